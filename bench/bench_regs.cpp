@@ -1,0 +1,37 @@
+// Register access cost through the C++ API (issue: performance target <= 5 ns per access).
+#include <benchmark/benchmark.h>
+
+#include "dpc31/chip.hpp"
+
+namespace {
+
+void BM_ReadRegister(benchmark::State& st) {
+  dpc31::Chip c({dpc31::Profile::dpc31, dpc31::BusMode::intel, 0});
+  for (auto _ : st) benchmark::DoNotOptimize(c.read(0x00));
+}
+BENCHMARK(BM_ReadRegister);
+
+void BM_WriteRegister(benchmark::State& st) {
+  dpc31::Chip c({dpc31::Profile::dpc31, dpc31::BusMode::intel, 0});
+  std::uint8_t v = 0;
+  for (auto _ : st) c.write(0x00, v++);
+  benchmark::DoNotOptimize(c.cycle());
+}
+BENCHMARK(BM_WriteRegister);
+
+void BM_ReadRam(benchmark::State& st) {
+  dpc31::Chip c({dpc31::Profile::dpc31, dpc31::BusMode::intel, 0});
+  for (auto _ : st) benchmark::DoNotOptimize(c.read(0x0900));
+}
+BENCHMARK(BM_ReadRam);
+
+void BM_StepUserTimer(benchmark::State& st) {
+  dpc31::Chip c({dpc31::Profile::dpc31, dpc31::BusMode::intel, 0});
+  c.write(0x08, 0x01);  // started: the user timer ticks every 48000 cycles
+  for (auto _ : st) c.step(48000);
+}
+BENCHMARK(BM_StepUserTimer);
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,139 @@
+// Buffer state machine hooks: the *_Buffer_SM reads, the user's command reads
+// (New_Din_Buffer_Cmd, Next_Dout_Buffer_Cmd, New_Diag_Buffer_Cmd) and the ASIC's side
+// (outputs received, clear, inputs fetched, diag sent).
+#include "core.hpp"
+
+namespace dpc31 {
+
+namespace {
+
+constexpr std::uint8_t kState_U_Buffer = 0x04;
+constexpr std::uint8_t kU_Buffer_Cleared = 0x08;
+constexpr std::uint8_t kStat_Diag = 0x02;  // diag buffer byte 0
+
+std::uint16_t din_sm(const ChipCore& c) { return c.buffers.din.sm(); }
+std::uint16_t dout_sm(const ChipCore& c) { return c.buffers.dout.sm(); }
+std::uint16_t diag_sm(const ChipCore& c) { return c.buffers.diag.sm(); }
+
+// User: the filled U goes to N; the answer names the new U.
+std::uint16_t new_din(BufferUnit& b) {
+  b.din.u_to_n();
+  return b.din.u;
+}
+
+// User: fetch the newest outputs (N -> U) if there are any.
+std::uint16_t next_dout(BufferUnit& b) {
+  std::uint8_t r = 0;
+  if (b.dout.n_to_u()) {
+    b.u_cleared = b.n_cleared;
+    b.n_cleared = false;
+    r = kState_U_Buffer;
+  }
+  return static_cast<std::uint8_t>(r | (b.u_cleared ? kU_Buffer_Cleared : 0) | b.dout.u);
+}
+
+// User: hand the prepared diag buffer to the ASIC. The ASIC's previous buffer comes back at
+// once unless it is being sent right now; then the answer is 00 (both with the ASIC) and it
+// comes back when the send ends (asic_diag_send_end).
+std::uint16_t new_diag(BufferUnit& b, bool& changed) {
+  changed = false;
+  for (int k = 0; k < 2; ++k) {
+    if (b.diag.buf[k] != DiagState::User) continue;
+    DiagState& other = b.diag.buf[1 - k];
+    b.diag.buf[k] = DiagState::Asic;
+    b.diag_flag = true;
+    if (other == DiagState::Asic) {
+      other = DiagState::User;
+      changed = true;
+      return static_cast<std::uint16_t>(2 - k);  // 01 = buffer 1, 10 = buffer 2
+    }
+    return 0;
+  }
+  return 0;
+}
+
+template <std::uint16_t (*Op)(BufferUnit&)>
+std::uint16_t preview(const ChipCore& c) {
+  BufferUnit copy = c.buffers;
+  return Op(copy);
+}
+
+std::uint16_t new_diag_preview(const ChipCore& c) {
+  BufferUnit copy = c.buffers;
+  bool changed = false;
+  return new_diag(copy, changed);
+}
+
+std::uint16_t new_diag_cmd(ChipCore& c) {
+  bool changed = false;
+  const std::uint16_t r = new_diag(c.buffers, changed);
+  if (changed) c.raise(irq::Diag_Buffer_Changed);
+  return r;
+}
+
+}  // namespace
+
+void install_buffer_hooks(HookTable& h) {
+  h[ChipCore::idx(RegId::Din_Buffer_SM)].read = din_sm;
+  h[ChipCore::idx(RegId::Dout_Buffer_SM)].read = dout_sm;
+  h[ChipCore::idx(RegId::Diag_Buffer_SM)].read = diag_sm;
+  h[ChipCore::idx(RegId::New_Din_Buffer_Cmd)].read = preview<new_din>;
+  h[ChipCore::idx(RegId::New_Din_Buffer_Cmd)].command = [](ChipCore& c) { return new_din(c.buffers); };
+  h[ChipCore::idx(RegId::Next_Dout_Buffer_Cmd)].read = preview<next_dout>;
+  h[ChipCore::idx(RegId::Next_Dout_Buffer_Cmd)].command = [](ChipCore& c) {
+    return next_dout(c.buffers);
+  };
+  h[ChipCore::idx(RegId::New_Diag_Buffer_Cmd)].read = new_diag_preview;
+  h[ChipCore::idx(RegId::New_Diag_Buffer_Cmd)].command = new_diag_cmd;
+}
+
+std::uint32_t ChipCore::buffer_addr(RegId ptr_cell) const {
+  return static_cast<std::uint32_t>(cell(ptr_cell)) << segment_shift();
+}
+
+void ChipCore::dout_received() {
+  buffers.dout.d_to_n();
+  buffers.n_cleared = false;
+  raise(irq::DX_Out);
+}
+
+void ChipCore::dout_clear() {
+  static constexpr RegId kPtr[] = {RegId::R_Dout_Buf_Ptr1, RegId::R_Dout_Buf_Ptr2,
+                                   RegId::R_Dout_Buf_Ptr3};
+  clear_ram(buffer_addr(kPtr[buffers.dout.d - 1]), cell(RegId::R_Len_Dout_Buf));
+  buffers.dout.d_to_n();
+  buffers.n_cleared = true;
+  raise(irq::DX_Out);
+}
+
+std::uint8_t ChipCore::din_fetch() {
+  buffers.din.n_to_d();
+  return buffers.din.d;
+}
+
+void ChipCore::diag_send_begin() {
+  for (DiagState& s : buffers.diag.buf) {
+    if (s == DiagState::Asic) {
+      s = DiagState::Asic_Send_Mode;
+      return;
+    }
+  }
+}
+
+void ChipCore::diag_send_end() {
+  static constexpr RegId kPtr[] = {RegId::R_Diag_Buf_Ptr1, RegId::R_Diag_Buf_Ptr2};
+  for (int k = 0; k < 2; ++k) {
+    if (buffers.diag.buf[k] != DiagState::Asic_Send_Mode) continue;
+    // Diag_Flag stays set while the sent buffer says Stat_Diag.
+    buffers.diag_flag = (mem[buffer_addr(kPtr[k])] & kStat_Diag) != 0;
+    if (buffers.diag.buf[1 - k] == DiagState::Asic) {  // the user handed a newer one meanwhile
+      buffers.diag.buf[k] = DiagState::User;
+      raise(irq::Diag_Buffer_Changed);
+    } else {
+      buffers.diag.buf[k] = DiagState::Asic;
+    }
+    return;
+  }
+}
+
+}  // namespace dpc31

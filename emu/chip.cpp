@@ -1,0 +1,107 @@
+// The public Chip: a thin wrapper over ChipCore, plus time. Timers are absolute deadlines, so
+// step(n) jumps from one deadline to the next instead of visiting every clock.
+#include "dpc31/chip.hpp"
+
+#include <algorithm>
+
+#include "core.hpp"
+
+namespace dpc31 {
+
+std::uint32_t ChipCore::cycles_for_us(std::uint32_t us) const {
+  // Round up: the manuals give minimum times ("at least 1 us").
+  return static_cast<std::uint32_t>((std::uint64_t{clock_hz} * us + 999'999u) / 1'000'000u);
+}
+
+void ChipCore::advance(std::uint64_t cycles) {
+  const std::uint64_t end = now + cycles;
+  for (;;) {
+    const std::uint64_t eoi_end = irq.eoi_block_until > now ? irq.eoi_block_until : kNever;
+    const std::uint64_t next = std::min(timers.user_timer_next, eoi_end);
+    if (next > end) break;
+    now = next;
+    if (timers.user_timer_next == now) {
+      timers.user_timer_next = now + user_timer_period();
+      raise(irq::User_Timer_Clock);
+    }
+    update_irq_line();
+  }
+  now = end;
+}
+
+Chip::Chip(ChipOptions opt) : core_(std::make_unique<ChipCore>(opt)) {}
+Chip::~Chip() = default;
+Chip::Chip(Chip&&) noexcept = default;
+Chip& Chip::operator=(Chip&&) noexcept = default;
+
+void Chip::reset() { core_->reset(); }
+std::uint8_t Chip::read(std::uint32_t addr) { return core_->bus_read(addr); }
+void Chip::write(std::uint32_t addr, std::uint8_t value) { core_->bus_write(addr, value); }
+std::uint8_t Chip::peek(std::uint32_t addr) const { return core_->peek(addr); }
+bool Chip::poke(std::uint32_t addr, std::uint8_t value) { return core_->poke(addr, value); }
+std::uint16_t Chip::peek_reg(RegId id) const { return core_->reg_value(id); }
+
+bool Chip::poke_reg(RegId id, std::uint16_t value) {
+  ChipCore& c = *core_;
+  const RegDesc* r = c.reg(id);
+  if (r == nullptr) return false;
+  if (r->kind == Kind::cell) {
+    c.set_cell16(*r, value);
+    return true;
+  }
+  if (r->kind != Kind::latch) return false;
+  c.latch[ChipCore::idx(id)] = static_cast<std::uint16_t>(value & r->mask());
+  c.update_irq_line();
+  return true;
+}
+
+void Chip::step(std::uint64_t cycles) { core_->advance(cycles); }
+std::uint64_t Chip::cycle() const { return core_->now; }
+std::uint32_t Chip::clock_hz() const { return core_->clock_hz; }
+std::uint32_t Chip::bus_access_cycles() const { return core_->prof->bus_access_cycles; }
+
+bool Chip::x_int_pin() const {
+  constexpr std::uint16_t kINT_Pol = 1u << 4;
+  // INT_Pol = 0: low-active (the default), 1: high-active.
+  return core_->mode0(kINT_Pol) ? core_->irq_active() : !core_->irq_active();
+}
+bool Chip::irq_active() const { return core_->irq_active(); }
+bool Chip::started() const { return core_->started; }
+DpState Chip::dp_state() const { return core_->dp.state; }
+WdState Chip::wd_state() const { return core_->timers.wd; }
+
+void Chip::on_irq_change(std::function<void(std::uint64_t, bool)> cb) {
+  core_->irq_observer = std::move(cb);
+}
+void Chip::set_log_sink(LogSink sink) { core_->sink = std::move(sink); }
+const ProfileDesc& Chip::profile() const { return *core_->prof; }
+BusMode Chip::bus_mode() const { return core_->bus; }
+
+std::int32_t Chip::addr_of(RegId id) const {
+  const RegDesc* r = core_->reg(id);
+  if (r == nullptr) return -1;
+  return r->read_addr >= 0 ? r->read_addr : r->write_addr;
+}
+
+void Chip::asic_raise(std::uint16_t irq_bits) { core_->raise(irq_bits); }
+void Chip::asic_dout_received() { core_->dout_received(); }
+void Chip::asic_dout_clear() { core_->dout_clear(); }
+std::uint8_t Chip::asic_din_fetch() { return core_->din_fetch(); }
+void Chip::asic_diag_send_begin() { core_->diag_send_begin(); }
+void Chip::asic_diag_send_end() { core_->diag_send_end(); }
+
+void Chip::asic_prm_received() {
+  core_->dp.prm.arrived();
+  core_->raise(irq::New_Prm_Data);
+}
+void Chip::asic_cfg_received() {
+  core_->dp.cfg.arrived();
+  core_->raise(irq::New_Cfg_Data);
+}
+void Chip::asic_ssa_received() {
+  core_->dp.ssa_free = false;
+  core_->raise(irq::New_SSA_Data);
+}
+bool Chip::ssa_buffer_free() const { return core_->dp.ssa_free; }
+
+}  // namespace dpc31

@@ -1,0 +1,130 @@
+// Internal state of one chip: the register file storage, RAM, and every hardware block.
+// Blocks keep their own state in small structs and attach behaviour to registers through
+// hooks (install_*_hooks), next to the block they belong to.
+#pragma once
+
+#include <fmt/format.h>
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "buffers.hpp"
+#include "dp_sm.hpp"
+#include "dpc31/chip.hpp"
+#include "dpc31/reg_ids.hpp"
+#include "dpc31/regdesc.hpp"
+#include "irq.hpp"
+#include "watchdog.hpp"
+
+namespace dpc31 {
+
+struct ChipCore;
+
+// Behaviour attached to one register (keyed by the RegId that is accessed, port or latch).
+struct RegHooks {
+  // Derived read side without side effects (for command reads: the result they would give).
+  std::uint16_t (*read)(const ChipCore&) = nullptr;
+  // Command reads: perform the command, return its result.
+  std::uint16_t (*command)(ChipCore&) = nullptr;
+  // After the access-policy rule: may change what is stored (veto, keep events).
+  std::uint16_t (*pre_write)(ChipCore&, std::uint16_t old, std::uint16_t next) = nullptr;
+  // After the store: actions of the write (Start, EOI, Go_Offline).
+  void (*post_write)(ChipCore&, std::uint16_t old, std::uint16_t now) = nullptr;
+};
+
+using HookTable = std::array<RegHooks, kRegIdCount>;
+
+void install_irq_hooks(HookTable& h);
+void install_mode_hooks(HookTable& h);
+void install_buffer_hooks(HookTable& h);
+void install_dp_sm_hooks(HookTable& h);
+
+inline constexpr std::uint16_t kNoReg = 0xFFFF;
+
+struct ChipCore {
+  ChipCore(const ChipOptions& opt);
+
+  const ProfileDesc* prof;
+  BusMode bus;
+  std::uint32_t clock_hz;
+  std::uint64_t now = 0;
+
+  std::array<std::uint16_t, kRegIdCount> latch{};
+  std::vector<std::uint8_t> mem;       // 2^address_bits bytes; only RAM regions are used as RAM
+  std::vector<std::uint16_t> rd_map;   // address -> index into prof->regs (kNoReg = none)
+  std::vector<std::uint16_t> wr_map;
+  std::vector<std::uint16_t> region_map;  // address -> index into prof->regions (kNoReg)
+  std::array<std::uint16_t, kRegIdCount> reg_index{};  // RegId -> index into prof->regs
+  HookTable hooks{};
+
+  IrqController irq;
+  BufferUnit buffers;
+  DpStateMachine dp;
+  Timers timers;
+  bool started = false;
+  bool ram_access_violation = false;
+  bool large_ram = false;  // VPC3+ 4kB_Mode
+  std::uint8_t baud_code = 0;  // Status_Reg bits 11..8 (0 = 12 Mbaud, where Baud_Search starts)
+
+  LogSink sink;
+  std::function<void(std::uint64_t, bool)> irq_observer;
+  bool irq_line = false;  // last computed interrupt activity (for change notifications)
+
+  // --- register file (regfile.cpp) ---
+  void reset();
+  std::uint8_t bus_read(std::uint32_t addr);
+  void bus_write(std::uint32_t addr, std::uint8_t value);
+  std::uint8_t peek(std::uint32_t addr) const;
+  bool poke(std::uint32_t addr, std::uint8_t value);
+  [[nodiscard]] const RegDesc* reg(RegId id) const;
+  [[nodiscard]] std::uint16_t cell16(const RegDesc& r) const;
+  void set_cell16(const RegDesc& r, std::uint16_t v);
+  [[nodiscard]] std::uint16_t reg_value(RegId id) const;  // storage or derived (no side effect)
+
+  // --- time (chip.cpp) ---
+  void advance(std::uint64_t cycles);
+  [[nodiscard]] std::uint32_t cycles_for_us(std::uint32_t us) const;
+
+  // --- interrupt line (irq.cpp) ---
+  void raise(std::uint16_t bits);
+  void update_irq_line();
+  [[nodiscard]] bool irq_active() const;
+  [[nodiscard]] std::uint32_t eoi_inactive_cycles() const;
+
+  // --- mode and state (mode.cpp) ---
+  void start();
+  void go_offline();
+  void leave_master();
+  [[nodiscard]] std::uint16_t status() const;
+  [[nodiscard]] std::uint32_t user_timer_period() const;
+
+  // --- buffers, ASIC side (buffers.cpp) ---
+  void dout_received();
+  void dout_clear();
+  std::uint8_t din_fetch();
+  void diag_send_begin();
+  void diag_send_end();
+  [[nodiscard]] std::uint32_t buffer_addr(RegId ptr_cell) const;
+  [[nodiscard]] bool mode0(std::uint16_t bit) const { return (latch[idx(RegId::Mode_Reg0)] & bit) != 0; }
+
+  // --- RAM used by the blocks (the ASIC's own accesses) ---
+  [[nodiscard]] std::uint32_t segment_shift() const;
+  [[nodiscard]] std::uint8_t cell(RegId id) const;  // 8-bit organisational cell
+  void clear_ram(std::uint32_t begin, std::uint32_t len);
+
+  template <typename... Args>
+  void log(LogLevel level, fmt::format_string<Args...> f, Args&&... args) const {
+    if (sink) sink(LogRecord{now, level, fmt::format(f, std::forward<Args>(args)...)});
+  }
+
+  static constexpr std::size_t idx(RegId id) { return static_cast<std::size_t>(id); }
+
+ private:
+  std::uint32_t decode(std::uint32_t addr, bool& violation) const;
+  void note_violation(std::uint32_t addr, std::uint32_t mapped);
+  void write_reg(const RegDesc& r, std::uint32_t offset, std::uint8_t value);
+};
+
+}  // namespace dpc31

@@ -1,0 +1,49 @@
+// Interrupt controller hooks: Int_Reg is computed, acknowledges and user writes never swallow an
+// event latched in the same cycle, and the X/INT line follows IR and the EOI inactive time.
+#include "core.hpp"
+
+namespace dpc31 {
+
+namespace {
+
+std::uint16_t int_reg(const ChipCore& c) {
+  return static_cast<std::uint16_t>(c.latch[ChipCore::idx(RegId::Int_Req_Reg)] &
+                                    ~c.latch[ChipCore::idx(RegId::Int_Mask_Reg)]);
+}
+
+// "If a new event and an acknowledge for the same bit coincide, the event stays set."
+std::uint16_t keep_events(ChipCore& c, std::uint16_t /*old*/, std::uint16_t next) {
+  return static_cast<std::uint16_t>(next | c.irq.events_at(c.now));
+}
+
+}  // namespace
+
+void install_irq_hooks(HookTable& h) {
+  h[ChipCore::idx(RegId::Int_Reg)].read = int_reg;
+  h[ChipCore::idx(RegId::Int_Req_Reg)].pre_write = keep_events;
+  h[ChipCore::idx(RegId::Int_Ack_Reg)].pre_write = keep_events;
+}
+
+void ChipCore::raise(std::uint16_t bits) {
+  const RegDesc* irr = reg(RegId::Int_Req_Reg);
+  bits = static_cast<std::uint16_t>(bits & ~irr->rsvd);
+  latch[idx(RegId::Int_Req_Reg)] |= bits;
+  irq.note_events(bits, now);
+  update_irq_line();
+}
+
+bool ChipCore::irq_active() const { return int_reg(*this) != 0 && now >= irq.eoi_block_until; }
+
+std::uint32_t ChipCore::eoi_inactive_cycles() const {
+  constexpr std::uint16_t kEOI_Time_Base = 1u << 9;
+  return cycles_for_us(mode0(kEOI_Time_Base) ? 1000 : 1);
+}
+
+void ChipCore::update_irq_line() {
+  const bool active = irq_active();
+  if (active == irq_line) return;
+  irq_line = active;
+  if (irq_observer) irq_observer(now, active);
+}
+
+}  // namespace dpc31

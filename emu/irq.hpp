@@ -1,0 +1,30 @@
+// Interrupt controller (chip-facts §2): IRR latched independent of IMR, IR = IRR & ~IMR,
+// X/INT = OR of IR unless inside the inactive time that follows an EOI.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+
+namespace dpc31 {
+
+struct IrqController {
+  // X/INT may not become active before this cycle (end of the EOI inactive time).
+  std::uint64_t eoi_block_until = 0;
+  // Events latched in the current cycle survive an acknowledge in that same cycle.
+  std::uint64_t event_cycle = std::numeric_limits<std::uint64_t>::max();
+  std::uint16_t event_mask = 0;
+
+  void reset() { *this = IrqController{}; }
+  void note_events(std::uint16_t bits, std::uint64_t now) {
+    if (event_cycle != now) {
+      event_cycle = now;
+      event_mask = 0;
+    }
+    event_mask |= bits;
+  }
+  [[nodiscard]] std::uint16_t events_at(std::uint64_t now) const {
+    return event_cycle == now ? event_mask : std::uint16_t{0};
+  }
+};
+
+}  // namespace dpc31

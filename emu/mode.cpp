@@ -1,0 +1,99 @@
+// Mode registers and the chip's run state: Mode_Reg0 (written only while Offline), the
+// Mode_Reg1 set/reset pair (Start_SPC3, EOI, Go_Offline, User_Leave_Master), VPC3+ Mode_Reg2,
+// and the Status register that reports the result.
+#include "core.hpp"
+
+namespace dpc31 {
+
+namespace {
+
+constexpr std::uint16_t kStart_SPC3 = 1u << 0;
+constexpr std::uint16_t kEOI = 1u << 1;
+constexpr std::uint16_t kGo_Offline = 1u << 2;
+constexpr std::uint16_t kUser_Leave_Master = 1u << 3;
+constexpr std::uint16_t k4kB_Mode = 1u << 7;
+
+// Mode_Reg0 and Mode_Reg2 configure the chip and may only change while it is Offline.
+std::uint16_t offline_only(ChipCore& c, std::uint16_t old, std::uint16_t next) {
+  if (!c.started || old == next) return next;
+  c.log(LogLevel::warn, "mode register written while started (Passive_Idle): ignored, write it in Offline");
+  return old;
+}
+
+void mode_reg1_set(ChipCore& c, std::uint16_t old, std::uint16_t now) {
+  const auto rising = static_cast<std::uint16_t>(now & ~old);
+  if ((rising & kStart_SPC3) != 0) c.start();
+  if ((rising & kEOI) != 0) {
+    c.irq.eoi_block_until = c.now + c.eoi_inactive_cycles();
+    c.log(LogLevel::debug, "EOI: X/INT inactive until cycle {}", c.irq.eoi_block_until);
+  }
+  if ((rising & kUser_Leave_Master) != 0) c.leave_master();
+  if ((rising & kGo_Offline) != 0) c.go_offline();
+}
+
+void mode_reg2_written(ChipCore& c, std::uint16_t /*old*/, std::uint16_t now) {
+  c.large_ram = c.prof->ram_size_large != 0 && (now & k4kB_Mode) != 0;
+}
+
+std::uint16_t status_reg(const ChipCore& c) { return c.status(); }
+
+}  // namespace
+
+void install_mode_hooks(HookTable& h) {
+  h[ChipCore::idx(RegId::Mode_Reg0)].pre_write = offline_only;
+  h[ChipCore::idx(RegId::Mode_Reg2)].pre_write = offline_only;
+  h[ChipCore::idx(RegId::Mode_Reg2)].post_write = mode_reg2_written;
+  h[ChipCore::idx(RegId::Mode_Reg1_S)].post_write = mode_reg1_set;
+  h[ChipCore::idx(RegId::Status_Reg)].read = status_reg;
+}
+
+void ChipCore::start() {
+  if (started) return;
+  started = true;
+  ram_access_violation = false;
+  latch[idx(RegId::Mode_Reg1)] &= static_cast<std::uint16_t>(~kGo_Offline);
+  timers.wd = WdState::Baud_Search;
+  timers.user_timer_next = now + user_timer_period();
+  dp.reset();
+  log(LogLevel::info, "Start_SPC3: Offline -> Passive_Idle");
+  // Power-on: the ASIC clears the output buffer and hands it to the user (DX_Out).
+  dout_clear();
+}
+
+void ChipCore::go_offline() {
+  if (!started) return;
+  started = false;
+  latch[idx(RegId::Mode_Reg1)] &= static_cast<std::uint16_t>(~kStart_SPC3);
+  timers.user_timer_next = kNever;
+  log(LogLevel::info, "Passive_Idle -> Offline (MAC_Reset)");
+  raise(irq::MAC_Reset);
+}
+
+void ChipCore::leave_master() {
+  if (!started) return;
+  const DpState was = dp.state;
+  dp.state = DpState::Wait_Prm;
+  dp.prm = Handshake{};
+  dp.cfg = Handshake{};
+  log(LogLevel::info, "Leave_Master: DP state -> Wait_Prm");
+  if (was == DpState::Data_Exchange) raise(irq::Go_Leave_Data_Exchange);
+  dout_clear();
+}
+
+std::uint32_t ChipCore::user_timer_period() const {
+  constexpr std::uint16_t kUser_Time_Base = 1u << 10;
+  return cycles_for_us(mode0(kUser_Time_Base) ? 10000 : 1000);
+}
+
+std::uint16_t ChipCore::status() const {
+  unsigned v = started ? 1u : 0u;
+  v |= (buffers.diag_flag ? 1u : 0u) << 2;
+  v |= (ram_access_violation ? 1u : 0u) << 3;
+  v |= static_cast<unsigned>(dp.state) << 4;
+  v |= static_cast<unsigned>(timers.wd) << 6;
+  v |= static_cast<unsigned>(baud_code) << 8;
+  v |= static_cast<unsigned>(prof->release) << 12;
+  return static_cast<std::uint16_t>(v);
+}
+
+}  // namespace dpc31

@@ -1,0 +1,120 @@
+// The chip: one SPC3, VPC3+ or DPC31 as firmware sees it on its parallel bus.
+//
+// Time is a 64-bit count of chip clocks since reset (docs/timing.md). Bus accesses cost
+// bus_access_cycles() clocks each and take effect at the end of the access; peek/poke are the
+// debugger's path: no time, no side effects.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string_view>
+
+#include "dpc31/log.hpp"
+#include "dpc31/reg_ids.hpp"
+#include "dpc31/regdesc.hpp"
+
+namespace dpc31 {
+
+struct ChipOptions {
+  Profile profile = Profile::dpc31;
+  BusMode bus = BusMode::intel;
+  std::uint32_t clock_hz = 0;  // 0 = the description's default (48 MHz)
+};
+
+// DP slave state machine (Status_Reg bits 5:4).
+enum class DpState : std::uint8_t { Wait_Prm = 0, Wait_Cfg = 1, Data_Exchange = 2 };
+// Watchdog state machine (Status_Reg bits 7:6).
+enum class WdState : std::uint8_t { Baud_Search = 0, Baud_Control = 1, DP_Control = 2 };
+
+// Interrupt bit positions (Int_Req_Reg), identical in all profiles.
+namespace irq {
+inline constexpr std::uint16_t MAC_Reset = 1u << 0;
+inline constexpr std::uint16_t Go_Leave_Data_Exchange = 1u << 1;
+inline constexpr std::uint16_t Baudrate_Detect = 1u << 2;
+inline constexpr std::uint16_t WD_DP_Control_Timeout = 1u << 3;
+inline constexpr std::uint16_t User_Timer_Clock = 1u << 4;
+inline constexpr std::uint16_t New_Ext_Prm_Data = 1u << 6;  // VPC3+ only
+inline constexpr std::uint16_t New_GC_Command = 1u << 8;
+inline constexpr std::uint16_t New_SSA_Data = 1u << 9;
+inline constexpr std::uint16_t New_Cfg_Data = 1u << 10;
+inline constexpr std::uint16_t New_Prm_Data = 1u << 11;
+inline constexpr std::uint16_t Diag_Buffer_Changed = 1u << 12;
+inline constexpr std::uint16_t DX_Out = 1u << 13;
+}  // namespace irq
+
+struct ChipCore;
+
+class Chip {
+ public:
+  explicit Chip(ChipOptions opt = {});
+  ~Chip();
+  Chip(const Chip&) = delete;
+  Chip& operator=(const Chip&) = delete;
+  Chip(Chip&&) noexcept;
+  Chip& operator=(Chip&&) noexcept;
+
+  // Hardware reset: registers and RAM cells to their reset values, cycle counter to 0.
+  void reset();
+
+  // --- the bus (front door) ---
+  std::uint8_t read(std::uint32_t addr);
+  void write(std::uint32_t addr, std::uint8_t value);
+
+  // --- the debugger (back door): no time passes, no side effects, no log ---
+  // peek returns what a bus read would return now (command reads: the result they would give).
+  [[nodiscard]] std::uint8_t peek(std::uint32_t addr) const;
+  // poke stores into RAM / a RAM cell / the latch behind the read side; false where the read
+  // side has no storage (derived values, reserved and unmapped addresses).
+  bool poke(std::uint32_t addr, std::uint8_t value);
+  // Whole registers by id, including write-only latches (Int_Mask_Reg, WD_Baud_Control_Val).
+  [[nodiscard]] std::uint16_t peek_reg(RegId id) const;
+  bool poke_reg(RegId id, std::uint16_t value);
+
+  // --- time ---
+  void step(std::uint64_t cycles = 1);
+  [[nodiscard]] std::uint64_t cycle() const;
+  [[nodiscard]] std::uint32_t clock_hz() const;
+  [[nodiscard]] std::uint32_t bus_access_cycles() const;
+
+  // --- pins and state ---
+  // X/INT pin level (true = high), after the polarity of Mode_Reg0.INT_Pol.
+  [[nodiscard]] bool x_int_pin() const;
+  // Whether the interrupt is active (independent of polarity).
+  [[nodiscard]] bool irq_active() const;
+  [[nodiscard]] bool started() const;
+  [[nodiscard]] DpState dp_state() const;
+  [[nodiscard]] WdState wd_state() const;
+
+  // Called whenever the interrupt becomes active or inactive: (cycle, active).
+  void on_irq_change(std::function<void(std::uint64_t, bool)> cb);
+  void set_log_sink(LogSink sink);
+
+  [[nodiscard]] const ProfileDesc& profile() const;
+  [[nodiscard]] BusMode bus_mode() const;
+
+  // Address of a register's read side (or write side if it has none) in this profile; -1 if the
+  // profile lacks it.
+  [[nodiscard]] std::int32_t addr_of(RegId id) const;
+
+  // Protocol-side entry points (what the DP engine does inside the chip). Each takes effect at
+  // the current cycle.
+  void asic_raise(std::uint16_t irq_bits);           // latch events into Int_Req_Reg
+  void asic_dout_received();                         // D -> N, DX_Out
+  void asic_dout_clear();                            // clear D, D -> N, DX_Out
+  std::uint8_t asic_din_fetch();                     // N -> D if new; returns the D buffer index
+  void asic_diag_send_begin();                       // the ASIC starts sending its diag buffer
+  void asic_diag_send_end();                         // ... and has sent it
+  void asic_prm_received();                          // Set_Prm in the Prm buffer: New_Prm_Data
+  void asic_cfg_received();                          // Chk_Cfg in the Cfg buffer: New_Cfg_Data
+  void asic_ssa_received();                          // Set_Slave_Add: New_SSA_Data
+  [[nodiscard]] bool ssa_buffer_free() const;
+
+  ChipCore& core() { return *core_; }
+  [[nodiscard]] const ChipCore& core() const { return *core_; }
+
+ private:
+  std::unique_ptr<ChipCore> core_;
+};
+
+}  // namespace dpc31

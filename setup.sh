@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# dpc31emu setup: installs the missing Debian 12 packages (as root; otherwise prints the exact
+# apt-get line and stops), then configures and builds into build/. Safe to run again.
+set -euo pipefail
+cd "$(dirname "$0")"
+
+packages=(cmake g++ make verilator libfmt-dev libcli11-dev nlohmann-json3-dev libgtest-dev
+  libbenchmark-dev)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  if [ "$(id -u)" -eq 0 ]; then
+    echo "setup: installing ${missing[*]}"
+    apt-get update -q
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends "${missing[@]}"
+  else
+    echo "setup: missing Debian packages. Install them as root with:" >&2
+    echo "  apt-get install -y --no-install-recommends ${missing[*]}" >&2
+    exit 1
+  fi
+fi
+
+cmake -S . -B build -DCMAKE_BUILD_TYPE=RelWithDebInfo
+cmake --build build -j "$(nproc)"

@@ -1,0 +1,84 @@
+// The dpc31 command line: help, the register map in every format, the demo.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "dpc31/regdesc.hpp"
+
+namespace {
+
+struct Result {
+  int rc;
+  std::string out;
+};
+
+Result run(const std::string& args) {
+  const std::string cmd = std::string(DPC31_CLI) + " " + args + " 2>/dev/null";
+  FILE* p = popen(cmd.c_str(), "r");
+  Result r{-1, {}};
+  if (p == nullptr) return r;
+  std::array<char, 4096> buf{};
+  std::size_t n = 0;
+  while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
+  const int st = pclose(p);
+  r.rc = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  return r;
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+}  // namespace
+
+TEST(Cli, HelpListsSubcommands) {
+  const Result r = run("--help");
+  EXPECT_EQ(r.rc, 0);
+  EXPECT_NE(r.out.find("demo"), std::string::npos);
+  EXPECT_NE(r.out.find("regs"), std::string::npos);
+}
+
+TEST(Cli, BadArgumentsExit2) {
+  EXPECT_EQ(run("regs --profile pentium").rc, 2);
+  EXPECT_EQ(run("regs --format yaml").rc, 2);
+  EXPECT_EQ(run("nosuchcommand").rc, 2);
+  EXPECT_EQ(run("").rc, 2);
+}
+
+TEST(Cli, RegsJsonIsValidAndComplete) {
+  for (dpc31::Profile p : dpc31::kAllProfiles) {
+    const auto& desc = dpc31::profile_desc(p);
+    const Result r = run("regs --profile " + std::string(desc.name) + " --format json");
+    ASSERT_EQ(r.rc, 0);
+    const nlohmann::json j = nlohmann::json::parse(r.out);  // throws on invalid JSON
+    ASSERT_TRUE(j.contains("registers"));
+    ASSERT_EQ(j["registers"].size(), desc.regs.size());
+    for (std::size_t i = 0; i < desc.regs.size(); ++i) {
+      EXPECT_EQ(j["registers"][i]["name"].get<std::string>(), desc.regs[i].name);
+    }
+  }
+}
+
+// The compiled-in tables print exactly the checked-in generated files.
+TEST(Cli, RegsReproducesTheCheckedInOutputs) {
+  EXPECT_EQ(run("regs --profile all --format c").out, slurp(std::string(SOURCE_DIR) + "/include/dpc31/dpc31_regs.h"));
+  EXPECT_EQ(run("regs --profile all --format verilog").out, slurp(std::string(SOURCE_DIR) + "/rtl/dpc31_regs.vh"));
+  EXPECT_EQ(run("regs --profile all --format markdown").out, slurp(std::string(SOURCE_DIR) + "/docs/registers.md"));
+}
+
+TEST(Cli, DemoRunsOnEveryProfile) {
+  for (const char* p : {"spc3", "vpc3plus", "dpc31"}) {
+    const Result r = run(std::string("demo --profile ") + p);
+    EXPECT_EQ(r.rc, 0) << p;
+    EXPECT_NE(r.out.find("X/INT -> low (active)"), std::string::npos) << p;
+    EXPECT_NE(r.out.find("User_Prm_Data_Okay = 00h"), std::string::npos) << p;
+  }
+}

@@ -1,0 +1,173 @@
+// Interrupt controller with exact cycles from docs/timing.md: a bus access takes 4 clocks and
+// acts when it completes; X/INT follows IR in the same cycle; after EOI it stays inactive for
+// ceil(1 us * f) = 48 or ceil(1 ms * f) = 48000 clocks at 48 MHz.
+#include <fmt/core.h>
+#include <gtest/gtest.h>
+
+#include <utility>
+
+#include "dpc31/reg_ids.hpp"
+#include "test_util.hpp"
+
+using namespace dpc31;
+using testutil::bus_read16;
+using testutil::bus_write16;
+
+namespace {
+
+constexpr std::uint64_t kAccess = 4;
+
+struct Edges {
+  std::vector<std::pair<std::uint64_t, bool>> v;
+  void attach(Chip& c) {
+    c.on_irq_change([this](std::uint64_t cyc, bool a) { v.emplace_back(cyc, a); });
+  }
+};
+
+class Irq : public ::testing::TestWithParam<testutil::ChipParam> {
+ protected:
+  Chip make(std::uint32_t clock_hz = 0) {
+    Chip c({GetParam().profile, GetParam().bus, clock_hz});
+    log_.attach(c);
+    edges_.attach(c);
+    return c;
+  }
+  testutil::LogCapture log_;
+  Edges edges_;
+};
+
+// Offset (0 or 1) of the byte holding bit `b` of a 16-bit register at the manuals' byte order.
+int offset_of_bit(BusMode m, int b) { return spec::byte_index_at(m, 0) == b / 8 ? 0 : 1; }
+
+}  // namespace
+
+TEST_P(Irq, EveryBitSetsMasksAcknowledges) {
+  const auto rows = spec::rows_for(GetParam().profile);
+  const std::string_view irr_policy = rows[0].policy;  // Int_Req_Reg comes first
+  const std::uint16_t events = spec::mask_of(irr_policy, "w");
+  const std::uint16_t not_by_iar = spec::mask_of(rows[4].policy, "i");  // Int_Ack_Reg
+  for (int b = 0; b < 16; ++b) {
+    if (((events >> b) & 1) == 0) continue;
+    SCOPED_TRACE(fmt::format("bit {}", b));
+    edges_.v.clear();
+    Chip c = make();
+    const auto bit = static_cast<std::uint16_t>(1u << b);
+    bus_write16(c, 0x04, 16, static_cast<std::uint16_t>(~bit));  // unmask only this bit
+    ASSERT_EQ(c.cycle(), 2 * kAccess);
+    EXPECT_FALSE(c.irq_active());
+    EXPECT_TRUE(c.x_int_pin());  // low-active: inactive = high
+
+    c.asic_raise(bit);  // event at cycle 8: X/INT active in the same cycle
+    EXPECT_TRUE(c.irq_active());
+    EXPECT_FALSE(c.x_int_pin());
+    EXPECT_EQ(bus_read16(c, 0x02, 16), bit);  // IR; two reads end at cycle 16
+    EXPECT_EQ(bus_read16(c, 0x00, 16), bit);  // IRR; cycle 24
+
+    // Mask it: the line drops when the write of the byte holding the bit completes.
+    const int off = offset_of_bit(c.bus_mode(), b);
+    c.write(static_cast<std::uint32_t>(0x04 + off), 0xFF);  // completes at 28
+    EXPECT_FALSE(c.irq_active());
+    EXPECT_EQ(bus_read16(c, 0x00, 16), bit);  // IRR keeps the event while masked; cycle 36
+    EXPECT_EQ(bus_read16(c, 0x02, 16), 0);    // cycle 44
+    c.write(static_cast<std::uint32_t>(0x04 + off), static_cast<std::uint8_t>(~(bit >> (8 * (b / 8)))));
+    EXPECT_TRUE(c.irq_active());  // unmasked at 48
+
+    // Acknowledge: W1C, except the bits only the OK/Not_OK reads clear.
+    c.write(static_cast<std::uint32_t>(0x02 + off), static_cast<std::uint8_t>(bit >> (8 * (b / 8))));
+    const bool ignored = (not_by_iar & bit) != 0;
+    EXPECT_EQ(c.irq_active(), ignored);  // acknowledge completes at 52
+    std::vector<std::pair<std::uint64_t, bool>> expect = {{8, true}, {28, false}, {48, true}};
+    if (!ignored) expect.emplace_back(52, false);
+    EXPECT_EQ(edges_.v, expect);
+    EXPECT_EQ(log_.count_containing("not changed by this register"), ignored ? 1u : 0u);
+  }
+}
+
+TEST_P(Irq, EoiHoldsTheLineInactiveFor1us) {
+  Chip c = make();
+  bus_write16(c, 0x04, 16, static_cast<std::uint16_t>(~(irq::DX_Out | irq::User_Timer_Clock)));
+  c.asic_raise(irq::DX_Out | irq::User_Timer_Clock);  // cycle 8
+  bus_write16(c, 0x02, 16, irq::DX_Out);              // acknowledge one: still active, cycle 16
+  EXPECT_TRUE(c.irq_active());
+  c.write(0x08, 0x02);  // EOI completes at 20
+  EXPECT_EQ(c.cycle(), 20u);
+  EXPECT_FALSE(c.irq_active());
+  c.step(47);  // cycle 67: still inside the inactive time
+  EXPECT_FALSE(c.irq_active());
+  c.step(1);  // cycle 68 = 20 + 48
+  EXPECT_TRUE(c.irq_active());
+  const std::vector<std::pair<std::uint64_t, bool>> expect = {{8, true}, {20, false}, {68, true}};
+  EXPECT_EQ(edges_.v, expect);
+  EXPECT_EQ(c.peek_reg(RegId::Mode_Reg1) & 0x02, 0);  // EOI cleared by the chip
+}
+
+TEST_P(Irq, EoiTimeBase1msAndEventsInsideTheWindow) {
+  Chip c = make();
+  bus_write16(c, 0x06, 16, 0x0200);  // EOI_Time_Base = 1 ms; cycle 8
+  bus_write16(c, 0x04, 16, static_cast<std::uint16_t>(~irq::New_GC_Command));  // cycle 16
+  c.write(0x08, 0x02);  // EOI with nothing pending, completes at 20
+  c.step(10);           // cycle 30: an event inside the window waits for its end
+  c.asic_raise(irq::New_GC_Command);
+  EXPECT_FALSE(c.irq_active());
+  c.step(20 + 48000 - 30 - 1);  // cycle 48019
+  EXPECT_FALSE(c.irq_active());
+  c.step(1);  // cycle 48020 = 20 + 48000
+  EXPECT_TRUE(c.irq_active());
+  // After the window an event asserts at once.
+  bus_write16(c, 0x02, 16, irq::New_GC_Command);  // cycle 48028
+  EXPECT_FALSE(c.irq_active());
+  c.asic_raise(irq::New_GC_Command);
+  EXPECT_TRUE(c.irq_active());
+  const std::vector<std::pair<std::uint64_t, bool>> expect = {
+      {48020, true}, {48024 + (c.bus_mode() == BusMode::intel ? 4u : 0u), false}, {48028, true}};
+  EXPECT_EQ(edges_.v, expect);
+}
+
+TEST_P(Irq, InactiveTimeRoundsUpAtOtherClocks) {
+  for (auto [hz, cycles] : {std::pair{12'000'000u, 12u}, {20'000'001u, 21u}, {48'000'000u, 48u}}) {
+    Chip c = make(hz);
+    c.asic_raise(0);  // nothing
+    bus_write16(c, 0x04, 16, static_cast<std::uint16_t>(~irq::DX_Out));
+    c.asic_raise(irq::DX_Out);
+    c.write(0x08, 0x02);  // EOI at 12
+    c.step(cycles - 1);
+    EXPECT_FALSE(c.irq_active()) << hz;
+    c.step(1);
+    EXPECT_TRUE(c.irq_active()) << hz;
+  }
+}
+
+TEST_P(Irq, EventAndAcknowledgeInTheSameCycleKeepsTheEvent) {
+  for (std::uint64_t late : {0u, 1u}) {
+    Chip c = make();
+    bus_write16(c, 0x04, 16, static_cast<std::uint16_t>(~irq::User_Timer_Clock));
+    c.write(0x08, 0x01);  // Start_SPC3 completes at 12: the user timer ticks at 12 + 48000
+    ASSERT_EQ(c.cycle(), 12u);
+    c.step(48000 - kAccess + late);
+    const int off = offset_of_bit(c.bus_mode(), 4);
+    c.write(static_cast<std::uint32_t>(0x02 + off), 0x10);  // ack completes at 48012 + late
+    EXPECT_EQ(c.cycle(), 48012u + late);
+    const bool kept = late == 0;
+    EXPECT_EQ((c.peek_reg(RegId::Int_Req_Reg) & irq::User_Timer_Clock) != 0, kept) << late;
+  }
+}
+
+TEST_P(Irq, WritingIrrRaisesAndClearsEvents) {
+  Chip c = make();
+  bus_write16(c, 0x04, 16, 0x0000);  // all unmasked
+  bus_write16(c, 0x00, 16, irq::Diag_Buffer_Changed);
+  EXPECT_TRUE(c.irq_active());
+  bus_write16(c, 0x00, 16, 0x0000);
+  EXPECT_FALSE(c.irq_active());
+}
+
+TEST_P(Irq, PolarityFollowsIntPol) {
+  Chip c = make();
+  bus_write16(c, 0x06, 16, 0x0010);  // INT_Pol = 1: high-active
+  EXPECT_FALSE(c.x_int_pin());
+  bus_write16(c, 0x04, 16, static_cast<std::uint16_t>(~irq::DX_Out));
+  c.asic_raise(irq::DX_Out);
+  EXPECT_TRUE(c.x_int_pin());
+}
+
+INSTANTIATE_TEST_SUITE_P(Chips, Irq, ::testing::ValuesIn(testutil::all_chip_params()), testutil::param_name);

@@ -1,0 +1,130 @@
+// Mode_Reg0/1/2, Start / Go_Offline, Status_Reg, user timer, RAM access violation, profile layout.
+#include <gtest/gtest.h>
+
+#include "dpc31/reg_ids.hpp"
+#include "test_util.hpp"
+
+using namespace dpc31;
+using testutil::bus_read16;
+using testutil::bus_write16;
+
+namespace {
+
+class Mode : public ::testing::TestWithParam<testutil::ChipParam> {
+ protected:
+  Chip make() {
+    Chip c({GetParam().profile, GetParam().bus});
+    log_.attach(c);
+    return c;
+  }
+  testutil::LogCapture log_;
+};
+
+}  // namespace
+
+TEST_P(Mode, StartAndGoOffline) {
+  Chip c = make();
+  const std::uint16_t release = GetParam().profile == Profile::vpc3plus ? 0xC000 : 0x0000;
+  EXPECT_EQ(bus_read16(c, 0x04, 16), release);  // Offline, Wait_Prm, Baud_Search, 12M code 0
+  c.write(0x08, 0x01);                          // Start_SPC3
+  EXPECT_TRUE(c.started());
+  EXPECT_EQ(c.peek_reg(RegId::Status_Reg), release | 0x0001);  // Passive_Idle
+  // Power-on clear of the outputs raised DX_Out at the cycle Start completed.
+  EXPECT_EQ(c.peek_reg(RegId::Int_Req_Reg), irq::DX_Out);
+  c.write(0x08, 0x04);  // Go_Offline
+  EXPECT_FALSE(c.started());
+  EXPECT_EQ(c.peek_reg(RegId::Status_Reg), release);
+  EXPECT_EQ(c.peek_reg(RegId::Int_Req_Reg), irq::DX_Out | irq::MAC_Reset);
+  EXPECT_EQ(c.peek_reg(RegId::Mode_Reg1), 0x04);  // Go_Offline stays, Start_SPC3 cleared
+  c.write(0x08, 0x01);                            // Start again clears Go_Offline
+  EXPECT_EQ(c.peek_reg(RegId::Mode_Reg1), 0x01);
+  EXPECT_TRUE(c.started());
+}
+
+TEST_P(Mode, ModeReg0OnlyWhileOffline) {
+  Chip c = make();
+  bus_write16(c, 0x06, 16, 0x0100);
+  c.write(0x08, 0x01);
+  log_.clear();
+  bus_write16(c, 0x06, 16, 0x0300);
+  EXPECT_EQ(c.peek_reg(RegId::Mode_Reg0), 0x0100);
+  EXPECT_EQ(log_.count_containing("while started"), 1u);  // only the byte that would change
+}
+
+TEST_P(Mode, UserTimerClockPeriods) {
+  for (std::uint16_t base : {std::uint16_t{0}, std::uint16_t{0x0400}}) {
+    Chip c = make();
+    const std::uint64_t period = base != 0 ? 480000 : 48000;
+    bus_write16(c, 0x06, 16, base);  // User_Time_Base; cycle 8
+    c.write(0x08, 0x01);             // Start at 12
+    c.step(period - 1);
+    EXPECT_EQ(c.peek_reg(RegId::Int_Req_Reg) & irq::User_Timer_Clock, 0);
+    c.step(1);  // 12 + period
+    EXPECT_NE(c.peek_reg(RegId::Int_Req_Reg) & irq::User_Timer_Clock, 0);
+    bus_write16(c, 0x02, 16, irq::User_Timer_Clock);
+    c.step(period - 8 - 1);  // one cycle before the second tick at 12 + 2 * period
+    EXPECT_EQ(c.peek_reg(RegId::Int_Req_Reg) & irq::User_Timer_Clock, 0);
+    c.step(1);
+    EXPECT_NE(c.peek_reg(RegId::Int_Req_Reg) & irq::User_Timer_Clock, 0);
+    EXPECT_EQ(c.cycle(), 12 + 2 * period);
+  }
+}
+
+TEST_P(Mode, UserLeaveMasterFromDataExchange) {
+  Chip c = make();
+  c.write(0x08, 0x01);
+  c.asic_prm_received();
+  EXPECT_EQ(c.read(0x0E), 0x00);  // User_Prm_Data_Okay: finished
+  EXPECT_EQ(c.dp_state(), DpState::Wait_Cfg);
+  c.asic_cfg_received();
+  EXPECT_EQ(c.read(0x10), 0x00);  // User_Cfg_Data_Okay
+  EXPECT_EQ(c.dp_state(), DpState::Data_Exchange);
+  EXPECT_EQ(c.peek_reg(RegId::Status_Reg) & 0x30, 0x20);
+  bus_write16(c, 0x02, 16, 0xFFFF);
+  c.write(0x08, 0x08);  // User_Leave_Master
+  EXPECT_EQ(c.dp_state(), DpState::Wait_Prm);
+  EXPECT_EQ(c.peek_reg(RegId::Int_Req_Reg), irq::Go_Leave_Data_Exchange | irq::DX_Out);
+  EXPECT_EQ(c.peek_reg(RegId::Mode_Reg1) & 0x08, 0);  // the chip clears the bit
+}
+
+TEST_P(Mode, RamAccessViolation) {
+  Chip c = make();
+  const ProfileDesc& p = c.profile();
+  if (p.violation_from == 0) {
+    // dpc31: the whole 8 KB space is decoded; nothing wraps.
+    c.write(0x1FFF, 0x5A);
+    EXPECT_EQ(c.read(0x1FFF), 0x5A);
+    EXPECT_EQ(c.peek_reg(RegId::Status_Reg) & 0x08, 0);
+    return;
+  }
+  c.write(p.violation_from - 0x100, 0x11);  // a plain RAM byte
+  c.write(0x08, 0x01);                      // started
+  const std::uint32_t wraps_to = p.violation_from + 0x10 - p.violation_subtract;
+  c.write(wraps_to, 0x77);
+  log_.clear();
+  EXPECT_EQ(c.read(p.violation_from + 0x10), 0x77);  // the access lands at address - subtract
+  EXPECT_EQ(log_.count_containing("RAM access violation"), 1u);
+  EXPECT_NE(c.peek_reg(RegId::Status_Reg) & 0x08, 0);  // RAM_Access_Violation
+  EXPECT_FALSE(c.started());                            // forced Offline ...
+  EXPECT_NE(c.peek_reg(RegId::Int_Req_Reg) & irq::MAC_Reset, 0);  // ... with MAC_Reset
+  c.write(0x08, 0x01);                                  // Start clears the flag
+  EXPECT_EQ(c.peek_reg(RegId::Status_Reg) & 0x08, 0);
+}
+
+TEST_P(Mode, Vpc3FourKilobyteMode) {
+  if (GetParam().profile != Profile::vpc3plus) GTEST_SKIP() << "4kB_Mode exists on the VPC3+ only";
+  Chip c = make();
+  c.write(0x0C, 0x80);  // Mode_Reg2.4kB_Mode
+  c.write(0x900, 0x42);
+  c.write(0x100, 0x24);
+  EXPECT_EQ(c.read(0x900), 0x42);  // a real upper 2 KB, no wrap
+  EXPECT_EQ(c.peek_reg(RegId::Status_Reg) & 0x08, 0);
+}
+
+TEST_P(Mode, GcCommandPreset) {
+  Chip c = make();
+  const RegDesc* r = find_reg(c.profile(), "R_GC_Command");
+  EXPECT_EQ(c.read(static_cast<std::uint32_t>(r->read_addr)), GetParam().profile == Profile::dpc31 ? 0xFF : 0x00);
+}
+
+INSTANTIATE_TEST_SUITE_P(Chips, Mode, ::testing::ValuesIn(testutil::all_chip_params()), testutil::param_name);

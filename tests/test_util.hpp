@@ -1,0 +1,69 @@
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "dpc31/chip.hpp"
+#include "spec.hpp"
+
+namespace testutil {
+
+// Collects the chip's log so tests can assert what was reported.
+struct LogCapture {
+  std::vector<dpc31::LogRecord> records;
+  void attach(dpc31::Chip& c) {
+    c.set_log_sink([this](const dpc31::LogRecord& r) { records.push_back(r); });
+  }
+  [[nodiscard]] std::size_t count_containing(const std::string& s) const {
+    std::size_t n = 0;
+    for (const auto& r : records) n += r.text.find(s) != std::string::npos ? 1 : 0;
+    return n;
+  }
+  void clear() { records.clear(); }
+};
+
+inline std::string pname(dpc31::Profile p) { return std::string(dpc31::profile_desc(p).name); }
+
+struct ChipParam {
+  dpc31::Profile profile;
+  dpc31::BusMode bus;
+};
+
+inline std::string param_name(const ::testing::TestParamInfo<ChipParam>& i) {
+  return pname(i.param.profile) + (i.param.bus == dpc31::BusMode::intel ? "_intel" : "_motorola");
+}
+
+inline std::vector<ChipParam> all_chip_params() {
+  std::vector<ChipParam> v;
+  for (dpc31::Profile p : dpc31::kAllProfiles) {
+    v.push_back({p, dpc31::BusMode::intel});
+    v.push_back({p, dpc31::BusMode::motorola});
+  }
+  return v;
+}
+
+// Front-door access of a whole register through the bus, with the manuals' byte order.
+inline std::uint16_t bus_read16(dpc31::Chip& c, int addr, int width) {
+  if (width == 8) return c.read(static_cast<std::uint32_t>(addr));
+  std::uint16_t v = 0;
+  for (int off = 0; off < 2; ++off) {
+    v = static_cast<std::uint16_t>(v | c.read(static_cast<std::uint32_t>(addr + off))
+                                           << (8 * spec::byte_index_at(c.bus_mode(), off)));
+  }
+  return v;
+}
+
+inline void bus_write16(dpc31::Chip& c, int addr, int width, std::uint16_t v) {
+  if (width == 8) {
+    c.write(static_cast<std::uint32_t>(addr), static_cast<std::uint8_t>(v));
+    return;
+  }
+  for (int off = 0; off < 2; ++off) {
+    c.write(static_cast<std::uint32_t>(addr + off),
+            static_cast<std::uint8_t>(v >> (8 * spec::byte_index_at(c.bus_mode(), off))));
+  }
+}
+
+}  // namespace testutil

@@ -1,0 +1,141 @@
+#include "demo.hpp"
+
+#include <fmt/core.h>
+
+#include <string>
+
+namespace dpc31::cli {
+
+namespace {
+
+// A firmware-like view of the chip that narrates what it does.
+class Narrator {
+ public:
+  Narrator(Chip& chip, std::FILE* out) : chip_(chip), out_(out) {
+    chip_.on_irq_change([this](std::uint64_t cycle, bool active) {
+      fmt::print(out_, "[cycle {:>8}]   X/INT -> {} ({})\n", cycle, chip_.x_int_pin() ? "high" : "low",
+                 active ? "active" : "inactive");
+    });
+    chip_.set_log_sink([this](const LogRecord& r) {
+      if (r.level >= LogLevel::info) fmt::print(out_, "[cycle {:>8}]   chip: {}\n", r.cycle, r.text);
+    });
+  }
+
+  std::uint8_t read(RegId id, int byte = 0) {
+    const auto a = static_cast<std::uint32_t>(chip_.addr_of(id) + byte);
+    const std::uint8_t v = chip_.read(a);
+    fmt::print(out_, "[cycle {:>8}] read  {:#06x} -> {:02X}h  {}\n", chip_.cycle(), a, v, name(id, byte));
+    return v;
+  }
+  void write(RegId id, std::uint8_t v, int byte = 0) {
+    const auto a = static_cast<std::uint32_t>(chip_.profile().regs.empty() ? 0 : write_addr(id) + byte);
+    chip_.write(a, v);
+    fmt::print(out_, "[cycle {:>8}] write {:#06x} <- {:02X}h  {}\n", chip_.cycle(), a, v, name(id, byte));
+  }
+  // 16-bit registers: the byte that holds bits 15..8 / 7..0 depends on the bus mode.
+  std::uint16_t read16(RegId id) {
+    const int lo = low_byte_offset(id);
+    const std::uint8_t l = read(id, lo);
+    const std::uint8_t h = read(id, 1 - lo);
+    return static_cast<std::uint16_t>(h << 8 | l);
+  }
+  void write16(RegId id, std::uint16_t v) {
+    const int lo = low_byte_offset(id);
+    write(id, static_cast<std::uint8_t>(v), lo);
+    write(id, static_cast<std::uint8_t>(v >> 8), 1 - lo);
+  }
+  void step(std::uint64_t n, const char* why) {
+    fmt::print(out_, "[cycle {:>8}] step  {} cycles: {}\n", chip_.cycle(), n, why);
+    chip_.step(n);
+  }
+  void say(const std::string& s) { fmt::print(out_, "\n# {}\n", s); }
+
+ private:
+  std::int32_t write_addr(RegId id) const {
+    const RegDesc* r = find_reg(chip_.profile(), id);
+    return r->write_addr >= 0 ? r->write_addr : r->read_addr;
+  }
+  int low_byte_offset(RegId id) const {
+    const RegDesc* r = find_reg(chip_.profile(), id);
+    return r->placement(chip_.bus_mode())[0] == 0 ? 0 : 1;
+  }
+  std::string name(RegId id, int byte) const {
+    const RegDesc* r = find_reg(chip_.profile(), id);
+    if (r->width == 8) return std::string(r->name);
+    return fmt::format("{} bits {}", r->name, r->placement(chip_.bus_mode())[byte] == 0 ? "7..0" : "15..8");
+  }
+
+  Chip& chip_;
+  std::FILE* out_;
+};
+
+}  // namespace
+
+int run_demo(ChipOptions opt, std::FILE* out) {
+  Chip chip(opt);
+  Narrator n(chip, out);
+  const ProfileDesc& p = chip.profile();
+  fmt::print(out, "dpc31emu demo: {} ({} profile), {} bus, {} Hz, {} clocks per bus access\n", p.title,
+             p.name, chip.bus_mode() == BusMode::intel ? "Intel" : "Motorola", chip.clock_hz(),
+             chip.bus_access_cycles());
+  fmt::print(out, "X/INT is low-active after reset; the pin is {} at cycle 0\n",
+             chip.x_int_pin() ? "high (inactive)" : "low");
+
+  n.say("Initialise as a driver does: clear IRR, acknowledge all, mode, unmask four events, start");
+  n.write16(RegId::Int_Req_Reg, 0x0000);
+  n.write16(RegId::Int_Ack_Reg, 0xFFFF);
+  n.write(RegId::Mode_Reg1_R, 0xFF);
+  n.write16(RegId::Mode_Reg0, 0x0100);  // DP_Mode; EOI inactive time 1 us; user timer 1 ms
+  const std::uint16_t enabled = irq::DX_Out | irq::MAC_Reset | irq::User_Timer_Clock | irq::New_Prm_Data;
+  n.write16(RegId::Int_Mask_Reg, static_cast<std::uint16_t>(~enabled));
+  n.write(RegId::Mode_Reg1_S, 0x01);  // Start_SPC3: power-on clear of the outputs raises DX_Out
+
+  n.say("ISR: read IR, fetch the (cleared) outputs, acknowledge DX_Out, EOI");
+  const std::uint16_t ir = n.read16(RegId::Int_Reg);
+  fmt::print(out, "                   IR = {:04X}h (DX_Out = bit 13)\n", ir);
+  const std::uint8_t dout = n.read(RegId::Next_Dout_Buffer_Cmd);
+  fmt::print(out, "                   Next_Dout_Buffer_Cmd: U = buffer {}, new = {}, cleared = {}\n",
+             dout & 3, (dout >> 2) & 1, (dout >> 3) & 1);
+  n.write16(RegId::Int_Ack_Reg, irq::DX_Out);
+  n.write(RegId::Mode_Reg1_S, 0x02);  // EOI
+
+  n.say("Wait for the 1 ms User_Timer_Clock; acknowledge it and EOI");
+  n.step(chip.clock_hz() / 1000 - chip.cycle(), "until the first user timer tick (1 ms after Start)");
+  n.step(8, "a little more");
+  n.write16(RegId::Int_Ack_Reg, irq::User_Timer_Clock);
+  n.write(RegId::Mode_Reg1_S, 0x02);
+
+  n.say("Mask the user timer: IRR latches the event, X/INT stays inactive");
+  n.write16(RegId::Int_Mask_Reg, static_cast<std::uint16_t>(~(enabled & ~irq::User_Timer_Clock)));
+  n.step(chip.clock_hz() / 1000, "one more millisecond");
+  fmt::print(out, "                   IRR = {:04X}h, IR = {:04X}h\n", chip.peek_reg(RegId::Int_Req_Reg),
+             chip.peek_reg(RegId::Int_Reg));
+  n.say("Unmask it again: X/INT goes active as soon as the mask write completes");
+  n.write16(RegId::Int_Mask_Reg, static_cast<std::uint16_t>(~enabled));
+
+  n.say("Two events pending, acknowledge one, EOI: X/INT drops and returns after the 1 us inactive time");
+  chip.asic_prm_received();
+  fmt::print(out, "[cycle {:>8}] (bus side) Set_Prm arrives: New_Prm_Data\n", chip.cycle());
+  n.write16(RegId::Int_Ack_Reg, irq::User_Timer_Clock);
+  n.write(RegId::Mode_Reg1_S, 0x02);
+  n.step(60, "past the inactive time (48 cycles at 48 MHz)");
+
+  n.say("New_Prm_Data is not acknowledged through IAR but by the User_Prm_Data_Okay read");
+  n.write16(RegId::Int_Ack_Reg, irq::New_Prm_Data);
+  const std::uint8_t ok = n.read(RegId::User_Prm_Data_Okay);
+  fmt::print(out, "                   User_Prm_Data_Okay = {:02X}h (00 finished); DP state now {}\n", ok,
+             chip.dp_state() == DpState::Wait_Cfg ? "Wait_Cfg" : "other");
+  n.write(RegId::Mode_Reg1_S, 0x02);
+
+  n.say("Go_Offline: MAC_Reset, Status.Offline");
+  n.write(RegId::Mode_Reg1_S, 0x04);
+  const std::uint16_t status = n.read16(RegId::Status_Reg);
+  fmt::print(out, "                   Status_Reg = {:04X}h (bit 0 = 0: Offline)\n", status);
+  n.write16(RegId::Int_Ack_Reg, irq::MAC_Reset);
+  n.write(RegId::Mode_Reg1_S, 0x02);
+  fmt::print(out, "\ndone at cycle {} ({:.3f} ms of chip time)\n", chip.cycle(),
+             static_cast<double>(chip.cycle()) * 1e3 / chip.clock_hz());
+  return 0;
+}
+
+}  // namespace dpc31::cli

@@ -1,0 +1,83 @@
+// dpc31: the command-line front end. Exit codes: 0 ok, 1 difference or test failure, 2 bad input.
+#include <fmt/core.h>
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "demo.hpp"
+#include "dpc31/chip.hpp"
+#include "regfmt.hpp"
+
+namespace {
+
+struct ProfileOption {
+  std::string name = "dpc31";
+};
+
+dpc31::Profile to_profile(const std::string& s) {
+  dpc31::Profile p{};
+  dpc31::parse_profile(s, p);  // CLI11's check already refused unknown names
+  return p;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"dpc31emu: cycle-accurate emulator of the Siemens DPC31, SPC3 and VPC3+"};
+  app.require_subcommand(1);
+  const std::vector<std::string> profiles = {"spc3", "vpc3plus", "dpc31"};
+
+  std::string demo_profile = "dpc31";
+  std::string demo_bus = "intel";
+  auto* demo = app.add_subcommand("demo", "scripted register-level session: start, interrupts, EOI");
+  demo->add_option("--profile", demo_profile, "chip profile")->check(CLI::IsMember(profiles));
+  demo->add_option("--bus", demo_bus, "bus byte order")->check(CLI::IsMember({"intel", "motorola"}));
+
+  std::string regs_profile = "dpc31";
+  std::string regs_format = "text";
+  auto* regs = app.add_subcommand("regs", "print the register map of a profile from the description");
+  std::vector<std::string> with_all = profiles;
+  with_all.emplace_back("all");
+  regs->add_option("--profile", regs_profile, "chip profile, or all (c, verilog, markdown)")
+      ->check(CLI::IsMember(with_all));
+  regs->add_option("--format", regs_format, "output format")
+      ->check(CLI::IsMember({"text", "json", "c", "verilog", "markdown"}));
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int rc = app.exit(e);
+    return rc == 0 ? 0 : 2;
+  }
+
+  if (demo->parsed()) {
+    dpc31::ChipOptions opt;
+    opt.profile = to_profile(demo_profile);
+    opt.bus = demo_bus == "intel" ? dpc31::BusMode::intel : dpc31::BusMode::motorola;
+    return dpc31::cli::run_demo(opt, stdout);
+  }
+  if (regs->parsed()) {
+    std::vector<const dpc31::ProfileDesc*> sel;
+    for (dpc31::Profile p : dpc31::kAllProfiles) {
+      if (regs_profile == "all" || dpc31::profile_desc(p).name == regs_profile) {
+        sel.push_back(&dpc31::profile_desc(p));
+      }
+    }
+    if (sel.size() != 1 && (regs_format == "text" || regs_format == "json")) {
+      fmt::print(stderr, "dpc31 regs: --format {} needs one profile, not all\n", regs_format);
+      return 2;
+    }
+    namespace rf = dpc31::regfmt;
+    std::string out;
+    if (regs_format == "text") out = rf::emit_text(*sel[0]);
+    if (regs_format == "json") out = rf::emit_json(*sel[0]);
+    if (regs_format == "c") out = rf::emit_c_header(sel);
+    if (regs_format == "verilog") out = rf::emit_verilog(sel);
+    if (regs_format == "markdown") out = rf::emit_markdown(sel);
+    std::fwrite(out.data(), 1, out.size(), stdout);
+    return 0;
+  }
+  return 2;
+}
