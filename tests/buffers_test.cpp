@@ -78,7 +78,7 @@ TEST_P(Buffers, DiagExchange) {
   EXPECT_NE(c.peek_reg(RegId::Status_Reg) & 0x04, 0);  // Diag_Flag
   // The ASIC sends buffer 1; meanwhile the user hands buffer 2: both with the ASIC (00).
   c.asic_diag_send_begin();
-  EXPECT_EQ(c.read(0x0C), 0x0B);
+  EXPECT_EQ(c.read(0x0C), 0x07);  // buffer 1 SPC3_Send_Mode, buffer 2 User
   testutil::bus_write16(c, 0x02, 16, irq::Diag_Buffer_Changed);
   EXPECT_EQ(c.read(0x0D), 0x00);
   EXPECT_EQ(c.read(0x0C), 0x0B);  // buffer 2 ASIC, buffer 1 still being sent

@@ -99,10 +99,10 @@ TEST_P(Mode, RamAccessViolation) {
   }
   c.write(p.violation_from - 0x100, 0x11);  // a plain RAM byte
   c.write(0x08, 0x01);                      // started
-  const std::uint32_t wraps_to = p.violation_from + 0x10 - p.violation_subtract;
+  const std::uint32_t wraps_to = p.violation_from + 0x100 - p.violation_subtract;  // plain RAM
   c.write(wraps_to, 0x77);
   log_.clear();
-  EXPECT_EQ(c.read(p.violation_from + 0x10), 0x77);  // the access lands at address - subtract
+  EXPECT_EQ(c.read(p.violation_from + 0x100), 0x77);  // the access lands at address - subtract
   EXPECT_EQ(log_.count_containing("RAM access violation"), 1u);
   EXPECT_NE(c.peek_reg(RegId::Status_Reg) & 0x08, 0);  // RAM_Access_Violation
   EXPECT_FALSE(c.started());                            // forced Offline ...
@@ -111,14 +111,15 @@ TEST_P(Mode, RamAccessViolation) {
   EXPECT_EQ(c.peek_reg(RegId::Status_Reg) & 0x08, 0);
 }
 
-TEST_P(Mode, Vpc3FourKilobyteMode) {
-  if (GetParam().profile != Profile::vpc3plus) GTEST_SKIP() << "4kB_Mode exists on the VPC3+ only";
-  Chip c = make();
-  c.write(0x0C, 0x80);  // Mode_Reg2.4kB_Mode
-  c.write(0x900, 0x42);
-  c.write(0x100, 0x24);
-  EXPECT_EQ(c.read(0x900), 0x42);  // a real upper 2 KB, no wrap
-  EXPECT_EQ(c.peek_reg(RegId::Status_Reg) & 0x08, 0);
+TEST(Vpc3, FourKilobyteMode) {
+  for (BusMode bus : {BusMode::intel, BusMode::motorola}) {
+    Chip c({Profile::vpc3plus, bus});
+    c.write(0x0C, 0x80);  // Mode_Reg2.4kB_Mode
+    c.write(0x900, 0x42);
+    c.write(0x100, 0x24);
+    EXPECT_EQ(c.read(0x900), 0x42);  // a real upper 2 KB, no wrap
+    EXPECT_EQ(c.peek_reg(RegId::Status_Reg) & 0x08, 0);
+  }
 }
 
 TEST_P(Mode, GcCommandPreset) {

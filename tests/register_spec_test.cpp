@@ -25,10 +25,10 @@ TEST_P(RegisterSpec, EveryRegisterMatchesTheManual) {
     }
     EXPECT_EQ(row.policy.size(), static_cast<std::size_t>(row.width));
     EXPECT_EQ(r->rw, spec::mask_of(row.policy, "w"));
-    EXPECT_EQ(r->ro, spec::mask_of(row.policy, "r"));
+    EXPECT_EQ(r->ro, spec::mask_of(row.policy, "rR"));
     EXPECT_EQ(r->w1c, spec::mask_of(row.policy, "cC"));
     EXPECT_EQ(r->w1s, spec::mask_of(row.policy, "sS"));
-    EXPECT_EQ(r->pulse, spec::mask_of(row.policy, "CS"));
+    EXPECT_EQ(r->pulse, spec::mask_of(row.policy, "CSR"));
     EXPECT_EQ(r->cmd, spec::mask_of(row.policy, "k"));
     EXPECT_EQ(r->wo, spec::mask_of(row.policy, "o"));
     EXPECT_EQ(r->ign, spec::mask_of(row.policy, "i"));

@@ -1,7 +1,7 @@
 // The register map as the manuals state it (chip-facts §1-§4), written by hand, independent of
 // regs/dpc31_regs.json: the description and the emulator are both checked against this.
 // Policy strings give bits from the most significant down: w RW, r RO, c W1C, s W1S, C/S the same
-// but self-clearing (pulse), k command read, o write-only, i no effect (logged), - reserved,
+// and R the same but self-clearing (pulse), k command read, o write-only, i no effect (logged), - reserved,
 // u stored but not modelled.
 #pragma once
 
@@ -84,9 +84,9 @@ inline const std::vector<Row>& rows() {
       {ALL, "SSA_Buffer_Free_Cmd", 0x14, -1, 8, -1, "kkkkkkkk"},
       {ALL, "Reserved_14h_W", -1, 0x14, 8, -1, "--------", false, true},
       {S, "Reserved_15h_R", 0x15, -1, 8, -1, "--------", false, true},
-      {S, "Mode_Reg1", -1, -1, 8, 0x00, "--rrrrrr"},
-      {D, "Mode_Reg1", 0x15, -1, 8, 0x00, "--rrrrrr"},
-      {V, "Mode_Reg1", 0x15, -1, 8, 0x00, "r-rrrrrr"},
+      {S, "Mode_Reg1", -1, -1, 8, 0x00, "--rrRrRr"},
+      {D, "Mode_Reg1", 0x15, -1, 8, 0x00, "--rrRrRr"},
+      {V, "Mode_Reg1", 0x15, -1, 8, 0x00, "r-rrRrRr"},
       {ALL, "Reserved_15h_W", -1, 0x15, 8, -1, "--------", false, true},
       {D, "Param_Reg", 0x16, 0x16, 8, 0x00, "------ww"},
       {D, "C31_Control", 0x17, 0x17, 8, 0x00, "-------w"},
@@ -159,6 +159,13 @@ inline std::vector<Row> rows_for(dpc31::Profile p) {
     out.push_back(x);
   }
   return out;
+}
+
+inline Row row(dpc31::Profile p, std::string_view name) {
+  for (const Row& r : rows_for(p)) {
+    if (r.name == name) return r;
+  }
+  return Row{0, name, -1, -1, 0, -1, ""};
 }
 
 // The manuals' byte order: Intel puts bits 7..0 at the lower address, Motorola bits 15..8.
