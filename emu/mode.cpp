@@ -65,6 +65,9 @@ void ChipCore::go_offline() {
   started = false;
   latch[idx(RegId::Mode_Reg1)] &= static_cast<std::uint16_t>(~kStart_SPC3);
   timers.user_timer_next = kNever;
+  // The MAC reset puts the DP and watchdog state machines back into their reset states.
+  dp.reset();
+  timers.wd = WdState::Baud_Search;
   log(LogLevel::info, "Passive_Idle -> Offline (MAC_Reset)");
   raise(irq::MAC_Reset);
 }

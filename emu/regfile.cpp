@@ -253,8 +253,10 @@ void ChipCore::write_reg(const RegDesc& r, std::uint32_t offset, std::uint8_t va
   auto next = static_cast<std::uint16_t>((old & ~store) | (w & store));
   next = static_cast<std::uint16_t>(next & ~(w & r.w1c));
   next = static_cast<std::uint16_t>(next | (w & r.w1s));
-  if ((w & r.rsvd) != 0) {
-    log(LogLevel::warn, "{}: 1 written to reserved bits {:#06x}: ignored", r.name, w & r.rsvd);
+  // QEMU's rule: a write that would change a reserved bit is a guest error.
+  const auto rsvd_change = static_cast<std::uint16_t>((w ^ old) & r.rsvd & lane);
+  if (rsvd_change != 0) {
+    log(LogLevel::warn, "{}: write would change reserved bits {:#06x}: ignored", r.name, rsvd_change);
   }
   if ((w & r.ign) != 0) {
     log(LogLevel::info, "{}: {} not changed by this register (bits {:#06x})", r.name,

@@ -31,7 +31,10 @@ TEST_P(Mode, StartAndGoOffline) {
   EXPECT_EQ(c.peek_reg(RegId::Status_Reg), release | 0x0001);  // Passive_Idle
   // Power-on clear of the outputs raised DX_Out at the cycle Start completed.
   EXPECT_EQ(c.peek_reg(RegId::Int_Req_Reg), irq::DX_Out);
-  c.write(0x08, 0x04);  // Go_Offline
+  c.asic_prm_received();
+  EXPECT_EQ(c.read(0x0E), 0x00);  // Prm OK: Wait_Cfg
+  EXPECT_EQ(c.peek_reg(RegId::Status_Reg), release | 0x0011);
+  c.write(0x08, 0x04);  // Go_Offline: the DP state machine back to its reset state
   EXPECT_FALSE(c.started());
   EXPECT_EQ(c.peek_reg(RegId::Status_Reg), release);
   EXPECT_EQ(c.peek_reg(RegId::Int_Req_Reg), irq::DX_Out | irq::MAC_Reset);

@@ -216,4 +216,16 @@ TEST_P(Ral, UnmappedAddressesReadZeroAndAreLogged) {
   EXPECT_EQ(log_.count_containing("beyond"), 1u);
 }
 
+// QEMU's rule: only a write that would change a reserved bit is reported.
+TEST_P(Ral, ReservedBitWritesFollowQemusRule) {
+  Chip c = make();
+  const std::uint16_t rsvd = spec::mask_of(spec::row(GetParam().profile, "Int_Req_Reg").policy, "-");
+  bus_write16(c, 0x04, 16, 0xFFFF);  // IMR: reserved bits already 1 (reset FFFFh): no change
+  EXPECT_EQ(log_.count_containing("reserved bits"), 0u);
+  bus_write16(c, 0x00, 16, 0xFFFF);  // IRR: reserved bits are 0, one report per lane holding some
+  const std::size_t lanes = ((rsvd & 0x00FF) != 0 ? 1u : 0u) + ((rsvd & 0xFF00) != 0 ? 1u : 0u);
+  EXPECT_EQ(log_.count_containing("Int_Req_Reg: write would change reserved bits"), lanes);
+  EXPECT_EQ(c.peek_reg(RegId::Int_Req_Reg), static_cast<std::uint16_t>(~rsvd));
+}
+
 INSTANTIATE_TEST_SUITE_P(Chips, Ral, ::testing::ValuesIn(testutil::all_chip_params()), testutil::param_name);
