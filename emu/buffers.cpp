@@ -78,7 +78,9 @@ void install_buffer_hooks(HookTable& h) {
   h[ChipCore::idx(RegId::Dout_Buffer_SM)].read = dout_sm;
   h[ChipCore::idx(RegId::Diag_Buffer_SM)].read = diag_sm;
   h[ChipCore::idx(RegId::New_Din_Buffer_Cmd)].read = preview<new_din>;
-  h[ChipCore::idx(RegId::New_Din_Buffer_Cmd)].command = [](ChipCore& c) { return new_din(c.buffers); };
+  h[ChipCore::idx(RegId::New_Din_Buffer_Cmd)].command = [](ChipCore& c) {
+    return new_din(c.buffers);
+  };
   h[ChipCore::idx(RegId::Next_Dout_Buffer_Cmd)].read = preview<next_dout>;
   h[ChipCore::idx(RegId::Next_Dout_Buffer_Cmd)].command = [](ChipCore& c) {
     return next_dout(c.buffers);

@@ -52,8 +52,8 @@ struct ChipCore {
   std::uint64_t now = 0;
 
   std::array<std::uint16_t, kRegIdCount> latch{};
-  std::vector<std::uint8_t> mem;       // 2^address_bits bytes; only RAM regions are used as RAM
-  std::vector<std::uint16_t> rd_map;   // address -> index into prof->regs (kNoReg = none)
+  std::vector<std::uint8_t> mem;      // 2^address_bits bytes; only RAM regions are used as RAM
+  std::vector<std::uint16_t> rd_map;  // address -> index into prof->regs (kNoReg = none)
   std::vector<std::uint16_t> wr_map;
   std::vector<std::uint16_t> region_map;  // address -> index into prof->regions (kNoReg)
   std::array<std::uint16_t, kRegIdCount> reg_index{};  // RegId -> index into prof->regs
@@ -65,7 +65,7 @@ struct ChipCore {
   Timers timers;
   bool started = false;
   bool ram_access_violation = false;
-  bool large_ram = false;  // VPC3+ 4kB_Mode
+  bool large_ram = false;      // VPC3+ 4kB_Mode
   std::uint8_t baud_code = 0;  // Status_Reg bits 11..8 (0 = 12 Mbaud, where Baud_Search starts)
 
   LogSink sink;
@@ -107,7 +107,9 @@ struct ChipCore {
   void diag_send_begin();
   void diag_send_end();
   [[nodiscard]] std::uint32_t buffer_addr(RegId ptr_cell) const;
-  [[nodiscard]] bool mode0(std::uint16_t bit) const { return (latch[idx(RegId::Mode_Reg0)] & bit) != 0; }
+  [[nodiscard]] bool mode0(std::uint16_t bit) const {
+    return (latch[idx(RegId::Mode_Reg0)] & bit) != 0;
+  }
 
   // --- RAM used by the blocks (the ASIC's own accesses) ---
   [[nodiscard]] std::uint32_t segment_shift() const;

@@ -1,8 +1,8 @@
+#include "dpc31/log.hpp"
+
 #include <fmt/core.h>
 
 #include <cstdio>
-
-#include "dpc31/log.hpp"
 
 namespace dpc31 {
 

@@ -16,7 +16,8 @@ constexpr std::uint16_t k4kB_Mode = 1u << 7;
 // Mode_Reg0 and Mode_Reg2 configure the chip and may only change while it is Offline.
 std::uint16_t offline_only(ChipCore& c, std::uint16_t old, std::uint16_t next) {
   if (!c.started || old == next) return next;
-  c.log(LogLevel::warn, "mode register written while started (Passive_Idle): ignored, write it in Offline");
+  c.log(LogLevel::warn,
+        "mode register written while started (Passive_Idle): ignored, write it in Offline");
   return old;
 }
 

@@ -38,8 +38,10 @@ ChipCore::ChipCore(const ChipOptions& opt)
     const RegDesc& r = prof->regs[i];
     reg_index[idx(r.id)] = static_cast<std::uint16_t>(i);
     for (int b = 0; b < r.bytes(); ++b) {
-      if (r.read_addr >= 0) rd_map[static_cast<std::size_t>(r.read_addr + b)] = static_cast<std::uint16_t>(i);
-      if (r.write_addr >= 0) wr_map[static_cast<std::size_t>(r.write_addr + b)] = static_cast<std::uint16_t>(i);
+      if (r.read_addr >= 0)
+        rd_map[static_cast<std::size_t>(r.read_addr + b)] = static_cast<std::uint16_t>(i);
+      if (r.write_addr >= 0)
+        wr_map[static_cast<std::size_t>(r.write_addr + b)] = static_cast<std::uint16_t>(i);
     }
   }
   for (std::size_t i = 0; i < prof->regions.size(); ++i) {
@@ -110,7 +112,9 @@ void ChipCore::set_cell16(const RegDesc& r, std::uint16_t v) {
   mem[base + 1] = static_cast<std::uint8_t>(v >> (8 * p[1]));
 }
 
-std::uint8_t ChipCore::cell(RegId id) const { return mem[static_cast<std::uint32_t>(reg(id)->read_addr)]; }
+std::uint8_t ChipCore::cell(RegId id) const {
+  return mem[static_cast<std::uint32_t>(reg(id)->read_addr)];
+}
 
 std::uint32_t ChipCore::segment_shift() const {
   return large_ram ? prof->segment_shift_large : prof->segment_shift;
@@ -132,8 +136,9 @@ std::uint32_t ChipCore::decode(std::uint32_t addr, bool& violation) const {
 }
 
 void ChipCore::note_violation(std::uint32_t addr, std::uint32_t mapped) {
-  log(LogLevel::warn, "RAM access violation at {:#05x}: beyond the {} bytes of RAM, wraps to {:#05x}",
-      addr, large_ram ? prof->ram_size_large : prof->ram_size, mapped);
+  log(LogLevel::warn,
+      "RAM access violation at {:#05x}: beyond the {} bytes of RAM, wraps to {:#05x}", addr,
+      large_ram ? prof->ram_size_large : prof->ram_size, mapped);
   ram_access_violation = true;
   if (started) go_offline();
 }
@@ -196,7 +201,8 @@ std::uint8_t ChipCore::bus_read(std::uint32_t addr) {
   const RegHooks& h = hooks[idx(r.id)];
   std::uint16_t v = h.command != nullptr ? h.command(*this) : reg_value(r.id);
   v = static_cast<std::uint16_t>(v & r.mask() & ~r.rsvd);
-  if (r.unimp != 0) log(LogLevel::info, "read of {}: behaviour not modelled, reads the stored value", r.name);
+  if (r.unimp != 0)
+    log(LogLevel::info, "read of {}: behaviour not modelled, reads the stored value", r.name);
   update_irq_line();
   return static_cast<std::uint8_t>(v >> (8 * r.placement(bus)[offset]));
 }
@@ -227,7 +233,8 @@ void ChipCore::bus_write(std::uint32_t addr, std::uint8_t value) {
   const RegDesc& r = prof->regs[i];
   switch (r.kind) {
     case Kind::cell:
-      if (r.reserved) log(LogLevel::info, "write {:02X}h to reserved cell {} at {:#06x}", value, r.name, a);
+      if (r.reserved)
+        log(LogLevel::info, "write {:02X}h to reserved cell {} at {:#06x}", value, r.name, a);
       mem[a] = value;
       return;
     case Kind::reserved:
@@ -256,7 +263,8 @@ void ChipCore::write_reg(const RegDesc& r, std::uint32_t offset, std::uint8_t va
   // QEMU's rule: a write that would change a reserved bit is a guest error.
   const auto rsvd_change = static_cast<std::uint16_t>((w ^ old) & r.rsvd & lane);
   if (rsvd_change != 0) {
-    log(LogLevel::warn, "{}: write would change reserved bits {:#06x}: ignored", r.name, rsvd_change);
+    log(LogLevel::warn, "{}: write would change reserved bits {:#06x}: ignored", r.name,
+        rsvd_change);
   }
   if ((w & r.ign) != 0) {
     log(LogLevel::info, "{}: {} not changed by this register (bits {:#06x})", r.name,
@@ -282,7 +290,8 @@ std::uint8_t ChipCore::peek(std::uint32_t addr) const {
   const RegDesc& r = prof->regs[i];
   if (r.kind == Kind::cell) return mem[a];
   const std::uint16_t v = reg_value(r.id);
-  return static_cast<std::uint8_t>(v >> (8 * r.placement(bus)[a - static_cast<std::uint32_t>(r.read_addr)]));
+  return static_cast<std::uint8_t>(
+      v >> (8 * r.placement(bus)[a - static_cast<std::uint32_t>(r.read_addr)]));
 }
 
 bool ChipCore::poke(std::uint32_t addr, std::uint8_t value) {

@@ -62,7 +62,7 @@ TEST_P(Buffers, DinRotation) {
   EXPECT_EQ(c.read(0x09), 0x03);  // U=2 -> N; new U = 3
   EXPECT_EQ(c.read(0x08), 0x39);  // D=1 N=2 U=3 F=Nil
   EXPECT_EQ(c.asic_din_fetch(), 2);
-  EXPECT_EQ(c.read(0x08), 0x72);  // D=2 N=Nil U=3 F=1
+  EXPECT_EQ(c.read(0x08), 0x72);     // D=2 N=Nil U=3 F=1
   EXPECT_EQ(c.asic_din_fetch(), 2);  // nothing new: D resent
   EXPECT_EQ(c.read(0x09), 0x01);     // U=3 -> N; new U = 1 (from F)
   EXPECT_EQ(c.read(0x09), 0x03);     // again before a send: old N comes back as U
@@ -131,4 +131,5 @@ TEST_P(Buffers, SsaBufferFree) {
   EXPECT_TRUE(c.ssa_buffer_free());
 }
 
-INSTANTIATE_TEST_SUITE_P(Chips, Buffers, ::testing::ValuesIn(testutil::all_chip_params()), testutil::param_name);
+INSTANTIATE_TEST_SUITE_P(Chips, Buffers, ::testing::ValuesIn(testutil::all_chip_params()),
+                         testutil::param_name);

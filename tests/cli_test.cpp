@@ -69,9 +69,12 @@ TEST(Cli, RegsJsonIsValidAndComplete) {
 
 // The compiled-in tables print exactly the checked-in generated files.
 TEST(Cli, RegsReproducesTheCheckedInOutputs) {
-  EXPECT_EQ(run("regs --profile all --format c").out, slurp(std::string(SOURCE_DIR) + "/include/dpc31/dpc31_regs.h"));
-  EXPECT_EQ(run("regs --profile all --format verilog").out, slurp(std::string(SOURCE_DIR) + "/rtl/dpc31_regs.vh"));
-  EXPECT_EQ(run("regs --profile all --format markdown").out, slurp(std::string(SOURCE_DIR) + "/docs/registers.md"));
+  EXPECT_EQ(run("regs --profile all --format c").out,
+            slurp(std::string(SOURCE_DIR) + "/include/dpc31/dpc31_regs.h"));
+  EXPECT_EQ(run("regs --profile all --format verilog").out,
+            slurp(std::string(SOURCE_DIR) + "/rtl/dpc31_regs.vh"));
+  EXPECT_EQ(run("regs --profile all --format markdown").out,
+            slurp(std::string(SOURCE_DIR) + "/docs/registers.md"));
 }
 
 TEST(Cli, DemoRunsOnEveryProfile) {

@@ -42,8 +42,10 @@ int offset_of_bit(BusMode m, int b) { return spec::byte_index_at(m, 0) == b / 8 
 }  // namespace
 
 TEST_P(Irq, EveryBitSetsMasksAcknowledges) {
-  const std::uint16_t events = spec::mask_of(spec::row(GetParam().profile, "Int_Req_Reg").policy, "w");
-  const std::uint16_t not_by_iar = spec::mask_of(spec::row(GetParam().profile, "Int_Ack_Reg").policy, "i");
+  const std::uint16_t events =
+      spec::mask_of(spec::row(GetParam().profile, "Int_Req_Reg").policy, "w");
+  const std::uint16_t not_by_iar =
+      spec::mask_of(spec::row(GetParam().profile, "Int_Ack_Reg").policy, "i");
   for (int b = 0; b < 16; ++b) {
     if (((events >> b) & 1) == 0) continue;
     SCOPED_TRACE(fmt::format("bit {}", b));
@@ -68,11 +70,13 @@ TEST_P(Irq, EveryBitSetsMasksAcknowledges) {
     EXPECT_FALSE(c.irq_active());
     EXPECT_EQ(bus_read16(c, 0x00, 16), bit);  // IRR keeps the event while masked; cycle 36
     EXPECT_EQ(bus_read16(c, 0x02, 16), 0);    // cycle 44
-    c.write(static_cast<std::uint32_t>(0x04 + off), static_cast<std::uint8_t>(~(bit >> (8 * (b / 8)))));
+    c.write(static_cast<std::uint32_t>(0x04 + off),
+            static_cast<std::uint8_t>(~(bit >> (8 * (b / 8)))));
     EXPECT_TRUE(c.irq_active());  // unmasked at 48
 
     // Acknowledge: W1C, except the bits only the OK/Not_OK reads clear.
-    c.write(static_cast<std::uint32_t>(0x02 + off), static_cast<std::uint8_t>(bit >> (8 * (b / 8))));
+    c.write(static_cast<std::uint32_t>(0x02 + off),
+            static_cast<std::uint8_t>(bit >> (8 * (b / 8))));
     const bool ignored = (not_by_iar & bit) != 0;
     EXPECT_EQ(c.irq_active(), ignored);  // acknowledge completes at 52
     std::vector<std::pair<std::uint64_t, bool>> expect = {{8, true}, {28, false}, {48, true}};
@@ -169,4 +173,5 @@ TEST_P(Irq, PolarityFollowsIntPol) {
   EXPECT_TRUE(c.x_int_pin());
 }
 
-INSTANTIATE_TEST_SUITE_P(Chips, Irq, ::testing::ValuesIn(testutil::all_chip_params()), testutil::param_name);
+INSTANTIATE_TEST_SUITE_P(Chips, Irq, ::testing::ValuesIn(testutil::all_chip_params()),
+                         testutil::param_name);

@@ -107,10 +107,10 @@ TEST_P(Mode, RamAccessViolation) {
   log_.clear();
   EXPECT_EQ(c.read(p.violation_from + 0x100), 0x77);  // the access lands at address - subtract
   EXPECT_EQ(log_.count_containing("RAM access violation"), 1u);
-  EXPECT_NE(c.peek_reg(RegId::Status_Reg) & 0x08, 0);  // RAM_Access_Violation
-  EXPECT_FALSE(c.started());                            // forced Offline ...
+  EXPECT_NE(c.peek_reg(RegId::Status_Reg) & 0x08, 0);             // RAM_Access_Violation
+  EXPECT_FALSE(c.started());                                      // forced Offline ...
   EXPECT_NE(c.peek_reg(RegId::Int_Req_Reg) & irq::MAC_Reset, 0);  // ... with MAC_Reset
-  c.write(0x08, 0x01);                                  // Start clears the flag
+  c.write(0x08, 0x01);                                            // Start clears the flag
   EXPECT_EQ(c.peek_reg(RegId::Status_Reg) & 0x08, 0);
 }
 
@@ -128,7 +128,9 @@ TEST(Vpc3, FourKilobyteMode) {
 TEST_P(Mode, GcCommandPreset) {
   Chip c = make();
   const RegDesc* r = find_reg(c.profile(), "R_GC_Command");
-  EXPECT_EQ(c.read(static_cast<std::uint32_t>(r->read_addr)), GetParam().profile == Profile::dpc31 ? 0xFF : 0x00);
+  EXPECT_EQ(c.read(static_cast<std::uint32_t>(r->read_addr)),
+            GetParam().profile == Profile::dpc31 ? 0xFF : 0x00);
 }
 
-INSTANTIATE_TEST_SUITE_P(Chips, Mode, ::testing::ValuesIn(testutil::all_chip_params()), testutil::param_name);
+INSTANTIATE_TEST_SUITE_P(Chips, Mode, ::testing::ValuesIn(testutil::all_chip_params()),
+                         testutil::param_name);

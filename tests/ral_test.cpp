@@ -63,7 +63,8 @@ TEST_P(Ral, HwReset) {
     if (row.read >= 0 && row.policy.find('k') == std::string_view::npos) {
       EXPECT_EQ(bus_read16(c, row.read, row.width), expected);  // front door
     }
-    if (row.policy.find('c') == std::string_view::npos && row.policy.find('s') == std::string_view::npos) {
+    if (row.policy.find('c') == std::string_view::npos &&
+        row.policy.find('s') == std::string_view::npos) {
       EXPECT_EQ(c.peek_reg(id_of(GetParam().profile, row.name)), expected);  // back door
     }
   }
@@ -106,7 +107,8 @@ TEST_P(Ral, BitBash) {
           }
           expect = static_cast<std::uint16_t>(expect & ~rsvd);
           const bool readable = tgt->read >= 0 && tgt->policy.find('k') == std::string_view::npos;
-          const std::uint16_t got = readable ? bus_read16(c, tgt->read, tgt->width) : c.peek_reg(target);
+          const std::uint16_t got =
+              readable ? bus_read16(c, tgt->read, tgt->width) : c.peek_reg(target);
           EXPECT_EQ(got, expect);
         }
       }
@@ -173,7 +175,8 @@ TEST_P(Ral, IntelVersusMotorolaViews) {
     // Intel: the lower address holds bits 7..0; Motorola: bits 15..8.
     const std::uint16_t expect = c.bus_mode() == BusMode::intel ? 0x3412 : 0x1234;
     EXPECT_EQ(c.peek_reg(r->id), expect & store);
-    EXPECT_EQ(c.peek(static_cast<std::uint32_t>(r->read_addr)), 0x12 & (c.bus_mode() == BusMode::intel ? store : store >> 8));
+    EXPECT_EQ(c.peek(static_cast<std::uint32_t>(r->read_addr)),
+              0x12 & (c.bus_mode() == BusMode::intel ? store : store >> 8));
   }
   // The release code sits in Status_Reg bits 15..12: the high byte's address depends on the mode.
   Chip c = make();
@@ -191,7 +194,8 @@ TEST_P(Ral, ReservedAddressesAreLoggedByName) {
       EXPECT_EQ(c.read(static_cast<std::uint32_t>(row.read)), 0);
     }
     if (row.write >= 0) c.write(static_cast<std::uint32_t>(row.write), 0xA5);
-    const std::size_t accesses = (row.read >= 0 && !row.cell ? 1u : 0u) + (row.write >= 0 ? 1u : 0u);
+    const std::size_t accesses =
+        (row.read >= 0 && !row.cell ? 1u : 0u) + (row.write >= 0 ? 1u : 0u);
     EXPECT_EQ(log_.count_containing(std::string(row.name)), accesses);
   }
 }
@@ -219,7 +223,8 @@ TEST_P(Ral, UnmappedAddressesReadZeroAndAreLogged) {
 // QEMU's rule: only a write that would change a reserved bit is reported.
 TEST_P(Ral, ReservedBitWritesFollowQemusRule) {
   Chip c = make();
-  const std::uint16_t rsvd = spec::mask_of(spec::row(GetParam().profile, "Int_Req_Reg").policy, "-");
+  const std::uint16_t rsvd =
+      spec::mask_of(spec::row(GetParam().profile, "Int_Req_Reg").policy, "-");
   bus_write16(c, 0x04, 16, 0xFFFF);  // IMR: reserved bits already 1 (reset FFFFh): no change
   EXPECT_EQ(log_.count_containing("reserved bits"), 0u);
   bus_write16(c, 0x00, 16, 0xFFFF);  // IRR: reserved bits are 0, one report per lane holding some
@@ -228,4 +233,5 @@ TEST_P(Ral, ReservedBitWritesFollowQemusRule) {
   EXPECT_EQ(c.peek_reg(RegId::Int_Req_Reg), static_cast<std::uint16_t>(~rsvd));
 }
 
-INSTANTIATE_TEST_SUITE_P(Chips, Ral, ::testing::ValuesIn(testutil::all_chip_params()), testutil::param_name);
+INSTANTIATE_TEST_SUITE_P(Chips, Ral, ::testing::ValuesIn(testutil::all_chip_params()),
+                         testutil::param_name);

@@ -11,7 +11,8 @@ class RegisterSpec : public ::testing::TestWithParam<Profile> {};
 TEST_P(RegisterSpec, EveryRegisterMatchesTheManual) {
   const ProfileDesc& p = profile_desc(GetParam());
   const auto rows = spec::rows_for(GetParam());
-  EXPECT_EQ(p.regs.size(), rows.size()) << "the description has registers the spec table lacks or vice versa";
+  EXPECT_EQ(p.regs.size(), rows.size())
+      << "the description has registers the spec table lacks or vice versa";
   for (const spec::Row& row : rows) {
     SCOPED_TRACE(std::string(row.name));
     const RegDesc* r = find_reg(p, row.name);
@@ -62,7 +63,8 @@ TEST_P(RegisterSpec, ProfileLayoutMatchesTheManual) {
       EXPECT_EQ(p.segment_shift_large, 4);
       EXPECT_EQ(p.release, 0xC);
       break;
-    case Profile::dpc31:  // 8 KB space, RAM from 0800h, cells from 0840h, users from 08A0h, 32-byte segments
+    case Profile::dpc31:  // 8 KB space, RAM from 0800h, cells from 0840h, users from 08A0h, 32-byte
+                          // segments
       EXPECT_EQ(p.address_bits, 13);
       EXPECT_EQ(p.ram_begin, 0x800u);
       EXPECT_EQ(p.ram_size, 6144u);

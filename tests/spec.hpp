@@ -1,8 +1,8 @@
 // The register map as the manuals state it (chip-facts §1-§4), written by hand, independent of
 // regs/dpc31_regs.json: the description and the emulator are both checked against this.
 // Policy strings give bits from the most significant down: w RW, r RO, c W1C, s W1S, C/S the same
-// and R the same but self-clearing (pulse), k command read, o write-only, i no effect (logged), - reserved,
-// u stored but not modelled.
+// and R the same but self-clearing (pulse), k command read, o write-only, i no effect (logged), -
+// reserved, u stored but not modelled.
 #pragma once
 
 #include <cstdint>
@@ -178,7 +178,8 @@ inline std::uint16_t mask_of(std::string_view policy, std::string_view letters) 
   std::uint16_t m = 0;
   const auto n = policy.size();
   for (std::size_t i = 0; i < n; ++i) {
-    if (letters.find(policy[i]) != std::string_view::npos) m |= static_cast<std::uint16_t>(1u << (n - 1 - i));
+    if (letters.find(policy[i]) != std::string_view::npos)
+      m |= static_cast<std::uint16_t>(1u << (n - 1 - i));
   }
   return m;
 }

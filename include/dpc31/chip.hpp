@@ -99,15 +99,15 @@ class Chip {
 
   // Protocol-side entry points (what the DP engine does inside the chip). Each takes effect at
   // the current cycle.
-  void asic_raise(std::uint16_t irq_bits);           // latch events into Int_Req_Reg
-  void asic_dout_received();                         // D -> N, DX_Out
-  void asic_dout_clear();                            // clear D, D -> N, DX_Out
-  std::uint8_t asic_din_fetch();                     // N -> D if new; returns the D buffer index
-  void asic_diag_send_begin();                       // the ASIC starts sending its diag buffer
-  void asic_diag_send_end();                         // ... and has sent it
-  void asic_prm_received();                          // Set_Prm in the Prm buffer: New_Prm_Data
-  void asic_cfg_received();                          // Chk_Cfg in the Cfg buffer: New_Cfg_Data
-  void asic_ssa_received();                          // Set_Slave_Add: New_SSA_Data
+  void asic_raise(std::uint16_t irq_bits);  // latch events into Int_Req_Reg
+  void asic_dout_received();                // D -> N, DX_Out
+  void asic_dout_clear();                   // clear D, D -> N, DX_Out
+  std::uint8_t asic_din_fetch();            // N -> D if new; returns the D buffer index
+  void asic_diag_send_begin();              // the ASIC starts sending its diag buffer
+  void asic_diag_send_end();                // ... and has sent it
+  void asic_prm_received();                 // Set_Prm in the Prm buffer: New_Prm_Data
+  void asic_cfg_received();                 // Chk_Cfg in the Cfg buffer: New_Cfg_Data
+  void asic_ssa_received();                 // Set_Slave_Add: New_SSA_Data
   [[nodiscard]] bool ssa_buffer_free() const;
 
   ChipCore& core() { return *core_; }

@@ -88,11 +88,12 @@ struct RegDesc {
 
 // A contiguous memory region of a profile.
 struct RegionDesc {
-  std::string_view name;  // "register area", "internal work cells", "organisational parameters", ...
-  std::uint32_t begin;    // first address
-  std::uint32_t end;      // one past the last address
-  bool ram;               // backed by RAM (peek/poke/walk) or not
-  bool reserved;          // accesses logged (the user must not touch)
+  std::string_view
+      name;             // "register area", "internal work cells", "organisational parameters", ...
+  std::uint32_t begin;  // first address
+  std::uint32_t end;    // one past the last address
+  bool ram;             // backed by RAM (peek/poke/walk) or not
+  bool reserved;        // accesses logged (the user must not touch)
   std::string_view desc;
 };
 
@@ -102,17 +103,17 @@ struct ProfileDesc {
   std::string_view title;  // "Siemens SPC3"
   std::string_view macro;  // C macro prefix "SPC3"
   std::uint8_t address_bits;
-  std::uint32_t ram_begin;        // first RAM address
-  std::uint32_t ram_size;         // bytes of RAM (normal mode)
-  std::uint32_t ram_size_large;   // bytes of RAM with VPC3+ 4kB_Mode (0 = no such mode)
-  std::uint32_t cells_base;       // physical address of organisational cell 16h
-  std::uint32_t user_base;        // first byte of the user buffer area
-  std::uint8_t segment_shift;     // buffer pointer -> physical address shift
+  std::uint32_t ram_begin;       // first RAM address
+  std::uint32_t ram_size;        // bytes of RAM (normal mode)
+  std::uint32_t ram_size_large;  // bytes of RAM with VPC3+ 4kB_Mode (0 = no such mode)
+  std::uint32_t cells_base;      // physical address of organisational cell 16h
+  std::uint32_t user_base;       // first byte of the user buffer area
+  std::uint8_t segment_shift;    // buffer pointer -> physical address shift
   std::uint8_t segment_shift_large;
-  std::uint32_t violation_from;   // first address that is a RAM access violation (0 = none)
+  std::uint32_t violation_from;  // first address that is a RAM access violation (0 = none)
   std::uint32_t violation_subtract;
-  std::uint8_t release;           // Status_Reg bits 15..12
-  std::uint8_t bus_access_cycles; // clocks one bus access takes (docs/timing.md)
+  std::uint8_t release;            // Status_Reg bits 15..12
+  std::uint8_t bus_access_cycles;  // clocks one bus access takes (docs/timing.md)
   std::string_view note;
   std::span<const RegDesc> regs;
   std::span<const RegionDesc> regions;

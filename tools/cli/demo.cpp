@@ -13,24 +13,27 @@ class Narrator {
  public:
   Narrator(Chip& chip, std::FILE* out) : chip_(chip), out_(out) {
     chip_.on_irq_change([this](std::uint64_t cycle, bool active) {
-      fmt::print(out_, "[cycle {:>8}]   X/INT -> {} ({})\n", cycle, chip_.x_int_pin() ? "high" : "low",
-                 active ? "active" : "inactive");
+      fmt::print(out_, "[cycle {:>8}]   X/INT -> {} ({})\n", cycle,
+                 chip_.x_int_pin() ? "high" : "low", active ? "active" : "inactive");
     });
     chip_.set_log_sink([this](const LogRecord& r) {
-      if (r.level >= LogLevel::info) fmt::print(out_, "[cycle {:>8}]   chip: {}\n", r.cycle, r.text);
+      if (r.level >= LogLevel::info)
+        fmt::print(out_, "[cycle {:>8}]   chip: {}\n", r.cycle, r.text);
     });
   }
 
   std::uint8_t read(RegId id, int byte = 0) {
     const auto a = static_cast<std::uint32_t>(chip_.addr_of(id) + byte);
     const std::uint8_t v = chip_.read(a);
-    fmt::print(out_, "[cycle {:>8}] read  {:#06x} -> {:02X}h  {}\n", chip_.cycle(), a, v, name(id, byte));
+    fmt::print(out_, "[cycle {:>8}] read  {:#06x} -> {:02X}h  {}\n", chip_.cycle(), a, v,
+               name(id, byte));
     return v;
   }
   void write(RegId id, std::uint8_t v, int byte = 0) {
-    const auto a = static_cast<std::uint32_t>(chip_.profile().regs.empty() ? 0 : write_addr(id) + byte);
+    const auto a = static_cast<std::uint32_t>(write_addr(id) + byte);
     chip_.write(a, v);
-    fmt::print(out_, "[cycle {:>8}] write {:#06x} <- {:02X}h  {}\n", chip_.cycle(), a, v, name(id, byte));
+    fmt::print(out_, "[cycle {:>8}] write {:#06x} <- {:02X}h  {}\n", chip_.cycle(), a, v,
+               name(id, byte));
   }
   // 16-bit registers: the byte that holds bits 15..8 / 7..0 depends on the bus mode.
   std::uint16_t read16(RegId id) {
@@ -62,7 +65,8 @@ class Narrator {
   std::string name(RegId id, int byte) const {
     const RegDesc* r = find_reg(chip_.profile(), id);
     if (r->width == 8) return std::string(r->name);
-    return fmt::format("{} bits {}", r->name, r->placement(chip_.bus_mode())[byte] == 0 ? "7..0" : "15..8");
+    return fmt::format("{} bits {}", r->name,
+                       r->placement(chip_.bus_mode())[byte] == 0 ? "7..0" : "15..8");
   }
 
   Chip& chip_;
@@ -75,9 +79,9 @@ int run_demo(ChipOptions opt, std::FILE* out) {
   Chip chip(opt);
   Narrator n(chip, out);
   const ProfileDesc& p = chip.profile();
-  fmt::print(out, "dpc31emu demo: {} ({} profile), {} bus, {} Hz, {} clocks per bus access\n", p.title,
-             p.name, chip.bus_mode() == BusMode::intel ? "Intel" : "Motorola", chip.clock_hz(),
-             chip.bus_access_cycles());
+  fmt::print(out, "dpc31emu demo: {} ({} profile), {} bus, {} Hz, {} clocks per bus access\n",
+             p.title, p.name, chip.bus_mode() == BusMode::intel ? "Intel" : "Motorola",
+             chip.clock_hz(), chip.bus_access_cycles());
   fmt::print(out, "X/INT is low-active after reset; the pin is {} at cycle 0\n",
              chip.x_int_pin() ? "high (inactive)" : "low");
 
@@ -86,7 +90,8 @@ int run_demo(ChipOptions opt, std::FILE* out) {
   n.write16(RegId::Int_Ack_Reg, 0xFFFF);
   n.write(RegId::Mode_Reg1_R, 0xFF);
   n.write16(RegId::Mode_Reg0, 0x0100);  // DP_Mode; EOI inactive time 1 us; user timer 1 ms
-  const std::uint16_t enabled = irq::DX_Out | irq::MAC_Reset | irq::User_Timer_Clock | irq::New_Prm_Data;
+  const std::uint16_t enabled =
+      irq::DX_Out | irq::MAC_Reset | irq::User_Timer_Clock | irq::New_Prm_Data;
   n.write16(RegId::Int_Mask_Reg, static_cast<std::uint16_t>(~enabled));
   n.write(RegId::Mode_Reg1_S, 0x01);  // Start_SPC3: power-on clear of the outputs raises DX_Out
 
@@ -94,13 +99,15 @@ int run_demo(ChipOptions opt, std::FILE* out) {
   const std::uint16_t ir = n.read16(RegId::Int_Reg);
   fmt::print(out, "                   IR = {:04X}h (DX_Out = bit 13)\n", ir);
   const std::uint8_t dout = n.read(RegId::Next_Dout_Buffer_Cmd);
-  fmt::print(out, "                   Next_Dout_Buffer_Cmd: U = buffer {}, new = {}, cleared = {}\n",
+  fmt::print(out,
+             "                   Next_Dout_Buffer_Cmd: U = buffer {}, new = {}, cleared = {}\n",
              dout & 3, (dout >> 2) & 1, (dout >> 3) & 1);
   n.write16(RegId::Int_Ack_Reg, irq::DX_Out);
   n.write(RegId::Mode_Reg1_S, 0x02);  // EOI
 
   n.say("Wait for the 1 ms User_Timer_Clock; acknowledge it and EOI");
-  n.step(chip.clock_hz() / 1000 - chip.cycle(), "until the first user timer tick (1 ms after Start)");
+  n.step(chip.clock_hz() / 1000 - chip.cycle(),
+         "until the first user timer tick (1 ms after Start)");
   n.step(8, "a little more");
   n.write16(RegId::Int_Ack_Reg, irq::User_Timer_Clock);
   n.write(RegId::Mode_Reg1_S, 0x02);
@@ -108,12 +115,14 @@ int run_demo(ChipOptions opt, std::FILE* out) {
   n.say("Mask the user timer: IRR latches the event, X/INT stays inactive");
   n.write16(RegId::Int_Mask_Reg, static_cast<std::uint16_t>(~(enabled & ~irq::User_Timer_Clock)));
   n.step(chip.clock_hz() / 1000, "one more millisecond");
-  fmt::print(out, "                   IRR = {:04X}h, IR = {:04X}h\n", chip.peek_reg(RegId::Int_Req_Reg),
-             chip.peek_reg(RegId::Int_Reg));
+  fmt::print(out, "                   IRR = {:04X}h, IR = {:04X}h\n",
+             chip.peek_reg(RegId::Int_Req_Reg), chip.peek_reg(RegId::Int_Reg));
   n.say("Unmask it again: X/INT goes active as soon as the mask write completes");
   n.write16(RegId::Int_Mask_Reg, static_cast<std::uint16_t>(~enabled));
 
-  n.say("Two events pending, acknowledge one, EOI: X/INT drops and returns after the 1 us inactive time");
+  n.say(
+      "Two events pending, acknowledge one, EOI: X/INT drops and returns after the 1 us inactive "
+      "time");
   chip.asic_prm_received();
   fmt::print(out, "[cycle {:>8}] (bus side) Set_Prm arrives: New_Prm_Data\n", chip.cycle());
   n.write16(RegId::Int_Ack_Reg, irq::User_Timer_Clock);
@@ -123,7 +132,8 @@ int run_demo(ChipOptions opt, std::FILE* out) {
   n.say("New_Prm_Data is not acknowledged through IAR but by the User_Prm_Data_Okay read");
   n.write16(RegId::Int_Ack_Reg, irq::New_Prm_Data);
   const std::uint8_t ok = n.read(RegId::User_Prm_Data_Okay);
-  fmt::print(out, "                   User_Prm_Data_Okay = {:02X}h (00 finished); DP state now {}\n", ok,
+  fmt::print(out,
+             "                   User_Prm_Data_Okay = {:02X}h (00 finished); DP state now {}\n", ok,
              chip.dp_state() == DpState::Wait_Cfg ? "Wait_Cfg" : "other");
   n.write(RegId::Mode_Reg1_S, 0x02);
 

@@ -12,10 +12,6 @@
 
 namespace {
 
-struct ProfileOption {
-  std::string name = "dpc31";
-};
-
 dpc31::Profile to_profile(const std::string& s) {
   dpc31::Profile p{};
   dpc31::parse_profile(s, p);  // CLI11's check already refused unknown names
@@ -31,13 +27,16 @@ int main(int argc, char** argv) {
 
   std::string demo_profile = "dpc31";
   std::string demo_bus = "intel";
-  auto* demo = app.add_subcommand("demo", "scripted register-level session: start, interrupts, EOI");
+  auto* demo =
+      app.add_subcommand("demo", "scripted register-level session: start, interrupts, EOI");
   demo->add_option("--profile", demo_profile, "chip profile")->check(CLI::IsMember(profiles));
-  demo->add_option("--bus", demo_bus, "bus byte order")->check(CLI::IsMember({"intel", "motorola"}));
+  demo->add_option("--bus", demo_bus, "bus byte order")
+      ->check(CLI::IsMember({"intel", "motorola"}));
 
   std::string regs_profile = "dpc31";
   std::string regs_format = "text";
-  auto* regs = app.add_subcommand("regs", "print the register map of a profile from the description");
+  auto* regs =
+      app.add_subcommand("regs", "print the register map of a profile from the description");
   std::vector<std::string> with_all = profiles;
   with_all.emplace_back("all");
   regs->add_option("--profile", regs_profile, "chip profile, or all (c, verilog, markdown)")
