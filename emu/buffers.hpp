@@ -14,45 +14,33 @@ struct BufferRing {
   [[nodiscard]] std::uint8_t sm() const {
     return static_cast<std::uint8_t>(f << 6 | u << 4 | n << 2 | d);
   }
-  // The buffer that was in D goes to N; the previous N (never fetched) or else F becomes D.
-  // One of N and F is Nil at any time, so no buffer is ever lost.
-  void d_to_n() {
+  // A side (D for the ASIC, U for the user) hands its buffer to N. It gets back the previous N
+  // if that was never taken, else the free buffer. One of N and F is Nil at any time, so no
+  // buffer is ever lost.
+  void hand_to_n(std::uint8_t& side) {
     const std::uint8_t old_n = n;
-    n = d;
+    n = side;
     if (old_n != 0) {
-      d = old_n;
+      side = old_n;
     } else {
-      d = f;
+      side = f;
       f = 0;
     }
   }
-  // The buffer in N goes to U; the old U becomes free. No-op when N is Nil.
-  bool n_to_u() {
+  // A side takes the buffer in N; its old buffer becomes free. No-op when N is Nil.
+  bool take_from_n(std::uint8_t& side) {
     if (n == 0) return false;
-    f = u;
-    u = n;
+    f = side;
+    side = n;
     n = 0;
     return true;
   }
-  // The user's U goes to N; the old N (never sent) or else F becomes the new U.
-  void u_to_n() {
-    const std::uint8_t old_n = n;
-    n = u;
-    if (old_n != 0) {
-      u = old_n;
-    } else {
-      u = f;
-      f = 0;
-    }
-  }
-  // Before sending: N (new inputs) goes to D; the old D becomes free. No-op when N is Nil.
-  bool n_to_d() {
-    if (n == 0) return false;
-    f = d;
-    d = n;
-    n = 0;
-    return true;
-  }
+  // Dout: the ASIC passes received outputs on, the user fetches them.
+  void d_to_n() { hand_to_n(d); }
+  bool n_to_u() { return take_from_n(u); }
+  // Din: the user passes new inputs on, the ASIC takes them before sending.
+  void u_to_n() { hand_to_n(u); }
+  bool n_to_d() { return take_from_n(d); }
 };
 
 // Diag buffer states (Diag_Buffer_SM fields).

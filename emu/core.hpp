@@ -125,6 +125,8 @@ struct ChipCore {
 
  private:
   std::uint32_t decode(std::uint32_t addr, bool& violation) const;
+  // Time of the access, address-bus width, RAM access violation: the decoded address.
+  std::uint32_t begin_access(std::uint32_t addr, std::string_view what);
   void note_violation(std::uint32_t addr, std::uint32_t mapped);
   void write_reg(const RegDesc& r, std::uint32_t offset, std::uint8_t value);
 };

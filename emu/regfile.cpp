@@ -162,15 +162,20 @@ std::uint16_t ChipCore::reg_value(RegId id) const {
   return static_cast<std::uint16_t>(v & r->mask() & ~r->rsvd);
 }
 
-std::uint8_t ChipCore::bus_read(std::uint32_t addr) {
+std::uint32_t ChipCore::begin_access(std::uint32_t addr, std::string_view what) {
   advance(prof->bus_access_cycles);
   if ((addr >> prof->address_bits) != 0) {
-    log(LogLevel::warn, "read at {:#x}: beyond the {}-bit address bus, upper bits ignored", addr,
-        prof->address_bits);
+    log(LogLevel::warn, "{} at {:#x}: beyond the {}-bit address bus, upper bits ignored", what,
+        addr, prof->address_bits);
   }
   bool violation = false;
   const std::uint32_t a = decode(addr, violation);
   if (violation) note_violation(addr, a);
+  return a;
+}
+
+std::uint8_t ChipCore::bus_read(std::uint32_t addr) {
+  const std::uint32_t a = begin_access(addr, "read");
   const std::uint16_t i = rd_map[a];
   if (i == kNoReg) {
     const std::uint16_t region = region_map[a];
@@ -208,14 +213,7 @@ std::uint8_t ChipCore::bus_read(std::uint32_t addr) {
 }
 
 void ChipCore::bus_write(std::uint32_t addr, std::uint8_t value) {
-  advance(prof->bus_access_cycles);
-  if ((addr >> prof->address_bits) != 0) {
-    log(LogLevel::warn, "write at {:#x}: beyond the {}-bit address bus, upper bits ignored", addr,
-        prof->address_bits);
-  }
-  bool violation = false;
-  const std::uint32_t a = decode(addr, violation);
-  if (violation) note_violation(addr, a);
+  const std::uint32_t a = begin_access(addr, "write");
   const std::uint16_t i = wr_map[a];
   if (i == kNoReg) {
     const std::uint16_t region = region_map[a];

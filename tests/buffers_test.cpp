@@ -9,17 +9,11 @@ using namespace dpc31;
 
 namespace {
 
-class Buffers : public ::testing::TestWithParam<testutil::ChipParam> {
+class Buffers : public testutil::ChipTest {
  protected:
-  Chip make() {
-    Chip c({GetParam().profile, GetParam().bus});
-    log_.attach(c);
-    return c;
-  }
   std::uint32_t cell(const Chip& c, std::string_view name) {
     return static_cast<std::uint32_t>(find_reg(c.profile(), name)->read_addr);
   }
-  testutil::LogCapture log_;
 };
 
 }  // namespace

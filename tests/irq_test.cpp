@@ -24,15 +24,13 @@ struct Edges {
   }
 };
 
-class Irq : public ::testing::TestWithParam<testutil::ChipParam> {
+class Irq : public testutil::ChipTest {
  protected:
   Chip make(std::uint32_t clock_hz = 0) {
-    Chip c({GetParam().profile, GetParam().bus, clock_hz});
-    log_.attach(c);
+    Chip c = ChipTest::make(clock_hz);
     edges_.attach(c);
     return c;
   }
-  testutil::LogCapture log_;
   Edges edges_;
 };
 

@@ -10,15 +10,7 @@ using testutil::bus_write16;
 
 namespace {
 
-class Mode : public ::testing::TestWithParam<testutil::ChipParam> {
- protected:
-  Chip make() {
-    Chip c({GetParam().profile, GetParam().bus});
-    log_.attach(c);
-    return c;
-  }
-  testutil::LogCapture log_;
-};
+class Mode : public testutil::ChipTest {};
 
 }  // namespace
 

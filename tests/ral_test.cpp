@@ -13,15 +13,7 @@ using testutil::bus_write16;
 
 namespace {
 
-class Ral : public ::testing::TestWithParam<testutil::ChipParam> {
- protected:
-  Chip make() {
-    Chip c({GetParam().profile, GetParam().bus});
-    log_.attach(c);
-    return c;
-  }
-  testutil::LogCapture log_;
-};
+class Ral : public testutil::ChipTest {};
 
 RegId id_of(Profile p, std::string_view name) { return find_reg(profile_desc(p), name)->id; }
 

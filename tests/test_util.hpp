@@ -44,6 +44,17 @@ inline std::vector<ChipParam> all_chip_params() {
   return v;
 }
 
+// A fresh chip of the test's profile and bus mode, its log captured.
+class ChipTest : public ::testing::TestWithParam<ChipParam> {
+ protected:
+  dpc31::Chip make(std::uint32_t clock_hz = 0) {
+    dpc31::Chip c({GetParam().profile, GetParam().bus, clock_hz});
+    log_.attach(c);
+    return c;
+  }
+  LogCapture log_;
+};
+
 // Front-door access of a whole register through the bus, with the manuals' byte order.
 inline std::uint16_t bus_read16(dpc31::Chip& c, int addr, int width) {
   if (width == 8) return c.read(static_cast<std::uint32_t>(addr));
