@@ -38,7 +38,7 @@ enum class Access : std::uint8_t {
   CMD,    // command-on-read: reading performs an action, the value is its result
   WO,     // write only storage (read side of the address is another register)
   IGN,    // documented as "no effect when written" (IAR bits of New_Prm/New_Cfg); logged
-  RSVD,   // reserved: reads 0, not writable; writing 1 is logged
+  RSVD,   // reserved: reads 0, not writable; a write that would change it is logged
   UNIMP,  // exists on the chip, behaviour not modelled (DXB); stored, logged on every access
 };
 
