@@ -1,0 +1,229 @@
+// PROFIBUS FDL telegram coding (chip-facts §8). Layout, with [DA..DU] the FCS range:
+//   SD1 10 DA SA FC FCS 16          SD2 68 LE LEr 68 DA SA FC DU.. FCS 16
+//   SD3 A2 DA SA FC DU(8) FCS 16    SD4 DC DA SA                    SC E5
+// The address extension (DSAP, then SSAP) lives at the start of the DU, so SD1 cannot carry it.
+#include "fdl.hpp"
+
+#include <numeric>
+#include <utility>
+
+namespace dpc31::fdl {
+
+namespace {
+
+Decoded fail(Error e, Frame f) { return {e, std::move(f)}; }
+
+}  // namespace
+
+Frame make_frame(std::uint8_t da, std::uint8_t sa, std::uint8_t fc, std::vector<std::uint8_t> du,
+                 std::optional<std::uint8_t> dsap, std::optional<std::uint8_t> ssap) {
+  const bool sd1 = du.empty() && !dsap && !ssap;
+  return Frame{sd1 ? SD1 : SD2, da, sa, fc, dsap, ssap, std::move(du)};
+}
+
+Frame sc() { return Frame{SC, 0, 0, 0, std::nullopt, std::nullopt, {}}; }
+
+Frame token(std::uint8_t da, std::uint8_t sa) {
+  return Frame{SD4, da, sa, 0, std::nullopt, std::nullopt, {}};
+}
+
+std::uint8_t fcs(std::span<const std::uint8_t> bytes) {
+  return static_cast<std::uint8_t>(std::accumulate(bytes.begin(), bytes.end(), 0U));
+}
+
+std::vector<std::uint8_t> encode(const Frame& f) {
+  const std::size_t saps = (f.dsap ? 1U : 0U) + (f.ssap ? 1U : 0U);
+  const bool no_data = saps == 0 && f.du.empty();
+  // SC and SD4 carry no addresses beyond DA/SA and no data; refuse rather than drop data.
+  if (f.sd == SC) return no_data ? std::vector<std::uint8_t>{SC} : std::vector<std::uint8_t>{};
+  if (f.da > kAddressMask || f.sa > kAddressMask) return {};
+  if (f.sd == SD4) {
+    return no_data ? std::vector<std::uint8_t>{SD4, f.da, f.sa} : std::vector<std::uint8_t>{};
+  }
+  // Further address extension is not supported, so a SAP byte must not claim it.
+  if ((f.dsap && (*f.dsap & kExtension)) || (f.ssap && (*f.ssap & kExtension))) return {};
+
+  const std::size_t le = 3 + saps + f.du.size();
+  std::vector<std::uint8_t> out;
+  switch (f.sd) {
+    case SD1:
+      if (!no_data) return {};
+      out = {SD1};
+      break;
+    case SD3:
+      if (saps + f.du.size() != kSd3DataLength) return {};
+      out = {SD3};
+      break;
+    case SD2: {
+      if (le < kMinLe || le > kMaxLe) return {};
+      const auto l = static_cast<std::uint8_t>(le);
+      out = {SD2, l, l, SD2};
+      break;
+    }
+    default:
+      return {};
+  }
+  const std::size_t body = out.size();
+  out.reserve(body + le + 2);
+  out.push_back(static_cast<std::uint8_t>(f.da | (f.dsap ? kExtension : 0)));
+  out.push_back(static_cast<std::uint8_t>(f.sa | (f.ssap ? kExtension : 0)));
+  out.push_back(f.fc);
+  if (f.dsap) out.push_back(*f.dsap);
+  if (f.ssap) out.push_back(*f.ssap);
+  out.insert(out.end(), f.du.begin(), f.du.end());
+  out.push_back(fcs(std::span(out).subspan(body)));
+  out.push_back(ED);
+  return out;
+}
+
+std::string_view error_name(Error e) {
+  switch (e) {
+    case Error::none:
+      return "none";
+    case Error::bad_sd:
+      return "bad_sd";
+    case Error::truncated:
+      return "truncated";
+    case Error::le_mismatch:
+      return "le_mismatch";
+    case Error::bad_le:
+      return "bad_le";
+    case Error::bad_fcs:
+      return "bad_fcs";
+    case Error::wrong_ed:
+      return "wrong_ed";
+    case Error::oversize:
+      return "oversize";
+    case Error::bad_sap:
+      return "bad_sap";
+  }
+  return "?";
+}
+
+Decoded decode(std::span<const std::uint8_t> b) {
+  Frame f{};
+  if (b.empty()) return fail(Error::truncated, f);
+  f.sd = b[0];
+
+  // 1. Framing, in the order the bytes arrive (as the Assembler sees it).
+  std::size_t da_at = 1;  // index of DA
+  std::size_t total = 0;  // whole frame length
+  switch (b[0]) {
+    case SC:
+      if (b.size() > 1) return fail(Error::oversize, f);
+      return {Error::none, sc()};
+    case SD4:
+      total = 3;
+      break;
+    case SD1:
+      total = 6;
+      break;
+    case SD3:
+      total = 4 + kSd3DataLength + 2;
+      break;
+    case SD2: {
+      if (b.size() < 3) return fail(Error::truncated, f);
+      const std::size_t le = b[1];
+      if (le != b[2]) return fail(Error::le_mismatch, f);
+      if (le < kMinLe || le > kMaxLe) return fail(Error::bad_le, f);
+      if (b.size() < 4) return fail(Error::truncated, f);
+      if (b[3] != SD2) return fail(Error::bad_sd, f);
+      da_at = 4;
+      total = le + 6;
+      break;
+    }
+    default:
+      return fail(Error::bad_sd, f);
+  }
+  if (b.size() < total) return fail(Error::truncated, f);
+  if (b.size() > total) return fail(Error::oversize, f);
+
+  const bool dx = (b[da_at] & kExtension) != 0;
+  const bool sx = (b[da_at + 1] & kExtension) != 0;
+  f.da = b[da_at] & kAddressMask;
+  f.sa = b[da_at + 1] & kAddressMask;
+  if (f.sd == SD4) {
+    // A token has no DU, so an extension bit can only be a corrupt address.
+    if (dx || sx) return fail(Error::bad_sap, f);
+    return {Error::none, f};
+  }
+  f.fc = b[da_at + 2];
+
+  // 2. Integrity.
+  const auto body = b.subspan(da_at, total - da_at - 2);  // DA..last DU byte
+  if (fcs(body) != b[total - 2]) return fail(Error::bad_fcs, f);
+  if (b[total - 1] != ED) return fail(Error::wrong_ed, f);
+
+  // 3. Address extension: DSAP first, then SSAP, both at the start of the DU.
+  const std::size_t saps = (dx ? 1U : 0U) + (sx ? 1U : 0U);
+  std::size_t at = 3;
+  if (saps > body.size() - at) {
+    // SD2's LE was too short for the SAP bytes; SD1 has no DU at all (SD3 always has 8).
+    return fail(f.sd == SD2 ? Error::bad_le : Error::bad_sap, f);
+  }
+  if (dx) {
+    if (body[at] & kExtension) return fail(Error::bad_sap, f);
+    f.dsap = body[at++];
+  }
+  if (sx) {
+    if (body[at] & kExtension) return fail(Error::bad_sap, f);
+    f.ssap = body[at++];
+  }
+  f.du.assign(body.begin() + static_cast<std::ptrdiff_t>(at), body.end());
+  return {Error::none, std::move(f)};
+}
+
+Assembler::Status Assembler::fail(Error e) {
+  error_ = e;
+  status_ = Status::error;
+  return status_;
+}
+
+Assembler::Status Assembler::push(std::uint8_t byte) {
+  if (status_ == Status::error) return status_;
+  if (status_ == Status::complete) return fail(Error::oversize);
+  // Unreachable by construction (need_more implies size_ < expected_ <= 255); keeps the bound.
+  if (size_ >= buf_.size()) return fail(Error::oversize);
+  buf_[size_++] = byte;
+
+  if (size_ == 1) {
+    switch (byte) {
+      case SC:
+        expected_ = 1;
+        break;
+      case SD4:
+        expected_ = 3;
+        break;
+      case SD1:
+        expected_ = 6;
+        break;
+      case SD3:
+        expected_ = 4 + kSd3DataLength + 2;
+        break;
+      case SD2:
+        break;  // length known at LEr
+      default:
+        return fail(Error::bad_sd);
+    }
+  } else if (buf_[0] == SD2) {
+    if (size_ == 3) {
+      // Checked at LEr, as in decode, so both report the same error.
+      if (buf_[1] != buf_[2]) return fail(Error::le_mismatch);
+      if (buf_[1] < kMinLe || buf_[1] > kMaxLe) return fail(Error::bad_le);
+      expected_ = std::size_t{buf_[1]} + 6;
+    } else if (size_ == 4 && byte != SD2) {
+      return fail(Error::bad_sd);
+    }
+  }
+  if (expected_ != 0 && size_ == expected_) status_ = Status::complete;
+  return status_;
+}
+
+void Assembler::reset() {
+  size_ = 0;
+  expected_ = 0;
+  status_ = Status::need_more;
+  error_ = Error::none;
+}
+
+}  // namespace dpc31::fdl

@@ -1,0 +1,109 @@
+// PROFIBUS serial line (EN 50170 / IEC 61158-3-3 character: start 0, 8 data bits LSB first,
+// even parity, stop 1; idle = 1). Time is chip clock cycles. The receiver is fed RxD edges and
+// never stepped per cycle, so idle time costs nothing; the rules are in docs/timing.md,
+// "Serial line (UART)".
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <limits>
+#include <span>
+#include <utility>
+#include <vector>
+
+namespace dpc31 {
+
+// Index = the Status_Reg baud code: 0 = 12 Mbaud ... 9 = 9.6 kbaud.
+inline constexpr std::uint32_t kBaudRates[10] = {12000000, 6000000, 3000000, 1500000, 500000,
+                                                 187500,   93750,   45450,   19200,   9600};
+
+// Bits per character on the wire (start + 8 data + parity + stop).
+inline constexpr std::uint32_t kUartCharBits = 11;
+
+// Clock cycles per bit: clock_hz / baud rounded to the nearest integer, halves up (48 MHz at
+// 45.45 kbaud: 1056.1 -> 1056). 0 when baud is 0 or above 2 x clock_hz (the rate is unusable).
+[[nodiscard]] std::uint32_t bit_cycles(std::uint32_t clock_hz, std::uint32_t baud);
+// Status_Reg baud code of `baud`, -1 if it is not one of kBaudRates.
+[[nodiscard]] int baud_code(std::uint32_t baud);
+// The parity bit that makes the number of ones in data + parity even.
+[[nodiscard]] std::uint8_t even_parity(std::uint8_t data);
+
+struct UartChar {
+  std::uint8_t data = 0;
+  bool start_ok = false;    // bit 0 sampled as 0
+  bool parity_ok = false;   // even parity over data + parity bit
+  bool stop_ok = false;     // bit 10 sampled as 1
+  std::uint64_t start = 0;  // falling edge that began the start bit
+  std::uint64_t end = 0;    // start + 11 T, also for a bad character
+  // Whole bit times the line was high between the previous character's end (or configure())
+  // and `start`; saturates at 0xFFFF'FFFF. TSYN / idle-time checks read this.
+  std::uint64_t idle_bits = 0;
+  [[nodiscard]] bool ok() const { return start_ok && parity_ok && stop_ok; }
+  bool operator==(const UartChar&) const = default;
+};
+
+// Receiver fed with RxD level changes. A character starts at a falling edge (1 -> 0) seen while
+// idle, at or after the end of the previous character; bit k (0 start, 1..8 data, 9 parity,
+// 10 stop) is sampled at start + k*T + T/2 and reads the level set by the last edge at or before
+// that cycle. Once started, the whole 11-bit frame is sampled whatever the line does: a glitch
+// (low pulse ending at or before the first sample point) yields one character with
+// start_ok = false, and falling edges inside the frame are not starts. No edge history is kept:
+// samples are taken as edges arrive, so memory does not grow with idle time.
+class UartRx {
+ public:
+  static constexpr std::uint64_t kIdle = std::numeric_limits<std::uint64_t>::max();
+
+  // Default: unconfigured (T = 0): edges are tracked, no character is ever started.
+  UartRx() = default;
+  UartRx(std::uint32_t bit_cycles, std::uint64_t now) { configure(bit_cycles, now); }
+
+  // (Re)start at `now` with the line assumed high (idle) since `now`: the character in progress
+  // and characters not yet returned by advance() are dropped. bit_cycles = 0 disables reception.
+  void configure(std::uint32_t bit_cycles, std::uint64_t now);
+  // RxD becomes `level` at `cycle`. Cycles are non-decreasing, and an edge at c must be fed
+  // before advance(c) (a sample already taken is not revised). An edge to the level the line
+  // already has is ignored.
+  void edge(std::uint64_t cycle, bool level);
+  // Appends, in order, every character whose stop sample is at or before `now`. Edges may have
+  // been fed beyond `now`; such characters wait for a later advance().
+  void advance(std::uint64_t now, std::vector<UartChar>& out);
+  // Stop-sample cycle of the earliest character not yet returned by advance(), kIdle if none:
+  // the engine may jump straight to it.
+  [[nodiscard]] std::uint64_t next_deadline() const;
+
+  [[nodiscard]] std::uint32_t bit_time() const { return t_; }  // T in clocks
+  [[nodiscard]] bool level() const { return level_; }
+  [[nodiscard]] bool receiving() const { return k_ < kUartCharBits; }
+
+ private:
+  [[nodiscard]] std::uint64_t sample_at(std::uint32_t k) const;
+  // Takes the samples of the character in progress that fall at or before `last`.
+  void sample_through(std::uint64_t last);
+  void finish();
+
+  std::uint32_t t_ = 0;           // clock cycles per bit
+  bool level_ = true;             // current RxD level
+  std::uint64_t not_before_ = 0;  // end of the previous character: earliest accepted start
+  std::uint64_t last_rise_ = 0;   // the line is high from here (or from not_before_) when idle
+  // Character in progress: k_ = next bit to sample, kUartCharBits when idle.
+  std::uint32_t k_ = kUartCharBits;
+  std::uint64_t s_ = 0;
+  std::uint16_t bits_ = 0;       // sampled bit k at bit position k
+  std::uint64_t idle_bits_ = 0;  // of the character in progress
+  std::deque<UartChar> done_;    // complete, waiting for advance() to reach their stop sample
+};
+
+// Fault injection for uart_encode: char `char_index` gets its parity bit inverted, its start bit
+// sent as 1 (no falling edge: the line stays high for bit 0), or its stop bit sent as 0.
+struct UartFault {
+  int char_index = -1;
+  enum class Kind { none, parity, start, stop } kind = Kind::none;
+};
+
+// Appends the TxD level changes (cycle, level) for back-to-back characters: char i starts at
+// start + 11*T*i. The line is 1 before `start` and returns to 1 after the last stop bit; only real
+// changes are listed (the final rise is included when the line is low before it).
+void uart_encode(std::span<const std::uint8_t> bytes, std::uint64_t start, std::uint32_t bit_cycles,
+                 std::vector<std::pair<std::uint64_t, bool>>& edges, UartFault fault = {});
+
+}  // namespace dpc31

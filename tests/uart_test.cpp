@@ -1,0 +1,445 @@
+// PROFIBUS UART with exact cycles from docs/timing.md, "Serial line (UART)": T = round(f / baud);
+// a character starts at a falling edge s while idle; bit k is sampled at s + k*T + T/2 and reads
+// the last edge at or before that cycle; end = s + 11 T; the next start needs a falling edge at
+// or after the end. Every expected cycle below is worked out from those rules.
+#include "../emu/uart.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <random>
+#include <utility>
+#include <vector>
+
+using namespace dpc31;
+
+namespace {
+
+using Edges = std::vector<std::pair<std::uint64_t, bool>>;
+constexpr std::uint64_t kIdle = UartRx::kIdle;
+
+// Feeds every edge, then advances once to `until`.
+std::vector<UartChar> receive(const Edges& edges, std::uint32_t t, std::uint64_t until,
+                              std::uint64_t configured_at = 0) {
+  UartRx rx(t, configured_at);
+  for (const auto& [cycle, level] : edges) rx.edge(cycle, level);
+  std::vector<UartChar> out;
+  rx.advance(until, out);
+  return out;
+}
+
+UartChar good(std::uint8_t data, std::uint64_t start, std::uint32_t t, std::uint64_t idle) {
+  return UartChar{data, true, true, true, start, start + 11 * std::uint64_t{t}, idle};
+}
+
+}  // namespace
+
+// ---- bit times and codes ----
+
+TEST(UartBaud, BitCyclesAt48MHz) {
+  constexpr std::uint32_t kExpected[10] = {4, 8, 16, 32, 96, 256, 512, 1056, 2500, 5000};
+  for (int i = 0; i < 10; ++i) {
+    SCOPED_TRACE(kBaudRates[i]);
+    EXPECT_EQ(bit_cycles(48'000'000, kBaudRates[i]), kExpected[i]);
+  }
+}
+
+TEST(UartBaud, BitCyclesRoundToNearest) {
+  // 12 MHz: 1, 8, 264.03 -> 264, 1250.
+  EXPECT_EQ(bit_cycles(12'000'000, 12'000'000), 1u);
+  EXPECT_EQ(bit_cycles(12'000'000, 1'500'000), 8u);
+  EXPECT_EQ(bit_cycles(12'000'000, 45'450), 264u);
+  EXPECT_EQ(bit_cycles(12'000'000, 9'600), 1250u);
+  // 10 MHz: 1.67 -> 2 (up), 3.33 -> 3 (down), 6.67 -> 7, 0.83 -> 1.
+  EXPECT_EQ(bit_cycles(10'000'000, 6'000'000), 2u);
+  EXPECT_EQ(bit_cycles(10'000'000, 3'000'000), 3u);
+  EXPECT_EQ(bit_cycles(10'000'000, 1'500'000), 7u);
+  EXPECT_EQ(bit_cycles(10'000'000, 12'000'000), 1u);
+  // A half rounds up; below a half the rate is unusable (0), as is baud 0.
+  EXPECT_EQ(bit_cycles(6'000'000, 12'000'000), 1u);
+  EXPECT_EQ(bit_cycles(5'000'000, 12'000'000), 0u);
+  EXPECT_EQ(bit_cycles(48'000'000, 0), 0u);
+  // No overflow at the top of the range: 4294967295 / 2 = 2147483647.5 -> 2147483648.
+  EXPECT_EQ(bit_cycles(0xFFFF'FFFF, 2), 2147483648u);
+}
+
+TEST(UartBaud, BaudCodeRoundTrip) {
+  for (int i = 0; i < 10; ++i) EXPECT_EQ(baud_code(kBaudRates[i]), i);
+  EXPECT_EQ(baud_code(0), -1);
+  EXPECT_EQ(baud_code(115'200), -1);
+  EXPECT_EQ(baud_code(45'455), -1);
+}
+
+TEST(UartBaud, EvenParity) {
+  EXPECT_EQ(even_parity(0x00), 0);
+  EXPECT_EQ(even_parity(0x01), 1);
+  EXPECT_EQ(even_parity(0x03), 0);
+  EXPECT_EQ(even_parity(0x10), 1);
+  EXPECT_EQ(even_parity(0x7F), 1);
+  EXPECT_EQ(even_parity(0xFF), 0);
+}
+
+// ---- encoder ----
+
+TEST(UartEncode, Byte0x10AtT4FromCycle100) {
+  // Bits at 100 + 4k: start 0 @100, d0..d3 = 0, d4 = 1 @120, d5..d7 = 0 @124, parity 1 @136,
+  // stop 1 @140; the line is already high at the stop bit, so no edge at 140 or 144.
+  const std::uint8_t b[] = {0x10};
+  Edges e;
+  uart_encode(b, 100, 4, e);
+  EXPECT_EQ(e, (Edges{{100, false}, {120, true}, {124, false}, {136, true}}));
+}
+
+TEST(UartEncode, BackToBackAndFinalRise) {
+  Edges e;
+  const std::uint8_t two[] = {0x10, 0x10};  // the second char starts at 100 + 44 = 144
+  uart_encode(two, 100, 4, e);
+  EXPECT_EQ(e, (Edges{{100, false},
+                      {120, true},
+                      {124, false},
+                      {136, true},
+                      {144, false},
+                      {164, true},
+                      {168, false},
+                      {180, true}}));
+  e.clear();
+  const std::uint8_t zero[] = {0x00};  // low from start to the stop bit: rise at 0 + 10*4
+  uart_encode(zero, 0, 4, e);
+  EXPECT_EQ(e, (Edges{{0, false}, {40, true}}));
+  e.clear();
+  const std::uint8_t ones[] = {0xFF};  // parity 0 at 36, stop rises at 40
+  uart_encode(ones, 0, 4, e);
+  EXPECT_EQ(e, (Edges{{0, false}, {4, true}, {36, false}, {40, true}}));
+}
+
+TEST(UartEncode, Faults) {
+  const std::uint8_t b[] = {0x10};
+  Edges e;
+  uart_encode(b, 100, 4, e, {0, UartFault::Kind::parity});  // parity 0: stays low to the stop
+  EXPECT_EQ(e, (Edges{{100, false}, {120, true}, {124, false}, {140, true}}));
+  e.clear();
+  uart_encode(b, 100, 4, e, {0, UartFault::Kind::start});  // high through bit 0, d0 falls at 104
+  EXPECT_EQ(e, (Edges{{104, false}, {120, true}, {124, false}, {136, true}}));
+  e.clear();
+  uart_encode(b, 100, 4, e, {0, UartFault::Kind::stop});  // stop low at 140, back high at 144
+  EXPECT_EQ(
+      e, (Edges{{100, false}, {120, true}, {124, false}, {136, true}, {140, false}, {144, true}}));
+  e.clear();
+  uart_encode(b, 100, 4, e, {1, UartFault::Kind::stop});  // no char 1: no fault
+  EXPECT_EQ(e, (Edges{{100, false}, {120, true}, {124, false}, {136, true}}));
+}
+
+// ---- receiver ----
+
+TEST(UartRx, Decodes0x10AtT4) {
+  // Samples at 102, 106, ..., 142: 0 | 0 0 0 0 1 0 0 0 | 1 | 1 -> 0x10, all ok.
+  UartRx rx(4, 0);
+  EXPECT_EQ(rx.next_deadline(), kIdle);
+  const Edges e{{100, false}, {120, true}, {124, false}, {136, true}};
+  rx.edge(100, false);
+  EXPECT_EQ(rx.next_deadline(), 142u);  // 100 + 10*4 + 2
+  for (std::size_t i = 1; i < e.size(); ++i) rx.edge(e[i].first, e[i].second);
+  std::vector<UartChar> out;
+  rx.advance(141, out);
+  EXPECT_TRUE(out.empty());
+  EXPECT_EQ(rx.next_deadline(), 142u);
+  rx.advance(142, out);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0], good(0x10, 100, 4, 25));  // idle since 0: 100 / 4 = 25 bit times
+  EXPECT_EQ(out[0].end, 144u);
+  EXPECT_EQ(rx.next_deadline(), kIdle);
+}
+
+TEST(UartRx, RoundTripEveryRate) {
+  std::mt19937 rng(20240611);
+  for (std::uint32_t baud : kBaudRates) {
+    const std::uint32_t t = bit_cycles(48'000'000, baud);
+    SCOPED_TRACE(t);
+    std::vector<std::uint8_t> a(17), b(9);
+    for (auto& x : a) x = static_cast<std::uint8_t>(rng());
+    for (auto& x : b) x = static_cast<std::uint8_t>(rng());
+    // Burst a starts 7 bit times + 3 cycles after configure (idle_bits 7); burst b starts
+    // exactly 33 bit times after the end of a (idle_bits 33).
+    const std::uint64_t t64 = t;
+    const std::uint64_t sa = 7 * t64 + 3;
+    const std::uint64_t sb = sa + 11 * t64 * a.size() + 33 * t64;
+    Edges e;
+    uart_encode(a, sa, t, e);
+    uart_encode(b, sb, t, e);
+    const auto out = receive(e, t, sb + 11 * t64 * b.size());
+    ASSERT_EQ(out.size(), a.size() + b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      EXPECT_EQ(out[i], good(a[i], sa + 11 * t64 * i, t, i == 0 ? 7 : 0)) << i;
+    }
+    for (std::size_t i = 0; i < b.size(); ++i) {
+      EXPECT_EQ(out[a.size() + i], good(b[i], sb + 11 * t64 * i, t, i == 0 ? 33 : 0)) << i;
+    }
+  }
+}
+
+TEST(UartRx, AdvanceAtAnyTimeGivesTheSameCharacters) {
+  // Cycle by cycle, as an engine that delivers the edges of cycle c and then advances to c:
+  // each char appears exactly at its stop sample s + 10T + T/2 and next_deadline() names that
+  // cycle from s on; outside a char it is kIdle.
+  constexpr std::uint32_t t = 4;
+  std::mt19937 rng(7);
+  std::vector<std::uint8_t> a(6), b(5);
+  for (auto& x : a) x = static_cast<std::uint8_t>(rng());
+  for (auto& x : b) x = static_cast<std::uint8_t>(rng());
+  const std::uint64_t sa = 40, sb = sa + 11 * t * a.size() + 5 * t + 1;
+  Edges e;
+  uart_encode(a, sa, t, e);
+  uart_encode(b, sb, t, e);
+  const std::uint64_t last = sb + 11 * t * b.size() + 20;
+  std::vector<std::uint64_t> starts;
+  for (std::size_t i = 0; i < a.size(); ++i) starts.push_back(sa + 11 * t * i);
+  for (std::size_t i = 0; i < b.size(); ++i) starts.push_back(sb + 11 * t * i);
+
+  const auto once = receive(e, t, last);
+  ASSERT_EQ(once.size(), starts.size());
+
+  UartRx rx(t, 0);
+  std::vector<UartChar> stepped;
+  std::size_t next_edge = 0;
+  for (std::uint64_t c = 0; c <= last; ++c) {
+    while (next_edge < e.size() && e[next_edge].first == c) {
+      rx.edge(c, e[next_edge].second);
+      ++next_edge;
+    }
+    const std::size_t before = stepped.size();
+    rx.advance(c, stepped);
+    std::uint64_t expect_deadline = kIdle;
+    for (std::size_t i = 0; i < starts.size(); ++i) {
+      const std::uint64_t stop = starts[i] + 10 * t + t / 2;
+      if (c == stop) {
+        EXPECT_EQ(stepped.size(), before + 1) << c;
+      }
+      if (starts[i] <= c && c < stop) expect_deadline = stop;
+    }
+    if (stepped.size() == before + 1) {
+      EXPECT_EQ(stepped.back().start + 10 * t + t / 2, c);
+    }
+    EXPECT_EQ(rx.next_deadline(), expect_deadline) << c;
+  }
+  EXPECT_EQ(stepped, once);
+
+  // All edges fed ahead, then advance() at scattered times (some repeated, some going back).
+  UartRx ahead(t, 0);
+  for (const auto& [cycle, level] : e) ahead.edge(cycle, level);
+  EXPECT_EQ(ahead.next_deadline(), sa + 10 * t + t / 2);
+  std::vector<UartChar> scattered;
+  for (std::uint64_t c : {std::uint64_t{0}, std::uint64_t{85}, std::uint64_t{86}, std::uint64_t{86},
+                          std::uint64_t{50}, std::uint64_t{200}, sb, last}) {
+    ahead.advance(c, scattered);
+  }
+  EXPECT_EQ(scattered, once);
+  EXPECT_EQ(ahead.next_deadline(), kIdle);
+}
+
+TEST(UartRx, SamplePointsAt45450Baud) {
+  // T = 1056, T/2 = 528; start at 1000: samples at 1528, 2584, 3640, 4696, 5752, 6808, 7864,
+  // 8920, 9976, 11032, stop 12088; end 1000 + 11616 = 12616.
+  constexpr std::uint32_t t = 1056;
+  ASSERT_EQ(bit_cycles(48'000'000, 45'450), t);
+  // An edge exactly at a sample point is seen by it: d0 = 1 (rise at 2584), d1 = 1 (fall one
+  // cycle after its sample at 3640), d2 = 0, d3.. = 1 (rise at 5752), parity 1, stop 1.
+  // Data 1101'1111 LSB first = 0xFB, 7 ones + parity 1: even.
+  const Edges at{{1000, false}, {2584, true}, {3641, false}, {5752, true}};
+  auto out = receive(at, t, 12088);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0], good(0xFB, 1000, t, 0));  // idle 1000 cycles < one bit time
+  EXPECT_EQ(out[0].end, 12616u);
+  // Each edge one cycle later: d0 = 0, d1 = 1, d2 = 0, d3 = 0, d4.. = 1 -> 1111'0010 = 0xF2,
+  // 5 ones + parity 1: even.
+  const Edges late{{1000, false}, {2585, true}, {3641, false}, {5753, true}};
+  out = receive(late, t, 12088);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0], good(0xF2, 1000, t, 0));
+  // The stop sample is at 12088: nothing at 12087; a fall at 12088 is a framing error, a fall
+  // at 12089 is not.
+  EXPECT_TRUE(receive(at, t, 12087).empty());
+  Edges e = at;
+  e.emplace_back(12088, false);
+  out = receive(e, t, 12088);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_FALSE(out[0].stop_ok);
+  e.back().first = 12089;
+  out = receive(e, t, 12089);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_TRUE(out[0].ok());
+}
+
+TEST(UartRx, IdleBitsCountWholeBitsAndSaturate) {
+  // Configured at 10, T = 8: a fall at 10 + 8*5 + 7 = 57 -> 5 whole bit times.
+  auto out = receive({{57, false}, {57 + 80, true}}, 8, 57 + 84, 10);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].idle_bits, 5u);
+  EXPECT_EQ(out[0].data, 0x00);
+  EXPECT_TRUE(out[0].ok());
+  // 2^32 + 5 bit times of idle saturates; the receiver holds no edge history meanwhile.
+  const std::uint64_t s = 4 * ((std::uint64_t{1} << 32) + 5);
+  out = receive({{s, false}, {s + 40, true}}, 4, s + 42);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].idle_bits, 0xFFFF'FFFFu);
+  EXPECT_EQ(out[0].start, s);
+}
+
+TEST(UartRx, ConfigureRestartsAndZeroDisables) {
+  UartRx rx(4, 0);
+  rx.edge(100, false);  // a char in progress is dropped by configure
+  rx.configure(8, 110);
+  EXPECT_EQ(rx.next_deadline(), kIdle);
+  EXPECT_TRUE(rx.level());  // assumed idle since 110
+  rx.edge(126, false);      // 16 cycles after configure: 2 bit times
+  EXPECT_EQ(rx.next_deadline(), 126u + 80 + 4);
+  rx.edge(126 + 80, true);
+  std::vector<UartChar> out;
+  rx.advance(1000, out);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0], good(0x00, 126, 8, 2));
+
+  rx.configure(0, 2000);  // T = 0: never starts a character
+  rx.edge(2100, false);
+  rx.edge(2200, true);
+  EXPECT_EQ(rx.next_deadline(), kIdle);
+  rx.advance(100000, out);
+  EXPECT_EQ(out.size(), 1u);
+}
+
+// ---- faults ----
+
+TEST(UartFault, ParityOnTheChosenCharOnly) {
+  // T = 8 from 80: chars at 80, 168, 256, 344; idle 80 / 8 = 10 before the first.
+  const std::uint8_t b[] = {0x11, 0x22, 0x33, 0x44};
+  for (int bad = 0; bad < 4; ++bad) {
+    SCOPED_TRACE(bad);
+    Edges e;
+    uart_encode(b, 80, 8, e, {bad, UartFault::Kind::parity});
+    const auto out = receive(e, 8, 1000);
+    ASSERT_EQ(out.size(), 4u);
+    for (int i = 0; i < 4; ++i) {
+      UartChar want = good(b[i], 80 + 88 * static_cast<std::uint64_t>(i), 8, i == 0 ? 10 : 0);
+      want.parity_ok = i != bad;
+      EXPECT_EQ(out[i], want) << i;
+    }
+  }
+}
+
+TEST(UartFault, MissingStartBitShiftsTheFrame) {
+  // T = 4: 0x01 at 100, 0x10 at 144 with its start bit high, then 0x22 at 268.
+  // Char 1 has no falling edge at 144; the first one is d0 at 148, so the receiver starts there
+  // (idle_bits (148 - 144) / 4 = 1) and reads bits 1..10 of the sent char plus the idle line:
+  // d = 0 0 0 1 0 0 0 1 (d1..d7, parity) = 0x88, parity sample = stop (1): 3 ones, odd.
+  // Stop sample 148 + 42 = 190 is idle (1). End 192; 0x22 at 268: (268 - 192) / 4 = 19 idle bits.
+  const std::uint8_t burst[] = {0x01, 0x10};
+  const std::uint8_t next[] = {0x22};
+  Edges e;
+  uart_encode(burst, 100, 4, e, {1, UartFault::Kind::start});
+  uart_encode(next, 268, 4, e);
+  const auto out = receive(e, 4, 1000);
+  ASSERT_EQ(out.size(), 3u);
+  EXPECT_EQ(out[0], good(0x01, 100, 4, 25));
+  EXPECT_EQ(out[1], (UartChar{0x88, true, false, true, 148, 192, 1}));
+  EXPECT_EQ(out[2], good(0x22, 268, 4, 19));
+}
+
+TEST(UartFault, StopBitZeroIsAFramingError) {
+  // T = 4: 0x01 at 100, 0x10 at 144 with stop low at 184..188, then 0x22 at 268 (idle
+  // (268 - 188) / 4 = 20).
+  const std::uint8_t burst[] = {0x01, 0x10};
+  const std::uint8_t next[] = {0x22};
+  Edges e;
+  uart_encode(burst, 100, 4, e, {1, UartFault::Kind::stop});
+  uart_encode(next, 268, 4, e);
+  const auto out = receive(e, 4, 1000);
+  ASSERT_EQ(out.size(), 3u);
+  EXPECT_EQ(out[0], good(0x01, 100, 4, 25));
+  EXPECT_EQ(out[1], (UartChar{0x10, true, true, false, 144, 188, 0}));
+  EXPECT_EQ(out[2], good(0x22, 268, 4, 20));
+}
+
+TEST(UartFault, BreakThenNormalCharAfterTheLineRecovers) {
+  // T = 4: low from 100 for 30 bit times (rise at 220), 0x10 from 232. The break reads as 0x00
+  // with parity 0 (ok) and stop 0; at its end (144) the line is still low, which is no start.
+  // 0x10 at 232: high since the rise at 220 -> (232 - 220) / 4 = 3 idle bits.
+  Edges e{{100, false}, {220, true}};
+  const std::uint8_t b[] = {0x10};
+  uart_encode(b, 232, 4, e);
+  const auto out = receive(e, 4, 1000);
+  ASSERT_EQ(out.size(), 2u);
+  EXPECT_EQ(out[0], (UartChar{0x00, true, true, false, 100, 144, 25}));
+  EXPECT_EQ(out[1], good(0x10, 232, 4, 3));
+}
+
+TEST(UartFault, BreakSwallowsTheNextStartEdge) {
+  // T = 4: 0x10 at 100 with stop 0 (fall at 140), 0xFF back to back at 144: its start bit keeps
+  // the line low, so there is no falling edge at 144. Edges after 140: rise 148 (d0), fall 180
+  // (parity 0), rise 184 (stop). The fall at 180 starts a char: start 182 = 0, 186.. = 1 ->
+  // 0xFF, parity sample 218 = 1 (odd), stop 222 = 1. High since 148: (180 - 148) / 4 = 8.
+  const std::uint8_t b[] = {0x10, 0xFF};
+  Edges e;
+  uart_encode(b, 100, 4, e, {0, UartFault::Kind::stop});
+  EXPECT_EQ(e, (Edges{{100, false},
+                      {120, true},
+                      {124, false},
+                      {136, true},
+                      {140, false},
+                      {148, true},
+                      {180, false},
+                      {184, true}}));
+  const auto out = receive(e, 4, 1000);
+  ASSERT_EQ(out.size(), 2u);
+  EXPECT_EQ(out[0], (UartChar{0x10, true, true, false, 100, 144, 25}));
+  EXPECT_EQ(out[1], (UartChar{0xFF, true, false, true, 180, 224, 8}));
+}
+
+// ---- glitches ----
+
+TEST(UartGlitch, ShortLowPulseIsABadStartBit) {
+  // T = 16, T/2 = 8. Fall at 200, rise at 207 (7 cycles, before the start sample at 208): the
+  // receiver commits to the frame: start reads 1, data 0xFF, parity 1 (9 ones: odd), stop 1.
+  // Reported at the stop sample 200 + 168 = 368; end 376; idle 200 / 16 = 12.
+  UartRx rx(16, 0);
+  rx.edge(200, false);
+  rx.edge(207, true);
+  EXPECT_EQ(rx.next_deadline(), 368u);
+  std::vector<UartChar> out;
+  rx.advance(367, out);
+  EXPECT_TRUE(out.empty());
+  rx.advance(368, out);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0], (UartChar{0xFF, false, false, true, 200, 376, 12}));
+  // A real char may start right at the end of the glitch frame: high since 376, idle 0.
+  Edges e;
+  const std::uint8_t b[] = {0x10};
+  uart_encode(b, 376, 16, e);
+  for (const auto& [c, l] : e) rx.edge(c, l);
+  rx.advance(2000, out);
+  ASSERT_EQ(out.size(), 2u);
+  EXPECT_EQ(out[1], good(0x10, 376, 16, 0));
+}
+
+TEST(UartGlitch, PulseEndingOnTheStartSample) {
+  // The start sample reads the level of the edge at its own cycle: rise at 208 -> bad start;
+  // rise at 209 -> good start, the rest high (0xFF, parity 1: odd).
+  auto out = receive({{200, false}, {208, true}}, 16, 1000);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0], (UartChar{0xFF, false, false, true, 200, 376, 12}));
+  out = receive({{200, false}, {209, true}}, 16, 1000);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0], (UartChar{0xFF, true, false, true, 200, 376, 12}));
+}
+
+TEST(UartGlitch, SwallowsACharStartingInsideItsFrame) {
+  // Glitch 200..207, then 0x00 sent from 240 (inside the frame that ends at 376): fall 240,
+  // rise 400. Samples 208 = 1, 224 = 1, 240 = 0 (edge at 240), 256..368 = 0: start 1, data
+  // 0x01, parity 0 (odd), stop 0. At 376 the line is low; the rise at 400 starts nothing.
+  Edges e{{200, false}, {207, true}};
+  const std::uint8_t b[] = {0x00};
+  uart_encode(b, 240, 16, e);
+  EXPECT_EQ(e, (Edges{{200, false}, {207, true}, {240, false}, {400, true}}));
+  const auto out = receive(e, 16, 10000);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0], (UartChar{0x01, false, false, false, 200, 376, 12}));
+}
