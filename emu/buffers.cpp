@@ -12,7 +12,11 @@ constexpr std::uint8_t kU_Buffer_Cleared = 0x08;
 constexpr std::uint8_t kStat_Diag = 0x02;  // diag buffer byte 0
 
 std::uint16_t din_sm(const ChipCore& c) { return c.buffers.din.sm(); }
-std::uint16_t dout_sm(const ChipCore& c) { return c.buffers.dout.sm(); }
+// dpc31: bit 7 is N_Cl and F (always the one buffer D, N, U leave) is not shown.
+std::uint16_t dout_sm(const ChipCore& c) {
+  if (c.prof->id != Profile::dpc31) return c.buffers.dout.sm();
+  return static_cast<std::uint16_t>((c.buffers.n_cl ? 0x80 : 0) | (c.buffers.dout.sm() & 0x3F));
+}
 std::uint16_t diag_sm(const ChipCore& c) { return c.buffers.diag.sm(); }
 
 // User: the filled U goes to N; the answer names the new U.
@@ -21,10 +25,16 @@ std::uint16_t new_din(BufferUnit& b) {
   return b.din.u;
 }
 
-// User: fetch the newest outputs (N -> U) if there are any.
+// User: fetch the newest outputs (N -> U) if there are any. dpc31 with N_Cl: the clear buffer C
+// (the user's substitute values) is exchanged with U instead.
 std::uint16_t next_dout(BufferUnit& b) {
   std::uint8_t r = 0;
-  if (b.dout.n_to_u()) {
+  if (b.n_cl) {
+    b.n_cl = false;
+    b.c_swap_pending = true;
+    b.u_cleared = true;
+    r = kState_U_Buffer;
+  } else if (b.dout.n_to_u()) {
     b.u_cleared = b.n_cleared;
     b.n_cleared = false;
     r = kState_U_Buffer;
@@ -83,7 +93,12 @@ void install_buffer_hooks(HookTable& h) {
   };
   h[ChipCore::idx(RegId::Next_Dout_Buffer_Cmd)].read = preview<next_dout>;
   h[ChipCore::idx(RegId::Next_Dout_Buffer_Cmd)].command = [](ChipCore& c) {
-    return next_dout(c.buffers);
+    const std::uint16_t r = next_dout(c.buffers);
+    if (c.buffers.c_swap_pending) {
+      c.buffers.c_swap_pending = false;
+      c.swap_cells(RegId::R_Dout_Buf_Ptr_C, ChipCore::dout_ptr(c.buffers.dout.u));
+    }
+    return r;
   };
   h[ChipCore::idx(RegId::New_Diag_Buffer_Cmd)].read = new_diag_preview;
   h[ChipCore::idx(RegId::New_Diag_Buffer_Cmd)].command = new_diag_cmd;
@@ -99,10 +114,31 @@ void ChipCore::dout_received() {
   raise(irq::DX_Out);
 }
 
-void ChipCore::dout_clear() {
+RegId ChipCore::dout_ptr(std::uint8_t buffer) {
   static constexpr RegId kPtr[] = {RegId::R_Dout_Buf_Ptr1, RegId::R_Dout_Buf_Ptr2,
                                    RegId::R_Dout_Buf_Ptr3};
-  clear_ram(buffer_addr(kPtr[buffers.dout.d - 1]), cell(RegId::R_Len_Dout_Buf));
+  return kPtr[buffer - 1];
+}
+
+RegId ChipCore::din_ptr(std::uint8_t buffer) {
+  static constexpr RegId kPtr[] = {RegId::R_Din_Buf_Ptr1, RegId::R_Din_Buf_Ptr2,
+                                   RegId::R_Din_Buf_Ptr3};
+  return kPtr[buffer - 1];
+}
+
+// Clear_Data and the fail-safe Data_Exchange without outputs. SPC3 / VPC3+: D is cleared and
+// passed on. dpc31: D is left alone; N_Cl makes the next fetch hand over the C buffer.
+void ChipCore::failsafe_clear() {
+  if (prof->id != Profile::dpc31) {
+    dout_clear();
+    return;
+  }
+  buffers.n_cl = true;
+  raise(irq::DX_Out);
+}
+
+void ChipCore::dout_clear() {
+  clear_ram(buffer_addr(dout_ptr(buffers.dout.d)), cell(RegId::R_Len_Dout_Buf));
   buffers.dout.d_to_n();
   buffers.n_cleared = true;
   raise(irq::DX_Out);

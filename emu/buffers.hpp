@@ -61,6 +61,8 @@ struct BufferUnit {
   bool n_cleared = false;  // the buffer in N was cleared by the ASIC
   bool u_cleared = false;  // the buffer in U was cleared by the ASIC
   bool diag_flag = false;  // Status_Reg.Diag_Flag
+  bool n_cl = false;       // dpc31: the clear buffer C is due at the next fetch
+  bool c_swap_pending = false;
   void reset() { *this = BufferUnit{}; }
 };
 

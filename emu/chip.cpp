@@ -8,25 +8,39 @@
 
 namespace dpc31 {
 
-std::uint32_t ChipCore::cycles_for_us(std::uint32_t us) const {
+std::uint64_t ChipCore::cycles_for_us(std::uint64_t us) const {
   // Round up: the manuals give minimum times ("at least 1 us").
-  return static_cast<std::uint32_t>((std::uint64_t{clock_hz} * us + 999'999u) / 1'000'000u);
+  return (std::uint64_t{clock_hz} * us + 999'999u) / 1'000'000u;
 }
 
-void ChipCore::advance(std::uint64_t cycles) {
+std::uint64_t ChipCore::next_event() const {
+  const std::uint64_t eoi_end = irq.eoi_block_until > now ? irq.eoi_block_until : kNever;
+  return std::min({timers.user_timer_next, timers.wd_deadline, eoi_end, mac_deadline()});
+}
+
+// Everything due at `now`, in the order of docs/timing.md.
+void ChipCore::process_events() {
+  if (timers.user_timer_next <= now) {
+    timers.user_timer_next = now + user_timer_period();
+    raise(irq::User_Timer_Clock);
+  }
+  mac_process();
+  if (timers.wd_deadline <= now) watchdog_expired();
+  update_irq_line();
+}
+
+bool ChipCore::advance(std::uint64_t cycles, bool stop_on_irq) {
   const std::uint64_t end = now + cycles;
   for (;;) {
-    const std::uint64_t eoi_end = irq.eoi_block_until > now ? irq.eoi_block_until : kNever;
-    const std::uint64_t next = std::min(timers.user_timer_next, eoi_end);
+    const std::uint64_t next = next_event();
     if (next > end) break;
-    now = next;
-    if (timers.user_timer_next == now) {
-      timers.user_timer_next = now + user_timer_period();
-      raise(irq::User_Timer_Clock);
-    }
-    update_irq_line();
+    now = std::max(now, next);
+    const bool was_active = irq_line;
+    process_events();
+    if (stop_on_irq && irq_line && !was_active) return true;
   }
   now = end;
+  return false;
 }
 
 Chip::Chip(ChipOptions opt) : core_(std::make_unique<ChipCore>(opt)) {}
@@ -56,6 +70,21 @@ bool Chip::poke_reg(RegId id, std::uint16_t value) {
 }
 
 void Chip::step(std::uint64_t cycles) { core_->advance(cycles); }
+bool Chip::step_until_irq(std::uint64_t cycles) { return core_->advance(cycles, true); }
+
+void Chip::drive_rxd(std::uint64_t cycle, bool level) {
+  core_->mac.rx.edge(std::max(cycle, core_->now), level);
+}
+void Chip::on_txd(std::function<void(std::uint64_t, bool)> cb) {
+  core_->txd_observer = std::move(cb);
+}
+void Chip::on_telegram(std::function<void(const Telegram&)> cb) {
+  core_->telegram_observer = std::move(cb);
+}
+bool Chip::txd_pin() const { return core_->mac.txd; }
+const FdlCounters& Chip::fdl_counters() const { return core_->counters; }
+std::uint8_t Chip::station_address() const { return core_->dp.station; }
+std::uint32_t Chip::bit_cycles() const { return core_->mac.rx.bit_time(); }
 std::uint64_t Chip::cycle() const { return core_->now; }
 std::uint32_t Chip::clock_hz() const { return core_->clock_hz; }
 std::uint32_t Chip::bus_access_cycles() const { return core_->prof->bus_access_cycles; }

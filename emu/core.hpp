@@ -8,14 +8,19 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <optional>
+#include <span>
 #include <vector>
 
 #include "buffers.hpp"
+#include "dp_services.hpp"
 #include "dp_sm.hpp"
 #include "dpc31/chip.hpp"
 #include "dpc31/reg_ids.hpp"
 #include "dpc31/regdesc.hpp"
+#include "fdl.hpp"
 #include "irq.hpp"
+#include "mac.hpp"
 #include "watchdog.hpp"
 
 namespace dpc31 {
@@ -63,13 +68,19 @@ struct ChipCore {
   BufferUnit buffers;
   DpStateMachine dp;
   Timers timers;
+  Mac mac;
   bool started = false;
   bool ram_access_violation = false;
   bool large_ram = false;      // VPC3+ 4kB_Mode
   std::uint8_t baud_code = 0;  // Status_Reg bits 11..8 (0 = 12 Mbaud, where Baud_Search starts)
 
+  FdlCounters counters;
+  bool diag_in_flight = false;  // a Slave_Diag answer is being sent
+
   LogSink sink;
   std::function<void(std::uint64_t, bool)> irq_observer;
+  std::function<void(std::uint64_t, bool)> txd_observer;
+  std::function<void(const Telegram&)> telegram_observer;
   bool irq_line = false;  // last computed interrupt activity (for change notifications)
 
   // --- register file (regfile.cpp) ---
@@ -84,8 +95,21 @@ struct ChipCore {
   [[nodiscard]] std::uint16_t reg_value(RegId id) const;  // storage or derived (no side effect)
 
   // --- time (chip.cpp) ---
-  void advance(std::uint64_t cycles);
-  [[nodiscard]] std::uint32_t cycles_for_us(std::uint32_t us) const;
+  // Advances time event by event; with stop_on_irq it stops right after the event that makes the
+  // interrupt active and returns true.
+  bool advance(std::uint64_t cycles, bool stop_on_irq = false);
+  [[nodiscard]] std::uint64_t next_event() const;
+  void process_events();
+  [[nodiscard]] std::uint64_t cycles_for_us(std::uint64_t us) const;
+
+  // --- MAC (mac.cpp) ---
+  void mac_start_search();
+  void mac_stop();
+  void mac_char(const UartChar& c);
+  void mac_frame(const fdl::Frame& f, const UartChar& last);
+  void mac_send(const fdl::Frame& f, std::uint64_t request_end);
+  void mac_process();  // receiver, frame timeout, search, transmitter: whatever is due now
+  [[nodiscard]] std::uint64_t mac_deadline() const;
 
   // --- interrupt line (irq.cpp) ---
   void raise(std::uint16_t bits);
@@ -106,7 +130,37 @@ struct ChipCore {
   std::uint8_t din_fetch();
   void diag_send_begin();
   void diag_send_end();
+  void failsafe_clear();
   [[nodiscard]] std::uint32_t buffer_addr(RegId ptr_cell) const;
+  [[nodiscard]] static RegId dout_ptr(std::uint8_t buffer);  // 1..3
+  [[nodiscard]] static RegId din_ptr(std::uint8_t buffer);
+
+  // --- DP services (dp_sm.cpp, global_control.cpp) ---
+  // An error-free request for us (or broadcast) arrived now: act, and return the answer to send.
+  std::optional<fdl::Frame> dp_service(const fdl::Frame& req);
+  void dp_response_sent();  // our answer's last stop bit is out
+  std::optional<fdl::Frame> set_prm(const fdl::Frame& req);
+  std::optional<fdl::Frame> chk_cfg(const fdl::Frame& req);
+  std::optional<fdl::Frame> slave_diag(const fdl::Frame& req);
+  std::optional<fdl::Frame> read_io(const fdl::Frame& req);
+  std::optional<fdl::Frame> set_slave_add(const fdl::Frame& req);
+  std::optional<fdl::Frame> data_exchange(const fdl::Frame& req);
+  void global_control(const fdl::Frame& req);
+  bool user_watchdog_tick();
+  bool receive_via_aux(int sel_bit, RegId target_ptr, RegId len_cell,
+                       std::span<const std::uint8_t> du);
+  void set_cell(RegId id, std::uint8_t v);
+  void swap_cells(RegId a, RegId b);
+  void write_buffer(RegId ptr_cell, std::span<const std::uint8_t> bytes);
+  std::vector<std::uint8_t> read_buffer(RegId ptr_cell, std::size_t len);
+  void ram_write(std::uint32_t addr, std::uint8_t v);
+  std::uint8_t ram_read(std::uint32_t addr);
+
+  // --- watchdogs (watchdog.cpp) ---
+  void watchdog_parameterise(bool wd_on, std::uint8_t f1, std::uint8_t f2, bool base_1ms);
+  void watchdog_retrigger();  // an error-free telegram to our address
+  void watchdog_expired();
+  void baud_found(std::uint8_t code);
   [[nodiscard]] bool mode0(std::uint16_t bit) const {
     return (latch[idx(RegId::Mode_Reg0)] & bit) != 0;
   }

@@ -1,5 +1,7 @@
-// DP state machine hooks: the user's verdict on Set_Prm and Chk_Cfg (User_Prm/Cfg_Data_(Not_)Okay)
-// and SSA_Buffer_Free_Cmd. New_Prm_Data / New_Cfg_Data are cleared here, never through IAR.
+// DP state machine: the services the ASIC answers by itself and the user's verdict on Set_Prm
+// and Chk_Cfg (User_Prm/Cfg_Data_(Not_)Okay), SSA_Buffer_Free_Cmd. New_Prm_Data / New_Cfg_Data
+// are cleared here, never through IAR. Decisions where the manuals are silent: docs/decisions.md.
+#include <algorithm>
 #include <utility>
 
 #include "core.hpp"
@@ -9,6 +11,31 @@ namespace dpc31 {
 namespace {
 
 constexpr std::uint16_t kEn_Change_Cfg_Buffer = 1u << 4;
+constexpr std::uint16_t kRes_User_WD = 1u << 5;
+constexpr std::uint16_t kMode0_Dis_Start_Stop = 0x0003;
+constexpr std::uint16_t kMode0_Sync_Supported = 1u << 6;
+constexpr std::uint16_t kMode0_Freeze_Supported = 1u << 7;
+constexpr std::uint16_t kMode0_DP_Mode = 1u << 8;
+constexpr std::uint16_t kMode0_Spec_Clear_Mode = 1u << 13;
+constexpr std::uint16_t kMode0_WD_Base_Vpc3 = 1u << 2;
+constexpr std::uint16_t kMode2_No_Check_Prm_Reserved = 1u << 6;
+
+// Set_Prm Station_Status (DU byte 0) and Spec_User_Prm_Byte (DU byte 7, SPC3).
+constexpr std::uint8_t kLock_Req = 0x80;
+constexpr std::uint8_t kUnlock_Req = 0x40;
+constexpr std::uint8_t kSync_Req = 0x20;
+constexpr std::uint8_t kFreeze_Req = 0x10;
+constexpr std::uint8_t kWD_On = 0x08;
+constexpr std::uint8_t kStation_Status_Reserved = 0x07;
+constexpr std::uint8_t kSpec_WD_Base_1ms = 0x04;
+constexpr std::size_t kMinPrmLength = 7;
+constexpr std::size_t kMaxBufferLength = 244;
+
+// Diag buffer byte 0 as the user writes it.
+constexpr std::uint8_t kDiag_Ext_Diag = 0x01;
+constexpr std::uint8_t kDiag_Stat_Diag = 0x02;
+constexpr std::uint8_t kDiag_Ext_Diag_Overflow = 0x04;
+constexpr std::size_t kStandardDiagBytes = 6;
 
 enum class Verdict { ok, not_ok };
 
@@ -36,10 +63,7 @@ void cfg_done(ChipCore& c, Verdict v) {
   }
   if ((c.latch[ChipCore::idx(RegId::Mode_Reg1)] & kEn_Change_Cfg_Buffer) != 0) {
     // Get_Cfg answers the new configuration from now on.
-    const RegDesc* cfg = c.reg(RegId::R_Cfg_Buf_Ptr);
-    const RegDesc* read_cfg = c.reg(RegId::R_Read_Cfg_Buf_Ptr);
-    std::swap(c.mem[static_cast<std::uint32_t>(cfg->read_addr)],
-              c.mem[static_cast<std::uint32_t>(read_cfg->read_addr)]);
+    c.swap_cells(RegId::R_Cfg_Buf_Ptr, RegId::R_Read_Cfg_Buf_Ptr);
   }
   if (c.dp.state == DpState::Wait_Cfg) {
     c.dp.state = DpState::Data_Exchange;
@@ -53,6 +77,20 @@ std::uint16_t handshake_command(ChipCore& c) {
   const std::uint8_t r = (c.dp.*Which).answer(done);
   if (done) Done(c, V);
   return r;
+}
+
+using fdl::Frame;
+using fdl::Response;
+
+// The answer to a request with SAPs: DA/SA swapped, DSAP = the master's SSAP, SSAP = ours.
+Frame sap_answer(const ChipCore& c, const Frame& req, Response code, std::vector<std::uint8_t> du) {
+  Frame f = fdl::make_frame(req.sa, c.dp.station, fdl::make_response_fc(code), std::move(du),
+                            req.ssap, req.dsap);
+  return f;
+}
+
+Frame short_answer(const ChipCore& c, const Frame& req, Response code) {
+  return fdl::make_frame(req.sa, c.dp.station, fdl::make_response_fc(code));
 }
 
 }  // namespace
@@ -76,6 +114,318 @@ void install_dp_sm_hooks(HookTable& h) {
         c.dp.ssa_free = true;  // SAP55 accepts Set_Slave_Add again
         return 0;
       });
+}
+
+// --- buffers in RAM, as the ASIC sees them ---
+
+void ChipCore::set_cell(RegId id, std::uint8_t v) {
+  mem[static_cast<std::uint32_t>(reg(id)->read_addr)] = v;
+}
+
+void ChipCore::swap_cells(RegId a, RegId b) {
+  const std::uint8_t va = cell(a);
+  set_cell(a, cell(b));
+  set_cell(b, va);
+}
+
+void ChipCore::write_buffer(RegId ptr_cell, std::span<const std::uint8_t> bytes) {
+  const std::uint32_t base = buffer_addr(ptr_cell);
+  for (std::size_t i = 0; i < bytes.size(); ++i)
+    ram_write(base + static_cast<std::uint32_t>(i), bytes[i]);
+}
+
+std::vector<std::uint8_t> ChipCore::read_buffer(RegId ptr_cell, std::size_t len) {
+  const std::uint32_t base = buffer_addr(ptr_cell);
+  std::vector<std::uint8_t> out(len);
+  for (std::size_t i = 0; i < len; ++i) out[i] = ram_read(base + static_cast<std::uint32_t>(i));
+  return out;
+}
+
+// A telegram is received into the Aux buffer R_Aux_Buf_Sel selects and, when it fits, the Aux
+// and target buffers are exchanged (pointer cells swap) and the length cell written.
+bool ChipCore::receive_via_aux(int sel_bit, RegId target_ptr, RegId len_cell,
+                               std::span<const std::uint8_t> du) {
+  const bool aux2 = ((cell(RegId::R_Aux_Buf_Sel) >> sel_bit) & 1) != 0;
+  const RegId aux_ptr = aux2 ? RegId::R_Aux_Buf_Ptr2 : RegId::R_Aux_Buf_Ptr1;
+  const RegId aux_len = aux2 ? RegId::R_Len_Cntrl_Buf2 : RegId::R_Len_Cntrl_Buf1;
+  if (du.size() > cell(aux_len)) return false;
+  write_buffer(aux_ptr, du);
+  swap_cells(aux_ptr, target_ptr);
+  set_cell(len_cell, static_cast<std::uint8_t>(du.size()));
+  return true;
+}
+
+// --- the services ---
+
+std::optional<fdl::Frame> ChipCore::dp_service(const fdl::Frame& req) {
+  ++counters.requests;
+  const bool broadcast = req.da == fdl::kBroadcast;
+  const fdl::Function fn = fdl::request_function(req.fc);
+  const bool wants_answer =
+      !broadcast && (fn == fdl::Function::SRD_low || fn == fdl::Function::SRD_high ||
+                     fn == fdl::Function::FDL_Status);
+  // FCB/FCV (EN 50170): the same FCB again from the same master means our answer was lost.
+  if (!broadcast && fdl::fcv(req.fc) && dp.fcb_valid && dp.last_master == req.sa &&
+      dp.last_fcb == fdl::fcb(req.fc) && !dp.last_response.empty()) {
+    ++counters.repeated;
+    return fdl::decode(dp.last_response).frame;
+  }
+  std::optional<Frame> answer;
+  if (fn == fdl::Function::FDL_Status && !req.dsap) {
+    answer = short_answer(*this, req, Response::OK);
+  } else if (fn != fdl::Function::SRD_low && fn != fdl::Function::SRD_high &&
+             fn != fdl::Function::SDN_low && fn != fdl::Function::SDN_high) {
+    ++counters.unsupported_function;
+    log(LogLevel::info, "FC {:#04x} from {}: function not served by a DP slave", req.fc, req.sa);
+  } else if (!req.dsap) {
+    answer = data_exchange(req);
+  } else {
+    switch (fdl::sap_number(*req.dsap)) {
+      case sap::Set_Prm:
+        answer = set_prm(req);
+        break;
+      case sap::Chk_Cfg:
+        answer = chk_cfg(req);
+        break;
+      case sap::Slave_Diag:
+        answer = slave_diag(req);
+        break;
+      case sap::Get_Cfg:
+        answer =
+            sap_answer(*this, req, Response::DL,
+                       read_buffer(RegId::R_Read_Cfg_Buf_Ptr, cell(RegId::R_Len_Read_Cfg_Data)));
+        break;
+      case sap::Rd_Inp:
+      case sap::Rd_Outp:
+        answer = read_io(req);
+        break;
+      case sap::Global_Control:
+        global_control(req);
+        break;
+      case sap::Set_Slave_Add:
+        answer = set_slave_add(req);
+        break;
+      default:
+        ++counters.unknown_sap;
+        log(LogLevel::info, "DSAP {} from {}: not served (RS)", fdl::sap_number(*req.dsap), req.sa);
+        answer = short_answer(*this, req, Response::RS);
+        break;
+    }
+  }
+  if (!wants_answer || !answer) return std::nullopt;
+  dp.fcb_valid = fdl::fcv(req.fc);
+  dp.last_fcb = fdl::fcb(req.fc);
+  dp.last_master = req.sa;
+  dp.last_response = fdl::encode(*answer);
+  return answer;
+}
+
+std::optional<fdl::Frame> ChipCore::set_prm(const fdl::Frame& req) {
+  const std::vector<std::uint8_t>& du = req.du;
+  if (du.size() < kMinPrmLength || du.size() > kMaxBufferLength) {
+    dp.prm_fault = true;
+    log(LogLevel::info, "Set_Prm with {} bytes: Prm_Fault", du.size());
+    leave_master();
+    return fdl::sc();
+  }
+  const std::uint8_t status = du[0];
+  if (dp.master_add != 0xFF && dp.master_add != req.sa && (status & kLock_Req) != 0) {
+    ++counters.not_allowed;  // locked by another master: its diag shows Master_Add
+    log(LogLevel::info, "Set_Prm from master {} while locked by {}: ignored", req.sa,
+        dp.master_add);
+    return fdl::sc();
+  }
+  const bool check_reserved = prof->id != Profile::vpc3plus ||
+                              (latch[idx(RegId::Mode_Reg2)] & kMode2_No_Check_Prm_Reserved) == 0;
+  const std::uint16_t ident =
+      static_cast<std::uint16_t>(cell(RegId::R_Ident_High) << 8 | cell(RegId::R_Ident_Low));
+  const std::uint16_t asked = static_cast<std::uint16_t>(du[4] << 8 | du[5]);
+  const char* fault = nullptr;
+  if (asked != ident) fault = "Ident_Number differs";
+  if (check_reserved && (status & kStation_Status_Reserved) != 0)
+    fault = "reserved Station_Status bits";
+  if ((status & kSync_Req) != 0 && !mode0(kMode0_Sync_Supported))
+    fault = "Sync_Req but Sync not supported";
+  if ((status & kFreeze_Req) != 0 && !mode0(kMode0_Freeze_Supported))
+    fault = "Freeze_Req but Freeze not supported";
+  if (fault != nullptr) {
+    log(LogLevel::info, "Set_Prm from {}: {}: Prm_Fault", req.sa, fault);
+    leave_master();
+    dp.prm_fault = true;
+    return fdl::sc();
+  }
+  const bool aux2 = (cell(RegId::R_Aux_Buf_Sel) & 0x01) != 0;
+  if (du.size() > cell(aux2 ? RegId::R_Len_Cntrl_Buf2 : RegId::R_Len_Cntrl_Buf1)) {
+    ++counters.no_resource;
+    return short_answer(*this, req, Response::RR);
+  }
+  // A new parameterisation starts the DP state machine over (outputs to the safe state).
+  if (dp.state != DpState::Wait_Prm || dp.prm.pending) leave_master();
+  dp.prm_fault = dp.cfg_fault = dp.not_supported = false;
+  if ((status & kUnlock_Req) != 0) {
+    dp.master_add = 0xFF;
+  } else if ((status & kLock_Req) != 0) {
+    dp.master_add = req.sa;
+  }
+  dp.group_ident = du[6];
+  if (du[3] != 0) dp.min_tsdr = du[3];
+  if (mode0(kMode0_DP_Mode) && du.size() > 7) {
+    // Spec_User_Prm_Byte overwrites Dis_Start_Control / Dis_Stop_Control in DP mode.
+    std::uint16_t& m0 = latch[idx(RegId::Mode_Reg0)];
+    m0 =
+        static_cast<std::uint16_t>((m0 & ~kMode0_Dis_Start_Stop) | (du[7] & kMode0_Dis_Start_Stop));
+  }
+  const bool wd_1ms = prof->id == Profile::vpc3plus
+                          ? mode0(kMode0_WD_Base_Vpc3)
+                          : du.size() > 7 && (du[7] & kSpec_WD_Base_1ms) != 0;
+  watchdog_parameterise((status & kWD_On) != 0, du[1], du[2], wd_1ms);
+  receive_via_aux(0, RegId::R_Prm_Buf_Ptr, RegId::R_Len_Prm_Data, du);
+  dp.prm.arrived();
+  raise(irq::New_Prm_Data);
+  return fdl::sc();
+}
+
+std::optional<fdl::Frame> ChipCore::chk_cfg(const fdl::Frame& req) {
+  if (dp.state == DpState::Wait_Prm || req.sa != dp.master_add) {
+    ++counters.not_allowed;
+    log(LogLevel::info, "Chk_Cfg from {} in {}: not accepted", req.sa,
+        dp.state == DpState::Wait_Prm ? "Wait_Prm" : "a foreign lock");
+    return fdl::sc();
+  }
+  if (req.du.empty() || req.du.size() > kMaxBufferLength ||
+      !receive_via_aux(1, RegId::R_Cfg_Buf_Ptr, RegId::R_Len_Cfg_Data, req.du)) {
+    ++counters.no_resource;
+    return short_answer(*this, req, Response::RR);
+  }
+  if (dp.state == DpState::Data_Exchange) {
+    dp.state = DpState::Wait_Cfg;
+    raise(irq::Go_Leave_Data_Exchange);
+  }
+  dp.cfg.arrived();
+  raise(irq::New_Cfg_Data);
+  return fdl::sc();
+}
+
+// The six standard bytes are the ASIC's; the rest of the buffer is the user's.
+std::optional<fdl::Frame> ChipCore::slave_diag(const fdl::Frame& req) {
+  static constexpr RegId kPtr[] = {RegId::R_Diag_Buf_Ptr1, RegId::R_Diag_Buf_Ptr2};
+  static constexpr RegId kLen[] = {RegId::R_Len_Diag_Buf1, RegId::R_Len_Diag_Buf2};
+  int k = buffers.diag.buf[0] == DiagState::Asic ? 0 : 1;
+  if (buffers.diag.buf[k] != DiagState::Asic)
+    k = buffers.diag.buf[0] == DiagState::Asic_Send_Mode ? 0 : 1;
+  const std::size_t len =
+      std::clamp<std::size_t>(cell(kLen[k]), kStandardDiagBytes, kMaxBufferLength);
+  std::vector<std::uint8_t> du = read_buffer(kPtr[k], len);
+  const std::uint8_t user = du[0];
+  du[0] = static_cast<std::uint8_t>((dp.state != DpState::Data_Exchange ? 0x02 : 0) |
+                                    (dp.cfg_fault ? 0x04 : 0) | (user & kDiag_Ext_Diag ? 0x08 : 0) |
+                                    (dp.not_supported ? 0x10 : 0) | (dp.prm_fault ? 0x40 : 0));
+  du[1] = static_cast<std::uint8_t>(
+      (dp.state == DpState::Wait_Prm ? 0x01 : 0) | (user & kDiag_Stat_Diag ? 0x02 : 0) | 0x04 |
+      (timers.dp_wd_on ? 0x08 : 0) | (dp.freeze_mode ? 0x10 : 0) | (dp.sync_mode ? 0x20 : 0));
+  du[2] = (user & kDiag_Ext_Diag_Overflow) != 0 ? 0x80 : 0x00;
+  du[3] = dp.master_add;
+  du[4] = cell(RegId::R_Ident_High);
+  du[5] = cell(RegId::R_Ident_Low);
+  diag_send_begin();
+  diag_in_flight = true;
+  return sap_answer(*this, req, Response::DL, std::move(du));
+}
+
+std::optional<fdl::Frame> ChipCore::read_io(const fdl::Frame& req) {
+  if (dp.state != DpState::Data_Exchange) {
+    ++counters.not_allowed;
+    return short_answer(*this, req, Response::RS);
+  }
+  if (fdl::sap_number(*req.dsap) == sap::Rd_Inp) {
+    if (!dp.freeze_mode) din_fetch();
+    return sap_answer(*this, req, Response::DL,
+                      read_buffer(din_ptr(buffers.din.d), cell(RegId::R_Len_Din_Buf)));
+  }
+  // Read_Outputs is served from the user's U buffer.
+  return sap_answer(*this, req, Response::DL,
+                    read_buffer(dout_ptr(buffers.dout.u), cell(RegId::R_Len_Dout_Buf)));
+}
+
+std::optional<fdl::Frame> ChipCore::set_slave_add(const fdl::Frame& req) {
+  const std::vector<std::uint8_t>& du = req.du;
+  const std::uint16_t ident =
+      static_cast<std::uint16_t>(cell(RegId::R_Ident_High) << 8 | cell(RegId::R_Ident_Low));
+  if (cell(RegId::R_SSA_Buf_Ptr) == 0 || dp.no_add_change ||
+      cell(RegId::R_Real_No_Add_Change) == 0xFF || dp.state != DpState::Wait_Prm) {
+    ++counters.not_allowed;  // SAP55 off, address frozen, or not in Wait_Prm
+    return short_answer(*this, req, Response::RS);
+  }
+  if (!dp.ssa_free) {
+    ++counters.no_resource;  // the user has not freed the SSA buffer yet
+    return short_answer(*this, req, Response::RR);
+  }
+  if (du.size() < 4 || du.size() > kMaxBufferLength || du[0] > 125 ||
+      static_cast<std::uint16_t>(du[1] << 8 | du[2]) != ident) {
+    ++counters.not_allowed;
+    log(LogLevel::info, "Set_Slave_Add from {}: bad address or Ident_Number: ignored", req.sa);
+    return fdl::sc();
+  }
+  if (!receive_via_aux(2, RegId::R_SSA_Buf_Ptr, RegId::R_Len_SSA_Data, du)) {
+    ++counters.no_resource;
+    return short_answer(*this, req, Response::RR);
+  }
+  Frame ack = fdl::sc();
+  log(LogLevel::info, "Set_Slave_Add: station {} -> {}", dp.station, du[0]);
+  dp.station = du[0];  // the chip answers at the new address from now on
+  dp.no_add_change = du[3] != 0;
+  dp.ssa_free = false;
+  raise(irq::New_SSA_Data);
+  return ack;
+}
+
+std::optional<fdl::Frame> ChipCore::data_exchange(const fdl::Frame& req) {
+  if (dp.state != DpState::Data_Exchange || req.sa != dp.master_add) {
+    ++counters.not_allowed;
+    return short_answer(*this, req, Response::RS);
+  }
+  if (!user_watchdog_tick()) return std::nullopt;
+  const std::size_t out_len = cell(RegId::R_Len_Dout_Buf);
+  if (req.du.size() == out_len) {
+    write_buffer(dout_ptr(buffers.dout.d), req.du);
+    if (!dp.sync_mode) dout_received();  // in Sync mode D holds the data until the next Sync
+  } else if (req.du.empty() && mode0(kMode0_Spec_Clear_Mode)) {
+    failsafe_clear();  // fail-safe: the master sends no outputs while in Clear
+  } else {
+    ++counters.not_allowed;
+    log(LogLevel::info, "Data_Exchange with {} output bytes, {} configured: RS", req.du.size(),
+        out_len);
+    return short_answer(*this, req, Response::RS);
+  }
+  if (!dp.freeze_mode) din_fetch();
+  const std::size_t in_len = cell(RegId::R_Len_Din_Buf);
+  const Response code = buffers.diag_flag ? Response::DH : Response::DL;
+  if (in_len == 0) return code == Response::DL ? fdl::sc() : short_answer(*this, req, code);
+  return fdl::make_frame(req.sa, dp.station, fdl::make_response_fc(code),
+                         read_buffer(din_ptr(buffers.din.d), in_len));
+}
+
+// Each Data_Exchange counts the user watchdog down; Res_User_WD reloads it. False: expired.
+bool ChipCore::user_watchdog_tick() {
+  std::uint16_t& m1 = latch[idx(RegId::Mode_Reg1)];
+  if ((m1 & kRes_User_WD) != 0) {
+    m1 = static_cast<std::uint16_t>(m1 & ~kRes_User_WD);
+    dp.user_wd = cell16(*reg(RegId::R_User_WD_Value));
+    dp.user_wd_armed = true;
+    return true;
+  }
+  if (!dp.user_wd_armed) return true;
+  if (dp.user_wd > 0) --dp.user_wd;
+  if (dp.user_wd != 0) return true;
+  log(LogLevel::info, "user watchdog expired: Leave_Master");
+  leave_master();
+  return false;
+}
+
+void ChipCore::dp_response_sent() {
+  if (!diag_in_flight) return;
+  diag_in_flight = false;
+  diag_send_end();
 }
 
 }  // namespace dpc31

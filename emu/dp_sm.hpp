@@ -1,8 +1,11 @@
-// DP slave state machine: the user's side of the Prm / Cfg / SSA handshakes (chip-facts §5.4,
-// §6). The OK / Not_OK command reads answer 00 finished, 01 conflict, 11 not allowed.
+// DP slave state machine (chip-facts §5.4, §6): Wait_Prm -> Wait_Cfg -> Data_Exchange, the
+// services the ASIC answers by itself (Set_Prm, Chk_Cfg, Slave_Diag, Get_Cfg, Rd_Inp, Rd_Outp,
+// Set_Slave_Add, Data_Exchange, FDL_Status) and the user's Prm / Cfg / SSA handshakes, whose
+// OK / Not_OK reads answer 00 finished, 01 conflict, 11 not allowed.
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "dpc31/chip.hpp"
 
@@ -11,6 +14,19 @@ namespace dpc31 {
 inline constexpr std::uint8_t kHandshakeFinished = 0x00;
 inline constexpr std::uint8_t kHandshakeConflict = 0x01;
 inline constexpr std::uint8_t kHandshakeNotAllowed = 0x03;
+
+// DP service access points (DSAP at the slave) and the master's SSAP.
+namespace sap {
+inline constexpr std::uint8_t Set_Slave_Add = 55;
+inline constexpr std::uint8_t Rd_Inp = 56;
+inline constexpr std::uint8_t Rd_Outp = 57;
+inline constexpr std::uint8_t Global_Control = 58;
+inline constexpr std::uint8_t Get_Cfg = 59;
+inline constexpr std::uint8_t Slave_Diag = 60;
+inline constexpr std::uint8_t Set_Prm = 61;
+inline constexpr std::uint8_t Chk_Cfg = 62;
+inline constexpr std::uint8_t Master = 62;
+}  // namespace sap
 
 // One pending telegram awaiting the user's verdict (Set_Prm or Chk_Cfg).
 struct Handshake {
@@ -43,9 +59,26 @@ struct DpStateMachine {
   DpState state = DpState::Wait_Prm;
   Handshake prm;
   Handshake cfg;
-  bool ssa_free = true;    // SAP55 enabled (SSA buffer free)
-  bool prm_fault = false;  // the user rejected Set_Prm (diag Prm_Fault)
-  bool cfg_fault = false;  // the user rejected Chk_Cfg (diag Cfg_Fault)
+  bool ssa_free = true;            // SAP55 enabled (SSA buffer free)
+  bool prm_fault = false;          // diag St1 Prm_Fault
+  bool cfg_fault = false;          // diag St1 Cfg_Fault
+  bool not_supported = false;      // diag St1 Not_Supported (reserved Global_Control bits, ...)
+  std::uint8_t station = 0;        // own address: R_TS_Adr at Start, changed by Set_Slave_Add
+  bool no_add_change = false;      // Real_No_Add_Change adopted from Set_Slave_Add
+  std::uint8_t master_add = 0xFF;  // the master that locked us (FFh: not parameterised)
+  std::uint8_t group_ident = 0;
+  std::uint8_t min_tsdr = 0;  // from Set_Prm byte 3; 0 = MinTSDR_Val
+  bool sync_mode = false;
+  bool freeze_mode = false;
+  // User watchdog: armed by Res_User_WD, counts Data_Exchange telegrams down.
+  bool user_wd_armed = false;
+  std::uint16_t user_wd = 0;
+  // FCB/FCV: a repeated request (same master, FCV = 1, same FCB) gets the previous answer again.
+  bool fcb_valid = false;
+  bool last_fcb = false;
+  std::uint8_t last_master = 0xFF;
+  std::vector<std::uint8_t> last_response;
+
   void reset() { *this = DpStateMachine{}; }
 };
 

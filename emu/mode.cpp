@@ -53,9 +53,12 @@ void ChipCore::start() {
   started = true;
   ram_access_violation = false;
   latch[idx(RegId::Mode_Reg1)] &= static_cast<std::uint16_t>(~kGo_Offline);
-  timers.wd = WdState::Baud_Search;
+  timers.reset();
   timers.user_timer_next = now + user_timer_period();
   dp.reset();
+  dp.station = cell(RegId::R_TS_Adr);
+  dp.no_add_change = cell(RegId::R_Real_No_Add_Change) == 0xFF;
+  mac_start_search();
   log(LogLevel::info, "Start_SPC3: Offline -> Passive_Idle");
   // Power-on: the ASIC clears the output buffer and hands it to the user (DX_Out).
   dout_clear();
@@ -65,10 +68,10 @@ void ChipCore::go_offline() {
   if (!started) return;
   started = false;
   latch[idx(RegId::Mode_Reg1)] &= static_cast<std::uint16_t>(~kStart_SPC3);
-  timers.user_timer_next = kNever;
   // The MAC reset puts the DP and watchdog state machines back into their reset states.
+  timers.reset();
   dp.reset();
-  timers.wd = WdState::Baud_Search;
+  mac_stop();
   log(LogLevel::info, "Passive_Idle -> Offline (MAC_Reset)");
   raise(irq::MAC_Reset);
 }
@@ -79,6 +82,12 @@ void ChipCore::leave_master() {
   dp.state = DpState::Wait_Prm;
   dp.prm = Handshake{};
   dp.cfg = Handshake{};
+  dp.master_add = 0xFF;  // unlocked: any master may parameterise us again
+  dp.sync_mode = false;
+  dp.freeze_mode = false;
+  dp.user_wd_armed = false;
+  dp.fcb_valid = false;
+  buffers.n_cl = false;
   log(LogLevel::info, "Leave_Master: DP state -> Wait_Prm");
   if (was == DpState::Data_Exchange) raise(irq::Go_Leave_Data_Exchange);
   dout_clear();

@@ -75,6 +75,11 @@ void ChipCore::reset() {
   buffers.reset();
   dp.reset();
   timers.reset();
+  mac.reset();
+  mac.rx.configure(bit_cycles(clock_hz, kBaudRates[0]), 0);  // listening, for the offline count
+  counters = FdlCounters{};
+  diag_in_flight = false;
+  baud_code = 0;
   started = false;
   ram_access_violation = false;
   large_ram = false;
@@ -121,12 +126,22 @@ std::uint32_t ChipCore::segment_shift() const {
 }
 
 void ChipCore::clear_ram(std::uint32_t begin, std::uint32_t len) {
-  for (std::uint32_t i = 0; i < len; ++i) {
-    bool violation = false;
-    const std::uint32_t a = decode(begin + i, violation);
-    if (violation) note_violation(begin + i, a);
-    mem[a] = 0;
-  }
+  for (std::uint32_t i = 0; i < len; ++i) ram_write(begin + i, 0);
+}
+
+// The ASIC's own RAM accesses (buffers): the same address decode and violation as the bus.
+void ChipCore::ram_write(std::uint32_t addr, std::uint8_t v) {
+  bool violation = false;
+  const std::uint32_t a = decode(addr, violation);
+  if (violation) note_violation(addr, a);
+  mem[a] = v;
+}
+
+std::uint8_t ChipCore::ram_read(std::uint32_t addr) {
+  bool violation = false;
+  const std::uint32_t a = decode(addr, violation);
+  if (violation) note_violation(addr, a);
+  return mem[a];
 }
 
 std::uint32_t ChipCore::decode(std::uint32_t addr, bool& violation) const {

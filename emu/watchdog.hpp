@@ -14,6 +14,9 @@ inline constexpr std::uint64_t kNever = std::numeric_limits<std::uint64_t>::max(
 struct Timers {
   std::uint64_t user_timer_next = kNever;  // next User_Timer_Clock event
   WdState wd = WdState::Baud_Search;
+  std::uint64_t wd_deadline = kNever;  // Baud_Control or DP_Control expiry
+  bool dp_wd_on = false;               // Set_Prm WD_On: DP_Control monitors the master
+  std::uint64_t dp_wd_cycles = 0;      // TWD in clocks
   void reset() { *this = Timers{}; }
 };
 

@@ -1306,17 +1306,17 @@
 `define DPC31_Mode_Reg1_R_Res_User_WD_POS               5
 `define DPC31_Mode_Reg1_R_Res_User_WD_W                 1
 
-// Dout_Buffer_SM: derived, 8 bit -- Dout buffer state machine: which Dout buffer is in D, N, U, F
+// Dout_Buffer_SM: derived, 8 bit -- Dout buffer state machine with the clear-buffer flag N_Cl
 `define DPC31_ADDR_Dout_Buffer_SM                       13'h000A
-`define DPC31_Dout_Buffer_SM_RESET                      8'hE1
+`define DPC31_Dout_Buffer_SM_RESET                      8'h21
 `define DPC31_Dout_Buffer_SM_D_POS                      0
 `define DPC31_Dout_Buffer_SM_D_W                        2
 `define DPC31_Dout_Buffer_SM_N_POS                      2
 `define DPC31_Dout_Buffer_SM_N_W                        2
 `define DPC31_Dout_Buffer_SM_U_POS                      4
 `define DPC31_Dout_Buffer_SM_U_W                        2
-`define DPC31_Dout_Buffer_SM_F_POS                      6
-`define DPC31_Dout_Buffer_SM_F_W                        2
+`define DPC31_Dout_Buffer_SM_N_Cl_POS                   7
+`define DPC31_Dout_Buffer_SM_N_Cl_W                     1
 
 // WD_Baud_Control_Val: latch, 8 bit -- Baud_Control monitoring time in 10 ms units
 `define DPC31_ADDR_WD_Baud_Control_Val                  13'h000A

@@ -9,6 +9,7 @@
 #include <functional>
 #include <memory>
 #include <string_view>
+#include <vector>
 
 #include "dpc31/log.hpp"
 #include "dpc31/reg_ids.hpp"
@@ -43,6 +44,15 @@ inline constexpr std::uint16_t Diag_Buffer_Changed = 1u << 12;
 inline constexpr std::uint16_t DX_Out = 1u << 13;
 }  // namespace irq
 
+// A telegram on the bus, as the chip received or sent it (for logs and captures).
+struct Telegram {
+  bool from_chip;                   // sent by the chip (TxD) or received (RxD)
+  std::vector<std::uint8_t> bytes;  // as on the wire, SD to ED
+  std::uint64_t start;              // first start bit
+  std::uint64_t end;                // end of the last stop bit
+};
+
+struct FdlCounters;
 struct ChipCore;
 
 class Chip {
@@ -73,6 +83,9 @@ class Chip {
 
   // --- time ---
   void step(std::uint64_t cycles = 1);
+  // Steps at most `cycles`, stopping right after the event that makes the interrupt active
+  // (true) — where firmware would enter its ISR.
+  bool step_until_irq(std::uint64_t cycles);
   [[nodiscard]] std::uint64_t cycle() const;
   [[nodiscard]] std::uint32_t clock_hz() const;
   [[nodiscard]] std::uint32_t bus_access_cycles() const;
@@ -88,6 +101,19 @@ class Chip {
 
   // Called whenever the interrupt becomes active or inactive: (cycle, active).
   void on_irq_change(std::function<void(std::uint64_t, bool)> cb);
+
+  // --- the serial side (RS-485) ---
+  // RxD changes to `level` at `cycle` (>= cycle(), non-decreasing); whole frames may be given
+  // ahead of time.
+  void drive_rxd(std::uint64_t cycle, bool level);
+  // TxD edges, reported when time reaches them.
+  void on_txd(std::function<void(std::uint64_t, bool)> cb);
+  // Every error-free frame the chip receives and every answer it sends.
+  void on_telegram(std::function<void(const Telegram&)> cb);
+  [[nodiscard]] bool txd_pin() const;
+  [[nodiscard]] const FdlCounters& fdl_counters() const;
+  [[nodiscard]] std::uint8_t station_address() const;
+  [[nodiscard]] std::uint32_t bit_cycles() const;  // at the current (or searched) baud rate
   void set_log_sink(LogSink sink);
 
   [[nodiscard]] const ProfileDesc& profile() const;

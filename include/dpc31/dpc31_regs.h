@@ -1402,17 +1402,17 @@ enum dpc31_profile {
 #define DPC31_Mode_Reg1_R_Res_User_WD_Pos               5u
 #define DPC31_Mode_Reg1_R_Res_User_WD_Msk               0x20u /* 5 W1C: reload the user watchdog; the chip clears it at the next Data_Exchange */
 
-/* Dout_Buffer_SM: derived, 8 bit -- Dout buffer state machine: which Dout buffer is in D, N, U, F */
+/* Dout_Buffer_SM: derived, 8 bit -- Dout buffer state machine with the clear-buffer flag N_Cl */
 #define DPC31_Dout_Buffer_SM                            0x000Au /* read */
-#define DPC31_Dout_Buffer_SM_RESET                      0xE1u
+#define DPC31_Dout_Buffer_SM_RESET                      0x21u
 #define DPC31_Dout_Buffer_SM_D_Pos                      0u
 #define DPC31_Dout_Buffer_SM_D_Msk                      0x03u /* 1:0 RO: buffer in state D (00 Nil, 01..11 = Buf_Ptr1..3) */
 #define DPC31_Dout_Buffer_SM_N_Pos                      2u
 #define DPC31_Dout_Buffer_SM_N_Msk                      0x0Cu /* 3:2 RO: buffer in state N */
 #define DPC31_Dout_Buffer_SM_U_Pos                      4u
 #define DPC31_Dout_Buffer_SM_U_Msk                      0x30u /* 5:4 RO: buffer in state U (the user's) */
-#define DPC31_Dout_Buffer_SM_F_Pos                      6u
-#define DPC31_Dout_Buffer_SM_F_Msk                      0xC0u /* 7:6 RO: buffer in state F (free) */
+#define DPC31_Dout_Buffer_SM_N_Cl_Pos                   7u
+#define DPC31_Dout_Buffer_SM_N_Cl_Msk                   0x80u /* 7 RO: the clear buffer C goes to the user at the next Next_Dout_Buffer_Cmd */
 
 /* WD_Baud_Control_Val: latch, 8 bit -- Baud_Control monitoring time in 10 ms units */
 #define DPC31_WD_Baud_Control_Val                       0x000Au /* write */

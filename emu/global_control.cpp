@@ -1,0 +1,66 @@
+// Global_Control (SAP58), as the DPC31 manual describes it (seed 003): Sync, Unsync, Freeze,
+// Unfreeze, Clear_Data; reserved bits 7, 6, 0 -> Not_Supported and Leave_Master unless the check
+// is switched off; Sync/Freeze without support treated like a reserved bit; Group_Select.
+#include "core.hpp"
+
+namespace dpc31 {
+
+namespace {
+
+constexpr std::uint8_t kGC_Reserved = 0xC1;
+constexpr std::uint8_t kGC_Sync = 0x20;
+constexpr std::uint8_t kGC_Unsync = 0x10;
+constexpr std::uint8_t kGC_Freeze = 0x08;
+constexpr std::uint8_t kGC_Unfreeze = 0x04;
+constexpr std::uint8_t kGC_Clear_Data = 0x02;
+constexpr std::uint16_t kMode0_Sync_Supported = 1u << 6;
+constexpr std::uint16_t kMode0_Freeze_Supported = 1u << 7;
+
+}  // namespace
+
+void ChipCore::global_control(const fdl::Frame& req) {
+  if (dp.state != DpState::Data_Exchange || req.sa != dp.master_add || req.du.size() != 2) {
+    ++counters.not_allowed;
+    log(LogLevel::info, "Global_Control from {}: not accepted in this state", req.sa);
+    return;
+  }
+  const std::uint8_t command = req.du[0];
+  const std::uint8_t groups = req.du[1];
+  if (groups != 0 && (groups & dp.group_ident) == 0) return;  // addressed to other groups
+  // The option bits: dpc31 Param_Reg, VPC3+ Mode_Reg2 (bit 0 interrupt mode, bit 1 no check).
+  const std::uint16_t options = prof->id == Profile::dpc31      ? latch[idx(RegId::Param_Reg)]
+                                : prof->id == Profile::vpc3plus ? latch[idx(RegId::Mode_Reg2)]
+                                                                : 0;
+  const bool every_gc_interrupts = (options & 0x01) != 0;
+  const bool check_reserved = (options & 0x02) == 0;
+  const bool bad = (check_reserved && (command & kGC_Reserved) != 0) ||
+                   ((command & kGC_Sync) != 0 && !mode0(kMode0_Sync_Supported)) ||
+                   ((command & kGC_Freeze) != 0 && !mode0(kMode0_Freeze_Supported));
+  if (bad) {
+    log(LogLevel::info, "Global_Control {:02X}h: not supported: Not_Supported, Leave_Master",
+        command);
+    leave_master();
+    dp.not_supported = true;
+    return;
+  }
+  const RegDesc* cell_desc = reg(RegId::R_GC_Command);
+  const std::uint8_t previous = mem[static_cast<std::uint32_t>(cell_desc->read_addr)];
+  set_cell(RegId::R_GC_Command, command);
+  if (every_gc_interrupts || command != previous) raise(irq::New_GC_Command);
+
+  if ((command & kGC_Clear_Data) != 0) {
+    failsafe_clear();
+  }
+  // Unsync wins over Sync; both hand the outputs received so far (D) to the user, unless
+  // Clear_Data already did.
+  if ((command & (kGC_Sync | kGC_Unsync)) != 0) {
+    dp.sync_mode = (command & kGC_Unsync) == 0;
+    if ((command & kGC_Clear_Data) == 0) dout_received();
+  }
+  if ((command & (kGC_Freeze | kGC_Unfreeze)) != 0) {
+    dp.freeze_mode = (command & kGC_Unfreeze) == 0;
+    din_fetch();  // the newest inputs (N) are taken into D, then frozen or not
+  }
+}
+
+}  // namespace dpc31

@@ -1,0 +1,206 @@
+// The FDL MAC of the chip. Rules (docs/timing.md, "Serial line"): a telegram starts with a
+// start delimiter after at least TSYN = 33 idle bit times; the line idle for TSYN inside a
+// telegram ends it as truncated; a bad character aborts the telegram and the receiver waits for
+// TSYN again; a request is acted on at the stop-bit sample of its last character; the answer's
+// first start bit goes out MinTSDR bit times after the end of that character's stop bit.
+#include <algorithm>
+
+#include "core.hpp"
+
+namespace dpc31 {
+
+namespace {
+
+constexpr std::uint16_t kDis_Start_Control = 1u << 0;
+constexpr std::uint16_t kDis_Stop_Control = 1u << 1;
+
+void count(FdlCounters& n, fdl::Error e) {
+  switch (e) {
+    case fdl::Error::none:
+      break;
+    case fdl::Error::bad_sd:
+      ++n.bad_sd;
+      break;
+    case fdl::Error::truncated:
+      ++n.truncated;
+      break;
+    case fdl::Error::le_mismatch:
+      ++n.le_mismatch;
+      break;
+    case fdl::Error::bad_le:
+      ++n.bad_le;
+      break;
+    case fdl::Error::bad_fcs:
+      ++n.bad_fcs;
+      break;
+    case fdl::Error::wrong_ed:
+      ++n.wrong_ed;
+      break;
+    case fdl::Error::oversize:
+      ++n.oversize;
+      break;
+    case fdl::Error::bad_sap:
+      ++n.bad_sap;
+      break;
+  }
+}
+
+}  // namespace
+
+void ChipCore::mac_start_search() {
+  mac.search_code = 0;  // from the highest rate down
+  mac.rx.configure(bit_cycles(clock_hz, kBaudRates[0]), now);
+  mac.in_frame = false;
+  mac.skipping = false;
+  mac.frame.reset();
+  mac.frame_timeout = kNever;
+  mac.search_deadline = now + std::uint64_t{kBaudSearchBits} * mac.rx.bit_time();
+}
+
+void ChipCore::mac_stop() {
+  mac.search_deadline = kNever;
+  mac.frame_timeout = kNever;
+  mac.in_frame = false;
+  mac.frame.reset();
+  mac.tx_edges.clear();
+  mac.tx_next = 0;
+  mac.tx_end = kNever;
+  diag_in_flight = false;
+  if (!mac.txd) {
+    mac.txd = true;
+    if (txd_observer) txd_observer(now, true);
+  }
+}
+
+std::uint64_t ChipCore::mac_deadline() const {
+  std::uint64_t t =
+      std::min({mac.rx.next_deadline(), mac.frame_timeout, mac.search_deadline, mac.tx_end});
+  if (mac.tx_next < mac.tx_edges.size()) t = std::min(t, mac.tx_edges[mac.tx_next].first);
+  return t;
+}
+
+void ChipCore::mac_process() {
+  mac.chars.clear();
+  mac.rx.advance(now, mac.chars);
+  for (const UartChar& c : mac.chars) mac_char(c);
+  if (mac.in_frame && mac.frame_timeout <= now) {
+    ++counters.truncated;
+    log(LogLevel::info, "telegram truncated: the line went idle for TSYN after {} bytes",
+        mac.frame.bytes().size());
+    mac.in_frame = false;
+    mac.frame.reset();
+    mac.frame_timeout = kNever;
+  }
+  if (mac.search_deadline <= now) {
+    if (mac.rx.receiving() || mac.in_frame) {
+      mac.search_deadline = now + mac.rx.bit_time();  // never switch inside a character
+    } else {
+      mac.search_code = static_cast<std::uint8_t>((mac.search_code + 1) % std::size(kBaudRates));
+      mac.rx.configure(bit_cycles(clock_hz, kBaudRates[mac.search_code]), now);
+      mac.skipping = false;
+      mac.search_deadline = now + std::uint64_t{kBaudSearchBits} * mac.rx.bit_time();
+    }
+  }
+  while (mac.tx_next < mac.tx_edges.size() && mac.tx_edges[mac.tx_next].first <= now) {
+    mac.txd = mac.tx_edges[mac.tx_next].second;
+    if (txd_observer) txd_observer(mac.tx_edges[mac.tx_next].first, mac.txd);
+    ++mac.tx_next;
+  }
+  if (mac.tx_end <= now) {
+    mac.tx_end = kNever;
+    mac.tx_edges.clear();
+    mac.tx_next = 0;
+    dp_response_sent();
+  }
+}
+
+void ChipCore::mac_char(const UartChar& c) {
+  const bool start_ok = c.start_ok || mode0(kDis_Start_Control);
+  const bool stop_ok = c.stop_ok || mode0(kDis_Stop_Control);
+  if (!c.parity_ok || !start_ok || !stop_ok) {
+    counters.parity += c.parity_ok ? 0 : 1;
+    counters.start_bit += start_ok ? 0 : 1;
+    counters.stop_bit += stop_ok ? 0 : 1;
+    mac.in_frame = false;
+    mac.frame.reset();
+    mac.frame_timeout = kNever;
+    mac.skipping = true;
+    return;
+  }
+  const std::uint64_t tsyn = std::uint64_t{kTsynBits};
+  if (mac.in_frame && c.idle_bits >= tsyn) {
+    ++counters.truncated;  // a new telegram began before the old one was complete
+    mac.in_frame = false;
+    mac.frame.reset();
+  }
+  if (!mac.in_frame) {
+    if (c.idle_bits < tsyn) {
+      if (!mac.skipping) ++counters.no_sync;
+      mac.skipping = true;
+      return;
+    }
+    mac.skipping = false;
+    mac.in_frame = true;
+    mac.frame.reset();
+  }
+  const fdl::Assembler::Status st = mac.frame.push(c.data);
+  mac.frame_timeout = c.end + tsyn * mac.rx.bit_time();
+  if (st == fdl::Assembler::Status::need_more) return;
+  mac.in_frame = false;
+  mac.frame_timeout = kNever;
+  mac.skipping = true;  // anything right after a telegram is not synchronised
+  if (st == fdl::Assembler::Status::error) {
+    count(counters, mac.frame.error());
+    return;
+  }
+  const fdl::Decoded d = fdl::decode(mac.frame.bytes());
+  if (d.error != fdl::Error::none) {
+    count(counters, d.error);
+    return;
+  }
+  const std::uint64_t frame_chars = mac.frame.bytes().size();
+  if (telegram_observer) {
+    const std::uint64_t t = std::uint64_t{kUartCharBits} * mac.rx.bit_time();
+    telegram_observer(Telegram{false,
+                               {mac.frame.bytes().begin(), mac.frame.bytes().end()},
+                               c.end - frame_chars * t,
+                               c.end});
+  }
+  mac_frame(d.frame, c);
+}
+
+void ChipCore::mac_frame(const fdl::Frame& f, const UartChar& last) {
+  if (!started) {
+    ++counters.offline;
+    return;
+  }
+  const bool carries_data = f.sd == fdl::SD1 || f.sd == fdl::SD2 || f.sd == fdl::SD3;
+  if (timers.wd == WdState::Baud_Search && carries_data) {
+    mac.search_deadline = kNever;
+    baud_found(mac.search_code);
+  }
+  if (!carries_data || !fdl::is_request(f.fc)) return;  // tokens, acknowledges, answers
+  if (f.da != dp.station && f.da != fdl::kBroadcast) {
+    ++counters.foreign_address;
+    return;
+  }
+  if (f.da == dp.station) watchdog_retrigger();
+  const std::optional<fdl::Frame> answer = dp_service(f);
+  if (answer) mac_send(*answer, last.end);
+}
+
+void ChipCore::mac_send(const fdl::Frame& f, std::uint64_t request_end) {
+  if (mac.tx_end != kNever) return;  // half duplex: still sending the previous answer
+  const std::vector<std::uint8_t> bytes = fdl::encode(f);
+  const std::uint32_t t = mac.rx.bit_time();
+  const std::uint32_t tsdr = std::max<std::uint32_t>(
+      kMinTsdrBits, dp.min_tsdr != 0 ? dp.min_tsdr : latch[idx(RegId::MinTSDR_Val)]);
+  const std::uint64_t start = request_end + std::uint64_t{tsdr} * t;
+  mac.tx_edges.clear();
+  mac.tx_next = 0;
+  uart_encode(bytes, start, t, mac.tx_edges);
+  mac.tx_end = start + bytes.size() * std::uint64_t{kUartCharBits} * t;
+  if (telegram_observer) telegram_observer(Telegram{true, bytes, start, mac.tx_end});
+}
+
+}  // namespace dpc31

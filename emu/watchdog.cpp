@@ -1,0 +1,71 @@
+// Watchdog state machine (seed 002): Baud_Search -> Baud_Control -> DP_Control. Baud_Control
+// watches the baud rate (WD_Baud_Control_Val x 10 ms), DP_Control the master (TWD = 1 or 10 ms x
+// WD_Fact_1 x WD_Fact_2). Every error-free telegram to our address retriggers the running one.
+#include "core.hpp"
+
+namespace dpc31 {
+
+namespace {
+
+constexpr std::uint16_t kMode0_DP_Mode = 1u << 8;
+
+}  // namespace
+
+// Baud_Control monitoring time; the VPC3+S manual states a factor 2 that the SPC3 text lacks.
+// WD_Baud_Control_Val = 0 switches the monitoring off (modelled).
+static std::uint64_t baud_control_cycles(const ChipCore& c) {
+  const std::uint64_t val = c.latch[ChipCore::idx(RegId::WD_Baud_Control_Val)];
+  if (val == 0) return kNever;
+  const std::uint64_t factor = c.prof->id == Profile::vpc3plus ? 2 : 1;
+  return c.cycles_for_us(val * factor * 10'000);
+}
+
+static void enter_baud_control(ChipCore& c) {
+  c.timers.wd = WdState::Baud_Control;
+  const std::uint64_t t = baud_control_cycles(c);
+  c.timers.wd_deadline = t == kNever ? kNever : c.now + t;
+}
+
+void ChipCore::baud_found(std::uint8_t code) {
+  baud_code = code;
+  log(LogLevel::info, "baud rate found: {} baud (code {})", kBaudRates[code], code);
+  enter_baud_control(*this);
+  raise(irq::Baudrate_Detect);
+}
+
+void ChipCore::watchdog_parameterise(bool wd_on, std::uint8_t f1, std::uint8_t f2, bool base_1ms) {
+  timers.dp_wd_on = wd_on;
+  timers.dp_wd_cycles = cycles_for_us(std::uint64_t{base_1ms ? 1000u : 10'000u} * f1 * f2);
+  if (timers.wd == WdState::Baud_Search) return;
+  if (wd_on && mode0(kMode0_DP_Mode)) {
+    timers.wd = WdState::DP_Control;
+    timers.wd_deadline = now + timers.dp_wd_cycles;
+  } else {
+    enter_baud_control(*this);  // WD_On = 0: stays in Baud_Control, the DP state is never reset
+  }
+}
+
+void ChipCore::watchdog_retrigger() {
+  if (timers.wd == WdState::DP_Control) {
+    timers.wd_deadline = now + timers.dp_wd_cycles;
+  } else if (timers.wd == WdState::Baud_Control) {
+    enter_baud_control(*this);
+  }
+}
+
+void ChipCore::watchdog_expired() {
+  timers.wd_deadline = kNever;
+  if (timers.wd == WdState::DP_Control) {
+    log(LogLevel::info, "DP watchdog expired: WD_DP_Control_Timeout, DP state machine reset");
+    enter_baud_control(*this);
+    raise(irq::WD_DP_Control_Timeout);
+    leave_master();
+    timers.dp_wd_on = false;
+  } else if (timers.wd == WdState::Baud_Control) {
+    log(LogLevel::info, "Baud_Control expired: Baud_Search");
+    timers.wd = WdState::Baud_Search;
+    mac_start_search();
+  }
+}
+
+}  // namespace dpc31
