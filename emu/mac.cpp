@@ -92,14 +92,15 @@ void ChipCore::mac_process() {
     mac.frame_timeout = kNever;
   }
   if (mac.search_deadline <= now) {
-    if (mac.rx.receiving() || mac.in_frame) {
-      mac.search_deadline = now + mac.rx.bit_time();  // never switch inside a character
-    } else {
-      mac.search_code = static_cast<std::uint8_t>((mac.search_code + 1) % std::size(kBaudRates));
-      mac.rx.configure(bit_cycles(clock_hz, kBaudRates[mac.search_code]), now);
-      mac.skipping = false;
-      mac.search_deadline = now + std::uint64_t{kBaudSearchBits} * mac.rx.bit_time();
-    }
+    // The windows are fixed (4096 bit times each), whatever is on the line: a character or
+    // telegram in progress is dropped with the old rate.
+    mac.search_code = static_cast<std::uint8_t>((mac.search_code + 1) % std::size(kBaudRates));
+    mac.rx.configure(bit_cycles(clock_hz, kBaudRates[mac.search_code]), now);
+    mac.in_frame = false;
+    mac.frame.reset();
+    mac.frame_timeout = kNever;
+    mac.skipping = false;
+    mac.search_deadline = now + std::uint64_t{kBaudSearchBits} * mac.rx.bit_time();
   }
   while (mac.tx_next < mac.tx_edges.size() && mac.tx_edges[mac.tx_next].first <= now) {
     mac.txd = mac.tx_edges[mac.tx_next].second;

@@ -1,0 +1,195 @@
+#include "dp_master.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+
+#include "dp_sm.hpp"
+
+namespace dpc31 {
+
+DpMaster::DpMaster(Chip& chip, MasterConfig m, SlaveConfig s)
+    : chip_(chip),
+      cfg_(m),
+      slave_(std::move(s)),
+      t_(dpc31::bit_cycles(chip.clock_hz(), m.baud)),
+      target_(slave_.address),
+      rx_(t_, chip.cycle()),
+      bus_free_(chip.cycle()) {
+  chip_.on_txd([this](std::uint64_t cycle, bool level) { rx_.edge(cycle, level); });
+}
+
+void DpMaster::note(const std::string& s) {
+  if (narrate) narrate(s);
+}
+
+// X/INT is level-triggered: the firmware runs whenever it is active (its bus accesses take time,
+// so this always moves on), otherwise the chip runs until it becomes active.
+void DpMaster::run_until(std::uint64_t cycle) {
+  while (chip_.cycle() < cycle) {
+    if (isr_ && chip_.irq_active()) {
+      isr_(chip_);
+      continue;
+    }
+    chip_.step_until_irq(cycle - chip_.cycle());
+  }
+}
+
+void DpMaster::idle(std::uint64_t cycles) { run_until(chip_.cycle() + cycles); }
+
+fdl::Frame DpMaster::request(std::optional<std::uint8_t> dsap, std::vector<std::uint8_t> du, bool srd) {
+  std::uint8_t fc = fdl::make_request_fc(fdl::Function::SDN_high, false, false);
+  if (srd) {
+    fcb_ = !fcb_;
+    fc = fdl::make_request_fc(fdl::Function::SRD_high, fcb_, fcv_started_);
+  }
+  const std::optional<std::uint8_t> ssap = dsap ? std::optional<std::uint8_t>(sap::Master) : std::nullopt;
+  return fdl::make_frame(target_, cfg_.address, fc, std::move(du), dsap, ssap);
+}
+
+Exchange DpMaster::transact(const fdl::Frame& req, UartFault fault) {
+  Exchange ex = transact_raw(fdl::encode(req), fault);
+  ex.request = req;
+  history_.back().request = req;
+  return ex;
+}
+
+Exchange DpMaster::transact_raw(const std::vector<std::uint8_t>& bytes, UartFault fault) {
+  Exchange ex;
+  ex.request_start = std::max(chip_.cycle(), bus_free_ + std::uint64_t{cfg_.idle_bits} * t_);
+  std::vector<std::pair<std::uint64_t, bool>> edges;
+  uart_encode(bytes, ex.request_start, t_, edges, fault);
+  run_until(ex.request_start);
+  for (const auto& [cycle, level] : edges) chip_.drive_rxd(cycle, level);
+  ex.request_end = ex.request_start + bytes.size() * std::uint64_t{kUartCharBits} * t_;
+  run_until(ex.request_end);
+  const fdl::Decoded d = fdl::decode(bytes);
+  const bool sdn = d.error == fdl::Error::none &&
+                   (fdl::request_function(d.frame.fc) == fdl::Function::SDN_high ||
+                    fdl::request_function(d.frame.fc) == fdl::Function::SDN_low);
+  if (sdn) {
+    bus_free_ = ex.request_end;  // send-data-no-acknowledge: nothing to wait for
+  } else {
+    ex = wait_answer(ex);
+  }
+  history_.push_back(ex);
+  return ex;
+}
+
+Exchange DpMaster::wait_answer(Exchange ex) {
+  const std::uint64_t slot_end = ex.request_end + std::uint64_t{cfg_.slot_bits} * t_;
+  frame_.reset();
+  bool started = false;
+  bool bad = false;
+  for (;;) {
+    chars_.clear();
+    rx_.advance(chip_.cycle(), chars_);
+    for (const UartChar& c : chars_) {
+      if (!started) ex.answer_start = c.start;
+      started = true;
+      ex.answer_end = c.end;
+      if (!c.ok()) bad = true;
+      if (bad || frame_.push(c.data) == fdl::Assembler::Status::error) bad = true;
+    }
+    if (started && !rx_.receiving() && (bad || frame_.status() != fdl::Assembler::Status::need_more)) break;
+    if (!started && !rx_.receiving() && chip_.cycle() >= slot_end) {
+      bus_free_ = chip_.cycle();
+      return ex;  // no answer within the slot time
+    }
+    const std::uint64_t next = rx_.receiving() ? rx_.next_deadline() : started ? chip_.cycle() + t_ : slot_end;
+    run_until(std::max(next, chip_.cycle() + 1));
+  }
+  bus_free_ = ex.answer_end;
+  if (!bad && frame_.status() == fdl::Assembler::Status::complete) {
+    const fdl::Decoded d = fdl::decode(frame_.bytes());
+    if (d.error == fdl::Error::none) ex.answer = d.frame;
+  }
+  return ex;
+}
+
+Exchange DpMaster::fdl_status() {
+  const Exchange ex = transact(
+      fdl::make_frame(target_, cfg_.address, fdl::make_request_fc(fdl::Function::FDL_Status, false, false)));
+  if (ex.answer) {
+    fcb_ = false;  // the first SRD after FDL_Status carries FCV = 1, FCB = 1
+    fcv_started_ = true;
+  }
+  return ex;
+}
+
+Exchange DpMaster::slave_diag() { return transact(request(sap::Slave_Diag, {})); }
+
+Exchange DpMaster::set_prm(std::uint8_t station_status_extra) {
+  std::uint8_t status = 0x80;  // Lock_Req
+  if (slave_.wd_on) status |= 0x08;
+  if (slave_.freeze_req) status |= 0x10;
+  if (slave_.sync_req) status |= 0x20;
+  status |= station_status_extra;
+  std::vector<std::uint8_t> du = {status,
+                                  slave_.wd_fact1,
+                                  slave_.wd_fact2,
+                                  slave_.min_tsdr,
+                                  static_cast<std::uint8_t>(slave_.ident >> 8),
+                                  static_cast<std::uint8_t>(slave_.ident),
+                                  slave_.group_ident};
+  std::vector<std::uint8_t> user = slave_.user_prm;
+  if (user.empty()) user.push_back(0);
+  if (slave_.wd_base_1ms) user[0] |= 0x04;  // Spec_User_Prm_Byte WD_Base
+  du.insert(du.end(), user.begin(), user.end());
+  return transact(request(sap::Set_Prm, std::move(du)));
+}
+
+Exchange DpMaster::chk_cfg() { return transact(request(sap::Chk_Cfg, slave_.cfg)); }
+Exchange DpMaster::get_cfg() { return transact(request(sap::Get_Cfg, {})); }
+Exchange DpMaster::data_exchange(const std::vector<std::uint8_t>& outputs) {
+  return transact(request(std::nullopt, outputs));
+}
+Exchange DpMaster::read_inputs() { return transact(request(sap::Rd_Inp, {})); }
+Exchange DpMaster::read_outputs() { return transact(request(sap::Rd_Outp, {})); }
+
+Exchange DpMaster::global_control(std::uint8_t command, std::uint8_t groups) {
+  const std::uint8_t keep = target_;
+  target_ = fdl::kBroadcast;
+  const Exchange ex = transact(request(sap::Global_Control, {command, groups}, false));
+  target_ = keep;
+  return ex;
+}
+
+Exchange DpMaster::set_slave_address(std::uint8_t new_address, bool no_add_change) {
+  return transact(request(sap::Set_Slave_Add, {new_address, static_cast<std::uint8_t>(slave_.ident >> 8),
+                                               static_cast<std::uint8_t>(slave_.ident),
+                                               static_cast<std::uint8_t>(no_add_change ? 1 : 0)}));
+}
+
+bool DpMaster::diag_ready(const fdl::Frame& f) {
+  if (f.du.size() < 6) return false;
+  constexpr std::uint8_t kNotReadyOrFault = 0x02 | 0x04 | 0x10 | 0x40;
+  return (f.du[0] & kNotReadyOrFault) == 0 && (f.du[1] & 0x01) == 0;
+}
+
+bool DpMaster::startup(int tries) {
+  int n = 0;
+  for (; n < tries; ++n) {
+    if (fdl_status().answer) break;
+  }
+  if (n == tries) return false;
+  note(fmt::format("[cycle {:>10}] FDL_Status answered", chip_.cycle()));
+  for (; n < tries; ++n) {
+    const Exchange diag = slave_diag();
+    if (!diag.answer) continue;
+    if (diag_ready(*diag.answer)) {
+      note(fmt::format("[cycle {:>10}] Slave_Diag: ready for Data_Exchange", chip_.cycle()));
+      return true;
+    }
+    if ((diag.answer->du.size() >= 2 && (diag.answer->du[1] & 0x01) != 0) ||
+        (diag.answer->du.size() >= 1 && (diag.answer->du[0] & 0x44) != 0)) {
+      // Prm_Req (or a fault): parameterise and configure.
+      note(fmt::format("[cycle {:>10}] Slave_Diag: Prm_Req, sending Set_Prm and Chk_Cfg", chip_.cycle()));
+      set_prm();
+      chk_cfg();
+    }
+  }
+  return false;
+}
+
+}  // namespace dpc31

@@ -1,0 +1,115 @@
+// A built-in DP master (class 1) that drives the chip from the bus side like a real one: it
+// puts its requests on RxD as UART edges and decodes the chip's TxD with its own UART receiver.
+// Between telegrams it keeps TSYN idle; it waits a slot time for the first character of an
+// answer. While the chip runs, the user side (firmware) is called whenever X/INT goes active.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "dpc31/chip.hpp"
+#include "fdl.hpp"
+#include "uart.hpp"
+
+namespace dpc31 {
+
+struct SlaveConfig {
+  std::uint8_t address = 5;
+  std::uint16_t ident = 0x0C31;
+  std::vector<std::uint8_t> cfg = {0x13, 0x23};  // 4 bytes in, 4 bytes out (byte consistency)
+  std::uint8_t in_len = 4;
+  std::uint8_t out_len = 4;
+  bool wd_on = true;
+  std::uint8_t wd_fact1 = 10;
+  std::uint8_t wd_fact2 = 10;
+  bool wd_base_1ms = false;  // Set_Prm byte 7 bit 2 (SPC3 / DPC31)
+  std::uint8_t group_ident = 0;
+  bool sync_req = false;
+  bool freeze_req = false;
+  std::uint8_t min_tsdr = 0;  // Set_Prm byte 3, 0 = no change
+  std::vector<std::uint8_t> user_prm;  // bytes after the 7 standard ones (byte 7 first)
+};
+
+struct MasterConfig {
+  std::uint8_t address = 2;
+  std::uint32_t baud = 1'500'000;
+  std::uint32_t slot_bits = 100;  // TSL: wait for the first character of an answer
+  std::uint32_t idle_bits = 33;   // idle before each request (at least TSYN)
+};
+
+struct Exchange {
+  fdl::Frame request;
+  std::uint64_t request_start = 0;
+  std::uint64_t request_end = 0;
+  std::optional<fdl::Frame> answer;  // nullopt: no (valid) answer within the slot time
+  std::uint64_t answer_start = 0;
+  std::uint64_t answer_end = 0;
+};
+
+class DpMaster {
+ public:
+  using Firmware = std::function<void(Chip&)>;  // the ISR, run when X/INT goes active
+
+  DpMaster(Chip& chip, MasterConfig m, SlaveConfig s);
+
+  void set_firmware(Firmware isr) { isr_ = std::move(isr); }
+  // Sends one request after the idle time and waits for its answer. `fault` corrupts one
+  // character on the wire (parity, start or stop bit).
+  Exchange transact(const fdl::Frame& req, UartFault fault = {});
+  // Sends raw bytes as they are (malformed frames) and waits a slot time for an answer.
+  Exchange transact_raw(const std::vector<std::uint8_t>& bytes, UartFault fault = {});
+  // Lets time pass with a silent bus (cable pulled), running the firmware on interrupts.
+  void idle(std::uint64_t cycles);
+
+  // The DP services, FCB handled per EN 50170 (FCV = 1 from the second SRD on).
+  Exchange fdl_status();
+  Exchange slave_diag();
+  Exchange set_prm(std::uint8_t station_status_extra = 0);
+  Exchange chk_cfg();
+  Exchange get_cfg();
+  Exchange data_exchange(const std::vector<std::uint8_t>& outputs);
+  Exchange global_control(std::uint8_t command, std::uint8_t groups = 0);
+  Exchange read_inputs();
+  Exchange read_outputs();
+  Exchange set_slave_address(std::uint8_t new_address, bool no_add_change);
+
+  // The standard start-up: FDL_Status until answered, Slave_Diag, Set_Prm, Chk_Cfg, Slave_Diag
+  // until the slave is ready. Returns false if it did not reach Data_Exchange within `tries`.
+  bool startup(int tries = 200);
+  // Parses the six standard diag bytes: ready = no Station_Not_Ready, no Prm_Req, no faults.
+  static bool diag_ready(const fdl::Frame& diag_answer);
+
+  std::uint32_t bit_cycles() const { return t_; }
+  const SlaveConfig& slave() const { return slave_; }
+  SlaveConfig& slave() { return slave_; }
+  std::uint8_t target() const { return target_; }
+  void set_target(std::uint8_t a) { target_ = a; }
+  const std::vector<Exchange>& history() const { return history_; }
+  // Narration of what happened (`dpc31 run` prints it).
+  std::function<void(const std::string&)> narrate;
+
+ private:
+  fdl::Frame request(std::optional<std::uint8_t> dsap, std::vector<std::uint8_t> du, bool srd = true);
+  void run_until(std::uint64_t cycle);
+  Exchange wait_answer(Exchange ex);
+  void note(const std::string& s);
+
+  Chip& chip_;
+  MasterConfig cfg_;
+  SlaveConfig slave_;
+  std::uint32_t t_;
+  std::uint8_t target_;
+  UartRx rx_;
+  fdl::Assembler frame_;
+  std::vector<UartChar> chars_;
+  bool fcb_ = true;        // toggled before every SRD with FCV
+  bool fcv_started_ = false;
+  std::uint64_t bus_free_ = 0;  // end of the last telegram on the bus
+  Firmware isr_;
+  std::vector<Exchange> history_;
+};
+
+}  // namespace dpc31

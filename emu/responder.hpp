@@ -1,0 +1,58 @@
+// A minimal user side (the firmware's part) written against the register interface only, as a
+// driver would be: the init sequence, and an ISR that accepts Prm, checks Cfg against Read_Cfg,
+// fetches outputs on DX_Out, hands over new inputs, acknowledges and EOIs. Scenarios use it until
+// real example firmware takes its place.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "dp_master.hpp"
+#include "dpc31/chip.hpp"
+
+namespace dpc31 {
+
+struct ResponderConfig {
+  SlaveConfig slave;
+  bool sync_supported = true;
+  bool freeze_supported = true;
+  bool spec_clear_mode = true;
+  bool user_watchdog = false;          // Res_User_WD on every DX_Out
+  std::uint16_t user_wd_value = 0x01FF;
+  std::uint8_t wd_baud_control = 0x10;  // x 10 ms
+  std::vector<std::uint8_t> substitute;  // dpc31 clear buffer C contents
+};
+
+class Responder {
+ public:
+  explicit Responder(ResponderConfig cfg) : cfg_(std::move(cfg)) {}
+
+  void init(Chip& chip);  // registers, buffers, Start_SPC3
+  void isr(Chip& chip);
+
+  struct Output {
+    std::uint64_t cycle;
+    std::vector<std::uint8_t> data;
+    bool cleared;
+  };
+  std::vector<std::uint8_t> inputs;  // handed to the chip on every DX_Out
+  std::vector<Output> outputs;       // every fetch of new outputs
+  std::vector<std::pair<std::uint64_t, std::uint16_t>> interrupts;  // cycle, IR at ISR entry
+  std::uint32_t prm_accepted = 0;
+  std::uint32_t cfg_accepted = 0;
+  std::uint32_t cfg_rejected = 0;
+
+ private:
+  std::uint32_t waddr(const Chip& c, RegId id) const;
+  std::uint32_t raddr(const Chip& c, RegId id) const;
+  std::uint32_t cell_addr(const Chip& c, RegId id) const { return raddr(c, id); }
+  void write16(Chip& c, RegId id, std::uint16_t v) const;
+  std::uint16_t read16(Chip& c, RegId id) const;
+  std::uint32_t buffer(Chip& c, RegId ptr_cell) const;
+  void give_inputs(Chip& c);
+
+  ResponderConfig cfg_;
+  std::uint32_t seg_shift_ = 3;
+};
+
+}  // namespace dpc31
