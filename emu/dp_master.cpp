@@ -23,15 +23,11 @@ void DpMaster::note(const std::string& s) {
   if (narrate) narrate(s);
 }
 
-// X/INT is level-triggered: the firmware runs whenever it is active (its bus accesses take time,
-// so this always moves on), otherwise the chip runs until it becomes active.
 void DpMaster::run_until(std::uint64_t cycle) {
-  while (chip_.cycle() < cycle) {
-    if (isr_ && chip_.irq_active()) {
-      isr_(chip_);
-      continue;
-    }
-    chip_.step_until_irq(cycle - chip_.cycle());
+  if (cpu_) {
+    cpu_->run_until(cycle);
+  } else if (chip_.cycle() < cycle) {
+    chip_.step(cycle - chip_.cycle());
   }
 }
 
@@ -59,7 +55,7 @@ Exchange DpMaster::transact_raw(const std::vector<std::uint8_t>& bytes, UartFaul
   ex.request_start = std::max(chip_.cycle(), bus_free_ + std::uint64_t{cfg_.idle_bits} * t_);
   std::vector<std::pair<std::uint64_t, bool>> edges;
   uart_encode(bytes, ex.request_start, t_, edges, fault);
-  run_until(ex.request_start);
+  // The whole request goes on the line ahead of time: firmware running meanwhile cannot delay it.
   for (const auto& [cycle, level] : edges) chip_.drive_rxd(cycle, level);
   ex.request_end = ex.request_start + bytes.size() * std::uint64_t{kUartCharBits} * t_;
   run_until(ex.request_end);
@@ -96,7 +92,10 @@ Exchange DpMaster::wait_answer(Exchange ex) {
       bus_free_ = chip_.cycle();
       return ex;  // no answer within the slot time
     }
-    const std::uint64_t next = rx_.receiving() ? rx_.next_deadline() : started ? chip_.cycle() + t_ : slot_end;
+    // Watch the line bit by bit until a character starts, then follow the receiver's samples.
+    const std::uint64_t next = rx_.receiving() ? rx_.next_deadline()
+                               : started       ? chip_.cycle() + t_
+                                               : std::min(slot_end, chip_.cycle() + t_);
     run_until(std::max(next, chip_.cycle() + 1));
   }
   bus_free_ = ex.answer_end;

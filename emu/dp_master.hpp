@@ -6,10 +6,12 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "cpu.hpp"
 #include "dpc31/chip.hpp"
 #include "fdl.hpp"
 #include "uart.hpp"
@@ -51,11 +53,11 @@ struct Exchange {
 
 class DpMaster {
  public:
-  using Firmware = std::function<void(Chip&)>;  // the ISR, run when X/INT goes active
+  using Firmware = Cpu::Isr;  // the ISR, run (on the host CPU) while X/INT is active
 
   DpMaster(Chip& chip, MasterConfig m, SlaveConfig s);
 
-  void set_firmware(Firmware isr) { isr_ = std::move(isr); }
+  void set_firmware(Firmware isr) { cpu_ = std::make_unique<Cpu>(chip_, std::move(isr)); }
   // Sends one request after the idle time and waits for its answer. `fault` corrupts one
   // character on the wire (parity, start or stop bit).
   Exchange transact(const fdl::Frame& req, UartFault fault = {});
@@ -108,7 +110,7 @@ class DpMaster {
   bool fcb_ = true;        // toggled before every SRD with FCV
   bool fcv_started_ = false;
   std::uint64_t bus_free_ = 0;  // end of the last telegram on the bus
-  Firmware isr_;
+  std::unique_ptr<Cpu> cpu_;
   std::vector<Exchange> history_;
 };
 

@@ -151,7 +151,10 @@ void ChipCore::mac_char(const UartChar& c) {
   mac.frame_timeout = kNever;
   mac.skipping = true;  // anything right after a telegram is not synchronised
   if (st == fdl::Assembler::Status::error) {
-    count(counters, mac.frame.error());
+    // An LE beyond the longest telegram is an oversize frame, not a malformed one.
+    const auto bytes = mac.frame.bytes();
+    const bool too_long = mac.frame.error() == fdl::Error::bad_le && bytes.size() >= 2 && bytes[1] > fdl::kMaxLe;
+    count(counters, too_long ? fdl::Error::oversize : mac.frame.error());
     return;
   }
   const fdl::Decoded d = fdl::decode(mac.frame.bytes());

@@ -25,32 +25,32 @@ std::uint32_t Responder::raddr(const Chip& c, RegId id) const {
 
 // 16-bit registers go over the 8-bit bus low byte first; the address of each byte depends on
 // the bus mode (Intel: low byte at the lower address).
-void Responder::write16(Chip& c, RegId id, std::uint16_t v) const {
-  const std::uint32_t a = waddr(c, id);
-  const std::uint32_t lo = c.bus_mode() == BusMode::intel ? a : a + 1;
-  const std::uint32_t hi = c.bus_mode() == BusMode::intel ? a + 1 : a;
+void Responder::write16(BusPort& c, RegId id, std::uint16_t v) const {
+  const std::uint32_t a = waddr(c.chip(), id);
+  const std::uint32_t lo = c.chip().bus_mode() == BusMode::intel ? a : a + 1;
+  const std::uint32_t hi = c.chip().bus_mode() == BusMode::intel ? a + 1 : a;
   c.write(lo, static_cast<std::uint8_t>(v));
   c.write(hi, static_cast<std::uint8_t>(v >> 8));
 }
 
-std::uint16_t Responder::read16(Chip& c, RegId id) const {
-  const std::uint32_t a = raddr(c, id);
-  const std::uint32_t lo = c.bus_mode() == BusMode::intel ? a : a + 1;
-  const std::uint32_t hi = c.bus_mode() == BusMode::intel ? a + 1 : a;
+std::uint16_t Responder::read16(BusPort& c, RegId id) const {
+  const std::uint32_t a = raddr(c.chip(), id);
+  const std::uint32_t lo = c.chip().bus_mode() == BusMode::intel ? a : a + 1;
+  const std::uint32_t hi = c.chip().bus_mode() == BusMode::intel ? a + 1 : a;
   const std::uint8_t l = c.read(lo);
   return static_cast<std::uint16_t>(c.read(hi) << 8 | l);
 }
 
-std::uint32_t Responder::buffer(Chip& c, RegId ptr_cell) const {
-  return static_cast<std::uint32_t>(c.read(cell_addr(c, ptr_cell))) << seg_shift_;
+std::uint32_t Responder::buffer(BusPort& c, RegId ptr_cell) const {
+  return static_cast<std::uint32_t>(c.read(cell_addr(c.chip(), ptr_cell))) << seg_shift_;
 }
 
-void Responder::init(Chip& c) {
-  const ProfileDesc& p = c.profile();
+void Responder::init(BusPort& c) {
+  const ProfileDesc& p = c.chip().profile();
   const SlaveConfig& s = cfg_.slave;
   write16(c, RegId::Int_Req_Reg, 0x0000);
   write16(c, RegId::Int_Ack_Reg, 0xFFFF);
-  c.write(waddr(c, RegId::Mode_Reg1_R), 0xFF);
+  c.write(waddr(c.chip(), RegId::Mode_Reg1_R), 0xFF);
   std::uint16_t mode0 = 0x0100;  // DP_Mode; EOI inactive time 1 us; user timer 1 ms
   if (cfg_.sync_supported) mode0 |= 0x0040;
   if (cfg_.freeze_supported) mode0 |= 0x0080;
@@ -58,47 +58,47 @@ void Responder::init(Chip& c) {
   write16(c, RegId::Mode_Reg0, mode0);
   // Large buffers need the VPC3+'s 4 KB mode (16-byte segments).
   const bool large = p.ram_size_large != 0 && 3u * (s.in_len + s.out_len) + 1024 > p.ram_size - p.user_base;
-  if (large) c.write(waddr(c, RegId::Mode_Reg2), 0x80);
+  if (large) c.write(waddr(c.chip(), RegId::Mode_Reg2), 0x80);
   seg_shift_ = large ? p.segment_shift_large : p.segment_shift;
   const std::uint16_t enabled = irq::MAC_Reset | irq::Go_Leave_Data_Exchange | irq::Baudrate_Detect |
                                 irq::WD_DP_Control_Timeout | irq::New_GC_Command | irq::New_SSA_Data |
                                 irq::New_Cfg_Data | irq::New_Prm_Data | irq::Diag_Buffer_Changed |
                                 irq::DX_Out;
   write16(c, RegId::Int_Mask_Reg, static_cast<std::uint16_t>(~enabled));
-  c.write(waddr(c, RegId::WD_Baud_Control_Val), cfg_.wd_baud_control);
-  c.write(waddr(c, RegId::MinTSDR_Val), 0x0B);
+  c.write(waddr(c.chip(), RegId::WD_Baud_Control_Val), cfg_.wd_baud_control);
+  c.write(waddr(c.chip(), RegId::MinTSDR_Val), 0x0B);
   write16(c, RegId::R_User_WD_Value, cfg_.user_wd_value);
-  c.write(cell_addr(c, RegId::R_Ident_Low), static_cast<std::uint8_t>(s.ident));
-  c.write(cell_addr(c, RegId::R_Ident_High), static_cast<std::uint8_t>(s.ident >> 8));
-  c.write(cell_addr(c, RegId::R_TS_Adr), s.address);
-  c.write(cell_addr(c, RegId::R_Real_No_Add_Change), 0x00);
+  c.write(cell_addr(c.chip(), RegId::R_Ident_Low), static_cast<std::uint8_t>(s.ident));
+  c.write(cell_addr(c.chip(), RegId::R_Ident_High), static_cast<std::uint8_t>(s.ident >> 8));
+  c.write(cell_addr(c.chip(), RegId::R_TS_Adr), s.address);
+  c.write(cell_addr(c.chip(), RegId::R_Real_No_Add_Change), 0x00);
 
   // Buffers, segment by segment from the start of the user area.
   const std::uint32_t seg = 1u << seg_shift_;
   std::uint32_t next = (p.user_base + seg - 1) / seg;
   auto alloc = [&](RegId ptr_cell, std::uint32_t len) {
-    c.write(cell_addr(c, ptr_cell), static_cast<std::uint8_t>(next));
+    c.write(cell_addr(c.chip(), ptr_cell), static_cast<std::uint8_t>(next));
     next += std::max<std::uint32_t>(1, (len + seg - 1) / seg);
   };
   const std::uint32_t aux_len = std::max<std::uint32_t>({8u + static_cast<std::uint32_t>(s.user_prm.size()),
                                                          static_cast<std::uint32_t>(s.cfg.size()), 4u});
-  c.write(cell_addr(c, RegId::R_Len_Dout_Buf), s.out_len);
-  c.write(cell_addr(c, RegId::R_Len_Din_Buf), s.in_len);
+  c.write(cell_addr(c.chip(), RegId::R_Len_Dout_Buf), s.out_len);
+  c.write(cell_addr(c.chip(), RegId::R_Len_Din_Buf), s.in_len);
   for (RegId r : {RegId::R_Dout_Buf_Ptr1, RegId::R_Dout_Buf_Ptr2, RegId::R_Dout_Buf_Ptr3}) alloc(r, s.out_len);
   for (RegId r : {RegId::R_Din_Buf_Ptr1, RegId::R_Din_Buf_Ptr2, RegId::R_Din_Buf_Ptr3}) alloc(r, s.in_len);
   if (p.id == Profile::dpc31) alloc(RegId::R_Dout_Buf_Ptr_C, s.out_len);
-  c.write(cell_addr(c, RegId::R_Len_Diag_Buf1), 6);
-  c.write(cell_addr(c, RegId::R_Len_Diag_Buf2), 6);
+  c.write(cell_addr(c.chip(), RegId::R_Len_Diag_Buf1), 6);
+  c.write(cell_addr(c.chip(), RegId::R_Len_Diag_Buf2), 6);
   alloc(RegId::R_Diag_Buf_Ptr1, 6);
   alloc(RegId::R_Diag_Buf_Ptr2, 6);
-  c.write(cell_addr(c, RegId::R_Len_Cntrl_Buf1), static_cast<std::uint8_t>(aux_len));
-  c.write(cell_addr(c, RegId::R_Len_Cntrl_Buf2), static_cast<std::uint8_t>(aux_len));
-  c.write(cell_addr(c, RegId::R_Aux_Buf_Sel), 0x00);
+  c.write(cell_addr(c.chip(), RegId::R_Len_Cntrl_Buf1), static_cast<std::uint8_t>(aux_len));
+  c.write(cell_addr(c.chip(), RegId::R_Len_Cntrl_Buf2), static_cast<std::uint8_t>(aux_len));
+  c.write(cell_addr(c.chip(), RegId::R_Aux_Buf_Sel), 0x00);
   for (RegId r : {RegId::R_Aux_Buf_Ptr1, RegId::R_Aux_Buf_Ptr2, RegId::R_Prm_Buf_Ptr, RegId::R_Cfg_Buf_Ptr,
                   RegId::R_Read_Cfg_Buf_Ptr, RegId::R_SSA_Buf_Ptr}) {
     alloc(r, aux_len);
   }
-  c.write(cell_addr(c, RegId::R_Len_Read_Cfg_Data), static_cast<std::uint8_t>(s.cfg.size()));
+  c.write(cell_addr(c.chip(), RegId::R_Len_Read_Cfg_Data), static_cast<std::uint8_t>(s.cfg.size()));
   const std::uint32_t read_cfg = buffer(c, RegId::R_Read_Cfg_Buf_Ptr);
   for (std::size_t i = 0; i < s.cfg.size(); ++i) c.write(read_cfg + static_cast<std::uint32_t>(i), s.cfg[i]);
   if (p.id == Profile::dpc31) {
@@ -108,43 +108,43 @@ void Responder::init(Chip& c) {
     }
   }
   give_inputs(c);
-  c.write(waddr(c, RegId::Mode_Reg1_S), static_cast<std::uint8_t>(kStart_SPC3 | kRes_User_WD));
+  c.write(waddr(c.chip(), RegId::Mode_Reg1_S), static_cast<std::uint8_t>(kStart_SPC3 | kRes_User_WD));
 }
 
-void Responder::give_inputs(Chip& c) {
+void Responder::give_inputs(BusPort& c) {
   if (inputs.empty()) return;
-  const std::uint8_t u = static_cast<std::uint8_t>((c.read(raddr(c, RegId::Din_Buffer_SM)) >> 4) & 3);
+  const std::uint8_t u = static_cast<std::uint8_t>((c.read(raddr(c.chip(), RegId::Din_Buffer_SM)) >> 4) & 3);
   static constexpr RegId kPtr[] = {RegId::R_Din_Buf_Ptr1, RegId::R_Din_Buf_Ptr2, RegId::R_Din_Buf_Ptr3};
   const std::uint32_t base = buffer(c, kPtr[u - 1]);
   for (std::size_t i = 0; i < inputs.size() && i < cfg_.slave.in_len; ++i) {
     c.write(base + static_cast<std::uint32_t>(i), inputs[i]);
   }
-  c.read(raddr(c, RegId::New_Din_Buffer_Cmd));
+  c.read(raddr(c.chip(), RegId::New_Din_Buffer_Cmd));
 }
 
-void Responder::isr(Chip& c) {
+void Responder::isr(BusPort& c) {
   const std::uint16_t ir = read16(c, RegId::Int_Reg);
   interrupts.emplace_back(c.cycle(), ir);
   if ((ir & irq::New_Prm_Data) != 0) {
-    while (c.read(raddr(c, RegId::User_Prm_Data_Okay)) == kHandshakeConflict) {
+    while (c.read(raddr(c.chip(), RegId::User_Prm_Data_Okay)) == kHandshakeConflict) {
     }
     ++prm_accepted;
   }
   if ((ir & irq::New_Cfg_Data) != 0) {
     for (;;) {
       const std::uint32_t cfg = buffer(c, RegId::R_Cfg_Buf_Ptr);
-      const std::uint8_t len = c.read(cell_addr(c, RegId::R_Len_Cfg_Data));
+      const std::uint8_t len = c.read(cell_addr(c.chip(), RegId::R_Len_Cfg_Data));
       bool same = len == cfg_.slave.cfg.size();
       for (std::uint32_t i = 0; same && i < len; ++i) same = c.read(cfg + i) == cfg_.slave.cfg[i];
       const RegId verdict = same ? RegId::User_Cfg_Data_Okay : RegId::User_Cfg_Data_Not_Okay;
-      if (c.read(raddr(c, verdict)) != kHandshakeConflict) {
+      if (c.read(raddr(c.chip(), verdict)) != kHandshakeConflict) {
         ++(same ? cfg_accepted : cfg_rejected);
         break;
       }
     }
   }
   if ((ir & irq::DX_Out) != 0) {
-    const std::uint8_t r = c.read(raddr(c, RegId::Next_Dout_Buffer_Cmd));
+    const std::uint8_t r = c.read(raddr(c.chip(), RegId::Next_Dout_Buffer_Cmd));
     if ((r & 0x04) != 0) {
       static constexpr RegId kPtr[] = {RegId::R_Dout_Buf_Ptr1, RegId::R_Dout_Buf_Ptr2, RegId::R_Dout_Buf_Ptr3};
       const std::uint32_t base = buffer(c, kPtr[(r & 3) - 1]);
@@ -153,11 +153,11 @@ void Responder::isr(Chip& c) {
       outputs.push_back(std::move(o));
     }
     give_inputs(c);
-    if (cfg_.user_watchdog) c.write(waddr(c, RegId::Mode_Reg1_S), kRes_User_WD);
+    if (cfg_.user_watchdog) c.write(waddr(c.chip(), RegId::Mode_Reg1_S), kRes_User_WD);
   }
   const auto ack = static_cast<std::uint16_t>(ir & ~kHandledByReads);
   if (ack != 0) write16(c, RegId::Int_Ack_Reg, ack);
-  c.write(waddr(c, RegId::Mode_Reg1_S), kEOI);
+  c.write(waddr(c.chip(), RegId::Mode_Reg1_S), kEOI);
 }
 
 }  // namespace dpc31

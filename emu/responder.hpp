@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "cpu.hpp"
 #include "dp_master.hpp"
 #include "dpc31/chip.hpp"
 
@@ -27,8 +28,8 @@ class Responder {
  public:
   explicit Responder(ResponderConfig cfg) : cfg_(std::move(cfg)) {}
 
-  void init(Chip& chip);  // registers, buffers, Start_SPC3
-  void isr(Chip& chip);
+  void init(BusPort& bus);  // registers, buffers, Start_SPC3
+  void isr(BusPort& bus);
 
   struct Output {
     std::uint64_t cycle;
@@ -46,10 +47,10 @@ class Responder {
   std::uint32_t waddr(const Chip& c, RegId id) const;
   std::uint32_t raddr(const Chip& c, RegId id) const;
   std::uint32_t cell_addr(const Chip& c, RegId id) const { return raddr(c, id); }
-  void write16(Chip& c, RegId id, std::uint16_t v) const;
-  std::uint16_t read16(Chip& c, RegId id) const;
-  std::uint32_t buffer(Chip& c, RegId ptr_cell) const;
-  void give_inputs(Chip& c);
+  void write16(BusPort& c, RegId id, std::uint16_t v) const;
+  std::uint16_t read16(BusPort& c, RegId id) const;
+  std::uint32_t buffer(BusPort& c, RegId ptr_cell) const;
+  void give_inputs(BusPort& c);
 
   ResponderConfig cfg_;
   std::uint32_t seg_shift_ = 3;

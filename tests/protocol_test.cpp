@@ -1,1 +1,433 @@
+// The protocol engine end to end: the built-in master on RxD/TxD, the chip, the minimal user
+// side. Cycles are derived from docs/timing.md: T = round(48 MHz / baud); a request is acted on
+// at the stop sample of its last character (end - T + T/2); the answer starts MinTSDR = 11 bit
+// times after the request's end; the master keeps 33 idle bits (TSYN) before each request and
+// waits a slot time of 100 bits; Baud_Search listens 4096 bit times per rate, 12 M first.
+// Telegram bytes and FCS are worked out by hand.
 #include <gtest/gtest.h>
+
+#include <numeric>
+
+#include "../emu/dp_master.hpp"
+#include "../emu/dp_services.hpp"
+#include "../emu/responder.hpp"
+#include "dpc31/reg_ids.hpp"
+#include "test_util.hpp"
+
+using namespace dpc31;
+using Bytes = std::vector<std::uint8_t>;
+
+namespace {
+
+std::uint32_t T_of(std::uint32_t baud) {
+  return static_cast<std::uint32_t>((48'000'000u + baud / 2) / baud);
+}
+
+struct Bench {
+  Chip chip;
+  Responder user;
+  DpMaster master;
+  std::uint64_t start;  // the cycle Start_SPC3 completed
+
+  Bench(Profile p, std::uint32_t baud, ResponderConfig rc = {}, BusMode bus = BusMode::intel)
+      : chip({p, bus, 0}), user(prepare(rc)), master(init(chip, user), MasterConfig{2, baud, 100, 33}, rc.slave),
+        start(chip.cycle()) {
+    master.set_firmware([this](BusPort& c) { user.isr(c); });
+  }
+  static ResponderConfig prepare(ResponderConfig rc) { return rc; }
+  static Chip& init(Chip& c, Responder& u) {
+    c.set_log_sink(nullptr);
+    if (u.inputs.empty()) u.inputs = {0xA1, 0xA2, 0xA3, 0xA4};
+    DirectBus bus(c);
+    u.init(bus);
+    return c;
+  }
+  std::uint32_t T() const { return master.bit_cycles(); }
+  // The cycle a request is acted on: the stop-bit sample of its last character.
+  std::uint64_t acted(const Exchange& ex) const { return ex.request_end - T() + T() / 2; }
+};
+
+Bytes wire(const std::optional<fdl::Frame>& f) { return f ? fdl::encode(*f) : Bytes{}; }
+
+}  // namespace
+
+class Startup : public ::testing::TestWithParam<std::tuple<Profile, std::uint32_t>> {};
+
+TEST_P(Startup, ReachesDataExchangeAtExactCycles) {
+  const auto [profile, baud] = GetParam();
+  Bench b(profile, baud);
+  const std::uint64_t t = b.T();
+  ASSERT_EQ(t, T_of(baud));
+  ASSERT_TRUE(b.master.startup());
+  const auto& h = b.master.history();
+
+  // Baud_Search: window i of the searched rate opens 4096 bit times per faster rate after Start.
+  std::size_t rate = 0;
+  while (kBaudRates[rate] != baud) ++rate;
+  std::uint64_t window = b.start;
+  for (std::size_t j = 0; j < rate; ++j) window += 4096u * T_of(kBaudRates[j]);
+  // Unanswered FDL_Status requests repeat every 6*11 + 100 + 33 = 199 bit times; the first one
+  // starting TSYN after the window opens is heard.
+  std::size_t first = 0;
+  while (b.start + 33 * t + first * 199 * t < window + 33 * t) ++first;
+  ASSERT_GT(h.size(), first + 4);
+  for (std::size_t k = 0; k < first; ++k) {
+    EXPECT_FALSE(h[k].answer) << k;
+    EXPECT_EQ(h[k].request_start, b.start + 33 * t + k * 199 * t) << k;
+  }
+  const Bytes kFdlStatusAnswer = {0x10, 0x02, 0x05, 0x00, 0x07, 0x16};
+  const Bytes kDiagPrmReq = {0x68, 0x0B, 0x0B, 0x68, 0x82, 0x85, 0x08, 0x3E, 0x3C,
+                             0x02, 0x05, 0x00, 0xFF, 0x0C, 0x31, 0xCC, 0x16};
+  const Bytes kDiagReady = {0x68, 0x0B, 0x0B, 0x68, 0x82, 0x85, 0x08, 0x3E, 0x3C,
+                            0x00, 0x0C, 0x00, 0x02, 0x0C, 0x31, 0xD4, 0x16};
+  const std::vector<std::pair<std::size_t, Bytes>> expected = {
+      {6, kFdlStatusAnswer},  // FDL_Status
+      {11, kDiagPrmReq},      // Slave_Diag: Station_Not_Ready, Prm_Req
+      {19, {0xE5}},           // Set_Prm (8 bytes)
+      {13, {0xE5}},           // Chk_Cfg (2 bytes)
+      {11, kDiagReady},       // Slave_Diag: ready, WD_On, locked by master 2
+  };
+  ASSERT_EQ(h.size(), first + expected.size());
+  std::uint64_t next = b.start + 33 * t + first * 199 * t;
+  for (std::size_t k = 0; k < expected.size(); ++k) {
+    const Exchange& ex = h[first + k];
+    SCOPED_TRACE(k);
+    EXPECT_EQ(ex.request_start, next);
+    EXPECT_EQ(ex.request_end, ex.request_start + expected[k].first * 11 * t);
+    EXPECT_EQ(wire(ex.answer), expected[k].second);
+    EXPECT_EQ(ex.answer_start, ex.request_end + 11 * t);
+    EXPECT_EQ(ex.answer_end, ex.answer_start + expected[k].second.size() * 11 * t);
+    next = ex.answer_end + 33 * t;
+  }
+  EXPECT_EQ(b.chip.dp_state(), DpState::Data_Exchange);
+  EXPECT_EQ(b.chip.wd_state(), WdState::DP_Control);
+  EXPECT_EQ((b.chip.peek_reg(RegId::Status_Reg) >> 8) & 0x0F, rate);  // the baud code
+
+  // One Data_Exchange: 4 outputs in, the user's 4 inputs back (FCS 02+05+08+A1..A4 = 99h).
+  const Exchange dx = b.master.data_exchange({0x01, 0x02, 0x03, 0x04});
+  EXPECT_EQ(dx.request_start, next);
+  EXPECT_EQ(wire(dx.answer), (Bytes{0x68, 0x07, 0x07, 0x68, 0x02, 0x05, 0x08, 0xA1, 0xA2, 0xA3, 0xA4, 0x99, 0x16}));
+  EXPECT_EQ(dx.answer_start, dx.request_end + 11 * t);
+  ASSERT_FALSE(b.user.outputs.empty());
+  EXPECT_EQ(b.user.outputs.back().data, (Bytes{0x01, 0x02, 0x03, 0x04}));
+  EXPECT_FALSE(b.user.outputs.back().cleared);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    ProfilesAndBaudRates, Startup,
+    ::testing::Combine(::testing::ValuesIn(kAllProfiles),
+                       ::testing::Values(9600u, 187500u, 1500000u, 12000000u)),
+    [](const auto& i) {
+      return testutil::pname(std::get<0>(i.param)) + "_" + std::to_string(std::get<1>(i.param));
+    });
+
+class Protocol : public ::testing::TestWithParam<Profile> {
+ protected:
+  static ResponderConfig config() {
+    ResponderConfig rc;
+    rc.substitute = {0x5A, 0x5B, 0x5C, 0x5D};
+    return rc;
+  }
+};
+
+TEST_P(Protocol, MaximumDataLengthsRoundTrip) {
+  if (GetParam() == Profile::spc3) {
+    // 3 x 244 output + 3 x 244 input buffers need 1464 of the SPC3's 1472 user bytes: no room
+    // for the Prm, Cfg, Aux and diag buffers (docs/decisions.md).
+    return;
+  }
+  ResponderConfig rc = config();
+  rc.slave.in_len = 244;
+  rc.slave.out_len = 244;
+  rc.slave.cfg = {0xC0, 0xBC, 0xBC, 0xC0, 0xBC, 0xBC, 0xC0, 0xBC, 0xBC, 0xC0, 0xBC, 0xBC};  // 4 x 61
+  Bytes in(244), out(244);
+  for (std::size_t i = 0; i < 244; ++i) {
+    in[i] = static_cast<std::uint8_t>(i * 7 + 3);
+    out[i] = static_cast<std::uint8_t>(255 - i);
+  }
+  Bench b(GetParam(), 12'000'000, rc);
+  b.user.inputs = in;
+  ASSERT_TRUE(b.master.startup());
+  b.master.data_exchange(out);  // the first answer carries the inputs given at init
+  b.user.inputs = in;
+  const Exchange dx = b.master.data_exchange(out);
+  ASSERT_TRUE(dx.answer);
+  EXPECT_EQ(dx.answer->du, in);
+  EXPECT_EQ(dx.request_end - dx.request_start, (244u + 9u) * 11 * 4);  // LE = 247
+  EXPECT_EQ(dx.answer_start, dx.request_end + 11 * 4);
+  EXPECT_EQ(b.user.outputs.back().data, out);
+}
+
+TEST_P(Protocol, GlobalControlSyncHoldsOutputsUntilUnsync) {
+  Bench b(GetParam(), 12'000'000, config());
+  ASSERT_TRUE(b.master.startup());
+  b.master.data_exchange({1, 1, 1, 1});
+  const std::size_t before = b.user.outputs.size();
+  b.master.global_control(0x20);  // Sync: what D holds goes to N now (DX_Out), later data stays in D
+  b.master.idle(2000);
+  EXPECT_EQ(b.chip.peek(b.chip.addr_of(RegId::R_GC_Command)), 0x20);
+  b.master.data_exchange({2, 2, 2, 2});
+  b.master.data_exchange({3, 3, 3, 3});
+  EXPECT_EQ(b.user.outputs.size(), before + 1);  // only the Sync's hand-over
+  b.master.global_control(0x20);  // the next Sync delivers the newest outputs
+  b.master.idle(2000);
+  EXPECT_EQ(b.user.outputs.back().data, (Bytes{3, 3, 3, 3}));
+  b.master.data_exchange({4, 4, 4, 4});
+  b.master.global_control(0x10);  // Unsync: hands over D and ends the Sync mode
+  b.master.idle(2000);
+  EXPECT_EQ(b.user.outputs.back().data, (Bytes{4, 4, 4, 4}));
+  b.master.data_exchange({5, 5, 5, 5});
+  EXPECT_EQ(b.user.outputs.back().data, (Bytes{5, 5, 5, 5}));
+  const Exchange diag = b.master.slave_diag();
+  ASSERT_TRUE(diag.answer);
+  EXPECT_EQ(diag.answer->du[1] & 0x20, 0);  // Sync_Mode off again
+}
+
+TEST_P(Protocol, GlobalControlFreezeHoldsInputsUntilUnfreeze) {
+  Bench b(GetParam(), 12'000'000, config());
+  ASSERT_TRUE(b.master.startup());
+  b.master.data_exchange({0, 0, 0, 0});
+  b.master.global_control(0x08);  // Freeze: the newest inputs (A1..A4) are taken and frozen
+  b.user.inputs = {0xB1, 0xB2, 0xB3, 0xB4};
+  b.master.data_exchange({0, 0, 0, 0});  // the user hands B1.. over on this DX_Out
+  Exchange dx = b.master.data_exchange({0, 0, 0, 0});
+  EXPECT_EQ(dx.answer->du, (Bytes{0xA1, 0xA2, 0xA3, 0xA4}));
+  const Exchange diag = b.master.slave_diag();
+  EXPECT_NE(diag.answer->du[1] & 0x10, 0);  // Freeze_Mode
+  b.master.global_control(0x04);           // Unfreeze: N -> D, inputs flow again
+  dx = b.master.data_exchange({0, 0, 0, 0});
+  EXPECT_EQ(dx.answer->du, (Bytes{0xB1, 0xB2, 0xB3, 0xB4}));
+}
+
+TEST_P(Protocol, GlobalControlClearData) {
+  Bench b(GetParam(), 12'000'000, config());
+  ASSERT_TRUE(b.master.startup());
+  b.master.data_exchange({9, 9, 9, 9});
+  b.master.global_control(0x02);
+  b.master.idle(2000);  // the user's ISR fetches on DX_Out
+  ASSERT_FALSE(b.user.outputs.empty());
+  const Responder::Output& o = b.user.outputs.back();
+  EXPECT_TRUE(o.cleared);
+  // SPC3 / VPC3+: D is cleared and passed on. DPC31: the C buffer with the substitute values.
+  EXPECT_EQ(o.data, GetParam() == Profile::dpc31 ? (Bytes{0x5A, 0x5B, 0x5C, 0x5D}) : (Bytes{0, 0, 0, 0}));
+  EXPECT_EQ(b.chip.peek(static_cast<std::uint32_t>(b.chip.addr_of(RegId::R_GC_Command))), 0x02);
+}
+
+TEST_P(Protocol, FailsafeDataExchangeWithoutOutputs) {
+  Bench b(GetParam(), 12'000'000, config());
+  ASSERT_TRUE(b.master.startup());
+  b.master.data_exchange({7, 7, 7, 7});
+  const Exchange dx = b.master.data_exchange({});  // Spec_Clear_Mode: accepted with 0 bytes
+  ASSERT_TRUE(dx.answer);
+  EXPECT_EQ(dx.answer->du, (Bytes{0xA1, 0xA2, 0xA3, 0xA4}));  // inputs keep being fetched
+  const Responder::Output& o = b.user.outputs.back();
+  EXPECT_TRUE(o.cleared);
+  EXPECT_EQ(o.data, GetParam() == Profile::dpc31 ? (Bytes{0x5A, 0x5B, 0x5C, 0x5D}) : (Bytes{0, 0, 0, 0}));
+  EXPECT_EQ(b.chip.dp_state(), DpState::Data_Exchange);
+}
+
+TEST_P(Protocol, GlobalControlReservedBitGivesNotSupportedAndWaitPrm) {
+  for (std::uint8_t bad : {std::uint8_t{0x01}, std::uint8_t{0x40}, std::uint8_t{0x80}}) {
+    Bench b(GetParam(), 12'000'000, config());
+    ASSERT_TRUE(b.master.startup());
+    b.master.global_control(bad);
+    EXPECT_EQ(b.chip.dp_state(), DpState::Wait_Prm) << int(bad);
+    const Exchange diag = b.master.slave_diag();
+    ASSERT_TRUE(diag.answer);
+    EXPECT_EQ(diag.answer->du[0], 0x02 | 0x10) << int(bad);  // Station_Not_Ready, Not_Supported
+    EXPECT_EQ(diag.answer->du[3], 0xFF);                      // unlocked
+  }
+}
+
+TEST_P(Protocol, SyncWithoutSupportIsTreatedLikeAReservedBit) {
+  ResponderConfig rc = config();
+  rc.sync_supported = false;
+  Bench b(GetParam(), 12'000'000, rc);
+  ASSERT_TRUE(b.master.startup());
+  b.master.global_control(0x20);
+  EXPECT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
+  EXPECT_NE(b.master.slave_diag().answer->du[0] & 0x10, 0);
+}
+
+TEST_P(Protocol, NewGcCommandOnlyOnAChangedCommandByte) {
+  Bench b(GetParam(), 12'000'000, config());
+  ASSERT_TRUE(b.master.startup());
+  const auto gc_interrupts = [&] {
+    std::size_t n = 0;
+    for (const auto& [cycle, ir] : b.user.interrupts) n += (ir & irq::New_GC_Command) != 0 ? 1 : 0;
+    return n;
+  };
+  b.master.global_control(0x08);
+  b.master.global_control(0x08);
+  b.master.global_control(0x04);
+  EXPECT_EQ(gc_interrupts(), 2u);
+  EXPECT_EQ(b.chip.peek(b.chip.addr_of(RegId::R_GC_Command)), 0x04);
+  b.master.global_control(0x08, 0x02);  // Group_Select 2, our Group_Ident 0: not for us
+  EXPECT_EQ(b.chip.peek(b.chip.addr_of(RegId::R_GC_Command)), 0x04);
+}
+
+TEST_P(Protocol, DpWatchdogExpiresAtTheExactCycle) {
+  Bench b(GetParam(), 12'000'000, config());  // WD 10 x 10 x 10 ms = 1 s
+  ASSERT_TRUE(b.master.startup());
+  const Exchange dx = b.master.data_exchange({6, 6, 6, 6});
+  const std::uint64_t expiry = b.acted(dx) + 48'000'000;
+  b.master.idle(expiry - 1 - b.chip.cycle());  // cable pulled
+  EXPECT_EQ(b.chip.dp_state(), DpState::Data_Exchange);
+  EXPECT_EQ(b.chip.wd_state(), WdState::DP_Control);
+  b.chip.step(1);
+  EXPECT_EQ(b.chip.cycle(), expiry);
+  EXPECT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
+  EXPECT_EQ(b.chip.wd_state(), WdState::Baud_Control);
+  EXPECT_NE(b.chip.peek_reg(RegId::Int_Req_Reg) & irq::WD_DP_Control_Timeout, 0u);
+  EXPECT_NE(b.chip.peek_reg(RegId::Int_Req_Reg) & irq::Go_Leave_Data_Exchange, 0u);
+  b.master.idle(1000);  // the user fetches the outputs the ASIC cleared
+  EXPECT_TRUE(b.user.outputs.back().cleared);
+  EXPECT_EQ(b.user.outputs.back().data, (Bytes{0, 0, 0, 0}));
+}
+
+TEST_P(Protocol, DpWatchdogWith1msBase) {
+  ResponderConfig rc = config();
+  rc.slave.wd_base_1ms = true;
+  rc.slave.wd_fact1 = 5;
+  rc.slave.wd_fact2 = 7;  // 35 ms
+  if (GetParam() == Profile::vpc3plus) return;  // VPC3+ takes the base from Mode_Reg0.WD_Base
+  Bench b(GetParam(), 12'000'000, rc);
+  ASSERT_TRUE(b.master.startup());
+  const Exchange dx = b.master.data_exchange({6, 6, 6, 6});
+  b.master.idle(b.acted(dx) + 35 * 48'000 - 1 - b.chip.cycle());
+  EXPECT_EQ(b.chip.dp_state(), DpState::Data_Exchange);
+  b.chip.step(1);
+  EXPECT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
+}
+
+TEST_P(Protocol, WatchdogOffKeepsDataExchangeThroughASilentBus) {
+  ResponderConfig rc = config();
+  rc.slave.wd_on = false;
+  Bench b(GetParam(), 12'000'000, rc);
+  ASSERT_TRUE(b.master.startup());
+  EXPECT_EQ(b.chip.wd_state(), WdState::Baud_Control);
+  b.master.idle(2 * 48'000'000);  // 2 s of silence: Baud_Control (160 ms) runs out, DP stays
+  EXPECT_EQ(b.chip.dp_state(), DpState::Data_Exchange);
+  EXPECT_EQ(b.chip.wd_state(), WdState::Baud_Search);
+  bool answered = false;
+  for (int i = 0; i < 20 && !answered; ++i) answered = b.master.data_exchange({8, 8, 8, 8}).answer.has_value();
+  EXPECT_TRUE(answered);  // found the baud rate again, still in Data_Exchange
+  EXPECT_EQ(b.user.outputs.back().data, (Bytes{8, 8, 8, 8}));
+}
+
+TEST_P(Protocol, UserWatchdogExpires) {
+  ResponderConfig rc = config();
+  rc.user_wd_value = 3;  // Res_User_WD only at init: three Data_Exchanges, then Leave_Master
+  Bench b(GetParam(), 12'000'000, rc);
+  ASSERT_TRUE(b.master.startup());
+  EXPECT_TRUE(b.master.data_exchange({1, 1, 1, 1}).answer);  // loads 3
+  EXPECT_TRUE(b.master.data_exchange({1, 1, 1, 1}).answer);  // 2
+  EXPECT_TRUE(b.master.data_exchange({1, 1, 1, 1}).answer);  // 1
+  const Exchange last = b.master.data_exchange({1, 1, 1, 1});  // 0: expired
+  EXPECT_FALSE(last.answer);
+  EXPECT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
+}
+
+TEST_P(Protocol, SecondMasterCannotParameteriseALockedSlave) {
+  Bench b(GetParam(), 12'000'000, config());
+  ASSERT_TRUE(b.master.startup());
+  DpMaster other(b.chip, MasterConfig{7, 12'000'000, 100, 33}, config().slave);
+  other.set_firmware([&](BusPort& c) { b.user.isr(c); });
+  other.fdl_status();
+  const Exchange prm = other.set_prm();
+  EXPECT_EQ(wire(prm.answer), Bytes{0xE5});
+  EXPECT_EQ(b.chip.dp_state(), DpState::Data_Exchange);
+  EXPECT_EQ(b.chip.fdl_counters().not_allowed, 1u);
+  const Exchange diag = other.slave_diag();
+  EXPECT_EQ(diag.answer->du[3], 2);  // Master_Add: locked by master 2
+}
+
+TEST_P(Protocol, SetSlaveAddress) {
+  Bench b(GetParam(), 12'000'000, config());
+  b.master.fdl_status();
+  ASSERT_EQ(b.chip.station_address(), 5);
+  const Exchange ex = b.master.set_slave_address(9, false);
+  EXPECT_EQ(wire(ex.answer), Bytes{0xE5});
+  EXPECT_EQ(b.chip.station_address(), 9);
+  b.master.idle(2000);
+  ASSERT_FALSE(b.user.interrupts.empty());
+  EXPECT_NE(b.user.interrupts.back().second & irq::New_SSA_Data, 0u);
+  EXPECT_FALSE(b.chip.ssa_buffer_free());
+  b.master.set_target(9);
+  EXPECT_TRUE(b.master.fdl_status().answer);
+  // SSA buffer still held by the user: a second request gets RR (no resource).
+  const Exchange again = b.master.set_slave_address(10, false);
+  EXPECT_EQ(wire(again.answer), (Bytes{0x10, 0x02, 0x09, 0x02, 0x0D, 0x16}));
+}
+
+TEST_P(Protocol, ReadInputsAndOutputsAndGetCfg) {
+  Bench b(GetParam(), 12'000'000, config());
+  // Before Data_Exchange: no service activated (RS), 10 02 05 03 0A 16.
+  EXPECT_EQ(wire(b.master.read_inputs().answer), (Bytes{0x10, 0x02, 0x05, 0x03, 0x0A, 0x16}));
+  ASSERT_TRUE(b.master.startup());
+  const Exchange cfg = b.master.get_cfg();
+  EXPECT_EQ(cfg.answer->du, (Bytes{0x13, 0x23}));
+  b.master.data_exchange({4, 3, 2, 1});
+  EXPECT_EQ(b.master.read_outputs().answer->du, (Bytes{4, 3, 2, 1}));  // served from U
+  EXPECT_EQ(b.master.read_inputs().answer->du, (Bytes{0xA1, 0xA2, 0xA3, 0xA4}));
+}
+
+INSTANTIATE_TEST_SUITE_P(Profiles, Protocol, ::testing::ValuesIn(kAllProfiles),
+                         [](const auto& i) { return testutil::pname(i.param); });
+
+// Every malformed frame class: the documented reaction (no answer) and its counter.
+class Malformed : public ::testing::TestWithParam<Profile> {};
+
+TEST_P(Malformed, EachClassIsCountedAndNotAnswered) {
+  Bench b(GetParam(), 12'000'000);
+  ASSERT_TRUE(b.master.startup());
+  const FdlCounters& n = b.chip.fdl_counters();
+  const Bytes good = fdl::encode(fdl::make_frame(5, 2, 0x7D, {1, 2, 3, 4}));  // SRD_high, FCB FCV
+  auto send = [&](Bytes bytes, UartFault f = {}) { return b.master.transact_raw(bytes, f); };
+  auto expect_silent = [&](const Exchange& ex, std::uint32_t counter, const char* what) {
+    EXPECT_FALSE(ex.answer) << what;
+    EXPECT_EQ(ex.answer_end, 0u) << what;  // nothing at all came back
+    EXPECT_EQ(counter, 1u) << what;
+  };
+  Bytes bad_fcs = good;
+  bad_fcs[good.size() - 2] ^= 0x01;
+  expect_silent(send(bad_fcs), n.bad_fcs, "bad FCS");
+  expect_silent(send(good, {3, UartFault::Kind::parity}), n.parity, "parity");
+  expect_silent(send(good, {5, UartFault::Kind::stop}), n.stop_bit, "stop bit");
+  Bytes le = good;
+  le[2] = static_cast<std::uint8_t>(le[1] + 1);
+  expect_silent(send(le), n.le_mismatch, "LE != LEr");
+  Bytes ed = good;
+  ed.back() = 0x17;
+  expect_silent(send(ed), n.wrong_ed, "wrong ED");
+  expect_silent(send(Bytes(good.begin(), good.begin() + 6)), n.truncated, "truncated");
+  Bytes big = {0x68, 0xFA, 0xFA, 0x68};  // LE 250: longer than any telegram
+  expect_silent(send(big), n.oversize, "oversize");
+  expect_silent(send({0x33, 0x05, 0x02}), n.bad_sd, "unknown SD");
+  expect_silent(send(fdl::encode(fdl::make_frame(9, 2, 0x7D, {1, 2, 3, 4}))), n.foreign_address,
+                "foreign address");
+  // An unknown SAP is answered RS (no service activated): 10 02 05 03 0A 16.
+  const Exchange sap = send(fdl::encode(fdl::make_frame(5, 2, 0x6D, {}, 50, 62)));
+  EXPECT_EQ(wire(sap.answer), (Bytes{0x10, 0x02, 0x05, 0x03, 0x0A, 0x16}));
+  EXPECT_EQ(n.unknown_sap, 1u);
+  // The exchange goes on after every one of them.
+  EXPECT_TRUE(b.master.data_exchange({1, 2, 3, 4}).answer);
+  EXPECT_EQ(b.chip.dp_state(), DpState::Data_Exchange);
+  // Offline: the receiver frames the request but nothing answers.
+  b.chip.write(static_cast<std::uint32_t>(find_reg(b.chip.profile(), RegId::Mode_Reg1_S)->write_addr),
+               0x04);  // Go_Offline
+  ASSERT_FALSE(b.chip.started());
+  expect_silent(b.master.fdl_status(), n.offline, "offline");
+}
+
+TEST_P(Malformed, RequestWithoutTsynIsIgnored) {
+  Bench b(GetParam(), 12'000'000);
+  ASSERT_TRUE(b.master.startup());
+  DpMaster hasty(b.chip, MasterConfig{2, 12'000'000, 100, 10}, SlaveConfig{});  // 10 idle bits only
+  const Exchange ex = hasty.fdl_status();
+  EXPECT_FALSE(ex.answer);
+  EXPECT_EQ(b.chip.fdl_counters().no_sync, 1u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Profiles, Malformed, ::testing::ValuesIn(kAllProfiles),
+                         [](const auto& i) { return testutil::pname(i.param); });
