@@ -119,9 +119,14 @@ void ChipCore::mac_char(const UartChar& c) {
   const bool start_ok = c.start_ok || mode0(kDis_Start_Control);
   const bool stop_ok = c.stop_ok || mode0(kDis_Stop_Control);
   if (!c.parity_ok || !start_ok || !stop_ok) {
-    counters.parity += c.parity_ok ? 0 : 1;
-    counters.start_bit += start_ok ? 0 : 1;
-    counters.stop_bit += stop_ok ? 0 : 1;
+    // One count per broken telegram: characters misframed after the first error are its tail.
+    const bool fresh = !mac.discarding && (mac.in_frame || c.idle_bits >= kTsynBits);
+    if (fresh) {
+      counters.parity += c.parity_ok ? 0 : 1;
+      counters.start_bit += start_ok ? 0 : 1;
+      counters.stop_bit += stop_ok ? 0 : 1;
+    }
+    mac.discarding = true;
     mac.in_frame = false;
     mac.frame.reset();
     mac.frame_timeout = kNever;
@@ -141,6 +146,7 @@ void ChipCore::mac_char(const UartChar& c) {
       return;
     }
     mac.skipping = false;
+    mac.discarding = false;
     mac.in_frame = true;
     mac.frame.reset();
   }
@@ -149,8 +155,8 @@ void ChipCore::mac_char(const UartChar& c) {
   if (st == fdl::Assembler::Status::need_more) return;
   mac.in_frame = false;
   mac.frame_timeout = kNever;
-  mac.skipping = true;  // anything right after a telegram is not synchronised
   if (st == fdl::Assembler::Status::error) {
+    mac.discarding = true;
     // An LE beyond the longest telegram is an oversize frame, not a malformed one.
     const auto bytes = mac.frame.bytes();
     const bool too_long = mac.frame.error() == fdl::Error::bad_le && bytes.size() >= 2 && bytes[1] > fdl::kMaxLe;

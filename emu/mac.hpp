@@ -23,7 +23,8 @@ struct Mac {
   fdl::Assembler frame;
   std::vector<UartChar> chars;  // scratch for UartRx::advance
   bool in_frame = false;
-  bool skipping = false;  // after an error or an unsynchronised start: wait for TSYN idle
+  bool skipping = false;    // after a telegram, an error or an unsynchronised start: wait for TSYN
+  bool discarding = false;  // the telegram in progress was already counted as broken
   std::uint64_t frame_timeout = kNever;
   std::uint8_t search_code = 0;
   std::uint64_t search_deadline = kNever;

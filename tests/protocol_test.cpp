@@ -260,6 +260,7 @@ TEST_P(Protocol, NewGcCommandOnlyOnAChangedCommandByte) {
   b.master.global_control(0x08);
   b.master.global_control(0x08);
   b.master.global_control(0x04);
+  b.master.idle(2000);
   EXPECT_EQ(gc_interrupts(), 2u);
   EXPECT_EQ(b.chip.peek(b.chip.addr_of(RegId::R_GC_Command)), 0x04);
   b.master.global_control(0x08, 0x02);  // Group_Select 2, our Group_Ident 0: not for us
@@ -306,13 +307,23 @@ TEST_P(Protocol, WatchdogOffKeepsDataExchangeThroughASilentBus) {
   Bench b(GetParam(), 12'000'000, rc);
   ASSERT_TRUE(b.master.startup());
   EXPECT_EQ(b.chip.wd_state(), WdState::Baud_Control);
-  b.master.idle(2 * 48'000'000);  // 2 s of silence: Baud_Control (160 ms) runs out, DP stays
+  b.master.idle(2 * 48'000'000);  // 2 s of silence: Baud_Control runs out, DP stays
   EXPECT_EQ(b.chip.dp_state(), DpState::Data_Exchange);
   EXPECT_EQ(b.chip.wd_state(), WdState::Baud_Search);
-  bool answered = false;
-  for (int i = 0; i < 20 && !answered; ++i) answered = b.master.data_exchange({8, 8, 8, 8}).answer.has_value();
-  EXPECT_TRUE(answered);  // found the baud rate again, still in Data_Exchange
+  // Baud_Control (16 x 10 ms, x 2 on the VPC3+) ran out after the last telegram to us; from
+  // there the search cycles through all ten 4096-bit windows, 12 M first.
+  const std::uint64_t baud_control = (GetParam() == Profile::vpc3plus ? 320u : 160u) * 48'000u;
+  std::uint64_t window = b.acted(b.master.history().back()) + baud_control;
+  std::uint64_t cycle_length = 0;
+  for (std::uint32_t baud : kBaudRates) cycle_length += 4096u * T_of(baud);
+  while (window + 33 * 4 < b.chip.cycle()) window += cycle_length;
+  b.master.idle(window + 33 * 4 - b.chip.cycle());  // the first request TSYN into the window
+  const Exchange dx = b.master.data_exchange({8, 8, 8, 8});
+  EXPECT_EQ(dx.request_start, window + 33 * 4);
+  EXPECT_TRUE(dx.answer);  // found the baud rate again, still in Data_Exchange
+  b.master.idle(2000);
   EXPECT_EQ(b.user.outputs.back().data, (Bytes{8, 8, 8, 8}));
+  EXPECT_EQ(b.chip.wd_state(), WdState::Baud_Control);
 }
 
 TEST_P(Protocol, UserWatchdogExpires) {
@@ -384,7 +395,7 @@ TEST_P(Malformed, EachClassIsCountedAndNotAnswered) {
   const FdlCounters& n = b.chip.fdl_counters();
   const Bytes good = fdl::encode(fdl::make_frame(5, 2, 0x7D, {1, 2, 3, 4}));  // SRD_high, FCB FCV
   auto send = [&](Bytes bytes, UartFault f = {}) { return b.master.transact_raw(bytes, f); };
-  auto expect_silent = [&](const Exchange& ex, std::uint32_t counter, const char* what) {
+  auto expect_silent = [&](const Exchange& ex, const std::uint32_t& counter, const char* what) {
     EXPECT_FALSE(ex.answer) << what;
     EXPECT_EQ(ex.answer_end, 0u) << what;  // nothing at all came back
     EXPECT_EQ(counter, 1u) << what;
@@ -423,10 +434,11 @@ TEST_P(Malformed, EachClassIsCountedAndNotAnswered) {
 TEST_P(Malformed, RequestWithoutTsynIsIgnored) {
   Bench b(GetParam(), 12'000'000);
   ASSERT_TRUE(b.master.startup());
-  DpMaster hasty(b.chip, MasterConfig{2, 12'000'000, 100, 10}, SlaveConfig{});  // 10 idle bits only
-  const Exchange ex = hasty.fdl_status();
+  // A token to station 9 and, without any idle, an FDL_Status to us: not synchronised.
+  const Exchange ex = b.master.transact_raw({0xDC, 0x09, 0x02, 0x10, 0x05, 0x02, 0x49, 0x50, 0x16});
   EXPECT_FALSE(ex.answer);
   EXPECT_EQ(b.chip.fdl_counters().no_sync, 1u);
+  EXPECT_TRUE(b.master.fdl_status().answer);  // with TSYN before it, answered
 }
 
 INSTANTIATE_TEST_SUITE_P(Profiles, Malformed, ::testing::ValuesIn(kAllProfiles),
