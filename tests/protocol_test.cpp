@@ -383,6 +383,51 @@ TEST_P(Protocol, ReadInputsAndOutputsAndGetCfg) {
   EXPECT_EQ(b.master.read_inputs().answer->du, (Bytes{0xA1, 0xA2, 0xA3, 0xA4}));
 }
 
+
+TEST_P(Protocol, RepeatedFcbGetsThePreviousAnswerAgain) {
+  Bench b(GetParam(), 12'000'000, config());
+  ASSERT_TRUE(b.master.startup());
+  const Exchange first = b.master.data_exchange({1, 1, 1, 1});
+  b.master.idle(2000);
+  const std::size_t fetched = b.user.outputs.size();
+  b.user.inputs = {0xC1, 0xC2, 0xC3, 0xC4};
+  // The master lost the answer and repeats: same FC (FCV = 1, same FCB), other data.
+  fdl::Frame again = first.request;
+  again.du = {2, 2, 2, 2};
+  const Exchange repeat = b.master.transact(again);
+  EXPECT_EQ(wire(repeat.answer), wire(first.answer));
+  b.master.idle(2000);
+  EXPECT_EQ(b.user.outputs.size(), fetched);  // nothing was taken
+  EXPECT_EQ(b.chip.fdl_counters().repeated, 1u);
+  // The user hands new inputs over in its DX_Out ISR, so they appear one exchange later.
+  EXPECT_EQ(b.master.data_exchange({3, 3, 3, 3}).answer->du, (Bytes{0xA1, 0xA2, 0xA3, 0xA4}));
+  EXPECT_EQ(b.master.data_exchange({4, 4, 4, 4}).answer->du, (Bytes{0xC1, 0xC2, 0xC3, 0xC4}));
+}
+
+TEST_P(Protocol, NewDiagnosticsAreAnnouncedWithHighPriorityAnswers) {
+  Bench b(GetParam(), 12'000'000, config());
+  ASSERT_TRUE(b.master.startup());
+  EXPECT_EQ(b.master.data_exchange({0, 0, 0, 0}).answer->fc, 0x08);  // DL
+  // The user writes extended diagnostics into its diag buffer and hands it over.
+  Chip& c = b.chip;
+  const std::uint8_t sm = c.read(c.addr_of(RegId::Diag_Buffer_SM));
+  const RegId ptr = (sm & 0x03) == 0x01 ? RegId::R_Diag_Buf_Ptr1 : RegId::R_Diag_Buf_Ptr2;
+  const RegId len = (sm & 0x03) == 0x01 ? RegId::R_Len_Diag_Buf1 : RegId::R_Len_Diag_Buf2;
+  const std::uint32_t base = static_cast<std::uint32_t>(c.read(c.addr_of(ptr))) << c.profile().segment_shift;
+  const Bytes ext = {0x03, 0x00, 0x00, 0x00, 0x00, 0x00, 0x42, 0x43};  // Ext_Diag, Stat_Diag
+  for (std::size_t i = 0; i < ext.size(); ++i) c.write(base + static_cast<std::uint32_t>(i), ext[i]);
+  c.write(c.addr_of(len), static_cast<std::uint8_t>(ext.size()));
+  c.read(c.addr_of(RegId::New_Diag_Buffer_Cmd));
+  EXPECT_NE(c.peek_reg(RegId::Status_Reg) & 0x04, 0u);                // Diag_Flag
+  EXPECT_EQ(b.master.data_exchange({0, 0, 0, 0}).answer->fc, 0x0A);  // DH
+  const Exchange diag = b.master.slave_diag();
+  ASSERT_TRUE(diag.answer);
+  // St1 Ext_Diag, St2 Stat_Diag | 1 | WD_On, St3 0, Master_Add 2, ident, then the user's bytes.
+  EXPECT_EQ(diag.answer->du, (Bytes{0x08, 0x0E, 0x00, 0x02, 0x0C, 0x31, 0x42, 0x43}));
+  // Stat_Diag: the flag stays after the fetch, the master keeps asking.
+  EXPECT_EQ(b.master.data_exchange({0, 0, 0, 0}).answer->fc, 0x0A);
+}
+
 INSTANTIATE_TEST_SUITE_P(Profiles, Protocol, ::testing::ValuesIn(kAllProfiles),
                          [](const auto& i) { return testutil::pname(i.param); });
 
