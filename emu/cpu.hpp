@@ -55,9 +55,9 @@ class Cpu final : public BusPort {
 
  private:
   void body();
-  void gate();               // firmware: wait for the bus side's grant before an access
-  void hand_to_firmware();   // bus side: let the firmware run until it yields
-  void hand_to_bus_side();   // firmware: give the baton back
+  void gate();              // firmware: wait for the bus side's grant before an access
+  void hand_to_firmware();  // bus side: let the firmware run until it yields
+  void hand_to_bus_side();  // firmware: give the baton back
 
   Chip& chip_;
   Isr isr_;

@@ -33,13 +33,15 @@ void DpMaster::run_until(std::uint64_t cycle) {
 
 void DpMaster::idle(std::uint64_t cycles) { run_until(chip_.cycle() + cycles); }
 
-fdl::Frame DpMaster::request(std::optional<std::uint8_t> dsap, std::vector<std::uint8_t> du, bool srd) {
+fdl::Frame DpMaster::request(std::optional<std::uint8_t> dsap, std::vector<std::uint8_t> du,
+                             bool srd) {
   std::uint8_t fc = fdl::make_request_fc(fdl::Function::SDN_high, false, false);
   if (srd) {
     fcb_ = !fcb_;
     fc = fdl::make_request_fc(fdl::Function::SRD_high, fcb_, fcv_started_);
   }
-  const std::optional<std::uint8_t> ssap = dsap ? std::optional<std::uint8_t>(sap::Master) : std::nullopt;
+  const std::optional<std::uint8_t> ssap =
+      dsap ? std::optional<std::uint8_t>(sap::Master) : std::nullopt;
   return fdl::make_frame(target_, cfg_.address, fc, std::move(du), dsap, ssap);
 }
 
@@ -87,7 +89,9 @@ Exchange DpMaster::wait_answer(Exchange ex) {
       if (!c.ok()) bad = true;
       if (bad || frame_.push(c.data) == fdl::Assembler::Status::error) bad = true;
     }
-    if (started && !rx_.receiving() && (bad || frame_.status() != fdl::Assembler::Status::need_more)) break;
+    if (started && !rx_.receiving() &&
+        (bad || frame_.status() != fdl::Assembler::Status::need_more))
+      break;
     if (!started && !rx_.receiving() && chip_.cycle() >= slot_end) {
       bus_free_ = chip_.cycle();
       return ex;  // no answer within the slot time
@@ -107,8 +111,8 @@ Exchange DpMaster::wait_answer(Exchange ex) {
 }
 
 Exchange DpMaster::fdl_status() {
-  const Exchange ex = transact(
-      fdl::make_frame(target_, cfg_.address, fdl::make_request_fc(fdl::Function::FDL_Status, false, false)));
+  const Exchange ex = transact(fdl::make_frame(
+      target_, cfg_.address, fdl::make_request_fc(fdl::Function::FDL_Status, false, false)));
   if (ex.answer) {
     fcb_ = false;  // the first SRD after FDL_Status carries FCV = 1, FCB = 1
     fcv_started_ = true;
@@ -155,9 +159,10 @@ Exchange DpMaster::global_control(std::uint8_t command, std::uint8_t groups) {
 }
 
 Exchange DpMaster::set_slave_address(std::uint8_t new_address, bool no_add_change) {
-  return transact(request(sap::Set_Slave_Add, {new_address, static_cast<std::uint8_t>(slave_.ident >> 8),
-                                               static_cast<std::uint8_t>(slave_.ident),
-                                               static_cast<std::uint8_t>(no_add_change ? 1 : 0)}));
+  return transact(request(
+      sap::Set_Slave_Add,
+      {new_address, static_cast<std::uint8_t>(slave_.ident >> 8),
+       static_cast<std::uint8_t>(slave_.ident), static_cast<std::uint8_t>(no_add_change ? 1 : 0)}));
 }
 
 bool DpMaster::diag_ready(const fdl::Frame& f) {
@@ -183,7 +188,8 @@ bool DpMaster::startup(int tries) {
     if ((diag.answer->du.size() >= 2 && (diag.answer->du[1] & 0x01) != 0) ||
         (diag.answer->du.size() >= 1 && (diag.answer->du[0] & 0x44) != 0)) {
       // Prm_Req (or a fault): parameterise and configure.
-      note(fmt::format("[cycle {:>10}] Slave_Diag: Prm_Req, sending Set_Prm and Chk_Cfg", chip_.cycle()));
+      note(fmt::format("[cycle {:>10}] Slave_Diag: Prm_Req, sending Set_Prm and Chk_Cfg",
+                       chip_.cycle()));
       set_prm();
       chk_cfg();
     }

@@ -31,7 +31,7 @@ struct SlaveConfig {
   std::uint8_t group_ident = 0;
   bool sync_req = false;
   bool freeze_req = false;
-  std::uint8_t min_tsdr = 0;  // Set_Prm byte 3, 0 = no change
+  std::uint8_t min_tsdr = 0;           // Set_Prm byte 3, 0 = no change
   std::vector<std::uint8_t> user_prm;  // bytes after the 7 standard ones (byte 7 first)
 };
 
@@ -94,7 +94,8 @@ class DpMaster {
   std::function<void(const std::string&)> narrate;
 
  private:
-  fdl::Frame request(std::optional<std::uint8_t> dsap, std::vector<std::uint8_t> du, bool srd = true);
+  fdl::Frame request(std::optional<std::uint8_t> dsap, std::vector<std::uint8_t> du,
+                     bool srd = true);
   void run_until(std::uint64_t cycle);
   Exchange wait_answer(Exchange ex);
   void note(const std::string& s);
@@ -107,7 +108,7 @@ class DpMaster {
   UartRx rx_;
   fdl::Assembler frame_;
   std::vector<UartChar> chars_;
-  bool fcb_ = true;        // toggled before every SRD with FCV
+  bool fcb_ = true;  // toggled before every SRD with FCV
   bool fcv_started_ = false;
   std::uint64_t bus_free_ = 0;  // end of the last telegram on the bus
   std::unique_ptr<Cpu> cpu_;

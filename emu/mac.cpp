@@ -159,7 +159,8 @@ void ChipCore::mac_char(const UartChar& c) {
     mac.discarding = true;
     // An LE beyond the longest telegram is an oversize frame, not a malformed one.
     const auto bytes = mac.frame.bytes();
-    const bool too_long = mac.frame.error() == fdl::Error::bad_le && bytes.size() >= 2 && bytes[1] > fdl::kMaxLe;
+    const bool too_long =
+        mac.frame.error() == fdl::Error::bad_le && bytes.size() >= 2 && bytes[1] > fdl::kMaxLe;
     count(counters, too_long ? fdl::Error::oversize : mac.frame.error());
     return;
   }

@@ -57,13 +57,14 @@ void Responder::init(BusPort& c) {
   if (cfg_.spec_clear_mode) mode0 |= 0x2000;
   write16(c, RegId::Mode_Reg0, mode0);
   // Large buffers need the VPC3+'s 4 KB mode (16-byte segments).
-  const bool large = p.ram_size_large != 0 && 3u * (s.in_len + s.out_len) + 1024 > p.ram_size - p.user_base;
+  const bool large =
+      p.ram_size_large != 0 && 3u * (s.in_len + s.out_len) + 1024 > p.ram_size - p.user_base;
   if (large) c.write(waddr(c.chip(), RegId::Mode_Reg2), 0x80);
   seg_shift_ = large ? p.segment_shift_large : p.segment_shift;
-  const std::uint16_t enabled = irq::MAC_Reset | irq::Go_Leave_Data_Exchange | irq::Baudrate_Detect |
-                                irq::WD_DP_Control_Timeout | irq::New_GC_Command | irq::New_SSA_Data |
-                                irq::New_Cfg_Data | irq::New_Prm_Data | irq::Diag_Buffer_Changed |
-                                irq::DX_Out;
+  const std::uint16_t enabled = irq::MAC_Reset | irq::Go_Leave_Data_Exchange |
+                                irq::Baudrate_Detect | irq::WD_DP_Control_Timeout |
+                                irq::New_GC_Command | irq::New_SSA_Data | irq::New_Cfg_Data |
+                                irq::New_Prm_Data | irq::Diag_Buffer_Changed | irq::DX_Out;
   write16(c, RegId::Int_Mask_Reg, static_cast<std::uint16_t>(~enabled));
   c.write(waddr(c.chip(), RegId::WD_Baud_Control_Val), cfg_.wd_baud_control);
   c.write(waddr(c.chip(), RegId::MinTSDR_Val), 0x0B);
@@ -80,12 +81,15 @@ void Responder::init(BusPort& c) {
     c.write(cell_addr(c.chip(), ptr_cell), static_cast<std::uint8_t>(next));
     next += std::max<std::uint32_t>(1, (len + seg - 1) / seg);
   };
-  const std::uint32_t aux_len = std::max<std::uint32_t>({8u + static_cast<std::uint32_t>(s.user_prm.size()),
-                                                         static_cast<std::uint32_t>(s.cfg.size()), 4u});
+  const std::uint32_t aux_len =
+      std::max<std::uint32_t>({8u + static_cast<std::uint32_t>(s.user_prm.size()),
+                               static_cast<std::uint32_t>(s.cfg.size()), 4u});
   c.write(cell_addr(c.chip(), RegId::R_Len_Dout_Buf), s.out_len);
   c.write(cell_addr(c.chip(), RegId::R_Len_Din_Buf), s.in_len);
-  for (RegId r : {RegId::R_Dout_Buf_Ptr1, RegId::R_Dout_Buf_Ptr2, RegId::R_Dout_Buf_Ptr3}) alloc(r, s.out_len);
-  for (RegId r : {RegId::R_Din_Buf_Ptr1, RegId::R_Din_Buf_Ptr2, RegId::R_Din_Buf_Ptr3}) alloc(r, s.in_len);
+  for (RegId r : {RegId::R_Dout_Buf_Ptr1, RegId::R_Dout_Buf_Ptr2, RegId::R_Dout_Buf_Ptr3})
+    alloc(r, s.out_len);
+  for (RegId r : {RegId::R_Din_Buf_Ptr1, RegId::R_Din_Buf_Ptr2, RegId::R_Din_Buf_Ptr3})
+    alloc(r, s.in_len);
   if (p.id == Profile::dpc31) alloc(RegId::R_Dout_Buf_Ptr_C, s.out_len);
   c.write(cell_addr(c.chip(), RegId::R_Len_Diag_Buf1), 6);
   c.write(cell_addr(c.chip(), RegId::R_Len_Diag_Buf2), 6);
@@ -94,13 +98,14 @@ void Responder::init(BusPort& c) {
   c.write(cell_addr(c.chip(), RegId::R_Len_Cntrl_Buf1), static_cast<std::uint8_t>(aux_len));
   c.write(cell_addr(c.chip(), RegId::R_Len_Cntrl_Buf2), static_cast<std::uint8_t>(aux_len));
   c.write(cell_addr(c.chip(), RegId::R_Aux_Buf_Sel), 0x00);
-  for (RegId r : {RegId::R_Aux_Buf_Ptr1, RegId::R_Aux_Buf_Ptr2, RegId::R_Prm_Buf_Ptr, RegId::R_Cfg_Buf_Ptr,
-                  RegId::R_Read_Cfg_Buf_Ptr, RegId::R_SSA_Buf_Ptr}) {
+  for (RegId r : {RegId::R_Aux_Buf_Ptr1, RegId::R_Aux_Buf_Ptr2, RegId::R_Prm_Buf_Ptr,
+                  RegId::R_Cfg_Buf_Ptr, RegId::R_Read_Cfg_Buf_Ptr, RegId::R_SSA_Buf_Ptr}) {
     alloc(r, aux_len);
   }
   c.write(cell_addr(c.chip(), RegId::R_Len_Read_Cfg_Data), static_cast<std::uint8_t>(s.cfg.size()));
   const std::uint32_t read_cfg = buffer(c, RegId::R_Read_Cfg_Buf_Ptr);
-  for (std::size_t i = 0; i < s.cfg.size(); ++i) c.write(read_cfg + static_cast<std::uint32_t>(i), s.cfg[i]);
+  for (std::size_t i = 0; i < s.cfg.size(); ++i)
+    c.write(read_cfg + static_cast<std::uint32_t>(i), s.cfg[i]);
   if (p.id == Profile::dpc31) {
     const std::uint32_t sub = buffer(c, RegId::R_Dout_Buf_Ptr_C);
     for (std::size_t i = 0; i < cfg_.substitute.size() && i < s.out_len; ++i) {
@@ -108,13 +113,16 @@ void Responder::init(BusPort& c) {
     }
   }
   give_inputs(c);
-  c.write(waddr(c.chip(), RegId::Mode_Reg1_S), static_cast<std::uint8_t>(kStart_SPC3 | kRes_User_WD));
+  c.write(waddr(c.chip(), RegId::Mode_Reg1_S),
+          static_cast<std::uint8_t>(kStart_SPC3 | kRes_User_WD));
 }
 
 void Responder::give_inputs(BusPort& c) {
   if (inputs.empty()) return;
-  const std::uint8_t u = static_cast<std::uint8_t>((c.read(raddr(c.chip(), RegId::Din_Buffer_SM)) >> 4) & 3);
-  static constexpr RegId kPtr[] = {RegId::R_Din_Buf_Ptr1, RegId::R_Din_Buf_Ptr2, RegId::R_Din_Buf_Ptr3};
+  const std::uint8_t u =
+      static_cast<std::uint8_t>((c.read(raddr(c.chip(), RegId::Din_Buffer_SM)) >> 4) & 3);
+  static constexpr RegId kPtr[] = {RegId::R_Din_Buf_Ptr1, RegId::R_Din_Buf_Ptr2,
+                                   RegId::R_Din_Buf_Ptr3};
   const std::uint32_t base = buffer(c, kPtr[u - 1]);
   for (std::size_t i = 0; i < inputs.size() && i < cfg_.slave.in_len; ++i) {
     c.write(base + static_cast<std::uint32_t>(i), inputs[i]);
@@ -146,7 +154,8 @@ void Responder::isr(BusPort& c) {
   if ((ir & irq::DX_Out) != 0) {
     const std::uint8_t r = c.read(raddr(c.chip(), RegId::Next_Dout_Buffer_Cmd));
     if ((r & 0x04) != 0) {
-      static constexpr RegId kPtr[] = {RegId::R_Dout_Buf_Ptr1, RegId::R_Dout_Buf_Ptr2, RegId::R_Dout_Buf_Ptr3};
+      static constexpr RegId kPtr[] = {RegId::R_Dout_Buf_Ptr1, RegId::R_Dout_Buf_Ptr2,
+                                       RegId::R_Dout_Buf_Ptr3};
       const std::uint32_t base = buffer(c, kPtr[(r & 3) - 1]);
       Output o{c.cycle(), {}, (r & 0x08) != 0};
       for (std::uint32_t i = 0; i < cfg_.slave.out_len; ++i) o.data.push_back(c.read(base + i));

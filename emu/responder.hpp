@@ -18,9 +18,9 @@ struct ResponderConfig {
   bool sync_supported = true;
   bool freeze_supported = true;
   bool spec_clear_mode = true;
-  bool user_watchdog = false;          // Res_User_WD on every DX_Out
+  bool user_watchdog = false;  // Res_User_WD on every DX_Out
   std::uint16_t user_wd_value = 0x01FF;
-  std::uint8_t wd_baud_control = 0x10;  // x 10 ms
+  std::uint8_t wd_baud_control = 0x10;   // x 10 ms
   std::vector<std::uint8_t> substitute;  // dpc31 clear buffer C contents
 };
 

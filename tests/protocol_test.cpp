@@ -30,7 +30,9 @@ struct Bench {
   std::uint64_t start;  // the cycle Start_SPC3 completed
 
   Bench(Profile p, std::uint32_t baud, ResponderConfig rc = {}, BusMode bus = BusMode::intel)
-      : chip({p, bus, 0}), user(prepare(rc)), master(init(chip, user), MasterConfig{2, baud, 100, 33}, rc.slave),
+      : chip({p, bus, 0}),
+        user(prepare(rc)),
+        master(init(chip, user), MasterConfig{2, baud, 100, 33}, rc.slave),
         start(chip.cycle()) {
     master.set_firmware([this](BusPort& c) { user.isr(c); });
   }
@@ -106,20 +108,21 @@ TEST_P(Startup, ReachesDataExchangeAtExactCycles) {
   // One Data_Exchange: 4 outputs in, the user's 4 inputs back (FCS 02+05+08+A1..A4 = 99h).
   const Exchange dx = b.master.data_exchange({0x01, 0x02, 0x03, 0x04});
   EXPECT_EQ(dx.request_start, next);
-  EXPECT_EQ(wire(dx.answer), (Bytes{0x68, 0x07, 0x07, 0x68, 0x02, 0x05, 0x08, 0xA1, 0xA2, 0xA3, 0xA4, 0x99, 0x16}));
+  EXPECT_EQ(wire(dx.answer),
+            (Bytes{0x68, 0x07, 0x07, 0x68, 0x02, 0x05, 0x08, 0xA1, 0xA2, 0xA3, 0xA4, 0x99, 0x16}));
   EXPECT_EQ(dx.answer_start, dx.request_end + 11 * t);
   ASSERT_FALSE(b.user.outputs.empty());
   EXPECT_EQ(b.user.outputs.back().data, (Bytes{0x01, 0x02, 0x03, 0x04}));
   EXPECT_FALSE(b.user.outputs.back().cleared);
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    ProfilesAndBaudRates, Startup,
-    ::testing::Combine(::testing::ValuesIn(kAllProfiles),
-                       ::testing::Values(9600u, 187500u, 1500000u, 12000000u)),
-    [](const auto& i) {
-      return testutil::pname(std::get<0>(i.param)) + "_" + std::to_string(std::get<1>(i.param));
-    });
+INSTANTIATE_TEST_SUITE_P(ProfilesAndBaudRates, Startup,
+                         ::testing::Combine(::testing::ValuesIn(kAllProfiles),
+                                            ::testing::Values(9600u, 187500u, 1500000u, 12000000u)),
+                         [](const auto& i) {
+                           return testutil::pname(std::get<0>(i.param)) + "_" +
+                                  std::to_string(std::get<1>(i.param));
+                         });
 
 class Protocol : public ::testing::TestWithParam<Profile> {
  protected:
@@ -139,7 +142,8 @@ TEST_P(Protocol, MaximumDataLengthsRoundTrip) {
   ResponderConfig rc = config();
   rc.slave.in_len = 244;
   rc.slave.out_len = 244;
-  rc.slave.cfg = {0xC0, 0xBC, 0xBC, 0xC0, 0xBC, 0xBC, 0xC0, 0xBC, 0xBC, 0xC0, 0xBC, 0xBC};  // 4 x 61
+  rc.slave.cfg = {0xC0, 0xBC, 0xBC, 0xC0, 0xBC, 0xBC,
+                  0xC0, 0xBC, 0xBC, 0xC0, 0xBC, 0xBC};  // 4 x 61
   Bytes in(244), out(244);
   for (std::size_t i = 0; i < 244; ++i) {
     in[i] = static_cast<std::uint8_t>(i * 7 + 3);
@@ -163,13 +167,14 @@ TEST_P(Protocol, GlobalControlSyncHoldsOutputsUntilUnsync) {
   ASSERT_TRUE(b.master.startup());
   b.master.data_exchange({1, 1, 1, 1});
   const std::size_t before = b.user.outputs.size();
-  b.master.global_control(0x20);  // Sync: what D holds goes to N now (DX_Out), later data stays in D
+  b.master.global_control(
+      0x20);  // Sync: what D holds goes to N now (DX_Out), later data stays in D
   b.master.idle(2000);
   EXPECT_EQ(b.chip.peek(b.chip.addr_of(RegId::R_GC_Command)), 0x20);
   b.master.data_exchange({2, 2, 2, 2});
   b.master.data_exchange({3, 3, 3, 3});
   EXPECT_EQ(b.user.outputs.size(), before + 1);  // only the Sync's hand-over
-  b.master.global_control(0x20);  // the next Sync delivers the newest outputs
+  b.master.global_control(0x20);                 // the next Sync delivers the newest outputs
   b.master.idle(2000);
   EXPECT_EQ(b.user.outputs.back().data, (Bytes{3, 3, 3, 3}));
   b.master.data_exchange({4, 4, 4, 4});
@@ -194,7 +199,7 @@ TEST_P(Protocol, GlobalControlFreezeHoldsInputsUntilUnfreeze) {
   EXPECT_EQ(dx.answer->du, (Bytes{0xA1, 0xA2, 0xA3, 0xA4}));
   const Exchange diag = b.master.slave_diag();
   EXPECT_NE(diag.answer->du[1] & 0x10, 0);  // Freeze_Mode
-  b.master.global_control(0x04);           // Unfreeze: N -> D, inputs flow again
+  b.master.global_control(0x04);            // Unfreeze: N -> D, inputs flow again
   dx = b.master.data_exchange({0, 0, 0, 0});
   EXPECT_EQ(dx.answer->du, (Bytes{0xB1, 0xB2, 0xB3, 0xB4}));
 }
@@ -209,7 +214,8 @@ TEST_P(Protocol, GlobalControlClearData) {
   const Responder::Output& o = b.user.outputs.back();
   EXPECT_TRUE(o.cleared);
   // SPC3 / VPC3+: D is cleared and passed on. DPC31: the C buffer with the substitute values.
-  EXPECT_EQ(o.data, GetParam() == Profile::dpc31 ? (Bytes{0x5A, 0x5B, 0x5C, 0x5D}) : (Bytes{0, 0, 0, 0}));
+  EXPECT_EQ(o.data,
+            GetParam() == Profile::dpc31 ? (Bytes{0x5A, 0x5B, 0x5C, 0x5D}) : (Bytes{0, 0, 0, 0}));
   EXPECT_EQ(b.chip.peek(static_cast<std::uint32_t>(b.chip.addr_of(RegId::R_GC_Command))), 0x02);
 }
 
@@ -222,7 +228,8 @@ TEST_P(Protocol, FailsafeDataExchangeWithoutOutputs) {
   EXPECT_EQ(dx.answer->du, (Bytes{0xA1, 0xA2, 0xA3, 0xA4}));  // inputs keep being fetched
   const Responder::Output& o = b.user.outputs.back();
   EXPECT_TRUE(o.cleared);
-  EXPECT_EQ(o.data, GetParam() == Profile::dpc31 ? (Bytes{0x5A, 0x5B, 0x5C, 0x5D}) : (Bytes{0, 0, 0, 0}));
+  EXPECT_EQ(o.data,
+            GetParam() == Profile::dpc31 ? (Bytes{0x5A, 0x5B, 0x5C, 0x5D}) : (Bytes{0, 0, 0, 0}));
   EXPECT_EQ(b.chip.dp_state(), DpState::Data_Exchange);
 }
 
@@ -235,7 +242,7 @@ TEST_P(Protocol, GlobalControlReservedBitGivesNotSupportedAndWaitPrm) {
     const Exchange diag = b.master.slave_diag();
     ASSERT_TRUE(diag.answer);
     EXPECT_EQ(diag.answer->du[0], 0x02 | 0x10) << int(bad);  // Station_Not_Ready, Not_Supported
-    EXPECT_EQ(diag.answer->du[3], 0xFF);                      // unlocked
+    EXPECT_EQ(diag.answer->du[3], 0xFF);                     // unlocked
   }
 }
 
@@ -290,7 +297,7 @@ TEST_P(Protocol, DpWatchdogWith1msBase) {
   ResponderConfig rc = config();
   rc.slave.wd_base_1ms = true;
   rc.slave.wd_fact1 = 5;
-  rc.slave.wd_fact2 = 7;  // 35 ms
+  rc.slave.wd_fact2 = 7;                        // 35 ms
   if (GetParam() == Profile::vpc3plus) return;  // VPC3+ takes the base from Mode_Reg0.WD_Base
   Bench b(GetParam(), 12'000'000, rc);
   ASSERT_TRUE(b.master.startup());
@@ -331,9 +338,9 @@ TEST_P(Protocol, UserWatchdogExpires) {
   rc.user_wd_value = 3;  // Res_User_WD only at init: three Data_Exchanges, then Leave_Master
   Bench b(GetParam(), 12'000'000, rc);
   ASSERT_TRUE(b.master.startup());
-  EXPECT_TRUE(b.master.data_exchange({1, 1, 1, 1}).answer);  // loads 3
-  EXPECT_TRUE(b.master.data_exchange({1, 1, 1, 1}).answer);  // 2
-  EXPECT_TRUE(b.master.data_exchange({1, 1, 1, 1}).answer);  // 1
+  EXPECT_TRUE(b.master.data_exchange({1, 1, 1, 1}).answer);    // loads 3
+  EXPECT_TRUE(b.master.data_exchange({1, 1, 1, 1}).answer);    // 2
+  EXPECT_TRUE(b.master.data_exchange({1, 1, 1, 1}).answer);    // 1
   const Exchange last = b.master.data_exchange({1, 1, 1, 1});  // 0: expired
   EXPECT_FALSE(last.answer);
   EXPECT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
@@ -383,7 +390,6 @@ TEST_P(Protocol, ReadInputsAndOutputsAndGetCfg) {
   EXPECT_EQ(b.master.read_inputs().answer->du, (Bytes{0xA1, 0xA2, 0xA3, 0xA4}));
 }
 
-
 TEST_P(Protocol, RepeatedFcbGetsThePreviousAnswerAgain) {
   Bench b(GetParam(), 12'000'000, config());
   ASSERT_TRUE(b.master.startup());
@@ -413,12 +419,14 @@ TEST_P(Protocol, NewDiagnosticsAreAnnouncedWithHighPriorityAnswers) {
   const std::uint8_t sm = c.read(c.addr_of(RegId::Diag_Buffer_SM));
   const RegId ptr = (sm & 0x03) == 0x01 ? RegId::R_Diag_Buf_Ptr1 : RegId::R_Diag_Buf_Ptr2;
   const RegId len = (sm & 0x03) == 0x01 ? RegId::R_Len_Diag_Buf1 : RegId::R_Len_Diag_Buf2;
-  const std::uint32_t base = static_cast<std::uint32_t>(c.read(c.addr_of(ptr))) << c.profile().segment_shift;
+  const std::uint32_t base = static_cast<std::uint32_t>(c.read(c.addr_of(ptr)))
+                             << c.profile().segment_shift;
   const Bytes ext = {0x03, 0x00, 0x00, 0x00, 0x00, 0x00, 0x42, 0x43};  // Ext_Diag, Stat_Diag
-  for (std::size_t i = 0; i < ext.size(); ++i) c.write(base + static_cast<std::uint32_t>(i), ext[i]);
+  for (std::size_t i = 0; i < ext.size(); ++i)
+    c.write(base + static_cast<std::uint32_t>(i), ext[i]);
   c.write(c.addr_of(len), static_cast<std::uint8_t>(ext.size()));
   c.read(c.addr_of(RegId::New_Diag_Buffer_Cmd));
-  EXPECT_NE(c.peek_reg(RegId::Status_Reg) & 0x04, 0u);                // Diag_Flag
+  EXPECT_NE(c.peek_reg(RegId::Status_Reg) & 0x04, 0u);               // Diag_Flag
   EXPECT_EQ(b.master.data_exchange({0, 0, 0, 0}).answer->fc, 0x0A);  // DH
   const Exchange diag = b.master.slave_diag();
   ASSERT_TRUE(diag.answer);
@@ -428,8 +436,75 @@ TEST_P(Protocol, NewDiagnosticsAreAnnouncedWithHighPriorityAnswers) {
   EXPECT_EQ(b.master.data_exchange({0, 0, 0, 0}).answer->fc, 0x0A);
 }
 
+TEST_P(Protocol, SetPrmFaults) {
+  // Wrong Ident_Number, then a reserved Station_Status bit: Prm_Fault each time, no New_Prm_Data.
+  for (int variant = 0; variant < 2; ++variant) {
+    ResponderConfig rc = config();
+    Bench b(GetParam(), 12'000'000, rc);
+    b.master.fdl_status();
+    if (variant == 0) b.master.slave().ident = 0x1234;
+    const Exchange prm = b.master.set_prm(variant == 1 ? 0x01 : 0x00);
+    EXPECT_EQ(wire(prm.answer), Bytes{0xE5});
+    b.master.idle(2000);
+    EXPECT_EQ(b.user.prm_accepted, 0u) << variant;
+    b.master.slave().ident = 0x0C31;
+    const Exchange diag = b.master.slave_diag();
+    EXPECT_EQ(diag.answer->du[0], 0x02 | 0x40) << variant;  // Station_Not_Ready, Prm_Fault
+    EXPECT_EQ(diag.answer->du[1] & 0x01, 0x01) << variant;  // Prm_Req
+    EXPECT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
+  }
+}
+
+TEST_P(Protocol, StopBitCheckOffByParameterisation) {
+  ResponderConfig rc = config();
+  rc.slave.user_prm = {0x02};  // Spec_User_Prm_Byte: Dis_Stopbit
+  Bench b(GetParam(), 12'000'000, rc);
+  ASSERT_TRUE(b.master.startup());
+  EXPECT_EQ(b.chip.peek_reg(RegId::Mode_Reg0) & 0x0003, 0x0002);  // Dis_Stop_Control from Set_Prm
+  // A zero stop bit in the last character (the line returns high before the next start). The
+  // start-up's SRDs carried FCB 1, 0, 1, 0, so this one has FCB 1: FC 7Dh.
+  const Exchange dx =
+      b.master.transact(fdl::make_frame(5, 2, 0x7D, {5, 5, 5, 5}), {12, UartFault::Kind::stop});
+  EXPECT_TRUE(dx.answer);
+  EXPECT_EQ(b.chip.fdl_counters().stop_bit, 0u);
+  EXPECT_EQ(b.chip.fdl_counters().repeated, 0u);
+  b.master.idle(2000);
+  EXPECT_EQ(b.user.outputs.back().data, (Bytes{5, 5, 5, 5}));
+}
+
+TEST_P(Protocol, DataExchangeInSd3) {
+  ResponderConfig rc = config();
+  rc.slave.in_len = 8;
+  rc.slave.out_len = 8;
+  rc.slave.cfg = {0x17, 0x27};  // 8 in, 8 out
+  Bench b(GetParam(), 12'000'000, rc);
+  b.user.inputs = {1, 2, 3, 4, 5, 6, 7, 8};
+  ASSERT_TRUE(b.master.startup());
+  fdl::Frame sd3 = fdl::make_frame(5, 2, 0x7D, {8, 7, 6, 5, 4, 3, 2, 1});  // FCB 1 (see above)
+  sd3.sd = fdl::SD3;
+  const Exchange dx = b.master.transact(sd3);
+  ASSERT_TRUE(dx.answer);
+  EXPECT_EQ(dx.request_end - dx.request_start, 14u * 11 * 4);  // SD3: 14 characters
+  b.master.idle(2000);
+  EXPECT_EQ(b.user.outputs.back().data, (Bytes{8, 7, 6, 5, 4, 3, 2, 1}));
+}
+
 INSTANTIATE_TEST_SUITE_P(Profiles, Protocol, ::testing::ValuesIn(kAllProfiles),
                          [](const auto& i) { return testutil::pname(i.param); });
+
+TEST(Dpc31, NewGcIntModeOneInterruptsOnEveryGlobalControl) {
+  Bench b(Profile::dpc31, 12'000'000);
+  ASSERT_TRUE(b.master.startup());
+  b.chip.write(0x16, 0x01);  // Param_Reg.New_GC_Int_Mode
+  b.master.global_control(0x08);
+  b.master.global_control(0x08);
+  b.master.global_control(0x08);
+  b.master.idle(2000);
+  std::size_t n = 0;
+  for (const auto& [cycle, ir] : b.user.interrupts) n += (ir & irq::New_GC_Command) != 0 ? 1 : 0;
+  EXPECT_EQ(n, 3u);
+  EXPECT_EQ(b.chip.peek(0x0866), 0x08);  // R_GC_Command (cell 3Ch at 0840h + 26h)
+}
 
 // Every malformed frame class: the documented reaction (no answer) and its counter.
 class Malformed : public ::testing::TestWithParam<Profile> {};
@@ -470,8 +545,9 @@ TEST_P(Malformed, EachClassIsCountedAndNotAnswered) {
   EXPECT_TRUE(b.master.data_exchange({1, 2, 3, 4}).answer);
   EXPECT_EQ(b.chip.dp_state(), DpState::Data_Exchange);
   // Offline: the receiver frames the request but nothing answers.
-  b.chip.write(static_cast<std::uint32_t>(find_reg(b.chip.profile(), RegId::Mode_Reg1_S)->write_addr),
-               0x04);  // Go_Offline
+  b.chip.write(
+      static_cast<std::uint32_t>(find_reg(b.chip.profile(), RegId::Mode_Reg1_S)->write_addr),
+      0x04);  // Go_Offline
   ASSERT_FALSE(b.chip.started());
   expect_silent(b.master.fdl_status(), n.offline, "offline");
 }

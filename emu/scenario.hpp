@@ -1,0 +1,133 @@
+// Scenarios: a line-based, diff-friendly script of what a DP master does to one chip (start-up,
+// Data_Exchange, Global_Control, faults on the wire, silence) with checks on the outcome, and the
+// runner that plays it and prints the state walk with cycle numbers. The format is specified in
+// docs/scenario-format.md; `dpc31 run SCENARIO` is the front end.
+//
+// A file is parsed completely before anything runs, so a typo on the last line costs no
+// simulation time and never leaves a half-run walk behind.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "dp_master.hpp"
+#include "dp_services.hpp"
+#include "dpc31/chip.hpp"
+#include "responder.hpp"
+#include "uart.hpp"
+
+namespace dpc31 {
+
+struct ScenarioError {
+  std::string file;
+  int line = 0;  // 0: the file as a whole (missing, unreadable, empty)
+  std::string message;
+  [[nodiscard]] std::string text() const;  // "FILE:LINE: message" (or "FILE: message")
+};
+
+enum class StepKind : std::uint8_t {
+  // actions (they let time pass)
+  startup,
+  restart,
+  exchange,
+  gc,
+  diag,
+  fdl_status,
+  set_prm,
+  chk_cfg,
+  get_cfg,
+  read_inputs,
+  read_outputs,
+  set_slave_address,
+  foreign_master,
+  silence,
+  inputs,  // new inputs for the user side (no time passes)
+  // modifiers of the next request
+  corrupt,
+  bad_fcs,
+  // checks
+  expect,
+};
+
+enum class ExpectKind : std::uint8_t {
+  dp_state,
+  wd_state,
+  outputs,
+  cleared,
+  inputs,
+  counter,
+  irr_bit,
+  answer,
+  station,
+  diag_byte,
+  baud,
+};
+
+// One line of the file. Only the fields its kind uses are meaningful.
+struct ScenarioStep {
+  int line = 0;
+  std::string text;  // the line without its comment, for the walk
+  StepKind kind = StepKind::expect;
+  std::uint64_t count = 1;          // exchange: requests; startup/restart: tries
+  std::uint64_t cycles = 0;         // silence
+  std::vector<std::uint8_t> bytes;  // outputs, inputs, expected bytes
+  bool has_bytes = false;           // exchange: outputs= given
+  std::uint32_t value = 0;          // gc command, address, expected number / bit / state
+  std::uint32_t value2 = 0;         // gc groups, no_change, diag byte index, counter delta flag
+  UartFault fault;                  // corrupt: char_index -1 = the last character
+  SlaveConfig slave;                // set_prm / chk_cfg: the master's view from now on
+  ExpectKind expect = ExpectKind::dp_state;
+  std::string name;  // expect: counter / interrupt / answer kind; the expected text
+};
+
+struct Scenario {
+  std::string file;
+  ChipOptions chip;
+  MasterConfig master;
+  ResponderConfig user;       // user.slave is also what the master parameterises
+  std::uint32_t retries = 1;  // repeats of a request that got no answer (max_retry_limit)
+  std::vector<ScenarioStep> steps;
+};
+
+// Parses scenario text; `file` names it in messages. False with `err` set on the first error.
+bool parse_scenario(std::string_view text, const std::string& file, Scenario& out,
+                    ScenarioError& err);
+bool load_scenario(const std::string& path, Scenario& out, ScenarioError& err);
+
+struct ScenarioOutcome {
+  std::uint64_t final_cycle = 0;
+  DpState dp = DpState::Wait_Prm;
+  WdState wd = WdState::Baud_Search;
+  FdlCounters counters;
+  std::uint32_t passed = 0;
+  std::uint32_t failed = 0;
+  std::vector<std::string> failures;  // "FILE:LINE: expected X, got Y", in order
+  [[nodiscard]] bool ok() const { return failures.empty(); }
+};
+
+// Receives one line at a time, without its newline. An empty function discards the lines.
+using LineSink = std::function<void(const std::string&)>;
+
+// Plays a parsed scenario: the walk goes to `walk`, failed expects to `errors` (and the walk).
+ScenarioOutcome run_scenario(const Scenario& s, const LineSink& walk, const LineSink& errors);
+
+// Load, parse, run. Exit code: 0 every expect held, 1 one failed, 2 the file did not load or
+// parse (one line to `errors`, nothing run). `scenario` / `outcome` are filled when given.
+int run_scenario_file(const std::string& path, const LineSink& walk, const LineSink& errors,
+                      Scenario* scenario = nullptr, ScenarioOutcome* outcome = nullptr);
+
+std::string_view dp_state_name(DpState s);
+std::string_view wd_state_name(WdState s);
+
+// The FdlCounters fields by name, in declaration order (expect counter, JSON summaries).
+struct CounterField {
+  std::string_view name;
+  std::uint32_t FdlCounters::*member;
+};
+std::span<const CounterField> fdl_counter_fields();
+
+}  // namespace dpc31
