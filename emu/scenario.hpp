@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -72,14 +73,14 @@ struct ScenarioStep {
   int line = 0;
   std::string text;  // the line without its comment, for the walk
   StepKind kind = StepKind::expect;
-  std::uint64_t count = 1;          // exchange: requests; startup/restart: tries
-  std::uint64_t cycles = 0;         // silence
-  std::vector<std::uint8_t> bytes;  // outputs, inputs, expected bytes
-  bool has_bytes = false;           // exchange: outputs= given
-  std::uint32_t value = 0;          // gc command, address, expected number / bit / state
-  std::uint32_t value2 = 0;         // gc groups, no_change, diag byte index, counter delta flag
-  UartFault fault;                  // corrupt: char_index -1 = the last character
-  SlaveConfig slave;                // set_prm / chk_cfg: the master's view from now on
+  std::uint64_t count = 1;           // exchange: requests; startup/restart: tries
+  std::uint64_t cycles = 0;          // silence
+  std::vector<std::uint8_t> bytes;   // outputs, inputs, expected bytes
+  bool has_bytes = false;            // exchange: outputs= given
+  std::uint32_t value = 0;           // gc command, address, expected number / bit / state
+  std::uint32_t value2 = 0;          // gc groups, no_change, diag byte index, counter delta flag
+  UartFault fault;                   // corrupt: char_index -1 = the last character
+  std::optional<SlaveConfig> slave;  // set_prm / chk_cfg: the master's view from now on
   ExpectKind expect = ExpectKind::dp_state;
   std::string name;  // expect: counter / interrupt / answer kind; the expected text
 };
@@ -88,8 +89,9 @@ struct Scenario {
   std::string file;
   ChipOptions chip;
   MasterConfig master;
-  ResponderConfig user;       // user.slave is also what the master parameterises
-  std::uint32_t retries = 1;  // repeats of a request that got no answer (max_retry_limit)
+  ResponderConfig user;              // user.slave is also what the master parameterises
+  std::vector<std::uint8_t> inputs;  // the user's inputs from the start
+  std::uint32_t retries = 1;         // repeats of a request that got no answer (max_retry_limit)
   std::vector<ScenarioStep> steps;
 };
 

@@ -9,6 +9,7 @@
 #include "demo.hpp"
 #include "dpc31/chip.hpp"
 #include "regfmt.hpp"
+#include "run.hpp"
 
 namespace {
 
@@ -44,6 +45,13 @@ int main(int argc, char** argv) {
   regs->add_option("--format", regs_format, "output format")
       ->check(CLI::IsMember({"text", "json", "c", "verilog", "markdown"}));
 
+  dpc31::cli::RunOptions run_opt;
+  auto* run = app.add_subcommand("run", "play a scenario file and print the state walk");
+  run->add_option("scenario", run_opt.scenario, "scenario file (docs/scenario-format.md)")
+      ->required();
+  run->add_flag("--quiet", run_opt.quiet, "print no state walk, only failures");
+  run->add_option("--json", run_opt.json, "write a JSON summary to this file");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -51,6 +59,7 @@ int main(int argc, char** argv) {
     return rc == 0 ? 0 : 2;
   }
 
+  if (run->parsed()) return dpc31::cli::run_scenario_command(run_opt, stdout, stderr);
   if (demo->parsed()) {
     dpc31::ChipOptions opt;
     opt.profile = to_profile(demo_profile);

@@ -1,0 +1,271 @@
+// Scenario files (docs/scenario-format.md): parse errors name FILE:LINE, a failed expect exits 1
+// with its line, nothing runs when a file does not parse, and every shipped scenario passes.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+// emu/ is not on the tests' include path.
+#include "../emu/scenario.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kTraces = fs::path(__FILE__).parent_path().parent_path() / "traces";
+
+struct Lines {
+  std::vector<std::string> lines;
+  dpc31::LineSink sink() {
+    return [this](const std::string& l) { lines.push_back(l); };
+  }
+  [[nodiscard]] bool has(const std::string& s) const {
+    for (const std::string& l : lines) {
+      if (l.find(s) != std::string::npos) return true;
+    }
+    return false;
+  }
+};
+
+// The first parse error of `text` as "FILE:LINE: message"; "" if it parses.
+std::string parse_error(const std::string& text) {
+  dpc31::Scenario s;
+  dpc31::ScenarioError err;
+  if (dpc31::parse_scenario(text, "t.scn", s, err)) return "";
+  return err.text();
+}
+
+// A scenario file in a fresh temporary directory.
+class TempFile {
+ public:
+  explicit TempFile(const std::string& text) {
+    std::array<char, 32> dir{};
+    std::snprintf(dir.data(), dir.size(), "/tmp/scn_test_XXXXXX");
+    dir_ = mkdtemp(dir.data());
+    path_ = dir_ / "s.scn";
+    std::ofstream(path_) << text;
+  }
+  ~TempFile() {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  TempFile(const TempFile&) = delete;
+  TempFile& operator=(const TempFile&) = delete;
+  [[nodiscard]] std::string path() const { return path_.string(); }
+  [[nodiscard]] fs::path dir() const { return dir_; }
+
+ private:
+  fs::path dir_;
+  fs::path path_;
+};
+
+std::vector<fs::path> shipped() {
+  std::vector<fs::path> v;
+  for (const auto& e : fs::directory_iterator(kTraces)) {
+    if (e.path().extension() == ".scn") v.push_back(e.path());
+  }
+  std::sort(v.begin(), v.end());
+  return v;
+}
+
+}  // namespace
+
+TEST(ScenarioParse, ErrorsNameFileAndLine) {
+  EXPECT_EQ(parse_error("profile dpc31\n\n# comment\nfrobnicate 3\n"),
+            "t.scn:4: unknown command 'frobnicate'");
+  EXPECT_EQ(parse_error("startup\nexchange 3x\n"), "t.scn:2: bad number '3x' for exchange count");
+  EXPECT_EQ(parse_error("startup\nexchange 0\n"),
+            "t.scn:2: exchange count 0 out of range (1..1000000)");
+  EXPECT_EQ(parse_error("Startup\n"), "t.scn:1: unknown command 'Startup'");
+  EXPECT_EQ(parse_error("profile z80\n"), "t.scn:1: unknown profile 'z80' (spc3, vpc3plus, dpc31)");
+  EXPECT_TRUE(
+      parse_error("baud 1200\nstartup\n").starts_with("t.scn:1: baud 1200 is not a PROFIBUS r"))
+      << parse_error("baud 1200\nstartup\n");
+  EXPECT_EQ(parse_error("startup\nbaud 9600\n"),
+            "t.scn:2: 'baud' is a header command: headers come before actions and expects");
+  EXPECT_EQ(parse_error("slave adress=5\n"), "t.scn:1: unknown option 'adress' for slave");
+  EXPECT_EQ(parse_error("slave address=0x80\n"),
+            "t.scn:1: slave address 0x80 out of range (0..125)");
+  EXPECT_EQ(parse_error("startup\nexchange outputs=01,2G\n"),
+            "t.scn:2: bad byte '2G' in outputs (hex bytes separated by commas)");
+  EXPECT_EQ(parse_error("startup\nsilence 10min\n"),
+            "t.scn:2: bad time unit 'min' in '10min' (us, ms, s, bits, or none for cycles)");
+  EXPECT_EQ(parse_error("startup\nsilence 4000s\n"),
+            "t.scn:2: time '4000s' too long (at most 3600 s)");
+  EXPECT_TRUE(parse_error("startup\nexpect counter parityy 1\n")
+                  .starts_with("t.scn:2: unknown counter 'parityy' (th"))
+      << parse_error("startup\nexpect counter parityy 1\n");
+  EXPECT_TRUE(parse_error("startup\nexpect irr_bit DX_In 1\n")
+                  .starts_with("t.scn:2: 'DX_In' is not an interrupt of dpc"))
+      << parse_error("startup\nexpect irr_bit DX_In 1\n");
+  EXPECT_EQ(parse_error("startup\nexpect dp_state Data_exchange\n"),
+            "t.scn:2: unknown state 'Data_exchange' (Wait_Prm, Wait_Cfg, Data_Exchange)");
+  EXPECT_EQ(parse_error("startup\nexchange 1 outputs=01 outputs=02\n"),
+            "t.scn:2: option 'outputs' given twice");
+  EXPECT_EQ(parse_error("foreign_master address=2\n"),
+            "t.scn:1: foreign_master address=2 is our own master's address");
+}
+
+TEST(ScenarioParse, FaultsNeedARequestToDamage) {
+  EXPECT_EQ(parse_error("startup\ncorrupt parity\n"), "t.scn:2: no request follows to damage");
+  EXPECT_EQ(parse_error("startup\nbad_fcs\nexpect dp_state Wait_Prm\nsilence 1ms\n"),
+            "t.scn:2: the next action ('silence', line 4) sends no request to damage");
+  EXPECT_EQ(parse_error("startup\ncorrupt stop\nbad_fcs\nexchange\n"),
+            "t.scn:3: a second fault before the request of line 2");
+  EXPECT_EQ(parse_error("startup\ncorrupt parity char=3\nexpect dp_state Data_Exchange\ndiag\n"),
+            "");
+}
+
+TEST(ScenarioParse, EmptyAndCommentOnlyFilesAreRefused) {
+  EXPECT_EQ(parse_error(""), "t.scn: no commands: nothing to run");
+  EXPECT_EQ(parse_error("# nothing\n\n   \n"), "t.scn: no commands: nothing to run");
+  EXPECT_EQ(parse_error("profile spc3\nbaud 9600\n"),
+            "t.scn: only header commands: nothing to run");
+}
+
+TEST(ScenarioParse, GarbageGivesOneLine) {
+  const std::string e =
+      parse_error(std::string("\x7f"
+                              "ELF\x02\x01\x01\0\0\n\xff\xfe",
+                              13));
+  EXPECT_EQ(e, "t.scn:1: unknown command '\\x7FELF\\x02\\x01\\x01\\x00\\x00'");
+  EXPECT_EQ(e.find('\n'), std::string::npos);
+}
+
+TEST(ScenarioParse, TimesAndNumbers) {
+  dpc31::Scenario s;
+  dpc31::ScenarioError err;
+  ASSERT_TRUE(dpc31::parse_scenario(
+      "baud 1500000\nsilence 1ms\nsilence 2us\nsilence 3bits\nsilence 0x10\nsilence 1s\n"
+      "gc sync,clear groups=0x81\nexchange 0x10 outputs=0x0A,b,FF\n",
+      "t.scn", s, err))
+      << err.text();
+  ASSERT_EQ(s.steps.size(), 7u);
+  EXPECT_EQ(s.steps[0].cycles, 48'000u);  // ceil(t x 48 MHz)
+  EXPECT_EQ(s.steps[1].cycles, 96u);
+  EXPECT_EQ(s.steps[2].cycles, 96u);  // 32 clocks per bit at 1.5 Mbaud
+  EXPECT_EQ(s.steps[3].cycles, 16u);
+  EXPECT_EQ(s.steps[4].cycles, 48'000'000u);
+  EXPECT_EQ(s.steps[5].value, 0x22u);
+  EXPECT_EQ(s.steps[5].value2, 0x81u);
+  EXPECT_EQ(s.steps[6].count, 16u);
+  EXPECT_EQ(s.steps[6].bytes, (std::vector<std::uint8_t>{0x0A, 0x0B, 0xFF}));
+}
+
+TEST(ScenarioRun, MissingFileExits2WithOneLine) {
+  Lines walk;
+  Lines errors;
+  EXPECT_EQ(dpc31::run_scenario_file("/nonexistent/x.scn", walk.sink(), errors.sink()), 2);
+  ASSERT_EQ(errors.lines.size(), 1u);
+  EXPECT_EQ(errors.lines[0], "/nonexistent/x.scn: no such file");
+  EXPECT_TRUE(walk.lines.empty());
+}
+
+// The whole file is parsed before anything runs: an error on the last line costs no run.
+TEST(ScenarioRun, NothingRunsWhenTheFileDoesNotParse) {
+  const TempFile f("startup\nexchange 5\nexpect dp_state Data_Exchange\nexchange 1 outputs=XYZ\n");
+  Lines walk;
+  Lines errors;
+  EXPECT_EQ(dpc31::run_scenario_file(f.path(), walk.sink(), errors.sink()), 2);
+  EXPECT_TRUE(walk.lines.empty());
+  ASSERT_EQ(errors.lines.size(), 1u);
+  EXPECT_EQ(errors.lines[0], f.path() +
+                                 ":4: bad byte 'XYZ' in outputs (hex bytes separated by "
+                                 "commas)");
+}
+
+TEST(ScenarioRun, FailedExpectExits1WithItsLine) {
+  const TempFile f(
+      "startup\n"
+      "expect dp_state Data_Exchange\n"
+      "expect dp_state Wait_Cfg   # wrong on purpose\n"
+      "expect counter requests 5\n"
+      "exchange 2 outputs=01,02,03,04\n"
+      "expect outputs 01,02,03,05\n");
+  Lines walk;
+  Lines errors;
+  dpc31::Scenario s;
+  dpc31::ScenarioOutcome o;
+  EXPECT_EQ(dpc31::run_scenario_file(f.path(), walk.sink(), errors.sink(), &s, &o), 1);
+  ASSERT_EQ(errors.lines.size(), 2u);
+  EXPECT_EQ(errors.lines[0], f.path() + ":3: expected dp_state Wait_Cfg, got Data_Exchange");
+  EXPECT_EQ(errors.lines[1], f.path() + ":6: expected outputs 01 02 03 05, got 01 02 03 04");
+  EXPECT_EQ(o.passed, 2u);
+  EXPECT_EQ(o.failed, 2u);
+  // The run goes on after a failed expect: the exchange happened.
+  EXPECT_TRUE(walk.has("2 -> 5 Data_Exchange 01 02 03 04 => DL"));
+  EXPECT_TRUE(walk.has("line 3: expect dp_state Wait_Cfg: FAILED, got Data_Exchange"));
+}
+
+TEST(ScenarioRun, WalkIsDeterministic) {
+  const fs::path p = kTraces / "faults.scn";
+  Lines a;
+  Lines b;
+  ASSERT_EQ(dpc31::run_scenario_file(p.string(), a.sink(), {}), 0);
+  ASSERT_EQ(dpc31::run_scenario_file(p.string(), b.sink(), {}), 0);
+  EXPECT_EQ(a.lines, b.lines);
+}
+
+TEST(ScenarioRun, ShippedStartupWalksToDataExchange) {
+  bool found = false;
+  for (const fs::path& p : shipped()) {
+    if (p.filename().string().find("startup") == std::string::npos) continue;
+    found = true;
+    Lines walk;
+    Lines errors;
+    EXPECT_EQ(dpc31::run_scenario_file(p.string(), walk.sink(), errors.sink()), 0) << p;
+    EXPECT_TRUE(walk.has("dp_state Wait_Prm -> Wait_Cfg")) << p;
+    EXPECT_TRUE(walk.has("dp_state Wait_Cfg -> Data_Exchange")) << p;
+    EXPECT_TRUE(walk.has("wd_state Baud_Search -> Baud_Control")) << p;
+    EXPECT_TRUE(walk.lines.at(1).starts_with("[cycle ")) << p;
+  }
+  EXPECT_TRUE(found);
+}
+
+TEST(ScenarioRun, EveryShippedScenarioPasses) {
+  const std::vector<fs::path> all = shipped();
+  EXPECT_GE(all.size(), 7u);
+  for (const fs::path& p : all) {
+    Lines errors;
+    dpc31::ScenarioOutcome o;
+    EXPECT_EQ(dpc31::run_scenario_file(p.string(), {}, errors.sink(), nullptr, &o), 0) << p;
+    EXPECT_TRUE(errors.lines.empty()) << p << ": " << errors.lines.front();
+    EXPECT_GT(o.passed, 0u) << p;
+  }
+}
+
+// The command line, when it has been built next to this test binary.
+TEST(ScenarioRun, CliExitCodes) {
+  std::error_code ec;
+  const fs::path cli = fs::read_symlink("/proc/self/exe", ec).parent_path() / "dpc31";
+  if (ec || !fs::exists(cli)) GTEST_SKIP() << "dpc31 not built next to the tests";
+  const auto rc = [&](const std::string& args) {
+    const int st = std::system((cli.string() + " " + args + " >/dev/null 2>&1").c_str());
+    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  };
+  const TempFile bad("startup\nnonsense\n");
+  const TempFile failing("startup\nexpect dp_state Wait_Prm\n");
+  const TempFile empty("");
+  EXPECT_EQ(rc("run " + (kTraces / "startup_dpc31_1m5.scn").string()), 0);
+  EXPECT_EQ(rc("run --quiet " + failing.path()), 1);
+  EXPECT_EQ(rc("run " + bad.path()), 2);
+  EXPECT_EQ(rc("run " + empty.path()), 2);
+  EXPECT_EQ(rc("run /nonexistent.scn"), 2);
+  EXPECT_EQ(rc("run"), 2);
+  const std::string json = (failing.dir() / "out.json").string();
+  EXPECT_EQ(rc("run --quiet --json " + json + " " + failing.path()), 1);
+  std::ifstream j(json);
+  const std::string text((std::istreambuf_iterator<char>(j)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("\"failed\": 1"), std::string::npos) << text;
+  EXPECT_NE(text.find("\"dp_state\": \"Data_Exchange\""), std::string::npos) << text;
+  EXPECT_FALSE(fs::exists(json + ".tmp"));
+}
