@@ -111,6 +111,7 @@ std::uint32_t ChipCore::buffer_addr(RegId ptr_cell) const {
 void ChipCore::dout_received() {
   buffers.dout.d_to_n();
   buffers.n_cleared = false;
+  buffers.d_fresh = false;
   raise(irq::DX_Out);
 }
 
@@ -133,6 +134,8 @@ void ChipCore::failsafe_clear() {
     dout_clear();
     return;
   }
+  // While the user already holds the substitute values, a further clear changes nothing.
+  if (buffers.u_cleared && !buffers.dout_n_pending()) return;
   buffers.n_cl = true;
   raise(irq::DX_Out);
 }

@@ -62,7 +62,9 @@ struct BufferUnit {
   bool u_cleared = false;  // the buffer in U was cleared by the ASIC
   bool diag_flag = false;  // Status_Reg.Diag_Flag
   bool n_cl = false;       // dpc31: the clear buffer C is due at the next fetch
+  bool d_fresh = false;    // D holds outputs not yet passed on (Sync mode holds them there)
   bool c_swap_pending = false;
+  [[nodiscard]] bool dout_n_pending() const { return dout.n != 0 || n_cl; }
   void reset() { *this = BufferUnit{}; }
 };
 

@@ -388,6 +388,7 @@ std::optional<fdl::Frame> ChipCore::data_exchange(const fdl::Frame& req) {
   const std::size_t out_len = cell(RegId::R_Len_Dout_Buf);
   if (req.du.size() == out_len) {
     write_buffer(dout_ptr(buffers.dout.d), req.du);
+    buffers.d_fresh = true;
     if (!dp.sync_mode) dout_received();  // in Sync mode D holds the data until the next Sync
   } else if (req.du.empty() && mode0(kMode0_Spec_Clear_Mode)) {
     failsafe_clear();  // fail-safe: the master sends no outputs while in Clear

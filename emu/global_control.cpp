@@ -51,11 +51,11 @@ void ChipCore::global_control(const fdl::Frame& req) {
   if ((command & kGC_Clear_Data) != 0) {
     failsafe_clear();
   }
-  // Unsync wins over Sync; both hand the outputs received so far (D) to the user, unless
-  // Clear_Data already did.
+  // Unsync wins over Sync; both hand the outputs received since the last hand-over (D) to the
+  // user, unless Clear_Data already did or nothing new came.
   if ((command & (kGC_Sync | kGC_Unsync)) != 0) {
     dp.sync_mode = (command & kGC_Unsync) == 0;
-    if ((command & kGC_Clear_Data) == 0) dout_received();
+    if ((command & kGC_Clear_Data) == 0 && buffers.d_fresh) dout_received();
   }
   if ((command & (kGC_Freeze | kGC_Unfreeze)) != 0) {
     dp.freeze_mode = (command & kGC_Unfreeze) == 0;

@@ -48,9 +48,16 @@ std::uint32_t Responder::buffer(BusPort& c, RegId ptr_cell) const {
 void Responder::init(BusPort& c) {
   const ProfileDesc& p = c.chip().profile();
   const SlaveConfig& s = cfg_.slave;
+  // Only defined bits: a write to reserved bits would be reported by the chip.
+  const auto defined = [&](RegId id) {
+    const RegDesc* r = find_reg(p, id);
+    return static_cast<std::uint16_t>(~(r->rsvd | r->ign));
+  };
   write16(c, RegId::Int_Req_Reg, 0x0000);
-  write16(c, RegId::Int_Ack_Reg, 0xFFFF);
-  c.write(waddr(c.chip(), RegId::Mode_Reg1_R), 0xFF);
+  write16(c, RegId::Int_Ack_Reg,
+          static_cast<std::uint16_t>(defined(RegId::Int_Ack_Reg) & ~kHandledByReads));
+  c.write(waddr(c.chip(), RegId::Mode_Reg1_R),
+          static_cast<std::uint8_t>(defined(RegId::Mode_Reg1_R)));
   std::uint16_t mode0 = 0x0100;  // DP_Mode; EOI inactive time 1 us; user timer 1 ms
   if (cfg_.sync_supported) mode0 |= 0x0040;
   if (cfg_.freeze_supported) mode0 |= 0x0080;
@@ -106,15 +113,18 @@ void Responder::init(BusPort& c) {
   const std::uint32_t read_cfg = buffer(c, RegId::R_Read_Cfg_Buf_Ptr);
   for (std::size_t i = 0; i < s.cfg.size(); ++i)
     c.write(read_cfg + static_cast<std::uint32_t>(i), s.cfg[i]);
-  if (p.id == Profile::dpc31) {
-    const std::uint32_t sub = buffer(c, RegId::R_Dout_Buf_Ptr_C);
-    for (std::size_t i = 0; i < cfg_.substitute.size() && i < s.out_len; ++i) {
-      c.write(sub + static_cast<std::uint32_t>(i), cfg_.substitute[i]);
-    }
-  }
+  if (p.id == Profile::dpc31) refill_substitute(c);
   give_inputs(c);
   c.write(waddr(c.chip(), RegId::Mode_Reg1_S),
           static_cast<std::uint8_t>(kStart_SPC3 | kRes_User_WD));
+}
+
+// dpc31: after a cleared fetch the old U is the new clear buffer C; prepare the substitute values.
+void Responder::refill_substitute(BusPort& c) {
+  const std::uint32_t sub = buffer(c, RegId::R_Dout_Buf_Ptr_C);
+  for (std::size_t i = 0; i < cfg_.substitute.size() && i < cfg_.slave.out_len; ++i) {
+    c.write(sub + static_cast<std::uint32_t>(i), cfg_.substitute[i]);
+  }
 }
 
 void Responder::give_inputs(BusPort& c) {
@@ -160,6 +170,7 @@ void Responder::isr(BusPort& c) {
       Output o{c.cycle(), {}, (r & 0x08) != 0};
       for (std::uint32_t i = 0; i < cfg_.slave.out_len; ++i) o.data.push_back(c.read(base + i));
       outputs.push_back(std::move(o));
+      if (outputs.back().cleared && c.chip().profile().id == Profile::dpc31) refill_substitute(c);
     }
     give_inputs(c);
     if (cfg_.user_watchdog) c.write(waddr(c.chip(), RegId::Mode_Reg1_S), kRes_User_WD);

@@ -51,6 +51,7 @@ class Responder {
   std::uint16_t read16(BusPort& c, RegId id) const;
   std::uint32_t buffer(BusPort& c, RegId ptr_cell) const;
   void give_inputs(BusPort& c);
+  void refill_substitute(BusPort& c);
 
   ResponderConfig cfg_;
   std::uint32_t seg_shift_ = 3;

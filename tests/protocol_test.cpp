@@ -173,8 +173,9 @@ TEST_P(Protocol, GlobalControlSyncHoldsOutputsUntilUnsync) {
   EXPECT_EQ(b.chip.peek(b.chip.addr_of(RegId::R_GC_Command)), 0x20);
   b.master.data_exchange({2, 2, 2, 2});
   b.master.data_exchange({3, 3, 3, 3});
-  EXPECT_EQ(b.user.outputs.size(), before + 1);  // only the Sync's hand-over
-  b.master.global_control(0x20);                 // the next Sync delivers the newest outputs
+  // D held nothing new at the Sync (1,1,1,1 was already handed over); later data stays in D.
+  EXPECT_EQ(b.user.outputs.size(), before);
+  b.master.global_control(0x20);  // the next Sync delivers the newest outputs
   b.master.idle(2000);
   EXPECT_EQ(b.user.outputs.back().data, (Bytes{3, 3, 3, 3}));
   b.master.data_exchange({4, 4, 4, 4});
@@ -504,6 +505,30 @@ TEST(Dpc31, NewGcIntModeOneInterruptsOnEveryGlobalControl) {
   for (const auto& [cycle, ir] : b.user.interrupts) n += (ir & irq::New_GC_Command) != 0 ? 1 : 0;
   EXPECT_EQ(n, 3u);
   EXPECT_EQ(b.chip.peek(0x0866), 0x08);  // R_GC_Command (cell 3Ch at 0840h + 26h)
+}
+
+TEST(Dpc31, ClearBufferCycle) {
+  ResponderConfig rc;
+  rc.substitute = {0x5A, 0x5B, 0x5C, 0x5D};
+  Bench b(Profile::dpc31, 12'000'000, rc);
+  ASSERT_TRUE(b.master.startup());
+  b.master.data_exchange({1, 2, 3, 4});
+  b.master.global_control(0x02);  // Clear_Data: N_Cl, DX_Out, the user gets C
+  b.master.idle(2000);
+  EXPECT_EQ(b.user.outputs.back().data, (Bytes{0x5A, 0x5B, 0x5C, 0x5D}));
+  EXPECT_EQ(b.chip.read(0x0A) & 0x80, 0);  // N_Cl consumed by the fetch
+  const std::size_t fetched = b.user.outputs.size();
+  b.master.data_exchange({});  // fail-safe while the user already holds C: nothing new
+  b.master.idle(2000);
+  EXPECT_EQ(b.user.outputs.size(), fetched);
+  b.master.data_exchange({9, 9, 9, 9});  // Operate again
+  b.master.idle(2000);
+  EXPECT_EQ(b.user.outputs.back().data, (Bytes{9, 9, 9, 9}));
+  EXPECT_FALSE(b.user.outputs.back().cleared);
+  b.master.data_exchange({});  // Clear again: the C buffer the firmware refilled
+  b.master.idle(2000);
+  EXPECT_EQ(b.user.outputs.back().data, (Bytes{0x5A, 0x5B, 0x5C, 0x5D}));
+  EXPECT_TRUE(b.user.outputs.back().cleared);
 }
 
 // Every malformed frame class: the documented reaction (no answer) and its counter.
