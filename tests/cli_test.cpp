@@ -83,5 +83,7 @@ TEST(Cli, DemoRunsOnEveryProfile) {
     EXPECT_EQ(r.rc, 0) << p;
     EXPECT_NE(r.out.find("X/INT -> low (active)"), std::string::npos) << p;
     EXPECT_NE(r.out.find("User_Prm_Data_Okay = 00h"), std::string::npos) << p;
+    EXPECT_NE(r.out.find("dp_state Wait_Cfg -> Data_Exchange"), std::string::npos) << p;
+    EXPECT_NE(r.out.find("wd_state DP_Control -> Baud_Control"), std::string::npos) << p;
   }
 }

@@ -4,6 +4,8 @@
 
 #include <string>
 
+#include "../../emu/scenario.hpp"
+
 namespace dpc31::cli {
 
 namespace {
@@ -72,6 +74,42 @@ class Narrator {
   Chip& chip_;
   std::FILE* out_;
 };
+
+// The chip's main job: a DP master on the RS-485 side, the minimal firmware on the other.
+int run_dp_session(const ChipOptions& opt, std::FILE* out) {
+  const std::string text = fmt::format(R"(profile {}
+bus {}
+baud 1500000
+slave address=5 ident=0x0C31 cfg=13,23 in=4 out=4 wd=10,10 wd_on=1
+user inputs=A1,A2,A3,A4 spec_clear=1 substitute=5A,5A,5A,5A
+startup
+exchange 2 outputs=01,02,03,04
+gc clear
+exchange 1 outputs=-
+gc operate
+exchange 1 outputs=11,12,13,14
+silence 1100ms
+startup
+exchange 1 outputs=21,22,23,24
+expect dp_state Data_Exchange
+)",
+                                       profile_desc(opt.profile).name,
+                                       opt.bus == BusMode::intel ? "intel" : "motorola");
+  fmt::print(out,
+             "\n# DP session: master 2 finds slave 5 at 1.5 Mbaud (after the chip's baud search),\n"
+             "# parameterises it, exchanges data, sends Clear and a fail-safe telegram, then the cable\n"
+             "# is pulled for 1.1 s (the DP watchdog, 1 s, expires) and the master starts over.\n");
+  Scenario sc;
+  ScenarioError err;
+  if (!parse_scenario(text, "<demo>", sc, err)) {
+    fmt::print(stderr, "{}\n", err.message);
+    return 2;
+  }
+  const ScenarioOutcome o = run_scenario(
+      sc, [out](const std::string& line) { fmt::print(out, "{}\n", line); },
+      [](const std::string& line) { fmt::print(stderr, "{}\n", line); });
+  return o.ok() ? 0 : 1;
+}
 
 }  // namespace
 
@@ -143,9 +181,9 @@ int run_demo(ChipOptions opt, std::FILE* out) {
   fmt::print(out, "                   Status_Reg = {:04X}h (bit 0 = 0: Offline)\n", status);
   n.write16(RegId::Int_Ack_Reg, irq::MAC_Reset);
   n.write(RegId::Mode_Reg1_S, 0x02);
-  fmt::print(out, "\ndone at cycle {} ({:.3f} ms of chip time)\n", chip.cycle(),
+  fmt::print(out, "\nregister session done at cycle {} ({:.3f} ms of chip time)\n", chip.cycle(),
              static_cast<double>(chip.cycle()) * 1e3 / chip.clock_hz());
-  return 0;
+  return run_dp_session(opt, out);
 }
 
 }  // namespace dpc31::cli
