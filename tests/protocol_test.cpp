@@ -577,6 +577,19 @@ TEST_P(Malformed, EachClassIsCountedAndNotAnswered) {
   expect_silent(b.master.fdl_status(), n.offline, "offline");
 }
 
+TEST_P(Malformed, GlitchIsABadStartBit) {
+  Bench b(GetParam(), 12'000'000);
+  ASSERT_TRUE(b.master.startup());
+  // A 1-clock low pulse after a long idle: falls at c, rises at c + 1, before the start sample
+  // at c + T/2 = c + 2: the character has a bad start bit and is thrown away.
+  const std::uint64_t c = b.chip.cycle() + 1000;
+  b.chip.drive_rxd(c, false);
+  b.chip.drive_rxd(c + 1, true);
+  b.master.idle(2000);
+  EXPECT_EQ(b.chip.fdl_counters().start_bit, 1u);
+  EXPECT_TRUE(b.master.data_exchange({1, 2, 3, 4}).answer);
+}
+
 TEST_P(Malformed, RequestWithoutTsynIsIgnored) {
   Bench b(GetParam(), 12'000'000);
   ASSERT_TRUE(b.master.startup());
