@@ -144,6 +144,7 @@ void ChipCore::dout_clear() {
   clear_ram(buffer_addr(dout_ptr(buffers.dout.d)), cell(RegId::R_Len_Dout_Buf));
   buffers.dout.d_to_n();
   buffers.n_cleared = true;
+  buffers.d_fresh = false;
   raise(irq::DX_Out);
 }
 

@@ -146,6 +146,9 @@ struct ChipCore {
   std::optional<fdl::Frame> set_slave_add(const fdl::Frame& req);
   std::optional<fdl::Frame> data_exchange(const fdl::Frame& req);
   void global_control(const fdl::Frame& req);
+  void apply_global_control(std::uint8_t command);
+  void prm_accepted();
+  void cfg_accepted();
   bool user_watchdog_tick();
   bool receive_via_aux(int sel_bit, RegId target_ptr, RegId len_cell,
                        std::span<const std::uint8_t> du);

@@ -280,9 +280,24 @@ std::optional<fdl::Frame> ChipCore::set_prm(const fdl::Frame& req) {
                           : du.size() > 7 && (du[7] & kSpec_WD_Base_1ms) != 0;
   watchdog_parameterise((status & kWD_On) != 0, du[1], du[2], wd_1ms);
   receive_via_aux(0, RegId::R_Prm_Buf_Ptr, RegId::R_Len_Prm_Data, du);
+  prm_accepted();
+  return fdl::sc();
+}
+
+// The Prm buffer holds a new, checked Set_Prm: the user's turn.
+void ChipCore::prm_accepted() {
   dp.prm.arrived();
   raise(irq::New_Prm_Data);
-  return fdl::sc();
+}
+
+// The Cfg buffer holds a new Chk_Cfg: leave Data_Exchange until the user has checked it.
+void ChipCore::cfg_accepted() {
+  if (dp.state == DpState::Data_Exchange) {
+    dp.state = DpState::Wait_Cfg;
+    raise(irq::Go_Leave_Data_Exchange);
+  }
+  dp.cfg.arrived();
+  raise(irq::New_Cfg_Data);
 }
 
 std::optional<fdl::Frame> ChipCore::chk_cfg(const fdl::Frame& req) {
@@ -297,12 +312,7 @@ std::optional<fdl::Frame> ChipCore::chk_cfg(const fdl::Frame& req) {
     ++counters.no_resource;
     return short_answer(*this, req, Response::RR);
   }
-  if (dp.state == DpState::Data_Exchange) {
-    dp.state = DpState::Wait_Cfg;
-    raise(irq::Go_Leave_Data_Exchange);
-  }
-  dp.cfg.arrived();
-  raise(irq::New_Cfg_Data);
+  cfg_accepted();
   return fdl::sc();
 }
 

@@ -24,9 +24,13 @@ void ChipCore::global_control(const fdl::Frame& req) {
     log(LogLevel::info, "Global_Control from {}: not accepted in this state", req.sa);
     return;
   }
-  const std::uint8_t command = req.du[0];
   const std::uint8_t groups = req.du[1];
   if (groups != 0 && (groups & dp.group_ident) == 0) return;  // addressed to other groups
+  apply_global_control(req.du[0]);
+}
+
+// The block-level part: what an accepted Control_Command does to buffers and interrupts.
+void ChipCore::apply_global_control(std::uint8_t command) {
   // The option bits: dpc31 Param_Reg, VPC3+ Mode_Reg2 (bit 0 interrupt mode, bit 1 no check).
   const std::uint16_t options = prof->id == Profile::dpc31      ? latch[idx(RegId::Param_Reg)]
                                 : prof->id == Profile::vpc3plus ? latch[idx(RegId::Mode_Reg2)]
