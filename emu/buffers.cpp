@@ -162,12 +162,19 @@ void ChipCore::diag_send_begin() {
   }
 }
 
-void ChipCore::diag_send_end() {
+bool ChipCore::sent_diag_has_stat_diag() const {
   static constexpr RegId kPtr[] = {RegId::R_Diag_Buf_Ptr1, RegId::R_Diag_Buf_Ptr2};
   for (int k = 0; k < 2; ++k) {
+    if (buffers.diag.buf[k] == DiagState::Asic_Send_Mode) return (mem[buffer_addr(kPtr[k])] & kStat_Diag) != 0;
+  }
+  return false;
+}
+
+// Diag_Flag stays set while the sent buffer says Stat_Diag.
+void ChipCore::diag_send_end(bool stat_diag) {
+  for (int k = 0; k < 2; ++k) {
     if (buffers.diag.buf[k] != DiagState::Asic_Send_Mode) continue;
-    // Diag_Flag stays set while the sent buffer says Stat_Diag.
-    buffers.diag_flag = (mem[buffer_addr(kPtr[k])] & kStat_Diag) != 0;
+    buffers.diag_flag = stat_diag;
     if (buffers.diag.buf[1 - k] == DiagState::Asic) {  // the user handed a newer one meanwhile
       buffers.diag.buf[k] = DiagState::User;
       raise(irq::Diag_Buffer_Changed);
@@ -176,6 +183,15 @@ void ChipCore::diag_send_end() {
     }
     return;
   }
+}
+
+void ChipCore::outputs_received() {
+  buffers.d_fresh = true;
+  if (!dp.sync_mode) dout_received();  // in Sync mode D holds the data until the next Sync
+}
+
+void ChipCore::inputs_due() {
+  if (!dp.freeze_mode) din_fetch();
 }
 
 }  // namespace dpc31

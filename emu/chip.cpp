@@ -117,20 +117,11 @@ void Chip::asic_dout_received() { core_->dout_received(); }
 void Chip::asic_dout_clear() { core_->dout_clear(); }
 std::uint8_t Chip::asic_din_fetch() { return core_->din_fetch(); }
 void Chip::asic_diag_send_begin() { core_->diag_send_begin(); }
-void Chip::asic_diag_send_end() { core_->diag_send_end(); }
+void Chip::asic_diag_send_end() { core_->diag_send_end(core_->sent_diag_has_stat_diag()); }
 
-void Chip::asic_prm_received() {
-  core_->dp.prm.arrived();
-  core_->raise(irq::New_Prm_Data);
-}
-void Chip::asic_cfg_received() {
-  core_->dp.cfg.arrived();
-  core_->raise(irq::New_Cfg_Data);
-}
-void Chip::asic_ssa_received() {
-  core_->dp.ssa_free = false;
-  core_->raise(irq::New_SSA_Data);
-}
+void Chip::asic_prm_received() { core_->prm_accepted(); }
+void Chip::asic_cfg_received() { core_->cfg_accepted(); }
+void Chip::asic_ssa_received() { core_->ssa_accepted(); }
 bool Chip::ssa_buffer_free() const { return core_->dp.ssa_free; }
 
 }  // namespace dpc31

@@ -85,8 +85,11 @@ struct ChipCore {
 
   // --- register file (regfile.cpp) ---
   void reset();
-  std::uint8_t bus_read(std::uint32_t addr);
+  std::uint8_t bus_read(std::uint32_t addr);  // 4 clocks, then the access
   void bus_write(std::uint32_t addr, std::uint8_t value);
+  // The access itself, in the current cycle (the lockstep harness strobes it per cycle).
+  std::uint8_t read_now(std::uint32_t addr);
+  void write_now(std::uint32_t addr, std::uint8_t value);
   std::uint8_t peek(std::uint32_t addr) const;
   bool poke(std::uint32_t addr, std::uint8_t value);
   [[nodiscard]] const RegDesc* reg(RegId id) const;
@@ -129,7 +132,11 @@ struct ChipCore {
   void dout_clear();
   std::uint8_t din_fetch();
   void diag_send_begin();
-  void diag_send_end();
+  void diag_send_end(bool stat_diag);
+  [[nodiscard]] bool sent_diag_has_stat_diag() const;
+  void outputs_received();  // Data_Exchange wrote the outputs into D
+  void inputs_due();        // about to send inputs
+  void ssa_accepted();
   void failsafe_clear();
   [[nodiscard]] std::uint32_t buffer_addr(RegId ptr_cell) const;
   [[nodiscard]] static RegId dout_ptr(std::uint8_t buffer);  // 1..3
@@ -182,7 +189,7 @@ struct ChipCore {
 
  private:
   std::uint32_t decode(std::uint32_t addr, bool& violation) const;
-  // Time of the access, address-bus width, RAM access violation: the decoded address.
+  // Address-bus width, RAM access violation: the decoded address.
   std::uint32_t begin_access(std::uint32_t addr, std::string_view what);
   void note_violation(std::uint32_t addr, std::uint32_t mapped);
   void write_reg(const RegDesc& r, std::uint32_t offset, std::uint8_t value);

@@ -348,7 +348,7 @@ std::optional<fdl::Frame> ChipCore::read_io(const fdl::Frame& req) {
     return short_answer(*this, req, Response::RS);
   }
   if (fdl::sap_number(*req.dsap) == sap::Rd_Inp) {
-    if (!dp.freeze_mode) din_fetch();
+    inputs_due();
     return sap_answer(*this, req, Response::DL,
                       read_buffer(din_ptr(buffers.din.d), cell(RegId::R_Len_Din_Buf)));
   }
@@ -384,9 +384,13 @@ std::optional<fdl::Frame> ChipCore::set_slave_add(const fdl::Frame& req) {
   log(LogLevel::info, "Set_Slave_Add: station {} -> {}", dp.station, du[0]);
   dp.station = du[0];  // the chip answers at the new address from now on
   dp.no_add_change = du[3] != 0;
+  ssa_accepted();
+  return ack;
+}
+
+void ChipCore::ssa_accepted() {
   dp.ssa_free = false;
   raise(irq::New_SSA_Data);
-  return ack;
 }
 
 std::optional<fdl::Frame> ChipCore::data_exchange(const fdl::Frame& req) {
@@ -398,8 +402,7 @@ std::optional<fdl::Frame> ChipCore::data_exchange(const fdl::Frame& req) {
   const std::size_t out_len = cell(RegId::R_Len_Dout_Buf);
   if (req.du.size() == out_len) {
     write_buffer(dout_ptr(buffers.dout.d), req.du);
-    buffers.d_fresh = true;
-    if (!dp.sync_mode) dout_received();  // in Sync mode D holds the data until the next Sync
+    outputs_received();
   } else if (req.du.empty() && mode0(kMode0_Spec_Clear_Mode)) {
     failsafe_clear();  // fail-safe: the master sends no outputs while in Clear
   } else {
@@ -408,7 +411,7 @@ std::optional<fdl::Frame> ChipCore::data_exchange(const fdl::Frame& req) {
         out_len);
     return short_answer(*this, req, Response::RS);
   }
-  if (!dp.freeze_mode) din_fetch();
+  inputs_due();
   const std::size_t in_len = cell(RegId::R_Len_Din_Buf);
   const Response code = buffers.diag_flag ? Response::DH : Response::DL;
   if (in_len == 0) return code == Response::DL ? fdl::sc() : short_answer(*this, req, code);
@@ -436,7 +439,7 @@ bool ChipCore::user_watchdog_tick() {
 void ChipCore::dp_response_sent() {
   if (!diag_in_flight) return;
   diag_in_flight = false;
-  diag_send_end();
+  diag_send_end(sent_diag_has_stat_diag());
 }
 
 }  // namespace dpc31

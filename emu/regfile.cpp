@@ -178,7 +178,6 @@ std::uint16_t ChipCore::reg_value(RegId id) const {
 }
 
 std::uint32_t ChipCore::begin_access(std::uint32_t addr, std::string_view what) {
-  advance(prof->bus_access_cycles);
   if ((addr >> prof->address_bits) != 0) {
     log(LogLevel::warn, "{} at {:#x}: beyond the {}-bit address bus, upper bits ignored", what,
         addr, prof->address_bits);
@@ -190,6 +189,16 @@ std::uint32_t ChipCore::begin_access(std::uint32_t addr, std::string_view what) 
 }
 
 std::uint8_t ChipCore::bus_read(std::uint32_t addr) {
+  advance(prof->bus_access_cycles);
+  return read_now(addr);
+}
+
+void ChipCore::bus_write(std::uint32_t addr, std::uint8_t value) {
+  advance(prof->bus_access_cycles);
+  write_now(addr, value);
+}
+
+std::uint8_t ChipCore::read_now(std::uint32_t addr) {
   const std::uint32_t a = begin_access(addr, "read");
   const std::uint16_t i = rd_map[a];
   if (i == kNoReg) {
@@ -227,7 +236,7 @@ std::uint8_t ChipCore::bus_read(std::uint32_t addr) {
   return static_cast<std::uint8_t>(v >> (8 * r.placement(bus)[offset]));
 }
 
-void ChipCore::bus_write(std::uint32_t addr, std::uint8_t value) {
+void ChipCore::write_now(std::uint32_t addr, std::uint8_t value) {
   const std::uint32_t a = begin_access(addr, "write");
   const std::uint16_t i = wr_map[a];
   if (i == kNoReg) {
