@@ -3,9 +3,11 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <sstream>
 #include <string>
 #include <vector>
 
+#include "cosim.hpp"
 #include "demo.hpp"
 #include "dpc31/chip.hpp"
 #include "regfmt.hpp"
@@ -52,6 +54,30 @@ int main(int argc, char** argv) {
   run->add_flag("--quiet", run_opt.quiet, "print no state walk, only failures");
   run->add_option("--json", run_opt.json, "write a JSON summary to this file");
 
+  dpc31::cli::CosimOptions cos;
+  std::string cos_shard = "1/1";
+  std::string cos_bus = "intel";
+  auto* cosim = app.add_subcommand(
+      "cosim", "lockstep: the C++ blocks against the Verilated RTL, every cycle");
+  cosim->add_option("--profile", cos.profile_name, "chip profile")->check(CLI::IsMember(profiles));
+  cosim->add_option("--bus", cos_bus, "bus byte order")
+      ->check(CLI::IsMember({"intel", "motorola"}));
+  cosim->add_option("--seeds", cos.seeds, "number of random seeds")
+      ->check(CLI::Range(1, 100'000'000));
+  cosim->add_option("--seed-base", cos.seed_base, "first seed");
+  cosim->add_option("--cycles", cos.cycles, "cycles per seed")->check(CLI::Range(1, 100'000'000));
+  cosim->add_option("--shard", cos_shard, "K/N: run the K-th of N equal parts of the seed range");
+  cosim->add_option("--junit", cos.junit, "write JUnit XML results to this file");
+  cosim->add_option("--vcd", cos.vcd_dir,
+                    "on divergence, write emu.vcd and rtl.vcd around it here");
+  cosim->add_option("--window", cos.window,
+                    "cycles before and after the divergence in the VCD window");
+  cosim->add_option("--out", cos.out_dir, "where shrunk stimulus traces go (default .)");
+  cosim->add_option("--replay", cos.replay, "replay a stimulus trace instead of random seeds");
+  cosim->add_option("--mutant", cos.mutant, "use an RTL mutant (to see the check fail)");
+  cosim->add_flag("--keep-going", cos.keep_going, "do not stop at the first divergent seed");
+  cosim->add_flag("--quiet", cos.quiet, "no report text, only the JSON summary");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -60,6 +86,22 @@ int main(int argc, char** argv) {
   }
 
   if (run->parsed()) return dpc31::cli::run_scenario_command(run_opt, stdout, stderr);
+  if (cosim->parsed()) {
+    dpc31::parse_profile(cos.profile_name, cos.profile);
+    cos.bus = cos_bus == "intel" ? dpc31::BusMode::intel : dpc31::BusMode::motorola;
+    unsigned k = 0;
+    unsigned n = 0;
+    char slash = 0;
+    std::istringstream sh(cos_shard);
+    if (!(sh >> k >> slash >> n) || slash != '/' || n == 0 || k == 0 || k > n || !sh.eof()) {
+      fmt::print(stderr, "dpc31 cosim: --shard must be K/N with 1 <= K <= N, not '{}'\n",
+                 cos_shard);
+      return 2;
+    }
+    cos.shard = k;
+    cos.shards = n;
+    return dpc31::cli::run_cosim(cos);
+  }
   if (demo->parsed()) {
     dpc31::ChipOptions opt;
     opt.profile = to_profile(demo_profile);

@@ -1,0 +1,163 @@
+// dpc31 cosim: the C++ blocks against the Verilated RTL, cycle by cycle, over seeded random
+// stimulus (or a replayed trace). Exit 0 no divergence, 1 divergence, 2 bad input.
+#include "cosim.hpp"
+
+#include <fmt/core.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "lockstep.hpp"
+
+namespace dpc31::cli {
+
+namespace {
+
+bool write_atomically(const std::string& path, const std::string& text, std::string& error) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream f(tmp, std::ios::binary);
+    if (!f || !(f << text) || !f.flush()) {
+      error = fmt::format("{}: cannot write", path);
+      std::filesystem::remove(tmp);
+      return false;
+    }
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) error = fmt::format("{}: {}", path, ec.message());
+  return !ec;
+}
+
+std::string junit(const CosimOptions& o, const nlohmann::json& results) {
+  std::string cases;
+  int failures = 0;
+  for (const auto& r : results) {
+    const std::string name =
+        fmt::format("{}.seed{}", o.profile_name, r["seed"].get<std::uint64_t>());
+    if (r["diverged"].get<bool>()) {
+      ++failures;
+      cases += fmt::format(
+          "  <testcase classname=\"cosim\" name=\"{}\"><failure message=\"divergence at cycle "
+          "{}\"/></testcase>\n",
+          name, r["cycle"].get<std::int64_t>());
+    } else {
+      cases += fmt::format("  <testcase classname=\"cosim\" name=\"{}\"/>\n", name);
+    }
+  }
+  return fmt::format(
+      "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuite name=\"dpc31-cosim\" tests=\"{}\" "
+      "failures=\"{}\">\n{}</testsuite>\n",
+      results.size(), failures, cases);
+}
+
+}  // namespace
+
+int run_cosim(const CosimOptions& o) {
+  using namespace dpc31::cosim;
+  const DutOptions dut{o.profile, o.bus};
+  if (!make_rtl_dut(dut, o.mutant)) {
+    fmt::print(stderr,
+               "dpc31 cosim: no RTL model for profile {} mutant '{}' (built mutants use dpc31)\n",
+               o.profile_name, o.mutant);
+    return 2;
+  }
+  // Seeds of this shard: a contiguous part of [seed_base, seed_base + seeds).
+  const std::uint64_t lo = o.seed_base + o.seeds * (o.shard - 1) / o.shards;
+  const std::uint64_t hi = o.seed_base + o.seeds * o.shard / o.shards;
+  std::vector<std::pair<std::uint64_t, Stimulus>> runs;
+  if (!o.replay.empty()) {
+    std::ifstream f(o.replay);
+    std::stringstream text;
+    text << f.rdbuf();
+    Stimulus s;
+    std::string error;
+    if (!f || !parse_trace(text.str(), o.replay, s, error)) {
+      fmt::print(stderr, "{}\n", error.empty() ? o.replay + ": cannot read" : error);
+      return 2;
+    }
+    runs.emplace_back(0, std::move(s));
+  }
+  const bool tty = isatty(STDOUT_FILENO) != 0 && !o.quiet;
+  nlohmann::json results = nlohmann::json::array();
+  std::uint64_t diverged = 0;
+  std::uint64_t cycles = 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::uint64_t total = runs.empty() ? hi - lo : 1;
+  for (std::uint64_t i = 0; i < total; ++i) {
+    const std::uint64_t seed = runs.empty() ? lo + i : 0;
+    const Stimulus s = runs.empty() ? random_stimulus({o.profile, seed, o.cycles}) : runs[0].second;
+    const RunResult r = run_lockstep(s, dut, o.mutant);
+    cycles += r.divergence >= 0 ? static_cast<std::uint64_t>(r.divergence) + 1 : s.size();
+    nlohmann::json entry = {
+        {"seed", seed}, {"diverged", r.divergence >= 0}, {"cycle", r.divergence}};
+    if (r.divergence >= 0) {
+      ++diverged;
+      if (!o.quiet) {
+        fmt::print(stderr, "{}seed {}: ", tty ? "\n" : "", seed);
+        for (const std::string& line : r.report) fmt::print(stderr, "{}\n", line);
+      }
+      entry["signals"] = r.signals;
+      const Stimulus small = shrink(s, dut, o.mutant);
+      const std::string dir = o.out_dir.empty() ? "." : o.out_dir;
+      std::filesystem::create_directories(dir);
+      const std::string trace = fmt::format("{}/cosim-{}-seed{}.trace", dir, o.profile_name, seed);
+      std::string error;
+      const std::string header =
+          fmt::format("profile {}\nseed {}\nmutant {}\nshrunk from {} to {} cycles", o.profile_name,
+                      seed, o.mutant.empty() ? "-" : o.mutant, r.divergence + 1, small.size());
+      if (write_atomically(trace, write_trace(small, header), error)) {
+        entry["trace"] = trace;
+        if (!o.quiet) fmt::print(stderr, "  shrunk to {} cycles: {}\n", small.size(), trace);
+      } else {
+        fmt::print(stderr, "{}\n", error);
+      }
+      if (!o.vcd_dir.empty()) {
+        const std::uint64_t d = small.size() - 1;
+        const std::uint64_t from = d > o.window ? d - o.window : 0;
+        if (write_window(small, dut, o.mutant, from, d + o.window + 1, o.vcd_dir, error)) {
+          entry["vcd"] = {o.vcd_dir + "/emu.vcd", o.vcd_dir + "/rtl.vcd"};
+        } else {
+          fmt::print(stderr, "{}\n", error);
+        }
+      }
+    }
+    results.push_back(entry);
+    if (tty) {
+      const std::size_t width = 40;
+      const std::size_t done = (i + 1) * width / total;
+      fmt::print("\r[{}{}] {}/{} seeds, {} divergent", std::string(done, '#'),
+                 std::string(width - done, '.'), i + 1, total, diverged);
+      std::fflush(stdout);
+    }
+    if (diverged > 0 && !o.keep_going) break;
+  }
+  if (tty) fmt::print("\n");
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const nlohmann::json summary = {
+      {"profile", o.profile_name},
+      {"mutant", o.mutant},
+      {"seeds", {{"from", lo}, {"to", hi}, {"run", results.size()}}},
+      {"cycles_per_seed", o.cycles},
+      {"cycles", cycles},
+      {"seconds", secs},
+      {"lockstep_cycles_per_second", secs > 0 ? static_cast<double>(cycles) / secs : 0.0},
+      {"divergent_seeds", diverged},
+      {"results", results}};
+  fmt::print("{}\n", summary.dump(2));
+  if (!o.junit.empty()) {
+    std::string error;
+    if (!write_atomically(o.junit, junit(o, results), error)) {
+      fmt::print(stderr, "{}\n", error);
+      return 2;
+    }
+  }
+  return diverged == 0 ? 0 : 1;
+}
+
+}  // namespace dpc31::cli

@@ -1,0 +1,31 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "dpc31/regdesc.hpp"
+
+namespace dpc31::cli {
+
+struct CosimOptions {
+  Profile profile = Profile::dpc31;
+  std::string profile_name = "dpc31";
+  BusMode bus = BusMode::intel;
+  std::uint64_t seeds = 10;
+  std::uint64_t seed_base = 1;
+  std::uint64_t cycles = 20'000;
+  std::uint64_t shard = 1;  // 1..shards
+  std::uint64_t shards = 1;
+  std::string junit;
+  std::string vcd_dir;
+  std::string out_dir;  // where shrunk traces go
+  std::string replay;   // a trace file instead of random seeds
+  std::string mutant;   // an RTL mutant instead of the real model
+  std::uint64_t window = 50;
+  bool keep_going = false;
+  bool quiet = false;
+};
+
+int run_cosim(const CosimOptions& o);
+
+}  // namespace dpc31::cli

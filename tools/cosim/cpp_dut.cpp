@@ -1,0 +1,150 @@
+// The C++ blocks as a Dut: a ChipCore stepped one clock at a time, the bus access applied in its
+// completion cycle, the events through the same actions the protocol engine uses.
+#include <fmt/format.h>
+
+#include "../../emu/core.hpp"
+#include "dpc31/reg_ids.hpp"
+#include "dut.hpp"
+
+namespace dpc31::cosim {
+
+namespace {
+
+constexpr std::array<std::string_view, Outputs::kCount> kNames = {
+    "x_int",         "irr",         "imr",         "mode_reg0", "mode_reg1",    "started",
+    "dp_state",      "prm_pending", "cfg_pending", "ssa_free",  "prm_fault",    "cfg_fault",
+    "not_supported", "sync_mode",   "freeze_mode", "diag_flag", "dout_sm",      "din_sm",
+    "diag_sm",       "u_cleared",   "n_cleared",   "n_cl",      "d_fresh",      "dout_ptr1",
+    "dout_ptr2",     "dout_ptr3",   "dout_ptr_c",  "cfg_ptr",   "read_cfg_ptr", "gc_command",
+    "bus_rdata"};
+constexpr std::array<int, Outputs::kCount> kWidths = {
+    1, 16, 16, 16, 8, 1, 2, 1, 1, 1, 1, 1, 1, 1, 1, 1, 8, 8, 4, 1, 1, 1, 1, 8, 8, 8, 8, 8, 8, 8, 8};
+
+class CppDut final : public Dut {
+ public:
+  explicit CppDut(const DutOptions& o) : core_(ChipOptions{o.profile, o.bus, 0}) {
+    core_.sink = nullptr;
+    core_.reset();
+  }
+
+  void step(const Inputs& in) override {
+    if (in.rst) {
+      core_.reset();  // the cycle count restarts with the hardware
+      rdata_ = 0;
+      return;
+    }
+    core_.advance(1);
+    if (in.ev_irq != 0) core_.raise(in.ev_irq);
+    if (in.ev_leave_master) core_.leave_master();
+    if (in.ev_gc) core_.apply_global_control(in.gc_cmd);
+    if (in.ev_dout) core_.outputs_received();
+    if (in.ev_failsafe) core_.failsafe_clear();
+    if (in.ev_din) core_.inputs_due();
+    if (in.ev_diag_begin) core_.diag_send_begin();
+    if (in.ev_diag_end) core_.diag_send_end(in.stat_diag);
+    if (in.ev_prm) core_.prm_accepted();
+    if (in.ev_cfg) core_.cfg_accepted();
+    if (in.ev_ssa) core_.ssa_accepted();
+    if (in.bus_rd) rdata_ = core_.read_now(in.bus_addr);
+    if (in.bus_wr) core_.write_now(in.bus_addr, in.bus_wdata);
+    core_.update_irq_line();
+  }
+
+  [[nodiscard]] Outputs outputs() const override {
+    const ChipCore& c = core_;
+    auto latch = [&](RegId id) { return std::uint32_t{c.latch[ChipCore::idx(id)]}; };
+    auto cell = [&](RegId id) -> std::uint32_t { return c.reg(id) != nullptr ? c.cell(id) : 0; };
+    const bool int_pol = (latch(RegId::Mode_Reg0) & 0x10) != 0;
+    const bool active = c.irq_active();
+    const BufferUnit& b = c.buffers;
+    Outputs o;
+    o.v = {int_pol ? active : !active,
+           latch(RegId::Int_Req_Reg),
+           latch(RegId::Int_Mask_Reg),
+           latch(RegId::Mode_Reg0),
+           latch(RegId::Mode_Reg1),
+           c.started,
+           static_cast<std::uint32_t>(c.dp.state),
+           c.dp.prm.pending,
+           c.dp.cfg.pending,
+           c.dp.ssa_free,
+           c.dp.prm_fault,
+           c.dp.cfg_fault,
+           c.dp.not_supported,
+           c.dp.sync_mode,
+           c.dp.freeze_mode,
+           b.diag_flag,
+           b.dout.sm(),
+           b.din.sm(),
+           b.diag.sm(),
+           b.u_cleared,
+           b.n_cleared,
+           b.n_cl,
+           b.d_fresh,
+           cell(RegId::R_Dout_Buf_Ptr1),
+           cell(RegId::R_Dout_Buf_Ptr2),
+           cell(RegId::R_Dout_Buf_Ptr3),
+           cell(RegId::R_Dout_Buf_Ptr_C),
+           cell(RegId::R_Cfg_Buf_Ptr),
+           cell(RegId::R_Read_Cfg_Buf_Ptr),
+           cell(RegId::R_GC_Command),
+           rdata_};
+    return o;
+  }
+
+  [[nodiscard]] std::string name() const override { return "EMU"; }
+
+ private:
+  ChipCore core_;
+  std::uint8_t rdata_ = 0;
+};
+
+}  // namespace
+
+const std::array<std::string_view, Outputs::kCount>& Outputs::names() { return kNames; }
+const std::array<int, Outputs::kCount>& Outputs::widths() { return kWidths; }
+
+bool Inputs::idle() const { return *this == Inputs{}; }
+
+std::string Inputs::describe() const {
+  std::string s;
+  auto add = [&s](const std::string& part) {
+    if (!s.empty()) s += ' ';
+    s += part;
+  };
+  if (rst) add("rst");
+  if (bus_rd) add(fmt::format("rd {:04x}", bus_addr));
+  if (bus_wr) add(fmt::format("wr {:04x}<-{:02x}", bus_addr, bus_wdata));
+  if (ev_irq != 0) add(fmt::format("ev_irq({:04x})", ev_irq));
+  if (ev_leave_master) add("ev_leave_master");
+  if (ev_gc) add(fmt::format("ev_gc({:02x})", gc_cmd));
+  if (ev_dout) add("ev_dout");
+  if (ev_failsafe) add("ev_failsafe");
+  if (ev_din) add("ev_din");
+  if (ev_diag_begin) add("ev_diag_begin");
+  if (ev_diag_end) add(fmt::format("ev_diag_end(stat={})", stat_diag ? 1 : 0));
+  if (ev_prm) add("ev_prm");
+  if (ev_cfg) add("ev_cfg");
+  if (ev_ssa) add("ev_ssa");
+  return s;
+}
+
+std::unique_ptr<Dut> make_cpp_dut(const DutOptions& o) { return std::make_unique<CppDut>(o); }
+
+bool compared_read(const ProfileDesc& p, std::uint16_t addr) {
+  static constexpr RegId kCells[] = {RegId::R_Dout_Buf_Ptr1, RegId::R_Dout_Buf_Ptr2,
+                                     RegId::R_Dout_Buf_Ptr3, RegId::R_Dout_Buf_Ptr_C,
+                                     RegId::R_Cfg_Buf_Ptr,   RegId::R_Read_Cfg_Buf_Ptr,
+                                     RegId::R_GC_Command};
+  for (RegId id : kCells) {
+    const RegDesc* r = find_reg(p, id);
+    if (r != nullptr && r->read_addr == addr) return true;
+  }
+  for (const RegDesc& r : p.regs) {
+    if (r.kind == Kind::cell || r.read_addr < 0) continue;
+    if (addr >= r.read_addr && addr < r.read_addr + r.bytes()) return true;
+  }
+  return false;
+}
+
+}  // namespace dpc31::cosim

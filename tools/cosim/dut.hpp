@@ -1,0 +1,75 @@
+// The block-level ports of docs/golden-model.md, and the Dut interface the lockstep harness
+// drives: one adapter for the C++ blocks, one per Verilated model, and any user RTL with the same
+// ports.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "dpc31/regdesc.hpp"
+
+namespace dpc31::cosim {
+
+struct Inputs {
+  bool rst = false;
+  bool bus_rd = false;
+  bool bus_wr = false;
+  std::uint16_t bus_addr = 0;
+  std::uint8_t bus_wdata = 0;
+  std::uint16_t ev_irq = 0;
+  bool ev_leave_master = false;
+  bool ev_gc = false;
+  std::uint8_t gc_cmd = 0;
+  bool ev_dout = false;
+  bool ev_failsafe = false;
+  bool ev_din = false;
+  bool ev_diag_begin = false;
+  bool ev_diag_end = false;
+  bool stat_diag = false;
+  bool ev_prm = false;
+  bool ev_cfg = false;
+  bool ev_ssa = false;
+
+  [[nodiscard]] bool idle() const;
+  [[nodiscard]] std::string describe() const;  // "wr 0008<-02 ev_gc(08)"; empty when idle
+  bool operator==(const Inputs&) const = default;
+};
+
+// Every compared output, in a fixed order (names are the Verilog port names).
+struct Outputs {
+  static constexpr std::size_t kCount = 31;
+  std::array<std::uint32_t, kCount> v{};
+  static const std::array<std::string_view, kCount>& names();
+  static const std::array<int, kCount>& widths();
+  // Index of bus_rdata, compared only in cycles with a read of a compared address.
+  static constexpr std::size_t kRdata = kCount - 1;
+};
+
+class Dut {
+ public:
+  virtual ~Dut() = default;
+  // One clock: apply the inputs of this cycle, then the outputs show the state after it.
+  virtual void step(const Inputs& in) = 0;
+  [[nodiscard]] virtual Outputs outputs() const = 0;
+  [[nodiscard]] virtual std::string name() const = 0;
+};
+
+struct DutOptions {
+  Profile profile = Profile::dpc31;
+  BusMode bus = BusMode::intel;
+};
+
+std::unique_ptr<Dut> make_cpp_dut(const DutOptions& o);
+// The Verilated model of rtl/dpc31_blocks.v for the profile, or one of its mutants (by macro
+// name without the MUTANT_ prefix, "" = none). nullptr if that variant was not built.
+std::unique_ptr<Dut> make_rtl_dut(const DutOptions& o, std::string_view mutant = "");
+std::vector<std::string> rtl_mutants();
+
+// Whether a read of this address is compared (registers and mirrored cells of the block).
+bool compared_read(const ProfileDesc& p, std::uint16_t addr);
+
+}  // namespace dpc31::cosim

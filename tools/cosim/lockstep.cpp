@@ -1,0 +1,480 @@
+#include "lockstep.hpp"
+
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "dpc31/reg_ids.hpp"
+
+namespace dpc31::cosim {
+
+namespace {
+
+constexpr std::size_t kRecent = 32;
+
+std::string hex(std::uint32_t v, int width) {
+  return width == 1 ? fmt::format("{}", v) : fmt::format("0x{:0{}x}", v, (width + 3) / 4);
+}
+
+}  // namespace
+
+Lockstep::Lockstep(std::unique_ptr<Dut> emu, std::unique_ptr<Dut> rtl, const ProfileDesc& profile)
+    : emu_(std::move(emu)), rtl_(std::move(rtl)), profile_(profile) {}
+
+bool Lockstep::step(const Inputs& in) {
+  emu_->step(in);
+  rtl_->step(in);
+  if (!in.idle()) {
+    recent_.emplace_back(cycle_, in);
+    if (recent_.size() > kRecent) recent_.pop_front();
+  }
+  const Outputs a = emu_->outputs();
+  const Outputs b = rtl_->outputs();
+  const bool read_compared = in.bus_rd && !in.rst && compared_read(profile_, in.bus_addr);
+  std::vector<std::string> lines;
+  std::vector<std::string> names;
+  for (std::size_t i = 0; i < Outputs::kCount; ++i) {
+    if (i == Outputs::kRdata && !read_compared) continue;
+    if (a.v[i] == b.v[i]) continue;
+    const std::string_view n = Outputs::names()[i];
+    const int w = Outputs::widths()[i];
+    lines.push_back(fmt::format("  {} {}={} / {} {}={}", emu_->name(), n, hex(a.v[i], w),
+                                rtl_->name(), n, hex(b.v[i], w)));
+    names.emplace_back(n);
+  }
+  const std::uint64_t c = cycle_++;
+  if (lines.empty()) return true;
+  if (divergences_++ == 0) {
+    first_ = c;
+    signals_ = names;
+  }
+  errors_.push_back(
+      fmt::format("divergence at cycle {} ({}):", c, in.idle() ? "no stimulus" : in.describe()));
+  errors_.insert(errors_.end(), lines.begin(), lines.end());
+  errors_.push_back(fmt::format("  last {} stimulus events:", recent_.size()));
+  for (const auto& [cy, ev] : recent_)
+    errors_.push_back(fmt::format("    cycle {:>8}: {}", cy, ev.describe()));
+  return false;
+}
+
+RunResult run_lockstep(const Stimulus& s, const DutOptions& o, std::string_view mutant) {
+  RunResult r;
+  std::unique_ptr<Dut> rtl = make_rtl_dut(o, mutant);
+  if (!rtl) {
+    r.report.push_back(fmt::format("no RTL model built for mutant '{}'", mutant));
+    r.divergence = 0;
+    return r;
+  }
+  Lockstep ls(make_cpp_dut(o), std::move(rtl), profile_desc(o.profile));
+  for (const Inputs& in : s) {
+    if (!ls.step(in)) {
+      r.divergence = static_cast<std::int64_t>(ls.first_divergence());
+      r.report = ls.errors();
+      r.signals = ls.diverged_signals();
+      return r;
+    }
+  }
+  return r;
+}
+
+// --- constrained random stimulus ---
+
+namespace {
+
+struct Gen {
+  std::mt19937_64 rng;
+  const ProfileDesc& p;
+  bool chance(double prob) { return std::uniform_real_distribution<double>(0.0, 1.0)(rng) < prob; }
+  std::uint32_t pick(std::uint32_t n) { return static_cast<std::uint32_t>(rng() % n); }
+  std::uint8_t byte() { return static_cast<std::uint8_t>(rng()); }
+  std::uint16_t addr(RegId id, int byte_offset = 0) {
+    const RegDesc* r = find_reg(p, id);
+    const std::int32_t a = r->read_addr >= 0 ? r->read_addr : r->write_addr;
+    return static_cast<std::uint16_t>(a + byte_offset);
+  }
+  std::uint16_t waddr(RegId id, int byte_offset = 0) {
+    const RegDesc* r = find_reg(p, id);
+    return static_cast<std::uint16_t>((r->write_addr >= 0 ? r->write_addr : r->read_addr) +
+                                      byte_offset);
+  }
+};
+
+void random_access(Gen& g, Inputs& in) {
+  static constexpr RegId kReads[] = {RegId::Int_Req_Reg,         RegId::Int_Reg,
+                                     RegId::Status_Reg,          RegId::Mode_Reg0,
+                                     RegId::Din_Buffer_SM,       RegId::New_Din_Buffer_Cmd,
+                                     RegId::Dout_Buffer_SM,      RegId::Next_Dout_Buffer_Cmd,
+                                     RegId::Diag_Buffer_SM,      RegId::New_Diag_Buffer_Cmd,
+                                     RegId::User_Prm_Data_Okay,  RegId::User_Prm_Data_Not_Okay,
+                                     RegId::User_Cfg_Data_Okay,  RegId::User_Cfg_Data_Not_Okay,
+                                     RegId::SSA_Buffer_Free_Cmd, RegId::R_Dout_Buf_Ptr1,
+                                     RegId::R_Cfg_Buf_Ptr,       RegId::R_GC_Command};
+  const std::uint32_t kind = g.pick(100);
+  if (kind < 40) {
+    const RegId id = kReads[g.pick(std::size(kReads))];
+    const RegDesc* r = find_reg(g.p, id);
+    in.bus_rd = true;
+    in.bus_addr = g.addr(id, r->width == 16 ? static_cast<int>(g.pick(2)) : 0);
+    return;
+  }
+  in.bus_wr = true;
+  in.bus_wdata = g.byte();
+  const int lane = static_cast<int>(g.pick(2));
+  if (kind < 55) {  // EOI, the most frequent write of an ISR
+    in.bus_addr = g.waddr(RegId::Mode_Reg1_S);
+    in.bus_wdata = 0x02;
+  } else if (kind < 65) {  // acknowledges
+    in.bus_addr = g.waddr(RegId::Int_Ack_Reg, lane);
+  } else if (kind < 72) {  // masks, biased to unmasking
+    in.bus_addr = g.waddr(RegId::Int_Mask_Reg, lane);
+    in.bus_wdata = g.chance(0.6) ? static_cast<std::uint8_t>(in.bus_wdata & g.byte() & g.byte())
+                                 : in.bus_wdata;
+  } else if (kind < 76) {
+    in.bus_addr = g.waddr(RegId::Int_Req_Reg, lane);
+    in.bus_wdata = static_cast<std::uint8_t>(in.bus_wdata & g.byte());
+  } else if (kind <
+             82) {  // Mode_Reg1 set: Start, User_Leave_Master, Go_Offline, En_Change, Res_User_WD
+    static constexpr std::uint8_t kSet[] = {0x01, 0x01, 0x08, 0x04, 0x10, 0x20, 0x03};
+    in.bus_addr = g.waddr(RegId::Mode_Reg1_S);
+    in.bus_wdata = kSet[g.pick(std::size(kSet))];
+  } else if (kind < 85) {
+    in.bus_addr = g.waddr(RegId::Mode_Reg1_R);
+  } else if (kind < 90) {
+    in.bus_addr = g.waddr(RegId::Mode_Reg0, lane);
+  } else if (kind < 93) {
+    const RegId opt = g.p.id == Profile::dpc31      ? RegId::Param_Reg
+                      : g.p.id == Profile::vpc3plus ? RegId::Mode_Reg2
+                                                    : RegId::Mode_Reg0;
+    in.bus_addr = g.waddr(opt);
+    in.bus_wdata = static_cast<std::uint8_t>(in.bus_wdata & 0x03);
+  } else {  // the mirrored pointer cells
+    static constexpr RegId kCells[] = {RegId::R_Dout_Buf_Ptr1,    RegId::R_Dout_Buf_Ptr2,
+                                       RegId::R_Dout_Buf_Ptr3,    RegId::R_Cfg_Buf_Ptr,
+                                       RegId::R_Read_Cfg_Buf_Ptr, RegId::R_GC_Command};
+    in.bus_addr = g.waddr(kCells[g.pick(std::size(kCells))]);
+  }
+}
+
+void random_event(Gen& g, Inputs& in) {
+  static constexpr std::uint8_t kGc[] = {0x20, 0x10, 0x08, 0x04, 0x02, 0x22, 0x30,
+                                         0x0C, 0x00, 0x01, 0x40, 0x80, 0x28};
+  switch (g.pick(13)) {
+    case 0:
+      in.ev_irq = static_cast<std::uint16_t>(1u << g.pick(16));
+      break;
+    case 1:
+      in.ev_leave_master = true;
+      break;
+    case 2:
+      in.ev_gc = true;
+      in.gc_cmd = g.chance(0.9) ? kGc[g.pick(std::size(kGc))] : g.byte();
+      break;
+    case 3:
+    case 4:
+      in.ev_dout = true;
+      break;
+    case 5:
+      in.ev_failsafe = true;
+      break;
+    case 6:
+    case 7:
+      in.ev_din = true;
+      break;
+    case 8:
+      in.ev_diag_begin = true;
+      break;
+    case 9:
+      in.ev_diag_end = true;
+      in.stat_diag = g.chance(0.3);
+      break;
+    case 10:
+      in.ev_prm = true;
+      break;
+    case 11:
+      in.ev_cfg = true;
+      break;
+    default:
+      in.ev_ssa = true;
+      break;
+  }
+}
+
+}  // namespace
+
+Stimulus random_stimulus(const RandomConfig& c) {
+  Gen g{std::mt19937_64(c.seed * 0x9E3779B97F4A7C15ull + static_cast<unsigned>(c.profile)),
+        profile_desc(c.profile)};
+  Stimulus s(c.cycles);
+  // Bursts of activity and quiet stretches, so timers (EOI, user timer) run out too.
+  double activity = 0.3;
+  for (std::uint64_t i = 0; i < c.cycles; ++i) {
+    if (i % 256 == 0)
+      activity = g.chance(0.25) ? 0.01 : 0.1 + 0.5 * std::uniform_real_distribution<>(0, 1)(g.rng);
+    Inputs& in = s[i];
+    if (g.chance(0.00005)) {
+      in.rst = true;
+      continue;
+    }
+    if (!g.chance(activity)) continue;
+    const std::uint32_t what = g.pick(10);
+    if (what < 5) random_access(g, in);
+    if (what >= 4) random_event(g, in);  // 4: an event and an access in the same cycle
+    if (what == 9) random_event(g, in);  // two events in one cycle
+  }
+  return s;
+}
+
+// --- shrinking ---
+
+Stimulus shrink(const Stimulus& s, const DutOptions& o, std::string_view mutant, int max_runs) {
+  RunResult r = run_lockstep(s, o, mutant);
+  if (r.divergence < 0) return s;
+  Stimulus best(s.begin(), s.begin() + r.divergence + 1);
+  int runs = 1;
+  auto fails = [&](const Stimulus& t) {
+    ++runs;
+    const RunResult x = run_lockstep(t, o, mutant);
+    return x.divergence >= 0 ? x.divergence : -1;
+  };
+  // Delta debugging over the non-idle cycles: try to make chunks of them idle.
+  for (std::size_t chunk = best.size() / 2; chunk >= 1 && runs < max_runs; chunk /= 2) {
+    bool progress = true;
+    while (progress && runs < max_runs) {
+      progress = false;
+      for (std::size_t start = 0; start < best.size() && runs < max_runs; start += chunk) {
+        Stimulus t = best;
+        bool changed = false;
+        for (std::size_t i = start; i < std::min(best.size(), start + chunk); ++i) {
+          if (!t[i].idle()) {
+            t[i] = Inputs{};
+            changed = true;
+          }
+        }
+        if (!changed) continue;
+        const std::int64_t d = fails(t);
+        if (d >= 0) {
+          t.resize(static_cast<std::size_t>(d) + 1);
+          best = std::move(t);
+          progress = true;
+        }
+      }
+    }
+    if (chunk == 1) break;
+  }
+  return best;
+}
+
+// --- trace files ---
+
+std::string write_trace(const Stimulus& s, const std::string& header) {
+  std::string out = "# dpc31 cosim stimulus trace\n";
+  std::istringstream h(header);
+  for (std::string line; std::getline(h, line);) out += "# " + line + "\n";
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (!s[i].idle()) out += fmt::format("{} {}\n", i, s[i].describe());
+  }
+  out += fmt::format("end {}\n", s.size());
+  return out;
+}
+
+namespace {
+
+bool parse_hex(const std::string& t, std::uint32_t& v) {
+  if (t.empty() || t.size() > 4) return false;
+  v = 0;
+  for (char ch : t) {
+    const int d = ch >= '0' && ch <= '9' ? ch - '0' : ch >= 'a' && ch <= 'f' ? ch - 'a' + 10 : -1;
+    if (d < 0) return false;
+    v = v * 16 + static_cast<std::uint32_t>(d);
+  }
+  return true;
+}
+
+bool parse_event(const std::string& tok, std::istringstream& rest, Inputs& in) {
+  std::uint32_t v = 0;
+  auto arg = [&](const std::string& prefix) {
+    return tok.size() > prefix.size() + 1 && tok.back() == ')' &&
+           parse_hex(tok.substr(prefix.size() + 1, tok.size() - prefix.size() - 2), v);
+  };
+  if (tok == "rst") return in.rst = true;
+  if (tok == "rd") {
+    std::string a;
+    rest >> a;
+    in.bus_rd = parse_hex(a, v);
+    in.bus_addr = static_cast<std::uint16_t>(v);
+    return in.bus_rd;
+  }
+  if (tok == "wr") {
+    std::string a;
+    rest >> a;
+    const auto arrow = a.find("<-");
+    std::uint32_t d = 0;
+    if (arrow == std::string::npos || !parse_hex(a.substr(0, arrow), v) ||
+        !parse_hex(a.substr(arrow + 2), d)) {
+      return false;
+    }
+    in.bus_wr = true;
+    in.bus_addr = static_cast<std::uint16_t>(v);
+    in.bus_wdata = static_cast<std::uint8_t>(d);
+    return true;
+  }
+  if (tok.rfind("ev_irq(", 0) == 0 && arg("ev_irq"))
+    return (in.ev_irq = static_cast<std::uint16_t>(v)) != 0;
+  if (tok.rfind("ev_gc(", 0) == 0 && arg("ev_gc")) {
+    in.ev_gc = true;
+    in.gc_cmd = static_cast<std::uint8_t>(v);
+    return true;
+  }
+  if (tok == "ev_diag_end(stat=0)" || tok == "ev_diag_end(stat=1)") {
+    in.ev_diag_end = true;
+    in.stat_diag = tok[16] == '1';
+    return true;
+  }
+  static const std::pair<const char*, bool Inputs::*> kFlags[] = {
+      {"ev_leave_master", &Inputs::ev_leave_master},
+      {"ev_dout", &Inputs::ev_dout},
+      {"ev_failsafe", &Inputs::ev_failsafe},
+      {"ev_din", &Inputs::ev_din},
+      {"ev_diag_begin", &Inputs::ev_diag_begin},
+      {"ev_prm", &Inputs::ev_prm},
+      {"ev_cfg", &Inputs::ev_cfg},
+      {"ev_ssa", &Inputs::ev_ssa}};
+  for (const auto& [name, member] : kFlags) {
+    if (tok == name) return in.*member = true;
+  }
+  return false;
+}
+
+}  // namespace
+
+bool parse_trace(const std::string& text, const std::string& file, Stimulus& out,
+                 std::string& error) {
+  out.clear();
+  std::istringstream is(text);
+  std::string line;
+  int n = 0;
+  bool ended = false;
+  std::uint64_t last = 0;
+  auto fail = [&](const std::string& m) {
+    error = fmt::format("{}:{}: {}", file, n, m);
+    return false;
+  };
+  while (std::getline(is, line)) {
+    ++n;
+    if (line.empty() || line[0] == '#') continue;
+    if (ended) return fail("text after 'end'");
+    std::istringstream ls(line);
+    std::string first;
+    ls >> first;
+    if (first == "end") {
+      std::uint64_t total = 0;
+      if (!(ls >> total) || total < last)
+        return fail("'end' needs the cycle count, at least the last cycle + 1");
+      out.resize(total);
+      ended = true;
+      continue;
+    }
+    std::uint64_t cycle = 0;
+    try {
+      std::size_t used = 0;
+      cycle = std::stoull(first, &used);
+      if (used != first.size()) return fail(fmt::format("'{}' is not a cycle number", first));
+    } catch (const std::exception&) {
+      return fail(fmt::format("'{}' is not a cycle number", first));
+    }
+    if (cycle < last && !(cycle == 0 && out.empty())) return fail("cycles must increase");
+    if (cycle > 100'000'000) return fail("cycle beyond 100000000");
+    if (out.size() <= cycle) out.resize(cycle + 1);
+    Inputs in;
+    std::string tok;
+    while (ls >> tok) {
+      if (!parse_event(tok, ls, in)) return fail(fmt::format("unknown stimulus '{}'", tok));
+    }
+    if (in.idle()) return fail("a stimulus line without stimulus");
+    out[cycle] = in;
+    last = cycle + 1;
+  }
+  if (!ended) return fail("missing 'end <cycles>' (truncated trace?)");
+  return true;
+}
+
+// --- waveform window ---
+
+namespace {
+
+void vcd_header(std::FILE* f, const std::string& side) {
+  fmt::print(
+      f, "$date dpc31 cosim $end\n$version dpc31emu cosim window ({}) $end\n$timescale 1ns $end\n",
+      side);
+  fmt::print(f, "$scope module blocks $end\n");
+  for (std::size_t i = 0; i < Outputs::kCount; ++i) {
+    fmt::print(f, "$var wire {} o{} {} $end\n", Outputs::widths()[i], i, Outputs::names()[i]);
+  }
+  fmt::print(f, "$var wire 1 c cycle_marker $end\n$upscope $end\n$enddefinitions $end\n");
+}
+
+void vcd_value(std::FILE* f, std::size_t i, std::uint32_t v) {
+  const int w = Outputs::widths()[i];
+  if (w == 1) {
+    fmt::print(f, "{}o{}\n", v & 1, i);
+    return;
+  }
+  std::string bits;
+  for (int b = w - 1; b >= 0; --b) bits += ((v >> b) & 1) != 0 ? '1' : '0';
+  fmt::print(f, "b{} o{}\n", bits, i);
+}
+
+}  // namespace
+
+bool write_window(const Stimulus& s, const DutOptions& o, std::string_view mutant,
+                  std::uint64_t from, std::uint64_t to, const std::string& dir,
+                  std::string& error) {
+  std::unique_ptr<Dut> sides[2] = {make_cpp_dut(o), make_rtl_dut(o, mutant)};
+  if (!sides[1]) {
+    error = "no RTL model for that mutant";
+    return false;
+  }
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  const char* names[2] = {"emu", "rtl"};
+  std::FILE* f[2] = {nullptr, nullptr};
+  std::string tmp[2];
+  for (int k = 0; k < 2; ++k) {
+    tmp[k] = fmt::format("{}/{}.vcd.tmp", dir, names[k]);
+    f[k] = std::fopen(tmp[k].c_str(), "w");
+    if (f[k] == nullptr) {
+      error = fmt::format("{}: cannot write", tmp[k]);
+      if (f[0] != nullptr) std::fclose(f[0]);
+      return false;
+    }
+    vcd_header(f[k], names[k]);
+  }
+  Outputs last[2];
+  for (std::uint64_t c = 0; c < std::min<std::uint64_t>(to, s.size()); ++c) {
+    for (int k = 0; k < 2; ++k) {
+      sides[k]->step(s[c]);
+      if (c < from) continue;
+      const Outputs now = sides[k]->outputs();
+      fmt::print(f[k], "#{}\n{}c\n", c * 21, c % 2);  // 48 MHz: 20.83 ns per cycle, drawn as 21 ns
+      for (std::size_t i = 0; i < Outputs::kCount; ++i) {
+        if (c == from || now.v[i] != last[k].v[i]) vcd_value(f[k], i, now.v[i]);
+      }
+      last[k] = now;
+    }
+  }
+  for (int k = 0; k < 2; ++k) {
+    std::fclose(f[k]);
+    std::filesystem::rename(tmp[k], fmt::format("{}/{}.vcd", dir, names[k]), ec);
+    if (ec) {
+      error = fmt::format("{}: {}", tmp[k], ec.message());
+      return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace dpc31::cosim

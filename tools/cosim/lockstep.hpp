@@ -1,0 +1,87 @@
+// Lockstep in the style of lowRISC Ibex's Cosim: the harness pushes what the models cannot
+// predict (the stimulus of a cycle), steps both, and collects mismatches as readable paired
+// lines. The first divergence stops the comparison unless told to continue.
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "dut.hpp"
+
+namespace dpc31::cosim {
+
+class Lockstep {
+ public:
+  Lockstep(std::unique_ptr<Dut> emu, std::unique_ptr<Dut> rtl, const ProfileDesc& profile);
+
+  // One cycle on both sides. False when an output differs; errors() then holds the report.
+  bool step(const Inputs& in);
+  [[nodiscard]] const std::vector<std::string>& errors() const { return errors_; }
+  void clear_errors() { errors_.clear(); }
+  [[nodiscard]] std::uint64_t cycle() const { return cycle_; }  // cycles stepped so far
+  [[nodiscard]] std::uint64_t divergences() const { return divergences_; }
+  [[nodiscard]] std::uint64_t first_divergence() const { return first_; }
+  // Names of the outputs that differed at the first divergence.
+  [[nodiscard]] const std::vector<std::string>& diverged_signals() const { return signals_; }
+  // The last 32 non-idle stimulus cycles, oldest first.
+  [[nodiscard]] const std::deque<std::pair<std::uint64_t, Inputs>>& recent() const {
+    return recent_;
+  }
+
+  Dut& emu() { return *emu_; }
+  Dut& rtl() { return *rtl_; }
+
+ private:
+  std::unique_ptr<Dut> emu_;
+  std::unique_ptr<Dut> rtl_;
+  const ProfileDesc& profile_;
+  std::uint64_t cycle_ = 0;
+  std::uint64_t divergences_ = 0;
+  std::uint64_t first_ = 0;
+  std::vector<std::string> errors_;
+  std::vector<std::string> signals_;
+  std::deque<std::pair<std::uint64_t, Inputs>> recent_;
+};
+
+// A stimulus: the inputs of every cycle from a reset on (index = cycle).
+using Stimulus = std::vector<Inputs>;
+
+struct RandomConfig {
+  Profile profile = Profile::dpc31;
+  std::uint64_t seed = 1;
+  std::uint64_t cycles = 20'000;
+};
+// Constrained random, reproducible from the seed: register reads and writes (every command read,
+// masks, acknowledges, EOI, Start/Go_Offline, mirrored cells), every event input, Global_Control
+// commands, resets, and same-cycle collisions of events with accesses.
+Stimulus random_stimulus(const RandomConfig& c);
+
+// Runs a whole stimulus; returns the cycle of the first divergence or -1.
+struct RunResult {
+  std::int64_t divergence = -1;
+  std::vector<std::string> report;   // paired lines and the recent stimulus
+  std::vector<std::string> signals;  // outputs that differed
+};
+using DutFactory = std::unique_ptr<Dut> (*)(const DutOptions&, std::string_view);
+RunResult run_lockstep(const Stimulus& s, const DutOptions& o, std::string_view mutant = "");
+
+// Shrinks a failing stimulus to a short one that still diverges (cycles made idle, the tail cut).
+Stimulus shrink(const Stimulus& s, const DutOptions& o, std::string_view mutant,
+                int max_runs = 3000);
+
+// Trace files: one line per non-idle cycle, "<cycle> <describe()>", '#' comments; the last cycle
+// is given by a line "end <cycle>". Parse errors: "file:line: message".
+std::string write_trace(const Stimulus& s, const std::string& header);
+bool parse_trace(const std::string& text, const std::string& file, Stimulus& out,
+                 std::string& error);
+
+// VCD of both sides' outputs (and the inputs) for cycles [from, to): the waveform window around
+// a divergence. Files written to a temporary name and renamed.
+bool write_window(const Stimulus& s, const DutOptions& o, std::string_view mutant,
+                  std::uint64_t from, std::uint64_t to, const std::string& dir, std::string& error);
+
+}  // namespace dpc31::cosim
