@@ -165,7 +165,8 @@ void ChipCore::diag_send_begin() {
 bool ChipCore::sent_diag_has_stat_diag() const {
   static constexpr RegId kPtr[] = {RegId::R_Diag_Buf_Ptr1, RegId::R_Diag_Buf_Ptr2};
   for (int k = 0; k < 2; ++k) {
-    if (buffers.diag.buf[k] == DiagState::Asic_Send_Mode) return (mem[buffer_addr(kPtr[k])] & kStat_Diag) != 0;
+    if (buffers.diag.buf[k] == DiagState::Asic_Send_Mode)
+      return (mem[buffer_addr(kPtr[k])] & kStat_Diag) != 0;
   }
   return false;
 }

@@ -78,6 +78,9 @@ void Chip::drive_rxd(std::uint64_t cycle, bool level) {
 void Chip::on_txd(std::function<void(std::uint64_t, bool)> cb) {
   core_->txd_observer = std::move(cb);
 }
+void Chip::on_block_event(std::function<void(std::uint64_t, const BlockEvent&)> cb) {
+  core_->block_observer = std::move(cb);
+}
 void Chip::on_telegram(std::function<void(const Telegram&)> cb) {
   core_->telegram_observer = std::move(cb);
 }

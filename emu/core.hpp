@@ -75,12 +75,18 @@ struct ChipCore {
   std::uint8_t baud_code = 0;  // Status_Reg bits 11..8 (0 = 12 Mbaud, where Baud_Search starts)
 
   FdlCounters counters;
-  bool diag_in_flight = false;  // a Slave_Diag answer is being sent
+  std::uint16_t written_bits = 0;  // the lane-aligned value of the write the hooks are serving
+  bool diag_in_flight = false;     // a Slave_Diag answer is being sent
 
   LogSink sink;
   std::function<void(std::uint64_t, bool)> irq_observer;
   std::function<void(std::uint64_t, bool)> txd_observer;
   std::function<void(const Telegram&)> telegram_observer;
+  std::function<void(std::uint64_t, const BlockEvent&)> block_observer;
+  // Reports a protocol-side action on the blocks (call sites only, never inside the actions).
+  void emit(BlockEvent::Kind k, std::uint16_t value = 0, std::uint8_t data = 0) const {
+    if (block_observer) block_observer(now, BlockEvent{k, value, data});
+  }
   bool irq_line = false;  // last computed interrupt activity (for change notifications)
 
   // --- register file (regfile.cpp) ---
@@ -155,6 +161,7 @@ struct ChipCore {
   void global_control(const fdl::Frame& req);
   void apply_global_control(std::uint8_t command);
   void prm_accepted();
+  void prm_fault();
   void cfg_accepted();
   bool user_watchdog_tick();
   bool receive_via_aux(int sel_bit, RegId target_ptr, RegId len_cell,

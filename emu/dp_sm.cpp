@@ -223,9 +223,8 @@ std::optional<fdl::Frame> ChipCore::dp_service(const fdl::Frame& req) {
 std::optional<fdl::Frame> ChipCore::set_prm(const fdl::Frame& req) {
   const std::vector<std::uint8_t>& du = req.du;
   if (du.size() < kMinPrmLength || du.size() > kMaxBufferLength) {
-    dp.prm_fault = true;
     log(LogLevel::info, "Set_Prm with {} bytes: Prm_Fault", du.size());
-    leave_master();
+    prm_fault();
     return fdl::sc();
   }
   const std::uint8_t status = du[0];
@@ -250,8 +249,7 @@ std::optional<fdl::Frame> ChipCore::set_prm(const fdl::Frame& req) {
     fault = "Freeze_Req but Freeze not supported";
   if (fault != nullptr) {
     log(LogLevel::info, "Set_Prm from {}: {}: Prm_Fault", req.sa, fault);
-    leave_master();
-    dp.prm_fault = true;
+    prm_fault();
     return fdl::sc();
   }
   const bool aux2 = (cell(RegId::R_Aux_Buf_Sel) & 0x01) != 0;
@@ -260,8 +258,10 @@ std::optional<fdl::Frame> ChipCore::set_prm(const fdl::Frame& req) {
     return short_answer(*this, req, Response::RR);
   }
   // A new parameterisation starts the DP state machine over (outputs to the safe state).
-  if (dp.state != DpState::Wait_Prm || dp.prm.pending) leave_master();
-  dp.prm_fault = dp.cfg_fault = dp.not_supported = false;
+  if (dp.state != DpState::Wait_Prm || dp.prm.pending) {
+    emit(BlockEvent::Kind::leave_master);
+    leave_master();
+  }
   if ((status & kUnlock_Req) != 0) {
     dp.master_add = 0xFF;
   } else if ((status & kLock_Req) != 0) {
@@ -272,6 +272,7 @@ std::optional<fdl::Frame> ChipCore::set_prm(const fdl::Frame& req) {
   if (mode0(kMode0_DP_Mode) && du.size() > 7) {
     // Spec_User_Prm_Byte overwrites Dis_Start_Control / Dis_Stop_Control in DP mode.
     std::uint16_t& m0 = latch[idx(RegId::Mode_Reg0)];
+    emit(BlockEvent::Kind::dis, du[7] & kMode0_Dis_Start_Stop);
     m0 =
         static_cast<std::uint16_t>((m0 & ~kMode0_Dis_Start_Stop) | (du[7] & kMode0_Dis_Start_Stop));
   }
@@ -280,12 +281,21 @@ std::optional<fdl::Frame> ChipCore::set_prm(const fdl::Frame& req) {
                           : du.size() > 7 && (du[7] & kSpec_WD_Base_1ms) != 0;
   watchdog_parameterise((status & kWD_On) != 0, du[1], du[2], wd_1ms);
   receive_via_aux(0, RegId::R_Prm_Buf_Ptr, RegId::R_Len_Prm_Data, du);
+  emit(BlockEvent::Kind::prm);
   prm_accepted();
   return fdl::sc();
 }
 
-// The Prm buffer holds a new, checked Set_Prm: the user's turn.
+// A Set_Prm that failed the ASIC's checks.
+void ChipCore::prm_fault() {
+  emit(BlockEvent::Kind::prm_fault);
+  leave_master();
+  dp.prm_fault = true;
+}
+
+// The Prm buffer holds a new, checked Set_Prm: the faults are reported no more, the user's turn.
 void ChipCore::prm_accepted() {
+  dp.prm_fault = dp.cfg_fault = dp.not_supported = false;
   dp.prm.arrived();
   raise(irq::New_Prm_Data);
 }
@@ -312,6 +322,7 @@ std::optional<fdl::Frame> ChipCore::chk_cfg(const fdl::Frame& req) {
     ++counters.no_resource;
     return short_answer(*this, req, Response::RR);
   }
+  emit(BlockEvent::Kind::cfg);
   cfg_accepted();
   return fdl::sc();
 }
@@ -337,6 +348,7 @@ std::optional<fdl::Frame> ChipCore::slave_diag(const fdl::Frame& req) {
   du[3] = dp.master_add;
   du[4] = cell(RegId::R_Ident_High);
   du[5] = cell(RegId::R_Ident_Low);
+  emit(BlockEvent::Kind::diag_begin);
   diag_send_begin();
   diag_in_flight = true;
   return sap_answer(*this, req, Response::DL, std::move(du));
@@ -348,6 +360,7 @@ std::optional<fdl::Frame> ChipCore::read_io(const fdl::Frame& req) {
     return short_answer(*this, req, Response::RS);
   }
   if (fdl::sap_number(*req.dsap) == sap::Rd_Inp) {
+    emit(BlockEvent::Kind::din);
     inputs_due();
     return sap_answer(*this, req, Response::DL,
                       read_buffer(din_ptr(buffers.din.d), cell(RegId::R_Len_Din_Buf)));
@@ -384,6 +397,7 @@ std::optional<fdl::Frame> ChipCore::set_slave_add(const fdl::Frame& req) {
   log(LogLevel::info, "Set_Slave_Add: station {} -> {}", dp.station, du[0]);
   dp.station = du[0];  // the chip answers at the new address from now on
   dp.no_add_change = du[3] != 0;
+  emit(BlockEvent::Kind::ssa);
   ssa_accepted();
   return ack;
 }
@@ -402,8 +416,10 @@ std::optional<fdl::Frame> ChipCore::data_exchange(const fdl::Frame& req) {
   const std::size_t out_len = cell(RegId::R_Len_Dout_Buf);
   if (req.du.size() == out_len) {
     write_buffer(dout_ptr(buffers.dout.d), req.du);
+    emit(BlockEvent::Kind::dout);
     outputs_received();
   } else if (req.du.empty() && mode0(kMode0_Spec_Clear_Mode)) {
+    emit(BlockEvent::Kind::failsafe);
     failsafe_clear();  // fail-safe: the master sends no outputs while in Clear
   } else {
     ++counters.not_allowed;
@@ -411,6 +427,7 @@ std::optional<fdl::Frame> ChipCore::data_exchange(const fdl::Frame& req) {
         out_len);
     return short_answer(*this, req, Response::RS);
   }
+  emit(BlockEvent::Kind::din);
   inputs_due();
   const std::size_t in_len = cell(RegId::R_Len_Din_Buf);
   const Response code = buffers.diag_flag ? Response::DH : Response::DL;
@@ -432,6 +449,7 @@ bool ChipCore::user_watchdog_tick() {
   if (dp.user_wd > 0) --dp.user_wd;
   if (dp.user_wd != 0) return true;
   log(LogLevel::info, "user watchdog expired: Leave_Master");
+  emit(BlockEvent::Kind::leave_master);
   leave_master();
   return false;
 }
@@ -439,7 +457,9 @@ bool ChipCore::user_watchdog_tick() {
 void ChipCore::dp_response_sent() {
   if (!diag_in_flight) return;
   diag_in_flight = false;
-  diag_send_end(sent_diag_has_stat_diag());
+  const bool stat = sent_diag_has_stat_diag();
+  emit(BlockEvent::Kind::diag_end, stat ? 1 : 0);
+  diag_send_end(stat);
 }
 
 }  // namespace dpc31

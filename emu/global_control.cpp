@@ -26,6 +26,7 @@ void ChipCore::global_control(const fdl::Frame& req) {
   }
   const std::uint8_t groups = req.du[1];
   if (groups != 0 && (groups & dp.group_ident) == 0) return;  // addressed to other groups
+  emit(BlockEvent::Kind::gc, req.du[0]);
   apply_global_control(req.du[0]);
 }
 

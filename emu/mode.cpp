@@ -21,15 +21,17 @@ std::uint16_t offline_only(ChipCore& c, std::uint16_t old, std::uint16_t next) {
   return old;
 }
 
-void mode_reg1_set(ChipCore& c, std::uint16_t old, std::uint16_t now) {
-  const auto rising = static_cast<std::uint16_t>(now & ~old);
-  if ((rising & kStart_SPC3) != 0) c.start();
-  if ((rising & kEOI) != 0) {
+// The actions follow the bits written as 1 (a command), not the stored value: Go_Offline stays
+// set while Offline, yet a later Start alone must not take the chip Offline again.
+void mode_reg1_set(ChipCore& c, std::uint16_t /*old*/, std::uint16_t /*now*/) {
+  const std::uint16_t written = c.written_bits;
+  if ((written & kStart_SPC3) != 0) c.start();
+  if ((written & kEOI) != 0) {
     c.irq.eoi_block_until = c.now + c.eoi_inactive_cycles();
     c.log(LogLevel::debug, "EOI: X/INT inactive until cycle {}", c.irq.eoi_block_until);
   }
-  if ((rising & kUser_Leave_Master) != 0) c.leave_master();
-  if ((rising & kGo_Offline) != 0) c.go_offline();
+  if ((written & kUser_Leave_Master) != 0) c.leave_master();
+  if ((written & kGo_Offline) != 0) c.go_offline();
 }
 
 void mode_reg2_written(ChipCore& c, std::uint16_t /*old*/, std::uint16_t now) {

@@ -190,11 +190,13 @@ std::uint32_t ChipCore::begin_access(std::uint32_t addr, std::string_view what) 
 
 std::uint8_t ChipCore::bus_read(std::uint32_t addr) {
   advance(prof->bus_access_cycles);
+  emit(BlockEvent::Kind::read, static_cast<std::uint16_t>(addr));
   return read_now(addr);
 }
 
 void ChipCore::bus_write(std::uint32_t addr, std::uint8_t value) {
   advance(prof->bus_access_cycles);
+  emit(BlockEvent::Kind::write, static_cast<std::uint16_t>(addr), value);
   write_now(addr, value);
 }
 
@@ -294,6 +296,7 @@ void ChipCore::write_reg(const RegDesc& r, std::uint32_t offset, std::uint8_t va
   }
   if ((r.unimp & lane) != 0) log(LogLevel::info, "{}: stored, behaviour not modelled", r.name);
   const RegHooks& h = hooks[idx(r.id)];
+  written_bits = w;
   if (h.pre_write != nullptr) next = h.pre_write(*this, old, next);
   latch[t] = next;
   if (h.post_write != nullptr) h.post_write(*this, old, next);

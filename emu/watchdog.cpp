@@ -30,6 +30,7 @@ void ChipCore::baud_found(std::uint8_t code) {
   baud_code = code;
   log(LogLevel::info, "baud rate found: {} baud (code {})", kBaudRates[code], code);
   enter_baud_control(*this);
+  emit(BlockEvent::Kind::irq, irq::Baudrate_Detect);
   raise(irq::Baudrate_Detect);
 }
 
@@ -58,7 +59,9 @@ void ChipCore::watchdog_expired() {
   if (timers.wd == WdState::DP_Control) {
     log(LogLevel::info, "DP watchdog expired: WD_DP_Control_Timeout, DP state machine reset");
     enter_baud_control(*this);
+    emit(BlockEvent::Kind::irq, irq::WD_DP_Control_Timeout);
     raise(irq::WD_DP_Control_Timeout);
+    emit(BlockEvent::Kind::leave_master);
     leave_master();
     timers.dp_wd_on = false;
   } else if (timers.wd == WdState::Baud_Control) {

@@ -54,6 +54,9 @@ module dpc31_blocks #(
   input  wire        ev_prm,
   input  wire        ev_cfg,
   input  wire        ev_ssa,
+  input  wire        ev_prm_fault,
+  input  wire        ev_dis,
+  input  wire  [1:0] dis_bits,
   // compared outputs
   output wire        x_int,
   output reg  [15:0] irr,
@@ -950,6 +953,12 @@ module dpc31_blocks #(
     // ev_leave_master
     if (ev_leave_master) leave_master;
 
+    // ev_prm_fault: a Set_Prm failed the ASIC's checks: leave_master, Prm_Fault.
+    if (ev_prm_fault) begin
+      leave_master;
+      nx_prm_fault = 1'b1;
+    end
+
     // ev_gc: an accepted Global_Control.
     if (ev_gc) global_control(gc_cmd);
 
@@ -974,8 +983,14 @@ module dpc31_blocks #(
     if (ev_diag_begin) diag_begin;
     if (ev_diag_end) diag_end(stat_diag);
 
-    // ev_prm: Prm handshake arrived; New_Prm_Data.
+    // ev_dis: Set_Prm in DP mode writes Dis_Start_Control / Dis_Stop_Control (Mode_Reg0 1:0).
+    if (ev_dis) nx_mode_reg0[1:0] = dis_bits;
+
+    // ev_prm: the fault bits cleared; Prm handshake arrived; New_Prm_Data.
     if (ev_prm) begin
+      nx_prm_fault = 1'b0;
+      nx_cfg_fault = 1'b0;
+      nx_not_supported = 1'b0;
       prm_arrived;
       raise(IRQ_NEW_PRM);
     end

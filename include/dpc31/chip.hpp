@@ -52,6 +52,31 @@ struct Telegram {
   std::uint64_t end;                // end of the last stop bit
 };
 
+// What the protocol side and the CPU did to the blocks in one cycle (docs/golden-model.md): the
+// lockstep's chip-session mode replays these into the RTL.
+struct BlockEvent {
+  enum class Kind : std::uint8_t {
+    irq,
+    leave_master,
+    prm_fault,
+    gc,
+    dout,
+    failsafe,
+    din,
+    diag_begin,
+    diag_end,
+    dis,
+    prm,
+    cfg,
+    ssa,
+    read,
+    write
+  };
+  Kind kind;
+  std::uint16_t value = 0;  // irq bits, gc command, stat_diag, dis bits, bus address
+  std::uint8_t data = 0;    // bus write data
+};
+
 struct FdlCounters;
 struct ChipCore;
 
@@ -110,6 +135,8 @@ class Chip {
   void on_txd(std::function<void(std::uint64_t, bool)> cb);
   // Every error-free frame the chip receives and every answer it sends.
   void on_telegram(std::function<void(const Telegram&)> cb);
+  // Every block-level event and every CPU bus access, with its cycle.
+  void on_block_event(std::function<void(std::uint64_t, const BlockEvent&)> cb);
   [[nodiscard]] bool txd_pin() const;
   [[nodiscard]] const FdlCounters& fdl_counters() const;
   [[nodiscard]] std::uint8_t station_address() const;

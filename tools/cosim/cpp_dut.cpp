@@ -36,12 +36,17 @@ class CppDut final : public Dut {
     core_.advance(1);
     if (in.ev_irq != 0) core_.raise(in.ev_irq);
     if (in.ev_leave_master) core_.leave_master();
+    if (in.ev_prm_fault) core_.prm_fault();
     if (in.ev_gc) core_.apply_global_control(in.gc_cmd);
     if (in.ev_dout) core_.outputs_received();
     if (in.ev_failsafe) core_.failsafe_clear();
     if (in.ev_din) core_.inputs_due();
     if (in.ev_diag_begin) core_.diag_send_begin();
     if (in.ev_diag_end) core_.diag_send_end(in.stat_diag);
+    if (in.ev_dis) {
+      std::uint16_t& m0 = core_.latch[ChipCore::idx(RegId::Mode_Reg0)];
+      m0 = static_cast<std::uint16_t>((m0 & ~0x0003u) | (in.dis_bits & 0x03u));
+    }
     if (in.ev_prm) core_.prm_accepted();
     if (in.ev_cfg) core_.cfg_accepted();
     if (in.ev_ssa) core_.ssa_accepted();
@@ -117,6 +122,7 @@ std::string Inputs::describe() const {
   if (bus_wr) add(fmt::format("wr {:04x}<-{:02x}", bus_addr, bus_wdata));
   if (ev_irq != 0) add(fmt::format("ev_irq({:04x})", ev_irq));
   if (ev_leave_master) add("ev_leave_master");
+  if (ev_prm_fault) add("ev_prm_fault");
   if (ev_gc) add(fmt::format("ev_gc({:02x})", gc_cmd));
   if (ev_dout) add("ev_dout");
   if (ev_failsafe) add("ev_failsafe");
@@ -126,6 +132,7 @@ std::string Inputs::describe() const {
   if (ev_prm) add("ev_prm");
   if (ev_cfg) add("ev_cfg");
   if (ev_ssa) add("ev_ssa");
+  if (ev_dis) add(fmt::format("ev_dis({:x})", dis_bits));
   return s;
 }
 
@@ -141,7 +148,8 @@ bool compared_read(const ProfileDesc& p, std::uint16_t addr) {
     if (r != nullptr && r->read_addr == addr) return true;
   }
   for (const RegDesc& r : p.regs) {
-    if (r.kind == Kind::cell || r.read_addr < 0) continue;
+    // C31_Control (the DX_Out port option) is not one of the blocks.
+    if (r.kind == Kind::cell || r.read_addr < 0 || r.id == RegId::C31_Control) continue;
     if (addr >= r.read_addr && addr < r.read_addr + r.bytes()) return true;
   }
   return false;

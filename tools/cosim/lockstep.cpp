@@ -162,7 +162,7 @@ void random_access(Gen& g, Inputs& in) {
 void random_event(Gen& g, Inputs& in) {
   static constexpr std::uint8_t kGc[] = {0x20, 0x10, 0x08, 0x04, 0x02, 0x22, 0x30,
                                          0x0C, 0x00, 0x01, 0x40, 0x80, 0x28};
-  switch (g.pick(13)) {
+  switch (g.pick(15)) {
     case 0:
       in.ev_irq = static_cast<std::uint16_t>(1u << g.pick(16));
       break;
@@ -196,6 +196,13 @@ void random_event(Gen& g, Inputs& in) {
       break;
     case 11:
       in.ev_cfg = true;
+      break;
+    case 12:
+      in.ev_prm_fault = true;
+      break;
+    case 13:
+      in.ev_dis = true;
+      in.dis_bits = static_cast<std::uint8_t>(g.pick(4));
       break;
     default:
       in.ev_ssa = true;
@@ -324,6 +331,11 @@ bool parse_event(const std::string& tok, std::istringstream& rest, Inputs& in) {
   }
   if (tok.rfind("ev_irq(", 0) == 0 && arg("ev_irq"))
     return (in.ev_irq = static_cast<std::uint16_t>(v)) != 0;
+  if (tok.rfind("ev_dis(", 0) == 0 && arg("ev_dis") && v <= 3) {
+    in.ev_dis = true;
+    in.dis_bits = static_cast<std::uint8_t>(v);
+    return true;
+  }
   if (tok.rfind("ev_gc(", 0) == 0 && arg("ev_gc")) {
     in.ev_gc = true;
     in.gc_cmd = static_cast<std::uint8_t>(v);
