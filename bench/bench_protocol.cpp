@@ -28,6 +28,11 @@ void BM_DataExchange(benchmark::State& st) {
   const double chip_seconds = static_cast<double>(chip.cycle() - c0) / chip.clock_hz();
   st.counters["x_realtime"] = benchmark::Counter(chip_seconds, benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_DataExchange)->Args({12'000'000, 4})->Args({12'000'000, 244})->Args({1'500'000, 244})->Args({9600, 4})->UseRealTime();
+BENCHMARK(BM_DataExchange)
+    ->Args({12'000'000, 4})
+    ->Args({12'000'000, 244})
+    ->Args({1'500'000, 244})
+    ->Args({9600, 4})
+    ->UseRealTime();
 
 }  // namespace

@@ -412,6 +412,7 @@ std::optional<fdl::Frame> ChipCore::data_exchange(const fdl::Frame& req) {
     ++counters.not_allowed;
     return short_answer(*this, req, Response::RS);
   }
+  emit(BlockEvent::Kind::dx);
   if (!user_watchdog_tick()) return std::nullopt;
   const std::size_t out_len = cell(RegId::R_Len_Dout_Buf);
   if (req.du.size() == out_len) {

@@ -840,8 +840,9 @@ std::string_view fault_name(UartFault::Kind k) {
 
 class Runner {
  public:
-  Runner(const Scenario& s, const LineSink& walk, const LineSink& errors)
-      : s_(s), walk_(walk), errors_(errors), chip_(s.chip), user_(s.user) {}
+  Runner(const Scenario& s, const LineSink& walk, const LineSink& errors,
+         const ScenarioHooks& hooks = {})
+      : s_(s), walk_(walk), errors_(errors), hooks_(hooks), chip_(s.chip), user_(s.user) {}
   Runner(const Runner&) = delete;
   Runner& operator=(const Runner&) = delete;
 
@@ -855,6 +856,7 @@ class Runner {
     chip_.set_log_sink([this](const LogRecord& r) {
       if (r.level >= LogLevel::info) note(r.cycle, "chip: " + r.text);
     });
+    if (hooks_.at_start) hooks_.at_start(chip_);
     user_.inputs = s_.inputs;
     DirectBus bus(chip_);
     user_.init(bus);
@@ -893,6 +895,7 @@ class Runner {
       report_outputs();
       flush();
     }
+    if (hooks_.at_end) hooks_.at_end(chip_);
     out_.final_cycle = chip_.cycle();
     out_.dp = chip_.dp_state();
     out_.wd = chip_.wd_state();
@@ -1362,6 +1365,7 @@ class Runner {
   const Scenario& s_;
   const LineSink& walk_;
   const LineSink& errors_;
+  const ScenarioHooks& hooks_;
   Chip chip_;
   Responder user_;
   std::unique_ptr<DpMaster> master_;
@@ -1441,8 +1445,9 @@ bool load_scenario(const std::string& path, Scenario& out, ScenarioError& err) {
   return parse_scenario(text, path, out, err);
 }
 
-ScenarioOutcome run_scenario(const Scenario& s, const LineSink& walk, const LineSink& errors) {
-  Runner r(s, walk, errors);
+ScenarioOutcome run_scenario(const Scenario& s, const LineSink& walk, const LineSink& errors,
+                             const ScenarioHooks& hooks) {
+  Runner r(s, walk, errors, hooks);
   return r.run();
 }
 

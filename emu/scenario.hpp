@@ -114,8 +114,16 @@ struct ScenarioOutcome {
 // Receives one line at a time, without its newline. An empty function discards the lines.
 using LineSink = std::function<void(const std::string&)>;
 
+// Optional access to the chip a scenario runs on (the lockstep's chip-session mode records its
+// block events): at_start before the firmware's init, at_end after the last step.
+struct ScenarioHooks {
+  std::function<void(Chip&)> at_start;
+  std::function<void(Chip&)> at_end;
+};
+
 // Plays a parsed scenario: the walk goes to `walk`, failed expects to `errors` (and the walk).
-ScenarioOutcome run_scenario(const Scenario& s, const LineSink& walk, const LineSink& errors);
+ScenarioOutcome run_scenario(const Scenario& s, const LineSink& walk, const LineSink& errors,
+                             const ScenarioHooks& hooks = {});
 
 // Load, parse, run. Exit code: 0 every expect held, 1 one failed, 2 the file did not load or
 // parse (one line to `errors`, nothing run). `scenario` / `outcome` are filled when given.

@@ -55,6 +55,7 @@ module dpc31_blocks #(
   input  wire        ev_cfg,
   input  wire        ev_ssa,
   input  wire        ev_prm_fault,
+  input  wire        ev_dx,
   input  wire        ev_dis,
   input  wire  [1:0] dis_bits,
   // compared outputs
@@ -947,6 +948,9 @@ module dpc31_blocks #(
     end
 
     // ================================================================= step 2: events
+    // ev_dx: a Data_Exchange arrived; the user watchdog takes Res_User_WD (Mode_Reg1 bit 5).
+    if (ev_dx) nx_mode_reg1[5] = 1'b0;
+
     // ev_irq: events with no block state.
     raise(ev_irq);
 

@@ -56,6 +56,7 @@ struct Telegram {
 // lockstep's chip-session mode replays these into the RTL.
 struct BlockEvent {
   enum class Kind : std::uint8_t {
+    dx,
     irq,
     leave_master,
     prm_fault,

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "lockstep.hpp"
+#include "session.hpp"
 
 namespace dpc31::cli {
 
@@ -58,8 +59,41 @@ std::string junit(const CosimOptions& o, const nlohmann::json& results) {
 
 }  // namespace
 
+namespace {
+
+int run_session_mode(const CosimOptions& o) {
+  using namespace dpc31::cosim;
+  Session s;
+  std::string error;
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!record_session(o.session, s, error)) {
+    fmt::print(stderr, "{}\n", error);
+    return 2;
+  }
+  const RunResult r = run_session(s, o.mutant);
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!o.quiet) {
+    for (const std::string& line : r.report) fmt::print(stderr, "{}\n", line);
+  }
+  const nlohmann::json summary = {{"session", o.session},
+                                  {"profile", std::string(profile_desc(s.options.profile).name)},
+                                  {"mutant", o.mutant},
+                                  {"cycles", s.cycles},
+                                  {"block_events", s.events.size()},
+                                  {"scenario_expects_passed", s.scenario_passed},
+                                  {"diverged", r.divergence >= 0},
+                                  {"cycle", r.divergence},
+                                  {"signals", r.signals},
+                                  {"seconds", secs}};
+  fmt::print("{}\n", summary.dump(2));
+  return r.divergence >= 0 ? 1 : 0;
+}
+
+}  // namespace
+
 int run_cosim(const CosimOptions& o) {
   using namespace dpc31::cosim;
+  if (!o.session.empty()) return run_session_mode(o);
   const DutOptions dut{o.profile, o.bus};
   if (!make_rtl_dut(dut, o.mutant)) {
     fmt::print(stderr,

@@ -21,6 +21,7 @@ struct CosimOptions {
   std::string out_dir;  // where shrunk traces go
   std::string replay;   // a trace file instead of random seeds
   std::string mutant;   // an RTL mutant instead of the real model
+  std::string session;  // chip-session mode: a scenario file
   std::uint64_t window = 50;
   bool keep_going = false;
   bool quiet = false;

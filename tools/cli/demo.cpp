@@ -77,7 +77,8 @@ class Narrator {
 
 // The chip's main job: a DP master on the RS-485 side, the minimal firmware on the other.
 int run_dp_session(const ChipOptions& opt, std::FILE* out) {
-  const std::string text = fmt::format(R"(profile {}
+  const std::string text =
+      fmt::format(R"(profile {}
 bus {}
 baud 1500000
 slave address=5 ident=0x0C31 cfg=13,23 in=4 out=4 wd=10,10 wd_on=1
@@ -93,12 +94,12 @@ startup
 exchange 1 outputs=21,22,23,24
 expect dp_state Data_Exchange
 )",
-                                       profile_desc(opt.profile).name,
-                                       opt.bus == BusMode::intel ? "intel" : "motorola");
-  fmt::print(out,
-             "\n# DP session: master 2 finds slave 5 at 1.5 Mbaud (after the chip's baud search),\n"
-             "# parameterises it, exchanges data, sends Clear and a fail-safe telegram, then the cable\n"
-             "# is pulled for 1.1 s (the DP watchdog, 1 s, expires) and the master starts over.\n");
+                  profile_desc(opt.profile).name, opt.bus == BusMode::intel ? "intel" : "motorola");
+  fmt::print(
+      out,
+      "\n# DP session: master 2 finds slave 5 at 1.5 Mbaud (after the chip's baud search),\n"
+      "# parameterises it, exchanges data, sends Clear and a fail-safe telegram, then the cable\n"
+      "# is pulled for 1.1 s (the DP watchdog, 1 s, expires) and the master starts over.\n");
   Scenario sc;
   ScenarioError err;
   if (!parse_scenario(text, "<demo>", sc, err)) {

@@ -75,6 +75,9 @@ int main(int argc, char** argv) {
   cosim->add_option("--out", cos.out_dir, "where shrunk stimulus traces go (default .)");
   cosim->add_option("--replay", cos.replay, "replay a stimulus trace instead of random seeds");
   cosim->add_option("--mutant", cos.mutant, "use an RTL mutant (to see the check fail)");
+  cosim->add_option(
+      "--session", cos.session,
+      "chip-session mode: run this scenario on the full chip, drive the RTL with its block events");
   cosim->add_flag("--keep-going", cos.keep_going, "do not stop at the first divergent seed");
   cosim->add_flag("--quiet", cos.quiet, "no report text, only the JSON summary");
 

@@ -1,5 +1,7 @@
 // The C++ blocks as a Dut: a ChipCore stepped one clock at a time, the bus access applied in its
 // completion cycle, the events through the same actions the protocol engine uses.
+#include "cpp_dut.hpp"
+
 #include <fmt/format.h>
 
 #include "../../emu/core.hpp"
@@ -34,6 +36,8 @@ class CppDut final : public Dut {
       return;
     }
     core_.advance(1);
+    if (in.ev_dx)
+      core_.latch[ChipCore::idx(RegId::Mode_Reg1)] &= static_cast<std::uint16_t>(~0x20u);
     if (in.ev_irq != 0) core_.raise(in.ev_irq);
     if (in.ev_leave_master) core_.leave_master();
     if (in.ev_prm_fault) core_.prm_fault();
@@ -55,47 +59,7 @@ class CppDut final : public Dut {
     core_.update_irq_line();
   }
 
-  [[nodiscard]] Outputs outputs() const override {
-    const ChipCore& c = core_;
-    auto latch = [&](RegId id) { return std::uint32_t{c.latch[ChipCore::idx(id)]}; };
-    auto cell = [&](RegId id) -> std::uint32_t { return c.reg(id) != nullptr ? c.cell(id) : 0; };
-    const bool int_pol = (latch(RegId::Mode_Reg0) & 0x10) != 0;
-    const bool active = c.irq_active();
-    const BufferUnit& b = c.buffers;
-    Outputs o;
-    o.v = {int_pol ? active : !active,
-           latch(RegId::Int_Req_Reg),
-           latch(RegId::Int_Mask_Reg),
-           latch(RegId::Mode_Reg0),
-           latch(RegId::Mode_Reg1),
-           c.started,
-           static_cast<std::uint32_t>(c.dp.state),
-           c.dp.prm.pending,
-           c.dp.cfg.pending,
-           c.dp.ssa_free,
-           c.dp.prm_fault,
-           c.dp.cfg_fault,
-           c.dp.not_supported,
-           c.dp.sync_mode,
-           c.dp.freeze_mode,
-           b.diag_flag,
-           b.dout.sm(),
-           b.din.sm(),
-           b.diag.sm(),
-           b.u_cleared,
-           b.n_cleared,
-           b.n_cl,
-           b.d_fresh,
-           cell(RegId::R_Dout_Buf_Ptr1),
-           cell(RegId::R_Dout_Buf_Ptr2),
-           cell(RegId::R_Dout_Buf_Ptr3),
-           cell(RegId::R_Dout_Buf_Ptr_C),
-           cell(RegId::R_Cfg_Buf_Ptr),
-           cell(RegId::R_Read_Cfg_Buf_Ptr),
-           cell(RegId::R_GC_Command),
-           rdata_};
-    return o;
-  }
+  [[nodiscard]] Outputs outputs() const override { return block_outputs(core_, rdata_); }
 
   [[nodiscard]] std::string name() const override { return "EMU"; }
 
@@ -118,6 +82,7 @@ std::string Inputs::describe() const {
     s += part;
   };
   if (rst) add("rst");
+  if (ev_dx) add("ev_dx");
   if (bus_rd) add(fmt::format("rd {:04x}", bus_addr));
   if (bus_wr) add(fmt::format("wr {:04x}<-{:02x}", bus_addr, bus_wdata));
   if (ev_irq != 0) add(fmt::format("ev_irq({:04x})", ev_irq));
@@ -134,6 +99,47 @@ std::string Inputs::describe() const {
   if (ev_ssa) add("ev_ssa");
   if (ev_dis) add(fmt::format("ev_dis({:x})", dis_bits));
   return s;
+}
+
+Outputs block_outputs(const ChipCore& c, std::uint8_t rdata) {
+  auto latch = [&](RegId id) { return std::uint32_t{c.latch[ChipCore::idx(id)]}; };
+  auto cell = [&](RegId id) -> std::uint32_t { return c.reg(id) != nullptr ? c.cell(id) : 0; };
+  const bool int_pol = (latch(RegId::Mode_Reg0) & 0x10) != 0;
+  const bool active = c.irq_active();
+  const BufferUnit& b = c.buffers;
+  Outputs o;
+  o.v = {int_pol ? active : !active,
+         latch(RegId::Int_Req_Reg),
+         latch(RegId::Int_Mask_Reg),
+         latch(RegId::Mode_Reg0),
+         latch(RegId::Mode_Reg1),
+         c.started,
+         static_cast<std::uint32_t>(c.dp.state),
+         c.dp.prm.pending,
+         c.dp.cfg.pending,
+         c.dp.ssa_free,
+         c.dp.prm_fault,
+         c.dp.cfg_fault,
+         c.dp.not_supported,
+         c.dp.sync_mode,
+         c.dp.freeze_mode,
+         b.diag_flag,
+         b.dout.sm(),
+         b.din.sm(),
+         b.diag.sm(),
+         b.u_cleared,
+         b.n_cleared,
+         b.n_cl,
+         b.d_fresh,
+         cell(RegId::R_Dout_Buf_Ptr1),
+         cell(RegId::R_Dout_Buf_Ptr2),
+         cell(RegId::R_Dout_Buf_Ptr3),
+         cell(RegId::R_Dout_Buf_Ptr_C),
+         cell(RegId::R_Cfg_Buf_Ptr),
+         cell(RegId::R_Read_Cfg_Buf_Ptr),
+         cell(RegId::R_GC_Command),
+         rdata};
+  return o;
 }
 
 std::unique_ptr<Dut> make_cpp_dut(const DutOptions& o) { return std::make_unique<CppDut>(o); }

@@ -16,6 +16,7 @@ namespace dpc31::cosim {
 
 struct Inputs {
   bool rst = false;
+  bool ev_dx = false;
   bool bus_rd = false;
   bool bus_wr = false;
   std::uint16_t bus_addr = 0;

@@ -162,7 +162,7 @@ void random_access(Gen& g, Inputs& in) {
 void random_event(Gen& g, Inputs& in) {
   static constexpr std::uint8_t kGc[] = {0x20, 0x10, 0x08, 0x04, 0x02, 0x22, 0x30,
                                          0x0C, 0x00, 0x01, 0x40, 0x80, 0x28};
-  switch (g.pick(15)) {
+  switch (g.pick(16)) {
     case 0:
       in.ev_irq = static_cast<std::uint16_t>(1u << g.pick(16));
       break;
@@ -199,6 +199,9 @@ void random_event(Gen& g, Inputs& in) {
       break;
     case 12:
       in.ev_prm_fault = true;
+      break;
+    case 14:
+      in.ev_dx = true;
       break;
     case 13:
       in.ev_dis = true;

@@ -44,6 +44,7 @@ class RtlDut final : public Dut {
     top_->ev_cfg = in.ev_cfg;
     top_->ev_ssa = in.ev_ssa;
     top_->ev_prm_fault = in.ev_prm_fault;
+    top_->ev_dx = in.ev_dx;
     top_->ev_dis = in.ev_dis;
     top_->dis_bits = in.dis_bits;
     clock();

@@ -1,0 +1,29 @@
+// Chip-session mode: the full C++ chip runs a DP scenario (protocol engine, built-in master,
+// firmware); its block events and the CPU's bus accesses are recorded per cycle and drive the
+// RTL in lockstep with the C++ blocks; at the end the replayed blocks must also equal the live
+// chip's own.
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "lockstep.hpp"
+
+namespace dpc31::cosim {
+
+struct Session {
+  DutOptions options;
+  std::vector<std::pair<std::uint64_t, Inputs>> events;  // stimulus index (= chip cycle - 1)
+  std::uint64_t cycles = 0;                              // the session's length
+  Outputs chip_final;                                    // the live chip's blocks at the end
+  bool scenario_passed = false;
+};
+
+// Loads and plays the scenario. False (with a one-line error) if it does not load.
+bool record_session(const std::string& scenario_path, Session& out, std::string& error);
+
+// Lockstep of C++ blocks and RTL over the recorded session, then the replay against the chip.
+RunResult run_session(const Session& s, std::string_view mutant = "");
+
+}  // namespace dpc31::cosim
