@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <map>
 
 #include "lockstep.hpp"
@@ -107,4 +108,19 @@ TEST(Cosim, BrokenTracesAreRejectedWithFileAndLine) {
 TEST(Cosim, RandomStimulusIsReproducible) {
   EXPECT_EQ(random_stimulus({Profile::spc3, 42, 5000}), random_stimulus({Profile::spc3, 42, 5000}));
   EXPECT_NE(random_stimulus({Profile::spc3, 42, 5000}), random_stimulus({Profile::spc3, 43, 5000}));
+}
+
+TEST(Cosim, RtlInternalWaveformOnDemand) {
+  const Stimulus s = random_stimulus({Profile::dpc31, 3, 2000});
+  const std::string path = ::testing::TempDir() + "cosim_rtl.fst";
+  std::string error;
+  ASSERT_TRUE(write_rtl_fst(s, {Profile::dpc31, BusMode::intel}, "", path, error)) << error;
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  ASSERT_NE(f, nullptr);
+  std::fseek(f, 0, SEEK_END);
+  EXPECT_GT(std::ftell(f), 100);
+  std::fclose(f);
+  // The mutants are built without tracing: said plainly, nothing written.
+  EXPECT_FALSE(write_rtl_fst(s, {Profile::dpc31, BusMode::intel}, "POLARITY", path + "2", error));
+  EXPECT_NE(error.find("without tracing"), std::string::npos);
 }

@@ -5,6 +5,7 @@
 #include <fmt/core.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -142,12 +143,17 @@ int run_cosim(const CosimOptions& o) {
       std::filesystem::create_directories(dir);
       const std::string trace = fmt::format("{}/cosim-{}-seed{}.trace", dir, o.profile_name, seed);
       std::string error;
+      const auto events = [](const Stimulus& x) {
+        return std::count_if(x.begin(), x.end(), [](const Inputs& in) { return !in.idle(); });
+      };
+      const Stimulus before(s.begin(), s.begin() + r.divergence + 1);
       const std::string header =
-          fmt::format("profile {}\nseed {}\nmutant {}\nshrunk from {} to {} cycles", o.profile_name,
-                      seed, o.mutant.empty() ? "-" : o.mutant, r.divergence + 1, small.size());
+          fmt::format("profile {}\nseed {}\nmutant {}\nshrunk from {} to {} stimulus events ({} cycles)",
+                      o.profile_name, seed, o.mutant.empty() ? "-" : o.mutant, events(before), events(small),
+                      small.size());
       if (write_atomically(trace, write_trace(small, header), error)) {
         entry["trace"] = trace;
-        if (!o.quiet) fmt::print(stderr, "  shrunk to {} cycles: {}\n", small.size(), trace);
+        if (!o.quiet) fmt::print(stderr, "  shrunk to {} stimulus events: {}\n", events(small), trace);
       } else {
         fmt::print(stderr, "{}\n", error);
       }
@@ -158,6 +164,11 @@ int run_cosim(const CosimOptions& o) {
           entry["vcd"] = {o.vcd_dir + "/emu.vcd", o.vcd_dir + "/rtl.vcd"};
         } else {
           fmt::print(stderr, "{}\n", error);
+        }
+        if (write_rtl_fst(small, dut, o.mutant, o.vcd_dir + "/rtl_internal.fst", error)) {
+          entry["fst"] = o.vcd_dir + "/rtl_internal.fst";
+        } else if (!o.quiet) {
+          fmt::print(stderr, "  {}\n", error);
         }
       }
     }

@@ -60,6 +60,9 @@ class Dut {
   virtual void step(const Inputs& in) = 0;
   [[nodiscard]] virtual Outputs outputs() const = 0;
   [[nodiscard]] virtual std::string name() const = 0;
+  // Internal waveform of the whole model from now on (Verilated models built with tracing:
+  // FST). False where the model has none.
+  virtual bool trace_to(const std::string& /*path*/) { return false; }
 };
 
 struct DutOptions {

@@ -417,6 +417,17 @@ bool parse_trace(const std::string& text, const std::string& file, Stimulus& out
   return true;
 }
 
+bool write_rtl_fst(const Stimulus& s, const DutOptions& o, std::string_view mutant, const std::string& path,
+                   std::string& error) {
+  std::unique_ptr<Dut> rtl = make_rtl_dut(o, mutant);
+  if (!rtl || !rtl->trace_to(path)) {
+    error = fmt::format("{}: this RTL model was built without tracing (mutants are)", path);
+    return false;
+  }
+  for (const Inputs& in : s) rtl->step(in);
+  return true;
+}
+
 // --- waveform window ---
 
 namespace {

@@ -22,7 +22,22 @@ class RtlDut final : public Dut {
     clock();
     top_->rst = 0;
   }
-  ~RtlDut() override { top_->final(); }
+  ~RtlDut() override {
+    top_->final();
+    if (fst_) fst_->close();
+  }
+
+  bool trace_to(const std::string& path) override {
+    if constexpr (requires(V& v, VerilatedFstC* t) { v.trace(t, 99); }) {
+      ctx_.traceEverOn(true);
+      fst_ = std::make_unique<VerilatedFstC>();
+      top_->trace(fst_.get(), 99);
+      fst_->open(path.c_str());
+      return fst_->isOpen();
+    } else {
+      return false;
+    }
+  }
 
   void step(const Inputs& in) override {
     top_->rst = in.rst;
@@ -68,12 +83,17 @@ class RtlDut final : public Dut {
   void clock() {
     top_->clk = 0;
     top_->eval();
+    if (fst_) fst_->dump(2 * cycle_);
     top_->clk = 1;
     top_->eval();
+    if (fst_) fst_->dump(2 * cycle_ + 1);
+    ++cycle_;
   }
 
   VerilatedContext ctx_;
   std::unique_ptr<V> top_;
+  std::unique_ptr<VerilatedFstC> fst_;
+  std::uint64_t cycle_ = 0;
 };
 
 struct Model {
