@@ -73,16 +73,24 @@ void Chip::step(std::uint64_t cycles) { core_->advance(cycles); }
 bool Chip::step_until_irq(std::uint64_t cycles) { return core_->advance(cycles, true); }
 
 void Chip::drive_rxd(std::uint64_t cycle, bool level) {
-  core_->mac.rx.edge(std::max(cycle, core_->now), level);
+  const std::uint64_t at = std::max(cycle, core_->now);
+  core_->mac.rx.edge(at, level);
+  core_->rxd_observer(at, level);
+}
+void Chip::on_rxd(std::function<void(std::uint64_t, bool)> cb) {
+  core_->rxd_observer.add(std::move(cb));
+}
+void Chip::on_state_change(std::function<void(std::uint64_t)> cb) {
+  core_->state_observer.add(std::move(cb));
 }
 void Chip::on_txd(std::function<void(std::uint64_t, bool)> cb) {
-  core_->txd_observer = std::move(cb);
+  core_->txd_observer.add(std::move(cb));
 }
 void Chip::on_block_event(std::function<void(std::uint64_t, const BlockEvent&)> cb) {
-  core_->block_observer = std::move(cb);
+  core_->block_observer.add(std::move(cb));
 }
 void Chip::on_telegram(std::function<void(const Telegram&)> cb) {
-  core_->telegram_observer = std::move(cb);
+  core_->telegram_observer.add(std::move(cb));
 }
 bool Chip::txd_pin() const { return core_->mac.txd; }
 const FdlCounters& Chip::fdl_counters() const { return core_->counters; }
@@ -103,7 +111,7 @@ DpState Chip::dp_state() const { return core_->dp.state; }
 WdState Chip::wd_state() const { return core_->timers.wd; }
 
 void Chip::on_irq_change(std::function<void(std::uint64_t, bool)> cb) {
-  core_->irq_observer = std::move(cb);
+  core_->irq_observer.add(std::move(cb));
 }
 void Chip::set_log_sink(LogSink sink) { core_->sink = std::move(sink); }
 const ProfileDesc& Chip::profile() const { return *core_->prof; }

@@ -48,6 +48,24 @@ void install_dp_sm_hooks(HookTable& h);
 
 inline constexpr std::uint16_t kNoReg = 0xFFFF;
 
+// Several parties watch the chip (the scenario runner, waveform and capture writers, the
+// built-in master): each observer is a list. Adding an empty function clears the list.
+template <typename... A>
+struct Observers {
+  std::vector<std::function<void(A...)>> fns;
+  explicit operator bool() const { return !fns.empty(); }
+  void operator()(A... a) const {
+    for (const auto& f : fns) f(a...);
+  }
+  void add(std::function<void(A...)> f) {
+    if (f) {
+      fns.push_back(std::move(f));
+    } else {
+      fns.clear();
+    }
+  }
+};
+
 struct ChipCore {
   ChipCore(const ChipOptions& opt);
 
@@ -79,10 +97,12 @@ struct ChipCore {
   bool diag_in_flight = false;     // a Slave_Diag answer is being sent
 
   LogSink sink;
-  std::function<void(std::uint64_t, bool)> irq_observer;
-  std::function<void(std::uint64_t, bool)> txd_observer;
-  std::function<void(const Telegram&)> telegram_observer;
-  std::function<void(std::uint64_t, const BlockEvent&)> block_observer;
+  Observers<std::uint64_t, bool> irq_observer;
+  Observers<std::uint64_t, bool> txd_observer;
+  Observers<std::uint64_t, bool> rxd_observer;  // edges as they are driven (possibly ahead of time)
+  Observers<const Telegram&> telegram_observer;
+  Observers<std::uint64_t, const BlockEvent&> block_observer;
+  Observers<std::uint64_t> state_observer;  // after every event and every bus access
   // Reports a protocol-side action on the blocks (call sites only, never inside the actions).
   void emit(BlockEvent::Kind k, std::uint16_t value = 0, std::uint8_t data = 0) const {
     if (block_observer) block_observer(now, BlockEvent{k, value, data});

@@ -54,6 +54,9 @@ Exchange DpMaster::transact(const fdl::Frame& req, UartFault fault) {
 
 Exchange DpMaster::transact_raw(const std::vector<std::uint8_t>& bytes, UartFault fault) {
   Exchange ex;
+  // What the line carried before (another master's traffic, for instance) is no answer to us.
+  chars_.clear();
+  rx_.advance(chip_.cycle(), chars_);
   ex.request_start = std::max(chip_.cycle(), bus_free_ + std::uint64_t{cfg_.idle_bits} * t_);
   std::vector<std::pair<std::uint64_t, bool>> edges;
   uart_encode(bytes, ex.request_start, t_, edges, fault);

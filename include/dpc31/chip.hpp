@@ -132,8 +132,13 @@ class Chip {
   // RxD changes to `level` at `cycle` (>= cycle(), non-decreasing); whole frames may be given
   // ahead of time.
   void drive_rxd(std::uint64_t cycle, bool level);
+  // Observers are lists: each on_* call adds one; an empty function removes all of that kind.
   // TxD edges, reported when time reaches them.
   void on_txd(std::function<void(std::uint64_t, bool)> cb);
+  // RxD edges as they are driven (may lie ahead of cycle()).
+  void on_rxd(std::function<void(std::uint64_t, bool)> cb);
+  // After every event the chip processes and every bus access: internal state may have changed.
+  void on_state_change(std::function<void(std::uint64_t)> cb);
   // Every error-free frame the chip receives and every answer it sends.
   void on_telegram(std::function<void(const Telegram&)> cb);
   // Every block-level event and every CPU bus access, with its cycle.
