@@ -4,8 +4,10 @@
 set -euo pipefail
 cd "$(dirname "$0")"
 
+# Build: compiler, CMake, Verilator and the libraries. Checks in the test suite: gtkwave
+# (vcd2fst / fst2vcd), sigrok-cli (UART decode of our waveforms), tshark (our pcapng captures).
 packages=(cmake g++ make verilator libfmt-dev libcli11-dev nlohmann-json3-dev libgtest-dev
-  libbenchmark-dev)
+  libbenchmark-dev zlib1g-dev gtkwave sigrok-cli tshark)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -147,13 +147,14 @@ int run_cosim(const CosimOptions& o) {
         return std::count_if(x.begin(), x.end(), [](const Inputs& in) { return !in.idle(); });
       };
       const Stimulus before(s.begin(), s.begin() + r.divergence + 1);
-      const std::string header =
-          fmt::format("profile {}\nseed {}\nmutant {}\nshrunk from {} to {} stimulus events ({} cycles)",
-                      o.profile_name, seed, o.mutant.empty() ? "-" : o.mutant, events(before), events(small),
-                      small.size());
+      const std::string header = fmt::format(
+          "profile {}\nseed {}\nmutant {}\nshrunk from {} to {} stimulus events ({} cycles)",
+          o.profile_name, seed, o.mutant.empty() ? "-" : o.mutant, events(before), events(small),
+          small.size());
       if (write_atomically(trace, write_trace(small, header), error)) {
         entry["trace"] = trace;
-        if (!o.quiet) fmt::print(stderr, "  shrunk to {} stimulus events: {}\n", events(small), trace);
+        if (!o.quiet)
+          fmt::print(stderr, "  shrunk to {} stimulus events: {}\n", events(small), trace);
       } else {
         fmt::print(stderr, "{}\n", error);
       }
@@ -183,6 +184,18 @@ int run_cosim(const CosimOptions& o) {
     if (diverged > 0 && !o.keep_going) break;
   }
   if (tty) fmt::print("\n");
+  if (!o.dump_dir.empty()) {
+    // The whole run of the first stimulus, both sides, for wavediff or GTKWave.
+    const Stimulus s = runs.empty() ? random_stimulus({o.profile, lo, o.cycles}) : runs[0].second;
+    std::string error;
+    if (!write_window(s, dut, o.mutant, 0, s.size(), o.dump_dir, error)) {
+      fmt::print(stderr, "{}\n", error);
+      return 2;
+    }
+    if (!write_rtl_fst(s, dut, o.mutant, o.dump_dir + "/rtl_internal.fst", error) && !o.quiet) {
+      fmt::print(stderr, "{}\n", error);
+    }
+  }
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const nlohmann::json summary = {
       {"profile", o.profile_name},

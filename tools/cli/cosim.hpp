@@ -22,6 +22,7 @@ struct CosimOptions {
   std::string replay;   // a trace file instead of random seeds
   std::string mutant;   // an RTL mutant instead of the real model
   std::string session;  // chip-session mode: a scenario file
+  std::string dump_dir;  // write both sides' whole run (first seed or the replay) here
   std::uint64_t window = 50;
   bool keep_going = false;
   bool quiet = false;

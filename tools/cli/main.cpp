@@ -73,6 +73,8 @@ int main(int argc, char** argv) {
   cosim->add_option("--window", cos.window,
                     "cycles before and after the divergence in the VCD window");
   cosim->add_option("--out", cos.out_dir, "where shrunk stimulus traces go (default .)");
+  cosim->add_option("--dump", cos.dump_dir,
+                    "write emu.vcd, rtl.vcd (ports) and rtl_internal.fst of the first run here");
   cosim->add_option("--replay", cos.replay, "replay a stimulus trace instead of random seeds");
   cosim->add_option("--mutant", cos.mutant, "use an RTL mutant (to see the check fail)");
   cosim->add_option(

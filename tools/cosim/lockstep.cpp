@@ -417,8 +417,8 @@ bool parse_trace(const std::string& text, const std::string& file, Stimulus& out
   return true;
 }
 
-bool write_rtl_fst(const Stimulus& s, const DutOptions& o, std::string_view mutant, const std::string& path,
-                   std::string& error) {
+bool write_rtl_fst(const Stimulus& s, const DutOptions& o, std::string_view mutant,
+                   const std::string& path, std::string& error) {
   std::unique_ptr<Dut> rtl = make_rtl_dut(o, mutant);
   if (!rtl || !rtl->trace_to(path)) {
     error = fmt::format("{}: this RTL model was built without tracing (mutants are)", path);
@@ -432,15 +432,16 @@ bool write_rtl_fst(const Stimulus& s, const DutOptions& o, std::string_view muta
 
 namespace {
 
+// Both sides use Verilator's convention: the clock falls at time 2c and rises at 2c + 1, where
+// the outputs of cycle c change; one time unit is half a clock.
 void vcd_header(std::FILE* f, const std::string& side) {
-  fmt::print(
-      f, "$date dpc31 cosim $end\n$version dpc31emu cosim window ({}) $end\n$timescale 1ns $end\n",
-      side);
-  fmt::print(f, "$scope module blocks $end\n");
+  fmt::print(f, "$date dpc31 cosim $end\n$version dpc31emu cosim ({}) $end\n$timescale 1ns $end\n",
+             side);
+  fmt::print(f, "$scope module blocks $end\n$var wire 1 c clk $end\n");
   for (std::size_t i = 0; i < Outputs::kCount; ++i) {
     fmt::print(f, "$var wire {} o{} {} $end\n", Outputs::widths()[i], i, Outputs::names()[i]);
   }
-  fmt::print(f, "$var wire 1 c cycle_marker $end\n$upscope $end\n$enddefinitions $end\n");
+  fmt::print(f, "$upscope $end\n$enddefinitions $end\n");
 }
 
 void vcd_value(std::FILE* f, std::size_t i, std::uint32_t v) {
@@ -485,7 +486,7 @@ bool write_window(const Stimulus& s, const DutOptions& o, std::string_view mutan
       sides[k]->step(s[c]);
       if (c < from) continue;
       const Outputs now = sides[k]->outputs();
-      fmt::print(f[k], "#{}\n{}c\n", c * 21, c % 2);  // 48 MHz: 20.83 ns per cycle, drawn as 21 ns
+      fmt::print(f[k], "#{}\n0c\n#{}\n1c\n", 2 * c, 2 * c + 1);
       for (std::size_t i = 0; i < Outputs::kCount; ++i) {
         if (c == from || now.v[i] != last[k].v[i]) vcd_value(f[k], i, now.v[i]);
       }

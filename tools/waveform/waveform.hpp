@@ -1,0 +1,51 @@
+// Waveforms of a chip run: VCD (IEEE 1364-2005 §18) or FST (fstapi from Debian's verilator
+// package) of the pins, the bus, the state machines and the block registers, under stable
+// hierarchical names (docs/waveforms.md). Only the signals and the window asked for are written.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "dpc31/chip.hpp"
+
+namespace dpc31::wave {
+
+struct Options {
+  std::string path;
+  bool fst = false;
+  std::vector<std::string> signals;  // glob patterns on the names below ("" = all)
+  std::uint64_t from = 0;            // first cycle written
+  std::uint64_t to = UINT64_MAX;     // one past the last cycle written
+  int timescale_exp = -12;           // 10^exp seconds per unit: -12 1 ps, -8 10 ns, ...
+  bool flat = false;                 // one scope, 1-bit signals only (for sigrok's VCD input)
+};
+
+// The documented signal list: name (below the top scope "dpc31") and width.
+struct SignalDef {
+  const char* name;
+  int width;
+};
+const std::vector<SignalDef>& signal_list();
+
+// Watches a chip from now on and writes the waveform when finished. Events are buffered in time
+// order (RxD edges are known ahead of time), so memory grows with the number of changes written.
+class Recorder {
+ public:
+  explicit Recorder(const Options& o);
+  ~Recorder();
+  Recorder(const Recorder&) = delete;
+  Recorder& operator=(const Recorder&) = delete;
+
+  // False (with a one-line error) if a signal pattern matches nothing or the options are bad.
+  bool attach(Chip& chip, std::string& error);
+  // Writes everything up to `end_cycle` (temporary file, then rename). False with a reason.
+  bool finish(std::uint64_t end_cycle, std::string& error);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace dpc31::wave
