@@ -1,0 +1,271 @@
+#include "pcapng.hpp"
+
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <limits>
+#include <system_error>
+
+namespace dpc31::capture {
+
+namespace {
+
+// draft-ietf-opsawg-pcapng §4: block types and option codes used here.
+constexpr std::uint32_t kShb = 0x0A0D0D0A;
+constexpr std::uint32_t kIdb = 0x00000001;
+constexpr std::uint32_t kEpb = 0x00000006;
+constexpr std::uint32_t kByteOrderMagic = 0x1A2B3C4D;
+constexpr std::uint16_t kOptEndOfOpt = 0;
+constexpr std::uint16_t kOptComment = 1;
+constexpr std::uint16_t kShbUserAppl = 4;
+constexpr std::uint16_t kIfName = 2;
+constexpr std::uint16_t kIfTsresol = 9;
+constexpr std::uint16_t kEpbFlags = 2;
+constexpr std::size_t kFlushBytes = 64 * 1024;
+
+constexpr std::uint64_t kNsPerS = 1'000'000'000;
+
+// One block body, little-endian, with the 32-bit padding rules of §3.1 and §3.5.
+class Block {
+ public:
+  void u16(std::uint16_t v) {
+    b_.push_back(static_cast<std::uint8_t>(v));
+    b_.push_back(static_cast<std::uint8_t>(v >> 8));
+  }
+  void u32(std::uint32_t v) {
+    for (int i = 0; i < 4; ++i) b_.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
+  }
+  void u64(std::uint64_t v) {
+    for (int i = 0; i < 8; ++i) b_.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
+  }
+  void bytes(std::span<const std::uint8_t> d) { b_.insert(b_.end(), d.begin(), d.end()); }
+  void pad() {
+    while (b_.size() % 4 != 0) b_.push_back(0);
+  }
+  void option(std::uint16_t code, std::span<const std::uint8_t> value) {
+    u16(code);
+    u16(static_cast<std::uint16_t>(value.size()));
+    bytes(value);
+    pad();
+    options_ = true;
+  }
+  void option(std::uint16_t code, const std::string& s) {
+    option(code, {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()});
+  }
+  // Type, total length, body, total length. The option list, if any, ends with opt_endofopt.
+  std::vector<std::uint8_t> finish(std::uint32_t type) {
+    if (options_) {
+      u16(kOptEndOfOpt);
+      u16(0);
+    }
+    const auto total = static_cast<std::uint32_t>(b_.size() + 12);
+    Block out;
+    out.u32(type);
+    out.u32(total);
+    out.bytes(b_);
+    out.u32(total);
+    return std::move(out.b_);
+  }
+
+ private:
+  std::vector<std::uint8_t> b_;
+  bool options_ = false;
+};
+
+std::string errno_text(int e) { return std::error_code(e, std::generic_category()).message(); }
+
+}  // namespace
+
+std::optional<std::uint64_t> cycles_to_ns(std::uint64_t cycle, std::uint32_t clock_hz) {
+  if (clock_hz == 0) return std::nullopt;
+  // cycle = q * hz + r with r < hz < 2^32, so r * 10^9 + hz / 2 < 2^62: no overflow.
+  const std::uint64_t q = cycle / clock_hz;
+  const std::uint64_t r = cycle % clock_hz;
+  const std::uint64_t frac = (r * kNsPerS + clock_hz / 2) / clock_hz;  // <= 10^9
+  if (q > (std::numeric_limits<std::uint64_t>::max() - frac) / kNsPerS) return std::nullopt;
+  return q * kNsPerS + frac;
+}
+
+std::vector<std::uint8_t> section_header_block(const WriterOptions& opt) {
+  Block b;
+  b.u32(kByteOrderMagic);
+  b.u16(1);                                          // major version
+  b.u16(0);                                          // minor version
+  b.u64(std::numeric_limits<std::uint64_t>::max());  // section length -1: not given
+  if (!opt.application.empty()) b.option(kShbUserAppl, opt.application);
+  return b.finish(kShb);
+}
+
+std::vector<std::uint8_t> interface_description_block(const WriterOptions& opt) {
+  Block b;
+  b.u16(kLinkTypeProfibusDl);
+  b.u16(0);  // reserved
+  b.u32(0);  // snaplen: no limit
+  if (!opt.interface_name.empty()) b.option(kIfName, opt.interface_name);
+  const std::uint8_t tsresol = kTsresolNanoseconds;
+  b.option(kIfTsresol, std::span<const std::uint8_t>(&tsresol, 1));
+  return b.finish(kIdb);
+}
+
+std::vector<std::uint8_t> enhanced_packet_block(const Packet& p) {
+  Block b;
+  b.u32(0);  // interface 0
+  b.u32(static_cast<std::uint32_t>(p.timestamp_ns >> 32));
+  b.u32(static_cast<std::uint32_t>(p.timestamp_ns));
+  b.u32(static_cast<std::uint32_t>(p.bytes.size()));  // captured
+  b.u32(static_cast<std::uint32_t>(p.bytes.size()));  // original
+  b.bytes(p.bytes);
+  b.pad();
+  if (p.direction != Direction::unknown) {
+    const auto f = static_cast<std::uint32_t>(p.direction);
+    const std::uint8_t flags[4] = {static_cast<std::uint8_t>(f), 0, 0, 0};
+    b.option(kEpbFlags, flags);
+  }
+  if (!p.comment.empty()) b.option(kOptComment, p.comment);
+  return b.finish(kEpb);
+}
+
+std::optional<Packet> telegram_packet(const Telegram& t, std::uint32_t clock_hz,
+                                      bool cycle_comments) {
+  const std::optional<std::uint64_t> ns = cycles_to_ns(t.start, clock_hz);
+  if (!ns) return std::nullopt;
+  Packet p;
+  p.timestamp_ns = *ns;
+  p.direction = t.from_chip ? Direction::outbound : Direction::inbound;
+  p.bytes = t.bytes;
+  if (cycle_comments) p.comment = fmt::format("cycles {}-{}", t.start, t.end);
+  return p;
+}
+
+struct PcapngWriter::State {
+  WriterOptions opt;
+  std::string path;
+  std::string tmp;
+  int fd = -1;
+  std::vector<std::uint8_t> buf;
+  std::string error;
+  std::uint64_t packets = 0;
+
+  bool fail(std::string msg) {
+    if (error.empty()) error = std::move(msg);
+    return false;
+  }
+  bool flush() {
+    std::size_t done = 0;
+    while (done < buf.size()) {
+      const ssize_t n = ::write(fd, buf.data() + done, buf.size() - done);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) {
+        const int e = n < 0 ? errno : ENOSPC;
+        buf.clear();
+        return fail(fmt::format("cannot write {}: {}", tmp, errno_text(e)));
+      }
+      done += static_cast<std::size_t>(n);
+    }
+    buf.clear();
+    return true;
+  }
+  bool put(const std::vector<std::uint8_t>& block) {
+    if (fd < 0) return fail("no capture file is open");
+    if (!error.empty()) return false;
+    buf.insert(buf.end(), block.begin(), block.end());
+    return buf.size() < kFlushBytes || flush();
+  }
+  bool add(const Packet& p) {
+    if (!put(enhanced_packet_block(p))) return false;
+    ++packets;
+    return true;
+  }
+  bool add(const Telegram& t, std::uint32_t clock_hz) {
+    if (fd < 0) return fail("no capture file is open");
+    const std::optional<Packet> p = telegram_packet(t, clock_hz, opt.cycle_comments);
+    if (!p) {
+      return fail(fmt::format("the telegram at cycle {} has no timestamp at {} Hz (out of range)",
+                              t.start, clock_hz));
+    }
+    return add(*p);
+  }
+  void drop() {
+    if (fd >= 0) {
+      ::close(fd);
+      fd = -1;
+      ::unlink(tmp.c_str());
+    }
+    buf.clear();
+  }
+};
+
+PcapngWriter::PcapngWriter(WriterOptions opt) : state_(std::make_shared<State>()) {
+  state_->opt = std::move(opt);
+}
+
+PcapngWriter::~PcapngWriter() { state_->drop(); }
+
+bool PcapngWriter::open(const std::string& path) {
+  State& s = *state_;
+  s.drop();
+  s.error.clear();
+  s.packets = 0;
+  s.path = path;
+  // Same directory as the target, so that rename() replaces it atomically; O_EXCL so that two
+  // writers never share a temporary.
+  for (int attempt = 0; attempt < 100 && s.fd < 0; ++attempt) {
+    s.tmp = attempt == 0 ? fmt::format("{}.{}.tmp", path, ::getpid())
+                         : fmt::format("{}.{}-{}.tmp", path, ::getpid(), attempt);
+    s.fd = ::open(s.tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    if (s.fd < 0 && errno != EEXIST) {
+      return s.fail(fmt::format("cannot create {} (for {}): {}", s.tmp, path, errno_text(errno)));
+    }
+  }
+  if (s.fd < 0) return s.fail(fmt::format("cannot create a temporary for {}", path));
+  return s.put(section_header_block(s.opt)) && s.put(interface_description_block(s.opt));
+}
+
+bool PcapngWriter::add(const Packet& p) { return state_->add(p); }
+
+bool PcapngWriter::add(const Telegram& t, std::uint32_t clock_hz) {
+  return state_->add(t, clock_hz);
+}
+
+void PcapngWriter::attach(Chip& chip) {
+  const std::uint32_t hz = chip.clock_hz();
+  std::weak_ptr<State> weak = state_;
+  chip.on_telegram([weak, hz](const Telegram& t) {
+    const std::shared_ptr<State> s = weak.lock();
+    if (!s || s->fd < 0) return;  // writer gone or closed
+    s->add(t, hz);
+  });
+}
+
+bool PcapngWriter::close() {
+  State& s = *state_;
+  if (s.fd < 0) return s.fail("no capture file is open");
+  if (s.error.empty()) s.flush();
+  if (s.error.empty() && ::fsync(s.fd) != 0) {
+    s.fail(fmt::format("cannot write {}: {}", s.tmp, errno_text(errno)));
+  }
+  const int fd = s.fd;
+  s.fd = -1;
+  if (::close(fd) != 0) {
+    s.fail(fmt::format("cannot write {}: {}", s.tmp, errno_text(errno)));
+  }
+  if (s.error.empty() && std::rename(s.tmp.c_str(), s.path.c_str()) != 0) {
+    s.fail(fmt::format("cannot rename {} to {}: {}", s.tmp, s.path, errno_text(errno)));
+  }
+  if (!s.error.empty()) {
+    ::unlink(s.tmp.c_str());
+    return false;
+  }
+  return true;
+}
+
+void PcapngWriter::discard() { state_->drop(); }
+
+bool PcapngWriter::is_open() const { return state_->fd >= 0; }
+const std::string& PcapngWriter::error() const { return state_->error; }
+std::uint64_t PcapngWriter::packets() const { return state_->packets; }
+
+}  // namespace dpc31::capture
