@@ -11,6 +11,7 @@
 #include "demo.hpp"
 #include "dpc31/chip.hpp"
 #include "regfmt.hpp"
+#include "replay.hpp"
 #include "run.hpp"
 
 namespace {
@@ -53,6 +54,14 @@ int main(int argc, char** argv) {
       ->required();
   run->add_flag("--quiet", run_opt.quiet, "print no state walk, only failures");
   run->add_option("--json", run_opt.json, "write a JSON summary to this file");
+  run->add_option("--record", run_opt.record,
+                  "write a golden trace of the run to this file (docs/trace-format.md)");
+
+  dpc31::cli::ReplayOptions replay_opt;
+  auto* replay = app.add_subcommand(
+      "replay", "replay a golden trace on a fresh chip and check every expected value");
+  replay->add_option("trace", replay_opt.trace, "trace file (docs/trace-format.md)")->required();
+  replay->add_flag("--quiet", replay_opt.quiet, "print nothing on success");
 
   dpc31::cli::CosimOptions cos;
   std::string cos_shard = "1/1";
@@ -91,6 +100,7 @@ int main(int argc, char** argv) {
   }
 
   if (run->parsed()) return dpc31::cli::run_scenario_command(run_opt, stdout, stderr);
+  if (replay->parsed()) return dpc31::cli::run_replay_command(replay_opt, stdout, stderr);
   if (cosim->parsed()) {
     dpc31::parse_profile(cos.profile_name, cos.profile);
     cos.bus = cos_bus == "intel" ? dpc31::BusMode::intel : dpc31::BusMode::motorola;

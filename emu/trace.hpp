@@ -1,0 +1,161 @@
+// Golden traces: a line-based, diff-friendly record of one chip session with cycle stamps — the
+// telegrams the chip received (RxD) and sent (TxD), every CPU bus access (writes, and reads with
+// the value the firmware got), every X/INT edge, and the chip's state at checkpoints — and the
+// replay that plays it back on a fresh chip with neither master nor firmware: the recorded RxD
+// telegrams and bus accesses are performed at their cycles, everything else is an expectation
+// and checked exactly. The format is specified in docs/trace-format.md; `dpc31 run --record` and
+// `dpc31 replay` are the front ends.
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "dpc31/chip.hpp"
+#include "scenario.hpp"
+#include "uart.hpp"
+
+namespace dpc31 {
+
+// The first line of every trace file.
+inline constexpr std::string_view kTraceMagic = "dpc31-trace 1";
+
+// --- recording ---
+
+// Records a session on one chip. attach() it at cycle 0, before anything touches the chip; the
+// recorder must outlive the chip's observers (it stays registered until the chip is gone).
+// Entries are collected per segment — the stretch between two checkpoints — and each segment is
+// written in cycle order, headed by its comments and followed by a `state` line.
+class TraceRecorder {
+ public:
+  // `baud`: the rate of the telegrams on RxD (the master's); `notes`: comment lines for the top
+  // of the file (without the leading '#').
+  TraceRecorder(std::uint32_t baud, std::vector<std::string> notes = {});
+  TraceRecorder(const TraceRecorder&) = delete;
+  TraceRecorder& operator=(const TraceRecorder&) = delete;
+
+  void attach(Chip& chip);
+  // A comment heading the current segment (e.g. the scenario line being executed).
+  void heading(std::string text);
+  // A comment placed among the current segment's events at `cycle`.
+  void note(std::uint64_t cycle, std::string text);
+  // Closes the current segment: its events in cycle order, then a `state` line at the chip's
+  // current cycle (left out when nothing changed since the previous one).
+  void checkpoint();
+  // The last checkpoint and the `end` line. Nothing may be recorded afterwards.
+  void finish();
+
+  [[nodiscard]] std::string text() const;
+  // Empty, or why the recording is not a valid trace (then text() must not be used).
+  [[nodiscard]] const std::string& error() const { return error_; }
+
+  // For scenario runs: hooks that attach at the start and finish at the end, and a walk sink
+  // that turns the runner's walk into headings, notes and checkpoints (forwarding every line to
+  // `forward`, which may be empty). The recorder must outlive the run.
+  ScenarioHooks scenario_hooks();
+  LineSink scenario_walk(const Scenario& s, LineSink forward);
+
+ private:
+  struct Entry {
+    std::uint64_t key;  // cycle the line is ordered by
+    std::string text;
+  };
+  void add(std::uint64_t key, std::string text);
+  void close_rxd();
+  void close_segment();
+  [[nodiscard]] std::string state_line() const;
+  void walk_line(const Scenario& s, const std::string& line);
+
+  Chip* chip_ = nullptr;
+  std::uint32_t baud_;
+  std::vector<std::string> notes_;
+  std::vector<std::string> header_;
+  std::vector<std::string> body_;
+  // The segment being collected.
+  std::vector<std::string> headings_;
+  std::vector<Entry> seg_;
+  bool closing_ = false;  // a checkpoint is due before the next chip event
+  // RxD edges handed to the chip in one go (one telegram).
+  std::uint64_t rxd_fed_ = 0;
+  std::vector<std::pair<std::uint64_t, bool>> rxd_;
+  std::uint64_t last_key_ = 0;
+  // The state at the segment's checkpoint (cycle, line), taken when it was due.
+  std::optional<std::pair<std::uint64_t, std::string>> pending_state_;
+  std::string last_state_;
+  bool finished_ = false;
+  std::string error_;
+};
+
+// Formats a batch of RxD edges handed to the chip at `fed` as an `rx` line (characters at bit
+// time `t` from the first start bit, with the one damaged character uart_encode produced, if
+// any), or an `rxd` line with the raw edges when no such encoding reproduces them exactly.
+std::string format_rxd(std::uint64_t fed, const std::vector<std::pair<std::uint64_t, bool>>& edges,
+                       std::uint32_t t);
+
+// --- the trace file ---
+
+struct TraceError {
+  std::string file;
+  int line = 0;  // 0: the file as a whole
+  std::string message;
+  [[nodiscard]] std::string text() const;  // "FILE:LINE: message" (or "FILE: message")
+};
+
+enum class TraceKind : std::uint8_t { rx, rxd, wr, rd, xint, tx, state, end };
+
+struct TraceStateKey {
+  std::string key;    // dp, wd, status, irr, imr, station, fdl
+  std::string value;  // as written (normalised for hex and counter lists)
+};
+
+struct TraceLine {
+  int line = 0;
+  TraceKind kind = TraceKind::end;
+  std::uint64_t cycle = 0;  // ordering cycle: rx/rxd the feed cycle, tx its start
+  std::uint64_t start = 0;  // rx: first start bit; tx: first start bit
+  std::uint64_t end = 0;    // tx: end of the last stop bit
+  std::uint32_t addr = 0;   // wr / rd
+  std::uint8_t data = 0;    // wr data, rd expected value
+  bool level = false;       // xint: 1 = active
+  std::vector<std::uint8_t> bytes;
+  UartFault fault;
+  std::vector<std::pair<std::uint64_t, bool>> edges;  // rxd
+  std::vector<TraceStateKey> state;
+};
+
+struct Trace {
+  std::string file;
+  ChipOptions chip;
+  std::uint32_t baud = 0;
+  std::vector<TraceLine> lines;
+};
+
+bool parse_trace(std::string_view text, const std::string& file, Trace& out, TraceError& err);
+bool load_trace(const std::string& path, Trace& out, TraceError& err);
+
+// --- replay ---
+
+struct ReplayOutcome {
+  bool ok = false;
+  std::string failure;  // "FILE:LINE: expected X, got Y" (the first mismatch)
+  std::uint64_t final_cycle = 0;
+  std::uint32_t reads = 0;
+  std::uint32_t writes = 0;
+  std::uint32_t telegrams_in = 0;
+  std::uint32_t telegrams_out = 0;
+  std::uint32_t irq_edges = 0;
+  std::uint32_t states = 0;
+};
+
+ReplayOutcome replay_trace(const Trace& t);
+
+// Load, parse, replay. Exit code: 0 every expectation held, 1 one did not (`message` is the
+// first mismatch), 2 bad input (`message` is one "FILE:LINE: message" line, nothing run).
+int replay_trace_file(const std::string& path, std::string& message,
+                      ReplayOutcome* outcome = nullptr);
+
+}  // namespace dpc31

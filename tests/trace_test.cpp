@@ -1,0 +1,507 @@
+// Golden traces (docs/trace-format.md): recording, the parser's refusals, the replay's first
+// mismatch, the RxD line formats, the `dpc31 replay` command, and the session behind the golden
+// trace traces/diag_ext_diag_dpc31.trace (extended diagnosis, which scenarios cannot express).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+// emu/ is not on the tests' include path.
+#include "../emu/cpu.hpp"
+#include "../emu/dp_master.hpp"
+#include "../emu/fdl.hpp"
+#include "../emu/responder.hpp"
+#include "../emu/scenario.hpp"
+#include "../emu/trace.hpp"
+#include "../emu/uart.hpp"
+
+namespace {
+
+using dpc31::parse_trace;
+using dpc31::ReplayOutcome;
+using dpc31::Trace;
+using dpc31::TraceError;
+
+constexpr const char* kScenario = R"(# a short session for the trace tests
+profile spc3
+bus motorola
+baud 12000000
+master address=1
+slave address=12 ident=0x8031 cfg=11,21 in=2 out=2
+user inputs=C0,DE
+
+startup
+exchange 2 outputs=5A,A5
+expect outputs 5A,A5
+gc clear
+)";
+
+std::string record(const std::string& scn, int* rc = nullptr) {
+  dpc31::Scenario s;
+  dpc31::ScenarioError err;
+  EXPECT_TRUE(dpc31::parse_scenario(scn, "test.scn", s, err)) << err.text();
+  dpc31::TraceRecorder rec(s.master.baud, {"test"});
+  const dpc31::ScenarioOutcome o =
+      dpc31::run_scenario(s, rec.scenario_walk(s, {}), {}, rec.scenario_hooks());
+  if (rc != nullptr) *rc = o.ok() ? 0 : 1;
+  EXPECT_EQ(rec.error(), "");
+  return rec.text();
+}
+
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> v;
+  std::istringstream in(text);
+  for (std::string l; std::getline(in, l);) v.push_back(l);
+  return v;
+}
+
+std::string join(const std::vector<std::string>& v) {
+  std::string s;
+  for (const std::string& l : v) s += l + '\n';
+  return s;
+}
+
+// Parses and replays; returns the exit code replay_trace_file would give, with the message.
+int replay_text(const std::string& text, std::string& message) {
+  Trace t;
+  TraceError err;
+  if (!parse_trace(text, "t.trace", t, err)) {
+    message = err.text();
+    return 2;
+  }
+  const ReplayOutcome o = dpc31::replay_trace(t);
+  message = o.failure;
+  return o.ok ? 0 : 1;
+}
+
+// Index (0-based) of the first line starting with `prefix`, and its 1-based line number.
+std::size_t find_line(const std::vector<std::string>& v, const std::string& prefix,
+                      std::size_t from = 0) {
+  for (std::size_t i = from; i < v.size(); ++i) {
+    if (v[i].starts_with(prefix)) return i;
+  }
+  ADD_FAILURE() << "no line starting with " << prefix;
+  return 0;
+}
+
+const std::string& recorded() {
+  static const std::string text = record(kScenario);
+  return text;
+}
+
+TEST(TraceFile, RecordingIsDeterministicAndReplays) {
+  int rc = -1;
+  const std::string a = record(kScenario, &rc);
+  EXPECT_EQ(rc, 0);
+  EXPECT_EQ(a, record(kScenario));
+  const std::vector<std::string> v = lines_of(a);
+  ASSERT_GT(v.size(), 20u);
+  EXPECT_EQ(v[0], "dpc31-trace 1");
+  EXPECT_EQ(v[1], "# test");
+  EXPECT_NE(a.find("\nprofile spc3\nbus motorola\nclock 48000000\nbaud 12000000\n"),
+            std::string::npos);
+  EXPECT_TRUE(v.back().starts_with("end "));
+  // Every kind of line is there: RxD telegrams, writes, reads, X/INT, answers, states, and the
+  // scenario's lines as comments.
+  for (const char* p : {"rx ", "wr ", "rd ", "xint ", "tx ", "state ", "# line 9: startup"}) {
+    EXPECT_NE(a.find(std::string("\n") + p), std::string::npos) << p;
+  }
+  std::string msg;
+  EXPECT_EQ(replay_text(a, msg), 0) << msg;
+}
+
+TEST(TraceFile, GlobalControlIsAnRxWithoutAnswer) {
+  // gc clear: SD2, LE 7, DA 127 with the SAP bit, SA 1 with it, FC SDN high, DSAP 58, SSAP 62.
+  EXPECT_NE(recorded().find(" 68 07 07 68 FF 81 46 3A 3E 02 00 "), std::string::npos);
+}
+
+// The replay reports the first wrong expectation with its line, for every kind of expectation.
+struct Damage {
+  const char* prefix;  // the first line of this kind after the start-up is changed
+  const char* from;
+  const char* to;
+  const char* message;
+};
+
+class TraceMismatch : public ::testing::TestWithParam<Damage> {};
+
+TEST_P(TraceMismatch, FirstMismatchWithItsLine) {
+  std::vector<std::string> v = lines_of(recorded());
+  const Damage& d = GetParam();
+  const std::size_t begin = find_line(v, "# line 10: exchange");
+  const std::size_t i = find_line(v, d.prefix, begin);
+  if (std::string(d.prefix) == "rd ") {
+    // The value read: any other one.
+    std::string& val = v[i];
+    val.replace(val.size() - 2, 2, val.ends_with("EE") ? "DD" : "EE");
+  } else {
+    const std::size_t k = v[i].rfind(d.from);
+    ASSERT_NE(k, std::string::npos) << v[i];
+    v[i].replace(k, std::string(d.from).size(), d.to);
+  }
+  std::string msg;
+  EXPECT_EQ(replay_text(join(v), msg), 1);
+  EXPECT_TRUE(msg.starts_with("t.trace:" + std::to_string(i + 1) + ": expected ")) << msg;
+  EXPECT_NE(msg.find(d.message), std::string::npos) << msg;
+}
+
+INSTANTIATE_TEST_SUITE_P(TraceFile, TraceMismatch,
+                         ::testing::Values(Damage{"rd ", "", "", ", got "},
+                                           Damage{"xint ", " 1", " 0", "got xint 1 at cycle"},
+                                           Damage{"tx ", " 16", " 17", "got tx "},
+                                           Damage{"state ", "dp=Data_Exchange", "dp=Wait_Cfg",
+                                                  "got dp=Data_Exchange"},
+                                           Damage{"state ", "fdl=", "fdl=parity:9,", "got fdl="}));
+
+TEST(TraceFile, AMissingExpectationIsReportedWhereItWasDue) {
+  std::vector<std::string> v = lines_of(recorded());
+  const std::size_t i = find_line(v, "xint ", find_line(v, "# line 10: exchange"));
+  v.erase(v.begin() + static_cast<std::ptrdiff_t>(i));
+  std::string msg;
+  EXPECT_EQ(replay_text(join(v), msg), 1);
+  // The next X/INT expectation is met by the edge whose line was removed.
+  EXPECT_NE(msg.find("got xint 1 at cycle"), std::string::npos) << msg;
+}
+
+TEST(TraceFile, AnUnexpectedEdgeIsReportedAtTheNextLine) {
+  std::vector<std::string> v = lines_of(recorded());
+  std::size_t last = 0;
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    if (v[i].starts_with("xint ")) last = i;
+  }
+  v.erase(v.begin() + static_cast<std::ptrdiff_t>(last));
+  std::string msg;
+  EXPECT_EQ(replay_text(join(v), msg), 1);
+  EXPECT_TRUE(msg.starts_with("t.trace:" + std::to_string(last + 1) +
+                              ": expected no other X/INT edge up to cycle "))
+      << msg;
+}
+
+TEST(TraceFile, ADelayedTelegramIsAMismatch) {
+  std::vector<std::string> v = lines_of(recorded());
+  const std::size_t i = find_line(v, "rx ", find_line(v, "# line 10: exchange"));
+  // Two bit times later: the chip answers two bit times later than the trace says.
+  std::istringstream in(v[i]);
+  std::string kw;
+  std::uint64_t start = 0;
+  in >> kw >> start;
+  std::string rest;
+  std::getline(in, rest);
+  v[i] = "rx " + std::to_string(start + 8) + rest;
+  std::string msg;
+  EXPECT_EQ(replay_text(join(v), msg), 1);
+  EXPECT_NE(msg.find("expected "), std::string::npos) << msg;
+}
+
+// Bad input: one "FILE:LINE: message" line, nothing run.
+struct BadInput {
+  std::string text;
+  int line;
+  const char* message;
+};
+
+class TraceBadInput : public ::testing::TestWithParam<BadInput> {};
+
+TEST_P(TraceBadInput, OneLineWithFileAndLine) {
+  const BadInput& b = GetParam();
+  std::string msg;
+  EXPECT_EQ(replay_text(b.text, msg), 2);
+  const std::string want = b.line > 0 ? "t.trace:" + std::to_string(b.line) + ": " : "t.trace: ";
+  EXPECT_TRUE(msg.starts_with(want)) << msg;
+  EXPECT_NE(msg.find(b.message), std::string::npos) << msg;
+  EXPECT_EQ(msg.find('\n'), std::string::npos);
+}
+
+const std::string kHead = "dpc31-trace 1\nprofile dpc31\nbus intel\nclock 48000000\nbaud 1500000\n";
+
+INSTANTIATE_TEST_SUITE_P(
+    TraceFile, TraceBadInput,
+    ::testing::Values(
+        BadInput{"", 0, "empty file"}, BadInput{"hello\n", 1, "not a dpc31 trace"},
+        BadInput{"dpc31-trace 2\n", 1, "version"},
+        BadInput{kHead + "wr 4 0000 00\n", 6, "truncated trace: no 'end' line"},
+        BadInput{kHead + "wr 4 0000 00\nfoo bar\nend 8\n", 7, "unknown line 'foo'"},
+        BadInput{kHead + "wr 4 0000 00\n\x01\x02garbage\nend 8\n", 7, "unknown line"},
+        BadInput{kHead + "wr 8 0000 00\nwr 4 0001 00\nend 8\n", 7, "cycle order"},
+        BadInput{kHead + "wr 8 0000 00\nwr 10 0001 00\nend 10\n", 7, "before cycle 8"},
+        BadInput{kHead + "wr 4 0000 0x1\nend 4\n", 6, "bad data"},
+        BadInput{kHead + "wr 4 0000 00\nprofile spc3\nend 4\n", 7, "given twice"},
+        BadInput{kHead + "rd 4 0000 04\nend 4\n", 6, "rd CYCLE ADDR = DATA"},
+        BadInput{kHead + "state 4 dp=Nowhere\nend 4\n", 6, "unknown dp state"},
+        BadInput{kHead + "state 4 foo=1\nend 4\n", 6, "unknown state key"},
+        BadInput{kHead + "state 4 fdl=parity:1,parity:2\nend 4\n", 6, "each counter once"},
+        BadInput{kHead + "rx 100 10 05 02 49 50 16 fed=200\nend 300\n", 6, "fed= after"},
+        BadInput{kHead + "rx 100 10 05 fault=parity:7\nend 300\n", 6, "fault in character 7"},
+        BadInput{kHead + "xint 100 1\nend 50\n", 7, "cycle order"},
+        BadInput{kHead + "end 8\nwr 12 0000 00\n", 7, "after the 'end' line"},
+        BadInput{"dpc31-trace 1\nprofile dpc31\nwr 4 0000 00\nend 4\n", 3, "no 'bus' line"},
+        BadInput{kHead + "wr 99999999999999999999 0000 00\nend 4\n", 6, "bad cycle"}));
+
+TEST(TraceFile, CommentsAndBlankLinesAnywhere) {
+  const std::string text =
+      "dpc31-trace 1   # version\n\n# a comment\n" + kHead.substr(14) +
+      "wr 4 0016 00   # R_TS_Adr\n\n  rd 8 0016 = 00\nstate 8 dp=Wait_Prm wd=Baud_Search "
+      "status=0000 irr=0000 imr=3f1f station=0 fdl=-\nend 100\n";
+  std::string msg;
+  EXPECT_EQ(replay_text(text, msg), 0) << msg;
+}
+
+TEST(TraceFile, AnUnexpectedEdgeBeforeTheEnd) {
+  std::string msg;
+  EXPECT_EQ(replay_text(kHead + "wr 4 0004 E0\nwr 8 0005 C0\nwr 12 0008 01\nend 100\n", msg), 1);
+  EXPECT_EQ(msg, "t.trace:9: expected no more X/INT edges, got xint 1 at cycle 12");
+}
+
+TEST(TraceFile, ReplayChecksAHandWrittenTrace) {
+  // Start_SPC3 on the DPC31 at 12 (docs/timing.md): DX_Out from the power-on clear; unmasked,
+  // X/INT goes active in the same cycle.
+  const std::string text = kHead +
+                           "wr 4 0004 E0\n"   // Int_Mask_Reg bits 7..0: all unmasked
+                           "wr 8 0005 C0\n"   // bits 15..8
+                           "wr 12 0008 01\n"  // Mode_Reg1_S: Start_SPC3
+                           "xint 12 1\n"
+                           "rd 16 0003 = 20\n"  // Int_Reg bits 15..8: DX_Out
+                           "state 16 dp=Wait_Prm wd=Baud_Search status=0001 irr=2000 "
+                           "imr=0000 station=0 fdl=-\n"
+                           "end 1000\n";
+  std::string msg;
+  EXPECT_EQ(replay_text(text, msg), 0) << msg;
+}
+
+// --- the RxD line ---
+
+std::vector<std::pair<std::uint64_t, bool>> encode(const std::vector<std::uint8_t>& b,
+                                                   std::uint64_t start, std::uint32_t t,
+                                                   dpc31::UartFault f = {}) {
+  std::vector<std::pair<std::uint64_t, bool>> e;
+  dpc31::uart_encode(b, start, t, e, f);
+  return e;
+}
+
+TEST(TraceRxd, CleanTelegram) {
+  EXPECT_EQ(dpc31::format_rxd(100, encode({0x10, 0x05, 0x02, 0x49, 0x50, 0x16}, 100, 32), 32),
+            "rx 100 10 05 02 49 50 16");
+  EXPECT_EQ(dpc31::format_rxd(90, encode({0xE5}, 100, 4), 4), "rx 100 E5 fed=90");
+}
+
+TEST(TraceRxd, DamagedCharacters) {
+  const std::vector<std::uint8_t> b = {0x10, 0x05, 0x02, 0x49, 0x50, 0x16};
+  using K = dpc31::UartFault::Kind;
+  for (K k : {K::parity, K::stop, K::start}) {
+    for (int i = 0; i < 6; ++i) {
+      if (k == K::start && i == 0) continue;
+      const std::string s = dpc31::format_rxd(7, encode(b, 7, 8, {i, k}), 8);
+      const std::string kind = k == K::parity ? "parity" : k == K::stop ? "stop" : "start";
+      EXPECT_EQ(s, "rx 7 10 05 02 49 50 16 fault=" + kind + ":" + std::to_string(i));
+    }
+  }
+  // No start bit in the first character: no start to count from; the raw edges.
+  const auto e = encode(b, 7, 8, {0, K::start});
+  const std::string raw = dpc31::format_rxd(7, e, 8);
+  EXPECT_TRUE(raw.starts_with("rxd 7 ")) << raw;
+  std::string msg;
+  const std::string text =
+      "dpc31-trace 1\nprofile dpc31\nbus intel\nclock 48000000\nbaud "
+      "6000000\n" +
+      raw + "\nend 1000\n";
+  EXPECT_EQ(replay_text(text, msg), 0) << msg;
+}
+
+// --- the command line ---
+
+struct Cli {
+  int rc;
+  std::string out;
+};
+
+Cli cli(const std::string& args) {
+  const std::string cmd = std::string(DPC31_CLI) + " " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  Cli r{-1, {}};
+  if (p == nullptr) return r;
+  std::array<char, 4096> buf{};
+  std::size_t n = 0;
+  while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
+  const int st = pclose(p);
+  r.rc = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  return r;
+}
+
+std::string tmp(const std::string& name) {
+  return ::testing::TempDir() + "dpc31_trace_test_" + name;
+}
+
+TEST(TraceCli, RecordThenReplay) {
+  const std::string scn = tmp("a.scn");
+  const std::string trace = tmp("a.trace");
+  std::ofstream(scn) << kScenario;
+  const Cli r = cli("run --quiet --record " + trace + " " + scn);
+  EXPECT_EQ(r.rc, 0) << r.out;
+  std::ifstream in(trace);
+  std::stringstream text;
+  text << in.rdbuf();
+  EXPECT_TRUE(
+      text.str().starts_with("dpc31-trace 1\n# a short session for the trace tests\n#\n# "
+                             "recorded by `dpc31 run --record` from "))
+      << text.str().substr(0, 200);
+  const Cli p = cli("replay " + trace);
+  EXPECT_EQ(p.rc, 0) << p.out;
+  EXPECT_NE(p.out.find(": ok up to cycle "), std::string::npos) << p.out;
+  EXPECT_EQ(cli("replay --quiet " + trace).out, "");
+}
+
+TEST(TraceCli, ExitCodes) {
+  const std::string bad = tmp("bad.trace");
+  std::ofstream(bad) << kHead << "wr 4 0000 00\n";
+  Cli r = cli("replay " + bad);
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_EQ(r.out, bad + ":6: truncated trace: no 'end' line\n");
+
+  const std::string wrong = tmp("wrong.trace");
+  std::ofstream(wrong) << kHead
+                       << "wr 4 0004 E0\nwr 8 0005 C0\nwr 12 0008 01\nxint 13 1\nend 100\n";
+  r = cli("replay " + wrong);
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_EQ(r.out, wrong + ":9: expected xint 1 at cycle 13, got xint 1 at cycle 12\n");
+
+  r = cli("replay " + tmp("missing.trace"));
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_EQ(r.out, tmp("missing.trace") + ": no such file\n");
+  EXPECT_EQ(cli("replay").rc, 2);
+
+  r = cli("run --record /nonexistent-dir/x.trace " + std::string(SOURCE_DIR) +
+          "/traces/gc_clear_spc3.scn --quiet");
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_NE(r.out.find("cannot write the trace"), std::string::npos) << r.out;
+}
+
+// --- traces/diag_ext_diag_dpc31.trace ---
+//
+// The built-in user side has no extended diagnosis, and scenarios cannot ask for it, so this
+// golden trace comes from a session written here: the DPC31 at 1.5 Mbaud; after the start-up
+// and one Data_Exchange the firmware, in its next DX_Out interrupt, puts a device-related
+// diagnosis block (04 12 34 56) after the six standard bytes of its diag buffer, sets Ext_Diag
+// in byte 0 and hands the buffer over (New_Diag_Buffer_Cmd). The following Data_Exchange is
+// answered DH, the master fetches the diagnosis, and the exchange after it is DL again.
+// DPC31_TRACE_OUT=FILE writes the recording to FILE (to refresh the golden trace, which must
+// then be checked by hand again).
+
+constexpr std::array<std::uint8_t, 4> kExtDiag = {0x04, 0x12, 0x34, 0x56};
+
+struct ExtDiagSession {
+  std::string text;
+  std::vector<dpc31::Exchange> history;
+};
+
+ExtDiagSession ext_diag_session() {
+  using namespace dpc31;
+  ResponderConfig cfg;
+  cfg.slave.address = 5;
+  MasterConfig m;
+  m.address = 2;
+  m.baud = 1'500'000;
+  TraceRecorder rec(m.baud,
+                    {"generated by tests/trace_test.cpp (TraceGolden.DiagExtDiag): the DPC31 "
+                     "at 1.5 Mbaud, extended diagnosis",
+                     "from the firmware; see there for the session"});
+  Chip chip({Profile::dpc31, BusMode::intel});
+  rec.attach(chip);
+  Responder user(cfg);
+  user.inputs = {0xA1, 0xA2, 0xA3, 0xA4};
+  DirectBus bus(chip);
+  user.init(bus);
+  rec.heading("firmware init (the built-in user side): registers, buffers, Start_SPC3");
+  rec.checkpoint();
+
+  const ProfileDesc& p = chip.profile();
+  const auto addr = [&](RegId id) {
+    const RegDesc* r = find_reg(p, id);
+    return static_cast<std::uint32_t>(r->read_addr >= 0 ? r->read_addr : r->write_addr);
+  };
+  bool publish = false;
+  DpMaster master(chip, m, cfg.slave);
+  master.set_firmware([&](BusPort& b) {
+    if (publish) {
+      publish = false;
+      // The user's diag buffer: the one in state 01 (User).
+      const std::uint8_t sm = b.read(addr(RegId::Diag_Buffer_SM));
+      const int k = (sm & 3) == 1 ? 0 : 1;
+      const RegId ptr = k == 0 ? RegId::R_Diag_Buf_Ptr1 : RegId::R_Diag_Buf_Ptr2;
+      const RegId len = k == 0 ? RegId::R_Len_Diag_Buf1 : RegId::R_Len_Diag_Buf2;
+      const std::uint32_t base = static_cast<std::uint32_t>(b.read(addr(ptr))) << p.segment_shift;
+      b.write(base, 0x01);  // Ext_Diag; bytes 1..5 are the ASIC's
+      for (std::uint32_t i = 0; i < kExtDiag.size(); ++i) b.write(base + 6 + i, kExtDiag[i]);
+      b.write(addr(len), static_cast<std::uint8_t>(6 + kExtDiag.size()));
+      b.read(addr(RegId::New_Diag_Buffer_Cmd));
+    }
+    user.isr(b);
+  });
+  // After each request the bus idles until the master could send the next one (TSYN after the
+  // answer), as the scenario runner does: the checkpoint sees a settled slave.
+  const auto settle = [&] {
+    const Exchange& ex = master.history().back();
+    const std::uint64_t next = ex.answer_end + std::uint64_t{33} * master.bit_cycles();
+    if (next > chip.cycle()) master.idle(next - chip.cycle());
+  };
+  master.startup();
+  settle();
+  rec.heading(
+      "the master's start-up: FDL_Status until answered, Slave_Diag, Set_Prm, Chk_Cfg, "
+      "Slave_Diag");
+  rec.checkpoint();
+  master.data_exchange({0x01, 0x02, 0x03, 0x04});
+  settle();
+  rec.heading("Data_Exchange 01 02 03 04 (DL)");
+  rec.checkpoint();
+  publish = true;
+  master.data_exchange({0x05, 0x06, 0x07, 0x08});
+  settle();
+  rec.heading(
+      "Data_Exchange 05 06 07 08 (DL); in its DX_Out interrupt the firmware publishes "
+      "the extended diagnosis 04 12 34 56 (Ext_Diag, R_Len_Diag_Buf 10, "
+      "New_Diag_Buffer_Cmd)");
+  rec.checkpoint();
+  master.data_exchange({0x05, 0x06, 0x07, 0x08});
+  settle();
+  rec.heading("Data_Exchange 05 06 07 08: answered DH (Diag_Flag)");
+  rec.checkpoint();
+  master.slave_diag();
+  settle();
+  rec.heading("Slave_Diag: the six standard bytes (Ext_Diag set) and the block 04 12 34 56");
+  rec.checkpoint();
+  master.data_exchange({0x09, 0x0A, 0x0B, 0x0C});
+  settle();
+  rec.heading("Data_Exchange 09 0A 0B 0C: DL again");
+  rec.finish();
+  EXPECT_EQ(rec.error(), "");
+  return {rec.text(), master.history()};
+}
+
+TEST(TraceGolden, DiagExtDiag) {
+  const ExtDiagSession s = ext_diag_session();
+  ASSERT_GE(s.history.size(), 4u);
+  const std::size_t n = s.history.size();
+  // DH, then the diagnosis with Ext_Diag and the block, then DL.
+  const auto& dh = s.history[n - 3];
+  const auto& diag = s.history[n - 2];
+  const auto& dl = s.history[n - 1];
+  ASSERT_TRUE(dh.answer && diag.answer && dl.answer);
+  EXPECT_EQ(dpc31::fdl::response_code(dh.answer->fc), dpc31::fdl::Response::DH);
+  EXPECT_EQ(dpc31::fdl::response_code(dl.answer->fc), dpc31::fdl::Response::DL);
+  const std::vector<std::uint8_t> want = {0x08, 0x0C, 0x00, 0x02, 0x0C,
+                                          0x31, 0x04, 0x12, 0x34, 0x56};
+  EXPECT_EQ(diag.answer->du, want);
+  std::string msg;
+  EXPECT_EQ(replay_text(s.text, msg), 0) << msg;
+  if (const char* out = std::getenv("DPC31_TRACE_OUT"); out != nullptr) {
+    std::ofstream(out, std::ios::binary) << s.text;
+  }
+}
+
+}  // namespace

@@ -1,0 +1,28 @@
+#include "replay.hpp"
+
+#include <fmt/core.h>
+
+// The trace replay lives with the emulator (emu/ is not on this target's include path).
+#include "../../emu/trace.hpp"
+
+namespace dpc31::cli {
+
+int run_replay_command(const ReplayOptions& opt, std::FILE* out, std::FILE* err) {
+  std::string message;
+  ReplayOutcome o;
+  const int rc = replay_trace_file(opt.trace, message, &o);
+  if (rc != 0) {
+    fmt::print(err, "{}\n", message);
+    return rc;
+  }
+  if (!opt.quiet) {
+    fmt::print(out,
+               "{}: ok up to cycle {}: {} telegrams in, {} out, {} writes, {} reads, {} X/INT "
+               "edges, {} states\n",
+               opt.trace, o.final_cycle, o.telegrams_in, o.telegrams_out, o.writes, o.reads,
+               o.irq_edges, o.states);
+  }
+  return 0;
+}
+
+}  // namespace dpc31::cli
