@@ -87,3 +87,23 @@ TEST(Cli, DemoRunsOnEveryProfile) {
     EXPECT_NE(r.out.find("wd_state DP_Control -> Baud_Control"), std::string::npos) << p;
   }
 }
+
+TEST(Cli, RunWritesWaveformsAndCapture) {
+  const std::string dir = ::testing::TempDir();
+  const std::string scn = std::string(SOURCE_DIR) + "/traces/startup_dpc31_1m5.scn";
+  const Result r = run("run " + scn + " --quiet --vcd " + dir + "r.vcd --fst " + dir +
+                       "r.fst --pcap " + dir + "r.pcapng --signals 'pins.*,state.dp_state'");
+  ASSERT_EQ(r.rc, 0);
+  const std::string vcd = slurp(dir + "r.vcd");
+  EXPECT_NE(vcd.find("$var wire 1 ! rxd $end"), std::string::npos);
+  EXPECT_NE(vcd.find("dp_state"), std::string::npos);
+  EXPECT_EQ(vcd.find("irr"), std::string::npos);  // only what was asked for
+  EXPECT_FALSE(slurp(dir + "r.fst").empty());
+  const std::string pcap = slurp(dir + "r.pcapng");
+  ASSERT_GE(pcap.size(), 28u);
+  EXPECT_EQ(pcap.substr(0, 4), std::string("\x0A\x0D\x0D\x0A", 4));  // Section Header Block
+  // Bad input: one line, exit 2, nothing written.
+  EXPECT_EQ(run("run " + scn + " --vcd " + dir + "bad.vcd --signals nosuch").rc, 2);
+  EXPECT_TRUE(slurp(dir + "bad.vcd").empty());
+  EXPECT_EQ(run("run " + scn + " --vcd " + dir + "bad.vcd --timescale 3ns").rc, 2);
+}

@@ -18,10 +18,10 @@ struct CosimOptions {
   std::uint64_t shards = 1;
   std::string junit;
   std::string vcd_dir;
-  std::string out_dir;  // where shrunk traces go
-  std::string replay;   // a trace file instead of random seeds
-  std::string mutant;   // an RTL mutant instead of the real model
-  std::string session;  // chip-session mode: a scenario file
+  std::string out_dir;   // where shrunk traces go
+  std::string replay;    // a trace file instead of random seeds
+  std::string mutant;    // an RTL mutant instead of the real model
+  std::string session;   // chip-session mode: a scenario file
   std::string dump_dir;  // write both sides' whole run (first seed or the replay) here
   std::uint64_t window = 50;
   bool keep_going = false;

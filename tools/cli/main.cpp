@@ -13,6 +13,7 @@
 #include "regfmt.hpp"
 #include "replay.hpp"
 #include "run.hpp"
+#include "wavediff_cli.hpp"
 
 namespace {
 
@@ -56,6 +57,15 @@ int main(int argc, char** argv) {
   run->add_option("--json", run_opt.json, "write a JSON summary to this file");
   run->add_option("--record", run_opt.record,
                   "write a golden trace of the run to this file (docs/trace-format.md)");
+  run->add_option("--vcd", run_opt.vcd, "write the run as a VCD waveform (docs/waveforms.md)");
+  run->add_option("--fst", run_opt.fst, "write the run as an FST waveform");
+  run->add_option("--signals", run_opt.signals, "waveform signals (globs, e.g. pins.*)")
+      ->delimiter(',');
+  run->add_option("--from", run_opt.from, "waveform window: first cycle");
+  run->add_option("--to", run_opt.to, "waveform window: one past the last cycle");
+  run->add_option("--timescale", run_opt.timescale, "waveform time unit (default 1ps)");
+  run->add_flag("--flat", run_opt.flat, "one scope, 1-bit signals only (for sigrok)");
+  run->add_option("--pcap", run_opt.pcap, "write the telegrams as pcapng (docs/capture.md)");
 
   dpc31::cli::ReplayOptions replay_opt;
   auto* replay = app.add_subcommand(
@@ -92,6 +102,10 @@ int main(int argc, char** argv) {
   cosim->add_flag("--keep-going", cos.keep_going, "do not stop at the first divergent seed");
   cosim->add_flag("--quiet", cos.quiet, "no report text, only the JSON summary");
 
+  // dpc31 wavediff A B [options]: waveform comparison (docs/wavediff.md).
+  dpc31::wavediff::CliArgs wavediff_args;
+  auto* wavediff = dpc31::wavediff::add_subcommand(app, wavediff_args);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -99,6 +113,7 @@ int main(int argc, char** argv) {
     return rc == 0 ? 0 : 2;
   }
 
+  if (wavediff->parsed()) return dpc31::wavediff::run_cli(wavediff_args, stdout, stderr);
   if (run->parsed()) return dpc31::cli::run_scenario_command(run_opt, stdout, stderr);
   if (replay->parsed()) return dpc31::cli::run_replay_command(replay_opt, stdout, stderr);
   if (cosim->parsed()) {

@@ -4,9 +4,13 @@
 
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <system_error>
 #include <vector>
+
+#include "pcapng.hpp"
+#include "waveform.hpp"
 
 // The scenario runner lives with the emulator (emu/ is not on this target's include path).
 #include "../../emu/scenario.hpp"
@@ -78,27 +82,101 @@ std::vector<std::string> leading_comments(const std::string& path) {
   return out;
 }
 
-// `run --record`: the same run, with a trace recorder on the chip and on the walk.
-int run_recorded(const RunOptions& opt, const LineSink& walk, const LineSink& errors, Scenario& s,
-                 ScenarioOutcome& o, std::FILE* err) {
+// The unit of --timescale: 1/10/100 followed by s, ms, us, ns, ps or fs, as an exponent of 10.
+bool timescale_exponent(const std::string& t, int& exp) {
+  static const std::pair<const char*, int> kUnits[] = {{"fs", -15}, {"ps", -12}, {"ns", -9},
+                                                       {"us", -6},  {"ms", -3},  {"s", 0}};
+  for (const auto& [unit, e] : kUnits) {
+    for (const auto& [mult, add] : {std::pair{"100", 2}, std::pair{"10", 1}, std::pair{"1", 0}}) {
+      if (t == std::string(mult) + unit) {
+        exp = e + add;
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
+// The run with everything asked for watching it: a trace recorder (--record), a waveform
+// (--vcd / --fst) and a telegram capture (--pcap). Nothing is written unless the run completes.
+int run_with_outputs(const RunOptions& opt, const LineSink& walk, const LineSink& errors,
+                     Scenario& s, ScenarioOutcome& o, std::FILE* err) {
   ScenarioError perr;
   if (!load_scenario(opt.scenario, s, perr)) {
     errors(perr.text());
     return 2;
   }
-  std::vector<std::string> notes = leading_comments(opt.scenario);
-  if (!notes.empty()) notes.emplace_back();
-  notes.push_back(
-      fmt::format("recorded by `dpc31 run --record` from {} (docs/trace-format.md)", s.file));
-  TraceRecorder rec(s.master.baud, std::move(notes));
-  o = run_scenario(s, rec.scenario_walk(s, walk), errors, rec.scenario_hooks());
-  const int rc = o.ok() ? 0 : 1;
-  if (!rec.error().empty()) {
-    fmt::print(err, "dpc31 run: cannot record {}: {}\n", opt.scenario, rec.error());
+  std::unique_ptr<TraceRecorder> rec;
+  ScenarioHooks hooks;
+  LineSink run_walk = walk;
+  if (!opt.record.empty()) {
+    std::vector<std::string> notes = leading_comments(opt.scenario);
+    if (!notes.empty()) notes.emplace_back();
+    notes.push_back(
+        fmt::format("recorded by `dpc31 run --record` from {} (docs/trace-format.md)", s.file));
+    rec = std::make_unique<TraceRecorder>(s.master.baud, std::move(notes));
+    hooks = rec->scenario_hooks();
+    run_walk = rec->scenario_walk(s, walk);
+  }
+  std::vector<std::unique_ptr<wave::Recorder>> waves;
+  for (const auto& [path, fst] : {std::pair{opt.vcd, false}, std::pair{opt.fst, true}}) {
+    if (path.empty()) continue;
+    wave::Options w;
+    w.path = path;
+    w.fst = fst;
+    w.signals = opt.signals;
+    w.from = opt.from;
+    w.to = opt.to;
+    w.flat = opt.flat;
+    if (!timescale_exponent(opt.timescale, w.timescale_exp)) {
+      fmt::print(err,
+                 "dpc31 run: --timescale '{}': use 1, 10 or 100 with s, ms, us, ns, ps or fs\n",
+                 opt.timescale);
+      return 2;
+    }
+    waves.push_back(std::make_unique<wave::Recorder>(w));
+  }
+  capture::PcapngWriter pcap;
+  if (!opt.pcap.empty() && !pcap.open(opt.pcap)) {
+    fmt::print(err, "dpc31 run: {}\n", pcap.error());
     return 2;
   }
-  if (!write_file(opt.record, rec.text())) {
+  std::string attach_error;
+  std::uint64_t end_cycle = 0;
+  hooks.at_start = [&, inner = hooks.at_start](Chip& chip) {
+    if (inner) inner(chip);
+    for (auto& w : waves) {
+      if (attach_error.empty()) w->attach(chip, attach_error);
+    }
+    if (pcap.is_open()) pcap.attach(chip);
+  };
+  hooks.at_end = [&, inner = hooks.at_end](Chip& chip) {
+    if (inner) inner(chip);
+    end_cycle = chip.cycle();
+  };
+  o = run_scenario(s, run_walk, errors, hooks);
+  if (!attach_error.empty()) {
+    fmt::print(err, "dpc31 run: {}\n", attach_error);
+    return 2;
+  }
+  const int rc = o.ok() ? 0 : 1;
+  if (rec && !rec->error().empty()) {
+    fmt::print(err, "dpc31 run: cannot record {}: {}\n", opt.scenario, rec->error());
+    return 2;
+  }
+  if (rec && !write_file(opt.record, rec->text())) {
     fmt::print(err, "dpc31 run: cannot write the trace to {}\n", opt.record);
+    return 2;
+  }
+  for (auto& w : waves) {
+    std::string error;
+    if (!w->finish(end_cycle, error)) {
+      fmt::print(err, "dpc31 run: {}\n", error);
+      return 2;
+    }
+  }
+  if (pcap.is_open() && !pcap.close()) {
+    fmt::print(err, "dpc31 run: cannot write the capture: {}\n", pcap.error());
     return 2;
   }
   return rc;
@@ -112,8 +190,10 @@ int run_scenario_command(const RunOptions& opt, std::FILE* out, std::FILE* err) 
   const LineSink errors = [err](const std::string& line) { fmt::print(err, "{}\n", line); };
   Scenario s;
   ScenarioOutcome o;
-  const int rc = opt.record.empty() ? run_scenario_file(opt.scenario, walk, errors, &s, &o)
-                                    : run_recorded(opt, walk, errors, s, o, err);
+  const bool outputs =
+      !opt.record.empty() || !opt.vcd.empty() || !opt.fst.empty() || !opt.pcap.empty();
+  const int rc = outputs ? run_with_outputs(opt, walk, errors, s, o, err)
+                         : run_scenario_file(opt.scenario, walk, errors, &s, &o);
   if (rc == 2) return rc;
   if (!opt.json.empty() && !write_json(opt.json, summary(s, o))) {
     fmt::print(err, "dpc31 run: cannot write the JSON summary to {}\n", opt.json);

@@ -1,7 +1,9 @@
 #pragma once
 
+#include <cstdint>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 namespace dpc31::cli {
 
@@ -10,6 +12,14 @@ struct RunOptions {
   bool quiet = false;    // no state walk; failures are still reported
   std::string json;      // write a JSON summary here ("" = none)
   std::string record;    // write a golden trace of the run here ("" = none, docs/trace-format.md)
+  std::string vcd;       // waveform of the run (docs/waveforms.md)
+  std::string fst;
+  std::vector<std::string> signals;  // waveform signal globs ("" = all)
+  std::uint64_t from = 0;            // waveform window, cycles
+  std::uint64_t to = UINT64_MAX;
+  std::string timescale = "1ps";
+  bool flat = false;
+  std::string pcap;  // the chip's telegrams as pcapng (docs/capture.md)
 };
 
 // `dpc31 run`: plays a scenario file (docs/scenario-format.md), printing the state walk to `out`

@@ -1,0 +1,7 @@
+/* fstapi with its compressors as one translation unit (as Verilator's verilated_fst_c.cpp does),
+ * so that weakening the symbols it defines (weaken_defined.cmake) leaves no weak references
+ * between its parts. Third-party code from Debian's verilator package; compiled without -W. */
+#define FST_CONFIG_INCLUDE "fst_config.h"
+#include "gtkwave/fastlz.c"
+#include "gtkwave/fstapi.c"
+#include "gtkwave/lz4.c"

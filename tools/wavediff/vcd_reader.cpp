@@ -1,0 +1,460 @@
+// VCD reader (IEEE 1364-2005 §18): header into names and slots, then a buffered tokenizer that
+// applies one time step per call. Memory: one read buffer (1 MiB, grows only for a longer
+// token), the identifier table and the slots, i.e. proportional to the number of signals.
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <bit>
+#include <cerrno>
+#include <charconv>
+#include <cstring>
+#include <limits>
+#include <unordered_map>
+
+#include "wave_reader_impl.hpp"
+
+namespace dpc31::wavediff {
+
+namespace {
+
+constexpr std::size_t kBufSize = std::size_t{1} << 20;
+constexpr std::size_t kMaxToken = std::size_t{1} << 30;
+constexpr std::uint32_t kNone = UINT32_MAX;
+
+// Identifier codes of up to 8 characters, packed into a 64-bit key, in an open-addressing
+// table; longer codes in a map.
+class IdTable {
+ public:
+  [[nodiscard]] std::uint32_t find(std::string_view id) const {
+    if (id.size() <= 8) {
+      if (keys_.empty()) return kNone;
+      const std::uint64_t k = pack(id);
+      std::size_t i = hash(k);
+      for (;;) {
+        if (keys_[i] == k) return vals_[i];
+        if (keys_[i] == 0) return kNone;
+        i = (i + 1) & (keys_.size() - 1);
+      }
+    }
+    auto it = long_.find(std::string(id));
+    return it == long_.end() ? kNone : it->second;
+  }
+  void insert(std::string_view id, std::uint32_t v) {
+    if (id.size() > 8) {
+      long_.emplace(std::string(id), v);
+      return;
+    }
+    if ((count_ + 1) * 2 > keys_.size()) grow();
+    put(pack(id), v);
+    ++count_;
+  }
+
+ private:
+  std::vector<std::uint64_t> keys_;
+  std::vector<std::uint32_t> vals_;
+  std::size_t count_ = 0;
+  int shift_ = 64;
+  std::unordered_map<std::string, std::uint32_t> long_;
+
+  static std::uint64_t pack(std::string_view id) {
+    std::uint64_t k = 0;
+    std::memcpy(&k, id.data(), id.size());
+    return k;  // never 0: identifier characters are printable
+  }
+  [[nodiscard]] std::size_t hash(std::uint64_t k) const {
+    return static_cast<std::size_t>((k * 0x9E3779B97F4A7C15ULL) >> shift_);
+  }
+  void put(std::uint64_t k, std::uint32_t v) {
+    std::size_t i = hash(k);
+    while (keys_[i] != 0) i = (i + 1) & (keys_.size() - 1);
+    keys_[i] = k;
+    vals_[i] = v;
+  }
+  void grow() {
+    std::vector<std::uint64_t> ok = std::move(keys_);
+    std::vector<std::uint32_t> ov = std::move(vals_);
+    const std::size_t n = ok.empty() ? 64 : ok.size() * 2;
+    keys_.assign(n, 0);
+    vals_.assign(n, kNone);
+    shift_ = 64 - std::countr_zero(n);
+    for (std::size_t i = 0; i < ok.size(); ++i) {
+      if (ok[i] != 0) put(ok[i], ov[i]);
+    }
+  }
+};
+
+bool is_real_type(std::string_view t) { return t == "real" || t == "realtime" || t == "shortreal"; }
+
+class VcdReader final : public WaveReader {
+ public:
+  VcdReader(const std::string& path, int fd) : fd_{fd}, buf_(kBufSize) {
+    path_ = path;
+    format_ = "vcd";
+    parse_header();
+    prime();
+  }
+
+  bool has_next() override { return has_next_; }
+  std::uint64_t next_time() override { return pending_; }
+  std::uint64_t line() const override { return line_; }
+  const std::vector<std::uint32_t>& step() override;
+
+ private:
+  struct Fd {
+    int fd;
+    explicit Fd(int f) : fd(f) {}
+    ~Fd() { ::close(fd); }
+    Fd(const Fd&) = delete;
+    Fd& operator=(const Fd&) = delete;
+  };
+  Fd fd_;
+  std::vector<char> buf_;
+  std::size_t pos_ = 0;
+  std::size_t end_ = 0;
+  bool eof_ = false;
+  bool any_byte_ = false;
+  char last_byte_ = '\n';
+  std::uint64_t line_ = 1;
+  std::uint64_t tok_line_ = 1;
+  IdTable ids_;
+  bool has_next_ = false;
+  std::uint64_t pending_ = 0;
+  bool has_pushed_ = false;
+  std::string_view pushed_;
+  std::string section_;  // open $dumpvars/$dumpon/$dumpoff/$dumpall section
+  std::uint64_t section_line_ = 0;
+  std::string scratch_;
+  bool first_step_ = true;
+
+  [[noreturn]] void error(std::uint64_t line, const std::string& what) const {
+    fail(path_, line, what);
+  }
+
+  // Reads more input after keeping buf_[keep_from, end_). False at end of file.
+  bool refill(std::size_t keep_from) {
+    const std::size_t keep = end_ - keep_from;
+    if (keep_from > 0 && keep > 0) std::memmove(buf_.data(), buf_.data() + keep_from, keep);
+    if (keep == buf_.size()) {
+      if (buf_.size() >= kMaxToken) error(line_, "token longer than 1 GiB");
+      buf_.resize(buf_.size() * 2);
+    }
+    end_ = keep;
+    pos_ = keep;
+    if (eof_) return false;
+    for (;;) {
+      const ssize_t n = ::read(fd_.fd, buf_.data() + end_, buf_.size() - end_);
+      if (n < 0 && errno == EINTR) continue;
+      if (n < 0) error(line_, fmt::format("read error: {}", std::strerror(errno)));
+      if (n == 0) {
+        eof_ = true;
+        return false;
+      }
+      end_ += static_cast<std::size_t>(n);
+      any_byte_ = true;
+      last_byte_ = buf_[end_ - 1];
+      return true;
+    }
+  }
+
+  // Next whitespace-separated token (a view into the buffer, valid until the next call).
+  bool next_token(std::string_view& tok) {
+    for (;;) {
+      while (pos_ < end_) {
+        const char c = buf_[pos_];
+        if (static_cast<unsigned char>(c) > ' ') goto found;
+        if (c == '\n') ++line_;
+        ++pos_;
+      }
+      if (!refill(end_)) return false;
+    }
+  found:
+    tok_line_ = line_;
+    std::size_t start = pos_;
+    for (;;) {
+      const char* p = buf_.data();
+      while (pos_<end_&& static_cast<unsigned char>(p[pos_])> ' ') ++pos_;
+      if (pos_ < end_) break;
+      const std::size_t have = end_ - start;
+      const bool more = refill(start);  // moves the token's start to the buffer's start
+      start = 0;
+      pos_ = have;
+      if (!more) break;
+    }
+    tok = std::string_view(buf_.data() + start, pos_ - start);
+    return true;
+  }
+
+  // Tokens up to $end (copied), for header sections.
+  std::vector<std::string> until_end(std::string_view kw) {
+    std::vector<std::string> out;
+    const std::uint64_t at = tok_line_;
+    std::string_view t;
+    for (;;) {
+      if (!next_token(t)) {
+        error(tok_line_, fmt::format("truncated: end of file inside {} (from line {})", kw, at));
+      }
+      if (t == "$end") return out;
+      out.emplace_back(t);
+    }
+  }
+
+  void parse_header();
+  void prime();
+  void keyword(std::string_view t);
+  void apply(std::string_view t);
+  void at_eof();
+  std::uint32_t lookup(std::string_view id, std::uint64_t line) const {
+    const std::uint32_t s = ids_.find(id);
+    if (s == kNone) error(line, fmt::format("undeclared identifier '{}'", id));
+    return s;
+  }
+  std::uint64_t parse_time(std::string_view t) const {
+    std::uint64_t v = 0;
+    const char* b = t.data() + 1;
+    const char* e = t.data() + t.size();
+    auto r = std::from_chars(b, e, v);
+    if (b == e || r.ec != std::errc() || r.ptr != e) {
+      error(tok_line_, fmt::format("bad time '{}'", t));
+    }
+    return v;
+  }
+};
+
+void VcdReader::parse_header() {
+  std::vector<std::string> scopes;
+  std::string_view t;
+  bool seen_any = false;
+  for (;;) {
+    if (!next_token(t)) {
+      if (!seen_any) error(1, "empty file");
+      error(tok_line_, "truncated: end of file in the header (no $enddefinitions)");
+    }
+    seen_any = true;
+    if (t.empty() || t[0] != '$') error(tok_line_, fmt::format("unexpected '{}' in the header", t));
+    const std::string kw(t);
+    const std::uint64_t kw_line = tok_line_;
+    if (kw == "$enddefinitions") {
+      until_end(kw);
+      break;
+    }
+    std::vector<std::string> a = until_end(kw);
+    if (kw == "$scope") {
+      if (a.size() != 2) error(kw_line, "bad $scope (expected '$scope type name $end')");
+      scopes.push_back(a[1]);
+    } else if (kw == "$upscope") {
+      if (scopes.empty()) error(kw_line, "$upscope without $scope");
+      scopes.pop_back();
+    } else if (kw == "$timescale") {
+      std::string text;
+      for (const auto& s : a) text += s;
+      if (!parse_timescale(text, ts_pow_)) {
+        error(kw_line, fmt::format("bad timescale '{}' (1, 10 or 100 of s ms us ns ps fs)", text));
+      }
+    } else if (kw == "$var") {
+      if (a.size() < 4) error(kw_line, "bad $var (expected '$var type size id name $end')");
+      if (a[0] == "port") error(kw_line, "extended VCD ($var port) is not supported");
+      if (a[0] == "string") error(kw_line, "string variables are not supported");
+      unsigned width = 0;
+      auto r = std::from_chars(a[1].data(), a[1].data() + a[1].size(), width);
+      if (r.ec != std::errc() || r.ptr != a[1].data() + a[1].size() || width == 0 ||
+          width > (1u << 24)) {
+        error(kw_line, fmt::format("bad $var size '{}'", a[1]));
+      }
+      const bool real = is_real_type(a[0]);
+      std::string ref;
+      for (std::size_t i = 3; i < a.size(); ++i) ref += a[i];
+      Var v;
+      split_reference(ref, v.name, v.msb, v.lsb);
+      std::string full;
+      for (const auto& s : scopes) full += s + ".";
+      v.name = full + v.name;
+      std::uint32_t slot = ids_.find(a[2]);
+      if (slot == kNone) {
+        slot = static_cast<std::uint32_t>(slots_.size());
+        Slot s;
+        s.real = real;
+        s.width = real ? 64 : width;
+        if (real) {
+          s.value = std::numeric_limits<double>::quiet_NaN();
+        } else {
+          s.bits.assign(width, 'x');
+        }
+        slots_.push_back(std::move(s));
+        ids_.insert(a[2], slot);
+      } else if (slots_[slot].real != real || (!real && slots_[slot].width != width)) {
+        error(kw_line,
+              fmt::format("identifier '{}' declared again with another type or size", a[2]));
+      }
+      v.slot = slot;
+      vars_.push_back(std::move(v));
+    }
+    // $date, $version, $comment and unknown header sections are skipped.
+  }
+  if (!scopes.empty()) error(tok_line_, "$enddefinitions inside an open $scope");
+}
+
+void VcdReader::keyword(std::string_view t) {
+  if (t == "$dumpvars" || t == "$dumpon" || t == "$dumpoff" || t == "$dumpall") {
+    if (!section_.empty()) error(tok_line_, fmt::format("{} inside {}", t, section_));
+    section_ = std::string(t);
+    section_line_ = tok_line_;
+  } else if (t == "$end") {
+    if (section_.empty()) error(tok_line_, "$end without an open section");
+    section_.clear();
+  } else if (t == "$comment") {
+    until_end("$comment");
+  } else {
+    error(tok_line_, fmt::format("unexpected '{}' after $enddefinitions", t));
+  }
+}
+
+void VcdReader::apply(std::string_view t) {
+  const char c = t[0];
+  const std::uint64_t at = tok_line_;
+  if (c == 'b' || c == 'B') {
+    scratch_.assign(t.substr(1));
+    if (scratch_.empty()) error(at, fmt::format("bad value '{}'", t));
+    for (char& ch : scratch_) {
+      const char v = value_char(ch);
+      if (v == 0) error(at, fmt::format("bad vector value '{}'", t));
+      ch = v;
+    }
+    std::string_view id;
+    if (!next_token(id)) {
+      error(at, "truncated: vector value without identifier");
+    }
+    const std::uint32_t si = lookup(id, at);
+    Slot& s = slots_[si];
+    if (s.real) error(at, fmt::format("vector value for real variable '{}'", id));
+    const std::size_t n = scratch_.size();
+    if (n >= s.width) {
+      const std::size_t extra = n - s.width;
+      for (std::size_t i = 0; i < extra; ++i) {
+        if (scratch_[i] != '0') {
+          error(at, fmt::format("value of {} bits for '{}' declared with {}", n, id, s.width));
+        }
+      }
+      std::memcpy(s.bits.data(), scratch_.data() + extra, s.width);
+    } else {
+      const char pad = scratch_[0] == '1' ? '0' : scratch_[0];
+      const std::size_t fill = s.width - n;
+      std::memset(s.bits.data(), pad, fill);
+      std::memcpy(s.bits.data() + fill, scratch_.data(), n);
+    }
+    touch(si);
+    return;
+  }
+  if (c == 'r' || c == 'R') {
+    double d = 0;
+    const char* b = t.data() + 1;
+    const char* e = t.data() + t.size();
+    auto r = std::from_chars(b, e, d);
+    if (b == e || r.ec != std::errc() || r.ptr != e)
+      error(at, fmt::format("bad real value '{}'", t));
+    std::string_view id;
+    if (!next_token(id)) {
+      error(at, "truncated: real value without identifier");
+    }
+    const std::uint32_t si = lookup(id, at);
+    Slot& s = slots_[si];
+    if (!s.real) error(at, fmt::format("real value for non-real variable '{}'", id));
+    s.value = d;
+    touch(si);
+    return;
+  }
+  const char v = value_char(c);
+  if (v == 0) error(at, fmt::format("unexpected '{}'", t));
+  if (t.size() < 2) error(at, fmt::format("value '{}' without identifier", t));
+  const std::uint32_t si = lookup(t.substr(1), at);
+  Slot& s = slots_[si];
+  if (s.real) error(at, fmt::format("scalar value for real variable '{}'", t.substr(1)));
+  if (s.width == 1) {
+    s.bits[0] = v;
+  } else {
+    std::memset(s.bits.data(), v == '1' ? '0' : v, s.width - 1);
+    s.bits[s.width - 1] = v;
+  }
+  touch(si);
+}
+
+void VcdReader::at_eof() {
+  if (!section_.empty()) {
+    error(tok_line_,
+          fmt::format("truncated: {} from line {} not closed by $end", section_, section_line_));
+  }
+  if (any_byte_ && last_byte_ != '\n') {
+    error(tok_line_, "truncated: the last line has no end of line");
+  }
+}
+
+void VcdReader::prime() {
+  std::string_view t;
+  for (;;) {
+    if (!next_token(t)) {
+      has_next_ = false;
+      at_eof();
+      return;
+    }
+    if (t[0] == '#') {
+      pending_ = parse_time(t);
+      has_next_ = true;
+      return;
+    }
+    if (t[0] == '$') {
+      keyword(t);
+      continue;
+    }
+    pushed_ = t;  // a change before the first #time: time 0
+    has_pushed_ = true;
+    pending_ = 0;
+    has_next_ = true;
+    return;
+  }
+}
+
+const std::vector<std::uint32_t>& VcdReader::step() {
+  changed_.clear();
+  ++stamp_;
+  if (!has_next_) return changed_;
+  if (!first_step_ && pending_ < time_) error(tok_line_, "time goes backwards");
+  first_step_ = false;
+  time_ = pending_;
+  if (has_pushed_) {
+    has_pushed_ = false;
+    apply(pushed_);
+  }
+  std::string_view t;
+  for (;;) {
+    if (!next_token(t)) {
+      has_next_ = false;
+      at_eof();
+      return changed_;
+    }
+    const char c = t[0];
+    if (c == '#') {
+      const std::uint64_t nt = parse_time(t);
+      if (nt < time_) {
+        error(tok_line_, fmt::format("time goes backwards ({} after {})", t, time_));
+      }
+      if (nt == time_) continue;
+      pending_ = nt;
+      return changed_;
+    }
+    if (c == '$') {
+      keyword(t);
+    } else {
+      apply(t);
+    }
+  }
+}
+
+}  // namespace
+
+std::unique_ptr<WaveReader> open_vcd(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) fail(path, 0, fmt::format("cannot open: {}", std::strerror(errno)));
+  return std::make_unique<VcdReader>(path, fd);
+}
+
+}  // namespace dpc31::wavediff

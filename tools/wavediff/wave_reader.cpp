@@ -1,0 +1,130 @@
+// Common parts of the readers: errors, timescales, reference names, format detection.
+#include <fmt/format.h>
+#include <sys/stat.h>
+
+#include <cerrno>
+#include <charconv>
+#include <cstdio>
+#include <cstring>
+
+#include "wave_reader_impl.hpp"
+
+namespace dpc31::wavediff {
+
+void fail(const std::string& file, std::uint64_t line, const std::string& what) {
+  throw InputError(fmt::format("{}:{}: {}", file, line, what));
+}
+
+namespace {
+
+struct Unit {
+  const char* name;
+  int pow;  // of ten femtoseconds
+};
+constexpr Unit kUnits[] = {{"s", 15}, {"ms", 12}, {"us", 9}, {"ns", 6}, {"ps", 3}, {"fs", 0}};
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && static_cast<unsigned char>(s.front()) <= ' ') s.remove_prefix(1);
+  while (!s.empty() && static_cast<unsigned char>(s.back()) <= ' ') s.remove_suffix(1);
+  return s;
+}
+
+bool parse_int(std::string_view s, int& v) {
+  s = trim(s);
+  if (s.empty()) return false;
+  auto r = std::from_chars(s.data(), s.data() + s.size(), v);
+  return r.ec == std::errc() && r.ptr == s.data() + s.size();
+}
+
+}  // namespace
+
+bool parse_timescale(std::string_view text, int& pow) {
+  std::string t;
+  for (char c : text) {
+    if (static_cast<unsigned char>(c) > ' ') t += c;
+  }
+  std::size_t i = 0;
+  while (i < t.size() && t[i] >= '0' && t[i] <= '9') ++i;
+  const std::string num = t.substr(0, i);
+  const std::string unit = t.substr(i);
+  int mult = 0;
+  if (num == "1") {
+    mult = 0;
+  } else if (num == "10") {
+    mult = 1;
+  } else if (num == "100") {
+    mult = 2;
+  } else {
+    return false;
+  }
+  for (const Unit& u : kUnits) {
+    if (unit == u.name) {
+      pow = u.pow + mult;
+      return true;
+    }
+  }
+  return false;
+}
+
+std::string timescale_text(int pow) {
+  for (const Unit& u : kUnits) {
+    if (pow >= u.pow && pow <= u.pow + 2) {
+      return fmt::format("{}{}", pow == u.pow ? "1" : pow == u.pow + 1 ? "10" : "100", u.name);
+    }
+  }
+  return fmt::format("1e{}fs", pow);
+}
+
+void split_reference(std::string_view ref, std::string& name, int& msb, int& lsb) {
+  msb = -1;
+  lsb = -1;
+  std::string_view s = trim(ref);
+  if (!s.empty() && s.back() == ']') {
+    const std::size_t lb = s.rfind('[');
+    if (lb != std::string_view::npos) {
+      const std::string_view inner = s.substr(lb + 1, s.size() - lb - 2);
+      const std::string_view base = trim(s.substr(0, lb));
+      const std::size_t colon = inner.find(':');
+      int a = 0;
+      int b = 0;
+      if (colon != std::string_view::npos && parse_int(inner.substr(0, colon), a) &&
+          parse_int(inner.substr(colon + 1), b) && !base.empty()) {
+        msb = a;
+        lsb = b;
+        // A range after a single index ("mem[3] [7:0]"): keep the index, without blanks.
+        split_reference(base, name, a, b);
+        return;
+      }
+      if (parse_int(inner, a) && !base.empty()) {
+        name = fmt::format("{}[{}]", base, a);
+        return;
+      }
+    }
+  } else if (!s.empty() && s.back() == ')') {
+    const std::size_t lp = s.rfind('(');
+    int a = 0;
+    if (lp != std::string_view::npos && lp > 0 &&
+        parse_int(s.substr(lp + 1, s.size() - lp - 2), a)) {
+      name = fmt::format("{}({})", trim(s.substr(0, lp)), a);
+      return;
+    }
+  }
+  name = std::string(s);
+}
+
+std::unique_ptr<WaveReader> open_wave(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    fail(path, 0, fmt::format("cannot open: {}", std::strerror(errno)));
+  }
+  if (S_ISDIR(st.st_mode)) fail(path, 0, "cannot open: is a directory");
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (f == nullptr) fail(path, 0, fmt::format("cannot open: {}", std::strerror(errno)));
+  const int first = std::fgetc(f);
+  std::fclose(f);
+  // FST starts with a header block (type 0) or a gzip wrapper block (type 254).
+  if (first == 0 || first == 254) return open_fst(path);
+  return open_vcd(path);
+}
+
+}  // namespace dpc31::wavediff

@@ -1,0 +1,1137 @@
+// The comparison engine: names to pairs (strip, map, split vectors, filters), the time-ordered
+// walk over both files (event mode) or over the clock edges of each (clock mode), difference
+// stretches with tolerance, and the diff VCD and WaveDrom outputs.
+#include "wavediff.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <deque>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <unordered_map>
+#include <unordered_set>
+
+namespace dpc31::wavediff {
+
+namespace {
+
+constexpr std::uint32_t kNone = UINT32_MAX;
+
+std::uint64_t pow10(int n) {
+  std::uint64_t v = 1;
+  for (int i = 0; i < n; ++i) v *= 10;
+  return v;
+}
+
+std::string fmt_real(double d) {
+  if (std::isnan(d)) return "x";
+  return fmt::format("{}", d);
+}
+
+bool bits_equal(std::string_view a, std::string_view b, XzPolicy p) {
+  if (a.size() == b.size() && a == b) return true;
+  if (p == XzPolicy::strict && a.size() == b.size()) return false;
+  const std::size_t n = std::max(a.size(), b.size());
+  const std::size_t pa = n - a.size();
+  const std::size_t pb = n - b.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    char ca = i < pa ? '0' : a[i - pa];
+    char cb = i < pb ? '0' : b[i - pb];
+    if (ca == cb) continue;
+    const bool xa = ca == 'x' || ca == 'z';
+    const bool xb = cb == 'x' || cb == 'z';
+    if (p == XzPolicy::wildcard) {
+      if (xa || xb) continue;
+      return false;
+    }
+    if (p == XzPolicy::zero) {
+      if (xa) ca = '0';
+      if (xb) cb = '0';
+      if (ca == cb) continue;
+    }
+    return false;
+  }
+  return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Signals of one side.
+
+struct LSig {
+  std::string name;  // matched name: after strip and --map
+  std::string orig;  // after strip (B: before --map)
+  std::uint32_t width = 1;
+  bool real = false;
+  int msb = -1;
+  int lsb = -1;
+  std::uint32_t slot = kNone;            // the whole slot, or
+  std::vector<std::uint32_t> bit_slots;  // a joined vector: one 1-bit slot per bit, MSB first
+  bool joined_member = false;            // a bit used by a joined vector
+  mutable std::string scratch;
+};
+
+struct Side {
+  std::unique_ptr<WaveReader> r;
+  const char* label = "A";
+  std::uint64_t ratio = 1;  // common units per file unit
+  std::vector<LSig> sigs;
+  std::vector<std::uint32_t> slot_begin;  // slot -> pairs watching it (CSR)
+  std::vector<std::uint32_t> slot_pairs;
+
+  [[nodiscard]] std::string_view bits(const LSig& l) const {
+    if (l.bit_slots.empty()) return r->slots()[l.slot].bits;
+    l.scratch.resize(l.bit_slots.size());
+    for (std::size_t i = 0; i < l.bit_slots.size(); ++i) {
+      l.scratch[i] = r->slots()[l.bit_slots[i]].bits[0];
+    }
+    return l.scratch;
+  }
+  [[nodiscard]] double real(const LSig& l) const { return r->slots()[l.slot].value; }
+  [[nodiscard]] std::string text(const LSig& l) const {
+    return l.real ? fmt_real(real(l)) : std::string(bits(l));
+  }
+  std::uint64_t norm(std::uint64_t t) const {
+    std::uint64_t v = 0;
+    if (__builtin_mul_overflow(t, ratio, &v)) {
+      fail(r->path(), r->line(), "time too large to bring to the common unit");
+    }
+    return v;
+  }
+};
+
+std::string strip_name(const std::string& name, const std::string& prefix) {
+  if (prefix.empty()) return name;
+  if (name.size() > prefix.size() + 1 && name.compare(0, prefix.size(), prefix) == 0 &&
+      name[prefix.size()] == '.') {
+    return name.substr(prefix.size() + 1);
+  }
+  return name;
+}
+
+// The scope components shared by every name of a side ("TOP", "tb", "dut" ...).
+std::vector<std::string> common_scopes(const std::vector<Var>& vars) {
+  std::vector<std::string> common;
+  bool first = true;
+  for (const Var& v : vars) {
+    std::vector<std::string> parts;
+    std::size_t b = 0;
+    for (std::size_t i = 0; i < v.name.size(); ++i) {
+      if (v.name[i] == '.') {
+        parts.push_back(v.name.substr(b, i - b));
+        b = i + 1;
+      }
+    }
+    if (first) {
+      common = parts;
+      first = false;
+    } else {
+      std::size_t k = 0;
+      while (k < common.size() && k < parts.size() && common[k] == parts[k]) ++k;
+      common.resize(k);
+    }
+  }
+  return common;
+}
+
+std::vector<std::string> prefixes(const std::vector<std::string>& scopes) {
+  std::vector<std::string> out{""};
+  std::string p;
+  for (const auto& s : scopes) {
+    p += (p.empty() ? "" : ".") + s;
+    out.push_back(p);
+  }
+  return out;
+}
+
+struct MapEntry {
+  std::string a;
+  std::string b;
+  std::uint64_t line = 0;
+  bool used_a = false;
+  bool used_b = false;
+};
+
+std::vector<MapEntry> read_map(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) fail(path, 0, fmt::format("cannot open: {}", std::strerror(errno)));
+  std::vector<MapEntry> out;
+  std::unordered_map<std::string, std::uint64_t> seen_a;
+  std::unordered_map<std::string, std::uint64_t> seen_b;
+  std::string line;
+  std::uint64_t n = 0;
+  auto trim = [](std::string s) {
+    const auto b = s.find_first_not_of(" \t\r");
+    if (b == std::string::npos) return std::string();
+    const auto e = s.find_last_not_of(" \t\r");
+    return s.substr(b, e - b + 1);
+  };
+  while (std::getline(f, line)) {
+    ++n;
+    const auto hash = line.find('#');
+    if (hash != std::string::npos) line.resize(hash);
+    line = trim(line);
+    if (line.empty()) continue;
+    const auto eq = line.find('=');
+    if (eq == std::string::npos || line.find('=', eq + 1) != std::string::npos) {
+      fail(path, n, "expected 'nameA = nameB'");
+    }
+    MapEntry e{trim(line.substr(0, eq)), trim(line.substr(eq + 1)), n};
+    auto blank = [](const std::string& s) {
+      return s.empty() || s.find_first_of(" \t") != std::string::npos;
+    };
+    if (blank(e.a) || blank(e.b)) fail(path, n, "expected 'nameA = nameB' (one name on each side)");
+    if (auto it = seen_a.find(e.a); it != seen_a.end()) {
+      fail(path, n, fmt::format("'{}' is already mapped on line {}", e.a, it->second));
+    }
+    if (auto it = seen_b.find(e.b); it != seen_b.end()) {
+      fail(path, n, fmt::format("'{}' is already mapped on line {}", e.b, it->second));
+    }
+    seen_a.emplace(e.a, n);
+    seen_b.emplace(e.b, n);
+    out.push_back(std::move(e));
+  }
+  return out;
+}
+
+// "base[3]" or "base(3)": the base and index of a one-bit signal of a split vector.
+bool bit_of(const std::string& name, std::string& base, int& idx) {
+  if (name.size() < 4) return false;
+  const char close = name.back();
+  const char open = close == ']' ? '[' : close == ')' ? '(' : 0;
+  if (open == 0) return false;
+  const auto p = name.rfind(open);
+  if (p == std::string::npos || p == 0 || p + 2 >= name.size()) return false;
+  int v = 0;
+  for (std::size_t i = p + 1; i + 1 < name.size(); ++i) {
+    if (name[i] < '0' || name[i] > '9' || v > 100'000'000) return false;
+    v = v * 10 + (name[i] - '0');
+  }
+  base = name.substr(0, p);
+  idx = v;
+  return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+struct Pair {
+  std::uint32_t a = 0;
+  std::uint32_t b = 0;
+  std::string name;
+  bool real = false;
+  bool dirty = false;
+  bool a_changed = false;
+  bool b_changed = false;
+  bool differs = false;   // raw state at the last comparison
+  bool mismatch = false;  // inside a stretch of difference
+  std::uint64_t start_key = 0;
+  Point start_pt;
+  std::string start_a;
+  std::string start_b;
+  std::optional<std::string> start_common;
+  std::string last_common;
+  bool has_common = false;
+  std::uint64_t count = 0;
+  Divergence first;
+  Point last;
+};
+
+class Engine;
+using Hook = std::function<bool(Engine&, const Point&, bool full)>;
+
+class Engine {
+ public:
+  explicit Engine(const Options& o) : o_(o) {}
+
+  void setup(Report& rep);
+  void run(const Hook& hook);
+  void finish(Report& rep);
+
+  const Options& o_;
+  Side A;
+  Side B;
+  std::vector<Pair> pairs;
+  std::vector<std::uint32_t> dirty;
+  int pow = 0;
+  std::uint32_t clock_a = kNone;  // LSig indices
+  std::uint32_t clock_b = kNone;
+
+  [[nodiscard]] bool clock_mode() const { return !o_.clock_a.empty(); }
+
+ private:
+  std::uint64_t tol_ = 0;
+
+  void build_names(Side& s, const std::string& strip, std::vector<MapEntry>* map);
+  void join_bits(Side& s, const Side& other);
+  std::uint32_t find_clock(const Side& s, const std::string& name) const;
+  void mark(Side& s, bool is_a);
+  void compare(std::uint32_t pi, std::uint64_t key, const Point& pt);
+  void compare_all(std::uint64_t key, const Point& pt);
+  void compare_dirty(std::uint64_t key, const Point& pt);
+  void clear_dirty();
+  void record(Pair& p, bool open);
+  void run_events(const Hook& hook);
+  void run_clock(const Hook& hook);
+  std::uint64_t to_common(std::uint64_t fs, bool round_up) const {
+    const std::uint64_t u = pow10(pow);
+    return fs / u + (round_up && fs % u != 0 ? 1 : 0);
+  }
+  std::vector<Structural> clock_structural_;
+  std::uint64_t edges_ = 0;
+};
+
+void Engine::build_names(Side& s, const std::string& strip, std::vector<MapEntry>* map) {
+  std::unordered_map<std::string, MapEntry*> b2a;
+  if (map != nullptr) {
+    for (MapEntry& e : *map) b2a.emplace(e.b, &e);
+  }
+  s.sigs.clear();
+  for (const Var& v : s.r->vars()) {
+    const Slot& sl = s.r->slots()[v.slot];
+    LSig l;
+    l.orig = strip_name(v.name, strip);
+    l.name = l.orig;
+    if (map != nullptr) {
+      if (auto it = b2a.find(l.orig); it != b2a.end()) {
+        l.name = it->second->a;
+        it->second->used_b = true;
+      } else {
+        std::string base;
+        int idx = 0;
+        if (bit_of(l.orig, base, idx)) {
+          if (auto jt = b2a.find(base); jt != b2a.end()) {
+            l.name = jt->second->a + l.orig.substr(base.size());
+            jt->second->used_b = true;
+          }
+        }
+      }
+    }
+    l.width = sl.width;
+    l.real = sl.real;
+    l.msb = v.msb;
+    l.lsb = v.lsb;
+    l.slot = v.slot;
+    s.sigs.push_back(std::move(l));
+  }
+}
+
+void Engine::join_bits(Side& s, const Side& other) {
+  std::unordered_set<std::string> own;
+  for (const LSig& l : s.sigs) own.insert(l.name);
+  std::unordered_map<std::string, std::uint32_t> theirs;
+  for (std::uint32_t i = 0; i < other.sigs.size(); ++i) theirs.emplace(other.sigs[i].name, i);
+  std::map<std::string, std::vector<std::pair<int, std::uint32_t>>> groups;
+  for (std::uint32_t i = 0; i < s.sigs.size(); ++i) {
+    const LSig& l = s.sigs[i];
+    std::string base;
+    int idx = 0;
+    if (l.width == 1 && !l.real && l.bit_slots.empty() && bit_of(l.name, base, idx)) {
+      groups[base].emplace_back(idx, i);
+    }
+  }
+  for (auto& [base, members] : groups) {
+    if (own.count(base) != 0) continue;
+    auto it = theirs.find(base);
+    if (it == theirs.end() || other.sigs[it->second].real) continue;
+    std::sort(members.begin(), members.end());
+    bool ok = true;
+    for (std::size_t k = 1; k < members.size(); ++k) {
+      ok = ok && members[k].first == members[k - 1].first + 1;
+    }
+    if (!ok) continue;
+    const LSig& o = other.sigs[it->second];
+    const int lo = members.front().first;
+    const int hi = members.back().first;
+    // Leftmost bit first, as the other side declares its range: [hi:lo] unless it is [lo:hi].
+    const bool ascending = o.msb >= 0 && o.lsb >= 0 && o.msb < o.lsb && o.msb == lo && o.lsb == hi;
+    LSig j;
+    j.name = base;
+    const LSig& m0 = s.sigs[members.front().second];
+    j.orig = m0.orig.substr(0, m0.orig.size() - (m0.name.size() - base.size()));
+    j.width = static_cast<std::uint32_t>(members.size());
+    j.msb = ascending ? lo : hi;
+    j.lsb = ascending ? hi : lo;
+    for (std::size_t k = 0; k < members.size(); ++k) {
+      const auto& m = members[ascending ? k : members.size() - 1 - k];
+      j.bit_slots.push_back(s.sigs[m.second].slot);
+      s.sigs[m.second].joined_member = true;
+    }
+    s.sigs.push_back(std::move(j));
+  }
+}
+
+std::uint32_t Engine::find_clock(const Side& s, const std::string& name) const {
+  for (std::uint32_t pass = 0; pass < 3; ++pass) {
+    for (std::uint32_t i = 0; i < s.sigs.size(); ++i) {
+      const LSig& l = s.sigs[i];
+      if (!l.bit_slots.empty()) continue;
+      const std::string& n = pass == 0 ? l.name : pass == 1 ? l.orig : s.r->vars()[i].name;
+      if (n == name) return i;
+    }
+  }
+  fail(s.r->path(), 0, fmt::format("no clock signal '{}'", name));
+}
+
+void Engine::setup(Report& rep) {
+  A.r = open_wave(o_.file_a);
+  B.r = open_wave(o_.file_b);
+  A.label = "A";
+  B.label = "B";
+  pow = std::min(A.r->timescale_pow(), B.r->timescale_pow());
+  A.ratio = pow10(A.r->timescale_pow() - pow);
+  B.ratio = pow10(B.r->timescale_pow() - pow);
+
+  rep.clock_mode = clock_mode();
+  rep.file_a = o_.file_a;
+  rep.file_b = o_.file_b;
+  rep.format_a = A.r->format();
+  rep.format_b = B.r->format();
+  rep.pow_a = A.r->timescale_pow();
+  rep.pow_b = B.r->timescale_pow();
+  rep.pow = pow;
+  rep.edge = o_.edge;
+  rep.ignore_missing = o_.ignore_missing;
+
+  if (clock_mode()) {
+    if (o_.tolerance_fs != 0)
+      throw InputError("wavediff: --tolerance is for event mode; use --tolerance-cycles");
+  } else {
+    if (o_.tolerance_cycles != 0) throw InputError("wavediff: --tolerance-cycles needs --clock");
+    if ((o_.start && o_.start->cycles) || (o_.end && o_.end->cycles)) {
+      throw InputError("wavediff: cycle bounds (c123) need --clock");
+    }
+    if (!o_.clock_b.empty()) throw InputError("wavediff: --clock-b needs --clock");
+  }
+  tol_ = clock_mode() ? o_.tolerance_cycles : to_common(o_.tolerance_fs, false);
+  if (!clock_mode() && o_.end) {  // an FST reader may skip the blocks after the window
+    const std::uint64_t e = to_common(o_.end->value, false);
+    A.r->set_limit_end(e / A.ratio);
+    B.r->set_limit_end(e / B.ratio);
+  }
+
+  std::vector<MapEntry> map;
+  if (!o_.map_file.empty()) map = read_map(o_.map_file);
+
+  // Strip: explicit scopes, or (auto) the depths that match the most names.
+  std::string sa = o_.strip_a;
+  std::string sb = o_.strip_b;
+  auto check_strip = [](const Side& s, const std::string& p) {
+    if (p.empty()) return;
+    for (const Var& v : s.r->vars()) {
+      if (strip_name(v.name, p) != v.name) return;
+    }
+    fail(s.r->path(), 0, fmt::format("no signal under scope '{}'", p));
+  };
+  check_strip(A, sa);
+  check_strip(B, sb);
+  if (o_.strip_auto) {
+    const auto pa = o_.strip_a.empty() ? prefixes(common_scopes(A.r->vars()))
+                                       : std::vector<std::string>{o_.strip_a};
+    const auto pb = o_.strip_b.empty() ? prefixes(common_scopes(B.r->vars()))
+                                       : std::vector<std::string>{o_.strip_b};
+    std::size_t best = 0;
+    std::size_t best_depth = SIZE_MAX;
+    for (std::size_t i = 0; i < pa.size(); ++i) {
+      std::unordered_set<std::string> names;
+      for (const Var& v : A.r->vars()) names.insert(strip_name(v.name, pa[i]));
+      for (std::size_t k = 0; k < pb.size(); ++k) {
+        std::vector<MapEntry> scratch = map;
+        build_names(B, pb[k], &scratch);
+        std::size_t n = 0;
+        for (const LSig& l : B.sigs) n += names.count(l.name);
+        if (n > best || (n == best && i + k < best_depth)) {
+          best = n;
+          best_depth = i + k;
+          sa = pa[i];
+          sb = pb[k];
+        }
+      }
+    }
+  }
+  build_names(A, sa, nullptr);
+  build_names(B, sb, &map);
+  join_bits(A, B);
+  join_bits(B, A);
+  if (!map.empty()) {
+    std::unordered_set<std::string> an;
+    for (const LSig& l : A.sigs) an.insert(l.name);
+    for (MapEntry& e : map) {
+      if (an.count(e.a) == 0) {
+        rep.warnings.push_back(
+            fmt::format("{}:{}: warning: no signal '{}' in A", o_.map_file, e.line, e.a));
+      }
+      if (!e.used_b) {
+        rep.warnings.push_back(
+            fmt::format("{}:{}: warning: no signal '{}' in B", o_.map_file, e.line, e.b));
+      }
+    }
+  }
+
+  if (clock_mode()) {
+    clock_a = find_clock(A, o_.clock_a);
+    clock_b = find_clock(B, o_.clock_b.empty() ? A.sigs[clock_a].name : o_.clock_b);
+    for (auto [s, c] : {std::pair{&A, clock_a}, std::pair{&B, clock_b}}) {
+      if (s->sigs[c].real || s->sigs[c].width != 1) {
+        fail(s->r->path(), 0, fmt::format("clock '{}' is not a 1-bit signal", s->sigs[c].name));
+      }
+    }
+    rep.clock_a = A.sigs[clock_a].name;
+    rep.clock_b = B.sigs[clock_b].orig;
+  }
+
+  // Pairs by name, after the filters.
+  auto wanted = [this](const std::string& n) {
+    bool in = o_.include.empty();
+    for (const auto& g : o_.include) in = in || glob_match(g, n);
+    for (const auto& g : o_.exclude) in = in && !glob_match(g, n);
+    return in;
+  };
+  auto index = [&](Side& s, std::uint32_t clock) {
+    std::map<std::string, std::uint32_t> m;
+    for (std::uint32_t i = 0; i < s.sigs.size(); ++i) {
+      const LSig& l = s.sigs[i];
+      if (l.joined_member || i == clock || !wanted(l.name)) continue;
+      if (!m.emplace(l.name, i).second) {
+        rep.warnings.push_back(fmt::format(
+            "{}: warning: two signals named '{}', the second ignored", s.r->path(), l.name));
+      }
+    }
+    return m;
+  };
+  const auto ia = index(A, clock_a);
+  const auto ib = index(B, clock_b);
+  for (const auto& [name, i] : ia) {
+    auto it = ib.find(name);
+    if (it == ib.end()) {
+      rep.only_a.push_back(name);
+      continue;
+    }
+    const LSig& la = A.sigs[i];
+    const LSig& lb = B.sigs[it->second];
+    if (la.real != lb.real) {
+      rep.structural.push_back(
+          {name, fmt::format("real in {}, {} bits in {}", la.real ? "A" : "B",
+                             la.real ? lb.width : la.width, la.real ? "B" : "A")});
+      continue;
+    }
+    if (!la.real && la.width != lb.width) {
+      rep.structural.push_back(
+          {name,
+           fmt::format("{} bits in A, {} bits in B (compared zero-extended)", la.width, lb.width)});
+    }
+    Pair p;
+    p.a = i;
+    p.b = it->second;
+    p.name = name;
+    p.real = la.real;
+    pairs.push_back(std::move(p));
+  }
+  for (const auto& [name, i] : ib) {
+    if (ia.count(name) == 0) rep.only_b.push_back(B.sigs[i].orig);
+  }
+  rep.compared = pairs.size();
+  if (pairs.empty() && rep.only_a.empty() && rep.only_b.empty() && rep.structural.empty()) {
+    throw InputError("wavediff: no signals to compare (check --include/--exclude and --strip)");
+  }
+
+  // Which pairs each slot feeds.
+  for (Side* s : {&A, &B}) {
+    std::vector<std::vector<std::uint32_t>> lists(s->r->slots().size());
+    for (std::uint32_t pi = 0; pi < pairs.size(); ++pi) {
+      const LSig& l = s->sigs[s == &A ? pairs[pi].a : pairs[pi].b];
+      if (l.bit_slots.empty()) {
+        lists[l.slot].push_back(pi);
+      } else {
+        for (std::uint32_t sl : l.bit_slots) lists[sl].push_back(pi);
+      }
+    }
+    s->slot_begin.assign(lists.size() + 1, 0);
+    for (std::size_t k = 0; k < lists.size(); ++k) {
+      s->slot_begin[k + 1] = s->slot_begin[k] + static_cast<std::uint32_t>(lists[k].size());
+      s->slot_pairs.insert(s->slot_pairs.end(), lists[k].begin(), lists[k].end());
+    }
+  }
+}
+
+void Engine::mark(Side& s, bool is_a) {
+  const auto& changed = s.r->step();
+  for (const std::uint32_t slot : changed) {
+    for (std::uint32_t k = s.slot_begin[slot]; k < s.slot_begin[slot + 1]; ++k) {
+      const std::uint32_t pi = s.slot_pairs[k];
+      Pair& p = pairs[pi];
+      if (!p.dirty) {
+        p.dirty = true;
+        dirty.push_back(pi);
+      }
+      (is_a ? p.a_changed : p.b_changed) = true;
+    }
+  }
+}
+
+void Engine::clear_dirty() {
+  for (const std::uint32_t pi : dirty) {
+    Pair& p = pairs[pi];
+    p.dirty = p.a_changed = p.b_changed = false;
+  }
+  dirty.clear();
+}
+
+void Engine::record(Pair& p, bool open) {
+  if (p.count == 0) {
+    p.first.at = p.start_pt;
+    p.first.a = p.start_a;
+    p.first.b = p.start_b;
+    p.first.last_common = p.start_common;
+    p.first.open = open;
+  }
+  ++p.count;
+  p.last = p.start_pt;
+}
+
+void Engine::compare(std::uint32_t pi, std::uint64_t key, const Point& pt) {
+  Pair& p = pairs[pi];
+  const LSig& la = A.sigs[p.a];
+  const LSig& lb = B.sigs[p.b];
+  bool eq = false;
+  std::string_view va;
+  std::string_view vb;
+  if (p.real) {
+    const double x = A.real(la);
+    const double y = B.real(lb);
+    eq = x == y || (std::isnan(x) && std::isnan(y));
+  } else {
+    va = A.bits(la);
+    vb = B.bits(lb);
+    eq = bits_equal(va, vb, o_.xz);
+  }
+  p.differs = !eq;
+  if (!eq) {
+    if (!p.mismatch) {
+      p.mismatch = true;
+      p.start_key = key;
+      p.start_pt = pt;
+      if (p.real) {
+        p.start_a = fmt_real(A.real(la));
+        p.start_b = fmt_real(B.real(lb));
+      } else {
+        p.start_a.assign(va);
+        p.start_b.assign(vb);
+      }
+      if (p.has_common) {
+        p.start_common = p.last_common;
+      } else {
+        p.start_common.reset();
+      }
+    }
+    return;
+  }
+  if (p.mismatch) {
+    p.mismatch = false;
+    if (key - p.start_key > tol_) record(p, false);
+  }
+  if (p.real) {
+    p.last_common = fmt_real(A.real(la));
+  } else {
+    p.last_common.assign(va);
+  }
+  p.has_common = true;
+}
+
+void Engine::compare_all(std::uint64_t key, const Point& pt) {
+  for (std::uint32_t pi = 0; pi < pairs.size(); ++pi) compare(pi, key, pt);
+}
+
+void Engine::compare_dirty(std::uint64_t key, const Point& pt) {
+  for (const std::uint32_t pi : dirty) compare(pi, key, pt);
+}
+
+void Engine::run(const Hook& hook) {
+  if (clock_mode()) {
+    run_clock(hook);
+  } else {
+    run_events(hook);
+  }
+}
+
+void Engine::run_events(const Hook& hook) {
+  const bool has_start = o_.start.has_value();
+  const std::uint64_t start = has_start ? to_common(o_.start->value, true) : 0;
+  const std::uint64_t end = o_.end ? to_common(o_.end->value, false) : UINT64_MAX;
+  bool started = false;
+  bool any = false;
+  for (;;) {
+    const bool ha = A.r->has_next();
+    const bool hb = B.r->has_next();
+    if (!ha && !hb) break;
+    const std::uint64_t ta = ha ? A.norm(A.r->next_time()) : UINT64_MAX;
+    const std::uint64_t tb = hb ? B.norm(B.r->next_time()) : UINT64_MAX;
+    const std::uint64_t t = std::min(ta, tb);
+    if (t > end) break;
+    if (!started && has_start && any && t > start) {
+      const Point ps{start, start, 0};
+      compare_all(start, ps);
+      started = true;
+      clear_dirty();
+      if (hook && !hook(*this, ps, true)) return;
+    }
+    if (ta == t) mark(A, true);
+    if (tb == t) mark(B, false);
+    any = true;
+    if (t < start) {
+      clear_dirty();
+      continue;
+    }
+    const Point pt{t, t, 0};
+    const bool full = !started;
+    if (full) {
+      compare_all(t, pt);
+      started = true;
+    } else {
+      compare_dirty(t, pt);
+    }
+    const bool go_on = !hook || hook(*this, pt, full);
+    clear_dirty();
+    if (!go_on) return;
+  }
+  if (!started && any && has_start && start <= end) {
+    const Point ps{start, start, 0};
+    compare_all(start, ps);
+    clear_dirty();
+    if (hook) hook(*this, ps, true);
+  }
+}
+
+void Engine::run_clock(const Hook& hook) {
+  struct Clk {
+    Side* s;
+    std::uint32_t slot;
+    char prev = 'x';
+  };
+  Clk ca{&A, A.sigs[clock_a].slot};
+  Clk cb{&B, B.sigs[clock_b].slot};
+  const Edge edge = o_.edge;
+  auto advance = [&](Clk& c, bool is_a) {
+    while (c.s->r->has_next()) {
+      mark(*c.s, is_a);
+      const char now = c.s->r->slots()[c.slot].bits[0];
+      bool e = false;
+      if (c.prev == '0' && now == '1') e = edge != Edge::falling;
+      if (c.prev == '1' && now == '0') e = edge != Edge::rising;
+      c.prev = now;
+      if (e) return true;
+    }
+    return false;
+  };
+  const auto& sb = o_.start;
+  const auto& eb = o_.end;
+  const std::uint64_t start_t = sb && !sb->cycles ? to_common(sb->value, true) : 0;
+  const std::uint64_t end_t = eb && !eb->cycles ? to_common(eb->value, false) : UINT64_MAX;
+  const std::uint64_t start_c = sb && sb->cycles ? sb->value : 0;
+  const std::uint64_t end_c = eb && eb->cycles ? eb->value : UINT64_MAX;
+  bool started = false;
+  for (std::uint64_t n = 0;; ++n) {
+    if (n > end_c) break;
+    const bool ea = advance(ca, true);
+    const bool eb2 = advance(cb, false);
+    if (!ea || !eb2) {
+      if (ea && A.norm(A.r->time()) <= end_t) {
+        clock_structural_.push_back(
+            {A.sigs[clock_a].name,
+             fmt::format("clock: B has only {} {} edges, A has more", n, edge_name(edge))});
+      } else if (eb2 && !ea && !(o_.end && !o_.end->cycles)) {
+        clock_structural_.push_back(
+            {A.sigs[clock_a].name,
+             fmt::format("clock: A has only {} {} edges, B has more", n, edge_name(edge))});
+      }
+      break;
+    }
+    const Point pt{A.norm(A.r->time()), B.norm(B.r->time()), n};
+    if (pt.time > end_t) break;
+    if (n < start_c || pt.time < start_t) {
+      clear_dirty();
+      continue;
+    }
+    ++edges_;
+    const bool full = !started;
+    if (full) {
+      compare_all(n, pt);
+      started = true;
+    } else {
+      compare_dirty(n, pt);
+    }
+    const bool go_on = !hook || hook(*this, pt, full);
+    clear_dirty();
+    if (!go_on) return;
+  }
+}
+
+void Engine::finish(Report& rep) {
+  for (Pair& p : pairs) {
+    if (p.mismatch) {
+      p.mismatch = false;
+      record(p, true);
+    }
+  }
+  rep.structural.insert(rep.structural.end(), clock_structural_.begin(), clock_structural_.end());
+  rep.edges = edges_;
+  std::vector<const Pair*> d;
+  for (const Pair& p : pairs) {
+    if (p.count > 0) d.push_back(&p);
+  }
+  const bool cm = clock_mode();
+  std::stable_sort(d.begin(), d.end(), [cm](const Pair* x, const Pair* y) {
+    return cm ? x->first.at.cycle < y->first.at.cycle : x->first.at.time < y->first.at.time;
+  });
+  for (const Pair* p : d) {
+    SignalDiff s;
+    s.name = p->name;
+    s.name_b = B.sigs[p->b].orig;
+    s.count = p->count;
+    s.first = p->first;
+    s.last = p->last;
+    rep.diffs.push_back(std::move(s));
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Diff VCD: scopes a/, b/ and diff/ with every compared signal under its own hierarchy.
+
+std::string vcd_id(std::size_t i) {
+  std::string id;
+  do {
+    id += static_cast<char>('!' + i % 94);
+    i /= 94;
+  } while (i != 0);
+  return id;
+}
+
+std::vector<std::string> split_dots(const std::string& n) {
+  std::vector<std::string> parts;
+  std::size_t b = 0;
+  for (std::size_t i = 0; i <= n.size(); ++i) {
+    if (i == n.size() || n[i] == '.') {
+      parts.push_back(n.substr(b, i - b));
+      b = i + 1;
+    }
+  }
+  return parts;
+}
+
+class DiffVcd {
+ public:
+  DiffVcd(const std::string& path, Engine& e) : path_(path) {
+    f_ = std::fopen(path.c_str(), "wb");
+    if (f_ == nullptr) fail(path, 0, fmt::format("cannot write: {}", std::strerror(errno)));
+    const std::size_t n = e.pairs.size();
+    ids_.resize(n * 3);
+    for (std::size_t i = 0; i < ids_.size(); ++i) ids_[i] = vcd_id(i);
+    cycle_id_ = vcd_id(ids_.size());
+    flag_.assign(n, -1);
+    std::vector<std::pair<std::vector<std::string>, std::size_t>> order;
+    for (std::size_t i = 0; i < n; ++i) order.emplace_back(split_dots(e.pairs[i].name), i);
+    std::sort(order.begin(), order.end());
+    std::string h =
+        fmt::format("$version dpc31 wavediff $end\n$timescale {} $end\n", timescale_text(e.pow));
+    if (e.clock_mode()) {
+      h += fmt::format(
+          "$scope module wavediff $end\n$var integer 32 {} cycle $end\n$upscope $end\n", cycle_id_);
+    }
+    const char* tops[3] = {"a", "b", "diff"};
+    for (int side = 0; side < 3; ++side) {
+      h += fmt::format("$scope module {} $end\n", tops[side]);
+      std::vector<std::string> stack;
+      for (const auto& [parts, i] : order) {
+        std::size_t common = 0;
+        while (common < stack.size() && common + 1 < parts.size() &&
+               stack[common] == parts[common]) {
+          ++common;
+        }
+        while (stack.size() > common) {
+          h += "$upscope $end\n";
+          stack.pop_back();
+        }
+        for (std::size_t k = common; k + 1 < parts.size(); ++k) {
+          h += fmt::format("$scope module {} $end\n", parts[k]);
+          stack.push_back(parts[k]);
+        }
+        const Pair& p = e.pairs[i];
+        const std::string& leaf = parts.back();
+        const std::string& id = ids_[i * 3 + static_cast<std::size_t>(side)];
+        if (side == 2) {
+          h += fmt::format("$var wire 1 {} {} $end\n", id, leaf);
+        } else if (p.real) {
+          h += fmt::format("$var real 64 {} {} $end\n", id, leaf);
+        } else {
+          const LSig& l = side == 0 ? e.A.sigs[p.a] : e.B.sigs[p.b];
+          if (l.width == 1) {
+            h += fmt::format("$var wire 1 {} {} $end\n", id, leaf);
+          } else {
+            h += fmt::format("$var wire {} {} {} [{}:0] $end\n", l.width, id, leaf, l.width - 1);
+          }
+        }
+      }
+      while (!stack.empty()) {
+        h += "$upscope $end\n";
+        stack.pop_back();
+      }
+      h += "$upscope $end\n";
+    }
+    h += "$enddefinitions $end\n";
+    put(h);
+  }
+  ~DiffVcd() {
+    if (f_ != nullptr) std::fclose(f_);
+  }
+  DiffVcd(const DiffVcd&) = delete;
+  DiffVcd& operator=(const DiffVcd&) = delete;
+
+  void point(Engine& e, const Point& pt, bool full) {
+    std::string& s = line_;
+    s.clear();
+    s += fmt::format("#{}\n", pt.time);
+    if (e.clock_mode()) s += fmt::format("b{:b} {}\n", pt.cycle, cycle_id_);
+    auto emit = [&](std::uint32_t pi) {
+      const Pair& p = e.pairs[pi];
+      if (full || p.a_changed) value(s, e.A, e.A.sigs[p.a], ids_[pi * 3]);
+      if (full || p.b_changed) value(s, e.B, e.B.sigs[p.b], ids_[pi * 3 + 1]);
+      const int f = p.differs ? 1 : 0;
+      if (full || f != flag_[pi]) {
+        s += static_cast<char>('0' + f);
+        s += ids_[pi * 3 + 2];
+        s += '\n';
+        flag_[pi] = static_cast<signed char>(f);
+      }
+    };
+    if (full) {
+      for (std::uint32_t pi = 0; pi < e.pairs.size(); ++pi) emit(pi);
+    } else {
+      for (const std::uint32_t pi : e.dirty) emit(pi);
+    }
+    put(s);
+  }
+
+  void close() {
+    if (std::fclose(f_) != 0) {
+      f_ = nullptr;
+      fail(path_, 0, fmt::format("cannot write: {}", std::strerror(errno)));
+    }
+    f_ = nullptr;
+  }
+
+ private:
+  std::string path_;
+  std::FILE* f_ = nullptr;
+  std::vector<std::string> ids_;
+  std::string cycle_id_;
+  std::vector<signed char> flag_;
+  std::string line_;
+
+  void put(const std::string& s) {
+    if (std::fwrite(s.data(), 1, s.size(), f_) != s.size()) {
+      fail(path_, 0, fmt::format("cannot write: {}", std::strerror(errno)));
+    }
+  }
+  static void value(std::string& s, const Side& side, const LSig& l, const std::string& id) {
+    if (l.real) {
+      const double d = side.real(l);
+      s += std::isnan(d) ? std::string("rnan") : fmt::format("r{}", d);
+      s += ' ';
+    } else if (l.width == 1) {
+      s += side.bits(l);
+    } else {
+      s += 'b';
+      s += side.bits(l);
+      s += ' ';
+    }
+    s += id;
+    s += '\n';
+  }
+};
+
+// ---------------------------------------------------------------------------------------------
+// WaveDrom: a second pass that keeps the last N points before the first divergence and N after.
+
+struct DromSample {
+  std::string label;
+  std::vector<std::string> a;
+  std::vector<std::string> b;
+  std::vector<bool> differs;
+};
+
+std::string drom_label(const std::string& v, bool real) {
+  if (real) return v;
+  if (v.size() <= 4 || v.find_first_not_of("01") != std::string::npos) return v;
+  std::string hex;
+  const std::size_t lead = v.size() % 4;
+  for (std::size_t i = 0; i < v.size();) {
+    const std::size_t len = i == 0 && lead != 0 ? lead : 4;
+    int x = 0;
+    for (std::size_t k = 0; k < len; ++k) x = x * 2 + (v[i + k] - '0');
+    hex += "0123456789abcdef"[x];
+    i += len;
+  }
+  return "0x" + hex;
+}
+
+nlohmann::ordered_json drom_row(const std::string& name, const std::vector<std::string>& values,
+                                bool real, std::uint32_t width) {
+  std::string wave;
+  nlohmann::ordered_json data = nlohmann::ordered_json::array();
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    const std::string& v = values[i];
+    if (i > 0 && v == values[i - 1]) {
+      wave += '.';
+      continue;
+    }
+    if (!real && width == 1 && v.size() == 1) {
+      wave += v[0];
+    } else if (!real && v.find_first_not_of('x') == std::string::npos) {
+      wave += 'x';
+    } else if (!real && v.find_first_not_of('z') == std::string::npos) {
+      wave += 'z';
+    } else {
+      wave += '=';
+      data.push_back(drom_label(v, real));
+    }
+  }
+  return {{"name", name}, {"wave", wave}, {"data", data}};
+}
+
+void write_wavedrom(const Options& o, const Report& rep) {
+  Engine e(o);
+  Report scratch;
+  e.setup(scratch);
+  std::vector<std::uint32_t> sel;
+  std::unordered_map<std::string, std::uint32_t> by_name;
+  for (std::uint32_t i = 0; i < e.pairs.size(); ++i) by_name.emplace(e.pairs[i].name, i);
+  for (const SignalDiff& d : rep.diffs) {
+    if (sel.size() >= 8) break;
+    if (auto it = by_name.find(d.name); it != by_name.end()) sel.push_back(it->second);
+  }
+  const SignalDiff& first = rep.diffs.front();
+  const std::uint64_t key = rep.clock_mode ? first.first.at.cycle : first.first.at.time;
+  const std::size_t w = o.wavedrom_window;
+  std::deque<DromSample> ring;
+  bool found = false;
+  std::size_t after = 0;
+  e.run([&](Engine& en, const Point& pt, bool) {
+    DromSample s;
+    s.label = rep.clock_mode ? std::to_string(pt.cycle) : time_text(pt.time, en.pow);
+    for (const std::uint32_t pi : sel) {
+      const Pair& p = en.pairs[pi];
+      s.a.push_back(en.A.text(en.A.sigs[p.a]));
+      s.b.push_back(en.B.text(en.B.sigs[p.b]));
+      s.differs.push_back(p.differs);
+    }
+    ring.push_back(std::move(s));
+    const std::uint64_t k = rep.clock_mode ? pt.cycle : pt.time;
+    if (!found) {
+      if (k >= key) {
+        found = true;
+      } else if (ring.size() > w) {
+        ring.pop_front();
+      }
+      return true;
+    }
+    return ++after < w;
+  });
+  nlohmann::ordered_json rows = nlohmann::ordered_json::array();
+  std::vector<std::string> labels;
+  for (const auto& s : ring) labels.push_back(s.label);
+  {
+    nlohmann::ordered_json data = labels;
+    rows.push_back({{"name", rep.clock_mode ? "cycle" : "time"},
+                    {"wave", std::string(labels.size(), '=')},
+                    {"data", data}});
+  }
+  for (std::size_t k = 0; k < sel.size(); ++k) {
+    const Pair& p = e.pairs[sel[k]];
+    std::vector<std::string> va;
+    std::vector<std::string> vb;
+    std::vector<std::string> vd;
+    for (const auto& s : ring) {
+      va.push_back(s.a[k]);
+      vb.push_back(s.b[k]);
+      vd.emplace_back(s.differs[k] ? "1" : "0");
+    }
+    rows.push_back(drom_row(p.name + " (a)", va, p.real, e.A.sigs[p.a].width));
+    rows.push_back(drom_row(p.name + " (b)", vb, p.real, e.B.sigs[p.b].width));
+    rows.push_back(drom_row(p.name + " (diff)", vd, false, 1));
+  }
+  const std::string when = rep.clock_mode ? fmt::format("cycle {}", first.first.at.cycle)
+                                          : time_text(first.first.at.time, rep.pow);
+  nlohmann::ordered_json j = {
+      {"signal", rows},
+      {"head", {{"text", fmt::format("first divergence: {} at {}", first.name, when)}}},
+      {"foot", {{"text", fmt::format("a: {}  b: {}", o.file_a, o.file_b)}}}};
+  std::ofstream f(o.wavedrom);
+  f << j.dump(2) << '\n';
+  if (!f) fail(o.wavedrom, 0, "cannot write");
+}
+
+}  // namespace
+
+const char* edge_name(Edge e) {
+  return e == Edge::rising ? "rising" : e == Edge::falling ? "falling" : "both";
+}
+
+Report compare(const Options& o) {
+  Report rep;
+  Engine e(o);
+  e.setup(rep);
+  std::unique_ptr<DiffVcd> dv;
+  if (!o.diff_vcd.empty()) dv = std::make_unique<DiffVcd>(o.diff_vcd, e);
+  Hook hook;
+  if (dv) {
+    hook = [&dv](Engine& en, const Point& pt, bool full) {
+      dv->point(en, pt, full);
+      return true;
+    };
+  }
+  e.run(hook);
+  e.finish(rep);
+  if (dv) dv->close();
+  if (!o.wavedrom.empty()) {
+    if (rep.diffs.empty()) {
+      std::ofstream f(o.wavedrom);
+      f << R"({"signal": [], "head": {"text": "no divergence"}})" << '\n';
+      if (!f) fail(o.wavedrom, 0, "cannot write");
+    } else {
+      write_wavedrom(o, rep);
+    }
+  }
+  return rep;
+}
+
+bool glob_match(std::string_view p, std::string_view s) {
+  std::size_t pi = 0;
+  std::size_t si = 0;
+  std::size_t star = std::string_view::npos;
+  std::size_t mark = 0;
+  while (si < s.size()) {
+    if (pi < p.size() && (p[pi] == '?' || p[pi] == s[si])) {
+      ++pi;
+      ++si;
+    } else if (pi < p.size() && p[pi] == '*') {
+      star = pi++;
+      mark = si;
+    } else if (star != std::string_view::npos) {
+      pi = star + 1;
+      si = ++mark;
+    } else {
+      return false;
+    }
+  }
+  while (pi < p.size() && p[pi] == '*') ++pi;
+  return pi == p.size();
+}
+
+}  // namespace dpc31::wavediff

@@ -1,0 +1,20 @@
+# cmake -DNM=... -DOBJCOPY=... -DLIB=libx.a -P weaken_defined.cmake
+# Makes every global symbol *defined* in a static library weak (undefined references stay as
+# they are, so the archive's members still pull each other in).
+execute_process(COMMAND ${NM} --defined-only -g -P ${LIB} OUTPUT_VARIABLE out RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "nm failed on ${LIB}")
+endif()
+string(REGEX MATCHALL "[^\n]+" lines "${out}")
+set(syms "")
+foreach(line IN LISTS lines)
+  if(line MATCHES "^([^ ]+) [TDBRV] ")
+    string(APPEND syms "${CMAKE_MATCH_1}\n")
+  endif()
+endforeach()
+set(list_file ${LIB}.weaken.txt)
+file(WRITE ${list_file} "${syms}")
+execute_process(COMMAND ${OBJCOPY} --weaken-symbols=${list_file} ${LIB} RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "objcopy failed on ${LIB}")
+endif()
