@@ -230,6 +230,15 @@ void VcdReader::parse_header() {
       if (!seen_any) error(1, "empty file");
       error(tok_line_, "truncated: end of file in the header (no $enddefinitions)");
     }
+    // libsigrok's VCD export (0.5) opens with a non-standard "META samplerate: N" line: skipped,
+    // so that sigrok-cli exports of logic-analyser captures compare.
+    if (!seen_any && t == "META") {
+      const std::uint64_t meta_line = tok_line_;
+      do {
+        if (!next_token(t))
+          error(tok_line_, "truncated: end of file in the header (no $enddefinitions)");
+      } while (tok_line_ == meta_line);
+    }
     seen_any = true;
     if (t.empty() || t[0] != '$') error(tok_line_, fmt::format("unexpected '{}' in the header", t));
     const std::string kw(t);
