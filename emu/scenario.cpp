@@ -15,6 +15,7 @@
 #include "core.hpp"  // the watchdog deadline, so `silence` stops at each state change
 #include "dp_sm.hpp"
 #include "fdl.hpp"
+#include "textfile.hpp"
 
 namespace dpc31 {
 
@@ -1417,31 +1418,8 @@ bool parse_scenario(std::string_view text, const std::string& file, Scenario& ou
 
 bool load_scenario(const std::string& path, Scenario& out, ScenarioError& err) {
   err = ScenarioError{path, 0, {}};
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) {
-    err.message = "no such file";
-    return false;
-  }
-  if (std::filesystem::is_directory(path, ec)) {
-    err.message = "is a directory, not a scenario file";
-    return false;
-  }
-  std::ifstream f(path, std::ios::binary);
-  if (!f) {
-    err.message = "cannot open the file";
-    return false;
-  }
-  std::string text(kMaxFileBytes + 1, '\0');
-  f.read(text.data(), static_cast<std::streamsize>(text.size()));
-  if (f.bad()) {
-    err.message = "cannot read the file";
-    return false;
-  }
-  text.resize(static_cast<std::size_t>(f.gcount()));
-  if (text.size() > kMaxFileBytes) {
-    err.message = fmt::format("too large for a scenario (more than {} bytes)", kMaxFileBytes);
-    return false;
-  }
+  std::string text;
+  if (!read_text_file(path, kMaxFileBytes, "scenario", text, err.message)) return false;
   return parse_scenario(text, path, out, err);
 }
 

@@ -12,6 +12,7 @@
 
 #include "dp_services.hpp"
 #include "fdl.hpp"
+#include "textfile.hpp"
 
 namespace dpc31 {
 
@@ -731,31 +732,8 @@ bool parse_trace(std::string_view text, const std::string& file, Trace& out, Tra
 
 bool load_trace(const std::string& path, Trace& out, TraceError& err) {
   err = TraceError{path, 0, {}};
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) {
-    err.message = "no such file";
-    return false;
-  }
-  if (std::filesystem::is_directory(path, ec)) {
-    err.message = "is a directory, not a trace file";
-    return false;
-  }
-  std::ifstream f(path, std::ios::binary);
-  if (!f) {
-    err.message = "cannot open the file";
-    return false;
-  }
-  std::string text(kMaxFileBytes + 1, '\0');
-  f.read(text.data(), static_cast<std::streamsize>(text.size()));
-  if (f.bad()) {
-    err.message = "cannot read the file";
-    return false;
-  }
-  text.resize(static_cast<std::size_t>(f.gcount()));
-  if (text.size() > kMaxFileBytes) {
-    err.message = fmt::format("too large for a trace (more than {} bytes)", kMaxFileBytes);
-    return false;
-  }
+  std::string text;
+  if (!read_text_file(path, kMaxFileBytes, "trace", text, err.message)) return false;
   return parse_trace(text, path, out, err);
 }
 

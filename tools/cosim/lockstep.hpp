@@ -81,8 +81,8 @@ bool parse_trace(const std::string& text, const std::string& file, Stimulus& out
 
 // The RTL's internal waveform (FST, Verilator tracing) over a whole stimulus. False (with a
 // reason) for models built without tracing (the mutants).
-bool write_rtl_fst(const Stimulus& s, const DutOptions& o, std::string_view mutant, const std::string& path,
-                   std::string& error);
+bool write_rtl_fst(const Stimulus& s, const DutOptions& o, std::string_view mutant,
+                   const std::string& path, std::string& error);
 
 // VCD of both sides' outputs (and the inputs) for cycles [from, to): the waveform window around
 // a divergence. Files written to a temporary name and renamed.

@@ -28,7 +28,7 @@ class RtlDut final : public Dut {
   }
 
   bool trace_to(const std::string& path) override {
-    if constexpr (requires(V& v, VerilatedFstC* t) { v.trace(t, 99); }) {
+    if constexpr (requires(V & v, VerilatedFstC * t) { v.trace(t, 99); }) {
       ctx_.traceEverOn(true);
       fst_ = std::make_unique<VerilatedFstC>();
       top_->trace(fst_.get(), 99);

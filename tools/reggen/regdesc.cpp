@@ -37,7 +37,8 @@ constexpr std::array<NameEntry<Access>, 9> kAccesses{{
     {Access::CMD, "CMD", "command on read: reading performs an action, the value is its result"},
     {Access::WO, "WO", "write-only storage: the read side of the address is another register"},
     {Access::IGN, "IGN", "documented as 'no effect when written'; a written 1 is logged"},
-    {Access::RSVD, "RSVD", "reserved: reads 0, not writable; a write that would change it is logged"},
+    {Access::RSVD, "RSVD",
+     "reserved: reads 0, not writable; a write that would change it is logged"},
     {Access::UNIMP, "UNIMP",
      "exists on the chip, behaviour not modelled: stored, every access logged"},
 }};

@@ -641,7 +641,8 @@ std::string emit_markdown(Profiles profiles) {
       "Addresses are physical byte addresses of the profile; a 16-bit register occupies the "
       "address and the next one. _Bytes_ gives, for Intel and Motorola bus mode, which byte "
       "(lo = bits 7..0, hi = bits 15..8) sits at address + 0 and address + 1. Bits no field "
-      "covers are reserved (`rsvd`: read 0, a write that would change one is logged). _Origin_: `documented` = "
+      "covers are reserved (`rsvd`: read 0, a write that would change one is logged). _Origin_: "
+      "`documented` = "
       "taken from the manuals, `modelled` = our choice (see the notes below each table).\n\n";
   std::vector<Row> kinds{{"Kind", "Meaning"}};
   for (Kind k : {Kind::latch, Kind::cell, Kind::derived, Kind::port, Kind::reserved}) {

@@ -1,0 +1,40 @@
+#include "textfile.hpp"
+
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace dpc31 {
+
+bool read_text_file(const std::string& path, std::size_t max_bytes, std::string_view what,
+                    std::string& text, std::string& error) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) {
+    error = "no such file";
+    return false;
+  }
+  if (std::filesystem::is_directory(path, ec)) {
+    error = fmt::format("is a directory, not a {} file", what);
+    return false;
+  }
+  std::ifstream f(path, std::ios::binary);
+  if (!f) {
+    error = "cannot open the file";
+    return false;
+  }
+  text.assign(max_bytes + 1, '\0');
+  f.read(text.data(), static_cast<std::streamsize>(text.size()));
+  if (f.bad()) {
+    error = "cannot read the file";
+    return false;
+  }
+  text.resize(static_cast<std::size_t>(f.gcount()));
+  if (text.size() > max_bytes) {
+    error = fmt::format("too large for a {} (more than {} bytes)", what, max_bytes);
+    return false;
+  }
+  return true;
+}
+
+}  // namespace dpc31
