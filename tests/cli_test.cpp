@@ -9,25 +9,14 @@
 #include <string>
 
 #include "dpc31/regdesc.hpp"
+#include "run_command.hpp"
 
 namespace {
 
-struct Result {
-  int rc;
-  std::string out;
-};
+using Result = testutil::CommandResult;
 
 Result run(const std::string& args) {
-  const std::string cmd = std::string(DPC31_CLI) + " " + args + " 2>/dev/null";
-  FILE* p = popen(cmd.c_str(), "r");
-  Result r{-1, {}};
-  if (p == nullptr) return r;
-  std::array<char, 4096> buf{};
-  std::size_t n = 0;
-  while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
-  const int st = pclose(p);
-  r.rc = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return r;
+  return testutil::run_command(std::string(DPC31_CLI) + " " + args + " 2>/dev/null");
 }
 
 std::string slurp(const std::string& path) {

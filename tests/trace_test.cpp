@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "run_command.hpp"
+
 // emu/ is not on the tests' include path.
 #include "../emu/cpu.hpp"
 #include "../emu/dp_master.hpp"
@@ -315,22 +317,10 @@ TEST(TraceRxd, DamagedCharacters) {
 
 // --- the command line ---
 
-struct Cli {
-  int rc;
-  std::string out;
-};
+using Cli = testutil::CommandResult;
 
 Cli cli(const std::string& args) {
-  const std::string cmd = std::string(DPC31_CLI) + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  Cli r{-1, {}};
-  if (p == nullptr) return r;
-  std::array<char, 4096> buf{};
-  std::size_t n = 0;
-  while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
-  const int st = pclose(p);
-  r.rc = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return r;
+  return testutil::run_command(std::string(DPC31_CLI) + " " + args + " 2>&1");
 }
 
 std::string tmp(const std::string& name) {

@@ -14,6 +14,7 @@
 #include "../emu/cpu.hpp"
 #include "../emu/dp_master.hpp"
 #include "../emu/responder.hpp"
+#include "run_command.hpp"
 
 using namespace dpc31;
 
@@ -26,22 +27,9 @@ std::string slurp(const std::string& path) {
   return s.str();
 }
 
-struct Cmd {
-  int rc;
-  std::string out;
-};
+using Cmd = testutil::CommandResult;
 
-Cmd sh(const std::string& cmd) {
-  FILE* p = popen((cmd + " 2>&1").c_str(), "r");
-  Cmd r{-1, {}};
-  if (p == nullptr) return r;
-  std::array<char, 4096> buf{};
-  std::size_t n = 0;
-  while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
-  const int st = pclose(p);
-  r.rc = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return r;
-}
+Cmd sh(const std::string& cmd) { return testutil::run_command(cmd + " 2>&1"); }
 
 std::string tmp(const std::string& name) { return ::testing::TempDir() + name; }
 
