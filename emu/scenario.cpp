@@ -15,6 +15,7 @@
 #include "core.hpp"  // the watchdog deadline, so `silence` stops at each state change
 #include "dp_sm.hpp"
 #include "fdl.hpp"
+#include "firmware_host.hpp"
 #include "textfile.hpp"
 
 namespace dpc31 {
@@ -153,7 +154,23 @@ struct ParseFail {
 
 bool is_action(StepKind k) {
   return k != StepKind::expect && k != StepKind::corrupt && k != StepKind::bad_fcs &&
-         k != StepKind::inputs;
+         k != StepKind::inputs && k != StepKind::hw;
+}
+
+// Index of `name` in a NULL-terminated list of names, -1 if absent.
+int name_index(const char* const* names, std::string_view name) {
+  for (int i = 0; names != nullptr && names[i] != nullptr; ++i) {
+    if (name == names[i]) return i;
+  }
+  return -1;
+}
+
+std::string name_list(const char* const* names) {
+  std::string all;
+  for (int i = 0; names != nullptr && names[i] != nullptr; ++i) {
+    all += (i == 0 ? "" : ", ") + std::string(names[i]);
+  }
+  return all.empty() ? "none" : all;
 }
 
 // Actions whose first telegram a fault can be injected into.
@@ -409,8 +426,30 @@ class Parser {
           unknown_option(k);
         }
       }
+    } else if (cmd_ == "firmware") {
+      positional(1, 1, "a firmware name");
+      no_options();
+      if (slave_seen_) fail("'firmware' comes before 'slave': it sets the slave's GSD defaults");
+      if (user_seen_) fail("'firmware' and 'user' exclude each other");
+      const std::string name(pos_[0]);
+      fw_ = dpc31_find_firmware(name.c_str());
+      if (fw_ == nullptr) {
+        std::string all;
+        for (int i = 0; dpc31_firmwares[i] != nullptr; ++i) {
+          all += (i == 0 ? "" : ", ") + std::string(dpc31_firmwares[i]->name);
+        }
+        fail(fmt::format("unknown firmware '{}' ({})", shown(pos_[0]), all));
+      }
+      s_.firmware = fw_->name;
+      SlaveConfig& sl = s_.user.slave;
+      sl.ident = fw_->ident;
+      sl.cfg.assign(fw_->cfg, fw_->cfg + fw_->cfg_len);
+      sl.in_len = fw_->in_len;
+      sl.out_len = fw_->out_len;
+      sl.user_prm.assign(fw_->user_prm, fw_->user_prm + fw_->user_prm_len);
     } else if (cmd_ == "slave") {
       positional(0, 0, "options only");
+      slave_seen_ = true;
       SlaveConfig& sl = s_.user.slave;
       for (const auto& [k, v] : opts_) {
         if (prm_option(sl, k, v)) continue;
@@ -429,6 +468,9 @@ class Parser {
       }
     } else if (cmd_ == "user") {
       positional(0, 0, "options only");
+      if (fw_ != nullptr)
+        fail("'user' configures the built-in user side; a firmware configures itself");
+      user_seen_ = true;
       ResponderConfig& u = s_.user;
       for (const auto& [k, v] : opts_) {
         if (k == "inputs") {
@@ -547,7 +589,19 @@ class Parser {
       positional(1, 1, "one time (e.g. 200ms)");
       no_options();
       step_.cycles = duration(pos_[0]);
+    } else if (cmd_ == "hw") {
+      step_.kind = StepKind::hw;
+      positional(2, 2, "a hardware input and a value");
+      no_options();
+      if (fw_ == nullptr) fail("'hw' needs a firmware (header 'firmware NAME')");
+      if (name_index(fw_->hw_inputs, pos_[0]) < 0) {
+        fail(fmt::format("unknown hardware input '{}' of {} ({})", shown(pos_[0]), fw_->name,
+                         name_list(fw_->hw_inputs)));
+      }
+      step_.name = std::string(pos_[0]);
+      step_.value = static_cast<std::uint32_t>(number(pos_[1], "hw value", 0, 0xFFFF'FFFF));
     } else if (cmd_ == "inputs") {
+      if (fw_ != nullptr) fail("'inputs' feeds the built-in user side; a firmware makes its own");
       step_.kind = StepKind::inputs;
       positional(1, 1, "a byte list");
       no_options();
@@ -618,8 +672,21 @@ class Parser {
       args(1, "Baud_Search|Baud_Control|DP_Control");
       step_.expect = ExpectKind::wd_state;
       step_.value = state_value(pos_[1], {"Baud_Search", "Baud_Control", "DP_Control"});
+    } else if (what == "port") {
+      args(2, "NAME VALUE");
+      if (fw_ == nullptr) fail("'expect port' needs a firmware (header 'firmware NAME')");
+      if (name_index(fw_->ports, pos_[1]) < 0) {
+        fail(fmt::format("unknown port '{}' of {} ({})", shown(pos_[1]), fw_->name,
+                         name_list(fw_->ports)));
+      }
+      step_.expect = ExpectKind::port;
+      step_.name = std::string(pos_[1]);
+      step_.value = static_cast<std::uint32_t>(number(pos_[2], "port value", 0, 0xFFFF'FFFF));
     } else if (what == "outputs" || what == "inputs") {
       args(1, "BYTES");
+      if (what == "outputs" && fw_ != nullptr) {
+        fail("'expect outputs' checks the built-in user side; with a firmware check its ports");
+      }
       step_.expect = what == "outputs" ? ExpectKind::outputs : ExpectKind::inputs;
       if (what == "outputs" && pos_[1] == "none") {
         step_.value = 1;  // nothing fetched yet
@@ -628,6 +695,9 @@ class Parser {
       }
     } else if (what == "cleared") {
       args(1, "0|1");
+      if (fw_ != nullptr) {
+        fail("'expect cleared' checks the built-in user side; with a firmware check its ports");
+      }
       step_.expect = ExpectKind::cleared;
       step_.value = flag(pos_[1], "cleared") ? 1 : 0;
     } else if (what == "counter") {
@@ -679,7 +749,7 @@ class Parser {
     } else {
       fail(
           fmt::format("unknown check '{}' (dp_state, wd_state, outputs, cleared, inputs, counter, "
-                      "irr_bit, answer, station, diag_byte, baud)",
+                      "irr_bit, answer, station, diag_byte, baud, port)",
                       shown(what)));
     }
   }
@@ -711,6 +781,9 @@ class Parser {
   ScenarioStep step_;
   std::optional<SlaveConfig> view_;  // the master's view of the slave after the steps so far
   bool headers_ = false;
+  const dpc31_firmware* fw_ = nullptr;
+  bool slave_seen_ = false;
+  bool user_seen_ = false;
   bool body_ = false;  // an action or expect has been seen: no more headers
   std::vector<std::string_view> words_;
   std::string_view cmd_;
@@ -860,12 +933,25 @@ class Runner {
     if (hooks_.at_start) hooks_.at_start(chip_);
     user_.inputs = s_.inputs;
     DirectBus bus(chip_);
-    user_.init(bus);
+    if (!s_.firmware.empty()) {
+      fw_ = std::make_unique<FirmwareHost>(*dpc31_find_firmware(s_.firmware.c_str()));
+      fw_->on_port = [this](std::uint64_t cycle, unsigned port, std::uint32_t value) {
+        note(cycle, fmt::format("{}: {} = {} at {}", fw_->firmware().name, fw_->port_name(port),
+                                port_text(value), time_text(cycle)));
+      };
+      fw_->init(bus, s_.user.slave.address);
+    } else {
+      user_.init(bus);
+    }
     master_ = std::make_unique<DpMaster>(chip_, s_.master, s_.user.slave);
     // State changes are looked for wherever they can happen: after the firmware's ISR (its
     // Prm/Cfg verdicts), at every telegram, at every X/INT edge, after every transaction.
     master_->set_firmware([this](BusPort& b) {
-      user_.isr(b);
+      if (fw_) {
+        fw_->isr(b);
+      } else {
+        user_.isr(b);
+      }
       check_states();
     });
     chip_.on_telegram([this](const Telegram&) { check_states(); });
@@ -885,7 +971,7 @@ class Runner {
       const bool modifier = st.kind == StepKind::corrupt || st.kind == StepKind::bad_fcs;
       if (modifier || (is_action(st.kind) && !fault_ && !bad_fcs_)) {
         base_counters_ = chip_.fdl_counters();
-        base_irq_ = user_.interrupts.size();
+        base_irq_ = interrupts().size();
       }
       note(chip_.cycle(), fmt::format("line {}: {}", st.line, st.text));
       const std::size_t sent = master_->history().size();
@@ -1174,6 +1260,11 @@ class Runner {
       case StepKind::inputs:
         user_.inputs = st.bytes;
         break;
+      case StepKind::hw:
+        if (const std::string err = fw_->hw_input(st.name, st.value); !err.empty()) {
+          fail(st.line, err);
+        }
+        break;
       case StepKind::corrupt:
         fault_ = st.fault;
         fault_line_ = st.line;
@@ -1265,6 +1356,19 @@ class Runner {
     }
   }
 
+  const std::vector<std::pair<std::uint64_t, std::uint16_t>>& interrupts() const {
+    return fw_ ? fw_->interrupts : user_.interrupts;
+  }
+
+  // Port values in hex and, for the bit patterns of digital outputs, binary.
+  static std::string port_text(std::uint32_t v) {
+    return v <= 0xF ? fmt::format("0x{:X} ({:04b})", v, v) : fmt::format("0x{:X}", v);
+  }
+
+  std::string time_text(std::uint64_t cycle) const {
+    return fmt::format("{:.3f} us", static_cast<double>(cycle) * 1e6 / chip_.clock_hz());
+  }
+
   // --- checks ---
 
   void check(const ScenarioStep& st) {
@@ -1319,8 +1423,8 @@ class Runner {
         // The firmware acknowledges what it handles, so the register alone rarely shows an
         // event: what its ISR saw during the last action counts as well.
         std::uint16_t seen = chip_.peek_reg(RegId::Int_Req_Reg);
-        for (std::size_t i = base_irq_; i < user_.interrupts.size(); ++i) {
-          seen |= user_.interrupts[i].second;
+        for (std::size_t i = base_irq_; i < interrupts().size(); ++i) {
+          seen |= interrupts()[i].second;
         }
         want = std::to_string(st.value);
         got = ((seen >> st.value2) & 1) != 0 ? "1" : "0";
@@ -1351,6 +1455,11 @@ class Runner {
         want = std::to_string(st.value);
         got = std::to_string(chip_baud());
         break;
+      case ExpectKind::port:
+        what = "port " + st.name;
+        want = port_text(st.value);
+        got = port_text(static_cast<std::uint32_t>(fw_->port(st.name)));
+        break;
     }
     if (got == want) {
       ++out_.passed;
@@ -1369,6 +1478,7 @@ class Runner {
   const ScenarioHooks& hooks_;
   Chip chip_;
   Responder user_;
+  std::unique_ptr<FirmwareHost> fw_;  // instead of user_ when the scenario names a firmware
   std::unique_ptr<DpMaster> master_;
   ScenarioOutcome out_;
   std::vector<Event> events_;

@@ -47,6 +47,7 @@ enum class StepKind : std::uint8_t {
   foreign_master,
   silence,
   inputs,  // new inputs for the user side (no time passes)
+  hw,      // a hardware input of the firmware's module (no time passes)
   // modifiers of the next request
   corrupt,
   bad_fcs,
@@ -66,6 +67,7 @@ enum class ExpectKind : std::uint8_t {
   station,
   diag_byte,
   baud,
+  port,
 };
 
 // One line of the file. Only the fields its kind uses are meaningful.
@@ -82,7 +84,7 @@ struct ScenarioStep {
   UartFault fault;                   // corrupt: char_index -1 = the last character
   std::optional<SlaveConfig> slave;  // set_prm / chk_cfg: the master's view from now on
   ExpectKind expect = ExpectKind::dp_state;
-  std::string name;  // expect: counter / interrupt / answer kind; the expected text
+  std::string name;  // expect: counter / interrupt / answer kind / port; hw: the input
 };
 
 struct Scenario {
@@ -90,6 +92,7 @@ struct Scenario {
   ChipOptions chip;
   MasterConfig master;
   ResponderConfig user;              // user.slave is also what the master parameterises
+  std::string firmware;              // an example firmware (firmware.h) instead of the responder
   std::vector<std::uint8_t> inputs;  // the user's inputs from the start
   std::uint32_t retries = 1;         // repeats of a request that got no answer (max_retry_limit)
   std::vector<ScenarioStep> steps;

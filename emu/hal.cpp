@@ -1,0 +1,191 @@
+// The C HAL: a chip handle for C hosts, and the driver-shaped access functions on the bus
+// selected for the calling thread (a handle's own bus, or the host CPU's while it runs an ISR).
+#include "hal.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+#include "core.hpp"
+#include "dpc31/dpc31_hal.h"
+
+struct dpc31_chip {
+  explicit dpc31_chip(dpc31::ChipOptions o) : chip(o), bus(chip) {}
+  dpc31::Chip chip;
+  dpc31::DirectBus bus;
+  dpc31::hal::PortSink ports;
+};
+
+namespace dpc31::hal {
+namespace {
+
+thread_local BusPort* t_bus = nullptr;
+thread_local const PortSink* t_ports = nullptr;
+
+void default_error(const char* message) {
+  std::fprintf(stderr, "dpc31 HAL: %s\n", message);
+  std::abort();
+}
+
+dpc31_error_fn g_error = default_error;
+
+BusPort& bus(const char* fn) {
+  if (t_bus == nullptr) {
+    g_error((std::string(fn) + " called with no chip selected (dpc31_select)").c_str());
+    std::abort();  // a handler that returns cannot make the access happen
+  }
+  return *t_bus;
+}
+
+// The block functions, one byte access (4 clocks) per byte, addresses wrapping at 16 bits.
+void copy_to(BusPort& b, VPC3_ADR dst, const uint8_t* src, uint16_t len) {
+  for (uint16_t i = 0; i < len; ++i) b.write(static_cast<VPC3_ADR>(dst + i), src[i]);
+}
+
+void copy_from(BusPort& b, uint8_t* dst, VPC3_ADR src, uint16_t len) {
+  for (uint16_t i = 0; i < len; ++i) dst[i] = b.read(static_cast<VPC3_ADR>(src + i));
+}
+
+void mem_set(BusPort& b, VPC3_ADR addr, uint8_t value, uint16_t len) {
+  for (uint16_t i = 0; i < len; ++i) b.write(static_cast<VPC3_ADR>(addr + i), value);
+}
+
+// Stops at the first difference, as the drivers' version does (its reads are what it costs).
+uint8_t mem_cmp(BusPort& b, VPC3_ADR a, VPC3_ADR c, uint16_t len) {
+  for (uint16_t i = 0; i < len; ++i) {
+    const uint8_t first = b.read(static_cast<VPC3_ADR>(a + i));  // this order on the bus
+    if (first != b.read(static_cast<VPC3_ADR>(c + i))) return 1;
+  }
+  return 0;
+}
+
+}  // namespace
+
+Scope::Scope(BusPort& b, const PortSink* ports) : prev_bus_(t_bus), prev_ports_(t_ports) {
+  t_bus = &b;
+  t_ports = ports;
+}
+
+Scope::~Scope() {
+  t_bus = prev_bus_;
+  t_ports = prev_ports_;
+}
+
+}  // namespace dpc31::hal
+
+using dpc31::hal::bus;
+
+extern "C" {
+
+dpc31_chip* dpc31_create(const char* profile, int motorola) {
+  dpc31::ChipOptions o;
+  if (profile == nullptr || !dpc31::parse_profile(profile, o.profile)) return nullptr;
+  o.bus = motorola != 0 ? dpc31::BusMode::motorola : dpc31::BusMode::intel;
+  return new dpc31_chip(o);
+}
+
+void dpc31_destroy(dpc31_chip* chip) {
+  if (dpc31::hal::t_bus == &chip->bus) dpc31_select(nullptr);
+  delete chip;
+}
+
+uint8_t dpc31_read(dpc31_chip* chip, VPC3_ADR addr) { return chip->bus.read(addr); }
+void dpc31_write(dpc31_chip* chip, VPC3_ADR addr, uint8_t value) { chip->bus.write(addr, value); }
+
+void dpc31_copy_to(dpc31_chip* chip, VPC3_ADR dst, const uint8_t* src, uint16_t len) {
+  dpc31::hal::copy_to(chip->bus, dst, src, len);
+}
+
+void dpc31_copy_from(dpc31_chip* chip, uint8_t* dst, VPC3_ADR src, uint16_t len) {
+  dpc31::hal::copy_from(chip->bus, dst, src, len);
+}
+
+void dpc31_memset(dpc31_chip* chip, VPC3_ADR addr, uint8_t value, uint16_t len) {
+  dpc31::hal::mem_set(chip->bus, addr, value, len);
+}
+
+uint8_t dpc31_memcmp(dpc31_chip* chip, VPC3_ADR a, VPC3_ADR b, uint16_t len) {
+  return dpc31::hal::mem_cmp(chip->bus, a, b, len);
+}
+
+uint8_t dpc31_peek(const dpc31_chip* chip, VPC3_ADR addr) { return chip->chip.peek(addr); }
+
+void dpc31_run(dpc31_chip* chip, uint64_t cycles) { chip->chip.step(cycles); }
+
+int dpc31_run_until_irq_change(dpc31_chip* chip, uint64_t max_cycles) {
+  dpc31::Chip& c = chip->chip;
+  const bool was = c.irq_active();
+  const uint64_t end = c.cycle() + max_cycles;
+  if (!was) return c.step_until_irq(max_cycles) ? 1 : 0;
+  // Active: with no bus access the line can only fall at an event (the EOI inactive time, a
+  // reset); go from event to event.
+  while (c.cycle() < end) {
+    const uint64_t next = std::max(c.core().next_event(), c.cycle() + 1);
+    c.step(std::min(next, end) - c.cycle());
+    if (c.irq_active() != was) return 1;
+  }
+  return 0;
+}
+
+uint64_t dpc31_cycle(const dpc31_chip* chip) { return chip->chip.cycle(); }
+uint32_t dpc31_clock_hz(const dpc31_chip* chip) { return chip->chip.clock_hz(); }
+int dpc31_irq_active(const dpc31_chip* chip) { return chip->chip.irq_active() ? 1 : 0; }
+
+void dpc31_set_irq_callback(dpc31_chip* chip, dpc31_irq_fn fn, void* user) {
+  chip->chip.on_irq_change({});
+  if (fn != nullptr) {
+    chip->chip.on_irq_change(
+        [fn, user](std::uint64_t cycle, bool active) { fn(user, cycle, active ? 1 : 0); });
+  }
+}
+
+void dpc31_select(dpc31_chip* chip) {
+  dpc31::hal::t_bus = chip != nullptr ? &chip->bus : nullptr;
+  dpc31::hal::t_ports = chip != nullptr ? &chip->ports : nullptr;
+}
+
+uint8_t Vpc3Read(VPC3_ADR wAddress) { return bus("Vpc3Read").read(wAddress); }
+
+void Vpc3Write(VPC3_ADR wAddress, uint8_t bData) { bus("Vpc3Write").write(wAddress, bData); }
+
+void CopyToVpc3(VPC3_UNSIGNED8_PTR pToVpc3Memory, MEM_UNSIGNED8_PTR pLocalMemory,
+                uint16_t wLength) {
+  dpc31::hal::copy_to(bus("CopyToVpc3"), pToVpc3Memory, pLocalMemory, wLength);
+}
+
+void CopyFromVpc3(MEM_UNSIGNED8_PTR pLocalMemory, VPC3_UNSIGNED8_PTR pToVpc3Memory,
+                  uint16_t wLength) {
+  dpc31::hal::copy_from(bus("CopyFromVpc3"), pLocalMemory, pToVpc3Memory, wLength);
+}
+
+void Vpc3MemSet(VPC3_ADR wAddress, uint8_t bValue, uint16_t wLength) {
+  dpc31::hal::mem_set(bus("Vpc3MemSet"), wAddress, bValue, wLength);
+}
+
+uint8_t Vpc3MemCmp(VPC3_UNSIGNED8_PTR pToVpc3Memory1, VPC3_UNSIGNED8_PTR pToVpc3Memory2,
+                   uint16_t wLength) {
+  return dpc31::hal::mem_cmp(bus("Vpc3MemCmp"), pToVpc3Memory1, pToVpc3Memory2, wLength);
+}
+
+void dpc31_port_write(unsigned port, uint32_t value) {
+  dpc31::BusPort& b = bus("dpc31_port_write");
+  if (dpc31::hal::t_ports != nullptr && *dpc31::hal::t_ports) {
+    (*dpc31::hal::t_ports)(b.cycle(), port, value);
+  }
+}
+
+void dpc31_set_port_callback(dpc31_chip* chip, dpc31_port_fn fn, void* user) {
+  chip->ports = nullptr;
+  if (fn != nullptr) {
+    chip->ports = [fn, user](std::uint64_t cycle, unsigned port, std::uint32_t value) {
+      fn(user, cycle, port, value);
+    };
+  }
+}
+
+void dpc31_set_error_handler(dpc31_error_fn fn) {
+  dpc31::hal::g_error = fn != nullptr ? fn : dpc31::hal::default_error;
+}
+
+}  // extern "C"

@@ -1,0 +1,29 @@
+// The C++ side of the C HAL (include/dpc31/dpc31_hal.h): which bus the driver-shaped access
+// functions (Vpc3Read & co.) and dpc31_port_write reach on the calling thread.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+
+#include "cpu.hpp"
+
+namespace dpc31::hal {
+
+// A port write of the firmware: (cycle, port, value).
+using PortSink = std::function<void(std::uint64_t, unsigned, std::uint32_t)>;
+
+// While alive, Vpc3Read & co. on this thread access `bus` and port writes go to `ports`; the
+// previous selection comes back afterwards (scopes nest).
+class Scope {
+ public:
+  Scope(BusPort& bus, const PortSink* ports);
+  ~Scope();
+  Scope(const Scope&) = delete;
+  Scope& operator=(const Scope&) = delete;
+
+ private:
+  BusPort* prev_bus_;
+  const PortSink* prev_ports_;
+};
+
+}  // namespace dpc31::hal

@@ -1,0 +1,322 @@
+/* dps.c -- the DP-slave driver layer (see dps.h). */
+#include "dps.h"
+
+#include <string.h>
+
+#include "dpc31/dpc31_regs.h"
+
+/* The addresses this driver uses, per chip. A driver for one chip would use the macros
+ * directly; the examples run on all three, so they pick a table at init. */
+typedef struct regmap {
+  VPC3_ADR int_req, int_reg, int_ack, status, int_mask, mode0, mode1_s, mode1_r, mode2;
+  VPC3_ADR din_sm, new_din, dout_sm, next_dout, diag_sm, new_diag, wd_baud, min_tsdr;
+  VPC3_ADR prm_ok, prm_not_ok, cfg_ok, cfg_not_ok, ssa_free;
+  VPC3_ADR ts_adr, user_wd, len_dout, dout_ptr[3], len_din, din_ptr[3], dout_ptr_c;
+  VPC3_ADR len_diag[2], diag_ptr[2], len_cntrl[2], aux_sel, aux_ptr[2];
+  VPC3_ADR len_ssa, ssa_ptr, len_prm, prm_ptr, len_cfg, cfg_ptr, len_read_cfg, read_cfg_ptr;
+  VPC3_ADR real_no_add_change, ident_lo, ident_hi, gc_command;
+  VPC3_ADR user_base, segment_shift;
+} regmap;
+
+#define DPS_REGMAP(P, MODE2, PTR_C)                                                                \
+  {                                                                                                \
+    P##_Int_Req_Reg, P##_Int_Reg, P##_Int_Ack_Reg, P##_Status_Reg, P##_Int_Mask_Reg,               \
+        P##_Mode_Reg0, P##_Mode_Reg1_S, P##_Mode_Reg1_R, MODE2, P##_Din_Buffer_SM,                 \
+        P##_New_Din_Buffer_Cmd, P##_Dout_Buffer_SM, P##_Next_Dout_Buffer_Cmd, P##_Diag_Buffer_SM,  \
+        P##_New_Diag_Buffer_Cmd, P##_WD_Baud_Control_Val, P##_MinTSDR_Val, P##_User_Prm_Data_Okay, \
+        P##_User_Prm_Data_Not_Okay, P##_User_Cfg_Data_Okay, P##_User_Cfg_Data_Not_Okay,            \
+        P##_SSA_Buffer_Free_Cmd, P##_R_TS_Adr, P##_R_User_WD_Value, P##_R_Len_Dout_Buf,            \
+        {P##_R_Dout_Buf_Ptr1, P##_R_Dout_Buf_Ptr2, P##_R_Dout_Buf_Ptr3}, P##_R_Len_Din_Buf,        \
+        {P##_R_Din_Buf_Ptr1, P##_R_Din_Buf_Ptr2, P##_R_Din_Buf_Ptr3}, PTR_C,                       \
+        {P##_R_Len_Diag_Buf1, P##_R_Len_Diag_Buf2}, {P##_R_Diag_Buf_Ptr1, P##_R_Diag_Buf_Ptr2},    \
+        {P##_R_Len_Cntrl_Buf1, P##_R_Len_Cntrl_Buf2}, P##_R_Aux_Buf_Sel,                           \
+        {P##_R_Aux_Buf_Ptr1, P##_R_Aux_Buf_Ptr2}, P##_R_Len_SSA_Data, P##_R_SSA_Buf_Ptr,           \
+        P##_R_Len_Prm_Data, P##_R_Prm_Buf_Ptr, P##_R_Len_Cfg_Data, P##_R_Cfg_Buf_Ptr,              \
+        P##_R_Len_Read_Cfg_Data, P##_R_Read_Cfg_Buf_Ptr, P##_R_Real_No_Add_Change,                 \
+        P##_R_Ident_Low, P##_R_Ident_High, P##_R_GC_Command, P##_USER_BASE, P##_SEGMENT_SHIFT      \
+  }
+
+#define NONE 0xFFFFu
+static const regmap kMaps[3] = {DPS_REGMAP(SPC3, NONE, NONE),
+                                DPS_REGMAP(VPC3, VPC3_Mode_Reg2, NONE),
+                                DPS_REGMAP(DPC31, NONE, DPC31_R_Dout_Buf_Ptr_C)};
+
+/* Int_Req_Reg bits, the same in every profile. */
+enum {
+  MAC_Reset = 0x0001u,
+  Go_Leave_Data_Exchange = 0x0002u,
+  Baudrate_Detect = 0x0004u,
+  WD_DP_Control_Timeout = 0x0008u,
+  User_Timer_Clock = 0x0010u,
+  New_Ext_Prm_Data = 0x0040u,
+  New_GC_Command = 0x0100u,
+  New_SSA_Data = 0x0200u,
+  New_Cfg_Data = 0x0400u,
+  New_Prm_Data = 0x0800u,
+  Diag_Buffer_Changed = 0x1000u,
+  DX_Out = 0x2000u
+};
+enum { Start_SPC3 = 0x01u, EOI = 0x02u, Res_User_WD = 0x20u };
+enum { Prm_Conflict = 0x01u };                             /* handshake read result */
+enum { State_U_Buffer = 0x04u, U_Buffer_Cleared = 0x08u }; /* Next_Dout_Buffer_Cmd */
+enum { DP_Mode = 0x0100u, Spec_Clear_Mode = 0x2000u };     /* Mode_Reg0 */
+enum { Ext_Diag = 0x01u };                                 /* diag byte 0 */
+enum { kStdPrm = 7u, kStdDiag = 6u };
+
+static const regmap* R;
+static const dps_module* M;
+static int g_motorola;
+static dps_stats g_stats;
+static uint16_t g_mask;
+static uint8_t g_diag[DPS_MAX_DIAG];
+static uint8_t g_diag_len;
+static uint8_t g_diag_ext;
+static int g_diag_pending;
+
+/* 16-bit registers go over the 8-bit bus byte by byte; which address holds the low byte
+ * depends on the bus mode (Intel: the lower address). */
+static void write16(VPC3_ADR a, uint16_t v) {
+  Vpc3Write(g_motorola ? (VPC3_ADR)(a + 1u) : a, (uint8_t)v);
+  Vpc3Write(g_motorola ? a : (VPC3_ADR)(a + 1u), (uint8_t)(v >> 8));
+}
+
+static uint16_t read16(VPC3_ADR a) {
+  const uint8_t lo = Vpc3Read(g_motorola ? (VPC3_ADR)(a + 1u) : a);
+  return (uint16_t)(Vpc3Read(g_motorola ? a : (VPC3_ADR)(a + 1u)) << 8 | lo);
+}
+
+/* A buffer pointer cell holds the segment number. */
+static VPC3_ADR buffer(VPC3_ADR ptr_cell) {
+  return (VPC3_ADR)((VPC3_ADR)Vpc3Read(ptr_cell) << R->segment_shift);
+}
+
+static void set_mask(uint16_t enabled) {
+  g_mask = enabled;
+  write16(R->int_mask, (uint16_t)~enabled);
+}
+
+/* Buffers, segment by segment from the start of the user area. */
+static void allocate_buffers(void) {
+  const unsigned seg = 1u << R->segment_shift;
+  unsigned next = (R->user_base + seg - 1u) / seg;
+  const uint8_t aux_len = M->prm_len > M->cfg_len ? M->prm_len : M->cfg_len;
+  unsigned k;
+#define DPS_ALLOC(cell, len)                                                 \
+  do {                                                                       \
+    Vpc3Write((cell), (uint8_t)next);                                        \
+    next += (unsigned)(len) > seg ? ((unsigned)(len) + seg - 1u) / seg : 1u; \
+  } while (0)
+  Vpc3Write(R->len_dout, M->out_len);
+  Vpc3Write(R->len_din, M->in_len);
+  for (k = 0; k < 3; ++k) DPS_ALLOC(R->dout_ptr[k], M->out_len);
+  for (k = 0; k < 3; ++k) DPS_ALLOC(R->din_ptr[k], M->in_len);
+  if (R->dout_ptr_c != NONE) DPS_ALLOC(R->dout_ptr_c, M->out_len);
+  for (k = 0; k < 2; ++k) {
+    Vpc3Write(R->len_diag[k], kStdDiag);
+    DPS_ALLOC(R->diag_ptr[k], kStdDiag + DPS_MAX_DIAG);
+    Vpc3Write(R->len_cntrl[k], aux_len);
+    DPS_ALLOC(R->aux_ptr[k], aux_len);
+  }
+  Vpc3Write(R->aux_sel, 0x00);
+  DPS_ALLOC(R->prm_ptr, aux_len);
+  DPS_ALLOC(R->cfg_ptr, aux_len);
+  DPS_ALLOC(R->read_cfg_ptr, M->cfg_len);
+  DPS_ALLOC(R->ssa_ptr, aux_len);
+#undef DPS_ALLOC
+}
+
+/* dpc31: the clear buffer C holds what a Clear hands over as outputs: all zero. */
+static void refill_clear_buffer(void) {
+  if (R->dout_ptr_c != NONE) Vpc3MemSet(buffer(R->dout_ptr_c), 0x00, M->out_len);
+}
+
+void dps_init(const dps_board* board, const dps_module* module) {
+  static const uint16_t kSources = MAC_Reset | Go_Leave_Data_Exchange | Baudrate_Detect |
+                                   WD_DP_Control_Timeout | New_GC_Command | New_SSA_Data |
+                                   New_Cfg_Data | New_Prm_Data | Diag_Buffer_Changed | DX_Out;
+  R = &kMaps[board->profile];
+  M = module;
+  g_motorola = board->motorola;
+  memset(&g_stats, 0, sizeof g_stats);
+  g_diag_len = 0;
+  g_diag_ext = 0;
+  g_diag_pending = 0;
+  g_stats.station_address = board->station_address;
+
+  write16(R->int_req, 0x0000);
+  /* Stale events from before the reset go; New_Prm/Cfg_Data only go with their verdict reads. */
+  write16(R->int_ack, (uint16_t)(kSources & ~(New_Prm_Data | New_Cfg_Data)));
+  /* DP mode, fail-safe telegrams accepted; no Sync/Freeze (the GSD says so); EOI inactive
+   * time 1 us, user timer 1 ms. */
+  write16(R->mode0, DP_Mode | Spec_Clear_Mode);
+  set_mask(kSources);
+  Vpc3Write(R->wd_baud, 0x10);  /* Baud_Control: 16 x 10 ms */
+  Vpc3Write(R->min_tsdr, 0x0B); /* 11 bit times */
+  write16(R->user_wd, 0x01FF);
+  Vpc3Write(R->ident_lo, (uint8_t)module->ident);
+  Vpc3Write(R->ident_hi, (uint8_t)(module->ident >> 8));
+  Vpc3Write(R->ts_adr, board->station_address);
+  Vpc3Write(R->real_no_add_change, 0x00); /* Set_Slave_Add allowed */
+  allocate_buffers();
+  Vpc3Write(R->len_read_cfg, module->cfg_len);
+  CopyToVpc3(buffer(R->read_cfg_ptr), (MEM_UNSIGNED8_PTR)module->cfg, module->cfg_len);
+  refill_clear_buffer();
+  dps_update_inputs();
+  Vpc3Write(R->mode1_s, Start_SPC3 | Res_User_WD);
+}
+
+void dps_update_inputs(void) {
+  uint8_t in[DPS_MAX_IO];
+  /* Din_Buffer_SM bits 5:4 name the buffer the user owns (U). */
+  const uint8_t u = (uint8_t)((Vpc3Read(R->din_sm) >> 4) & 3u);
+  if (u == 0 || M->in_len == 0) return;
+  M->inputs(in);
+  CopyToVpc3(buffer(R->din_ptr[u - 1u]), in, M->in_len);
+  (void)Vpc3Read(R->new_din);
+}
+
+void dps_timer_enable(int on) {
+  set_mask(on ? (uint16_t)(g_mask | User_Timer_Clock) : (uint16_t)(g_mask & ~User_Timer_Clock));
+}
+
+/* The user's diag buffer is the one in state 01 (User); both may be with the ASIC. */
+static void publish_diag(void) {
+  const uint8_t sm = Vpc3Read(R->diag_sm);
+  int k;
+  VPC3_ADR base;
+  if ((sm & 3u) == 1u) {
+    k = 0;
+  } else if (((sm >> 2) & 3u) == 1u) {
+    k = 1;
+  } else {
+    g_diag_pending = 1; /* retried on Diag_Buffer_Changed */
+    return;
+  }
+  base = buffer(R->diag_ptr[k]);
+  Vpc3Write(base, g_diag_ext ? Ext_Diag : 0x00); /* bytes 1..5 are the ASIC's */
+  CopyToVpc3((VPC3_ADR)(base + kStdDiag), g_diag, g_diag_len);
+  Vpc3Write(R->len_diag[k], (uint8_t)(kStdDiag + g_diag_len));
+  (void)Vpc3Read(R->new_diag);
+  g_diag_pending = 0;
+  ++g_stats.diag_updates;
+}
+
+void dps_set_diag(const uint8_t* bytes, uint8_t len, int ext_diag) {
+  g_diag_len = len > DPS_MAX_DIAG ? (uint8_t)DPS_MAX_DIAG : len;
+  memcpy(g_diag, bytes, g_diag_len);
+  g_diag_ext = (uint8_t)(ext_diag != 0);
+  publish_diag();
+}
+
+/* Set_Prm: the ASIC checked ident, lock and reserved bits; the module checks its own bytes.
+ * A new Set_Prm arriving during the check makes the verdict read return Prm_Conflict: check
+ * the new buffer. */
+static void handle_prm(void) {
+  for (;;) {
+    uint8_t prm[DPS_MAX_PRM];
+    const uint8_t len = Vpc3Read(R->len_prm);
+    int ok = len == M->prm_len && len <= DPS_MAX_PRM;
+    uint8_t result;
+    if (ok) {
+      CopyFromVpc3(prm, buffer(R->prm_ptr), len);
+      ok = M->check_prm(prm + kStdPrm + 1u, (uint8_t)(len - kStdPrm - 1u));
+    }
+    result = Vpc3Read(ok ? R->prm_ok : R->prm_not_ok);
+    if (result != Prm_Conflict) {
+      if (ok) {
+        ++g_stats.prm_ok;
+      } else {
+        ++g_stats.prm_rejected;
+      }
+      return;
+    }
+    ++g_stats.prm_conflicts;
+  }
+}
+
+/* Chk_Cfg: the master's configuration must equal the module's; same conflict rule. */
+static void handle_cfg(void) {
+  for (;;) {
+    const uint8_t len = Vpc3Read(R->len_cfg);
+    const int ok =
+        len == M->cfg_len && Vpc3MemCmp(buffer(R->cfg_ptr), buffer(R->read_cfg_ptr), len) == 0;
+    const uint8_t result = Vpc3Read(ok ? R->cfg_ok : R->cfg_not_ok);
+    if (result != Prm_Conflict) {
+      if (ok) {
+        ++g_stats.cfg_ok;
+        dps_update_inputs(); /* the first Data_Exchange answers with valid inputs */
+      } else {
+        ++g_stats.cfg_rejected;
+      }
+      return;
+    }
+    ++g_stats.cfg_conflicts;
+  }
+}
+
+static void handle_dx_out(void) {
+  const uint8_t r = Vpc3Read(R->next_dout);
+  ++g_stats.dx_out;
+  if ((r & State_U_Buffer) != 0 && (r & 3u) != 0) {
+    uint8_t out[DPS_MAX_IO];
+    const int cleared = (r & U_Buffer_Cleared) != 0;
+    CopyFromVpc3(out, buffer(R->dout_ptr[(r & 3u) - 1u]), M->out_len);
+    if (cleared) {
+      ++g_stats.cleared;
+      refill_clear_buffer(); /* dpc31: the old U is the new C */
+    }
+    M->outputs(out, cleared);
+  }
+  dps_update_inputs();
+  Vpc3Write(R->mode1_s, Res_User_WD);
+}
+
+/* Set_Slave_Add: the new address would go to the board's non-volatile memory. */
+static void handle_ssa(void) {
+  uint8_t ssa[4];
+  CopyFromVpc3(ssa, buffer(R->ssa_ptr), sizeof ssa);
+  g_stats.station_address = ssa[0];
+  ++g_stats.ssa;
+  (void)Vpc3Read(R->ssa_free);
+}
+
+static int in_data_exchange(void) { return ((read16(R->status) >> 4) & 3u) == 2u; }
+
+void dps_isr(void) {
+  const uint16_t ir = read16(R->int_reg);
+  ++g_stats.interrupts;
+  if (ir & New_Prm_Data) handle_prm();
+  if (ir & New_Cfg_Data) handle_cfg();
+  if (ir & DX_Out) handle_dx_out();
+  if (ir & WD_DP_Control_Timeout) {
+    ++g_stats.wd_timeouts;
+    M->comm_lost(DPS_LOSS_WATCHDOG);
+  }
+  if ((ir & Go_Leave_Data_Exchange) && !in_data_exchange()) {
+    ++g_stats.leave_dx;
+    M->comm_lost(DPS_LOSS_LEFT_DATA_EXCH);
+  }
+  if (ir & MAC_Reset) {
+    ++g_stats.mac_resets;
+    M->comm_lost(DPS_LOSS_OFFLINE);
+  }
+  if (ir & Baudrate_Detect) ++g_stats.baud_detects;
+  if (ir & New_GC_Command) {
+    g_stats.last_gc = Vpc3Read(R->gc_command);
+    ++g_stats.gc_commands;
+  }
+  if (ir & New_SSA_Data) handle_ssa();
+  if ((ir & Diag_Buffer_Changed) && g_diag_pending) publish_diag();
+  if ((ir & User_Timer_Clock) && M->tick != 0) {
+    ++g_stats.ticks;
+    M->tick();
+  }
+  /* New_Prm/Cfg_Data are cleared by the verdict reads; New_Ext_Prm_Data (VPC3+ SAP53) is not
+   * enabled, acknowledged like the rest should it ever be latched. */
+  if (ir & ~(New_Prm_Data | New_Cfg_Data)) {
+    write16(R->int_ack, (uint16_t)(ir & ~(New_Prm_Data | New_Cfg_Data)));
+  }
+  Vpc3Write(R->mode1_s, EOI);
+}
+
+const dps_stats* dps_get_stats(void) { return &g_stats; }

@@ -1,0 +1,89 @@
+/*
+ * dps.h -- the DP-slave driver layer shared by the example modules (DO4, CNT2).
+ *
+ * Portable C99, written as for silicon: the chip is reached only through the six access
+ * functions of the public SPC3/VPC3+ drivers (Vpc3Read, Vpc3Write, CopyToVpc3, CopyFromVpc3,
+ * Vpc3MemSet, Vpc3MemCmp) and the addresses of the generated register header. It owns the
+ * chip: the init sequence, the ISR for every interrupt source, the Prm/Cfg handshakes with
+ * their conflict loops, Dout/Din buffer switching, diag updates, Set_Slave_Add and Res_User_WD.
+ * A module plugs in with a dps_module: its ident, Cfg and lengths, and callbacks.
+ */
+#ifndef DPC31_FIRMWARE_DPS_H
+#define DPC31_FIRMWARE_DPS_H
+
+#include <stdint.h>
+
+#include "dpc31/dpc31_hal.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* What the board tells the firmware: which chip it is wired to and the station address from
+ * its address switch. */
+typedef struct dps_board {
+  int profile;  /* enum dpc31_profile */
+  int motorola; /* 1: Motorola byte order on the bus */
+  uint8_t station_address;
+} dps_board;
+
+/* Why communication with the master was lost (dps_module.comm_lost). */
+enum dps_comm_loss {
+  DPS_LOSS_WATCHDOG = 1,       /* WD_DP_Control_Timeout */
+  DPS_LOSS_LEFT_DATA_EXCH = 2, /* Go_Leave_Data_Exchange, the DP state is no longer DX */
+  DPS_LOSS_OFFLINE = 3         /* MAC_Reset: the chip went Offline */
+};
+
+#define DPS_MAX_IO 32u   /* input and output bytes of the example modules */
+#define DPS_MAX_PRM 32u  /* Set_Prm bytes, the 7 standard ones included */
+#define DPS_MAX_DIAG 16u /* user diag bytes after the 6 standard ones */
+
+typedef struct dps_module {
+  const char* name;
+  uint16_t ident;
+  const uint8_t* cfg; /* the Chk_Cfg bytes the module accepts (also its Read_Cfg) */
+  uint8_t cfg_len;
+  uint8_t in_len;
+  uint8_t out_len;
+  uint8_t prm_len; /* total Set_Prm length, 7 standard bytes + Spec_User_Prm_Byte + module bytes */
+  /* Module parameters (Set_Prm bytes 8..): 1 = accept (and take them), 0 = User_Prm_Data_Not_Okay.
+   */
+  int (*check_prm)(const uint8_t* prm, uint8_t len);
+  /* New outputs from the master (DX_Out); cleared = 1 when the ASIC cleared them (Clear_Data,
+   * fail-safe telegram). */
+  void (*outputs)(const uint8_t* out, int cleared);
+  /* The inputs to hand over next. */
+  void (*inputs)(uint8_t* in);
+  void (*comm_lost)(int why);
+  /* User_Timer_Clock (1 ms) while the module asked for it (dps_timer_enable); may be NULL. */
+  void (*tick)(void);
+} dps_module;
+
+/* main(): configure the chip for this module and start it (Start_SPC3). */
+void dps_init(const dps_board* board, const dps_module* module);
+/* The X/INT interrupt service routine. */
+void dps_isr(void);
+
+/* Hand the module's current inputs (module->inputs) to the chip now. */
+void dps_update_inputs(void);
+/* Publish user diag bytes (device-related block) after the 6 standard bytes; ext_diag sets
+ * Ext_Diag in byte 0. Queued until a diag buffer is free (Diag_Buffer_Changed). */
+void dps_set_diag(const uint8_t* bytes, uint8_t len, int ext_diag);
+/* User_Timer_Clock interrupts on (1) or off (0). */
+void dps_timer_enable(int on);
+
+/* Bookkeeping for hosts and tests. */
+typedef struct dps_stats {
+  uint32_t prm_ok, prm_rejected, cfg_ok, cfg_rejected, prm_conflicts, cfg_conflicts;
+  uint32_t dx_out, cleared, gc_commands, ssa, diag_updates, baud_detects, wd_timeouts;
+  uint32_t leave_dx, mac_resets, ticks, interrupts;
+  uint8_t last_gc; /* R_GC_Command at the last New_GC_Command */
+  uint8_t station_address;
+} dps_stats;
+const dps_stats* dps_get_stats(void);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* DPC31_FIRMWARE_DPS_H */

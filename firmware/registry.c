@@ -1,0 +1,24 @@
+/* registry.c -- the example firmwares, for hosts that pick one by name. */
+#include <ctype.h>
+
+#include "firmware.h"
+
+extern const dpc31_firmware do4_firmware;
+extern const dpc31_firmware cnt2_firmware;
+
+const dpc31_firmware* const dpc31_firmwares[] = {&do4_firmware, &cnt2_firmware, 0};
+
+static int same_name(const char* a, const char* b) {
+  for (; *a && *b; ++a, ++b) {
+    if (tolower((unsigned char)*a) != tolower((unsigned char)*b)) return 0;
+  }
+  return *a == *b;
+}
+
+const dpc31_firmware* dpc31_find_firmware(const char* name) {
+  int i;
+  for (i = 0; dpc31_firmwares[i] != 0; ++i) {
+    if (same_name(dpc31_firmwares[i]->name, name)) return dpc31_firmwares[i];
+  }
+  return 0;
+}

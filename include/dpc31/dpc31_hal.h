@@ -1,0 +1,96 @@
+/*
+ * dpc31_hal.h -- the C HAL: host-built firmware against the emulated SPC3 / VPC3+ / DPC31.
+ *
+ * Usable from C99 and C++. Two layers:
+ *
+ *  1. A chip handle (dpc31_create ... dpc31_destroy) with byte access, block copy, memset and
+ *     memcmp on chip RAM, the clock and the interrupt line.
+ *  2. The six access functions of the public SPC3/VPC3+ drivers, with their names and
+ *     signatures (Vpc3Read, Vpc3Write, CopyToVpc3, CopyFromVpc3, Vpc3MemSet, Vpc3MemCmp). They
+ *     act on the chip selected for the calling thread (dpc31_select), so a driver ports by
+ *     deleting its own versions of exactly these six (docs/bring-up.md).
+ *
+ * Every access costs the modelled bus cycles (4 chip clocks, docs/timing.md) and takes effect at
+ * the end of the access. Chip addresses are plain 16-bit byte offsets (VPC3_ADR), as in the
+ * drivers' VPC3_SERIAL_MODE.
+ */
+#ifndef DPC31_HAL_H
+#define DPC31_HAL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* The drivers' address types: a byte offset in the chip's address space. */
+typedef uint16_t VPC3_ADR;
+typedef uint16_t VPC3_UNSIGNED8_PTR;
+typedef uint8_t* MEM_UNSIGNED8_PTR;
+
+typedef struct dpc31_chip dpc31_chip;
+
+/* --- the chip handle --- */
+
+/* profile: "spc3", "vpc3plus" or "dpc31"; motorola: 0 = Intel byte order (XINT low active
+ * by default), 1 = Motorola. Returns NULL for an unknown profile. */
+dpc31_chip* dpc31_create(const char* profile, int motorola);
+void dpc31_destroy(dpc31_chip* chip);
+
+uint8_t dpc31_read(dpc31_chip* chip, VPC3_ADR addr);
+void dpc31_write(dpc31_chip* chip, VPC3_ADR addr, uint8_t value);
+void dpc31_copy_to(dpc31_chip* chip, VPC3_ADR dst, const uint8_t* src, uint16_t len);
+void dpc31_copy_from(dpc31_chip* chip, uint8_t* dst, VPC3_ADR src, uint16_t len);
+void dpc31_memset(dpc31_chip* chip, VPC3_ADR addr, uint8_t value, uint16_t len);
+/* 0 when the two blocks of chip memory are equal, 1 when not (Vpc3MemCmp's convention). */
+uint8_t dpc31_memcmp(dpc31_chip* chip, VPC3_ADR a, VPC3_ADR b, uint16_t len);
+
+/* Debugger access: no time passes, no side effects. */
+uint8_t dpc31_peek(const dpc31_chip* chip, VPC3_ADR addr);
+
+/* --- time and the interrupt line --- */
+void dpc31_run(dpc31_chip* chip, uint64_t cycles);
+/* Runs at most max_cycles; stops right after the interrupt line changed (returns 1) or when
+ * max_cycles have passed (returns 0). */
+int dpc31_run_until_irq_change(dpc31_chip* chip, uint64_t max_cycles);
+uint64_t dpc31_cycle(const dpc31_chip* chip);
+uint32_t dpc31_clock_hz(const dpc31_chip* chip);
+/* The interrupt is active (independent of the X/INT polarity in Mode_Reg0). */
+int dpc31_irq_active(const dpc31_chip* chip);
+/* Called on every change of the interrupt line, with the cycle of the change. */
+typedef void (*dpc31_irq_fn)(void* user, uint64_t cycle, int active);
+void dpc31_set_irq_callback(dpc31_chip* chip, dpc31_irq_fn fn, void* user);
+
+/* --- the driver-shaped access functions --- */
+
+/* The chip Vpc3Read & co. act on for the calling thread (NULL: none). */
+void dpc31_select(dpc31_chip* chip);
+
+uint8_t Vpc3Read(VPC3_ADR wAddress);
+void Vpc3Write(VPC3_ADR wAddress, uint8_t bData);
+void CopyToVpc3(VPC3_UNSIGNED8_PTR pToVpc3Memory, MEM_UNSIGNED8_PTR pLocalMemory, uint16_t wLength);
+void CopyFromVpc3(MEM_UNSIGNED8_PTR pLocalMemory, VPC3_UNSIGNED8_PTR pToVpc3Memory,
+                  uint16_t wLength);
+void Vpc3MemSet(VPC3_ADR wAddress, uint8_t bValue, uint16_t wLength);
+uint8_t Vpc3MemCmp(VPC3_UNSIGNED8_PTR pToVpc3Memory1, VPC3_UNSIGNED8_PTR pToVpc3Memory2,
+                   uint16_t wLength);
+
+/* --- board support: what the module does besides the chip --- */
+
+/* The module's own outputs (digital outputs, LEDs): firmware writes a port; the host sees the
+ * value with the cycle of the write (the end of the firmware's last bus access). */
+void dpc31_port_write(unsigned port, uint32_t value);
+typedef void (*dpc31_port_fn)(void* user, uint64_t cycle, unsigned port, uint32_t value);
+void dpc31_set_port_callback(dpc31_chip* chip, dpc31_port_fn fn, void* user);
+
+/* Calling Vpc3Read & co. (or dpc31_port_write) with no chip selected is a programming error:
+ * the handler gets a message; the default prints it to stderr and aborts. */
+typedef void (*dpc31_error_fn)(const char* message);
+void dpc31_set_error_handler(dpc31_error_fn fn);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* DPC31_HAL_H */
