@@ -1,10 +1,9 @@
 /* registry.c -- the example firmwares, for hosts that pick one by name. */
 #include <ctype.h>
 
+#include "cnt2/cnt2.h"
+#include "do4/do4.h"
 #include "firmware.h"
-
-extern const dpc31_firmware do4_firmware;
-extern const dpc31_firmware cnt2_firmware;
 
 const dpc31_firmware* const dpc31_firmwares[] = {&do4_firmware, &cnt2_firmware, 0};
 

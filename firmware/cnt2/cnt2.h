@@ -21,7 +21,7 @@
 
 #include <stdint.h>
 
-#include "../dps/dps.h"
+#include "../firmware.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -37,6 +37,9 @@ enum {
   CNT2_MSG_SHORT = 0x04,
   CNT2_MSG_SUPPLY = 0x08
 };
+
+/* The firmware as hosts find it (firmware.h). */
+extern const dpc31_firmware cnt2_firmware;
 
 void cnt2_init(const dps_board* board);
 void cnt2_isr(void);

@@ -18,7 +18,7 @@
 
 #include <stdint.h>
 
-#include "../dps/dps.h"
+#include "../firmware.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -29,6 +29,9 @@ extern "C" {
 #define DO4_PORT_MODUL_OK 1u /* 1 normal operation, 0 OSP */
 
 enum do4_osp_mode { DO4_RETAIN_LAST = 0, DO4_REPLACE = 1 };
+
+/* The firmware as hosts find it (firmware.h). */
+extern const dpc31_firmware do4_firmware;
 
 void do4_init(const dps_board* board);
 void do4_isr(void);

@@ -261,11 +261,11 @@ static void handle_dx_out(void) {
     uint8_t out[DPS_MAX_IO];
     const int cleared = (r & U_Buffer_Cleared) != 0;
     CopyFromVpc3(out, buffer(R->dout_ptr[(r & 3u) - 1u]), M->out_len);
+    M->outputs(out, cleared); /* the terminals first: they are what is time-critical */
     if (cleared) {
       ++g_stats.cleared;
       refill_clear_buffer(); /* dpc31: the old U is the new C */
     }
-    M->outputs(out, cleared);
   }
   dps_update_inputs();
   Vpc3Write(R->mode1_s, Res_User_WD);

@@ -1,0 +1,275 @@
+// The example firmware (firmware/) on the host CPU against the built-in master: exact cycles
+// of the module's outputs after the events that move them (docs/timing.md: 4 clocks per bus
+// access, the ISR starts in the cycle X/INT goes active), and CNT2's message storage as a
+// property over many random timings.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <optional>
+#include <random>
+
+#include "../emu/dp_master.hpp"
+#include "../emu/dp_services.hpp"
+#include "../emu/firmware_host.hpp"
+#include "cnt2/cnt2.h"
+#include "do4/do4.h"
+
+namespace {
+
+using namespace dpc31;
+
+SlaveConfig gsd_slave(const dpc31_firmware& fw, std::uint8_t address) {
+  SlaveConfig s;
+  s.address = address;
+  s.ident = fw.ident;
+  s.cfg.assign(fw.cfg, fw.cfg + fw.cfg_len);
+  s.in_len = fw.in_len;
+  s.out_len = fw.out_len;
+  s.user_prm.assign(fw.user_prm, fw.user_prm + fw.user_prm_len);
+  return s;
+}
+
+// One chip, one firmware on its host CPU, the built-in master.
+struct Bench {
+  Bench(Profile p, const dpc31_firmware& fw, SlaveConfig slave, std::uint32_t baud)
+      : chip({p, BusMode::intel}), host(fw), master(chip, MasterConfig{2, baud, 100, 33}, slave) {
+    chip.on_irq_change([this](std::uint64_t cycle, bool active) {
+      if (active) activations.push_back(cycle);
+    });
+    DirectBus bus(chip);
+    host.init(bus, slave.address);
+    master.set_firmware([this](BusPort& b) { host.isr(b); });
+  }
+  std::optional<FirmwareHost::PortWrite> last_write(unsigned port) const {
+    const auto& w = host.port_writes();
+    for (auto it = w.rbegin(); it != w.rend(); ++it) {
+      if (it->port == port) return *it;
+    }
+    return std::nullopt;
+  }
+  // The request was acted on at the stop sample of its last character: end - T + floor(T/2).
+  std::uint64_t acted(const Exchange& ex) const {
+    return ex.request_end - master.bit_cycles() + master.bit_cycles() / 2;
+  }
+  Chip chip;
+  FirmwareHost host;
+  DpMaster master;
+  std::vector<std::uint64_t> activations;  // X/INT going active: the ISR starts there
+};
+
+class Do4 : public ::testing::TestWithParam<Profile> {};
+
+// Data_Exchange acted on -> DX_Out, X/INT active, the ISR starts in that cycle: Int_Reg (2
+// reads), Next_Dout_Buffer_Cmd, the U pointer cell, 2 output bytes: 6 accesses, so the
+// terminals change 24 clocks after the request was acted on.
+TEST_P(Do4, TerminalsFollowDxOutAfterSixBusAccesses) {
+  SlaveConfig s = gsd_slave(do4_firmware, 5);
+  s.user_prm = {0x00, DO4_REPLACE, 0x09, 0x00};
+  Bench b(GetParam(), do4_firmware, s, 1'500'000);
+  ASSERT_TRUE(b.master.startup());
+  const Exchange ex = b.master.data_exchange({0x05, 0x01});
+  b.master.idle(2000);
+  const auto w = b.last_write(DO4_PORT_OUTPUTS);
+  ASSERT_TRUE(w);
+  ASSERT_FALSE(b.activations.empty());
+  EXPECT_NE(std::find(b.activations.begin(), b.activations.end(), b.acted(ex)),
+            b.activations.end());
+  EXPECT_EQ(w->value, 0x5u);
+  EXPECT_EQ(w->cycle, b.acted(ex) + 6 * 4);
+  EXPECT_EQ(do4_get_state()->modul_ok, 1);
+}
+
+// The watchdog expires at acted + TWD (TWD = 2 x 5 x 10 ms). In that cycle Leave_Master also
+// clears the outputs (DX_Out with U_Buffer_Cleared); the ISR handles DX_Out first: Int_Reg (2),
+// Next_Dout_Buffer_Cmd, the U pointer, 2 bytes, then the cleared outputs are an OSP event:
+// the replacement value 24 clocks after the expiry.
+TEST_P(Do4, OspReplacementValue24ClocksAfterWatchdogExpiry) {
+  SlaveConfig s = gsd_slave(do4_firmware, 5);
+  s.wd_fact1 = 2;
+  s.wd_fact2 = 5;
+  s.user_prm = {0x00, DO4_REPLACE, 0x09, 0x00};
+  Bench b(GetParam(), do4_firmware, s, 1'500'000);
+  ASSERT_TRUE(b.master.startup());
+  const Exchange ex = b.master.data_exchange({0x05, 0x01});
+  b.master.idle(6'000'000);  // 125 ms
+  const std::uint64_t expiry = b.acted(ex) + 2 * 5 * 480'000;
+  const auto w = b.last_write(DO4_PORT_OUTPUTS);
+  ASSERT_TRUE(w);
+  ASSERT_FALSE(b.activations.empty());
+  EXPECT_NE(std::find(b.activations.begin(), b.activations.end(), expiry), b.activations.end());
+  EXPECT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
+  EXPECT_EQ(w->value, 0x9u);
+  EXPECT_EQ(w->cycle, expiry + 6 * 4);
+  EXPECT_EQ(do4_get_state()->modul_ok, 0);
+  EXPECT_EQ(do4_get_state()->osp_valid, 0);
+}
+
+// OSPMode 2, a replacement value beyond 4 bits, a short Set_Prm: the firmware answers
+// User_Prm_Data_Not_Okay. A longer one does not fit the Prm buffer sized from the GSD: the chip
+// answers RR (no resource) and the firmware never sees it.
+TEST_P(Do4, ParametersOutsideTheGsdRangesAreRefused) {
+  const std::vector<std::vector<std::uint8_t>> refused_by_firmware = {
+      {0x00, 0x02, 0x00, 0x0A}, {0x00, 0x00, 0x10, 0x0A}, {0x00, 0x00, 0x00}};
+  for (const auto& bad : refused_by_firmware) {
+    SlaveConfig s = gsd_slave(do4_firmware, 5);
+    s.user_prm = bad;
+    Bench b(GetParam(), do4_firmware, s, 12'000'000);
+    EXPECT_FALSE(b.master.startup(20));
+    EXPECT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
+    EXPECT_EQ(dps_get_stats()->prm_ok, 0u);
+    EXPECT_GE(dps_get_stats()->prm_rejected, 1u);
+  }
+  SlaveConfig s = gsd_slave(do4_firmware, 5);
+  s.user_prm = {0x00, 0x00, 0x00, 0x0A, 0x00};
+  Bench b(GetParam(), do4_firmware, s, 12'000'000);
+  EXPECT_FALSE(b.master.startup(20));
+  EXPECT_GE(b.chip.fdl_counters().no_resource, 1u);
+  EXPECT_EQ(dps_get_stats()->prm_ok + dps_get_stats()->prm_rejected, 0u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Profiles, Do4,
+                         ::testing::Values(Profile::spc3, Profile::vpc3plus, Profile::dpc31),
+                         [](const auto& i) { return std::string(profile_name(i.param)); });
+
+// --- CNT2: no message is lost across hold and release, at any timing ---
+
+// Everything in the order it happened (the host CPU and the bus side take turns, so this is a
+// total order): hardware events and the firmware's hold/release instants.
+struct LogEntry {
+  enum Kind { event, hold, release } kind;
+  int channel;
+  std::uint8_t bits;
+};
+
+struct MasterApp {
+  enum State { idle, wait_ack, held, wait_release } state = idle;
+  int delay = 0;
+  std::vector<std::uint8_t> reports;  // MSG bits read while held, one per hold
+};
+
+void run_property(std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  auto pick = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
+  const Profile profile = static_cast<Profile>(pick(0, 2));
+  const std::uint32_t baud = pick(0, 1) != 0 ? 12'000'000 : 1'500'000;
+  Bench b(profile, cnt2_firmware, gsd_slave(cnt2_firmware, 9), baud);
+  ASSERT_EQ(cnt2_get_channel(0)->shadow, 0) << "seed " << seed;
+  ASSERT_EQ(cnt2_get_channel(1)->shadow, 0) << "seed " << seed;
+  ASSERT_TRUE(b.master.startup()) << "seed " << seed;
+
+  std::vector<LogEntry> log;
+  bool injecting = true;
+  bool draining = false;  // the master starts no hold of its own
+  const std::uint64_t max_gap = 3ull * b.master.bit_cycles() * 11 * 12;  // ~3 telegrams
+  std::uint64_t next_event =
+      b.chip.cycle() + std::uniform_int_distribution<std::uint64_t>(0, max_gap)(rng);
+  // Hardware events arrive at any access of either side, also inside the firmware's ISR.
+  b.chip.on_state_change([&](std::uint64_t cycle) {
+    while (injecting && cycle >= next_event) {
+      const int ch = pick(0, 1);
+      const auto bits = static_cast<std::uint8_t>(pick(1, 15));
+      ASSERT_EQ(cnt2_hw_input(ch == 0 ? "event1" : "event2", bits), 0);
+      log.push_back({LogEntry::event, ch, bits});
+      next_event =
+          cycle +
+          (pick(0, 3) == 0 ? 0 : std::uniform_int_distribution<std::uint64_t>(1, max_gap)(rng));
+    }
+  });
+  b.host.on_port = [&](std::uint64_t, unsigned port, std::uint32_t value) {
+    log.push_back({value != 0 ? LogEntry::hold : LogEntry::release, static_cast<int>(port), 0});
+  };
+
+  MasterApp app[2];
+  std::vector<std::uint8_t> out = {0x00, 0x00};
+  auto exchange = [&] {
+    const Exchange ex = b.master.data_exchange(out);
+    if (pick(0, 2) == 0)
+      b.master.idle(std::uniform_int_distribution<std::uint64_t>(1, max_gap)(rng));
+    ASSERT_TRUE(ex.answer && ex.answer->du.size() == 6) << "seed " << seed;
+    for (int c = 0; c < 2; ++c) {
+      const std::uint8_t status = ex.answer->du[3 * c + 2];
+      const bool ack = (status & 0x80) != 0;
+      MasterApp& a = app[c];
+      switch (a.state) {
+        case MasterApp::idle:
+          // Evaluate when messages are shown, or (rarely) for no reason at all.
+          if (!draining && (((status & 0x0F) != 0 && pick(0, 2) != 0) || pick(0, 15) == 0)) {
+            out[c] |= 0x80;
+            a.state = MasterApp::wait_ack;
+          }
+          break;
+        case MasterApp::wait_ack:
+          if (ack) {
+            a.reports.push_back(status & 0x0F);
+            a.delay = pick(0, 3);
+            a.state = MasterApp::held;
+          }
+          break;
+        case MasterApp::held:
+          ASSERT_TRUE(ack) << "seed " << seed;
+          ASSERT_EQ(status & 0x0F, a.reports.back()) << "seed " << seed << ": held MSG changed";
+          if (a.delay-- <= 0) {
+            out[c] &= 0x7F;
+            a.state = MasterApp::wait_release;
+          }
+          break;
+        case MasterApp::wait_release:
+          if (!ack) a.state = MasterApp::idle;
+          break;
+      }
+    }
+  };
+  const int n = pick(20, 80);
+  for (int i = 0; i < n; ++i) exchange();
+  // Drain: no new events; every channel completes one more hold and release.
+  injecting = false;
+  draining = true;
+  for (int c = 0; c < 2; ++c) {
+    while (app[c].state != MasterApp::idle) exchange();
+    const std::size_t before = app[c].reports.size();
+    out[c] |= 0x80;
+    app[c].state = MasterApp::wait_ack;
+    while (app[c].reports.size() == before || app[c].state != MasterApp::idle) exchange();
+  }
+  if (::testing::Test::HasFatalFailure()) return;
+
+  // Each hold must show exactly the messages since the previous hold instant: nothing lost,
+  // nothing invented (a shadow that did not start at 0 would add bits to a report).
+  for (int c = 0; c < 2; ++c) {
+    std::vector<std::uint8_t> expected;
+    std::uint8_t pending = 0;
+    for (const LogEntry& e : log) {
+      if (e.channel != c) continue;
+      if (e.kind == LogEntry::event) pending |= e.bits;
+      if (e.kind == LogEntry::hold) {
+        expected.push_back(pending);
+        pending = 0;
+      }
+    }
+    EXPECT_EQ(pending, 0) << "seed " << seed << " channel " << c << ": never reported";
+    EXPECT_EQ(app[c].reports, expected) << "seed " << seed << " channel " << c;
+  }
+  b.chip.on_state_change({});
+}
+
+TEST(Cnt2, NoMessageIsLostAcrossHoldAndReleaseAtAnyTiming) {
+  for (std::uint32_t seed = 1; seed <= 300; ++seed) {
+    run_property(seed);
+    if (HasFailure()) break;
+  }
+}
+
+// With no message ever raised, hold and release show MSG = 0: the shadow starts as all 0.
+TEST(Cnt2, ShadowStartsAsAllZero) {
+  Bench b(Profile::spc3, cnt2_firmware, gsd_slave(cnt2_firmware, 9), 12'000'000);
+  ASSERT_TRUE(b.master.startup());
+  EXPECT_EQ(b.master.data_exchange({0x80, 0x80}).answer->du,
+            (std::vector<std::uint8_t>{0, 0, 0, 0, 0, 0}));
+  EXPECT_EQ(b.master.data_exchange({0x80, 0x80}).answer->du,
+            (std::vector<std::uint8_t>{0, 0, 0x80, 0, 0, 0x80}));
+  b.master.data_exchange({0x00, 0x00});
+  EXPECT_EQ(b.master.data_exchange({0x00, 0x00}).answer->du,
+            (std::vector<std::uint8_t>{0, 0, 0, 0, 0, 0}));
+}
+
+}  // namespace
