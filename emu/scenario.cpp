@@ -987,6 +987,11 @@ class Runner {
     out_.dp = chip_.dp_state();
     out_.wd = chip_.wd_state();
     out_.counters = chip_.fdl_counters();
+    if (fw_) {
+      for (const FirmwareHost::PortWrite& w : fw_->port_writes()) {
+        out_.port_writes.push_back({w.cycle, fw_->port_name(w.port), w.value});
+      }
+    }
     note(chip_.cycle(),
          fmt::format("end: dp_state {}, wd_state {}; expects passed {}, failed {}",
                      dp_state_name(out_.dp), wd_state_name(out_.wd), out_.passed, out_.failed));

@@ -111,6 +111,12 @@ struct ScenarioOutcome {
   std::uint32_t passed = 0;
   std::uint32_t failed = 0;
   std::vector<std::string> failures;  // "FILE:LINE: expected X, got Y", in order
+  struct PortWrite {
+    std::uint64_t cycle;
+    std::string port;
+    std::uint32_t value;
+  };
+  std::vector<PortWrite> port_writes;  // the firmware's module outputs, when it has one
   [[nodiscard]] bool ok() const { return failures.empty(); }
 };
 

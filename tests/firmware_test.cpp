@@ -5,8 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <map>
 #include <optional>
 #include <random>
+#include <sstream>
 
 #include "../emu/dp_master.hpp"
 #include "../emu/dp_services.hpp"
@@ -271,5 +275,134 @@ TEST(Cnt2, ShadowStartsAsAllZero) {
   EXPECT_EQ(b.master.data_exchange({0x00, 0x00}).answer->du,
             (std::vector<std::uint8_t>{0, 0, 0, 0, 0, 0}));
 }
+
+}  // namespace
+
+// --- the GSD files: what a master is configured with must be what the firmware accepts ---
+
+namespace {
+
+struct Gsd {
+  std::map<std::string, std::string> keys;
+  std::vector<std::uint8_t> module_cfg;
+  std::vector<std::uint8_t> prm_const;
+  struct Param {
+    int offset;  // into the user parameter bytes (Ext_User_Prm_Data_Ref)
+    int def, min, max;
+  };
+  std::map<int, Param> params;  // by ExtUserPrmData number
+};
+
+std::vector<std::uint8_t> hex_list(const std::string& s) {
+  std::vector<std::uint8_t> v;
+  std::stringstream in(s);
+  std::string item;
+  while (std::getline(in, item, ','))
+    v.push_back(static_cast<std::uint8_t>(std::stoul(item, nullptr, 0)));
+  return v;
+}
+
+std::string trim(std::string s) {
+  const auto b = s.find_first_not_of(" \t\r");
+  const auto e = s.find_last_not_of(" \t\r");
+  return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
+}
+
+// The subset of the GSD grammar these files use; anything else fails the test.
+Gsd load_gsd(const std::string& path) {
+  std::ifstream in(path);
+  EXPECT_TRUE(in.good()) << path;
+  Gsd g;
+  std::string line;
+  int param = -1;
+  while (std::getline(in, line)) {
+    line = trim(line.substr(0, line.find(';')));
+    if (line.empty() || line == "#Profibus_DP" || line == "EndModule" || line == "EndPrmText")
+      continue;
+    if (line == "EndExtUserPrmData") {
+      param = -1;
+      continue;
+    }
+    if (param >= 0 && line.rfind("Unsigned8 ", 0) == 0) {
+      int def = 0, lo = 0, hi = 0;
+      EXPECT_EQ(std::sscanf(line.c_str(), "Unsigned8 %d %d-%d", &def, &lo, &hi), 3) << line;
+      g.params[param].def = def;
+      g.params[param].min = lo;
+      g.params[param].max = hi;
+      continue;
+    }
+    const auto eq = line.find('=');
+    if (eq == std::string::npos) continue;  // Text(k) lines of a PrmText block have '=' too
+    const std::string key = trim(line.substr(0, eq));
+    const std::string value = trim(line.substr(eq + 1));
+    if (key == "Module") {
+      g.module_cfg = hex_list(value.substr(value.rfind('"') + 1));
+    } else if (key == "ExtUserPrmData") {
+      param = std::stoi(value);
+    } else if (key == "Ext_User_Prm_Data_Const(0)") {
+      g.prm_const = hex_list(value);
+    } else if (key.rfind("Ext_User_Prm_Data_Ref(", 0) == 0) {
+      g.params[std::stoi(value)].offset = std::stoi(key.substr(22));
+    } else {
+      g.keys[key] = value;
+    }
+  }
+  return g;
+}
+
+class GsdFile : public ::testing::TestWithParam<const dpc31_firmware*> {};
+
+TEST_P(GsdFile, DescribesWhatTheFirmwareChecks) {
+  const dpc31_firmware& fw = *GetParam();
+  const Gsd g = load_gsd(std::string(SOURCE_DIR) + "/firmware/" + fw.gsd);
+  EXPECT_EQ(std::stoul(g.keys.at("Ident_Number"), nullptr, 0), fw.ident);
+  EXPECT_EQ(g.module_cfg, std::vector<std::uint8_t>(fw.cfg, fw.cfg + fw.cfg_len));
+  EXPECT_EQ(g.prm_const, std::vector<std::uint8_t>(fw.user_prm, fw.user_prm + fw.user_prm_len));
+  EXPECT_EQ(std::stoul(g.keys.at("Max_User_Prm_Data_Len")), fw.user_prm_len);
+  for (const auto& [n, p] : g.params) EXPECT_EQ(g.prm_const.at(p.offset), p.def) << "param " << n;
+  // No Sync/Freeze: the firmware leaves them off in Mode_Reg0.
+  EXPECT_EQ(g.keys.at("Sync_Mode_supp"), "0");
+  EXPECT_EQ(g.keys.at("Freeze_Mode_supp"), "0");
+  EXPECT_EQ(g.keys.at("Set_Slave_Add_supp"), "1");
+  EXPECT_EQ(g.keys.at("Fail_Safe"), "1");
+}
+
+// A master set up from the GSD reaches Data_Exchange at every rate it claims, on every chip,
+// with every parameter at its minimum, default and maximum; one beyond the range is refused.
+TEST_P(GsdFile, EveryMasterConfiguredFromItReachesDataExchange) {
+  const dpc31_firmware& fw = *GetParam();
+  const Gsd g = load_gsd(std::string(SOURCE_DIR) + "/firmware/" + fw.gsd);
+  const auto slave_from_gsd = [&] {
+    SlaveConfig s = gsd_slave(fw, 5);
+    s.ident = static_cast<std::uint16_t>(std::stoul(g.keys.at("Ident_Number"), nullptr, 0));
+    s.cfg = g.module_cfg;
+    s.user_prm = g.prm_const;
+    return s;
+  };
+  static const std::pair<const char*, std::uint32_t> kRates[] = {
+      {"9.6_supp", 9600},     {"19.2_supp", 19200},  {"45.45_supp", 45450},  {"93.75_supp", 93750},
+      {"187.5_supp", 187500}, {"500_supp", 500000},  {"1.5M_supp", 1500000}, {"3M_supp", 3000000},
+      {"6M_supp", 6000000},   {"12M_supp", 12000000}};
+  for (const auto& [key, baud] : kRates) {
+    if (g.keys.at(key) != "1") continue;
+    for (Profile p : {Profile::spc3, Profile::vpc3plus, Profile::dpc31}) {
+      Bench b(p, fw, slave_from_gsd(), baud);
+      EXPECT_TRUE(b.master.startup()) << key << " " << profile_name(p);
+      EXPECT_EQ(b.chip.dp_state(), DpState::Data_Exchange) << key << " " << profile_name(p);
+    }
+  }
+  for (const auto& [n, param] : g.params) {
+    for (int v : {param.min, param.def, param.max, param.max + 1}) {
+      if (v > 255) continue;
+      SlaveConfig s = slave_from_gsd();
+      s.user_prm.at(param.offset) = static_cast<std::uint8_t>(v);
+      Bench b(Profile::dpc31, fw, s, 12'000'000);
+      EXPECT_EQ(b.master.startup(40), v <= param.max) << "param " << n << " = " << v;
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Firmware, GsdFile, ::testing::Values(&do4_firmware, &cnt2_firmware),
+                         [](const auto& i) { return std::string(i.param->name); });
 
 }  // namespace

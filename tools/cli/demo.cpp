@@ -2,9 +2,11 @@
 
 #include <fmt/core.h>
 
+#include <filesystem>
 #include <string>
 
 #include "../../emu/scenario.hpp"
+#include "run.hpp"
 
 namespace dpc31::cli {
 
@@ -75,46 +77,68 @@ class Narrator {
   std::FILE* out_;
 };
 
-// The chip's main job: a DP master on the RS-485 side, the minimal firmware on the other.
-int run_dp_session(const ChipOptions& opt, std::FILE* out) {
+// The chip's main job: a DP master on the RS-485 side, the example firmware DO4 (C99, over the
+// C HAL) on the other. Its outputs are what a bring-up is about: when did they change, and why.
+int run_dp_session(const ChipOptions& opt, const std::string& out_dir, std::FILE* out) {
   const std::string text =
       fmt::format(R"(profile {}
 bus {}
 baud 1500000
-slave address=5 ident=0x0C31 cfg=13,23 in=4 out=4 wd=10,10 wd_on=1
-user inputs=A1,A2,A3,A4 spec_clear=1 substitute=5A,5A,5A,5A
+firmware DO4
+slave address=5 wd=10,10 wd_on=1 user_prm=00,01,09,00
 startup
-exchange 2 outputs=01,02,03,04
-gc clear
-exchange 1 outputs=-
-gc operate
-exchange 1 outputs=11,12,13,14
+exchange 2 outputs=00,00
+exchange 2 outputs=05,01
+exchange 2 outputs=0A,01
 silence 1100ms
+expect port outputs 9
+expect port modul_ok 0
 startup
-exchange 1 outputs=21,22,23,24
+exchange 2 outputs=0A,01
 expect dp_state Data_Exchange
+expect port outputs 0xA
+expect port modul_ok 1
 )",
                   profile_desc(opt.profile).name, opt.bus == BusMode::intel ? "intel" : "motorola");
   fmt::print(
       out,
-      "\n# DP session: master 2 finds slave 5 at 1.5 Mbaud (after the chip's baud search),\n"
-      "# parameterises it, exchanges data, sends Clear and a fail-safe telegram, then the cable\n"
-      "# is pulled for 1.1 s (the DP watchdog, 1 s, expires) and the master starts over.\n");
+      "\n# DP session: master 2 finds slave 5 at 1.5 Mbaud (after the chip's baud search); the\n"
+      "# slave runs the example firmware DO4 (firmware/do4, 4 digital outputs with the OSP\n"
+      "# function model: OSPMode 'replace with static value' 1001, refresh monitor off). The\n"
+      "# master sends OSPValid 0 (OSP), then sets it; the cable is pulled for 1.1 s (the DP\n"
+      "# watchdog, 10 x 10 x 10 ms, expires: OSP), the master starts over (recovery).\n");
   Scenario sc;
   ScenarioError err;
   if (!parse_scenario(text, "<demo>", sc, err)) {
-    fmt::print(stderr, "{}\n", err.message);
+    fmt::print(stderr, "{}\n", err.text());
     return 2;
   }
-  const ScenarioOutcome o = run_scenario(
-      sc, [out](const std::string& line) { fmt::print(out, "{}\n", line); },
-      [](const std::string& line) { fmt::print(stderr, "{}\n", line); });
-  return o.ok() ? 0 : 1;
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  RunOptions ro;
+  ro.scenario = "<demo>";
+  ro.vcd = (std::filesystem::path(out_dir) / "dpc31-demo.vcd").string();
+  ro.pcap = (std::filesystem::path(out_dir) / "dpc31-demo.pcapng").string();
+  ScenarioOutcome o;
+  const int rc = run_parsed_scenario(
+      ro, sc, [out](const std::string& line) { fmt::print(out, "{}\n", line); },
+      [](const std::string& line) { fmt::print(stderr, "{}\n", line); }, o, stderr);
+  if (rc == 2) return rc;
+  const double hz = Chip(opt).clock_hz();
+  fmt::print(out, "\n# What DO4's outputs did (terminals DO4..DO1; ModulOK 1 = normal, 0 = OSP)\n");
+  fmt::print(out, "{:>12} {:>14}  {}\n", "cycle", "time", "change");
+  for (const ScenarioOutcome::PortWrite& w : o.port_writes) {
+    fmt::print(out, "{:>12} {:>11.3f} us  {} = {}\n", w.cycle,
+               static_cast<double>(w.cycle) * 1e6 / hz, w.port,
+               w.port == "outputs" ? fmt::format("{:04b}", w.value) : std::to_string(w.value));
+  }
+  fmt::print(out, "\nwaveform (VCD): {}\ntelegrams (pcapng, link type 257): {}\n", ro.vcd, ro.pcap);
+  return rc;
 }
 
 }  // namespace
 
-int run_demo(ChipOptions opt, std::FILE* out) {
+int run_demo(ChipOptions opt, const std::string& out_dir, std::FILE* out) {
   Chip chip(opt);
   Narrator n(chip, out);
   const ProfileDesc& p = chip.profile();
@@ -184,7 +208,7 @@ int run_demo(ChipOptions opt, std::FILE* out) {
   n.write(RegId::Mode_Reg1_S, 0x02);
   fmt::print(out, "\nregister session done at cycle {} ({:.3f} ms of chip time)\n", chip.cycle(),
              static_cast<double>(chip.cycle()) * 1e3 / chip.clock_hz());
-  return run_dp_session(opt, out);
+  return run_dp_session(opt, out_dir, out);
 }
 
 }  // namespace dpc31::cli

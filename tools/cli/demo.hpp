@@ -1,13 +1,15 @@
 #pragma once
 
 #include <cstdio>
+#include <string>
 
 #include "dpc31/chip.hpp"
 
 namespace dpc31::cli {
 
-// The scripted register-level session of `dpc31 demo`: start the chip, raise, mask, acknowledge
-// and EOI interrupts, printing every access and every X/INT edge with its cycle.
-int run_demo(ChipOptions opt, std::FILE* out);
+// `dpc31 demo`: a scripted register-level session (start the chip, raise, mask, acknowledge and
+// EOI interrupts, every access and X/INT edge with its cycle), then a DP session with the DO4
+// example firmware, its waveform and capture written to `out_dir`.
+int run_demo(ChipOptions opt, const std::string& out_dir, std::FILE* out);
 
 }  // namespace dpc31::cli

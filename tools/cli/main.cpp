@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <filesystem>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -35,6 +36,9 @@ int main(int argc, char** argv) {
   auto* demo =
       app.add_subcommand("demo", "scripted register-level session: start, interrupts, EOI");
   demo->add_option("--profile", demo_profile, "chip profile")->check(CLI::IsMember(profiles));
+  std::string demo_out = (std::filesystem::temp_directory_path() / "dpc31-demo").string();
+  demo->add_option("--out-dir", demo_out,
+                   "where the DP session's waveform and capture go (default: TMPDIR/dpc31-demo)");
   demo->add_option("--bus", demo_bus, "bus byte order")
       ->check(CLI::IsMember({"intel", "motorola"}));
 
@@ -136,7 +140,7 @@ int main(int argc, char** argv) {
     dpc31::ChipOptions opt;
     opt.profile = to_profile(demo_profile);
     opt.bus = demo_bus == "intel" ? dpc31::BusMode::intel : dpc31::BusMode::motorola;
-    return dpc31::cli::run_demo(opt, stdout);
+    return dpc31::cli::run_demo(opt, demo_out, stdout);
   }
   if (regs->parsed()) {
     std::vector<const dpc31::ProfileDesc*> sel;

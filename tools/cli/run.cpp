@@ -106,6 +106,13 @@ int run_with_outputs(const RunOptions& opt, const LineSink& walk, const LineSink
     errors(perr.text());
     return 2;
   }
+  return run_parsed_scenario(opt, s, walk, errors, o, err);
+}
+
+}  // namespace
+
+int run_parsed_scenario(const RunOptions& opt, const Scenario& s, const LineSink& walk,
+                        const LineSink& errors, ScenarioOutcome& o, std::FILE* err) {
   std::unique_ptr<TraceRecorder> rec;
   ScenarioHooks hooks;
   LineSink run_walk = walk;
@@ -181,8 +188,6 @@ int run_with_outputs(const RunOptions& opt, const LineSink& walk, const LineSink
   }
   return rc;
 }
-
-}  // namespace
 
 int run_scenario_command(const RunOptions& opt, std::FILE* out, std::FILE* err) {
   LineSink walk;

@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "../../emu/scenario.hpp"
+
 namespace dpc31::cli {
 
 struct RunOptions {
@@ -26,5 +28,10 @@ struct RunOptions {
 // and failures to `err`. Returns the exit code: 0 every expect held, 1 one failed, 2 bad input.
 // With `record`, the run is also written as a trace (for exit codes 0 and 1).
 int run_scenario_command(const RunOptions& opt, std::FILE* out, std::FILE* err);
+
+// A parsed scenario with the outputs `opt` asks for (waveforms, capture, trace; opt.scenario is
+// only used to name it). Returns 0, 1 or 2 like the command.
+int run_parsed_scenario(const RunOptions& opt, const Scenario& s, const LineSink& walk,
+                        const LineSink& errors, ScenarioOutcome& o, std::FILE* err);
 
 }  // namespace dpc31::cli
