@@ -68,8 +68,18 @@ TEST(Cli, RegsReproducesTheCheckedInOutputs) {
 
 TEST(Cli, DemoRunsOnEveryProfile) {
   for (const char* p : {"spc3", "vpc3plus", "dpc31"}) {
-    const Result r = run(std::string("demo --profile ") + p);
+    const std::string dir = ::testing::TempDir() + "demo-" + p;
+    const Result r = run(std::string("demo --profile ") + p + " --out-dir " + dir);
     EXPECT_EQ(r.rc, 0) << p;
+    // DO4 through the pulled cable: OSP after the watchdog, normal again after recovery; the
+    // table of output changes and where the files went.
+    EXPECT_NE(r.out.find("What DO4's outputs did"), std::string::npos) << p;
+    EXPECT_NE(r.out.find("modul_ok = 0"), std::string::npos) << p;
+    EXPECT_NE(r.out.find("outputs = 1010"), std::string::npos) << p;
+    EXPECT_NE(r.out.find("expects passed 5, failed 0"), std::string::npos) << p;
+    EXPECT_NE(r.out.find("waveform (VCD): " + dir + "/dpc31-demo.vcd"), std::string::npos) << p;
+    EXPECT_FALSE(slurp(dir + "/dpc31-demo.vcd").empty()) << p;
+    EXPECT_FALSE(slurp(dir + "/dpc31-demo.pcapng").empty()) << p;
     EXPECT_NE(r.out.find("X/INT -> low (active)"), std::string::npos) << p;
     EXPECT_NE(r.out.find("User_Prm_Data_Okay = 00h"), std::string::npos) << p;
     EXPECT_NE(r.out.find("dp_state Wait_Cfg -> Data_Exchange"), std::string::npos) << p;
