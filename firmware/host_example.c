@@ -2,9 +2,9 @@
  * and its ISR while the interrupt is active. Built as dpc31_host_example and run by CTest. */
 #include <stdio.h>
 
+#include "do4/do4.h" /* or your driver's header */
 #include "dpc31/dpc31_hal.h"
 #include "dpc31/dpc31_regs.h"
-#include "do4/do4.h" /* or your driver's header */
 
 int main(void) {
   dps_board board = {DPC31_PROFILE_DPC31, 0, 5}; /* chip, bus mode, station address */
@@ -20,7 +20,8 @@ int main(void) {
     }
   }
   printf("cycle %llu: %u interrupts served, DP state %u\n", (unsigned long long)dpc31_cycle(chip),
-         (unsigned)dps_get_stats()->interrupts, (unsigned)((dpc31_peek(chip, DPC31_Status_Reg) >> 4) & 3u));
+         (unsigned)dps_get_stats()->interrupts,
+         (unsigned)((dpc31_peek(chip, DPC31_Status_Reg) >> 4) & 3u));
   dpc31_destroy(chip);
   return 0;
 }
