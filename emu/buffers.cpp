@@ -196,3 +196,56 @@ void ChipCore::inputs_due() {
 }
 
 }  // namespace dpc31
+
+namespace dpc31 {
+
+namespace {
+
+template <typename Ar, typename S>
+void ring_fields(Ar& ar, S& s) {
+  static_assert(snap::member_count<BufferRing>() == 4, "a new member: add it here");
+  ar.bounded(s.d, std::uint8_t{3});
+  ar.bounded(s.n, std::uint8_t{3});
+  ar.bounded(s.u, std::uint8_t{3});
+  ar.bounded(s.f, std::uint8_t{3});
+}
+
+template <typename Ar, typename S>
+void fields(Ar& ar, S& s) {
+  static_assert(snap::member_count<BufferUnit>() == 9, "a new member: add it here");
+  static_assert(snap::member_count<DiagPair>() == 2, "a new member: add it here");
+  ring_fields(ar, s.dout);
+  ring_fields(ar, s.din);
+  ar.bounded(s.diag.buf[0], DiagState::Asic_Send_Mode);
+  ar.bounded(s.diag.buf[1], DiagState::Asic_Send_Mode);
+  ar(s.n_cleared);
+  ar(s.u_cleared);
+  ar(s.diag_flag);
+  ar(s.n_cl);
+  ar(s.d_fresh);
+  ar(s.c_swap_pending);
+}
+
+// D and U always hold a buffer, exactly one of N and F is Nil, no buffer is held twice: the
+// pointer cells are indexed by these numbers.
+bool valid_ring(const BufferRing& b) {
+  const bool n_nil = b.n == 0;
+  const bool f_nil = b.f == 0;
+  const std::uint8_t third = n_nil ? b.f : b.n;
+  return b.d != 0 && b.u != 0 && n_nil != f_nil && b.d != b.u && third != b.d && third != b.u;
+}
+
+}  // namespace
+
+void save_state(snap::Writer& w, const BufferUnit& s) {
+  w.section("BUFS");
+  fields(w, s);
+}
+
+void load_state(snap::Reader& r, BufferUnit& s) {
+  r.section("BUFS");
+  fields(r, s);
+  if (!valid_ring(s.dout) || !valid_ring(s.din)) r.fail("Dout or Din ring is not buffers 1..3");
+}
+
+}  // namespace dpc31

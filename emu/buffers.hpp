@@ -5,6 +5,8 @@
 
 #include <cstdint>
 
+#include "snapshot.hpp"
+
 namespace dpc31 {
 
 struct BufferRing {
@@ -67,5 +69,8 @@ struct BufferUnit {
   [[nodiscard]] bool dout_n_pending() const { return dout.n != 0 || n_cl; }
   void reset() { *this = BufferUnit{}; }
 };
+
+void save_state(snap::Writer& w, const BufferUnit& s);
+void load_state(snap::Reader& r, BufferUnit& s);
 
 }  // namespace dpc31

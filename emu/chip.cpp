@@ -3,8 +3,10 @@
 #include "dpc31/chip.hpp"
 
 #include <algorithm>
+#include <type_traits>
 
 #include "core.hpp"
+#include "snapshot.hpp"
 
 namespace dpc31 {
 
@@ -134,5 +136,97 @@ void Chip::asic_prm_received() { core_->prm_accepted(); }
 void Chip::asic_cfg_received() { core_->cfg_accepted(); }
 void Chip::asic_ssa_received() { core_->ssa_accepted(); }
 bool Chip::ssa_buffer_free() const { return core_->dp.ssa_free; }
+
+// ---- snapshots (docs/snapshots.md) ----
+
+namespace {
+
+// A guard for the one platform the size is known on: a new member of ChipCore changes its size
+// (less the arrays that grow with the register description), or lands in padding, which the
+// snapshot tests' many save points in live sessions catch. Then: state goes into core_fields,
+// configuration into the header, attachments into move_attachments.
+#if defined(__x86_64__) && defined(__GLIBCXX__)
+constexpr std::size_t round8(std::size_t n) { return (n + 7) / 8 * 8; }
+static_assert(sizeof(ChipCore) - 2 * round8(sizeof(ChipCore::latch)) - sizeof(HookTable) == 1040,
+              "a new member of ChipCore: see the comment above");
+#endif
+
+// Everything that influences future behaviour. Not here: the configuration (prof, bus,
+// clock_hz: the header), the tables derived from the profile (rd_map, wr_map, region_map,
+// reg_index, hooks), the log sink and the observers.
+template <typename Ar, typename C>
+void core_fields(Ar& ar, C& c) {
+  ar.section("CORE");
+  ar(c.now);
+  ar(c.started);
+  ar(c.ram_access_violation);
+  ar(c.large_ram);
+  ar.bounded(c.baud_code, static_cast<std::uint8_t>(std::size(kBaudRates) - 1));
+  ar(c.written_bits);
+  ar(c.diag_in_flight);
+  ar(c.irq_line);
+  ar.section("LTCH");
+  ar.array(c.latch);
+  ar.section("MEM ");
+  ar.fixed_bytes(c.mem);
+  ar.block(c.irq);
+  ar.block(c.buffers);
+  ar.block(c.dp);
+  ar.block(c.timers);
+  ar.block(c.mac);
+  ar.block(c.counters);
+}
+
+snap::Header header_of(const ChipCore& c) {
+  return {c.prof->id, c.bus, c.clock_hz, snap::register_map_fingerprint()};
+}
+
+// The log sink and the observers belong to whoever attached them, not to the state.
+void move_attachments(ChipCore& from, ChipCore& to) noexcept {
+  to.sink = std::move(from.sink);
+  to.irq_observer = std::move(from.irq_observer);
+  to.txd_observer = std::move(from.txd_observer);
+  to.rxd_observer = std::move(from.rxd_observer);
+  to.telegram_observer = std::move(from.telegram_observer);
+  to.block_observer = std::move(from.block_observer);
+  to.state_observer = std::move(from.state_observer);
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> Chip::save_state() const {
+  snap::Writer w;
+  core_fields(w, *core_);
+  return snap::seal(header_of(*core_), w.bytes());
+}
+
+void Chip::load_state(std::span<const std::uint8_t> bytes) {
+  ChipCore& c = *core_;
+  const std::span<const std::uint8_t> payload = snap::open(bytes, header_of(c));
+  // Decode into a fresh core (its tables built from the same profile); *core_ is untouched until
+  // everything has been read and checked.
+  auto fresh = std::make_unique<ChipCore>(ChipOptions{c.prof->id, c.bus, c.clock_hz});
+  fresh->sink = nullptr;
+  snap::Reader r(payload);
+  core_fields(r, *fresh);
+  r.finish();
+  // Commit: nothing below throws.
+  static_assert(std::is_nothrow_move_assignable_v<ChipCore>);
+  move_attachments(c, *fresh);
+  c = std::move(*fresh);
+}
+
+void Chip::save_state_file(const std::string& path) const {
+  snap::write_file_atomic(path, save_state());
+}
+
+void Chip::load_state_file(const std::string& path) {
+  const std::vector<std::uint8_t> bytes = snap::read_file(path);
+  try {
+    load_state(bytes);
+  } catch (const SnapshotError& e) {
+    throw SnapshotError(path + ": " + e.what());
+  }
+}
 
 }  // namespace dpc31

@@ -3,6 +3,8 @@
 
 #include <cstdint>
 
+#include "snapshot.hpp"
+
 namespace dpc31 {
 
 struct FdlCounters {
@@ -27,5 +29,9 @@ struct FdlCounters {
   std::uint32_t repeated = 0;              // FCB repeat: the previous answer sent again
   std::uint32_t requests = 0;              // error-free requests to us (or broadcast) processed
 };
+
+// In mac.cpp, where they are counted.
+void save_state(snap::Writer& w, const FdlCounters& s);
+void load_state(snap::Reader& r, FdlCounters& s);
 
 }  // namespace dpc31

@@ -464,3 +464,53 @@ void ChipCore::dp_response_sent() {
 }
 
 }  // namespace dpc31
+
+namespace dpc31 {
+
+namespace {
+
+template <typename Ar, typename S>
+void handshake_fields(Ar& ar, S& s) {
+  static_assert(snap::member_count<Handshake>() == 2, "a new member: add it here");
+  ar(s.pending);
+  ar(s.newer_arrived);
+}
+
+template <typename Ar, typename S>
+void fields(Ar& ar, S& s) {
+  static_assert(snap::member_count<DpStateMachine>() == 20, "a new member: add it here");
+  ar.bounded(s.state, DpState::Data_Exchange);
+  handshake_fields(ar, s.prm);
+  handshake_fields(ar, s.cfg);
+  ar(s.ssa_free);
+  ar(s.prm_fault);
+  ar(s.cfg_fault);
+  ar(s.not_supported);
+  ar(s.station);
+  ar(s.no_add_change);
+  ar(s.master_add);
+  ar(s.group_ident);
+  ar(s.min_tsdr);
+  ar(s.sync_mode);
+  ar(s.freeze_mode);
+  ar(s.user_wd_armed);
+  ar(s.user_wd);
+  ar(s.fcb_valid);
+  ar(s.last_fcb);
+  ar(s.last_master);
+  ar.byte_vector(s.last_response, fdl::kMaxFrameLength);
+}
+
+}  // namespace
+
+void save_state(snap::Writer& w, const DpStateMachine& s) {
+  w.section("DPSM");
+  fields(w, s);
+}
+
+void load_state(snap::Reader& r, DpStateMachine& s) {
+  r.section("DPSM");
+  fields(r, s);
+}
+
+}  // namespace dpc31

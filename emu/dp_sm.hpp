@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "dpc31/chip.hpp"
+#include "snapshot.hpp"
 
 namespace dpc31 {
 
@@ -81,5 +82,8 @@ struct DpStateMachine {
 
   void reset() { *this = DpStateMachine{}; }
 };
+
+void save_state(snap::Writer& w, const DpStateMachine& s);
+void load_state(snap::Reader& r, DpStateMachine& s);
 
 }  // namespace dpc31

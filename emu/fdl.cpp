@@ -226,4 +226,29 @@ void Assembler::reset() {
   error_ = Error::none;
 }
 
+#if defined(__x86_64__) && defined(__GLIBCXX__)
+static_assert(sizeof(Assembler) == 280, "a new member of Assembler: add it to Assembler::fields");
+#endif
+
+// Only the bytes collected so far: the rest of buf_ is never read.
+template <typename Ar, typename Self>
+void Assembler::fields(Ar& ar, Self& s) {
+  ar.size(s.size_, kMaxFrameLength);
+  ar.raw(std::span(s.buf_.data(), s.size_));
+  ar.size(s.expected_, kMaxFrameLength);
+  ar.bounded(s.status_, Status::error);
+  ar.bounded(s.error_, Error::bad_sap);
+}
+
+void Assembler::save_state(snap::Writer& w) const {
+  w.section("FDLA");
+  fields(w, *this);
+}
+
+void Assembler::load_state(snap::Reader& r) {
+  r.section("FDLA");
+  buf_.fill(0);
+  fields(r, *this);
+}
+
 }  // namespace dpc31::fdl

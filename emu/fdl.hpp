@@ -11,6 +11,8 @@
 #include <string_view>
 #include <vector>
 
+#include "snapshot.hpp"
+
 namespace dpc31::fdl {
 
 // Start delimiters, short acknowledge, end delimiter.
@@ -166,8 +168,14 @@ class Assembler {
   [[nodiscard]] Error error() const { return error_; }
   void reset();
 
+  // Snapshots (emu/snapshot.hpp): the bytes collected so far, length, status, error.
+  void save_state(snap::Writer& w) const;
+  void load_state(snap::Reader& r);
+
  private:
   Status fail(Error e);
+  template <typename Ar, typename Self>
+  static void fields(Ar& ar, Self& s);
 
   std::array<std::uint8_t, kMaxFrameLength> buf_{};
   std::size_t size_ = 0;

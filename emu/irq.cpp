@@ -24,6 +24,27 @@ void install_irq_hooks(HookTable& h) {
   h[ChipCore::idx(RegId::Int_Ack_Reg)].pre_write = keep_events;
 }
 
+namespace {
+
+template <typename Ar, typename S>
+void fields(Ar& ar, S& s) {
+  static_assert(snap::member_count<IrqController>() == 3, "a new member: add it here");
+  ar(s.eoi_block_until);
+  ar(s.event_cycle);
+  ar(s.event_mask);
+}
+
+}  // namespace
+
+void save_state(snap::Writer& w, const IrqController& s) {
+  w.section("IRQC");
+  fields(w, s);
+}
+void load_state(snap::Reader& r, IrqController& s) {
+  r.section("IRQC");
+  fields(r, s);
+}
+
 void ChipCore::raise(std::uint16_t bits) {
   const RegDesc* irr = reg(RegId::Int_Req_Reg);
   bits = static_cast<std::uint16_t>(bits & ~irr->rsvd);

@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <limits>
 
+#include "snapshot.hpp"
+
 namespace dpc31 {
 
 struct IrqController {
@@ -26,5 +28,8 @@ struct IrqController {
     return event_cycle == now ? event_mask : std::uint16_t{0};
   }
 };
+
+void save_state(snap::Writer& w, const IrqController& s);
+void load_state(snap::Reader& r, IrqController& s);
 
 }  // namespace dpc31

@@ -214,4 +214,82 @@ void ChipCore::mac_send(const fdl::Frame& f, std::uint64_t request_end) {
   if (telegram_observer) telegram_observer(Telegram{true, bytes, start, mac.tx_end});
 }
 
+// ---- snapshot ----
+
+namespace {
+
+// The longest answer on the wire: every character toggling at every bit, plus the final rise.
+constexpr std::size_t kMaxTxEdges = fdl::kMaxFrameLength * kUartCharBits + 1;
+
+// `chars` is scratch (cleared before every use), not state.
+template <typename Ar, typename S>
+void fields(Ar& ar, S& s) {
+  static_assert(snap::member_count<Mac>() == 13, "a new member: add it here");
+  ar.block(s.rx);
+  ar.block(s.frame);
+  ar(s.in_frame);
+  ar(s.skipping);
+  ar(s.discarding);
+  ar(s.frame_timeout);
+  ar.bounded(s.search_code, static_cast<std::uint8_t>(std::size(kBaudRates) - 1));
+  ar(s.search_deadline);
+  ar.sequence(s.tx_edges, kMaxTxEdges, [](auto& a, auto& e) {
+    a(e.first);
+    a(e.second);
+  });
+  ar.size(s.tx_next, s.tx_edges.size());
+  ar(s.tx_end);
+  ar(s.txd);
+}
+
+template <typename Ar, typename S>
+void counter_fields(Ar& ar, S& s) {
+  static_assert(snap::member_count<FdlCounters>() == 20, "a new member: add it here");
+  ar(s.parity);
+  ar(s.start_bit);
+  ar(s.stop_bit);
+  ar(s.bad_sd);
+  ar(s.le_mismatch);
+  ar(s.bad_le);
+  ar(s.bad_fcs);
+  ar(s.wrong_ed);
+  ar(s.truncated);
+  ar(s.oversize);
+  ar(s.bad_sap);
+  ar(s.no_sync);
+  ar(s.foreign_address);
+  ar(s.unknown_sap);
+  ar(s.unsupported_function);
+  ar(s.not_allowed);
+  ar(s.no_resource);
+  ar(s.offline);
+  ar(s.repeated);
+  ar(s.requests);
+}
+
+}  // namespace
+
+void save_state(snap::Writer& w, const Mac& s) {
+  w.section("MAC ");
+  fields(w, s);
+}
+
+void load_state(snap::Reader& r, Mac& s) {
+  r.section("MAC ");
+  fields(r, s);
+  s.chars.clear();
+  // Only a telegram in progress has a timeout; a stale one would be due for ever.
+  if (!s.in_frame && s.frame_timeout != kNever) r.fail("frame timeout outside a telegram");
+}
+
+void save_state(snap::Writer& w, const FdlCounters& s) {
+  w.section("CNTR");
+  counter_fields(w, s);
+}
+
+void load_state(snap::Reader& r, FdlCounters& s) {
+  r.section("CNTR");
+  counter_fields(r, s);
+}
+
 }  // namespace dpc31

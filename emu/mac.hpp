@@ -36,4 +36,6 @@ struct Mac {
   void reset() { *this = Mac{}; }
 };
 
+void save_state(snap::Writer& w, const Mac& s);
+void load_state(snap::Reader& r, Mac& s);
 }  // namespace dpc31

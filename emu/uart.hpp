@@ -11,6 +11,8 @@
 #include <utility>
 #include <vector>
 
+#include "snapshot.hpp"
+
 namespace dpc31 {
 
 // Index = the Status_Reg baud code: 0 = 12 Mbaud ... 9 = 9.6 kbaud.
@@ -75,7 +77,14 @@ class UartRx {
   [[nodiscard]] bool level() const { return level_; }
   [[nodiscard]] bool receiving() const { return k_ < kUartCharBits; }
 
+  // Snapshots (emu/snapshot.hpp): every member, so also the edges driven ahead of time (they are
+  // already sampled into the character in progress and the finished characters in done_).
+  void save_state(snap::Writer& w) const;
+  void load_state(snap::Reader& r);
+
  private:
+  template <typename Ar, typename Self>
+  static void fields(Ar& ar, Self& s);
   [[nodiscard]] std::uint64_t sample_at(std::uint32_t k) const;
   // Takes the samples of the character in progress that fall at or before `last`.
   void sample_through(std::uint64_t last);

@@ -72,3 +72,31 @@ void ChipCore::watchdog_expired() {
 }
 
 }  // namespace dpc31
+
+namespace dpc31 {
+
+namespace {
+
+template <typename Ar, typename S>
+void fields(Ar& ar, S& s) {
+  static_assert(snap::member_count<Timers>() == 5, "a new member: add it here");
+  ar(s.user_timer_next);
+  ar.bounded(s.wd, WdState::DP_Control);
+  ar(s.wd_deadline);
+  ar(s.dp_wd_on);
+  ar(s.dp_wd_cycles);
+}
+
+}  // namespace
+
+void save_state(snap::Writer& w, const Timers& s) {
+  w.section("TIMR");
+  fields(w, s);
+}
+
+void load_state(snap::Reader& r, Timers& s) {
+  r.section("TIMR");
+  fields(r, s);
+}
+
+}  // namespace dpc31

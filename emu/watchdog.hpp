@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "dpc31/chip.hpp"
+#include "snapshot.hpp"
 
 namespace dpc31 {
 
@@ -19,5 +20,8 @@ struct Timers {
   std::uint64_t dp_wd_cycles = 0;      // TWD in clocks
   void reset() { *this = Timers{}; }
 };
+
+void save_state(snap::Writer& w, const Timers& s);
+void load_state(snap::Reader& r, Timers& s);
 
 }  // namespace dpc31

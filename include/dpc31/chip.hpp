@@ -8,12 +8,15 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <span>
+#include <string>
 #include <string_view>
 #include <vector>
 
 #include "dpc31/log.hpp"
 #include "dpc31/reg_ids.hpp"
 #include "dpc31/regdesc.hpp"
+#include "dpc31/snapshot.hpp"
 
 namespace dpc31 {
 
@@ -168,6 +171,19 @@ class Chip {
   void asic_cfg_received();                 // Chk_Cfg in the Cfg buffer: New_Cfg_Data
   void asic_ssa_received();                 // Set_Slave_Add: New_SSA_Data
   [[nodiscard]] bool ssa_buffer_free() const;
+
+  // --- snapshots (docs/snapshots.md) ---
+  // The whole chip state: registers, RAM, every block's state, timers, the serial receiver and
+  // transmitter, RxD edges already driven ahead of time, the cycle counter. Observers and the log
+  // sink are not state: they stay attached across load_state.
+  [[nodiscard]] std::vector<std::uint8_t> save_state() const;
+  // Only a snapshot of a chip with the same profile, bus mode and clock_hz is accepted.
+  // throws dpc31::SnapshotError; on error the chip is unchanged
+  void load_state(std::span<const std::uint8_t> bytes);
+  // temp file + rename; throws SnapshotError (message names the path)
+  void save_state_file(const std::string& path) const;
+  // throws SnapshotError "PATH: message"
+  void load_state_file(const std::string& path);
 
   ChipCore& core() { return *core_; }
   [[nodiscard]] const ChipCore& core() const { return *core_; }
