@@ -14,6 +14,7 @@
 #include "regfmt.hpp"
 #include "replay.hpp"
 #include "run.hpp"
+#include "serve.hpp"
 #include "wavediff_cli.hpp"
 
 namespace {
@@ -110,6 +111,10 @@ int main(int argc, char** argv) {
   dpc31::wavediff::CliArgs wavediff_args;
   auto* wavediff = dpc31::wavediff::add_subcommand(app, wavediff_args);
 
+  // dpc31 serve: the chip behind a socket (docs/protocol.md).
+  dpc31::cli::ServeArgs serve_args;
+  auto* serve = dpc31::cli::add_serve_subcommand(app, serve_args);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -117,6 +122,7 @@ int main(int argc, char** argv) {
     return rc == 0 ? 0 : 2;
   }
 
+  if (serve->parsed()) return dpc31::cli::run_serve(serve_args, stdout, stderr);
   if (wavediff->parsed()) return dpc31::wavediff::run_cli(wavediff_args, stdout, stderr);
   if (run->parsed()) return dpc31::cli::run_scenario_command(run_opt, stdout, stderr);
   if (replay->parsed()) return dpc31::cli::run_replay_command(replay_opt, stdout, stderr);

@@ -1,0 +1,70 @@
+#include "serve.hpp"
+
+#include <fmt/core.h>
+
+#include <atomic>
+#include <csignal>
+
+#include "dpc31/regdesc.hpp"
+#include "serve_server.hpp"
+
+namespace dpc31::cli {
+
+namespace {
+
+std::atomic<serve::Server*> g_server{nullptr};
+
+extern "C" void on_stop_signal(int /*sig*/) {
+  if (serve::Server* s = g_server.load()) s->stop();
+}
+
+}  // namespace
+
+CLI::App* add_serve_subcommand(CLI::App& app, ServeArgs& a) {
+  auto* cmd = app.add_subcommand(
+      "serve", "serve one chip over a line-based socket protocol (docs/protocol.md)");
+  cmd->add_option("--tcp", a.tcp,
+                  "listen on TCP: PORT (on 127.0.0.1) or ADDR:PORT; port 0 picks a free one");
+  cmd->add_option("--unix", a.unix_path, "listen on a Unix socket at this path");
+  cmd->add_option("--profile", a.profile, "chip profile")
+      ->check(CLI::IsMember({"spc3", "vpc3plus", "dpc31"}));
+  cmd->add_option("--bus", a.bus, "bus byte order")->check(CLI::IsMember({"intel", "motorola"}));
+  cmd->add_option("--max-clients", a.max_clients,
+                  "clients served at once; more get 'ERR busy' and are closed")
+      ->check(CLI::Range(1, 100000));
+  cmd->add_option("--idle-timeout", a.idle_timeout,
+                  "close a client after this many seconds without input (0 = never)")
+      ->check(CLI::Range(0.0, 1e7));
+  return cmd;
+}
+
+int run_serve(const ServeArgs& a, std::FILE* out, std::FILE* err) {
+  serve::ServerOptions opt;
+  parse_profile(a.profile, opt.chip.profile);  // CLI11's check already refused unknown names
+  opt.chip.bus = a.bus == "intel" ? BusMode::intel : BusMode::motorola;
+  if (!a.tcp.empty()) opt.tcp = a.tcp;
+  if (!a.unix_path.empty()) opt.unix_path = a.unix_path;
+  opt.max_clients = a.max_clients;
+  opt.idle_timeout = a.idle_timeout;
+  try {
+    serve::Server server(opt);
+    for (const std::string& l : server.listening()) fmt::print(out, "{}\n", l);
+    std::fflush(out);
+    g_server.store(&server);
+    struct sigaction sa {};
+    sa.sa_handler = on_stop_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, nullptr);
+    sigaction(SIGTERM, &sa, nullptr);
+    std::signal(SIGPIPE, SIG_IGN);
+    const int rc = server.run();
+    g_server.store(nullptr);
+    return rc;
+  } catch (const serve::ServerError& e) {
+    g_server.store(nullptr);
+    fmt::print(err, "dpc31 serve: {}\n", e.what());
+    return 2;
+  }
+}
+
+}  // namespace dpc31::cli

@@ -1,0 +1,505 @@
+#include "serve_session.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <exception>
+#include <limits>
+#include <span>
+#include <utility>
+#include <vector>
+
+#include "../../emu/dp_services.hpp"
+#include "../../emu/fdl.hpp"
+#include "../../emu/uart.hpp"
+#include "dpc31/regdesc.hpp"
+#include "dpc31/snapshot.hpp"
+
+namespace dpc31::serve {
+
+namespace {
+
+using Tokens = std::vector<std::string_view>;
+
+// One failed command: the reply is "ERR <code> <message>".
+struct Fail {
+  std::string_view code;
+  std::string message;
+};
+
+Session::Result ok(std::string text = {}) {
+  return {text.empty() ? std::string("OK") : "OK " + text, Session::Action::none};
+}
+
+Session::Result err(std::string_view code, std::string_view message) {
+  return {fmt::format("ERR {} {}", code, message), Session::Action::none};
+}
+
+// Replies and async lines are single lines of printable ASCII, whatever a message contains.
+std::string one_line(std::string_view s) {
+  std::string out;
+  out.reserve(s.size());
+  for (const char ch : s) {
+    const auto c = static_cast<unsigned char>(ch);
+    out.push_back(c >= 0x20 && c < 0x7F ? ch : ' ');
+  }
+  return out;
+}
+
+Tokens split(std::string_view line) {
+  Tokens t;
+  std::size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
+    const std::size_t b = i;
+    while (i < line.size() && line[i] != ' ' && line[i] != '\t') ++i;
+    if (i > b) t.push_back(line.substr(b, i - b));
+  }
+  return t;
+}
+
+// "0x1F" (hex, either case) or "31" (decimal); nothing else. Throws Fail: syntax for malformed
+// text, range for a value above `max` (including anything beyond 64 bits).
+std::uint64_t number(std::string_view s, std::uint64_t max, std::string_view what) {
+  int base = 10;
+  std::string_view digits = s;
+  if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
+    base = 16;
+    digits = s.substr(2);
+  }
+  std::uint64_t v = 0;
+  const auto [p, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), v, base);
+  if (digits.empty() || p != digits.data() + digits.size() ||
+      (ec != std::errc() && ec != std::errc::result_out_of_range)) {
+    throw Fail{"syntax", fmt::format("{} '{}' is not a number (decimal or 0x hex)", what, s)};
+  }
+  if (ec == std::errc::result_out_of_range || v > max) {
+    throw Fail{"range", fmt::format("{} {} is out of range (0..{})", what, s, max)};
+  }
+  return v;
+}
+
+int hex_digit(char c) {
+  if (c >= '0' && c <= '9') return c - '0';
+  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+  return -1;
+}
+
+// Hex bytes, two digits each, in one or more tokens: "10 05 02" or "100502".
+void hex_bytes(std::string_view tok, std::vector<std::uint8_t>& out, std::size_t max) {
+  if (tok.size() % 2 != 0) {
+    throw Fail{"syntax", fmt::format("'{}' is not hex bytes (two digits each)", tok)};
+  }
+  for (std::size_t i = 0; i < tok.size(); i += 2) {
+    const int hi = hex_digit(tok[i]);
+    const int lo = hex_digit(tok[i + 1]);
+    if (hi < 0 || lo < 0) {
+      throw Fail{"syntax", fmt::format("'{}' is not hex bytes (two digits each)", tok)};
+    }
+    if (out.size() >= max) throw Fail{"range", fmt::format("more than {} bytes", max)};
+    out.push_back(static_cast<std::uint8_t>(hi << 4 | lo));
+  }
+}
+
+std::string hex(std::span<const std::uint8_t> bytes) {
+  std::string s;
+  s.reserve(bytes.size() * 2);
+  static constexpr char kDigits[] = "0123456789ABCDEF";
+  for (const std::uint8_t b : bytes) {
+    s.push_back(kDigits[b >> 4]);
+    s.push_back(kDigits[b & 0xF]);
+  }
+  return s;
+}
+
+void arity(const Tokens& t, std::size_t min, std::size_t max, std::string_view usage) {
+  if (t.size() - 1 < min || t.size() - 1 > max) {
+    throw Fail{"syntax", fmt::format("usage: {}", usage)};
+  }
+}
+
+// key=value options after the positional arguments.
+struct Options {
+  std::vector<std::pair<std::string_view, std::string_view>> kv;
+  // Splits tokens [from, end) into plain tokens (returned) and key=value options (kept).
+  static std::pair<Tokens, Options> parse(const Tokens& t, std::size_t from,
+                                          std::initializer_list<std::string_view> keys) {
+    Tokens plain;
+    Options o;
+    for (std::size_t i = from; i < t.size(); ++i) {
+      const std::size_t eq = t[i].find('=');
+      if (eq == std::string_view::npos) {
+        plain.push_back(t[i]);
+        continue;
+      }
+      const std::string_view k = t[i].substr(0, eq);
+      if (std::find(keys.begin(), keys.end(), k) == keys.end()) {
+        throw Fail{"syntax", fmt::format("unknown option '{}'", k)};
+      }
+      for (const auto& [have, v] : o.kv) {
+        if (have == k) throw Fail{"syntax", fmt::format("option '{}' given twice", k)};
+      }
+      o.kv.emplace_back(k, t[i].substr(eq + 1));
+    }
+    return {plain, o};
+  }
+  [[nodiscard]] std::optional<std::string_view> get(std::string_view k) const {
+    for (const auto& [have, v] : kv) {
+      if (have == k) return v;
+    }
+    return std::nullopt;
+  }
+};
+
+// The rest of the line after the command word (paths may contain blanks).
+std::string_view rest_of_line(std::string_view line, std::string_view cmd) {
+  std::string_view r = line.substr(line.find(cmd) + cmd.size());
+  while (!r.empty() && (r.front() == ' ' || r.front() == '\t')) r.remove_prefix(1);
+  while (!r.empty() && (r.back() == ' ' || r.back() == '\t')) r.remove_suffix(1);
+  return r;
+}
+
+std::string_view dp_name(DpState s) {
+  switch (s) {
+    case DpState::Wait_Prm:
+      return "Wait_Prm";
+    case DpState::Wait_Cfg:
+      return "Wait_Cfg";
+    case DpState::Data_Exchange:
+      return "Data_Exchange";
+  }
+  return "?";
+}
+
+std::string_view wd_name(WdState s) {
+  switch (s) {
+    case WdState::Baud_Search:
+      return "Baud_Search";
+    case WdState::Baud_Control:
+      return "Baud_Control";
+    case WdState::DP_Control:
+      return "DP_Control";
+  }
+  return "?";
+}
+
+constexpr std::string_view kCommands =
+    "help info ping cycle status read write peek poke readblock writeblock peekblock pokeblock "
+    "addr peek_reg poke_reg step run_until_irq reset inject inject_fdl counters log save load "
+    "quit shutdown";
+
+}  // namespace
+
+Session::Session(ChipOptions opt, std::function<void(const AsyncLine&)> sink)
+    : chip_(opt), emit_(std::move(sink)) {
+  chip_.on_irq_change([this](std::uint64_t cycle, bool active) {
+    irq_reported_ = active;
+    emit(AsyncLine::Kind::irq, fmt::format("! irq {} {}", cycle, active ? 1 : 0));
+  });
+  chip_.on_telegram([this](const Telegram& t) {
+    emit(AsyncLine::Kind::telegram, fmt::format("! telegram {} {} {} {}", t.start, t.end,
+                                                t.from_chip ? "tx" : "rx", hex(t.bytes)));
+  });
+  chip_.set_log_sink([this](const LogRecord& r) {
+    emit(AsyncLine::Kind::log,
+         fmt::format("! log {} {} {}", r.cycle, level_name(r.level), one_line(r.text)), r.level);
+  });
+}
+
+void Session::emit(AsyncLine::Kind kind, std::string text, LogLevel level) {
+  if (emit_) emit_(AsyncLine{kind, level, std::move(text)});
+}
+
+void Session::resync_irq() {
+  if (chip_.irq_active() == irq_reported_) return;
+  irq_reported_ = chip_.irq_active();
+  emit(AsyncLine::Kind::irq, fmt::format("! irq {} {}", chip_.cycle(), irq_reported_ ? 1 : 0));
+}
+
+std::uint32_t Session::default_bit_cycles() const {
+  // While the chip searches (and before Start) it listens at 12 Mbaud first.
+  if (chip_.wd_state() == WdState::Baud_Search) return bit_cycles(chip_.clock_hz(), kBaudRates[0]);
+  return chip_.bit_cycles();
+}
+
+std::uint32_t Session::address_limit() const { return 1u << chip_.profile().address_bits; }
+
+Session::Result Session::execute(std::string_view line, ClientState& client) {
+  if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const auto c = static_cast<unsigned char>(line[i]);
+    if ((c < 0x20 && c != '\t') || c >= 0x7F) {
+      return err("syntax",
+                 fmt::format("byte {:#04x} at column {} is not printable ASCII", c, i + 1));
+    }
+  }
+  const Tokens t = split(line);
+  if (t.empty()) return err("syntax", "empty command");
+  const std::string_view cmd = t[0];
+  const std::uint64_t amax = address_limit() - 1;
+
+  try {
+    if (cmd == "help") {
+      arity(t, 0, 0, "help");
+      return ok(std::string(kCommands));
+    }
+    if (cmd == "info") {
+      arity(t, 0, 0, "info");
+      const ProfileDesc& p = chip_.profile();
+      return ok(fmt::format(
+          "protocol={} profile={} bus={} clock_hz={} bus_access_cycles={} address_bits={}",
+          kProtocolVersion, p.name, chip_.bus_mode() == BusMode::intel ? "intel" : "motorola",
+          chip_.clock_hz(), chip_.bus_access_cycles(), p.address_bits));
+    }
+    if (cmd == "ping") {
+      arity(t, 0, 0, "ping");
+      return ok("pong");
+    }
+    if (cmd == "cycle") {
+      arity(t, 0, 0, "cycle");
+      return ok(fmt::format("{}", chip_.cycle()));
+    }
+    if (cmd == "status") {
+      arity(t, 0, 0, "status");
+      std::string baud = "search";
+      if (chip_.wd_state() != WdState::Baud_Search) {
+        const unsigned code = (chip_.peek_reg(RegId::Status_Reg) >> 8) & 0x0F;
+        baud = code < std::size(kBaudRates) ? fmt::format("{}", kBaudRates[code]) : "?";
+      }
+      return ok(fmt::format(
+          "cycle={} started={} dp={} wd={} baud={} xint={} irq={} station={} txd={}", chip_.cycle(),
+          chip_.started() ? 1 : 0, dp_name(chip_.dp_state()), wd_name(chip_.wd_state()), baud,
+          chip_.x_int_pin() ? 1 : 0, chip_.irq_active() ? 1 : 0, chip_.station_address(),
+          chip_.txd_pin() ? 1 : 0));
+    }
+    if (cmd == "read" || cmd == "peek") {
+      arity(t, 1, 1, fmt::format("{} ADDR", cmd));
+      const auto a = static_cast<std::uint32_t>(number(t[1], amax, "address"));
+      const std::uint8_t v = cmd == "read" ? chip_.read(a) : chip_.peek(a);
+      return ok(fmt::format("{:#04x}", v));
+    }
+    if (cmd == "write" || cmd == "poke") {
+      arity(t, 2, 2, fmt::format("{} ADDR VALUE", cmd));
+      const auto a = static_cast<std::uint32_t>(number(t[1], amax, "address"));
+      const auto v = static_cast<std::uint8_t>(number(t[2], 0xFF, "value"));
+      if (cmd == "write") {
+        chip_.write(a, v);
+      } else if (!chip_.poke(a, v)) {
+        return err("no_storage", fmt::format("nothing to poke at {:#06x}", a));
+      }
+      return ok();
+    }
+    if (cmd == "readblock" || cmd == "peekblock") {
+      arity(t, 2, 2, fmt::format("{} ADDR LEN", cmd));
+      const auto a = static_cast<std::uint32_t>(number(t[1], amax, "address"));
+      const auto n = static_cast<std::uint32_t>(number(t[2], kMaxBlock, "length"));
+      if (n == 0) throw Fail{"range", "length 0"};
+      if (std::uint64_t{a} + n > amax + 1) {
+        throw Fail{"range", fmt::format("block {:#06x}+{} ends beyond the address space", a, n)};
+      }
+      std::vector<std::uint8_t> bytes(n);
+      for (std::uint32_t i = 0; i < n; ++i) {
+        bytes[i] = cmd == "readblock" ? chip_.read(a + i) : chip_.peek(a + i);
+      }
+      return ok(hex(bytes));
+    }
+    if (cmd == "writeblock" || cmd == "pokeblock") {
+      if (t.size() < 3) throw Fail{"syntax", fmt::format("usage: {} ADDR HEX...", cmd)};
+      const auto a = static_cast<std::uint32_t>(number(t[1], amax, "address"));
+      std::vector<std::uint8_t> bytes;
+      for (std::size_t i = 2; i < t.size(); ++i) hex_bytes(t[i], bytes, kMaxBlock);
+      if (std::uint64_t{a} + bytes.size() > amax + 1) {
+        throw Fail{"range",
+                   fmt::format("block {:#06x}+{} ends beyond the address space", a, bytes.size())};
+      }
+      for (std::uint32_t i = 0; i < bytes.size(); ++i) {
+        if (cmd == "writeblock") {
+          chip_.write(a + i, bytes[i]);
+        } else if (!chip_.poke(a + i, bytes[i])) {
+          return err(
+              "no_storage",
+              fmt::format("nothing to poke at {:#06x} ({} bytes before it poked)", a + i, i));
+        }
+      }
+      return ok();
+    }
+    if (cmd == "addr" || cmd == "peek_reg" || cmd == "poke_reg") {
+      if (cmd == "poke_reg") {
+        arity(t, 2, 2, "poke_reg NAME VALUE");
+      } else {
+        arity(t, 1, 1, fmt::format("{} NAME", cmd));
+      }
+      const RegDesc* r = find_reg(chip_.profile(), t[1]);
+      if (r == nullptr) {
+        return err("unknown_register",
+                   fmt::format("no register '{}' in {}", t[1], chip_.profile().name));
+      }
+      if (cmd == "addr") return ok(fmt::format("{:#06x}", chip_.addr_of(r->id)));
+      if (cmd == "peek_reg") return ok(fmt::format("{:#06x}", chip_.peek_reg(r->id)));
+      const auto v = static_cast<std::uint16_t>(number(t[2], r->mask(), "value"));
+      if (!chip_.poke_reg(r->id, v)) {
+        return err("no_storage", fmt::format("{} has no storage to poke", r->name));
+      }
+      resync_irq();
+      return ok();
+    }
+    if (cmd == "step" || cmd == "run_until_irq") {
+      arity(t, 1, 1, fmt::format("{} {}", cmd, cmd == "step" ? "N" : "MAX"));
+      const std::uint64_t n = number(t[1], kMaxStep, "cycles");
+      if (n > std::numeric_limits<std::uint64_t>::max() - chip_.cycle()) {
+        throw Fail{"range", "the cycle counter would overflow"};
+      }
+      if (cmd == "step") {
+        chip_.step(n);
+        return ok(fmt::format("{}", chip_.cycle()));
+      }
+      // Level-triggered like firmware: an interrupt that is already active stops at once.
+      const bool hit = chip_.irq_active() || chip_.step_until_irq(n);
+      return ok(fmt::format("{} {}", hit ? "irq" : "timeout", chip_.cycle()));
+    }
+    if (cmd == "reset") {
+      arity(t, 0, 0, "reset");
+      chip_.reset();
+      rx_free_ = 0;
+      resync_irq();
+      return ok(fmt::format("{}", chip_.cycle()));
+    }
+    if (cmd == "inject" || cmd == "inject_fdl") {
+      std::vector<std::uint8_t> bytes;
+      UartFault fault;
+      Options o;
+      if (cmd == "inject") {
+        auto [plain, opts] = Options::parse(t, 1, {"baud", "idle", "fault"});
+        o = opts;
+        if (plain.empty())
+          throw Fail{"syntax",
+                     "usage: inject HEX... [baud=B] [idle=BITS] "
+                     "[fault=parity|start|stop:INDEX]"};
+        for (const std::string_view tok : plain) hex_bytes(tok, bytes, kMaxInject);
+        if (const auto f = o.get("fault")) {
+          const std::size_t colon = f->find(':');
+          const std::string_view kind = f->substr(0, colon);
+          if (colon == std::string_view::npos) {
+            throw Fail{"syntax", "fault=KIND:INDEX, KIND parity, start or stop"};
+          }
+          if (kind == "parity") {
+            fault.kind = UartFault::Kind::parity;
+          } else if (kind == "start") {
+            fault.kind = UartFault::Kind::start;
+          } else if (kind == "stop") {
+            fault.kind = UartFault::Kind::stop;
+          } else {
+            throw Fail{"syntax", fmt::format("unknown fault '{}' (parity, start, stop)", kind)};
+          }
+          fault.char_index =
+              static_cast<int>(number(f->substr(colon + 1), bytes.size() - 1, "fault index"));
+        }
+      } else {
+        auto [plain, opts] = Options::parse(t, 1, {"baud", "idle", "dsap", "ssap", "data"});
+        o = opts;
+        if (plain.size() != 3) {
+          throw Fail{"syntax",
+                     "usage: inject_fdl DA SA FC [dsap=N] [ssap=N] [data=HEX] [baud=B] "
+                     "[idle=BITS]"};
+        }
+        const auto da = static_cast<std::uint8_t>(number(plain[0], fdl::kAddressMask, "DA"));
+        const auto sa = static_cast<std::uint8_t>(number(plain[1], fdl::kAddressMask, "SA"));
+        const auto fc = static_cast<std::uint8_t>(number(plain[2], 0xFF, "FC"));
+        std::optional<std::uint8_t> dsap;
+        std::optional<std::uint8_t> ssap;
+        if (const auto v = o.get("dsap"))
+          dsap = static_cast<std::uint8_t>(number(*v, 0x7F, "dsap"));
+        if (const auto v = o.get("ssap"))
+          ssap = static_cast<std::uint8_t>(number(*v, 0x7F, "ssap"));
+        std::vector<std::uint8_t> du;
+        if (const auto v = o.get("data")) hex_bytes(*v, du, fdl::kMaxLe);
+        bytes = fdl::encode(fdl::make_frame(da, sa, fc, std::move(du), dsap, ssap));
+        if (bytes.empty()) {
+          throw Fail{"range", "no such frame (too much data for SD2, or a bad SAP byte)"};
+        }
+      }
+      std::uint32_t t_bit = default_bit_cycles();
+      if (const auto b = o.get("baud")) {
+        t_bit = bit_cycles(chip_.clock_hz(),
+                           static_cast<std::uint32_t>(number(*b, 2u * chip_.clock_hz(), "baud")));
+        if (t_bit == 0) throw Fail{"range", fmt::format("baud {} is unusable", *b)};
+      }
+      std::uint32_t idle = 33;  // TSYN
+      if (const auto v = o.get("idle")) {
+        idle = static_cast<std::uint32_t>(number(*v, kMaxIdleBits, "idle"));
+      }
+      const std::uint64_t start = std::max(chip_.cycle(), rx_free_) + std::uint64_t{idle} * t_bit;
+      std::vector<std::pair<std::uint64_t, bool>> edges;
+      uart_encode(bytes, start, t_bit, edges, fault);
+      for (const auto& [cycle, level] : edges) chip_.drive_rxd(cycle, level);
+      rx_free_ = start + bytes.size() * std::uint64_t{kUartCharBits} * t_bit;
+      return ok(fmt::format("{} {}", start, rx_free_));
+    }
+    if (cmd == "counters") {
+      arity(t, 0, 0, "counters");
+      const FdlCounters& c = chip_.fdl_counters();
+      return ok(fmt::format(
+          "requests={} parity={} start_bit={} stop_bit={} bad_sd={} le_mismatch={} bad_le={} "
+          "bad_fcs={} wrong_ed={} truncated={} oversize={} bad_sap={} no_sync={} "
+          "foreign_address={} unknown_sap={} unsupported_function={} not_allowed={} "
+          "no_resource={} offline={} repeated={}",
+          c.requests, c.parity, c.start_bit, c.stop_bit, c.bad_sd, c.le_mismatch, c.bad_le,
+          c.bad_fcs, c.wrong_ed, c.truncated, c.oversize, c.bad_sap, c.no_sync, c.foreign_address,
+          c.unknown_sap, c.unsupported_function, c.not_allowed, c.no_resource, c.offline,
+          c.repeated));
+    }
+    if (cmd == "log") {
+      arity(t, 1, 1, "log off|debug|info|warn|error");
+      static constexpr std::array kLevels = {LogLevel::debug, LogLevel::info, LogLevel::warn,
+                                             LogLevel::error};
+      if (t[1] == "off") {
+        client.log_level.reset();
+        return ok();
+      }
+      for (const LogLevel l : kLevels) {
+        if (t[1] == level_name(l)) {
+          client.log_level = l;
+          return ok();
+        }
+      }
+      throw Fail{"syntax", "usage: log off|debug|info|warn|error"};
+    }
+    if (cmd == "save" || cmd == "load") {
+      const std::string path(rest_of_line(line, cmd));
+      if (path.empty()) throw Fail{"syntax", fmt::format("usage: {} PATH", cmd)};
+      try {
+        if (cmd == "save") {
+          chip_.save_state_file(path);
+        } else {
+          chip_.load_state_file(path);
+        }
+      } catch (const SnapshotError& e) {
+        return err("snapshot", one_line(e.what()));
+      }
+      if (cmd == "load") {
+        rx_free_ = 0;
+        resync_irq();
+      }
+      return ok(fmt::format("{}", chip_.cycle()));
+    }
+    if (cmd == "quit") {
+      arity(t, 0, 0, "quit");
+      return {"OK bye", Action::quit};
+    }
+    if (cmd == "shutdown") {
+      arity(t, 0, 0, "shutdown");
+      return {"OK shutdown", Action::shutdown};
+    }
+  } catch (const Fail& f) {
+    return err(f.code, f.message);
+  } catch (const std::exception& e) {
+    // The model refusing something it should not: report it, keep serving.
+    return err("internal", one_line(e.what()));
+  }
+  return err("unknown_command", fmt::format("'{}' (try help)", one_line(cmd)));
+}
+
+}  // namespace dpc31::serve
