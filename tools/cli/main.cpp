@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "bridge.hpp"
 #include "cosim.hpp"
 #include "demo.hpp"
 #include "dpc31/chip.hpp"
@@ -106,6 +107,10 @@ int main(int argc, char** argv) {
   dpc31::wavediff::CliArgs wavediff_args;
   auto* wavediff = dpc31::wavediff::add_subcommand(app, wavediff_args);
 
+  // dpc31 bridge: the slave's RS-485 side as a pseudo-terminal (docs/bridge.md).
+  dpc31::cli::BridgeOptions bridge_opt;
+  auto* bridge = dpc31::cli::add_bridge_subcommand(app, bridge_opt);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -113,6 +118,7 @@ int main(int argc, char** argv) {
     return rc == 0 ? 0 : 2;
   }
 
+  if (bridge->parsed()) return dpc31::cli::run_bridge(bridge_opt, stdout, stderr);
   if (wavediff->parsed()) return dpc31::wavediff::run_cli(wavediff_args, stdout, stderr);
   if (run->parsed()) return dpc31::cli::run_scenario_command(run_opt, stdout, stderr);
   if (replay->parsed()) return dpc31::cli::run_replay_command(replay_opt, stdout, stderr);
