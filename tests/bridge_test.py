@@ -160,8 +160,9 @@ class Bridge:
                                      list(args), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         deadline = time.monotonic() + 10
         while not os.path.islink(self.path) or not os.path.exists(self.path):
-            check(self.proc.poll() is None,
-                  f"bridge exited with {self.proc.returncode}: {self.proc.stderr.read()!r}")
+            if self.proc.poll() is not None:
+                raise Fail(f"bridge exited with {self.proc.returncode}: "
+                           f"{self.proc.stderr.read()!r}")
             check(time.monotonic() < deadline, "the bridge made no symlink within 10 s")
             time.sleep(0.01)
 
@@ -181,48 +182,69 @@ class Bridge:
         if self.proc.poll() is None:
             self.proc.kill()
             self.proc.wait()
+        if sys.exc_info()[0] is not None and os.path.exists(self.log):
+            # A failing case shows the end of the bridge's log.
+            print("--- bridge log (last 80 lines) ---", file=sys.stderr)
+            for line in self.log_lines()[-80:]:
+                print(line, file=sys.stderr)
+
+    def cpu_ticks(self):
+        """User + system CPU time of the bridge so far, in clock ticks."""
+        with open(f"/proc/{self.proc.pid}/stat", encoding="utf-8") as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+        return int(fields[11]) + int(fields[12])
 
     def log_lines(self):
         with open(self.log, encoding="utf-8") as f:
             return f.read().splitlines()
 
 
-def startup_do4(m, wd=(0x64, 0x0A)):
-    """FDL_Status until answered, Slave_Diag, Set_Prm, Chk_Cfg, Slave_Diag until ready."""
-    for _ in range(300):  # the chip's baud search takes up to ~0.8 s of chip time
+def find_slave(m):
+    """FDL_Status until answered: the chip's baud search takes up to ~0.8 s of chip time."""
+    for _ in range(300):
         a = m.fdl_status(timeout=0.06)
         if a is not None:
-            m.expect("FDL_Status", a, status_ok())
-            break
-    else:
-        raise Fail("FDL_Status never answered")
+            return a
+    raise Fail("FDL_Status never answered")
+
+
+def startup_do4(m, wd=(0x64, 0x0A)):
+    """FDL_Status until answered, Slave_Diag, Set_Prm, Chk_Cfg, Slave_Diag until ready."""
+    m.expect("FDL_Status", find_slave(m), status_ok())
     # Not parameterised: Station_Not_Ready, Prm_Req, no master yet, ident 0D04.
     m.expect("first Slave_Diag", m.srd([], SAP_SLAVE_DIAG), diag([0x02, 0x05, 0x00, 0xFF, 0x0D,
                                                                   0x04]))
+    parameterise_do4(m, wd, [])
+
+
+def parameterise_do4(m, wd, ext):
+    """Set_Prm, Chk_Cfg, Slave_Diag until ready. `ext`: the device-related diag block the
+    firmware has set by now (none at power-on)."""
     # Lock_Req + WD_On, watchdog factors, MinTSDR 0, ident 0D04, group 0; user prm: Spec_User_Prm
     # 00, OSPMode 0 (retain), replacement 0, refresh monitor off.
     prm = [0x88, wd[0], wd[1], 0x00, 0x0D, 0x04, 0x00, 0x00, 0x00, 0x00, 0x00]
     m.expect("Set_Prm", m.srd(prm, SAP_SET_PRM), bytes([SC]))
     m.expect("Chk_Cfg", m.srd([0x21, 0x10], SAP_CHK_CFG), bytes([SC]))
-    ready = diag([0x00, 0x0C, 0x00, MASTER, 0x0D, 0x04])
+    ready = diag([0x00, 0x0C, 0x00, MASTER, 0x0D, 0x04] + ext)
     for _ in range(20):
         # Station_Not_Ready while the firmware is still checking Prm/Cfg, then ready (WD_On).
         a = m.expect("Slave_Diag after Chk_Cfg", m.srd([], SAP_SLAVE_DIAG), ready,
-                     diag([0x02, 0x0C, 0x00, MASTER, 0x0D, 0x04]))
+                     diag([0x02, 0x0C, 0x00, MASTER, 0x0D, 0x04] + ext))
         if a == ready:
             return
     raise Fail("the slave never became ready")
 
 
-def exchange_do4(m):
+def exchange_do4(m, before=0x00):
     """Data_Exchange 05 01 (DO1+DO3, OSPValid) until the input byte reads 51h (terminals 0101,
-    ModulOK); a DH answer (the device diag changed: ModulOK) is followed by a Slave_Diag."""
+    ModulOK); `before` is the input byte until the firmware has taken the outputs. A DH answer
+    (the device diag changed: ModulOK) is followed by a Slave_Diag."""
     # The device-related diag block DO4 keeps: header 02, OSP bit 0.
     ext_ok = diag([0x00, 0x0C, 0x00, MASTER, 0x0D, 0x04, 0x02, 0x00])
     for _ in range(20):
-        a = m.expect("Data_Exchange 05 01", m.srd([0x05, 0x01]), dx_answer(0x08, [0x00]),
-                     dx_answer(0x0A, [0x00]), dx_answer(0x0A, [0x51]), dx_answer(0x08, [0x51]))
-        if a[7] == 0x0A:
+        a = m.expect("Data_Exchange 05 01", m.srd([0x05, 0x01]), dx_answer(0x08, [before]),
+                     dx_answer(0x0A, [before]), dx_answer(0x0A, [0x51]), dx_answer(0x08, [0x51]))
+        if a[6] == 0x0A:  # DH
             m.expect("Slave_Diag after DH", m.srd([], SAP_SLAVE_DIAG), ext_ok)
             continue
         if a == dx_answer(0x08, [0x51]):
@@ -239,7 +261,7 @@ def check_log(b, pacing, baud):
     text = "\n".join(lines)
     for want in ("RxD   10 05 02 49 50 16  | FDL_Status 2->5",
                  "TxD   10 02 05 00 07 16  | OK 5->2",
-                 "| Set_Prm 2->5 SRD_high FCB 1 SAP 62->61 DU 88 64 0A 00 0D 04 00 00 00 00 00",
+                 "| Set_Prm 2->5 SRD_high FCB 0 SAP 62->61 DU 88 64 0A 00 0D 04 00 00 00 00 00",
                  "TxD   E5  | SC", "| Chk_Cfg 2->5", "| Data_Exchange 2->5 SRD_high",
                  "DL 5->2 DU 51", "PORT  DO4 outputs = 0x05", "PORT  DO4 modul_ok = 0x01",
                  "client opened the pty", "client closed the pty", "STATE dp_state Wait_Cfg -> "
@@ -286,21 +308,27 @@ def do4_two_clients(pacing, baud=19200, timeout=0.5):
 
 
 def do4_reparameterise_after_watchdog():
-    """Free pacing, watchdog 1 x 5 x 10 ms: the second client comes after it expired and must
-    parameterise the slave again (Prm_Req in the first Slave_Diag)."""
+    """Free pacing, watchdog 2 x 10 x 10 ms: the second client comes after it expired and must
+    parameterise the slave again (Prm_Req in the first Slave_Diag), then reaches Data_Exchange."""
     with tempfile.TemporaryDirectory() as tmp:
         b = Bridge(tmp, "--firmware", "DO4", "--pacing", "free")
         try:
             m = Master(b.path, 19200, 0.5)
-            startup_do4(m, wd=(0x01, 0x05))
+            startup_do4(m, wd=(0x02, 0x0A))
             exchange_do4(m)
             m.close()
-            time.sleep(0.3)  # > 50 ms: the DP watchdog expires while no client is there
+            time.sleep(0.6)  # > 200 ms: the DP watchdog expires while no client is there
             m = Master(b.path, 19200, 0.5)
-            m.expect("FDL_Status", m.fdl_status(), status_ok())
+            # Baud_Control expired too (the chip searches the rate again): FDL_Status until
+            # answered.
+            m.expect("FDL_Status", find_slave(m), status_ok())
             # Wait_Prm again (Prm_Req), outputs kept by the OSP model (retain), diag block OSP.
             m.expect("Slave_Diag after the watchdog", m.srd([], SAP_SLAVE_DIAG),
                      diag([0x02, 0x05, 0x00, 0xFF, 0x0D, 0x04, 0x02, 0x01]))
+            # Parameterise again; until the outputs are valid again the module is in OSP with
+            # the retained outputs 0101 (input byte 50h).
+            parameterise_do4(m, (0x02, 0x0A), [0x02, 0x01])
+            exchange_do4(m, before=0x50)
             m.close()
             b.stop(signal.SIGINT)
             text = "\n".join(b.log_lines())
@@ -319,11 +347,7 @@ def cnt2_logmsg():
         SLAVE = 9
         try:
             m = Master(b.path, 500000, 0.5)
-            for _ in range(300):
-                a = m.fdl_status(timeout=0.06)
-                if a is not None:
-                    break
-            m.expect("FDL_Status", a, status_ok())
+            m.expect("FDL_Status", find_slave(m), status_ok())
             m.expect("Slave_Diag", m.srd([], SAP_SLAVE_DIAG),
                      diag([0x02, 0x05, 0x00, 0xFF, 0x0C, 0x02]))
             prm = [0x88, 0x64, 0x0A, 0x00, 0x0C, 0x02, 0x00, 0x00]
@@ -344,7 +368,7 @@ def cnt2_logmsg():
                     break
             check(a == held, "LOGMSG_ACK never came")
             m.close()
-            b.stop(signal.SIGTERM)
+            b.stop(signal.SIGHUP)
             text = "\n".join(b.log_lines())
             check("PORT  CNT2 hold1 = 0x01" in text, "log lacks the hold1 port write")
             check("firmware CNT2" in b.log_lines()[0], "log line 1 lacks the firmware")
@@ -387,6 +411,8 @@ def bad_arguments():
 
 
 def stale_symlink_replaced():
+    """A stale symlink is replaced; a client that only configures the pty, one at another speed;
+    no busy loop while no client is connected."""
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "dp0")
         os.symlink("/dev/pts/nonexistent-stale", path)
@@ -399,13 +425,25 @@ def stale_symlink_replaced():
             Master(b.path, 19200, 0.5).close()
             time.sleep(0.05)
             m = Master(b.path, 19200, 0.5)
-            for _ in range(300):
-                a = m.fdl_status(timeout=0.06)
-                if a is not None:
-                    break
-            m.expect("FDL_Status", a, status_ok())
+            m.expect("FDL_Status", find_slave(m), status_ok())
             m.close()
+            # A client at another speed: the pty carries no timing, the bytes go on the bus at
+            # the bridge's rate, and the log says so.
+            time.sleep(0.05)
+            m = Master(b.path, 9600, 0.5)
+            m.expect("FDL_Status at 9600 on the pty", m.fdl_status(), status_ok())
+            m.close()
+            # No client: the master fd reports hang-up all the time; the bridge must not spin.
+            before = b.cpu_ticks()
+            time.sleep(1.0)
+            used = b.cpu_ticks() - before
+            check(used < 0.3 * os.sysconf("SC_CLK_TCK"),
+                  f"the bridge used {used} clock ticks of CPU in 1 s without a client")
             b.stop(signal.SIGINT)
+            text = "\n".join(b.log_lines())
+            check("the client set 9600 baud on the pty; the bridge carries its bytes at 19200 "
+                  "baud" in text, "log lacks the speed note")
+            check("stopping on SIGINT" in text, "log lacks the stop note")
         finally:
             b.kill()
 

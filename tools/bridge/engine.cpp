@@ -73,7 +73,7 @@ std::string service_name(const fdl::Frame& f) {
   if (fn == fdl::Function::FDL_Status) return "FDL_Status";
   if (!f.dsap) {
     return fn == fdl::Function::SRD_high || fn == fdl::Function::SRD_low ? "Data_Exchange"
-                                                                          : "no SAP";
+                                                                         : "no SAP";
   }
   switch (fdl::sap_number(*f.dsap)) {
     case sap::Set_Slave_Add:
@@ -103,8 +103,7 @@ bool wants_answer(std::span<const std::uint8_t> bytes) {
   const fdl::Frame& f = d.frame;
   if (f.sd == fdl::SC || f.sd == fdl::SD4 || !fdl::is_request(f.fc)) return false;
   const fdl::Function fn = fdl::request_function(f.fc);
-  return f.da != fdl::kBroadcast && fn != fdl::Function::SDN_low &&
-         fn != fdl::Function::SDN_high;
+  return f.da != fdl::kBroadcast && fn != fdl::Function::SDN_low && fn != fdl::Function::SDN_high;
 }
 
 std::string_view dp_name(DpState s) {
@@ -181,7 +180,7 @@ Engine::Engine(const Setup& setup, LogSink log)
   fw_->on_port = [this](std::uint64_t cycle, unsigned port, std::uint32_t value) {
     if (log_) {
       log_(cycle, "PORT",
-           fmt::format("{} {} = {:#04x}", fw_->firmware().name, fw_->port_name(port), value));
+           fmt::format("{} {} = 0x{:02X}", fw_->firmware().name, fw_->port_name(port), value));
     }
   };
   dp_ = chip_.dp_state();
@@ -246,7 +245,8 @@ void Engine::flush_partial() {
 }
 
 void Engine::drop_partial() {
-  if (!partial_.empty()) note(fmt::format("dropped an incomplete telegram: {}", hex_bytes(partial_)));
+  if (!partial_.empty())
+    note(fmt::format("dropped an incomplete telegram: {}", hex_bytes(partial_)));
   partial_.clear();
   in_.reset();
 }
@@ -263,24 +263,25 @@ void Engine::queue_group(std::vector<std::uint8_t> bytes) {
   queue_.push_back(std::move(r));
 }
 
-// The next queued request goes on RxD after TSYN of bus idle (all its edges at once).
+// Queued requests go on RxD after TSYN of bus idle (all edges of one at once), up to the first
+// that waits for an answer.
 void Engine::start_next() {
-  if (in_flight_ || queue_.empty()) return;
-  Request r = std::move(queue_.front());
-  queue_.pop_front();
-  queued_bytes_ -= r.bytes.size();
-  const std::uint64_t start = std::max(chip_.cycle(), bus_free_ + std::uint64_t{kTsynBits} * t_);
-  if (log_) {
-    log_(start, "RxD", fmt::format("{}  | {}", hex_bytes(r.bytes), telegram_summary(r.bytes)));
-  }
-  request_end_ = send_on_rxd(chip_, r.bytes, start, t_);
-  if (r.wants_answer) {
-    in_flight_ = true;
-    slot_end_ = request_end_ + std::uint64_t{setup_.slot_bits} * t_;
-    answer_.reset();
-    // Characters of an earlier (late) answer still arriving stay with it.
-  } else {
-    bus_free_ = request_end_;  // nothing to wait for: the next request follows after TSYN
+  while (!in_flight_ && !queue_.empty()) {
+    Request r = std::move(queue_.front());
+    queue_.pop_front();
+    queued_bytes_ -= r.bytes.size();
+    const std::uint64_t start = std::max(chip_.cycle(), bus_free_ + std::uint64_t{kTsynBits} * t_);
+    if (log_) {
+      log_(start, "RxD", fmt::format("{}  | {}", hex_bytes(r.bytes), telegram_summary(r.bytes)));
+    }
+    request_end_ = send_on_rxd(chip_, r.bytes, start, t_);
+    if (r.wants_answer) {
+      in_flight_ = true;
+      slot_end_ = request_end_ + std::uint64_t{setup_.slot_bits} * t_;
+      answer_.reset();
+    } else {
+      bus_free_ = request_end_;  // nothing to wait for: the next request follows after TSYN
+    }
   }
 }
 
@@ -318,16 +319,18 @@ void Engine::collect() {
   }
 }
 
-// Where to look at the line next while a request is in flight: as DpMaster does, bit by bit until
-// a character starts, then at the receiver's samples.
+// Where to look at the line next: as DpMaster does, bit by bit while an answer is awaited until
+// a character starts, then at the receiver's samples; the end of a request that waits for none.
 std::uint64_t Engine::next_wake(std::uint64_t limit) const {
   const std::uint64_t now = chip_.cycle();
   std::uint64_t next = limit;
-  if (in_flight_ || stray_.started() || rx_.receiving()) {
-    next = rx_.receiving()  ? rx_.next_deadline()
-           : in_flight_ && !answer_.started() ? std::min(slot_end_, now + t_)
-                                              : now + t_;
+  if (rx_.receiving()) {
+    next = std::min(next, rx_.next_deadline());
+  } else if (in_flight_ || stray_.started()) {
+    next =
+        std::min(next, in_flight_ && !answer_.started() ? std::min(slot_end_, now + t_) : now + t_);
   }
+  if (!in_flight_ && now < request_end_) next = std::min(next, request_end_);
   return std::clamp(next, now + 1, std::max(limit, now + 1));
 }
 
@@ -356,6 +359,8 @@ bool Engine::settle(std::uint64_t max_cycles) {
   }
   return !busy();
 }
+
+bool Engine::busy() const { return in_flight_ || !queue_.empty() || chip_.cycle() < request_end_; }
 
 std::vector<std::uint8_t> Engine::take_output() {
   std::vector<std::uint8_t> out;

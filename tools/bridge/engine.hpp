@@ -58,14 +58,15 @@ class Engine {
   // The client paused: an incomplete telegram goes on the bus as it is (the chip counts it).
   void flush_partial();
   [[nodiscard]] bool partial() const { return !partial_.empty(); }
-  // A request is queued or on the bus and not yet answered (or timed out).
-  [[nodiscard]] bool busy() const { return in_flight_ || !queue_.empty(); }
+  // A request is queued, still on the line, or not yet answered (nor timed out).
+  [[nodiscard]] bool busy() const;
 
   // Runs the chip and its firmware to `cycle` (a firmware access may end up to 3 clocks later),
   // putting queued requests on RxD as the bus allows.
   void run_until(std::uint64_t cycle);
-  // Runs until no request is queued or in flight (answered, or its slot time passed), at most
-  // `max_cycles`; stops right after the last answer character. Returns whether it is idle.
+  // Runs until no request is queued or on the line and none waits for its answer (answered, or
+  // its slot time passed), at most `max_cycles`; stops right after the last answer character
+  // (or the request's last stop bit). Returns whether it is no longer busy().
   bool settle(std::uint64_t max_cycles);
 
   // TxD characters decoded since the last call, in order.

@@ -1,6 +1,7 @@
 #include "bridge.hpp"
 
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <poll.h>
 #include <unistd.h>
 
@@ -9,7 +10,6 @@
 #include <chrono>
 #include <csignal>
 #include <cstring>
-#include <fmt/format.h>
 #include <memory>
 #include <optional>
 
@@ -139,12 +139,14 @@ class SignalGuard {
     sigemptyset(&sa.sa_mask);
     sigaction(SIGINT, &sa, &old_int_);
     sigaction(SIGTERM, &sa, &old_term_);
+    sigaction(SIGHUP, &sa, &old_hup_);
     ok_ = true;
   }
   ~SignalGuard() {
     if (!ok_) return;
     sigaction(SIGINT, &old_int_, nullptr);
     sigaction(SIGTERM, &old_term_, nullptr);
+    sigaction(SIGHUP, &old_hup_, nullptr);
     ::close(g_signal_pipe[0]);
     ::close(g_signal_pipe[1]);
     g_signal_pipe[0] = g_signal_pipe[1] = -1;
@@ -157,6 +159,7 @@ class SignalGuard {
   bool ok_ = false;
   struct sigaction old_int_ {};
   struct sigaction old_term_ {};
+  struct sigaction old_hup_ {};
 };
 
 class Bridge {
@@ -214,7 +217,9 @@ class Bridge {
       }
       if (!wait_events(wait)) return 1;
     }
-    engine_->note(fmt::format("stopping on {}", g_signal == SIGINT ? "SIGINT" : "SIGTERM"));
+    engine_->note(fmt::format("stopping on {}", g_signal == SIGINT    ? "SIGINT"
+                                                : g_signal == SIGTERM ? "SIGTERM"
+                                                                      : "SIGHUP"));
     return 0;
   }
 
@@ -229,8 +234,8 @@ class Bridge {
     }
     const unsigned long n = pty_.write(out.data(), out.size());
     if (n < out.size()) {
-      engine_->note(fmt::format("the client does not read: {} answer bytes dropped",
-                                out.size() - n));
+      engine_->note(
+          fmt::format("the client does not read: {} answer bytes dropped", out.size() - n));
     }
   }
 
@@ -240,7 +245,8 @@ class Bridge {
     pollfd fds[2] = {{g_signal_pipe[0], POLLIN, 0}, {pty_.master_fd(), POLLIN, 0}};
     const nfds_t n = present_ ? 2 : 1;
     const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(wait).count();
-    const timespec ts{static_cast<time_t>(ns / 1'000'000'000), static_cast<long>(ns % 1'000'000'000)};
+    const timespec ts{static_cast<time_t>(ns / 1'000'000'000),
+                      static_cast<long>(ns % 1'000'000'000)};
     const int r = ::ppoll(fds, n, &ts, nullptr);
     if (r < 0 && errno != EINTR) {
       engine_->note(fmt::format("poll: {}", std::strerror(errno)));
@@ -254,8 +260,8 @@ class Bridge {
         present_ = true;
         speed_checked_ = false;
         if (dropped_ != 0) {
-          engine_->note(fmt::format("{} answer bytes were dropped while no client was there",
-                                    dropped_));
+          engine_->note(
+              fmt::format("{} answer bytes were dropped while no client was there", dropped_));
           dropped_ = 0;
         }
         engine_->note("client opened the pty");
@@ -280,11 +286,10 @@ class Bridge {
           speed_checked_ = true;
           const unsigned s = pty_.speed();
           if (s != baud_) {
-            engine_->note(fmt::format("the client set {} on the pty; the bridge carries its bytes "
-                                      "at {} baud",
-                                      s == 0 ? std::string("a non-standard speed")
-                                             : fmt::format("{} baud", s),
-                                      baud_));
+            engine_->note(fmt::format(
+                "the client set {} on the pty; the bridge carries its bytes "
+                "at {} baud",
+                s == 0 ? std::string("a non-standard speed") : fmt::format("{} baud", s), baud_));
           }
         }
         last_input_ = Clock::now();
@@ -326,8 +331,9 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
       ->capture_default_str();
   b->add_option("--firmware", o.firmware, "example firmware: " + firmware_names() + " (required)");
   b->add_option("--address", o.address, "station address 0..125")->capture_default_str();
-  b->add_option("--pacing", o.pacing, "realtime: chip time follows the wall clock; free: "
-                                      "exchanges take no wall time")
+  b->add_option("--pacing", o.pacing,
+                "realtime: chip time follows the wall clock; free: "
+                "exchanges take no wall time")
       ->capture_default_str();
   b->add_option("--slot", o.slot, "slot time in bit times: how long a request waits for an answer")
       ->capture_default_str();
@@ -368,11 +374,11 @@ int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
     return 2;
   }
   Log log(log_file);
-  log.line(fmt::format("dpc31 bridge: pacing {}, baud {}, profile {}, firmware {}, address {}, "
-                       "pty {} -> {}",
-                       c->realtime ? "realtime" : "free", c->setup.baud,
-                       profile_name(c->setup.chip.profile), c->setup.firmware->name,
-                       c->setup.address, o.pty, pty->slave_name()));
+  log.line(fmt::format(
+      "dpc31 bridge: pacing {}, baud {}, profile {}, firmware {}, address {}, "
+      "pty {} -> {}",
+      c->realtime ? "realtime" : "free", c->setup.baud, profile_name(c->setup.chip.profile),
+      c->setup.firmware->name, c->setup.address, o.pty, pty->slave_name()));
   int rc = 0;
   {
     Bridge b(*c, *pty, log);
