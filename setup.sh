@@ -5,9 +5,10 @@ set -euo pipefail
 cd "$(dirname "$0")"
 
 # Build: compiler, CMake, Verilator and the libraries. Checks in the test suite: gtkwave
-# (vcd2fst / fst2vcd), sigrok-cli (UART decode of our waveforms), tshark (our pcapng captures).
+# (vcd2fst / fst2vcd), sigrok-cli (UART decode of our waveforms), tshark (our pcapng captures),
+# python3 (a DP master on the pty of dpc31 bridge).
 packages=(cmake g++ make verilator libfmt-dev libcli11-dev nlohmann-json3-dev libgtest-dev
-  libbenchmark-dev zlib1g-dev gtkwave sigrok-cli tshark)
+  libbenchmark-dev zlib1g-dev gtkwave sigrok-cli tshark python3)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -8,6 +8,39 @@
 
 namespace dpc31 {
 
+std::uint64_t send_on_rxd(Chip& chip, std::span<const std::uint8_t> bytes, std::uint64_t start,
+                          std::uint32_t bit_cycles, UartFault fault) {
+  std::vector<std::pair<std::uint64_t, bool>> edges;
+  uart_encode(bytes, start, bit_cycles, edges, fault);
+  for (const auto& [cycle, level] : edges) chip.drive_rxd(cycle, level);
+  return start + bytes.size() * std::uint64_t{kUartCharBits} * bit_cycles;
+}
+
+void AnswerCollector::reset() {
+  frame_.reset();
+  bytes_.clear();
+  started_ = false;
+  bad_ = false;
+  start_ = 0;
+  end_ = 0;
+}
+
+void AnswerCollector::push(const UartChar& c) {
+  if (!started_) start_ = c.start;
+  started_ = true;
+  end_ = c.end;
+  if (bytes_.size() <= fdl::kMaxFrameLength) bytes_.push_back(c.data);
+  if (!c.ok()) bad_ = true;
+  if (bad_ || frame_.push(c.data) == fdl::Assembler::Status::error) bad_ = true;
+}
+
+std::optional<fdl::Frame> AnswerCollector::frame() const {
+  if (bad_ || frame_.status() != fdl::Assembler::Status::complete) return std::nullopt;
+  fdl::Decoded d = fdl::decode(frame_.bytes());
+  if (d.error != fdl::Error::none) return std::nullopt;
+  return std::move(d.frame);
+}
+
 DpMaster::DpMaster(Chip& chip, MasterConfig m, SlaveConfig s)
     : chip_(chip),
       cfg_(m),
@@ -58,11 +91,7 @@ Exchange DpMaster::transact_raw(const std::vector<std::uint8_t>& bytes, UartFaul
   chars_.clear();
   rx_.advance(chip_.cycle(), chars_);
   ex.request_start = std::max(chip_.cycle(), bus_free_ + std::uint64_t{cfg_.idle_bits} * t_);
-  std::vector<std::pair<std::uint64_t, bool>> edges;
-  uart_encode(bytes, ex.request_start, t_, edges, fault);
-  // The whole request goes on the line ahead of time: firmware running meanwhile cannot delay it.
-  for (const auto& [cycle, level] : edges) chip_.drive_rxd(cycle, level);
-  ex.request_end = ex.request_start + bytes.size() * std::uint64_t{kUartCharBits} * t_;
+  ex.request_end = send_on_rxd(chip_, bytes, ex.request_start, t_, fault);
   run_until(ex.request_end);
   const fdl::Decoded d = fdl::decode(bytes);
   const bool sdn = d.error == fdl::Error::none &&
@@ -79,37 +108,26 @@ Exchange DpMaster::transact_raw(const std::vector<std::uint8_t>& bytes, UartFaul
 
 Exchange DpMaster::wait_answer(Exchange ex) {
   const std::uint64_t slot_end = ex.request_end + std::uint64_t{cfg_.slot_bits} * t_;
-  frame_.reset();
-  bool started = false;
-  bool bad = false;
+  answer_.reset();
   for (;;) {
     chars_.clear();
     rx_.advance(chip_.cycle(), chars_);
-    for (const UartChar& c : chars_) {
-      if (!started) ex.answer_start = c.start;
-      started = true;
-      ex.answer_end = c.end;
-      if (!c.ok()) bad = true;
-      if (bad || frame_.push(c.data) == fdl::Assembler::Status::error) bad = true;
-    }
-    if (started && !rx_.receiving() &&
-        (bad || frame_.status() != fdl::Assembler::Status::need_more))
-      break;
-    if (!started && !rx_.receiving() && chip_.cycle() >= slot_end) {
+    for (const UartChar& c : chars_) answer_.push(c);
+    if (answer_.finished() && !rx_.receiving()) break;
+    if (!answer_.started() && !rx_.receiving() && chip_.cycle() >= slot_end) {
       bus_free_ = chip_.cycle();
       return ex;  // no answer within the slot time
     }
     // Watch the line bit by bit until a character starts, then follow the receiver's samples.
-    const std::uint64_t next = rx_.receiving() ? rx_.next_deadline()
-                               : started       ? chip_.cycle() + t_
-                                               : std::min(slot_end, chip_.cycle() + t_);
+    const std::uint64_t next = rx_.receiving()     ? rx_.next_deadline()
+                               : answer_.started() ? chip_.cycle() + t_
+                                                   : std::min(slot_end, chip_.cycle() + t_);
     run_until(std::max(next, chip_.cycle() + 1));
   }
+  ex.answer_start = answer_.start();
+  ex.answer_end = answer_.end();
   bus_free_ = ex.answer_end;
-  if (!bad && frame_.status() == fdl::Assembler::Status::complete) {
-    const fdl::Decoded d = fdl::decode(frame_.bytes());
-    if (d.error == fdl::Error::none) ex.answer = d.frame;
-  }
+  ex.answer = answer_.frame();
   return ex;
 }
 

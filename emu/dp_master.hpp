@@ -8,6 +8,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -49,6 +50,41 @@ struct Exchange {
   std::optional<fdl::Frame> answer;  // nullopt: no (valid) answer within the slot time
   std::uint64_t answer_start = 0;
   std::uint64_t answer_end = 0;
+};
+
+// Puts `bytes` on the chip's RxD as back-to-back UART characters from `start` (uart_encode). The
+// whole request goes on the line ahead of time, so firmware running meanwhile cannot delay it.
+// Returns the end of the last stop bit.
+std::uint64_t send_on_rxd(Chip& chip, std::span<const std::uint8_t> bytes, std::uint64_t start,
+                          std::uint32_t bit_cycles, UartFault fault = {});
+
+// One answer as a master's receiver sees it, fed with the characters its UART decodes from TxD:
+// the first character starts it, fdl::Assembler tells when it is complete; a bad character or a
+// framing error breaks it. Used by DpMaster and by the pty bridge (tools/bridge).
+class AnswerCollector {
+ public:
+  void reset();
+  void push(const UartChar& c);
+  [[nodiscard]] bool started() const { return started_; }
+  // Complete or broken: no further character belongs to it. (The caller also waits until its
+  // receiver is idle: a character may still be in progress.)
+  [[nodiscard]] bool finished() const {
+    return started_ && (bad_ || frame_.status() != fdl::Assembler::Status::need_more);
+  }
+  [[nodiscard]] std::uint64_t start() const { return start_; }  // first start bit
+  [[nodiscard]] std::uint64_t end() const { return end_; }      // end of the last stop bit
+  // The answer, if it is complete and decodes without error.
+  [[nodiscard]] std::optional<fdl::Frame> frame() const;
+  // Every character's data as received (also of a broken answer), at most kMaxFrameLength + 1.
+  [[nodiscard]] const std::vector<std::uint8_t>& bytes() const { return bytes_; }
+
+ private:
+  fdl::Assembler frame_;
+  std::vector<std::uint8_t> bytes_;
+  bool started_ = false;
+  bool bad_ = false;
+  std::uint64_t start_ = 0;
+  std::uint64_t end_ = 0;
 };
 
 class DpMaster {
@@ -106,7 +142,7 @@ class DpMaster {
   std::uint32_t t_;
   std::uint8_t target_;
   UartRx rx_;
-  fdl::Assembler frame_;
+  AnswerCollector answer_;
   std::vector<UartChar> chars_;
   bool fcb_ = true;  // toggled before every SRD with FCV
   bool fcv_started_ = false;

@@ -42,6 +42,12 @@ class FirmwareHost {
   std::vector<std::pair<std::uint64_t, std::uint16_t>> interrupts;
   // Extra observer of port writes (the bridge's log, tests).
   hal::PortSink on_port;
+  // Forgets port_writes() and interrupts (the port values stay): a long-running host (the
+  // bridge) calls it so memory does not grow with time.
+  void clear_history() {
+    writes_.clear();
+    interrupts.clear();
+  }
 
  private:
   const dpc31_firmware& fw_;

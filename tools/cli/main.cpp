@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "bridge.hpp"
 #include "cosim.hpp"
 #include "demo.hpp"
 #include "dpc31/chip.hpp"
@@ -114,6 +115,9 @@ int main(int argc, char** argv) {
   // dpc31 serve: the chip behind a socket (docs/protocol.md).
   dpc31::cli::ServeArgs serve_args;
   auto* serve = dpc31::cli::add_serve_subcommand(app, serve_args);
+  // dpc31 bridge: the slave's RS-485 side as a pseudo-terminal (docs/bridge.md).
+  dpc31::cli::BridgeOptions bridge_opt;
+  auto* bridge = dpc31::cli::add_bridge_subcommand(app, bridge_opt);
 
   try {
     app.parse(argc, argv);
@@ -123,6 +127,7 @@ int main(int argc, char** argv) {
   }
 
   if (serve->parsed()) return dpc31::cli::run_serve(serve_args, stdout, stderr);
+  if (bridge->parsed()) return dpc31::cli::run_bridge(bridge_opt, stdout, stderr);
   if (wavediff->parsed()) return dpc31::wavediff::run_cli(wavediff_args, stdout, stderr);
   if (run->parsed()) return dpc31::cli::run_scenario_command(run_opt, stdout, stderr);
   if (replay->parsed()) return dpc31::cli::run_replay_command(replay_opt, stdout, stderr);

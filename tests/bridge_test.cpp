@@ -1,0 +1,258 @@
+// dpc31 bridge, in process: the engine (client bytes -> RxD after TSYN, TxD -> bytes, cycle-exact),
+// the telegram summaries of its log, the pty's hang-up and reset handling, the symlink rules.
+// The end-to-end tests with the real binary and a master on the pty are in bridge_test.py.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <poll.h>
+#include <sys/stat.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "../emu/dp_services.hpp"
+#include "../emu/fdl.hpp"
+#include "../tools/bridge/engine.hpp"
+#include "../tools/bridge/pty.hpp"
+
+namespace {
+
+using Bytes = std::vector<std::uint8_t>;
+using dpc31::bridge::Engine;
+
+struct Line {
+  std::uint64_t cycle;
+  std::string tag;
+  std::string text;
+};
+
+constexpr std::uint32_t kT = 2500;  // bit time at 19200 baud, 48 MHz
+
+Bytes sd1(std::uint8_t da, std::uint8_t sa, std::uint8_t fc) {
+  return dpc31::fdl::encode(dpc31::fdl::make_frame(da, sa, fc));
+}
+
+const Bytes kFdlStatus = sd1(5, 2, 0x49);
+const Bytes kStatusOk = {0x10, 0x02, 0x05, 0x00, 0x07, 0x16};
+
+class BridgeEngine : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dpc31::bridge::Setup s;
+    s.firmware = dpc31_find_firmware("DO4");
+    s.baud = 19200;
+    engine_ = std::make_unique<Engine>(
+        s, [this](std::uint64_t cycle, std::string_view tag, const std::string& text) {
+          lines_.push_back({cycle, std::string(tag), text});
+        });
+  }
+
+  Bytes exchange(const Bytes& req) {
+    engine_->feed(req);
+    EXPECT_TRUE(engine_->settle(48'000'000));
+    return engine_->take_output();
+  }
+
+  // FDL_Status until the chip's baud search has found 19200 baud.
+  void find_slave() {
+    for (int i = 0; i < 100; ++i) {
+      const Bytes a = exchange(kFdlStatus);
+      if (!a.empty()) {
+        ASSERT_EQ(a, kStatusOk);
+        return;
+      }
+    }
+    FAIL() << "FDL_Status never answered";
+  }
+
+  std::vector<Line> tagged(const std::string& tag) const {
+    std::vector<Line> out;
+    for (const Line& l : lines_) {
+      if (l.tag == tag) out.push_back(l);
+    }
+    return out;
+  }
+
+  std::unique_ptr<Engine> engine_;
+  std::vector<Line> lines_;
+};
+
+TEST_F(BridgeEngine, AnswersFdlStatusOnceTheBaudSearchReachesTheRate) {
+  find_slave();
+  const std::vector<Line> rx = tagged("RxD");
+  const std::vector<Line> tx = tagged("TxD");
+  ASSERT_EQ(tx.size(), 1u);
+  // The answered request: its 6 characters, then MinTSDR = 11 bit times, then the answer.
+  EXPECT_EQ(tx[0].cycle, rx.back().cycle + (6 * 11 + 11) * kT);
+  EXPECT_EQ(tx[0].text, "10 02 05 00 07 16  | OK 5->2");
+  EXPECT_EQ(rx.back().text, "10 05 02 49 50 16  | FDL_Status 2->5");
+  // Unanswered ones: the next request follows TSYN after the slot time (100 bits) ran out.
+  ASSERT_GE(rx.size(), 2u);
+  EXPECT_EQ(rx[1].cycle - rx[0].cycle, (33 + 66 + 100) * kT);
+  EXPECT_EQ(engine_->chip().wd_state(), dpc31::WdState::Baud_Control);
+}
+
+TEST_F(BridgeEngine, EveryRequestWaitsTsynAfterTheLastAnswer) {
+  find_slave();
+  const std::uint64_t answer_start = tagged("TxD").back().cycle;
+  const Bytes diag = exchange(dpc31::fdl::encode(
+      dpc31::fdl::make_frame(5, 2, 0x7D, {}, std::uint8_t{60}, std::uint8_t{62})));
+  EXPECT_EQ(diag, (Bytes{0x68, 0x0B, 0x0B, 0x68, 0x82, 0x85, 0x08, 0x3E, 0x3C, 0x02, 0x05, 0x00,
+                         0xFF, 0x0D, 0x04, 0xA0, 0x16}));
+  EXPECT_EQ(tagged("RxD").back().cycle, answer_start + (6 * 11 + 33) * kT);
+}
+
+TEST_F(BridgeEngine, SplitsTelegramsWrittenTogetherAndSendsEachAfterTsyn) {
+  find_slave();
+  // Global_Control (SDN broadcast: no answer) and FDL_Status in one write.
+  Bytes both = dpc31::fdl::encode(
+      dpc31::fdl::make_frame(127, 2, 0x46, {0x00, 0x00}, std::uint8_t{58}, std::uint8_t{62}));
+  const std::size_t gc_len = both.size();
+  both.insert(both.end(), kFdlStatus.begin(), kFdlStatus.end());
+  const std::size_t before = tagged("RxD").size();
+  EXPECT_EQ(exchange(both), kStatusOk);
+  const std::vector<Line> rx = tagged("RxD");
+  ASSERT_EQ(rx.size(), before + 2);
+  EXPECT_NE(rx[before].text.find("Global_Control 2->127 SDN_high SAP 62->58 DU 00 00"),
+            std::string::npos)
+      << rx[before].text;
+  EXPECT_EQ(rx[before + 1].cycle, rx[before].cycle + (gc_len * 11 + 33) * kT);
+}
+
+TEST_F(BridgeEngine, AnIncompleteTelegramWaitsForItsRest) {
+  find_slave();
+  engine_->feed(Bytes(kFdlStatus.begin(), kFdlStatus.begin() + 3));
+  EXPECT_TRUE(engine_->partial());
+  EXPECT_FALSE(engine_->busy());
+  EXPECT_EQ(exchange(Bytes(kFdlStatus.begin() + 3, kFdlStatus.end())), kStatusOk);
+  EXPECT_FALSE(engine_->partial());
+}
+
+TEST_F(BridgeEngine, BrokenBytesGoOnTheBusAsTheyCame) {
+  find_slave();
+  const std::uint32_t bad_sd = engine_->chip().fdl_counters().bad_sd;
+  const std::uint32_t bad_fcs = engine_->chip().fdl_counters().bad_fcs;
+  EXPECT_TRUE(exchange({0xFF}).empty());
+  Bytes wrong = kFdlStatus;
+  wrong[4] ^= 1;
+  EXPECT_TRUE(exchange(wrong).empty());
+  // A flushed half telegram is sent as it is, too.
+  engine_->feed(Bytes(kFdlStatus.begin(), kFdlStatus.begin() + 2));
+  engine_->flush_partial();
+  EXPECT_TRUE(engine_->settle(48'000'000));
+  EXPECT_TRUE(engine_->take_output().empty());
+  EXPECT_EQ(engine_->chip().fdl_counters().bad_sd, bad_sd + 1);
+  EXPECT_EQ(engine_->chip().fdl_counters().bad_fcs, bad_fcs + 1);
+  const std::vector<Line> rx = tagged("RxD");
+  ASSERT_GE(rx.size(), 3u);
+  EXPECT_EQ(rx[rx.size() - 3].text, "FF  | broken telegram (bad_sd)");
+  EXPECT_EQ(rx[rx.size() - 2].text, "10 05 02 49 51 16  | broken telegram (bad_fcs)");
+  EXPECT_EQ(rx[rx.size() - 1].text, "10 05  | broken telegram (truncated)");
+  // And the slave still answers.
+  EXPECT_EQ(exchange(kFdlStatus), kStatusOk);
+}
+
+TEST_F(BridgeEngine, TimePassesWithoutClientAndStatesAreLogged) {
+  const std::uint64_t c0 = engine_->cycle();
+  engine_->run_until(c0 + 48'000'000);  // one second of silence
+  EXPECT_GE(engine_->cycle(), c0 + 48'000'000);
+  EXPECT_TRUE(engine_->take_output().empty());
+  ASSERT_FALSE(lines_.empty());
+  EXPECT_EQ(lines_.front().tag, "CHIP");  // Start_SPC3 by the firmware's main()
+}
+
+TEST(BridgeSummary, NamesServicesAndAnswers) {
+  using dpc31::bridge::telegram_summary;
+  using dpc31::fdl::encode;
+  using dpc31::fdl::make_frame;
+  EXPECT_EQ(telegram_summary(Bytes{0xE5}), "SC (short acknowledge)");
+  EXPECT_EQ(telegram_summary(Bytes{0xDC, 0x02, 0x02}), "token 2->2");
+  EXPECT_EQ(telegram_summary(encode(make_frame(5, 2, 0x5D, {0x05, 0x01}))),
+            "Data_Exchange 2->5 SRD_high FCB 0 DU 05 01");
+  EXPECT_EQ(telegram_summary(
+                encode(make_frame(5, 2, 0x7D, {0x21, 0x10}, std::uint8_t{62}, std::uint8_t{62}))),
+            "Chk_Cfg 2->5 SRD_high FCB 1 SAP 62->62 DU 21 10");
+  EXPECT_EQ(telegram_summary(encode(make_frame(2, 5, 0x0A, {0x51}))), "DH 5->2 DU 51");
+  EXPECT_EQ(telegram_summary(Bytes{}), "empty");
+  EXPECT_EQ(telegram_summary(Bytes{0x68, 0x05}), "broken telegram (truncated)");
+}
+
+// --- the pty ---
+
+termios eight_e1(int fd, speed_t speed) {
+  termios t{};
+  EXPECT_EQ(tcgetattr(fd, &t), 0);
+  cfmakeraw(&t);
+  t.c_cflag = CS8 | PARENB | CREAD | CLOCAL;
+  cfsetspeed(&t, speed);
+  return t;
+}
+
+TEST(BridgePty, HangUpResetAndTheNextClientSetsTheSameSpeed) {
+  dpc31::bridge::Pty pty;
+  EXPECT_FALSE(pty.client_open());  // opened and closed once: hang-up until a client comes
+  EXPECT_FALSE(pty.changed());
+  EXPECT_EQ(pty.speed(), 38400u);
+
+  int c = ::open(pty.slave_name().c_str(), O_RDWR | O_NOCTTY);
+  ASSERT_GE(c, 0);
+  EXPECT_TRUE(pty.client_open());
+  termios t = eight_e1(c, B19200);
+  EXPECT_EQ(tcsetattr(c, TCSANOW, &t), 0) << std::strerror(errno);
+  EXPECT_TRUE(pty.changed());
+  EXPECT_EQ(pty.speed(), 19200u);
+  // The chip's answer, never read by this client.
+  const unsigned char answer[] = {0x10, 0x02, 0x05, 0x00, 0x07, 0x16};
+  EXPECT_EQ(pty.write(answer, sizeof answer), sizeof answer);
+  const unsigned char req[] = {0x10, 0x05, 0x02, 0x49, 0x50, 0x16};
+  ASSERT_EQ(::write(c, req, sizeof req), static_cast<ssize_t>(sizeof req));
+  unsigned char buf[64];
+  EXPECT_EQ(pty.read(buf, sizeof buf), static_cast<long>(sizeof req));
+  EXPECT_EQ(pty.read(buf, sizeof buf), 0);  // nothing more, client still there
+  ::close(c);
+  EXPECT_FALSE(pty.client_open());
+  EXPECT_EQ(pty.read(buf, sizeof buf), -1);  // EIO: hang-up
+
+  pty.reset();
+  EXPECT_FALSE(pty.changed());
+  EXPECT_EQ(pty.speed(), 38400u);
+  c = ::open(pty.slave_name().c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK);
+  ASSERT_GE(c, 0);
+  t = eight_e1(c, B19200);
+  EXPECT_EQ(tcsetattr(c, TCSANOW, &t), 0) << std::strerror(errno);
+  EXPECT_EQ(::read(c, buf, sizeof buf), -1);  // the old answer was flushed
+  EXPECT_EQ(errno, EAGAIN);
+  termios now{};
+  ASSERT_EQ(tcgetattr(c, &now), 0);
+  EXPECT_EQ(now.c_lflag & (ECHO | ICANON), 0u);  // raw: the client's bytes never come back
+  ::close(c);
+}
+
+TEST(BridgePty, SymlinkRules) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("dpc31-bridge-test-" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string link = (dir / "dp0").string();
+  // New, then replaced (a stale one), then removed only while it is still ours.
+  EXPECT_EQ(dpc31::bridge::make_link(link, "/dev/pts/999999"), "");
+  EXPECT_EQ(dpc31::bridge::make_link(link, "/dev/pts/1"), "");
+  EXPECT_EQ(std::filesystem::read_symlink(link).string(), "/dev/pts/1");
+  dpc31::bridge::remove_link(link, "/dev/pts/2");
+  EXPECT_TRUE(std::filesystem::is_symlink(link));
+  dpc31::bridge::remove_link(link, "/dev/pts/1");
+  EXPECT_FALSE(std::filesystem::exists(std::filesystem::symlink_status(link)));
+  // A regular file is never replaced.
+  const std::string file = (dir / "file").string();
+  std::ofstream(file) << "keep\n";
+  EXPECT_NE(dpc31::bridge::make_link(file, "/dev/pts/1").find("not a symlink"), std::string::npos);
+  EXPECT_TRUE(std::filesystem::is_regular_file(file));
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace

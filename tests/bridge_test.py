@@ -1,0 +1,477 @@
+#!/usr/bin/env python3
+"""End-to-end tests of `dpc31 bridge` (docs/bridge.md), run by CTest.
+
+Starts the real binary as a child process, then plays a small DP master (class 1) of our own on
+the pty the way an off-the-shelf master program does: it opens the symlink, sets raw 8E1 at the
+bridge's baud rate with one tcsetattr, and writes and reads FDL telegram bytes. Every answer is
+checked byte for byte (FCS computed here).
+
+Usage: bridge_test.py DPC31_CLI CASE     (CASE: see CASES at the bottom)
+Python 3 standard library only.
+"""
+
+import os
+import select
+import signal
+import subprocess
+import sys
+import tempfile
+import termios
+import time
+
+CLI = None
+SD1, SD2, SC, ED = 0x10, 0x68, 0xE5, 0x16
+MASTER = 2
+SLAVE = 5
+SAP_SLAVE_DIAG, SAP_SET_PRM, SAP_CHK_CFG, SAP_MASTER = 60, 61, 62, 62
+SPEEDS = {9600: termios.B9600, 19200: termios.B19200, 500000: termios.B500000,
+          1500000: termios.B1500000}
+
+
+class Fail(Exception):
+    pass
+
+
+def check(cond, what):
+    if not cond:
+        raise Fail(what)
+
+
+def hexs(b):
+    return " ".join(f"{x:02X}" for x in b) if b is not None else "nothing"
+
+
+def fcs(body):
+    return sum(body) & 0xFF
+
+
+def sd1(da, sa, fc):
+    body = [da, sa, fc]
+    return bytes([SD1] + body + [fcs(body), ED])
+
+
+def sd2(da, sa, fc, du, dsap=None, ssap=None):
+    body = [da | (0x80 if dsap is not None else 0), sa | (0x80 if ssap is not None else 0), fc]
+    if dsap is not None:
+        body.append(dsap)
+    if ssap is not None:
+        body.append(ssap)
+    body += list(du)
+    le = len(body)
+    return bytes([SD2, le, le, SD2] + body + [fcs(body), ED])
+
+
+def frame_length(buf):
+    """Length of the telegram at the start of buf as its SD (and LE) tell, None if unknown yet."""
+    if not buf:
+        return None
+    sd = buf[0]
+    if sd == SC:
+        return 1
+    if sd == SD1:
+        return 6
+    if sd == SD2:
+        return buf[1] + 6 if len(buf) >= 2 else None
+    raise Fail(f"answer starts with {sd:02X}, no start delimiter")
+
+
+# --- what the slave answers (exact telegrams) ---
+
+def status_ok():  # FDL_Status: OK, station type 0 (slave)
+    return sd1(MASTER, SLAVE, 0x00)
+
+
+def diag(du):  # Slave_Diag answer: DL from SAP 60 to SAP 62
+    return sd2(MASTER, SLAVE, 0x08, du, dsap=SAP_MASTER, ssap=SAP_SLAVE_DIAG)
+
+
+def dx_answer(code, inputs):  # Data_Exchange answer: DL (0x08) or DH (0x0A), no SAPs
+    return sd2(MASTER, SLAVE, code, inputs)
+
+
+class Master:
+    """A DP master on the pty: 8E1 raw, FCB/FCV per EN 50170, a timeout per answer."""
+
+    def __init__(self, path, baud, timeout):
+        self.fd = os.open(path, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
+        a = termios.tcgetattr(self.fd)
+        # One tcsetattr with everything, as serial libraries do: raw, 8 data bits, even parity,
+        # one stop bit, receiver on, no modem control, the bus speed.
+        a[0] = 0
+        a[1] = 0
+        a[2] = termios.CS8 | termios.PARENB | termios.CREAD | termios.CLOCAL
+        a[3] = 0
+        a[4] = a[5] = SPEEDS[baud]
+        a[6][termios.VMIN] = 0
+        a[6][termios.VTIME] = 0
+        termios.tcsetattr(self.fd, termios.TCSANOW, a)
+        self.timeout = timeout
+        self.fcb = True
+        self.fcv = False
+
+    def close(self):
+        os.close(self.fd)
+
+    def transact(self, req, timeout=None):
+        """Writes one request, returns the answer telegram (bytes) or None after the timeout."""
+        termios.tcflush(self.fd, termios.TCIFLUSH)
+        os.write(self.fd, req)
+        buf = b""
+        deadline = time.monotonic() + (timeout or self.timeout)
+        while True:
+            n = frame_length(buf)
+            if n is not None and len(buf) >= n:
+                check(len(buf) == n, f"answer {hexs(buf)}: {len(buf) - n} bytes too many")
+                return buf
+            left = deadline - time.monotonic()
+            if left <= 0:
+                check(not buf, f"incomplete answer {hexs(buf)} to {hexs(req)}")
+                return None
+            r, _, _ = select.select([self.fd], [], [], left)
+            if r:
+                buf += os.read(self.fd, 512)
+
+    def fdl_status(self, timeout=None):
+        a = self.transact(sd1(SLAVE, MASTER, 0x49), timeout)
+        if a is not None:
+            self.fcb = False  # the first SRD after FDL_Status: FCB = 1, FCV = 1
+            self.fcv = True
+        return a
+
+    def srd(self, du, dsap=None):
+        self.fcb = not self.fcb
+        fc = 0x40 | (0x20 if self.fcb else 0) | (0x10 if self.fcv else 0) | 0x0D
+        ssap = SAP_MASTER if dsap is not None else None
+        return self.transact(sd2(SLAVE, MASTER, fc, du, dsap=dsap, ssap=ssap))
+
+    def expect(self, what, got, *allowed):
+        check(got in allowed,
+              f"{what}: got {hexs(got)}, expected " + " or ".join(hexs(a) for a in allowed))
+        return got
+
+
+class Bridge:
+    """The bridge as a child process; its symlink in a temporary directory."""
+
+    def __init__(self, tmp, *args, link="dp0"):
+        self.path = os.path.join(tmp, link)
+        self.log = os.path.join(tmp, "bridge.log")
+        self.proc = subprocess.Popen([CLI, "bridge", "--pty", self.path, "--log", self.log] +
+                                     list(args), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        deadline = time.monotonic() + 10
+        while not os.path.islink(self.path) or not os.path.exists(self.path):
+            if self.proc.poll() is not None:
+                raise Fail(f"bridge exited with {self.proc.returncode}: "
+                           f"{self.proc.stderr.read()!r}")
+            check(time.monotonic() < deadline, "the bridge made no symlink within 10 s")
+            time.sleep(0.01)
+
+    def stop(self, sig=signal.SIGTERM):
+        self.proc.send_signal(sig)
+        try:
+            out, err = self.proc.communicate(timeout=10)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            raise Fail(f"the bridge did not stop on signal {sig}")
+        check(self.proc.returncode == 0,
+              f"bridge exit code {self.proc.returncode} on signal {sig}, stderr {err!r}")
+        check(err == b"", f"bridge wrote to stderr: {err!r}")
+        check(not os.path.lexists(self.path), "the symlink is still there after the bridge stopped")
+
+    def kill(self):
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait()
+        if sys.exc_info()[0] is not None and os.path.exists(self.log):
+            # A failing case shows the end of the bridge's log.
+            print("--- bridge log (last 80 lines) ---", file=sys.stderr)
+            for line in self.log_lines()[-80:]:
+                print(line, file=sys.stderr)
+
+    def cpu_ticks(self):
+        """User + system CPU time of the bridge so far, in clock ticks."""
+        with open(f"/proc/{self.proc.pid}/stat", encoding="utf-8") as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+        return int(fields[11]) + int(fields[12])
+
+    def log_lines(self):
+        with open(self.log, encoding="utf-8") as f:
+            return f.read().splitlines()
+
+
+def find_slave(m):
+    """FDL_Status until answered: the chip's baud search takes up to ~0.8 s of chip time."""
+    for _ in range(300):
+        a = m.fdl_status(timeout=0.06)
+        if a is not None:
+            return a
+    raise Fail("FDL_Status never answered")
+
+
+def startup_do4(m, wd=(0x64, 0x0A)):
+    """FDL_Status until answered, Slave_Diag, Set_Prm, Chk_Cfg, Slave_Diag until ready."""
+    m.expect("FDL_Status", find_slave(m), status_ok())
+    # Not parameterised: Station_Not_Ready, Prm_Req, no master yet, ident 0D04.
+    m.expect("first Slave_Diag", m.srd([], SAP_SLAVE_DIAG), diag([0x02, 0x05, 0x00, 0xFF, 0x0D,
+                                                                  0x04]))
+    parameterise_do4(m, wd, [])
+
+
+def parameterise_do4(m, wd, ext):
+    """Set_Prm, Chk_Cfg, Slave_Diag until ready. `ext`: the device-related diag block the
+    firmware has set by now (none at power-on)."""
+    # Lock_Req + WD_On, watchdog factors, MinTSDR 0, ident 0D04, group 0; user prm: Spec_User_Prm
+    # 00, OSPMode 0 (retain), replacement 0, refresh monitor off.
+    prm = [0x88, wd[0], wd[1], 0x00, 0x0D, 0x04, 0x00, 0x00, 0x00, 0x00, 0x00]
+    m.expect("Set_Prm", m.srd(prm, SAP_SET_PRM), bytes([SC]))
+    m.expect("Chk_Cfg", m.srd([0x21, 0x10], SAP_CHK_CFG), bytes([SC]))
+    ready = diag([0x00, 0x0C, 0x00, MASTER, 0x0D, 0x04] + ext)
+    for _ in range(20):
+        # Station_Not_Ready while the firmware is still checking Prm/Cfg, then ready (WD_On).
+        a = m.expect("Slave_Diag after Chk_Cfg", m.srd([], SAP_SLAVE_DIAG), ready,
+                     diag([0x02, 0x0C, 0x00, MASTER, 0x0D, 0x04] + ext))
+        if a == ready:
+            return
+    raise Fail("the slave never became ready")
+
+
+def exchange_do4(m, before=0x00):
+    """Data_Exchange 05 01 (DO1+DO3, OSPValid) until the input byte reads 51h (terminals 0101,
+    ModulOK); `before` is the input byte until the firmware has taken the outputs. A DH answer
+    (the device diag changed: ModulOK) is followed by a Slave_Diag."""
+    # The device-related diag block DO4 keeps: header 02, OSP bit 0.
+    ext_ok = diag([0x00, 0x0C, 0x00, MASTER, 0x0D, 0x04, 0x02, 0x00])
+    for _ in range(20):
+        a = m.expect("Data_Exchange 05 01", m.srd([0x05, 0x01]), dx_answer(0x08, [before]),
+                     dx_answer(0x0A, [before]), dx_answer(0x0A, [0x51]), dx_answer(0x08, [0x51]))
+        if a[6] == 0x0A:  # DH
+            m.expect("Slave_Diag after DH", m.srd([], SAP_SLAVE_DIAG), ext_ok)
+            continue
+        if a == dx_answer(0x08, [0x51]):
+            return
+    raise Fail("the input byte never became 51h")
+
+
+def check_log(b, pacing, baud):
+    lines = b.log_lines()
+    first = lines[0]
+    for want in (f"pacing {pacing}", f"baud {baud}", "profile dpc31", "firmware DO4",
+                 f"pty {b.path} -> /dev/pts/"):
+        check(want in first, f"log line 1 lacks '{want}': {first}")
+    text = "\n".join(lines)
+    for want in ("RxD   10 05 02 49 50 16  | FDL_Status 2->5",
+                 "TxD   10 02 05 00 07 16  | OK 5->2",
+                 "| Set_Prm 2->5 SRD_high FCB 0 SAP 62->61 DU 88 64 0A 00 0D 04 00 00 00 00 00",
+                 "TxD   E5  | SC", "| Chk_Cfg 2->5", "| Data_Exchange 2->5 SRD_high",
+                 "DL 5->2 DU 51", "PORT  DO4 outputs = 0x05", "PORT  DO4 modul_ok = 0x01",
+                 "client opened the pty", "client closed the pty", "STATE dp_state Wait_Cfg -> "
+                 "Data_Exchange"):
+        check(want in text, f"log lacks '{want}'")
+    # Telegram lines: cycle, direction, hex, summary.
+    for line in lines[1:]:
+        parts = line.split()
+        check(parts[0].isdigit(), f"log line without a cycle: {line}")
+
+
+def do4_two_clients(pacing, baud=19200, timeout=0.5):
+    with tempfile.TemporaryDirectory() as tmp:
+        b = Bridge(tmp, "--firmware", "DO4", "--baud", str(baud), "--pacing", pacing)
+        try:
+            m = Master(b.path, baud, timeout)
+            startup_do4(m)
+            exchange_do4(m)
+            m.close()
+            # A second master program on the same pty, same speed: its 8E1 tcsetattr only works
+            # because the bridge reset the slave side when the first one closed. The slave is
+            # still parameterised by master 2 (watchdog 100 x 10 x 10 ms = 10 s), so FDL_Status
+            # and one Slave_Diag find it ready and the outputs are still 05 01.
+            time.sleep(0.05)
+            m = Master(b.path, baud, timeout)
+            a = None
+            for _ in range(20):
+                a = m.fdl_status()
+                if a is not None:
+                    break
+            m.expect("FDL_Status (second client)", a, status_ok())
+            m.expect("Slave_Diag (second client)", m.srd([], SAP_SLAVE_DIAG),
+                     diag([0x00, 0x0C, 0x00, MASTER, 0x0D, 0x04, 0x02, 0x00]))
+            m.expect("Data_Exchange (second client)", m.srd([0x05, 0x01]),
+                     dx_answer(0x08, [0x51]))
+            # New outputs: DO2+DO4 -> input byte A1h.
+            m.expect("Data_Exchange 0A 01", m.srd([0x0A, 0x01]), dx_answer(0x08, [0x51]))
+            m.expect("Data_Exchange 0A 01 again", m.srd([0x0A, 0x01]), dx_answer(0x08, [0xA1]))
+            m.close()
+            b.stop(signal.SIGTERM)
+            check_log(b, pacing, baud)
+        finally:
+            b.kill()
+
+
+def do4_reparameterise_after_watchdog():
+    """Free pacing, watchdog 2 x 10 x 10 ms: the second client comes after it expired and must
+    parameterise the slave again (Prm_Req in the first Slave_Diag), then reaches Data_Exchange."""
+    with tempfile.TemporaryDirectory() as tmp:
+        b = Bridge(tmp, "--firmware", "DO4", "--pacing", "free")
+        try:
+            m = Master(b.path, 19200, 0.5)
+            startup_do4(m, wd=(0x02, 0x0A))
+            exchange_do4(m)
+            m.close()
+            time.sleep(0.6)  # > 200 ms: the DP watchdog expires while no client is there
+            m = Master(b.path, 19200, 0.5)
+            # Baud_Control expired too (the chip searches the rate again): FDL_Status until
+            # answered.
+            m.expect("FDL_Status", find_slave(m), status_ok())
+            # Wait_Prm again (Prm_Req), outputs kept by the OSP model (retain), diag block OSP.
+            m.expect("Slave_Diag after the watchdog", m.srd([], SAP_SLAVE_DIAG),
+                     diag([0x02, 0x05, 0x00, 0xFF, 0x0D, 0x04, 0x02, 0x01]))
+            # Parameterise again; until the outputs are valid again the module is in OSP with
+            # the retained outputs 0101 (input byte 50h).
+            parameterise_do4(m, (0x02, 0x0A), [0x02, 0x01])
+            exchange_do4(m, before=0x50)
+            m.close()
+            b.stop(signal.SIGINT)
+            text = "\n".join(b.log_lines())
+            check("DP watchdog expired" in text, "log lacks the watchdog expiry")
+        finally:
+            b.kill()
+
+
+def cnt2_logmsg():
+    """CNT2 at 500 kbaud, free pacing: CNT1_LOGMSG (outputs 81 00) sets LOGMSG_ACK (bit 7 of
+    channel 1's status byte) and the firmware's hold1 port."""
+    with tempfile.TemporaryDirectory() as tmp:
+        b = Bridge(tmp, "--firmware", "cnt2", "--baud", "500000", "--pacing", "free",
+                   "--profile", "vpc3plus", "--address", "9")
+        global SLAVE
+        SLAVE = 9
+        try:
+            m = Master(b.path, 500000, 0.5)
+            m.expect("FDL_Status", find_slave(m), status_ok())
+            m.expect("Slave_Diag", m.srd([], SAP_SLAVE_DIAG),
+                     diag([0x02, 0x05, 0x00, 0xFF, 0x0C, 0x02]))
+            prm = [0x88, 0x64, 0x0A, 0x00, 0x0C, 0x02, 0x00, 0x00]
+            m.expect("Set_Prm", m.srd(prm, SAP_SET_PRM), bytes([SC]))
+            m.expect("Chk_Cfg", m.srd([0x21, 0x15], SAP_CHK_CFG), bytes([SC]))
+            ready = diag([0x00, 0x0C, 0x00, MASTER, 0x0C, 0x02])
+            for _ in range(20):
+                a = m.expect("Slave_Diag", m.srd([], SAP_SLAVE_DIAG), ready,
+                             diag([0x02, 0x0C, 0x00, MASTER, 0x0C, 0x02]))
+                if a == ready:
+                    break
+            check(a == ready, "CNT2 never became ready")
+            zero = dx_answer(0x08, [0] * 6)
+            held = dx_answer(0x08, [0x00, 0x00, 0x80, 0x00, 0x00, 0x00])
+            for _ in range(5):
+                a = m.expect("Data_Exchange 81 00", m.srd([0x81, 0x00]), zero, held)
+                if a == held:
+                    break
+            check(a == held, "LOGMSG_ACK never came")
+            m.close()
+            b.stop(signal.SIGHUP)
+            text = "\n".join(b.log_lines())
+            check("PORT  CNT2 hold1 = 0x01" in text, "log lacks the hold1 port write")
+            check("firmware CNT2" in b.log_lines()[0], "log line 1 lacks the firmware")
+        finally:
+            SLAVE = 5
+            b.kill()
+
+
+def bad_arguments():
+    with tempfile.TemporaryDirectory() as tmp:
+        regular = os.path.join(tmp, "file")
+        with open(regular, "w", encoding="utf-8") as f:
+            f.write("keep me\n")
+        link = os.path.join(tmp, "dp0")
+        cases = [
+            ["bridge", "--firmware", "DO4"],                               # no --pty
+            ["bridge", "--pty", link],                                     # no --firmware
+            ["bridge", "--pty", link, "--firmware", "DO5"],
+            ["bridge", "--pty", link, "--firmware", "DO4", "--baud", "12345"],
+            ["bridge", "--pty", link, "--firmware", "DO4", "--baud", "fast"],
+            ["bridge", "--pty", link, "--firmware", "DO4", "--profile", "spc4"],
+            ["bridge", "--pty", link, "--firmware", "DO4", "--address", "126"],
+            ["bridge", "--pty", link, "--firmware", "DO4", "--pacing", "slow"],
+            ["bridge", "--pty", link, "--firmware", "DO4", "--slot", "0"],
+            ["bridge", "--pty", link, "--firmware", "DO4", "--colour"],
+            ["bridge", "--pty", link, "--firmware", "DO4", "extra"],
+            ["bridge", "--pty", regular, "--firmware", "DO4"],             # a regular file
+            ["bridge", "--pty", os.path.join(tmp, "no", "dir"), "--firmware", "DO4"],
+            ["bridge", "--pty", link, "--firmware", "DO4", "--log", os.path.join(tmp, "no", "x")],
+        ]
+        for args in cases:
+            p = subprocess.run([CLI] + args, capture_output=True, timeout=20, check=False)
+            check(p.returncode == 2, f"{args}: exit code {p.returncode}, expected 2")
+            err = p.stderr.decode()
+            check(err.count("\n") == 1 and err.endswith("\n"),
+                  f"{args}: stderr is not one line: {err!r}")
+            check(not os.path.lexists(link), f"{args}: left a symlink behind")
+        with open(regular, encoding="utf-8") as f:
+            check(f.read() == "keep me\n", "the regular file was changed")
+
+
+def stale_symlink_replaced():
+    """A stale symlink is replaced; a client that only configures the pty, one at another speed;
+    no busy loop while no client is connected."""
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "dp0")
+        os.symlink("/dev/pts/nonexistent-stale", path)
+        b = Bridge(tmp, "--firmware", "DO4", "--pacing", "free")
+        try:
+            check(os.readlink(path).startswith("/dev/pts/") and os.path.exists(path),
+                  "the stale symlink was not replaced")
+            # A client that only opens, configures and closes: the next one still gets a
+            # working tcsetattr at the same speed.
+            Master(b.path, 19200, 0.5).close()
+            time.sleep(0.05)
+            m = Master(b.path, 19200, 0.5)
+            m.expect("FDL_Status", find_slave(m), status_ok())
+            m.close()
+            # A client at another speed: the pty carries no timing, the bytes go on the bus at
+            # the bridge's rate, and the log says so.
+            time.sleep(0.05)
+            m = Master(b.path, 9600, 0.5)
+            m.expect("FDL_Status at 9600 on the pty", m.fdl_status(), status_ok())
+            m.close()
+            # No client: the master fd reports hang-up all the time; the bridge must not spin.
+            before = b.cpu_ticks()
+            time.sleep(1.0)
+            used = b.cpu_ticks() - before
+            check(used < 0.3 * os.sysconf("SC_CLK_TCK"),
+                  f"the bridge used {used} clock ticks of CPU in 1 s without a client")
+            b.stop(signal.SIGINT)
+            text = "\n".join(b.log_lines())
+            check("the client set 9600 baud on the pty; the bridge carries its bytes at 19200 "
+                  "baud" in text, "log lacks the speed note")
+            check("stopping on SIGINT" in text, "log lacks the stop note")
+        finally:
+            b.kill()
+
+
+CASES = {
+    "do4_realtime_two_clients": lambda: do4_two_clients("realtime"),
+    "do4_free_two_clients": lambda: do4_two_clients("free"),
+    "do4_free_watchdog_then_reparameterise": do4_reparameterise_after_watchdog,
+    "cnt2_free_logmsg": cnt2_logmsg,
+    "bad_arguments_exit_2": bad_arguments,
+    "stale_symlink_and_silent_client": stale_symlink_replaced,
+}
+
+
+def main():
+    global CLI
+    if len(sys.argv) != 3 or sys.argv[2] not in CASES:
+        print(f"usage: {sys.argv[0]} DPC31_CLI CASE ({', '.join(CASES)})", file=sys.stderr)
+        return 2
+    CLI = sys.argv[1]
+    try:
+        CASES[sys.argv[2]]()
+    except Fail as e:
+        print(f"FAIL {sys.argv[2]}: {e}", file=sys.stderr)
+        return 1
+    print(f"ok {sys.argv[2]}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,371 @@
+#include "engine.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <utility>
+
+#include "../../emu/dp_sm.hpp"  // SAP numbers
+
+namespace dpc31::bridge {
+
+namespace {
+
+// More client bytes than this waiting for the bus are dropped: the client writes faster than
+// the line can carry them (a master never does: it waits for each answer).
+constexpr std::size_t kMaxQueuedBytes = 64 * 1024;
+// Port writes and ISR entries are kept this long by FirmwareHost before the bridge drops them.
+constexpr std::size_t kHistoryLimit = 4096;
+
+std::string_view function_name(fdl::Function f) {
+  switch (f) {
+    case fdl::Function::SDA_low:
+      return "SDA_low";
+    case fdl::Function::SDN_low:
+      return "SDN_low";
+    case fdl::Function::SDA_high:
+      return "SDA_high";
+    case fdl::Function::SDN_high:
+      return "SDN_high";
+    case fdl::Function::DDB:
+      return "DDB";
+    case fdl::Function::FDL_Status:
+      return "FDL_Status";
+    case fdl::Function::SRD_low:
+      return "SRD_low";
+    case fdl::Function::SRD_high:
+      return "SRD_high";
+    case fdl::Function::Ident:
+      return "Ident";
+    case fdl::Function::LSAP_Status:
+      return "LSAP_Status";
+  }
+  return "function?";
+}
+
+std::string_view response_name(fdl::Response r) {
+  switch (r) {
+    case fdl::Response::OK:
+      return "OK";
+    case fdl::Response::UE:
+      return "UE";
+    case fdl::Response::RR:
+      return "RR";
+    case fdl::Response::RS:
+      return "RS";
+    case fdl::Response::DL:
+      return "DL";
+    case fdl::Response::NR:
+      return "NR";
+    case fdl::Response::DH:
+      return "DH";
+    case fdl::Response::RDL:
+      return "RDL";
+    case fdl::Response::RDH:
+      return "RDH";
+  }
+  return "response?";
+}
+
+// The DP service a request asks for (DP standard SAPs; no SAP = Data_Exchange).
+std::string service_name(const fdl::Frame& f) {
+  const fdl::Function fn = fdl::request_function(f.fc);
+  if (fn == fdl::Function::FDL_Status) return "FDL_Status";
+  if (!f.dsap) {
+    return fn == fdl::Function::SRD_high || fn == fdl::Function::SRD_low ? "Data_Exchange"
+                                                                         : "no SAP";
+  }
+  switch (fdl::sap_number(*f.dsap)) {
+    case sap::Set_Slave_Add:
+      return "Set_Slave_Add";
+    case sap::Rd_Inp:
+      return "Rd_Inp";
+    case sap::Rd_Outp:
+      return "Rd_Outp";
+    case sap::Global_Control:
+      return "Global_Control";
+    case sap::Get_Cfg:
+      return "Get_Cfg";
+    case sap::Slave_Diag:
+      return "Slave_Diag";
+    case sap::Set_Prm:
+      return "Set_Prm";
+    case sap::Chk_Cfg:
+      return "Chk_Cfg";
+    default:
+      return fmt::format("SAP {}", fdl::sap_number(*f.dsap));
+  }
+}
+
+bool wants_answer(std::span<const std::uint8_t> bytes) {
+  const fdl::Decoded d = fdl::decode(bytes);
+  if (d.error != fdl::Error::none) return false;
+  const fdl::Frame& f = d.frame;
+  if (f.sd == fdl::SC || f.sd == fdl::SD4 || !fdl::is_request(f.fc)) return false;
+  const fdl::Function fn = fdl::request_function(f.fc);
+  return f.da != fdl::kBroadcast && fn != fdl::Function::SDN_low && fn != fdl::Function::SDN_high;
+}
+
+std::string_view dp_name(DpState s) {
+  switch (s) {
+    case DpState::Wait_Prm:
+      return "Wait_Prm";
+    case DpState::Wait_Cfg:
+      return "Wait_Cfg";
+    case DpState::Data_Exchange:
+      return "Data_Exchange";
+  }
+  return "?";
+}
+
+std::string_view wd_name(WdState s) {
+  switch (s) {
+    case WdState::Baud_Search:
+      return "Baud_Search";
+    case WdState::Baud_Control:
+      return "Baud_Control";
+    case WdState::DP_Control:
+      return "DP_Control";
+  }
+  return "?";
+}
+
+}  // namespace
+
+std::string hex_bytes(std::span<const std::uint8_t> bytes) {
+  std::string s;
+  s.reserve(bytes.size() * 3);
+  for (std::size_t i = 0; i < bytes.size(); ++i) {
+    if (i != 0) s += ' ';
+    s += fmt::format("{:02X}", bytes[i]);
+  }
+  return s;
+}
+
+std::string telegram_summary(std::span<const std::uint8_t> bytes) {
+  if (bytes.empty()) return "empty";
+  const fdl::Decoded d = fdl::decode(bytes);
+  if (d.error != fdl::Error::none) {
+    return fmt::format("broken telegram ({})", fdl::error_name(d.error));
+  }
+  const fdl::Frame& f = d.frame;
+  if (f.sd == fdl::SC) return "SC (short acknowledge)";
+  if (f.sd == fdl::SD4) return fmt::format("token {}->{}", f.sa, f.da);
+  std::string s;
+  if (fdl::is_request(f.fc)) {
+    const fdl::Function fn = fdl::request_function(f.fc);
+    s = fmt::format("{} {}->{}", service_name(f), f.sa, f.da);
+    if (fn != fdl::Function::FDL_Status) s += fmt::format(" {}", function_name(fn));
+    if (fdl::fcv(f.fc)) s += fmt::format(" FCB {}", fdl::fcb(f.fc) ? 1 : 0);
+  } else {
+    s = fmt::format("{} {}->{}", response_name(fdl::response_code(f.fc)), f.sa, f.da);
+  }
+  if (f.ssap || f.dsap) {
+    s += fmt::format(" SAP {}->{}", f.ssap ? fmt::format("{}", fdl::sap_number(*f.ssap)) : "-",
+                     f.dsap ? fmt::format("{}", fdl::sap_number(*f.dsap)) : "-");
+  }
+  if (!f.du.empty()) s += " DU " + hex_bytes(f.du);
+  return s;
+}
+
+Engine::Engine(const Setup& setup, LogSink log)
+    : setup_(setup),
+      log_(std::move(log)),
+      chip_(setup.chip),
+      t_(dpc31::bit_cycles(chip_.clock_hz(), setup.baud)) {
+  chip_.set_log_sink([this](const LogRecord& r) {
+    if (r.level >= LogLevel::info && log_) log_(r.cycle, "CHIP", r.text);
+  });
+  fw_ = std::make_unique<FirmwareHost>(*setup_.firmware);
+  fw_->on_port = [this](std::uint64_t cycle, unsigned port, std::uint32_t value) {
+    if (log_) {
+      log_(cycle, "PORT",
+           fmt::format("{} {} = 0x{:02X}", fw_->firmware().name, fw_->port_name(port), value));
+    }
+  };
+  dp_ = chip_.dp_state();
+  wd_ = chip_.wd_state();
+  chip_.on_state_change([this](std::uint64_t cycle) { check_states(cycle); });
+  DirectBus bus(chip_);
+  fw_->init(bus, setup_.address);
+  rx_.configure(t_, chip_.cycle());
+  chip_.on_txd([this](std::uint64_t cycle, bool level) { rx_.edge(cycle, level); });
+  cpu_ = std::make_unique<Cpu>(chip_, [this](BusPort& b) { fw_->isr(b); });
+  bus_free_ = chip_.cycle();
+}
+
+Engine::~Engine() {
+  cpu_.reset();  // stops the firmware thread before the chip goes away
+  chip_.on_txd({});
+  chip_.on_state_change({});
+  chip_.set_log_sink({});
+}
+
+void Engine::note(const std::string& text) {
+  if (log_) log_(chip_.cycle(), "NOTE", text);
+}
+
+void Engine::check_states(std::uint64_t cycle) {
+  const DpState dp = chip_.dp_state();
+  const WdState wd = chip_.wd_state();
+  if (dp == dp_ && wd == wd_) return;
+  if (log_) {
+    std::string s;
+    if (dp != dp_) s = fmt::format("dp_state {} -> {}", dp_name(dp_), dp_name(dp));
+    if (wd != wd_) {
+      if (!s.empty()) s += ", ";
+      s += fmt::format("wd_state {} -> {}", wd_name(wd_), wd_name(wd));
+    }
+    log_(cycle, "STATE", s);
+  }
+  dp_ = dp;
+  wd_ = wd;
+}
+
+void Engine::feed(std::span<const std::uint8_t> bytes) {
+  for (const std::uint8_t b : bytes) {
+    partial_.push_back(b);
+    const fdl::Assembler::Status st = in_.push(b);
+    if (st == fdl::Assembler::Status::need_more) continue;
+    // Complete, or bytes that cannot be a telegram: they go on the bus as they came (the chip
+    // counts the error) and the next byte may start a telegram again.
+    std::vector<std::uint8_t> group;
+    group.swap(partial_);
+    in_.reset();
+    queue_group(std::move(group));
+  }
+}
+
+void Engine::flush_partial() {
+  if (partial_.empty()) return;
+  std::vector<std::uint8_t> group;
+  group.swap(partial_);
+  in_.reset();
+  queue_group(std::move(group));
+}
+
+void Engine::drop_partial() {
+  if (!partial_.empty())
+    note(fmt::format("dropped an incomplete telegram: {}", hex_bytes(partial_)));
+  partial_.clear();
+  in_.reset();
+}
+
+void Engine::queue_group(std::vector<std::uint8_t> bytes) {
+  if (queued_bytes_ + bytes.size() > kMaxQueuedBytes) {
+    note(fmt::format("client writes faster than the bus carries: {} bytes dropped", bytes.size()));
+    return;
+  }
+  queued_bytes_ += bytes.size();
+  Request r;
+  r.wants_answer = wants_answer(bytes);
+  r.bytes = std::move(bytes);
+  queue_.push_back(std::move(r));
+}
+
+// Queued requests go on RxD after TSYN of bus idle (all edges of one at once), up to the first
+// that waits for an answer.
+void Engine::start_next() {
+  while (!in_flight_ && !queue_.empty()) {
+    Request r = std::move(queue_.front());
+    queue_.pop_front();
+    queued_bytes_ -= r.bytes.size();
+    const std::uint64_t start = std::max(chip_.cycle(), bus_free_ + std::uint64_t{kTsynBits} * t_);
+    if (log_) {
+      log_(start, "RxD", fmt::format("{}  | {}", hex_bytes(r.bytes), telegram_summary(r.bytes)));
+    }
+    request_end_ = send_on_rxd(chip_, r.bytes, start, t_);
+    if (r.wants_answer) {
+      in_flight_ = true;
+      slot_end_ = request_end_ + std::uint64_t{setup_.slot_bits} * t_;
+      answer_.reset();
+    } else {
+      bus_free_ = request_end_;  // nothing to wait for: the next request follows after TSYN
+    }
+  }
+}
+
+void Engine::finish_answer(AnswerCollector& a, std::string_view how) {
+  if (log_) {
+    std::string s = fmt::format("{}  | {}", hex_bytes(a.bytes()), telegram_summary(a.bytes()));
+    if (!how.empty()) s += fmt::format(" ({})", how);
+    log_(a.start(), "TxD", s);
+  }
+  bus_free_ = std::max(bus_free_, a.end());
+  a.reset();
+}
+
+void Engine::collect() {
+  chars_.clear();
+  rx_.advance(chip_.cycle(), chars_);
+  for (const UartChar& c : chars_) {
+    out_.push_back(c.data);
+    // Before the request's end the line carries nothing of ours: such characters are late.
+    if (in_flight_ && c.start >= request_end_ && !stray_.started()) {
+      answer_.push(c);
+    } else {
+      stray_.push(c);
+    }
+  }
+  if (stray_.finished() && !rx_.receiving()) finish_answer(stray_, "late");
+  if (!in_flight_) return;
+  if (answer_.finished() && !rx_.receiving()) {
+    finish_answer(answer_, "");
+    in_flight_ = false;
+  } else if (!answer_.started() && !rx_.receiving() && chip_.cycle() >= slot_end_) {
+    if (log_) log_(slot_end_, "NOTE", "no answer within the slot time");
+    bus_free_ = std::max(bus_free_, slot_end_);
+    in_flight_ = false;
+  }
+}
+
+// Where to look at the line next: as DpMaster does, bit by bit while an answer is awaited until
+// a character starts, then at the receiver's samples; the end of a request that waits for none.
+std::uint64_t Engine::next_wake(std::uint64_t limit) const {
+  const std::uint64_t now = chip_.cycle();
+  std::uint64_t next = limit;
+  if (rx_.receiving()) {
+    next = std::min(next, rx_.next_deadline());
+  } else if (in_flight_ || stray_.started()) {
+    next =
+        std::min(next, in_flight_ && !answer_.started() ? std::min(slot_end_, now + t_) : now + t_);
+  }
+  if (!in_flight_ && now < request_end_) next = std::min(next, request_end_);
+  return std::clamp(next, now + 1, std::max(limit, now + 1));
+}
+
+void Engine::step_to(std::uint64_t cycle) {
+  cpu_->run_until(cycle);
+  collect();
+  if (fw_->port_writes().size() > kHistoryLimit || fw_->interrupts.size() > kHistoryLimit) {
+    fw_->clear_history();
+  }
+}
+
+void Engine::run_until(std::uint64_t cycle) {
+  while (chip_.cycle() < cycle) {
+    start_next();
+    step_to(next_wake(cycle));
+  }
+  start_next();
+}
+
+bool Engine::settle(std::uint64_t max_cycles) {
+  const std::uint64_t limit = chip_.cycle() + max_cycles;
+  start_next();
+  while (busy() && chip_.cycle() < limit) {
+    step_to(next_wake(limit));
+    start_next();
+  }
+  return !busy();
+}
+
+bool Engine::busy() const { return in_flight_ || !queue_.empty() || chip_.cycle() < request_end_; }
+
+std::vector<std::uint8_t> Engine::take_output() {
+  std::vector<std::uint8_t> out;
+  out.swap(out_);
+  return out;
+}
+
+}  // namespace dpc31::bridge

@@ -1,0 +1,124 @@
+// The chip side of `dpc31 bridge` (docs/bridge.md): one chip with an example firmware on its host
+// CPU, fed with the bytes a DP master program writes and giving back the bytes the chip sends.
+// No operating system here: the pty, the wall clock and the pacing are the caller's
+// (tools/cli/bridge.cpp), so tests can drive it cycle-exactly.
+//
+// Client bytes are split into telegrams by their SD and LE (fdl::Assembler); each telegram goes on
+// RxD as 11-bit characters at the bridge's baud rate after TSYN (33 bit times) of bus idle,
+// measured from the end of the last telegram on the bus (request or answer). A request that wants
+// an answer holds the bus until the chip's answer is complete or a slot time has passed, as a
+// master would. TxD is decoded by a UART receiver like DpMaster's; every character becomes one
+// output byte.
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "../../emu/dp_master.hpp"
+#include "../../emu/firmware_host.hpp"
+#include "dpc31/chip.hpp"
+#include "firmware.h"
+
+namespace dpc31::bridge {
+
+inline constexpr std::uint32_t kTsynBits = 33;
+
+struct Setup {
+  ChipOptions chip;
+  std::uint32_t baud = 19200;  // one of kBaudRates
+  std::uint8_t address = 5;    // the station address the firmware gives the chip
+  const dpc31_firmware* firmware = nullptr;
+  std::uint32_t slot_bits = 100;  // how long a request waits for the first answer character
+};
+
+// One log line without its cycle: a tag ("RxD", "TxD", "PORT", "STATE", "CHIP", "NOTE") and text.
+using LogSink = std::function<void(std::uint64_t cycle, std::string_view tag, const std::string&)>;
+
+// "FDL_Status 2->5 FC 49", "DL 5->2 SAP 60->62 DU 02 05 00 FF 0D 04", "broken (bad_fcs)".
+std::string telegram_summary(std::span<const std::uint8_t> bytes);
+// "10 05 02 49 50 16".
+std::string hex_bytes(std::span<const std::uint8_t> bytes);
+
+class Engine {
+ public:
+  // Builds the chip and runs the firmware's main() (which starts the chip).
+  Engine(const Setup& setup, LogSink log);
+  ~Engine();
+  Engine(const Engine&) = delete;
+  Engine& operator=(const Engine&) = delete;
+
+  // Bytes the client wrote. Each complete telegram (and each run of bytes that cannot start one)
+  // queues for the bus; an incomplete telegram waits for more bytes or flush_partial().
+  void feed(std::span<const std::uint8_t> bytes);
+  // The client paused: an incomplete telegram goes on the bus as it is (the chip counts it).
+  void flush_partial();
+  [[nodiscard]] bool partial() const { return !partial_.empty(); }
+  // A request is queued, still on the line, or not yet answered (nor timed out).
+  [[nodiscard]] bool busy() const;
+
+  // Runs the chip and its firmware to `cycle` (a firmware access may end up to 3 clocks later),
+  // putting queued requests on RxD as the bus allows.
+  void run_until(std::uint64_t cycle);
+  // Runs until no request is queued or on the line and none waits for its answer (answered, or
+  // its slot time passed), at most `max_cycles`; stops right after the last answer character
+  // (or the request's last stop bit). Returns whether it is no longer busy().
+  bool settle(std::uint64_t max_cycles);
+
+  // TxD characters decoded since the last call, in order.
+  std::vector<std::uint8_t> take_output();
+  // Forgets an incomplete telegram (its client went away).
+  void drop_partial();
+
+  [[nodiscard]] const Chip& chip() const { return chip_; }
+  [[nodiscard]] std::uint64_t cycle() const { return chip_.cycle(); }
+  [[nodiscard]] std::uint32_t bit_cycles() const { return t_; }
+  [[nodiscard]] const FirmwareHost& firmware() const { return *fw_; }
+  // An event line at the current cycle.
+  void note(const std::string& text);
+
+ private:
+  struct Request {
+    std::vector<std::uint8_t> bytes;
+    bool wants_answer = false;
+  };
+  void queue_group(std::vector<std::uint8_t> bytes);
+  void start_next();
+  void collect();  // TxD characters up to now: output, answer, end of the exchange
+  void finish_answer(AnswerCollector& a, std::string_view how);
+  void step_to(std::uint64_t cycle);
+  std::uint64_t next_wake(std::uint64_t limit) const;
+  void check_states(std::uint64_t cycle);
+
+  Setup setup_;
+  LogSink log_;
+  Chip chip_;
+  std::uint32_t t_;
+  std::unique_ptr<FirmwareHost> fw_;
+  std::unique_ptr<Cpu> cpu_;
+
+  fdl::Assembler in_;                  // the client's bytes, split into telegrams
+  std::vector<std::uint8_t> partial_;  // the telegram being assembled
+  std::deque<Request> queue_;
+  std::size_t queued_bytes_ = 0;
+
+  bool in_flight_ = false;  // a request is on the bus and its answer is awaited
+  std::uint64_t request_end_ = 0;
+  std::uint64_t slot_end_ = 0;
+  std::uint64_t bus_free_ = 0;  // end of the last telegram on the bus
+  UartRx rx_;                   // the master's receiver on TxD
+  std::vector<UartChar> chars_;
+  AnswerCollector answer_;  // of the request in flight
+  AnswerCollector stray_;   // characters while no request is in flight (a late answer)
+  std::vector<std::uint8_t> out_;
+
+  DpState dp_;
+  WdState wd_;
+  std::uint64_t history_checked_ = 0;
+};
+
+}  // namespace dpc31::bridge

@@ -1,0 +1,392 @@
+#include "bridge.hpp"
+
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <poll.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <charconv>
+#include <chrono>
+#include <csignal>
+#include <cstring>
+#include <memory>
+#include <optional>
+
+#include "../../emu/uart.hpp"
+#include "../bridge/engine.hpp"
+#include "../bridge/pty.hpp"
+
+namespace dpc31::cli {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using std::chrono::milliseconds;
+
+// Loop period while a client is connected: the realtime lead (the chip runs this far ahead of
+// the wall clock) and the latency of an answer at most.
+constexpr milliseconds kTick{1};
+// While no client is connected: how often the bridge looks for one (and runs the chip).
+constexpr milliseconds kIdleTick{5};
+// An incomplete telegram goes on the bus after the client paused this long.
+constexpr milliseconds kPause{20};
+// Realtime: falling this far behind the wall clock is reported (at most every 10 s).
+constexpr milliseconds kLagReport{50};
+// Free pacing: chip time one settle() may take (several requests in a row).
+constexpr std::uint64_t kSettleSeconds = 1;
+
+int g_signal_pipe[2] = {-1, -1};
+volatile std::sig_atomic_t g_signal = 0;
+
+extern "C" void on_signal(int sig) {
+  g_signal = sig;
+  const char c = 1;
+  const int keep = errno;
+  [[maybe_unused]] const ssize_t n = ::write(g_signal_pipe[1], &c, 1);
+  errno = keep;
+}
+
+bool parse_uint(const std::string& s, std::uint64_t max, std::uint64_t& v) {
+  if (s.empty()) return false;
+  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v, 10);
+  return ec == std::errc() && p == s.data() + s.size() && v <= max;
+}
+
+std::string firmware_names() {
+  std::string all;
+  for (int i = 0; dpc31_firmwares[i] != nullptr; ++i) {
+    all += (i == 0 ? "" : ", ") + std::string(dpc31_firmwares[i]->name);
+  }
+  return all;
+}
+
+// Chip cycles in a wall-clock duration (no overflow for years).
+std::uint64_t to_cycles(Clock::duration d, std::uint32_t clock_hz) {
+  const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(d).count();
+  if (ns <= 0) return 0;
+  const auto u = static_cast<std::uint64_t>(ns);
+  return u / 1'000'000'000 * clock_hz + u % 1'000'000'000 * clock_hz / 1'000'000'000;
+}
+
+struct Checked {
+  bridge::Setup setup;
+  bool realtime = true;
+};
+
+// One line on `err` and nullopt for a bad option.
+std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
+  const auto bad = [err](const std::string& msg) {
+    fmt::print(err, "dpc31 bridge: {}\n", msg);
+    return std::nullopt;
+  };
+  if (!o.extra.empty()) return bad(fmt::format("unexpected argument '{}'", o.extra.front()));
+  if (o.pty.empty()) return bad("--pty PATH is required (the symlink the master program opens)");
+  Checked c;
+  if (o.firmware.empty()) return bad(fmt::format("--firmware is required ({})", firmware_names()));
+  c.setup.firmware = dpc31_find_firmware(o.firmware.c_str());
+  if (c.setup.firmware == nullptr) {
+    return bad(fmt::format("unknown firmware '{}' ({})", o.firmware, firmware_names()));
+  }
+  std::uint64_t v = 0;
+  if (!parse_uint(o.baud, 12'000'000, v) || baud_code(static_cast<std::uint32_t>(v)) < 0) {
+    return bad(fmt::format(
+        "--baud '{}' is no PROFIBUS rate (9600, 19200, 45450, 93750, 187500, 500000, 1500000, "
+        "3000000, 6000000, 12000000)",
+        o.baud));
+  }
+  c.setup.baud = static_cast<std::uint32_t>(v);
+  if (!parse_profile(o.profile, c.setup.chip.profile)) {
+    return bad(fmt::format("unknown profile '{}' (spc3, vpc3plus, dpc31)", o.profile));
+  }
+  if (!parse_uint(o.address, 125, v)) {
+    return bad(fmt::format("--address '{}' must be a station address 0..125", o.address));
+  }
+  c.setup.address = static_cast<std::uint8_t>(v);
+  if (o.pacing != "realtime" && o.pacing != "free") {
+    return bad(fmt::format("--pacing '{}' must be realtime or free", o.pacing));
+  }
+  c.realtime = o.pacing == "realtime";
+  if (!parse_uint(o.slot, 16383, v) || v < 1) {
+    return bad(fmt::format("--slot '{}' must be 1..16383 bit times", o.slot));
+  }
+  c.setup.slot_bits = static_cast<std::uint32_t>(v);
+  return c;
+}
+
+class Log {
+ public:
+  explicit Log(std::FILE* f) : f_(f) {}
+  void line(const std::string& text) {
+    std::fputs(text.c_str(), f_);
+    std::fputc('\n', f_);
+    std::fflush(f_);
+  }
+  void event(std::uint64_t cycle, std::string_view tag, const std::string& text) {
+    line(fmt::format("{:>12} {:<5} {}", cycle, tag, text));
+  }
+
+ private:
+  std::FILE* f_;
+};
+
+class SignalGuard {
+ public:
+  SignalGuard() {
+    if (::pipe2(g_signal_pipe, O_NONBLOCK | O_CLOEXEC) != 0) return;
+    struct sigaction sa {};
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, &old_int_);
+    sigaction(SIGTERM, &sa, &old_term_);
+    sigaction(SIGHUP, &sa, &old_hup_);
+    ok_ = true;
+  }
+  ~SignalGuard() {
+    if (!ok_) return;
+    sigaction(SIGINT, &old_int_, nullptr);
+    sigaction(SIGTERM, &old_term_, nullptr);
+    sigaction(SIGHUP, &old_hup_, nullptr);
+    ::close(g_signal_pipe[0]);
+    ::close(g_signal_pipe[1]);
+    g_signal_pipe[0] = g_signal_pipe[1] = -1;
+  }
+  SignalGuard(const SignalGuard&) = delete;
+  SignalGuard& operator=(const SignalGuard&) = delete;
+  [[nodiscard]] bool ok() const { return ok_; }
+
+ private:
+  bool ok_ = false;
+  struct sigaction old_int_ {};
+  struct sigaction old_term_ {};
+  struct sigaction old_hup_ {};
+};
+
+class Bridge {
+ public:
+  Bridge(const Checked& c, bridge::Pty& pty, Log& log)
+      : realtime_(c.realtime), baud_(c.setup.baud), pty_(pty), log_(log) {
+    engine_ = std::make_unique<bridge::Engine>(
+        c.setup, [this](std::uint64_t cycle, std::string_view tag, const std::string& text) {
+          log_.event(cycle, tag, text);
+        });
+  }
+
+  // Returns the exit code.
+  int run() {
+    const std::uint32_t f = engine_->chip().clock_hz();
+    anchor_wall_ = Clock::now();
+    anchor_chip_ = engine_->cycle();
+    last_input_ = anchor_wall_;
+    Clock::time_point last_lag_report = anchor_wall_ - std::chrono::hours(1);
+    engine_->note("waiting for a client");
+    while (g_signal == 0) {
+      const Clock::time_point now = Clock::now();
+      Clock::duration wait = present_ ? kTick : kIdleTick;
+      if (engine_->partial()) {
+        if (now - last_input_ >= kPause) {
+          engine_->flush_partial();
+        } else {
+          wait = std::min(wait, kPause - (now - last_input_));
+        }
+      }
+      // Realtime runs the chip to the wall-clock time of the next wake-up, so chip time never
+      // falls behind the wall clock; free runs it to now, and settle() lets an exchange take no
+      // wall time (chip time then runs ahead by the exchanges' durations).
+      const Clock::time_point until = realtime_ ? now + wait : now;
+      const std::uint64_t target = anchor_chip_ + to_cycles(until - anchor_wall_, f);
+      if (target > engine_->cycle()) engine_->run_until(target);
+      if (!realtime_ && engine_->busy()) {
+        engine_->settle(kSettleSeconds * f);
+        anchor_wall_ = Clock::now();
+        anchor_chip_ = engine_->cycle();
+      }
+      deliver();
+      const Clock::time_point after = Clock::now();
+      if (realtime_) {
+        const std::uint64_t wall = anchor_chip_ + to_cycles(after - anchor_wall_, f);
+        if (wall > engine_->cycle() + to_cycles(kLagReport, f) &&
+            after - last_lag_report > std::chrono::seconds(10)) {
+          engine_->note(fmt::format("running {} ms behind the wall clock",
+                                    (wall - engine_->cycle()) / (f / 1000)));
+          last_lag_report = after;
+        }
+        wait = until > after ? until - after : Clock::duration::zero();
+      } else {
+        wait = engine_->busy() ? Clock::duration::zero() : wait;
+      }
+      if (!wait_events(wait)) return 1;
+    }
+    engine_->note(fmt::format("stopping on {}", g_signal == SIGINT    ? "SIGINT"
+                                                : g_signal == SIGTERM ? "SIGTERM"
+                                                                      : "SIGHUP"));
+    return 0;
+  }
+
+ private:
+  // Writes what the chip sent to the client (if there is one).
+  void deliver() {
+    const std::vector<std::uint8_t> out = engine_->take_output();
+    if (out.empty()) return;
+    if (!present_) {
+      dropped_ += out.size();
+      return;
+    }
+    const unsigned long n = pty_.write(out.data(), out.size());
+    if (n < out.size()) {
+      engine_->note(
+          fmt::format("the client does not read: {} answer bytes dropped", out.size() - n));
+    }
+  }
+
+  // Polls for the client's bytes (only while one is connected: with no slave fd open the master
+  // reports POLLHUP continuously) and the signal pipe; looks for a client while none is there.
+  bool wait_events(Clock::duration wait) {
+    pollfd fds[2] = {{g_signal_pipe[0], POLLIN, 0}, {pty_.master_fd(), POLLIN, 0}};
+    const nfds_t n = present_ ? 2 : 1;
+    const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(wait).count();
+    const timespec ts{static_cast<time_t>(ns / 1'000'000'000),
+                      static_cast<long>(ns % 1'000'000'000)};
+    const int r = ::ppoll(fds, n, &ts, nullptr);
+    if (r < 0 && errno != EINTR) {
+      engine_->note(fmt::format("poll: {}", std::strerror(errno)));
+      return false;
+    }
+    if (g_signal != 0) return true;
+    try {
+      if (present_) {
+        if ((fds[1].revents & (POLLIN | POLLHUP | POLLERR)) != 0) read_client();
+      } else if (pty_.client_open()) {
+        present_ = true;
+        speed_checked_ = false;
+        if (dropped_ != 0) {
+          engine_->note(
+              fmt::format("{} answer bytes were dropped while no client was there", dropped_));
+          dropped_ = 0;
+        }
+        engine_->note("client opened the pty");
+      } else if (pty_.changed()) {
+        // A client opened, configured and closed the pty between two looks.
+        pty_.reset();
+        engine_->note("a client changed the pty's settings and left: slave side reset");
+      }
+    } catch (const bridge::PtyError& e) {
+      engine_->note(fmt::format("pty: {}", e.what()));
+      return false;
+    }
+    return true;
+  }
+
+  void read_client() {
+    unsigned char buf[4096];
+    for (;;) {
+      const long n = pty_.read(buf, sizeof buf);
+      if (n > 0) {
+        if (!speed_checked_) {
+          speed_checked_ = true;
+          const unsigned s = pty_.speed();
+          if (s != baud_) {
+            engine_->note(fmt::format(
+                "the client set {} on the pty; the bridge carries its bytes "
+                "at {} baud",
+                s == 0 ? std::string("a non-standard speed") : fmt::format("{} baud", s), baud_));
+          }
+        }
+        last_input_ = Clock::now();
+        engine_->feed({buf, static_cast<std::size_t>(n)});
+        continue;
+      }
+      if (n == 0) return;  // all read, the client is still there
+      break;               // hang-up: no slave fd open any more
+    }
+    present_ = false;
+    // Its complete telegrams still go on the bus (a master may send Clear as it leaves); a
+    // telegram it did not finish is dropped.
+    engine_->drop_partial();
+    pty_.reset();
+    engine_->note("client closed the pty: slave side reset (raw, 38400 baud), queues flushed");
+  }
+
+  bool realtime_;
+  std::uint32_t baud_;
+  bridge::Pty& pty_;
+  Log& log_;
+  std::unique_ptr<bridge::Engine> engine_;
+  Clock::time_point anchor_wall_;
+  std::uint64_t anchor_chip_ = 0;
+  Clock::time_point last_input_;
+  bool present_ = false;
+  bool speed_checked_ = false;
+  std::size_t dropped_ = 0;
+};
+
+}  // namespace
+
+CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
+  auto* b = app.add_subcommand(
+      "bridge", "the slave's RS-485 side as a pseudo-terminal for a DP master program");
+  b->add_option("--pty", o.pty, "symlink to create to the pty's slave side (required)");
+  b->add_option("--baud", o.baud, "baud rate of the bus (a PROFIBUS rate)")->capture_default_str();
+  b->add_option("--profile", o.profile, "chip profile: spc3, vpc3plus, dpc31")
+      ->capture_default_str();
+  b->add_option("--firmware", o.firmware, "example firmware: " + firmware_names() + " (required)");
+  b->add_option("--address", o.address, "station address 0..125")->capture_default_str();
+  b->add_option("--pacing", o.pacing,
+                "realtime: chip time follows the wall clock; free: "
+                "exchanges take no wall time")
+      ->capture_default_str();
+  b->add_option("--slot", o.slot, "slot time in bit times: how long a request waits for an answer")
+      ->capture_default_str();
+  b->add_option("--log", o.log, "write the log to this file instead of stdout");
+  b->allow_extras();
+  b->callback([b, &o] { o.extra = b->remaining(); });
+  return b;
+}
+
+int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
+  const std::optional<Checked> c = check(o, err);
+  if (!c) return 2;
+  std::FILE* log_file = out;
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> owned(nullptr, std::fclose);
+  if (!o.log.empty()) {
+    owned.reset(std::fopen(o.log.c_str(), "w"));
+    if (!owned) {
+      fmt::print(err, "dpc31 bridge: cannot write the log {}: {}\n", o.log, std::strerror(errno));
+      return 2;
+    }
+    log_file = owned.get();
+  }
+  std::unique_ptr<bridge::Pty> pty;
+  try {
+    pty = std::make_unique<bridge::Pty>();
+  } catch (const bridge::PtyError& e) {
+    fmt::print(err, "dpc31 bridge: cannot set up a pseudo-terminal: {}\n", e.what());
+    return 2;
+  }
+  if (const std::string why = bridge::make_link(o.pty, pty->slave_name()); !why.empty()) {
+    fmt::print(err, "dpc31 bridge: {}\n", why);
+    return 2;
+  }
+  SignalGuard signals;
+  if (!signals.ok()) {
+    bridge::remove_link(o.pty, pty->slave_name());
+    fmt::print(err, "dpc31 bridge: cannot install the signal handlers: {}\n", std::strerror(errno));
+    return 2;
+  }
+  Log log(log_file);
+  log.line(fmt::format(
+      "dpc31 bridge: pacing {}, baud {}, profile {}, firmware {}, address {}, "
+      "pty {} -> {}",
+      c->realtime ? "realtime" : "free", c->setup.baud, profile_name(c->setup.chip.profile),
+      c->setup.firmware->name, c->setup.address, o.pty, pty->slave_name()));
+  int rc = 0;
+  {
+    Bridge b(*c, *pty, log);
+    rc = b.run();
+  }
+  bridge::remove_link(o.pty, pty->slave_name());
+  if (rc != 0) fmt::print(err, "dpc31 bridge: stopped on an error (see the log)\n");
+  return rc;
+}
+
+}  // namespace dpc31::cli

@@ -1,0 +1,31 @@
+// dpc31 bridge: the emulated slave's RS-485 side as a Linux pseudo-terminal (docs/bridge.md).
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace dpc31::cli {
+
+// Every option is kept as text and checked by run_bridge, so a bad value gives one line on
+// stderr and exit code 2 (CLI11's own messages take two lines).
+struct BridgeOptions {
+  std::string pty;  // the symlink to create
+  std::string baud = "19200";
+  std::string profile = "dpc31";
+  std::string firmware;
+  std::string address = "5";
+  std::string pacing = "realtime";
+  std::string log;  // "" = stdout
+  std::string slot = "100";
+  std::vector<std::string> extra;  // unknown arguments, refused by run_bridge
+};
+
+CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o);
+
+// Runs until SIGINT or SIGTERM: 0 then; 2 for bad options or when the pty cannot be set up; 1
+// for a failure while running. Errors go to `err` (one line); the log to `out` unless --log.
+int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err);
+
+}  // namespace dpc31::cli
