@@ -4,75 +4,26 @@
 Starts the real binary as a child process, then plays a small DP master (class 1) of our own on
 the pty the way an off-the-shelf master program does: it opens the symlink, sets raw 8E1 at the
 bridge's baud rate with one tcsetattr, and writes and reads FDL telegram bytes. Every answer is
-checked byte for byte (FCS computed here).
+checked byte for byte. The master itself is tools/dp_master.py.
 
 Usage: bridge_test.py DPC31_CLI CASE     (CASE: see CASES at the bottom)
 Python 3 standard library only.
 """
 
 import os
-import select
 import signal
 import subprocess
 import sys
 import tempfile
-import termios
 import time
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tools"))
+from dp_master import (SAP_SLAVE_DIAG, SAP_SET_PRM, SAP_CHK_CFG, SAP_MASTER, SC,  # noqa: E402
+                       Fail, Master, check, hexs, sd1, sd2)
+
 CLI = None
-SD1, SD2, SC, ED = 0x10, 0x68, 0xE5, 0x16
 MASTER = 2
 SLAVE = 5
-SAP_SLAVE_DIAG, SAP_SET_PRM, SAP_CHK_CFG, SAP_MASTER = 60, 61, 62, 62
-SPEEDS = {9600: termios.B9600, 19200: termios.B19200, 500000: termios.B500000,
-          1500000: termios.B1500000}
-
-
-class Fail(Exception):
-    pass
-
-
-def check(cond, what):
-    if not cond:
-        raise Fail(what)
-
-
-def hexs(b):
-    return " ".join(f"{x:02X}" for x in b) if b is not None else "nothing"
-
-
-def fcs(body):
-    return sum(body) & 0xFF
-
-
-def sd1(da, sa, fc):
-    body = [da, sa, fc]
-    return bytes([SD1] + body + [fcs(body), ED])
-
-
-def sd2(da, sa, fc, du, dsap=None, ssap=None):
-    body = [da | (0x80 if dsap is not None else 0), sa | (0x80 if ssap is not None else 0), fc]
-    if dsap is not None:
-        body.append(dsap)
-    if ssap is not None:
-        body.append(ssap)
-    body += list(du)
-    le = len(body)
-    return bytes([SD2, le, le, SD2] + body + [fcs(body), ED])
-
-
-def frame_length(buf):
-    """Length of the telegram at the start of buf as its SD (and LE) tell, None if unknown yet."""
-    if not buf:
-        return None
-    sd = buf[0]
-    if sd == SC:
-        return 1
-    if sd == SD1:
-        return 6
-    if sd == SD2:
-        return buf[1] + 6 if len(buf) >= 2 else None
-    raise Fail(f"answer starts with {sd:02X}, no start delimiter")
 
 
 # --- what the slave answers (exact telegrams) ---
@@ -87,67 +38,6 @@ def diag(du):  # Slave_Diag answer: DL from SAP 60 to SAP 62
 
 def dx_answer(code, inputs):  # Data_Exchange answer: DL (0x08) or DH (0x0A), no SAPs
     return sd2(MASTER, SLAVE, code, inputs)
-
-
-class Master:
-    """A DP master on the pty: 8E1 raw, FCB/FCV per EN 50170, a timeout per answer."""
-
-    def __init__(self, path, baud, timeout):
-        self.fd = os.open(path, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
-        a = termios.tcgetattr(self.fd)
-        # One tcsetattr with everything, as serial libraries do: raw, 8 data bits, even parity,
-        # one stop bit, receiver on, no modem control, the bus speed.
-        a[0] = 0
-        a[1] = 0
-        a[2] = termios.CS8 | termios.PARENB | termios.CREAD | termios.CLOCAL
-        a[3] = 0
-        a[4] = a[5] = SPEEDS[baud]
-        a[6][termios.VMIN] = 0
-        a[6][termios.VTIME] = 0
-        termios.tcsetattr(self.fd, termios.TCSANOW, a)
-        self.timeout = timeout
-        self.fcb = True
-        self.fcv = False
-
-    def close(self):
-        os.close(self.fd)
-
-    def transact(self, req, timeout=None):
-        """Writes one request, returns the answer telegram (bytes) or None after the timeout."""
-        termios.tcflush(self.fd, termios.TCIFLUSH)
-        os.write(self.fd, req)
-        buf = b""
-        deadline = time.monotonic() + (timeout or self.timeout)
-        while True:
-            n = frame_length(buf)
-            if n is not None and len(buf) >= n:
-                check(len(buf) == n, f"answer {hexs(buf)}: {len(buf) - n} bytes too many")
-                return buf
-            left = deadline - time.monotonic()
-            if left <= 0:
-                check(not buf, f"incomplete answer {hexs(buf)} to {hexs(req)}")
-                return None
-            r, _, _ = select.select([self.fd], [], [], left)
-            if r:
-                buf += os.read(self.fd, 512)
-
-    def fdl_status(self, timeout=None):
-        a = self.transact(sd1(SLAVE, MASTER, 0x49), timeout)
-        if a is not None:
-            self.fcb = False  # the first SRD after FDL_Status: FCB = 1, FCV = 1
-            self.fcv = True
-        return a
-
-    def srd(self, du, dsap=None):
-        self.fcb = not self.fcb
-        fc = 0x40 | (0x20 if self.fcb else 0) | (0x10 if self.fcv else 0) | 0x0D
-        ssap = SAP_MASTER if dsap is not None else None
-        return self.transact(sd2(SLAVE, MASTER, fc, du, dsap=dsap, ssap=ssap))
-
-    def expect(self, what, got, *allowed):
-        check(got in allowed,
-              f"{what}: got {hexs(got)}, expected " + " or ".join(hexs(a) for a in allowed))
-        return got
 
 
 class Bridge:
@@ -199,18 +89,9 @@ class Bridge:
             return f.read().splitlines()
 
 
-def find_slave(m):
-    """FDL_Status until answered: the chip's baud search takes up to ~0.8 s of chip time."""
-    for _ in range(300):
-        a = m.fdl_status(timeout=0.06)
-        if a is not None:
-            return a
-    raise Fail("FDL_Status never answered")
-
-
 def startup_do4(m, wd=(0x64, 0x0A)):
     """FDL_Status until answered, Slave_Diag, Set_Prm, Chk_Cfg, Slave_Diag until ready."""
-    m.expect("FDL_Status", find_slave(m), status_ok())
+    m.expect("FDL_Status", m.find_slave(), status_ok())
     # Not parameterised: Station_Not_Ready, Prm_Req, no master yet, ident 0D04.
     m.expect("first Slave_Diag", m.srd([], SAP_SLAVE_DIAG), diag([0x02, 0x05, 0x00, 0xFF, 0x0D,
                                                                   0x04]))
@@ -321,7 +202,7 @@ def do4_reparameterise_after_watchdog():
             m = Master(b.path, 19200, 0.5)
             # Baud_Control expired too (the chip searches the rate again): FDL_Status until
             # answered.
-            m.expect("FDL_Status", find_slave(m), status_ok())
+            m.expect("FDL_Status", m.find_slave(), status_ok())
             # Wait_Prm again (Prm_Req), outputs kept by the OSP model (retain), diag block OSP.
             m.expect("Slave_Diag after the watchdog", m.srd([], SAP_SLAVE_DIAG),
                      diag([0x02, 0x05, 0x00, 0xFF, 0x0D, 0x04, 0x02, 0x01]))
@@ -346,8 +227,8 @@ def cnt2_logmsg():
         global SLAVE
         SLAVE = 9
         try:
-            m = Master(b.path, 500000, 0.5)
-            m.expect("FDL_Status", find_slave(m), status_ok())
+            m = Master(b.path, 500000, 0.5, MASTER, SLAVE)
+            m.expect("FDL_Status", m.find_slave(), status_ok())
             m.expect("Slave_Diag", m.srd([], SAP_SLAVE_DIAG),
                      diag([0x02, 0x05, 0x00, 0xFF, 0x0C, 0x02]))
             prm = [0x88, 0x64, 0x0A, 0x00, 0x0C, 0x02, 0x00, 0x00]
@@ -425,7 +306,7 @@ def stale_symlink_replaced():
             Master(b.path, 19200, 0.5).close()
             time.sleep(0.05)
             m = Master(b.path, 19200, 0.5)
-            m.expect("FDL_Status", find_slave(m), status_ok())
+            m.expect("FDL_Status", m.find_slave(), status_ok())
             m.close()
             # A client at another speed: the pty carries no timing, the bytes go on the bus at
             # the bridge's rate, and the log says so.

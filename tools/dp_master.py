@@ -1,0 +1,256 @@
+#!/usr/bin/env python3
+"""A small DP master (class 1) on a serial device: start-up of one slave and Data_Exchange.
+
+Made for `dpc31 bridge` (docs/bridge.md, docs/bring-up.md section 5) but written as a master on
+any 8E1 serial device is: open the device, one tcsetattr (raw, 8 data bits, even parity, the bus
+rate), then FDL telegrams (EN 50170: SD1/SD2, FCS, FCB/FCV) with a timeout per answer.
+
+    python3 tools/dp_master.py /tmp/dp0 --baud 19200 --ident 0x0D04 --cfg 21,10 \
+        --user-prm 00,00,00,00 --outputs 05,01
+
+Prints one line per step and the inputs of the last Data_Exchange. Exit codes: 0 Data_Exchange
+reached, 1 the slave did not come up (the line says where), 2 bad arguments or device.
+Python 3 standard library only; tests/bridge_test.py uses the same Master class.
+"""
+
+import argparse
+import os
+import select
+import sys
+import termios
+import time
+
+SD1, SD2, SC, ED = 0x10, 0x68, 0xE5, 0x16
+SAP_SLAVE_DIAG, SAP_SET_PRM, SAP_CHK_CFG, SAP_MASTER = 60, 61, 62, 62
+SPEEDS = {9600: termios.B9600, 19200: termios.B19200, 38400: termios.B38400,
+          57600: termios.B57600, 115200: termios.B115200, 230400: termios.B230400,
+          500000: termios.B500000, 1500000: termios.B1500000, 3000000: termios.B3000000}
+
+
+class Fail(Exception):
+    pass
+
+
+def check(cond, what):
+    if not cond:
+        raise Fail(what)
+
+
+def hexs(b):
+    return " ".join(f"{x:02X}" for x in b) if b is not None else "nothing"
+
+
+def fcs(body):
+    return sum(body) & 0xFF
+
+
+def sd1(da, sa, fc):
+    body = [da, sa, fc]
+    return bytes([SD1] + body + [fcs(body), ED])
+
+
+def sd2(da, sa, fc, du, dsap=None, ssap=None):
+    body = [da | (0x80 if dsap is not None else 0), sa | (0x80 if ssap is not None else 0), fc]
+    if dsap is not None:
+        body.append(dsap)
+    if ssap is not None:
+        body.append(ssap)
+    body += list(du)
+    le = len(body)
+    return bytes([SD2, le, le, SD2] + body + [fcs(body), ED])
+
+
+def frame_length(buf):
+    """Length of the telegram at the start of buf as its SD (and LE) tell, None if unknown yet."""
+    if not buf:
+        return None
+    sd = buf[0]
+    if sd == SC:
+        return 1
+    if sd == SD1:
+        return 6
+    if sd == SD2:
+        return buf[1] + 6 if len(buf) >= 2 else None
+    raise Fail(f"answer starts with {sd:02X}, no start delimiter")
+
+
+def answer_du(a, sap):
+    """The data unit of an SD2 answer (after DA, SA, FC and, with `sap`, DSAP/SSAP)."""
+    check(a is not None and a[0] == SD2, f"expected an SD2 answer, got {hexs(a)}")
+    return a[(9 if sap else 7):-2]
+
+
+class Master:
+    """A DP master on the device: 8E1 raw, FCB/FCV per EN 50170, a timeout per answer."""
+
+    def __init__(self, path, baud, timeout, address=2, slave=5):
+        self.fd = os.open(path, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
+        a = termios.tcgetattr(self.fd)
+        # One tcsetattr with everything, as serial libraries do: raw, 8 data bits, even parity,
+        # one stop bit, receiver on, no modem control, the bus speed.
+        a[0] = 0
+        a[1] = 0
+        a[2] = termios.CS8 | termios.PARENB | termios.CREAD | termios.CLOCAL
+        a[3] = 0
+        a[4] = a[5] = SPEEDS[baud]
+        a[6][termios.VMIN] = 0
+        a[6][termios.VTIME] = 0
+        termios.tcsetattr(self.fd, termios.TCSANOW, a)
+        self.timeout = timeout
+        self.address = address
+        self.slave = slave
+        self.fcb = True
+        self.fcv = False
+
+    def close(self):
+        os.close(self.fd)
+
+    def transact(self, req, timeout=None):
+        """Writes one request, returns the answer telegram (bytes) or None after the timeout."""
+        termios.tcflush(self.fd, termios.TCIFLUSH)
+        os.write(self.fd, req)
+        buf = b""
+        deadline = time.monotonic() + (timeout or self.timeout)
+        while True:
+            n = frame_length(buf)
+            if n is not None and len(buf) >= n:
+                check(len(buf) == n, f"answer {hexs(buf)}: {len(buf) - n} bytes too many")
+                return buf
+            left = deadline - time.monotonic()
+            if left <= 0:
+                check(not buf, f"incomplete answer {hexs(buf)} to {hexs(req)}")
+                return None
+            r, _, _ = select.select([self.fd], [], [], left)
+            if r:
+                buf += os.read(self.fd, 512)
+
+    def fdl_status(self, timeout=None):
+        a = self.transact(sd1(self.slave, self.address, 0x49), timeout)
+        if a is not None:
+            self.fcb = False  # the first SRD after FDL_Status: FCB = 1, FCV = 1
+            self.fcv = True
+        return a
+
+    def find_slave(self):
+        """FDL_Status until answered: the chip's baud search takes up to ~0.8 s of chip time."""
+        for _ in range(300):
+            a = self.fdl_status(timeout=0.06)
+            if a is not None:
+                return a
+        raise Fail("FDL_Status never answered")
+
+    def srd(self, du, dsap=None):
+        self.fcb = not self.fcb
+        fc = 0x40 | (0x20 if self.fcb else 0) | (0x10 if self.fcv else 0) | 0x0D
+        ssap = SAP_MASTER if dsap is not None else None
+        return self.transact(sd2(self.slave, self.address, fc, du, dsap=dsap, ssap=ssap))
+
+    def slave_diag(self):
+        return answer_du(self.srd([], SAP_SLAVE_DIAG), True)
+
+    def expect(self, what, got, *allowed):
+        check(got in allowed,
+              f"{what}: got {hexs(got)}, expected " + " or ".join(hexs(a) for a in allowed))
+        return got
+
+
+def byte_list(text):
+    """'21,10' or '2110' or '' -> [0x21, 0x10]."""
+    digits = text.replace(",", "").replace(" ", "")
+    if len(digits) % 2:
+        raise argparse.ArgumentTypeError(f"'{text}': an odd number of hex digits")
+    try:
+        return list(bytes.fromhex(digits))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}': not hex bytes") from None
+
+
+def start_up(m, args, say):
+    """Slave_Diag, Set_Prm, Chk_Cfg, Slave_Diag until the slave is ready (Station_Not_Ready and
+    Prm_Req clear)."""
+    say(f"FDL_Status: {hexs(m.find_slave())}")
+    say(f"Slave_Diag: {hexs(m.slave_diag())}")
+    # Lock_Req + WD_On, watchdog factors, MinTSDR 0, ident, group 0, then the user parameters.
+    prm = [0x88, args.watchdog[0], args.watchdog[1], 0x00, args.ident >> 8, args.ident & 0xFF,
+           0x00] + args.user_prm
+    a = m.srd(prm, SAP_SET_PRM)
+    say(f"Set_Prm {hexs(prm)}: {hexs(a)}")
+    check(a == bytes([SC]), "Set_Prm not acknowledged")
+    a = m.srd(args.cfg, SAP_CHK_CFG)
+    say(f"Chk_Cfg {hexs(args.cfg)}: {hexs(a)}")
+    check(a == bytes([SC]), "Chk_Cfg not acknowledged")
+    for _ in range(20):
+        du = m.slave_diag()
+        # Station_Not_Ready, Cfg_Fault, Prm_Fault (Station_Status_1) and Prm_Req (_2) clear
+        if du[0] & 0x46 == 0 and du[1] & 0x01 == 0:
+            say(f"Slave_Diag: {hexs(du)} (ready)")
+            return
+    raise Fail(f"the slave never became ready; last Slave_Diag {hexs(du)}")
+
+
+def exchange(m, args, say):
+    """Data_Exchange `--cycles` times; a DH answer (new diagnosis) is followed by a Slave_Diag.
+    Prints the inputs whenever they change."""
+    last = None
+    for _ in range(args.cycles):
+        a = m.srd(args.outputs)
+        check(a is not None and a[0] == SD2 and a[6] in (0x08, 0x0A),
+              f"Data_Exchange: got {hexs(a)}")
+        inputs = answer_du(a, False)
+        if inputs != last:
+            say(f"Data_Exchange {hexs(args.outputs)}: inputs {hexs(inputs)}")
+            last = inputs
+        if a[6] == 0x0A:
+            say(f"Slave_Diag (after DH): {hexs(m.slave_diag())}")
+
+
+def wait_for(path, seconds):
+    deadline = time.monotonic() + seconds
+    while not os.path.exists(path):
+        if time.monotonic() > deadline:
+            raise FileNotFoundError(f"{path}: no such device (waited {seconds:g} s)")
+        time.sleep(0.02)
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("device", help="serial device, e.g. the path given to dpc31 bridge --pty")
+    p.add_argument("--baud", type=int, default=19200, choices=sorted(SPEEDS))
+    p.add_argument("--address", type=int, default=2, help="the master's station address")
+    p.add_argument("--slave", type=int, default=5, help="the slave's station address")
+    p.add_argument("--ident", type=lambda s: int(s, 0), required=True, help="Ident_Number")
+    p.add_argument("--cfg", type=byte_list, required=True, help="Chk_Cfg bytes, e.g. 21,10")
+    p.add_argument("--user-prm", type=byte_list, default=[], help="user parameter bytes")
+    p.add_argument("--watchdog", type=byte_list, default=[0x64, 0x0A],
+                   help="WD_Fact_1,WD_Fact_2 (default 64,0A: 10 s)")
+    p.add_argument("--outputs", type=byte_list, default=[], help="output bytes")
+    p.add_argument("--cycles", type=int, default=10, help="Data_Exchange cycles")
+    p.add_argument("--timeout", type=float, default=0.5, help="seconds to wait for an answer")
+    p.add_argument("--wait", type=float, default=10.0,
+                   help="seconds to wait for the device to appear")
+    args = p.parse_args()
+    if len(args.watchdog) != 2:
+        p.error("--watchdog takes two bytes")
+
+    def say(line):
+        print(line, flush=True)
+
+    try:
+        wait_for(args.device, args.wait)
+        m = Master(args.device, args.baud, args.timeout, args.address, args.slave)
+    except OSError as e:
+        print(f"dp_master: {e}", file=sys.stderr)
+        return 2
+    try:
+        start_up(m, args, say)
+        exchange(m, args, say)
+    except Fail as e:
+        print(f"dp_master: {e}", file=sys.stderr)
+        return 1
+    finally:
+        m.close()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
