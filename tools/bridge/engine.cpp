@@ -5,7 +5,8 @@
 #include <algorithm>
 #include <utility>
 
-#include "../../emu/dp_sm.hpp"  // SAP numbers
+#include "../../emu/dp_sm.hpp"     // SAP numbers
+#include "../../emu/scenario.hpp"  // state names
 
 namespace dpc31::bridge {
 
@@ -106,30 +107,6 @@ bool wants_answer(std::span<const std::uint8_t> bytes) {
   return f.da != fdl::kBroadcast && fn != fdl::Function::SDN_low && fn != fdl::Function::SDN_high;
 }
 
-std::string_view dp_name(DpState s) {
-  switch (s) {
-    case DpState::Wait_Prm:
-      return "Wait_Prm";
-    case DpState::Wait_Cfg:
-      return "Wait_Cfg";
-    case DpState::Data_Exchange:
-      return "Data_Exchange";
-  }
-  return "?";
-}
-
-std::string_view wd_name(WdState s) {
-  switch (s) {
-    case WdState::Baud_Search:
-      return "Baud_Search";
-    case WdState::Baud_Control:
-      return "Baud_Control";
-    case WdState::DP_Control:
-      return "DP_Control";
-  }
-  return "?";
-}
-
 }  // namespace
 
 std::string hex_bytes(std::span<const std::uint8_t> bytes) {
@@ -211,10 +188,10 @@ void Engine::check_states(std::uint64_t cycle) {
   if (dp == dp_ && wd == wd_) return;
   if (log_) {
     std::string s;
-    if (dp != dp_) s = fmt::format("dp_state {} -> {}", dp_name(dp_), dp_name(dp));
+    if (dp != dp_) s = fmt::format("dp_state {} -> {}", dp_state_name(dp_), dp_state_name(dp));
     if (wd != wd_) {
       if (!s.empty()) s += ", ";
-      s += fmt::format("wd_state {} -> {}", wd_name(wd_), wd_name(wd));
+      s += fmt::format("wd_state {} -> {}", wd_state_name(wd_), wd_state_name(wd));
     }
     log_(cycle, "STATE", s);
   }

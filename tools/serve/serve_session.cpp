@@ -13,6 +13,7 @@
 
 #include "../../emu/dp_services.hpp"
 #include "../../emu/fdl.hpp"
+#include "../../emu/scenario.hpp"  // state names
 #include "../../emu/uart.hpp"
 #include "dpc31/regdesc.hpp"
 #include "dpc31/snapshot.hpp"
@@ -162,30 +163,6 @@ std::string_view rest_of_line(std::string_view line, std::string_view cmd) {
   return r;
 }
 
-std::string_view dp_name(DpState s) {
-  switch (s) {
-    case DpState::Wait_Prm:
-      return "Wait_Prm";
-    case DpState::Wait_Cfg:
-      return "Wait_Cfg";
-    case DpState::Data_Exchange:
-      return "Data_Exchange";
-  }
-  return "?";
-}
-
-std::string_view wd_name(WdState s) {
-  switch (s) {
-    case WdState::Baud_Search:
-      return "Baud_Search";
-    case WdState::Baud_Control:
-      return "Baud_Control";
-    case WdState::DP_Control:
-      return "DP_Control";
-  }
-  return "?";
-}
-
 constexpr std::string_view kCommands =
     "help info ping cycle status read write peek poke readblock writeblock peekblock pokeblock "
     "addr peek_reg poke_reg step run_until_irq reset inject inject_fdl counters log save load "
@@ -271,8 +248,8 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
       }
       return ok(fmt::format(
           "cycle={} started={} dp={} wd={} baud={} xint={} irq={} station={} txd={}", chip_.cycle(),
-          chip_.started() ? 1 : 0, dp_name(chip_.dp_state()), wd_name(chip_.wd_state()), baud,
-          chip_.x_int_pin() ? 1 : 0, chip_.irq_active() ? 1 : 0, chip_.station_address(),
+          chip_.started() ? 1 : 0, dp_state_name(chip_.dp_state()), wd_state_name(chip_.wd_state()),
+          baud, chip_.x_int_pin() ? 1 : 0, chip_.irq_active() ? 1 : 0, chip_.station_address(),
           chip_.txd_pin() ? 1 : 0));
     }
     if (cmd == "read" || cmd == "peek") {
