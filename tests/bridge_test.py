@@ -189,16 +189,18 @@ def do4_two_clients(pacing, baud=19200, timeout=0.5):
 
 
 def do4_reparameterise_after_watchdog():
-    """Free pacing, watchdog 2 x 10 x 10 ms: the second client comes after it expired and must
-    parameterise the slave again (Prm_Req in the first Slave_Diag), then reaches Data_Exchange."""
+    """Free pacing, watchdog 10 x 10 x 10 ms: the second client comes after it expired and must
+    parameterise the slave again (Prm_Req in the first Slave_Diag), then reaches Data_Exchange.
+    Chip time follows the wall clock between exchanges, so the watchdogs are long enough for a
+    loaded test machine (1 s while parameterised for the first time, 10 s after)."""
     with tempfile.TemporaryDirectory() as tmp:
         b = Bridge(tmp, "--firmware", "DO4", "--pacing", "free")
         try:
             m = Master(b.path, 19200, 0.5)
-            startup_do4(m, wd=(0x02, 0x0A))
+            startup_do4(m, wd=(0x0A, 0x0A))
             exchange_do4(m)
             m.close()
-            time.sleep(0.6)  # > 200 ms: the DP watchdog expires while no client is there
+            time.sleep(1.5)  # > 1 s: the DP watchdog expires while no client is there
             m = Master(b.path, 19200, 0.5)
             # Baud_Control expired too (the chip searches the rate again): FDL_Status until
             # answered.
@@ -208,7 +210,7 @@ def do4_reparameterise_after_watchdog():
                      diag([0x02, 0x05, 0x00, 0xFF, 0x0D, 0x04, 0x02, 0x01]))
             # Parameterise again; until the outputs are valid again the module is in OSP with
             # the retained outputs 0101 (input byte 50h).
-            parameterise_do4(m, (0x02, 0x0A), [0x02, 0x01])
+            parameterise_do4(m, (0x64, 0x0A), [0x02, 0x01])
             exchange_do4(m, before=0x50)
             m.close()
             b.stop(signal.SIGINT)

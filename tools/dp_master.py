@@ -101,6 +101,7 @@ class Master:
         self.slave = slave
         self.fcb = True
         self.fcv = False
+        self.lost = 0
 
     def close(self):
         os.close(self.fd)
@@ -140,10 +141,24 @@ class Master:
         raise Fail("FDL_Status never answered")
 
     def srd(self, du, dsap=None):
+        """SRD_high with FCB/FCV. No answer: the station is lost (on a loaded host chip time can
+        run past Baud_Control between two requests, and the slave searches the rate again), so
+        FDL_Status until it answers, then the request once more, as a master re-finds a lost
+        station. Counted in `self.lost` and said on stderr."""
+        a = self.transact(self.srd_frame(du, dsap))
+        if a is None:
+            self.lost += 1
+            print(f"dp_master: no answer from station {self.slave}, searching it again",
+                  file=sys.stderr)
+            self.find_slave()
+            a = self.transact(self.srd_frame(du, dsap))
+        return a
+
+    def srd_frame(self, du, dsap):
         self.fcb = not self.fcb
         fc = 0x40 | (0x20 if self.fcb else 0) | (0x10 if self.fcv else 0) | 0x0D
         ssap = SAP_MASTER if dsap is not None else None
-        return self.transact(sd2(self.slave, self.address, fc, du, dsap=dsap, ssap=ssap))
+        return sd2(self.slave, self.address, fc, du, dsap=dsap, ssap=ssap)
 
     def slave_diag(self):
         return answer_du(self.srd([], SAP_SLAVE_DIAG), True)
