@@ -52,7 +52,9 @@ void Cpu::hand_to_bus_side() {
 }
 
 void Cpu::gate() {
-  while (chip_.cycle() >= limit_) hand_to_bus_side();
+  // A stop request (an observer of the bus side, e.g. the master seeing an answer start) takes
+  // the baton back before the next access, as reaching the limit does.
+  while (chip_.cycle() >= limit_ || chip_.stop_requested()) hand_to_bus_side();
 }
 
 std::uint8_t Cpu::read(std::uint32_t addr) {
@@ -66,7 +68,7 @@ void Cpu::write(std::uint32_t addr, std::uint8_t value) {
 }
 
 void Cpu::run_until(std::uint64_t cycle) {
-  while (chip_.cycle() < cycle) {
+  while (chip_.cycle() < cycle && !chip_.stop_requested()) {
     limit_ = cycle;
     if (in_isr_) {
       hand_to_firmware();  // an ISR in progress continues with its next access

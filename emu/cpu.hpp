@@ -45,7 +45,8 @@ class Cpu final : public BusPort {
   Cpu& operator=(const Cpu&) = delete;
 
   // Bus side: advance the chip to `cycle`, running the ISR whenever X/INT is active. The last
-  // firmware access may end up to 3 clocks after `cycle` (an access is never split).
+  // firmware access may end up to 3 clocks after `cycle` (an access is never split). Returns
+  // early when Chip::request_stop is pending (the caller clears it).
   void run_until(std::uint64_t cycle);
 
   // Firmware side (called from the ISR).

@@ -22,6 +22,7 @@ struct RunOptions {
   std::string timescale = "1ps";
   bool flat = false;
   std::string pcap;  // the chip's telegrams as pcapng (docs/capture.md)
+  Engine engine = Engine::event;  // how time advances (docs/engine.md)
 };
 
 // `dpc31 run`: plays a scenario file (docs/scenario-format.md), printing the state walk to `out`
