@@ -124,18 +124,7 @@ static_assert(sizeof(ChipCore) - 2 * round8(sizeof(ChipCore::latch)) - sizeof(Ho
 template <typename Ar, typename C>
 void core_fields(Ar& ar, C& c) {
   ar.section("CORE");
-  // Each engine keeps its timers its own way: a snapshot loads into a chip of the same engine.
-  Engine engine = c.engine;
-  ar.bounded(engine, Engine::per_cycle);
-  if constexpr (requires { ar.fail(""); }) {
-    if (engine != c.engine) ar.fail("the snapshot is of the other engine (event / per_cycle)");
-  }
   ar(c.now);
-  ar.sequence(c.rxd_pending, snap::kMaxFileSize, [](auto& a, auto& e) {
-    a(e.first);
-    a(e.second);
-  });
-  ar(c.rxd_level);
   ar(c.started);
   ar(c.ram_access_violation);
   ar(c.large_ram);
@@ -143,6 +132,17 @@ void core_fields(Ar& ar, C& c) {
   ar(c.written_bits);
   ar(c.diag_in_flight);
   ar(c.irq_line);
+  // Each engine keeps its timers its own way: a snapshot loads into a chip of the same engine.
+  Engine engine = c.engine;
+  ar.bounded(engine, Engine::per_cycle);
+  if constexpr (requires { ar.fail(""); }) {
+    if (engine != c.engine) ar.fail("the snapshot is of the other engine (event / per_cycle)");
+  }
+  ar.sequence(c.rxd_pending, snap::kMaxFileSize, [](auto& a, auto& e) {
+    a(e.first);
+    a(e.second);
+  });
+  ar(c.rxd_level);
   ar.section("LTCH");
   ar.array(c.latch);
   ar.section("MEM ");
