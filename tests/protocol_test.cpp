@@ -124,6 +124,46 @@ INSTANTIATE_TEST_SUITE_P(ProfilesAndBaudRates, Startup,
                                   std::to_string(std::get<1>(i.param));
                          });
 
+// A request handed to RxD before a Baud_Search window switch that it reaches into is heard at the
+// new rate: the edges wait in the chip, not in the receiver that the switch reconfigures.
+class AheadOfTime : public ::testing::TestWithParam<Engine> {};
+
+TEST_P(AheadOfTime, RequestDrivenBeforeAWindowSwitchIsHeardAtTheNewRate) {
+  Chip chip({Profile::dpc31, BusMode::intel, 0, GetParam()});
+  chip.set_log_sink(nullptr);
+  Responder user(ResponderConfig{});
+  DirectBus bus(chip);
+  user.init(bus);
+  const std::uint64_t s = chip.cycle();  // Start_SPC3 completed: the 12 Mbaud window opens
+  const std::uint64_t t = 8;             // 6 Mbaud
+  const std::uint64_t window = s + 4096 * 4;
+  std::vector<std::pair<std::uint64_t, bool>> txd;
+  chip.on_txd([&](std::uint64_t c, bool l) { txd.emplace_back(c, l); });
+  // FDL_Status 5 <- 2 (FCS 05+02+49 = 50h), starting TSYN after the 6 Mbaud window opens, handed
+  // over now, at 12 Mbaud.
+  const Bytes req = {0x10, 0x05, 0x02, 0x49, 0x50, 0x16};
+  const std::uint64_t start = window + 33 * t;
+  const std::uint64_t end = send_on_rxd(chip, req, start, t);
+  ASSERT_EQ(end, start + 6 * 11 * t);
+  // Acted on at the last stop sample: the rate is found (Baud_Control, baud code 1 = 6 Mbaud).
+  chip.step(end - t + t / 2 - 1 - chip.cycle());
+  EXPECT_EQ(chip.wd_state(), WdState::Baud_Search);
+  chip.step(1);
+  EXPECT_EQ(chip.wd_state(), WdState::Baud_Control);
+  EXPECT_EQ((chip.peek_reg(RegId::Status_Reg) >> 8) & 0x0F, 1);
+  chip.step(end + 11 * t + 6 * 11 * t - chip.cycle());
+  // The answer 10 02 05 00 07 16 starts MinTSDR = 11 bit times after the request's end.
+  ASSERT_FALSE(txd.empty());
+  EXPECT_EQ(txd.front(), std::make_pair(end + 11 * t, false));
+  EXPECT_EQ(chip.fdl_counters().requests, 1u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Engines, AheadOfTime,
+                         ::testing::Values(Engine::event, Engine::per_cycle),
+                         [](const auto& i) {
+                           return std::string(i.param == Engine::event ? "event" : "per_cycle");
+                         });
+
 class Protocol : public ::testing::TestWithParam<Profile> {
  protected:
   static ResponderConfig config() {
