@@ -52,6 +52,9 @@ void Chip::on_state_change(std::function<void(std::uint64_t)> cb) {
   core_->state_observer.add(std::move(cb));
 }
 void Chip::on_txd(std::function<void(std::uint64_t, bool)> cb) {
+  // Edges before now happened unwatched; from now on each one is an event again.
+  core_->mac_tx_catch_up();
+  core_->quiet_until = 0;
   core_->txd_observer.add(std::move(cb));
 }
 void Chip::on_block_event(std::function<void(std::uint64_t, const BlockEvent&)> cb) {
@@ -60,7 +63,7 @@ void Chip::on_block_event(std::function<void(std::uint64_t, const BlockEvent&)> 
 void Chip::on_telegram(std::function<void(const Telegram&)> cb) {
   core_->telegram_observer.add(std::move(cb));
 }
-bool Chip::txd_pin() const { return core_->mac.txd; }
+bool Chip::txd_pin() const { return core_->txd_level(); }
 const FdlCounters& Chip::fdl_counters() const { return core_->counters; }
 std::uint8_t Chip::station_address() const { return core_->dp.station; }
 std::uint32_t Chip::bit_cycles() const { return core_->mac.rx.bit_time(); }

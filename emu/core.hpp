@@ -79,8 +79,9 @@ struct ChipCore {
   // receiver (re)configure (Baud_Search switching the rate, Start).
   std::deque<std::pair<std::uint64_t, bool>> rxd_pending;
   bool rxd_level = true;  // the RxD line (per-cycle engine)
-  // Event engine: no deadline falls before this cycle (a lower bound; 0 = unknown). Lets a bus
-  // access that crosses no deadline skip the search for the next event.
+  // Event engine: no deadline falls before this cycle (a lower bound; 0 = unknown; always 0 in the
+  // per-cycle engine). Lets a bus access that crosses no deadline skip the search for the next
+  // event.
   std::uint64_t quiet_until = 0;
   bool stop = false;  // Chip::request_stop
 
@@ -137,7 +138,15 @@ struct ChipCore {
   enum class Stop : std::uint8_t { never, on_irq, on_irq_or_request };
   // Advances time; with Stop::on_irq it stops right after the event that makes the interrupt
   // active and returns true (also after Chip::request_stop with on_irq_or_request).
-  bool advance(std::uint64_t cycles, Stop stop_at = Stop::never);
+  bool advance(std::uint64_t cycles, Stop stop_at = Stop::never) {
+    const std::uint64_t end = now + cycles;
+    if (end < quiet_until) {  // the common bus access: no deadline inside it (event engine)
+      now = end;
+      return false;
+    }
+    return advance_to(end, stop_at);
+  }
+  bool advance_to(std::uint64_t end, Stop stop_at);
   bool advance_events(std::uint64_t end, Stop stop_at);
   bool advance_clocks(std::uint64_t end, Stop stop_at);
   // Event engine: the earliest deadline (the per-cycle engine: the next clock).
@@ -164,6 +173,8 @@ struct ChipCore {
   void mac_txd(std::uint64_t cycle, bool level);
   void mac_tx_done();
   [[nodiscard]] bool mac_tx_busy() const;
+  void mac_tx_catch_up();              // event engine: TxD edges due by now onto the pin
+  [[nodiscard]] bool txd_level() const;  // TxD now, also with edges not yet taken
   void mac_stop();
   void mac_char(const UartChar& c);
   void mac_frame(const fdl::Frame& f, const UartChar& last);

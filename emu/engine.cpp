@@ -16,14 +16,9 @@ std::uint64_t ChipCore::cycles_for_us(std::uint64_t us) const {
   return (std::uint64_t{clock_hz} * us + 999'999u) / 1'000'000u;
 }
 
-bool ChipCore::advance(std::uint64_t cycles, Stop stop_at) {
-  const std::uint64_t end = now + cycles;
-  if (engine == Engine::per_cycle) return advance_clocks(end, stop_at);
-  if (end < quiet_until) {  // the common bus access: no deadline inside it
-    now = end;
-    return false;
-  }
-  return advance_events(end, stop_at);
+bool ChipCore::advance_to(std::uint64_t end, Stop stop_at) {
+  return engine == Engine::per_cycle ? advance_clocks(end, stop_at)
+                                     : advance_events(end, stop_at);
 }
 
 // ---- timers armed by the actions ----

@@ -126,8 +126,27 @@ void ChipCore::mac_stop() {
 std::uint64_t ChipCore::mac_deadline() const {
   std::uint64_t t =
       std::min({mac.rx.next_deadline(), mac.frame_timeout, mac.search_deadline, mac.tx_end});
-  if (mac.tx_next < mac.tx_edges.size()) t = std::min(t, mac.tx_edges[mac.tx_next].first);
+  // Single TxD bits are events only for someone watching them; otherwise the answer's edges are
+  // taken as the line is looked at (txd_pin) or at the end of the answer.
+  if (txd_observer && mac.tx_next < mac.tx_edges.size()) {
+    t = std::min(t, mac.tx_edges[mac.tx_next].first);
+  }
   return t;
+}
+
+void ChipCore::mac_tx_catch_up() {
+  while (mac.tx_next < mac.tx_edges.size() && mac.tx_edges[mac.tx_next].first <= now) {
+    mac_txd(mac.tx_edges[mac.tx_next].first, mac.tx_edges[mac.tx_next].second);
+    ++mac.tx_next;
+  }
+}
+
+bool ChipCore::txd_level() const {
+  bool level = mac.txd;
+  for (std::size_t i = mac.tx_next; i < mac.tx_edges.size() && mac.tx_edges[i].first <= now; ++i) {
+    level = mac.tx_edges[i].second;
+  }
+  return level;
 }
 
 void ChipCore::mac_process() {
@@ -144,10 +163,7 @@ void ChipCore::mac_process() {
     }
   }
   if (mac.search_deadline <= now) mac_search_next();
-  while (mac.tx_next < mac.tx_edges.size() && mac.tx_edges[mac.tx_next].first <= now) {
-    mac_txd(mac.tx_edges[mac.tx_next].first, mac.tx_edges[mac.tx_next].second);
-    ++mac.tx_next;
-  }
+  mac_tx_catch_up();
   if (mac.tx_end <= now) mac_tx_done();
 }
 

@@ -182,13 +182,13 @@ std::uint16_t ChipCore::reg_value(RegId id) const {
 }
 
 std::uint32_t ChipCore::begin_access(std::uint32_t addr, std::string_view what) {
-  if ((addr >> prof->address_bits) != 0) {
+  if ((addr >> prof->address_bits) != 0) [[unlikely]] {
     log(LogLevel::warn, "{} at {:#x}: beyond the {}-bit address bus, upper bits ignored", what,
         addr, prof->address_bits);
   }
   bool violation = false;
   const std::uint32_t a = decode(addr, violation);
-  if (violation) note_violation(addr, a);
+  if (violation) [[unlikely]] note_violation(addr, a);
   return a;
 }
 
@@ -243,7 +243,7 @@ std::uint8_t ChipCore::read_now(std::uint32_t addr) {
     v = h.command(*this);
     update_irq_line();
   } else {
-    v = reg_value(r.id);
+    v = h.read != nullptr ? h.read(*this) : latch[idx(r.id)];  // reg_value for these kinds
   }
   v = static_cast<std::uint16_t>(v & r.mask() & ~r.rsvd);
   if (r.unimp != 0)
@@ -309,7 +309,7 @@ void ChipCore::write_reg(const RegDesc& r, std::uint32_t offset, std::uint8_t va
   }
   if ((r.unimp & lane) != 0) log(LogLevel::info, "{}: stored, behaviour not modelled", r.name);
   const RegHooks& h = hooks[idx(r.id)];
-  quiet_until = 0;  // Start, EOI, Go_Offline arm or stop timers
+  if (h.post_write != nullptr) quiet_until = 0;  // Start, EOI, Go_Offline arm or stop timers
   written_bits = w;
   if (h.pre_write != nullptr) next = h.pre_write(*this, old, next);
   latch[t] = next;

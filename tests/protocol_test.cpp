@@ -164,6 +164,53 @@ INSTANTIATE_TEST_SUITE_P(Engines, AheadOfTime,
                            return std::string(i.param == Engine::event ? "event" : "per_cycle");
                          });
 
+// With nobody watching TxD bit by bit, the event engine takes the answer's bits without an event
+// each (docs/engine.md); the pin, interrupts and telegrams are the same as with a watcher.
+TEST(TxdFastPath, UnwatchedAnswerCostsNoEventPerBitAndLooksTheSame) {
+  struct Run {
+    Chip chip{{Profile::dpc31, BusMode::intel, 0}};
+    std::vector<std::pair<std::uint64_t, bool>> irq;
+    std::vector<std::uint64_t> telegrams;
+    std::vector<bool> pin;  // TxD at every cycle of the answer
+    std::size_t events = 0;
+  };
+  auto play = [](Run& r, bool watch_txd) {
+    r.chip.set_log_sink(nullptr);
+    Responder user(ResponderConfig{});
+    DirectBus bus(r.chip);
+    user.init(bus);
+    r.chip.on_irq_change([&r](std::uint64_t c, bool a) { r.irq.emplace_back(c, a); });
+    r.chip.on_telegram([&r](const Telegram& t) { r.telegrams.push_back(t.start); });
+    r.chip.on_state_change([&r](std::uint64_t) { ++r.events; });
+    if (watch_txd) r.chip.on_txd([](std::uint64_t, bool) {});
+    const std::uint64_t t = 4;  // 12 Mbaud, the first Baud_Search window
+    const std::uint64_t start = r.chip.cycle() + 33 * t;
+    const Bytes req = {0x10, 0x05, 0x02, 0x49, 0x50, 0x16};  // FDL_Status 5 <- 2
+    const std::uint64_t end = send_on_rxd(r.chip, req, start, t);
+    const std::uint64_t answer = end + 11 * t;  // 10 02 05 00 07 16: 6 characters
+    r.chip.step(answer - r.chip.cycle());
+    const std::size_t before = r.events;
+    for (std::uint64_t c = 0; c < 6 * 11 * t; ++c) {
+      r.pin.push_back(r.chip.txd_pin());
+      r.chip.step(1);
+    }
+    r.events -= before;  // events inside the answer
+  };
+  Run watched;
+  Run unwatched;
+  play(watched, true);
+  play(unwatched, false);
+  EXPECT_EQ(unwatched.pin, watched.pin);
+  EXPECT_EQ(unwatched.irq, watched.irq);
+  EXPECT_EQ(unwatched.telegrams, watched.telegrams);
+  EXPECT_EQ(unwatched.chip.save_state(), watched.chip.save_state());
+  // 10 02 05 00 07 16 changes TxD 4 + 4 + 6 + 2 + 4 + 6 = 26 times; the first, at the answer's
+  // start, is before the counted cycles, the end of the answer is one more event. Unwatched,
+  // only the end of the answer is an event.
+  EXPECT_EQ(watched.events, 26u);
+  EXPECT_EQ(unwatched.events, 1u);
+}
+
 class Protocol : public ::testing::TestWithParam<Profile> {
  protected:
   static ResponderConfig config() {
