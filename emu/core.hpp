@@ -7,7 +7,6 @@
 
 #include <array>
 #include <cstdint>
-#include <deque>
 #include <functional>
 #include <optional>
 #include <span>
@@ -20,6 +19,7 @@
 #include "dpc31/reg_ids.hpp"
 #include "dpc31/regdesc.hpp"
 #include "fdl.hpp"
+#include "fifo.hpp"
 #include "irq.hpp"
 #include "mac.hpp"
 #include "watchdog.hpp"
@@ -77,7 +77,7 @@ struct ChipCore {
   std::uint64_t now = 0;
   // RxD edges driven for later cycles. Kept here, not in the receiver, so they survive a
   // receiver (re)configure (Baud_Search switching the rate, Start).
-  std::deque<std::pair<std::uint64_t, bool>> rxd_pending;
+  Fifo<std::pair<std::uint64_t, bool>> rxd_pending;
   bool rxd_level = true;  // the RxD line (per-cycle engine)
   // Event engine: no deadline falls before this cycle (a lower bound; 0 = unknown; always 0 in the
   // per-cycle engine). Lets a bus access that crosses no deadline skip the search for the next

@@ -78,8 +78,7 @@ void UartRx::sample_through(std::uint64_t last) {
 }
 
 void UartRx::finish() {
-  const UartChar c = make_char(bits_, s_, t_, idle_bits_);
-  done_.push_back(c);
+  const UartChar& c = done_.emplace_back(make_char(bits_, s_, t_, idle_bits_));
   // A start is accepted only from the end of this frame on, and only on a real falling edge: a
   // line still low after a bad stop bit (break) must rise and fall again.
   not_before_ = c.end;
@@ -120,7 +119,7 @@ std::uint64_t UartRx::next_deadline() const {
 // A guard for the one platform the sizes are known on: a new member changes the size (or lands in
 // padding, which the snapshot tests' perturbation of a live session catches).
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-static_assert(sizeof(UartRx) == 136, "a new member of UartRx: add it to UartRx::fields");
+static_assert(sizeof(UartRx) == 88, "a new member of UartRx: add it to UartRx::fields");
 #endif
 static_assert(snap::member_count<UartChar>() == 7, "a new member of UartChar: add it below");
 
@@ -242,6 +241,7 @@ void UartSampler::load_state(snap::Reader& r) {
 void uart_encode(std::span<const std::uint8_t> bytes, std::uint64_t start, std::uint32_t bit_cycles,
                  std::vector<std::pair<std::uint64_t, bool>>& edges, UartFault fault) {
   const std::uint64_t t = bit_cycles;
+  edges.reserve(edges.size() + bytes.size() * kUartCharBits + 1);
   bool line = true;
   auto drive = [&](std::uint64_t cycle, bool level) {
     if (level != line) edges.emplace_back(cycle, level);

@@ -5,12 +5,12 @@
 #pragma once
 
 #include <cstdint>
-#include <deque>
 #include <limits>
 #include <span>
 #include <utility>
 #include <vector>
 
+#include "fifo.hpp"
 #include "snapshot.hpp"
 
 namespace dpc31 {
@@ -106,7 +106,7 @@ class UartRx {
   std::uint64_t s_ = 0;
   std::uint16_t bits_ = 0;       // sampled bit k at bit position k
   std::uint64_t idle_bits_ = 0;  // of the character in progress
-  std::deque<UartChar> done_;    // complete, waiting for advance() to reach their stop sample
+  Fifo<UartChar> done_;  // complete, waiting for advance() to reach their stop sample
 };
 
 // The receiver of the per-cycle engine (docs/engine.md): the rules of UartRx, evaluated the way
