@@ -93,8 +93,27 @@ void ChipCore::drive_rxd(std::uint64_t cycle, bool level) {
 
 std::uint64_t ChipCore::next_event() const {
   if (engine == Engine::per_cycle) return now + 1;
+  return std::min(timers.user_timer_next, next_event_but_user_timer());
+}
+
+std::uint64_t ChipCore::next_event_but_user_timer() const {
   const std::uint64_t eoi_end = irq.eoi_block_until > now ? irq.eoi_block_until : kNever;
-  return std::min({timers.user_timer_next, timers.wd_deadline, eoi_end, mac_deadline()});
+  return std::min({timers.wd_deadline, eoi_end, mac_deadline()});
+}
+
+// A User_Timer_Clock tick while its IRR bit is still set changes nothing anyone can see (the bit
+// stays set, X/INT stays as it is) unless an acknowledge lands in its cycle, which needs a bus
+// access, so not before `end`. Such ticks before the next other deadline are counted, not
+// visited: a silent bus with the user timer running costs one step per other deadline, not one
+// per millisecond. The last skipped tick is noted as the event of its cycle, as visiting it would.
+void ChipCore::skip_quiet_user_ticks(std::uint64_t end) {
+  if ((latch[idx(RegId::Int_Req_Reg)] & irq::User_Timer_Clock) == 0) return;
+  const std::uint64_t bound = std::min(end, next_event_but_user_timer());
+  if (timers.user_timer_next >= bound) return;
+  const std::uint64_t p = user_timer_period();
+  const std::uint64_t last = timers.user_timer_next + (bound - 1 - timers.user_timer_next) / p * p;
+  irq.note_events(irq::User_Timer_Clock, last);
+  timers.user_timer_next = last + p;
 }
 
 // Everything due at `now`, in the order of docs/timing.md.
@@ -112,6 +131,7 @@ void ChipCore::process_events() {
 bool ChipCore::advance_events(std::uint64_t end, Stop stop_at) {
   quiet_until = 0;  // the events below may arm new deadlines
   for (;;) {
+    skip_quiet_user_ticks(end);
     const std::uint64_t next = next_event();
     if (next > end) {
       quiet_until = next;
