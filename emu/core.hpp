@@ -175,7 +175,7 @@ struct ChipCore {
   void mac_txd(std::uint64_t cycle, bool level);
   void mac_tx_done();
   [[nodiscard]] bool mac_tx_busy() const;
-  void mac_tx_catch_up();              // event engine: TxD edges due by now onto the pin
+  void mac_tx_catch_up();                // event engine: TxD edges due by now onto the pin
   [[nodiscard]] bool txd_level() const;  // TxD now, also with edges not yet taken
   void mac_stop();
   void mac_char(const UartChar& c);

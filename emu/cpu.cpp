@@ -9,45 +9,37 @@ struct Stopped {};  // unwinds an ISR that is still waiting when the CPU goes aw
 Cpu::Cpu(Chip& chip, Isr isr) : chip_(chip), isr_(std::move(isr)), thread_([this] { body(); }) {}
 
 Cpu::~Cpu() {
-  {
-    std::unique_lock lk(m_);
-    stop_ = true;
-    firmware_turn_ = true;
-  }
-  cv_.notify_all();
+  stop_ = true;
+  turn_.store(kFirmware);
+  turn_.notify_one();
   thread_.join();
 }
 
 void Cpu::body() {
-  std::unique_lock lk(m_);
   for (;;) {
-    cv_.wait(lk, [this] { return firmware_turn_; });
+    turn_.wait(kBusSide);
     if (stop_) return;
-    lk.unlock();
     try {
       isr_(*this);
     } catch (const Stopped&) {
       return;
     }
-    lk.lock();
     in_isr_ = false;
-    firmware_turn_ = false;
-    cv_.notify_all();
+    turn_.store(kBusSide);
+    turn_.notify_one();
   }
 }
 
 void Cpu::hand_to_firmware() {
-  std::unique_lock lk(m_);
-  firmware_turn_ = true;
-  cv_.notify_all();
-  cv_.wait(lk, [this] { return !firmware_turn_; });
+  turn_.store(kFirmware);
+  turn_.notify_one();
+  turn_.wait(kFirmware);
 }
 
 void Cpu::hand_to_bus_side() {
-  std::unique_lock lk(m_);
-  firmware_turn_ = false;
-  cv_.notify_all();
-  cv_.wait(lk, [this] { return firmware_turn_; });
+  turn_.store(kBusSide);
+  turn_.notify_one();
+  turn_.wait(kBusSide);
   if (stop_) throw Stopped{};
 }
 

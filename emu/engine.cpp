@@ -17,8 +17,7 @@ std::uint64_t ChipCore::cycles_for_us(std::uint64_t us) const {
 }
 
 bool ChipCore::advance_to(std::uint64_t end, Stop stop_at) {
-  return engine == Engine::per_cycle ? advance_clocks(end, stop_at)
-                                     : advance_events(end, stop_at);
+  return engine == Engine::per_cycle ? advance_clocks(end, stop_at) : advance_events(end, stop_at);
 }
 
 // ---- timers armed by the actions ----

@@ -188,7 +188,8 @@ std::uint32_t ChipCore::begin_access(std::uint32_t addr, std::string_view what) 
   }
   bool violation = false;
   const std::uint32_t a = decode(addr, violation);
-  if (violation) [[unlikely]] note_violation(addr, a);
+  if (violation) [[unlikely]]
+    note_violation(addr, a);
   return a;
 }
 

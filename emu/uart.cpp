@@ -252,11 +252,11 @@ void uart_encode(std::span<const std::uint8_t> bytes, std::uint64_t start, std::
     const bool hit = fault.char_index >= 0 && static_cast<std::size_t>(fault.char_index) == i;
     auto faulty = [&](UartFault::Kind k) { return hit && fault.kind == k; };
     const std::uint64_t s = start + i * kUartCharBits * t;
-    const bool flip[kUartCharBits] = {faulty(UartFault::Kind::start), false, false, false, false,
-                                      false, false, false, false,
-                                      faulty(UartFault::Kind::parity),
-                                      faulty(UartFault::Kind::stop)};
-    for (std::uint32_t b = 0; b < kUartCharBits; ++b) drive(s + b * t, uart_bit(d, b) != flip[b]);
+    for (std::uint32_t b = 0; b < kUartCharBits; ++b) {
+      using K = UartFault::Kind;
+      const K kind = b == 0 ? K::start : b == 9 ? K::parity : b == kStopBit ? K::stop : K::none;
+      drive(s + b * t, uart_bit(d, b) != (kind != K::none && faulty(kind)));
+    }
   }
   drive(start + bytes.size() * kUartCharBits * t, true);
 }

@@ -106,7 +106,7 @@ class UartRx {
   std::uint64_t s_ = 0;
   std::uint16_t bits_ = 0;       // sampled bit k at bit position k
   std::uint64_t idle_bits_ = 0;  // of the character in progress
-  Fifo<UartChar> done_;  // complete, waiting for advance() to reach their stop sample
+  Fifo<UartChar> done_;          // complete, waiting for advance() to reach their stop sample
 };
 
 // The receiver of the per-cycle engine (docs/engine.md): the rules of UartRx, evaluated the way
@@ -137,9 +137,9 @@ class UartSampler {
   bool detect(bool line, std::uint64_t now);
 
   std::uint32_t t_ = 0;
-  bool line_prev_ = true;   // RxD at the previous clock: the edge detector
-  bool level_ = true;       // the level the receiver holds (set high by configure)
-  bool busy_ = false;       // from the start edge to the end of the stop bit
+  bool line_prev_ = true;            // RxD at the previous clock: the edge detector
+  bool level_ = true;                // the level the receiver holds (set high by configure)
+  bool busy_ = false;                // from the start edge to the end of the stop bit
   std::uint32_t k_ = kUartCharBits;  // next bit to sample
   std::uint64_t pos_ = 0;            // clocks since the start edge
   std::uint64_t next_pos_ = 0;       // pos_ of the next sample

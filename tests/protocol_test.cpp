@@ -158,8 +158,7 @@ TEST_P(AheadOfTime, RequestDrivenBeforeAWindowSwitchIsHeardAtTheNewRate) {
   EXPECT_EQ(chip.fdl_counters().requests, 1u);
 }
 
-INSTANTIATE_TEST_SUITE_P(Engines, AheadOfTime,
-                         ::testing::Values(Engine::event, Engine::per_cycle),
+INSTANTIATE_TEST_SUITE_P(Engines, AheadOfTime, ::testing::Values(Engine::event, Engine::per_cycle),
                          [](const auto& i) {
                            return std::string(i.param == Engine::event ? "event" : "per_cycle");
                          });

@@ -75,9 +75,8 @@ int main(int argc, char** argv) {
   run->add_option("--engine", run_opt.engine,
                   "how time advances: event (deadline to deadline) or per-cycle (every clock, "
                   "the reference; docs/engine.md)")
-      ->transform(CLI::CheckedTransformer(
-          std::map<std::string, dpc31::Engine>{{"event", dpc31::Engine::event},
-                                               {"per-cycle", dpc31::Engine::per_cycle}}))
+      ->transform(CLI::CheckedTransformer(std::map<std::string, dpc31::Engine>{
+          {"event", dpc31::Engine::event}, {"per-cycle", dpc31::Engine::per_cycle}}))
       ->capture_default_str();
   run->add_option("--pcap", run_opt.pcap, "write the telegrams as pcapng (docs/capture.md)");
 
