@@ -152,7 +152,7 @@ struct ChipCore {
   // Event engine: the earliest deadline (the per-cycle engine: the next clock).
   [[nodiscard]] std::uint64_t next_event() const;
   [[nodiscard]] std::uint64_t next_event_but_user_timer() const;
-  void skip_quiet_user_ticks(std::uint64_t end);
+  void skip_quiet_user_ticks(std::uint64_t bound);
   void process_events();
   void clock();  // per-cycle engine: one clock, everything in the order of docs/timing.md
   void mac_clock();

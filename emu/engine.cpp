@@ -105,10 +105,10 @@ std::uint64_t ChipCore::next_event_but_user_timer() const {
 // access, so not before `end`. Such ticks before the next other deadline are counted, not
 // visited: a silent bus with the user timer running costs one step per other deadline, not one
 // per millisecond. The last skipped tick is noted as the event of its cycle, as visiting it would.
-void ChipCore::skip_quiet_user_ticks(std::uint64_t end) {
-  if ((latch[idx(RegId::Int_Req_Reg)] & irq::User_Timer_Clock) == 0) return;
-  const std::uint64_t bound = std::min(end, next_event_but_user_timer());
+// `bound`: the earlier of the end of the step and the next other deadline.
+void ChipCore::skip_quiet_user_ticks(std::uint64_t bound) {
   if (timers.user_timer_next >= bound) return;
+  if ((latch[idx(RegId::Int_Req_Reg)] & irq::User_Timer_Clock) == 0) return;
   const std::uint64_t p = user_timer_period();
   const std::uint64_t last = timers.user_timer_next + (bound - 1 - timers.user_timer_next) / p * p;
   irq.note_events(irq::User_Timer_Clock, last);
@@ -130,8 +130,9 @@ void ChipCore::process_events() {
 bool ChipCore::advance_events(std::uint64_t end, Stop stop_at) {
   quiet_until = 0;  // the events below may arm new deadlines
   for (;;) {
-    skip_quiet_user_ticks(end);
-    const std::uint64_t next = next_event();
+    const std::uint64_t other = next_event_but_user_timer();
+    skip_quiet_user_ticks(std::min(end, other));
+    const std::uint64_t next = std::min(timers.user_timer_next, other);
     if (next > end) {
       quiet_until = next;
       break;
