@@ -158,6 +158,29 @@ TEST_P(AheadOfTime, RequestDrivenBeforeAWindowSwitchIsHeardAtTheNewRate) {
   EXPECT_EQ(chip.fdl_counters().requests, 1u);
 }
 
+// A gap inside a telegram ends it only when it reaches TSYN = 33 bit times: a character that
+// starts after 30 bit times continues it, although its stop sample comes 40.5 bit times after
+// the previous character's end.
+TEST_P(AheadOfTime, CharacterStartedBeforeTsynContinuesTheTelegram) {
+  Chip chip({Profile::dpc31, BusMode::intel, 0, GetParam()});
+  chip.set_log_sink(nullptr);
+  Responder user(ResponderConfig{});
+  DirectBus bus(chip);
+  user.init(bus);
+  const std::uint64_t t = 4;  // 12 Mbaud: the first Baud_Search window
+  std::vector<std::pair<std::uint64_t, bool>> txd;
+  chip.on_txd([&](std::uint64_t c, bool l) { txd.emplace_back(c, l); });
+  // FDL_Status 5 <- 2 (10 05 02 49 50 16), the ED 30 bit times after the FCS.
+  const std::uint64_t head_end =
+      send_on_rxd(chip, Bytes{0x10, 0x05, 0x02, 0x49, 0x50}, chip.cycle() + 33 * t, t);
+  const std::uint64_t end = send_on_rxd(chip, Bytes{0x16}, head_end + 30 * t, t);
+  chip.step(end + 11 * t + 1 - chip.cycle());
+  EXPECT_EQ(chip.fdl_counters().truncated, 0u);
+  EXPECT_EQ(chip.fdl_counters().no_sync, 0u);
+  ASSERT_FALSE(txd.empty());
+  EXPECT_EQ(txd.front(), std::make_pair(end + 11 * t, false));  // answered after MinTSDR
+}
+
 INSTANTIATE_TEST_SUITE_P(Engines, AheadOfTime, ::testing::Values(Engine::event, Engine::per_cycle),
                          [](const auto& i) {
                            return std::string(i.param == Engine::event ? "event" : "per_cycle");
