@@ -1,5 +1,4 @@
-// The public Chip: a thin wrapper over ChipCore, plus time. Timers are absolute deadlines, so
-// step(n) jumps from one deadline to the next instead of visiting every clock.
+// The public Chip: a thin wrapper over ChipCore. How time advances is in engine.cpp.
 #include "dpc31/chip.hpp"
 
 #include <algorithm>
@@ -9,41 +8,6 @@
 #include "snapshot.hpp"
 
 namespace dpc31 {
-
-std::uint64_t ChipCore::cycles_for_us(std::uint64_t us) const {
-  // Round up: the manuals give minimum times ("at least 1 us").
-  return (std::uint64_t{clock_hz} * us + 999'999u) / 1'000'000u;
-}
-
-std::uint64_t ChipCore::next_event() const {
-  const std::uint64_t eoi_end = irq.eoi_block_until > now ? irq.eoi_block_until : kNever;
-  return std::min({timers.user_timer_next, timers.wd_deadline, eoi_end, mac_deadline()});
-}
-
-// Everything due at `now`, in the order of docs/timing.md.
-void ChipCore::process_events() {
-  if (timers.user_timer_next <= now) {
-    timers.user_timer_next = now + user_timer_period();
-    raise(irq::User_Timer_Clock);
-  }
-  mac_process();
-  if (timers.wd_deadline <= now) watchdog_expired();
-  update_irq_line();
-}
-
-bool ChipCore::advance(std::uint64_t cycles, bool stop_on_irq) {
-  const std::uint64_t end = now + cycles;
-  for (;;) {
-    const std::uint64_t next = next_event();
-    if (next > end) break;
-    now = std::max(now, next);
-    const bool was_active = irq_line;
-    process_events();
-    if (stop_on_irq && irq_line && !was_active) return true;
-  }
-  now = end;
-  return false;
-}
 
 Chip::Chip(ChipOptions opt) : core_(std::make_unique<ChipCore>(opt)) {}
 Chip::~Chip() = default;
@@ -72,13 +36,15 @@ bool Chip::poke_reg(RegId id, std::uint16_t value) {
 }
 
 void Chip::step(std::uint64_t cycles) { core_->advance(cycles); }
-bool Chip::step_until_irq(std::uint64_t cycles) { return core_->advance(cycles, true); }
-
-void Chip::drive_rxd(std::uint64_t cycle, bool level) {
-  const std::uint64_t at = std::max(cycle, core_->now);
-  core_->mac.rx.edge(at, level);
-  core_->rxd_observer(at, level);
+bool Chip::step_until_irq(std::uint64_t cycles) {
+  if (core_->stop) return false;
+  return core_->advance(cycles, ChipCore::Stop::on_irq_or_request);
 }
+void Chip::request_stop() { core_->stop = true; }
+bool Chip::stop_requested() const { return core_->stop; }
+void Chip::clear_stop() { core_->stop = false; }
+
+void Chip::drive_rxd(std::uint64_t cycle, bool level) { core_->drive_rxd(cycle, level); }
 void Chip::on_rxd(std::function<void(std::uint64_t, bool)> cb) {
   core_->rxd_observer.add(std::move(cb));
 }
@@ -86,6 +52,9 @@ void Chip::on_state_change(std::function<void(std::uint64_t)> cb) {
   core_->state_observer.add(std::move(cb));
 }
 void Chip::on_txd(std::function<void(std::uint64_t, bool)> cb) {
+  // Edges before now happened unwatched; from now on each one is an event again.
+  core_->mac_tx_catch_up();
+  core_->quiet_until = 0;
   core_->txd_observer.add(std::move(cb));
 }
 void Chip::on_block_event(std::function<void(std::uint64_t, const BlockEvent&)> cb) {
@@ -94,7 +63,7 @@ void Chip::on_block_event(std::function<void(std::uint64_t, const BlockEvent&)> 
 void Chip::on_telegram(std::function<void(const Telegram&)> cb) {
   core_->telegram_observer.add(std::move(cb));
 }
-bool Chip::txd_pin() const { return core_->mac.txd; }
+bool Chip::txd_pin() const { return core_->txd_level(); }
 const FdlCounters& Chip::fdl_counters() const { return core_->counters; }
 std::uint8_t Chip::station_address() const { return core_->dp.station; }
 std::uint32_t Chip::bit_cycles() const { return core_->mac.rx.bit_time(); }
@@ -147,13 +116,14 @@ namespace {
 // configuration into the header, attachments into move_attachments.
 #if defined(__x86_64__) && defined(__GLIBCXX__)
 constexpr std::size_t round8(std::size_t n) { return (n + 7) / 8 * 8; }
-static_assert(sizeof(ChipCore) - 2 * round8(sizeof(ChipCore::latch)) - sizeof(HookTable) == 1040,
+static_assert(sizeof(ChipCore) - 2 * round8(sizeof(ChipCore::latch)) - sizeof(HookTable) == 1240,
               "a new member of ChipCore: see the comment above");
 #endif
 
 // Everything that influences future behaviour. Not here: the configuration (prof, bus,
 // clock_hz: the header), the tables derived from the profile (rd_map, wr_map, region_map,
-// reg_index, hooks), the log sink and the observers.
+// reg_index, hooks), the log sink and the observers, quiet_until (a cache, 0 = recompute) and stop
+// (a request of whoever steps the chip).
 template <typename Ar, typename C>
 void core_fields(Ar& ar, C& c) {
   ar.section("CORE");
@@ -165,6 +135,17 @@ void core_fields(Ar& ar, C& c) {
   ar(c.written_bits);
   ar(c.diag_in_flight);
   ar(c.irq_line);
+  // Each engine keeps its timers its own way: a snapshot loads into a chip of the same engine.
+  Engine engine = c.engine;
+  ar.bounded(engine, Engine::per_cycle);
+  if constexpr (requires { ar.fail(""); }) {
+    if (engine != c.engine) ar.fail("the snapshot is of the other engine (event / per_cycle)");
+  }
+  ar.sequence(c.rxd_pending, snap::kMaxFileSize, [](auto& a, auto& e) {
+    a(e.first);
+    a(e.second);
+  });
+  ar(c.rxd_level);
   ar.section("LTCH");
   ar.array(c.latch);
   ar.section("MEM ");
@@ -205,7 +186,7 @@ void Chip::load_state(std::span<const std::uint8_t> bytes) {
   const std::span<const std::uint8_t> payload = snap::open(bytes, header_of(c));
   // Decode into a fresh core (its tables built from the same profile); *core_ is untouched until
   // everything has been read and checked.
-  auto fresh = std::make_unique<ChipCore>(ChipOptions{c.prof->id, c.bus, c.clock_hz});
+  auto fresh = std::make_unique<ChipCore>(ChipOptions{c.prof->id, c.bus, c.clock_hz, c.engine});
   fresh->sink = nullptr;
   snap::Reader r(payload);
   core_fields(r, *fresh);

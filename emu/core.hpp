@@ -19,6 +19,7 @@
 #include "dpc31/reg_ids.hpp"
 #include "dpc31/regdesc.hpp"
 #include "fdl.hpp"
+#include "fifo.hpp"
 #include "irq.hpp"
 #include "mac.hpp"
 #include "watchdog.hpp"
@@ -72,7 +73,17 @@ struct ChipCore {
   const ProfileDesc* prof;
   BusMode bus;
   std::uint32_t clock_hz;
+  Engine engine;
   std::uint64_t now = 0;
+  // RxD edges driven for later cycles. Kept here, not in the receiver, so they survive a
+  // receiver (re)configure (Baud_Search switching the rate, Start).
+  Fifo<std::pair<std::uint64_t, bool>> rxd_pending;
+  bool rxd_level = true;  // the RxD line (per-cycle engine)
+  // Event engine: no deadline falls before this cycle (a lower bound; 0 = unknown; always 0 in the
+  // per-cycle engine). Lets a bus access that crosses no deadline skip the search for the next
+  // event.
+  std::uint64_t quiet_until = 0;
+  bool stop = false;  // Chip::request_stop
 
   std::array<std::uint16_t, kRegIdCount> latch{};
   std::vector<std::uint8_t> mem;      // 2^address_bits bytes; only RAM regions are used as RAM
@@ -123,16 +134,49 @@ struct ChipCore {
   void set_cell16(const RegDesc& r, std::uint16_t v);
   [[nodiscard]] std::uint16_t reg_value(RegId id) const;  // storage or derived (no side effect)
 
-  // --- time (chip.cpp) ---
-  // Advances time event by event; with stop_on_irq it stops right after the event that makes the
-  // interrupt active and returns true.
-  bool advance(std::uint64_t cycles, bool stop_on_irq = false);
+  // --- time (chip.cpp: the event engine; per_cycle.cpp: the per-cycle engine) ---
+  enum class Stop : std::uint8_t { never, on_irq, on_irq_or_request };
+  // Advances time; with Stop::on_irq it stops right after the event that makes the interrupt
+  // active and returns true (also after Chip::request_stop with on_irq_or_request).
+  bool advance(std::uint64_t cycles, Stop stop_at = Stop::never) {
+    const std::uint64_t end = now + cycles;
+    if (end < quiet_until) {  // the common bus access: no deadline inside it (event engine)
+      now = end;
+      return false;
+    }
+    return advance_to(end, stop_at);
+  }
+  bool advance_to(std::uint64_t end, Stop stop_at);
+  bool advance_events(std::uint64_t end, Stop stop_at);
+  bool advance_clocks(std::uint64_t end, Stop stop_at);
+  // Event engine: the earliest deadline (the per-cycle engine: the next clock).
   [[nodiscard]] std::uint64_t next_event() const;
+  [[nodiscard]] std::uint64_t next_event_but_user_timer() const;
+  void skip_quiet_user_ticks(std::uint64_t bound);
   void process_events();
+  void clock();  // per-cycle engine: one clock, everything in the order of docs/timing.md
+  void mac_clock();
   [[nodiscard]] std::uint64_t cycles_for_us(std::uint64_t us) const;
+  // The cycle the running watchdog expires (kNever: none), from the engine's own state.
+  [[nodiscard]] std::uint64_t watchdog_due() const;
+  // Timers armed by the actions; each engine keeps them its own way (deadline or counter).
+  void arm_user_timer();
+  void arm_watchdog(std::uint64_t cycles);  // kNever: off
+  void arm_eoi();
+  void arm_search_window();
+  void stop_search_window();
+  void drive_rxd(std::uint64_t cycle, bool level);
 
   // --- MAC (mac.cpp) ---
   void mac_start_search();
+  void mac_listen(std::uint8_t code);  // receive at kBaudRates[code] from now on
+  void mac_search_next();
+  void mac_truncated();
+  void mac_txd(std::uint64_t cycle, bool level);
+  void mac_tx_done();
+  [[nodiscard]] bool mac_tx_busy() const;
+  void mac_tx_catch_up();                // event engine: TxD edges due by now onto the pin
+  [[nodiscard]] bool txd_level() const;  // TxD now, also with edges not yet taken
   void mac_stop();
   void mac_char(const UartChar& c);
   void mac_frame(const fdl::Frame& f, const UartChar& last);

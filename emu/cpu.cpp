@@ -9,50 +9,44 @@ struct Stopped {};  // unwinds an ISR that is still waiting when the CPU goes aw
 Cpu::Cpu(Chip& chip, Isr isr) : chip_(chip), isr_(std::move(isr)), thread_([this] { body(); }) {}
 
 Cpu::~Cpu() {
-  {
-    std::unique_lock lk(m_);
-    stop_ = true;
-    firmware_turn_ = true;
-  }
-  cv_.notify_all();
+  stop_ = true;
+  turn_.store(kFirmware);
+  turn_.notify_one();
   thread_.join();
 }
 
 void Cpu::body() {
-  std::unique_lock lk(m_);
   for (;;) {
-    cv_.wait(lk, [this] { return firmware_turn_; });
+    turn_.wait(kBusSide);
     if (stop_) return;
-    lk.unlock();
     try {
       isr_(*this);
     } catch (const Stopped&) {
       return;
     }
-    lk.lock();
     in_isr_ = false;
-    firmware_turn_ = false;
-    cv_.notify_all();
+    turn_.store(kBusSide);
+    turn_.notify_one();
   }
 }
 
 void Cpu::hand_to_firmware() {
-  std::unique_lock lk(m_);
-  firmware_turn_ = true;
-  cv_.notify_all();
-  cv_.wait(lk, [this] { return !firmware_turn_; });
+  turn_.store(kFirmware);
+  turn_.notify_one();
+  turn_.wait(kFirmware);
 }
 
 void Cpu::hand_to_bus_side() {
-  std::unique_lock lk(m_);
-  firmware_turn_ = false;
-  cv_.notify_all();
-  cv_.wait(lk, [this] { return firmware_turn_; });
+  turn_.store(kBusSide);
+  turn_.notify_one();
+  turn_.wait(kBusSide);
   if (stop_) throw Stopped{};
 }
 
 void Cpu::gate() {
-  while (chip_.cycle() >= limit_) hand_to_bus_side();
+  // A stop request (an observer of the bus side, e.g. the master seeing an answer start) takes
+  // the baton back before the next access, as reaching the limit does.
+  while (chip_.cycle() >= limit_ || chip_.stop_requested()) hand_to_bus_side();
 }
 
 std::uint8_t Cpu::read(std::uint32_t addr) {
@@ -66,7 +60,7 @@ void Cpu::write(std::uint32_t addr, std::uint8_t value) {
 }
 
 void Cpu::run_until(std::uint64_t cycle) {
-  while (chip_.cycle() < cycle) {
+  while (chip_.cycle() < cycle && !chip_.stop_requested()) {
     limit_ = cycle;
     if (in_isr_) {
       hand_to_firmware();  // an ISR in progress continues with its next access

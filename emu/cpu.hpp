@@ -4,10 +4,9 @@
 // interleave at the granularity of one bus access: an ISR never holds the bus side back.
 #pragma once
 
-#include <condition_variable>
+#include <atomic>
 #include <cstdint>
 #include <functional>
-#include <mutex>
 #include <thread>
 
 #include "dpc31/chip.hpp"
@@ -45,7 +44,8 @@ class Cpu final : public BusPort {
   Cpu& operator=(const Cpu&) = delete;
 
   // Bus side: advance the chip to `cycle`, running the ISR whenever X/INT is active. The last
-  // firmware access may end up to 3 clocks after `cycle` (an access is never split).
+  // firmware access may end up to 3 clocks after `cycle` (an access is never split). Returns
+  // early when Chip::request_stop is pending (the caller clears it).
   void run_until(std::uint64_t cycle);
 
   // Firmware side (called from the ISR).
@@ -61,9 +61,10 @@ class Cpu final : public BusPort {
 
   Chip& chip_;
   Isr isr_;
-  std::mutex m_;
-  std::condition_variable cv_;
-  bool firmware_turn_ = false;
+  // The baton: whoever does not hold it waits on it (C++20 atomic wait on a 32-bit value: a
+  // futex, no mutex). in_isr_ and stop_ are written before the baton changes hands, read after.
+  enum Turn : std::uint32_t { kBusSide, kFirmware };
+  std::atomic<std::uint32_t> turn_{kBusSide};
   bool in_isr_ = false;
   bool stop_ = false;
   std::uint64_t limit_ = 0;

@@ -49,19 +49,27 @@ DpMaster::DpMaster(Chip& chip, MasterConfig m, SlaveConfig s)
       target_(slave_.address),
       rx_(t_, chip.cycle()),
       bus_free_(chip.cycle()) {
-  chip_.on_txd([this](std::uint64_t cycle, bool level) { rx_.edge(cycle, level); });
+  chip_.on_txd([this](std::uint64_t cycle, bool level) {
+    rx_.edge(cycle, level);
+    // A falling edge may be a start bit: look at the line again (the wait is event-driven).
+    if (wake_on_txd_ && !level) chip_.request_stop();
+  });
 }
 
 void DpMaster::note(const std::string& s) {
   if (narrate) narrate(s);
 }
 
+// To `cycle`, or less when the chip's TxD wakes the master up (wake_on_txd_).
 void DpMaster::run_until(std::uint64_t cycle) {
   if (cpu_) {
     cpu_->run_until(cycle);
-  } else if (chip_.cycle() < cycle) {
-    chip_.step(cycle - chip_.cycle());
+  } else {
+    while (chip_.cycle() < cycle && !chip_.stop_requested()) {
+      chip_.step_until_irq(cycle - chip_.cycle());
+    }
   }
+  chip_.clear_stop();
 }
 
 void DpMaster::idle(std::uint64_t cycles) { run_until(chip_.cycle() + cycles); }
@@ -116,14 +124,24 @@ Exchange DpMaster::wait_answer(Exchange ex) {
     if (answer_.finished() && !rx_.receiving()) break;
     if (!answer_.started() && !rx_.receiving() && chip_.cycle() >= slot_end) {
       bus_free_ = chip_.cycle();
+      wake_on_txd_ = false;
       return ex;  // no answer within the slot time
     }
-    // Watch the line bit by bit until a character starts, then follow the receiver's samples.
-    const std::uint64_t next = rx_.receiving()     ? rx_.next_deadline()
-                               : answer_.started() ? chip_.cycle() + t_
-                                                   : std::min(slot_end, chip_.cycle() + t_);
+    // An answer that stops for a slot time between characters is broken.
+    const std::uint64_t gap_end = answer_.end() + std::uint64_t{cfg_.slot_bits} * t_;
+    if (answer_.started() && !rx_.receiving() && chip_.cycle() >= gap_end) break;
+    // Event-driven: sleep until a start bit (TxD falls) or the slot time ends; once the length
+    // is known, until the stop sample of the answer's last character (sent back to back).
+    const std::size_t len = answer_.expected_length();
+    std::uint64_t next = answer_.started() ? gap_end : slot_end;
+    if (rx_.receiving()) {
+      next = len == 0 ? rx_.next_deadline()
+                      : answer_.start() + (len * kUartCharBits - 1) * std::uint64_t{t_} + t_ / 2;
+    }
+    wake_on_txd_ = len == 0 || !rx_.receiving();
     run_until(std::max(next, chip_.cycle() + 1));
   }
+  wake_on_txd_ = false;
   ex.answer_start = answer_.start();
   ex.answer_end = answer_.end();
   bus_free_ = ex.answer_end;

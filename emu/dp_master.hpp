@@ -72,7 +72,9 @@ class AnswerCollector {
     return started_ && (bad_ || frame_.status() != fdl::Assembler::Status::need_more);
   }
   [[nodiscard]] std::uint64_t start() const { return start_; }  // first start bit
-  [[nodiscard]] std::uint64_t end() const { return end_; }      // end of the last stop bit
+  // Characters in the whole answer, 0 until its start delimiter (and LE) tell.
+  [[nodiscard]] std::size_t expected_length() const { return frame_.expected_length(); }
+  [[nodiscard]] std::uint64_t end() const { return end_; }  // end of the last stop bit
   // The answer, if it is complete and decodes without error.
   [[nodiscard]] std::optional<fdl::Frame> frame() const;
   // Every character's data as received (also of a broken answer), at most kMaxFrameLength + 1.
@@ -146,6 +148,7 @@ class DpMaster {
   std::vector<UartChar> chars_;
   bool fcb_ = true;  // toggled before every SRD with FCV
   bool fcv_started_ = false;
+  bool wake_on_txd_ = false;    // waiting for an answer whose length is not known yet
   std::uint64_t bus_free_ = 0;  // end of the last telegram on the bus
   std::unique_ptr<Cpu> cpu_;
   std::vector<Exchange> history_;

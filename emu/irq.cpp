@@ -28,8 +28,9 @@ namespace {
 
 template <typename Ar, typename S>
 void fields(Ar& ar, S& s) {
-  static_assert(snap::member_count<IrqController>() == 3, "a new member: add it here");
+  static_assert(snap::member_count<IrqController>() == 4, "a new member: add it here");
   ar(s.eoi_block_until);
+  ar(s.eoi_left);
   ar(s.event_cycle);
   ar(s.event_mask);
 }
@@ -52,8 +53,6 @@ void ChipCore::raise(std::uint16_t bits) {
   irq.note_events(bits, now);
   update_irq_line();
 }
-
-bool ChipCore::irq_active() const { return int_reg(*this) != 0 && now >= irq.eoi_block_until; }
 
 std::uint32_t ChipCore::eoi_inactive_cycles() const {
   constexpr std::uint16_t kEOI_Time_Base = 1u << 9;

@@ -15,6 +15,8 @@ struct IrqController {
   // Events latched in the current cycle survive an acknowledge in that same cycle.
   std::uint64_t event_cycle = std::numeric_limits<std::uint64_t>::max();
   std::uint16_t event_mask = 0;
+  // Per-cycle engine: clocks of the EOI inactive time still to run.
+  std::uint64_t eoi_left = 0;
 
   void reset() { *this = IrqController{}; }
   void note_events(std::uint16_t bits, std::uint64_t now) {

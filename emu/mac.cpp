@@ -48,35 +48,105 @@ void count(FdlCounters& n, fdl::Error e) {
 }  // namespace
 
 void ChipCore::mac_start_search() {
-  mac.search_code = 0;  // from the highest rate down
-  mac.rx.configure(bit_cycles(clock_hz, kBaudRates[0]), now);
+  mac_listen(0);  // from the highest rate down
   mac.in_frame = false;
   mac.skipping = false;
   mac.frame.reset();
   mac.frame_timeout = kNever;
-  mac.search_deadline = now + std::uint64_t{kBaudSearchBits} * mac.rx.bit_time();
+  arm_search_window();
+}
+
+void ChipCore::mac_listen(std::uint8_t code) {
+  mac.search_code = code;
+  const std::uint32_t t = bit_cycles(clock_hz, kBaudRates[code]);
+  mac.rx.configure(t, now);
+  mac.sampler.configure(t);
+  // Edges driven for later cycles are still to come on the line: the receiver hears them at the
+  // new rate (the per-cycle engine reads them off the line clock by clock anyway).
+  if (engine == Engine::event) {
+    for (const auto& [cycle, level] : rxd_pending) {
+      if (cycle > now) mac.rx.edge(cycle, level);
+    }
+  }
+}
+
+void ChipCore::mac_search_next() {
+  // The windows are fixed (4096 bit times each), whatever is on the line: a character or
+  // telegram in progress is dropped with the old rate.
+  mac_listen(static_cast<std::uint8_t>((mac.search_code + 1) % std::size(kBaudRates)));
+  mac.in_frame = false;
+  mac.frame.reset();
+  mac.frame_timeout = kNever;
+  mac.skipping = false;
+  arm_search_window();
+}
+
+void ChipCore::mac_truncated() {
+  ++counters.truncated;
+  log(LogLevel::info, "telegram truncated: the line went idle for TSYN after {} bytes",
+      mac.frame.bytes().size());
+  mac.in_frame = false;
+  mac.frame.reset();
+  mac.frame_timeout = kNever;
+}
+
+void ChipCore::mac_txd(std::uint64_t cycle, bool level) {
+  if (level == mac.txd) return;
+  mac.txd = level;
+  if (txd_observer) txd_observer(cycle, level);
+}
+
+void ChipCore::mac_tx_done() {
+  mac.tx_end = kNever;
+  mac.tx_edges.clear();
+  mac.tx_next = 0;
+  mac.shifter = TxShifter{};
+  dp_response_sent();
+}
+
+bool ChipCore::mac_tx_busy() const {
+  return engine == Engine::event ? mac.tx_end != kNever
+                                 : mac.shifter.phase != TxShifter::Phase::idle;
 }
 
 void ChipCore::mac_stop() {
-  mac.search_deadline = kNever;
+  stop_search_window();
   mac.frame_timeout = kNever;
+  mac.gap.on = false;
   mac.in_frame = false;
   mac.frame.reset();
   mac.tx_edges.clear();
   mac.tx_next = 0;
   mac.tx_end = kNever;
+  mac.shifter = TxShifter{};
   diag_in_flight = false;
-  if (!mac.txd) {
-    mac.txd = true;
-    if (txd_observer) txd_observer(now, true);
-  }
+  mac_txd(now, true);
 }
 
 std::uint64_t ChipCore::mac_deadline() const {
   std::uint64_t t =
       std::min({mac.rx.next_deadline(), mac.frame_timeout, mac.search_deadline, mac.tx_end});
-  if (mac.tx_next < mac.tx_edges.size()) t = std::min(t, mac.tx_edges[mac.tx_next].first);
+  // Single TxD bits are events only for someone watching them; otherwise the answer's edges are
+  // taken as the line is looked at (txd_pin) or at the end of the answer.
+  if (txd_observer && mac.tx_next < mac.tx_edges.size()) {
+    t = std::min(t, mac.tx_edges[mac.tx_next].first);
+  }
   return t;
+}
+
+void ChipCore::mac_tx_catch_up() {
+  while (mac.tx_next < mac.tx_edges.size() && mac.tx_edges[mac.tx_next].first <= now) {
+    mac_txd(mac.tx_edges[mac.tx_next].first, mac.tx_edges[mac.tx_next].second);
+    ++mac.tx_next;
+  }
+}
+
+bool ChipCore::txd_level() const {
+  bool level = mac.txd;
+  for (std::size_t i = mac.tx_next; i < mac.tx_edges.size() && mac.tx_edges[i].first <= now; ++i) {
+    level = mac.tx_edges[i].second;
+  }
+  return level;
 }
 
 void ChipCore::mac_process() {
@@ -84,35 +154,17 @@ void ChipCore::mac_process() {
   mac.rx.advance(now, mac.chars);
   for (const UartChar& c : mac.chars) mac_char(c);
   if (mac.in_frame && mac.frame_timeout <= now) {
-    ++counters.truncated;
-    log(LogLevel::info, "telegram truncated: the line went idle for TSYN after {} bytes",
-        mac.frame.bytes().size());
-    mac.in_frame = false;
-    mac.frame.reset();
-    mac.frame_timeout = kNever;
+    // A character that started before the gap reached TSYN continues the telegram: its stop
+    // sample decides.
+    if (mac.rx.busy_from() < mac.frame_timeout) {
+      mac.frame_timeout = kNever;
+    } else {
+      mac_truncated();
+    }
   }
-  if (mac.search_deadline <= now) {
-    // The windows are fixed (4096 bit times each), whatever is on the line: a character or
-    // telegram in progress is dropped with the old rate.
-    mac.search_code = static_cast<std::uint8_t>((mac.search_code + 1) % std::size(kBaudRates));
-    mac.rx.configure(bit_cycles(clock_hz, kBaudRates[mac.search_code]), now);
-    mac.in_frame = false;
-    mac.frame.reset();
-    mac.frame_timeout = kNever;
-    mac.skipping = false;
-    mac.search_deadline = now + std::uint64_t{kBaudSearchBits} * mac.rx.bit_time();
-  }
-  while (mac.tx_next < mac.tx_edges.size() && mac.tx_edges[mac.tx_next].first <= now) {
-    mac.txd = mac.tx_edges[mac.tx_next].second;
-    if (txd_observer) txd_observer(mac.tx_edges[mac.tx_next].first, mac.txd);
-    ++mac.tx_next;
-  }
-  if (mac.tx_end <= now) {
-    mac.tx_end = kNever;
-    mac.tx_edges.clear();
-    mac.tx_next = 0;
-    dp_response_sent();
-  }
+  if (mac.search_deadline <= now) mac_search_next();
+  mac_tx_catch_up();
+  if (mac.tx_end <= now) mac_tx_done();
 }
 
 void ChipCore::mac_char(const UartChar& c) {
@@ -187,7 +239,7 @@ void ChipCore::mac_frame(const fdl::Frame& f, const UartChar& last) {
   }
   const bool carries_data = f.sd == fdl::SD1 || f.sd == fdl::SD2 || f.sd == fdl::SD3;
   if (timers.wd == WdState::Baud_Search && carries_data) {
-    mac.search_deadline = kNever;
+    stop_search_window();
     baud_found(mac.search_code);
   }
   if (!carries_data || !fdl::is_request(f.fc)) return;  // tokens, acknowledges, answers
@@ -201,17 +253,25 @@ void ChipCore::mac_frame(const fdl::Frame& f, const UartChar& last) {
 }
 
 void ChipCore::mac_send(const fdl::Frame& f, std::uint64_t request_end) {
-  if (mac.tx_end != kNever) return;  // half duplex: still sending the previous answer
-  const std::vector<std::uint8_t> bytes = fdl::encode(f);
+  if (mac_tx_busy()) return;  // half duplex: still sending the previous answer
+  std::vector<std::uint8_t> bytes = fdl::encode(f);
   const std::uint32_t t = mac.rx.bit_time();
   const std::uint32_t tsdr = std::max<std::uint32_t>(
       kMinTsdrBits, dp.min_tsdr != 0 ? dp.min_tsdr : latch[idx(RegId::MinTSDR_Val)]);
   const std::uint64_t start = request_end + std::uint64_t{tsdr} * t;
+  const std::uint64_t end = start + bytes.size() * std::uint64_t{kUartCharBits} * t;
+  if (telegram_observer) telegram_observer(Telegram{true, bytes, start, end});
+  if (engine == Engine::per_cycle) {
+    // Counted from the end of the request's stop bit, as the receiver sees it.
+    mac.shifter.phase = TxShifter::Phase::wait_end;
+    mac.shifter.bytes = std::move(bytes);
+    mac.shifter.tsdr_bits = tsdr;
+    return;
+  }
   mac.tx_edges.clear();
   mac.tx_next = 0;
   uart_encode(bytes, start, t, mac.tx_edges);
-  mac.tx_end = start + bytes.size() * std::uint64_t{kUartCharBits} * t;
-  if (telegram_observer) telegram_observer(Telegram{true, bytes, start, mac.tx_end});
+  mac.tx_end = end;
 }
 
 // ---- snapshot ----
@@ -221,10 +281,19 @@ namespace {
 // The longest answer on the wire: every character toggling at every bit, plus the final rise.
 constexpr std::size_t kMaxTxEdges = fdl::kMaxFrameLength * kUartCharBits + 1;
 
+template <typename Ar, typename T>
+void bit_timer(Ar& ar, T& b) {
+  static_assert(snap::member_count<BitTimer>() == 4, "a new member: add it here");
+  ar(b.on);
+  ar(b.sub);
+  ar(b.bits);
+  ar(b.target);
+}
+
 // `chars` is scratch (cleared before every use), not state.
 template <typename Ar, typename S>
 void fields(Ar& ar, S& s) {
-  static_assert(snap::member_count<Mac>() == 13, "a new member: add it here");
+  static_assert(snap::member_count<Mac>() == 17, "a new member: add it here");
   ar.block(s.rx);
   ar.block(s.frame);
   ar(s.in_frame);
@@ -240,6 +309,16 @@ void fields(Ar& ar, S& s) {
   ar.size(s.tx_next, s.tx_edges.size());
   ar(s.tx_end);
   ar(s.txd);
+  ar.block(s.sampler);
+  bit_timer(ar, s.gap);
+  bit_timer(ar, s.search);
+  bit_timer(ar, s.shifter.timer);
+  ar.bounded(s.shifter.phase, TxShifter::Phase::shifting);
+  ar.byte_vector(s.shifter.bytes, fdl::kMaxFrameLength);
+  ar(s.shifter.tsdr_bits);
+  ar.size(s.shifter.index, s.shifter.bytes.size());
+  ar.bounded(s.shifter.bit, kUartCharBits - 1);
+  ar(s.shifter.sub);
 }
 
 template <typename Ar, typename S>

@@ -27,8 +27,8 @@ void mode_reg1_set(ChipCore& c, std::uint16_t /*old*/, std::uint16_t /*now*/) {
   const std::uint16_t written = c.written_bits;
   if ((written & kStart_SPC3) != 0) c.start();
   if ((written & kEOI) != 0) {
-    c.irq.eoi_block_until = c.now + c.eoi_inactive_cycles();
-    c.log(LogLevel::debug, "EOI: X/INT inactive until cycle {}", c.irq.eoi_block_until);
+    c.arm_eoi();
+    c.log(LogLevel::debug, "EOI: X/INT inactive until cycle {}", c.now + c.eoi_inactive_cycles());
   }
   if ((written & kUser_Leave_Master) != 0) c.leave_master();
   if ((written & kGo_Offline) != 0) c.go_offline();
@@ -56,7 +56,7 @@ void ChipCore::start() {
   ram_access_violation = false;
   latch[idx(RegId::Mode_Reg1)] &= static_cast<std::uint16_t>(~kGo_Offline);
   timers.reset();
-  timers.user_timer_next = now + user_timer_period();
+  arm_user_timer();
   dp.reset();
   dp.station = cell(RegId::R_TS_Adr);
   dp.no_add_change = cell(RegId::R_Real_No_Add_Change) == 0xFF;

@@ -27,6 +27,7 @@ ChipCore::ChipCore(const ChipOptions& opt)
     : prof(&profile_desc(opt.profile)),
       bus(opt.bus),
       clock_hz(opt.clock_hz != 0 ? opt.clock_hz : chip_timing().clock_hz),
+      engine(opt.engine),
       sink(stderr_sink()) {
   const std::size_t size = std::size_t{1} << prof->address_bits;
   mem.assign(size, 0);
@@ -76,7 +77,10 @@ void ChipCore::reset() {
   dp.reset();
   timers.reset();
   mac.reset();
-  mac.rx.configure(bit_cycles(clock_hz, kBaudRates[0]), 0);  // listening, for the offline count
+  rxd_pending.clear();
+  rxd_level = true;
+  quiet_until = 0;
+  mac_listen(0);  // listening at 12 Mbaud, for the offline count
   counters = FdlCounters{};
   diag_in_flight = false;
   baud_code = 0;
@@ -178,13 +182,14 @@ std::uint16_t ChipCore::reg_value(RegId id) const {
 }
 
 std::uint32_t ChipCore::begin_access(std::uint32_t addr, std::string_view what) {
-  if ((addr >> prof->address_bits) != 0) {
+  if ((addr >> prof->address_bits) != 0) [[unlikely]] {
     log(LogLevel::warn, "{} at {:#x}: beyond the {}-bit address bus, upper bits ignored", what,
         addr, prof->address_bits);
   }
   bool violation = false;
   const std::uint32_t a = decode(addr, violation);
-  if (violation) note_violation(addr, a);
+  if (violation) [[unlikely]]
+    note_violation(addr, a);
   return a;
 }
 
@@ -233,11 +238,17 @@ std::uint8_t ChipCore::read_now(std::uint32_t addr) {
       break;
   }
   const RegHooks& h = hooks[idx(r.id)];
-  std::uint16_t v = h.command != nullptr ? h.command(*this) : reg_value(r.id);
+  std::uint16_t v = 0;
+  if (h.command != nullptr) {
+    quiet_until = 0;  // a command may arm timers
+    v = h.command(*this);
+    update_irq_line();
+  } else {
+    v = h.read != nullptr ? h.read(*this) : latch[idx(r.id)];  // reg_value for these kinds
+  }
   v = static_cast<std::uint16_t>(v & r.mask() & ~r.rsvd);
   if (r.unimp != 0)
     log(LogLevel::info, "read of {}: behaviour not modelled, reads the stored value", r.name);
-  update_irq_line();
   return static_cast<std::uint8_t>(v >> (8 * r.placement(bus)[offset]));
 }
 
@@ -299,6 +310,7 @@ void ChipCore::write_reg(const RegDesc& r, std::uint32_t offset, std::uint8_t va
   }
   if ((r.unimp & lane) != 0) log(LogLevel::info, "{}: stored, behaviour not modelled", r.name);
   const RegHooks& h = hooks[idx(r.id)];
+  if (h.post_write != nullptr) quiet_until = 0;  // Start, EOI, Go_Offline arm or stop timers
   written_bits = w;
   if (h.pre_write != nullptr) next = h.pre_write(*this, old, next);
   latch[t] = next;

@@ -1181,7 +1181,7 @@ class Runner {
     // Baud_Search) is reported at its own cycle.
     const std::uint64_t end = chip_.cycle() + cycles;
     while (chip_.cycle() < end) {
-      std::uint64_t next = std::min(end, chip_.core().timers.wd_deadline);
+      std::uint64_t next = std::min(end, chip_.core().watchdog_due());
       if (next <= chip_.cycle()) next = end;
       master_->idle(next - chip_.cycle());
       check_states();

@@ -12,6 +12,20 @@ namespace {
 constexpr std::uint32_t kStopBit = 10;
 constexpr std::uint64_t kMaxIdleBits = 0xFFFF'FFFF;
 
+// The character both receivers report: `bits` holds sampled bit k at position k.
+UartChar make_char(std::uint16_t bits, std::uint64_t start, std::uint32_t t,
+                   std::uint64_t idle_bits) {
+  UartChar c;
+  c.data = static_cast<std::uint8_t>(bits >> 1);
+  c.start_ok = (bits & 1) == 0;
+  c.parity_ok = (std::popcount(static_cast<unsigned>((bits >> 1) & 0x1FF)) & 1) == 0;
+  c.stop_ok = ((bits >> kStopBit) & 1) != 0;
+  c.start = start;
+  c.end = start + std::uint64_t{kUartCharBits} * t;
+  c.idle_bits = idle_bits;
+  return c;
+}
+
 }  // namespace
 
 std::uint32_t bit_cycles(std::uint32_t clock_hz, std::uint32_t baud) {
@@ -30,6 +44,12 @@ int baud_code(std::uint32_t baud) {
 
 std::uint8_t even_parity(std::uint8_t data) {
   return static_cast<std::uint8_t>(std::popcount(data) & 1);
+}
+
+bool uart_bit(std::uint8_t data, std::uint32_t k) {
+  if (k == 0) return false;
+  if (k <= 8) return ((data >> (k - 1)) & 1) != 0;
+  return k == 9 ? even_parity(data) != 0 : true;
 }
 
 // ---- receiver ----
@@ -58,15 +78,7 @@ void UartRx::sample_through(std::uint64_t last) {
 }
 
 void UartRx::finish() {
-  UartChar c;
-  c.data = static_cast<std::uint8_t>(bits_ >> 1);
-  c.start_ok = (bits_ & 1) == 0;
-  c.parity_ok = (std::popcount(static_cast<unsigned>((bits_ >> 1) & 0x1FF)) & 1) == 0;
-  c.stop_ok = ((bits_ >> kStopBit) & 1) != 0;
-  c.start = s_;
-  c.end = s_ + std::uint64_t{kUartCharBits} * t_;
-  c.idle_bits = idle_bits_;
-  done_.push_back(c);
+  const UartChar& c = done_.emplace_back(make_char(bits_, s_, t_, idle_bits_));
   // A start is accepted only from the end of this frame on, and only on a real falling edge: a
   // line still low after a bad stop bit (break) must rise and fall again.
   not_before_ = c.end;
@@ -107,7 +119,7 @@ std::uint64_t UartRx::next_deadline() const {
 // A guard for the one platform the sizes are known on: a new member changes the size (or lands in
 // padding, which the snapshot tests' perturbation of a live session catches).
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-static_assert(sizeof(UartRx) == 136, "a new member of UartRx: add it to UartRx::fields");
+static_assert(sizeof(UartRx) == 88, "a new member of UartRx: add it to UartRx::fields");
 #endif
 static_assert(snap::member_count<UartChar>() == 7, "a new member of UartChar: add it below");
 
@@ -142,11 +154,94 @@ void UartRx::load_state(snap::Reader& r) {
   fields(r, *this);
 }
 
+// ---- per-clock receiver ----
+
+void UartSampler::configure(std::uint32_t bit_cycles) {
+  t_ = bit_cycles;
+  level_ = true;
+  busy_ = false;
+  k_ = kUartCharBits;
+  high_for_ = 0;
+}
+
+bool UartSampler::detect(bool line, std::uint64_t now) {
+  if (line == line_prev_) return false;
+  line_prev_ = line;
+  if (line == level_) return false;  // a change back to what the receiver assumed (configure)
+  level_ = line;
+  if (line) {
+    high_for_ = 0;
+    return false;
+  }
+  if (busy_ || t_ == 0) return false;
+  busy_ = true;
+  start_ = now;
+  pos_ = 0;
+  k_ = 0;
+  next_pos_ = t_ / 2;
+  bits_ = 0;
+  idle_bits_ = std::min(high_for_ / t_, kMaxIdleBits);
+  return true;
+}
+
+UartSampler::Clock UartSampler::clock(bool line, std::uint64_t now, UartChar& ch) {
+  Clock r;
+  ++high_for_;
+  if (busy_ && ++pos_ == std::uint64_t{kUartCharBits} * t_) {
+    busy_ = false;
+    high_for_ = 0;
+    r.ended = true;
+  }
+  r.started = detect(line, now);
+  // The sample reads the level after this clock's edge.
+  if (busy_ && k_ < kUartCharBits && pos_ == next_pos_) {
+    if (level_) bits_ = static_cast<std::uint16_t>(bits_ | (1u << k_));
+    next_pos_ += t_;
+    if (++k_ == kUartCharBits) {
+      ch = make_char(bits_, start_, t_, idle_bits_);
+      r.ready = true;
+    }
+  }
+  return r;
+}
+
+bool UartSampler::late_edge(bool line, std::uint64_t now) { return detect(line, now); }
+
+#if defined(__x86_64__) && defined(__GLIBCXX__)
+static_assert(sizeof(UartSampler) == 64, "a new member of UartSampler: add it to fields");
+#endif
+
+template <typename Ar, typename Self>
+void UartSampler::fields(Ar& ar, Self& s) {
+  ar(s.t_);
+  ar(s.line_prev_);
+  ar(s.level_);
+  ar(s.busy_);
+  ar.bounded(s.k_, kUartCharBits);
+  ar(s.pos_);
+  ar(s.next_pos_);
+  ar(s.bits_);
+  ar(s.start_);
+  ar(s.high_for_);
+  ar(s.idle_bits_);
+}
+
+void UartSampler::save_state(snap::Writer& w) const {
+  w.section("USMP");
+  fields(w, *this);
+}
+
+void UartSampler::load_state(snap::Reader& r) {
+  r.section("USMP");
+  fields(r, *this);
+}
+
 // ---- encoder ----
 
 void uart_encode(std::span<const std::uint8_t> bytes, std::uint64_t start, std::uint32_t bit_cycles,
                  std::vector<std::pair<std::uint64_t, bool>>& edges, UartFault fault) {
   const std::uint64_t t = bit_cycles;
+  edges.reserve(edges.size() + bytes.size() * kUartCharBits + 1);
   bool line = true;
   auto drive = [&](std::uint64_t cycle, bool level) {
     if (level != line) edges.emplace_back(cycle, level);
@@ -157,10 +252,11 @@ void uart_encode(std::span<const std::uint8_t> bytes, std::uint64_t start, std::
     const bool hit = fault.char_index >= 0 && static_cast<std::size_t>(fault.char_index) == i;
     auto faulty = [&](UartFault::Kind k) { return hit && fault.kind == k; };
     const std::uint64_t s = start + i * kUartCharBits * t;
-    drive(s, faulty(UartFault::Kind::start));
-    for (std::uint32_t b = 0; b < 8; ++b) drive(s + (1 + b) * t, ((d >> b) & 1) != 0);
-    drive(s + 9 * t, (even_parity(d) != 0) != faulty(UartFault::Kind::parity));
-    drive(s + kStopBit * t, !faulty(UartFault::Kind::stop));
+    for (std::uint32_t b = 0; b < kUartCharBits; ++b) {
+      using K = UartFault::Kind;
+      const K kind = b == 0 ? K::start : b == 9 ? K::parity : b == kStopBit ? K::stop : K::none;
+      drive(s + b * t, uart_bit(d, b) != (kind != K::none && faulty(kind)));
+    }
   }
   drive(start + bytes.size() * kUartCharBits * t, true);
 }

@@ -5,12 +5,12 @@
 #pragma once
 
 #include <cstdint>
-#include <deque>
 #include <limits>
 #include <span>
 #include <utility>
 #include <vector>
 
+#include "fifo.hpp"
 #include "snapshot.hpp"
 
 namespace dpc31 {
@@ -29,6 +29,8 @@ inline constexpr std::uint32_t kUartCharBits = 11;
 [[nodiscard]] int baud_code(std::uint32_t baud);
 // The parity bit that makes the number of ones in data + parity even.
 [[nodiscard]] std::uint8_t even_parity(std::uint8_t data);
+// The line level of bit k (0 start, 1..8 data, 9 parity, 10 stop) of character `data`.
+[[nodiscard]] bool uart_bit(std::uint8_t data, std::uint32_t k);
 
 struct UartChar {
   std::uint8_t data = 0;
@@ -76,6 +78,11 @@ class UartRx {
   [[nodiscard]] std::uint32_t bit_time() const { return t_; }  // T in clocks
   [[nodiscard]] bool level() const { return level_; }
   [[nodiscard]] bool receiving() const { return k_ < kUartCharBits; }
+  // Start of the earliest character not yet returned by advance(), kIdle if none.
+  [[nodiscard]] std::uint64_t busy_from() const {
+    if (!done_.empty()) return done_.front().start;
+    return receiving() ? s_ : kIdle;
+  }
 
   // Snapshots (emu/snapshot.hpp): every member, so also the edges driven ahead of time (they are
   // already sampled into the character in progress and the finished characters in done_).
@@ -99,7 +106,47 @@ class UartRx {
   std::uint64_t s_ = 0;
   std::uint16_t bits_ = 0;       // sampled bit k at bit position k
   std::uint64_t idle_bits_ = 0;  // of the character in progress
-  std::deque<UartChar> done_;    // complete, waiting for advance() to reach their stop sample
+  Fifo<UartChar> done_;          // complete, waiting for advance() to reach their stop sample
+};
+
+// The receiver of the per-cycle engine (docs/engine.md): the rules of UartRx, evaluated the way
+// hardware does it. Every clock it looks at RxD; a change of the line towards a level the
+// receiver does not hold is an edge; a falling edge while idle starts a bit counter, and each bit
+// is sampled when the counter reaches it. Nothing here is computed ahead of time.
+class UartSampler {
+ public:
+  // At the current clock: idle, the line assumed high from now on (as UartRx::configure).
+  void configure(std::uint32_t bit_cycles);
+  struct Clock {
+    bool ready = false;    // `ch` holds a character: this clock was its stop sample
+    bool ended = false;    // this clock ended a frame (the end of its stop bit)
+    bool started = false;  // a start bit began at this clock
+  };
+  // One clock at cycle `now`; `line` is RxD after the edges of this clock.
+  Clock clock(bool line, std::uint64_t now, UartChar& ch);
+  // An edge driven for the clock already evaluated (Chip::drive_rxd at the current cycle).
+  bool late_edge(bool line, std::uint64_t now);
+  [[nodiscard]] bool busy() const { return busy_; }
+
+  void save_state(snap::Writer& w) const;
+  void load_state(snap::Reader& r);
+
+ private:
+  template <typename Ar, typename Self>
+  static void fields(Ar& ar, Self& s);
+  bool detect(bool line, std::uint64_t now);
+
+  std::uint32_t t_ = 0;
+  bool line_prev_ = true;            // RxD at the previous clock: the edge detector
+  bool level_ = true;                // the level the receiver holds (set high by configure)
+  bool busy_ = false;                // from the start edge to the end of the stop bit
+  std::uint32_t k_ = kUartCharBits;  // next bit to sample
+  std::uint64_t pos_ = 0;            // clocks since the start edge
+  std::uint64_t next_pos_ = 0;       // pos_ of the next sample
+  std::uint16_t bits_ = 0;
+  std::uint64_t start_ = 0;
+  std::uint64_t high_for_ = 0;  // clocks the line has been high since the last rise / frame end
+  std::uint64_t idle_bits_ = 0;
 };
 
 // Fault injection for uart_encode: char `char_index` gets its parity bit inverted, its start bit

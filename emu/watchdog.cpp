@@ -22,8 +22,7 @@ static std::uint64_t baud_control_cycles(const ChipCore& c) {
 
 static void enter_baud_control(ChipCore& c) {
   c.timers.wd = WdState::Baud_Control;
-  const std::uint64_t t = baud_control_cycles(c);
-  c.timers.wd_deadline = t == kNever ? kNever : c.now + t;
+  c.arm_watchdog(baud_control_cycles(c));
 }
 
 void ChipCore::baud_found(std::uint8_t code) {
@@ -40,7 +39,7 @@ void ChipCore::watchdog_parameterise(bool wd_on, std::uint8_t f1, std::uint8_t f
   if (timers.wd == WdState::Baud_Search) return;
   if (wd_on && mode0(kMode0_DP_Mode)) {
     timers.wd = WdState::DP_Control;
-    timers.wd_deadline = now + timers.dp_wd_cycles;
+    arm_watchdog(timers.dp_wd_cycles);
   } else {
     enter_baud_control(*this);  // WD_On = 0: stays in Baud_Control, the DP state is never reset
   }
@@ -48,14 +47,14 @@ void ChipCore::watchdog_parameterise(bool wd_on, std::uint8_t f1, std::uint8_t f
 
 void ChipCore::watchdog_retrigger() {
   if (timers.wd == WdState::DP_Control) {
-    timers.wd_deadline = now + timers.dp_wd_cycles;
+    arm_watchdog(timers.dp_wd_cycles);
   } else if (timers.wd == WdState::Baud_Control) {
     enter_baud_control(*this);
   }
 }
 
 void ChipCore::watchdog_expired() {
-  timers.wd_deadline = kNever;
+  arm_watchdog(kNever);
   if (timers.wd == WdState::DP_Control) {
     log(LogLevel::info, "DP watchdog expired: WD_DP_Control_Timeout, DP state machine reset");
     enter_baud_control(*this);
@@ -79,12 +78,14 @@ namespace {
 
 template <typename Ar, typename S>
 void fields(Ar& ar, S& s) {
-  static_assert(snap::member_count<Timers>() == 5, "a new member: add it here");
+  static_assert(snap::member_count<Timers>() == 7, "a new member: add it here");
   ar(s.user_timer_next);
   ar.bounded(s.wd, WdState::DP_Control);
   ar(s.wd_deadline);
   ar(s.dp_wd_on);
   ar(s.dp_wd_cycles);
+  ar(s.user_left);
+  ar(s.wd_left);
 }
 
 }  // namespace

@@ -18,6 +18,9 @@ struct Timers {
   std::uint64_t wd_deadline = kNever;  // Baud_Control or DP_Control expiry
   bool dp_wd_on = false;               // Set_Prm WD_On: DP_Control monitors the master
   std::uint64_t dp_wd_cycles = 0;      // TWD in clocks
+  // Per-cycle engine: clocks to the next User_Timer_Clock / to the watchdog expiry (kNever: off).
+  std::uint64_t user_left = kNever;
+  std::uint64_t wd_left = kNever;
   void reset() { *this = Timers{}; }
 };
 

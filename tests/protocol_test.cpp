@@ -124,6 +124,115 @@ INSTANTIATE_TEST_SUITE_P(ProfilesAndBaudRates, Startup,
                                   std::to_string(std::get<1>(i.param));
                          });
 
+// A request handed to RxD before a Baud_Search window switch that it reaches into is heard at the
+// new rate: the edges wait in the chip, not in the receiver that the switch reconfigures.
+class AheadOfTime : public ::testing::TestWithParam<Engine> {};
+
+TEST_P(AheadOfTime, RequestDrivenBeforeAWindowSwitchIsHeardAtTheNewRate) {
+  Chip chip({Profile::dpc31, BusMode::intel, 0, GetParam()});
+  chip.set_log_sink(nullptr);
+  Responder user(ResponderConfig{});
+  DirectBus bus(chip);
+  user.init(bus);
+  const std::uint64_t s = chip.cycle();  // Start_SPC3 completed: the 12 Mbaud window opens
+  const std::uint64_t t = 8;             // 6 Mbaud
+  const std::uint64_t window = s + 4096 * 4;
+  std::vector<std::pair<std::uint64_t, bool>> txd;
+  chip.on_txd([&](std::uint64_t c, bool l) { txd.emplace_back(c, l); });
+  // FDL_Status 5 <- 2 (FCS 05+02+49 = 50h), starting TSYN after the 6 Mbaud window opens, handed
+  // over now, at 12 Mbaud.
+  const Bytes req = {0x10, 0x05, 0x02, 0x49, 0x50, 0x16};
+  const std::uint64_t start = window + 33 * t;
+  const std::uint64_t end = send_on_rxd(chip, req, start, t);
+  ASSERT_EQ(end, start + 6 * 11 * t);
+  // Acted on at the last stop sample: the rate is found (Baud_Control, baud code 1 = 6 Mbaud).
+  chip.step(end - t + t / 2 - 1 - chip.cycle());
+  EXPECT_EQ(chip.wd_state(), WdState::Baud_Search);
+  chip.step(1);
+  EXPECT_EQ(chip.wd_state(), WdState::Baud_Control);
+  EXPECT_EQ((chip.peek_reg(RegId::Status_Reg) >> 8) & 0x0F, 1);
+  chip.step(end + 11 * t + 6 * 11 * t - chip.cycle());
+  // The answer 10 02 05 00 07 16 starts MinTSDR = 11 bit times after the request's end.
+  ASSERT_FALSE(txd.empty());
+  EXPECT_EQ(txd.front(), std::make_pair(end + 11 * t, false));
+  EXPECT_EQ(chip.fdl_counters().requests, 1u);
+}
+
+// A gap inside a telegram ends it only when it reaches TSYN = 33 bit times: a character that
+// starts after 30 bit times continues it, although its stop sample comes 40.5 bit times after
+// the previous character's end.
+TEST_P(AheadOfTime, CharacterStartedBeforeTsynContinuesTheTelegram) {
+  Chip chip({Profile::dpc31, BusMode::intel, 0, GetParam()});
+  chip.set_log_sink(nullptr);
+  Responder user(ResponderConfig{});
+  DirectBus bus(chip);
+  user.init(bus);
+  const std::uint64_t t = 4;  // 12 Mbaud: the first Baud_Search window
+  std::vector<std::pair<std::uint64_t, bool>> txd;
+  chip.on_txd([&](std::uint64_t c, bool l) { txd.emplace_back(c, l); });
+  // FDL_Status 5 <- 2 (10 05 02 49 50 16), the ED 30 bit times after the FCS.
+  const std::uint64_t head_end =
+      send_on_rxd(chip, Bytes{0x10, 0x05, 0x02, 0x49, 0x50}, chip.cycle() + 33 * t, t);
+  const std::uint64_t end = send_on_rxd(chip, Bytes{0x16}, head_end + 30 * t, t);
+  chip.step(end + 11 * t + 1 - chip.cycle());
+  EXPECT_EQ(chip.fdl_counters().truncated, 0u);
+  EXPECT_EQ(chip.fdl_counters().no_sync, 0u);
+  ASSERT_FALSE(txd.empty());
+  EXPECT_EQ(txd.front(), std::make_pair(end + 11 * t, false));  // answered after MinTSDR
+}
+
+INSTANTIATE_TEST_SUITE_P(Engines, AheadOfTime, ::testing::Values(Engine::event, Engine::per_cycle),
+                         [](const auto& i) {
+                           return std::string(i.param == Engine::event ? "event" : "per_cycle");
+                         });
+
+// With nobody watching TxD bit by bit, the event engine takes the answer's bits without an event
+// each (docs/engine.md); the pin, interrupts and telegrams are the same as with a watcher.
+TEST(TxdFastPath, UnwatchedAnswerCostsNoEventPerBitAndLooksTheSame) {
+  struct Run {
+    Chip chip{{Profile::dpc31, BusMode::intel, 0}};
+    std::vector<std::pair<std::uint64_t, bool>> irq;
+    std::vector<std::uint64_t> telegrams;
+    std::vector<bool> pin;  // TxD at every cycle of the answer
+    std::size_t events = 0;
+  };
+  auto play = [](Run& r, bool watch_txd) {
+    r.chip.set_log_sink(nullptr);
+    Responder user(ResponderConfig{});
+    DirectBus bus(r.chip);
+    user.init(bus);
+    r.chip.on_irq_change([&r](std::uint64_t c, bool a) { r.irq.emplace_back(c, a); });
+    r.chip.on_telegram([&r](const Telegram& t) { r.telegrams.push_back(t.start); });
+    r.chip.on_state_change([&r](std::uint64_t) { ++r.events; });
+    if (watch_txd) r.chip.on_txd([](std::uint64_t, bool) {});
+    const std::uint64_t t = 4;  // 12 Mbaud, the first Baud_Search window
+    const std::uint64_t start = r.chip.cycle() + 33 * t;
+    const Bytes req = {0x10, 0x05, 0x02, 0x49, 0x50, 0x16};  // FDL_Status 5 <- 2
+    const std::uint64_t end = send_on_rxd(r.chip, req, start, t);
+    const std::uint64_t answer = end + 11 * t;  // 10 02 05 00 07 16: 6 characters
+    r.chip.step(answer - r.chip.cycle());
+    const std::size_t before = r.events;
+    for (std::uint64_t c = 0; c < 6 * 11 * t; ++c) {
+      r.pin.push_back(r.chip.txd_pin());
+      r.chip.step(1);
+    }
+    r.events -= before;  // events inside the answer
+  };
+  Run watched;
+  Run unwatched;
+  play(watched, true);
+  play(unwatched, false);
+  EXPECT_EQ(unwatched.pin, watched.pin);
+  EXPECT_EQ(unwatched.irq, watched.irq);
+  EXPECT_EQ(unwatched.telegrams, watched.telegrams);
+  EXPECT_EQ(unwatched.chip.save_state(), watched.chip.save_state());
+  // 10 02 05 00 07 16 changes TxD 4 + 4 + 6 + 2 + 4 + 6 = 26 times; the first, at the answer's
+  // start, is before the counted cycles, the end of the answer is one more event. Unwatched,
+  // only the end of the answer is an event.
+  EXPECT_EQ(watched.events, 26u);
+  EXPECT_EQ(unwatched.events, 1u);
+}
+
 class Protocol : public ::testing::TestWithParam<Profile> {
  protected:
   static ResponderConfig config() {

@@ -502,7 +502,7 @@ TEST(SnapshotFormat, BadFilesAreRefusedAndLeaveTheChipUnchanged) {
 
   b = good;
   set_le(b, 8, snap::kFormatVersion + 1, 4);
-  expect_refused(target, b, "snapshot format version 2 is newer than this build reads (1)");
+  expect_refused(target, b, "snapshot format version 3 is newer than this build reads (2)");
   set_le(b, 8, 0, 4);
   expect_refused(target, b, "snapshot format version 0 is not supported");
 

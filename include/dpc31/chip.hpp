@@ -20,10 +20,15 @@
 
 namespace dpc31 {
 
+// How time advances (docs/engine.md). Both engines give the same observable results; per_cycle
+// evaluates every clock as RTL would and is the reference the event engine is checked against.
+enum class Engine : std::uint8_t { event = 0, per_cycle = 1 };
+
 struct ChipOptions {
   Profile profile = Profile::dpc31;
   BusMode bus = BusMode::intel;
   std::uint32_t clock_hz = 0;  // 0 = the description's default (48 MHz)
+  Engine engine = Engine::event;
 };
 
 // DP slave state machine (Status_Reg bits 5:4).
@@ -115,6 +120,11 @@ class Chip {
   // Steps at most `cycles`, stopping right after the event that makes the interrupt active
   // (true) — where firmware would enter its ISR.
   bool step_until_irq(std::uint64_t cycles);
+  // Ends the step() / step_until_irq() in progress after the current event (an observer's way
+  // to hand control back to whoever steps the chip). Bus accesses always take their full time.
+  void request_stop();
+  [[nodiscard]] bool stop_requested() const;
+  void clear_stop();
   [[nodiscard]] std::uint64_t cycle() const;
   [[nodiscard]] std::uint32_t clock_hz() const;
   [[nodiscard]] std::uint32_t bus_access_cycles() const;

@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -71,6 +72,12 @@ int main(int argc, char** argv) {
   run->add_option("--to", run_opt.to, "waveform window: one past the last cycle");
   run->add_option("--timescale", run_opt.timescale, "waveform time unit (default 1ps)");
   run->add_flag("--flat", run_opt.flat, "one scope, 1-bit signals only (for sigrok)");
+  run->add_option("--engine", run_opt.engine,
+                  "how time advances: event (deadline to deadline) or per-cycle (every clock, "
+                  "the reference; docs/engine.md)")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, dpc31::Engine>{
+          {"event", dpc31::Engine::event}, {"per-cycle", dpc31::Engine::per_cycle}}))
+      ->capture_default_str();
   run->add_option("--pcap", run_opt.pcap, "write the telegrams as pcapng (docs/capture.md)");
 
   dpc31::cli::ReplayOptions replay_opt;

@@ -106,6 +106,7 @@ int run_with_outputs(const RunOptions& opt, const LineSink& walk, const LineSink
     errors(perr.text());
     return 2;
   }
+  s.chip.engine = opt.engine;
   return run_parsed_scenario(opt, s, walk, errors, o, err);
 }
 
@@ -195,10 +196,7 @@ int run_scenario_command(const RunOptions& opt, std::FILE* out, std::FILE* err) 
   const LineSink errors = [err](const std::string& line) { fmt::print(err, "{}\n", line); };
   Scenario s;
   ScenarioOutcome o;
-  const bool outputs =
-      !opt.record.empty() || !opt.vcd.empty() || !opt.fst.empty() || !opt.pcap.empty();
-  const int rc = outputs ? run_with_outputs(opt, walk, errors, s, o, err)
-                         : run_scenario_file(opt.scenario, walk, errors, &s, &o);
+  const int rc = run_with_outputs(opt, walk, errors, s, o, err);
   if (rc == 2) return rc;
   if (!opt.json.empty() && !write_json(opt.json, summary(s, o))) {
     fmt::print(err, "dpc31 run: cannot write the JSON summary to {}\n", opt.json);

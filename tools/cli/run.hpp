@@ -21,7 +21,8 @@ struct RunOptions {
   std::uint64_t to = UINT64_MAX;
   std::string timescale = "1ps";
   bool flat = false;
-  std::string pcap;  // the chip's telegrams as pcapng (docs/capture.md)
+  std::string pcap;               // the chip's telegrams as pcapng (docs/capture.md)
+  Engine engine = Engine::event;  // how time advances (docs/engine.md)
 };
 
 // `dpc31 run`: plays a scenario file (docs/scenario-format.md), printing the state walk to `out`
