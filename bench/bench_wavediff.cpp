@@ -1,0 +1,115 @@
+// `dpc31 wavediff` on two large VCD files (issue 7 item f: >= 300 MB/s with peak RSS < 64 MB).
+// The pair is generated at run time into a temporary directory (tools/wavediff/synthetic_vcd:
+// RTL-dump-shaped, four one-bit differences), --wavediff_mb MB each (default 1000); the real
+// command runs as a child process, its wall time is the iteration time and wait4's ru_maxrss its
+// peak RSS. That figure also counts what this process had resident when it spawned the child (a
+// few MB; `peak_rss_parent_MB`), so it is an upper bound.
+#include <benchmark/benchmark.h>
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "bench_options.hpp"
+#include "synthetic_vcd.hpp"
+
+extern char** environ;
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// A directory removed with everything in it when done.
+class ScratchDir {
+ public:
+  ScratchDir() {
+    const std::string& base = dpc31::bench::options().wavediff_dir;
+    path_ = (base.empty() ? fs::temp_directory_path() : fs::path(base)) /
+            ("dpc31-bench-wavediff-" + std::to_string(::getpid()));
+    fs::create_directories(path_);
+  }
+  ~ScratchDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  ScratchDir(const ScratchDir&) = delete;
+  ScratchDir& operator=(const ScratchDir&) = delete;
+  [[nodiscard]] std::string file(const char* name) const { return (path_ / name).string(); }
+
+ private:
+  fs::path path_;
+};
+
+struct ChildResult {
+  int exit_code = -1;  // -1: did not start or was killed
+  long maxrss_kib = 0;
+};
+
+// Runs argv[0] with its output discarded and waits for it.
+ChildResult run_child(const std::vector<std::string>& args) {
+  std::vector<char*> argv;
+  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&fa, 2, "/dev/null", O_WRONLY, 0);
+  pid_t pid = 0;
+  ChildResult r;
+  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (rc != 0) return r;
+  int status = 0;
+  struct rusage ru {};
+  if (::wait4(pid, &status, 0, &ru) != pid) return r;
+  r.maxrss_kib = ru.ru_maxrss;
+  if (WIFEXITED(status)) r.exit_code = WEXITSTATUS(status);
+  return r;
+}
+
+void BM_WavediffLargePair(benchmark::State& st) {
+  const auto& opt = dpc31::bench::options();
+  ScratchDir dir;
+  const std::string a = dir.file("a.vcd");
+  const std::string b = dir.file("b.vcd");
+  dpc31::wavediff::SyntheticVcd spec;
+  spec.steps = dpc31::wavediff::synthetic_steps_for_megabytes(opt.wavediff_mb);
+  spec.diff_steps = {spec.steps / 4, spec.steps / 2, spec.steps * 3 / 4, spec.steps - 10};
+  std::string error;
+  if (!dpc31::wavediff::write_synthetic_vcd_pair(a, b, spec, error)) {
+    st.SkipWithError(error.c_str());
+    return;
+  }
+  const double mb = static_cast<double>(fs::file_size(a) + fs::file_size(b)) / 1e6;
+  struct rusage self {};
+  ::getrusage(RUSAGE_SELF, &self);
+  long maxrss = 0;
+  for (auto _ : st) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const ChildResult r = run_child({opt.dpc31_cli, "wavediff", a, b});
+    st.SetIterationTime(
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    if (r.exit_code != 1) {  // 1: the files differ, as they do
+      st.SkipWithError(
+          ("dpc31 wavediff exited with " + std::to_string(r.exit_code) + ": " + opt.dpc31_cli)
+              .c_str());
+      return;
+    }
+    maxrss = std::max(maxrss, r.maxrss_kib);
+  }
+  st.counters["MB_per_s"] =
+      benchmark::Counter(mb * static_cast<double>(st.iterations()), benchmark::Counter::kIsRate);
+  st.counters["input_MB"] = mb;
+  st.counters["peak_rss_MB"] = static_cast<double>(maxrss) / 1024.0;
+  st.counters["peak_rss_parent_MB"] = static_cast<double>(self.ru_maxrss) / 1024.0;
+}
+BENCHMARK(BM_WavediffLargePair)->UseManualTime()->Iterations(1)->Unit(benchmark::kSecond);
+
+}  // namespace
