@@ -5,10 +5,7 @@
 // peak RSS. That figure also counts what this process had resident when it spawned the child (a
 // few MB; `peak_rss_parent_MB`), so it is an upper bound.
 #include <benchmark/benchmark.h>
-#include <fcntl.h>
-#include <spawn.h>
 #include <sys/resource.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -18,9 +15,8 @@
 #include <vector>
 
 #include "bench_options.hpp"
+#include "child.hpp"
 #include "synthetic_vcd.hpp"
-
-extern char** environ;
 
 namespace {
 
@@ -47,33 +43,6 @@ class ScratchDir {
   fs::path path_;
 };
 
-struct ChildResult {
-  int exit_code = -1;  // -1: did not start or was killed
-  long maxrss_kib = 0;
-};
-
-// Runs argv[0] with its output discarded and waits for it.
-ChildResult run_child(const std::vector<std::string>& args) {
-  std::vector<char*> argv;
-  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&fa, 2, "/dev/null", O_WRONLY, 0);
-  pid_t pid = 0;
-  ChildResult r;
-  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  if (rc != 0) return r;
-  int status = 0;
-  struct rusage ru {};
-  if (::wait4(pid, &status, 0, &ru) != pid) return r;
-  r.maxrss_kib = ru.ru_maxrss;
-  if (WIFEXITED(status)) r.exit_code = WEXITSTATUS(status);
-  return r;
-}
-
 void BM_WavediffLargePair(benchmark::State& st) {
   const auto& opt = dpc31::bench::options();
   ScratchDir dir;
@@ -93,7 +62,7 @@ void BM_WavediffLargePair(benchmark::State& st) {
   long maxrss = 0;
   for (auto _ : st) {
     const auto t0 = std::chrono::steady_clock::now();
-    const ChildResult r = run_child({opt.dpc31_cli, "wavediff", a, b});
+    const dpc31::child::Result r = dpc31::child::run({opt.dpc31_cli, "wavediff", a, b});
     st.SetIterationTime(
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     if (r.exit_code != 1) {  // 1: the files differ, as they do
