@@ -22,32 +22,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A directory removed with everything in it when done.
-class ScratchDir {
- public:
-  ScratchDir() {
-    const std::string& base = dpc31::bench::options().wavediff_dir;
-    path_ = (base.empty() ? fs::temp_directory_path() : fs::path(base)) /
-            ("dpc31-bench-wavediff-" + std::to_string(::getpid()));
-    fs::create_directories(path_);
-  }
-  ~ScratchDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  ScratchDir(const ScratchDir&) = delete;
-  ScratchDir& operator=(const ScratchDir&) = delete;
-  [[nodiscard]] std::string file(const char* name) const { return (path_ / name).string(); }
-
- private:
-  fs::path path_;
-};
-
-void BM_WavediffLargePair(benchmark::State& st) {
+// Generates the pair in `dir` and runs `dpc31 wavediff` on it.
+void generate_and_compare(benchmark::State& st, const fs::path& dir) {
   const auto& opt = dpc31::bench::options();
-  ScratchDir dir;
-  const std::string a = dir.file("a.vcd");
-  const std::string b = dir.file("b.vcd");
+  const std::string a = (dir / "a.vcd").string();
+  const std::string b = (dir / "b.vcd").string();
   dpc31::wavediff::SyntheticVcd spec;
   spec.steps = dpc31::wavediff::synthetic_steps_for_megabytes(opt.wavediff_mb);
   spec.diff_steps = {spec.steps / 4, spec.steps / 2, spec.steps * 3 / 4, spec.steps - 10};
@@ -66,9 +45,9 @@ void BM_WavediffLargePair(benchmark::State& st) {
     st.SetIterationTime(
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     if (r.exit_code != 1) {  // 1: the files differ, as they do
-      st.SkipWithError(
-          ("dpc31 wavediff exited with " + std::to_string(r.exit_code) + ": " + opt.dpc31_cli)
-              .c_str());
+      st.SkipWithError(("dpc31 wavediff exited with " + std::to_string(r.exit_code) + " " +
+                        r.error + " (" + opt.dpc31_cli + ")")
+                           .c_str());
       return;
     }
     maxrss = std::max(maxrss, r.maxrss_kib);
@@ -78,6 +57,16 @@ void BM_WavediffLargePair(benchmark::State& st) {
   st.counters["input_MB"] = mb;
   st.counters["peak_rss_MB"] = static_cast<double>(maxrss) / 1024.0;
   st.counters["peak_rss_parent_MB"] = static_cast<double>(self.ru_maxrss) / 1024.0;
+}
+
+void BM_WavediffLargePair(benchmark::State& st) {
+  const std::string& base = dpc31::bench::options().wavediff_dir;
+  const fs::path dir = (base.empty() ? fs::temp_directory_path() : fs::path(base)) /
+                       ("dpc31-bench-wavediff-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  generate_and_compare(st, dir);
+  std::error_code ec;
+  fs::remove_all(dir, ec);
 }
 BENCHMARK(BM_WavediffLargePair)->UseManualTime()->Iterations(1)->Unit(benchmark::kSecond);
 
