@@ -94,18 +94,23 @@ double seconds_per_unit(const std::string& time_unit) {
   return 1;
 }
 
-// The benchmark's entry in Google Benchmark's JSON output: its name, or its name followed by
+// The benchmark's entry in Google Benchmark's JSON output: the median of its repetitions if it
+// was repeated, else its only run. Runs are named by the benchmark's name, or that followed by
 // "/real_time" and the like.
 const json* find_entry(const json& out, const std::string& name) {
   if (!out.contains("benchmarks")) return nullptr;
+  const json* found = nullptr;
   for (const json& b : out["benchmarks"]) {
-    const std::string n = b.value("name", "");
-    if (n == name ||
-        (n.size() > name.size() && n.compare(0, name.size(), name) == 0 && n[name.size()] == '/')) {
-      return &b;
+    const std::string n = b.value("run_name", b.value("name", ""));
+    if (n != name && (n.size() <= name.size() || n.compare(0, name.size(), name) != 0 ||
+                      n[name.size()] != '/')) {
+      continue;
     }
+    const std::string aggregate = b.value("aggregate_name", "");
+    if (aggregate == "median") return &b;
+    if (aggregate.empty() && found == nullptr) found = &b;
   }
-  return nullptr;
+  return found;
 }
 
 struct Row {
@@ -190,6 +195,7 @@ json run_item(const BenchArgs& a, const std::string& bench, const std::vector<Ro
   const dpc31::child::Result r = dpc31::child::run(
       {bench, "--benchmark_filter=" + filter,
        "--benchmark_min_time=" + fmt::format("{}", a.min_time),
+       "--benchmark_repetitions=" + std::to_string(a.repetitions),
        "--benchmark_out=" + out_file.string(), "--benchmark_out_format=json",
        "--dpc31_cli=" + self_path().string(), "--wavediff_mb=" + std::to_string(a.wavediff_mb),
        "--wavediff_dir=" +
@@ -254,8 +260,8 @@ json to_json(const BenchArgs& a, const std::string& bench, const std::vector<Row
 CLI::App* add_bench_subcommand(CLI::App& app, BenchArgs& a) {
   auto* cmd = app.add_subcommand(
       "bench", "run the benchmarks of bench/ and print one table against the targets");
-  auto* quick =
-      cmd->add_flag("--quick", a.quick, "short runs and 8 MB wavediff files (a smoke test)");
+  auto* quick = cmd->add_flag("--quick", a.quick,
+                              "one short run each and 8 MB wavediff files (a smoke test)");
   cmd->add_option("--json", a.json, "also write the table as JSON to this file");
   cmd->add_option("--min-time", a.min_time, "seconds per benchmark (default 0.5)")
       ->check(CLI::Range(0.001, 3600.0))
@@ -263,6 +269,10 @@ CLI::App* add_bench_subcommand(CLI::App& app, BenchArgs& a) {
   cmd->add_option("--wavediff-mb", a.wavediff_mb,
                   "MB of each of item f's two generated VCD files (default 1000)")
       ->check(CLI::Range(1, 1'000'000))
+      ->excludes(quick);
+  cmd->add_option("--repetitions", a.repetitions,
+                  "runs of each benchmark; the table shows the median (default 3)")
+      ->check(CLI::Range(1, 100))
       ->excludes(quick);
   cmd->add_option("--wavediff-dir", a.wavediff_dir,
                   "where item f's files go (default: TMPDIR; needs twice --wavediff-mb)")
@@ -278,6 +288,7 @@ int run_bench(const BenchArgs& args, std::FILE* out, std::FILE* err) {
   if (a.quick) {
     a.min_time = 0.01;
     a.wavediff_mb = 8;
+    a.repetitions = 1;
   }
   const std::string bench = a.bench_binary.empty()
                                 ? (self_path().parent_path() / "dpc31_bench").string()

@@ -14,6 +14,7 @@ struct BenchArgs {
   bool quick = false;     // short minimum time and small wavediff files: a smoke test
   std::string json;       // also write the rows as JSON here (temporary file + rename)
   double min_time = 0.5;  // seconds per benchmark (Google Benchmark's --benchmark_min_time)
+  int repetitions = 3;    // runs of each benchmark; the table shows the median
   std::uint64_t wavediff_mb = 1000;  // size of each of item f's two VCD files
   std::string wavediff_dir;          // where item f's files go (default: TMPDIR)
   std::string bench_binary;          // default: dpc31_bench next to this dpc31
