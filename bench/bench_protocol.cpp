@@ -47,8 +47,15 @@ class DpSession {
     st.SkipWithError("the master did not bring the slave to Data_Exchange");
     return false;
   }
-  void exchange(int n) {
-    for (int i = 0; i < n; ++i) master_.data_exchange(outputs_);
+  // `n` Data_Exchanges; false (benchmark skipped with an error) if one is not answered.
+  bool exchange(benchmark::State& st, int n) {
+    for (int i = 0; i < n; ++i) {
+      if (!master_.data_exchange(outputs_).answer) {
+        st.SkipWithError("a Data_Exchange was not answered");
+        return false;
+      }
+    }
+    return true;
   }
   [[nodiscard]] double chip_seconds() const {
     return static_cast<double>(chip_.cycle()) / chip_.clock_hz();
@@ -85,7 +92,9 @@ void BM_DataExchange(benchmark::State& st) {
   DpSession s(static_cast<std::uint32_t>(st.range(0)), static_cast<std::uint8_t>(st.range(1)));
   if (!s.startup(st)) return;
   const double t0 = s.chip_seconds();
-  for (auto _ : st) s.exchange(1);
+  for (auto _ : st) {
+    if (!s.exchange(st, 1)) return;
+  }
   set_realtime_factor(st, s.chip_seconds() - t0);
   st.counters["chip_us_per_dx"] =
       benchmark::Counter((s.chip_seconds() - t0) * 1e6 / static_cast<double>(st.iterations()));
@@ -107,8 +116,7 @@ void BM_StartupAndDataExchange(benchmark::State& st) {
   double chip_seconds = 0;
   for (auto _ : st) {
     DpSession s(static_cast<std::uint32_t>(st.range(0)), 4);
-    if (!s.startup(st)) return;
-    s.exchange(static_cast<int>(st.range(1)));
+    if (!s.startup(st) || !s.exchange(st, static_cast<int>(st.range(1)))) return;
     chip_seconds += s.chip_seconds();
   }
   set_realtime_factor(st, chip_seconds);
@@ -125,8 +133,7 @@ BENCHMARK(BM_StartupAndDataExchange)
 void BM_WatchdogExpiry650s(benchmark::State& st) {
   for (auto _ : st) {
     DpSession s(1'500'000, 4, 255);
-    if (!s.startup(st)) return;
-    s.exchange(1);
+    if (!s.startup(st) || !s.exchange(st, 1)) return;
     const std::uint64_t ms = s.chip().clock_hz() / 1000;
     const std::uint64_t twd = 650'250 * ms;
     const auto t0 = Clock::now();
@@ -163,8 +170,7 @@ void BM_TracedRun(benchmark::State& st) {
       st.SkipWithError(error.c_str());
       return;
     }
-    if (!s.startup(st)) return;
-    s.exchange(50);
+    if (!s.startup(st) || !s.exchange(st, 50)) return;
     if (!o.signals.empty()) {
       if (!rec.finish(s.chip().cycle(), error)) {
         st.SkipWithError(error.c_str());
