@@ -1,39 +1,202 @@
-// Cyclic Data_Exchange through the whole chip (bit-level RxD/TxD, firmware on its thread):
-// how many seconds of chip time one second of wall time buys ("x_realtime").
+// The whole chip on the bus (bit-level RxD/TxD, exact timing, firmware on its thread) driven by
+// the built-in DP master: how many seconds of chip time one second of wall time buys
+// ("x_realtime"). Issue 7 items b (12 Mbaud, 244 + 244 bytes), c (start-up and data exchange at
+// 9.6 kbaud), d (a 650 s DP watchdog expiring), and the scaling families: Data_Exchange against
+// baud rate and telegram length, a traced run against the number of traced signals.
 #include <benchmark/benchmark.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <string>
+#include <vector>
 
 #include "../emu/dp_master.hpp"
 #include "../emu/responder.hpp"
+#include "waveform.hpp"
 
 namespace {
 
-void BM_DataExchange(benchmark::State& st) {
-  const auto baud = static_cast<std::uint32_t>(st.range(0));
-  const auto len = static_cast<std::uint8_t>(st.range(1));
-  dpc31::Chip chip({dpc31::Profile::dpc31, dpc31::BusMode::intel, 0});
-  chip.set_log_sink(nullptr);
-  dpc31::ResponderConfig rc;
-  rc.slave.in_len = len;
-  rc.slave.out_len = len;
-  dpc31::Responder user(rc);
-  user.inputs.assign(len, 0x5A);
-  dpc31::DirectBus bus(chip);
-  user.init(bus);
-  dpc31::DpMaster master(chip, dpc31::MasterConfig{2, baud, 100, 33}, rc.slave);
-  master.set_firmware([&](dpc31::BusPort& b) { user.isr(b); });
-  if (!master.startup(5000)) st.SkipWithError("no start-up");
-  const std::vector<std::uint8_t> out(len, 0x11);
-  const std::uint64_t c0 = chip.cycle();
-  for (auto _ : st) master.data_exchange(out);
-  const double chip_seconds = static_cast<double>(chip.cycle() - c0) / chip.clock_hz();
+using Clock = std::chrono::steady_clock;
+
+// A chip at power-on with the responder firmware (`len` bytes each way) behind the built-in
+// master; `wd_fact` != 0 sets both DP watchdog factors (10 ms base, TWD = 10 ms x wd_fact^2).
+// Not movable: the firmware callback refers to the members.
+class DpSession {
+ public:
+  DpSession(std::uint32_t baud, std::uint8_t len, std::uint8_t wd_fact = 0)
+      : config_(responder_config(len, wd_fact)),
+        chip_({dpc31::Profile::dpc31, dpc31::BusMode::intel, 0}),
+        user_(config_),
+        bus_(chip_),
+        master_(chip_, dpc31::MasterConfig{2, baud, 100, 33}, config_.slave),
+        outputs_(len, 0x11) {
+    chip_.set_log_sink(nullptr);
+    user_.inputs.assign(len, 0x5A);
+    user_.init(bus_);
+    master_.set_firmware([this](dpc31::BusPort& b) { user_.isr(b); });
+  }
+  DpSession(const DpSession&) = delete;
+  DpSession& operator=(const DpSession&) = delete;
+
+  dpc31::Chip& chip() { return chip_; }
+  dpc31::DpMaster& master() { return master_; }
+  // Start-up to Data_Exchange; false (benchmark skipped with an error) if it fails.
+  bool startup(benchmark::State& st) {
+    if (master_.startup(5000) && chip_.dp_state() == dpc31::DpState::Data_Exchange) return true;
+    st.SkipWithError("the master did not bring the slave to Data_Exchange");
+    return false;
+  }
+  // `n` Data_Exchanges; false (benchmark skipped with an error) if one is not answered.
+  bool exchange(benchmark::State& st, int n) {
+    for (int i = 0; i < n; ++i) {
+      if (!master_.data_exchange(outputs_).answer) {
+        st.SkipWithError("a Data_Exchange was not answered");
+        return false;
+      }
+    }
+    return true;
+  }
+  [[nodiscard]] double chip_seconds() const {
+    return static_cast<double>(chip_.cycle()) / chip_.clock_hz();
+  }
+
+ private:
+  static dpc31::ResponderConfig responder_config(std::uint8_t len, std::uint8_t wd_fact) {
+    dpc31::ResponderConfig rc;
+    rc.slave.in_len = len;
+    rc.slave.out_len = len;
+    if (wd_fact != 0) {
+      rc.slave.wd_on = true;
+      rc.slave.wd_fact1 = wd_fact;
+      rc.slave.wd_fact2 = wd_fact;
+      rc.slave.wd_base_1ms = false;
+    }
+    return rc;
+  }
+
+  dpc31::ResponderConfig config_;
+  dpc31::Chip chip_;
+  dpc31::Responder user_;
+  dpc31::DirectBus bus_;
+  dpc31::DpMaster master_;
+  std::vector<std::uint8_t> outputs_;
+};
+
+void set_realtime_factor(benchmark::State& st, double chip_seconds) {
   st.counters["x_realtime"] = benchmark::Counter(chip_seconds, benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_DataExchange)
-    ->Args({12'000'000, 4})
-    ->Args({12'000'000, 244})
-    ->Args({1'500'000, 244})
-    ->Args({9600, 4})
-    ->UseRealTime();
+
+// One Data_Exchange per iteration, after start-up (not timed).
+void BM_DataExchange(benchmark::State& st) {
+  DpSession s(static_cast<std::uint32_t>(st.range(0)), static_cast<std::uint8_t>(st.range(1)));
+  if (!s.startup(st)) return;
+  const double t0 = s.chip_seconds();
+  for (auto _ : st) {
+    if (!s.exchange(st, 1)) return;
+  }
+  set_realtime_factor(st, s.chip_seconds() - t0);
+  st.counters["chip_us_per_dx"] =
+      benchmark::Counter((s.chip_seconds() - t0) * 1e6 / static_cast<double>(st.iterations()));
+}
+// Item b, then the scaling families: baud rate at 32 bytes, telegram length at 1.5 and 12 Mbaud.
+void data_exchange_args(benchmark::internal::Benchmark* b) {
+  for (const int baud : {9600, 19200, 93750, 187500, 500000, 1500000, 3000000, 6000000, 12000000}) {
+    b->Args({baud, 32});
+  }
+  for (const int baud : {1500000, 12000000}) {
+    for (const int len : {4, 128, 244}) b->Args({baud, len});
+  }
+}
+BENCHMARK(BM_DataExchange)->ArgNames({"baud", "len"})->Apply(data_exchange_args)->UseRealTime();
+
+// Item c: power-on (chip construction), the master's start-up including the baud search, and
+// `range(1)` Data_Exchanges of 4 + 4 bytes, all timed.
+void BM_StartupAndDataExchange(benchmark::State& st) {
+  double chip_seconds = 0;
+  for (auto _ : st) {
+    DpSession s(static_cast<std::uint32_t>(st.range(0)), 4);
+    if (!s.startup(st) || !s.exchange(st, static_cast<int>(st.range(1)))) return;
+    chip_seconds += s.chip_seconds();
+  }
+  set_realtime_factor(st, chip_seconds);
+}
+BENCHMARK(BM_StartupAndDataExchange)
+    ->ArgNames({"baud", "dx"})
+    ->Args({9600, 100})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+
+// Item d: WD_Fact_1 = WD_Fact_2 = 255 on the 10 ms base: TWD = 650.25 s. After start-up and one
+// Data_Exchange the bus falls silent; timed: TWD - 1 ms (still Data_Exchange), then 2 ms more
+// (the watchdog has expired: Wait_Prm, Baud_Control).
+void BM_WatchdogExpiry650s(benchmark::State& st) {
+  for (auto _ : st) {
+    DpSession s(1'500'000, 4, 255);
+    if (!s.startup(st) || !s.exchange(st, 1)) return;
+    const std::uint64_t ms = s.chip().clock_hz() / 1000;
+    const std::uint64_t twd = 650'250 * ms;
+    const auto t0 = Clock::now();
+    s.master().idle(twd - ms);
+    const bool before = s.chip().dp_state() == dpc31::DpState::Data_Exchange;
+    s.master().idle(2 * ms);
+    const auto t1 = Clock::now();
+    st.SetIterationTime(std::chrono::duration<double>(t1 - t0).count());
+    if (!before || s.chip().dp_state() != dpc31::DpState::Wait_Prm ||
+        s.chip().wd_state() != dpc31::WdState::Baud_Control) {
+      st.SkipWithError("the DP watchdog did not expire at TWD = 650.25 s");
+      return;
+    }
+  }
+}
+BENCHMARK(BM_WatchdogExpiry650s)->UseManualTime()->Unit(benchmark::kMillisecond);
+
+// Scaling: power-on, start-up and 50 Data_Exchanges of 32 + 32 bytes at 1.5 Mbaud, with a VCD
+// of the first `range(0)` signals of the documented list (docs/waveforms.md); 0 = no recorder.
+void BM_TracedRun(benchmark::State& st) {
+  const auto& all = dpc31::wave::signal_list();
+  dpc31::wave::Options o;
+  o.path = (std::filesystem::temp_directory_path() /
+            ("dpc31-bench-trace-" + std::to_string(::getpid()) + ".vcd"))
+               .string();
+  for (std::int64_t i = 0; i < st.range(0); ++i) o.signals.emplace_back(all.at(i).name);
+  double chip_seconds = 0;
+  std::uintmax_t bytes = 0;
+  for (auto _ : st) {
+    DpSession s(1'500'000, 32);
+    dpc31::wave::Recorder rec(o);
+    std::string error;
+    if (!o.signals.empty() && !rec.attach(s.chip(), error)) {
+      st.SkipWithError(error.c_str());
+      return;
+    }
+    if (!s.startup(st) || !s.exchange(st, 50)) return;
+    if (!o.signals.empty()) {
+      if (!rec.finish(s.chip().cycle(), error)) {
+        st.SkipWithError(error.c_str());
+        return;
+      }
+      bytes = std::filesystem::file_size(o.path);
+    }
+    chip_seconds += s.chip_seconds();
+  }
+  std::error_code ec;
+  std::filesystem::remove(o.path, ec);
+  set_realtime_factor(st, chip_seconds);
+  st.counters["vcd_bytes"] = static_cast<double>(bytes);
+}
+void traced_run_args(benchmark::internal::Benchmark* b) {
+  const auto n = static_cast<std::int64_t>(dpc31::wave::signal_list().size());
+  for (const std::int64_t k :
+       {std::int64_t{0}, std::int64_t{1}, std::int64_t{2}, std::int64_t{4}, std::int64_t{8}, n}) {
+    b->Arg(k);
+  }
+}
+BENCHMARK(BM_TracedRun)
+    ->ArgName("signals")
+    ->Apply(traced_run_args)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
 
 // A DP watchdog at its longest, TWD = 10 ms x 255 x 255 = 650.25 s, running out on a silent bus:
 // the event engine jumps from deadline to deadline (the user timer's every 1 ms, the watchdog's).

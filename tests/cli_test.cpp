@@ -1,12 +1,14 @@
 // The dpc31 command line: help, the register map in every format, the demo.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "dpc31/regdesc.hpp"
 #include "run_command.hpp"
@@ -105,4 +107,60 @@ TEST(Cli, RunWritesWaveformsAndCapture) {
   EXPECT_EQ(run("run " + scn + " --vcd " + dir + "bad.vcd --signals nosuch").rc, 2);
   EXPECT_TRUE(slurp(dir + "bad.vcd").empty());
   EXPECT_EQ(run("run " + scn + " --vcd " + dir + "bad.vcd --timescale 3ns").rc, 2);
+}
+
+// `dpc31 bench --quick`: every row of the table is there and well-formed. The timings are not
+// checked (speed is measured by the benchmarks, not asserted by tests).
+TEST(CliBench, QuickPrintsEveryRowWellFormed) {
+  const std::string json_path = ::testing::TempDir() + "dpc31_bench_quick.json";
+  const Result r = run("bench --quick --json " + json_path);
+  ASSERT_EQ(r.rc, 0) << r.out;
+  std::istringstream lines(r.out);
+  std::string line;
+  std::vector<std::vector<std::string>> rows;
+  while (std::getline(lines, line)) {
+    if (line == "|---|---|---|---|---|") continue;
+    ASSERT_EQ(line.rfind("| ", 0), 0u) << "not a table line: " << line;
+    std::vector<std::string> cells;
+    std::size_t at = 1;
+    for (std::size_t bar = line.find(" |", at); bar != std::string::npos;
+         bar = line.find(" |", at)) {
+      cells.push_back(line.substr(at + 1, bar - at - 1));
+      at = bar + 2;
+    }
+    ASSERT_EQ(cells.size(), 5u) << line;
+    rows.push_back(cells);
+  }
+  ASSERT_FALSE(rows.empty());
+  EXPECT_EQ(rows[0], (std::vector<std::string>{"item", "what", "measured", "target", "result"}));
+  rows.erase(rows.begin());
+  // Rows per item of issue 7: a (six accesses), b, c, d, e (ratio, lockstep), f (MB/s, RSS), g.
+  const std::vector<std::string> items = {"a", "a", "a", "a", "a", "a", "b",
+                                          "c", "d", "e", "e", "f", "f", "g"};
+  ASSERT_EQ(rows.size(), items.size()) << r.out;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const auto& c = rows[i];
+    EXPECT_EQ(c[0], items[i]);
+    EXPECT_FALSE(c[1].empty());
+    EXPECT_TRUE(!c[2].empty() && c[2].find("error") == std::string::npos) << c[2];
+    EXPECT_TRUE(c[3].rfind("≤ ", 0) == 0 || c[3].rfind("≥ ", 0) == 0 || c[3].rfind("< ", 0) == 0)
+        << c[3];
+    EXPECT_TRUE(c[4].rfind("met", 0) == 0 || c[4].rfind("missed by ", 0) == 0) << c[4];
+  }
+  const auto j = nlohmann::json::parse(slurp(json_path));
+  ASSERT_EQ(j["rows"].size(), items.size());
+  for (const auto& row : j["rows"]) {
+    EXPECT_TRUE(row["measured"].get<bool>()) << row.dump();
+    EXPECT_TRUE(row["value"].is_number()) << row.dump();
+  }
+  std::remove(json_path.c_str());
+}
+
+TEST(CliBench, BadArgumentsExit2WithOneLine) {
+  for (const char* args : {"bench --min-time 0", "bench --quick --wavediff-mb 5",
+                           "bench --bench /nonexistent/dpc31_bench", "bench extra"}) {
+    const Result r = testutil::run_command(std::string(DPC31_CLI) + " " + args + " 2>&1");
+    EXPECT_EQ(r.rc, 2) << args;
+    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << args << ": " << r.out;
+  }
 }

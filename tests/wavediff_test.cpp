@@ -10,7 +10,6 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -21,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "synthetic_vcd.hpp"
 #include "wavediff_cli.hpp"
 
 namespace fs = std::filesystem;
@@ -1038,57 +1038,18 @@ TEST(WavediffCli, ThroughTheDpc31Binary) {
 // ---------------------------------------------------------------------------------------------
 // Streaming: memory does not grow with the file.
 
-namespace {
-
-// A VCD of `steps` time steps over 64 signals (32 1-bit, 32 16-bit), about 100 bytes a step.
-void write_big_vcd(const std::string& path, std::uint64_t steps, std::uint64_t diff_step) {
-  std::FILE* f = std::fopen(path.c_str(), "wb");
-  ASSERT_NE(f, nullptr);
-  std::string h = "$timescale 1ps $end\n$scope module top $end\n";
-  for (int i = 0; i < 32; ++i) h += fmt::format("$var wire 1 {} s{} $end\n", vcd_id(i), i);
-  for (int i = 0; i < 32; ++i) {
-    h += fmt::format("$var wire 16 {} v{} [15:0] $end\n", vcd_id(32 + i), i);
-  }
-  h += "$upscope $end\n$enddefinitions $end\n";
-  std::fwrite(h.data(), 1, h.size(), f);
-  std::string s;
-  std::uint32_t x = 12345;
-  for (std::uint64_t t = 0; t < steps; ++t) {
-    s += fmt::format("#{}\n", t * 10);
-    for (int k = 0; k < 4; ++k) {
-      x = x * 1103515245u + 12345u;
-      const int i = static_cast<int>((x >> 8) % 32);
-      s += fmt::format("{}{}\n", (x >> 20) & 1, vcd_id(static_cast<std::size_t>(i)));
-      x = x * 1103515245u + 12345u;
-      const int v = static_cast<int>((x >> 8) % 32);
-      std::uint32_t val = x >> 16;
-      if (t == diff_step && k == 3) val ^= 1;  // the step's last write: it stays
-      s += fmt::format("b{} {}\n", bin(val & 0xFFFF, 16), vcd_id(32 + static_cast<std::size_t>(v)));
-    }
-    if (s.size() > (1u << 20)) {
-      std::fwrite(s.data(), 1, s.size(), f);
-      s.clear();
-    }
-  }
-  std::fwrite(s.data(), 1, s.size(), f);
-  std::fclose(f);
-}
-
-}  // namespace
-
 TEST(WavediffStreaming, FiftyMegabytesInBoundedMemory) {
   Dir d;
   const auto a = d.path("big_a.vcd");
   const auto b = d.path("big_b.vcd");
-  write_big_vcd(a, 520'000, UINT64_MAX);
-  write_big_vcd(b, 520'000, 400'000);  // one bit of one vector differs at step 400000
+  std::string error;
+  // One bit of one vector differs at step 400000.
+  ASSERT_TRUE(write_synthetic_vcd_pair(a, b, {520'000, {400'000}}, error)) << error;
   const auto size = fs::file_size(a);
   EXPECT_GT(size, 50'000'000u);
   long rss = 0;
-  const auto t0 = std::chrono::steady_clock::now();
   const auto out = d.path("out.txt");
   const int rc = spawn({DPC31_CLI, "wavediff", a, b, "--json", d.path("r.json")}, &rss, out);
-  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_EQ(rc, 1) << slurp(out);
   const auto j = nlohmann::json::parse(slurp(d.path("r.json")));
   EXPECT_EQ(j["first_divergence"]["time"], 4'000'000);  // step 400000 at 10 ps a step
@@ -1097,27 +1058,5 @@ TEST(WavediffStreaming, FiftyMegabytesInBoundedMemory) {
 #if !defined(__SANITIZE_ADDRESS__)
   EXPECT_LT(rss, 64 * 1024) << "peak RSS " << rss << " KiB";
 #endif
-  std::printf("[ wavediff ] 2 x %.1f MB in %.2f s (%.0f MB/s of input), peak RSS %ld KiB\n",
-              static_cast<double>(size) / 1e6, secs, 2.0 * static_cast<double>(size) / 1e6 / secs,
-              rss);
-}
-
-// Outcome by hand (--gtest_also_run_disabled_tests): WAVEDIFF_BIG_MB sets the size of each file.
-TEST(WavediffStreaming, DISABLED_ThroughputOfALargePair) {
-  Dir d;
-  const char* mb_env = std::getenv("WAVEDIFF_BIG_MB");
-  const std::uint64_t mb = mb_env != nullptr ? std::strtoull(mb_env, nullptr, 10) : 200;
-  const std::uint64_t steps = mb * 1'000'000 / 100;
-  const auto a = d.path("big_a.vcd");
-  const auto b = d.path("big_b.vcd");
-  write_big_vcd(a, steps, UINT64_MAX);
-  write_big_vcd(b, steps, steps - 10);
-  long rss = 0;
-  const auto t0 = std::chrono::steady_clock::now();
-  const int rc = spawn({DPC31_CLI, "wavediff", a, b}, &rss);
-  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  EXPECT_EQ(rc, 1);
-  const double total = 2.0 * static_cast<double>(fs::file_size(a)) / 1e6;
-  std::printf("[ wavediff ] %.0f MB in %.2f s: %.0f MB/s, peak RSS %ld KiB\n", total, secs,
-              total / secs, rss);
+  // Throughput is measured in bench/bench_wavediff.cpp (BM_WavediffLargePair), not here.
 }

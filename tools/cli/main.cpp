@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "bench.hpp"
 #include "bridge.hpp"
 #include "cosim.hpp"
 #include "demo.hpp"
@@ -126,13 +127,22 @@ int main(int argc, char** argv) {
   dpc31::cli::BridgeOptions bridge_opt;
   auto* bridge = dpc31::cli::add_bridge_subcommand(app, bridge_opt);
 
+  // dpc31 bench: the benchmarks against the targets (docs/performance.md).
+  dpc31::cli::BenchArgs bench_args;
+  auto* bench = dpc31::cli::add_bench_subcommand(app, bench_args);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
+    if (bench->parsed() && e.get_exit_code() != 0) {
+      std::fprintf(stderr, "dpc31 bench: %s\n", e.what());  // one line, exit 2
+      return 2;
+    }
     const int rc = app.exit(e);
     return rc == 0 ? 0 : 2;
   }
 
+  if (bench->parsed()) return dpc31::cli::run_bench(bench_args, stdout, stderr);
   if (serve->parsed()) return dpc31::cli::run_serve(serve_args, stdout, stderr);
   if (bridge->parsed()) return dpc31::cli::run_bridge(bridge_opt, stdout, stderr);
   if (wavediff->parsed()) return dpc31::wavediff::run_cli(wavediff_args, stdout, stderr);

@@ -1,0 +1,17 @@
+// Options of dpc31_bench beyond Google Benchmark's own (bench_main.cpp parses them).
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace dpc31::bench {
+
+struct Options {
+  std::string dpc31_cli;             // --dpc31_cli=PATH: the dpc31 binary wavediff runs
+  std::uint64_t wavediff_mb = 1000;  // --wavediff_mb=N: size of each of the two VCD files
+  std::string wavediff_dir;          // --wavediff_dir=DIR: where they go (default: TMPDIR)
+};
+
+Options& options();
+
+}  // namespace dpc31::bench

@@ -1,0 +1,346 @@
+#include "bench.hpp"
+
+#include <fmt/core.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <vector>
+
+#include "../../emu/snapshot.hpp"
+#include "child.hpp"
+
+namespace dpc31::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+enum class Goal : std::uint8_t { at_most, below, at_least };
+
+// One row of the table: which benchmark, which of its values, and the target.
+struct RowSpec {
+  const char* item;
+  const char* what;
+  const char* benchmark;  // name as registered, without the /real_time... suffixes
+  const char* metric;     // a counter, or "time" (real time per iteration)
+  double scale;           // metric (time: in seconds) x scale = the value in `unit`
+  const char* unit;
+  Goal goal;
+  double target;
+};
+
+// Issue 7, item 2: every row, grouped by item (one dpc31_bench run per item).
+const std::vector<RowSpec>& rows() {
+  static const std::vector<RowSpec> r = {
+      {"a", "Chip::read, Int_Req_Reg (C++ API)", "BM_ReadRegister", "time", 1e9, "ns",
+       Goal::at_most, 5},
+      {"a", "Chip::write, Int_Mask_Reg (C++ API)", "BM_WriteRegister", "time", 1e9, "ns",
+       Goal::at_most, 5},
+      {"a", "dpc31_read (C HAL)", "BM_HalRead", "time", 1e9, "ns", Goal::at_most, 5},
+      {"a", "dpc31_write (C HAL)", "BM_HalWrite", "time", 1e9, "ns", Goal::at_most, 5},
+      {"a", "Vpc3Read (C HAL, selected chip)", "BM_Vpc3Read", "time", 1e9, "ns", Goal::at_most, 5},
+      {"a", "Vpc3Write (C HAL, selected chip)", "BM_Vpc3Write", "time", 1e9, "ns", Goal::at_most,
+       5},
+      {"b", "Data_Exchange 12 Mbaud, 244 + 244 bytes, exact timing",
+       "BM_DataExchange/baud:12000000/len:244", "x_realtime", 1, "x real time", Goal::at_least,
+       200},
+      {"c", "power-on, start-up and 100 Data_Exchange at 9.6 kbaud",
+       "BM_StartupAndDataExchange/baud:9600/dx:100", "x_realtime", 1, "x real time", Goal::at_least,
+       10'000},
+      {"d", "DP watchdog, TWD = 650 s, expiring (wall time)", "BM_WatchdogExpiry650s", "time", 1e3,
+       "ms", Goal::below, 10},
+      {"e", "C++ blocks versus Verilated RTL, same stimulus", "BM_CppOverRtl", "cpp_over_rtl", 1,
+       "x faster", Goal::at_least, 20},
+      {"e", "lockstep (C++ blocks + RTL, compared every cycle)", "BM_Lockstep", "cycles_per_s",
+       1e-6, "M cycles/s", Goal::at_least, 5},
+      {"f", "dpc31 wavediff, two generated VCD files: throughput", "BM_WavediffLargePair",
+       "MB_per_s", 1, "MB/s", Goal::at_least, 300},
+      {"f", "dpc31 wavediff, two generated VCD files: peak RSS", "BM_WavediffLargePair",
+       "peak_rss_MB", 1, "MB", Goal::below, 64},
+      {"g", "socket round trips, `peek 0` over TCP, one in flight", "BM_SocketPeekTcp/1",
+       "items_per_second", 1, "/s", Goal::at_least, 100'000},
+  };
+  return r;
+}
+
+// 3 significant digits, whole numbers from 100 on with thin groups of three ("10 000").
+std::string number(double v) {
+  if (std::fabs(v) < 100) return fmt::format("{:.3g}", v);
+  std::string digits = fmt::format("{:.0f}", v);
+  std::string out;
+  for (std::size_t i = 0; i < digits.size(); ++i) {
+    if (i > 0 && (digits.size() - i) % 3 == 0) out += ' ';
+    out += digits[i];
+  }
+  return out;
+}
+
+std::string with_unit(double v, const char* unit) {
+  const std::string u = unit;
+  if (u.rfind("x ", 0) == 0) return number(v) + "×" + u.substr(1);  // "200× real time"
+  if (u == "/s") return number(v) + "/s";
+  return number(v) + " " + u;
+}
+
+double seconds_per_unit(const std::string& time_unit) {
+  if (time_unit == "ns") return 1e-9;
+  if (time_unit == "us") return 1e-6;
+  if (time_unit == "ms") return 1e-3;
+  return 1;
+}
+
+// The benchmark's entry in Google Benchmark's JSON output: the median of its repetitions if it
+// was repeated, else its only run. Runs are named by the benchmark's name, or that followed by
+// "/real_time" and the like.
+const json* find_entry(const json& out, const std::string& name) {
+  if (!out.contains("benchmarks")) return nullptr;
+  const json* found = nullptr;
+  for (const json& b : out["benchmarks"]) {
+    const std::string n = b.value("run_name", b.value("name", ""));
+    if (n != name && (n.size() <= name.size() || n.compare(0, name.size(), name) != 0 ||
+                      n[name.size()] != '/')) {
+      continue;
+    }
+    const std::string aggregate = b.value("aggregate_name", "");
+    if (aggregate == "median") return &b;
+    if (aggregate.empty() && found == nullptr) found = &b;
+  }
+  return found;
+}
+
+struct Row {
+  const RowSpec* spec = nullptr;
+  bool measured = false;
+  double value = 0;
+  std::string error;
+  [[nodiscard]] bool met() const {
+    switch (spec->goal) {
+      case Goal::at_most:
+        return value <= spec->target;
+      case Goal::below:
+        return value < spec->target;
+      case Goal::at_least:
+        return value >= spec->target;
+    }
+    return false;
+  }
+  // How far from the target: measured / target for upper bounds, target / measured for lower
+  // ones; above 1 means missed by that factor, below 1 the margin is its inverse.
+  [[nodiscard]] double ratio() const {
+    if (spec->goal == Goal::at_least) return value > 0 ? spec->target / value : INFINITY;
+    return value / spec->target;
+  }
+  [[nodiscard]] std::string target_text() const {
+    const char* rel = spec->goal == Goal::at_least ? "≥ " : spec->goal == Goal::below ? "< " : "≤ ";
+    return rel + with_unit(spec->target, spec->unit);
+  }
+  [[nodiscard]] std::string result_text() const {
+    if (!measured) return "not measured";
+    const double r = ratio();
+    if (met()) return r > 0 ? fmt::format("met ({}× margin)", number(1 / r)) : "met";
+    return fmt::format("missed by {}×", number(r));
+  }
+};
+
+void fill(Row& row, const json& out, const std::string& run_error) {
+  if (!run_error.empty()) {
+    row.error = run_error;
+    return;
+  }
+  const json* e = find_entry(out, row.spec->benchmark);
+  if (e == nullptr) {
+    row.error = std::string(row.spec->benchmark) + " is not in dpc31_bench's output";
+    return;
+  }
+  if (e->value("error_occurred", false)) {
+    row.error = e->value("error_message", std::string("error"));
+    return;
+  }
+  const std::string metric = row.spec->metric;
+  if (metric == "time") {
+    row.value = e->value("real_time", 0.0) * seconds_per_unit(e->value("time_unit", "ns")) *
+                row.spec->scale;
+  } else if (e->contains(metric) && (*e)[metric].is_number()) {
+    row.value = (*e)[metric].get<double>() * row.spec->scale;
+  } else {
+    row.error = std::string(row.spec->benchmark) + " has no value " + metric;
+    return;
+  }
+  row.measured = true;
+}
+
+fs::path self_path() {
+  std::error_code ec;
+  fs::path p = fs::read_symlink("/proc/self/exe", ec);
+  return ec ? fs::path("dpc31") : p;
+}
+
+// Runs dpc31_bench on the benchmarks of one item; its JSON output, or an error.
+// Its console output goes to `log_file`; the last lines of it are in `error` if it fails.
+json run_item(const BenchArgs& a, const std::string& bench, const std::vector<Row*>& item_rows,
+              const fs::path& out_file, const fs::path& log_file, std::string& error) {
+  std::string filter = "^(";
+  std::string sep;
+  for (const Row* r : item_rows) {
+    if (filter.find(std::string(r->spec->benchmark) + "|") != std::string::npos) continue;
+    filter += sep + r->spec->benchmark;
+    sep = "|";
+  }
+  filter += ")(/|$)";
+  const dpc31::child::Result r = dpc31::child::run(
+      {bench, "--benchmark_filter=" + filter,
+       "--benchmark_min_time=" + fmt::format("{}", a.min_time),
+       "--benchmark_repetitions=" + std::to_string(a.repetitions),
+       "--benchmark_out=" + out_file.string(), "--benchmark_out_format=json",
+       "--dpc31_cli=" + self_path().string(), "--wavediff_mb=" + std::to_string(a.wavediff_mb),
+       "--wavediff_dir=" +
+           (a.wavediff_dir.empty() ? fs::temp_directory_path().string() : a.wavediff_dir)},
+      log_file.string());
+  if (r.exit_code != 0) {
+    error = r.error.empty() ? fmt::format("dpc31_bench exited with {}", r.exit_code) : r.error;
+    std::ifstream log(log_file);
+    std::string line;
+    std::string last;
+    while (std::getline(log, line)) {
+      if (!line.empty()) last = line;
+    }
+    if (!last.empty()) error += ": " + last;
+    return {};
+  }
+  std::ifstream f(out_file);
+  json j = json::parse(f, nullptr, false);
+  if (j.is_discarded()) error = "dpc31_bench wrote no readable JSON";
+  return j;
+}
+
+std::string table(const std::vector<Row>& rs) {
+  std::string t = "| item | what | measured | target | result |\n|---|---|---|---|---|\n";
+  for (const Row& r : rs) {
+    t += fmt::format("| {} | {} | {} | {} | {} |\n", r.spec->item, r.spec->what,
+                     r.measured ? with_unit(r.value, r.spec->unit) : "error: " + r.error,
+                     r.target_text(), r.result_text());
+  }
+  return t;
+}
+
+json to_json(const BenchArgs& a, const std::string& bench, const std::vector<Row>& rs,
+             const json& context) {
+  json j = {{"dpc31_bench", bench},         {"quick", a.quick},   {"min_time_s", a.min_time},
+            {"wavediff_mb", a.wavediff_mb}, {"context", context}, {"rows", json::array()}};
+  for (const Row& r : rs) {
+    json row = {{"item", r.spec->item},
+                {"what", r.spec->what},
+                {"benchmark", r.spec->benchmark},
+                {"metric", r.spec->metric},
+                {"unit", r.spec->unit},
+                {"target", r.spec->target},
+                {"goal", r.spec->goal == Goal::at_least ? ">="
+                         : r.spec->goal == Goal::below  ? "<"
+                                                        : "<="},
+                {"measured", r.measured}};
+    if (r.measured) {
+      row["value"] = r.value;
+      row["met"] = r.met();
+      row["ratio_to_target"] = r.ratio();
+    } else {
+      row["error"] = r.error;
+    }
+    j["rows"].push_back(std::move(row));
+  }
+  return j;
+}
+
+}  // namespace
+
+CLI::App* add_bench_subcommand(CLI::App& app, BenchArgs& a) {
+  auto* cmd = app.add_subcommand(
+      "bench", "run the benchmarks of bench/ and print one table against the targets");
+  auto* quick = cmd->add_flag("--quick", a.quick,
+                              "one short run each and 8 MB wavediff files (a smoke test)");
+  cmd->add_option("--json", a.json, "also write the table as JSON to this file");
+  cmd->add_option("--min-time", a.min_time, "seconds per benchmark (default 0.5)")
+      ->check(CLI::Range(0.001, 3600.0))
+      ->excludes(quick);
+  cmd->add_option("--wavediff-mb", a.wavediff_mb,
+                  "MB of each of item f's two generated VCD files (default 1000)")
+      ->check(CLI::Range(1, 1'000'000))
+      ->excludes(quick);
+  cmd->add_option("--repetitions", a.repetitions,
+                  "runs of each benchmark; the table shows the median (default 3)")
+      ->check(CLI::Range(1, 100))
+      ->excludes(quick);
+  cmd->add_option("--wavediff-dir", a.wavediff_dir,
+                  "where item f's files go (default: TMPDIR; needs twice --wavediff-mb)")
+      ->check(CLI::ExistingDirectory);
+  cmd->add_option("--bench", a.bench_binary,
+                  "the dpc31_bench program (default: next to this dpc31)")
+      ->check(CLI::ExistingFile);
+  return cmd;
+}
+
+int run_bench(const BenchArgs& args, std::FILE* out, std::FILE* err) {
+  BenchArgs a = args;
+  if (a.quick) {
+    a.min_time = 0.01;
+    a.wavediff_mb = 8;
+    a.repetitions = 1;
+  }
+  const std::string bench = a.bench_binary.empty()
+                                ? (self_path().parent_path() / "dpc31_bench").string()
+                                : a.bench_binary;
+  if (::access(bench.c_str(), X_OK) != 0) {
+    fmt::print(err, "dpc31 bench: {} is not there (build the dpc31_bench target, or --bench)\n",
+               bench);
+    return 2;
+  }
+  std::vector<Row> rs;
+  for (const RowSpec& s : rows()) {
+    Row r;
+    r.spec = &s;
+    rs.push_back(r);
+  }
+  const fs::path out_file =
+      fs::temp_directory_path() / fmt::format("dpc31-bench-{}.json", ::getpid());
+  const fs::path log_file =
+      fs::temp_directory_path() / fmt::format("dpc31-bench-{}.log", ::getpid());
+  json context;
+  for (std::size_t i = 0; i < rs.size();) {
+    std::vector<Row*> item;
+    for (std::size_t k = i; k < rs.size() && std::string(rs[k].spec->item) == rs[i].spec->item;
+         ++k) {
+      item.push_back(&rs[k]);
+    }
+    fmt::print(err, "dpc31 bench: item {} ...\n", rs[i].spec->item);
+    std::fflush(err);
+    std::string error;
+    const json j = run_item(a, bench, item, out_file, log_file, error);
+    if (context.is_null() && j.contains("context")) context = j["context"];
+    for (Row* r : item) fill(*r, j, error);
+    i += item.size();
+  }
+  std::error_code ec;
+  fs::remove(out_file, ec);
+  fs::remove(log_file, ec);
+  fmt::print(out, "{}", table(rs));
+  if (!a.json.empty()) {
+    const std::string text = to_json(a, bench, rs, context).dump(2) + "\n";
+    try {
+      snap::write_file_atomic(a.json,
+                              {reinterpret_cast<const std::uint8_t*>(text.data()), text.size()});
+    } catch (const std::exception& e) {
+      fmt::print(err, "dpc31 bench: {}\n", e.what());
+      return 2;
+    }
+  }
+  for (const Row& r : rs) {
+    if (!r.measured) return 1;
+  }
+  return 0;
+}
+
+}  // namespace dpc31::cli
