@@ -84,22 +84,4 @@ void BM_StepUserTimer(benchmark::State& st) {
 }
 BENCHMARK(BM_StepUserTimer);
 
-// The same accesses through the C HAL: a firmware's Vpc3Read / Vpc3Write on the selected chip.
-void BM_HalReadRegister(benchmark::State& st) {
-  dpc31_chip* c = dpc31_create("dpc31", 0);
-  dpc31_select(c);
-  for (auto _ : st) benchmark::DoNotOptimize(Vpc3Read(0x00));
-  dpc31_destroy(c);
-}
-BENCHMARK(BM_HalReadRegister);
-
-void BM_HalWriteRegister(benchmark::State& st) {
-  dpc31_chip* c = dpc31_create("dpc31", 0);
-  dpc31_select(c);
-  std::uint8_t v = 0;
-  for (auto _ : st) Vpc3Write(0x04, static_cast<std::uint8_t>(v++ | 0xE0));
-  dpc31_destroy(c);
-}
-BENCHMARK(BM_HalWriteRegister);
-
 }  // namespace
