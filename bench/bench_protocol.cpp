@@ -54,6 +54,9 @@ class DpSession {
         st.SkipWithError("a Data_Exchange was not answered");
         return false;
       }
+      // The responder records every ISR entry and output for tests; here that would only grow.
+      user_.interrupts.clear();
+      user_.outputs.clear();
     }
     return true;
   }
@@ -64,6 +67,9 @@ class DpSession {
  private:
   static dpc31::ResponderConfig responder_config(std::uint8_t len, std::uint8_t wd_fact) {
     dpc31::ResponderConfig rc;
+    // As firmware on silicon must: without Res_User_WD the user watchdog (R_User_WD_Value,
+    // 511 telegrams after start-up) ends Data_Exchange.
+    rc.user_watchdog = true;
     rc.slave.in_len = len;
     rc.slave.out_len = len;
     if (wd_fact != 0) {
