@@ -1,13 +1,17 @@
 // The host CPU that runs firmware against the chip. Firmware is level-triggered on X/INT and
-// makes ordinary bus accesses (4 clocks each); it runs on its own thread, but strictly one side
-// at a time (a baton), so a run is deterministic. The bus side (the DP master) and the firmware
-// interleave at the granularity of one bus access: an ISR never holds the bus side back.
+// makes ordinary bus accesses (4 clocks each); its ISR runs as a coroutine with its own stack on
+// the caller's thread (ucontext), strictly one side at a time, so a run is deterministic and a
+// hand-over costs a context switch in user space, not a wake-up of another thread. The bus side
+// (the DP master) and the firmware interleave at the granularity of one bus access: an ISR never
+// holds the bus side back.
 #pragma once
 
-#include <atomic>
+#include <ucontext.h>
+
 #include <cstdint>
+#include <exception>
 #include <functional>
-#include <thread>
+#include <memory>
 
 #include "dpc31/chip.hpp"
 
@@ -24,6 +28,18 @@ class BusPort {
 };
 
 // Synchronous access (init code, tests): each access simply takes its 4 clocks.
+namespace hal {
+// A port write of the firmware: (cycle, port, value).
+using PortSink = std::function<void(std::uint64_t, unsigned, std::uint32_t)>;
+// What the C HAL's access functions reach on the calling thread (hal.hpp, hal::Scope).
+struct Selection {
+  BusPort* bus = nullptr;
+  const PortSink* ports = nullptr;
+};
+// Installs `s` and returns the selection it replaces.
+Selection exchange_selection(Selection s);
+}  // namespace hal
+
 class DirectBus final : public BusPort {
  public:
   explicit DirectBus(Chip& c) : chip_(c) {}
@@ -54,21 +70,28 @@ class Cpu final : public BusPort {
   [[nodiscard]] const Chip& chip() const override { return chip_; }
 
  private:
+  static void entry(unsigned hi, unsigned lo);  // the coroutine's first frame: runs body()
   void body();
   void gate();              // firmware: wait for the bus side's grant before an access
   void hand_to_firmware();  // bus side: let the firmware run until it yields
-  void hand_to_bus_side();  // firmware: give the baton back
+  void hand_to_bus_side();  // firmware: give control back
 
   Chip& chip_;
   Isr isr_;
-  // The baton: whoever does not hold it waits on it (C++20 atomic wait on a 32-bit value: a
-  // futex, no mutex). in_isr_ and stop_ are written before the baton changes hands, read after.
-  enum Turn : std::uint32_t { kBusSide, kFirmware };
-  std::atomic<std::uint32_t> turn_{kBusSide};
+  // The coroutine: its stack, its context and the bus side's. in_isr_ and stop_ are set by the
+  // side that hands over, read by the other.
+  std::unique_ptr<char[]> stack_;
+  ucontext_t firmware_ctx_{};
+  ucontext_t bus_ctx_{};
+  bool started_ = false;  // the coroutine has run (and holds frames to unwind on destruction)
+  bool finished_ = false;
   bool in_isr_ = false;
   bool stop_ = false;
+  std::exception_ptr error_;  // thrown by the ISR, rethrown on the bus side
   std::uint64_t limit_ = 0;
-  std::thread thread_;
+  // The HAL selection (hal::Scope) of the side that is not running: the firmware's while the bus
+  // side runs, and the other way round; being thread-local, it would otherwise leak between them.
+  hal::Selection other_hal_;
 };
 
 }  // namespace dpc31

@@ -62,15 +62,16 @@ uint8_t mem_cmp(BusPort& b, VPC3_ADR a, VPC3_ADR c, uint16_t len) {
 
 }  // namespace
 
-Scope::Scope(BusPort& b, const PortSink* ports) : prev_bus_(t_bus), prev_ports_(t_ports) {
-  t_bus = &b;
-  t_ports = ports;
+Selection exchange_selection(Selection s) {
+  const Selection prev{t_bus, t_ports};
+  t_bus = s.bus;
+  t_ports = s.ports;
+  return prev;
 }
 
-Scope::~Scope() {
-  t_bus = prev_bus_;
-  t_ports = prev_ports_;
-}
+Scope::Scope(BusPort& b, const PortSink* ports) : prev_(exchange_selection({&b, ports})) {}
+
+Scope::~Scope() { exchange_selection(prev_); }
 
 }  // namespace dpc31::hal
 

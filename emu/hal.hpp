@@ -9,9 +9,6 @@
 
 namespace dpc31::hal {
 
-// A port write of the firmware: (cycle, port, value).
-using PortSink = std::function<void(std::uint64_t, unsigned, std::uint32_t)>;
-
 // While alive, Vpc3Read & co. on this thread access `bus` and port writes go to `ports`; the
 // previous selection comes back afterwards (scopes nest).
 class Scope {
@@ -22,8 +19,7 @@ class Scope {
   Scope& operator=(const Scope&) = delete;
 
  private:
-  BusPort* prev_bus_;
-  const PortSink* prev_ports_;
+  Selection prev_;
 };
 
 }  // namespace dpc31::hal
