@@ -1,5 +1,5 @@
 // A C firmware (firmware/, firmware.h) on the host CPU of one chip: its init runs as main()
-// with direct bus accesses, its ISR on the host CPU thread whenever X/INT is active (cpu.hpp).
+// with direct bus accesses, its ISR on the host CPU (a coroutine) whenever X/INT is active (cpu.hpp).
 // Every access goes through the C HAL's driver-shaped functions and costs its bus cycles.
 //
 // The example firmwares keep their state in C globals, as on silicon: one FirmwareHost per
