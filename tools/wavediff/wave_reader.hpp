@@ -76,7 +76,8 @@ class WaveReader {
   std::uint64_t stamp_ = 0;
   std::uint64_t time_ = 0;
 
-  void touch(std::uint32_t slot) {
+  // Once per value change: always inlined into the readers' value parsers.
+  [[gnu::always_inline]] void touch(std::uint32_t slot) {
     Slot& s = slots_[slot];
     if (s.stamp != stamp_) {
       s.stamp = stamp_;
