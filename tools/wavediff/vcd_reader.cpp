@@ -25,9 +25,9 @@ constexpr std::uint32_t kNone = UINT32_MAX;
 
 // Identifier codes. VCD writers number their signals in base 94 over '!'..'~', so codes of 1 to
 // 3 such characters (up to 94^3 signals) are the common case: they index a direct table, one
-// tier per length, allocated when the first code of that length is declared (the 3-character
-// tier is 3.3 MB). Every other code (longer, or with other bytes) goes to the fallback: packed
-// into a 64-bit key in an open-addressing table up to 8 characters, a map beyond.
+// tier per length, allocated when the first code of that length is declared (3.4 MB once there
+// are 3-character codes). Every other code (longer, or with other bytes) goes to the fallback:
+// packed into a 64-bit key in an open-addressing table up to 8 characters, a map beyond.
 class IdTable {
  public:
   [[nodiscard]] std::uint32_t find(std::string_view id) const {
