@@ -10,6 +10,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -102,6 +103,7 @@ struct Style {
   std::string prefix;                         // scopes above the model's names ("tb.dut")
   bool split = false;                         // vectors as 1-bit variables name[7] ... name[0]
   std::size_t id_base = 0;                    // other identifier codes
+  std::vector<std::string> codes;             // identifier codes in declaration order, if given
   bool reverse = false;                       // declarations in reverse order
   std::map<std::string, std::string> rename;  // model name -> name written
 };
@@ -111,6 +113,10 @@ std::string render(const Model& m, const Style& st) {
   h += fmt::format("$timescale {} $end\n", st.timescale);
   std::vector<std::vector<std::string>> ids(m.sigs.size());
   std::size_t next = st.id_base;
+  auto new_id = [&] {
+    const std::size_t i = next++;
+    return st.codes.empty() ? vcd_id(i) : st.codes.at(i - st.id_base);
+  };
   struct Decl {
     std::vector<std::string> scopes;
     std::string line;
@@ -127,19 +133,19 @@ std::string render(const Model& m, const Style& st) {
     const std::string leaf = parts.back();
     parts.pop_back();
     if (s.real) {
-      ids[i].push_back(vcd_id(next++));
+      ids[i].push_back(new_id());
       decls.push_back({parts, fmt::format("$var real 64 {} {} $end", ids[i][0], leaf)});
     } else if (s.width == 1) {
-      ids[i].push_back(vcd_id(next++));
+      ids[i].push_back(new_id());
       decls.push_back({parts, fmt::format("$var wire 1 {} {} $end", ids[i][0], leaf)});
     } else if (st.split) {
       for (int b = s.width - 1; b >= 0; --b) {
-        ids[i].push_back(vcd_id(next++));
+        ids[i].push_back(new_id());
         decls.push_back(
             {parts, fmt::format("$var wire 1 {} {} [{}] $end", ids[i].back(), leaf, b)});
       }
     } else {
-      ids[i].push_back(vcd_id(next++));
+      ids[i].push_back(new_id());
       decls.push_back({parts, fmt::format("$var wire {} {} {} [{}:0] $end", s.width, ids[i][0],
                                           leaf, s.width - 1)});
     }
@@ -503,6 +509,149 @@ TEST(WavediffAlias, EveryNameOfAnIdGetsTheValues) {
   EXPECT_EQ(r.diffs[0].name, "top.u.a_copy");
   EXPECT_EQ(r.diffs[0].first.at.time, 20u);
   EXPECT_EQ(r.compared, 2u);
+}
+
+// The reader looks identifier codes of 1 to 3 characters from '!' to '~' up in a direct table
+// (one tier per length) and every other code in a fallback table. The same model written with
+// codes at the table's edges ('!' first, '~' last of each tier), with 4- to 16-character codes and
+// with codes of other bytes must read the same: against a mutant in which signal i differs from
+// time 2i+1 to 2i+2 only, each gives one divergence per signal with the same values.
+TEST(WavediffIds, DirectTableAndFallbackCodesReadTheSame) {
+  Dir d;
+  const int widths[] = {1, 4, 1, 8, 16, 1, 12, 3, 1, 20, 2, 1, 9, 5};
+  constexpr int kSigs = 14;
+  auto value = [&](int i, std::uint64_t t, bool mutant) {
+    const int w = widths[i];
+    std::string v = bin((t / static_cast<std::uint64_t>(i % 3 + 1)) * 2654435761u + 7u * i, w);
+    if (i % 5 == 4 && t % 4 == 0) v[0] = 'z';  // x and z go through the vector path too
+    if (i % 5 == 2 && t % 3 == 0) v[static_cast<std::size_t>(w) - 1] = 'x';
+    if (mutant && t == 2u * static_cast<std::uint64_t>(i) + 1) {
+      char& c = v.back();
+      c = c == '1' ? '0' : '1';
+    }
+    return v;
+  };
+  auto model = [&](bool mutant) {
+    Model m;
+    for (int i = 0; i < kSigs; ++i) m.sigs.push_back({fmt::format("top.s{}", i), widths[i]});
+    m.sigs.push_back({"top.level", 64, true});
+    for (std::uint64_t t = 0; t < 40; ++t) {
+      for (int i = 0; i < kSigs; ++i) m.set(t, i, value(i, t, mutant));
+      const bool bump = mutant && t == 2u * kSigs + 1;  // the real differs at 29 only
+      m.set(t, kSigs, fmt::format("{}", 0.25 * static_cast<double>(t / 2) + (bump ? 1 : 0)));
+    }
+    return m;
+  };
+  Style short_codes;  // tiers 1, 2, 3 and both ends of each
+  short_codes.codes = {"!",   "~",   "!!", "~~", "!~", "~!", "!!!", "~~~",
+                       "~!!", "!~~", "\"", "}",  "a",  "zz", "q5"};
+  Style long_codes;  // packed fallback up to 8 characters, map beyond
+  long_codes.codes = {"!!!!",      "~~~~",  "!!!!!",   "~~~~~~~~",  "!~~~~~~~~", "abcdefghijklmnop",
+                      "long_code", "!!!!~", "~!!!",    "!!!!!!!!!", "~!~!",      "zzzz",
+                      "~~~~~",     "q5q5",  "\"\"\"\""};
+  Style other_bytes;  // short codes outside '!'..'~': the fallback as well
+  other_bytes.codes = {"\x7f",  "\xc3\xa9", "\x80",         "\xff\xff",     "!\x7f",
+                       "\x7f!", "~\x80~",   "\xe2\x82\xac", "\x7f\x7f\x7f", "a\xff",
+                       "\x81",  "\xfe",     "\x7f~",        "\x80\x80",     "\x9f"};
+  const Model a = model(false);
+  const auto f_short = d.file("short.vcd", render(a, short_codes));
+  const auto fl = d.file("long.vcd", render(a, long_codes));
+  const auto fo = d.file("other.vcd", render(a, other_bytes));
+  const auto fm = d.file("mutant.vcd", render(model(true), {}));
+  EXPECT_EQ(run_opts(opts(f_short, fl)).rc, 0);
+  EXPECT_EQ(run_opts(opts(fl, fo)).rc, 0);
+  EXPECT_EQ(run_opts(opts(fo, f_short)).rc, 0);
+  auto text = [](const Report& r) {
+    std::string out = fmt::format("compared {}\n", r.compared);
+    for (const SignalDiff& s : r.diffs) {
+      out += fmt::format("{} {} {} {} {} {} {} {}\n", s.name, s.count, s.first.at.time, s.first.a,
+                         s.first.b, s.first.last_common.value_or("-"), s.first.open, s.last.time);
+    }
+    return out;
+  };
+  const Report rs = compare(opts(f_short, fm));
+  ASSERT_EQ(rs.diffs.size(), static_cast<std::size_t>(kSigs + 1)) << text(rs);
+  EXPECT_EQ(rs.compared, static_cast<std::size_t>(kSigs + 1));
+  for (int i = 0; i < kSigs; ++i) {
+    const SignalDiff& sd = rs.diffs[static_cast<std::size_t>(i)];
+    const std::uint64_t t = 2u * static_cast<std::uint64_t>(i) + 1;
+    EXPECT_EQ(sd.name, fmt::format("top.s{}", i));
+    EXPECT_EQ(sd.count, 1u) << sd.name;
+    EXPECT_EQ(sd.first.at.time, t) << sd.name;
+    EXPECT_EQ(sd.first.a, value(i, t, false)) << sd.name;
+    EXPECT_EQ(sd.first.b, value(i, t, true)) << sd.name;
+    EXPECT_FALSE(sd.first.open) << sd.name;
+  }
+  EXPECT_EQ(rs.diffs[kSigs].name, "top.level");
+  EXPECT_EQ(rs.diffs[kSigs].first.at.time, 29u);
+  EXPECT_EQ(rs.diffs[kSigs].first.a, "3.5");  // 0.25 * 14
+  EXPECT_EQ(rs.diffs[kSigs].first.b, "4.5");
+  EXPECT_EQ(text(compare(opts(fl, fm))), text(rs));
+  EXPECT_EQ(text(compare(opts(fo, fm))), text(rs));
+  // With the sides swapped as well (B's reader uses the table).
+  EXPECT_EQ(text(compare(opts(fm, f_short))), text(compare(opts(fm, fl))));
+  // An undeclared code in each tier and in the fallback is still an error with its line (the
+  // one after "#0" and "1!", which follow the header).
+  Model one;
+  one.sigs = {{"top.a", 1}};  // declared as '!'
+  const std::string head = render(one, short_codes);
+  const auto head_lines = static_cast<std::size_t>(std::count(head.begin(), head.end(), '\n'));
+  for (const char* id : {"~", "!!", "~~~", "!!!!", "~~~~~~~~~", "\x7f"}) {
+    const auto f = d.file("undeclared.vcd", head + "#0\n1!\n1" + std::string(id) + "\n");
+    const Outcome r = run_opts(opts(f, f));
+    EXPECT_EQ(r.rc, 2) << id;
+    EXPECT_EQ(r.err, fmt::format("{}:{}: undeclared identifier '{}'\n", f, head_lines + 3, id));
+  }
+}
+
+// A vector value is used in place in the read buffer (1 MiB) unless reading its identifier
+// refills the buffer. The same changes, placed at every offset around the end of the first
+// buffer by a header comment, read the same as without the comment; nine-valued letters
+// (normalised into a copy) as well.
+TEST(WavediffIds, VectorValuesAcrossTheReadBuffersEnd) {
+  Dir d;
+  const std::string decl =
+      "$timescale 1ns $end\n$scope module top $end\n$var wire 20 ~ v [19:0] $end\n"
+      "$var wire 12 !!!!!!!!! w [11:0] $end\n$var wire 1 !! c $end\n$upscope $end\n"
+      "$enddefinitions $end\n";
+  std::string body;
+  for (std::uint64_t t = 0; t < 64; ++t) {
+    body += fmt::format("#{}\nb{} ~\n", t, bin(t * 40503u + 1, 20));
+    body += t % 5 == 3 ? "bUWXZ-HL10101 !!!!!!!!!\n" : fmt::format("b{} !!!!!!!!!\n", bin(t, 12));
+    body += fmt::format("{}!!\n", t & 1);
+  }
+  // A trailer of more than 1 MiB: the refill overwrites the whole buffer, so that a vector value
+  // that had been left there would be lost.
+  std::string trailer = "$comment";
+  while (trailer.size() < (std::size_t{1} << 20) + 4096) trailer += " trailer";
+  body += trailer + " $end\n";
+  const auto ref = d.file("ref.vcd", decl + body);
+  // The changes are about 3.5 KB: with a comment of `pad` bytes they start at 1 MiB - 1500 -
+  // shift.
+  const std::size_t pad = (std::size_t{1} << 20) - 1500 - decl.size();
+  std::string comment;
+  for (std::size_t shift = 0; shift < 48; ++shift) {
+    comment = "$comment";
+    while (comment.size() < pad - shift - 6) comment += " padding";
+    comment.resize(pad - shift - 6, '_');
+    comment += " $end\n";
+    const auto f = d.file("shifted.vcd", comment + decl + body);
+    const Outcome r = run_opts(opts(f, ref));
+    EXPECT_EQ(r.rc, 0) << "shift " << shift << ": " << r.out << r.err;
+  }
+  // The comparison sees a difference in the same setting (so the loop above can fail).
+  std::string other = body;
+  const std::size_t at = other.find("#40\nb") + 5;  // v's leftmost bit at 40
+  other[at] = other[at] == '0' ? '1' : '0';
+  const auto f = d.file("shifted.vcd", comment + decl + other);
+  const Report r = compare(opts(f, ref));
+  ASSERT_EQ(r.diffs.size(), 1u);
+  EXPECT_EQ(r.diffs[0].name, "top.v");
+  EXPECT_EQ(r.diffs[0].first.at.time, 40u);
+  // The nine-valued letters as documented: U W X - read as x, Z as z, H L as 1 0.
+  const auto nine = d.file("nine.vcd", decl + "#0\nbUWXZ-HL10101 !!!!!!!!!\n");
+  EXPECT_EQ(run_opts(opts(nine, d.file("xz.vcd", decl + "#0\nbxxxzx1010101 !!!!!!!!!\n"))).rc, 0);
+  EXPECT_EQ(run_opts(opts(nine, d.file("xz1.vcd", decl + "#0\nbxxxzx1010100 !!!!!!!!!\n"))).rc, 1);
 }
 
 TEST(WavediffMap, RenamesFromAMappingFile) {

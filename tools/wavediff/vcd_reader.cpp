@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <array>
 #include <bit>
 #include <cerrno>
 #include <charconv>
@@ -22,11 +23,62 @@ constexpr std::size_t kBufSize = std::size_t{1} << 20;
 constexpr std::size_t kMaxToken = std::size_t{1} << 30;
 constexpr std::uint32_t kNone = UINT32_MAX;
 
-// Identifier codes of up to 8 characters, packed into a 64-bit key, in an open-addressing
-// table; longer codes in a map.
+// Identifier codes. VCD writers number their signals in base 94 over '!'..'~', so codes of 1 to
+// 3 such characters (up to 94^3 signals) are the common case: they index a direct table, one
+// tier per length, allocated when the first code of that length is declared (3.4 MB once there
+// are 3-character codes). Every other code (longer, or with other bytes) goes to the fallback:
+// packed into a 64-bit key in an open-addressing table up to 8 characters, a map beyond.
 class IdTable {
  public:
   [[nodiscard]] std::uint32_t find(std::string_view id) const {
+    const std::size_t d = direct_index(id);
+    if (d != kNotDirect) return d < direct_.size() ? direct_[d] : kNone;
+    return find_other(id);
+  }
+  void insert(std::string_view id, std::uint32_t v) {
+    const std::size_t d = direct_index(id);
+    if (d != kNotDirect) {
+      if (d >= direct_.size()) direct_.resize(kTierEnd[id.size() - 1], kNone);
+      direct_[d] = v;
+      return;
+    }
+    if (id.size() > 8) {
+      long_.emplace(std::string(id), v);
+      return;
+    }
+    if ((count_ + 1) * 2 > keys_.size()) grow();
+    put(pack(id), v);
+    ++count_;
+  }
+
+ private:
+  static constexpr std::size_t kNotDirect = SIZE_MAX;
+  static constexpr std::size_t kRadix = '~' - '!' + 1;  // 94
+  // End of each length's tier in direct_: lengths 1, 2 and 3 follow each other.
+  static constexpr std::size_t kTierEnd[3] = {kRadix, kRadix + kRadix* kRadix,
+                                              kRadix + kRadix* kRadix + kRadix* kRadix* kRadix};
+
+  std::vector<std::uint32_t> direct_;
+  std::vector<std::uint64_t> keys_;
+  std::vector<std::uint32_t> vals_;
+  std::size_t count_ = 0;
+  int shift_ = 64;
+  std::unordered_map<std::string, std::uint32_t> long_;
+
+  // Index in direct_ of a code of 1 to 3 characters from '!' to '~', else kNotDirect.
+  static std::size_t direct_index(std::string_view id) {
+    const std::size_t n = id.size();
+    if (n == 0 || n > 3) return kNotDirect;
+    std::size_t i = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::size_t c = static_cast<unsigned char>(id[k]) - std::size_t{'!'};
+      if (c >= kRadix) return kNotDirect;  // also below '!': unsigned wrap-around
+      i = i * kRadix + c;
+    }
+    return n == 1 ? i : kTierEnd[n - 2] + i;
+  }
+  // Out of line, so that find() stays small enough to be inlined into the value parser.
+  [[gnu::noinline]] [[nodiscard]] std::uint32_t find_other(std::string_view id) const {
     if (id.size() <= 8) {
       if (keys_.empty()) return kNone;
       const std::uint64_t k = pack(id);
@@ -40,26 +92,12 @@ class IdTable {
     auto it = long_.find(std::string(id));
     return it == long_.end() ? kNone : it->second;
   }
-  void insert(std::string_view id, std::uint32_t v) {
-    if (id.size() > 8) {
-      long_.emplace(std::string(id), v);
-      return;
-    }
-    if ((count_ + 1) * 2 > keys_.size()) grow();
-    put(pack(id), v);
-    ++count_;
-  }
-
- private:
-  std::vector<std::uint64_t> keys_;
-  std::vector<std::uint32_t> vals_;
-  std::size_t count_ = 0;
-  int shift_ = 64;
-  std::unordered_map<std::string, std::uint32_t> long_;
-
+  // Byte by byte: a variable-length memcpy into the key stalls on store forwarding.
   static std::uint64_t pack(std::string_view id) {
     std::uint64_t k = 0;
-    std::memcpy(&k, id.data(), id.size());
+    for (std::size_t i = 0; i < id.size(); ++i) {
+      k |= std::uint64_t{static_cast<unsigned char>(id[i])} << (8 * i);
+    }
     return k;  // never 0: identifier characters are printable
   }
   [[nodiscard]] std::size_t hash(std::uint64_t k) const {
@@ -83,6 +121,31 @@ class IdTable {
     }
   }
 };
+
+// Eight bytes at a time (SWAR). load8: unaligned little-endian load.
+std::uint64_t load8(const char* p) {
+  std::uint64_t x = 0;
+  std::memcpy(&x, p, sizeof x);
+  if constexpr (std::endian::native == std::endian::big) x = __builtin_bswap64(x);
+  return x;
+}
+constexpr std::uint64_t kOnes = 0x0101010101010101ULL;
+// Index (0..7) of the first byte of x at or below ' ' (whitespace and control), 8 if none. The
+// borrow trick flags every byte below 0x21 (bytes from 0x80 never: they are token characters);
+// it may also flag bytes after the first one below, never before, so the lowest flag is exact.
+unsigned first_blank(std::uint64_t x) {
+  const std::uint64_t m = (x - kOnes * 0x21) & ~x & (kOnes * 0x80);
+  return m == 0 ? 8 : static_cast<unsigned>(std::countr_zero(m)) / 8;
+}
+// All eight bytes are '0' or '1' (0x30, 0x31).
+bool all_binary(std::uint64_t x) { return (x | kOnes) == kOnes * 0x31; }
+
+// value_char() as a table: one load per character of a vector instead of a switch.
+constexpr auto kValueChar = [] {
+  std::array<char, 256> t{};
+  for (std::size_t i = 0; i < t.size(); ++i) t[i] = value_char(static_cast<char>(i));
+  return t;
+}();
 
 bool is_real_type(std::string_view t) { return t == "real" || t == "realtime" || t == "shortreal"; }
 
@@ -125,6 +188,7 @@ class VcdReader final : public WaveReader {
   std::string section_;  // open $dumpvars/$dumpon/$dumpoff/$dumpall section
   std::uint64_t section_line_ = 0;
   std::string scratch_;
+  std::string_view* hold_ = nullptr;  // moved to scratch_ by refill() (see apply())
   bool first_step_ = true;
 
   [[noreturn]] void error(std::uint64_t line, const std::string& what) const {
@@ -133,6 +197,11 @@ class VcdReader final : public WaveReader {
 
   // Reads more input after keeping buf_[keep_from, end_). False at end of file.
   bool refill(std::size_t keep_from) {
+    if (hold_ != nullptr) {  // a vector value that lives in the part about to be dropped
+      scratch_.assign(*hold_);
+      *hold_ = scratch_;
+      hold_ = nullptr;
+    }
     const std::size_t keep = end_ - keep_from;
     if (keep_from > 0 && keep > 0) std::memmove(buf_.data(), buf_.data() + keep_from, keep);
     if (keep == buf_.size()) {
@@ -158,23 +227,37 @@ class VcdReader final : public WaveReader {
   }
 
   // Next whitespace-separated token (a view into the buffer, valid until the next call).
+  // Scans with local pointers: through the members, every byte would store pos_ and line_.
   bool next_token(std::string_view& tok) {
     for (;;) {
-      while (pos_ < end_) {
-        const char c = buf_[pos_];
-        if (static_cast<unsigned char>(c) > ' ') goto found;
-        if (c == '\n') ++line_;
-        ++pos_;
+      const char* const b = buf_.data();
+      const char* p = b + pos_;
+      const char* const e = b + end_;
+      std::uint64_t lines = 0;
+      while (p < e && static_cast<unsigned char>(*p) <= ' ') {
+        lines += *p == '\n' ? 1 : 0;
+        ++p;
       }
+      line_ += lines;
+      pos_ = static_cast<std::size_t>(p - b);
+      if (p < e) break;
       if (!refill(end_)) return false;
     }
-  found:
     tok_line_ = line_;
     std::size_t start = pos_;
     for (;;) {
-      const char* p = buf_.data();
-      while (pos_<end_&& static_cast<unsigned char>(p[pos_])> ' ') ++pos_;
-      if (pos_ < end_) break;
+      const char* const b = buf_.data();
+      const char* p = b + pos_;
+      const char* const e = b + end_;
+      while (e - p >= 8) {
+        const unsigned k = first_blank(load8(p));
+        p += k;
+        if (k < 8) goto token_end;
+      }
+      while (p<e&& static_cast<unsigned char>(*p)> ' ') ++p;
+    token_end:
+      pos_ = static_cast<std::size_t>(p - b);
+      if (p < e) break;
       const std::size_t have = end_ - start;
       const bool more = refill(start);  // moves the token's start to the buffer's start
       start = 0;
@@ -322,34 +405,54 @@ void VcdReader::apply(std::string_view t) {
   const char c = t[0];
   const std::uint64_t at = tok_line_;
   if (c == 'b' || c == 'B') {
-    scratch_.assign(t.substr(1));
-    if (scratch_.empty()) error(at, fmt::format("bad value '{}'", t));
-    for (char& ch : scratch_) {
-      const char v = value_char(ch);
+    std::string_view val = t.substr(1);
+    if (val.empty()) error(at, fmt::format("bad value '{}'", t));
+    bool plain = true;  // only 0 1 x z: used as it is, without a copy
+    std::size_t i0 = 0;
+    while (val.size() - i0 >= 8 && all_binary(load8(val.data() + i0))) i0 += 8;
+    for (const char ch : val.substr(i0)) {
+      const char v = kValueChar[static_cast<unsigned char>(ch)];
       if (v == 0) error(at, fmt::format("bad vector value '{}'", t));
-      ch = v;
+      plain = plain && v == ch;
+    }
+    if (!plain) {
+      scratch_.resize(val.size());
+      for (std::size_t i = 0; i < val.size(); ++i) {
+        scratch_[i] = kValueChar[static_cast<unsigned char>(val[i])];
+      }
+      val = scratch_;
+    } else {
+      hold_ = &val;  // reading the identifier may refill the buffer under val
     }
     std::string_view id;
-    if (!next_token(id)) {
+    bool has_id = false;
+    {
+      struct Release {  // also when next_token() throws
+        std::string_view*& h;
+        ~Release() { h = nullptr; }
+      } release{hold_};
+      has_id = next_token(id);
+    }
+    if (!has_id) {
       error(at, "truncated: vector value without identifier");
     }
     const std::uint32_t si = lookup(id, at);
     Slot& s = slots_[si];
     if (s.real) error(at, fmt::format("vector value for real variable '{}'", id));
-    const std::size_t n = scratch_.size();
+    const std::size_t n = val.size();
     if (n >= s.width) {
       const std::size_t extra = n - s.width;
       for (std::size_t i = 0; i < extra; ++i) {
-        if (scratch_[i] != '0') {
+        if (val[i] != '0') {
           error(at, fmt::format("value of {} bits for '{}' declared with {}", n, id, s.width));
         }
       }
-      std::memcpy(s.bits.data(), scratch_.data() + extra, s.width);
+      std::memcpy(s.bits.data(), val.data() + extra, s.width);
     } else {
-      const char pad = scratch_[0] == '1' ? '0' : scratch_[0];
+      const char pad = val[0] == '1' ? '0' : val[0];
       const std::size_t fill = s.width - n;
       std::memset(s.bits.data(), pad, fill);
-      std::memcpy(s.bits.data() + fill, scratch_.data(), n);
+      std::memcpy(s.bits.data() + fill, val.data(), n);
     }
     touch(si);
     return;
@@ -372,7 +475,7 @@ void VcdReader::apply(std::string_view t) {
     touch(si);
     return;
   }
-  const char v = value_char(c);
+  const char v = kValueChar[static_cast<unsigned char>(c)];
   if (v == 0) error(at, fmt::format("unexpected '{}'", t));
   if (t.size() < 2) error(at, fmt::format("value '{}' without identifier", t));
   const std::uint32_t si = lookup(t.substr(1), at);

@@ -76,7 +76,8 @@ class WaveReader {
   std::uint64_t stamp_ = 0;
   std::uint64_t time_ = 0;
 
-  void touch(std::uint32_t slot) {
+  // Once per value change: always inlined into the readers' value parsers.
+  [[gnu::always_inline]] void touch(std::uint32_t slot) {
     Slot& s = slots_[slot];
     if (s.stamp != stamp_) {
       s.stamp = stamp_;
@@ -100,7 +101,7 @@ void split_reference(std::string_view ref, std::string& name, int& msb, int& lsb
 
 // Normalises a value character: 0 1 x z (and X Z); the nine-valued letters U W - read as x and
 // H L as 1 0 (uppercase only, as GTKWave writes them for VHDL). 0 if not a value.
-inline char value_char(char c) {
+constexpr char value_char(char c) {
   switch (c) {
     case '0':
     case '1':

@@ -89,6 +89,10 @@ struct Side {
 
   [[nodiscard]] std::string_view bits(const LSig& l) const {
     if (l.bit_slots.empty()) return r->slots()[l.slot].bits;
+    return joined_bits(l);
+  }
+  // Out of line: keeps bits() small enough to be inlined into compare().
+  [[gnu::noinline]] std::string_view joined_bits(const LSig& l) const {
     l.scratch.resize(l.bit_slots.size());
     for (std::size_t i = 0; i < l.bit_slots.size(); ++i) {
       l.scratch[i] = r->slots()[l.bit_slots[i]].bits[0];
@@ -639,6 +643,9 @@ void Engine::compare(std::uint32_t pi, std::uint64_t key, const Point& pt) {
   }
   if (p.real) {
     p.last_common = fmt_real(A.real(la));
+  } else if (p.last_common.size() == va.size()) {
+    // On every equal comparison: a plain copy, not string::assign's general replace.
+    std::memcpy(p.last_common.data(), va.data(), va.size());
   } else {
     p.last_common.assign(va);
   }
