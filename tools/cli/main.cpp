@@ -2,6 +2,7 @@
 #include <fmt/core.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -69,16 +70,21 @@ int main(int argc, char** argv) {
   run->add_option("--fst", run_opt.fst, "write the run as an FST waveform");
   run->add_option("--signals", run_opt.signals, "waveform signals (globs, e.g. pins.*)")
       ->delimiter(',');
-  run->add_option("--from", run_opt.from, "waveform window: first cycle");
-  run->add_option("--to", run_opt.to, "waveform window: one past the last cycle");
+  // Unsigned options get NonNegativeNumber: CLI11 would take "-1" as 2^64 - 1.
+  run->add_option("--from", run_opt.from, "waveform window: first cycle")
+      ->check(CLI::NonNegativeNumber);
+  run->add_option("--to", run_opt.to, "waveform window: one past the last cycle")
+      ->check(CLI::NonNegativeNumber);
   run->add_option("--timescale", run_opt.timescale, "waveform time unit (default 1ps)");
   run->add_flag("--flat", run_opt.flat, "one scope, 1-bit signals only (for sigrok)");
   run->add_option("--engine", run_opt.engine,
                   "how time advances: event (deadline to deadline) or per-cycle (every clock, "
                   "the reference; docs/engine.md)")
-      ->transform(CLI::CheckedTransformer(std::map<std::string, dpc31::Engine>{
-          {"event", dpc31::Engine::event}, {"per-cycle", dpc31::Engine::per_cycle}}))
-      ->capture_default_str();
+      // Mapped to the enum's number as text: Engine is a uint8_t, which CLI11 would print (in
+      // --help and in its error message) as a raw byte, a NUL that cuts the line short.
+      ->transform(CLI::CheckedTransformer(
+          std::map<std::string, std::string>{{"event", "0"}, {"per-cycle", "1"}}))
+      ->default_str("event");
   run->add_option("--pcap", run_opt.pcap, "write the telegrams as pcapng (docs/capture.md)");
 
   dpc31::cli::ReplayOptions replay_opt;
@@ -97,14 +103,16 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"intel", "motorola"}));
   cosim->add_option("--seeds", cos.seeds, "number of random seeds")
       ->check(CLI::Range(1, 100'000'000));
-  cosim->add_option("--seed-base", cos.seed_base, "first seed");
+  cosim->add_option("--seed-base", cos.seed_base, "first seed")->check(CLI::NonNegativeNumber);
   cosim->add_option("--cycles", cos.cycles, "cycles per seed")->check(CLI::Range(1, 100'000'000));
   cosim->add_option("--shard", cos_shard, "K/N: run the K-th of N equal parts of the seed range");
   cosim->add_option("--junit", cos.junit, "write JUnit XML results to this file");
   cosim->add_option("--vcd", cos.vcd_dir,
                     "on divergence, write emu.vcd and rtl.vcd around it here");
-  cosim->add_option("--window", cos.window,
-                    "cycles before and after the divergence in the VCD window");
+  cosim
+      ->add_option("--window", cos.window,
+                   "cycles before and after the divergence in the VCD window")
+      ->check(CLI::NonNegativeNumber);
   cosim->add_option("--out", cos.out_dir, "where shrunk stimulus traces go (default .)");
   cosim->add_option("--dump", cos.dump_dir,
                     "write emu.vcd, rtl.vcd (ports) and rtl_internal.fst of the first run here");
@@ -134,12 +142,15 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    if (bench->parsed() && e.get_exit_code() != 0) {
-      std::fprintf(stderr, "dpc31 bench: %s\n", e.what());  // one line, exit 2
-      return 2;
-    }
-    const int rc = app.exit(e);
-    return rc == 0 ? 0 : 2;
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --help-all
+    // One line, exit 2 (docs/bad-input.md); CLI11's own exit() adds a second line.
+    std::string where = "dpc31";
+    for (const CLI::App* sub : app.get_subcommands()) where += " " + sub->get_name();
+    std::string what = e.what();
+    std::replace(what.begin(), what.end(), '\n', ' ');
+    while (!what.empty() && what.back() == ' ') what.pop_back();
+    fmt::print(stderr, "{}: {}\n", where, what);
+    return 2;
   }
 
   if (bench->parsed()) return dpc31::cli::run_bench(bench_args, stdout, stderr);
