@@ -359,6 +359,20 @@ TEST_F(BadInput, CosimOptionsAndOutputs) {
   EXPECT_EQ(r.out, "");
   expect_bad_prefix(dpc31("cosim --seeds 1 --cycles 100 --junit no/such/j.xml"),
                     "no/such/j.xml: cannot create the temporary file ", "junit missing directory");
+  // Directories for shrunk traces and waveforms that cannot be made: found before any seed
+  // runs (a divergent mutant would write into them), not a crash in the middle.
+  spit(path("plain"), "old");
+  for (const char* opt : {"--out", "--vcd", "--dump"}) {
+    const std::string o = opt;
+    expect_bad(
+        dpc31("cosim --seeds 1 --cycles 3000 --mutant NEXT_DOUT_KEEPS_N --quiet " + o + " plain"),
+        "dpc31 cosim: " + o + " plain: not a directory", o);
+    expect_bad(dpc31("cosim --seeds 1 --cycles 3000 --mutant NEXT_DOUT_KEEPS_N --quiet " + o +
+                     " plain/sub"),
+               "dpc31 cosim: " + o + " plain/sub: plain is not a directory", o + " below a file");
+  }
+  EXPECT_EQ(slurp(path("plain")), "old");
+  fs::remove(path("plain"));
   EXPECT_EQ(slurp(path("old.xml")), "old");
   EXPECT_TRUE(fs::is_empty(path("taken")));
   EXPECT_EQ(listing(), before);

@@ -47,6 +47,22 @@ bool read_stimulus(const std::string& path, cosim::Stimulus& s, std::string& err
   return cosim::parse_trace(text, path, s, error);
 }
 
+// True if `dir` is a directory or can be made one: the nearest part of it that exists is a
+// directory.
+bool can_be_directory(const std::filesystem::path& dir, std::string& why) {
+  std::error_code ec;
+  for (std::filesystem::path p = dir; !p.empty(); p = p.parent_path()) {
+    const auto st = std::filesystem::status(p, ec);
+    if (std::filesystem::exists(st)) {
+      if (std::filesystem::is_directory(st)) return true;
+      why = p == dir ? "not a directory" : fmt::format("{} is not a directory", p.string());
+      return false;
+    }
+    if (p == p.parent_path()) break;
+  }
+  return true;  // a relative path below the working directory
+}
+
 std::string junit(const CosimOptions& o, const nlohmann::json& results) {
   std::string cases;
   int failures = 0;
@@ -112,6 +128,14 @@ int run_cosim(const CosimOptions& o) {
     fmt::print(stderr, "{}\n", junit_out.error());
     return 2;
   }
+  // The directories are made only when something goes into them, but checked now.
+  for (const auto& [opt, dir] : {std::pair{"--out", o.out_dir}, std::pair{"--vcd", o.vcd_dir},
+                                 std::pair{"--dump", o.dump_dir}}) {
+    if (std::string why; !dir.empty() && !can_be_directory(dir, why)) {
+      fmt::print(stderr, "dpc31 cosim: {} {}: {}\n", opt, dir, why);
+      return 2;
+    }
+  }
   const DutOptions dut{o.profile, o.bus};
   if (!make_rtl_dut(dut, o.mutant)) {
     fmt::print(stderr,
@@ -154,7 +178,8 @@ int run_cosim(const CosimOptions& o) {
       entry["signals"] = r.signals;
       const Stimulus small = shrink(s, dut, o.mutant);
       const std::string dir = o.out_dir.empty() ? "." : o.out_dir;
-      std::filesystem::create_directories(dir);
+      std::error_code ec;
+      std::filesystem::create_directories(dir, ec);  // checked up front; a failure shows below
       const std::string trace = fmt::format("{}/cosim-{}-seed{}.trace", dir, o.profile_name, seed);
       std::string error;
       const auto events = [](const Stimulus& x) {

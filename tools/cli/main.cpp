@@ -153,54 +153,65 @@ int main(int argc, char** argv) {
     return 2;
   }
 
-  if (bench->parsed()) return dpc31::cli::run_bench(bench_args, stdout, stderr);
-  if (serve->parsed()) return dpc31::cli::run_serve(serve_args, stdout, stderr);
-  if (bridge->parsed()) return dpc31::cli::run_bridge(bridge_opt, stdout, stderr);
-  if (wavediff->parsed()) return dpc31::wavediff::run_cli(wavediff_args, stdout, stderr);
-  if (run->parsed()) return dpc31::cli::run_scenario_command(run_opt, stdout, stderr);
-  if (replay->parsed()) return dpc31::cli::run_replay_command(replay_opt, stdout, stderr);
-  if (cosim->parsed()) {
-    dpc31::parse_profile(cos.profile_name, cos.profile);
-    cos.bus = cos_bus == "intel" ? dpc31::BusMode::intel : dpc31::BusMode::motorola;
-    unsigned k = 0;
-    unsigned n = 0;
-    char slash = 0;
-    std::istringstream sh(cos_shard);
-    if (!(sh >> k >> slash >> n) || slash != '/' || n == 0 || k == 0 || k > n || !sh.eof()) {
-      fmt::print(stderr, "dpc31 cosim: --shard must be K/N with 1 <= K <= N, not '{}'\n",
-                 cos_shard);
-      return 2;
-    }
-    cos.shard = k;
-    cos.shards = n;
-    return dpc31::cli::run_cosim(cos);
-  }
-  if (demo->parsed()) {
-    dpc31::ChipOptions opt;
-    opt.profile = to_profile(demo_profile);
-    opt.bus = demo_bus == "intel" ? dpc31::BusMode::intel : dpc31::BusMode::motorola;
-    return dpc31::cli::run_demo(opt, demo_out, stdout);
-  }
-  if (regs->parsed()) {
-    std::vector<const dpc31::ProfileDesc*> sel;
-    for (dpc31::Profile p : dpc31::kAllProfiles) {
-      if (regs_profile == "all" || dpc31::profile_desc(p).name == regs_profile) {
-        sel.push_back(&dpc31::profile_desc(p));
+  const auto dispatch = [&]() -> int {
+    if (bench->parsed()) return dpc31::cli::run_bench(bench_args, stdout, stderr);
+    if (serve->parsed()) return dpc31::cli::run_serve(serve_args, stdout, stderr);
+    if (bridge->parsed()) return dpc31::cli::run_bridge(bridge_opt, stdout, stderr);
+    if (wavediff->parsed()) return dpc31::wavediff::run_cli(wavediff_args, stdout, stderr);
+    if (run->parsed()) return dpc31::cli::run_scenario_command(run_opt, stdout, stderr);
+    if (replay->parsed()) return dpc31::cli::run_replay_command(replay_opt, stdout, stderr);
+    if (cosim->parsed()) {
+      dpc31::parse_profile(cos.profile_name, cos.profile);
+      cos.bus = cos_bus == "intel" ? dpc31::BusMode::intel : dpc31::BusMode::motorola;
+      unsigned k = 0;
+      unsigned n = 0;
+      char slash = 0;
+      std::istringstream sh(cos_shard);
+      if (!(sh >> k >> slash >> n) || slash != '/' || n == 0 || k == 0 || k > n || !sh.eof()) {
+        fmt::print(stderr, "dpc31 cosim: --shard must be K/N with 1 <= K <= N, not '{}'\n",
+                   cos_shard);
+        return 2;
       }
+      cos.shard = k;
+      cos.shards = n;
+      return dpc31::cli::run_cosim(cos);
     }
-    if (sel.size() != 1 && (regs_format == "text" || regs_format == "json")) {
-      fmt::print(stderr, "dpc31 regs: --format {} needs one profile, not all\n", regs_format);
-      return 2;
+    if (demo->parsed()) {
+      dpc31::ChipOptions opt;
+      opt.profile = to_profile(demo_profile);
+      opt.bus = demo_bus == "intel" ? dpc31::BusMode::intel : dpc31::BusMode::motorola;
+      return dpc31::cli::run_demo(opt, demo_out, stdout);
     }
-    namespace rf = dpc31::regfmt;
-    std::string out;
-    if (regs_format == "text") out = rf::emit_text(*sel[0]);
-    if (regs_format == "json") out = rf::emit_json(*sel[0]);
-    if (regs_format == "c") out = rf::emit_c_header(sel);
-    if (regs_format == "verilog") out = rf::emit_verilog(sel);
-    if (regs_format == "markdown") out = rf::emit_markdown(sel);
-    std::fwrite(out.data(), 1, out.size(), stdout);
-    return 0;
+    if (regs->parsed()) {
+      std::vector<const dpc31::ProfileDesc*> sel;
+      for (dpc31::Profile p : dpc31::kAllProfiles) {
+        if (regs_profile == "all" || dpc31::profile_desc(p).name == regs_profile) {
+          sel.push_back(&dpc31::profile_desc(p));
+        }
+      }
+      if (sel.size() != 1 && (regs_format == "text" || regs_format == "json")) {
+        fmt::print(stderr, "dpc31 regs: --format {} needs one profile, not all\n", regs_format);
+        return 2;
+      }
+      namespace rf = dpc31::regfmt;
+      std::string out;
+      if (regs_format == "text") out = rf::emit_text(*sel[0]);
+      if (regs_format == "json") out = rf::emit_json(*sel[0]);
+      if (regs_format == "c") out = rf::emit_c_header(sel);
+      if (regs_format == "verilog") out = rf::emit_verilog(sel);
+      if (regs_format == "markdown") out = rf::emit_markdown(sel);
+      std::fwrite(out.data(), 1, out.size(), stdout);
+      return 0;
+    }
+    return 2;
+  };
+  try {
+    return dispatch();
+  } catch (const std::exception& e) {
+    // Nothing is meant to get here; if something does, it is one line, not std::terminate's.
+    std::string where = "dpc31";
+    for (const CLI::App* sub : app.get_subcommands()) where += " " + sub->get_name();
+    fmt::print(stderr, "{}: {}\n", where, e.what());
+    return 2;
   }
-  return 2;
 }
