@@ -250,6 +250,24 @@ TEST_F(BadInput, RunOutputsAppearWholeAndAlone) {
   EXPECT_EQ(fst_blocks(slurp(path("r.fst"))).at(0).type, 0u);  // the FST header block
 }
 
+// Not every target is a file to replace: a device is written in place (renaming over /dev/null
+// would put a plain file there), and a symlink stays a symlink to the file it names.
+TEST_F(BadInput, OutputsToDevicesAndThroughSymlinks) {
+  spit(path("real.json"), "old");
+  fs::create_symlink("real.json", path("link.json"));
+  const Outcome r = dpc31("run " + kTraces +
+                          "gc_clear_spc3.scn --quiet --vcd /dev/null --pcap /dev/null --json "
+                          "/dev/stdout");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_EQ(r.out.rfind("{\n", 0), 0u);  // the JSON on stdout
+  EXPECT_TRUE(fs::is_character_file("/dev/null"));
+  const Outcome l = dpc31("run " + kTraces + "gc_clear_spc3.scn --quiet --json link.json");
+  ASSERT_EQ(l.rc, 0) << l.err;
+  EXPECT_TRUE(fs::is_symlink(path("link.json")));
+  EXPECT_EQ(slurp(path("real.json")).rfind("{\n", 0), 0u);
+  EXPECT_EQ(listing(), (std::vector<std::string>{"link.json", "real.json"}));
+}
+
 // --- dpc31 replay: golden traces --------------------------------------------------------------
 
 TEST_F(BadInput, ReplayTraceFile) {

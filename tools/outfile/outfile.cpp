@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdlib>
 #include <system_error>
 
 namespace dpc31::outfile {
@@ -54,21 +55,37 @@ bool OutFile::open(const std::string& path) {
   discard();
   error_.clear();
   path_ = path;
-  // Found before any work is done, not at the rename after it.
-  struct stat st {};
-  if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) {
-    return fail(fmt::format("{}: cannot write: is a directory", path));
-  }
+  target_ = path;
+  direct_ = false;
   int fd = -1;
-  std::string error;
-  tmp_ = create_temp(
-      path,
-      [&fd](const std::string& name) {
-        fd = ::open(name.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-        return fd < 0 ? errno : 0;
-      },
-      error);
-  if (tmp_.empty()) return fail(error);
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0) {
+    // Found before any work is done, not at the rename after it.
+    if (S_ISDIR(st.st_mode)) return fail(fmt::format("{}: cannot write: is a directory", path));
+    if (!S_ISREG(st.st_mode)) {
+      // A device or a FIFO (/dev/stdout, /dev/null): there is no file to replace, and renaming
+      // over it would put a plain file in its place. Written in place.
+      fd = ::open(path.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
+      if (fd < 0) return fail(fmt::format("{}: cannot write: {}", path, errno_text(errno)));
+      direct_ = true;
+      tmp_ = path;
+    } else if (std::unique_ptr<char, decltype(&std::free)> real(::realpath(path.c_str(), nullptr),
+                                                                &std::free);
+               real) {
+      target_ = real.get();  // a symlink stays a symlink: the file it names is replaced
+    }
+  }
+  if (!direct_) {
+    std::string error;
+    tmp_ = create_temp(
+        target_,
+        [&fd](const std::string& name) {
+          fd = ::open(name.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+          return fd < 0 ? errno : 0;
+        },
+        error);
+    if (tmp_.empty()) return fail(error);
+  }
   f_ = ::fdopen(fd, "wb");
   if (f_ == nullptr) {
     const int e = errno;
@@ -99,14 +116,18 @@ bool OutFile::commit() {
   // old file or the new one, never an empty one.
   if (std::fflush(f_) != 0 || std::ferror(f_) != 0) {
     fail(fmt::format("{}: cannot write: {}", path_, errno_text(errno)));
-  } else if (::fsync(::fileno(f_)) != 0) {
+  } else if (!direct_ && ::fsync(::fileno(f_)) != 0) {
     fail(fmt::format("{}: cannot write: {}", path_, errno_text(errno)));
   }
   const int rc = std::fclose(f_);
   f_ = nullptr;
   if (rc != 0) fail(fmt::format("{}: cannot write: {}", path_, errno_text(errno)));
+  if (direct_) {
+    tmp_.clear();
+    return error_.empty();
+  }
   std::string error;
-  if (error_.empty() && !replace(tmp_, path_, error)) fail(error);
+  if (error_.empty() && !replace(tmp_, target_, error)) fail(error);
   if (!error_.empty()) {
     ::unlink(tmp_.c_str());
     tmp_.clear();
@@ -122,7 +143,7 @@ void OutFile::discard() {
     f_ = nullptr;
   }
   if (!tmp_.empty()) {
-    ::unlink(tmp_.c_str());
+    if (!direct_) ::unlink(tmp_.c_str());  // a device is not ours to remove
     tmp_.clear();
   }
 }

@@ -29,7 +29,8 @@ class OutFile {
   OutFile& operator=(const OutFile&) = delete;
 
   // Creates the temporary. False with error() if `path` is a directory or the temporary cannot
-  // be created; nothing is touched then. A file still open is discarded first.
+  // be created; nothing is touched then. A file still open is discarded first. A `path` that is
+  // a device or a FIFO (/dev/stdout) is written in place; a symlink to a file is followed.
   bool open(const std::string& path);
   // Buffered stream on the temporary (fmt::print, fwrite); nullptr when not open.
   std::FILE* stream();
@@ -50,8 +51,10 @@ class OutFile {
 
  private:
   bool fail(std::string msg);
-  std::string path_;
+  std::string path_;    // as given, for messages
+  std::string target_;  // what is replaced: the path, or the file a symlink names
   std::string tmp_;
+  bool direct_ = false;  // a device or FIFO, written in place
   std::FILE* f_ = nullptr;
   std::unique_ptr<char[]> buf_;  // the stream's buffer, outlives f_
   std::string error_;
