@@ -229,6 +229,14 @@ TEST_F(BadInput, RunOutputPaths) {
                       o + " unwritable");
     EXPECT_TRUE(fs::is_empty(path("taken"))) << o;
     EXPECT_EQ(listing(), before) << o;
+    // The same among good outputs: none of them is written either.
+    std::string all;
+    for (const char* other : {"--json", "--record", "--vcd", "--fst", "--pcap"}) {
+      all += " " + std::string(other) + (other == o ? " taken" : " new" + std::string(other + 1));
+    }
+    expect_bad(dpc31("run " + scn + " --quiet" + all),
+               "dpc31 run: taken: cannot write: is a directory", o + " among good outputs");
+    EXPECT_EQ(listing(), before) << o;
   }
 }
 

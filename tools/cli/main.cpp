@@ -139,18 +139,20 @@ int main(int argc, char** argv) {
   dpc31::cli::BenchArgs bench_args;
   auto* bench = dpc31::cli::add_bench_subcommand(app, bench_args);
 
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --help-all
-    // One line, exit 2 (docs/bad-input.md); CLI11's own exit() adds a second line.
+  // Bad input is one line, "dpc31 SUBCOMMAND: what", and exit 2 (docs/bad-input.md).
+  const auto refuse = [&app](std::string what) {
     std::string where = "dpc31";
     for (const CLI::App* sub : app.get_subcommands()) where += " " + sub->get_name();
-    std::string what = e.what();
     std::replace(what.begin(), what.end(), '\n', ' ');
     while (!what.empty() && what.back() == ' ') what.pop_back();
     fmt::print(stderr, "{}: {}\n", where, what);
     return 2;
+  };
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --help-all
+    return refuse(e.what());                         // CLI11's own exit() would add a second line
   }
 
   const auto dispatch = [&]() -> int {
@@ -209,9 +211,6 @@ int main(int argc, char** argv) {
     return dispatch();
   } catch (const std::exception& e) {
     // Nothing is meant to get here; if something does, it is one line, not std::terminate's.
-    std::string where = "dpc31";
-    for (const CLI::App* sub : app.get_subcommands()) where += " " + sub->get_name();
-    fmt::print(stderr, "{}: {}\n", where, e.what());
-    return 2;
+    return refuse(e.what());
   }
 }

@@ -39,10 +39,6 @@ nlohmann::json summary(const Scenario& s, const ScenarioOutcome& o) {
   };
 }
 
-bool write_json(const std::string& path, const nlohmann::json& j, std::string& error) {
-  return outfile::write_file(path, j.dump(2) + '\n', error);
-}
-
 // The comment block at the top of a scenario file (its description, and for golden traces what
 // was checked by hand): it heads the recorded trace.
 std::vector<std::string> leading_comments(const std::string& path) {
@@ -94,10 +90,14 @@ int run_with_outputs(const RunOptions& opt, const LineSink& walk, const LineSink
 int run_parsed_scenario(const RunOptions& opt, const Scenario& s, const LineSink& walk,
                         const LineSink& errors, ScenarioOutcome& o, std::FILE* err) {
   std::unique_ptr<TraceRecorder> rec;
-  outfile::OutFile rec_out;  // opened now: a bad path is found before the run
-  if (!opt.record.empty() && !rec_out.open(opt.record)) {
-    fmt::print(err, "dpc31 run: {}\n", rec_out.error());
-    return 2;
+  // Every output is opened now: a bad path is found before the run, before any is written.
+  outfile::OutFile rec_out;
+  outfile::OutFile json_out;
+  for (auto [path, out] : {std::pair{&opt.record, &rec_out}, std::pair{&opt.json, &json_out}}) {
+    if (!path->empty() && !out->open(*path)) {
+      fmt::print(err, "dpc31 run: {}\n", out->error());
+      return 2;
+    }
   }
   ScenarioHooks hooks;
   LineSink run_walk = walk;
@@ -176,6 +176,10 @@ int run_parsed_scenario(const RunOptions& opt, const Scenario& s, const LineSink
     fmt::print(err, "dpc31 run: {}\n", pcap.error());
     return 2;
   }
+  if (json_out.is_open() && !(json_out.write(summary(s, o).dump(2) + '\n') && json_out.commit())) {
+    fmt::print(err, "dpc31 run: {}\n", json_out.error());
+    return 2;
+  }
   return rc;
 }
 
@@ -185,14 +189,7 @@ int run_scenario_command(const RunOptions& opt, std::FILE* out, std::FILE* err) 
   const LineSink errors = [err](const std::string& line) { fmt::print(err, "{}\n", line); };
   Scenario s;
   ScenarioOutcome o;
-  const int rc = run_with_outputs(opt, walk, errors, s, o, err);
-  if (rc == 2) return rc;
-  std::string error;
-  if (!opt.json.empty() && !write_json(opt.json, summary(s, o), error)) {
-    fmt::print(err, "dpc31 run: {}\n", error);
-    return 2;
-  }
-  return rc;
+  return run_with_outputs(opt, walk, errors, s, o, err);
 }
 
 }  // namespace dpc31::cli
