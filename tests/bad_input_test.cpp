@@ -541,6 +541,14 @@ TEST_F(BadWaves, MapFileOptionsAndOutputs) {
     expect_bad_prefix(dpc31("wavediff good.vcd good.fst " + o + " no/such/x"),
                       "no/such/x: cannot create the temporary file no/such/x.", o);
     EXPECT_EQ(listing(), before) << o;
+    // Among good outputs: none of them is written.
+    std::string all;
+    for (const char* other : {"--json", "--diff-vcd", "--wavedrom"}) {
+      all += " " + std::string(other) + (other == o ? " taken" : " new" + std::string(other + 1));
+    }
+    expect_bad(dpc31("wavediff good.vcd good.fst" + all), "taken: cannot write: is a directory",
+               o + " among good outputs");
+    EXPECT_EQ(listing(), before) << o;
   }
   for (const char* args : {"good.vcd", "good.vcd good.vcd --xz maybe", "a b c"}) {
     expect_bad_prefix(dpc31(std::string("wavediff ") + args), "dpc31 wavediff: ", args);

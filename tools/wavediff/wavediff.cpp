@@ -830,11 +830,6 @@ std::vector<std::string> split_dots(const std::string& n) {
   return parts;
 }
 
-void write_whole(const std::string& path, std::string_view text) {
-  std::string error;
-  if (!outfile::write_file(path, text, error)) throw InputError(error);
-}
-
 class DiffVcd {
  public:
   DiffVcd(const std::string& path, Engine& e) {
@@ -1005,7 +1000,7 @@ nlohmann::ordered_json drom_row(const std::string& name, const std::vector<std::
   return {{"name", name}, {"wave", wave}, {"data", data}};
 }
 
-void write_wavedrom(const Options& o, const Report& rep) {
+std::string wavedrom_text(const Options& o, const Report& rep) {
   Engine e(o);
   Report scratch;
   e.setup(scratch);
@@ -1072,7 +1067,7 @@ void write_wavedrom(const Options& o, const Report& rep) {
       {"signal", rows},
       {"head", {{"text", fmt::format("first divergence: {} at {}", first.name, when)}}},
       {"foot", {{"text", fmt::format("a: {}  b: {}", o.file_a, o.file_b)}}}};
-  write_whole(o.wavedrom, j.dump(2) + '\n');
+  return j.dump(2) + '\n';
 }
 
 }  // namespace
@@ -1085,6 +1080,10 @@ Report compare(const Options& o) {
   Report rep;
   Engine e(o);
   e.setup(rep);
+  // Every output is opened before the comparison and renamed into place after it, all or none
+  // (docs/bad-input.md).
+  outfile::OutFile drom;
+  if (!o.wavedrom.empty() && !drom.open(o.wavedrom)) throw InputError(drom.error());
   std::unique_ptr<DiffVcd> dv;
   if (!o.diff_vcd.empty()) dv = std::make_unique<DiffVcd>(o.diff_vcd, e);
   Hook hook;
@@ -1096,15 +1095,15 @@ Report compare(const Options& o) {
   }
   e.run(hook);
   e.finish(rep);
-  if (dv) dv->commit();
-  if (!o.wavedrom.empty()) {
-    if (rep.diffs.empty()) {
-      write_whole(o.wavedrom, R"({"signal": [], "head": {"text": "no divergence"}})"
-                              "\n");
-    } else {
-      write_wavedrom(o, rep);
-    }
+  if (drom.is_open()) {
+    const std::string text = rep.diffs.empty()
+                                 ? R"({"signal": [], "head": {"text": "no divergence"}})"
+                                   "\n"
+                                 : wavedrom_text(o, rep);
+    if (!drom.write(text)) throw InputError(drom.error());
   }
+  if (dv) dv->commit();
+  if (drom.is_open() && !drom.commit()) throw InputError(drom.error());
   return rep;
 }
 
