@@ -452,11 +452,8 @@ TEST_F(BadWaves, VcdFiles) {
   file("garbage.vcd",
        "\x7f"
        "ELF\x01\x02\x03\n");
-  // The reader splits words at control characters.
-  expect_refused("garbage.vcd",
-                 "garbage.vcd:1: unexpected '\x7f"
-                 "ELF' in the header",
-                 "garbage");
+  // The reader splits words at control characters; the one quoted is shown escaped.
+  expect_refused("garbage.vcd", "garbage.vcd:1: unexpected '\\x7FELF' in the header", "garbage");
 }
 
 TEST_F(BadWaves, FstFiles) {
