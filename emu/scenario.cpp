@@ -103,21 +103,6 @@ std::string hex(std::span<const std::uint8_t> bytes, std::size_t max = 32) {
   return s;
 }
 
-// A token as it may appear in a one-line message: printable, short.
-std::string shown(std::string_view s) {
-  std::string out;
-  for (std::size_t i = 0; i < s.size() && i < 40; ++i) {
-    const auto c = static_cast<unsigned char>(s[i]);
-    if (c >= 0x20 && c < 0x7F) {
-      out += static_cast<char>(c);
-    } else {
-      out += fmt::format("\\x{:02X}", c);
-    }
-  }
-  if (s.size() > 40) out += "...";
-  return out;
-}
-
 bool parse_u64(std::string_view s, std::uint64_t& v) {
   int base = 10;
   if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
@@ -1535,6 +1520,7 @@ bool load_scenario(const std::string& path, Scenario& out, ScenarioError& err) {
   err = ScenarioError{path, 0, {}};
   std::string text;
   if (!read_text_file(path, kMaxFileBytes, "scenario", text, err.message)) return false;
+  if ((err.line = cut_off_line(text, err.message)) != 0) return false;
   return parse_scenario(text, path, out, err);
 }
 

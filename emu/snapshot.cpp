@@ -2,17 +2,13 @@
 // Layout and messages: docs/snapshots.md.
 #include "snapshot.hpp"
 
-#include <fcntl.h>
 #include <fmt/format.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
-#include <cerrno>
 #include <filesystem>
-#include <system_error>
 
 #include "dpc31/reg_ids.hpp"
+#include "outfile.hpp"
 #include "textfile.hpp"
 
 namespace dpc31::snap {
@@ -40,8 +36,6 @@ std::uint64_t get_le(std::span<const std::uint8_t> b, std::size_t off, std::size
 void put_le(std::vector<std::uint8_t>& out, std::uint64_t v, std::size_t n) {
   for (std::size_t i = 0; i < n; ++i) out.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
 }
-
-std::string errno_text(int e) { return std::error_code(e, std::generic_category()).message(); }
 
 std::string bus_name(BusMode b) { return b == BusMode::intel ? "intel" : "motorola"; }
 
@@ -254,35 +248,11 @@ std::span<const std::uint8_t> open(std::span<const std::uint8_t> bytes, const He
 // ---- files ----
 
 void write_file_atomic(const std::string& path, std::span<const std::uint8_t> bytes) {
-  static std::atomic<unsigned> serial{0};
-  const std::string tmp = fmt::format("{}.tmp.{}.{}", path, ::getpid(), serial++);
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-  if (fd < 0) {
-    throw SnapshotError(
-        fmt::format("{}: cannot create the temporary file {}: {}", path, tmp, errno_text(errno)));
+  std::string error;
+  if (!outfile::write_file(path, {reinterpret_cast<const char*>(bytes.data()), bytes.size()},
+                           error)) {
+    throw SnapshotError(error);
   }
-  auto give_up = [&](std::string_view what, int e) {
-    ::unlink(tmp.c_str());
-    throw SnapshotError(fmt::format("{}: {}: {}", path, what, errno_text(e)));
-  };
-  std::size_t done = 0;
-  while (done < bytes.size()) {
-    const ssize_t w = ::write(fd, bytes.data() + done, bytes.size() - done);
-    if (w < 0 && errno == EINTR) continue;
-    if (w <= 0) {
-      const int e = w < 0 ? errno : EIO;
-      ::close(fd);
-      give_up("cannot write the temporary file", e);
-    }
-    done += static_cast<std::size_t>(w);
-  }
-  if (::fsync(fd) != 0) {
-    const int e = errno;
-    ::close(fd);
-    give_up("cannot flush the temporary file", e);
-  }
-  if (::close(fd) != 0) give_up("cannot close the temporary file", errno);
-  if (::rename(tmp.c_str(), path.c_str()) != 0) give_up("cannot rename the temporary file", errno);
 }
 
 std::vector<std::uint8_t> read_file(const std::string& path) {

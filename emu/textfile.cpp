@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
@@ -35,6 +36,26 @@ bool read_text_file(const std::string& path, std::size_t max_bytes, std::string_
     return false;
   }
   return true;
+}
+
+int cut_off_line(std::string_view text, std::string& error) {
+  if (text.empty() || text.back() == '\n') return 0;
+  error = "truncated: the last line has no end of line";
+  return static_cast<int>(std::count(text.begin(), text.end(), '\n')) + 1;
+}
+
+std::string shown(std::string_view s) {
+  std::string out;
+  for (std::size_t i = 0; i < s.size() && i < 40; ++i) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    if (c >= 0x20 && c < 0x7F) {
+      out += static_cast<char>(c);
+    } else {
+      out += fmt::format("\\x{:02X}", c);
+    }
+  }
+  if (s.size() > 40) out += "...";
+  return out;
 }
 
 }  // namespace dpc31

@@ -70,20 +70,6 @@ std::vector<TraceStateKey> chip_state(const Chip& c) {
   };
 }
 
-std::string shown(std::string_view s) {
-  std::string out;
-  for (std::size_t i = 0; i < s.size() && i < 40; ++i) {
-    const auto ch = static_cast<unsigned char>(s[i]);
-    if (ch >= 0x20 && ch < 0x7F) {
-      out += static_cast<char>(ch);
-    } else {
-      out += fmt::format("\\x{:02X}", ch);
-    }
-  }
-  if (s.size() > 40) out += "...";
-  return out;
-}
-
 bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 
 std::vector<std::string_view> words(std::string_view s) {
@@ -734,6 +720,7 @@ bool load_trace(const std::string& path, Trace& out, TraceError& err) {
   err = TraceError{path, 0, {}};
   std::string text;
   if (!read_text_file(path, kMaxFileBytes, "trace", text, err.message)) return false;
+  if ((err.line = cut_off_line(text, err.message)) != 0) return false;
   return parse_trace(text, path, out, err);
 }
 

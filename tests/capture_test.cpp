@@ -292,9 +292,16 @@ TEST(Capture, TargetUntouchedUntilClose) {
 TEST(Capture, RenameFailureIsReported) {
   TempDir dir;
   const std::string path = dir.file("is_a_directory");
+  // A directory in the way is found by open(), before any telegram is captured.
   fs::create_directory(path);
   PcapngWriter w;
+  EXPECT_FALSE(w.open(path));
+  EXPECT_EQ(w.error(), path + ": cannot write: is a directory");
+  EXPECT_EQ(dir.entries(), std::vector<std::string>{"is_a_directory"});
+  // One that appears while the capture is open makes the rename fail.
+  fs::remove(path);
   ASSERT_TRUE(w.open(path)) << w.error();
+  fs::create_directory(path);
   EXPECT_FALSE(w.close());
   EXPECT_NE(w.error().find("cannot rename"), std::string::npos) << w.error();
   EXPECT_EQ(dir.entries(), std::vector<std::string>{"is_a_directory"});  // temporary removed

@@ -493,8 +493,13 @@ TEST(Serve, FloodDoesNotStarveAWellBehavedClient) {
   std::atomic<bool> stop{false};
   std::atomic<std::size_t> sent{0};
   std::thread t([&] {
+    // Garbage, oversized lines (over the 4096-byte limit) and valid commands, mixed.
     std::string chunk;
-    for (int i = 0; i < 2000; ++i) chunk += (i % 7 == 0) ? "garbage \x01\x02\n" : "peek 0\n";
+    for (int i = 0; i < 2000; ++i) {
+      chunk += (i % 7 == 0)    ? "garbage \x01\x02\n"
+               : (i % 50 == 1) ? std::string(10000, 'z') + "\n"
+                               : "peek 0\n";
+    }
     while (!stop.load()) {
       const ssize_t n = ::send(flood.fd(), chunk.data(), chunk.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
       if (n > 0) {
@@ -522,6 +527,32 @@ TEST(Serve, FloodDoesNotStarveAWellBehavedClient) {
   EXPECT_LT(secs, 10.0);
   flood.close();
   EXPECT_EQ(good.command("peek 0x900"), "OK 0x2b");
+}
+
+// Without an address, --tcp binds the loopback interface only: the listening socket in the
+// kernel's table (/proc/net/tcp: local address 0100007F = 127.0.0.1, state 0A = LISTEN), not
+// just the line the server prints.
+TEST(Serve, TcpBindsLoopbackByDefault) {
+  ServerProcess server(kCli, {"--tcp", "0"});
+  const std::string port = fmt::format(":{:04X}", server.port());
+  const auto listeners = [&port](const char* table) {
+    std::ifstream f(table);
+    std::vector<std::string> found;
+    std::string line;
+    std::getline(f, line);  // the header
+    while (std::getline(f, line)) {
+      const std::vector<std::string> w = words(line);
+      // sl local_address rem_address st ...
+      if (w.size() > 3 && w[1].size() > port.size() && w[1].ends_with(port) && w[3] == "0A") {
+        found.push_back(w[1]);
+      }
+    }
+    return found;
+  };
+  ASSERT_TRUE(std::filesystem::exists("/proc/net/tcp"));
+  EXPECT_EQ(listeners("/proc/net/tcp"), std::vector<std::string>{"0100007F" + port});
+  EXPECT_TRUE(listeners("/proc/net/tcp6").empty());  // nor on IPv6's any-address
+  EXPECT_EQ(server.listening().at(0), fmt::format("listening tcp 127.0.0.1:{}", server.port()));
 }
 
 // A client that stops reading while async lines pile up is dropped, not waited for.

@@ -10,6 +10,8 @@
 #include <cstring>
 #include <vector>
 
+#include "outfile.hpp"
+
 namespace dpc31::bridge {
 
 namespace {
@@ -174,16 +176,14 @@ std::string make_link(const std::string& path, const std::string& target) {
       return path + " exists and is not a symlink: refusing to replace it";
     }
     // Replace atomically: a client never finds the path missing.
-    const std::string tmp = path + ".dpc31-bridge." + std::to_string(::getpid());
-    ::unlink(tmp.c_str());
-    if (::symlink(target.c_str(), tmp.c_str()) != 0) {
-      return errno_text(("symlink " + tmp).c_str());
-    }
-    if (::rename(tmp.c_str(), path.c_str()) != 0) {
-      std::string msg = errno_text(("rename to " + path).c_str());
-      ::unlink(tmp.c_str());
-      return msg;
-    }
+    std::string error;
+    const std::string tmp = outfile::create_temp(
+        path,
+        [&target](const std::string& name) {
+          return ::symlink(target.c_str(), name.c_str()) == 0 ? 0 : errno;
+        },
+        error);
+    if (tmp.empty() || !outfile::replace(tmp, path, error)) return error;
     return {};
   }
   if (errno != ENOENT) return errno_text(path.c_str());

@@ -1,13 +1,11 @@
 #include "pcapng.hpp"
 
-#include <fcntl.h>
 #include <fmt/format.h>
-#include <unistd.h>
 
-#include <cerrno>
 #include <cstdio>
 #include <limits>
-#include <system_error>
+
+#include "outfile.hpp"
 
 namespace dpc31::capture {
 
@@ -24,7 +22,6 @@ constexpr std::uint16_t kShbUserAppl = 4;
 constexpr std::uint16_t kIfName = 2;
 constexpr std::uint16_t kIfTsresol = 9;
 constexpr std::uint16_t kEpbFlags = 2;
-constexpr std::size_t kFlushBytes = 64 * 1024;
 
 constexpr std::uint64_t kNsPerS = 1'000'000'000;
 
@@ -74,8 +71,6 @@ class Block {
   std::vector<std::uint8_t> b_;
   bool options_ = false;
 };
-
-std::string errno_text(int e) { return std::error_code(e, std::generic_category()).message(); }
 
 }  // namespace
 
@@ -142,10 +137,7 @@ std::optional<Packet> telegram_packet(const Telegram& t, std::uint32_t clock_hz,
 
 struct PcapngWriter::State {
   WriterOptions opt;
-  std::string path;
-  std::string tmp;
-  int fd = -1;
-  std::vector<std::uint8_t> buf;
+  outfile::OutFile out;
   std::string error;
   std::uint64_t packets = 0;
 
@@ -153,26 +145,13 @@ struct PcapngWriter::State {
     if (error.empty()) error = std::move(msg);
     return false;
   }
-  bool flush() {
-    std::size_t done = 0;
-    while (done < buf.size()) {
-      const ssize_t n = ::write(fd, buf.data() + done, buf.size() - done);
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) {
-        const int e = n < 0 ? errno : ENOSPC;
-        buf.clear();
-        return fail(fmt::format("cannot write {}: {}", tmp, errno_text(e)));
-      }
-      done += static_cast<std::size_t>(n);
-    }
-    buf.clear();
-    return true;
-  }
   bool put(const std::vector<std::uint8_t>& block) {
-    if (fd < 0) return fail("no capture file is open");
+    if (!out.is_open()) return fail("no capture file is open");
     if (!error.empty()) return false;
-    buf.insert(buf.end(), block.begin(), block.end());
-    return buf.size() < kFlushBytes || flush();
+    if (!out.write({reinterpret_cast<const char*>(block.data()), block.size()})) {
+      return fail(out.error());
+    }
+    return true;
   }
   bool add(const Packet& p) {
     if (!put(enhanced_packet_block(p))) return false;
@@ -180,7 +159,7 @@ struct PcapngWriter::State {
     return true;
   }
   bool add(const Telegram& t, std::uint32_t clock_hz) {
-    if (fd < 0) return fail("no capture file is open");
+    if (!out.is_open()) return fail("no capture file is open");
     const std::optional<Packet> p = telegram_packet(t, clock_hz, opt.cycle_comments);
     if (!p) {
       return fail(fmt::format("the telegram at cycle {} has no timestamp at {} Hz (out of range)",
@@ -188,39 +167,20 @@ struct PcapngWriter::State {
     }
     return add(*p);
   }
-  void drop() {
-    if (fd >= 0) {
-      ::close(fd);
-      fd = -1;
-      ::unlink(tmp.c_str());
-    }
-    buf.clear();
-  }
 };
 
 PcapngWriter::PcapngWriter(WriterOptions opt) : state_(std::make_shared<State>()) {
   state_->opt = std::move(opt);
 }
 
-PcapngWriter::~PcapngWriter() { state_->drop(); }
+PcapngWriter::~PcapngWriter() = default;  // the OutFile discards what was not closed
 
 bool PcapngWriter::open(const std::string& path) {
   State& s = *state_;
-  s.drop();
+  s.out.discard();
   s.error.clear();
   s.packets = 0;
-  s.path = path;
-  // Same directory as the target, so that rename() replaces it atomically; O_EXCL so that two
-  // writers never share a temporary.
-  for (int attempt = 0; attempt < 100 && s.fd < 0; ++attempt) {
-    s.tmp = attempt == 0 ? fmt::format("{}.{}.tmp", path, ::getpid())
-                         : fmt::format("{}.{}-{}.tmp", path, ::getpid(), attempt);
-    s.fd = ::open(s.tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-    if (s.fd < 0 && errno != EEXIST) {
-      return s.fail(fmt::format("cannot create {} (for {}): {}", s.tmp, path, errno_text(errno)));
-    }
-  }
-  if (s.fd < 0) return s.fail(fmt::format("cannot create a temporary for {}", path));
+  if (!s.out.open(path)) return s.fail(s.out.error());
   return s.put(section_header_block(s.opt)) && s.put(interface_description_block(s.opt));
 }
 
@@ -235,36 +195,24 @@ void PcapngWriter::attach(Chip& chip) {
   std::weak_ptr<State> weak = state_;
   chip.on_telegram([weak, hz](const Telegram& t) {
     const std::shared_ptr<State> s = weak.lock();
-    if (!s || s->fd < 0) return;  // writer gone or closed
+    if (!s || !s->out.is_open()) return;  // writer gone or closed
     s->add(t, hz);
   });
 }
 
 bool PcapngWriter::close() {
   State& s = *state_;
-  if (s.fd < 0) return s.fail("no capture file is open");
-  if (s.error.empty()) s.flush();
-  if (s.error.empty() && ::fsync(s.fd) != 0) {
-    s.fail(fmt::format("cannot write {}: {}", s.tmp, errno_text(errno)));
-  }
-  const int fd = s.fd;
-  s.fd = -1;
-  if (::close(fd) != 0) {
-    s.fail(fmt::format("cannot write {}: {}", s.tmp, errno_text(errno)));
-  }
-  if (s.error.empty() && std::rename(s.tmp.c_str(), s.path.c_str()) != 0) {
-    s.fail(fmt::format("cannot rename {} to {}: {}", s.tmp, s.path, errno_text(errno)));
-  }
+  if (!s.out.is_open()) return s.fail("no capture file is open");
   if (!s.error.empty()) {
-    ::unlink(s.tmp.c_str());
+    s.out.discard();
     return false;
   }
-  return true;
+  return s.out.commit() || s.fail(s.out.error());
 }
 
-void PcapngWriter::discard() { state_->drop(); }
+void PcapngWriter::discard() { state_->out.discard(); }
 
-bool PcapngWriter::is_open() const { return state_->fd >= 0; }
+bool PcapngWriter::is_open() const { return state_->out.is_open(); }
 const std::string& PcapngWriter::error() const { return state_->error; }
 std::uint64_t PcapngWriter::packets() const { return state_->packets; }
 

@@ -4,12 +4,40 @@
 #include <spawn.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
+#include <cerrno>
+#include <cstdio>
 #include <cstring>
 
 extern char** environ;
 
 namespace dpc31::child {
+
+namespace {
+
+Result wait_for(pid_t pid, const std::string& what) {
+  Result r;
+  int status = 0;
+  struct rusage ru {};
+  pid_t got = -1;
+  do {
+    got = ::wait4(pid, &status, 0, &ru);
+  } while (got < 0 && errno == EINTR);
+  if (got != pid) {
+    r.error = what + "wait4 failed";
+    return r;
+  }
+  r.maxrss_kib = ru.ru_maxrss;
+  if (WIFEXITED(status)) {
+    r.exit_code = WEXITSTATUS(status);
+  } else {
+    r.error = what + "ended by signal " + std::to_string(WTERMSIG(status));
+  }
+  return r;
+}
+
+}  // namespace
 
 Result run(const std::vector<std::string>& argv, const std::string& stderr_file) {
   Result r;
@@ -32,19 +60,32 @@ Result run(const std::vector<std::string>& argv, const std::string& stderr_file)
     r.error = argv[0] + ": " + std::strerror(rc);
     return r;
   }
-  int status = 0;
-  struct rusage ru {};
-  if (::wait4(pid, &status, 0, &ru) != pid) {
-    r.error = argv[0] + ": wait4 failed";
+  return wait_for(pid, argv[0] + ": ");
+}
+
+Result call(const std::function<int()>& fn) {
+  std::fflush(nullptr);  // nothing buffered is written twice
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    Result r;
+    r.error = std::string("fork: ") + std::strerror(errno);
     return r;
   }
-  r.maxrss_kib = ru.ru_maxrss;
-  if (WIFEXITED(status)) {
-    r.exit_code = WEXITSTATUS(status);
-  } else {
-    r.error = argv[0] + ": ended by signal " + std::to_string(WTERMSIG(status));
+  if (pid == 0) {
+    const int null = ::open("/dev/null", O_WRONLY);
+    if (null >= 0) {
+      ::dup2(null, 1);
+      ::dup2(null, 2);
+    }
+    int rc = 1;
+    try {
+      rc = fn();
+    } catch (...) {
+      rc = 1;
+    }
+    ::_exit(rc);
   }
-  return r;
+  return wait_for(pid, "");
 }
 
 }  // namespace dpc31::child

@@ -10,8 +10,8 @@
 #include <sstream>
 #include <vector>
 
-#include "../../emu/snapshot.hpp"
 #include "child.hpp"
+#include "outfile.hpp"
 
 namespace dpc31::cli {
 
@@ -298,6 +298,12 @@ int run_bench(const BenchArgs& args, std::FILE* out, std::FILE* err) {
                bench);
     return 2;
   }
+  // Opened before the minutes of measuring, so that a bad path is one line up front.
+  outfile::OutFile json_out;
+  if (!a.json.empty() && !json_out.open(a.json)) {
+    fmt::print(err, "dpc31 bench: {}\n", json_out.error());
+    return 2;
+  }
   std::vector<Row> rs;
   for (const RowSpec& s : rows()) {
     Row r;
@@ -328,12 +334,8 @@ int run_bench(const BenchArgs& args, std::FILE* out, std::FILE* err) {
   fs::remove(log_file, ec);
   fmt::print(out, "{}", table(rs));
   if (!a.json.empty()) {
-    const std::string text = to_json(a, bench, rs, context).dump(2) + "\n";
-    try {
-      snap::write_file_atomic(a.json,
-                              {reinterpret_cast<const std::uint8_t*>(text.data()), text.size()});
-    } catch (const std::exception& e) {
-      fmt::print(err, "dpc31 bench: {}\n", e.what());
+    if (!json_out.write(to_json(a, bench, rs, context).dump(2) + "\n") || !json_out.commit()) {
+      fmt::print(err, "dpc31 bench: {}\n", json_out.error());
       return 2;
     }
   }

@@ -346,16 +346,6 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
 int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
   const std::optional<Checked> c = check(o, err);
   if (!c) return 2;
-  std::FILE* log_file = out;
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> owned(nullptr, std::fclose);
-  if (!o.log.empty()) {
-    owned.reset(std::fopen(o.log.c_str(), "w"));
-    if (!owned) {
-      fmt::print(err, "dpc31 bridge: cannot write the log {}: {}\n", o.log, std::strerror(errno));
-      return 2;
-    }
-    log_file = owned.get();
-  }
   std::unique_ptr<bridge::Pty> pty;
   try {
     pty = std::make_unique<bridge::Pty>();
@@ -372,6 +362,19 @@ int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
     bridge::remove_link(o.pty, pty->slave_name());
     fmt::print(err, "dpc31 bridge: cannot install the signal handlers: {}\n", std::strerror(errno));
     return 2;
+  }
+  // The log is live (a master's user tails it), so it is not written through a temporary; it is
+  // opened last, when every input has been checked, so that bad input never creates it.
+  std::FILE* log_file = out;
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> owned(nullptr, std::fclose);
+  if (!o.log.empty()) {
+    owned.reset(std::fopen(o.log.c_str(), "w"));
+    if (!owned) {
+      bridge::remove_link(o.pty, pty->slave_name());
+      fmt::print(err, "dpc31 bridge: cannot write the log {}: {}\n", o.log, std::strerror(errno));
+      return 2;
+    }
+    log_file = owned.get();
   }
   Log log(log_file);
   log.line(fmt::format(

@@ -13,27 +13,54 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "../../emu/textfile.hpp"
 #include "lockstep.hpp"
+#include "outfile.hpp"
 #include "session.hpp"
 
 namespace dpc31::cli {
 
 namespace {
 
-bool write_atomically(const std::string& path, const std::string& text, std::string& error) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream f(tmp, std::ios::binary);
-    if (!f || !(f << text) || !f.flush()) {
-      error = fmt::format("{}: cannot write", path);
-      std::filesystem::remove(tmp);
+// A stimulus trace file (lockstep.hpp), read like the emulator's own text files: missing,
+// a directory, empty or cut off is one line "FILE: reason" / "FILE:LINE: reason".
+bool read_stimulus(const std::string& path, cosim::Stimulus& s, std::string& error) {
+  constexpr std::uintmax_t kMaxBytes = 256u << 20;  // 100 M cycles of stimulus fit easily
+  std::error_code ec;
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  std::string text;
+  std::string why;
+  // read_text_file reserves its bound up front: the file's size when it is known.
+  if (!read_text_file(path, ec || size > kMaxBytes ? kMaxBytes : size, "stimulus trace", text,
+                      why)) {
+    error = fmt::format("{}: {}", path, why);
+    return false;
+  }
+  if (text.empty()) {
+    error = fmt::format("{}: empty file, not a stimulus trace", path);
+    return false;
+  }
+  if (const int line = cut_off_line(text, why); line != 0) {
+    error = fmt::format("{}:{}: {}", path, line, why);
+    return false;
+  }
+  return cosim::parse_trace(text, path, s, error);
+}
+
+// True if `dir` is a directory or can be made one: the nearest part of it that exists is a
+// directory.
+bool can_be_directory(const std::filesystem::path& dir, std::string& why) {
+  std::error_code ec;
+  for (std::filesystem::path p = dir; !p.empty(); p = p.parent_path()) {
+    const auto st = std::filesystem::status(p, ec);
+    if (std::filesystem::exists(st)) {
+      if (std::filesystem::is_directory(st)) return true;
+      why = p == dir ? "not a directory" : fmt::format("{} is not a directory", p.string());
       return false;
     }
+    if (p == p.parent_path()) break;
   }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) error = fmt::format("{}: {}", path, ec.message());
-  return !ec;
+  return true;  // a relative path below the working directory
 }
 
 std::string junit(const CosimOptions& o, const nlohmann::json& results) {
@@ -95,6 +122,20 @@ int run_session_mode(const CosimOptions& o) {
 int run_cosim(const CosimOptions& o) {
   using namespace dpc31::cosim;
   if (!o.session.empty()) return run_session_mode(o);
+  // Opened before the seeds run: a bad path is one line up front, not after minutes.
+  outfile::OutFile junit_out;
+  if (!o.junit.empty() && !junit_out.open(o.junit)) {
+    fmt::print(stderr, "{}\n", junit_out.error());
+    return 2;
+  }
+  // The directories are made only when something goes into them, but checked now.
+  for (const auto& [opt, dir] : {std::pair{"--out", o.out_dir}, std::pair{"--vcd", o.vcd_dir},
+                                 std::pair{"--dump", o.dump_dir}}) {
+    if (std::string why; !dir.empty() && !can_be_directory(dir, why)) {
+      fmt::print(stderr, "dpc31 cosim: {} {}: {}\n", opt, dir, why);
+      return 2;
+    }
+  }
   const DutOptions dut{o.profile, o.bus};
   if (!make_rtl_dut(dut, o.mutant)) {
     fmt::print(stderr,
@@ -107,13 +148,10 @@ int run_cosim(const CosimOptions& o) {
   const std::uint64_t hi = o.seed_base + o.seeds * o.shard / o.shards;
   std::vector<std::pair<std::uint64_t, Stimulus>> runs;
   if (!o.replay.empty()) {
-    std::ifstream f(o.replay);
-    std::stringstream text;
-    text << f.rdbuf();
     Stimulus s;
     std::string error;
-    if (!f || !parse_trace(text.str(), o.replay, s, error)) {
-      fmt::print(stderr, "{}\n", error.empty() ? o.replay + ": cannot read" : error);
+    if (!read_stimulus(o.replay, s, error)) {
+      fmt::print(stderr, "{}\n", error);
       return 2;
     }
     runs.emplace_back(0, std::move(s));
@@ -140,7 +178,8 @@ int run_cosim(const CosimOptions& o) {
       entry["signals"] = r.signals;
       const Stimulus small = shrink(s, dut, o.mutant);
       const std::string dir = o.out_dir.empty() ? "." : o.out_dir;
-      std::filesystem::create_directories(dir);
+      std::error_code ec;
+      std::filesystem::create_directories(dir, ec);  // checked up front; a failure shows below
       const std::string trace = fmt::format("{}/cosim-{}-seed{}.trace", dir, o.profile_name, seed);
       std::string error;
       const auto events = [](const Stimulus& x) {
@@ -151,7 +190,7 @@ int run_cosim(const CosimOptions& o) {
           "profile {}\nseed {}\nmutant {}\nshrunk from {} to {} stimulus events ({} cycles)",
           o.profile_name, seed, o.mutant.empty() ? "-" : o.mutant, events(before), events(small),
           small.size());
-      if (write_atomically(trace, write_trace(small, header), error)) {
+      if (outfile::write_file(trace, write_trace(small, header), error)) {
         entry["trace"] = trace;
         if (!o.quiet)
           fmt::print(stderr, "  shrunk to {} stimulus events: {}\n", events(small), trace);
@@ -208,12 +247,9 @@ int run_cosim(const CosimOptions& o) {
       {"divergent_seeds", diverged},
       {"results", results}};
   fmt::print("{}\n", summary.dump(2));
-  if (!o.junit.empty()) {
-    std::string error;
-    if (!write_atomically(o.junit, junit(o, results), error)) {
-      fmt::print(stderr, "{}\n", error);
-      return 2;
-    }
+  if (!o.junit.empty() && !(junit_out.write(junit(o, results)) && junit_out.commit())) {
+    fmt::print(stderr, "{}\n", junit_out.error());
+    return 2;
   }
   return diverged == 0 ? 0 : 1;
 }

@@ -113,8 +113,6 @@ expect port modul_ok 1
     fmt::print(stderr, "{}\n", err.text());
     return 2;
   }
-  std::error_code ec;
-  std::filesystem::create_directories(out_dir, ec);
   RunOptions ro;
   ro.scenario = "<demo>";
   ro.vcd = (std::filesystem::path(out_dir) / "dpc31-demo.vcd").string();
@@ -139,6 +137,14 @@ expect port modul_ok 1
 }  // namespace
 
 int run_demo(ChipOptions opt, const std::string& out_dir, std::FILE* out) {
+  // The output directory is checked before anything is printed: bad input is one line.
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  if (ec || !std::filesystem::is_directory(out_dir)) {
+    fmt::print(stderr, "dpc31 demo: {}: cannot create the output directory: {}\n", out_dir,
+               ec ? ec.message() : "Not a directory");
+    return 2;
+  }
   Chip chip(opt);
   Narrator n(chip, out);
   const ProfileDesc& p = chip.profile();

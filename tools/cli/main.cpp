@@ -2,6 +2,7 @@
 #include <fmt/core.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -69,16 +70,21 @@ int main(int argc, char** argv) {
   run->add_option("--fst", run_opt.fst, "write the run as an FST waveform");
   run->add_option("--signals", run_opt.signals, "waveform signals (globs, e.g. pins.*)")
       ->delimiter(',');
-  run->add_option("--from", run_opt.from, "waveform window: first cycle");
-  run->add_option("--to", run_opt.to, "waveform window: one past the last cycle");
+  // Unsigned options get NonNegativeNumber: CLI11 would take "-1" as 2^64 - 1.
+  run->add_option("--from", run_opt.from, "waveform window: first cycle")
+      ->check(CLI::NonNegativeNumber);
+  run->add_option("--to", run_opt.to, "waveform window: one past the last cycle")
+      ->check(CLI::NonNegativeNumber);
   run->add_option("--timescale", run_opt.timescale, "waveform time unit (default 1ps)");
   run->add_flag("--flat", run_opt.flat, "one scope, 1-bit signals only (for sigrok)");
   run->add_option("--engine", run_opt.engine,
                   "how time advances: event (deadline to deadline) or per-cycle (every clock, "
                   "the reference; docs/engine.md)")
-      ->transform(CLI::CheckedTransformer(std::map<std::string, dpc31::Engine>{
-          {"event", dpc31::Engine::event}, {"per-cycle", dpc31::Engine::per_cycle}}))
-      ->capture_default_str();
+      // Mapped to the enum's number as text: Engine is a uint8_t, which CLI11 would print (in
+      // --help and in its error message) as a raw byte, a NUL that cuts the line short.
+      ->transform(CLI::CheckedTransformer(
+          std::map<std::string, std::string>{{"event", "0"}, {"per-cycle", "1"}}))
+      ->default_str("event");
   run->add_option("--pcap", run_opt.pcap, "write the telegrams as pcapng (docs/capture.md)");
 
   dpc31::cli::ReplayOptions replay_opt;
@@ -97,14 +103,16 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"intel", "motorola"}));
   cosim->add_option("--seeds", cos.seeds, "number of random seeds")
       ->check(CLI::Range(1, 100'000'000));
-  cosim->add_option("--seed-base", cos.seed_base, "first seed");
+  cosim->add_option("--seed-base", cos.seed_base, "first seed")->check(CLI::NonNegativeNumber);
   cosim->add_option("--cycles", cos.cycles, "cycles per seed")->check(CLI::Range(1, 100'000'000));
   cosim->add_option("--shard", cos_shard, "K/N: run the K-th of N equal parts of the seed range");
   cosim->add_option("--junit", cos.junit, "write JUnit XML results to this file");
   cosim->add_option("--vcd", cos.vcd_dir,
                     "on divergence, write emu.vcd and rtl.vcd around it here");
-  cosim->add_option("--window", cos.window,
-                    "cycles before and after the divergence in the VCD window");
+  cosim
+      ->add_option("--window", cos.window,
+                   "cycles before and after the divergence in the VCD window")
+      ->check(CLI::NonNegativeNumber);
   cosim->add_option("--out", cos.out_dir, "where shrunk stimulus traces go (default .)");
   cosim->add_option("--dump", cos.dump_dir,
                     "write emu.vcd, rtl.vcd (ports) and rtl_internal.fst of the first run here");
@@ -131,65 +139,78 @@ int main(int argc, char** argv) {
   dpc31::cli::BenchArgs bench_args;
   auto* bench = dpc31::cli::add_bench_subcommand(app, bench_args);
 
+  // Bad input is one line, "dpc31 SUBCOMMAND: what", and exit 2 (docs/bad-input.md).
+  const auto refuse = [&app](std::string what) {
+    std::string where = "dpc31";
+    for (const CLI::App* sub : app.get_subcommands()) where += " " + sub->get_name();
+    std::replace(what.begin(), what.end(), '\n', ' ');
+    while (!what.empty() && what.back() == ' ') what.pop_back();
+    fmt::print(stderr, "{}: {}\n", where, what);
+    return 2;
+  };
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    if (bench->parsed() && e.get_exit_code() != 0) {
-      std::fprintf(stderr, "dpc31 bench: %s\n", e.what());  // one line, exit 2
-      return 2;
-    }
-    const int rc = app.exit(e);
-    return rc == 0 ? 0 : 2;
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --help-all
+    return refuse(e.what());                         // CLI11's own exit() would add a second line
   }
 
-  if (bench->parsed()) return dpc31::cli::run_bench(bench_args, stdout, stderr);
-  if (serve->parsed()) return dpc31::cli::run_serve(serve_args, stdout, stderr);
-  if (bridge->parsed()) return dpc31::cli::run_bridge(bridge_opt, stdout, stderr);
-  if (wavediff->parsed()) return dpc31::wavediff::run_cli(wavediff_args, stdout, stderr);
-  if (run->parsed()) return dpc31::cli::run_scenario_command(run_opt, stdout, stderr);
-  if (replay->parsed()) return dpc31::cli::run_replay_command(replay_opt, stdout, stderr);
-  if (cosim->parsed()) {
-    dpc31::parse_profile(cos.profile_name, cos.profile);
-    cos.bus = cos_bus == "intel" ? dpc31::BusMode::intel : dpc31::BusMode::motorola;
-    unsigned k = 0;
-    unsigned n = 0;
-    char slash = 0;
-    std::istringstream sh(cos_shard);
-    if (!(sh >> k >> slash >> n) || slash != '/' || n == 0 || k == 0 || k > n || !sh.eof()) {
-      fmt::print(stderr, "dpc31 cosim: --shard must be K/N with 1 <= K <= N, not '{}'\n",
-                 cos_shard);
-      return 2;
-    }
-    cos.shard = k;
-    cos.shards = n;
-    return dpc31::cli::run_cosim(cos);
-  }
-  if (demo->parsed()) {
-    dpc31::ChipOptions opt;
-    opt.profile = to_profile(demo_profile);
-    opt.bus = demo_bus == "intel" ? dpc31::BusMode::intel : dpc31::BusMode::motorola;
-    return dpc31::cli::run_demo(opt, demo_out, stdout);
-  }
-  if (regs->parsed()) {
-    std::vector<const dpc31::ProfileDesc*> sel;
-    for (dpc31::Profile p : dpc31::kAllProfiles) {
-      if (regs_profile == "all" || dpc31::profile_desc(p).name == regs_profile) {
-        sel.push_back(&dpc31::profile_desc(p));
+  const auto dispatch = [&]() -> int {
+    if (bench->parsed()) return dpc31::cli::run_bench(bench_args, stdout, stderr);
+    if (serve->parsed()) return dpc31::cli::run_serve(serve_args, stdout, stderr);
+    if (bridge->parsed()) return dpc31::cli::run_bridge(bridge_opt, stdout, stderr);
+    if (wavediff->parsed()) return dpc31::wavediff::run_cli(wavediff_args, stdout, stderr);
+    if (run->parsed()) return dpc31::cli::run_scenario_command(run_opt, stdout, stderr);
+    if (replay->parsed()) return dpc31::cli::run_replay_command(replay_opt, stdout, stderr);
+    if (cosim->parsed()) {
+      dpc31::parse_profile(cos.profile_name, cos.profile);
+      cos.bus = cos_bus == "intel" ? dpc31::BusMode::intel : dpc31::BusMode::motorola;
+      unsigned k = 0;
+      unsigned n = 0;
+      char slash = 0;
+      std::istringstream sh(cos_shard);
+      if (!(sh >> k >> slash >> n) || slash != '/' || n == 0 || k == 0 || k > n || !sh.eof()) {
+        fmt::print(stderr, "dpc31 cosim: --shard must be K/N with 1 <= K <= N, not '{}'\n",
+                   cos_shard);
+        return 2;
       }
+      cos.shard = k;
+      cos.shards = n;
+      return dpc31::cli::run_cosim(cos);
     }
-    if (sel.size() != 1 && (regs_format == "text" || regs_format == "json")) {
-      fmt::print(stderr, "dpc31 regs: --format {} needs one profile, not all\n", regs_format);
-      return 2;
+    if (demo->parsed()) {
+      dpc31::ChipOptions opt;
+      opt.profile = to_profile(demo_profile);
+      opt.bus = demo_bus == "intel" ? dpc31::BusMode::intel : dpc31::BusMode::motorola;
+      return dpc31::cli::run_demo(opt, demo_out, stdout);
     }
-    namespace rf = dpc31::regfmt;
-    std::string out;
-    if (regs_format == "text") out = rf::emit_text(*sel[0]);
-    if (regs_format == "json") out = rf::emit_json(*sel[0]);
-    if (regs_format == "c") out = rf::emit_c_header(sel);
-    if (regs_format == "verilog") out = rf::emit_verilog(sel);
-    if (regs_format == "markdown") out = rf::emit_markdown(sel);
-    std::fwrite(out.data(), 1, out.size(), stdout);
-    return 0;
+    if (regs->parsed()) {
+      std::vector<const dpc31::ProfileDesc*> sel;
+      for (dpc31::Profile p : dpc31::kAllProfiles) {
+        if (regs_profile == "all" || dpc31::profile_desc(p).name == regs_profile) {
+          sel.push_back(&dpc31::profile_desc(p));
+        }
+      }
+      if (sel.size() != 1 && (regs_format == "text" || regs_format == "json")) {
+        fmt::print(stderr, "dpc31 regs: --format {} needs one profile, not all\n", regs_format);
+        return 2;
+      }
+      namespace rf = dpc31::regfmt;
+      std::string out;
+      if (regs_format == "text") out = rf::emit_text(*sel[0]);
+      if (regs_format == "json") out = rf::emit_json(*sel[0]);
+      if (regs_format == "c") out = rf::emit_c_header(sel);
+      if (regs_format == "verilog") out = rf::emit_verilog(sel);
+      if (regs_format == "markdown") out = rf::emit_markdown(sel);
+      std::fwrite(out.data(), 1, out.size(), stdout);
+      return 0;
+    }
+    return 2;
+  };
+  try {
+    return dispatch();
+  } catch (const std::exception& e) {
+    // Nothing is meant to get here; if something does, it is one line, not std::terminate's.
+    return refuse(e.what());
   }
-  return 2;
 }

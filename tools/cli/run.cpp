@@ -2,13 +2,12 @@
 
 #include <fmt/core.h>
 
-#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
-#include <system_error>
 #include <vector>
 
+#include "outfile.hpp"
 #include "pcapng.hpp"
 #include "waveform.hpp"
 
@@ -38,30 +37,6 @@ nlohmann::json summary(const Scenario& s, const ScenarioOutcome& o) {
       {"failures", o.failures},
       {"ok", o.ok()},
   };
-}
-
-// Written next to the target and renamed over it: a reader never sees half a file.
-bool write_file(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    if (!f) return false;
-    f << text;
-    f.close();
-    if (!f) {
-      std::error_code ec;
-      std::filesystem::remove(tmp, ec);
-      return false;
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) std::filesystem::remove(tmp, ec);
-  return !ec;
-}
-
-bool write_json(const std::string& path, const nlohmann::json& j) {
-  return write_file(path, j.dump(2) + '\n');
 }
 
 // The comment block at the top of a scenario file (its description, and for golden traces what
@@ -115,6 +90,15 @@ int run_with_outputs(const RunOptions& opt, const LineSink& walk, const LineSink
 int run_parsed_scenario(const RunOptions& opt, const Scenario& s, const LineSink& walk,
                         const LineSink& errors, ScenarioOutcome& o, std::FILE* err) {
   std::unique_ptr<TraceRecorder> rec;
+  // Every output is opened now: a bad path is found before the run, before any is written.
+  outfile::OutFile rec_out;
+  outfile::OutFile json_out;
+  for (auto [path, out] : {std::pair{&opt.record, &rec_out}, std::pair{&opt.json, &json_out}}) {
+    if (!path->empty() && !out->open(*path)) {
+      fmt::print(err, "dpc31 run: {}\n", out->error());
+      return 2;
+    }
+  }
   ScenarioHooks hooks;
   LineSink run_walk = walk;
   if (!opt.record.empty()) {
@@ -125,6 +109,11 @@ int run_parsed_scenario(const RunOptions& opt, const Scenario& s, const LineSink
     rec = std::make_unique<TraceRecorder>(s.master.baud, std::move(notes));
     hooks = rec->scenario_hooks();
     run_walk = rec->scenario_walk(s, walk);
+  }
+  if (opt.to <= opt.from) {
+    fmt::print(err, "dpc31 run: --to {} is not after --from {}: an empty waveform window\n", opt.to,
+               opt.from);
+    return 2;
   }
   std::vector<std::unique_ptr<wave::Recorder>> waves;
   for (const auto& [path, fst] : {std::pair{opt.vcd, false}, std::pair{opt.fst, true}}) {
@@ -172,19 +161,23 @@ int run_parsed_scenario(const RunOptions& opt, const Scenario& s, const LineSink
     fmt::print(err, "dpc31 run: cannot record {}: {}\n", opt.scenario, rec->error());
     return 2;
   }
-  if (rec && !write_file(opt.record, rec->text())) {
-    fmt::print(err, "dpc31 run: cannot write the trace to {}\n", opt.record);
+  if (rec && !(rec_out.write(rec->text()) && rec_out.commit())) {
+    fmt::print(err, "dpc31 run: {}\n", rec_out.error());
     return 2;
   }
+  std::string error;
   for (auto& w : waves) {
-    std::string error;
     if (!w->finish(end_cycle, error)) {
       fmt::print(err, "dpc31 run: {}\n", error);
       return 2;
     }
   }
   if (pcap.is_open() && !pcap.close()) {
-    fmt::print(err, "dpc31 run: cannot write the capture: {}\n", pcap.error());
+    fmt::print(err, "dpc31 run: {}\n", pcap.error());
+    return 2;
+  }
+  if (json_out.is_open() && !(json_out.write(summary(s, o).dump(2) + '\n') && json_out.commit())) {
+    fmt::print(err, "dpc31 run: {}\n", json_out.error());
     return 2;
   }
   return rc;
@@ -196,13 +189,7 @@ int run_scenario_command(const RunOptions& opt, std::FILE* out, std::FILE* err) 
   const LineSink errors = [err](const std::string& line) { fmt::print(err, "{}\n", line); };
   Scenario s;
   ScenarioOutcome o;
-  const int rc = run_with_outputs(opt, walk, errors, s, o, err);
-  if (rc == 2) return rc;
-  if (!opt.json.empty() && !write_json(opt.json, summary(s, o))) {
-    fmt::print(err, "dpc31 run: cannot write the JSON summary to {}\n", opt.json);
-    return 2;
-  }
-  return rc;
+  return run_with_outputs(opt, walk, errors, s, o, err);
 }
 
 }  // namespace dpc31::cli

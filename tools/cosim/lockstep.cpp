@@ -8,7 +8,9 @@
 #include <random>
 #include <sstream>
 
+#include "../../emu/textfile.hpp"
 #include "dpc31/reg_ids.hpp"
+#include "outfile.hpp"
 
 namespace dpc31::cosim {
 
@@ -397,9 +399,10 @@ bool parse_trace(const std::string& text, const std::string& file, Stimulus& out
     try {
       std::size_t used = 0;
       cycle = std::stoull(first, &used);
-      if (used != first.size()) return fail(fmt::format("'{}' is not a cycle number", first));
+      if (used != first.size())
+        return fail(fmt::format("'{}' is not a cycle number", shown(first)));
     } catch (const std::exception&) {
-      return fail(fmt::format("'{}' is not a cycle number", first));
+      return fail(fmt::format("'{}' is not a cycle number", shown(first)));
     }
     if (cycle < last && !(cycle == 0 && out.empty())) return fail("cycles must increase");
     if (cycle > 100'000'000) return fail("cycle beyond 100000000");
@@ -407,7 +410,7 @@ bool parse_trace(const std::string& text, const std::string& file, Stimulus& out
     Inputs in;
     std::string tok;
     while (ls >> tok) {
-      if (!parse_event(tok, ls, in)) return fail(fmt::format("unknown stimulus '{}'", tok));
+      if (!parse_event(tok, ls, in)) return fail(fmt::format("unknown stimulus '{}'", shown(tok)));
     }
     if (in.idle()) return fail("a stimulus line without stimulus");
     out[cycle] = in;
@@ -420,11 +423,22 @@ bool parse_trace(const std::string& text, const std::string& file, Stimulus& out
 bool write_rtl_fst(const Stimulus& s, const DutOptions& o, std::string_view mutant,
                    const std::string& path, std::string& error) {
   std::unique_ptr<Dut> rtl = make_rtl_dut(o, mutant);
-  if (!rtl || !rtl->trace_to(path)) {
+  outfile::OutFile out;
+  if (!out.open(path)) {
+    error = out.error();
+    return false;
+  }
+  // Verilator's tracer opens the file by name: it writes the temporary.
+  if (!rtl || !rtl->trace_to(out.temp_path())) {
     error = fmt::format("{}: this RTL model was built without tracing (mutants are)", path);
     return false;
   }
   for (const Inputs& in : s) rtl->step(in);
+  rtl.reset();  // closes the trace
+  if (!out.commit()) {
+    error = out.error();
+    return false;
+  }
   return true;
 }
 
@@ -468,16 +482,14 @@ bool write_window(const Stimulus& s, const DutOptions& o, std::string_view mutan
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   const char* names[2] = {"emu", "rtl"};
+  outfile::OutFile out[2];
   std::FILE* f[2] = {nullptr, nullptr};
-  std::string tmp[2];
   for (int k = 0; k < 2; ++k) {
-    tmp[k] = fmt::format("{}/{}.vcd.tmp", dir, names[k]);
-    f[k] = std::fopen(tmp[k].c_str(), "w");
-    if (f[k] == nullptr) {
-      error = fmt::format("{}: cannot write", tmp[k]);
-      if (f[0] != nullptr) std::fclose(f[0]);
+    if (!out[k].open(fmt::format("{}/{}.vcd", dir, names[k]))) {
+      error = out[k].error();
       return false;
     }
+    f[k] = out[k].stream();
     vcd_header(f[k], names[k]);
   }
   Outputs last[2];
@@ -493,11 +505,9 @@ bool write_window(const Stimulus& s, const DutOptions& o, std::string_view mutan
       last[k] = now;
     }
   }
-  for (int k = 0; k < 2; ++k) {
-    std::fclose(f[k]);
-    std::filesystem::rename(tmp[k], fmt::format("{}/{}.vcd", dir, names[k]), ec);
-    if (ec) {
-      error = fmt::format("{}: {}", tmp[k], ec.message());
+  for (auto& o_k : out) {
+    if (!o_k.commit()) {
+      error = o_k.error();
       return false;
     }
   }

@@ -3,7 +3,6 @@
 // rename) when its content changed, so a failed run leaves the old files and builds stay
 // incremental. Exit codes: 0 ok, 1 I/O error, 2 bad input.
 #include <fmt/format.h>
-#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <exception>
@@ -17,6 +16,7 @@
 #include <utility>
 #include <vector>
 
+#include "outfile.hpp"
 #include "regfmt.hpp"
 #include "regjson.hpp"
 
@@ -45,8 +45,8 @@ bool same_content(const fs::path& path, const std::string& content) {
   return old.str() == content;
 }
 
-// Writes `content` to `path` through a temporary file in the same directory; returns false when
-// the file already held exactly that content (and was left untouched).
+// Writes `content` to `path` through a temporary file in the same directory (dpc31::outfile);
+// returns false when the file already held exactly that content (and was left untouched).
 bool write_if_changed(const fs::path& path, const std::string& content) {
   if (same_content(path, content)) return false;
   std::error_code ec;
@@ -54,23 +54,8 @@ bool write_if_changed(const fs::path& path, const std::string& content) {
   if (ec)
     throw IoError(fmt::format("{}: cannot create the directory: {}", path.parent_path().string(),
                               ec.message()));
-  const fs::path tmp = path.string() + fmt::format(".tmp{}", ::getpid());
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out << content;
-    out.close();
-    if (!out) {
-      fs::remove(tmp, ec);
-      throw IoError(fmt::format("{}: cannot write", tmp.string()));
-    }
-  }
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    std::error_code ignored;
-    fs::remove(tmp, ignored);
-    throw IoError(
-        fmt::format("{}: cannot rename to {}: {}", tmp.string(), path.string(), ec.message()));
-  }
+  std::string error;
+  if (!dpc31::outfile::write_file(path.string(), content, error)) throw IoError(error);
   return true;
 }
 

@@ -6,13 +6,16 @@
 // plus the slots: so it grows with the number of signals and the block size, not the file length.
 #include <fmt/format.h>
 
+#include <cerrno>
 #include <condition_variable>
+#include <cstdio>
 #include <cstring>
 #include <deque>
 #include <limits>
 #include <mutex>
 #include <thread>
 
+#include "child.hpp"
 #include "gtkwave/fstapi.h"
 #include "wave_reader_impl.hpp"
 
@@ -119,12 +122,14 @@ class FstReader final : public WaveReader {
     handle_slot_.assign(static_cast<std::size_t>(maxh) + 1, kNone);
     std::vector<std::string> scopes;
     fstReaderSetFacProcessMaskAll(ctx_);
+    std::uint64_t declared = 0;
     while (fstHier* h = fstReaderIterateHier(ctx_)) {
       if (h->htyp == FST_HT_SCOPE) {
         scopes.emplace_back(h->u.scope.name, h->u.scope.name_length);
       } else if (h->htyp == FST_HT_UPSCOPE) {
         if (!scopes.empty()) scopes.pop_back();
       } else if (h->htyp == FST_HT_VAR) {
+        ++declared;
         const auto& hv = h->u.var;
         if (hv.handle == 0 || hv.handle > maxh) fail(path_, 0, "variable with a bad handle");
         if (hv.length == 0 || hv.typ == FST_VT_GEN_STRING) {  // variable-length: not compared
@@ -155,6 +160,14 @@ class FstReader final : public WaveReader {
         v.slot = slot;
         vars_.push_back(std::move(v));
       }
+    }
+    // A hierarchy block that does not decompress reads as fewer variables (or none): fstapi
+    // does not say so.
+    if (declared != fstReaderGetVarCount(ctx_)) {
+      fail(path_, 0,
+           fmt::format("not a readable FST file (corrupt: the hierarchy has {} of the {} "
+                       "variables of the header)",
+                       declared, fstReaderGetVarCount(ctx_)));
     }
   }
 
@@ -233,7 +246,82 @@ class FstReader final : public WaveReader {
 
 }  // namespace
 
+namespace {
+
+void ignore_change(void*, std::uint64_t, fstHandle, const unsigned char*) {}
+void ignore_varlen(void*, std::uint64_t, fstHandle, const unsigned char*, std::uint32_t) {}
+
+// The block chain (fstapi.h: a type byte, a big-endian length that counts itself and the data):
+// it must end exactly at the end of the file. fstapi reads a file cut inside its last blocks
+// without complaint, as a shorter waveform.
+void check_blocks(const std::string& path) {
+  constexpr std::uint64_t kHeaderLength = 329;  // fstapi's FST_HDRSIZE: the length of block 0
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (f == nullptr) fail(path, 0, fmt::format("cannot open: {}", std::strerror(errno)));
+  std::uint64_t size = 0;
+  if (std::fseek(f, 0, SEEK_END) == 0 && std::ftell(f) > 0) {
+    size = static_cast<std::uint64_t>(std::ftell(f));
+  }
+  std::vector<unsigned char> head(9);
+  std::uint64_t pos = 0;
+  std::string problem;
+  bool not_fst = false;  // no FST header: not an FST at all
+  for (int block = 0; pos < size && problem.empty() && !not_fst; ++block) {
+    std::size_t n = 0;
+    if (std::fseek(f, static_cast<long>(pos), SEEK_SET) == 0) {
+      n = std::fread(head.data(), 1, head.size(), f);
+    }
+    if (block == 0 && n > 0 && head[0] == FST_BL_ZWRAPPER) break;  // gzip: left to fstapi
+    std::uint64_t len = 0;
+    for (std::size_t i = 1; i < n; ++i) len = len << 8 | head[i];
+    const unsigned type = head[0];
+    if (block == 0 &&
+        (n < head.size() || type != FST_BL_HDR || len != kHeaderLength || 1 + len > size)) {
+      not_fst = true;
+    } else if (n < head.size()) {
+      problem = fmt::format("truncated: the block at byte {} has no header", pos);
+    } else if (type > FST_BL_VCDATA_DYN_ALIAS2 && type != FST_BL_SKIP) {
+      problem = fmt::format("corrupt: unknown block type {} at byte {}", type, pos);
+    } else if (len < 8) {
+      problem = fmt::format("corrupt: block length {} at byte {}", len, pos);
+    } else if (len > size - pos - 1) {
+      problem = fmt::format("truncated: the block at byte {} ends past the end of the file", pos);
+    } else {
+      pos += 1 + len;
+    }
+  }
+  std::fclose(f);
+  if (not_fst) fail(path, 0, "not a readable FST file");
+  if (!problem.empty()) fail(path, 0, fmt::format("not a readable FST file ({})", problem));
+}
+
+// fstapi prints to stderr and exit()s on a block that does not decompress, and may crash on other
+// corruption: the whole file is read once in a child process first (docs/bad-input.md). A file
+// the child reads to the end decompresses the same way here.
+void check_in_child(const std::string& path) {
+  constexpr int kNotFst = 3;
+  const child::Result r = child::call([&path] {
+    void* ctx = fstReaderOpen(path.c_str());
+    if (ctx == nullptr) return kNotFst;
+    fstReaderSetFacProcessMaskAll(ctx);
+    while (fstReaderIterateHier(ctx) != nullptr) {
+    }
+    fstReaderIterBlocks2(ctx, ignore_change, ignore_varlen, nullptr, nullptr);
+    fstReaderClose(ctx);
+    return 0;
+  });
+  if (r.exit_code == 0) return;
+  if (r.exit_code == kNotFst) fail(path, 0, "not a readable FST file");
+  fail(path, 0,
+       fmt::format("not a readable FST file (corrupt or truncated: its reader {})",
+                   r.exit_code >= 0 ? fmt::format("exited with {}", r.exit_code) : r.error));
+}
+
+}  // namespace
+
 std::unique_ptr<WaveReader> open_fst(const std::string& path) {
+  check_blocks(path);
+  check_in_child(path);
   void* ctx = fstReaderOpen(path.c_str());
   if (ctx == nullptr) fail(path, 0, "not a readable FST file");
   try {

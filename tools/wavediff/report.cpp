@@ -2,9 +2,9 @@
 #include <fmt/format.h>
 
 #include <charconv>
-#include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "outfile.hpp"
 #include "wavediff.hpp"
 
 namespace dpc31::wavediff {
@@ -262,28 +262,22 @@ std::string json_report(const Report& r) {
 }
 
 int run(const Options& o, std::string& out, std::string& err) {
-  auto write_json = [&](const std::string& text) {
-    std::ofstream f(o.json_file);
-    f << text;
-    f.close();
-    if (!f) {
-      err += fmt::format("{}:0: cannot write the JSON report\n", o.json_file);
-      return false;
-    }
-    return true;
-  };
   try {
+    // Opened first, so that a bad path is found before the comparison; renamed into place only
+    // with a complete report (on bad input there is none, docs/bad-input.md).
+    outfile::OutFile json;
+    if (!o.json_file.empty() && !json.open(o.json_file)) throw InputError(json.error());
     const Report r = compare(o);
-    for (const auto& w : r.warnings) err += w + "\n";
+    std::string warnings;
+    for (const auto& w : r.warnings) warnings += w + "\n";
+    if (!o.json_file.empty() && !(json.write(json_report(r)) && json.commit())) {
+      throw InputError(json.error());
+    }
+    err += warnings;
     out += text_report(r, o.max_signals);
-    if (!o.json_file.empty() && !write_json(json_report(r))) return 2;
     return r.same() ? 0 : 1;
   } catch (const InputError& e) {
     err += std::string(e.what()) + "\n";
-    if (!o.json_file.empty()) {
-      const nlohmann::ordered_json j = {{"result", "error"}, {"error", e.what()}, {"exit_code", 2}};
-      write_json(j.dump(2) + "\n");
-    }
     return 2;
   }
 }

@@ -12,7 +12,17 @@
 namespace dpc31::wavediff {
 
 void fail(const std::string& file, std::uint64_t line, const std::string& what) {
-  throw InputError(fmt::format("{}:{}: {}", file, line, what));
+  // Garbage quoted from a file must not bring control characters (a CR, escapes) into the line.
+  std::string shown;
+  for (const char c : what) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u < 0x20 || u == 0x7F) {
+      shown += fmt::format("\\x{:02X}", u);
+    } else {
+      shown += c;
+    }
+  }
+  throw InputError(fmt::format("{}:{}: {}", file, line, shown));
 }
 
 namespace {

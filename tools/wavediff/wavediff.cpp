@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstring>
 #include <deque>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <map>
@@ -19,6 +20,8 @@
 #include <set>
 #include <unordered_map>
 #include <unordered_set>
+
+#include "outfile.hpp"
 
 namespace dpc31::wavediff {
 
@@ -165,6 +168,8 @@ struct MapEntry {
 };
 
 std::vector<MapEntry> read_map(const std::string& path) {
+  // An ifstream opens a directory and reads nothing from it: that would be an empty map.
+  if (std::filesystem::is_directory(path)) fail(path, 0, "cannot open: is a directory");
   std::ifstream f(path);
   if (!f) fail(path, 0, fmt::format("cannot open: {}", std::strerror(errno)));
   std::vector<MapEntry> out;
@@ -834,9 +839,8 @@ std::vector<std::string> split_dots(const std::string& n) {
 
 class DiffVcd {
  public:
-  DiffVcd(const std::string& path, Engine& e) : path_(path) {
-    f_ = std::fopen(path.c_str(), "wb");
-    if (f_ == nullptr) fail(path, 0, fmt::format("cannot write: {}", std::strerror(errno)));
+  DiffVcd(const std::string& path, Engine& e) {
+    if (!out_.open(path)) throw InputError(out_.error());
     const std::size_t n = e.pairs.size();
     ids_.resize(n * 3);
     for (std::size_t i = 0; i < ids_.size(); ++i) ids_[i] = vcd_id(i);
@@ -894,9 +898,6 @@ class DiffVcd {
     h += "$enddefinitions $end\n";
     put(h);
   }
-  ~DiffVcd() {
-    if (f_ != nullptr) std::fclose(f_);
-  }
   DiffVcd(const DiffVcd&) = delete;
   DiffVcd& operator=(const DiffVcd&) = delete;
 
@@ -925,26 +926,20 @@ class DiffVcd {
     put(s);
   }
 
-  void close() {
-    if (std::fclose(f_) != 0) {
-      f_ = nullptr;
-      fail(path_, 0, fmt::format("cannot write: {}", std::strerror(errno)));
-    }
-    f_ = nullptr;
+  // Renames the whole file into place; without it the destructor discards it.
+  void commit() {
+    if (!out_.commit()) throw InputError(out_.error());
   }
 
  private:
-  std::string path_;
-  std::FILE* f_ = nullptr;
+  outfile::OutFile out_;
   std::vector<std::string> ids_;
   std::string cycle_id_;
   std::vector<signed char> flag_;
   std::string line_;
 
   void put(const std::string& s) {
-    if (std::fwrite(s.data(), 1, s.size(), f_) != s.size()) {
-      fail(path_, 0, fmt::format("cannot write: {}", std::strerror(errno)));
-    }
+    if (!out_.write(s)) throw InputError(out_.error());
   }
   static void value(std::string& s, const Side& side, const LSig& l, const std::string& id) {
     if (l.real) {
@@ -1012,7 +1007,7 @@ nlohmann::ordered_json drom_row(const std::string& name, const std::vector<std::
   return {{"name", name}, {"wave", wave}, {"data", data}};
 }
 
-void write_wavedrom(const Options& o, const Report& rep) {
+std::string wavedrom_text(const Options& o, const Report& rep) {
   Engine e(o);
   Report scratch;
   e.setup(scratch);
@@ -1079,9 +1074,7 @@ void write_wavedrom(const Options& o, const Report& rep) {
       {"signal", rows},
       {"head", {{"text", fmt::format("first divergence: {} at {}", first.name, when)}}},
       {"foot", {{"text", fmt::format("a: {}  b: {}", o.file_a, o.file_b)}}}};
-  std::ofstream f(o.wavedrom);
-  f << j.dump(2) << '\n';
-  if (!f) fail(o.wavedrom, 0, "cannot write");
+  return j.dump(2) + '\n';
 }
 
 }  // namespace
@@ -1094,6 +1087,10 @@ Report compare(const Options& o) {
   Report rep;
   Engine e(o);
   e.setup(rep);
+  // Every output is opened before the comparison and renamed into place after it, all or none
+  // (docs/bad-input.md).
+  outfile::OutFile drom;
+  if (!o.wavedrom.empty() && !drom.open(o.wavedrom)) throw InputError(drom.error());
   std::unique_ptr<DiffVcd> dv;
   if (!o.diff_vcd.empty()) dv = std::make_unique<DiffVcd>(o.diff_vcd, e);
   Hook hook;
@@ -1105,16 +1102,15 @@ Report compare(const Options& o) {
   }
   e.run(hook);
   e.finish(rep);
-  if (dv) dv->close();
-  if (!o.wavedrom.empty()) {
-    if (rep.diffs.empty()) {
-      std::ofstream f(o.wavedrom);
-      f << R"({"signal": [], "head": {"text": "no divergence"}})" << '\n';
-      if (!f) fail(o.wavedrom, 0, "cannot write");
-    } else {
-      write_wavedrom(o, rep);
-    }
+  if (drom.is_open()) {
+    const std::string text = rep.diffs.empty()
+                                 ? R"({"signal": [], "head": {"text": "no divergence"}})"
+                                   "\n"
+                                 : wavedrom_text(o, rep);
+    if (!drom.write(text)) throw InputError(drom.error());
   }
+  if (dv) dv->commit();
+  if (drom.is_open() && !drom.commit()) throw InputError(drom.error());
   return rep;
 }
 

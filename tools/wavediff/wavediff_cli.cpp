@@ -24,8 +24,10 @@ CLI::App* add_subcommand(CLI::App& app, CliArgs& a) {
   c->add_option("--end", a.end, "compare up to this time or cycle (inclusive)");
   c->add_option("--tolerance", a.tolerance,
                 "event mode: ignore differences that last at most this long (5ns)");
+  // NonNegativeNumber: CLI11 would read "-1" into an unsigned as 2^64 - 1.
   c->add_option("--tolerance-cycles", o.tolerance_cycles,
-                "clock mode: ignore differences that last at most N cycles");
+                "clock mode: ignore differences that last at most N cycles")
+      ->check(CLI::NonNegativeNumber);
   c->add_option("--xz", a.xz,
                 "X/Z policy: strict (must match), wildcard (matches anything), "
                 "zero (read as 0)")
@@ -42,7 +44,8 @@ CLI::App* add_subcommand(CLI::App& app, CliArgs& a) {
   c->add_option("--wavedrom-window", o.wavedrom_window,
                 "events or cycles shown before and after the first divergence")
       ->check(CLI::Range(1, 1000));
-  c->add_option("--max-signals", o.max_signals, "signals listed in the text report");
+  c->add_option("--max-signals", o.max_signals, "signals listed in the text report")
+      ->check(CLI::NonNegativeNumber);
   return c;
 }
 

@@ -6,11 +6,11 @@
 #include <algorithm>
 #include <array>
 #include <cstdio>
-#include <filesystem>
 
 #include "../../emu/core.hpp"
 #include "dpc31/reg_ids.hpp"
 #include "gtkwave/fstapi.h"
+#include "outfile.hpp"
 
 namespace dpc31::wave {
 
@@ -88,6 +88,7 @@ struct Recorder::Impl {
   std::vector<Event> events;
   std::vector<std::uint32_t> sampled = std::vector<std::uint32_t>(kCount, 0xFFFFFFFF);
   std::uint64_t seq = 0;
+  outfile::OutFile out;  // opened by attach(), so that a bad path is found before the run
 
   void push(std::uint64_t cycle, Sig s, std::uint32_t v) {
     if (!selected[s] || cycle >= opt.to) return;
@@ -146,6 +147,10 @@ bool Recorder::attach(Chip& chip, std::string& error) {
       return false;
     }
   }
+  if (!m.out.open(m.opt.path)) {
+    error = m.out.error();
+    return false;
+  }
   m.chip = &chip;
   m.clock_hz = chip.clock_hz();
   Impl* im = &m;
@@ -175,7 +180,10 @@ bool Recorder::finish(std::uint64_t end_cycle, std::string& error) {
     return a.cycle != b.cycle ? a.cycle < b.cycle : a.seq < b.seq;
   });
   const std::uint64_t to = std::min(m.opt.to, end_cycle + 1);
-  const std::string tmp = m.opt.path + ".tmp";
+  if (!m.out.is_open()) {
+    error = fmt::format("{}: not attached to a chip", m.opt.path);
+    return false;
+  }
   std::vector<std::uint32_t> cur(kCount, 0);
   std::vector<std::size_t> order;
   for (std::size_t i = 0; i < kCount; ++i) {
@@ -187,9 +195,11 @@ bool Recorder::finish(std::uint64_t end_cycle, std::string& error) {
     cur[m.events[k].sig] = m.events[k].value;
   }
   if (m.opt.fst) {
-    void* ctx = fstWriterCreate(tmp.c_str(), 1);
+    // fstapi opens the file by name: it writes the temporary.
+    void* ctx = fstWriterCreate(m.out.temp_path().c_str(), 1);
     if (ctx == nullptr) {
       error = fmt::format("{}: cannot write", m.opt.path);
+      m.out.discard();
       return false;
     }
     fstWriterSetTimescale(ctx, m.opt.timescale_exp);
@@ -225,11 +235,7 @@ bool Recorder::finish(std::uint64_t end_cycle, std::string& error) {
     fstWriterEmitTimeChange(ctx, m.units(to));
     fstWriterClose(ctx);
   } else {
-    std::FILE* f = std::fopen(tmp.c_str(), "w");
-    if (f == nullptr) {
-      error = fmt::format("{}: cannot write", m.opt.path);
-      return false;
-    }
+    std::FILE* f = m.out.stream();
     static constexpr const char* kUnit[] = {"s", "ms", "us", "ns", "ps", "fs"};
     const int e = -m.opt.timescale_exp;
     fmt::print(f,
@@ -275,17 +281,9 @@ bool Recorder::finish(std::uint64_t end_cycle, std::string& error) {
       value(ev.sig, ev.value);
     }
     if (m.units(to) != last_t) fmt::print(f, "#{}\n", m.units(to));
-    const bool ok = std::ferror(f) == 0;
-    if (std::fclose(f) != 0 || !ok) {
-      error = fmt::format("{}: write failed", m.opt.path);
-      std::filesystem::remove(tmp);
-      return false;
-    }
   }
-  std::error_code ec;
-  std::filesystem::rename(tmp, m.opt.path, ec);
-  if (ec) {
-    error = fmt::format("{}: {}", m.opt.path, ec.message());
+  if (!m.out.commit()) {
+    error = m.out.error();
     return false;
   }
   return true;

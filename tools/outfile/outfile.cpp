@@ -1,0 +1,158 @@
+#include "outfile.hpp"
+
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdlib>
+#include <system_error>
+
+namespace dpc31::outfile {
+
+namespace {
+
+constexpr std::size_t kBufferBytes = 64 * 1024;
+
+std::string errno_text(int e) { return std::error_code(e, std::generic_category()).message(); }
+
+}  // namespace
+
+std::string create_temp(const std::string& path,
+                        const std::function<int(const std::string&)>& create, std::string& error) {
+  // The pid keeps two processes apart; the counter two temporaries of one process (or a leftover
+  // of a killed run with a recycled pid).
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    const std::string tmp = attempt == 0 ? fmt::format("{}.{}.tmp", path, ::getpid())
+                                         : fmt::format("{}.{}-{}.tmp", path, ::getpid(), attempt);
+    const int e = create(tmp);
+    if (e == 0) return tmp;
+    if (e != EEXIST) {
+      error = fmt::format("{}: cannot create the temporary file {}: {}", path, tmp, errno_text(e));
+      return {};
+    }
+  }
+  error = fmt::format("{}: cannot create a temporary file: every name is taken", path);
+  return {};
+}
+
+bool replace(const std::string& tmp, const std::string& path, std::string& error) {
+  if (::rename(tmp.c_str(), path.c_str()) == 0) return true;
+  error = fmt::format("{}: cannot rename the temporary file over it: {}", path, errno_text(errno));
+  ::unlink(tmp.c_str());
+  return false;
+}
+
+OutFile::~OutFile() { discard(); }
+
+bool OutFile::fail(std::string msg) {
+  if (error_.empty()) error_ = std::move(msg);
+  return false;
+}
+
+bool OutFile::open(const std::string& path) {
+  discard();
+  error_.clear();
+  path_ = path;
+  target_ = path;
+  direct_ = false;
+  int fd = -1;
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0) {
+    // Found before any work is done, not at the rename after it.
+    if (S_ISDIR(st.st_mode)) return fail(fmt::format("{}: cannot write: is a directory", path));
+    if (!S_ISREG(st.st_mode)) {
+      // A device or a FIFO (/dev/stdout, /dev/null): there is no file to replace, and renaming
+      // over it would put a plain file in its place. Written in place.
+      fd = ::open(path.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
+      if (fd < 0) return fail(fmt::format("{}: cannot write: {}", path, errno_text(errno)));
+      direct_ = true;
+      tmp_ = path;
+    } else if (std::unique_ptr<char, decltype(&std::free)> real(::realpath(path.c_str(), nullptr),
+                                                                &std::free);
+               real) {
+      target_ = real.get();  // a symlink stays a symlink: the file it names is replaced
+    }
+  }
+  if (!direct_) {
+    std::string error;
+    tmp_ = create_temp(
+        target_,
+        [&fd](const std::string& name) {
+          fd = ::open(name.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+          return fd < 0 ? errno : 0;
+        },
+        error);
+    if (tmp_.empty()) return fail(error);
+  }
+  f_ = ::fdopen(fd, "wb");
+  if (f_ == nullptr) {
+    const int e = errno;
+    ::close(fd);
+    discard();
+    return fail(fmt::format("{}: cannot write: {}", path, errno_text(e)));
+  }
+  // Large writes: waveforms and captures are written in many small pieces.
+  // (glibc ignores the size without a buffer of our own.)
+  if (!buf_) buf_ = std::make_unique<char[]>(kBufferBytes);
+  std::setvbuf(f_, buf_.get(), _IOFBF, kBufferBytes);
+  return true;
+}
+
+std::FILE* OutFile::stream() { return f_; }
+
+bool OutFile::write(std::string_view bytes) {
+  if (f_ == nullptr) return fail(fmt::format("{}: not open for writing", path_));
+  if (std::fwrite(bytes.data(), 1, bytes.size(), f_) != bytes.size()) {
+    return fail(fmt::format("{}: cannot write: {}", path_, errno_text(errno)));
+  }
+  return true;
+}
+
+bool OutFile::commit() {
+  if (tmp_.empty()) return fail(fmt::format("{}: not open for writing", path_));
+  // Errors of stdio surface at the flush; an fsync before the rename so that a crash leaves the
+  // old file or the new one, never an empty one.
+  if (std::fflush(f_) != 0 || std::ferror(f_) != 0) {
+    fail(fmt::format("{}: cannot write: {}", path_, errno_text(errno)));
+  } else if (!direct_ && ::fsync(::fileno(f_)) != 0) {
+    fail(fmt::format("{}: cannot write: {}", path_, errno_text(errno)));
+  }
+  const int rc = std::fclose(f_);
+  f_ = nullptr;
+  if (rc != 0) fail(fmt::format("{}: cannot write: {}", path_, errno_text(errno)));
+  if (direct_) {
+    tmp_.clear();
+    return error_.empty();
+  }
+  std::string error;
+  if (error_.empty() && !replace(tmp_, target_, error)) fail(error);
+  if (!error_.empty()) {
+    ::unlink(tmp_.c_str());
+    tmp_.clear();
+    return false;
+  }
+  tmp_.clear();
+  return true;
+}
+
+void OutFile::discard() {
+  if (f_ != nullptr) {
+    std::fclose(f_);
+    f_ = nullptr;
+  }
+  if (!tmp_.empty()) {
+    if (!direct_) ::unlink(tmp_.c_str());  // a device is not ours to remove
+    tmp_.clear();
+  }
+}
+
+bool write_file(const std::string& path, std::string_view bytes, std::string& error) {
+  OutFile f;
+  if (f.open(path) && f.write(bytes) && f.commit()) return true;
+  error = f.error();
+  return false;
+}
+
+}  // namespace dpc31::outfile

@@ -1,0 +1,66 @@
+// Output files that appear whole or not at all (docs/bad-input.md): the bytes go to a temporary
+// file in the target's directory (so that rename() is atomic), and commit() renames it over the
+// target. Anything else (an error, an exception, a bad input found later) discards it: the
+// temporary is removed and an existing target is left as it was.
+#pragma once
+
+#include <cstdio>
+#include <functional>
+#include <memory>
+#include <string>
+#include <string_view>
+
+namespace dpc31::outfile {
+
+// A fresh temporary next to `path`, made by `create(name)`, which returns 0 or an errno value;
+// EEXIST tries the next name ("<path>.<pid>.tmp", "<path>.<pid>-1.tmp", ...). Returns its name,
+// or "" with a one-line `error`. For temporaries that are not plain files (bridge's symlink).
+std::string create_temp(const std::string& path,
+                        const std::function<int(const std::string&)>& create, std::string& error);
+
+// rename(tmp, path); on failure the temporary is removed and `error` says why.
+bool replace(const std::string& tmp, const std::string& path, std::string& error);
+
+class OutFile {
+ public:
+  OutFile() = default;
+  ~OutFile();  // not committed: discarded
+  OutFile(const OutFile&) = delete;
+  OutFile& operator=(const OutFile&) = delete;
+
+  // Creates the temporary. False with error() if `path` is a directory or the temporary cannot
+  // be created; nothing is touched then. A file still open is discarded first. A `path` that is
+  // a device or a FIFO (/dev/stdout) is written in place; a symlink to a file is followed.
+  bool open(const std::string& path);
+  // Buffered stream on the temporary (fmt::print, fwrite); nullptr when not open.
+  std::FILE* stream();
+  bool write(std::string_view bytes);
+  // For libraries that open files by name (fstapi, Verilator's tracer): they write temp_path().
+  [[nodiscard]] const std::string& temp_path() const { return tmp_; }
+  [[nodiscard]] const std::string& path() const { return path_; }
+  [[nodiscard]] bool is_open() const { return !tmp_.empty(); }
+
+  // Flushes, syncs and renames the temporary over the target. False with error() if any write
+  // since open() failed or the rename fails; the temporary is then removed.
+  bool commit();
+  // Removes the temporary; the target stays as it was.
+  void discard();
+
+  // The first error, one line naming the target: "" if none.
+  [[nodiscard]] const std::string& error() const { return error_; }
+
+ private:
+  bool fail(std::string msg);
+  std::string path_;    // as given, for messages
+  std::string target_;  // what is replaced: the path, or the file a symlink names
+  std::string tmp_;
+  bool direct_ = false;  // a device or FIFO, written in place
+  std::FILE* f_ = nullptr;
+  std::unique_ptr<char[]> buf_;  // the stream's buffer, outlives f_
+  std::string error_;
+};
+
+// The whole file at once through an OutFile. False with a one-line `error`.
+bool write_file(const std::string& path, std::string_view bytes, std::string& error);
+
+}  // namespace dpc31::outfile
