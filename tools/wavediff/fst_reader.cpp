@@ -9,9 +9,11 @@
 #include <condition_variable>
 #include <cstring>
 #include <deque>
+#include <exception>
 #include <limits>
 #include <mutex>
 #include <thread>
+#include <utility>
 
 #include "gtkwave/fstapi.h"
 #include "wave_reader_impl.hpp"
@@ -104,6 +106,7 @@ class FstReader final : public WaveReader {
   std::vector<std::unique_ptr<Chunk>> free_;
   bool done_ = false;
   bool abort_ = false;
+  std::exception_ptr error_;     // the producer's, rethrown by the consumer
   std::unique_ptr<Chunk> fill_;  // producer side
   std::unique_ptr<Chunk> cur_;   // consumer side
   std::size_t idx_ = 0;
@@ -200,10 +203,19 @@ class FstReader final : public WaveReader {
   }
 
   void produce() {
-    fstReaderIterBlocks2(ctx_, &FstReader::on_change, &FstReader::on_change_varlen, this, nullptr);
-    if (!fill_->recs.empty()) hand_over();
+    // An exception here (std::bad_alloc; in the fuzz build fstapi's exit()) would end the
+    // process from this thread: it goes to the consumer, which rethrows it from step().
+    std::exception_ptr error;
+    try {
+      fstReaderIterBlocks2(ctx_, &FstReader::on_change, &FstReader::on_change_varlen, this,
+                           nullptr);
+      if (!fill_->recs.empty()) hand_over();
+    } catch (...) {
+      error = std::current_exception();
+    }
     {
       std::lock_guard<std::mutex> lk(m_);
+      error_ = error;
       done_ = true;
     }
     cv_.notify_all();
@@ -220,7 +232,10 @@ class FstReader final : public WaveReader {
         free_.push_back(std::move(cur_));
       }
       cv_.wait(lk, [this] { return !queue_.empty() || done_; });
-      if (queue_.empty()) return false;
+      if (queue_.empty()) {
+        if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
+        return false;
+      }
       cur_ = std::move(queue_.front());
       queue_.pop_front();
       idx_ = 0;
