@@ -6,7 +6,9 @@
 // plus the slots: so it grows with the number of signals and the block size, not the file length.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <condition_variable>
+#include <cstdio>
 #include <cstring>
 #include <deque>
 #include <exception>
@@ -246,9 +248,80 @@ class FstReader final : public WaveReader {
   }
 };
 
+// fstapi walks the file block by block (a type byte, a 64-bit big-endian length, the body), at
+// the next block = here + 1 + length, with no check: a length that wraps the position around
+// makes it read the same blocks forever, and a header cut off by the end of the file is read
+// from uninitialised memory. Such files are refused before fstapi sees them (docs/robustness.md).
+// The same for the sizes of LZ4 hierarchy blocks (below). A gzip-wrapped FST (type 254) is
+// unpacked by fstapi first; its inner blocks are not checked here.
+constexpr std::uint64_t kMaxHierarchyBytes = std::uint64_t{1} << 30;
+
+std::string check_lz4_hierarchy(std::FILE* f, std::uint64_t pos, std::uint64_t len, bool duo) {
+  unsigned char b[8 + 10];
+  const std::size_t n = std::fread(b, 1, sizeof b, f);  // after the 9-byte block header
+  if (len < 16 + 1 || n < 8 + (duo ? 1u : 0u)) {
+    return fmt::format("hierarchy block at byte {} too short", pos);
+  }
+  std::uint64_t uclen = 0;
+  for (int i = 0; i < 8; ++i) uclen = uclen << 8 | b[i];
+  std::uint64_t inner = 0;
+  if (duo) {  // LEB128-style varint, as fstGetVarint64 reads it
+    int shift = 0;
+    std::size_t i = 8;
+    for (; i < n && shift < 64; ++i, shift += 7) {
+      inner |= static_cast<std::uint64_t>(b[i] & 0x7F) << shift;
+      if ((b[i] & 0x80) == 0) break;
+    }
+    // fstapi looks for the varint's end without a bound: it must end inside the data.
+    if (i == n || shift >= 64 || i - 8 + 1 > len - 16) {
+      return fmt::format("hierarchy block at byte {}: bad length", pos);
+    }
+  }
+  if (uclen > kMaxHierarchyBytes || inner > kMaxHierarchyBytes) {
+    return fmt::format("hierarchy block at byte {} claims {} bytes uncompressed", pos,
+                       std::max(uclen, inner));
+  }
+  return {};
+}
+
+void check_block_chain(const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (f == nullptr) return;  // fstReaderOpen reports it
+  std::uint64_t pos = 0;
+  std::string error;
+  for (;;) {
+    if (fseeko(f, static_cast<off_t>(pos), SEEK_SET) != 0) break;
+    unsigned char h[9];
+    const std::size_t n = std::fread(h, 1, sizeof h, f);
+    if (n == 0 || (pos == 0 && h[0] == FST_BL_ZWRAPPER)) break;
+    if (n < sizeof h) {
+      error = fmt::format("block header at byte {} cut off by the end of the file", pos);
+      break;
+    }
+    std::uint64_t len = 0;
+    for (int i = 1; i < 9; ++i) len = len << 8 | h[i];
+    if (h[0] == FST_BL_HIER_LZ4 || h[0] == FST_BL_HIER_LZ4DUO) {
+      // fstapi mallocs the sizes of an LZ4 hierarchy block as given (uncompressed length, and
+      // for LZ4DUO the inner length, a varint) and writes through the result unchecked.
+      error = check_lz4_hierarchy(f, pos, len, h[0] == FST_BL_HIER_LZ4DUO);
+      if (!error.empty()) break;
+    }
+    const std::uint64_t next = pos + 1 + len;
+    if (next <= pos) {
+      error =
+          fmt::format("block at byte {} has a length of {} (the chain runs backwards)", pos, len);
+      break;
+    }
+    pos = next;
+  }
+  std::fclose(f);
+  if (!error.empty()) fail(path, 0, "corrupt FST: " + error);
+}
+
 }  // namespace
 
 std::unique_ptr<WaveReader> open_fst(const std::string& path) {
+  check_block_chain(path);
   void* ctx = fstReaderOpen(path.c_str());
   if (ctx == nullptr) fail(path, 0, "not a readable FST file");
   try {
