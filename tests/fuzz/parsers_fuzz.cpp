@@ -1,12 +1,15 @@
 // Fuzz targets for the text and binary inputs of the product: golden traces, scenario files, the
 // `dpc31 serve` command lines and snapshots. Each goes through the same function the product
 // uses on a file or a socket line; errors must come back as the documented error values.
+#include <zlib.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "../../emu/scenario.hpp"
 #include "../../emu/trace.hpp"
@@ -83,11 +86,34 @@ int serve_lines(const std::uint8_t* data, std::size_t size) {
   return 0;
 }
 
+namespace {
+
+int load_one(std::span<const std::uint8_t> bytes);
+
+}  // namespace
+
 // Chip::load_state: a snapshot is accepted by the chip of its configuration or rejected with
 // SnapshotError, the chip unchanged. An accepted one must save again to bytes that load again to
-// the same state, and the chip must run from it with the invariants holding.
+// the same state, and the chip must run from it with the invariants holding. Every input is
+// loaded as it is, and once more with its CRC-32 (header bytes 32..35, docs/snapshots.md) made
+// to fit, so mutations reach the payload checks instead of all ending at the CRC.
 int snapshot_loader(const std::uint8_t* data, std::size_t size) {
-  const std::span<const std::uint8_t> bytes(data, size);
+  load_one({data, size});
+  if (size >= 36) {
+    std::vector<std::uint8_t> fixed(data, data + size);
+    uLong crc = crc32(0L, Z_NULL, 0);
+    crc = crc32(crc, fixed.data(), 32);
+    crc = crc32(crc, fixed.data() + 36, static_cast<uInt>(size - 36));
+    for (int i = 0; i < 4; ++i)
+      fixed[32 + static_cast<std::size_t>(i)] = std::uint8_t(crc >> 8 * i);
+    load_one(fixed);
+  }
+  return 0;
+}
+
+namespace {
+
+int load_one(std::span<const std::uint8_t> bytes) {
   for (Profile p : kAllProfiles) {
     for (BusMode bus : {BusMode::intel, BusMode::motorola}) {
       Chip chip({p, bus});
@@ -119,5 +145,7 @@ int snapshot_loader(const std::uint8_t* data, std::size_t size) {
   }
   return 0;
 }
+
+}  // namespace
 
 }  // namespace dpc31::fuzz
