@@ -256,11 +256,16 @@ class FstReader final : public WaveReader {
 // unpacked by fstapi first; its inner blocks are not checked here.
 constexpr std::uint64_t kMaxHierarchyBytes = std::uint64_t{1} << 30;
 
-std::string check_lz4_hierarchy(std::FILE* f, std::uint64_t pos, std::uint64_t len, bool duo) {
+std::string check_lz4_hierarchy(std::FILE* f, std::uint64_t pos, std::uint64_t len,
+                                std::uint64_t file_size, bool duo) {
   unsigned char b[8 + 10];
   const std::size_t n = std::fread(b, 1, sizeof b, f);  // after the 9-byte block header
   if (len < 16 + 1 || n < 8 + (duo ? 1u : 0u)) {
     return fmt::format("hierarchy block at byte {} too short", pos);
+  }
+  // Its compressed size (len - 16) is malloc'd and read as well: the block must be in the file.
+  if (len > file_size - pos - 1) {
+    return fmt::format("hierarchy block at byte {} runs past the end of the file", pos);
   }
   std::uint64_t uclen = 0;
   for (int i = 0; i < 8; ++i) uclen = uclen << 8 | b[i];
@@ -287,6 +292,8 @@ std::string check_lz4_hierarchy(std::FILE* f, std::uint64_t pos, std::uint64_t l
 void check_block_chain(const std::string& path) {
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (f == nullptr) return;  // fstReaderOpen reports it
+  std::uint64_t size = 0;
+  if (fseeko(f, 0, SEEK_END) == 0) size = static_cast<std::uint64_t>(ftello(f));
   std::uint64_t pos = 0;
   std::string error;
   for (;;) {
@@ -303,7 +310,7 @@ void check_block_chain(const std::string& path) {
     if (h[0] == FST_BL_HIER_LZ4 || h[0] == FST_BL_HIER_LZ4DUO) {
       // fstapi mallocs the sizes of an LZ4 hierarchy block as given (uncompressed length, and
       // for LZ4DUO the inner length, a varint) and writes through the result unchecked.
-      error = check_lz4_hierarchy(f, pos, len, h[0] == FST_BL_HIER_LZ4DUO);
+      error = check_lz4_hierarchy(f, pos, len, size, h[0] == FST_BL_HIER_LZ4DUO);
       if (!error.empty()) break;
     }
     const std::uint64_t next = pos + 1 + len;
