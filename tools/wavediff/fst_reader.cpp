@@ -302,6 +302,7 @@ void check_block_chain(const std::string& path) {
     const std::size_t n = std::fread(h, 1, sizeof h, f);
     if (n == 0 || (pos == 0 && h[0] == FST_BL_ZWRAPPER)) break;
     if (n < sizeof h) {
+      if (pos == 0) break;  // not an FST at all: fstReaderOpen says so
       error = fmt::format("block header at byte {} cut off by the end of the file", pos);
       break;
     }
