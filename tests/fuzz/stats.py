@@ -18,11 +18,12 @@ for path in sys.argv[1:]:
     done = re.search(r"Done (\d+) runs in (\d+) second", text)
     secs = done.group(2) if done else "?"
     if not execs:  # fork mode: "#N: cov: ... exec/s: R ... time: Ss"
-        fork = re.findall(r"#(\d+): cov: \d+ ft: \d+ corp: \d+ exec/s: (\d+) oom/timeout/crash: "
-                          r"(\d+)/(\d+)/(\d+) time: (\d+)s", text)
+        fork = re.findall(r"#(\d+): cov: (\d+) ft: (\d+) corp: (\d+) exec/s:? \d+ "
+                          r"oom/timeout/crash: (\d+)/(\d+)/(\d+) time: (\d+)s", text)
         if fork:
-            n, r, oom, to, crash, secs = fork[-1]
-            execs_s, rate_s = n, r
+            n, cov, ft, corp, oom, to, crash, secs = fork[-1]
+            size = "-"
+            execs_s, rate_s = n, str(int(n) // max(1, int(secs)))
             end = f"fork mode: {crash} crashes, {to} time-outs, {oom} OOMs (ignored, see findings)"
         else:
             execs_s = rate_s = "?"
