@@ -71,11 +71,18 @@ void cfg_done(ChipCore& c, Verdict v) {
   }
 }
 
-template <Handshake DpStateMachine::*Which, void (*Done)(ChipCore&, Verdict), Verdict V>
+template <Handshake DpStateMachine::*Which, void (*Done)(ChipCore&, Verdict), Verdict V,
+          std::uint16_t Event>
 std::uint16_t handshake_command(ChipCore& c) {
   bool done = false;
   const std::uint8_t r = (c.dp.*Which).answer(done);
   if (done) Done(c, V);
+  // Nothing pending (a Leave_Master discarded the telegram before the user's verdict): the read
+  // completes all the same and its event goes (docs/timing.md). Kept, it could never be cleared
+  // (Int_Ack_Reg ignores it) and X/INT would stay active for good.
+  if (r == kHandshakeNotAllowed) {
+    c.latch[ChipCore::idx(RegId::Int_Req_Reg)] &= static_cast<std::uint16_t>(~Event);
+  }
   return r;
 }
 
@@ -101,13 +108,13 @@ void install_dp_sm_hooks(HookTable& h) {
     h[ChipCore::idx(id)].command = command;
   };
   set(RegId::User_Prm_Data_Okay, handshake_preview<&DpStateMachine::prm>,
-      handshake_command<&DpStateMachine::prm, prm_done, Verdict::ok>);
+      handshake_command<&DpStateMachine::prm, prm_done, Verdict::ok, irq::New_Prm_Data>);
   set(RegId::User_Prm_Data_Not_Okay, handshake_preview<&DpStateMachine::prm>,
-      handshake_command<&DpStateMachine::prm, prm_done, Verdict::not_ok>);
+      handshake_command<&DpStateMachine::prm, prm_done, Verdict::not_ok, irq::New_Prm_Data>);
   set(RegId::User_Cfg_Data_Okay, handshake_preview<&DpStateMachine::cfg>,
-      handshake_command<&DpStateMachine::cfg, cfg_done, Verdict::ok>);
+      handshake_command<&DpStateMachine::cfg, cfg_done, Verdict::ok, irq::New_Cfg_Data>);
   set(RegId::User_Cfg_Data_Not_Okay, handshake_preview<&DpStateMachine::cfg>,
-      handshake_command<&DpStateMachine::cfg, cfg_done, Verdict::not_ok>);
+      handshake_command<&DpStateMachine::cfg, cfg_done, Verdict::not_ok, irq::New_Cfg_Data>);
   set(
       RegId::SSA_Buffer_Free_Cmd, [](const ChipCore&) -> std::uint16_t { return 0; },
       [](ChipCore& c) -> std::uint16_t {

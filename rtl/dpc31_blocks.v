@@ -730,12 +730,14 @@ module dpc31_blocks #(
     end
   endtask
 
-  // The OK / Not_OK reads: 11 when not pending; 01 (conflict, newer cleared, still pending) when
-  // a newer one arrived; else 00, not pending, and the completion.
+  // The OK / Not_OK reads: 11 when not pending (and the event bit cleared: a leave_master may
+  // have discarded what it announced); 01 (conflict, newer cleared, still pending) when a newer
+  // one arrived; else 00, not pending, and the completion.
   task prm_handshake(input not_ok, output [7:0] res);
     begin
       if (!nx_prm_pending) begin
         res = 8'h03;
+        nx_irr = nx_irr & ~IRQ_NEW_PRM;
       end else if (nx_prm_newer) begin
         res = 8'h01;
         nx_prm_newer = 1'b0;
@@ -757,6 +759,7 @@ module dpc31_blocks #(
     begin
       if (!nx_cfg_pending) begin
         res = 8'h03;
+        nx_irr = nx_irr & ~IRQ_NEW_CFG;
       end else if (nx_cfg_newer) begin
         res = 8'h01;
         nx_cfg_newer = 1'b0;

@@ -119,6 +119,28 @@ TEST_P(Buffers, PrmCfgHandshakes) {
   EXPECT_EQ(c.read(0x10), 0x03);  // nothing pending any more
 }
 
+// Found by fuzz_chip_bytes (tests/fuzz/regressions/chip_bytes/stale_new_prm_data_irq_storm): a
+// Leave_Master between Set_Prm and the user's verdict discarded the handshake but left
+// New_Prm_Data set; the OK read answered "not allowed" and kept it, Int_Ack_Reg cannot clear it,
+// so X/INT stayed active and the firmware's ISR ran forever.
+TEST_P(Buffers, NotAllowedVerdictClearsAStaleEvent) {
+  Chip c = make();
+  c.write(0x08, 0x01);
+  testutil::bus_write16(c, 0x04, 16,
+                        static_cast<std::uint16_t>(~(irq::New_Prm_Data | irq::New_Cfg_Data)));
+  c.asic_prm_received();
+  c.asic_cfg_received();
+  c.write(0x08, 0x08);  // User_Leave_Master: both telegrams discarded
+  EXPECT_TRUE(c.irq_active());
+  EXPECT_EQ(c.read(0x0E), 0x03);  // nothing to accept any more
+  EXPECT_EQ(c.peek_reg(RegId::Int_Req_Reg) & irq::New_Prm_Data, 0);
+  EXPECT_TRUE(c.irq_active());  // New_Cfg_Data still set
+  EXPECT_EQ(c.read(0x11), 0x03);
+  EXPECT_EQ(c.peek_reg(RegId::Int_Req_Reg) & irq::New_Cfg_Data, 0);
+  EXPECT_FALSE(c.irq_active());
+  EXPECT_EQ(c.dp_state(), DpState::Wait_Prm);
+}
+
 TEST_P(Buffers, SsaBufferFree) {
   Chip c = make();
   c.asic_ssa_received();

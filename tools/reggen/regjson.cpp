@@ -457,8 +457,10 @@ class Loader {
       if (overrides != nullptr) {
         expect_object(*overrides, "'override'");
         for (const auto& [fname, fa] : overrides->items()) {
+          // clang 14 (the fuzz build) cannot capture a structured binding in a lambda.
+          const std::string& wanted = fname;
           auto f = std::find_if(fields.begin(), fields.end(),
-                                [&](const RawField& x) { return x.name == fname; });
+                                [&](const RawField& x) { return x.name == wanted; });
           if (f == fields.end()) {
             fail(fmt::format("override of field '{}', which fieldset '{}' does not have", fname,
                              it->first));

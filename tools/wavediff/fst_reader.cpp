@@ -6,14 +6,17 @@
 // plus the slots: so it grows with the number of signals and the block size, not the file length.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <condition_variable>
 #include <cstdio>
 #include <cstring>
 #include <deque>
+#include <exception>
 #include <limits>
 #include <mutex>
 #include <thread>
+#include <utility>
 
 #include "child.hpp"
 #include "gtkwave/fstapi.h"
@@ -107,6 +110,7 @@ class FstReader final : public WaveReader {
   std::vector<std::unique_ptr<Chunk>> free_;
   bool done_ = false;
   bool abort_ = false;
+  std::exception_ptr error_;     // the producer's, rethrown by the consumer
   std::unique_ptr<Chunk> fill_;  // producer side
   std::unique_ptr<Chunk> cur_;   // consumer side
   std::size_t idx_ = 0;
@@ -213,10 +217,19 @@ class FstReader final : public WaveReader {
   }
 
   void produce() {
-    fstReaderIterBlocks2(ctx_, &FstReader::on_change, &FstReader::on_change_varlen, this, nullptr);
-    if (!fill_->recs.empty()) hand_over();
+    // An exception here (std::bad_alloc; in the fuzz build fstapi's exit()) would end the
+    // process from this thread: it goes to the consumer, which rethrows it from step().
+    std::exception_ptr error;
+    try {
+      fstReaderIterBlocks2(ctx_, &FstReader::on_change, &FstReader::on_change_varlen, this,
+                           nullptr);
+      if (!fill_->recs.empty()) hand_over();
+    } catch (...) {
+      error = std::current_exception();
+    }
     {
       std::lock_guard<std::mutex> lk(m_);
+      error_ = error;
       done_ = true;
     }
     cv_.notify_all();
@@ -233,7 +246,10 @@ class FstReader final : public WaveReader {
         free_.push_back(std::move(cur_));
       }
       cv_.wait(lk, [this] { return !queue_.empty() || done_; });
-      if (queue_.empty()) return false;
+      if (queue_.empty()) {
+        if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
+        return false;
+      }
       cur_ = std::move(queue_.front());
       queue_.pop_front();
       idx_ = 0;
@@ -243,6 +259,40 @@ class FstReader final : public WaveReader {
     return true;
   }
 };
+
+// fstapi mallocs the sizes an LZ4 hierarchy block announces (its uncompressed length, and for
+// LZ4DUO the inner length, a varint) and writes through the result unchecked: absurd sizes are
+// refused before fstapi sees them (docs/robustness.md, finding 3). `f` is just past the block's
+// 9-byte header.
+constexpr std::uint64_t kMaxHierarchyBytes = std::uint64_t{1} << 30;
+
+std::string check_lz4_hierarchy(std::FILE* f, std::uint64_t pos, std::uint64_t len, bool duo) {
+  unsigned char b[8 + 10];
+  const std::size_t n = std::fread(b, 1, sizeof b, f);  // after the 9-byte block header
+  if (len < 16 + 1 || n < 8 + (duo ? 1u : 0u)) {
+    return fmt::format("hierarchy block at byte {} too short", pos);
+  }
+  std::uint64_t uclen = 0;
+  for (int i = 0; i < 8; ++i) uclen = uclen << 8 | b[i];
+  std::uint64_t inner = 0;
+  if (duo) {  // LEB128-style varint, as fstGetVarint64 reads it
+    int shift = 0;
+    std::size_t i = 8;
+    for (; i < n && shift < 64; ++i, shift += 7) {
+      inner |= static_cast<std::uint64_t>(b[i] & 0x7F) << shift;
+      if ((b[i] & 0x80) == 0) break;
+    }
+    // fstapi looks for the varint's end without a bound: it must end inside the data.
+    if (i == n || shift >= 64 || i - 8 + 1 > len - 16) {
+      return fmt::format("hierarchy block at byte {}: bad length", pos);
+    }
+  }
+  if (uclen > kMaxHierarchyBytes || inner > kMaxHierarchyBytes) {
+    return fmt::format("hierarchy block at byte {} claims {} bytes uncompressed", pos,
+                       std::max(uclen, inner));
+  }
+  return {};
+}
 
 }  // namespace
 
@@ -285,7 +335,13 @@ void check_blocks(const std::string& path) {
     } else if (len < 8) {
       problem = fmt::format("corrupt: block length {} at byte {}", len, pos);
     } else if (len > size - pos - 1) {
+      // Also a length that would wrap the position around (fstapi would loop forever).
       problem = fmt::format("truncated: the block at byte {} ends past the end of the file", pos);
+    } else if (type == FST_BL_HIER_LZ4 || type == FST_BL_HIER_LZ4DUO) {
+      // (The block is inside the file, checked above: its compressed size is read as well.)
+      problem = check_lz4_hierarchy(f, pos, len, type == FST_BL_HIER_LZ4DUO);
+      if (!problem.empty()) problem = "corrupt: " + problem;
+      pos += 1 + len;
     } else {
       pos += 1 + len;
     }

@@ -1,0 +1,56 @@
+// The findings of the fuzzers, each pinned down by what the product must do with the input that
+// found it (docs/robustness.md, "Findings"). The inputs are also replayed by FuzzReplay.
+#include <gtest/gtest.h>
+
+#include <initializer_list>
+#include <string>
+#include <utility>
+
+#include "wavediff.hpp"
+
+namespace {
+
+int wavediff_self(const std::string& file, std::string& err) {
+  dpc31::wavediff::Options o;
+  o.file_a = o.file_b = file;
+  o.strip_auto = true;
+  std::string out;
+  return dpc31::wavediff::run(o, out, err);
+}
+
+const std::string kDir = std::string(FUZZ_DIR) + "/";
+
+// fstapi followed a block length that wraps the file position around: it read the same block
+// forever (dpc31 wavediff hung).
+TEST(FuzzFindings, FstBlockChainRunningBackwardsIsBadInput) {
+  std::string err;
+  EXPECT_EQ(wavediff_self(kDir + "regressions/fst_reader/fstapi_block_chain_backwards", err), 2);
+  EXPECT_NE(err.find(":0: not a readable FST file (truncated: the block at byte 330 ends past the "
+                     "end of the file)"),
+            std::string::npos)
+      << err;
+}
+
+// fstapi mallocs an LZ4DUO hierarchy's inner length as given and writes through NULL when that
+// fails (a segmentation fault in dpc31 wavediff); likewise its compressed length (a 4 GB malloc
+// for a block that claims to run past the end of the file).
+TEST(FuzzFindings, FstHierarchyWithAnAbsurdLengthIsBadInput) {
+  for (const auto& [f, why] : std::initializer_list<std::pair<const char*, const char*>>{
+           {"fstapi_lz4duo_hierarchy_huge_inner_length", "(corrupt: hierarchy block at byte "},
+           {"fstapi_lz4duo_hierarchy_past_end_of_file", "(truncated: the block at byte "}}) {
+    std::string err;
+    EXPECT_EQ(wavediff_self(kDir + "regressions/fst_reader/" + f, err), 2) << f;
+    EXPECT_NE(err.find(std::string(":0: not a readable FST file ") + why), std::string::npos)
+        << f << err;
+  }
+}
+
+// The checks refuse no real file: the seeds (vcd2fst output) still compare equal to themselves.
+TEST(FuzzFindings, FstChecksPassRealFiles) {
+  for (const char* f : {"emu.fst", "rtl.fst", "rtl_late_irq.fst"}) {
+    std::string err;
+    EXPECT_EQ(wavediff_self(kDir + "corpus/fst_reader/" + f, err), 0) << f << ": " << err;
+  }
+}
+
+}  // namespace

@@ -1,0 +1,151 @@
+// Fuzz targets for the text and binary inputs of the product: golden traces, scenario files, the
+// `dpc31 serve` command lines and snapshots. Each goes through the same function the product
+// uses on a file or a socket line; errors must come back as the documented error values.
+#include <zlib.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "../../emu/scenario.hpp"
+#include "../../emu/trace.hpp"
+#include "dpc31/chip.hpp"
+#include "dpc31/snapshot.hpp"
+#include "fuzz_targets.hpp"
+#include "invariants.hpp"
+#include "serve_session.hpp"
+
+namespace dpc31::fuzz {
+
+namespace {
+
+std::string_view text(const std::uint8_t* data, std::size_t size) {
+  return {reinterpret_cast<const char*>(data), size};
+}
+
+[[noreturn]] void bug(const std::string& what) {
+  std::fprintf(stderr, "fuzz: %s\n", what.c_str());
+  std::abort();
+}
+
+// A replay runs the chip up to the trace's last cycle; beyond this a trace only costs time (an
+// `end 10^18` line is legal), so longer ones are parsed but not replayed.
+constexpr std::uint64_t kMaxReplayCycles = std::uint64_t{1} << 32;
+
+}  // namespace
+
+// `dpc31 replay FILE`: parse (errors are TraceError, exit 2), then replay on a fresh chip.
+int trace_parser(const std::uint8_t* data, std::size_t size) {
+  Trace t;
+  TraceError err;
+  if (!parse_trace(text(data, size), "fuzz.trace", t, err)) {
+    if (err.message.empty()) bug("parse_trace failed without a message");
+    return 0;
+  }
+  std::uint64_t last = 0;
+  for (const TraceLine& l : t.lines) last = std::max({last, l.cycle, l.start, l.end});
+  if (last > kMaxReplayCycles) return 0;
+  (void)replay_trace(t);
+  return 0;
+}
+
+// `dpc31 run FILE`, the parsing half (running needs the built-in master and a CPU thread).
+int scenario_parser(const std::uint8_t* data, std::size_t size) {
+  Scenario s;
+  ScenarioError err;
+  if (!parse_scenario(text(data, size), "fuzz.scn", s, err) && err.message.empty()) {
+    bug("parse_scenario failed without a message");
+  }
+  return 0;
+}
+
+// One `dpc31 serve` client: every line of the input to the command interpreter. `save` is left
+// out (it writes files wherever its path says); everything else runs as the server runs it.
+int serve_lines(const std::uint8_t* data, std::size_t size) {
+  serve::Session session({}, [](const serve::AsyncLine&) {});
+  serve::ClientState client;
+  std::string_view in = text(data, size);
+  while (!in.empty()) {
+    const std::size_t nl = in.find('\n');
+    const std::string_view line = in.substr(0, nl);
+    in = nl == std::string_view::npos ? std::string_view{} : in.substr(nl + 1);
+    std::size_t b = 0;
+    while (b < line.size() && (line[b] == ' ' || line[b] == '\t')) ++b;
+    if (line.substr(b, 4) == "save") continue;
+    const serve::Session::Result r = session.execute(line, client);
+    if (r.reply.rfind("OK", 0) != 0 && r.reply.rfind("ERR ", 0) != 0) {
+      bug("serve reply is neither OK nor ERR: " + r.reply);
+    }
+    if (r.reply.find('\n') != std::string::npos) bug("serve reply spans lines");
+    if (r.action != serve::Session::Action::none) break;
+  }
+  return 0;
+}
+
+namespace {
+
+int load_one(std::span<const std::uint8_t> bytes);
+
+}  // namespace
+
+// Chip::load_state: a snapshot is accepted by the chip of its configuration or rejected with
+// SnapshotError, the chip unchanged. An accepted one must save again to bytes that load again to
+// the same state, and the chip must run from it with the invariants holding. Every input is
+// loaded as it is, and once more with its CRC-32 (header bytes 32..35, docs/snapshots.md) made
+// to fit, so mutations reach the payload checks instead of all ending at the CRC.
+int snapshot_loader(const std::uint8_t* data, std::size_t size) {
+  load_one({data, size});
+  if (size >= 36) {
+    std::vector<std::uint8_t> fixed(data, data + size);
+    uLong crc = crc32(0L, Z_NULL, 0);
+    crc = crc32(crc, fixed.data(), 32);
+    crc = crc32(crc, fixed.data() + 36, static_cast<uInt>(size - 36));
+    for (int i = 0; i < 4; ++i)
+      fixed[32 + static_cast<std::size_t>(i)] = std::uint8_t(crc >> 8 * i);
+    load_one(fixed);
+  }
+  return 0;
+}
+
+namespace {
+
+int load_one(std::span<const std::uint8_t> bytes) {
+  for (Profile p : kAllProfiles) {
+    for (BusMode bus : {BusMode::intel, BusMode::motorola}) {
+      Chip chip({p, bus});
+      chip.set_log_sink(nullptr);
+      const std::vector<std::uint8_t> fresh = chip.save_state();
+      try {
+        chip.load_state(bytes);
+      } catch (const SnapshotError&) {
+        if (chip.save_state() != fresh) bug("a rejected snapshot changed the chip");
+        continue;
+      }
+      const std::vector<std::uint8_t> once = chip.save_state();
+      Chip again({p, bus});
+      again.set_log_sink(nullptr);
+      try {
+        again.load_state(once);
+      } catch (const SnapshotError& e) {
+        bug(std::string("a saved snapshot does not load: ") + e.what());
+      }
+      if (again.save_state() != once) bug("save(load(save(load(x)))) differs from save(load(x))");
+      InvariantChecker checker;
+      checker.attach(chip);
+      checker.check();
+      chip.step(200'000);
+      for (std::uint32_t a = 0; a < 0x40; ++a) (void)chip.read(a);
+      chip.step(2'000'000);
+      return 0;
+    }
+  }
+  return 0;
+}
+
+}  // namespace
+
+}  // namespace dpc31::fuzz
