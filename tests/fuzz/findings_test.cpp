@@ -36,7 +36,10 @@ TEST(FuzzFindings, FstBlockChainRunningBackwardsIsBadInput) {
 // for a block that claims to run past the end of the file).
 TEST(FuzzFindings, FstHierarchyWithAnAbsurdLengthIsBadInput) {
   for (const auto& [f, why] : std::initializer_list<std::pair<const char*, const char*>>{
-           {"fstapi_lz4duo_hierarchy_huge_inner_length", "(corrupt: hierarchy block at byte "},
+           {"fstapi_lz4duo_hierarchy_huge_inner_length", "(truncated: the block at byte 523 "},
+           // The same with the block's length made to fit the file: the size check itself.
+           {"fstapi_lz4duo_hierarchy_huge_inner_length_in_file",
+            "(corrupt: hierarchy block at byte 523 claims 38654705832 bytes uncompressed)"},
            {"fstapi_lz4duo_hierarchy_past_end_of_file", "(truncated: the block at byte "}}) {
     std::string err;
     EXPECT_EQ(wavediff_self(kDir + "regressions/fst_reader/" + f, err), 2) << f;
