@@ -18,6 +18,7 @@
 #include "replay.hpp"
 #include "run.hpp"
 #include "serve.hpp"
+#include "soak.hpp"
 #include "wavediff_cli.hpp"
 
 namespace {
@@ -131,6 +132,10 @@ int main(int argc, char** argv) {
   dpc31::cli::BenchArgs bench_args;
   auto* bench = dpc31::cli::add_bench_subcommand(app, bench_args);
 
+  // dpc31 soak: a long run with injected faults, counters checked exactly (docs/soak.md).
+  dpc31::soak::Options soak_opt;
+  auto* soak = dpc31::soak::add_subcommand(app, soak_opt);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -142,6 +147,7 @@ int main(int argc, char** argv) {
     return rc == 0 ? 0 : 2;
   }
 
+  if (soak->parsed()) return dpc31::soak::run_cli(soak_opt, stdout, stderr);
   if (bench->parsed()) return dpc31::cli::run_bench(bench_args, stdout, stderr);
   if (serve->parsed()) return dpc31::cli::run_serve(serve_args, stdout, stderr);
   if (bridge->parsed()) return dpc31::cli::run_bridge(bridge_opt, stdout, stderr);
