@@ -16,6 +16,13 @@ std::uint64_t send_on_rxd(Chip& chip, std::span<const std::uint8_t> bytes, std::
   return start + bytes.size() * std::uint64_t{kUartCharBits} * bit_cycles;
 }
 
+bool wants_answer(const fdl::Frame& f) {
+  const fdl::Function fn = fdl::request_function(f.fc);
+  return f.da != fdl::kBroadcast &&
+         (fn == fdl::Function::SRD_low || fn == fdl::Function::SRD_high ||
+          fn == fdl::Function::FDL_Status);
+}
+
 void AnswerCollector::reset() {
   frame_.reset();
   bytes_.clear();
@@ -74,6 +81,30 @@ void DpMaster::run_until(std::uint64_t cycle) {
 
 void DpMaster::idle(std::uint64_t cycles) { run_until(chip_.cycle() + cycles); }
 
+Exchange DpMaster::retry(Exchange ex, std::uint32_t retries) {
+  for (std::uint32_t i = 0; i < retries && !ex.answer && wants_answer(ex.request); ++i) {
+    ex = transact(ex.request);
+  }
+  return ex;
+}
+
+void DpMaster::line_noise(std::span<const std::uint8_t> bytes, std::uint32_t idle_bits) {
+  const std::uint64_t start = std::max(chip_.cycle(), bus_free_ + std::uint64_t{idle_bits} * t_);
+  bus_free_ = send_on_rxd(chip_, bytes, start, t_);
+  ++counters_.noise;
+  run_until(bus_free_);
+}
+
+void DpMaster::glitch(std::uint32_t low_cycles) {
+  const std::uint64_t start =
+      std::max(chip_.cycle(), bus_free_ + std::uint64_t{cfg_.idle_bits} * t_);
+  chip_.drive_rxd(start, false);
+  chip_.drive_rxd(start + low_cycles, true);
+  bus_free_ = start + std::uint64_t{kUartCharBits} * t_;
+  ++counters_.noise;
+  run_until(bus_free_);
+}
+
 fdl::Frame DpMaster::request(std::optional<std::uint8_t> dsap, std::vector<std::uint8_t> du,
                              bool srd) {
   std::uint8_t fc = fdl::make_request_fc(fdl::Function::SDN_high, false, false);
@@ -105,10 +136,18 @@ Exchange DpMaster::transact_raw(const std::vector<std::uint8_t>& bytes, UartFaul
   const bool sdn = d.error == fdl::Error::none &&
                    (fdl::request_function(d.frame.fc) == fdl::Function::SDN_high ||
                     fdl::request_function(d.frame.fc) == fdl::Function::SDN_low);
+  ++counters_.requests;
   if (sdn) {
     bus_free_ = ex.request_end;  // send-data-no-acknowledge: nothing to wait for
   } else {
     ex = wait_answer(ex);
+    if (ex.answer) {
+      ++counters_.answered;
+    } else if (ex.answer_end == 0) {
+      ++counters_.no_answer;
+    } else {
+      ++counters_.bad_answer;
+    }
   }
   history_.push_back(ex);
   return ex;
@@ -183,8 +222,8 @@ Exchange DpMaster::set_prm(std::uint8_t station_status_extra) {
 
 Exchange DpMaster::chk_cfg() { return transact(request(sap::Chk_Cfg, slave_.cfg)); }
 Exchange DpMaster::get_cfg() { return transact(request(sap::Get_Cfg, {})); }
-Exchange DpMaster::data_exchange(const std::vector<std::uint8_t>& outputs) {
-  return transact(request(std::nullopt, outputs));
+Exchange DpMaster::data_exchange(const std::vector<std::uint8_t>& outputs, UartFault fault) {
+  return transact(request(std::nullopt, outputs), fault);
 }
 Exchange DpMaster::read_inputs() { return transact(request(sap::Rd_Inp, {})); }
 Exchange DpMaster::read_outputs() { return transact(request(sap::Rd_Outp, {})); }
@@ -232,6 +271,22 @@ bool DpMaster::startup(int tries) {
       set_prm();
       chk_cfg();
     }
+  }
+  return false;
+}
+
+bool DpMaster::restart(std::uint64_t tries, std::uint32_t retries) {
+  std::uint64_t n = 0;
+  for (; n < tries; ++n) {
+    if (retry(fdl_status(), retries).answer) break;
+  }
+  if (n == tries) return false;
+  retry(slave_diag(), retries);
+  retry(set_prm(), retries);
+  retry(chk_cfg(), retries);
+  for (; n < tries; ++n) {
+    const Exchange d = retry(slave_diag(), retries);
+    if (d.answer && diag_ready(*d.answer)) return true;
   }
   return false;
 }

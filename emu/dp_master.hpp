@@ -89,6 +89,18 @@ class AnswerCollector {
   std::uint64_t end_ = 0;
 };
 
+// The request is SRD or FDL_Status to one station: the master waits for an answer.
+[[nodiscard]] bool wants_answer(const fdl::Frame& request);
+
+// What the master saw of its own requests (DpMaster::counters).
+struct MasterCounters {
+  std::uint64_t requests = 0;    // telegrams sent by transact / transact_raw
+  std::uint64_t answered = 0;    // a complete, valid answer came back
+  std::uint64_t no_answer = 0;   // an answer was due, nothing started within the slot time
+  std::uint64_t bad_answer = 0;  // an answer started but was broken (character or frame error)
+  std::uint64_t noise = 0;       // noise bursts and glitches put on the line (line_noise, glitch)
+};
+
 class DpMaster {
  public:
   using Firmware = Cpu::Isr;  // the ISR, run (on the host CPU) while X/INT is active
@@ -103,6 +115,15 @@ class DpMaster {
   Exchange transact_raw(const std::vector<std::uint8_t>& bytes, UartFault fault = {});
   // Lets time pass with a silent bus (cable pulled), running the firmware on interrupts.
   void idle(std::uint64_t cycles);
+  // Sends `ex.request` again, unchanged (same FCB), while it wants an answer and has none, at
+  // most `retries` times.
+  Exchange retry(Exchange ex, std::uint32_t retries);
+  // Noise on the line: `bytes` as UART characters after `idle_bits` of bus idle (fewer than TSYN:
+  // a telegram the chip must not accept). Nothing is waited for but the last stop bit.
+  void line_noise(std::span<const std::uint8_t> bytes, std::uint32_t idle_bits);
+  // A low pulse of `low_cycles` after a TSYN of bus idle; the chip's receiver samples one
+  // character from it (11 bit times), which the next request waits out.
+  void glitch(std::uint32_t low_cycles);
 
   // The DP services, FCB handled per EN 50170 (FCV = 1 from the second SRD on).
   Exchange fdl_status();
@@ -110,7 +131,7 @@ class DpMaster {
   Exchange set_prm(std::uint8_t station_status_extra = 0);
   Exchange chk_cfg();
   Exchange get_cfg();
-  Exchange data_exchange(const std::vector<std::uint8_t>& outputs);
+  Exchange data_exchange(const std::vector<std::uint8_t>& outputs, UartFault fault = {});
   Exchange global_control(std::uint8_t command, std::uint8_t groups = 0);
   Exchange read_inputs();
   Exchange read_outputs();
@@ -119,6 +140,10 @@ class DpMaster {
   // The standard start-up: FDL_Status until answered, Slave_Diag, Set_Prm, Chk_Cfg, Slave_Diag
   // until the slave is ready. Returns false if it did not reach Data_Exchange within `tries`.
   bool startup(int tries = 200);
+  // A master restart: FDL_Status until answered, Slave_Diag, Set_Prm, Chk_Cfg, then Slave_Diag
+  // until ready. Unlike startup it parameterises even a slave that reports itself ready. Every
+  // request without an answer is repeated up to `retries` times.
+  bool restart(std::uint64_t tries, std::uint32_t retries);
   // Parses the six standard diag bytes: ready = no Station_Not_Ready, no Prm_Req, no faults.
   static bool diag_ready(const fdl::Frame& diag_answer);
 
@@ -128,6 +153,10 @@ class DpMaster {
   std::uint8_t target() const { return target_; }
   void set_target(std::uint8_t a) { target_ = a; }
   const std::vector<Exchange>& history() const { return history_; }
+  // Forgets history() (the counters stay): a long run (dpc31 soak) calls it so memory does not
+  // grow with time.
+  void clear_history() { history_.clear(); }
+  [[nodiscard]] const MasterCounters& counters() const { return counters_; }
   // Narration of what happened (`dpc31 run` prints it).
   std::function<void(const std::string&)> narrate;
 
@@ -152,6 +181,7 @@ class DpMaster {
   std::uint64_t bus_free_ = 0;  // end of the last telegram on the bus
   std::unique_ptr<Cpu> cpu_;
   std::vector<Exchange> history_;
+  MasterCounters counters_;
 };
 
 }  // namespace dpc31

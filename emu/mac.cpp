@@ -172,11 +172,16 @@ void ChipCore::mac_char(const UartChar& c) {
   const bool stop_ok = c.stop_ok || mode0(kDis_Stop_Control);
   if (!c.parity_ok || !start_ok || !stop_ok) {
     // One count per broken telegram: characters misframed after the first error are its tail.
+    // Of one character's errors the first sampled counts: start bit, parity, stop bit.
     const bool fresh = !mac.discarding && (mac.in_frame || c.idle_bits >= kTsynBits);
     if (fresh) {
-      counters.parity += c.parity_ok ? 0 : 1;
-      counters.start_bit += start_ok ? 0 : 1;
-      counters.stop_bit += stop_ok ? 0 : 1;
+      if (!start_ok) {
+        ++counters.start_bit;
+      } else if (!c.parity_ok) {
+        ++counters.parity;
+      } else {
+        ++counters.stop_bit;
+      }
     }
     mac.discarding = true;
     mac.in_frame = false;
@@ -208,7 +213,9 @@ void ChipCore::mac_char(const UartChar& c) {
   mac.in_frame = false;
   mac.frame_timeout = kNever;
   if (st == fdl::Assembler::Status::error) {
+    // The rest of the broken telegram is its tail, not an unsynchronised one: wait for TSYN.
     mac.discarding = true;
+    mac.skipping = true;
     // An LE beyond the longest telegram is an oversize frame, not a malformed one.
     const auto bytes = mac.frame.bytes();
     const bool too_long =

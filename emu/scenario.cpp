@@ -805,13 +805,6 @@ std::string service_name(const fdl::Frame& f) {
   }
 }
 
-bool wants_answer(const fdl::Frame& f) {
-  const fdl::Function fn = fdl::request_function(f.fc);
-  return f.da != fdl::kBroadcast &&
-         (fn == fdl::Function::SRD_low || fn == fdl::Function::SRD_high ||
-          fn == fdl::Function::FDL_Status);
-}
-
 std::string_view response_name(std::uint8_t fc) {
   switch (fdl::response_code(fc)) {
     case fdl::Response::OK:
@@ -1110,30 +1103,7 @@ class Runner {
   }
 
   // A request without an answer is sent again, unchanged (same FCB), up to `retries` times.
-  Exchange with_retries(Exchange ex) {
-    for (std::uint32_t i = 0; i < s_.retries && !ex.answer && wants_answer(ex.request); ++i) {
-      ex = master_->transact(ex.request);
-    }
-    return ex;
-  }
-
-  // A master restart: FDL_Status until answered, Slave_Diag, Set_Prm, Chk_Cfg, then Slave_Diag
-  // until ready. Unlike startup it parameterises even a slave that reports itself ready.
-  bool restart(std::uint64_t tries) {
-    std::uint64_t n = 0;
-    for (; n < tries; ++n) {
-      if (with_retries(master_->fdl_status()).answer) break;
-    }
-    if (n == tries) return false;
-    with_retries(master_->slave_diag());
-    with_retries(master_->set_prm());
-    with_retries(master_->chk_cfg());
-    for (; n < tries; ++n) {
-      const Exchange d = with_retries(master_->slave_diag());
-      if (d.answer && DpMaster::diag_ready(*d.answer)) return true;
-    }
-    return false;
-  }
+  Exchange with_retries(Exchange ex) { return master_->retry(std::move(ex), s_.retries); }
 
   void foreign_master(std::uint8_t a) {
     const std::uint8_t t = master_->target();
@@ -1184,7 +1154,7 @@ class Runner {
       }
       case StepKind::restart: {
         damage(st);
-        const bool ok = restart(st.count);
+        const bool ok = master_->restart(st.count, s_.retries);
         note(chip_.cycle(), ok ? std::string("restart: slave ready for Data_Exchange")
                                : fmt::format("restart: slave not ready after {} tries", st.count));
         break;

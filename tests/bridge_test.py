@@ -22,6 +22,9 @@ from dp_master import (SAP_SLAVE_DIAG, SAP_SET_PRM, SAP_CHK_CFG, SAP_MASTER, SC,
                        Fail, Master, check, hexs, sd1, sd2)
 
 CLI = None
+# Wall-clock limits are multiplied by this; only the sanitizer build (CMakePresets.json, asan)
+# sets it above 1 (docs/sanitizers.md).
+SCALE = float(os.environ.get("DPC31_TIMEOUT_SCALE", "1"))
 MASTER = 2
 SLAVE = 5
 
@@ -48,7 +51,7 @@ class Bridge:
         self.log = os.path.join(tmp, "bridge.log")
         self.proc = subprocess.Popen([CLI, "bridge", "--pty", self.path, "--log", self.log] +
                                      list(args), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-        deadline = time.monotonic() + 10
+        deadline = time.monotonic() + 10 * SCALE
         while not os.path.islink(self.path) or not os.path.exists(self.path):
             if self.proc.poll() is not None:
                 raise Fail(f"bridge exited with {self.proc.returncode}: "
@@ -59,7 +62,7 @@ class Bridge:
     def stop(self, sig=signal.SIGTERM):
         self.proc.send_signal(sig)
         try:
-            out, err = self.proc.communicate(timeout=10)
+            out, err = self.proc.communicate(timeout=10 * SCALE)
         except subprocess.TimeoutExpired:
             self.proc.kill()
             raise Fail(f"the bridge did not stop on signal {sig}")
@@ -158,7 +161,7 @@ def do4_two_clients(pacing, baud=19200, timeout=0.5):
     with tempfile.TemporaryDirectory() as tmp:
         b = Bridge(tmp, "--firmware", "DO4", "--baud", str(baud), "--pacing", pacing)
         try:
-            m = Master(b.path, baud, timeout)
+            m = Master(b.path, baud, timeout * SCALE)
             startup_do4(m)
             exchange_do4(m)
             m.close()
@@ -167,7 +170,7 @@ def do4_two_clients(pacing, baud=19200, timeout=0.5):
             # still parameterised by master 2 (watchdog 100 x 10 x 10 ms = 10 s), so FDL_Status
             # and one Slave_Diag find it ready and the outputs are still 05 01.
             time.sleep(0.05)
-            m = Master(b.path, baud, timeout)
+            m = Master(b.path, baud, timeout * SCALE)
             a = None
             for _ in range(20):
                 a = m.fdl_status()
@@ -196,12 +199,12 @@ def do4_reparameterise_after_watchdog():
     with tempfile.TemporaryDirectory() as tmp:
         b = Bridge(tmp, "--firmware", "DO4", "--pacing", "free")
         try:
-            m = Master(b.path, 19200, 0.5)
+            m = Master(b.path, 19200, 0.5 * SCALE)
             startup_do4(m, wd=(0x0A, 0x0A))
             exchange_do4(m)
             m.close()
             time.sleep(1.5)  # > 1 s: the DP watchdog expires while no client is there
-            m = Master(b.path, 19200, 0.5)
+            m = Master(b.path, 19200, 0.5 * SCALE)
             # Baud_Control expired too (the chip searches the rate again): FDL_Status until
             # answered.
             m.expect("FDL_Status", m.find_slave(), status_ok())
@@ -229,7 +232,7 @@ def cnt2_logmsg():
         global SLAVE
         SLAVE = 9
         try:
-            m = Master(b.path, 500000, 0.5, MASTER, SLAVE)
+            m = Master(b.path, 500000, 0.5 * SCALE, MASTER, SLAVE)
             m.expect("FDL_Status", m.find_slave(), status_ok())
             m.expect("Slave_Diag", m.srd([], SAP_SLAVE_DIAG),
                      diag([0x02, 0x05, 0x00, 0xFF, 0x0C, 0x02]))
@@ -283,7 +286,7 @@ def bad_arguments():
             ["bridge", "--pty", link, "--firmware", "DO4", "--log", os.path.join(tmp, "no", "x")],
         ]
         for args in cases:
-            p = subprocess.run([CLI] + args, capture_output=True, timeout=20, check=False)
+            p = subprocess.run([CLI] + args, capture_output=True, timeout=20 * SCALE, check=False)
             check(p.returncode == 2, f"{args}: exit code {p.returncode}, expected 2")
             err = p.stderr.decode()
             check(err.count("\n") == 1 and err.endswith("\n"),
@@ -305,15 +308,15 @@ def stale_symlink_replaced():
                   "the stale symlink was not replaced")
             # A client that only opens, configures and closes: the next one still gets a
             # working tcsetattr at the same speed.
-            Master(b.path, 19200, 0.5).close()
+            Master(b.path, 19200, 0.5 * SCALE).close()
             time.sleep(0.05)
-            m = Master(b.path, 19200, 0.5)
+            m = Master(b.path, 19200, 0.5 * SCALE)
             m.expect("FDL_Status", m.find_slave(), status_ok())
             m.close()
             # A client at another speed: the pty carries no timing, the bytes go on the bus at
             # the bridge's rate, and the log says so.
             time.sleep(0.05)
-            m = Master(b.path, 9600, 0.5)
+            m = Master(b.path, 9600, 0.5 * SCALE)
             m.expect("FDL_Status at 9600 on the pty", m.fdl_status(), status_ok())
             m.close()
             # No client: the master fd reports hang-up all the time; the bridge must not spin.

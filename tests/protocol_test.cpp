@@ -11,6 +11,7 @@
 #include "../emu/dp_master.hpp"
 #include "../emu/dp_services.hpp"
 #include "../emu/responder.hpp"
+#include "../emu/scenario.hpp"
 #include "dpc31/reg_ids.hpp"
 #include "test_util.hpp"
 
@@ -697,6 +698,50 @@ TEST_P(Malformed, GlitchIsABadStartBit) {
   b.master.idle(2000);
   EXPECT_EQ(b.chip.fdl_counters().start_bit, 1u);
   EXPECT_TRUE(b.master.data_exchange({1, 2, 3, 4}).answer);
+}
+
+// Counters that differ between two snapshots, "name:before->after" (empty: none).
+std::string changed(const FdlCounters& a, const FdlCounters& b) {
+  std::string out;
+  for (const CounterField& f : fdl_counter_fields()) {
+    if (a.*f.member != b.*f.member) {
+      out += std::string(f.name) + ":" + std::to_string(a.*f.member) + "->" +
+             std::to_string(b.*f.member) + " ";
+    }
+  }
+  return out;
+}
+
+TEST_P(Malformed, GlitchCountsOnlyItsStartBit) {
+  Bench b(GetParam(), 12'000'000);
+  ASSERT_TRUE(b.master.startup());
+  const FdlCounters before = b.chip.fdl_counters();
+  // The character sampled from a glitch also reads 1 for its parity bit (data FFh, parity 1:
+  // odd). One count per character, the first error sampled: the start bit.
+  b.master.glitch(1);
+  b.master.idle(2000);
+  EXPECT_EQ(changed(before, b.chip.fdl_counters()), "start_bit:0->1 ");
+  EXPECT_TRUE(b.master.data_exchange({1, 2, 3, 4}).answer);
+}
+
+TEST_P(Malformed, TailOfABrokenTelegramIsNotCountedAgain) {
+  Bench b(GetParam(), 12'000'000);
+  ASSERT_TRUE(b.master.startup());
+  // A framing error discards the telegram; its remaining characters (well-formed, without TSYN
+  // before them) are its tail, not a telegram of their own: no no_sync for them.
+  FdlCounters before = b.chip.fdl_counters();
+  const Exchange noise = b.master.transact_raw({0x33, 0x05, 0x02, 0x49, 0x16});
+  EXPECT_FALSE(noise.answer);
+  EXPECT_EQ(changed(before, b.chip.fdl_counters()), "bad_sd:0->1 ");
+  before = b.chip.fdl_counters();
+  Bytes le = fdl::encode(fdl::make_frame(5, 2, 0x7D, {1, 2, 3, 4}));
+  le[2] = static_cast<std::uint8_t>(le[1] + 1);
+  EXPECT_FALSE(b.master.transact_raw(le).answer);
+  EXPECT_EQ(changed(before, b.chip.fdl_counters()), "le_mismatch:0->1 ");
+  // After TSYN the next telegram is heard.
+  before = b.chip.fdl_counters();
+  EXPECT_TRUE(b.master.fdl_status().answer);
+  EXPECT_EQ(changed(before, b.chip.fdl_counters()), "requests:5->6 ");
 }
 
 TEST_P(Malformed, RequestWithoutTsynIsIgnored) {

@@ -16,6 +16,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <optional>
 #include <stdexcept>
@@ -30,6 +31,14 @@ extern char** environ;
 namespace testutil {
 
 inline constexpr int kDefaultTimeoutMs = 10'000;
+
+// Wall-clock limits are multiplied by DPC31_TIMEOUT_SCALE; only the sanitizer build
+// (CMakePresets.json, asan) sets it above 1 (docs/sanitizers.md).
+inline int scaled_ms(int ms) {
+  const char* s = std::getenv("DPC31_TIMEOUT_SCALE");
+  const double f = s != nullptr ? std::atof(s) : 1.0;
+  return f > 1.0 ? static_cast<int>(ms * f) : ms;
+}
 
 // `dpc31 serve ARGS...` with its stdout on a pipe; the constructor waits for the "listening"
 // lines (one per endpoint asked for).
@@ -79,7 +88,8 @@ class ServerProcess {
   // The exit code (-signal if killed), or kRunning if it has not exited within `timeout_ms`.
   int wait_exit(int timeout_ms) {
     if (exited_) return status_;
-    const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
+    const auto until =
+        std::chrono::steady_clock::now() + std::chrono::milliseconds(scaled_ms(timeout_ms));
     for (;;) {
       int st = 0;
       const pid_t r = ::waitpid(pid_, &st, WNOHANG);
@@ -102,7 +112,8 @@ class ServerProcess {
     std::string line;
     for (;;) {
       pollfd pfd{out_fd_, POLLIN, 0};
-      if (::poll(&pfd, 1, timeout_ms) <= 0) throw std::runtime_error("server printed nothing");
+      if (::poll(&pfd, 1, scaled_ms(timeout_ms)) <= 0)
+        throw std::runtime_error("server printed nothing");
       char ch = 0;
       const ssize_t n = ::read(out_fd_, &ch, 1);
       if (n <= 0) return std::nullopt;
@@ -229,7 +240,7 @@ class LineClient {
 
  private:
   static std::chrono::steady_clock::time_point deadline(int ms) {
-    return std::chrono::steady_clock::now() + std::chrono::milliseconds(ms);
+    return std::chrono::steady_clock::now() + std::chrono::milliseconds(scaled_ms(ms));
   }
   void wait_for(short ev, std::chrono::steady_clock::time_point until, const char* what) const {
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(

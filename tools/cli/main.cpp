@@ -19,6 +19,7 @@
 #include "replay.hpp"
 #include "run.hpp"
 #include "serve.hpp"
+#include "soak.hpp"
 #include "wavediff_cli.hpp"
 
 namespace {
@@ -139,6 +140,10 @@ int main(int argc, char** argv) {
   dpc31::cli::BenchArgs bench_args;
   auto* bench = dpc31::cli::add_bench_subcommand(app, bench_args);
 
+  // dpc31 soak: a long run with injected faults, counters checked exactly (docs/soak.md).
+  dpc31::soak::Options soak_opt;
+  auto* soak = dpc31::soak::add_subcommand(app, soak_opt);
+
   // Bad input is one line, "dpc31 SUBCOMMAND: what", and exit 2 (docs/bad-input.md).
   const auto refuse = [&app](std::string what) {
     std::string where = "dpc31";
@@ -148,6 +153,7 @@ int main(int argc, char** argv) {
     fmt::print(stderr, "{}: {}\n", where, what);
     return 2;
   };
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -156,6 +162,7 @@ int main(int argc, char** argv) {
   }
 
   const auto dispatch = [&]() -> int {
+    if (soak->parsed()) return dpc31::soak::run_cli(soak_opt, stdout, stderr);
     if (bench->parsed()) return dpc31::cli::run_bench(bench_args, stdout, stderr);
     if (serve->parsed()) return dpc31::cli::run_serve(serve_args, stdout, stderr);
     if (bridge->parsed()) return dpc31::cli::run_bridge(bridge_opt, stdout, stderr);

@@ -1,0 +1,152 @@
+// dpc31 soak (docs/soak.md): short soaks with every kind of fault, the counters matched exactly;
+// and faults injected behind the check's back, which it must notice.
+#include "soak.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <tuple>
+
+#include "run_command.hpp"
+
+namespace {
+
+using dpc31::soak::Fault;
+using dpc31::soak::Options;
+using dpc31::soak::Result;
+
+// The rows that do not match, name -> actual - expected.
+std::map<std::string, std::int64_t> mismatches(const Result& r) {
+  std::map<std::string, std::int64_t> m;
+  for (const auto& row : r.rows) {
+    if (!row.ok()) {
+      m[row.name] = static_cast<std::int64_t>(row.actual) - static_cast<std::int64_t>(row.expected);
+    }
+  }
+  return m;
+}
+
+std::uint64_t row(const Result& r, const std::string& name, bool actual) {
+  for (const auto& x : r.rows) {
+    if (x.name == name) return actual ? x.actual : x.expected;
+  }
+  ADD_FAILURE() << "no row " << name;
+  return 0;
+}
+
+std::uint64_t injected(const Result& r, Fault f) { return r.injected[static_cast<std::size_t>(f)]; }
+
+class ShortSoak : public ::testing::TestWithParam<std::tuple<std::string, std::uint32_t>> {};
+
+TEST_P(ShortSoak, EveryCounterAccountsExactlyForTheInjectedFaults) {
+  Options o;
+  o.profile = std::get<0>(GetParam());
+  o.baud = std::get<1>(GetParam());
+  o.cycles = 20'000'000;
+  o.fault_period = 500'000;
+  o.seed = 7;
+  const Result r = dpc31::soak::run(o);
+  EXPECT_TRUE(r.ok());
+  EXPECT_EQ(mismatches(r), (std::map<std::string, std::int64_t>{}));
+  EXPECT_GE(r.cycles, o.cycles);
+  // Each kind was injected (twice at least), and the counters of its class moved by exactly that.
+  for (std::size_t k = 0; k < dpc31::soak::kFaultKinds; ++k) {
+    EXPECT_GE(r.injected[k], 2u) << dpc31::soak::fault_name(static_cast<Fault>(k));
+  }
+  EXPECT_EQ(row(r, "chip.parity", true), injected(r, Fault::parity));
+  EXPECT_EQ(row(r, "chip.stop_bit", true), injected(r, Fault::stop));
+  EXPECT_EQ(row(r, "chip.start_bit", true), injected(r, Fault::glitch));
+  EXPECT_EQ(row(r, "chip.bad_sd", true), injected(r, Fault::noise));
+  EXPECT_EQ(row(r, "chip.no_sync", true), injected(r, Fault::noise_sync));
+  EXPECT_EQ(row(r, "chip.not_allowed", true), injected(r, Fault::cable));
+  EXPECT_EQ(row(r, "firmware.wd_timeouts", true), injected(r, Fault::cable));
+  EXPECT_EQ(row(r, "firmware.prm_accepted", true),
+            injected(r, Fault::cable) + injected(r, Fault::restart));
+  EXPECT_EQ(row(r, "master.no_answer", true),
+            injected(r, Fault::parity) + injected(r, Fault::stop));
+  EXPECT_GT(r.exchanges, 0u);
+  EXPECT_GT(r.rss_start_kib, 0u);
+  EXPECT_GT(r.rss_end_kib, 0u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Profiles, ShortSoak,
+                         ::testing::Values(std::make_tuple("dpc31", 1'500'000u),
+                                           std::make_tuple("spc3", 12'000'000u),
+                                           std::make_tuple("vpc3plus", 187'500u)),
+                         [](const auto& i) {
+                           return std::get<0>(i.param) + "_" + std::to_string(std::get<1>(i.param));
+                         });
+
+Options small() {
+  Options o;
+  o.cycles = 6'000'000;
+  o.fault_period = 500'000;
+  o.seed = 3;
+  return o;
+}
+
+TEST(SoakCheck, NoticesAnUnaccountedGlitch) {
+  Options o = small();
+  o.unaccounted = "glitch";
+  const Result r = dpc31::soak::run(o);
+  EXPECT_FALSE(r.ok());
+  EXPECT_EQ(mismatches(r),
+            (std::map<std::string, std::int64_t>{{"chip.start_bit", 1}, {"master.noise", 1}}));
+}
+
+TEST(SoakCheck, NoticesAnUnaccountedPulledCable) {
+  Options o = small();
+  o.unaccounted = "cable";
+  const Result r = dpc31::soak::run(o);
+  EXPECT_FALSE(r.ok());
+  EXPECT_EQ(mismatches(r), (std::map<std::string, std::int64_t>{{"chip.not_allowed", 1},
+                                                                {"master.recoveries", 1},
+                                                                {"firmware.wd_timeouts", 1},
+                                                                {"firmware.prm_accepted", 1},
+                                                                {"firmware.cfg_accepted", 1}}));
+}
+
+TEST(SoakCheck, NoticesAnUnaccountedDamagedRequest) {
+  Options o = small();
+  o.unaccounted = "parity";
+  const Result r = dpc31::soak::run(o);
+  EXPECT_EQ(mismatches(r),
+            (std::map<std::string, std::int64_t>{
+                {"chip.parity", 1}, {"chip.requests", -1}, {"master.no_answer", 1}}));
+}
+
+TEST(SoakCli, ReportsTheTableAndExitCodes) {
+  const std::string json = (std::filesystem::temp_directory_path() /
+                            ("dpc31-soak-test-" + std::to_string(getpid()) + ".json"))
+                               .string();
+  const std::string cmd = std::string(DPC31_CLI) +
+                          " soak --cycles 4000000 --fault-period 400000 --seed 5 --json " + json;
+  const testutil::CommandResult ok = testutil::run_command(cmd + " 2>&1");
+  EXPECT_EQ(ok.rc, 0) << ok.out;
+  EXPECT_NE(ok.out.find("result: every counter accounts exactly for the injected faults"),
+            std::string::npos)
+      << ok.out;
+  EXPECT_NE(ok.out.find("VmRSS: "), std::string::npos);
+  std::ifstream in(json);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(j.at("ok"), true);
+  EXPECT_GE(j.at("cycles").get<std::uint64_t>(), 4'000'000u);
+  EXPECT_EQ(j.at("counters").size(), 20u + 10u);  // every FdlCounters field, master, firmware, data
+  std::filesystem::remove(json);
+
+  const testutil::CommandResult bad = testutil::run_command(cmd + " --unaccounted-fault stop 2>&1");
+  EXPECT_EQ(bad.rc, 1) << bad.out;
+  EXPECT_NE(bad.out.find("chip.stop_bit"), std::string::npos);
+  EXPECT_NE(bad.out.find("MISMATCH"), std::string::npos);
+  std::filesystem::remove(json);
+
+  EXPECT_EQ(testutil::run_command(std::string(DPC31_CLI) + " soak --baud 1234 2>/dev/null").rc, 2);
+}
+
+}  // namespace

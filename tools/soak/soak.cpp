@@ -1,0 +1,430 @@
+#include "soak.hpp"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <chrono>
+#include <deque>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <stdexcept>
+
+#include "../../emu/dp_master.hpp"
+#include "../../emu/dp_services.hpp"
+#include "../../emu/responder.hpp"
+#include "../../emu/scenario.hpp"
+#include "dpc31/chip.hpp"
+#include "outfile.hpp"
+
+namespace dpc31::soak {
+
+namespace {
+
+constexpr std::uint32_t kRetries = 1;  // a request without an answer is sent once more
+constexpr std::uint64_t kTries = 200;  // start-up and restart give up after this many
+constexpr std::uint8_t kSlave = 5;
+constexpr std::uint8_t kMaster = 2;
+const std::vector<std::uint8_t> kInputs = {0x11, 0x22, 0x33, 0x44};
+
+constexpr std::array<Fault, kFaultKinds> kAll = {Fault::noise,  Fault::noise_sync, Fault::glitch,
+                                                 Fault::parity, Fault::stop,       Fault::cable,
+                                                 Fault::restart};
+
+// TWD on the 10 ms base: at least 20 ms and 4000 bit times (about ten Data_Exchange cycles), so
+// the watchdog never expires while the master is talking.
+std::uint32_t twd_ms(std::uint32_t baud) {
+  const std::uint64_t need = std::max<std::uint64_t>(20, (4000ull * 1000 + baud - 1) / baud);
+  return static_cast<std::uint32_t>(std::min<std::uint64_t>((need + 9) / 10, 255) * 10);
+}
+
+class Soak {
+ public:
+  explicit Soak(const Options& o)
+      : o_(o), rc_(responder_config(o)), chip_(chip_options(o)), user_(rc_), rng_(o.seed) {
+    user_.inputs = kInputs;
+    DirectBus bus(chip_);
+    user_.init(bus);
+    MasterConfig mc;
+    mc.address = kMaster;
+    mc.baud = o.baud;
+    master_ = std::make_unique<DpMaster>(chip_, mc, rc_.slave);
+    master_->set_firmware([this](BusPort& b) { user_.isr(b); });
+    t_ = master_->bit_cycles();
+    twd_ = std::uint64_t{twd_ms(o.baud)} * chip_.clock_hz() / 1000;
+  }
+
+  Result run() {
+    if (!master_->startup(static_cast<int>(kTries))) {
+      throw std::runtime_error("the first start-up did not reach Data_Exchange");
+    }
+    // The baud search counts the garbage it hears at wrong rates: the baseline is after it.
+    const FdlCounters chip0 = chip_.fdl_counters();
+    const MasterCounters master0 = master_->counters();
+    const std::uint32_t prm0 = user_.prm_accepted;
+    const std::uint32_t cfg0 = user_.cfg_accepted;
+    const std::uint32_t rej0 = user_.cfg_rejected;
+    collect();
+    Result r;
+    r.first_cycle = chip_.cycle();
+    r.clock_hz = chip_.clock_hz();
+    r.twd_ms = twd_ms(o_.baud);
+    r.rss_start_kib = resident_kib();
+    const auto wall0 = std::chrono::steady_clock::now();
+
+    bool unaccounted_pending = !o_.unaccounted.empty();
+    std::array<Fault, kFaultKinds> round = kAll;
+    std::size_t next_in_round = kFaultKinds;
+    std::uint64_t next_fault = chip_.cycle() + o_.fault_period;
+    while (chip_.cycle() < o_.cycles) {
+      if (chip_.cycle() < next_fault) {
+        exchange();
+        continue;
+      }
+      if (unaccounted_pending) {  // this slot's fault, deliberately not counted in injected_
+        unaccounted_pending = false;
+        inject(parse_fault(o_.unaccounted));
+        next_fault = chip_.cycle() + o_.fault_period;
+        continue;
+      }
+      if (next_in_round == kFaultKinds) {  // every kind once per round, in a random order
+        std::shuffle(round.begin(), round.end(), rng_);
+        next_in_round = 0;
+      }
+      const Fault f = round[next_in_round++];
+      ++injected_[static_cast<std::size_t>(f)];
+      inject(f);
+      next_fault = chip_.cycle() + o_.fault_period;
+    }
+    // A last exchange, so that the slave lost to a fault just before the end is recovered and
+    // counted as such.
+    exchange();
+
+    r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+    r.rss_end_kib = resident_kib();
+    r.cycles = chip_.cycle();
+    r.exchanges = exchanges_;
+    r.injected = injected_;
+    const auto n = [this](Fault f) { return injected_[static_cast<std::size_t>(f)]; };
+    const std::uint64_t damaged = n(Fault::parity) + n(Fault::stop);
+    const MasterCounters& m = master_->counters();
+    // The chip: each counter grew by exactly what was injected of its class, nothing else.
+    const FdlCounters& c = chip_.fdl_counters();
+    for (const CounterField& f : fdl_counter_fields()) {
+      std::uint64_t expected = 0;
+      const std::string_view name = f.name;
+      if (name == "parity") expected = n(Fault::parity);
+      if (name == "stop_bit") expected = n(Fault::stop);
+      if (name == "start_bit") expected = n(Fault::glitch);
+      if (name == "bad_sd") expected = n(Fault::noise);
+      if (name == "no_sync") expected = n(Fault::noise_sync);
+      if (name == "not_allowed") expected = n(Fault::cable);  // the first Data_Exchange: RS
+      if (name == "requests") expected = (m.requests - master0.requests) - damaged;
+      r.rows.push_back({"chip." + std::string(name), expected, c.*f.member - chip0.*f.member});
+    }
+    r.rows.push_back({"master.no_answer", damaged, m.no_answer - master0.no_answer});
+    r.rows.push_back({"master.bad_answer", 0, m.bad_answer - master0.bad_answer});
+    r.rows.push_back({"master.noise", n(Fault::noise) + n(Fault::noise_sync) + n(Fault::glitch),
+                      m.noise - master0.noise});
+    r.rows.push_back({"master.recoveries", n(Fault::cable), recoveries_});
+    r.rows.push_back({"firmware.wd_timeouts", n(Fault::cable), wd_timeouts_});
+    r.rows.push_back(
+        {"firmware.prm_accepted", n(Fault::cable) + n(Fault::restart), user_.prm_accepted - prm0});
+    r.rows.push_back(
+        {"firmware.cfg_accepted", n(Fault::cable) + n(Fault::restart), user_.cfg_accepted - cfg0});
+    r.rows.push_back({"firmware.cfg_rejected", 0, user_.cfg_rejected - rej0});
+    r.rows.push_back({"data.wrong_inputs", 0, wrong_inputs_});
+    r.rows.push_back({"data.wrong_outputs", 0, wrong_outputs_});
+    return r;
+  }
+
+ private:
+  static ChipOptions chip_options(const Options& o) {
+    ChipOptions co;
+    if (!parse_profile(o.profile, co.profile)) {
+      throw std::invalid_argument("unknown profile '" + o.profile + "'");
+    }
+    if (baud_code(o.baud) < 0) throw std::invalid_argument("unsupported baud rate");
+    return co;
+  }
+
+  // Not inlined: GCC 12 warns maybe-uninitialized about SlaveConfig's vector initialiser when it
+  // is (a false positive).
+  [[gnu::noinline]] static ResponderConfig responder_config(const Options& o) {
+    ResponderConfig rc;
+    rc.slave.address = kSlave;
+    rc.slave.wd_on = true;
+    rc.slave.wd_fact1 = static_cast<std::uint8_t>(twd_ms(o.baud) / 10);
+    rc.slave.wd_fact2 = 1;
+    // The user watchdog is armed at init (511 Data_Exchange): a firmware that arms it feeds it.
+    rc.user_watchdog = true;
+    return rc;
+  }
+
+  static Fault parse_fault(const std::string& s) {
+    for (Fault f : kAll) {
+      if (s == fault_name(f)) return f;
+    }
+    throw std::invalid_argument("unknown fault '" + s + "'");
+  }
+
+  std::uint32_t below(std::uint32_t n) {
+    return static_cast<std::uint32_t>(std::uniform_int_distribution<std::uint32_t>(0, n - 1)(rng_));
+  }
+  std::vector<std::uint8_t> random_bytes(std::size_t n) {
+    std::vector<std::uint8_t> b(n);
+    for (std::uint8_t& x : b) x = static_cast<std::uint8_t>(below(256));
+    return b;
+  }
+
+  // One Data_Exchange with new outputs (a running number), repeated once without an answer.
+  void exchange(UartFault fault = {}) {
+    ++sent_count_;
+    const std::vector<std::uint8_t> out = {
+        static_cast<std::uint8_t>(sent_count_ >> 24), static_cast<std::uint8_t>(sent_count_ >> 16),
+        static_cast<std::uint8_t>(sent_count_ >> 8), static_cast<std::uint8_t>(sent_count_)};
+    pending_.push_back(out);
+    const Exchange ex = master_->retry(master_->data_exchange(out, fault), kRetries);
+    const bool data = ex.answer && !ex.answer->du.empty();
+    if (data) {
+      ++exchanges_;
+      if (ex.answer->du != kInputs) ++wrong_inputs_;
+    }
+    if (ex.answer_end != 0) {
+      // Until the master could send again: the firmware has handled what this exchange raised.
+      const std::uint64_t free = ex.answer_end + std::uint64_t{33} * t_;
+      if (free > chip_.cycle()) master_->idle(free - chip_.cycle());
+    }
+    collect();
+    if (!data) {  // RS (the slave left Data_Exchange) or nothing at all: start over
+      ++recoveries_;
+      master_->restart(kTries, kRetries);
+      collect();
+    }
+  }
+
+  void inject(Fault f) {
+    switch (f) {
+      case Fault::noise: {
+        std::vector<std::uint8_t> b = random_bytes(1 + below(8));
+        while (b[0] == fdl::SD1 || b[0] == fdl::SD2 || b[0] == fdl::SD3 || b[0] == fdl::SD4 ||
+               b[0] == fdl::SC) {
+          b[0] = static_cast<std::uint8_t>(below(256));
+        }
+        master_->line_noise(b, 33 + below(64));
+        break;
+      }
+      case Fault::noise_sync: {
+        // A token between two other stations, then noise right after it (less than TSYN).
+        std::vector<std::uint8_t> b = {fdl::SD4, 9, 3};
+        const std::vector<std::uint8_t> tail = random_bytes(1 + below(8));
+        b.insert(b.end(), tail.begin(), tail.end());
+        master_->line_noise(b, 33 + below(64));
+        break;
+      }
+      case Fault::glitch:
+        master_->glitch(1 + below(std::max<std::uint32_t>(1, t_ / 2 - 1)));
+        break;
+      case Fault::parity:
+      case Fault::stop: {
+        UartFault u;
+        u.kind = f == Fault::parity ? UartFault::Kind::parity : UartFault::Kind::stop;
+        u.char_index = static_cast<int>(below(13));  // SD2 with 4 output bytes: 13 characters
+        exchange(u);
+        return;
+      }
+      case Fault::cable:
+        master_->idle(twd_ + twd_ / 4);
+        break;
+      case Fault::restart:
+        master_->idle(twd_ / 4);
+        master_->restart(kTries, kRetries);
+        break;
+    }
+    collect();
+  }
+
+  // Reads and forgets what the firmware and the master recorded, so memory stays flat.
+  void collect() {
+    for (const auto& [cycle, ir] : user_.interrupts) {
+      if ((ir & irq::WD_DP_Control_Timeout) != 0) ++wd_timeouts_;
+    }
+    user_.interrupts.clear();
+    // Every fetched output must be one the master sent, in order (cleared ones are zeros).
+    for (const Responder::Output& o : user_.outputs) {
+      if (o.cleared) continue;
+      while (!pending_.empty() && pending_.front() != o.data) pending_.pop_front();
+      if (pending_.empty()) {
+        ++wrong_outputs_;
+      } else {
+        pending_.pop_front();
+      }
+    }
+    user_.outputs.clear();
+    if (pending_.size() > 2) pending_.erase(pending_.begin(), pending_.end() - 2);
+    master_->clear_history();
+  }
+
+  const Options& o_;
+  const ResponderConfig rc_;
+  Chip chip_;
+  Responder user_;
+  std::unique_ptr<DpMaster> master_;
+  std::mt19937_64 rng_;
+  std::uint32_t t_ = 0;
+  std::uint64_t twd_ = 0;
+  std::array<std::uint64_t, kFaultKinds> injected_{};
+  std::uint64_t sent_count_ = 0;
+  std::deque<std::vector<std::uint8_t>> pending_;  // outputs sent, not yet seen fetched
+  std::uint64_t exchanges_ = 0;
+  std::uint64_t recoveries_ = 0;
+  std::uint64_t wd_timeouts_ = 0;
+  std::uint64_t wrong_inputs_ = 0;
+  std::uint64_t wrong_outputs_ = 0;
+};
+
+}  // namespace
+
+const char* fault_name(Fault f) {
+  switch (f) {
+    case Fault::noise:
+      return "noise";
+    case Fault::noise_sync:
+      return "noise_sync";
+    case Fault::glitch:
+      return "glitch";
+    case Fault::parity:
+      return "parity";
+    case Fault::stop:
+      return "stop";
+    case Fault::cable:
+      return "cable";
+    case Fault::restart:
+      return "restart";
+  }
+  return "?";
+}
+
+bool Result::ok() const {
+  return std::all_of(rows.begin(), rows.end(), [](const Row& r) { return r.ok(); });
+}
+
+std::uint64_t resident_kib() {
+  std::ifstream in("/proc/self/status");
+  std::string key;
+  while (in >> key) {
+    if (key == "VmRSS:") {
+      std::uint64_t kib = 0;
+      in >> kib;
+      return kib;
+    }
+    in.ignore(1 << 16, '\n');
+  }
+  return 0;
+}
+
+Result run(const Options& o) { return Soak(o).run(); }
+
+CLI::App* add_subcommand(CLI::App& app, Options& o) {
+  auto* s = app.add_subcommand(
+      "soak", "a long Data_Exchange run with injected faults; every error counter must match");
+  // Counts of cycles may be written 1e9 (parsed as a number, then taken whole).
+  const auto cycles = [s](const char* name, std::uint64_t& v, const char* what) {
+    s->add_option_function<double>(
+         name, [&v](double d) { v = static_cast<std::uint64_t>(d); },
+         fmt::format("{} (default {})", what, v))
+        ->check(CLI::Range(1.0, 1e15));
+  };
+  cycles("--cycles", o.cycles, "run until the chip's cycle counter reaches this");
+  s->add_option("--profile", o.profile, "chip profile")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"spc3", "vpc3plus", "dpc31"}));
+  s->add_option("--baud", o.baud, "bus baud rate")
+      ->capture_default_str()
+      ->check(
+          CLI::IsMember(std::vector<std::uint32_t>(std::begin(kBaudRates), std::end(kBaudRates))));
+  cycles("--fault-period", o.fault_period,
+         "cycles of undisturbed Data_Exchange between two injected faults");
+  s->add_option("--seed", o.seed, "seed of the fault order and the noise bytes")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);  // CLI11 would take "-1" as 2^64 - 1
+  s->add_option("--json", o.json, "write the result as JSON to this file");
+  std::vector<std::string> kinds;
+  for (Fault f : kAll) kinds.emplace_back(fault_name(f));
+  s->add_option("--unaccounted-fault", o.unaccounted,
+                "inject one extra fault of this kind without accounting for it (the check must "
+                "then fail; for testing the check)")
+      ->check(CLI::IsMember(kinds));
+  return s;
+}
+
+int run_cli(const Options& o, std::FILE* out, std::FILE* err) {
+  // The JSON report appears whole or not at all, and a bad path fails before the run
+  // (docs/bad-input.md).
+  outfile::OutFile json_out;
+  if (!o.json.empty() && !json_out.open(o.json)) {
+    fmt::print(err, "dpc31 soak: {}\n", json_out.error());
+    return 2;
+  }
+  Result r;
+  try {
+    r = run(o);
+  } catch (const std::exception& e) {
+    fmt::print(err, "dpc31 soak: {}\n", e.what());
+    return 2;
+  }
+  fmt::print(out, "dpc31 soak: profile {}, {} baud, TWD {} ms, a fault every {} cycles, seed {}\n",
+             o.profile, o.baud, r.twd_ms, o.fault_period, o.seed);
+  const double hz = r.clock_hz;
+  fmt::print(out,
+             "cycles {} ({:.3f} s of chip time), {} after the start-up; wall {:.2f} s ({:.1f}x "
+             "real time)\n",
+             r.cycles, static_cast<double>(r.cycles) / hz, r.cycles - r.first_cycle, r.wall_s,
+             static_cast<double>(r.cycles - r.first_cycle) / hz / std::max(r.wall_s, 1e-9));
+  fmt::print(out, "Data_Exchange answered with data: {}\n", r.exchanges);
+  fmt::print(out, "VmRSS: {} KiB after the start-up, {} KiB at the end\n", r.rss_start_kib,
+             r.rss_end_kib);
+  std::string inj;
+  for (Fault f : kAll) {
+    inj += fmt::format("{}{} {}", inj.empty() ? "" : ", ", fault_name(f),
+                       r.injected[static_cast<std::size_t>(f)]);
+  }
+  fmt::print(out, "injected: {}\n\n{:<24} {:>12} {:>12}\n", inj, "counter", "expected", "actual");
+  std::size_t bad = 0;
+  for (const Row& row : r.rows) {
+    fmt::print(out, "{:<24} {:>12} {:>12}{}\n", row.name, row.expected, row.actual,
+               row.ok() ? "" : "  MISMATCH");
+    bad += row.ok() ? 0 : 1;
+  }
+  if (bad == 0) {
+    fmt::print(out, "\nresult: every counter accounts exactly for the injected faults\n");
+  } else {
+    fmt::print(out, "\nresult: {} counter(s) do not match the injected faults\n", bad);
+  }
+  if (!o.json.empty()) {
+    nlohmann::json j;
+    j["profile"] = o.profile;
+    j["baud"] = o.baud;
+    j["seed"] = o.seed;
+    j["fault_period"] = o.fault_period;
+    j["twd_ms"] = r.twd_ms;
+    j["cycles"] = r.cycles;
+    j["first_cycle"] = r.first_cycle;
+    j["wall_s"] = r.wall_s;
+    j["rss_start_kib"] = r.rss_start_kib;
+    j["rss_end_kib"] = r.rss_end_kib;
+    j["exchanges"] = r.exchanges;
+    for (Fault f : kAll) j["injected"][fault_name(f)] = r.injected[static_cast<std::size_t>(f)];
+    for (const Row& row : r.rows) {
+      j["counters"].push_back(
+          {{"name", row.name}, {"expected", row.expected}, {"actual", row.actual}});
+    }
+    j["ok"] = r.ok();
+    if (!json_out.write(j.dump(2) + '\n') || !json_out.commit()) {
+      fmt::print(err, "dpc31 soak: {}\n", json_out.error());
+      return 2;
+    }
+  }
+  return bad == 0 ? 0 : 1;
+}
+
+}  // namespace dpc31::soak
