@@ -7,6 +7,7 @@
 #include <cstdlib>
 
 #include "../../emu/core.hpp"
+#include "../../emu/scenario.hpp"
 
 namespace dpc31::fuzz {
 
@@ -20,18 +21,6 @@ constexpr std::size_t kKeepChars = 300;            // more than the longest fram
 // Gap (whole idle bit times) that certainly ends a telegram: TSYN is 33; one bit of slack for
 // where the chip's receiver counts idle from (its configure cycle may lie half a bit earlier).
 constexpr std::uint64_t kGapEnds = 34;
-
-const char* state_name(DpState s) {
-  switch (s) {
-    case DpState::Wait_Prm:
-      return "Wait_Prm";
-    case DpState::Wait_Cfg:
-      return "Wait_Cfg";
-    case DpState::Data_Exchange:
-      return "Data_Exchange";
-  }
-  return "?";
-}
 
 std::uint8_t sum(const std::uint8_t* b, std::size_t n) {
   unsigned s = 0;
@@ -256,12 +245,12 @@ void InvariantChecker::check_dp() {
   } else {
     why = "is not a documented transition";
   }
-  if (!ok) fail(fmt::format("DP state {} -> {} {}", state_name(was), state_name(now), why));
+  if (!ok) fail(fmt::format("DP state {} -> {} {}", dp_state_name(was), dp_state_name(now), why));
   const bool leaves_offline = was_started && !started;
   if ((was == DpState::Data_Exchange || now == DpState::Data_Exchange) && !leaves_offline &&
       (chip_->peek_reg(RegId::Int_Req_Reg) & kGo_Leave_Data_Exchange) == 0) {
     fail(fmt::format("DP state {} -> {} without Go_Leave_Data_Exchange in Int_Req_Reg",
-                     state_name(was), state_name(now)));
+                     dp_state_name(was), dp_state_name(now)));
   }
 }
 
