@@ -1,5 +1,7 @@
 #include "cpu.hpp"
 
+#include <setjmp.h>
+
 #include <cerrno>
 #include <cstdint>
 #include <system_error>
@@ -37,22 +39,24 @@ struct AsanStack {
 thread_local AsanStack t_bus_stack;
 #endif
 
-// Leaves the running context for `to`, saving it in `from`. `to_stack`/`to_size` is the stack
-// being entered (ASan only).
-void switch_context(ucontext_t& from, const ucontext_t& to, const void* to_stack,
-                    std::size_t to_size) {
+// Tell ASan that the running side leaves for the stack [bottom, bottom + size) (`fake`: where
+// the leaving side's fake stack is kept; nullptr when the leaving side ends), and that it is
+// back (`fake` as saved).
+void leaving(void** fake, const void* bottom, std::size_t size) {
 #ifdef DPC31_ASAN_FIBERS
-  void* fake = nullptr;
-  __sanitizer_start_switch_fiber(&fake, to_stack, to_size);
+  __sanitizer_start_switch_fiber(fake, bottom, size);
 #else
-  (void)to_stack;
-  (void)to_size;
+  (void)fake;
+  (void)bottom;
+  (void)size;
 #endif
-  if (::swapcontext(&from, &to) != 0) {
-    throw std::system_error(errno, std::generic_category(), "swapcontext");
-  }
+}
+
+void back(void* fake) {
 #ifdef DPC31_ASAN_FIBERS
   __sanitizer_finish_switch_fiber(fake, nullptr, nullptr);
+#else
+  (void)fake;
 #endif
 }
 
@@ -65,7 +69,7 @@ Cpu::Cpu(Chip& chip, Isr isr)
   }
   firmware_ctx_.uc_stack.ss_sp = stack_.get();
   firmware_ctx_.uc_stack.ss_size = kStackSize;
-  firmware_ctx_.uc_link = &bus_ctx_;  // body() returning ends up where the bus side switched
+  firmware_ctx_.uc_link = nullptr;  // entry() never returns: it jumps back to the bus side
   // makecontext passes int arguments only: `this` in two halves.
   const auto self = reinterpret_cast<std::uintptr_t>(this);
   ::makecontext(&firmware_ctx_, reinterpret_cast<void (*)()>(&Cpu::entry), 2,
@@ -90,9 +94,11 @@ void Cpu::entry(unsigned hi, unsigned lo) {
   self->body();
   self->finished_ = true;
 #ifdef DPC31_ASAN_FIBERS
-  __sanitizer_start_switch_fiber(nullptr, t_bus_stack.bottom, t_bus_stack.size);
+  leaving(nullptr, t_bus_stack.bottom, t_bus_stack.size);
+#else
+  leaving(nullptr, nullptr, 0);
 #endif
-  // Returning resumes uc_link: the bus side, where it last switched.
+  _longjmp(self->bus_jmp_, 1);
 }
 
 void Cpu::body() {
@@ -113,20 +119,36 @@ void Cpu::body() {
   }
 }
 
+// The switches are QEMU's (util/coroutine-ucontext.c): makecontext gives the coroutine its
+// stack and setcontext enters it the first time; every later switch is _setjmp/_longjmp, which
+// save and restore no signal mask (no system call) and are not swapcontext, which ASan only
+// half supports (it warns on stderr at the first call).
 void Cpu::hand_to_firmware() {
-  started_ = true;
   other_hal_ = hal::exchange_selection(other_hal_);
-  switch_context(bus_ctx_, firmware_ctx_, stack_.get(), kStackSize);
+  void* fake = nullptr;
+  leaving(&fake, stack_.get(), kStackSize);
+  if (_setjmp(bus_jmp_) == 0) {
+    if (!started_) {
+      started_ = true;
+      ::setcontext(&firmware_ctx_);  // returns only on failure
+      throw std::system_error(errno, std::generic_category(), "setcontext");
+    }
+    _longjmp(firmware_jmp_, 1);
+  }
+  back(fake);
   other_hal_ = hal::exchange_selection(other_hal_);
   if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
 }
 
 void Cpu::hand_to_bus_side() {
+  void* fake = nullptr;
 #ifdef DPC31_ASAN_FIBERS
-  switch_context(firmware_ctx_, bus_ctx_, t_bus_stack.bottom, t_bus_stack.size);
+  leaving(&fake, t_bus_stack.bottom, t_bus_stack.size);
 #else
-  switch_context(firmware_ctx_, bus_ctx_, nullptr, 0);
+  leaving(&fake, nullptr, 0);
 #endif
+  if (_setjmp(firmware_jmp_) == 0) _longjmp(bus_jmp_, 1);
+  back(fake);
   if (stop_) throw Stopped{};
 }
 

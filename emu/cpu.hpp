@@ -1,11 +1,12 @@
 // The host CPU that runs firmware against the chip. Firmware is level-triggered on X/INT and
 // makes ordinary bus accesses (4 clocks each); its ISR runs as a coroutine with its own stack on
-// the caller's thread (ucontext), strictly one side at a time, so a run is deterministic and a
-// hand-over costs a context switch in user space, not a wake-up of another thread. The bus side
-// (the DP master) and the firmware interleave at the granularity of one bus access: an ISR never
-// holds the bus side back.
+// the caller's thread (ucontext, then setjmp/longjmp), strictly one side at a time, so a run is
+// deterministic and a hand-over costs a context switch in user space, not a wake-up of another
+// thread. The bus side (the DP master) and the firmware interleave at the granularity of one bus
+// access: an ISR never holds the bus side back.
 #pragma once
 
+#include <setjmp.h>
 #include <ucontext.h>
 
 #include <cstdint>
@@ -78,11 +79,12 @@ class Cpu final : public BusPort {
 
   Chip& chip_;
   Isr isr_;
-  // The coroutine: its stack, its context and the bus side's. in_isr_ and stop_ are set by the
-  // side that hands over, read by the other.
+  // The coroutine: its stack, its first context, and where each side continues. in_isr_ and
+  // stop_ are set by the side that hands over, read by the other.
   std::unique_ptr<char[]> stack_;
   ucontext_t firmware_ctx_{};
-  ucontext_t bus_ctx_{};
+  jmp_buf bus_jmp_{};
+  jmp_buf firmware_jmp_{};
   bool started_ = false;  // the coroutine has run (and holds frames to unwind on destruction)
   bool finished_ = false;
   bool in_isr_ = false;
