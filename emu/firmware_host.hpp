@@ -1,6 +1,7 @@
 // A C firmware (firmware/, firmware.h) on the host CPU of one chip: its init runs as main()
-// with direct bus accesses, its ISR on the host CPU (a coroutine) whenever X/INT is active (cpu.hpp).
-// Every access goes through the C HAL's driver-shaped functions and costs its bus cycles.
+// with direct bus accesses, its ISR on the host CPU (a coroutine) whenever X/INT is active
+// (cpu.hpp). Every access goes through the C HAL's driver-shaped functions and costs its bus
+// cycles.
 //
 // The example firmwares keep their state in C globals, as on silicon: one FirmwareHost per
 // firmware image is alive at a time in a process.
