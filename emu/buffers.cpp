@@ -30,7 +30,10 @@ std::uint16_t new_din(BufferUnit& b) {
 std::uint16_t next_dout(BufferUnit& b) {
   std::uint8_t r = 0;
   if (b.n_cl) {
+    // The substitute values supersede outputs received before the Clear: N is freed unseen.
     b.n_cl = false;
+    b.dout.drop_n();
+    b.n_cleared = false;
     b.c_swap_pending = true;
     b.u_cleared = true;
     r = kState_U_Buffer;
@@ -89,7 +92,9 @@ void install_buffer_hooks(HookTable& h) {
   h[ChipCore::idx(RegId::Diag_Buffer_SM)].read = diag_sm;
   h[ChipCore::idx(RegId::New_Din_Buffer_Cmd)].read = preview<new_din>;
   h[ChipCore::idx(RegId::New_Din_Buffer_Cmd)].command = [](ChipCore& c) {
-    return new_din(c.buffers);
+    const std::uint16_t r = new_din(c.buffers);
+    c.din_handed_over();
+    return r;
   };
   h[ChipCore::idx(RegId::Next_Dout_Buffer_Cmd)].read = preview<next_dout>;
   h[ChipCore::idx(RegId::Next_Dout_Buffer_Cmd)].command = [](ChipCore& c) {
@@ -110,6 +115,7 @@ std::uint32_t ChipCore::buffer_addr(RegId ptr_cell) const {
 
 void ChipCore::dout_received() {
   buffers.dout.d_to_n();
+  buffers.n_cl = false;  // newer real outputs win over a clear the user has not fetched yet
   buffers.n_cleared = false;
   buffers.d_fresh = false;
   raise(irq::DX_Out);
@@ -134,8 +140,9 @@ void ChipCore::failsafe_clear() {
     dout_clear();
     return;
   }
-  // While the user already holds the substitute values, a further clear changes nothing.
-  if (buffers.u_cleared && !buffers.dout_n_pending()) return;
+  // Once per clear: until real outputs arrive, a further clear changes nothing.
+  if (buffers.in_clear) return;
+  buffers.in_clear = true;
   buffers.n_cl = true;
   raise(irq::DX_Out);
 }
@@ -188,6 +195,7 @@ void ChipCore::diag_send_end(bool stat_diag) {
 
 void ChipCore::outputs_received() {
   buffers.d_fresh = true;
+  buffers.in_clear = false;            // the master has left Clear
   if (!dp.sync_mode) dout_received();  // in Sync mode D holds the data until the next Sync
 }
 
@@ -212,7 +220,7 @@ void ring_fields(Ar& ar, S& s) {
 
 template <typename Ar, typename S>
 void fields(Ar& ar, S& s) {
-  static_assert(snap::member_count<BufferUnit>() == 9, "a new member: add it here");
+  static_assert(snap::member_count<BufferUnit>() == 10, "a new member: add it here");
   static_assert(snap::member_count<DiagPair>() == 2, "a new member: add it here");
   ring_fields(ar, s.dout);
   ring_fields(ar, s.din);
@@ -224,6 +232,7 @@ void fields(Ar& ar, S& s) {
   ar(s.n_cl);
   ar(s.d_fresh);
   ar(s.c_swap_pending);
+  ar(s.in_clear);
 }
 
 // D and U always hold a buffer, exactly one of N and F is Nil, no buffer is held twice: the

@@ -37,6 +37,12 @@ struct BufferRing {
     n = 0;
     return true;
   }
+  // The buffer in N is freed unseen (dpc31: outputs older than a Clear).
+  void drop_n() {
+    if (n == 0) return;
+    f = n;
+    n = 0;
+  }
   // Dout: the ASIC passes received outputs on, the user fetches them.
   void d_to_n() { hand_to_n(d); }
   bool n_to_u() { return take_from_n(u); }
@@ -66,6 +72,9 @@ struct BufferUnit {
   bool n_cl = false;       // dpc31: the clear buffer C is due at the next fetch
   bool d_fresh = false;    // D holds outputs not yet passed on (Sync mode holds them there)
   bool c_swap_pending = false;
+  // dpc31: the current clear has been signalled (N_Cl, DX_Out); further Clear_Data and fail-safe
+  // exchanges change nothing until real outputs arrive ("once per clear").
+  bool in_clear = false;
   [[nodiscard]] bool dout_n_pending() const { return dout.n != 0 || n_cl; }
   void reset() { *this = BufferUnit{}; }
 };

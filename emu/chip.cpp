@@ -77,6 +77,10 @@ bool Chip::x_int_pin() const {
   return core_->mode0(kINT_Pol) ? core_->irq_active() : !core_->irq_active();
 }
 bool Chip::irq_active() const { return core_->irq_active(); }
+bool Chip::pb3_pin() const { return core_->pb3; }
+void Chip::on_pb3_change(std::function<void(std::uint64_t, bool)> cb) {
+  core_->pb3_observer.add(std::move(cb));
+}
 bool Chip::started() const { return core_->started; }
 DpState Chip::dp_state() const { return core_->dp.state; }
 WdState Chip::wd_state() const { return core_->timers.wd; }
@@ -116,7 +120,7 @@ namespace {
 // configuration into the header, attachments into move_attachments.
 #if defined(__x86_64__) && defined(__GLIBCXX__)
 constexpr std::size_t round8(std::size_t n) { return (n + 7) / 8 * 8; }
-static_assert(sizeof(ChipCore) - 2 * round8(sizeof(ChipCore::latch)) - sizeof(HookTable) == 1240,
+static_assert(sizeof(ChipCore) - 2 * round8(sizeof(ChipCore::latch)) - sizeof(HookTable) == 1280,
               "a new member of ChipCore: see the comment above");
 #endif
 
@@ -135,6 +139,7 @@ void core_fields(Ar& ar, C& c) {
   ar(c.written_bits);
   ar(c.diag_in_flight);
   ar(c.irq_line);
+  ar(c.pb3);
   // Each engine keeps its timers its own way: a snapshot loads into a chip of the same engine.
   Engine engine = c.engine;
   ar.bounded(engine, Engine::per_cycle);
@@ -166,6 +171,7 @@ snap::Header header_of(const ChipCore& c) {
 void move_attachments(ChipCore& from, ChipCore& to) noexcept {
   to.sink = std::move(from.sink);
   to.irq_observer = std::move(from.irq_observer);
+  to.pb3_observer = std::move(from.pb3_observer);
   to.txd_observer = std::move(from.txd_observer);
   to.rxd_observer = std::move(from.rxd_observer);
   to.telegram_observer = std::move(from.telegram_observer);

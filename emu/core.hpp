@@ -119,6 +119,15 @@ struct ChipCore {
     if (block_observer) block_observer(now, BlockEvent{k, value, data});
   }
   bool irq_line = false;  // last computed interrupt activity (for change notifications)
+  // dpc31 port PB3 with Enable_DX_Out_Port (C31_Control bit 0): high from the DX_Out of a
+  // Global_Control with Sync until the user acknowledges DX_Out (seed 003, p.32).
+  bool pb3 = false;
+  Observers<std::uint64_t, bool> pb3_observer;
+  void set_pb3(bool level) {
+    if (pb3 == level) return;
+    pb3 = level;
+    if (pb3_observer) pb3_observer(now, level);
+  }
 
   // --- register file (regfile.cpp) ---
   void reset();
@@ -225,6 +234,9 @@ struct ChipCore {
   void global_control(const fdl::Frame& req);
   void apply_global_control(std::uint8_t command);
   void prm_accepted();
+  void din_handed_over();
+  // VPC3+ DX_Int_Mode / DX_Int_Mode_2: whether these received outputs raise DX_Out.
+  bool dx_out_wanted(std::span<const std::uint8_t> outputs);  // New_Din_Buffer_Cmd: the SPC3's delayed entry into Data_Exchange
   void prm_fault();
   void cfg_accepted();
   bool user_watchdog_tick();
@@ -239,7 +251,11 @@ struct ChipCore {
 
   // --- watchdogs (watchdog.cpp) ---
   void watchdog_parameterise(bool wd_on, std::uint8_t f1, std::uint8_t f2, bool base_1ms);
-  void watchdog_retrigger();  // an error-free telegram to our address
+  // An error-free telegram from `master` to our address: Baud_Control restarts for any station,
+  // DP_Control only for the locking master (Master_Add).
+  void watchdog_retrigger(std::uint8_t master);
+  // Unlocked (Set_Prm Unlock_Req): no master to monitor, DP_Control -> Baud_Control.
+  void watchdog_release();
   void watchdog_expired();
   void baud_found(std::uint8_t code);
   [[nodiscard]] bool mode0(std::uint16_t bit) const {

@@ -205,7 +205,10 @@ Exchange DpMaster::set_prm(std::uint8_t station_status_extra) {
   if (slave_.wd_on) status |= 0x08;
   if (slave_.freeze_req) status |= 0x10;
   if (slave_.sync_req) status |= 0x20;
-  status |= station_status_extra;
+  return set_prm_status(static_cast<std::uint8_t>(status | station_status_extra));
+}
+
+Exchange DpMaster::set_prm_status(std::uint8_t status) {
   std::vector<std::uint8_t> du = {status,
                                   slave_.wd_fact1,
                                   slave_.wd_fact2,

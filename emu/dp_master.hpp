@@ -129,6 +129,8 @@ class DpMaster {
   Exchange fdl_status();
   Exchange slave_diag();
   Exchange set_prm(std::uint8_t station_status_extra = 0);
+  // Set_Prm with this Station_Status byte as it is (Lock_Req / Unlock_Req as given).
+  Exchange set_prm_status(std::uint8_t station_status);
   Exchange chk_cfg();
   Exchange get_cfg();
   Exchange data_exchange(const std::vector<std::uint8_t>& outputs, UartFault fault = {});

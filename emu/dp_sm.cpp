@@ -49,9 +49,24 @@ void prm_done(ChipCore& c, Verdict v) {
   c.dp.prm_fault = v == Verdict::not_ok;
   if (v == Verdict::not_ok) {
     c.leave_master();
-  } else if (c.dp.state == DpState::Wait_Prm) {
-    c.dp.state = DpState::Wait_Cfg;
+    return;
   }
+  // The parameters are accepted: the DP watchdog runs with the new TWD from now on.
+  c.watchdog_parameterise(c.dp.prm_wd_on, c.dp.prm_wd_fact1, c.dp.prm_wd_fact2, c.dp.prm_wd_1ms);
+  if (c.dp.state == DpState::Wait_Prm) c.dp.state = DpState::Wait_Cfg;
+}
+
+// SPC3 p.31: "the transition to 'DATA_EX' takes place immediately, if no Din_buffer is present
+// (R_Len_Din_Puf = 00H) ..." — otherwise (the sentence is cut off in every copy; modelled) at
+// the user's next New_Din_Buffer_Cmd, so the first answer in Data_Exchange carries the user's
+// inputs. VPC3+ and DPC31: at once.
+void enter_data_exchange(ChipCore& c) {
+  if (c.prof->id == Profile::spc3 && c.cell(RegId::R_Len_Din_Buf) != 0) {
+    c.dp.dx_on_new_din = true;
+    return;
+  }
+  c.dp.state = DpState::Data_Exchange;
+  c.raise(irq::Go_Leave_Data_Exchange);
 }
 
 void cfg_done(ChipCore& c, Verdict v) {
@@ -65,10 +80,7 @@ void cfg_done(ChipCore& c, Verdict v) {
     // Get_Cfg answers the new configuration from now on.
     c.swap_cells(RegId::R_Cfg_Buf_Ptr, RegId::R_Read_Cfg_Buf_Ptr);
   }
-  if (c.dp.state == DpState::Wait_Cfg) {
-    c.dp.state = DpState::Data_Exchange;
-    c.raise(irq::Go_Leave_Data_Exchange);
-  }
+  if (c.dp.state == DpState::Wait_Cfg) enter_data_exchange(c);
 }
 
 template <Handshake DpStateMachine::*Which, void (*Done)(ChipCore&, Verdict), Verdict V,
@@ -175,11 +187,28 @@ std::optional<fdl::Frame> ChipCore::dp_service(const fdl::Frame& req) {
   if (!broadcast && fdl::fcv(req.fc) && dp.fcb_valid && dp.last_master == req.sa &&
       dp.last_fcb == fdl::fcb(req.fc) && !dp.last_response.empty()) {
     ++counters.repeated;
+    // SPC3 p.36 (Rd_Outp: "If there is a buffer change from 'N' to 'U' ... between the first
+    // call-up and the repetition, the new output data is sent during the repetition") and
+    // DPC31 p.33 (Rd_Inp, U -> N -> D): these two answer from the buffers as they are now.
+    if (req.dsap &&
+        (fdl::sap_number(*req.dsap) == sap::Rd_Inp || fdl::sap_number(*req.dsap) == sap::Rd_Outp)) {
+      std::optional<Frame> fresh = read_io(req);
+      if (fresh) dp.last_response = fdl::encode(*fresh);
+      return fresh;
+    }
     return fdl::decode(dp.last_response).frame;
   }
   std::optional<Frame> answer;
   if (fn == fdl::Function::FDL_Status && !req.dsap) {
     answer = short_answer(*this, req, Response::OK);
+  } else if (!mode0(kMode0_DP_Mode)) {
+    // Mode_Reg0: "DP_MODE: 0 = DP_Mode is disabled. 1 = DP_Mode is enabled. SPC3 sets up all
+    // DP_SAPs." Without it no DP SAP (nor Data_Exchange's default SAP) exists: the chip is a
+    // plain FDL station that answers FDL_Status and refuses the rest with RS (modelled).
+    ++counters.unknown_sap;
+    log(LogLevel::info, "request from {} with DP_Mode = 0: no DP SAP set up (RS)", req.sa);
+    if (fn == fdl::Function::SRD_low || fn == fdl::Function::SRD_high)
+      answer = short_answer(*this, req, Response::RS);
   } else if (fn != fdl::Function::SRD_low && fn != fdl::Function::SRD_high &&
              fn != fdl::Function::SDN_low && fn != fdl::Function::SDN_high) {
     ++counters.unsupported_function;
@@ -235,8 +264,10 @@ std::optional<fdl::Frame> ChipCore::set_prm(const fdl::Frame& req) {
     return fdl::sc();
   }
   const std::uint8_t status = du[0];
-  if (dp.master_add != 0xFF && dp.master_add != req.sa && (status & kLock_Req) != 0) {
-    ++counters.not_allowed;  // locked by another master: its diag shows Master_Add
+  if (dp.master_add != 0xFF && dp.master_add != req.sa) {
+    // Locked by another master (its diag shows Master_Add): whatever the lock bits say, this
+    // master never re-parameterises, unlocks or changes min TSDR.
+    ++counters.not_allowed;
     log(LogLevel::info, "Set_Prm from master {} while locked by {}: ignored", req.sa,
         dp.master_add);
     return fdl::sc();
@@ -254,9 +285,33 @@ std::optional<fdl::Frame> ChipCore::set_prm(const fdl::Frame& req) {
     fault = "Sync_Req but Sync not supported";
   if ((status & kFreeze_Req) != 0 && !mode0(kMode0_Freeze_Supported))
     fault = "Freeze_Req but Freeze not supported";
+  const bool lock = (status & kLock_Req) != 0;
+  const bool unlock = (status & kUnlock_Req) != 0;
+  // Lock_Req = Unlock_Req = 0 and the unlock codes adopt no parameters: only the Ident_Number
+  // check applies to them.
+  if (!lock || unlock) fault = asked != ident ? "Ident_Number differs" : nullptr;
   if (fault != nullptr) {
     log(LogLevel::info, "Set_Prm from {}: {}: Prm_Fault", req.sa, fault);
     prm_fault();
+    return fdl::sc();
+  }
+  // CP 5613/5614 DP Base manual p.198-199: 00 "The min TSDR is overwritten when parameters are
+  // assigned. All other parameters remain unchanged." (0 keeps it, as for a lock: modelled)
+  if (!lock && !unlock) {
+    if (du[3] != 0) dp.min_tsdr = du[3];
+    log(LogLevel::info, "Set_Prm from {} without Lock_Req / Unlock_Req: min TSDR only", req.sa);
+    return fdl::sc();
+  }
+  // 01 and 11: "released for other masters": the slave leaves this master (Wait_Prm, Master_Add
+  // FFh) and nobody is monitored any more.
+  if (unlock) {
+    log(LogLevel::info, "Set_Prm from {} with Unlock_Req: released for other masters", req.sa);
+    if (dp.state != DpState::Wait_Prm || dp.prm.pending) {
+      emit(BlockEvent::Kind::leave_master);
+      leave_master();
+    }
+    dp.master_add = 0xFF;
+    watchdog_release();
     return fdl::sc();
   }
   const bool aux2 = (cell(RegId::R_Aux_Buf_Sel) & 0x01) != 0;
@@ -269,11 +324,9 @@ std::optional<fdl::Frame> ChipCore::set_prm(const fdl::Frame& req) {
     emit(BlockEvent::Kind::leave_master);
     leave_master();
   }
-  if ((status & kUnlock_Req) != 0) {
-    dp.master_add = 0xFF;
-  } else if ((status & kLock_Req) != 0) {
-    dp.master_add = req.sa;
-  }
+  // 10: "disabled for other masters, all parameters are adopted (exception: min TSDR = 0)";
+  // "The Group_Ident is accepted only when the Lock_Req bit is set."
+  dp.master_add = req.sa;
   dp.group_ident = du[6];
   if (du[3] != 0) dp.min_tsdr = du[3];
   if (mode0(kMode0_DP_Mode) && du.size() > 7) {
@@ -286,7 +339,11 @@ std::optional<fdl::Frame> ChipCore::set_prm(const fdl::Frame& req) {
   const bool wd_1ms = prof->id == Profile::vpc3plus
                           ? mode0(kMode0_WD_Base_Vpc3)
                           : du.size() > 7 && (du[7] & kSpec_WD_Base_1ms) != 0;
-  watchdog_parameterise((status & kWD_On) != 0, du[1], du[2], wd_1ms);
+  // DP_Control starts with these only once the user accepts them (User_Prm_Data_Okay).
+  dp.prm_wd_on = (status & kWD_On) != 0;
+  dp.prm_wd_fact1 = du[1];
+  dp.prm_wd_fact2 = du[2];
+  dp.prm_wd_1ms = wd_1ms;
   receive_via_aux(0, RegId::R_Prm_Buf_Ptr, RegId::R_Len_Prm_Data, du);
   emit(BlockEvent::Kind::prm);
   prm_accepted();
@@ -303,6 +360,7 @@ void ChipCore::prm_fault() {
 // The Prm buffer holds a new, checked Set_Prm: the faults are reported no more, the user's turn.
 void ChipCore::prm_accepted() {
   dp.prm_fault = dp.cfg_fault = dp.not_supported = false;
+  dp.dx_on_new_din = false;  // the new parameters need their verdicts again
   dp.prm.arrived();
   raise(irq::New_Prm_Data);
 }
@@ -313,15 +371,17 @@ void ChipCore::cfg_accepted() {
     dp.state = DpState::Wait_Cfg;
     raise(irq::Go_Leave_Data_Exchange);
   }
+  dp.dx_on_new_din = false;  // the new configuration needs its verdict again
   dp.cfg.arrived();
   raise(irq::New_Cfg_Data);
 }
 
 std::optional<fdl::Frame> ChipCore::chk_cfg(const fdl::Frame& req) {
-  if (dp.state == DpState::Wait_Prm || req.sa != dp.master_add) {
+  // DPC31 p.28: "This service is accepted by DPS in any DP mode. If the Check_Config message does
+  // not come from 'Master_Add' i.e., the locking master, DPS ignores this message."
+  if (req.sa != dp.master_add) {
     ++counters.not_allowed;
-    log(LogLevel::info, "Chk_Cfg from {} in {}: not accepted", req.sa,
-        dp.state == DpState::Wait_Prm ? "Wait_Prm" : "a foreign lock");
+    log(LogLevel::info, "Chk_Cfg from {}: not the locking master: ignored", req.sa);
     return fdl::sc();
   }
   if (req.du.empty() || req.du.size() > kMaxBufferLength ||
@@ -409,6 +469,15 @@ std::optional<fdl::Frame> ChipCore::set_slave_add(const fdl::Frame& req) {
   return ack;
 }
 
+// The user handed new inputs over (New_Din_Buffer_Cmd): an SPC3 waiting after Cfg OK enters
+// Data_Exchange now.
+void ChipCore::din_handed_over() {
+  if (!dp.dx_on_new_din || dp.state != DpState::Wait_Cfg) return;
+  dp.dx_on_new_din = false;
+  dp.state = DpState::Data_Exchange;
+  raise(irq::Go_Leave_Data_Exchange);
+}
+
 void ChipCore::ssa_accepted() {
   dp.ssa_free = false;
   raise(irq::New_SSA_Data);
@@ -423,9 +492,11 @@ std::optional<fdl::Frame> ChipCore::data_exchange(const fdl::Frame& req) {
   if (!user_watchdog_tick()) return std::nullopt;
   const std::size_t out_len = cell(RegId::R_Len_Dout_Buf);
   if (req.du.size() == out_len) {
-    write_buffer(dout_ptr(buffers.dout.d), req.du);
-    emit(BlockEvent::Kind::dout);
-    outputs_received();
+    if (dx_out_wanted(req.du)) {
+      write_buffer(dout_ptr(buffers.dout.d), req.du);
+      emit(BlockEvent::Kind::dout);
+      outputs_received();
+    }
   } else if (req.du.empty() && mode0(kMode0_Spec_Clear_Mode)) {
     emit(BlockEvent::Kind::failsafe);
     failsafe_clear();  // fail-safe: the master sends no outputs while in Clear
@@ -442,6 +513,24 @@ std::optional<fdl::Frame> ChipCore::data_exchange(const fdl::Frame& req) {
   if (in_len == 0) return code == Response::DL ? fdl::sc() : short_answer(*this, req, code);
   return fdl::make_frame(req.sa, dp.station, fdl::make_response_fc(code),
                          read_buffer(din_ptr(buffers.din.d), in_len));
+}
+
+// VPC3+ Mode_Reg2 DX_Int_Mode = 0 (the default): "DX Interrupt only generated, if DOUT length not
+// 0"; Mode_Reg3 DX_Int_Mode_2 = 1: "DX_Out interrupt is only generated, if received data is not
+// equal to current data" (Profichip DpCfg.h). The current data are the newest outputs the ASIC
+// holds: D while a Sync holds them, else N, else U. Without the interrupt the outputs are not
+// passed on either: the user already has them (modelled).
+bool ChipCore::dx_out_wanted(std::span<const std::uint8_t> outputs) {
+  if (prof->id != Profile::vpc3plus) return true;
+  constexpr std::uint16_t kMode2_DX_Int_Mode = 1u << 2;
+  constexpr std::uint16_t kMode3_DX_Int_Mode_2 = 1u << 1;
+  if (outputs.empty() && (latch[idx(RegId::Mode_Reg2)] & kMode2_DX_Int_Mode) == 0) return false;
+  if ((latch[idx(RegId::Mode_Reg3)] & kMode3_DX_Int_Mode_2) == 0) return true;
+  const std::uint8_t current = buffers.d_fresh      ? buffers.dout.d
+                               : buffers.dout.n != 0 ? buffers.dout.n
+                                                     : buffers.dout.u;
+  const std::vector<std::uint8_t> now = read_buffer(dout_ptr(current), outputs.size());
+  return !std::equal(outputs.begin(), outputs.end(), now.begin());
 }
 
 // Each Data_Exchange counts the user watchdog down; Res_User_WD reloads it. False: expired.
@@ -485,7 +574,7 @@ void handshake_fields(Ar& ar, S& s) {
 
 template <typename Ar, typename S>
 void fields(Ar& ar, S& s) {
-  static_assert(snap::member_count<DpStateMachine>() == 20, "a new member: add it here");
+  static_assert(snap::member_count<DpStateMachine>() == 25, "a new member: add it here");
   ar.bounded(s.state, DpState::Data_Exchange);
   handshake_fields(ar, s.prm);
   handshake_fields(ar, s.cfg);
@@ -498,6 +587,11 @@ void fields(Ar& ar, S& s) {
   ar(s.master_add);
   ar(s.group_ident);
   ar(s.min_tsdr);
+  ar(s.prm_wd_on);
+  ar(s.prm_wd_fact1);
+  ar(s.prm_wd_fact2);
+  ar(s.prm_wd_1ms);
+  ar(s.dx_on_new_din);
   ar(s.sync_mode);
   ar(s.freeze_mode);
   ar(s.user_wd_armed);

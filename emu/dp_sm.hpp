@@ -69,6 +69,14 @@ struct DpStateMachine {
   std::uint8_t master_add = 0xFF;  // the master that locked us (FFh: not parameterised)
   std::uint8_t group_ident = 0;
   std::uint8_t min_tsdr = 0;  // from Set_Prm byte 3; 0 = MinTSDR_Val
+  // The watchdog parameters of the Set_Prm the user is checking: DP_Control starts with them at
+  // User_Prm_Data_Okay, not when the telegram arrives.
+  bool prm_wd_on = false;
+  std::uint8_t prm_wd_fact1 = 0;
+  std::uint8_t prm_wd_fact2 = 0;
+  bool prm_wd_1ms = false;
+  // SPC3 with a Din buffer: Cfg OK given, Data_Exchange at the user's next New_Din_Buffer_Cmd.
+  bool dx_on_new_din = false;
   bool sync_mode = false;
   bool freeze_mode = false;
   // User watchdog: armed by Res_User_WD, counts Data_Exchange telegrams down.

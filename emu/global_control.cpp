@@ -57,10 +57,26 @@ void ChipCore::apply_global_control(std::uint8_t command) {
     failsafe_clear();
   }
   // Unsync wins over Sync; both hand the outputs received since the last hand-over (D) to the
-  // user, unless Clear_Data already did or nothing new came.
+  // user with DX_Out, unless Clear_Data already did. With nothing new in D, DX_Out comes all the
+  // same (the manual's wording is unconditional) and no buffer changes hands.
   if ((command & (kGC_Sync | kGC_Unsync)) != 0) {
     dp.sync_mode = (command & kGC_Unsync) == 0;
-    if ((command & kGC_Clear_Data) == 0 && buffers.d_fresh) dout_received();
+    if ((command & kGC_Clear_Data) == 0) {
+      if (buffers.d_fresh) {
+        dout_received();
+      } else {
+        raise(irq::DX_Out);
+      }
+    }
+  }
+  // "the interrupt 'DX_OUT' can directly be applied to the port PB3 if a global control message
+  // is received with 'Sync', provided 'Enable DX_OUT_Port=1' was parameterized in the C31_Control
+  // register beforehand" (seed 003, p.32).
+  constexpr std::uint16_t kEnable_DX_Out_Port = 0x01;
+  if ((command & kGC_Sync) != 0 && prof->id == Profile::dpc31 &&
+      (latch[idx(RegId::C31_Control)] & kEnable_DX_Out_Port) != 0 &&
+      (latch[idx(RegId::Int_Req_Reg)] & irq::DX_Out) != 0) {
+    set_pb3(true);
   }
   if ((command & (kGC_Freeze | kGC_Unfreeze)) != 0) {
     dp.freeze_mode = (command & kGC_Unfreeze) == 0;

@@ -141,6 +141,16 @@ void dpc31_set_irq_callback(dpc31_chip* chip, dpc31_irq_fn fn, void* user) {
   }
 }
 
+int dpc31_pb3(const dpc31_chip* chip) { return chip->chip.pb3_pin() ? 1 : 0; }
+
+void dpc31_set_pb3_callback(dpc31_chip* chip, dpc31_irq_fn fn, void* user) {
+  chip->chip.on_pb3_change({});
+  if (fn != nullptr) {
+    chip->chip.on_pb3_change(
+        [fn, user](std::uint64_t cycle, bool high) { fn(user, cycle, high ? 1 : 0); });
+  }
+}
+
 void dpc31_select(dpc31_chip* chip) {
   dpc31::hal::t_bus = chip != nullptr ? &chip->bus : nullptr;
   dpc31::hal::t_ports = chip != nullptr ? &chip->ports : nullptr;

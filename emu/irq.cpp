@@ -60,6 +60,7 @@ std::uint32_t ChipCore::eoi_inactive_cycles() const {
 }
 
 void ChipCore::update_irq_line() {
+  if (pb3 && (latch[idx(RegId::Int_Req_Reg)] & irq::DX_Out) == 0) set_pb3(false);
   const bool active = irq_active();
   if (active == irq_line) return;
   irq_line = active;

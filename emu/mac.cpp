@@ -254,7 +254,7 @@ void ChipCore::mac_frame(const fdl::Frame& f, const UartChar& last) {
     ++counters.foreign_address;
     return;
   }
-  if (f.da == dp.station) watchdog_retrigger();
+  if (f.da == dp.station) watchdog_retrigger(f.sa);
   const std::optional<fdl::Frame> answer = dp_service(f);
   if (answer) mac_send(*answer, last.end);
 }

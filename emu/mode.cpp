@@ -58,6 +58,8 @@ void ChipCore::start() {
   timers.reset();
   arm_user_timer();
   dp.reset();
+  buffers.n_cl = false;
+  buffers.in_clear = false;
   dp.station = cell(RegId::R_TS_Adr);
   dp.no_add_change = cell(RegId::R_Real_No_Add_Change) == 0xFF;
   mac_start_search();
@@ -89,7 +91,9 @@ void ChipCore::leave_master() {
   dp.freeze_mode = false;
   dp.user_wd_armed = false;
   dp.fcb_valid = false;
+  dp.dx_on_new_din = false;
   buffers.n_cl = false;
+  buffers.in_clear = false;
   log(LogLevel::info, "Leave_Master: DP state -> Wait_Prm");
   if (was == DpState::Data_Exchange) raise(irq::Go_Leave_Data_Exchange);
   dout_clear();

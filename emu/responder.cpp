@@ -114,6 +114,8 @@ void Responder::init(BusPort& c) {
   for (std::size_t i = 0; i < s.cfg.size(); ++i)
     c.write(read_cfg + static_cast<std::uint32_t>(i), s.cfg[i]);
   if (p.id == Profile::dpc31) refill_substitute(c);
+  if (p.id == Profile::dpc31 && cfg_.dx_out_port)
+    c.write(waddr(c.chip(), RegId::C31_Control), 0x01);
   give_inputs(c);
   c.write(waddr(c.chip(), RegId::Mode_Reg1_S),
           static_cast<std::uint8_t>(kStart_SPC3 | kRes_User_WD));
@@ -157,6 +159,9 @@ void Responder::isr(BusPort& c) {
       const RegId verdict = same ? RegId::User_Cfg_Data_Okay : RegId::User_Cfg_Data_Not_Okay;
       if (c.read(raddr(c.chip(), verdict)) != kHandshakeConflict) {
         ++(same ? cfg_accepted : cfg_rejected);
+        // The SPC3 enters Data_Exchange with the first New_Din_Buffer_Cmd after Cfg OK (SPC3
+        // p.31, docs/decisions.md): fresh inputs for the first answer.
+        if (same && c.chip().profile().id == Profile::spc3) give_inputs(c);
         break;
       }
     }

@@ -22,6 +22,7 @@ struct ResponderConfig {
   std::uint16_t user_wd_value = 0x01FF;
   std::uint8_t wd_baud_control = 0x10;   // x 10 ms
   std::vector<std::uint8_t> substitute;  // dpc31 clear buffer C contents
+  bool dx_out_port = false;              // dpc31 C31_Control.Enable_DX_Out_Port (PB3)
 };
 
 class Responder {

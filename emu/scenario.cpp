@@ -474,6 +474,8 @@ class Parser {
           u.wd_baud_control = static_cast<std::uint8_t>(number(v, k, 0, 255));
         } else if (k == "substitute") {
           u.substitute = bytes(v, k);
+        } else if (k == "dx_out_port") {
+          u.dx_out_port = flag(v, k);
         } else {
           unknown_option(k);
         }
@@ -727,6 +729,10 @@ class Parser {
       step_.expect = ExpectKind::diag_byte;
       step_.value2 = static_cast<std::uint32_t>(number(pos_[1], "diag byte index", 0, kMaxDu - 1));
       step_.value = static_cast<std::uint32_t>(number(pos_[2], "diag byte value", 0, 255));
+    } else if (what == "pb3") {
+      args(1, "0|1");
+      step_.expect = ExpectKind::pb3;
+      step_.value = flag(pos_[1], "pb3") ? 1 : 0;
     } else if (what == "baud") {
       args(1, "N");
       step_.expect = ExpectKind::baud;
@@ -734,7 +740,7 @@ class Parser {
     } else {
       fail(
           fmt::format("unknown check '{}' (dp_state, wd_state, outputs, cleared, inputs, counter, "
-                      "irr_bit, answer, station, diag_byte, baud, port)",
+                      "irr_bit, answer, station, diag_byte, baud, port, pb3)",
                       shown(what)));
     }
   }
@@ -934,6 +940,10 @@ class Runner {
     });
     chip_.on_telegram([this](const Telegram&) { check_states(); });
     chip_.on_irq_change([this](std::uint64_t, bool) { check_states(); });
+    chip_.on_pb3_change([this](std::uint64_t cycle, bool high) {
+      pb3_rises_ += high ? 1 : 0;
+      note(cycle, fmt::format("PB3 {}", high ? "high (DX_Out of a Sync)" : "low"));
+    });
     dp_ = chip_.dp_state();
     wd_ = chip_.wd_state();
     outputs_.assign(s_.user.slave.out_len, 0);
@@ -950,6 +960,7 @@ class Runner {
       if (modifier || (is_action(st.kind) && !fault_ && !bad_fcs_)) {
         base_counters_ = chip_.fdl_counters();
         base_irq_ = interrupts().size();
+        base_pb3_ = pb3_rises_;
       }
       note(chip_.cycle(), fmt::format("line {}: {}", st.line, st.text));
       const std::size_t sent = master_->history().size();
@@ -977,6 +988,7 @@ class Runner {
     chip_.set_log_sink({});
     chip_.on_telegram({});
     chip_.on_irq_change({});
+    chip_.on_pb3_change({});
     return out_;
   }
 
@@ -1415,6 +1427,12 @@ class Runner {
         want = std::to_string(st.value);
         got = std::to_string(chip_baud());
         break;
+      case ExpectKind::pb3:
+        // DX_Out is acknowledged by the ISR at once, so a rise during the last action counts.
+        what = "pb3";
+        want = std::to_string(st.value);
+        got = chip_.pb3_pin() || pb3_rises_ > base_pb3_ ? "1" : "0";
+        break;
       case ExpectKind::port:
         what = "port " + st.name;
         want = port_text(st.value);
@@ -1464,6 +1482,8 @@ class Runner {
   std::optional<std::vector<std::uint8_t>> last_diag_;
   FdlCounters base_counters_;
   std::size_t base_irq_ = 0;
+  std::size_t pb3_rises_ = 0;  // PB3 rising edges so far (dpc31 DX_Out port)
+  std::size_t base_pb3_ = 0;
 };
 
 }  // namespace

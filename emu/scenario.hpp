@@ -68,6 +68,7 @@ enum class ExpectKind : std::uint8_t {
   diag_byte,
   baud,
   port,
+  pb3,
 };
 
 // One line of the file. Only the fields its kind uses are meaningful.

@@ -1,6 +1,7 @@
 // Watchdog state machine (seed 002): Baud_Search -> Baud_Control -> DP_Control. Baud_Control
 // watches the baud rate (WD_Baud_Control_Val x 10 ms), DP_Control the master (TWD = 1 or 10 ms x
-// WD_Fact_1 x WD_Fact_2). Every error-free telegram to our address retriggers the running one.
+// WD_Fact_1 x WD_Fact_2). An error-free telegram to our address retriggers Baud_Control; only
+// the locking master's retriggers DP_Control.
 #include "core.hpp"
 
 namespace dpc31 {
@@ -45,12 +46,19 @@ void ChipCore::watchdog_parameterise(bool wd_on, std::uint8_t f1, std::uint8_t f
   }
 }
 
-void ChipCore::watchdog_retrigger() {
+void ChipCore::watchdog_retrigger(std::uint8_t master) {
   if (timers.wd == WdState::DP_Control) {
-    arm_watchdog(timers.dp_wd_cycles);
+    // "The 'DP_Control' state serves response time monitoring of the DP master (Master_Add)"
+    // (SPC3 p.25): another master's telegrams, answered or refused, do not keep it alive.
+    if (master == dp.master_add) arm_watchdog(timers.dp_wd_cycles);
   } else if (timers.wd == WdState::Baud_Control) {
     enter_baud_control(*this);
   }
+}
+
+void ChipCore::watchdog_release() {
+  timers.dp_wd_on = false;
+  if (timers.wd == WdState::DP_Control) enter_baud_control(*this);
 }
 
 void ChipCore::watchdog_expired() {

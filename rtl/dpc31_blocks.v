@@ -97,6 +97,7 @@ module dpc31_blocks #(
   // ===========================================================================================
   localparam IS_DPC31 = (PROFILE != 0) && (PROFILE != 1);
   localparam IS_VPC3 = (PROFILE == 1);
+  localparam IS_SPC3 = (PROFILE == 0);
 
   // CHOICE: address bits above the profile's bus width (11 / 12 / 13) are ignored, as in
   // docs/decisions.md. The RAM access violation (spc3 >= 600h, vpc3plus >= 800h) is not part of
@@ -179,6 +180,8 @@ module dpc31_blocks #(
   localparam [12:0] A_GC_COMMAND = `DPC31B_PSEL(`SPC3_ADDR_R_GC_Command,
                                                 `VPC3_ADDR_R_GC_Command,
                                                 `DPC31_ADDR_R_GC_Command);
+  localparam [12:0] A_LEN_DIN = `DPC31B_PSEL(`SPC3_ADDR_R_Len_Din_Buf, `VPC3_ADDR_R_Len_Din_Buf,
+                                             `DPC31_ADDR_R_Len_Din_Buf);
 
   // Int_Req_Reg bit positions.
   localparam integer B_MAC_RESET = `DPC31B_PSEL(`SPC3_Int_Req_Reg_MAC_Reset_POS,
@@ -423,6 +426,9 @@ module dpc31_blocks #(
   reg        prm_newer;  // Prm handshake: a newer Set_Prm arrived while pending
   reg        cfg_newer;  // Cfg handshake: a newer Chk_Cfg arrived while pending
   reg  [7:0] opt_reg;    // dpc31 Param_Reg / vpc3plus Mode_Reg2, only the OPT_MASK bits
+  reg        in_clear;   // dpc31: the current clear was signalled (N_Cl, DX_Out): once per clear
+  reg  [7:0] len_din;    // mirrored cell R_Len_Din_Buf (only the user writes it)
+  reg        dx_on_new_din;  // spc3: Cfg OK given, Data_Exchange at the next New_Din_Buffer_Cmd
   reg [18:0] eoi_cnt;    // cycles of EOI inactive time left; X/INT may be active only at 0
   reg [18:0] ut_cnt;     // while started: cycles to the next User_Timer_Clock
   reg  [1:0] dout_d, dout_n, dout_u, dout_f;
@@ -456,7 +462,9 @@ module dpc31_blocks #(
   reg  [1:0] nx_dout_d, nx_dout_n, nx_dout_u, nx_dout_f;
   reg  [1:0] nx_din_d, nx_din_n, nx_din_u, nx_din_f;
   reg  [1:0] nx_diag1, nx_diag2;
-  reg        nx_u_cleared, nx_n_cleared, nx_n_cl, nx_d_fresh;
+  reg        nx_u_cleared, nx_n_cleared, nx_n_cl, nx_d_fresh, nx_in_clear;
+  reg  [7:0] nx_len_din;
+  reg        nx_dx_on_new_din;
   reg  [7:0] nx_dout_ptr1, nx_dout_ptr2, nx_dout_ptr3, nx_dout_ptr_c;
   reg  [7:0] nx_cfg_ptr, nx_read_cfg_ptr, nx_gc_command;
   reg  [7:0] nx_opt_reg;
@@ -555,9 +563,11 @@ module dpc31_blocks #(
 
   // ---------------------------------------------------------------------------- Dout actions
   // ev_dout (and Sync / Unsync with fresh D): d_to_n, N not cleared, D not fresh, DX_Out.
+  // N_Cl = 0: newer real outputs win over a clear the user has not fetched yet.
   task dout_received;
     begin
       d_to_n;
+      nx_n_cl = 1'b0;
       nx_n_cleared = 1'b0;
       nx_d_fresh = 1'b0;
       raise(IRQ_DX_OUT);
@@ -574,14 +584,15 @@ module dpc31_blocks #(
     end
   endtask
 
-  // failsafe_clear: spc3 / vpc3plus: dout_clear. dpc31: if U already holds cleared data and N is
-  // Nil and N_Cl is 0, nothing; otherwise N_Cl = 1 and DX_Out.
+  // failsafe_clear: spc3 / vpc3plus: dout_clear. dpc31: once per clear: if In_Clear, nothing;
+  // otherwise In_Clear = 1, N_Cl = 1 and DX_Out.
   // (dpc31: D and D-fresh are left as they are; the spec names nothing else.)
   task failsafe_clear;
     begin
       if (!IS_DPC31) begin
         dout_clear;
-      end else if (!(nx_u_cleared && nx_dout_n == NIL && !nx_n_cl)) begin
+      end else if (!nx_in_clear) begin
+        nx_in_clear = 1'b1;
         nx_n_cl = 1'b1;
         raise(IRQ_DX_OUT);
       end
@@ -618,6 +629,7 @@ module dpc31_blocks #(
       nx_not_supported = 1'b0;
       nx_sync_mode = 1'b0;
       nx_freeze_mode = 1'b0;
+      nx_dx_on_new_din = 1'b0;
     end
   endtask
 
@@ -636,6 +648,8 @@ module dpc31_blocks #(
         nx_sync_mode = 1'b0;
         nx_freeze_mode = 1'b0;
         nx_n_cl = 1'b0;
+        nx_in_clear = 1'b0;
+        nx_dx_on_new_din = 1'b0;
         if (was_dx) raise(IRQ_GO_LEAVE_DX);
         dout_clear;
       end
@@ -648,6 +662,8 @@ module dpc31_blocks #(
       nx_started = 1'b1;
       nx_mode_reg1[M1_GO_OFFLINE] = 1'b0;
       dp_reset;
+      nx_n_cl = 1'b0;
+      nx_in_clear = 1'b0;
       nx_ut_cnt = user_period(nx_mode_reg0);  // first tick P cycles after this cycle
       dout_clear;
     end
@@ -698,9 +714,13 @@ module dpc31_blocks #(
           failsafe_clear;
 `endif
         end
+        // Sync / Unsync: D to N with DX_Out; with nothing fresh in D, DX_Out alone.
         if (cmd[GC_SYNC] || cmd[GC_UNSYNC]) begin
           nx_sync_mode = !cmd[GC_UNSYNC];  // Unsync wins
-          if (!cmd[GC_CLEAR_DATA] && nx_d_fresh) dout_received;
+          if (!cmd[GC_CLEAR_DATA]) begin
+            if (nx_d_fresh) dout_received;
+            else raise(IRQ_DX_OUT);
+          end
         end
         if (cmd[GC_FREEZE] || cmd[GC_UNFREEZE]) begin
           nx_freeze_mode = !cmd[GC_UNFREEZE];  // Unfreeze wins
@@ -776,9 +796,14 @@ module dpc31_blocks #(
             nx_cfg_ptr = nx_read_cfg_ptr;
             nx_read_cfg_ptr = t;
           end
+          // spc3 with a Din buffer (R_Len_Din_Buf != 0): at the next New_Din_Buffer_Cmd.
           if (nx_dp_state == DP_WAIT_CFG) begin
-            nx_dp_state = DP_DATA_EXCHANGE;
-            raise(IRQ_GO_LEAVE_DX);
+            if (IS_SPC3 && nx_len_din != 8'h00) begin
+              nx_dx_on_new_din = 1'b1;
+            end else begin
+              nx_dp_state = DP_DATA_EXCHANGE;
+              raise(IRQ_GO_LEAVE_DX);
+            end
           end
         end
       end
@@ -796,7 +821,13 @@ module dpc31_blocks #(
       keep_n = 1'b0;
 `endif
       if (IS_DPC31 && nx_n_cl) begin
+        // The substitute values supersede outputs received before the Clear: N freed unseen.
         nx_n_cl = 1'b0;
+        if (nx_dout_n != NIL) begin
+          nx_dout_f = nx_dout_n;
+          nx_dout_n = NIL;
+        end
+        nx_n_cleared = 1'b0;
 `ifndef MUTANT_NO_C_SWAP
         swap_c_with_u;
 `endif
@@ -920,6 +951,9 @@ module dpc31_blocks #(
     nx_n_cleared = n_cleared;
     nx_n_cl = n_cl;
     nx_d_fresh = d_fresh;
+    nx_in_clear = in_clear;
+    nx_len_din = len_din;
+    nx_dx_on_new_din = dx_on_new_din;
     nx_dout_ptr1 = dout_ptr1;
     nx_dout_ptr2 = dout_ptr2;
     nx_dout_ptr3 = dout_ptr3;
@@ -972,6 +1006,7 @@ module dpc31_blocks #(
     // ev_dout: D holds fresh data; unless Sync_Mode: d_to_n, N not cleared, D not fresh, DX_Out.
     if (ev_dout) begin
       nx_d_fresh = 1'b1;
+      nx_in_clear = 1'b0;  // the master has left Clear
       if (!nx_sync_mode) dout_received;
     end
 
@@ -998,6 +1033,7 @@ module dpc31_blocks #(
       nx_prm_fault = 1'b0;
       nx_cfg_fault = 1'b0;
       nx_not_supported = 1'b0;
+      nx_dx_on_new_din = 1'b0;  // the new parameters need their verdicts again
       prm_arrived;
       raise(IRQ_NEW_PRM);
     end
@@ -1008,6 +1044,7 @@ module dpc31_blocks #(
         nx_dp_state = DP_WAIT_CFG;
         raise(IRQ_GO_LEAVE_DX);
       end
+      nx_dx_on_new_din = 1'b0;  // the new configuration needs its verdict again
       cfg_arrived;
       raise(IRQ_NEW_CFG);
     end
@@ -1040,9 +1077,14 @@ module dpc31_blocks #(
         nx_bus_rdata = ({6'd0, nx_din_f} << SM_F) | ({6'd0, nx_din_u} << SM_U) |
                        ({6'd0, nx_din_n} << SM_N) | ({6'd0, nx_din_d} << SM_D);
       end else if (a == A_NEW_DIN) begin
-        // u_to_n on Din; the result is the new U.
+        // u_to_n on Din; the result is the new U. spc3 after Cfg OK: Data_Exchange now.
         u_to_n;
         nx_bus_rdata = {6'd0, nx_din_u};
+        if (nx_dx_on_new_din && nx_dp_state == DP_WAIT_CFG) begin
+          nx_dx_on_new_din = 1'b0;
+          nx_dp_state = DP_DATA_EXCHANGE;
+          raise(IRQ_GO_LEAVE_DX);
+        end
       end else if (a == A_DOUT_SM) begin
         if (IS_DPC31)  // bit 7 N_Cl, bits 5..0 U N D
           nx_bus_rdata = ({7'd0, nx_n_cl} << SM_N_CL) | ({6'd0, nx_dout_u} << SM_U) |
@@ -1143,6 +1185,8 @@ module dpc31_blocks #(
         nx_read_cfg_ptr = bus_wdata;
       end else if (a == A_GC_COMMAND) begin
         nx_gc_command = bus_wdata;
+      end else if (a == A_LEN_DIN) begin
+        nx_len_din = bus_wdata;
       end
       // Other write addresses (WD_Baud_Control_Val, MinTSDR_Val, reserved, RAM) are not part of
       // the block.
@@ -1188,6 +1232,9 @@ module dpc31_blocks #(
       n_cleared <= 1'b0;
       n_cl <= 1'b0;
       d_fresh <= 1'b0;
+      in_clear <= 1'b0;
+      len_din <= `SPC3_R_Len_Din_Buf_RESET;
+      dx_on_new_din <= 1'b0;
       dout_ptr1 <= DOUT_PTR1_RESET;
       dout_ptr2 <= DOUT_PTR2_RESET;
       dout_ptr3 <= DOUT_PTR3_RESET;
@@ -1232,6 +1279,9 @@ module dpc31_blocks #(
       n_cleared <= nx_n_cleared;
       n_cl <= nx_n_cl;
       d_fresh <= nx_d_fresh;
+      in_clear <= nx_in_clear;
+      len_din <= nx_len_din;
+      dx_on_new_din <= nx_dx_on_new_din;
       dout_ptr1 <= nx_dout_ptr1;
       dout_ptr2 <= nx_dout_ptr2;
       dout_ptr3 <= nx_dout_ptr3;

@@ -138,6 +138,11 @@ class Chip {
   [[nodiscard]] DpState dp_state() const;
   [[nodiscard]] WdState wd_state() const;
 
+  // dpc31 port PB3 (seed 003): with C31_Control.Enable_DX_Out_Port = 1 it goes high in the
+  // cycle a Global_Control with Sync latches DX_Out and low when DX_Out is acknowledged
+  // (docs/timing.md). Always low on the other profiles.
+  [[nodiscard]] bool pb3_pin() const;
+  void on_pb3_change(std::function<void(std::uint64_t, bool)> cb);
   // Called whenever the interrupt becomes active or inactive: (cycle, active).
   void on_irq_change(std::function<void(std::uint64_t, bool)> cb);
 

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "../../emu/dp_master.hpp"
+#include "../../emu/dp_services.hpp"
 #include "../../emu/responder.hpp"
 #include "dpc31/chip.hpp"
 #include "dpc31/reg_ids.hpp"
@@ -52,6 +53,59 @@ struct Bench {
 
 inline Bytes wire(const std::optional<dpc31::fdl::Frame>& f) {
   return f ? dpc31::fdl::encode(*f) : Bytes{};
+}
+
+}  // namespace conformance
+
+namespace conformance {
+
+// A user side that only acknowledges and EOIs (Int_Ack_Reg, Mode_Reg1_S.EOI), recording the
+// Int_Reg it saw: the buffers are left for the test to drive over the bus.
+struct AckOnly {
+  std::vector<std::pair<std::uint64_t, std::uint16_t>> seen;  // cycle, Int_Reg at ISR entry
+  void isr(dpc31::BusPort& c) {
+    const dpc31::Chip& chip = c.chip();
+    const auto ir_addr = static_cast<std::uint32_t>(chip.addr_of(dpc31::RegId::Int_Reg));
+    const auto ack_addr = static_cast<std::uint32_t>(chip.addr_of(dpc31::RegId::Int_Ack_Reg));
+    const std::uint16_t ir = testutil_read16(c, ir_addr);
+    seen.emplace_back(c.cycle(), ir);
+    // New_Prm_Data / New_Cfg_Data clear only through their OK reads (SPC3 p.22).
+    const auto ack =
+        static_cast<std::uint16_t>(ir & ~(dpc31::irq::New_Prm_Data | dpc31::irq::New_Cfg_Data));
+    if (ack != 0) {
+      c.write(ack_addr, static_cast<std::uint8_t>(ack));
+      c.write(ack_addr + 1, static_cast<std::uint8_t>(ack >> 8));
+    }
+    c.write(static_cast<std::uint32_t>(chip.addr_of(dpc31::RegId::Mode_Reg1_S)), 0x02);  // EOI
+  }
+  // Intel byte order (the benches here use the Intel bus).
+  static std::uint16_t testutil_read16(dpc31::BusPort& c, std::uint32_t a) {
+    const std::uint8_t lo = c.read(a);
+    return static_cast<std::uint16_t>(lo | c.read(a + 1) << 8);
+  }
+};
+
+// The bus address of a register of the bench's chip.
+inline std::uint32_t addr(const dpc31::Chip& c, dpc31::RegId id) {
+  return static_cast<std::uint32_t>(c.addr_of(id));
+}
+
+// The RAM address a buffer pointer cell names (segment << shift), read over the bus.
+inline std::uint32_t buffer_base(dpc31::Chip& c, dpc31::RegId ptr_cell) {
+  return static_cast<std::uint32_t>(c.read(addr(c, ptr_cell))) << c.profile().segment_shift;
+}
+
+// `n` bytes from RAM over the bus.
+inline Bytes read_ram(dpc31::Chip& c, std::uint32_t base, std::size_t n) {
+  Bytes out;
+  for (std::size_t i = 0; i < n; ++i) out.push_back(c.read(base + static_cast<std::uint32_t>(i)));
+  return out;
+}
+
+inline dpc31::RegId dout_ptr(unsigned buffer) {
+  static constexpr dpc31::RegId kPtr[] = {
+      dpc31::RegId::R_Dout_Buf_Ptr1, dpc31::RegId::R_Dout_Buf_Ptr2, dpc31::RegId::R_Dout_Buf_Ptr3};
+  return kPtr[buffer - 1];
 }
 
 }  // namespace conformance

@@ -20,6 +20,7 @@ enum Sig : std::uint16_t {
   kRxd,
   kTxd,
   kXInt,
+  kPb3,
   kBusRd,
   kBusWr,
   kBusAddr,
@@ -39,6 +40,7 @@ enum Sig : std::uint16_t {
 constexpr std::array<SignalDef, kCount> kSignals = {{{"pins.rxd", 1},
                                                      {"pins.txd", 1},
                                                      {"pins.x_int", 1},
+                                                     {"pins.pb3", 1},
                                                      {"bus.rd", 1},
                                                      {"bus.wr", 1},
                                                      {"bus.addr", 13},
@@ -104,8 +106,9 @@ struct Recorder::Impl {
                                  c.buffers.dout.sm(),
                                  c.buffers.din.sm(),
                                  c.buffers.diag.sm(),
-                                 chip->x_int_pin() ? 1u : 0u};
-    const Sig sigs[] = {kDpState, kWdState, kBaud, kIrr, kDoutSm, kDinSm, kDiagSm, kXInt};
+                                 chip->x_int_pin() ? 1u : 0u,
+                                 chip->pb3_pin() ? 1u : 0u};
+    const Sig sigs[] = {kDpState, kWdState, kBaud, kIrr, kDoutSm, kDinSm, kDiagSm, kXInt, kPb3};
     for (std::size_t i = 0; i < std::size(sigs); ++i) {
       if (sampled[sigs[i]] == now[i]) continue;
       sampled[sigs[i]] = now[i];
@@ -136,6 +139,7 @@ bool Recorder::attach(Chip& chip, std::string& error) {
     for (const std::string& p : m.opt.signals)
       take = take || fnmatch(p.c_str(), kSignals[i].name, 0) == 0;
     if (m.opt.flat && kSignals[i].width != 1) take = false;
+    if (i == kPb3 && chip.profile().id != Profile::dpc31) take = false;  // a DPC31 port
     m.selected[i] = take;
   }
   for (const std::string& p : m.opt.signals) {
