@@ -129,8 +129,8 @@ void Responder::refill_substitute(BusPort& c) {
   }
 }
 
-void Responder::give_inputs(BusPort& c) {
-  if (inputs.empty()) return;
+void Responder::give_inputs(BusPort& c, bool always) {
+  if (inputs.empty() && !always) return;
   const std::uint8_t u =
       static_cast<std::uint8_t>((c.read(raddr(c.chip(), RegId::Din_Buffer_SM)) >> 4) & 3);
   static constexpr RegId kPtr[] = {RegId::R_Din_Buf_Ptr1, RegId::R_Din_Buf_Ptr2,
@@ -161,7 +161,7 @@ void Responder::isr(BusPort& c) {
         ++(same ? cfg_accepted : cfg_rejected);
         // The SPC3 enters Data_Exchange with the first New_Din_Buffer_Cmd after Cfg OK (SPC3
         // p.31, docs/decisions.md): fresh inputs for the first answer.
-        if (same && c.chip().profile().id == Profile::spc3) give_inputs(c);
+        if (same && c.chip().profile().id == Profile::spc3) give_inputs(c, true);
         break;
       }
     }

@@ -51,7 +51,8 @@ class Responder {
   void write16(BusPort& c, RegId id, std::uint16_t v) const;
   std::uint16_t read16(BusPort& c, RegId id) const;
   std::uint32_t buffer(BusPort& c, RegId ptr_cell) const;
-  void give_inputs(BusPort& c);
+  // Hands U over (New_Din_Buffer_Cmd) with `inputs`; without inputs only if `always`.
+  void give_inputs(BusPort& c, bool always = false);
   void refill_substitute(BusPort& c);
 
   ResponderConfig cfg_;

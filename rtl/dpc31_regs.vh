@@ -810,7 +810,7 @@
 
 // Mode_Reg2: latch, 8 bit -- VPC3+ Mode register 2
 `define VPC3_ADDR_Mode_Reg2                             13'h000C
-`define VPC3_Mode_Reg2_RESET                            8'h00
+`define VPC3_Mode_Reg2_RESET                            8'h01
 `define VPC3_Mode_Reg2_GC_Int_Mode_POS                  0
 `define VPC3_Mode_Reg2_GC_Int_Mode_W                    1
 `define VPC3_Mode_Reg2_No_Check_GC_Reserved_POS         1
@@ -884,6 +884,12 @@
 // Mode_Reg3: latch, 8 bit -- VPC3+C Mode register 3
 `define VPC3_ADDR_Mode_Reg3                             13'h0012
 `define VPC3_Mode_Reg3_RESET                            8'h00
+`define VPC3_Mode_Reg3_Mode_Reg3_0_POS                  0
+`define VPC3_Mode_Reg3_Mode_Reg3_0_W                    1
+`define VPC3_Mode_Reg3_DX_Int_Mode_2_POS                1
+`define VPC3_Mode_Reg3_DX_Int_Mode_2_W                  1
+`define VPC3_Mode_Reg3_Mode_Reg3_7_2_POS                2
+`define VPC3_Mode_Reg3_Mode_Reg3_7_2_W                  6
 
 // Next_DXBout_Buffer_Cmd: derived, 8 bit -- VPC3+ DXB output buffer command
 `define VPC3_ADDR_Next_DXBout_Buffer_Cmd                13'h0013

@@ -876,13 +876,13 @@ enum dpc31_profile {
 
 /* Mode_Reg2: latch, 8 bit -- VPC3+ Mode register 2 */
 #define VPC3_Mode_Reg2                                  0x00Cu /* write */
-#define VPC3_Mode_Reg2_RESET                            0x00u
+#define VPC3_Mode_Reg2_RESET                            0x01u
 #define VPC3_Mode_Reg2_GC_Int_Mode_Pos                  0u
-#define VPC3_Mode_Reg2_GC_Int_Mode_Msk                  0x01u /* 0 WO: 1 = New_GC_Command on every Global_Control */
+#define VPC3_Mode_Reg2_GC_Int_Mode_Msk                  0x01u /* 0 WO: 1 = New_GC_Command after every Global_Control (default), 0 = only when the command differs from the previous one */
 #define VPC3_Mode_Reg2_No_Check_GC_Reserved_Pos         1u
 #define VPC3_Mode_Reg2_No_Check_GC_Reserved_Msk         0x02u /* 1 WO: reserved Control_Command bits not checked */
 #define VPC3_Mode_Reg2_DX_Int_Mode_Pos                  2u
-#define VPC3_Mode_Reg2_DX_Int_Mode_Msk                  0x04u /* 2 WO: DX_Out only on changed data (stored) */
+#define VPC3_Mode_Reg2_DX_Int_Mode_Msk                  0x04u /* 2 WO: 0 = DX_Out only if the Dout length is not 0 (default), 1 = DX_Out after every Data_Exchange telegram */
 #define VPC3_Mode_Reg2_DX_Int_Port_Pos                  3u
 #define VPC3_Mode_Reg2_DX_Int_Port_Msk                  0x08u /* 3 WO: DX_Out on a port pin (stored) */
 #define VPC3_Mode_Reg2_SYNC_Ena_Pos                     4u
@@ -950,6 +950,12 @@ enum dpc31_profile {
 /* Mode_Reg3: latch, 8 bit -- VPC3+C Mode register 3 */
 #define VPC3_Mode_Reg3                                  0x012u /* write */
 #define VPC3_Mode_Reg3_RESET                            0x00u
+#define VPC3_Mode_Reg3_Mode_Reg3_0_Pos                  0u
+#define VPC3_Mode_Reg3_Mode_Reg3_0_Msk                  0x01u /* 0 UNIMP: VPC3+C extra mode (stored, not evaluated by the model) */
+#define VPC3_Mode_Reg3_DX_Int_Mode_2_Pos                1u
+#define VPC3_Mode_Reg3_DX_Int_Mode_2_Msk                0x02u /* 1 WO: 1 = DX_Out only if the received outputs differ from the current ones */
+#define VPC3_Mode_Reg3_Mode_Reg3_7_2_Pos                2u
+#define VPC3_Mode_Reg3_Mode_Reg3_7_2_Msk                0xFCu /* 7:2 UNIMP: VPC3+C extra modes (stored, not evaluated by the model) */
 
 /* Next_DXBout_Buffer_Cmd: derived, 8 bit -- VPC3+ DXB output buffer command */
 #define VPC3_Next_DXBout_Buffer_Cmd                     0x013u /* read */
