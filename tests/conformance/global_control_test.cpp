@@ -108,8 +108,12 @@ TEST_P(GlobalControl, ReservedBitSet_NotSupportedAndLeaveMaster) {
 // the Reserved bits are not checked." DPC31, and the VPC3+'s No_Check_GC_Reserved: a Freeze
 // with all three reserved bits (C9h) keeps Data_Exchange, no Not_Supported, is stored in
 // GC_Command and freezes the inputs.
-TEST_P(GlobalControl, CheckNoGcReserved1_ReservedBitsNotChecked) {
-  if (GetParam() == Profile::spc3) GTEST_SKIP() << "the SPC3 has no such option";
+// (The SPC3 has no such option.)
+namespace {
+class GcReservedUnchecked : public ::testing::TestWithParam<Profile> {};
+}  // namespace
+
+TEST_P(GcReservedUnchecked, CheckNoGcReserved1_ReservedBitsNotChecked) {
   Bench b(GetParam(), 12'000'000);
   no_gc_reserved_check(b.chip);
   ASSERT_TRUE(b.master.startup());
@@ -188,6 +192,10 @@ TEST_P(GlobalControl, GroupSelectAndGroupIdentNonZero_GroupSelect0AddressesAll) 
   b.master.global_control(0x00, 0x00);
   EXPECT_EQ(gc_command(b.chip), 0x00);
 }
+
+INSTANTIATE_TEST_SUITE_P(Vpc3AndDpc31, GcReservedUnchecked,
+                         ::testing::Values(Profile::vpc3plus, Profile::dpc31),
+                         [](const auto& i) { return testutil::pname(i.param); });
 
 INSTANTIATE_TEST_SUITE_P(Profiles, GlobalControl, ::testing::ValuesIn(kAllProfiles),
                          [](const auto& i) { return testutil::pname(i.param); });
