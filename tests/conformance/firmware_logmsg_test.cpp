@@ -5,6 +5,9 @@
 // its inputs in the DX_Out ISR after taking the outputs, so an answer shows the state after the
 // previous exchange. Hardware events are the module's hardware inputs "event1"/"event2"; the
 // hold lines are its ports 0/1 (kPortLatency = 24 clocks after the exchange is acted on).
+#include <memory>
+#include <utility>
+
 #include "cnt2/cnt2.h"
 #include "firmware_bench.hpp"
 #include "user_side.hpp"
