@@ -83,6 +83,29 @@ void locked_with_new_diag(Bare& b, std::uint8_t byte0) {
 
 }  // namespace
 
+// chip-facts §5.3 [S-DIAG]: New_Diag_Buffer_Cmd "returns bits 1:0: 00 = no buffer (both with
+// the ASIC), 01 = Diag_Buf1 now user's, 10 = Diag_Buf2 now user's"; "Exchange → Diag_Buffer_
+// Changed interrupt". While the ASIC sends its buffer (a Slave_Diag answer in progress) the user
+// hands its own over: 00h, no Diag_Buffer_Changed; when the answer has ended the sent buffer
+// comes back: Diag_Buffer_Changed (IRR bit 12), and Diag_Buffer_SM shows it as User (01).
+TEST_P(BufferSm, NewDiagBufferCmd_00WhileBothWithTheAsic_DiagBufferChangedWhenOneComesBack) {
+  Bare b(GetParam());
+  ASSERT_TRUE(b.master.fdl_status().answer);
+  testutil::bus_write16(b.chip, static_cast<int>(wr(b.chip, RegId::Int_Ack_Reg)), 16, 0xF3FF);
+  const Bytes req = {0x68, 0x05, 0x05, 0x68, 0x85, 0x82, 0x4D, 0x3C, 0x3E, 0xCE, 0x16};
+  const std::uint64_t end = send_on_rxd(b.chip, req, b.chip.cycle() + 40 * 4, 4);
+  const std::uint64_t answer_end = end + 11 * 4 + 17 * 11 * 4;
+  b.chip.step(end + 100 - b.chip.cycle());
+  const std::uint8_t sent = b.chip.read(0x0C);  // reset: buffer 2 is the ASIC's (11 now)
+  EXPECT_EQ(b.chip.read(0x0D), 0x00);
+  EXPECT_EQ(irr(b.chip) & irq::Diag_Buffer_Changed, 0);
+  b.chip.step(answer_end + 4 - b.chip.cycle());
+  EXPECT_NE(irr(b.chip) & irq::Diag_Buffer_Changed, 0);
+  const std::uint8_t sm = b.chip.read(0x0C);
+  // The buffer that was being sent (11) is the user's (01) now; the other one the ASIC's (10).
+  EXPECT_EQ(sm, sent == 0x0D ? 0x06 : 0x09);
+}
+
 // manual-quotes.md Confirmed, SPC3 p.32: "Diag_Flag: set on the exchange, cleared when 'the
 // relevant master' fetched, kept with Stat_Diag." Status_Reg bit 2: 1 after the user's
 // New_Diag_Buffer_Cmd, 0 after master 2 (the one the slave is locked to) fetched the diag; with
@@ -294,6 +317,38 @@ TEST(BufferSmSpc3, RamAccessViolation_Above1536Bytes1024IsSubtracted) {
   EXPECT_EQ(c.read(0x700), 0x77);
   EXPECT_EQ(status(c) & 0x08, 0x08);
 }
+
+// chip-facts §4.2 / §7 [S-RU-SPC3][S-VPC3C-UWD]: Res_User_WD "reload user watchdog"; "Res_User_WD
+// = 1 reloads it at the next DX". R_User_WD_Value 3 and Res_User_WD written by the ISR on every
+// DX_Out: ten exchanges in a row are all answered, the slave stays in Data_Exchange.
+TEST_P(UserWatchdog, ResUserWdReloadsAtTheNextDataExchange) {
+  ResponderConfig rc;
+  rc.user_wd_value = 3;
+  rc.user_watchdog = true;
+  Bench b(GetParam(), 12'000'000, rc);
+  ASSERT_TRUE(b.master.startup());
+  for (int i = 1; i <= 10; ++i) EXPECT_TRUE(b.master.data_exchange({1, 1, 1, 1}).answer) << i;
+  EXPECT_EQ(dp_bits(status(b.chip)), kDataEx);
+}
+
+// chip-facts §4.2 [S-RU-SPC3]: EOI "ASIC clears the bit", User_Leave_Master "ASIC clears the
+// bit". The Mode_Reg1 read-back (15h, [S-VPC3-IF]; dpc31 the same address, modelled) shows bits 1
+// and 3 as 0 right after they were set through Mode_Reg1_S; Start_SPC3 (bit 0) stays 1.
+namespace {
+class ModeReg1ReadBack : public ::testing::TestWithParam<Profile> {};
+}  // namespace
+
+TEST_P(ModeReg1ReadBack, EoiAndUserLeaveMasterClearedByTheAsic) {
+  Bare b(GetParam());
+  b.chip.write(wr(b.chip, RegId::Mode_Reg1_S), 0x02);
+  EXPECT_EQ(b.chip.read(0x15) & 0x0B, 0x01);
+  b.chip.write(wr(b.chip, RegId::Mode_Reg1_S), 0x08);
+  EXPECT_EQ(b.chip.read(0x15) & 0x0B, 0x01);
+}
+
+INSTANTIATE_TEST_SUITE_P(Vpc3AndDpc31, ModeReg1ReadBack,
+                         ::testing::Values(Profile::vpc3plus, Profile::dpc31),
+                         [](const auto& i) { return testutil::pname(i.param); });
 
 INSTANTIATE_TEST_SUITE_P(Spc3AndVpc3, UserWatchdog,
                          ::testing::Values(Profile::spc3, Profile::vpc3plus),

@@ -195,6 +195,32 @@ TEST_P(Services, SlaveDiag_SixMandatoryBytes) {
   EXPECT_EQ(b.master.slave_diag().answer->du, (Bytes{0x00, 0x0C, 0x00, 0x02, 0x0C, 0x31}));
 }
 
+// chip-facts §5.4 [S-AUX][S-PRM][S-CFG]: received into the Aux buffer, "if error-free, the Aux
+// buffer is exchanged with the target buffer ...; length cell written; interrupt New_Prm/Cfg_
+// Data". After the Set_Prm: R_Len_Prm_Data = 8 and the Prm buffer holds the telegram's data (88
+// 0A 0A 00 0C 31 00 00: Lock_Req | WD_On, factors 10, 10, min_TSDR 0, ident, group 0, byte 7);
+// after the Chk_Cfg: R_Len_Cfg_Data = 2, the Cfg buffer 13 23.
+TEST_P(Services, PrmAndCfgTelegrams_InTheirBuffersWithTheirLengths) {
+  Bare b(GetParam());
+  Chip& c = b.chip;
+  const auto buffer = [&](RegId ptr, std::size_t n) {
+    const std::uint32_t at = static_cast<std::uint32_t>(c.read(rd(c, ptr)))
+                             << c.profile().segment_shift;
+    Bytes v;
+    for (std::uint32_t i = 0; i < n; ++i) v.push_back(c.read(at + i));
+    return v;
+  };
+  ASSERT_TRUE(b.master.fdl_status().answer);
+  b.master.set_prm();
+  EXPECT_EQ(c.read(rd(c, RegId::R_Len_Prm_Data)), 8);
+  EXPECT_EQ(buffer(RegId::R_Prm_Buf_Ptr, 8),
+            (Bytes{0x88, 0x0A, 0x0A, 0x00, 0x0C, 0x31, 0x00, 0x00}));
+  ASSERT_EQ(c.read(0x0E), 0x00);
+  b.master.chk_cfg();
+  EXPECT_EQ(c.read(rd(c, RegId::R_Len_Cfg_Data)), 2);
+  EXPECT_EQ(buffer(RegId::R_Cfg_Buf_Ptr, 2), (Bytes{0x13, 0x23}));
+}
+
 // chip-facts §5.4 [S-AUX]: Set_Prm, Chk_Cfg are received into an Aux buffer; "Buffer too small →
 // ASIC answers 'no resources' (RR)." The driver (Responder::init) sizes its Aux buffers for 8
 // bytes (7 + the Spec_User_Prm_Byte); a Set_Prm with 7 + 4 = 11 data bytes is answered RR and
