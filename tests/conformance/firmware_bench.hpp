@@ -1,0 +1,67 @@
+// One chip running an example firmware (firmware/, docs/firmware.md) on its host CPU against
+// the built-in master, for the conformance tests of seeds 000 (DO4) and 001 (CNT2). The module
+// is observed as its user sees it: its ports (the output terminals, the hold lines) with the
+// cycle of each change, and its inputs on the wire.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "../../emu/dp_master.hpp"
+#include "../../emu/firmware_host.hpp"
+#include "conformance.hpp"
+
+namespace conformance {
+
+// A slave parameterised as the module's GSD says (ident, Cfg, user parameters).
+inline dpc31::SlaveConfig gsd_slave(const dpc31_firmware& fw, std::uint8_t address) {
+  dpc31::SlaveConfig s;
+  s.address = address;
+  s.ident = fw.ident;
+  s.cfg.assign(fw.cfg, fw.cfg + fw.cfg_len);
+  s.in_len = fw.in_len;
+  s.out_len = fw.out_len;
+  s.user_prm.assign(fw.user_prm, fw.user_prm + fw.user_prm_len);
+  return s;
+}
+
+struct FirmwareBench {
+  FirmwareBench(dpc31::Profile p, const dpc31_firmware& fw, dpc31::SlaveConfig slave,
+                std::uint32_t baud = 1'500'000)
+      : chip({p, dpc31::BusMode::intel, 0}),
+        host(fw),
+        master(chip, dpc31::MasterConfig{2, baud, 100, 33}, slave) {
+    chip.set_log_sink(nullptr);
+    dpc31::DirectBus bus(chip);
+    host.init(bus, slave.address);
+    master.set_firmware([this](dpc31::BusPort& b) { host.isr(b); });
+  }
+  // Port writes of `port` after cycle `after` (exclusive).
+  [[nodiscard]] std::vector<dpc31::FirmwareHost::PortWrite> writes(unsigned port,
+                                                                   std::uint64_t after = 0) const {
+    std::vector<dpc31::FirmwareHost::PortWrite> v;
+    for (const auto& w : host.port_writes()) {
+      if (w.port == port && w.cycle > after) v.push_back(w);
+    }
+    return v;
+  }
+  [[nodiscard]] std::optional<dpc31::FirmwareHost::PortWrite> last(unsigned port) const {
+    const auto v = writes(port);
+    if (v.empty()) return std::nullopt;
+    return v.back();
+  }
+  [[nodiscard]] std::uint64_t acted(const dpc31::Exchange& ex) const {
+    return ex.request_end - master.bit_cycles() + master.bit_cycles() / 2;
+  }
+  dpc31::Chip chip;
+  dpc31::FirmwareHost host;
+  dpc31::DpMaster master;
+};
+
+// docs/firmware.md "Output latency": the DX_Out ISR starts in the cycle the Data_Exchange is
+// acted on (X/INT active at once, docs/timing.md) and writes a port after 6 bus accesses of 4
+// clocks (Int_Reg x2, Next_Dout_Buffer_Cmd, the U pointer cell, 2 output bytes).
+inline constexpr std::uint64_t kPortLatency = 6 * 4;
+
+}  // namespace conformance
