@@ -227,6 +227,13 @@ std::optional<fdl::Frame> ChipCore::dp_service(const fdl::Frame& req) {
         answer = slave_diag(req);
         break;
       case sap::Get_Cfg:
+        // DPC31 p.33: "accepted in all modes. If the call message contains request data, the
+        // MAC acknowledges with 'no resource'."
+        if (!req.du.empty()) {
+          ++counters.no_resource;
+          answer = short_answer(*this, req, Response::RR);
+          break;
+        }
         answer =
             sap_answer(*this, req, Response::DL,
                        read_buffer(RegId::R_Read_Cfg_Buf_Ptr, cell(RegId::R_Len_Read_Cfg_Data)));
@@ -319,8 +326,10 @@ std::optional<fdl::Frame> ChipCore::set_prm(const fdl::Frame& req) {
     ++counters.no_resource;
     return short_answer(*this, req, Response::RR);
   }
-  // A new parameterisation starts the DP state machine over (outputs to the safe state).
-  if (dp.state != DpState::Wait_Prm || dp.prm.pending) {
+  // A new parameterisation starts the DP state machine over (outputs to the safe state). One
+  // that arrives while the user is still checking the previous one in Wait_Prm is a newer
+  // telegram for the same check: the verdict read answers 01 (conflict).
+  if (dp.state != DpState::Wait_Prm) {
     emit(BlockEvent::Kind::leave_master);
     leave_master();
   }
@@ -418,6 +427,7 @@ std::optional<fdl::Frame> ChipCore::slave_diag(const fdl::Frame& req) {
   emit(BlockEvent::Kind::diag_begin);
   diag_send_begin();
   diag_in_flight = true;
+  dp.diag_requester = req.sa;
   return sap_answer(*this, req, Response::DL, std::move(du));
 }
 
@@ -425,6 +435,10 @@ std::optional<fdl::Frame> ChipCore::read_io(const fdl::Frame& req) {
   if (dp.state != DpState::Data_Exchange) {
     ++counters.not_allowed;
     return short_answer(*this, req, Response::RS);
+  }
+  if (!req.du.empty()) {  // DPC31 p.33: request data length != 0: "no resource"
+    ++counters.no_resource;
+    return short_answer(*this, req, Response::RR);
   }
   if (fdl::sap_number(*req.dsap) == sap::Rd_Inp) {
     emit(BlockEvent::Kind::din);
@@ -554,9 +568,12 @@ bool ChipCore::user_watchdog_tick() {
 void ChipCore::dp_response_sent() {
   if (!diag_in_flight) return;
   diag_in_flight = false;
-  const bool stat = sent_diag_has_stat_diag();
-  emit(BlockEvent::Kind::diag_end, stat ? 1 : 0);
-  diag_send_end(stat);
+  // Diag_Flag is cleared when "the relevant master" fetched (SPC3 p.32): the locking master, or
+  // any master while none holds the lock. Another master's fetch leaves it as it is.
+  const bool relevant = dp.master_add == 0xFF || dp.diag_requester == dp.master_add;
+  const bool flag = relevant ? sent_diag_has_stat_diag() : buffers.diag_flag;
+  emit(BlockEvent::Kind::diag_end, flag ? 1 : 0);
+  diag_send_end(flag);
 }
 
 }  // namespace dpc31
@@ -574,7 +591,7 @@ void handshake_fields(Ar& ar, S& s) {
 
 template <typename Ar, typename S>
 void fields(Ar& ar, S& s) {
-  static_assert(snap::member_count<DpStateMachine>() == 25, "a new member: add it here");
+  static_assert(snap::member_count<DpStateMachine>() == 26, "a new member: add it here");
   ar.bounded(s.state, DpState::Data_Exchange);
   handshake_fields(ar, s.prm);
   handshake_fields(ar, s.cfg);
@@ -592,6 +609,7 @@ void fields(Ar& ar, S& s) {
   ar(s.prm_wd_fact2);
   ar(s.prm_wd_1ms);
   ar(s.dx_on_new_din);
+  ar(s.diag_requester);
   ar(s.sync_mode);
   ar(s.freeze_mode);
   ar(s.user_wd_armed);

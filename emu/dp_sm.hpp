@@ -77,6 +77,7 @@ struct DpStateMachine {
   bool prm_wd_1ms = false;
   // SPC3 with a Din buffer: Cfg OK given, Data_Exchange at the user's next New_Din_Buffer_Cmd.
   bool dx_on_new_din = false;
+  std::uint8_t diag_requester = 0xFF;  // the master whose Slave_Diag answer is being sent
   bool sync_mode = false;
   bool freeze_mode = false;
   // User watchdog: armed by Res_User_WD, counts Data_Exchange telegrams down.

@@ -125,8 +125,8 @@ TEST_P(BufferSm, DiagFlag_SetOnExchange_ClearedWhenFetched_KeptWithStatDiag) {
 
 // The same sentence, "cleared when 'the relevant master' fetched": a fetch by master 7, which
 // the slave is not locked to, leaves Diag_Flag set; master 2's fetch clears it.
-// DEVIATION (fix pending): the model clears it on any master's fetch.
-TEST_P(BufferSm, DISABLED_DiagFlag_NotClearedByAnotherMastersFetch) {
+// Fixed (issue 13); before: the model clears it on any master's fetch.
+TEST_P(BufferSm, DiagFlag_NotClearedByAnotherMastersFetch) {
   Bare b(GetParam());
   locked_with_new_diag(b, 0x00);
   DpMaster other(b.chip, MasterConfig{7, 12'000'000, 100, 33}, b.master.slave());
@@ -168,6 +168,7 @@ TEST_P(BufferSm, NextDoutBufferCmd_BitLayout_NoExchangeWithNothingInN) {
   ASSERT_EQ(b.chip.read(0x0E), 0x00);
   b.master.chk_cfg();
   ASSERT_EQ(b.chip.read(0x10), 0x00);
+  b.chip.read(0x09);  // first inputs: the SPC3 enters Data_Exchange now (SPC3 p.31)
   b.master.data_exchange({0x11, 0x22, 0x33, 0x44});
   r = b.chip.read(0x0B);
   u = (b.chip.read(0x0A) >> 4) & 3;
@@ -191,6 +192,7 @@ TEST_P(BufferSm, SlowUser_AlwaysGetsTheLatestOutputs) {
   ASSERT_EQ(b.chip.read(0x0E), 0x00);
   b.master.chk_cfg();
   ASSERT_EQ(b.chip.read(0x10), 0x00);
+  b.chip.read(0x09);  // first inputs: the SPC3 enters Data_Exchange now (SPC3 p.31)
   b.chip.read(0x0B);  // the power-on clear
   for (std::uint8_t v = 1; v <= 3; ++v) b.master.data_exchange({v, v, v, v});
   const std::uint8_t r = b.chip.read(0x0B);
@@ -255,6 +257,7 @@ TEST_P(BufferSm, PowerOnAndLeaveMaster_ClearTheOutputsWithDxOut) {
   ASSERT_EQ(c.read(0x0E), 0x00);
   b.master.chk_cfg();
   ASSERT_EQ(c.read(0x10), 0x00);
+  c.read(0x09);  // first inputs: the SPC3 enters Data_Exchange now (SPC3 p.31)
   b.master.data_exchange({0x01, 0x02, 0x03, 0x04});
   r = c.read(0x0B);
   ASSERT_EQ(r & 0x0C, 0x04);

@@ -17,13 +17,22 @@ class Services : public ::testing::TestWithParam<Profile> {};
 const Bytes kRS = {0x10, 0x02, 0x05, 0x03, 0x0A, 0x16};  // 02 + 05 + 03 = 0Ah
 const Bytes kRR = {0x10, 0x02, 0x05, 0x02, 0x09, 0x16};  // 02 + 05 + 02 = 09h
 
-// The start-up with the test as the user: FDL_Status, Set_Prm, Prm OK, Chk_Cfg, Cfg OK.
+// The start-up with the test as the user: FDL_Status, Set_Prm, Prm OK, Chk_Cfg, Cfg OK, the
+// first inputs (New_Din_Buffer_Cmd).
 void start_by_hand(Bare& b) {
   ASSERT_TRUE(b.master.fdl_status().answer);
   b.master.set_prm();
   ASSERT_EQ(b.chip.read(0x0E), 0x00);
   b.master.chk_cfg();
   ASSERT_EQ(b.chip.read(0x10), 0x00);
+  // The first inputs A1..A4 into U (Din_Buffer_SM bits 5:4), then New_Din_Buffer_Cmd: the SPC3
+  // enters Data_Exchange now (SPC3 p.31).
+  static constexpr RegId kPtr[] = {RegId::R_Din_Buf_Ptr1, RegId::R_Din_Buf_Ptr2,
+                                   RegId::R_Din_Buf_Ptr3};
+  const unsigned u = (b.chip.read(0x08) >> 4) & 3u;
+  const std::uint32_t base = buffer_base(b.chip, kPtr[u - 1]);
+  for (std::uint32_t k = 0; k < 4; ++k) b.chip.write(base + k, static_cast<std::uint8_t>(0xA1 + k));
+  b.chip.read(0x09);
 }
 
 }  // namespace
@@ -49,8 +58,8 @@ TEST_P(Services, PrmCfgOkCodes_00Finished01Conflict11NotAllowed) {
 
 // The same for Set_Prm: two Set_Prm (same master, both answered SC) before the user's verdict:
 // User_Prm_Data_Okay answers 01h (conflict), then 00h.
-// DEVIATION (fix pending): the model answers 00h at once and 03h after it.
-TEST_P(Services, DISABLED_PrmOkCode01_ConflictWhenASecondSetPrmArrived) {
+// Fixed (issue 13); before: the model answers 00h at once and 03h after it.
+TEST_P(Services, PrmOkCode01_ConflictWhenASecondSetPrmArrived) {
   Bare b(GetParam());
   ASSERT_TRUE(b.master.fdl_status().answer);
   EXPECT_EQ(wire(b.master.set_prm().answer), Bytes{0xE5});
@@ -133,8 +142,8 @@ TEST_P(Services, RdInpRdOutp_InDataExchangeFromAnyMaster) {
 
 // manual-quotes.md Confirmed (DPC31 p.33): Rd_Inp / Rd_Outp with request data length != 0: "no
 // resource" (RR), also in Data_Exchange.
-// DEVIATION (fix pending): the model answers with the inputs / outputs as for length 0.
-TEST_P(Services, DISABLED_RdInpRdOutp_RequestDataGivesNoResource) {
+// Fixed (issue 13); before: the model answers with the inputs / outputs as for length 0.
+TEST_P(Services, RdInpRdOutp_RequestDataGivesNoResource) {
   Bare b(GetParam());
   start_by_hand(b);
   EXPECT_EQ(wire(b.sap_request(dsap::Rd_Inp, {0x00}).answer), kRR);
@@ -162,8 +171,8 @@ TEST_P(Services, GetCfg_AcceptedInAllModes) {
 
 // The same sentence: "If the call message contains request data, the MAC acknowledges with 'no
 // resource'." Get_Cfg with one request byte, in Wait_Prm and in Data_Exchange: RR.
-// DEVIATION (fix pending): the model answers with the configuration.
-TEST_P(Services, DISABLED_GetCfg_RequestDataGivesNoResource) {
+// Fixed (issue 13); before: the model answers with the configuration.
+TEST_P(Services, GetCfg_RequestDataGivesNoResource) {
   Bare b(GetParam());
   ASSERT_TRUE(b.master.fdl_status().answer);
   EXPECT_EQ(wire(b.sap_request(dsap::Get_Cfg, {0x00}).answer), kRR);
