@@ -44,21 +44,6 @@ TEST(Cli, BadArgumentsExit2) {
   EXPECT_EQ(run("").rc, 2);
 }
 
-// --variant b|c|s on every subcommand that takes --profile; only with --profile vpc3plus.
-TEST(Cli, VariantIsForVpc3plusOnly) {
-  for (const char* sub : {"demo", "cosim --seeds 1 --cycles 10 --quiet", "soak --cycles 1000",
-                          "serve --tcp 0", "bridge --pty /nonexistent/x --firmware DO4"}) {
-    const Result r = testutil::run_command(std::string(DPC31_CLI) + " " + sub +
-                                           " --profile dpc31 --variant s 2>&1 >/dev/null");
-    EXPECT_EQ(r.rc, 2) << sub;
-    EXPECT_NE(r.out.find("--variant is for --profile vpc3plus"), std::string::npos)
-        << sub << ": " << r.out;
-    EXPECT_EQ(run(std::string(sub) + " --profile vpc3plus --variant x").rc, 2) << sub;
-  }
-  EXPECT_EQ(run("demo --profile vpc3plus --variant s").rc, 0);
-  EXPECT_EQ(run("cosim --profile vpc3plus --variant s --seeds 2 --cycles 2000 --quiet").rc, 0);
-}
-
 TEST(Cli, RegsJsonIsValidAndComplete) {
   for (dpc31::Profile p : dpc31::kAllProfiles) {
     const auto& desc = dpc31::profile_desc(p);
