@@ -91,6 +91,29 @@ void Chip::on_irq_change(std::function<void(std::uint64_t, bool)> cb) {
 void Chip::set_log_sink(LogSink sink) { core_->sink = std::move(sink); }
 const ProfileDesc& Chip::profile() const { return *core_->prof; }
 BusMode Chip::bus_mode() const { return core_->bus; }
+std::optional<Vpc3Variant> Chip::vpc3_variant() const { return core_->variant; }
+
+bool parse_vpc3_variant(std::string_view s, Vpc3Variant& out) {
+  for (Vpc3Variant v : kAllVpc3Variants) {
+    if (s == vpc3_variant_name(v)) {
+      out = v;
+      return true;
+    }
+  }
+  return false;
+}
+
+std::string_view vpc3_variant_name(Vpc3Variant v) {
+  switch (v) {
+    case Vpc3Variant::b:
+      return "b";
+    case Vpc3Variant::c:
+      return "c";
+    case Vpc3Variant::s:
+      return "s";
+  }
+  return "?";
+}
 
 std::int32_t Chip::addr_of(RegId id) const {
   const RegDesc* r = core_->reg(id);
@@ -192,7 +215,8 @@ void Chip::load_state(std::span<const std::uint8_t> bytes) {
   const std::span<const std::uint8_t> payload = snap::open(bytes, header_of(c));
   // Decode into a fresh core (its tables built from the same profile); *core_ is untouched until
   // everything has been read and checked.
-  auto fresh = std::make_unique<ChipCore>(ChipOptions{c.prof->id, c.bus, c.clock_hz, c.engine});
+  auto fresh =
+      std::make_unique<ChipCore>(ChipOptions{c.prof->id, c.bus, c.clock_hz, c.engine, c.variant});
   fresh->sink = nullptr;
   snap::Reader r(payload);
   core_fields(r, *fresh);

@@ -72,6 +72,8 @@ struct ChipCore {
 
   const ProfileDesc* prof;
   BusMode bus;
+  std::optional<Vpc3Variant> variant;  // vpc3plus only (ChipOptions::variant)
+  std::uint8_t release;                // Status_Reg bits 15..12: the profile's, or the variant
   std::uint32_t clock_hz;
   Engine engine;
   std::uint64_t now = 0;

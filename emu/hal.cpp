@@ -80,8 +80,18 @@ using dpc31::hal::bus;
 extern "C" {
 
 dpc31_chip* dpc31_create(const char* profile, int motorola) {
+  return dpc31_create_variant(profile, nullptr, motorola);
+}
+
+dpc31_chip* dpc31_create_variant(const char* profile, const char* variant, int motorola) {
   dpc31::ChipOptions o;
   if (profile == nullptr || !dpc31::parse_profile(profile, o.profile)) return nullptr;
+  if (variant != nullptr) {
+    dpc31::Vpc3Variant v{};
+    if (o.profile != dpc31::Profile::vpc3plus || !dpc31::parse_vpc3_variant(variant, v))
+      return nullptr;
+    o.variant = v;
+  }
   o.bus = motorola != 0 ? dpc31::BusMode::motorola : dpc31::BusMode::intel;
   return new dpc31_chip(o);
 }

@@ -62,6 +62,13 @@ void ChipCore::start() {
   buffers.in_clear = false;
   dp.station = cell(RegId::R_TS_Adr);
   dp.no_add_change = cell(RegId::R_Real_No_Add_Change) == 0xFF;
+  // R_GC_Command at every start of the DP slave: the DPC31 presets FFh "at initialization"
+  // (seed 003; DPC31 p.26: MAC_Start is when "the DPS is powered up"), the SPC3 00h "during
+  // initialization" (SPC3 p.36); the VPC3+ leaves the cell alone ("not initialized", VPC3+C p.50).
+  // The preset is the cell's reset value of the register description.
+  if (prof->id != Profile::vpc3plus) {
+    set_cell(RegId::R_GC_Command, static_cast<std::uint8_t>(reg(RegId::R_GC_Command)->reset));
+  }
   mac_start_search();
   log(LogLevel::info, "Start_SPC3: Offline -> Passive_Idle");
   // Power-on: the ASIC clears the output buffer and hands it to the user (DX_Out).
@@ -111,7 +118,7 @@ std::uint16_t ChipCore::status() const {
   v |= static_cast<unsigned>(dp.state) << 4;
   v |= static_cast<unsigned>(timers.wd) << 6;
   v |= static_cast<unsigned>(baud_code) << 8;
-  v |= static_cast<unsigned>(prof->release) << 12;
+  v |= static_cast<unsigned>(release) << 12;
   return static_cast<std::uint16_t>(v);
 }
 

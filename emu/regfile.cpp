@@ -26,9 +26,16 @@ std::string field_names(const RegDesc& r, std::uint16_t mask) {
 ChipCore::ChipCore(const ChipOptions& opt)
     : prof(&profile_desc(opt.profile)),
       bus(opt.bus),
+      variant(opt.variant),
+      release(opt.variant ? static_cast<std::uint8_t>(*opt.variant) : prof->release),
       clock_hz(opt.clock_hz != 0 ? opt.clock_hz : chip_timing().clock_hz),
       engine(opt.engine),
       sink(stderr_sink()) {
+  if (variant && prof->id != Profile::vpc3plus) {
+    throw std::invalid_argument(
+        fmt::format("a VPC3+ variant ({}) on the {} profile: only vpc3plus has variants",
+                    vpc3_variant_name(*variant), prof->name));
+  }
   const std::size_t size = std::size_t{1} << prof->address_bits;
   mem.assign(size, 0);
   rd_map.assign(size, kNoReg);
@@ -298,8 +305,12 @@ void ChipCore::write_reg(const RegDesc& r, std::uint32_t offset, std::uint8_t va
   auto next = static_cast<std::uint16_t>((old & ~store) | (w & store));
   next = static_cast<std::uint16_t>(next & ~(w & r.w1c));
   next = static_cast<std::uint16_t>(next | (w & r.w1s));
-  // QEMU's rule: a write that would change a reserved bit is a guest error.
-  const auto rsvd_change = static_cast<std::uint16_t>((w ^ old) & r.rsvd & lane);
+  // QEMU's rule: a write that would change a reserved bit is a guest error. What the write would
+  // make of a reserved bit follows the register's own action: a reset or acknowledge port would
+  // clear it, a set port set it, storage take the written value. So FFh to Mode_Reg1_R or
+  // Int_Ack_Reg, where the reserved target bits are 0 already, changes nothing and is no error.
+  const auto would = static_cast<std::uint16_t>(r.w1c != 0 ? old & ~w : r.w1s != 0 ? old | w : w);
+  const auto rsvd_change = static_cast<std::uint16_t>((would ^ old) & r.rsvd & lane);
   if (rsvd_change != 0) {
     log(LogLevel::warn, "{}: write would change reserved bits {:#06x}: ignored", r.name,
         rsvd_change);

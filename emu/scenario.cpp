@@ -378,6 +378,20 @@ class Parser {
       if (!parse_profile(pos_[0], s_.chip.profile)) {
         fail(fmt::format("unknown profile '{}' (spc3, vpc3plus, dpc31)", shown(pos_[0])));
       }
+      if (s_.chip.variant && s_.chip.profile != Profile::vpc3plus) {
+        fail("a 'variant' was given: only profile vpc3plus has variants");
+      }
+    } else if (cmd_ == "variant") {
+      positional(1, 1, "one of b, c, s");
+      no_options();
+      Vpc3Variant v{};
+      if (!parse_vpc3_variant(pos_[0], v)) {
+        fail(fmt::format("unknown variant '{}' (b, c, s)", shown(pos_[0])));
+      }
+      if (s_.chip.profile != Profile::vpc3plus) {
+        fail("'variant' needs 'profile vpc3plus' before it: only the VPC3+ has variants");
+      }
+      s_.chip.variant = v;
     } else if (cmd_ == "bus") {
       positional(1, 1, "intel or motorola");
       no_options();
@@ -906,8 +920,11 @@ class Runner {
 
   ScenarioOutcome run() {
     if (walk_) {
-      walk_(fmt::format("scenario {}: profile {}, bus {}, master {} -> slave {} at {} baud",
+      walk_(fmt::format("scenario {}: profile {}{}, bus {}, master {} -> slave {} at {} baud",
                         s_.file, profile_name(s_.chip.profile),
+                        s_.chip.variant
+                            ? fmt::format(", variant {}", vpc3_variant_name(*s_.chip.variant))
+                            : std::string(),
                         s_.chip.bus == BusMode::intel ? "intel" : "motorola", s_.master.address,
                         s_.user.slave.address, s_.master.baud));
     }

@@ -154,6 +154,9 @@ void TraceRecorder::attach(Chip& chip) {
   header_.emplace_back(kTraceMagic);
   for (const std::string& n : notes_) header_.push_back(n.empty() ? "#" : "# " + n);
   header_.push_back(fmt::format("profile {}", profile_name(chip.profile().id)));
+  if (chip.vpc3_variant()) {
+    header_.push_back(fmt::format("variant {}", vpc3_variant_name(*chip.vpc3_variant())));
+  }
   header_.push_back(
       fmt::format("bus {}", chip.bus_mode() == BusMode::intel ? "intel" : "motorola"));
   header_.push_back(fmt::format("clock {}", chip.clock_hz()));
@@ -486,6 +489,16 @@ class TraceParser {
       if (!parse_profile(w[1], t_.chip.profile)) {
         fail(fmt::format("unknown profile '{}' (spc3, vpc3plus, dpc31)", shown(w[1])));
       }
+    } else if (k == "variant") {
+      once(have_variant_);
+      arity(w, 2, "variant b|c|s");
+      if (t_.chip.profile != Profile::vpc3plus || !have_profile_) {
+        fail("'variant' follows 'profile vpc3plus': only the VPC3+ has variants");
+      }
+      Vpc3Variant v{};
+      if (!parse_vpc3_variant(w[1], v))
+        fail(fmt::format("unknown variant '{}' (b, c, s)", shown(w[1])));
+      t_.chip.variant = v;
     } else if (k == "bus") {
       once(have_bus_);
       arity(w, 2, "bus intel|motorola");
@@ -663,15 +676,16 @@ class TraceParser {
       l.cycle = dec(w[1], "cycle");
       ended_ = true;
     } else {
-      fail(fmt::format(
-          "unknown line '{}' (rx, rxd, wr, rd, xint, tx, state, end; header: profile, bus, "
-          "clock, baud)",
-          shown(k)));
+      fail(
+          fmt::format("unknown line '{}' (rx, rxd, wr, rd, xint, tx, state, end; header: profile, "
+                      "variant, bus, clock, baud)",
+                      shown(k)));
     }
   }
 
   Trace& t_;
   bool have_profile_ = false;
+  bool have_variant_ = false;
   bool have_bus_ = false;
   bool have_clock_ = false;
   bool have_baud_ = false;

@@ -35,6 +35,9 @@ module dpc31_blocks #(
   input  wire        clk,
   input  wire        rst,
   input  wire        motorola,
+  // Status_Reg bits 15..12 (static): the release, 0 on spc3 / dpc31; on vpc3plus the ASIC type
+  // of the variant, Bh VPC3+B, Ch VPC3+C, Eh VPC3+S
+  input  wire  [3:0] asic_type,
   // bus port
   input  wire [12:0] bus_addr,
   input  wire  [7:0] bus_wdata,
@@ -333,10 +336,6 @@ module dpc31_blocks #(
   localparam integer ST_RELEASE = `DPC31B_PSEL(`SPC3_Status_Reg_Release_POS,
                                                `VPC3_Status_Reg_Release_POS,
                                                `DPC31_Status_Reg_Release_POS);
-  localparam [15:0] STATUS_RESET = `DPC31B_PSEL(`SPC3_Status_Reg_RESET, `VPC3_Status_Reg_RESET,
-                                                `DPC31_Status_Reg_RESET);
-  // The release nibble (vpc3plus Ch) is the only constant part of the reset value.
-  localparam [15:0] STATUS_RELEASE = STATUS_RESET & (16'hF << ST_RELEASE);
 
   // Buffer state machine bytes.
   localparam integer SM_D = `DPC31B_PSEL(`SPC3_Dout_Buffer_SM_D_POS, `VPC3_Dout_Buffer_SM_D_POS,
@@ -665,6 +664,9 @@ module dpc31_blocks #(
       nx_n_cl = 1'b0;
       nx_in_clear = 1'b0;
       nx_ut_cnt = user_period(nx_mode_reg0);  // first tick P cycles after this cycle
+      // R_GC_Command preset at every start of the DP slave: FFh dpc31, 00h spc3 (the cell's reset
+      // value); the VPC3+ leaves the cell alone.
+      if (!IS_VPC3) nx_gc_command = GC_COMMAND_RESET;
       dout_clear;
     end
   endtask
@@ -1067,7 +1069,7 @@ module dpc31_blocks #(
         rd16 = nx_irr & ~nx_imr;
         nx_bus_rdata = lane_hi ? rd16[15:8] : rd16[7:0];
       end else if (a[12:1] == A_STATUS[12:1]) begin
-        rd16 = STATUS_RELEASE | ({15'd0, nx_started} << ST_STARTED) |
+        rd16 = ({12'd0, asic_type} << ST_RELEASE) | ({15'd0, nx_started} << ST_STARTED) |
                ({15'd0, nx_diag_flag} << ST_DIAG_FLAG) | ({14'd0, nx_dp_state} << ST_DP_STATE);
         nx_bus_rdata = lane_hi ? rd16[15:8] : rd16[7:0];
       end else if (a[12:1] == A_MODE_REG0[12:1]) begin

@@ -582,6 +582,24 @@ TEST_F(BadInput, RegsAndDemoOptions) {
 // --- serve, bridge, bench
 // -------------------------------------------------------------------------
 
+// --variant b|c|s on every subcommand that takes --profile: only with --profile vpc3plus, and only
+// those three names. One line, exit 2, nothing on stdout (serve binds nothing, soak runs nothing).
+TEST_F(BadInput, VariantOptions) {
+  for (const std::string sub : {"demo", "cosim --seeds 1 --cycles 10", "soak --cycles 1000",
+                                "serve --tcp 0", "bridge --pty dp0 --firmware DO4"}) {
+    const std::string name = sub.substr(0, sub.find(' '));
+    const Outcome r = dpc31(sub + " --profile dpc31 --variant s");
+    expect_bad(
+        r, "dpc31 " + name + ": --variant is for --profile vpc3plus: only the VPC3+ has variants",
+        sub);
+    EXPECT_EQ(r.out, "") << sub;
+    const Outcome x = dpc31(sub + " --profile vpc3plus --variant x");
+    expect_bad_prefix(x, "dpc31 " + name + ": --variant", sub + " x");
+    EXPECT_EQ(x.out, "") << sub;
+  }
+  EXPECT_EQ(listing(), std::vector<std::string>{}) << "nothing left behind";
+}
+
 TEST_F(BadInput, ServeOptions) {
   spit(path("plain"), "old");
   expect_bad(dpc31("serve --tcp abc"), "dpc31 serve: --tcp 'abc': expected PORT or ADDR:PORT",

@@ -115,6 +115,33 @@ TEST(ScenarioParse, ErrorsNameFileAndLine) {
             "t.scn:1: foreign_master address=2 is our own master's address");
 }
 
+// The header line `variant` makes the chip a VPC3+B, C or S (Status_Reg bits 15..12, read over
+// the bus by the scenario's own chip); it needs profile vpc3plus.
+TEST(ScenarioParse, VariantHeaderChoosesTheVpc3plusAsicType) {
+  for (const auto& [name, nibble] :
+       {std::pair{"b", 0xB}, std::pair{"c", 0xC}, std::pair{"s", 0xE}}) {
+    dpc31::Scenario s;
+    dpc31::ScenarioError err;
+    ASSERT_TRUE(dpc31::parse_scenario(std::string("profile vpc3plus\nvariant ") + name +
+                                          "\nstartup\nexpect dp_state Data_Exchange\n",
+                                      "t.scn", s, err))
+        << err.text();
+    int seen = -1;
+    dpc31::ScenarioHooks hooks;
+    hooks.at_end = [&](dpc31::Chip& c) { seen = c.read(0x05) >> 4; };  // Status_Reg high byte
+    Lines walk;
+    const dpc31::ScenarioOutcome out = dpc31::run_scenario(s, walk.sink(), {}, hooks);
+    EXPECT_TRUE(out.ok());
+    EXPECT_EQ(seen, nibble) << name;
+    EXPECT_TRUE(walk.has(std::string("profile vpc3plus, variant ") + name)) << name;
+  }
+  EXPECT_EQ(parse_error("profile spc3\nvariant s\n"),
+            "t.scn:2: 'variant' needs 'profile vpc3plus' before it: only the VPC3+ has variants");
+  EXPECT_EQ(parse_error("profile vpc3plus\nvariant d\n"), "t.scn:2: unknown variant 'd' (b, c, s)");
+  EXPECT_EQ(parse_error("profile vpc3plus\nvariant s\nprofile dpc31\n"),
+            "t.scn:3: a 'variant' was given: only profile vpc3plus has variants");
+}
+
 TEST(ScenarioParse, FaultsNeedARequestToDamage) {
   EXPECT_EQ(parse_error("startup\ncorrupt parity\n"), "t.scn:2: no request follows to damage");
   EXPECT_EQ(parse_error("startup\nbad_fcs\nexpect dp_state Wait_Prm\nsilence 1ms\n"),

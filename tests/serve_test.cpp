@@ -330,6 +330,18 @@ INSTANTIATE_TEST_SUITE_P(
 
 // --- several clients ------------------------------------------------------------------------
 
+// `dpc31 serve --profile vpc3plus --variant s`: a VPC3+S behind the socket, its ASIC type read
+// over the bus as the serial-mode driver reads it (Status_Reg high byte & F0h = E0h).
+TEST(Serve, VariantChoosesTheVpc3plusAsicType) {
+  for (const auto& [name, high] : {std::pair{"b", "0xb0"}, std::pair{"s", "0xe0"}}) {
+    ServerProcess server(kCli, {"--tcp", "0", "--profile", "vpc3plus", "--variant", name});
+    LineClient a = LineClient::tcp(server.port());
+    EXPECT_EQ(a.command("read 0x05"), std::string("OK ") + high);
+    EXPECT_TRUE(a.command("info").starts_with(
+        std::string("OK protocol=1 profile=vpc3plus variant=") + name + " bus=intel"));
+  }
+}
+
 TEST(Serve, TwoClientsShareOneChip) {
   TempDir dir;
   ServerProcess server(kCli, {"--tcp", "0", "--unix", dir.file("s")});

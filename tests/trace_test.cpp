@@ -260,6 +260,27 @@ TEST(TraceFile, AnUnexpectedEdgeBeforeTheEnd) {
   EXPECT_EQ(msg, "t.trace:9: expected no more X/INT edges, got xint 1 at cycle 12");
 }
 
+// A run on a VPC3+S records `variant s` after the profile; the replay makes the same chip (its
+// state lines carry Status_Reg with the ASIC type Eh). Without the line the replay runs on a
+// VPC3+C and the first state line differs.
+TEST(TraceFile, TheVariantIsRecordedAndReplayed) {
+  const std::string text = record("profile vpc3plus\nvariant s\nstartup\n");
+  std::vector<std::string> v = lines_of(text);
+  const std::size_t p = find_line(v, "profile vpc3plus");
+  ASSERT_LT(p + 1, v.size());
+  EXPECT_EQ(v[p + 1], "variant s");
+  EXPECT_NE(text.find(" status=E"), std::string::npos);
+  std::string msg;
+  EXPECT_EQ(replay_text(text, msg), 0) << msg;
+  v.erase(v.begin() + static_cast<std::ptrdiff_t>(p + 1));
+  EXPECT_EQ(replay_text(join(v), msg), 1);
+  EXPECT_NE(msg.find("status"), std::string::npos) << msg;
+  v.insert(v.begin() + static_cast<std::ptrdiff_t>(p), "variant s");  // before its profile
+  EXPECT_EQ(replay_text(join(v), msg), 2);
+  EXPECT_EQ(msg, "t.trace:" + std::to_string(p + 1) +
+                     ": 'variant' follows 'profile vpc3plus': only the VPC3+ has variants");
+}
+
 TEST(TraceFile, ReplayChecksAHandWrittenTrace) {
   // Start_SPC3 on the DPC31 at 12 (docs/timing.md): DX_Out from the power-on clear; unmasked,
   // X/INT goes active in the same cycle.

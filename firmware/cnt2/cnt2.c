@@ -26,11 +26,18 @@ static int check_prm(const uint8_t* prm, uint8_t len) {
   return len == 0;
 }
 
+/* The safe state of the outputs: the counters stop; the MSG bits, held or not, stay. */
+static void stop_counters(void) { C[0].enabled = C[1].enabled = 0; }
+
 static void outputs(const uint8_t* out, int cleared) {
   int c;
+  if (cleared) { /* Clear_Data, a fail-safe exchange, Leave_Master: the ASIC cleared the outputs, */
+    stop_counters(); /* the master did not write LOGMSG 0: a hold stays until it does */
+    return;
+  }
   for (c = 0; c < 2; ++c) {
     cnt2_channel* ch = &C[c];
-    const uint8_t ctl = cleared ? 0 : out[c];
+    const uint8_t ctl = out[c];
     const uint8_t hold = (uint8_t)((ctl & CNT_LOGMSG) != 0);
     ch->enabled = (uint8_t)((ctl & CNT_EN) != 0 && (ctl & CNT_RESET) == 0);
     if (ctl & CNT_RESET) ch->counter = 0;
@@ -59,7 +66,7 @@ static void inputs(uint8_t* in) {
 /* Communication lost: the counters stop (outputs to the safe state); messages are kept. */
 static void comm_lost(int why) {
   (void)why;
-  C[0].enabled = C[1].enabled = 0;
+  stop_counters();
 }
 
 static const uint8_t kCfg[2] = {0x21, 0x15};

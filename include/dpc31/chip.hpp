@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -24,11 +25,23 @@ namespace dpc31 {
 // evaluates every clock as RTL would and is the reference the event engine is checked against.
 enum class Engine : std::uint8_t { event = 0, per_cycle = 1 };
 
+// The VPC3+ variants, as the ASIC type in Status_Reg bits 15..12 tells them apart (the
+// Profichip driver's dp_if.h: AT_MASK F0h of the high status byte, AT_VPC3B B0h, AT_VPC3C C0h,
+// AT_VPC3S E0h). The value is that nibble. Only the nibble differs in the model.
+enum class Vpc3Variant : std::uint8_t { b = 0xB, c = 0xC, s = 0xE };
+inline constexpr Vpc3Variant kAllVpc3Variants[] = {Vpc3Variant::b, Vpc3Variant::c, Vpc3Variant::s};
+// "b", "c", "s" (the names the CLI, the C HAL and scenario files use).
+bool parse_vpc3_variant(std::string_view s, Vpc3Variant& out);
+std::string_view vpc3_variant_name(Vpc3Variant v);
+
 struct ChipOptions {
   Profile profile = Profile::dpc31;
   BusMode bus = BusMode::intel;
   std::uint32_t clock_hz = 0;  // 0 = the description's default (48 MHz)
   Engine engine = Engine::event;
+  // vpc3plus only (the Chip constructor throws std::invalid_argument for another profile);
+  // unset = VPC3+C, the description's reset value of Status_Reg (docs/decisions.md).
+  std::optional<Vpc3Variant> variant = std::nullopt;
 };
 
 // DP slave state machine (Status_Reg bits 5:4).
@@ -168,6 +181,8 @@ class Chip {
   void set_log_sink(LogSink sink);
 
   [[nodiscard]] const ProfileDesc& profile() const;
+  // The VPC3+ variant the chip was made as (nullopt on the other profiles).
+  [[nodiscard]] std::optional<Vpc3Variant> vpc3_variant() const;
   [[nodiscard]] BusMode bus_mode() const;
 
   // Address of a register's read side (or write side if it has none) in this profile; -1 if the

@@ -36,6 +36,10 @@ typedef struct dpc31_chip dpc31_chip;
 /* profile: "spc3", "vpc3plus" or "dpc31"; motorola: 0 = Intel byte order (XINT low active
  * by default), 1 = Motorola. Returns NULL for an unknown profile. */
 dpc31_chip* dpc31_create(const char* profile, int motorola);
+/* The same with the VPC3+ variant: "b", "c" or "s" (Status_Reg bits 15..12 read Bh, Ch, Eh,
+ * the ASIC type the Profichip drivers check); NULL = "c". Returns NULL for an unknown profile
+ * or variant, or a variant with a profile other than "vpc3plus". */
+dpc31_chip* dpc31_create_variant(const char* profile, const char* variant, int motorola);
 void dpc31_destroy(dpc31_chip* chip);
 
 uint8_t dpc31_read(dpc31_chip* chip, VPC3_ADR addr);

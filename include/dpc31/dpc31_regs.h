@@ -138,7 +138,7 @@ enum dpc31_profile {
 #define SPC3_Status_Reg_Baudrate_Pos                    8u
 #define SPC3_Status_Reg_Baudrate_Msk                    0x0F00u /* 11:8 RO: 0 12M, 1 6M, 2 3M, 3 1.5M, 4 500k, 5 187.5k, 6 93.75k, 7 45.45k, 8 19.2k, 9 9.6k */
 #define SPC3_Status_Reg_Release_Pos                     12u
-#define SPC3_Status_Reg_Release_Msk                     0xF000u /* 15:12 RO: SPC3 0; VPC3+C Ch */
+#define SPC3_Status_Reg_Release_Msk                     0xF000u /* 15:12 RO: SPC3 0; VPC3+ ASIC type: Bh VPC3+B, Ch VPC3+C, Eh VPC3+S (the chosen variant) */
 
 /* Int_Mask_Reg: latch, 16 bit -- Interrupt mask: 1 = masked */
 #define SPC3_Int_Mask_Reg                               0x004u /* write */
@@ -704,7 +704,7 @@ enum dpc31_profile {
 #define VPC3_Status_Reg_Baudrate_Pos                    8u
 #define VPC3_Status_Reg_Baudrate_Msk                    0x0F00u /* 11:8 RO: 0 12M, 1 6M, 2 3M, 3 1.5M, 4 500k, 5 187.5k, 6 93.75k, 7 45.45k, 8 19.2k, 9 9.6k */
 #define VPC3_Status_Reg_Release_Pos                     12u
-#define VPC3_Status_Reg_Release_Msk                     0xF000u /* 15:12 RO: SPC3 0; VPC3+C Ch */
+#define VPC3_Status_Reg_Release_Msk                     0xF000u /* 15:12 RO: SPC3 0; VPC3+ ASIC type: Bh VPC3+B, Ch VPC3+C, Eh VPC3+S (the chosen variant) */
 
 /* Int_Mask_Reg: latch, 16 bit -- Interrupt mask: 1 = masked */
 #define VPC3_Int_Mask_Reg                               0x004u /* write */
@@ -1295,7 +1295,7 @@ enum dpc31_profile {
 #define DPC31_Status_Reg_Baudrate_Pos                   8u
 #define DPC31_Status_Reg_Baudrate_Msk                   0x0F00u /* 11:8 RO: 0 12M, 1 6M, 2 3M, 3 1.5M, 4 500k, 5 187.5k, 6 93.75k, 7 45.45k, 8 19.2k, 9 9.6k */
 #define DPC31_Status_Reg_Release_Pos                    12u
-#define DPC31_Status_Reg_Release_Msk                    0xF000u /* 15:12 RO: SPC3 0; VPC3+C Ch */
+#define DPC31_Status_Reg_Release_Msk                    0xF000u /* 15:12 RO: SPC3 0; VPC3+ ASIC type: Bh VPC3+B, Ch VPC3+C, Eh VPC3+S (the chosen variant) */
 
 /* Int_Mask_Reg: latch, 16 bit -- Interrupt mask: 1 = masked */
 #define DPC31_Int_Mask_Reg                              0x0004u /* write */

@@ -16,6 +16,7 @@
 #include "../../emu/uart.hpp"
 #include "../bridge/engine.hpp"
 #include "../bridge/pty.hpp"
+#include "variant_option.hpp"
 
 namespace dpc31::cli {
 
@@ -99,6 +100,7 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
   if (!parse_profile(o.profile, c.setup.chip.profile)) {
     return bad(fmt::format("unknown profile '{}' (spc3, vpc3plus, dpc31)", o.profile));
   }
+  if (const std::string why = apply_variant(o.variant, c.setup.chip); !why.empty()) return bad(why);
   if (!parse_uint(o.address, 125, v)) {
     return bad(fmt::format("--address '{}' must be a station address 0..125", o.address));
   }
@@ -329,6 +331,7 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
   b->add_option("--baud", o.baud, "baud rate of the bus (a PROFIBUS rate)")->capture_default_str();
   b->add_option("--profile", o.profile, "chip profile: spc3, vpc3plus, dpc31")
       ->capture_default_str();
+  add_variant_option(b, o.variant);
   b->add_option("--firmware", o.firmware, "example firmware: " + firmware_names() + " (required)");
   b->add_option("--address", o.address, "station address 0..125")->capture_default_str();
   b->add_option("--pacing", o.pacing,

@@ -14,6 +14,7 @@ struct BridgeOptions {
   std::string pty;  // the symlink to create
   std::string baud = "19200";
   std::string profile = "dpc31";
+  std::string variant;  // --variant (vpc3plus), "" = none
   std::string firmware;
   std::string address = "5";
   std::string pacing = "realtime";

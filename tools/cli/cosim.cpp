@@ -136,7 +136,7 @@ int run_cosim(const CosimOptions& o) {
       return 2;
     }
   }
-  const DutOptions dut{o.profile, o.bus};
+  const DutOptions dut{o.profile, o.bus, o.variant};
   if (!make_rtl_dut(dut, o.mutant)) {
     fmt::print(stderr,
                "dpc31 cosim: no RTL model for profile {} mutant '{}' (built mutants use dpc31)\n",

@@ -1,8 +1,10 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 
+#include "dpc31/chip.hpp"
 #include "dpc31/regdesc.hpp"
 
 namespace dpc31::cli {
@@ -11,6 +13,7 @@ struct CosimOptions {
   Profile profile = Profile::dpc31;
   std::string profile_name = "dpc31";
   BusMode bus = BusMode::intel;
+  std::optional<Vpc3Variant> variant = std::nullopt;  // --variant (vpc3plus)
   std::uint64_t seeds = 10;
   std::uint64_t seed_base = 1;
   std::uint64_t cycles = 20'000;

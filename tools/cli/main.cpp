@@ -20,6 +20,7 @@
 #include "run.hpp"
 #include "serve.hpp"
 #include "soak.hpp"
+#include "variant_option.hpp"
 #include "wavediff_cli.hpp"
 
 namespace {
@@ -47,6 +48,8 @@ int main(int argc, char** argv) {
                    "where the DP session's waveform and capture go (default: TMPDIR/dpc31-demo)");
   demo->add_option("--bus", demo_bus, "bus byte order")
       ->check(CLI::IsMember({"intel", "motorola"}));
+  std::string demo_variant;
+  dpc31::cli::add_variant_option(demo, demo_variant);
 
   std::string regs_profile = "dpc31";
   std::string regs_format = "text";
@@ -102,6 +105,8 @@ int main(int argc, char** argv) {
   cosim->add_option("--profile", cos.profile_name, "chip profile")->check(CLI::IsMember(profiles));
   cosim->add_option("--bus", cos_bus, "bus byte order")
       ->check(CLI::IsMember({"intel", "motorola"}));
+  std::string cos_variant;
+  dpc31::cli::add_variant_option(cosim, cos_variant);
   cosim->add_option("--seeds", cos.seeds, "number of random seeds")
       ->check(CLI::Range(1, 100'000'000));
   cosim->add_option("--seed-base", cos.seed_base, "first seed")->check(CLI::NonNegativeNumber);
@@ -172,6 +177,11 @@ int main(int argc, char** argv) {
     if (cosim->parsed()) {
       dpc31::parse_profile(cos.profile_name, cos.profile);
       cos.bus = cos_bus == "intel" ? dpc31::BusMode::intel : dpc31::BusMode::motorola;
+      dpc31::ChipOptions chip{cos.profile};
+      if (std::string why = dpc31::cli::apply_variant(cos_variant, chip); !why.empty()) {
+        return refuse(why);
+      }
+      cos.variant = chip.variant;
       unsigned k = 0;
       unsigned n = 0;
       char slash = 0;
@@ -189,6 +199,9 @@ int main(int argc, char** argv) {
       dpc31::ChipOptions opt;
       opt.profile = to_profile(demo_profile);
       opt.bus = demo_bus == "intel" ? dpc31::BusMode::intel : dpc31::BusMode::motorola;
+      if (std::string why = dpc31::cli::apply_variant(demo_variant, opt); !why.empty()) {
+        return refuse(why);
+      }
       return dpc31::cli::run_demo(opt, demo_out, stdout);
     }
     if (regs->parsed()) {

@@ -7,6 +7,7 @@
 
 #include "dpc31/regdesc.hpp"
 #include "serve_server.hpp"
+#include "variant_option.hpp"
 
 namespace dpc31::cli {
 
@@ -29,6 +30,7 @@ CLI::App* add_serve_subcommand(CLI::App& app, ServeArgs& a) {
   cmd->add_option("--profile", a.profile, "chip profile")
       ->check(CLI::IsMember({"spc3", "vpc3plus", "dpc31"}));
   cmd->add_option("--bus", a.bus, "bus byte order")->check(CLI::IsMember({"intel", "motorola"}));
+  add_variant_option(cmd, a.variant);
   cmd->add_option("--max-clients", a.max_clients,
                   "clients served at once; more get 'ERR busy' and are closed")
       ->check(CLI::Range(1, 100000));
@@ -42,6 +44,10 @@ int run_serve(const ServeArgs& a, std::FILE* out, std::FILE* err) {
   serve::ServerOptions opt;
   parse_profile(a.profile, opt.chip.profile);  // CLI11's check already refused unknown names
   opt.chip.bus = a.bus == "intel" ? BusMode::intel : BusMode::motorola;
+  if (const std::string why = apply_variant(a.variant, opt.chip); !why.empty()) {
+    fmt::print(err, "dpc31 serve: {}\n", why);
+    return 2;
+  }
   if (!a.tcp.empty()) opt.tcp = a.tcp;
   if (!a.unix_path.empty()) opt.unix_path = a.unix_path;
   opt.max_clients = a.max_clients;

@@ -13,6 +13,7 @@ struct ServeArgs {
   std::string unix_path;  // "" = no Unix socket
   std::string profile = "dpc31";
   std::string bus = "intel";
+  std::string variant;  // --variant (vpc3plus), "" = none
   std::size_t max_clients = 16;
   double idle_timeout = 0;  // seconds, 0 = never
 };

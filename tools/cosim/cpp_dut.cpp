@@ -24,7 +24,8 @@ constexpr std::array<int, Outputs::kCount> kWidths = {
 
 class CppDut final : public Dut {
  public:
-  explicit CppDut(const DutOptions& o) : core_(ChipOptions{o.profile, o.bus, 0}) {
+  explicit CppDut(const DutOptions& o)
+      : core_(ChipOptions{o.profile, o.bus, 0, Engine::event, o.variant}) {
     core_.sink = nullptr;
     core_.reset();
   }

@@ -6,10 +6,12 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "dpc31/chip.hpp"
 #include "dpc31/regdesc.hpp"
 
 namespace dpc31::cosim {
@@ -68,6 +70,11 @@ class Dut {
 struct DutOptions {
   Profile profile = Profile::dpc31;
   BusMode bus = BusMode::intel;
+  std::optional<Vpc3Variant> variant = std::nullopt;  // vpc3plus only (ChipOptions::variant)
+  // Status_Reg bits 15..12: the RTL's static input asic_type.
+  [[nodiscard]] std::uint8_t asic_type() const {
+    return variant ? static_cast<std::uint8_t>(*variant) : profile_desc(profile).release;
+  }
 };
 
 std::unique_ptr<Dut> make_cpp_dut(const DutOptions& o);

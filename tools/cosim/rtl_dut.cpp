@@ -17,6 +17,7 @@ class RtlDut final : public Dut {
  public:
   explicit RtlDut(const DutOptions& o) : top_(std::make_unique<V>(&ctx_)) {
     top_->motorola = o.bus == BusMode::motorola ? 1 : 0;
+    top_->asic_type = o.asic_type();
     top_->clk = 0;
     top_->rst = 1;  // power-on: registers to their reset values before cycle 0
     clock();

@@ -80,7 +80,7 @@ bool record_session(const std::string& scenario_path, Session& out, std::string&
     return false;
   }
   out = Session{};
-  out.options = {sc.chip.profile, sc.chip.bus};
+  out.options = {sc.chip.profile, sc.chip.bus, sc.chip.variant};
   ScenarioHooks hooks;
   hooks.at_start = [&out](Chip& chip) {
     chip.on_block_event([&out](std::uint64_t cycle, const BlockEvent& e) {

@@ -227,9 +227,13 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
       arity(t, 0, 0, "info");
       const ProfileDesc& p = chip_.profile();
       return ok(fmt::format(
-          "protocol={} profile={} bus={} clock_hz={} bus_access_cycles={} address_bits={}",
-          kProtocolVersion, p.name, chip_.bus_mode() == BusMode::intel ? "intel" : "motorola",
-          chip_.clock_hz(), chip_.bus_access_cycles(), p.address_bits));
+          "protocol={} profile={}{} bus={} clock_hz={} bus_access_cycles={} address_bits={}",
+          kProtocolVersion, p.name,
+          chip_.vpc3_variant()
+              ? fmt::format(" variant={}", vpc3_variant_name(*chip_.vpc3_variant()))
+              : std::string(),
+          chip_.bus_mode() == BusMode::intel ? "intel" : "motorola", chip_.clock_hz(),
+          chip_.bus_access_cycles(), p.address_bits));
     }
     if (cmd == "ping") {
       arity(t, 0, 0, "ping");

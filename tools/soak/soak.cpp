@@ -13,6 +13,7 @@
 #include "../../emu/dp_services.hpp"
 #include "../../emu/responder.hpp"
 #include "../../emu/scenario.hpp"
+#include "../cli/variant_option.hpp"
 #include "dpc31/chip.hpp"
 #include "outfile.hpp"
 
@@ -142,6 +143,9 @@ class Soak {
     ChipOptions co;
     if (!parse_profile(o.profile, co.profile)) {
       throw std::invalid_argument("unknown profile '" + o.profile + "'");
+    }
+    if (const std::string why = cli::apply_variant(o.variant, co); !why.empty()) {
+      throw std::invalid_argument(why);
     }
     if (baud_code(o.baud) < 0) throw std::invalid_argument("unsupported baud rate");
     return co;
@@ -338,6 +342,7 @@ CLI::App* add_subcommand(CLI::App& app, Options& o) {
   s->add_option("--profile", o.profile, "chip profile")
       ->capture_default_str()
       ->check(CLI::IsMember({"spc3", "vpc3plus", "dpc31"}));
+  cli::add_variant_option(s, o.variant);
   s->add_option("--baud", o.baud, "bus baud rate")
       ->capture_default_str()
       ->check(

@@ -29,6 +29,7 @@ inline constexpr std::size_t kFaultKinds = 7;
 struct Options {
   std::uint64_t cycles = 1'000'000'000;  // run at least this many chip cycles
   std::string profile = "dpc31";
+  std::string variant;  // --variant (vpc3plus), "" = none
   std::uint32_t baud = 1'500'000;
   std::uint64_t fault_period = 2'000'000;  // cycles of undisturbed exchange between two faults
   std::uint64_t seed = 1;
