@@ -147,6 +147,17 @@ class Firmware {
       while (bus_.read(raddr(RegId::User_Cfg_Data_Okay)) == kConflict) {
       }
       ++cfg_ok;
+      // The SPC3 enters Data_Exchange with the first New_Din_Buffer_Cmd after Cfg OK (SPC3
+      // p.31, docs/decisions.md): the inputs A1..A4 into U, then hand it over.
+      if (p_.id == dpc31::Profile::spc3) {
+        static constexpr RegId kDin[] = {RegId::R_Din_Buf_Ptr1, RegId::R_Din_Buf_Ptr2,
+                                         RegId::R_Din_Buf_Ptr3};
+        const unsigned u = (bus_.read(raddr(RegId::Din_Buffer_SM)) >> 4) & 3u;
+        const std::uint32_t base = std::uint32_t{bus_.read(raddr(kDin[u - 1]))} << p_.segment_shift;
+        for (std::uint32_t i = 0; i < 4; ++i)
+          bus_.write(base + i, static_cast<std::uint8_t>(0xA1 + i));
+        bus_.read(raddr(RegId::New_Din_Buffer_Cmd));
+      }
     }
     if ((ir & irq::DX_Out) != 0) {
       const std::uint8_t r = bus_.read(raddr(RegId::Next_Dout_Buffer_Cmd));

@@ -61,7 +61,7 @@ inline const std::vector<Row>& rows() {
       {ALL, "MinTSDR_Val", -1, 0x0B, 8, 0x0B, "oooooooo"},
       {ALL, "Diag_Buffer_SM", 0x0C, -1, 8, 0x09, "----rrrr"},
       {S | D, "Reserved_0Ch_W", -1, 0x0C, 8, -1, "--------", false, true},
-      {V, "Mode_Reg2", -1, 0x0C, 8, 0x00, "oooooooo"},
+      {V, "Mode_Reg2", -1, 0x0C, 8, 0x01, "oooooooo"},  // GC_Int_Mode = 1 "(default)", VPC3+C p.50
       {ALL, "New_Diag_Buffer_Cmd", 0x0D, -1, 8, -1, "------kk"},
       {S | D, "Reserved_0Dh_W", -1, 0x0D, 8, -1, "--------", false, true},
       {V, "Sync_PW_Reg", -1, 0x0D, 8, 0x00, "uuuuuuuu"},

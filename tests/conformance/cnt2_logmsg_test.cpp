@@ -3,7 +3,7 @@
 // CPU over the C HAL; the built-in master drives the chip on the wire.
 #include "cnt2/cnt2.h"
 #include "conformance.hpp"
-#include "firmware_bench.hpp"
+#include "../firmware_bench.hpp"
 
 using namespace dpc31;
 

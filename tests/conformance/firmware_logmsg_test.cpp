@@ -9,7 +9,7 @@
 #include <utility>
 
 #include "cnt2/cnt2.h"
-#include "firmware_bench.hpp"
+#include "firmware_host_bench.hpp"
 #include "user_side.hpp"
 
 using namespace dpc31;

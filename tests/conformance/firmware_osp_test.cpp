@@ -5,7 +5,7 @@
 // value, refresh monitor in ms (0 = off). Terminal changes are the module's port 0 with their
 // cycle (kPortLatency = 24 clocks after the Data_Exchange is acted on, docs/firmware.md).
 #include "do4/do4.h"
-#include "firmware_bench.hpp"
+#include "firmware_host_bench.hpp"
 #include "user_side.hpp"
 
 using namespace dpc31;

@@ -2,7 +2,7 @@
 // and a fast rate the bridge offers: the module stays in normal operation, the master sees no
 // storm of high-priority answers.
 #include "conformance.hpp"
-#include "firmware_bench.hpp"
+#include "../firmware_bench.hpp"
 
 using namespace dpc31;
 

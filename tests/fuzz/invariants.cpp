@@ -108,6 +108,7 @@ void InvariantChecker::attach(Chip& chip, bool line_idle) {
   mode1_s_ = static_cast<std::uint32_t>(chip.addr_of(RegId::Mode_Reg1_S));
   prm_ok_addr_ = chip.addr_of(RegId::User_Prm_Data_Okay);
   cfg_ok_addr_ = chip.addr_of(RegId::User_Cfg_Data_Okay);
+  new_din_addr_ = chip.addr_of(RegId::New_Din_Buffer_Cmd);
   // The one piece of internal state read: an EOI inactive time already running at attach.
   eoi_until_ = chip.core().irq.eoi_block_until;
   reported_ = chip.irq_active();
@@ -161,9 +162,11 @@ void InvariantChecker::on_block(const BlockEvent& e) {
     }
   } else if (e.kind == K::read) {
     if (static_cast<std::int32_t>(a) == prm_ok_addr_) prm_ok_read_ = true;
-    if (static_cast<std::int32_t>(a) == cfg_ok_addr_) cfg_ok_read_ = true;
-  } else if (e.kind == K::cfg) {
-    cfg_accepted_ = true;
+    if (static_cast<std::int32_t>(a) == cfg_ok_addr_) cfg_ok_read_ = cfg_ok_given_ = true;
+    if (static_cast<std::int32_t>(a) == new_din_addr_) new_din_read_ = true;
+  } else if (e.kind == K::cfg || e.kind == K::prm) {
+    cfg_accepted_ = e.kind == K::cfg;
+    cfg_ok_given_ = false;  // a new telegram needs its verdict again
   }
 }
 
@@ -174,7 +177,7 @@ void InvariantChecker::check() {
   check_xint();
   check_buffers();
   check_dp();
-  prm_ok_read_ = cfg_ok_read_ = cfg_accepted_ = false;
+  prm_ok_read_ = cfg_ok_read_ = cfg_accepted_ = new_din_read_ = false;
 }
 
 void InvariantChecker::check_xint() {
@@ -231,14 +234,17 @@ void InvariantChecker::check_dp() {
   if (now == was) return;
   bool ok = false;
   const char* why = "";
+  if (now == DpState::Wait_Prm) cfg_ok_given_ = false;
   if (now == DpState::Wait_Prm) {
     ok = true;  // Leave_Master, Go_Offline, Not_OK, watchdogs: from anywhere
   } else if (was == DpState::Wait_Prm && now == DpState::Wait_Cfg) {
     ok = prm_ok_read_;
     why = "without a User_Prm_Data_Okay read";
   } else if (was == DpState::Wait_Cfg && now == DpState::Data_Exchange) {
-    ok = cfg_ok_read_;
-    why = "without a User_Cfg_Data_Okay read";
+    // SPC3 with a Din buffer: at the first New_Din_Buffer_Cmd after Cfg OK (docs/decisions.md).
+    ok = cfg_ok_read_ ||
+         (chip_->profile().id == Profile::spc3 && new_din_read_ && cfg_ok_given_);
+    why = "without a User_Cfg_Data_Okay read (SPC3: or a New_Din_Buffer_Cmd after one)";
   } else if (was == DpState::Data_Exchange && now == DpState::Wait_Cfg) {
     ok = cfg_accepted_;
     why = "without an accepted Chk_Cfg";

@@ -90,7 +90,9 @@ class InvariantChecker {
   DpState dp_ = DpState::Wait_Prm;
   bool started_ = false;
   bool prm_ok_read_ = false, cfg_ok_read_ = false, cfg_accepted_ = false;
-  std::int32_t prm_ok_addr_ = -1, cfg_ok_addr_ = -1;
+  bool new_din_read_ = false;
+  bool cfg_ok_given_ = false;  // a Cfg OK since the last Set_Prm / Chk_Cfg / Wait_Prm
+  std::int32_t prm_ok_addr_ = -1, cfg_ok_addr_ = -1, new_din_addr_ = -1;
 
   // answer: the checker's own receiver at the chip's bit rate
   struct RxChar {

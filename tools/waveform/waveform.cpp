@@ -20,7 +20,6 @@ enum Sig : std::uint16_t {
   kRxd,
   kTxd,
   kXInt,
-  kPb3,
   kBusRd,
   kBusWr,
   kBusAddr,
@@ -32,6 +31,7 @@ enum Sig : std::uint16_t {
   kDoutSm,
   kDinSm,
   kDiagSm,
+  kPb3,  // last, so the older signals keep their VCD identifiers
   kCount
 };
 
@@ -40,7 +40,6 @@ enum Sig : std::uint16_t {
 constexpr std::array<SignalDef, kCount> kSignals = {{{"pins.rxd", 1},
                                                      {"pins.txd", 1},
                                                      {"pins.x_int", 1},
-                                                     {"pins.pb3", 1},
                                                      {"bus.rd", 1},
                                                      {"bus.wr", 1},
                                                      {"bus.addr", 13},
@@ -51,7 +50,8 @@ constexpr std::array<SignalDef, kCount> kSignals = {{{"pins.rxd", 1},
                                                      {"blocks.irr", 16},
                                                      {"blocks.dout_sm", 8},
                                                      {"blocks.din_sm", 8},
-                                                     {"blocks.diag_sm", 4}}};
+                                                     {"blocks.diag_sm", 4},
+                                                     {"pins.pb3", 1}}};
 
 struct Event {
   std::uint64_t cycle;
@@ -189,9 +189,11 @@ bool Recorder::finish(std::uint64_t end_cycle, std::string& error) {
     return false;
   }
   std::vector<std::uint32_t> cur(kCount, 0);
+  // Declared scope by scope: PB3 (the newest signal, last in the list) beside the other pins.
   std::vector<std::size_t> order;
   for (std::size_t i = 0; i < kCount; ++i) {
-    if (m.selected[i]) order.push_back(i);
+    if (i != kPb3 && m.selected[i]) order.push_back(i);
+    if (i == kXInt && m.selected[kPb3]) order.push_back(kPb3);
   }
   // The values in force when the window opens, then the changes inside it.
   std::size_t k = 0;
