@@ -78,7 +78,7 @@ inline const std::vector<Row>& rows() {
       {S | D, "Reserved_12h_R", 0x12, -1, 8, -1, "--------", false, true},
       {V, "DXBout_Buffer_SM", 0x12, -1, 8, 0x00, "uuuuuuuu"},
       {S | D, "Reserved_12h_W", -1, 0x12, 8, -1, "--------", false, true},
-      {V, "Mode_Reg3", -1, 0x12, 8, 0x00, "uuuuuuuu"},
+      {V, "Mode_Reg3", -1, 0x12, 8, 0x00, "uuuuuuou"},  // bit 1 DX_Int_Mode_2 (Profichip DpCfg.h)
       {S | D, "Reserved_13h_R", 0x13, -1, 8, -1, "--------", false, true},
       {V, "Next_DXBout_Buffer_Cmd", 0x13, -1, 8, 0x00, "uuuuuuuu"},
       {ALL, "Reserved_13h_W", -1, 0x13, 8, -1, "--------", false, true},
