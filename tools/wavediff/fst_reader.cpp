@@ -362,8 +362,11 @@ Geometry read_geometry(std::FILE* f, const std::string& path, const fst_chain::B
   for (int i = 0; i < 8; ++i) uclen = uclen << 8 | head[i];
   for (int i = 8; i < 16; ++i) handles = handles << 8 | head[i];
   const std::uint64_t clen = b.len - 24;
-  // At most 5 bytes a varint: a longer claim is not a geometry of this many handles.
-  if (handles > (std::uint64_t{1} << 28) || uclen > 5 * handles || clen > uclen) {
+  // At most 5 bytes a varint: a longer claim is not a geometry of this many handles; and zlib
+  // packs at most about 1032 : 1, so a larger claim is not what the compressed bytes hold (the
+  // buffer is sized by the claim).
+  if (handles > (std::uint64_t{1} << 28) || uclen > 5 * handles || clen > uclen ||
+      (clen != uclen && uclen > 1100 * clen + 64)) {
     corrupt(fmt::format("claims {} handles in {} bytes", handles, uclen));
   }
   std::vector<unsigned char> packed(clen);
