@@ -6,7 +6,9 @@
 # finding 6 of docs/robustness.md. Prints the summary row (stats.py) and, on failure, the end of
 # the log.
 set -u
-target=$1 seconds=$2 build=$3 work=$4
+target=$1 seconds=$2
+mkdir -p "$4"
+build=$(cd "$3" && pwd) work=$(cd "$4" && pwd)  # run.sh changes directory
 src=$(cd "$(dirname "$0")" && pwd)
 "$src/run.sh" "$target" "$seconds" "$build" "$work"
 rc=$?
