@@ -6,9 +6,11 @@ cd "$(dirname "$0")"
 
 # Build: compiler, CMake, Verilator and the libraries. Checks in the test suite: gtkwave
 # (vcd2fst / fst2vcd), sigrok-cli (UART decode of our waveforms), tshark (our pcapng captures),
-# python3 (a DP master on the pty of dpc31 bridge).
+# python3 (a DP master on the pty of dpc31 bridge). The fuzz build of test.sh: clang with its
+# sanitizer and libFuzzer runtimes (libclang-rt-14-dev), ninja.
 packages=(cmake g++ make verilator libfmt-dev libcli11-dev nlohmann-json3-dev libgtest-dev
-  libbenchmark-dev zlib1g-dev gtkwave sigrok-cli tshark python3)
+  libbenchmark-dev zlib1g-dev gtkwave sigrok-cli tshark python3 clang libclang-rt-14-dev
+  ninja-build)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

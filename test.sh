@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # The whole test suite, as CI runs it (.ci/run): setup.sh installs what is missing and builds
-# build/; the suite runs there; then the sanitizer build (CMakePresets.json, preset asan:
+# build/; the suite runs there; then the fuzz build (clang, ASan + UBSan + libFuzzer, only what
+# the fuzz targets need, in build-fuzz/, docs/robustness.md) is built and each fuzz target runs
+# for 30 s (CTest tests Fuzz.*); then the sanitizer build (CMakePresets.json, preset asan:
 # AddressSanitizer + UndefinedBehaviorSanitizer in build-asan/, docs/sanitizers.md) is
-# configured, built and its suite run. Exit code 0 only if both suites pass.
+# configured, built and its suite run. Exit code 0 only if all three pass.
 set -uo pipefail
 cd "$(dirname "$0")"
 
@@ -12,6 +14,19 @@ start=$SECONDS
 ctest --test-dir build --output-on-failure -j 2
 normal=$?
 echo "test.sh: normal suite exit code $normal after $((SECONDS - start)) s"
+
+start=$SECONDS
+fuzz=1
+if cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
+    -DCMAKE_CXX_COMPILER=clang++ -DDPC31_FUZZ=ON >/dev/null && ninja -C build-fuzz; then
+  echo "test.sh: fuzz build took $((SECONDS - start)) s"
+  start=$SECONDS
+  ctest --test-dir build-fuzz --output-on-failure -j 2
+  fuzz=$?
+  echo "test.sh: fuzz runs exit code $fuzz after $((SECONDS - start)) s"
+else
+  echo "test.sh: the fuzz build failed"
+fi
 
 start=$SECONDS
 asan=1
@@ -25,4 +40,4 @@ else
   echo "test.sh: the asan build failed"
 fi
 
-[ "$normal" -eq 0 ] && [ "$asan" -eq 0 ]
+[ "$normal" -eq 0 ] && [ "$fuzz" -eq 0 ] && [ "$asan" -eq 0 ]

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "bench_options.hpp"
+#include "cleanup.hpp"
 
 namespace dpc31::bench {
 
@@ -57,6 +58,7 @@ bool take_options(int& argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  dpc31::cleanup::install();  // the large files of a benchmark go when a signal ends it
   if (!take_options(argc, argv)) return 2;
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;

@@ -16,6 +16,7 @@
 
 #include "bench_options.hpp"
 #include "child.hpp"
+#include "cleanup.hpp"
 #include "synthetic_vcd.hpp"
 
 namespace {
@@ -27,6 +28,9 @@ void generate_and_compare(benchmark::State& st, const fs::path& dir) {
   const auto& opt = dpc31::bench::options();
   const std::string a = (dir / "a.vcd").string();
   const std::string b = (dir / "b.vcd").string();
+  // Gigabytes each: removed if a signal ends the run (dpc31 bench passes its own on).
+  const dpc31::cleanup::Entry gone[] = {dpc31::cleanup::Entry::path(a),
+                                        dpc31::cleanup::Entry::path(b)};
   dpc31::wavediff::SyntheticVcd spec;
   spec.steps = dpc31::wavediff::synthetic_steps_for_megabytes(opt.wavediff_mb);
   spec.diff_steps = {spec.steps / 4, spec.steps / 2, spec.steps * 3 / 4, spec.steps - 10};
@@ -64,6 +68,7 @@ void BM_WavediffLargePair(benchmark::State& st) {
   const fs::path dir = (base.empty() ? fs::temp_directory_path() : fs::path(base)) /
                        ("dpc31-bench-wavediff-" + std::to_string(::getpid()));
   fs::create_directories(dir);
+  const dpc31::cleanup::Entry gone = dpc31::cleanup::Entry::dir(dir.string());
   generate_and_compare(st, dir);
   std::error_code ec;
   fs::remove_all(dir, ec);

@@ -158,6 +158,11 @@ class DpMaster {
   // Forgets history() (the counters stay): a long run (dpc31 soak) calls it so memory does not
   // grow with time.
   void clear_history() { history_.clear(); }
+  // Forgets all of history() but its last exchange: the scenario runner calls it once a step is
+  // reported, so that the memory of `dpc31 run` does not grow with the run.
+  void keep_last_exchange() {
+    if (history_.size() > 1) history_.erase(history_.begin(), history_.end() - 1);
+  }
   [[nodiscard]] const MasterCounters& counters() const { return counters_; }
   // Narration of what happened (`dpc31 run` prints it).
   std::function<void(const std::string&)> narrate;

@@ -987,6 +987,7 @@ class Runner {
       report_history();
       report_outputs();
       flush();
+      forget_reported();
     }
     if (hooks_.at_end) hooks_.at_end(chip_);
     out_.final_cycle = chip_.cycle();
@@ -1016,7 +1017,7 @@ class Runner {
   };
 
   void note(std::uint64_t cycle, std::string text) {
-    events_.push_back(Event{cycle, std::move(text)});
+    if (walk_) events_.push_back(Event{cycle, std::move(text)});  // --quiet: nobody reads them
   }
 
   // Events are collected during an action and printed in cycle order: a transaction's line is
@@ -1191,7 +1192,11 @@ class Runner {
       case StepKind::exchange: {
         if (st.has_bytes) outputs_ = st.bytes;
         damage(st, outputs_);
-        for (std::uint64_t i = 0; i < st.count; ++i) with_retries(master_->data_exchange(outputs_));
+        for (std::uint64_t i = 0; i < st.count; ++i) {
+          with_retries(master_->data_exchange(outputs_));
+          report_history();  // as it goes: `exchange 1000000` keeps memory flat
+          forget_reported();
+        }
         break;
       }
       case StepKind::gc:
@@ -1331,6 +1336,28 @@ class Runner {
       note(h[i].request_start, std::move(line));
       reported_ = j + 1;
     }
+  }
+
+  // Once a step is reported, the master's history is not needed but for its last exchange (the
+  // `answer` expect reads it; a damaged request's note may name it): memory stays flat over a
+  // long run. Not while a repeat of a damaged request is still to come (it names a later index).
+  void forget_reported() {
+    const std::size_t n = master_->history().size();
+    if (n < 2 || reported_ != n || repeat_) return;
+    const auto keep_last = [n](auto& by_index) {
+      const auto it = by_index.find(n - 1);
+      if (it == by_index.end()) {
+        by_index.clear();
+        return;
+      }
+      auto v = std::move(it->second);
+      by_index.clear();
+      by_index.emplace(0, std::move(v));
+    };
+    keep_last(notes_);
+    keep_last(sent_);
+    master_->keep_last_exchange();
+    reported_ = 1;
   }
 
   void report_outputs() {

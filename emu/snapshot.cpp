@@ -5,7 +5,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <filesystem>
 
 #include "dpc31/reg_ids.hpp"
 #include "outfile.hpp"
@@ -256,14 +255,9 @@ void write_file_atomic(const std::string& path, std::span<const std::uint8_t> by
 }
 
 std::vector<std::uint8_t> read_file(const std::string& path) {
-  // read_text_file reserves its bound up front: ask for the file's size when it is known.
-  std::error_code ec;
-  const std::uintmax_t size = std::filesystem::file_size(path, ec);
-  const std::size_t bound =
-      ec || size > kMaxFileSize ? kMaxFileSize : static_cast<std::size_t>(size);
   std::string text;
   std::string error;
-  if (!read_text_file(path, bound, "snapshot", text, error)) {
+  if (!read_text_file(path, kMaxFileSize, "snapshot", text, error)) {
     throw SnapshotError(fmt::format("{}: {}", path, error));
   }
   return {text.begin(), text.end()};

@@ -1,40 +1,55 @@
 #include "textfile.hpp"
 
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
-#include <filesystem>
-#include <fstream>
+#include <cerrno>
 
 namespace dpc31 {
 
 bool read_text_file(const std::string& path, std::size_t max_bytes, std::string_view what,
                     std::string& text, std::string& error) {
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) {
-    error = "no such file";
+  // Opened once (a pipe can be read only once) and read in pieces: memory follows what the file
+  // holds, not the cap (a cap of 256 MiB is not allocated for /dev/null).
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) {
+    error = errno == ENOENT ? "no such file" : "cannot open the file";
     return false;
   }
-  if (std::filesystem::is_directory(path, ec)) {
+  struct stat st {};
+  if (::fstat(fd, &st) == 0 && S_ISDIR(st.st_mode)) {
+    ::close(fd);
     error = fmt::format("is a directory, not a {} file", what);
     return false;
   }
-  std::ifstream f(path, std::ios::binary);
-  if (!f) {
-    error = "cannot open the file";
-    return false;
+  constexpr std::size_t kPiece = 64 * 1024;
+  text.clear();
+  for (;;) {
+    const std::size_t have = text.size();
+    const std::size_t want = std::min(kPiece, max_bytes + 1 - have);
+    text.resize(have + want);
+    const ssize_t n = ::read(fd, text.data() + have, want);
+    if (n < 0 && errno == EINTR) {
+      text.resize(have);
+      continue;
+    }
+    text.resize(have + static_cast<std::size_t>(std::max<ssize_t>(n, 0)));
+    if (n < 0) {
+      ::close(fd);
+      error = "cannot read the file";
+      return false;
+    }
+    if (n == 0 || text.size() > max_bytes) break;
   }
-  text.assign(max_bytes + 1, '\0');
-  f.read(text.data(), static_cast<std::streamsize>(text.size()));
-  if (f.bad()) {
-    error = "cannot read the file";
-    return false;
-  }
-  text.resize(static_cast<std::size_t>(f.gcount()));
+  ::close(fd);
   if (text.size() > max_bytes) {
     error = fmt::format("too large for a {} (more than {} bytes)", what, max_bytes);
     return false;
   }
+  text.shrink_to_fit();
   return true;
 }
 

@@ -158,6 +158,81 @@ TEST_F(BridgeEngine, BrokenBytesGoOnTheBusAsTheyCame) {
   EXPECT_EQ(exchange(kFdlStatus), kStatusOk);
 }
 
+// A client that writes garbage as fast as it can (issue 14, finding 8): 1 MiB of FF bytes, which
+// cannot start a telegram, in 4 KiB writes 20 ms of chip time apart. What the bus cannot carry
+// is dropped and reported at most once a second of chip time; consecutive garbage goes on the
+// bus in runs of at most 256 bytes, one log line each. Every byte is accounted for: carried,
+// dropped, or discarded when the client closes.
+TEST_F(BridgeEngine, AGarbageFloodIsLoggedInAFewLinesAndDiscardedWithItsClient) {
+  find_slave();
+  lines_.clear();
+  const Bytes piece(4096, 0xFF);
+  const std::uint64_t start = engine_->cycle();
+  for (int i = 0; i < 256; ++i) {
+    engine_->feed(piece);
+    engine_->run_until(engine_->cycle() + 48'000'000 / 50);
+  }
+  const std::uint64_t seconds = (engine_->cycle() - start) / 48'000'000;
+  engine_->client_gone();
+  const auto number_before = [](const std::string& text, const std::string& what) {
+    const auto at = text.find(what);
+    return at == std::string::npos ? std::uint64_t{0}
+                                   : std::stoull(text.substr(text.rfind('(', at) + 1));
+  };
+  std::uint64_t dropped = 0;
+  std::uint64_t dropped_lines = 0;
+  std::uint64_t discarded = 0;
+  for (const Line& l : tagged("NOTE")) {
+    if (l.text.find(" bytes dropped in the last ") != std::string::npos) {
+      ++dropped_lines;
+      dropped += std::stoull(l.text);
+    }
+    discarded += number_before(l.text, " bytes) dropped: they had not reached the bus");
+  }
+  std::uint64_t carried = 0;
+  for (const Line& l : tagged("RxD")) {
+    const std::string hex = l.text.substr(0, l.text.find("  |"));
+    const std::uint64_t n = (hex.size() + 1) / 3;
+    EXPECT_LE(n, dpc31::bridge::kMaxGarbageRun) << l.text.substr(0, 80);
+    carried += n;
+  }
+  EXPECT_EQ(carried + dropped + discarded, 256u * 4096u);
+  EXPECT_GT(dropped, 900'000u);
+  EXPECT_LE(dropped_lines, seconds + 2) << seconds << " s";
+  EXPECT_LT(lines_.size(), 200u);  // before: a line per dropped byte
+  // Gone with the client: only what is on the line still finishes (one run at most).
+  const std::uint64_t closed = engine_->cycle();
+  EXPECT_TRUE(engine_->settle(48'000'000));
+  EXPECT_LE(engine_->cycle() - closed, (dpc31::bridge::kMaxGarbageRun * 11 + 100) * kT);
+}
+
+// The next master after such a flood is answered within one round of the baud search (the
+// flood fixed no rate, so Baud_Control has expired): docs/timing.md, Baud_Search: 4096 bit times
+// at each of the 10 rates, 12 M first; at 48 MHz the bit times are 4, 8, 16, 32, 96, 256, 512,
+// 1056, 2500 and 5000 cycles. Plus one unanswered FDL_Status period (66 + slot 100 + TSYN 33
+// bit times) for the request in progress when the search reaches 19200 baud.
+TEST_F(BridgeEngine, TheNextMasterAfterAFloodIsAnsweredWithinOneBaudSearchRound) {
+  find_slave();
+  for (int i = 0; i < 256; ++i) {
+    engine_->feed(Bytes(4096, 0xFF));
+    engine_->run_until(engine_->cycle() + 48'000'000 / 50);
+  }
+  EXPECT_EQ(engine_->chip().wd_state(), dpc31::WdState::Baud_Search);
+  engine_->client_gone();
+  const std::uint64_t closed = engine_->cycle();
+  constexpr std::uint64_t kRound =
+      4096ull * (4 + 8 + 16 + 32 + 96 + 256 + 512 + 1056 + 2500 + 5000);
+  constexpr std::uint64_t kPeriod = (66 + 100 + 33) * kT;
+  for (int i = 0; i < 1000 && engine_->cycle() - closed <= kRound + 2 * kPeriod; ++i) {
+    if (exchange(kFdlStatus) == kStatusOk) break;
+  }
+  const std::vector<Line> tx = tagged("TxD");
+  ASSERT_FALSE(tx.empty());
+  EXPECT_EQ(tx.back().text, "10 02 05 00 07 16  | OK 5->2");
+  EXPECT_GT(tx.back().cycle, closed);
+  EXPECT_LE(tx.back().cycle - closed, kRound + kPeriod + (dpc31::bridge::kMaxGarbageRun * 11) * kT);
+}
+
 TEST_F(BridgeEngine, TimePassesWithoutClientAndStatesAreLogged) {
   const std::uint64_t c0 = engine_->cycle();
   engine_->run_until(c0 + 48'000'000);  // one second of silence

@@ -48,6 +48,26 @@ TEST(FuzzFindings, FstHierarchyWithAnAbsurdLengthIsBadInput) {
   }
 }
 
+// FstReader copied as many value bytes as the hierarchy's width from a buffer fstapi sizes by the
+// geometry block's length (ASan: heap-buffer-overflow in FstReader::push; in the release build
+// a file compared with itself "differed"). Both lengths are now compared before any value is
+// read (issue 14, finding 3): a narrower geometry, and a variable-length one (fstapi then calls
+// the variable-length callback with its own length).
+TEST(FuzzFindings, FstValueLengthsMustMatchTheHierarchy) {
+  for (const auto& [f, why] : std::initializer_list<std::pair<const char*, const char*>>{
+           {"fst_geometry_narrower_than_hierarchy",
+            "(corrupt: the variable 'addr' has 13 bits in the hierarchy and 1 bits in the geometry "
+            "block)"},
+           {"fst_geometry_varlen_for_a_16_bit_variable",
+            "(corrupt: the variable 'irr' has 16 bits in the hierarchy and a variable length in "
+            "the geometry block)"}}) {
+    std::string err;
+    EXPECT_EQ(wavediff_self(kDir + "regressions/fst_reader/" + f, err), 2) << f;
+    EXPECT_NE(err.find(std::string(":0: not a readable FST file ") + why), std::string::npos)
+        << f << err;
+  }
+}
+
 // The checks refuse no real file: the seeds (vcd2fst output) still compare equal to themselves.
 TEST(FuzzFindings, FstChecksPassRealFiles) {
   for (const char* f : {"emu.fst", "rtl.fst", "rtl_late_irq.fst"}) {

@@ -12,9 +12,6 @@ namespace dpc31::bridge {
 
 namespace {
 
-// More client bytes than this waiting for the bus are dropped: the client writes faster than
-// the line can carry them (a master never does: it waits for each answer).
-constexpr std::size_t kMaxQueuedBytes = 64 * 1024;
 // Port writes and ISR entries are kept this long by FirmwareHost before the bridge drops them.
 constexpr std::size_t kHistoryLimit = 4096;
 
@@ -209,7 +206,7 @@ void Engine::feed(std::span<const std::uint8_t> bytes) {
     std::vector<std::uint8_t> group;
     group.swap(partial_);
     in_.reset();
-    queue_group(std::move(group));
+    queue_group(std::move(group), st == fdl::Assembler::Status::error);
   }
 }
 
@@ -218,36 +215,73 @@ void Engine::flush_partial() {
   std::vector<std::uint8_t> group;
   group.swap(partial_);
   in_.reset();
-  queue_group(std::move(group));
+  queue_group(std::move(group), true);
 }
 
-void Engine::drop_partial() {
-  if (!partial_.empty())
-    note(fmt::format("dropped an incomplete telegram: {}", hex_bytes(partial_)));
+void Engine::client_gone() {
+  if (!partial_.empty()) {
+    note(fmt::format("dropped an incomplete telegram: {}",
+                     hex_bytes(std::span(partial_).first(
+                         std::min<std::size_t>(partial_.size(), kMaxGarbageRun)))));
+  }
   partial_.clear();
   in_.reset();
+  report_dropped();
+  if (!queue_.empty()) {
+    note(
+        fmt::format("the client's {} queued telegrams ({} bytes) dropped: they had not reached "
+                    "the bus",
+                    queue_.size(), queued_bytes_));
+  }
+  queue_.clear();
+  queued_bytes_ = 0;
 }
 
-void Engine::queue_group(std::vector<std::uint8_t> bytes) {
+void Engine::drop(std::size_t bytes) {
+  if (dropped_ == 0) dropped_since_ = chip_.cycle();
+  dropped_ += bytes;
+  if (chip_.cycle() - last_drop_report_ >= chip_.clock_hz()) report_dropped();
+}
+
+void Engine::report_dropped() {
+  if (dropped_ == 0) return;
+  note(
+      fmt::format("{} bytes dropped in the last {} ms: the client writes faster than the bus "
+                  "carries",
+                  dropped_, (chip_.cycle() - dropped_since_) * 1000 / chip_.clock_hz()));
+  dropped_ = 0;
+  last_drop_report_ = chip_.cycle();
+}
+
+void Engine::queue_group(std::vector<std::uint8_t> bytes, bool garbage) {
   if (queued_bytes_ + bytes.size() > kMaxQueuedBytes) {
-    note(fmt::format("client writes faster than the bus carries: {} bytes dropped", bytes.size()));
+    drop(bytes.size());
     return;
   }
   queued_bytes_ += bytes.size();
+  if (garbage && !queue_.empty() && queue_.back().garbage &&
+      queue_.back().bytes.size() + bytes.size() <= kMaxGarbageRun) {
+    queue_.back().bytes.insert(queue_.back().bytes.end(), bytes.begin(), bytes.end());
+    return;
+  }
   Request r;
-  r.wants_answer = wants_answer(bytes);
+  r.wants_answer = !garbage && wants_answer(bytes);
+  r.garbage = garbage;
   r.bytes = std::move(bytes);
   queue_.push_back(std::move(r));
 }
 
 // Queued requests go on RxD after TSYN of bus idle (all edges of one at once), up to the first
-// that waits for an answer.
+// that waits for an answer, and none that would start more than TSYN from now: the rest waits
+// in the queue (bounded, and dropped with its client), not as RxD edges driven minutes ahead.
+// (A request behind one that wants no answer starts when the chip reaches that one's end.)
 void Engine::start_next() {
   while (!in_flight_ && !queue_.empty()) {
+    const std::uint64_t start = std::max(chip_.cycle(), bus_free_ + std::uint64_t{kTsynBits} * t_);
+    if (start > chip_.cycle() + std::uint64_t{kTsynBits} * t_) break;
     Request r = std::move(queue_.front());
     queue_.pop_front();
     queued_bytes_ -= r.bytes.size();
-    const std::uint64_t start = std::max(chip_.cycle(), bus_free_ + std::uint64_t{kTsynBits} * t_);
     if (log_) {
       log_(start, "RxD", fmt::format("{}  | {}", hex_bytes(r.bytes), telegram_summary(r.bytes)));
     }
@@ -308,6 +342,8 @@ std::uint64_t Engine::next_wake(std::uint64_t limit) const {
         std::min(next, in_flight_ && !answer_.started() ? std::min(slot_end_, now + t_) : now + t_);
   }
   if (!in_flight_ && now < request_end_) next = std::min(next, request_end_);
+  // A queued request starts once its start is TSYN ahead (start_next()).
+  if (!in_flight_ && !queue_.empty()) next = std::min(next, bus_free_);
   return std::clamp(next, now + 1, std::max(limit, now + 1));
 }
 
@@ -325,6 +361,7 @@ void Engine::run_until(std::uint64_t cycle) {
     step_to(next_wake(cycle));
   }
   start_next();
+  if (dropped_ != 0 && chip_.cycle() - last_drop_report_ >= chip_.clock_hz()) report_dropped();
 }
 
 bool Engine::settle(std::uint64_t max_cycles) {

@@ -27,6 +27,12 @@
 namespace dpc31::bridge {
 
 inline constexpr std::uint32_t kTsynBits = 33;
+// More client bytes than this waiting for the bus are dropped: the client writes faster than
+// the line can carry them (a master never does: it waits for each answer).
+inline constexpr std::size_t kMaxQueuedBytes = 64 * 1024;
+// Consecutive bytes that cannot be a telegram go on the bus as one run of at most this many
+// (one log line each), not one byte at a time.
+inline constexpr std::size_t kMaxGarbageRun = 256;
 
 struct Setup {
   ChipOptions chip;
@@ -52,8 +58,10 @@ class Engine {
   Engine(const Engine&) = delete;
   Engine& operator=(const Engine&) = delete;
 
-  // Bytes the client wrote. Each complete telegram (and each run of bytes that cannot start one)
-  // queues for the bus; an incomplete telegram waits for more bytes or flush_partial().
+  // Bytes the client wrote. Each complete telegram (and each run of bytes that cannot start one,
+  // up to kMaxGarbageRun bytes a run) queues for the bus; an incomplete telegram waits for more
+  // bytes or flush_partial(). Beyond kMaxQueuedBytes waiting, bytes are dropped, and reported in
+  // one line per second of chip time at most ("N bytes dropped in the last ... ms").
   void feed(std::span<const std::uint8_t> bytes);
   // The client paused: an incomplete telegram goes on the bus as it is (the chip counts it).
   void flush_partial();
@@ -71,8 +79,12 @@ class Engine {
 
   // TxD characters decoded since the last call, in order.
   std::vector<std::uint8_t> take_output();
-  // Forgets an incomplete telegram (its client went away).
-  void drop_partial();
+  // The client went away: its incomplete telegram and every queued telegram that has not reached
+  // the bus yet are dropped (what is on the line finishes), so that the next client's requests
+  // are not stuck behind a flood of its bytes; one line says how much.
+  void client_gone();
+  // Reports bytes dropped since the last report, whether or not a second has passed.
+  void report_dropped();
 
   [[nodiscard]] const Chip& chip() const { return chip_; }
   [[nodiscard]] std::uint64_t cycle() const { return chip_.cycle(); }
@@ -85,8 +97,10 @@ class Engine {
   struct Request {
     std::vector<std::uint8_t> bytes;
     bool wants_answer = false;
+    bool garbage = false;  // bytes that cannot be a telegram (merged with the next such run)
   };
-  void queue_group(std::vector<std::uint8_t> bytes);
+  void queue_group(std::vector<std::uint8_t> bytes, bool garbage);
+  void drop(std::size_t bytes);
   void start_next();
   void collect();  // TxD characters up to now: output, answer, end of the exchange
   void finish_answer(AnswerCollector& a, std::string_view how);
@@ -105,6 +119,9 @@ class Engine {
   std::vector<std::uint8_t> partial_;  // the telegram being assembled
   std::deque<Request> queue_;
   std::size_t queued_bytes_ = 0;
+  std::uint64_t dropped_ = 0;           // bytes dropped since the last report
+  std::uint64_t dropped_since_ = 0;     // the cycle of the first of them
+  std::uint64_t last_drop_report_ = 0;  // the cycle of the last report
 
   bool in_flight_ = false;  // a request is on the bus and its answer is awaited
   std::uint64_t request_end_ = 0;

@@ -3,7 +3,10 @@
 #include <fmt/core.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -11,6 +14,8 @@
 #include <vector>
 
 #include "child.hpp"
+#include "cleanup.hpp"
+#include "numbers.hpp"
 #include "outfile.hpp"
 
 namespace dpc31::cli {
@@ -264,15 +269,15 @@ CLI::App* add_bench_subcommand(CLI::App& app, BenchArgs& a) {
                               "one short run each and 8 MB wavediff files (a smoke test)");
   cmd->add_option("--json", a.json, "also write the table as JSON to this file");
   cmd->add_option("--min-time", a.min_time, "seconds per benchmark (default 0.5)")
-      ->check(CLI::Range(0.001, 3600.0))
+      ->check(numbers::real(0.001, 3600.0))
       ->excludes(quick);
   cmd->add_option("--wavediff-mb", a.wavediff_mb,
                   "MB of each of item f's two generated VCD files (default 1000)")
-      ->check(CLI::Range(1, 1'000'000))
+      ->check(numbers::whole(1, 1'000'000))
       ->excludes(quick);
   cmd->add_option("--repetitions", a.repetitions,
                   "runs of each benchmark; the table shows the median (default 3)")
-      ->check(CLI::Range(1, 100))
+      ->check(numbers::whole(1, 100))
       ->excludes(quick);
   cmd->add_option("--wavediff-dir", a.wavediff_dir,
                   "where item f's files go (default: TMPDIR; needs twice --wavediff-mb)")
@@ -310,10 +315,18 @@ int run_bench(const BenchArgs& args, std::FILE* out, std::FILE* err) {
     r.spec = &s;
     rs.push_back(r);
   }
-  const fs::path out_file =
-      fs::temp_directory_path() / fmt::format("dpc31-bench-{}.json", ::getpid());
-  const fs::path log_file =
-      fs::temp_directory_path() / fmt::format("dpc31-bench-{}.log", ::getpid());
+  // dpc31_bench's output and log: in a private directory (a fixed name in TMPDIR could be a
+  // link another user made), all removed if a signal ends the run.
+  std::string dir = (fs::temp_directory_path() / "dpc31-bench-XXXXXX").string();
+  if (::mkdtemp(dir.data()) == nullptr) {
+    fmt::print(err, "dpc31 bench: cannot create a directory in {}: {}\n",
+               fs::temp_directory_path().string(), std::strerror(errno));
+    return 2;
+  }
+  const fs::path out_file = fs::path(dir) / "bench.json";
+  const fs::path log_file = fs::path(dir) / "bench.log";
+  const cleanup::Entry gone[] = {cleanup::Entry::path(out_file.string()),
+                                 cleanup::Entry::path(log_file.string()), cleanup::Entry::dir(dir)};
   json context;
   for (std::size_t i = 0; i < rs.size();) {
     std::vector<Row*> item;
@@ -332,6 +345,7 @@ int run_bench(const BenchArgs& args, std::FILE* out, std::FILE* err) {
   std::error_code ec;
   fs::remove(out_file, ec);
   fs::remove(log_file, ec);
+  fs::remove(dir, ec);
   fmt::print(out, "{}", table(rs));
   if (!a.json.empty()) {
     if (!json_out.write(to_json(a, bench, rs, context).dump(2) + "\n") || !json_out.commit()) {

@@ -302,9 +302,9 @@ class Bridge {
       break;               // hang-up: no slave fd open any more
     }
     present_ = false;
-    // Its complete telegrams still go on the bus (a master may send Clear as it leaves); a
-    // telegram it did not finish is dropped.
-    engine_->drop_partial();
+    // What it queued and the bus has not carried yet goes with it (a flood of its bytes must
+    // not keep the next client waiting).
+    engine_->client_gone();
     pty_.reset();
     engine_->note("client closed the pty: slave side reset (raw, 38400 baud), queues flushed");
   }

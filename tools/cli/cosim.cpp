@@ -25,14 +25,10 @@ namespace {
 // A stimulus trace file (lockstep.hpp), read like the emulator's own text files: missing,
 // a directory, empty or cut off is one line "FILE: reason" / "FILE:LINE: reason".
 bool read_stimulus(const std::string& path, cosim::Stimulus& s, std::string& error) {
-  constexpr std::uintmax_t kMaxBytes = 256u << 20;  // 100 M cycles of stimulus fit easily
-  std::error_code ec;
-  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  constexpr std::size_t kMaxBytes = 256u << 20;  // 100 M cycles of stimulus fit easily
   std::string text;
   std::string why;
-  // read_text_file reserves its bound up front: the file's size when it is known.
-  if (!read_text_file(path, ec || size > kMaxBytes ? kMaxBytes : size, "stimulus trace", text,
-                      why)) {
+  if (!read_text_file(path, kMaxBytes, "stimulus trace", text, why)) {
     error = fmt::format("{}: {}", path, why);
     return false;
   }

@@ -2,6 +2,9 @@
 
 #include <fmt/core.h>
 
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <string>
 
@@ -136,14 +139,29 @@ expect port modul_ok 1
 
 }  // namespace
 
-int run_demo(ChipOptions opt, const std::string& out_dir, std::FILE* out) {
-  // The output directory is checked before anything is printed: bad input is one line.
+int run_demo(ChipOptions opt, const std::string& out_dir_option, std::FILE* out) {
+  // The output directory is made before anything is printed: bad input is one line. Without
+  // --out-dir it is a new one only this user can enter (mkdtemp, mode 0700): a fixed name in a
+  // shared TMPDIR could be a directory or a link another user made, and the outputs would go
+  // wherever that led.
+  std::string out_dir = out_dir_option;
   std::error_code ec;
-  std::filesystem::create_directories(out_dir, ec);
-  if (ec || !std::filesystem::is_directory(out_dir)) {
-    fmt::print(stderr, "dpc31 demo: {}: cannot create the output directory: {}\n", out_dir,
-               ec ? ec.message() : "Not a directory");
-    return 2;
+  if (out_dir.empty()) {
+    const std::filesystem::path tmp = std::filesystem::temp_directory_path(ec);
+    std::string tmpl = (tmp / "dpc31-demo-XXXXXX").string();
+    if (ec || ::mkdtemp(tmpl.data()) == nullptr) {
+      fmt::print(stderr, "dpc31 demo: cannot create a directory in {}: {}\n", tmp.string(),
+                 ec ? ec.message() : std::strerror(errno));
+      return 2;
+    }
+    out_dir = tmpl;
+  } else {
+    std::filesystem::create_directories(out_dir, ec);
+    if (ec || !std::filesystem::is_directory(out_dir)) {
+      fmt::print(stderr, "dpc31 demo: {}: cannot create the output directory: {}\n", out_dir,
+                 ec ? ec.message() : "Not a directory");
+      return 2;
+    }
   }
   Chip chip(opt);
   Narrator n(chip, out);

@@ -1,9 +1,12 @@
 // dpc31: the command-line front end. Exit codes: 0 ok, 1 difference or test failure, 2 bad input.
 #include <fmt/core.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <map>
 #include <sstream>
@@ -12,9 +15,11 @@
 
 #include "bench.hpp"
 #include "bridge.hpp"
+#include "cleanup.hpp"
 #include "cosim.hpp"
 #include "demo.hpp"
 #include "dpc31/chip.hpp"
+#include "numbers.hpp"
 #include "regfmt.hpp"
 #include "replay.hpp"
 #include "run.hpp"
@@ -25,6 +30,34 @@
 
 namespace {
 
+// The standard output through a stream that remembers why its first write failed: stdio keeps
+// only an error flag, and by the end errno says something else.
+int g_stdout_errno = 0;
+
+ssize_t write_stdout(void* /*cookie*/, const char* buf, std::size_t n) {
+  std::size_t done = 0;
+  while (done < n) {
+    const ssize_t w = ::write(STDOUT_FILENO, buf + done, n - done);
+    if (w < 0 && errno == EINTR) continue;
+    if (w <= 0) {
+      if (g_stdout_errno == 0) g_stdout_errno = w < 0 ? errno : EIO;
+      return done > 0 ? static_cast<ssize_t>(done) : -1;
+    }
+    done += static_cast<std::size_t>(w);
+  }
+  return static_cast<ssize_t>(n);
+}
+
+void check_stdout_writes() {
+  cookie_io_functions_t io{};
+  io.write = write_stdout;
+  std::FILE* f = ::fopencookie(nullptr, "w", io);
+  if (f == nullptr) return;  // the plain stdout then: failures still show, without the reason
+  // As stdio would: line-buffered on a terminal (progress lines), fully buffered otherwise.
+  std::setvbuf(f, nullptr, ::isatty(STDOUT_FILENO) != 0 ? _IOLBF : _IOFBF, BUFSIZ);
+  stdout = f;
+}
+
 dpc31::Profile to_profile(const std::string& s) {
   dpc31::Profile p{};
   dpc31::parse_profile(s, p);  // CLI11's check already refused unknown names
@@ -34,6 +67,9 @@ dpc31::Profile to_profile(const std::string& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  dpc31::cleanup::install();  // temporaries and children go when a signal ends the process
+  check_stdout_writes();
+  using dpc31::numbers::whole;
   CLI::App app{"dpc31emu: cycle-accurate emulator of the Siemens DPC31, SPC3 and VPC3+"};
   app.require_subcommand(1);
   const std::vector<std::string> profiles = {"spc3", "vpc3plus", "dpc31"};
@@ -43,9 +79,10 @@ int main(int argc, char** argv) {
   auto* demo =
       app.add_subcommand("demo", "scripted register-level session: start, interrupts, EOI");
   demo->add_option("--profile", demo_profile, "chip profile")->check(CLI::IsMember(profiles));
-  std::string demo_out = (std::filesystem::temp_directory_path() / "dpc31-demo").string();
+  std::string demo_out;  // "": a fresh private directory TMPDIR/dpc31-demo-XXXXXX (mkdtemp)
   demo->add_option("--out-dir", demo_out,
-                   "where the DP session's waveform and capture go (default: TMPDIR/dpc31-demo)");
+                   "where the DP session's waveform and capture go (default: a new directory "
+                   "TMPDIR/dpc31-demo-XXXXXX)");
   demo->add_option("--bus", demo_bus, "bus byte order")
       ->check(CLI::IsMember({"intel", "motorola"}));
   std::string demo_variant;
@@ -74,11 +111,9 @@ int main(int argc, char** argv) {
   run->add_option("--fst", run_opt.fst, "write the run as an FST waveform");
   run->add_option("--signals", run_opt.signals, "waveform signals (globs, e.g. pins.*)")
       ->delimiter(',');
-  // Unsigned options get NonNegativeNumber: CLI11 would take "-1" as 2^64 - 1.
-  run->add_option("--from", run_opt.from, "waveform window: first cycle")
-      ->check(CLI::NonNegativeNumber);
-  run->add_option("--to", run_opt.to, "waveform window: one past the last cycle")
-      ->check(CLI::NonNegativeNumber);
+  // Numbers: dpc31::numbers (no NaN, no "-1" taken as 2^64 - 1, nothing that does not fit).
+  run->add_option("--from", run_opt.from, "waveform window: first cycle")->check(whole(0));
+  run->add_option("--to", run_opt.to, "waveform window: one past the last cycle")->check(whole(0));
   run->add_option("--timescale", run_opt.timescale, "waveform time unit (default 1ps)");
   run->add_flag("--flat", run_opt.flat, "one scope, 1-bit signals only (for sigrok)");
   run->add_option("--engine", run_opt.engine,
@@ -107,10 +142,9 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"intel", "motorola"}));
   std::string cos_variant;
   dpc31::cli::add_variant_option(cosim, cos_variant);
-  cosim->add_option("--seeds", cos.seeds, "number of random seeds")
-      ->check(CLI::Range(1, 100'000'000));
-  cosim->add_option("--seed-base", cos.seed_base, "first seed")->check(CLI::NonNegativeNumber);
-  cosim->add_option("--cycles", cos.cycles, "cycles per seed")->check(CLI::Range(1, 100'000'000));
+  cosim->add_option("--seeds", cos.seeds, "number of random seeds")->check(whole(1, 100'000'000));
+  cosim->add_option("--seed-base", cos.seed_base, "first seed")->check(whole(0));
+  cosim->add_option("--cycles", cos.cycles, "cycles per seed")->check(whole(1, 100'000'000));
   cosim->add_option("--shard", cos_shard, "K/N: run the K-th of N equal parts of the seed range");
   cosim->add_option("--junit", cos.junit, "write JUnit XML results to this file");
   cosim->add_option("--vcd", cos.vcd_dir,
@@ -118,7 +152,7 @@ int main(int argc, char** argv) {
   cosim
       ->add_option("--window", cos.window,
                    "cycles before and after the divergence in the VCD window")
-      ->check(CLI::NonNegativeNumber);
+      ->check(whole(0, 100'000'000));
   cosim->add_option("--out", cos.out_dir, "where shrunk stimulus traces go (default .)");
   cosim->add_option("--dump", cos.dump_dir,
                     "write emu.vcd, rtl.vcd (ports) and rtl_internal.fst of the first run here");
@@ -227,10 +261,18 @@ int main(int argc, char** argv) {
     }
     return 2;
   };
+  int rc = 2;
   try {
-    return dispatch();
+    rc = dispatch();
   } catch (const std::exception& e) {
     // Nothing is meant to get here; if something does, it is one line, not std::terminate's.
     return refuse(e.what());
   }
+  // What went to the standard output is part of the result: a write that failed (a full disk,
+  // /dev/full) is exit 2, whatever the command found.
+  if (std::fflush(stdout) != 0 || std::ferror(stdout) != 0) {
+    return refuse(fmt::format("cannot write the standard output: {}",
+                              std::strerror(g_stdout_errno != 0 ? g_stdout_errno : EIO)));
+  }
+  return rc;
 }

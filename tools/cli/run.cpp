@@ -76,6 +76,16 @@ bool timescale_exponent(const std::string& t, int& exp) {
 // (--vcd / --fst) and a telegram capture (--pcap). Nothing is written unless the run completes.
 int run_with_outputs(const RunOptions& opt, const LineSink& walk, const LineSink& errors,
                      Scenario& s, ScenarioOutcome& o, std::FILE* err) {
+  const std::string same =
+      outfile::distinct({{"the scenario", opt.scenario}}, {{"--json", opt.json},
+                                                           {"--record", opt.record},
+                                                           {"--vcd", opt.vcd},
+                                                           {"--fst", opt.fst},
+                                                           {"--pcap", opt.pcap}});
+  if (!same.empty()) {
+    fmt::print(err, "dpc31 run: {}\n", same);
+    return 2;
+  }
   ScenarioError perr;
   if (!load_scenario(opt.scenario, s, perr)) {
     errors(perr.text());

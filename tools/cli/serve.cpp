@@ -6,6 +6,7 @@
 #include <csignal>
 
 #include "dpc31/regdesc.hpp"
+#include "numbers.hpp"
 #include "serve_server.hpp"
 #include "variant_option.hpp"
 
@@ -33,10 +34,10 @@ CLI::App* add_serve_subcommand(CLI::App& app, ServeArgs& a) {
   add_variant_option(cmd, a.variant);
   cmd->add_option("--max-clients", a.max_clients,
                   "clients served at once; more get 'ERR busy' and are closed")
-      ->check(CLI::Range(1, 100000));
+      ->check(numbers::whole(1, 100000));
   cmd->add_option("--idle-timeout", a.idle_timeout,
                   "close a client after this many seconds without input (0 = never)")
-      ->check(CLI::Range(0.0, 1e7));
+      ->check(numbers::real(0.0, 1e7));
   return cmd;
 }
 

@@ -370,6 +370,7 @@ bool parse_event(const std::string& tok, std::istringstream& rest, Inputs& in) {
 
 bool parse_trace(const std::string& text, const std::string& file, Stimulus& out,
                  std::string& error) {
+  constexpr std::uint64_t kMaxCycles = 100'000'000;
   out.clear();
   std::istringstream is(text);
   std::string line;
@@ -391,6 +392,8 @@ bool parse_trace(const std::string& text, const std::string& file, Stimulus& out
       std::uint64_t total = 0;
       if (!(ls >> total) || total < last)
         return fail("'end' needs the cycle count, at least the last cycle + 1");
+      // The bound of the cycle lines and of --cycles: the stimulus is a table of every cycle.
+      if (total > kMaxCycles) return fail(fmt::format("'end' beyond {} cycles", kMaxCycles));
       out.resize(total);
       ended = true;
       continue;
@@ -405,7 +408,7 @@ bool parse_trace(const std::string& text, const std::string& file, Stimulus& out
       return fail(fmt::format("'{}' is not a cycle number", shown(first)));
     }
     if (cycle < last && !(cycle == 0 && out.empty())) return fail("cycles must increase");
-    if (cycle > 100'000'000) return fail("cycle beyond 100000000");
+    if (cycle > kMaxCycles) return fail(fmt::format("cycle beyond {}", kMaxCycles));
     if (out.size() <= cycle) out.resize(cycle + 1);
     Inputs in;
     std::string tok;
@@ -428,14 +431,19 @@ bool write_rtl_fst(const Stimulus& s, const DutOptions& o, std::string_view muta
     error = out.error();
     return false;
   }
-  // Verilator's tracer opens the file by name: it writes the temporary.
-  if (!rtl || !rtl->trace_to(out.temp_path())) {
+  // Verilator's tracer opens the file by name (fstapi unlinks it first): a regular file of ours.
+  const std::string name = out.library_path();
+  if (name.empty()) {
+    error = out.error();
+    return false;
+  }
+  if (!rtl || !rtl->trace_to(name)) {
     error = fmt::format("{}: this RTL model was built without tracing (mutants are)", path);
     return false;
   }
   for (const Inputs& in : s) rtl->step(in);
   rtl.reset();  // closes the trace
-  if (!out.commit()) {
+  if (!out.commit_fst()) {
     error = out.error();
     return false;
   }

@@ -7,7 +7,10 @@
 
 #include <cerrno>
 #include <cstdlib>
+#include <filesystem>
 #include <system_error>
+
+#include "fst_chain.hpp"
 
 namespace dpc31::outfile {
 
@@ -59,6 +62,11 @@ bool OutFile::open(const std::string& path) {
   direct_ = false;
   int fd = -1;
   struct stat st {};
+  struct stat lst {};
+  if (::stat(path.c_str(), &st) != 0 && ::lstat(path.c_str(), &lst) == 0 && S_ISLNK(lst.st_mode)) {
+    // Creating what a dangling link names would write wherever whoever made the link chose.
+    return fail(fmt::format("{}: cannot write: a symbolic link to a missing file", path));
+  }
   if (::stat(path.c_str(), &st) == 0) {
     // Found before any work is done, not at the rename after it.
     if (S_ISDIR(st.st_mode)) return fail(fmt::format("{}: cannot write: is a directory", path));
@@ -85,6 +93,7 @@ bool OutFile::open(const std::string& path) {
         },
         error);
     if (tmp_.empty()) return fail(error);
+    tmp_entry_ = cleanup::Entry::path(tmp_);
   }
   f_ = ::fdopen(fd, "wb");
   if (f_ == nullptr) {
@@ -102,6 +111,56 @@ bool OutFile::open(const std::string& path) {
 
 std::FILE* OutFile::stream() { return f_; }
 
+std::string OutFile::library_path() {
+  if (tmp_.empty()) {
+    fail(fmt::format("{}: not open for writing", path_));
+    return {};
+  }
+  if (!direct_) {
+    if (scratch_entries_.empty()) scratch_entries_.push_back(cleanup::Entry::path(tmp_ + ".hier"));
+    return tmp_;
+  }
+  if (scratch_dir_.empty()) {
+    std::error_code ec;
+    std::string tmpl = (std::filesystem::temp_directory_path(ec) / "dpc31-out-XXXXXX").string();
+    if (ec || ::mkdtemp(tmpl.data()) == nullptr) {
+      fail(fmt::format("{}: cannot create a scratch directory in TMPDIR: {}", path_,
+                       ec ? ec.message() : errno_text(errno)));
+      return {};
+    }
+    scratch_dir_ = tmpl;
+    // Files first, then the directory (the handler removes in that order anyway).
+    scratch_entries_.push_back(cleanup::Entry::path(scratch_dir_ + "/out"));
+    scratch_entries_.push_back(cleanup::Entry::path(scratch_dir_ + "/out.hier"));
+    scratch_entries_.push_back(cleanup::Entry::dir(scratch_dir_));
+  }
+  return scratch_dir_ + "/out";
+}
+
+bool OutFile::commit_fst() {
+  const std::string written = library_path();
+  if (written.empty()) return false;
+  const std::string problem = fst_chain::incomplete(written);
+  if (problem.empty()) {
+    // The library wrote a file of its own under the name (commit() syncs only the one open()
+    // made): synced here before the rename.
+    const int fd = ::open(written.c_str(), O_RDONLY | O_CLOEXEC);
+    const bool synced = fd >= 0 && ::fsync(fd) == 0;
+    if (fd >= 0) ::close(fd);
+    if (!synced) {
+      fail(fmt::format("{}: cannot write: {}", path_, errno_text(errno)));
+      discard();
+      return false;
+    }
+    return commit();
+  }
+  discard();
+  return fail(
+      fmt::format("{}: cannot write: the FST writer left an incomplete file ({}): is the "
+                  "file system full?",
+                  path_, problem));
+}
+
 bool OutFile::write(std::string_view bytes) {
   if (f_ == nullptr) return fail(fmt::format("{}: not open for writing", path_));
   if (std::fwrite(bytes.data(), 1, bytes.size(), f_) != bytes.size()) {
@@ -112,6 +171,17 @@ bool OutFile::write(std::string_view bytes) {
 
 bool OutFile::commit() {
   if (tmp_.empty()) return fail(fmt::format("{}: not open for writing", path_));
+  if (!scratch_dir_.empty()) {
+    // A device or FIFO target: what the library wrote to the scratch file goes into it now.
+    std::FILE* in = std::fopen((scratch_dir_ + "/out").c_str(), "rb");
+    if (in == nullptr)
+      fail(fmt::format("{}: cannot read the scratch file: {}", path_, errno_text(errno)));
+    char buf[64 * 1024];
+    for (std::size_t n = 0; in != nullptr && (n = std::fread(buf, 1, sizeof buf, in)) > 0;) {
+      if (!write(std::string_view(buf, n))) break;
+    }
+    if (in != nullptr) std::fclose(in);
+  }
   // Errors of stdio surface at the flush; an fsync before the rename so that a crash leaves the
   // old file or the new one, never an empty one.
   if (std::fflush(f_) != 0 || std::ferror(f_) != 0) {
@@ -123,17 +193,17 @@ bool OutFile::commit() {
   f_ = nullptr;
   if (rc != 0) fail(fmt::format("{}: cannot write: {}", path_, errno_text(errno)));
   if (direct_) {
-    tmp_.clear();
+    discard();  // the scratch directory
     return error_.empty();
   }
   std::string error;
   if (error_.empty() && !replace(tmp_, target_, error)) fail(error);
   if (!error_.empty()) {
-    ::unlink(tmp_.c_str());
-    tmp_.clear();
+    discard();
     return false;
   }
   tmp_.clear();
+  discard();  // the registrations
   return true;
 }
 
@@ -143,9 +213,20 @@ void OutFile::discard() {
     f_ = nullptr;
   }
   if (!tmp_.empty()) {
-    if (!direct_) ::unlink(tmp_.c_str());  // a device is not ours to remove
+    if (!direct_) {  // a device is not ours to remove
+      ::unlink(tmp_.c_str());
+      ::unlink((tmp_ + ".hier").c_str());  // fstapi's, if a library wrote it
+    }
     tmp_.clear();
   }
+  if (!scratch_dir_.empty()) {
+    ::unlink((scratch_dir_ + "/out").c_str());
+    ::unlink((scratch_dir_ + "/out.hier").c_str());
+    ::rmdir(scratch_dir_.c_str());
+    scratch_dir_.clear();
+  }
+  tmp_entry_.release();
+  scratch_entries_.clear();
 }
 
 bool write_file(const std::string& path, std::string_view bytes, std::string& error) {
@@ -153,6 +234,52 @@ bool write_file(const std::string& path, std::string_view bytes, std::string& er
   if (f.open(path) && f.write(bytes) && f.commit()) return true;
   error = f.error();
   return false;
+}
+
+std::string distinct(const std::vector<Named>& inputs, const std::vector<Named>& outputs) {
+  struct Id {
+    bool exists = false;
+    bool special = false;  // a device or a FIFO
+    dev_t dev = 0;
+    ino_t ino = 0;
+    std::string abs;
+  };
+  const auto id_of = [](const std::string& p) {
+    Id id;
+    struct stat st {};
+    if (::stat(p.c_str(), &st) == 0) {
+      id.exists = true;
+      id.special = !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode);
+      id.dev = st.st_dev;
+      id.ino = st.st_ino;
+    }
+    std::error_code ec;
+    id.abs = std::filesystem::weakly_canonical(std::filesystem::absolute(p, ec), ec).string();
+    if (ec) id.abs = p;
+    return id;
+  };
+  const auto same = [](const Id& a, const Id& b) {
+    if (a.exists && b.exists) return a.dev == b.dev && a.ino == b.ino;
+    return a.abs == b.abs;
+  };
+  std::vector<Id> out_ids;
+  for (const Named& o : outputs) out_ids.push_back(o.path.empty() ? Id{} : id_of(o.path));
+  for (std::size_t k = 0; k < outputs.size(); ++k) {
+    if (outputs[k].path.empty() || out_ids[k].special) continue;
+    for (const Named& in : inputs) {
+      if (!in.path.empty() && same(out_ids[k], id_of(in.path))) {
+        return fmt::format("{} {}: is {} {}: an output must not replace an input", outputs[k].what,
+                           outputs[k].path, in.what, in.path);
+      }
+    }
+    for (std::size_t j = 0; j < k; ++j) {
+      if (!outputs[j].path.empty() && same(out_ids[k], out_ids[j])) {
+        return fmt::format("{} {} and {} {} are the same file: each output needs its own",
+                           outputs[j].what, outputs[j].path, outputs[k].what, outputs[k].path);
+      }
+    }
+  }
+  return {};
 }
 
 }  // namespace dpc31::outfile

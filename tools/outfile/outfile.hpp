@@ -9,6 +9,9 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <vector>
+
+#include "cleanup.hpp"
 
 namespace dpc31::outfile {
 
@@ -28,21 +31,31 @@ class OutFile {
   OutFile(const OutFile&) = delete;
   OutFile& operator=(const OutFile&) = delete;
 
-  // Creates the temporary. False with error() if `path` is a directory or the temporary cannot
-  // be created; nothing is touched then. A file still open is discarded first. A `path` that is
-  // a device or a FIFO (/dev/stdout) is written in place; a symlink to a file is followed.
+  // Creates the temporary. False with error() if `path` is a directory, a symbolic link to
+  // nothing, or the temporary cannot be created; nothing is touched then. A file still open is
+  // discarded first. A `path` that is a device or a FIFO (/dev/stdout, /dev/null) is written in
+  // place, never removed or replaced; a symlink to a file is followed: the link stays, the file it
+  // names is replaced. The temporary is removed if a signal ends the process (cleanup.hpp).
   bool open(const std::string& path);
   // Buffered stream on the temporary (fmt::print, fwrite); nullptr when not open.
   std::FILE* stream();
   bool write(std::string_view bytes);
-  // For libraries that open files by name (fstapi, Verilator's tracer): they write temp_path().
-  [[nodiscard]] const std::string& temp_path() const { return tmp_; }
+  // For a library that writes a file by name (fstapi, Verilator's FST tracer: they unlink the
+  // name, create it again, seek in it and keep NAME.hier next to it while they write): a regular
+  // file for it. The temporary for a regular target; for a device or a FIFO a scratch file in a
+  // private directory (mkdtemp) of TMPDIR, which commit() copies into it. "" with error() if
+  // that cannot be made.
+  std::string library_path();
   [[nodiscard]] const std::string& path() const { return path_; }
   [[nodiscard]] bool is_open() const { return !tmp_.empty(); }
 
   // Flushes, syncs and renames the temporary over the target. False with error() if any write
   // since open() failed or the rename fails; the temporary is then removed.
   bool commit();
+  // commit() for what a library wrote to library_path() as FST: first checks that fstapi left a
+  // whole file (fst_chain::incomplete; its writes are unchecked, so a full file system shows
+  // only there), else discards it with a one-line error().
+  bool commit_fst();
   // Removes the temporary; the target stays as it was.
   void discard();
 
@@ -54,7 +67,10 @@ class OutFile {
   std::string path_;    // as given, for messages
   std::string target_;  // what is replaced: the path, or the file a symlink names
   std::string tmp_;
-  bool direct_ = false;  // a device or FIFO, written in place
+  bool direct_ = false;      // a device or FIFO, written in place
+  std::string scratch_dir_;  // library_path() of a direct target: the private directory
+  cleanup::Entry tmp_entry_;
+  std::vector<cleanup::Entry> scratch_entries_;  // the scratch files, their .hier, the directory
   std::FILE* f_ = nullptr;
   std::unique_ptr<char[]> buf_;  // the stream's buffer, outlives f_
   std::string error_;
@@ -62,5 +78,18 @@ class OutFile {
 
 // The whole file at once through an OutFile. False with a one-line `error`.
 bool write_file(const std::string& path, std::string_view bytes, std::string& error);
+
+// A file a command names on its command line, for distinct(): the option ("--json") or the
+// argument's role ("the scenario"), and the path.
+struct Named {
+  std::string what;
+  std::string path;
+};
+
+// Refuses, before any work, an output that is one of the inputs or another output (the same
+// file by st_dev and st_ino when it exists, else the same absolute path once the directory part
+// is resolved): "" or one line. Devices and FIFOs may be named several times (--vcd /dev/null
+// --fst /dev/null). Empty paths (options not given) are skipped.
+std::string distinct(const std::vector<Named>& inputs, const std::vector<Named>& outputs);
 
 }  // namespace dpc31::outfile

@@ -15,6 +15,7 @@
 #include "../../emu/scenario.hpp"
 #include "../cli/variant_option.hpp"
 #include "dpc31/chip.hpp"
+#include "numbers.hpp"
 #include "outfile.hpp"
 
 namespace dpc31::soak {
@@ -336,7 +337,7 @@ CLI::App* add_subcommand(CLI::App& app, Options& o) {
     s->add_option_function<double>(
          name, [&v](double d) { v = static_cast<std::uint64_t>(d); },
          fmt::format("{} (default {})", what, v))
-        ->check(CLI::Range(1.0, 1e15));
+        ->check(numbers::real(1.0, 1e15));
   };
   cycles("--cycles", o.cycles, "run until the chip's cycle counter reaches this");
   s->add_option("--profile", o.profile, "chip profile")
@@ -351,7 +352,7 @@ CLI::App* add_subcommand(CLI::App& app, Options& o) {
          "cycles of undisturbed Data_Exchange between two injected faults");
   s->add_option("--seed", o.seed, "seed of the fault order and the noise bytes")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);  // CLI11 would take "-1" as 2^64 - 1
+      ->check(numbers::whole(0));
   s->add_option("--json", o.json, "write the result as JSON to this file");
   std::vector<std::string> kinds;
   for (Fault f : kAll) kinds.emplace_back(fault_name(f));

@@ -5,6 +5,8 @@
 // Verilator's writers by default), plus at most kQueue + 2 chunks of kChunkRecs records here,
 // plus the slots: so it grows with the number of signals and the block size, not the file length.
 #include <fmt/format.h>
+#include <unistd.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -19,6 +21,7 @@
 #include <utility>
 
 #include "child.hpp"
+#include "fst_chain.hpp"
 #include "gtkwave/fstapi.h"
 #include "wave_reader_impl.hpp"
 
@@ -46,9 +49,18 @@ bool is_real(unsigned char typ) {
          typ == FST_VT_SV_SHORTREAL;
 }
 
+// The value length fstapi gives each handle, from the file's geometry block (as fstReaderInit
+// reads it: the last such block wins): 0 a real (8 bytes, a double), kVarLen a variable-length
+// value, else the number of bits. fstapi sizes the value it passes to a callback by this, not by
+// the hierarchy (finding 3 of docs/security.md).
+constexpr std::uint32_t kVarLen = 0xFFFFFFFF;
+using Geometry = std::vector<std::uint32_t>;  // index: handle - 1
+
 class FstReader final : public WaveReader {
  public:
-  FstReader(const std::string& path, void* ctx) : ctx_(ctx) {
+  // An empty geometry: a gzip-wrapped file.
+  FstReader(const std::string& path, int fd, void* ctx, Geometry geometry)
+      : fd_(fd), ctx_(ctx), geometry_(std::move(geometry)), gzip_(geometry_.empty()) {
     path_ = path;
     format_ = "fst";
     read_hierarchy();
@@ -63,6 +75,7 @@ class FstReader final : public WaveReader {
     cv_.notify_all();
     if (producer_.joinable()) producer_.join();
     fstReaderClose(ctx_);
+    ::close(fd_);
   }
   FstReader(const FstReader&) = delete;
   FstReader& operator=(const FstReader&) = delete;
@@ -100,7 +113,10 @@ class FstReader final : public WaveReader {
   }
 
  private:
+  int fd_;  // the input, open while fstapi reads it by /proc/self/fd/N
   void* ctx_;
+  Geometry geometry_;
+  bool gzip_;
   std::vector<std::uint32_t> handle_slot_;  // FST handle -> slot
   std::vector<std::uint32_t> slot_bytes_;   // bytes per value record of a slot
   std::thread producer_;
@@ -141,6 +157,19 @@ class FstReader final : public WaveReader {
           continue;
         }
         const bool real = is_real(hv.typ);
+        // (A gzip-wrapped file, which fstapi unpacks to a file of its own, is not checked.)
+        const std::uint32_t geom = hv.handle <= geometry_.size() ? geometry_[hv.handle - 1] : 0;
+        if (!gzip_ && (hv.handle > geometry_.size() || (real ? geom != 0 : geom != hv.length))) {
+          fail(path_, 0,
+               fmt::format("not a readable FST file (corrupt: the variable '{}' has {} in the "
+                           "hierarchy and {} in the geometry block)",
+                           std::string_view(hv.name, std::min<std::size_t>(hv.name_length, 60)),
+                           real ? "a real" : fmt::format("{} bits", hv.length),
+                           hv.handle > geometry_.size() ? "no entry"
+                           : geom == 0                  ? "a real"
+                           : geom == kVarLen            ? "a variable length"
+                                                        : fmt::format("{} bits", geom)));
+        }
         std::uint32_t slot = handle_slot_[hv.handle];
         if (slot == kNone) {
           slot = static_cast<std::uint32_t>(slots_.size());
@@ -178,15 +207,25 @@ class FstReader final : public WaveReader {
   static void on_change(void* self, std::uint64_t time, fstHandle h, const unsigned char* v) {
     static_cast<FstReader*>(self)->push(time, h, v);
   }
+  // Only for handles the geometry declares variable-length, which the hierarchy check leaves
+  // unmasked only if the hierarchy says so too: a length that is not the slot's is refused.
   static void on_change_varlen(void* self, std::uint64_t time, fstHandle h, const unsigned char* v,
-                               std::uint32_t /*len*/) {
-    static_cast<FstReader*>(self)->push(time, h, v);
+                               std::uint32_t len) {
+    static_cast<FstReader*>(self)->push(time, h, v, len);
   }
 
-  void push(std::uint64_t time, fstHandle h, const unsigned char* v) {
+  // `v` holds the handle's geometry length (checked against the hierarchy's in read_hierarchy)
+  // or, from the variable-length callback, `len` bytes.
+  void push(std::uint64_t time, fstHandle h, const unsigned char* v, std::uint32_t len = kNone) {
     if (abort_seen_ || h >= handle_slot_.size()) return;
     const std::uint32_t slot = handle_slot_[h];
     if (slot == kNone) return;
+    if (len != kNone && len != slot_bytes_[slot]) {
+      fail(
+          path_, 0,
+          fmt::format("not a readable FST file (corrupt: a value of {} bytes for a variable of {})",
+                      len, slot_bytes_[slot]));
+    }
     Chunk& c = *fill_;
     const auto off = static_cast<std::uint32_t>(c.data.size());
     c.data.insert(c.data.end(), v, v + slot_bytes_[slot]);
@@ -301,63 +340,105 @@ namespace {
 void ignore_change(void*, std::uint64_t, fstHandle, const unsigned char*) {}
 void ignore_varlen(void*, std::uint64_t, fstHandle, const unsigned char*, std::uint32_t) {}
 
-// The block chain (fstapi.h: a type byte, a big-endian length that counts itself and the data):
-// it must end exactly at the end of the file. fstapi reads a file cut inside its last blocks
-// without complaint, as a shorter waveform.
-void check_blocks(const std::string& path) {
-  constexpr std::uint64_t kHeaderLength = 329;  // fstapi's FST_HDRSIZE: the length of block 0
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (f == nullptr) fail(path, 0, fmt::format("cannot open: {}", std::strerror(errno)));
-  std::uint64_t size = 0;
-  if (std::fseek(f, 0, SEEK_END) == 0 && std::ftell(f) > 0) {
-    size = static_cast<std::uint64_t>(std::ftell(f));
+// The block chain (tools/outfile/fst_chain.hpp) must end exactly at the end of the file: fstapi
+// reads a file cut inside its last blocks without complaint, as a shorter waveform. The LZ4
+// hierarchy blocks before any break are checked for absurd sizes too.
+// The geometry block: its uncompressed length and handle count (8 bytes each, big-endian), then
+// one varint per handle, zlib-compressed unless the two lengths are equal. Read here with bounds
+// on everything; fstapi's own reading of it trusts the lengths.
+Geometry read_geometry(std::FILE* f, const std::string& path, const fst_chain::Block& b) {
+  const auto corrupt = [&](const std::string& what) {
+    fail(path, 0,
+         fmt::format("not a readable FST file (corrupt: the geometry block at byte {} {})", b.pos,
+                     what));
+  };
+  unsigned char head[16];
+  if (b.len < 8 + 16 || std::fseek(f, static_cast<long>(b.pos + 9), SEEK_SET) != 0 ||
+      std::fread(head, 1, 16, f) != 16) {
+    corrupt("is too short");
   }
-  std::vector<unsigned char> head(9);
-  std::uint64_t pos = 0;
-  std::string problem;
-  bool not_fst = false;  // no FST header: not an FST at all
-  for (int block = 0; pos < size && problem.empty() && !not_fst; ++block) {
-    std::size_t n = 0;
-    if (std::fseek(f, static_cast<long>(pos), SEEK_SET) == 0) {
-      n = std::fread(head.data(), 1, head.size(), f);
+  std::uint64_t uclen = 0;
+  std::uint64_t handles = 0;
+  for (int i = 0; i < 8; ++i) uclen = uclen << 8 | head[i];
+  for (int i = 8; i < 16; ++i) handles = handles << 8 | head[i];
+  const std::uint64_t clen = b.len - 24;
+  // At most 5 bytes a varint: a longer claim is not a geometry of this many handles; and zlib
+  // packs at most about 1032 : 1, so a larger claim is not what the compressed bytes hold (the
+  // buffer is sized by the claim).
+  if (handles > (std::uint64_t{1} << 28) || uclen > 5 * handles || clen > uclen ||
+      (clen != uclen && uclen > 1100 * clen + 64)) {
+    corrupt(fmt::format("claims {} handles in {} bytes", handles, uclen));
+  }
+  std::vector<unsigned char> packed(clen);
+  if (std::fread(packed.data(), 1, clen, f) != clen) corrupt("is cut short");
+  std::vector<unsigned char> data;
+  if (clen == uclen) {
+    data = std::move(packed);
+  } else {
+    data.resize(uclen);
+    uLongf got = uclen;
+    if (uncompress(data.data(), &got, packed.data(), clen) != Z_OK || got != uclen) {
+      corrupt("does not decompress");
     }
-    if (block == 0 && n > 0 && head[0] == FST_BL_ZWRAPPER) break;  // gzip: left to fstapi
-    std::uint64_t len = 0;
-    for (std::size_t i = 1; i < n; ++i) len = len << 8 | head[i];
-    const unsigned type = head[0];
-    if (block == 0 &&
-        (n < head.size() || type != FST_BL_HDR || len != kHeaderLength || 1 + len > size)) {
-      not_fst = true;
-    } else if (n < head.size()) {
-      problem = fmt::format("truncated: the block at byte {} has no header", pos);
-    } else if (type > FST_BL_VCDATA_DYN_ALIAS2 && type != FST_BL_SKIP) {
-      problem = fmt::format("corrupt: unknown block type {} at byte {}", type, pos);
-    } else if (len < 8) {
-      problem = fmt::format("corrupt: block length {} at byte {}", len, pos);
-    } else if (len > size - pos - 1) {
-      // Also a length that would wrap the position around (fstapi would loop forever).
-      problem = fmt::format("truncated: the block at byte {} ends past the end of the file", pos);
-    } else if (type == FST_BL_HIER_LZ4 || type == FST_BL_HIER_LZ4DUO) {
-      // (The block is inside the file, checked above: its compressed size is read as well.)
-      problem = check_lz4_hierarchy(f, pos, len, type == FST_BL_HIER_LZ4DUO);
-      if (!problem.empty()) problem = "corrupt: " + problem;
-      pos += 1 + len;
-    } else {
-      pos += 1 + len;
+  }
+  Geometry g;
+  g.reserve(handles);
+  std::size_t at = 0;
+  for (std::uint64_t h = 0; h < handles; ++h) {
+    std::uint32_t v = 0;
+    int shift = 0;
+    for (;; shift += 7) {
+      if (at == data.size()) corrupt("ends inside its lengths");
+      const unsigned char c = data[at++];
+      if (shift < 32) v |= static_cast<std::uint32_t>(c & 0x7F) << shift;
+      if ((c & 0x80) == 0) break;
+    }
+    g.push_back(v);
+  }
+  return g;
+}
+
+Geometry check_blocks(const std::string& path, const std::string& access) {
+  std::FILE* f = std::fopen(access.c_str(), "rb");
+  if (f == nullptr) fail(path, 0, fmt::format("cannot open: {}", std::strerror(errno)));
+  const fst_chain::Chain c = fst_chain::walk(f);
+  std::string problem;
+  for (const fst_chain::Block& b : c.blocks) {
+    if (b.type != FST_BL_HIER_LZ4 && b.type != FST_BL_HIER_LZ4DUO) continue;
+    if (std::fseek(f, static_cast<long>(b.pos + 9), SEEK_SET) == 0) {
+      problem = check_lz4_hierarchy(f, b.pos, b.len, b.type == FST_BL_HIER_LZ4DUO);
+    }
+    if (!problem.empty()) {
+      problem = "corrupt: " + problem;
+      break;
+    }
+  }
+  if (problem.empty()) problem = c.problem;
+  Geometry g;
+  if (!c.not_fst && !c.gzip && problem.empty()) {
+    const auto last = std::find_if(c.blocks.rbegin(), c.blocks.rend(),
+                                   [](const fst_chain::Block& b) { return b.type == FST_BL_GEOM; });
+    if (last == c.blocks.rend()) problem = "no geometry block";
+    try {
+      if (last != c.blocks.rend()) g = read_geometry(f, path, *last);
+    } catch (...) {
+      std::fclose(f);
+      throw;
     }
   }
   std::fclose(f);
-  if (not_fst) fail(path, 0, "not a readable FST file");
+  if (c.not_fst) fail(path, 0, "not a readable FST file");
   if (!problem.empty()) fail(path, 0, fmt::format("not a readable FST file ({})", problem));
+  return g;
 }
 
 // fstapi prints to stderr and exit()s on a block that does not decompress, and may crash on other
 // corruption: the whole file is read once in a child process first (docs/bad-input.md). A file
 // the child reads to the end decompresses the same way here.
-void check_in_child(const std::string& path) {
+void check_in_child(const std::string& path, const std::string& access) {
   constexpr int kNotFst = 3;
-  const child::Result r = child::call([&path] {
-    void* ctx = fstReaderOpen(path.c_str());
+  const child::Result r = child::call([&access] {
+    void* ctx = fstReaderOpen(access.c_str());
     if (ctx == nullptr) return kNotFst;
     fstReaderSetFacProcessMaskAll(ctx);
     while (fstReaderIterateHier(ctx) != nullptr) {
@@ -375,15 +456,18 @@ void check_in_child(const std::string& path) {
 
 }  // namespace
 
-std::unique_ptr<WaveReader> open_fst(const std::string& path) {
-  check_blocks(path);
-  check_in_child(path);
-  void* ctx = fstReaderOpen(path.c_str());
-  if (ctx == nullptr) fail(path, 0, "not a readable FST file");
+std::unique_ptr<WaveReader> open_fst(const std::string& path, int fd, const std::string& access) {
+  void* ctx = nullptr;
   try {
-    return std::make_unique<FstReader>(path, ctx);
+    Geometry geometry = check_blocks(path, access);
+    check_in_child(path, access);
+    ctx = fstReaderOpen(access.c_str());
+    if (ctx == nullptr) fail(path, 0, "not a readable FST file");
+    return std::make_unique<FstReader>(path, fd, ctx, std::move(geometry));
   } catch (...) {
-    fstReaderClose(ctx);  // the constructor failed in the hierarchy, before owning the context
+    // Failed before the reader owned them (in the hierarchy, or earlier).
+    if (ctx != nullptr) fstReaderClose(ctx);
+    ::close(fd);
     throw;
   }
 }

@@ -151,9 +151,16 @@ bool is_real_type(std::string_view t) { return t == "real" || t == "realtime" ||
 
 class VcdReader final : public WaveReader {
  public:
-  VcdReader(const std::string& path, int fd) : fd_{fd}, buf_(kBufSize) {
+  VcdReader(const std::string& path, int fd, std::string_view prefix)
+      : fd_{fd}, buf_(std::max(kBufSize, prefix.size())) {
     path_ = path;
     format_ = "vcd";
+    if (!prefix.empty()) {
+      std::memcpy(buf_.data(), prefix.data(), prefix.size());
+      end_ = prefix.size();
+      any_byte_ = true;
+      last_byte_ = prefix.back();
+    }
     parse_header();
     prime();
   }
@@ -563,10 +570,8 @@ const std::vector<std::uint32_t>& VcdReader::step() {
 
 }  // namespace
 
-std::unique_ptr<WaveReader> open_vcd(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) fail(path, 0, fmt::format("cannot open: {}", std::strerror(errno)));
-  return std::make_unique<VcdReader>(path, fd);
+std::unique_ptr<WaveReader> open_vcd(const std::string& path, int fd, std::string_view prefix) {
+  return std::make_unique<VcdReader>(path, fd, prefix);
 }
 
 }  // namespace dpc31::wavediff

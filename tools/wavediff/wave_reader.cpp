@@ -1,11 +1,16 @@
 // Common parts of the readers: errors, timescales, reference names, format detection.
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <charconv>
 #include <cstdio>
 #include <cstring>
+#include <utility>
+#include <vector>
 
 #include "wave_reader_impl.hpp"
 
@@ -122,19 +127,63 @@ void split_reference(std::string_view ref, std::string& name, int& msb, int& lsb
   name = std::string(s);
 }
 
-std::unique_ptr<WaveReader> open_wave(const std::string& path) {
-  struct stat st {};
-  if (::stat(path.c_str(), &st) != 0) {
-    fail(path, 0, fmt::format("cannot open: {}", std::strerror(errno)));
+namespace {
+
+// Closes the descriptor unless released (an error on the way).
+struct FdGuard {
+  int fd;
+  ~FdGuard() {
+    if (fd >= 0) ::close(fd);
   }
+  int release() { return std::exchange(fd, -1); }
+};
+
+}  // namespace
+
+std::unique_ptr<WaveReader> open_wave(const std::string& path) {
+  FdGuard in{::open(path.c_str(), O_RDONLY | O_CLOEXEC)};
+  if (in.fd < 0) fail(path, 0, fmt::format("cannot open: {}", std::strerror(errno)));
+  struct stat st {};
+  if (::fstat(in.fd, &st) != 0) fail(path, 0, fmt::format("cannot open: {}", std::strerror(errno)));
   if (S_ISDIR(st.st_mode)) fail(path, 0, "cannot open: is a directory");
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (f == nullptr) fail(path, 0, fmt::format("cannot open: {}", std::strerror(errno)));
-  const int first = std::fgetc(f);
-  std::fclose(f);
-  // FST starts with a header block (type 0) or a gzip wrapper block (type 254).
-  if (first == 0 || first == 254) return open_fst(path);
-  return open_vcd(path);
+  // The first byte tells the format: FST starts with a header block (type 0) or a gzip
+  // wrapper block (type 254). A regular file is peeked at; a pipe gives it only once.
+  const bool seekable = S_ISREG(st.st_mode);
+  unsigned char first = '\n';
+  ssize_t n = 0;
+  do {
+    n = seekable ? ::pread(in.fd, &first, 1, 0) : ::read(in.fd, &first, 1);
+  } while (n < 0 && errno == EINTR);
+  if (n < 0) fail(path, 0, fmt::format("read error: {}", std::strerror(errno)));
+  const bool fst = n == 1 && (first == 0 || first == 254);
+  if (!fst) {
+    const std::string_view prefix(reinterpret_cast<const char*>(&first),
+                                  seekable ? 0 : static_cast<std::size_t>(n));
+    return open_vcd(path, in.release(), prefix);
+  }
+  if (seekable) {
+    const int fd = in.release();
+    return open_fst(path, fd, fmt::format("/proc/self/fd/{}", fd));
+  }
+  // fstapi seeks: what the pipe gives goes into an anonymous memory file first.
+  FdGuard mem{::memfd_create("dpc31-wavediff", MFD_CLOEXEC)};
+  if (mem.fd < 0) fail(path, 0, fmt::format("cannot buffer the pipe: {}", std::strerror(errno)));
+  std::vector<char> buf(1 << 16);
+  buf[0] = static_cast<char>(first);
+  std::size_t have = 1;
+  for (;;) {
+    if (::write(mem.fd, buf.data(), have) != static_cast<ssize_t>(have)) {
+      fail(path, 0, fmt::format("cannot buffer the pipe: {}", std::strerror(errno)));
+    }
+    do {
+      n = ::read(in.fd, buf.data(), buf.size());
+    } while (n < 0 && errno == EINTR);
+    if (n < 0) fail(path, 0, fmt::format("read error: {}", std::strerror(errno)));
+    if (n == 0) break;
+    have = static_cast<std::size_t>(n);
+  }
+  const int fd = mem.release();
+  return open_fst(path, fd, fmt::format("/proc/self/fd/{}", fd));
 }
 
 }  // namespace dpc31::wavediff

@@ -2,6 +2,10 @@
 
 #include <fmt/core.h>
 
+#include <limits>
+
+#include "numbers.hpp"
+
 namespace dpc31::wavediff {
 
 CLI::App* add_subcommand(CLI::App& app, CliArgs& a) {
@@ -27,7 +31,7 @@ CLI::App* add_subcommand(CLI::App& app, CliArgs& a) {
   // NonNegativeNumber: CLI11 would read "-1" into an unsigned as 2^64 - 1.
   c->add_option("--tolerance-cycles", o.tolerance_cycles,
                 "clock mode: ignore differences that last at most N cycles")
-      ->check(CLI::NonNegativeNumber);
+      ->check(numbers::whole(0));
   c->add_option("--xz", a.xz,
                 "X/Z policy: strict (must match), wildcard (matches anything), "
                 "zero (read as 0)")
@@ -43,9 +47,9 @@ CLI::App* add_subcommand(CLI::App& app, CliArgs& a) {
                 "write WaveJSON of the window around the first divergence");
   c->add_option("--wavedrom-window", o.wavedrom_window,
                 "events or cycles shown before and after the first divergence")
-      ->check(CLI::Range(1, 1000));
+      ->check(numbers::whole(1, 1000));
   c->add_option("--max-signals", o.max_signals, "signals listed in the text report")
-      ->check(CLI::NonNegativeNumber);
+      ->check(numbers::whole(0, std::numeric_limits<unsigned>::max()));
   return c;
 }
 

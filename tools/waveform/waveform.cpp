@@ -201,10 +201,11 @@ bool Recorder::finish(std::uint64_t end_cycle, std::string& error) {
     cur[m.events[k].sig] = m.events[k].value;
   }
   if (m.opt.fst) {
-    // fstapi opens the file by name: it writes the temporary.
-    void* ctx = fstWriterCreate(m.out.temp_path().c_str(), 1);
+    // fstapi opens the file by name (it unlinks it first): it writes a regular file of ours.
+    const std::string name = m.out.library_path();
+    void* ctx = name.empty() ? nullptr : fstWriterCreate(name.c_str(), 1);
     if (ctx == nullptr) {
-      error = fmt::format("{}: cannot write", m.opt.path);
+      error = name.empty() ? m.out.error() : fmt::format("{}: cannot write", m.opt.path);
       m.out.discard();
       return false;
     }
@@ -288,7 +289,7 @@ bool Recorder::finish(std::uint64_t end_cycle, std::string& error) {
     }
     if (m.units(to) != last_t) fmt::print(f, "#{}\n", m.units(to));
   }
-  if (!m.out.commit()) {
+  if (!(m.opt.fst ? m.out.commit_fst() : m.out.commit())) {
     error = m.out.error();
     return false;
   }

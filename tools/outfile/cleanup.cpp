@@ -1,0 +1,120 @@
+#include "cleanup.hpp"
+
+#include <limits.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <mutex>
+
+namespace dpc31::cleanup {
+
+namespace {
+
+// Slots 0..kPaths-1 hold paths, kPaths.. child pids. state: 0 free, 1 being filled, 2 live.
+constexpr int kPaths = 64;
+constexpr int kChildren = 64;
+
+struct Slot {
+  std::atomic<int> state{0};
+  pid_t pid = 0;
+  bool dir = false;
+  char path[PATH_MAX] = {};
+};
+
+Slot g_slots[kPaths + kChildren];
+std::atomic<pid_t> g_owner{0};  // the process that installed: a forked child only re-raises
+constexpr int kSignals[] = {SIGINT, SIGTERM, SIGHUP};
+
+extern "C" void dpc31_cleanup_on_signal(int sig) {
+  const int saved = errno;
+  if (::getpid() == g_owner.load()) {
+    for (int i = kPaths; i < kPaths + kChildren; ++i) {
+      if (g_slots[i].state.load() == 2) ::kill(g_slots[i].pid, sig);
+    }
+    for (const bool dirs : {false, true}) {  // a directory empties first
+      for (int i = 0; i < kPaths; ++i) {
+        if (g_slots[i].state.load() != 2 || g_slots[i].dir != dirs) continue;
+        if (dirs) {
+          ::rmdir(g_slots[i].path);
+        } else {
+          ::unlink(g_slots[i].path);
+        }
+      }
+    }
+  }
+  errno = saved;
+  struct sigaction dfl {};
+  dfl.sa_handler = SIG_DFL;
+  ::sigemptyset(&dfl.sa_mask);
+  ::sigaction(sig, &dfl, nullptr);
+  ::raise(sig);  // delivered when the handler returns: the process ends by the signal
+}
+
+int take(int from, int to) {
+  for (int i = from; i < to; ++i) {
+    int expected = 0;
+    if (g_slots[i].state.compare_exchange_strong(expected, 1)) return i;
+  }
+  return -1;
+}
+
+}  // namespace
+
+void install() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    g_owner = ::getpid();
+    for (const int sig : kSignals) {
+      struct sigaction old {};
+      if (::sigaction(sig, nullptr, &old) != 0 || old.sa_handler != SIG_DFL) continue;
+      struct sigaction sa {};
+      sa.sa_handler = dpc31_cleanup_on_signal;
+      ::sigfillset(&sa.sa_mask);  // one handler run at a time
+      ::sigaction(sig, &sa, nullptr);
+    }
+  });
+}
+
+Entry& Entry::operator=(Entry&& o) noexcept {
+  if (this != &o) {
+    release();
+    slot_ = o.slot_;
+    o.slot_ = -1;
+  }
+  return *this;
+}
+
+void Entry::release() {
+  if (slot_ >= 0) g_slots[slot_].state.store(0);
+  slot_ = -1;
+}
+
+namespace {
+
+int add_path(const std::string& p, bool dir) {
+  if (p.size() >= PATH_MAX) return -1;
+  const int i = take(0, kPaths);
+  if (i < 0) return -1;
+  std::memcpy(g_slots[i].path, p.c_str(), p.size() + 1);
+  g_slots[i].dir = dir;
+  g_slots[i].state.store(2);
+  return i;
+}
+
+}  // namespace
+
+Entry Entry::path(const std::string& p) { return Entry(add_path(p, false)); }
+Entry Entry::dir(const std::string& p) { return Entry(add_path(p, true)); }
+
+Entry Entry::child(pid_t pid) {
+  const int i = take(kPaths, kPaths + kChildren);
+  if (i < 0) return {};
+  g_slots[i].pid = pid;
+  g_slots[i].state.store(2);
+  return Entry(i);
+}
+
+}  // namespace dpc31::cleanup

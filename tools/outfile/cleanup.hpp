@@ -1,0 +1,40 @@
+// What a process must not leave behind when SIGINT, SIGTERM or SIGHUP ends it
+// (docs/bad-input.md): the temporaries of its output files and its child processes. The handler
+// (async-signal-safe: fixed slots, unlink() and kill()) removes every registered path, sends the
+// same signal to every registered child, restores the default action and raises the signal again,
+// so the process still ends by it.
+#pragma once
+
+#include <sys/types.h>
+
+#include <string>
+
+namespace dpc31::cleanup {
+
+// Installs the handler for each of the three signals whose action is still the default (an
+// ignored SIGHUP under nohup stays ignored; a handler of the program's own stays). Once; main()
+// calls it first.
+void install();
+
+// A registered path or child; release() (or the destructor) takes it off the list. A path too
+// long for a slot, or a full list (64 of each), is not covered: the registration is then empty.
+class Entry {
+ public:
+  Entry() = default;
+  ~Entry() { release(); }
+  Entry(Entry&& o) noexcept : slot_(o.slot_) { o.slot_ = -1; }
+  Entry& operator=(Entry&& o) noexcept;
+  Entry(const Entry&) = delete;
+  Entry& operator=(const Entry&) = delete;
+  void release();
+
+  static Entry path(const std::string& p);  // unlink()ed
+  static Entry dir(const std::string& p);   // rmdir()ed, after the paths
+  static Entry child(pid_t pid);
+
+ private:
+  explicit Entry(int slot) : slot_(slot) {}
+  int slot_ = -1;
+};
+
+}  // namespace dpc31::cleanup
