@@ -230,7 +230,7 @@ TEST_P(ServeStartup, DpStartupToDataExchange) {
   LineClient client = std::string(prm.transport) == "tcp" ? LineClient::tcp(server.port())
                                                           : LineClient::unix_socket(sock);
   RemoteChip chip(client);
-  EXPECT_TRUE(starts_with(chip.ok("info"), fmt::format("protocol=1 profile={} ", profile)));
+  EXPECT_TRUE(starts_with(chip.ok("info"), fmt::format("protocol=2 profile={} ", profile)));
 
   const dpc31::ChipOptions opt{prm.profile, prm.bus, 0};
   SocketBus bus(chip, opt);
@@ -1138,17 +1138,19 @@ TEST(ServeSecurity, IdleTimeoutIsOnByDefault) {
 // timeout off.
 TEST(ServeSecurity, SilentConnectionsCannotLockOthersOut) {
   {
-    ServerProcess server(kCli, {"--tcp", "0", "--max-clients", "2", "--idle-timeout", "0"});
+    ServerProcess server(kCli, {"--tcp", "0", "--max-clients", "3", "--idle-timeout", "0"});
     LineClient s1 = LineClient::tcp(server.port());
     LineClient s2 = LineClient::tcp(server.port());
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));  // both accepted
+    // Connections are accepted in order: once the probe is answered, both silent ones are in.
+    LineClient probe = LineClient::tcp(server.port());
+    EXPECT_EQ(probe.command("ping"), "OK pong");
     LineClient a = LineClient::tcp(server.port());
     EXPECT_EQ(a.command("ping"), "OK pong");
     LineClient b = LineClient::tcp(server.port());
     EXPECT_EQ(b.command("ping"), "OK pong");
     EXPECT_TRUE(s1.read_until_closed().empty());  // the oldest silent ones gave way
     EXPECT_TRUE(s2.read_until_closed().empty());
-    LineClient c = LineClient::tcp(server.port());  // two established: busy, as before
+    LineClient c = LineClient::tcp(server.port());  // three established: busy, as before
     const std::vector<std::string> lines = c.read_until_closed();
     ASSERT_EQ(lines.size(), 1u);
     EXPECT_TRUE(starts_with(lines[0], "ERR busy ")) << lines[0];

@@ -16,8 +16,10 @@
 
 namespace dpc31::serve {
 
-// Bumped on every incompatible change of docs/protocol.md; `info` reports it.
-inline constexpr int kProtocolVersion = 1;
+// Bumped on every incompatible change of docs/protocol.md; `info` reports it. 2: save/load
+// names are relative to --state-dir (refused without it), the first line must be a command or
+// `auth` (issue 14).
+inline constexpr int kProtocolVersion = 2;
 
 // Limits of single commands (docs/protocol.md, "Limits").
 inline constexpr std::uint64_t kMaxStep = std::uint64_t{1} << 40;  // cycles per step/run_until_irq
