@@ -1,18 +1,25 @@
 // `dpc31 serve` round trips (docs/protocol.md): a client sends `peek 0` and waits for its reply,
 // over loopback TCP and a Unix socket, against the server running on a thread of this process.
 // Items per second = commands per second. The in-process interpreter alone gives the floor.
+// BM_SocketFlood: the same round trips while 13 other clients pipeline as fast as they can; its
+// p99 is the scheduler's bound in wall time (docs/protocol.md, "Several clients").
 #include <benchmark/benchmark.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
+#include <poll.h>
 #include <sys/socket.h>
 #include <sys/un.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cstdlib>
 #include <cstring>
 #include <memory>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "serve_server.hpp"
 #include "serve_session.hpp"
@@ -92,6 +99,102 @@ void BM_SocketPeekUnix(benchmark::State& st) {
   round_trips(st, connect_unix(path), static_cast<int>(st.range(0)));
 }
 BENCHMARK(BM_SocketPeekUnix)->Arg(1)->Arg(64)->UseRealTime();
+
+// Clients that keep their pipelines full of `peek 0` lines and read every reply, on one thread.
+class Flood {
+ public:
+  Flood(std::uint16_t port, int clients) {
+    for (int i = 0; i < clients; ++i) {
+      const int fd = connect_tcp(port);
+      // The first line (docs/protocol.md): a command, then the flood.
+      if (::send(fd, "ping\n", 5, 0) != 5) std::abort();
+      fds_.push_back(fd);
+    }
+    thread_ = std::thread([this] { run(); });
+  }
+  ~Flood() {
+    stop_ = true;
+    thread_.join();
+    for (const int fd : fds_) ::close(fd);
+  }
+  Flood(const Flood&) = delete;
+  Flood& operator=(const Flood&) = delete;
+  [[nodiscard]] std::uint64_t replies() const { return replies_.load(); }
+
+ private:
+  void run() {
+    std::string chunk;
+    for (int i = 0; i < 512; ++i) chunk += "peek 0\n";
+    const std::size_t line = 7;
+    std::vector<std::size_t> pos(fds_.size(), 0);  // where in the endless line stream each is
+    std::vector<pollfd> p;
+    for (const int fd : fds_) p.push_back({fd, POLLIN | POLLOUT, 0});
+    char buf[65536];
+    while (!stop_.load(std::memory_order_relaxed)) {
+      if (::poll(p.data(), p.size(), 10) <= 0) continue;
+      for (std::size_t i = 0; i < p.size(); ++i) {
+        if ((p[i].revents & POLLIN) != 0) {
+          const ssize_t n = ::recv(p[i].fd, buf, sizeof buf, MSG_DONTWAIT);
+          if (n > 0) {
+            replies_ += static_cast<std::uint64_t>(std::count(buf, buf + n, '\n'));
+          }
+        }
+        if ((p[i].revents & POLLOUT) != 0) {
+          const std::size_t off = pos[i] % line;
+          const ssize_t n =
+              ::send(p[i].fd, chunk.data() + off, chunk.size() - off, MSG_DONTWAIT | MSG_NOSIGNAL);
+          if (n > 0) pos[i] += static_cast<std::size_t>(n);
+        }
+      }
+    }
+  }
+
+  std::vector<int> fds_;
+  std::thread thread_;
+  std::atomic<bool> stop_{false};
+  std::atomic<std::uint64_t> replies_{0};
+};
+
+// One client's `peek 0` round trips while 13 others pipeline (the 14 of the finding:
+// p99 363 ms when the server ran up to 64 lines per client and round). Counters: percentiles of
+// the round trip in microseconds, and the flood's commands per second.
+void BM_SocketFlood(benchmark::State& st) {
+  dpc31::serve::ServerOptions opt;
+  opt.tcp = "0";
+  ServerThread s(opt);
+  const int fd = connect_tcp(s.port());
+  Flood flood(s.port(), static_cast<int>(st.range(0)));
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));  // the flood under way
+  std::vector<double> us;
+  char buf[256];
+  const std::uint64_t flood_before = flood.replies();
+  const auto t_begin = std::chrono::steady_clock::now();
+  for (auto _ : st) {
+    const auto t0 = std::chrono::steady_clock::now();
+    if (::send(fd, "peek 0\n", 7, 0) != 7) std::abort();
+    for (bool done = false; !done;) {
+      const ssize_t n = ::recv(fd, buf, sizeof buf, 0);
+      if (n <= 0) std::abort();
+      done = buf[n - 1] == '\n';
+    }
+    us.push_back(
+        std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
+  }
+  const double secs =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_begin).count();
+  const std::uint64_t flood_replies = flood.replies() - flood_before;
+  ::close(fd);
+  std::sort(us.begin(), us.end());
+  const auto pct = [&us](double p) {
+    return us.empty() ? 0.0 : us[std::min(us.size() - 1, static_cast<std::size_t>(p * us.size()))];
+  };
+  st.counters["p50_us"] = pct(0.50);
+  st.counters["p99_us"] = pct(0.99);
+  st.counters["max_us"] = us.empty() ? 0.0 : us.back();
+  st.counters["flood_per_s"] = secs > 0 ? static_cast<double>(flood_replies) / secs : 0;
+  st.SetItemsProcessed(st.iterations());
+}
+BENCHMARK(BM_SocketFlood)->Arg(13)->UseRealTime();
 
 // The interpreter without sockets: parse, peek, format.
 void BM_SessionPeek(benchmark::State& st) {

@@ -618,9 +618,15 @@ TEST_F(BadInput, ServeOptions) {
   expect_bad(dpc31("serve --unix no/such/s"),
              "dpc31 serve: cannot listen on unix no/such/s: No such file or directory",
              "unix missing directory");
+  expect_bad(dpc31("serve --tcp 0 --state-dir no/such"),
+             "dpc31 serve: --state-dir no/such: No such file or directory", "state-dir missing");
+  expect_bad(dpc31("serve --tcp 0 --state-dir plain"),
+             "dpc31 serve: --state-dir plain: Not a directory", "state-dir a file");
+  expect_bad(dpc31("serve --tcp 0 --secret-file no/such"),
+             "dpc31 serve: --secret-file no/such: No such file or directory", "secret missing");
   for (const char* args :
        {"serve", "serve --tcp 0 --max-clients 0", "serve --tcp 0 --idle-timeout soon",
-        "serve --tcp 0 --profile z80", "serve --unix plain"}) {
+        "serve --tcp 0 --profile z80", "serve --unix plain", "serve --tcp 0 --secret-file plain"}) {
     expect_bad_prefix(dpc31(args), "dpc31 serve: ", args);
   }
   EXPECT_EQ(slurp(path("plain")), "old");  // a file that is not a socket is not replaced

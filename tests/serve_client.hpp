@@ -103,6 +103,7 @@ class ServerProcess {
     }
   }
   void signal(int sig) const { ::kill(pid_, sig); }
+  [[nodiscard]] pid_t pid() const { return pid_; }
 
   [[nodiscard]] const std::vector<std::string>& listening() const { return listening_; }
   [[nodiscard]] std::uint16_t port() const { return port_; }

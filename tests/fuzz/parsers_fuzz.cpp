@@ -63,8 +63,8 @@ int scenario_parser(const std::uint8_t* data, std::size_t size) {
   return 0;
 }
 
-// One `dpc31 serve` client: every line of the input to the command interpreter. `save` is left
-// out (it writes files wherever its path says); everything else runs as the server runs it.
+// One `dpc31 serve` client: every line of the input to the command interpreter, as the server
+// runs it. There is no --state-dir: `save` and `load` are refused whatever their name says.
 int serve_lines(const std::uint8_t* data, std::size_t size) {
   serve::Session session({}, [](const serve::AsyncLine&) {});
   serve::ClientState client;
@@ -73,9 +73,6 @@ int serve_lines(const std::uint8_t* data, std::size_t size) {
     const std::size_t nl = in.find('\n');
     const std::string_view line = in.substr(0, nl);
     in = nl == std::string_view::npos ? std::string_view{} : in.substr(nl + 1);
-    std::size_t b = 0;
-    while (b < line.size() && (line[b] == ' ' || line[b] == '\t')) ++b;
-    if (line.substr(b, 4) == "save") continue;
     const serve::Session::Result r = session.execute(line, client);
     if (r.reply.rfind("OK", 0) != 0 && r.reply.rfind("ERR ", 0) != 0) {
       bug("serve reply is neither OK nor ERR: " + r.reply);

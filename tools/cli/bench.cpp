@@ -69,6 +69,10 @@ const std::vector<RowSpec>& rows() {
        "peak_rss_MB", 1, "MB", Goal::below, 64},
       {"g", "socket round trips, `peek 0` over TCP, one in flight", "BM_SocketPeekTcp/1",
        "items_per_second", 1, "/s", Goal::at_least, 100'000},
+      // Issue 14, item 5: the scheduler's bound in wall time (docs/protocol.md, "Several
+      // clients"; docs/performance.md).
+      {"g", "`peek 0` round trip, p99, beside 13 clients pipelining", "BM_SocketFlood/13", "p99_us",
+       1e-3, "ms", Goal::at_most, 5},
   };
   return r;
 }

@@ -27,17 +27,26 @@ CLI::App* add_serve_subcommand(CLI::App& app, ServeArgs& a) {
       "serve", "serve one chip over a line-based socket protocol (docs/protocol.md)");
   cmd->add_option("--tcp", a.tcp,
                   "listen on TCP: PORT (on 127.0.0.1) or ADDR:PORT; port 0 picks a free one");
-  cmd->add_option("--unix", a.unix_path, "listen on a Unix socket at this path");
+  cmd->add_option("--unix", a.unix_path,
+                  "listen on a Unix socket at this path (created mode 0600: this user only)");
+  cmd->add_option("--state-dir", a.state_dir,
+                  "the directory save and load may use (names relative to it); without it they "
+                  "are refused");
+  cmd->add_option("--secret-file", a.secret_file,
+                  "TCP clients must send 'auth SECRET' first; SECRET is this file's first line "
+                  "(16+ characters, file mode 600)");
   cmd->add_option("--profile", a.profile, "chip profile")
       ->check(CLI::IsMember({"spc3", "vpc3plus", "dpc31"}));
   cmd->add_option("--bus", a.bus, "bus byte order")->check(CLI::IsMember({"intel", "motorola"}));
   add_variant_option(cmd, a.variant);
   cmd->add_option("--max-clients", a.max_clients,
-                  "clients served at once; more get 'ERR busy' and are closed")
-      ->check(numbers::whole(1, 100000));
+                  "connections served at once; more get 'ERR busy' and are closed")
+      ->check(numbers::whole(1, 100000))
+      ->capture_default_str();
   cmd->add_option("--idle-timeout", a.idle_timeout,
                   "close a client after this many seconds without input (0 = never)")
-      ->check(numbers::real(0.0, 1e7));
+      ->check(numbers::real(0.0, 1e7))
+      ->capture_default_str();
   return cmd;
 }
 
@@ -53,7 +62,9 @@ int run_serve(const ServeArgs& a, std::FILE* out, std::FILE* err) {
   if (!a.unix_path.empty()) opt.unix_path = a.unix_path;
   opt.max_clients = a.max_clients;
   opt.idle_timeout = a.idle_timeout;
+  if (!a.state_dir.empty()) opt.state_dir = a.state_dir;
   try {
+    if (!a.secret_file.empty()) opt.secret = serve::read_secret_file(a.secret_file);
     serve::Server server(opt);
     for (const std::string& l : server.listening()) fmt::print(out, "{}\n", l);
     std::fflush(out);

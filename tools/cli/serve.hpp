@@ -14,8 +14,10 @@ struct ServeArgs {
   std::string profile = "dpc31";
   std::string bus = "intel";
   std::string variant;  // --variant (vpc3plus), "" = none
+  std::string state_dir;    // "" = save/load refused
+  std::string secret_file;  // "" = no auth on TCP
   std::size_t max_clients = 16;
-  double idle_timeout = 0;  // seconds, 0 = never
+  double idle_timeout = 300;  // seconds, 0 = never
 };
 
 // Adds the subcommand with all its options to `app`.

@@ -282,4 +282,50 @@ std::string distinct(const std::vector<Named>& inputs, const std::vector<Named>&
   return {};
 }
 
+bool write_file_at(int dirfd, const std::string& name, std::string_view bytes,
+                   const std::string& shown, std::string& error) {
+  struct stat st {};
+  if (::fstatat(dirfd, name.c_str(), &st, AT_SYMLINK_NOFOLLOW) == 0 && !S_ISREG(st.st_mode)) {
+    error = fmt::format("{}: cannot write: {}", shown,
+                        S_ISLNK(st.st_mode)   ? "a symbolic link (not followed)"
+                        : S_ISDIR(st.st_mode) ? "is a directory"
+                                              : "not a regular file");
+    return false;
+  }
+  int fd = -1;
+  std::string create_error;
+  const std::string tmp = create_temp(
+      name,
+      [&](const std::string& t) {
+        fd = ::openat(dirfd, t.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
+        return fd < 0 ? errno : 0;
+      },
+      create_error);
+  if (tmp.empty()) {
+    // create_temp names `name`; say it as the user did.
+    error = shown + create_error.substr(name.size());
+    return false;
+  }
+  const auto fail = [&](const char* what, int e) {
+    error = fmt::format("{}: {}: {}", shown, what, errno_text(e));
+    if (fd >= 0) ::close(fd);
+    ::unlinkat(dirfd, tmp.c_str(), 0);
+    return false;
+  };
+  for (std::size_t done = 0; done < bytes.size();) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return fail("cannot write", n < 0 ? errno : ENOSPC);
+    done += static_cast<std::size_t>(n);
+  }
+  if (::fsync(fd) != 0) return fail("cannot write", errno);
+  const int rc = ::close(fd);
+  fd = -1;
+  if (rc != 0) return fail("cannot write", errno);
+  if (::renameat(dirfd, tmp.c_str(), dirfd, name.c_str()) != 0) {
+    return fail("cannot rename the temporary file over it", errno);
+  }
+  return true;
+}
+
 }  // namespace dpc31::outfile

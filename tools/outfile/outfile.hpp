@@ -92,4 +92,13 @@ struct Named {
 // --fst /dev/null). Empty paths (options not given) are skipped.
 std::string distinct(const std::vector<Named>& inputs, const std::vector<Named>& outputs);
 
+// The whole file `name` (one component, no '/') in the directory open as `dirfd`, relative to it
+// and without following symlinks: the temporary is made with openat(O_CREAT | O_EXCL |
+// O_NOFOLLOW), written, fsync'ed and renameat()'ed over `name`. An existing `name` that is not a
+// regular file (a symlink, a FIFO, a device, a directory) is refused and left alone. Messages
+// name `shown` (the name as the user gave it), never the directory. False with a one-line
+// `error`; the temporary is removed then. (`dpc31 serve`'s `save` in its --state-dir.)
+bool write_file_at(int dirfd, const std::string& name, std::string_view bytes,
+                   const std::string& shown, std::string& error);
+
 }  // namespace dpc31::outfile

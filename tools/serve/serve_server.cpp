@@ -13,10 +13,12 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
 #include <string_view>
+#include <vector>
 
 #include "serve_session.hpp"
 
@@ -27,7 +29,9 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 constexpr std::size_t kReadChunk = 16u << 10;
-constexpr int kMaxPasses = 64;                         // lines per client per poll() round
+constexpr int kAcceptBatch = 4;                        // connections per listener per round
+constexpr std::size_t kKeepBuffer = 64u << 10;         // a drained buffer keeps this capacity
+constexpr std::size_t kHoldOutput = 16u << 10;         // replies of a lone pipeline held up to
 constexpr auto kCloseGrace = std::chrono::seconds(2);  // to flush the last lines of a client
 constexpr auto kShutdownGrace = std::chrono::seconds(1);
 constexpr auto kAcceptPause = std::chrono::milliseconds(100);  // after EMFILE and friends
@@ -43,8 +47,61 @@ bool all_digits(std::string_view s) {
   return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
 }
 
+Clock::duration seconds(double s) {
+  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+}
+
+// Equal in time independent of where they differ: every byte of the secret is looked at,
+// whatever was given.
+bool same_secret(std::string_view given, std::string_view secret) {
+  unsigned diff = given.size() == secret.size() ? 0 : 1;
+  for (std::size_t i = 0; i < secret.size(); ++i) {
+    const auto g = static_cast<unsigned char>(i < given.size() ? given[i] : 0);
+    diff |= g ^ static_cast<unsigned char>(secret[i]);
+  }
+  return diff == 0;
+}
+
+// The first line of a connection (docs/protocol.md, "The first line"): it must start with a
+// command word (`auth` only, where a secret is required), in printable ASCII. Judged on what has
+// arrived so far, so that an HTTP request line, a TLS ClientHello or binary junk is refused at its
+// first bytes, before any newline.
+enum class Hello : std::uint8_t { more, accept, reject };
+
+bool is_word_prefix(std::string_view partial, bool auth_only) {
+  if (auth_only) return std::string_view("auth").starts_with(partial);
+  for (std::size_t b = 0; b < kCommandNames.size();) {
+    std::size_t e = kCommandNames.find(' ', b);
+    if (e == std::string_view::npos) e = kCommandNames.size();
+    if (kCommandNames.substr(b, e - b).starts_with(partial)) return true;
+    b = e + 1;
+  }
+  return false;
+}
+
+Hello judge_hello(std::string_view line, bool complete, bool auth_only, std::size_t max_line) {
+  // A CR is allowed at the end only (CR LF, or CR as the last byte so far).
+  if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+  if (line.size() > max_line) return Hello::reject;
+  if (line.empty()) return complete ? Hello::reject : Hello::more;
+  if (line[0] < 'a' || line[0] > 'z') return Hello::reject;
+  for (const char ch : line) {
+    const auto c = static_cast<unsigned char>(ch);
+    if ((c < 0x20 && c != '\t') || c >= 0x7F) return Hello::reject;
+  }
+  const std::size_t blank = line.find_first_of(" \t");
+  const std::string_view word = line.substr(0, blank);
+  if (blank == std::string_view::npos && !complete) {
+    return is_word_prefix(word, auth_only) ? Hello::more : Hello::reject;
+  }
+  if (auth_only ? word != "auth" : !is_command(word)) return Hello::reject;
+  return complete ? Hello::accept : Hello::more;
+}
+
 struct Client {
   int fd = -1;
+  bool tcp = false;
+  bool established = false;  // its first line was accepted (and auth, where required)
   std::string in;
   std::size_t in_off = 0;
   std::string out;
@@ -53,6 +110,10 @@ struct Client {
   bool eof = false;         // the peer sends no more: execute what is left, then close
   bool closing = false;     // no more input; close once the output is sent or at close_by
   bool dead = false;        // close now, unsent output is lost
+  // The only client with work, with more lines waiting: its replies are sent together when its
+  // pipeline is done (or kHoldOutput is reached, or someone else has work), not one per round.
+  bool hold = false;
+  Clock::time_point accepted;
   Clock::time_point last_input;
   Clock::time_point close_by;
   ClientState state;
@@ -75,8 +136,10 @@ struct Server::Impl {
   void listen_tcp(const std::string& spec);
   void listen_unix(const std::string& path);
   void poll_once();
-  void accept_all(int lfd, bool tcp);
+  void accept_some(int lfd, bool tcp);
   void read_client(Client& c);
+  void check_hello(Client& c);
+  void reject(Client& c, std::string_view why);
   void flush(Client& c);
   void queue(Client& c, std::string_view text);
   void broadcast(const AsyncLine& l);
@@ -104,6 +167,8 @@ struct Server::Impl {
   std::atomic<bool> stop_requested{false};
   bool shutting_down = false;
   Clock::time_point accept_paused_until{};
+  bool unix_first = false;      // which listener is served first: alternates every round
+  std::size_t round_start = 0;  // where the next round of execute_round begins
   Clock::time_point now = Clock::now();
 };
 
@@ -216,8 +281,15 @@ void Server::Impl::listen_unix(const std::string& path) {
     }
     ::unlink(path.c_str());
   }
-  if (::bind(fd, reinterpret_cast<sockaddr*>(&sa), sizeof sa) != 0 || ::listen(fd, 64) != 0) {
-    const int e = errno;
+  // Only our user may connect: the socket file is created 0600 (connect() needs write permission
+  // on it). The umask makes it so from the start; the chmod is for file systems that ignore it.
+  const mode_t old_mask = ::umask(0177);
+  const int bound = ::bind(fd, reinterpret_cast<sockaddr*>(&sa), sizeof sa);
+  const int bind_errno = errno;
+  ::umask(old_mask);
+  if (bound != 0 || ::chmod(path.c_str(), 0600) != 0 || ::listen(fd, 64) != 0) {
+    const int e = bound != 0 ? bind_errno : errno;
+    if (bound == 0) ::unlink(path.c_str());
     ::close(fd);
     throw ServerError(fmt::format("cannot listen on unix {}: {}", path, errno_text(e)));
   }
@@ -236,8 +308,10 @@ std::size_t Server::Impl::active_clients() const {
       clients.begin(), clients.end(), [](const auto& c) { return !c->dead && !c->closing; }));
 }
 
-void Server::Impl::accept_all(int lfd, bool tcp) {
-  for (;;) {
+void Server::Impl::accept_some(int lfd, bool tcp) {
+  // A few per round and listener: a connection flood on one listener neither starves the other
+  // nor the clients.
+  for (int i = 0; i < kAcceptBatch; ++i) {
     const int fd = ::accept4(lfd, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
     if (fd < 0) {
       if (errno == EINTR || errno == ECONNABORTED) continue;
@@ -246,7 +320,24 @@ void Server::Impl::accept_all(int lfd, bool tcp) {
       }
       return;
     }
-    if (shutting_down || active_clients() >= opt.max_clients) {
+    bool refuse = shutting_down;
+    if (!refuse && active_clients() >= opt.max_clients) {
+      // Full. A connection that has not sent its first line yet gives way to the newcomer (the
+      // oldest one): silent or unauthenticated connections cannot lock the others out.
+      Client* oldest = nullptr;
+      for (auto& o : clients) {
+        if (!o->established && !o->dead && !o->closing &&
+            (oldest == nullptr || o->accepted < oldest->accepted)) {
+          oldest = o.get();
+        }
+      }
+      if (oldest != nullptr) {
+        oldest->dead = true;
+      } else {
+        refuse = true;
+      }
+    }
+    if (refuse) {
       const std::string msg =
           shutting_down ? "ERR busy the server is shutting down\n"
                         : fmt::format("ERR busy too many clients (at most {})\n", opt.max_clients);
@@ -262,14 +353,78 @@ void Server::Impl::accept_all(int lfd, bool tcp) {
     }
     auto c = std::make_unique<Client>();
     c->fd = fd;
+    c->tcp = tcp;
+    c->accepted = now;
     c->last_input = now;
     clients.push_back(std::move(c));
   }
 }
 
+void Server::Impl::reject(Client& c, std::string_view why) {
+  // Nothing it sent is executed; what it sends from now on is not read.
+  c.in.clear();
+  c.in_off = 0;
+  c.discarding = false;
+  queue(c, why);
+  begin_close(c, kCloseGrace);
+}
+
+void Server::Impl::check_hello(Client& c) {
+  const std::string_view in = c.input();
+  const std::size_t nl = in.find('\n');
+  const bool complete = nl != std::string_view::npos || (c.eof && !in.empty());
+  const std::string_view line = in.substr(0, nl);
+  const bool auth_required = opt.secret.has_value() && c.tcp;
+  if (in.empty()) {
+    if (c.eof) begin_close(c, kCloseGrace);
+    return;
+  }
+  switch (judge_hello(line, complete, auth_required, opt.max_line)) {
+    case Hello::more:
+      return;
+    case Hello::reject:
+      reject(c,
+             auth_required
+                 ? "ERR protocol the first line must be 'auth SECRET' (docs/protocol.md); closing"
+                 : "ERR protocol the first line must be a dpc31 serve command "
+                   "(docs/protocol.md); closing");
+      return;
+    case Hello::accept:
+      break;
+  }
+  std::string_view l = line;
+  if (!l.empty() && l.back() == '\r') l.remove_suffix(1);
+  const std::size_t blank = l.find_first_of(" \t");
+  if (l.substr(0, blank) != "auth") {
+    c.established = true;  // the line stays: it is executed in its turn
+    return;
+  }
+  // `auth SECRET`: taken here, never by the interpreter.
+  std::vector<std::string_view> words;
+  for (std::size_t i = 0; i < l.size();) {
+    while (i < l.size() && (l[i] == ' ' || l[i] == '\t')) ++i;
+    const std::size_t b = i;
+    while (i < l.size() && l[i] != ' ' && l[i] != '\t') ++i;
+    if (i > b) words.push_back(l.substr(b, i - b));
+  }
+  c.in_off += nl == std::string_view::npos ? in.size() : nl + 1;
+  if (!opt.secret) {
+    c.established = true;
+    queue(c, "OK auth not required");
+    return;
+  }
+  if (words.size() != 2 || !same_secret(words[1], *opt.secret)) {
+    reject(c, "ERR auth wrong secret; closing");
+    return;
+  }
+  c.established = true;
+  queue(c, "OK auth");
+}
+
 void Server::Impl::read_client(Client& c) {
   if (c.in_off == c.in.size()) {
     c.in.clear();
+    if (c.in.capacity() > kKeepBuffer) std::string().swap(c.in);
     c.in_off = 0;
   } else if (c.in_off > kReadChunk) {
     c.in.erase(0, c.in_off);
@@ -290,8 +445,9 @@ void Server::Impl::read_client(Client& c) {
     } else if (errno != EAGAIN && errno != EWOULDBLOCK) {
       c.dead = true;
     }
-    return;
+    break;
   }
+  if (!c.established && !c.dead && !c.closing) check_hello(c);
 }
 
 void Server::Impl::flush(Client& c) {
@@ -310,6 +466,7 @@ void Server::Impl::flush(Client& c) {
   }
   if (c.out_off == c.out.size()) {
     c.out.clear();
+    if (c.out.capacity() > kKeepBuffer) std::string().swap(c.out);
     c.out_off = 0;
   } else if (c.out_off > kReadChunk) {
     c.out.erase(0, c.out_off);
@@ -327,7 +484,7 @@ void Server::Impl::queue(Client& c, std::string_view text) {
 
 void Server::Impl::broadcast(const AsyncLine& l) {
   for (auto& c : clients) {
-    if (c->dead || c->closing) continue;
+    if (c->dead || c->closing || !c->established) continue;  // nothing for strangers
     if (l.kind == AsyncLine::Kind::log && (!c->state.log_level || l.level < *c->state.log_level)) {
       continue;
     }
@@ -371,7 +528,7 @@ Got Server::Impl::next_line(Client& c, std::string_view& line) const {
 }
 
 bool Server::Impl::has_work(const Client& c) const {
-  if (c.dead || c.closing || c.pending_out() > opt.output_pause) return false;
+  if (!c.established || c.dead || c.closing || c.pending_out() > opt.output_pause) return false;
   const std::string_view in = c.input();
   if (in.empty()) return c.eof;  // an eof to act on
   if (c.discarding || c.eof) return true;
@@ -398,30 +555,38 @@ void Server::Impl::handle(Client& c, Got got, std::string_view line) {
   if (r.action == Session::Action::shutdown) {
     shutting_down = true;
     for (auto& o : clients) {
-      if (o.get() != &c && !o->closing) queue(*o, "! bye shutdown");
+      if (o.get() != &c && !o->closing && o->established) queue(*o, "! bye shutdown");
     }
   }
 }
 
 void Server::Impl::execute_round() {
-  // Round-robin, one line per client and pass: a client flooding the server delays the others
-  // by one command each round, never more.
-  for (int pass = 0; pass < kMaxPasses && !shutting_down; ++pass) {
-    bool any = false;
-    for (std::size_t i = 0; i < clients.size() && !shutting_down; ++i) {
-      Client& c = *clients[i];
-      if (!has_work(c)) continue;
-      std::string_view line;
-      const Got got = next_line(c, line);
-      if (got == Got::none) {
-        if (c.eof && c.input().empty()) begin_close(c, kCloseGrace);
-        continue;
-      }
-      any = true;
-      handle(c, got, line);
+  // One line per client and round, round robin, then back to poll() for what arrived meanwhile:
+  // a command that has arrived waits for the rest of the round in progress and at most one line
+  // of every other client in the next (2 x (clients - 1) lines; docs/protocol.md, "Several
+  // clients"). The round starts one client further each time.
+  const std::size_t n = clients.size();
+  Client* only = nullptr;  // the one client that executed a line, if it was one
+  std::size_t busy = 0;
+  for (std::size_t k = 0; k < n && !shutting_down; ++k) {
+    Client& c = *clients[(round_start + k) % n];
+    c.hold = false;
+    if (!has_work(c)) continue;
+    std::string_view line;
+    const Got got = next_line(c, line);
+    if (got == Got::none) {
+      if (c.eof && c.input().empty()) begin_close(c, kCloseGrace);
+      continue;
     }
-    if (!any) break;
+    handle(c, got, line);
+    only = &c;
+    ++busy;
   }
+  round_start = n == 0 ? 0 : (round_start + 1) % n;
+  // A lone pipelining client pays one poll() per line, not also a send() and a wake-up of its
+  // reader: its replies wait until its pipeline is done. With two or more busy clients every
+  // reply is sent at the end of its round.
+  if (busy == 1 && has_work(*only) && only->pending_out() < kHoldOutput) only->hold = true;
 }
 
 void Server::Impl::close_client(Client& c) {
@@ -443,14 +608,16 @@ void Server::Impl::poll_once() {
   const bool accepting = now >= accept_paused_until;
   const std::size_t first_listener = fds.size();
   if (accepting) {
-    if (tcp_fd >= 0) fds.push_back({tcp_fd, POLLIN, 0});
-    if (unix_fd >= 0) fds.push_back({unix_fd, POLLIN, 0});
+    unix_first = !unix_first;
+    for (const int lfd : unix_first ? std::array{unix_fd, tcp_fd} : std::array{tcp_fd, unix_fd}) {
+      if (lfd >= 0) fds.push_back({lfd, POLLIN, 0});
+    }
   }
   const std::size_t first_client = fds.size();
   for (const auto& c : clients) {
     short ev = 0;
     if (!c->closing && !c->eof && c->pending_in() < opt.max_input) ev |= POLLIN;
-    if (c->pending_out() > 0) ev |= POLLOUT;
+    if (c->pending_out() > 0 && !c->hold) ev |= POLLOUT;
     fds.push_back({c->fd, ev, 0});
   }
 
@@ -460,9 +627,10 @@ void Server::Impl::poll_once() {
     if (has_work(*c)) wake = now;
     if (c->closing) {
       wake = std::min(wake, c->close_by);
+    } else if (!c->established) {
+      wake = std::min(wake, c->accepted + seconds(opt.hello_timeout));
     } else if (opt.idle_timeout > 0) {
-      wake = std::min(wake, c->last_input + std::chrono::duration_cast<Clock::duration>(
-                                                std::chrono::duration<double>(opt.idle_timeout)));
+      wake = std::min(wake, c->last_input + seconds(opt.idle_timeout));
     }
   }
   if (!accepting) wake = std::min(wake, accept_paused_until);
@@ -480,10 +648,8 @@ void Server::Impl::poll_once() {
       while (::read(wake_r, buf, sizeof buf) > 0) {
       }
     }
-    for (std::size_t i = first_listener; i < first_client; ++i) {
-      if ((fds[i].revents & POLLIN) != 0) accept_all(fds[i].fd, fds[i].fd == tcp_fd);
-    }
-    // Clients accepted just now are not in fds; they are polled next time.
+    // Clients first, then the listeners: a newcomer whose first line has arrived is established
+    // before another connection could take its place (accept_some).
     for (std::size_t i = first_client; i < fds.size(); ++i) {
       Client& c = *clients[i - first_client];
       const short re = fds[i].revents;
@@ -500,19 +666,27 @@ void Server::Impl::poll_once() {
       }
       if ((re & POLLOUT) != 0) flush(c);
     }
+    // Clients accepted now are not in fds; they are polled next time.
+    for (std::size_t i = first_listener; i < first_client; ++i) {
+      if ((fds[i].revents & POLLIN) != 0) accept_some(fds[i].fd, fds[i].fd == tcp_fd);
+    }
   }
   if (stop_requested.load()) {
     shutting_down = true;
     for (auto& c : clients) {
-      if (!c->closing) queue(*c, "! bye shutdown");
+      if (!c->closing && c->established) queue(*c, "! bye shutdown");
     }
   }
   if (!shutting_down) execute_round();
 
   for (auto& c : clients) {
-    flush(*c);
-    if (!c->closing && !c->dead && opt.idle_timeout > 0 &&
-        std::chrono::duration<double>(now - c->last_input).count() >= opt.idle_timeout) {
+    if (!c->hold) flush(*c);
+    if (!c->closing && !c->dead && !c->established &&
+        std::chrono::duration<double>(now - c->accepted).count() >= opt.hello_timeout) {
+      reject(*c, "! bye hello_timeout");  // no first line in time
+      flush(*c);
+    } else if (!c->closing && !c->dead && c->established && opt.idle_timeout > 0 &&
+               std::chrono::duration<double>(now - c->last_input).count() >= opt.idle_timeout) {
       queue(*c, "! bye idle_timeout");
       flush(*c);
       begin_close(*c, kCloseGrace);
@@ -545,11 +719,62 @@ void Server::Impl::final_flush() {
   clients.clear();
 }
 
+std::string read_secret_file(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
+  if (fd < 0) throw ServerError(fmt::format("--secret-file {}: {}", path, errno_text(errno)));
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    throw ServerError(fmt::format("--secret-file {}: not a regular file", path));
+  }
+  if ((st.st_mode & 077) != 0) {
+    throw ServerError(
+        fmt::format("--secret-file {}: group or others may access it (mode {:04o}): chmod 600 it",
+                    path, st.st_mode & 07777));
+  }
+  char buf[4096];
+  std::string text;
+  for (;;) {
+    const ssize_t n = ::read(fd, buf, sizeof buf);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) throw ServerError(fmt::format("--secret-file {}: {}", path, errno_text(errno)));
+    if (n == 0 || text.size() > 4096) break;
+    text.append(buf, static_cast<std::size_t>(n));
+  }
+  std::string secret = text.substr(0, text.find('\n'));
+  if (!secret.empty() && secret.back() == '\r') secret.pop_back();
+  const bool printable = std::all_of(secret.begin(), secret.end(), [](char ch) {
+    return static_cast<unsigned char>(ch) > 0x20 && static_cast<unsigned char>(ch) < 0x7F;
+  });
+  if (secret.size() < 16 || secret.size() > 1024 || !printable) {
+    throw ServerError(fmt::format(
+        "--secret-file {}: the first line must be 16 to 1024 printable ASCII characters without "
+        "blanks",
+        path));
+  }
+  return secret;
+}
+
 Server::Server(ServerOptions opt) : impl_(std::make_unique<Impl>(std::move(opt))) {
   if (!impl_->opt.tcp && !impl_->opt.unix_path) {
     throw ServerError("nothing to listen on: give --tcp and/or --unix");
   }
   if (impl_->opt.max_clients == 0) throw ServerError("--max-clients must be at least 1");
+  if (!(impl_->opt.hello_timeout > 0)) throw ServerError("the first-line timeout must be above 0");
+  if (impl_->opt.idle_timeout > 0) {
+    impl_->opt.hello_timeout = std::min(impl_->opt.hello_timeout, impl_->opt.idle_timeout);
+  }
+  if (impl_->opt.secret && impl_->opt.secret->empty()) throw ServerError("an empty secret");
+  if (impl_->opt.state_dir) {
+    try {
+      impl_->session.set_state_dir(StateDir(*impl_->opt.state_dir));
+    } catch (const std::runtime_error& e) {
+      throw ServerError(e.what());
+    }
+  }
   impl_->open_wake_pipe();
   if (impl_->opt.tcp) impl_->listen_tcp(*impl_->opt.tcp);
   if (impl_->opt.unix_path) impl_->listen_unix(*impl_->opt.unix_path);

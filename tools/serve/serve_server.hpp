@@ -23,18 +23,30 @@ class ServerError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Limits and defaults: docs/protocol.md ("Limits") and docs/security.md.
 struct ServerOptions {
   ChipOptions chip;
   // "PORT" (binds 127.0.0.1) or "ADDR:PORT" ("[::1]:PORT" for IPv6); port 0 picks a free one.
   std::optional<std::string> tcp;
-  std::optional<std::string> unix_path;
-  std::size_t max_clients = 16;
-  double idle_timeout = 0;            // seconds without input before a client is closed; 0 = never
-  std::size_t max_line = 4096;        // bytes per line, without the newline
-  std::size_t max_output = 1u << 20;  // queued output bytes before a client is dropped
+  std::optional<std::string> unix_path;  // the socket is created mode 0600
+  // The only directory `save` and `load` may use; none = both are refused.
+  std::optional<std::string> state_dir;
+  // If set, a TCP client's first line must be `auth SECRET` (read_secret_file).
+  std::optional<std::string> secret;
+  std::size_t max_clients = 16;  // connections, also those that have not sent their first line
+  double idle_timeout = 300;     // seconds without input before a client is closed; 0 = never
+  // Seconds a new connection has for its first line (and auth); the idle timeout if shorter.
+  double hello_timeout = 10;
+  std::size_t max_line = 4096;           // bytes per line, without the newline
+  std::size_t max_output = 1u << 20;     // queued output bytes before a client is dropped
   std::size_t output_pause = 64u << 10;  // stop executing a client's lines above this much output
   std::size_t max_input = 64u << 10;     // unexecuted input bytes before reading pauses
 };
+
+// The secret of --secret-file: the file's first line (a trailing CR is dropped), 16..1024
+// printable ASCII characters without blanks; the file must be a regular file that neither group
+// nor others may access (chmod 600). Throws ServerError with one line.
+std::string read_secret_file(const std::string& path);
 
 class Server {
  public:

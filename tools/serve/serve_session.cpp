@@ -14,6 +14,7 @@
 #include "../../emu/dp_services.hpp"
 #include "../../emu/fdl.hpp"
 #include "../../emu/scenario.hpp"  // state names
+#include "../../emu/snapshot.hpp"  // kMaxFileSize
 #include "../../emu/uart.hpp"
 #include "dpc31/regdesc.hpp"
 #include "dpc31/snapshot.hpp"
@@ -163,12 +164,41 @@ std::string_view rest_of_line(std::string_view line, std::string_view cmd) {
   return r;
 }
 
-constexpr std::string_view kCommands =
-    "help info ping cycle status read write peek poke readblock writeblock peekblock pokeblock "
-    "addr peek_reg poke_reg step run_until_irq reset inject inject_fdl counters log save load "
-    "quit shutdown";
-
 }  // namespace
+
+bool is_command(std::string_view word) {
+  if (word.empty()) return false;
+  for (std::size_t b = 0; b < kCommandNames.size();) {
+    std::size_t e = kCommandNames.find(' ', b);
+    if (e == std::string_view::npos) e = kCommandNames.size();
+    if (kCommandNames.substr(b, e - b) == word) return true;
+    b = e + 1;
+  }
+  return false;
+}
+
+void Session::prune_injected() {
+  while (!injected_.empty() && injected_.front().first <= chip_.cycle()) {
+    injected_bytes_ -= injected_.front().second;
+    injected_.pop_front();
+  }
+}
+
+void Session::clear_injected() {
+  std::deque<std::pair<std::uint64_t, std::size_t>>().swap(injected_);
+  injected_bytes_ = 0;
+  rx_free_ = 0;
+}
+
+std::size_t Session::inject_queue_bytes() {
+  prune_injected();
+  return injected_bytes_;
+}
+
+std::size_t Session::inject_queue_telegrams() {
+  prune_injected();
+  return injected_.size();
+}
 
 Session::Session(ChipOptions opt, std::function<void(const AsyncLine&)> sink)
     : chip_(opt), emit_(std::move(sink)) {
@@ -221,7 +251,7 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
   try {
     if (cmd == "help") {
       arity(t, 0, 0, "help");
-      return ok(std::string(kCommands));
+      return ok(std::string(kCommandNames));
     }
     if (cmd == "info") {
       arity(t, 0, 0, "info");
@@ -344,7 +374,7 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
     if (cmd == "reset") {
       arity(t, 0, 0, "reset");
       chip_.reset();
-      rx_free_ = 0;
+      clear_injected();
       resync_irq();
       return ok(fmt::format("{}", chip_.cycle()));
     }
@@ -412,11 +442,22 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
       if (const auto v = o.get("idle")) {
         idle = static_cast<std::uint32_t>(number(*v, kMaxIdleBits, "idle"));
       }
+      prune_injected();
+      if (injected_.size() >= kMaxInjectQueue ||
+          injected_bytes_ + bytes.size() > kMaxInjectQueueBytes) {
+        return err(
+            "queue_full",
+            fmt::format("{} telegrams of {} bytes are not yet on the line (at most {} "
+                        "telegrams, {} bytes): step past their END first",
+                        injected_.size(), injected_bytes_, kMaxInjectQueue, kMaxInjectQueueBytes));
+      }
       const std::uint64_t start = std::max(chip_.cycle(), rx_free_) + std::uint64_t{idle} * t_bit;
       std::vector<std::pair<std::uint64_t, bool>> edges;
       uart_encode(bytes, start, t_bit, edges, fault);
       for (const auto& [cycle, level] : edges) chip_.drive_rxd(cycle, level);
       rx_free_ = start + bytes.size() * std::uint64_t{kUartCharBits} * t_bit;
+      injected_.emplace_back(rx_free_, bytes.size());
+      injected_bytes_ += bytes.size();
       return ok(fmt::format("{} {}", start, rx_free_));
     }
     if (cmd == "counters") {
@@ -449,22 +490,34 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
       throw Fail{"syntax", "usage: log off|debug|info|warn|error"};
     }
     if (cmd == "save" || cmd == "load") {
-      const std::string path(rest_of_line(line, cmd));
-      if (path.empty()) throw Fail{"syntax", fmt::format("usage: {} PATH", cmd)};
-      try {
-        if (cmd == "save") {
-          chip_.save_state_file(path);
-        } else {
-          chip_.load_state_file(path);
+      // The name is the rest of the line (it may contain blanks), relative to --state-dir.
+      const std::string_view name = rest_of_line(line, cmd);
+      if (name.empty()) throw Fail{"syntax", fmt::format("usage: {} NAME", cmd)};
+      StateDir::Error e;
+      if (cmd == "save") {
+        if (!state_dir_.write(name, chip_.save_state(), e)) {
+          return err(e.kind == StateDir::Error::Kind::denied ? "denied" : "snapshot",
+                     one_line(e.message));
         }
-      } catch (const SnapshotError& e) {
-        return err("snapshot", one_line(e.what()));
+        return ok(fmt::format("{}", chip_.cycle()));
       }
-      if (cmd == "load") {
-        rx_free_ = 0;
-        resync_irq();
+      std::vector<std::uint8_t> bytes;
+      if (!state_dir_.read(name, snap::kMaxFileSize, bytes, e)) {
+        return err(e.kind == StateDir::Error::Kind::denied ? "denied" : "snapshot",
+                   one_line(e.message));
       }
+      try {
+        chip_.load_state(bytes);
+      } catch (const SnapshotError& x) {
+        return err("snapshot", one_line(fmt::format("{}: {}", name, x.what())));
+      }
+      clear_injected();
+      resync_irq();
       return ok(fmt::format("{}", chip_.cycle()));
+    }
+    if (cmd == "auth") {
+      // The server takes a connection's first line `auth SECRET` before anything reaches here.
+      return err("syntax", "auth is accepted only as the first line of a connection");
     }
     if (cmd == "quit") {
       arity(t, 0, 0, "quit");

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <optional>
 #include <string>
@@ -11,17 +12,33 @@
 
 #include "dpc31/chip.hpp"
 #include "dpc31/log.hpp"
+#include "state_dir.hpp"
 
 namespace dpc31::serve {
 
-// Bumped on every incompatible change of docs/protocol.md; `info` reports it.
-inline constexpr int kProtocolVersion = 1;
+// Bumped on every incompatible change of docs/protocol.md; `info` reports it. 2: save/load
+// names are relative to --state-dir (refused without it), the first line must be a command or
+// `auth` (issue 14).
+inline constexpr int kProtocolVersion = 2;
 
 // Limits of single commands (docs/protocol.md, "Limits").
 inline constexpr std::uint64_t kMaxStep = std::uint64_t{1} << 40;  // cycles per step/run_until_irq
 inline constexpr std::size_t kMaxBlock = 4096;                     // bytes per *block command
 inline constexpr std::size_t kMaxInject = 1024;                    // bytes per inject
 inline constexpr std::uint32_t kMaxIdleBits = 1'000'000;           // inject idle=
+// Injected bytes and telegrams not yet on the line (their END still ahead of the chip's cycle):
+// one more `inject` is `ERR queue_full` (docs/protocol.md, "Limits"). Each queued byte holds
+// about 11 RxD edges and a received character in the chip (some 250 bytes of memory).
+inline constexpr std::size_t kMaxInjectQueueBytes = 16u << 10;
+inline constexpr std::size_t kMaxInjectQueue = 256;
+
+// The command words, in `help`'s order.
+inline constexpr std::string_view kCommandNames =
+    "help info ping cycle status read write peek poke readblock writeblock peekblock pokeblock "
+    "addr peek_reg poke_reg step run_until_irq reset inject inject_fdl counters log save load "
+    "auth quit shutdown";
+// Whether `word` is one of kCommandNames.
+bool is_command(std::string_view word);
 
 // A line that is not the reply to a command ("! ..."), as the chip produced it.
 struct AsyncLine {
@@ -52,17 +69,31 @@ class Session {
 
   Chip& chip() { return chip_; }
 
+  // Where `save` and `load` may go; without one they are refused (`ERR denied`).
+  void set_state_dir(StateDir dir) { state_dir_ = std::move(dir); }
+
+  // Injected bytes and telegrams still ahead of the chip's cycle (the queue kMaxInjectQueue*
+  // bound).
+  [[nodiscard]] std::size_t inject_queue_bytes();
+  [[nodiscard]] std::size_t inject_queue_telegrams();
+
  private:
   void emit(AsyncLine::Kind kind, std::string text, LogLevel level = LogLevel::info);
   // After reset / load: report a changed interrupt level the chip did not report itself.
   void resync_irq();
   [[nodiscard]] std::uint32_t default_bit_cycles() const;
   [[nodiscard]] std::uint32_t address_limit() const;
+  // Forgets the injected telegrams whose END the chip has reached.
+  void prune_injected();
+  void clear_injected();
 
   Chip chip_;
   std::function<void(const AsyncLine&)> emit_;
   bool irq_reported_ = false;  // the interrupt level the clients were last told
   std::uint64_t rx_free_ = 0;  // end of the last injected telegram: RxD is ours until then
+  std::deque<std::pair<std::uint64_t, std::size_t>> injected_;  // END, bytes; oldest first
+  std::size_t injected_bytes_ = 0;
+  StateDir state_dir_;
 };
 
 }  // namespace dpc31::serve
