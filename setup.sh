@@ -8,7 +8,7 @@ cd "$(dirname "$0")"
 # (vcd2fst / fst2vcd), sigrok-cli (UART decode of our waveforms), tshark (our pcapng captures),
 # python3 (a DP master on the pty of dpc31 bridge). The fuzz build of test.sh: clang with its
 # sanitizer and libFuzzer runtimes (libclang-rt-14-dev), ninja.
-packages=(cmake g++ make verilator libfmt-dev libcli11-dev nlohmann-json3-dev libgtest-dev
+packages=(cmake g++ make ccache verilator libfmt-dev libcli11-dev nlohmann-json3-dev libgtest-dev
   libbenchmark-dev zlib1g-dev gtkwave sigrok-cli tshark python3 clang libclang-rt-14-dev
   ninja-build)
 missing=()
