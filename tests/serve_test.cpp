@@ -1365,6 +1365,20 @@ TEST(ServeSession, LogLinesFollowTheClientsLevel) {
   EXPECT_FALSE(s.client.log_level);
 }
 
+TEST(ServeSession, InjectQueueCountsWhatIsAheadOfTheChip) {
+  LocalSession s;
+  EXPECT_EQ(s("inject 10 05 02 49 50 16"), "OK 132 396");
+  EXPECT_EQ(s("inject 10 05 02 49 50 16"), "OK 528 792");
+  EXPECT_EQ(s.s.inject_queue_bytes(), 12u);
+  EXPECT_EQ(s.s.inject_queue_telegrams(), 2u);
+  EXPECT_EQ(s("step 396"), "OK 396");  // the first one's END reached
+  EXPECT_EQ(s.s.inject_queue_telegrams(), 1u);
+  EXPECT_EQ(s("reset"), "OK 0");
+  EXPECT_EQ(s.s.inject_queue_bytes(), 0u);
+  EXPECT_EQ(s("save x"),
+            "ERR denied file commands are disabled: the server was started without --state-dir");
+}
+
 TEST(ServeSession, BlocksAndPoke) {
   LocalSession s;
   EXPECT_EQ(s("writeblock 0x900 0102 03 0405"), "OK");
