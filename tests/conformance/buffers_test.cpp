@@ -163,12 +163,7 @@ TEST_P(BufferSm, NextDoutBufferCmd_BitLayout_NoExchangeWithNothingInN) {
   EXPECT_EQ(r & 0x0C, 0x0C);
   EXPECT_EQ(r & 0x03, u);
   EXPECT_NE(u, 0);
-  ASSERT_TRUE(b.master.fdl_status().answer);
-  b.master.set_prm();
-  ASSERT_EQ(b.chip.read(0x0E), 0x00);
-  b.master.chk_cfg();
-  ASSERT_EQ(b.chip.read(0x10), 0x00);
-  b.chip.read(0x09);  // first inputs: the SPC3 enters Data_Exchange now (SPC3 p.31)
+  start_by_hand(b);
   b.master.data_exchange({0x11, 0x22, 0x33, 0x44});
   r = b.chip.read(0x0B);
   u = (b.chip.read(0x0A) >> 4) & 3;
@@ -187,12 +182,7 @@ TEST_P(BufferSm, NextDoutBufferCmd_BitLayout_NoExchangeWithNothingInN) {
 // U holds the third's 03 03 03 03.
 TEST_P(BufferSm, SlowUser_AlwaysGetsTheLatestOutputs) {
   Bare b(GetParam());
-  ASSERT_TRUE(b.master.fdl_status().answer);
-  b.master.set_prm();
-  ASSERT_EQ(b.chip.read(0x0E), 0x00);
-  b.master.chk_cfg();
-  ASSERT_EQ(b.chip.read(0x10), 0x00);
-  b.chip.read(0x09);  // first inputs: the SPC3 enters Data_Exchange now (SPC3 p.31)
+  start_by_hand(b);
   b.chip.read(0x0B);  // the power-on clear
   for (std::uint8_t v = 1; v <= 3; ++v) b.master.data_exchange({v, v, v, v});
   const std::uint8_t r = b.chip.read(0x0B);

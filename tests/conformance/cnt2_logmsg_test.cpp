@@ -1,9 +1,9 @@
 // CNT2 (firmware/cnt2, seed 001): the MSG bits held by CNTx_LOGMSG are released only by the
 // master writing LOGMSG 0, never by the ASIC clearing the outputs. The firmware runs on the host
 // CPU over the C HAL; the built-in master drives the chip on the wire.
+#include "../firmware_bench.hpp"
 #include "cnt2/cnt2.h"
 #include "conformance.hpp"
-#include "../firmware_bench.hpp"
 
 using namespace dpc31;
 

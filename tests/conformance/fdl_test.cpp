@@ -96,12 +96,7 @@ TEST_P(Fdl, SetPrmSpecUserPrmByte_OverwritesDisStartStopControl) {
 // (with DX_Out, the cleared outputs) and Status_Reg shows Wait_Prm.
 TEST_P(Fdl, GoLeaveDataExchange_WhenTheStateMachineLeavesDataExchange) {
   Bare b(GetParam());
-  ASSERT_TRUE(b.master.fdl_status().answer);
-  b.master.set_prm();
-  ASSERT_EQ(b.chip.read(0x0E), 0x00);
-  b.master.chk_cfg();
-  ASSERT_EQ(b.chip.read(0x10), 0x00);
-  b.chip.read(0x09);  // first inputs: the SPC3 enters Data_Exchange now (SPC3 p.31)
+  start_by_hand(b);
   b.master.data_exchange({0, 0, 0, 0});
   ASSERT_EQ(dp_bits(status(b.chip)), kDataEx);
   testutil::bus_write16(b.chip, static_cast<int>(wr(b.chip, RegId::Int_Ack_Reg)), 16, 0xF3FF);

@@ -10,21 +10,13 @@
 
 #include "../../emu/dp_master.hpp"
 #include "../../emu/firmware_host.hpp"
+#include "../firmware_bench.hpp"
 #include "conformance.hpp"
 
 namespace conformance {
 
 // A slave parameterised as the module's GSD says (ident, Cfg, user parameters).
-inline dpc31::SlaveConfig gsd_slave(const dpc31_firmware& fw, std::uint8_t address) {
-  dpc31::SlaveConfig s;
-  s.address = address;
-  s.ident = fw.ident;
-  s.cfg.assign(fw.cfg, fw.cfg + fw.cfg_len);
-  s.in_len = fw.in_len;
-  s.out_len = fw.out_len;
-  s.user_prm.assign(fw.user_prm, fw.user_prm + fw.user_prm_len);
-  return s;
-}
+using firmware_bench::gsd_slave;
 
 struct FirmwareBench {
   FirmwareBench(dpc31::Profile p, const dpc31_firmware& fw, dpc31::SlaveConfig slave,

@@ -1,8 +1,8 @@
 // Every shipped firmware with a master configured from its GSD file's defaults, at the slowest
 // and a fast rate the bridge offers: the module stays in normal operation, the master sees no
 // storm of high-priority answers.
-#include "conformance.hpp"
 #include "../firmware_bench.hpp"
+#include "conformance.hpp"
 
 using namespace dpc31;
 

@@ -17,24 +17,6 @@ class Services : public ::testing::TestWithParam<Profile> {};
 const Bytes kRS = {0x10, 0x02, 0x05, 0x03, 0x0A, 0x16};  // 02 + 05 + 03 = 0Ah
 const Bytes kRR = {0x10, 0x02, 0x05, 0x02, 0x09, 0x16};  // 02 + 05 + 02 = 09h
 
-// The start-up with the test as the user: FDL_Status, Set_Prm, Prm OK, Chk_Cfg, Cfg OK, the
-// first inputs (New_Din_Buffer_Cmd).
-void start_by_hand(Bare& b) {
-  ASSERT_TRUE(b.master.fdl_status().answer);
-  b.master.set_prm();
-  ASSERT_EQ(b.chip.read(0x0E), 0x00);
-  b.master.chk_cfg();
-  ASSERT_EQ(b.chip.read(0x10), 0x00);
-  // The first inputs A1..A4 into U (Din_Buffer_SM bits 5:4), then New_Din_Buffer_Cmd: the SPC3
-  // enters Data_Exchange now (SPC3 p.31).
-  static constexpr RegId kPtr[] = {RegId::R_Din_Buf_Ptr1, RegId::R_Din_Buf_Ptr2,
-                                   RegId::R_Din_Buf_Ptr3};
-  const unsigned u = (b.chip.read(0x08) >> 4) & 3u;
-  const std::uint32_t base = buffer_base(b.chip, kPtr[u - 1]);
-  for (std::uint32_t k = 0; k < 4; ++k) b.chip.write(base + k, static_cast<std::uint8_t>(0xA1 + k));
-  b.chip.read(0x09);
-}
-
 }  // namespace
 
 // manual-quotes.md Confirmed / chip-facts §5.4 [S-PRM][S-CFG]: "Prm/Cfg OK codes 00 finished, 01
@@ -128,7 +110,7 @@ TEST_P(Services, RdInpRdOutp_NoServiceActivatedInWaitPrmAndWaitCfg) {
 // first Din buffer) and the outputs the user holds in U (01 02 03 04 fetched by the user).
 TEST_P(Services, RdInpRdOutp_InDataExchangeFromAnyMaster) {
   Bare b(GetParam());
-  start_by_hand(b);
+  start_by_hand(b, {0xA1, 0xA2, 0xA3, 0xA4});
   b.master.data_exchange({0x01, 0x02, 0x03, 0x04});
   ASSERT_EQ(b.chip.read(0x0B) & 0x04, 0x04);  // the user fetches the new outputs: N -> U
   const Exchange i = b.sap_request(dsap::Rd_Inp, {}, 7);
@@ -145,7 +127,7 @@ TEST_P(Services, RdInpRdOutp_InDataExchangeFromAnyMaster) {
 // Fixed (issue 13); before: the model answers with the inputs / outputs as for length 0.
 TEST_P(Services, RdInpRdOutp_RequestDataGivesNoResource) {
   Bare b(GetParam());
-  start_by_hand(b);
+  start_by_hand(b, {0xA1, 0xA2, 0xA3, 0xA4});
   EXPECT_EQ(wire(b.sap_request(dsap::Rd_Inp, {0x00}).answer), kRR);
   EXPECT_EQ(wire(b.sap_request(dsap::Rd_Outp, {0x00}).answer), kRR);
 }
@@ -176,7 +158,7 @@ TEST_P(Services, GetCfg_RequestDataGivesNoResource) {
   Bare b(GetParam());
   ASSERT_TRUE(b.master.fdl_status().answer);
   EXPECT_EQ(wire(b.sap_request(dsap::Get_Cfg, {0x00}).answer), kRR);
-  start_by_hand(b);
+  start_by_hand(b, {0xA1, 0xA2, 0xA3, 0xA4});
   EXPECT_EQ(wire(b.sap_request(dsap::Get_Cfg, {0x00}).answer), kRR);
 }
 
@@ -200,7 +182,7 @@ TEST_P(Services, SlaveDiag_SixMandatoryBytes) {
   Bare b(GetParam());
   ASSERT_TRUE(b.master.fdl_status().answer);
   EXPECT_EQ(b.master.slave_diag().answer->du, (Bytes{0x02, 0x05, 0x00, 0xFF, 0x0C, 0x31}));
-  start_by_hand(b);
+  start_by_hand(b, {0xA1, 0xA2, 0xA3, 0xA4});
   EXPECT_EQ(b.master.slave_diag().answer->du, (Bytes{0x00, 0x0C, 0x00, 0x02, 0x0C, 0x31}));
 }
 
@@ -254,7 +236,7 @@ TEST_P(Services, SetPrmMinTsdr_DelaysTheAnswers) {
   ASSERT_TRUE(b.master.fdl_status().answer);
   const Exchange before = b.master.slave_diag();
   EXPECT_EQ(before.answer_start, before.request_end + 11 * 4);
-  start_by_hand(b);
+  start_by_hand(b, {0xA1, 0xA2, 0xA3, 0xA4});
   const Exchange after = b.master.slave_diag();
   ASSERT_TRUE(after.answer);
   EXPECT_EQ(after.answer_start, after.request_end + 40 * 4);

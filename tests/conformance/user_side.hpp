@@ -7,21 +7,13 @@
 #include <cstdint>
 #include <vector>
 
+#include "../../emu/dp_sm.hpp"
 #include "conformance.hpp"
 
 namespace conformance {
 
 // DP SAPs at the slave (chip-facts §8, EN 50170); the master's SSAP is 62.
-namespace dsap {
-inline constexpr std::uint8_t Rd_Inp = 56;
-inline constexpr std::uint8_t Rd_Outp = 57;
-inline constexpr std::uint8_t Global_Control = 58;
-inline constexpr std::uint8_t Get_Cfg = 59;
-inline constexpr std::uint8_t Slave_Diag = 60;
-inline constexpr std::uint8_t Set_Prm = 61;
-inline constexpr std::uint8_t Chk_Cfg = 62;
-inline constexpr std::uint8_t Master = 62;
-}  // namespace dsap
+namespace dsap = dpc31::sap;
 
 // Address of a register's read side (or its write side if it has none).
 inline std::uint32_t rd(const dpc31::Chip& c, dpc31::RegId id) {
@@ -69,6 +61,24 @@ struct Bare {
         dsap_, dsap::Master));
   }
 };
+
+// The start-up with the test as the user: FDL_Status, Set_Prm, Prm OK (0Eh), Chk_Cfg, Cfg OK
+// (10h), then the first inputs: `inputs` (if any) into U (Din_Buffer_SM bits 5:4) and
+// New_Din_Buffer_Cmd (09h), with which the SPC3 enters Data_Exchange (SPC3 p.31).
+inline void start_by_hand(Bare& b, const Bytes& inputs = {}) {
+  ASSERT_TRUE(b.master.fdl_status().answer);
+  b.master.set_prm();
+  ASSERT_EQ(b.chip.read(0x0E), 0x00);
+  b.master.chk_cfg();
+  ASSERT_EQ(b.chip.read(0x10), 0x00);
+  static constexpr dpc31::RegId kPtr[] = {
+      dpc31::RegId::R_Din_Buf_Ptr1, dpc31::RegId::R_Din_Buf_Ptr2, dpc31::RegId::R_Din_Buf_Ptr3};
+  const unsigned u = (b.chip.read(0x08) >> 4) & 3u;
+  const std::uint32_t base = buffer_base(b.chip, kPtr[u - 1]);
+  for (std::size_t k = 0; k < inputs.size(); ++k)
+    b.chip.write(base + static_cast<std::uint32_t>(k), inputs[k]);
+  b.chip.read(0x09);
+}
 
 // The minimal driver's ISR (Responder::isr) logs each entry with the cycle after its two Int_Reg
 // reads: X/INT went active, and the ISR started, 2 x 4 clocks earlier (docs/timing.md).
