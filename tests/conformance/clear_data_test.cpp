@@ -261,6 +261,23 @@ TEST_P(Sync, SyncWithNothingNewInDStillRaisesDxOutButHandsNothingOver) {
   }
 }
 
+// manual-quotes.md Confirmed (ProSoft PTQ-PDPMV1): Sync and Unsync in one Control_Command:
+// "Function will be inactive" — the chip does not enter Sync mode (Unsync wins, docs/decisions.md):
+// the next Data_Exchange's outputs reach the user at once, not held in D.
+TEST_P(Sync, SyncAndUnsyncTogetherLeaveSyncInactive) {
+  Bench b(GetParam());
+  ASSERT_TRUE(b.master.startup());
+  b.master.global_control(kGC_Sync | kGC_Unsync);
+  b.master.idle(kIsrTime);
+  const std::size_t n = b.user.outputs.size();
+  b.master.data_exchange({0x71, 0x72, 0x73, 0x74});
+  ASSERT_EQ(b.user.outputs.size(), n + 1);
+  EXPECT_EQ(b.user.outputs.back().data, (Bytes{0x71, 0x72, 0x73, 0x74}));
+  const Exchange diag = b.master.slave_diag();
+  ASSERT_TRUE(diag.answer);
+  EXPECT_EQ(diag.answer->du[1] & 0x20, 0);  // St2 bit 5 Sync_Mode: off
+}
+
 INSTANTIATE_TEST_SUITE_P(Profiles, Sync, ::testing::ValuesIn(kAllProfiles),
                          [](const auto& i) { return testutil::pname(i.param); });
 
