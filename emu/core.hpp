@@ -238,7 +238,8 @@ struct ChipCore {
   void prm_accepted();
   void din_handed_over();
   // VPC3+ DX_Int_Mode / DX_Int_Mode_2: whether these received outputs raise DX_Out.
-  bool dx_out_wanted(std::span<const std::uint8_t> outputs);  // New_Din_Buffer_Cmd: the SPC3's delayed entry into Data_Exchange
+  bool dx_out_wanted(std::span<const std::uint8_t> outputs);  // New_Din_Buffer_Cmd: the SPC3's
+                                                              // delayed entry into Data_Exchange
   void prm_fault();
   void cfg_accepted();
   bool user_watchdog_tick();

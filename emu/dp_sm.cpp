@@ -540,7 +540,7 @@ bool ChipCore::dx_out_wanted(std::span<const std::uint8_t> outputs) {
   constexpr std::uint16_t kMode3_DX_Int_Mode_2 = 1u << 1;
   if (outputs.empty() && (latch[idx(RegId::Mode_Reg2)] & kMode2_DX_Int_Mode) == 0) return false;
   if ((latch[idx(RegId::Mode_Reg3)] & kMode3_DX_Int_Mode_2) == 0) return true;
-  const std::uint8_t current = buffers.d_fresh      ? buffers.dout.d
+  const std::uint8_t current = buffers.d_fresh       ? buffers.dout.d
                                : buffers.dout.n != 0 ? buffers.dout.n
                                                      : buffers.dout.u;
   const std::vector<std::uint8_t> now = read_buffer(dout_ptr(current), outputs.size());

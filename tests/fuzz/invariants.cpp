@@ -242,8 +242,7 @@ void InvariantChecker::check_dp() {
     why = "without a User_Prm_Data_Okay read";
   } else if (was == DpState::Wait_Cfg && now == DpState::Data_Exchange) {
     // SPC3 with a Din buffer: at the first New_Din_Buffer_Cmd after Cfg OK (docs/decisions.md).
-    ok = cfg_ok_read_ ||
-         (chip_->profile().id == Profile::spc3 && new_din_read_ && cfg_ok_given_);
+    ok = cfg_ok_read_ || (chip_->profile().id == Profile::spc3 && new_din_read_ && cfg_ok_given_);
     why = "without a User_Cfg_Data_Okay read (SPC3: or a New_Din_Buffer_Cmd after one)";
   } else if (was == DpState::Data_Exchange && now == DpState::Wait_Cfg) {
     ok = cfg_accepted_;

@@ -13,7 +13,7 @@ struct ServeArgs {
   std::string unix_path;  // "" = no Unix socket
   std::string profile = "dpc31";
   std::string bus = "intel";
-  std::string variant;  // --variant (vpc3plus), "" = none
+  std::string variant;      // --variant (vpc3plus), "" = none
   std::string state_dir;    // "" = save/load refused
   std::string secret_file;  // "" = no auth on TCP
   std::size_t max_clients = 16;
