@@ -178,10 +178,9 @@ int run_cosim(const CosimOptions& o) {
       std::filesystem::create_directories(dir, ec);  // checked up front; a failure shows below
       const std::string trace = fmt::format("{}/cosim-{}-seed{}.trace", dir, o.profile_name, seed);
       std::string error;
-      const auto events = [](const Stimulus& x) {
-        return std::count_if(x.begin(), x.end(), [](const Inputs& in) { return !in.idle(); });
-      };
-      const Stimulus before(s.begin(), s.begin() + r.divergence + 1);
+      const auto events = [](const Stimulus& x) { return x.event_count(); };
+      Stimulus before = s;
+      before.resize(static_cast<std::uint64_t>(r.divergence) + 1);
       const std::string header = fmt::format(
           "profile {}\nseed {}\nmutant {}\nshrunk from {} to {} stimulus events ({} cycles)",
           o.profile_name, seed, o.mutant.empty() ? "-" : o.mutant, events(before), events(small),

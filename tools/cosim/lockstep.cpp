@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -61,6 +62,67 @@ bool Lockstep::step(const Inputs& in) {
   for (const auto& [cy, ev] : recent_)
     errors_.push_back(fmt::format("    cycle {:>8}: {}", cy, ev.describe()));
   return false;
+}
+
+// --- stimulus ---
+
+namespace {
+const Inputs kIdle{};
+bool before(const Stimulus::Event& e, std::uint64_t c) { return e.first < c; }
+}  // namespace
+
+const Inputs& Stimulus::operator[](std::uint64_t c) const {
+  const auto it = std::lower_bound(events_.begin(), events_.end(), c, before);
+  return it != events_.end() && it->first == c ? it->second : kIdle;
+}
+
+void Stimulus::set(std::uint64_t c, const Inputs& in) {
+  cycles_ = std::max(cycles_, c + 1);
+  if (!events_.empty() && events_.back().first < c) {  // the common case: built in order
+    if (!in.idle()) events_.emplace_back(c, in);
+    return;
+  }
+  const auto it = std::lower_bound(events_.begin(), events_.end(), c, before);
+  if (it != events_.end() && it->first == c) {
+    if (in.idle()) {
+      events_.erase(it);
+    } else {
+      it->second = in;
+    }
+  } else if (!in.idle()) {
+    events_.insert(it, {c, in});
+  }
+}
+
+void Stimulus::resize(std::uint64_t cycles) {
+  cycles_ = cycles;
+  events_.erase(std::lower_bound(events_.begin(), events_.end(), cycles, before), events_.end());
+}
+
+void Stimulus::clear(std::uint64_t from, std::uint64_t to) {
+  const auto a = std::lower_bound(events_.begin(), events_.end(), from, before);
+  events_.erase(a, std::lower_bound(a, events_.end(), to, before));
+}
+
+std::uint64_t Stimulus::next_event(std::uint64_t c) const {
+  const auto it = std::lower_bound(events_.begin(), events_.end(), c, before);
+  return it == events_.end() ? cycles_ : it->first;
+}
+
+Stimulus::Iterator::Iterator(const Stimulus& s, std::uint64_t c)
+    : s_(&s),
+      c_(c),
+      k_(static_cast<std::size_t>(std::lower_bound(s.events_.begin(), s.events_.end(), c, before) -
+                                  s.events_.begin())) {}
+
+const Inputs& Stimulus::Iterator::operator*() const {
+  return k_ < s_->events_.size() && s_->events_[k_].first == c_ ? s_->events_[k_].second : kIdle;
+}
+
+Stimulus::Iterator& Stimulus::Iterator::operator++() {
+  if (k_ < s_->events_.size() && s_->events_[k_].first == c_) ++k_;
+  ++c_;
+  return *this;
 }
 
 RunResult run_lockstep(const Stimulus& s, const DutOptions& o, std::string_view mutant) {
@@ -226,16 +288,16 @@ Stimulus random_stimulus(const RandomConfig& c) {
   for (std::uint64_t i = 0; i < c.cycles; ++i) {
     if (i % 256 == 0)
       activity = g.chance(0.25) ? 0.01 : 0.1 + 0.5 * std::uniform_real_distribution<>(0, 1)(g.rng);
-    Inputs& in = s[i];
+    Inputs in;
     if (g.chance(0.00005)) {
       in.rst = true;
-      continue;
+    } else if (g.chance(activity)) {
+      const std::uint32_t what = g.pick(10);
+      if (what < 5) random_access(g, in);
+      if (what >= 4) random_event(g, in);  // 4: an event and an access in the same cycle
+      if (what == 9) random_event(g, in);  // two events in one cycle
     }
-    if (!g.chance(activity)) continue;
-    const std::uint32_t what = g.pick(10);
-    if (what < 5) random_access(g, in);
-    if (what >= 4) random_event(g, in);  // 4: an event and an access in the same cycle
-    if (what == 9) random_event(g, in);  // two events in one cycle
+    s.set(i, in);
   }
   return s;
 }
@@ -245,7 +307,8 @@ Stimulus random_stimulus(const RandomConfig& c) {
 Stimulus shrink(const Stimulus& s, const DutOptions& o, std::string_view mutant, int max_runs) {
   RunResult r = run_lockstep(s, o, mutant);
   if (r.divergence < 0) return s;
-  Stimulus best(s.begin(), s.begin() + r.divergence + 1);
+  Stimulus best = s;
+  best.resize(static_cast<std::uint64_t>(r.divergence) + 1);
   int runs = 1;
   auto fails = [&](const Stimulus& t) {
     ++runs;
@@ -253,23 +316,19 @@ Stimulus shrink(const Stimulus& s, const DutOptions& o, std::string_view mutant,
     return x.divergence >= 0 ? x.divergence : -1;
   };
   // Delta debugging over the non-idle cycles: try to make chunks of them idle.
-  for (std::size_t chunk = best.size() / 2; chunk >= 1 && runs < max_runs; chunk /= 2) {
+  for (std::uint64_t chunk = best.size() / 2; chunk >= 1 && runs < max_runs; chunk /= 2) {
     bool progress = true;
     while (progress && runs < max_runs) {
       progress = false;
-      for (std::size_t start = 0; start < best.size() && runs < max_runs; start += chunk) {
+      for (std::uint64_t start = 0; start < best.size() && runs < max_runs; start += chunk) {
+        // Chunks without inputs change nothing: go straight to the next one that has some.
+        start = best.next_event(start) / chunk * chunk;
+        if (start >= best.size()) break;
         Stimulus t = best;
-        bool changed = false;
-        for (std::size_t i = start; i < std::min(best.size(), start + chunk); ++i) {
-          if (!t[i].idle()) {
-            t[i] = Inputs{};
-            changed = true;
-          }
-        }
-        if (!changed) continue;
+        t.clear(start, std::min(best.size(), start + chunk));
         const std::int64_t d = fails(t);
         if (d >= 0) {
-          t.resize(static_cast<std::size_t>(d) + 1);
+          t.resize(static_cast<std::uint64_t>(d) + 1);
           best = std::move(t);
           progress = true;
         }
@@ -286,9 +345,7 @@ std::string write_trace(const Stimulus& s, const std::string& header) {
   std::string out = "# dpc31 cosim stimulus trace\n";
   std::istringstream h(header);
   for (std::string line; std::getline(h, line);) out += "# " + line + "\n";
-  for (std::size_t i = 0; i < s.size(); ++i) {
-    if (!s[i].idle()) out += fmt::format("{} {}\n", i, s[i].describe());
-  }
+  for (const auto& [cycle, in] : s.events()) out += fmt::format("{} {}\n", cycle, in.describe());
   out += fmt::format("end {}\n", s.size());
   return out;
 }
@@ -371,7 +428,7 @@ bool parse_event(const std::string& tok, std::istringstream& rest, Inputs& in) {
 bool parse_trace(const std::string& text, const std::string& file, Stimulus& out,
                  std::string& error) {
   constexpr std::uint64_t kMaxCycles = 100'000'000;
-  out.clear();
+  out = Stimulus{};
   std::istringstream is(text);
   std::string line;
   int n = 0;
@@ -392,7 +449,8 @@ bool parse_trace(const std::string& text, const std::string& file, Stimulus& out
       std::uint64_t total = 0;
       if (!(ls >> total) || total < last)
         return fail("'end' needs the cycle count, at least the last cycle + 1");
-      // The bound of the cycle lines and of --cycles: the stimulus is a table of every cycle.
+      // The bound of the cycle lines and of --cycles (the run time, not memory: the stimulus
+      // keeps only the lines given).
       if (total > kMaxCycles) return fail(fmt::format("'end' beyond {} cycles", kMaxCycles));
       out.resize(total);
       ended = true;
@@ -409,14 +467,13 @@ bool parse_trace(const std::string& text, const std::string& file, Stimulus& out
     }
     if (cycle < last && !(cycle == 0 && out.empty())) return fail("cycles must increase");
     if (cycle > kMaxCycles) return fail(fmt::format("cycle beyond {}", kMaxCycles));
-    if (out.size() <= cycle) out.resize(cycle + 1);
     Inputs in;
     std::string tok;
     while (ls >> tok) {
       if (!parse_event(tok, ls, in)) return fail(fmt::format("unknown stimulus '{}'", shown(tok)));
     }
     if (in.idle()) return fail("a stimulus line without stimulus");
-    out[cycle] = in;
+    out.set(cycle, in);
     last = cycle + 1;
   }
   if (!ended) return fail("missing 'end <cycles>' (truncated trace?)");
@@ -501,9 +558,10 @@ bool write_window(const Stimulus& s, const DutOptions& o, std::string_view mutan
     vcd_header(f[k], names[k]);
   }
   Outputs last[2];
-  for (std::uint64_t c = 0; c < std::min<std::uint64_t>(to, s.size()); ++c) {
+  Stimulus::Iterator in = s.begin();
+  for (std::uint64_t c = 0; c < std::min<std::uint64_t>(to, s.size()); ++c, ++in) {
     for (int k = 0; k < 2; ++k) {
-      sides[k]->step(s[c]);
+      sides[k]->step(*in);
       if (c < from) continue;
       const Outputs now = sides[k]->outputs();
       fmt::print(f[k], "#{}\n0c\n#{}\n1c\n", 2 * c, 2 * c + 1);

@@ -47,8 +47,51 @@ class Lockstep {
   std::deque<std::pair<std::uint64_t, Inputs>> recent_;
 };
 
-// A stimulus: the inputs of every cycle from a reset on (index = cycle).
-using Stimulus = std::vector<Inputs>;
+// A stimulus: the inputs of every cycle from a reset on, kept sparse (only the non-idle cycles
+// are stored), so memory follows the events and never the cycle count a trace file names.
+class Stimulus {
+ public:
+  using Event = std::pair<std::uint64_t, Inputs>;  // cycle, inputs (never idle)
+
+  Stimulus() = default;
+  explicit Stimulus(std::uint64_t cycles) : cycles_(cycles) {}
+
+  [[nodiscard]] std::uint64_t size() const { return cycles_; }  // cycles, idle ones included
+  [[nodiscard]] bool empty() const { return cycles_ == 0; }
+  [[nodiscard]] std::size_t event_count() const { return events_.size(); }
+  [[nodiscard]] const std::vector<Event>& events() const { return events_; }
+  // The inputs of cycle c (idle when nothing happens then).
+  [[nodiscard]] const Inputs& operator[](std::uint64_t c) const;
+  // Sets the inputs of cycle c (idle removes it); the stimulus grows to cover c.
+  void set(std::uint64_t c, const Inputs& in);
+  // Keeps the first `cycles` cycles (or grows with idle ones).
+  void resize(std::uint64_t cycles);
+  // Makes cycles [from, to) idle.
+  void clear(std::uint64_t from, std::uint64_t to);
+  // The first cycle >= c with inputs (size() when none).
+  [[nodiscard]] std::uint64_t next_event(std::uint64_t c) const;
+  bool operator==(const Stimulus&) const = default;
+
+  // Every cycle in order, idle ones included: `for (const Inputs& in : s)`.
+  class Iterator {
+   public:
+    Iterator(const Stimulus& s, std::uint64_t c);
+    const Inputs& operator*() const;
+    Iterator& operator++();
+    bool operator!=(const Iterator& o) const { return c_ != o.c_; }
+
+   private:
+    const Stimulus* s_;
+    std::uint64_t c_;
+    std::size_t k_;  // the first event at or after c_
+  };
+  [[nodiscard]] Iterator begin() const { return {*this, 0}; }
+  [[nodiscard]] Iterator end() const { return {*this, cycles_}; }
+
+ private:
+  std::uint64_t cycles_ = 0;
+  std::vector<Event> events_;  // ascending cycle, each < cycles_
+};
 
 struct RandomConfig {
   Profile profile = Profile::dpc31;
