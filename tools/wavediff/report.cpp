@@ -30,17 +30,8 @@ std::string u128(U128 v) {
 }
 
 std::string with_hex(const std::string& v) {
-  if (v.size() < 8 || v.find_first_not_of("01") != std::string::npos) return v;
-  std::string hex;
-  const std::size_t lead = v.size() % 4;
-  for (std::size_t i = 0; i < v.size();) {
-    const std::size_t len = i == 0 && lead != 0 ? lead : 4;
-    int x = 0;
-    for (std::size_t k = 0; k < len; ++k) x = x * 2 + (v[i + k] - '0');
-    hex += "0123456789abcdef"[x];
-    i += len;
-  }
-  return v + " (0x" + hex + ")";
+  const std::string hex = v.size() < 8 ? std::string() : bits_hex(v);
+  return hex.empty() ? v : v + " (0x" + hex + ")";
 }
 
 std::string where(const Report& r, const Point& p) {
@@ -284,6 +275,20 @@ int run(const Options& o, std::string& out, std::string& err) {
     err += std::string(e.what()) + "\n";
     return 2;
   }
+}
+
+std::string bits_hex(std::string_view bits) {
+  if (bits.empty() || bits.find_first_not_of("01") != std::string_view::npos) return {};
+  std::string hex;
+  const std::size_t lead = bits.size() % 4;
+  for (std::size_t i = 0; i < bits.size();) {
+    const std::size_t len = i == 0 && lead != 0 ? lead : 4;
+    int x = 0;
+    for (std::size_t k = 0; k < len; ++k) x = x * 2 + (bits[i + k] - '0');
+    hex += "0123456789abcdef"[x];
+    i += len;
+  }
+  return hex;
 }
 
 }  // namespace dpc31::wavediff

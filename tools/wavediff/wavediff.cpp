@@ -1,6 +1,6 @@
 // The comparison engine: names to pairs (strip, map, split vectors, filters), the time-ordered
 // walk over both files (event mode) or over the clock edges of each (clock mode), difference
-// stretches with tolerance, and the diff VCD and WaveDrom outputs.
+// stretches with tolerance. The diff VCD and WaveDrom outputs: diff_vcd.cpp, wavedrom.cpp.
 #include "wavediff.hpp"
 
 #include <fmt/format.h>
@@ -21,24 +21,14 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "engine.hpp"
 #include "outfile.hpp"
 
 namespace dpc31::wavediff {
 
+namespace detail {
+
 namespace {
-
-constexpr std::uint32_t kNone = UINT32_MAX;
-
-std::uint64_t pow10(int n) {
-  std::uint64_t v = 1;
-  for (int i = 0; i < n; ++i) v *= 10;
-  return v;
-}
-
-std::string fmt_real(double d) {
-  if (std::isnan(d)) return "x";
-  return fmt::format("{}", d);
-}
 
 bool bits_equal(std::string_view a, std::string_view b, XzPolicy p) {
   if (a.size() == b.size() && a == b) return true;
@@ -65,55 +55,6 @@ bool bits_equal(std::string_view a, std::string_view b, XzPolicy p) {
   }
   return true;
 }
-
-// ---------------------------------------------------------------------------------------------
-// Signals of one side.
-
-struct LSig {
-  std::string name;  // matched name: after strip and --map
-  std::string orig;  // after strip (B: before --map)
-  std::uint32_t width = 1;
-  bool real = false;
-  int msb = -1;
-  int lsb = -1;
-  std::uint32_t slot = kNone;            // the whole slot, or
-  std::vector<std::uint32_t> bit_slots;  // a joined vector: one 1-bit slot per bit, MSB first
-  bool joined_member = false;            // a bit used by a joined vector
-  mutable std::string scratch;
-};
-
-struct Side {
-  std::unique_ptr<WaveReader> r;
-  const char* label = "A";
-  std::uint64_t ratio = 1;  // common units per file unit
-  std::vector<LSig> sigs;
-  std::vector<std::uint32_t> slot_begin;  // slot -> pairs watching it (CSR)
-  std::vector<std::uint32_t> slot_pairs;
-
-  [[nodiscard]] std::string_view bits(const LSig& l) const {
-    if (l.bit_slots.empty()) return r->slots()[l.slot].bits;
-    return joined_bits(l);
-  }
-  // Out of line: keeps bits() small enough to be inlined into compare().
-  [[gnu::noinline]] std::string_view joined_bits(const LSig& l) const {
-    l.scratch.resize(l.bit_slots.size());
-    for (std::size_t i = 0; i < l.bit_slots.size(); ++i) {
-      l.scratch[i] = r->slots()[l.bit_slots[i]].bits[0];
-    }
-    return l.scratch;
-  }
-  [[nodiscard]] double real(const LSig& l) const { return r->slots()[l.slot].value; }
-  [[nodiscard]] std::string text(const LSig& l) const {
-    return l.real ? fmt_real(real(l)) : std::string(bits(l));
-  }
-  std::uint64_t norm(std::uint64_t t) const {
-    std::uint64_t v = 0;
-    if (__builtin_mul_overflow(t, ratio, &v)) {
-      fail(r->path(), r->line(), "time too large to bring to the common unit");
-    }
-    return v;
-  }
-};
 
 std::string strip_name(const std::string& name, const std::string& prefix) {
   if (prefix.empty()) return name;
@@ -158,14 +99,6 @@ std::vector<std::string> prefixes(const std::vector<std::string>& scopes) {
   }
   return out;
 }
-
-struct MapEntry {
-  std::string a;
-  std::string b;
-  std::uint64_t line = 0;
-  bool used_a = false;
-  bool used_b = false;
-};
 
 std::vector<MapEntry> read_map(const std::string& path) {
   // An ifstream opens a directory and reads nothing from it: that would be an empty map.
@@ -229,73 +162,7 @@ bool bit_of(const std::string& name, std::string& base, int& idx) {
   return true;
 }
 
-// ---------------------------------------------------------------------------------------------
-
-struct Pair {
-  std::uint32_t a = 0;
-  std::uint32_t b = 0;
-  std::string name;
-  bool real = false;
-  bool dirty = false;
-  bool a_changed = false;
-  bool b_changed = false;
-  bool differs = false;   // raw state at the last comparison
-  bool mismatch = false;  // inside a stretch of difference
-  std::uint64_t start_key = 0;
-  Point start_pt;
-  std::string start_a;
-  std::string start_b;
-  std::optional<std::string> start_common;
-  std::string last_common;
-  bool has_common = false;
-  std::uint64_t count = 0;
-  Divergence first;
-  Point last;
-};
-
-class Engine;
-using Hook = std::function<bool(Engine&, const Point&, bool full)>;
-
-class Engine {
- public:
-  explicit Engine(const Options& o) : o_(o) {}
-
-  void setup(Report& rep);
-  void run(const Hook& hook);
-  void finish(Report& rep);
-
-  const Options& o_;
-  Side A;
-  Side B;
-  std::vector<Pair> pairs;
-  std::vector<std::uint32_t> dirty;
-  int pow = 0;
-  std::uint32_t clock_a = kNone;  // LSig indices
-  std::uint32_t clock_b = kNone;
-
-  [[nodiscard]] bool clock_mode() const { return !o_.clock_a.empty(); }
-
- private:
-  std::uint64_t tol_ = 0;
-
-  void build_names(Side& s, const std::string& strip, std::vector<MapEntry>* map);
-  void join_bits(Side& s, const Side& other);
-  std::uint32_t find_clock(const Side& s, const std::string& name) const;
-  void mark(Side& s, bool is_a);
-  void compare(std::uint32_t pi, std::uint64_t key, const Point& pt);
-  void compare_all(std::uint64_t key, const Point& pt);
-  void compare_dirty(std::uint64_t key, const Point& pt);
-  void clear_dirty();
-  void record(Pair& p, bool open);
-  void run_events(const Hook& hook);
-  void run_clock(const Hook& hook);
-  std::uint64_t to_common(std::uint64_t fs, bool round_up) const {
-    const std::uint64_t u = pow10(pow);
-    return fs / u + (round_up && fs % u != 0 ? 1 : 0);
-  }
-  std::vector<Structural> clock_structural_;
-  std::uint64_t edges_ = 0;
-};
+}  // namespace
 
 void Engine::build_names(Side& s, const std::string& strip, std::vector<MapEntry>* map) {
   std::unordered_map<std::string, MapEntry*> b2a;
@@ -813,271 +680,10 @@ void Engine::finish(Report& rep) {
   }
 }
 
-// ---------------------------------------------------------------------------------------------
-// Diff VCD: scopes a/, b/ and diff/ with every compared signal under its own hierarchy.
+}  // namespace detail
 
-std::string vcd_id(std::size_t i) {
-  std::string id;
-  do {
-    id += static_cast<char>('!' + i % 94);
-    i /= 94;
-  } while (i != 0);
-  return id;
-}
-
-std::vector<std::string> split_dots(const std::string& n) {
-  std::vector<std::string> parts;
-  std::size_t b = 0;
-  for (std::size_t i = 0; i <= n.size(); ++i) {
-    if (i == n.size() || n[i] == '.') {
-      parts.push_back(n.substr(b, i - b));
-      b = i + 1;
-    }
-  }
-  return parts;
-}
-
-class DiffVcd {
- public:
-  DiffVcd(const std::string& path, Engine& e) {
-    if (!out_.open(path)) throw InputError(out_.error());
-    const std::size_t n = e.pairs.size();
-    ids_.resize(n * 3);
-    for (std::size_t i = 0; i < ids_.size(); ++i) ids_[i] = vcd_id(i);
-    cycle_id_ = vcd_id(ids_.size());
-    flag_.assign(n, -1);
-    std::vector<std::pair<std::vector<std::string>, std::size_t>> order;
-    for (std::size_t i = 0; i < n; ++i) order.emplace_back(split_dots(e.pairs[i].name), i);
-    std::sort(order.begin(), order.end());
-    std::string h =
-        fmt::format("$version dpc31 wavediff $end\n$timescale {} $end\n", timescale_text(e.pow));
-    if (e.clock_mode()) {
-      h += fmt::format(
-          "$scope module wavediff $end\n$var integer 32 {} cycle $end\n$upscope $end\n", cycle_id_);
-    }
-    const char* tops[3] = {"a", "b", "diff"};
-    for (int side = 0; side < 3; ++side) {
-      h += fmt::format("$scope module {} $end\n", tops[side]);
-      std::vector<std::string> stack;
-      for (const auto& [parts, i] : order) {
-        std::size_t common = 0;
-        while (common < stack.size() && common + 1 < parts.size() &&
-               stack[common] == parts[common]) {
-          ++common;
-        }
-        while (stack.size() > common) {
-          h += "$upscope $end\n";
-          stack.pop_back();
-        }
-        for (std::size_t k = common; k + 1 < parts.size(); ++k) {
-          h += fmt::format("$scope module {} $end\n", parts[k]);
-          stack.push_back(parts[k]);
-        }
-        const Pair& p = e.pairs[i];
-        const std::string& leaf = parts.back();
-        const std::string& id = ids_[i * 3 + static_cast<std::size_t>(side)];
-        if (side == 2) {
-          h += fmt::format("$var wire 1 {} {} $end\n", id, leaf);
-        } else if (p.real) {
-          h += fmt::format("$var real 64 {} {} $end\n", id, leaf);
-        } else {
-          const LSig& l = side == 0 ? e.A.sigs[p.a] : e.B.sigs[p.b];
-          if (l.width == 1) {
-            h += fmt::format("$var wire 1 {} {} $end\n", id, leaf);
-          } else {
-            h += fmt::format("$var wire {} {} {} [{}:0] $end\n", l.width, id, leaf, l.width - 1);
-          }
-        }
-      }
-      while (!stack.empty()) {
-        h += "$upscope $end\n";
-        stack.pop_back();
-      }
-      h += "$upscope $end\n";
-    }
-    h += "$enddefinitions $end\n";
-    put(h);
-  }
-  DiffVcd(const DiffVcd&) = delete;
-  DiffVcd& operator=(const DiffVcd&) = delete;
-
-  void point(Engine& e, const Point& pt, bool full) {
-    std::string& s = line_;
-    s.clear();
-    s += fmt::format("#{}\n", pt.time);
-    if (e.clock_mode()) s += fmt::format("b{:b} {}\n", pt.cycle, cycle_id_);
-    auto emit = [&](std::uint32_t pi) {
-      const Pair& p = e.pairs[pi];
-      if (full || p.a_changed) value(s, e.A, e.A.sigs[p.a], ids_[pi * 3]);
-      if (full || p.b_changed) value(s, e.B, e.B.sigs[p.b], ids_[pi * 3 + 1]);
-      const int f = p.differs ? 1 : 0;
-      if (full || f != flag_[pi]) {
-        s += static_cast<char>('0' + f);
-        s += ids_[pi * 3 + 2];
-        s += '\n';
-        flag_[pi] = static_cast<signed char>(f);
-      }
-    };
-    if (full) {
-      for (std::uint32_t pi = 0; pi < e.pairs.size(); ++pi) emit(pi);
-    } else {
-      for (const std::uint32_t pi : e.dirty) emit(pi);
-    }
-    put(s);
-  }
-
-  // Renames the whole file into place; without it the destructor discards it.
-  void commit() {
-    if (!out_.commit()) throw InputError(out_.error());
-  }
-
- private:
-  outfile::OutFile out_;
-  std::vector<std::string> ids_;
-  std::string cycle_id_;
-  std::vector<signed char> flag_;
-  std::string line_;
-
-  void put(const std::string& s) {
-    if (!out_.write(s)) throw InputError(out_.error());
-  }
-  static void value(std::string& s, const Side& side, const LSig& l, const std::string& id) {
-    if (l.real) {
-      const double d = side.real(l);
-      s += std::isnan(d) ? std::string("rnan") : fmt::format("r{}", d);
-      s += ' ';
-    } else if (l.width == 1) {
-      s += side.bits(l);
-    } else {
-      s += 'b';
-      s += side.bits(l);
-      s += ' ';
-    }
-    s += id;
-    s += '\n';
-  }
-};
-
-// ---------------------------------------------------------------------------------------------
-// WaveDrom: a second pass that keeps the last N points before the first divergence and N after.
-
-struct DromSample {
-  std::string label;
-  std::vector<std::string> a;
-  std::vector<std::string> b;
-  std::vector<bool> differs;
-};
-
-std::string drom_label(const std::string& v, bool real) {
-  if (real) return v;
-  if (v.size() <= 4 || v.find_first_not_of("01") != std::string::npos) return v;
-  std::string hex;
-  const std::size_t lead = v.size() % 4;
-  for (std::size_t i = 0; i < v.size();) {
-    const std::size_t len = i == 0 && lead != 0 ? lead : 4;
-    int x = 0;
-    for (std::size_t k = 0; k < len; ++k) x = x * 2 + (v[i + k] - '0');
-    hex += "0123456789abcdef"[x];
-    i += len;
-  }
-  return "0x" + hex;
-}
-
-nlohmann::ordered_json drom_row(const std::string& name, const std::vector<std::string>& values,
-                                bool real, std::uint32_t width) {
-  std::string wave;
-  nlohmann::ordered_json data = nlohmann::ordered_json::array();
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    const std::string& v = values[i];
-    if (i > 0 && v == values[i - 1]) {
-      wave += '.';
-      continue;
-    }
-    if (!real && width == 1 && v.size() == 1) {
-      wave += v[0];
-    } else if (!real && v.find_first_not_of('x') == std::string::npos) {
-      wave += 'x';
-    } else if (!real && v.find_first_not_of('z') == std::string::npos) {
-      wave += 'z';
-    } else {
-      wave += '=';
-      data.push_back(drom_label(v, real));
-    }
-  }
-  return {{"name", name}, {"wave", wave}, {"data", data}};
-}
-
-std::string wavedrom_text(const Options& o, const Report& rep) {
-  Engine e(o);
-  Report scratch;
-  e.setup(scratch);
-  std::vector<std::uint32_t> sel;
-  std::unordered_map<std::string, std::uint32_t> by_name;
-  for (std::uint32_t i = 0; i < e.pairs.size(); ++i) by_name.emplace(e.pairs[i].name, i);
-  for (const SignalDiff& d : rep.diffs) {
-    if (sel.size() >= 8) break;
-    if (auto it = by_name.find(d.name); it != by_name.end()) sel.push_back(it->second);
-  }
-  const SignalDiff& first = rep.diffs.front();
-  const std::uint64_t key = rep.clock_mode ? first.first.at.cycle : first.first.at.time;
-  const std::size_t w = o.wavedrom_window;
-  std::deque<DromSample> ring;
-  bool found = false;
-  std::size_t after = 0;
-  e.run([&](Engine& en, const Point& pt, bool) {
-    DromSample s;
-    s.label = rep.clock_mode ? std::to_string(pt.cycle) : time_text(pt.time, en.pow);
-    for (const std::uint32_t pi : sel) {
-      const Pair& p = en.pairs[pi];
-      s.a.push_back(en.A.text(en.A.sigs[p.a]));
-      s.b.push_back(en.B.text(en.B.sigs[p.b]));
-      s.differs.push_back(p.differs);
-    }
-    ring.push_back(std::move(s));
-    const std::uint64_t k = rep.clock_mode ? pt.cycle : pt.time;
-    if (!found) {
-      if (k >= key) {
-        found = true;
-      } else if (ring.size() > w) {
-        ring.pop_front();
-      }
-      return true;
-    }
-    return ++after < w;
-  });
-  nlohmann::ordered_json rows = nlohmann::ordered_json::array();
-  std::vector<std::string> labels;
-  for (const auto& s : ring) labels.push_back(s.label);
-  {
-    nlohmann::ordered_json data = labels;
-    rows.push_back({{"name", rep.clock_mode ? "cycle" : "time"},
-                    {"wave", std::string(labels.size(), '=')},
-                    {"data", data}});
-  }
-  for (std::size_t k = 0; k < sel.size(); ++k) {
-    const Pair& p = e.pairs[sel[k]];
-    std::vector<std::string> va;
-    std::vector<std::string> vb;
-    std::vector<std::string> vd;
-    for (const auto& s : ring) {
-      va.push_back(s.a[k]);
-      vb.push_back(s.b[k]);
-      vd.emplace_back(s.differs[k] ? "1" : "0");
-    }
-    rows.push_back(drom_row(p.name + " (a)", va, p.real, e.A.sigs[p.a].width));
-    rows.push_back(drom_row(p.name + " (b)", vb, p.real, e.B.sigs[p.b].width));
-    rows.push_back(drom_row(p.name + " (diff)", vd, false, 1));
-  }
-  const std::string when = rep.clock_mode ? fmt::format("cycle {}", first.first.at.cycle)
-                                          : time_text(first.first.at.time, rep.pow);
-  nlohmann::ordered_json j = {
-      {"signal", rows},
-      {"head", {{"text", fmt::format("first divergence: {} at {}", first.name, when)}}},
-      {"foot", {{"text", fmt::format("a: {}  b: {}", o.file_a, o.file_b)}}}};
-  return j.dump(2) + '\n';
-}
-
-}  // namespace
+using detail::Engine;
+using detail::Hook;
 
 const char* edge_name(Edge e) {
   return e == Edge::rising ? "rising" : e == Edge::falling ? "falling" : "both";
@@ -1091,12 +697,12 @@ Report compare(const Options& o) {
   // (docs/bad-input.md).
   outfile::OutFile drom;
   if (!o.wavedrom.empty() && !drom.open(o.wavedrom)) throw InputError(drom.error());
-  std::unique_ptr<DiffVcd> dv;
-  if (!o.diff_vcd.empty()) dv = std::make_unique<DiffVcd>(o.diff_vcd, e);
+  std::shared_ptr<detail::DiffVcd> dv;
+  if (!o.diff_vcd.empty()) dv = detail::open_diff_vcd(o.diff_vcd, e);
   Hook hook;
   if (dv) {
     hook = [&dv](Engine& en, const Point& pt, bool full) {
-      dv->point(en, pt, full);
+      detail::diff_vcd_point(*dv, en, pt, full);
       return true;
     };
   }
@@ -1106,10 +712,10 @@ Report compare(const Options& o) {
     const std::string text = rep.diffs.empty()
                                  ? R"({"signal": [], "head": {"text": "no divergence"}})"
                                    "\n"
-                                 : wavedrom_text(o, rep);
+                                 : detail::wavedrom_text(o, rep);
     if (!drom.write(text)) throw InputError(drom.error());
   }
-  if (dv) dv->commit();
+  if (dv) detail::commit_diff_vcd(*dv);
   if (drom.is_open() && !drom.commit()) throw InputError(drom.error());
   return rep;
 }

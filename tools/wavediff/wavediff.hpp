@@ -117,6 +117,9 @@ std::string json_report(const Report& r);
 // Time in the common unit as text ("1500ps"), and in a file's own units ("1.5").
 std::string time_text(std::uint64_t t, int pow);
 std::string file_time(std::uint64_t t, int pow, int file_pow);
+// A value of 0/1 digits as hex digits (the leading group is the short one: "101110001" -> "171");
+// empty when it holds x, z or other characters.
+std::string bits_hex(std::string_view bits);
 
 // The whole command: compare, print the text report to `out` (errors and warnings to `err`),
 // write --json. Exit code 0 same, 1 different, 2 bad input.
