@@ -20,6 +20,7 @@
 #include "../emu/dp_master.hpp"
 #include "../emu/responder.hpp"
 #include "pcapng.hpp"
+#include "test_files.hpp"
 
 using namespace dpc31;
 using namespace dpc31::capture;
@@ -28,34 +29,7 @@ using Bytes = std::vector<std::uint8_t>;
 
 namespace {
 
-// A fresh directory per test, removed afterwards.
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() /
-            (std::string("dpc31-capture-") + std::to_string(::getpid()) + "-" + info->name());
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  [[nodiscard]] std::string file(const std::string& name) const { return (path_ / name).string(); }
-  [[nodiscard]] std::vector<std::string> entries() const {
-    std::vector<std::string> v;
-    for (const auto& e : fs::directory_iterator(path_)) v.push_back(e.path().filename().string());
-    std::sort(v.begin(), v.end());
-    return v;
-  }
-  [[nodiscard]] const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
+using testutil::TempDir;
 
 Bytes read_file(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
@@ -102,7 +76,7 @@ TEST(Capture, TwoPacketFileFieldByField) {
   ASSERT_TRUE(w.add(Telegram{true, kFdlStatusAns, 50464, 52576}, 48'000'000)) << w.error();
   EXPECT_EQ(w.packets(), 2u);
   ASSERT_TRUE(w.close()) << w.error();
-  EXPECT_EQ(dir.entries(), std::vector<std::string>{"two.pcapng"});  // no temporary left
+  EXPECT_EQ(dir.tree(), std::vector<std::string>{"two.pcapng"});  // no temporary left
 
   const Bytes b = read_file(path);
   ASSERT_EQ(b.size(), 240u);
@@ -260,7 +234,7 @@ TEST(Capture, OpenFailureIsReported) {
   EXPECT_FALSE(w.add(Telegram{false, kFdlStatusReq, 0, 2112}, 48'000'000));
   EXPECT_FALSE(w.close());
   EXPECT_FALSE(fs::exists(path));
-  EXPECT_TRUE(dir.entries().empty());
+  EXPECT_TRUE(dir.tree().empty());
 }
 
 TEST(Capture, TargetUntouchedUntilClose) {
@@ -272,21 +246,21 @@ TEST(Capture, TargetUntouchedUntilClose) {
     ASSERT_TRUE(w.open(path)) << w.error();
     ASSERT_TRUE(w.add(Telegram{false, kFdlStatusReq, 0, 2112}, 48'000'000));
     EXPECT_EQ(read_file(path), (Bytes{'o', 'l', 'd'}));
-    EXPECT_EQ(dir.entries().size(), 2u);  // the target and the temporary
+    EXPECT_EQ(dir.tree().size(), 2u);  // the target and the temporary
     // Destroyed without close(): the capture is discarded.
   }
   EXPECT_EQ(read_file(path), (Bytes{'o', 'l', 'd'}));
-  EXPECT_EQ(dir.entries(), std::vector<std::string>{"c.pcapng"});
+  EXPECT_EQ(dir.tree(), std::vector<std::string>{"c.pcapng"});
 
   PcapngWriter w;
   ASSERT_TRUE(w.open(path)) << w.error();
   w.discard();
   EXPECT_FALSE(w.is_open());
-  EXPECT_EQ(dir.entries(), std::vector<std::string>{"c.pcapng"});
+  EXPECT_EQ(dir.tree(), std::vector<std::string>{"c.pcapng"});
   ASSERT_TRUE(w.open(path)) << w.error();
   ASSERT_TRUE(w.close()) << w.error();
   EXPECT_EQ(read_file(path).size(), 88u);  // SHB + IDB: an empty capture
-  EXPECT_EQ(dir.entries(), std::vector<std::string>{"c.pcapng"});
+  EXPECT_EQ(dir.tree(), std::vector<std::string>{"c.pcapng"});
 }
 
 TEST(Capture, RenameFailureIsReported) {
@@ -297,14 +271,14 @@ TEST(Capture, RenameFailureIsReported) {
   PcapngWriter w;
   EXPECT_FALSE(w.open(path));
   EXPECT_EQ(w.error(), path + ": cannot write: is a directory");
-  EXPECT_EQ(dir.entries(), std::vector<std::string>{"is_a_directory"});
+  EXPECT_EQ(dir.tree(), std::vector<std::string>{"is_a_directory"});
   // One that appears while the capture is open makes the rename fail.
   fs::remove(path);
   ASSERT_TRUE(w.open(path)) << w.error();
   fs::create_directory(path);
   EXPECT_FALSE(w.close());
   EXPECT_NE(w.error().find("cannot rename"), std::string::npos) << w.error();
-  EXPECT_EQ(dir.entries(), std::vector<std::string>{"is_a_directory"});  // temporary removed
+  EXPECT_EQ(dir.tree(), std::vector<std::string>{"is_a_directory"});  // temporary removed
 }
 
 // A full disk, as the file size limit (SIGXFSZ ignored, so write() fails with EFBIG).
@@ -338,7 +312,7 @@ TEST(Capture, WriteFailureIsReportedNeverSilent) {
   EXPECT_NE(w.error().find("cannot write"), std::string::npos) << w.error();
   EXPECT_NE(w.error().find("File too large"), std::string::npos) << w.error();
   EXPECT_FALSE(fs::exists(path));
-  EXPECT_TRUE(dir.entries().empty());
+  EXPECT_TRUE(dir.tree().empty());
 
   // The same at close(): everything still buffered, the flush fails there.
   ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &lim), 0);
@@ -484,7 +458,7 @@ TEST(Capture, AttachRecordsEveryTelegram) {
   }
   s.master->data_exchange({0x05, 0x06, 0x07, 0x08});
   EXPECT_EQ(w.packets(), s.seen.size() - 2);
-  EXPECT_EQ(dir.entries(), std::vector<std::string>{"startup.pcapng"});
+  EXPECT_EQ(dir.tree(), std::vector<std::string>{"startup.pcapng"});
 }
 
 // The whole path. Expected fields by hand from the telegrams (FCB/FCV per EN 50170: the first SRD

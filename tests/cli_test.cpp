@@ -12,6 +12,7 @@
 
 #include "dpc31/regdesc.hpp"
 #include "run_command.hpp"
+#include "test_files.hpp"
 
 namespace {
 
@@ -21,12 +22,7 @@ Result run(const std::string& args) {
   return testutil::run_command(std::string(DPC31_CLI) + " " + args + " 2>/dev/null");
 }
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
+using testutil::slurp;
 
 }  // namespace
 

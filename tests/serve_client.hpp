@@ -19,6 +19,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -29,6 +30,15 @@
 extern char** environ;
 
 namespace testutil {
+
+inline std::vector<std::string> words(const std::string& s) {
+  std::istringstream in(s);
+  std::vector<std::string> w;
+  for (std::string x; in >> x;) w.push_back(x);
+  return w;
+}
+
+inline bool starts_with(const std::string& s, std::string_view p) { return s.rfind(p, 0) == 0; }
 
 inline constexpr int kDefaultTimeoutMs = 10'000;
 

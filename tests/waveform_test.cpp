@@ -15,17 +15,13 @@
 #include "../emu/dp_master.hpp"
 #include "../emu/responder.hpp"
 #include "run_command.hpp"
+#include "test_files.hpp"
 
 using namespace dpc31;
 
 namespace {
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
+using testutil::slurp;
 
 using Cmd = testutil::CommandResult;
 

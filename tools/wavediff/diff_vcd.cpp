@@ -14,15 +14,6 @@ namespace dpc31::wavediff::detail {
 
 namespace {
 
-std::string vcd_id(std::size_t i) {
-  std::string id;
-  do {
-    id += static_cast<char>('!' + i % 94);
-    i /= 94;
-  } while (i != 0);
-  return id;
-}
-
 std::vector<std::string> split_dots(const std::string& n) {
   std::vector<std::string> parts;
   std::size_t b = 0;

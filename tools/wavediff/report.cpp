@@ -277,6 +277,15 @@ int run(const Options& o, std::string& out, std::string& err) {
   }
 }
 
+std::string vcd_id(std::size_t i) {
+  std::string id;
+  do {
+    id += static_cast<char>('!' + i % 94);
+    i /= 94;
+  } while (i != 0);
+  return id;
+}
+
 std::string bits_hex(std::string_view bits) {
   if (bits.empty() || bits.find_first_not_of("01") != std::string_view::npos) return {};
   std::string hex;

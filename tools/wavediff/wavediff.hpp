@@ -117,6 +117,9 @@ std::string json_report(const Report& r);
 // Time in the common unit as text ("1500ps"), and in a file's own units ("1.5").
 std::string time_text(std::uint64_t t, int pow);
 std::string file_time(std::uint64_t t, int pow, int file_pow);
+// The VCD identifier code of the i-th variable: printable ASCII '!'..'~', base 94, least
+// significant digit first (what our writers emit; any reader takes any code).
+std::string vcd_id(std::size_t i);
 // A value of 0/1 digits as hex digits (the leading group is the short one: "101110001" -> "171");
 // empty when it holds x, z or other characters.
 std::string bits_hex(std::string_view bits);

@@ -1,0 +1,153 @@
+// The fixture of the bad-input tests (tests/bad_input_test.cpp, tests/bad_output_test.cpp): the
+// real `dpc31` binary run in a scratch directory, and what "one line on stderr, exit 2, nothing
+// written" means as assertions.
+#pragma once
+
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/mount.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "run_command.hpp"
+#include "test_files.hpp"
+
+extern char** environ;
+
+namespace badinput {
+
+namespace fs = std::filesystem;
+
+inline const std::string kCli = DPC31_CLI;
+inline const std::string kTraces = std::string(SOURCE_DIR) + "/traces/";
+
+using testutil::slurp;
+
+inline void spit(const std::string& path, const std::string& text) {
+  std::ofstream f(path, std::ios::binary | std::ios::trunc);
+  f << text;
+}
+
+struct Outcome {
+  int rc = -1;
+  std::string out;
+  std::string err;
+};
+
+// Each test in a directory of its own: the inputs and outputs live in `work`, stdout and stderr
+// of the command go to `io` (so that they never count as files the command left behind).
+class BadInput : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::string tmpl = ::testing::TempDir() + "dpc31-bad-input-XXXXXX";
+    ASSERT_NE(::mkdtemp(tmpl.data()), nullptr);
+    root_ = tmpl;
+    fs::create_directory(root_ / "work");
+    fs::create_directory(root_ / "io");
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::permissions(root_ / "work" / "ro", fs::perms::owner_all, ec);
+    fs::remove_all(root_, ec);
+  }
+
+  [[nodiscard]] std::string path(const std::string& name) const {
+    return (root_ / "work" / name).string();
+  }
+  std::string file(const std::string& name, const std::string& text) {
+    spit(path(name), text);
+    return path(name);
+  }
+  std::string copy(const std::string& from, const std::string& name) {
+    fs::copy_file(from, path(name), fs::copy_options::overwrite_existing);
+    return path(name);
+  }
+  // The first `keep` bytes of `from`: a file cut off in the middle.
+  std::string truncated(const std::string& from, const std::string& name, std::size_t keep) {
+    const std::string text = slurp(from);
+    EXPECT_LT(keep, text.size());
+    return file(name, text.substr(0, keep));
+  }
+
+  Outcome dpc31(const std::string& args) const {
+    const std::string out = (root_ / "io" / "out").string();
+    const std::string err = (root_ / "io" / "err").string();
+    const testutil::CommandResult r = testutil::run_command(
+        "cd " + (root_ / "work").string() + " && " + kCli + " " + args + " >" + out + " 2>" + err);
+    return {r.rc, slurp(out), slurp(err)};
+  }
+
+  [[nodiscard]] std::vector<std::string> listing() const {
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(root_ / "work")) {
+      names.push_back(e.path().filename().string());
+    }
+    std::sort(names.begin(), names.end());
+    return names;
+  }
+
+  fs::path root_;
+};
+
+// Exit 2 and exactly this one line on stderr.
+inline void expect_bad(const Outcome& r, const std::string& line, const std::string& what) {
+  EXPECT_EQ(r.rc, 2) << what << "\n" << r.err;
+  EXPECT_EQ(r.err, line + "\n") << what;
+}
+
+// Exit 2 and one line on stderr that starts with `prefix` (the rest is CLI11's or the system's
+// wording, not ours).
+inline void expect_bad_prefix(const Outcome& r, const std::string& prefix,
+                              const std::string& what) {
+  EXPECT_EQ(r.rc, 2) << what << "\n" << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << what << ": " << r.err;
+  EXPECT_EQ(r.err.rfind(prefix, 0), 0u) << what << ": " << r.err;
+}
+
+inline std::string fmt_line(const std::string& file, std::ptrdiff_t line, const std::string& what) {
+  return file + ":" + std::to_string(line) + ": " + what;
+}
+
+// A directory the command cannot create files in: read-only for a user; root writes anyway, so
+// there /proc, where nobody can create files, stands in for it.
+inline std::string unwritable_dir(const std::string& ro) {
+  if (::geteuid() == 0) return "/proc";
+  fs::create_directory(ro);
+  fs::permissions(ro, fs::perms::owner_read | fs::perms::owner_exec);
+  return ro;
+}
+
+// The FST block chain (fstapi.h): type byte, big-endian length counting itself, data.
+struct FstBlock {
+  std::size_t pos;
+  unsigned type;
+  std::size_t len;
+};
+inline std::vector<FstBlock> fst_blocks(const std::string& b) {
+  std::vector<FstBlock> out;
+  for (std::size_t pos = 0; pos + 9 <= b.size();) {
+    std::size_t len = 0;
+    for (std::size_t i = 1; i < 9; ++i) len = len << 8 | static_cast<unsigned char>(b[pos + i]);
+    out.push_back({pos, static_cast<unsigned char>(b[pos]), len});
+    pos += 1 + len;
+  }
+  return out;
+}
+
+}  // namespace badinput

@@ -1,0 +1,379 @@
+// Outputs that must not destroy or half-write (docs/security.md, docs/bad-input.md): device
+// nodes, FIFOs and symlinks as outputs, a full file system, a failed write to stdout, an output
+// that names an input, signals during a run, the demo's private directory, numbers that are not
+// finite or in range, and inputs whose size must not decide what is allocated.
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "bad_input.hpp"
+
+using namespace badinput;
+
+namespace {
+
+// --- Outputs that must not destroy or half-write (docs/security.md, findings 2, 6, 7) -----------
+
+const std::string kScn = kTraces + "gc_clear_spc3.scn";
+
+// The FST writer (fstapi) unlinks the name it is given: a device or a FIFO named by --fst must
+// be written in place, never replaced by a plain file (issue 14, finding 2).
+TEST_F(BadInput, FstToADeviceKeepsTheDeviceNode) {
+  struct stat before {};
+  ASSERT_EQ(::stat("/dev/null", &before), 0);
+  ASSERT_TRUE(S_ISCHR(before.st_mode));
+  const Outcome r = dpc31("run " + kScn + " --quiet --fst /dev/null --vcd /dev/null");
+  EXPECT_EQ(r.rc, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  struct stat after {};
+  ASSERT_EQ(::stat("/dev/null", &after), 0);
+  EXPECT_TRUE(S_ISCHR(after.st_mode)) << "/dev/null is no longer a character device";
+  EXPECT_EQ(after.st_rdev, before.st_rdev);
+  EXPECT_EQ(after.st_ino, before.st_ino);
+  // Nothing of fstapi's left in TMPDIR's scratch directory or here.
+  EXPECT_EQ(listing(), std::vector<std::string>{});
+}
+
+TEST_F(BadInput, FstToAFifoWritesTheWholeFileThroughIt) {
+  ASSERT_EQ(::mkfifo(path("pipe").c_str(), 0600), 0);
+  const std::string got = (root_ / "io" / "got").string();
+  const testutil::CommandResult r = testutil::run_command(
+      "cd " + (root_ / "work").string() + " && { cat pipe > " + got + " & " + kCli + " run " +
+      kScn + " --quiet --fst pipe; rc=$?; wait; exit $rc; } 2>&1");
+  EXPECT_EQ(r.rc, 0) << r.out;
+  struct stat st {};
+  ASSERT_EQ(::lstat(path("pipe").c_str(), &st), 0);
+  EXPECT_TRUE(S_ISFIFO(st.st_mode));
+  // The same bytes as a run into a regular file.
+  EXPECT_EQ(dpc31("run " + kScn + " --quiet --fst file.fst").rc, 0);
+  const std::string bytes = slurp(got);
+  EXPECT_GT(bytes.size(), 329u);
+  EXPECT_EQ(bytes.substr(0, 9), slurp(path("file.fst")).substr(0, 9));
+  EXPECT_EQ(fst_blocks(bytes).size(), fst_blocks(slurp(path("file.fst"))).size());
+}
+
+// A symlink to a file: the link stays, the file it names is replaced. A link to nothing is
+// refused (creating what it names would write wherever its maker chose).
+TEST_F(BadInput, OutputSymlinksAreFollowedOnlyToAnExistingFile) {
+  spit(path("real.fst"), "old");
+  fs::create_symlink("real.fst", path("link.fst"));
+  EXPECT_EQ(dpc31("run " + kScn + " --quiet --fst link.fst").rc, 0);
+  EXPECT_TRUE(fs::is_symlink(path("link.fst")));
+  EXPECT_EQ(slurp(path("real.fst")).substr(0, 1), std::string(1, '\0'));  // an FST header block
+  fs::create_symlink("nowhere/x.vcd", path("dangling.vcd"));
+  const auto before = listing();
+  expect_bad(dpc31("run " + kScn + " --quiet --vcd dangling.vcd"),
+             "dpc31 run: dangling.vcd: cannot write: a symbolic link to a missing file",
+             "dangling");
+  EXPECT_EQ(listing(), before);
+}
+
+// A full file system: fstapi does not check its writes, so only the walk of what it wrote
+// shows it. Exit 2, one line, the old file kept, no temporary left (finding 6). A small tmpfs
+// mounted for the test (root; the suite runs as root in CI and here).
+TEST_F(BadInput, FullFileSystemIsExit2AndKeepsTheOldFile) {
+  if (::geteuid() != 0) GTEST_SKIP() << "mounting a tmpfs needs root";
+  const std::string full = path("full");
+  fs::create_directory(full);
+  ASSERT_EQ(::mount("tmpfs", full.c_str(), "tmpfs", 0, "size=64k"), 0) << std::strerror(errno);
+  struct Unmount {
+    std::string dir;
+    ~Unmount() { ::umount2(dir.c_str(), MNT_DETACH); }
+  } unmount{full};
+  spit(full + "/old.fst", "old fst");
+  spit(full + "/old.vcd", "old vcd");
+  spit(full + "/old.json", "old json");
+  // Fill it up: what is left cannot hold a waveform of the whole run.
+  {
+    std::ofstream fill(full + "/fill", std::ios::binary);
+    const std::string block(4096, 'x');
+    while (fill.write(block.data(), static_cast<std::streamsize>(block.size()))) {
+    }
+  }
+  for (const auto& [opt, name] : {std::pair{"--fst", "old.fst"}, std::pair{"--vcd", "old.vcd"},
+                                  std::pair{"--json", "old.json"}}) {
+    const Outcome r = dpc31("run " + kScn + " --quiet " + opt + " full/" + name);
+    expect_bad_prefix(r, std::string("dpc31 run: full/") + name + ": cannot write", name);
+  }
+  EXPECT_EQ(slurp(full + "/old.fst"), "old fst");
+  EXPECT_EQ(slurp(full + "/old.vcd"), "old vcd");
+  EXPECT_EQ(slurp(full + "/old.json"), "old json");
+  std::vector<std::string> left;
+  for (const auto& e : fs::directory_iterator(full)) left.push_back(e.path().filename().string());
+  std::sort(left.begin(), left.end());
+  EXPECT_EQ(left, (std::vector<std::string>{"fill", "old.fst", "old.json", "old.vcd"}));
+}
+
+// The standard output is an output too: a write that fails is exit 2 with one line, whatever
+// the command found (finding 6).
+TEST_F(BadInput, AFailedWriteToTheStandardOutputIsExit2) {
+  for (const std::string& args :
+       std::vector<std::string>{"regs --profile dpc31", "regs --profile all --format c",
+                                "run " + kScn, "replay " + kTraces + "gc_clear_spc3.trace"}) {
+    const std::string err = (root_ / "io" / "err").string();
+    const testutil::CommandResult r =
+        testutil::run_command(kCli + " " + args + " >/dev/full 2>" + err);
+    EXPECT_EQ(r.rc, 2) << args;
+    const std::string line = slurp(err);
+    EXPECT_EQ(std::count(line.begin(), line.end(), '\n'), 1) << args << ": " << line;
+    EXPECT_NE(line.find(": cannot write the standard output: No space left on device"),
+              std::string::npos)
+        << args << ": " << line;
+  }
+}
+
+// An output that names an input, or another output, is refused before any work: the scenario,
+// waveform B and the first output stay as they were (finding 6).
+TEST_F(BadInput, AnOutputThatNamesAnInputOrAnotherOutputIsRefused) {
+  const std::string scn = copy(kScn, "s.scn");
+  const std::string text = slurp(scn);
+  expect_bad(dpc31("run s.scn --json s.scn"),
+             "dpc31 run: --json s.scn: is the scenario s.scn: an output must not replace an input",
+             "json = scenario");
+  expect_bad(dpc31("run s.scn --quiet --vcd ./s.scn"),
+             "dpc31 run: --vcd ./s.scn: is the scenario s.scn: an output must not replace an "
+             "input",
+             "another spelling");
+  fs::create_hard_link(scn, path("hard.scn"));
+  expect_bad_prefix(dpc31("run s.scn --quiet --record hard.scn"),
+                    "dpc31 run: --record hard.scn: is the scenario s.scn", "hard link");
+  EXPECT_EQ(slurp(scn), text);
+  spit(path("x"), "old");
+  expect_bad(dpc31("run s.scn --quiet --vcd x --fst x"),
+             "dpc31 run: --vcd x and --fst x are the same file: each output needs its own",
+             "two outputs, one file");
+  expect_bad(dpc31("run s.scn --quiet --vcd new.vcd --pcap " + path("new.vcd")),
+             "dpc31 run: --vcd new.vcd and --pcap " + path("new.vcd") +
+                 " are the same file: each output needs its own",
+             "two outputs, a file to be");
+  EXPECT_EQ(slurp(path("x")), "old");
+  // wavediff: --diff-vcd B would overwrite the file compared.
+  copy(kTraces + "../tests/data/wavediff/emu.vcd", "a.vcd");
+  copy(kTraces + "../tests/data/wavediff/rtl.vcd", "b.vcd");
+  const std::string b_text = slurp(path("b.vcd"));
+  expect_bad(dpc31("wavediff a.vcd b.vcd --diff-vcd b.vcd"),
+             "--diff-vcd b.vcd: is B b.vcd: an output must not replace an input", "diff-vcd = B");
+  expect_bad(dpc31("wavediff a.vcd b.vcd --json r.json --wavedrom r.json"),
+             "--json r.json and --wavedrom r.json are the same file: each output "
+             "needs its own",
+             "json = wavedrom");
+  EXPECT_EQ(slurp(path("b.vcd")), b_text);
+  EXPECT_FALSE(fs::exists(path("new.vcd")));
+  EXPECT_FALSE(fs::exists(path("r.json")));
+}
+
+// A long run (10^6 exchanges at 12 Mbaud, about 40 s of chip time): long enough to be signalled.
+std::string long_scenario() {
+  return "profile spc3\nbaud 12000000\nmaster address=1\n"
+         "slave address=12 ident=0x8031 cfg=11,21 in=2 out=2\nuser inputs=C0,DE\n"
+         "startup\nexchange 1000000 outputs=5A,A5\n";
+}
+
+pid_t spawn(const std::vector<std::string>& argv, const std::string& dir) {
+  std::vector<char*> args;
+  for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addchdir_np(&fa, dir.c_str());
+  pid_t pid = -1;
+  EXPECT_EQ(posix_spawn(&pid, args[0], &fa, nullptr, args.data(), environ), 0);
+  posix_spawn_file_actions_destroy(&fa);
+  return pid;
+}
+
+// Waits up to 60 s for `done`.
+template <typename F>
+bool eventually(F done) {
+  for (int i = 0; i < 6000; ++i) {
+    if (done()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return false;
+}
+
+bool any_ending(const fs::path& dir, const std::string& suffix) {
+  for (const auto& e : fs::directory_iterator(dir)) {
+    const std::string n = e.path().filename().string();
+    if (n.size() >= suffix.size() &&
+        n.compare(n.size() - suffix.size(), suffix.size(), suffix) == 0)
+      return true;
+  }
+  return false;
+}
+
+// SIGINT, SIGTERM or SIGHUP in the middle of a run: the process still ends by the signal, and
+// no temporary of its outputs is left (finding 7).
+TEST_F(BadInput, ASignalDuringARunLeavesNoTemporary) {
+  spit(path("long.scn"), long_scenario());
+  spit(path("old.vcd"), "old");
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    const pid_t pid =
+        spawn({kCli, "run", "long.scn", "--quiet", "--json", "r.json", "--vcd", "old.vcd", "--fst",
+               "r.fst", "--pcap", "r.pcapng", "--record", "r.trace"},
+              (root_ / "work").string());
+    ASSERT_GT(pid, 0);
+    // Every output's temporary is there from the start of the run.
+    EXPECT_TRUE(eventually([&] { return any_ending(root_ / "work", ".tmp"); })) << sig;
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    ASSERT_EQ(::kill(pid, sig), 0);
+    int status = 0;
+    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+    EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << sig << " status " << status;
+    EXPECT_EQ(listing(), (std::vector<std::string>{"long.scn", "old.vcd"})) << sig;
+    EXPECT_EQ(slurp(path("old.vcd")), "old");
+  }
+}
+
+// dpc31 bench runs dpc31_bench as a child: a signal to dpc31 ends the child too, and the files
+// of both go (finding 7).
+TEST_F(BadInput, ASignalToBenchEndsItsChildAndRemovesTheFiles) {
+  const std::string work = (root_ / "work").string();
+  ::setenv("TMPDIR", work.c_str(), 1);
+  const pid_t pid = spawn({kCli, "bench", "--quick"}, work);
+  ::unsetenv("TMPDIR");
+  ASSERT_GT(pid, 0);
+  // The child: a process whose parent is `pid`.
+  pid_t child = -1;
+  EXPECT_TRUE(eventually([&] {
+    for (const auto& e : fs::directory_iterator("/proc")) {
+      std::ifstream stat(e.path() / "stat");
+      std::string text;
+      std::getline(stat, text);
+      const auto close = text.rfind(')');
+      if (close == std::string::npos) continue;
+      std::istringstream rest(text.substr(close + 2));
+      char state = 0;
+      pid_t ppid = 0;
+      rest >> state >> ppid;
+      if (ppid == pid && text.find("(dpc31_bench)") != std::string::npos) {
+        child = std::stoi(e.path().filename().string());
+        return true;
+      }
+    }
+    return false;
+  }));
+  ASSERT_GT(child, 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  ASSERT_EQ(::kill(pid, SIGTERM), 0);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM) << status;
+  // Gone (reaped by init once it was killed), and with it everything both made in TMPDIR.
+  EXPECT_TRUE(eventually([&] { return ::kill(child, 0) != 0 && listing().empty(); }))
+      << "left: " << ::testing::PrintToString(listing());
+}
+
+// --- demo (finding 4) ------------------------------------------------------------------------
+
+// A TMPDIR/dpc31-demo made beforehand by someone else (a directory, or a link to one) is not
+// used: the demo writes into a new directory of its own, mode 0700.
+TEST_F(BadInput, DemoUsesAFreshPrivateDirectory) {
+  const std::string tmp = path("tmp");
+  fs::create_directory(tmp);
+  fs::create_directory(path("elsewhere"));
+  fs::create_directory_symlink(path("elsewhere"), tmp + "/dpc31-demo");
+  ASSERT_EQ(::chown(path("elsewhere").c_str(), 65534, 65534), ::geteuid() == 0 ? 0 : -1);
+  const testutil::CommandResult r =
+      testutil::run_command("TMPDIR=" + tmp + " " + kCli + " demo 2>/dev/null");
+  ASSERT_EQ(r.rc, 0);
+  const std::string key = "waveform (VCD): ";
+  const auto at = r.out.find(key);
+  ASSERT_NE(at, std::string::npos);
+  const fs::path vcd = r.out.substr(at + key.size(), r.out.find('\n', at) - at - key.size());
+  const fs::path dir = vcd.parent_path();
+  EXPECT_EQ(dir.parent_path(), fs::path(tmp));
+  EXPECT_EQ(dir.filename().string().rfind("dpc31-demo-", 0), 0u) << dir;
+  EXPECT_EQ(dir.filename().string().size(), std::string("dpc31-demo-XXXXXX").size()) << dir;
+  EXPECT_TRUE(fs::is_regular_file(vcd));
+  EXPECT_TRUE(fs::is_regular_file(dir / "dpc31-demo.pcapng"));
+  struct stat st {};
+  ASSERT_EQ(::lstat(dir.c_str(), &st), 0);
+  EXPECT_TRUE(S_ISDIR(st.st_mode));
+  EXPECT_EQ(st.st_mode & 0777, 0700u);
+  EXPECT_TRUE(fs::is_empty(path("elsewhere")));
+  // A second run: another new directory.
+  const testutil::CommandResult again =
+      testutil::run_command("TMPDIR=" + tmp + " " + kCli + " demo 2>/dev/null");
+  EXPECT_EQ(again.rc, 0);
+  EXPECT_EQ(again.out.find(vcd.string()), std::string::npos);
+}
+
+// --- numbers (finding 9) ---------------------------------------------------------------------
+
+// Every numeric option refuses NaN, the infinities, values that overflow its type and values
+// outside its range: one line, exit 2, nothing run.
+TEST_F(BadInput, NumbersAreFiniteAndInRangeEverywhere) {
+  const std::string scn = copy(kScn, "s.scn");
+  const std::vector<std::string> cases = {
+      // dpc31 soak: NaN ran forever (--cycles) or was undefined behaviour (--fault-period).
+      "soak --cycles nan", "soak --cycles inf", "soak --cycles -inf", "soak --cycles 1e400",
+      "soak --fault-period nan", "soak --fault-period 0x10", "soak --seed 18446744073709551616",
+      "soak --seed 99999999999999999999999", "soak --seed -1", "soak --seed 1.5",
+      // dpc31 run
+      "run s.scn --from nan", "run s.scn --to 18446744073709551616", "run s.scn --from -1",
+      "run s.scn --to 1e3",
+      // dpc31 cosim
+      "cosim --seeds nan", "cosim --seeds 0", "cosim --seeds 100000001",
+      "cosim --seed-base 18446744073709551616", "cosim --cycles inf", "cosim --window -5",
+      // dpc31 wavediff
+      "wavediff a b --tolerance-cycles nan", "wavediff a b --wavedrom-window 0",
+      "wavediff a b --max-signals 4294967296",
+      // dpc31 bench
+      "bench --min-time nan", "bench --min-time inf", "bench --repetitions 1e2",
+      "bench --wavediff-mb 18446744073709551616",
+      // dpc31 serve
+      "serve --idle-timeout nan", "serve --idle-timeout inf", "serve --max-clients 1e5"};
+  const auto before = listing();
+  for (const std::string& args : cases) {
+    const Outcome r = dpc31(args);
+    expect_bad_prefix(r, "dpc31 " + args.substr(0, args.find(' ')) + ": ", args);
+    EXPECT_EQ(r.out, "") << args;
+  }
+  EXPECT_EQ(listing(), before);
+}
+
+// A stimulus trace of a few bytes that claims a huge run: refused with FILE:LINE, not a
+// multi-gigabyte allocation or std::bad_alloc (the bound of --cycles and of the cycle lines).
+TEST_F(BadInput, CosimReplayRefusesARunLongerThanTheBound) {
+  file("huge.trace", "end 99999999999999\n");
+  expect_bad(dpc31("cosim --replay " + path("huge.trace") + " --quiet"),
+             path("huge.trace") + ":1: 'end' beyond 100000000 cycles", "end");
+  file("far.trace", "100000001 rst\nend 100000002\n");
+  expect_bad(dpc31("cosim --replay " + path("far.trace") + " --quiet"),
+             path("far.trace") + ":1: cycle beyond 100000000", "cycle");
+}
+
+// Reading a text input allocates what the file holds, not the size cap (256 MB for /dev/null
+// before): with 200 MB of address space the empty scenario is still just empty.
+TEST_F(BadInput, TextInputsDoNotPreallocateTheirCap) {
+#if defined(__SANITIZE_ADDRESS__)
+  // ASan reserves terabytes of shadow address space at start-up: no ulimit -v build can run.
+  GTEST_SKIP() << "an address-space limit cannot hold an AddressSanitizer binary";
+#endif
+  const testutil::CommandResult r =
+      testutil::run_command("(ulimit -v 200000; " + kCli + " run /dev/null) 2>&1");
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_EQ(r.out, "/dev/null: no commands: nothing to run\n");
+}
+
+// Each waveform is opened once: a pipe (bash's <(cat ...)) is read like the file (finding 9).
+TEST_F(BadInput, WavediffReadsAPipeLikeTheFile) {
+  const std::string a = kTraces + "../tests/data/wavediff/emu.vcd";
+  for (const std::string& cmd :
+       std::vector<std::string>{kCli + " wavediff " + a + " <(cat " + a + ")",
+                                kCli + " wavediff <(cat " + a + ") " + a}) {
+    const testutil::CommandResult r = testutil::run_command("bash -c '" + cmd + "' 2>&1");
+    EXPECT_EQ(r.rc, 0) << cmd << "\n" << r.out;
+  }
+  // An FST through a pipe too (fstapi seeks: it is buffered in memory first).
+  ASSERT_EQ(dpc31("run " + kScn + " --quiet --fst w.fst").rc, 0);
+  const std::string fst = path("w.fst");
+  const testutil::CommandResult r =
+      testutil::run_command("bash -c '" + kCli + " wavediff " + fst + " <(cat " + fst + ")' 2>&1");
+  EXPECT_EQ(r.rc, 0) << r.out;
+}
+
+}  // namespace

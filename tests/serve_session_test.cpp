@@ -1,0 +1,126 @@
+// The `dpc31 serve` interpreter in-process (docs/protocol.md): one Session executing command
+// lines against its chip, without a socket in between.
+#include "serve_session.hpp"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "../emu/cpu.hpp"
+#include "../emu/responder.hpp"
+#include "dpc31/chip.hpp"
+#include "serve_client.hpp"
+
+using testutil::starts_with;
+
+namespace {
+
+struct LocalSession {
+  std::vector<std::string> lines;
+  dpc31::serve::ClientState client;
+  dpc31::serve::Session s{{},
+                          [this](const dpc31::serve::AsyncLine& l) { lines.push_back(l.text); }};
+  std::string operator()(std::string_view line) { return s.execute(line, client).reply; }
+  std::vector<std::string> telegrams() const {
+    std::vector<std::string> t;
+    for (const auto& l : lines) {
+      if (starts_with(l, "! telegram ")) t.push_back(l);
+    }
+    return t;
+  }
+};
+
+TEST(ServeSession, InjectDefaultsTo12MbaudWhileSearching) {
+  LocalSession s;
+  EXPECT_EQ(s("inject 10 05 02 49 50 16"), "OK 132 396");  // T = 4, TSYN 33 bits
+  // The next one queues behind the first.
+  EXPECT_EQ(s("inject 100502495016"), fmt::format("OK {} {}", 396 + 132, 396 + 132 + 264));
+  EXPECT_EQ(s("inject 10 baud=1500000 idle=40"),
+            fmt::format("OK {} {}", 792 + 40 * 32, 792 + 40 * 32 + 11 * 32));
+  EXPECT_EQ(s("step 100000"), "OK 100000");
+  // Both FDL_Status requests were heard (the chip is not started: it only listens).
+  EXPECT_EQ(s.telegrams(), (std::vector<std::string>{"! telegram 132 396 rx 100502495016",
+                                                     "! telegram 528 792 rx 100502495016"}));
+}
+
+TEST(ServeSession, InjectUsesTheDetectedRate) {
+  LocalSession s;
+  dpc31::DirectBus bus(s.s.chip());
+  dpc31::Responder r({});
+  r.init(bus);
+  const std::uint64_t now = s.s.chip().cycle();
+  // 1.5 Mbaud is heard in its search window; afterwards inject defaults to it (T = 32).
+  const std::uint64_t window = now + 4096u * (4 + 8 + 16);
+  EXPECT_EQ(s(fmt::format("step {}", window - now)), fmt::format("OK {}", window));
+  EXPECT_EQ(s("inject_fdl 5 2 0x49 baud=1500000"),
+            fmt::format("OK {} {}", window + 33 * 32, window + 33 * 32 + 6 * 11 * 32));
+  EXPECT_EQ(s("step 20000"), fmt::format("OK {}", window + 20000));
+  EXPECT_NE(s("status").find("wd=Baud_Control baud=1500000"), std::string::npos);
+  const std::uint64_t c = s.s.chip().cycle();
+  EXPECT_EQ(s("inject_fdl 5 2 0x49"),
+            fmt::format("OK {} {}", c + 33 * 32, c + 33 * 32 + 6 * 11 * 32));
+}
+
+TEST(ServeSession, InjectedFaultsAreCounted) {
+  LocalSession s;
+  EXPECT_EQ(s("inject 10 05 02 49 50 16 fault=parity:2"), "OK 132 396");
+  EXPECT_EQ(s("step 1000"), "OK 1000");
+  EXPECT_NE(s("counters").find(" parity=1 "), std::string::npos);
+  EXPECT_TRUE(s.telegrams().empty());  // a broken telegram is not reported
+}
+
+TEST(ServeSession, RunUntilIrqIsLevelTriggered) {
+  LocalSession s;
+  EXPECT_EQ(s("run_until_irq 500"), "OK timeout 500");
+  EXPECT_EQ(s("write 0x04 0xFE"), "OK");
+  EXPECT_EQ(s("write 0x00 0x01"), "OK");
+  EXPECT_EQ(s.lines.back(), "! irq 508 1");
+  EXPECT_EQ(s("run_until_irq 500"), "OK irq 508");  // already active: at once
+  EXPECT_EQ(s("reset"), "OK 0");
+  EXPECT_EQ(s.lines.back(), "! irq 0 0");              // reset ends it; the clients are told
+  EXPECT_EQ(s("peek_reg Int_Mask_Reg"), "OK 0x3f1f");  // all defined bits masked again
+  EXPECT_EQ(s("addr Status_Reg"), "OK 0x0004");
+}
+
+TEST(ServeSession, LogLinesFollowTheClientsLevel) {
+  LocalSession s;
+  EXPECT_EQ(s("read 0x18"), "OK 0x00");
+  ASSERT_EQ(s.lines.size(), 1u);  // emitted; the server filters per client
+  EXPECT_EQ(s.lines[0],
+            "! log 4 warn read of unmapped address 0x0018 (register area (unused)): reads 00h");
+  EXPECT_EQ(s("log info"), "OK");
+  EXPECT_EQ(s.client.log_level, dpc31::LogLevel::info);
+  EXPECT_EQ(s("log off"), "OK");
+  EXPECT_FALSE(s.client.log_level);
+}
+
+TEST(ServeSession, InjectQueueCountsWhatIsAheadOfTheChip) {
+  LocalSession s;
+  EXPECT_EQ(s("inject 10 05 02 49 50 16"), "OK 132 396");
+  EXPECT_EQ(s("inject 10 05 02 49 50 16"), "OK 528 792");
+  EXPECT_EQ(s.s.inject_queue_bytes(), 12u);
+  EXPECT_EQ(s.s.inject_queue_telegrams(), 2u);
+  EXPECT_EQ(s("step 396"), "OK 396");  // the first one's END reached
+  EXPECT_EQ(s.s.inject_queue_telegrams(), 1u);
+  EXPECT_EQ(s("reset"), "OK 0");
+  EXPECT_EQ(s.s.inject_queue_bytes(), 0u);
+  EXPECT_EQ(s("save x"),
+            "ERR denied file commands are disabled: the server was started without --state-dir");
+}
+
+TEST(ServeSession, BlocksAndPoke) {
+  LocalSession s;
+  EXPECT_EQ(s("writeblock 0x900 0102 03 0405"), "OK");
+  EXPECT_EQ(s("cycle"), "OK 20");
+  EXPECT_EQ(s("readblock 0x900 5"), "OK 0102030405");
+  EXPECT_EQ(s("cycle"), "OK 40");
+  EXPECT_EQ(s("pokeblock 0x902 AaBb"), "OK");
+  EXPECT_EQ(s("peekblock 0x900 5"), "OK 0102AABB05");
+  EXPECT_EQ(s("cycle"), "OK 40");
+  EXPECT_TRUE(starts_with(s("poke 0x02 1"), "ERR no_storage "));  // Int_Reg is derived
+}
+
+}  // namespace
