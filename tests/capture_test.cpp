@@ -428,15 +428,21 @@ std::string normalise_bools(std::string s) {
 
 }  // namespace
 
+// A DP start-up recorded by `w` into `path`: false (with the reason) when any step fails.
+::testing::AssertionResult record_startup(const std::string& path, Startup& s, PcapngWriter& w) {
+  if (!w.open(path)) return ::testing::AssertionFailure() << w.error();
+  w.attach(s.chip);
+  if (!s.run()) return ::testing::AssertionFailure() << "the start-up failed";
+  if (!w.close()) return ::testing::AssertionFailure() << w.error();
+  return ::testing::AssertionSuccess();
+}
+
 TEST(Capture, AttachRecordsEveryTelegram) {
   TempDir dir;
   const std::string path = dir.file("startup.pcapng");
   Startup s;
   PcapngWriter w;
-  ASSERT_TRUE(w.open(path)) << w.error();
-  w.attach(s.chip);
-  ASSERT_TRUE(s.run());
-  ASSERT_TRUE(w.close()) << w.error();
+  ASSERT_TRUE(record_startup(path, s, w));
   ASSERT_EQ(w.packets(), s.seen.size());
   ASSERT_GE(s.seen.size(), 13u);
 
@@ -481,10 +487,7 @@ TEST(Capture, TsharkDecodesADpStartup) {
   const std::string path = dir.file("startup.pcapng");
   Startup s;
   PcapngWriter w;
-  ASSERT_TRUE(w.open(path)) << w.error();
-  w.attach(s.chip);
-  ASSERT_TRUE(s.run());
-  ASSERT_TRUE(w.close()) << w.error();
+  ASSERT_TRUE(record_startup(path, s, w));
   ASSERT_EQ(s.seen.size(), 13u);
 
   const std::string out =

@@ -28,19 +28,13 @@
 #include "serve_session.hpp"
 #include "test_files.hpp"
 
-using testutil::LineClient;
-using testutil::ServerProcess;
-using testutil::starts_with;
-using testutil::TempDir;
-using testutil::words;
+using namespace testutil;  // the server process, line client, temporary directory
 
 namespace {
 
 const std::string kCli = DPC31_CLI;
 
 // --- confinement, first line, authentication, resources (docs/security.md) -------------------
-
-using testutil::slurp;
 
 // RSS figures mean nothing under AddressSanitizer (its allocator keeps freed memory in
 // quarantine): the memory checks are made in the normal build only.

@@ -32,11 +32,7 @@
 #include "serve_session.hpp"
 #include "test_files.hpp"
 
-using testutil::LineClient;
-using testutil::ServerProcess;
-using testutil::starts_with;
-using testutil::TempDir;
-using testutil::words;
+using namespace testutil;  // the server process, line client, temporary directory
 
 namespace {
 

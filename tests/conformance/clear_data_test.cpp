@@ -4,9 +4,7 @@
 #include "conformance.hpp"
 
 using namespace dpc31;
-using conformance::AckOnly;
-using conformance::Bench;
-using conformance::Bytes;
+using namespace conformance;  // the bench, the ISR that only acknowledges
 
 namespace {
 

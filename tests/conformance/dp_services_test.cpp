@@ -7,11 +7,7 @@
 #include "conformance.hpp"
 
 using namespace dpc31;
-using conformance::AckOnly;
-using conformance::addr;
-using conformance::Bench;
-using conformance::Bytes;
-using conformance::wire;
+using namespace conformance;  // the bench, the ISR that only acknowledges
 
 namespace {
 
@@ -304,6 +300,22 @@ TEST_P(DpServices, DpModeZeroSetsUpNoDpSaps) {
 INSTANTIATE_TEST_SUITE_P(Profiles, DpServices, ::testing::ValuesIn(kAllProfiles),
                          [](const auto& i) { return testutil::pname(i.param); });
 
+namespace {
+
+// FDL_Status until answered, then Set_Prm and Chk_Cfg, each accepted by hand (User_Prm_Data_Okay,
+// User_Cfg_Data_Okay read at once) while `user` acknowledges every interrupt.
+void prm_and_cfg_by_hand(Bench& b, AckOnly& user) {
+  b.master.set_firmware([&user](BusPort& c) { user.isr(c); });
+  while (!b.master.fdl_status().answer) {
+  }
+  b.master.set_prm();
+  read8(b.chip, RegId::User_Prm_Data_Okay);
+  b.master.chk_cfg();
+  read8(b.chip, RegId::User_Cfg_Data_Okay);
+}
+
+}  // namespace
+
 // SPC3 p.31: "For a correct configuration, the transition to 'DATA_EX' takes place immediately,
 // if no Din_buffer is present (R_Len_Din_Puf = 00H) and trigger counters ... are at 0. Otherwise"
 // — cut off; modelled: at the user's next New_Din_Buffer_Cmd (docs/decisions.md). VPC3+C p.43:
@@ -313,13 +325,7 @@ TEST(SpcCfgOk, Spc3WithDinBufferEntersDataExchangeAtNewDinBufferCmd) {
     SCOPED_TRACE(testutil::pname(p));
     Bench b(p);
     AckOnly user;
-    b.master.set_firmware([&user](BusPort& c) { user.isr(c); });
-    while (!b.master.fdl_status().answer) {
-    }
-    b.master.set_prm();
-    read8(b.chip, RegId::User_Prm_Data_Okay);
-    b.master.chk_cfg();
-    read8(b.chip, RegId::User_Cfg_Data_Okay);
+    prm_and_cfg_by_hand(b, user);
     if (p == Profile::spc3) {
       EXPECT_EQ(b.chip.dp_state(), DpState::Wait_Cfg);
       EXPECT_EQ(irr(b.chip) & irq::Go_Leave_Data_Exchange, 0);
@@ -336,13 +342,7 @@ TEST(SpcCfgOk, Spc3WithoutDinBufferEntersDataExchangeAtOnce) {
   rc.slave.in_len = 0;
   Bench b(Profile::spc3, 1'500'000, rc);
   AckOnly user;
-  b.master.set_firmware([&user](BusPort& c) { user.isr(c); });
-  while (!b.master.fdl_status().answer) {
-  }
-  b.master.set_prm();
-  read8(b.chip, RegId::User_Prm_Data_Okay);
-  b.master.chk_cfg();
-  read8(b.chip, RegId::User_Cfg_Data_Okay);
+  prm_and_cfg_by_hand(b, user);
   EXPECT_EQ(b.chip.dp_state(), DpState::Data_Exchange);
 }
 

@@ -6,8 +6,7 @@
 #include "conformance.hpp"
 
 using namespace dpc31;
-using conformance::addr;
-using conformance::Bench;
+using namespace conformance;  // the bench, the ISR that only acknowledges
 
 namespace {
 

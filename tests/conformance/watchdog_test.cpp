@@ -135,15 +135,25 @@ TEST_P(Watchdog, DpControl_AfterSetPrmWithWdOn1) {
 // Seed 002: "TWD = (1 ms or 10 ms) * WD_Fact_1 * WD_Fact_2". 10 ms x 10 x 10 = 1 s = 48 000 000
 // clocks after the last Data_Exchange was acted on, the WD_DP_Control_Timeout interrupt (X/INT
 // goes active and the ISR starts in that cycle); nothing between.
-TEST_P(Watchdog, Twd_TimeBase10msTimesFact1TimesFact2) {
-  Bench b(GetParam(), 12'000'000, wd(true, 10, 10));
+namespace {
+
+// One Data_Exchange, then silence: the WD_DP_Control_Timeout interrupt comes exactly `twd`
+// clocks after the exchange was acted on, and no interrupt before it.
+void expect_timeout_after(Bench& b, std::uint64_t twd) {
   ASSERT_TRUE(b.master.startup());
   const Exchange dx = b.master.data_exchange({1, 2, 3, 4});
   b.master.idle(2000);
-  const std::uint64_t expiry = b.acted(dx) + 10 * 10 * k10ms;
+  const std::uint64_t expiry = b.acted(dx) + twd;
   b.master.idle(expiry + 2000 - b.chip.cycle());
   EXPECT_EQ(first_isr_after(b.user, b.acted(dx) + 2000), expiry);
   EXPECT_TRUE(isr_saw(b.user, expiry, irq::WD_DP_Control_Timeout));
+}
+
+}  // namespace
+
+TEST_P(Watchdog, Twd_TimeBase10msTimesFact1TimesFact2) {
+  Bench b(GetParam(), 12'000'000, wd(true, 10, 10));
+  expect_timeout_after(b, 10 * 10 * k10ms);
 }
 
 // Seed 002: TWD with the 1 ms base. Set_Prm byte 7 bit 2 (WD_Base) on the SPC3 / DPC31
@@ -152,13 +162,7 @@ TEST_P(Watchdog, Twd_TimeBase10msTimesFact1TimesFact2) {
 TEST_P(Watchdog, Twd_TimeBase1msTimesFact1TimesFact2) {
   Bench b(GetParam(), 12'000'000, wd(true, 5, 7, GetParam() != Profile::vpc3plus));
   if (GetParam() == Profile::vpc3plus) vpc3_wd_base_1ms(b.chip);
-  ASSERT_TRUE(b.master.startup());
-  const Exchange dx = b.master.data_exchange({1, 2, 3, 4});
-  b.master.idle(2000);
-  const std::uint64_t expiry = b.acted(dx) + 5 * 7 * k1ms;
-  b.master.idle(expiry + 2000 - b.chip.cycle());
-  EXPECT_EQ(first_isr_after(b.user, b.acted(dx) + 2000), expiry);
-  EXPECT_TRUE(isr_saw(b.user, expiry, irq::WD_DP_Control_Timeout));
+  expect_timeout_after(b, 5 * 7 * k1ms);
 }
 
 // Seed 002: "The user can load the two watchdog factors ... via the 'Set_Param telegram' with
