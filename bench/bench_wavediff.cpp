@@ -1,5 +1,5 @@
 // `dpc31 wavediff` on two large VCD files (issue 7 item f: >= 300 MB/s with peak RSS < 64 MB).
-// The pair is generated at run time into a temporary directory (tools/wavediff/synthetic_vcd:
+// The pair is generated at run time into a temporary directory (lib/wavediff/synthetic_vcd:
 // RTL-dump-shaped, four one-bit differences), --wavediff_mb MB each (default 1000); the real
 // command runs as a child process, its wall time is the iteration time and wait4's ru_maxrss its
 // peak RSS. That figure also counts what this process had resident when it spawned the child (a

@@ -60,7 +60,7 @@ std::uint64_t send_on_rxd(Chip& chip, std::span<const std::uint8_t> bytes, std::
 
 // One answer as a master's receiver sees it, fed with the characters its UART decodes from TxD:
 // the first character starts it, fdl::Assembler tells when it is complete; a bad character or a
-// framing error breaks it. Used by DpMaster and by the pty bridge (tools/bridge).
+// framing error breaks it. Used by DpMaster and by the pty bridge (lib/bridge).
 class AnswerCollector {
  public:
   void reset();

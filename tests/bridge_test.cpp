@@ -18,8 +18,8 @@
 
 #include "../emu/dp_services.hpp"
 #include "../emu/fdl.hpp"
-#include "../tools/bridge/engine.hpp"
-#include "../tools/bridge/pty.hpp"
+#include "../lib/bridge/engine.hpp"
+#include "../lib/bridge/pty.hpp"
 
 namespace {
 

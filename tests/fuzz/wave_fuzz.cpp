@@ -4,7 +4,7 @@
 //
 // fstapi (third-party) calls exit(255) when a block does not decompress; the product then exits
 // 255 (docs/wavediff.md). The fuzz build compiles fstapi with exit() turned into
-// dpc31_fuzz_fstapi_exit (tools/wavediff/CMakeLists.txt), which throws FstapiExit, so the run
+// dpc31_fuzz_fstapi_exit (lib/wavediff/CMakeLists.txt), which throws FstapiExit, so the run
 // goes on and the exit is counted instead of ending the fuzzer; the default build keeps exit().
 #include <sys/mman.h>
 #include <unistd.h>

@@ -1,7 +1,7 @@
 // Telegram captures: pcapng files (draft-ietf-opsawg-pcapng) of what the chip received and sent
 // on its serial line, one Enhanced Packet Block per telegram, SD to ED, link type 257
 // (LINKTYPE_PROFIBUS_DL), nanosecond timestamps derived from chip cycles (docs/capture.md).
-// tools/profibus_dl.lua dissects them in Wireshark / tshark.
+// lib/capture/profibus_dl.lua dissects them in Wireshark / tshark.
 //
 // The file is written to a temporary next to the target and renamed over it by close(): a reader,
 // or a crash, never sees half a capture. The first error (cannot create, disk full, timestamp out

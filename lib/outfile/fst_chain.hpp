@@ -1,5 +1,5 @@
 // The block chain of an FST file (fstapi.h: a type byte, a big-endian length that counts itself
-// and the data, the data): walked by the FST reader's guard (tools/wavediff, docs/bad-input.md)
+// and the data, the data): walked by the FST reader's guard (lib/wavediff, docs/bad-input.md)
 // and after each FST write, because fstapi does not check its own writes (a full file system
 // leaves a short file and no error).
 #pragma once

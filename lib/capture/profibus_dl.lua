@@ -2,8 +2,8 @@
 -- pcapng captures with link type 257 (LINKTYPE_PROFIBUS_DL): every packet is one telegram, SD to
 -- ED, without a pseudo-header. dpc31emu writes such captures (docs/capture.md).
 --
---   tshark -X lua_script:tools/profibus_dl.lua -r capture.pcapng
---   wireshark -X lua_script:tools/profibus_dl.lua capture.pcapng
+--   tshark -X lua_script:lib/capture/profibus_dl.lua -r capture.pcapng
+--   wireshark -X lua_script:lib/capture/profibus_dl.lua capture.pcapng
 --
 -- or copy this file into the personal Lua plugin folder (Help > About > Folders).
 --
