@@ -45,7 +45,7 @@ class StateDir {
   bool read(std::string_view name, std::size_t max, std::vector<std::uint8_t>& bytes,
             Error& error) const;
   // Replaces (or creates) the regular file `name` through a temporary and a rename inside the
-  // directory of `name` (lib/outfile, write_file_at). Subdirectories are not created. False with
+  // directory of `name` (util/outfile, write_file_at). Subdirectories are not created. False with
   // `error`.
   bool write(std::string_view name, std::span<const std::uint8_t> bytes, Error& error) const;
 

@@ -340,7 +340,7 @@ namespace {
 void ignore_change(void*, std::uint64_t, fstHandle, const unsigned char*) {}
 void ignore_varlen(void*, std::uint64_t, fstHandle, const unsigned char*, std::uint32_t) {}
 
-// The block chain (lib/outfile/fst_chain.hpp) must end exactly at the end of the file: fstapi
+// The block chain (util/outfile/fst_chain.hpp) must end exactly at the end of the file: fstapi
 // reads a file cut inside its last blocks without complaint, as a shorter waveform. The LZ4
 // hierarchy blocks before any break are checked for absurd sizes too.
 // The geometry block: its uncompressed length and handle count (8 bytes each, big-endian), then
