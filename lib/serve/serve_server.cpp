@@ -421,15 +421,25 @@ void Server::Impl::check_hello(Client& c) {
   queue(c, "OK auth");
 }
 
-void Server::Impl::read_client(Client& c) {
-  if (c.in_off == c.in.size()) {
-    c.in.clear();
-    if (c.in.capacity() > kKeepBuffer) std::string().swap(c.in);
-    c.in_off = 0;
-  } else if (c.in_off > kReadChunk) {
-    c.in.erase(0, c.in_off);
-    c.in_off = 0;
+namespace {
+
+// A buffer read from the front up to `off`: emptied (its storage freed when it grew large), or
+// its consumed front dropped once that is more than a chunk.
+void compact(std::string& buf, std::size_t& off) {
+  if (off == buf.size()) {
+    buf.clear();
+    if (buf.capacity() > kKeepBuffer) std::string().swap(buf);
+    off = 0;
+  } else if (off > kReadChunk) {
+    buf.erase(0, off);
+    off = 0;
   }
+}
+
+}  // namespace
+
+void Server::Impl::read_client(Client& c) {
+  compact(c.in, c.in_off);
   char buf[kReadChunk];
   while (c.pending_in() < opt.max_input) {
     const ssize_t n = ::recv(c.fd, buf, sizeof buf, 0);
@@ -464,14 +474,7 @@ void Server::Impl::flush(Client& c) {
       c.dead = true;
     }
   }
-  if (c.out_off == c.out.size()) {
-    c.out.clear();
-    if (c.out.capacity() > kKeepBuffer) std::string().swap(c.out);
-    c.out_off = 0;
-  } else if (c.out_off > kReadChunk) {
-    c.out.erase(0, c.out_off);
-    c.out_off = 0;
-  }
+  compact(c.out, c.out_off);
 }
 
 void Server::Impl::queue(Client& c, std::string_view text) {

@@ -145,6 +145,8 @@ class Engine {
   void compare(std::uint32_t pi, std::uint64_t key, const Point& pt);
   void compare_all(std::uint64_t key, const Point& pt);
   void compare_dirty(std::uint64_t key, const Point& pt);
+  // One point of the walk: compare (everything at the first), call the hook; false: stop.
+  bool step(std::uint64_t key, const Point& pt, bool& started, const Hook& hook);
   void clear_dirty();
   void record(Pair& p, bool open);
   void run_events(const Hook& hook);

@@ -532,6 +532,19 @@ void Engine::compare_dirty(std::uint64_t key, const Point& pt) {
   for (const std::uint32_t pi : dirty) compare(pi, key, pt);
 }
 
+bool Engine::step(std::uint64_t key, const Point& pt, bool& started, const Hook& hook) {
+  const bool full = !started;
+  if (full) {
+    compare_all(key, pt);  // the first point compares every pair
+    started = true;
+  } else {
+    compare_dirty(key, pt);
+  }
+  const bool go_on = !hook || hook(*this, pt, full);
+  clear_dirty();
+  return go_on;
+}
+
 void Engine::run(const Hook& hook) {
   if (clock_mode()) {
     run_clock(hook);
@@ -568,17 +581,7 @@ void Engine::run_events(const Hook& hook) {
       clear_dirty();
       continue;
     }
-    const Point pt{t, t, 0};
-    const bool full = !started;
-    if (full) {
-      compare_all(t, pt);
-      started = true;
-    } else {
-      compare_dirty(t, pt);
-    }
-    const bool go_on = !hook || hook(*this, pt, full);
-    clear_dirty();
-    if (!go_on) return;
+    if (!step(t, Point{t, t, 0}, started, hook)) return;
   }
   if (!started && any && has_start && start <= end) {
     const Point ps{start, start, 0};
@@ -639,16 +642,7 @@ void Engine::run_clock(const Hook& hook) {
       continue;
     }
     ++edges_;
-    const bool full = !started;
-    if (full) {
-      compare_all(n, pt);
-      started = true;
-    } else {
-      compare_dirty(n, pt);
-    }
-    const bool go_on = !hook || hook(*this, pt, full);
-    clear_dirty();
-    if (!go_on) return;
+    if (!step(n, pt, started, hook)) return;
   }
 }
 
