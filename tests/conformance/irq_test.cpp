@@ -116,18 +116,18 @@ TEST_P(Interrupts, EachEventDeletedViaIar_ExceptNewPrmAndNewCfgData) {
 TEST_P(Interrupts, NewPrmAndNewCfgData_DeletedByTheVerdictReads) {
   Bare b(GetParam());
   ASSERT_TRUE(b.master.fdl_status().answer);
+  // The event is set; Int_Ack_Reg (02h) leaves it; the verdict read (OK 00h) deletes it.
+  const auto deleted_by_verdict = [&b](std::uint16_t event, std::uint32_t okay_addr) {
+    ASSERT_NE(irr(b.chip) & event, 0);
+    w16(b.chip, 0x02, event);
+    EXPECT_NE(irr(b.chip) & event, 0);
+    EXPECT_EQ(b.chip.read(okay_addr), 0x00);
+    EXPECT_EQ(irr(b.chip) & event, 0);
+  };
   b.master.set_prm();
-  ASSERT_NE(irr(b.chip) & irq::New_Prm_Data, 0);
-  w16(b.chip, 0x02, irq::New_Prm_Data);
-  EXPECT_NE(irr(b.chip) & irq::New_Prm_Data, 0);
-  EXPECT_EQ(b.chip.read(0x0E), 0x00);
-  EXPECT_EQ(irr(b.chip) & irq::New_Prm_Data, 0);
+  deleted_by_verdict(irq::New_Prm_Data, 0x0E);  // User_Prm_Data_Okay
   b.master.chk_cfg();
-  ASSERT_NE(irr(b.chip) & irq::New_Cfg_Data, 0);
-  w16(b.chip, 0x02, irq::New_Cfg_Data);
-  EXPECT_NE(irr(b.chip) & irq::New_Cfg_Data, 0);
-  EXPECT_EQ(b.chip.read(0x10), 0x00);
-  EXPECT_EQ(irr(b.chip) & irq::New_Cfg_Data, 0);
+  deleted_by_verdict(irq::New_Cfg_Data, 0x10);  // User_Cfg_Data_Okay
 }
 
 // chip-facts §2.2 [S-IRR][S-VPC3S-INT]: "16 events latched in IRR independent of IMR. IR = IRR
