@@ -127,14 +127,19 @@ INSTANTIATE_TEST_SUITE_P(ProfilesAndBaudRates, Startup,
 
 // A request handed to RxD before a Baud_Search window switch that it reaches into is heard at the
 // new rate: the edges wait in the chip, not in the receiver that the switch reconfigures.
-class AheadOfTime : public ::testing::TestWithParam<Engine> {};
+// A started dpc31 (the responder's init) on the engine of the parameter, its log off.
+class AheadOfTime : public ::testing::TestWithParam<Engine> {
+ protected:
+  Chip chip{{Profile::dpc31, BusMode::intel, 0, GetParam()}};
+  Responder user{ResponderConfig{}};
+  DirectBus bus{chip};
+  void SetUp() override {
+    chip.set_log_sink(nullptr);
+    user.init(bus);
+  }
+};
 
 TEST_P(AheadOfTime, RequestDrivenBeforeAWindowSwitchIsHeardAtTheNewRate) {
-  Chip chip({Profile::dpc31, BusMode::intel, 0, GetParam()});
-  chip.set_log_sink(nullptr);
-  Responder user(ResponderConfig{});
-  DirectBus bus(chip);
-  user.init(bus);
   const std::uint64_t s = chip.cycle();  // Start_SPC3 completed: the 12 Mbaud window opens
   const std::uint64_t t = 8;             // 6 Mbaud
   const std::uint64_t window = s + 4096 * 4;
@@ -163,11 +168,6 @@ TEST_P(AheadOfTime, RequestDrivenBeforeAWindowSwitchIsHeardAtTheNewRate) {
 // starts after 30 bit times continues it, although its stop sample comes 40.5 bit times after
 // the previous character's end.
 TEST_P(AheadOfTime, CharacterStartedBeforeTsynContinuesTheTelegram) {
-  Chip chip({Profile::dpc31, BusMode::intel, 0, GetParam()});
-  chip.set_log_sink(nullptr);
-  Responder user(ResponderConfig{});
-  DirectBus bus(chip);
-  user.init(bus);
   const std::uint64_t t = 4;  // 12 Mbaud: the first Baud_Search window
   std::vector<std::pair<std::uint64_t, bool>> txd;
   chip.on_txd([&](std::uint64_t c, bool l) { txd.emplace_back(c, l); });
