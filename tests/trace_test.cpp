@@ -15,13 +15,13 @@
 #include "run_command.hpp"
 
 // emu/ is not on the tests' include path.
-#include "../emu/cpu.hpp"
-#include "../emu/dp_master.hpp"
 #include "../emu/fdl.hpp"
-#include "../emu/responder.hpp"
-#include "../emu/scenario.hpp"
-#include "../emu/trace.hpp"
 #include "../emu/uart.hpp"
+#include "cpu.hpp"
+#include "dp_master.hpp"
+#include "responder.hpp"
+#include "scenario.hpp"
+#include "trace.hpp"
 
 namespace {
 

@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <utility>
 
-#include "../../emu/dp_sm.hpp"     // SAP numbers
-#include "../../emu/scenario.hpp"  // state names
+#include "../../emu/dp_sm.hpp"  // SAP numbers
+#include "scenario.hpp"         // state names
 
 namespace dpc31::bridge {
 

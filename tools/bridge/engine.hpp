@@ -19,10 +19,10 @@
 #include <string>
 #include <vector>
 
-#include "../../emu/dp_master.hpp"
-#include "../../emu/firmware_host.hpp"
+#include "dp_master.hpp"
 #include "dpc31/chip.hpp"
 #include "firmware.h"
+#include "firmware_host.hpp"
 
 namespace dpc31::bridge {
 

@@ -12,8 +12,8 @@
 #include "waveform.hpp"
 
 // The scenario runner lives with the emulator (emu/ is not on this target's include path).
-#include "../../emu/scenario.hpp"
-#include "../../emu/trace.hpp"
+#include "scenario.hpp"
+#include "trace.hpp"
 
 namespace dpc31::cli {
 

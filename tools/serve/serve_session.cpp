@@ -13,11 +13,11 @@
 
 #include "../../emu/dp_services.hpp"
 #include "../../emu/fdl.hpp"
-#include "../../emu/scenario.hpp"  // state names
 #include "../../emu/snapshot.hpp"  // kMaxFileSize
 #include "../../emu/uart.hpp"
 #include "dpc31/regdesc.hpp"
 #include "dpc31/snapshot.hpp"
+#include "scenario.hpp"  // state names
 
 namespace dpc31::serve {
 

@@ -12,10 +12,10 @@
 #include <string>
 #include <vector>
 
+#include "../emu/fdl.hpp"
+#include "../emu/uart.hpp"
 #include "cpu.hpp"
 #include "dpc31/chip.hpp"
-#include "fdl.hpp"
-#include "uart.hpp"
 
 namespace dpc31 {
 
@@ -35,6 +35,13 @@ struct SlaveConfig {
   std::uint8_t min_tsdr = 0;           // Set_Prm byte 3, 0 = no change
   std::vector<std::uint8_t> user_prm;  // bytes after the 7 standard ones (byte 7 first)
 };
+
+// Set_Prm's Station_Status byte for `s`: Lock_Req, with WD_On / Freeze_Req / Sync_Req as set.
+[[nodiscard]] std::uint8_t prm_station_status(const SlaveConfig& s);
+// Set_Prm's data unit for `s` with this Station_Status byte: the 7 standard bytes, then the
+// User_Prm_Data (at least one byte, WD_Base in bit 2 of the first). DpMaster::set_prm sends it;
+// a scenario builds the damaged copy of a request from it.
+[[nodiscard]] std::vector<std::uint8_t> prm_du(const SlaveConfig& s, std::uint8_t station_status);
 
 struct MasterConfig {
   std::uint8_t address = 2;

@@ -10,9 +10,9 @@
 #include <limits>
 #include <span>
 
-#include "dp_services.hpp"
-#include "fdl.hpp"
-#include "textfile.hpp"
+#include "../emu/dp_services.hpp"
+#include "../emu/fdl.hpp"
+#include "../emu/textfile.hpp"
 
 namespace dpc31 {
 

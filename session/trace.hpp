@@ -15,9 +15,9 @@
 #include <utility>
 #include <vector>
 
+#include "../emu/uart.hpp"
 #include "dpc31/chip.hpp"
 #include "scenario.hpp"
-#include "uart.hpp"
 
 namespace dpc31 {
 

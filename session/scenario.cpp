@@ -12,11 +12,11 @@
 #include <optional>
 #include <utility>
 
-#include "core.hpp"  // the watchdog deadline, so `silence` stops at each state change
-#include "dp_sm.hpp"
-#include "fdl.hpp"
+#include "../emu/core.hpp"  // the watchdog deadline, so `silence` stops at each state change
+#include "../emu/dp_sm.hpp"
+#include "../emu/fdl.hpp"
+#include "../emu/textfile.hpp"
 #include "firmware_host.hpp"
-#include "textfile.hpp"
 
 namespace dpc31 {
 

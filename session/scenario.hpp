@@ -15,11 +15,11 @@
 #include <string_view>
 #include <vector>
 
+#include "../emu/dp_services.hpp"
+#include "../emu/uart.hpp"
 #include "dp_master.hpp"
-#include "dp_services.hpp"
 #include "dpc31/chip.hpp"
 #include "responder.hpp"
-#include "uart.hpp"
 
 namespace dpc31 {
 
