@@ -30,7 +30,7 @@ inline constexpr std::string_view kTraceMagic = "dpc31-trace 1";
 // recorder must outlive the chip's observers (it stays registered until the chip is gone).
 // Entries are collected per segment — the stretch between two checkpoints — and each segment is
 // written in cycle order, headed by its comments and followed by a `state` line.
-class TraceRecorder {
+class TraceRecorder final : public ScenarioObserver {
  public:
   // `baud`: the rate of the telegrams on RxD (the master's); `notes`: comment lines for the top
   // of the file (without the leading '#').
@@ -53,11 +53,18 @@ class TraceRecorder {
   // Empty, or why the recording is not a valid trace (then text() must not be used).
   [[nodiscard]] const std::string& error() const { return error_; }
 
-  // For scenario runs: hooks that attach at the start and finish at the end, and a walk sink
-  // that turns the runner's walk into headings, notes and checkpoints (forwarding every line to
-  // `forward`, which may be empty). The recorder must outlive the run.
+  // For scenario runs: hooks with the recorder as the run's observer. It attaches at the start
+  // and finishes at the end; each step and each checked expect heads a segment closed by the
+  // chip's state after it, the walk's other events become notes at their cycles. The recorder
+  // must outlive the run.
   ScenarioHooks scenario_hooks();
-  LineSink scenario_walk(const Scenario& s, LineSink forward);
+  void run_begins(Chip& chip) override;
+  void user_side_started(std::uint64_t cycle, std::string_view text) override;
+  void step_begins(std::uint64_t cycle, const ScenarioStep& st, std::string_view text) override;
+  void expect_checked(std::uint64_t cycle, const ScenarioStep& st, bool ok,
+                      std::string_view text) override;
+  void walk_note(std::uint64_t cycle, std::string_view text) override;
+  void run_ends(Chip& chip) override;
 
  private:
   struct Entry {
@@ -68,7 +75,9 @@ class TraceRecorder {
   void close_rxd();
   void close_segment();
   [[nodiscard]] std::string state_line() const;
-  void walk_line(const Scenario& s, const std::string& line);
+  // A heading for the segment of the step (or expect) now reported, with the chip's state after
+  // it as its checkpoint; the segment is closed when the next step's first chip event comes in.
+  void mark(std::string heading);
 
   Chip* chip_ = nullptr;
   std::uint32_t baud_;
@@ -111,6 +120,10 @@ struct TraceStateKey {
   std::string key;    // dp, wd, status, irr, imr, station, fdl
   std::string value;  // as written (normalised for hex and counter lists)
 };
+
+// The chip's state as a `state` line's keys, in the order the recorder writes them; the replay
+// compares the chip's against the recorded ones.
+std::vector<TraceStateKey> trace_state(const Chip& c);
 
 struct TraceLine {
   int line = 0;

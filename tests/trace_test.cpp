@@ -49,8 +49,7 @@ std::string record(const std::string& scn, int* rc = nullptr) {
   dpc31::ScenarioError err;
   EXPECT_TRUE(dpc31::parse_scenario(scn, "test.scn", s, err)) << err.text();
   dpc31::TraceRecorder rec(s.master.baud, {"test"});
-  const dpc31::ScenarioOutcome o =
-      dpc31::run_scenario(s, rec.scenario_walk(s, {}), {}, rec.scenario_hooks());
+  const dpc31::ScenarioOutcome o = dpc31::run_scenario(s, {}, {}, rec.scenario_hooks());
   if (rc != nullptr) *rc = o.ok() ? 0 : 1;
   EXPECT_EQ(rec.error(), "");
   return rec.text();
