@@ -538,13 +538,7 @@ class Parser {
     } else if (cmd_ == "corrupt") {
       step_.kind = StepKind::corrupt;
       positional(1, 1, "parity, start or stop");
-      if (pos_[0] == "parity") {
-        step_.fault.kind = UartFault::Kind::parity;
-      } else if (pos_[0] == "start") {
-        step_.fault.kind = UartFault::Kind::start;
-      } else if (pos_[0] == "stop") {
-        step_.fault.kind = UartFault::Kind::stop;
-      } else {
+      if (!parse_fault_kind(pos_[0], step_.fault.kind)) {
         fail(fmt::format("unknown fault '{}' (parity, start, stop)", shown(pos_[0])));
       }
       step_.fault.char_index = -1;
@@ -596,11 +590,15 @@ class Parser {
     if (what == "dp_state") {
       args(1, "Wait_Prm|Wait_Cfg|Data_Exchange");
       step_.expect = ExpectKind::dp_state;
-      step_.value = state_value(pos_[1], {"Wait_Prm", "Wait_Cfg", "Data_Exchange"});
+      step_.value =
+          state_value(pos_[1], {dp_state_name(DpState::Wait_Prm), dp_state_name(DpState::Wait_Cfg),
+                                dp_state_name(DpState::Data_Exchange)});
     } else if (what == "wd_state") {
       args(1, "Baud_Search|Baud_Control|DP_Control");
       step_.expect = ExpectKind::wd_state;
-      step_.value = state_value(pos_[1], {"Baud_Search", "Baud_Control", "DP_Control"});
+      step_.value = state_value(
+          pos_[1], {wd_state_name(WdState::Baud_Search), wd_state_name(WdState::Baud_Control),
+                    wd_state_name(WdState::DP_Control)});
     } else if (what == "port") {
       args(2, "NAME VALUE");
       if (fw_ == nullptr) fail("'expect port' needs a firmware (header 'firmware NAME')");

@@ -312,13 +312,7 @@ class TraceParser {
         } else if (key == "fault" && l.fault.kind == UartFault::Kind::none) {
           const std::size_t colon = v.find(':');
           const std::string_view kind = v.substr(0, colon);
-          if (kind == "parity") {
-            l.fault.kind = UartFault::Kind::parity;
-          } else if (kind == "start") {
-            l.fault.kind = UartFault::Kind::start;
-          } else if (kind == "stop") {
-            l.fault.kind = UartFault::Kind::stop;
-          } else {
+          if (!parse_fault_kind(kind, l.fault.kind)) {
             fail(fmt::format("bad fault '{}' (parity, start or stop, then :CHAR)", shown(v)));
           }
           if (colon == std::string_view::npos) fail("fault= needs the character: KIND:CHAR");

@@ -149,4 +149,15 @@ std::string_view fault_kind_name(UartFault::Kind k) {
   return "none";
 }
 
+bool parse_fault_kind(std::string_view name, UartFault::Kind& kind) {
+  for (const UartFault::Kind k :
+       {UartFault::Kind::parity, UartFault::Kind::start, UartFault::Kind::stop}) {
+    if (name == fault_kind_name(k)) {
+      kind = k;
+      return true;
+    }
+  }
+  return false;
+}
+
 }  // namespace dpc31

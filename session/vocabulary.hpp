@@ -34,5 +34,7 @@ std::string_view response_name(fdl::Response r);
 // A UART fault as the walk tells it ("parity error") and as trace files write it ("parity").
 std::string_view fault_name(UartFault::Kind k);
 std::string_view fault_kind_name(UartFault::Kind k);
+// The kind named by fault_kind_name ("parity", "start", "stop"); false for any other name.
+bool parse_fault_kind(std::string_view name, UartFault::Kind& kind);
 
 }  // namespace dpc31

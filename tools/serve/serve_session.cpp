@@ -387,13 +387,7 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
           if (colon == std::string_view::npos) {
             throw Fail{"syntax", "fault=KIND:INDEX, KIND parity, start or stop"};
           }
-          if (kind == "parity") {
-            fault.kind = UartFault::Kind::parity;
-          } else if (kind == "start") {
-            fault.kind = UartFault::Kind::start;
-          } else if (kind == "stop") {
-            fault.kind = UartFault::Kind::stop;
-          } else {
+          if (!parse_fault_kind(kind, fault.kind)) {
             throw Fail{"syntax", fmt::format("unknown fault '{}' (parity, start, stop)", kind)};
           }
           fault.char_index =
