@@ -90,6 +90,7 @@ Exchange DpMaster::retry(Exchange ex, std::uint32_t retries) {
 
 void DpMaster::line_noise(std::span<const std::uint8_t> bytes, std::uint32_t idle_bits) {
   const std::uint64_t start = std::max(chip_.cycle(), bus_free_ + std::uint64_t{idle_bits} * t_);
+  if (on_send) on_send(start, bytes, {});
   bus_free_ = send_on_rxd(chip_, bytes, start, t_);
   ++counters_.noise;
   run_until(bus_free_);
@@ -130,6 +131,7 @@ Exchange DpMaster::transact_raw(const std::vector<std::uint8_t>& bytes, UartFaul
   chars_.clear();
   rx_.advance(chip_.cycle(), chars_);
   ex.request_start = std::max(chip_.cycle(), bus_free_ + std::uint64_t{cfg_.idle_bits} * t_);
+  if (on_send) on_send(ex.request_start, bytes, fault);
   ex.request_end = send_on_rxd(chip_, bytes, ex.request_start, t_, fault);
   run_until(ex.request_end);
   const fdl::Decoded d = fdl::decode(bytes);

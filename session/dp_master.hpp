@@ -173,6 +173,10 @@ class DpMaster {
   [[nodiscard]] const MasterCounters& counters() const { return counters_; }
   // Narration of what happened (`dpc31 run` prints it).
   std::function<void(const std::string&)> narrate;
+  // Told of every telegram just before it goes on RxD (requests, line noise): its first start
+  // bit, its bytes and the fault it carries. A trace recorder writes the batch from it.
+  std::function<void(std::uint64_t start, std::span<const std::uint8_t> bytes, UartFault fault)>
+      on_send;
 
  private:
   fdl::Frame request(std::optional<std::uint8_t> dsap, std::vector<std::uint8_t> du,

@@ -147,6 +147,9 @@ class ScenarioObserver {
   // The expect `st` was checked ("line K: TEXT: ok", or "...: FAILED, got X").
   virtual void expect_checked(std::uint64_t /*cycle*/, const ScenarioStep& /*st*/, bool /*ok*/,
                               std::string_view /*text*/) {}
+  // The master puts a telegram on RxD from `start` (DpMaster::on_send), damaged by `fault`.
+  virtual void telegram_sent(std::uint64_t /*start*/, std::span<const std::uint8_t> /*bytes*/,
+                             UartFault /*fault*/) {}
   // Any other event of the walk at its cycle: a transaction, a state change, a chip message.
   virtual void walk_note(std::uint64_t /*cycle*/, std::string_view /*text*/) {}
   // After the last step, before ScenarioHooks::at_end.

@@ -86,6 +86,12 @@ class Runner {
       user_.init(bus);
     }
     master_ = std::make_unique<DpMaster>(chip_, s_.master, s_.user.slave);
+    if (hooks_.observer != nullptr) {
+      master_->on_send = [this](std::uint64_t start, std::span<const std::uint8_t> bytes,
+                                UartFault fault) {
+        hooks_.observer->telegram_sent(start, bytes, fault);
+      };
+    }
     // State changes are looked for wherever they can happen: after the firmware's ISR (its
     // Prm/Cfg verdicts), at every telegram, at every X/INT edge, after every transaction.
     master_->set_firmware([this](BusPort& b) {

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <deque>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -25,6 +26,13 @@ namespace dpc31 {
 inline constexpr std::string_view kTraceMagic = "dpc31-trace 1";
 
 // --- recording ---
+
+// A telegram as its sender put it on RxD.
+struct RxdTelegram {
+  std::uint64_t start = 0;  // first start bit
+  std::vector<std::uint8_t> bytes;
+  UartFault fault;
+};
 
 // Records a session on one chip. attach() it at cycle 0, before anything touches the chip; the
 // recorder must outlive the chip's observers (it stays registered until the chip is gone).
@@ -64,6 +72,10 @@ class TraceRecorder final : public ScenarioObserver {
   void expect_checked(std::uint64_t cycle, const ScenarioStep& st, bool ok,
                       std::string_view text) override;
   void walk_note(std::uint64_t cycle, std::string_view text) override;
+  // What the sender puts on RxD next (DpMaster::on_send): the batch of edges it hands over is
+  // written as an `rx` line from it when uart_encode of it gives exactly those edges.
+  void telegram_sent(std::uint64_t start, std::span<const std::uint8_t> bytes,
+                     UartFault fault) override;
   void run_ends(Chip& chip) override;
 
  private:
@@ -91,6 +103,7 @@ class TraceRecorder final : public ScenarioObserver {
   // RxD edges handed to the chip in one go (one telegram).
   std::uint64_t rxd_fed_ = 0;
   std::vector<std::pair<std::uint64_t, bool>> rxd_;
+  std::optional<RxdTelegram> sent_;  // what the sender said the next batch is
   std::uint64_t last_key_ = 0;
   // The state at the segment's checkpoint (cycle, line), taken when it was due.
   std::optional<std::pair<std::uint64_t, std::string>> pending_state_;
@@ -99,11 +112,12 @@ class TraceRecorder final : public ScenarioObserver {
   std::string error_;
 };
 
-// Formats a batch of RxD edges handed to the chip at `fed` as an `rx` line (characters at bit
-// time `t` from the first start bit, with the one damaged character uart_encode produced, if
-// any), or an `rxd` line with the raw edges when no such encoding reproduces them exactly.
+// Formats a batch of RxD edges handed to the chip at `fed` as an `rx` line — when the sender
+// said what it is (`sent`: characters at bit time `t` from the first start bit, with at most one
+// damaged character) and uart_encode of that reproduces the edges exactly — or else as an `rxd`
+// line with the raw edges.
 std::string format_rxd(std::uint64_t fed, const std::vector<std::pair<std::uint64_t, bool>>& edges,
-                       std::uint32_t t);
+                       std::uint32_t t, const RxdTelegram* sent);
 
 // --- the trace file ---
 

@@ -26,53 +26,25 @@ std::vector<TraceStateKey> trace_state(const Chip& c) {
 // RxD batches
 
 std::string format_rxd(std::uint64_t fed, const std::vector<std::pair<std::uint64_t, bool>>& edges,
-                       std::uint32_t t) {
-  const auto raw = [&] {
-    std::string s = fmt::format("rxd {}", fed);
-    for (const auto& [c, l] : edges) s += fmt::format(" {}:{}", c, l ? 1 : 0);
-    return s;
-  };
-  if (edges.empty() || edges.front().second || t == 0) return raw();
-  const std::uint64_t s = edges.front().first;
-  const std::uint64_t ch = std::uint64_t{kUartCharBits} * t;
-  // The line level at `at`: the last edge at or before it; high before the first.
-  const auto level_at = [&](std::uint64_t at) {
-    const auto it = std::upper_bound(
-        edges.begin(), edges.end(), at,
-        [](std::uint64_t v, const std::pair<std::uint64_t, bool>& e) { return v < e.first; });
-    return it == edges.begin() ? true : std::prev(it)->second;
-  };
-  const std::uint64_t n0 = (edges.back().first - s) / ch + 1;
-  for (std::uint64_t n = n0; n >= 1 && n + 1 >= n0; --n) {
-    std::vector<std::uint8_t> bytes;
-    std::vector<UartFault> anomalies;
-    for (std::uint64_t i = 0; i < n; ++i) {
-      std::uint16_t bits = 0;
-      for (std::uint32_t k = 0; k < kUartCharBits; ++k) {
-        if (level_at(s + i * ch + std::uint64_t{k} * t + t / 2)) {
-          bits = static_cast<std::uint16_t>(bits | (1u << k));
-        }
-      }
-      const auto d = static_cast<std::uint8_t>(bits >> 1);
-      bytes.push_back(d);
-      const int idx = static_cast<int>(i);
-      if ((bits & 1) != 0) anomalies.push_back({idx, UartFault::Kind::start});
-      if (((bits >> 9) & 1) != even_parity(d)) anomalies.push_back({idx, UartFault::Kind::parity});
-      if (((bits >> 10) & 1) == 0) anomalies.push_back({idx, UartFault::Kind::stop});
-    }
-    if (anomalies.size() > 1) continue;
-    const UartFault fault = anomalies.empty() ? UartFault{} : anomalies.front();
+                       std::uint32_t t, const RxdTelegram* sent) {
+  // No start bit to count from (a first character sent without one) is no `rx` line either.
+  if (sent != nullptr && t != 0 && !edges.empty() && !edges.front().second &&
+      edges.front().first == sent->start) {
     std::vector<std::pair<std::uint64_t, bool>> enc;
-    uart_encode(bytes, s, t, enc, fault);
-    if (enc != edges) continue;
-    std::string line = fmt::format("rx {} {}", s, hex_bytes(bytes));
-    if (fault.kind != UartFault::Kind::none) {
-      line += fmt::format(" fault={}:{}", fault_kind_name(fault.kind), fault.char_index);
+    uart_encode(sent->bytes, sent->start, t, enc, sent->fault);
+    if (enc == edges) {
+      std::string line = fmt::format("rx {} {}", sent->start, hex_bytes(sent->bytes));
+      if (sent->fault.kind != UartFault::Kind::none) {
+        line +=
+            fmt::format(" fault={}:{}", fault_kind_name(sent->fault.kind), sent->fault.char_index);
+      }
+      if (fed != sent->start) line += fmt::format(" fed={}", fed);
+      return line;
     }
-    if (fed != s) line += fmt::format(" fed={}", fed);
-    return line;
   }
-  return raw();
+  std::string line = fmt::format("rxd {}", fed);
+  for (const auto& [c, l] : edges) line += fmt::format(" {}:{}", c, l ? 1 : 0);
+  return line;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -136,8 +108,9 @@ void TraceRecorder::add(std::uint64_t key, std::string text) {
 void TraceRecorder::close_rxd() {
   if (rxd_.empty()) return;
   const std::uint32_t t = chip_ != nullptr ? bit_cycles(chip_->clock_hz(), baud_) : 0;
-  seg_.push_back(Entry{rxd_fed_, format_rxd(rxd_fed_, rxd_, t)});
+  seg_.push_back(Entry{rxd_fed_, format_rxd(rxd_fed_, rxd_, t, sent_ ? &*sent_ : nullptr)});
   rxd_.clear();
+  sent_.reset();
 }
 
 void TraceRecorder::heading(std::string text) { headings_.push_back(std::move(text)); }
@@ -235,6 +208,12 @@ void TraceRecorder::step_begins(std::uint64_t, const ScenarioStep&, std::string_
 void TraceRecorder::expect_checked(std::uint64_t, const ScenarioStep&, bool,
                                    std::string_view text) {
   mark(std::string(text));
+}
+
+void TraceRecorder::telegram_sent(std::uint64_t start, std::span<const std::uint8_t> bytes,
+                                  UartFault fault) {
+  close_rxd();  // the batch before is another's
+  sent_ = RxdTelegram{start, {bytes.begin(), bytes.end()}, fault};
 }
 
 void TraceRecorder::walk_note(std::uint64_t cycle, std::string_view text) {
