@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "../emu/dp_master.hpp"
-#include "../emu/responder.hpp"
+#include "dp_master.hpp"
+#include "responder.hpp"
 #include "waveform.hpp"
 
 namespace {

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <functional>
 
-#include "cpu.hpp"
+#include "bus_port.hpp"
 
 namespace dpc31::hal {
 

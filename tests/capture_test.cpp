@@ -17,9 +17,9 @@
 #include <string>
 #include <vector>
 
-#include "../emu/dp_master.hpp"
-#include "../emu/responder.hpp"
+#include "dp_master.hpp"
 #include "pcapng.hpp"
+#include "responder.hpp"
 #include "test_files.hpp"
 
 using namespace dpc31;

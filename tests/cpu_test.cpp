@@ -1,8 +1,8 @@
-// The host CPU (emu/cpu.hpp): the firmware's ISR interleaves with the bus side one bus access at
-// a time (4 clocks each, docs/timing.md), resumes where it stopped, and keeps its own HAL
+// The host CPU (session/cpu.hpp): the firmware's ISR interleaves with the bus side one bus access
+// at a time (4 clocks each, docs/timing.md), resumes where it stopped, and keeps its own HAL
 // selection; an exception it throws reaches the bus side; destroying the CPU unwinds an ISR in
 // progress.
-#include "../emu/cpu.hpp"
+#include "cpu.hpp"
 
 #include <gtest/gtest.h>
 

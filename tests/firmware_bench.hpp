@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "../emu/dp_master.hpp"
-#include "../emu/firmware_host.hpp"
+#include "dp_master.hpp"
+#include "firmware_host.hpp"
 
 namespace firmware_bench {
 

@@ -8,11 +8,11 @@
 
 #include <numeric>
 
-#include "../emu/dp_master.hpp"
 #include "../emu/dp_services.hpp"
-#include "../emu/responder.hpp"
-#include "../emu/scenario.hpp"
+#include "dp_master.hpp"
 #include "dpc31/reg_ids.hpp"
+#include "responder.hpp"
+#include "scenario.hpp"
 #include "test_util.hpp"
 
 using namespace dpc31;

@@ -15,7 +15,7 @@
 #include <vector>
 
 // emu/ is not on the tests' include path.
-#include "../emu/scenario.hpp"
+#include "scenario.hpp"
 
 namespace {
 

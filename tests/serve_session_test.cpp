@@ -9,8 +9,8 @@
 #include <string_view>
 #include <vector>
 
-#include "../emu/cpu.hpp"
-#include "../emu/responder.hpp"
+#include "cpu.hpp"
+#include "responder.hpp"
 #include "dpc31/chip.hpp"
 #include "serve_client.hpp"
 

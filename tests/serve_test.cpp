@@ -21,11 +21,11 @@
 #include <thread>
 #include <vector>
 
-#include "../emu/cpu.hpp"
 #include "../emu/fdl.hpp"
-#include "../emu/responder.hpp"
+#include "cpu.hpp"
 #include "dpc31/chip.hpp"
 #include "dpc31/regdesc.hpp"
+#include "responder.hpp"
 #include "run_command.hpp"
 #include "serve_client.hpp"
 #include "serve_server.hpp"

@@ -18,10 +18,10 @@
 #include <vector>
 
 #include "../emu/core.hpp"
-#include "../emu/cpu.hpp"
-#include "../emu/dp_master.hpp"
-#include "../emu/responder.hpp"
+#include "cpu.hpp"
+#include "dp_master.hpp"
 #include "dpc31/chip.hpp"
+#include "responder.hpp"
 #include "test_util.hpp"
 
 using namespace dpc31;

@@ -15,13 +15,13 @@
 #include "run_command.hpp"
 
 // emu/ is not on the tests' include path.
-#include "../emu/cpu.hpp"
-#include "../emu/dp_master.hpp"
 #include "../emu/fdl.hpp"
-#include "../emu/responder.hpp"
-#include "../emu/scenario.hpp"
-#include "../emu/trace.hpp"
 #include "../emu/uart.hpp"
+#include "cpu.hpp"
+#include "dp_master.hpp"
+#include "responder.hpp"
+#include "scenario.hpp"
+#include "trace.hpp"
 
 namespace {
 
@@ -49,8 +49,7 @@ std::string record(const std::string& scn, int* rc = nullptr) {
   dpc31::ScenarioError err;
   EXPECT_TRUE(dpc31::parse_scenario(scn, "test.scn", s, err)) << err.text();
   dpc31::TraceRecorder rec(s.master.baud, {"test"});
-  const dpc31::ScenarioOutcome o =
-      dpc31::run_scenario(s, rec.scenario_walk(s, {}), {}, rec.scenario_hooks());
+  const dpc31::ScenarioOutcome o = dpc31::run_scenario(s, {}, {}, rec.scenario_hooks());
   if (rc != nullptr) *rc = o.ok() ? 0 : 1;
   EXPECT_EQ(rec.error(), "");
   return rec.text();
@@ -308,9 +307,14 @@ std::vector<std::pair<std::uint64_t, bool>> encode(const std::vector<std::uint8_
 }
 
 TEST(TraceRxd, CleanTelegram) {
-  EXPECT_EQ(dpc31::format_rxd(100, encode({0x10, 0x05, 0x02, 0x49, 0x50, 0x16}, 100, 32), 32),
-            "rx 100 10 05 02 49 50 16");
-  EXPECT_EQ(dpc31::format_rxd(90, encode({0xE5}, 100, 4), 4), "rx 100 E5 fed=90");
+  const std::vector<std::uint8_t> b = {0x10, 0x05, 0x02, 0x49, 0x50, 0x16};
+  const dpc31::RxdTelegram sent{100, b, {}};
+  EXPECT_EQ(dpc31::format_rxd(100, encode(b, 100, 32), 32, &sent), "rx 100 10 05 02 49 50 16");
+  const dpc31::RxdTelegram e5{100, {0xE5}, {}};
+  EXPECT_EQ(dpc31::format_rxd(90, encode({0xE5}, 100, 4), 4, &e5), "rx 100 E5 fed=90");
+  // Edges nobody said anything about, or not the ones said: the raw edges.
+  EXPECT_TRUE(dpc31::format_rxd(100, encode(b, 100, 32), 32, nullptr).starts_with("rxd 100 "));
+  EXPECT_TRUE(dpc31::format_rxd(100, encode(b, 100, 32), 16, &sent).starts_with("rxd 100 "));
 }
 
 TEST(TraceRxd, DamagedCharacters) {
@@ -319,14 +323,16 @@ TEST(TraceRxd, DamagedCharacters) {
   for (K k : {K::parity, K::stop, K::start}) {
     for (int i = 0; i < 6; ++i) {
       if (k == K::start && i == 0) continue;
-      const std::string s = dpc31::format_rxd(7, encode(b, 7, 8, {i, k}), 8);
+      const dpc31::RxdTelegram sent{7, b, {i, k}};
+      const std::string s = dpc31::format_rxd(7, encode(b, 7, 8, {i, k}), 8, &sent);
       const std::string kind = k == K::parity ? "parity" : k == K::stop ? "stop" : "start";
       EXPECT_EQ(s, "rx 7 10 05 02 49 50 16 fault=" + kind + ":" + std::to_string(i));
     }
   }
   // No start bit in the first character: no start to count from; the raw edges.
   const auto e = encode(b, 7, 8, {0, K::start});
-  const std::string raw = dpc31::format_rxd(7, e, 8);
+  const dpc31::RxdTelegram sent{7, b, {0, K::start}};
+  const std::string raw = dpc31::format_rxd(7, e, 8, &sent);
   EXPECT_TRUE(raw.starts_with("rxd 7 ")) << raw;
   std::string msg;
   const std::string text =
@@ -439,6 +445,8 @@ ExtDiagSession ext_diag_session() {
   };
   bool publish = false;
   DpMaster master(chip, m, cfg.slave);
+  master.on_send = [&rec](std::uint64_t start, std::span<const std::uint8_t> bytes,
+                          UartFault fault) { rec.telegram_sent(start, bytes, fault); };
   master.set_firmware([&](BusPort& b) {
     if (publish) {
       publish = false;

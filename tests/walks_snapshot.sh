@@ -5,7 +5,7 @@
 # recorded trace, the VCD and the pcapng; for each traces/*.trace: the replay's output. Compare
 # two such directories with `diff -r`.
 set -uo pipefail
-bin=$1
+bin=$(realpath "$1")
 out=$2
 src=$(cd "$(dirname "$0")/.." && pwd)
 out=$(mkdir -p "$out" && cd "$out" && pwd)

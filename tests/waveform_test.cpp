@@ -11,9 +11,9 @@
 #include <fstream>
 #include <sstream>
 
-#include "../emu/cpu.hpp"
-#include "../emu/dp_master.hpp"
-#include "../emu/responder.hpp"
+#include "cpu.hpp"
+#include "dp_master.hpp"
+#include "responder.hpp"
 #include "run_command.hpp"
 #include "test_files.hpp"
 

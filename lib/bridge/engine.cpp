@@ -5,8 +5,7 @@
 #include <algorithm>
 #include <utility>
 
-#include "../../emu/dp_sm.hpp"     // SAP numbers
-#include "../../emu/scenario.hpp"  // state names
+#include "vocabulary.hpp"  // state, service and response names
 
 namespace dpc31::bridge {
 
@@ -41,60 +40,6 @@ std::string_view function_name(fdl::Function f) {
   return "function?";
 }
 
-std::string_view response_name(fdl::Response r) {
-  switch (r) {
-    case fdl::Response::OK:
-      return "OK";
-    case fdl::Response::UE:
-      return "UE";
-    case fdl::Response::RR:
-      return "RR";
-    case fdl::Response::RS:
-      return "RS";
-    case fdl::Response::DL:
-      return "DL";
-    case fdl::Response::NR:
-      return "NR";
-    case fdl::Response::DH:
-      return "DH";
-    case fdl::Response::RDL:
-      return "RDL";
-    case fdl::Response::RDH:
-      return "RDH";
-  }
-  return "response?";
-}
-
-// The DP service a request asks for (DP standard SAPs; no SAP = Data_Exchange).
-std::string service_name(const fdl::Frame& f) {
-  const fdl::Function fn = fdl::request_function(f.fc);
-  if (fn == fdl::Function::FDL_Status) return "FDL_Status";
-  if (!f.dsap) {
-    return fn == fdl::Function::SRD_high || fn == fdl::Function::SRD_low ? "Data_Exchange"
-                                                                         : "no SAP";
-  }
-  switch (fdl::sap_number(*f.dsap)) {
-    case sap::Set_Slave_Add:
-      return "Set_Slave_Add";
-    case sap::Rd_Inp:
-      return "Rd_Inp";
-    case sap::Rd_Outp:
-      return "Rd_Outp";
-    case sap::Global_Control:
-      return "Global_Control";
-    case sap::Get_Cfg:
-      return "Get_Cfg";
-    case sap::Slave_Diag:
-      return "Slave_Diag";
-    case sap::Set_Prm:
-      return "Set_Prm";
-    case sap::Chk_Cfg:
-      return "Chk_Cfg";
-    default:
-      return fmt::format("SAP {}", fdl::sap_number(*f.dsap));
-  }
-}
-
 bool wants_answer(std::span<const std::uint8_t> bytes) {
   const fdl::Decoded d = fdl::decode(bytes);
   if (d.error != fdl::Error::none) return false;
@@ -105,16 +50,6 @@ bool wants_answer(std::span<const std::uint8_t> bytes) {
 }
 
 }  // namespace
-
-std::string hex_bytes(std::span<const std::uint8_t> bytes) {
-  std::string s;
-  s.reserve(bytes.size() * 3);
-  for (std::size_t i = 0; i < bytes.size(); ++i) {
-    if (i != 0) s += ' ';
-    s += fmt::format("{:02X}", bytes[i]);
-  }
-  return s;
-}
 
 std::string telegram_summary(std::span<const std::uint8_t> bytes) {
   if (bytes.empty()) return "empty";

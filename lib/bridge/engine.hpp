@@ -19,10 +19,11 @@
 #include <string>
 #include <vector>
 
-#include "../../emu/dp_master.hpp"
-#include "../../emu/firmware_host.hpp"
+#include "../../emu/hex.hpp"
+#include "dp_master.hpp"
 #include "dpc31/chip.hpp"
 #include "firmware.h"
+#include "firmware_host.hpp"
 
 namespace dpc31::bridge {
 
@@ -48,7 +49,7 @@ using LogSink = std::function<void(std::uint64_t cycle, std::string_view tag, co
 // "FDL_Status 2->5 FC 49", "DL 5->2 SAP 60->62 DU 02 05 00 FF 0D 04", "broken (bad_fcs)".
 std::string telegram_summary(std::span<const std::uint8_t> bytes);
 // "10 05 02 49 50 16".
-std::string hex_bytes(std::span<const std::uint8_t> bytes);
+using dpc31::hex_bytes;
 
 class Engine {
  public:

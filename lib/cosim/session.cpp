@@ -2,8 +2,8 @@
 
 #include <fmt/format.h>
 
-#include "../../emu/scenario.hpp"
 #include "cpp_dut.hpp"
+#include "scenario.hpp"
 
 namespace dpc31::cosim {
 

@@ -13,11 +13,12 @@
 
 #include "../../emu/dp_services.hpp"
 #include "../../emu/fdl.hpp"
-#include "../../emu/scenario.hpp"  // state names
+#include "../../emu/hex.hpp"
 #include "../../emu/snapshot.hpp"  // kMaxFileSize
 #include "../../emu/uart.hpp"
 #include "dpc31/regdesc.hpp"
 #include "dpc31/snapshot.hpp"
+#include "vocabulary.hpp"  // state names
 
 namespace dpc31::serve {
 
@@ -104,17 +105,6 @@ void hex_bytes(std::string_view tok, std::vector<std::uint8_t>& out, std::size_t
     if (out.size() >= max) throw Fail{"range", fmt::format("more than {} bytes", max)};
     out.push_back(static_cast<std::uint8_t>(hi << 4 | lo));
   }
-}
-
-std::string hex(std::span<const std::uint8_t> bytes) {
-  std::string s;
-  s.reserve(bytes.size() * 2);
-  static constexpr char kDigits[] = "0123456789ABCDEF";
-  for (const std::uint8_t b : bytes) {
-    s.push_back(kDigits[b >> 4]);
-    s.push_back(kDigits[b & 0xF]);
-  }
-  return s;
 }
 
 void arity(const Tokens& t, std::size_t min, std::size_t max, std::string_view usage) {
@@ -207,8 +197,9 @@ Session::Session(ChipOptions opt, std::function<void(const AsyncLine&)> sink)
     emit(AsyncLine::Kind::irq, fmt::format("! irq {} {}", cycle, active ? 1 : 0));
   });
   chip_.on_telegram([this](const Telegram& t) {
-    emit(AsyncLine::Kind::telegram, fmt::format("! telegram {} {} {} {}", t.start, t.end,
-                                                t.from_chip ? "tx" : "rx", hex(t.bytes)));
+    emit(AsyncLine::Kind::telegram,
+         fmt::format("! telegram {} {} {} {}", t.start, t.end, t.from_chip ? "tx" : "rx",
+                     dpc31::hex_bytes(t.bytes, "")));
   });
   chip_.set_log_sink([this](const LogRecord& r) {
     emit(AsyncLine::Kind::log,
@@ -315,7 +306,7 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
       for (std::uint32_t i = 0; i < n; ++i) {
         bytes[i] = cmd == "readblock" ? chip_.read(a + i) : chip_.peek(a + i);
       }
-      return ok(hex(bytes));
+      return ok(dpc31::hex_bytes(bytes, ""));
     }
     if (cmd == "writeblock" || cmd == "pokeblock") {
       if (t.size() < 3) throw Fail{"syntax", fmt::format("usage: {} ADDR HEX...", cmd)};
@@ -396,13 +387,7 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
           if (colon == std::string_view::npos) {
             throw Fail{"syntax", "fault=KIND:INDEX, KIND parity, start or stop"};
           }
-          if (kind == "parity") {
-            fault.kind = UartFault::Kind::parity;
-          } else if (kind == "start") {
-            fault.kind = UartFault::Kind::start;
-          } else if (kind == "stop") {
-            fault.kind = UartFault::Kind::stop;
-          } else {
+          if (!parse_fault_kind(kind, fault.kind)) {
             throw Fail{"syntax", fmt::format("unknown fault '{}' (parity, start, stop)", kind)};
           }
           fault.char_index =

@@ -9,14 +9,14 @@
 #include <random>
 #include <stdexcept>
 
-#include "../../emu/dp_master.hpp"
 #include "../../emu/dp_services.hpp"
-#include "../../emu/responder.hpp"
-#include "../../emu/scenario.hpp"
 #include "../cli/variant_option.hpp"
+#include "dp_master.hpp"
 #include "dpc31/chip.hpp"
 #include "numbers.hpp"
 #include "outfile.hpp"
+#include "responder.hpp"
+#include "scenario.hpp"
 
 namespace dpc31::soak {
 

@@ -7,11 +7,11 @@
 #include <cstdint>
 #include <vector>
 
-#include "../../emu/dp_master.hpp"
 #include "../../emu/dp_services.hpp"
-#include "../../emu/responder.hpp"
+#include "dp_master.hpp"
 #include "dpc31/chip.hpp"
 #include "dpc31/reg_ids.hpp"
+#include "responder.hpp"
 #include "test_util.hpp"
 
 namespace conformance {

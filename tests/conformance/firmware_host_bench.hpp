@@ -8,10 +8,10 @@
 #include <optional>
 #include <vector>
 
-#include "../../emu/dp_master.hpp"
-#include "../../emu/firmware_host.hpp"
 #include "../firmware_bench.hpp"
 #include "conformance.hpp"
+#include "dp_master.hpp"
+#include "firmware_host.hpp"
 
 namespace conformance {
 

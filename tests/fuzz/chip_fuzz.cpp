@@ -1,5 +1,5 @@
 // Fuzz targets chip_bits and chip_bytes: the serial line into the chip, with the user side
-// (emu/responder.cpp: Prm/Cfg verdicts, Dout/Din, diagnostics, New_GC_Command, EOI) running
+// (session/responder.cpp: Prm/Cfg verdicts, Dout/Din, diagnostics, New_GC_Command, EOI) running
 // whenever X/INT is active, and the invariant checker (invariants.hpp) after every event.
 //
 // Input byte 0 chooses the set-up:
@@ -18,12 +18,12 @@
 #include <optional>
 #include <vector>
 
-#include "../../emu/cpu.hpp"
-#include "../../emu/dp_master.hpp"
-#include "../../emu/responder.hpp"
 #include "../../emu/uart.hpp"
+#include "cpu.hpp"
+#include "dp_master.hpp"
 #include "fuzz_targets.hpp"
 #include "invariants.hpp"
+#include "responder.hpp"
 
 namespace dpc31::fuzz {
 

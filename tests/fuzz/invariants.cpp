@@ -7,7 +7,7 @@
 #include <cstdlib>
 
 #include "../../emu/core.hpp"
-#include "../../emu/scenario.hpp"
+#include "scenario.hpp"
 
 namespace dpc31::fuzz {
 

@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "../../emu/core.hpp"
-#include "../../emu/cpu.hpp"
-#include "../../emu/dp_master.hpp"
-#include "../../emu/responder.hpp"
+#include "cpu.hpp"
+#include "dp_master.hpp"
+#include "responder.hpp"
 
 namespace {
 

@@ -8,11 +8,11 @@
 #include <string>
 #include <vector>
 
-#include "../../emu/cpu.hpp"
-#include "../../emu/dp_master.hpp"
-#include "../../emu/responder.hpp"
 #include "../../emu/uart.hpp"
+#include "cpu.hpp"
+#include "dp_master.hpp"
 #include "dpc31/chip.hpp"
+#include "responder.hpp"
 
 namespace {
 

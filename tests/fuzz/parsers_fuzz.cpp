@@ -11,13 +11,13 @@
 #include <string_view>
 #include <vector>
 
-#include "../../emu/scenario.hpp"
-#include "../../emu/trace.hpp"
 #include "dpc31/chip.hpp"
 #include "dpc31/snapshot.hpp"
 #include "fuzz_targets.hpp"
 #include "invariants.hpp"
+#include "scenario.hpp"
 #include "serve_session.hpp"
+#include "trace.hpp"
 
 namespace dpc31::fuzz {
 

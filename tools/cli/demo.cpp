@@ -8,8 +8,8 @@
 #include <filesystem>
 #include <string>
 
-#include "../../emu/scenario.hpp"
 #include "run.hpp"
+#include "scenario.hpp"
 
 namespace dpc31::cli {
 

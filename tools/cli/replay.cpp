@@ -3,7 +3,7 @@
 #include <fmt/core.h>
 
 // The trace replay lives with the emulator (emu/ is not on this target's include path).
-#include "../../emu/trace.hpp"
+#include "trace.hpp"
 
 namespace dpc31::cli {
 

@@ -12,8 +12,8 @@
 #include "waveform.hpp"
 
 // The scenario runner lives with the emulator (emu/ is not on this target's include path).
-#include "../../emu/scenario.hpp"
-#include "../../emu/trace.hpp"
+#include "scenario.hpp"
+#include "trace.hpp"
 
 namespace dpc31::cli {
 
@@ -110,7 +110,6 @@ int run_parsed_scenario(const RunOptions& opt, const Scenario& s, const LineSink
     }
   }
   ScenarioHooks hooks;
-  LineSink run_walk = walk;
   if (!opt.record.empty()) {
     std::vector<std::string> notes = leading_comments(opt.scenario);
     if (!notes.empty()) notes.emplace_back();
@@ -118,7 +117,6 @@ int run_parsed_scenario(const RunOptions& opt, const Scenario& s, const LineSink
         fmt::format("recorded by `dpc31 run --record` from {} (docs/trace-format.md)", s.file));
     rec = std::make_unique<TraceRecorder>(s.master.baud, std::move(notes));
     hooks = rec->scenario_hooks();
-    run_walk = rec->scenario_walk(s, walk);
   }
   if (opt.to <= opt.from) {
     fmt::print(err, "dpc31 run: --to {} is not after --from {}: an empty waveform window\n", opt.to,
@@ -161,7 +159,7 @@ int run_parsed_scenario(const RunOptions& opt, const Scenario& s, const LineSink
     if (inner) inner(chip);
     end_cycle = chip.cycle();
   };
-  o = run_scenario(s, run_walk, errors, hooks);
+  o = run_scenario(s, walk, errors, hooks);
   if (!attach_error.empty()) {
     fmt::print(err, "dpc31 run: {}\n", attach_error);
     return 2;

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "../../emu/scenario.hpp"
+#include "scenario.hpp"
 
 namespace dpc31::cli {
 

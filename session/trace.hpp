@@ -10,14 +10,15 @@
 #include <cstdint>
 #include <deque>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <utility>
 #include <vector>
 
+#include "../emu/uart.hpp"
 #include "dpc31/chip.hpp"
 #include "scenario.hpp"
-#include "uart.hpp"
 
 namespace dpc31 {
 
@@ -26,11 +27,18 @@ inline constexpr std::string_view kTraceMagic = "dpc31-trace 1";
 
 // --- recording ---
 
+// A telegram as its sender put it on RxD.
+struct RxdTelegram {
+  std::uint64_t start = 0;  // first start bit
+  std::vector<std::uint8_t> bytes;
+  UartFault fault;
+};
+
 // Records a session on one chip. attach() it at cycle 0, before anything touches the chip; the
 // recorder must outlive the chip's observers (it stays registered until the chip is gone).
 // Entries are collected per segment — the stretch between two checkpoints — and each segment is
 // written in cycle order, headed by its comments and followed by a `state` line.
-class TraceRecorder {
+class TraceRecorder final : public ScenarioObserver {
  public:
   // `baud`: the rate of the telegrams on RxD (the master's); `notes`: comment lines for the top
   // of the file (without the leading '#').
@@ -53,11 +61,22 @@ class TraceRecorder {
   // Empty, or why the recording is not a valid trace (then text() must not be used).
   [[nodiscard]] const std::string& error() const { return error_; }
 
-  // For scenario runs: hooks that attach at the start and finish at the end, and a walk sink
-  // that turns the runner's walk into headings, notes and checkpoints (forwarding every line to
-  // `forward`, which may be empty). The recorder must outlive the run.
+  // For scenario runs: hooks with the recorder as the run's observer. It attaches at the start
+  // and finishes at the end; each step and each checked expect heads a segment closed by the
+  // chip's state after it, the walk's other events become notes at their cycles. The recorder
+  // must outlive the run.
   ScenarioHooks scenario_hooks();
-  LineSink scenario_walk(const Scenario& s, LineSink forward);
+  void run_begins(Chip& chip) override;
+  void user_side_started(std::uint64_t cycle, std::string_view text) override;
+  void step_begins(std::uint64_t cycle, const ScenarioStep& st, std::string_view text) override;
+  void expect_checked(std::uint64_t cycle, const ScenarioStep& st, bool ok,
+                      std::string_view text) override;
+  void walk_note(std::uint64_t cycle, std::string_view text) override;
+  // What the sender puts on RxD next (DpMaster::on_send): the batch of edges it hands over is
+  // written as an `rx` line from it when uart_encode of it gives exactly those edges.
+  void telegram_sent(std::uint64_t start, std::span<const std::uint8_t> bytes,
+                     UartFault fault) override;
+  void run_ends(Chip& chip) override;
 
  private:
   struct Entry {
@@ -68,7 +87,9 @@ class TraceRecorder {
   void close_rxd();
   void close_segment();
   [[nodiscard]] std::string state_line() const;
-  void walk_line(const Scenario& s, const std::string& line);
+  // A heading for the segment of the step (or expect) now reported, with the chip's state after
+  // it as its checkpoint; the segment is closed when the next step's first chip event comes in.
+  void mark(std::string heading);
 
   Chip* chip_ = nullptr;
   std::uint32_t baud_;
@@ -82,6 +103,7 @@ class TraceRecorder {
   // RxD edges handed to the chip in one go (one telegram).
   std::uint64_t rxd_fed_ = 0;
   std::vector<std::pair<std::uint64_t, bool>> rxd_;
+  std::optional<RxdTelegram> sent_;  // what the sender said the next batch is
   std::uint64_t last_key_ = 0;
   // The state at the segment's checkpoint (cycle, line), taken when it was due.
   std::optional<std::pair<std::uint64_t, std::string>> pending_state_;
@@ -90,11 +112,12 @@ class TraceRecorder {
   std::string error_;
 };
 
-// Formats a batch of RxD edges handed to the chip at `fed` as an `rx` line (characters at bit
-// time `t` from the first start bit, with the one damaged character uart_encode produced, if
-// any), or an `rxd` line with the raw edges when no such encoding reproduces them exactly.
+// Formats a batch of RxD edges handed to the chip at `fed` as an `rx` line — when the sender
+// said what it is (`sent`: characters at bit time `t` from the first start bit, with at most one
+// damaged character) and uart_encode of that reproduces the edges exactly — or else as an `rxd`
+// line with the raw edges.
 std::string format_rxd(std::uint64_t fed, const std::vector<std::pair<std::uint64_t, bool>>& edges,
-                       std::uint32_t t);
+                       std::uint32_t t, const RxdTelegram* sent);
 
 // --- the trace file ---
 
@@ -111,6 +134,10 @@ struct TraceStateKey {
   std::string key;    // dp, wd, status, irr, imr, station, fdl
   std::string value;  // as written (normalised for hex and counter lists)
 };
+
+// The chip's state as a `state` line's keys, in the order the recorder writes them; the replay
+// compares the chip's against the recorded ones.
+std::vector<TraceStateKey> trace_state(const Chip& c);
 
 struct TraceLine {
   int line = 0;

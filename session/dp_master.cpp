@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-#include "dp_sm.hpp"
+#include "../emu/dp_sm.hpp"
 
 namespace dpc31 {
 
@@ -90,6 +90,7 @@ Exchange DpMaster::retry(Exchange ex, std::uint32_t retries) {
 
 void DpMaster::line_noise(std::span<const std::uint8_t> bytes, std::uint32_t idle_bits) {
   const std::uint64_t start = std::max(chip_.cycle(), bus_free_ + std::uint64_t{idle_bits} * t_);
+  if (on_send) on_send(start, bytes, {});
   bus_free_ = send_on_rxd(chip_, bytes, start, t_);
   ++counters_.noise;
   run_until(bus_free_);
@@ -130,6 +131,7 @@ Exchange DpMaster::transact_raw(const std::vector<std::uint8_t>& bytes, UartFaul
   chars_.clear();
   rx_.advance(chip_.cycle(), chars_);
   ex.request_start = std::max(chip_.cycle(), bus_free_ + std::uint64_t{cfg_.idle_bits} * t_);
+  if (on_send) on_send(ex.request_start, bytes, fault);
   ex.request_end = send_on_rxd(chip_, bytes, ex.request_start, t_, fault);
   run_until(ex.request_end);
   const fdl::Decoded d = fdl::decode(bytes);
@@ -200,27 +202,36 @@ Exchange DpMaster::fdl_status() {
 
 Exchange DpMaster::slave_diag() { return transact(request(sap::Slave_Diag, {})); }
 
-Exchange DpMaster::set_prm(std::uint8_t station_status_extra) {
+std::uint8_t prm_station_status(const SlaveConfig& s) {
   std::uint8_t status = 0x80;  // Lock_Req
-  if (slave_.wd_on) status |= 0x08;
-  if (slave_.freeze_req) status |= 0x10;
-  if (slave_.sync_req) status |= 0x20;
-  return set_prm_status(static_cast<std::uint8_t>(status | station_status_extra));
+  if (s.wd_on) status |= 0x08;
+  if (s.freeze_req) status |= 0x10;
+  if (s.sync_req) status |= 0x20;
+  return status;
+}
+
+std::vector<std::uint8_t> prm_du(const SlaveConfig& s, std::uint8_t station_status) {
+  std::vector<std::uint8_t> du = {station_status,
+                                  s.wd_fact1,
+                                  s.wd_fact2,
+                                  s.min_tsdr,
+                                  static_cast<std::uint8_t>(s.ident >> 8),
+                                  static_cast<std::uint8_t>(s.ident),
+                                  s.group_ident};
+  std::vector<std::uint8_t> user = s.user_prm;
+  if (user.empty()) user.push_back(0);
+  if (s.wd_base_1ms) user[0] |= 0x04;  // Spec_User_Prm_Byte WD_Base
+  du.insert(du.end(), user.begin(), user.end());
+  return du;
+}
+
+Exchange DpMaster::set_prm(std::uint8_t station_status_extra) {
+  return set_prm_status(
+      static_cast<std::uint8_t>(prm_station_status(slave_) | station_status_extra));
 }
 
 Exchange DpMaster::set_prm_status(std::uint8_t status) {
-  std::vector<std::uint8_t> du = {status,
-                                  slave_.wd_fact1,
-                                  slave_.wd_fact2,
-                                  slave_.min_tsdr,
-                                  static_cast<std::uint8_t>(slave_.ident >> 8),
-                                  static_cast<std::uint8_t>(slave_.ident),
-                                  slave_.group_ident};
-  std::vector<std::uint8_t> user = slave_.user_prm;
-  if (user.empty()) user.push_back(0);
-  if (slave_.wd_base_1ms) user[0] |= 0x04;  // Spec_User_Prm_Byte WD_Base
-  du.insert(du.end(), user.begin(), user.end());
-  return transact(request(sap::Set_Prm, std::move(du)));
+  return transact(request(sap::Set_Prm, prm_du(slave_, status)));
 }
 
 Exchange DpMaster::chk_cfg() { return transact(request(sap::Chk_Cfg, slave_.cfg)); }

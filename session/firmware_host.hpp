@@ -12,9 +12,9 @@
 #include <utility>
 #include <vector>
 
+#include "../emu/hal.hpp"
 #include "cpu.hpp"
 #include "firmware.h"
-#include "hal.hpp"
 
 namespace dpc31 {
 

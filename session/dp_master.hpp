@@ -12,10 +12,10 @@
 #include <string>
 #include <vector>
 
+#include "../emu/fdl.hpp"
+#include "../emu/uart.hpp"
 #include "cpu.hpp"
 #include "dpc31/chip.hpp"
-#include "fdl.hpp"
-#include "uart.hpp"
 
 namespace dpc31 {
 
@@ -35,6 +35,13 @@ struct SlaveConfig {
   std::uint8_t min_tsdr = 0;           // Set_Prm byte 3, 0 = no change
   std::vector<std::uint8_t> user_prm;  // bytes after the 7 standard ones (byte 7 first)
 };
+
+// Set_Prm's Station_Status byte for `s`: Lock_Req, with WD_On / Freeze_Req / Sync_Req as set.
+[[nodiscard]] std::uint8_t prm_station_status(const SlaveConfig& s);
+// Set_Prm's data unit for `s` with this Station_Status byte: the 7 standard bytes, then the
+// User_Prm_Data (at least one byte, WD_Base in bit 2 of the first). DpMaster::set_prm sends it;
+// a scenario builds the damaged copy of a request from it.
+[[nodiscard]] std::vector<std::uint8_t> prm_du(const SlaveConfig& s, std::uint8_t station_status);
 
 struct MasterConfig {
   std::uint8_t address = 2;
@@ -166,6 +173,10 @@ class DpMaster {
   [[nodiscard]] const MasterCounters& counters() const { return counters_; }
   // Narration of what happened (`dpc31 run` prints it).
   std::function<void(const std::string&)> narrate;
+  // Told of every telegram just before it goes on RxD (requests, line noise): its first start
+  // bit, its bytes and the fault it carries. A trace recorder writes the batch from it.
+  std::function<void(std::uint64_t start, std::span<const std::uint8_t> bytes, UartFault fault)>
+      on_send;
 
  private:
   fdl::Frame request(std::optional<std::uint8_t> dsap, std::vector<std::uint8_t> du,

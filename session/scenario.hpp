@@ -15,11 +15,12 @@
 #include <string_view>
 #include <vector>
 
+#include "../emu/dp_services.hpp"
+#include "../emu/uart.hpp"
 #include "dp_master.hpp"
-#include "dp_services.hpp"
 #include "dpc31/chip.hpp"
 #include "responder.hpp"
-#include "uart.hpp"
+#include "vocabulary.hpp"
 
 namespace dpc31 {
 
@@ -70,6 +71,12 @@ enum class ExpectKind : std::uint8_t {
   port,
   pb3,
 };
+
+// Steps that let time pass (and may send requests), as opposed to modifiers, inputs and checks.
+[[nodiscard]] constexpr bool is_action(StepKind k) {
+  return k != StepKind::expect && k != StepKind::corrupt && k != StepKind::bad_fcs &&
+         k != StepKind::inputs && k != StepKind::hw;
+}
 
 // One line of the file. Only the fields its kind uses are meaningful.
 struct ScenarioStep {
@@ -124,11 +131,38 @@ struct ScenarioOutcome {
 // Receives one line at a time, without its newline. An empty function discards the lines.
 using LineSink = std::function<void(const std::string&)>;
 
+// What a run tells an observer (the trace recorder), as structured events: the walk's lines are
+// their text, handed over in walk order (cycle order within each step), so an observer never
+// reads the printed walk. Every method does nothing unless overridden.
+class ScenarioObserver {
+ public:
+  virtual ~ScenarioObserver() = default;
+  // At cycle 0, before the user side's init and before ScenarioHooks::at_start.
+  virtual void run_begins(Chip& /*chip*/) {}
+  // The user side (the built-in responder or the firmware) has set up and started the chip.
+  virtual void user_side_started(std::uint64_t /*cycle*/, std::string_view /*text*/) {}
+  // Step `st` begins at `cycle` ("line K: TEXT").
+  virtual void step_begins(std::uint64_t /*cycle*/, const ScenarioStep& /*st*/,
+                           std::string_view /*text*/) {}
+  // The expect `st` was checked ("line K: TEXT: ok", or "...: FAILED, got X").
+  virtual void expect_checked(std::uint64_t /*cycle*/, const ScenarioStep& /*st*/, bool /*ok*/,
+                              std::string_view /*text*/) {}
+  // The master puts a telegram on RxD from `start` (DpMaster::on_send), damaged by `fault`.
+  virtual void telegram_sent(std::uint64_t /*start*/, std::span<const std::uint8_t> /*bytes*/,
+                             UartFault /*fault*/) {}
+  // Any other event of the walk at its cycle: a transaction, a state change, a chip message.
+  virtual void walk_note(std::uint64_t /*cycle*/, std::string_view /*text*/) {}
+  // After the last step, before ScenarioHooks::at_end.
+  virtual void run_ends(Chip& /*chip*/) {}
+};
+
 // Optional access to the chip a scenario runs on (the lockstep's chip-session mode records its
-// block events): at_start before the firmware's init, at_end after the last step.
+// block events): at_start before the firmware's init, at_end after the last step; `observer`
+// gets the run's events (it must outlive the run).
 struct ScenarioHooks {
   std::function<void(Chip&)> at_start;
   std::function<void(Chip&)> at_end;
+  ScenarioObserver* observer = nullptr;
 };
 
 // Plays a parsed scenario: the walk goes to `walk`, failed expects to `errors` (and the walk).
@@ -139,15 +173,5 @@ ScenarioOutcome run_scenario(const Scenario& s, const LineSink& walk, const Line
 // parse (one line to `errors`, nothing run). `scenario` / `outcome` are filled when given.
 int run_scenario_file(const std::string& path, const LineSink& walk, const LineSink& errors,
                       Scenario* scenario = nullptr, ScenarioOutcome* outcome = nullptr);
-
-std::string_view dp_state_name(DpState s);
-std::string_view wd_state_name(WdState s);
-
-// The FdlCounters fields by name, in declaration order (expect counter, JSON summaries).
-struct CounterField {
-  std::string_view name;
-  std::uint32_t FdlCounters::*member;
-};
-std::span<const CounterField> fdl_counter_fields();
 
 }  // namespace dpc31

@@ -1,0 +1,47 @@
+// What firmware sees of the chip: its parallel bus (BusPort), plain synchronous access
+// (DirectBus), and which bus the C HAL's access functions reach on the calling thread
+// (hal::Selection, hal.hpp). The host CPU that runs firmware behind it is in session/cpu.hpp.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+
+#include "dpc31/chip.hpp"
+
+namespace dpc31 {
+
+// What firmware sees: the parallel bus of the chip.
+class BusPort {
+ public:
+  virtual ~BusPort() = default;
+  virtual std::uint8_t read(std::uint32_t addr) = 0;
+  virtual void write(std::uint32_t addr, std::uint8_t value) = 0;
+  [[nodiscard]] virtual const Chip& chip() const = 0;
+  [[nodiscard]] std::uint64_t cycle() const { return chip().cycle(); }
+};
+
+// Synchronous access (init code, tests): each access simply takes its 4 clocks.
+namespace hal {
+// A port write of the firmware: (cycle, port, value).
+using PortSink = std::function<void(std::uint64_t, unsigned, std::uint32_t)>;
+// What the C HAL's access functions reach on the calling thread (hal.hpp, hal::Scope).
+struct Selection {
+  BusPort* bus = nullptr;
+  const PortSink* ports = nullptr;
+};
+// Installs `s` and returns the selection it replaces.
+Selection exchange_selection(Selection s);
+}  // namespace hal
+
+class DirectBus final : public BusPort {
+ public:
+  explicit DirectBus(Chip& c) : chip_(c) {}
+  std::uint8_t read(std::uint32_t addr) override { return chip_.read(addr); }
+  void write(std::uint32_t addr, std::uint8_t value) override { chip_.write(addr, value); }
+  [[nodiscard]] const Chip& chip() const override { return chip_; }
+
+ private:
+  Chip& chip_;
+};
+
+}  // namespace dpc31

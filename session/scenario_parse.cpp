@@ -1,0 +1,753 @@
+// Scenario files: the parser (text -> Scenario). The format and every command:
+// docs/scenario-format.md; the runner is scenario_run.cpp.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <charconv>
+#include <utility>
+
+#include "../emu/fdl.hpp"
+#include "../emu/textfile.hpp"
+#include "firmware.h"
+#include "scenario.hpp"
+
+namespace dpc31 {
+
+std::string ScenarioError::text() const {
+  if (line <= 0) return fmt::format("{}: {}", file, message);
+  return fmt::format("{}:{}: {}", file, line, message);
+}
+
+namespace {
+
+// Simulated time one `silence` may take: bounds the run time of a typo like `silence 10000s`.
+constexpr std::uint64_t kMaxSeconds = 3600;
+constexpr std::uint64_t kMaxExchanges = 1'000'000;
+constexpr std::uint64_t kMaxTries = 100'000;
+constexpr std::size_t kMaxFileBytes = 16u << 20;
+constexpr std::size_t kMaxDu = 244;
+
+// Global_Control command bits (DP standard).
+constexpr std::pair<std::string_view, std::uint8_t> kGcNames[] = {
+    {"sync", 0x20},     {"unsync", 0x10}, {"freeze", 0x08},
+    {"unfreeze", 0x04}, {"clear", 0x02},  {"operate", 0x00},
+};
+
+constexpr std::string_view kAnswerKinds[] = {"none", "sc", "data", "ok", "ue",
+                                             "rr",   "rs", "dl",   "nr", "dh"};
+
+bool parse_u64(std::string_view s, std::uint64_t& v) {
+  int base = 10;
+  if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
+    base = 16;
+    s.remove_prefix(2);
+  }
+  if (s.empty()) return false;
+  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v, base);
+  return ec == std::errc() && p == s.data() + s.size();
+}
+
+std::vector<std::string_view> split(std::string_view s, char sep) {
+  std::vector<std::string_view> out;
+  for (;;) {
+    const std::size_t k = s.find(sep);
+    out.push_back(s.substr(0, k));
+    if (k == std::string_view::npos) return out;
+    s.remove_prefix(k + 1);
+  }
+}
+
+bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && is_space(s.front())) s.remove_prefix(1);
+  while (!s.empty() && is_space(s.back())) s.remove_suffix(1);
+  return s;
+}
+
+struct ParseFail {
+  int line = 0;  // 0: the line being parsed
+  std::string message;
+};
+
+// Index of `name` in a NULL-terminated list of names, -1 if absent.
+int name_index(const char* const* names, std::string_view name) {
+  for (int i = 0; names != nullptr && names[i] != nullptr; ++i) {
+    if (name == names[i]) return i;
+  }
+  return -1;
+}
+
+std::string name_list(const char* const* names) {
+  std::string all;
+  for (int i = 0; names != nullptr && names[i] != nullptr; ++i) {
+    all += (i == 0 ? "" : ", ") + std::string(names[i]);
+  }
+  return all.empty() ? "none" : all;
+}
+
+// Actions whose first telegram a fault can be injected into.
+bool sends_request(StepKind k) {
+  return is_action(k) && k != StepKind::silence && k != StepKind::foreign_master;
+}
+
+class Parser {
+ public:
+  explicit Parser(Scenario& s) : s_(s) {}
+
+  void line(int no, std::string_view raw) {
+    const std::string_view text = trim(raw.substr(0, raw.find('#')));
+    if (text.empty()) return;
+    words_.clear();
+    pos_.clear();
+    opts_.clear();
+    std::string_view rest = text;
+    while (!rest.empty()) {
+      std::size_t k = 0;
+      while (k < rest.size() && !is_space(rest[k])) ++k;
+      words_.push_back(rest.substr(0, k));
+      rest = trim(rest.substr(k));
+    }
+    cmd_ = words_[0];
+    for (std::size_t i = 1; i < words_.size(); ++i) {
+      const std::size_t eq = words_[i].find('=');
+      if (eq == std::string_view::npos) {
+        pos_.push_back(words_[i]);
+      } else {
+        const std::string_view key = words_[i].substr(0, eq);
+        if (key.empty()) fail(fmt::format("option without a name: '{}'", shown(words_[i])));
+        for (const auto& o : opts_) {
+          if (o.first == key) fail(fmt::format("option '{}' given twice", shown(key)));
+        }
+        opts_.emplace_back(key, words_[i].substr(eq + 1));
+      }
+    }
+    step_ = ScenarioStep{};
+    step_.line = no;
+    step_.text = std::string(text);
+    if (header()) {
+      headers_ = true;
+      if (body_) {
+        fail(
+            fmt::format("'{}' is a header command: headers come before actions and expects", cmd_));
+      }
+      return;
+    }
+    if (!body_) view_ = s_.user.slave;
+    body_ = true;
+    body();
+    s_.steps.push_back(std::move(step_));
+  }
+
+  // Checks that need the whole file: a fault must be followed by an action that sends.
+  void finish() {
+    if (s_.steps.empty()) {
+      fail_at(-1,
+              headers_ ? "only header commands: nothing to run" : "no commands: nothing to run");
+    }
+    const ScenarioStep* fault = nullptr;
+    for (const ScenarioStep& st : s_.steps) {
+      if (st.kind == StepKind::corrupt || st.kind == StepKind::bad_fcs) {
+        if (fault != nullptr) {
+          fail_at(st.line,
+                  fmt::format("a second fault before the request of line {}", fault->line));
+        }
+        fault = &st;
+        continue;
+      }
+      if (fault == nullptr || !is_action(st.kind)) continue;
+      if (!sends_request(st.kind)) {
+        fail_at(fault->line, fmt::format("the next action ('{}', line {}) sends no request to "
+                                         "damage",
+                                         st.text.substr(0, st.text.find(' ')), st.line));
+      }
+      fault = nullptr;
+    }
+    if (fault != nullptr) fail_at(fault->line, "no request follows to damage");
+  }
+
+ private:
+  [[noreturn]] static void fail(std::string msg) { throw ParseFail{0, std::move(msg)}; }
+  [[noreturn]] static void fail_at(int line, std::string msg) {
+    throw ParseFail{line, std::move(msg)};
+  }
+
+  void positional(std::size_t min, std::size_t max, std::string_view what) const {
+    if (pos_.size() < min) {
+      fail(fmt::format("'{}' needs {}", cmd_, what));
+    }
+    if (pos_.size() > max) {
+      fail(fmt::format("'{}' takes {}; unexpected '{}'", cmd_, max == 0 ? "no arguments" : what,
+                       shown(pos_[max])));
+    }
+  }
+  void no_options() const {
+    if (!opts_.empty())
+      fail(fmt::format("unknown option '{}' for {}", shown(opts_[0].first), cmd_));
+  }
+  [[noreturn]] void unknown_option(std::string_view key) const {
+    fail(fmt::format("unknown option '{}' for {}", shown(key), cmd_));
+  }
+
+  static std::uint64_t number(std::string_view s, std::string_view what, std::uint64_t min,
+                              std::uint64_t max) {
+    std::uint64_t v = 0;
+    if (!parse_u64(s, v)) fail(fmt::format("bad number '{}' for {}", shown(s), what));
+    if (v < min || v > max) {
+      fail(fmt::format("{} {} out of range ({}..{})", what, shown(s), min, max));
+    }
+    return v;
+  }
+  static bool flag(std::string_view s, std::string_view what) {
+    if (s == "0") return false;
+    if (s == "1") return true;
+    fail(fmt::format("bad value '{}' for {}: 0 or 1", shown(s), what));
+  }
+  // Hex bytes "13,23" ("0x13" also accepted); "-" is the empty list.
+  static std::vector<std::uint8_t> bytes(std::string_view s, std::string_view what,
+                                         std::size_t max = kMaxDu) {
+    std::vector<std::uint8_t> out;
+    if (s == "-") return out;
+    if (s.empty()) fail(fmt::format("empty byte list for {} (write '-' for none)", what));
+    for (std::string_view b : split(s, ',')) {
+      std::string_view d = b;
+      if (d.size() > 2 && d[0] == '0' && (d[1] == 'x' || d[1] == 'X')) d.remove_prefix(2);
+      unsigned v = 0;
+      const auto [p, ec] = std::from_chars(d.data(), d.data() + d.size(), v, 16);
+      if (d.empty() || d.size() > 2 || ec != std::errc() || p != d.data() + d.size()) {
+        fail(fmt::format("bad byte '{}' in {} (hex bytes separated by commas)", shown(b), what));
+      }
+      out.push_back(static_cast<std::uint8_t>(v));
+    }
+    if (out.size() > max) fail(fmt::format("{}: {} bytes, at most {}", what, out.size(), max));
+    return out;
+  }
+
+  std::uint32_t clock() const {
+    return s_.chip.clock_hz != 0 ? s_.chip.clock_hz : chip_timing().clock_hz;
+  }
+
+  // Cycles, or a time with a unit; rounded up like every minimum time (docs/timing.md).
+  std::uint64_t duration(std::string_view s) const {
+    std::uint64_t v = 0;
+    const std::uint64_t f = clock();
+    if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
+      v = number(s, "time", 0, kMaxSeconds * f);
+      return v;
+    }
+    std::size_t k = 0;
+    while (k < s.size() && s[k] >= '0' && s[k] <= '9') ++k;
+    const std::string_view unit = s.substr(k);
+    if (k == 0 || !parse_u64(s.substr(0, k), v)) {
+      fail(fmt::format("bad time '{}' (cycles, or a number with us, ms, s or bits)", shown(s)));
+    }
+    const auto check = [&](std::uint64_t max) {
+      if (v > max) fail(fmt::format("time '{}' too long (at most {} s)", shown(s), kMaxSeconds));
+    };
+    if (unit.empty() || unit == "cycles") {
+      check(kMaxSeconds * f);
+      return v;
+    }
+    if (unit == "us") {
+      check(kMaxSeconds * 1'000'000);
+      return (v * f + 999'999) / 1'000'000;
+    }
+    if (unit == "ms") {
+      check(kMaxSeconds * 1'000);
+      return (v * f + 999) / 1'000;
+    }
+    if (unit == "s") {
+      check(kMaxSeconds);
+      return v * f;
+    }
+    if (unit == "bits") {
+      const std::uint64_t t = bit_cycles(clock(), s_.master.baud);
+      check(kMaxSeconds * f / t);
+      return v * t;
+    }
+    fail(fmt::format("bad time unit '{}' in '{}' (us, ms, s, bits, or none for cycles)",
+                     shown(unit), shown(s)));
+  }
+
+  // Options of `slave` that also apply to `set_prm` (what Set_Prm carries).
+  bool prm_option(SlaveConfig& sl, std::string_view k, std::string_view v) const {
+    if (k == "ident") {
+      sl.ident = static_cast<std::uint16_t>(number(v, "ident", 0, 0xFFFF));
+    } else if (k == "wd") {
+      const std::vector<std::string_view> f = split(v, ',');
+      if (f.size() != 2) fail(fmt::format("wd='{}': two factors, as in wd=10,10", shown(v)));
+      sl.wd_fact1 = static_cast<std::uint8_t>(number(f[0], "wd factor 1", 1, 255));
+      sl.wd_fact2 = static_cast<std::uint8_t>(number(f[1], "wd factor 2", 1, 255));
+    } else if (k == "wd_on") {
+      sl.wd_on = flag(v, "wd_on");
+    } else if (k == "wd_base") {
+      if (v != "1ms" && v != "10ms") fail(fmt::format("wd_base '{}': 1ms or 10ms", shown(v)));
+      sl.wd_base_1ms = v == "1ms";
+    } else if (k == "group") {
+      sl.group_ident = static_cast<std::uint8_t>(number(v, "group", 0, 255));
+    } else if (k == "sync") {
+      sl.sync_req = flag(v, "sync");
+    } else if (k == "freeze") {
+      sl.freeze_req = flag(v, "freeze");
+    } else if (k == "min_tsdr") {
+      sl.min_tsdr = static_cast<std::uint8_t>(number(v, "min_tsdr", 0, 255));
+    } else if (k == "user_prm") {
+      sl.user_prm = bytes(v, "user_prm", kMaxDu - 7);
+    } else {
+      return false;
+    }
+    return true;
+  }
+
+  bool header() {
+    if (cmd_ == "profile") {
+      positional(1, 1, "one of spc3, vpc3plus, dpc31");
+      no_options();
+      if (!parse_profile(pos_[0], s_.chip.profile)) {
+        fail(fmt::format("unknown profile '{}' (spc3, vpc3plus, dpc31)", shown(pos_[0])));
+      }
+      if (s_.chip.variant && s_.chip.profile != Profile::vpc3plus) {
+        fail("a 'variant' was given: only profile vpc3plus has variants");
+      }
+    } else if (cmd_ == "variant") {
+      positional(1, 1, "one of b, c, s");
+      no_options();
+      Vpc3Variant v{};
+      if (!parse_vpc3_variant(pos_[0], v)) {
+        fail(fmt::format("unknown variant '{}' (b, c, s)", shown(pos_[0])));
+      }
+      if (s_.chip.profile != Profile::vpc3plus) {
+        fail("'variant' needs 'profile vpc3plus' before it: only the VPC3+ has variants");
+      }
+      s_.chip.variant = v;
+    } else if (cmd_ == "bus") {
+      positional(1, 1, "intel or motorola");
+      no_options();
+      if (pos_[0] != "intel" && pos_[0] != "motorola") {
+        fail(fmt::format("unknown bus '{}' (intel, motorola)", shown(pos_[0])));
+      }
+      s_.chip.bus = pos_[0] == "intel" ? BusMode::intel : BusMode::motorola;
+    } else if (cmd_ == "baud") {
+      positional(1, 1, "a baud rate");
+      no_options();
+      const std::uint64_t b = number(pos_[0], "baud", 1, 12'000'000);
+      if (baud_code(static_cast<std::uint32_t>(b)) < 0) {
+        fail(
+            fmt::format("baud {} is not a PROFIBUS rate (9600, 19200, 45450, 93750, 187500, "
+                        "500000, 1500000, 3000000, 6000000, 12000000)",
+                        b));
+      }
+      s_.master.baud = static_cast<std::uint32_t>(b);
+    } else if (cmd_ == "master") {
+      positional(0, 0, "options only");
+      for (const auto& [k, v] : opts_) {
+        if (k == "address") {
+          s_.master.address = static_cast<std::uint8_t>(number(v, "master address", 0, 126));
+        } else if (k == "slot") {
+          s_.master.slot_bits = static_cast<std::uint32_t>(number(v, "slot", 1, 65535));
+        } else if (k == "idle") {
+          s_.master.idle_bits = static_cast<std::uint32_t>(number(v, "idle", 1, 65535));
+        } else if (k == "retries") {
+          s_.retries = static_cast<std::uint32_t>(number(v, "retries", 0, 8));
+        } else {
+          unknown_option(k);
+        }
+      }
+    } else if (cmd_ == "firmware") {
+      positional(1, 1, "a firmware name");
+      no_options();
+      if (slave_seen_) fail("'firmware' comes before 'slave': it sets the slave's GSD defaults");
+      if (user_seen_) fail("'firmware' and 'user' exclude each other");
+      const std::string name(pos_[0]);
+      fw_ = dpc31_find_firmware(name.c_str());
+      if (fw_ == nullptr) {
+        std::string all;
+        for (int i = 0; dpc31_firmwares[i] != nullptr; ++i) {
+          all += (i == 0 ? "" : ", ") + std::string(dpc31_firmwares[i]->name);
+        }
+        fail(fmt::format("unknown firmware '{}' ({})", shown(pos_[0]), all));
+      }
+      s_.firmware = fw_->name;
+      SlaveConfig& sl = s_.user.slave;
+      sl.ident = fw_->ident;
+      sl.cfg.assign(fw_->cfg, fw_->cfg + fw_->cfg_len);
+      sl.in_len = fw_->in_len;
+      sl.out_len = fw_->out_len;
+      sl.user_prm.assign(fw_->user_prm, fw_->user_prm + fw_->user_prm_len);
+    } else if (cmd_ == "slave") {
+      positional(0, 0, "options only");
+      slave_seen_ = true;
+      SlaveConfig& sl = s_.user.slave;
+      for (const auto& [k, v] : opts_) {
+        if (prm_option(sl, k, v)) continue;
+        if (k == "address") {
+          sl.address = static_cast<std::uint8_t>(number(v, "slave address", 0, 125));
+        } else if (k == "cfg") {
+          sl.cfg = bytes(v, "cfg");
+          if (sl.cfg.empty()) fail("cfg: at least one byte");
+        } else if (k == "in") {
+          sl.in_len = static_cast<std::uint8_t>(number(v, "in", 0, kMaxDu));
+        } else if (k == "out") {
+          sl.out_len = static_cast<std::uint8_t>(number(v, "out", 0, kMaxDu));
+        } else {
+          unknown_option(k);
+        }
+      }
+    } else if (cmd_ == "user") {
+      positional(0, 0, "options only");
+      if (fw_ != nullptr)
+        fail("'user' configures the built-in user side; a firmware configures itself");
+      user_seen_ = true;
+      ResponderConfig& u = s_.user;
+      for (const auto& [k, v] : opts_) {
+        if (k == "inputs") {
+          s_.inputs = bytes(v, "inputs");
+        } else if (k == "sync_supported") {
+          u.sync_supported = flag(v, k);
+        } else if (k == "freeze_supported") {
+          u.freeze_supported = flag(v, k);
+        } else if (k == "spec_clear") {
+          u.spec_clear_mode = flag(v, k);
+        } else if (k == "user_wd") {
+          u.user_watchdog = flag(v, k);
+        } else if (k == "user_wd_value") {
+          u.user_wd_value = static_cast<std::uint16_t>(number(v, k, 0, 0xFFFF));
+        } else if (k == "wd_baud_control") {
+          u.wd_baud_control = static_cast<std::uint8_t>(number(v, k, 0, 255));
+        } else if (k == "substitute") {
+          u.substitute = bytes(v, k);
+        } else if (k == "dx_out_port") {
+          u.dx_out_port = flag(v, k);
+        } else {
+          unknown_option(k);
+        }
+      }
+    } else {
+      return false;
+    }
+    return true;
+  }
+
+  void simple(StepKind k) {
+    positional(0, 0, "no arguments");
+    no_options();
+    step_.kind = k;
+  }
+
+  void tries(std::uint64_t dflt) {
+    positional(0, 0, "options only");
+    step_.count = dflt;
+    for (const auto& [k, v] : opts_) {
+      if (k != "tries") unknown_option(k);
+      step_.count = number(v, "tries", 1, kMaxTries);
+    }
+  }
+
+  void body() {
+    if (cmd_ == "startup" || cmd_ == "restart") {
+      step_.kind = cmd_ == "startup" ? StepKind::startup : StepKind::restart;
+      tries(200);
+    } else if (cmd_ == "exchange") {
+      step_.kind = StepKind::exchange;
+      positional(0, 1, "one count");
+      if (!pos_.empty()) step_.count = number(pos_[0], "exchange count", 1, kMaxExchanges);
+      for (const auto& [k, v] : opts_) {
+        if (k != "outputs") unknown_option(k);
+        step_.bytes = bytes(v, "outputs");
+        step_.has_bytes = true;
+      }
+    } else if (cmd_ == "gc") {
+      step_.kind = StepKind::gc;
+      positional(1, 1, "a command (sync, unsync, freeze, unfreeze, clear, operate, or a number)");
+      step_.value = gc_command(pos_[0]);
+      for (const auto& [k, v] : opts_) {
+        if (k != "groups") unknown_option(k);
+        step_.value2 = static_cast<std::uint32_t>(number(v, "groups", 0, 255));
+      }
+    } else if (cmd_ == "diag") {
+      simple(StepKind::diag);
+    } else if (cmd_ == "fdl_status") {
+      simple(StepKind::fdl_status);
+    } else if (cmd_ == "get_cfg") {
+      simple(StepKind::get_cfg);
+    } else if (cmd_ == "read_inputs") {
+      simple(StepKind::read_inputs);
+    } else if (cmd_ == "read_outputs") {
+      simple(StepKind::read_outputs);
+    } else if (cmd_ == "set_prm") {
+      step_.kind = StepKind::set_prm;
+      positional(0, 0, "options only");
+      step_.slave = view_;
+      for (const auto& [k, v] : opts_) {
+        if (!prm_option(*step_.slave, k, v)) unknown_option(k);
+      }
+      view_ = step_.slave;
+    } else if (cmd_ == "chk_cfg") {
+      step_.kind = StepKind::chk_cfg;
+      positional(0, 0, "options only");
+      step_.slave = view_;
+      for (const auto& [k, v] : opts_) {
+        if (k != "cfg") unknown_option(k);
+        step_.slave->cfg = bytes(v, "cfg");
+        if (step_.slave->cfg.empty()) fail("cfg: at least one byte");
+      }
+      view_ = step_.slave;
+    } else if (cmd_ == "set_slave_address") {
+      step_.kind = StepKind::set_slave_address;
+      positional(1, 1, "the new address");
+      step_.value = static_cast<std::uint32_t>(number(pos_[0], "new address", 0, 126));
+      for (const auto& [k, v] : opts_) {
+        if (k != "no_change") unknown_option(k);
+        step_.value2 = flag(v, "no_change") ? 1 : 0;
+      }
+    } else if (cmd_ == "foreign_master") {
+      step_.kind = StepKind::foreign_master;
+      positional(0, 0, "address=N");
+      bool have = false;
+      for (const auto& [k, v] : opts_) {
+        if (k != "address") unknown_option(k);
+        step_.value = static_cast<std::uint32_t>(number(v, "foreign master address", 0, 126));
+        have = true;
+      }
+      if (!have) fail("foreign_master needs address=N");
+      if (step_.value == s_.master.address) {
+        fail(fmt::format("foreign_master address={} is our own master's address", step_.value));
+      }
+    } else if (cmd_ == "silence") {
+      step_.kind = StepKind::silence;
+      positional(1, 1, "one time (e.g. 200ms)");
+      no_options();
+      step_.cycles = duration(pos_[0]);
+    } else if (cmd_ == "hw") {
+      step_.kind = StepKind::hw;
+      positional(2, 2, "a hardware input and a value");
+      no_options();
+      if (fw_ == nullptr) fail("'hw' needs a firmware (header 'firmware NAME')");
+      if (name_index(fw_->hw_inputs, pos_[0]) < 0) {
+        fail(fmt::format("unknown hardware input '{}' of {} ({})", shown(pos_[0]), fw_->name,
+                         name_list(fw_->hw_inputs)));
+      }
+      step_.name = std::string(pos_[0]);
+      step_.value = static_cast<std::uint32_t>(number(pos_[1], "hw value", 0, 0xFFFF'FFFF));
+    } else if (cmd_ == "inputs") {
+      if (fw_ != nullptr) fail("'inputs' feeds the built-in user side; a firmware makes its own");
+      step_.kind = StepKind::inputs;
+      positional(1, 1, "a byte list");
+      no_options();
+      step_.bytes = bytes(pos_[0], "inputs");
+    } else if (cmd_ == "corrupt") {
+      step_.kind = StepKind::corrupt;
+      positional(1, 1, "parity, start or stop");
+      if (!parse_fault_kind(pos_[0], step_.fault.kind)) {
+        fail(fmt::format("unknown fault '{}' (parity, start, stop)", shown(pos_[0])));
+      }
+      step_.fault.char_index = -1;
+      for (const auto& [k, v] : opts_) {
+        if (k != "char") unknown_option(k);
+        step_.fault.char_index =
+            v == "last" ? -1 : static_cast<int>(number(v, "char", 0, fdl::kMaxFrameLength - 1));
+      }
+    } else if (cmd_ == "bad_fcs") {
+      simple(StepKind::bad_fcs);
+    } else if (cmd_ == "expect") {
+      step_.kind = StepKind::expect;
+      no_options();
+      expect();
+    } else {
+      fail(fmt::format("unknown command '{}'", shown(cmd_)));
+    }
+  }
+
+  std::uint32_t gc_command(std::string_view s) const {
+    if (!s.empty() && s[0] >= '0' && s[0] <= '9') {
+      return static_cast<std::uint32_t>(number(s, "gc command", 0, 255));
+    }
+    std::uint32_t c = 0;
+    for (std::string_view n : split(s, ',')) {
+      bool found = false;
+      for (const auto& [name, bits] : kGcNames) {
+        if (n == name) {
+          c |= bits;
+          found = true;
+        }
+      }
+      if (!found) {
+        fail(
+            fmt::format("unknown gc command '{}' (sync, unsync, freeze, unfreeze, clear, "
+                        "operate, or a number)",
+                        shown(n)));
+      }
+    }
+    return c;
+  }
+
+  void expect() {
+    if (pos_.empty()) fail("'expect' needs what to check and the expected value");
+    const std::string_view what = pos_[0];
+    auto args = [&](std::size_t n, std::string_view form) {
+      if (pos_.size() != n + 1) fail(fmt::format("expected 'expect {} {}'", what, form));
+    };
+    if (what == "dp_state") {
+      args(1, "Wait_Prm|Wait_Cfg|Data_Exchange");
+      step_.expect = ExpectKind::dp_state;
+      step_.value =
+          state_value(pos_[1], {dp_state_name(DpState::Wait_Prm), dp_state_name(DpState::Wait_Cfg),
+                                dp_state_name(DpState::Data_Exchange)});
+    } else if (what == "wd_state") {
+      args(1, "Baud_Search|Baud_Control|DP_Control");
+      step_.expect = ExpectKind::wd_state;
+      step_.value = state_value(
+          pos_[1], {wd_state_name(WdState::Baud_Search), wd_state_name(WdState::Baud_Control),
+                    wd_state_name(WdState::DP_Control)});
+    } else if (what == "port") {
+      args(2, "NAME VALUE");
+      if (fw_ == nullptr) fail("'expect port' needs a firmware (header 'firmware NAME')");
+      if (name_index(fw_->ports, pos_[1]) < 0) {
+        fail(fmt::format("unknown port '{}' of {} ({})", shown(pos_[1]), fw_->name,
+                         name_list(fw_->ports)));
+      }
+      step_.expect = ExpectKind::port;
+      step_.name = std::string(pos_[1]);
+      step_.value = static_cast<std::uint32_t>(number(pos_[2], "port value", 0, 0xFFFF'FFFF));
+    } else if (what == "outputs" || what == "inputs") {
+      args(1, "BYTES");
+      if (what == "outputs" && fw_ != nullptr) {
+        fail("'expect outputs' checks the built-in user side; with a firmware check its ports");
+      }
+      step_.expect = what == "outputs" ? ExpectKind::outputs : ExpectKind::inputs;
+      if (what == "outputs" && pos_[1] == "none") {
+        step_.value = 1;  // nothing fetched yet
+      } else {
+        step_.bytes = bytes(pos_[1], what);
+      }
+    } else if (what == "cleared") {
+      args(1, "0|1");
+      if (fw_ != nullptr) {
+        fail("'expect cleared' checks the built-in user side; with a firmware check its ports");
+      }
+      step_.expect = ExpectKind::cleared;
+      step_.value = flag(pos_[1], "cleared") ? 1 : 0;
+    } else if (what == "counter") {
+      args(2, "NAME N (or +N: increase during the last action)");
+      step_.expect = ExpectKind::counter;
+      step_.name = std::string(pos_[1]);
+      const auto fields = fdl_counter_fields();
+      if (std::none_of(fields.begin(), fields.end(),
+                       [&](const CounterField& f) { return f.name == pos_[1]; })) {
+        fail(
+            fmt::format("unknown counter '{}' (the FdlCounters fields: parity, stop_bit, bad_fcs, "
+                        "not_allowed, requests, ...)",
+                        shown(pos_[1])));
+      }
+      std::string_view n = pos_[2];
+      if (!n.empty() && n[0] == '+') {
+        step_.value2 = 1;
+        n.remove_prefix(1);
+      }
+      step_.value = static_cast<std::uint32_t>(number(n, "counter value", 0, 0xFFFF'FFFF));
+    } else if (what == "irr_bit") {
+      args(2, "NAME 0|1");
+      step_.expect = ExpectKind::irr_bit;
+      step_.name = std::string(pos_[1]);
+      step_.value2 = irq_bit(pos_[1]);
+      step_.value = flag(pos_[2], "irr_bit") ? 1 : 0;
+    } else if (what == "answer") {
+      args(1, "none|sc|data|ok|ue|rr|rs|dl|nr|dh");
+      step_.expect = ExpectKind::answer;
+      if (std::find(std::begin(kAnswerKinds), std::end(kAnswerKinds), pos_[1]) ==
+          std::end(kAnswerKinds)) {
+        fail(fmt::format("unknown answer kind '{}' (none, sc, data, ok, ue, rr, rs, dl, nr, dh)",
+                         shown(pos_[1])));
+      }
+      step_.name = std::string(pos_[1]);
+    } else if (what == "station") {
+      args(1, "N");
+      step_.expect = ExpectKind::station;
+      step_.value = static_cast<std::uint32_t>(number(pos_[1], "station", 0, 127));
+    } else if (what == "diag_byte") {
+      args(2, "K VALUE");
+      step_.expect = ExpectKind::diag_byte;
+      step_.value2 = static_cast<std::uint32_t>(number(pos_[1], "diag byte index", 0, kMaxDu - 1));
+      step_.value = static_cast<std::uint32_t>(number(pos_[2], "diag byte value", 0, 255));
+    } else if (what == "pb3") {
+      args(1, "0|1");
+      step_.expect = ExpectKind::pb3;
+      step_.value = flag(pos_[1], "pb3") ? 1 : 0;
+    } else if (what == "baud") {
+      args(1, "N");
+      step_.expect = ExpectKind::baud;
+      step_.value = static_cast<std::uint32_t>(number(pos_[1], "baud", 1, 12'000'000));
+    } else {
+      fail(
+          fmt::format("unknown check '{}' (dp_state, wd_state, outputs, cleared, inputs, counter, "
+                      "irr_bit, answer, station, diag_byte, baud, port, pb3)",
+                      shown(what)));
+    }
+  }
+
+  static std::uint32_t state_value(std::string_view s, std::initializer_list<std::string_view> n) {
+    std::uint32_t i = 0;
+    for (std::string_view name : n) {
+      if (s == name) return i;
+      ++i;
+    }
+    std::string all;
+    for (std::string_view name : n) all += (all.empty() ? "" : ", ") + std::string(name);
+    fail(fmt::format("unknown state '{}' ({})", shown(s), all));
+  }
+
+  // Interrupt names are the Int_Req_Reg fields of the chosen profile.
+  std::uint32_t irq_bit(std::string_view name) const {
+    const RegDesc* r = find_reg(profile_desc(s_.chip.profile), RegId::Int_Req_Reg);
+    for (const FieldDesc& f : r->fields) {
+      if (f.name == name && f.width == 1 && f.access != Access::RSVD) return f.lsb;
+    }
+    fail(
+        fmt::format("'{}' is not an interrupt of {} (Int_Req_Reg: DX_Out, New_Prm_Data, "
+                    "WD_DP_Control_Timeout, ...)",
+                    shown(name), profile_desc(s_.chip.profile).name));
+  }
+
+  Scenario& s_;
+  ScenarioStep step_;
+  std::optional<SlaveConfig> view_;  // the master's view of the slave after the steps so far
+  bool headers_ = false;
+  const dpc31_firmware* fw_ = nullptr;
+  bool slave_seen_ = false;
+  bool user_seen_ = false;
+  bool body_ = false;  // an action or expect has been seen: no more headers
+  std::vector<std::string_view> words_;
+  std::string_view cmd_;
+  std::vector<std::string_view> pos_;
+  std::vector<std::pair<std::string_view, std::string_view>> opts_;
+};
+
+}  // namespace
+
+bool parse_scenario(std::string_view text, const std::string& file, Scenario& out,
+                    ScenarioError& err) {
+  Scenario s;
+  s.file = file;
+  Parser p(s);
+  int no = 0;
+  if (text.starts_with("\xEF\xBB\xBF")) text.remove_prefix(3);  // a UTF-8 BOM from an editor
+  try {
+    for (std::string_view line : split(text, '\n')) p.line(++no, line);
+    p.finish();
+  } catch (const ParseFail& f) {
+    err = ScenarioError{file, f.line == 0 ? no : std::max(f.line, 0), f.message};
+    return false;
+  }
+  out = std::move(s);
+  return true;
+}
+
+bool load_scenario(const std::string& path, Scenario& out, ScenarioError& err) {
+  err = ScenarioError{path, 0, {}};
+  std::string text;
+  if (!read_text_file(path, kMaxFileBytes, "scenario", text, err.message)) return false;
+  if ((err.line = cut_off_line(text, err.message)) != 0) return false;
+  return parse_scenario(text, path, out, err);
+}
+
+}  // namespace dpc31

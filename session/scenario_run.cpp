@@ -1,0 +1,738 @@
+// Scenarios: the runner, which plays a parsed Scenario on one chip and prints the state walk
+// (docs/scenario-format.md). The parser is scenario_parse.cpp.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <map>
+#include <memory>
+#include <optional>
+#include <utility>
+
+#include "../emu/core.hpp"  // the watchdog deadline, so `silence` stops at each state change
+#include "../emu/dp_sm.hpp"
+#include "../emu/fdl.hpp"
+#include "../emu/hex.hpp"
+#include "firmware_host.hpp"
+#include "scenario.hpp"
+#include "vocabulary.hpp"
+
+namespace dpc31 {
+
+namespace {
+
+std::string bytes_text(std::span<const std::uint8_t> b) {
+  return b.empty() ? "-" : hex_bytes(b, " ", 244);
+}
+
+std::string answer_text(const std::optional<fdl::Frame>& a) {
+  if (!a) return "no answer";
+  if (a->sd == fdl::SC) return "SC";
+  std::string s(response_name(fdl::response_code(a->fc)));
+  if (!a->du.empty()) s += " " + hex_bytes(a->du, " ", 32);
+  return s;
+}
+
+// The kinds of `expect answer`, lower case.
+std::string answer_kind(const std::optional<fdl::Frame>& a) {
+  if (!a) return "none";
+  if (a->sd == fdl::SC) return "sc";
+  std::string s(response_name(fdl::response_code(a->fc)));
+  std::transform(s.begin(), s.end(), s.begin(), [](char c) { return static_cast<char>(c | 0x20); });
+  if (!a->du.empty()) s += fmt::format(" with {} data bytes", a->du.size());
+  return s;
+}
+
+bool answer_is(const std::optional<fdl::Frame>& a, std::string_view kind) {
+  if (kind == "none" || !a) return kind == "none" && !a;
+  if (kind == "sc" || a->sd == fdl::SC) return kind == "sc" && a->sd == fdl::SC;
+  if (kind == "data") return !a->du.empty();
+  return answer_kind(a).starts_with(kind) &&
+         (answer_kind(a).size() == kind.size() || answer_kind(a)[kind.size()] == ' ');
+}
+
+class Runner {
+ public:
+  Runner(const Scenario& s, const LineSink& walk, const LineSink& errors,
+         const ScenarioHooks& hooks = {})
+      : s_(s), walk_(walk), errors_(errors), hooks_(hooks), chip_(s.chip), user_(s.user) {}
+  Runner(const Runner&) = delete;
+  Runner& operator=(const Runner&) = delete;
+
+  ScenarioOutcome run() {
+    if (walk_) {
+      walk_(fmt::format("scenario {}: profile {}{}, bus {}, master {} -> slave {} at {} baud",
+                        s_.file, profile_name(s_.chip.profile),
+                        s_.chip.variant
+                            ? fmt::format(", variant {}", vpc3_variant_name(*s_.chip.variant))
+                            : std::string(),
+                        s_.chip.bus == BusMode::intel ? "intel" : "motorola", s_.master.address,
+                        s_.user.slave.address, s_.master.baud));
+    }
+    chip_.set_log_sink([this](const LogRecord& r) {
+      if (r.level >= LogLevel::info) note(r.cycle, "chip: " + r.text);
+    });
+    if (hooks_.observer != nullptr) hooks_.observer->run_begins(chip_);
+    if (hooks_.at_start) hooks_.at_start(chip_);
+    user_.inputs = s_.inputs;
+    DirectBus bus(chip_);
+    if (!s_.firmware.empty()) {
+      fw_ = std::make_unique<FirmwareHost>(*dpc31_find_firmware(s_.firmware.c_str()));
+      fw_->on_port = [this](std::uint64_t cycle, unsigned port, std::uint32_t value) {
+        note(cycle, fmt::format("{}: {} = {} at {}", fw_->firmware().name, fw_->port_name(port),
+                                port_text(value), time_text(cycle)));
+      };
+      fw_->init(bus, s_.user.slave.address);
+    } else {
+      user_.init(bus);
+    }
+    master_ = std::make_unique<DpMaster>(chip_, s_.master, s_.user.slave);
+    if (hooks_.observer != nullptr) {
+      master_->on_send = [this](std::uint64_t start, std::span<const std::uint8_t> bytes,
+                                UartFault fault) {
+        hooks_.observer->telegram_sent(start, bytes, fault);
+      };
+    }
+    // State changes are looked for wherever they can happen: after the firmware's ISR (its
+    // Prm/Cfg verdicts), at every telegram, at every X/INT edge, after every transaction.
+    master_->set_firmware([this](BusPort& b) {
+      if (fw_) {
+        fw_->isr(b);
+      } else {
+        user_.isr(b);
+      }
+      check_states();
+    });
+    chip_.on_telegram([this](const Telegram&) { check_states(); });
+    chip_.on_irq_change([this](std::uint64_t, bool) { check_states(); });
+    chip_.on_pb3_change([this](std::uint64_t cycle, bool high) {
+      pb3_rises_ += high ? 1 : 0;
+      note(cycle, fmt::format("PB3 {}", high ? "high (DX_Out of a Sync)" : "low"));
+    });
+    dp_ = chip_.dp_state();
+    wd_ = chip_.wd_state();
+    outputs_.assign(s_.user.slave.out_len, 0);
+    note(chip_.cycle(),
+         fmt::format("started: dp_state {}, wd_state {}", dp_state_name(dp_), wd_state_name(wd_)),
+         Event::Kind::started);
+    flush();
+    for (const ScenarioStep& st : s_.steps) {
+      if (st.kind == StepKind::expect) {
+        check(st);
+        continue;
+      }
+      // A fault and the action it damages count as one action for "+N" and irr_bit.
+      const bool modifier = st.kind == StepKind::corrupt || st.kind == StepKind::bad_fcs;
+      if (modifier || (is_action(st.kind) && !fault_ && !bad_fcs_)) {
+        base_counters_ = chip_.fdl_counters();
+        base_irq_ = interrupts().size();
+        base_pb3_ = pb3_rises_;
+      }
+      note(chip_.cycle(), fmt::format("line {}: {}", st.line, st.text), Event::Kind::step, &st);
+      // Requests counted, not history().size(): a long exchange step forgets history as it goes.
+      const std::uint64_t sent = master_->counters().requests;
+      act(st);
+      if (master_->counters().requests != sent) settle();
+      check_states();
+      report_history();
+      report_outputs();
+      flush();
+      forget_reported();
+    }
+    if (hooks_.observer != nullptr) hooks_.observer->run_ends(chip_);
+    if (hooks_.at_end) hooks_.at_end(chip_);
+    out_.final_cycle = chip_.cycle();
+    out_.dp = chip_.dp_state();
+    out_.wd = chip_.wd_state();
+    out_.counters = chip_.fdl_counters();
+    if (fw_) {
+      for (const FirmwareHost::PortWrite& w : fw_->port_writes()) {
+        out_.port_writes.push_back({w.cycle, fw_->port_name(w.port), w.value});
+      }
+    }
+    note(chip_.cycle(),
+         fmt::format("end: dp_state {}, wd_state {}; expects passed {}, failed {}",
+                     dp_state_name(out_.dp), wd_state_name(out_.wd), out_.passed, out_.failed),
+         Event::Kind::end);
+    flush();
+    chip_.set_log_sink({});
+    chip_.on_telegram({});
+    chip_.on_irq_change({});
+    chip_.on_pb3_change({});
+    return out_;
+  }
+
+ private:
+  struct Event {
+    enum class Kind : std::uint8_t { note, started, step, passed, failed, end };
+    std::uint64_t cycle;
+    std::string text;
+    Kind kind = Kind::note;
+    const ScenarioStep* step = nullptr;  // step / passed / failed
+  };
+
+  void note(std::uint64_t cycle, std::string text, Event::Kind kind = Event::Kind::note,
+            const ScenarioStep* step = nullptr) {
+    // --quiet without an observer: nobody reads them.
+    if (walk_ || hooks_.observer != nullptr) {
+      events_.push_back(Event{cycle, std::move(text), kind, step});
+    }
+  }
+
+  void tell(ScenarioObserver& o, const Event& e) {
+    switch (e.kind) {
+      case Event::Kind::note:
+        o.walk_note(e.cycle, e.text);
+        break;
+      case Event::Kind::started:
+        o.user_side_started(e.cycle, e.text);
+        break;
+      case Event::Kind::step:
+        o.step_begins(e.cycle, *e.step, e.text);
+        break;
+      case Event::Kind::passed:
+      case Event::Kind::failed:
+        o.expect_checked(e.cycle, *e.step, e.kind == Event::Kind::passed, e.text);
+        break;
+      case Event::Kind::end:
+        break;
+    }
+  }
+
+  // Events are collected during an action and printed in cycle order: a transaction's line is
+  // only known once its answer is in, after the state changes it caused.
+  void flush() {
+    std::stable_sort(events_.begin(), events_.end(),
+                     [](const Event& a, const Event& b) { return a.cycle < b.cycle; });
+    for (const Event& e : events_) {
+      if (walk_) walk_(fmt::format("[cycle {:>10}] {}", e.cycle, e.text));
+      if (hooks_.observer != nullptr) tell(*hooks_.observer, e);
+    }
+    events_.clear();
+  }
+
+  void fail(int line, const std::string& msg) {
+    const std::string text = fmt::format("{}:{}: {}", s_.file, line, msg);
+    out_.failures.push_back(text);
+    if (errors_) errors_(text);
+  }
+
+  std::uint32_t chip_baud() const {
+    const unsigned code = (chip_.peek_reg(RegId::Status_Reg) >> 8) & 0xF;
+    return code < std::size(kBaudRates) ? kBaudRates[code] : 0;
+  }
+
+  void check_states() {
+    const DpState dp = chip_.dp_state();
+    const WdState wd = chip_.wd_state();
+    if (dp != dp_) {
+      note(chip_.cycle(), fmt::format("dp_state {} -> {}", dp_state_name(dp_), dp_state_name(dp)));
+      dp_ = dp;
+    }
+    if (wd != wd_) {
+      std::string found;
+      if (wd_ == WdState::Baud_Search) found = fmt::format(" ({} baud)", chip_baud());
+      note(chip_.cycle(),
+           fmt::format("wd_state {} -> {}{}", wd_state_name(wd_), wd_state_name(wd), found));
+      wd_ = wd;
+    }
+  }
+
+  // --- requests ---
+
+  fdl::Frame predict(const ScenarioStep& st, const std::vector<std::uint8_t>& outputs) const {
+    const std::uint8_t a = s_.master.address;
+    const std::uint8_t t = master_->target();
+    const auto srd = [&](std::optional<std::uint8_t> dsap, std::vector<std::uint8_t> du) {
+      const std::optional<std::uint8_t> ssap =
+          dsap ? std::optional<std::uint8_t>(sap::Master) : std::nullopt;
+      return fdl::make_frame(t, a, fdl::make_request_fc(fdl::Function::SRD_high, !fcb_, fcv_),
+                             std::move(du), dsap, ssap);
+    };
+    const SlaveConfig& sl = master_->slave();
+    switch (st.kind) {
+      case StepKind::exchange:
+        return srd(std::nullopt, outputs);
+      case StepKind::gc:
+        return fdl::make_frame(
+            fdl::kBroadcast, a, fdl::make_request_fc(fdl::Function::SDN_high, false, false),
+            {static_cast<std::uint8_t>(st.value), static_cast<std::uint8_t>(st.value2)},
+            sap::Global_Control, sap::Master);
+      case StepKind::diag:
+        return srd(sap::Slave_Diag, {});
+      case StepKind::get_cfg:
+        return srd(sap::Get_Cfg, {});
+      case StepKind::read_inputs:
+        return srd(sap::Rd_Inp, {});
+      case StepKind::read_outputs:
+        return srd(sap::Rd_Outp, {});
+      case StepKind::set_prm:
+        return srd(sap::Set_Prm, prm_du(sl, prm_station_status(sl)));
+      case StepKind::chk_cfg:
+        return srd(sap::Chk_Cfg, sl.cfg);
+      case StepKind::set_slave_address:
+        return srd(sap::Set_Slave_Add,
+                   {static_cast<std::uint8_t>(st.value), static_cast<std::uint8_t>(sl.ident >> 8),
+                    static_cast<std::uint8_t>(sl.ident), static_cast<std::uint8_t>(st.value2)});
+      default:
+        return fdl::make_frame(t, a, fdl::make_request_fc(fdl::Function::FDL_Status, false, false));
+    }
+  }
+
+  // Sends the damaged copy of the action's first request, if a fault is pending. The chip
+  // discards it, so the master gets no answer and repeats the request: the action proper.
+  // Global_Control expects no answer: the damaged telegram is all there is (false).
+  bool damage(const ScenarioStep& st, const std::vector<std::uint8_t>& outputs = {}) {
+    if (!fault_ && !bad_fcs_) return true;
+    const fdl::Frame f = predict(st, outputs);
+    std::vector<std::uint8_t> bytes = fdl::encode(f);
+    const std::size_t index = master_->history().size();
+    if (bad_fcs_) {
+      bad_fcs_ = false;
+      bytes[bytes.size() - 2] = static_cast<std::uint8_t>(bytes[bytes.size() - 2] + 1);
+      master_->transact_raw(bytes);
+      notes_[index] = "bad FCS";
+    } else {
+      UartFault fl = *fault_;
+      fault_.reset();
+      if (fl.char_index < 0) fl.char_index = static_cast<int>(bytes.size()) - 1;
+      if (static_cast<std::size_t>(fl.char_index) >= bytes.size()) {
+        fail(fault_line_, fmt::format("corrupt char={}: the request has only {} characters, sent "
+                                      "undamaged",
+                                      fl.char_index, bytes.size()));
+        return true;
+      }
+      master_->transact(f, fl);
+      notes_[index] = fmt::format("{} in char {}", fault_name(fl.kind), fl.char_index);
+    }
+    sent_[index] = f;
+    if (st.kind == StepKind::gc) return false;
+    repeat_ = std::make_pair(index + 1, f);
+    repeat_line_ = fault_line_;
+    return true;
+  }
+
+  // A request without an answer is sent again, unchanged (same FCB), up to `retries` times.
+  Exchange with_retries(Exchange ex) { return master_->retry(std::move(ex), s_.retries); }
+
+  void foreign_master(std::uint8_t a) {
+    const std::uint8_t t = master_->target();
+    const Exchange fs = with_retries(master_->transact(
+        fdl::make_frame(t, a, fdl::make_request_fc(fdl::Function::FDL_Status, false, false))));
+    if (!fs.answer) return;
+    // Its first SRD after FDL_Status: FCB = 1, FCV = 1; Lock_Req as any class-1 master sends.
+    with_retries(master_->transact(
+        fdl::make_frame(t, a, fdl::make_request_fc(fdl::Function::SRD_high, true, true),
+                        prm_du(master_->slave(), prm_station_status(master_->slave())),
+                        sap::Set_Prm, sap::Master)));
+  }
+
+  // Runs on to the earliest start of the master's next request (TSYN after the last telegram,
+  // as DpMaster times it), so the firmware has answered what the action raised and checks see
+  // a settled slave. The master's timing is unchanged: it could not have sent earlier.
+  void settle() {
+    const Exchange& ex = master_->history().back();
+    std::uint64_t free = chip_.cycle();
+    if (ex.answer_end != 0) {
+      free = ex.answer_end;
+    } else if (!wants_answer(request_of(master_->history().size() - 1))) {
+      free = ex.request_end;
+    }
+    const std::uint64_t next = free + std::uint64_t{s_.master.idle_bits} * master_->bit_cycles();
+    if (next > chip_.cycle()) master_->idle(next - chip_.cycle());
+  }
+
+  void silence(std::uint64_t cycles) {
+    // Stop at each watchdog deadline so a state change without an interrupt (Baud_Control ->
+    // Baud_Search) is reported at its own cycle.
+    const std::uint64_t end = chip_.cycle() + cycles;
+    while (chip_.cycle() < end) {
+      std::uint64_t next = std::min(end, chip_.core().watchdog_due());
+      if (next <= chip_.cycle()) next = end;
+      master_->idle(next - chip_.cycle());
+      check_states();
+    }
+  }
+
+  void act(const ScenarioStep& st) {
+    switch (st.kind) {
+      case StepKind::startup: {
+        damage(st);
+        const bool ok = master_->startup(static_cast<int>(st.count));
+        note(chip_.cycle(), ok ? std::string("startup: slave ready for Data_Exchange")
+                               : fmt::format("startup: slave not ready after {} tries", st.count));
+        break;
+      }
+      case StepKind::restart: {
+        damage(st);
+        const bool ok = master_->restart(st.count, s_.retries);
+        note(chip_.cycle(), ok ? std::string("restart: slave ready for Data_Exchange")
+                               : fmt::format("restart: slave not ready after {} tries", st.count));
+        break;
+      }
+      case StepKind::exchange: {
+        if (st.has_bytes) outputs_ = st.bytes;
+        damage(st, outputs_);
+        for (std::uint64_t i = 0; i < st.count; ++i) {
+          with_retries(master_->data_exchange(outputs_));
+          report_history();  // as it goes: `exchange 1000000` keeps memory flat
+          forget_reported();
+        }
+        break;
+      }
+      case StepKind::gc:
+        if (damage(st)) {
+          master_->global_control(static_cast<std::uint8_t>(st.value),
+                                  static_cast<std::uint8_t>(st.value2));
+        }
+        break;
+      case StepKind::diag:
+        damage(st);
+        with_retries(master_->slave_diag());
+        break;
+      case StepKind::fdl_status:
+        damage(st);
+        with_retries(master_->fdl_status());
+        break;
+      case StepKind::get_cfg:
+        damage(st);
+        with_retries(master_->get_cfg());
+        break;
+      case StepKind::read_inputs:
+        damage(st);
+        with_retries(master_->read_inputs());
+        break;
+      case StepKind::read_outputs:
+        damage(st);
+        with_retries(master_->read_outputs());
+        break;
+      case StepKind::set_prm:
+        master_->slave() = *st.slave;
+        damage(st);
+        with_retries(master_->set_prm());
+        break;
+      case StepKind::chk_cfg:
+        master_->slave() = *st.slave;
+        damage(st);
+        with_retries(master_->chk_cfg());
+        break;
+      case StepKind::set_slave_address: {
+        damage(st);
+        const Exchange ex = with_retries(
+            master_->set_slave_address(static_cast<std::uint8_t>(st.value), st.value2 != 0));
+        if (ex.answer && ex.answer->sd == fdl::SC) {
+          master_->set_target(static_cast<std::uint8_t>(st.value));
+          note(chip_.cycle(), fmt::format("master: slave now addressed as {}", st.value));
+        }
+        break;
+      }
+      case StepKind::foreign_master:
+        foreign_master(static_cast<std::uint8_t>(st.value));
+        break;
+      case StepKind::silence:
+        silence(st.cycles);
+        break;
+      case StepKind::inputs:
+        user_.inputs = st.bytes;
+        break;
+      case StepKind::hw:
+        if (const std::string err = fw_->hw_input(st.name, st.value); !err.empty()) {
+          fail(st.line, err);
+        }
+        break;
+      case StepKind::corrupt:
+        fault_ = st.fault;
+        fault_line_ = st.line;
+        break;
+      case StepKind::bad_fcs:
+        bad_fcs_ = true;
+        fault_line_ = st.line;
+        break;
+      case StepKind::expect:
+        break;
+    }
+  }
+
+  // --- the walk ---
+
+  const fdl::Frame& request_of(std::size_t i) const {
+    const auto it = sent_.find(i);
+    return it != sent_.end() ? it->second : master_->history()[i].request;
+  }
+
+  std::string describe(std::size_t i) const {
+    const fdl::Frame& req = request_of(i);
+    std::string s = fmt::format("{} -> {} {}", req.sa, req.da, service_name(req));
+    if (!req.du.empty()) s += " " + hex_bytes(req.du, " ", 32);
+    const auto it = notes_.find(i);
+    if (it != notes_.end()) s += " [" + it->second + "]";
+    if (wants_answer(req)) s += " => " + answer_text(master_->history()[i].answer);
+    return s;
+  }
+
+  // What the expects need from each transaction, and the master's FCB for predict().
+  void track(std::size_t i) {
+    const Exchange& ex = master_->history()[i];
+    const fdl::Frame& req = request_of(i);
+    if (repeat_ && repeat_->first == i) {
+      if (!(req == repeat_->second)) {
+        fail(repeat_line_, "internal: the master's repeat differs from the damaged request");
+      }
+      repeat_.reset();
+    }
+    if (req.sa != s_.master.address || notes_.count(i) != 0) return;
+    const fdl::Function fn = fdl::request_function(req.fc);
+    if (fn == fdl::Function::SRD_high && req.da != fdl::kBroadcast) {
+      fcb_ = fdl::fcb(req.fc);
+      fcv_ = fdl::fcv(req.fc);
+    } else if (fn == fdl::Function::FDL_Status && ex.answer) {
+      fcb_ = false;  // DpMaster: the first SRD after FDL_Status has FCB = 1, FCV = 1
+      fcv_ = true;
+    }
+    if (!ex.answer) return;
+    const fdl::Frame& a = *ex.answer;
+    const bool data = a.sd != fdl::SC && (fdl::response_code(a.fc) == fdl::Response::DL ||
+                                          fdl::response_code(a.fc) == fdl::Response::DH);
+    const bool dx = !req.dsap && fn == fdl::Function::SRD_high;
+    if ((dx && (data || a.sd == fdl::SC)) ||
+        (req.dsap && fdl::sap_number(*req.dsap) == sap::Rd_Inp && data)) {
+      last_inputs_ = a.sd == fdl::SC ? std::vector<std::uint8_t>{} : a.du;
+    }
+    if (req.dsap && fdl::sap_number(*req.dsap) == sap::Slave_Diag && data) last_diag_ = a.du;
+  }
+
+  void report_history() {
+    const std::vector<Exchange>& h = master_->history();
+    while (reported_ < h.size()) {
+      const std::size_t i = reported_;
+      track(i);
+      // A run of the same unanswered request (baud search, retries) is one line.
+      std::size_t j = i;
+      while (j + 1 < h.size() && !h[i].answer && !h[j + 1].answer && notes_.count(i) == 0 &&
+             notes_.count(j + 1) == 0 && request_of(j + 1) == request_of(i)) {
+        track(++j);
+      }
+      std::string line = describe(i);
+      if (j > i) line += fmt::format(" (x{}, last at cycle {})", j - i + 1, h[j].request_start);
+      note(h[i].request_start, std::move(line));
+      reported_ = j + 1;
+    }
+  }
+
+  // Once a step is reported, the master's history is not needed but for its last exchange (the
+  // `answer` expect reads it; a damaged request's note may name it): memory stays flat over a
+  // long run. Not while a repeat of a damaged request is still to come (it names a later index).
+  void forget_reported() {
+    const std::size_t n = master_->history().size();
+    if (n < 2 || reported_ != n || repeat_) return;
+    const auto keep_last = [n](auto& by_index) {
+      const auto it = by_index.find(n - 1);
+      if (it == by_index.end()) {
+        by_index.clear();
+        return;
+      }
+      auto v = std::move(it->second);
+      by_index.clear();
+      by_index.emplace(0, std::move(v));
+    };
+    keep_last(notes_);
+    keep_last(sent_);
+    master_->keep_last_exchange();
+    reported_ = 1;
+  }
+
+  void report_outputs() {
+    for (; outputs_seen_ < user_.outputs.size(); ++outputs_seen_) {
+      const Responder::Output& o = user_.outputs[outputs_seen_];
+      if (shown_output_ && shown_output_->first == o.data && shown_output_->second == o.cleared) {
+        continue;  // only changes: every Data_Exchange hands over outputs
+      }
+      note(o.cycle,
+           fmt::format("user: outputs {}{}", bytes_text(o.data), o.cleared ? " (cleared)" : ""));
+      shown_output_ = std::make_pair(o.data, o.cleared);
+    }
+  }
+
+  const std::vector<std::pair<std::uint64_t, std::uint16_t>>& interrupts() const {
+    return fw_ ? fw_->interrupts : user_.interrupts;
+  }
+
+  // Port values in hex and, for the bit patterns of digital outputs, binary.
+  static std::string port_text(std::uint32_t v) {
+    return v <= 0xF ? fmt::format("0x{:X} ({:04b})", v, v) : fmt::format("0x{:X}", v);
+  }
+
+  std::string time_text(std::uint64_t cycle) const {
+    return fmt::format("{:.3f} us", static_cast<double>(cycle) * 1e6 / chip_.clock_hz());
+  }
+
+  // --- checks ---
+
+  void check(const ScenarioStep& st) {
+    std::string what;
+    std::string want;
+    std::string got;
+    const std::vector<Responder::Output>& outs = user_.outputs;
+    switch (st.expect) {
+      case ExpectKind::dp_state:
+        what = "dp_state";
+        want = dp_state_name(static_cast<DpState>(st.value));
+        got = dp_state_name(chip_.dp_state());
+        break;
+      case ExpectKind::wd_state:
+        what = "wd_state";
+        want = wd_state_name(static_cast<WdState>(st.value));
+        got = wd_state_name(chip_.wd_state());
+        break;
+      case ExpectKind::outputs:
+        what = "outputs";
+        want = st.value != 0 ? "none" : bytes_text(st.bytes);
+        got = outs.empty() ? "none" : bytes_text(outs.back().data);
+        break;
+      case ExpectKind::cleared:
+        what = "cleared";
+        want = std::to_string(st.value);
+        got = outs.empty() ? "no outputs fetched" : outs.back().cleared ? "1" : "0";
+        break;
+      case ExpectKind::inputs:
+        what = "inputs";
+        want = bytes_text(st.bytes);
+        got = last_inputs_ ? bytes_text(*last_inputs_) : "no inputs received";
+        break;
+      case ExpectKind::counter: {
+        what = "counter " + st.name;
+        const auto fields = fdl_counter_fields();
+        const auto f = std::find_if(fields.begin(), fields.end(),
+                                    [&](const CounterField& c) { return c.name == st.name; });
+        const std::uint32_t now = chip_.fdl_counters().*(f->member);
+        if (st.value2 != 0) {
+          want = fmt::format("+{}", st.value);
+          got = fmt::format("+{}", now - base_counters_.*(f->member));
+          if (got != want) got += fmt::format(" (now {})", now);
+        } else {
+          want = std::to_string(st.value);
+          got = std::to_string(now);
+        }
+        break;
+      }
+      case ExpectKind::irr_bit: {
+        what = "irr_bit " + st.name;
+        // The firmware acknowledges what it handles, so the register alone rarely shows an
+        // event: what its ISR saw during the last action counts as well.
+        std::uint16_t seen = chip_.peek_reg(RegId::Int_Req_Reg);
+        for (std::size_t i = base_irq_; i < interrupts().size(); ++i) {
+          seen |= interrupts()[i].second;
+        }
+        want = std::to_string(st.value);
+        got = ((seen >> st.value2) & 1) != 0 ? "1" : "0";
+        break;
+      }
+      case ExpectKind::answer: {
+        what = "answer";
+        const std::optional<fdl::Frame> last =
+            master_->history().empty() ? std::nullopt : master_->history().back().answer;
+        want = st.name;
+        got = answer_is(last, st.name) ? st.name : answer_kind(last);
+        break;
+      }
+      case ExpectKind::station:
+        what = "station";
+        want = std::to_string(st.value);
+        got = std::to_string(chip_.station_address());
+        break;
+      case ExpectKind::diag_byte:
+        what = fmt::format("diag_byte {}", st.value2);
+        want = fmt::format("0x{:02X}", st.value);
+        got = !last_diag_                       ? std::string("no diagnosis received")
+              : st.value2 >= last_diag_->size() ? fmt::format("{} bytes", last_diag_->size())
+                                                : fmt::format("0x{:02X}", (*last_diag_)[st.value2]);
+        break;
+      case ExpectKind::baud:
+        what = "baud";
+        want = std::to_string(st.value);
+        got = std::to_string(chip_baud());
+        break;
+      case ExpectKind::pb3:
+        // DX_Out is acknowledged by the ISR at once, so a rise during the last action counts.
+        what = "pb3";
+        want = std::to_string(st.value);
+        got = chip_.pb3_pin() || pb3_rises_ > base_pb3_ ? "1" : "0";
+        break;
+      case ExpectKind::port:
+        what = "port " + st.name;
+        want = port_text(st.value);
+        got = port_text(static_cast<std::uint32_t>(fw_->port(st.name)));
+        break;
+    }
+    if (got == want) {
+      ++out_.passed;
+      note(chip_.cycle(), fmt::format("line {}: {}: ok", st.line, st.text), Event::Kind::passed,
+           &st);
+    } else {
+      ++out_.failed;
+      note(chip_.cycle(), fmt::format("line {}: {}: FAILED, got {}", st.line, st.text, got),
+           Event::Kind::failed, &st);
+      fail(st.line, fmt::format("expected {} {}, got {}", what, want, got));
+    }
+    flush();
+  }
+
+  const Scenario& s_;
+  const LineSink& walk_;
+  const LineSink& errors_;
+  const ScenarioHooks& hooks_;
+  Chip chip_;
+  Responder user_;
+  std::unique_ptr<FirmwareHost> fw_;  // instead of user_ when the scenario names a firmware
+  std::unique_ptr<DpMaster> master_;
+  ScenarioOutcome out_;
+  std::vector<Event> events_;
+  DpState dp_ = DpState::Wait_Prm;
+  WdState wd_ = WdState::Baud_Search;
+  std::vector<std::uint8_t> outputs_;  // what `exchange` sends when no outputs= is given
+  // Faults waiting for the next request, and what was sent in their place.
+  std::optional<UartFault> fault_;
+  bool bad_fcs_ = false;
+  int fault_line_ = 0;
+  std::map<std::size_t, std::string> notes_;                  // history index -> the damage done
+  std::map<std::size_t, fdl::Frame> sent_;                    // history index -> the frame damaged
+  std::optional<std::pair<std::size_t, fdl::Frame>> repeat_;  // the master's repeat, checked
+  int repeat_line_ = 0;
+  // The master's FCB state as DpMaster keeps it (private there), for predict().
+  bool fcb_ = true;
+  bool fcv_ = false;
+  // Walk and expects bookkeeping.
+  std::size_t reported_ = 0;
+  std::size_t outputs_seen_ = 0;
+  std::optional<std::pair<std::vector<std::uint8_t>, bool>> shown_output_;
+  std::optional<std::vector<std::uint8_t>> last_inputs_;
+  std::optional<std::vector<std::uint8_t>> last_diag_;
+  FdlCounters base_counters_;
+  std::size_t base_irq_ = 0;
+  std::size_t pb3_rises_ = 0;  // PB3 rising edges so far (dpc31 DX_Out port)
+  std::size_t base_pb3_ = 0;
+};
+
+}  // namespace
+
+ScenarioOutcome run_scenario(const Scenario& s, const LineSink& walk, const LineSink& errors,
+                             const ScenarioHooks& hooks) {
+  Runner r(s, walk, errors, hooks);
+  return r.run();
+}
+
+int run_scenario_file(const std::string& path, const LineSink& walk, const LineSink& errors,
+                      Scenario* scenario, ScenarioOutcome* outcome) {
+  Scenario s;
+  ScenarioError err;
+  if (!load_scenario(path, s, err)) {
+    if (errors) errors(err.text());
+    return 2;
+  }
+  const ScenarioOutcome o = run_scenario(s, walk, errors);
+  const int rc = o.ok() ? 0 : 1;
+  if (scenario != nullptr) *scenario = std::move(s);
+  if (outcome != nullptr) *outcome = o;
+  return rc;
+}
+
+}  // namespace dpc31

@@ -1,0 +1,446 @@
+// Golden traces: the parser (trace text -> Trace). The format: docs/trace-format.md.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <charconv>
+
+#include "../emu/fdl.hpp"
+#include "../emu/textfile.hpp"
+#include "trace.hpp"
+#include "vocabulary.hpp"
+
+namespace dpc31 {
+
+namespace {
+
+constexpr std::size_t kMaxFileBytes = 64u << 20;
+constexpr std::uint64_t kMaxCycle = std::uint64_t{1} << 62;
+constexpr std::uint32_t kMaxClock = 200'000'000;
+
+bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+
+std::vector<std::string_view> words(std::string_view s) {
+  std::vector<std::string_view> out;
+  std::size_t i = 0;
+  while (i < s.size()) {
+    while (i < s.size() && is_space(s[i])) ++i;
+    std::size_t k = i;
+    while (k < s.size() && !is_space(s[k])) ++k;
+    if (k > i) out.push_back(s.substr(i, k - i));
+    i = k;
+  }
+  return out;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Parser
+
+std::string TraceError::text() const {
+  if (line <= 0) return fmt::format("{}: {}", file, message);
+  return fmt::format("{}:{}: {}", file, line, message);
+}
+
+namespace {
+
+struct Fail {
+  std::string message;
+};
+
+[[noreturn]] void fail(std::string msg) { throw Fail{std::move(msg)}; }
+
+std::uint64_t dec(std::string_view s, std::string_view what) {
+  std::uint64_t v = 0;
+  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v, 10);
+  if (s.empty() || ec != std::errc() || p != s.data() + s.size() || v > kMaxCycle) {
+    fail(fmt::format("bad {} '{}' (a decimal number)", what, shown(s)));
+  }
+  return v;
+}
+
+std::uint32_t hexnum(std::string_view s, std::size_t max_digits, std::string_view what) {
+  std::uint32_t v = 0;
+  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v, 16);
+  if (s.empty() || s.size() > max_digits || ec != std::errc() || p != s.data() + s.size()) {
+    fail(fmt::format("bad {} '{}' (up to {} hex digits)", what, shown(s), max_digits));
+  }
+  return v;
+}
+
+std::uint8_t hexbyte(std::string_view s, std::string_view what) {
+  return static_cast<std::uint8_t>(hexnum(s, 2, what));
+}
+
+void arity(const std::vector<std::string_view>& w, std::size_t n, std::string_view form) {
+  if (w.size() != n) fail(fmt::format("expected '{}'", form));
+}
+
+// Canonical form of a `state` value (hex upper case, counters in declaration order).
+std::string state_value(std::string_view key, std::string_view v) {
+  if (key == "dp") {
+    for (DpState s : {DpState::Wait_Prm, DpState::Wait_Cfg, DpState::Data_Exchange}) {
+      if (v == dp_state_name(s)) return std::string(v);
+    }
+    fail(fmt::format("unknown dp state '{}' (Wait_Prm, Wait_Cfg, Data_Exchange)", shown(v)));
+  }
+  if (key == "wd") {
+    for (WdState s : {WdState::Baud_Search, WdState::Baud_Control, WdState::DP_Control}) {
+      if (v == wd_state_name(s)) return std::string(v);
+    }
+    fail(fmt::format("unknown wd state '{}' (Baud_Search, Baud_Control, DP_Control)", shown(v)));
+  }
+  if (key == "status" || key == "irr" || key == "imr") {
+    return fmt::format("{:04X}", hexnum(v, 4, key));
+  }
+  if (key == "station") {
+    const std::uint64_t n = dec(v, "station");
+    if (n > 127) fail(fmt::format("station {} out of range (0..127)", n));
+    return std::to_string(n);
+  }
+  if (key == "fdl") {
+    FdlCounters c;
+    if (v != "-") {
+      std::string_view rest = v;
+      while (!rest.empty()) {
+        const std::size_t comma = rest.find(',');
+        const std::string_view item = rest.substr(0, comma);
+        rest = comma == std::string_view::npos ? std::string_view{} : rest.substr(comma + 1);
+        const std::size_t colon = item.find(':');
+        if (colon == std::string_view::npos) {
+          fail(fmt::format("bad counter '{}' in fdl= (name:N, separated by commas)", shown(item)));
+        }
+        const auto fields = fdl_counter_fields();
+        const auto f = std::find_if(fields.begin(), fields.end(), [&](const CounterField& cf) {
+          return cf.name == item.substr(0, colon);
+        });
+        if (f == fields.end()) {
+          fail(fmt::format("unknown counter '{}' in fdl=", shown(item.substr(0, colon))));
+        }
+        const std::uint64_t n = dec(item.substr(colon + 1), "counter value");
+        if (n == 0 || n > 0xFFFF'FFFF || c.*(f->member) != 0) {
+          fail(fmt::format("bad counter '{}' in fdl= (each counter once, 1..4294967295)",
+                           shown(item)));
+        }
+        c.*(f->member) = static_cast<std::uint32_t>(n);
+      }
+    }
+    return counters_text(c);
+  }
+  fail(fmt::format("unknown state key '{}' (dp, wd, status, irr, imr, station, fdl)", shown(key)));
+}
+
+class TraceParser {
+ public:
+  explicit TraceParser(Trace& t) : t_(t) {}
+
+  void line(int no, std::string_view raw) {
+    const std::string_view text = raw.substr(0, raw.find('#'));
+    const std::vector<std::string_view> w = words(text);
+    if (no == 1) {
+      if (w.size() != 2 || w[0] != "dpc31-trace") {
+        fail(fmt::format("not a dpc31 trace (the first line must be '{}')", kTraceMagic));
+      }
+      if (w[1] != "1") fail(fmt::format("trace format version '{}': only 1 is known", shown(w[1])));
+      return;
+    }
+    if (w.empty()) return;
+    if (ended_) fail(fmt::format("'{}' after the 'end' line", shown(w[0])));
+    if (header(w)) {
+      if (body_) fail(fmt::format("header line '{}' after the first event", shown(w[0])));
+      return;
+    }
+    if (!body_) {
+      for (const auto& [name, seen] : {std::pair{"profile", have_profile_},
+                                       {"bus", have_bus_},
+                                       {"clock", have_clock_},
+                                       {"baud", have_baud_}}) {
+        if (!seen) fail(fmt::format("the header has no '{}' line", name));
+      }
+      if (bit_cycles(clock(), t_.baud) == 0) {
+        fail(fmt::format("baud {} is unusable at clock {}", t_.baud, clock()));
+      }
+      body_ = true;
+    }
+    TraceLine l;
+    l.line = no;
+    body(w, l);
+    if (l.cycle < order_) {
+      fail(
+          fmt::format("cycle {} comes before cycle {} of an earlier line: lines must be in "
+                      "cycle order",
+                      l.cycle, order_));
+    }
+    order_ = l.cycle;
+    timing(l);
+    t_.lines.push_back(std::move(l));
+  }
+
+  void finish(int last) {
+    if (!ended_) {
+      throw std::pair<int, std::string>(
+          last, body_ ? "truncated trace: no 'end' line" : "no events and no 'end' line");
+    }
+  }
+
+ private:
+  [[nodiscard]] std::uint32_t clock() const {
+    return t_.chip.clock_hz != 0 ? t_.chip.clock_hz : chip_timing().clock_hz;
+  }
+
+  bool header(const std::vector<std::string_view>& w) {
+    const std::string_view k = w[0];
+    const auto once = [&](bool& seen) {
+      if (seen) fail(fmt::format("'{}' given twice", k));
+      seen = true;
+    };
+    if (k == "profile") {
+      once(have_profile_);
+      arity(w, 2, "profile spc3|vpc3plus|dpc31");
+      if (!parse_profile(w[1], t_.chip.profile)) {
+        fail(fmt::format("unknown profile '{}' (spc3, vpc3plus, dpc31)", shown(w[1])));
+      }
+    } else if (k == "variant") {
+      once(have_variant_);
+      arity(w, 2, "variant b|c|s");
+      if (t_.chip.profile != Profile::vpc3plus || !have_profile_) {
+        fail("'variant' follows 'profile vpc3plus': only the VPC3+ has variants");
+      }
+      Vpc3Variant v{};
+      if (!parse_vpc3_variant(w[1], v))
+        fail(fmt::format("unknown variant '{}' (b, c, s)", shown(w[1])));
+      t_.chip.variant = v;
+    } else if (k == "bus") {
+      once(have_bus_);
+      arity(w, 2, "bus intel|motorola");
+      if (w[1] != "intel" && w[1] != "motorola") {
+        fail(fmt::format("unknown bus '{}' (intel, motorola)", shown(w[1])));
+      }
+      t_.chip.bus = w[1] == "intel" ? BusMode::intel : BusMode::motorola;
+    } else if (k == "clock") {
+      once(have_clock_);
+      arity(w, 2, "clock HZ");
+      const std::uint64_t hz = dec(w[1], "clock");
+      if (hz == 0 || hz > kMaxClock)
+        fail(fmt::format("clock {} out of range (1..{})", hz, kMaxClock));
+      t_.chip.clock_hz = static_cast<std::uint32_t>(hz);
+    } else if (k == "baud") {
+      once(have_baud_);
+      arity(w, 2, "baud N");
+      const std::uint64_t b = dec(w[1], "baud");
+      if (b == 0 || b > 12'000'000) fail(fmt::format("baud {} out of range (1..12000000)", b));
+      t_.baud = static_cast<std::uint32_t>(b);
+    } else {
+      return false;
+    }
+    return true;
+  }
+
+  // The chip's cycle after the actions so far: the replay never goes back in time, and the
+  // expectations must all be due by the end.
+  void timing(const TraceLine& l) {
+    const std::uint32_t access = profile_desc(t_.chip.profile).bus_access_cycles;
+    std::uint64_t start = l.cycle;
+    switch (l.kind) {
+      case TraceKind::wr:
+      case TraceKind::rd:
+        if (l.cycle < access) {
+          fail(fmt::format("a bus access cannot complete before cycle {}", access));
+        }
+        start = l.cycle - access;
+        break;
+      case TraceKind::xint:
+        last_expect_ = std::max(last_expect_, l.cycle);
+        return;
+      case TraceKind::tx:
+        last_expect_ = std::max(last_expect_, l.end);
+        return;
+      case TraceKind::end:
+        if (l.cycle < last_expect_) {
+          fail(fmt::format("end at cycle {} before an expected event at cycle {}", l.cycle,
+                           last_expect_));
+        }
+        break;
+      case TraceKind::rx:
+      case TraceKind::rxd:
+      case TraceKind::state:
+        break;
+    }
+    if (start < now_) {
+      fail(fmt::format("starts at cycle {}, before cycle {} where the previous line left the chip",
+                       start, now_));
+    }
+    now_ = l.cycle;
+  }
+
+  void body(const std::vector<std::string_view>& w, TraceLine& l) {
+    const std::string_view k = w[0];
+    const std::uint32_t addr_digits = 4;
+    if (k == "wr") {
+      arity(w, 4, "wr CYCLE ADDR DATA");
+      l.kind = TraceKind::wr;
+      l.cycle = dec(w[1], "cycle");
+      l.addr = hexnum(w[2], addr_digits, "address");
+      l.data = hexbyte(w[3], "data");
+    } else if (k == "rd") {
+      arity(w, 5, "rd CYCLE ADDR = DATA");
+      if (w[3] != "=") fail("expected 'rd CYCLE ADDR = DATA'");
+      l.kind = TraceKind::rd;
+      l.cycle = dec(w[1], "cycle");
+      l.addr = hexnum(w[2], addr_digits, "address");
+      l.data = hexbyte(w[4], "data");
+    } else if (k == "rx") {
+      if (w.size() < 3) fail("expected 'rx START BYTES... [fault=KIND:CHAR] [fed=CYCLE]'");
+      l.kind = TraceKind::rx;
+      l.start = dec(w[1], "start cycle");
+      l.cycle = l.start;
+      bool fed = false;
+      for (std::size_t i = 2; i < w.size(); ++i) {
+        const std::size_t eq = w[i].find('=');
+        if (eq == std::string_view::npos) {
+          if (fed || l.fault.kind != UartFault::Kind::none) {
+            fail(fmt::format("byte '{}' after the options", shown(w[i])));
+          }
+          l.bytes.push_back(hexbyte(w[i], "byte"));
+          continue;
+        }
+        const std::string_view key = w[i].substr(0, eq);
+        const std::string_view v = w[i].substr(eq + 1);
+        if (key == "fed" && !fed) {
+          fed = true;
+          l.cycle = dec(v, "fed cycle");
+        } else if (key == "fault" && l.fault.kind == UartFault::Kind::none) {
+          const std::size_t colon = v.find(':');
+          const std::string_view kind = v.substr(0, colon);
+          if (!parse_fault_kind(kind, l.fault.kind)) {
+            fail(fmt::format("bad fault '{}' (parity, start or stop, then :CHAR)", shown(v)));
+          }
+          if (colon == std::string_view::npos) fail("fault= needs the character: KIND:CHAR");
+          l.fault.char_index = static_cast<int>(dec(v.substr(colon + 1), "fault character"));
+        } else {
+          fail(fmt::format("unknown or repeated option '{}' (fault=, fed=)", shown(key)));
+        }
+      }
+      if (l.bytes.empty()) fail("'rx' needs at least one byte");
+      if (l.bytes.size() > fdl::kMaxFrameLength) {
+        fail(fmt::format("{} bytes: a telegram has at most {}", l.bytes.size(),
+                         fdl::kMaxFrameLength));
+      }
+      if (l.fault.kind != UartFault::Kind::none &&
+          static_cast<std::size_t>(l.fault.char_index) >= l.bytes.size()) {
+        fail(fmt::format("fault in character {} of {}", l.fault.char_index, l.bytes.size()));
+      }
+      if (l.cycle > l.start) fail("fed= after the first start bit");
+    } else if (k == "rxd") {
+      if (w.size() < 3) fail("expected 'rxd FED CYCLE:LEVEL...'");
+      l.kind = TraceKind::rxd;
+      l.cycle = dec(w[1], "fed cycle");
+      std::uint64_t prev = l.cycle;
+      for (std::size_t i = 2; i < w.size(); ++i) {
+        const std::size_t colon = w[i].find(':');
+        const std::string_view lv = colon == std::string_view::npos ? "" : w[i].substr(colon + 1);
+        if (lv != "0" && lv != "1")
+          fail(fmt::format("bad edge '{}' (CYCLE:0 or CYCLE:1)", shown(w[i])));
+        const std::uint64_t c = dec(w[i].substr(0, colon), "edge cycle");
+        if (c < prev) fail(fmt::format("edge at cycle {} before cycle {}", c, prev));
+        prev = c;
+        l.edges.emplace_back(c, lv == "1");
+      }
+    } else if (k == "xint") {
+      arity(w, 3, "xint CYCLE 0|1");
+      l.kind = TraceKind::xint;
+      l.cycle = dec(w[1], "cycle");
+      if (w[2] != "0" && w[2] != "1") fail(fmt::format("bad level '{}' (0 or 1)", shown(w[2])));
+      l.level = w[2] == "1";
+    } else if (k == "tx") {
+      if (w.size() < 4) fail("expected 'tx START END BYTES...'");
+      l.kind = TraceKind::tx;
+      l.start = dec(w[1], "start cycle");
+      l.end = dec(w[2], "end cycle");
+      l.cycle = l.start;
+      if (l.end <= l.start) fail("the end of a telegram must come after its start");
+      for (std::size_t i = 3; i < w.size(); ++i) l.bytes.push_back(hexbyte(w[i], "byte"));
+    } else if (k == "state") {
+      if (w.size() < 3) fail("expected 'state CYCLE KEY=VALUE...'");
+      l.kind = TraceKind::state;
+      l.cycle = dec(w[1], "cycle");
+      for (std::size_t i = 2; i < w.size(); ++i) {
+        const std::size_t eq = w[i].find('=');
+        if (eq == std::string_view::npos || eq == 0) {
+          fail(fmt::format("bad state item '{}' (KEY=VALUE)", shown(w[i])));
+        }
+        const std::string_view key = w[i].substr(0, eq);
+        for (const TraceStateKey& s : l.state) {
+          if (s.key == key) fail(fmt::format("state key '{}' given twice", shown(key)));
+        }
+        l.state.push_back({std::string(key), state_value(key, w[i].substr(eq + 1))});
+      }
+    } else if (k == "end") {
+      arity(w, 2, "end CYCLE");
+      l.kind = TraceKind::end;
+      l.cycle = dec(w[1], "cycle");
+      ended_ = true;
+    } else {
+      fail(
+          fmt::format("unknown line '{}' (rx, rxd, wr, rd, xint, tx, state, end; header: profile, "
+                      "variant, bus, clock, baud)",
+                      shown(k)));
+    }
+  }
+
+  Trace& t_;
+  bool have_profile_ = false;
+  bool have_variant_ = false;
+  bool have_bus_ = false;
+  bool have_clock_ = false;
+  bool have_baud_ = false;
+  bool body_ = false;
+  bool ended_ = false;
+  std::uint64_t order_ = 0;
+  std::uint64_t now_ = 0;
+  std::uint64_t last_expect_ = 0;
+};
+
+}  // namespace
+
+bool parse_trace(std::string_view text, const std::string& file, Trace& out, TraceError& err) {
+  Trace t;
+  t.file = file;
+  if (text.starts_with("\xEF\xBB\xBF")) text.remove_prefix(3);
+  if (text.empty()) {
+    err = TraceError{file, 0, "empty file, not a trace"};
+    return false;
+  }
+  TraceParser p(t);
+  int no = 0;
+  try {
+    std::string_view rest = text;
+    while (!rest.empty()) {
+      const std::size_t nl = rest.find('\n');
+      const std::string_view line = rest.substr(0, nl);
+      rest = nl == std::string_view::npos ? std::string_view{} : rest.substr(nl + 1);
+      ++no;
+      if (line.find('\0') != std::string_view::npos) fail("a NUL byte: not a text file");
+      p.line(no, line);
+    }
+    p.finish(no);
+  } catch (const Fail& f) {
+    err = TraceError{file, no, f.message};
+    return false;
+  } catch (const std::pair<int, std::string>& f) {
+    err = TraceError{file, f.first, f.second};
+    return false;
+  }
+  out = std::move(t);
+  return true;
+}
+
+bool load_trace(const std::string& path, Trace& out, TraceError& err) {
+  err = TraceError{path, 0, {}};
+  std::string text;
+  if (!read_text_file(path, kMaxFileBytes, "trace", text, err.message)) return false;
+  if ((err.line = cut_off_line(text, err.message)) != 0) return false;
+  return parse_trace(text, path, out, err);
+}
+
+}  // namespace dpc31

@@ -1,0 +1,224 @@
+// Golden traces: the recorder (a chip session -> trace text). The format: docs/trace-format.md;
+// the parser is trace_parse.cpp, the replay trace_replay.cpp.
+#include <fmt/format.h>
+
+#include <algorithm>
+
+#include "../emu/hex.hpp"
+#include "trace.hpp"
+#include "vocabulary.hpp"
+
+namespace dpc31 {
+
+std::vector<TraceStateKey> trace_state(const Chip& c) {
+  return {
+      {"dp", std::string(dp_state_name(c.dp_state()))},
+      {"wd", std::string(wd_state_name(c.wd_state()))},
+      {"status", fmt::format("{:04X}", c.peek_reg(RegId::Status_Reg))},
+      {"irr", fmt::format("{:04X}", c.peek_reg(RegId::Int_Req_Reg))},
+      {"imr", fmt::format("{:04X}", c.peek_reg(RegId::Int_Mask_Reg))},
+      {"station", std::to_string(c.station_address())},
+      {"fdl", counters_text(c.fdl_counters())},
+  };
+}
+
+// ---------------------------------------------------------------------------------------------
+// RxD batches
+
+std::string format_rxd(std::uint64_t fed, const std::vector<std::pair<std::uint64_t, bool>>& edges,
+                       std::uint32_t t, const RxdTelegram* sent) {
+  // No start bit to count from (a first character sent without one) is no `rx` line either.
+  if (sent != nullptr && t != 0 && !edges.empty() && !edges.front().second &&
+      edges.front().first == sent->start) {
+    std::vector<std::pair<std::uint64_t, bool>> enc;
+    uart_encode(sent->bytes, sent->start, t, enc, sent->fault);
+    if (enc == edges) {
+      std::string line = fmt::format("rx {} {}", sent->start, hex_bytes(sent->bytes));
+      if (sent->fault.kind != UartFault::Kind::none) {
+        line +=
+            fmt::format(" fault={}:{}", fault_kind_name(sent->fault.kind), sent->fault.char_index);
+      }
+      if (fed != sent->start) line += fmt::format(" fed={}", fed);
+      return line;
+    }
+  }
+  std::string line = fmt::format("rxd {}", fed);
+  for (const auto& [c, l] : edges) line += fmt::format(" {}:{}", c, l ? 1 : 0);
+  return line;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Recorder
+
+TraceRecorder::TraceRecorder(std::uint32_t baud, std::vector<std::string> notes)
+    : baud_(baud), notes_(std::move(notes)) {}
+
+void TraceRecorder::attach(Chip& chip) {
+  chip_ = &chip;
+  if (chip.cycle() != 0) {
+    error_ = fmt::format("the recording must start at cycle 0, not {}", chip.cycle());
+  }
+  header_.emplace_back(kTraceMagic);
+  for (const std::string& n : notes_) header_.push_back(n.empty() ? "#" : "# " + n);
+  header_.push_back(fmt::format("profile {}", profile_name(chip.profile().id)));
+  if (chip.vpc3_variant()) {
+    header_.push_back(fmt::format("variant {}", vpc3_variant_name(*chip.vpc3_variant())));
+  }
+  header_.push_back(
+      fmt::format("bus {}", chip.bus_mode() == BusMode::intel ? "intel" : "motorola"));
+  header_.push_back(fmt::format("clock {}", chip.clock_hz()));
+  header_.push_back(fmt::format("baud {}", baud_));
+
+  chip.on_block_event([this](std::uint64_t cycle, const BlockEvent& e) {
+    if (e.kind == BlockEvent::Kind::write) {
+      add(cycle, fmt::format("wr {} {:04X} {:02X}", cycle, e.value, e.data));
+    } else if (e.kind == BlockEvent::Kind::read) {
+      // Emitted when the access completes, just before it acts: peek gives what it returns
+      // (a command read's result included). The replay holds the two to account.
+      add(cycle, fmt::format("rd {} {:04X} = {:02X}", cycle, e.value, chip_->peek(e.value)));
+    }
+  });
+  chip.on_irq_change([this](std::uint64_t cycle, bool active) {
+    add(cycle, fmt::format("xint {} {}", cycle, active ? 1 : 0));
+  });
+  chip.on_telegram([this](const Telegram& t) {
+    if (!t.from_chip) return;  // received ones are recorded from RxD, edge by edge
+    add(t.start, fmt::format("tx {} {} {}", t.start, t.end, hex_bytes(t.bytes)));
+  });
+  chip.on_rxd([this](std::uint64_t cycle, bool level) {
+    if (finished_) return;
+    if (closing_) close_segment();
+    const std::uint64_t fed = chip_->cycle();
+    if (!rxd_.empty() && fed != rxd_fed_) close_rxd();
+    rxd_fed_ = fed;
+    rxd_.emplace_back(cycle, level);
+  });
+}
+
+void TraceRecorder::add(std::uint64_t key, std::string text) {
+  if (finished_) {
+    if (error_.empty()) error_ = fmt::format("an event at cycle {} after the end", key);
+    return;
+  }
+  if (closing_) close_segment();
+  close_rxd();
+  seg_.push_back(Entry{key, std::move(text)});
+}
+
+void TraceRecorder::close_rxd() {
+  if (rxd_.empty()) return;
+  const std::uint32_t t = chip_ != nullptr ? bit_cycles(chip_->clock_hz(), baud_) : 0;
+  seg_.push_back(Entry{rxd_fed_, format_rxd(rxd_fed_, rxd_, t, sent_ ? &*sent_ : nullptr)});
+  rxd_.clear();
+  sent_.reset();
+}
+
+void TraceRecorder::heading(std::string text) { headings_.push_back(std::move(text)); }
+
+void TraceRecorder::note(std::uint64_t cycle, std::string text) {
+  seg_.push_back(Entry{cycle, "# " + std::move(text)});
+}
+
+std::string TraceRecorder::state_line() const {
+  std::string s = fmt::format("state {}", chip_->cycle());
+  for (const TraceStateKey& k : trace_state(*chip_)) s += fmt::format(" {}={}", k.key, k.value);
+  return s;
+}
+
+void TraceRecorder::close_segment() {
+  close_rxd();
+  closing_ = false;
+  std::stable_sort(seg_.begin(), seg_.end(),
+                   [](const Entry& a, const Entry& b) { return a.key < b.key; });
+  for (const std::string& h : headings_) body_.push_back("# " + h);
+  for (const Entry& e : seg_) {
+    const bool comment = e.text.starts_with('#');
+    if (e.key < last_key_ && !comment && error_.empty()) {
+      error_ = fmt::format("'{}' is out of cycle order (after cycle {})", e.text, last_key_);
+    }
+    if (!comment) last_key_ = std::max(last_key_, e.key);
+    body_.push_back(e.text);
+  }
+  headings_.clear();
+  seg_.clear();
+  if (pending_state_) {
+    const auto& [cycle, line] = *pending_state_;
+    if (cycle < last_key_ && error_.empty()) {
+      error_ = fmt::format("'{}' is out of cycle order (after cycle {})", line, last_key_);
+    }
+    last_key_ = std::max(last_key_, cycle);
+    if (line != last_state_) body_.push_back(line);
+    last_state_ = line;
+    pending_state_.reset();
+  }
+}
+
+void TraceRecorder::checkpoint() {
+  if (chip_ == nullptr || finished_) return;
+  close_rxd();
+  pending_state_.emplace(chip_->cycle(), state_line());
+  close_segment();
+}
+
+void TraceRecorder::finish() {
+  if (chip_ == nullptr || finished_) return;
+  if (closing_) close_segment();
+  checkpoint();
+  body_.push_back(fmt::format("end {}", chip_->cycle()));
+  finished_ = true;
+}
+
+std::string TraceRecorder::text() const {
+  std::string s;
+  for (const std::string& l : header_) s += l + '\n';
+  for (const std::string& l : body_) s += l + '\n';
+  return s;
+}
+
+ScenarioHooks TraceRecorder::scenario_hooks() {
+  ScenarioHooks h;
+  h.observer = this;
+  return h;
+}
+
+void TraceRecorder::run_begins(Chip& chip) { attach(chip); }
+
+void TraceRecorder::run_ends(Chip&) { finish(); }
+
+// The runner reports a step's events at its end, with the chip standing still: the step's own
+// line marks a checkpoint, the other events become notes at their cycles.
+void TraceRecorder::mark(std::string heading) {
+  if (chip_ == nullptr || finished_) return;
+  if (closing_) close_segment();  // the previous step left no event: close it now
+  close_rxd();
+  headings_.push_back(std::move(heading));
+  pending_state_.emplace(chip_->cycle(), state_line());
+  closing_ = true;
+}
+
+void TraceRecorder::user_side_started(std::uint64_t, std::string_view text) {
+  mark(fmt::format("firmware init (the built-in user side): registers, buffers, Start_SPC3; {}",
+                   text));
+}
+
+void TraceRecorder::step_begins(std::uint64_t, const ScenarioStep&, std::string_view text) {
+  mark(std::string(text));
+}
+
+void TraceRecorder::expect_checked(std::uint64_t, const ScenarioStep&, bool,
+                                   std::string_view text) {
+  mark(std::string(text));
+}
+
+void TraceRecorder::telegram_sent(std::uint64_t start, std::span<const std::uint8_t> bytes,
+                                  UartFault fault) {
+  close_rxd();  // the batch before is another's
+  sent_ = RxdTelegram{start, {bytes.begin(), bytes.end()}, fault};
+}
+
+void TraceRecorder::walk_note(std::uint64_t cycle, std::string_view text) {
+  if (chip_ == nullptr || finished_) return;
+  note(cycle, std::string(text));
+}
+
+}  // namespace dpc31

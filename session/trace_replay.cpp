@@ -1,0 +1,243 @@
+// Golden traces: the replay (a Trace on a fresh chip, every expectation checked). The format:
+// docs/trace-format.md.
+#include <fmt/format.h>
+
+#include <algorithm>
+
+#include "../emu/fdl.hpp"
+#include "../emu/hex.hpp"
+#include "trace.hpp"
+#include "vocabulary.hpp"
+
+namespace dpc31 {
+
+// ---------------------------------------------------------------------------------------------
+// Replay
+
+namespace {
+
+struct Mismatch {
+  int line;
+  std::string message;
+};
+
+class Replayer {
+ public:
+  explicit Replayer(const Trace& t) : t_(t), chip_(t.chip) {
+    chip_.on_irq_change(
+        [this](std::uint64_t cycle, bool active) { irq_.emplace_back(cycle, active); });
+    chip_.on_telegram([this](const Telegram& tg) {
+      if (tg.from_chip) tx_.push_back(tg);
+    });
+    t_bit_ = bit_cycles(chip_.clock_hz(), t.baud);
+    access_ = chip_.bus_access_cycles();
+    chip_.set_log_sink({});  // the replay reports its checks, not the model's remarks
+    end_line_ = t.lines.empty() ? 0 : t.lines.back().line;
+  }
+
+  ReplayOutcome run() {
+    ReplayOutcome o;
+    try {
+      for (const TraceLine& l : t_.lines) {
+        check_due(o, l.cycle, &l);
+        act(l, o);
+      }
+      o.ok = true;
+    } catch (const Mismatch& m) {
+      o.failure = fmt::format("{}:{}: {}", t_.file, m.line, m.message);
+    }
+    o.final_cycle = chip_.cycle();
+    return o;
+  }
+
+ private:
+  [[noreturn]] static void mismatch(int line, std::string msg) {
+    throw Mismatch{line, std::move(msg)};
+  }
+
+  void step_to(const TraceLine& l, std::uint64_t c) {
+    if (chip_.cycle() > c) {
+      // The parser rules this out; kept as a guard against a model that moves time by itself.
+      mismatch(l.line,
+               fmt::format("expected the chip at cycle {}, got cycle {}", c, chip_.cycle()));
+    }
+    chip_.step(c - chip_.cycle());
+  }
+
+  static std::string xint_text(std::uint64_t c, bool level) {
+    return fmt::format("xint {} at cycle {}", level ? 1 : 0, c);
+  }
+  static std::string tx_text(std::uint64_t s, std::uint64_t e,
+                             std::span<const std::uint8_t> bytes) {
+    return fmt::format("tx {}..{} {}", s, e, hex_bytes(bytes));
+  }
+
+  // What the trace says instead of an event of the chip that no expectation matches.
+  static std::string nothing_expected(std::uint64_t horizon, const TraceLine* next,
+                                      std::string_view what) {
+    if (next == nullptr || next->kind == TraceKind::end) return fmt::format("no more {}s", what);
+    return fmt::format("no other {} up to cycle {}", what, horizon - 1);
+  }
+
+  // Compares the expectations due by now with what the chip did, in order. Every expectation
+  // before `horizon` has been read (`next` is the line about to be played, nullptr after the
+  // end): an event the chip made before it is unexpected if no expectation matches it.
+  void check_due(ReplayOutcome& o, std::uint64_t horizon, const TraceLine* next) {
+    const std::uint64_t now = chip_.cycle();
+    const int next_line = next != nullptr ? next->line : end_line_;
+    for (;;) {
+      const TraceLine* e = pend_irq_.empty() ? nullptr : pend_irq_.front();
+      if (e != nullptr && e->cycle <= now) {
+        if (irq_.empty()) {
+          mismatch(e->line, fmt::format("expected {}, got no X/INT edge by cycle {}",
+                                        xint_text(e->cycle, e->level), now));
+        }
+        const auto [c, lv] = irq_.front();
+        if (c != e->cycle || lv != e->level) {
+          mismatch(e->line, fmt::format("expected {}, got {}", xint_text(e->cycle, e->level),
+                                        xint_text(c, lv)));
+        }
+        irq_.pop_front();
+        pend_irq_.pop_front();
+        ++o.irq_edges;
+        continue;
+      }
+      if (!irq_.empty() && irq_.front().first <= now && irq_.front().first < horizon &&
+          (e == nullptr || irq_.front().first < e->cycle)) {
+        if (e == nullptr && next != nullptr && next->kind == TraceKind::xint) e = next;
+        const std::string got = xint_text(irq_.front().first, irq_.front().second);
+        if (e != nullptr) {
+          mismatch(e->line, fmt::format("expected {}, got {}", xint_text(e->cycle, e->level), got));
+        }
+        mismatch(next_line, fmt::format("expected {}, got {}",
+                                        nothing_expected(horizon, next, "X/INT edge"), got));
+      }
+      break;
+    }
+    for (;;) {
+      const TraceLine* e = pend_tx_.empty() ? nullptr : pend_tx_.front();
+      if (e != nullptr && e->start <= now) {
+        if (tx_.empty()) {
+          mismatch(e->line, fmt::format("expected {}, got no telegram from the chip by cycle {}",
+                                        tx_text(e->start, e->end, e->bytes), now));
+        }
+        const Telegram& g = tx_.front();
+        if (g.start != e->start || g.end != e->end || g.bytes != e->bytes) {
+          mismatch(e->line, fmt::format("expected {}, got {}", tx_text(e->start, e->end, e->bytes),
+                                        tx_text(g.start, g.end, g.bytes)));
+        }
+        tx_.pop_front();
+        pend_tx_.pop_front();
+        ++o.telegrams_out;
+        continue;
+      }
+      if (!tx_.empty() && tx_.front().start <= now && tx_.front().start < horizon &&
+          (e == nullptr || tx_.front().start < e->start)) {
+        if (e == nullptr && next != nullptr && next->kind == TraceKind::tx) e = next;
+        const Telegram& g = tx_.front();
+        const std::string got = tx_text(g.start, g.end, g.bytes);
+        if (e != nullptr) {
+          mismatch(e->line,
+                   fmt::format("expected {}, got {}", tx_text(e->start, e->end, e->bytes), got));
+        }
+        mismatch(next_line, fmt::format("expected {}, got {}",
+                                        nothing_expected(horizon, next, "telegram"), got));
+      }
+      break;
+    }
+  }
+
+  void act(const TraceLine& l, ReplayOutcome& o) {
+    switch (l.kind) {
+      case TraceKind::rx: {
+        step_to(l, l.cycle);
+        std::vector<std::pair<std::uint64_t, bool>> edges;
+        uart_encode(l.bytes, l.start, t_bit_, edges, l.fault);
+        for (const auto& [c, lv] : edges) chip_.drive_rxd(c, lv);
+        ++o.telegrams_in;
+        break;
+      }
+      case TraceKind::rxd:
+        step_to(l, l.cycle);
+        for (const auto& [c, lv] : l.edges) chip_.drive_rxd(c, lv);
+        ++o.telegrams_in;
+        break;
+      case TraceKind::wr:
+        step_to(l, l.cycle - access_);
+        chip_.write(l.addr, l.data);
+        ++o.writes;
+        break;
+      case TraceKind::rd: {
+        step_to(l, l.cycle - access_);
+        const std::uint8_t v = chip_.read(l.addr);
+        if (v != l.data) {
+          mismatch(l.line, fmt::format("expected rd {:04X} = {:02X} at cycle {}, got {:02X}",
+                                       l.addr, l.data, l.cycle, v));
+        }
+        ++o.reads;
+        break;
+      }
+      case TraceKind::xint:
+        pend_irq_.push_back(&l);
+        return;  // checked when time has passed it
+      case TraceKind::tx:
+        pend_tx_.push_back(&l);
+        return;
+      case TraceKind::state: {
+        step_to(l, l.cycle);
+        check_due(o, l.cycle + 1, &l);  // a state line follows the expectations of its cycle
+        const std::vector<TraceStateKey> now = trace_state(chip_);
+        for (const TraceStateKey& want : l.state) {
+          const auto it = std::find_if(now.begin(), now.end(),
+                                       [&](const TraceStateKey& k) { return k.key == want.key; });
+          if (it->value != want.value) {
+            mismatch(l.line, fmt::format("expected {}={} at cycle {}, got {}={}", want.key,
+                                         want.value, l.cycle, it->key, it->value));
+          }
+        }
+        ++o.states;
+        return;
+      }
+      case TraceKind::end:
+        step_to(l, l.cycle);
+        check_due(o, std::numeric_limits<std::uint64_t>::max(), nullptr);
+        if (!pend_irq_.empty() || !pend_tx_.empty()) {
+          // The parser keeps expectations before the end; a guard all the same.
+          mismatch(l.line, "expected every expectation due by the end");
+        }
+        return;
+    }
+  }
+
+  const Trace& t_;
+  Chip chip_;
+  std::uint32_t t_bit_ = 0;
+  std::uint32_t access_ = 4;
+  int end_line_ = 0;
+  std::deque<std::pair<std::uint64_t, bool>> irq_;  // observed, not yet matched
+  std::deque<Telegram> tx_;
+  std::deque<const TraceLine*> pend_irq_;  // expected, not yet due
+  std::deque<const TraceLine*> pend_tx_;
+};
+
+}  // namespace
+
+ReplayOutcome replay_trace(const Trace& t) {
+  Replayer r(t);
+  return r.run();
+}
+
+int replay_trace_file(const std::string& path, std::string& message, ReplayOutcome* outcome) {
+  Trace t;
+  TraceError err;
+  if (!load_trace(path, t, err)) {
+    message = err.text();
+    return 2;
+  }
+  const ReplayOutcome o = replay_trace(t);
+  if (outcome != nullptr) *outcome = o;
+  message = o.failure;
+  return o.ok ? 0 : 1;
+}
+
+}  // namespace dpc31
