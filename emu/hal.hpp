@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <functional>
 
-#include "bus_port.hpp"
+#include "dpc31/bus_port.hpp"
 
 namespace dpc31::hal {
 

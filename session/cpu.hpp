@@ -14,7 +14,7 @@
 #include <functional>
 #include <memory>
 
-#include "../emu/bus_port.hpp"
+#include "dpc31/bus_port.hpp"
 #include "dpc31/chip.hpp"
 
 namespace dpc31 {

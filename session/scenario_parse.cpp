@@ -7,7 +7,7 @@
 #include <utility>
 
 #include "../emu/fdl.hpp"
-#include "../emu/textfile.hpp"
+#include "textfile.hpp"
 #include "firmware.h"
 #include "scenario.hpp"
 

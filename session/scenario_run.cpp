@@ -11,7 +11,7 @@
 #include "../emu/core.hpp"  // the watchdog deadline, so `silence` stops at each state change
 #include "../emu/dp_sm.hpp"
 #include "../emu/fdl.hpp"
-#include "../emu/hex.hpp"
+#include "dpc31/hex.hpp"
 #include "firmware_host.hpp"
 #include "scenario.hpp"
 #include "vocabulary.hpp"

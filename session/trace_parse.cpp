@@ -5,7 +5,7 @@
 #include <charconv>
 
 #include "../emu/fdl.hpp"
-#include "../emu/textfile.hpp"
+#include "textfile.hpp"
 #include "trace.hpp"
 #include "vocabulary.hpp"
 

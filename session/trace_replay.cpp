@@ -5,7 +5,7 @@
 #include <algorithm>
 
 #include "../emu/fdl.hpp"
-#include "../emu/hex.hpp"
+#include "dpc31/hex.hpp"
 #include "trace.hpp"
 #include "vocabulary.hpp"
 

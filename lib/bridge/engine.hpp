@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "../../emu/hex.hpp"
+#include "dpc31/hex.hpp"
 #include "dp_master.hpp"
 #include "dpc31/chip.hpp"
 #include "firmware.h"

@@ -9,7 +9,7 @@
 #include <random>
 #include <sstream>
 
-#include "../../emu/textfile.hpp"
+#include "textfile.hpp"
 #include "dpc31/reg_ids.hpp"
 #include "outfile.hpp"
 

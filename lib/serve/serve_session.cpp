@@ -13,7 +13,7 @@
 
 #include "../../emu/dp_services.hpp"
 #include "../../emu/fdl.hpp"
-#include "../../emu/hex.hpp"
+#include "dpc31/hex.hpp"
 #include "../../emu/snapshot.hpp"  // kMaxFileSize
 #include "../../emu/uart.hpp"
 #include "dpc31/regdesc.hpp"

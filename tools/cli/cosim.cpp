@@ -13,7 +13,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "../../emu/textfile.hpp"
+#include "textfile.hpp"
 #include "lockstep.hpp"
 #include "outfile.hpp"
 #include "session.hpp"
