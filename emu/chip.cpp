@@ -51,12 +51,7 @@ void Chip::on_rxd(std::function<void(std::uint64_t, bool)> cb) {
 void Chip::on_state_change(std::function<void(std::uint64_t)> cb) {
   core_->state_observer.add(std::move(cb));
 }
-void Chip::on_txd(std::function<void(std::uint64_t, bool)> cb) {
-  // Edges before now happened unwatched; from now on each one is an event again.
-  core_->mac_tx_catch_up();
-  core_->quiet_until = 0;
-  core_->txd_observer.add(std::move(cb));
-}
+void Chip::on_txd(std::function<void(std::uint64_t, bool)> cb) { core_->watch_txd(std::move(cb)); }
 void Chip::on_block_event(std::function<void(std::uint64_t, const BlockEvent&)> cb) {
   core_->block_observer.add(std::move(cb));
 }

@@ -158,6 +158,10 @@ struct ChipCore {
     return advance_to(end, stop_at);
   }
   bool advance_to(std::uint64_t end, Stop stop_at);
+  void reset_time();  // cycle 0
+  // Whatever sets a deadline (arm, the MAC's receiver and transmitter) reports it here: the event
+  // engine's bus accesses then look for it (quiet_until).
+  void note_deadline(std::uint64_t at);
   bool advance_events(std::uint64_t end, Stop stop_at);
   bool advance_clocks(std::uint64_t end, Stop stop_at);
   // Event engine: the earliest deadline (the per-cycle engine: the next clock).
@@ -166,14 +170,15 @@ struct ChipCore {
   void skip_quiet_user_ticks(std::uint64_t bound);
   void process_events();
   void clock();  // per-cycle engine: one clock, everything in the order of docs/timing.md
-  void mac_clock();
   [[nodiscard]] std::uint64_t cycles_for_us(std::uint64_t us) const;
   // The cycle the running watchdog expires (kNever: none), from the engine's own state.
-  [[nodiscard]] std::uint64_t watchdog_due() const;
-  // Timers armed by the actions; each engine keeps them its own way (deadline or counter).
-  void arm_user_timer();
-  void arm_watchdog(std::uint64_t cycles);  // kNever: off
-  void arm_eoi();
+  [[nodiscard]] std::uint64_t watchdog_due() const { return due(timers.watchdog); }
+  // The timers of the blocks (timer.hpp): each engine keeps them its own way (deadline or
+  // counter); the blocks only arm them and ask.
+  void arm(Timer& t, std::uint64_t cycles);          // fires `cycles` clocks from now; kNever: off
+  [[nodiscard]] bool reached(const Timer& t) const;  // fires now (or has fired, not re-armed)
+  [[nodiscard]] bool running(const Timer& t) const;  // armed and not yet reached
+  [[nodiscard]] std::uint64_t due(const Timer& t) const;  // the cycle it fires (kNever: off)
   void arm_search_window();
   void stop_search_window();
   void drive_rxd(std::uint64_t cycle, bool level);
@@ -186,20 +191,22 @@ struct ChipCore {
   void mac_txd(std::uint64_t cycle, bool level);
   void mac_tx_done();
   [[nodiscard]] bool mac_tx_busy() const;
-  void mac_tx_catch_up();                // event engine: TxD edges due by now onto the pin
+  void mac_tx_catch_up();  // event engine: TxD edges due by now onto the pin
+  void watch_txd(std::function<void(std::uint64_t, bool)> cb);  // Chip::on_txd
   [[nodiscard]] bool txd_level() const;  // TxD now, also with edges not yet taken
   void mac_stop();
   void mac_char(const UartChar& c);
   void mac_frame(const fdl::Frame& f, const UartChar& last);
   void mac_send(const fdl::Frame& f, std::uint64_t request_end);
   void mac_process();  // receiver, frame timeout, search, transmitter: whatever is due now
+  void mac_clock();    // per-cycle engine: the same, one clock
   [[nodiscard]] std::uint64_t mac_deadline() const;
 
   // --- interrupt line (irq.cpp) ---
   void raise(std::uint16_t bits);
   void update_irq_line();
   [[nodiscard]] bool irq_active() const;
-  [[nodiscard]] std::uint32_t eoi_inactive_cycles() const;
+  void end_of_interrupt();  // EOI: the inactive time starts
 
   // --- mode and state (mode.cpp) ---
   void start();
@@ -207,6 +214,7 @@ struct ChipCore {
   void leave_master();
   [[nodiscard]] std::uint16_t status() const;
   [[nodiscard]] std::uint32_t user_timer_period() const;
+  void user_timer_due();  // the User_Timer_Clock tick, if it is due now
 
   // --- buffers, ASIC side (buffers.cpp) ---
   void dout_received();

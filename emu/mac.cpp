@@ -67,6 +67,7 @@ void ChipCore::mac_listen(std::uint8_t code) {
     for (const auto& [cycle, level] : rxd_pending) {
       if (cycle > now) mac.rx.edge(cycle, level);
     }
+    note_deadline(mac.rx.next_deadline());
   }
 }
 
@@ -134,6 +135,13 @@ std::uint64_t ChipCore::mac_deadline() const {
   return t;
 }
 
+void ChipCore::watch_txd(std::function<void(std::uint64_t, bool)> cb) {
+  // Edges before now happened unwatched; from now on each one is an event again.
+  mac_tx_catch_up();
+  txd_observer.add(std::move(cb));
+  note_deadline(mac_deadline());
+}
+
 void ChipCore::mac_tx_catch_up() {
   while (mac.tx_next < mac.tx_edges.size() && mac.tx_edges[mac.tx_next].first <= now) {
     mac_txd(mac.tx_edges[mac.tx_next].first, mac.tx_edges[mac.tx_next].second);
@@ -165,6 +173,55 @@ void ChipCore::mac_process() {
   if (mac.search_deadline <= now) mac_search_next();
   mac_tx_catch_up();
   if (mac.tx_end <= now) mac_tx_done();
+}
+
+// Per-cycle engine: the MAC's clock (docs/engine.md, step 4): the receiver looks at RxD, the
+// TSYN gap, the Baud_Search window and the transmitter count bit times.
+void ChipCore::mac_clock() {
+  const std::uint32_t t = mac.rx.bit_time();
+  UartChar ch;
+  const UartSampler::Clock r = mac.sampler.clock(rxd_level, now, ch);
+  if (r.ready) mac_char(ch);
+  // Idle inside a telegram counts from the end of a stop bit; a start bit ends the gap, but one
+  // on the very clock TSYN is reached comes too late (the gap is 33 bit times).
+  if (mac.gap.tick(t) && mac.in_frame) mac_truncated();
+  if (r.ended && mac.in_frame) mac.gap.start(kTsynBits);
+  if (r.started) mac.gap.on = false;
+  if (mac.search.tick(t)) mac_search_next();
+  TxShifter& tx = mac.shifter;
+  switch (tx.phase) {
+    case TxShifter::Phase::idle:
+      break;
+    case TxShifter::Phase::wait_end:
+      if (r.ended) {
+        tx.phase = TxShifter::Phase::tsdr;
+        tx.timer.start(tx.tsdr_bits);
+      }
+      break;
+    case TxShifter::Phase::tsdr:
+      if (tx.timer.tick(t)) {
+        tx.phase = TxShifter::Phase::shifting;
+        tx.index = 0;
+        tx.bit = 0;
+        tx.sub = 0;
+        mac_txd(now, uart_bit(tx.bytes[0], 0));
+      }
+      break;
+    case TxShifter::Phase::shifting:
+      if (++tx.sub < t) break;
+      tx.sub = 0;
+      if (++tx.bit == kUartCharBits) {
+        tx.bit = 0;
+        ++tx.index;
+      }
+      if (tx.index < tx.bytes.size()) {
+        mac_txd(now, uart_bit(tx.bytes[tx.index], tx.bit));
+      } else {
+        mac_txd(now, true);
+        mac_tx_done();
+      }
+      break;
+  }
 }
 
 void ChipCore::mac_char(const UartChar& c) {

@@ -26,10 +26,7 @@ std::uint16_t offline_only(ChipCore& c, std::uint16_t old, std::uint16_t next) {
 void mode_reg1_set(ChipCore& c, std::uint16_t /*old*/, std::uint16_t /*now*/) {
   const std::uint16_t written = c.written_bits;
   if ((written & kStart_SPC3) != 0) c.start();
-  if ((written & kEOI) != 0) {
-    c.arm_eoi();
-    c.log(LogLevel::debug, "EOI: X/INT inactive until cycle {}", c.now + c.eoi_inactive_cycles());
-  }
+  if ((written & kEOI) != 0) c.end_of_interrupt();
   if ((written & kUser_Leave_Master) != 0) c.leave_master();
   if ((written & kGo_Offline) != 0) c.go_offline();
 }
@@ -56,7 +53,7 @@ void ChipCore::start() {
   ram_access_violation = false;
   latch[idx(RegId::Mode_Reg1)] &= static_cast<std::uint16_t>(~kGo_Offline);
   timers.reset();
-  arm_user_timer();
+  arm(timers.user, user_timer_period());
   dp.reset();
   buffers.n_cl = false;
   buffers.in_clear = false;
@@ -109,6 +106,13 @@ void ChipCore::leave_master() {
 std::uint32_t ChipCore::user_timer_period() const {
   constexpr std::uint16_t kUser_Time_Base = 1u << 10;
   return cycles_for_us(mode0(kUser_Time_Base) ? 10000 : 1000);
+}
+
+// User_Timer_Clock: while the chip is started, every 1 ms (10 ms with Mode_Reg0.User_Time_Base).
+void ChipCore::user_timer_due() {
+  if (!reached(timers.user)) return;
+  arm(timers.user, user_timer_period());
+  raise(irq::User_Timer_Clock);
 }
 
 std::uint16_t ChipCore::status() const {

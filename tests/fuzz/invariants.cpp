@@ -110,7 +110,7 @@ void InvariantChecker::attach(Chip& chip, bool line_idle) {
   cfg_ok_addr_ = chip.addr_of(RegId::User_Cfg_Data_Okay);
   new_din_addr_ = chip.addr_of(RegId::New_Din_Buffer_Cmd);
   // The one piece of internal state read: an EOI inactive time already running at attach.
-  eoi_until_ = chip.core().irq.eoi_block_until;
+  eoi_until_ = chip.core().irq.eoi.at;
   reported_ = chip.irq_active();
   dp_ = chip.dp_state();
   started_ = chip.started();

@@ -81,7 +81,7 @@ TEST(Invariants, XintWithAHiddenInactiveTimeIsReported) {
   s.checker.check();
   ASSERT_TRUE(s.seen.messages.empty());
   // The model holds the line inactive although nobody wrote EOI.
-  s.chip.core().irq.eoi_block_until = s.chip.cycle() + 1000;
+  s.chip.core().irq.eoi.at = s.chip.cycle() + 1000;
   s.checker.check();
   EXPECT_TRUE(s.seen.any_containing("X/INT")) << ::testing::PrintToString(s.seen.messages);
 }
