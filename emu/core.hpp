@@ -1,6 +1,8 @@
-// Internal state of one chip: the register file storage, RAM, and every hardware block.
-// Blocks keep their own state in small structs and attach behaviour to registers through
-// hooks (install_*_hooks), next to the block they belong to.
+// Internal state of one chip: the register file storage, RAM, and every hardware block
+// (docs/architecture.md, "The chip's blocks"). Blocks keep their own state in small structs and
+// attach behaviour to registers through hooks (install_*_hooks), next to the block they belong
+// to; their timers are engine timers (timer.hpp). Reached from outside the emulator only through
+// dpc31::Chip, and by the block-level tools and tests through emu/harness.hpp.
 #pragma once
 
 #include <fmt/format.h>
@@ -12,10 +14,12 @@
 #include <span>
 #include <vector>
 
+#include "block_event.hpp"
 #include "buffers.hpp"
 #include "dp_services.hpp"
 #include "dp_sm.hpp"
 #include "dpc31/chip.hpp"
+#include "dpc31/reg_fields.hpp"
 #include "dpc31/reg_ids.hpp"
 #include "dpc31/regdesc.hpp"
 #include "fdl.hpp"
@@ -115,6 +119,7 @@ struct ChipCore {
   Observers<std::uint64_t, bool> rxd_observer;  // edges as they are driven (possibly ahead of time)
   Observers<const Telegram&> telegram_observer;
   Observers<std::uint64_t, const BlockEvent&> block_observer;
+  Observers<std::uint64_t, const BusAccess&> bus_observer;
   Observers<std::uint64_t> state_observer;  // after every event and every bus access
   // Reports a protocol-side action on the blocks (call sites only, never inside the actions).
   void emit(BlockEvent::Kind k, std::uint16_t value = 0, std::uint8_t data = 0) const {
@@ -145,7 +150,7 @@ struct ChipCore {
   void set_cell16(const RegDesc& r, std::uint16_t v);
   [[nodiscard]] std::uint16_t reg_value(RegId id) const;  // storage or derived (no side effect)
 
-  // --- time (chip.cpp: the event engine; per_cycle.cpp: the per-cycle engine) ---
+  // --- time (engine.cpp: both engines, docs/engine.md) ---
   enum class Stop : std::uint8_t { never, on_irq, on_irq_or_request };
   // Advances time; with Stop::on_irq it stops right after the event that makes the interrupt
   // active and returns true (also after Chip::request_stop with on_irq_or_request).
@@ -183,7 +188,7 @@ struct ChipCore {
   void stop_search_window();
   void drive_rxd(std::uint64_t cycle, bool level);
 
-  // --- MAC (mac.cpp) ---
+  // --- MAC (mac.cpp: the event engine's mac_process and the per-cycle engine's mac_clock) ---
   void mac_start_search();
   void mac_listen(std::uint8_t code);  // receive at kBaudRates[code] from now on
   void mac_search_next();
@@ -202,13 +207,13 @@ struct ChipCore {
   void mac_clock();    // per-cycle engine: the same, one clock
   [[nodiscard]] std::uint64_t mac_deadline() const;
 
-  // --- interrupt line (irq.cpp) ---
+  // --- interrupt controller and X/INT, the EOI inactive time (irq.cpp) ---
   void raise(std::uint16_t bits);
   void update_irq_line();
   [[nodiscard]] bool irq_active() const;
   void end_of_interrupt();  // EOI: the inactive time starts
 
-  // --- mode and state (mode.cpp) ---
+  // --- mode and state, the user timer (mode.cpp) ---
   void start();
   void go_offline();
   void leave_master();
@@ -251,7 +256,7 @@ struct ChipCore {
   void prm_fault();
   void cfg_accepted();
   bool user_watchdog_tick();
-  bool receive_via_aux(int sel_bit, RegId target_ptr, RegId len_cell,
+  bool receive_via_aux(std::uint16_t sel, RegId target_ptr, RegId len_cell,
                        std::span<const std::uint8_t> du);
   void set_cell(RegId id, std::uint8_t v);
   void swap_cells(RegId a, RegId b);

@@ -11,9 +11,6 @@ namespace dpc31 {
 
 namespace {
 
-constexpr std::uint16_t kDis_Start_Control = 1u << 0;
-constexpr std::uint16_t kDis_Stop_Control = 1u << 1;
-
 void count(FdlCounters& n, fdl::Error e) {
   switch (e) {
     case fdl::Error::none:
@@ -225,8 +222,8 @@ void ChipCore::mac_clock() {
 }
 
 void ChipCore::mac_char(const UartChar& c) {
-  const bool start_ok = c.start_ok || mode0(kDis_Start_Control);
-  const bool stop_ok = c.stop_ok || mode0(kDis_Stop_Control);
+  const bool start_ok = c.start_ok || mode0(fields::Mode_Reg0::Dis_Start_Control);
+  const bool stop_ok = c.stop_ok || mode0(fields::Mode_Reg0::Dis_Stop_Control);
   if (!c.parity_ok || !start_ok || !stop_ok) {
     // One count per broken telegram: characters misframed after the first error are its tail.
     // Of one character's errors the first sampled counts: start bit, parity, stop bit.
@@ -356,7 +353,7 @@ void bit_timer(Ar& ar, T& b) {
 
 // `chars` is scratch (cleared before every use), not state.
 template <typename Ar, typename S>
-void fields(Ar& ar, S& s) {
+void members(Ar& ar, S& s) {
   static_assert(snap::member_count<Mac>() == 17, "a new member: add it here");
   ar.block(s.rx);
   ar.block(s.frame);
@@ -414,12 +411,12 @@ void counter_fields(Ar& ar, S& s) {
 
 void save_state(snap::Writer& w, const Mac& s) {
   w.section("MAC ");
-  fields(w, s);
+  members(w, s);
 }
 
 void load_state(snap::Reader& r, Mac& s) {
   r.section("MAC ");
-  fields(r, s);
+  members(r, s);
   s.chars.clear();
   // Only a telegram in progress has a timeout; a stale one would be due for ever.
   if (!s.in_frame && s.frame_timeout != kNever) r.fail("frame timeout outside a telegram");

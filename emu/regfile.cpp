@@ -202,6 +202,7 @@ std::uint32_t ChipCore::begin_access(std::uint32_t addr, std::string_view what) 
 std::uint8_t ChipCore::bus_read(std::uint32_t addr) {
   advance(prof->bus_access_cycles);
   emit(BlockEvent::Kind::read, static_cast<std::uint16_t>(addr));
+  if (bus_observer) bus_observer(now, BusAccess{false, static_cast<std::uint16_t>(addr), 0});
   const std::uint8_t v = read_now(addr);
   state_observer(now);
   return v;
@@ -210,6 +211,7 @@ std::uint8_t ChipCore::bus_read(std::uint32_t addr) {
 void ChipCore::bus_write(std::uint32_t addr, std::uint8_t value) {
   advance(prof->bus_access_cycles);
   emit(BlockEvent::Kind::write, static_cast<std::uint16_t>(addr), value);
+  if (bus_observer) bus_observer(now, BusAccess{true, static_cast<std::uint16_t>(addr), value});
   write_now(addr, value);
   state_observer(now);
 }

@@ -6,11 +6,7 @@
 
 namespace dpc31 {
 
-namespace {
-
-constexpr std::uint16_t kMode0_DP_Mode = 1u << 8;
-
-}  // namespace
+namespace {}  // namespace
 
 // Baud_Control monitoring time; the VPC3+S manual states a factor 2 that the SPC3 text lacks.
 // WD_Baud_Control_Val = 0 switches the monitoring off (modelled).
@@ -38,7 +34,7 @@ void ChipCore::watchdog_parameterise(bool wd_on, std::uint8_t f1, std::uint8_t f
   timers.dp_wd_on = wd_on;
   timers.dp_wd_cycles = cycles_for_us(std::uint64_t{base_1ms ? 1000u : 10'000u} * f1 * f2);
   if (timers.wd == WdState::Baud_Search) return;
-  if (wd_on && mode0(kMode0_DP_Mode)) {
+  if (wd_on && mode0(fields::Mode_Reg0::DP_Mode)) {
     timers.wd = WdState::DP_Control;
     arm(timers.watchdog, timers.dp_wd_cycles);
   } else {
@@ -85,7 +81,7 @@ namespace dpc31 {
 namespace {
 
 template <typename Ar, typename S>
-void fields(Ar& ar, S& s) {
+void members(Ar& ar, S& s) {
   static_assert(snap::member_count<Timers>() == 5, "a new member: add it here");
   static_assert(snap::member_count<Timer>() == 2, "a new member: add it here and in IRQC");
   // The order of format version 2 (docs/snapshots.md): both timers' deadlines first, their
@@ -103,12 +99,12 @@ void fields(Ar& ar, S& s) {
 
 void save_state(snap::Writer& w, const Timers& s) {
   w.section("TIMR");
-  fields(w, s);
+  members(w, s);
 }
 
 void load_state(snap::Reader& r, Timers& s) {
   r.section("TIMR");
-  fields(r, s);
+  members(r, s);
 }
 
 }  // namespace dpc31

@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "../../emu/core.hpp"
+#include "../../emu/harness.hpp"
 #include "../../emu/scenario.hpp"
 
 namespace dpc31::fuzz {
@@ -110,7 +110,7 @@ void InvariantChecker::attach(Chip& chip, bool line_idle) {
   cfg_ok_addr_ = chip.addr_of(RegId::User_Cfg_Data_Okay);
   new_din_addr_ = chip.addr_of(RegId::New_Din_Buffer_Cmd);
   // The one piece of internal state read: an EOI inactive time already running at attach.
-  eoi_until_ = chip.core().irq.eoi.at;
+  eoi_until_ = chip.eoi_inactive_until();
   reported_ = chip.irq_active();
   dp_ = chip.dp_state();
   started_ = chip.started();
@@ -134,7 +134,7 @@ void InvariantChecker::attach(Chip& chip, bool line_idle) {
   chip.on_telegram([this](const Telegram& t) {
     if (t.from_chip) on_answer(t);
   });
-  chip.on_block_event([this](std::uint64_t, const BlockEvent& e) { on_block(e); });
+  harness::on_block_event(chip, [this](std::uint64_t, const BlockEvent& e) { on_block(e); });
   chip.on_state_change([this](std::uint64_t) { check(); });
 }
 
