@@ -200,7 +200,11 @@ void InvariantChecker::check_buffers() {
   const bool dpc31 = chip_->profile().id == Profile::dpc31;
   // dpc31: Dout_Buffer_SM bit 7 is N_Cl and F is not shown (docs/decisions.md).
   const std::uint16_t dout = chip_->peek_reg(RegId::Dout_Buffer_SM);
-  std::string p = ring_problem(dpc31 ? (dout & 0x3F) : dout, dpc31);
+  std::string p =
+      ring_problem(dpc31 ? (dout & (fields::Dout_Buffer_SM::D | fields::Dout_Buffer_SM::N |
+                                    fields::Dout_Buffer_SM::U))
+                         : dout,
+                   dpc31);
   if (!p.empty()) fail(fmt::format("Dout_Buffer_SM {:02X}: {}", dout, p));
   const std::uint16_t din = chip_->peek_reg(RegId::Din_Buffer_SM);
   p = ring_problem(din, false);

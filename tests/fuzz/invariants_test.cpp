@@ -164,7 +164,7 @@ TEST(Invariants, DataExchangeWithoutGoLeaveIsReported) {
   ASSERT_TRUE(s.seen.messages.empty()) << s.seen.messages.front();
   dpc31::harness::core(s.chip).dp.state = DpState::Data_Exchange;
   dpc31::harness::core(s.chip).latch[dpc31::ChipCore::idx(RegId::Int_Req_Reg)] &=
-      static_cast<std::uint16_t>(~2u);
+      static_cast<std::uint16_t>(~dpc31::irq::Go_Leave_Data_Exchange);
   dpc31::harness::core(s.chip).update_irq_line();
   s.checker.on_block({dpc31::BlockEvent::Kind::read,
                       static_cast<std::uint16_t>(s.addr(RegId::User_Cfg_Data_Okay)), 0});
