@@ -219,7 +219,7 @@ struct ChipCore {
   void leave_master();
   [[nodiscard]] std::uint16_t status() const;
   [[nodiscard]] std::uint32_t user_timer_period() const;
-  void user_timer_due();  // the User_Timer_Clock tick, if it is due now
+  void user_timer_tick();  // the User_Timer_Clock tick (its timer reached now)
 
   // --- buffers, ASIC side (buffers.cpp) ---
   void dout_received();
@@ -297,5 +297,35 @@ struct ChipCore {
   void note_violation(std::uint32_t addr, std::uint32_t mapped);
   void write_reg(const RegDesc& r, std::uint32_t offset, std::uint8_t value);
 };
+
+// ---- the engine's timer operations (timer.hpp), inline for the hot paths; the engines
+// themselves are in engine.cpp ----
+
+// Whatever sets a deadline tells the engine: a bus access must not run past it.
+inline void ChipCore::note_deadline(std::uint64_t at) {
+  if (at < quiet_until) quiet_until = 0;
+}
+
+inline void ChipCore::arm(Timer& t, std::uint64_t cycles) {
+  if (engine == Engine::event) {
+    t.at = cycles == kNever ? kNever : now + cycles;
+    note_deadline(t.at);
+  } else {
+    t.left = cycles;
+  }
+}
+
+inline bool ChipCore::reached(const Timer& t) const {
+  return engine == Engine::event ? t.at <= now : t.left == 0;
+}
+
+inline bool ChipCore::running(const Timer& t) const {
+  return engine == Engine::event ? now < t.at : t.left != 0;
+}
+
+inline std::uint64_t ChipCore::due(const Timer& t) const {
+  if (engine == Engine::event) return t.at;
+  return t.left == kNever ? kNever : now + t.left;
+}
 
 }  // namespace dpc31

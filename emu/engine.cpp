@@ -25,34 +25,7 @@ void ChipCore::reset_time() {
   quiet_until = 0;
 }
 
-// ---- the timers (timer.hpp): each engine keeps them its own way ----
-
-// Whatever sets a deadline tells the engine: a bus access must not run past it.
-void ChipCore::note_deadline(std::uint64_t at) {
-  if (at < quiet_until) quiet_until = 0;
-}
-
-void ChipCore::arm(Timer& t, std::uint64_t cycles) {
-  if (engine == Engine::event) {
-    t.at = cycles == kNever ? kNever : now + cycles;
-    note_deadline(t.at);
-  } else {
-    t.left = cycles;
-  }
-}
-
-bool ChipCore::reached(const Timer& t) const {
-  return engine == Engine::event ? t.at <= now : t.left == 0;
-}
-
-bool ChipCore::running(const Timer& t) const {
-  return engine == Engine::event ? now < t.at : t.left != 0;
-}
-
-std::uint64_t ChipCore::due(const Timer& t) const {
-  if (engine == Engine::event) return t.at;
-  return t.left == kNever ? kNever : now + t.left;
-}
+// ---- the timers (timer.hpp; arm, reached, running, due: core.hpp, inline) ----
 
 // Per-cycle engine: one clock of a running timer.
 static void count_clock(Timer& t) {
@@ -122,7 +95,7 @@ void ChipCore::skip_quiet_user_ticks(std::uint64_t bound) {
 
 // Everything due at `now`, in the order of docs/timing.md.
 void ChipCore::process_events() {
-  user_timer_due();
+  if (reached(timers.user)) user_timer_tick();
   mac_process();
   if (reached(timers.watchdog)) watchdog_expired();
   update_irq_line();
@@ -171,7 +144,7 @@ void ChipCore::clock() {
   // The watchdog counts this clock before the MAC may retrigger it, and expires after.
   count_clock(timers.watchdog);
   count_clock(timers.user);
-  user_timer_due();
+  if (reached(timers.user)) user_timer_tick();
   mac_clock();
   if (reached(timers.watchdog)) watchdog_expired();
   update_irq_line();

@@ -100,8 +100,7 @@ std::uint32_t ChipCore::user_timer_period() const {
 }
 
 // User_Timer_Clock: while the chip is started, every 1 ms (10 ms with Mode_Reg0.User_Time_Base).
-void ChipCore::user_timer_due() {
-  if (!reached(timers.user)) return;
+void ChipCore::user_timer_tick() {
   arm(timers.user, user_timer_period());
   raise(irq::User_Timer_Clock);
 }
