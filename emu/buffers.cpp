@@ -7,15 +7,15 @@ namespace dpc31 {
 
 namespace {
 
-constexpr std::uint8_t kState_U_Buffer = 0x04;
-constexpr std::uint8_t kU_Buffer_Cleared = 0x08;
 constexpr std::uint8_t kStat_Diag = 0x02;  // diag buffer byte 0
 
 std::uint16_t din_sm(const ChipCore& c) { return c.buffers.din.sm(); }
 // dpc31: bit 7 is N_Cl and F (always the one buffer D, N, U leave) is not shown.
 std::uint16_t dout_sm(const ChipCore& c) {
   if (c.prof->id != Profile::dpc31) return c.buffers.dout.sm();
-  return static_cast<std::uint16_t>((c.buffers.n_cl ? 0x80 : 0) | (c.buffers.dout.sm() & 0x3F));
+  namespace f = fields::Dout_Buffer_SM;
+  return static_cast<std::uint16_t>((c.buffers.n_cl ? f::N_Cl : 0) |
+                                    (c.buffers.dout.sm() & (f::D | f::N | f::U)));
 }
 std::uint16_t diag_sm(const ChipCore& c) { return c.buffers.diag.sm(); }
 
@@ -36,13 +36,14 @@ std::uint16_t next_dout(BufferUnit& b) {
     b.n_cleared = false;
     b.c_swap_pending = true;
     b.u_cleared = true;
-    r = kState_U_Buffer;
+    r = fields::Next_Dout_Buffer_Cmd::State_U_Buffer;
   } else if (b.dout.n_to_u()) {
     b.u_cleared = b.n_cleared;
     b.n_cleared = false;
-    r = kState_U_Buffer;
+    r = fields::Next_Dout_Buffer_Cmd::State_U_Buffer;
   }
-  return static_cast<std::uint8_t>(r | (b.u_cleared ? kU_Buffer_Cleared : 0) | b.dout.u);
+  return static_cast<std::uint8_t>(
+      r | (b.u_cleared ? fields::Next_Dout_Buffer_Cmd::U_Buffer_Cleared : 0) | b.dout.u);
 }
 
 // User: hand the prepared diag buffer to the ASIC. The ASIC's previous buffer comes back at
@@ -219,7 +220,7 @@ void ring_fields(Ar& ar, S& s) {
 }
 
 template <typename Ar, typename S>
-void fields(Ar& ar, S& s) {
+void members(Ar& ar, S& s) {
   static_assert(snap::member_count<BufferUnit>() == 10, "a new member: add it here");
   static_assert(snap::member_count<DiagPair>() == 2, "a new member: add it here");
   ring_fields(ar, s.dout);
@@ -248,12 +249,12 @@ bool valid_ring(const BufferRing& b) {
 
 void save_state(snap::Writer& w, const BufferUnit& s) {
   w.section("BUFS");
-  fields(w, s);
+  members(w, s);
 }
 
 void load_state(snap::Reader& r, BufferUnit& s) {
   r.section("BUFS");
-  fields(r, s);
+  members(r, s);
   if (!valid_ring(s.dout) || !valid_ring(s.din)) r.fail("Dout or Din ring is not buffers 1..3");
 }
 

@@ -76,6 +76,11 @@ struct BufferUnit {
   // exchanges change nothing until real outputs arrive ("once per clear").
   bool in_clear = false;
   [[nodiscard]] bool dout_n_pending() const { return dout.n != 0 || n_cl; }
+  // dpc31: Start and Leave_Master end a clear: no clear buffer due, the next Clear_Data counts.
+  void end_clear() {
+    n_cl = false;
+    in_clear = false;
+  }
   void reset() { *this = BufferUnit{}; }
 };
 

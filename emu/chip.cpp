@@ -51,18 +51,24 @@ void Chip::on_rxd(std::function<void(std::uint64_t, bool)> cb) {
 void Chip::on_state_change(std::function<void(std::uint64_t)> cb) {
   core_->state_observer.add(std::move(cb));
 }
-void Chip::on_txd(std::function<void(std::uint64_t, bool)> cb) {
-  // Edges before now happened unwatched; from now on each one is an event again.
-  core_->mac_tx_catch_up();
-  core_->quiet_until = 0;
-  core_->txd_observer.add(std::move(cb));
-}
-void Chip::on_block_event(std::function<void(std::uint64_t, const BlockEvent&)> cb) {
-  core_->block_observer.add(std::move(cb));
+void Chip::on_txd(std::function<void(std::uint64_t, bool)> cb) { core_->watch_txd(std::move(cb)); }
+void Chip::on_bus_access(std::function<void(std::uint64_t, const BusAccess&)> cb) {
+  core_->bus_observer.add(std::move(cb));
 }
 void Chip::on_telegram(std::function<void(const Telegram&)> cb) {
   core_->telegram_observer.add(std::move(cb));
 }
+ChipProbe Chip::probe() const {
+  const ChipCore& c = *core_;
+  return {c.dp.state,          c.timers.wd,
+          c.baud_code,         c.latch[ChipCore::idx(RegId::Int_Req_Reg)],
+          c.buffers.dout.sm(), c.buffers.din.sm(),
+          c.buffers.diag.sm()};
+}
+std::uint64_t Chip::next_deadline() const { return core_->next_event(); }
+std::uint64_t Chip::watchdog_due() const { return core_->watchdog_due(); }
+std::uint64_t Chip::eoi_inactive_until() const { return core_->due(core_->irq.eoi); }
+
 bool Chip::txd_pin() const { return core_->txd_level(); }
 const FdlCounters& Chip::fdl_counters() const { return core_->counters; }
 std::uint8_t Chip::station_address() const { return core_->dp.station; }
@@ -72,9 +78,8 @@ std::uint32_t Chip::clock_hz() const { return core_->clock_hz; }
 std::uint32_t Chip::bus_access_cycles() const { return core_->prof->bus_access_cycles; }
 
 bool Chip::x_int_pin() const {
-  constexpr std::uint16_t kINT_Pol = 1u << 4;
   // INT_Pol = 0: low-active (the default), 1: high-active.
-  return core_->mode0(kINT_Pol) ? core_->irq_active() : !core_->irq_active();
+  return core_->mode0(fields::Mode_Reg0::INT_Pol) ? core_->irq_active() : !core_->irq_active();
 }
 bool Chip::irq_active() const { return core_->irq_active(); }
 bool Chip::pb3_pin() const { return core_->pb3; }
@@ -121,16 +126,6 @@ std::int32_t Chip::addr_of(RegId id) const {
   return r->read_addr >= 0 ? r->read_addr : r->write_addr;
 }
 
-void Chip::asic_raise(std::uint16_t irq_bits) { core_->raise(irq_bits); }
-void Chip::asic_dout_received() { core_->dout_received(); }
-void Chip::asic_dout_clear() { core_->dout_clear(); }
-std::uint8_t Chip::asic_din_fetch() { return core_->din_fetch(); }
-void Chip::asic_diag_send_begin() { core_->diag_send_begin(); }
-void Chip::asic_diag_send_end() { core_->diag_send_end(core_->sent_diag_has_stat_diag()); }
-
-void Chip::asic_prm_received() { core_->prm_accepted(); }
-void Chip::asic_cfg_received() { core_->cfg_accepted(); }
-void Chip::asic_ssa_received() { core_->ssa_accepted(); }
 bool Chip::ssa_buffer_free() const { return core_->dp.ssa_free; }
 
 // ---- snapshots (docs/snapshots.md) ----
@@ -143,7 +138,7 @@ namespace {
 // configuration into the header, attachments into move_attachments.
 #if defined(__x86_64__) && defined(__GLIBCXX__)
 constexpr std::size_t round8(std::size_t n) { return (n + 7) / 8 * 8; }
-static_assert(sizeof(ChipCore) - 2 * round8(sizeof(ChipCore::latch)) - sizeof(HookTable) == 1280,
+static_assert(sizeof(ChipCore) - 2 * round8(sizeof(ChipCore::latch)) - sizeof(HookTable) == 1304,
               "a new member of ChipCore: see the comment above");
 #endif
 
@@ -199,6 +194,7 @@ void move_attachments(ChipCore& from, ChipCore& to) noexcept {
   to.rxd_observer = std::move(from.rxd_observer);
   to.telegram_observer = std::move(from.telegram_observer);
   to.block_observer = std::move(from.block_observer);
+  to.bus_observer = std::move(from.bus_observer);
   to.state_observer = std::move(from.state_observer);
 }
 

@@ -1,6 +1,8 @@
-// Internal state of one chip: the register file storage, RAM, and every hardware block.
-// Blocks keep their own state in small structs and attach behaviour to registers through
-// hooks (install_*_hooks), next to the block they belong to.
+// Internal state of one chip: the register file storage, RAM, and every hardware block
+// (docs/architecture.md, "The chip's blocks"). Blocks keep their own state in small structs and
+// attach behaviour to registers through hooks (install_*_hooks), next to the block they belong
+// to; their timers are engine timers (timer.hpp). Reached from outside the emulator only through
+// dpc31::Chip, and by the block-level tools and tests through emu/harness.hpp.
 #pragma once
 
 #include <fmt/format.h>
@@ -12,10 +14,12 @@
 #include <span>
 #include <vector>
 
+#include "block_event.hpp"
 #include "buffers.hpp"
 #include "dp_services.hpp"
 #include "dp_sm.hpp"
 #include "dpc31/chip.hpp"
+#include "dpc31/reg_fields.hpp"
 #include "dpc31/reg_ids.hpp"
 #include "dpc31/regdesc.hpp"
 #include "fdl.hpp"
@@ -115,6 +119,7 @@ struct ChipCore {
   Observers<std::uint64_t, bool> rxd_observer;  // edges as they are driven (possibly ahead of time)
   Observers<const Telegram&> telegram_observer;
   Observers<std::uint64_t, const BlockEvent&> block_observer;
+  Observers<std::uint64_t, const BusAccess&> bus_observer;
   Observers<std::uint64_t> state_observer;  // after every event and every bus access
   // Reports a protocol-side action on the blocks (call sites only, never inside the actions).
   void emit(BlockEvent::Kind k, std::uint16_t value = 0, std::uint8_t data = 0) const {
@@ -145,7 +150,7 @@ struct ChipCore {
   void set_cell16(const RegDesc& r, std::uint16_t v);
   [[nodiscard]] std::uint16_t reg_value(RegId id) const;  // storage or derived (no side effect)
 
-  // --- time (chip.cpp: the event engine; per_cycle.cpp: the per-cycle engine) ---
+  // --- time (engine.cpp: both engines, docs/engine.md) ---
   enum class Stop : std::uint8_t { never, on_irq, on_irq_or_request };
   // Advances time; with Stop::on_irq it stops right after the event that makes the interrupt
   // active and returns true (also after Chip::request_stop with on_irq_or_request).
@@ -158,6 +163,10 @@ struct ChipCore {
     return advance_to(end, stop_at);
   }
   bool advance_to(std::uint64_t end, Stop stop_at);
+  void reset_time();  // cycle 0
+  // Whatever sets a deadline (arm, the MAC's receiver and transmitter) reports it here: the event
+  // engine's bus accesses then look for it (quiet_until).
+  void note_deadline(std::uint64_t at);
   bool advance_events(std::uint64_t end, Stop stop_at);
   bool advance_clocks(std::uint64_t end, Stop stop_at);
   // Event engine: the earliest deadline (the per-cycle engine: the next clock).
@@ -166,19 +175,20 @@ struct ChipCore {
   void skip_quiet_user_ticks(std::uint64_t bound);
   void process_events();
   void clock();  // per-cycle engine: one clock, everything in the order of docs/timing.md
-  void mac_clock();
   [[nodiscard]] std::uint64_t cycles_for_us(std::uint64_t us) const;
   // The cycle the running watchdog expires (kNever: none), from the engine's own state.
-  [[nodiscard]] std::uint64_t watchdog_due() const;
-  // Timers armed by the actions; each engine keeps them its own way (deadline or counter).
-  void arm_user_timer();
-  void arm_watchdog(std::uint64_t cycles);  // kNever: off
-  void arm_eoi();
+  [[nodiscard]] std::uint64_t watchdog_due() const { return due(timers.watchdog); }
+  // The timers of the blocks (timer.hpp): each engine keeps them its own way (deadline or
+  // counter); the blocks only arm them and ask.
+  void arm(Timer& t, std::uint64_t cycles);          // fires `cycles` clocks from now; kNever: off
+  [[nodiscard]] bool reached(const Timer& t) const;  // fires now (or has fired, not re-armed)
+  [[nodiscard]] bool running(const Timer& t) const;  // armed and not yet reached
+  [[nodiscard]] std::uint64_t due(const Timer& t) const;  // the cycle it fires (kNever: off)
   void arm_search_window();
   void stop_search_window();
   void drive_rxd(std::uint64_t cycle, bool level);
 
-  // --- MAC (mac.cpp) ---
+  // --- MAC (mac.cpp: the event engine's mac_process and the per-cycle engine's mac_clock) ---
   void mac_start_search();
   void mac_listen(std::uint8_t code);  // receive at kBaudRates[code] from now on
   void mac_search_next();
@@ -186,27 +196,30 @@ struct ChipCore {
   void mac_txd(std::uint64_t cycle, bool level);
   void mac_tx_done();
   [[nodiscard]] bool mac_tx_busy() const;
-  void mac_tx_catch_up();                // event engine: TxD edges due by now onto the pin
+  void mac_tx_catch_up();  // event engine: TxD edges due by now onto the pin
+  void watch_txd(std::function<void(std::uint64_t, bool)> cb);  // Chip::on_txd
   [[nodiscard]] bool txd_level() const;  // TxD now, also with edges not yet taken
   void mac_stop();
   void mac_char(const UartChar& c);
   void mac_frame(const fdl::Frame& f, const UartChar& last);
   void mac_send(const fdl::Frame& f, std::uint64_t request_end);
   void mac_process();  // receiver, frame timeout, search, transmitter: whatever is due now
+  void mac_clock();    // per-cycle engine: the same, one clock
   [[nodiscard]] std::uint64_t mac_deadline() const;
 
-  // --- interrupt line (irq.cpp) ---
+  // --- interrupt controller and X/INT, the EOI inactive time (irq.cpp) ---
   void raise(std::uint16_t bits);
   void update_irq_line();
   [[nodiscard]] bool irq_active() const;
-  [[nodiscard]] std::uint32_t eoi_inactive_cycles() const;
+  void end_of_interrupt();  // EOI: the inactive time starts
 
-  // --- mode and state (mode.cpp) ---
+  // --- mode and state, the user timer (mode.cpp) ---
   void start();
   void go_offline();
   void leave_master();
   [[nodiscard]] std::uint16_t status() const;
   [[nodiscard]] std::uint32_t user_timer_period() const;
+  void user_timer_tick();  // the User_Timer_Clock tick (its timer reached now)
 
   // --- buffers, ASIC side (buffers.cpp) ---
   void dout_received();
@@ -243,7 +256,7 @@ struct ChipCore {
   void prm_fault();
   void cfg_accepted();
   bool user_watchdog_tick();
-  bool receive_via_aux(int sel_bit, RegId target_ptr, RegId len_cell,
+  bool receive_via_aux(std::uint16_t sel, RegId target_ptr, RegId len_cell,
                        std::span<const std::uint8_t> du);
   void set_cell(RegId id, std::uint8_t v);
   void swap_cells(RegId a, RegId b);
@@ -284,5 +297,35 @@ struct ChipCore {
   void note_violation(std::uint32_t addr, std::uint32_t mapped);
   void write_reg(const RegDesc& r, std::uint32_t offset, std::uint8_t value);
 };
+
+// ---- the engine's timer operations (timer.hpp), inline for the hot paths; the engines
+// themselves are in engine.cpp ----
+
+// Whatever sets a deadline tells the engine: a bus access must not run past it.
+inline void ChipCore::note_deadline(std::uint64_t at) {
+  if (at < quiet_until) quiet_until = 0;
+}
+
+inline void ChipCore::arm(Timer& t, std::uint64_t cycles) {
+  if (engine == Engine::event) {
+    t.at = cycles == kNever ? kNever : now + cycles;
+    note_deadline(t.at);
+  } else {
+    t.left = cycles;
+  }
+}
+
+inline bool ChipCore::reached(const Timer& t) const {
+  return engine == Engine::event ? t.at <= now : t.left == 0;
+}
+
+inline bool ChipCore::running(const Timer& t) const {
+  return engine == Engine::event ? now < t.at : t.left != 0;
+}
+
+inline std::uint64_t ChipCore::due(const Timer& t) const {
+  if (engine == Engine::event) return t.at;
+  return t.left == kNever ? kNever : now + t.left;
+}
 
 }  // namespace dpc31

@@ -10,15 +10,9 @@ namespace dpc31 {
 
 namespace {
 
-constexpr std::uint16_t kEn_Change_Cfg_Buffer = 1u << 4;
-constexpr std::uint16_t kRes_User_WD = 1u << 5;
-constexpr std::uint16_t kMode0_Dis_Start_Stop = 0x0003;
-constexpr std::uint16_t kMode0_Sync_Supported = 1u << 6;
-constexpr std::uint16_t kMode0_Freeze_Supported = 1u << 7;
-constexpr std::uint16_t kMode0_DP_Mode = 1u << 8;
-constexpr std::uint16_t kMode0_Spec_Clear_Mode = 1u << 13;
-constexpr std::uint16_t kMode0_WD_Base_Vpc3 = 1u << 2;
-constexpr std::uint16_t kMode2_No_Check_Prm_Reserved = 1u << 6;
+// Dis_Start_Control and Dis_Stop_Control, which Spec_User_Prm_Byte overwrites.
+constexpr std::uint16_t kDis_Start_Stop =
+    fields::Mode_Reg0::Dis_Start_Control | fields::Mode_Reg0::Dis_Stop_Control;
 
 // Set_Prm Station_Status (DU byte 0) and Spec_User_Prm_Byte (DU byte 7, SPC3).
 constexpr std::uint8_t kLock_Req = 0x80;
@@ -76,7 +70,7 @@ void cfg_done(ChipCore& c, Verdict v) {
     c.leave_master();
     return;
   }
-  if ((c.latch[ChipCore::idx(RegId::Mode_Reg1)] & kEn_Change_Cfg_Buffer) != 0) {
+  if ((c.latch[ChipCore::idx(RegId::Mode_Reg1)] & fields::Mode_Reg1::En_Change_Cfg_Buffer) != 0) {
     // Get_Cfg answers the new configuration from now on.
     c.swap_cells(RegId::R_Cfg_Buf_Ptr, RegId::R_Read_Cfg_Buf_Ptr);
   }
@@ -162,9 +156,9 @@ std::vector<std::uint8_t> ChipCore::read_buffer(RegId ptr_cell, std::size_t len)
 
 // A telegram is received into the Aux buffer R_Aux_Buf_Sel selects and, when it fits, the Aux
 // and target buffers are exchanged (pointer cells swap) and the length cell written.
-bool ChipCore::receive_via_aux(int sel_bit, RegId target_ptr, RegId len_cell,
+bool ChipCore::receive_via_aux(std::uint16_t sel, RegId target_ptr, RegId len_cell,
                                std::span<const std::uint8_t> du) {
-  const bool aux2 = ((cell(RegId::R_Aux_Buf_Sel) >> sel_bit) & 1) != 0;
+  const bool aux2 = (cell(RegId::R_Aux_Buf_Sel) & sel) != 0;
   const RegId aux_ptr = aux2 ? RegId::R_Aux_Buf_Ptr2 : RegId::R_Aux_Buf_Ptr1;
   const RegId aux_len = aux2 ? RegId::R_Len_Cntrl_Buf2 : RegId::R_Len_Cntrl_Buf1;
   if (du.size() > cell(aux_len)) return false;
@@ -201,7 +195,7 @@ std::optional<fdl::Frame> ChipCore::dp_service(const fdl::Frame& req) {
   std::optional<Frame> answer;
   if (fn == fdl::Function::FDL_Status && !req.dsap) {
     answer = short_answer(*this, req, Response::OK);
-  } else if (!mode0(kMode0_DP_Mode)) {
+  } else if (!mode0(fields::Mode_Reg0::DP_Mode)) {
     // Mode_Reg0: "DP_MODE: 0 = DP_Mode is disabled. 1 = DP_Mode is enabled. SPC3 sets up all
     // DP_SAPs." Without it no DP SAP (nor Data_Exchange's default SAP) exists: the chip is a
     // plain FDL station that answers FDL_Status and refuses the rest with RS (modelled).
@@ -279,8 +273,9 @@ std::optional<fdl::Frame> ChipCore::set_prm(const fdl::Frame& req) {
         dp.master_add);
     return fdl::sc();
   }
-  const bool check_reserved = prof->id != Profile::vpc3plus ||
-                              (latch[idx(RegId::Mode_Reg2)] & kMode2_No_Check_Prm_Reserved) == 0;
+  const bool check_reserved =
+      prof->id != Profile::vpc3plus ||
+      (latch[idx(RegId::Mode_Reg2)] & fields::Mode_Reg2::No_Check_Prm_Reserved) == 0;
   const std::uint16_t ident =
       static_cast<std::uint16_t>(cell(RegId::R_Ident_High) << 8 | cell(RegId::R_Ident_Low));
   const std::uint16_t asked = static_cast<std::uint16_t>(du[4] << 8 | du[5]);
@@ -288,9 +283,9 @@ std::optional<fdl::Frame> ChipCore::set_prm(const fdl::Frame& req) {
   if (asked != ident) fault = "Ident_Number differs";
   if (check_reserved && (status & kStation_Status_Reserved) != 0)
     fault = "reserved Station_Status bits";
-  if ((status & kSync_Req) != 0 && !mode0(kMode0_Sync_Supported))
+  if ((status & kSync_Req) != 0 && !mode0(fields::Mode_Reg0::Sync_Supported))
     fault = "Sync_Req but Sync not supported";
-  if ((status & kFreeze_Req) != 0 && !mode0(kMode0_Freeze_Supported))
+  if ((status & kFreeze_Req) != 0 && !mode0(fields::Mode_Reg0::Freeze_Supported))
     fault = "Freeze_Req but Freeze not supported";
   const bool lock = (status & kLock_Req) != 0;
   const bool unlock = (status & kUnlock_Req) != 0;
@@ -321,7 +316,7 @@ std::optional<fdl::Frame> ChipCore::set_prm(const fdl::Frame& req) {
     watchdog_release();
     return fdl::sc();
   }
-  const bool aux2 = (cell(RegId::R_Aux_Buf_Sel) & 0x01) != 0;
+  const bool aux2 = (cell(RegId::R_Aux_Buf_Sel) & fields::R_Aux_Buf_Sel::Set_Prm) != 0;
   if (du.size() > cell(aux2 ? RegId::R_Len_Cntrl_Buf2 : RegId::R_Len_Cntrl_Buf1)) {
     ++counters.no_resource;
     return short_answer(*this, req, Response::RR);
@@ -338,22 +333,21 @@ std::optional<fdl::Frame> ChipCore::set_prm(const fdl::Frame& req) {
   dp.master_add = req.sa;
   dp.group_ident = du[6];
   if (du[3] != 0) dp.min_tsdr = du[3];
-  if (mode0(kMode0_DP_Mode) && du.size() > 7) {
+  if (mode0(fields::Mode_Reg0::DP_Mode) && du.size() > 7) {
     // Spec_User_Prm_Byte overwrites Dis_Start_Control / Dis_Stop_Control in DP mode.
     std::uint16_t& m0 = latch[idx(RegId::Mode_Reg0)];
-    emit(BlockEvent::Kind::dis, du[7] & kMode0_Dis_Start_Stop);
-    m0 =
-        static_cast<std::uint16_t>((m0 & ~kMode0_Dis_Start_Stop) | (du[7] & kMode0_Dis_Start_Stop));
+    emit(BlockEvent::Kind::dis, du[7] & kDis_Start_Stop);
+    m0 = static_cast<std::uint16_t>((m0 & ~kDis_Start_Stop) | (du[7] & kDis_Start_Stop));
   }
   const bool wd_1ms = prof->id == Profile::vpc3plus
-                          ? mode0(kMode0_WD_Base_Vpc3)
+                          ? mode0(fields::Mode_Reg0::WD_Base)
                           : du.size() > 7 && (du[7] & kSpec_WD_Base_1ms) != 0;
   // DP_Control starts with these only once the user accepts them (User_Prm_Data_Okay).
   dp.prm_wd_on = (status & kWD_On) != 0;
   dp.prm_wd_fact1 = du[1];
   dp.prm_wd_fact2 = du[2];
   dp.prm_wd_1ms = wd_1ms;
-  receive_via_aux(0, RegId::R_Prm_Buf_Ptr, RegId::R_Len_Prm_Data, du);
+  receive_via_aux(fields::R_Aux_Buf_Sel::Set_Prm, RegId::R_Prm_Buf_Ptr, RegId::R_Len_Prm_Data, du);
   emit(BlockEvent::Kind::prm);
   prm_accepted();
   return fdl::sc();
@@ -394,7 +388,8 @@ std::optional<fdl::Frame> ChipCore::chk_cfg(const fdl::Frame& req) {
     return fdl::sc();
   }
   if (req.du.empty() || req.du.size() > kMaxBufferLength ||
-      !receive_via_aux(1, RegId::R_Cfg_Buf_Ptr, RegId::R_Len_Cfg_Data, req.du)) {
+      !receive_via_aux(fields::R_Aux_Buf_Sel::Chk_Cfg, RegId::R_Cfg_Buf_Ptr, RegId::R_Len_Cfg_Data,
+                       req.du)) {
     ++counters.no_resource;
     return short_answer(*this, req, Response::RR);
   }
@@ -470,7 +465,8 @@ std::optional<fdl::Frame> ChipCore::set_slave_add(const fdl::Frame& req) {
     log(LogLevel::info, "Set_Slave_Add from {}: bad address or Ident_Number: ignored", req.sa);
     return fdl::sc();
   }
-  if (!receive_via_aux(2, RegId::R_SSA_Buf_Ptr, RegId::R_Len_SSA_Data, du)) {
+  if (!receive_via_aux(fields::R_Aux_Buf_Sel::Set_Slave_Adr, RegId::R_SSA_Buf_Ptr,
+                       RegId::R_Len_SSA_Data, du)) {
     ++counters.no_resource;
     return short_answer(*this, req, Response::RR);
   }
@@ -511,7 +507,7 @@ std::optional<fdl::Frame> ChipCore::data_exchange(const fdl::Frame& req) {
       emit(BlockEvent::Kind::dout);
       outputs_received();
     }
-  } else if (req.du.empty() && mode0(kMode0_Spec_Clear_Mode)) {
+  } else if (req.du.empty() && mode0(fields::Mode_Reg0::Spec_Clear_Mode)) {
     emit(BlockEvent::Kind::failsafe);
     failsafe_clear();  // fail-safe: the master sends no outputs while in Clear
   } else {
@@ -536,10 +532,9 @@ std::optional<fdl::Frame> ChipCore::data_exchange(const fdl::Frame& req) {
 // passed on either: the user already has them (modelled).
 bool ChipCore::dx_out_wanted(std::span<const std::uint8_t> outputs) {
   if (prof->id != Profile::vpc3plus) return true;
-  constexpr std::uint16_t kMode2_DX_Int_Mode = 1u << 2;
-  constexpr std::uint16_t kMode3_DX_Int_Mode_2 = 1u << 1;
-  if (outputs.empty() && (latch[idx(RegId::Mode_Reg2)] & kMode2_DX_Int_Mode) == 0) return false;
-  if ((latch[idx(RegId::Mode_Reg3)] & kMode3_DX_Int_Mode_2) == 0) return true;
+  if (outputs.empty() && (latch[idx(RegId::Mode_Reg2)] & fields::Mode_Reg2::DX_Int_Mode) == 0)
+    return false;
+  if ((latch[idx(RegId::Mode_Reg3)] & fields::Mode_Reg3::DX_Int_Mode_2) == 0) return true;
   const std::uint8_t current = buffers.d_fresh       ? buffers.dout.d
                                : buffers.dout.n != 0 ? buffers.dout.n
                                                      : buffers.dout.u;
@@ -550,8 +545,8 @@ bool ChipCore::dx_out_wanted(std::span<const std::uint8_t> outputs) {
 // Each Data_Exchange counts the user watchdog down; Res_User_WD reloads it. False: expired.
 bool ChipCore::user_watchdog_tick() {
   std::uint16_t& m1 = latch[idx(RegId::Mode_Reg1)];
-  if ((m1 & kRes_User_WD) != 0) {
-    m1 = static_cast<std::uint16_t>(m1 & ~kRes_User_WD);
+  if ((m1 & fields::Mode_Reg1::Res_User_WD) != 0) {
+    m1 = static_cast<std::uint16_t>(m1 & ~fields::Mode_Reg1::Res_User_WD);
     dp.user_wd = cell16(*reg(RegId::R_User_WD_Value));
     dp.user_wd_armed = true;
     return true;
@@ -590,7 +585,7 @@ void handshake_fields(Ar& ar, S& s) {
 }
 
 template <typename Ar, typename S>
-void fields(Ar& ar, S& s) {
+void members(Ar& ar, S& s) {
   static_assert(snap::member_count<DpStateMachine>() == 26, "a new member: add it here");
   ar.bounded(s.state, DpState::Data_Exchange);
   handshake_fields(ar, s.prm);
@@ -624,12 +619,12 @@ void fields(Ar& ar, S& s) {
 
 void save_state(snap::Writer& w, const DpStateMachine& s) {
   w.section("DPSM");
-  fields(w, s);
+  members(w, s);
 }
 
 void load_state(snap::Reader& r, DpStateMachine& s) {
   r.section("DPSM");
-  fields(r, s);
+  members(r, s);
 }
 
 }  // namespace dpc31

@@ -13,8 +13,6 @@ constexpr std::uint8_t kGC_Unsync = 0x10;
 constexpr std::uint8_t kGC_Freeze = 0x08;
 constexpr std::uint8_t kGC_Unfreeze = 0x04;
 constexpr std::uint8_t kGC_Clear_Data = 0x02;
-constexpr std::uint16_t kMode0_Sync_Supported = 1u << 6;
-constexpr std::uint16_t kMode0_Freeze_Supported = 1u << 7;
 
 }  // namespace
 
@@ -36,11 +34,13 @@ void ChipCore::apply_global_control(std::uint8_t command) {
   const std::uint16_t options = prof->id == Profile::dpc31      ? latch[idx(RegId::Param_Reg)]
                                 : prof->id == Profile::vpc3plus ? latch[idx(RegId::Mode_Reg2)]
                                                                 : 0;
-  const bool every_gc_interrupts = (options & 0x01) != 0;
-  const bool check_reserved = (options & 0x02) == 0;
+  static_assert(fields::Param_Reg::New_GC_Int_Mode == fields::Mode_Reg2::GC_Int_Mode &&
+                fields::Param_Reg::Check_No_GC_Reserved == fields::Mode_Reg2::No_Check_GC_Reserved);
+  const bool every_gc_interrupts = (options & fields::Mode_Reg2::GC_Int_Mode) != 0;
+  const bool check_reserved = (options & fields::Mode_Reg2::No_Check_GC_Reserved) == 0;
   const bool bad = (check_reserved && (command & kGC_Reserved) != 0) ||
-                   ((command & kGC_Sync) != 0 && !mode0(kMode0_Sync_Supported)) ||
-                   ((command & kGC_Freeze) != 0 && !mode0(kMode0_Freeze_Supported));
+                   ((command & kGC_Sync) != 0 && !mode0(fields::Mode_Reg0::Sync_Supported)) ||
+                   ((command & kGC_Freeze) != 0 && !mode0(fields::Mode_Reg0::Freeze_Supported));
   if (bad) {
     log(LogLevel::info, "Global_Control {:02X}h: not supported: Not_Supported, Leave_Master",
         command);
@@ -72,9 +72,8 @@ void ChipCore::apply_global_control(std::uint8_t command) {
   // "the interrupt 'DX_OUT' can directly be applied to the port PB3 if a global control message
   // is received with 'Sync', provided 'Enable DX_OUT_Port=1' was parameterized in the C31_Control
   // register beforehand" (seed 003, p.32).
-  constexpr std::uint16_t kEnable_DX_Out_Port = 0x01;
   if ((command & kGC_Sync) != 0 && prof->id == Profile::dpc31 &&
-      (latch[idx(RegId::C31_Control)] & kEnable_DX_Out_Port) != 0 &&
+      (latch[idx(RegId::C31_Control)] & fields::C31_Control::Enable_DX_Out_Port) != 0 &&
       (latch[idx(RegId::Int_Req_Reg)] & irq::DX_Out) != 0) {
     set_pb3(true);
   }

@@ -7,7 +7,6 @@
 #include <cstdlib>
 #include <string>
 
-#include "core.hpp"
 #include "dpc31/dpc31_hal.h"
 
 struct dpc31_chip {
@@ -132,7 +131,7 @@ int dpc31_run_until_irq_change(dpc31_chip* chip, uint64_t max_cycles) {
   // Active: with no bus access the line can only fall at an event (the EOI inactive time, a
   // reset); go from event to event.
   while (c.cycle() < end) {
-    const uint64_t next = std::max(c.core().next_event(), c.cycle() + 1);
+    const uint64_t next = std::max(c.next_deadline(), c.cycle() + 1);
     c.step(std::min(next, end) - c.cycle());
     if (c.irq_active() != was) return 1;
   }

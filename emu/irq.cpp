@@ -27,10 +27,10 @@ void install_irq_hooks(HookTable& h) {
 namespace {
 
 template <typename Ar, typename S>
-void fields(Ar& ar, S& s) {
-  static_assert(snap::member_count<IrqController>() == 4, "a new member: add it here");
-  ar(s.eoi_block_until);
-  ar(s.eoi_left);
+void members(Ar& ar, S& s) {
+  static_assert(snap::member_count<IrqController>() == 3, "a new member: add it here");
+  ar(s.eoi.at);
+  ar(s.eoi.left);
   ar(s.event_cycle);
   ar(s.event_mask);
 }
@@ -39,11 +39,11 @@ void fields(Ar& ar, S& s) {
 
 void save_state(snap::Writer& w, const IrqController& s) {
   w.section("IRQC");
-  fields(w, s);
+  members(w, s);
 }
 void load_state(snap::Reader& r, IrqController& s) {
   r.section("IRQC");
-  fields(r, s);
+  members(r, s);
 }
 
 void ChipCore::raise(std::uint16_t bits) {
@@ -54,9 +54,17 @@ void ChipCore::raise(std::uint16_t bits) {
   update_irq_line();
 }
 
-std::uint32_t ChipCore::eoi_inactive_cycles() const {
-  constexpr std::uint16_t kEOI_Time_Base = 1u << 9;
-  return cycles_for_us(mode0(kEOI_Time_Base) ? 1000 : 1);
+// EOI (Mode_Reg1): X/INT stays inactive for 1 us, or 1 ms with Mode_Reg0.EOI_Time_Base, even
+// if IR is still set (docs/timing.md, "Interrupt line", [S-TIM]).
+void ChipCore::end_of_interrupt() {
+  const std::uint64_t cycles = cycles_for_us(mode0(fields::Mode_Reg0::EOI_Time_Base) ? 1000 : 1);
+  arm(irq.eoi, cycles);
+  log(LogLevel::debug, "EOI: X/INT inactive until cycle {}", now + cycles);
+}
+
+bool ChipCore::irq_active() const {
+  return !running(irq.eoi) &&
+         (latch[idx(RegId::Int_Req_Reg)] & ~latch[idx(RegId::Int_Mask_Reg)]) != 0;
 }
 
 void ChipCore::update_irq_line() {

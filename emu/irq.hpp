@@ -6,17 +6,16 @@
 #include <limits>
 
 #include "snapshot.hpp"
+#include "timer.hpp"
 
 namespace dpc31 {
 
 struct IrqController {
-  // X/INT may not become active before this cycle (end of the EOI inactive time).
-  std::uint64_t eoi_block_until = 0;
+  // The EOI inactive time: X/INT may not become active while it runs.
+  Timer eoi = Timer::elapsed();
   // Events latched in the current cycle survive an acknowledge in that same cycle.
   std::uint64_t event_cycle = std::numeric_limits<std::uint64_t>::max();
   std::uint16_t event_mask = 0;
-  // Per-cycle engine: clocks of the EOI inactive time still to run.
-  std::uint64_t eoi_left = 0;
 
   void reset() { *this = IrqController{}; }
   void note_events(std::uint16_t bits, std::uint64_t now) {

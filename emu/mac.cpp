@@ -11,9 +11,6 @@ namespace dpc31 {
 
 namespace {
 
-constexpr std::uint16_t kDis_Start_Control = 1u << 0;
-constexpr std::uint16_t kDis_Stop_Control = 1u << 1;
-
 void count(FdlCounters& n, fdl::Error e) {
   switch (e) {
     case fdl::Error::none:
@@ -67,6 +64,7 @@ void ChipCore::mac_listen(std::uint8_t code) {
     for (const auto& [cycle, level] : rxd_pending) {
       if (cycle > now) mac.rx.edge(cycle, level);
     }
+    note_deadline(mac.rx.next_deadline());
   }
 }
 
@@ -134,6 +132,13 @@ std::uint64_t ChipCore::mac_deadline() const {
   return t;
 }
 
+void ChipCore::watch_txd(std::function<void(std::uint64_t, bool)> cb) {
+  // Edges before now happened unwatched; from now on each one is an event again.
+  mac_tx_catch_up();
+  txd_observer.add(std::move(cb));
+  note_deadline(mac_deadline());
+}
+
 void ChipCore::mac_tx_catch_up() {
   while (mac.tx_next < mac.tx_edges.size() && mac.tx_edges[mac.tx_next].first <= now) {
     mac_txd(mac.tx_edges[mac.tx_next].first, mac.tx_edges[mac.tx_next].second);
@@ -167,9 +172,58 @@ void ChipCore::mac_process() {
   if (mac.tx_end <= now) mac_tx_done();
 }
 
+// Per-cycle engine: the MAC's clock (docs/engine.md, step 4): the receiver looks at RxD, the
+// TSYN gap, the Baud_Search window and the transmitter count bit times.
+void ChipCore::mac_clock() {
+  const std::uint32_t t = mac.rx.bit_time();
+  UartChar ch;
+  const UartSampler::Clock r = mac.sampler.clock(rxd_level, now, ch);
+  if (r.ready) mac_char(ch);
+  // Idle inside a telegram counts from the end of a stop bit; a start bit ends the gap, but one
+  // on the very clock TSYN is reached comes too late (the gap is 33 bit times).
+  if (mac.gap.tick(t) && mac.in_frame) mac_truncated();
+  if (r.ended && mac.in_frame) mac.gap.start(kTsynBits);
+  if (r.started) mac.gap.on = false;
+  if (mac.search.tick(t)) mac_search_next();
+  TxShifter& tx = mac.shifter;
+  switch (tx.phase) {
+    case TxShifter::Phase::idle:
+      break;
+    case TxShifter::Phase::wait_end:
+      if (r.ended) {
+        tx.phase = TxShifter::Phase::tsdr;
+        tx.timer.start(tx.tsdr_bits);
+      }
+      break;
+    case TxShifter::Phase::tsdr:
+      if (tx.timer.tick(t)) {
+        tx.phase = TxShifter::Phase::shifting;
+        tx.index = 0;
+        tx.bit = 0;
+        tx.sub = 0;
+        mac_txd(now, uart_bit(tx.bytes[0], 0));
+      }
+      break;
+    case TxShifter::Phase::shifting:
+      if (++tx.sub < t) break;
+      tx.sub = 0;
+      if (++tx.bit == kUartCharBits) {
+        tx.bit = 0;
+        ++tx.index;
+      }
+      if (tx.index < tx.bytes.size()) {
+        mac_txd(now, uart_bit(tx.bytes[tx.index], tx.bit));
+      } else {
+        mac_txd(now, true);
+        mac_tx_done();
+      }
+      break;
+  }
+}
+
 void ChipCore::mac_char(const UartChar& c) {
-  const bool start_ok = c.start_ok || mode0(kDis_Start_Control);
-  const bool stop_ok = c.stop_ok || mode0(kDis_Stop_Control);
+  const bool start_ok = c.start_ok || mode0(fields::Mode_Reg0::Dis_Start_Control);
+  const bool stop_ok = c.stop_ok || mode0(fields::Mode_Reg0::Dis_Stop_Control);
   if (!c.parity_ok || !start_ok || !stop_ok) {
     // One count per broken telegram: characters misframed after the first error are its tail.
     // Of one character's errors the first sampled counts: start bit, parity, stop bit.
@@ -299,7 +353,7 @@ void bit_timer(Ar& ar, T& b) {
 
 // `chars` is scratch (cleared before every use), not state.
 template <typename Ar, typename S>
-void fields(Ar& ar, S& s) {
+void members(Ar& ar, S& s) {
   static_assert(snap::member_count<Mac>() == 17, "a new member: add it here");
   ar.block(s.rx);
   ar.block(s.frame);
@@ -357,12 +411,12 @@ void counter_fields(Ar& ar, S& s) {
 
 void save_state(snap::Writer& w, const Mac& s) {
   w.section("MAC ");
-  fields(w, s);
+  members(w, s);
 }
 
 void load_state(snap::Reader& r, Mac& s) {
   r.section("MAC ");
-  fields(r, s);
+  members(r, s);
   s.chars.clear();
   // Only a telegram in progress has a timeout; a stale one would be due for ever.
   if (!s.in_frame && s.frame_timeout != kNever) r.fail("frame timeout outside a telegram");

@@ -7,12 +7,6 @@ namespace dpc31 {
 
 namespace {
 
-constexpr std::uint16_t kStart_SPC3 = 1u << 0;
-constexpr std::uint16_t kEOI = 1u << 1;
-constexpr std::uint16_t kGo_Offline = 1u << 2;
-constexpr std::uint16_t kUser_Leave_Master = 1u << 3;
-constexpr std::uint16_t k4kB_Mode = 1u << 7;
-
 // Mode_Reg0 and Mode_Reg2 configure the chip and may only change while it is Offline.
 std::uint16_t offline_only(ChipCore& c, std::uint16_t old, std::uint16_t next) {
   if (!c.started || old == next) return next;
@@ -25,17 +19,14 @@ std::uint16_t offline_only(ChipCore& c, std::uint16_t old, std::uint16_t next) {
 // set while Offline, yet a later Start alone must not take the chip Offline again.
 void mode_reg1_set(ChipCore& c, std::uint16_t /*old*/, std::uint16_t /*now*/) {
   const std::uint16_t written = c.written_bits;
-  if ((written & kStart_SPC3) != 0) c.start();
-  if ((written & kEOI) != 0) {
-    c.arm_eoi();
-    c.log(LogLevel::debug, "EOI: X/INT inactive until cycle {}", c.now + c.eoi_inactive_cycles());
-  }
-  if ((written & kUser_Leave_Master) != 0) c.leave_master();
-  if ((written & kGo_Offline) != 0) c.go_offline();
+  if ((written & fields::Mode_Reg1::Start_SPC3) != 0) c.start();
+  if ((written & fields::Mode_Reg1::EOI) != 0) c.end_of_interrupt();
+  if ((written & fields::Mode_Reg1::User_Leave_Master) != 0) c.leave_master();
+  if ((written & fields::Mode_Reg1::Go_Offline) != 0) c.go_offline();
 }
 
 void mode_reg2_written(ChipCore& c, std::uint16_t /*old*/, std::uint16_t now) {
-  c.large_ram = c.prof->ram_size_large != 0 && (now & k4kB_Mode) != 0;
+  c.large_ram = c.prof->ram_size_large != 0 && (now & fields::Mode_Reg2::_4kB_Mode) != 0;
 }
 
 std::uint16_t status_reg(const ChipCore& c) { return c.status(); }
@@ -54,12 +45,11 @@ void ChipCore::start() {
   if (started) return;
   started = true;
   ram_access_violation = false;
-  latch[idx(RegId::Mode_Reg1)] &= static_cast<std::uint16_t>(~kGo_Offline);
+  latch[idx(RegId::Mode_Reg1)] &= static_cast<std::uint16_t>(~fields::Mode_Reg1::Go_Offline);
   timers.reset();
-  arm_user_timer();
+  arm(timers.user, user_timer_period());
   dp.reset();
-  buffers.n_cl = false;
-  buffers.in_clear = false;
+  buffers.end_clear();
   dp.station = cell(RegId::R_TS_Adr);
   dp.no_add_change = cell(RegId::R_Real_No_Add_Change) == 0xFF;
   // R_GC_Command at every start of the DP slave: the DPC31 presets FFh "at initialization"
@@ -78,7 +68,7 @@ void ChipCore::start() {
 void ChipCore::go_offline() {
   if (!started) return;
   started = false;
-  latch[idx(RegId::Mode_Reg1)] &= static_cast<std::uint16_t>(~kStart_SPC3);
+  latch[idx(RegId::Mode_Reg1)] &= static_cast<std::uint16_t>(~fields::Mode_Reg1::Start_SPC3);
   // The MAC reset puts the DP and watchdog state machines back into their reset states.
   timers.reset();
   dp.reset();
@@ -99,27 +89,31 @@ void ChipCore::leave_master() {
   dp.user_wd_armed = false;
   dp.fcb_valid = false;
   dp.dx_on_new_din = false;
-  buffers.n_cl = false;
-  buffers.in_clear = false;
+  buffers.end_clear();
   log(LogLevel::info, "Leave_Master: DP state -> Wait_Prm");
   if (was == DpState::Data_Exchange) raise(irq::Go_Leave_Data_Exchange);
   dout_clear();
 }
 
 std::uint32_t ChipCore::user_timer_period() const {
-  constexpr std::uint16_t kUser_Time_Base = 1u << 10;
-  return cycles_for_us(mode0(kUser_Time_Base) ? 10000 : 1000);
+  return cycles_for_us(mode0(fields::Mode_Reg0::User_Time_Base) ? 10000 : 1000);
+}
+
+// User_Timer_Clock: while the chip is started, every 1 ms (10 ms with Mode_Reg0.User_Time_Base).
+void ChipCore::user_timer_tick() {
+  arm(timers.user, user_timer_period());
+  raise(irq::User_Timer_Clock);
 }
 
 std::uint16_t ChipCore::status() const {
-  unsigned v = started ? 1u : 0u;
-  v |= (buffers.diag_flag ? 1u : 0u) << 2;
-  v |= (ram_access_violation ? 1u : 0u) << 3;
-  v |= static_cast<unsigned>(dp.state) << 4;
-  v |= static_cast<unsigned>(timers.wd) << 6;
-  v |= static_cast<unsigned>(baud_code) << 8;
-  v |= static_cast<unsigned>(release) << 12;
-  return static_cast<std::uint16_t>(v);
+  namespace f = fields::Status_Reg;
+  return static_cast<std::uint16_t>(
+      field_value(f::Offline_Passive_Idle, started ? 1u : 0u) |
+      field_value(f::Diag_Flag, buffers.diag_flag ? 1u : 0u) |
+      field_value(f::RAM_Access_Violation, ram_access_violation ? 1u : 0u) |
+      field_value(f::DP_State, static_cast<unsigned>(dp.state)) |
+      field_value(f::WD_State, static_cast<unsigned>(timers.wd)) |
+      field_value(f::Baudrate, baud_code) | field_value(f::Release, release));
 }
 
 }  // namespace dpc31

@@ -76,7 +76,7 @@ ChipCore::ChipCore(const ChipOptions& opt)
 }
 
 void ChipCore::reset() {
-  now = 0;
+  reset_time();
   latch.fill(0);
   std::fill(mem.begin(), mem.end(), std::uint8_t{0});
   irq.reset();
@@ -86,7 +86,6 @@ void ChipCore::reset() {
   mac.reset();
   rxd_pending.clear();
   rxd_level = true;
-  quiet_until = 0;
   mac_listen(0);  // listening at 12 Mbaud, for the offline count
   counters = FdlCounters{};
   diag_in_flight = false;
@@ -203,6 +202,7 @@ std::uint32_t ChipCore::begin_access(std::uint32_t addr, std::string_view what) 
 std::uint8_t ChipCore::bus_read(std::uint32_t addr) {
   advance(prof->bus_access_cycles);
   emit(BlockEvent::Kind::read, static_cast<std::uint16_t>(addr));
+  if (bus_observer) bus_observer(now, BusAccess{false, static_cast<std::uint16_t>(addr), 0});
   const std::uint8_t v = read_now(addr);
   state_observer(now);
   return v;
@@ -211,6 +211,7 @@ std::uint8_t ChipCore::bus_read(std::uint32_t addr) {
 void ChipCore::bus_write(std::uint32_t addr, std::uint8_t value) {
   advance(prof->bus_access_cycles);
   emit(BlockEvent::Kind::write, static_cast<std::uint16_t>(addr), value);
+  if (bus_observer) bus_observer(now, BusAccess{true, static_cast<std::uint16_t>(addr), value});
   write_now(addr, value);
   state_observer(now);
 }
@@ -247,7 +248,6 @@ std::uint8_t ChipCore::read_now(std::uint32_t addr) {
   const RegHooks& h = hooks[idx(r.id)];
   std::uint16_t v = 0;
   if (h.command != nullptr) {
-    quiet_until = 0;  // a command may arm timers
     v = h.command(*this);
     update_irq_line();
   } else {
@@ -321,7 +321,6 @@ void ChipCore::write_reg(const RegDesc& r, std::uint32_t offset, std::uint8_t va
   }
   if ((r.unimp & lane) != 0) log(LogLevel::info, "{}: stored, behaviour not modelled", r.name);
   const RegHooks& h = hooks[idx(r.id)];
-  if (h.post_write != nullptr) quiet_until = 0;  // Start, EOI, Go_Offline arm or stop timers
   written_bits = w;
   if (h.pre_write != nullptr) next = h.pre_write(*this, old, next);
   latch[t] = next;

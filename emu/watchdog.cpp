@@ -6,11 +6,7 @@
 
 namespace dpc31 {
 
-namespace {
-
-constexpr std::uint16_t kMode0_DP_Mode = 1u << 8;
-
-}  // namespace
+namespace {}  // namespace
 
 // Baud_Control monitoring time; the VPC3+S manual states a factor 2 that the SPC3 text lacks.
 // WD_Baud_Control_Val = 0 switches the monitoring off (modelled).
@@ -23,7 +19,7 @@ static std::uint64_t baud_control_cycles(const ChipCore& c) {
 
 static void enter_baud_control(ChipCore& c) {
   c.timers.wd = WdState::Baud_Control;
-  c.arm_watchdog(baud_control_cycles(c));
+  c.arm(c.timers.watchdog, baud_control_cycles(c));
 }
 
 void ChipCore::baud_found(std::uint8_t code) {
@@ -38,9 +34,9 @@ void ChipCore::watchdog_parameterise(bool wd_on, std::uint8_t f1, std::uint8_t f
   timers.dp_wd_on = wd_on;
   timers.dp_wd_cycles = cycles_for_us(std::uint64_t{base_1ms ? 1000u : 10'000u} * f1 * f2);
   if (timers.wd == WdState::Baud_Search) return;
-  if (wd_on && mode0(kMode0_DP_Mode)) {
+  if (wd_on && mode0(fields::Mode_Reg0::DP_Mode)) {
     timers.wd = WdState::DP_Control;
-    arm_watchdog(timers.dp_wd_cycles);
+    arm(timers.watchdog, timers.dp_wd_cycles);
   } else {
     enter_baud_control(*this);  // WD_On = 0: stays in Baud_Control, the DP state is never reset
   }
@@ -50,7 +46,7 @@ void ChipCore::watchdog_retrigger(std::uint8_t master) {
   if (timers.wd == WdState::DP_Control) {
     // "The 'DP_Control' state serves response time monitoring of the DP master (Master_Add)"
     // (SPC3 p.25): another master's telegrams, answered or refused, do not keep it alive.
-    if (master == dp.master_add) arm_watchdog(timers.dp_wd_cycles);
+    if (master == dp.master_add) arm(timers.watchdog, timers.dp_wd_cycles);
   } else if (timers.wd == WdState::Baud_Control) {
     enter_baud_control(*this);
   }
@@ -62,7 +58,7 @@ void ChipCore::watchdog_release() {
 }
 
 void ChipCore::watchdog_expired() {
-  arm_watchdog(kNever);
+  arm(timers.watchdog, kNever);
   if (timers.wd == WdState::DP_Control) {
     log(LogLevel::info, "DP watchdog expired: WD_DP_Control_Timeout, DP state machine reset");
     enter_baud_control(*this);
@@ -85,27 +81,30 @@ namespace dpc31 {
 namespace {
 
 template <typename Ar, typename S>
-void fields(Ar& ar, S& s) {
-  static_assert(snap::member_count<Timers>() == 7, "a new member: add it here");
-  ar(s.user_timer_next);
+void members(Ar& ar, S& s) {
+  static_assert(snap::member_count<Timers>() == 5, "a new member: add it here");
+  static_assert(snap::member_count<Timer>() == 2, "a new member: add it here and in IRQC");
+  // The order of format version 2 (docs/snapshots.md): both timers' deadlines first, their
+  // per-cycle counts last.
+  ar(s.user.at);
   ar.bounded(s.wd, WdState::DP_Control);
-  ar(s.wd_deadline);
+  ar(s.watchdog.at);
   ar(s.dp_wd_on);
   ar(s.dp_wd_cycles);
-  ar(s.user_left);
-  ar(s.wd_left);
+  ar(s.user.left);
+  ar(s.watchdog.left);
 }
 
 }  // namespace
 
 void save_state(snap::Writer& w, const Timers& s) {
   w.section("TIMR");
-  fields(w, s);
+  members(w, s);
 }
 
 void load_state(snap::Reader& r, Timers& s) {
   r.section("TIMR");
-  fields(r, s);
+  members(r, s);
 }
 
 }  // namespace dpc31

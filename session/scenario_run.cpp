@@ -346,7 +346,7 @@ class Runner {
     // Baud_Search) is reported at its own cycle.
     const std::uint64_t end = chip_.cycle() + cycles;
     while (chip_.cycle() < end) {
-      std::uint64_t next = std::min(end, chip_.core().watchdog_due());
+      std::uint64_t next = std::min(end, chip_.watchdog_due());
       if (next <= chip_.cycle()) next = end;
       master_->idle(next - chip_.cycle());
       check_states();

@@ -69,13 +69,13 @@ void TraceRecorder::attach(Chip& chip) {
   header_.push_back(fmt::format("clock {}", chip.clock_hz()));
   header_.push_back(fmt::format("baud {}", baud_));
 
-  chip.on_block_event([this](std::uint64_t cycle, const BlockEvent& e) {
-    if (e.kind == BlockEvent::Kind::write) {
-      add(cycle, fmt::format("wr {} {:04X} {:02X}", cycle, e.value, e.data));
-    } else if (e.kind == BlockEvent::Kind::read) {
+  chip.on_bus_access([this](std::uint64_t cycle, const BusAccess& e) {
+    if (e.write) {
+      add(cycle, fmt::format("wr {} {:04X} {:02X}", cycle, e.addr, e.data));
+    } else {
       // Emitted when the access completes, just before it acts: peek gives what it returns
       // (a command read's result included). The replay holds the two to account.
-      add(cycle, fmt::format("rd {} {:04X} = {:02X}", cycle, e.value, chip_->peek(e.value)));
+      add(cycle, fmt::format("rd {} {:04X} = {:02X}", cycle, e.addr, chip_->peek(e.addr)));
     }
   });
   chip.on_irq_change([this](std::uint64_t cycle, bool active) {

@@ -2,6 +2,7 @@
 // bytes are worked out by hand from chip-facts §5 (F 7:6, U 5:4, N 3:2, D 1:0).
 #include <gtest/gtest.h>
 
+#include "../emu/harness.hpp"
 #include "dpc31/reg_ids.hpp"
 #include "test_util.hpp"
 
@@ -39,14 +40,14 @@ TEST_P(Buffers, DoutRotation) {
   EXPECT_EQ(c.read(0x0B), 0x0D);      // cleared | new | U=1
   EXPECT_EQ(c.read(0x0A), sm(0x93));  // D=3 N=Nil U=1 F=2
   EXPECT_EQ(c.read(0x0B), 0x09);      // nothing new; U=1 still the cleared buffer
-  c.asic_dout_received();
+  harness::asic_dout_received(c);
   EXPECT_EQ(c.read(0x0A), sm(0x1E));  // D=2 N=3 U=1 F=Nil
   EXPECT_EQ(c.read(0x0B), 0x07);      // new | U=3, data (not cleared)
   EXPECT_EQ(c.read(0x0A), sm(0x72));  // D=2 N=Nil U=3 F=1
   // A slow user: two telegrams before the fetch; the user gets the newest.
-  c.asic_dout_received();
+  harness::asic_dout_received(c);
   EXPECT_EQ(c.read(0x0A), sm(0x39));  // D=1 N=2 U=3 F=Nil
-  c.asic_dout_received();
+  harness::asic_dout_received(c);
   EXPECT_EQ(c.read(0x0A), sm(0x36));  // D=2 N=1 U=3 F=Nil
   EXPECT_EQ(c.read(0x0B), 0x05);      // new | U=1
   EXPECT_EQ(c.read(0x0A), sm(0xD2));  // D=2 N=Nil U=1 F=3
@@ -59,12 +60,12 @@ TEST_P(Buffers, DinRotation) {
   EXPECT_EQ(c.read(0x08), 0xE1);
   EXPECT_EQ(c.read(0x09), 0x03);  // U=2 -> N; new U = 3
   EXPECT_EQ(c.read(0x08), 0x39);  // D=1 N=2 U=3 F=Nil
-  EXPECT_EQ(c.asic_din_fetch(), 2);
-  EXPECT_EQ(c.read(0x08), 0x72);     // D=2 N=Nil U=3 F=1
-  EXPECT_EQ(c.asic_din_fetch(), 2);  // nothing new: D resent
-  EXPECT_EQ(c.read(0x09), 0x01);     // U=3 -> N; new U = 1 (from F)
-  EXPECT_EQ(c.read(0x09), 0x03);     // again before a send: old N comes back as U
-  EXPECT_EQ(c.read(0x08), 0x36);     // D=2 N=1 U=3 F=Nil
+  EXPECT_EQ(harness::asic_din_fetch(c), 2);
+  EXPECT_EQ(c.read(0x08), 0x72);             // D=2 N=Nil U=3 F=1
+  EXPECT_EQ(harness::asic_din_fetch(c), 2);  // nothing new: D resent
+  EXPECT_EQ(c.read(0x09), 0x01);             // U=3 -> N; new U = 1 (from F)
+  EXPECT_EQ(c.read(0x09), 0x03);             // again before a send: old N comes back as U
+  EXPECT_EQ(c.read(0x08), 0x36);             // D=2 N=1 U=3 F=Nil
 }
 
 TEST_P(Buffers, DiagExchange) {
@@ -75,13 +76,13 @@ TEST_P(Buffers, DiagExchange) {
   EXPECT_NE(c.peek_reg(RegId::Int_Req_Reg) & irq::Diag_Buffer_Changed, 0);
   EXPECT_NE(c.peek_reg(RegId::Status_Reg) & 0x04, 0);  // Diag_Flag
   // The ASIC sends buffer 1; meanwhile the user hands buffer 2: both with the ASIC (00).
-  c.asic_diag_send_begin();
+  harness::asic_diag_send_begin(c);
   EXPECT_EQ(c.read(0x0C), 0x07);  // buffer 1 SPC3_Send_Mode, buffer 2 User
   testutil::bus_write16(c, 0x02, 16, irq::Diag_Buffer_Changed);
   EXPECT_EQ(c.read(0x0D), 0x00);
   EXPECT_EQ(c.read(0x0C), 0x0B);  // buffer 2 ASIC, buffer 1 still being sent
   EXPECT_EQ(c.peek_reg(RegId::Int_Req_Reg) & irq::Diag_Buffer_Changed, 0);
-  c.asic_diag_send_end();  // buffer 1 returns: Diag_Buffer_Changed now
+  harness::asic_diag_send_end(c);  // buffer 1 returns: Diag_Buffer_Changed now
   EXPECT_EQ(c.read(0x0C), 0x09);
   EXPECT_NE(c.peek_reg(RegId::Int_Req_Reg) & irq::Diag_Buffer_Changed, 0);
   EXPECT_EQ(c.peek_reg(RegId::Status_Reg) & 0x04, 0);  // fetched, no Stat_Diag in byte 0
@@ -92,8 +93,8 @@ TEST_P(Buffers, PrmCfgHandshakes) {
   Chip c = make();
   c.write(0x08, 0x01);
   EXPECT_EQ(c.read(0x0E), 0x03);  // nothing to accept: not allowed
-  c.asic_prm_received();
-  c.asic_prm_received();  // a second Set_Prm while the user checks the first
+  harness::asic_prm_received(c);
+  harness::asic_prm_received(c);  // a second Set_Prm while the user checks the first
   testutil::bus_write16(c, 0x02, 16, irq::New_Prm_Data);  // IAR cannot clear it
   EXPECT_NE(c.peek_reg(RegId::Int_Req_Reg) & irq::New_Prm_Data, 0);
   EXPECT_EQ(c.read(0x0E), 0x01);  // conflict: re-check the newer buffer
@@ -105,13 +106,13 @@ TEST_P(Buffers, PrmCfgHandshakes) {
   c.write(cell(c, "R_Cfg_Buf_Ptr"), 0x11);
   c.write(cell(c, "R_Read_Cfg_Buf_Ptr"), 0x22);
   c.write(0x08, 0x10);
-  c.asic_cfg_received();
+  harness::asic_cfg_received(c);
   EXPECT_EQ(c.read(0x11), 0x00);  // Cfg not OK: back to Wait_Prm
   EXPECT_EQ(c.dp_state(), DpState::Wait_Prm);
   EXPECT_EQ(c.read(cell(c, "R_Cfg_Buf_Ptr")), 0x11);  // no swap on Not_OK
-  c.asic_prm_received();
+  harness::asic_prm_received(c);
   EXPECT_EQ(c.read(0x0E), 0x00);
-  c.asic_cfg_received();
+  harness::asic_cfg_received(c);
   EXPECT_EQ(c.read(0x10), 0x00);
   EXPECT_EQ(c.dp_state(), DpState::Data_Exchange);
   EXPECT_EQ(c.read(cell(c, "R_Cfg_Buf_Ptr")), 0x22);
@@ -128,8 +129,8 @@ TEST_P(Buffers, NotAllowedVerdictClearsAStaleEvent) {
   c.write(0x08, 0x01);
   testutil::bus_write16(c, 0x04, 16,
                         static_cast<std::uint16_t>(~(irq::New_Prm_Data | irq::New_Cfg_Data)));
-  c.asic_prm_received();
-  c.asic_cfg_received();
+  harness::asic_prm_received(c);
+  harness::asic_cfg_received(c);
   c.write(0x08, 0x08);  // User_Leave_Master: both telegrams discarded
   EXPECT_TRUE(c.irq_active());
   EXPECT_EQ(c.read(0x0E), 0x03);  // nothing to accept any more
@@ -143,7 +144,7 @@ TEST_P(Buffers, NotAllowedVerdictClearsAStaleEvent) {
 
 TEST_P(Buffers, SsaBufferFree) {
   Chip c = make();
-  c.asic_ssa_received();
+  harness::asic_ssa_received(c);
   EXPECT_FALSE(c.ssa_buffer_free());
   EXPECT_EQ(c.peek(0x14), 0x00);
   EXPECT_FALSE(c.ssa_buffer_free());  // peek has no side effect

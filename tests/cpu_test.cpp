@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "../emu/hal.hpp"
+#include "../emu/harness.hpp"
 #include "dpc31/dpc31_hal.h"
 
 namespace {
@@ -25,7 +26,7 @@ Chip chip_with_pending_irq() {
   c.set_log_sink(nullptr);
   c.write(0x04, static_cast<std::uint8_t>(~irq::DX_Out & 0xFF));
   c.write(0x05, static_cast<std::uint8_t>(~irq::DX_Out >> 8));
-  c.asic_raise(irq::DX_Out);
+  harness::asic_raise(c, irq::DX_Out);
   return c;
 }
 

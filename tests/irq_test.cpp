@@ -6,6 +6,7 @@
 
 #include <utility>
 
+#include "../emu/harness.hpp"
 #include "dpc31/reg_ids.hpp"
 #include "test_util.hpp"
 
@@ -56,7 +57,7 @@ TEST_P(Irq, EveryBitSetsMasksAcknowledges) {
     EXPECT_FALSE(c.irq_active());
     EXPECT_TRUE(c.x_int_pin());  // low-active: inactive = high
 
-    c.asic_raise(bit);  // event at cycle 8: X/INT active in the same cycle
+    harness::asic_raise(c, bit);  // event at cycle 8: X/INT active in the same cycle
     EXPECT_TRUE(c.irq_active());
     EXPECT_FALSE(c.x_int_pin());
     EXPECT_EQ(bus_read16(c, 0x02, 16), bit);  // IR; two reads end at cycle 16
@@ -87,8 +88,8 @@ TEST_P(Irq, EveryBitSetsMasksAcknowledges) {
 TEST_P(Irq, EoiHoldsTheLineInactiveFor1us) {
   Chip c = make();
   bus_write16(c, 0x04, 16, static_cast<std::uint16_t>(~(irq::DX_Out | irq::User_Timer_Clock)));
-  c.asic_raise(irq::DX_Out | irq::User_Timer_Clock);  // cycle 8
-  bus_write16(c, 0x02, 16, irq::DX_Out);              // acknowledge one: still active, cycle 16
+  harness::asic_raise(c, irq::DX_Out | irq::User_Timer_Clock);  // cycle 8
+  bus_write16(c, 0x02, 16, irq::DX_Out);  // acknowledge one: still active, cycle 16
   EXPECT_TRUE(c.irq_active());
   c.write(0x08, 0x02);  // EOI completes at 20
   EXPECT_EQ(c.cycle(), 20u);
@@ -108,7 +109,7 @@ TEST_P(Irq, EoiTimeBase1msAndEventsInsideTheWindow) {
   bus_write16(c, 0x04, 16, static_cast<std::uint16_t>(~irq::New_GC_Command));  // cycle 16
   c.write(0x08, 0x02);  // EOI with nothing pending, completes at 20
   c.step(10);           // cycle 30: an event inside the window waits for its end
-  c.asic_raise(irq::New_GC_Command);
+  harness::asic_raise(c, irq::New_GC_Command);
   EXPECT_FALSE(c.irq_active());
   c.step(20 + 48000 - 30 - 1);  // cycle 48019
   EXPECT_FALSE(c.irq_active());
@@ -117,7 +118,7 @@ TEST_P(Irq, EoiTimeBase1msAndEventsInsideTheWindow) {
   // After the window an event asserts at once.
   bus_write16(c, 0x02, 16, irq::New_GC_Command);  // cycle 48028
   EXPECT_FALSE(c.irq_active());
-  c.asic_raise(irq::New_GC_Command);
+  harness::asic_raise(c, irq::New_GC_Command);
   EXPECT_TRUE(c.irq_active());
   const std::vector<std::pair<std::uint64_t, bool>> expect = {
       {48020, true}, {48024 + (c.bus_mode() == BusMode::intel ? 4u : 0u), false}, {48028, true}};
@@ -127,9 +128,9 @@ TEST_P(Irq, EoiTimeBase1msAndEventsInsideTheWindow) {
 TEST_P(Irq, InactiveTimeRoundsUpAtOtherClocks) {
   for (auto [hz, cycles] : {std::pair{12'000'000u, 12u}, {20'000'001u, 21u}, {48'000'000u, 48u}}) {
     Chip c = make(hz);
-    c.asic_raise(0);  // nothing
+    harness::asic_raise(c, 0);  // nothing
     bus_write16(c, 0x04, 16, static_cast<std::uint16_t>(~irq::DX_Out));
-    c.asic_raise(irq::DX_Out);
+    harness::asic_raise(c, irq::DX_Out);
     c.write(0x08, 0x02);  // EOI at 12
     c.step(cycles - 1);
     EXPECT_FALSE(c.irq_active()) << hz;
@@ -167,7 +168,7 @@ TEST_P(Irq, PolarityFollowsIntPol) {
   bus_write16(c, 0x06, 16, 0x0010);  // INT_Pol = 1: high-active
   EXPECT_FALSE(c.x_int_pin());
   bus_write16(c, 0x04, 16, static_cast<std::uint16_t>(~irq::DX_Out));
-  c.asic_raise(irq::DX_Out);
+  harness::asic_raise(c, irq::DX_Out);
   EXPECT_TRUE(c.x_int_pin());
 }
 

@@ -1,6 +1,7 @@
 // Mode_Reg0/1/2, Start / Go_Offline, Status_Reg, user timer, RAM access violation, profile layout.
 #include <gtest/gtest.h>
 
+#include "../emu/harness.hpp"
 #include "dpc31/reg_ids.hpp"
 #include "test_util.hpp"
 
@@ -23,7 +24,7 @@ TEST_P(Mode, StartAndGoOffline) {
   EXPECT_EQ(c.peek_reg(RegId::Status_Reg), release | 0x0001);  // Passive_Idle
   // Power-on clear of the outputs raised DX_Out at the cycle Start completed.
   EXPECT_EQ(c.peek_reg(RegId::Int_Req_Reg), irq::DX_Out);
-  c.asic_prm_received();
+  harness::asic_prm_received(c);
   EXPECT_EQ(c.read(0x0E), 0x00);  // Prm OK: Wait_Cfg
   EXPECT_EQ(c.peek_reg(RegId::Status_Reg), release | 0x0011);
   c.write(0x08, 0x04);  // Go_Offline: the DP state machine back to its reset state
@@ -68,10 +69,10 @@ TEST_P(Mode, UserTimerClockPeriods) {
 TEST_P(Mode, UserLeaveMasterFromDataExchange) {
   Chip c = make();
   c.write(0x08, 0x01);
-  c.asic_prm_received();
+  harness::asic_prm_received(c);
   EXPECT_EQ(c.read(0x0E), 0x00);  // User_Prm_Data_Okay: finished
   EXPECT_EQ(c.dp_state(), DpState::Wait_Cfg);
-  c.asic_cfg_received();
+  harness::asic_cfg_received(c);
   EXPECT_EQ(c.read(0x10), 0x00);  // User_Cfg_Data_Okay
   EXPECT_EQ(c.dp_state(), DpState::Data_Exchange);
   EXPECT_EQ(c.peek_reg(RegId::Status_Reg) & 0x30, 0x20);

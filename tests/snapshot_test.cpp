@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "../emu/core.hpp"
+#include "../emu/harness.hpp"
 #include "cpu.hpp"
 #include "dp_master.hpp"
 #include "dpc31/chip.hpp"
@@ -53,7 +53,7 @@ struct Recorder {
       lines.push_back(fmt::format("telegram {} {}..{} {:02x}", g.from_chip ? "tx" : "rx", g.start,
                                   g.end, fmt::join(g.bytes, " ")));
     });
-    c.on_block_event([this](std::uint64_t t, const BlockEvent& e) {
+    harness::on_block_event(c, [this](std::uint64_t t, const BlockEvent& e) {
       lines.push_back(fmt::format("block {} {} {} {}", t, static_cast<int>(e.kind), e.value,
                                   static_cast<int>(e.data)));
     });
@@ -94,11 +94,9 @@ Live live_session(testutil::ChipParam p) {
   chip.on_rxd([&](std::uint64_t at, bool level) {
     live.actions.push_back({Action::Kind::rxd, chip.cycle(), at, level});
   });
-  chip.on_block_event([&](std::uint64_t t, const BlockEvent& e) {
-    if (e.kind == BlockEvent::Kind::read || e.kind == BlockEvent::Kind::write) {
-      const auto kind = e.kind == BlockEvent::Kind::read ? Action::Kind::read : Action::Kind::write;
-      live.actions.push_back({kind, t - access, 0, false, e.value, e.data});
-    }
+  chip.on_bus_access([&](std::uint64_t t, const BusAccess& e) {
+    const auto kind = e.write ? Action::Kind::write : Action::Kind::read;
+    live.actions.push_back({kind, t - access, 0, false, e.addr, e.data});
   });
   chip.on_telegram([&](const Telegram& g) { live.telegrams.push_back(g); });
 
@@ -263,11 +261,11 @@ struct SavePoint {
 };
 
 bool receiving_with_edges_ahead(const Chip& c) {
-  const ChipCore& k = c.core();
+  const ChipCore& k = harness::core(c);
   return k.mac.in_frame && k.mac.rx.next_deadline() != UartRx::kIdle;
 }
 bool transmitting(const Chip& c) {
-  const Mac& m = c.core().mac;
+  const Mac& m = harness::core(c).mac;
   return m.tx_next > 0 && m.tx_next < m.tx_edges.size();
 }
 bool searching(const Chip& c) { return c.wd_state() == WdState::Baud_Search && c.started(); }
@@ -434,13 +432,13 @@ TEST(SnapshotFormat, EventOfTheSaveCycleSurvivesAnAcknowledgeAfterLoad) {
   Chip a({Profile::spc3, BusMode::intel, 0});
   a.set_log_sink(nullptr);
   a.step(100);
-  a.asic_raise(irq::User_Timer_Clock);
+  harness::asic_raise(a, irq::User_Timer_Clock);
   Chip b({Profile::spc3, BusMode::intel, 0});
   b.set_log_sink(nullptr);
   b.load_state(a.save_state());
   for (Chip* c : {&a, &b}) {
-    c->core().write_now(static_cast<std::uint32_t>(c->addr_of(RegId::Int_Ack_Reg)),
-                        static_cast<std::uint8_t>(irq::User_Timer_Clock));
+    harness::core(*c).write_now(static_cast<std::uint32_t>(c->addr_of(RegId::Int_Ack_Reg)),
+                                static_cast<std::uint8_t>(irq::User_Timer_Clock));
     EXPECT_NE(c->peek_reg(RegId::Int_Req_Reg) & irq::User_Timer_Clock, 0u);
   }
 }

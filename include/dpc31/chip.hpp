@@ -14,7 +14,9 @@
 #include <string_view>
 #include <vector>
 
+#include "dpc31/fdl_counters.hpp"
 #include "dpc31/log.hpp"
+#include "dpc31/reg_fields.hpp"
 #include "dpc31/reg_ids.hpp"
 #include "dpc31/regdesc.hpp"
 #include "dpc31/snapshot.hpp"
@@ -49,20 +51,21 @@ enum class DpState : std::uint8_t { Wait_Prm = 0, Wait_Cfg = 1, Data_Exchange = 
 // Watchdog state machine (Status_Reg bits 7:6).
 enum class WdState : std::uint8_t { Baud_Search = 0, Baud_Control = 1, DP_Control = 2 };
 
-// Interrupt bit positions (Int_Req_Reg), identical in all profiles.
+// Interrupt bits (Int_Req_Reg, the same in all profiles): the generated field masks.
 namespace irq {
-inline constexpr std::uint16_t MAC_Reset = 1u << 0;
-inline constexpr std::uint16_t Go_Leave_Data_Exchange = 1u << 1;
-inline constexpr std::uint16_t Baudrate_Detect = 1u << 2;
-inline constexpr std::uint16_t WD_DP_Control_Timeout = 1u << 3;
-inline constexpr std::uint16_t User_Timer_Clock = 1u << 4;
-inline constexpr std::uint16_t New_Ext_Prm_Data = 1u << 6;  // VPC3+ only
-inline constexpr std::uint16_t New_GC_Command = 1u << 8;
-inline constexpr std::uint16_t New_SSA_Data = 1u << 9;
-inline constexpr std::uint16_t New_Cfg_Data = 1u << 10;
-inline constexpr std::uint16_t New_Prm_Data = 1u << 11;
-inline constexpr std::uint16_t Diag_Buffer_Changed = 1u << 12;
-inline constexpr std::uint16_t DX_Out = 1u << 13;
+inline constexpr std::uint16_t MAC_Reset = fields::Int_Req_Reg::MAC_Reset;
+inline constexpr std::uint16_t Go_Leave_Data_Exchange = fields::Int_Req_Reg::Go_Leave_Data_Exchange;
+inline constexpr std::uint16_t Baudrate_Detect = fields::Int_Req_Reg::Baudrate_Detect;
+inline constexpr std::uint16_t WD_DP_Control_Timeout = fields::Int_Req_Reg::WD_DP_Control_Timeout;
+inline constexpr std::uint16_t User_Timer_Clock = fields::Int_Req_Reg::User_Timer_Clock;
+inline constexpr std::uint16_t New_Ext_Prm_Data =
+    fields::Int_Req_Reg::New_Ext_Prm_Data;  // VPC3+ only
+inline constexpr std::uint16_t New_GC_Command = fields::Int_Req_Reg::New_GC_Command;
+inline constexpr std::uint16_t New_SSA_Data = fields::Int_Req_Reg::New_SSA_Data;
+inline constexpr std::uint16_t New_Cfg_Data = fields::Int_Req_Reg::New_Cfg_Data;
+inline constexpr std::uint16_t New_Prm_Data = fields::Int_Req_Reg::New_Prm_Data;
+inline constexpr std::uint16_t Diag_Buffer_Changed = fields::Int_Req_Reg::Diag_Buffer_Changed;
+inline constexpr std::uint16_t DX_Out = fields::Int_Req_Reg::DX_Out;
 }  // namespace irq
 
 // A telegram on the bus, as the chip received or sent it (for logs and captures).
@@ -73,34 +76,30 @@ struct Telegram {
   std::uint64_t end;                // end of the last stop bit
 };
 
-// What the protocol side and the CPU did to the blocks in one cycle (docs/golden-model.md): the
-// lockstep's chip-session mode replays these into the RTL.
-struct BlockEvent {
-  enum class Kind : std::uint8_t {
-    dx,
-    irq,
-    leave_master,
-    prm_fault,
-    gc,
-    dout,
-    failsafe,
-    din,
-    diag_begin,
-    diag_end,
-    dis,
-    prm,
-    cfg,
-    ssa,
-    read,
-    write
-  };
-  Kind kind;
-  std::uint16_t value = 0;  // irq bits, gc command, stat_diag, dis bits, bus address
-  std::uint8_t data = 0;    // bus write data
+// A CPU bus access, reported in the cycle it completes, just before it acts (a command read's
+// result is what peek gives then).
+struct BusAccess {
+  bool write;
+  std::uint16_t addr;
+  std::uint8_t data;  // writes only
 };
 
-struct FdlCounters;
+// What the waveform and the tests watch of the chip's inside, in one look (no time passes, no
+// side effects): the state signals the VCD records (dpc31 run --vcd).
+struct ChipProbe {
+  DpState dp_state;
+  WdState wd_state;
+  std::uint8_t baud_code;  // Status_Reg bits 11..8 (0 = 12 Mbaud)
+  std::uint16_t irr;       // Int_Req_Reg
+  // The buffer state machines as the SPC3 shows them in *_Buffer_SM (the dpc31's read of
+  // Dout_Buffer_SM shows N_Cl in bit 7 instead of F).
+  std::uint8_t dout_buffer_sm;
+  std::uint8_t din_buffer_sm;
+  std::uint8_t diag_buffer_sm;
+};
+
 struct ChipCore;
+struct ChipAccess;  // the emulator's harness interface (emu/harness.hpp), not part of the API
 
 class Chip {
  public:
@@ -172,8 +171,8 @@ class Chip {
   void on_state_change(std::function<void(std::uint64_t)> cb);
   // Every error-free frame the chip receives and every answer it sends.
   void on_telegram(std::function<void(const Telegram&)> cb);
-  // Every block-level event and every CPU bus access, with its cycle.
-  void on_block_event(std::function<void(std::uint64_t, const BlockEvent&)> cb);
+  // Every CPU bus access, with its cycle.
+  void on_bus_access(std::function<void(std::uint64_t, const BusAccess&)> cb);
   [[nodiscard]] bool txd_pin() const;
   [[nodiscard]] const FdlCounters& fdl_counters() const;
   [[nodiscard]] std::uint8_t station_address() const;
@@ -189,17 +188,7 @@ class Chip {
   // profile lacks it.
   [[nodiscard]] std::int32_t addr_of(RegId id) const;
 
-  // Protocol-side entry points (what the DP engine does inside the chip). Each takes effect at
-  // the current cycle.
-  void asic_raise(std::uint16_t irq_bits);  // latch events into Int_Req_Reg
-  void asic_dout_received();                // D -> N, DX_Out
-  void asic_dout_clear();                   // clear D, D -> N, DX_Out
-  std::uint8_t asic_din_fetch();            // N -> D if new; returns the D buffer index
-  void asic_diag_send_begin();              // the ASIC starts sending its diag buffer
-  void asic_diag_send_end();                // ... and has sent it
-  void asic_prm_received();                 // Set_Prm in the Prm buffer: New_Prm_Data
-  void asic_cfg_received();                 // Chk_Cfg in the Cfg buffer: New_Cfg_Data
-  void asic_ssa_received();                 // Set_Slave_Add: New_SSA_Data
+  // Whether the SSA buffer takes a Set_Slave_Add (SSA_Buffer_Free_Cmd was read since the last).
   [[nodiscard]] bool ssa_buffer_free() const;
 
   // --- snapshots (docs/snapshots.md) ---
@@ -215,10 +204,19 @@ class Chip {
   // throws SnapshotError "PATH: message"
   void load_state_file(const std::string& path);
 
-  ChipCore& core() { return *core_; }
-  [[nodiscard]] const ChipCore& core() const { return *core_; }
+  // --- observables ---
+  [[nodiscard]] ChipProbe probe() const;
+  // The next cycle at which something may happen inside the chip without a bus access or a new
+  // RxD edge: a timer, the serial receiver or transmitter (the per-cycle engine: the next clock).
+  [[nodiscard]] std::uint64_t next_deadline() const;
+  // The cycle the running watchdog (Baud_Control or DP_Control) expires; UINT64_MAX: none.
+  [[nodiscard]] std::uint64_t watchdog_due() const;
+  // The cycle the EOI inactive time ends (X/INT may become active again from then on); at or
+  // before cycle() when none runs.
+  [[nodiscard]] std::uint64_t eoi_inactive_until() const;
 
  private:
+  friend struct ChipAccess;
   std::unique_ptr<ChipCore> core_;
 };
 

@@ -38,7 +38,8 @@ class CppDut final : public Dut {
     }
     core_.advance(1);
     if (in.ev_dx)
-      core_.latch[ChipCore::idx(RegId::Mode_Reg1)] &= static_cast<std::uint16_t>(~0x20u);
+      core_.latch[ChipCore::idx(RegId::Mode_Reg1)] &=
+          static_cast<std::uint16_t>(~fields::Mode_Reg1::Res_User_WD);
     if (in.ev_irq != 0) core_.raise(in.ev_irq);
     if (in.ev_leave_master) core_.leave_master();
     if (in.ev_prm_fault) core_.prm_fault();
@@ -50,7 +51,9 @@ class CppDut final : public Dut {
     if (in.ev_diag_end) core_.diag_send_end(in.stat_diag);
     if (in.ev_dis) {
       std::uint16_t& m0 = core_.latch[ChipCore::idx(RegId::Mode_Reg0)];
-      m0 = static_cast<std::uint16_t>((m0 & ~0x0003u) | (in.dis_bits & 0x03u));
+      constexpr std::uint16_t kDis =
+          fields::Mode_Reg0::Dis_Start_Control | fields::Mode_Reg0::Dis_Stop_Control;
+      m0 = static_cast<std::uint16_t>((m0 & ~kDis) | (in.dis_bits & kDis));
     }
     if (in.ev_prm) core_.prm_accepted();
     if (in.ev_cfg) core_.cfg_accepted();
@@ -105,7 +108,7 @@ std::string Inputs::describe() const {
 Outputs block_outputs(const ChipCore& c, std::uint8_t rdata) {
   auto latch = [&](RegId id) { return std::uint32_t{c.latch[ChipCore::idx(id)]}; };
   auto cell = [&](RegId id) -> std::uint32_t { return c.reg(id) != nullptr ? c.cell(id) : 0; };
-  const bool int_pol = (latch(RegId::Mode_Reg0) & 0x10) != 0;
+  const bool int_pol = (latch(RegId::Mode_Reg0) & fields::Mode_Reg0::INT_Pol) != 0;
   const bool active = c.irq_active();
   const BufferUnit& b = c.buffers;
   Outputs o;

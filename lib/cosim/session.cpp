@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include "../../emu/harness.hpp"
 #include "cpp_dut.hpp"
 #include "scenario.hpp"
 
@@ -83,7 +84,7 @@ bool record_session(const std::string& scenario_path, Session& out, std::string&
   out.options = {sc.chip.profile, sc.chip.bus, sc.chip.variant};
   ScenarioHooks hooks;
   hooks.at_start = [&out](Chip& chip) {
-    chip.on_block_event([&out](std::uint64_t cycle, const BlockEvent& e) {
+    harness::on_block_event(chip, [&out](std::uint64_t cycle, const BlockEvent& e) {
       const std::uint64_t index = cycle - 1;  // the C++ Dut reaches cycle i + 1 in step i
       if (out.events.empty() || out.events.back().first != index)
         out.events.emplace_back(index, Inputs{});
@@ -92,8 +93,8 @@ bool record_session(const std::string& scenario_path, Session& out, std::string&
   };
   hooks.at_end = [&out](Chip& chip) {
     out.cycles = chip.cycle();
-    out.chip_final = block_outputs(chip.core(), 0);
-    chip.on_block_event(nullptr);
+    out.chip_final = block_outputs(harness::core(chip), 0);
+    harness::on_block_event(chip, nullptr);
   };
   const ScenarioOutcome o = run_scenario(sc, nullptr, nullptr, hooks);
   out.scenario_passed = o.ok();

@@ -7,7 +7,6 @@
 #include <array>
 #include <cstdio>
 
-#include "../../emu/core.hpp"
 #include "dpc31/reg_ids.hpp"
 #include "gtkwave/fstapi.h"
 #include "outfile.hpp"
@@ -98,14 +97,14 @@ struct Recorder::Impl {
   }
   // State signals: recorded when they change.
   void sample(std::uint64_t cycle) {
-    const ChipCore& c = chip->core();
-    const std::uint32_t now[] = {static_cast<std::uint32_t>(c.dp.state),
-                                 static_cast<std::uint32_t>(c.timers.wd),
+    const ChipProbe c = chip->probe();
+    const std::uint32_t now[] = {static_cast<std::uint32_t>(c.dp_state),
+                                 static_cast<std::uint32_t>(c.wd_state),
                                  c.baud_code,
-                                 c.latch[ChipCore::idx(RegId::Int_Req_Reg)],
-                                 c.buffers.dout.sm(),
-                                 c.buffers.din.sm(),
-                                 c.buffers.diag.sm(),
+                                 c.irr,
+                                 c.dout_buffer_sm,
+                                 c.din_buffer_sm,
+                                 c.diag_buffer_sm,
                                  chip->x_int_pin() ? 1u : 0u,
                                  chip->pb3_pin() ? 1u : 0u};
     const Sig sigs[] = {kDpState, kWdState, kBaud, kIrr, kDoutSm, kDinSm, kDiagSm, kXInt, kPb3};
@@ -167,11 +166,10 @@ bool Recorder::attach(Chip& chip, std::string& error) {
   chip.on_txd([im](std::uint64_t c, bool l) { im->push(c, kTxd, l ? 1 : 0); });
   chip.on_irq_change([im](std::uint64_t c, bool) { im->sample(c); });
   chip.on_state_change([im](std::uint64_t c) { im->sample(c); });
-  chip.on_block_event([im](std::uint64_t c, const BlockEvent& e) {
-    if (e.kind != BlockEvent::Kind::read && e.kind != BlockEvent::Kind::write) return;
-    const Sig strobe = e.kind == BlockEvent::Kind::read ? kBusRd : kBusWr;
-    im->push(c, kBusAddr, e.value);
-    if (e.kind == BlockEvent::Kind::write) im->push(c, kBusData, e.data);
+  chip.on_bus_access([im](std::uint64_t c, const BusAccess& e) {
+    const Sig strobe = e.write ? kBusWr : kBusRd;
+    im->push(c, kBusAddr, e.addr);
+    if (e.write) im->push(c, kBusData, e.data);
     im->push(c, strobe, 1);  // the strobe is high for the access's completion cycle
     im->push(c + 1, strobe, 0);
   });

@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "../../emu/core.hpp"
+#include "../../emu/harness.hpp"
 #include "scenario.hpp"
 
 namespace dpc31::fuzz {
@@ -110,7 +110,7 @@ void InvariantChecker::attach(Chip& chip, bool line_idle) {
   cfg_ok_addr_ = chip.addr_of(RegId::User_Cfg_Data_Okay);
   new_din_addr_ = chip.addr_of(RegId::New_Din_Buffer_Cmd);
   // The one piece of internal state read: an EOI inactive time already running at attach.
-  eoi_until_ = chip.core().irq.eoi_block_until;
+  eoi_until_ = chip.eoi_inactive_until();
   reported_ = chip.irq_active();
   dp_ = chip.dp_state();
   started_ = chip.started();
@@ -134,7 +134,7 @@ void InvariantChecker::attach(Chip& chip, bool line_idle) {
   chip.on_telegram([this](const Telegram& t) {
     if (t.from_chip) on_answer(t);
   });
-  chip.on_block_event([this](std::uint64_t, const BlockEvent& e) { on_block(e); });
+  harness::on_block_event(chip, [this](std::uint64_t, const BlockEvent& e) { on_block(e); });
   chip.on_state_change([this](std::uint64_t) { check(); });
 }
 
@@ -200,7 +200,11 @@ void InvariantChecker::check_buffers() {
   const bool dpc31 = chip_->profile().id == Profile::dpc31;
   // dpc31: Dout_Buffer_SM bit 7 is N_Cl and F is not shown (docs/decisions.md).
   const std::uint16_t dout = chip_->peek_reg(RegId::Dout_Buffer_SM);
-  std::string p = ring_problem(dpc31 ? (dout & 0x3F) : dout, dpc31);
+  std::string p =
+      ring_problem(dpc31 ? (dout & (fields::Dout_Buffer_SM::D | fields::Dout_Buffer_SM::N |
+                                    fields::Dout_Buffer_SM::U))
+                         : dout,
+                   dpc31);
   if (!p.empty()) fail(fmt::format("Dout_Buffer_SM {:02X}: {}", dout, p));
   const std::uint16_t din = chip_->peek_reg(RegId::Din_Buffer_SM);
   p = ring_problem(din, false);

@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "../../emu/block_event.hpp"
 #include "../../emu/uart.hpp"
 #include "dpc31/chip.hpp"
 

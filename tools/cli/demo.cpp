@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <string>
 
+#include "../../emu/harness.hpp"
 #include "run.hpp"
 #include "scenario.hpp"
 
@@ -210,7 +211,7 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option, std::FILE* out)
   n.say(
       "Two events pending, acknowledge one, EOI: X/INT drops and returns after the 1 us inactive "
       "time");
-  chip.asic_prm_received();
+  harness::asic_prm_received(chip);
   fmt::print(out, "[cycle {:>8}] (bus side) Set_Prm arrives: New_Prm_Data\n", chip.cycle());
   n.write16(RegId::Int_Ack_Reg, irq::User_Timer_Clock);
   n.write(RegId::Mode_Reg1_S, 0x02);

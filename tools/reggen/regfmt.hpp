@@ -33,6 +33,11 @@ std::string emit_cpp_tables(Profiles profiles, const ChipTiming& timing,
                             std::span<const std::string> reg_names);
 // The header dpc31/reg_ids.hpp: enum class RegId with one enumerator per name.
 std::string emit_reg_ids(std::span<const std::string> reg_names);
+// The header dpc31/reg_fields.hpp: a constexpr mask per named register field,
+// dpc31::fields::<Reg>::<Field> where every profile that has the field puts it on the same bits,
+// else dpc31::fields::<profile>::<Reg>::<Field>. A name that is no C++ identifier (4kB_Mode)
+// gets a leading underscore.
+std::string emit_reg_fields(Profiles profiles);
 
 // ---- Helpers shared by the emitters (also usable by callers) --------------------------------
 

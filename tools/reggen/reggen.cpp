@@ -1,7 +1,7 @@
-// reggen: regs/dpc31_regs.json -> reg_ids.hpp, reg_tables.cpp, dpc31_regs.h, dpc31_regs.vh,
-// registers.md. Every output is produced in memory first; a file is only replaced (temp file +
-// rename) when its content changed, so a failed run leaves the old files and builds stay
-// incremental. Exit codes: 0 ok, 1 I/O error, 2 bad input.
+// reggen: regs/dpc31_regs.json -> reg_ids.hpp, reg_fields.hpp, reg_tables.cpp, dpc31_regs.h,
+// dpc31_regs.vh, registers.md. Every output is produced in memory first; a file is only replaced
+// (temp file + rename) when its content changed, so a failed run leaves the old files and builds
+// stay incremental. Exit codes: 0 ok, 1 I/O error, 2 bad input.
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
@@ -64,6 +64,7 @@ std::vector<Output> generate(const dpc31::regjson::RegModel& model) {
   const auto profiles = model.profiles();
   return {
       {"include/dpc31/reg_ids.hpp", rf::emit_reg_ids(model.reg_names())},
+      {"include/dpc31/reg_fields.hpp", rf::emit_reg_fields(profiles)},
       {"reg_tables.cpp", rf::emit_cpp_tables(profiles, model.timing(), model.reg_names())},
       {"include/dpc31/dpc31_regs.h", rf::emit_c_header(profiles)},
       {"dpc31_regs.vh", rf::emit_verilog(profiles)},

@@ -56,6 +56,7 @@ int main(int argc, char** argv) {
 
   const std::pair<std::string, std::string> outputs[] = {
       {"include/dpc31/reg_ids.hpp", regfmt::emit_reg_ids(names)},
+      {"include/dpc31/reg_fields.hpp", regfmt::emit_reg_fields(profiles)},
       {"reg_tables.cpp", regfmt::emit_cpp_tables(profiles, chip_timing(), names)},
       {"include/dpc31/dpc31_regs.h", regfmt::emit_c_header(profiles)},
       {"dpc31_regs.vh", regfmt::emit_verilog(profiles)},

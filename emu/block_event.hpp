@@ -1,0 +1,34 @@
+// The block-level events of docs/golden-model.md: what the protocol side and the CPU did to the
+// blocks in one cycle. The lockstep's chip-session mode (tools/cosim/session.cpp) replays them
+// into the RTL; observed through the harness interface (emu/harness.hpp), not the public API.
+#pragma once
+
+#include <cstdint>
+
+namespace dpc31 {
+
+struct BlockEvent {
+  enum class Kind : std::uint8_t {
+    dx,
+    irq,
+    leave_master,
+    prm_fault,
+    gc,
+    dout,
+    failsafe,
+    din,
+    diag_begin,
+    diag_end,
+    dis,
+    prm,
+    cfg,
+    ssa,
+    read,
+    write
+  };
+  Kind kind;
+  std::uint16_t value = 0;  // irq bits, gc command, stat_diag, dis bits, bus address
+  std::uint8_t data = 0;    // bus write data
+};
+
+}  // namespace dpc31

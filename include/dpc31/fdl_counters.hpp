@@ -1,0 +1,33 @@
+// Counters of what the chip's receiver threw away or refused, by class, and of the requests it
+// served (Chip::fdl_counters). Each is counted where the telegram is judged: the MAC
+// (emu/mac.cpp) and the DP services (emu/dp_sm.cpp).
+#pragma once
+
+#include <cstdint>
+
+namespace dpc31 {
+
+struct FdlCounters {
+  std::uint32_t parity = 0;       // character with a parity error
+  std::uint32_t start_bit = 0;    // start bit not 0 (checked unless Dis_Start_Control)
+  std::uint32_t stop_bit = 0;     // stop bit not 1 (checked unless Dis_Stop_Control)
+  std::uint32_t bad_sd = 0;       // unknown start delimiter / bad repeated SD2
+  std::uint32_t le_mismatch = 0;  // LE != LEr
+  std::uint32_t bad_le = 0;       // LE out of range
+  std::uint32_t bad_fcs = 0;
+  std::uint32_t wrong_ed = 0;
+  std::uint32_t truncated = 0;             // the line went idle (TSYN) inside a frame
+  std::uint32_t oversize = 0;              // more characters than SD / LE announce
+  std::uint32_t bad_sap = 0;               // unsupported address extension
+  std::uint32_t no_sync = 0;               // a request not preceded by TSYN idle
+  std::uint32_t foreign_address = 0;       // well-formed, for another station
+  std::uint32_t unknown_sap = 0;           // DSAP the DP slave does not serve (answered RS)
+  std::uint32_t unsupported_function = 0;  // FC function the slave does not serve
+  std::uint32_t not_allowed = 0;           // service refused in this state / from this master
+  std::uint32_t no_resource = 0;           // answered RR (buffer too small, SSA busy)
+  std::uint32_t offline = 0;               // a frame arrived while the chip was Offline
+  std::uint32_t repeated = 0;              // FCB repeat: the previous answer sent again
+  std::uint32_t requests = 0;              // error-free requests to us (or broadcast) processed
+};
+
+}  // namespace dpc31
