@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "dpc31/chip.hpp"
+#include "dpc31/dp.hpp"
 #include "snapshot.hpp"
 
 namespace dpc31 {
@@ -15,19 +16,6 @@ namespace dpc31 {
 inline constexpr std::uint8_t kHandshakeFinished = 0x00;
 inline constexpr std::uint8_t kHandshakeConflict = 0x01;
 inline constexpr std::uint8_t kHandshakeNotAllowed = 0x03;
-
-// DP service access points (DSAP at the slave) and the master's SSAP.
-namespace sap {
-inline constexpr std::uint8_t Set_Slave_Add = 55;
-inline constexpr std::uint8_t Rd_Inp = 56;
-inline constexpr std::uint8_t Rd_Outp = 57;
-inline constexpr std::uint8_t Global_Control = 58;
-inline constexpr std::uint8_t Get_Cfg = 59;
-inline constexpr std::uint8_t Slave_Diag = 60;
-inline constexpr std::uint8_t Set_Prm = 61;
-inline constexpr std::uint8_t Chk_Cfg = 62;
-inline constexpr std::uint8_t Master = 62;
-}  // namespace sap
 
 // One pending telegram awaiting the user's verdict (Set_Prm or Chk_Cfg).
 struct Handshake {

@@ -2,10 +2,12 @@
 //   SD1 10 DA SA FC FCS 16          SD2 68 LE LEr 68 DA SA FC DU.. FCS 16
 //   SD3 A2 DA SA FC DU(8) FCS 16    SD4 DC DA SA                    SC E5
 // The address extension (DSAP, then SSAP) lives at the start of the DU, so SD1 cannot carry it.
-#include "fdl.hpp"
+#include "dpc31/fdl.hpp"
 
 #include <numeric>
 #include <utility>
+
+#include "snapshot.hpp"
 
 namespace dpc31::fdl {
 

@@ -1,6 +1,6 @@
 // The C HAL: a chip handle for C hosts, and the driver-shaped access functions on the bus
 // selected for the calling thread (a handle's own bus, or the host CPU's while it runs an ISR).
-#include "hal.hpp"
+#include "dpc31/hal.hpp"
 
 #include <algorithm>
 #include <cstdio>

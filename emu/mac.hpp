@@ -7,8 +7,8 @@
 #include <utility>
 #include <vector>
 
-#include "fdl.hpp"
-#include "uart.hpp"
+#include "dpc31/fdl.hpp"
+#include "dpc31/uart.hpp"
 #include "watchdog.hpp"
 
 namespace dpc31 {

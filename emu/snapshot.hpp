@@ -157,7 +157,7 @@ consteval std::size_t member_count() {
 inline constexpr std::uint32_t kFormatVersion = 2;
 inline constexpr std::size_t kHeaderSize = 36;
 // load_state_file refuses larger files (a snapshot is about 8 KB plus what is queued).
-inline constexpr std::size_t kMaxFileSize = std::size_t{64} << 20;
+inline constexpr std::size_t kMaxFileSize = kMaxSnapshotFileBytes;
 
 struct Header {
   Profile profile;

@@ -1,9 +1,11 @@
 // PROFIBUS UART: bit times, the edge-driven receiver and the encoder used by tests and the
 // master side of the bench. Sampling rules: docs/timing.md, "Serial line (UART)".
-#include "uart.hpp"
+#include "dpc31/uart.hpp"
 
 #include <algorithm>
 #include <bit>
+
+#include "snapshot.hpp"
 
 namespace dpc31 {
 

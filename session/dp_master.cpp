@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-#include "../emu/dp_sm.hpp"
+#include "dpc31/dp.hpp"
 
 namespace dpc31 {
 

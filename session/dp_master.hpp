@@ -12,10 +12,10 @@
 #include <string>
 #include <vector>
 
-#include "../emu/fdl.hpp"
-#include "../emu/uart.hpp"
 #include "cpu.hpp"
 #include "dpc31/chip.hpp"
+#include "dpc31/fdl.hpp"
+#include "dpc31/uart.hpp"
 
 namespace dpc31 {
 

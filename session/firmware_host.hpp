@@ -12,8 +12,8 @@
 #include <utility>
 #include <vector>
 
-#include "../emu/hal.hpp"
 #include "cpu.hpp"
+#include "dpc31/hal.hpp"
 #include "firmware.h"
 
 namespace dpc31 {

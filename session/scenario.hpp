@@ -15,10 +15,10 @@
 #include <string_view>
 #include <vector>
 
-#include "../emu/dp_services.hpp"
-#include "../emu/uart.hpp"
 #include "dp_master.hpp"
 #include "dpc31/chip.hpp"
+#include "dpc31/fdl_counters.hpp"
+#include "dpc31/uart.hpp"
 #include "responder.hpp"
 #include "vocabulary.hpp"
 

@@ -6,10 +6,10 @@
 #include <charconv>
 #include <utility>
 
-#include "../emu/fdl.hpp"
-#include "textfile.hpp"
+#include "dpc31/fdl.hpp"
 #include "firmware.h"
 #include "scenario.hpp"
+#include "textfile.hpp"
 
 namespace dpc31 {
 

@@ -8,9 +8,8 @@
 #include <optional>
 #include <utility>
 
-#include "../emu/core.hpp"  // the watchdog deadline, so `silence` stops at each state change
-#include "../emu/dp_sm.hpp"
-#include "../emu/fdl.hpp"
+#include "dpc31/dp.hpp"
+#include "dpc31/fdl.hpp"
 #include "dpc31/hex.hpp"
 #include "firmware_host.hpp"
 #include "scenario.hpp"

@@ -16,8 +16,8 @@
 #include <utility>
 #include <vector>
 
-#include "../emu/uart.hpp"
 #include "dpc31/chip.hpp"
+#include "dpc31/uart.hpp"
 #include "scenario.hpp"
 
 namespace dpc31 {

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <charconv>
 
-#include "../emu/fdl.hpp"
+#include "dpc31/fdl.hpp"
 #include "textfile.hpp"
 #include "trace.hpp"
 #include "vocabulary.hpp"

@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-#include "../emu/fdl.hpp"
+#include "dpc31/fdl.hpp"
 #include "dpc31/hex.hpp"
 #include "trace.hpp"
 #include "vocabulary.hpp"

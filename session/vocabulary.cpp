@@ -3,7 +3,7 @@
 
 #include <fmt/format.h>
 
-#include "../emu/dp_sm.hpp"  // SAP numbers
+#include "dpc31/dp.hpp"
 
 namespace dpc31 {
 

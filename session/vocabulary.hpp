@@ -8,10 +8,10 @@
 #include <string>
 #include <string_view>
 
-#include "../emu/dp_services.hpp"
-#include "../emu/fdl.hpp"
-#include "../emu/uart.hpp"
 #include "dpc31/chip.hpp"
+#include "dpc31/fdl.hpp"
+#include "dpc31/fdl_counters.hpp"
+#include "dpc31/uart.hpp"
 
 namespace dpc31 {
 

@@ -16,8 +16,8 @@
 #include <string>
 #include <vector>
 
-#include "../emu/dp_services.hpp"
-#include "../emu/fdl.hpp"
+#include "dpc31/fdl_counters.hpp"
+#include "dpc31/fdl.hpp"
 #include "../lib/bridge/engine.hpp"
 #include "../lib/bridge/pty.hpp"
 

@@ -9,8 +9,8 @@
 #include <stdexcept>
 #include <vector>
 
-#include "../emu/hal.hpp"
-#include "../emu/harness.hpp"
+#include "dpc31/hal.hpp"
+#include "harness.hpp"
 #include "dpc31/dpc31_hal.h"
 
 namespace {

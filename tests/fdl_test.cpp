@@ -1,6 +1,6 @@
 // FDL telegram coding (chip-facts §8). Expected bytes are worked out by hand: FCS = sum mod 256
 // of DA..last DU byte as sent (extension bits and SAP bytes included).
-#include "../emu/fdl.hpp"
+#include "dpc31/fdl.hpp"
 
 #include <gtest/gtest.h>
 

@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <random>
 
-#include "../emu/dp_services.hpp"
+#include "dpc31/fdl_counters.hpp"
 #include "cnt2/cnt2.h"
 #include "do4/do4.h"
 #include "dp_master.hpp"

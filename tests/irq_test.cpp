@@ -6,7 +6,7 @@
 
 #include <utility>
 
-#include "../emu/harness.hpp"
+#include "harness.hpp"
 #include "dpc31/reg_ids.hpp"
 #include "test_util.hpp"
 

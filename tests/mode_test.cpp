@@ -1,7 +1,7 @@
 // Mode_Reg0/1/2, Start / Go_Offline, Status_Reg, user timer, RAM access violation, profile layout.
 #include <gtest/gtest.h>
 
-#include "../emu/harness.hpp"
+#include "harness.hpp"
 #include "dpc31/reg_ids.hpp"
 #include "test_util.hpp"
 

@@ -8,7 +8,7 @@
 
 #include <numeric>
 
-#include "../emu/dp_services.hpp"
+#include "dpc31/fdl_counters.hpp"
 #include "dp_master.hpp"
 #include "dpc31/reg_ids.hpp"
 #include "responder.hpp"

@@ -21,7 +21,7 @@
 #include <thread>
 #include <vector>
 
-#include "../emu/fdl.hpp"
+#include "dpc31/fdl.hpp"
 #include "cpu.hpp"
 #include "dpc31/chip.hpp"
 #include "dpc31/regdesc.hpp"

@@ -4,7 +4,7 @@
 // fresh chip is stopped at a save point and saved; a third chip loads the snapshot and runs the
 // rest of the stimulus. Both must then show the same TxD edges, X/INT changes, telegrams, block
 // events and read values, the same memory image and the same final snapshot.
-#include "../emu/snapshot.hpp"
+#include "snapshot.hpp"
 
 #include <gtest/gtest.h>
 #include <sys/stat.h>
@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "../emu/harness.hpp"
+#include "harness.hpp"
 #include "cpu.hpp"
 #include "dp_master.hpp"
 #include "dpc31/chip.hpp"

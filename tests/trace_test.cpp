@@ -15,8 +15,8 @@
 #include "run_command.hpp"
 
 // emu/ is not on the tests' include path.
-#include "../emu/fdl.hpp"
-#include "../emu/uart.hpp"
+#include "dpc31/fdl.hpp"
+#include "dpc31/uart.hpp"
 #include "cpu.hpp"
 #include "dp_master.hpp"
 #include "responder.hpp"

@@ -2,7 +2,7 @@
 // a character starts at a falling edge s while idle; bit k is sampled at s + k*T + T/2 and reads
 // the last edge at or before that cycle; end = s + 11 T; the next start needs a falling edge at
 // or after the end. Every expected cycle below is worked out from those rules.
-#include "../emu/uart.hpp"
+#include "dpc31/uart.hpp"
 
 #include <gtest/gtest.h>
 

@@ -4,7 +4,7 @@
 
 #include <fmt/format.h>
 
-#include "../../emu/core.hpp"
+#include "core.hpp"
 #include "dpc31/reg_ids.hpp"
 #include "dut.hpp"
 

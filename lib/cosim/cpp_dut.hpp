@@ -1,6 +1,6 @@
 #pragma once
 
-#include "../../emu/core.hpp"
+#include "core.hpp"
 #include "dut.hpp"
 
 namespace dpc31::cosim {

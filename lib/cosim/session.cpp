@@ -2,7 +2,7 @@
 
 #include <fmt/format.h>
 
-#include "../../emu/harness.hpp"
+#include "harness.hpp"
 #include "cpp_dut.hpp"
 #include "scenario.hpp"
 

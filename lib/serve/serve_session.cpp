@@ -11,11 +11,11 @@
 #include <utility>
 #include <vector>
 
-#include "../../emu/dp_services.hpp"
-#include "../../emu/fdl.hpp"
+#include "dpc31/fdl_counters.hpp"
+#include "dpc31/fdl.hpp"
 #include "dpc31/hex.hpp"
-#include "../../emu/snapshot.hpp"  // kMaxFileSize
-#include "../../emu/uart.hpp"
+#include "dpc31/snapshot.hpp"
+#include "dpc31/uart.hpp"
 #include "dpc31/regdesc.hpp"
 #include "dpc31/snapshot.hpp"
 #include "vocabulary.hpp"  // state names
@@ -487,7 +487,7 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
         return ok(fmt::format("{}", chip_.cycle()));
       }
       std::vector<std::uint8_t> bytes;
-      if (!state_dir_.read(name, snap::kMaxFileSize, bytes, e)) {
+      if (!state_dir_.read(name, kMaxSnapshotFileBytes, bytes, e)) {
         return err(e.kind == StateDir::Error::Kind::denied ? "denied" : "snapshot",
                    one_line(e.message));
       }

@@ -9,7 +9,7 @@
 #include <random>
 #include <stdexcept>
 
-#include "../../emu/dp_services.hpp"
+#include "dpc31/fdl_counters.hpp"
 #include "../cli/variant_option.hpp"
 #include "dp_master.hpp"
 #include "dpc31/chip.hpp"

@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "../../emu/dp_services.hpp"
+#include "dpc31/fdl_counters.hpp"
 #include "dp_master.hpp"
 #include "dpc31/chip.hpp"
 #include "dpc31/reg_ids.hpp"

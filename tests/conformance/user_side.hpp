@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "../../emu/dp_sm.hpp"
+#include "dpc31/dp.hpp"
 #include "conformance.hpp"
 
 namespace conformance {

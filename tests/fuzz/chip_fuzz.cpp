@@ -18,7 +18,7 @@
 #include <optional>
 #include <vector>
 
-#include "../../emu/uart.hpp"
+#include "dpc31/uart.hpp"
 #include "cpu.hpp"
 #include "dp_master.hpp"
 #include "fuzz_targets.hpp"

@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "../../emu/harness.hpp"
+#include "harness.hpp"
 #include "scenario.hpp"
 
 namespace dpc31::fuzz {

@@ -26,8 +26,8 @@
 #include <string>
 #include <vector>
 
-#include "../../emu/block_event.hpp"
-#include "../../emu/uart.hpp"
+#include "block_event.hpp"
+#include "dpc31/uart.hpp"
 #include "dpc31/chip.hpp"
 
 namespace dpc31::fuzz {

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "../../emu/harness.hpp"
+#include "harness.hpp"
 #include "cpu.hpp"
 #include "dp_master.hpp"
 #include "responder.hpp"

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "../../emu/uart.hpp"
+#include "dpc31/uart.hpp"
 #include "cpu.hpp"
 #include "dp_master.hpp"
 #include "dpc31/chip.hpp"

@@ -13,7 +13,7 @@
 #include <memory>
 #include <optional>
 
-#include "../../emu/uart.hpp"
+#include "dpc31/uart.hpp"
 #include "../bridge/engine.hpp"
 #include "../bridge/pty.hpp"
 #include "variant_option.hpp"

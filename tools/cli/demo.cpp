@@ -8,7 +8,7 @@
 #include <filesystem>
 #include <string>
 
-#include "../../emu/harness.hpp"
+#include "harness.hpp"
 #include "run.hpp"
 #include "scenario.hpp"
 

@@ -10,8 +10,13 @@
 #include <utility>
 #include <vector>
 
-#include "fifo.hpp"
-#include "snapshot.hpp"
+#include "dpc31/fifo.hpp"
+
+// Snapshots of the chip's internal state (emu/snapshot.hpp) save and load these through:
+namespace dpc31::snap {
+class Writer;
+class Reader;
+}  // namespace dpc31::snap
 
 namespace dpc31 {
 

@@ -11,7 +11,11 @@
 #include <string_view>
 #include <vector>
 
-#include "snapshot.hpp"
+// Snapshots of the chip's internal state (emu/snapshot.hpp) save and load these through:
+namespace dpc31::snap {
+class Writer;
+class Reader;
+}  // namespace dpc31::snap
 
 namespace dpc31::fdl {
 
