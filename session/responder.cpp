@@ -6,10 +6,9 @@ namespace dpc31 {
 
 namespace {
 
-constexpr std::uint8_t kStart_SPC3 = 0x01;
-constexpr std::uint8_t kEOI = 0x02;
-constexpr std::uint8_t kRes_User_WD = 0x20;
-constexpr std::uint8_t kHandshakeConflict = 0x01;
+namespace m0 = fields::Mode_Reg0;
+namespace m1 = fields::Mode_Reg1_S;
+constexpr std::uint8_t kHandshakeConflict = 0x01;  // the OK / Not_OK reads' 01: a newer one came
 constexpr std::uint16_t kHandledByReads = irq::New_Prm_Data | irq::New_Cfg_Data;
 
 }  // namespace
@@ -58,15 +57,15 @@ void Responder::init(BusPort& c) {
           static_cast<std::uint16_t>(defined(RegId::Int_Ack_Reg) & ~kHandledByReads));
   c.write(waddr(c.chip(), RegId::Mode_Reg1_R),
           static_cast<std::uint8_t>(defined(RegId::Mode_Reg1_R)));
-  std::uint16_t mode0 = 0x0100;  // DP_Mode; EOI inactive time 1 us; user timer 1 ms
-  if (cfg_.sync_supported) mode0 |= 0x0040;
-  if (cfg_.freeze_supported) mode0 |= 0x0080;
-  if (cfg_.spec_clear_mode) mode0 |= 0x2000;
+  std::uint16_t mode0 = m0::DP_Mode;  // EOI inactive time 1 us; user timer 1 ms
+  if (cfg_.sync_supported) mode0 |= m0::Sync_Supported;
+  if (cfg_.freeze_supported) mode0 |= m0::Freeze_Supported;
+  if (cfg_.spec_clear_mode) mode0 |= m0::Spec_Clear_Mode;
   write16(c, RegId::Mode_Reg0, mode0);
   // Large buffers need the VPC3+'s 4 KB mode (16-byte segments).
   const bool large =
       p.ram_size_large != 0 && 3u * (s.in_len + s.out_len) + 1024 > p.ram_size - p.user_base;
-  if (large) c.write(waddr(c.chip(), RegId::Mode_Reg2), 0x80);
+  if (large) c.write(waddr(c.chip(), RegId::Mode_Reg2), fields::Mode_Reg2::_4kB_Mode);
   seg_shift_ = large ? p.segment_shift_large : p.segment_shift;
   const std::uint16_t enabled = irq::MAC_Reset | irq::Go_Leave_Data_Exchange |
                                 irq::Baudrate_Detect | irq::WD_DP_Control_Timeout |
@@ -115,10 +114,10 @@ void Responder::init(BusPort& c) {
     c.write(read_cfg + static_cast<std::uint32_t>(i), s.cfg[i]);
   if (p.id == Profile::dpc31) refill_substitute(c);
   if (p.id == Profile::dpc31 && cfg_.dx_out_port)
-    c.write(waddr(c.chip(), RegId::C31_Control), 0x01);
+    c.write(waddr(c.chip(), RegId::C31_Control), fields::C31_Control::Enable_DX_Out_Port);
   give_inputs(c);
   c.write(waddr(c.chip(), RegId::Mode_Reg1_S),
-          static_cast<std::uint8_t>(kStart_SPC3 | kRes_User_WD));
+          static_cast<std::uint8_t>(m1::Start_SPC3 | m1::Res_User_WD));
 }
 
 // dpc31: after a cleared fetch the old U is the new clear buffer C; prepare the substitute values.
@@ -168,21 +167,22 @@ void Responder::isr(BusPort& c) {
   }
   if ((ir & irq::DX_Out) != 0) {
     const std::uint8_t r = c.read(raddr(c.chip(), RegId::Next_Dout_Buffer_Cmd));
-    if ((r & 0x04) != 0) {
+    if ((r & fields::Next_Dout_Buffer_Cmd::State_U_Buffer) != 0) {
       static constexpr RegId kPtr[] = {RegId::R_Dout_Buf_Ptr1, RegId::R_Dout_Buf_Ptr2,
                                        RegId::R_Dout_Buf_Ptr3};
-      const std::uint32_t base = buffer(c, kPtr[(r & 3) - 1]);
-      Output o{c.cycle(), {}, (r & 0x08) != 0};
+      const std::uint32_t base =
+          buffer(c, kPtr[field_of(r, fields::Next_Dout_Buffer_Cmd::Ind_U_Buffer) - 1]);
+      Output o{c.cycle(), {}, (r & fields::Next_Dout_Buffer_Cmd::U_Buffer_Cleared) != 0};
       for (std::uint32_t i = 0; i < cfg_.slave.out_len; ++i) o.data.push_back(c.read(base + i));
       outputs.push_back(std::move(o));
       if (outputs.back().cleared && c.chip().profile().id == Profile::dpc31) refill_substitute(c);
     }
     give_inputs(c);
-    if (cfg_.user_watchdog) c.write(waddr(c.chip(), RegId::Mode_Reg1_S), kRes_User_WD);
+    if (cfg_.user_watchdog) c.write(waddr(c.chip(), RegId::Mode_Reg1_S), m1::Res_User_WD);
   }
   const auto ack = static_cast<std::uint16_t>(ir & ~kHandledByReads);
   if (ack != 0) write16(c, RegId::Int_Ack_Reg, ack);
-  c.write(waddr(c.chip(), RegId::Mode_Reg1_S), kEOI);
+  c.write(waddr(c.chip(), RegId::Mode_Reg1_S), m1::EOI);
 }
 
 }  // namespace dpc31

@@ -9,9 +9,9 @@
 #include <random>
 #include <sstream>
 
-#include "textfile.hpp"
 #include "dpc31/reg_ids.hpp"
 #include "outfile.hpp"
+#include "textfile.hpp"
 
 namespace dpc31::cosim {
 
@@ -190,7 +190,7 @@ void random_access(Gen& g, Inputs& in) {
   const int lane = static_cast<int>(g.pick(2));
   if (kind < 55) {  // EOI, the most frequent write of an ISR
     in.bus_addr = g.waddr(RegId::Mode_Reg1_S);
-    in.bus_wdata = 0x02;
+    in.bus_wdata = fields::Mode_Reg1_S::EOI;
   } else if (kind < 65) {  // acknowledges
     in.bus_addr = g.waddr(RegId::Int_Ack_Reg, lane);
   } else if (kind < 72) {  // masks, biased to unmasking
@@ -200,9 +200,11 @@ void random_access(Gen& g, Inputs& in) {
   } else if (kind < 76) {
     in.bus_addr = g.waddr(RegId::Int_Req_Reg, lane);
     in.bus_wdata = static_cast<std::uint8_t>(in.bus_wdata & g.byte());
-  } else if (kind <
-             82) {  // Mode_Reg1 set: Start, User_Leave_Master, Go_Offline, En_Change, Res_User_WD
-    static constexpr std::uint8_t kSet[] = {0x01, 0x01, 0x08, 0x04, 0x10, 0x20, 0x03};
+  } else if (kind < 82) {  // Mode_Reg1 set: Start (twice as often), the others, Start with EOI
+    namespace m1 = fields::Mode_Reg1_S;
+    static constexpr std::uint8_t kSet[] = {
+        m1::Start_SPC3,           m1::Start_SPC3,  m1::User_Leave_Master,   m1::Go_Offline,
+        m1::En_Change_Cfg_Buffer, m1::Res_User_WD, m1::Start_SPC3 | m1::EOI};
     in.bus_addr = g.waddr(RegId::Mode_Reg1_S);
     in.bus_wdata = kSet[g.pick(std::size(kSet))];
   } else if (kind < 85) {

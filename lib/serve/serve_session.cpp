@@ -11,13 +11,12 @@
 #include <utility>
 #include <vector>
 
-#include "dpc31/fdl_counters.hpp"
 #include "dpc31/fdl.hpp"
+#include "dpc31/fdl_counters.hpp"
 #include "dpc31/hex.hpp"
-#include "dpc31/snapshot.hpp"
-#include "dpc31/uart.hpp"
 #include "dpc31/regdesc.hpp"
 #include "dpc31/snapshot.hpp"
+#include "dpc31/uart.hpp"
 #include "vocabulary.hpp"  // state names
 
 namespace dpc31::serve {
@@ -268,7 +267,8 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
       arity(t, 0, 0, "status");
       std::string baud = "search";
       if (chip_.wd_state() != WdState::Baud_Search) {
-        const unsigned code = (chip_.peek_reg(RegId::Status_Reg) >> 8) & 0x0F;
+        const unsigned code =
+            field_of(chip_.peek_reg(RegId::Status_Reg), fields::Status_Reg::Baudrate);
         baud = code < std::size(kBaudRates) ? fmt::format("{}", kBaudRates[code]) : "?";
       }
       return ok(fmt::format(

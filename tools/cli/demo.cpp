@@ -16,6 +16,9 @@ namespace dpc31::cli {
 
 namespace {
 
+namespace m0 = fields::Mode_Reg0;
+namespace m1 = fields::Mode_Reg1_S;
+
 // A firmware-like view of the chip that narrates what it does.
 class Narrator {
  public:
@@ -177,11 +180,11 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option, std::FILE* out)
   n.write16(RegId::Int_Req_Reg, 0x0000);
   n.write16(RegId::Int_Ack_Reg, 0xFFFF);
   n.write(RegId::Mode_Reg1_R, 0xFF);
-  n.write16(RegId::Mode_Reg0, 0x0100);  // DP_Mode; EOI inactive time 1 us; user timer 1 ms
+  n.write16(RegId::Mode_Reg0, m0::DP_Mode);  // EOI inactive time 1 us; user timer 1 ms
   const std::uint16_t enabled =
       irq::DX_Out | irq::MAC_Reset | irq::User_Timer_Clock | irq::New_Prm_Data;
   n.write16(RegId::Int_Mask_Reg, static_cast<std::uint16_t>(~enabled));
-  n.write(RegId::Mode_Reg1_S, 0x01);  // Start_SPC3: power-on clear of the outputs raises DX_Out
+  n.write(RegId::Mode_Reg1_S, m1::Start_SPC3);  // power-on clear of the outputs raises DX_Out
 
   n.say("ISR: read IR, fetch the (cleared) outputs, acknowledge DX_Out, EOI");
   const std::uint16_t ir = n.read16(RegId::Int_Reg);
@@ -191,14 +194,14 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option, std::FILE* out)
              "                   Next_Dout_Buffer_Cmd: U = buffer {}, new = {}, cleared = {}\n",
              dout & 3, (dout >> 2) & 1, (dout >> 3) & 1);
   n.write16(RegId::Int_Ack_Reg, irq::DX_Out);
-  n.write(RegId::Mode_Reg1_S, 0x02);  // EOI
+  n.write(RegId::Mode_Reg1_S, m1::EOI);
 
   n.say("Wait for the 1 ms User_Timer_Clock; acknowledge it and EOI");
   n.step(chip.clock_hz() / 1000 - chip.cycle(),
          "until the first user timer tick (1 ms after Start)");
   n.step(8, "a little more");
   n.write16(RegId::Int_Ack_Reg, irq::User_Timer_Clock);
-  n.write(RegId::Mode_Reg1_S, 0x02);
+  n.write(RegId::Mode_Reg1_S, m1::EOI);
 
   n.say("Mask the user timer: IRR latches the event, X/INT stays inactive");
   n.write16(RegId::Int_Mask_Reg, static_cast<std::uint16_t>(~(enabled & ~irq::User_Timer_Clock)));
@@ -214,7 +217,7 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option, std::FILE* out)
   harness::asic_prm_received(chip);
   fmt::print(out, "[cycle {:>8}] (bus side) Set_Prm arrives: New_Prm_Data\n", chip.cycle());
   n.write16(RegId::Int_Ack_Reg, irq::User_Timer_Clock);
-  n.write(RegId::Mode_Reg1_S, 0x02);
+  n.write(RegId::Mode_Reg1_S, m1::EOI);
   n.step(60, "past the inactive time (48 cycles at 48 MHz)");
 
   n.say("New_Prm_Data is not acknowledged through IAR but by the User_Prm_Data_Okay read");
@@ -223,14 +226,14 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option, std::FILE* out)
   fmt::print(out,
              "                   User_Prm_Data_Okay = {:02X}h (00 finished); DP state now {}\n", ok,
              chip.dp_state() == DpState::Wait_Cfg ? "Wait_Cfg" : "other");
-  n.write(RegId::Mode_Reg1_S, 0x02);
+  n.write(RegId::Mode_Reg1_S, m1::EOI);
 
   n.say("Go_Offline: MAC_Reset, Status.Offline");
-  n.write(RegId::Mode_Reg1_S, 0x04);
+  n.write(RegId::Mode_Reg1_S, m1::Go_Offline);
   const std::uint16_t status = n.read16(RegId::Status_Reg);
   fmt::print(out, "                   Status_Reg = {:04X}h (bit 0 = 0: Offline)\n", status);
   n.write16(RegId::Int_Ack_Reg, irq::MAC_Reset);
-  n.write(RegId::Mode_Reg1_S, 0x02);
+  n.write(RegId::Mode_Reg1_S, m1::EOI);
   fmt::print(out, "\nregister session done at cycle {} ({:.3f} ms of chip time)\n", chip.cycle(),
              static_cast<double>(chip.cycle()) * 1e3 / chip.clock_hz());
   return run_dp_session(opt, out_dir, out);
