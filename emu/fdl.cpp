@@ -7,6 +7,7 @@
 #include <numeric>
 #include <utility>
 
+#include "dpc31/names.hpp"
 #include "snapshot.hpp"
 
 namespace dpc31::fdl {
@@ -78,29 +79,13 @@ std::vector<std::uint8_t> encode(const Frame& f) {
   return out;
 }
 
-std::string_view error_name(Error e) {
-  switch (e) {
-    case Error::none:
-      return "none";
-    case Error::bad_sd:
-      return "bad_sd";
-    case Error::truncated:
-      return "truncated";
-    case Error::le_mismatch:
-      return "le_mismatch";
-    case Error::bad_le:
-      return "bad_le";
-    case Error::bad_fcs:
-      return "bad_fcs";
-    case Error::wrong_ed:
-      return "wrong_ed";
-    case Error::oversize:
-      return "oversize";
-    case Error::bad_sap:
-      return "bad_sap";
-  }
-  return "?";
-}
+constexpr std::array<std::string_view, 9> kErrorNames = {"none",        "bad_sd",   "truncated",
+                                                         "le_mismatch", "bad_le",   "bad_fcs",
+                                                         "wrong_ed",    "oversize", "bad_sap"};
+static_assert(kErrorNames.size() == static_cast<std::size_t>(Error::bad_sap) + 1,
+              "a new value: name it here");
+
+std::string_view error_name(Error e) { return name_of(e, kErrorNames); }
 
 Decoded decode(std::span<const std::uint8_t> b) {
   Frame f{};

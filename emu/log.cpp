@@ -4,21 +4,15 @@
 
 #include <cstdio>
 
+#include "dpc31/names.hpp"
+
 namespace dpc31 {
 
-std::string_view level_name(LogLevel l) {
-  switch (l) {
-    case LogLevel::debug:
-      return "debug";
-    case LogLevel::info:
-      return "info";
-    case LogLevel::warn:
-      return "warn";
-    case LogLevel::error:
-      return "error";
-  }
-  return "?";
-}
+constexpr std::array<std::string_view, 4> kLogLevelNames = {"debug", "info", "warn", "error"};
+static_assert(kLogLevelNames.size() == static_cast<std::size_t>(LogLevel::error) + 1,
+              "a new value: name it here");
+
+std::string_view level_name(LogLevel l) { return name_of(l, kLogLevelNames); }
 
 LogSink stderr_sink(LogLevel min_level) {
   return [min_level](const LogRecord& r) {

@@ -4,32 +4,22 @@
 #include <fmt/format.h>
 
 #include "dpc31/dp.hpp"
+#include "dpc31/names.hpp"
 
 namespace dpc31 {
 
-std::string_view dp_state_name(DpState s) {
-  switch (s) {
-    case DpState::Wait_Prm:
-      return "Wait_Prm";
-    case DpState::Wait_Cfg:
-      return "Wait_Cfg";
-    case DpState::Data_Exchange:
-      return "Data_Exchange";
-  }
-  return "?";
-}
+constexpr std::array<std::string_view, 3> kDpStateNames = {"Wait_Prm", "Wait_Cfg", "Data_Exchange"};
+static_assert(kDpStateNames.size() == static_cast<std::size_t>(DpState::Data_Exchange) + 1,
+              "a new value: name it here");
 
-std::string_view wd_state_name(WdState s) {
-  switch (s) {
-    case WdState::Baud_Search:
-      return "Baud_Search";
-    case WdState::Baud_Control:
-      return "Baud_Control";
-    case WdState::DP_Control:
-      return "DP_Control";
-  }
-  return "?";
-}
+std::string_view dp_state_name(DpState s) { return name_of(s, kDpStateNames); }
+
+constexpr std::array<std::string_view, 3> kWdStateNames = {"Baud_Search", "Baud_Control",
+                                                           "DP_Control"};
+static_assert(kWdStateNames.size() == static_cast<std::size_t>(WdState::DP_Control) + 1,
+              "a new value: name it here");
+
+std::string_view wd_state_name(WdState s) { return name_of(s, kWdStateNames); }
 
 std::span<const CounterField> fdl_counter_fields() {
   static constexpr CounterField kFields[] = {

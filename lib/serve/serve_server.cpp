@@ -125,6 +125,19 @@ struct Client {
 
 enum class Got : std::uint8_t { none, line, too_long };
 
+// A buffer read from the front up to `off`: emptied (its storage freed when it grew large), or
+// its consumed front dropped once that is more than a chunk.
+void compact(std::string& buf, std::size_t& off) {
+  if (off == buf.size()) {
+    buf.clear();
+    if (buf.capacity() > kKeepBuffer) std::string().swap(buf);
+    off = 0;
+  } else if (off > kReadChunk) {
+    buf.erase(0, off);
+    off = 0;
+  }
+}
+
 }  // namespace
 
 struct Server::Impl {
@@ -420,23 +433,6 @@ void Server::Impl::check_hello(Client& c) {
   c.established = true;
   queue(c, "OK auth");
 }
-
-namespace {
-
-// A buffer read from the front up to `off`: emptied (its storage freed when it grew large), or
-// its consumed front dropped once that is more than a chunk.
-void compact(std::string& buf, std::size_t& off) {
-  if (off == buf.size()) {
-    buf.clear();
-    if (buf.capacity() > kKeepBuffer) std::string().swap(buf);
-    off = 0;
-  } else if (off > kReadChunk) {
-    buf.erase(0, off);
-    off = 0;
-  }
-}
-
-}  // namespace
 
 void Server::Impl::read_client(Client& c) {
   compact(c.in, c.in_off);

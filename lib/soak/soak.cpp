@@ -9,10 +9,11 @@
 #include <random>
 #include <stdexcept>
 
-#include "dpc31/fdl_counters.hpp"
 #include "../cli/variant_option.hpp"
 #include "dp_master.hpp"
 #include "dpc31/chip.hpp"
+#include "dpc31/fdl_counters.hpp"
+#include "dpc31/names.hpp"
 #include "numbers.hpp"
 #include "outfile.hpp"
 #include "responder.hpp"
@@ -289,25 +290,11 @@ class Soak {
 
 }  // namespace
 
-const char* fault_name(Fault f) {
-  switch (f) {
-    case Fault::noise:
-      return "noise";
-    case Fault::noise_sync:
-      return "noise_sync";
-    case Fault::glitch:
-      return "glitch";
-    case Fault::parity:
-      return "parity";
-    case Fault::stop:
-      return "stop";
-    case Fault::cable:
-      return "cable";
-    case Fault::restart:
-      return "restart";
-  }
-  return "?";
-}
+constexpr std::array<std::string_view, 7> kFaultNames = {"noise", "noise_sync", "glitch", "parity",
+                                                         "stop",  "cable",      "restart"};
+static_assert(kFaultNames.size() == kFaultKinds, "a new fault kind: name it here");
+
+const char* fault_name(Fault f) { return name_of(f, kFaultNames).data(); }
 
 bool Result::ok() const {
   return std::all_of(rows.begin(), rows.end(), [](const Row& r) { return r.ok(); });
