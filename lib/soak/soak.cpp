@@ -9,7 +9,7 @@
 #include <random>
 #include <stdexcept>
 
-#include "../cli/variant_option.hpp"
+#include "variant_option.hpp"
 #include "dp_master.hpp"
 #include "dpc31/chip.hpp"
 #include "dpc31/fdl_counters.hpp"
