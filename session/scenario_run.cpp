@@ -216,7 +216,7 @@ class Runner {
   }
 
   std::uint32_t chip_baud() const {
-    const unsigned code = (chip_.peek_reg(RegId::Status_Reg) >> 8) & 0xF;
+    const unsigned code = field_of(chip_.peek_reg(RegId::Status_Reg), fields::Status_Reg::Baudrate);
     return code < std::size(kBaudRates) ? kBaudRates[code] : 0;
   }
 
