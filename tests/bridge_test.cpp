@@ -16,10 +16,10 @@
 #include <string>
 #include <vector>
 
-#include "dpc31/fdl_counters.hpp"
-#include "dpc31/fdl.hpp"
 #include "../lib/bridge/engine.hpp"
 #include "../lib/bridge/pty.hpp"
+#include "dpc31/fdl.hpp"
+#include "dpc31/fdl_counters.hpp"
 
 namespace {
 

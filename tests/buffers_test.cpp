@@ -2,8 +2,8 @@
 // bytes are worked out by hand from chip-facts §5 (F 7:6, U 5:4, N 3:2, D 1:0).
 #include <gtest/gtest.h>
 
-#include "harness.hpp"
 #include "dpc31/reg_ids.hpp"
+#include "harness.hpp"
 #include "test_util.hpp"
 
 using namespace dpc31;

@@ -1,7 +1,8 @@
 // Telegram captures (docs/capture.md): the pcapng writer's bytes against
 // draft-ietf-opsawg-pcapng field by field, cycle -> ns conversion, failures that must be reported,
 // and the whole path: a DP start-up on the chip, captured, dissected by tshark with
-// lib/capture/profibus_dl.lua. Expected bytes, block lengths and dissector fields are worked out by hand.
+// lib/capture/profibus_dl.lua. Expected bytes, block lengths and dissector fields are worked out by
+// hand.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/resource.h>

@@ -9,9 +9,9 @@
 #include <stdexcept>
 #include <vector>
 
+#include "dpc31/dpc31_hal.h"
 #include "dpc31/hal.hpp"
 #include "harness.hpp"
-#include "dpc31/dpc31_hal.h"
 
 namespace {
 

@@ -7,10 +7,10 @@
 #include <algorithm>
 #include <random>
 
-#include "dpc31/fdl_counters.hpp"
 #include "cnt2/cnt2.h"
 #include "do4/do4.h"
 #include "dp_master.hpp"
+#include "dpc31/fdl_counters.hpp"
 #include "firmware_bench.hpp"
 
 namespace {

@@ -6,8 +6,8 @@
 
 #include <utility>
 
-#include "harness.hpp"
 #include "dpc31/reg_ids.hpp"
+#include "harness.hpp"
 #include "test_util.hpp"
 
 using namespace dpc31;

@@ -1,8 +1,8 @@
 // Mode_Reg0/1/2, Start / Go_Offline, Status_Reg, user timer, RAM access violation, profile layout.
 #include <gtest/gtest.h>
 
-#include "harness.hpp"
 #include "dpc31/reg_ids.hpp"
+#include "harness.hpp"
 #include "test_util.hpp"
 
 using namespace dpc31;

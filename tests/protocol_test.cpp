@@ -8,8 +8,8 @@
 
 #include <numeric>
 
-#include "dpc31/fdl_counters.hpp"
 #include "dp_master.hpp"
+#include "dpc31/fdl_counters.hpp"
 #include "dpc31/reg_ids.hpp"
 #include "responder.hpp"
 #include "scenario.hpp"

@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "cpu.hpp"
-#include "responder.hpp"
 #include "dpc31/chip.hpp"
+#include "responder.hpp"
 #include "serve_client.hpp"
 
 using testutil::starts_with;

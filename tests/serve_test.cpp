@@ -21,9 +21,9 @@
 #include <thread>
 #include <vector>
 
-#include "dpc31/fdl.hpp"
 #include "cpu.hpp"
 #include "dpc31/chip.hpp"
+#include "dpc31/fdl.hpp"
 #include "dpc31/regdesc.hpp"
 #include "responder.hpp"
 #include "run_command.hpp"

@@ -17,10 +17,10 @@
 #include <string>
 #include <vector>
 
-#include "harness.hpp"
 #include "cpu.hpp"
 #include "dp_master.hpp"
 #include "dpc31/chip.hpp"
+#include "harness.hpp"
 #include "responder.hpp"
 #include "test_util.hpp"
 

@@ -15,10 +15,10 @@
 #include "run_command.hpp"
 
 // emu/ is not on the tests' include path.
-#include "dpc31/fdl.hpp"
-#include "dpc31/uart.hpp"
 #include "cpu.hpp"
 #include "dp_master.hpp"
+#include "dpc31/fdl.hpp"
+#include "dpc31/uart.hpp"
 #include "responder.hpp"
 #include "scenario.hpp"
 #include "trace.hpp"

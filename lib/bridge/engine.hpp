@@ -19,9 +19,9 @@
 #include <string>
 #include <vector>
 
-#include "dpc31/hex.hpp"
 #include "dp_master.hpp"
 #include "dpc31/chip.hpp"
+#include "dpc31/hex.hpp"
 #include "firmware.h"
 #include "firmware_host.hpp"
 

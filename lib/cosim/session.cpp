@@ -2,8 +2,8 @@
 
 #include <fmt/format.h>
 
-#include "harness.hpp"
 #include "cpp_dut.hpp"
+#include "harness.hpp"
 #include "scenario.hpp"
 
 namespace dpc31::cosim {

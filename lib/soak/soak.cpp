@@ -9,7 +9,6 @@
 #include <random>
 #include <stdexcept>
 
-#include "variant_option.hpp"
 #include "dp_master.hpp"
 #include "dpc31/chip.hpp"
 #include "dpc31/fdl_counters.hpp"
@@ -18,6 +17,7 @@
 #include "outfile.hpp"
 #include "responder.hpp"
 #include "scenario.hpp"
+#include "variant_option.hpp"
 
 namespace dpc31::soak {
 

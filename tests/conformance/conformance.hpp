@@ -7,9 +7,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "dpc31/fdl_counters.hpp"
 #include "dp_master.hpp"
 #include "dpc31/chip.hpp"
+#include "dpc31/fdl_counters.hpp"
 #include "dpc31/reg_ids.hpp"
 #include "responder.hpp"
 #include "test_util.hpp"

@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "dpc31/dp.hpp"
 #include "conformance.hpp"
+#include "dpc31/dp.hpp"
 
 namespace conformance {
 

@@ -18,9 +18,9 @@
 #include <optional>
 #include <vector>
 
-#include "dpc31/uart.hpp"
 #include "cpu.hpp"
 #include "dp_master.hpp"
+#include "dpc31/uart.hpp"
 #include "fuzz_targets.hpp"
 #include "invariants.hpp"
 #include "responder.hpp"

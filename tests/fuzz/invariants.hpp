@@ -27,8 +27,8 @@
 #include <vector>
 
 #include "block_event.hpp"
-#include "dpc31/uart.hpp"
 #include "dpc31/chip.hpp"
+#include "dpc31/uart.hpp"
 
 namespace dpc31::fuzz {
 

@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "harness.hpp"
 #include "cpu.hpp"
 #include "dp_master.hpp"
+#include "harness.hpp"
 #include "responder.hpp"
 
 namespace {

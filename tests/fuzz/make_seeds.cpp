@@ -8,10 +8,10 @@
 #include <string>
 #include <vector>
 
-#include "dpc31/uart.hpp"
 #include "cpu.hpp"
 #include "dp_master.hpp"
 #include "dpc31/chip.hpp"
+#include "dpc31/uart.hpp"
 #include "responder.hpp"
 
 namespace {

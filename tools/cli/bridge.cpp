@@ -13,9 +13,9 @@
 #include <memory>
 #include <optional>
 
-#include "dpc31/uart.hpp"
 #include "../bridge/engine.hpp"
 #include "../bridge/pty.hpp"
+#include "dpc31/uart.hpp"
 #include "variant_option.hpp"
 
 namespace dpc31::cli {

@@ -13,10 +13,10 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "textfile.hpp"
 #include "lockstep.hpp"
 #include "outfile.hpp"
 #include "session.hpp"
+#include "textfile.hpp"
 
 namespace dpc31::cli {
 
