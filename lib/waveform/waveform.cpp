@@ -10,6 +10,7 @@
 #include "dpc31/reg_ids.hpp"
 #include "gtkwave/fstapi.h"
 #include "outfile.hpp"
+#include "wavediff.hpp"  // vcd_id: one VCD identifier code for every writer
 
 namespace dpc31::wave {
 
@@ -63,15 +64,6 @@ std::string bits(std::uint32_t v, int width) {
   std::string s;
   for (int b = width - 1; b >= 0; --b) s += ((v >> b) & 1) != 0 ? '1' : '0';
   return s;
-}
-
-std::string vcd_id(std::size_t i) {
-  std::string id;
-  do {
-    id += static_cast<char>('!' + i % 94);
-    i /= 94;
-  } while (i != 0);
-  return id;
 }
 
 }  // namespace
@@ -261,16 +253,16 @@ bool Recorder::finish(std::uint64_t end_cycle, std::string& error) {
         fmt::print(f, "$scope module {} $end\n", sc);
         scope = sc;
       }
-      fmt::print(f, "$var wire {} {} {} $end\n", kSignals[i].width, vcd_id(i),
+      fmt::print(f, "$var wire {} {} {} $end\n", kSignals[i].width, wavediff::vcd_id(i),
                  name.substr(dot + 1));
     }
     if (!m.opt.flat && !scope.empty()) fmt::print(f, "$upscope $end\n");
     fmt::print(f, "$upscope $end\n$enddefinitions $end\n#{}\n$dumpvars\n", m.units(m.opt.from));
     auto value = [&](std::size_t i, std::uint32_t v) {
       if (kSignals[i].width == 1) {
-        fmt::print(f, "{}{}\n", v & 1, vcd_id(i));
+        fmt::print(f, "{}{}\n", v & 1, wavediff::vcd_id(i));
       } else {
-        fmt::print(f, "b{} {}\n", bits(v, kSignals[i].width), vcd_id(i));
+        fmt::print(f, "b{} {}\n", bits(v, kSignals[i].width), wavediff::vcd_id(i));
       }
     };
     for (std::size_t i : order) value(i, cur[i]);
