@@ -1,6 +1,8 @@
-// Buffer state machine hooks: the *_Buffer_SM reads, the user's command reads
-// (New_Din_Buffer_Cmd, Next_Dout_Buffer_Cmd, New_Diag_Buffer_Cmd) and the ASIC's side
-// (outputs received, clear, inputs fetched, diag sent).
+// Buffer state machines: the *_Buffer_SM reads, the user's command reads (New_Din_Buffer_Cmd,
+// Next_Dout_Buffer_Cmd, New_Diag_Buffer_Cmd) and the ASIC's side (outputs received, clear, inputs
+// fetched, diag sent).
+#include "buffers.hpp"
+
 #include "core.hpp"
 
 namespace dpc31 {
@@ -9,25 +11,17 @@ namespace {
 
 constexpr std::uint8_t kStat_Diag = 0x02;  // diag buffer byte 0
 
-std::uint16_t din_sm(const ChipCore& c) { return c.buffers.din.sm(); }
-// dpc31: bit 7 is N_Cl and F (always the one buffer D, N, U leave) is not shown.
-std::uint16_t dout_sm(const ChipCore& c) {
-  if (c.prof->id != Profile::dpc31) return c.buffers.dout.sm();
-  namespace f = fields::Dout_Buffer_SM;
-  return static_cast<std::uint16_t>((c.buffers.n_cl ? f::N_Cl : 0) |
-                                    (c.buffers.dout.sm() & (f::D | f::N | f::U)));
-}
-std::uint16_t diag_sm(const ChipCore& c) { return c.buffers.diag.sm(); }
+using State = BufferUnit::State;
 
 // User: the filled U goes to N; the answer names the new U.
-std::uint16_t new_din(BufferUnit& b) {
+std::uint16_t new_din(State& b) {
   b.din.u_to_n();
   return b.din.u;
 }
 
 // User: fetch the newest outputs (N -> U) if there are any. dpc31 with N_Cl: the clear buffer C
 // (the user's substitute values) is exchanged with U instead.
-std::uint16_t next_dout(BufferUnit& b) {
+std::uint16_t next_dout(State& b) {
   std::uint8_t r = 0;
   if (b.n_cl) {
     // The substitute values supersede outputs received before the Clear: N is freed unseen.
@@ -48,8 +42,8 @@ std::uint16_t next_dout(BufferUnit& b) {
 
 // User: hand the prepared diag buffer to the ASIC. The ASIC's previous buffer comes back at
 // once unless it is being sent right now; then the answer is 00 (both with the ASIC) and it
-// comes back when the send ends (asic_diag_send_end).
-std::uint16_t new_diag(BufferUnit& b, bool& changed) {
+// comes back when the send ends (diag_send_end).
+std::uint16_t new_diag(State& b, bool& changed) {
   changed = false;
   for (int k = 0; k < 2; ++k) {
     if (b.diag.buf[k] != DiagState::User) continue;
@@ -66,103 +60,130 @@ std::uint16_t new_diag(BufferUnit& b, bool& changed) {
   return 0;
 }
 
-template <std::uint16_t (*Op)(BufferUnit&)>
-std::uint16_t preview(const ChipCore& c) {
-  BufferUnit copy = c.buffers;
-  return Op(copy);
+}  // namespace
+
+void install_buffer_hooks(HookTable& h) {
+  auto at = [&h](RegId id) -> RegHooks& { return h[RegisterFile::idx(id)]; };
+  at(RegId::Din_Buffer_SM).read = [](const ChipCore& c) -> std::uint16_t {
+    return c.buffers.din_sm();
+  };
+  at(RegId::Dout_Buffer_SM).read = [](const ChipCore& c) -> std::uint16_t {
+    return c.buffers.dout_sm();
+  };
+  at(RegId::Diag_Buffer_SM).read = [](const ChipCore& c) -> std::uint16_t {
+    return c.buffers.diag_sm();
+  };
+  at(RegId::New_Din_Buffer_Cmd).read = [](const ChipCore& c) {
+    return c.buffers.new_din_preview();
+  };
+  at(RegId::New_Din_Buffer_Cmd).command = [](ChipCore& c) {
+    const std::uint16_t r = c.buffers.new_din_cmd();
+    c.dp.din_handed_over();
+    return r;
+  };
+  at(RegId::Next_Dout_Buffer_Cmd).read = [](const ChipCore& c) {
+    return c.buffers.next_dout_preview();
+  };
+  at(RegId::Next_Dout_Buffer_Cmd).command = [](ChipCore& c) { return c.buffers.next_dout_cmd(); };
+  at(RegId::New_Diag_Buffer_Cmd).read = [](const ChipCore& c) {
+    return c.buffers.new_diag_preview();
+  };
+  at(RegId::New_Diag_Buffer_Cmd).command = [](ChipCore& c) { return c.buffers.new_diag_cmd(); };
 }
 
-std::uint16_t new_diag_preview(const ChipCore& c) {
-  BufferUnit copy = c.buffers;
+std::uint8_t BufferUnit::dout_sm() const {
+  if (regs_.id() != Profile::dpc31) return s_.dout.sm();
+  namespace f = fields::Dout_Buffer_SM;
+  return static_cast<std::uint8_t>((s_.n_cl ? f::N_Cl : 0) | (s_.dout.sm() & (f::D | f::N | f::U)));
+}
+
+std::uint16_t BufferUnit::new_din_cmd() { return new_din(s_); }
+
+std::uint16_t BufferUnit::new_din_preview() const {
+  State copy = s_;
+  return new_din(copy);
+}
+
+std::uint16_t BufferUnit::next_dout_cmd() {
+  const std::uint16_t r = next_dout(s_);
+  if (s_.c_swap_pending) {
+    s_.c_swap_pending = false;
+    regs_.swap_cells(RegId::R_Dout_Buf_Ptr_C, dout_ptr(s_.dout.u));
+  }
+  return r;
+}
+
+std::uint16_t BufferUnit::next_dout_preview() const {
+  State copy = s_;
+  return next_dout(copy);
+}
+
+std::uint16_t BufferUnit::new_diag_cmd() {
+  bool changed = false;
+  const std::uint16_t r = new_diag(s_, changed);
+  if (changed) irq_.raise(irq::Diag_Buffer_Changed);
+  return r;
+}
+
+std::uint16_t BufferUnit::new_diag_preview() const {
+  State copy = s_;
   bool changed = false;
   return new_diag(copy, changed);
 }
 
-std::uint16_t new_diag_cmd(ChipCore& c) {
-  bool changed = false;
-  const std::uint16_t r = new_diag(c.buffers, changed);
-  if (changed) c.raise(irq::Diag_Buffer_Changed);
-  return r;
+void BufferUnit::dout_received() {
+  s_.dout.d_to_n();
+  s_.n_cl = false;  // newer real outputs win over a clear the user has not fetched yet
+  s_.n_cleared = false;
+  s_.d_fresh = false;
+  irq_.raise(irq::DX_Out);
 }
 
-}  // namespace
-
-void install_buffer_hooks(HookTable& h) {
-  h[ChipCore::idx(RegId::Din_Buffer_SM)].read = din_sm;
-  h[ChipCore::idx(RegId::Dout_Buffer_SM)].read = dout_sm;
-  h[ChipCore::idx(RegId::Diag_Buffer_SM)].read = diag_sm;
-  h[ChipCore::idx(RegId::New_Din_Buffer_Cmd)].read = preview<new_din>;
-  h[ChipCore::idx(RegId::New_Din_Buffer_Cmd)].command = [](ChipCore& c) {
-    const std::uint16_t r = new_din(c.buffers);
-    c.din_handed_over();
-    return r;
-  };
-  h[ChipCore::idx(RegId::Next_Dout_Buffer_Cmd)].read = preview<next_dout>;
-  h[ChipCore::idx(RegId::Next_Dout_Buffer_Cmd)].command = [](ChipCore& c) {
-    const std::uint16_t r = next_dout(c.buffers);
-    if (c.buffers.c_swap_pending) {
-      c.buffers.c_swap_pending = false;
-      c.swap_cells(RegId::R_Dout_Buf_Ptr_C, ChipCore::dout_ptr(c.buffers.dout.u));
-    }
-    return r;
-  };
-  h[ChipCore::idx(RegId::New_Diag_Buffer_Cmd)].read = new_diag_preview;
-  h[ChipCore::idx(RegId::New_Diag_Buffer_Cmd)].command = new_diag_cmd;
-}
-
-std::uint32_t ChipCore::buffer_addr(RegId ptr_cell) const {
-  return static_cast<std::uint32_t>(cell(ptr_cell)) << segment_shift();
-}
-
-void ChipCore::dout_received() {
-  buffers.dout.d_to_n();
-  buffers.n_cl = false;  // newer real outputs win over a clear the user has not fetched yet
-  buffers.n_cleared = false;
-  buffers.d_fresh = false;
-  raise(irq::DX_Out);
-}
-
-RegId ChipCore::dout_ptr(std::uint8_t buffer) {
+RegId BufferUnit::dout_ptr(std::uint8_t buffer) {
   static constexpr RegId kPtr[] = {RegId::R_Dout_Buf_Ptr1, RegId::R_Dout_Buf_Ptr2,
                                    RegId::R_Dout_Buf_Ptr3};
   return kPtr[buffer - 1];
 }
 
-RegId ChipCore::din_ptr(std::uint8_t buffer) {
+RegId BufferUnit::din_ptr(std::uint8_t buffer) {
   static constexpr RegId kPtr[] = {RegId::R_Din_Buf_Ptr1, RegId::R_Din_Buf_Ptr2,
                                    RegId::R_Din_Buf_Ptr3};
   return kPtr[buffer - 1];
 }
 
+RegId BufferUnit::newest_dout_ptr() const {
+  return dout_ptr(s_.d_fresh ? s_.dout.d : s_.dout.n != 0 ? s_.dout.n : s_.dout.u);
+}
+
 // Clear_Data and the fail-safe Data_Exchange without outputs. SPC3 / VPC3+: D is cleared and
 // passed on. dpc31: D is left alone; N_Cl makes the next fetch hand over the C buffer.
-void ChipCore::failsafe_clear() {
-  if (prof->id != Profile::dpc31) {
+void BufferUnit::failsafe_clear() {
+  if (regs_.id() != Profile::dpc31) {
     dout_clear();
     return;
   }
   // Once per clear: until real outputs arrive, a further clear changes nothing.
-  if (buffers.in_clear) return;
-  buffers.in_clear = true;
-  buffers.n_cl = true;
-  raise(irq::DX_Out);
+  if (s_.in_clear) return;
+  s_.in_clear = true;
+  s_.n_cl = true;
+  irq_.raise(irq::DX_Out);
 }
 
-void ChipCore::dout_clear() {
-  clear_ram(buffer_addr(dout_ptr(buffers.dout.d)), cell(RegId::R_Len_Dout_Buf));
-  buffers.dout.d_to_n();
-  buffers.n_cleared = true;
-  buffers.d_fresh = false;
-  raise(irq::DX_Out);
+void BufferUnit::dout_clear() {
+  regs_.clear_ram(regs_.buffer_addr(dout_ptr(s_.dout.d)), regs_.cell(RegId::R_Len_Dout_Buf));
+  s_.dout.d_to_n();
+  s_.n_cleared = true;
+  s_.d_fresh = false;
+  irq_.raise(irq::DX_Out);
 }
 
-std::uint8_t ChipCore::din_fetch() {
-  buffers.din.n_to_d();
-  return buffers.din.d;
+std::uint8_t BufferUnit::din_fetch() {
+  s_.din.n_to_d();
+  return s_.din.d;
 }
 
-void ChipCore::diag_send_begin() {
-  for (DiagState& s : buffers.diag.buf) {
+void BufferUnit::diag_send_begin() {
+  for (DiagState& s : s_.diag.buf) {
     if (s == DiagState::Asic) {
       s = DiagState::Asic_Send_Mode;
       return;
@@ -170,92 +191,44 @@ void ChipCore::diag_send_begin() {
   }
 }
 
-bool ChipCore::sent_diag_has_stat_diag() const {
+int BufferUnit::sending_diag() const {
+  const int k = s_.diag.buf[0] == DiagState::Asic ? 0 : 1;
+  if (s_.diag.buf[k] == DiagState::Asic) return k;
+  return s_.diag.buf[0] == DiagState::Asic_Send_Mode ? 0 : 1;
+}
+
+bool BufferUnit::sent_diag_has_stat_diag() const {
   static constexpr RegId kPtr[] = {RegId::R_Diag_Buf_Ptr1, RegId::R_Diag_Buf_Ptr2};
   for (int k = 0; k < 2; ++k) {
-    if (buffers.diag.buf[k] == DiagState::Asic_Send_Mode)
-      return (mem[buffer_addr(kPtr[k])] & kStat_Diag) != 0;
+    if (s_.diag.buf[k] == DiagState::Asic_Send_Mode)
+      return (regs_.mem(regs_.buffer_addr(kPtr[k])) & kStat_Diag) != 0;
   }
   return false;
 }
 
 // Diag_Flag stays set while the sent buffer says Stat_Diag.
-void ChipCore::diag_send_end(bool stat_diag) {
+void BufferUnit::diag_send_end(bool stat_diag) {
   for (int k = 0; k < 2; ++k) {
-    if (buffers.diag.buf[k] != DiagState::Asic_Send_Mode) continue;
-    buffers.diag_flag = stat_diag;
-    if (buffers.diag.buf[1 - k] == DiagState::Asic) {  // the user handed a newer one meanwhile
-      buffers.diag.buf[k] = DiagState::User;
-      raise(irq::Diag_Buffer_Changed);
+    if (s_.diag.buf[k] != DiagState::Asic_Send_Mode) continue;
+    s_.diag_flag = stat_diag;
+    if (s_.diag.buf[1 - k] == DiagState::Asic) {  // the user handed a newer one meanwhile
+      s_.diag.buf[k] = DiagState::User;
+      irq_.raise(irq::Diag_Buffer_Changed);
     } else {
-      buffers.diag.buf[k] = DiagState::Asic;
+      s_.diag.buf[k] = DiagState::Asic;
     }
     return;
   }
 }
 
-void ChipCore::outputs_received() {
-  buffers.d_fresh = true;
-  buffers.in_clear = false;            // the master has left Clear
-  if (!dp.sync_mode) dout_received();  // in Sync mode D holds the data until the next Sync
+void BufferUnit::outputs_received(bool sync_mode) {
+  s_.d_fresh = true;
+  s_.in_clear = false;              // the master has left Clear
+  if (!sync_mode) dout_received();  // in Sync mode D holds the data until the next Sync
 }
 
-void ChipCore::inputs_due() {
-  if (!dp.freeze_mode) din_fetch();
-}
-
-}  // namespace dpc31
-
-namespace dpc31 {
-
-namespace {
-
-template <typename Ar, typename S>
-void ring_fields(Ar& ar, S& s) {
-  static_assert(snap::member_count<BufferRing>() == 4, "a new member: add it here");
-  ar.bounded(s.d, std::uint8_t{3});
-  ar.bounded(s.n, std::uint8_t{3});
-  ar.bounded(s.u, std::uint8_t{3});
-  ar.bounded(s.f, std::uint8_t{3});
-}
-
-template <typename Ar, typename S>
-void members(Ar& ar, S& s) {
-  static_assert(snap::member_count<BufferUnit>() == 10, "a new member: add it here");
-  static_assert(snap::member_count<DiagPair>() == 2, "a new member: add it here");
-  ring_fields(ar, s.dout);
-  ring_fields(ar, s.din);
-  ar.bounded(s.diag.buf[0], DiagState::Asic_Send_Mode);
-  ar.bounded(s.diag.buf[1], DiagState::Asic_Send_Mode);
-  ar(s.n_cleared);
-  ar(s.u_cleared);
-  ar(s.diag_flag);
-  ar(s.n_cl);
-  ar(s.d_fresh);
-  ar(s.c_swap_pending);
-  ar(s.in_clear);
-}
-
-// D and U always hold a buffer, exactly one of N and F is Nil, no buffer is held twice: the
-// pointer cells are indexed by these numbers.
-bool valid_ring(const BufferRing& b) {
-  const bool n_nil = b.n == 0;
-  const bool f_nil = b.f == 0;
-  const std::uint8_t third = n_nil ? b.f : b.n;
-  return b.d != 0 && b.u != 0 && n_nil != f_nil && b.d != b.u && third != b.d && third != b.u;
-}
-
-}  // namespace
-
-void save_state(snap::Writer& w, const BufferUnit& s) {
-  w.section("BUFS");
-  members(w, s);
-}
-
-void load_state(snap::Reader& r, BufferUnit& s) {
-  r.section("BUFS");
-  members(r, s);
-  if (!valid_ring(s.dout) || !valid_ring(s.din)) r.fail("Dout or Din ring is not buffers 1..3");
+void BufferUnit::inputs_due(bool freeze_mode) {
+  if (!freeze_mode) din_fetch();
 }
 
 }  // namespace dpc31

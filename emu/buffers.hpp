@@ -5,7 +5,8 @@
 
 #include <cstdint>
 
-#include "snapshot.hpp"
+#include "irq.hpp"
+#include "regfile.hpp"
 
 namespace dpc31 {
 
@@ -62,29 +63,73 @@ struct DiagPair {
   }
 };
 
-struct BufferUnit {
-  BufferRing dout;
-  BufferRing din;
-  DiagPair diag;
-  bool n_cleared = false;  // the buffer in N was cleared by the ASIC
-  bool u_cleared = false;  // the buffer in U was cleared by the ASIC
-  bool diag_flag = false;  // Status_Reg.Diag_Flag
-  bool n_cl = false;       // dpc31: the clear buffer C is due at the next fetch
-  bool d_fresh = false;    // D holds outputs not yet passed on (Sync mode holds them there)
-  bool c_swap_pending = false;
-  // dpc31: the current clear has been signalled (N_Cl, DX_Out); further Clear_Data and fail-safe
-  // exchanges change nothing until real outputs arrive ("once per clear").
-  bool in_clear = false;
-  [[nodiscard]] bool dout_n_pending() const { return dout.n != 0 || n_cl; }
+class BufferUnit {
+ public:
+  struct State {
+    BufferRing dout;
+    BufferRing din;
+    DiagPair diag;
+    bool n_cleared = false;  // the buffer in N was cleared by the ASIC
+    bool u_cleared = false;  // the buffer in U was cleared by the ASIC
+    bool diag_flag = false;  // Status_Reg.Diag_Flag
+    bool n_cl = false;       // dpc31: the clear buffer C is due at the next fetch
+    bool d_fresh = false;    // D holds outputs not yet passed on (Sync mode holds them there)
+    bool c_swap_pending = false;
+    // dpc31: the current clear has been signalled (N_Cl, DX_Out); further Clear_Data and
+    // fail-safe exchanges change nothing until real outputs arrive ("once per clear").
+    bool in_clear = false;
+  };
+
+  BufferUnit(RegisterFile& regs, InterruptController& irq) : regs_(regs), irq_(irq) {}
+  void reset() { s_ = State{}; }
+
+  // The *_Buffer_SM bytes.
+  [[nodiscard]] std::uint8_t din_sm() const { return s_.din.sm(); }
+  [[nodiscard]] std::uint8_t dout_sm() const;  // dpc31: N_Cl in bit 7, F not shown
+  [[nodiscard]] std::uint8_t diag_sm() const { return s_.diag.sm(); }
+  [[nodiscard]] std::uint8_t dout_ring_sm() const { return s_.dout.sm(); }  // with F, as probed
+
+  // The user's command reads: perform (cmd) or tell what they would answer (preview).
+  std::uint16_t new_din_cmd();
+  [[nodiscard]] std::uint16_t new_din_preview() const;
+  std::uint16_t next_dout_cmd();
+  [[nodiscard]] std::uint16_t next_dout_preview() const;
+  std::uint16_t new_diag_cmd();
+  [[nodiscard]] std::uint16_t new_diag_preview() const;
+
+  // The ASIC's side.
+  void dout_received();                   // D -> N, DX_Out
+  void dout_clear();                      // clear D, D -> N, DX_Out
+  void failsafe_clear();                  // Clear_Data / fail-safe exchange (per profile)
+  void outputs_received(bool sync_mode);  // Data_Exchange wrote the outputs into D
+  void inputs_due(bool freeze_mode);      // about to send inputs
+  std::uint8_t din_fetch();               // N -> D if new; the D buffer
+  void diag_send_begin();
+  void diag_send_end(bool stat_diag);
+  [[nodiscard]] bool sent_diag_has_stat_diag() const;
+  [[nodiscard]] bool diag_flag() const { return s_.diag_flag; }
+  [[nodiscard]] bool d_fresh() const { return s_.d_fresh; }
   // dpc31: Start and Leave_Master end a clear: no clear buffer due, the next Clear_Data counts.
   void end_clear() {
-    n_cl = false;
-    in_clear = false;
+    s_.n_cl = false;
+    s_.in_clear = false;
   }
-  void reset() { *this = BufferUnit{}; }
-};
+  // The RAM pointer cells of the buffers the DP services answer from.
+  [[nodiscard]] RegId din_d_ptr() const { return din_ptr(s_.din.d); }
+  [[nodiscard]] RegId dout_u_ptr() const { return dout_ptr(s_.dout.u); }
+  [[nodiscard]] RegId dout_d_ptr() const { return dout_ptr(s_.dout.d); }
+  // The newest outputs the ASIC holds: D while a Sync holds them, else N, else U.
+  [[nodiscard]] RegId newest_dout_ptr() const;
+  // The diag buffer the ASIC sends (its pointer and length cells).
+  [[nodiscard]] int sending_diag() const;
+  [[nodiscard]] static RegId dout_ptr(std::uint8_t buffer);  // 1..3
+  [[nodiscard]] static RegId din_ptr(std::uint8_t buffer);
 
-void save_state(snap::Writer& w, const BufferUnit& s);
-void load_state(snap::Reader& r, BufferUnit& s);
+ private:
+  friend struct BlockAccess;
+  RegisterFile& regs_;
+  InterruptController& irq_;
+  State s_;
+};
 
 }  // namespace dpc31

@@ -1,6 +1,8 @@
 // DP state machine: the services the ASIC answers by itself and the user's verdict on Set_Prm
 // and Chk_Cfg (User_Prm/Cfg_Data_(Not_)Okay), SSA_Buffer_Free_Cmd. New_Prm_Data / New_Cfg_Data
 // are cleared here, never through IAR. Decisions where the manuals are silent: docs/decisions.md.
+#include "dp_sm.hpp"
+
 #include <algorithm>
 #include <utility>
 
@@ -31,64 +33,64 @@ constexpr std::uint8_t kDiag_Stat_Diag = 0x02;
 constexpr std::uint8_t kDiag_Ext_Diag_Overflow = 0x04;
 constexpr std::size_t kStandardDiagBytes = 6;
 
-enum class Verdict { ok, not_ok };
+}  // namespace
 
-template <Handshake DpStateMachine::*Which>
-std::uint16_t handshake_preview(const ChipCore& c) {
-  return (c.dp.*Which).preview();
-}
-
-void prm_done(ChipCore& c, Verdict v) {
-  c.latch[ChipCore::idx(RegId::Int_Req_Reg)] &= static_cast<std::uint16_t>(~irq::New_Prm_Data);
-  c.dp.prm_fault = v == Verdict::not_ok;
-  if (v == Verdict::not_ok) {
-    c.leave_master();
-    return;
+// The user's verdict on the Set_Prm in the Prm buffer. New_Prm_Data is cleared here, never
+// through IAR.
+std::uint16_t DpStateMachine::prm_verdict(Verdict v) {
+  bool done = false;
+  const std::uint8_t r = s_.prm.answer(done);
+  if (done) {
+    regs_.latch(RegId::Int_Req_Reg) &= static_cast<std::uint16_t>(~irq::New_Prm_Data);
+    s_.prm_fault = v == Verdict::not_ok;
+    if (v == Verdict::not_ok) {
+      leave_master();
+    } else {
+      // The parameters are accepted: the DP watchdog runs with the new TWD from now on.
+      watchdog_.parameterise(s_.prm_wd_on, s_.prm_wd_fact1, s_.prm_wd_fact2, s_.prm_wd_1ms);
+      if (s_.state == DpState::Wait_Prm) s_.state = DpState::Wait_Cfg;
+    }
   }
-  // The parameters are accepted: the DP watchdog runs with the new TWD from now on.
-  c.watchdog_parameterise(c.dp.prm_wd_on, c.dp.prm_wd_fact1, c.dp.prm_wd_fact2, c.dp.prm_wd_1ms);
-  if (c.dp.state == DpState::Wait_Prm) c.dp.state = DpState::Wait_Cfg;
+  // Nothing pending (a Leave_Master discarded the telegram before the user's verdict): the read
+  // completes all the same and its event goes (docs/timing.md). Kept, it could never be cleared
+  // (Int_Ack_Reg ignores it) and X/INT would stay active for good.
+  if (r == kHandshakeNotAllowed)
+    regs_.latch(RegId::Int_Req_Reg) &= static_cast<std::uint16_t>(~irq::New_Prm_Data);
+  return r;
 }
 
 // SPC3 p.31: "the transition to 'DATA_EX' takes place immediately, if no Din_buffer is present
 // (R_Len_Din_Puf = 00H) ..." — otherwise (the sentence is cut off in every copy; modelled) at
 // the user's next New_Din_Buffer_Cmd, so the first answer in Data_Exchange carries the user's
 // inputs. VPC3+ and DPC31: at once.
-void enter_data_exchange(ChipCore& c) {
-  if (c.prof->id == Profile::spc3 && c.cell(RegId::R_Len_Din_Buf) != 0) {
-    c.dp.dx_on_new_din = true;
+void DpStateMachine::enter_data_exchange() {
+  if (regs_.id() == Profile::spc3 && regs_.cell(RegId::R_Len_Din_Buf) != 0) {
+    s_.dx_on_new_din = true;
     return;
   }
-  c.dp.state = DpState::Data_Exchange;
-  c.raise(irq::Go_Leave_Data_Exchange);
+  s_.state = DpState::Data_Exchange;
+  irq_.raise(irq::Go_Leave_Data_Exchange);
 }
 
-void cfg_done(ChipCore& c, Verdict v) {
-  c.latch[ChipCore::idx(RegId::Int_Req_Reg)] &= static_cast<std::uint16_t>(~irq::New_Cfg_Data);
-  c.dp.cfg_fault = v == Verdict::not_ok;
-  if (v == Verdict::not_ok) {
-    c.leave_master();
-    return;
-  }
-  if ((c.latch[ChipCore::idx(RegId::Mode_Reg1)] & fields::Mode_Reg1::En_Change_Cfg_Buffer) != 0) {
-    // Get_Cfg answers the new configuration from now on.
-    c.swap_cells(RegId::R_Cfg_Buf_Ptr, RegId::R_Read_Cfg_Buf_Ptr);
-  }
-  if (c.dp.state == DpState::Wait_Cfg) enter_data_exchange(c);
-}
-
-template <Handshake DpStateMachine::*Which, void (*Done)(ChipCore&, Verdict), Verdict V,
-          std::uint16_t Event>
-std::uint16_t handshake_command(ChipCore& c) {
+// The user's verdict on the Chk_Cfg in the Cfg buffer (as prm_verdict, for New_Cfg_Data).
+std::uint16_t DpStateMachine::cfg_verdict(Verdict v) {
   bool done = false;
-  const std::uint8_t r = (c.dp.*Which).answer(done);
-  if (done) Done(c, V);
-  // Nothing pending (a Leave_Master discarded the telegram before the user's verdict): the read
-  // completes all the same and its event goes (docs/timing.md). Kept, it could never be cleared
-  // (Int_Ack_Reg ignores it) and X/INT would stay active for good.
-  if (r == kHandshakeNotAllowed) {
-    c.latch[ChipCore::idx(RegId::Int_Req_Reg)] &= static_cast<std::uint16_t>(~Event);
+  const std::uint8_t r = s_.cfg.answer(done);
+  if (done) {
+    regs_.latch(RegId::Int_Req_Reg) &= static_cast<std::uint16_t>(~irq::New_Cfg_Data);
+    s_.cfg_fault = v == Verdict::not_ok;
+    if (v == Verdict::not_ok) {
+      leave_master();
+    } else {
+      if ((regs_.latch(RegId::Mode_Reg1) & fields::Mode_Reg1::En_Change_Cfg_Buffer) != 0) {
+        // Get_Cfg answers the new configuration from now on.
+        regs_.swap_cells(RegId::R_Cfg_Buf_Ptr, RegId::R_Read_Cfg_Buf_Ptr);
+      }
+      if (s_.state == DpState::Wait_Cfg) enter_data_exchange();
+    }
   }
+  if (r == kHandshakeNotAllowed)
+    regs_.latch(RegId::Int_Req_Reg) &= static_cast<std::uint16_t>(~irq::New_Cfg_Data);
   return r;
 }
 
@@ -96,117 +98,94 @@ using fdl::Frame;
 using fdl::Response;
 
 // The answer to a request with SAPs: DA/SA swapped, DSAP = the master's SSAP, SSAP = ours.
-Frame sap_answer(const ChipCore& c, const Frame& req, Response code, std::vector<std::uint8_t> du) {
-  Frame f = fdl::make_frame(req.sa, c.dp.station, fdl::make_response_fc(code), std::move(du),
-                            req.ssap, req.dsap);
-  return f;
+Frame DpStateMachine::sap_answer(const Frame& req, Response code,
+                                 std::vector<std::uint8_t> du) const {
+  return fdl::make_frame(req.sa, s_.station, fdl::make_response_fc(code), std::move(du), req.ssap,
+                         req.dsap);
 }
 
-Frame short_answer(const ChipCore& c, const Frame& req, Response code) {
-  return fdl::make_frame(req.sa, c.dp.station, fdl::make_response_fc(code));
+Frame DpStateMachine::short_answer(const Frame& req, Response code) const {
+  return fdl::make_frame(req.sa, s_.station, fdl::make_response_fc(code));
 }
-
-}  // namespace
 
 void install_dp_sm_hooks(HookTable& h) {
-  auto set = [&h](RegId id, auto read, auto command) {
-    h[ChipCore::idx(id)].read = read;
-    h[ChipCore::idx(id)].command = command;
+  using V = DpStateMachine::Verdict;
+  auto at = [&h](RegId id) -> RegHooks& { return h[RegisterFile::idx(id)]; };
+  auto prm_preview = [](const ChipCore& c) { return c.dp.prm_preview(); };
+  auto cfg_preview = [](const ChipCore& c) { return c.dp.cfg_preview(); };
+  at(RegId::User_Prm_Data_Okay).read = prm_preview;
+  at(RegId::User_Prm_Data_Okay).command = [](ChipCore& c) { return c.dp.prm_verdict(V::ok); };
+  at(RegId::User_Prm_Data_Not_Okay).read = prm_preview;
+  at(RegId::User_Prm_Data_Not_Okay).command = [](ChipCore& c) {
+    return c.dp.prm_verdict(V::not_ok);
   };
-  set(RegId::User_Prm_Data_Okay, handshake_preview<&DpStateMachine::prm>,
-      handshake_command<&DpStateMachine::prm, prm_done, Verdict::ok, irq::New_Prm_Data>);
-  set(RegId::User_Prm_Data_Not_Okay, handshake_preview<&DpStateMachine::prm>,
-      handshake_command<&DpStateMachine::prm, prm_done, Verdict::not_ok, irq::New_Prm_Data>);
-  set(RegId::User_Cfg_Data_Okay, handshake_preview<&DpStateMachine::cfg>,
-      handshake_command<&DpStateMachine::cfg, cfg_done, Verdict::ok, irq::New_Cfg_Data>);
-  set(RegId::User_Cfg_Data_Not_Okay, handshake_preview<&DpStateMachine::cfg>,
-      handshake_command<&DpStateMachine::cfg, cfg_done, Verdict::not_ok, irq::New_Cfg_Data>);
-  set(
-      RegId::SSA_Buffer_Free_Cmd, [](const ChipCore&) -> std::uint16_t { return 0; },
-      [](ChipCore& c) -> std::uint16_t {
-        c.dp.ssa_free = true;  // SAP55 accepts Set_Slave_Add again
-        return 0;
-      });
-}
-
-// --- buffers in RAM, as the ASIC sees them ---
-
-void ChipCore::set_cell(RegId id, std::uint8_t v) {
-  mem[static_cast<std::uint32_t>(reg(id)->read_addr)] = v;
-}
-
-void ChipCore::swap_cells(RegId a, RegId b) {
-  const std::uint8_t va = cell(a);
-  set_cell(a, cell(b));
-  set_cell(b, va);
-}
-
-void ChipCore::write_buffer(RegId ptr_cell, std::span<const std::uint8_t> bytes) {
-  const std::uint32_t base = buffer_addr(ptr_cell);
-  for (std::size_t i = 0; i < bytes.size(); ++i)
-    ram_write(base + static_cast<std::uint32_t>(i), bytes[i]);
-}
-
-std::vector<std::uint8_t> ChipCore::read_buffer(RegId ptr_cell, std::size_t len) {
-  const std::uint32_t base = buffer_addr(ptr_cell);
-  std::vector<std::uint8_t> out(len);
-  for (std::size_t i = 0; i < len; ++i) out[i] = ram_read(base + static_cast<std::uint32_t>(i));
-  return out;
+  at(RegId::User_Cfg_Data_Okay).read = cfg_preview;
+  at(RegId::User_Cfg_Data_Okay).command = [](ChipCore& c) { return c.dp.cfg_verdict(V::ok); };
+  at(RegId::User_Cfg_Data_Not_Okay).read = cfg_preview;
+  at(RegId::User_Cfg_Data_Not_Okay).command = [](ChipCore& c) {
+    return c.dp.cfg_verdict(V::not_ok);
+  };
+  at(RegId::SSA_Buffer_Free_Cmd).read = [](const ChipCore&) -> std::uint16_t { return 0; };
+  at(RegId::SSA_Buffer_Free_Cmd).command = [](ChipCore& c) -> std::uint16_t {
+    c.dp.ssa_buffer_free();
+    return 0;
+  };
 }
 
 // A telegram is received into the Aux buffer R_Aux_Buf_Sel selects and, when it fits, the Aux
 // and target buffers are exchanged (pointer cells swap) and the length cell written.
-bool ChipCore::receive_via_aux(std::uint16_t sel, RegId target_ptr, RegId len_cell,
-                               std::span<const std::uint8_t> du) {
-  const bool aux2 = (cell(RegId::R_Aux_Buf_Sel) & sel) != 0;
+bool DpStateMachine::receive_via_aux(std::uint16_t sel, RegId target_ptr, RegId len_cell,
+                                     std::span<const std::uint8_t> du) {
+  const bool aux2 = (regs_.cell(RegId::R_Aux_Buf_Sel) & sel) != 0;
   const RegId aux_ptr = aux2 ? RegId::R_Aux_Buf_Ptr2 : RegId::R_Aux_Buf_Ptr1;
   const RegId aux_len = aux2 ? RegId::R_Len_Cntrl_Buf2 : RegId::R_Len_Cntrl_Buf1;
-  if (du.size() > cell(aux_len)) return false;
-  write_buffer(aux_ptr, du);
-  swap_cells(aux_ptr, target_ptr);
-  set_cell(len_cell, static_cast<std::uint8_t>(du.size()));
+  if (du.size() > regs_.cell(aux_len)) return false;
+  regs_.write_buffer(aux_ptr, du);
+  regs_.swap_cells(aux_ptr, target_ptr);
+  regs_.set_cell(len_cell, static_cast<std::uint8_t>(du.size()));
   return true;
 }
 
 // --- the services ---
 
-std::optional<fdl::Frame> ChipCore::dp_service(const fdl::Frame& req) {
-  ++counters.requests;
+std::optional<fdl::Frame> DpStateMachine::service(const fdl::Frame& req) {
+  ++counters_.requests;
   const bool broadcast = req.da == fdl::kBroadcast;
   const fdl::Function fn = fdl::request_function(req.fc);
   const bool wants_answer =
       !broadcast && (fn == fdl::Function::SRD_low || fn == fdl::Function::SRD_high ||
                      fn == fdl::Function::FDL_Status);
   // FCB/FCV (EN 50170): the same FCB again from the same master means our answer was lost.
-  if (!broadcast && fdl::fcv(req.fc) && dp.fcb_valid && dp.last_master == req.sa &&
-      dp.last_fcb == fdl::fcb(req.fc) && !dp.last_response.empty()) {
-    ++counters.repeated;
+  if (!broadcast && fdl::fcv(req.fc) && s_.fcb_valid && s_.last_master == req.sa &&
+      s_.last_fcb == fdl::fcb(req.fc) && !s_.last_response.empty()) {
+    ++counters_.repeated;
     // SPC3 p.36 (Rd_Outp: "If there is a buffer change from 'N' to 'U' ... between the first
     // call-up and the repetition, the new output data is sent during the repetition") and
     // DPC31 p.33 (Rd_Inp, U -> N -> D): these two answer from the buffers as they are now.
     if (req.dsap &&
         (fdl::sap_number(*req.dsap) == sap::Rd_Inp || fdl::sap_number(*req.dsap) == sap::Rd_Outp)) {
       std::optional<Frame> fresh = read_io(req);
-      if (fresh) dp.last_response = fdl::encode(*fresh);
+      if (fresh) s_.last_response = fdl::encode(*fresh);
       return fresh;
     }
-    return fdl::decode(dp.last_response).frame;
+    return fdl::decode(s_.last_response).frame;
   }
   std::optional<Frame> answer;
   if (fn == fdl::Function::FDL_Status && !req.dsap) {
-    answer = short_answer(*this, req, Response::OK);
-  } else if (!mode0(fields::Mode_Reg0::DP_Mode)) {
+    answer = short_answer(req, Response::OK);
+  } else if (!regs_.mode0(fields::Mode_Reg0::DP_Mode)) {
     // Mode_Reg0: "DP_MODE: 0 = DP_Mode is disabled. 1 = DP_Mode is enabled. SPC3 sets up all
     // DP_SAPs." Without it no DP SAP (nor Data_Exchange's default SAP) exists: the chip is a
     // plain FDL station that answers FDL_Status and refuses the rest with RS (modelled).
-    ++counters.unknown_sap;
-    log(LogLevel::info, "request from {} with DP_Mode = 0: no DP SAP set up (RS)", req.sa);
+    ++counters_.unknown_sap;
+    sig_.log(LogLevel::info, "request from {} with DP_Mode = 0: no DP SAP set up (RS)", req.sa);
     if (fn == fdl::Function::SRD_low || fn == fdl::Function::SRD_high)
-      answer = short_answer(*this, req, Response::RS);
+      answer = short_answer(req, Response::RS);
   } else if (fn != fdl::Function::SRD_low && fn != fdl::Function::SRD_high &&
              fn != fdl::Function::SDN_low && fn != fdl::Function::SDN_high) {
-    ++counters.unsupported_function;
-    log(LogLevel::info, "FC {:#04x} from {}: function not served by a DP slave", req.fc, req.sa);
+    ++counters_.unsupported_function;
+    sig_.log(LogLevel::info, "FC {:#04x} from {}: function not served by a DP slave", req.fc,
+             req.sa);
   } else if (!req.dsap) {
     answer = data_exchange(req);
   } else {
@@ -224,13 +203,13 @@ std::optional<fdl::Frame> ChipCore::dp_service(const fdl::Frame& req) {
         // DPC31 p.33: "accepted in all modes. If the call message contains request data, the
         // MAC acknowledges with 'no resource'."
         if (!req.du.empty()) {
-          ++counters.no_resource;
-          answer = short_answer(*this, req, Response::RR);
+          ++counters_.no_resource;
+          answer = short_answer(req, Response::RR);
           break;
         }
-        answer =
-            sap_answer(*this, req, Response::DL,
-                       read_buffer(RegId::R_Read_Cfg_Buf_Ptr, cell(RegId::R_Len_Read_Cfg_Data)));
+        answer = sap_answer(
+            req, Response::DL,
+            regs_.read_buffer(RegId::R_Read_Cfg_Buf_Ptr, regs_.cell(RegId::R_Len_Read_Cfg_Data)));
         break;
       case sap::Rd_Inp:
       case sap::Rd_Outp:
@@ -243,49 +222,50 @@ std::optional<fdl::Frame> ChipCore::dp_service(const fdl::Frame& req) {
         answer = set_slave_add(req);
         break;
       default:
-        ++counters.unknown_sap;
-        log(LogLevel::info, "DSAP {} from {}: not served (RS)", fdl::sap_number(*req.dsap), req.sa);
-        answer = short_answer(*this, req, Response::RS);
+        ++counters_.unknown_sap;
+        sig_.log(LogLevel::info, "DSAP {} from {}: not served (RS)", fdl::sap_number(*req.dsap),
+                 req.sa);
+        answer = short_answer(req, Response::RS);
         break;
     }
   }
   if (!wants_answer || !answer) return std::nullopt;
-  dp.fcb_valid = fdl::fcv(req.fc);
-  dp.last_fcb = fdl::fcb(req.fc);
-  dp.last_master = req.sa;
-  dp.last_response = fdl::encode(*answer);
+  s_.fcb_valid = fdl::fcv(req.fc);
+  s_.last_fcb = fdl::fcb(req.fc);
+  s_.last_master = req.sa;
+  s_.last_response = fdl::encode(*answer);
   return answer;
 }
 
-std::optional<fdl::Frame> ChipCore::set_prm(const fdl::Frame& req) {
+std::optional<fdl::Frame> DpStateMachine::set_prm(const fdl::Frame& req) {
   const std::vector<std::uint8_t>& du = req.du;
   if (du.size() < kMinPrmLength || du.size() > kMaxBufferLength) {
-    log(LogLevel::info, "Set_Prm with {} bytes: Prm_Fault", du.size());
+    sig_.log(LogLevel::info, "Set_Prm with {} bytes: Prm_Fault", du.size());
     prm_fault();
     return fdl::sc();
   }
   const std::uint8_t status = du[0];
-  if (dp.master_add != 0xFF && dp.master_add != req.sa) {
+  if (s_.master_add != 0xFF && s_.master_add != req.sa) {
     // Locked by another master (its diag shows Master_Add): whatever the lock bits say, this
     // master never re-parameterises, unlocks or changes min TSDR.
-    ++counters.not_allowed;
-    log(LogLevel::info, "Set_Prm from master {} while locked by {}: ignored", req.sa,
-        dp.master_add);
+    ++counters_.not_allowed;
+    sig_.log(LogLevel::info, "Set_Prm from master {} while locked by {}: ignored", req.sa,
+             s_.master_add);
     return fdl::sc();
   }
   const bool check_reserved =
-      prof->id != Profile::vpc3plus ||
-      (latch[idx(RegId::Mode_Reg2)] & fields::Mode_Reg2::No_Check_Prm_Reserved) == 0;
-  const std::uint16_t ident =
-      static_cast<std::uint16_t>(cell(RegId::R_Ident_High) << 8 | cell(RegId::R_Ident_Low));
+      regs_.id() != Profile::vpc3plus ||
+      (regs_.latch(RegId::Mode_Reg2) & fields::Mode_Reg2::No_Check_Prm_Reserved) == 0;
+  const std::uint16_t ident = static_cast<std::uint16_t>(regs_.cell(RegId::R_Ident_High) << 8 |
+                                                         regs_.cell(RegId::R_Ident_Low));
   const std::uint16_t asked = static_cast<std::uint16_t>(du[4] << 8 | du[5]);
   const char* fault = nullptr;
   if (asked != ident) fault = "Ident_Number differs";
   if (check_reserved && (status & kStation_Status_Reserved) != 0)
     fault = "reserved Station_Status bits";
-  if ((status & kSync_Req) != 0 && !mode0(fields::Mode_Reg0::Sync_Supported))
+  if ((status & kSync_Req) != 0 && !regs_.mode0(fields::Mode_Reg0::Sync_Supported))
     fault = "Sync_Req but Sync not supported";
-  if ((status & kFreeze_Req) != 0 && !mode0(fields::Mode_Reg0::Freeze_Supported))
+  if ((status & kFreeze_Req) != 0 && !regs_.mode0(fields::Mode_Reg0::Freeze_Supported))
     fault = "Freeze_Req but Freeze not supported";
   const bool lock = (status & kLock_Req) != 0;
   const bool unlock = (status & kUnlock_Req) != 0;
@@ -293,236 +273,235 @@ std::optional<fdl::Frame> ChipCore::set_prm(const fdl::Frame& req) {
   // check applies to them.
   if (!lock || unlock) fault = asked != ident ? "Ident_Number differs" : nullptr;
   if (fault != nullptr) {
-    log(LogLevel::info, "Set_Prm from {}: {}: Prm_Fault", req.sa, fault);
+    sig_.log(LogLevel::info, "Set_Prm from {}: {}: Prm_Fault", req.sa, fault);
     prm_fault();
     return fdl::sc();
   }
   // CP 5613/5614 DP Base manual p.198-199: 00 "The min TSDR is overwritten when parameters are
   // assigned. All other parameters remain unchanged." (0 keeps it, as for a lock: modelled)
   if (!lock && !unlock) {
-    if (du[3] != 0) dp.min_tsdr = du[3];
-    log(LogLevel::info, "Set_Prm from {} without Lock_Req / Unlock_Req: min TSDR only", req.sa);
+    if (du[3] != 0) s_.min_tsdr = du[3];
+    sig_.log(LogLevel::info, "Set_Prm from {} without Lock_Req / Unlock_Req: min TSDR only",
+             req.sa);
     return fdl::sc();
   }
   // 01 and 11: "released for other masters": the slave leaves this master (Wait_Prm, Master_Add
   // FFh) and nobody is monitored any more.
   if (unlock) {
-    log(LogLevel::info, "Set_Prm from {} with Unlock_Req: released for other masters", req.sa);
-    if (dp.state != DpState::Wait_Prm || dp.prm.pending) {
-      emit(BlockEvent::Kind::leave_master);
+    sig_.log(LogLevel::info, "Set_Prm from {} with Unlock_Req: released for other masters", req.sa);
+    if (s_.state != DpState::Wait_Prm || s_.prm.pending) {
+      sig_.emit(BlockEvent::Kind::leave_master);
       leave_master();
     }
-    dp.master_add = 0xFF;
-    watchdog_release();
+    s_.master_add = 0xFF;
+    watchdog_.release();
     return fdl::sc();
   }
-  const bool aux2 = (cell(RegId::R_Aux_Buf_Sel) & fields::R_Aux_Buf_Sel::Set_Prm) != 0;
-  if (du.size() > cell(aux2 ? RegId::R_Len_Cntrl_Buf2 : RegId::R_Len_Cntrl_Buf1)) {
-    ++counters.no_resource;
-    return short_answer(*this, req, Response::RR);
+  const bool aux2 = (regs_.cell(RegId::R_Aux_Buf_Sel) & fields::R_Aux_Buf_Sel::Set_Prm) != 0;
+  if (du.size() > regs_.cell(aux2 ? RegId::R_Len_Cntrl_Buf2 : RegId::R_Len_Cntrl_Buf1)) {
+    ++counters_.no_resource;
+    return short_answer(req, Response::RR);
   }
   // A new parameterisation starts the DP state machine over (outputs to the safe state). One
   // that arrives while the user is still checking the previous one in Wait_Prm is a newer
   // telegram for the same check: the verdict read answers 01 (conflict).
-  if (dp.state != DpState::Wait_Prm) {
-    emit(BlockEvent::Kind::leave_master);
+  if (s_.state != DpState::Wait_Prm) {
+    sig_.emit(BlockEvent::Kind::leave_master);
     leave_master();
   }
   // 10: "disabled for other masters, all parameters are adopted (exception: min TSDR = 0)";
   // "The Group_Ident is accepted only when the Lock_Req bit is set."
-  dp.master_add = req.sa;
-  dp.group_ident = du[6];
-  if (du[3] != 0) dp.min_tsdr = du[3];
-  if (mode0(fields::Mode_Reg0::DP_Mode) && du.size() > 7) {
+  s_.master_add = req.sa;
+  s_.group_ident = du[6];
+  if (du[3] != 0) s_.min_tsdr = du[3];
+  if (regs_.mode0(fields::Mode_Reg0::DP_Mode) && du.size() > 7) {
     // Spec_User_Prm_Byte overwrites Dis_Start_Control / Dis_Stop_Control in DP mode.
-    std::uint16_t& m0 = latch[idx(RegId::Mode_Reg0)];
-    emit(BlockEvent::Kind::dis, du[7] & kDis_Start_Stop);
+    std::uint16_t& m0 = regs_.latch(RegId::Mode_Reg0);
+    sig_.emit(BlockEvent::Kind::dis, du[7] & kDis_Start_Stop);
     m0 = static_cast<std::uint16_t>((m0 & ~kDis_Start_Stop) | (du[7] & kDis_Start_Stop));
   }
-  const bool wd_1ms = prof->id == Profile::vpc3plus
-                          ? mode0(fields::Mode_Reg0::WD_Base)
+  const bool wd_1ms = regs_.id() == Profile::vpc3plus
+                          ? regs_.mode0(fields::Mode_Reg0::WD_Base)
                           : du.size() > 7 && (du[7] & kSpec_WD_Base_1ms) != 0;
   // DP_Control starts with these only once the user accepts them (User_Prm_Data_Okay).
-  dp.prm_wd_on = (status & kWD_On) != 0;
-  dp.prm_wd_fact1 = du[1];
-  dp.prm_wd_fact2 = du[2];
-  dp.prm_wd_1ms = wd_1ms;
+  s_.prm_wd_on = (status & kWD_On) != 0;
+  s_.prm_wd_fact1 = du[1];
+  s_.prm_wd_fact2 = du[2];
+  s_.prm_wd_1ms = wd_1ms;
   receive_via_aux(fields::R_Aux_Buf_Sel::Set_Prm, RegId::R_Prm_Buf_Ptr, RegId::R_Len_Prm_Data, du);
-  emit(BlockEvent::Kind::prm);
+  sig_.emit(BlockEvent::Kind::prm);
   prm_accepted();
   return fdl::sc();
 }
 
 // A Set_Prm that failed the ASIC's checks.
-void ChipCore::prm_fault() {
-  emit(BlockEvent::Kind::prm_fault);
+void DpStateMachine::prm_fault() {
+  sig_.emit(BlockEvent::Kind::prm_fault);
   leave_master();
-  dp.prm_fault = true;
+  s_.prm_fault = true;
 }
 
 // The Prm buffer holds a new, checked Set_Prm: the faults are reported no more, the user's turn.
-void ChipCore::prm_accepted() {
-  dp.prm_fault = dp.cfg_fault = dp.not_supported = false;
-  dp.dx_on_new_din = false;  // the new parameters need their verdicts again
-  dp.prm.arrived();
-  raise(irq::New_Prm_Data);
+void DpStateMachine::prm_accepted() {
+  s_.prm_fault = s_.cfg_fault = s_.not_supported = false;
+  s_.dx_on_new_din = false;  // the new parameters need their verdicts again
+  s_.prm.arrived();
+  irq_.raise(irq::New_Prm_Data);
 }
 
 // The Cfg buffer holds a new Chk_Cfg: leave Data_Exchange until the user has checked it.
-void ChipCore::cfg_accepted() {
-  if (dp.state == DpState::Data_Exchange) {
-    dp.state = DpState::Wait_Cfg;
-    raise(irq::Go_Leave_Data_Exchange);
+void DpStateMachine::cfg_accepted() {
+  if (s_.state == DpState::Data_Exchange) {
+    s_.state = DpState::Wait_Cfg;
+    irq_.raise(irq::Go_Leave_Data_Exchange);
   }
-  dp.dx_on_new_din = false;  // the new configuration needs its verdict again
-  dp.cfg.arrived();
-  raise(irq::New_Cfg_Data);
+  s_.dx_on_new_din = false;  // the new configuration needs its verdict again
+  s_.cfg.arrived();
+  irq_.raise(irq::New_Cfg_Data);
 }
 
-std::optional<fdl::Frame> ChipCore::chk_cfg(const fdl::Frame& req) {
+std::optional<fdl::Frame> DpStateMachine::chk_cfg(const fdl::Frame& req) {
   // DPC31 p.28: "This service is accepted by DPS in any DP mode. If the Check_Config message does
   // not come from 'Master_Add' i.e., the locking master, DPS ignores this message."
-  if (req.sa != dp.master_add) {
-    ++counters.not_allowed;
-    log(LogLevel::info, "Chk_Cfg from {}: not the locking master: ignored", req.sa);
+  if (req.sa != s_.master_add) {
+    ++counters_.not_allowed;
+    sig_.log(LogLevel::info, "Chk_Cfg from {}: not the locking master: ignored", req.sa);
     return fdl::sc();
   }
   if (req.du.empty() || req.du.size() > kMaxBufferLength ||
       !receive_via_aux(fields::R_Aux_Buf_Sel::Chk_Cfg, RegId::R_Cfg_Buf_Ptr, RegId::R_Len_Cfg_Data,
                        req.du)) {
-    ++counters.no_resource;
-    return short_answer(*this, req, Response::RR);
+    ++counters_.no_resource;
+    return short_answer(req, Response::RR);
   }
-  emit(BlockEvent::Kind::cfg);
+  sig_.emit(BlockEvent::Kind::cfg);
   cfg_accepted();
   return fdl::sc();
 }
 
 // The six standard bytes are the ASIC's; the rest of the buffer is the user's.
-std::optional<fdl::Frame> ChipCore::slave_diag(const fdl::Frame& req) {
+std::optional<fdl::Frame> DpStateMachine::slave_diag(const fdl::Frame& req) {
   static constexpr RegId kPtr[] = {RegId::R_Diag_Buf_Ptr1, RegId::R_Diag_Buf_Ptr2};
   static constexpr RegId kLen[] = {RegId::R_Len_Diag_Buf1, RegId::R_Len_Diag_Buf2};
-  int k = buffers.diag.buf[0] == DiagState::Asic ? 0 : 1;
-  if (buffers.diag.buf[k] != DiagState::Asic)
-    k = buffers.diag.buf[0] == DiagState::Asic_Send_Mode ? 0 : 1;
+  const int k = buffers_.sending_diag();
   const std::size_t len =
-      std::clamp<std::size_t>(cell(kLen[k]), kStandardDiagBytes, kMaxBufferLength);
-  std::vector<std::uint8_t> du = read_buffer(kPtr[k], len);
+      std::clamp<std::size_t>(regs_.cell(kLen[k]), kStandardDiagBytes, kMaxBufferLength);
+  std::vector<std::uint8_t> du = regs_.read_buffer(kPtr[k], len);
   const std::uint8_t user = du[0];
-  du[0] = static_cast<std::uint8_t>((dp.state != DpState::Data_Exchange ? 0x02 : 0) |
-                                    (dp.cfg_fault ? 0x04 : 0) | (user & kDiag_Ext_Diag ? 0x08 : 0) |
-                                    (dp.not_supported ? 0x10 : 0) | (dp.prm_fault ? 0x40 : 0));
+  du[0] = static_cast<std::uint8_t>((s_.state != DpState::Data_Exchange ? 0x02 : 0) |
+                                    (s_.cfg_fault ? 0x04 : 0) | (user & kDiag_Ext_Diag ? 0x08 : 0) |
+                                    (s_.not_supported ? 0x10 : 0) | (s_.prm_fault ? 0x40 : 0));
   du[1] = static_cast<std::uint8_t>(
-      (dp.state == DpState::Wait_Prm ? 0x01 : 0) | (user & kDiag_Stat_Diag ? 0x02 : 0) | 0x04 |
-      (timers.dp_wd_on ? 0x08 : 0) | (dp.freeze_mode ? 0x10 : 0) | (dp.sync_mode ? 0x20 : 0));
+      (s_.state == DpState::Wait_Prm ? 0x01 : 0) | (user & kDiag_Stat_Diag ? 0x02 : 0) | 0x04 |
+      (watchdog_.dp_wd_on() ? 0x08 : 0) | (s_.freeze_mode ? 0x10 : 0) | (s_.sync_mode ? 0x20 : 0));
   du[2] = (user & kDiag_Ext_Diag_Overflow) != 0 ? 0x80 : 0x00;
-  du[3] = dp.master_add;
-  du[4] = cell(RegId::R_Ident_High);
-  du[5] = cell(RegId::R_Ident_Low);
-  emit(BlockEvent::Kind::diag_begin);
-  diag_send_begin();
-  diag_in_flight = true;
-  dp.diag_requester = req.sa;
-  return sap_answer(*this, req, Response::DL, std::move(du));
+  du[3] = s_.master_add;
+  du[4] = regs_.cell(RegId::R_Ident_High);
+  du[5] = regs_.cell(RegId::R_Ident_Low);
+  sig_.emit(BlockEvent::Kind::diag_begin);
+  buffers_.diag_send_begin();
+  s_.diag_in_flight = true;
+  s_.diag_requester = req.sa;
+  return sap_answer(req, Response::DL, std::move(du));
 }
 
-std::optional<fdl::Frame> ChipCore::read_io(const fdl::Frame& req) {
-  if (dp.state != DpState::Data_Exchange) {
-    ++counters.not_allowed;
-    return short_answer(*this, req, Response::RS);
+std::optional<fdl::Frame> DpStateMachine::read_io(const fdl::Frame& req) {
+  if (s_.state != DpState::Data_Exchange) {
+    ++counters_.not_allowed;
+    return short_answer(req, Response::RS);
   }
   if (!req.du.empty()) {  // DPC31 p.33: request data length != 0: "no resource"
-    ++counters.no_resource;
-    return short_answer(*this, req, Response::RR);
+    ++counters_.no_resource;
+    return short_answer(req, Response::RR);
   }
   if (fdl::sap_number(*req.dsap) == sap::Rd_Inp) {
-    emit(BlockEvent::Kind::din);
-    inputs_due();
-    return sap_answer(*this, req, Response::DL,
-                      read_buffer(din_ptr(buffers.din.d), cell(RegId::R_Len_Din_Buf)));
+    sig_.emit(BlockEvent::Kind::din);
+    buffers_.inputs_due(s_.freeze_mode);
+    return sap_answer(req, Response::DL,
+                      regs_.read_buffer(buffers_.din_d_ptr(), regs_.cell(RegId::R_Len_Din_Buf)));
   }
   // Read_Outputs is served from the user's U buffer.
-  return sap_answer(*this, req, Response::DL,
-                    read_buffer(dout_ptr(buffers.dout.u), cell(RegId::R_Len_Dout_Buf)));
+  return sap_answer(req, Response::DL,
+                    regs_.read_buffer(buffers_.dout_u_ptr(), regs_.cell(RegId::R_Len_Dout_Buf)));
 }
 
-std::optional<fdl::Frame> ChipCore::set_slave_add(const fdl::Frame& req) {
+std::optional<fdl::Frame> DpStateMachine::set_slave_add(const fdl::Frame& req) {
   const std::vector<std::uint8_t>& du = req.du;
-  const std::uint16_t ident =
-      static_cast<std::uint16_t>(cell(RegId::R_Ident_High) << 8 | cell(RegId::R_Ident_Low));
-  if (cell(RegId::R_SSA_Buf_Ptr) == 0 || dp.no_add_change ||
-      cell(RegId::R_Real_No_Add_Change) == 0xFF || dp.state != DpState::Wait_Prm) {
-    ++counters.not_allowed;  // SAP55 off, address frozen, or not in Wait_Prm
-    return short_answer(*this, req, Response::RS);
+  const std::uint16_t ident = static_cast<std::uint16_t>(regs_.cell(RegId::R_Ident_High) << 8 |
+                                                         regs_.cell(RegId::R_Ident_Low));
+  if (regs_.cell(RegId::R_SSA_Buf_Ptr) == 0 || s_.no_add_change ||
+      regs_.cell(RegId::R_Real_No_Add_Change) == 0xFF || s_.state != DpState::Wait_Prm) {
+    ++counters_.not_allowed;  // SAP55 off, address frozen, or not in Wait_Prm
+    return short_answer(req, Response::RS);
   }
-  if (!dp.ssa_free) {
-    ++counters.no_resource;  // the user has not freed the SSA buffer yet
-    return short_answer(*this, req, Response::RR);
+  if (!s_.ssa_free) {
+    ++counters_.no_resource;  // the user has not freed the SSA buffer yet
+    return short_answer(req, Response::RR);
   }
   if (du.size() < 4 || du.size() > kMaxBufferLength || du[0] > 125 ||
       static_cast<std::uint16_t>(du[1] << 8 | du[2]) != ident) {
-    ++counters.not_allowed;
-    log(LogLevel::info, "Set_Slave_Add from {}: bad address or Ident_Number: ignored", req.sa);
+    ++counters_.not_allowed;
+    sig_.log(LogLevel::info, "Set_Slave_Add from {}: bad address or Ident_Number: ignored", req.sa);
     return fdl::sc();
   }
   if (!receive_via_aux(fields::R_Aux_Buf_Sel::Set_Slave_Adr, RegId::R_SSA_Buf_Ptr,
                        RegId::R_Len_SSA_Data, du)) {
-    ++counters.no_resource;
-    return short_answer(*this, req, Response::RR);
+    ++counters_.no_resource;
+    return short_answer(req, Response::RR);
   }
   Frame ack = fdl::sc();
-  log(LogLevel::info, "Set_Slave_Add: station {} -> {}", dp.station, du[0]);
-  dp.station = du[0];  // the chip answers at the new address from now on
-  dp.no_add_change = du[3] != 0;
-  emit(BlockEvent::Kind::ssa);
+  sig_.log(LogLevel::info, "Set_Slave_Add: station {} -> {}", s_.station, du[0]);
+  s_.station = du[0];  // the chip answers at the new address from now on
+  s_.no_add_change = du[3] != 0;
+  sig_.emit(BlockEvent::Kind::ssa);
   ssa_accepted();
   return ack;
 }
 
 // The user handed new inputs over (New_Din_Buffer_Cmd): an SPC3 waiting after Cfg OK enters
 // Data_Exchange now.
-void ChipCore::din_handed_over() {
-  if (!dp.dx_on_new_din || dp.state != DpState::Wait_Cfg) return;
-  dp.dx_on_new_din = false;
-  dp.state = DpState::Data_Exchange;
-  raise(irq::Go_Leave_Data_Exchange);
+void DpStateMachine::din_handed_over() {
+  if (!s_.dx_on_new_din || s_.state != DpState::Wait_Cfg) return;
+  s_.dx_on_new_din = false;
+  s_.state = DpState::Data_Exchange;
+  irq_.raise(irq::Go_Leave_Data_Exchange);
 }
 
-void ChipCore::ssa_accepted() {
-  dp.ssa_free = false;
-  raise(irq::New_SSA_Data);
+void DpStateMachine::ssa_accepted() {
+  s_.ssa_free = false;
+  irq_.raise(irq::New_SSA_Data);
 }
 
-std::optional<fdl::Frame> ChipCore::data_exchange(const fdl::Frame& req) {
-  if (dp.state != DpState::Data_Exchange || req.sa != dp.master_add) {
-    ++counters.not_allowed;
-    return short_answer(*this, req, Response::RS);
+std::optional<fdl::Frame> DpStateMachine::data_exchange(const fdl::Frame& req) {
+  if (s_.state != DpState::Data_Exchange || req.sa != s_.master_add) {
+    ++counters_.not_allowed;
+    return short_answer(req, Response::RS);
   }
-  emit(BlockEvent::Kind::dx);
+  sig_.emit(BlockEvent::Kind::dx);
   if (!user_watchdog_tick()) return std::nullopt;
-  const std::size_t out_len = cell(RegId::R_Len_Dout_Buf);
+  const std::size_t out_len = regs_.cell(RegId::R_Len_Dout_Buf);
   if (req.du.size() == out_len) {
     if (dx_out_wanted(req.du)) {
-      write_buffer(dout_ptr(buffers.dout.d), req.du);
-      emit(BlockEvent::Kind::dout);
-      outputs_received();
+      regs_.write_buffer(buffers_.dout_d_ptr(), req.du);
+      sig_.emit(BlockEvent::Kind::dout);
+      buffers_.outputs_received(s_.sync_mode);
     }
-  } else if (req.du.empty() && mode0(fields::Mode_Reg0::Spec_Clear_Mode)) {
-    emit(BlockEvent::Kind::failsafe);
-    failsafe_clear();  // fail-safe: the master sends no outputs while in Clear
+  } else if (req.du.empty() && regs_.mode0(fields::Mode_Reg0::Spec_Clear_Mode)) {
+    sig_.emit(BlockEvent::Kind::failsafe);
+    buffers_.failsafe_clear();  // fail-safe: the master sends no outputs while in Clear
   } else {
-    ++counters.not_allowed;
-    log(LogLevel::info, "Data_Exchange with {} output bytes, {} configured: RS", req.du.size(),
-        out_len);
-    return short_answer(*this, req, Response::RS);
+    ++counters_.not_allowed;
+    sig_.log(LogLevel::info, "Data_Exchange with {} output bytes, {} configured: RS", req.du.size(),
+             out_len);
+    return short_answer(req, Response::RS);
   }
-  emit(BlockEvent::Kind::din);
-  inputs_due();
-  const std::size_t in_len = cell(RegId::R_Len_Din_Buf);
-  const Response code = buffers.diag_flag ? Response::DH : Response::DL;
-  if (in_len == 0) return code == Response::DL ? fdl::sc() : short_answer(*this, req, code);
-  return fdl::make_frame(req.sa, dp.station, fdl::make_response_fc(code),
-                         read_buffer(din_ptr(buffers.din.d), in_len));
+  sig_.emit(BlockEvent::Kind::din);
+  buffers_.inputs_due(s_.freeze_mode);
+  const std::size_t in_len = regs_.cell(RegId::R_Len_Din_Buf);
+  const Response code = buffers_.diag_flag() ? Response::DH : Response::DL;
+  if (in_len == 0) return code == Response::DL ? fdl::sc() : short_answer(req, code);
+  return fdl::make_frame(req.sa, s_.station, fdl::make_response_fc(code),
+                         regs_.read_buffer(buffers_.din_d_ptr(), in_len));
 }
 
 // VPC3+ Mode_Reg2 DX_Int_Mode = 0 (the default): "DX Interrupt only generated, if DOUT length not
@@ -530,101 +509,73 @@ std::optional<fdl::Frame> ChipCore::data_exchange(const fdl::Frame& req) {
 // equal to current data" (Profichip DpCfg.h). The current data are the newest outputs the ASIC
 // holds: D while a Sync holds them, else N, else U. Without the interrupt the outputs are not
 // passed on either: the user already has them (modelled).
-bool ChipCore::dx_out_wanted(std::span<const std::uint8_t> outputs) {
-  if (prof->id != Profile::vpc3plus) return true;
-  if (outputs.empty() && (latch[idx(RegId::Mode_Reg2)] & fields::Mode_Reg2::DX_Int_Mode) == 0)
+bool DpStateMachine::dx_out_wanted(std::span<const std::uint8_t> outputs) {
+  if (regs_.id() != Profile::vpc3plus) return true;
+  if (outputs.empty() && (regs_.latch(RegId::Mode_Reg2) & fields::Mode_Reg2::DX_Int_Mode) == 0)
     return false;
-  if ((latch[idx(RegId::Mode_Reg3)] & fields::Mode_Reg3::DX_Int_Mode_2) == 0) return true;
-  const std::uint8_t current = buffers.d_fresh       ? buffers.dout.d
-                               : buffers.dout.n != 0 ? buffers.dout.n
-                                                     : buffers.dout.u;
-  const std::vector<std::uint8_t> now = read_buffer(dout_ptr(current), outputs.size());
+  if ((regs_.latch(RegId::Mode_Reg3) & fields::Mode_Reg3::DX_Int_Mode_2) == 0) return true;
+  const std::vector<std::uint8_t> now =
+      regs_.read_buffer(buffers_.newest_dout_ptr(), outputs.size());
   return !std::equal(outputs.begin(), outputs.end(), now.begin());
 }
 
 // Each Data_Exchange counts the user watchdog down; Res_User_WD reloads it. False: expired.
-bool ChipCore::user_watchdog_tick() {
-  std::uint16_t& m1 = latch[idx(RegId::Mode_Reg1)];
+bool DpStateMachine::user_watchdog_tick() {
+  std::uint16_t& m1 = regs_.latch(RegId::Mode_Reg1);
   if ((m1 & fields::Mode_Reg1::Res_User_WD) != 0) {
     m1 = static_cast<std::uint16_t>(m1 & ~fields::Mode_Reg1::Res_User_WD);
-    dp.user_wd = cell16(*reg(RegId::R_User_WD_Value));
-    dp.user_wd_armed = true;
+    s_.user_wd = regs_.cell16(*regs_.reg(RegId::R_User_WD_Value));
+    s_.user_wd_armed = true;
     return true;
   }
-  if (!dp.user_wd_armed) return true;
-  if (dp.user_wd > 0) --dp.user_wd;
-  if (dp.user_wd != 0) return true;
-  log(LogLevel::info, "user watchdog expired: Leave_Master");
-  emit(BlockEvent::Kind::leave_master);
+  if (!s_.user_wd_armed) return true;
+  if (s_.user_wd > 0) --s_.user_wd;
+  if (s_.user_wd != 0) return true;
+  sig_.log(LogLevel::info, "user watchdog expired: Leave_Master");
+  sig_.emit(BlockEvent::Kind::leave_master);
   leave_master();
   return false;
 }
 
-void ChipCore::dp_response_sent() {
-  if (!diag_in_flight) return;
-  diag_in_flight = false;
+void DpStateMachine::response_sent() {
+  if (!s_.diag_in_flight) return;
+  s_.diag_in_flight = false;
   // Diag_Flag is cleared when "the relevant master" fetched (SPC3 p.32): the locking master, or
   // any master while none holds the lock. Another master's fetch leaves it as it is.
-  const bool relevant = dp.master_add == 0xFF || dp.diag_requester == dp.master_add;
-  const bool flag = relevant ? sent_diag_has_stat_diag() : buffers.diag_flag;
-  emit(BlockEvent::Kind::diag_end, flag ? 1 : 0);
-  diag_send_end(flag);
+  const bool relevant = s_.master_add == 0xFF || s_.diag_requester == s_.master_add;
+  const bool flag = relevant ? buffers_.sent_diag_has_stat_diag() : buffers_.diag_flag();
+  sig_.emit(BlockEvent::Kind::diag_end, flag ? 1 : 0);
+  buffers_.diag_send_end(flag);
 }
 
 }  // namespace dpc31
 
 namespace dpc31 {
 
-namespace {
-
-template <typename Ar, typename S>
-void handshake_fields(Ar& ar, S& s) {
-  static_assert(snap::member_count<Handshake>() == 2, "a new member: add it here");
-  ar(s.pending);
-  ar(s.newer_arrived);
+void DpStateMachine::start() {
+  s_ = State{};
+  s_.started = true;
+  buffers_.end_clear();
+  s_.station = regs_.cell(RegId::R_TS_Adr);
+  s_.no_add_change = regs_.cell(RegId::R_Real_No_Add_Change) == 0xFF;
 }
 
-template <typename Ar, typename S>
-void members(Ar& ar, S& s) {
-  static_assert(snap::member_count<DpStateMachine>() == 26, "a new member: add it here");
-  ar.bounded(s.state, DpState::Data_Exchange);
-  handshake_fields(ar, s.prm);
-  handshake_fields(ar, s.cfg);
-  ar(s.ssa_free);
-  ar(s.prm_fault);
-  ar(s.cfg_fault);
-  ar(s.not_supported);
-  ar(s.station);
-  ar(s.no_add_change);
-  ar(s.master_add);
-  ar(s.group_ident);
-  ar(s.min_tsdr);
-  ar(s.prm_wd_on);
-  ar(s.prm_wd_fact1);
-  ar(s.prm_wd_fact2);
-  ar(s.prm_wd_1ms);
-  ar(s.dx_on_new_din);
-  ar(s.diag_requester);
-  ar(s.sync_mode);
-  ar(s.freeze_mode);
-  ar(s.user_wd_armed);
-  ar(s.user_wd);
-  ar(s.fcb_valid);
-  ar(s.last_fcb);
-  ar(s.last_master);
-  ar.byte_vector(s.last_response, fdl::kMaxFrameLength);
-}
-
-}  // namespace
-
-void save_state(snap::Writer& w, const DpStateMachine& s) {
-  w.section("DPSM");
-  members(w, s);
-}
-
-void load_state(snap::Reader& r, DpStateMachine& s) {
-  r.section("DPSM");
-  members(r, s);
+void DpStateMachine::leave_master() {
+  if (!s_.started) return;
+  const DpState was = s_.state;
+  s_.state = DpState::Wait_Prm;
+  s_.prm = Handshake{};
+  s_.cfg = Handshake{};
+  s_.master_add = 0xFF;  // unlocked: any master may parameterise us again
+  s_.sync_mode = false;
+  s_.freeze_mode = false;
+  s_.user_wd_armed = false;
+  s_.fcb_valid = false;
+  s_.dx_on_new_din = false;
+  buffers_.end_clear();
+  sig_.log(LogLevel::info, "Leave_Master: DP state -> Wait_Prm");
+  if (was == DpState::Data_Exchange) irq_.raise(irq::Go_Leave_Data_Exchange);
+  buffers_.dout_clear();
 }
 
 }  // namespace dpc31

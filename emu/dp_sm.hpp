@@ -5,11 +5,19 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
+#include <span>
 #include <vector>
 
+#include "buffers.hpp"
 #include "dpc31/chip.hpp"
 #include "dpc31/dp.hpp"
-#include "snapshot.hpp"
+#include "dpc31/fdl.hpp"
+#include "dpc31/fdl_counters.hpp"
+#include "irq.hpp"
+#include "regfile.hpp"
+#include "signals.hpp"
+#include "watchdog.hpp"
 
 namespace dpc31 {
 
@@ -44,43 +52,110 @@ struct Handshake {
   }
 };
 
-struct DpStateMachine {
-  DpState state = DpState::Wait_Prm;
-  Handshake prm;
-  Handshake cfg;
-  bool ssa_free = true;            // SAP55 enabled (SSA buffer free)
-  bool prm_fault = false;          // diag St1 Prm_Fault
-  bool cfg_fault = false;          // diag St1 Cfg_Fault
-  bool not_supported = false;      // diag St1 Not_Supported (reserved Global_Control bits, ...)
-  std::uint8_t station = 0;        // own address: R_TS_Adr at Start, changed by Set_Slave_Add
-  bool no_add_change = false;      // Real_No_Add_Change adopted from Set_Slave_Add
-  std::uint8_t master_add = 0xFF;  // the master that locked us (FFh: not parameterised)
-  std::uint8_t group_ident = 0;
-  std::uint8_t min_tsdr = 0;  // from Set_Prm byte 3; 0 = MinTSDR_Val
-  // The watchdog parameters of the Set_Prm the user is checking: DP_Control starts with them at
-  // User_Prm_Data_Okay, not when the telegram arrives.
-  bool prm_wd_on = false;
-  std::uint8_t prm_wd_fact1 = 0;
-  std::uint8_t prm_wd_fact2 = 0;
-  bool prm_wd_1ms = false;
-  // SPC3 with a Din buffer: Cfg OK given, Data_Exchange at the user's next New_Din_Buffer_Cmd.
-  bool dx_on_new_din = false;
-  std::uint8_t diag_requester = 0xFF;  // the master whose Slave_Diag answer is being sent
-  bool sync_mode = false;
-  bool freeze_mode = false;
-  // User watchdog: armed by Res_User_WD, counts Data_Exchange telegrams down.
-  bool user_wd_armed = false;
-  std::uint16_t user_wd = 0;
-  // FCB/FCV: a repeated request (same master, FCV = 1, same FCB) gets the previous answer again.
-  bool fcb_valid = false;
-  bool last_fcb = false;
-  std::uint8_t last_master = 0xFF;
-  std::vector<std::uint8_t> last_response;
+class DpStateMachine {
+ public:
+  struct State {
+    bool started = false;  // Start_SPC3: Offline -> Passive_Idle (Status_Reg.Offline_Passive_Idle)
+    DpState state = DpState::Wait_Prm;
+    Handshake prm;
+    Handshake cfg;
+    bool ssa_free = true;            // SAP55 enabled (SSA buffer free)
+    bool prm_fault = false;          // diag St1 Prm_Fault
+    bool cfg_fault = false;          // diag St1 Cfg_Fault
+    bool not_supported = false;      // diag St1 Not_Supported (reserved Global_Control bits, ...)
+    std::uint8_t station = 0;        // own address: R_TS_Adr at Start, changed by Set_Slave_Add
+    bool no_add_change = false;      // Real_No_Add_Change adopted from Set_Slave_Add
+    std::uint8_t master_add = 0xFF;  // the master that locked us (FFh: not parameterised)
+    std::uint8_t group_ident = 0;
+    std::uint8_t min_tsdr = 0;  // from Set_Prm byte 3; 0 = MinTSDR_Val
+    // The watchdog parameters of the Set_Prm the user is checking: DP_Control starts with them at
+    // User_Prm_Data_Okay, not when the telegram arrives.
+    bool prm_wd_on = false;
+    std::uint8_t prm_wd_fact1 = 0;
+    std::uint8_t prm_wd_fact2 = 0;
+    bool prm_wd_1ms = false;
+    // SPC3 with a Din buffer: Cfg OK given, Data_Exchange at the user's next New_Din_Buffer_Cmd.
+    bool dx_on_new_din = false;
+    std::uint8_t diag_requester = 0xFF;  // the master whose Slave_Diag answer is being sent
+    bool sync_mode = false;
+    bool freeze_mode = false;
+    // User watchdog: armed by Res_User_WD, counts Data_Exchange telegrams down.
+    bool user_wd_armed = false;
+    std::uint16_t user_wd = 0;
+    // FCB/FCV: a repeated request (same master, FCV = 1, same FCB) gets the previous answer again.
+    bool fcb_valid = false;
+    bool last_fcb = false;
+    std::uint8_t last_master = 0xFF;
+    std::vector<std::uint8_t> last_response;
+    bool diag_in_flight = false;  // a Slave_Diag answer is being sent
+  };
+  enum class Verdict : std::uint8_t { ok, not_ok };
 
-  void reset() { *this = DpStateMachine{}; }
+  DpStateMachine(RegisterFile& regs, InterruptController& irq, BufferUnit& buffers,
+                 Watchdog& watchdog, FdlCounters& counters, const Signals& sig)
+      : regs_(regs),
+        irq_(irq),
+        buffers_(buffers),
+        watchdog_(watchdog),
+        counters_(counters),
+        sig_(sig) {}
+  void reset() { s_ = State{}; }  // also the MAC reset (Go_Offline): Offline, as after reset
+  // Start_SPC3: the state machine from the top, at the station address of R_TS_Adr.
+  void start();
+  [[nodiscard]] bool started() const { return s_.started; }
+
+  // An error-free request for us (or broadcast) arrived now: act, and return the answer to send.
+  std::optional<fdl::Frame> service(const fdl::Frame& req);
+  void response_sent();  // our answer's last stop bit is out
+  // Leave_Master: back to Wait_Prm, unlocked (User_Leave_Master, a fault, a watchdog expiry).
+  void leave_master();
+  // The block-level actions of the services (docs/golden-model.md), also for the harness.
+  void prm_accepted();  // New_Prm_Data
+  void prm_fault();     // a Set_Prm that failed the ASIC's checks
+  void cfg_accepted();  // New_Cfg_Data
+  void ssa_accepted();  // New_SSA_Data
+  void apply_global_control(std::uint8_t command);
+
+  // The user's side (the command reads of User_Prm/Cfg_Data_(Not_)Okay, SSA_Buffer_Free_Cmd,
+  // New_Din_Buffer_Cmd).
+  std::uint16_t prm_verdict(Verdict v);
+  std::uint16_t cfg_verdict(Verdict v);
+  [[nodiscard]] std::uint16_t prm_preview() const { return s_.prm.preview(); }
+  [[nodiscard]] std::uint16_t cfg_preview() const { return s_.cfg.preview(); }
+  void ssa_buffer_free() { s_.ssa_free = true; }  // SAP55 accepts Set_Slave_Add again
+  void din_handed_over();
+
+  [[nodiscard]] DpState state() const { return s_.state; }
+  [[nodiscard]] std::uint8_t station() const { return s_.station; }
+  [[nodiscard]] std::uint8_t master_add() const { return s_.master_add; }
+  [[nodiscard]] std::uint8_t min_tsdr() const { return s_.min_tsdr; }
+  [[nodiscard]] bool ssa_free() const { return s_.ssa_free; }
+
+ private:
+  friend struct BlockAccess;
+  std::optional<fdl::Frame> set_prm(const fdl::Frame& req);
+  std::optional<fdl::Frame> chk_cfg(const fdl::Frame& req);
+  std::optional<fdl::Frame> slave_diag(const fdl::Frame& req);
+  std::optional<fdl::Frame> read_io(const fdl::Frame& req);
+  std::optional<fdl::Frame> set_slave_add(const fdl::Frame& req);
+  std::optional<fdl::Frame> data_exchange(const fdl::Frame& req);
+  void global_control(const fdl::Frame& req);
+  void enter_data_exchange();
+  bool dx_out_wanted(std::span<const std::uint8_t> outputs);
+  bool user_watchdog_tick();
+  bool receive_via_aux(std::uint16_t sel, RegId target_ptr, RegId len_cell,
+                       std::span<const std::uint8_t> du);
+  [[nodiscard]] fdl::Frame sap_answer(const fdl::Frame& req, fdl::Response code,
+                                      std::vector<std::uint8_t> du) const;
+  [[nodiscard]] fdl::Frame short_answer(const fdl::Frame& req, fdl::Response code) const;
+
+  RegisterFile& regs_;
+  InterruptController& irq_;
+  BufferUnit& buffers_;
+  Watchdog& watchdog_;
+  FdlCounters& counters_;
+  const Signals& sig_;
+  State s_;
 };
-
-void save_state(snap::Writer& w, const DpStateMachine& s);
-void load_state(snap::Reader& r, DpStateMachine& s);
 
 }  // namespace dpc31

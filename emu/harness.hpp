@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <functional>
 
+#include "block_access.hpp"
 #include "core.hpp"
 #include "dpc31/chip.hpp"
 
@@ -26,23 +27,23 @@ inline const ChipCore& core(const Chip& c) { return ChipAccess::core(c); }
 // Every block-level event (block_event.hpp) and every CPU bus access, with its cycle; an empty
 // function removes them all.
 inline void on_block_event(Chip& c, std::function<void(std::uint64_t, const BlockEvent&)> cb) {
-  core(c).block_observer.add(std::move(cb));
+  core(c).signals.block.add(std::move(cb));
 }
 
 // The protocol side's entry points (what the DP engine does inside the chip), each taking
 // effect at the current cycle: for the tests of one block.
-inline void asic_raise(Chip& c, std::uint16_t irq_bits) { core(c).raise(irq_bits); }  // IRR
-inline void asic_dout_received(Chip& c) { core(c).dout_received(); }  // D -> N, DX_Out
-inline void asic_dout_clear(Chip& c) { core(c).dout_clear(); }        // clear D, D -> N, DX_Out
+inline void asic_raise(Chip& c, std::uint16_t irq_bits) { core(c).irq.raise(irq_bits); }  // IRR
+inline void asic_dout_received(Chip& c) { core(c).buffers.dout_received(); }  // D -> N, DX_Out
+inline void asic_dout_clear(Chip& c) { core(c).buffers.dout_clear(); }  // clear D, D -> N, DX_Out
 // N -> D if new; returns the D buffer index.
-inline std::uint8_t asic_din_fetch(Chip& c) { return core(c).din_fetch(); }
-inline void asic_diag_send_begin(Chip& c) { core(c).diag_send_begin(); }
+inline std::uint8_t asic_din_fetch(Chip& c) { return core(c).buffers.din_fetch(); }
+inline void asic_diag_send_begin(Chip& c) { core(c).buffers.diag_send_begin(); }
 inline void asic_diag_send_end(Chip& c) {
-  core(c).diag_send_end(core(c).sent_diag_has_stat_diag());
+  core(c).buffers.diag_send_end(core(c).buffers.sent_diag_has_stat_diag());
 }
-inline void asic_prm_received(Chip& c) { core(c).prm_accepted(); }  // New_Prm_Data
-inline void asic_cfg_received(Chip& c) { core(c).cfg_accepted(); }  // New_Cfg_Data
-inline void asic_ssa_received(Chip& c) { core(c).ssa_accepted(); }  // New_SSA_Data
+inline void asic_prm_received(Chip& c) { core(c).dp.prm_accepted(); }  // New_Prm_Data
+inline void asic_cfg_received(Chip& c) { core(c).dp.cfg_accepted(); }  // New_Cfg_Data
+inline void asic_ssa_received(Chip& c) { core(c).dp.ssa_accepted(); }  // New_SSA_Data
 
 }  // namespace harness
 

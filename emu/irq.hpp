@@ -1,36 +1,55 @@
 // Interrupt controller (chip-facts §2): IRR latched independent of IMR, IR = IRR & ~IMR,
-// X/INT = OR of IR unless inside the inactive time that follows an EOI.
+// X/INT = OR of IR unless inside the inactive time that follows an EOI. On the DPC31 the
+// DX_Out interrupt can also drive port PB3 (seed 003, p.32).
 #pragma once
 
 #include <cstdint>
 #include <limits>
 
-#include "snapshot.hpp"
+#include "regfile.hpp"
+#include "signals.hpp"
 #include "timer.hpp"
 
 namespace dpc31 {
 
-struct IrqController {
-  // The EOI inactive time: X/INT may not become active while it runs.
-  Timer eoi = Timer::elapsed();
-  // Events latched in the current cycle survive an acknowledge in that same cycle.
-  std::uint64_t event_cycle = std::numeric_limits<std::uint64_t>::max();
-  std::uint16_t event_mask = 0;
+class InterruptController {
+ public:
+  struct State {
+    // The EOI inactive time: X/INT may not become active while it runs.
+    Timer eoi = Timer::elapsed();
+    // Events latched in the current cycle survive an acknowledge in that same cycle.
+    std::uint64_t event_cycle = std::numeric_limits<std::uint64_t>::max();
+    std::uint16_t event_mask = 0;
+    bool line = false;  // last computed X/INT activity (for change notifications)
+    bool pb3 = false;   // port PB3 (below)
+  };
 
-  void reset() { *this = IrqController{}; }
-  void note_events(std::uint16_t bits, std::uint64_t now) {
-    if (event_cycle != now) {
-      event_cycle = now;
-      event_mask = 0;
-    }
-    event_mask |= bits;
-  }
-  [[nodiscard]] std::uint16_t events_at(std::uint64_t now) const {
-    return event_cycle == now ? event_mask : std::uint16_t{0};
-  }
+  InterruptController(Clock& clock, RegisterFile& regs, const Signals& sig)
+      : clock_(clock), regs_(regs), sig_(sig) {}
+  void reset();
+
+  void raise(std::uint16_t bits);  // IRR |= bits, noted as this cycle's events
+  void end_of_interrupt();         // EOI (Mode_Reg1): the inactive time starts
+  [[nodiscard]] bool active() const;
+  void update_line();  // X/INT from IR and the inactive time; tells on_irq_change
+  [[nodiscard]] bool line() const { return s_.line; }
+  // What an acknowledge or IRR write in this cycle must keep (the events of this cycle).
+  [[nodiscard]] std::uint16_t events_now() const;
+  void note_events(std::uint16_t bits, std::uint64_t cycle);
+  [[nodiscard]] std::uint64_t inactive_until() const { return clock_.due(s_.eoi); }
+  Timer& eoi_timer() { return s_.eoi; }  // the engine counts it
+
+  // dpc31 port PB3 with Enable_DX_Out_Port (C31_Control bit 0): high from the DX_Out of a
+  // Global_Control with Sync until the user acknowledges DX_Out (seed 003, p.32).
+  void set_pb3(bool level);
+  [[nodiscard]] bool pb3() const { return s_.pb3; }
+
+ private:
+  friend struct BlockAccess;
+  Clock& clock_;
+  RegisterFile& regs_;
+  const Signals& sig_;
+  State s_;
 };
-
-void save_state(snap::Writer& w, const IrqController& s);
-void load_state(snap::Reader& r, IrqController& s);
 
 }  // namespace dpc31

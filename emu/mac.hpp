@@ -4,11 +4,18 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <utility>
 #include <vector>
 
+#include "dp_sm.hpp"
 #include "dpc31/fdl.hpp"
+#include "dpc31/fdl_counters.hpp"
+#include "dpc31/fifo.hpp"
 #include "dpc31/uart.hpp"
+#include "regfile.hpp"
+#include "signals.hpp"
+#include "timer.hpp"
 #include "watchdog.hpp"
 
 namespace dpc31 {
@@ -48,29 +55,73 @@ struct TxShifter {
   std::uint32_t sub = 0;  // clocks into that bit
 };
 
-struct Mac {
-  UartRx rx;
-  fdl::Assembler frame;
-  std::vector<UartChar> chars;  // scratch for UartRx::advance
-  bool in_frame = false;
-  bool skipping = false;    // after a telegram, an error or an unsynchronised start: wait for TSYN
-  bool discarding = false;  // the telegram in progress was already counted as broken
-  std::uint64_t frame_timeout = kNever;
-  std::uint8_t search_code = 0;
-  std::uint64_t search_deadline = kNever;
-  // Transmitter: TxD edges still to come, and the end of our answer's last stop bit.
-  std::vector<std::pair<std::uint64_t, bool>> tx_edges;
-  std::size_t tx_next = 0;
-  std::uint64_t tx_end = kNever;
-  bool txd = true;
-  // Per-cycle engine (docs/engine.md): its own receiver and counters; never the deadlines above.
-  UartSampler sampler;
-  BitTimer gap;     // idle inside a telegram, from the end of a character (TSYN ends it)
-  BitTimer search;  // the Baud_Search window at the current rate
-  TxShifter shifter;
-  void reset() { *this = Mac{}; }
+class Mac {
+ public:
+  struct State {
+    UartRx rx;
+    fdl::Assembler frame;
+    std::vector<UartChar> chars;  // scratch for UartRx::advance
+    bool in_frame = false;
+    bool skipping = false;  // after a telegram, an error or an unsynchronised start: wait for TSYN
+    bool discarding = false;  // the telegram in progress was already counted as broken
+    std::uint64_t frame_timeout = kNever;
+    std::uint8_t search_code = 0;
+    std::uint64_t search_deadline = kNever;
+    // Transmitter: TxD edges still to come, and the end of our answer's last stop bit.
+    std::vector<std::pair<std::uint64_t, bool>> tx_edges;
+    std::size_t tx_next = 0;
+    std::uint64_t tx_end = kNever;
+    bool txd = true;
+    // Per-cycle engine (docs/engine.md): its own receiver and counters; never the deadlines above.
+    UartSampler sampler;
+    BitTimer gap;     // idle inside a telegram, from the end of a character (TSYN ends it)
+    BitTimer search;  // the Baud_Search window at the current rate
+    TxShifter shifter;
+    // RxD edges driven for later cycles. Kept here, not in the receiver, so they survive a
+    // receiver (re)configure (Baud_Search switching the rate, Start).
+    Fifo<std::pair<std::uint64_t, bool>> rxd_pending;
+    bool rxd_level = true;  // the RxD line (per-cycle engine)
+  };
+
+  Mac(Clock& clock, const RegisterFile& regs, DpStateMachine& dp, Watchdog& watchdog,
+      FdlCounters& counters, Signals& sig)
+      : clock_(clock), regs_(regs), dp_(dp), watchdog_(watchdog), counters_(counters), sig_(sig) {}
+  void reset();  // a hardware reset: listening at 12 Mbaud (for the offline count), line idle
+
+  void start_search();  // Baud_Search from the highest rate down (Start, Baud_Control expiry)
+  void stop();          // Go_Offline: no search, no telegram, no answer; TxD idle
+  void drive_rxd(std::uint64_t cycle, bool level);
+  void watch_txd(std::function<void(std::uint64_t, bool)> cb);  // Chip::on_txd
+  [[nodiscard]] bool txd_level() const;  // TxD now, also with edges not yet taken
+  [[nodiscard]] std::uint32_t bit_time() const { return s_.rx.bit_time(); }
+
+  // The engines: whatever is due now (event engine), or one clock (per-cycle engine).
+  void process();
+  void clock();
+  [[nodiscard]] std::uint64_t deadline() const;  // event engine: the MAC's next deadline
+
+ private:
+  friend struct BlockAccess;
+  void listen(std::uint8_t code);  // receive at kBaudRates[code] from now on
+  void arm_search_window();
+  void stop_search_window();
+  void search_next();
+  void truncated();
+  void set_txd(std::uint64_t cycle, bool level);
+  void tx_done();
+  [[nodiscard]] bool tx_busy() const;
+  void tx_catch_up();  // event engine: TxD edges due by now onto the pin
+  void on_char(const UartChar& c);
+  void on_frame(const fdl::Frame& f, const UartChar& last);
+  void send(const fdl::Frame& f, std::uint64_t request_end);
+
+  Clock& clock_;
+  const RegisterFile& regs_;
+  DpStateMachine& dp_;
+  Watchdog& watchdog_;
+  FdlCounters& counters_;
+  Signals& sig_;  // not const: Chip::on_txd adds its observer through the MAC (watch_txd)
+  State s_;
 };
 
-void save_state(snap::Writer& w, const Mac& s);
-void load_state(snap::Reader& r, Mac& s);
 }  // namespace dpc31

@@ -261,11 +261,11 @@ struct SavePoint {
 };
 
 bool receiving_with_edges_ahead(const Chip& c) {
-  const ChipCore& k = harness::core(c);
-  return k.mac.in_frame && k.mac.rx.next_deadline() != UartRx::kIdle;
+  const Mac::State& m = BlockAccess::state(harness::core(c).mac);
+  return m.in_frame && m.rx.next_deadline() != UartRx::kIdle;
 }
 bool transmitting(const Chip& c) {
-  const Mac& m = harness::core(c).mac;
+  const Mac::State& m = BlockAccess::state(harness::core(c).mac);
   return m.tx_next > 0 && m.tx_next < m.tx_edges.size();
 }
 bool searching(const Chip& c) { return c.wd_state() == WdState::Baud_Search && c.started(); }

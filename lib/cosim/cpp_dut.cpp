@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include "block_access.hpp"
 #include "core.hpp"
 #include "dpc31/reg_ids.hpp"
 #include "dut.hpp"
@@ -26,7 +27,7 @@ class CppDut final : public Dut {
  public:
   explicit CppDut(const DutOptions& o)
       : core_(ChipOptions{o.profile, o.bus, 0, Engine::event, o.variant}) {
-    core_.sink = nullptr;
+    core_.signals.sink = nullptr;
     core_.reset();
   }
 
@@ -37,30 +38,32 @@ class CppDut final : public Dut {
       return;
     }
     core_.advance(1);
+    DpStateMachine& dp = core_.dp;
+    BufferUnit& buffers = core_.buffers;
     if (in.ev_dx)
-      core_.latch[ChipCore::idx(RegId::Mode_Reg1)] &=
+      core_.regs.latch(RegId::Mode_Reg1) &=
           static_cast<std::uint16_t>(~fields::Mode_Reg1::Res_User_WD);
-    if (in.ev_irq != 0) core_.raise(in.ev_irq);
-    if (in.ev_leave_master) core_.leave_master();
-    if (in.ev_prm_fault) core_.prm_fault();
-    if (in.ev_gc) core_.apply_global_control(in.gc_cmd);
-    if (in.ev_dout) core_.outputs_received();
-    if (in.ev_failsafe) core_.failsafe_clear();
-    if (in.ev_din) core_.inputs_due();
-    if (in.ev_diag_begin) core_.diag_send_begin();
-    if (in.ev_diag_end) core_.diag_send_end(in.stat_diag);
+    if (in.ev_irq != 0) core_.irq.raise(in.ev_irq);
+    if (in.ev_leave_master) dp.leave_master();
+    if (in.ev_prm_fault) dp.prm_fault();
+    if (in.ev_gc) dp.apply_global_control(in.gc_cmd);
+    if (in.ev_dout) buffers.outputs_received(BlockAccess::state(dp).sync_mode);
+    if (in.ev_failsafe) buffers.failsafe_clear();
+    if (in.ev_din) buffers.inputs_due(BlockAccess::state(dp).freeze_mode);
+    if (in.ev_diag_begin) buffers.diag_send_begin();
+    if (in.ev_diag_end) buffers.diag_send_end(in.stat_diag);
     if (in.ev_dis) {
-      std::uint16_t& m0 = core_.latch[ChipCore::idx(RegId::Mode_Reg0)];
+      std::uint16_t& m0 = core_.regs.latch(RegId::Mode_Reg0);
       constexpr std::uint16_t kDis =
           fields::Mode_Reg0::Dis_Start_Control | fields::Mode_Reg0::Dis_Stop_Control;
       m0 = static_cast<std::uint16_t>((m0 & ~kDis) | (in.dis_bits & kDis));
     }
-    if (in.ev_prm) core_.prm_accepted();
-    if (in.ev_cfg) core_.cfg_accepted();
-    if (in.ev_ssa) core_.ssa_accepted();
+    if (in.ev_prm) dp.prm_accepted();
+    if (in.ev_cfg) dp.cfg_accepted();
+    if (in.ev_ssa) dp.ssa_accepted();
     if (in.bus_rd) rdata_ = core_.read_now(in.bus_addr);
     if (in.bus_wr) core_.write_now(in.bus_addr, in.bus_wdata);
-    core_.update_irq_line();
+    core_.irq.update_line();
   }
 
   [[nodiscard]] Outputs outputs() const override { return block_outputs(core_, rdata_); }
@@ -106,27 +109,30 @@ std::string Inputs::describe() const {
 }
 
 Outputs block_outputs(const ChipCore& c, std::uint8_t rdata) {
-  auto latch = [&](RegId id) { return std::uint32_t{c.latch[ChipCore::idx(id)]}; };
-  auto cell = [&](RegId id) -> std::uint32_t { return c.reg(id) != nullptr ? c.cell(id) : 0; };
+  auto latch = [&](RegId id) { return std::uint32_t{c.regs.latch(id)}; };
+  auto cell = [&](RegId id) -> std::uint32_t {
+    return c.regs.reg(id) != nullptr ? c.regs.cell(id) : 0;
+  };
   const bool int_pol = (latch(RegId::Mode_Reg0) & fields::Mode_Reg0::INT_Pol) != 0;
-  const bool active = c.irq_active();
-  const BufferUnit& b = c.buffers;
+  const bool active = c.irq.active();
+  const BufferUnit::State& b = BlockAccess::state(c.buffers);
+  const DpStateMachine::State& dp = BlockAccess::state(c.dp);
   Outputs o;
   o.v = {int_pol ? active : !active,
          latch(RegId::Int_Req_Reg),
          latch(RegId::Int_Mask_Reg),
          latch(RegId::Mode_Reg0),
          latch(RegId::Mode_Reg1),
-         c.started,
-         static_cast<std::uint32_t>(c.dp.state),
-         c.dp.prm.pending,
-         c.dp.cfg.pending,
-         c.dp.ssa_free,
-         c.dp.prm_fault,
-         c.dp.cfg_fault,
-         c.dp.not_supported,
-         c.dp.sync_mode,
-         c.dp.freeze_mode,
+         dp.started,
+         static_cast<std::uint32_t>(dp.state),
+         dp.prm.pending,
+         dp.cfg.pending,
+         dp.ssa_free,
+         dp.prm_fault,
+         dp.cfg_fault,
+         dp.not_supported,
+         dp.sync_mode,
+         dp.freeze_mode,
          b.diag_flag,
          b.dout.sm(),
          b.din.sm(),

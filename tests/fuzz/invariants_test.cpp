@@ -81,7 +81,7 @@ TEST(Invariants, XintWithAHiddenInactiveTimeIsReported) {
   s.checker.check();
   ASSERT_TRUE(s.seen.messages.empty());
   // The model holds the line inactive although nobody wrote EOI.
-  dpc31::harness::core(s.chip).irq.eoi.at = s.chip.cycle() + 1000;
+  dpc31::BlockAccess::state(dpc31::harness::core(s.chip).irq).eoi.at = s.chip.cycle() + 1000;
   s.checker.check();
   EXPECT_TRUE(s.seen.any_containing("X/INT")) << ::testing::PrintToString(s.seen.messages);
 }
@@ -101,7 +101,7 @@ TEST(Invariants, XintPinAgainstIrqActivityIsReported) {
   Started s;
   s.chip.step(100);
   // IRR changed behind the line's back: the level reported last no longer fits IR.
-  dpc31::harness::core(s.chip).latch[dpc31::ChipCore::idx(RegId::Int_Req_Reg)] = 0;
+  dpc31::harness::core(s.chip).regs.latch(RegId::Int_Req_Reg) = 0;
   s.checker.check();
   EXPECT_TRUE(s.seen.any_containing("X/INT")) << ::testing::PrintToString(s.seen.messages);
 }
@@ -110,19 +110,23 @@ TEST(Invariants, BufferNamedTwiceIsReported) {
   Started s;
   s.checker.check();
   ASSERT_TRUE(s.seen.messages.empty());
-  dpc31::harness::core(s.chip).buffers.dout.u = dpc31::harness::core(s.chip).buffers.dout.d;
+  dpc31::BlockAccess::state(dpc31::harness::core(s.chip).buffers).dout.u =
+      dpc31::BlockAccess::state(dpc31::harness::core(s.chip).buffers).dout.d;
   s.checker.check();
   EXPECT_TRUE(s.seen.any_containing("Dout_Buffer_SM")) << ::testing::PrintToString(s.seen.messages);
   s.seen.messages.clear();
-  dpc31::harness::core(s.chip).buffers.din.n = dpc31::harness::core(s.chip).buffers.din.f;
+  dpc31::BlockAccess::state(dpc31::harness::core(s.chip).buffers).din.n =
+      dpc31::BlockAccess::state(dpc31::harness::core(s.chip).buffers).din.f;
   s.checker.check();
   EXPECT_TRUE(s.seen.any_containing("Din_Buffer_SM")) << ::testing::PrintToString(s.seen.messages);
 }
 
 TEST(Invariants, BothDiagBuffersWithTheUserIsReported) {
   Started s;
-  dpc31::harness::core(s.chip).buffers.diag.buf[0] = dpc31::DiagState::User;
-  dpc31::harness::core(s.chip).buffers.diag.buf[1] = dpc31::DiagState::User;
+  dpc31::BlockAccess::state(dpc31::harness::core(s.chip).buffers).diag.buf[0] =
+      dpc31::DiagState::User;
+  dpc31::BlockAccess::state(dpc31::harness::core(s.chip).buffers).diag.buf[1] =
+      dpc31::DiagState::User;
   s.checker.check();
   EXPECT_TRUE(s.seen.any_containing("Diag_Buffer_SM")) << ::testing::PrintToString(s.seen.messages);
 }
@@ -141,15 +145,16 @@ TEST(Invariants, PointerCellChangedByTheAsicIsReportedAUserWriteIsNot) {
 
 TEST(Invariants, UndocumentedDpTransitionsAreReported) {
   Started s;
-  dpc31::harness::core(s.chip).dp.state = DpState::Data_Exchange;  // straight from Wait_Prm
+  dpc31::BlockAccess::state(dpc31::harness::core(s.chip).dp).state =
+      DpState::Data_Exchange;  // straight from Wait_Prm
   s.checker.check();
   EXPECT_TRUE(s.seen.any_containing("Wait_Prm -> Data_Exchange is not a documented transition"))
       << ::testing::PrintToString(s.seen.messages);
   s.seen.messages.clear();
-  dpc31::harness::core(s.chip).dp.state = DpState::Wait_Prm;
+  dpc31::BlockAccess::state(dpc31::harness::core(s.chip).dp).state = DpState::Wait_Prm;
   s.checker.check();
   EXPECT_FALSE(s.seen.any_containing("Data_Exchange -> Wait_Prm is not"));  // always allowed
-  dpc31::harness::core(s.chip).dp.state = DpState::Wait_Cfg;
+  dpc31::BlockAccess::state(dpc31::harness::core(s.chip).dp).state = DpState::Wait_Cfg;
   s.checker.check();
   EXPECT_TRUE(s.seen.any_containing("without a User_Prm_Data_Okay read"))
       << ::testing::PrintToString(s.seen.messages);
@@ -157,15 +162,15 @@ TEST(Invariants, UndocumentedDpTransitionsAreReported) {
 
 TEST(Invariants, DataExchangeWithoutGoLeaveIsReported) {
   Started s;
-  dpc31::harness::core(s.chip).dp.state = DpState::Wait_Cfg;
+  dpc31::BlockAccess::state(dpc31::harness::core(s.chip).dp).state = DpState::Wait_Cfg;
   s.checker.on_block({dpc31::BlockEvent::Kind::read,
                       static_cast<std::uint16_t>(s.addr(RegId::User_Prm_Data_Okay)), 0});
   s.checker.check();
   ASSERT_TRUE(s.seen.messages.empty()) << s.seen.messages.front();
-  dpc31::harness::core(s.chip).dp.state = DpState::Data_Exchange;
-  dpc31::harness::core(s.chip).latch[dpc31::ChipCore::idx(RegId::Int_Req_Reg)] &=
+  dpc31::BlockAccess::state(dpc31::harness::core(s.chip).dp).state = DpState::Data_Exchange;
+  dpc31::harness::core(s.chip).regs.latch(RegId::Int_Req_Reg) &=
       static_cast<std::uint16_t>(~dpc31::irq::Go_Leave_Data_Exchange);
-  dpc31::harness::core(s.chip).update_irq_line();
+  dpc31::harness::core(s.chip).irq.update_line();
   s.checker.on_block({dpc31::BlockEvent::Kind::read,
                       static_cast<std::uint16_t>(s.addr(RegId::User_Cfg_Data_Okay)), 0});
   s.checker.check();
@@ -226,7 +231,7 @@ TEST(Invariants, DefaultReportAbortsWithTheMessage) {
         Started s;
         InvariantChecker strict;
         strict.attach(s.chip);
-        dpc31::harness::core(s.chip).dp.state = DpState::Data_Exchange;
+        dpc31::BlockAccess::state(dpc31::harness::core(s.chip).dp).state = DpState::Data_Exchange;
         strict.check();
       },
       "invariant violated at cycle [0-9]+: DP state Wait_Prm -> Data_Exchange");

@@ -1,0 +1,281 @@
+// The chip's bus side: the CPU's accesses through the address decode of the register file, the
+// registers' hooks (installed by each block next to its behaviour) and QEMU's write rule over the
+// per-bit policies of the description, plus the side-effect-free debugger path.
+#include <stdexcept>
+#include <string>
+
+#include "core.hpp"
+
+namespace dpc31 {
+
+ChipCore::ChipCore(const ChipOptions& opt)
+    : variant(opt.variant),
+      clock{opt.engine, opt.clock_hz != 0 ? opt.clock_hz : chip_timing().clock_hz},
+      signals(clock),
+      regs(profile_desc(opt.profile), opt.bus, signals),
+      irq(clock, regs, signals),
+      buffers(regs, irq),
+      watchdog(clock, regs, irq, signals),
+      dp(regs, irq, buffers, watchdog, counters, signals),
+      mac(clock, regs, dp, watchdog, counters, signals),
+      mode(clock, regs, irq, buffers, dp, watchdog, mac, signals,
+           opt.variant ? static_cast<std::uint8_t>(*opt.variant)
+                       : profile_desc(opt.profile).release) {
+  if (variant && prof().id != Profile::vpc3plus) {
+    throw std::invalid_argument(
+        fmt::format("a VPC3+ variant ({}) on the {} profile: only vpc3plus has variants",
+                    vpc3_variant_name(*variant), prof().name));
+  }
+  // A RAM access violation takes a started chip offline.
+  regs.on_violation = [this] { mode.go_offline(); };
+  install_irq_hooks(hooks);
+  install_mode_hooks(hooks);
+  install_buffer_hooks(hooks);
+  install_dp_sm_hooks(hooks);
+  // Every derived value the description promises must have a block that computes it.
+  for (const RegDesc& r : prof().regs) {
+    const RegHooks& h = hooks[RegisterFile::idx(r.id)];
+    const bool modelled = (r.mask() & ~r.rsvd & ~r.unimp) != 0;
+    if (r.kind == Kind::derived && modelled && h.read == nullptr) {
+      throw std::logic_error(fmt::format("{}: derived register without a read hook", r.name));
+    }
+    if (r.cmd != 0 && h.command == nullptr) {
+      throw std::logic_error(fmt::format("{}: command register without a command hook", r.name));
+    }
+  }
+  reset();
+}
+
+void ChipCore::reset() {
+  clock.now = 0;
+  clock.quiet_until = 0;
+  regs.reset();
+  buffers.reset();
+  dp.reset();
+  watchdog.power_on();
+  mode.reset();
+  mac.reset();
+  counters = FdlCounters{};
+  written_bits = 0;
+  irq.reset();  // last: X/INT from the reset registers
+}
+
+namespace {
+
+std::string field_names(const RegDesc& r, std::uint16_t mask) {
+  std::string out;
+  for (const FieldDesc& f : r.fields) {
+    const auto fm = static_cast<std::uint16_t>(((1u << f.width) - 1u) << f.lsb);
+    if ((fm & mask) == 0) continue;
+    if (!out.empty()) out += ", ";
+    out += f.name;
+  }
+  return out.empty() ? std::string("reserved") : out;
+}
+
+}  // namespace
+
+std::uint16_t ChipCore::reg_value(RegId id) const {
+  const RegDesc* r = regs.reg(id);
+  if (r == nullptr) return 0;
+  const RegHooks& h = hooks[RegisterFile::idx(id)];
+  switch (r->kind) {
+    case Kind::cell:
+      return regs.cell16(*r);
+    case Kind::reserved:
+      return 0;
+    case Kind::port:
+      return regs.latch(r->target);
+    case Kind::latch:
+    case Kind::derived:
+      break;
+  }
+  const std::uint16_t v = h.read != nullptr ? h.read(*this) : regs.latch(id);
+  return static_cast<std::uint16_t>(v & r->mask() & ~r->rsvd);
+}
+
+std::uint32_t ChipCore::begin_access(std::uint32_t addr, std::string_view what) {
+  if ((addr >> prof().address_bits) != 0) [[unlikely]] {
+    signals.log(LogLevel::warn, "{} at {:#x}: beyond the {}-bit address bus, upper bits ignored",
+                what, addr, prof().address_bits);
+  }
+  bool violation = false;
+  const std::uint32_t a = regs.decode(addr, violation);
+  if (violation) [[unlikely]]
+    regs.note_violation(addr, a);
+  return a;
+}
+
+std::uint8_t ChipCore::bus_read(std::uint32_t addr) {
+  advance(prof().bus_access_cycles);
+  signals.emit(BlockEvent::Kind::read, static_cast<std::uint16_t>(addr));
+  if (signals.bus) signals.bus(clock.now, BusAccess{false, static_cast<std::uint16_t>(addr), 0});
+  const std::uint8_t v = read_now(addr);
+  signals.state(clock.now);
+  return v;
+}
+
+void ChipCore::bus_write(std::uint32_t addr, std::uint8_t value) {
+  advance(prof().bus_access_cycles);
+  signals.emit(BlockEvent::Kind::write, static_cast<std::uint16_t>(addr), value);
+  if (signals.bus) signals.bus(clock.now, BusAccess{true, static_cast<std::uint16_t>(addr), value});
+  write_now(addr, value);
+  signals.state(clock.now);
+}
+
+std::uint8_t ChipCore::read_now(std::uint32_t addr) {
+  const std::uint32_t a = begin_access(addr, "read");
+  const std::uint16_t i = regs.read_index(a);
+  if (i == kNoReg) {
+    const std::uint16_t region = regs.region_index(a);
+    if (region != kNoReg && prof().regions[region].ram) {
+      if (prof().regions[region].reserved) {
+        signals.log(LogLevel::info, "read of {} at {:#06x}", prof().regions[region].name, a);
+      }
+      return regs.mem(a);
+    }
+    signals.log(LogLevel::warn, "read of unmapped address {:#06x} ({}): reads 00h", a,
+                region != kNoReg ? prof().regions[region].name : std::string_view("no region"));
+    return 0;
+  }
+  const RegDesc& r = prof().regs[i];
+  const std::uint32_t offset = a - static_cast<std::uint32_t>(r.read_addr);
+  switch (r.kind) {
+    case Kind::cell:
+      if (r.reserved) signals.log(LogLevel::info, "read of reserved cell {} at {:#06x}", r.name, a);
+      return regs.mem(a);
+    case Kind::reserved:
+      signals.log(LogLevel::warn, "read of reserved {} at {:#06x}: reads 00h", r.name, a);
+      return 0;
+    case Kind::port:  // ports have no read side
+    case Kind::latch:
+    case Kind::derived:
+      break;
+  }
+  const RegHooks& h = hooks[RegisterFile::idx(r.id)];
+  std::uint16_t v = 0;
+  if (h.command != nullptr) {
+    v = h.command(*this);
+    irq.update_line();
+  } else {
+    v = h.read != nullptr ? h.read(*this) : regs.latch(r.id);  // reg_value for these kinds
+  }
+  v = static_cast<std::uint16_t>(v & r.mask() & ~r.rsvd);
+  if (r.unimp != 0)
+    signals.log(LogLevel::info, "read of {}: behaviour not modelled, reads the stored value",
+                r.name);
+  return static_cast<std::uint8_t>(v >> (8 * r.placement(regs.bus())[offset]));
+}
+
+void ChipCore::write_now(std::uint32_t addr, std::uint8_t value) {
+  const std::uint32_t a = begin_access(addr, "write");
+  const std::uint16_t i = regs.write_index(a);
+  if (i == kNoReg) {
+    const std::uint16_t region = regs.region_index(a);
+    if (region != kNoReg && prof().regions[region].ram) {
+      if (prof().regions[region].reserved) {
+        signals.log(LogLevel::info, "write {:02X}h to {} at {:#06x}", value,
+                    prof().regions[region].name, a);
+      }
+      regs.set_mem(a, value);
+      return;
+    }
+    signals.log(LogLevel::warn, "write {:02X}h to unmapped address {:#06x} ({}): ignored", value, a,
+                region != kNoReg ? prof().regions[region].name : std::string_view("no region"));
+    return;
+  }
+  const RegDesc& r = prof().regs[i];
+  switch (r.kind) {
+    case Kind::cell:
+      if (r.reserved)
+        signals.log(LogLevel::info, "write {:02X}h to reserved cell {} at {:#06x}", value, r.name,
+                    a);
+      regs.set_mem(a, value);
+      return;
+    case Kind::reserved:
+      signals.log(LogLevel::warn, "write {:02X}h to reserved {} at {:#06x}: ignored", value, r.name,
+                  a);
+      return;
+    case Kind::derived:  // derived values have no write side
+    case Kind::latch:
+    case Kind::port:
+      break;
+  }
+  write_reg(r, a - static_cast<std::uint32_t>(r.write_addr), value);
+}
+
+// QEMU's rule (anchors §2.3), per byte lane: storage bits take the written value, W1C / W1S bits
+// act on the target, reserved / ignored / read-only bits keep their value.
+void ChipCore::write_reg(const RegDesc& r, std::uint32_t offset, std::uint8_t value) {
+  const unsigned shift = 8u * r.placement(regs.bus())[offset];
+  const auto lane = static_cast<std::uint16_t>(0xFFu << shift);
+  const auto w = static_cast<std::uint16_t>(value << shift);
+  const std::uint16_t old = regs.latch(r.target);
+  const auto store = static_cast<std::uint16_t>((r.rw | r.wo | r.unimp) & lane);
+  auto next = static_cast<std::uint16_t>((old & ~store) | (w & store));
+  next = static_cast<std::uint16_t>(next & ~(w & r.w1c));
+  next = static_cast<std::uint16_t>(next | (w & r.w1s));
+  // QEMU's rule: a write that would change a reserved bit is a guest error. What the write would
+  // make of a reserved bit follows the register's own action: a reset or acknowledge port would
+  // clear it, a set port set it, storage take the written value. So FFh to Mode_Reg1_R or
+  // Int_Ack_Reg, where the reserved target bits are 0 already, changes nothing and is no error.
+  const auto would = static_cast<std::uint16_t>(r.w1c != 0 ? old & ~w : r.w1s != 0 ? old | w : w);
+  const auto rsvd_change = static_cast<std::uint16_t>((would ^ old) & r.rsvd & lane);
+  if (rsvd_change != 0) {
+    signals.log(LogLevel::warn, "{}: write would change reserved bits {:#06x}: ignored", r.name,
+                rsvd_change);
+  }
+  if ((w & r.ign) != 0) {
+    signals.log(LogLevel::info, "{}: {} not changed by this register (bits {:#06x})", r.name,
+                field_names(r, w & r.ign), w & r.ign);
+  }
+  if ((r.unimp & lane) != 0)
+    signals.log(LogLevel::info, "{}: stored, behaviour not modelled", r.name);
+  const RegHooks& h = hooks[RegisterFile::idx(r.id)];
+  written_bits = w;
+  if (h.pre_write != nullptr) next = h.pre_write(*this, old, next);
+  regs.latch(r.target) = next;
+  if (h.post_write != nullptr) h.post_write(*this, old, next);
+  regs.latch(r.target) = static_cast<std::uint16_t>(regs.latch(r.target) & ~r.pulse);
+  irq.update_line();
+}
+
+std::uint8_t ChipCore::peek(std::uint32_t addr) const {
+  bool violation = false;
+  const std::uint32_t a = regs.decode(addr, violation);
+  const std::uint16_t i = regs.read_index(a);
+  if (i == kNoReg) {
+    const std::uint16_t region = regs.region_index(a);
+    return region != kNoReg && prof().regions[region].ram ? regs.mem(a) : std::uint8_t{0};
+  }
+  const RegDesc& r = prof().regs[i];
+  if (r.kind == Kind::cell) return regs.mem(a);
+  const std::uint16_t v = reg_value(r.id);
+  return static_cast<std::uint8_t>(
+      v >> (8 * r.placement(regs.bus())[a - static_cast<std::uint32_t>(r.read_addr)]));
+}
+
+bool ChipCore::poke(std::uint32_t addr, std::uint8_t value) {
+  bool violation = false;
+  const std::uint32_t a = regs.decode(addr, violation);
+  const std::uint16_t i = regs.read_index(a);
+  if (i == kNoReg) {
+    const std::uint16_t region = regs.region_index(a);
+    if (region == kNoReg || !prof().regions[region].ram) return false;
+    regs.set_mem(a, value);
+    return true;
+  }
+  const RegDesc& r = prof().regs[i];
+  if (r.kind == Kind::cell) {
+    regs.set_mem(a, value);
+    return true;
+  }
+  if (r.kind != Kind::latch) return false;
+  const unsigned shift = 8u * r.placement(regs.bus())[a - static_cast<std::uint32_t>(r.read_addr)];
+  std::uint16_t& s = regs.latch(r.id);
+  s = static_cast<std::uint16_t>((s & ~(0xFFu << shift)) | (value << shift));
+  irq.update_line();
+  return true;
+}
+
+}  // namespace dpc31

@@ -1,0 +1,282 @@
+// The chip's snapshot (docs/snapshots.md, format version 2): every block's state, written and
+// read in one place so that the format is one list. Each list is a template run with a Writer
+// (save) or a Reader (load), so save and load cannot drift apart; a static_assert on each
+// block's State makes a new member fail the build until it is listed here.
+#include <type_traits>
+
+#include "block_access.hpp"
+#include "core.hpp"
+#include "snapshot.hpp"
+
+namespace dpc31 {
+
+namespace {
+
+using A = BlockAccess;
+
+template <typename Ar, typename S>
+void irq_fields(Ar& ar, S& s) {
+  static_assert(snap::member_count<InterruptController::State>() == 5, "a new member: add it here");
+  static_assert(snap::member_count<Timer>() == 2, "a new member: add it here and in TIMR");
+  ar(s.eoi.at);
+  ar(s.eoi.left);
+  ar(s.event_cycle);
+  ar(s.event_mask);
+}
+
+template <typename Ar, typename S>
+void ring_fields(Ar& ar, S& s) {
+  static_assert(snap::member_count<BufferRing>() == 4, "a new member: add it here");
+  ar.bounded(s.d, std::uint8_t{3});
+  ar.bounded(s.n, std::uint8_t{3});
+  ar.bounded(s.u, std::uint8_t{3});
+  ar.bounded(s.f, std::uint8_t{3});
+}
+
+template <typename Ar, typename S>
+void buffer_fields(Ar& ar, S& s) {
+  static_assert(snap::member_count<BufferUnit::State>() == 10, "a new member: add it here");
+  static_assert(snap::member_count<DiagPair>() == 2, "a new member: add it here");
+  ring_fields(ar, s.dout);
+  ring_fields(ar, s.din);
+  ar.bounded(s.diag.buf[0], DiagState::Asic_Send_Mode);
+  ar.bounded(s.diag.buf[1], DiagState::Asic_Send_Mode);
+  ar(s.n_cleared);
+  ar(s.u_cleared);
+  ar(s.diag_flag);
+  ar(s.n_cl);
+  ar(s.d_fresh);
+  ar(s.c_swap_pending);
+  ar(s.in_clear);
+}
+
+// D and U always hold a buffer, exactly one of N and F is Nil, no buffer is held twice: the
+// pointer cells are indexed by these numbers.
+bool valid_ring(const BufferRing& b) {
+  const bool n_nil = b.n == 0;
+  const bool f_nil = b.f == 0;
+  const std::uint8_t third = n_nil ? b.f : b.n;
+  return b.d != 0 && b.u != 0 && n_nil != f_nil && b.d != b.u && third != b.d && third != b.u;
+}
+
+template <typename Ar, typename S>
+void handshake_fields(Ar& ar, S& s) {
+  static_assert(snap::member_count<Handshake>() == 2, "a new member: add it here");
+  ar(s.pending);
+  ar(s.newer_arrived);
+}
+
+template <typename Ar, typename S>
+void dp_fields(Ar& ar, S& s) {
+  static_assert(snap::member_count<DpStateMachine::State>() == 28, "a new member: add it here");
+  ar.bounded(s.state, DpState::Data_Exchange);
+  handshake_fields(ar, s.prm);
+  handshake_fields(ar, s.cfg);
+  ar(s.ssa_free);
+  ar(s.prm_fault);
+  ar(s.cfg_fault);
+  ar(s.not_supported);
+  ar(s.station);
+  ar(s.no_add_change);
+  ar(s.master_add);
+  ar(s.group_ident);
+  ar(s.min_tsdr);
+  ar(s.prm_wd_on);
+  ar(s.prm_wd_fact1);
+  ar(s.prm_wd_fact2);
+  ar(s.prm_wd_1ms);
+  ar(s.dx_on_new_din);
+  ar(s.diag_requester);
+  ar(s.sync_mode);
+  ar(s.freeze_mode);
+  ar(s.user_wd_armed);
+  ar(s.user_wd);
+  ar(s.fcb_valid);
+  ar(s.last_fcb);
+  ar(s.last_master);
+  ar.byte_vector(s.last_response, fdl::kMaxFrameLength);
+}
+
+// The longest answer on the wire: every character toggling at every bit, plus the final rise.
+constexpr std::size_t kMaxTxEdges = fdl::kMaxFrameLength * kUartCharBits + 1;
+
+template <typename Ar, typename T>
+void bit_timer(Ar& ar, T& b) {
+  static_assert(snap::member_count<BitTimer>() == 4, "a new member: add it here");
+  ar(b.on);
+  ar(b.sub);
+  ar(b.bits);
+  ar(b.target);
+}
+
+// `chars` is scratch (cleared before every use), not state; rxd_pending and rxd_level are in
+// the CORE section (format version 2).
+template <typename Ar, typename S>
+void mac_fields(Ar& ar, S& s) {
+  static_assert(snap::member_count<Mac::State>() == 19, "a new member: add it here");
+  ar.block(s.rx);
+  ar.block(s.frame);
+  ar(s.in_frame);
+  ar(s.skipping);
+  ar(s.discarding);
+  ar(s.frame_timeout);
+  ar.bounded(s.search_code, static_cast<std::uint8_t>(std::size(kBaudRates) - 1));
+  ar(s.search_deadline);
+  ar.sequence(s.tx_edges, kMaxTxEdges, [](auto& a, auto& e) {
+    a(e.first);
+    a(e.second);
+  });
+  ar.size(s.tx_next, s.tx_edges.size());
+  ar(s.tx_end);
+  ar(s.txd);
+  ar.block(s.sampler);
+  bit_timer(ar, s.gap);
+  bit_timer(ar, s.search);
+  bit_timer(ar, s.shifter.timer);
+  ar.bounded(s.shifter.phase, TxShifter::Phase::shifting);
+  ar.byte_vector(s.shifter.bytes, fdl::kMaxFrameLength);
+  ar(s.shifter.tsdr_bits);
+  ar.size(s.shifter.index, s.shifter.bytes.size());
+  ar.bounded(s.shifter.bit, kUartCharBits - 1);
+  ar(s.shifter.sub);
+}
+
+template <typename Ar, typename S>
+void counter_fields(Ar& ar, S& s) {
+  static_assert(snap::member_count<FdlCounters>() == 20, "a new member: add it here");
+  ar(s.parity);
+  ar(s.start_bit);
+  ar(s.stop_bit);
+  ar(s.bad_sd);
+  ar(s.le_mismatch);
+  ar(s.bad_le);
+  ar(s.bad_fcs);
+  ar(s.wrong_ed);
+  ar(s.truncated);
+  ar(s.oversize);
+  ar(s.bad_sap);
+  ar(s.no_sync);
+  ar(s.foreign_address);
+  ar(s.unknown_sap);
+  ar(s.unsupported_function);
+  ar(s.not_allowed);
+  ar(s.no_resource);
+  ar(s.offline);
+  ar(s.repeated);
+  ar(s.requests);
+}
+
+// Everything that influences future behaviour. Not here: the configuration (profile, bus,
+// clock rate: the header), the tables derived from the profile (decode maps, hooks), the log sink
+// and the observers, quiet_until (a cache, 0 = recompute) and stop (a request of whoever steps the
+// chip).
+template <typename Ar, typename C>
+void core_fields(Ar& ar, C& c) {
+  auto& regs = A::state(c.regs);
+  auto& irq = A::state(c.irq);
+  auto& dp = A::state(c.dp);
+  auto& wd = A::state(c.watchdog);
+  auto& mode = A::state(c.mode);
+  auto& mac = A::state(c.mac);
+  static_assert(snap::member_count<RegisterFile::State>() == 4, "a new member: add it here");
+  static_assert(snap::member_count<Watchdog::State>() == 5, "a new member: add it here");
+  static_assert(snap::member_count<ModeRegisters::State>() == 1, "a new member: add it here");
+  ar.section("CORE");
+  ar(c.clock.now);
+  ar(dp.started);
+  ar(regs.ram_access_violation);
+  ar(regs.large_ram);
+  ar.bounded(wd.baud_code, static_cast<std::uint8_t>(std::size(kBaudRates) - 1));
+  ar(c.written_bits);
+  ar(dp.diag_in_flight);
+  ar(irq.line);
+  ar(irq.pb3);
+  // Each engine keeps its timers its own way: a snapshot loads into a chip of the same engine.
+  Engine engine = c.clock.engine;
+  ar.bounded(engine, Engine::per_cycle);
+  if constexpr (requires { ar.fail(""); }) {
+    if (engine != c.clock.engine)
+      ar.fail("the snapshot is of the other engine (event / per_cycle)");
+  }
+  ar.sequence(mac.rxd_pending, snap::kMaxFileSize, [](auto& a, auto& e) {
+    a(e.first);
+    a(e.second);
+  });
+  ar(mac.rxd_level);
+  ar.section("LTCH");
+  ar.array(regs.latch);
+  ar.section("MEM ");
+  ar.fixed_bytes(regs.mem);
+  ar.section("IRQC");
+  irq_fields(ar, irq);
+  ar.section("BUFS");
+  buffer_fields(ar, A::state(c.buffers));
+  if constexpr (requires { ar.fail(""); }) {
+    const auto& b = A::state(c.buffers);
+    if (!valid_ring(b.dout) || !valid_ring(b.din)) ar.fail("Dout or Din ring is not buffers 1..3");
+  }
+  ar.section("DPSM");
+  dp_fields(ar, dp);
+  // The order of format version 2: both timers' deadlines first, their per-cycle counts last.
+  ar.section("TIMR");
+  ar(mode.user.at);
+  ar.bounded(wd.wd, WdState::DP_Control);
+  ar(wd.timer.at);
+  ar(wd.dp_wd_on);
+  ar(wd.dp_wd_cycles);
+  ar(mode.user.left);
+  ar(wd.timer.left);
+  ar.section("MAC ");
+  mac_fields(ar, mac);
+  if constexpr (requires { ar.fail(""); }) {
+    mac.chars.clear();
+    // Only a telegram in progress has a timeout; a stale one would be due for ever.
+    if (!mac.in_frame && mac.frame_timeout != kNever) ar.fail("frame timeout outside a telegram");
+  }
+  ar.section("CNTR");
+  counter_fields(ar, c.counters);
+}
+
+snap::Header header_of(const ChipCore& c) {
+  return {c.prof().id, c.regs.bus(), c.clock.hz, snap::register_map_fingerprint()};
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> Chip::save_state() const {
+  snap::Writer w;
+  core_fields(w, *core_);
+  return snap::seal(header_of(*core_), w.bytes());
+}
+
+void Chip::load_state(std::span<const std::uint8_t> bytes) {
+  ChipCore& c = *core_;
+  const std::span<const std::uint8_t> payload = snap::open(bytes, header_of(c));
+  // Decode into a fresh core (its tables built from the same profile); *core_ is untouched until
+  // everything has been read and checked.
+  auto fresh = std::make_unique<ChipCore>(
+      ChipOptions{c.prof().id, c.regs.bus(), c.clock.hz, c.clock.engine, c.variant});
+  fresh->signals.sink = nullptr;
+  snap::Reader r(payload);
+  core_fields(r, *fresh);
+  r.finish();
+  // Commit: nothing below throws. The log sink and the observers belong to whoever attached
+  // them, not to the state.
+  fresh->signals.take_attachments(c.signals);
+  core_ = std::move(fresh);
+}
+
+void Chip::save_state_file(const std::string& path) const {
+  snap::write_file_atomic(path, save_state());
+}
+
+void Chip::load_state_file(const std::string& path) {
+  const std::vector<std::uint8_t> bytes = snap::read_file(path);
+  try {
+    load_state(bytes);
+  } catch (const SnapshotError& e) {
+    throw SnapshotError(path + ": " + e.what());
+  }
+}
+
+}  // namespace dpc31

@@ -1,0 +1,91 @@
+// The register file: the latches behind the register ports, the RAM with its organisational
+// cells, and the address decode of the profile (chip-facts §1, regs/dpc31_regs.json). The blocks
+// keep their parameters and buffers here as the chip does; the CPU's accesses with their hooks and
+// QEMU's write rule are the chip's bus side (emu/bus.cpp).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <vector>
+
+#include "dpc31/chip.hpp"
+#include "dpc31/reg_ids.hpp"
+#include "dpc31/regdesc.hpp"
+#include "signals.hpp"
+
+namespace dpc31 {
+
+inline constexpr std::uint16_t kNoReg = 0xFFFF;
+
+class RegisterFile {
+ public:
+  struct State {
+    std::array<std::uint16_t, kRegIdCount> latch{};
+    std::vector<std::uint8_t> mem;  // 2^address_bits bytes; only RAM regions are used as RAM
+    bool large_ram = false;         // VPC3+ 4kB_Mode
+    bool ram_access_violation = false;
+  };
+
+  RegisterFile(const ProfileDesc& prof, BusMode bus, const Signals& sig);
+  void reset();  // zeros, then every reset value of the description
+
+  [[nodiscard]] const ProfileDesc& profile() const { return *prof_; }
+  [[nodiscard]] Profile id() const { return prof_->id; }
+  [[nodiscard]] BusMode bus() const { return bus_; }
+  [[nodiscard]] const RegDesc* reg(RegId id) const;
+  static constexpr std::size_t idx(RegId id) { return static_cast<std::size_t>(id); }
+
+  // The latch behind a register (storage of latch, port target and derived-with-storage kinds).
+  [[nodiscard]] std::uint16_t latch(RegId id) const { return s_.latch[idx(id)]; }
+  std::uint16_t& latch(RegId id) { return s_.latch[idx(id)]; }
+  [[nodiscard]] bool mode0(std::uint16_t bit) const { return (latch(RegId::Mode_Reg0) & bit) != 0; }
+
+  // Organisational cells in RAM (8 bit, or 16 bit placed by the bus mode).
+  [[nodiscard]] std::uint8_t cell(RegId id) const;
+  void set_cell(RegId id, std::uint8_t v);
+  void swap_cells(RegId a, RegId b);
+  [[nodiscard]] std::uint16_t cell16(const RegDesc& r) const;
+  void set_cell16(const RegDesc& r, std::uint16_t v);
+
+  // Raw RAM by decoded address (the bus side and the back door).
+  [[nodiscard]] std::uint8_t mem(std::uint32_t a) const { return s_.mem[a]; }
+  void set_mem(std::uint32_t a, std::uint8_t v) { s_.mem[a] = v; }
+
+  // The ASIC's own RAM accesses (buffers): the same decode and violation as the bus.
+  [[nodiscard]] std::uint32_t segment_shift() const;
+  [[nodiscard]] std::uint32_t buffer_addr(RegId ptr_cell) const;
+  std::uint8_t ram_read(std::uint32_t addr);
+  void ram_write(std::uint32_t addr, std::uint8_t v);
+  void clear_ram(std::uint32_t begin, std::uint32_t len);
+  void write_buffer(RegId ptr_cell, std::span<const std::uint8_t> bytes);
+  std::vector<std::uint8_t> read_buffer(RegId ptr_cell, std::size_t len);
+
+  // Address decode: the address bus width and the RAM access violation (the access wraps).
+  std::uint32_t decode(std::uint32_t addr, bool& violation) const;
+  void note_violation(std::uint32_t addr, std::uint32_t mapped);
+  [[nodiscard]] bool ram_access_violation() const { return s_.ram_access_violation; }
+  void clear_ram_access_violation() { s_.ram_access_violation = false; }
+  void set_large_ram(bool on) { s_.large_ram = on; }
+  // A violation takes a started chip offline: wired by the chip to the mode block.
+  std::function<void()> on_violation;
+
+  // Decode tables: address -> index into profile().regs or regions (kNoReg: none).
+  [[nodiscard]] std::uint16_t read_index(std::uint32_t a) const { return rd_map_[a]; }
+  [[nodiscard]] std::uint16_t write_index(std::uint32_t a) const { return wr_map_[a]; }
+  [[nodiscard]] std::uint16_t region_index(std::uint32_t a) const { return region_map_[a]; }
+
+ private:
+  friend struct BlockAccess;
+  const ProfileDesc* prof_;
+  BusMode bus_;
+  const Signals* sig_;
+  State s_;
+  std::vector<std::uint16_t> rd_map_;
+  std::vector<std::uint16_t> wr_map_;
+  std::vector<std::uint16_t> region_map_;
+  std::array<std::uint16_t, kRegIdCount> reg_index_{};  // RegId -> index into prof_->regs
+};
+
+}  // namespace dpc31

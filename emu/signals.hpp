@@ -1,0 +1,74 @@
+// What the blocks tell the world: the log and the observers of the chip's pins and events
+// (dpc31::Chip::on_*). Every block gets the one Signals of its chip; none of them is state (a
+// snapshot leaves them with whoever attached them).
+#pragma once
+
+#include <fmt/format.h>
+
+#include <cstdint>
+#include <functional>
+#include <utility>
+#include <vector>
+
+#include "block_event.hpp"
+#include "dpc31/chip.hpp"
+#include "dpc31/log.hpp"
+#include "timer.hpp"
+
+namespace dpc31 {
+
+// Several parties watch the chip (the scenario runner, waveform and capture writers, the
+// built-in master): each observer is a list. Adding an empty function clears the list.
+template <typename... A>
+struct Observers {
+  std::vector<std::function<void(A...)>> fns;
+  explicit operator bool() const { return !fns.empty(); }
+  void operator()(A... a) const {
+    for (const auto& f : fns) f(a...);
+  }
+  void add(std::function<void(A...)> f) {
+    if (f) {
+      fns.push_back(std::move(f));
+    } else {
+      fns.clear();
+    }
+  }
+};
+
+struct Signals {
+  explicit Signals(const Clock& c) : clock(&c), sink(stderr_sink()) {}
+
+  const Clock* clock;
+  LogSink sink;
+  Observers<std::uint64_t, bool> irq;  // X/INT activity
+  Observers<std::uint64_t, bool> pb3;  // dpc31 port PB3
+  Observers<std::uint64_t, bool> txd;
+  Observers<std::uint64_t, bool> rxd;  // edges as they are driven (possibly ahead of time)
+  Observers<const Telegram&> telegram;
+  Observers<std::uint64_t, const BlockEvent&> block;
+  Observers<std::uint64_t, const BusAccess&> bus;
+  Observers<std::uint64_t> state;  // after every event and every bus access
+
+  // Reports a protocol-side action on the blocks (call sites only, never inside the actions).
+  void emit(BlockEvent::Kind k, std::uint16_t value = 0, std::uint8_t data = 0) const {
+    if (block) block(clock->now, BlockEvent{k, value, data});
+  }
+  template <typename... Args>
+  void log(LogLevel level, fmt::format_string<Args...> f, Args&&... args) const {
+    if (sink) sink(LogRecord{clock->now, level, fmt::format(f, std::forward<Args>(args)...)});
+  }
+  // Everything attached moves to another chip's Signals (a snapshot load); the clock stays.
+  void take_attachments(Signals& from) noexcept {
+    sink = std::move(from.sink);
+    irq = std::move(from.irq);
+    pb3 = std::move(from.pb3);
+    txd = std::move(from.txd);
+    rxd = std::move(from.rxd);
+    telegram = std::move(from.telegram);
+    block = std::move(from.block);
+    bus = std::move(from.bus);
+    state = std::move(from.state);
+  }
+};
+
+}  // namespace dpc31
