@@ -82,32 +82,6 @@ const std::array<int, Outputs::kCount>& Outputs::widths() { return kWidths; }
 
 bool Inputs::idle() const { return *this == Inputs{}; }
 
-std::string Inputs::describe() const {
-  std::string s;
-  auto add = [&s](const std::string& part) {
-    if (!s.empty()) s += ' ';
-    s += part;
-  };
-  if (rst) add("rst");
-  if (ev_dx) add("ev_dx");
-  if (bus_rd) add(fmt::format("rd {:04x}", bus_addr));
-  if (bus_wr) add(fmt::format("wr {:04x}<-{:02x}", bus_addr, bus_wdata));
-  if (ev_irq != 0) add(fmt::format("ev_irq({:04x})", ev_irq));
-  if (ev_leave_master) add("ev_leave_master");
-  if (ev_prm_fault) add("ev_prm_fault");
-  if (ev_gc) add(fmt::format("ev_gc({:02x})", gc_cmd));
-  if (ev_dout) add("ev_dout");
-  if (ev_failsafe) add("ev_failsafe");
-  if (ev_din) add("ev_din");
-  if (ev_diag_begin) add("ev_diag_begin");
-  if (ev_diag_end) add(fmt::format("ev_diag_end(stat={})", stat_diag ? 1 : 0));
-  if (ev_prm) add("ev_prm");
-  if (ev_cfg) add("ev_cfg");
-  if (ev_ssa) add("ev_ssa");
-  if (ev_dis) add(fmt::format("ev_dis({:x})", dis_bits));
-  return s;
-}
-
 Outputs block_outputs(const ChipCore& c, std::uint8_t rdata) {
   auto latch = [&](RegId id) { return std::uint32_t{c.regs.latch(id)}; };
   auto cell = [&](RegId id) -> std::uint32_t {

@@ -7,12 +7,17 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "dpc31/chip.hpp"
 #include "dpc31/regdesc.hpp"
+
+namespace dpc31 {
+struct BlockEvent;
+}
 
 namespace dpc31::cosim {
 
@@ -44,6 +49,12 @@ struct Inputs {
   [[nodiscard]] std::string describe() const;  // "wr 0008<-02 ev_gc(08)"; empty when idle
   bool operator==(const Inputs&) const = default;
 };
+
+// The stimulus vocabulary (lib/cosim/stimulus.cpp, one table): one token of a trace line into
+// `in` (the bus accesses read their operand from `rest`); false if it is no stimulus.
+bool parse_input_token(const std::string& tok, std::istringstream& rest, Inputs& in);
+// A block event of a chip session (emu/block_event.hpp) into the inputs of its cycle.
+void apply_block_event(Inputs& in, const BlockEvent& e);
 
 // Every compared output, in a fixed order (names are the Verilog port names).
 struct Outputs {

@@ -352,80 +352,7 @@ std::string write_trace(const Stimulus& s, const std::string& header) {
   return out;
 }
 
-namespace {
-
-bool parse_hex(const std::string& t, std::uint32_t& v) {
-  if (t.empty() || t.size() > 4) return false;
-  v = 0;
-  for (char ch : t) {
-    const int d = ch >= '0' && ch <= '9' ? ch - '0' : ch >= 'a' && ch <= 'f' ? ch - 'a' + 10 : -1;
-    if (d < 0) return false;
-    v = v * 16 + static_cast<std::uint32_t>(d);
-  }
-  return true;
-}
-
-bool parse_event(const std::string& tok, std::istringstream& rest, Inputs& in) {
-  std::uint32_t v = 0;
-  auto arg = [&](const std::string& prefix) {
-    return tok.size() > prefix.size() + 1 && tok.back() == ')' &&
-           parse_hex(tok.substr(prefix.size() + 1, tok.size() - prefix.size() - 2), v);
-  };
-  if (tok == "rst") return in.rst = true;
-  if (tok == "rd") {
-    std::string a;
-    rest >> a;
-    in.bus_rd = parse_hex(a, v);
-    in.bus_addr = static_cast<std::uint16_t>(v);
-    return in.bus_rd;
-  }
-  if (tok == "wr") {
-    std::string a;
-    rest >> a;
-    const auto arrow = a.find("<-");
-    std::uint32_t d = 0;
-    if (arrow == std::string::npos || !parse_hex(a.substr(0, arrow), v) ||
-        !parse_hex(a.substr(arrow + 2), d)) {
-      return false;
-    }
-    in.bus_wr = true;
-    in.bus_addr = static_cast<std::uint16_t>(v);
-    in.bus_wdata = static_cast<std::uint8_t>(d);
-    return true;
-  }
-  if (tok.rfind("ev_irq(", 0) == 0 && arg("ev_irq"))
-    return (in.ev_irq = static_cast<std::uint16_t>(v)) != 0;
-  if (tok.rfind("ev_dis(", 0) == 0 && arg("ev_dis") && v <= 3) {
-    in.ev_dis = true;
-    in.dis_bits = static_cast<std::uint8_t>(v);
-    return true;
-  }
-  if (tok.rfind("ev_gc(", 0) == 0 && arg("ev_gc")) {
-    in.ev_gc = true;
-    in.gc_cmd = static_cast<std::uint8_t>(v);
-    return true;
-  }
-  if (tok == "ev_diag_end(stat=0)" || tok == "ev_diag_end(stat=1)") {
-    in.ev_diag_end = true;
-    in.stat_diag = tok[16] == '1';
-    return true;
-  }
-  static const std::pair<const char*, bool Inputs::*> kFlags[] = {
-      {"ev_leave_master", &Inputs::ev_leave_master},
-      {"ev_dout", &Inputs::ev_dout},
-      {"ev_failsafe", &Inputs::ev_failsafe},
-      {"ev_din", &Inputs::ev_din},
-      {"ev_diag_begin", &Inputs::ev_diag_begin},
-      {"ev_prm", &Inputs::ev_prm},
-      {"ev_cfg", &Inputs::ev_cfg},
-      {"ev_ssa", &Inputs::ev_ssa}};
-  for (const auto& [name, member] : kFlags) {
-    if (tok == name) return in.*member = true;
-  }
-  return false;
-}
-
-}  // namespace
+namespace {}  // namespace
 
 bool parse_trace(const std::string& text, const std::string& file, Stimulus& out,
                  std::string& error) {
@@ -472,7 +399,8 @@ bool parse_trace(const std::string& text, const std::string& file, Stimulus& out
     Inputs in;
     std::string tok;
     while (ls >> tok) {
-      if (!parse_event(tok, ls, in)) return fail(fmt::format("unknown stimulus '{}'", shown(tok)));
+      if (!parse_input_token(tok, ls, in))
+        return fail(fmt::format("unknown stimulus '{}'", shown(tok)));
     }
     if (in.idle()) return fail("a stimulus line without stimulus");
     out.set(cycle, in);

@@ -8,70 +8,7 @@
 
 namespace dpc31::cosim {
 
-namespace {
-
-// Folds one block event into the inputs of its cycle.
-void apply(Inputs& in, const BlockEvent& e) {
-  using K = BlockEvent::Kind;
-  switch (e.kind) {
-    case K::dx:
-      in.ev_dx = true;
-      break;
-    case K::irq:
-      in.ev_irq = static_cast<std::uint16_t>(in.ev_irq | e.value);
-      break;
-    case K::leave_master:
-      in.ev_leave_master = true;
-      break;
-    case K::prm_fault:
-      in.ev_prm_fault = true;
-      break;
-    case K::gc:
-      in.ev_gc = true;
-      in.gc_cmd = static_cast<std::uint8_t>(e.value);
-      break;
-    case K::dout:
-      in.ev_dout = true;
-      break;
-    case K::failsafe:
-      in.ev_failsafe = true;
-      break;
-    case K::din:
-      in.ev_din = true;
-      break;
-    case K::diag_begin:
-      in.ev_diag_begin = true;
-      break;
-    case K::diag_end:
-      in.ev_diag_end = true;
-      in.stat_diag = e.value != 0;
-      break;
-    case K::dis:
-      in.ev_dis = true;
-      in.dis_bits = static_cast<std::uint8_t>(e.value);
-      break;
-    case K::prm:
-      in.ev_prm = true;
-      break;
-    case K::cfg:
-      in.ev_cfg = true;
-      break;
-    case K::ssa:
-      in.ev_ssa = true;
-      break;
-    case K::read:
-      in.bus_rd = true;
-      in.bus_addr = e.value;
-      break;
-    case K::write:
-      in.bus_wr = true;
-      in.bus_addr = e.value;
-      in.bus_wdata = e.data;
-      break;
-  }
-}
-
-}  // namespace
+namespace {}  // namespace
 
 bool record_session(const std::string& scenario_path, Session& out, std::string& error) {
   Scenario sc;
@@ -88,7 +25,7 @@ bool record_session(const std::string& scenario_path, Session& out, std::string&
       const std::uint64_t index = cycle - 1;  // the C++ Dut reaches cycle i + 1 in step i
       if (out.events.empty() || out.events.back().first != index)
         out.events.emplace_back(index, Inputs{});
-      apply(out.events.back().second, e);
+      apply_block_event(out.events.back().second, e);
     });
   };
   hooks.at_end = [&out](Chip& chip) {

@@ -1,0 +1,200 @@
+// The lockstep's stimulus vocabulary, once: every input event of docs/golden-model.md with its
+// trace token, the block event of the chip session that drives it and the Inputs member it sets.
+// The trace writer (Inputs::describe), the trace parser and the chip-session recorder all read
+// this one table.
+#include <fmt/format.h>
+
+#include <array>
+#include <sstream>
+#include <string>
+#include <string_view>
+
+#include "block_event.hpp"
+#include "dut.hpp"
+
+namespace dpc31::cosim {
+
+namespace {
+
+using K = BlockEvent::Kind;
+
+// What an event carries besides its strobe, and how a trace line spells it.
+enum class Arg : std::uint8_t {
+  none,       // ev_dout
+  irq_mask,   // ev_irq(0010): the mask is the strobe
+  gc_cmd,     // ev_gc(08)
+  stat_diag,  // ev_diag_end(stat=1)
+  dis_bits,   // ev_dis(3)
+  bus_read,   // rd 0008
+  bus_write,  // wr 0008<-02
+};
+
+struct EventInput {
+  std::string_view name;
+  K kind;
+  bool Inputs::*strobe;  // nullptr: ev_irq
+  Arg arg;
+};
+
+// In the order a trace line names them (Inputs::describe).
+constexpr std::array<EventInput, 16> kEventInputs = {{
+    {"ev_dx", K::dx, &Inputs::ev_dx, Arg::none},
+    {"rd", K::read, &Inputs::bus_rd, Arg::bus_read},
+    {"wr", K::write, &Inputs::bus_wr, Arg::bus_write},
+    {"ev_irq", K::irq, nullptr, Arg::irq_mask},
+    {"ev_leave_master", K::leave_master, &Inputs::ev_leave_master, Arg::none},
+    {"ev_prm_fault", K::prm_fault, &Inputs::ev_prm_fault, Arg::none},
+    {"ev_gc", K::gc, &Inputs::ev_gc, Arg::gc_cmd},
+    {"ev_dout", K::dout, &Inputs::ev_dout, Arg::none},
+    {"ev_failsafe", K::failsafe, &Inputs::ev_failsafe, Arg::none},
+    {"ev_din", K::din, &Inputs::ev_din, Arg::none},
+    {"ev_diag_begin", K::diag_begin, &Inputs::ev_diag_begin, Arg::none},
+    {"ev_diag_end", K::diag_end, &Inputs::ev_diag_end, Arg::stat_diag},
+    {"ev_prm", K::prm, &Inputs::ev_prm, Arg::none},
+    {"ev_cfg", K::cfg, &Inputs::ev_cfg, Arg::none},
+    {"ev_ssa", K::ssa, &Inputs::ev_ssa, Arg::none},
+    {"ev_dis", K::dis, &Inputs::ev_dis, Arg::dis_bits},
+}};
+static_assert(kEventInputs.size() == static_cast<std::size_t>(K::write) + 1,
+              "a new BlockEvent::Kind: add its input here");
+
+bool active(const Inputs& in, const EventInput& e) {
+  return e.strobe != nullptr ? in.*e.strobe : in.ev_irq != 0;
+}
+
+std::string token(const Inputs& in, const EventInput& e) {
+  switch (e.arg) {
+    case Arg::none:
+      return std::string(e.name);
+    case Arg::irq_mask:
+      return fmt::format("{}({:04x})", e.name, in.ev_irq);
+    case Arg::gc_cmd:
+      return fmt::format("{}({:02x})", e.name, in.gc_cmd);
+    case Arg::stat_diag:
+      return fmt::format("{}(stat={})", e.name, in.stat_diag ? 1 : 0);
+    case Arg::dis_bits:
+      return fmt::format("{}({:x})", e.name, in.dis_bits);
+    case Arg::bus_read:
+      return fmt::format("{} {:04x}", e.name, in.bus_addr);
+    case Arg::bus_write:
+      return fmt::format("{} {:04x}<-{:02x}", e.name, in.bus_addr, in.bus_wdata);
+  }
+  return {};
+}
+
+// The event with its value (irq mask, gc command, stat_diag, dis bits, bus address) and data
+// (bus write data).
+void set(Inputs& in, const EventInput& e, std::uint32_t value, std::uint8_t data) {
+  if (e.strobe != nullptr) in.*e.strobe = true;
+  switch (e.arg) {
+    case Arg::none:
+      break;
+    case Arg::irq_mask:
+      in.ev_irq = static_cast<std::uint16_t>(in.ev_irq | value);
+      break;
+    case Arg::gc_cmd:
+      in.gc_cmd = static_cast<std::uint8_t>(value);
+      break;
+    case Arg::stat_diag:
+      in.stat_diag = value != 0;
+      break;
+    case Arg::dis_bits:
+      in.dis_bits = static_cast<std::uint8_t>(value);
+      break;
+    case Arg::bus_read:
+      in.bus_addr = static_cast<std::uint16_t>(value);
+      break;
+    case Arg::bus_write:
+      in.bus_addr = static_cast<std::uint16_t>(value);
+      in.bus_wdata = data;
+      break;
+  }
+}
+
+bool parse_hex(std::string_view t, std::uint32_t max, std::uint32_t& v) {
+  if (t.empty() || t.size() > 4) return false;
+  v = 0;
+  for (char ch : t) {
+    const int d = ch >= '0' && ch <= '9' ? ch - '0' : ch >= 'a' && ch <= 'f' ? ch - 'a' + 10 : -1;
+    if (d < 0) return false;
+    v = v * 16 + static_cast<std::uint32_t>(d);
+  }
+  return v <= max;
+}
+
+// `tok` as this event's token (the bus accesses take their operand from `rest`).
+bool parse(const EventInput& e, const std::string& tok, std::istringstream& rest, Inputs& in) {
+  std::uint32_t v = 0;
+  std::uint32_t d = 0;
+  // "name(hex)" with a value of at most `max`.
+  auto arg = [&](std::string_view prefix, std::uint32_t max) {
+    const std::string_view t(tok);
+    return t.size() > prefix.size() + 2 && t.substr(0, prefix.size()) == prefix &&
+           t[prefix.size()] == '(' && t.back() == ')' &&
+           parse_hex(t.substr(prefix.size() + 1, t.size() - prefix.size() - 2), max, v);
+  };
+  switch (e.arg) {
+    case Arg::none:
+      if (tok != e.name) return false;
+      break;
+    case Arg::irq_mask:
+      if (!arg(e.name, 0xFFFF) || v == 0) return false;
+      break;
+    case Arg::gc_cmd:
+      if (!arg(e.name, 0xFF)) return false;
+      break;
+    case Arg::stat_diag:
+      if (tok != fmt::format("{}(stat=0)", e.name) && tok != fmt::format("{}(stat=1)", e.name))
+        return false;
+      v = tok[tok.size() - 2] == '1' ? 1 : 0;
+      break;
+    case Arg::dis_bits:
+      if (!arg(e.name, 3)) return false;
+      break;
+    case Arg::bus_read: {
+      std::string a;
+      if (tok != e.name || !(rest >> a) || !parse_hex(a, 0xFFFF, v)) return false;
+      break;
+    }
+    case Arg::bus_write: {
+      std::string a;
+      if (tok != e.name || !(rest >> a)) return false;
+      const auto arrow = a.find("<-");
+      if (arrow == std::string::npos || !parse_hex(a.substr(0, arrow), 0xFFFF, v) ||
+          !parse_hex(a.substr(arrow + 2), 0xFF, d)) {
+        return false;
+      }
+      break;
+    }
+  }
+  set(in, e, v, static_cast<std::uint8_t>(d));
+  return true;
+}
+
+}  // namespace
+
+std::string Inputs::describe() const {
+  std::string s = rst ? "rst" : "";
+  for (const EventInput& e : kEventInputs) {
+    if (!active(*this, e)) continue;
+    if (!s.empty()) s += ' ';
+    s += token(*this, e);
+  }
+  return s;
+}
+
+bool parse_input_token(const std::string& tok, std::istringstream& rest, Inputs& in) {
+  if (tok == "rst") return in.rst = true;
+  for (const EventInput& e : kEventInputs) {
+    if (parse(e, tok, rest, in)) return true;
+  }
+  return false;
+}
+
+void apply_block_event(Inputs& in, const BlockEvent& ev) {
+  for (const EventInput& e : kEventInputs) {
+    if (e.kind == ev.kind) set(in, e, ev.value, ev.data);
+  }
+}
+
+}  // namespace dpc31::cosim
