@@ -46,11 +46,6 @@ void RegisterFile::reset() {
   }
 }
 
-const RegDesc* RegisterFile::reg(RegId id) const {
-  const std::uint16_t i = reg_index_[idx(id)];
-  return i == kNoReg ? nullptr : &prof_->regs[i];
-}
-
 std::uint16_t RegisterFile::cell16(const RegDesc& r) const {
   const auto base = static_cast<std::uint32_t>(r.read_addr);
   if (r.width == 8) return s_.mem[base];
@@ -120,12 +115,6 @@ std::vector<std::uint8_t> RegisterFile::read_buffer(RegId ptr_cell, std::size_t 
   std::vector<std::uint8_t> out(len);
   for (std::size_t i = 0; i < len; ++i) out[i] = ram_read(base + static_cast<std::uint32_t>(i));
   return out;
-}
-
-std::uint32_t RegisterFile::decode(std::uint32_t addr, bool& violation) const {
-  const std::uint32_t a = addr & ((1u << prof_->address_bits) - 1u);
-  violation = prof_->violation_from != 0 && a >= prof_->violation_from && !s_.large_ram;
-  return violation ? a - prof_->violation_subtract : a;
 }
 
 void RegisterFile::note_violation(std::uint32_t addr, std::uint32_t mapped) {

@@ -34,7 +34,10 @@ class RegisterFile {
   [[nodiscard]] const ProfileDesc& profile() const { return *prof_; }
   [[nodiscard]] Profile id() const { return prof_->id; }
   [[nodiscard]] BusMode bus() const { return bus_; }
-  [[nodiscard]] const RegDesc* reg(RegId id) const;
+  [[nodiscard]] const RegDesc* reg(RegId id) const {
+    const std::uint16_t i = reg_index_[idx(id)];
+    return i == kNoReg ? nullptr : &prof_->regs[i];
+  }
   static constexpr std::size_t idx(RegId id) { return static_cast<std::size_t>(id); }
 
   // The latch behind a register (storage of latch, port target and derived-with-storage kinds).
@@ -63,7 +66,11 @@ class RegisterFile {
   std::vector<std::uint8_t> read_buffer(RegId ptr_cell, std::size_t len);
 
   // Address decode: the address bus width and the RAM access violation (the access wraps).
-  std::uint32_t decode(std::uint32_t addr, bool& violation) const;
+  std::uint32_t decode(std::uint32_t addr, bool& violation) const {
+    const std::uint32_t a = addr & ((1u << prof_->address_bits) - 1u);
+    violation = prof_->violation_from != 0 && a >= prof_->violation_from && !s_.large_ram;
+    return violation ? a - prof_->violation_subtract : a;
+  }
   void note_violation(std::uint32_t addr, std::uint32_t mapped);
   [[nodiscard]] bool ram_access_violation() const { return s_.ram_access_violation; }
   void clear_ram_access_violation() { s_.ram_access_violation = false; }
