@@ -35,28 +35,35 @@ constexpr std::size_t kStandardDiagBytes = 6;
 
 }  // namespace
 
-// The user's verdict on the Set_Prm in the Prm buffer. New_Prm_Data is cleared here, never
-// through IAR.
-std::uint16_t DpStateMachine::prm_verdict(Verdict v) {
+// The user's verdict read on a pending Set_Prm or Chk_Cfg: the handshake's answer, and on a
+// completed one its event cleared (here, never through IAR) before `accepted` or a Leave_Master
+// acts. Nothing pending (a Leave_Master discarded the telegram before the user's verdict): the
+// read completes all the same and its event goes (docs/timing.md). Kept, it could never be
+// cleared (Int_Ack_Reg ignores it) and X/INT would stay active for good.
+template <typename Accepted>
+std::uint16_t DpStateMachine::verdict(Handshake& h, std::uint16_t event, bool& fault, Verdict v,
+                                      Accepted accepted) {
   bool done = false;
-  const std::uint8_t r = s_.prm.answer(done);
+  const std::uint8_t r = h.answer(done);
+  if (done || r == kHandshakeNotAllowed)
+    regs_.latch(RegId::Int_Req_Reg) &= static_cast<std::uint16_t>(~event);
   if (done) {
-    regs_.latch(RegId::Int_Req_Reg) &= static_cast<std::uint16_t>(~irq::New_Prm_Data);
-    s_.prm_fault = v == Verdict::not_ok;
-    if (v == Verdict::not_ok) {
+    fault = v == Verdict::not_ok;
+    if (fault) {
       leave_master();
     } else {
-      // The parameters are accepted: the DP watchdog runs with the new TWD from now on.
-      watchdog_.parameterise(s_.prm_wd_on, s_.prm_wd_fact1, s_.prm_wd_fact2, s_.prm_wd_1ms);
-      if (s_.state == DpState::Wait_Prm) s_.state = DpState::Wait_Cfg;
+      accepted();
     }
   }
-  // Nothing pending (a Leave_Master discarded the telegram before the user's verdict): the read
-  // completes all the same and its event goes (docs/timing.md). Kept, it could never be cleared
-  // (Int_Ack_Reg ignores it) and X/INT would stay active for good.
-  if (r == kHandshakeNotAllowed)
-    regs_.latch(RegId::Int_Req_Reg) &= static_cast<std::uint16_t>(~irq::New_Prm_Data);
   return r;
+}
+
+std::uint16_t DpStateMachine::prm_verdict(Verdict v) {
+  return verdict(s_.prm, irq::New_Prm_Data, s_.prm_fault, v, [this] {
+    // The parameters are accepted: the DP watchdog runs with the new TWD from now on.
+    watchdog_.parameterise(s_.prm_wd_on, s_.prm_wd_fact1, s_.prm_wd_fact2, s_.prm_wd_1ms);
+    if (s_.state == DpState::Wait_Prm) s_.state = DpState::Wait_Cfg;
+  });
 }
 
 // SPC3 p.31: "the transition to 'DATA_EX' takes place immediately, if no Din_buffer is present
@@ -72,26 +79,14 @@ void DpStateMachine::enter_data_exchange() {
   irq_.raise(irq::Go_Leave_Data_Exchange);
 }
 
-// The user's verdict on the Chk_Cfg in the Cfg buffer (as prm_verdict, for New_Cfg_Data).
 std::uint16_t DpStateMachine::cfg_verdict(Verdict v) {
-  bool done = false;
-  const std::uint8_t r = s_.cfg.answer(done);
-  if (done) {
-    regs_.latch(RegId::Int_Req_Reg) &= static_cast<std::uint16_t>(~irq::New_Cfg_Data);
-    s_.cfg_fault = v == Verdict::not_ok;
-    if (v == Verdict::not_ok) {
-      leave_master();
-    } else {
-      if ((regs_.latch(RegId::Mode_Reg1) & fields::Mode_Reg1::En_Change_Cfg_Buffer) != 0) {
-        // Get_Cfg answers the new configuration from now on.
-        regs_.swap_cells(RegId::R_Cfg_Buf_Ptr, RegId::R_Read_Cfg_Buf_Ptr);
-      }
-      if (s_.state == DpState::Wait_Cfg) enter_data_exchange();
+  return verdict(s_.cfg, irq::New_Cfg_Data, s_.cfg_fault, v, [this] {
+    if ((regs_.latch(RegId::Mode_Reg1) & fields::Mode_Reg1::En_Change_Cfg_Buffer) != 0) {
+      // Get_Cfg answers the new configuration from now on.
+      regs_.swap_cells(RegId::R_Cfg_Buf_Ptr, RegId::R_Read_Cfg_Buf_Ptr);
     }
-  }
-  if (r == kHandshakeNotAllowed)
-    regs_.latch(RegId::Int_Req_Reg) &= static_cast<std::uint16_t>(~irq::New_Cfg_Data);
-  return r;
+    if (s_.state == DpState::Wait_Cfg) enter_data_exchange();
+  });
 }
 
 using fdl::Frame;

@@ -140,6 +140,9 @@ class DpStateMachine {
   std::optional<fdl::Frame> set_slave_add(const fdl::Frame& req);
   std::optional<fdl::Frame> data_exchange(const fdl::Frame& req);
   void global_control(const fdl::Frame& req);
+  template <typename Accepted>
+  std::uint16_t verdict(Handshake& h, std::uint16_t event, bool& fault, Verdict v,
+                        Accepted accepted);
   void enter_data_exchange();
   bool dx_out_wanted(std::span<const std::uint8_t> outputs);
   bool user_watchdog_tick();
