@@ -218,10 +218,11 @@ std::vector<std::uint8_t> prm_du(const SlaveConfig& s, std::uint8_t station_stat
                                   static_cast<std::uint8_t>(s.ident >> 8),
                                   static_cast<std::uint8_t>(s.ident),
                                   s.group_ident};
-  std::vector<std::uint8_t> user = s.user_prm;
-  if (user.empty()) user.push_back(0);
-  if (s.wd_base_1ms) user[0] |= 0x04;  // Spec_User_Prm_Byte WD_Base
-  du.insert(du.end(), user.begin(), user.end());
+  // In place, without a copy of user_prm: a copy grown when empty, once inlined, makes GCC 12
+  // at -O3 report a false -Wfree-nonheap-object (issue 17).
+  du.insert(du.end(), s.user_prm.begin(), s.user_prm.end());
+  if (s.user_prm.empty()) du.push_back(0);  // Spec_User_Prm_Byte is always sent
+  if (s.wd_base_1ms) du[7] |= 0x04;         // Spec_User_Prm_Byte WD_Base
   return du;
 }
 
