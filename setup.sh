@@ -7,10 +7,11 @@ cd "$(dirname "$0")"
 # Build: compiler, CMake, Verilator and the libraries. Checks in the test suite: gtkwave
 # (vcd2fst / fst2vcd), sigrok-cli (UART decode of our waveforms), tshark (our pcapng captures),
 # python3 (a DP master on the pty of dpc31 bridge). The fuzz build of test.sh: clang with its
-# sanitizer and libFuzzer runtimes (libclang-rt-14-dev), ninja.
+# sanitizer and libFuzzer runtimes (libclang-rt-14-dev), ninja. The install test (Install.*):
+# pkgconf (pkg-config), and for the Debian package (cpack -G DEB) dpkg-dev and file.
 packages=(cmake g++ make ccache verilator libfmt-dev libcli11-dev nlohmann-json3-dev libgtest-dev
   libbenchmark-dev zlib1g-dev gtkwave sigrok-cli tshark python3 clang libclang-rt-14-dev
-  ninja-build)
+  ninja-build pkgconf dpkg-dev file)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -27,5 +28,7 @@ if ((${#missing[@]})); then
   fi
 fi
 
-cmake -S . -B build -DCMAKE_BUILD_TYPE=RelWithDebInfo
+# Our development build: warnings in our code are errors (a user's plain cmake build leaves
+# DPC31_WERROR off).
+cmake -S . -B build -DCMAKE_BUILD_TYPE=RelWithDebInfo -DDPC31_WERROR=ON
 cmake --build build -j "$(nproc)"

@@ -18,7 +18,7 @@ echo "test.sh: normal suite exit code $normal after $((SECONDS - start)) s"
 start=$SECONDS
 fuzz=1
 if cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
-    -DCMAKE_CXX_COMPILER=clang++ -DDPC31_FUZZ=ON >/dev/null && ninja -C build-fuzz; then
+    -DCMAKE_CXX_COMPILER=clang++ -DDPC31_FUZZ=ON -DDPC31_WERROR=ON >/dev/null && ninja -C build-fuzz; then
   echo "test.sh: fuzz build took $((SECONDS - start)) s"
   start=$SECONDS
   ctest --test-dir build-fuzz --output-on-failure -j 2

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 
 #include "dpc31/dp.hpp"
 
@@ -211,17 +212,20 @@ std::uint8_t prm_station_status(const SlaveConfig& s) {
 }
 
 std::vector<std::uint8_t> prm_du(const SlaveConfig& s, std::uint8_t station_status) {
-  std::vector<std::uint8_t> du = {station_status,
-                                  s.wd_fact1,
-                                  s.wd_fact2,
-                                  s.min_tsdr,
-                                  static_cast<std::uint8_t>(s.ident >> 8),
-                                  static_cast<std::uint8_t>(s.ident),
-                                  s.group_ident};
-  std::vector<std::uint8_t> user = s.user_prm;
-  if (user.empty()) user.push_back(0);
-  if (s.wd_base_1ms) user[0] |= 0x04;  // Spec_User_Prm_Byte WD_Base
-  du.insert(du.end(), user.begin(), user.end());
+  const std::array<std::uint8_t, 7> head = {station_status,
+                                            s.wd_fact1,
+                                            s.wd_fact2,
+                                            s.min_tsdr,
+                                            static_cast<std::uint8_t>(s.ident >> 8),
+                                            static_cast<std::uint8_t>(s.ident),
+                                            s.group_ident};
+  // Sized once and filled: growing the vector (a copy of user_prm, or an insert) makes GCC 12
+  // at -O3 report false -Wfree-nonheap-object / -Warray-bounds errors (issue 17).
+  // Spec_User_Prm_Byte (byte 7) is always sent, 0 when the slave has no user parameters.
+  std::vector<std::uint8_t> du(head.size() + std::max<std::size_t>(s.user_prm.size(), 1), 0);
+  std::copy(head.begin(), head.end(), du.begin());
+  std::copy(s.user_prm.begin(), s.user_prm.end(), du.begin() + head.size());
+  if (s.wd_base_1ms) du[head.size()] |= 0x04;  // Spec_User_Prm_Byte WD_Base
   return du;
 }
 

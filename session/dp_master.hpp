@@ -4,6 +4,7 @@
 // answer. While the chip runs, the user side (firmware) is called whenever X/INT goes active.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -19,10 +20,15 @@
 
 namespace dpc31 {
 
+// The default Cfg: 4 bytes in, 4 bytes out (byte consistency). A named array, not an
+// initializer list in SlaveConfig: GCC 12 at -O3 takes the list's backing array for
+// uninitialized where SlaveConfig() is inlined (a false -Wmaybe-uninitialized, issue 17).
+inline constexpr std::array<std::uint8_t, 2> kDefaultCfg = {0x13, 0x23};
+
 struct SlaveConfig {
   std::uint8_t address = 5;
   std::uint16_t ident = 0x0C31;
-  std::vector<std::uint8_t> cfg = {0x13, 0x23};  // 4 bytes in, 4 bytes out (byte consistency)
+  std::vector<std::uint8_t> cfg{kDefaultCfg.begin(), kDefaultCfg.end()};
   std::uint8_t in_len = 4;
   std::uint8_t out_len = 4;
   bool wd_on = true;
