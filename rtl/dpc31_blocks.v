@@ -12,28 +12,31 @@
 //
 // Where the spec leaves a choice, the choice is written at the spot, marked "CHOICE:".
 //
-// Mutants (each changes only the named behaviour), `define one of:
-//   MUTANT_NEXT_DOUT_KEEPS_N   Next_Dout_Buffer_Cmd's n_to_u leaves N as it was
-//   MUTANT_ACK_NEIGHBOUR       an acknowledge of bit k also clears bit k+1
-//   MUTANT_EOI_SHORT           EOI inactive time one cycle shorter
-//   MUTANT_CLEAR_IGNORED_IN_SYNC  Clear_Data has no effect while Sync_Mode
-//   MUTANT_NO_C_SWAP           dpc31: the C/U pointer cells are not exchanged
-//   MUTANT_ACK_BEATS_EVENT     an event and its acknowledge in one cycle: the bit ends cleared
-//   MUTANT_POLARITY            INT_Pol ignored: X/INT always low-active
-//   MUTANT_FREEZE_IGNORED      ev_din fetches N even in Freeze_Mode
-//   MUTANT_NO_CONFLICT         the handshakes never answer 01: a newer arrival is ignored
-//   MUTANT_DIAG_FLAG_STICKY    ev_diag_end leaves Diag_Flag at 1 when stat_diag is 0
+// Mutants (each changes only the named behaviour, docs/golden-model.md): with `define MUTANTS the
+// module has one more input, mutant_sel, whose value (MUT_* in dpc31_blocks_constants.vh, 0 none)
+// switches one of them on at run time, so one Verilated model carries all ten. Without MUTANTS
+// (the profile models) every mutant condition is the constant 0: no port, no logic; Verilator
+// generates for them the same C++ as from the model before it had mutants.
 
 `include "dpc31_regs.vh"
 
 // Profile selection of a register-description constant: spc3, vpc3plus, dpc31.
 `define DPC31B_PSEL(s3, v3, d31) ((PROFILE == 0) ? (s3) : (PROFILE == 1) ? (v3) : (d31))
+// Is mutant m (a MUT_* value) switched on?
+`ifdef MUTANTS
+`define DPC31B_MUT(m) (mutant_sel == (m))
+`else
+`define DPC31B_MUT(m) 1'b0
+`endif
 
 module dpc31_blocks #(
   parameter PROFILE = 2  // 0 spc3, 1 vpc3plus, 2 dpc31 (any other value behaves as dpc31)
 ) (
   input  wire        clk,
   input  wire        rst,
+`ifdef MUTANTS
+  input  wire  [3:0] mutant_sel,  // constant during a run: MUT_* or 0
+`endif
   input  wire        motorola,
   // Status_Reg bits 15..12 (static): the release, 0 on spc3 / dpc31; on vpc3plus the ASIC type
   // of the variant, Bh VPC3+B, Ch VPC3+C, Eh VPC3+S
@@ -116,12 +119,8 @@ module dpc31_blocks #(
   // Outputs combinational from registers (step 4: X/INT)
   // ===========================================================================================
   wire int_active = ((irr & ~imr) != 16'h0000) && (eoi_cnt == 19'd0);
-`ifdef MUTANT_POLARITY
-  assign x_int = ~int_active;
-`else
   // INT_Pol = 0: low-active (the reset state), 1: high-active.
-  assign x_int = mode_reg0[M0_INT_POL] ? int_active : ~int_active;
-`endif
+  assign x_int = (mode_reg0[M0_INT_POL] && !`DPC31B_MUT(MUT_POLARITY)) ? int_active : ~int_active;
   assign dout_sm = {dout_f, dout_u, dout_n, dout_d};
   assign din_sm = {din_f, din_u, din_n, din_d};
   assign diag_sm = {diag2, diag1};
@@ -261,11 +260,7 @@ module dpc31_blocks #(
 
     // ev_din: unless Freeze_Mode: n_to_d on Din.
     if (ev_din) begin
-`ifdef MUTANT_FREEZE_IGNORED
-      n_to_d;
-`else
-      if (!nx_freeze_mode) n_to_d;
-`endif
+      if (!nx_freeze_mode || `DPC31B_MUT(MUT_FREEZE_IGNORED)) n_to_d;
     end
 
     if (ev_diag_begin) diag_begin;
@@ -382,13 +377,9 @@ module dpc31_blocks #(
       end else if (a[12:1] == A_IAR[12:1]) begin
         // Int_Ack_Reg (W1C; New_Prm_Data / New_Cfg_Data / vpc3plus New_Ext_Prm_Data IGN).
         ack16 = w16 & IRR_MASK & ~ACK_IGN;
-`ifdef MUTANT_ACK_NEIGHBOUR
-        ack16 = ack16 | ((ack16 << 1) & IRR_MASK & ~ACK_IGN);
-`endif
+        if (`DPC31B_MUT(MUT_ACK_NEIGHBOUR)) ack16 = ack16 | ((ack16 << 1) & IRR_MASK & ~ACK_IGN);
         nx_irr = nx_irr & ~ack16;
-`ifndef MUTANT_ACK_BEATS_EVENT
-        nx_irr = nx_irr | ev_set;
-`endif
+        if (!`DPC31B_MUT(MUT_ACK_BEATS_EVENT)) nx_irr = nx_irr | ev_set;
       end else if (a[12:1] == A_IMR[12:1]) begin
         // Int_Mask_Reg (WO): reserved bits keep their reset value 1.
         nx_imr = (nx_imr & ~(lane & IRR_MASK)) | (w16 & IRR_MASK);
@@ -545,3 +536,4 @@ module dpc31_blocks #(
 endmodule
 
 `undef DPC31B_PSEL
+`undef DPC31B_MUT

@@ -7,9 +7,7 @@
     input [15:0] m0;
     begin
       eoi_time = m0[M0_EOI_TIME_BASE] ? EOI_T_1MS : EOI_T_1US;
-`ifdef MUTANT_EOI_SHORT
-      eoi_time = eoi_time - 19'd1;
-`endif
+      if (`DPC31B_MUT(MUT_EOI_SHORT)) eoi_time = eoi_time - 19'd1;
     end
   endfunction
 
@@ -46,7 +44,7 @@
   endtask
 
   // n_to_u / n_to_d: a side takes N (if N is not Nil); its old buffer becomes F; N becomes Nil
-  // (unless keep_n: only for MUTANT_NEXT_DOUT_KEEPS_N).
+  // (unless keep_n: only for the mutant NEXT_DOUT_KEEPS_N).
   task take_from_n(inout [1:0] side, inout [1:0] n, inout [1:0] f, input keep_n);
     begin
       if (n != NIL) begin
@@ -230,13 +228,8 @@
       end else begin
         if (nx_opt_reg[OPT_EVERY_GC] || (cmd != nx_gc_command)) raise(IRQ_NEW_GC);
         nx_gc_command = cmd;
-        if (cmd[GC_CLEAR_DATA]) begin
-`ifdef MUTANT_CLEAR_IGNORED_IN_SYNC
-          if (!nx_sync_mode) failsafe_clear;
-`else
+        if (cmd[GC_CLEAR_DATA] && !(nx_sync_mode && `DPC31B_MUT(MUT_CLEAR_IGNORED_IN_SYNC)))
           failsafe_clear;
-`endif
-        end
         // Sync / Unsync: D to N with DX_Out; with nothing fresh in D, DX_Out alone.
         if (cmd[GC_SYNC] || cmd[GC_UNSYNC]) begin
           nx_sync_mode = !cmd[GC_UNSYNC];  // Unsync wins
@@ -257,18 +250,14 @@
   // arrived: if pending, a newer one arrived; pending.
   task prm_arrived;
     begin
-`ifndef MUTANT_NO_CONFLICT
-      if (nx_prm_pending) nx_prm_newer = 1'b1;
-`endif
+      if (nx_prm_pending && !`DPC31B_MUT(MUT_NO_CONFLICT)) nx_prm_newer = 1'b1;
       nx_prm_pending = 1'b1;
     end
   endtask
 
   task cfg_arrived;
     begin
-`ifndef MUTANT_NO_CONFLICT
-      if (nx_cfg_pending) nx_cfg_newer = 1'b1;
-`endif
+      if (nx_cfg_pending && !`DPC31B_MUT(MUT_NO_CONFLICT)) nx_cfg_newer = 1'b1;
       nx_cfg_pending = 1'b1;
     end
   endtask
@@ -338,11 +327,7 @@
   task next_dout(output [7:0] res);
     reg keep_n;
     begin
-`ifdef MUTANT_NEXT_DOUT_KEEPS_N
-      keep_n = 1'b1;
-`else
-      keep_n = 1'b0;
-`endif
+      keep_n = `DPC31B_MUT(MUT_NEXT_DOUT_KEEPS_N);
       if (IS_DPC31 && nx_n_cl) begin
         // The substitute values supersede outputs received before the Clear: N freed unseen.
         nx_n_cl = 1'b0;
@@ -351,9 +336,7 @@
           nx_dout_n = NIL;
         end
         nx_n_cleared = 1'b0;
-`ifndef MUTANT_NO_C_SWAP
-        swap_c_with_u;
-`endif
+        if (!`DPC31B_MUT(MUT_NO_C_SWAP)) swap_c_with_u;
         nx_u_cleared = 1'b1;
         res = (8'd1 << ND_U_CLEARED) | (8'd1 << ND_STATE_U) | {6'd0, nx_dout_u};
       end else if (nx_dout_n != NIL) begin
@@ -404,11 +387,7 @@
 
   task diag_flag_after_send(input stat);
     begin
-`ifdef MUTANT_DIAG_FLAG_STICKY
-      nx_diag_flag = nx_diag_flag | stat;
-`else
-      nx_diag_flag = stat;
-`endif
+      nx_diag_flag = `DPC31B_MUT(MUT_DIAG_FLAG_STICKY) ? (nx_diag_flag | stat) : stat;
     end
   endtask
 

@@ -324,3 +324,28 @@
   localparam integer GC_UNSYNC = 4;
   localparam integer GC_SYNC = 5;
   localparam [7:0] GC_RESERVED = 8'hC1;  // bits 7, 6, 0
+
+`ifdef MUTANTS
+  // Mutants: the values of mutant_sel, 0 none (rtl/CMakeLists.txt reads the names and values
+  // from these lines; docs/golden-model.md says what each breaks).
+  // Next_Dout_Buffer_Cmd's n_to_u leaves N as it was
+  localparam [3:0] MUT_NEXT_DOUT_KEEPS_N = 4'd1;
+  // an acknowledge of bit k also clears bit k+1
+  localparam [3:0] MUT_ACK_NEIGHBOUR = 4'd2;
+  // EOI inactive time one cycle shorter
+  localparam [3:0] MUT_EOI_SHORT = 4'd3;
+  // Clear_Data has no effect while Sync_Mode
+  localparam [3:0] MUT_CLEAR_IGNORED_IN_SYNC = 4'd4;
+  // dpc31: the C/U pointer cells are not exchanged
+  localparam [3:0] MUT_NO_C_SWAP = 4'd5;
+  // an event and its acknowledge in one cycle: the bit ends cleared
+  localparam [3:0] MUT_ACK_BEATS_EVENT = 4'd6;
+  // INT_Pol ignored: X/INT always low-active
+  localparam [3:0] MUT_POLARITY = 4'd7;
+  // ev_din fetches N even in Freeze_Mode
+  localparam [3:0] MUT_FREEZE_IGNORED = 4'd8;
+  // the handshakes never answer 01: a newer arrival is ignored
+  localparam [3:0] MUT_NO_CONFLICT = 4'd9;
+  // ev_diag_end leaves Diag_Flag at 1 when stat_diag is 0
+  localparam [3:0] MUT_DIAG_FLAG_STICKY = 4'd10;
+`endif

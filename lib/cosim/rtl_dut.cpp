@@ -1,5 +1,5 @@
-// The Verilated models of rtl/dpc31_blocks.v as Duts: one class per profile and per mutant,
-// listed in the generated rtl_models.inc (from the CMake list of mutants).
+// The Verilated models of rtl/dpc31_blocks.v as Duts: one class per profile, and one (dpc31) with
+// every mutant behind its mutant_sel input, listed in the generated rtl_models.inc (rtl/).
 #include <verilated.h>
 #include <verilated_fst_c.h>
 
@@ -15,7 +15,9 @@ namespace {
 template <class V>
 class RtlDut final : public Dut {
  public:
-  explicit RtlDut(const DutOptions& o) : top_(std::make_unique<V>(&ctx_)) {
+  RtlDut(const DutOptions& o, int mutant_sel) : top_(std::make_unique<V>(&ctx_)) {
+    // Only the mutants' model has the input; it stays constant for the whole run.
+    if constexpr (requires(V & v) { v.mutant_sel; }) top_->mutant_sel = mutant_sel;
     top_->motorola = o.bus == BusMode::motorola ? 1 : 0;
     top_->asic_type = o.asic_type();
     top_->clk = 0;
@@ -99,16 +101,17 @@ class RtlDut final : public Dut {
 
 struct Model {
   const char* mutant;
-  int profile;  // -1: any
-  std::unique_ptr<Dut> (*make)(const DutOptions&);
+  int profile;     // -1: any
+  int mutant_sel;  // the model's mutant_sel input (0: none)
+  std::unique_ptr<Dut> (*make)(const DutOptions&, int mutant_sel);
 };
 
 template <class V>
-std::unique_ptr<Dut> make(const DutOptions& o) {
-  return std::make_unique<RtlDut<V>>(o);
+std::unique_ptr<Dut> make(const DutOptions& o, int mutant_sel) {
+  return std::make_unique<RtlDut<V>>(o, mutant_sel);
 }
 
-#define DPC31_RTL_MODEL(cls, mutant, profile) {mutant, profile, &make<cls>},
+#define DPC31_RTL_MODEL(cls, mutant, profile, mutant_sel) {mutant, profile, mutant_sel, &make<cls>},
 constexpr Model kModels[] = {
 #include "rtl_models.inc"
 };
@@ -119,7 +122,7 @@ constexpr Model kModels[] = {
 std::unique_ptr<Dut> make_rtl_dut(const DutOptions& o, std::string_view mutant) {
   for (const Model& m : kModels) {
     if (mutant == m.mutant && (m.profile < 0 || m.profile == static_cast<int>(o.profile)))
-      return m.make(o);
+      return m.make(o, m.mutant_sel);
   }
   return nullptr;
 }
