@@ -26,12 +26,12 @@ void install_irq_hooks(HookTable& h) {
   h[RegisterFile::idx(RegId::Int_Ack_Reg)].pre_write = keep_events;
 }
 
-// After the register file's reset (X/INT follows the reset IRR and IMR). PB3 goes low.
+// After the register file's reset (X/INT follows the reset IRR and IMR). PB3 keeps its level,
+// as before the blocks were classes: what a hardware reset does to it no manual says.
 void InterruptController::reset() {
   const bool pb3 = s_.pb3;
   s_ = State{};
   s_.pb3 = pb3;
-  set_pb3(false);
   s_.line = active();
 }
 
