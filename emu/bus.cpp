@@ -20,7 +20,8 @@ ChipCore::ChipCore(const ChipOptions& opt)
       mac(clock, regs, dp, watchdog, counters, signals),
       mode(clock, regs, irq, buffers, dp, watchdog, mac, signals,
            opt.variant ? static_cast<std::uint8_t>(*opt.variant)
-                       : profile_desc(opt.profile).release) {
+                       : profile_desc(opt.profile).release),
+      requests(clock, regs, irq, dp, mode, signals) {
   if (variant && prof().id != Profile::vpc3plus) {
     throw std::invalid_argument(
         fmt::format("a VPC3+ variant ({}) on the {} profile: only vpc3plus has variants",
@@ -32,6 +33,7 @@ ChipCore::ChipCore(const ChipOptions& opt)
   install_mode_hooks(hooks);
   install_buffer_hooks(hooks);
   install_dp_sm_hooks(hooks);
+  install_request_hooks(hooks);
   // Every derived value the description promises must have a block that computes it.
   for (const RegDesc& r : prof().regs) {
     const RegHooks& h = hooks[RegisterFile::idx(r.id)];
@@ -55,6 +57,7 @@ void ChipCore::reset() {
   watchdog.power_on();
   mode.reset();
   mac.reset();
+  requests.reset();
   counters = FdlCounters{};
   written_bits = 0;
   irq.reset();  // last: X/INT from the reset registers
@@ -186,12 +189,19 @@ void ChipCore::write_now(std::uint32_t addr, std::uint8_t value) {
   }
   const RegDesc& r = prof().regs[i];
   switch (r.kind) {
-    case Kind::cell:
+    case Kind::cell: {
       if (r.reserved)
         signals.log(LogLevel::info, "write {:02X}h to reserved cell {} at {:#06x}", value, r.name,
                     a);
       regs.set_mem(a, value);
+      // A cell is RAM; a few start an action when written (the DPC31's InstQ_Wr).
+      const RegHooks& h = hooks[RegisterFile::idx(r.id)];
+      if (h.post_write != nullptr) {
+        h.post_write(*this, 0, value);
+        irq.update_line();
+      }
       return;
+    }
     case Kind::reserved:
       signals.log(LogLevel::warn, "write {:02X}h to reserved {} at {:#06x}: ignored", value, r.name,
                   a);

@@ -1,4 +1,4 @@
-// The chip's snapshot (docs/snapshots.md, format version 2): every block's state, written and
+// The chip's snapshot (docs/snapshots.md, format version 3): every block's state, written and
 // read in one place so that the format is one list. Each list is a template run with a Writer
 // (save) or a Reader (load), so save and load cannot drift apart; a static_assert on each
 // block's State makes a new member fail the build until it is listed here.
@@ -235,6 +235,14 @@ void core_fields(Ar& ar, C& c) {
   }
   ar.section("CNTR");
   counter_fields(ar, c.counters);
+  // Format version 3: the DPC31's request interface (its DPS_User_Watchdog).
+  auto& rq = A::state(c.requests);
+  static_assert(snap::member_count<RequestInterface::State>() == 3, "a new member: add it here");
+  ar.section("RQIF");
+  ar(rq.wd.at);
+  ar(rq.wd.left);
+  ar(rq.wd_left);
+  ar(rq.wd_locked);
 }
 
 snap::Header header_of(const ChipCore& c) {

@@ -24,6 +24,7 @@
 #include "mac.hpp"
 #include "mode.hpp"
 #include "regfile.hpp"
+#include "requests.hpp"
 #include "signals.hpp"
 #include "timer.hpp"
 #include "watchdog.hpp"
@@ -51,6 +52,7 @@ void install_irq_hooks(HookTable& h);
 void install_mode_hooks(HookTable& h);
 void install_buffer_hooks(HookTable& h);
 void install_dp_sm_hooks(HookTable& h);
+void install_request_hooks(HookTable& h);
 
 struct ChipCore {
   explicit ChipCore(const ChipOptions& opt);
@@ -69,6 +71,7 @@ struct ChipCore {
   DpStateMachine dp;
   Mac mac;
   ModeRegisters mode;
+  RequestInterface requests;  // dpc31: the Instruction_Queue and Indication_Queue
   HookTable hooks{};
   bool stop = false;               // Chip::request_stop
   std::uint16_t written_bits = 0;  // the lane-aligned value of the write the hooks are serving

@@ -234,6 +234,12 @@ std::optional<fdl::Frame> DpStateMachine::service(const fdl::Frame& req) {
 
 std::optional<fdl::Frame> DpStateMachine::set_prm(const fdl::Frame& req) {
   const std::vector<std::uint8_t>& du = req.du;
+  if (du.size() < kMinPrmLength && regs_.id() == Profile::dpc31) {
+    // DPC31 p.26: "the message has to have at least a length of >= 7 bytes; otherwise, it is
+    // ignored" (acknowledged, nothing changes, as the other ignored Set_Prm).
+    sig_.log(LogLevel::info, "Set_Prm with {} bytes: ignored", du.size());
+    return fdl::sc();
+  }
   if (du.size() < kMinPrmLength || du.size() > kMaxBufferLength) {
     sig_.log(LogLevel::info, "Set_Prm with {} bytes: Prm_Fault", du.size());
     prm_fault();
@@ -309,7 +315,9 @@ std::optional<fdl::Frame> DpStateMachine::set_prm(const fdl::Frame& req) {
   s_.master_add = req.sa;
   s_.group_ident = du[6];
   if (du[3] != 0) s_.min_tsdr = du[3];
-  if (regs_.mode0(fields::Mode_Reg0::DP_Mode) && du.size() > 7) {
+  // DPC31: byte 13 (DPV1_Status_1) "is permanently reserved for the DPC31": bits 7 DPV1_Enable,
+  // 6 Failsafe, 2 WD_Base, the others reserved (p.26), so no Dis_Start / Dis_Stop there.
+  if (regs_.mode0(fields::Mode_Reg0::DP_Mode) && du.size() > 7 && regs_.id() != Profile::dpc31) {
     // Spec_User_Prm_Byte overwrites Dis_Start_Control / Dis_Stop_Control in DP mode.
     std::uint16_t& m0 = regs_.latch(RegId::Mode_Reg0);
     sig_.emit(BlockEvent::Kind::dis, du[7] & kDis_Start_Stop);
@@ -516,6 +524,9 @@ bool DpStateMachine::dx_out_wanted(std::span<const std::uint8_t> outputs) {
 
 // Each Data_Exchange counts the user watchdog down; Res_User_WD reloads it. False: expired.
 bool DpStateMachine::user_watchdog_tick() {
+  // The DPC31 watches its user on a 10 ms time base through the request interface instead
+  // (DPC31 p.31: "In the case of the SPC3, the processor is monitored via a counter").
+  if (regs_.id() == Profile::dpc31) return true;
   std::uint16_t& m1 = regs_.latch(RegId::Mode_Reg1);
   if ((m1 & fields::Mode_Reg1::Res_User_WD) != 0) {
     m1 = static_cast<std::uint16_t>(m1 & ~fields::Mode_Reg1::Res_User_WD);

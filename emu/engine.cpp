@@ -42,7 +42,8 @@ std::uint64_t ChipCore::next_event() const {
 std::uint64_t ChipCore::next_event_but_user_timer() const {
   // The end of the EOI inactive time is an event: X/INT may become active there.
   const std::uint64_t eoi_end = irq.inactive_until();
-  return std::min({watchdog.due(), eoi_end > clock.now ? eoi_end : kNever, mac.deadline()});
+  return std::min(
+      {watchdog.due(), eoi_end > clock.now ? eoi_end : kNever, mac.deadline(), requests.due()});
 }
 
 // Everything due at `now`, in the order of docs/timing.md.
@@ -50,6 +51,7 @@ void ChipCore::process_events() {
   if (clock.reached(mode.user_timer())) mode.user_timer_tick();
   mac.process();
   if (clock.reached(watchdog.timer())) watchdog_expired();
+  if (clock.reached(requests.timer())) requests.wd_tick();
   irq.update_line();
   signals.state(clock.now);
 }
@@ -97,9 +99,11 @@ void ChipCore::tick() {
   // The watchdog counts this clock before the MAC may retrigger it, and expires after.
   count_clock(watchdog.timer());
   count_clock(mode.user_timer());
+  count_clock(requests.timer());
   if (clock.reached(mode.user_timer())) mode.user_timer_tick();
   mac.clock();
   if (clock.reached(watchdog.timer())) watchdog_expired();
+  if (clock.reached(requests.timer())) requests.wd_tick();
   irq.update_line();
   signals.state(clock.now);
 }

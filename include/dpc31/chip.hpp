@@ -58,6 +58,7 @@ inline constexpr std::uint16_t Go_Leave_Data_Exchange = fields::Int_Req_Reg::Go_
 inline constexpr std::uint16_t Baudrate_Detect = fields::Int_Req_Reg::Baudrate_Detect;
 inline constexpr std::uint16_t WD_DP_Control_Timeout = fields::Int_Req_Reg::WD_DP_Control_Timeout;
 inline constexpr std::uint16_t User_Timer_Clock = fields::Int_Req_Reg::User_Timer_Clock;
+inline constexpr std::uint16_t Indication = fields::Int_Req_Reg::Indication;  // DPC31 only
 inline constexpr std::uint16_t New_Ext_Prm_Data =
     fields::Int_Req_Reg::New_Ext_Prm_Data;  // VPC3+ only
 inline constexpr std::uint16_t New_GC_Command = fields::Int_Req_Reg::New_GC_Command;

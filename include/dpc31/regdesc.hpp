@@ -42,7 +42,7 @@ enum class Access : std::uint8_t {
   UNIMP,  // exists on the chip, behaviour not modelled (DXB); stored, logged on every access
 };
 
-enum class Block : std::uint8_t { irq, mode, status, buffers, dp_sm, watchdog, fdl, ram };
+enum class Block : std::uint8_t { irq, mode, status, buffers, dp_sm, watchdog, fdl, ram, requests };
 
 struct FieldDesc {
   std::string_view name;

@@ -43,7 +43,7 @@ constexpr std::array<NameEntry<Access>, 9> kAccesses{{
      "exists on the chip, behaviour not modelled: stored, every access logged"},
 }};
 
-constexpr std::array<NameEntry<Block>, 8> kBlocks{{
+constexpr std::array<NameEntry<Block>, 9> kBlocks{{
     {Block::irq, "irq", ""},
     {Block::mode, "mode", ""},
     {Block::status, "status", ""},
@@ -52,6 +52,7 @@ constexpr std::array<NameEntry<Block>, 8> kBlocks{{
     {Block::watchdog, "watchdog", ""},
     {Block::fdl, "fdl", ""},
     {Block::ram, "ram", ""},
+    {Block::requests, "requests", ""},
 }};
 
 constexpr std::array<NameEntry<Profile>, 3> kProfileNames{{

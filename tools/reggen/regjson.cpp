@@ -662,9 +662,7 @@ class Loader {
         fail("a cell has no 'read'/'write' (its address follows from 'cell')");
       }
       cell = number(j, "cell", true);
-      if (*cell < kFirstCell || *cell + bytes - 1 > kLastCell) {
-        fail(fmt::format("cell 0x{:02X} outside 0x{:02X}..0x{:02X}", *cell, kFirstCell, kLastCell));
-      }
+      if (*cell < kFirstCell) fail(fmt::format("cell 0x{:02X} below 0x{:02X}", *cell, kFirstCell));
     } else {
       if (j.contains("cell")) fail("'cell' on an entry that is not a cell");
       read = per_profile(j, "read", applies, "read address");
@@ -690,7 +688,15 @@ class Loader {
       }
       std::optional<std::uint32_t> rd = read.value[pi];
       std::optional<std::uint32_t> wr = write.value[pi];
-      if (cell) rd = wr = prof.cells_base + (*cell - kFirstCell);
+      if (cell) {
+        // The SPC3's cells end at 3Fh where its user area begins; the DPC31's parameter cells
+        // run on up to its user area at 08A0h.
+        rd = wr = prof.cells_base + (*cell - kFirstCell);
+        if (*rd + bytes > prof.user_base) {
+          fail(fmt::format("cell 0x{:02X} of profile '{}' at 0x{:04X} reaches the user area at 0x{:04X}",
+                           *cell, prof.name, *rd, prof.user_base));
+        }
+      }
       if (kind == Kind::port && (!wr || rd)) {
         fail(fmt::format("a port needs a write address and no read address (profile '{}')",
                          prof.name));
