@@ -68,7 +68,7 @@ void handshake_fields(Ar& ar, S& s) {
 
 template <typename Ar, typename S>
 void dp_fields(Ar& ar, S& s) {
-  static_assert(snap::member_count<DpStateMachine::State>() == 28, "a new member: add it here");
+  static_assert(snap::member_count<DpStateMachine::State>() == 29, "a new member: add it here");
   ar.bounded(s.state, DpState::Data_Exchange);
   handshake_fields(ar, s.prm);
   handshake_fields(ar, s.cfg);
@@ -85,6 +85,7 @@ void dp_fields(Ar& ar, S& s) {
   ar(s.prm_wd_fact1);
   ar(s.prm_wd_fact2);
   ar(s.prm_wd_1ms);
+  ar(s.failsafe);
   ar(s.dx_on_new_din);
   ar(s.diag_requester);
   ar(s.sync_mode);

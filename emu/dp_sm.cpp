@@ -24,6 +24,7 @@ constexpr std::uint8_t kFreeze_Req = 0x10;
 constexpr std::uint8_t kWD_On = 0x08;
 constexpr std::uint8_t kStation_Status_Reserved = 0x07;
 constexpr std::uint8_t kSpec_WD_Base_1ms = 0x04;
+constexpr std::uint8_t kSpec_Failsafe = 0x40;  // DPC31 byte 13 bit 6 (p.26)
 constexpr std::size_t kMinPrmLength = 7;
 constexpr std::size_t kMaxBufferLength = 244;
 
@@ -331,6 +332,7 @@ std::optional<fdl::Frame> DpStateMachine::set_prm(const fdl::Frame& req) {
   s_.prm_wd_fact1 = du[1];
   s_.prm_wd_fact2 = du[2];
   s_.prm_wd_1ms = wd_1ms;
+  s_.failsafe = regs_.id() == Profile::dpc31 && du.size() > 7 && (du[7] & kSpec_Failsafe) != 0;
   receive_via_aux(fields::R_Aux_Buf_Sel::Set_Prm, RegId::R_Prm_Buf_Ptr, RegId::R_Len_Prm_Data, du);
   sig_.emit(BlockEvent::Kind::prm);
   prm_accepted();
@@ -489,7 +491,8 @@ std::optional<fdl::Frame> DpStateMachine::data_exchange(const fdl::Frame& req) {
       sig_.emit(BlockEvent::Kind::dout);
       buffers_.outputs_received(s_.sync_mode);
     }
-  } else if (req.du.empty() && regs_.mode0(fields::Mode_Reg0::Spec_Clear_Mode)) {
+  } else if (req.du.empty() &&
+             (regs_.mode0(fields::Mode_Reg0::Spec_Clear_Mode) || s_.failsafe)) {
     sig_.emit(BlockEvent::Kind::failsafe);
     buffers_.failsafe_clear();  // fail-safe: the master sends no outputs while in Clear
   } else {

@@ -74,6 +74,7 @@ class DpStateMachine {
     std::uint8_t prm_wd_fact1 = 0;
     std::uint8_t prm_wd_fact2 = 0;
     bool prm_wd_1ms = false;
+    bool failsafe = false;  // dpc31: Set_Prm byte 13 Failsafe (fail-safe Data_Exchange accepted)
     // SPC3 with a Din buffer: Cfg OK given, Data_Exchange at the user's next New_Din_Buffer_Cmd.
     bool dx_on_new_din = false;
     std::uint8_t diag_requester = 0xFF;  // the master whose Slave_Diag answer is being sent

@@ -285,3 +285,24 @@ TEST(Dpc31Requests, Byte13DoesNotSetDisStartOrDisStop) {
   ASSERT_TRUE(b.master.startup());
   EXPECT_EQ(rd(b.chip, RegId::Mode_Reg0) & 0x03, 0);
 }
+
+// p.26: byte 13 bit 6 Failsafe: with it the DPC31 accepts Data_Exchange without outputs (the
+// fail-safe exchange of seed 003) even when Mode_Reg0's Spec_Clear_Mode is 0; without it such an
+// exchange is refused (RS) as a wrong output length.
+TEST(Dpc31Requests, Byte13FailsafeAcceptsDataExchangeWithoutOutputs) {
+  for (const bool failsafe : {true, false}) {
+    ResponderConfig rc;
+    rc.spec_clear_mode = false;
+    Bench b(Profile::dpc31, 1'500'000, rc);
+    b.master.slave().user_prm = {static_cast<std::uint8_t>(failsafe ? 0x40 : 0x00)};
+    ASSERT_TRUE(b.master.startup());
+    const Exchange dx = b.master.data_exchange({});
+    ASSERT_TRUE(dx.answer);
+    if (failsafe) {
+      // SD2 answer with the four inputs, DL (seed 003 p.33: the inputs still come back).
+      EXPECT_EQ(wire(dx.answer).at(0), 0x68) << "failsafe";
+    } else {
+      EXPECT_EQ(fdl::response_code(dx.answer->fc), fdl::Response::RS);
+    }
+  }
+}
