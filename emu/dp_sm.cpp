@@ -24,7 +24,8 @@ constexpr std::uint8_t kFreeze_Req = 0x10;
 constexpr std::uint8_t kWD_On = 0x08;
 constexpr std::uint8_t kStation_Status_Reserved = 0x07;
 constexpr std::uint8_t kSpec_WD_Base_1ms = 0x04;
-constexpr std::uint8_t kSpec_Failsafe = 0x40;  // DPC31 byte 13 bit 6 (p.26)
+constexpr std::uint8_t kSpec_Failsafe = 0x40;   // DPC31 byte 13 bit 6 (p.26)
+constexpr std::uint16_t kSsaNotAllowed = 0x03;  // DPC31 User_SSA_OK Cmd 11 (p.26)
 constexpr std::size_t kMinPrmLength = 7;
 constexpr std::size_t kMaxBufferLength = 244;
 
@@ -121,10 +122,15 @@ void install_dp_sm_hooks(HookTable& h) {
   at(RegId::User_Cfg_Data_Not_Okay).command = [](ChipCore& c) {
     return c.dp.cfg_verdict(V::not_ok);
   };
-  at(RegId::SSA_Buffer_Free_Cmd).read = [](const ChipCore&) -> std::uint16_t { return 0; };
+  // The DPC31's User_SSA_OK Cmd answers 00 User_SSA_Finished or 11 Not_Allowed (DPC31 p.26;
+  // which one when: modelled); the SPC3's SSA_Buffer_Free_Cmd reads don't care (00h).
+  at(RegId::SSA_Buffer_Free_Cmd).read = [](const ChipCore& c) -> std::uint16_t {
+    return c.regs.id() == Profile::dpc31 && c.dp.ssa_free() ? kSsaNotAllowed : 0;
+  };
   at(RegId::SSA_Buffer_Free_Cmd).command = [](ChipCore& c) -> std::uint16_t {
+    const bool pending = !c.dp.ssa_free();
     c.dp.ssa_buffer_free();
-    return 0;
+    return c.regs.id() == Profile::dpc31 && !pending ? kSsaNotAllowed : 0;
   };
 }
 
@@ -491,8 +497,7 @@ std::optional<fdl::Frame> DpStateMachine::data_exchange(const fdl::Frame& req) {
       sig_.emit(BlockEvent::Kind::dout);
       buffers_.outputs_received(s_.sync_mode);
     }
-  } else if (req.du.empty() &&
-             (regs_.mode0(fields::Mode_Reg0::Spec_Clear_Mode) || s_.failsafe)) {
+  } else if (req.du.empty() && (regs_.mode0(fields::Mode_Reg0::Spec_Clear_Mode) || s_.failsafe)) {
     sig_.emit(BlockEvent::Kind::failsafe);
     buffers_.failsafe_clear();  // fail-safe: the master sends no outputs while in Clear
   } else {

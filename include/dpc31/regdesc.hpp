@@ -76,6 +76,9 @@ struct RegDesc {
   std::string_view desc;
   std::span<const FieldDesc> fields;
   bool reserved = false;  // kind cell only: a RAM cell the manuals mark reserved (accesses logged)
+  // The name this profile's own manual gives the register, where it differs (the DPC31's
+  // User_New_Dout_Cmd for Next_Dout_Buffer_Cmd); the C header and find_reg know it too.
+  std::string_view alias{};
 
   [[nodiscard]] constexpr int bytes() const { return width / 8; }
   [[nodiscard]] constexpr std::uint16_t mask() const {

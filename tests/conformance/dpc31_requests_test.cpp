@@ -5,6 +5,8 @@
 // the completion cycle of the InstQ_Wr write; 10 ms = 480 000 clocks at 48 MHz.
 #include "conformance.hpp"
 #include "dpc31/dp.hpp"
+#include "dpc31/dpc31_regs.h"
+#include "dpc31/regdesc.hpp"
 
 using namespace dpc31;
 using namespace conformance;
@@ -305,4 +307,64 @@ TEST(Dpc31Requests, Byte13FailsafeAcceptsDataExchangeWithoutOutputs) {
       EXPECT_EQ(fdl::response_code(dx.answer->fc), fdl::Response::RS);
     }
   }
+}
+
+// p.26: the "User_SSA_OK Cmd" read answers 00 User_SSA_Finished, 01 SSA_Conflict, 11
+// Not_Allowed, 10 not possible. After a Set_Slave_Add (New_SSA_Data) it finishes (00) and SAP55
+// takes the next one; with none pending it answers 11 (which code when: docs/dpc31.md).
+TEST(Dpc31Requests, UserSsaOkFinishesAPendingSetSlaveAddAndRefusesWithoutOne) {
+  Bench b(Profile::dpc31);
+  AckOnly user;
+  b.master.set_firmware([&user](BusPort& c) { user.isr(c); });
+  until_answered(b);
+  const std::uint32_t ssa_ok = at(b.chip, RegId::SSA_Buffer_Free_Cmd);
+  EXPECT_EQ(b.chip.addr_of(RegId::SSA_Buffer_Free_Cmd),
+            find_reg(b.chip.profile(), "User_SSA_OK_Cmd")->read_addr);
+  EXPECT_EQ(b.chip.read(ssa_ok), 0x03);
+  EXPECT_EQ(wire(b.master.set_slave_address(9, false).answer), Bytes{0xE5});
+  b.master.set_target(9);
+  EXPECT_EQ(b.chip.read(ssa_ok), 0x00);
+  EXPECT_EQ(b.chip.read(ssa_ok), 0x03);
+  EXPECT_EQ(wire(b.master.set_slave_address(10, false).answer), Bytes{0xE5});
+}
+
+// p.26: "The SSA_State_Machine is reset also when ... the watchdog has expired in the mode
+// 'DP_Control'": a Set_Slave_Add the user never finished no longer blocks SAP55 after the DP
+// watchdog expired (TWD = 10 ms x 2 x 5 = 100 ms).
+TEST(Dpc31Requests, DpControlExpiryResetsTheSsaStateMachine) {
+  ResponderConfig rc;
+  rc.slave.wd_fact1 = 2;
+  rc.slave.wd_fact2 = 5;
+  Bench b(Profile::dpc31, 1'500'000, rc);
+  ASSERT_TRUE(b.master.startup());
+  AckOnly user;  // from here the user leaves the SSA buffer as it is
+  b.master.set_firmware([&user](BusPort& c) { user.isr(c); });
+  EXPECT_EQ(wire(b.master.set_slave_address(9, false).answer), Bytes{0xE5});
+  b.master.set_target(9);
+  const Exchange refused = b.master.set_slave_address(10, false);
+  ASSERT_TRUE(refused.answer);
+  EXPECT_NE(wire(refused.answer), Bytes{0xE5}) << "SAP55 is closed until User_SSA_OK";
+  b.master.idle(4'800'000 + 48'000);
+  ASSERT_EQ(b.chip.wd_state(), WdState::Baud_Control);
+  EXPECT_EQ(wire(b.master.set_slave_address(10, false).answer), Bytes{0xE5});
+}
+
+// Table 5.2-8 / p.26 name the user's commands User_New_Dout, User_New_Din and User_SSA_OK: the
+// register description knows them under those names at the commands' (modelled) addresses, and
+// the C header defines them (DPC31_User_New_Dout_Cmd, ...).
+TEST(Dpc31Requests, ManualNamesReachTheCommands) {
+  const ProfileDesc& p = profile_desc(Profile::dpc31);
+  const std::pair<const char*, RegId> names[] = {{"User_New_Dout_Cmd", RegId::Next_Dout_Buffer_Cmd},
+                                                 {"User_New_Din_Cmd", RegId::New_Din_Buffer_Cmd},
+                                                 {"User_SSA_OK_Cmd", RegId::SSA_Buffer_Free_Cmd}};
+  for (const auto& [name, id] : names) {
+    const RegDesc* r = find_reg(p, name);
+    ASSERT_NE(r, nullptr) << name;
+    EXPECT_EQ(r->id, id) << name;
+  }
+  EXPECT_EQ(DPC31_User_New_Dout_Cmd, 0x000Bu);
+  EXPECT_EQ(DPC31_User_New_Din_Cmd, 0x0009u);
+  EXPECT_EQ(DPC31_User_SSA_OK_Cmd, 0x0014u);
+  EXPECT_EQ(DPC31_User_New_Dout_Cmd_U_Buffer_Cleared_Msk, 0x08u);
+  EXPECT_EQ(find_reg(profile_desc(Profile::spc3), "User_New_Dout_Cmd"), nullptr);
 }

@@ -125,7 +125,7 @@ const RegDesc* find_reg(const ProfileDesc& p, RegId id) {
 
 const RegDesc* find_reg(const ProfileDesc& p, std::string_view name) {
   for (const auto& r : p.regs) {
-    if (r.name == name) return &r;
+    if (r.name == name || (!r.alias.empty() && r.alias == name)) return &r;
   }
   return nullptr;
 }

@@ -342,6 +342,15 @@ void write_defines(DefineWriter& w, Profiles profiles, const MacroFormat& format
       for (const AddrSide& side : address_sides(r, "_RD", "_WR")) format.address(w, p, r, side);
       if (r.has_reset) w.define(reg_prefix + "_RESET", format.reset(r));
       for (const FieldDesc* f : named_fields(r)) format.field(w, reg_prefix, r, *f);
+      if (r.alias.empty()) continue;
+      // The same register under its own manual's name.
+      RegDesc named = r;
+      named.name = r.alias;
+      const std::string alias_prefix = fmt::format("{}_{}", p.macro, r.alias);
+      w.comment(fmt::format("{}: the {} manual's name of {}", r.alias, p.title, r.name));
+      for (const AddrSide& side : address_sides(named, "_RD", "_WR"))
+        format.address(w, p, named, side);
+      for (const FieldDesc* f : named_fields(r)) format.field(w, alias_prefix, r, *f);
     }
   }
 }
@@ -493,7 +502,7 @@ std::string col_cell(Col c, const ProfileDesc& p, const RegDesc& r) {
     case Col::write:
       return addr_str(p, r.write_addr);
     case Col::name:
-      return std::string{r.name};
+      return r.alias.empty() ? std::string{r.name} : fmt::format("{} ({})", r.name, r.alias);
     case Col::kind:
       return kind_label(p, r);
     case Col::width:
@@ -775,6 +784,7 @@ std::string emit_json(const ProfileDesc& p) {
     reg["source"] = r.source;
     reg["note"] = r.note;
     reg["desc"] = r.desc;
+    reg["alias"] = r.alias.empty() ? Json(nullptr) : Json(r.alias);
     regs.push_back(std::move(reg));
   }
   doc["registers"] = std::move(regs);

@@ -51,7 +51,7 @@ constexpr std::string_view kFieldKeys[] = {"bits", "name", "access", "pulse", "d
 constexpr std::string_view kRegisterKeys[] = {
     "name",     "kind",  "target",   "block",    "width",  "reset",    "read",
     "write",    "cell",  "reserved", "fieldset", "access", "override", "fields",
-    "profiles", "bytes", "origin",   "source",   "note",   "desc"};
+    "profiles", "bytes", "origin",   "source",   "note",   "desc",     "alias"};
 
 std::size_t index_of(Profile p) { return static_cast<std::size_t>(p); }
 
@@ -693,8 +693,9 @@ class Loader {
         // run on up to its user area at 08A0h.
         rd = wr = prof.cells_base + (*cell - kFirstCell);
         if (*rd + bytes > prof.user_base) {
-          fail(fmt::format("cell 0x{:02X} of profile '{}' at 0x{:04X} reaches the user area at 0x{:04X}",
-                           *cell, prof.name, *rd, prof.user_base));
+          fail(fmt::format(
+              "cell 0x{:02X} of profile '{}' at 0x{:04X} reaches the user area at 0x{:04X}", *cell,
+              prof.name, *rd, prof.user_base));
         }
       }
       if (kind == Kind::port && (!wr || rd)) {
@@ -708,6 +709,20 @@ class Loader {
       if (wr) {
         check_in_space(prof, "write", *wr, bytes);
         claim(p, false, *wr, bytes, name);
+      }
+      if (const Json* al = optional(j, "alias"); al != nullptr) {
+        if (!al->is_object()) fail("'alias' must be an object: profile name -> the manual's name");
+        if (al->contains(prof.name)) {
+          const Json& n = (*al)[std::string(prof.name)];
+          if (!n.is_string() || n.get<std::string>().empty())
+            fail(fmt::format("alias of profile '{}' must be a non-empty string", prof.name));
+          r.alias = intern(n.get<std::string>());
+        }
+      }
+      for (const RegDesc& x : m_.regs_[pi]) {
+        if (x.alias == r.name || (!r.alias.empty() && (r.alias == x.name || r.alias == x.alias)))
+          fail(fmt::format("name or alias '{}' used twice for profile '{}'",
+                           x.alias == r.name ? r.name : r.alias, prof.name));
       }
       r.read_addr = rd ? static_cast<std::int32_t>(*rd) : -1;
       r.write_addr = wr ? static_cast<std::int32_t>(*wr) : -1;
