@@ -25,9 +25,6 @@ void ChipCore::watchdog_expired() {
     case Watchdog::Expiry::dp_control:
       signals.emit(BlockEvent::Kind::leave_master);
       dp.leave_master();
-      // DPC31 p.26: "The SSA_State_Machine is reset also when ... the watchdog has expired in
-      // the mode 'DP_Control'": SAP55 takes a Set_Slave_Add again.
-      if (prof().id == Profile::dpc31) dp.ssa_buffer_free();
       break;
     case Watchdog::Expiry::baud_control:
       mac.start_search();

@@ -348,8 +348,9 @@ module dpc31_blocks #(
         cfg_handshake(a == A_CFG_NOK, cmd_res);
         nx_bus_rdata = cmd_res;
       end else if (a == A_SSA_FREE) begin
+        // The DPC31's User_SSA_OK Cmd: 00 finished (one was pending), 11 Not_Allowed (none).
+        nx_bus_rdata = (IS_DPC31 && nx_ssa_free) ? 8'h03 : 8'h00;
         nx_ssa_free = 1'b1;
-        nx_bus_rdata = 8'h00;
       end else if (HAS_MODE_REG1_RB && a == A_MODE_REG1_RB) begin
         nx_bus_rdata = nx_mode_reg1;
       end else if (IS_DPC31 && a == A_PARAM_REG) begin

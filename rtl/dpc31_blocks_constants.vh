@@ -137,7 +137,7 @@
   localparam [15:0] IRQ_DIAG_CHANGED = 16'd1 << B_DIAG_CHANGED;
   localparam [15:0] IRQ_DX_OUT = 16'd1 << B_DX_OUT;
 
-  // Writable (non-reserved) IRR / IMR bits: spc3, dpc31 3F1Fh; vpc3plus all 16 (the VPC3+'s
+  // Writable (non-reserved) IRR / IMR bits: spc3 3F1Fh, dpc31 3F3Fh; vpc3plus all 16 (the VPC3+'s
   // extra bits 15..14 and 7..5 are events without block state: they only come in via ev_irq).
   localparam [15:0] IRQ_COMMON = IRQ_MAC_RESET | IRQ_GO_LEAVE_DX | (16'd1 << B_BAUD_DETECT) |
                                  (16'd1 << B_WD_TIMEOUT) | IRQ_USER_TIMER | IRQ_NEW_GC |
@@ -148,7 +148,11 @@
                                      (16'd1 << `VPC3_Int_Req_Reg_DXB_Out_POS) |
                                      (16'd1 << `VPC3_Int_Req_Reg_Poll_End_Ind_POS) |
                                      (16'd1 << `VPC3_Int_Req_Reg_FDL_Ind_POS);
-  localparam [15:0] IRR_MASK = IS_VPC3 ? (IRQ_COMMON | IRQ_VPC3_EXTRA) : IRQ_COMMON;
+  // The DPC31's Indication (bit 5, docs/dpc31.md) is an event without block state here: the
+  // request interface is not one of the blocks this model covers, it only comes in via ev_irq.
+  localparam [15:0] IRQ_DPC31_EXTRA = 16'd1 << `DPC31_Int_Req_Reg_Indication_POS;
+  localparam [15:0] IRR_MASK = IS_VPC3  ? (IRQ_COMMON | IRQ_VPC3_EXTRA) :
+                               IS_DPC31 ? (IRQ_COMMON | IRQ_DPC31_EXTRA) : IRQ_COMMON;
   // Int_Ack_Reg bits that an acknowledge does not change (IGN).
   localparam [15:0] ACK_IGN = IRQ_NEW_PRM | IRQ_NEW_CFG |
       (IS_VPC3 ? (16'd1 << `VPC3_Int_Ack_Reg_New_Ext_Prm_Data_POS) : 16'd0);

@@ -1126,6 +1126,8 @@
 `define DPC31_Int_Req_Reg_WD_DP_Control_Timeout_W       1
 `define DPC31_Int_Req_Reg_User_Timer_Clock_POS          4
 `define DPC31_Int_Req_Reg_User_Timer_Clock_W            1
+`define DPC31_Int_Req_Reg_Indication_POS                5
+`define DPC31_Int_Req_Reg_Indication_W                  1
 `define DPC31_Int_Req_Reg_New_GC_Command_POS            8
 `define DPC31_Int_Req_Reg_New_GC_Command_W              1
 `define DPC31_Int_Req_Reg_New_SSA_Data_POS              9
@@ -1152,6 +1154,8 @@
 `define DPC31_Int_Reg_WD_DP_Control_Timeout_W           1
 `define DPC31_Int_Reg_User_Timer_Clock_POS              4
 `define DPC31_Int_Reg_User_Timer_Clock_W                1
+`define DPC31_Int_Reg_Indication_POS                    5
+`define DPC31_Int_Reg_Indication_W                      1
 `define DPC31_Int_Reg_New_GC_Command_POS                8
 `define DPC31_Int_Reg_New_GC_Command_W                  1
 `define DPC31_Int_Reg_New_SSA_Data_POS                  9
@@ -1178,6 +1182,8 @@
 `define DPC31_Int_Ack_Reg_WD_DP_Control_Timeout_W       1
 `define DPC31_Int_Ack_Reg_User_Timer_Clock_POS          4
 `define DPC31_Int_Ack_Reg_User_Timer_Clock_W            1
+`define DPC31_Int_Ack_Reg_Indication_POS                5
+`define DPC31_Int_Ack_Reg_Indication_W                  1
 `define DPC31_Int_Ack_Reg_New_GC_Command_POS            8
 `define DPC31_Int_Ack_Reg_New_GC_Command_W              1
 `define DPC31_Int_Ack_Reg_New_SSA_Data_POS              9
@@ -1222,6 +1228,8 @@
 `define DPC31_Int_Mask_Reg_WD_DP_Control_Timeout_W      1
 `define DPC31_Int_Mask_Reg_User_Timer_Clock_POS         4
 `define DPC31_Int_Mask_Reg_User_Timer_Clock_W           1
+`define DPC31_Int_Mask_Reg_Indication_POS               5
+`define DPC31_Int_Mask_Reg_Indication_W                 1
 `define DPC31_Int_Mask_Reg_New_GC_Command_POS           8
 `define DPC31_Int_Mask_Reg_New_GC_Command_W             1
 `define DPC31_Int_Mask_Reg_New_SSA_Data_POS             9
@@ -1295,6 +1303,10 @@
 `define DPC31_ADDR_New_Din_Buffer_Cmd                   13'h0009
 `define DPC31_New_Din_Buffer_Cmd_Ind_U_Buffer_POS       0
 `define DPC31_New_Din_Buffer_Cmd_Ind_U_Buffer_W         2
+// User_New_Din_Cmd: the Siemens DPC31 manual's name of New_Din_Buffer_Cmd
+`define DPC31_ADDR_User_New_Din_Cmd                     13'h0009
+`define DPC31_User_New_Din_Cmd_Ind_U_Buffer_POS         0
+`define DPC31_User_New_Din_Cmd_Ind_U_Buffer_W           2
 
 // Mode_Reg1_R: port -> Mode_Reg1, 8 bit -- Mode_Reg1 reset: a 1 clears the bit, a 0 leaves it
 `define DPC31_ADDR_Mode_Reg1_R                          13'h0009
@@ -1336,6 +1348,14 @@
 `define DPC31_Next_Dout_Buffer_Cmd_State_U_Buffer_W     1
 `define DPC31_Next_Dout_Buffer_Cmd_U_Buffer_Cleared_POS 3
 `define DPC31_Next_Dout_Buffer_Cmd_U_Buffer_Cleared_W   1
+// User_New_Dout_Cmd: the Siemens DPC31 manual's name of Next_Dout_Buffer_Cmd
+`define DPC31_ADDR_User_New_Dout_Cmd                    13'h000B
+`define DPC31_User_New_Dout_Cmd_Ind_U_Buffer_POS        0
+`define DPC31_User_New_Dout_Cmd_Ind_U_Buffer_W          2
+`define DPC31_User_New_Dout_Cmd_State_U_Buffer_POS      2
+`define DPC31_User_New_Dout_Cmd_State_U_Buffer_W        1
+`define DPC31_User_New_Dout_Cmd_U_Buffer_Cleared_POS    3
+`define DPC31_User_New_Dout_Cmd_U_Buffer_Cleared_W      1
 
 // MinTSDR_Val: latch, 8 bit -- Minimum station delay of the responder, in bit times (11..255)
 `define DPC31_ADDR_MinTSDR_Val                          13'h000B
@@ -1404,10 +1424,14 @@
 // Reserved_13h_W: reserved, 8 bit -- reserved write side
 `define DPC31_ADDR_Reserved_13h_W                       13'h0013
 
-// SSA_Buffer_Free_Cmd: derived, 8 bit -- Command read: the SSA buffer is free again
+// SSA_Buffer_Free_Cmd: derived, 8 bit -- Command read: the user has taken the new station address (the DPC31 manual's User_SSA_OK)
 `define DPC31_ADDR_SSA_Buffer_Free_Cmd                  13'h0014
-`define DPC31_SSA_Buffer_Free_Cmd_Dont_Care_POS         0
-`define DPC31_SSA_Buffer_Free_Cmd_Dont_Care_W           8
+`define DPC31_SSA_Buffer_Free_Cmd_Result_POS            0
+`define DPC31_SSA_Buffer_Free_Cmd_Result_W              2
+// User_SSA_OK_Cmd: the Siemens DPC31 manual's name of SSA_Buffer_Free_Cmd
+`define DPC31_ADDR_User_SSA_OK_Cmd                      13'h0014
+`define DPC31_User_SSA_OK_Cmd_Result_POS                0
+`define DPC31_User_SSA_OK_Cmd_Result_W                  2
 
 // Reserved_14h_W: reserved, 8 bit -- reserved write side
 `define DPC31_ADDR_Reserved_14h_W                       13'h0014
@@ -1616,5 +1640,37 @@
 // Reserved_3Fh: cell (reserved), 8 bit -- reserved cell
 `define DPC31_ADDR_Reserved_3Fh                         13'h0869
 `define DPC31_Reserved_3Fh_RESET                        8'h00
+
+// InstQ_Base: cell, 8 bit -- Instruction_Queue: segment of the first entry
+`define DPC31_ADDR_InstQ_Base                           13'h086A
+`define DPC31_InstQ_Base_RESET                          8'h00
+
+// InstQ_Len: cell, 8 bit -- Instruction_Queue: number of entries
+`define DPC31_ADDR_InstQ_Len                            13'h086B
+`define DPC31_InstQ_Len_RESET                           8'h00
+
+// InstQ_Wr: cell, 8 bit -- Instruction_Queue: write pointer (the user's)
+`define DPC31_ADDR_InstQ_Wr                             13'h086C
+`define DPC31_InstQ_Wr_RESET                            8'h00
+
+// InstQ_Rd: cell, 8 bit -- Instruction_Queue: read pointer (the MAC's)
+`define DPC31_ADDR_InstQ_Rd                             13'h086D
+`define DPC31_InstQ_Rd_RESET                            8'h00
+
+// IndQ_Base: cell, 8 bit -- Indication_Queue: segment of the first entry
+`define DPC31_ADDR_IndQ_Base                            13'h086E
+`define DPC31_IndQ_Base_RESET                           8'h00
+
+// IndQ_Len: cell, 8 bit -- Indication_Queue: number of entries
+`define DPC31_ADDR_IndQ_Len                             13'h086F
+`define DPC31_IndQ_Len_RESET                            8'h00
+
+// IndQ_Wr: cell, 8 bit -- Indication_Queue: write pointer (the chip's)
+`define DPC31_ADDR_IndQ_Wr                              13'h0870
+`define DPC31_IndQ_Wr_RESET                             8'h00
+
+// IndQ_Rd: cell, 8 bit -- Indication_Queue: read pointer (the user's)
+`define DPC31_ADDR_IndQ_Rd                              13'h0871
+`define DPC31_IndQ_Rd_RESET                             8'h00
 
 `endif // DPC31_REGS_VH

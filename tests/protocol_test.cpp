@@ -243,6 +243,8 @@ class Protocol : public ::testing::TestWithParam<Profile> {
   }
 };
 
+class ProtocolSpcVpc : public Protocol {};
+
 TEST_P(Protocol, MaximumDataLengthsRoundTrip) {
   if (GetParam() == Profile::spc3) {
     // 3 x 244 output + 3 x 244 input buffers need 1464 of the SPC3's 1472 user bytes: no room
@@ -445,7 +447,9 @@ TEST_P(Protocol, WatchdogOffKeepsDataExchangeThroughASilentBus) {
   EXPECT_EQ(b.chip.wd_state(), WdState::Baud_Control);
 }
 
-TEST_P(Protocol, UserWatchdogExpires) {
+// The SPC3's and the VPC3+'s user watchdog counts Data_Exchange telegrams; the DPC31's runs on
+// 10 ms through its request interface (Dpc31Requests.*, docs/dpc31.md).
+TEST_P(ProtocolSpcVpc, UserWatchdogExpires) {
   ResponderConfig rc = config();
   rc.user_wd_value = 3;  // Res_User_WD only at init: three Data_Exchanges, then Leave_Master
   Bench b(GetParam(), 12'000'000, rc);
@@ -567,7 +571,8 @@ TEST_P(Protocol, SetPrmFaults) {
   }
 }
 
-TEST_P(Protocol, StopBitCheckOffByParameterisation) {
+// Spec_User_Prm_Byte bits 0/1 on the SPC3 and the VPC3+ (the DPC31 keeps that byte, p.26).
+TEST_P(ProtocolSpcVpc, StopBitCheckOffByParameterisation) {
   ResponderConfig rc = config();
   rc.slave.user_prm = {0x02};  // Spec_User_Prm_Byte: Dis_Stopbit
   Bench b(GetParam(), 12'000'000, rc);
@@ -602,6 +607,9 @@ TEST_P(Protocol, DataExchangeInSd3) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Profiles, Protocol, ::testing::ValuesIn(kAllProfiles),
+                         [](const auto& i) { return testutil::pname(i.param); });
+INSTANTIATE_TEST_SUITE_P(Profiles, ProtocolSpcVpc,
+                         ::testing::Values(Profile::spc3, Profile::vpc3plus),
                          [](const auto& i) { return testutil::pname(i.param); });
 
 TEST(Dpc31, NewGcIntModeOneInterruptsOnEveryGlobalControl) {

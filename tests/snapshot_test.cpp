@@ -500,7 +500,7 @@ TEST(SnapshotFormat, BadFilesAreRefusedAndLeaveTheChipUnchanged) {
 
   b = good;
   set_le(b, 8, snap::kFormatVersion + 1, 4);
-  expect_refused(target, b, "snapshot format version 3 is newer than this build reads (2)");
+  expect_refused(target, b, "snapshot format version 4 is newer than this build reads (3)");
   set_le(b, 8, 0, 4);
   expect_refused(target, b, "snapshot format version 0 is not supported");
 

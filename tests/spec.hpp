@@ -29,22 +29,28 @@ struct Row {
 
 inline unsigned bit(dpc31::Profile p) { return 1u << static_cast<unsigned>(p); }
 
-// Physical address of organisational cell `off` (16h..3Fh): SPC3/VPC3+ in place, DPC31 from 0840h.
+// Physical address of organisational cell `off` (16h..3Fh; the DPC31's run on to 47h): SPC3/VPC3+
+// in place, DPC31 from 0840h.
 inline int cell_addr(dpc31::Profile p, int off) {
   return p == dpc31::Profile::dpc31 ? 0x840 + off - 0x16 : off;
 }
 
 inline const std::vector<Row>& rows() {
   static const std::vector<Row> r = {
-      {S | D, "Int_Req_Reg", 0x00, 0x00, 16, 0x0000, "--wwwwww---wwwww"},
+      {S, "Int_Req_Reg", 0x00, 0x00, 16, 0x0000, "--wwwwww---wwwww"},
+      // DPC31: bit 5 Indication, the Indication_Queue's interrupt (docs/dpc31.md, modelled).
+      {D, "Int_Req_Reg", 0x00, 0x00, 16, 0x0000, "--wwwwww--wwwwww"},
       {V, "Int_Req_Reg", 0x00, 0x00, 16, 0x0000, "wwwwwwwwwwwwwwww"},
-      {S | D, "Int_Reg", 0x02, -1, 16, 0x0000, "--rrrrrr---rrrrr"},
+      {S, "Int_Reg", 0x02, -1, 16, 0x0000, "--rrrrrr---rrrrr"},
+      {D, "Int_Reg", 0x02, -1, 16, 0x0000, "--rrrrrr--rrrrrr"},
       {V, "Int_Reg", 0x02, -1, 16, 0x0000, "rrrrrrrrrrrrrrrr"},
-      {S | D, "Int_Ack_Reg", -1, 0x02, 16, 0x0000, "--cciicc---ccccc"},
+      {S, "Int_Ack_Reg", -1, 0x02, 16, 0x0000, "--cciicc---ccccc"},
+      {D, "Int_Ack_Reg", -1, 0x02, 16, 0x0000, "--cciicc--cccccc"},
       {V, "Int_Ack_Reg", -1, 0x02, 16, 0x0000, "cccciicccicccccc"},
       {S | D, "Status_Reg", 0x04, -1, 16, 0x0000, "rrrrrrrrrrrrrr-r"},
       {V, "Status_Reg", 0x04, -1, 16, 0xC000, "rrrrrrrrrrrrrr-r"},
-      {S | D, "Int_Mask_Reg", -1, 0x04, 16, 0xFFFF, "--oooooo---ooooo"},
+      {S, "Int_Mask_Reg", -1, 0x04, 16, 0xFFFF, "--oooooo---ooooo"},
+      {D, "Int_Mask_Reg", -1, 0x04, 16, 0xFFFF, "--oooooo--oooooo"},
       {V, "Int_Mask_Reg", -1, 0x04, 16, 0xFFFF, "oooooooooooooooo"},
       {S | D, "Mode_Reg0", 0x06, 0x06, 16, 0x0000, "--ww-wwwwwwww-ww"},
       {V, "Mode_Reg0", 0x06, 0x06, 16, 0x0000, "-wwwwwwwwwwwwwww"},
@@ -82,7 +88,9 @@ inline const std::vector<Row>& rows() {
       {S | D, "Reserved_13h_R", 0x13, -1, 8, -1, "--------", false, true},
       {V, "Next_DXBout_Buffer_Cmd", 0x13, -1, 8, 0x00, "uuuuuuuu"},
       {ALL, "Reserved_13h_W", -1, 0x13, 8, -1, "--------", false, true},
-      {ALL, "SSA_Buffer_Free_Cmd", 0x14, -1, 8, -1, "kkkkkkkk"},
+      {S | V, "SSA_Buffer_Free_Cmd", 0x14, -1, 8, -1, "kkkkkkkk"},
+      // DPC31 p.26: "User_SSA_OK Cmd" with a 2-bit result (00, 01, 11, 10).
+      {D, "SSA_Buffer_Free_Cmd", 0x14, -1, 8, -1, "------kk"},
       {ALL, "Reserved_14h_W", -1, 0x14, 8, -1, "--------", false, true},
       {S, "Reserved_15h_R", 0x15, -1, 8, -1, "--------", false, true},
       {S, "Mode_Reg1", -1, -1, 8, 0x00, "--rrRrRr"},
@@ -139,6 +147,16 @@ inline const std::vector<Row>& rows() {
       {ALL, "R_Ident_High", 0x3B, 0x3B, 8, 0x00, "wwwwwwww", true},
       {S | V, "R_GC_Command", 0x3C, 0x3C, 8, 0x00, "wwwwwwww", true},
       {D, "R_GC_Command", 0x3C, 0x3C, 8, 0xFF, "wwwwwwww", true},
+      // DPC31 queue cells (p.22: InstQ_Base, InstQ_Wr, InstQ_Rd and the Indication_Queue's; places
+      // and the lengths modelled, docs/dpc31.md), among the parameter cells from 086Ah.
+      {D, "InstQ_Base", 0x40, 0x40, 8, 0x00, "wwwwwwww", true},
+      {D, "InstQ_Len", 0x41, 0x41, 8, 0x00, "wwwwwwww", true},
+      {D, "InstQ_Wr", 0x42, 0x42, 8, 0x00, "wwwwwwww", true},
+      {D, "InstQ_Rd", 0x43, 0x43, 8, 0x00, "wwwwwwww", true},
+      {D, "IndQ_Base", 0x44, 0x44, 8, 0x00, "wwwwwwww", true},
+      {D, "IndQ_Len", 0x45, 0x45, 8, 0x00, "wwwwwwww", true},
+      {D, "IndQ_Wr", 0x46, 0x46, 8, 0x00, "wwwwwwww", true},
+      {D, "IndQ_Rd", 0x47, 0x47, 8, 0x00, "wwwwwwww", true},
       {ALL, "R_Len_Spec_Prm_Buf", 0x3D, 0x3D, 8, 0x00, "wwwwwwww", true},
       {S | D, "Reserved_3Eh", 0x3E, 0x3E, 8, 0x00, "wwwwwwww", true, true},
       {S | D, "Reserved_3Fh", 0x3F, 0x3F, 8, 0x00, "wwwwwwww", true, true},

@@ -248,7 +248,7 @@ TEST(TraceFile, CommentsAndBlankLinesAnywhere) {
   const std::string text =
       "dpc31-trace 1   # version\n\n# a comment\n" + kHead.substr(14) +
       "wr 4 0016 00   # R_TS_Adr\n\n  rd 8 0016 = 00\nstate 8 dp=Wait_Prm wd=Baud_Search "
-      "status=0000 irr=0000 imr=3f1f station=0 fdl=-\nend 100\n";
+      "status=0000 irr=0000 imr=3f3f station=0 fdl=-\nend 100\n";  // reset FFFFh, the dpc31's bits
   std::string msg;
   EXPECT_EQ(replay_text(text, msg), 0) << msg;
 }
@@ -284,8 +284,8 @@ TEST(TraceFile, ReplayChecksAHandWrittenTrace) {
   // Start_SPC3 on the DPC31 at 12 (docs/timing.md): DX_Out from the power-on clear; unmasked,
   // X/INT goes active in the same cycle.
   const std::string text = kHead +
-                           "wr 4 0004 E0\n"   // Int_Mask_Reg bits 7..0: all unmasked
-                           "wr 8 0005 C0\n"   // bits 15..8
+                           "wr 4 0004 C0\n"  // Int_Mask_Reg bits 7..0: all unmasked (7..6 reserved)
+                           "wr 8 0005 C0\n"  // bits 15..8
                            "wr 12 0008 01\n"  // Mode_Reg1_S: Start_SPC3
                            "xint 12 1\n"
                            "rd 16 0003 = 20\n"  // Int_Reg bits 15..8: DX_Out

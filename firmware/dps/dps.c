@@ -18,36 +18,51 @@ typedef struct regmap {
   VPC3_ADR user_base, segment_shift;
 } regmap;
 
-#define DPS_REGMAP(P, MODE2, PTR_C)                                                                \
-  {                                                                                                \
-    P##_Int_Req_Reg, P##_Int_Reg, P##_Int_Ack_Reg, P##_Status_Reg, P##_Int_Mask_Reg,               \
-        P##_Mode_Reg0, P##_Mode_Reg1_S, P##_Mode_Reg1_R, MODE2, P##_Din_Buffer_SM,                 \
-        P##_New_Din_Buffer_Cmd, P##_Dout_Buffer_SM, P##_Next_Dout_Buffer_Cmd, P##_Diag_Buffer_SM,  \
-        P##_New_Diag_Buffer_Cmd, P##_WD_Baud_Control_Val, P##_MinTSDR_Val, P##_User_Prm_Data_Okay, \
-        P##_User_Prm_Data_Not_Okay, P##_User_Cfg_Data_Okay, P##_User_Cfg_Data_Not_Okay,            \
-        P##_SSA_Buffer_Free_Cmd, P##_R_TS_Adr, P##_R_User_WD_Value, P##_R_Len_Dout_Buf,            \
-        {P##_R_Dout_Buf_Ptr1, P##_R_Dout_Buf_Ptr2, P##_R_Dout_Buf_Ptr3}, P##_R_Len_Din_Buf,        \
-        {P##_R_Din_Buf_Ptr1, P##_R_Din_Buf_Ptr2, P##_R_Din_Buf_Ptr3}, PTR_C,                       \
-        {P##_R_Len_Diag_Buf1, P##_R_Len_Diag_Buf2}, {P##_R_Diag_Buf_Ptr1, P##_R_Diag_Buf_Ptr2},    \
-        {P##_R_Len_Cntrl_Buf1, P##_R_Len_Cntrl_Buf2}, P##_R_Aux_Buf_Sel,                           \
-        {P##_R_Aux_Buf_Ptr1, P##_R_Aux_Buf_Ptr2}, P##_R_Len_SSA_Data, P##_R_SSA_Buf_Ptr,           \
-        P##_R_Len_Prm_Data, P##_R_Prm_Buf_Ptr, P##_R_Len_Cfg_Data, P##_R_Cfg_Buf_Ptr,              \
-        P##_R_Len_Read_Cfg_Data, P##_R_Read_Cfg_Buf_Ptr, P##_R_Real_No_Add_Change,                 \
-        P##_R_Ident_Low, P##_R_Ident_High, P##_R_GC_Command, P##_USER_BASE, P##_SEGMENT_SHIFT      \
+#define DPS_REGMAP(P, MODE2, PTR_C, NEW_DIN, NEXT_DOUT, SSA_FREE)                                 \
+  {                                                                                               \
+    P##_Int_Req_Reg, P##_Int_Reg, P##_Int_Ack_Reg, P##_Status_Reg, P##_Int_Mask_Reg,              \
+        P##_Mode_Reg0, P##_Mode_Reg1_S, P##_Mode_Reg1_R, MODE2, P##_Din_Buffer_SM, NEW_DIN,       \
+        P##_Dout_Buffer_SM, NEXT_DOUT, P##_Diag_Buffer_SM, P##_New_Diag_Buffer_Cmd,               \
+        P##_WD_Baud_Control_Val, P##_MinTSDR_Val, P##_User_Prm_Data_Okay,                         \
+        P##_User_Prm_Data_Not_Okay, P##_User_Cfg_Data_Okay, P##_User_Cfg_Data_Not_Okay, SSA_FREE, \
+        P##_R_TS_Adr, P##_R_User_WD_Value, P##_R_Len_Dout_Buf,                                    \
+        {P##_R_Dout_Buf_Ptr1, P##_R_Dout_Buf_Ptr2, P##_R_Dout_Buf_Ptr3}, P##_R_Len_Din_Buf,       \
+        {P##_R_Din_Buf_Ptr1, P##_R_Din_Buf_Ptr2, P##_R_Din_Buf_Ptr3}, PTR_C,                      \
+        {P##_R_Len_Diag_Buf1, P##_R_Len_Diag_Buf2}, {P##_R_Diag_Buf_Ptr1, P##_R_Diag_Buf_Ptr2},   \
+        {P##_R_Len_Cntrl_Buf1, P##_R_Len_Cntrl_Buf2}, P##_R_Aux_Buf_Sel,                          \
+        {P##_R_Aux_Buf_Ptr1, P##_R_Aux_Buf_Ptr2}, P##_R_Len_SSA_Data, P##_R_SSA_Buf_Ptr,          \
+        P##_R_Len_Prm_Data, P##_R_Prm_Buf_Ptr, P##_R_Len_Cfg_Data, P##_R_Cfg_Buf_Ptr,             \
+        P##_R_Len_Read_Cfg_Data, P##_R_Read_Cfg_Buf_Ptr, P##_R_Real_No_Add_Change,                \
+        P##_R_Ident_Low, P##_R_Ident_High, P##_R_GC_Command, P##_USER_BASE, P##_SEGMENT_SHIFT     \
   }
 
 #define NONE 0xFFFFu
-static const regmap kMaps[3] = {DPS_REGMAP(SPC3, NONE, NONE),
-                                DPS_REGMAP(VPC3, VPC3_Mode_Reg2, NONE),
-                                DPS_REGMAP(DPC31, NONE, DPC31_R_Dout_Buf_Ptr_C)};
+/* The DPC31 under its own manual's names: User_New_Din / User_New_Dout (Table 5.2-8) and
+ * User_SSA_OK (p.26) are the commands the SPC3 calls New_Din_Buffer_Cmd, Next_Dout_Buffer_Cmd
+ * and SSA_Buffer_Free_Cmd. */
+static const regmap kMaps[3] = {
+    DPS_REGMAP(SPC3, NONE, NONE, SPC3_New_Din_Buffer_Cmd, SPC3_Next_Dout_Buffer_Cmd,
+               SPC3_SSA_Buffer_Free_Cmd),
+    DPS_REGMAP(VPC3, VPC3_Mode_Reg2, NONE, VPC3_New_Din_Buffer_Cmd, VPC3_Next_Dout_Buffer_Cmd,
+               VPC3_SSA_Buffer_Free_Cmd),
+    DPS_REGMAP(DPC31, NONE, DPC31_R_Dout_Buf_Ptr_C, DPC31_User_New_Din_Cmd, DPC31_User_New_Dout_Cmd,
+               DPC31_User_SSA_OK_Cmd)};
 
-/* Int_Req_Reg bits, the same in every profile. */
+/* The DPC31 takes its requests through the Instruction_Queue and answers through the
+ * Indication_Queue (DPC31 p.22, Table 5.1-3, p.31; docs/dpc31.md): 2-byte entries, code then
+ * parameter, in rings of DPS_QUEUE_LEN entries (one always stays empty). */
+enum { MAC_Start = 0x10u, DPS_User_Wd = 0x20u };
+enum { Wd_Reset = 0x00u, Wd_Enable = 0x01u, Wd_Disable = 0x02u, Wd_Expired = 0x03u };
+enum { DPS_QUEUE_LEN = 4u };
+
+/* Int_Req_Reg bits, the same in every profile (Indication: the DPC31's only). */
 enum {
   MAC_Reset = 0x0001u,
   Go_Leave_Data_Exchange = 0x0002u,
   Baudrate_Detect = 0x0004u,
   WD_DP_Control_Timeout = 0x0008u,
   User_Timer_Clock = 0x0010u,
+  Indication = 0x0020u,
   New_Ext_Prm_Data = 0x0040u,
   New_GC_Command = 0x0100u,
   New_SSA_Data = 0x0200u,
@@ -72,6 +87,9 @@ static uint8_t g_diag[DPS_MAX_DIAG];
 static uint8_t g_diag_len;
 static uint8_t g_diag_ext;
 static int g_diag_pending;
+static int g_dpc31;              /* the chip takes requests, not Mode_Reg1 commands */
+static VPC3_ADR g_instq, g_indq; /* dpc31: the queues' first entries */
+static uint8_t g_instq_wr, g_indq_rd;
 
 /* 16-bit registers go over the 8-bit bus byte by byte; which address holds the low byte
  * depends on the bus mode (Intel: the lower address). */
@@ -122,7 +140,47 @@ static void allocate_buffers(void) {
   DPS_ALLOC(R->cfg_ptr, aux_len);
   DPS_ALLOC(R->read_cfg_ptr, M->cfg_len);
   DPS_ALLOC(R->ssa_ptr, aux_len);
+  if (g_dpc31) {
+    DPS_ALLOC(DPC31_InstQ_Base, 2u * DPS_QUEUE_LEN);
+    DPS_ALLOC(DPC31_IndQ_Base, 2u * DPS_QUEUE_LEN);
+    Vpc3Write(DPC31_InstQ_Len, DPS_QUEUE_LEN);
+    Vpc3Write(DPC31_IndQ_Len, DPS_QUEUE_LEN);
+  }
 #undef DPS_ALLOC
+}
+
+/* dpc31: queue requests; the MAC executes them when InstQ_Wr moves past them (one write for
+ * several). */
+static void queue_request(uint8_t code, uint8_t param) {
+  Vpc3Write((VPC3_ADR)(g_instq + 2u * g_instq_wr), code);
+  Vpc3Write((VPC3_ADR)(g_instq + 2u * g_instq_wr + 1u), param);
+  g_instq_wr = (uint8_t)((g_instq_wr + 1u) % DPS_QUEUE_LEN);
+}
+static void send_requests(void) { Vpc3Write(DPC31_InstQ_Wr, g_instq_wr); }
+
+/* The user watchdog: the SPC3 and VPC3+ count Data_Exchange telegrams from Res_User_WD on; the
+ * DPC31's DPS_User_Watchdog runs on 10 ms from its Enable request, and Reset retriggers it. */
+static void user_wd(uint8_t action) {
+  if (!g_dpc31) {
+    if (action == Wd_Reset) Vpc3Write(R->mode1_s, Res_User_WD);
+    return;
+  }
+  /* Reset first: it lifts the lock an expiry leaves, which Enable alone would not. */
+  if (action == Wd_Enable) queue_request(DPS_User_Wd, Wd_Reset);
+  queue_request(DPS_User_Wd, action);
+  send_requests();
+}
+
+/* dpc31: read the Indication_Queue up to IndQ_Wr and free the entries. */
+static void drain_indications(void) {
+  const uint8_t wr = Vpc3Read(DPC31_IndQ_Wr);
+  while (g_indq_rd != wr && wr < DPS_QUEUE_LEN) {
+    const uint8_t code = Vpc3Read((VPC3_ADR)(g_indq + 2u * g_indq_rd));
+    const uint8_t event = Vpc3Read((VPC3_ADR)(g_indq + 2u * g_indq_rd + 1u));
+    if (code == DPS_User_Wd && event == Wd_Expired) ++g_stats.user_wd_expiries;
+    g_indq_rd = (uint8_t)((g_indq_rd + 1u) % DPS_QUEUE_LEN);
+  }
+  Vpc3Write(DPC31_IndQ_Rd, g_indq_rd);
 }
 
 /* dpc31: the clear buffer C holds what a Clear hands over as outputs: all zero. */
@@ -136,6 +194,9 @@ void dps_init(const dps_board* board, const dps_module* module) {
                                    New_Cfg_Data | New_Prm_Data | Diag_Buffer_Changed | DX_Out;
   R = &kMaps[board->profile];
   M = module;
+  g_dpc31 = board->profile == DPC31_PROFILE_DPC31;
+  g_instq_wr = 0;
+  g_indq_rd = 0;
   g_motorola = board->motorola;
   memset(&g_stats, 0, sizeof g_stats);
   g_diag_len = 0;
@@ -149,7 +210,7 @@ void dps_init(const dps_board* board, const dps_module* module) {
   /* DP mode, fail-safe telegrams accepted; no Sync/Freeze (the GSD says so); EOI inactive
    * time 1 us, user timer 1 ms. */
   write16(R->mode0, DP_Mode | Spec_Clear_Mode);
-  set_mask(kSources);
+  set_mask(g_dpc31 ? (uint16_t)(kSources | Indication) : kSources);
   Vpc3Write(R->wd_baud, 0x10);  /* Baud_Control: 16 x 10 ms */
   Vpc3Write(R->min_tsdr, 0x0B); /* 11 bit times */
   write16(R->user_wd, 0x01FF);
@@ -162,7 +223,15 @@ void dps_init(const dps_board* board, const dps_module* module) {
   CopyToVpc3(buffer(R->read_cfg_ptr), (MEM_UNSIGNED8_PTR)module->cfg, module->cfg_len);
   refill_clear_buffer();
   dps_update_inputs();
-  Vpc3Write(R->mode1_s, Start_SPC3 | Res_User_WD);
+  if (!g_dpc31) {
+    Vpc3Write(R->mode1_s, Start_SPC3 | Res_User_WD);
+    return;
+  }
+  /* The DPC31 starts with MAC_Start; its user watchdog runs while in Data_Exchange. */
+  g_instq = buffer(DPC31_InstQ_Base);
+  g_indq = buffer(DPC31_IndQ_Base);
+  queue_request(MAC_Start, 0x00);
+  send_requests();
 }
 
 void dps_update_inputs(void) {
@@ -268,7 +337,7 @@ static void handle_dx_out(void) {
     }
   }
   dps_update_inputs();
-  Vpc3Write(R->mode1_s, Res_User_WD);
+  user_wd(Wd_Reset);
 }
 
 /* Set_Slave_Add: the new address would go to the board's non-volatile memory. */
@@ -292,10 +361,16 @@ void dps_isr(void) {
     ++g_stats.wd_timeouts;
     M->comm_lost(DPS_LOSS_WATCHDOG);
   }
-  if ((ir & Go_Leave_Data_Exchange) && !in_data_exchange()) {
-    ++g_stats.leave_dx;
-    M->comm_lost(DPS_LOSS_LEFT_DATA_EXCH);
+  if (ir & Go_Leave_Data_Exchange) {
+    if (in_data_exchange()) {
+      user_wd(Wd_Enable);
+    } else {
+      ++g_stats.leave_dx;
+      user_wd(Wd_Disable);
+      M->comm_lost(DPS_LOSS_LEFT_DATA_EXCH);
+    }
   }
+  if (ir & Indication) drain_indications();
   if (ir & MAC_Reset) {
     ++g_stats.mac_resets;
     M->comm_lost(DPS_LOSS_OFFLINE);

@@ -5,7 +5,9 @@
  * functions of the public SPC3/VPC3+ drivers (Vpc3Read, Vpc3Write, CopyToVpc3, CopyFromVpc3,
  * Vpc3MemSet, Vpc3MemCmp) and the addresses of the generated register header. It owns the
  * chip: the init sequence, the ISR for every interrupt source, the Prm/Cfg handshakes with
- * their conflict loops, Dout/Din buffer switching, diag updates, Set_Slave_Add and Res_User_WD.
+ * their conflict loops, Dout/Din buffer switching, diag updates, Set_Slave_Add and the user
+ * watchdog; on the DPC31 through its request interface (MAC_Start, DPS_User_Wd, the
+ * Indication_Queue; docs/dpc31.md).
  * A module plugs in with a dps_module: its ident, Cfg and lengths, and callbacks.
  */
 #ifndef DPC31_FIRMWARE_DPS_H
@@ -59,7 +61,7 @@ typedef struct dps_module {
   void (*tick)(void);
 } dps_module;
 
-/* main(): configure the chip for this module and start it (Start_SPC3). */
+/* main(): configure the chip for this module and start it (Start_SPC3; the DPC31: MAC_Start). */
 void dps_init(const dps_board* board, const dps_module* module);
 /* The X/INT interrupt service routine. */
 void dps_isr(void);
@@ -77,7 +79,8 @@ typedef struct dps_stats {
   uint32_t prm_ok, prm_rejected, cfg_ok, cfg_rejected, prm_conflicts, cfg_conflicts;
   uint32_t dx_out, cleared, gc_commands, ssa, diag_updates, baud_detects, wd_timeouts;
   uint32_t leave_dx, mac_resets, ticks, interrupts;
-  uint8_t last_gc; /* R_GC_Command at the last New_GC_Command */
+  uint32_t user_wd_expiries; /* dpc31: DPS_User_WD Expired indications */
+  uint8_t last_gc;           /* R_GC_Command at the last New_GC_Command */
   uint8_t station_address;
 } dps_stats;
 const dps_stats* dps_get_stats(void);

@@ -1202,6 +1202,8 @@ enum dpc31_profile {
 #define DPC31_Int_Req_Reg_WD_DP_Control_Timeout_Msk     0x0008u /* 3 RW: watchdog expired in DP_Control */
 #define DPC31_Int_Req_Reg_User_Timer_Clock_Pos          4u
 #define DPC31_Int_Req_Reg_User_Timer_Clock_Msk          0x0010u /* 4 RW: user time base (1 ms / 10 ms) elapsed */
+#define DPC31_Int_Req_Reg_Indication_Pos                5u
+#define DPC31_Int_Req_Reg_Indication_Msk                0x0020u /* 5 RW: DPC31: a new entry in the Indication_Queue (the bit is modelled) */
 #define DPC31_Int_Req_Reg_New_GC_Command_Pos            8u
 #define DPC31_Int_Req_Reg_New_GC_Command_Msk            0x0100u /* 8 RW: Global_Control received (changed command byte, or every GC in New_GC_Int mode 1) */
 #define DPC31_Int_Req_Reg_New_SSA_Data_Pos              9u
@@ -1232,6 +1234,8 @@ enum dpc31_profile {
 #define DPC31_Int_Reg_WD_DP_Control_Timeout_Msk         0x0008u /* 3 RO: watchdog expired in DP_Control */
 #define DPC31_Int_Reg_User_Timer_Clock_Pos              4u
 #define DPC31_Int_Reg_User_Timer_Clock_Msk              0x0010u /* 4 RO: user time base (1 ms / 10 ms) elapsed */
+#define DPC31_Int_Reg_Indication_Pos                    5u
+#define DPC31_Int_Reg_Indication_Msk                    0x0020u /* 5 RO: DPC31: a new entry in the Indication_Queue (the bit is modelled) */
 #define DPC31_Int_Reg_New_GC_Command_Pos                8u
 #define DPC31_Int_Reg_New_GC_Command_Msk                0x0100u /* 8 RO: Global_Control received (changed command byte, or every GC in New_GC_Int mode 1) */
 #define DPC31_Int_Reg_New_SSA_Data_Pos                  9u
@@ -1262,6 +1266,8 @@ enum dpc31_profile {
 #define DPC31_Int_Ack_Reg_WD_DP_Control_Timeout_Msk     0x0008u /* 3 W1C: watchdog expired in DP_Control */
 #define DPC31_Int_Ack_Reg_User_Timer_Clock_Pos          4u
 #define DPC31_Int_Ack_Reg_User_Timer_Clock_Msk          0x0010u /* 4 W1C: user time base (1 ms / 10 ms) elapsed */
+#define DPC31_Int_Ack_Reg_Indication_Pos                5u
+#define DPC31_Int_Ack_Reg_Indication_Msk                0x0020u /* 5 W1C: DPC31: a new entry in the Indication_Queue (the bit is modelled) */
 #define DPC31_Int_Ack_Reg_New_GC_Command_Pos            8u
 #define DPC31_Int_Ack_Reg_New_GC_Command_Msk            0x0100u /* 8 W1C: Global_Control received (changed command byte, or every GC in New_GC_Int mode 1) */
 #define DPC31_Int_Ack_Reg_New_SSA_Data_Pos              9u
@@ -1314,6 +1320,8 @@ enum dpc31_profile {
 #define DPC31_Int_Mask_Reg_WD_DP_Control_Timeout_Msk    0x0008u /* 3 WO: watchdog expired in DP_Control */
 #define DPC31_Int_Mask_Reg_User_Timer_Clock_Pos         4u
 #define DPC31_Int_Mask_Reg_User_Timer_Clock_Msk         0x0010u /* 4 WO: user time base (1 ms / 10 ms) elapsed */
+#define DPC31_Int_Mask_Reg_Indication_Pos               5u
+#define DPC31_Int_Mask_Reg_Indication_Msk               0x0020u /* 5 WO: DPC31: a new entry in the Indication_Queue (the bit is modelled) */
 #define DPC31_Int_Mask_Reg_New_GC_Command_Pos           8u
 #define DPC31_Int_Mask_Reg_New_GC_Command_Msk           0x0100u /* 8 WO: Global_Control received (changed command byte, or every GC in New_GC_Int mode 1) */
 #define DPC31_Int_Mask_Reg_New_SSA_Data_Pos             9u
@@ -1391,6 +1399,10 @@ enum dpc31_profile {
 #define DPC31_New_Din_Buffer_Cmd                        0x0009u /* read */
 #define DPC31_New_Din_Buffer_Cmd_Ind_U_Buffer_Pos       0u
 #define DPC31_New_Din_Buffer_Cmd_Ind_U_Buffer_Msk       0x03u /* 1:0 CMD: the new U buffer (01..11 = Din_Buf_Ptr1..3) */
+/* User_New_Din_Cmd: the Siemens DPC31 manual's name of New_Din_Buffer_Cmd */
+#define DPC31_User_New_Din_Cmd                          0x0009u /* read */
+#define DPC31_User_New_Din_Cmd_Ind_U_Buffer_Pos         0u
+#define DPC31_User_New_Din_Cmd_Ind_U_Buffer_Msk         0x03u /* 1:0 CMD: the new U buffer (01..11 = Din_Buf_Ptr1..3) */
 
 /* Mode_Reg1_R: port -> Mode_Reg1, 8 bit -- Mode_Reg1 reset: a 1 clears the bit, a 0 leaves it */
 #define DPC31_Mode_Reg1_R                               0x0009u /* write */
@@ -1432,6 +1444,14 @@ enum dpc31_profile {
 #define DPC31_Next_Dout_Buffer_Cmd_State_U_Buffer_Msk   0x04u /* 2 CMD: 1 = a new U buffer was handed over */
 #define DPC31_Next_Dout_Buffer_Cmd_U_Buffer_Cleared_Pos 3u
 #define DPC31_Next_Dout_Buffer_Cmd_U_Buffer_Cleared_Msk 0x08u /* 3 CMD: 1 = the U buffer was cleared by the ASIC */
+/* User_New_Dout_Cmd: the Siemens DPC31 manual's name of Next_Dout_Buffer_Cmd */
+#define DPC31_User_New_Dout_Cmd                         0x000Bu /* read */
+#define DPC31_User_New_Dout_Cmd_Ind_U_Buffer_Pos        0u
+#define DPC31_User_New_Dout_Cmd_Ind_U_Buffer_Msk        0x03u /* 1:0 CMD: the U buffer after the command (01..11 = Dout_Buf_Ptr1..3) */
+#define DPC31_User_New_Dout_Cmd_State_U_Buffer_Pos      2u
+#define DPC31_User_New_Dout_Cmd_State_U_Buffer_Msk      0x04u /* 2 CMD: 1 = a new U buffer was handed over */
+#define DPC31_User_New_Dout_Cmd_U_Buffer_Cleared_Pos    3u
+#define DPC31_User_New_Dout_Cmd_U_Buffer_Cleared_Msk    0x08u /* 3 CMD: 1 = the U buffer was cleared by the ASIC */
 
 /* MinTSDR_Val: latch, 8 bit -- Minimum station delay of the responder, in bit times (11..255) */
 #define DPC31_MinTSDR_Val                               0x000Bu /* write */
@@ -1500,10 +1520,14 @@ enum dpc31_profile {
 /* Reserved_13h_W: reserved, 8 bit -- reserved write side */
 #define DPC31_Reserved_13h_W                            0x0013u /* write */
 
-/* SSA_Buffer_Free_Cmd: derived, 8 bit -- Command read: the SSA buffer is free again */
+/* SSA_Buffer_Free_Cmd: derived, 8 bit -- Command read: the user has taken the new station address (the DPC31 manual's User_SSA_OK) */
 #define DPC31_SSA_Buffer_Free_Cmd                       0x0014u /* read */
-#define DPC31_SSA_Buffer_Free_Cmd_Dont_Care_Pos         0u
-#define DPC31_SSA_Buffer_Free_Cmd_Dont_Care_Msk         0xFFu /* 7:0 CMD: value don't care (reads 00h); re-enables SAP55 */
+#define DPC31_SSA_Buffer_Free_Cmd_Result_Pos            0u
+#define DPC31_SSA_Buffer_Free_Cmd_Result_Msk            0x03u /* 1:0 CMD: 00 User_SSA_Finished (SAP55 enabled again), 01 SSA_Conflict, 11 Not_Allowed (no Set_Slave_Add pending), 10 not possible */
+/* User_SSA_OK_Cmd: the Siemens DPC31 manual's name of SSA_Buffer_Free_Cmd */
+#define DPC31_User_SSA_OK_Cmd                           0x0014u /* read */
+#define DPC31_User_SSA_OK_Cmd_Result_Pos                0u
+#define DPC31_User_SSA_OK_Cmd_Result_Msk                0x03u /* 1:0 CMD: 00 User_SSA_Finished (SAP55 enabled again), 01 SSA_Conflict, 11 Not_Allowed (no Set_Slave_Add pending), 10 not possible */
 
 /* Reserved_14h_W: reserved, 8 bit -- reserved write side */
 #define DPC31_Reserved_14h_W                            0x0014u /* write */
@@ -1716,5 +1740,37 @@ enum dpc31_profile {
 /* Reserved_3Fh: cell (reserved), 8 bit -- reserved cell */
 #define DPC31_Reserved_3Fh                              0x0869u /* read/write */
 #define DPC31_Reserved_3Fh_RESET                        0x00u
+
+/* InstQ_Base: cell, 8 bit -- Instruction_Queue: segment of the first entry */
+#define DPC31_InstQ_Base                                0x086Au /* read/write */
+#define DPC31_InstQ_Base_RESET                          0x00u
+
+/* InstQ_Len: cell, 8 bit -- Instruction_Queue: number of entries */
+#define DPC31_InstQ_Len                                 0x086Bu /* read/write */
+#define DPC31_InstQ_Len_RESET                           0x00u
+
+/* InstQ_Wr: cell, 8 bit -- Instruction_Queue: write pointer (the user's) */
+#define DPC31_InstQ_Wr                                  0x086Cu /* read/write */
+#define DPC31_InstQ_Wr_RESET                            0x00u
+
+/* InstQ_Rd: cell, 8 bit -- Instruction_Queue: read pointer (the MAC's) */
+#define DPC31_InstQ_Rd                                  0x086Du /* read/write */
+#define DPC31_InstQ_Rd_RESET                            0x00u
+
+/* IndQ_Base: cell, 8 bit -- Indication_Queue: segment of the first entry */
+#define DPC31_IndQ_Base                                 0x086Eu /* read/write */
+#define DPC31_IndQ_Base_RESET                           0x00u
+
+/* IndQ_Len: cell, 8 bit -- Indication_Queue: number of entries */
+#define DPC31_IndQ_Len                                  0x086Fu /* read/write */
+#define DPC31_IndQ_Len_RESET                            0x00u
+
+/* IndQ_Wr: cell, 8 bit -- Indication_Queue: write pointer (the chip's) */
+#define DPC31_IndQ_Wr                                   0x0870u /* read/write */
+#define DPC31_IndQ_Wr_RESET                             0x00u
+
+/* IndQ_Rd: cell, 8 bit -- Indication_Queue: read pointer (the user's) */
+#define DPC31_IndQ_Rd                                   0x0871u /* read/write */
+#define DPC31_IndQ_Rd_RESET                             0x00u
 
 #endif /* DPC31_REGS_H */

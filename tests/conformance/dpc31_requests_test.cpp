@@ -328,27 +328,6 @@ TEST(Dpc31Requests, UserSsaOkFinishesAPendingSetSlaveAddAndRefusesWithoutOne) {
   EXPECT_EQ(wire(b.master.set_slave_address(10, false).answer), Bytes{0xE5});
 }
 
-// p.26: "The SSA_State_Machine is reset also when ... the watchdog has expired in the mode
-// 'DP_Control'": a Set_Slave_Add the user never finished no longer blocks SAP55 after the DP
-// watchdog expired (TWD = 10 ms x 2 x 5 = 100 ms).
-TEST(Dpc31Requests, DpControlExpiryResetsTheSsaStateMachine) {
-  ResponderConfig rc;
-  rc.slave.wd_fact1 = 2;
-  rc.slave.wd_fact2 = 5;
-  Bench b(Profile::dpc31, 1'500'000, rc);
-  ASSERT_TRUE(b.master.startup());
-  AckOnly user;  // from here the user leaves the SSA buffer as it is
-  b.master.set_firmware([&user](BusPort& c) { user.isr(c); });
-  EXPECT_EQ(wire(b.master.set_slave_address(9, false).answer), Bytes{0xE5});
-  b.master.set_target(9);
-  const Exchange refused = b.master.set_slave_address(10, false);
-  ASSERT_TRUE(refused.answer);
-  EXPECT_NE(wire(refused.answer), Bytes{0xE5}) << "SAP55 is closed until User_SSA_OK";
-  b.master.idle(4'800'000 + 48'000);
-  ASSERT_EQ(b.chip.wd_state(), WdState::Baud_Control);
-  EXPECT_EQ(wire(b.master.set_slave_address(10, false).answer), Bytes{0xE5});
-}
-
 // Table 5.2-8 / p.26 name the user's commands User_New_Dout, User_New_Din and User_SSA_OK: the
 // register description knows them under those names at the commands' (modelled) addresses, and
 // the C header defines them (DPC31_User_New_Dout_Cmd, ...).

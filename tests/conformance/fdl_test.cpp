@@ -76,21 +76,6 @@ TEST_P(Fdl, SetSlaveAddress_SsaBufferFreeCmdReEnablesSap55) {
   EXPECT_TRUE(b.master.fdl_status().answer);
 }
 
-// chip-facts §4.1 [S-RU-SPC3] / §8 [S-PRM]: Mode_Reg0 bit 0 Dis_Start_Control, bit 1
-// Dis_Stop_Control "Overwritten by Set_Prm in DP mode" from Set_Prm byte 7 bits 0 / 1
-// (Spec_User_Prm_Byte). Byte 7 = 02h: Mode_Reg0 read through the bus shows bits 1..0 = 10b;
-// byte 7 = 01h: 01b.
-TEST_P(Fdl, SetPrmSpecUserPrmByte_OverwritesDisStartStopControl) {
-  for (const std::uint8_t byte7 : {0x02, 0x01}) {
-    ResponderConfig rc;
-    rc.slave.user_prm = {byte7};
-    Bare b(GetParam(), 12'000'000, rc);
-    ASSERT_TRUE(b.master.fdl_status().answer);
-    b.master.set_prm();
-    EXPECT_EQ(b.chip.read(rd(b.chip, RegId::Mode_Reg0)) & 0x03, byte7) << int(byte7);
-  }
-}
-
 // chip-facts §2.1 bit 1 [S-IRR]: Go/Leave_Data_Exchange "DP_SM entered or left DATA_EX". In
 // Data_Exchange, with Int_Req_Reg acknowledged, User_Leave_Master (Mode_Reg1 bit 3) latches it
 // (with DX_Out, the cleared outputs) and Status_Reg shows Wait_Prm.
@@ -108,4 +93,25 @@ TEST_P(Fdl, GoLeaveDataExchange_WhenTheStateMachineLeavesDataExchange) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Profiles, Fdl, ::testing::ValuesIn(kAllProfiles),
+                         [](const auto& i) { return testutil::pname(i.param); });
+
+class FdlSpcVpc : public ::testing::TestWithParam<Profile> {};
+
+// chip-facts §4.1 [S-RU-SPC3] / §8 [S-PRM]: Mode_Reg0 bit 0 Dis_Start_Control, bit 1
+// Dis_Stop_Control "Overwritten by Set_Prm in DP mode" from Set_Prm byte 7 bits 0 / 1
+// (Spec_User_Prm_Byte), on the SPC3 and the VPC3+ (the DPC31 keeps that byte for itself, p.26:
+// Dpc31Requests.Byte13DoesNotSetDisStartOrDisStop). Byte 7 = 02h: Mode_Reg0 read through the bus
+// shows bits 1..0 = 10b; byte 7 = 01h: 01b.
+TEST_P(FdlSpcVpc, SetPrmSpecUserPrmByte_OverwritesDisStartStopControl) {
+  for (const std::uint8_t byte7 : {0x02, 0x01}) {
+    ResponderConfig rc;
+    rc.slave.user_prm = {byte7};
+    Bare b(GetParam(), 12'000'000, rc);
+    ASSERT_TRUE(b.master.fdl_status().answer);
+    b.master.set_prm();
+    EXPECT_EQ(b.chip.read(rd(b.chip, RegId::Mode_Reg0)) & 0x03, byte7) << int(byte7);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Profiles, FdlSpcVpc, ::testing::Values(Profile::spc3, Profile::vpc3plus),
                          [](const auto& i) { return testutil::pname(i.param); });
