@@ -400,6 +400,43 @@ def profibus_rates_default_log():
           f"dp_master.py --baud 38400: exit {p.returncode}, {p.stderr!r}")
 
 
+def answer_dropped_without_client():
+    """A client that leaves after its request went on the line, before the answer: the answer is
+    dropped, and the log says so with the cycle at which it was dropped (between the client's
+    leaving and the next one's coming), not when the next client comes. Realtime, 9600 baud: the
+    request (Slave_Diag, 9 characters) is on the line about 3 to 14 ms after it was written, the
+    answer comes after it; the client closes 9 ms after writing (tried up to 5 times, the wall
+    clock of a loaded machine may miss that window)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        b = Bridge(tmp, "--firmware", "DO4", "--baud", "9600")
+        try:
+            for _ in range(5):
+                m = Master(b.path, 9600, 0.5 * SCALE)
+                m.expect("FDL_Status", m.find_slave(), status_ok())
+                os.write(m.fd, m.srd_frame([], SAP_SLAVE_DIAG))
+                time.sleep(0.009)
+                m.close()
+                time.sleep(0.1)
+                if any("answer bytes dropped" in line for line in b.log_lines()):
+                    break
+            m = Master(b.path, 9600, 0.5 * SCALE)
+            m.expect("FDL_Status (next client)", m.fdl_status(), status_ok())
+            m.close()
+            b.stop(signal.SIGTERM)
+            lines = b.log_lines()
+            check_order(lines)
+            at = [i for i, line in enumerate(lines) if "no client: 17 answer bytes dropped" in line]
+            check(len(at) == 1, "no line 'no client: 17 answer bytes dropped' (or several)")
+            before = [line for line in lines[:at[0]] if "NOTE  client" in line]
+            after = [line for line in lines[at[0]:] if "NOTE  client" in line]
+            check(before and "client closed the pty" in before[-1],
+                  f"the drop is not after the client left: {before[-1:]}")
+            check(after and "client opened the pty" in after[0],
+                  f"the drop is not before the next client came: {after[:1]}")
+        finally:
+            b.kill()
+
+
 CASES = {
     "do4_realtime_two_clients": lambda: do4_two_clients("realtime"),
     "do4_free_two_clients": lambda: do4_two_clients("free"),
@@ -408,6 +445,7 @@ CASES = {
     "bad_arguments_exit_2": bad_arguments,
     "stale_symlink_and_silent_client": stale_symlink_replaced,
     "profibus_rates_default_log": profibus_rates_default_log,
+    "answer_dropped_without_client": answer_dropped_without_client,
 }
 
 

@@ -251,12 +251,17 @@ class Bridge {
   // Writes what the chip sent to the client (if there is one).
   void deliver() {
     const std::vector<std::uint8_t> out = engine_->take_output();
-    if (out.empty()) return;
     if (!present_) {
-      // Said when they are dropped: the answer to a request the last client left on the line.
-      engine_->note(fmt::format("no client: {} answer bytes dropped", out.size()));
+      // The answer to a request the last client left on the line: one line when it is over
+      // (its bytes come over several loop turns), stamped then, not when the next client comes.
+      dropped_ += out.size();
+      if (dropped_ != 0 && !engine_->busy()) {
+        engine_->note(fmt::format("no client: {} answer bytes dropped", dropped_));
+        dropped_ = 0;
+      }
       return;
     }
+    if (out.empty()) return;
     const unsigned long n = pty_.write(out.data(), out.size());
     if (n < out.size()) {
       engine_->note(
@@ -337,6 +342,7 @@ class Bridge {
   Clock::time_point last_input_;
   bool present_ = false;
   bool speed_checked_ = false;
+  std::size_t dropped_ = 0;  // answer bytes dropped (no client) and not yet logged
 };
 
 }  // namespace
