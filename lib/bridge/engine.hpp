@@ -157,7 +157,6 @@ class Engine {
 
   DpState dp_;
   WdState wd_;
-  std::uint64_t history_checked_ = 0;
 
   struct HeldLine {
     std::uint64_t cycle;
