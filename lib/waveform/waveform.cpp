@@ -84,7 +84,9 @@ struct Stream {
     }
   }
   // The first `n` were written.
-  void drop(std::size_t n) { events.erase(events.begin(), events.begin() + static_cast<long>(n)); }
+  void drop(std::size_t n) {
+    events.erase(events.begin(), events.begin() + static_cast<std::ptrdiff_t>(n));
+  }
 };
 
 // The two streams (RxD, driven ahead of time, and everything else) merged in (cycle, seq) order.
@@ -118,8 +120,8 @@ std::string bits(std::uint32_t v, int width) {
   return s;
 }
 
-// The VCD body, formatted by hand into a 16 KiB buffer: a traced run writes one line per change,
-// and fmt's or stdio's per-call cost was most of the tracing cost (docs/performance.md).
+// The VCD body, formatted by hand into a 16 KiB buffer: a traced run writes a line per change, and
+// a formatted print per line (fmt into stdio) was a fifth of its cost (docs/performance.md, i).
 class VcdBody {
  public:
   explicit VcdBody(std::FILE* f) : f_(f) {}
