@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <ctime>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -159,32 +160,39 @@ BENCHMARK(BM_WatchdogExpiry650s)->UseManualTime()->Unit(benchmark::kMillisecond)
 
 // Scaling: power-on, start-up and 50 Data_Exchanges of 32 + 32 bytes at 1.5 Mbaud, with a VCD
 // of the first `range(0)` signals of the documented list (docs/waveforms.md); 0 = no recorder.
-void BM_TracedRun(benchmark::State& st) {
+dpc31::wave::Options trace_options(std::size_t signals) {
   const auto& all = dpc31::wave::signal_list();
   dpc31::wave::Options o;
   o.path = (std::filesystem::temp_directory_path() /
             ("dpc31-bench-trace-" + std::to_string(::getpid()) + ".vcd"))
                .string();
-  for (std::int64_t i = 0; i < st.range(0); ++i) o.signals.emplace_back(all.at(i).name);
+  for (std::size_t i = 0; i < signals; ++i) o.signals.emplace_back(all.at(i).name);
+  return o;
+}
+// One such run; false (benchmark skipped with an error) if it fails. Adds its chip time.
+bool traced_run(benchmark::State& st, const dpc31::wave::Options& o, double& chip_seconds) {
+  DpSession s(1'500'000, 32);
+  dpc31::wave::Recorder rec(o);
+  std::string error;
+  if (!o.signals.empty() && !rec.attach(s.chip(), error)) {
+    st.SkipWithError(error.c_str());
+    return false;
+  }
+  if (!s.startup(st) || !s.exchange(st, 50)) return false;
+  if (!o.signals.empty() && !rec.finish(s.chip().cycle(), error)) {
+    st.SkipWithError(error.c_str());
+    return false;
+  }
+  chip_seconds += s.chip_seconds();
+  return true;
+}
+void BM_TracedRun(benchmark::State& st) {
+  const dpc31::wave::Options o = trace_options(static_cast<std::size_t>(st.range(0)));
   double chip_seconds = 0;
   std::uintmax_t bytes = 0;
   for (auto _ : st) {
-    DpSession s(1'500'000, 32);
-    dpc31::wave::Recorder rec(o);
-    std::string error;
-    if (!o.signals.empty() && !rec.attach(s.chip(), error)) {
-      st.SkipWithError(error.c_str());
-      return;
-    }
-    if (!s.startup(st) || !s.exchange(st, 50)) return;
-    if (!o.signals.empty()) {
-      if (!rec.finish(s.chip().cycle(), error)) {
-        st.SkipWithError(error.c_str());
-        return;
-      }
-      bytes = std::filesystem::file_size(o.path);
-    }
-    chip_seconds += s.chip_seconds();
+    if (!traced_run(st, o, chip_seconds)) return;
+    if (!o.signals.empty()) bytes = std::filesystem::file_size(o.path);
   }
   std::error_code ec;
   std::filesystem::remove(o.path, ec);
@@ -203,5 +211,37 @@ BENCHMARK(BM_TracedRun)
     ->Apply(traced_run_args)
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
+
+// Item i (issue 19 item 7): the run above traced with every signal against the same run
+// untraced, side by side in every iteration (so that a change in the machine's load falls on
+// both). traced_over_untraced: the ratio of their wall times; _cpu: of their CPU times.
+void BM_TracedOverUntraced(benchmark::State& st) {
+  const dpc31::wave::Options none = trace_options(0);
+  const dpc31::wave::Options all = trace_options(dpc31::wave::signal_list().size());
+  double chip_seconds = 0;
+  double wall[2] = {0, 0};
+  double cpu[2] = {0, 0};
+  const auto cpu_now = [] {
+    timespec ts{};
+    ::clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
+  };
+  for (auto _ : st) {
+    for (int traced = 0; traced < 2; ++traced) {
+      const auto t0 = Clock::now();
+      const double c0 = cpu_now();
+      if (!traced_run(st, traced != 0 ? all : none, chip_seconds)) return;
+      wall[traced] += std::chrono::duration<double>(Clock::now() - t0).count();
+      cpu[traced] += cpu_now() - c0;
+    }
+  }
+  std::error_code ec;
+  std::filesystem::remove(all.path, ec);
+  st.counters["traced_over_untraced"] = wall[1] / wall[0];
+  st.counters["traced_over_untraced_cpu"] = cpu[1] / cpu[0];
+  st.counters["untraced_ms"] = wall[0] * 1e3 / static_cast<double>(st.iterations());
+  st.counters["traced_ms"] = wall[1] * 1e3 / static_cast<double>(st.iterations());
+}
+BENCHMARK(BM_TracedOverUntraced)->UseRealTime()->Unit(benchmark::kMillisecond);
 
 }  // namespace

@@ -84,8 +84,15 @@ TEST_F(BadInput, RunOptionValues) {
   const auto before = listing();
   // Ours: checked after the scenario parsed, before anything is written.
   expect_bad(dpc31("run " + scn + " --vcd old.vcd --timescale 3ns"),
-             "dpc31 run: --timescale '3ns': use 1, 10 or 100 with s, ms, us, ns, ps or fs",
+             "dpc31 run: --timescale '3ns': use 1, 10 or 100 with fs, ps, ns, us or ms, or 1s",
              "timescale");
+  // Above 1 s, and with no waveform asked for: refused all the same.
+  expect_bad(dpc31("run " + scn + " --la-vcd old.vcd --timescale 10s"),
+             "dpc31 run: --timescale '10s': use 1, 10 or 100 with fs, ps, ns, us or ms, or 1s",
+             "timescale above 1 s");
+  expect_bad(dpc31("run " + scn + " --timescale ps"),
+             "dpc31 run: --timescale 'ps': use 1, 10 or 100 with fs, ps, ns, us or ms, or 1s",
+             "timescale without a waveform");
   expect_bad(dpc31("run " + scn + " --quiet --vcd old.vcd --fst new.fst --signals nosuch"),
              "dpc31 run: no signal matches 'nosuch' (see docs/waveforms.md)", "signals");
   // CLI11's wording after our prefix.
@@ -457,6 +464,12 @@ TEST_F(BadInput, RegsAndDemoOptions) {
   expect_bad(r, "dpc31 demo: plain: cannot create the output directory: Not a directory",
              "out-dir is a file");
   EXPECT_EQ(r.out, "");
+  // A bad --timescale: one line before the output directory is made or anything printed.
+  r = dpc31("demo --out-dir fresh --timescale 1min");
+  expect_bad(r, "dpc31 demo: --timescale '1min': use 1, 10 or 100 with fs, ps, ns, us or ms, or 1s",
+             "demo timescale");
+  EXPECT_EQ(r.out, "");
+  EXPECT_FALSE(fs::exists(path("fresh")));
   r = dpc31("demo --out-dir plain/sub");
   expect_bad_prefix(
       r, "dpc31 demo: plain/sub: cannot create the output directory: ", "out-dir below a file");

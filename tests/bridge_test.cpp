@@ -8,11 +8,13 @@
 #include <termios.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -43,10 +45,14 @@ const Bytes kStatusOk = {0x10, 0x02, 0x05, 0x00, 0x07, 0x16};
 
 class BridgeEngine : public ::testing::Test {
  protected:
-  void SetUp() override {
+  void SetUp() override { make(dpc31::bridge::LogDetail::telegrams); }
+  void make(dpc31::bridge::LogDetail detail, std::uint32_t baud = 19200) {
+    engine_.reset();
+    lines_.clear();
     dpc31::bridge::Setup s;
     s.firmware = dpc31_find_firmware("DO4");
-    s.baud = 19200;
+    s.baud = baud;
+    s.log_detail = detail;
     engine_ = std::make_unique<Engine>(
         s, [this](std::uint64_t cycle, std::string_view tag, const std::string& text) {
           lines_.push_back({cycle, std::string(tag), text});
@@ -69,6 +75,28 @@ class BridgeEngine : public ::testing::Test {
       }
     }
     FAIL() << "FDL_Status never answered";
+  }
+
+  // A DP start-up of DO4 as a master writes it, each request as soon as the last answer is in
+  // (docs/bridge.md: DO4's GSD defaults; watchdog 100 x 10 x 10 ms), then `exchanges`
+  // Data_Exchanges of 05 01.
+  void start_up(int exchanges) {
+    find_slave();
+    bool fcb = true;  // the first SRD after FDL_Status has FCB = 1
+    const auto srd = [&](Bytes du, std::optional<std::uint8_t> dsap) {
+      const auto fc = static_cast<std::uint8_t>(fcb ? 0x7D : 0x5D);
+      fcb = !fcb;
+      const auto ssap = dsap ? std::optional<std::uint8_t>(62) : std::nullopt;
+      return exchange(dpc31::fdl::encode(dpc31::fdl::make_frame(5, 2, fc, du, dsap, ssap)));
+    };
+    EXPECT_FALSE(srd({}, 60).empty());
+    EXPECT_EQ(srd({0x88, 0x64, 0x0A, 0x00, 0x0D, 0x04, 0x00, 0x00, 0x00, 0x00, 0x00}, 61),
+              Bytes{0xE5});
+    EXPECT_EQ(srd({0x21, 0x10}, 62), Bytes{0xE5});
+    EXPECT_FALSE(srd({}, 60).empty());
+    for (int i = 0; i < exchanges; ++i) EXPECT_FALSE(srd({0x05, 0x01}, std::nullopt).empty());
+    engine_->run_until(engine_->cycle() + 48'000'000 / 10);
+    engine_->flush_log();
   }
 
   std::vector<Line> tagged(const std::string& tag) const {
@@ -240,6 +268,72 @@ TEST_F(BridgeEngine, TimePassesWithoutClientAndStatesAreLogged) {
   EXPECT_TRUE(engine_->take_output().empty());
   ASSERT_FALSE(lines_.empty());
   EXPECT_EQ(lines_.front().tag, "CHIP");  // Start_SPC3 by the firmware's main()
+}
+
+// The log's lines come in cycle order (issue 18 item 4): a request is known up to TSYN before it
+// goes on RxD and an answer only at its end, yet what happens meanwhile (the bridge's notes, the
+// firmware's port writes, state changes) carries its own cycle.
+TEST_F(BridgeEngine, LinesComeInCycleOrder) {
+  find_slave();
+  const std::uint64_t answer = tagged("TxD").back().cycle;
+  // A request written right after an answer: its RxD line is known TSYN ahead; a note (the
+  // client went away, say) comes before it.
+  engine_->feed(kFdlStatus);
+  engine_->run_until(engine_->cycle() + kT);
+  engine_->note("in the TSYN wait");
+  EXPECT_TRUE(engine_->settle(48'000'000));
+  engine_->flush_log();
+  ASSERT_GE(lines_.size(), 3u);
+  const Line& rx = lines_[lines_.size() - 2];
+  const Line& note = lines_[lines_.size() - 3];
+  EXPECT_EQ(note.text, "in the TSYN wait");
+  EXPECT_EQ(rx.tag, "RxD");
+  EXPECT_EQ(rx.cycle, answer + (6 * 11 + 33) * kT);  // TSYN after the answer's 6 characters
+  EXPECT_LT(note.cycle, rx.cycle);
+  EXPECT_EQ(lines_.back().tag, "TxD");
+  // A whole start-up at 1.5 Mbaud.
+  make(dpc31::bridge::LogDetail::telegrams, 1'500'000);
+  start_up(5);
+  ASSERT_FALSE(tagged("PORT").empty());
+  ASSERT_FALSE(tagged("STATE").empty());
+  ASSERT_GE(tagged("TxD").size(), 10u);
+  for (std::size_t i = 1; i < lines_.size(); ++i) {
+    EXPECT_LE(lines_[i - 1].cycle, lines_[i].cycle)
+        << lines_[i - 1].tag << " " << lines_[i - 1].text << " / " << lines_[i].tag << " "
+        << lines_[i].text;
+  }
+}
+
+// The default level (events): state changes and faults, no line for a healthy telegram and a
+// PORT line only when the value changes.
+TEST_F(BridgeEngine, EventsLevelLogsStateChangesAndFaultsOnly) {
+  make(dpc31::bridge::LogDetail::events);
+  start_up(50);
+  EXPECT_TRUE(tagged("RxD").empty());
+  EXPECT_TRUE(tagged("TxD").empty());
+  // DO4 writes its outputs at every Data_Exchange; logged: the power-on value and 05 once.
+  std::vector<std::string> outputs;
+  for (const Line& l : tagged("PORT")) {
+    if (l.text.rfind("DO4 outputs", 0) == 0) outputs.push_back(l.text);
+  }
+  EXPECT_EQ(outputs.back(), "DO4 outputs = 0x05");
+  EXPECT_EQ(std::count(outputs.begin(), outputs.end(), "DO4 outputs = 0x05"), 1);
+  EXPECT_FALSE(tagged("STATE").empty());
+  // The FDL_Status requests of the baud search: one line when the first goes unanswered, one
+  // when a request is answered again.
+  const std::vector<Line> notes = tagged("NOTE");
+  ASSERT_EQ(notes.size(), 2u);
+  EXPECT_EQ(notes[0].text,
+            "no answer within the slot time (the next ones are counted until an answer)");
+  EXPECT_EQ(notes[1].text.rfind("answered again, after ", 0), 0u) << notes[1].text;
+  EXPECT_LT(lines_.size(), 20u);
+  // A fault is logged: bytes that are no telegram.
+  lines_.clear();
+  EXPECT_TRUE(exchange({0xFF}).empty());
+  engine_->flush_log();
+  const std::vector<Line> rx = tagged("RxD");
+  ASSERT_EQ(rx.size(), 1u);
+  EXPECT_EQ(rx[0].text, "FF  | broken telegram (bad_sd)");
 }
 
 TEST(BridgeSummary, NamesServicesAndAnswers) {

@@ -136,12 +136,24 @@ def exchange_do4(m, before=0x00):
     raise Fail("the input byte never became 51h")
 
 
+def check_order(lines):
+    """Every line after the header starts with its cycle; the cycles never go back."""
+    last = 0
+    for line in lines[1:]:
+        parts = line.split()
+        check(parts[0].isdigit(), f"log line without a cycle: {line}")
+        check(int(parts[0]) >= last, f"log line out of cycle order: {line}")
+        last = int(parts[0])
+
+
 def check_log(b, pacing, baud):
     lines = b.log_lines()
     first = lines[0]
-    for want in (f"pacing {pacing}", f"baud {baud}", "profile dpc31", "firmware DO4",
+    for want in (f"pacing {pacing}", f"baud {baud}", "profile dpc31, firmware DO4",
+                 "address 5, slot 100 bit times, log level telegrams",
                  f"pty {b.path} -> /dev/pts/"):
         check(want in first, f"log line 1 lacks '{want}': {first}")
+    check("variant" not in first, f"log line 1 names a variant for the dpc31: {first}")
     text = "\n".join(lines)
     for want in ("RxD   10 05 02 49 50 16  | FDL_Status 2->5",
                  "TxD   10 02 05 00 07 16  | OK 5->2",
@@ -151,15 +163,13 @@ def check_log(b, pacing, baud):
                  "client opened the pty", "client closed the pty", "STATE dp_state Wait_Cfg -> "
                  "Data_Exchange"):
         check(want in text, f"log lacks '{want}'")
-    # Telegram lines: cycle, direction, hex, summary.
-    for line in lines[1:]:
-        parts = line.split()
-        check(parts[0].isdigit(), f"log line without a cycle: {line}")
+    check_order(lines)
 
 
 def do4_two_clients(pacing, baud=19200, timeout=0.5):
     with tempfile.TemporaryDirectory() as tmp:
-        b = Bridge(tmp, "--firmware", "DO4", "--baud", str(baud), "--pacing", pacing)
+        b = Bridge(tmp, "--firmware", "DO4", "--baud", str(baud), "--pacing", pacing,
+                   "--log-level", "telegrams")
         try:
             m = Master(b.path, baud, timeout * SCALE)
             startup_do4(m)
@@ -257,7 +267,8 @@ def cnt2_logmsg():
             b.stop(signal.SIGHUP)
             text = "\n".join(b.log_lines())
             check("PORT  CNT2 hold1 = 0x01" in text, "log lacks the hold1 port write")
-            check("firmware CNT2" in b.log_lines()[0], "log line 1 lacks the firmware")
+            check("profile vpc3plus, variant c, firmware CNT2, address 9" in b.log_lines()[0],
+                  f"log line 1 lacks the profile, variant or firmware: {b.log_lines()[0]}")
         finally:
             SLAVE = 5
             b.kill()
@@ -280,6 +291,7 @@ def bad_arguments():
             ["bridge", "--pty", link, "--firmware", "DO4", "--pacing", "slow"],
             ["bridge", "--pty", link, "--firmware", "DO4", "--slot", "0"],
             ["bridge", "--pty", link, "--firmware", "DO4", "--colour"],
+            ["bridge", "--pty", link, "--firmware", "DO4", "--log-level", "loud"],
             ["bridge", "--pty", link, "--firmware", "DO4", "extra"],
             ["bridge", "--pty", regular, "--firmware", "DO4"],             # a regular file
             ["bridge", "--pty", os.path.join(tmp, "no", "dir"), "--firmware", "DO4"],
@@ -334,6 +346,97 @@ def stale_symlink_replaced():
             b.kill()
 
 
+def profibus_rates_default_log():
+    """tools/dp_master.py at PROFIBUS rates termios has no constant for (45.45 and 187.5 kbaud:
+    set with TCSETS2 and BOTHER) brings DO4 to Data_Exchange; the bridge reads the client's rate
+    (no speed note when it matches; 12 Mbaud, named, when it does not: the bytes travel at the
+    bridge's rate all the same). The default log level says state changes and faults only: no
+    telegram lines, lines in cycle order. (Data_Exchange at 12 Mbaud through the pty works too,
+    but the master's FDL_Status every 60 ms meets the chip's 0.34 ms at 12 Mbaud of each 0.8 s
+    baud-search round only by chance: too slow for a test.)"""
+    for baud in (45450, 187500):
+        with tempfile.TemporaryDirectory() as tmp:
+            b = Bridge(tmp, "--firmware", "DO4", "--baud", str(baud), "--pacing", "free")
+            try:
+                m = Master(b.path, baud, 0.5 * SCALE)
+                startup_do4(m)
+                exchange_do4(m)
+                for _ in range(50):
+                    m.expect("Data_Exchange", m.srd([0x05, 0x01]), dx_answer(0x08, [0x51]))
+                m.close()
+                time.sleep(0.05)
+                # Another client at another rate: the bridge says which.
+                other = 12000000
+                m = Master(b.path, other, 0.5 * SCALE)
+                m.expect(f"FDL_Status at {other} on the pty", m.fdl_status(), status_ok())
+                m.close()
+                b.stop(signal.SIGTERM)
+                lines = b.log_lines()
+                check(f"baud {baud}," in lines[0] and "log level events" in lines[0],
+                      f"log line 1: {lines[0]}")
+                tags = [line.split()[1] for line in lines[1:]]
+                check("RxD" not in tags and "TxD" not in tags,
+                      "telegram lines at the events level")
+                text = "\n".join(lines)
+                for want in ("STATE dp_state Wait_Cfg -> Data_Exchange",
+                             "PORT  DO4 outputs = 0x05", "client opened the pty",
+                             f"the client set {other} baud on the pty; the bridge carries its "
+                             f"bytes at {baud} baud"):
+                    check(want in text, f"log lacks '{want}'")
+                check(text.count("the client set") == 1, "a speed note for the matching client")
+                check(text.count("PORT  DO4 outputs = 0x05") == 1,
+                      "PORT logged without a change")
+                check(len(lines) < 40, f"{len(lines)} log lines at the events level")
+                check_order(lines)
+            finally:
+                b.kill()
+    # The master program offers exactly the ten rates.
+    p = subprocess.run([sys.executable, os.path.join(os.path.dirname(os.path.abspath(__file__)),
+                                                     "..", "tools", "dp_master.py"),
+                        "/nonexistent", "--baud", "38400", "--ident", "0x0D04", "--cfg", "21,10"],
+                       capture_output=True, text=True, check=False)
+    check(p.returncode == 2 and "invalid choice: 38400 (choose from 9600, 19200, 45450, 93750, "
+          "187500, 500000, 1500000, 3000000, 6000000, 12000000)" in p.stderr,
+          f"dp_master.py --baud 38400: exit {p.returncode}, {p.stderr!r}")
+
+
+def answer_dropped_without_client():
+    """A client that leaves after its request went on the line, before the answer: the answer is
+    dropped, and the log says so with the cycle at which it was dropped (between the client's
+    leaving and the next one's coming), not when the next client comes. Realtime, 9600 baud: the
+    request (Slave_Diag, 9 characters) is on the line about 3 to 14 ms after it was written, the
+    answer comes after it; the client closes 9 ms after writing (tried up to 5 times, the wall
+    clock of a loaded machine may miss that window)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        b = Bridge(tmp, "--firmware", "DO4", "--baud", "9600")
+        try:
+            for _ in range(5):
+                m = Master(b.path, 9600, 0.5 * SCALE)
+                m.expect("FDL_Status", m.find_slave(), status_ok())
+                os.write(m.fd, m.srd_frame([], SAP_SLAVE_DIAG))
+                time.sleep(0.009)
+                m.close()
+                time.sleep(0.1)
+                if any("answer bytes dropped" in line for line in b.log_lines()):
+                    break
+            m = Master(b.path, 9600, 0.5 * SCALE)
+            m.expect("FDL_Status (next client)", m.fdl_status(), status_ok())
+            m.close()
+            b.stop(signal.SIGTERM)
+            lines = b.log_lines()
+            check_order(lines)
+            at = [i for i, line in enumerate(lines) if "no client: 17 answer bytes dropped" in line]
+            check(len(at) == 1, "no line 'no client: 17 answer bytes dropped' (or several)")
+            before = [line for line in lines[:at[0]] if "NOTE  client" in line]
+            after = [line for line in lines[at[0]:] if "NOTE  client" in line]
+            check(before and "client closed the pty" in before[-1],
+                  f"the drop is not after the client left: {before[-1:]}")
+            check(after and "client opened the pty" in after[0],
+                  f"the drop is not before the next client came: {after[:1]}")
+        finally:
+            b.kill()
+
+
 CASES = {
     "do4_realtime_two_clients": lambda: do4_two_clients("realtime"),
     "do4_free_two_clients": lambda: do4_two_clients("free"),
@@ -341,6 +444,8 @@ CASES = {
     "cnt2_free_logmsg": cnt2_logmsg,
     "bad_arguments_exit_2": bad_arguments,
     "stale_symlink_and_silent_client": stale_symlink_replaced,
+    "profibus_rates_default_log": profibus_rates_default_log,
+    "answer_dropped_without_client": answer_dropped_without_client,
 }
 
 

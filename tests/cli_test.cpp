@@ -77,6 +77,9 @@ TEST(Cli, DemoRunsOnEveryProfile) {
     EXPECT_NE(r.out.find("expects passed 5, failed 0"), std::string::npos) << p;
     EXPECT_NE(r.out.find("waveform (VCD): " + dir + "/dpc31-demo.vcd"), std::string::npos) << p;
     EXPECT_FALSE(slurp(dir + "/dpc31-demo.vcd").empty()) << p;
+    // The second waveform, for logic-analyser tools (decoded by sigrok: Waveform.sigrok_demo).
+    EXPECT_NE(slurp(dir + "/dpc31-demo-la.vcd").find("$timescale 10ns $end"), std::string::npos)
+        << p;
     EXPECT_FALSE(slurp(dir + "/dpc31-demo.pcapng").empty()) << p;
     EXPECT_NE(r.out.find("X/INT -> low (active)"), std::string::npos) << p;
     EXPECT_NE(r.out.find("User_Prm_Data_Okay = 00h"), std::string::npos) << p;
@@ -105,6 +108,28 @@ TEST(Cli, RunWritesWaveformsAndCapture) {
   EXPECT_EQ(run("run " + scn + " --vcd " + dir + "bad.vcd --timescale 3ns").rc, 2);
 }
 
+// The logic-analyser form (docs/waveforms.md): 1-bit signals in one scope, 10 ns unless
+// --timescale says otherwise, as a second file (--la-vcd) or as the --vcd itself (--flat).
+TEST(Cli, RunWritesTheLogicAnalyserForm) {
+  const std::string dir = ::testing::TempDir();
+  const std::string scn = std::string(SOURCE_DIR) + "/traces/startup_dpc31_1m5.scn";
+  ASSERT_EQ(run("run " + scn + " --quiet --vcd " + dir + "full.vcd --la-vcd " + dir + "la.vcd").rc,
+            0);
+  const std::string full = slurp(dir + "full.vcd");
+  const std::string la = slurp(dir + "la.vcd");
+  EXPECT_NE(full.find("$timescale 1ps $end"), std::string::npos);
+  EXPECT_NE(full.find("$var wire 16 + irr $end"), std::string::npos);
+  EXPECT_NE(la.find("$timescale 10ns $end\n$scope module dpc31 $end\n$var wire 1 ! rxd $end\n"
+                    "$var wire 1 \" txd $end\n$var wire 1 # x_int $end\n$var wire 1 / pb3 $end\n"
+                    "$var wire 1 $ rd $end\n$var wire 1 % wr $end\n$upscope $end\n"),
+            std::string::npos)
+      << la.substr(0, 400);
+  ASSERT_EQ(run("run " + scn + " --quiet --vcd " + dir + "flat.vcd --flat").rc, 0);
+  EXPECT_EQ(slurp(dir + "flat.vcd"), la);
+  ASSERT_EQ(run("run " + scn + " --quiet --la-vcd " + dir + "la1.vcd --timescale 1ns").rc, 0);
+  EXPECT_NE(slurp(dir + "la1.vcd").find("$timescale 1ns $end"), std::string::npos);
+}
+
 // `dpc31 bench --quick`: every row of the table is there and well-formed. The timings are not
 // checked (speed is measured by the benchmarks, not asserted by tests).
 TEST(CliBench, QuickPrintsEveryRowWellFormed) {
@@ -131,9 +156,9 @@ TEST(CliBench, QuickPrintsEveryRowWellFormed) {
   EXPECT_EQ(rows[0], (std::vector<std::string>{"item", "what", "measured", "target", "result"}));
   rows.erase(rows.begin());
   // Rows per item of issue 7: a (six accesses), b, c, d, e (ratio, lockstep), f (MB/s, RSS), g
-  // (one round trip; and beside a flood, issue 14).
+  // (one round trip; and beside a flood, issue 14), i (tracing cost, issue 19).
   const std::vector<std::string> items = {"a", "a", "a", "a", "a", "a", "b", "c",
-                                          "d", "e", "e", "f", "f", "g", "g"};
+                                          "d", "e", "e", "f", "f", "g", "g", "i"};
   ASSERT_EQ(rows.size(), items.size()) << r.out;
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const auto& c = rows[i];

@@ -2,8 +2,9 @@
 """A small DP master (class 1) on a serial device: start-up of one slave and Data_Exchange.
 
 Made for `dpc31 bridge` (docs/bridge.md, docs/bring-up.md section 5) but written as a master on
-any 8E1 serial device is: open the device, one tcsetattr (raw, 8 data bits, even parity, the bus
-rate), then FDL telegrams (EN 50170: SD1/SD2, FCS, FCB/FCV) with a timeout per answer.
+any 8E1 serial device is: open the device, one call that sets raw, 8 data bits, even parity and
+the bus rate (tcsetattr, or the TCSETS2 ioctl for the five rates termios has no constant for),
+then FDL telegrams (EN 50170: SD1/SD2, FCS, FCB/FCV) with a timeout per answer. Linux only.
 
     python3 tools/dp_master.py /tmp/dp0 --baud 19200 --ident 0x0D04 --cfg 21,10 \
         --user-prm 00,00,00,00 --outputs 05,01
@@ -14,17 +15,51 @@ Python 3 standard library only; tests/bridge_test.py uses the same Master class.
 """
 
 import argparse
+import fcntl
 import os
 import select
+import struct
 import sys
 import termios
 import time
 
 SD1, SD2, SC, ED = 0x10, 0x68, 0xE5, 0x16
 SAP_SLAVE_DIAG, SAP_SET_PRM, SAP_CHK_CFG, SAP_MASTER = 60, 61, 62, 62
-SPEEDS = {9600: termios.B9600, 19200: termios.B19200, 38400: termios.B38400,
-          57600: termios.B57600, 115200: termios.B115200, 230400: termios.B230400,
-          500000: termios.B500000, 1500000: termios.B1500000, 3000000: termios.B3000000}
+# The ten PROFIBUS DP rates (EN 50170). Five have a termios constant; the others (45.45, 93.75,
+# 187.5 kbaud, 6 and 12 Mbaud) are set as Linux's "other" rate: struct termios2 with BOTHER and
+# the rate itself, through the TCSETS2 ioctl (as pyserial does for such rates).
+RATES = (9600, 19200, 45450, 93750, 187500, 500000, 1500000, 3000000, 6000000, 12000000)
+SPEEDS = {9600: termios.B9600, 19200: termios.B19200, 500000: termios.B500000,
+          1500000: termios.B1500000, 3000000: termios.B3000000}
+# Linux, asm-generic/termbits.h and ioctls.h: struct termios2 (4 flags, c_line, c_cc[19], the
+# input and output rates) and _IOR/_IOW('T', 0x2A/0x2B, struct termios2).
+TERMIOS2 = "IIIIB19sII"
+TCGETS2 = 0x80000000 | (struct.calcsize(TERMIOS2) << 16) | (ord("T") << 8) | 0x2A
+TCSETS2 = 0x40000000 | (struct.calcsize(TERMIOS2) << 16) | (ord("T") << 8) | 0x2B
+BOTHER = 0o010000
+CBAUD = 0o010017
+
+
+def set_8e1(fd, baud):
+    """One call with everything, as serial libraries do: raw, 8 data bits, even parity, one stop
+    bit, receiver on, no modem control, the bus rate; no blocking reads."""
+    cflag = termios.CS8 | termios.PARENB | termios.CREAD | termios.CLOCAL
+    if baud in SPEEDS:
+        a = termios.tcgetattr(fd)
+        a[0] = a[1] = a[3] = 0
+        a[2] = cflag
+        a[4] = a[5] = SPEEDS[baud]
+        a[6][termios.VMIN] = 0
+        a[6][termios.VTIME] = 0
+        termios.tcsetattr(fd, termios.TCSANOW, a)
+        return
+    _, _, _, _, line, cc, _, _ = struct.unpack(
+        TERMIOS2, fcntl.ioctl(fd, TCGETS2, bytes(struct.calcsize(TERMIOS2))))
+    cc = bytearray(cc)
+    cc[termios.VMIN] = 0
+    cc[termios.VTIME] = 0
+    fcntl.ioctl(fd, TCSETS2, struct.pack(TERMIOS2, 0, 0, (cflag & ~CBAUD) | BOTHER, 0, line,
+                                         bytes(cc), baud, baud))
 
 
 class Fail(Exception):
@@ -85,17 +120,11 @@ class Master:
 
     def __init__(self, path, baud, timeout, address=2, slave=5):
         self.fd = os.open(path, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
-        a = termios.tcgetattr(self.fd)
-        # One tcsetattr with everything, as serial libraries do: raw, 8 data bits, even parity,
-        # one stop bit, receiver on, no modem control, the bus speed.
-        a[0] = 0
-        a[1] = 0
-        a[2] = termios.CS8 | termios.PARENB | termios.CREAD | termios.CLOCAL
-        a[3] = 0
-        a[4] = a[5] = SPEEDS[baud]
-        a[6][termios.VMIN] = 0
-        a[6][termios.VTIME] = 0
-        termios.tcsetattr(self.fd, termios.TCSANOW, a)
+        try:
+            set_8e1(self.fd, baud)
+        except OSError:
+            os.close(self.fd)
+            raise
         self.timeout = timeout
         self.address = address
         self.slave = slave
@@ -230,7 +259,8 @@ def wait_for(path, seconds):
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("device", help="serial device, e.g. the path given to dpc31 bridge --pty")
-    p.add_argument("--baud", type=int, default=19200, choices=sorted(SPEEDS))
+    p.add_argument("--baud", type=int, default=19200, choices=RATES,
+                   help="the bus rate, one of the ten PROFIBUS rates (default 19200)")
     p.add_argument("--address", type=int, default=2, help="the master's station address")
     p.add_argument("--slave", type=int, default=5, help="the slave's station address")
     p.add_argument("--ident", type=lambda s: int(s, 0), required=True, help="Ident_Number")

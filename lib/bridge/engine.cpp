@@ -83,14 +83,21 @@ Engine::Engine(const Setup& setup, LogSink log)
       chip_(setup.chip),
       t_(dpc31::bit_cycles(chip_.clock_hz(), setup.baud)) {
   chip_.set_log_sink([this](const LogRecord& r) {
-    if (r.level >= LogLevel::info && log_) log_(r.cycle, "CHIP", r.text);
+    if (r.level >= LogLevel::info) add_line(r.cycle, "CHIP", r.text);
   });
   fw_ = std::make_unique<FirmwareHost>(*setup_.firmware);
   fw_->on_port = [this](std::uint64_t cycle, unsigned port, std::uint32_t value) {
-    if (log_) {
-      log_(cycle, "PORT",
-           fmt::format("{} {} = 0x{:02X}", fw_->firmware().name, fw_->port_name(port), value));
+    // At the events level a port write is logged when it changes the port's value.
+    if (port >= port_.size()) {
+      port_.resize(port + 1, 0);
+      port_logged_.resize(port + 1, false);
     }
+    if (setup_.log_detail == LogDetail::events && port_logged_[port] && port_[port] == value)
+      return;
+    port_[port] = value;
+    port_logged_[port] = true;
+    add_line(cycle, "PORT",
+             fmt::format("{} {} = 0x{:02X}", fw_->firmware().name, fw_->port_name(port), value));
   };
   dp_ = chip_.dp_state();
   wd_ = chip_.wd_state();
@@ -110,23 +117,55 @@ Engine::~Engine() {
   chip_.set_log_sink({});
 }
 
+void Engine::add_line(std::uint64_t cycle, std::string_view tag, std::string text) {
+  if (log_) held_.push_back({cycle, tag, std::move(text)});
+}
+
+void Engine::log_telegram(std::uint64_t cycle, std::string_view tag,
+                          std::span<const std::uint8_t> bytes, std::string_view how) {
+  const bool broken = fdl::decode(bytes).error != fdl::Error::none;
+  if (setup_.log_detail == LogDetail::events && !broken && how.empty()) return;
+  std::string s = fmt::format("{}  | {}", hex_bytes(bytes), telegram_summary(bytes));
+  if (!how.empty()) s += fmt::format(" ({})", how);
+  add_line(cycle, tag, std::move(s));
+}
+
+std::uint64_t Engine::log_horizon() const {
+  std::uint64_t h = std::min(chip_.cycle(), rx_.busy_from());
+  if (answer_.started()) h = std::min(h, answer_.start());
+  if (stray_.started()) h = std::min(h, stray_.start());
+  if (in_flight_ && !answer_.started()) h = std::min(h, slot_end_);
+  return h;
+}
+
+void Engine::release_log(std::uint64_t upto) {
+  if (held_.empty()) return;
+  std::stable_sort(held_.begin(), held_.end(),
+                   [](const HeldLine& a, const HeldLine& b) { return a.cycle < b.cycle; });
+  std::size_t n = 0;
+  for (; n < held_.size() && held_[n].cycle <= upto; ++n)
+    log_(held_[n].cycle, held_[n].tag, held_[n].text);
+  held_.erase(held_.begin(), held_.begin() + static_cast<std::ptrdiff_t>(n));
+}
+
+void Engine::flush_log() { release_log(UINT64_MAX); }
+
 void Engine::note(const std::string& text) {
-  if (log_) log_(chip_.cycle(), "NOTE", text);
+  add_line(chip_.cycle(), "NOTE", text);
+  release_log(log_horizon());
 }
 
 void Engine::check_states(std::uint64_t cycle) {
   const DpState dp = chip_.dp_state();
   const WdState wd = chip_.wd_state();
   if (dp == dp_ && wd == wd_) return;
-  if (log_) {
-    std::string s;
-    if (dp != dp_) s = fmt::format("dp_state {} -> {}", dp_state_name(dp_), dp_state_name(dp));
-    if (wd != wd_) {
-      if (!s.empty()) s += ", ";
-      s += fmt::format("wd_state {} -> {}", wd_state_name(wd_), wd_state_name(wd));
-    }
-    log_(cycle, "STATE", s);
+  std::string s;
+  if (dp != dp_) s = fmt::format("dp_state {} -> {}", dp_state_name(dp_), dp_state_name(dp));
+  if (wd != wd_) {
+    if (!s.empty()) s += ", ";
+    s += fmt::format("wd_state {} -> {}", wd_state_name(wd_), wd_state_name(wd));
   }
+  add_line(cycle, "STATE", std::move(s));
   dp_ = dp;
   wd_ = wd;
 }
@@ -217,9 +256,7 @@ void Engine::start_next() {
     Request r = std::move(queue_.front());
     queue_.pop_front();
     queued_bytes_ -= r.bytes.size();
-    if (log_) {
-      log_(start, "RxD", fmt::format("{}  | {}", hex_bytes(r.bytes), telegram_summary(r.bytes)));
-    }
+    log_telegram(start, "RxD", r.bytes, "");
     request_end_ = send_on_rxd(chip_, r.bytes, start, t_);
     if (r.wants_answer) {
       in_flight_ = true;
@@ -232,11 +269,7 @@ void Engine::start_next() {
 }
 
 void Engine::finish_answer(AnswerCollector& a, std::string_view how) {
-  if (log_) {
-    std::string s = fmt::format("{}  | {}", hex_bytes(a.bytes()), telegram_summary(a.bytes()));
-    if (!how.empty()) s += fmt::format(" ({})", how);
-    log_(a.start(), "TxD", s);
-  }
+  log_telegram(a.start(), "TxD", a.bytes(), how);
   bus_free_ = std::max(bus_free_, a.end());
   a.reset();
 }
@@ -256,10 +289,23 @@ void Engine::collect() {
   if (stray_.finished() && !rx_.receiving()) finish_answer(stray_, "late");
   if (!in_flight_) return;
   if (answer_.finished() && !rx_.receiving()) {
+    if (unanswered_ > 1) {
+      add_line(answer_.start(), "NOTE",
+               fmt::format("answered again, after {} requests without an answer", unanswered_));
+    }
+    unanswered_ = 0;
     finish_answer(answer_, "");
     in_flight_ = false;
   } else if (!answer_.started() && !rx_.receiving() && chip_.cycle() >= slot_end_) {
-    if (log_) log_(slot_end_, "NOTE", "no answer within the slot time");
+    // At the events level a run of them (a master looking for a slave during its baud search,
+    // or for one that is not there) is one line at its start and one at its end.
+    if (setup_.log_detail == LogDetail::telegrams) {
+      add_line(slot_end_, "NOTE", "no answer within the slot time");
+    } else if (unanswered_ == 0) {
+      add_line(slot_end_, "NOTE",
+               "no answer within the slot time (the next ones are counted until an answer)");
+    }
+    ++unanswered_;
     bus_free_ = std::max(bus_free_, slot_end_);
     in_flight_ = false;
   }
@@ -297,6 +343,7 @@ void Engine::run_until(std::uint64_t cycle) {
   }
   start_next();
   if (dropped_ != 0 && chip_.cycle() - last_drop_report_ >= chip_.clock_hz()) report_dropped();
+  release_log(log_horizon());
 }
 
 bool Engine::settle(std::uint64_t max_cycles) {
@@ -306,6 +353,7 @@ bool Engine::settle(std::uint64_t max_cycles) {
     step_to(next_wake(limit));
     start_next();
   }
+  release_log(log_horizon());
   return !busy();
 }
 

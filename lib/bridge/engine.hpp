@@ -35,15 +35,24 @@ inline constexpr std::size_t kMaxQueuedBytes = 64 * 1024;
 // (one log line each), not one byte at a time.
 inline constexpr std::size_t kMaxGarbageRun = 256;
 
+// How much the log says (docs/bridge.md, "The log"). events: state changes and faults (the
+// chip's messages, DP and watchdog states, a port's new value, the bridge's notes, broken or late
+// telegrams); telegrams: also every telegram both ways and every port write.
+enum class LogDetail : std::uint8_t { events, telegrams };
+
 struct Setup {
   ChipOptions chip;
+  LogDetail log_detail = LogDetail::events;
   std::uint32_t baud = 19200;  // one of kBaudRates
   std::uint8_t address = 5;    // the station address the firmware gives the chip
   const dpc31_firmware* firmware = nullptr;
   std::uint32_t slot_bits = 100;  // how long a request waits for the first answer character
 };
 
-// One log line without its cycle: a tag ("RxD", "TxD", "PORT", "STATE", "CHIP", "NOTE") and text.
+// One log line: its cycle, a tag ("RxD", "TxD", "PORT", "STATE", "CHIP", "NOTE") and text. Lines
+// come in cycle order (those of one cycle in the order they arose): the engine holds each line
+// until no line with a smaller cycle can come any more (a request goes on RxD up to TSYN ahead;
+// an answer's line is known at its end but stamped with its start).
 using LogSink = std::function<void(std::uint64_t cycle, std::string_view tag, const std::string&)>;
 
 // "FDL_Status 2->5 FC 49", "DL 5->2 SAP 60->62 DU 02 05 00 FF 0D 04", "broken (bad_fcs)".
@@ -93,6 +102,9 @@ class Engine {
   [[nodiscard]] const FirmwareHost& firmware() const { return *fw_; }
   // An event line at the current cycle.
   void note(const std::string& text);
+  // Every line held back goes to the sink now: the owner calls it at the end (nothing more will
+  // come), before the sink goes away.
+  void flush_log();
 
  private:
   struct Request {
@@ -108,6 +120,14 @@ class Engine {
   void step_to(std::uint64_t cycle);
   std::uint64_t next_wake(std::uint64_t limit) const;
   void check_states(std::uint64_t cycle);
+  void add_line(std::uint64_t cycle, std::string_view tag, std::string text);
+  // A telegram line, at the telegrams level or when it is broken or `how` says what is wrong.
+  void log_telegram(std::uint64_t cycle, std::string_view tag, std::span<const std::uint8_t> bytes,
+                    std::string_view how);
+  // Hands over the held lines with a cycle up to `upto`.
+  void release_log(std::uint64_t upto);
+  // No line with a smaller cycle can come: the chip's time, or an earlier start still pending.
+  [[nodiscard]] std::uint64_t log_horizon() const;
 
   Setup setup_;
   LogSink log_;
@@ -127,8 +147,9 @@ class Engine {
   bool in_flight_ = false;  // a request is on the bus and its answer is awaited
   std::uint64_t request_end_ = 0;
   std::uint64_t slot_end_ = 0;
-  std::uint64_t bus_free_ = 0;  // end of the last telegram on the bus
-  UartRx rx_;                   // the master's receiver on TxD
+  std::uint64_t unanswered_ = 0;  // requests in a row without an answer within the slot time
+  std::uint64_t bus_free_ = 0;    // end of the last telegram on the bus
+  UartRx rx_;                     // the master's receiver on TxD
   std::vector<UartChar> chars_;
   AnswerCollector answer_;  // of the request in flight
   AnswerCollector stray_;   // characters while no request is in flight (a late answer)
@@ -136,7 +157,15 @@ class Engine {
 
   DpState dp_;
   WdState wd_;
-  std::uint64_t history_checked_ = 0;
+
+  struct HeldLine {
+    std::uint64_t cycle;
+    std::string_view tag;  // one of the literal tags
+    std::string text;
+  };
+  std::vector<HeldLine> held_;       // in the order they arose
+  std::vector<std::uint32_t> port_;  // the last value logged per port (events level)
+  std::vector<bool> port_logged_;    // whether a value was logged for the port yet
 };
 
 }  // namespace dpc31::bridge

@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <stdlib.h>
+#include <sys/ioctl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -138,10 +139,22 @@ bool Pty::changed() const {
   return !same_termios(t, ref_);
 }
 
+// Linux's struct termios2 (asm-generic/termbits.h; glibc's termios.h cannot be included with
+// it): the rate in baud, also one set as BOTHER with TCSETS2 (45450, 93750, 187500, 6 M, 12 M have
+// no B constant), which cfgetospeed() reports only as BOTHER.
+struct KernelTermios2 {
+  tcflag_t c_iflag, c_oflag, c_cflag, c_lflag;
+  cc_t c_line;
+  cc_t c_cc[19];
+  speed_t c_ispeed, c_ospeed;
+};
+
 unsigned Pty::speed() const {
-  termios t{};
-  if (tcgetattr(master_, &t) != 0) return 0;
-  return speed_baud(cfgetospeed(&t));
+  KernelTermios2 t{};
+  if (::ioctl(master_, _IOR('T', 0x2A, KernelTermios2), &t) == 0) return t.c_ospeed;  // TCGETS2
+  termios old{};
+  if (tcgetattr(master_, &old) != 0) return 0;
+  return speed_baud(cfgetospeed(&old));
 }
 
 long Pty::read(unsigned char* buf, unsigned long size) const {

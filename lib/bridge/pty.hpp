@@ -45,7 +45,8 @@ class Pty {
   void reset();
   // The slave side's attributes differ from the reset state (a client changed them).
   [[nodiscard]] bool changed() const;
-  // The output speed the slave side has now, in baud (0 if unknown).
+  // The output speed the slave side has now, in baud (also a non-standard one, set with
+  // TCSETS2 and BOTHER); 0 if unknown.
   [[nodiscard]] unsigned speed() const;
 
   // Reads what the client wrote: bytes read (> 0), 0 when nothing is there, -1 on hang-up (EIO).

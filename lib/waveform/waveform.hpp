@@ -29,8 +29,9 @@ struct SignalDef {
 };
 const std::vector<SignalDef>& signal_list();
 
-// Watches a chip from now on and writes the waveform when finished. Events are buffered in time
-// order (RxD edges are known ahead of time), so memory grows with the number of changes written.
+// Watches a chip from now on and writes the waveform as the run goes: changes wait in a small
+// buffer until the chip's time has passed them (RxD edges are known ahead of time), so memory
+// stays bounded however long the run. finish() writes the rest and puts the file in place.
 class Recorder {
  public:
   explicit Recorder(const Options& o);

@@ -73,6 +73,9 @@ const std::vector<RowSpec>& rows() {
       // clients"; docs/performance.md).
       {"g", "`peek 0` round trip, p99, beside 13 clients pipelining", "BM_SocketFlood/13", "p99_us",
        1e-3, "ms", Goal::at_most, 5},
+      // Issue 19, item 7: what a full waveform costs (docs/performance.md, docs/waveforms.md).
+      {"i", "traced / untraced run, all signals (wall time, side by side)", "BM_TracedOverUntraced",
+       "traced_over_untraced", 1, "x slower", Goal::at_most, 3},
   };
   return r;
 }

@@ -113,7 +113,28 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
     return bad(fmt::format("--slot '{}' must be 1..16383 bit times", o.slot));
   }
   c.setup.slot_bits = static_cast<std::uint32_t>(v);
+  if (o.log_level != "events" && o.log_level != "telegrams") {
+    return bad(fmt::format("--log-level '{}' must be events or telegrams", o.log_level));
+  }
+  c.setup.log_detail =
+      o.log_level == "events" ? bridge::LogDetail::events : bridge::LogDetail::telegrams;
   return c;
+}
+
+// Line 1 of the log: every setting that acts on this run, and only those (a variant only for
+// the profile that has variants).
+std::string header(const Checked& c, const BridgeOptions& o, const std::string& slave) {
+  const ChipOptions& chip = c.setup.chip;
+  std::string profile(profile_name(chip.profile));
+  if (chip.profile == Profile::vpc3plus) {
+    profile +=
+        fmt::format(", variant {}", vpc3_variant_name(chip.variant.value_or(Vpc3Variant::c)));
+  }
+  return fmt::format(
+      "dpc31 bridge: pacing {}, baud {}, profile {}, firmware {}, address {}, slot {} bit times, "
+      "log level {}, pty {} -> {}",
+      c.realtime ? "realtime" : "free", c.setup.baud, profile, c.setup.firmware->name,
+      c.setup.address, c.setup.slot_bits, o.log_level, o.pty, slave);
 }
 
 class Log {
@@ -222,6 +243,7 @@ class Bridge {
     engine_->note(fmt::format("stopping on {}", g_signal == SIGINT    ? "SIGINT"
                                                 : g_signal == SIGTERM ? "SIGTERM"
                                                                       : "SIGHUP"));
+    engine_->flush_log();
     return 0;
   }
 
@@ -229,11 +251,17 @@ class Bridge {
   // Writes what the chip sent to the client (if there is one).
   void deliver() {
     const std::vector<std::uint8_t> out = engine_->take_output();
-    if (out.empty()) return;
     if (!present_) {
+      // The answer to a request the last client left on the line: one line when it is over
+      // (its bytes come over several loop turns), stamped then, not when the next client comes.
       dropped_ += out.size();
+      if (dropped_ != 0 && !engine_->busy()) {
+        engine_->note(fmt::format("no client: {} answer bytes dropped", dropped_));
+        dropped_ = 0;
+      }
       return;
     }
+    if (out.empty()) return;
     const unsigned long n = pty_.write(out.data(), out.size());
     if (n < out.size()) {
       engine_->note(
@@ -261,11 +289,6 @@ class Bridge {
       } else if (pty_.client_open()) {
         present_ = true;
         speed_checked_ = false;
-        if (dropped_ != 0) {
-          engine_->note(
-              fmt::format("{} answer bytes were dropped while no client was there", dropped_));
-          dropped_ = 0;
-        }
         engine_->note("client opened the pty");
       } else if (pty_.changed()) {
         // A client opened, configured and closed the pty between two looks.
@@ -319,7 +342,7 @@ class Bridge {
   Clock::time_point last_input_;
   bool present_ = false;
   bool speed_checked_ = false;
-  std::size_t dropped_ = 0;
+  std::size_t dropped_ = 0;  // answer bytes dropped (no client) and not yet logged
 };
 
 }  // namespace
@@ -341,6 +364,9 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
   b->add_option("--slot", o.slot, "slot time in bit times: how long a request waits for an answer")
       ->capture_default_str();
   b->add_option("--log", o.log, "write the log to this file instead of stdout");
+  b->add_option("--log-level", o.log_level,
+                "events: state changes and faults; telegrams: also every telegram and port write")
+      ->capture_default_str();
   b->allow_extras();
   b->callback([b, &o] { o.extra = b->remaining(); });
   return b;
@@ -380,11 +406,7 @@ int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
     log_file = owned.get();
   }
   Log log(log_file);
-  log.line(fmt::format(
-      "dpc31 bridge: pacing {}, baud {}, profile {}, firmware {}, address {}, "
-      "pty {} -> {}",
-      c->realtime ? "realtime" : "free", c->setup.baud, profile_name(c->setup.chip.profile),
-      c->setup.firmware->name, c->setup.address, o.pty, pty->slave_name()));
+  log.line(header(*c, o, pty->slave_name()));
   int rc = 0;
   {
     Bridge b(*c, *pty, log);

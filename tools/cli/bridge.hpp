@@ -19,6 +19,7 @@ struct BridgeOptions {
   std::string address = "5";
   std::string pacing = "realtime";
   std::string log;  // "" = stdout
+  std::string log_level = "events";
   std::string slot = "100";
   std::vector<std::string> extra;  // unknown arguments, refused by run_bridge
 };

@@ -86,7 +86,8 @@ class Narrator {
 
 // The chip's main job: a DP master on the RS-485 side, the example firmware DO4 (C99, over the
 // C HAL) on the other. Its outputs are what a bring-up is about: when did they change, and why.
-int run_dp_session(const ChipOptions& opt, const std::string& out_dir, std::FILE* out) {
+int run_dp_session(const ChipOptions& opt, const std::string& out_dir, const std::string& timescale,
+                   std::FILE* out) {
   const std::string text =
       fmt::format(R"(profile {}
 bus {}
@@ -123,6 +124,8 @@ expect port modul_ok 1
   RunOptions ro;
   ro.scenario = "<demo>";
   ro.vcd = (std::filesystem::path(out_dir) / "dpc31-demo.vcd").string();
+  ro.la_vcd = (std::filesystem::path(out_dir) / "dpc31-demo-la.vcd").string();
+  ro.timescale = timescale;
   ro.pcap = (std::filesystem::path(out_dir) / "dpc31-demo.pcapng").string();
   ScenarioOutcome o;
   const int rc = run_parsed_scenario(
@@ -137,13 +140,22 @@ expect port modul_ok 1
                static_cast<double>(w.cycle) * 1e6 / hz, w.port,
                w.port == "outputs" ? fmt::format("{:04b}", w.value) : std::to_string(w.value));
   }
-  fmt::print(out, "\nwaveform (VCD): {}\ntelegrams (pcapng, link type 257): {}\n", ro.vcd, ro.pcap);
+  fmt::print(out,
+             "\nwaveform (VCD): {}\nwaveform for logic-analyser tools (VCD, sigrok-cli -I vcd): "
+             "{}\ntelegrams (pcapng, link type 257): {}\n",
+             ro.vcd, ro.la_vcd, ro.pcap);
   return rc;
 }
 
 }  // namespace
 
-int run_demo(ChipOptions opt, const std::string& out_dir_option, std::FILE* out) {
+int run_demo(ChipOptions opt, const std::string& out_dir_option, const std::string& timescale,
+             std::FILE* out) {
+  int unit_exp = 0;
+  if (!timescale.empty() && !parse_timescale(timescale, unit_exp)) {
+    fmt::print(stderr, "dpc31 demo: {}\n", timescale_error(timescale));
+    return 2;
+  }
   // The output directory is made before anything is printed: bad input is one line. Without
   // --out-dir it is a new one only this user can enter (mkdtemp, mode 0700): a fixed name in a
   // shared TMPDIR could be a directory or a link another user made, and the outputs would go
@@ -236,7 +248,7 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option, std::FILE* out)
   n.write(RegId::Mode_Reg1_S, m1::EOI);
   fmt::print(out, "\nregister session done at cycle {} ({:.3f} ms of chip time)\n", chip.cycle(),
              static_cast<double>(chip.cycle()) * 1e3 / chip.clock_hz());
-  return run_dp_session(opt, out_dir, out);
+  return run_dp_session(opt, out_dir, timescale, out);
 }
 
 }  // namespace dpc31::cli

@@ -87,6 +87,10 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"intel", "motorola"}));
   std::string demo_variant;
   dpc31::cli::add_variant_option(demo, demo_variant);
+  std::string demo_timescale;
+  demo->add_option("--timescale", demo_timescale,
+                   "time unit of both waveforms, 1ps ... 1s (default: 1ps for the full VCD, 10ns "
+                   "for the logic analysers' VCD)");
 
   std::string regs_profile = "dpc31";
   std::string regs_format = "text";
@@ -114,8 +118,13 @@ int main(int argc, char** argv) {
   // Numbers: dpc31::numbers (no NaN, no "-1" taken as 2^64 - 1, nothing that does not fit).
   run->add_option("--from", run_opt.from, "waveform window: first cycle")->check(whole(0));
   run->add_option("--to", run_opt.to, "waveform window: one past the last cycle")->check(whole(0));
-  run->add_option("--timescale", run_opt.timescale, "waveform time unit (default 1ps)");
-  run->add_flag("--flat", run_opt.flat, "one scope, 1-bit signals only (for sigrok)");
+  run->add_option("--la-vcd", run_opt.la_vcd,
+                  "also write the run as a VCD for logic-analyser tools (sigrok, PulseView): "
+                  "1-bit signals, one scope");
+  run->add_option("--timescale", run_opt.timescale,
+                  "waveform time unit, 1ps ... 1s (default 1ps; 10ns with --flat and --la-vcd)");
+  run->add_flag("--flat", run_opt.flat,
+                "--vcd / --fst for logic-analyser tools: 1-bit signals, one scope");
   run->add_option("--engine", run_opt.engine,
                   "how time advances: event (deadline to deadline) or per-cycle (every clock, "
                   "the reference; docs/engine.md)")
@@ -236,7 +245,7 @@ int main(int argc, char** argv) {
       if (std::string why = dpc31::cli::apply_variant(demo_variant, opt); !why.empty()) {
         return refuse(why);
       }
-      return dpc31::cli::run_demo(opt, demo_out, stdout);
+      return dpc31::cli::run_demo(opt, demo_out, demo_timescale, stdout);
     }
     if (regs->parsed()) {
       std::vector<const dpc31::ProfileDesc*> sel;

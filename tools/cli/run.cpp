@@ -5,6 +5,7 @@
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <tuple>
 #include <vector>
 
 #include "outfile.hpp"
@@ -57,21 +58,6 @@ std::vector<std::string> leading_comments(const std::string& path) {
   return out;
 }
 
-// The unit of --timescale: 1/10/100 followed by s, ms, us, ns, ps or fs, as an exponent of 10.
-bool timescale_exponent(const std::string& t, int& exp) {
-  static const std::pair<const char*, int> kUnits[] = {{"fs", -15}, {"ps", -12}, {"ns", -9},
-                                                       {"us", -6},  {"ms", -3},  {"s", 0}};
-  for (const auto& [unit, e] : kUnits) {
-    for (const auto& [mult, add] : {std::pair{"100", 2}, std::pair{"10", 1}, std::pair{"1", 0}}) {
-      if (t == std::string(mult) + unit) {
-        exp = e + add;
-        return true;
-      }
-    }
-  }
-  return false;
-}
-
 // The run with everything asked for watching it: a trace recorder (--record), a waveform
 // (--vcd / --fst) and a telegram capture (--pcap). Nothing is written unless the run completes.
 int run_with_outputs(const RunOptions& opt, const LineSink& walk, const LineSink& errors,
@@ -81,6 +67,7 @@ int run_with_outputs(const RunOptions& opt, const LineSink& walk, const LineSink
                                                            {"--record", opt.record},
                                                            {"--vcd", opt.vcd},
                                                            {"--fst", opt.fst},
+                                                           {"--la-vcd", opt.la_vcd},
                                                            {"--pcap", opt.pcap}});
   if (!same.empty()) {
     fmt::print(err, "dpc31 run: {}\n", same);
@@ -96,6 +83,24 @@ int run_with_outputs(const RunOptions& opt, const LineSink& walk, const LineSink
 }
 
 }  // namespace
+
+bool parse_timescale(const std::string& t, int& exp) {
+  static const std::pair<const char*, int> kUnits[] = {{"fs", -15}, {"ps", -12}, {"ns", -9},
+                                                       {"us", -6},  {"ms", -3},  {"s", 0}};
+  for (const auto& [unit, e] : kUnits) {
+    for (const auto& [mult, add] : {std::pair{"100", 2}, std::pair{"10", 1}, std::pair{"1", 0}}) {
+      if (t == std::string(mult) + unit && e + add <= 0) {
+        exp = e + add;
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
+std::string timescale_error(const std::string& t) {
+  return fmt::format("--timescale '{}': use 1, 10 or 100 with fs, ps, ns, us or ms, or 1s", t);
+}
 
 int run_parsed_scenario(const RunOptions& opt, const Scenario& s, const LineSink& walk,
                         const LineSink& errors, ScenarioOutcome& o, std::FILE* err) {
@@ -118,13 +123,20 @@ int run_parsed_scenario(const RunOptions& opt, const Scenario& s, const LineSink
     rec = std::make_unique<TraceRecorder>(s.master.baud, std::move(notes));
     hooks = rec->scenario_hooks();
   }
+  int unit_exp = 0;
+  if (!opt.timescale.empty() && !parse_timescale(opt.timescale, unit_exp)) {
+    fmt::print(err, "dpc31 run: {}\n", timescale_error(opt.timescale));
+    return 2;
+  }
   if (opt.to <= opt.from) {
     fmt::print(err, "dpc31 run: --to {} is not after --from {}: an empty waveform window\n", opt.to,
                opt.from);
     return 2;
   }
   std::vector<std::unique_ptr<wave::Recorder>> waves;
-  for (const auto& [path, fst] : {std::pair{opt.vcd, false}, std::pair{opt.fst, true}}) {
+  for (const auto& [path, fst, flat] :
+       {std::tuple{opt.vcd, false, opt.flat}, std::tuple{opt.fst, true, opt.flat},
+        std::tuple{opt.la_vcd, false, true}}) {
     if (path.empty()) continue;
     wave::Options w;
     w.path = path;
@@ -132,13 +144,13 @@ int run_parsed_scenario(const RunOptions& opt, const Scenario& s, const LineSink
     w.signals = opt.signals;
     w.from = opt.from;
     w.to = opt.to;
-    w.flat = opt.flat;
-    if (!timescale_exponent(opt.timescale, w.timescale_exp)) {
-      fmt::print(err,
-                 "dpc31 run: --timescale '{}': use 1, 10 or 100 with s, ms, us, ns, ps or fs\n",
-                 opt.timescale);
-      return 2;
-    }
+    w.flat = flat;
+    // The logic-analyser form's default: 10 ns, the sample period of a 100 MHz analyser (sigrok
+    // makes one sample per unit; 8.3 per bit at 12 Mbaud). The full form's: 1 ps.
+    parse_timescale(!opt.timescale.empty() ? opt.timescale
+                    : flat                 ? "10ns"
+                                           : "1ps",
+                    w.timescale_exp);
     waves.push_back(std::make_unique<wave::Recorder>(w));
   }
   capture::PcapngWriter pcap;

@@ -16,14 +16,21 @@ struct RunOptions {
   std::string record;    // write a golden trace of the run here ("" = none, docs/trace-format.md)
   std::string vcd;       // waveform of the run (docs/waveforms.md)
   std::string fst;
+  std::string la_vcd;  // the logic-analyser form as a second VCD ("" = none): 1-bit, one scope
   std::vector<std::string> signals;  // waveform signal globs ("" = all)
   std::uint64_t from = 0;            // waveform window, cycles
   std::uint64_t to = UINT64_MAX;
-  std::string timescale = "1ps";
-  bool flat = false;
+  std::string timescale;          // "" = 1ps, 10ns for the logic-analyser form (docs/waveforms.md)
+  bool flat = false;              // --vcd / --fst in the logic-analyser form
   std::string pcap;               // the chip's telegrams as pcapng (docs/capture.md)
   Engine engine = Engine::event;  // how time advances (docs/engine.md)
 };
+
+// A waveform time unit, "1ps", "10ns", "100us", ... up to "1s", as an exponent of 10 (-12, -8,
+// ...).
+bool parse_timescale(const std::string& t, int& exp);
+// The one line for a unit parse_timescale() refuses (without the command's name).
+std::string timescale_error(const std::string& t);
 
 // `dpc31 run`: plays a scenario file (docs/scenario-format.md), printing the state walk to `out`
 // and failures to `err`. Returns the exit code: 0 every expect held, 1 one failed, 2 bad input.

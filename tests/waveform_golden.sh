@@ -1,0 +1,18 @@
+#!/bin/sh
+# The VCD writer's output, byte for byte, against files written by the writer before it was made
+# fast (commit 3c78365, issue 19 item 7): the full form at 1 ps (do4_osp_replace: about 15 000
+# changes, so the recorder drains its buffer several times during the run), the form for
+# logic-analyser tools, and a window at 100 us of some signals.
+# Usage: waveform_golden.sh path/to/dpc31 source-dir
+set -eu
+dpc31=$1
+src=$2
+d=$(mktemp -d)
+trap 'rm -rf "$d"' EXIT
+"$dpc31" run "$src/traces/do4_osp_replace.scn" --quiet --vcd "$d/full.vcd" --la-vcd "$d/la.vcd"
+"$dpc31" run "$src/traces/startup_dpc31_1m5.scn" --quiet --vcd "$d/window.vcd" --from 100000 \
+  --to 300000 --timescale 100us --signals 'pins.*,bus.*'
+cmp "$d/full.vcd" "$src/tests/data/waveform/do4_osp_replace.vcd"
+cmp "$d/la.vcd" "$src/tests/data/waveform/do4_osp_replace.la.vcd"
+cmp "$d/window.vcd" "$src/tests/data/waveform/startup_dpc31_1m5_window.vcd"
+echo "3 waveforms as before"
