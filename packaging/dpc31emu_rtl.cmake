@@ -32,6 +32,13 @@ set(_dpc31emu_rtl_ports
   "OUT bus_rdata 8")
 set(_dpc31emu_rtl_optional_ports "IN mutant_sel 4")
 
+# One line on stderr as it is (FATAL_ERROR's own text is reflowed), then the stop.
+function(_dpc31emu_fail)
+  string(CONCAT text ${ARGN})
+  message(NOTICE "dpc31emu: ${text}")
+  message(FATAL_ERROR "dpc31emu_verilate_model stopped (the line above)")
+endfunction()
+
 # Fails with one line if the Verilated header's ports do not match the list: each listed port
 # present with its direction and width, no other input (the harness would leave it at 0).
 function(_dpc31emu_check_ports header)
@@ -55,8 +62,8 @@ function(_dpc31emu_check_ports header)
     endforeach()
     if(NOT want)
       if(NOT dir STREQUAL "OUT")
-        message(FATAL_ERROR "dpc31emu: ${model}: port ${name} is not one of the harness's inputs "
-          "(docs/golden-model.md lists them; nothing would drive it)")
+        _dpc31emu_fail("${model}: port ${name} is not one of the harness's inputs "
+          "(docs/golden-model.md lists them, and nothing would drive it)")
       endif()
       continue()  # an extra output is not compared
     endif()
@@ -65,7 +72,7 @@ function(_dpc31emu_check_ports header)
     if(NOT dir STREQUAL wdir OR NOT width EQUAL wwidth)
       string(TOLOWER "${dir}" d)
       string(TOLOWER "${wdir}" wd)
-      message(FATAL_ERROR "dpc31emu: ${model}: port ${name} is a ${width}-bit ${d}put, the "
+      _dpc31emu_fail("${model}: port ${name} is a ${width}-bit ${d}put, the "
         "harness needs a ${wwidth}-bit ${wd}put (docs/golden-model.md)")
     endif()
     list(APPEND seen ${name})
@@ -78,7 +85,7 @@ function(_dpc31emu_check_ports header)
       list(GET p 0 wdir)
       list(GET p 2 wwidth)
       string(TOLOWER "${wdir}" wd)
-      message(FATAL_ERROR "dpc31emu: ${model}: port ${pname} missing (a ${wwidth}-bit ${wd}put, "
+      _dpc31emu_fail("${model}: port ${pname} missing (a ${wwidth}-bit ${wd}put, "
         "docs/golden-model.md)")
     endif()
   endforeach()
@@ -99,7 +106,7 @@ endif()
 function(dpc31emu_verilate_model)
   cmake_parse_arguments(PARSE_ARGV 0 arg "" "TARGET;TOP;PROFILE" "SOURCES;DEFINES;INCLUDE_DIRS")
   if(NOT arg_TARGET OR NOT arg_TOP OR NOT arg_SOURCES)
-    message(FATAL_ERROR "dpc31emu: dpc31emu_verilate_model needs TARGET, SOURCES and TOP")
+    _dpc31emu_fail("dpc31emu_verilate_model needs TARGET, SOURCES and TOP")
   endif()
   if(NOT arg_PROFILE)
     set(arg_PROFILE dpc31)
@@ -107,7 +114,7 @@ function(dpc31emu_verilate_model)
   set(profiles spc3 vpc3plus dpc31)
   list(FIND profiles "${arg_PROFILE}" profile_index)
   if(profile_index LESS 0)
-    message(FATAL_ERROR "dpc31emu: PROFILE ${arg_PROFILE}: not spc3, vpc3plus or dpc31")
+    _dpc31emu_fail("PROFILE ${arg_PROFILE}: not spc3, vpc3plus or dpc31")
   endif()
   if(NOT COMMAND verilate)
     find_package(verilator REQUIRED HINTS $ENV{VERILATOR_ROOT} /usr/share/verilator)

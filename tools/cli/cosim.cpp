@@ -100,8 +100,11 @@ bool load_rtl(const CosimOptions& o, cosim::DutOptions& dut, std::string& id) {
     return fail("--rtl and --rtl-model: one model at a time");
   std::string path = o.rtl_model;
   std::string error;
-  if (!o.rtl_sources.empty() && !build_rtl_model({o.rtl_sources, o.top, o.defines, o.profile, ""},
-                                                 path, error, o.quiet ? nullptr : stderr)) {
+  // The note that a build starts (minutes) only on a terminal, as the progress bar: in a log,
+  // stderr is the report alone.
+  std::FILE* progress = o.quiet || isatty(STDERR_FILENO) == 0 ? nullptr : stderr;
+  if (!o.rtl_sources.empty() &&
+      !build_rtl_model({o.rtl_sources, o.top, o.defines, o.profile, ""}, path, error, progress)) {
     return fail(error);
   }
   if (o.rtl_sources.empty() && (!o.top.empty() || !o.defines.empty()))
