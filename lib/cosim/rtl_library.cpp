@@ -109,14 +109,13 @@ namespace {
 // 64-bit FNV-1a: a cache key, not a security measure (the cache is the user's own directory).
 struct Fnv {
   std::uint64_t h = 0xcbf29ce484222325ull;
+  // The length too, so that ("ab", "c") and ("a", "bc") differ.
   void add(std::string_view s) {
+    bytes(s);
+    bytes(fmt::format("|{}|", s.size()));
+  }
+  void bytes(std::string_view s) {
     for (const char c : s) {
-      h ^= static_cast<unsigned char>(c);
-      h *= 0x100000001b3ull;
-    }
-    // The length too, so that ("ab", "c") and ("a", "bc") differ.
-    const std::string n = fmt::format("|{}|", s.size());
-    for (const char c : n) {
       h ^= static_cast<unsigned char>(c);
       h *= 0x100000001b3ull;
     }
@@ -297,7 +296,7 @@ bool build_rtl_model(const RtlBuild& b, std::string& model_path, std::string& er
     }
     key.add(text);
   }
-  const std::string cache = b.cache_dir.empty() ? rtl_cache_dir() : b.cache_dir;
+  const std::string cache = rtl_cache_dir();
   fs::create_directories(cache, ec);
   if (ec) {
     error = fmt::format("RTL cache {}: {}", cache, ec.message());

@@ -48,16 +48,15 @@ struct RtlBuild {
   std::string top;                   // the top module
   std::vector<std::string> defines;  // NAME or NAME=VALUE (Verilator -D)
   Profile profile = Profile::dpc31;  // -GPROFILE=
-  std::string cache_dir;             // "" = rtl_cache_dir()
 };
 
 // $DPC31EMU_RTL_CACHE, else $XDG_CACHE_HOME/dpc31emu/rtl, else $HOME/.cache/dpc31emu/rtl.
 std::string rtl_cache_dir();
 
-// Verilates and compiles the sources into <cache>/<key>/model.so, unless that is there already
-// (key: a hash of the sources and the Verilog files next to them, the top, defines, profile,
-// the Verilator version and the adapter's own files). `progress` gets one line when a build
-// starts (nullptr: silent). False with one line in `error`: a missing file, Verilator's own
+// Verilates and compiles the sources into <rtl_cache_dir()>/<key>/model.so, unless that is there
+// already (key: a hash of the sources and the Verilog files next to them, the top, defines,
+// profile, the Verilator version and the adapter's own files). `progress` gets one line when a
+// build starts (nullptr: silent). False with one line in `error`: a missing file, Verilator's own
 // first error, a port missing or of the wrong width, a failed C++ build.
 bool build_rtl_model(const RtlBuild& b, std::string& model_path, std::string& error,
                      std::FILE* progress);

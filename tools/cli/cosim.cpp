@@ -104,7 +104,7 @@ bool load_rtl(const CosimOptions& o, cosim::DutOptions& dut, std::string& id) {
   // stderr is the report alone.
   std::FILE* progress = o.quiet || isatty(STDERR_FILENO) == 0 ? nullptr : stderr;
   if (!o.rtl_sources.empty() &&
-      !build_rtl_model({o.rtl_sources, o.top, o.defines, o.profile, ""}, path, error, progress)) {
+      !build_rtl_model({o.rtl_sources, o.top, o.defines, o.profile}, path, error, progress)) {
     return fail(error);
   }
   if (o.rtl_sources.empty() && (!o.top.empty() || !o.defines.empty()))
