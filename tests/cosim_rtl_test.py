@@ -122,6 +122,31 @@ def mutants_same_report():
                   f"{out['rtl'][1][-1]['cycle']}, same report as --mutant")
 
 
+def session_clean():
+    # A real DP session's block events drive the loaded model too.
+    scn = os.path.join(SRC, "traces", "gc_clear_failsafe_dpc31.scn")
+    r = run(OWN + ["--session", scn, "--quiet"])
+    check(r.returncode == 0 and not summary(r)["diverged"], f"exit {r.returncode}: {r.stderr}")
+    print("session mode on the loaded model: no divergence")
+
+
+def waveforms_and_number():
+    # The waveform window of a divergence, with Verilator's internal FST of the loaded model
+    # (built with tracing, unlike the built-in mutants), and --mutant as mutant_sel's number.
+    with tempfile.TemporaryDirectory() as work:
+        args = OWN + ["--define", "MUTANTS", "--seeds", "3", "--cycles", "3000", "--quiet"]
+        r = run(args + ["--mutant", "POLARITY", "--vcd", "win", "--out", "out"], cwd=work)
+        check(r.returncode == 1, f"exit {r.returncode}: {r.stderr}")
+        for f in ("emu.vcd", "rtl.vcd", "rtl_internal.fst"):
+            check(os.path.getsize(os.path.join(work, "win", f)) > 0, f"no {f}")
+        n = run(args + ["--mutant", "7", "--out", "out7"], cwd=work)  # MUT_POLARITY = 4'd7
+        check(n.returncode == 1, f"--mutant 7: exit {n.returncode}")
+        a, b = summary(r)["results"], summary(n)["results"]
+        check([(x["seed"], x["cycle"]) for x in a] == [(x["seed"], x["cycle"]) for x in b],
+              "--mutant 7 differs from --mutant POLARITY")
+    print("emu.vcd, rtl.vcd, rtl_internal.fst written; --mutant 7 = POLARITY")
+
+
 def bad(args, part, files=None):
     with tempfile.TemporaryDirectory() as work:
         for name, kw in (files or {}).items():
@@ -135,6 +160,8 @@ CASES = {
     "own_model_clean": own_model_clean,
     "mutant_model_unselected_clean": mutant_model_unselected_clean,
     "mutants_same_report": mutants_same_report,
+    "session_clean": session_clean,
+    "waveforms_and_number": waveforms_and_number,
     "missing_port": lambda: bad(["--rtl", "@stub.v", "--top", "stub"],
                                 "Vstub: port irr missing (a 16-bit output",
                                 {"stub.v": {"drop": "irr"}}),

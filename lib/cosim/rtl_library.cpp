@@ -67,7 +67,7 @@ std::shared_ptr<const RtlLibrary> RtlLibrary::load(const std::string& path, std:
   // RTLD_LOCAL: each model keeps its own copy of Verilator's runtime.
   void* h = ::dlopen(name.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (h == nullptr) {
-    error = fmt::format("--rtl-model {}", ::dlerror());  // dlerror names the file
+    error = ::dlerror();  // "FILE: reason"
     return nullptr;
   }
   using Entry = const dpc31_rtl_model* (*)();
