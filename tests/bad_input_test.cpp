@@ -300,6 +300,47 @@ TEST_F(BadInput, CosimOptionsAndOutputs) {
   EXPECT_EQ(listing(), before);
 }
 
+// dpc31 cosim merge (docs/regression.md): summaries that are not the complete set of one run.
+TEST_F(BadInput, CosimMerge) {
+  spit(path("old.xml"), "old");
+  const auto summary = [this](const std::string& file, const std::string& args) {
+    const Outcome r = dpc31("cosim --quiet " + args);
+    ASSERT_EQ(r.rc, 0) << args;
+    spit(path(file), r.out);
+  };
+  summary("s1.json", "--seeds 4 --cycles 100 --shard 1/2");
+  summary("s2.json", "--seeds 4 --cycles 100 --shard 2/2");
+  summary("other.json", "--seeds 4 --cycles 200 --shard 2/2");
+  summary("session.json", "--session " + std::string(SOURCE_DIR) + "/traces/startup_dpc31_1m5.scn");
+  const std::string text = slurp(path("s1.json"));
+  spit(path("cut.json"), text.substr(0, text.size() / 2));
+  const auto before = listing();
+  const std::string merge = "cosim merge --junit old.xml ";
+  expect_bad(dpc31(merge + "s1.json"), "dpc31 cosim merge: shard 2/2 missing", "missing");
+  expect_bad(dpc31(merge + "s1.json s1.json s2.json"),
+             "dpc31 cosim merge: s1.json: shard 1/2 given twice", "twice");
+  expect_bad(dpc31(merge + "s1.json other.json"),
+             "dpc31 cosim merge: other.json: cycles_per_seed is 200, in s1.json it is 100: not "
+             "shards of one run",
+             "other run");
+  expect_bad(dpc31(merge + "s1.json cut.json"),
+             "dpc31 cosim merge: cut.json: not the JSON summary of a `dpc31 cosim --shard` run "
+             "(not JSON, or cut off)",
+             "cut off");
+  expect_bad(dpc31(merge + "session.json"),
+             "dpc31 cosim merge: session.json: not the JSON summary of a `dpc31 cosim --shard` run",
+             "session summary");
+  expect_bad_prefix(dpc31(merge + "nosuch.json"), "dpc31 cosim merge: nosuch.json: ", "no file");
+  expect_bad(dpc31("cosim --shard-base 0 --shard 2/2 --junit old.xml"),
+             "dpc31 cosim: --shard must be K/N with 0 <= K <= N - 1, not '2/2'", "0-based");
+  expect_bad(dpc31("cosim --shard -1/2 --junit old.xml"),
+             "dpc31 cosim: --shard must be K/N with 1 <= K <= N, not '-1/2'", "negative");
+  EXPECT_EQ(slurp(path("old.xml")), "old");
+  EXPECT_EQ(listing(), before);
+  // And the good set merges, in any order.
+  EXPECT_EQ(dpc31("cosim merge s2.json s1.json").rc, 0);
+}
+
 // --- dpc31 wavediff: VCD, FST, the map file, its outputs ----------------------------------------
 
 class BadWaves : public BadInput {

@@ -21,6 +21,8 @@ struct BlockEvent;
 
 namespace dpc31::cosim {
 
+class RtlLibrary;
+
 struct Inputs {
   bool rst = false;
   bool ev_dx = false;
@@ -82,6 +84,8 @@ struct DutOptions {
   Profile profile = Profile::dpc31;
   BusMode bus = BusMode::intel;
   std::optional<Vpc3Variant> variant = std::nullopt;  // vpc3plus only (ChipOptions::variant)
+  // A model loaded at run time (rtl_library.hpp) in place of the built-in ones.
+  std::shared_ptr<const RtlLibrary> rtl = nullptr;
   // Status_Reg bits 15..12: the RTL's static input asic_type.
   [[nodiscard]] std::uint8_t asic_type() const {
     return variant ? static_cast<std::uint8_t>(*variant) : profile_desc(profile).release;
@@ -90,7 +94,8 @@ struct DutOptions {
 
 std::unique_ptr<Dut> make_cpp_dut(const DutOptions& o);
 // The Verilated model of rtl/dpc31_blocks.v for the profile, or one of its mutants (by macro
-// name without the MUTANT_ prefix, "" = none). nullptr if that variant was not built.
+// name without the MUTANT_ prefix, "" = none). nullptr if that variant was not built. With
+// o.rtl, that model, its mutant_sel input set from the mutant's name (or number).
 std::unique_ptr<Dut> make_rtl_dut(const DutOptions& o, std::string_view mutant = "");
 std::vector<std::string> rtl_mutants();
 

@@ -1,102 +1,63 @@
-// The Verilated models of rtl/dpc31_blocks.v as Duts: one class per profile, and one (dpc31) with
-// every mutant behind its mutant_sel input, listed in the generated rtl_models.inc (rtl/).
-#include <verilated.h>
-#include <verilated_fst_c.h>
-
+// The Verilated models of rtl/dpc31_blocks.v built into the harness as Duts: one class per
+// profile, and one (dpc31) with every mutant behind its mutant_sel input, listed in the generated
+// rtl_models.inc (rtl/). Models loaded at run time: rtl_library.cpp.
 #include <memory>
 
 #include "dut.hpp"
+#include "rtl_library.hpp"
 #include "rtl_models_includes.inc"
+#include "verilated_blocks.hpp"
 
 namespace dpc31::cosim {
 
+dpc31_rtl_inputs rtl_inputs(const Inputs& in) {
+  dpc31_rtl_inputs r{};
+  r.rst = in.rst;
+  r.ev_dx = in.ev_dx;
+  r.bus_rd = in.bus_rd;
+  r.bus_wr = in.bus_wr;
+  r.bus_addr = in.bus_addr;
+  r.bus_wdata = in.bus_wdata;
+  r.ev_irq = in.ev_irq;
+  r.ev_leave_master = in.ev_leave_master;
+  r.ev_prm_fault = in.ev_prm_fault;
+  r.ev_gc = in.ev_gc;
+  r.gc_cmd = in.gc_cmd;
+  r.ev_dout = in.ev_dout;
+  r.ev_failsafe = in.ev_failsafe;
+  r.ev_din = in.ev_din;
+  r.ev_diag_begin = in.ev_diag_begin;
+  r.ev_diag_end = in.ev_diag_end;
+  r.stat_diag = in.stat_diag;
+  r.ev_prm = in.ev_prm;
+  r.ev_cfg = in.ev_cfg;
+  r.ev_ssa = in.ev_ssa;
+  r.ev_dis = in.ev_dis;
+  r.dis_bits = in.dis_bits;
+  return r;
+}
+
 namespace {
+
+static_assert(Outputs::kCount == DPC31_RTL_OUTPUTS);
 
 template <class V>
 class RtlDut final : public Dut {
  public:
-  RtlDut(const DutOptions& o, int mutant_sel) : top_(std::make_unique<V>(&ctx_)) {
-    // Only the mutants' model has the input; it stays constant for the whole run.
-    if constexpr (requires(V & v) { v.mutant_sel; }) top_->mutant_sel = mutant_sel;
-    top_->motorola = o.bus == BusMode::motorola ? 1 : 0;
-    top_->asic_type = o.asic_type();
-    top_->clk = 0;
-    top_->rst = 1;  // power-on: registers to their reset values before cycle 0
-    clock();
-    top_->rst = 0;
-  }
-  ~RtlDut() override {
-    top_->final();
-    if (fst_) fst_->close();
-  }
+  RtlDut(const DutOptions& o, int mutant_sel)
+      : blocks_(o.bus == BusMode::motorola, o.asic_type(), static_cast<unsigned>(mutant_sel)) {}
 
-  bool trace_to(const std::string& path) override {
-    if constexpr (requires(V & v, VerilatedFstC * t) { v.trace(t, 99); }) {
-      ctx_.traceEverOn(true);
-      fst_ = std::make_unique<VerilatedFstC>();
-      top_->trace(fst_.get(), 99);
-      fst_->open(path.c_str());
-      return fst_->isOpen();
-    } else {
-      return false;
-    }
-  }
-
-  void step(const Inputs& in) override {
-    top_->rst = in.rst;
-    top_->bus_rd = in.bus_rd;
-    top_->bus_wr = in.bus_wr;
-    top_->bus_addr = in.bus_addr;
-    top_->bus_wdata = in.bus_wdata;
-    top_->ev_irq = in.ev_irq;
-    top_->ev_leave_master = in.ev_leave_master;
-    top_->ev_gc = in.ev_gc;
-    top_->gc_cmd = in.gc_cmd;
-    top_->ev_dout = in.ev_dout;
-    top_->ev_failsafe = in.ev_failsafe;
-    top_->ev_din = in.ev_din;
-    top_->ev_diag_begin = in.ev_diag_begin;
-    top_->ev_diag_end = in.ev_diag_end;
-    top_->stat_diag = in.stat_diag;
-    top_->ev_prm = in.ev_prm;
-    top_->ev_cfg = in.ev_cfg;
-    top_->ev_ssa = in.ev_ssa;
-    top_->ev_prm_fault = in.ev_prm_fault;
-    top_->ev_dx = in.ev_dx;
-    top_->ev_dis = in.ev_dis;
-    top_->dis_bits = in.dis_bits;
-    clock();
-  }
-
+  bool trace_to(const std::string& path) override { return blocks_.trace_to(path.c_str()); }
+  void step(const Inputs& in) override { blocks_.step(rtl_inputs(in)); }
   [[nodiscard]] Outputs outputs() const override {
-    const V& t = *top_;
     Outputs o;
-    o.v = {t.x_int,         t.irr,         t.imr,         t.mode_reg0, t.mode_reg1,    t.started,
-           t.dp_state,      t.prm_pending, t.cfg_pending, t.ssa_free,  t.prm_fault,    t.cfg_fault,
-           t.not_supported, t.sync_mode,   t.freeze_mode, t.diag_flag, t.dout_sm,      t.din_sm,
-           t.diag_sm,       t.u_cleared,   t.n_cleared,   t.n_cl,      t.d_fresh,      t.dout_ptr1,
-           t.dout_ptr2,     t.dout_ptr3,   t.dout_ptr_c,  t.cfg_ptr,   t.read_cfg_ptr, t.gc_command,
-           t.bus_rdata};
+    blocks_.read_outputs(o.v.data());
     return o;
   }
-
   [[nodiscard]] std::string name() const override { return "RTL"; }
 
  private:
-  void clock() {
-    top_->clk = 0;
-    top_->eval();
-    if (fst_) fst_->dump(2 * cycle_);
-    top_->clk = 1;
-    top_->eval();
-    if (fst_) fst_->dump(2 * cycle_ + 1);
-    ++cycle_;
-  }
-
-  VerilatedContext ctx_;
-  std::unique_ptr<V> top_;
-  std::unique_ptr<VerilatedFstC> fst_;
-  std::uint64_t cycle_ = 0;
+  VerilatedBlocks<V> blocks_;
 };
 
 struct Model {
@@ -120,6 +81,7 @@ constexpr Model kModels[] = {
 }  // namespace
 
 std::unique_ptr<Dut> make_rtl_dut(const DutOptions& o, std::string_view mutant) {
+  if (o.rtl) return o.rtl->make_dut(o, mutant_sel(mutant).value_or(0));
   for (const Model& m : kModels) {
     if (mutant == m.mutant && (m.profile < 0 || m.profile == static_cast<int>(o.profile)))
       return m.make(o, m.mutant_sel);
@@ -133,6 +95,20 @@ std::vector<std::string> rtl_mutants() {
     if (*m.mutant != '\0') out.emplace_back(m.mutant);
   }
   return out;
+}
+
+std::optional<unsigned> mutant_sel(std::string_view mutant) {
+  if (mutant.empty()) return 0u;
+  for (const Model& m : kModels) {
+    if (mutant == m.mutant) return static_cast<unsigned>(m.mutant_sel);
+  }
+  // A number for a design of your own with other mutants (mutant_sel is 4 bits).
+  unsigned n = 0;
+  for (const char c : mutant) {
+    if (c < '0' || c > '9' || n > 15) return std::nullopt;
+    n = n * 10 + static_cast<unsigned>(c - '0');
+  }
+  return n >= 1 && n <= 15 ? std::optional<unsigned>(n) : std::nullopt;
 }
 
 }  // namespace dpc31::cosim

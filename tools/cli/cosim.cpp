@@ -15,6 +15,7 @@
 
 #include "lockstep.hpp"
 #include "outfile.hpp"
+#include "rtl_library.hpp"
 #include "session.hpp"
 #include "textfile.hpp"
 
@@ -59,12 +60,11 @@ bool can_be_directory(const std::filesystem::path& dir, std::string& why) {
   return true;  // a relative path below the working directory
 }
 
-std::string junit(const CosimOptions& o, const nlohmann::json& results) {
+std::string junit(const std::string& profile, const nlohmann::json& results) {
   std::string cases;
   int failures = 0;
   for (const auto& r : results) {
-    const std::string name =
-        fmt::format("{}.seed{}", o.profile_name, r["seed"].get<std::uint64_t>());
+    const std::string name = fmt::format("{}.seed{}", profile, r["seed"].get<std::uint64_t>());
     if (r["diverged"].get<bool>()) {
       ++failures;
       cases += fmt::format(
@@ -81,6 +81,74 @@ std::string junit(const CosimOptions& o, const nlohmann::json& results) {
       results.size(), failures, cases);
 }
 
+// The model the run uses in place of the built-in ones: --rtl (built into the cache, or taken
+// from it) or --rtl-model. False with the line already printed (exit 2).
+// `id` names the model in the JSON summary the same on every machine: the cache key for --rtl,
+// the file name for --rtl-model, "" for the built-in models.
+bool load_rtl(const CosimOptions& o, cosim::DutOptions& dut, std::string& id) {
+  using namespace dpc31::cosim;
+  const auto fail = [](const std::string& why) {
+    fmt::print(stderr, "dpc31 cosim: {}\n", why);
+    return false;
+  };
+  if (o.rtl_sources.empty() && o.rtl_model.empty()) {
+    if (!o.top.empty() || !o.defines.empty())
+      return fail(fmt::format("--{} is for --rtl", o.top.empty() ? "define" : "top"));
+    return true;
+  }
+  if (!o.rtl_sources.empty() && !o.rtl_model.empty())
+    return fail("--rtl and --rtl-model: one model at a time");
+  std::string path = o.rtl_model;
+  std::string error;
+  // The note that a build starts (minutes) only on a terminal, as the progress bar: in a log,
+  // stderr is the report alone.
+  std::FILE* progress = o.quiet || isatty(STDERR_FILENO) == 0 ? nullptr : stderr;
+  if (!o.rtl_sources.empty() &&
+      !build_rtl_model({o.rtl_sources, o.top, o.defines, o.profile}, path, error, progress)) {
+    return fail(error);
+  }
+  if (o.rtl_sources.empty() && (!o.top.empty() || !o.defines.empty()))
+    return fail("--top and --define are for --rtl (a --rtl-model is built already)");
+  dut.rtl = RtlLibrary::load(path, error);
+  if (!dut.rtl) return fail(error);
+  const std::filesystem::path p(path);
+  id = (o.rtl_model.empty() ? p.parent_path().filename() : p.filename()).string();
+  if (!o.mutant.empty()) {
+    if (!mutant_sel(o.mutant))
+      return fail(fmt::format(
+          "--mutant {}: with --rtl, a mutant of rtl/dpc31_blocks.v by name or a number 1..15 "
+          "for the mutant_sel input",
+          o.mutant));
+    if (!dut.rtl->has_mutant_sel())
+      return fail(
+          fmt::format("--mutant {}: module {} has no mutant_sel input (rtl/dpc31_blocks.v "
+                      "has it with --define MUTANTS)",
+                      o.mutant, dut.rtl->top()));
+  }
+  return true;
+}
+
+// What a random run's JSON summary says about the run besides its results: a merge of shards
+// checks that these are the same in every shard (docs/regression.md).
+const char* const kRunKeys[] = {"profile",         "bus",       "variant", "mutant", "rtl",
+                                "cycles_per_seed", "keep_going"};
+
+// The JSON summary of a random run, and of a merge of shards, which must equal it.
+nlohmann::json summary_json(nlohmann::json run, const nlohmann::json& shard, std::uint64_t from,
+                            std::uint64_t to, std::uint64_t cycles, double secs,
+                            nlohmann::json results) {
+  std::uint64_t diverged = 0;
+  for (const auto& r : results) diverged += r["diverged"].get<bool>() ? 1 : 0;
+  run["shard"] = shard;
+  run["seeds"] = {{"from", from}, {"to", to}, {"run", results.size()}};
+  run["cycles"] = cycles;
+  run["seconds"] = secs;
+  run["lockstep_cycles_per_second"] = secs > 0 ? static_cast<double>(cycles) / secs : 0.0;
+  run["divergent_seeds"] = diverged;
+  run["results"] = std::move(results);
+  return run;
+}
+
 }  // namespace
 
 namespace {
@@ -94,7 +162,9 @@ int run_session_mode(const CosimOptions& o) {
     fmt::print(stderr, "{}\n", error);
     return 2;
   }
-  const RunResult r = run_session(s, o.mutant);
+  std::string rtl_id;
+  if (!load_rtl(o, s.options, rtl_id)) return 2;
+  const RunResult r = run_session(s, o.mutant);  // s.options carries a --rtl model
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!o.quiet) {
     for (const std::string& line : r.report) fmt::print(stderr, "{}\n", line);
@@ -102,6 +172,7 @@ int run_session_mode(const CosimOptions& o) {
   const nlohmann::json summary = {{"session", o.session},
                                   {"profile", std::string(profile_desc(s.options.profile).name)},
                                   {"mutant", o.mutant},
+                                  {"rtl", rtl_id},
                                   {"cycles", s.cycles},
                                   {"block_events", s.events.size()},
                                   {"scenario_expects_passed", s.scenario_passed},
@@ -132,7 +203,9 @@ int run_cosim(const CosimOptions& o) {
       return 2;
     }
   }
-  const DutOptions dut{o.profile, o.bus, o.variant};
+  DutOptions dut{o.profile, o.bus, o.variant};
+  std::string rtl_id;
+  if (!load_rtl(o, dut, rtl_id)) return 2;
   if (!make_rtl_dut(dut, o.mutant)) {
     fmt::print(stderr,
                "dpc31 cosim: no RTL model for profile {} mutant '{}' (built mutants use dpc31)\n",
@@ -231,22 +304,117 @@ int run_cosim(const CosimOptions& o) {
     }
   }
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const nlohmann::json summary = {
+  const nlohmann::json run = {
       {"profile", o.profile_name},
+      {"bus", o.bus == BusMode::motorola ? "motorola" : "intel"},
+      {"variant", o.variant ? nlohmann::json(static_cast<int>(*o.variant)) : nlohmann::json()},
       {"mutant", o.mutant},
-      {"seeds", {{"from", lo}, {"to", hi}, {"run", results.size()}}},
+      {"rtl", rtl_id},
       {"cycles_per_seed", o.cycles},
-      {"cycles", cycles},
-      {"seconds", secs},
-      {"lockstep_cycles_per_second", secs > 0 ? static_cast<double>(cycles) / secs : 0.0},
-      {"divergent_seeds", diverged},
-      {"results", results}};
+      {"keep_going", o.keep_going}};
+  const nlohmann::json shard = {{"index", o.shard},
+                                {"count", o.shards},
+                                {"of", {{"from", o.seed_base}, {"to", o.seed_base + o.seeds}}}};
+  const nlohmann::json summary = summary_json(run, shard, lo, hi, cycles, secs, results);
   fmt::print("{}\n", summary.dump(2));
-  if (!o.junit.empty() && !(junit_out.write(junit(o, results)) && junit_out.commit())) {
+  if (!o.junit.empty() &&
+      !(junit_out.write(junit(o.profile_name, results)) && junit_out.commit())) {
     fmt::print(stderr, "{}\n", junit_out.error());
     return 2;
   }
   return diverged == 0 ? 0 : 1;
+}
+
+int run_cosim_merge(const MergeOptions& o) {
+  const auto fail = [](const std::string& why) {
+    fmt::print(stderr, "dpc31 cosim merge: {}\n", why);
+    return 2;
+  };
+  outfile::OutFile junit_out;
+  if (!o.junit.empty() && !junit_out.open(o.junit)) return fail(junit_out.error());
+  struct Part {
+    std::string file;
+    nlohmann::json j;
+  };
+  std::vector<Part> parts;
+  for (const std::string& f : o.inputs) {
+    std::string text;
+    std::string why;
+    if (!read_text_file(f, 256u << 20, "JSON summary", text, why)) return fail(f + ": " + why);
+    nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
+    // What a shard of a random run writes: these keys with these types (a session summary, a
+    // cut-off file or another JSON document is refused here, not half-merged).
+    const bool shaped = j.is_object() && j.contains("shard") && j["shard"].is_object() &&
+                        j["shard"].value("index", nlohmann::json()).is_number_unsigned() &&
+                        j["shard"].value("count", nlohmann::json()).is_number_unsigned() &&
+                        j["shard"].contains("of") && j.contains("seeds") &&
+                        j["seeds"].value("from", nlohmann::json()).is_number_unsigned() &&
+                        j["seeds"].value("to", nlohmann::json()).is_number_unsigned() &&
+                        j.value("cycles", nlohmann::json()).is_number_unsigned() &&
+                        j.value("seconds", nlohmann::json()).is_number() && j.contains("results") &&
+                        j["results"].is_array() &&
+                        std::all_of(std::begin(kRunKeys), std::end(kRunKeys),
+                                    [&j](const char* k) { return j.contains(k); });
+    if (!shaped) {
+      return fail(fmt::format("{}: not the JSON summary of a `dpc31 cosim --shard` run{}", f,
+                              j.is_discarded() ? " (not JSON, or cut off)" : ""));
+    }
+    for (const auto& r : j["results"]) {
+      if (!r.is_object() || !r.value("seed", nlohmann::json()).is_number_unsigned() ||
+          !r.value("diverged", nlohmann::json()).is_boolean() ||
+          !r.value("cycle", nlohmann::json()).is_number_integer())
+        return fail(fmt::format("{}: a result without seed, diverged and cycle", f));
+    }
+    parts.push_back({f, std::move(j)});
+  }
+  if (parts.empty()) return fail("no summaries to merge");
+  std::sort(parts.begin(), parts.end(), [](const Part& a, const Part& b) {
+    return a.j["shard"]["index"].get<std::uint64_t>() < b.j["shard"]["index"].get<std::uint64_t>();
+  });
+  const nlohmann::json& first = parts.front().j;
+  const std::uint64_t count = first["shard"]["count"].get<std::uint64_t>();
+  nlohmann::json results = nlohmann::json::array();
+  std::uint64_t cycles = 0;
+  double secs = 0;
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    const nlohmann::json& j = parts[i].j;
+    const std::string& f = parts[i].file;
+    for (const char* k : kRunKeys) {
+      if (j[k] != first[k])
+        return fail(fmt::format("{}: {} is {}, in {} it is {}: not shards of one run", f, k,
+                                j[k].dump(), parts.front().file, first[k].dump()));
+    }
+    if (j["shard"]["count"] != first["shard"]["count"] || j["shard"]["of"] != first["shard"]["of"])
+      return fail(fmt::format("{}: shard {}/{} of seeds {}, {} is {}/{} of {}: not one run", f,
+                              j["shard"]["index"].dump(), j["shard"]["count"].dump(),
+                              j["shard"]["of"].dump(), parts.front().file,
+                              first["shard"]["index"].dump(), count, first["shard"]["of"].dump()));
+    const std::uint64_t index = j["shard"]["index"].get<std::uint64_t>();
+    if (index != i + 1) {
+      return fail(index < i + 1 ? fmt::format("{}: shard {}/{} given twice", f, index, count)
+                                : fmt::format("shard {}/{} missing", i + 1, count));
+    }
+    for (const auto& r : j["results"]) results.push_back(r);
+    cycles += j["cycles"].get<std::uint64_t>();
+    secs += j["seconds"].get<double>();
+  }
+  if (parts.size() != count)
+    return fail(fmt::format("shard {}/{} missing", parts.size() + 1, count));
+  nlohmann::json run = nlohmann::json::object();
+  for (const char* k : kRunKeys) run[k] = first[k];
+  const nlohmann::json& of = first["shard"]["of"];
+  const nlohmann::json shard = {{"index", 1}, {"count", 1}, {"of", of}};
+  const nlohmann::json summary =
+      summary_json(run, shard, parts.front().j["seeds"]["from"].get<std::uint64_t>(),
+                   parts.back().j["seeds"]["to"].get<std::uint64_t>(), cycles, secs, results);
+  fmt::print("{}\n", summary.dump(2));
+  if (!o.junit.empty() &&
+      !(junit_out.write(junit(first["profile"].get<std::string>(), summary["results"])) &&
+        junit_out.commit())) {
+    fmt::print(stderr, "{}\n", junit_out.error());
+    return 2;
+  }
+  return summary["divergent_seeds"].get<std::uint64_t>() == 0 ? 0 : 1;
 }
 
 }  // namespace dpc31::cli

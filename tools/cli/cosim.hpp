@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "dpc31/chip.hpp"
 #include "dpc31/regdesc.hpp"
@@ -19,6 +20,12 @@ struct CosimOptions {
   std::uint64_t cycles = 20'000;
   std::uint64_t shard = 1;  // 1..shards
   std::uint64_t shards = 1;
+  // Your RTL at run time (docs/golden-model.md): Verilog sources Verilated and built into the
+  // cache, or a model built by dpc31emu_verilate_model().
+  std::vector<std::string> rtl_sources;
+  std::string top;
+  std::vector<std::string> defines;
+  std::string rtl_model;
   std::string junit;
   std::string vcd_dir;
   std::string out_dir;   // where shrunk traces go
@@ -32,5 +39,13 @@ struct CosimOptions {
 };
 
 int run_cosim(const CosimOptions& o);
+
+// dpc31 cosim merge: the JSON summaries of the shards of one run into the summary (stdout) and
+// JUnit file of the whole run (docs/regression.md). Exit 0 / 1 as the run's verdict, 2 bad input.
+struct MergeOptions {
+  std::vector<std::string> inputs;
+  std::string junit;
+};
+int run_cosim_merge(const MergeOptions& o);
 
 }  // namespace dpc31::cli

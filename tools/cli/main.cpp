@@ -154,7 +154,12 @@ int main(int argc, char** argv) {
   cosim->add_option("--seeds", cos.seeds, "number of random seeds")->check(whole(1, 100'000'000));
   cosim->add_option("--seed-base", cos.seed_base, "first seed")->check(whole(0));
   cosim->add_option("--cycles", cos.cycles, "cycles per seed")->check(whole(1, 100'000'000));
-  cosim->add_option("--shard", cos_shard, "K/N: run the K-th of N equal parts of the seed range");
+  cosim->add_option("--shard", cos_shard,
+                    "K/N: run the K-th of N equal parts of the seed range (K from 1, or from 0 "
+                    "with --shard-base 0; docs/regression.md)");
+  unsigned cos_shard_base = 1;
+  cosim->add_option("--shard-base", cos_shard_base, "the first K of --shard: 1 (default) or 0")
+      ->check(CLI::IsMember({0, 1}));
   cosim->add_option("--junit", cos.junit, "write JUnit XML results to this file");
   cosim->add_option("--vcd", cos.vcd_dir,
                     "on divergence, write emu.vcd and rtl.vcd around it here");
@@ -166,7 +171,25 @@ int main(int argc, char** argv) {
   cosim->add_option("--dump", cos.dump_dir,
                     "write emu.vcd, rtl.vcd (ports) and rtl_internal.fst of the first run here");
   cosim->add_option("--replay", cos.replay, "replay a stimulus trace instead of random seeds");
-  cosim->add_option("--mutant", cos.mutant, "use an RTL mutant (to see the check fail)");
+  cosim->add_option("--mutant", cos.mutant,
+                    "use an RTL mutant (to see the check fail); with --rtl: the value of the "
+                    "model's mutant_sel input, by name or 1..15");
+  cosim
+      ->add_option("--rtl", cos.rtl_sources,
+                   "your Verilog sources in place of the built-in model: Verilated and built "
+                   "into the cache on first use (docs/golden-model.md)")
+      ->expected(1, -1);
+  cosim->add_option("--top", cos.top, "with --rtl: the top module");
+  cosim->add_option("--define", cos.defines, "with --rtl: a Verilog define NAME or NAME=VALUE")
+      ->take_all();
+  cosim->add_option("--rtl-model", cos.rtl_model,
+                    "a model built by dpc31emu_verilate_model() (a .so) in place of the built-in");
+  // dpc31 cosim merge: the shards' JSON summaries into the whole run's (docs/regression.md).
+  dpc31::cli::MergeOptions merge_opt;
+  auto* merge = cosim->add_subcommand(
+      "merge", "merge the JSON summaries of the shards of one run into its summary and JUnit");
+  merge->add_option("summaries", merge_opt.inputs, "the shards' JSON summaries")->required();
+  merge->add_option("--junit", merge_opt.junit, "write the whole run's JUnit XML to this file");
   cosim->add_option(
       "--session", cos.session,
       "chip-session mode: run this scenario on the full chip, drive the RTL with its block events");
@@ -217,6 +240,7 @@ int main(int argc, char** argv) {
     if (wavediff->parsed()) return dpc31::wavediff::run_cli(wavediff_args, stdout, stderr);
     if (run->parsed()) return dpc31::cli::run_scenario_command(run_opt, stdout, stderr);
     if (replay->parsed()) return dpc31::cli::run_replay_command(replay_opt, stdout, stderr);
+    if (merge->parsed()) return dpc31::cli::run_cosim_merge(merge_opt);
     if (cosim->parsed()) {
       dpc31::parse_profile(cos.profile_name, cos.profile);
       cos.bus = cos_bus == "intel" ? dpc31::BusMode::intel : dpc31::BusMode::motorola;
@@ -229,12 +253,14 @@ int main(int argc, char** argv) {
       unsigned n = 0;
       char slash = 0;
       std::istringstream sh(cos_shard);
-      if (!(sh >> k >> slash >> n) || slash != '/' || n == 0 || k == 0 || k > n || !sh.eof()) {
-        fmt::print(stderr, "dpc31 cosim: --shard must be K/N with 1 <= K <= N, not '{}'\n",
-                   cos_shard);
+      if (!(sh >> k >> slash >> n) || slash != '/' || n == 0 || k < cos_shard_base ||
+          k - cos_shard_base >= n || !sh.eof() ||
+          cos_shard.find_first_of("+-") != std::string::npos) {
+        fmt::print(stderr, "dpc31 cosim: --shard must be K/N with {} <= K <= N{}, not '{}'\n",
+                   cos_shard_base, cos_shard_base == 0 ? " - 1" : "", cos_shard);
         return 2;
       }
-      cos.shard = k;
+      cos.shard = k + 1 - cos_shard_base;
       cos.shards = n;
       return dpc31::cli::run_cosim(cos);
     }

@@ -1,0 +1,194 @@
+#!/usr/bin/env python3
+"""`dpc31 cosim --rtl` end to end (docs/golden-model.md, "Putting your own RTL under the harness").
+
+Usage: cosim_rtl_test.py DPC31_CLI SOURCE_DIR CACHE_DIR CASE   (CASE: see CASES at the bottom)
+
+The two model builds (our rtl/dpc31_blocks.v as it is, and with --define MUTANTS) go into
+CACHE_DIR, which the CTest fixtures share, so each is built once per build tree. The bad-input
+cases use a fresh cache each and must end in one line on stderr, exit 2, no model left behind.
+Python 3 standard library only.
+"""
+
+import json
+import os
+import re
+import subprocess
+import sys
+import tempfile
+
+CLI, SRC, CACHE, CASE = sys.argv[1:5]
+BLOCKS = os.path.join(SRC, "rtl", "dpc31_blocks.v")
+OWN = ["--rtl", BLOCKS, "--top", "dpc31_blocks"]
+
+
+def run(args, cache=CACHE, cwd=None):
+    env = dict(os.environ, DPC31EMU_RTL_CACHE=cache)
+    return subprocess.run([CLI, "cosim"] + args, capture_output=True, text=True, env=env, cwd=cwd,
+                          timeout=1800)
+
+
+def check(cond, what):
+    if not cond:
+        print("FAIL: " + what, file=sys.stderr)
+        sys.exit(1)
+
+
+def mutants():
+    """The MUT_* names of rtl/dpc31_blocks_constants.vh (as rtl/CMakeLists.txt reads them)."""
+    text = open(os.path.join(SRC, "rtl", "dpc31_blocks_constants.vh")).read()
+    return re.findall(r"^ *localparam \[3:0\] MUT_([A-Z0-9_]+) = 4'd[0-9]+;", text, re.M)
+
+
+def ports():
+    """The harness's port list, from the function that checks it (packaging/dpc31emu_rtl.cmake)."""
+    text = open(os.path.join(SRC, "packaging", "dpc31emu_rtl.cmake")).read()
+    block = text[text.index("set(_dpc31emu_rtl_ports"):text.index("set(_dpc31emu_rtl_optional")]
+    return [(d, n, int(w)) for d, n, w in re.findall(r'"(IN|OUT) (\w+) (\d+)"', block)]
+
+
+def stub(path, drop=None, width=None, extra_input=None, body=""):
+    """A module with the harness's ports (one dropped, one of another width, one input more)."""
+    decl = []
+    assigns = []
+    for d, n, w in ports():
+        if n == drop:
+            continue
+        if width and n == width[0]:
+            w = width[1]
+        rng = f"[{w - 1}:0] " if w > 1 else ""
+        decl.append(f"  {'input' if d == 'IN' else 'output'} wire {rng}{n}")
+        if d == "OUT":
+            assigns.append(f"  assign {n} = {w}'d0;")
+    if extra_input:
+        decl.append(f"  input wire {extra_input}")
+    with open(path, "w") as f:
+        f.write("// verilator lint_off UNUSED\nmodule stub #(parameter PROFILE = 2) (\n")
+        f.write(",\n".join(decl) + "\n);\n" + "\n".join(assigns) + "\n" + body + "endmodule\n")
+
+
+def one_line_exit_2(r, part, cache):
+    lines = r.stderr.splitlines()
+    check(r.returncode == 2, f"exit {r.returncode}, want 2; stderr: {r.stderr}")
+    check(len(lines) == 1, f"{len(lines)} lines on stderr, want 1: {r.stderr}")
+    check(part in lines[0], f"'{part}' not in: {lines[0]}")
+    check(r.stdout == "", f"stdout not empty: {r.stdout[:200]}")
+    left = [f for _, _, fs in os.walk(cache) for f in fs if f.startswith("model.so")]
+    check(not left, f"a model left behind in {cache}: {left}")
+    print(lines[0])
+
+
+def summary(r):
+    return json.loads(r.stdout)
+
+
+def own_model_clean():
+    # Done-when: our own model as --rtl is clean over the default budget (200 seeds x 20000).
+    r = run(OWN + ["--seeds", "200", "--quiet"])
+    check(r.returncode == 0, f"exit {r.returncode}: {r.stderr}")
+    s = summary(r)
+    check(s["divergent_seeds"] == 0 and s["seeds"]["run"] == 200, "not 200 clean seeds")
+    check(re.fullmatch(r"[0-9a-f]{16}", s["rtl"]) is not None, f"rtl = {s['rtl']!r}")
+    check(os.path.isfile(os.path.join(CACHE, s["rtl"], "model.so")), "no model.so in the cache")
+    print(f"200 seeds clean on the model {s['rtl']}")
+
+
+def mutant_model_unselected_clean():
+    # The mutants' model (MUTANTS) with mutant_sel = 0 is the real model.
+    r = run(OWN + ["--define", "MUTANTS", "--seeds", "20", "--quiet"])
+    check(r.returncode == 0, f"exit {r.returncode}: {r.stderr}")
+    check(summary(r)["divergent_seeds"] == 0, "diverged")
+    print("mutants' model, none selected: 20 seeds clean")
+
+
+def mutants_same_report():
+    # Each mutant through --rtl: caught with the same report, results and shrunk trace as
+    # the built-in --mutant (each run in its own directory, so the report's paths are equal).
+    names = mutants()
+    check(len(names) >= 8, f"only {len(names)} mutants found")
+    with tempfile.TemporaryDirectory() as work:
+        for m in names:
+            out = {}
+            for side, extra in (("builtin", []), ("rtl", OWN + ["--define", "MUTANTS"])):
+                d = os.path.join(work, m, side)
+                os.makedirs(d)
+                r = run(extra + ["--mutant", m, "--seeds", "200", "--out", "out"], cwd=d)
+                check(r.returncode == 1, f"{m} {side}: exit {r.returncode}: {r.stderr[-500:]}")
+                s = summary(r)
+                trace = os.path.join(d, s["results"][-1]["trace"])
+                out[side] = (r.stderr, s["results"], s["divergent_seeds"], open(trace).read())
+            check(out["builtin"][0] == out["rtl"][0], f"{m}: the reports differ")
+            check(out["builtin"][1:] == out["rtl"][1:], f"{m}: results or shrunk traces differ")
+            print(f"{m}: caught at seed {out['rtl'][1][-1]['seed']}, cycle "
+                  f"{out['rtl'][1][-1]['cycle']}, same report as --mutant")
+
+
+def session_clean():
+    # A real DP session's block events drive the loaded model too.
+    scn = os.path.join(SRC, "traces", "gc_clear_failsafe_dpc31.scn")
+    r = run(OWN + ["--session", scn, "--quiet"])
+    check(r.returncode == 0 and not summary(r)["diverged"], f"exit {r.returncode}: {r.stderr}")
+    print("session mode on the loaded model: no divergence")
+
+
+def waveforms_and_number():
+    # The waveform window of a divergence, with Verilator's internal FST of the loaded model
+    # (built with tracing, unlike the built-in mutants), and --mutant as mutant_sel's number.
+    with tempfile.TemporaryDirectory() as work:
+        args = OWN + ["--define", "MUTANTS", "--seeds", "3", "--cycles", "3000", "--quiet"]
+        r = run(args + ["--mutant", "POLARITY", "--vcd", "win", "--out", "out"], cwd=work)
+        check(r.returncode == 1, f"exit {r.returncode}: {r.stderr}")
+        for f in ("emu.vcd", "rtl.vcd", "rtl_internal.fst"):
+            check(os.path.getsize(os.path.join(work, "win", f)) > 0, f"no {f}")
+        n = run(args + ["--mutant", "7", "--out", "out7"], cwd=work)  # MUT_POLARITY = 4'd7
+        check(n.returncode == 1, f"--mutant 7: exit {n.returncode}")
+        a, b = summary(r)["results"], summary(n)["results"]
+        check([(x["seed"], x["cycle"]) for x in a] == [(x["seed"], x["cycle"]) for x in b],
+              "--mutant 7 differs from --mutant POLARITY")
+    print("emu.vcd, rtl.vcd, rtl_internal.fst written; --mutant 7 = POLARITY")
+
+
+def bad(args, part, files=None):
+    with tempfile.TemporaryDirectory() as work:
+        for name, kw in (files or {}).items():
+            stub(os.path.join(work, name), **kw)
+        args = [a.replace("@", work + "/") for a in args]
+        cache = os.path.join(work, "cache")
+        one_line_exit_2(run(args, cache=cache), part.replace("@", work + "/"), cache)
+
+
+CASES = {
+    "own_model_clean": own_model_clean,
+    "mutant_model_unselected_clean": mutant_model_unselected_clean,
+    "mutants_same_report": mutants_same_report,
+    "session_clean": session_clean,
+    "waveforms_and_number": waveforms_and_number,
+    "missing_port": lambda: bad(["--rtl", "@stub.v", "--top", "stub"],
+                                "Vstub: port irr missing (a 16-bit output",
+                                {"stub.v": {"drop": "irr"}}),
+    "wrong_width": lambda: bad(["--rtl", "@stub.v", "--top", "stub"],
+                               "port bus_addr is a 12-bit input, the harness needs a 13-bit input",
+                               {"stub.v": {"width": ("bus_addr", 12)}}),
+    "extra_input": lambda: bad(["--rtl", "@stub.v", "--top", "stub"],
+                               "port scan_en is not one of the harness's inputs",
+                               {"stub.v": {"extra_input": "scan_en"}}),
+    "syntax_error": lambda: bad(["--rtl", "@stub.v", "--top", "stub"],
+                                "Verilator: %Error: @stub.v:",
+                                {"stub.v": {"body": "  this is not verilog;\n"}}),
+    "wrong_top": lambda: bad(["--rtl", "@stub.v", "--top", "nosuch"], "Verilator: %Error",
+                             {"stub.v": {}}),
+    "missing_file": lambda: bad(["--rtl", "@nosuch.v", "--top", "stub"],
+                                "--rtl @nosuch.v: no such file"),
+    "no_top": lambda: bad(["--rtl", "@stub.v"], "--rtl needs --top MODULE", {"stub.v": {}}),
+    "bad_define": lambda: bad(["--rtl", "@stub.v", "--top", "stub", "--define", "=1"],
+                              "--define =1: not NAME or NAME=VALUE", {"stub.v": {}}),
+    "cpp_build_error": lambda: bad(["--rtl", "@stub.v", "--top", "stub"],
+                                   "C++ build of the RTL model failed: ",
+                                   {"stub.v": {"body": '  initial $c("not_cpp(;");\n'}}),
+    "not_a_model": lambda: bad(["--rtl-model", BLOCKS], "invalid ELF header"),
+    "mutant_without_input": lambda: one_line_exit_2(
+        run(OWN + ["--mutant", "NO_C_SWAP", "--seeds", "1"]),
+        "module dpc31_blocks has no mutant_sel input", CACHE + "/none"),
+}
+
+if __name__ == "__main__":
+    CASES[CASE]()
