@@ -186,3 +186,19 @@ TEST(CliBench, BadArgumentsExit2WithOneLine) {
     EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << args << ": " << r.out;
   }
 }
+
+// Issue 16: `dpc31 regs --profile dpc31` shows the parameter cells and both queues at their
+// places, each with its origin (documented / modelled) and its source (the manual's page).
+TEST(Cli, RegsShowsTheDpc31QueuesWithTheirOrigin) {
+  const Result r = run("regs --profile dpc31");
+  ASSERT_EQ(r.rc, 0) << r.out;
+  for (const char* line : {"0x086A  0x086A  InstQ_Base", "0x086C  0x086C  InstQ_Wr",
+                           "0x0870  0x0870  IndQ_Wr", "0x0871  0x0871  IndQ_Rd"}) {
+    const std::size_t at = r.out.find(line);
+    ASSERT_NE(at, std::string::npos) << line;
+    const std::string row = r.out.substr(at, r.out.find('\n', at) - at);
+    EXPECT_NE(row.find("modelled"), std::string::npos) << row;
+    EXPECT_NE(row.find("DPC31 p.22"), std::string::npos) << row;
+  }
+  EXPECT_NE(r.out.find("documented  [S-BECKHOFF]"), std::string::npos);  // Status_Reg
+}

@@ -630,8 +630,9 @@ std::vector<Row> constant_rows(const ProfileDesc& p) {
 constexpr std::array kMarkdownCols{Col::read,   Col::write,  Col::name,   Col::kind,
                                    Col::width,  Col::reset,  Col::fields, Col::bytes,
                                    Col::origin, Col::source, Col::desc};
-constexpr std::array kTextCols{Col::read,  Col::write, Col::name,  Col::kind,
-                               Col::width, Col::reset, Col::fields};
+// The origin and the source before the fields: which address is the manual's and which ours.
+constexpr std::array kTextCols{Col::read,  Col::write,  Col::name,   Col::kind,  Col::width,
+                               Col::reset, Col::origin, Col::source, Col::fields};
 
 }  // namespace
 
