@@ -6,7 +6,7 @@
  * Vpc3MemSet, Vpc3MemCmp) and the addresses of the generated register header. It owns the
  * chip: the init sequence, the ISR for every interrupt source, the Prm/Cfg handshakes with
  * their conflict loops, Dout/Din buffer switching, diag updates, Set_Slave_Add and the user
- * watchdog; on the DPC31 through its request interface (MAC_Start, DPS_User_Wd, the
+ * watchdog; on the DPC31 through its request interface (DPS_User_Wd, the
  * Indication_Queue; docs/dpc31.md).
  * A module plugs in with a dps_module: its ident, Cfg and lengths, and callbacks.
  */
@@ -61,7 +61,7 @@ typedef struct dps_module {
   void (*tick)(void);
 } dps_module;
 
-/* main(): configure the chip for this module and start it (Start_SPC3; the DPC31: MAC_Start). */
+/* main(): configure the chip for this module and start it (Start_SPC3). */
 void dps_init(const dps_board* board, const dps_module* module);
 /* The X/INT interrupt service routine. */
 void dps_isr(void);
