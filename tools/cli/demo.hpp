@@ -9,8 +9,10 @@ namespace dpc31::cli {
 
 // `dpc31 demo`: a scripted register-level session (start the chip, raise, mask, acknowledge and
 // EOI interrupts, every access and X/INT edge with its cycle), then a DP session with the DO4
-// example firmware, its waveform and capture written to `out_dir`, or if that is empty to a new
-// private directory TMPDIR/dpc31-demo-XXXXXX (mkdtemp), whose name it prints.
-int run_demo(ChipOptions opt, const std::string& out_dir, std::FILE* out);
+// example firmware (or `firmware`: a built-in name or a plug-in path), its waveform and capture
+// written to `out_dir`, or if that is empty to a new private directory TMPDIR/dpc31-demo-XXXXXX
+// (mkdtemp), whose name it prints.
+int run_demo(ChipOptions opt, const std::string& out_dir, const std::string& firmware,
+             std::FILE* out);
 
 }  // namespace dpc31::cli

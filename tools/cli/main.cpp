@@ -87,6 +87,10 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"intel", "motorola"}));
   std::string demo_variant;
   dpc31::cli::add_variant_option(demo, demo_variant);
+  std::string demo_firmware;  // "": DO4 with its OSP story
+  demo->add_option("--firmware", demo_firmware,
+                   "the DP session's firmware instead of DO4: a built-in name or a plug-in "
+                   "./libmine.so (docs/bring-up.md)");
 
   std::string regs_profile = "dpc31";
   std::string regs_format = "text";
@@ -236,7 +240,7 @@ int main(int argc, char** argv) {
       if (std::string why = dpc31::cli::apply_variant(demo_variant, opt); !why.empty()) {
         return refuse(why);
       }
-      return dpc31::cli::run_demo(opt, demo_out, stdout);
+      return dpc31::cli::run_demo(opt, demo_out, demo_firmware, stdout);
     }
     if (regs->parsed()) {
       std::vector<const dpc31::ProfileDesc*> sel;
