@@ -124,11 +124,13 @@ void Cpu::body() {
 }
 
 void Cpu::run_main() {
+  const std::uint64_t pass = chip_.clock_hz() * kMainPassNs / 1'000'000'000;
   try {
     for (;;) {
-      const std::uint64_t before = accesses_;
+      const std::uint64_t start = chip_.cycle();
       program_.main_step(*this);
-      if (accesses_ == before) idle(kNoAccessCycles);
+      const std::uint64_t spent = chip_.cycle() - start;
+      if (spent < pass) idle(pass - spent);
     }
   } catch (const Stopped&) {
     throw;

@@ -33,9 +33,11 @@ class Cpu final : public BusPort {
     // The board's interrupt input (dpc31_board_int_enable); nullptr: always enabled.
     const bool* interrupts_enabled = nullptr;
   };
-  // What a main-loop pass or an ISR run without a bus access costs: one bus access time, so time
-  // always advances (docs/decisions.md).
+  // What an ISR run without a bus access costs: one bus access time, so time always advances.
   static constexpr std::uint64_t kNoAccessCycles = 4;
+  // A main-loop pass takes at least 1 us of chip time: its bus accesses, and the rest of the
+  // microsecond as the loop's own instructions (docs/decisions.md).
+  static constexpr std::uint64_t kMainPassNs = 1000;
 
   Cpu(Chip& chip, Isr isr);
   Cpu(Chip& chip, Program program);

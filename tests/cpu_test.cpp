@@ -1,8 +1,8 @@
 // The host CPU (session/cpu.hpp): the firmware's ISR interleaves with the bus side one bus access
 // at a time (4 clocks each, docs/timing.md), resumes where it stopped, and keeps its own HAL
 // selection; an exception it throws reaches the bus side; destroying the CPU unwinds an ISR in
-// progress. A main loop runs whenever no interrupt is served, a pass without a bus access costs
-// 4 clocks (docs/decisions.md), an enabled X/INT preempts it between two accesses and a masked one
+// progress. A main loop runs whenever no interrupt is served, a pass takes at least 1 us
+// (docs/decisions.md), an enabled X/INT preempts it between two accesses and a masked one
 // does not; the board hooks (dpc31_firmware.h) act on the host that runs the firmware.
 #include "cpu.hpp"
 
@@ -127,23 +127,34 @@ TEST(HostCpu, DestroyingTheCpuUnwindsAnIsrInProgress) {
   EXPECT_TRUE(unwound);
 }
 
-TEST(HostCpu, MainLoopPassWithoutAccessCostsOneAccessTime) {
+// A pass takes at least 1 us: 48 clocks at 48 MHz, its accesses included.
+constexpr std::uint64_t kPass = 48;
+
+TEST(HostCpu, MainLoopPassTakesAtLeastOneMicrosecond) {
   Chip c({Profile::dpc31, BusMode::intel, 0});
   c.set_log_sink(nullptr);
+  ASSERT_EQ(c.clock_hz(), 48'000'000u);
   int passes = 0;
   bool read = false;
+  std::vector<std::uint64_t> reads;
   Cpu cpu(c, Cpu::Program{{}, [&](BusPort& b) {
                             ++passes;
-                            if (read) b.read(kRam);
+                            if (read) {
+                              b.read(kRam);
+                              reads.push_back(b.cycle());
+                            }
                           }});
-  cpu.run_until(40);
-  // Ten passes of 4 clocks; the eleventh has run and waits for its 4 clocks at the limit.
+  cpu.run_until(10 * kPass);
+  // Ten passes of 48 clocks; the eleventh has run and waits for its microsecond at the limit.
   EXPECT_EQ(passes, 11);
-  EXPECT_EQ(c.cycle(), 40u);
-  read = true;  // from the twelfth pass on, one read each: 4 clocks, no extra charge
-  cpu.run_until(80);
+  EXPECT_EQ(c.cycle(), 10 * kPass);
+  read = true;  // from the twelfth pass on, one read each (4 clocks) and 44 clocks of the loop
+  cpu.run_until(20 * kPass);
   EXPECT_EQ(passes, 11 + 10);
-  EXPECT_EQ(c.cycle(), 80u);
+  EXPECT_EQ(reads, (std::vector<std::uint64_t>{11 * kPass + 4, 12 * kPass + 4, 13 * kPass + 4,
+                                               14 * kPass + 4, 15 * kPass + 4, 16 * kPass + 4,
+                                               17 * kPass + 4, 18 * kPass + 4, 19 * kPass + 4}));
+  EXPECT_EQ(c.cycle(), 20 * kPass);
 }
 
 TEST(HostCpu, EnabledInterruptPreemptsTheMainLoopBetweenTwoAccesses) {
@@ -158,10 +169,11 @@ TEST(HostCpu, EnabledInterruptPreemptsTheMainLoopBetweenTwoAccesses) {
                             b.read(kRam);
                             main_reads.push_back(b.cycle());
                           }});
-  cpu.run_until(24);
-  // The main loop's first access waits for the ISR (the acknowledge, 8..12): it ends at 16.
+  cpu.run_until(8 + 2 * kPass);
+  // The main loop's first access waits for the ISR (the acknowledge, 8..12): it ends at 16, and
+  // the pass that began at 8 ends at 8 + 48; the next pass reads 56..60.
   EXPECT_EQ(isr_entries, (std::vector<std::uint64_t>{8}));
-  EXPECT_EQ(main_reads, (std::vector<std::uint64_t>{16, 20, 24}));
+  EXPECT_EQ(main_reads, (std::vector<std::uint64_t>{16, 8 + kPass + 4}));
   EXPECT_FALSE(c.irq_active());
 }
 
@@ -179,13 +191,14 @@ TEST(HostCpu, MaskedInterruptLeavesAPollingLoopAloneUntilEnabled) {
                             ++reads;
                           },
                           &enabled});
-  cpu.run_until(40);
+  cpu.run_until(8 + 3 * kPass);
   EXPECT_TRUE(isr_entries.empty());
-  EXPECT_EQ(reads, 8);  // 8..40, every access the main loop's
+  EXPECT_EQ(reads, 3);  // 8..12, 56..60, 104..108: one per pass, the ISR never
   EXPECT_TRUE(c.irq_active());
   enabled = true;
-  cpu.run_until(48);
-  EXPECT_EQ(isr_entries, (std::vector<std::uint64_t>{40}));  // before the next main-loop access
+  cpu.run_until(8 + 3 * kPass + 8);
+  // Right away: the third pass was still in its loop instructions (an idle wait).
+  EXPECT_EQ(isr_entries, (std::vector<std::uint64_t>{8 + 3 * kPass}));
   EXPECT_FALSE(c.irq_active());
 }
 
@@ -216,11 +229,11 @@ TEST(HostCpu, AnExceptionHaltsTheMainLoopAndOnlyTheChipRunsOn) {
                             b.read(kRam);
                             if (++passes == 3) throw std::runtime_error("fatal");
                           }});
-  EXPECT_THROW(cpu.run_until(100), std::runtime_error);
-  EXPECT_EQ(c.cycle(), 12u);
-  cpu.run_until(100);
+  EXPECT_THROW(cpu.run_until(1000), std::runtime_error);
+  EXPECT_EQ(c.cycle(), 2 * kPass + 4);  // the third pass's read
+  cpu.run_until(1000);
   EXPECT_EQ(passes, 3);
-  EXPECT_EQ(c.cycle(), 100u);
+  EXPECT_EQ(c.cycle(), 1000u);
 }
 
 // A firmware of dpc31_firmware.h that uses every board hook (C functions, as a plug-in's).

@@ -16,8 +16,8 @@
  * How the host runs it, on the host CPU of docs/bring-up.md section 4: init() once, as main()'s
  * set-up; then main_step() over and over (main()'s loop) while no interrupt is being served; the
  * ISR whenever X/INT is active and the board's interrupt input is enabled, preempting the main
- * loop between two of its bus accesses. Every bus access costs its 4 clocks; a main_step() that
- * makes no bus access costs 4 clocks too.
+ * loop between two of its bus accesses. Every bus access costs its 4 clocks; a main_step() pass
+ * takes at least 1 us of chip time (the rest of the microsecond: the loop's own instructions).
  */
 #ifndef DPC31_FIRMWARE_H_
 #define DPC31_FIRMWARE_H_
