@@ -38,23 +38,23 @@ BusPort& bus(const char* fn) {
 }
 
 // The block functions, one byte access (4 clocks) per byte, addresses wrapping at 16 bits.
-void copy_to(BusPort& b, VPC3_ADR dst, const uint8_t* src, uint16_t len) {
-  for (uint16_t i = 0; i < len; ++i) b.write(static_cast<VPC3_ADR>(dst + i), src[i]);
+void copy_to(BusPort& b, uint16_t dst, const uint8_t* src, uint16_t len) {
+  for (uint16_t i = 0; i < len; ++i) b.write(static_cast<uint16_t>(dst + i), src[i]);
 }
 
-void copy_from(BusPort& b, uint8_t* dst, VPC3_ADR src, uint16_t len) {
-  for (uint16_t i = 0; i < len; ++i) dst[i] = b.read(static_cast<VPC3_ADR>(src + i));
+void copy_from(BusPort& b, uint8_t* dst, uint16_t src, uint16_t len) {
+  for (uint16_t i = 0; i < len; ++i) dst[i] = b.read(static_cast<uint16_t>(src + i));
 }
 
-void mem_set(BusPort& b, VPC3_ADR addr, uint8_t value, uint16_t len) {
-  for (uint16_t i = 0; i < len; ++i) b.write(static_cast<VPC3_ADR>(addr + i), value);
+void mem_set(BusPort& b, uint16_t addr, uint8_t value, uint16_t len) {
+  for (uint16_t i = 0; i < len; ++i) b.write(static_cast<uint16_t>(addr + i), value);
 }
 
 // Stops at the first difference, as the drivers' version does (its reads are what it costs).
-uint8_t mem_cmp(BusPort& b, VPC3_ADR a, VPC3_ADR c, uint16_t len) {
+uint8_t mem_cmp(BusPort& b, uint16_t a, uint16_t c, uint16_t len) {
   for (uint16_t i = 0; i < len; ++i) {
-    const uint8_t first = b.read(static_cast<VPC3_ADR>(a + i));  // this order on the bus
-    if (first != b.read(static_cast<VPC3_ADR>(c + i))) return 1;
+    const uint8_t first = b.read(static_cast<uint16_t>(a + i));  // this order on the bus
+    if (first != b.read(static_cast<uint16_t>(c + i))) return 1;
   }
   return 0;
 }
@@ -75,6 +75,14 @@ Scope::~Scope() { exchange_selection(prev_); }
 }  // namespace dpc31::hal
 
 using dpc31::hal::bus;
+
+namespace {
+// A chip "pointer" of the drivers' serial mode (VPC3_UNSIGNED8_PTR, uint8_t *) holds the chip
+// address in its value: its low 16 bits are the address.
+std::uint16_t chip_address(const std::uint8_t* p) {
+  return static_cast<std::uint16_t>(reinterpret_cast<std::uintptr_t>(p) & 0xFFFFu);
+}
+}  // namespace
 
 extern "C" {
 
@@ -100,26 +108,26 @@ void dpc31_destroy(dpc31_chip* chip) {
   delete chip;
 }
 
-uint8_t dpc31_read(dpc31_chip* chip, VPC3_ADR addr) { return chip->bus.read(addr); }
-void dpc31_write(dpc31_chip* chip, VPC3_ADR addr, uint8_t value) { chip->bus.write(addr, value); }
+uint8_t dpc31_read(dpc31_chip* chip, uint16_t addr) { return chip->bus.read(addr); }
+void dpc31_write(dpc31_chip* chip, uint16_t addr, uint8_t value) { chip->bus.write(addr, value); }
 
-void dpc31_copy_to(dpc31_chip* chip, VPC3_ADR dst, const uint8_t* src, uint16_t len) {
+void dpc31_copy_to(dpc31_chip* chip, uint16_t dst, const uint8_t* src, uint16_t len) {
   dpc31::hal::copy_to(chip->bus, dst, src, len);
 }
 
-void dpc31_copy_from(dpc31_chip* chip, uint8_t* dst, VPC3_ADR src, uint16_t len) {
+void dpc31_copy_from(dpc31_chip* chip, uint8_t* dst, uint16_t src, uint16_t len) {
   dpc31::hal::copy_from(chip->bus, dst, src, len);
 }
 
-void dpc31_memset(dpc31_chip* chip, VPC3_ADR addr, uint8_t value, uint16_t len) {
+void dpc31_memset(dpc31_chip* chip, uint16_t addr, uint8_t value, uint16_t len) {
   dpc31::hal::mem_set(chip->bus, addr, value, len);
 }
 
-uint8_t dpc31_memcmp(dpc31_chip* chip, VPC3_ADR a, VPC3_ADR b, uint16_t len) {
+uint8_t dpc31_memcmp(dpc31_chip* chip, uint16_t a, uint16_t b, uint16_t len) {
   return dpc31::hal::mem_cmp(chip->bus, a, b, len);
 }
 
-uint8_t dpc31_peek(const dpc31_chip* chip, VPC3_ADR addr) { return chip->chip.peek(addr); }
+uint8_t dpc31_peek(const dpc31_chip* chip, uint16_t addr) { return chip->chip.peek(addr); }
 
 void dpc31_run(dpc31_chip* chip, uint64_t cycles) { chip->chip.step(cycles); }
 
@@ -165,27 +173,25 @@ void dpc31_select(dpc31_chip* chip) {
   dpc31::hal::t_ports = chip != nullptr ? &chip->ports : nullptr;
 }
 
-uint8_t Vpc3Read(VPC3_ADR wAddress) { return bus("Vpc3Read").read(wAddress); }
+uint8_t Vpc3Read(uint16_t wAddress) { return bus("Vpc3Read").read(wAddress); }
 
-void Vpc3Write(VPC3_ADR wAddress, uint8_t bData) { bus("Vpc3Write").write(wAddress, bData); }
+void Vpc3Write(uint16_t wAddress, uint8_t bData) { bus("Vpc3Write").write(wAddress, bData); }
 
-void CopyToVpc3(VPC3_UNSIGNED8_PTR pToVpc3Memory, MEM_UNSIGNED8_PTR pLocalMemory,
-                uint16_t wLength) {
-  dpc31::hal::copy_to(bus("CopyToVpc3"), pToVpc3Memory, pLocalMemory, wLength);
+void CopyToVpc3(uint8_t* pToVpc3Memory, uint8_t* pLocalMemory, uint16_t wLength) {
+  dpc31::hal::copy_to(bus("CopyToVpc3"), chip_address(pToVpc3Memory), pLocalMemory, wLength);
 }
 
-void CopyFromVpc3(MEM_UNSIGNED8_PTR pLocalMemory, VPC3_UNSIGNED8_PTR pToVpc3Memory,
-                  uint16_t wLength) {
-  dpc31::hal::copy_from(bus("CopyFromVpc3"), pLocalMemory, pToVpc3Memory, wLength);
+void CopyFromVpc3(uint8_t* pLocalMemory, uint8_t* pToVpc3Memory, uint16_t wLength) {
+  dpc31::hal::copy_from(bus("CopyFromVpc3"), pLocalMemory, chip_address(pToVpc3Memory), wLength);
 }
 
-void Vpc3MemSet(VPC3_ADR wAddress, uint8_t bValue, uint16_t wLength) {
+void Vpc3MemSet(uint16_t wAddress, uint8_t bValue, uint16_t wLength) {
   dpc31::hal::mem_set(bus("Vpc3MemSet"), wAddress, bValue, wLength);
 }
 
-uint8_t Vpc3MemCmp(VPC3_UNSIGNED8_PTR pToVpc3Memory1, VPC3_UNSIGNED8_PTR pToVpc3Memory2,
-                   uint16_t wLength) {
-  return dpc31::hal::mem_cmp(bus("Vpc3MemCmp"), pToVpc3Memory1, pToVpc3Memory2, wLength);
+uint8_t Vpc3MemCmp(uint8_t* pToVpc3Memory1, uint8_t* pToVpc3Memory2, uint16_t wLength) {
+  return dpc31::hal::mem_cmp(bus("Vpc3MemCmp"), chip_address(pToVpc3Memory1),
+                             chip_address(pToVpc3Memory2), wLength);
 }
 
 void dpc31_port_write(unsigned port, uint32_t value) {

@@ -1,5 +1,6 @@
-/* host_example.c -- the smallest C host of docs/bring-up.md section 3: a chip, a driver's init
- * and its ISR while the interrupt is active. Built as dpc31_host_example and run by CTest. */
+/* host_example.c -- a C host that drives a firmware by hand over the HAL, without the host CPU:
+ * a chip, the driver's init, and its ISR while the interrupt is active. Built as
+ * dpc31_host_example and run by CTest. (A plug-in's host: examples/plugin/host.c.) */
 #include <stdio.h>
 
 #include "do4/do4.h" /* or your driver's header */

@@ -2,6 +2,7 @@
 
 #include <setjmp.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdint>
 #include <system_error>
@@ -62,8 +63,10 @@ void back(void* fake) {
 
 }  // namespace
 
-Cpu::Cpu(Chip& chip, Isr isr)
-    : chip_(chip), isr_(std::move(isr)), stack_(std::make_unique<char[]>(kStackSize)) {
+Cpu::Cpu(Chip& chip, Isr isr) : Cpu(chip, Program{std::move(isr), {}, nullptr}) {}
+
+Cpu::Cpu(Chip& chip, Program program)
+    : chip_(chip), program_(std::move(program)), stack_(std::make_unique<char[]>(kStackSize)) {
   if (::getcontext(&firmware_ctx_) != 0) {
     throw std::system_error(errno, std::generic_category(), "getcontext");
   }
@@ -103,9 +106,10 @@ void Cpu::entry(unsigned hi, unsigned lo) {
 
 void Cpu::body() {
   try {
+    if (program_.main_step) run_main();
     for (;;) {
       try {
-        isr_(*this);
+        serve();
       } catch (const Stopped&) {
         throw;
       } catch (...) {
@@ -119,12 +123,49 @@ void Cpu::body() {
   }
 }
 
+void Cpu::run_main() {
+  const std::uint64_t pass = chip_.clock_hz() * kMainPassNs / 1'000'000'000;
+  try {
+    for (;;) {
+      const std::uint64_t start = chip_.cycle();
+      program_.main_step(*this);
+      const std::uint64_t spent = chip_.cycle() - start;
+      if (spent < pass) idle(pass - spent);
+    }
+  } catch (const Stopped&) {
+    throw;
+  } catch (...) {
+    error_ = std::current_exception();
+  }
+  // Halted: the bus side runs only the chip from now on; the coroutine waits to be unwound.
+  halted_ = true;
+  for (;;) hand_to_bus_side();
+}
+
+void Cpu::serve() {
+  in_isr_ = true;
+  const std::uint64_t before = accesses_;
+  program_.isr(*this);
+  if (accesses_ == before) idle(kNoAccessCycles);
+  in_isr_ = false;
+}
+
+bool Cpu::interrupts_enabled() const {
+  return program_.isr && (program_.interrupts_enabled == nullptr || *program_.interrupts_enabled);
+}
+
+bool Cpu::preempts() const {
+  return program_.main_step && !in_isr_ && interrupts_enabled() && chip_.irq_active();
+}
+
 // The switches are QEMU's (util/coroutine-ucontext.c): makecontext gives the coroutine its
 // stack and setcontext enters it the first time; every later switch is _setjmp/_longjmp, which
 // save and restore no signal mask (no system call) and are not swapcontext, which ASan only
 // half supports (it warns on stderr at the first call).
 void Cpu::hand_to_firmware() {
   other_hal_ = hal::exchange_selection(other_hal_);
+  other_board_ = board::exchange(other_board_);
+  board::firmware_entered();
   void* fake = nullptr;
   leaving(&fake, stack_.get(), kStackSize);
   if (_setjmp(bus_jmp_) == 0) {
@@ -136,6 +177,8 @@ void Cpu::hand_to_firmware() {
     _longjmp(firmware_jmp_, 1);
   }
   back(fake);
+  board::firmware_left();
+  other_board_ = board::exchange(other_board_);
   other_hal_ = hal::exchange_selection(other_hal_);
   if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
 }
@@ -153,9 +196,15 @@ void Cpu::hand_to_bus_side() {
 }
 
 void Cpu::gate() {
-  // A stop request (an observer of the bus side, e.g. the master seeing an answer start) takes
-  // control back before the next access, as reaching the limit does.
-  while (chip_.cycle() >= limit_ || chip_.stop_requested()) hand_to_bus_side();
+  board::progress();
+  ++accesses_;
+  for (;;) {
+    // A stop request (an observer of the bus side, e.g. the master seeing an answer start) takes
+    // control back before the next access, as reaching the limit does.
+    while (chip_.cycle() >= limit_ || chip_.stop_requested()) hand_to_bus_side();
+    if (!preempts()) return;
+    serve();  // between two accesses of the main loop, as the CPU takes an interrupt
+  }
 }
 
 std::uint8_t Cpu::read(std::uint32_t addr) {
@@ -168,11 +217,35 @@ void Cpu::write(std::uint32_t addr, std::uint8_t value) {
   chip_.write(addr, value);
 }
 
+void Cpu::idle(std::uint64_t cycles) {
+  const std::uint64_t end = chip_.cycle() + cycles;
+  for (;;) {
+    gate();
+    if (chip_.cycle() >= end) return;  // an ISR served in gate() took the rest of the wait
+    const std::uint64_t n = std::min(end, limit_) - chip_.cycle();
+    // An interrupt that would preempt the wait ends this piece where it becomes active.
+    if (program_.main_step && !in_isr_ && interrupts_enabled()) {
+      chip_.step_until_irq(n);
+    } else {
+      chip_.step(n);
+    }
+    if (chip_.cycle() >= end) return;
+  }
+}
+
 void Cpu::run_until(std::uint64_t cycle) {
   while (chip_.cycle() < cycle && !chip_.stop_requested()) {
     limit_ = cycle;
-    if (in_isr_) {
-      hand_to_firmware();  // an ISR in progress continues with its next access
+    if (halted_) {
+      chip_.step(cycle - chip_.cycle());
+      continue;
+    }
+    if (in_isr_ || program_.main_step) {
+      hand_to_firmware();  // an ISR in progress, or the main loop, continues
+      continue;
+    }
+    if (!interrupts_enabled()) {
+      chip_.step(cycle - chip_.cycle());  // asleep with X/INT masked: only the chip runs
       continue;
     }
     if (chip_.irq_active()) {

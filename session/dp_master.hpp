@@ -121,6 +121,10 @@ class DpMaster {
   DpMaster(Chip& chip, MasterConfig m, SlaveConfig s);
 
   void set_firmware(Firmware isr) { cpu_ = std::make_unique<Cpu>(chip_, std::move(isr)); }
+  // A firmware with a main loop and the board's interrupt input (FirmwareHost::program).
+  void set_firmware(Cpu::Program program) {
+    cpu_ = std::make_unique<Cpu>(chip_, std::move(program));
+  }
   // Sends one request after the idle time and waits for its answer. `fault` corrupts one
   // character on the wire (parity, start or stop bit).
   Exchange transact(const fdl::Frame& req, UartFault fault = {});

@@ -1,6 +1,29 @@
 #include "firmware_host.hpp"
 
+#include <fmt/format.h>
+
 namespace dpc31 {
+
+class FirmwareHost::Entered {
+ public:
+  Entered(FirmwareHost& h, BusPort& bus)
+      : h_(h),
+        hal_(bus, &h.sink_),
+        bus_(std::exchange(h.bus_, &bus)),
+        hooks_(board::exchange(&h)) {}
+  ~Entered() {
+    board::exchange(hooks_);
+    h_.bus_ = bus_;
+  }
+  Entered(const Entered&) = delete;
+  Entered& operator=(const Entered&) = delete;
+
+ private:
+  FirmwareHost& h_;
+  hal::Scope hal_;
+  BusPort* bus_;
+  board::Hooks* hooks_;
+};
 
 FirmwareHost::FirmwareHost(const dpc31_firmware& fw)
     : fw_(fw), sink_([this](std::uint64_t cycle, unsigned port, std::uint32_t value) {
@@ -12,16 +35,47 @@ FirmwareHost::FirmwareHost(const dpc31_firmware& fw)
 
 void FirmwareHost::init(BusPort& bus, std::uint8_t station_address) {
   const Chip& c = bus.chip();
-  const dps_board board{static_cast<int>(c.profile().id), c.bus_mode() == BusMode::motorola ? 1 : 0,
-                        station_address};
-  hal::Scope scope(bus, &sink_);
-  fw_.init(&board);
+  const dpc31_board board{static_cast<int>(c.profile().id),
+                          c.bus_mode() == BusMode::motorola ? 1 : 0, station_address};
+  Entered e(*this, bus);
+  // init runs on the caller's stack (the host CPU's hand-overs count the rest for the guard).
+  board::firmware_entered();
+  try {
+    fw_.init(&board);
+  } catch (...) {
+    board::firmware_left();
+    throw;
+  }
+  board::firmware_left();
 }
 
 void FirmwareHost::isr(BusPort& bus) {
   interrupts.emplace_back(bus.cycle(), bus.chip().peek_reg(RegId::Int_Reg));
-  hal::Scope scope(bus, &sink_);
+  Entered e(*this, bus);
   fw_.isr();
+}
+
+void FirmwareHost::main_step(BusPort& bus) {
+  Entered e(*this, bus);
+  fw_.main_step();
+}
+
+Cpu::Program FirmwareHost::program(const Cpu::Isr& after) {
+  Cpu::Program p;
+  if (fw_.isr != nullptr) {
+    p.isr = [this, after](BusPort& b) {
+      isr(b);
+      if (after) after(b);
+    };
+  }
+  if (fw_.main_step != nullptr) {
+    p.main_step = [this, after](BusPort& b) {
+      main_step(b);
+      if (after) after(b);
+    };
+  }
+  p.interrupts_enabled = &int_enabled_;
+  return p;
 }
 
 std::string FirmwareHost::hw_input(const std::string& name, std::uint32_t value) {
@@ -32,17 +86,32 @@ std::string FirmwareHost::hw_input(const std::string& name, std::uint32_t value)
 }
 
 std::int64_t FirmwareHost::port(const std::string& name) const {
-  for (unsigned i = 0; fw_.ports[i] != nullptr; ++i) {
+  for (unsigned i = 0; fw_.ports != nullptr && fw_.ports[i] != nullptr; ++i) {
     if (name == fw_.ports[i]) return i < values_.size() ? values_[i] : 0;
   }
   return -1;
 }
 
 std::string FirmwareHost::port_name(unsigned port) const {
-  for (unsigned i = 0; fw_.ports[i] != nullptr; ++i) {
+  for (unsigned i = 0; fw_.ports != nullptr && fw_.ports[i] != nullptr; ++i) {
     if (i == port) return fw_.ports[i];
   }
   return "port" + std::to_string(port);
 }
+
+// The chip starts in its reset state: a pulse before the firmware started it has nothing to do.
+// A reset of a running chip would restart its clock under the bus side: not modelled.
+void FirmwareHost::reset_line(bool asserted) {
+  if (asserted && bus_->chip().started()) {
+    throw FirmwareError(fmt::format(
+        "firmware {}: reset line asserted at cycle {} after the chip was started (a reset "
+        "during operation is not modelled)",
+        fw_.name, bus_->cycle()));
+  }
+}
+
+void FirmwareHost::int_enable(bool enabled) { int_enabled_ = enabled; }
+
+void FirmwareHost::wait_1ms() { bus_->idle(bus_->chip().clock_hz() / 1000); }
 
 }  // namespace dpc31

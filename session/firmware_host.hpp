@@ -1,31 +1,54 @@
-// A C firmware (firmware/, firmware.h) on the host CPU of one chip: its init runs as main()
-// with direct bus accesses, its ISR on the host CPU (a coroutine) whenever X/INT is active
-// (cpu.hpp). Every access goes through the C HAL's driver-shaped functions and costs its bus
-// cycles.
+// A C firmware (dpc31/dpc31_firmware.h: a built-in one of firmware/, or a plug-in) on the host
+// CPU of one chip: its init runs as main()'s set-up with direct bus accesses, then its main loop
+// and its ISR on the host CPU (cpu.hpp). Every access goes through the C HAL's driver-shaped
+// functions and costs its bus cycles; the board hooks (board.hpp) act on this host.
 //
-// The example firmwares keep their state in C globals, as on silicon: one FirmwareHost per
-// firmware image is alive at a time in a process.
+// The firmwares keep their state in C globals, as on silicon: one FirmwareHost per firmware
+// image is alive at a time in a process.
 #pragma once
 
 #include <cstdint>
+#include <memory>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "board.hpp"
 #include "cpu.hpp"
+#include "dpc31/dpc31_firmware.h"
 #include "dpc31/hal.hpp"
-#include "firmware.h"
 
 namespace dpc31 {
 
-class FirmwareHost {
+// The firmware did something the emulator cannot go on with (a reset of a started chip).
+class FirmwareError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// A firmware by what the user wrote: a plug-in path (it contains '/' or ends in ".so") or the
+// name of a built-in one (DO4, CNT2). Throws FirmwareError with one line when there is none or
+// the plug-in fails its checks (load, symbol, ABI version, required fields).
+const dpc31_firmware& find_firmware(const std::string& spec);
+[[nodiscard]] bool is_plugin_path(const std::string& spec);
+// The built-in names, "DO4, CNT2".
+[[nodiscard]] std::string builtin_firmware_names();
+// Why a descriptor cannot run (empty: it can).
+[[nodiscard]] std::string descriptor_problem(const dpc31_firmware* fw);
+
+class FirmwareHost final : private board::Hooks {
  public:
   explicit FirmwareHost(const dpc31_firmware& fw);
 
-  // main(): the firmware sets up and starts the chip.
+  // main()'s set-up: the firmware configures and starts the chip.
   void init(BusPort& bus, std::uint8_t station_address);
-  // The ISR, as the host CPU runs it (DpMaster::set_firmware, Cpu).
+  // The ISR and one pass of the main loop, as the host CPU runs them.
   void isr(BusPort& bus);
+  void main_step(BusPort& bus);
+  // What the host CPU runs after init: the ISR (if any), the main loop (if any), the board's
+  // interrupt input. `after` (may be empty) runs after each ISR and main-loop pass.
+  [[nodiscard]] Cpu::Program program(const Cpu::Isr& after = {});
   // A hardware input of the module (cnt2: "count1", "event2"): empty on success, else why not.
   std::string hw_input(const std::string& name, std::uint32_t value);
 
@@ -39,6 +62,7 @@ class FirmwareHost {
   // A port's current value (0 before the first write); -1 for an unknown name.
   [[nodiscard]] std::int64_t port(const std::string& name) const;
   [[nodiscard]] std::string port_name(unsigned port) const;
+  [[nodiscard]] bool interrupts_enabled() const { return int_enabled_; }
   // Int_Reg at every ISR entry (peeked: no bus time), for `expect irr_bit`.
   std::vector<std::pair<std::uint64_t, std::uint16_t>> interrupts;
   // Extra observer of port writes (the bridge's log, tests).
@@ -51,10 +75,17 @@ class FirmwareHost {
   }
 
  private:
+  class Entered;  // the HAL, the board hooks and the bus of one call into the firmware
+  void reset_line(bool asserted) override;
+  void int_enable(bool enabled) override;
+  void wait_1ms() override;
+
   const dpc31_firmware& fw_;
   hal::PortSink sink_;
   std::vector<PortWrite> writes_;
   std::vector<std::uint32_t> values_;
+  BusPort* bus_ = nullptr;   // the bus of the call into the firmware in progress
+  bool int_enabled_ = true;  // the board's interrupt input: enabled when the firmware starts
 };
 
 }  // namespace dpc31

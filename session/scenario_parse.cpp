@@ -4,10 +4,12 @@
 
 #include <algorithm>
 #include <charconv>
+#include <filesystem>
 #include <utility>
 
 #include "dpc31/fdl.hpp"
 #include "firmware.h"
+#include "firmware_host.hpp"
 #include "scenario.hpp"
 #include "textfile.hpp"
 
@@ -354,20 +356,22 @@ class Parser {
         }
       }
     } else if (cmd_ == "firmware") {
-      positional(1, 1, "a firmware name");
+      positional(1, 1, "a firmware name or plug-in path");
       no_options();
       if (slave_seen_) fail("'firmware' comes before 'slave': it sets the slave's GSD defaults");
       if (user_seen_) fail("'firmware' and 'user' exclude each other");
-      const std::string name(pos_[0]);
-      fw_ = dpc31_find_firmware(name.c_str());
-      if (fw_ == nullptr) {
-        std::string all;
-        for (int i = 0; dpc31_firmwares[i] != nullptr; ++i) {
-          all += (i == 0 ? "" : ", ") + std::string(dpc31_firmwares[i]->name);
-        }
-        fail(fmt::format("unknown firmware '{}' ({})", shown(pos_[0]), all));
+      std::string spec(pos_[0]);
+      // A plug-in's relative path is relative to the scenario file, as an #include's is.
+      if (is_plugin_path(spec) && spec.front() != '/') {
+        const std::filesystem::path dir = std::filesystem::path(s_.file).parent_path();
+        if (!dir.empty()) spec = (dir / spec).string();
       }
-      s_.firmware = fw_->name;
+      try {
+        fw_ = &find_firmware(spec);
+      } catch (const FirmwareError& e) {
+        fail(e.what());
+      }
+      s_.firmware = is_plugin_path(spec) ? spec : std::string(fw_->name);
       SlaveConfig& sl = s_.user.slave;
       sl.ident = fw_->ident;
       sl.cfg.assign(fw_->cfg, fw_->cfg + fw_->cfg_len);

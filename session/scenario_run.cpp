@@ -75,7 +75,7 @@ class Runner {
     user_.inputs = s_.inputs;
     DirectBus bus(chip_);
     if (!s_.firmware.empty()) {
-      fw_ = std::make_unique<FirmwareHost>(*dpc31_find_firmware(s_.firmware.c_str()));
+      fw_ = std::make_unique<FirmwareHost>(find_firmware(s_.firmware));
       fw_->on_port = [this](std::uint64_t cycle, unsigned port, std::uint32_t value) {
         note(cycle, fmt::format("{}: {} = {} at {}", fw_->firmware().name, fw_->port_name(port),
                                 port_text(value), time_text(cycle)));
@@ -93,14 +93,15 @@ class Runner {
     }
     // State changes are looked for wherever they can happen: after the firmware's ISR (its
     // Prm/Cfg verdicts), at every telegram, at every X/INT edge, after every transaction.
-    master_->set_firmware([this](BusPort& b) {
-      if (fw_) {
-        fw_->isr(b);
-      } else {
+    // (A firmware's main loop likewise after each pass.)
+    if (fw_) {
+      master_->set_firmware(fw_->program([this](BusPort&) { check_states(); }));
+    } else {
+      master_->set_firmware([this](BusPort& b) {
         user_.isr(b);
-      }
-      check_states();
-    });
+        check_states();
+      });
+    }
     chip_.on_telegram([this](const Telegram&) { check_states(); });
     chip_.on_irq_change([this](std::uint64_t, bool) { check_states(); });
     chip_.on_pb3_change([this](std::uint64_t cycle, bool high) {

@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "dpc31/dpc31_firmware.h"
+
 using namespace badinput;
 
 namespace {
@@ -562,10 +564,70 @@ TEST_F(BadInput, ServeOptions) {
   EXPECT_EQ(listing(), std::vector<std::string>{"plain"});
 }
 
+// Firmware plug-ins (dpc31/dpc31_firmware.h) are checked at load: the library loads with every
+// symbol resolved, exports the descriptor, has this host's ABI version and the required fields.
+// The same checks behind `bridge --firmware` and the scenario header `firmware`.
+TEST_F(BadInput, FirmwarePlugins) {
+  const std::string abi = BAD_PLUGIN_BAD_ABI;
+  const std::string no_init = BAD_PLUGIN_NO_INIT;
+  const std::string no_export = BAD_PLUGIN_NO_EXPORT;
+  const std::string undefined = BAD_PLUGIN_UNDEFINED;
+  const std::string version = std::to_string(DPC31_FIRMWARE_ABI_VERSION);
+  const std::vector<std::pair<std::string, std::string>> exact = {
+      {abi, "firmware plug-in " + abi + ": descriptor ABI version " +
+                std::to_string(DPC31_FIRMWARE_ABI_VERSION + 1) + ", this host takes " + version +
+                " (rebuild it against this dpc31emu)"},
+      {no_init, "firmware plug-in " + no_init + ": the descriptor has no init"},
+      {no_export, "firmware plug-in " + no_export +
+                      " exports no dpc31_firmware_descriptor (DPC31_FIRMWARE_EXPORT, "
+                      "dpc31/dpc31_firmware.h)"},
+  };
+  for (const auto& [lib, line] : exact) {
+    expect_bad(dpc31("bridge --pty p --firmware " + lib), "dpc31 bridge: " + line, lib);
+    file("plugin.scn", "firmware " + lib + "\nstartup\n");
+    expect_bad(dpc31("run plugin.scn"), "plugin.scn:1: " + line, lib);
+  }
+  // dlopen's own wording after ours: an unresolved symbol, a missing file, not an ELF file.
+  const std::string garbage = file("garbage.so", "not a library\n");
+  for (const std::string& lib : {undefined, path("missing.so"), garbage}) {
+    expect_bad_prefix(dpc31("bridge --pty p --firmware " + lib),
+                      "dpc31 bridge: cannot load firmware plug-in: " + lib, lib);
+  }
+  expect_bad_prefix(dpc31("bridge --pty p --firmware " + undefined),
+                    "dpc31 bridge: cannot load firmware plug-in: " + undefined +
+                        ": undefined symbol: no_such_board_function",
+                    "undefined symbol named");
+  // A bare file name ending in .so is a file in the current directory, not a library-path name.
+  expect_bad_prefix(dpc31("bridge --pty p --firmware libdpc31_fw_do4.so"),
+                    "dpc31 bridge: cannot load firmware plug-in: ./libdpc31_fw_do4.so", "./");
+  EXPECT_EQ(listing(), (std::vector<std::string>{"garbage.so", "plugin.scn"}));
+  // A firmware that spins without a bus access: the hang guard stops the process after 2 s of
+  // host time, with one line, and takes the bridge's symlink away.
+  const std::string spin = BAD_PLUGIN_SPIN;
+  const std::string hangs =
+      " hangs: it ran 2000 ms of host time without a bus access or a board hook call (a while(1) "
+      "loop, e.g. its fatal-error handler?); stopped";
+  expect_bad(dpc31("bridge --pty p --firmware " + spin), "dpc31 bridge: firmware BAD" + hangs,
+             "spin");
+  file("spin.scn", "firmware " + spin + "\nstartup\n");
+  expect_bad(dpc31("run spin.scn --json spin.json"), "dpc31 run: firmware BAD" + hangs,
+             "spin in run");
+  EXPECT_EQ(listing(), (std::vector<std::string>{"garbage.so", "plugin.scn", "spin.scn"}));
+  // A relative path in a scenario is relative to the scenario file: this one runs from work/.
+  fs::create_directory(path("sub"));
+  copy(PLUGIN_DO4, "sub/libdo4.so");
+  file("sub/do4.scn", "firmware ./libdo4.so\nstartup\n");
+  const Outcome ok = dpc31("run sub/do4.scn --quiet");
+  EXPECT_EQ(ok.rc, 0) << ok.err;
+  EXPECT_EQ(ok.err, "");
+}
+
 TEST_F(BadInput, BridgeOptions) {
   spit(path("plain"), "old");
-  expect_bad(dpc31("bridge --pty p --firmware XX"),
-             "dpc31 bridge: unknown firmware 'XX' (DO4, CNT2)", "firmware");
+  expect_bad(
+      dpc31("bridge --pty p --firmware XX"),
+      "dpc31 bridge: unknown firmware 'XX' (DO4, CNT2, or a plug-in path such as ./libmine.so)",
+      "firmware");
   expect_bad(dpc31("bridge --pty plain --firmware DO4"),
              "dpc31 bridge: plain exists and is not a symlink: refusing to replace it", "pty");
   // The log is opened last: the symlink made before it is removed again.

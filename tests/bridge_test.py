@@ -166,9 +166,15 @@ def check_log(b, pacing, baud):
     check_order(lines)
 
 
-def do4_two_clients(pacing, baud=19200, timeout=0.5):
+def plugin(name):
+    """The built-in firmware NAME as a run-time plug-in: build/lib/libdpc31_fw_NAME.so."""
+    return os.path.join(os.path.dirname(os.path.abspath(CLI)), "..", "lib",
+                        f"libdpc31_fw_{name}.so")
+
+
+def do4_two_clients(pacing, baud=19200, timeout=0.5, firmware="DO4"):
     with tempfile.TemporaryDirectory() as tmp:
-        b = Bridge(tmp, "--firmware", "DO4", "--baud", str(baud), "--pacing", pacing,
+        b = Bridge(tmp, "--firmware", firmware, "--baud", str(baud), "--pacing", pacing,
                    "--log-level", "telegrams")
         try:
             m = Master(b.path, baud, timeout * SCALE)
@@ -233,11 +239,11 @@ def do4_reparameterise_after_watchdog():
             b.kill()
 
 
-def cnt2_logmsg():
+def cnt2_logmsg(firmware="CNT2"):
     """CNT2 at 500 kbaud, free pacing: CNT1_LOGMSG (outputs 81 00) sets LOGMSG_ACK (bit 7 of
     channel 1's status byte) and the firmware's hold1 port."""
     with tempfile.TemporaryDirectory() as tmp:
-        b = Bridge(tmp, "--firmware", "cnt2", "--baud", "500000", "--pacing", "free",
+        b = Bridge(tmp, "--firmware", firmware, "--baud", "500000", "--pacing", "free",
                    "--profile", "vpc3plus", "--address", "9")
         global SLAVE
         SLAVE = 9
@@ -442,6 +448,9 @@ CASES = {
     "do4_free_two_clients": lambda: do4_two_clients("free"),
     "do4_free_watchdog_then_reparameterise": do4_reparameterise_after_watchdog,
     "cnt2_free_logmsg": cnt2_logmsg,
+    # The same through the plug-in path: the built-in firmwares as shared libraries.
+    "do4_plugin_free_two_clients": lambda: do4_two_clients("free", firmware=plugin("do4")),
+    "cnt2_plugin_free_logmsg": lambda: cnt2_logmsg(plugin("cnt2")),
     "bad_arguments_exit_2": bad_arguments,
     "stale_symlink_and_silent_client": stale_symlink_replaced,
     "profibus_rates_default_log": profibus_rates_default_log,

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -86,6 +87,35 @@ TEST(Cli, DemoRunsOnEveryProfile) {
     EXPECT_NE(r.out.find("dp_state Wait_Cfg -> Data_Exchange"), std::string::npos) << p;
     EXPECT_NE(r.out.find("wd_state DP_Control -> Baud_Control"), std::string::npos) << p;
   }
+}
+
+// The DP session with another firmware, here DO4 loaded as a plug-in: configured from its GSD
+// defaults, outputs 05 05, through the pulled cable (DP watchdog) and the master's restart, back in
+// Data_Exchange; the table lists its port writes. A firmware that does not load: one line, exit
+// 2, and no output directory made.
+TEST(Cli, DemoRunsAFirmwarePlugin) {
+  const std::string dir = ::testing::TempDir() + "demo-plugin";
+  const Result r = run(std::string("demo --firmware ") + PLUGIN_DO4 + " --out-dir " + dir);
+  EXPECT_EQ(r.rc, 0);
+  EXPECT_NE(r.out.find(std::string("the slave runs the firmware ") + PLUGIN_DO4),
+            std::string::npos);
+  EXPECT_NE(r.out.find("What the firmware's ports did"), std::string::npos);
+  // 05 01 normal operation (OSPValid), then OSP (ModulOK 0, outputs retained) after the watchdog.
+  EXPECT_NE(r.out.find("outputs = 0x05"), std::string::npos);
+  EXPECT_NE(r.out.find("modul_ok = 0x01"), std::string::npos);
+  EXPECT_NE(r.out.find("modul_ok = 0x00"), std::string::npos);
+  EXPECT_NE(r.out.find("wd_state DP_Control -> Baud_Control"), std::string::npos);
+  EXPECT_NE(r.out.find("expects passed 1, failed 0"), std::string::npos);
+  EXPECT_FALSE(slurp(dir + "/dpc31-demo.vcd").empty());
+
+  const std::string none = ::testing::TempDir() + "demo-none";
+  const Result bad = testutil::run_command(
+      std::string(DPC31_CLI) + " demo --firmware ./nosuch.so --out-dir " + none + " 2>&1");
+  EXPECT_EQ(bad.rc, 2);
+  EXPECT_EQ(bad.out.rfind("dpc31 demo: cannot load firmware plug-in: ./nosuch.so", 0), 0u)
+      << bad.out;
+  EXPECT_EQ(std::count(bad.out.begin(), bad.out.end(), '\n'), 1) << bad.out;
+  EXPECT_FALSE(std::filesystem::exists(none));
 }
 
 TEST(Cli, RunWritesWaveformsAndCapture) {

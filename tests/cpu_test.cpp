@@ -1,7 +1,9 @@
 // The host CPU (session/cpu.hpp): the firmware's ISR interleaves with the bus side one bus access
 // at a time (4 clocks each, docs/timing.md), resumes where it stopped, and keeps its own HAL
 // selection; an exception it throws reaches the bus side; destroying the CPU unwinds an ISR in
-// progress.
+// progress. A main loop runs whenever no interrupt is served, a pass takes at least 1 us
+// (docs/decisions.md), an enabled X/INT preempts it between two accesses and a masked one
+// does not; the board hooks (dpc31_firmware.h) act on the host that runs the firmware.
 #include "cpu.hpp"
 
 #include <gtest/gtest.h>
@@ -9,8 +11,10 @@
 #include <stdexcept>
 #include <vector>
 
+#include "dpc31/dpc31_firmware.h"
 #include "dpc31/dpc31_hal.h"
 #include "dpc31/hal.hpp"
+#include "firmware_host.hpp"
 #include "harness.hpp"
 
 namespace {
@@ -121,6 +125,165 @@ TEST(HostCpu, DestroyingTheCpuUnwindsAnIsrInProgress) {
     EXPECT_FALSE(unwound);
   }
   EXPECT_TRUE(unwound);
+}
+
+// A pass takes at least 1 us: 48 clocks at 48 MHz, its accesses included.
+constexpr std::uint64_t kPass = 48;
+
+TEST(HostCpu, MainLoopPassTakesAtLeastOneMicrosecond) {
+  Chip c({Profile::dpc31, BusMode::intel, 0});
+  c.set_log_sink(nullptr);
+  ASSERT_EQ(c.clock_hz(), 48'000'000u);
+  int passes = 0;
+  bool read = false;
+  std::vector<std::uint64_t> reads;
+  Cpu cpu(c, Cpu::Program{{}, [&](BusPort& b) {
+                            ++passes;
+                            if (read) {
+                              b.read(kRam);
+                              reads.push_back(b.cycle());
+                            }
+                          }});
+  cpu.run_until(10 * kPass);
+  // Ten passes of 48 clocks; the eleventh has run and waits for its microsecond at the limit.
+  EXPECT_EQ(passes, 11);
+  EXPECT_EQ(c.cycle(), 10 * kPass);
+  read = true;  // from the twelfth pass on, one read each (4 clocks) and 44 clocks of the loop
+  cpu.run_until(20 * kPass);
+  EXPECT_EQ(passes, 11 + 10);
+  EXPECT_EQ(reads, (std::vector<std::uint64_t>{11 * kPass + 4, 12 * kPass + 4, 13 * kPass + 4,
+                                               14 * kPass + 4, 15 * kPass + 4, 16 * kPass + 4,
+                                               17 * kPass + 4, 18 * kPass + 4, 19 * kPass + 4}));
+  EXPECT_EQ(c.cycle(), 20 * kPass);
+}
+
+TEST(HostCpu, EnabledInterruptPreemptsTheMainLoopBetweenTwoAccesses) {
+  Chip c = chip_with_pending_irq();  // X/INT active at 8
+  std::vector<std::uint64_t> isr_entries;
+  std::vector<std::uint64_t> main_reads;
+  Cpu cpu(c, Cpu::Program{[&](BusPort& b) {
+                            isr_entries.push_back(b.cycle());
+                            acknowledge(b);
+                          },
+                          [&](BusPort& b) {
+                            b.read(kRam);
+                            main_reads.push_back(b.cycle());
+                          }});
+  cpu.run_until(8 + 2 * kPass);
+  // The main loop's first access waits for the ISR (the acknowledge, 8..12): it ends at 16, and
+  // the pass that began at 8 ends at 8 + 48; the next pass reads 56..60.
+  EXPECT_EQ(isr_entries, (std::vector<std::uint64_t>{8}));
+  EXPECT_EQ(main_reads, (std::vector<std::uint64_t>{16, 8 + kPass + 4}));
+  EXPECT_FALSE(c.irq_active());
+}
+
+TEST(HostCpu, MaskedInterruptLeavesAPollingLoopAloneUntilEnabled) {
+  Chip c = chip_with_pending_irq();
+  bool enabled = false;  // the board's interrupt input, as dpc31_board_int_enable sets it
+  std::vector<std::uint64_t> isr_entries;
+  int reads = 0;
+  Cpu cpu(c, Cpu::Program{[&](BusPort& b) {
+                            isr_entries.push_back(b.cycle());
+                            acknowledge(b);
+                          },
+                          [&](BusPort& b) {
+                            b.read(kRam);
+                            ++reads;
+                          },
+                          &enabled});
+  cpu.run_until(8 + 3 * kPass);
+  EXPECT_TRUE(isr_entries.empty());
+  EXPECT_EQ(reads, 3);  // 8..12, 56..60, 104..108: one per pass, the ISR never
+  EXPECT_TRUE(c.irq_active());
+  enabled = true;
+  cpu.run_until(8 + 3 * kPass + 8);
+  // Right away: the third pass was still in its loop instructions (an idle wait).
+  EXPECT_EQ(isr_entries, (std::vector<std::uint64_t>{8 + 3 * kPass}));
+  EXPECT_FALSE(c.irq_active());
+}
+
+TEST(HostCpu, IdleWaitIsPreemptedAndStillTakesItsTime) {
+  Chip c = chip_with_pending_irq();
+  std::vector<std::uint64_t> isr_entries;
+  std::vector<std::uint64_t> waits_done;
+  Cpu cpu(c, Cpu::Program{[&](BusPort& b) {
+                            isr_entries.push_back(b.cycle());
+                            acknowledge(b);
+                          },
+                          [&](BusPort& b) {
+                            b.idle(100);
+                            waits_done.push_back(b.cycle());
+                          }});
+  cpu.run_until(200);
+  EXPECT_EQ(isr_entries, (std::vector<std::uint64_t>{8}));
+  // The ISR (8..12) runs within the first wait, which still ends 100 clocks after it began.
+  EXPECT_EQ(waits_done, (std::vector<std::uint64_t>{108}));
+  EXPECT_EQ(c.cycle(), 200u);
+}
+
+TEST(HostCpu, AnExceptionHaltsTheMainLoopAndOnlyTheChipRunsOn) {
+  Chip c({Profile::dpc31, BusMode::intel, 0});
+  c.set_log_sink(nullptr);
+  int passes = 0;
+  Cpu cpu(c, Cpu::Program{{}, [&](BusPort& b) {
+                            b.read(kRam);
+                            if (++passes == 3) throw std::runtime_error("fatal");
+                          }});
+  EXPECT_THROW(cpu.run_until(1000), std::runtime_error);
+  EXPECT_EQ(c.cycle(), 2 * kPass + 4);  // the third pass's read
+  cpu.run_until(1000);
+  EXPECT_EQ(passes, 3);
+  EXPECT_EQ(c.cycle(), 1000u);
+}
+
+// A firmware of dpc31_firmware.h that uses every board hook (C functions, as a plug-in's).
+namespace hooks_fw {
+void init(const dpc31_board* /*board*/) {
+  dpc31_board_reset(1);  // the chip is in its reset state: nothing to do
+  dpc31_board_wait_1ms();
+  dpc31_board_reset(0);
+  dpc31_board_int_enable(0);
+}
+void step() { dpc31_board_reset(1); }  // a reset of the started chip
+const std::uint8_t kCfg[] = {0x10};
+const dpc31_firmware kFw = {DPC31_FIRMWARE_ABI_VERSION,
+                            "HOOKS",
+                            nullptr,
+                            nullptr,
+                            init,
+                            nullptr,
+                            step,
+                            nullptr,
+                            nullptr,
+                            0x0001,
+                            kCfg,
+                            1,
+                            1,
+                            0,
+                            nullptr,
+                            0};
+}  // namespace hooks_fw
+
+TEST(BoardHooks, WaitResetAndInterruptInputActOnTheHost) {
+  Chip c({Profile::dpc31, BusMode::intel, 0});
+  c.set_log_sink(nullptr);
+  DirectBus bus(c);
+  FirmwareHost host(hooks_fw::kFw);
+  ASSERT_TRUE(host.interrupts_enabled());  // enabled when the firmware starts
+  host.init(bus, 5);
+  EXPECT_EQ(c.cycle(), 48'000u);  // Vpc3Wait_1ms: clock / 1000 clocks at 48 MHz
+  EXPECT_FALSE(host.interrupts_enabled());
+  c.write(0x08, 0x01);  // Mode_Reg1_S: Start_SPC3
+  ASSERT_TRUE(c.started());
+  Cpu cpu(c, host.program());
+  try {
+    cpu.run_until(c.cycle() + 100);
+    FAIL() << "no error";
+  } catch (const FirmwareError& e) {
+    EXPECT_STREQ(e.what(),
+                 "firmware HOOKS: reset line asserted at cycle 48004 after the chip was started (a "
+                 "reset during operation is not modelled)");
+  }
 }
 
 }  // namespace

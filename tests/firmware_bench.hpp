@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "dp_master.hpp"
+#include "firmware.h"
 #include "firmware_host.hpp"
 
 namespace firmware_bench {

@@ -1,10 +1,32 @@
 /* The C HAL from strict C99: every function once, with the cycle costs of docs/timing.md
- * (4 clocks per byte access). Exit 0 when all hold; each failure prints its line. */
+ * (4 clocks per byte access). Exit 0 when all hold; each failure prints its line.
+ *
+ * Compiled the way a public SPC3/VPC3+ driver includes it: its platform.h #defines the address
+ * types first (serial mode), and its own header declares the six access functions with them.
+ * Both must compile next to the HAL's prototypes (the declarations agree). */
+#include <stdint.h>
 #include <stdio.h>
 #include <string.h>
 
+#define VPC3_ADR uint16_t
+#define VPC3_UNSIGNED8_PTR uint8_t*
+#define MEM_UNSIGNED8_PTR uint8_t*
+
 #include "dpc31/dpc31_hal.h"
 #include "dpc31/dpc31_regs.h"
+
+/* A driver header's declarations, as the drivers write them. */
+uint8_t Vpc3Read(VPC3_ADR wAddress);
+void Vpc3Write(VPC3_ADR wAddress, uint8_t bData);
+void CopyToVpc3(VPC3_UNSIGNED8_PTR pToVpc3Memory, MEM_UNSIGNED8_PTR pLocalMemory, uint16_t wLength);
+void CopyFromVpc3(MEM_UNSIGNED8_PTR pLocalMemory, VPC3_UNSIGNED8_PTR pToVpc3Memory,
+                  uint16_t wLength);
+void Vpc3MemSet(VPC3_ADR wAddress, uint8_t bValue, uint16_t wLength);
+uint8_t Vpc3MemCmp(VPC3_UNSIGNED8_PTR pToVpc3Memory1, VPC3_UNSIGNED8_PTR pToVpc3Memory2,
+                   uint16_t wLength);
+
+/* A chip address as the serial mode's chip pointer. */
+#define CHIP_PTR(a) ((VPC3_UNSIGNED8_PTR)(uintptr_t)(a))
 
 static int failures;
 #define CHECK(cond)                                              \
@@ -41,17 +63,17 @@ int main(void) {
   Vpc3Write(a, 0x5A);
   CHECK(dpc31_cycle(chip) == 4);
   CHECK(Vpc3Read(a) == 0x5A && dpc31_cycle(chip) == 8);
-  CopyToVpc3((VPC3_UNSIGNED8_PTR)(a + 16), pattern, 8);
+  CopyToVpc3(CHIP_PTR(a + 16), pattern, 8);
   CHECK(dpc31_cycle(chip) == 8 + 32);
-  CopyFromVpc3(back, (VPC3_UNSIGNED8_PTR)(a + 16), 8);
+  CopyFromVpc3(back, CHIP_PTR(a + 16), 8);
   CHECK(memcmp(back, pattern, 8) == 0 && dpc31_cycle(chip) == 40 + 32);
   Vpc3MemSet((VPC3_ADR)(a + 32), 0x11, 4);
   CHECK(dpc31_cycle(chip) == 72 + 16);
   CHECK(dpc31_peek(chip, (VPC3_ADR)(a + 35)) == 0x11 && dpc31_cycle(chip) == 88);
   /* equal blocks: 2 reads per byte; a difference in the first byte: 2 reads */
-  CHECK(Vpc3MemCmp((VPC3_UNSIGNED8_PTR)(a + 16), (VPC3_UNSIGNED8_PTR)(a + 16), 3) == 0);
+  CHECK(Vpc3MemCmp(CHIP_PTR(a + 16), CHIP_PTR(a + 16), 3) == 0);
   CHECK(dpc31_cycle(chip) == 88 + 24);
-  CHECK(Vpc3MemCmp((VPC3_UNSIGNED8_PTR)(a + 16), (VPC3_UNSIGNED8_PTR)(a + 32), 8) == 1);
+  CHECK(Vpc3MemCmp(CHIP_PTR(a + 16), CHIP_PTR(a + 32), 8) == 1);
   CHECK(dpc31_cycle(chip) == 112 + 8);
   /* the handle functions are the same accesses */
   dpc31_write(chip, a, 0xA5);
@@ -79,6 +101,10 @@ int main(void) {
         edge_levels[1] == 0 && edges[2] == 332 && edge_levels[2] == 1);
   dpc31_run(chip, 1000);
   CHECK(dpc31_cycle(chip) == 1332);
+  /* Only the chip pointer's low 16 bits are the address: 0x10000 + a + 16 is a + 16 (equal
+   * blocks: 2 reads). */
+  CHECK(Vpc3MemCmp(CHIP_PTR(0x10000u + a + 16), CHIP_PTR(a + 16), 1) == 0);
+  CHECK(dpc31_cycle(chip) == 1332 + 8);
   dpc31_destroy(chip);
   if (failures == 0) printf("hal_c99_test: all checks hold\n");
   return failures == 0 ? 0 : 1;

@@ -103,6 +103,7 @@ class SocketBus final : public dpc31::BusPort {
   void write(std::uint32_t addr, std::uint8_t value) override {
     r_.ok(fmt::format("write {:#x} {:#x}", addr, value));
   }
+  void idle(std::uint64_t cycles) override { r_.ok(fmt::format("step {}", cycles)); }
   [[nodiscard]] const dpc31::Chip& chip() const override { return shadow_; }
 
  private:

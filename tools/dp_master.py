@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """A small DP master (class 1) on a serial device: start-up of one slave and Data_Exchange.
 
-Made for `dpc31 bridge` (docs/bridge.md, docs/bring-up.md section 5) but written as a master on
+Made for `dpc31 bridge` (docs/bridge.md, docs/bring-up.md section 6) but written as a master on
 any 8E1 serial device is: open the device, one call that sets raw, 8 data bits, even parity and
 the bus rate (tcsetattr, or the TCSETS2 ioctl for the five rates termios has no constant for),
 then FDL telegrams (EN 50170: SD1/SD2, FCS, FCB/FCV) with a timeout per answer. Linux only.

@@ -110,6 +110,24 @@ const cnt2_channel* cnt2_get_channel(int channel) { return &C[channel & 1]; }
 static const char* const kPorts[] = {"hold1", "hold2", 0};
 static const char* const kHwInputs[] = {"count1", "count2", "event1", "event2", 0};
 static const uint8_t kPrm[] = {0x00}; /* Spec_User_Prm_Byte */
-const dpc31_firmware cnt2_firmware = {
-    "CNT2", "cnt2/CNT2_0C02.gsd", kPorts, cnt2_init, cnt2_isr, cnt2_hw_input, kHwInputs, CNT2_IDENT,
-    kCfg,   sizeof kCfg,          6,      2,         kPrm,     sizeof kPrm};
+static void start(const dpc31_board* board) {
+  const dps_board b = dpc31_dps_board(board);
+  cnt2_init(&b);
+}
+
+const dpc31_firmware cnt2_firmware = {DPC31_FIRMWARE_ABI_VERSION,
+                                      "CNT2",
+                                      "cnt2/CNT2_0C02.gsd",
+                                      kPorts,
+                                      start,
+                                      cnt2_isr,
+                                      0,
+                                      cnt2_hw_input,
+                                      kHwInputs,
+                                      CNT2_IDENT,
+                                      kCfg,
+                                      sizeof kCfg,
+                                      6,
+                                      2,
+                                      kPrm,
+                                      sizeof kPrm};

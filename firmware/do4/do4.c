@@ -85,12 +85,30 @@ void do4_init(const dps_board* board) {
 
 void do4_isr(void) { dps_isr(); }
 
+static void start(const dpc31_board* board) {
+  const dps_board b = dpc31_dps_board(board);
+  do4_init(&b);
+}
+
 const do4_state* do4_get_state(void) { return &S; }
 
 static const char* const kPorts[] = {"outputs", "modul_ok", 0};
 /* Spec_User_Prm_Byte 00; OSPMode 0 (retain); replacement value 0; refresh monitor 100 ms: a
  * few Data_Exchange cycles even at 9.6 kbaud, where one cycle takes about 30 ms. */
 static const uint8_t kPrm[] = {0x00, DO4_RETAIN_LAST, 0x00, 0x64};
-const dpc31_firmware do4_firmware = {"DO4", "do4/DO4_0D04.gsd", kPorts, do4_init,    do4_isr, 0,
-                                     0,     DO4_IDENT,          kCfg,   sizeof kCfg, 1,       2,
-                                     kPrm,  sizeof kPrm};
+const dpc31_firmware do4_firmware = {DPC31_FIRMWARE_ABI_VERSION,
+                                     "DO4",
+                                     "do4/DO4_0D04.gsd",
+                                     kPorts,
+                                     start,
+                                     do4_isr,
+                                     0,
+                                     0,
+                                     0,
+                                     DO4_IDENT,
+                                     kCfg,
+                                     sizeof kCfg,
+                                     1,
+                                     2,
+                                     kPrm,
+                                     sizeof kPrm};

@@ -5,6 +5,11 @@
 
 #include "dpc31/dpc31_regs.h"
 
+/* The drivers' serial-mode types, as their platform.h defines them (the HAL uses the plain
+ * types): a chip address, and a chip "pointer" that carries the address in its value. */
+typedef uint16_t VPC3_ADR;
+#define CHIP_PTR(a) ((uint8_t*)(uintptr_t)(a))
+
 /* The addresses this driver uses, per chip. A driver for one chip would use the macros
  * directly; the examples run on all three, so they pick a table at init. */
 typedef struct regmap {
@@ -220,7 +225,7 @@ void dps_init(const dps_board* board, const dps_module* module) {
   Vpc3Write(R->real_no_add_change, 0x00); /* Set_Slave_Add allowed */
   allocate_buffers();
   Vpc3Write(R->len_read_cfg, module->cfg_len);
-  CopyToVpc3(buffer(R->read_cfg_ptr), (MEM_UNSIGNED8_PTR)module->cfg, module->cfg_len);
+  CopyToVpc3(CHIP_PTR(buffer(R->read_cfg_ptr)), (uint8_t*)module->cfg, module->cfg_len);
   refill_clear_buffer();
   dps_update_inputs();
   if (!g_dpc31) {
@@ -241,7 +246,7 @@ void dps_update_inputs(void) {
   const uint8_t u = (uint8_t)((Vpc3Read(R->din_sm) >> 4) & 3u);
   if (u == 0 || M->in_len == 0) return;
   M->inputs(in);
-  CopyToVpc3(buffer(R->din_ptr[u - 1u]), in, M->in_len);
+  CopyToVpc3(CHIP_PTR(buffer(R->din_ptr[u - 1u])), in, M->in_len);
   (void)Vpc3Read(R->new_din);
 }
 
@@ -264,7 +269,7 @@ static void publish_diag(void) {
   }
   base = buffer(R->diag_ptr[k]);
   Vpc3Write(base, g_diag_ext ? Ext_Diag : 0x00); /* bytes 1..5 are the ASIC's */
-  CopyToVpc3((VPC3_ADR)(base + kStdDiag), g_diag, g_diag_len);
+  CopyToVpc3(CHIP_PTR(base + kStdDiag), g_diag, g_diag_len);
   Vpc3Write(R->len_diag[k], (uint8_t)(kStdDiag + g_diag_len));
   (void)Vpc3Read(R->new_diag);
   g_diag_pending = 0;
@@ -288,7 +293,7 @@ static void handle_prm(void) {
     int ok = len == M->prm_len && len <= DPS_MAX_PRM;
     uint8_t result;
     if (ok) {
-      CopyFromVpc3(prm, buffer(R->prm_ptr), len);
+      CopyFromVpc3(prm, CHIP_PTR(buffer(R->prm_ptr)), len);
       ok = M->check_prm(prm + kStdPrm + 1u, (uint8_t)(len - kStdPrm - 1u));
     }
     result = Vpc3Read(ok ? R->prm_ok : R->prm_not_ok);
@@ -308,8 +313,8 @@ static void handle_prm(void) {
 static void handle_cfg(void) {
   for (;;) {
     const uint8_t len = Vpc3Read(R->len_cfg);
-    const int ok =
-        len == M->cfg_len && Vpc3MemCmp(buffer(R->cfg_ptr), buffer(R->read_cfg_ptr), len) == 0;
+    const int ok = len == M->cfg_len && Vpc3MemCmp(CHIP_PTR(buffer(R->cfg_ptr)),
+                                                   CHIP_PTR(buffer(R->read_cfg_ptr)), len) == 0;
     const uint8_t result = Vpc3Read(ok ? R->cfg_ok : R->cfg_not_ok);
     if (result != Prm_Conflict) {
       if (ok) {
@@ -330,7 +335,7 @@ static void handle_dx_out(void) {
   if ((r & State_U_Buffer) != 0 && (r & 3u) != 0) {
     uint8_t out[DPS_MAX_IO];
     const int cleared = (r & U_Buffer_Cleared) != 0;
-    CopyFromVpc3(out, buffer(R->dout_ptr[(r & 3u) - 1u]), M->out_len);
+    CopyFromVpc3(out, CHIP_PTR(buffer(R->dout_ptr[(r & 3u) - 1u])), M->out_len);
     M->outputs(out, cleared); /* the terminals first: they are what is time-critical */
     if (cleared) {
       ++g_stats.cleared;
@@ -344,7 +349,7 @@ static void handle_dx_out(void) {
 /* Set_Slave_Add: the new address would go to the board's non-volatile memory. */
 static void handle_ssa(void) {
   uint8_t ssa[4];
-  CopyFromVpc3(ssa, buffer(R->ssa_ptr), sizeof ssa);
+  CopyFromVpc3(ssa, CHIP_PTR(buffer(R->ssa_ptr)), sizeof ssa);
   g_stats.station_address = ssa[0];
   ++g_stats.ssa;
   (void)Vpc3Read(R->ssa_free);

@@ -16,6 +16,8 @@ class BusPort {
   virtual ~BusPort() = default;
   virtual std::uint8_t read(std::uint32_t addr) = 0;
   virtual void write(std::uint32_t addr, std::uint8_t value) = 0;
+  // The CPU spends `cycles` clocks without a bus access (a busy wait, a pass of a loop).
+  virtual void idle(std::uint64_t cycles) = 0;
   [[nodiscard]] virtual const Chip& chip() const = 0;
   [[nodiscard]] std::uint64_t cycle() const { return chip().cycle(); }
 };
@@ -38,6 +40,7 @@ class DirectBus final : public BusPort {
   explicit DirectBus(Chip& c) : chip_(c) {}
   std::uint8_t read(std::uint32_t addr) override { return chip_.read(addr); }
   void write(std::uint32_t addr, std::uint8_t value) override { chip_.write(addr, value); }
+  void idle(std::uint64_t cycles) override { chip_.step(cycles); }
   [[nodiscard]] const Chip& chip() const override { return chip_; }
 
  private:

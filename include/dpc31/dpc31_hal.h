@@ -11,8 +11,11 @@
  *     deleting its own versions of exactly these six (docs/bring-up.md).
  *
  * Every access costs the modelled bus cycles (4 chip clocks, docs/timing.md) and takes effect at
- * the end of the access. Chip addresses are plain 16-bit byte offsets (VPC3_ADR), as in the
- * drivers' VPC3_SERIAL_MODE.
+ * the end of the access. Chip addresses are plain 16-bit byte offsets, as in the drivers'
+ * VPC3_SERIAL_MODE. The header uses only standard types: the drivers' own platform.h #defines
+ * uint16_t (uint16_t), VPC3_UNSIGNED8_PTR and MEM_UNSIGNED8_PTR (uint8_t *), and the six
+ * prototypes below are what those expand to, so both declarations agree. A chip pointer
+ * (VPC3_UNSIGNED8_PTR) carries the chip address in its value; the HAL uses its low 16 bits.
  */
 #ifndef DPC31_HAL_H
 #define DPC31_HAL_H
@@ -23,11 +26,6 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-/* The drivers' address types: a byte offset in the chip's address space. */
-typedef uint16_t VPC3_ADR;
-typedef uint16_t VPC3_UNSIGNED8_PTR;
-typedef uint8_t* MEM_UNSIGNED8_PTR;
 
 typedef struct dpc31_chip dpc31_chip;
 
@@ -42,16 +40,16 @@ dpc31_chip* dpc31_create(const char* profile, int motorola);
 dpc31_chip* dpc31_create_variant(const char* profile, const char* variant, int motorola);
 void dpc31_destroy(dpc31_chip* chip);
 
-uint8_t dpc31_read(dpc31_chip* chip, VPC3_ADR addr);
-void dpc31_write(dpc31_chip* chip, VPC3_ADR addr, uint8_t value);
-void dpc31_copy_to(dpc31_chip* chip, VPC3_ADR dst, const uint8_t* src, uint16_t len);
-void dpc31_copy_from(dpc31_chip* chip, uint8_t* dst, VPC3_ADR src, uint16_t len);
-void dpc31_memset(dpc31_chip* chip, VPC3_ADR addr, uint8_t value, uint16_t len);
+uint8_t dpc31_read(dpc31_chip* chip, uint16_t addr);
+void dpc31_write(dpc31_chip* chip, uint16_t addr, uint8_t value);
+void dpc31_copy_to(dpc31_chip* chip, uint16_t dst, const uint8_t* src, uint16_t len);
+void dpc31_copy_from(dpc31_chip* chip, uint8_t* dst, uint16_t src, uint16_t len);
+void dpc31_memset(dpc31_chip* chip, uint16_t addr, uint8_t value, uint16_t len);
 /* 0 when the two blocks of chip memory are equal, 1 when not (Vpc3MemCmp's convention). */
-uint8_t dpc31_memcmp(dpc31_chip* chip, VPC3_ADR a, VPC3_ADR b, uint16_t len);
+uint8_t dpc31_memcmp(dpc31_chip* chip, uint16_t a, uint16_t b, uint16_t len);
 
 /* Debugger access: no time passes, no side effects. */
-uint8_t dpc31_peek(const dpc31_chip* chip, VPC3_ADR addr);
+uint8_t dpc31_peek(const dpc31_chip* chip, uint16_t addr);
 
 /* --- time and the interrupt line --- */
 void dpc31_run(dpc31_chip* chip, uint64_t cycles);
@@ -75,14 +73,12 @@ void dpc31_set_pb3_callback(dpc31_chip* chip, dpc31_irq_fn fn, void* user);
 /* The chip Vpc3Read & co. act on for the calling thread (NULL: none). */
 void dpc31_select(dpc31_chip* chip);
 
-uint8_t Vpc3Read(VPC3_ADR wAddress);
-void Vpc3Write(VPC3_ADR wAddress, uint8_t bData);
-void CopyToVpc3(VPC3_UNSIGNED8_PTR pToVpc3Memory, MEM_UNSIGNED8_PTR pLocalMemory, uint16_t wLength);
-void CopyFromVpc3(MEM_UNSIGNED8_PTR pLocalMemory, VPC3_UNSIGNED8_PTR pToVpc3Memory,
-                  uint16_t wLength);
-void Vpc3MemSet(VPC3_ADR wAddress, uint8_t bValue, uint16_t wLength);
-uint8_t Vpc3MemCmp(VPC3_UNSIGNED8_PTR pToVpc3Memory1, VPC3_UNSIGNED8_PTR pToVpc3Memory2,
-                   uint16_t wLength);
+uint8_t Vpc3Read(uint16_t wAddress);
+void Vpc3Write(uint16_t wAddress, uint8_t bData);
+void CopyToVpc3(uint8_t* pToVpc3Memory, uint8_t* pLocalMemory, uint16_t wLength);
+void CopyFromVpc3(uint8_t* pLocalMemory, uint8_t* pToVpc3Memory, uint16_t wLength);
+void Vpc3MemSet(uint16_t wAddress, uint8_t bValue, uint16_t wLength);
+uint8_t Vpc3MemCmp(uint8_t* pToVpc3Memory1, uint8_t* pToVpc3Memory2, uint16_t wLength);
 
 /* --- board support: what the module does besides the chip --- */
 

@@ -106,7 +106,7 @@ Engine::Engine(const Setup& setup, LogSink log)
   fw_->init(bus, setup_.address);
   rx_.configure(t_, chip_.cycle());
   chip_.on_txd([this](std::uint64_t cycle, bool level) { rx_.edge(cycle, level); });
-  cpu_ = std::make_unique<Cpu>(chip_, [this](BusPort& b) { fw_->isr(b); });
+  cpu_ = std::make_unique<Cpu>(chip_, fw_->program());
   bus_free_ = chip_.cycle();
 }
 

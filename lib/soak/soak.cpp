@@ -13,6 +13,7 @@
 #include "dpc31/chip.hpp"
 #include "dpc31/fdl_counters.hpp"
 #include "dpc31/names.hpp"
+#include "firmware_host.hpp"
 #include "numbers.hpp"
 #include "outfile.hpp"
 #include "responder.hpp"
@@ -44,14 +45,29 @@ class Soak {
  public:
   explicit Soak(const Options& o)
       : o_(o), rc_(responder_config(o)), chip_(chip_options(o)), user_(rc_), rng_(o.seed) {
-    user_.inputs = kInputs;
     DirectBus bus(chip_);
-    user_.init(bus);
     MasterConfig mc;
     mc.address = kMaster;
     mc.baud = o.baud;
-    master_ = std::make_unique<DpMaster>(chip_, mc, rc_.slave);
-    master_->set_firmware([this](BusPort& b) { user_.isr(b); });
+    SlaveConfig slave = rc_.slave;
+    if (o.firmware.empty()) {
+      user_.inputs = kInputs;
+      user_.init(bus);
+      master_ = std::make_unique<DpMaster>(chip_, mc, slave);
+      master_->set_firmware([this](BusPort& b) { user_.isr(b); });
+    } else {
+      fw_ = std::make_unique<FirmwareHost>(find_firmware(o.firmware));
+      const dpc31_firmware& f = fw_->firmware();
+      slave.ident = f.ident;
+      slave.cfg.assign(f.cfg, f.cfg + f.cfg_len);
+      slave.in_len = f.in_len;
+      slave.out_len = f.out_len;
+      slave.user_prm.assign(f.user_prm, f.user_prm + f.user_prm_len);
+      fw_->init(bus, kSlave);
+      master_ = std::make_unique<DpMaster>(chip_, mc, slave);
+      master_->set_firmware(fw_->program());
+    }
+    out_len_ = slave.out_len;
     t_ = master_->bit_cycles();
     twd_ = std::uint64_t{twd_ms(o.baud)} * chip_.clock_hz() / 1000;
   }
@@ -129,6 +145,7 @@ class Soak {
     r.rows.push_back({"master.noise", n(Fault::noise) + n(Fault::noise_sync) + n(Fault::glitch),
                       m.noise - master0.noise});
     r.rows.push_back({"master.recoveries", n(Fault::cable), recoveries_});
+    if (fw_) return r;  // the rest is the built-in responder's bookkeeping and data
     r.rows.push_back({"firmware.wd_timeouts", n(Fault::cable), wd_timeouts_});
     r.rows.push_back(
         {"firmware.prm_accepted", n(Fault::cable) + n(Fault::restart), user_.prm_accepted - prm0});
@@ -185,15 +202,18 @@ class Soak {
   // One Data_Exchange with new outputs (a running number), repeated once without an answer.
   void exchange(UartFault fault = {}) {
     ++sent_count_;
-    const std::vector<std::uint8_t> out = {
-        static_cast<std::uint8_t>(sent_count_ >> 24), static_cast<std::uint8_t>(sent_count_ >> 16),
-        static_cast<std::uint8_t>(sent_count_ >> 8), static_cast<std::uint8_t>(sent_count_)};
+    // The running number, big-endian, in the module's output bytes (the last ones).
+    std::vector<std::uint8_t> out(out_len_);
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      const std::size_t shift = 8 * (out.size() - 1 - i);
+      out[i] = shift < 64 ? static_cast<std::uint8_t>(sent_count_ >> shift) : 0;
+    }
     pending_.push_back(out);
     const Exchange ex = master_->retry(master_->data_exchange(out, fault), kRetries);
     const bool data = ex.answer && !ex.answer->du.empty();
     if (data) {
       ++exchanges_;
-      if (ex.answer->du != kInputs) ++wrong_inputs_;
+      if (!fw_ && ex.answer->du != kInputs) ++wrong_inputs_;
     }
     if (ex.answer_end != 0) {
       // Until the master could send again: the firmware has handled what this exchange raised.
@@ -234,7 +254,7 @@ class Soak {
       case Fault::stop: {
         UartFault u;
         u.kind = f == Fault::parity ? UartFault::Kind::parity : UartFault::Kind::stop;
-        u.char_index = static_cast<int>(below(13));  // SD2 with 4 output bytes: 13 characters
+        u.char_index = static_cast<int>(below(9 + out_len_));  // SD2: 9 characters + the outputs
         exchange(u);
         return;
       }
@@ -251,6 +271,11 @@ class Soak {
 
   // Reads and forgets what the firmware and the master recorded, so memory stays flat.
   void collect() {
+    if (fw_) {
+      fw_->clear_history();
+      master_->clear_history();
+      return;
+    }
     for (const auto& [cycle, ir] : user_.interrupts) {
       if ((ir & irq::WD_DP_Control_Timeout) != 0) ++wd_timeouts_;
     }
@@ -274,6 +299,8 @@ class Soak {
   const ResponderConfig rc_;
   Chip chip_;
   Responder user_;
+  std::unique_ptr<FirmwareHost> fw_;  // instead of user_ with --firmware
+  std::size_t out_len_ = 0;
   std::unique_ptr<DpMaster> master_;
   std::mt19937_64 rng_;
   std::uint32_t t_ = 0;
@@ -341,6 +368,9 @@ CLI::App* add_subcommand(CLI::App& app, Options& o) {
       ->capture_default_str()
       ->check(numbers::whole(0));
   s->add_option("--json", o.json, "write the result as JSON to this file");
+  s->add_option("--firmware", o.firmware,
+                "the slave's firmware instead of the built-in responder: a built-in name or a "
+                "plug-in ./libmine.so (only the chip's and the master's counters are checked)");
   std::vector<std::string> kinds;
   for (Fault f : kAll) kinds.emplace_back(fault_name(f));
   s->add_option("--unaccounted-fault", o.unaccounted,
@@ -360,13 +390,17 @@ int run_cli(const Options& o, std::FILE* out, std::FILE* err) {
   }
   Result r;
   try {
+    // A firmware stuck in a loop without a bus access cannot be stopped from this thread.
+    if (!o.firmware.empty()) board::guard_hangs("dpc31 soak", find_firmware(o.firmware).name);
     r = run(o);
   } catch (const std::exception& e) {
     fmt::print(err, "dpc31 soak: {}\n", e.what());
     return 2;
   }
-  fmt::print(out, "dpc31 soak: profile {}, {} baud, TWD {} ms, a fault every {} cycles, seed {}\n",
-             o.profile, o.baud, r.twd_ms, o.fault_period, o.seed);
+  fmt::print(out,
+             "dpc31 soak: profile {}, {} baud, TWD {} ms, a fault every {} cycles, seed {}{}\n",
+             o.profile, o.baud, r.twd_ms, o.fault_period, o.seed,
+             o.firmware.empty() ? "" : ", firmware " + o.firmware);
   const double hz = r.clock_hz;
   fmt::print(out,
              "cycles {} ({:.3f} s of chip time), {} after the start-up; wall {:.2f} s ({:.1f}x "
@@ -398,6 +432,7 @@ int run_cli(const Options& o, std::FILE* out, std::FILE* err) {
     j["profile"] = o.profile;
     j["baud"] = o.baud;
     j["seed"] = o.seed;
+    if (!o.firmware.empty()) j["firmware"] = o.firmware;
     j["fault_period"] = o.fault_period;
     j["twd_ms"] = r.twd_ms;
     j["cycles"] = r.cycles;

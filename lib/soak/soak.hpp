@@ -34,6 +34,10 @@ struct Options {
   std::uint64_t fault_period = 2'000'000;  // cycles of undisturbed exchange between two faults
   std::uint64_t seed = 1;
   std::string json;  // write the result here ("" = no file)
+  // A firmware (built-in name or plug-in path) instead of the built-in responder: the master is
+  // configured from its GSD defaults, and only the chip's and the master's counters are checked
+  // (its own bookkeeping and its data are the firmware's). "" = the responder.
+  std::string firmware;
   // For the check's own test: one fault of this kind is injected without being accounted for,
   // so the counters must not match (empty: none).
   std::string unaccounted;

@@ -1,9 +1,13 @@
 # CTest Install.consumer (packaging/CMakeLists.txt): installs the build into a fresh prefix,
 # checks the installed files, runs the installed CLI, builds examples/consumer with only that
 # prefix on CMAKE_PREFIX_PATH and runs it, and builds and runs its C program through
-# pkg-config. Any failing step fails the test.
-#   cmake -DBUILD_DIR=... -DWORK_DIR=... -DEXAMPLE_DIR=... -DLIBDIR=... -DC_COMPILER=...
-#         -DCXX_COMPILER=... -P check_install.cmake
+# pkg-config. Then examples/plugin the same way: its firmware plug-in in both configurations
+# (interrupt-driven, and polling with every interrupt masked) under its C host, and behind the
+# installed `dpc31 bridge` with the installed tools/dp_master.py as the master, to
+# Data_Exchange; the plug-in built with pkg-config's flags alone; the driver's fatal-error loop
+# stopped by the hang guard (bridge_example.py). Any failing step fails the test.
+#   cmake -DBUILD_DIR=... -DWORK_DIR=... -DEXAMPLE_DIR=... -DPLUGIN_DIR=... -DBRIDGE_CHECK=...
+#         -DPYTHON=... -DLIBDIR=... -DC_COMPILER=... -DCXX_COMPILER=... -P check_install.cmake
 set(prefix ${WORK_DIR}/prefix)
 file(REMOVE_RECURSE ${WORK_DIR})
 
@@ -15,7 +19,9 @@ run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix})
 
 foreach(f bin/dpc31 include/dpc31/chip.hpp include/dpc31/dpc31_hal.h include/dpc31/dpc31_regs.h
     include/dpc31/reg_ids.hpp include/dpc31/reg_fields.hpp include/dpc31/session/scenario.hpp
-    include/dpc31/firmware/firmware.h ${LIBDIR}/libdpc31emu.so
+    include/dpc31/firmware/firmware.h include/dpc31/dpc31_firmware.h ${LIBDIR}/libdpc31emu.so
+    ${LIBDIR}/dpc31emu/libdpc31_fw_do4.so ${LIBDIR}/dpc31emu/libdpc31_fw_cnt2.so
+    share/dpc31emu/tools/dp_master.py
     ${LIBDIR}/cmake/dpc31emu/dpc31emuConfig.cmake
     ${LIBDIR}/cmake/dpc31emu/dpc31emuConfigVersion.cmake ${LIBDIR}/pkgconfig/dpc31emu.pc
     share/dpc31emu/firmware/do4/DO4_0D04.gsd share/dpc31emu/firmware/cnt2/CNT2_0C02.gsd
@@ -45,3 +51,39 @@ separate_arguments(flags UNIX_COMMAND "${flags}")
 run(${C_COMPILER} -std=c99 ${EXAMPLE_DIR}/hal_consumer.c ${flags} -o ${WORK_DIR}/hal_pkgconfig)
 set(ENV{LD_LIBRARY_PATH} ${prefix}/${LIBDIR})
 run(${WORK_DIR}/hal_pkgconfig)
+
+# examples/plugin: the plug-ins and the C host, from the CMake package only.
+unset(ENV{LD_LIBRARY_PATH})
+run(${CMAKE_COMMAND} -S ${PLUGIN_DIR} -B ${WORK_DIR}/plugin -DCMAKE_PREFIX_PATH=${prefix}
+  -DCMAKE_C_COMPILER=${C_COMPILER} -DCMAKE_BUILD_TYPE=Release)
+run(${CMAKE_COMMAND} --build ${WORK_DIR}/plugin)
+foreach(plugin example example_polling)
+  execute_process(COMMAND ${WORK_DIR}/plugin/example_host ${WORK_DIR}/plugin/lib${plugin}.so
+    OUTPUT_VARIABLE host_out COMMAND_ECHO STDOUT COMMAND_ERROR_IS_FATAL ANY)
+  message(STATUS "${host_out}")
+  # 150 ms of chip time after init; started, waiting for its parameters (Wait_Prm). The
+  # interrupt-driven one's main loop turned its LED on after 100 ms; the polling one has no LED
+  # loop (the port keeps its power-on 0).
+  if(plugin STREQUAL "example")
+    set(want "EXAMPLE on vpc3plus: 150 ms after init, started 1, DP state 0, led 1")
+  else()
+    set(want "EXAMPLE-POLLING on vpc3plus: 150 ms after init, started 1, DP state 0, led 0")
+  endif()
+  if(NOT host_out STREQUAL "${want}\n")
+    message(FATAL_ERROR "example_host ${plugin}: got '${host_out}', want '${want}'")
+  endif()
+  foreach(case dx fatal)
+    run(${PYTHON} ${BRIDGE_CHECK} ${prefix}/bin/dpc31 ${prefix}/share/dpc31emu/tools/dp_master.py
+      ${WORK_DIR}/plugin/lib${plugin}.so ${case})
+  endforeach()
+endforeach()
+
+# A plug-in from pkg-config's flags alone (no library: the host provides the symbols).
+set(ENV{PKG_CONFIG_LIBDIR} ${prefix}/${LIBDIR}/pkgconfig)
+execute_process(COMMAND pkg-config --cflags dpc31emu OUTPUT_VARIABLE cflags
+  OUTPUT_STRIP_TRAILING_WHITESPACE COMMAND_ERROR_IS_FATAL ANY)
+separate_arguments(cflags UNIX_COMMAND "${cflags}")
+run(${C_COMPILER} -std=c99 -shared -fPIC -fvisibility=hidden -DDP_POLLING ${cflags}
+  ${PLUGIN_DIR}/example.c ${PLUGIN_DIR}/dp_slave.c -o ${WORK_DIR}/libexample_pc.so)
+run(${PYTHON} ${BRIDGE_CHECK} ${prefix}/bin/dpc31 ${prefix}/share/dpc31emu/tools/dp_master.py
+  ${WORK_DIR}/libexample_pc.so dx)

@@ -54,14 +54,6 @@ bool parse_uint(const std::string& s, std::uint64_t max, std::uint64_t& v) {
   return ec == std::errc() && p == s.data() + s.size() && v <= max;
 }
 
-std::string firmware_names() {
-  std::string all;
-  for (int i = 0; dpc31_firmwares[i] != nullptr; ++i) {
-    all += (i == 0 ? "" : ", ") + std::string(dpc31_firmwares[i]->name);
-  }
-  return all;
-}
-
 // Chip cycles in a wall-clock duration (no overflow for years).
 std::uint64_t to_cycles(Clock::duration d, std::uint32_t clock_hz) {
   const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(d).count();
@@ -84,10 +76,14 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
   if (!o.extra.empty()) return bad(fmt::format("unexpected argument '{}'", o.extra.front()));
   if (o.pty.empty()) return bad("--pty PATH is required (the symlink the master program opens)");
   Checked c;
-  if (o.firmware.empty()) return bad(fmt::format("--firmware is required ({})", firmware_names()));
-  c.setup.firmware = dpc31_find_firmware(o.firmware.c_str());
-  if (c.setup.firmware == nullptr) {
-    return bad(fmt::format("unknown firmware '{}' ({})", o.firmware, firmware_names()));
+  if (o.firmware.empty()) {
+    return bad(
+        fmt::format("--firmware is required ({} or a plug-in path)", builtin_firmware_names()));
+  }
+  try {
+    c.setup.firmware = &find_firmware(o.firmware);
+  } catch (const FirmwareError& e) {
+    return bad(e.what());
   }
   std::uint64_t v = 0;
   if (!parse_uint(o.baud, 12'000'000, v) || baud_code(static_cast<std::uint32_t>(v)) < 0) {
@@ -355,7 +351,8 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
   b->add_option("--profile", o.profile, "chip profile: spc3, vpc3plus, dpc31")
       ->capture_default_str();
   add_variant_option(b, o.variant);
-  b->add_option("--firmware", o.firmware, "example firmware: " + firmware_names() + " (required)");
+  b->add_option("--firmware", o.firmware,
+                "firmware: " + builtin_firmware_names() + ", or a plug-in ./libmine.so (required)");
   b->add_option("--address", o.address, "station address 0..125")->capture_default_str();
   b->add_option("--pacing", o.pacing,
                 "realtime: chip time follows the wall clock; free: "
@@ -407,10 +404,18 @@ int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
   }
   Log log(log_file);
   log.line(header(*c, o, pty->slave_name()));
+  // A firmware stuck in a loop without a bus access cannot be stopped from this thread: the guard
+  // ends the process with one line (and takes the symlink away first).
+  board::guard_hangs("dpc31 bridge", c->setup.firmware->name, o.pty);
   int rc = 0;
-  {
+  try {
     Bridge b(*c, *pty, log);
     rc = b.run();
+  } catch (const FirmwareError& e) {
+    bridge::remove_link(o.pty, pty->slave_name());
+    log.line(fmt::format("dpc31 bridge: {}", e.what()));
+    fmt::print(err, "dpc31 bridge: {}\n", e.what());
+    return 2;
   }
   bridge::remove_link(o.pty, pty->slave_name());
   if (rc != 0) fmt::print(err, "dpc31 bridge: stopped on an error (see the log)\n");

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <string>
 
+#include "firmware_host.hpp"
 #include "harness.hpp"
 #include "run.hpp"
 #include "scenario.hpp"
@@ -84,12 +85,16 @@ class Narrator {
   std::FILE* out_;
 };
 
-// The chip's main job: a DP master on the RS-485 side, the example firmware DO4 (C99, over the
-// C HAL) on the other. Its outputs are what a bring-up is about: when did they change, and why.
-int run_dp_session(const ChipOptions& opt, const std::string& out_dir, const std::string& timescale,
-                   std::FILE* out) {
-  const std::string text =
-      fmt::format(R"(profile {}
+// The DP session with DO4, and what its outputs did.
+std::string do4_session(const ChipOptions& opt, std::FILE* out) {
+  fmt::print(
+      out,
+      "\n# DP session: master 2 finds slave 5 at 1.5 Mbaud (after the chip's baud search); the\n"
+      "# slave runs the example firmware DO4 (firmware/do4, 4 digital outputs with the OSP\n"
+      "# function model: OSPMode 'replace with static value' 1001, refresh monitor off). The\n"
+      "# master sends OSPValid 0 (OSP), then sets it; the cable is pulled for 1.1 s (the DP\n"
+      "# watchdog, 10 x 10 x 10 ms, expires: OSP), the master starts over (recovery).\n");
+  return fmt::format(R"(profile {}
 bus {}
 baud 1500000
 firmware DO4
@@ -107,14 +112,45 @@ expect dp_state Data_Exchange
 expect port outputs 0xA
 expect port modul_ok 1
 )",
-                  profile_desc(opt.profile).name, opt.bus == BusMode::intel ? "intel" : "motorola");
-  fmt::print(
-      out,
-      "\n# DP session: master 2 finds slave 5 at 1.5 Mbaud (after the chip's baud search); the\n"
-      "# slave runs the example firmware DO4 (firmware/do4, 4 digital outputs with the OSP\n"
-      "# function model: OSPMode 'replace with static value' 1001, refresh monitor off). The\n"
-      "# master sends OSPValid 0 (OSP), then sets it; the cable is pulled for 1.1 s (the DP\n"
-      "# watchdog, 10 x 10 x 10 ms, expires: OSP), the master starts over (recovery).\n");
+                     profile_desc(opt.profile).name,
+                     opt.bus == BusMode::intel ? "intel" : "motorola");
+}
+
+// The same story with any firmware (a built-in name or a plug-in): configured from its GSD
+// defaults, 05h in every output byte, the cable pulled past the DP watchdog, the master starts
+// over.
+std::string firmware_session(const ChipOptions& opt, const std::string& firmware, std::FILE* out) {
+  fmt::print(out,
+             "\n# DP session: master 2 finds slave 5 at 1.5 Mbaud; the slave runs the firmware {}\n"
+             "# (configured from its GSD defaults). Data_Exchange with 05h in every output byte,\n"
+             "# then the cable is pulled for 1.1 s (the DP watchdog, 10 x 10 x 10 ms, expires),\n"
+             "# the master starts over.\n",
+             firmware);
+  std::string outputs;
+  for (unsigned i = 0; i < find_firmware(firmware).out_len; ++i) outputs += i == 0 ? "05" : ",05";
+  if (!outputs.empty()) outputs = " outputs=" + outputs;
+  return fmt::format(R"(profile {}
+bus {}
+baud 1500000
+firmware {}
+slave address=5 wd=10,10 wd_on=1
+startup
+exchange 4{}
+silence 1100ms
+startup
+exchange 4{}
+expect dp_state Data_Exchange
+)",
+                     profile_desc(opt.profile).name,
+                     opt.bus == BusMode::intel ? "intel" : "motorola", firmware, outputs, outputs);
+}
+
+// The chip's main job: a DP master on the RS-485 side, a firmware (C99, over the C HAL) on the
+// other. Its outputs are what a bring-up is about: when did they change, and why.
+int run_dp_session(const ChipOptions& opt, const std::string& out_dir, const std::string& firmware,
+                   const std::string& timescale, std::FILE* out) {
+  const std::string text =
+      firmware.empty() ? do4_session(opt, out) : firmware_session(opt, firmware, out);
   Scenario sc;
   ScenarioError err;
   if (!parse_scenario(text, "<demo>", sc, err)) {
@@ -133,12 +169,20 @@ expect port modul_ok 1
       [](const std::string& line) { fmt::print(stderr, "{}\n", line); }, o, stderr);
   if (rc == 2) return rc;
   const double hz = Chip(opt).clock_hz();
-  fmt::print(out, "\n# What DO4's outputs did (terminals DO4..DO1; ModulOK 1 = normal, 0 = OSP)\n");
+  if (firmware.empty()) {
+    fmt::print(out,
+               "\n# What DO4's outputs did (terminals DO4..DO1; ModulOK 1 = normal, 0 = OSP)\n");
+  } else {
+    fmt::print(out, "\n# What the firmware's ports did\n");
+  }
   fmt::print(out, "{:>12} {:>14}  {}\n", "cycle", "time", "change");
   for (const ScenarioOutcome::PortWrite& w : o.port_writes) {
+    std::string value = fmt::format("0x{:02X}", w.value);
+    if (firmware.empty()) {
+      value = w.port == "outputs" ? fmt::format("{:04b}", w.value) : std::to_string(w.value);
+    }
     fmt::print(out, "{:>12} {:>11.3f} us  {} = {}\n", w.cycle,
-               static_cast<double>(w.cycle) * 1e6 / hz, w.port,
-               w.port == "outputs" ? fmt::format("{:04b}", w.value) : std::to_string(w.value));
+               static_cast<double>(w.cycle) * 1e6 / hz, w.port, value);
   }
   fmt::print(out,
              "\nwaveform (VCD): {}\nwaveform for logic-analyser tools (VCD, sigrok-cli -I vcd): "
@@ -149,12 +193,20 @@ expect port modul_ok 1
 
 }  // namespace
 
-int run_demo(ChipOptions opt, const std::string& out_dir_option, const std::string& timescale,
-             std::FILE* out) {
+int run_demo(ChipOptions opt, const std::string& out_dir_option, const std::string& firmware,
+             const std::string& timescale, std::FILE* out) {
   int unit_exp = 0;
   if (!timescale.empty() && !parse_timescale(timescale, unit_exp)) {
     fmt::print(stderr, "dpc31 demo: {}\n", timescale_error(timescale));
     return 2;
+  }
+  if (!firmware.empty()) {  // checked first: bad input is one line, and nothing is made
+    try {
+      board::guard_hangs("dpc31 demo", find_firmware(firmware).name);
+    } catch (const FirmwareError& e) {
+      fmt::print(stderr, "dpc31 demo: {}\n", e.what());
+      return 2;
+    }
   }
   // The output directory is made before anything is printed: bad input is one line. Without
   // --out-dir it is a new one only this user can enter (mkdtemp, mode 0700): a fixed name in a
@@ -248,7 +300,7 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option, const std::stri
   n.write(RegId::Mode_Reg1_S, m1::EOI);
   fmt::print(out, "\nregister session done at cycle {} ({:.3f} ms of chip time)\n", chip.cycle(),
              static_cast<double>(chip.cycle()) * 1e3 / chip.clock_hz());
-  return run_dp_session(opt, out_dir, timescale, out);
+  return run_dp_session(opt, out_dir, firmware, timescale, out);
 }
 
 }  // namespace dpc31::cli

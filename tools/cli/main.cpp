@@ -91,6 +91,10 @@ int main(int argc, char** argv) {
   demo->add_option("--timescale", demo_timescale,
                    "time unit of both waveforms, 1ps ... 1s (default: 1ps for the full VCD, 10ns "
                    "for the logic analysers' VCD)");
+  std::string demo_firmware;  // "": DO4 with its OSP story
+  demo->add_option("--firmware", demo_firmware,
+                   "the DP session's firmware instead of DO4: a built-in name or a plug-in "
+                   "./libmine.so (docs/bring-up.md)");
 
   std::string regs_profile = "dpc31";
   std::string regs_format = "text";
@@ -271,7 +275,7 @@ int main(int argc, char** argv) {
       if (std::string why = dpc31::cli::apply_variant(demo_variant, opt); !why.empty()) {
         return refuse(why);
       }
-      return dpc31::cli::run_demo(opt, demo_out, demo_timescale, stdout);
+      return dpc31::cli::run_demo(opt, demo_out, demo_firmware, demo_timescale, stdout);
     }
     if (regs->parsed()) {
       std::vector<const dpc31::ProfileDesc*> sel;

@@ -8,6 +8,8 @@
 #include <tuple>
 #include <vector>
 
+#include "board.hpp"
+#include "firmware_host.hpp"
 #include "outfile.hpp"
 #include "pcapng.hpp"
 #include "waveform.hpp"
@@ -171,7 +173,15 @@ int run_parsed_scenario(const RunOptions& opt, const Scenario& s, const LineSink
     if (inner) inner(chip);
     end_cycle = chip.cycle();
   };
-  o = run_scenario(s, walk, errors, hooks);
+  try {
+    // A firmware stuck in a loop without a bus access cannot be stopped from this thread: the
+    // guard ends the process with one line.
+    if (!s.firmware.empty()) board::guard_hangs("dpc31 run", find_firmware(s.firmware).name);
+    o = run_scenario(s, walk, errors, hooks);
+  } catch (const FirmwareError& e) {
+    fmt::print(err, "dpc31 run: {}: {}\n", s.file, e.what());
+    return 2;
+  }
   if (!attach_error.empty()) {
     fmt::print(err, "dpc31 run: {}\n", attach_error);
     return 2;

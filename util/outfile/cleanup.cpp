@@ -28,23 +28,26 @@ Slot g_slots[kPaths + kChildren];
 std::atomic<pid_t> g_owner{0};  // the process that installed: a forked child only re-raises
 constexpr int kSignals[] = {SIGINT, SIGTERM, SIGHUP};
 
-extern "C" void dpc31_cleanup_on_signal(int sig) {
-  const int saved = errno;
-  if (::getpid() == g_owner.load()) {
-    for (int i = kPaths; i < kPaths + kChildren; ++i) {
-      if (g_slots[i].state.load() == 2) ::kill(g_slots[i].pid, sig);
-    }
-    for (const bool dirs : {false, true}) {  // a directory empties first
-      for (int i = 0; i < kPaths; ++i) {
-        if (g_slots[i].state.load() != 2 || g_slots[i].dir != dirs) continue;
-        if (dirs) {
-          ::rmdir(g_slots[i].path);
-        } else {
-          ::unlink(g_slots[i].path);
-        }
+// Async-signal-safe: only loads, kill(), unlink() and rmdir().
+void remove_all(int sig) {
+  for (int i = kPaths; i < kPaths + kChildren; ++i) {
+    if (g_slots[i].state.load() == 2) ::kill(g_slots[i].pid, sig);
+  }
+  for (const bool dirs : {false, true}) {  // a directory empties first
+    for (int i = 0; i < kPaths; ++i) {
+      if (g_slots[i].state.load() != 2 || g_slots[i].dir != dirs) continue;
+      if (dirs) {
+        ::rmdir(g_slots[i].path);
+      } else {
+        ::unlink(g_slots[i].path);
       }
     }
   }
+}
+
+extern "C" void dpc31_cleanup_on_signal(int sig) {
+  const int saved = errno;
+  if (::getpid() == g_owner.load()) remove_all(sig);
   errno = saved;
   struct sigaction dfl {};
   dfl.sa_handler = SIG_DFL;
@@ -62,6 +65,8 @@ int take(int from, int to) {
 }
 
 }  // namespace
+
+void remove_registered() { remove_all(SIGTERM); }
 
 void install() {
   static std::once_flag once;

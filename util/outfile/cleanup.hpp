@@ -16,6 +16,11 @@ namespace dpc31::cleanup {
 // calls it first.
 void install();
 
+// Removes every registered path and signals (SIGTERM) every registered child now, from any
+// thread, without ending the process: for a program that ends itself with _exit (the firmware
+// hang guard, session/board.hpp).
+void remove_registered();
+
 // A registered path or child; release() (or the destructor) takes it off the list. A path too
 // long for a slot, or a full list (64 of each), is not covered: the registration is then empty.
 class Entry {

@@ -1,0 +1,45 @@
+// The board hooks of dpc31/dpc31_firmware.h (reset line, interrupt input, Vpc3Wait_1ms) reach the
+// host that runs the firmware on the calling thread (FirmwareHost), like the HAL's access
+// functions reach the selected bus (hal.hpp). The host CPU (cpu.hpp) keeps the selection of each
+// side when it switches between firmware and bus side.
+//
+// The hang guard: a firmware that spins without a bus access and without a hook call (a
+// `while (1);` fatal-error loop) cannot be stopped from inside the process's one thread; a
+// watcher thread notices that no progress was made for a while and ends the process with one line
+// (docs/decisions.md).
+#pragma once
+
+#include <chrono>
+#include <string>
+
+namespace dpc31::board {
+
+class Hooks {
+ public:
+  virtual void reset_line(bool asserted) = 0;
+  virtual void int_enable(bool enabled) = 0;
+  virtual void wait_1ms() = 0;
+
+ protected:
+  ~Hooks() = default;
+};
+
+// Installs `h` for the calling thread and returns the one it replaces.
+Hooks* exchange(Hooks* h);
+
+// The firmware's code is running (from a host's call into it until it returns or yields).
+void firmware_entered();
+void firmware_left();
+// It made progress: a bus access, an idle wait, a hook call.
+void progress();
+
+// How long firmware code may run without progress before the guard stops the process.
+inline constexpr std::chrono::milliseconds kHangLimit{2000};
+
+// Starts the watcher (once per process): when firmware code has run for `limit` of host time
+// without progress, it removes `remove` (a file the program made, e.g. the bridge's symlink; empty:
+// none), prints "PROGRAM: firmware NAME hangs: ..." on stderr and exits with 2.
+void guard_hangs(const std::string& program, const std::string& firmware,
+                 const std::string& remove = {}, std::chrono::milliseconds limit = kHangLimit);
+
+}  // namespace dpc31::board

@@ -1,0 +1,160 @@
+// Firmware by name or as a run-time plug-in (dpc31/dpc31_firmware.h), and the C host of that
+// header (dpc31_firmware_load, dpc31_module_*).
+#include <dlfcn.h>
+
+#include <cstring>
+#include <exception>
+#include <memory>
+#include <string>
+
+#include "firmware.h"
+#include "firmware_host.hpp"
+
+namespace dpc31 {
+
+bool is_plugin_path(const std::string& spec) {
+  return spec.find('/') != std::string::npos ||
+         (spec.size() >= 3 && spec.compare(spec.size() - 3, 3, ".so") == 0);
+}
+
+std::string builtin_firmware_names() {
+  std::string all;
+  for (int i = 0; dpc31_firmwares[i] != nullptr; ++i) {
+    all += (i == 0 ? "" : ", ") + std::string(dpc31_firmwares[i]->name);
+  }
+  return all;
+}
+
+std::string descriptor_problem(const dpc31_firmware* fw) {
+  if (fw == nullptr) return "the descriptor pointer is NULL";
+  if (fw->abi_version != DPC31_FIRMWARE_ABI_VERSION) {
+    return "descriptor ABI version " + std::to_string(fw->abi_version) + ", this host takes " +
+           std::to_string(DPC31_FIRMWARE_ABI_VERSION) + " (rebuild it against this dpc31emu)";
+  }
+  if (fw->name == nullptr || fw->name[0] == '\0') return "the descriptor has no name";
+  if (fw->init == nullptr) return "the descriptor has no init";
+  if (fw->isr == nullptr && fw->main_step == nullptr) {
+    return "the descriptor has neither isr nor main_step";
+  }
+  if (fw->cfg == nullptr || fw->cfg_len == 0)
+    return "the descriptor has no Cfg bytes (cfg, cfg_len)";
+  if (fw->user_prm == nullptr && fw->user_prm_len != 0) {
+    return "the descriptor's user_prm is NULL with user_prm_len " +
+           std::to_string(fw->user_prm_len);
+  }
+  if ((fw->hw_input == nullptr) != (fw->hw_inputs == nullptr)) {
+    return "the descriptor has hw_input without hw_inputs or the other way round";
+  }
+  return {};
+}
+
+namespace {
+
+// dlopen looks a name without '/' up in the library path; the user meant the file.
+std::string file_path(const std::string& spec) {
+  return spec.find('/') == std::string::npos ? "./" + spec : spec;
+}
+
+const dpc31_firmware& load_plugin(const std::string& spec) {
+  const std::string path = file_path(spec);
+  // RTLD_NOW: an undefined symbol fails here, not in the middle of a run. RTLD_LOCAL: two
+  // plug-ins may use the same names. Never closed: the descriptor points into the library.
+  void* const lib = ::dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+  if (lib == nullptr) {
+    const char* why = ::dlerror();
+    throw FirmwareError("cannot load firmware plug-in: " +
+                        std::string(why != nullptr ? why : path));
+  }
+  ::dlerror();
+  void* const sym = ::dlsym(lib, DPC31_FIRMWARE_SYMBOL);
+  if (sym == nullptr) {
+    throw FirmwareError("firmware plug-in " + path +
+                        " exports no " DPC31_FIRMWARE_SYMBOL
+                        " (DPC31_FIRMWARE_EXPORT, dpc31/dpc31_firmware.h)");
+  }
+  const dpc31_firmware* const fw = *static_cast<const dpc31_firmware* const*>(sym);
+  const std::string problem = descriptor_problem(fw);
+  if (!problem.empty()) throw FirmwareError("firmware plug-in " + path + ": " + problem);
+  return *fw;
+}
+
+}  // namespace
+
+const dpc31_firmware& find_firmware(const std::string& spec) {
+  if (is_plugin_path(spec)) return load_plugin(spec);
+  const dpc31_firmware* fw = dpc31_find_firmware(spec.c_str());
+  if (fw == nullptr) {
+    throw FirmwareError("unknown firmware '" + spec + "' (" + builtin_firmware_names() +
+                        ", or a plug-in path such as ./libmine.so)");
+  }
+  return *fw;
+}
+
+}  // namespace dpc31
+
+struct dpc31_module {
+  dpc31_module(dpc31::ChipOptions o, const dpc31_firmware& fw) : chip(o), host(fw) {}
+  dpc31::Chip chip;
+  dpc31::FirmwareHost host;
+  std::unique_ptr<dpc31::Cpu> cpu;
+  std::string error;
+};
+
+extern "C" {
+
+const dpc31_firmware* dpc31_firmware_load(const char* path, char* err, size_t err_size) {
+  try {
+    return &dpc31::find_firmware(dpc31::file_path(path != nullptr ? path : ""));
+  } catch (const std::exception& e) {
+    if (err != nullptr && err_size > 0) {
+      std::strncpy(err, e.what(), err_size - 1);
+      err[err_size - 1] = '\0';
+    }
+    return nullptr;
+  }
+}
+
+dpc31_module* dpc31_module_create(const char* profile, int motorola, const dpc31_firmware* fw,
+                                  uint8_t station_address) {
+  dpc31::ChipOptions o;
+  if (profile == nullptr || !dpc31::parse_profile(profile, o.profile)) return nullptr;
+  if (!dpc31::descriptor_problem(fw).empty()) return nullptr;
+  o.bus = motorola != 0 ? dpc31::BusMode::motorola : dpc31::BusMode::intel;
+  auto m = std::make_unique<dpc31_module>(o, *fw);
+  try {
+    dpc31::DirectBus bus(m->chip);
+    m->host.init(bus, station_address);
+  } catch (const std::exception& e) {
+    m->error = e.what();
+  }
+  m->cpu = std::make_unique<dpc31::Cpu>(m->chip, m->host.program());
+  return m.release();
+}
+
+void dpc31_module_destroy(dpc31_module* module) {
+  if (module == nullptr) return;
+  module->cpu.reset();  // unwinds the firmware's stack before the chip goes away
+  delete module;
+}
+
+int dpc31_module_run(dpc31_module* module, uint64_t cycles) {
+  if (!module->error.empty()) return -1;
+  try {
+    module->cpu->run_until(module->chip.cycle() + cycles);
+  } catch (const std::exception& e) {
+    module->error = e.what();
+    return -1;
+  }
+  return 0;
+}
+
+const char* dpc31_module_error(const dpc31_module* module) { return module->error.c_str(); }
+uint64_t dpc31_module_cycle(const dpc31_module* module) { return module->chip.cycle(); }
+uint8_t dpc31_module_peek(const dpc31_module* module, uint16_t addr) {
+  return module->chip.peek(addr);
+}
+int64_t dpc31_module_port(const dpc31_module* module, const char* name) {
+  return module->host.port(name != nullptr ? name : "");
+}
+
+}  // extern "C"

@@ -1,0 +1,52 @@
+/* Firmware plug-ins a host must refuse at load (tests/bad_input_test.cpp, FirmwarePlugins), one
+ * per defect, selected by a macro (tests/CMakeLists.txt):
+ *   BAD_ABI      the descriptor's abi_version is not DPC31_FIRMWARE_ABI_VERSION
+ *   NO_INIT      a required field (init) is NULL
+ *   NO_EXPORT    no DPC31_FIRMWARE_EXPORT: the well-known symbol is missing
+ *   UNDEFINED    it calls a function no host provides: dlopen (RTLD_NOW) fails
+ *   SPIN         it loads, and its init spins in while(1) without a bus access (the hang guard) */
+#include "dpc31/dpc31_firmware.h"
+#include "dpc31/dpc31_hal.h"
+
+#ifdef UNDEFINED
+void no_such_board_function(void);
+#endif
+
+#ifndef NO_INIT
+static void init(const dpc31_board* board) {
+  (void)board;
+#ifdef UNDEFINED
+  no_such_board_function();
+#endif
+#ifdef SPIN
+  while (1) {
+  }
+#endif
+}
+#endif
+
+static void step(void) { (void)Vpc3Read(0); }
+
+static const uint8_t kCfg[] = {0x10};
+
+#ifdef BAD_ABI
+#define ABI (DPC31_FIRMWARE_ABI_VERSION + 1u)
+#else
+#define ABI DPC31_FIRMWARE_ABI_VERSION
+#endif
+#ifdef NO_INIT
+#define INIT 0
+#else
+#define INIT init
+#endif
+
+static const dpc31_firmware kBad = {ABI, "BAD",  0,    0,           INIT, 0, step, 0,
+                                    0,   0x0001, kCfg, sizeof kCfg, 1,    0, 0,    0};
+
+#ifdef NO_EXPORT
+/* A firmware without its export: the descriptor is referenced so that it is not unused. */
+const dpc31_firmware* bad_plugin_descriptor(void);
+const dpc31_firmware* bad_plugin_descriptor(void) { return &kBad; }
+#else
+DPC31_FIRMWARE_EXPORT(kBad);
+#endif
