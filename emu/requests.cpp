@@ -91,7 +91,8 @@ void RequestInterface::user_wd(std::uint8_t param) {
   const std::uint16_t value = regs_.cell16(*regs_.reg(RegId::R_User_WD_Value));
   switch (param) {
     case request::Wd_Reset:
-      sig_.log(LogLevel::info, "request DPS_User_Wd Reset: {}", value);
+      // A firmware retriggers it after every exchange: debug, not info.
+      sig_.log(LogLevel::debug, "request DPS_User_Wd Reset: {}", value);
       s_.wd_left = value;
       s_.wd_locked = false;
       return;

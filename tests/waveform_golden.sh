@@ -2,7 +2,10 @@
 # The VCD writer's output, byte for byte, against files written by the writer before it was made
 # fast (commit 3c78365, issue 19 item 7): the full form at 1 ps (do4_osp_replace: about 15 000
 # changes, so the recorder drains its buffer several times during the run), the form for
-# logic-analyser tools, and a window at 100 us of some signals.
+# logic-analyser tools, and a window at 100 us of some signals. The two do4_osp_replace files were
+# written again after issue 16 changed that run itself (the DPC31 firmware's requests and its
+# Indication interrupt: other bus accesses); the writer was the same as for the window file,
+# which stayed byte for byte as the old writer's.
 # Usage: waveform_golden.sh path/to/dpc31 source-dir
 set -eu
 dpc31=$1
