@@ -55,6 +55,13 @@ struct Queues {
   }
 };
 
+// A dpc31 on the bench with nothing but its queues set up (log off).
+struct Bare {
+  Chip c{{Profile::dpc31}};
+  Queues q;
+  explicit Bare(std::uint8_t ind_len = 4) : q((c.set_log_sink(nullptr), c), 4, ind_len) {}
+};
+
 bool started(Chip& c) { return (rd(c, RegId::Status_Reg) & 0x01) != 0; }
 
 // Baud_Search has found the master's rate once an FDL_Status is answered.
@@ -68,9 +75,9 @@ void until_answered(Bench& b) {
 // DPC31 Table 5.1-3: "MAC_Start 10h: MAC enters Pas_Idle". The MAC reads the request and moves
 // InstQ_Rd past it (p.22: InstQ_Rd is written by the MAC).
 TEST(Dpc31Requests, MacStartEntersPassiveIdle) {
-  Chip c({Profile::dpc31});
-  c.set_log_sink(nullptr);
-  Queues q(c);
+  Bare bare;
+  Chip& c = bare.c;
+  Queues& q = bare.q;
   std::vector<std::pair<std::uint64_t, bool>> line;
   c.on_irq_change([&](std::uint64_t cy, bool a) { line.emplace_back(cy, a); });
   c.write(at(c, RegId::Int_Mask_Reg), 0xFF);
@@ -90,9 +97,9 @@ TEST(Dpc31Requests, MacStartEntersPassiveIdle) {
 // Indication_Queue" (§5.1.3), after it has been executed: the entry is there, IndQ_Wr has moved
 // and the Indication interrupt is latched, all at the cycle the MAC went Offline.
 TEST(Dpc31Requests, MacStopIsConfirmedInTheIndicationQueue) {
-  Chip c({Profile::dpc31});
-  c.set_log_sink(nullptr);
-  Queues q(c);
+  Bare bare;
+  Chip& c = bare.c;
+  Queues& q = bare.q;
   q.request(request::MAC_Start);
   ASSERT_TRUE(started(c));
   std::uint64_t indication_at = 0;
@@ -160,9 +167,9 @@ TEST(Dpc31Requests, DataExchangeTelegramsDoNotCountTheUserWatchdog) {
 // reloads 2, so the decrements at e + 20 and e + 30 ms reach 0000h at e + 30 ms (the 10 ms
 // phase set by Enable stays: modelled, docs/dpc31.md).
 TEST(Dpc31Requests, DpsUserWdResetReloadsTheValue) {
-  Chip c({Profile::dpc31});
-  c.set_log_sink(nullptr);
-  Queues q(c);
+  Bare bare;
+  Chip& c = bare.c;
+  Queues& q = bare.q;
   c.write(at(c, RegId::R_User_WD_Value), 2);
   const std::uint64_t e = q.request(request::DPS_User_Wd, request::Wd_Enable);
   c.step(e + 15 * k10ms / 10 - c.cycle());
@@ -176,9 +183,9 @@ TEST(Dpc31Requests, DpsUserWdResetReloadsTheValue) {
 // "This timer can be enabled or disabled any time via the request interface": disabled, it
 // never expires.
 TEST(Dpc31Requests, DpsUserWdDisableStopsIt) {
-  Chip c({Profile::dpc31});
-  c.set_log_sink(nullptr);
-  Queues q(c);
+  Bare bare;
+  Chip& c = bare.c;
+  Queues& q = bare.q;
   c.write(at(c, RegId::R_User_WD_Value), 1);
   q.request(request::DPS_User_Wd, request::Wd_Enable);
   q.request(request::DPS_User_Wd, request::Wd_Disable);
@@ -189,9 +196,9 @@ TEST(Dpc31Requests, DpsUserWdDisableStopsIt) {
 // "locks the DPS_User WD": after an expiry Enable does nothing until a Reset; Reset then Enable
 // starts it again from its value.
 TEST(Dpc31Requests, DpsUserWdIsLockedAfterExpiryUntilReset) {
-  Chip c({Profile::dpc31});
-  c.set_log_sink(nullptr);
-  Queues q(c);
+  Bare bare;
+  Chip& c = bare.c;
+  Queues& q = bare.q;
   c.write(at(c, RegId::R_User_WD_Value), 1);
   q.request(request::DPS_User_Wd, request::Wd_Enable);
   c.step(k10ms);
@@ -208,10 +215,11 @@ TEST(Dpc31Requests, DpsUserWdIsLockedAfterExpiryUntilReset) {
 // An unknown request code is skipped (logged) and the MAC goes on with the next entry; a
 // pointer outside the queue executes nothing (docs/dpc31.md, modelled).
 TEST(Dpc31Requests, UnknownCodeIsSkippedAndBadPointerExecutesNothing) {
-  Chip c({Profile::dpc31});
+  Bare bare;
+  Chip& c = bare.c;
+  Queues& q = bare.q;
   std::vector<std::string> log;
   c.set_log_sink([&](const LogRecord& r) { log.push_back(r.text); });
-  Queues q(c);
   c.write(kInst, 0x7F);
   c.write(kInst + 1, 0x00);
   c.write(kInst + 2, request::MAC_Start);
@@ -231,9 +239,9 @@ TEST(Dpc31Requests, UnknownCodeIsSkippedAndBadPointerExecutesNothing) {
 // One entry always stays empty (p.22): a queue of 2 entries holds one indication; the second is
 // lost (logged), IndQ_Wr stays, until the user has read the first.
 TEST(Dpc31Requests, FullIndicationQueueLosesTheIndication) {
-  Chip c({Profile::dpc31});
-  c.set_log_sink(nullptr);
-  Queues q(c, 4, 2);
+  Bare bare(2);
+  Chip& c = bare.c;
+  Queues& q = bare.q;
   q.request(request::MAC_Stop);
   EXPECT_EQ(rd(c, RegId::IndQ_Wr), 1);
   q.request(request::MAC_Stop);
