@@ -217,7 +217,6 @@ TEST(Dpc31Requests, DpsUserWdIsLockedAfterExpiryUntilReset) {
 TEST(Dpc31Requests, UnknownCodeIsSkippedAndBadPointerExecutesNothing) {
   Bare bare;
   Chip& c = bare.c;
-  Queues& q = bare.q;
   std::vector<std::string> log;
   c.set_log_sink([&](const LogRecord& r) { log.push_back(r.text); });
   c.write(kInst, 0x7F);
