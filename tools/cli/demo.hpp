@@ -15,7 +15,6 @@ namespace dpc31::cli {
 // (docs/waveforms.md) and the pcapng. `timescale` ("" = the forms' defaults) is the unit of both
 // waveforms.
 int run_demo(ChipOptions opt, const std::string& out_dir, const std::string& firmware,
-             const std::string& timescale,
-             std::FILE* out);
+             const std::string& timescale, std::FILE* out);
 
 }  // namespace dpc31::cli
