@@ -4,7 +4,9 @@
 # the fuzz targets need, in build-fuzz/, docs/robustness.md) is built and each fuzz target runs
 # for 30 s (CTest tests Fuzz.*); then the sanitizer build (CMakePresets.json, preset asan:
 # AddressSanitizer + UndefinedBehaviorSanitizer in build-asan/, docs/sanitizers.md) is
-# configured, built and its suite run. Exit code 0 only if all three pass.
+# configured, built and its suite run; last the second compiler (preset clang-release: clang++,
+# Release, in build-clang/, docs/install.md) is built and its suite run. Exit code 0 only if all
+# four pass.
 set -uo pipefail
 cd "$(dirname "$0")"
 
@@ -40,4 +42,16 @@ else
   echo "test.sh: the asan build failed"
 fi
 
-[ "$normal" -eq 0 ] && [ "$fuzz" -eq 0 ] && [ "$asan" -eq 0 ]
+start=$SECONDS
+clang=1
+if cmake --preset clang-release && cmake --build --preset clang-release -j "$(nproc)"; then
+  echo "test.sh: clang-release build took $((SECONDS - start)) s"
+  start=$SECONDS
+  ctest --preset clang-release
+  clang=$?
+  echo "test.sh: clang-release suite exit code $clang after $((SECONDS - start)) s"
+else
+  echo "test.sh: the clang-release build failed"
+fi
+
+[ "$normal" -eq 0 ] && [ "$fuzz" -eq 0 ] && [ "$asan" -eq 0 ] && [ "$clang" -eq 0 ]

@@ -156,6 +156,18 @@ def bad(args, part, files=None):
         one_line_exit_2(run(args, cache=cache), part.replace("@", work + "/"), cache)
 
 
+def shared_cache():
+    # The cache's models are dlopen'ed: one that others can write to is refused before any use.
+    with tempfile.TemporaryDirectory() as work:
+        stub(os.path.join(work, "stub.v"))
+        cache = os.path.join(work, "cache")
+        os.mkdir(cache)
+        os.chmod(cache, 0o777)
+        one_line_exit_2(run(["--rtl", os.path.join(work, "stub.v"), "--top", "stub"], cache=cache),
+                        f"RTL cache {cache}: writable by others;", cache)
+        check(os.listdir(cache) == [], f"the shared cache was written to: {os.listdir(cache)}")
+
+
 CASES = {
     "own_model_clean": own_model_clean,
     "mutant_model_unselected_clean": mutant_model_unselected_clean,
@@ -184,6 +196,7 @@ CASES = {
     "cpp_build_error": lambda: bad(["--rtl", "@stub.v", "--top", "stub"],
                                    "C++ build of the RTL model failed: ",
                                    {"stub.v": {"body": '  initial $c("not_cpp(;");\n'}}),
+    "shared_cache": shared_cache,
     "not_a_model": lambda: bad(["--rtl-model", BLOCKS], "invalid ELF header"),
     "mutant_without_input": lambda: one_line_exit_2(
         run(OWN + ["--mutant", "NO_C_SWAP", "--seeds", "1"]),

@@ -3,7 +3,9 @@
 #include <dlfcn.h>
 #include <fcntl.h>
 #include <fmt/format.h>
+#include <pwd.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -101,8 +103,28 @@ std::string rtl_cache_dir() {
   if (const char* x = std::getenv("XDG_CACHE_HOME"); x != nullptr && *x == '/')
     return std::string(x) + "/dpc31emu/rtl";
   const char* home = std::getenv("HOME");
-  return std::string(home != nullptr && *home != '\0' ? home : "/tmp") + "/.cache/dpc31emu/rtl";
+  if (home == nullptr || *home == '\0') {
+    // Not /tmp: a model.so there could be anyone's, and we load it into our process.
+    const passwd* pw = ::getpwuid(::geteuid());
+    home = pw != nullptr ? pw->pw_dir : nullptr;
+  }
+  if (home == nullptr || *home == '\0') return {};
+  return std::string(home) + "/.cache/dpc31emu/rtl";
 }
+
+namespace {
+
+// We dlopen what the cache holds, so it must be ours alone: owned by us, writable by nobody else
+// (where it points to, if it is a symlink). Empty: fine; else the one-line reason.
+std::string cache_not_private(const std::string& cache) {
+  struct stat st {};
+  if (::stat(cache.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) return "not a directory";
+  if (st.st_uid != ::geteuid()) return "owned by another user";
+  if ((st.st_mode & (S_IWGRP | S_IWOTH)) != 0) return "writable by others";
+  return {};
+}
+
+}  // namespace
 
 namespace {
 
@@ -297,9 +319,20 @@ bool build_rtl_model(const RtlBuild& b, std::string& model_path, std::string& er
     key.add(text);
   }
   const std::string cache = rtl_cache_dir();
+  if (cache.empty()) {
+    error = "RTL cache: no home directory; set DPC31EMU_RTL_CACHE to a private directory";
+    return false;
+  }
   fs::create_directories(cache, ec);
   if (ec) {
     error = fmt::format("RTL cache {}: {}", cache, ec.message());
+    return false;
+  }
+  if (const std::string why = cache_not_private(cache); !why.empty()) {
+    error = fmt::format(
+        "RTL cache {}: {}; the models in it are loaded into this process, so it "
+        "must be yours alone (set DPC31EMU_RTL_CACHE to a private directory)",
+        cache, why);
     return false;
   }
   // Verilator's version (its banner) is part of the key: a new Verilator, a new model.

@@ -50,7 +50,9 @@ struct RtlBuild {
   Profile profile = Profile::dpc31;  // -GPROFILE=
 };
 
-// $DPC31EMU_RTL_CACHE, else $XDG_CACHE_HOME/dpc31emu/rtl, else $HOME/.cache/dpc31emu/rtl.
+// $DPC31EMU_RTL_CACHE, else $XDG_CACHE_HOME/dpc31emu/rtl, else <home>/.cache/dpc31emu/rtl ($HOME,
+// else the password database's); empty if there is no home. build_rtl_model refuses a cache that
+// is not owned by the user or is writable by others.
 std::string rtl_cache_dir();
 
 // Verilates and compiles the sources into <rtl_cache_dir()>/<key>/model.so, unless that is there
