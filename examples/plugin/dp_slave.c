@@ -52,9 +52,12 @@ static void new_cfg(void) {
   uint8_t result;
   do {
     const uint8_t len = Vpc3Read(CELL_LEN_CFG);
-    const int ok =
-        len == g_app->cfg_len &&
-        Vpc3MemCmp(VPC3_PTR(buffer(CELL_CFG_PTR)), VPC3_PTR(buffer(CELL_READ_CFG_PTR)), len) == 0;
+    int ok = len == g_app->cfg_len;
+    if (ok) { /* two bus reads in a fixed order (C leaves the order of arguments open) */
+      const VPC3_ADR cfg = buffer(CELL_CFG_PTR);
+      const VPC3_ADR read_cfg = buffer(CELL_READ_CFG_PTR);
+      ok = Vpc3MemCmp(VPC3_PTR(cfg), VPC3_PTR(read_cfg), len) == 0;
+    }
     result = Vpc3Read(ok ? REG_CFG_OK : REG_CFG_NOT_OK);
   } while (result == VERDICT_CONFLICT);
 }

@@ -313,8 +313,14 @@ static void handle_prm(void) {
 static void handle_cfg(void) {
   for (;;) {
     const uint8_t len = Vpc3Read(R->len_cfg);
-    const int ok = len == M->cfg_len && Vpc3MemCmp(CHIP_PTR(buffer(R->cfg_ptr)),
-                                                   CHIP_PTR(buffer(R->read_cfg_ptr)), len) == 0;
+    int ok = len == M->cfg_len;
+    if (ok) {
+      /* One pointer read after the other, not both as arguments: C leaves the order of argument
+       * evaluation open, and the bus trace must not depend on the compiler. */
+      const VPC3_ADR read_cfg = buffer(R->read_cfg_ptr);
+      const VPC3_ADR cfg = buffer(R->cfg_ptr);
+      ok = Vpc3MemCmp(CHIP_PTR(cfg), CHIP_PTR(read_cfg), len) == 0;
+    }
     const uint8_t result = Vpc3Read(ok ? R->cfg_ok : R->cfg_not_ok);
     if (result != Prm_Conflict) {
       if (ok) {
