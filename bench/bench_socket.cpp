@@ -1,12 +1,16 @@
 // `dpc31 serve` round trips (docs/protocol.md): a client sends `peek 0` and waits for its reply,
 // over loopback TCP and a Unix socket, against the server running on a thread of this process.
-// Items per second = commands per second. The in-process interpreter alone gives the floor.
+// Items per second = commands per second; Arg 1: one command in flight, Arg 64: 64 pipelined on
+// the connection. server_ns_per_cmd is the server thread's own CPU time per command (its thread
+// CPU clock), host_ns_per_cmd the rest of the wall time per command: the client, the kernel's
+// socket path and the wake-ups of both threads. The in-process interpreter alone gives the floor.
 // BM_SocketFlood: the same round trips while 13 other clients pipeline as fast as they can; its
 // p99 is the scheduler's bound in wall time (docs/protocol.md, "Several clients").
 #include <benchmark/benchmark.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <poll.h>
+#include <pthread.h>
 #include <sys/socket.h>
 #include <sys/un.h>
 #include <unistd.h>
@@ -16,6 +20,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <memory>
 #include <string>
 #include <thread>
@@ -38,6 +43,16 @@ class ServerThread {
   ServerThread(const ServerThread&) = delete;
   ServerThread& operator=(const ServerThread&) = delete;
   [[nodiscard]] std::uint16_t port() const { return server_.tcp_port(); }
+  // The server thread's CPU time so far.
+  [[nodiscard]] double cpu_ns() {
+    clockid_t id{};
+    timespec ts{};
+    if (::pthread_getcpuclockid(thread_.native_handle(), &id) != 0 ||
+        ::clock_gettime(id, &ts) != 0) {
+      std::abort();
+    }
+    return static_cast<double>(ts.tv_sec) * 1e9 + static_cast<double>(ts.tv_nsec);
+  }
 
  private:
   dpc31::serve::Server server_;
@@ -66,10 +81,12 @@ int connect_unix(const std::string& path) {
 }
 
 // Sends `batch` `peek 0` lines at once and reads as many replies.
-void round_trips(benchmark::State& st, int fd, int batch) {
+void round_trips(benchmark::State& st, ServerThread& server, int fd, int batch) {
   std::string req;
   for (int i = 0; i < batch; ++i) req += "peek 0\n";
   char buf[65536];
+  const double cpu_before = server.cpu_ns();
+  const auto t_begin = std::chrono::steady_clock::now();
   for (auto _ : st) {
     if (::send(fd, req.data(), req.size(), 0) != static_cast<ssize_t>(req.size())) std::abort();
     int replies = 0;
@@ -79,7 +96,13 @@ void round_trips(benchmark::State& st, int fd, int batch) {
       for (ssize_t i = 0; i < n; ++i) replies += buf[i] == '\n' ? 1 : 0;
     }
   }
+  const double wall_ns =
+      std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t_begin).count();
+  const double commands = static_cast<double>(st.iterations()) * batch;
+  const double server_ns = (server.cpu_ns() - cpu_before) / commands;
   st.SetItemsProcessed(st.iterations() * batch);
+  st.counters["server_ns_per_cmd"] = server_ns;
+  st.counters["host_ns_per_cmd"] = wall_ns / commands - server_ns;
   ::close(fd);
 }
 
@@ -87,7 +110,7 @@ void BM_SocketPeekTcp(benchmark::State& st) {
   dpc31::serve::ServerOptions opt;
   opt.tcp = "0";
   ServerThread s(opt);
-  round_trips(st, connect_tcp(s.port()), static_cast<int>(st.range(0)));
+  round_trips(st, s, connect_tcp(s.port()), static_cast<int>(st.range(0)));
 }
 BENCHMARK(BM_SocketPeekTcp)->Arg(1)->Arg(64)->UseRealTime();
 
@@ -96,7 +119,7 @@ void BM_SocketPeekUnix(benchmark::State& st) {
   dpc31::serve::ServerOptions opt;
   opt.unix_path = path;
   ServerThread s(opt);
-  round_trips(st, connect_unix(path), static_cast<int>(st.range(0)));
+  round_trips(st, s, connect_unix(path), static_cast<int>(st.range(0)));
 }
 BENCHMARK(BM_SocketPeekUnix)->Arg(1)->Arg(64)->UseRealTime();
 

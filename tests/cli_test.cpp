@@ -185,20 +185,29 @@ TEST(CliBench, QuickPrintsEveryRowWellFormed) {
   ASSERT_FALSE(rows.empty());
   EXPECT_EQ(rows[0], (std::vector<std::string>{"item", "what", "measured", "target", "result"}));
   rows.erase(rows.begin());
-  // Rows per item of issue 7: a (six accesses), b, c, d, e (ratio, lockstep), f (MB/s, RSS), g
-  // (one round trip; and beside a flood, issue 14), i (tracing cost, issue 19).
+  // Rows per item: a (six accesses), b, c, d, e (ratio, lockstep), f (MB/s, RSS), g (pipelined
+  // over TCP, one in flight over the Unix socket and over TCP, each with the server's own cost
+  // per command and the rest reported beside it; one round trip beside a flood), i (tracing).
   const std::vector<std::string> items = {"a", "a", "a", "a", "a", "a", "b", "c",
-                                          "d", "e", "e", "f", "f", "g", "g", "i"};
+                                          "d", "e", "e", "f", "f", "g", "g", "g",
+                                          "g", "g", "g", "g", "g", "g", "i"};
   ASSERT_EQ(rows.size(), items.size()) << r.out;
+  int reported = 0;
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const auto& c = rows[i];
     EXPECT_EQ(c[0], items[i]);
     EXPECT_FALSE(c[1].empty());
     EXPECT_TRUE(!c[2].empty() && c[2].find("error") == std::string::npos) << c[2];
+    if (c[3] == "—") {  // a breakdown of the row above it, with no target of its own
+      EXPECT_EQ(c[4], "reported");
+      ++reported;
+      continue;
+    }
     EXPECT_TRUE(c[3].rfind("≤ ", 0) == 0 || c[3].rfind("≥ ", 0) == 0 || c[3].rfind("< ", 0) == 0)
         << c[3];
     EXPECT_TRUE(c[4].rfind("met", 0) == 0 || c[4].rfind("missed by ", 0) == 0) << c[4];
   }
+  EXPECT_EQ(reported, 5);
   const auto j = nlohmann::json::parse(slurp(json_path));
   ASSERT_EQ(j["rows"].size(), items.size());
   for (const auto& row : j["rows"]) {

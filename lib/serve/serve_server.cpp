@@ -29,9 +29,9 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 constexpr std::size_t kReadChunk = 16u << 10;
-constexpr int kAcceptBatch = 4;                        // connections per listener per round
-constexpr std::size_t kKeepBuffer = 64u << 10;         // a drained buffer keeps this capacity
-constexpr std::size_t kHoldOutput = 16u << 10;         // replies of a lone pipeline held up to
+constexpr int kAcceptBatch = 4;                 // connections per listener per round
+constexpr std::size_t kKeepBuffer = 64u << 10;  // a drained buffer keeps this capacity
+constexpr std::size_t kLoneRound = 64;          // lines of a round when only one client has work
 constexpr auto kCloseGrace = std::chrono::seconds(2);  // to flush the last lines of a client
 constexpr auto kShutdownGrace = std::chrono::seconds(1);
 constexpr auto kAcceptPause = std::chrono::milliseconds(100);  // after EMFILE and friends
@@ -110,9 +110,6 @@ struct Client {
   bool eof = false;         // the peer sends no more: execute what is left, then close
   bool closing = false;     // no more input; close once the output is sent or at close_by
   bool dead = false;        // close now, unsent output is lost
-  // The only client with work, with more lines waiting: its replies are sent together when its
-  // pipeline is done (or kHoldOutput is reached, or someone else has work), not one per round.
-  bool hold = false;
   Clock::time_point accepted;
   Clock::time_point last_input;
   Clock::time_point close_by;
@@ -569,7 +566,6 @@ void Server::Impl::execute_round() {
   std::size_t busy = 0;
   for (std::size_t k = 0; k < n && !shutting_down; ++k) {
     Client& c = *clients[(round_start + k) % n];
-    c.hold = false;
     if (!has_work(c)) continue;
     std::string_view line;
     const Got got = next_line(c, line);
@@ -582,10 +578,16 @@ void Server::Impl::execute_round() {
     ++busy;
   }
   round_start = n == 0 ? 0 : (round_start + 1) % n;
-  // A lone pipelining client pays one poll() per line, not also a send() and a wake-up of its
-  // reader: its replies wait until its pipeline is done. With two or more busy clients every
-  // reply is sent at the end of its round.
-  if (busy == 1 && has_work(*only) && only->pending_out() < kHoldOutput) only->hold = true;
+  // A lone pipelining client: nobody else had a line this round, so it runs on, up to kLoneRound
+  // lines in all, before its replies go out and poll() looks again (a poll() and a send() per
+  // line were most of the cost of a pipelined `peek`). A command of another client that arrives
+  // meanwhile waits for at most these lines (docs/protocol.md, "Several clients").
+  for (std::size_t k = 1; busy == 1 && k < kLoneRound && !shutting_down && has_work(*only); ++k) {
+    std::string_view line;
+    const Got got = next_line(*only, line);
+    if (got == Got::none) break;
+    handle(*only, got, line);
+  }
 }
 
 void Server::Impl::close_client(Client& c) {
@@ -616,7 +618,7 @@ void Server::Impl::poll_once() {
   for (const auto& c : clients) {
     short ev = 0;
     if (!c->closing && !c->eof && c->pending_in() < opt.max_input) ev |= POLLIN;
-    if (c->pending_out() > 0 && !c->hold) ev |= POLLOUT;
+    if (c->pending_out() > 0) ev |= POLLOUT;
     fds.push_back({c->fd, ev, 0});
   }
 
@@ -679,7 +681,7 @@ void Server::Impl::poll_once() {
   if (!shutting_down) execute_round();
 
   for (auto& c : clients) {
-    if (!c->hold) flush(*c);
+    flush(*c);
     if (!c->closing && !c->dead && !c->established &&
         std::chrono::duration<double>(now - c->accepted).count() >= opt.hello_timeout) {
       reject(*c, "! bye hello_timeout");  // no first line in time
