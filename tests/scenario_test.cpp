@@ -21,7 +21,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const fs::path kTraces = fs::path(__FILE__).parent_path().parent_path() / "traces";
+// Not through __FILE__: with ccache's base directory (our launcher) that is a path relative to
+// where the compiler ran, which is not where CTest runs the test under every generator.
+const fs::path kTraces = fs::path(SOURCE_DIR) / "traces";
 
 struct Lines {
   std::vector<std::string> lines;
