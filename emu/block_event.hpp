@@ -23,6 +23,8 @@ struct BlockEvent {
     prm,
     cfg,
     ssa,
+    mac_stop,   // a MAC_Stop request (DPC31 Instruction_Queue)
+    mac_start,  // a MAC_Start request
     read,
     write
   };

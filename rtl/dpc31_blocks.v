@@ -64,6 +64,8 @@ module dpc31_blocks #(
   input  wire        ev_dx,
   input  wire        ev_dis,
   input  wire  [1:0] dis_bits,
+  input  wire        ev_mac_stop,   // dpc31: a MAC_Stop request (the Instruction_Queue)
+  input  wire        ev_mac_start,  // dpc31: a MAC_Start request
   // compared outputs
   output wire        x_int,
   output reg  [15:0] irr,
@@ -295,6 +297,11 @@ module dpc31_blocks #(
       nx_ssa_free = 1'b0;
       raise(IRQ_NEW_SSA);
     end
+
+    // ev_mac_stop / ev_mac_start: the requests of the InstQ_Wr write of this cycle, after every
+    // other event (the chip executes them with the bus access): Stop, then Start (a restart).
+    if (ev_mac_stop && nx_started) go_offline;
+    if (ev_mac_start && !nx_started) start;
 
     // ================================================================= step 3: bus access
     // CHOICE: the spec allows at most one access per cycle; should both strobes come, the read

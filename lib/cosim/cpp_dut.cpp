@@ -28,6 +28,10 @@ class CppDut final : public Dut {
   explicit CppDut(const DutOptions& o)
       : core_(ChipOptions{o.profile, o.bus, 0, Engine::event, o.variant}) {
     core_.signals.sink = nullptr;
+    // The request interface (DPC31 Instruction_Queue) is not one of the blocks: what its requests
+    // do to them comes in as events (ev_mac_stop, ev_mac_start, ev_leave_master, ev_irq), so a
+    // replayed InstQ_Wr write must not execute the queue a second time.
+    core_.hooks[RegisterFile::idx(RegId::InstQ_Wr)].post_write = nullptr;
     core_.reset();
   }
 
@@ -61,6 +65,8 @@ class CppDut final : public Dut {
     if (in.ev_prm) dp.prm_accepted();
     if (in.ev_cfg) dp.cfg_accepted();
     if (in.ev_ssa) dp.ssa_accepted();
+    if (in.ev_mac_stop) core_.mode.go_offline();
+    if (in.ev_mac_start) core_.mode.start();
     if (in.bus_rd) rdata_ = core_.read_now(in.bus_addr);
     if (in.bus_wr) core_.write_now(in.bus_addr, in.bus_wdata);
     core_.irq.update_line();

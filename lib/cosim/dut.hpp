@@ -46,6 +46,8 @@ struct Inputs {
   bool ev_ssa = false;
   bool ev_dis = false;
   std::uint8_t dis_bits = 0;
+  bool ev_mac_stop = false;
+  bool ev_mac_start = false;
 
   [[nodiscard]] bool idle() const;
   [[nodiscard]] std::string describe() const;  // "wr 0008<-02 ev_gc(08)"; empty when idle

@@ -34,6 +34,8 @@ dpc31_rtl_inputs rtl_inputs(const Inputs& in) {
   r.ev_ssa = in.ev_ssa;
   r.ev_dis = in.ev_dis;
   r.dis_bits = in.dis_bits;
+  r.ev_mac_stop = in.ev_mac_stop;
+  r.ev_mac_start = in.ev_mac_start;
   return r;
 }
 

@@ -37,7 +37,7 @@ struct EventInput {
 };
 
 // In the order a trace line names them (Inputs::describe).
-constexpr std::array<EventInput, 16> kEventInputs = {{
+constexpr std::array<EventInput, 18> kEventInputs = {{
     {"ev_dx", K::dx, &Inputs::ev_dx, Arg::none},
     {"rd", K::read, &Inputs::bus_rd, Arg::bus_read},
     {"wr", K::write, &Inputs::bus_wr, Arg::bus_write},
@@ -54,6 +54,8 @@ constexpr std::array<EventInput, 16> kEventInputs = {{
     {"ev_cfg", K::cfg, &Inputs::ev_cfg, Arg::none},
     {"ev_ssa", K::ssa, &Inputs::ev_ssa, Arg::none},
     {"ev_dis", K::dis, &Inputs::ev_dis, Arg::dis_bits},
+    {"ev_mac_stop", K::mac_stop, &Inputs::ev_mac_stop, Arg::none},
+    {"ev_mac_start", K::mac_start, &Inputs::ev_mac_start, Arg::none},
 }};
 static_assert(kEventInputs.size() == static_cast<std::size_t>(K::write) + 1,
               "a new BlockEvent::Kind: add its input here");

@@ -72,6 +72,8 @@ class VerilatedBlocks {
     top_->ev_dx = in.ev_dx;
     top_->ev_dis = in.ev_dis;
     top_->dis_bits = in.dis_bits;
+    top_->ev_mac_stop = in.ev_mac_stop;
+    top_->ev_mac_start = in.ev_mac_start;
     clock();
   }
 
