@@ -12,6 +12,7 @@ struct BlockEvent {
     dx,
     irq,
     leave_master,
+    wd_expired,  // the DP watchdog expired in DP_Control (WD_DP_Control_Timeout, Leave_Master)
     prm_fault,
     gc,
     dout,

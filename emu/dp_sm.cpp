@@ -548,6 +548,13 @@ bool DpStateMachine::user_watchdog_tick() {
   return false;
 }
 
+void DpStateMachine::dp_control_expired() {
+  leave_master();
+  // DPC31 p.26: "The SSA_State_Machine is reset also when ... the watchdog has expired in the
+  // mode 'DP_Control'": SAP55 takes a Set_Slave_Add again.
+  if (regs_.id() == Profile::dpc31) s_.ssa_free = true;
+}
+
 void DpStateMachine::response_sent() {
   if (!s_.diag_in_flight) return;
   s_.diag_in_flight = false;

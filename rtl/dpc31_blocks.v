@@ -49,6 +49,7 @@ module dpc31_blocks #(
   // event inputs (one-cycle pulses)
   input  wire [15:0] ev_irq,
   input  wire        ev_leave_master,
+  input  wire        ev_wd_expired,  // the DP watchdog expired in DP_Control
   input  wire        ev_gc,
   input  wire  [7:0] gc_cmd,
   input  wire        ev_dout,
@@ -240,6 +241,14 @@ module dpc31_blocks #(
 
     // ev_leave_master
     if (ev_leave_master) leave_master;
+
+    // ev_wd_expired: WD_DP_Control_Timeout; leave_master; the DPC31 resets its SSA state machine
+    // ("the watchdog has expired in the mode 'DP_Control'", DPC31 p.26): SSA free.
+    if (ev_wd_expired) begin
+      raise(IRQ_WD_TIMEOUT);
+      leave_master;
+      if (IS_DPC31) nx_ssa_free = 1'b1;
+    end
 
     // ev_prm_fault: a Set_Prm failed the ASIC's checks: leave_master, Prm_Fault.
     if (ev_prm_fault) begin

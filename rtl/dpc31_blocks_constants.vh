@@ -129,6 +129,7 @@
 
   localparam [15:0] IRQ_MAC_RESET = 16'd1 << B_MAC_RESET;
   localparam [15:0] IRQ_GO_LEAVE_DX = 16'd1 << B_GO_LEAVE_DX;
+  localparam [15:0] IRQ_WD_TIMEOUT = 16'd1 << B_WD_TIMEOUT;
   localparam [15:0] IRQ_USER_TIMER = 16'd1 << B_USER_TIMER;
   localparam [15:0] IRQ_NEW_GC = 16'd1 << B_NEW_GC;
   localparam [15:0] IRQ_NEW_SSA = 16'd1 << B_NEW_SSA;

@@ -115,7 +115,8 @@ TEST(Cosim, BrokenTracesAreRejectedWithFileAndLine) {
 // it was written.
 TEST(Cosim, EveryEventInputRoundTripsThroughATraceLine) {
   const std::string a =
-      "rst ev_dx rd 0010 ev_irq(0100) ev_leave_master ev_prm_fault ev_gc(08) ev_dout ev_failsafe "
+      "rst ev_dx rd 0010 ev_irq(0100) ev_leave_master ev_wd_expired ev_prm_fault ev_gc(08) ev_dout "
+      "ev_failsafe "
       "ev_din ev_diag_begin ev_diag_end(stat=1) ev_prm ev_cfg ev_ssa ev_dis(3) ev_mac_stop "
       "ev_mac_start";
   const std::string b = "wr 0008<-02";
@@ -123,10 +124,10 @@ TEST(Cosim, EveryEventInputRoundTripsThroughATraceLine) {
   std::string e;
   ASSERT_TRUE(parse_trace("3 " + a + "\n4 " + b + "\nend 6\n", "all.trace", s, e)) << e;
   const Inputs& in = s[3];
-  EXPECT_TRUE(in.rst && in.ev_dx && in.bus_rd && in.ev_leave_master && in.ev_prm_fault &&
-              in.ev_gc && in.ev_dout && in.ev_failsafe && in.ev_din && in.ev_diag_begin &&
-              in.ev_diag_end && in.stat_diag && in.ev_prm && in.ev_cfg && in.ev_ssa && in.ev_dis &&
-              in.ev_mac_stop && in.ev_mac_start);
+  EXPECT_TRUE(in.rst && in.ev_dx && in.bus_rd && in.ev_leave_master && in.ev_wd_expired &&
+              in.ev_prm_fault && in.ev_gc && in.ev_dout && in.ev_failsafe && in.ev_din &&
+              in.ev_diag_begin && in.ev_diag_end && in.stat_diag && in.ev_prm && in.ev_cfg &&
+              in.ev_ssa && in.ev_dis && in.ev_mac_stop && in.ev_mac_start);
   EXPECT_EQ(in.bus_addr, 0x0010);
   EXPECT_EQ(in.ev_irq, 0x0100);
   EXPECT_EQ(in.gc_cmd, 0x08);

@@ -49,6 +49,10 @@ class CppDut final : public Dut {
           static_cast<std::uint16_t>(~fields::Mode_Reg1::Res_User_WD);
     if (in.ev_irq != 0) core_.irq.raise(in.ev_irq);
     if (in.ev_leave_master) dp.leave_master();
+    if (in.ev_wd_expired) {
+      core_.irq.raise(irq::WD_DP_Control_Timeout);
+      dp.dp_control_expired();
+    }
     if (in.ev_prm_fault) dp.prm_fault();
     if (in.ev_gc) dp.apply_global_control(in.gc_cmd);
     if (in.ev_dout) buffers.outputs_received(BlockAccess::state(dp).sync_mode);

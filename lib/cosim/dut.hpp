@@ -32,6 +32,7 @@ struct Inputs {
   std::uint8_t bus_wdata = 0;
   std::uint16_t ev_irq = 0;
   bool ev_leave_master = false;
+  bool ev_wd_expired = false;
   bool ev_prm_fault = false;
   bool ev_gc = false;
   std::uint8_t gc_cmd = 0;

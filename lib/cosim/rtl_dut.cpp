@@ -20,6 +20,7 @@ dpc31_rtl_inputs rtl_inputs(const Inputs& in) {
   r.bus_wdata = in.bus_wdata;
   r.ev_irq = in.ev_irq;
   r.ev_leave_master = in.ev_leave_master;
+  r.ev_wd_expired = in.ev_wd_expired;
   r.ev_prm_fault = in.ev_prm_fault;
   r.ev_gc = in.ev_gc;
   r.gc_cmd = in.gc_cmd;

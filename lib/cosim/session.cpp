@@ -12,12 +12,13 @@ namespace dpc31::cosim {
 
 namespace {
 
-// The inputs of one cycle act in a fixed order (docs/golden-model.md): ev_leave_master among the
-// protocol events, then ev_mac_stop, then ev_mac_start. The rank of each of them, -1 for the
-// events whose order within a cycle does not change the result.
+// The inputs of one cycle act in a fixed order (docs/golden-model.md): ev_leave_master and
+// ev_wd_expired among the protocol events, then ev_mac_stop, then ev_mac_start. The rank of each of
+// them, -1 for the events whose order within a cycle does not change the result.
 int request_rank(BlockEvent::Kind k) {
   switch (k) {
     case BlockEvent::Kind::leave_master:
+    case BlockEvent::Kind::wd_expired:  // both end in leave_master: their order does not matter
       return 0;
     case BlockEvent::Kind::mac_stop:
       return 1;

@@ -37,12 +37,13 @@ struct EventInput {
 };
 
 // In the order a trace line names them (Inputs::describe).
-constexpr std::array<EventInput, 18> kEventInputs = {{
+constexpr std::array<EventInput, 19> kEventInputs = {{
     {"ev_dx", K::dx, &Inputs::ev_dx, Arg::none},
     {"rd", K::read, &Inputs::bus_rd, Arg::bus_read},
     {"wr", K::write, &Inputs::bus_wr, Arg::bus_write},
     {"ev_irq", K::irq, nullptr, Arg::irq_mask},
     {"ev_leave_master", K::leave_master, &Inputs::ev_leave_master, Arg::none},
+    {"ev_wd_expired", K::wd_expired, &Inputs::ev_wd_expired, Arg::none},
     {"ev_prm_fault", K::prm_fault, &Inputs::ev_prm_fault, Arg::none},
     {"ev_gc", K::gc, &Inputs::ev_gc, Arg::gc_cmd},
     {"ev_dout", K::dout, &Inputs::ev_dout, Arg::none},

@@ -347,6 +347,28 @@ TEST(Dpc31Requests, UserSsaOkFinishesAPendingSetSlaveAddAndRefusesWithoutOne) {
   EXPECT_EQ(wire(b.master.set_slave_address(10, false).answer), Bytes{0xE5});
 }
 
+// p.26: "The SSA_State_Machine is reset also when ... the watchdog has expired in the mode
+// 'DP_Control'." The Responder never reads User_SSA_OK, so after a Set_Slave_Add SAP55 refuses the
+// next one (RR: the buffer is not free); the DP watchdog (TWD = 10 ms x 10 x 10 = 1 s) expiring
+// in DP_Control opens it again: the next Set_Slave_Add is taken (SC), and User_SSA_OK finishes it
+// (00). (Before, a DP_Control expiry left SAP55 closed: RR.)
+TEST(Dpc31Requests, DpControlExpiryResetsTheSsaStateMachine) {
+  Bench b(Profile::dpc31);
+  until_answered(b);
+  ASSERT_EQ(wire(b.master.set_slave_address(9, false).answer), Bytes{0xE5});
+  b.master.set_target(9);
+  const Exchange refused = b.master.set_slave_address(10, false);
+  ASSERT_TRUE(refused.answer);
+  EXPECT_EQ(fdl::response_code(refused.answer->fc), fdl::Response::RR);
+  ASSERT_TRUE(b.master.startup());
+  ASSERT_EQ(b.chip.wd_state(), WdState::DP_Control);
+  b.master.idle(48'000'000ull + 48'000);
+  ASSERT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
+  ASSERT_EQ(b.chip.wd_state(), WdState::Baud_Control);  // DP_Control expired
+  EXPECT_EQ(wire(b.master.set_slave_address(10, false).answer), Bytes{0xE5});
+  EXPECT_EQ(b.chip.read(at(b.chip, RegId::SSA_Buffer_Free_Cmd)), 0x00);  // User_SSA_Finished
+}
+
 // Table 5.2-8 / p.26 name the user's commands User_New_Dout, User_New_Din and User_SSA_OK: the
 // register description knows them under those names at the commands' (modelled) addresses, and
 // the C header defines them (DPC31_User_New_Dout_Cmd, ...).

@@ -57,6 +57,7 @@ class VerilatedBlocks {
     top_->bus_wdata = in.bus_wdata;
     top_->ev_irq = in.ev_irq;
     top_->ev_leave_master = in.ev_leave_master;
+    top_->ev_wd_expired = in.ev_wd_expired;
     top_->ev_gc = in.ev_gc;
     top_->gc_cmd = in.gc_cmd;
     top_->ev_dout = in.ev_dout;
