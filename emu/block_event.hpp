@@ -12,6 +12,7 @@ struct BlockEvent {
     dx,
     irq,
     leave_master,
+    wd_expired,  // the DP watchdog expired in DP_Control (WD_DP_Control_Timeout, Leave_Master)
     prm_fault,
     gc,
     dout,
@@ -23,6 +24,8 @@ struct BlockEvent {
     prm,
     cfg,
     ssa,
+    mac_stop,   // a MAC_Stop request (DPC31 Instruction_Queue)
+    mac_start,  // a MAC_Start request
     read,
     write
   };

@@ -235,8 +235,10 @@ void ChipCore::write_reg(const RegDesc& r, std::uint32_t offset, std::uint8_t va
     signals.log(LogLevel::warn, "{}: write would change reserved bits {:#06x}: ignored", r.name,
                 rsvd_change);
   }
+  // Documented as no effect when written: a driver's standard writes (FFFFh to Int_Ack_Reg, an
+  // SPC3 driver's Res_User_WD on a DPC31) are no news, so debug.
   if ((w & r.ign) != 0) {
-    signals.log(LogLevel::info, "{}: {} not changed by this register (bits {:#06x})", r.name,
+    signals.log(LogLevel::debug, "{}: {} not changed by this register (bits {:#06x})", r.name,
                 field_names(r, w & r.ign), w & r.ign);
   }
   if ((r.unimp & lane) != 0)

@@ -535,10 +535,6 @@ bool DpStateMachine::user_watchdog_tick() {
   std::uint16_t& m1 = regs_.latch(RegId::Mode_Reg1);
   if ((m1 & fields::Mode_Reg1::Res_User_WD) != 0) {
     m1 = static_cast<std::uint16_t>(m1 & ~fields::Mode_Reg1::Res_User_WD);
-    // The DPC31 watches its user on a 10 ms time base through the request interface instead
-    // (DPC31 p.31: "In the case of the SPC3, the processor is monitored via a counter"): the bit
-    // is cleared as on the SPC3 but arms nothing.
-    if (regs_.id() == Profile::dpc31) return true;
     s_.user_wd = regs_.cell16(*regs_.reg(RegId::R_User_WD_Value));
     s_.user_wd_armed = true;
     return true;
@@ -550,6 +546,13 @@ bool DpStateMachine::user_watchdog_tick() {
   sig_.emit(BlockEvent::Kind::leave_master);
   leave_master();
   return false;
+}
+
+void DpStateMachine::dp_control_expired() {
+  leave_master();
+  // DPC31 p.26: "The SSA_State_Machine is reset also when ... the watchdog has expired in the
+  // mode 'DP_Control'": SAP55 takes a Set_Slave_Add again.
+  if (regs_.id() == Profile::dpc31) s_.ssa_free = true;
 }
 
 void DpStateMachine::response_sent() {

@@ -110,6 +110,9 @@ class DpStateMachine {
   void response_sent();  // our answer's last stop bit is out
   // Leave_Master: back to Wait_Prm, unlocked (User_Leave_Master, a fault, a watchdog expiry).
   void leave_master();
+  // The DP watchdog expired in DP_Control: Leave_Master; the DPC31 also resets its SSA state
+  // machine (DPC31 p.26).
+  void dp_control_expired();
   // The block-level actions of the services (docs/golden-model.md), also for the harness.
   void prm_accepted();  // New_Prm_Data
   void prm_fault();     // a Set_Prm that failed the ASIC's checks

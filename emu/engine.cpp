@@ -22,9 +22,9 @@ void ChipCore::watchdog_expired() {
   switch (watchdog.expire()) {
     case Watchdog::Expiry::none:
       break;
-    case Watchdog::Expiry::dp_control:
-      signals.emit(BlockEvent::Kind::leave_master);
-      dp.leave_master();
+    case Watchdog::Expiry::dp_control:  // WD_DP_Control_Timeout is latched already
+      signals.emit(BlockEvent::Kind::wd_expired);
+      dp.dp_control_expired();
       break;
     case Watchdog::Expiry::baud_control:
       mac.start_search();

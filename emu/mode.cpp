@@ -27,8 +27,10 @@ void install_mode_hooks(HookTable& h) {
     c.regs.set_large_ram(c.regs.profile().ram_size_large != 0 &&
                          (now & fields::Mode_Reg2::_4kB_Mode) != 0);
   };
+  // Only the bits the profile's Mode_Reg1_S takes act: on the DPC31 Start_SPC3, Go_Offline,
+  // User_Leave_Master and Res_User_WD are requests (IGN here, docs/dpc31.md).
   at(RegId::Mode_Reg1_S).post_write = [](ChipCore& c, std::uint16_t, std::uint16_t) {
-    c.mode.command(c.written_bits);
+    c.mode.command(c.written_bits & c.regs.reg(RegId::Mode_Reg1_S)->w1s);
   };
   at(RegId::Status_Reg).read = [](const ChipCore& c) { return c.mode.status(); };
 }

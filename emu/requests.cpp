@@ -60,10 +60,12 @@ void RequestInterface::execute(std::uint8_t code, std::uint8_t param) {
   switch (code) {
     case request::MAC_Start:  // "MAC enters Pas_Idle"; the SSA state machine starts over
       sig_.log(LogLevel::info, "request MAC_Start");
+      sig_.emit(BlockEvent::Kind::mac_start);
       mode_.start();
       return;
     case request::MAC_Stop:  // "MAC enters Offline", confirmed in the Indication_Queue
       sig_.log(LogLevel::info, "request MAC_Stop");
+      sig_.emit(BlockEvent::Kind::mac_stop);
       mode_.go_offline();
       indicate(request::MAC_Stop, request::Stop_Confirmed);
       return;

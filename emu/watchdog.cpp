@@ -64,8 +64,7 @@ Watchdog::Expiry Watchdog::expire() {
   if (s_.wd == WdState::DP_Control) {
     sig_.log(LogLevel::info, "DP watchdog expired: WD_DP_Control_Timeout, DP state machine reset");
     enter_baud_control();
-    sig_.emit(BlockEvent::Kind::irq, irq::WD_DP_Control_Timeout);
-    irq_.raise(irq::WD_DP_Control_Timeout);
+    irq_.raise(irq::WD_DP_Control_Timeout);  // the block event: wd_expired (engine.cpp)
     s_.dp_wd_on = false;
     return Expiry::dp_control;
   }

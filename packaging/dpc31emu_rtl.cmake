@@ -19,10 +19,10 @@ include_guard(GLOBAL)
 # The ports of docs/golden-model.md: direction, name, width. mutant_sel is optional.
 set(_dpc31emu_rtl_ports
   "IN clk 1" "IN rst 1" "IN motorola 1" "IN asic_type 4" "IN bus_addr 13" "IN bus_wdata 8"
-  "IN bus_rd 1" "IN bus_wr 1" "IN ev_irq 16" "IN ev_leave_master 1" "IN ev_gc 1" "IN gc_cmd 8"
+  "IN bus_rd 1" "IN bus_wr 1" "IN ev_irq 16" "IN ev_leave_master 1" "IN ev_wd_expired 1" "IN ev_gc 1" "IN gc_cmd 8"
   "IN ev_dout 1" "IN ev_failsafe 1" "IN ev_din 1" "IN ev_diag_begin 1" "IN ev_diag_end 1"
   "IN stat_diag 1" "IN ev_prm 1" "IN ev_cfg 1" "IN ev_ssa 1" "IN ev_prm_fault 1" "IN ev_dx 1"
-  "IN ev_dis 1" "IN dis_bits 2"
+  "IN ev_dis 1" "IN dis_bits 2" "IN ev_mac_stop 1" "IN ev_mac_start 1"
   "OUT x_int 1" "OUT irr 16" "OUT imr 16" "OUT mode_reg0 16" "OUT mode_reg1 8" "OUT started 1"
   "OUT dp_state 2" "OUT prm_pending 1" "OUT cfg_pending 1" "OUT ssa_free 1" "OUT prm_fault 1"
   "OUT cfg_fault 1" "OUT not_supported 1" "OUT sync_mode 1" "OUT freeze_mode 1"

@@ -49,6 +49,7 @@ module dpc31_blocks #(
   // event inputs (one-cycle pulses)
   input  wire [15:0] ev_irq,
   input  wire        ev_leave_master,
+  input  wire        ev_wd_expired,  // the DP watchdog expired in DP_Control
   input  wire        ev_gc,
   input  wire  [7:0] gc_cmd,
   input  wire        ev_dout,
@@ -64,6 +65,8 @@ module dpc31_blocks #(
   input  wire        ev_dx,
   input  wire        ev_dis,
   input  wire  [1:0] dis_bits,
+  input  wire        ev_mac_stop,   // dpc31: a MAC_Stop request (the Instruction_Queue)
+  input  wire        ev_mac_start,  // dpc31: a MAC_Start request
   // compared outputs
   output wire        x_int,
   output reg  [15:0] irr,
@@ -239,6 +242,14 @@ module dpc31_blocks #(
     // ev_leave_master
     if (ev_leave_master) leave_master;
 
+    // ev_wd_expired: WD_DP_Control_Timeout; leave_master; the DPC31 resets its SSA state machine
+    // ("the watchdog has expired in the mode 'DP_Control'", DPC31 p.26): SSA free.
+    if (ev_wd_expired) begin
+      raise(IRQ_WD_TIMEOUT);
+      leave_master;
+      if (IS_DPC31) nx_ssa_free = 1'b1;
+    end
+
     // ev_prm_fault: a Set_Prm failed the ASIC's checks: leave_master, Prm_Fault.
     if (ev_prm_fault) begin
       leave_master;
@@ -295,6 +306,11 @@ module dpc31_blocks #(
       nx_ssa_free = 1'b0;
       raise(IRQ_NEW_SSA);
     end
+
+    // ev_mac_stop / ev_mac_start: the requests of the InstQ_Wr write of this cycle, after every
+    // other event (the chip executes them with the bus access): Stop, then Start (a restart).
+    if (ev_mac_stop && nx_started) go_offline;
+    if (ev_mac_start && !nx_started) start;
 
     // ================================================================= step 3: bus access
     // CHOICE: the spec allows at most one access per cycle; should both strobes come, the read

@@ -174,7 +174,7 @@
     end
   endtask
 
-  // start (Start_SPC3 written 1 while Offline).
+  // start (Start_SPC3 written 1, or a MAC_Start request, while Offline).
   task start;
     begin
       nx_started = 1'b1;
@@ -190,7 +190,7 @@
     end
   endtask
 
-  // go_offline (Go_Offline written 1 while started).
+  // go_offline (Go_Offline written 1, or a MAC_Stop request, while started).
   task go_offline;
     begin
       nx_started = 1'b0;

@@ -129,6 +129,7 @@
 
   localparam [15:0] IRQ_MAC_RESET = 16'd1 << B_MAC_RESET;
   localparam [15:0] IRQ_GO_LEAVE_DX = 16'd1 << B_GO_LEAVE_DX;
+  localparam [15:0] IRQ_WD_TIMEOUT = 16'd1 << B_WD_TIMEOUT;
   localparam [15:0] IRQ_USER_TIMER = 16'd1 << B_USER_TIMER;
   localparam [15:0] IRQ_NEW_GC = 16'd1 << B_NEW_GC;
   localparam [15:0] IRQ_NEW_SSA = 16'd1 << B_NEW_SSA;
@@ -195,7 +196,7 @@
   localparam [15:0] M0_RESET = `DPC31B_PSEL(`SPC3_Mode_Reg0_RESET, `VPC3_Mode_Reg0_RESET,
                                             `DPC31_Mode_Reg0_RESET);
 
-  // Mode_Reg1 (set / reset ports): bits spc3, dpc31 3Fh; vpc3plus BFh (En_Chk_SSAP).
+  // Mode_Reg1 (set / reset ports): bits spc3 3Fh, dpc31 12h, vpc3plus BFh (En_Chk_SSAP).
   localparam integer M1_START = `DPC31B_PSEL(`SPC3_Mode_Reg1_S_Start_SPC3_POS,
                                              `VPC3_Mode_Reg1_S_Start_SPC3_POS,
                                              `DPC31_Mode_Reg1_S_Start_SPC3_POS);
@@ -216,8 +217,11 @@
   localparam [7:0] M1_COMMON = (8'd1 << M1_START) | (8'd1 << M1_EOI) | (8'd1 << M1_GO_OFFLINE) |
                                (8'd1 << M1_USER_LEAVE_MASTER) | (8'd1 << M1_EN_CHANGE_CFG) |
                                (8'd1 << M1_RES_USER_WD);
+  // dpc31: Start_SPC3, Go_Offline, User_Leave_Master and Res_User_WD are IGN (the DPC31 takes
+  // them as requests, ev_mac_start / ev_mac_stop / ev_leave_master): EOI and En_Change_Cfg_Buffer.
   localparam [7:0] M1_MASK =
-      IS_VPC3 ? (M1_COMMON | (8'd1 << `VPC3_Mode_Reg1_S_En_Chk_SSAP_POS)) : M1_COMMON;
+      IS_VPC3  ? (M1_COMMON | (8'd1 << `VPC3_Mode_Reg1_S_En_Chk_SSAP_POS)) :
+      IS_DPC31 ? ((8'd1 << M1_EOI) | (8'd1 << M1_EN_CHANGE_CFG)) : M1_COMMON;
   localparam [7:0] M1_PULSES = (8'd1 << M1_EOI) | (8'd1 << M1_USER_LEAVE_MASTER);
   localparam [7:0] M1_RESET = `DPC31B_PSEL(`SPC3_Mode_Reg1_RESET, `VPC3_Mode_Reg1_RESET,
                                            `DPC31_Mode_Reg1_RESET);

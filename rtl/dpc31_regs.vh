@@ -1439,18 +1439,10 @@
 // Mode_Reg1: latch, 8 bit -- Mode register 1
 `define DPC31_ADDR_Mode_Reg1                            13'h0015
 `define DPC31_Mode_Reg1_RESET                           8'h00
-`define DPC31_Mode_Reg1_Start_SPC3_POS                  0
-`define DPC31_Mode_Reg1_Start_SPC3_W                    1
 `define DPC31_Mode_Reg1_EOI_POS                         1
 `define DPC31_Mode_Reg1_EOI_W                           1
-`define DPC31_Mode_Reg1_Go_Offline_POS                  2
-`define DPC31_Mode_Reg1_Go_Offline_W                    1
-`define DPC31_Mode_Reg1_User_Leave_Master_POS           3
-`define DPC31_Mode_Reg1_User_Leave_Master_W             1
 `define DPC31_Mode_Reg1_En_Change_Cfg_Buffer_POS        4
 `define DPC31_Mode_Reg1_En_Change_Cfg_Buffer_W          1
-`define DPC31_Mode_Reg1_Res_User_WD_POS                 5
-`define DPC31_Mode_Reg1_Res_User_WD_W                   1
 
 // Reserved_15h_W: reserved, 8 bit -- reserved write side
 `define DPC31_ADDR_Reserved_15h_W                       13'h0015

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "dpc31/dp.hpp"
+
 namespace dpc31 {
 
 namespace {
@@ -10,6 +12,7 @@ namespace m0 = fields::Mode_Reg0;
 namespace m1 = fields::Mode_Reg1_S;
 constexpr std::uint8_t kHandshakeConflict = 0x01;  // the OK / Not_OK reads' 01: a newer one came
 constexpr std::uint16_t kHandledByReads = irq::New_Prm_Data | irq::New_Cfg_Data;
+constexpr std::uint8_t kQueueLen = 4;  // dpc31: entries of each queue (one always empty)
 
 }  // namespace
 
@@ -112,12 +115,27 @@ void Responder::init(BusPort& c) {
   const std::uint32_t read_cfg = buffer(c, RegId::R_Read_Cfg_Buf_Ptr);
   for (std::size_t i = 0; i < s.cfg.size(); ++i)
     c.write(read_cfg + static_cast<std::uint32_t>(i), s.cfg[i]);
-  if (p.id == Profile::dpc31) refill_substitute(c);
+  if (p.id == Profile::dpc31) {
+    refill_substitute(c);
+    alloc(RegId::InstQ_Base, kQueueLen * request::kEntryBytes);
+    alloc(RegId::IndQ_Base, kQueueLen * request::kEntryBytes);
+    c.write(cell_addr(c.chip(), RegId::InstQ_Len), kQueueLen);
+    c.write(cell_addr(c.chip(), RegId::IndQ_Len), kQueueLen);
+  }
   if (p.id == Profile::dpc31 && cfg_.dx_out_port)
     c.write(waddr(c.chip(), RegId::C31_Control), fields::C31_Control::Enable_DX_Out_Port);
   give_inputs(c);
-  c.write(waddr(c.chip(), RegId::Mode_Reg1_S),
-          static_cast<std::uint8_t>(m1::Start_SPC3 | m1::Res_User_WD));
+  if (p.id != Profile::dpc31) {
+    c.write(waddr(c.chip(), RegId::Mode_Reg1_S),
+            static_cast<std::uint8_t>(m1::Start_SPC3 | m1::Res_User_WD));
+    return;
+  }
+  // The DPC31 starts its MAC through the Instruction_Queue (DPC31 p.22, Table 5.1-3): the entry
+  // MAC_Start, then InstQ_Wr past it.
+  const std::uint32_t instq = buffer(c, RegId::InstQ_Base);
+  c.write(instq, request::MAC_Start);
+  c.write(instq + 1, 0x00);
+  c.write(cell_addr(c.chip(), RegId::InstQ_Wr), 1);
 }
 
 // dpc31: after a cleared fetch the old U is the new clear buffer C; prepare the substitute values.

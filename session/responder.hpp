@@ -29,7 +29,7 @@ class Responder {
  public:
   explicit Responder(ResponderConfig cfg) : cfg_(std::move(cfg)) {}
 
-  void init(BusPort& bus);  // registers, buffers, Start_SPC3
+  void init(BusPort& bus);  // registers, buffers, Start_SPC3 (dpc31: the queues, MAC_Start)
   void isr(BusPort& bus);
 
   struct Output {

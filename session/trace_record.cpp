@@ -197,8 +197,10 @@ void TraceRecorder::mark(std::string heading) {
 }
 
 void TraceRecorder::user_side_started(std::uint64_t, std::string_view text) {
-  mark(fmt::format("firmware init (the built-in user side): registers, buffers, Start_SPC3; {}",
-                   text));
+  // The DPC31 starts through its Instruction_Queue (MAC_Start), the others through Mode_Reg1.
+  const bool dpc31 = chip_ != nullptr && chip_->profile().id == Profile::dpc31;
+  mark(fmt::format("firmware init (the built-in user side): registers, buffers, {}; {}",
+                   dpc31 ? "MAC_Start" : "Start_SPC3", text));
 }
 
 void TraceRecorder::step_begins(std::uint64_t, const ScenarioStep&, std::string_view text) {

@@ -160,6 +160,7 @@ def check_log(b, pacing, baud):
                  "| Set_Prm 2->5 SRD_high FCB 0 SAP 62->61 DU 88 64 0A 00 0D 04 00 00 00 00 00",
                  "TxD   E5  | SC", "| Chk_Cfg 2->5", "| Data_Exchange 2->5 SRD_high",
                  "DL 5->2 DU 51", "PORT  DO4 outputs = 0x05", "PORT  DO4 modul_ok = 0x01",
+                 "CHIP  request MAC_Start",  # the DPC31 starts by request (docs/dpc31.md)
                  "client opened the pty", "client closed the pty", "STATE dp_state Wait_Cfg -> "
                  "Data_Exchange"):
         check(want in text, f"log lacks '{want}'")
@@ -384,7 +385,9 @@ def profibus_rates_default_log():
                 check("RxD" not in tags and "TxD" not in tags,
                       "telegram lines at the events level")
                 text = "\n".join(lines)
-                for want in ("STATE dp_state Wait_Cfg -> Data_Exchange",
+                # DO4 on the DPC31 started by MAC_Start (Table 5.1-3), its outputs fetched
+                # with User_New_Dout: Data_Exchange with an outside master.
+                for want in ("CHIP  request MAC_Start", "STATE dp_state Wait_Cfg -> Data_Exchange",
                              "PORT  DO4 outputs = 0x05", "client opened the pty",
                              f"the client set {other} baud on the pty; the bridge carries its "
                              f"bytes at {baud} baud"):

@@ -33,7 +33,7 @@ TEST_P(Buffers, DoutRotation) {
   c.write(cell(c, "R_Dout_Buf_Ptr1"), seg);
   const std::uint32_t buf1 = static_cast<std::uint32_t>(seg) << p.segment_shift;
   for (std::uint32_t i = 0; i < 5; ++i) c.write(buf1 + i, 0xAA);
-  c.write(0x08, 0x01);
+  testutil::user_start(c);
   for (std::uint32_t i = 0; i < 4; ++i) EXPECT_EQ(c.peek(buf1 + i), 0x00) << i;
   EXPECT_EQ(c.peek(buf1 + 4), 0xAA);  // only R_Len_Dout_Buf bytes are cleared
   EXPECT_EQ(c.read(0x0A), sm(0x27));  // D=3 N=1 U=2 F=Nil
@@ -91,7 +91,7 @@ TEST_P(Buffers, DiagExchange) {
 
 TEST_P(Buffers, PrmCfgHandshakes) {
   Chip c = make();
-  c.write(0x08, 0x01);
+  testutil::user_start(c);
   EXPECT_EQ(c.read(0x0E), 0x03);  // nothing to accept: not allowed
   harness::asic_prm_received(c);
   harness::asic_prm_received(c);  // a second Set_Prm while the user checks the first
@@ -126,12 +126,12 @@ TEST_P(Buffers, PrmCfgHandshakes) {
 // so X/INT stayed active and the firmware's ISR ran forever.
 TEST_P(Buffers, NotAllowedVerdictClearsAStaleEvent) {
   Chip c = make();
-  c.write(0x08, 0x01);
+  testutil::user_start(c);
   testutil::bus_write16(c, 0x04, 16,
                         static_cast<std::uint16_t>(~(irq::New_Prm_Data | irq::New_Cfg_Data)));
   harness::asic_prm_received(c);
   harness::asic_cfg_received(c);
-  c.write(0x08, 0x08);  // User_Leave_Master: both telegrams discarded
+  testutil::user_leave_master(c);  // both telegrams discarded
   EXPECT_TRUE(c.irq_active());
   EXPECT_EQ(c.read(0x0E), 0x03);  // nothing to accept any more
   EXPECT_EQ(c.peek_reg(RegId::Int_Req_Reg) & irq::New_Prm_Data, 0);

@@ -1,5 +1,6 @@
 // The lockstep check itself: it passes on the real RTL, catches every mutant and names the signal
 // the mutant changes, shrinks a failure to a short replayable trace, and rejects broken traces.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -7,7 +8,9 @@
 #include <map>
 
 #include "block_event.hpp"
+#include "dpc31/dp.hpp"
 #include "lockstep.hpp"
+#include "session.hpp"
 
 using namespace dpc31;
 using namespace dpc31::cosim;
@@ -112,16 +115,19 @@ TEST(Cosim, BrokenTracesAreRejectedWithFileAndLine) {
 // it was written.
 TEST(Cosim, EveryEventInputRoundTripsThroughATraceLine) {
   const std::string a =
-      "rst ev_dx rd 0010 ev_irq(0100) ev_leave_master ev_prm_fault ev_gc(08) ev_dout ev_failsafe "
-      "ev_din ev_diag_begin ev_diag_end(stat=1) ev_prm ev_cfg ev_ssa ev_dis(3)";
+      "rst ev_dx rd 0010 ev_irq(0100) ev_leave_master ev_wd_expired ev_prm_fault ev_gc(08) ev_dout "
+      "ev_failsafe "
+      "ev_din ev_diag_begin ev_diag_end(stat=1) ev_prm ev_cfg ev_ssa ev_dis(3) ev_mac_stop "
+      "ev_mac_start";
   const std::string b = "wr 0008<-02";
   Stimulus s;
   std::string e;
   ASSERT_TRUE(parse_trace("3 " + a + "\n4 " + b + "\nend 6\n", "all.trace", s, e)) << e;
   const Inputs& in = s[3];
-  EXPECT_TRUE(in.rst && in.ev_dx && in.bus_rd && in.ev_leave_master && in.ev_prm_fault &&
-              in.ev_gc && in.ev_dout && in.ev_failsafe && in.ev_din && in.ev_diag_begin &&
-              in.ev_diag_end && in.stat_diag && in.ev_prm && in.ev_cfg && in.ev_ssa && in.ev_dis);
+  EXPECT_TRUE(in.rst && in.ev_dx && in.bus_rd && in.ev_leave_master && in.ev_wd_expired &&
+              in.ev_prm_fault && in.ev_gc && in.ev_dout && in.ev_failsafe && in.ev_din &&
+              in.ev_diag_begin && in.ev_diag_end && in.stat_diag && in.ev_prm && in.ev_cfg &&
+              in.ev_ssa && in.ev_dis && in.ev_mac_stop && in.ev_mac_start);
   EXPECT_EQ(in.bus_addr, 0x0010);
   EXPECT_EQ(in.ev_irq, 0x0100);
   EXPECT_EQ(in.gc_cmd, 0x08);
@@ -140,6 +146,76 @@ TEST(Cosim, EveryBlockEventDrivesAnInput) {
     apply_block_event(in, BlockEvent{static_cast<BlockEvent::Kind>(k), 1, 2});
     EXPECT_FALSE(in.idle()) << "kind " << k;
   }
+}
+
+namespace {
+
+// A DPC31 firmware's side of the Instruction_Queue (DPC31 p.22): a ring of 4 entries at 1F00h.
+struct InstQueue {
+  Chip& c;
+  std::uint8_t wr = 0;
+  explicit InstQueue(Chip& chip) : c(chip) {
+    c.write(static_cast<std::uint32_t>(c.addr_of(RegId::InstQ_Base)), 0xF8);
+    c.write(static_cast<std::uint32_t>(c.addr_of(RegId::InstQ_Len)), 4);
+  }
+  // The entries, then one InstQ_Wr write past them: the MAC executes them in that write's cycle.
+  void request(std::initializer_list<std::uint8_t> codes) {
+    for (std::uint8_t code : codes) {
+      c.write(0x1F00u + wr * 2u, code);
+      c.write(0x1F00u + wr * 2u + 1, 0);
+      wr = static_cast<std::uint8_t>((wr + 1) % 4);
+    }
+    c.write(static_cast<std::uint32_t>(c.addr_of(RegId::InstQ_Wr)), wr);
+  }
+};
+
+}  // namespace
+
+// Issue 16: a firmware on the DPC31's own interface starts and stops the MAC with requests
+// (Table 5.1-3: MAC_Start "MAC enters Pas_Idle", MAC_Stop "MAC enters Offline"), a restart as
+// MAC_Stop and MAC_Start in one InstQ_Wr write. The RTL gets them as ev_mac_start / ev_mac_stop
+// and the lockstep stays clean (before, the RTL never started: a divergence in `started`).
+TEST(CosimSession, MacStartAndMacStopReachTheBlocks) {
+  Chip chip(ChipOptions{Profile::dpc31});
+  chip.set_log_sink(nullptr);
+  Session s;
+  s.options = {Profile::dpc31, BusMode::intel};
+  begin_recording(chip, s);
+  InstQueue q(chip);
+  q.request({request::MAC_Start});
+  chip.step(100'000);  // two User_Timer_Clock ticks
+  q.request({request::MAC_Stop});
+  chip.step(1000);
+  q.request({request::MAC_Start});
+  chip.step(1000);
+  q.request({request::MAC_Stop, request::MAC_Start});
+  chip.step(1000);
+  end_recording(chip, s);
+  EXPECT_EQ(s.unreplayable, "");
+  const auto& names = Outputs::names();
+  const auto started = std::find(names.begin(), names.end(), "started") - names.begin();
+  EXPECT_EQ(s.chip_final.v[static_cast<std::size_t>(started)], 1u);
+  const RunResult r = run_session(s);
+  std::string report;
+  for (const std::string& line : r.report) report += line + "\n";
+  EXPECT_LT(r.divergence, 0) << report;
+}
+
+// The inputs of one cycle act in one order (docs/golden-model.md): MAC_Start then MAC_Stop in
+// one InstQ_Wr write cannot be replayed, and the recording says so instead of diverging.
+TEST(CosimSession, RequestsInAnOrderTheInputsCannotCarryAreNamed) {
+  Chip chip(ChipOptions{Profile::dpc31});
+  chip.set_log_sink(nullptr);
+  Session s;
+  begin_recording(chip, s);
+  InstQueue q(chip);
+  q.request({request::MAC_Start, request::MAC_Stop});
+  const std::uint64_t cycle = chip.cycle();
+  end_recording(chip, s);
+  EXPECT_EQ(s.unreplayable,
+            fmt::format("cycle {}: requests of one InstQ_Wr write in an order the block events "
+                        "cannot replay (they act as User_Leave_Master, MAC_Stop, MAC_Start)",
+                        cycle));
 }
 
 // Issue 14 item 9: a stimulus trace of a few bytes that names 10^8 cycles holds what the file

@@ -39,8 +39,12 @@ struct Bench {
     chip.on_irq_change([this](std::uint64_t cycle, bool active) {
       if (active) activations.push_back(cycle);
     });
+    chip.on_bus_access([this](std::uint64_t, const BusAccess& a) {
+      if (in_init_) init_accesses.push_back(a);
+    });
     DirectBus bus(chip);
     host.init(bus, slave.address);
+    in_init_ = false;
     master.set_firmware([this](BusPort& b) { host.isr(b); });
   }
   std::optional<FirmwareHost::PortWrite> last_write(unsigned port) const {
@@ -58,6 +62,10 @@ struct Bench {
   FirmwareHost host;
   DpMaster master;
   std::vector<std::uint64_t> activations;  // X/INT going active: the ISR starts there
+  std::vector<BusAccess> init_accesses;    // the firmware's init (it starts the chip)
+
+ private:
+  bool in_init_ = true;
 };
 
 struct Gsd {

@@ -10,6 +10,7 @@
 #include "cnt2/cnt2.h"
 #include "do4/do4.h"
 #include "dp_master.hpp"
+#include "dpc31/dp.hpp"
 #include "dpc31/fdl_counters.hpp"
 #include "firmware_bench.hpp"
 
@@ -296,11 +297,13 @@ INSTANTIATE_TEST_SUITE_P(Firmware, GsdFile, ::testing::Values(&do4_firmware, &cn
 
 namespace {
 
-// DO4 on the DPC31 (docs/dpc31.md): its outputs fetched with User_New_Dout_Cmd (Table 5.2-8);
-// the DPS_User_Watchdog enabled through the Instruction_Queue when Data_Exchange begins and
-// retriggered after each DX_Out (p.31); a fail-safe Data_Exchange without outputs hands the C
-// buffer over through User_New_Dout_Cmd with U_Buffer_Cleared (p.33, seed 003), which DO4 takes
-// as an OSP event: its replacement value 9. (The start is still Start_SPC3: docs/dpc31.md.)
+// DO4 on the DPC31 (docs/dpc31.md): started by a MAC_Start request (Table 5.1-3: "MAC enters
+// Pas_Idle"), never by Mode_Reg1's Start_SPC3; its outputs fetched with User_New_Dout_Cmd (Table
+// 5.2-8); the DPS_User_Watchdog enabled through the Instruction_Queue when Data_Exchange begins
+// and retriggered after each DX_Out (p.31); a fail-safe Data_Exchange without outputs hands the
+// C buffer over through User_New_Dout_Cmd with U_Buffer_Cleared (p.33, seed 003): the user
+// gets the substitute values the firmware keeps in C (all 00h), which DO4 takes as an OSP event:
+// its replacement value 9.
 TEST(Do4Dpc31, FetchesThroughUserNewDoutAndWatchesItselfThroughRequests) {
   SlaveConfig s = gsd_slave(do4_firmware, 5);
   s.user_prm = {0x00, DO4_REPLACE, 0x09, 0x00};
@@ -313,12 +316,37 @@ TEST(Do4Dpc31, FetchesThroughUserNewDoutAndWatchesItselfThroughRequests) {
   b.chip.on_bus_access([&](std::uint64_t, const BusAccess& a) { accesses.push_back(a); });
   ASSERT_TRUE(b.master.startup());
   EXPECT_EQ(b.chip.dp_state(), DpState::Data_Exchange);
+  // The start: the entry MAC_Start 10h at the Instruction_Queue's first entry, then InstQ_Wr.
+  const auto instq = static_cast<std::uint16_t>(
+      b.chip.peek(static_cast<std::uint32_t>(find_reg(p, "InstQ_Base")->read_addr))
+      << p.segment_shift);
+  const std::vector<BusAccess>& init = b.init_accesses;
+  const auto mac_start = std::find_if(init.begin(), init.end(), [&](const BusAccess& a) {
+    return a.write && a.addr == instq && a.data == request::MAC_Start;
+  });
+  ASSERT_NE(mac_start, init.end());
+  EXPECT_TRUE(std::any_of(mac_start, init.end(),
+                          [&](const BusAccess& a) { return a.write && a.addr == instq_wr; }));
+  const auto mode1_s = static_cast<std::uint16_t>(find_reg(p, "Mode_Reg1_S")->write_addr);
+  EXPECT_FALSE(std::any_of(init.begin(), init.end(), [&](const BusAccess& a) {
+    return a.write && a.addr == mode1_s && (a.data & 0x2D) != 0;  // Start_SPC3 & co.
+  }));
   b.master.data_exchange({0x05, 0x01});
   b.master.idle(2000);
   EXPECT_EQ(b.last_write(DO4_PORT_OUTPUTS)->value, 0x5u);
   const Exchange failsafe = b.master.data_exchange({});
   ASSERT_TRUE(failsafe.answer);
   b.master.idle(2000);
+  // The user's U buffer is the C buffer of before, with the substitute values; User_New_Dout_Cmd
+  // says U_Buffer_Cleared (a peek: what the command would answer, nothing changed).
+  const std::uint8_t cmd = b.chip.peek(user_new_dout);
+  EXPECT_NE(cmd & 0x08, 0);  // U_Buffer_Cleared
+  static constexpr const char* kPtr[] = {"R_Dout_Buf_Ptr1", "R_Dout_Buf_Ptr2", "R_Dout_Buf_Ptr3"};
+  const std::uint32_t u_buf =
+      static_cast<std::uint32_t>(
+          b.chip.peek(static_cast<std::uint32_t>(find_reg(p, kPtr[(cmd & 3) - 1])->read_addr)))
+      << p.segment_shift;
+  for (std::uint32_t i = 0; i < s.out_len; ++i) EXPECT_EQ(b.chip.peek(u_buf + i), 0x00) << i;
   EXPECT_EQ(b.last_write(DO4_PORT_OUTPUTS)->value, 0x9u);
   EXPECT_EQ(do4_get_state()->modul_ok, 0);
   const auto count = [&](auto pred) {

@@ -8,6 +8,9 @@
 using namespace dpc31;
 using testutil::bus_read16;
 using testutil::bus_write16;
+using testutil::user_go_offline;
+using testutil::user_leave_master;
+using testutil::user_start;
 
 namespace {
 
@@ -19,7 +22,7 @@ TEST_P(Mode, StartAndGoOffline) {
   Chip c = make();
   const std::uint16_t release = GetParam().profile == Profile::vpc3plus ? 0xC000 : 0x0000;
   EXPECT_EQ(bus_read16(c, 0x04, 16), release);  // Offline, Wait_Prm, Baud_Search, 12M code 0
-  c.write(0x08, 0x01);                          // Start_SPC3
+  user_start(c);                                // Start_SPC3 (dpc31: MAC_Start)
   EXPECT_TRUE(c.started());
   EXPECT_EQ(c.peek_reg(RegId::Status_Reg), release | 0x0001);  // Passive_Idle
   // Power-on clear of the outputs raised DX_Out at the cycle Start completed.
@@ -27,20 +30,45 @@ TEST_P(Mode, StartAndGoOffline) {
   harness::asic_prm_received(c);
   EXPECT_EQ(c.read(0x0E), 0x00);  // Prm OK: Wait_Cfg
   EXPECT_EQ(c.peek_reg(RegId::Status_Reg), release | 0x0011);
-  c.write(0x08, 0x04);  // Go_Offline: the DP state machine back to its reset state
+  user_go_offline(c);  // Go_Offline (MAC_Stop): the DP state machine back to its reset state
   EXPECT_FALSE(c.started());
   EXPECT_EQ(c.peek_reg(RegId::Status_Reg), release);
-  EXPECT_EQ(c.peek_reg(RegId::Int_Req_Reg), irq::DX_Out | irq::MAC_Reset);
-  EXPECT_EQ(c.peek_reg(RegId::Mode_Reg1), 0x04);  // Go_Offline stays, Start_SPC3 cleared
-  c.write(0x08, 0x01);                            // Start again clears Go_Offline
-  EXPECT_EQ(c.peek_reg(RegId::Mode_Reg1), 0x01);
+  EXPECT_EQ(c.peek_reg(RegId::Int_Req_Reg) & (irq::DX_Out | irq::MAC_Reset),
+            irq::DX_Out | irq::MAC_Reset);
+  // Go_Offline stays, Start_SPC3 cleared; the DPC31's Mode_Reg1 has neither (requests).
+  const bool dpc31 = GetParam().profile == Profile::dpc31;
+  EXPECT_EQ(c.peek_reg(RegId::Mode_Reg1), dpc31 ? 0x00 : 0x04);
+  user_start(c);  // Start again clears Go_Offline
+  EXPECT_EQ(c.peek_reg(RegId::Mode_Reg1), dpc31 ? 0x00 : 0x01);
   EXPECT_TRUE(c.started());
+}
+
+// The DPC31 starts, stops and leaves the master through its Instruction_Queue (DPC31 p.22,
+// Table 5.1-3; docs/dpc31.md): the SPC3's Start_SPC3, Go_Offline, User_Leave_Master and
+// Res_User_WD bits of Mode_Reg1_S do nothing there, and a written 1 is logged at debug level.
+TEST(ModeDpc31, ModeReg1StartStopBitsAreIgnored) {
+  Chip c({Profile::dpc31});
+  testutil::LogCapture log;
+  log.attach(c);
+  c.write(0x08, 0x01);  // Start_SPC3
+  EXPECT_FALSE(c.started());
+  EXPECT_EQ(c.peek_reg(RegId::Mode_Reg1), 0x00);
+  EXPECT_EQ(c.peek_reg(RegId::Int_Req_Reg), 0x0000);
+  ASSERT_EQ(log.count_containing("Mode_Reg1_S: Start_SPC3 not changed by this register"), 1u);
+  EXPECT_EQ(log.records.back().level, LogLevel::debug);
+  user_start(c);
+  c.write(0x08, 0x2C);  // Go_Offline, User_Leave_Master, Res_User_WD
+  EXPECT_TRUE(c.started());
+  EXPECT_EQ(c.peek_reg(RegId::Mode_Reg1), 0x00);
+  EXPECT_EQ(c.peek_reg(RegId::Int_Req_Reg) & irq::MAC_Reset, 0);
+  c.write(0x08, 0x12);  // EOI and En_Change_Cfg_Buffer still act
+  EXPECT_EQ(c.peek_reg(RegId::Mode_Reg1), 0x10);
 }
 
 TEST_P(Mode, ModeReg0OnlyWhileOffline) {
   Chip c = make();
   bus_write16(c, 0x06, 16, 0x0100);
-  c.write(0x08, 0x01);
+  user_start(c);
   log_.clear();
   bus_write16(c, 0x06, 16, 0x0300);
   EXPECT_EQ(c.peek_reg(RegId::Mode_Reg0), 0x0100);
@@ -51,24 +79,27 @@ TEST_P(Mode, UserTimerClockPeriods) {
   for (std::uint16_t base : {std::uint16_t{0}, std::uint16_t{0x0400}}) {
     Chip c = make();
     const std::uint64_t period = base != 0 ? 480000 : 48000;
-    bus_write16(c, 0x06, 16, base);  // User_Time_Base; cycle 8
-    c.write(0x08, 0x01);             // Start at 12
+    bus_write16(c, 0x06, 16, base);         // User_Time_Base; cycle 8
+    const std::uint64_t s = user_start(c);  // Start_SPC3 at 12 (dpc31: MAC_Start, later)
     c.step(period - 1);
     EXPECT_EQ(c.peek_reg(RegId::Int_Req_Reg) & irq::User_Timer_Clock, 0);
     c.step(1);  // 12 + period
     EXPECT_NE(c.peek_reg(RegId::Int_Req_Reg) & irq::User_Timer_Clock, 0);
     bus_write16(c, 0x02, 16, irq::User_Timer_Clock);
-    c.step(period - 8 - 1);  // one cycle before the second tick at 12 + 2 * period
+    c.step(period - 8 - 1);  // one cycle before the second tick at s + 2 * period
     EXPECT_EQ(c.peek_reg(RegId::Int_Req_Reg) & irq::User_Timer_Clock, 0);
     c.step(1);
     EXPECT_NE(c.peek_reg(RegId::Int_Req_Reg) & irq::User_Timer_Clock, 0);
-    EXPECT_EQ(c.cycle(), 12 + 2 * period);
+    EXPECT_EQ(c.cycle(), s + 2 * period);
+    if (GetParam().profile != Profile::dpc31) {
+      EXPECT_EQ(s, 12u);
+    }
   }
 }
 
 TEST_P(Mode, UserLeaveMasterFromDataExchange) {
   Chip c = make();
-  c.write(0x08, 0x01);
+  user_start(c);
   harness::asic_prm_received(c);
   EXPECT_EQ(c.read(0x0E), 0x00);  // User_Prm_Data_Okay: finished
   EXPECT_EQ(c.dp_state(), DpState::Wait_Cfg);
@@ -77,7 +108,7 @@ TEST_P(Mode, UserLeaveMasterFromDataExchange) {
   EXPECT_EQ(c.dp_state(), DpState::Data_Exchange);
   EXPECT_EQ(c.peek_reg(RegId::Status_Reg) & 0x30, 0x20);
   bus_write16(c, 0x02, 16, 0xFFFF);
-  c.write(0x08, 0x08);  // User_Leave_Master
+  user_leave_master(c);
   EXPECT_EQ(c.dp_state(), DpState::Wait_Prm);
   EXPECT_EQ(c.peek_reg(RegId::Int_Req_Reg), irq::Go_Leave_Data_Exchange | irq::DX_Out);
   EXPECT_EQ(c.peek_reg(RegId::Mode_Reg1) & 0x08, 0);  // the chip clears the bit
@@ -94,7 +125,7 @@ TEST_P(Mode, RamAccessViolation) {
     return;
   }
   c.write(p.violation_from - 0x100, 0x11);  // a plain RAM byte
-  c.write(0x08, 0x01);                      // started
+  user_start(c);
   const std::uint32_t wraps_to = p.violation_from + 0x100 - p.violation_subtract;  // plain RAM
   c.write(wraps_to, 0x77);
   log_.clear();

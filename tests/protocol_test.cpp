@@ -689,9 +689,7 @@ TEST_P(Malformed, EachClassIsCountedAndNotAnswered) {
   EXPECT_TRUE(b.master.data_exchange({1, 2, 3, 4}).answer);
   EXPECT_EQ(b.chip.dp_state(), DpState::Data_Exchange);
   // Offline: the receiver frames the request but nothing answers.
-  b.chip.write(
-      static_cast<std::uint32_t>(find_reg(b.chip.profile(), RegId::Mode_Reg1_S)->write_addr),
-      0x04);  // Go_Offline
+  testutil::user_go_offline(b.chip);  // Go_Offline (dpc31: MAC_Stop)
   ASSERT_FALSE(b.chip.started());
   expect_silent(b.master.fdl_status(), n.offline, "offline");
 }

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "dpc31/chip.hpp"
+#include "dpc31/dp.hpp"
 #include "spec.hpp"
 
 namespace testutil {
@@ -75,6 +76,43 @@ inline void bus_write16(dpc31::Chip& c, int addr, int width, std::uint16_t v) {
     c.write(static_cast<std::uint32_t>(addr + off),
             static_cast<std::uint8_t>(v >> (8 * spec::byte_index_at(c.bus_mode(), off))));
   }
+}
+
+// The user's start, stop and Leave_Master as the profile takes them: Mode_Reg1_S bits 0, 2, 3 on
+// the SPC3 and the VPC3+, a request through the Instruction_Queue on the DPC31 (p.22, Table
+// 5.1-3: MAC_Start, MAC_Stop, User_Leave_Master), whose Mode_Reg1 has no such bits. The queue is
+// the one the chip has (a Responder sets one up); without one, a ring of 4 entries at 1F00h is
+// set up first. Returns the cycle the command acted: the completion of its last write.
+inline std::uint64_t user_command(dpc31::Chip& c, std::uint8_t mode_reg1_bit,
+                                  std::uint8_t request) {
+  using dpc31::RegId;
+  auto cell = [&](RegId id) { return static_cast<std::uint32_t>(c.addr_of(id)); };
+  if (c.profile().id != dpc31::Profile::dpc31) {
+    c.write(cell(RegId::Mode_Reg1_S), mode_reg1_bit);
+    return c.cycle();
+  }
+  if (c.peek(cell(RegId::InstQ_Len)) == 0) {
+    c.write(cell(RegId::InstQ_Base), 0xF8);
+    c.write(cell(RegId::InstQ_Len), 4);
+  }
+  const std::uint8_t len = c.peek(cell(RegId::InstQ_Len));
+  const std::uint8_t wr = c.peek(cell(RegId::InstQ_Wr));
+  const std::uint32_t entry =
+      (static_cast<std::uint32_t>(c.peek(cell(RegId::InstQ_Base))) << c.profile().segment_shift) +
+      wr * dpc31::request::kEntryBytes;
+  c.write(entry, request);
+  c.write(entry + 1, 0x00);
+  c.write(cell(RegId::InstQ_Wr), static_cast<std::uint8_t>((wr + 1) % len));
+  return c.cycle();
+}
+inline std::uint64_t user_start(dpc31::Chip& c) {
+  return user_command(c, 0x01, dpc31::request::MAC_Start);  // Start_SPC3
+}
+inline std::uint64_t user_go_offline(dpc31::Chip& c) {
+  return user_command(c, 0x04, dpc31::request::MAC_Stop);  // Go_Offline
+}
+inline std::uint64_t user_leave_master(dpc31::Chip& c) {
+  return user_command(c, 0x08, dpc31::request::User_Leave_Master);
 }
 
 }  // namespace testutil

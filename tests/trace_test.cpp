@@ -220,6 +220,10 @@ TEST_P(TraceBadInput, OneLineWithFileAndLine) {
 }
 
 const std::string kHead = "dpc31-trace 1\nprofile dpc31\nbus intel\nclock 48000000\nbaud 1500000\n";
+// The DPC31 starts by request (DPC31 p.22, Table 5.1-3; docs/dpc31.md): InstQ_Base F8h (1F00h),
+// InstQ_Len 4, the entry MAC_Start 10h (its parameter: RAM's 00h), then InstQ_Wr 1, whose
+// completion at 24 is the start.
+const std::string kMacStart = "wr 12 086A F8\nwr 16 086B 04\nwr 20 1F00 10\nwr 24 086C 01\n";
 
 INSTANTIATE_TEST_SUITE_P(
     TraceFile, TraceBadInput,
@@ -255,8 +259,8 @@ TEST(TraceFile, CommentsAndBlankLinesAnywhere) {
 
 TEST(TraceFile, AnUnexpectedEdgeBeforeTheEnd) {
   std::string msg;
-  EXPECT_EQ(replay_text(kHead + "wr 4 0004 E0\nwr 8 0005 C0\nwr 12 0008 01\nend 100\n", msg), 1);
-  EXPECT_EQ(msg, "t.trace:9: expected no more X/INT edges, got xint 1 at cycle 12");
+  EXPECT_EQ(replay_text(kHead + "wr 4 0004 E0\nwr 8 0005 C0\n" + kMacStart + "end 100\n", msg), 1);
+  EXPECT_EQ(msg, "t.trace:12: expected no more X/INT edges, got xint 1 at cycle 24");
 }
 
 // A run on a VPC3+S records `variant s` after the profile; the replay makes the same chip (its
@@ -281,15 +285,15 @@ TEST(TraceFile, TheVariantIsRecordedAndReplayed) {
 }
 
 TEST(TraceFile, ReplayChecksAHandWrittenTrace) {
-  // Start_SPC3 on the DPC31 at 12 (docs/timing.md): DX_Out from the power-on clear; unmasked,
+  // MAC_Start on the DPC31 at 24 (docs/timing.md): DX_Out from the power-on clear; unmasked,
   // X/INT goes active in the same cycle.
   const std::string text = kHead +
                            "wr 4 0004 C0\n"  // Int_Mask_Reg bits 7..0: all unmasked (7..6 reserved)
                            "wr 8 0005 C0\n"  // bits 15..8
-                           "wr 12 0008 01\n"  // Mode_Reg1_S: Start_SPC3
-                           "xint 12 1\n"
-                           "rd 16 0003 = 20\n"  // Int_Reg bits 15..8: DX_Out
-                           "state 16 dp=Wait_Prm wd=Baud_Search status=0001 irr=2000 "
+                           + kMacStart +
+                           "xint 24 1\n"
+                           "rd 28 0003 = 20\n"  // Int_Reg bits 15..8: DX_Out
+                           "state 28 dp=Wait_Prm wd=Baud_Search status=0001 irr=2000 "
                            "imr=0000 station=0 fdl=-\n"
                            "end 1000\n";
   std::string msg;
@@ -381,11 +385,11 @@ TEST(TraceCli, ExitCodes) {
   EXPECT_EQ(r.out, bad + ":6: truncated trace: no 'end' line\n");
 
   const std::string wrong = tmp("wrong.trace");
-  std::ofstream(wrong) << kHead
-                       << "wr 4 0004 E0\nwr 8 0005 C0\nwr 12 0008 01\nxint 13 1\nend 100\n";
+  std::ofstream(wrong) << kHead << "wr 4 0004 E0\nwr 8 0005 C0\n"
+                       << kMacStart << "xint 25 1\nend 100\n";
   r = cli("replay " + wrong);
   EXPECT_EQ(r.rc, 1);
-  EXPECT_EQ(r.out, wrong + ":9: expected xint 1 at cycle 13, got xint 1 at cycle 12\n");
+  EXPECT_EQ(r.out, wrong + ":12: expected xint 1 at cycle 25, got xint 1 at cycle 24\n");
 
   r = cli("replay " + tmp("missing.trace"));
   EXPECT_EQ(r.rc, 2);

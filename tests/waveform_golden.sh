@@ -5,7 +5,8 @@
 # logic-analyser tools, and a window at 100 us of some signals. The two do4_osp_replace files were
 # written again after issue 16 changed that run itself (the DPC31 firmware's requests and its
 # Indication interrupt: other bus accesses); the writer was the same as for the window file,
-# which stayed byte for byte as the old writer's.
+# which stayed byte for byte as the old writer's. All three were written again when the DPC31
+# started by MAC_Start (issue 16 item 2: the same run 28 cycles later, the writer unchanged).
 # Usage: waveform_golden.sh path/to/dpc31 source-dir
 set -eu
 dpc31=$1

@@ -56,7 +56,7 @@ static const regmap kMaps[3] = {
 /* The DPC31 takes its requests through the Instruction_Queue and answers through the
  * Indication_Queue (DPC31 p.22, Table 5.1-3, p.31; docs/dpc31.md): 2-byte entries, code then
  * parameter, in rings of DPS_QUEUE_LEN entries (one always stays empty). */
-enum { DPS_User_Wd = 0x20u };
+enum { MAC_Start = 0x10u, DPS_User_Wd = 0x20u };
 enum { Wd_Reset = 0x00u, Wd_Enable = 0x01u, Wd_Disable = 0x02u, Wd_Expired = 0x03u };
 enum { DPS_QUEUE_LEN = 4u };
 
@@ -232,12 +232,12 @@ void dps_init(const dps_board* board, const dps_module* module) {
     Vpc3Write(R->mode1_s, Start_SPC3 | Res_User_WD);
     return;
   }
-  /* The DPC31's user watchdog runs while in Data_Exchange. It is started with Start_SPC3 still,
-   * not with a MAC_Start request: the golden model's blocks know the start only through
-   * Mode_Reg1 so far (docs/dpc31.md, "Not yet"). */
+  /* The DPC31 has no Start_SPC3: the MAC starts with a MAC_Start request (Table 5.1-3). Its
+   * user watchdog runs while in Data_Exchange (DPS_User_Wd requests). */
   g_instq = buffer(DPC31_InstQ_Base);
   g_indq = buffer(DPC31_IndQ_Base);
-  Vpc3Write(R->mode1_s, Start_SPC3);
+  queue_request(MAC_Start, 0x00);
+  send_requests();
 }
 
 void dps_update_inputs(void) {

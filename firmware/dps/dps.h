@@ -61,7 +61,7 @@ typedef struct dps_module {
   void (*tick)(void);
 } dps_module;
 
-/* main(): configure the chip for this module and start it (Start_SPC3). */
+/* main(): configure the chip for this module and start it (Start_SPC3; DPC31: MAC_Start). */
 void dps_init(const dps_board* board, const dps_module* module);
 /* The X/INT interrupt service routine. */
 void dps_isr(void);

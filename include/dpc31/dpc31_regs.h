@@ -1383,17 +1383,17 @@ enum dpc31_profile {
 #define DPC31_Mode_Reg1_S                               0x0008u /* write */
 #define DPC31_Mode_Reg1_S_RESET                         0x00u
 #define DPC31_Mode_Reg1_S_Start_SPC3_Pos                0u
-#define DPC31_Mode_Reg1_S_Start_SPC3_Msk                0x01u /* 0 W1S: leave Offline: Passive_Idle, timers start, Go_Offline cleared */
+#define DPC31_Mode_Reg1_S_Start_SPC3_Msk                0x01u /* 0 IGN: leave Offline: Passive_Idle, timers start, Go_Offline cleared */
 #define DPC31_Mode_Reg1_S_EOI_Pos                       1u
 #define DPC31_Mode_Reg1_S_EOI_Msk                       0x02u /* 1 W1S pulse: end of interrupt: X/INT inactive for the inactive time; the chip clears the bit */
 #define DPC31_Mode_Reg1_S_Go_Offline_Pos                2u
-#define DPC31_Mode_Reg1_S_Go_Offline_Msk                0x04u /* 2 W1S: go Offline after the current request; MAC_Reset */
+#define DPC31_Mode_Reg1_S_Go_Offline_Msk                0x04u /* 2 IGN: go Offline after the current request; MAC_Reset */
 #define DPC31_Mode_Reg1_S_User_Leave_Master_Pos         3u
-#define DPC31_Mode_Reg1_S_User_Leave_Master_Msk         0x08u /* 3 W1S pulse: DP state machine to Wait_Prm; the chip clears the bit */
+#define DPC31_Mode_Reg1_S_User_Leave_Master_Msk         0x08u /* 3 IGN: DP state machine to Wait_Prm; the chip clears the bit */
 #define DPC31_Mode_Reg1_S_En_Change_Cfg_Buffer_Pos      4u
 #define DPC31_Mode_Reg1_S_En_Change_Cfg_Buffer_Msk      0x10u /* 4 W1S: User_Cfg_Data_Okay also exchanges Cfg and Read_Cfg buffers */
 #define DPC31_Mode_Reg1_S_Res_User_WD_Pos               5u
-#define DPC31_Mode_Reg1_S_Res_User_WD_Msk               0x20u /* 5 W1S: reload the user watchdog; the chip clears it at the next Data_Exchange */
+#define DPC31_Mode_Reg1_S_Res_User_WD_Msk               0x20u /* 5 IGN: reload the user watchdog; the chip clears it at the next Data_Exchange */
 
 /* New_Din_Buffer_Cmd: derived, 8 bit -- Command read: U -> N, the free buffer becomes the new U */
 #define DPC31_New_Din_Buffer_Cmd                        0x0009u /* read */
@@ -1408,17 +1408,17 @@ enum dpc31_profile {
 #define DPC31_Mode_Reg1_R                               0x0009u /* write */
 #define DPC31_Mode_Reg1_R_RESET                         0x00u
 #define DPC31_Mode_Reg1_R_Start_SPC3_Pos                0u
-#define DPC31_Mode_Reg1_R_Start_SPC3_Msk                0x01u /* 0 W1C: leave Offline: Passive_Idle, timers start, Go_Offline cleared */
+#define DPC31_Mode_Reg1_R_Start_SPC3_Msk                0x01u /* 0 IGN: leave Offline: Passive_Idle, timers start, Go_Offline cleared */
 #define DPC31_Mode_Reg1_R_EOI_Pos                       1u
 #define DPC31_Mode_Reg1_R_EOI_Msk                       0x02u /* 1 W1C pulse: end of interrupt: X/INT inactive for the inactive time; the chip clears the bit */
 #define DPC31_Mode_Reg1_R_Go_Offline_Pos                2u
-#define DPC31_Mode_Reg1_R_Go_Offline_Msk                0x04u /* 2 W1C: go Offline after the current request; MAC_Reset */
+#define DPC31_Mode_Reg1_R_Go_Offline_Msk                0x04u /* 2 IGN: go Offline after the current request; MAC_Reset */
 #define DPC31_Mode_Reg1_R_User_Leave_Master_Pos         3u
-#define DPC31_Mode_Reg1_R_User_Leave_Master_Msk         0x08u /* 3 W1C pulse: DP state machine to Wait_Prm; the chip clears the bit */
+#define DPC31_Mode_Reg1_R_User_Leave_Master_Msk         0x08u /* 3 IGN: DP state machine to Wait_Prm; the chip clears the bit */
 #define DPC31_Mode_Reg1_R_En_Change_Cfg_Buffer_Pos      4u
 #define DPC31_Mode_Reg1_R_En_Change_Cfg_Buffer_Msk      0x10u /* 4 W1C: User_Cfg_Data_Okay also exchanges Cfg and Read_Cfg buffers */
 #define DPC31_Mode_Reg1_R_Res_User_WD_Pos               5u
-#define DPC31_Mode_Reg1_R_Res_User_WD_Msk               0x20u /* 5 W1C: reload the user watchdog; the chip clears it at the next Data_Exchange */
+#define DPC31_Mode_Reg1_R_Res_User_WD_Msk               0x20u /* 5 IGN: reload the user watchdog; the chip clears it at the next Data_Exchange */
 
 /* Dout_Buffer_SM: derived, 8 bit -- Dout buffer state machine with the clear-buffer flag N_Cl */
 #define DPC31_Dout_Buffer_SM                            0x000Au /* read */
@@ -1535,18 +1535,10 @@ enum dpc31_profile {
 /* Mode_Reg1: latch, 8 bit -- Mode register 1 */
 #define DPC31_Mode_Reg1                                 0x0015u /* read */
 #define DPC31_Mode_Reg1_RESET                           0x00u
-#define DPC31_Mode_Reg1_Start_SPC3_Pos                  0u
-#define DPC31_Mode_Reg1_Start_SPC3_Msk                  0x01u /* 0 RO: leave Offline: Passive_Idle, timers start, Go_Offline cleared */
 #define DPC31_Mode_Reg1_EOI_Pos                         1u
 #define DPC31_Mode_Reg1_EOI_Msk                         0x02u /* 1 RO pulse: end of interrupt: X/INT inactive for the inactive time; the chip clears the bit */
-#define DPC31_Mode_Reg1_Go_Offline_Pos                  2u
-#define DPC31_Mode_Reg1_Go_Offline_Msk                  0x04u /* 2 RO: go Offline after the current request; MAC_Reset */
-#define DPC31_Mode_Reg1_User_Leave_Master_Pos           3u
-#define DPC31_Mode_Reg1_User_Leave_Master_Msk           0x08u /* 3 RO pulse: DP state machine to Wait_Prm; the chip clears the bit */
 #define DPC31_Mode_Reg1_En_Change_Cfg_Buffer_Pos        4u
 #define DPC31_Mode_Reg1_En_Change_Cfg_Buffer_Msk        0x10u /* 4 RO: User_Cfg_Data_Okay also exchanges Cfg and Read_Cfg buffers */
-#define DPC31_Mode_Reg1_Res_User_WD_Pos                 5u
-#define DPC31_Mode_Reg1_Res_User_WD_Msk                 0x20u /* 5 RO: reload the user watchdog; the chip clears it at the next Data_Exchange */
 
 /* Reserved_15h_W: reserved, 8 bit -- reserved write side */
 #define DPC31_Reserved_15h_W                            0x0015u /* write */

@@ -28,6 +28,10 @@ class CppDut final : public Dut {
   explicit CppDut(const DutOptions& o)
       : core_(ChipOptions{o.profile, o.bus, 0, Engine::event, o.variant}) {
     core_.signals.sink = nullptr;
+    // The request interface (DPC31 Instruction_Queue) is not one of the blocks: what its requests
+    // do to them comes in as events (ev_mac_stop, ev_mac_start, ev_leave_master, ev_irq), so a
+    // replayed InstQ_Wr write must not execute the queue a second time.
+    core_.hooks[RegisterFile::idx(RegId::InstQ_Wr)].post_write = nullptr;
     core_.reset();
   }
 
@@ -45,6 +49,10 @@ class CppDut final : public Dut {
           static_cast<std::uint16_t>(~fields::Mode_Reg1::Res_User_WD);
     if (in.ev_irq != 0) core_.irq.raise(in.ev_irq);
     if (in.ev_leave_master) dp.leave_master();
+    if (in.ev_wd_expired) {
+      core_.irq.raise(irq::WD_DP_Control_Timeout);
+      dp.dp_control_expired();
+    }
     if (in.ev_prm_fault) dp.prm_fault();
     if (in.ev_gc) dp.apply_global_control(in.gc_cmd);
     if (in.ev_dout) buffers.outputs_received(BlockAccess::state(dp).sync_mode);
@@ -61,6 +69,8 @@ class CppDut final : public Dut {
     if (in.ev_prm) dp.prm_accepted();
     if (in.ev_cfg) dp.cfg_accepted();
     if (in.ev_ssa) dp.ssa_accepted();
+    if (in.ev_mac_stop) core_.mode.go_offline();
+    if (in.ev_mac_start) core_.mode.start();
     if (in.bus_rd) rdata_ = core_.read_now(in.bus_addr);
     if (in.bus_wr) core_.write_now(in.bus_addr, in.bus_wdata);
     core_.irq.update_line();

@@ -32,6 +32,7 @@ struct Inputs {
   std::uint8_t bus_wdata = 0;
   std::uint16_t ev_irq = 0;
   bool ev_leave_master = false;
+  bool ev_wd_expired = false;
   bool ev_prm_fault = false;
   bool ev_gc = false;
   std::uint8_t gc_cmd = 0;
@@ -46,6 +47,8 @@ struct Inputs {
   bool ev_ssa = false;
   bool ev_dis = false;
   std::uint8_t dis_bits = 0;
+  bool ev_mac_stop = false;
+  bool ev_mac_start = false;
 
   [[nodiscard]] bool idle() const;
   [[nodiscard]] std::string describe() const;  // "wr 0008<-02 ev_gc(08)"; empty when idle

@@ -228,7 +228,8 @@ void random_access(Gen& g, Inputs& in) {
 void random_event(Gen& g, Inputs& in) {
   static constexpr std::uint8_t kGc[] = {0x20, 0x10, 0x08, 0x04, 0x02, 0x22, 0x30,
                                          0x0C, 0x00, 0x01, 0x40, 0x80, 0x28};
-  switch (g.pick(16)) {
+  // The dpc31's requests MAC_Stop and MAC_Start come in as two more events.
+  switch (g.pick(g.p.id == Profile::dpc31 ? 19 : 17)) {
     case 0:
       in.ev_irq = static_cast<std::uint16_t>(1u << g.pick(16));
       break;
@@ -272,6 +273,15 @@ void random_event(Gen& g, Inputs& in) {
     case 13:
       in.ev_dis = true;
       in.dis_bits = static_cast<std::uint8_t>(g.pick(4));
+      break;
+    case 16:
+      in.ev_wd_expired = true;
+      break;
+    case 17:
+      in.ev_mac_stop = true;
+      break;
+    case 18:
+      in.ev_mac_start = true;
       break;
     default:
       in.ev_ssa = true;

@@ -20,6 +20,7 @@ dpc31_rtl_inputs rtl_inputs(const Inputs& in) {
   r.bus_wdata = in.bus_wdata;
   r.ev_irq = in.ev_irq;
   r.ev_leave_master = in.ev_leave_master;
+  r.ev_wd_expired = in.ev_wd_expired;
   r.ev_prm_fault = in.ev_prm_fault;
   r.ev_gc = in.ev_gc;
   r.gc_cmd = in.gc_cmd;
@@ -34,6 +35,8 @@ dpc31_rtl_inputs rtl_inputs(const Inputs& in) {
   r.ev_ssa = in.ev_ssa;
   r.ev_dis = in.ev_dis;
   r.dis_bits = in.dis_bits;
+  r.ev_mac_stop = in.ev_mac_stop;
+  r.ev_mac_start = in.ev_mac_start;
   return r;
 }
 

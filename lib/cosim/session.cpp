@@ -2,13 +2,60 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
 #include "cpp_dut.hpp"
 #include "harness.hpp"
 #include "scenario.hpp"
 
 namespace dpc31::cosim {
 
-namespace {}  // namespace
+namespace {
+
+// The inputs of one cycle act in a fixed order (docs/golden-model.md): ev_leave_master and
+// ev_wd_expired among the protocol events, then ev_mac_stop, then ev_mac_start. The rank of each of
+// them, -1 for the events whose order within a cycle does not change the result.
+int request_rank(BlockEvent::Kind k) {
+  switch (k) {
+    case BlockEvent::Kind::leave_master:
+    case BlockEvent::Kind::wd_expired:  // both end in leave_master: their order does not matter
+      return 0;
+    case BlockEvent::Kind::mac_stop:
+      return 1;
+    case BlockEvent::Kind::mac_start:
+      return 2;
+    default:
+      return -1;
+  }
+}
+
+}  // namespace
+
+void begin_recording(Chip& chip, Session& out) {
+  harness::on_block_event(
+      chip, [&out, rank = -1](std::uint64_t cycle, const BlockEvent& e) mutable {
+        const std::uint64_t index = cycle - 1;  // the C++ Dut reaches cycle i + 1 in step i
+        if (out.events.empty() || out.events.back().first != index) {
+          out.events.emplace_back(index, Inputs{});
+          rank = -1;
+        }
+        const int r = request_rank(e.kind);
+        if (r >= 0 && r < rank && out.unreplayable.empty()) {
+          out.unreplayable = fmt::format(
+              "cycle {}: requests of one InstQ_Wr write in an order the block events cannot replay "
+              "(they act as User_Leave_Master, MAC_Stop, MAC_Start)",
+              cycle);
+        }
+        rank = std::max(rank, r);
+        apply_block_event(out.events.back().second, e);
+      });
+}
+
+void end_recording(Chip& chip, Session& out) {
+  out.cycles = chip.cycle();
+  out.chip_final = block_outputs(harness::core(chip), 0);
+  harness::on_block_event(chip, nullptr);
+}
 
 bool record_session(const std::string& scenario_path, Session& out, std::string& error) {
   Scenario sc;
@@ -20,21 +67,14 @@ bool record_session(const std::string& scenario_path, Session& out, std::string&
   out = Session{};
   out.options = {sc.chip.profile, sc.chip.bus, sc.chip.variant};
   ScenarioHooks hooks;
-  hooks.at_start = [&out](Chip& chip) {
-    harness::on_block_event(chip, [&out](std::uint64_t cycle, const BlockEvent& e) {
-      const std::uint64_t index = cycle - 1;  // the C++ Dut reaches cycle i + 1 in step i
-      if (out.events.empty() || out.events.back().first != index)
-        out.events.emplace_back(index, Inputs{});
-      apply_block_event(out.events.back().second, e);
-    });
-  };
-  hooks.at_end = [&out](Chip& chip) {
-    out.cycles = chip.cycle();
-    out.chip_final = block_outputs(harness::core(chip), 0);
-    harness::on_block_event(chip, nullptr);
-  };
+  hooks.at_start = [&out](Chip& chip) { begin_recording(chip, out); };
+  hooks.at_end = [&out](Chip& chip) { end_recording(chip, out); };
   const ScenarioOutcome o = run_scenario(sc, nullptr, nullptr, hooks);
   out.scenario_passed = o.ok();
+  if (!out.unreplayable.empty()) {
+    error = scenario_path + ": " + out.unreplayable;
+    return false;
+  }
   return true;
 }
 

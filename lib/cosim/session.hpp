@@ -18,7 +18,15 @@ struct Session {
   std::uint64_t cycles = 0;                              // the session's length
   Outputs chip_final;                                    // the live chip's blocks at the end
   bool scenario_passed = false;
+  // The first cycle whose block events came in an order its inputs cannot carry (requests of one
+  // InstQ_Wr write other than in the order User_Leave_Master, MAC_Stop, MAC_Start), else empty.
+  std::string unreplayable;
 };
+
+// Records the chip's block events and bus accesses into `out` from its current cycle on, until
+// end_recording, which also takes the chip's blocks as `out.chip_final`.
+void begin_recording(Chip& chip, Session& out);
+void end_recording(Chip& chip, Session& out);
 
 // Loads and plays the scenario. False (with a one-line error) if it does not load.
 bool record_session(const std::string& scenario_path, Session& out, std::string& error);

@@ -37,12 +37,13 @@ struct EventInput {
 };
 
 // In the order a trace line names them (Inputs::describe).
-constexpr std::array<EventInput, 16> kEventInputs = {{
+constexpr std::array<EventInput, 19> kEventInputs = {{
     {"ev_dx", K::dx, &Inputs::ev_dx, Arg::none},
     {"rd", K::read, &Inputs::bus_rd, Arg::bus_read},
     {"wr", K::write, &Inputs::bus_wr, Arg::bus_write},
     {"ev_irq", K::irq, nullptr, Arg::irq_mask},
     {"ev_leave_master", K::leave_master, &Inputs::ev_leave_master, Arg::none},
+    {"ev_wd_expired", K::wd_expired, &Inputs::ev_wd_expired, Arg::none},
     {"ev_prm_fault", K::prm_fault, &Inputs::ev_prm_fault, Arg::none},
     {"ev_gc", K::gc, &Inputs::ev_gc, Arg::gc_cmd},
     {"ev_dout", K::dout, &Inputs::ev_dout, Arg::none},
@@ -54,6 +55,8 @@ constexpr std::array<EventInput, 16> kEventInputs = {{
     {"ev_cfg", K::cfg, &Inputs::ev_cfg, Arg::none},
     {"ev_ssa", K::ssa, &Inputs::ev_ssa, Arg::none},
     {"ev_dis", K::dis, &Inputs::ev_dis, Arg::dis_bits},
+    {"ev_mac_stop", K::mac_stop, &Inputs::ev_mac_stop, Arg::none},
+    {"ev_mac_start", K::mac_start, &Inputs::ev_mac_start, Arg::none},
 }};
 static_assert(kEventInputs.size() == static_cast<std::size_t>(K::write) + 1,
               "a new BlockEvent::Kind: add its input here");

@@ -229,13 +229,13 @@ TEST_P(BufferSm, PowerOnAndLeaveMaster_ClearTheOutputsWithDxOut) {
   Chip& c = b.chip;
   // Power-on: Offline (Go_Offline), the three Dout buffers filled with AAh, DX_Out acknowledged,
   // then Start_SPC3.
-  c.write(wr(c, RegId::Mode_Reg1_S), 0x04);
+  testutil::user_go_offline(c);
   for (int i = 1; i <= 3; ++i) {
     for (std::uint32_t k = 0; k < 4; ++k) c.write(dout_buffer(c, i) + k, 0xAA);
   }
   testutil::bus_write16(c, static_cast<int>(wr(c, RegId::Int_Ack_Reg)), 16, irq::DX_Out);
   ASSERT_EQ(irr(c) & irq::DX_Out, 0);
-  c.write(wr(c, RegId::Mode_Reg1_S), 0x01);
+  testutil::user_start(c);
   EXPECT_NE(irr(c) & irq::DX_Out, 0);
   std::uint8_t r = c.read(0x0B);
   EXPECT_EQ(r & 0x0C, 0x0C);
@@ -254,7 +254,7 @@ TEST_P(BufferSm, PowerOnAndLeaveMaster_ClearTheOutputsWithDxOut) {
   EXPECT_EQ(read_bytes(c, dout_buffer(c, r & 3), 4), (Bytes{0x01, 0x02, 0x03, 0x04}));
   testutil::bus_write16(c, static_cast<int>(wr(c, RegId::Int_Ack_Reg)), 16, irq::DX_Out);
   ASSERT_EQ(irr(c) & irq::DX_Out, 0);
-  c.write(wr(c, RegId::Mode_Reg1_S), 0x08);
+  testutil::user_leave_master(c);
   EXPECT_NE(irr(c) & irq::DX_Out, 0);
   r = c.read(0x0B);
   EXPECT_EQ(r & 0x0C, 0x0C);
@@ -292,11 +292,11 @@ TEST_P(BufferSm, GoOffline_MacResetAndStatusBit0) {
   Bare b(GetParam());
   EXPECT_EQ(status(b.chip) & 0x01, 0x01);
   EXPECT_EQ(irr(b.chip) & irq::MAC_Reset, 0);
-  b.chip.write(wr(b.chip, RegId::Mode_Reg1_S), 0x04);
+  testutil::user_go_offline(b.chip);
   EXPECT_EQ(status(b.chip) & 0x01, 0x00);
   EXPECT_NE(irr(b.chip) & irq::MAC_Reset, 0);
   EXPECT_FALSE(b.master.fdl_status().answer);  // Offline: no answer
-  b.chip.write(wr(b.chip, RegId::Mode_Reg1_S), 0x01);
+  testutil::user_start(b.chip);
   EXPECT_EQ(status(b.chip) & 0x01, 0x01);
 }
 
@@ -326,17 +326,19 @@ TEST_P(UserWatchdog, ResUserWdReloadsAtTheNextDataExchange) {
 
 // chip-facts §4.2 [S-RU-SPC3]: EOI "ASIC clears the bit", User_Leave_Master "ASIC clears the
 // bit". The Mode_Reg1 read-back (15h, [S-VPC3-IF]; dpc31 the same address, modelled) shows bits 1
-// and 3 as 0 right after they were set through Mode_Reg1_S; Start_SPC3 (bit 0) stays 1.
+// and 3 as 0 right after they were set through Mode_Reg1_S; Start_SPC3 (bit 0) stays 1 (the
+// DPC31 started by MAC_Start: its Mode_Reg1 has no Start_SPC3, bit 0 reads 0, docs/dpc31.md).
 namespace {
 class ModeReg1ReadBack : public ::testing::TestWithParam<Profile> {};
 }  // namespace
 
 TEST_P(ModeReg1ReadBack, EoiAndUserLeaveMasterClearedByTheAsic) {
   Bare b(GetParam());
+  const std::uint8_t start = GetParam() == Profile::dpc31 ? 0x00 : 0x01;
   b.chip.write(wr(b.chip, RegId::Mode_Reg1_S), 0x02);
-  EXPECT_EQ(b.chip.read(0x15) & 0x0B, 0x01);
-  b.chip.write(wr(b.chip, RegId::Mode_Reg1_S), 0x08);
-  EXPECT_EQ(b.chip.read(0x15) & 0x0B, 0x01);
+  EXPECT_EQ(b.chip.read(0x15) & 0x0B, start);
+  testutil::user_leave_master(b.chip);
+  EXPECT_EQ(b.chip.read(0x15) & 0x0B, start);
 }
 
 INSTANTIATE_TEST_SUITE_P(Vpc3AndDpc31, ModeReg1ReadBack,

@@ -103,7 +103,7 @@ TEST(Dpc31ClearData, HandsOverCAfterLeaveMasterAndAfterWatchdogExpiry) {
       b.master.idle(48'000'000ull + 48'000);  // TWD = 10 ms x 10 x 10 = 1 s at 48 MHz, + 1 ms
       ASSERT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
     } else {
-      b.chip.write(conformance::addr(b.chip, RegId::Mode_Reg1_S), 0x08);  // User_Leave_Master
+      testutil::user_leave_master(b.chip);  // User_Leave_Master
       ASSERT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
     }
     ASSERT_TRUE(b.master.restart(200, 3));

@@ -280,11 +280,11 @@ TEST_P(DpServices, RdInpRepetitionSendsTheNewInputs) {
 TEST_P(DpServices, DpModeZeroSetsUpNoDpSaps) {
   Bench b(GetParam());
   Chip& c = b.chip;
-  c.write(addr(c, RegId::Mode_Reg1_S), 0x04);  // Go_Offline
+  testutil::user_go_offline(c);  // Go_Offline
   const std::uint32_t m0 = addr(c, RegId::Mode_Reg0);
-  c.write(m0, 0xC0);                           // Sync_Supported, Freeze_Supported
-  c.write(m0 + 1, 0x20);                       // Spec_Clear_Mode; DP_Mode (bit 8) = 0
-  c.write(addr(c, RegId::Mode_Reg1_S), 0x01);  // Start_SPC3
+  c.write(m0, 0xC0);        // Sync_Supported, Freeze_Supported
+  c.write(m0 + 1, 0x20);    // Spec_Clear_Mode; DP_Mode (bit 8) = 0
+  testutil::user_start(c);  // Start_SPC3
   Exchange st;
   for (int k = 0; k < 200 && !st.answer; ++k) st = b.master.fdl_status();
   EXPECT_EQ(wire(st.answer), (Bytes{0x10, 0x02, 0x05, 0x00, 0x07, 0x16}));

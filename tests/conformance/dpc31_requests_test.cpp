@@ -27,15 +27,27 @@ std::uint16_t irr(Chip& c) {
   return static_cast<std::uint16_t>(lo | c.read(at(c, RegId::Int_Req_Reg) + 1) << 8);
 }
 
-// The user's side of the queues, as firmware written to the DPC31 manual would do it.
+// The user's side of the queues, as firmware written to the DPC31 manual would do it: rings at
+// 1F00h / 1F40h, or those of the Responder that started the chip (MAC_Start) if it set them up.
 struct Queues {
   Chip& c;
   std::uint8_t inst_len;
   std::uint8_t ind_len;
   std::uint8_t inst_wr = 0;
+  std::uint32_t inst = kInst;
+  std::uint32_t ind = kInd;
 
   Queues(Chip& chip, std::uint8_t il = 4, std::uint8_t nl = 4)
       : c(chip), inst_len(il), ind_len(nl) {
+    if (c.peek(at(c, RegId::InstQ_Len)) != 0) {
+      const unsigned shift = c.profile().segment_shift;
+      inst_len = c.peek(at(c, RegId::InstQ_Len));
+      ind_len = c.peek(at(c, RegId::IndQ_Len));
+      inst_wr = c.peek(at(c, RegId::InstQ_Wr));
+      inst = static_cast<std::uint32_t>(c.peek(at(c, RegId::InstQ_Base))) << shift;
+      ind = static_cast<std::uint32_t>(c.peek(at(c, RegId::IndQ_Base))) << shift;
+      return;
+    }
     wr(c, RegId::InstQ_Base, kInstSeg);
     wr(c, RegId::InstQ_Len, inst_len);
     wr(c, RegId::IndQ_Base, kIndSeg);
@@ -44,14 +56,14 @@ struct Queues {
   // Writes one entry, then InstQ_Wr past it; returns the cycle the request acted (the
   // completion of the InstQ_Wr write).
   std::uint64_t request(std::uint8_t code, std::uint8_t param = 0) {
-    c.write(kInst + inst_wr * 2u, code);
-    c.write(kInst + inst_wr * 2u + 1, param);
+    c.write(inst + inst_wr * 2u, code);
+    c.write(inst + inst_wr * 2u + 1, param);
     inst_wr = static_cast<std::uint8_t>((inst_wr + 1) % inst_len);
     wr(c, RegId::InstQ_Wr, inst_wr);
     return c.cycle();
   }
   std::pair<std::uint8_t, std::uint8_t> indication(std::uint8_t i) {
-    return {c.read(kInd + i * 2u), c.read(kInd + i * 2u + 1)};
+    return {c.read(ind + i * 2u), c.read(ind + i * 2u + 1)};
   }
 };
 
@@ -333,6 +345,28 @@ TEST(Dpc31Requests, UserSsaOkFinishesAPendingSetSlaveAddAndRefusesWithoutOne) {
   EXPECT_EQ(b.chip.read(ssa_ok), 0x00);
   EXPECT_EQ(b.chip.read(ssa_ok), 0x03);
   EXPECT_EQ(wire(b.master.set_slave_address(10, false).answer), Bytes{0xE5});
+}
+
+// p.26: "The SSA_State_Machine is reset also when ... the watchdog has expired in the mode
+// 'DP_Control'." The Responder never reads User_SSA_OK, so after a Set_Slave_Add SAP55 refuses the
+// next one (RR: the buffer is not free); the DP watchdog (TWD = 10 ms x 10 x 10 = 1 s) expiring
+// in DP_Control opens it again: the next Set_Slave_Add is taken (SC), and User_SSA_OK finishes it
+// (00). (Before, a DP_Control expiry left SAP55 closed: RR.)
+TEST(Dpc31Requests, DpControlExpiryResetsTheSsaStateMachine) {
+  Bench b(Profile::dpc31);
+  until_answered(b);
+  ASSERT_EQ(wire(b.master.set_slave_address(9, false).answer), Bytes{0xE5});
+  b.master.set_target(9);
+  const Exchange refused = b.master.set_slave_address(10, false);
+  ASSERT_TRUE(refused.answer);
+  EXPECT_EQ(fdl::response_code(refused.answer->fc), fdl::Response::RR);
+  ASSERT_TRUE(b.master.startup());
+  ASSERT_EQ(b.chip.wd_state(), WdState::DP_Control);
+  b.master.idle(48'000'000ull + 48'000);
+  ASSERT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
+  ASSERT_EQ(b.chip.wd_state(), WdState::Baud_Control);  // DP_Control expired
+  EXPECT_EQ(wire(b.master.set_slave_address(10, false).answer), Bytes{0xE5});
+  EXPECT_EQ(b.chip.read(at(b.chip, RegId::SSA_Buffer_Free_Cmd)), 0x00);  // User_SSA_Finished
 }
 
 // Table 5.2-8 / p.26 name the user's commands User_New_Dout, User_New_Din and User_SSA_OK: the

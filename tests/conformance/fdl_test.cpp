@@ -86,7 +86,7 @@ TEST_P(Fdl, GoLeaveDataExchange_WhenTheStateMachineLeavesDataExchange) {
   ASSERT_EQ(dp_bits(status(b.chip)), kDataEx);
   testutil::bus_write16(b.chip, static_cast<int>(wr(b.chip, RegId::Int_Ack_Reg)), 16, 0xF3FF);
   ASSERT_EQ(irr(b.chip) & (irq::Go_Leave_Data_Exchange | irq::DX_Out), 0);
-  b.chip.write(wr(b.chip, RegId::Mode_Reg1_S), 0x08);
+  testutil::user_leave_master(b.chip);
   EXPECT_EQ(irr(b.chip) & (irq::Go_Leave_Data_Exchange | irq::DX_Out),
             irq::Go_Leave_Data_Exchange | irq::DX_Out);
   EXPECT_EQ(dp_bits(status(b.chip)), kWaitPrm);

@@ -8,12 +8,12 @@ namespace {
 class GcCommandPreset : public ::testing::TestWithParam<Profile> {};
 
 // What the cell reads after the user wrote `before` into it and started the chip (Mode_Reg1_S
-// bit 0, Start_SPC3; on the DPC31 the start of the DPS that MAC_Start stands for).
+// bit 0, Start_SPC3; on the DPC31 a MAC_Start request, the start of the DPS).
 std::uint8_t after_start(Chip& c, std::uint8_t before) {
   const auto cell = static_cast<std::uint32_t>(c.addr_of(RegId::R_GC_Command));
   c.write(cell, before);
   EXPECT_EQ(c.read(cell), before);
-  c.write(static_cast<std::uint32_t>(c.addr_of(RegId::Mode_Reg1_S)), 0x01);
+  testutil::user_start(c);
   EXPECT_TRUE(c.started());
   return c.read(cell);
 }
@@ -31,8 +31,8 @@ TEST_P(GcCommandPreset, EveryStartPresetsTheCellDpc31FFhSpc300hVpc3plusLeavesIt)
                               : GetParam() == Profile::spc3 ? 0x00
                                                             : 0x5A;
   EXPECT_EQ(after_start(c, 0x5A), preset);
-  // Go_Offline (Mode_Reg1_S bit 2), then a second start: the same again.
-  c.write(static_cast<std::uint32_t>(c.addr_of(RegId::Mode_Reg1_S)), 0x04);
+  // Go_Offline (Mode_Reg1_S bit 2; DPC31 MAC_Stop), then a second start: the same again.
+  testutil::user_go_offline(c);
   ASSERT_FALSE(c.started());
   EXPECT_EQ(after_start(c, 0x5A), preset);
 }

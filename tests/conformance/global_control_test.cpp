@@ -39,9 +39,9 @@ void no_gc_reserved_check(Chip& c) {
     c.write(wr(c, RegId::Param_Reg), 0x02);
     return;
   }
-  c.write(wr(c, RegId::Mode_Reg1_S), 0x04);
+  testutil::user_go_offline(c);
   c.write(wr(c, RegId::Mode_Reg2), 0x03);  // GC_Int_Mode 1 (the VPC3+ default), no check
-  c.write(wr(c, RegId::Mode_Reg1_S), 0x01);
+  testutil::user_start(c);
 }
 
 std::size_t gc_interrupts(const Responder& u) {

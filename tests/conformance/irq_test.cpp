@@ -72,19 +72,18 @@ TEST_P(Interrupts, EoiInactiveTime_Min1msWithEoiTimeBase1) {
 }
 
 // manual-quotes.md Confirmed, VPC3+S p.34: "If a new event and an acknowledge from the previous
-// event are present at the IRR at the same time, the event remains stored." Start_SPC3 completes
-// at 4: User_Timer_Clock fires at 4 + 48 000 = 48 004 and again at 96 004. Its acknowledge
-// completing at 96 004 (the cycle of the second tick) leaves the bit set; the one completing at
-// 48 005 (one clock after the first tick) clears it.
+// event are present at the IRR at the same time, the event remains stored." Start_SPC3 (the
+// DPC31: MAC_Start) completes at s: User_Timer_Clock fires at s + 48 000 and again at
+// s + 96 000. Its acknowledge completing at s + 96 000 (the cycle of the second tick) leaves the
+// bit set; the one completing at s + 48 001 (one clock after the first tick) clears it.
 TEST_P(Interrupts, NewEventAndAcknowledgeAtTheSameTime_EventRemainsStored) {
   Chip c = make();
-  c.write(0x08, 0x01);
-  ASSERT_EQ(c.cycle(), 4u);
-  c.step(48'005 - 4 - c.cycle());
-  c.write(0x02, static_cast<std::uint8_t>(irq::User_Timer_Clock));  // completes at 48 005
+  const std::uint64_t s = testutil::user_start(c);
+  c.step(s + 48'001 - 4 - c.cycle());
+  c.write(0x02, static_cast<std::uint8_t>(irq::User_Timer_Clock));  // completes at s + 48 001
   EXPECT_EQ(c.read(0x00) & irq::User_Timer_Clock, 0);               // cleared
-  c.step(96'004 - 4 - c.cycle());
-  c.write(0x02, static_cast<std::uint8_t>(irq::User_Timer_Clock));         // completes at 96 004
+  c.step(s + 96'000 - 4 - c.cycle());
+  c.write(0x02, static_cast<std::uint8_t>(irq::User_Timer_Clock));  // completes at s + 96 000
   EXPECT_EQ(c.read(0x00) & irq::User_Timer_Clock, irq::User_Timer_Clock);  // kept
 }
 
@@ -168,8 +167,7 @@ TEST_P(Interrupts, UserTimerClock_Every1msOr10ms) {
   for (const bool ten : {false, true}) {
     Chip c = make();
     if (ten) w16(c, 0x06, 0x0400);
-    c.write(0x08, 0x01);
-    const std::uint64_t s = c.cycle();
+    const std::uint64_t s = testutil::user_start(c);
     const std::uint64_t p = ten ? 480'000 : 48'000;
     c.step(s + p - 1 - 4 - c.cycle());
     EXPECT_EQ(c.read(0x00) & irq::User_Timer_Clock, 0) << ten;  // completes at s + p - 1

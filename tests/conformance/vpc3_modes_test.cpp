@@ -23,9 +23,9 @@ std::size_t count(const Responder& u, std::size_t from, std::uint16_t bit) {
 
 // Mode_Reg2 may only be written while Offline (docs/decisions.md): stop, write, start again.
 void set_mode_reg2(Chip& c, std::uint8_t v) {
-  c.write(addr(c, RegId::Mode_Reg1_S), 0x04);  // Go_Offline
+  testutil::user_go_offline(c);  // Go_Offline
   c.write(addr(c, RegId::Mode_Reg2), v);
-  c.write(addr(c, RegId::Mode_Reg1_S), 0x01);  // Start_SPC3
+  testutil::user_start(c);  // Start_SPC3
 }
 
 TEST(Vpc3GcIntMode, DefaultInterruptsOnEveryGlobalControl) {

@@ -28,11 +28,11 @@ std::uint8_t status_low_at(Chip& c, std::uint64_t at) {
 // Switches the VPC3+'s watchdog time base to 1 ms: Mode_Reg0.WD_Base (bit 2, chip-facts §4.1,
 // [S-VPC3-CFG]) can only be written Offline, so Go_Offline, write, Start again.
 void vpc3_wd_base_1ms(Chip& c) {
-  c.write(wr(c, RegId::Mode_Reg1_S), 0x04);
+  testutil::user_go_offline(c);
   const std::uint16_t m0 = testutil::bus_read16(c, static_cast<int>(rd(c, RegId::Mode_Reg0)), 16);
   testutil::bus_write16(c, static_cast<int>(wr(c, RegId::Mode_Reg0)), 16,
                         static_cast<std::uint16_t>(m0 | 0x0004));
-  c.write(wr(c, RegId::Mode_Reg1_S), 0x01);
+  testutil::user_start(c);
 }
 
 ResponderConfig wd(bool on, std::uint8_t f1 = 10, std::uint8_t f2 = 10, bool base_1ms = false) {
@@ -275,7 +275,7 @@ TEST_P(Watchdog, AnotherMasterAccepts_WdOn0BaudControl_WdOn1DpControl) {
     Bench b(GetParam(), 12'000'000, wd(first_on));
     ASSERT_TRUE(b.master.startup());
     EXPECT_EQ(wd_bits(status(b.chip)), first_on ? kDpControl : kBaudControl);
-    b.chip.write(wr(b.chip, RegId::Mode_Reg1_S), 0x08);  // User_Leave_Master
+    testutil::user_leave_master(b.chip);  // User_Leave_Master
     ASSERT_EQ(dp_bits(status(b.chip)), kWaitPrm);
     ResponderConfig other = wd(!first_on);
     DpMaster m7(b.chip, MasterConfig{7, 12'000'000, 100, 33}, other.slave);

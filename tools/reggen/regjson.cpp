@@ -623,16 +623,18 @@ class Loader {
     auto& fields = m_.field_lists_.emplace_back();
     std::uint16_t covered = 0;
     for (const RawField& f : raw) {
+      // A bit the register ignores or reserves (an override) is never set: no pulse.
+      const bool pulse = f.pulse && *f.access != Access::IGN && *f.access != Access::RSVD;
       fields.push_back(FieldDesc{.name = intern(f.name),
                                  .lsb = static_cast<std::uint8_t>(f.lsb),
                                  .width = static_cast<std::uint8_t>(f.width),
                                  .access = *f.access,
-                                 .pulse = f.pulse,
+                                 .pulse = pulse,
                                  .desc = intern(f.desc)});
       const auto mask = static_cast<std::uint16_t>(f.mask());
       covered |= mask;
       access_mask(base, *f.access) |= mask;
-      if (f.pulse) base.pulse |= mask;
+      if (pulse) base.pulse |= mask;
     }
     base.rsvd |= static_cast<std::uint16_t>(~covered & base.mask());
     base.fields = fields;

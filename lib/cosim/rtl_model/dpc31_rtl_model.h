@@ -12,7 +12,7 @@ extern "C" {
 #endif
 
 /* Raised whenever a struct below changes; the harness refuses any other value. */
-#define DPC31_RTL_MODEL_ABI 1
+#define DPC31_RTL_MODEL_ABI 2
 /* Outputs in the order of docs/golden-model.md "Outputs compared on every cycle", bus_rdata last.
  */
 #define DPC31_RTL_OUTPUTS 31
@@ -23,8 +23,9 @@ struct dpc31_rtl_inputs {
   uint16_t bus_addr;
   uint8_t bus_wdata;
   uint16_t ev_irq;
-  uint8_t ev_leave_master, ev_prm_fault, ev_gc, gc_cmd, ev_dout, ev_failsafe, ev_din, ev_diag_begin,
-      ev_diag_end, stat_diag, ev_prm, ev_cfg, ev_ssa, ev_dis, dis_bits;
+  uint8_t ev_leave_master, ev_wd_expired, ev_prm_fault, ev_gc, gc_cmd, ev_dout, ev_failsafe, ev_din,
+      ev_diag_begin, ev_diag_end, stat_diag, ev_prm, ev_cfg, ev_ssa, ev_dis, dis_bits, ev_mac_stop,
+      ev_mac_start;
 };
 
 struct dpc31_rtl_model {

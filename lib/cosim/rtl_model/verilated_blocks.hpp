@@ -57,6 +57,7 @@ class VerilatedBlocks {
     top_->bus_wdata = in.bus_wdata;
     top_->ev_irq = in.ev_irq;
     top_->ev_leave_master = in.ev_leave_master;
+    top_->ev_wd_expired = in.ev_wd_expired;
     top_->ev_gc = in.ev_gc;
     top_->gc_cmd = in.gc_cmd;
     top_->ev_dout = in.ev_dout;
@@ -72,6 +73,8 @@ class VerilatedBlocks {
     top_->ev_dx = in.ev_dx;
     top_->ev_dis = in.ev_dis;
     top_->dis_bits = in.dis_bits;
+    top_->ev_mac_stop = in.ev_mac_stop;
+    top_->ev_mac_start = in.ev_mac_start;
     clock();
   }
 
