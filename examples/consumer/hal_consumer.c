@@ -5,6 +5,9 @@
 #include "dpc31/dpc31_hal.h"
 #include "dpc31/dpc31_regs.h"
 
+/* A chip address where the drivers' block copies take a pointer (their VPC3_UNSIGNED8_PTR). */
+#define CHIP_PTR(a) ((uint8_t*)(uintptr_t)(a))
+
 int main(void) {
   uint8_t out[4] = {0x11, 0x22, 0x33, 0x44};
   uint8_t in[4] = {0};
@@ -17,9 +20,9 @@ int main(void) {
   }
   dpc31_select(chip);
   start = dpc31_cycle(chip);
-  CopyToVpc3(DPC31_USER_BASE, out, sizeof out);
+  CopyToVpc3(CHIP_PTR(DPC31_USER_BASE), out, sizeof out);
   Vpc3Write(DPC31_USER_BASE + 4u, 0x55);
-  CopyFromVpc3(in, DPC31_USER_BASE, sizeof in);
+  CopyFromVpc3(in, CHIP_PTR(DPC31_USER_BASE), sizeof in);
   took = dpc31_cycle(chip) - start;
   /* 4 + 1 + 4 byte accesses of 4 chip clocks each (docs/timing.md). */
   ok = in[0] == 0x11 && in[3] == 0x44 && Vpc3Read(DPC31_USER_BASE + 4u) == 0x55 && took == 36;

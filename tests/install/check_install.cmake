@@ -34,10 +34,14 @@ endforeach()
 
 run(${prefix}/bin/dpc31 demo --out-dir ${WORK_DIR}/demo)
 
+# Our examples build warning-free, as in a user's tree that turns warnings into errors (GCC 14
+# makes -Wint-conversion one by default).
+set(strict "-Wall -Wextra -Werror")
+
 # The CMake package: only the prefix.
 run(${CMAKE_COMMAND} -S ${EXAMPLE_DIR} -B ${WORK_DIR}/build -DCMAKE_PREFIX_PATH=${prefix}
   -DCMAKE_C_COMPILER=${C_COMPILER} -DCMAKE_CXX_COMPILER=${CXX_COMPILER}
-  -DCMAKE_BUILD_TYPE=Release)
+  -DCMAKE_BUILD_TYPE=Release "-DCMAKE_C_FLAGS=${strict}" "-DCMAKE_CXX_FLAGS=${strict}")
 run(${CMAKE_COMMAND} --build ${WORK_DIR}/build)
 run(${WORK_DIR}/build/session_consumer)
 run(${WORK_DIR}/build/hal_consumer)
@@ -48,14 +52,15 @@ execute_process(COMMAND pkg-config --cflags --libs dpc31emu OUTPUT_VARIABLE flag
   OUTPUT_STRIP_TRAILING_WHITESPACE COMMAND_ECHO STDOUT COMMAND_ERROR_IS_FATAL ANY)
 message(STATUS "pkg-config: ${flags}")
 separate_arguments(flags UNIX_COMMAND "${flags}")
-run(${C_COMPILER} -std=c99 ${EXAMPLE_DIR}/hal_consumer.c ${flags} -o ${WORK_DIR}/hal_pkgconfig)
+run(${C_COMPILER} -std=c99 -Wall -Wextra -Werror ${EXAMPLE_DIR}/hal_consumer.c ${flags}
+  -o ${WORK_DIR}/hal_pkgconfig)
 set(ENV{LD_LIBRARY_PATH} ${prefix}/${LIBDIR})
 run(${WORK_DIR}/hal_pkgconfig)
 
 # examples/plugin: the plug-ins and the C host, from the CMake package only.
 unset(ENV{LD_LIBRARY_PATH})
 run(${CMAKE_COMMAND} -S ${PLUGIN_DIR} -B ${WORK_DIR}/plugin -DCMAKE_PREFIX_PATH=${prefix}
-  -DCMAKE_C_COMPILER=${C_COMPILER} -DCMAKE_BUILD_TYPE=Release)
+  -DCMAKE_C_COMPILER=${C_COMPILER} -DCMAKE_BUILD_TYPE=Release "-DCMAKE_C_FLAGS=${strict}")
 run(${CMAKE_COMMAND} --build ${WORK_DIR}/plugin)
 foreach(plugin example example_polling)
   execute_process(COMMAND ${WORK_DIR}/plugin/example_host ${WORK_DIR}/plugin/lib${plugin}.so
