@@ -112,41 +112,6 @@ void ChipCore::build_plain_path() {
   }
 }
 
-bool ChipCore::plain_read(std::uint32_t addr, std::uint8_t& v) const {
-  if (addr >= regs.undecoded_end()) return false;
-  const std::uint16_t p = plain_rd_[addr];
-  if (p == 0) return false;
-  if (p < kPlainLane) {
-    v = regs.mem(addr);
-    return true;
-  }
-  const PlainLane& l = plain_lanes_[p & ~kPlainLane];
-  v = static_cast<std::uint8_t>((regs.latch(l.latch) & l.mask) >> l.shift);
-  return true;
-}
-
-// write_reg's rule for a lane without W1C, W1S, IGN, UNIMP, pulse bits or hooks: storage takes
-// the written bits. X/INT is looked at only when IRR or IMR changed: nothing else here moves it.
-bool ChipCore::plain_write(std::uint32_t addr, std::uint8_t value) {
-  if (addr >= regs.undecoded_end()) return false;
-  const std::uint16_t p = plain_wr_[addr];
-  if (p == 0) return false;
-  if (p < kPlainLane) {
-    regs.set_mem(addr, value);
-    return true;
-  }
-  const PlainLane& l = plain_lanes_[p & ~kPlainLane];
-  std::uint16_t& stored = regs.latch(l.latch);
-  const auto w = static_cast<std::uint16_t>(value << l.shift);
-  if (((w ^ stored) & l.rsvd) != 0) return false;  // the reference path logs it
-  const auto next = static_cast<std::uint16_t>((stored & ~l.mask) | (w & l.mask));
-  written_bits = w;
-  if (next == stored) return true;
-  stored = next;
-  if (l.irq) irq.update_line();
-  return true;
-}
-
 std::size_t ChipCore::ram_run(const std::vector<std::uint16_t>& table, std::uint32_t addr,
                               std::size_t len) const {
   const std::uint32_t end = regs.undecoded_end();
@@ -298,9 +263,7 @@ std::uint32_t ChipCore::begin_access(std::uint32_t addr, std::string_view what) 
   return a;
 }
 
-std::uint8_t ChipCore::bus_read(std::uint32_t addr) {
-  advance(prof().bus_access_cycles);
-  if (std::uint8_t v = 0; !watched() && plain_read(addr, v)) return v;
+std::uint8_t ChipCore::bus_read_ref(std::uint32_t addr) {
   signals.emit(BlockEvent::Kind::read, static_cast<std::uint16_t>(addr));
   if (signals.bus) signals.bus(clock.now, BusAccess{false, static_cast<std::uint16_t>(addr), 0});
   const std::uint8_t v = read_now(addr);
@@ -308,9 +271,7 @@ std::uint8_t ChipCore::bus_read(std::uint32_t addr) {
   return v;
 }
 
-void ChipCore::bus_write(std::uint32_t addr, std::uint8_t value) {
-  advance(prof().bus_access_cycles);
-  if (!watched() && plain_write(addr, value)) return;
+void ChipCore::bus_write_ref(std::uint32_t addr, std::uint8_t value) {
   signals.emit(BlockEvent::Kind::write, static_cast<std::uint16_t>(addr), value);
   if (signals.bus) signals.bus(clock.now, BusAccess{true, static_cast<std::uint16_t>(addr), value});
   write_now(addr, value);

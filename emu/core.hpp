@@ -82,8 +82,17 @@ struct ChipCore {
   void reset();  // the hardware reset: cycle 0, every block in its reset state
 
   // --- the CPU's bus side (bus.cpp): decode, the hooks, QEMU's write rule ---
-  std::uint8_t bus_read(std::uint32_t addr);  // 4 clocks, then the access
-  void bus_write(std::uint32_t addr, std::uint8_t value);
+  // 4 clocks, then the access: the plain path inline, everything else out of line.
+  std::uint8_t bus_read(std::uint32_t addr) {
+    advance(prof().bus_access_cycles);
+    if (std::uint8_t v = 0; !watched() && plain_read(addr, v)) return v;
+    return bus_read_ref(addr);
+  }
+  void bus_write(std::uint32_t addr, std::uint8_t value) {
+    advance(prof().bus_access_cycles);
+    if (!watched() && plain_write(addr, value)) return;
+    bus_write_ref(addr, value);
+  }
   // The access itself, in the current cycle (the lockstep harness strobes it per cycle).
   std::uint8_t read_now(std::uint32_t addr);
   void write_now(std::uint32_t addr, std::uint8_t value);
@@ -141,8 +150,42 @@ struct ChipCore {
   };
   void build_plain_path();
   [[nodiscard]] bool watched() const { return signals.bus || signals.block || signals.state; }
-  [[nodiscard]] bool plain_read(std::uint32_t addr, std::uint8_t& v) const;
-  bool plain_write(std::uint32_t addr, std::uint8_t value);
+  bool plain_read(std::uint32_t addr, std::uint8_t& v) const {
+    if (addr >= regs.undecoded_end()) return false;
+    const std::uint16_t p = plain_rd_[addr];
+    if (p == 0) return false;
+    if (p < kPlainLane) {
+      v = regs.mem(addr);
+      return true;
+    }
+    const PlainLane& l = plain_lanes_[p & ~kPlainLane];
+    v = static_cast<std::uint8_t>((regs.latch(l.latch) & l.mask) >> l.shift);
+    return true;
+  }
+  // write_reg's rule for a lane without W1C, W1S, IGN, UNIMP, pulse bits or hooks: storage takes
+  // the written bits. X/INT is looked at only when IRR or IMR changed: nothing else here moves it.
+  bool plain_write(std::uint32_t addr, std::uint8_t value) {
+    if (addr >= regs.undecoded_end()) return false;
+    const std::uint16_t p = plain_wr_[addr];
+    if (p == 0) return false;
+    if (p < kPlainLane) {
+      regs.set_mem(addr, value);
+      return true;
+    }
+    const PlainLane& l = plain_lanes_[p & ~kPlainLane];
+    std::uint16_t& stored = regs.latch(l.latch);
+    const auto w = static_cast<std::uint16_t>(value << l.shift);
+    if (((w ^ stored) & l.rsvd) != 0) return false;  // the reference path logs it
+    const auto next = static_cast<std::uint16_t>((stored & ~l.mask) | (w & l.mask));
+    written_bits = w;
+    if (next == stored) return true;
+    stored = next;
+    if (l.irq) irq.update_line();
+    return true;
+  }
+  // The reference path: the observers, decode, hooks, QEMU's write rule.
+  std::uint8_t bus_read_ref(std::uint32_t addr);
+  void bus_write_ref(std::uint32_t addr, std::uint8_t value);
   [[nodiscard]] std::size_t ram_run(const std::vector<std::uint16_t>& table, std::uint32_t addr,
                                     std::size_t len) const;
   [[nodiscard]] std::size_t quiet_accesses() const;
