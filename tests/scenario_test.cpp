@@ -21,7 +21,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const fs::path kTraces = fs::path(__FILE__).parent_path().parent_path() / "traces";
+// SOURCE_DIR, not __FILE__: with Ninja __FILE__ is relative to the build directory, and CTest
+// runs the tests from build/tests.
+const fs::path kTraces = fs::path(SOURCE_DIR) / "traces";
 
 struct Lines {
   std::vector<std::string> lines;
