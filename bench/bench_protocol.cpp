@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "bytewise_bus.hpp"
 #include "dp_master.hpp"
 #include "responder.hpp"
 #include "waveform.hpp"
@@ -22,10 +23,12 @@ using Clock = std::chrono::steady_clock;
 
 // A chip at power-on with the responder firmware (`len` bytes each way) behind the built-in
 // master; `wd_fact` != 0 sets both DP watchdog factors (10 ms base, TWD = 10 ms x wd_fact^2).
+// `blocks`: the firmware copies its buffers as block transfers (CopyToVpc3 & co.), else one
+// access per byte (the same bus accesses, docs/timing.md "Block transfers").
 // Not movable: the firmware callback refers to the members.
 class DpSession {
  public:
-  DpSession(std::uint32_t baud, std::uint8_t len, std::uint8_t wd_fact = 0)
+  DpSession(std::uint32_t baud, std::uint8_t len, std::uint8_t wd_fact = 0, bool blocks = true)
       : config_(responder_config(len, wd_fact)),
         chip_({dpc31::Profile::dpc31, dpc31::BusMode::intel, 0}),
         user_(config_),
@@ -35,7 +38,14 @@ class DpSession {
     chip_.set_log_sink(nullptr);
     user_.inputs.assign(len, 0x5A);
     user_.init(bus_);
-    master_.set_firmware([this](dpc31::BusPort& b) { user_.isr(b); });
+    master_.set_firmware([this, blocks](dpc31::BusPort& b) {
+      if (blocks) {
+        user_.isr(b);
+      } else {
+        dpc31::BytewiseBus bytewise(b);
+        user_.isr(bytewise);
+      }
+    });
   }
   DpSession(const DpSession&) = delete;
   DpSession& operator=(const DpSession&) = delete;
@@ -94,9 +104,10 @@ void set_realtime_factor(benchmark::State& st, double chip_seconds) {
   st.counters["x_realtime"] = benchmark::Counter(chip_seconds, benchmark::Counter::kIsRate);
 }
 
-// One Data_Exchange per iteration, after start-up (not timed).
+// One Data_Exchange per iteration, after start-up (not timed); block:0 copies byte by byte.
 void BM_DataExchange(benchmark::State& st) {
-  DpSession s(static_cast<std::uint32_t>(st.range(0)), static_cast<std::uint8_t>(st.range(1)));
+  DpSession s(static_cast<std::uint32_t>(st.range(0)), static_cast<std::uint8_t>(st.range(1)), 0,
+              st.range(2) != 0);
   if (!s.startup(st)) return;
   const double t0 = s.chip_seconds();
   for (auto _ : st) {
@@ -106,16 +117,22 @@ void BM_DataExchange(benchmark::State& st) {
   st.counters["chip_us_per_dx"] =
       benchmark::Counter((s.chip_seconds() - t0) * 1e6 / static_cast<double>(st.iterations()));
 }
-// Item b, then the scaling families: baud rate at 32 bytes, telegram length at 1.5 and 12 Mbaud.
+// Items b and b' (block copies, and byte by byte; the same at 1.5 Mbaud), then the scaling
+// families: baud rate at 32 bytes, telegram length at 1.5 and 12 Mbaud, with block copies.
 void data_exchange_args(benchmark::internal::Benchmark* b) {
+  b->Args({12000000, 244, 0});
+  b->Args({1500000, 244, 0});
   for (const int baud : {9600, 19200, 93750, 187500, 500000, 1500000, 3000000, 6000000, 12000000}) {
-    b->Args({baud, 32});
+    b->Args({baud, 32, 1});
   }
   for (const int baud : {1500000, 12000000}) {
-    for (const int len : {4, 128, 244}) b->Args({baud, len});
+    for (const int len : {4, 128, 244}) b->Args({baud, len, 1});
   }
 }
-BENCHMARK(BM_DataExchange)->ArgNames({"baud", "len"})->Apply(data_exchange_args)->UseRealTime();
+BENCHMARK(BM_DataExchange)
+    ->ArgNames({"baud", "len", "block"})
+    ->Apply(data_exchange_args)
+    ->UseRealTime();
 
 // Item c: power-on (chip construction), the master's start-up including the baud search, and
 // `range(1)` Data_Exchanges of 4 + 4 bytes, all timed.

@@ -1,6 +1,8 @@
 // The chip's bus side: the CPU's accesses through the address decode of the register file, the
 // registers' hooks (installed by each block next to its behaviour) and QEMU's write rule over the
 // per-bit policies of the description, plus the side-effect-free debugger path.
+#include <algorithm>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
@@ -45,7 +47,159 @@ ChipCore::ChipCore(const ChipOptions& opt)
       throw std::logic_error(fmt::format("{}: command register without a command hook", r.name));
     }
   }
+  build_plain_path();
   reset();
+}
+
+// The plain path: what the description marks plain (RegDesc::plain) and no block hooked. The
+// per-cycle engine keeps only the reference path, so the engine equality tests (Engine.*,
+// PlainPath.*) compare the two.
+void ChipCore::build_plain_path() {
+  const std::size_t size = std::size_t{1} << prof().address_bits;
+  plain_rd_.assign(size, 0);
+  plain_wr_.assign(size, 0);
+  plain_lanes_.clear();
+  if (clock.engine != Engine::event) return;
+  const auto lane_of = [&](const RegDesc& r, std::int32_t base, std::uint32_t a) {
+    return r.placement(regs.bus())[a - static_cast<std::uint32_t>(base)];
+  };
+  const auto add_lane = [&](PlainLane l) {
+    plain_lanes_.push_back(l);
+    return static_cast<std::uint16_t>(kPlainLane | (plain_lanes_.size() - 1));
+  };
+  std::vector<bool> ram_rd(size + 1, false);
+  std::vector<bool> ram_wr(size + 1, false);
+  for (std::uint32_t a = 0; a < size; ++a) {
+    const std::uint16_t region = regs.region_index(a);
+    const bool ram =
+        region != kNoReg && prof().regions[region].ram && !prof().regions[region].reserved;
+    if (const std::uint16_t i = regs.read_index(a); i == kNoReg) {
+      ram_rd[a] = ram;
+    } else if (const RegDesc& r = prof().regs[i]; r.kind == Kind::cell) {
+      ram_rd[a] = r.plain != 0;
+    } else if (const RegHooks& h = hooks[RegisterFile::idx(r.id)];
+               h.read == nullptr && h.command == nullptr) {
+      const unsigned lane = lane_of(r, r.read_addr, a);
+      if ((r.plain >> lane & 1u) != 0) {
+        plain_rd_[a] = add_lane({r.id, static_cast<std::uint16_t>(r.mask() & ~r.rsvd), 0,
+                                 static_cast<std::uint8_t>(8 * lane), false});
+      }
+    }
+    if (const std::uint16_t i = regs.write_index(a); i == kNoReg) {
+      ram_wr[a] = ram;
+    } else if (const RegDesc& r = prof().regs[i]; r.kind == Kind::cell) {
+      ram_wr[a] = r.plain != 0 && hooks[RegisterFile::idx(r.id)].post_write == nullptr;
+    } else if (const RegHooks& h = hooks[RegisterFile::idx(r.id)];
+               h.pre_write == nullptr && h.post_write == nullptr) {
+      const unsigned lane = lane_of(r, r.write_addr, a);
+      const auto bits = static_cast<std::uint16_t>(0xFFu << (8 * lane));
+      if ((r.plain >> lane & 1u) != 0) {
+        plain_wr_[a] = add_lane(
+            {r.target, static_cast<std::uint16_t>((r.rw | r.wo) & bits),
+             static_cast<std::uint16_t>(r.rsvd & bits), static_cast<std::uint8_t>(8 * lane),
+             r.target == RegId::Int_Req_Reg || r.target == RegId::Int_Mask_Reg});
+      }
+    }
+  }
+  // RAM: the number of plain RAM bytes from each address on (a block's one check).
+  std::uint16_t run_rd = 0;
+  std::uint16_t run_wr = 0;
+  for (std::size_t a = size; a-- > 0;) {
+    run_rd = ram_rd[a] ? static_cast<std::uint16_t>(std::min<int>(run_rd + 1, kPlainLane - 1)) : 0;
+    run_wr = ram_wr[a] ? static_cast<std::uint16_t>(std::min<int>(run_wr + 1, kPlainLane - 1)) : 0;
+    if (run_rd != 0) plain_rd_[a] = run_rd;
+    if (run_wr != 0) plain_wr_[a] = run_wr;
+  }
+}
+
+std::size_t ChipCore::ram_run(const std::vector<std::uint16_t>& table, std::uint32_t addr,
+                              std::size_t len) const {
+  const std::uint32_t end = regs.undecoded_end();
+  if (addr >= end) return 0;
+  const std::uint16_t p = table[addr];
+  if (p >= kPlainLane) return 0;
+  return std::min<std::size_t>({len, p, end - addr});
+}
+
+// Whole accesses that end before quiet_until: no event can act inside them (docs/engine.md).
+std::size_t ChipCore::quiet_accesses() const {
+  if (clock.quiet_until <= clock.now || watched()) return 0;
+  return (clock.quiet_until - clock.now - 1) / prof().bus_access_cycles;
+}
+
+std::size_t ChipCore::quiet_ram_run(std::uint32_t addr, std::size_t len, bool write) const {
+  return std::min(ram_run(write ? plain_wr_ : plain_rd_, addr, len), quiet_accesses());
+}
+
+void ChipCore::bus_write_block(std::uint32_t addr, std::span<const std::uint8_t> bytes) {
+  while (!bytes.empty()) {
+    std::size_t k = quiet_ram_run(addr, bytes.size(), true);
+    if (k == 0) {
+      bus_write(addr, bytes.front());
+      k = 1;
+    } else {
+      std::memcpy(regs.mem_at(addr), bytes.data(), k);
+      clock.now += k * prof().bus_access_cycles;
+    }
+    addr += static_cast<std::uint32_t>(k);
+    bytes = bytes.subspan(k);
+  }
+}
+
+void ChipCore::bus_read_block(std::uint32_t addr, std::span<std::uint8_t> out) {
+  while (!out.empty()) {
+    std::size_t k = quiet_ram_run(addr, out.size(), false);
+    if (k == 0) {
+      out.front() = bus_read(addr);
+      k = 1;
+    } else {
+      std::memcpy(out.data(), regs.mem_at(addr), k);
+      clock.now += k * prof().bus_access_cycles;
+    }
+    addr += static_cast<std::uint32_t>(k);
+    out = out.subspan(k);
+  }
+}
+
+void ChipCore::bus_fill(std::uint32_t addr, std::uint8_t value, std::size_t len) {
+  while (len != 0) {
+    std::size_t k = quiet_ram_run(addr, len, true);
+    if (k == 0) {
+      bus_write(addr, value);
+      k = 1;
+    } else {
+      std::memset(regs.mem_at(addr), value, k);
+      clock.now += k * prof().bus_access_cycles;
+    }
+    addr += static_cast<std::uint32_t>(k);
+    len -= k;
+  }
+}
+
+bool ChipCore::bus_equal(std::uint32_t a, std::uint32_t b, std::size_t len) {
+  for (std::size_t i = 0; i < len;) {
+    const auto ai = a + static_cast<std::uint32_t>(i);
+    const auto bi = b + static_cast<std::uint32_t>(i);
+    // Two accesses per pair.
+    const std::size_t k = std::min(
+        {ram_run(plain_rd_, ai, len - i), ram_run(plain_rd_, bi, len - i), quiet_accesses() / 2});
+    if (k == 0) {
+      const std::uint8_t first = bus_read(ai);  // this order on the bus
+      if (first != bus_read(bi)) return false;
+      ++i;
+      continue;
+    }
+    const std::uint8_t* pa = regs.mem_at(ai);
+    const auto diff =
+        static_cast<std::size_t>(std::mismatch(pa, pa + k, regs.mem_at(bi)).first - pa);
+    if (diff < k) {
+      clock.now += 2 * (diff + 1) * prof().bus_access_cycles;
+      return false;
+    }
+    clock.now += 2 * k * prof().bus_access_cycles;
+    i += k;
+  }
+  return true;
 }
 
 void ChipCore::reset() {
@@ -109,8 +263,7 @@ std::uint32_t ChipCore::begin_access(std::uint32_t addr, std::string_view what) 
   return a;
 }
 
-std::uint8_t ChipCore::bus_read(std::uint32_t addr) {
-  advance(prof().bus_access_cycles);
+std::uint8_t ChipCore::bus_read_ref(std::uint32_t addr) {
   signals.emit(BlockEvent::Kind::read, static_cast<std::uint16_t>(addr));
   if (signals.bus) signals.bus(clock.now, BusAccess{false, static_cast<std::uint16_t>(addr), 0});
   const std::uint8_t v = read_now(addr);
@@ -118,8 +271,7 @@ std::uint8_t ChipCore::bus_read(std::uint32_t addr) {
   return v;
 }
 
-void ChipCore::bus_write(std::uint32_t addr, std::uint8_t value) {
-  advance(prof().bus_access_cycles);
+void ChipCore::bus_write_ref(std::uint32_t addr, std::uint8_t value) {
   signals.emit(BlockEvent::Kind::write, static_cast<std::uint16_t>(addr), value);
   if (signals.bus) signals.bus(clock.now, BusAccess{true, static_cast<std::uint16_t>(addr), value});
   write_now(addr, value);

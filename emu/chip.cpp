@@ -16,6 +16,21 @@ Chip& Chip::operator=(Chip&&) noexcept = default;
 void Chip::reset() { core_->reset(); }
 std::uint8_t Chip::read(std::uint32_t addr) { return core_->bus_read(addr); }
 void Chip::write(std::uint32_t addr, std::uint8_t value) { core_->bus_write(addr, value); }
+void Chip::write_block(std::uint32_t addr, std::span<const std::uint8_t> bytes) {
+  core_->bus_write_block(addr, bytes);
+}
+void Chip::read_block(std::uint32_t addr, std::span<std::uint8_t> out) {
+  core_->bus_read_block(addr, out);
+}
+void Chip::fill(std::uint32_t addr, std::uint8_t value, std::size_t len) {
+  core_->bus_fill(addr, value, len);
+}
+bool Chip::equal(std::uint32_t a, std::uint32_t b, std::size_t len) {
+  return core_->bus_equal(a, b, len);
+}
+std::size_t Chip::quiet_ram_run(std::uint32_t addr, std::size_t len, bool write) const {
+  return core_->quiet_ram_run(addr, len, write);
+}
 std::uint8_t Chip::peek(std::uint32_t addr) const { return core_->peek(addr); }
 bool Chip::poke(std::uint32_t addr, std::uint8_t value) { return core_->poke(addr, value); }
 std::uint16_t Chip::peek_reg(RegId id) const { return core_->reg_value(id); }

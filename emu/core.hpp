@@ -12,6 +12,8 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <span>
+#include <vector>
 
 #include "buffers.hpp"
 #include "dp_sm.hpp"
@@ -80,14 +82,33 @@ struct ChipCore {
   void reset();  // the hardware reset: cycle 0, every block in its reset state
 
   // --- the CPU's bus side (bus.cpp): decode, the hooks, QEMU's write rule ---
-  std::uint8_t bus_read(std::uint32_t addr);  // 4 clocks, then the access
-  void bus_write(std::uint32_t addr, std::uint8_t value);
+  // 4 clocks, then the access: the plain path inline, everything else out of line.
+  std::uint8_t bus_read(std::uint32_t addr) {
+    advance(prof().bus_access_cycles);
+    if (std::uint8_t v = 0; !watched() && plain_read(addr, v)) return v;
+    return bus_read_ref(addr);
+  }
+  void bus_write(std::uint32_t addr, std::uint8_t value) {
+    advance(prof().bus_access_cycles);
+    if (!watched() && plain_write(addr, value)) return;
+    bus_write_ref(addr, value);
+  }
   // The access itself, in the current cycle (the lockstep harness strobes it per cycle).
   std::uint8_t read_now(std::uint32_t addr);
   void write_now(std::uint32_t addr, std::uint8_t value);
   [[nodiscard]] std::uint8_t peek(std::uint32_t addr) const;
   bool poke(std::uint32_t addr, std::uint8_t value);
   [[nodiscard]] std::uint16_t reg_value(RegId id) const;  // storage or derived (no side effect)
+  // Block transfers (docs/timing.md, "Block transfers"): byte i at addr + i, each access as
+  // bus_read / bus_write makes it, in order; runs of plain RAM that no event interrupts move at
+  // once. bus_equal reads a[i], then b[i], and stops after the first pair that differs.
+  void bus_write_block(std::uint32_t addr, std::span<const std::uint8_t> bytes);
+  void bus_read_block(std::uint32_t addr, std::span<std::uint8_t> out);
+  void bus_fill(std::uint32_t addr, std::uint8_t value, std::size_t len);
+  bool bus_equal(std::uint32_t a, std::uint32_t b, std::size_t len);
+  // Of the next `len` accesses to addr, addr + 1, ...: how many are plain RAM accesses that end
+  // before the next event (0 in the per-cycle engine and while an access is watched).
+  [[nodiscard]] std::size_t quiet_ram_run(std::uint32_t addr, std::size_t len, bool write) const;
 
   // --- time (engine.cpp: both engines, docs/engine.md) ---
   enum class Stop : std::uint8_t { never, on_irq, on_irq_or_request };
@@ -114,6 +135,63 @@ struct ChipCore {
   void watchdog_expired();
   std::uint32_t begin_access(std::uint32_t addr, std::string_view what);
   void write_reg(const RegDesc& r, std::uint32_t offset, std::uint8_t value);
+
+  // The plain path (bus.cpp, docs/engine.md "Plain accesses"): the accesses the description
+  // (RegDesc::plain) and the installed hooks make straight loads and stores. Per address: 0 the
+  // reference path, 1..kPlainLane - 1 plain RAM with that many plain RAM bytes from there on,
+  // kPlainLane | i the lane plain_lanes_[i] of a latch. The event engine only.
+  static constexpr std::uint16_t kPlainLane = 0x8000;
+  struct PlainLane {
+    RegId latch;         // read: the register; write: its target
+    std::uint16_t mask;  // read: the bits that read as stored; write: the bits that store
+    std::uint16_t rsvd;  // write: reserved bits of the lane (a change takes the reference path)
+    std::uint8_t shift;  // the lane's bit position in the bus mode
+    bool irq;            // write: the latch is IRR or IMR (X/INT follows it)
+  };
+  void build_plain_path();
+  [[nodiscard]] bool watched() const { return signals.bus || signals.block || signals.state; }
+  bool plain_read(std::uint32_t addr, std::uint8_t& v) const {
+    if (addr >= regs.undecoded_end()) return false;
+    const std::uint16_t p = plain_rd_[addr];
+    if (p == 0) return false;
+    if (p < kPlainLane) {
+      v = regs.mem(addr);
+      return true;
+    }
+    const PlainLane& l = plain_lanes_[p & ~kPlainLane];
+    v = static_cast<std::uint8_t>((regs.latch(l.latch) & l.mask) >> l.shift);
+    return true;
+  }
+  // write_reg's rule for a lane without W1C, W1S, IGN, UNIMP, pulse bits or hooks: storage takes
+  // the written bits. X/INT is looked at only when IRR or IMR changed: nothing else here moves it.
+  bool plain_write(std::uint32_t addr, std::uint8_t value) {
+    if (addr >= regs.undecoded_end()) return false;
+    const std::uint16_t p = plain_wr_[addr];
+    if (p == 0) return false;
+    if (p < kPlainLane) {
+      regs.set_mem(addr, value);
+      return true;
+    }
+    const PlainLane& l = plain_lanes_[p & ~kPlainLane];
+    std::uint16_t& stored = regs.latch(l.latch);
+    const auto w = static_cast<std::uint16_t>(value << l.shift);
+    if (((w ^ stored) & l.rsvd) != 0) return false;  // the reference path logs it
+    const auto next = static_cast<std::uint16_t>((stored & ~l.mask) | (w & l.mask));
+    written_bits = w;
+    if (next == stored) return true;
+    stored = next;
+    if (l.irq) irq.update_line();
+    return true;
+  }
+  // The reference path: the observers, decode, hooks, QEMU's write rule.
+  std::uint8_t bus_read_ref(std::uint32_t addr);
+  void bus_write_ref(std::uint32_t addr, std::uint8_t value);
+  [[nodiscard]] std::size_t ram_run(const std::vector<std::uint16_t>& table, std::uint32_t addr,
+                                    std::size_t len) const;
+  [[nodiscard]] std::size_t quiet_accesses() const;
+  std::vector<std::uint16_t> plain_rd_;
+  std::vector<std::uint16_t> plain_wr_;
+  std::vector<PlainLane> plain_lanes_;
 };
 
 }  // namespace dpc31

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <span>
 #include <string>
 
 #include "dpc31/dpc31_hal.h"
@@ -29,37 +30,97 @@ void default_error(const char* message) {
 
 dpc31_error_fn g_error = default_error;
 
-BusPort& bus(const char* fn) {
-  if (t_bus == nullptr) {
-    g_error((std::string(fn) + " called with no chip selected (dpc31_select)").c_str());
-    std::abort();  // a handler that returns cannot make the access happen
+[[noreturn]] void no_chip(const char* fn) {
+  g_error((std::string(fn) + " called with no chip selected (dpc31_select)").c_str());
+  std::abort();  // a handler that returns cannot make the access happen
+}
+
+// Inline, the error out of line: every Vpc3Read / Vpc3Write asks.
+inline BusPort& bus(const char* fn) {
+  BusPort* const b = t_bus;
+  if (b == nullptr) [[unlikely]]
+    no_chip(fn);
+  return *b;
+}
+
+void null_buffer(const char* fn, uint16_t len) {
+  g_error((std::string(fn) + ": local buffer is NULL with length " + std::to_string(len)).c_str());
+  std::abort();  // a handler that returns cannot make the copy happen
+}
+
+// The drivers' chip addresses wrap at 16 bits: byte i of a block is at (uint16_t)(addr + i).
+// f(address, offset, n) gets the pieces that do not wrap, in order.
+template <typename F>
+void pieces(uint16_t addr, uint16_t len, F&& f) {
+  for (std::size_t i = 0; i < len;) {
+    const auto a = static_cast<uint16_t>(addr + i);
+    const std::size_t n = std::min<std::size_t>(len - i, 0x10000u - a);
+    f(a, i, n);
+    i += n;
   }
-  return *t_bus;
 }
 
-// The block functions, one byte access (4 clocks) per byte, addresses wrapping at 16 bits.
-void copy_to(BusPort& b, uint16_t dst, const uint8_t* src, uint16_t len) {
-  for (uint16_t i = 0; i < len; ++i) b.write(static_cast<uint16_t>(dst + i), src[i]);
+// The block functions: one block transfer of the bus per piece (Chip::write_block & co.).
+void copy_to(BusPort& b, uint16_t dst, const uint8_t* src, uint16_t len, const char* fn) {
+  if (src == nullptr && len != 0) null_buffer(fn, len);
+  pieces(dst, len, [&](uint16_t a, std::size_t i, std::size_t n) {
+    b.write_block(a, std::span<const uint8_t>(src + i, n));
+  });
 }
 
-void copy_from(BusPort& b, uint8_t* dst, uint16_t src, uint16_t len) {
-  for (uint16_t i = 0; i < len; ++i) dst[i] = b.read(static_cast<uint16_t>(src + i));
+void copy_from(BusPort& b, uint8_t* dst, uint16_t src, uint16_t len, const char* fn) {
+  if (dst == nullptr && len != 0) null_buffer(fn, len);
+  pieces(src, len, [&](uint16_t a, std::size_t i, std::size_t n) {
+    b.read_block(a, std::span<uint8_t>(dst + i, n));
+  });
 }
 
 void mem_set(BusPort& b, uint16_t addr, uint8_t value, uint16_t len) {
-  for (uint16_t i = 0; i < len; ++i) b.write(static_cast<uint16_t>(addr + i), value);
+  pieces(addr, len, [&](uint16_t a, std::size_t, std::size_t n) { b.fill(a, value, n); });
 }
 
 // Stops at the first difference, as the drivers' version does (its reads are what it costs).
 uint8_t mem_cmp(BusPort& b, uint16_t a, uint16_t c, uint16_t len) {
-  for (uint16_t i = 0; i < len; ++i) {
-    const uint8_t first = b.read(static_cast<uint16_t>(a + i));  // this order on the bus
-    if (first != b.read(static_cast<uint16_t>(c + i))) return 1;
+  for (std::size_t i = 0; i < len;) {
+    const auto ai = static_cast<uint16_t>(a + i);
+    const auto ci = static_cast<uint16_t>(c + i);
+    const std::size_t n = std::min<std::size_t>({len - i, 0x10000u - ai, 0x10000u - ci});
+    if (!b.equal(ai, ci, n)) return 1;
+    i += n;
   }
   return 0;
 }
 
 }  // namespace
+
+}  // namespace dpc31::hal
+
+namespace dpc31 {
+
+// Byte by byte: what a bus without block transfers of its own does.
+void BusPort::write_block(std::uint32_t addr, std::span<const std::uint8_t> bytes) {
+  for (const std::uint8_t v : bytes) write(addr++, v);
+}
+
+void BusPort::read_block(std::uint32_t addr, std::span<std::uint8_t> out) {
+  for (std::uint8_t& v : out) v = read(addr++);
+}
+
+void BusPort::fill(std::uint32_t addr, std::uint8_t value, std::size_t len) {
+  for (std::size_t i = 0; i < len; ++i) write(addr + static_cast<std::uint32_t>(i), value);
+}
+
+bool BusPort::equal(std::uint32_t a, std::uint32_t b, std::size_t len) {
+  for (std::size_t i = 0; i < len; ++i) {
+    const std::uint8_t first = read(a + static_cast<std::uint32_t>(i));  // this order on the bus
+    if (first != read(b + static_cast<std::uint32_t>(i))) return false;
+  }
+  return true;
+}
+
+}  // namespace dpc31
+
+namespace dpc31::hal {
 
 Selection exchange_selection(Selection s) {
   const Selection prev{t_bus, t_ports};
@@ -112,11 +173,11 @@ uint8_t dpc31_read(dpc31_chip* chip, uint16_t addr) { return chip->bus.read(addr
 void dpc31_write(dpc31_chip* chip, uint16_t addr, uint8_t value) { chip->bus.write(addr, value); }
 
 void dpc31_copy_to(dpc31_chip* chip, uint16_t dst, const uint8_t* src, uint16_t len) {
-  dpc31::hal::copy_to(chip->bus, dst, src, len);
+  dpc31::hal::copy_to(chip->bus, dst, src, len, "dpc31_copy_to");
 }
 
 void dpc31_copy_from(dpc31_chip* chip, uint8_t* dst, uint16_t src, uint16_t len) {
-  dpc31::hal::copy_from(chip->bus, dst, src, len);
+  dpc31::hal::copy_from(chip->bus, dst, src, len, "dpc31_copy_from");
 }
 
 void dpc31_memset(dpc31_chip* chip, uint16_t addr, uint8_t value, uint16_t len) {
@@ -178,11 +239,13 @@ uint8_t Vpc3Read(uint16_t wAddress) { return bus("Vpc3Read").read(wAddress); }
 void Vpc3Write(uint16_t wAddress, uint8_t bData) { bus("Vpc3Write").write(wAddress, bData); }
 
 void CopyToVpc3(uint8_t* pToVpc3Memory, uint8_t* pLocalMemory, uint16_t wLength) {
-  dpc31::hal::copy_to(bus("CopyToVpc3"), chip_address(pToVpc3Memory), pLocalMemory, wLength);
+  dpc31::hal::copy_to(bus("CopyToVpc3"), chip_address(pToVpc3Memory), pLocalMemory, wLength,
+                      "CopyToVpc3");
 }
 
 void CopyFromVpc3(uint8_t* pLocalMemory, uint8_t* pToVpc3Memory, uint16_t wLength) {
-  dpc31::hal::copy_from(bus("CopyFromVpc3"), pLocalMemory, chip_address(pToVpc3Memory), wLength);
+  dpc31::hal::copy_from(bus("CopyFromVpc3"), pLocalMemory, chip_address(pToVpc3Memory), wLength,
+                        "CopyFromVpc3");
 }
 
 void Vpc3MemSet(uint16_t wAddress, uint8_t bValue, uint16_t wLength) {

@@ -63,17 +63,9 @@ void InterruptController::end_of_interrupt() {
   sig_.log(LogLevel::debug, "EOI: X/INT inactive until cycle {}", clock_.now + cycles);
 }
 
-bool InterruptController::active() const {
-  return !clock_.running(s_.eoi) &&
-         (regs_.latch(RegId::Int_Req_Reg) & ~regs_.latch(RegId::Int_Mask_Reg)) != 0;
-}
-
-void InterruptController::update_line() {
-  if (s_.pb3 && (regs_.latch(RegId::Int_Req_Reg) & irq::DX_Out) == 0) set_pb3(false);
-  const bool now_active = active();
-  if (now_active == s_.line) return;
-  s_.line = now_active;
-  if (sig_.irq) sig_.irq(clock_.now, now_active);
+void InterruptController::line_changed(bool active) {
+  s_.line = active;
+  if (sig_.irq) sig_.irq(clock_.now, active);
 }
 
 void InterruptController::set_pb3(bool level) {

@@ -30,8 +30,15 @@ class InterruptController {
 
   void raise(std::uint16_t bits);  // IRR |= bits, noted as this cycle's events
   void end_of_interrupt();         // EOI (Mode_Reg1): the inactive time starts
-  [[nodiscard]] bool active() const;
-  void update_line();  // X/INT from IR and the inactive time; tells on_irq_change
+  [[nodiscard]] bool active() const {
+    return !clock_.running(s_.eoi) &&
+           (regs_.latch(RegId::Int_Req_Reg) & ~regs_.latch(RegId::Int_Mask_Reg)) != 0;
+  }
+  // X/INT from IR and the inactive time; tells on_irq_change. Inline: every IMR write asks.
+  void update_line() {
+    if (s_.pb3 && (regs_.latch(RegId::Int_Req_Reg) & irq::DX_Out) == 0) set_pb3(false);
+    if (const bool now_active = active(); now_active != s_.line) line_changed(now_active);
+  }
   [[nodiscard]] bool line() const { return s_.line; }
   // What an acknowledge or IRR write in this cycle must keep (the events of this cycle).
   [[nodiscard]] std::uint16_t events_now() const;
@@ -46,6 +53,7 @@ class InterruptController {
 
  private:
   friend struct BlockAccess;
+  void line_changed(bool active);  // the slow half of update_line: the observers
   Clock& clock_;
   RegisterFile& regs_;
   const Signals& sig_;

@@ -55,6 +55,7 @@ class RegisterFile {
   // Raw RAM by decoded address (the bus side and the back door).
   [[nodiscard]] std::uint8_t mem(std::uint32_t a) const { return s_.mem[a]; }
   void set_mem(std::uint32_t a, std::uint8_t v) { s_.mem[a] = v; }
+  std::uint8_t* mem_at(std::uint32_t a) { return &s_.mem[a]; }  // block transfers (bus.cpp)
 
   // The ASIC's own RAM accesses (buffers): the same decode and violation as the bus.
   [[nodiscard]] std::uint32_t segment_shift() const;
@@ -70,6 +71,11 @@ class RegisterFile {
     const std::uint32_t a = addr & ((1u << prof_->address_bits) - 1u);
     violation = prof_->violation_from != 0 && a >= prof_->violation_from && !s_.large_ram;
     return violation ? a - prof_->violation_subtract : a;
+  }
+  // One past the last address that decodes as itself (no violation, inside the address bus).
+  [[nodiscard]] std::uint32_t undecoded_end() const {
+    return prof_->violation_from != 0 && !s_.large_ram ? prof_->violation_from
+                                                       : 1u << prof_->address_bits;
   }
   void note_violation(std::uint32_t addr, std::uint32_t mapped);
   [[nodiscard]] bool ram_access_violation() const { return s_.ram_access_violation; }

@@ -217,6 +217,84 @@ void Cpu::write(std::uint32_t addr, std::uint8_t value) {
   chip_.write(addr, value);
 }
 
+// A block's accesses go one by one through gate(), except a stretch that the chip says is quiet
+// plain RAM (Chip::quiet_ram_run) and that starts before the limit: between its accesses gate()
+// would find nothing to do (no event inside it can request a stop or change X/INT, and plain RAM
+// moves neither), so it goes at once and the run is the same as byte by byte.
+template <typename Quiet>
+std::size_t Cpu::stretch(Quiet quiet) {
+  gate();  // returns with cycle() < limit_
+  const std::uint64_t per = chip_.bus_access_cycles();
+  const std::uint64_t starting = (limit_ - chip_.cycle() + per - 1) / per;
+  const auto k = static_cast<std::size_t>(std::min<std::uint64_t>(quiet(), starting));
+  if (k > 1) accesses_ += k - 1;
+  return k;
+}
+
+void Cpu::write_block(std::uint32_t addr, std::span<const std::uint8_t> bytes) {
+  while (!bytes.empty()) {
+    std::size_t k = stretch([&] { return chip_.quiet_ram_run(addr, bytes.size(), true); });
+    if (k <= 1) {
+      chip_.write(addr, bytes.front());
+      k = 1;
+    } else {
+      chip_.write_block(addr, bytes.first(k));
+    }
+    addr += static_cast<std::uint32_t>(k);
+    bytes = bytes.subspan(k);
+  }
+}
+
+void Cpu::read_block(std::uint32_t addr, std::span<std::uint8_t> out) {
+  while (!out.empty()) {
+    std::size_t k = stretch([&] { return chip_.quiet_ram_run(addr, out.size(), false); });
+    if (k <= 1) {
+      out.front() = chip_.read(addr);
+      k = 1;
+    } else {
+      chip_.read_block(addr, out.first(k));
+    }
+    addr += static_cast<std::uint32_t>(k);
+    out = out.subspan(k);
+  }
+}
+
+void Cpu::fill(std::uint32_t addr, std::uint8_t value, std::size_t len) {
+  while (len != 0) {
+    std::size_t k = stretch([&] { return chip_.quiet_ram_run(addr, len, true); });
+    if (k <= 1) {
+      chip_.write(addr, value);
+      k = 1;
+    } else {
+      chip_.fill(addr, value, k);
+    }
+    addr += static_cast<std::uint32_t>(k);
+    len -= k;
+  }
+}
+
+bool Cpu::equal(std::uint32_t a, std::uint32_t b, std::size_t len) {
+  for (std::size_t i = 0; i < len;) {
+    const auto ai = a + static_cast<std::uint32_t>(i);
+    const auto bi = b + static_cast<std::uint32_t>(i);
+    // Two accesses per pair, both quiet plain RAM.
+    const std::size_t k = stretch([&] {
+                            return std::min(chip_.quiet_ram_run(ai, len - i, false),
+                                            chip_.quiet_ram_run(bi, len - i, false));
+                          }) /
+                          2;
+    if (k == 0) {
+      const std::uint8_t first = chip_.read(ai);  // gated by stretch(); this order on the bus
+      if (first != read(bi)) return false;
+      ++i;
+      continue;
+    }
+    if (!chip_.equal(ai, bi, k)) return false;
+    i += k;
+  }
+  return true;
+}
+
 void Cpu::idle(std::uint64_t cycles) {
   const std::uint64_t end = chip_.cycle() + cycles;
   for (;;) {

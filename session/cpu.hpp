@@ -13,10 +13,12 @@
 #include <setjmp.h>
 #include <ucontext.h>
 
+#include <cstddef>
 #include <cstdint>
 #include <exception>
 #include <functional>
 #include <memory>
+#include <span>
 
 #include "board.hpp"
 #include "dpc31/bus_port.hpp"
@@ -55,6 +57,12 @@ class Cpu final : public BusPort {
   // Firmware side (called from its code).
   std::uint8_t read(std::uint32_t addr) override;
   void write(std::uint32_t addr, std::uint8_t value) override;
+  // Block transfers: the accesses of read() / write() one by one, a quiet stretch of plain RAM
+  // at once (stretch()).
+  void write_block(std::uint32_t addr, std::span<const std::uint8_t> bytes) override;
+  void read_block(std::uint32_t addr, std::span<std::uint8_t> out) override;
+  void fill(std::uint32_t addr, std::uint8_t value, std::size_t len) override;
+  bool equal(std::uint32_t a, std::uint32_t b, std::size_t len) override;
   // Busy-waits `cycles` clocks; an enabled interrupt preempts the main loop meanwhile.
   void idle(std::uint64_t cycles) override;
   [[nodiscard]] const Chip& chip() const override { return chip_; }
@@ -67,8 +75,12 @@ class Cpu final : public BusPort {
   [[nodiscard]] bool interrupts_enabled() const;
   [[nodiscard]] bool preempts() const;  // X/INT interrupts the main loop now
   void gate();                          // firmware: wait for the bus side's grant before an access
-  void hand_to_firmware();              // bus side: let the firmware run until it yields
-  void hand_to_bus_side();              // firmware: give control back
+  // firmware: gate(), then how many of the next accesses (at most quiet(), asked after the gate)
+  // start before the limit
+  template <typename Quiet>
+  std::size_t stretch(Quiet quiet);
+  void hand_to_firmware();  // bus side: let the firmware run until it yields
+  void hand_to_bus_side();  // firmware: give control back
 
   Chip& chip_;
   Program program_;

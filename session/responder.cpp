@@ -1,6 +1,7 @@
 #include "responder.hpp"
 
 #include <algorithm>
+#include <span>
 
 #include "dpc31/dp.hpp"
 
@@ -112,9 +113,7 @@ void Responder::init(BusPort& c) {
     alloc(r, aux_len);
   }
   c.write(cell_addr(c.chip(), RegId::R_Len_Read_Cfg_Data), static_cast<std::uint8_t>(s.cfg.size()));
-  const std::uint32_t read_cfg = buffer(c, RegId::R_Read_Cfg_Buf_Ptr);
-  for (std::size_t i = 0; i < s.cfg.size(); ++i)
-    c.write(read_cfg + static_cast<std::uint32_t>(i), s.cfg[i]);
+  c.write_block(buffer(c, RegId::R_Read_Cfg_Buf_Ptr), s.cfg);
   if (p.id == Profile::dpc31) {
     refill_substitute(c);
     alloc(RegId::InstQ_Base, kQueueLen * request::kEntryBytes);
@@ -140,10 +139,9 @@ void Responder::init(BusPort& c) {
 
 // dpc31: after a cleared fetch the old U is the new clear buffer C; prepare the substitute values.
 void Responder::refill_substitute(BusPort& c) {
-  const std::uint32_t sub = buffer(c, RegId::R_Dout_Buf_Ptr_C);
-  for (std::size_t i = 0; i < cfg_.substitute.size() && i < cfg_.slave.out_len; ++i) {
-    c.write(sub + static_cast<std::uint32_t>(i), cfg_.substitute[i]);
-  }
+  const std::span<const std::uint8_t> sub(cfg_.substitute);
+  c.write_block(buffer(c, RegId::R_Dout_Buf_Ptr_C),
+                sub.first(std::min<std::size_t>(sub.size(), cfg_.slave.out_len)));
 }
 
 void Responder::give_inputs(BusPort& c, bool always) {
@@ -152,10 +150,9 @@ void Responder::give_inputs(BusPort& c, bool always) {
       static_cast<std::uint8_t>((c.read(raddr(c.chip(), RegId::Din_Buffer_SM)) >> 4) & 3);
   static constexpr RegId kPtr[] = {RegId::R_Din_Buf_Ptr1, RegId::R_Din_Buf_Ptr2,
                                    RegId::R_Din_Buf_Ptr3};
-  const std::uint32_t base = buffer(c, kPtr[u - 1]);
-  for (std::size_t i = 0; i < inputs.size() && i < cfg_.slave.in_len; ++i) {
-    c.write(base + static_cast<std::uint32_t>(i), inputs[i]);
-  }
+  const std::span<const std::uint8_t> in(inputs);
+  c.write_block(buffer(c, kPtr[u - 1]),
+                in.first(std::min<std::size_t>(in.size(), cfg_.slave.in_len)));
   c.read(raddr(c.chip(), RegId::New_Din_Buffer_Cmd));
 }
 
@@ -191,7 +188,8 @@ void Responder::isr(BusPort& c) {
       const std::uint32_t base =
           buffer(c, kPtr[field_of(r, fields::Next_Dout_Buffer_Cmd::Ind_U_Buffer) - 1]);
       Output o{c.cycle(), {}, (r & fields::Next_Dout_Buffer_Cmd::U_Buffer_Cleared) != 0};
-      for (std::uint32_t i = 0; i < cfg_.slave.out_len; ++i) o.data.push_back(c.read(base + i));
+      o.data.resize(cfg_.slave.out_len);
+      c.read_block(base, o.data);
       outputs.push_back(std::move(o));
       if (outputs.back().cleared && c.chip().profile().id == Profile::dpc31) refill_substitute(c);
     }

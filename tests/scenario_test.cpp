@@ -21,8 +21,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Not through __FILE__: with ccache's base directory (our launcher) that is a path relative to
-// where the compiler ran, which is not where CTest runs the test under every generator.
+// SOURCE_DIR, not __FILE__: with ccache's base directory (our launcher) or with Ninja, __FILE__
+// is relative to where the compiler ran, and CTest runs the tests from build/tests.
 const fs::path kTraces = fs::path(SOURCE_DIR) / "traces";
 
 struct Lines {

@@ -3,8 +3,10 @@
 // (hal::Selection, hal.hpp). The host CPU that runs firmware behind it is in session/cpu.hpp.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <span>
 
 #include "dpc31/chip.hpp"
 
@@ -16,6 +18,12 @@ class BusPort {
   virtual ~BusPort() = default;
   virtual std::uint8_t read(std::uint32_t addr) = 0;
   virtual void write(std::uint32_t addr, std::uint8_t value) = 0;
+  // Block transfers (Chip::write_block & co.): the same accesses as byte by byte, which is what
+  // these defaults make.
+  virtual void write_block(std::uint32_t addr, std::span<const std::uint8_t> bytes);
+  virtual void read_block(std::uint32_t addr, std::span<std::uint8_t> out);
+  virtual void fill(std::uint32_t addr, std::uint8_t value, std::size_t len);
+  virtual bool equal(std::uint32_t a, std::uint32_t b, std::size_t len);
   // The CPU spends `cycles` clocks without a bus access (a busy wait, a pass of a loop).
   virtual void idle(std::uint64_t cycles) = 0;
   [[nodiscard]] virtual const Chip& chip() const = 0;
@@ -40,6 +48,18 @@ class DirectBus final : public BusPort {
   explicit DirectBus(Chip& c) : chip_(c) {}
   std::uint8_t read(std::uint32_t addr) override { return chip_.read(addr); }
   void write(std::uint32_t addr, std::uint8_t value) override { chip_.write(addr, value); }
+  void write_block(std::uint32_t addr, std::span<const std::uint8_t> bytes) override {
+    chip_.write_block(addr, bytes);
+  }
+  void read_block(std::uint32_t addr, std::span<std::uint8_t> out) override {
+    chip_.read_block(addr, out);
+  }
+  void fill(std::uint32_t addr, std::uint8_t value, std::size_t len) override {
+    chip_.fill(addr, value, len);
+  }
+  bool equal(std::uint32_t a, std::uint32_t b, std::size_t len) override {
+    return chip_.equal(a, b, len);
+  }
   void idle(std::uint64_t cycles) override { chip_.step(cycles); }
   [[nodiscard]] const Chip& chip() const override { return chip_; }
 

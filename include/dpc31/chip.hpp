@@ -117,6 +117,21 @@ class Chip {
   // --- the bus (front door) ---
   std::uint8_t read(std::uint32_t addr);
   void write(std::uint32_t addr, std::uint8_t value);
+  // Block transfers, what the drivers' CopyToVpc3 & co. do (docs/timing.md, "Block transfers"):
+  // byte i at addr + i, each an ordinary bus access in order, exactly as that many read() /
+  // write() calls would be (time, values, log, observers); a stretch of plain RAM that no event
+  // interrupts moves at once.
+  void write_block(std::uint32_t addr, std::span<const std::uint8_t> bytes);
+  void read_block(std::uint32_t addr, std::span<std::uint8_t> out);
+  void fill(std::uint32_t addr, std::uint8_t value, std::size_t len);
+  // Reads a + i, then b + i, for each i, and stops after the first pair that differs (the
+  // drivers' Vpc3MemCmp); true when all len pairs are equal.
+  bool equal(std::uint32_t a, std::uint32_t b, std::size_t len);
+  // Of the next `len` accesses to addr, addr + 1, ... (reads, or writes): how many touch only
+  // plain RAM (no register, no hooked or reserved cell, no RAM access violation) and end before
+  // the next event. They change nothing but that RAM and the cycle, so a CPU model may make them
+  // at once (session/cpu.cpp). 0 in the per-cycle engine and while an access is watched.
+  [[nodiscard]] std::size_t quiet_ram_run(std::uint32_t addr, std::size_t len, bool write) const;
 
   // --- the debugger (back door): no time passes, no side effects, no log ---
   // peek returns what a bus read would return now (command reads: the result they would give).

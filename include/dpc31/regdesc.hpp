@@ -79,6 +79,14 @@ struct RegDesc {
   // The name this profile's own manual gives the register, where it differs (the DPC31's
   // User_New_Dout_Cmd for Next_Dout_Buffer_Cmd); the C header and find_reg know it too.
   std::string_view alias{};
+  // The byte lanes (bit 0: bits 7..0, bit 1: bits 15..8; the address of each lane follows from
+  // the bus mode's placement) whose CPU accesses are plain storage by the description: a latch
+  // whose lane has no W1C, W1S, CMD, IGN or pulse bit and a register without UNIMP bits, or a RAM
+  // cell the manuals do not mark reserved. Reserved bits may be in a plain lane: a write that
+  // leaves them as they are is a straight store, one that would change them takes the reference
+  // path, which logs it (docs/decisions.md). The chip adds what the description does not know:
+  // a lane is stored straight only if no block installed a hook on the register (emu/bus.cpp).
+  std::uint8_t plain = 0;
 
   [[nodiscard]] constexpr int bytes() const { return width / 8; }
   [[nodiscard]] constexpr std::uint16_t mask() const {

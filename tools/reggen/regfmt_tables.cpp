@@ -151,7 +151,8 @@ std::string emit_cpp_tables(Profiles profiles, const ChipTiming& timing,
           "     .desc = {},\n"
           "     .fields = {},\n"
           "     .reserved = {},\n"
-          "     .alias = {}}},\n",
+          "     .alias = {},\n"
+          "     .plain = {:#04b}}},\n",
           reg_id(reg_names, r.id), cpp_string(r.name), kind_name(r.kind), block_name(r.block),
           r.width, cpp_bool(r.has_reset), hex(r.reset, 4),
           r.read_addr < 0 ? std::string{"-1"} : hex(static_cast<std::uint32_t>(r.read_addr), 4),
@@ -160,7 +161,7 @@ std::string emit_cpp_tables(Profiles profiles, const ChipTiming& timing,
           r.motorola[1], cpp_bool(r.documented), cpp_string(r.source), cpp_string(r.note),
           cpp_string(r.desc),
           r.fields.empty() ? std::string{"{}"} : fmt::format("k{}_{}_fields", P, r.name),
-          cpp_bool(r.reserved), cpp_string(r.alias));
+          cpp_bool(r.reserved), cpp_string(r.alias), r.plain);
     }
     out += "};\n";
     // Regions.

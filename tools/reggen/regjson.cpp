@@ -152,6 +152,19 @@ Json parse_text(std::string_view text, const std::string& file) {
   return root;
 }
 
+// RegDesc::plain: the lanes whose accesses are straight stores and loads by the description.
+std::uint8_t plain_lanes(const RegDesc& r) {
+  const std::uint8_t all = r.width == 16 ? 0b11 : 0b01;
+  if (r.kind == Kind::cell) return r.reserved ? 0 : all;
+  if (r.kind != Kind::latch || r.unimp != 0) return 0;
+  const auto acting = static_cast<std::uint16_t>(r.w1c | r.w1s | r.cmd | r.ign | r.pulse);
+  std::uint8_t lanes = 0;
+  for (unsigned b = 0; b < static_cast<unsigned>(r.bytes()); ++b) {
+    if ((acting & (0xFFu << (8 * b))) == 0) lanes = static_cast<std::uint8_t>(lanes | 1u << b);
+  }
+  return lanes;
+}
+
 }  // namespace
 
 class Loader {
@@ -641,6 +654,7 @@ class Loader {
 
     base.reserved = boolean(j, "reserved", false);
     if (base.reserved && kind != Kind::cell) fail("'reserved' is only for cells");
+    base.plain = plain_lanes(base);
     const std::string target = string(j, "target", false);
     if (kind == Kind::port && target.empty()) fail("port without 'target'");
     if (kind != Kind::port && !target.empty()) fail("'target' on an entry that is not a port");

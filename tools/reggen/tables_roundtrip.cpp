@@ -82,6 +82,14 @@ int main(int argc, char** argv) {
   check(reg(Profile::spc3, "Int_Req_Reg").motorola[0] == 1, "Motorola: high byte first");
   check(reg(Profile::spc3, "Reserved_17h").reserved, "Reserved_17h is a reserved cell");
   check(!reg(Profile::spc3, "New_Din_Buffer_Cmd").has_reset, "command reads have no reset value");
+  // Plain lanes (RegDesc::plain): IMR's two lanes are storage (reserved bits included), a port,
+  // a command read, a pulse lane (Mode_Reg1_S) and a reserved cell are not.
+  check(reg(Profile::spc3, "Int_Mask_Reg").plain == 0b11, "Int_Mask_Reg: both lanes plain");
+  check(ack.plain == 0, "Int_Ack_Reg (a port) not plain");
+  check(reg(Profile::spc3, "Mode_Reg1_S").plain == 0, "Mode_Reg1_S not plain");
+  check(reg(Profile::spc3, "New_Din_Buffer_Cmd").plain == 0, "a command read is not plain");
+  check(reg(Profile::spc3, "Reserved_17h").plain == 0, "a reserved cell is not plain");
+  check(reg(Profile::spc3, "R_TS_Adr").plain == 0b01, "a cell is plain");
   check(find_reg(profile_desc(Profile::dpc31), RegId::Param_Reg) != nullptr, "find_reg by id");
   check(kRegIdNames[static_cast<std::size_t>(RegId::Mode_Reg1)] == "Mode_Reg1", "kRegIdNames");
 
