@@ -83,6 +83,16 @@ TEST(Cli, DemoRunsOnEveryProfile) {
         << p;
     EXPECT_FALSE(slurp(dir + "/dpc31-demo.pcapng").empty()) << p;
     EXPECT_NE(r.out.find("X/INT -> low (active)"), std::string::npos) << p;
+    // The register session really starts the chip (the start clears the outputs: DX_Out,
+    // docs/timing.md) and runs its 1 ms user timer, whose masked tick IRR latches; the DPC31 is
+    // started and stopped through its Instruction_Queue (MAC_Start, MAC_Stop; docs/dpc31.md),
+    // since its Mode_Reg1 has no start bit.
+    EXPECT_NE(r.out.find("IR = 2000h (DX_Out = bit 13)"), std::string::npos) << p;
+    EXPECT_NE(r.out.find("IRR = 0010h, IR = 0000h"), std::string::npos) << p;
+    EXPECT_EQ(r.out.find("chip: request MAC_Start") != std::string::npos, std::string(p) == "dpc31")
+        << p;
+    EXPECT_EQ(r.out.find("chip: request MAC_Stop") != std::string::npos, std::string(p) == "dpc31")
+        << p;
     EXPECT_NE(r.out.find("User_Prm_Data_Okay = 00h"), std::string::npos) << p;
     EXPECT_NE(r.out.find("dp_state Wait_Cfg -> Data_Exchange"), std::string::npos) << p;
     EXPECT_NE(r.out.find("wd_state DP_Control -> Baud_Control"), std::string::npos) << p;

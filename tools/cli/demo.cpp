@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <string>
 
+#include "dpc31/dp.hpp"
 #include "firmware_host.hpp"
 #include "harness.hpp"
 #include "run.hpp"
@@ -58,6 +59,30 @@ class Narrator {
     const int lo = low_byte_offset(id);
     write(id, static_cast<std::uint8_t>(v), lo);
     write(id, static_cast<std::uint8_t>(v >> 8), 1 - lo);
+  }
+  // The user's start and stop: Mode_Reg1_S on the SPC3 and the VPC3+; on the DPC31, whose
+  // Mode_Reg1 has no such bits, a request through the Instruction_Queue (docs/dpc31.md): the
+  // entry (code, parameter) in RAM, then InstQ_Wr moved on, which executes it.
+  void user_command(std::uint8_t mode_reg1_bit, std::uint8_t request, const char* name) {
+    if (chip_.profile().id != Profile::dpc31) {
+      write(RegId::Mode_Reg1_S, mode_reg1_bit);
+      return;
+    }
+    const std::uint8_t wr = chip_.peek(static_cast<std::uint32_t>(chip_.addr_of(RegId::InstQ_Wr)));
+    const std::uint8_t base =
+        chip_.peek(static_cast<std::uint32_t>(chip_.addr_of(RegId::InstQ_Base)));
+    const std::uint8_t len =
+        chip_.peek(static_cast<std::uint32_t>(chip_.addr_of(RegId::InstQ_Len)));
+    const std::uint32_t entry =
+        (static_cast<std::uint32_t>(base) << chip_.profile().segment_shift) +
+        wr * request::kEntryBytes;
+    write_ram(entry, request, fmt::format("Instruction_Queue entry {}: {}", wr, name));
+    write_ram(entry + 1, 0x00, "  its parameter");
+    write(RegId::InstQ_Wr, static_cast<std::uint8_t>((wr + 1) % len));
+  }
+  void write_ram(std::uint32_t a, std::uint8_t v, const std::string& what) {
+    chip_.write(a, v);
+    fmt::print(out_, "[cycle {:>8}] write {:#06x} <- {:02X}h  {}\n", chip_.cycle(), a, v, what);
   }
   void step(std::uint64_t n, const char* why) {
     fmt::print(out_, "[cycle {:>8}] step  {} cycles: {}\n", chip_.cycle(), n, why);
@@ -240,7 +265,11 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option, const std::stri
   fmt::print(out, "X/INT is low-active after reset; the pin is {} at cycle 0\n",
              chip.x_int_pin() ? "high (inactive)" : "low");
 
-  n.say("Initialise as a driver does: clear IRR, acknowledge all, mode, unmask four events, start");
+  n.say(p.id == Profile::dpc31
+            ? "Initialise as a driver does: clear IRR, acknowledge all, mode, unmask four "
+              "events, the Instruction_Queue, MAC_Start"
+            : "Initialise as a driver does: clear IRR, acknowledge all, mode, unmask four "
+              "events, start");
   n.write16(RegId::Int_Req_Reg, 0x0000);
   n.write16(RegId::Int_Ack_Reg, 0xFFFF);
   n.write(RegId::Mode_Reg1_R, 0xFF);
@@ -248,7 +277,16 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option, const std::stri
   const std::uint16_t enabled =
       irq::DX_Out | irq::MAC_Reset | irq::User_Timer_Clock | irq::New_Prm_Data;
   n.write16(RegId::Int_Mask_Reg, static_cast<std::uint16_t>(~enabled));
-  n.write(RegId::Mode_Reg1_S, m1::Start_SPC3);  // power-on clear of the outputs raises DX_Out
+  if (p.id == Profile::dpc31) {  // rings of 4 requests and 4 indications, the last two segments
+    const auto last =
+        static_cast<std::uint8_t>(((p.ram_begin + p.ram_size) >> p.segment_shift) - 1);
+    n.write(RegId::InstQ_Base, last);
+    n.write(RegId::InstQ_Len, 4);
+    n.write(RegId::IndQ_Base, static_cast<std::uint8_t>(last - 1));
+    n.write(RegId::IndQ_Len, 4);
+  }
+  // The start: the power-on clear of the outputs raises DX_Out.
+  n.user_command(m1::Start_SPC3, request::MAC_Start, "MAC_Start");
 
   n.say("ISR: read IR, fetch the (cleared) outputs, acknowledge DX_Out, EOI");
   const std::uint16_t ir = n.read16(RegId::Int_Reg);
@@ -292,8 +330,9 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option, const std::stri
              chip.dp_state() == DpState::Wait_Cfg ? "Wait_Cfg" : "other");
   n.write(RegId::Mode_Reg1_S, m1::EOI);
 
-  n.say("Go_Offline: MAC_Reset, Status.Offline");
-  n.write(RegId::Mode_Reg1_S, m1::Go_Offline);
+  n.say(p.id == Profile::dpc31 ? "MAC_Stop: MAC_Reset, Status.Offline, its confirmation queued"
+                               : "Go_Offline: MAC_Reset, Status.Offline");
+  n.user_command(m1::Go_Offline, request::MAC_Stop, "MAC_Stop");
   const std::uint16_t status = n.read16(RegId::Status_Reg);
   fmt::print(out, "                   Status_Reg = {:04X}h (bit 0 = 0: Offline)\n", status);
   n.write16(RegId::Int_Ack_Reg, irq::MAC_Reset);
