@@ -15,7 +15,7 @@ ChipCore::ChipCore(const ChipOptions& opt)
       clock{opt.engine, opt.clock_hz != 0 ? opt.clock_hz : chip_timing().clock_hz},
       signals(clock),
       regs(profile_desc(opt.profile), opt.bus, signals),
-      irq(clock, regs, signals),
+      irq(clock, regs, signals, opt.irq_controller),
       buffers(regs, irq),
       watchdog(clock, regs, irq, signals),
       dp(regs, irq, buffers, watchdog, counters, signals),
@@ -28,6 +28,12 @@ ChipCore::ChipCore(const ChipOptions& opt)
     throw std::invalid_argument(
         fmt::format("a VPC3+ variant ({}) on the {} profile: only vpc3plus has variants",
                     vpc3_variant_name(*variant), prof().name));
+  }
+  if (opt.irq_controller == IrqController::c31 && prof().id != Profile::dpc31) {
+    throw std::invalid_argument(
+        fmt::format("the C31's interrupt controller on the {} profile: only the dpc31 has a C31 "
+                    "core",
+                    prof().name));
   }
   // A RAM access violation takes a started chip offline.
   regs.on_violation = [this] { mode.go_offline(); };

@@ -98,7 +98,8 @@ std::uint32_t Chip::bus_access_cycles() const { return core_->prof().bus_access_
 
 bool Chip::x_int_pin() const {
   // INT_Pol = 0: low-active (the default), 1: high-active.
-  return core_->regs.mode0(fields::Mode_Reg0::INT_Pol) ? core_->irq.active() : !core_->irq.active();
+  const bool active = core_->irq.x_int_active();
+  return core_->regs.mode0(fields::Mode_Reg0::INT_Pol) ? active : !active;
 }
 bool Chip::irq_active() const { return core_->irq.active(); }
 bool Chip::pb3_pin() const { return core_->irq.pb3(); }
@@ -116,6 +117,7 @@ void Chip::set_log_sink(LogSink sink) { core_->signals.sink = std::move(sink); }
 const ProfileDesc& Chip::profile() const { return core_->prof(); }
 BusMode Chip::bus_mode() const { return core_->regs.bus(); }
 std::optional<Vpc3Variant> Chip::vpc3_variant() const { return core_->variant; }
+IrqController Chip::irq_controller() const { return core_->irq.served(); }
 
 bool parse_vpc3_variant(std::string_view s, Vpc3Variant& out) {
   for (Vpc3Variant v : kAllVpc3Variants) {
@@ -137,6 +139,20 @@ std::string_view vpc3_variant_name(Vpc3Variant v) {
       return "s";
   }
   return "?";
+}
+
+bool parse_irq_controller(std::string_view s, IrqController& out) {
+  for (IrqController c : {IrqController::external, IrqController::c31}) {
+    if (s == irq_controller_name(c)) {
+      out = c;
+      return true;
+    }
+  }
+  return false;
+}
+
+std::string_view irq_controller_name(IrqController c) {
+  return c == IrqController::c31 ? "c31" : "external";
 }
 
 std::int32_t Chip::addr_of(RegId id) const {

@@ -263,8 +263,8 @@ void Chip::load_state(std::span<const std::uint8_t> bytes) {
   const std::span<const std::uint8_t> payload = snap::open(bytes, header_of(c));
   // Decode into a fresh core (its tables built from the same profile); *core_ is untouched until
   // everything has been read and checked.
-  auto fresh = std::make_unique<ChipCore>(
-      ChipOptions{c.prof().id, c.regs.bus(), c.clock.hz, c.clock.engine, c.variant});
+  auto fresh = std::make_unique<ChipCore>(ChipOptions{c.prof().id, c.regs.bus(), c.clock.hz,
+                                                      c.clock.engine, c.variant, c.irq.served()});
   fresh->signals.sink = nullptr;
   snap::Reader r(payload);
   core_fields(r, *fresh);

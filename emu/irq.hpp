@@ -1,6 +1,10 @@
 // Interrupt controller (chip-facts §2): IRR latched independent of IMR, IR = IRR & ~IMR,
 // X/INT = OR of IR unless inside the inactive time that follows an EOI. On the DPC31 the
 // DX_Out interrupt can also drive port PB3 (seed 003, p.32).
+// The DPC31 has the controller twice at the same addresses, for the external processor and for
+// the C31 core; this block is the one the bus reaches (ChipOptions::irq_controller). The other
+// one is never written: its mask keeps its reset value FFFFh, so its line never becomes active,
+// and its registers, which no one can read, are not kept (docs/dpc31.md).
 #pragma once
 
 #include <cstdint>
@@ -24,8 +28,8 @@ class InterruptController {
     bool pb3 = false;   // port PB3 (below)
   };
 
-  InterruptController(Clock& clock, RegisterFile& regs, const Signals& sig)
-      : clock_(clock), regs_(regs), sig_(sig) {}
+  InterruptController(Clock& clock, RegisterFile& regs, const Signals& sig, IrqController served)
+      : clock_(clock), regs_(regs), sig_(sig), served_(served) {}
   void reset();
 
   void raise(std::uint16_t bits);  // IRR |= bits, noted as this cycle's events
@@ -40,6 +44,10 @@ class InterruptController {
     if (const bool now_active = active(); now_active != s_.line) line_changed(now_active);
   }
   [[nodiscard]] bool line() const { return s_.line; }
+  [[nodiscard]] IrqController served() const { return served_; }
+  // The external processor's controller drives X/INT; with the C31's served, that is the other,
+  // fully masked one.
+  [[nodiscard]] bool x_int_active() const { return served_ == IrqController::external && active(); }
   // What an acknowledge or IRR write in this cycle must keep (the events of this cycle).
   [[nodiscard]] std::uint16_t events_now() const;
   void note_events(std::uint16_t bits, std::uint64_t cycle);
@@ -57,6 +65,7 @@ class InterruptController {
   Clock& clock_;
   RegisterFile& regs_;
   const Signals& sig_;
+  const IrqController served_;
   State s_;
 };
 

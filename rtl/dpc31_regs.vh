@@ -1103,9 +1103,10 @@
 // 8 KB address space: register area 0000h-07FFh, 6 KB RAM 0800h-1FFFh, internal work cells
 // 0800h-083Fh, organisational cells from 0840h, user buffers from 08A0h on 32-byte segments
 // (documented, DPC31 HW description p.12). The DPC31's own register addresses are not public:
-// the processor parameters keep the SPC3 offsets 00h-15h at the start of the register area
-// (modelled), Param_Reg and C31_Control follow at 16h/17h (modelled), and organisational cell
-// 16h+k sits at 0840h+k (modelled).
+// the processor parameters keep the SPC3 offsets 00h-15h at the start of the register area but
+// for Status_Reg (modelled), C31_Control follows at 17h (modelled), organisational cell 16h+k
+// sits at 0840h+k (modelled); the queues' cells, Param_Reg and the status register are
+// parameter cells from 086Ah (p.12; places modelled).
 `define DPC31_ADDRESS_BITS                              13
 `define DPC31_RAM_BEGIN                                 13'h0800
 `define DPC31_RAM_SIZE                                  6144
@@ -1197,8 +1198,8 @@
 `define DPC31_Int_Ack_Reg_DX_Out_POS                    13
 `define DPC31_Int_Ack_Reg_DX_Out_W                      1
 
-// Status_Reg: derived, 16 bit -- Status register
-`define DPC31_ADDR_Status_Reg                           13'h0004
+// Status_Reg: derived, 16 bit -- Status register (a status display in the parameter cells)
+`define DPC31_ADDR_Status_Reg                           13'h0874
 `define DPC31_Status_Reg_RESET                          16'h0000
 `define DPC31_Status_Reg_Offline_Passive_Idle_POS       0
 `define DPC31_Status_Reg_Offline_Passive_Idle_W         1
@@ -1448,7 +1449,7 @@
 `define DPC31_ADDR_Reserved_15h_W                       13'h0015
 
 // Param_Reg: latch, 8 bit -- DPC31 param register (Global_Control options)
-`define DPC31_ADDR_Param_Reg                            13'h0016
+`define DPC31_ADDR_Param_Reg                            13'h0872
 `define DPC31_Param_Reg_RESET                           8'h00
 `define DPC31_Param_Reg_New_GC_Int_Mode_POS             0
 `define DPC31_Param_Reg_New_GC_Int_Mode_W               1

@@ -311,6 +311,9 @@ class Parser {
       if (s_.chip.variant && s_.chip.profile != Profile::vpc3plus) {
         fail("a 'variant' was given: only profile vpc3plus has variants");
       }
+      if (s_.chip.irq_controller == IrqController::c31 && s_.chip.profile != Profile::dpc31) {
+        fail("'irq-controller c31' was given: only profile dpc31 has a C31 core");
+      }
     } else if (cmd_ == "variant") {
       positional(1, 1, "one of b, c, s");
       no_options();
@@ -322,6 +325,15 @@ class Parser {
         fail("'variant' needs 'profile vpc3plus' before it: only the VPC3+ has variants");
       }
       s_.chip.variant = v;
+    } else if (cmd_ == "irq-controller") {
+      positional(1, 1, "external or c31");
+      no_options();
+      if (!parse_irq_controller(pos_[0], s_.chip.irq_controller)) {
+        fail(fmt::format("unknown irq-controller '{}' (external, c31)", shown(pos_[0])));
+      }
+      if (s_.chip.irq_controller == IrqController::c31 && s_.chip.profile != Profile::dpc31) {
+        fail("'irq-controller c31' needs 'profile dpc31' before it: only the DPC31 has a C31 core");
+      }
     } else if (cmd_ == "bus") {
       positional(1, 1, "intel or motorola");
       no_options();

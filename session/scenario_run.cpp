@@ -59,10 +59,13 @@ class Runner {
 
   ScenarioOutcome run() {
     if (walk_) {
-      walk_(fmt::format("scenario {}: profile {}{}, bus {}, master {} -> slave {} at {} baud",
+      walk_(fmt::format("scenario {}: profile {}{}{}, bus {}, master {} -> slave {} at {} baud",
                         s_.file, profile_name(s_.chip.profile),
                         s_.chip.variant
                             ? fmt::format(", variant {}", vpc3_variant_name(*s_.chip.variant))
+                            : std::string(),
+                        s_.chip.irq_controller == IrqController::c31
+                            ? std::string(", the C31's interrupt controller")
                             : std::string(),
                         s_.chip.bus == BusMode::intel ? "intel" : "motorola", s_.master.address,
                         s_.user.slave.address, s_.master.baud));

@@ -210,6 +210,15 @@ class TraceParser {
       if (!parse_vpc3_variant(w[1], v))
         fail(fmt::format("unknown variant '{}' (b, c, s)", shown(w[1])));
       t_.chip.variant = v;
+    } else if (k == "irq-controller") {
+      once(have_irq_controller_);
+      arity(w, 2, "irq-controller external|c31");
+      if (!parse_irq_controller(w[1], t_.chip.irq_controller))
+        fail(fmt::format("unknown irq-controller '{}' (external, c31)", shown(w[1])));
+      if (t_.chip.irq_controller == IrqController::c31 &&
+          (t_.chip.profile != Profile::dpc31 || !have_profile_)) {
+        fail("'irq-controller c31' follows 'profile dpc31': only the DPC31 has a C31 core");
+      }
     } else if (k == "bus") {
       once(have_bus_);
       arity(w, 2, "bus intel|motorola");
@@ -383,7 +392,7 @@ class TraceParser {
     } else {
       fail(
           fmt::format("unknown line '{}' (rx, rxd, wr, rd, xint, tx, state, end; header: profile, "
-                      "variant, bus, clock, baud)",
+                      "variant, irq-controller, bus, clock, baud)",
                       shown(k)));
     }
   }
@@ -391,6 +400,7 @@ class TraceParser {
   Trace& t_;
   bool have_profile_ = false;
   bool have_variant_ = false;
+  bool have_irq_controller_ = false;
   bool have_bus_ = false;
   bool have_clock_ = false;
   bool have_baud_ = false;

@@ -64,6 +64,9 @@ void TraceRecorder::attach(Chip& chip) {
   if (chip.vpc3_variant()) {
     header_.push_back(fmt::format("variant {}", vpc3_variant_name(*chip.vpc3_variant())));
   }
+  if (chip.irq_controller() != IrqController::external) {
+    header_.push_back(fmt::format("irq-controller {}", irq_controller_name(chip.irq_controller())));
+  }
   header_.push_back(
       fmt::format("bus {}", chip.bus_mode() == BusMode::intel ? "intel" : "motorola"));
   header_.push_back(fmt::format("clock {}", chip.clock_hz()));

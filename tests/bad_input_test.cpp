@@ -542,6 +542,25 @@ TEST_F(BadInput, VariantOptions) {
   EXPECT_EQ(listing(), std::vector<std::string>{}) << "nothing left behind";
 }
 
+// --irq-controller external|c31 where --variant is, but not on cosim (docs/dpc31.md): c31 only
+// with --profile dpc31, and only those two names. One line, exit 2, nothing on stdout.
+TEST_F(BadInput, IrqControllerOptions) {
+  for (const std::string sub :
+       {"demo", "soak --cycles 1000", "serve --tcp 0", "bridge --pty dp0 --firmware DO4"}) {
+    const std::string name = sub.substr(0, sub.find(' '));
+    const Outcome r = dpc31(sub + " --profile spc3 --irq-controller c31");
+    expect_bad(r,
+               "dpc31 " + name +
+                   ": --irq-controller c31 is for --profile dpc31: only the DPC31 has a C31 core",
+               sub);
+    EXPECT_EQ(r.out, "") << sub;
+    const Outcome x = dpc31(sub + " --profile dpc31 --irq-controller cpu");
+    expect_bad_prefix(x, "dpc31 " + name + ": --irq-controller", sub + " cpu");
+    EXPECT_EQ(x.out, "") << sub;
+  }
+  EXPECT_EQ(listing(), std::vector<std::string>{}) << "nothing left behind";
+}
+
 TEST_F(BadInput, ServeOptions) {
   spit(path("plain"), "old");
   expect_bad(dpc31("serve --tcp abc"), "dpc31 serve: --tcp 'abc': expected PORT or ADDR:PORT",

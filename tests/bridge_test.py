@@ -149,7 +149,7 @@ def check_order(lines):
 def check_log(b, pacing, baud):
     lines = b.log_lines()
     first = lines[0]
-    for want in (f"pacing {pacing}", f"baud {baud}", "profile dpc31, firmware DO4",
+    for want in (f"pacing {pacing}", f"baud {baud}", "profile dpc31, irq-controller external, firmware DO4",
                  "address 5, slot 100 bit times, log level telegrams",
                  f"pty {b.path} -> /dev/pts/"):
         check(want in first, f"log line 1 lacks '{want}': {first}")

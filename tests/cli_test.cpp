@@ -251,5 +251,13 @@ TEST(Cli, RegsShowsTheDpc31QueuesWithTheirOrigin) {
     EXPECT_NE(row.find("modelled"), std::string::npos) << row;
     EXPECT_NE(row.find("DPC31 p.22"), std::string::npos) << row;
   }
-  EXPECT_NE(r.out.find("documented  [S-BECKHOFF]"), std::string::npos);  // Status_Reg
+  // p.12: the Param Register and the status register are parameter cells too (places modelled).
+  for (const char* line : {"0x0872  0x0872  Param_Reg", "0x0874  -       Status_Reg"}) {
+    const std::size_t at = r.out.find(line);
+    ASSERT_NE(at, std::string::npos) << line;
+    const std::string row = r.out.substr(at, r.out.find('\n', at) - at);
+    EXPECT_NE(row.find("modelled"), std::string::npos) << row;
+    EXPECT_NE(row.find("DPC31 p.12"), std::string::npos) << row;
+  }
+  EXPECT_EQ(r.out.find("0x0004  -       Status_Reg"), std::string::npos);
 }

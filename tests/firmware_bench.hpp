@@ -11,6 +11,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "dp_master.hpp"
@@ -35,7 +36,9 @@ inline SlaveConfig gsd_slave(const dpc31_firmware& fw, std::uint8_t address) {
 // One chip, one firmware on its host CPU, the built-in master.
 struct Bench {
   Bench(Profile p, const dpc31_firmware& fw, SlaveConfig slave, std::uint32_t baud)
-      : chip({p, BusMode::intel}), host(fw), master(chip, MasterConfig{2, baud, 100, 33}, slave) {
+      : Bench(ChipOptions{p, BusMode::intel}, fw, std::move(slave), baud) {}
+  Bench(const ChipOptions& o, const dpc31_firmware& fw, SlaveConfig slave, std::uint32_t baud)
+      : chip(o), host(fw), master(chip, MasterConfig{2, baud, 100, 33}, slave) {
     chip.on_irq_change([this](std::uint64_t cycle, bool active) {
       if (active) activations.push_back(cycle);
     });

@@ -359,4 +359,26 @@ TEST(Do4Dpc31, FetchesThroughUserNewDoutAndWatchesItselfThroughRequests) {
             b.chip.peek(instq_wr));
 }
 
+// The DO4 firmware on the C31's interrupt controller (docs/dpc31.md, "Two interrupt
+// controllers"): the firmware's interrupt is the C31's, the same as the external processor's
+// would be at the same addresses, so it reaches Data_Exchange and drives its outputs; X/INT, the
+// external processor's, never goes active (low) on the way.
+TEST(Do4Dpc31, RunsOnTheC31sInterruptControllerWithXIntInactive) {
+  SlaveConfig s = gsd_slave(do4_firmware, 5);
+  s.user_prm = {0x00, DO4_REPLACE, 0x09, 0x00};
+  Bench b(ChipOptions{Profile::dpc31, BusMode::intel, 0, Engine::event, std::nullopt,
+                      IrqController::c31},
+          do4_firmware, s, 1'500'000);
+  int x_int_low = 0;
+  b.chip.on_irq_change([&](std::uint64_t, bool) { x_int_low += b.chip.x_int_pin() ? 0 : 1; });
+  ASSERT_TRUE(b.master.startup());
+  EXPECT_EQ(b.chip.dp_state(), DpState::Data_Exchange);
+  b.master.data_exchange({0x05, 0x01});
+  b.master.idle(2000);
+  EXPECT_EQ(b.last_write(DO4_PORT_OUTPUTS)->value, 0x5u);
+  EXPECT_FALSE(b.activations.empty());  // the ISR ran on the C31's interrupt
+  EXPECT_EQ(x_int_low, 0);
+  EXPECT_TRUE(b.chip.x_int_pin());
+}
+
 }  // namespace

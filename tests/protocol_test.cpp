@@ -615,7 +615,8 @@ INSTANTIATE_TEST_SUITE_P(Profiles, ProtocolSpcVpc,
 TEST(Dpc31, NewGcIntModeOneInterruptsOnEveryGlobalControl) {
   Bench b(Profile::dpc31, 12'000'000);
   ASSERT_TRUE(b.master.startup());
-  b.chip.write(0x16, 0x01);  // Param_Reg.New_GC_Int_Mode
+  b.chip.write(static_cast<std::uint32_t>(b.chip.addr_of(RegId::Param_Reg)),
+               0x01);  // Param_Reg.New_GC_Int_Mode
   b.master.global_control(0x08);
   b.master.global_control(0x08);
   b.master.global_control(0x08);

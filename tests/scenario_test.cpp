@@ -144,6 +144,37 @@ TEST(ScenarioParse, VariantHeaderChoosesTheVpc3plusAsicType) {
             "t.scn:3: a 'variant' was given: only profile vpc3plus has variants");
 }
 
+// The header line `irq-controller c31` puts the user's bus on the DPC31's C31 interrupt
+// controller (docs/dpc31.md): the built-in user side still answers every interrupt, and X/INT,
+// the external processor's, stays inactive (high). Only profile dpc31 has it.
+TEST(ScenarioParse, IrqControllerHeaderChoosesTheC31s) {
+  dpc31::Scenario s;
+  dpc31::ScenarioError err;
+  ASSERT_TRUE(dpc31::parse_scenario(
+      "profile dpc31\nirq-controller c31\nstartup\nexpect dp_state Data_Exchange\n", "t.scn", s,
+      err))
+      << err.text();
+  int x_int_low = 0;
+  bool c31 = false;
+  dpc31::ScenarioHooks hooks;
+  hooks.at_start = [&](dpc31::Chip& c) {
+    c31 = c.irq_controller() == dpc31::IrqController::c31;
+    c.on_irq_change([&x_int_low, &c](std::uint64_t, bool) { x_int_low += c.x_int_pin() ? 0 : 1; });
+  };
+  Lines walk;
+  EXPECT_TRUE(dpc31::run_scenario(s, walk.sink(), {}, hooks).ok());
+  EXPECT_TRUE(c31);
+  EXPECT_EQ(x_int_low, 0);
+  EXPECT_TRUE(walk.has("profile dpc31, the C31's interrupt controller"));
+  EXPECT_EQ(parse_error("profile spc3\nirq-controller c31\n"),
+            "t.scn:2: 'irq-controller c31' needs 'profile dpc31' before it: only the DPC31 has a "
+            "C31 core");
+  EXPECT_EQ(parse_error("profile dpc31\nirq-controller cpu\n"),
+            "t.scn:2: unknown irq-controller 'cpu' (external, c31)");
+  EXPECT_EQ(parse_error("profile dpc31\nirq-controller c31\nprofile spc3\n"),
+            "t.scn:3: 'irq-controller c31' was given: only profile dpc31 has a C31 core");
+}
+
 TEST(ScenarioParse, FaultsNeedARequestToDamage) {
   EXPECT_EQ(parse_error("startup\ncorrupt parity\n"), "t.scn:2: no request follows to damage");
   EXPECT_EQ(parse_error("startup\nbad_fcs\nexpect dp_state Wait_Prm\nsilence 1ms\n"),

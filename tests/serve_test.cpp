@@ -336,6 +336,15 @@ TEST(Serve, VariantChoosesTheVpc3plusAsicType) {
   }
 }
 
+// `dpc31 serve --irq-controller c31`: the DPC31's C31 interrupt controller behind the socket;
+// `info` says so.
+TEST(Serve, IrqControllerC31IsServed) {
+  ServerProcess server(kCli, {"--tcp", "0", "--profile", "dpc31", "--irq-controller", "c31"});
+  LineClient a = LineClient::tcp(server.port());
+  EXPECT_TRUE(
+      a.command("info").starts_with("OK protocol=2 profile=dpc31 irq_controller=c31 bus=intel"));
+}
+
 TEST(Serve, TwoClientsShareOneChip) {
   TempDir dir;
   ServerProcess server(kCli, {"--tcp", "0", "--unix", dir.file("s")});

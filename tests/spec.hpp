@@ -47,7 +47,10 @@ inline const std::vector<Row>& rows() {
       {S, "Int_Ack_Reg", -1, 0x02, 16, 0x0000, "--cciicc---ccccc"},
       {D, "Int_Ack_Reg", -1, 0x02, 16, 0x0000, "--cciicc--cccccc"},
       {V, "Int_Ack_Reg", -1, 0x02, 16, 0x0000, "cccciicccicccccc"},
-      {S | D, "Status_Reg", 0x04, -1, 16, 0x0000, "rrrrrrrrrrrrrr-r"},
+      {S, "Status_Reg", 0x04, -1, 16, 0x0000, "rrrrrrrrrrrrrr-r"},
+      // DPC31 p.12: "status displays are stored (status register, ...)" in the parameter cells,
+      // as is the "Param Register" (below); both places modelled (docs/dpc31.md).
+      {D, "Status_Reg", 0x0874, -1, 16, 0x0000, "rrrrrrrrrrrrrr-r"},
       {V, "Status_Reg", 0x04, -1, 16, 0xC000, "rrrrrrrrrrrrrr-r"},
       {S, "Int_Mask_Reg", -1, 0x04, 16, 0xFFFF, "--oooooo---ooooo"},
       {D, "Int_Mask_Reg", -1, 0x04, 16, 0xFFFF, "--oooooo--oooooo"},
@@ -100,7 +103,7 @@ inline const std::vector<Row>& rows() {
       {D, "Mode_Reg1", 0x15, -1, 8, 0x00, "---r--R-"},
       {V, "Mode_Reg1", 0x15, -1, 8, 0x00, "r-rrRrRr"},
       {ALL, "Reserved_15h_W", -1, 0x15, 8, -1, "--------", false, true},
-      {D, "Param_Reg", 0x16, 0x16, 8, 0x00, "------ww"},
+      {D, "Param_Reg", 0x0872, 0x0872, 8, 0x00, "------ww"},
       {D, "C31_Control", 0x17, 0x17, 8, 0x00, "-------w"},
       // Organisational parameters: RAM cells (SPC3 offsets).
       {ALL, "R_TS_Adr", 0x16, 0x16, 8, 0x00, "wwwwwwww", true},

@@ -284,6 +284,26 @@ TEST(TraceFile, TheVariantIsRecordedAndReplayed) {
                      ": 'variant' follows 'profile vpc3plus': only the VPC3+ has variants");
 }
 
+// A run on the C31's interrupt controller records `irq-controller c31` after the profile (its
+// xint lines are the C31's interrupt, docs/dpc31.md) and replays; the line belongs to the dpc31.
+TEST(TraceFile, TheIrqControllerIsRecordedAndReplayed) {
+  const std::string text = record("profile dpc31\nirq-controller c31\nstartup\n");
+  std::vector<std::string> v = lines_of(text);
+  const std::size_t p = find_line(v, "profile dpc31");
+  ASSERT_LT(p + 1, v.size());
+  EXPECT_EQ(v[p + 1], "irq-controller c31");
+  EXPECT_NE(text.find("xint "), std::string::npos);
+  std::string msg;
+  EXPECT_EQ(replay_text(text, msg), 0) << msg;
+  v[p] = "profile spc3";
+  EXPECT_EQ(replay_text(join(v), msg), 2);
+  EXPECT_EQ(msg,
+            "t.trace:" + std::to_string(p + 2) +
+                ": 'irq-controller c31' follows 'profile dpc31': only the DPC31 has a C31 core");
+  EXPECT_EQ(lines_of(record("profile dpc31\nstartup\n")).at(p + 1).rfind("irq-controller", 0),
+            std::string::npos);  // the external one is the default and not written
+}
+
 TEST(TraceFile, ReplayChecksAHandWrittenTrace) {
   // MAC_Start on the DPC31 at 24 (docs/timing.md): DX_Out from the power-on clear; unmasked,
   // X/INT goes active in the same cycle.

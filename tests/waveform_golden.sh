@@ -7,6 +7,9 @@
 # Indication interrupt: other bus accesses); the writer was the same as for the window file,
 # which stayed byte for byte as the old writer's. All three were written again when the DPC31
 # started by MAC_Start (issue 16 item 2: the same run 28 cycles later, the writer unchanged).
+# do4_osp_replace.vcd once more when the DPC31's status register moved to the parameter cells
+# (0874h, DPC31 p.12): the only change is bus.addr 0004h/0005h -> 0874h/0875h at the firmware's
+# five Status_Reg reads, each at the same time as before.
 # Usage: waveform_golden.sh path/to/dpc31 source-dir
 set -eu
 dpc31=$1

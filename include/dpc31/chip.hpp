@@ -36,6 +36,15 @@ inline constexpr Vpc3Variant kAllVpc3Variants[] = {Vpc3Variant::b, Vpc3Variant::
 bool parse_vpc3_variant(std::string_view s, Vpc3Variant& out);
 std::string_view vpc3_variant_name(Vpc3Variant v);
 
+// The DPC31 has its interrupt controller twice, at the same addresses: one for the external
+// processor (it drives the X/INT pin) and one for the internal C31 core (docs/dpc31.md,
+// "Two interrupt controllers"). The user's bus reaches one of them; SPC3 and VPC3+ have only
+// the external one.
+enum class IrqController : std::uint8_t { external = 0, c31 = 1 };
+// "external", "c31" (the names the CLI, scenario and trace files use).
+bool parse_irq_controller(std::string_view s, IrqController& out);
+std::string_view irq_controller_name(IrqController c);
+
 struct ChipOptions {
   Profile profile = Profile::dpc31;
   BusMode bus = BusMode::intel;
@@ -44,6 +53,9 @@ struct ChipOptions {
   // vpc3plus only (the Chip constructor throws std::invalid_argument for another profile);
   // unset = VPC3+C, the description's reset value of Status_Reg (docs/decisions.md).
   std::optional<Vpc3Variant> variant = std::nullopt;
+  // The interrupt controller the bus reaches: c31 on the dpc31 only (else the constructor throws
+  // std::invalid_argument).
+  IrqController irq_controller = IrqController::external;
 };
 
 // DP slave state machine (Status_Reg bits 5:4).
@@ -158,9 +170,12 @@ class Chip {
   [[nodiscard]] std::uint32_t bus_access_cycles() const;
 
   // --- pins and state ---
-  // X/INT pin level (true = high), after the polarity of Mode_Reg0.INT_Pol.
+  // X/INT pin level (true = high), after the polarity of Mode_Reg0.INT_Pol: the external
+  // processor's interrupt controller. With IrqController::c31 the bus reaches the C31's, and the
+  // external one, which nobody unmasks, keeps X/INT inactive.
   [[nodiscard]] bool x_int_pin() const;
-  // Whether the interrupt is active (independent of polarity).
+  // Whether the interrupt of the controller the bus reaches is active (independent of polarity):
+  // the user's processor's interrupt input; on_irq_change reports it.
   [[nodiscard]] bool irq_active() const;
   [[nodiscard]] bool started() const;
   [[nodiscard]] DpState dp_state() const;
@@ -198,6 +213,8 @@ class Chip {
   [[nodiscard]] const ProfileDesc& profile() const;
   // The VPC3+ variant the chip was made as (nullopt on the other profiles).
   [[nodiscard]] std::optional<Vpc3Variant> vpc3_variant() const;
+  // The interrupt controller the bus reaches (ChipOptions::irq_controller).
+  [[nodiscard]] IrqController irq_controller() const;
   [[nodiscard]] BusMode bus_mode() const;
 
   // Address of a register's read side (or write side if it has none) in this profile; -1 if the

@@ -1174,9 +1174,10 @@ enum dpc31_profile {
  * 8 KB address space: register area 0000h-07FFh, 6 KB RAM 0800h-1FFFh, internal work cells
  * 0800h-083Fh, organisational cells from 0840h, user buffers from 08A0h on 32-byte segments
  * (documented, DPC31 HW description p.12). The DPC31's own register addresses are not public:
- * the processor parameters keep the SPC3 offsets 00h-15h at the start of the register area
- * (modelled), Param_Reg and C31_Control follow at 16h/17h (modelled), and organisational cell
- * 16h+k sits at 0840h+k (modelled).
+ * the processor parameters keep the SPC3 offsets 00h-15h at the start of the register area but
+ * for Status_Reg (modelled), C31_Control follows at 17h (modelled), organisational cell 16h+k
+ * sits at 0840h+k (modelled); the queues' cells, Param_Reg and the status register are
+ * parameter cells from 086Ah (p.12; places modelled).
  */
 #define DPC31_ADDRESS_BITS                              13u
 #define DPC31_RAM_BEGIN                                 0x0800u
@@ -1281,12 +1282,12 @@ enum dpc31_profile {
 #define DPC31_Int_Ack_Reg_DX_Out_Pos                    13u
 #define DPC31_Int_Ack_Reg_DX_Out_Msk                    0x2000u /* 13 W1C: new output data in N (also after a clear by the ASIC) */
 
-/* Status_Reg: derived, 16 bit -- Status register */
-#define DPC31_Status_Reg                                0x0004u /* read */
-#define DPC31_Status_Reg_LO_INTEL                       0x0004u
-#define DPC31_Status_Reg_HI_INTEL                       0x0005u
-#define DPC31_Status_Reg_LO_MOTOROLA                    0x0005u
-#define DPC31_Status_Reg_HI_MOTOROLA                    0x0004u
+/* Status_Reg: derived, 16 bit -- Status register (a status display in the parameter cells) */
+#define DPC31_Status_Reg                                0x0874u /* read */
+#define DPC31_Status_Reg_LO_INTEL                       0x0874u
+#define DPC31_Status_Reg_HI_INTEL                       0x0875u
+#define DPC31_Status_Reg_LO_MOTOROLA                    0x0875u
+#define DPC31_Status_Reg_HI_MOTOROLA                    0x0874u
 #define DPC31_Status_Reg_RESET                          0x0000u
 #define DPC31_Status_Reg_Offline_Passive_Idle_Pos       0u
 #define DPC31_Status_Reg_Offline_Passive_Idle_Msk       0x0001u /* 0 RO: 0 = Offline, 1 = Passive_Idle (started) */
@@ -1544,7 +1545,7 @@ enum dpc31_profile {
 #define DPC31_Reserved_15h_W                            0x0015u /* write */
 
 /* Param_Reg: latch, 8 bit -- DPC31 param register (Global_Control options) */
-#define DPC31_Param_Reg                                 0x0016u /* read/write */
+#define DPC31_Param_Reg                                 0x0872u /* read/write */
 #define DPC31_Param_Reg_RESET                           0x00u
 #define DPC31_Param_Reg_New_GC_Int_Mode_Pos             0u
 #define DPC31_Param_Reg_New_GC_Int_Mode_Msk             0x01u /* 0 RW: 0 = New_GC_Command only on a changed command byte, 1 = on every Global_Control */

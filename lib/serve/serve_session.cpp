@@ -247,11 +247,12 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
       arity(t, 0, 0, "info");
       const ProfileDesc& p = chip_.profile();
       return ok(fmt::format(
-          "protocol={} profile={}{} bus={} clock_hz={} bus_access_cycles={} address_bits={}",
+          "protocol={} profile={}{}{} bus={} clock_hz={} bus_access_cycles={} address_bits={}",
           kProtocolVersion, p.name,
           chip_.vpc3_variant()
               ? fmt::format(" variant={}", vpc3_variant_name(*chip_.vpc3_variant()))
               : std::string(),
+          chip_.irq_controller() == IrqController::c31 ? " irq_controller=c31" : "",
           chip_.bus_mode() == BusMode::intel ? "intel" : "motorola", chip_.clock_hz(),
           chip_.bus_access_cycles(), p.address_bits));
     }

@@ -18,7 +18,6 @@
 #include "outfile.hpp"
 #include "responder.hpp"
 #include "scenario.hpp"
-#include "variant_option.hpp"
 
 namespace dpc31::soak {
 
@@ -163,7 +162,7 @@ class Soak {
     if (!parse_profile(o.profile, co.profile)) {
       throw std::invalid_argument("unknown profile '" + o.profile + "'");
     }
-    if (const std::string why = cli::apply_variant(o.variant, co); !why.empty()) {
+    if (const std::string why = cli::apply_chip_choice(o.chip, co); !why.empty()) {
       throw std::invalid_argument(why);
     }
     if (baud_code(o.baud) < 0) throw std::invalid_argument("unsupported baud rate");
@@ -357,7 +356,7 @@ CLI::App* add_subcommand(CLI::App& app, Options& o) {
   s->add_option("--profile", o.profile, "chip profile")
       ->capture_default_str()
       ->check(CLI::IsMember({"spc3", "vpc3plus", "dpc31"}));
-  cli::add_variant_option(s, o.variant);
+  cli::add_chip_options(s, o.chip);
   s->add_option("--baud", o.baud, "bus baud rate")
       ->capture_default_str()
       ->check(
@@ -397,10 +396,10 @@ int run_cli(const Options& o, std::FILE* out, std::FILE* err) {
     fmt::print(err, "dpc31 soak: {}\n", e.what());
     return 2;
   }
-  fmt::print(out,
-             "dpc31 soak: profile {}, {} baud, TWD {} ms, a fault every {} cycles, seed {}{}\n",
-             o.profile, o.baud, r.twd_ms, o.fault_period, o.seed,
-             o.firmware.empty() ? "" : ", firmware " + o.firmware);
+  fmt::print(
+      out, "dpc31 soak: profile {}{}, {} baud, TWD {} ms, a fault every {} cycles, seed {}{}\n",
+      o.profile, o.chip.irq_controller == "c31" ? ", irq-controller c31" : "", o.baud, r.twd_ms,
+      o.fault_period, o.seed, o.firmware.empty() ? "" : ", firmware " + o.firmware);
   const double hz = r.clock_hz;
   fmt::print(out,
              "cycles {} ({:.3f} s of chip time), {} after the start-up; wall {:.2f} s ({:.1f}x "

@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "chip_choice.hpp"
+
 namespace dpc31::soak {
 
 // The kinds of injected fault, in the order of the report.
@@ -29,7 +31,7 @@ inline constexpr std::size_t kFaultKinds = 7;
 struct Options {
   std::uint64_t cycles = 1'000'000'000;  // run at least this many chip cycles
   std::string profile = "dpc31";
-  std::string variant;  // --variant (vpc3plus), "" = none
+  cli::ChipChoice chip;  // --variant, --irq-controller
   std::uint32_t baud = 1'500'000;
   std::uint64_t fault_period = 2'000'000;  // cycles of undisturbed exchange between two faults
   std::uint64_t seed = 1;

@@ -16,7 +16,6 @@
 #include "../bridge/engine.hpp"
 #include "../bridge/pty.hpp"
 #include "dpc31/uart.hpp"
-#include "variant_option.hpp"
 
 namespace dpc31::cli {
 
@@ -96,7 +95,8 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
   if (!parse_profile(o.profile, c.setup.chip.profile)) {
     return bad(fmt::format("unknown profile '{}' (spc3, vpc3plus, dpc31)", o.profile));
   }
-  if (const std::string why = apply_variant(o.variant, c.setup.chip); !why.empty()) return bad(why);
+  if (const std::string why = apply_chip_choice(o.chip, c.setup.chip); !why.empty())
+    return bad(why);
   if (!parse_uint(o.address, 125, v)) {
     return bad(fmt::format("--address '{}' must be a station address 0..125", o.address));
   }
@@ -118,13 +118,16 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
 }
 
 // Line 1 of the log: every setting that acts on this run, and only those (a variant only for
-// the profile that has variants).
+// the profile that has variants, the interrupt controller only for the dpc31).
 std::string header(const Checked& c, const BridgeOptions& o, const std::string& slave) {
   const ChipOptions& chip = c.setup.chip;
   std::string profile(profile_name(chip.profile));
   if (chip.profile == Profile::vpc3plus) {
     profile +=
         fmt::format(", variant {}", vpc3_variant_name(chip.variant.value_or(Vpc3Variant::c)));
+  }
+  if (chip.profile == Profile::dpc31) {
+    profile += fmt::format(", irq-controller {}", irq_controller_name(chip.irq_controller));
   }
   return fmt::format(
       "dpc31 bridge: pacing {}, baud {}, profile {}, firmware {}, address {}, slot {} bit times, "
@@ -350,7 +353,7 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
   b->add_option("--baud", o.baud, "baud rate of the bus (a PROFIBUS rate)")->capture_default_str();
   b->add_option("--profile", o.profile, "chip profile: spc3, vpc3plus, dpc31")
       ->capture_default_str();
-  add_variant_option(b, o.variant);
+  add_chip_options(b, o.chip);
   b->add_option("--firmware", o.firmware,
                 "firmware: " + builtin_firmware_names() + ", or a plug-in ./libmine.so (required)");
   b->add_option("--address", o.address, "station address 0..125")->capture_default_str();

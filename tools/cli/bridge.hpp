@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "chip_choice.hpp"
+
 namespace dpc31::cli {
 
 // Every option is kept as text and checked by run_bridge, so a bad value gives one line on
@@ -14,7 +16,7 @@ struct BridgeOptions {
   std::string pty;  // the symlink to create
   std::string baud = "19200";
   std::string profile = "dpc31";
-  std::string variant;  // --variant (vpc3plus), "" = none
+  ChipChoice chip;  // --variant, --irq-controller
   std::string firmware;
   std::string address = "5";
   std::string pacing = "realtime";

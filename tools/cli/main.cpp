@@ -15,6 +15,7 @@
 
 #include "bench.hpp"
 #include "bridge.hpp"
+#include "chip_choice.hpp"
 #include "cleanup.hpp"
 #include "cosim.hpp"
 #include "demo.hpp"
@@ -25,7 +26,6 @@
 #include "run.hpp"
 #include "serve.hpp"
 #include "soak.hpp"
-#include "variant_option.hpp"
 #include "wavediff_cli.hpp"
 
 namespace {
@@ -85,8 +85,8 @@ int main(int argc, char** argv) {
                    "TMPDIR/dpc31-demo-XXXXXX)");
   demo->add_option("--bus", demo_bus, "bus byte order")
       ->check(CLI::IsMember({"intel", "motorola"}));
-  std::string demo_variant;
-  dpc31::cli::add_variant_option(demo, demo_variant);
+  dpc31::cli::ChipChoice demo_chip;
+  dpc31::cli::add_chip_options(demo, demo_chip);
   std::string demo_timescale;
   demo->add_option("--timescale", demo_timescale,
                    "time unit of both waveforms, 1ps ... 1s (default: 1ps for the full VCD, 10ns "
@@ -272,7 +272,7 @@ int main(int argc, char** argv) {
       dpc31::ChipOptions opt;
       opt.profile = to_profile(demo_profile);
       opt.bus = demo_bus == "intel" ? dpc31::BusMode::intel : dpc31::BusMode::motorola;
-      if (std::string why = dpc31::cli::apply_variant(demo_variant, opt); !why.empty()) {
+      if (std::string why = dpc31::cli::apply_chip_choice(demo_chip, opt); !why.empty()) {
         return refuse(why);
       }
       return dpc31::cli::run_demo(opt, demo_out, demo_firmware, demo_timescale, stdout);

@@ -5,10 +5,10 @@
 #include <atomic>
 #include <csignal>
 
+#include "chip_choice.hpp"
 #include "dpc31/regdesc.hpp"
 #include "numbers.hpp"
 #include "serve_server.hpp"
-#include "variant_option.hpp"
 
 namespace dpc31::cli {
 
@@ -38,7 +38,7 @@ CLI::App* add_serve_subcommand(CLI::App& app, ServeArgs& a) {
   cmd->add_option("--profile", a.profile, "chip profile")
       ->check(CLI::IsMember({"spc3", "vpc3plus", "dpc31"}));
   cmd->add_option("--bus", a.bus, "bus byte order")->check(CLI::IsMember({"intel", "motorola"}));
-  add_variant_option(cmd, a.variant);
+  add_chip_options(cmd, a.chip);
   cmd->add_option("--max-clients", a.max_clients,
                   "connections served at once; more get 'ERR busy' and are closed")
       ->check(numbers::whole(1, 100000))
@@ -54,7 +54,7 @@ int run_serve(const ServeArgs& a, std::FILE* out, std::FILE* err) {
   serve::ServerOptions opt;
   parse_profile(a.profile, opt.chip.profile);  // CLI11's check already refused unknown names
   opt.chip.bus = a.bus == "intel" ? BusMode::intel : BusMode::motorola;
-  if (const std::string why = apply_variant(a.variant, opt.chip); !why.empty()) {
+  if (const std::string why = apply_chip_choice(a.chip, opt.chip); !why.empty()) {
     fmt::print(err, "dpc31 serve: {}\n", why);
     return 2;
   }

@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <string>
 
+#include "chip_choice.hpp"
+
 namespace dpc31::cli {
 
 struct ServeArgs {
@@ -13,7 +15,7 @@ struct ServeArgs {
   std::string unix_path;  // "" = no Unix socket
   std::string profile = "dpc31";
   std::string bus = "intel";
-  std::string variant;      // --variant (vpc3plus), "" = none
+  ChipChoice chip;          // --variant, --irq-controller
   std::string state_dir;    // "" = save/load refused
   std::string secret_file;  // "" = no auth on TCP
   std::size_t max_clients = 16;
