@@ -161,12 +161,19 @@ module dpc31_blocks #(
   reg   [7:0] w8;       // Mode_Reg1_S / _R: the written bits that exist
   reg   [7:0] cmd_res;  // result of a command read
 
+  // The actions and next_state below assign the nx_* values with blocking assignments inside the
+  // clocked process, on purpose (one evaluation per cycle); only the registers take '<='.
+  /* verilator lint_off BLKSEQ */
   `include "dpc31_blocks_actions.vh"
 
   // ===========================================================================================
-  // One cycle
+  // One cycle: the next state from the registered state and this cycle's inputs. A task called
+  // by the clocked process, not an always @* block: a simulator then computes it once per cycle
+  // (Verilator ran a combinational block at every eval and again after every register update:
+  // three times per cycle, docs/golden-model.md).
   // ===========================================================================================
-  always @* begin : next_state
+  task next_state;
+    begin
     // ---- the registered state
     nx_irr = irr;
     nx_imr = imr;
@@ -447,7 +454,9 @@ module dpc31_blocks #(
     end
     // ================================================================= step 4: X/INT
     // combinational from the registered result (x_int above).
-  end
+    end
+  endtask
+  /* verilator lint_on BLKSEQ */
 
   // ===========================================================================================
   // Registers
@@ -502,6 +511,7 @@ module dpc31_blocks #(
       // CHOICE: bus_rdata resets to 00h.
       bus_rdata <= 8'h00;
     end else begin
+      next_state;
       irr <= nx_irr;
       imr <= nx_imr;
       mode_reg0 <= nx_mode_reg0;

@@ -1,8 +1,13 @@
-// The C++ blocks as a Dut: a ChipCore stepped one clock at a time, the bus access applied in its
-// completion cycle, the events through the same actions the protocol engine uses.
+// The C++ blocks as a Dut: a ChipCore stepped at every cycle with stimulus (idle cycles in one
+// advance with the event engine), the bus access applied in its completion cycle, the events
+// through the same actions the protocol engine uses.
 #include "cpp_dut.hpp"
 
 #include <fmt/format.h>
+
+#include <array>
+#include <iterator>
+#include <vector>
 
 #include "block_access.hpp"
 #include "core.hpp"
@@ -26,7 +31,8 @@ constexpr std::array<int, Outputs::kCount> kWidths = {
 class CppDut final : public Dut {
  public:
   explicit CppDut(const DutOptions& o)
-      : core_(ChipOptions{o.profile, o.bus, 0, Engine::event, o.variant}) {
+      : core_(ChipOptions{o.profile, o.bus, 0, o.engine, o.variant}),
+        lazy_(o.engine == Engine::event) {
     core_.signals.sink = nullptr;
     // The request interface (DPC31 Instruction_Queue) is not one of the blocks: what its requests
     // do to them comes in as events (ev_mac_stop, ev_mac_start, ev_leave_master, ev_irq), so a
@@ -35,13 +41,24 @@ class CppDut final : public Dut {
     core_.reset();
   }
 
+  // An idle cycle is only counted (with the event engine): the blocks catch up in one advance at
+  // the next stimulus, or when the outputs are asked for and an internal event (a timer) fell
+  // due in between; until then the outputs of the last evaluation still hold.
   void step(const Inputs& in) override {
     if (in.rst) {
       core_.reset();  // the cycle count restarts with the hardware
       rdata_ = 0;
+      idle_ = 0;
+      fresh_ = false;
       return;
     }
-    core_.advance(1);
+    if (lazy_ && in.idle()) {
+      ++idle_;
+      return;
+    }
+    core_.advance(idle_ + 1);
+    idle_ = 0;
+    fresh_ = false;
     DpStateMachine& dp = core_.dp;
     BufferUnit& buffers = core_.buffers;
     if (in.ev_dx)
@@ -76,13 +93,30 @@ class CppDut final : public Dut {
     core_.irq.update_line();
   }
 
-  [[nodiscard]] Outputs outputs() const override { return block_outputs(core_, rdata_); }
+  [[nodiscard]] Outputs outputs() const override {
+    if (idle_ != 0 && core_.clock.now + idle_ >= core_.next_event()) {
+      core_.advance(idle_);
+      core_.irq.update_line();
+      idle_ = 0;
+      fresh_ = false;
+    }
+    if (!fresh_) {
+      outputs_ = block_outputs(core_, rdata_);
+      fresh_ = true;
+    }
+    return outputs_;
+  }
 
   [[nodiscard]] std::string name() const override { return "EMU"; }
 
  private:
-  ChipCore core_;
+  // outputs() catches up with counted idle cycles: the chip's time is the Dut's, not a value.
+  mutable ChipCore core_;
   std::uint8_t rdata_ = 0;
+  const bool lazy_;
+  mutable std::uint64_t idle_ = 0;  // idle cycles counted, not yet applied
+  mutable Outputs outputs_;         // the outputs after the last evaluation
+  mutable bool fresh_ = false;      // outputs_ is current
 };
 
 }  // namespace
@@ -138,21 +172,38 @@ Outputs block_outputs(const ChipCore& c, std::uint8_t rdata) {
 
 std::unique_ptr<Dut> make_cpp_dut(const DutOptions& o) { return std::make_unique<CppDut>(o); }
 
-bool compared_read(const ProfileDesc& p, std::uint16_t addr) {
+namespace {
+
+// The compared addresses of a profile, one bit per address of the 16-bit bus.
+std::vector<bool> compared_addresses(const ProfileDesc& p) {
+  std::vector<bool> set(0x10000, false);
   static constexpr RegId kCells[] = {RegId::R_Dout_Buf_Ptr1, RegId::R_Dout_Buf_Ptr2,
                                      RegId::R_Dout_Buf_Ptr3, RegId::R_Dout_Buf_Ptr_C,
                                      RegId::R_Cfg_Buf_Ptr,   RegId::R_Read_Cfg_Buf_Ptr,
                                      RegId::R_GC_Command};
   for (RegId id : kCells) {
     const RegDesc* r = find_reg(p, id);
-    if (r != nullptr && r->read_addr == addr) return true;
+    if (r != nullptr && r->read_addr >= 0) set[static_cast<std::size_t>(r->read_addr)] = true;
   }
   for (const RegDesc& r : p.regs) {
     // C31_Control (the DX_Out port option) is not one of the blocks.
     if (r.kind == Kind::cell || r.read_addr < 0 || r.id == RegId::C31_Control) continue;
-    if (addr >= r.read_addr && addr < r.read_addr + r.bytes()) return true;
+    for (int k = 0; k < r.bytes(); ++k) set[static_cast<std::size_t>(r.read_addr + k)] = true;
   }
-  return false;
+  return set;
+}
+
+}  // namespace
+
+// Asked at every read of the lockstep: a table per profile, made once.
+bool compared_read(const ProfileDesc& p, std::uint16_t addr) {
+  static const std::array<std::vector<bool>, std::size(kAllProfiles)> tables = [] {
+    std::array<std::vector<bool>, std::size(kAllProfiles)> t;
+    for (const Profile q : kAllProfiles)
+      t[static_cast<std::size_t>(q)] = compared_addresses(profile_desc(q));
+    return t;
+  }();
+  return tables[static_cast<std::size_t>(p.id)][addr];
 }
 
 }  // namespace dpc31::cosim

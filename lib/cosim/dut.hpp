@@ -89,6 +89,10 @@ struct DutOptions {
   std::optional<Vpc3Variant> variant = std::nullopt;  // vpc3plus only (ChipOptions::variant)
   // A model loaded at run time (rtl_library.hpp) in place of the built-in ones.
   std::shared_ptr<const RtlLibrary> rtl = nullptr;
+  // The C++ blocks' engine (docs/engine.md): event (the default) lets idle cycles pass in one
+  // step until something is due; per_cycle evaluates every clock, the reference it is checked
+  // against (tests: CosimEngines.*).
+  Engine engine = Engine::event;
   // Status_Reg bits 15..12: the RTL's static input asic_type.
   [[nodiscard]] std::uint8_t asic_type() const {
     return variant ? static_cast<std::uint8_t>(*variant) : profile_desc(profile).release;

@@ -38,6 +38,12 @@ bool Lockstep::step(const Inputs& in) {
   const Outputs a = emu_->outputs();
   const Outputs b = rtl_->outputs();
   const bool read_compared = in.bus_rd && !in.rst && compared_read(profile_, in.bus_addr);
+  // Nearly every cycle agrees: one comparison of the arrays, the report only on a difference.
+  if (std::equal(a.v.begin(), a.v.begin() + Outputs::kRdata, b.v.begin()) &&
+      (!read_compared || a.v[Outputs::kRdata] == b.v[Outputs::kRdata])) {
+    ++cycle_;
+    return true;
+  }
   std::vector<std::string> lines;
   std::vector<std::string> names;
   for (std::size_t i = 0; i < Outputs::kCount; ++i) {
