@@ -141,6 +141,18 @@ std::string_view vpc3_variant_name(Vpc3Variant v) {
   return "?";
 }
 
+std::optional<Chip::RequestSlot> Chip::next_request_slot() const {
+  if (profile().id != Profile::dpc31) return std::nullopt;
+  auto cell = [this](RegId id) { return peek(static_cast<std::uint32_t>(addr_of(id))); };
+  const std::uint8_t len = cell(RegId::InstQ_Len);
+  if (len == 0) return std::nullopt;
+  const std::uint8_t wr = cell(RegId::InstQ_Wr);
+  return RequestSlot{
+      (static_cast<std::uint32_t>(cell(RegId::InstQ_Base)) << profile().segment_shift) +
+          wr * request::kEntryBytes,
+      static_cast<std::uint8_t>((wr + 1) % len)};
+}
+
 bool parse_irq_controller(std::string_view s, IrqController& out) {
   for (IrqController c : {IrqController::external, IrqController::c31}) {
     if (s == irq_controller_name(c)) {

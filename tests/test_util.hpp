@@ -95,14 +95,10 @@ inline std::uint64_t user_command(dpc31::Chip& c, std::uint8_t mode_reg1_bit,
     c.write(cell(RegId::InstQ_Base), 0xF8);
     c.write(cell(RegId::InstQ_Len), 4);
   }
-  const std::uint8_t len = c.peek(cell(RegId::InstQ_Len));
-  const std::uint8_t wr = c.peek(cell(RegId::InstQ_Wr));
-  const std::uint32_t entry =
-      (static_cast<std::uint32_t>(c.peek(cell(RegId::InstQ_Base))) << c.profile().segment_shift) +
-      wr * dpc31::request::kEntryBytes;
-  c.write(entry, request);
-  c.write(entry + 1, 0x00);
-  c.write(cell(RegId::InstQ_Wr), static_cast<std::uint8_t>((wr + 1) % len));
+  const dpc31::Chip::RequestSlot slot = *c.next_request_slot();
+  c.write(slot.entry, request);
+  c.write(slot.entry + 1, 0x00);
+  c.write(cell(RegId::InstQ_Wr), slot.next_wr);
   return c.cycle();
 }
 inline std::uint64_t user_start(dpc31::Chip& c) {

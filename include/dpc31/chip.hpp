@@ -221,6 +221,15 @@ class Chip {
   // profile lacks it.
   [[nodiscard]] std::int32_t addr_of(RegId id) const;
 
+  // DPC31 (docs/dpc31.md, "The queues"): where the user's next request goes, read from the queue
+  // cells without an access: the entry's address (code, then parameter) and the InstQ_Wr value
+  // that hands it to the chip. A queue of length 0 gives nullopt, as do the other profiles.
+  struct RequestSlot {
+    std::uint32_t entry;
+    std::uint8_t next_wr;
+  };
+  [[nodiscard]] std::optional<RequestSlot> next_request_slot() const;
+
   // Whether the SSA buffer takes a Set_Slave_Add (SSA_Buffer_Free_Cmd was read since the last).
   [[nodiscard]] bool ssa_buffer_free() const;
 

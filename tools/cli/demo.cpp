@@ -68,17 +68,11 @@ class Narrator {
       write(RegId::Mode_Reg1_S, mode_reg1_bit);
       return;
     }
-    const std::uint8_t wr = chip_.peek(static_cast<std::uint32_t>(chip_.addr_of(RegId::InstQ_Wr)));
-    const std::uint8_t base =
-        chip_.peek(static_cast<std::uint32_t>(chip_.addr_of(RegId::InstQ_Base)));
-    const std::uint8_t len =
-        chip_.peek(static_cast<std::uint32_t>(chip_.addr_of(RegId::InstQ_Len)));
-    const std::uint32_t entry =
-        (static_cast<std::uint32_t>(base) << chip_.profile().segment_shift) +
-        wr * request::kEntryBytes;
-    write_ram(entry, request, fmt::format("Instruction_Queue entry {}: {}", wr, name));
-    write_ram(entry + 1, 0x00, "  its parameter");
-    write(RegId::InstQ_Wr, static_cast<std::uint8_t>((wr + 1) % len));
+    const Chip::RequestSlot slot = *chip_.next_request_slot();  // the demo set the queue up
+    write_ram(slot.entry, request,
+              fmt::format("Instruction_Queue entry at {:#06x}: {}", slot.entry, name));
+    write_ram(slot.entry + 1, 0x00, "  its parameter");
+    write(RegId::InstQ_Wr, slot.next_wr);
   }
   void write_ram(std::uint32_t a, std::uint8_t v, const std::string& what) {
     chip_.write(a, v);
