@@ -216,7 +216,15 @@ class Bridge {
       // falls behind the wall clock; free runs it to now, and settle() lets an exchange take no
       // wall time (chip time then runs ahead by the exchanges' durations).
       const Clock::time_point until = realtime_ ? now + wait : now;
-      const std::uint64_t target = anchor_chip_ + to_cycles(until - anchor_wall_, f);
+      std::uint64_t target = anchor_chip_ + to_cycles(until - anchor_wall_, f);
+      if (!realtime_) {
+        // Free: at most one loop period of chip time per turn, and no debt. A chip slower than
+        // the wall clock (a polling firmware in a Debug build) otherwise ran ever longer turns
+        // and never read the client again.
+        target = std::min(target, engine_->cycle() + to_cycles(wait, f));
+        anchor_wall_ = now;
+        anchor_chip_ = std::max(target, engine_->cycle());
+      }
       if (target > engine_->cycle()) engine_->run_until(target);
       if (!realtime_ && engine_->busy()) {
         engine_->settle(kSettleSeconds * f);
