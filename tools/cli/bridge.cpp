@@ -217,11 +217,12 @@ class Bridge {
       // wall time (chip time then runs ahead by the exchanges' durations).
       const Clock::time_point until = realtime_ ? now + wait : now;
       std::uint64_t target = anchor_chip_ + to_cycles(until - anchor_wall_, f);
+      // A bounded turn: a chip slower than the wall clock (a polling firmware in a Debug build)
+      // otherwise ran ever longer turns and never read the client again. Free: one loop period
+      // of chip time at most, and no debt. Realtime: at most kIdleTick, the rest caught up over
+      // the next turns (the lag is reported below).
+      target = std::min(target, engine_->cycle() + to_cycles(realtime_ ? kIdleTick : wait, f));
       if (!realtime_) {
-        // Free: at most one loop period of chip time per turn, and no debt. A chip slower than
-        // the wall clock (a polling firmware in a Debug build) otherwise ran ever longer turns
-        // and never read the client again.
-        target = std::min(target, engine_->cycle() + to_cycles(wait, f));
         anchor_wall_ = now;
         anchor_chip_ = std::max(target, engine_->cycle());
       }
