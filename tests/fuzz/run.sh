@@ -19,5 +19,5 @@ if [ "$target" = fst_reader ]; then
   extra="-fork=1 -ignore_crashes=1"
 fi
 exec nice "$build/bin/fuzz_$target" corpus "$src/corpus/$target" \
-  -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
+  -max_total_time="$seconds" -timeout=10 -timeout_exitcode=70 -rss_limit_mb=2048 -print_final_stats=1 \
   -artifact_prefix="$work/$target/" $extra >fuzz.log 2>&1
