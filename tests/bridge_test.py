@@ -359,8 +359,9 @@ def profibus_rates_default_log():
     (no speed note when it matches; 12 Mbaud, named, when it does not: the bytes travel at the
     bridge's rate all the same). The default log level says state changes and faults only: no
     telegram lines, lines in cycle order. (Data_Exchange at 12 Mbaud through the pty works too,
-    but the master's FDL_Status every 60 ms meets the chip's 0.34 ms at 12 Mbaud of each 0.8 s
-    baud-search round only by chance: too slow for a test.)"""
+    but the master's FDL_Status every 3 ms (find_slave: the exchange time plus the host's) meets
+    the chip's 0.34 ms at 12 Mbaud of each 0.8 s baud-search round only by chance: too slow for a
+    test.)"""
     for baud in (45450, 187500):
         with tempfile.TemporaryDirectory() as tmp:
             b = Bridge(tmp, "--firmware", "DO4", "--baud", str(baud), "--pacing", "free")

@@ -125,6 +125,7 @@ class Master:
         except OSError:
             os.close(self.fd)
             raise
+        self.baud = baud
         self.timeout = timeout
         self.address = address
         self.slave = slave
@@ -135,39 +136,69 @@ class Master:
     def close(self):
         os.close(self.fd)
 
-    def transact(self, req, timeout=None):
-        """Writes one request, returns the answer telegram (bytes) or None after the timeout."""
+    def transact(self, req, timeout=None, searching=False):
+        """Writes one request, returns the answer telegram (bytes) or None after the timeout.
+        `searching` (find_slave): bytes before a start delimiter are dropped, an answer begun by
+        the timeout is awaited for the answer timeout, and bytes after the first whole telegram
+        (late answers to earlier requests) are left to find_slave's drain."""
         termios.tcflush(self.fd, termios.TCIFLUSH)
         os.write(self.fd, req)
         buf = b""
         deadline = time.monotonic() + (timeout or self.timeout)
+        extended = False
         while True:
+            if searching:  # the tail of a late answer that the flush cut is not ours either
+                buf = buf.lstrip(bytes(b for b in range(256) if b not in (SD1, SD2, SC)))
             n = frame_length(buf)
             if n is not None and len(buf) >= n:
+                if searching:
+                    return buf[:n]
                 check(len(buf) == n, f"answer {hexs(buf)}: {len(buf) - n} bytes too many")
                 return buf
             left = deadline - time.monotonic()
+            if left <= 0 and searching and buf and not extended:
+                deadline, left, extended = time.monotonic() + self.timeout, self.timeout, True
             if left <= 0:
-                check(not buf, f"incomplete answer {hexs(buf)} to {hexs(req)}")
+                check(searching or not buf, f"incomplete answer {hexs(buf)} to {hexs(req)}")
                 return None
             r, _, _ = select.select([self.fd], [], [], left)
             if r:
                 buf += os.read(self.fd, 512)
 
-    def fdl_status(self, timeout=None):
-        a = self.transact(sd1(self.slave, self.address, 0x49), timeout)
+    def fdl_status(self, timeout=None, searching=False):
+        a = self.transact(sd1(self.slave, self.address, 0x49), timeout, searching)
         if a is not None:
             self.fcb = False  # the first SRD after FDL_Status: FCB = 1, FCV = 1
             self.fcv = True
         return a
 
-    def find_slave(self):
-        """FDL_Status until answered: the chip's baud search takes up to ~0.8 s of chip time."""
-        for _ in range(300):
-            a = self.fdl_status(timeout=0.06)
+    def find_slave(self, budget=20.0):
+        """FDL_Status until answered, for `budget` seconds at most. While the chip searches the
+        rate it listens 4096 bit times at each of the ten (12 Mbaud first; the round is ~0.8 s of
+        chip time, docs/timing.md "Baud_Search"): a request goes out every exchange time at this
+        rate (request, TSYN, slot time, answer: under 300 bit times) plus 3 ms for the host, so
+        from 45.45 kbaud down one lands whole in the first window at our rate. A fixed period (60
+        ms before) can be nearly a divisor of the round (54 ms of chip time at 500 kbaud: 15 x
+        = 0.809 s) and then misses the window round after round. Once answered, the answers to
+        requests still on their way are read and dropped (until the line has been quiet for two
+        periods: not longer, or Baud_Control, a few hundred ms of a silent bus, sends the chip
+        back to its search), so the next request gets its own answer."""
+        period = 300.0 / self.baud + 0.003
+        deadline = time.monotonic() + budget
+        while time.monotonic() < deadline:
+            a = self.fdl_status(timeout=period, searching=True)
             if a is not None:
+                self.drain(2 * period)
                 return a
         raise Fail("FDL_Status never answered")
+
+    def drain(self, quiet):
+        """Reads and drops what arrives until the line has been quiet for `quiet` seconds."""
+        while True:
+            r, _, _ = select.select([self.fd], [], [], quiet)
+            if not r:
+                return
+            os.read(self.fd, 512)
 
     def srd(self, du, dsap=None):
         """SRD_high with FCB/FCV. No answer: the station is lost (on a loaded host chip time can
