@@ -59,6 +59,21 @@ bool Chip::stop_requested() const { return core_->stop; }
 void Chip::clear_stop() { core_->stop = false; }
 
 void Chip::drive_rxd(std::uint64_t cycle, bool level) { core_->mac.drive_rxd(cycle, level); }
+std::uint64_t Chip::drive_rxd_chars(std::span<const std::uint8_t> bytes, std::uint64_t start,
+                                    std::uint32_t bit_cycles, UartFault fault) {
+  const std::uint64_t frame = std::uint64_t{kUartCharBits} * bit_cycles;
+  if (fault.kind != UartFault::Kind::none) {
+    // A damaged character changes the framing of the ones after it: edges for all of them.
+    std::vector<std::pair<std::uint64_t, bool>> edges;
+    uart_encode(bytes, start, bit_cycles, edges, fault);
+    for (const auto& [cycle, level] : edges) drive_rxd(cycle, level);
+  } else {
+    for (std::size_t i = 0; i < bytes.size(); ++i) {
+      core_->mac.drive_rxd_char(start + i * frame, bytes[i], bit_cycles);
+    }
+  }
+  return start + bytes.size() * frame;
+}
 void Chip::on_rxd(std::function<void(std::uint64_t, bool)> cb) {
   core_->signals.rxd.add(std::move(cb));
 }

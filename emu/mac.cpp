@@ -6,6 +6,7 @@
 #include "mac.hpp"
 
 #include <algorithm>
+#include <array>
 
 namespace dpc31 {
 
@@ -373,6 +374,34 @@ void Mac::drive_rxd(std::uint64_t cycle, bool level) {
     if (s_.sampler.late_edge(level, clock_.now)) s_.gap.on = false;
   }
   sig_.rxd(at, level);
+}
+
+void Mac::drive_rxd_char(std::uint64_t start, std::uint8_t data, std::uint32_t bit_cycles) {
+  const std::uint16_t frame = uart_frame(data);
+  // The character's edges, as uart_encode gives them after a high line.
+  std::array<std::pair<std::uint64_t, bool>, kUartCharBits> edges{};
+  std::size_t n = 0;
+  bool line = true;
+  for (std::uint32_t k = 0; k < kUartCharBits; ++k) {
+    const bool level = (frame >> k & 1u) != 0;
+    if (level != line) edges[n++] = {start + std::uint64_t{k} * bit_cycles, level};
+    line = level;
+  }
+  // The per-cycle engine is the reference: it always takes edges.
+  if (clock_.engine != Engine::event || start < clock_.now ||
+      !s_.rx.whole_char(start, data, bit_cycles)) {
+    for (std::size_t i = 0; i < n; ++i) drive_rxd(edges[i].first, edges[i].second);
+    return;
+  }
+  // Taken whole: the rest of drive_rxd for each edge (a reconfigure hears the pending ones again).
+  clock_.quiet_until = 0;
+  while (!s_.rxd_pending.empty() && s_.rxd_pending.front().first <= clock_.now) {
+    s_.rxd_pending.pop_front();
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (edges[i].first > clock_.now) s_.rxd_pending.emplace_back(edges[i]);
+    sig_.rxd(edges[i].first, edges[i].second);
+  }
 }
 
 }  // namespace dpc31

@@ -91,6 +91,9 @@ class Mac {
   void start_search();  // Baud_Search from the highest rate down (Start, Baud_Control expiry)
   void stop();          // Go_Offline: no search, no telegram, no answer; TxD idle
   void drive_rxd(std::uint64_t cycle, bool level);
+  // Chip::drive_rxd_chars: one good character from `start` (>= now), whole when the receiver can
+  // take it so (UartRx::whole_char), else edge by edge; the same state and observers either way.
+  void drive_rxd_char(std::uint64_t start, std::uint8_t data, std::uint32_t bit_cycles);
   void watch_txd(std::function<void(std::uint64_t, bool)> cb);  // Chip::on_txd
   [[nodiscard]] bool txd_level() const;  // TxD now, also with edges not yet taken
   [[nodiscard]] std::uint32_t bit_time() const { return s_.rx.bit_time(); }

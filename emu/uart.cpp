@@ -54,6 +54,11 @@ bool uart_bit(std::uint8_t data, std::uint32_t k) {
   return k == 9 ? even_parity(data) != 0 : true;
 }
 
+std::uint16_t uart_frame(std::uint8_t data) {
+  return static_cast<std::uint16_t>(std::uint32_t{data} << 1 |
+                                    std::uint32_t{even_parity(data)} << 9 | 1u << kStopBit);
+}
+
 // ---- receiver ----
 
 void UartRx::configure(std::uint32_t bit_cycles, std::uint64_t now) {
@@ -101,6 +106,27 @@ void UartRx::edge(std::uint64_t cycle, bool level) {
   // The last edge before a falling one is a rise, so the line was high since max(end, rise).
   const std::uint64_t high_since = std::max(not_before_, last_rise_);
   idle_bits_ = std::min((cycle - high_since) / t_, kMaxIdleBits);
+}
+
+bool UartRx::whole_char(std::uint64_t start, std::uint8_t data, std::uint32_t bit_cycles) {
+  // Sampling reads a bit's level in its middle: with T >= 2 every sample of the frame lies before
+  // the next bit's edge, as below.
+  if (bit_cycles != t_ || t_ < 2 || !level_) return false;
+  if (start > 0) sample_through(start - 1);  // what the start bit's falling edge does first
+  if (receiving() || start < not_before_) return false;
+  // The falling edge at `start` begins the character (edge() above).
+  s_ = start;
+  idle_bits_ = std::min((start - std::max(not_before_, last_rise_)) / t_, kMaxIdleBits);
+  // The frame's last edge is the rise that ends its last 0 bit (the stop bit is 1), at bit
+  // boundary b; that edge took the samples of bits 0 .. b-1 and left the line high. Samples b ..
+  // 10 and finish() come later, from advance() or the next edge, as they would.
+  const std::uint16_t frame = uart_frame(data);
+  const auto b = static_cast<std::uint32_t>(
+      std::bit_width(static_cast<unsigned>(~frame & ((1u << kStopBit) - 1))));
+  k_ = b;
+  bits_ = static_cast<std::uint16_t>(frame & ((1u << b) - 1));
+  last_rise_ = start + std::uint64_t{b} * t_;
+  return true;
 }
 
 void UartRx::advance(std::uint64_t now, std::vector<UartChar>& out) {

@@ -11,10 +11,7 @@ namespace dpc31 {
 
 std::uint64_t send_on_rxd(Chip& chip, std::span<const std::uint8_t> bytes, std::uint64_t start,
                           std::uint32_t bit_cycles, UartFault fault) {
-  std::vector<std::pair<std::uint64_t, bool>> edges;
-  uart_encode(bytes, start, bit_cycles, edges, fault);
-  for (const auto& [cycle, level] : edges) chip.drive_rxd(cycle, level);
-  return start + bytes.size() * std::uint64_t{kUartCharBits} * bit_cycles;
+  return chip.drive_rxd_chars(bytes, start, bit_cycles, fault);
 }
 
 bool wants_answer(const fdl::Frame& f) {

@@ -65,7 +65,8 @@ struct Exchange {
   std::uint64_t answer_end = 0;
 };
 
-// Puts `bytes` on the chip's RxD as back-to-back UART characters from `start` (uart_encode). The
+// Puts `bytes` on the chip's RxD as back-to-back UART characters from `start`
+// (Chip::drive_rxd_chars: whole characters where the receiver takes them so, else edges). The
 // whole request goes on the line ahead of time, so firmware running meanwhile cannot delay it.
 // Returns the end of the last stop bit.
 std::uint64_t send_on_rxd(Chip& chip, std::span<const std::uint8_t> bytes, std::uint64_t start,

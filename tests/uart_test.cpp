@@ -12,6 +12,8 @@
 #include <utility>
 #include <vector>
 
+#include "snapshot.hpp"
+
 using namespace dpc31;
 
 namespace {
@@ -442,4 +444,103 @@ TEST(UartGlitch, SwallowsACharStartingInsideItsFrame) {
   const auto out = receive(e, 16, 10000);
   ASSERT_EQ(out.size(), 1u);
   EXPECT_EQ(out[0], (UartChar{0x01, false, false, false, 200, 376, 12}));
+}
+
+// ---- whole characters (issue 19 item 1) ----
+
+namespace {
+
+std::vector<std::uint8_t> rx_state(const UartRx& rx) {
+  snap::Writer w;
+  rx.save_state(w);
+  return w.bytes();
+}
+
+void feed(UartRx& rx, const Edges& edges) {
+  for (const auto& [cycle, level] : edges) rx.edge(cycle, level);
+}
+
+}  // namespace
+
+// UartRx::whole_char against the same character's edges (uart_encode) fed one by one, on two
+// receivers given the same random line: good characters back to back, after gaps, starting
+// inside the previous frame, at another bit time; damaged ones (parity, start, stop: as edges on
+// both, and the next character after a stop fault finds the line low); glitches; advance() at
+// random cycles in between. After every step both receivers hold the same state, every member
+// (their snapshot bytes), and give the same characters. The whole path must have been taken often.
+TEST(UartRx, AWholeCharacterLeavesTheStateItsEdgesLeave) {
+  std::mt19937 rng(19);
+  for (const std::uint32_t t : {2u, 3u, 4u, 8u, 16u, 32u, 96u, 256u, 512u, 1056u, 2500u, 5000u}) {
+    SCOPED_TRACE(t);
+    UartRx a(t, 0);
+    UartRx b(t, 0);
+    std::uint64_t cursor = 100;  // no edge of the next step before this
+    std::uint64_t advanced = 0;  // the last advance()
+    int whole = 0;
+    std::vector<UartChar> out_a;
+    std::vector<UartChar> out_b;
+    for (int step = 0; step < 400; ++step) {
+      SCOPED_TRACE(step);
+      const std::uint64_t tt = t;
+      // Where the next thing starts: back to back, after a gap, or inside the last frame's
+      // stop bit (cursor is the last frame's end minus T at most).
+      switch (rng() % 4) {
+        case 0:
+          break;
+        case 1:
+          cursor += rng() % (40 * tt);
+          break;
+        case 2:
+          cursor += tt * (rng() % 3);
+          break;
+        default:
+          cursor += rng() % tt;
+          break;
+      }
+      if (rng() % 3 == 0 && cursor > advanced + 1) {
+        const std::uint64_t at = advanced + rng() % (cursor - advanced);
+        a.advance(at, out_a);
+        b.advance(at, out_b);
+        advanced = at;
+      }
+      const auto data = static_cast<std::uint8_t>(rng());
+      Edges edges;
+      const unsigned kind = rng() % 10;
+      if (kind < 6) {  // a good character: whole on b where it can be
+        uart_encode(std::vector<std::uint8_t>{data}, cursor, t, edges);
+        feed(a, edges);
+        if (b.whole_char(cursor, data, t)) {
+          ++whole;
+        } else {
+          feed(b, edges);
+        }
+      } else if (kind == 6) {  // a good character at another bit time: never whole
+        const std::uint32_t other = t + 1 + rng() % 3;
+        uart_encode(std::vector<std::uint8_t>{data}, cursor, other, edges);
+        feed(a, edges);
+        EXPECT_FALSE(b.whole_char(cursor, data, other));
+        feed(b, edges);
+      } else if (kind < 9) {  // a damaged character
+        const UartFault f{0, kind == 7
+                                 ? UartFault::Kind::parity
+                                 : (rng() % 2 ? UartFault::Kind::start : UartFault::Kind::stop)};
+        uart_encode(std::vector<std::uint8_t>{data}, cursor, t, edges, f);
+        feed(a, edges);
+        feed(b, edges);
+      } else {  // a glitch
+        const std::uint64_t low = 1 + rng() % (2 * tt);
+        edges = {{cursor, false}, {cursor + low, true}};
+        feed(a, edges);
+        feed(b, edges);
+      }
+      cursor = std::max(cursor + 10 * tt, edges.empty() ? cursor : edges.back().first);
+      ASSERT_EQ(rx_state(a), rx_state(b));
+      ASSERT_EQ(out_a, out_b);
+    }
+    a.advance(cursor + 20 * t, out_a);
+    b.advance(cursor + 20 * t, out_b);
+    EXPECT_EQ(out_a, out_b);
+    EXPECT_EQ(rx_state(a), rx_state(b));
+    EXPECT_GE(whole, 60) << "the whole path was rarely taken";  // 86-99 of 400 steps
+  }
 }

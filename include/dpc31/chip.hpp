@@ -20,6 +20,7 @@
 #include "dpc31/reg_ids.hpp"
 #include "dpc31/regdesc.hpp"
 #include "dpc31/snapshot.hpp"
+#include "dpc31/uart.hpp"
 
 namespace dpc31 {
 
@@ -193,6 +194,14 @@ class Chip {
   // RxD changes to `level` at `cycle` (>= cycle(), non-decreasing); whole frames may be given
   // ahead of time.
   void drive_rxd(std::uint64_t cycle, bool level);
+  // `bytes` as back-to-back UART characters on RxD from `start` (>= cycle()), `bit_cycles` per
+  // bit: the edges uart_encode gives, with `fault`. Characters, not edges, reach the receiver
+  // where it takes them whole (event engine, the rate it listens at, the line idle, no fault in
+  // the telegram); the chip's state, its timing and the on_rxd observers are the same as with
+  // the edges given one by one (docs/engine.md, "Characters on RxD"). Returns the end of the
+  // last stop bit.
+  std::uint64_t drive_rxd_chars(std::span<const std::uint8_t> bytes, std::uint64_t start,
+                                std::uint32_t bit_cycles, UartFault fault = {});
   // Observers are lists: each on_* call adds one; an empty function removes all of that kind.
   // TxD edges, reported when time reaches them.
   void on_txd(std::function<void(std::uint64_t, bool)> cb);

@@ -28,6 +28,7 @@ struct FdlCounters {
   std::uint32_t offline = 0;               // a frame arrived while the chip was Offline
   std::uint32_t repeated = 0;              // FCB repeat: the previous answer sent again
   std::uint32_t requests = 0;              // error-free requests to us (or broadcast) processed
+  bool operator==(const FdlCounters&) const = default;
 };
 
 }  // namespace dpc31

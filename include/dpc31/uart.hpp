@@ -36,6 +36,8 @@ inline constexpr std::uint32_t kUartCharBits = 11;
 [[nodiscard]] std::uint8_t even_parity(std::uint8_t data);
 // The line level of bit k (0 start, 1..8 data, 9 parity, 10 stop) of character `data`.
 [[nodiscard]] bool uart_bit(std::uint8_t data, std::uint32_t k);
+// All eleven levels of character `data`: bit k of the result is uart_bit(data, k).
+[[nodiscard]] std::uint16_t uart_frame(std::uint8_t data);
 
 struct UartChar {
   std::uint8_t data = 0;
@@ -73,6 +75,12 @@ class UartRx {
   // before advance(c) (a sample already taken is not revised). An edge to the level the line
   // already has is ignored.
   void edge(std::uint64_t cycle, bool level);
+  // One whole character on the line from `start` at `bit_cycles` per bit: the edges uart_encode
+  // gives for `data` with no fault, taken in one step. The receiver is left exactly as those
+  // edges, fed one by one, would leave it. False, and nothing received, when that cannot be done
+  // so: another bit time (the baud search listens elsewhere), a line that is low, or a character
+  // still in progress at `start`; the caller then feeds the edges (Mac::drive_rxd_char).
+  bool whole_char(std::uint64_t start, std::uint8_t data, std::uint32_t bit_cycles);
   // Appends, in order, every character whose stop sample is at or before `now`. Edges may have
   // been fed beyond `now`; such characters wait for a later advance().
   void advance(std::uint64_t now, std::vector<UartChar>& out);

@@ -438,10 +438,7 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
                         injected_.size(), injected_bytes_, kMaxInjectQueue, kMaxInjectQueueBytes));
       }
       const std::uint64_t start = std::max(chip_.cycle(), rx_free_) + std::uint64_t{idle} * t_bit;
-      std::vector<std::pair<std::uint64_t, bool>> edges;
-      uart_encode(bytes, start, t_bit, edges, fault);
-      for (const auto& [cycle, level] : edges) chip_.drive_rxd(cycle, level);
-      rx_free_ = start + bytes.size() * std::uint64_t{kUartCharBits} * t_bit;
+      rx_free_ = chip_.drive_rxd_chars(bytes, start, t_bit, fault);
       injected_.emplace_back(rx_free_, bytes.size());
       injected_bytes_ += bytes.size();
       return ok(fmt::format("{} {}", start, rx_free_));
