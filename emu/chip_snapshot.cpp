@@ -113,7 +113,7 @@ void bit_timer(Ar& ar, T& b) {
 // `chars` is scratch (cleared before every use), not state; rxd_pending and rxd_level are in
 // the CORE section (format version 2).
 template <typename Ar, typename S>
-void mac_fields(Ar& ar, S& s) {
+void mac_fields(Ar& ar, S& s, std::uint64_t now) {
   static_assert(snap::member_count<Mac::State>() == 19, "a new member: add it here");
   ar.block(s.rx);
   ar.block(s.frame);
@@ -127,9 +127,18 @@ void mac_fields(Ar& ar, S& s) {
     a(e.first);
     a(e.second);
   });
-  ar.size(s.tx_next, s.tx_edges.size());
-  ar(s.tx_end);
-  ar(s.txd);
+  if constexpr (requires { ar.fail(""); }) {
+    ar.size(s.tx_next, s.tx_edges.size());
+    ar(s.tx_end);
+    ar(s.txd);
+  } else {
+    // The TxD edges up to now as taken: a snapshot does not depend on when the MAC takes them
+    // (at its next event, or when a master looks: Chip::on_txd_edges).
+    const auto [next, txd] = s.txd_at(now);
+    ar.size(next, s.tx_edges.size());
+    ar(s.tx_end);
+    ar(txd);
+  }
   ar.block(s.sampler);
   bit_timer(ar, s.gap);
   bit_timer(ar, s.search);
@@ -228,7 +237,7 @@ void core_fields(Ar& ar, C& c) {
   ar(mode.user.left);
   ar(wd.timer.left);
   ar.section("MAC ");
-  mac_fields(ar, mac);
+  mac_fields(ar, mac, c.clock.now);
   if constexpr (requires { ar.fail(""); }) {
     mac.chars.clear();
     // Only a telegram in progress has a timeout; a stale one would be due for ever.

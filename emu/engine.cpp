@@ -50,6 +50,7 @@ std::uint64_t ChipCore::next_event_but_user_timer() const {
 void ChipCore::process_events() {
   if (clock.reached(mode.user_timer())) mode.user_timer_tick();
   mac.process();
+  if (mac.take_txd_wake()) stop = true;
   if (clock.reached(watchdog.timer())) watchdog_expired();
   if (clock.reached(requests.timer())) requests.wd_tick();
   irq.update_line();
@@ -102,6 +103,7 @@ void ChipCore::tick() {
   count_clock(requests.timer());
   if (clock.reached(mode.user_timer())) mode.user_timer_tick();
   mac.clock();
+  if (mac.take_txd_wake()) stop = true;
   if (clock.reached(watchdog.timer())) watchdog_expired();
   if (clock.reached(requests.timer())) requests.wd_tick();
   irq.update_line();

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <tuple>
 
 namespace dpc31 {
 
@@ -89,10 +90,21 @@ void Mac::truncated() {
   s_.frame_timeout = kNever;
 }
 
-void Mac::set_txd(std::uint64_t cycle, bool level) {
-  if (level == s_.txd) return;
+bool Mac::set_txd(std::uint64_t cycle, bool level) {
+  if (level == s_.txd) return false;
   s_.txd = level;
   if (sig_.txd) sig_.txd(cycle, level);
+  if (wake_ && !level) {
+    wake_ = false;
+    woke_ = true;
+  }
+  return true;
+}
+
+void Mac::txd_edge(std::uint64_t cycle, bool level) {
+  if (!set_txd(cycle, level) || !sig_.txd_edges) return;
+  const std::pair<std::uint64_t, bool> e{cycle, level};
+  sig_.txd_edges(std::span(&e, 1));
 }
 
 void Mac::tx_done() {
@@ -109,6 +121,7 @@ bool Mac::tx_busy() const {
 }
 
 void Mac::stop() {
+  tx_catch_up();  // what went out before the stop reaches the edge observers
   stop_search_window();
   s_.frame_timeout = kNever;
   s_.gap.on = false;
@@ -118,18 +131,32 @@ void Mac::stop() {
   s_.tx_next = 0;
   s_.tx_end = kNever;
   s_.shifter = TxShifter{};
-  set_txd(clock_.now, true);
+  txd_edge(clock_.now, true);
 }
 
 std::uint64_t Mac::deadline() const {
   std::uint64_t t =
       std::min({s_.rx.next_deadline(), s_.frame_timeout, s_.search_deadline, s_.tx_end});
-  // Single TxD bits are events only for someone watching them; otherwise the answer's edges are
-  // taken as the line is looked at (txd_pin) or at the end of the answer.
-  if (sig_.txd && s_.tx_next < s_.tx_edges.size()) {
-    t = std::min(t, s_.tx_edges[s_.tx_next].first);
+  // Single TxD bits are events only for someone watching them one by one, and the next start
+  // bit for a wake-up; otherwise the answer's edges are taken as the line is looked at
+  // (txd_pin, take_txd) or at the next event, at the latest the end of the answer.
+  const std::size_t next = s_.tx_next;
+  if (next < s_.tx_edges.size()) {
+    if (sig_.txd) {
+      t = std::min(t, s_.tx_edges[next].first);
+    } else if (wake_) {
+      // The edges alternate: the next falling one is this edge or the one after.
+      const std::size_t fall = s_.tx_edges[next].second ? next + 1 : next;
+      if (fall < s_.tx_edges.size()) t = std::min(t, s_.tx_edges[fall].first);
+    }
   }
   return t;
+}
+
+void Mac::wake_on_txd(bool on) {
+  wake_ = on;
+  woke_ = false;
+  if (on) clock_.note_deadline(deadline());
 }
 
 void Mac::watch_txd(std::function<void(std::uint64_t, bool)> cb) {
@@ -140,20 +167,21 @@ void Mac::watch_txd(std::function<void(std::uint64_t, bool)> cb) {
 }
 
 void Mac::tx_catch_up() {
-  while (s_.tx_next < s_.tx_edges.size() && s_.tx_edges[s_.tx_next].first <= clock_.now) {
-    set_txd(s_.tx_edges[s_.tx_next].first, s_.tx_edges[s_.tx_next].second);
-    ++s_.tx_next;
+  const std::size_t from = s_.tx_next;
+  if (sig_.txd || wake_) {
+    while (s_.tx_next < s_.tx_edges.size() && s_.tx_edges[s_.tx_next].first <= clock_.now) {
+      set_txd(s_.tx_edges[s_.tx_next].first, s_.tx_edges[s_.tx_next].second);
+      ++s_.tx_next;
+    }
+  } else {
+    std::tie(s_.tx_next, s_.txd) = s_.txd_at(clock_.now);  // nobody to tell edge by edge
+  }
+  if (s_.tx_next > from && sig_.txd_edges) {
+    sig_.txd_edges(std::span(s_.tx_edges).subspan(from, s_.tx_next - from));
   }
 }
 
-bool Mac::txd_level() const {
-  bool level = s_.txd;
-  for (std::size_t i = s_.tx_next; i < s_.tx_edges.size() && s_.tx_edges[i].first <= clock_.now;
-       ++i) {
-    level = s_.tx_edges[i].second;
-  }
-  return level;
-}
+bool Mac::txd_level() const { return s_.txd_at(clock_.now).second; }
 
 void Mac::process() {
   s_.chars.clear();
@@ -206,7 +234,7 @@ void Mac::clock() {
         tx.index = 0;
         tx.bit = 0;
         tx.sub = 0;
-        set_txd(clock_.now, uart_bit(tx.bytes[0], 0));
+        txd_edge(clock_.now, uart_bit(tx.bytes[0], 0));
       }
       break;
     case TxShifter::Phase::shifting:
@@ -217,9 +245,9 @@ void Mac::clock() {
         ++tx.index;
       }
       if (tx.index < tx.bytes.size()) {
-        set_txd(clock_.now, uart_bit(tx.bytes[tx.index], tx.bit));
+        txd_edge(clock_.now, uart_bit(tx.bytes[tx.index], tx.bit));
       } else {
-        set_txd(clock_.now, true);
+        txd_edge(clock_.now, true);
         tx_done();
       }
       break;
@@ -339,6 +367,7 @@ void Mac::send(const fdl::Frame& f, std::uint64_t request_end) {
 }
 
 void Mac::reset() {
+  tx_catch_up();  // as stop(): what went out before reaches the edge observers
   s_ = State{};
   listen(0);  // listening at 12 Mbaud, for the offline count
 }
@@ -377,16 +406,10 @@ void Mac::drive_rxd(std::uint64_t cycle, bool level) {
 }
 
 void Mac::drive_rxd_char(std::uint64_t start, std::uint8_t data, std::uint32_t bit_cycles) {
-  const std::uint16_t frame = uart_frame(data);
   // The character's edges, as uart_encode gives them after a high line.
   std::array<std::pair<std::uint64_t, bool>, kUartCharBits> edges{};
-  std::size_t n = 0;
   bool line = true;
-  for (std::uint32_t k = 0; k < kUartCharBits; ++k) {
-    const bool level = (frame >> k & 1u) != 0;
-    if (level != line) edges[n++] = {start + std::uint64_t{k} * bit_cycles, level};
-    line = level;
-  }
+  const std::size_t n = uart_frame_edges(uart_frame(data), start, bit_cycles, line, edges.data());
   // The per-cycle engine is the reference: it always takes edges.
   if (clock_.engine != Engine::event || start < clock_.now ||
       !s_.rx.whole_char(start, data, bit_cycles)) {

@@ -81,6 +81,15 @@ class Mac {
     // receiver (re)configure (Baud_Search switching the rate, Start).
     Fifo<std::pair<std::uint64_t, bool>> rxd_pending;
     bool rxd_level = true;  // the RxD line (per-cycle engine)
+
+    // TxD with the edges up to `now` taken, whether or not an event has taken them yet: the
+    // first edge after `now`, and the line's level.
+    [[nodiscard]] std::pair<std::size_t, bool> txd_at(std::uint64_t now) const {
+      std::size_t i = tx_next;
+      bool level = txd;
+      for (; i < tx_edges.size() && tx_edges[i].first <= now; ++i) level = tx_edges[i].second;
+      return {i, level};
+    }
   };
 
   Mac(Clock& clock, const RegisterFile& regs, DpStateMachine& dp, Watchdog& watchdog,
@@ -95,6 +104,12 @@ class Mac {
   // take it so (UartRx::whole_char), else edge by edge; the same state and observers either way.
   void drive_rxd_char(std::uint64_t start, std::uint8_t data, std::uint32_t bit_cycles);
   void watch_txd(std::function<void(std::uint64_t, bool)> cb);  // Chip::on_txd
+  // Chip::take_txd: the TxD edges up to now onto the pin, handed to the on_txd_edges observers.
+  void tx_catch_up();
+  // Chip::wake_on_txd: while on, the next falling TxD edge is an event that fires the wake-up.
+  void wake_on_txd(bool on);
+  // Whether a TxD wake-up fired since the last call (ChipCore stops the step there).
+  [[nodiscard]] bool take_txd_wake() { return std::exchange(woke_, false); }
   [[nodiscard]] bool txd_level() const;  // TxD now, also with edges not yet taken
   [[nodiscard]] std::uint32_t bit_time() const { return s_.rx.bit_time(); }
 
@@ -110,10 +125,10 @@ class Mac {
   void stop_search_window();
   void search_next();
   void truncated();
-  void set_txd(std::uint64_t cycle, bool level);
+  bool set_txd(std::uint64_t cycle, bool level);   // false: TxD had that level already
+  void txd_edge(std::uint64_t cycle, bool level);  // one edge, to every kind of observer
   void tx_done();
   [[nodiscard]] bool tx_busy() const;
-  void tx_catch_up();  // event engine: TxD edges due by now onto the pin
   void on_char(const UartChar& c);
   void on_frame(const fdl::Frame& f, const UartChar& last);
   void send(const fdl::Frame& f, std::uint64_t request_end);
@@ -125,6 +140,9 @@ class Mac {
   FdlCounters& counters_;
   Signals& sig_;  // not const: Chip::on_txd adds its observer through the MAC (watch_txd)
   State s_;
+  // Not state (a snapshot leaves them): the wake-up a master asked for, and whether it fired.
+  bool wake_ = false;
+  bool woke_ = false;
 };
 
 }  // namespace dpc31

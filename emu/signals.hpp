@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -42,7 +43,9 @@ struct Signals {
   LogSink sink;
   Observers<std::uint64_t, bool> irq;  // X/INT activity
   Observers<std::uint64_t, bool> pb3;  // dpc31 port PB3
-  Observers<std::uint64_t, bool> txd;
+  Observers<std::uint64_t, bool> txd;  // one by one, each edge an event (Chip::on_txd)
+  // In batches, when the MAC catches up (Chip::on_txd_edges).
+  Observers<std::span<const std::pair<std::uint64_t, bool>>> txd_edges;
   Observers<std::uint64_t, bool> rxd;  // edges as they are driven (possibly ahead of time)
   Observers<const Telegram&> telegram;
   Observers<std::uint64_t, const BlockEvent&> block;
@@ -63,6 +66,7 @@ struct Signals {
     irq = std::move(from.irq);
     pb3 = std::move(from.pb3);
     txd = std::move(from.txd);
+    txd_edges = std::move(from.txd_edges);
     rxd = std::move(from.rxd);
     telegram = std::move(from.telegram);
     block = std::move(from.block);

@@ -14,13 +14,21 @@ namespace {
 constexpr std::uint32_t kStopBit = 10;
 constexpr std::uint64_t kMaxIdleBits = 0xFFFF'FFFF;
 
+// Parity of the low 9 bits by folding (std::popcount is a library call without -mpopcnt).
+constexpr unsigned parity9(unsigned v) {
+  v ^= v >> 8;
+  v ^= v >> 4;
+  return (0x6996u >> (v & 0xFu)) & 1u;
+}
+static_assert(parity9(0x1FF) == 1 && parity9(0x101) == 0 && parity9(0x100) == 1);
+
 // The character both receivers report: `bits` holds sampled bit k at position k.
 UartChar make_char(std::uint16_t bits, std::uint64_t start, std::uint32_t t,
                    std::uint64_t idle_bits) {
   UartChar c;
   c.data = static_cast<std::uint8_t>(bits >> 1);
   c.start_ok = (bits & 1) == 0;
-  c.parity_ok = (std::popcount(static_cast<unsigned>((bits >> 1) & 0x1FF)) & 1) == 0;
+  c.parity_ok = parity9((bits >> 1) & 0x1FF) == 0;
   c.stop_ok = ((bits >> kStopBit) & 1) != 0;
   c.start = start;
   c.end = start + std::uint64_t{kUartCharBits} * t;
@@ -44,19 +52,25 @@ int baud_code(std::uint32_t baud) {
   return -1;
 }
 
-std::uint8_t even_parity(std::uint8_t data) {
-  return static_cast<std::uint8_t>(std::popcount(data) & 1);
-}
+std::uint8_t even_parity(std::uint8_t data) { return static_cast<std::uint8_t>(parity9(data)); }
 
-bool uart_bit(std::uint8_t data, std::uint32_t k) {
-  if (k == 0) return false;
-  if (k <= 8) return ((data >> (k - 1)) & 1) != 0;
-  return k == 9 ? even_parity(data) != 0 : true;
-}
+bool uart_bit(std::uint8_t data, std::uint32_t k) { return (uart_frame(data) >> k & 1u) != 0; }
 
 std::uint16_t uart_frame(std::uint8_t data) {
   return static_cast<std::uint16_t>(std::uint32_t{data} << 1 |
                                     std::uint32_t{even_parity(data)} << 9 | 1u << kStopBit);
+}
+
+std::size_t uart_frame_edges(std::uint16_t frame, std::uint64_t start, std::uint32_t bit_cycles,
+                             bool& line, std::pair<std::uint64_t, bool>* out) {
+  std::size_t n = 0;
+  std::uint64_t at = start;
+  for (std::uint32_t k = 0; k < kUartCharBits; ++k, at += bit_cycles) {
+    const bool level = (frame >> k & 1u) != 0;
+    if (level != line) out[n++] = {at, level};
+    line = level;
+  }
+  return n;
 }
 
 // ---- receiver ----
@@ -127,6 +141,47 @@ bool UartRx::whole_char(std::uint64_t start, std::uint8_t data, std::uint32_t bi
   bits_ = static_cast<std::uint16_t>(frame & ((1u << b) - 1));
   last_rise_ = start + std::uint64_t{b} * t_;
   return true;
+}
+
+std::size_t UartRx::whole_run(std::span<const std::pair<std::uint64_t, bool>> e) {
+  // A good character's edges fall on its bit boundaries s + kT, alternating from the start bit's
+  // fall. The edges that read as one are taken whole: whole_char leaves the state those edges
+  // leave, so an edge still to come inside the frame (a later batch) reads as it would.
+  if (e.empty() || e[0].second || t_ < 2) return 0;
+  const std::uint64_t s = e[0].first;
+  std::uint16_t frame = 0;
+  bool line = false;
+  std::size_t n = 1;
+  std::uint64_t at = s;
+  for (std::uint32_t k = 1; k < kUartCharBits; ++k) {
+    at += t_;
+    if (n < e.size() && e[n].first < at) return 0;  // off a bit boundary: not a character's edge
+    if (n < e.size() && e[n].first == at) {
+      if (e[n].second == line) return 0;
+      line = e[n].second;
+      ++n;
+    }
+    if (line) frame = static_cast<std::uint16_t>(frame | 1u << k);
+  }
+  const auto data = static_cast<std::uint8_t>(frame >> 1);
+  if (frame != uart_frame(data) || !whole_char(s, data, t_)) return 0;
+  return n;
+}
+
+std::size_t UartRx::edges(std::span<const std::pair<std::uint64_t, bool>> e) {
+  std::size_t whole = 0;
+  std::size_t i = 0;
+  while (i < e.size()) {
+    const std::size_t n = whole_run(e.subspan(i));
+    if (n == 0) {
+      edge(e[i].first, e[i].second);
+      ++i;
+    } else {
+      i += n;
+      ++whole;
+    }
+  }
+  return whole;
 }
 
 void UartRx::advance(std::uint64_t now, std::vector<UartChar>& out) {
@@ -268,25 +323,25 @@ void UartSampler::load_state(snap::Reader& r) {
 
 void uart_encode(std::span<const std::uint8_t> bytes, std::uint64_t start, std::uint32_t bit_cycles,
                  std::vector<std::pair<std::uint64_t, bool>>& edges, UartFault fault) {
-  const std::uint64_t t = bit_cycles;
-  edges.reserve(edges.size() + bytes.size() * kUartCharBits + 1);
+  const std::uint64_t frame_cycles = std::uint64_t{kUartCharBits} * bit_cycles;
+  std::size_t n = edges.size();
+  edges.resize(n + bytes.size() * kUartCharBits + 1);
   bool line = true;
-  auto drive = [&](std::uint64_t cycle, bool level) {
-    if (level != line) edges.emplace_back(cycle, level);
-    line = level;
-  };
   for (std::size_t i = 0; i < bytes.size(); ++i) {
-    const std::uint8_t d = bytes[i];
-    const bool hit = fault.char_index >= 0 && static_cast<std::size_t>(fault.char_index) == i;
-    auto faulty = [&](UartFault::Kind k) { return hit && fault.kind == k; };
-    const std::uint64_t s = start + i * kUartCharBits * t;
-    for (std::uint32_t b = 0; b < kUartCharBits; ++b) {
+    std::uint16_t frame = uart_frame(bytes[i]);
+    if (fault.char_index >= 0 && static_cast<std::size_t>(fault.char_index) == i) {
+      // The faulty bit is sent inverted: the start bit (0 -> 1), parity, or the stop bit (1 -> 0).
       using K = UartFault::Kind;
-      const K kind = b == 0 ? K::start : b == 9 ? K::parity : b == kStopBit ? K::stop : K::none;
-      drive(s + b * t, uart_bit(d, b) != (kind != K::none && faulty(kind)));
+      const std::uint32_t k = fault.kind == K::start    ? 0
+                              : fault.kind == K::parity ? 9
+                              : fault.kind == K::stop   ? kStopBit
+                                                        : kUartCharBits;
+      if (k < kUartCharBits) frame = static_cast<std::uint16_t>(frame ^ 1u << k);
     }
+    n += uart_frame_edges(frame, start + i * frame_cycles, bit_cycles, line, &edges[n]);
   }
-  drive(start + bytes.size() * kUartCharBits * t, true);
+  if (!line) edges[n++] = {start + bytes.size() * frame_cycles, true};
+  edges.resize(n);
 }
 
 }  // namespace dpc31

@@ -54,11 +54,13 @@ DpMaster::DpMaster(Chip& chip, MasterConfig m, SlaveConfig s)
       target_(slave_.address),
       rx_(t_, chip.cycle()),
       bus_free_(chip.cycle()) {
-  chip_.on_txd([this](std::uint64_t cycle, bool level) {
-    rx_.edge(cycle, level);
-    // A falling edge may be a start bit: look at the line again (the wait is event-driven).
-    if (wake_on_txd_ && !level) chip_.request_stop();
-  });
+  // TxD in batches, taken when the master looks (take_txd): no event per bit.
+  chip_.on_txd_edges([this](std::span<const std::pair<std::uint64_t, bool>> e) { rx_.edges(e); });
+}
+
+void DpMaster::look(std::vector<UartChar>& out) {
+  chip_.take_txd();
+  rx_.advance(chip_.cycle(), out);
 }
 
 void DpMaster::note(const std::string& s) {
@@ -67,6 +69,8 @@ void DpMaster::note(const std::string& s) {
 
 // To `cycle`, or less when the chip's TxD wakes the master up (wake_on_txd_).
 void DpMaster::run_until(std::uint64_t cycle) {
+  // A falling edge may be a start bit: look at the line again (the wait is event-driven).
+  if (wake_on_txd_) chip_.wake_on_txd(true);
   if (cpu_) {
     cpu_->run_until(cycle);
   } else {
@@ -74,6 +78,7 @@ void DpMaster::run_until(std::uint64_t cycle) {
       chip_.step_until_irq(cycle - chip_.cycle());
     }
   }
+  if (wake_on_txd_) chip_.wake_on_txd(false);
   chip_.clear_stop();
 }
 
@@ -127,7 +132,7 @@ Exchange DpMaster::transact_raw(const std::vector<std::uint8_t>& bytes, UartFaul
   Exchange ex;
   // What the line carried before (another master's traffic, for instance) is no answer to us.
   chars_.clear();
-  rx_.advance(chip_.cycle(), chars_);
+  look(chars_);
   ex.request_start = std::max(chip_.cycle(), bus_free_ + std::uint64_t{cfg_.idle_bits} * t_);
   if (on_send) on_send(ex.request_start, bytes, fault);
   ex.request_end = send_on_rxd(chip_, bytes, ex.request_start, t_, fault);
@@ -158,7 +163,7 @@ Exchange DpMaster::wait_answer(Exchange ex) {
   answer_.reset();
   for (;;) {
     chars_.clear();
-    rx_.advance(chip_.cycle(), chars_);
+    look(chars_);
     for (const UartChar& c : chars_) answer_.push(c);
     if (answer_.finished() && !rx_.receiving()) break;
     if (!answer_.started() && !rx_.receiving() && chip_.cycle() >= slot_end) {

@@ -194,6 +194,7 @@ class DpMaster {
                      bool srd = true);
   void run_until(std::uint64_t cycle);
   Exchange wait_answer(Exchange ex);
+  void look(std::vector<UartChar>& out);  // the characters on TxD whose stop bit is sampled by now
   void note(const std::string& s);
 
   Chip& chip_;

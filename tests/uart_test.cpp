@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <random>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -542,5 +543,122 @@ TEST(UartRx, AWholeCharacterLeavesTheStateItsEdgesLeave) {
     EXPECT_EQ(out_a, out_b);
     EXPECT_EQ(rx_state(a), rx_state(b));
     EXPECT_GE(whole, 60) << "the whole path was rarely taken";  // 86-99 of 400 steps
+  }
+}
+
+// UartRx::edges (the master's and the bridge's receiver on TxD, Chip::on_txd_edges) against the
+// same edges fed one by one: a random line of good characters (back to back, after gaps, inside
+// the previous frame's stop bit, at another bit time), damaged ones and glitches, handed over in
+// batches that end at random cycles (`upto`: the chip's events and the master's looks), with
+// advance() at some of them. After every batch both receivers hold the same state, every member,
+// and have given the same characters; the whole path must have been taken often.
+TEST(UartRx, EdgesInBatchesLeaveTheStateTheEdgesOneByOneLeave) {
+  std::mt19937 rng(23);
+  for (const std::uint32_t t : {2u, 3u, 4u, 8u, 16u, 32u, 96u, 256u, 512u, 1056u, 2500u, 5000u}) {
+    SCOPED_TRACE(t);
+    const std::uint64_t tt = t;
+    Edges line;
+    std::uint64_t cursor = 100;
+    for (int step = 0; step < 400; ++step) {
+      cursor += rng() % 3 == 0 ? rng() % (40 * tt) : (rng() % 2 ? 0 : rng() % tt);
+      const auto data = static_cast<std::uint8_t>(rng());
+      Edges e;
+      const unsigned kind = rng() % 10;
+      if (kind < 6) {
+        uart_encode(std::vector<std::uint8_t>{data}, cursor, t, e);
+      } else if (kind == 6) {
+        uart_encode(std::vector<std::uint8_t>{data}, cursor, t + 1 + rng() % 3, e);
+      } else if (kind < 9) {
+        const UartFault f{0, kind == 7
+                                 ? UartFault::Kind::parity
+                                 : (rng() % 2 ? UartFault::Kind::start : UartFault::Kind::stop)};
+        uart_encode(std::vector<std::uint8_t>{data}, cursor, t, e, f);
+      } else {
+        e = {{cursor, false}, {cursor + 1 + rng() % (2 * tt), true}};
+      }
+      // A line has one level at a time: a fault's first edge may repeat the level the line has.
+      for (const auto& x : e) {
+        if (line.empty() ? !x.second : line.back().second != x.second) line.push_back(x);
+      }
+      cursor = std::max(cursor + 10 * tt, e.empty() ? cursor : e.back().first);
+    }
+    UartRx a(t, 0);
+    UartRx b(t, 0);
+    std::vector<UartChar> out_a;
+    std::vector<UartChar> out_b;
+    std::size_t next = 0;
+    std::size_t whole = 0;
+    std::uint64_t upto = 0;
+    while (next < line.size()) {
+      SCOPED_TRACE(upto);
+      const unsigned span_kind = rng() % 3;
+      upto += 1 + rng() % (span_kind == 0 ? 3 * tt : (span_kind == 1 ? 40 * tt : 400 * tt));
+      std::size_t end = next;
+      while (end < line.size() && line[end].first <= upto) ++end;
+      for (std::size_t i = next; i < end; ++i) a.edge(line[i].first, line[i].second);
+      whole += b.edges(std::span(line).subspan(next, end - next));
+      next = end;
+      if (rng() % 2 == 0) {
+        a.advance(upto, out_a);
+        b.advance(upto, out_b);
+      }
+      ASSERT_EQ(rx_state(a), rx_state(b));
+      ASSERT_EQ(out_a, out_b);
+      ASSERT_EQ(a.receiving(), b.receiving());
+      ASSERT_EQ(a.next_deadline(), b.next_deadline());
+    }
+    a.advance(upto + 20 * tt, out_a);
+    b.advance(upto + 20 * tt, out_b);
+    EXPECT_EQ(out_a, out_b);
+    EXPECT_EQ(rx_state(a), rx_state(b));
+    EXPECT_GE(whole, 60u) << "the whole path was rarely taken";
+  }
+}
+
+// A batch may end inside a character (Chip::on_txd_edges hands over what is on the line when
+// somebody looks). 0xFE has no edge after its line bit 2, so its first two edges already read as
+// a good character and are taken whole; a later batch then brings an edge inside the frame (a low
+// line bit 6), and the receiver must read what a receiver fed edge by edge reads.
+TEST(UartRx, AnEdgeInsideACharacterTakenWholeReadsAsItsEdgesWould) {
+  constexpr std::uint32_t t = 8;
+  constexpr std::uint64_t s = 80;
+  const Edges first{{s, false}, {s + 2 * t, true}};  // 0xFE: start, bit 0 low, then high
+  const Edges later{{s + 6 * t, false}, {s + 7 * t, true}};
+  UartRx a(t, 0);
+  UartRx b(t, 0);
+  for (const auto& [c, l] : first) a.edge(c, l);
+  for (const auto& [c, l] : later) a.edge(c, l);
+  EXPECT_EQ(b.edges(first), 1u);
+  b.edges(later);
+  std::vector<UartChar> out_a;
+  std::vector<UartChar> out_b;
+  a.advance(s + 20 * t, out_a);
+  b.advance(s + 20 * t, out_b);
+  ASSERT_EQ(out_a.size(), 1u);
+  EXPECT_EQ(out_a[0].data, 0xDE);  // data bit 5 (line bit 6) low
+  EXPECT_FALSE(out_a[0].parity_ok);
+  EXPECT_EQ(out_a, out_b);
+  EXPECT_EQ(rx_state(a), rx_state(b));
+}
+
+// A glitch anywhere inside a good character's high tail (0xFE: high from line bit 2 through the
+// stop bit), in the same batch, on a bit boundary or off one: the receiver reads what a receiver
+// fed edge by edge reads.
+TEST(UartRx, AGlitchInsideAGoodCharacterReadsAsItsEdgesWould) {
+  constexpr std::uint32_t t = 8;
+  constexpr std::uint64_t s = 80;
+  for (std::uint64_t d = 2 * t + 1; d + 1 < 11 * t; ++d) {
+    SCOPED_TRACE(d);
+    const Edges e{{s, false}, {s + 2 * t, true}, {s + d, false}, {s + d + 1, true}};
+    UartRx a(t, 0);
+    UartRx b(t, 0);
+    for (const auto& [c, l] : e) a.edge(c, l);
+    b.edges(e);
+    std::vector<UartChar> out_a;
+    std::vector<UartChar> out_b;
+    a.advance(s + 30 * t, out_a);
+    b.advance(s + 30 * t, out_b);
+    ASSERT_EQ(out_a, out_b);
+    ASSERT_EQ(rx_state(a), rx_state(b));
   }
 }

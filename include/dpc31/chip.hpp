@@ -203,8 +203,18 @@ class Chip {
   std::uint64_t drive_rxd_chars(std::span<const std::uint8_t> bytes, std::uint64_t start,
                                 std::uint32_t bit_cycles, UartFault fault = {});
   // Observers are lists: each on_* call adds one; an empty function removes all of that kind.
-  // TxD edges, reported when time reaches them.
+  // TxD edges, reported when time reaches them: each edge is an event of the chip.
   void on_txd(std::function<void(std::uint64_t, bool)> cb);
+  // TxD edges for a receiver of the caller's own (a master, the bridge): handed over in order and
+  // in batches, none before its cycle, at the chip's next event, at take_txd() and at the end of
+  // every answer. They are no events: a run nobody else watches is not stepped bit by bit
+  // (docs/engine.md, "Characters on TxD").
+  void on_txd_edges(std::function<void(std::span<const std::pair<std::uint64_t, bool>>)> cb);
+  // Hands the TxD edges up to cycle() to the on_txd_edges observers.
+  void take_txd();
+  // While on, the chip's next falling TxD edge (a start bit) is an event after which the step
+  // stops as after request_stop(). Off clears a wake-up that fired but was not taken.
+  void wake_on_txd(bool on);
   // RxD edges as they are driven (may lie ahead of cycle()).
   void on_rxd(std::function<void(std::uint64_t, bool)> cb);
   // After every event the chip processes and every bus access: internal state may have changed.

@@ -38,6 +38,10 @@ inline constexpr std::uint32_t kUartCharBits = 11;
 [[nodiscard]] bool uart_bit(std::uint8_t data, std::uint32_t k);
 // All eleven levels of character `data`: bit k of the result is uart_bit(data, k).
 [[nodiscard]] std::uint16_t uart_frame(std::uint8_t data);
+// The level changes of one frame (bit k of `frame` on the line from start + k * bit_cycles) on a
+// line now at `line`, written to out[0..n) (n <= 11, returned); `line` becomes the stop bit's.
+std::size_t uart_frame_edges(std::uint16_t frame, std::uint64_t start, std::uint32_t bit_cycles,
+                             bool& line, std::pair<std::uint64_t, bool>* out);
 
 struct UartChar {
   std::uint8_t data = 0;
@@ -81,6 +85,10 @@ class UartRx {
   // so: another bit time (the baud search listens elsewhere), a line that is low, or a character
   // still in progress at `start`; the caller then feeds the edges (Mac::drive_rxd_char).
   bool whole_char(std::uint64_t start, std::uint8_t data, std::uint32_t bit_cycles);
+  // Edges in order, after those given before (Chip::on_txd_edges): the same as edge() for each,
+  // but a run that reads as one good character at this receiver's bit time is taken whole
+  // (whole_char). Returns the number of characters taken whole.
+  std::size_t edges(std::span<const std::pair<std::uint64_t, bool>> e);
   // Appends, in order, every character whose stop sample is at or before `now`. Edges may have
   // been fed beyond `now`; such characters wait for a later advance().
   void advance(std::uint64_t now, std::vector<UartChar>& out);
@@ -109,6 +117,8 @@ class UartRx {
   // Takes the samples of the character in progress that fall at or before `last`.
   void sample_through(std::uint64_t last);
   void finish();
+  // edges(): how many edges at the front of `e` are one good character taken whole (0: none).
+  std::size_t whole_run(std::span<const std::pair<std::uint64_t, bool>> e);
 
   std::uint32_t t_ = 0;           // clock cycles per bit
   bool level_ = true;             // current RxD level

@@ -105,14 +105,15 @@ Engine::Engine(const Setup& setup, LogSink log)
   DirectBus bus(chip_);
   fw_->init(bus, setup_.address);
   rx_.configure(t_, chip_.cycle());
-  chip_.on_txd([this](std::uint64_t cycle, bool level) { rx_.edge(cycle, level); });
+  // TxD in batches, taken when the bridge looks (collect): no event per bit.
+  chip_.on_txd_edges([this](std::span<const std::pair<std::uint64_t, bool>> e) { rx_.edges(e); });
   cpu_ = std::make_unique<Cpu>(chip_, fw_->program());
   bus_free_ = chip_.cycle();
 }
 
 Engine::~Engine() {
   cpu_.reset();  // stops the firmware thread before the chip goes away
-  chip_.on_txd({});
+  chip_.on_txd_edges({});
   chip_.on_state_change({});
   chip_.set_log_sink({});
 }
@@ -276,6 +277,7 @@ void Engine::finish_answer(AnswerCollector& a, std::string_view how) {
 
 void Engine::collect() {
   chars_.clear();
+  chip_.take_txd();
   rx_.advance(chip_.cycle(), chars_);
   for (const UartChar& c : chars_) {
     out_.push_back(c.data);

@@ -1,0 +1,214 @@
+// Characters on TxD (Chip::on_txd_edges, issue 19 item 1, the sending half) against TxD edges as
+// events (Chip::on_txd), the path every earlier test and golden trace was made with. With an
+// on_txd observer attached every TxD edge is an event and reaches the master's receiver in a
+// batch of its own, as before; without one the edges reach it in batches when it looks, and whole
+// characters go in one step (UartRx::edges). Two chips of the same profile, each with the built-in
+// master and the minimal user side: the master's exchanges (every request's and answer's start
+// and end cycle, the answer's bytes), its counters, the chip's state (save_state) and TxD must be
+// the same after every exchange. Every profile, every PROFIBUS rate; and an answer cut by
+// Go_Offline while on the line.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <span>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "dp_master.hpp"
+#include "dpc31/bus_port.hpp"
+#include "dpc31/fdl.hpp"
+#include "responder.hpp"
+#include "snapshot.hpp"
+#include "test_util.hpp"
+
+using namespace dpc31;
+
+namespace {
+
+using Edges = std::vector<std::pair<std::uint64_t, bool>>;
+
+struct Side {
+  Chip chip;
+  Responder user;
+  DpMaster master;
+  Edges txd;
+  std::size_t whole = 0;  // characters a receiver beside the master took whole
+  UartRx probe;
+
+  Side(Profile p, std::uint32_t baud, bool watch_bits)
+      : chip({p, BusMode::intel, 0}),
+        user(ResponderConfig{}),
+        master(init(chip, user), MasterConfig{2, baud, 100, 33}, SlaveConfig{}),
+        probe(bit_cycles(chip.clock_hz(), baud), chip.cycle()) {
+    master.set_firmware([this](BusPort& c) { user.isr(c); });
+    if (watch_bits) {
+      chip.on_txd([this](std::uint64_t c, bool l) { txd.emplace_back(c, l); });
+    } else {
+      // Beside the master: gets the same batches, counts how many characters went whole.
+      chip.on_txd_edges([this](std::span<const std::pair<std::uint64_t, bool>> e) {
+        txd.insert(txd.end(), e.begin(), e.end());
+        whole += probe.edges(e);
+      });
+    }
+  }
+  static Chip& init(Chip& c, Responder& u) {
+    c.set_log_sink(nullptr);
+    u.inputs = {0xA1, 0xA2, 0xA3, 0xA4};
+    DirectBus bus(c);
+    u.init(bus);
+    return c;
+  }
+};
+
+std::vector<std::uint8_t> wire(const std::optional<fdl::Frame>& f) {
+  return f ? fdl::encode(*f) : std::vector<std::uint8_t>{};
+}
+
+::testing::AssertionResult same_exchange(const Exchange& a, const Exchange& b) {
+  if (a.request_start == b.request_start && a.request_end == b.request_end &&
+      a.answer_start == b.answer_start && a.answer_end == b.answer_end &&
+      wire(a.answer) == wire(b.answer)) {
+    return ::testing::AssertionSuccess();
+  }
+  return ::testing::AssertionFailure()
+         << "request " << a.request_start << ".." << a.request_end << " / " << b.request_start
+         << ".." << b.request_end << ", answer " << a.answer_start << ".." << a.answer_end << " / "
+         << b.answer_start << ".." << b.answer_end << " (" << wire(a.answer).size() << " / "
+         << wire(b.answer).size() << " bytes)";
+}
+
+::testing::AssertionResult same_state(const Chip& a, const Chip& b) {
+  const std::vector<std::uint8_t> x = a.save_state();
+  const std::vector<std::uint8_t> y = b.save_state();
+  if (x == y) return ::testing::AssertionSuccess();
+  std::size_t i = 0;
+  while (i < x.size() && i < y.size() && x[i] == y[i]) ++i;
+  return ::testing::AssertionFailure() << "snapshots differ from byte " << i << " of " << x.size()
+                                       << " / " << y.size() << " at cycle " << a.cycle();
+}
+
+void expect_same(Side& bits, Side& chars, const char* what) {
+  SCOPED_TRACE(what);
+  const auto& h = bits.master.history();
+  const auto& g = chars.master.history();
+  ASSERT_EQ(h.size(), g.size());
+  for (std::size_t i = 0; i < h.size(); ++i) ASSERT_TRUE(same_exchange(h[i], g[i])) << i;
+  const MasterCounters& m = bits.master.counters();
+  const MasterCounters& n = chars.master.counters();
+  ASSERT_EQ(std::tie(m.requests, m.answered, m.no_answer, m.bad_answer),
+            std::tie(n.requests, n.answered, n.no_answer, n.bad_answer));
+  ASSERT_EQ(bits.chip.cycle(), chars.chip.cycle());
+  ASSERT_TRUE(same_state(bits.chip, chars.chip));
+  ASSERT_EQ(bits.chip.txd_pin(), chars.chip.txd_pin());
+  chars.chip.take_txd();
+  ASSERT_EQ(bits.txd, chars.txd);
+  ASSERT_EQ(bits.chip.fdl_counters(), chars.chip.fdl_counters());
+}
+
+class TxdChars : public ::testing::TestWithParam<std::tuple<Profile, std::uint32_t>> {};
+
+}  // namespace
+
+TEST_P(TxdChars, TheMasterSeesWhatTheEdgesShowed) {
+  const auto [profile, baud] = GetParam();
+  Side bits(profile, baud, true);
+  Side chars(profile, baud, false);
+  // The start-up: FDL_Status through the baud search, Slave_Diag, Set_Prm, Chk_Cfg, Slave_Diag.
+  ASSERT_TRUE(bits.master.startup());
+  ASSERT_TRUE(chars.master.startup());
+  expect_same(bits, chars, "start-up");
+  for (int i = 0; i < 6; ++i) {
+    const std::vector<std::uint8_t> out{static_cast<std::uint8_t>(i), 0x55, 0xAA,
+                                        static_cast<std::uint8_t>(0xF0 | i)};
+    bits.master.data_exchange(out);
+    chars.master.data_exchange(out);
+    expect_same(bits, chars, "Data_Exchange");
+  }
+  // A damaged request goes unanswered on both; the master waits the slot time out.
+  bits.master.data_exchange({1, 2, 3, 4}, {2, UartFault::Kind::parity});
+  chars.master.data_exchange({1, 2, 3, 4}, {2, UartFault::Kind::parity});
+  expect_same(bits, chars, "Data_Exchange with a parity error");
+  bits.master.get_cfg();
+  chars.master.get_cfg();
+  expect_same(bits, chars, "Get_Cfg");
+  bits.master.read_inputs();
+  chars.master.read_inputs();
+  expect_same(bits, chars, "Rd_Inp");
+  bits.master.slave_diag();
+  chars.master.slave_diag();
+  expect_same(bits, chars, "Slave_Diag");
+  bits.master.global_control(0x02);  // Clear_Data: no answer (SDN)
+  chars.master.global_control(0x02);
+  expect_same(bits, chars, "Global_Control");
+  bits.master.idle(1000);
+  chars.master.idle(1000);
+  expect_same(bits, chars, "idle");
+  EXPECT_GE(chars.whole, 20u) << "the whole path was rarely taken";
+}
+
+INSTANTIATE_TEST_SUITE_P(ProfilesAndRates, TxdChars,
+                         ::testing::Combine(::testing::Values(Profile::spc3, Profile::vpc3plus,
+                                                              Profile::dpc31),
+                                            ::testing::ValuesIn(kBaudRates)),
+                         [](const ::testing::TestParamInfo<std::tuple<Profile, std::uint32_t>>& i) {
+                           return testutil::pname(std::get<0>(i.param)) + "_" +
+                                  std::to_string(std::get<1>(i.param));
+                         });
+
+// Go_Offline while the answer is on the line (docs/timing.md: TxD returns to idle at the
+// completion cycle): the edges before the cut reach a batch receiver as they reached a receiver
+// fed edge by edge, the cut included, and the snapshots agree in the middle of the answer.
+class TxdCut : public ::testing::TestWithParam<Profile> {};
+
+TEST_P(TxdCut, AnAnswerCutByGoOfflineReachesBothReceiversAlike) {
+  const Profile profile = GetParam();
+  Side bits(profile, 12'000'000, true);
+  Side chars(profile, 12'000'000, false);
+  ASSERT_TRUE(bits.master.startup());
+  ASSERT_TRUE(chars.master.startup());
+  const std::uint32_t t = bits.master.bit_cycles();
+  UartRx a(t, bits.chip.cycle());
+  UartRx b(t, chars.chip.cycle());
+  bits.chip.on_txd([&](std::uint64_t c, bool l) { a.edge(c, l); });
+  chars.chip.on_txd_edges([&](std::span<const std::pair<std::uint64_t, bool>> e) { b.edges(e); });
+  // Get_Cfg by hand: its answer (SD2, 9 + 1 characters) starts MinTSDR = 11 bit times after the
+  // request's end; cut it 3.5 characters in.
+  const std::vector<std::uint8_t> req =
+      fdl::encode(fdl::make_frame(5, 2, fdl::make_request_fc(fdl::Function::SRD_high, false, true),
+                                  {}, sap::Get_Cfg, sap::Master));
+  const std::uint64_t start = bits.chip.cycle() + 40 * std::uint64_t{t};
+  const std::uint64_t end = bits.chip.drive_rxd_chars(req, start, t);
+  ASSERT_EQ(chars.chip.drive_rxd_chars(req, start, t), end);
+  const std::uint64_t cut = end + 11 * std::uint64_t{t} + (3 * 11 + 5) * std::uint64_t{t} + 1;
+  bits.chip.step(cut - bits.chip.cycle());
+  chars.chip.step(cut - chars.chip.cycle());
+  ASSERT_TRUE(same_state(bits.chip, chars.chip)) << "in the middle of the answer";
+  testutil::user_go_offline(bits.chip);
+  testutil::user_go_offline(chars.chip);
+  const std::uint64_t later = bits.chip.cycle() + 30 * 11 * std::uint64_t{t};
+  bits.chip.step(later - bits.chip.cycle());
+  chars.chip.step(later - chars.chip.cycle());
+  chars.chip.take_txd();
+  EXPECT_TRUE(bits.chip.txd_pin());
+  EXPECT_TRUE(same_state(bits.chip, chars.chip));
+  std::vector<UartChar> x;
+  std::vector<UartChar> y;
+  a.advance(later, x);
+  b.advance(later, y);
+  EXPECT_EQ(x, y);
+  // Three whole characters and the fourth cut: its remaining bits read high.
+  ASSERT_EQ(x.size(), 4u);
+  EXPECT_TRUE(x[2].ok());
+  snap::Writer wa;
+  a.save_state(wa);
+  snap::Writer wb;
+  b.save_state(wb);
+  EXPECT_EQ(wa.bytes(), wb.bytes());
+}
+
+INSTANTIATE_TEST_SUITE_P(Profiles, TxdCut,
+                         ::testing::Values(Profile::spc3, Profile::vpc3plus, Profile::dpc31),
+                         [](const ::testing::TestParamInfo<Profile>& i) {
+                           return testutil::pname(i.param);
+                         });
