@@ -160,6 +160,7 @@ class Engine {
   [[nodiscard]] bool can_follow() const;
   void try_follow();
   void stop_following();
+  bool follow_steps(std::uint64_t end, std::uint64_t& t);
   void keep_common(Pair& p, std::string_view bits, double real);
   void compare(std::uint32_t pi, std::uint64_t key, const Point& pt);
   void compare_all(std::uint64_t key, const Point& pt);

@@ -490,6 +490,33 @@ void Engine::stop_following() {
   stale_.clear();
 }
 
+// B takes A's steps while their bytes agree (the same changes on both sides: all stay equal), up
+// to the end of the window. False at a step B did not take: A's changes in it are marked, `t` is
+// its time, and B's next time is t as well (it was A's before that step).
+bool Engine::follow_steps(std::uint64_t end, std::uint64_t& t) {
+  for (;;) {
+    const auto& changed = A.r->step();
+    if (!B.r->follow(*A.r)) {
+      stop_following();
+      mark_changed(A, changed, true);
+      t = A.norm(A.r->time());
+      return false;
+    }
+    ++followed_;
+    ++stretch_;
+    for (const std::uint32_t slot : changed) {
+      for (std::uint32_t k = A.slot_begin[slot]; k < A.slot_begin[slot + 1]; ++k) {
+        Pair& p = pairs[A.slot_pairs[k]];
+        if (!p.stale) {
+          p.stale = true;
+          stale_.push_back(A.slot_pairs[k]);
+        }
+      }
+    }
+    if (A.norm(A.r->next_time()) > end) return true;  // follow() leaves both a next step
+  }
+}
+
 void Engine::keep_common(Pair& p, std::string_view bits, double real) {
   if (p.real) {
     p.last_common = fmt_real(real);
@@ -626,7 +653,7 @@ void Engine::run_events(const Hook& hook) {
     if (!ha && !hb) break;
     const std::uint64_t ta = ha ? A.norm(A.r->next_time()) : UINT64_MAX;
     const std::uint64_t tb = hb ? B.norm(B.r->next_time()) : UINT64_MAX;
-    const std::uint64_t t = std::min(ta, tb);
+    std::uint64_t t = std::min(ta, tb);
     if (t > end) break;
     if (!started && has_start && any && t > start) {
       const Point ps{start, start, 0};
@@ -638,30 +665,14 @@ void Engine::run_events(const Hook& hook) {
     bool a_marked = false;
     if (following_) {
       if (ta == t && tb == t) {
-        const auto& changed = A.r->step();
-        if (B.r->follow(*A.r)) {  // the same bytes: the same changes on both sides, all equal
-          ++followed_;
-          ++stretch_;
-          for (const std::uint32_t slot : changed) {
-            for (std::uint32_t k = A.slot_begin[slot]; k < A.slot_begin[slot + 1]; ++k) {
-              Pair& p = pairs[A.slot_pairs[k]];
-              if (!p.stale) {
-                p.stale = true;
-                stale_.push_back(A.slot_pairs[k]);
-              }
-            }
-          }
-          continue;
-        }
-        stop_following();
-        mark_changed(A, changed, true);
-        a_marked = true;
+        if (follow_steps(end, t)) continue;
+        a_marked = true;  // at the new t, B's next time
       } else {
         stop_following();
       }
     }
     if (ta == t && !a_marked) mark(A, true);
-    if (tb == t) mark(B, false);
+    if (tb == t || a_marked) mark(B, false);
     any = true;
     if (t < start) {
       clear_dirty();
