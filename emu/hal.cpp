@@ -9,19 +9,31 @@
 #include <string>
 
 #include "dpc31/dpc31_hal.h"
+#include "harness.hpp"
 
 struct dpc31_chip {
-  explicit dpc31_chip(dpc31::ChipOptions o) : chip(o), bus(chip) {}
+  explicit dpc31_chip(dpc31::ChipOptions o)
+      : chip(o), bus(chip), core(dpc31::harness::core(chip)) {}
   dpc31::Chip chip;
   dpc31::DirectBus bus;
   dpc31::hal::PortSink ports;
+  // What Chip::read / Chip::write (and so `bus`) call: core.bus_read / bus_write (chip.cpp). The
+  // single-byte accesses call it here, inline: the out-of-line Chip::write is a call, and its
+  // register saves, more per access (docs/decisions.md, "HAL accesses inline").
+  dpc31::ChipCore& core;
 };
 
 namespace dpc31::hal {
 namespace {
 
-thread_local BusPort* t_bus = nullptr;
-thread_local const PortSink* t_ports = nullptr;
+// The selection (Selection). The emulator's objects are position independent (they also make
+// libdpc31emu.so), so the default TLS model would be local-dynamic: a __tls_get_addr call per
+// access in the shared library, the thread pointer, an add and a load in an executable.
+// initial-exec is one load from the thread pointer (and a GOT load in the shared library); its
+// cost, 24 bytes of static TLS when the library is dlopen'ed, glibc reserves room for.
+[[gnu::tls_model("initial-exec")]] thread_local BusPort* t_bus = nullptr;
+[[gnu::tls_model("initial-exec")]] thread_local const PortSink* t_ports = nullptr;
+[[gnu::tls_model("initial-exec")]] thread_local ChipCore* t_core = nullptr;
 
 void default_error(const char* message) {
   std::fprintf(stderr, "dpc31 HAL: %s\n", message);
@@ -30,7 +42,7 @@ void default_error(const char* message) {
 
 dpc31_error_fn g_error = default_error;
 
-[[noreturn]] void no_chip(const char* fn) {
+[[noreturn, gnu::cold, gnu::noinline]] void no_chip(const char* fn) {
   g_error((std::string(fn) + " called with no chip selected (dpc31_select)").c_str());
   std::abort();  // a handler that returns cannot make the access happen
 }
@@ -41,6 +53,12 @@ inline BusPort& bus(const char* fn) {
   if (b == nullptr) [[unlikely]]
     no_chip(fn);
   return *b;
+}
+
+// Vpc3Read / Vpc3Write on any other bus, out of line (the fast path stays small).
+[[gnu::noinline]] std::uint8_t read_bus(std::uint16_t addr) { return bus("Vpc3Read").read(addr); }
+[[gnu::noinline]] void write_bus(std::uint16_t addr, std::uint8_t value) {
+  bus("Vpc3Write").write(addr, value);
 }
 
 void null_buffer(const char* fn, uint16_t len) {
@@ -123,9 +141,10 @@ bool BusPort::equal(std::uint32_t a, std::uint32_t b, std::size_t len) {
 namespace dpc31::hal {
 
 Selection exchange_selection(Selection s) {
-  const Selection prev{t_bus, t_ports};
+  const Selection prev{t_bus, t_ports, t_core};
   t_bus = s.bus;
   t_ports = s.ports;
+  t_core = s.core;
   return prev;
 }
 
@@ -169,8 +188,14 @@ void dpc31_destroy(dpc31_chip* chip) {
   delete chip;
 }
 
-uint8_t dpc31_read(dpc31_chip* chip, uint16_t addr) { return chip->bus.read(addr); }
-void dpc31_write(dpc31_chip* chip, uint16_t addr, uint8_t value) { chip->bus.write(addr, value); }
+// flatten: the core's plain path inline here too (GCC inlines it into Chip::write, not always
+// into these).
+[[gnu::flatten]] uint8_t dpc31_read(dpc31_chip* chip, uint16_t addr) {
+  return chip->core.bus_read(addr);
+}
+[[gnu::flatten]] void dpc31_write(dpc31_chip* chip, uint16_t addr, uint8_t value) {
+  chip->core.bus_write(addr, value);
+}
 
 void dpc31_copy_to(dpc31_chip* chip, uint16_t dst, const uint8_t* src, uint16_t len) {
   dpc31::hal::copy_to(chip->bus, dst, src, len, "dpc31_copy_to");
@@ -230,13 +255,26 @@ void dpc31_set_pb3_callback(dpc31_chip* chip, dpc31_irq_fn fn, void* user) {
 }
 
 void dpc31_select(dpc31_chip* chip) {
-  dpc31::hal::t_bus = chip != nullptr ? &chip->bus : nullptr;
-  dpc31::hal::t_ports = chip != nullptr ? &chip->ports : nullptr;
+  dpc31::hal::exchange_selection(chip != nullptr
+                                     ? dpc31::hal::Selection{&chip->bus, &chip->ports, &chip->core}
+                                     : dpc31::hal::Selection{});
 }
 
-uint8_t Vpc3Read(uint16_t wAddress) { return bus("Vpc3Read").read(wAddress); }
+// A chip of dpc31_select: its core inline (what its DirectBus reaches); any other bus (the host
+// CPU's, a hal::Scope's) through the bus.
+[[gnu::flatten]] uint8_t Vpc3Read(uint16_t wAddress) {
+  if (dpc31::ChipCore* const c = dpc31::hal::t_core; c != nullptr) [[likely]]
+    return c->bus_read(wAddress);
+  return dpc31::hal::read_bus(wAddress);
+}
 
-void Vpc3Write(uint16_t wAddress, uint8_t bData) { bus("Vpc3Write").write(wAddress, bData); }
+[[gnu::flatten]] void Vpc3Write(uint16_t wAddress, uint8_t bData) {
+  if (dpc31::ChipCore* const c = dpc31::hal::t_core; c != nullptr) [[likely]] {
+    c->bus_write(wAddress, bData);
+    return;
+  }
+  dpc31::hal::write_bus(wAddress, bData);
+}
 
 void CopyToVpc3(uint8_t* pToVpc3Memory, uint8_t* pLocalMemory, uint16_t wLength) {
   dpc31::hal::copy_to(bus("CopyToVpc3"), chip_address(pToVpc3Memory), pLocalMemory, wLength,
@@ -259,8 +297,9 @@ uint8_t Vpc3MemCmp(uint8_t* pToVpc3Memory1, uint8_t* pToVpc3Memory2, uint16_t wL
 
 void dpc31_port_write(unsigned port, uint32_t value) {
   dpc31::BusPort& b = bus("dpc31_port_write");
-  if (dpc31::hal::t_ports != nullptr && *dpc31::hal::t_ports) {
-    (*dpc31::hal::t_ports)(b.cycle(), port, value);
+  const dpc31::hal::PortSink* const ports = dpc31::hal::t_ports;
+  if (ports != nullptr && *ports) {
+    (*ports)(b.cycle(), port, value);
   }
 }
 

@@ -393,3 +393,42 @@ TEST(BlockTransferDeathTest, NullLocalBufferIsReported) {
 }
 
 }  // namespace
+
+// dpc31_hal.h: "Calling Vpc3Read & co. ... with no chip selected is a programming error: the
+// handler gets a message; the default prints it to stderr and aborts." The message names the
+// function, also after the selected chip was destroyed; a chip selected again is reached.
+TEST(HalSelection, AccessWithNoChipSelectedIsAnError) {
+  EXPECT_DEATH(Vpc3Write(0x04, 0xE0),
+               "dpc31 HAL: Vpc3Write called with no chip selected \\(dpc31_select\\)");
+  EXPECT_DEATH((void)Vpc3Read(0x00),
+               "dpc31 HAL: Vpc3Read called with no chip selected \\(dpc31_select\\)");
+  struct HalError {
+    std::string what;
+  };
+  dpc31_set_error_handler([](const char* message) { throw HalError{message}; });
+  dpc31_chip* c = dpc31_create("dpc31", 0);
+  dpc31_select(c);
+  Vpc3Write(0x04, 0xE5);  // Int_Mask_Reg, reserved bits 7..5 kept 1
+  const std::uint64_t cycle = dpc31_cycle(c);
+  dpc31_destroy(c);  // also deselects it
+  std::string error;
+  try {
+    Vpc3Write(0x04, 0xE0);
+  } catch (const HalError& e) {
+    error = e.what;
+  }
+  EXPECT_EQ(error, "Vpc3Write called with no chip selected (dpc31_select)");
+  error.clear();
+  try {
+    (void)Vpc3Read(0x00);
+  } catch (const HalError& e) {
+    error = e.what;
+  }
+  EXPECT_EQ(error, "Vpc3Read called with no chip selected (dpc31_select)");
+  dpc31_set_error_handler(nullptr);
+  dpc31_chip* d = dpc31_create("dpc31", 0);
+  dpc31_select(d);
+  Vpc3Write(0x04, 0xE5);
+  EXPECT_EQ(dpc31_cycle(d), cycle);  // one access, 4 clocks on each chip
+  dpc31_destroy(d);
+}

@@ -38,6 +38,9 @@ using PortSink = std::function<void(std::uint64_t, unsigned, std::uint32_t)>;
 struct Selection {
   BusPort* bus = nullptr;
   const PortSink* ports = nullptr;
+  // The chip core behind `bus` when `bus` is a C HAL handle's own DirectBus (dpc31_select):
+  // Vpc3Read and Vpc3Write call it inline, the same access without the bus's calls.
+  ChipCore* core = nullptr;
 };
 // Installs `s` and returns the selection it replaces.
 Selection exchange_selection(Selection s);

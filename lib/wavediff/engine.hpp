@@ -97,6 +97,7 @@ struct Pair {
   std::string name;
   bool real = false;
   bool dirty = false;
+  bool stale = false;  // changed while B followed A, not compared since (Engine::stale_)
   bool a_changed = false;
   bool b_changed = false;
   bool differs = false;   // raw state at the last comparison
@@ -137,11 +138,30 @@ class Engine {
 
  private:
   std::uint64_t tol_ = 0;
+  // Equal stretches (docs/wavediff.md): follow_ once setup finds that B can take A's steps
+  // (the same slots, the same pairs on them); following_ while B does, every slot holding the
+  // same value on both sides; stale_ the pairs changed meanwhile (their last common value is
+  // brought up to date when following ends). mismatches_: pairs inside a stretch of difference.
+  bool follow_ = false;
+  bool following_ = false;
+  std::vector<std::uint32_t> stale_;
+  std::uint64_t mismatches_ = 0;
+  std::uint64_t steps_ = 0;
+  std::uint64_t followed_ = 0;  // steps B took from A, in all
+  std::uint64_t stretch_ = 0;   // of them, since following began
+  std::uint64_t retry_at_ = 0;
+  std::uint64_t backoff_ = 1;
 
   void build_names(Side& s, const std::string& strip, std::vector<MapEntry>* map);
   void join_bits(Side& s, const Side& other);
   std::uint32_t find_clock(const Side& s, const std::string& name) const;
   void mark(Side& s, bool is_a);
+  void mark_changed(Side& s, const std::vector<std::uint32_t>& changed, bool is_a);
+  [[nodiscard]] bool can_follow() const;
+  void try_follow();
+  void stop_following();
+  bool follow_steps(std::uint64_t end, std::uint64_t& t);
+  void keep_common(Pair& p, std::string_view bits, double real);
   void compare(std::uint32_t pi, std::uint64_t key, const Point& pt);
   void compare_all(std::uint64_t key, const Point& pt);
   void compare_dirty(std::uint64_t key, const Point& pt);

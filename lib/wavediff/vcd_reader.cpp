@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <cerrno>
@@ -22,6 +23,7 @@ namespace {
 constexpr std::size_t kBufSize = std::size_t{1} << 20;
 constexpr std::size_t kMaxToken = std::size_t{1} << 30;
 constexpr std::uint32_t kNone = UINT32_MAX;
+constexpr std::size_t kNoStep = SIZE_MAX;
 
 // Identifier codes. VCD writers number their signals in base 94 over '!'..'~', so codes of 1 to
 // 3 such characters (up to 94^3 signals) are the common case: they index a direct table, one
@@ -169,6 +171,8 @@ class VcdReader final : public WaveReader {
   std::uint64_t next_time() override { return pending_; }
   std::uint64_t line() const override { return line_; }
   const std::vector<std::uint32_t>& step() override;
+  bool can_follow(const WaveReader& leader) const override;
+  bool follow(const WaveReader& leader) override;
 
  private:
   struct Fd {
@@ -197,26 +201,52 @@ class VcdReader final : public WaveReader {
   std::string scratch_;
   std::string_view* hold_ = nullptr;  // moved to scratch_ by refill() (see apply())
   bool first_step_ = true;
+  // The bytes of the last step() (for follow()): buf_[step_begin_, pos_), kNoStep if they are not
+  // all in the buffer. The line and the open section where it began.
+  std::size_t step_begin_ = kNoStep;
+  std::uint64_t step_line_ = 0;
+  std::string step_section_;
+  std::string codes_;  // the header's identifier codes and their slots, in order (can_follow)
+  std::uint64_t dropped_ =
+      0;  // bytes of the input before buf_[0]: pos_ is input byte dropped_ + pos_
+  // follow(): input bytes [agree_b_, agree_b_ + agreed_) here equal the leader's from agree_a_ on.
+  std::uint64_t agree_a_ = 0;
+  std::uint64_t agree_b_ = 0;
+  std::size_t agreed_ = 0;
 
   [[noreturn]] void error(std::uint64_t line, const std::string& what) const {
     fail(path_, line, what);
   }
 
-  // Reads more input after keeping buf_[keep_from, end_). False at end of file.
-  bool refill(std::size_t keep_from) {
+  // Reads more input after keeping buf_[keep_from, end_), or from the start of the current step
+  // while that is at most half the buffer (follow() reads it; a longer step is not followed).
+  // What is kept moves to the start: pos_, keep_from and step_begin_ move down with it. Called
+  // with pos_ == end_ or (have()) pos_ == keep_from. False at end of file.
+  bool refill(std::size_t& keep_from) {
     if (hold_ != nullptr) {  // a vector value that lives in the part about to be dropped
       scratch_.assign(*hold_);
       *hold_ = scratch_;
       hold_ = nullptr;
     }
-    const std::size_t keep = end_ - keep_from;
-    if (keep_from > 0 && keep > 0) std::memmove(buf_.data(), buf_.data() + keep_from, keep);
+    std::size_t from = keep_from;
+    if (step_begin_ != kNoStep) {
+      if (end_ - step_begin_ <= buf_.size() / 2) {
+        from = std::min(from, step_begin_);
+      } else {
+        step_begin_ = kNoStep;
+      }
+    }
+    const std::size_t keep = end_ - from;
+    if (from > 0 && keep > 0) std::memmove(buf_.data(), buf_.data() + from, keep);
     if (keep == buf_.size()) {
       if (buf_.size() >= kMaxToken) error(line_, "token longer than 1 GiB");
       buf_.resize(buf_.size() * 2);
     }
     end_ = keep;
-    pos_ = keep;
+    pos_ -= from;
+    dropped_ += from;
+    keep_from -= from;
+    if (step_begin_ != kNoStep) step_begin_ -= from;
     if (eof_) return false;
     for (;;) {
       const ssize_t n = ::read(fd_.fd, buf_.data() + end_, buf_.size() - end_);
@@ -248,7 +278,8 @@ class VcdReader final : public WaveReader {
       line_ += lines;
       pos_ = static_cast<std::size_t>(p - b);
       if (p < e) break;
-      if (!refill(end_)) return false;
+      std::size_t from = end_;
+      if (!refill(from)) return false;
     }
     tok_line_ = line_;
     std::size_t start = pos_;
@@ -265,13 +296,19 @@ class VcdReader final : public WaveReader {
     token_end:
       pos_ = static_cast<std::size_t>(p - b);
       if (p < e) break;
-      const std::size_t have = end_ - start;
-      const bool more = refill(start);  // moves the token's start to the buffer's start
-      start = 0;
-      pos_ = have;
-      if (!more) break;
+      if (!refill(start)) break;  // moves the token (and start) down to the buffer's start
     }
     tok = std::string_view(buf_.data() + start, pos_ - start);
+    return true;
+  }
+
+  // At least n bytes from pos_ in the buffer; false if the input ends first or n does not fit.
+  bool have(std::size_t n) {
+    if (n > buf_.size()) return false;
+    while (end_ - pos_ < n) {
+      std::size_t from = pos_;
+      if (!refill(from)) return end_ - pos_ >= n;
+    }
     return true;
   }
 
@@ -300,6 +337,17 @@ class VcdReader final : public WaveReader {
     return s;
   }
   std::uint64_t parse_time(std::string_view t) const {
+    // Up to 19 digits cannot overflow: one pass without from_chars's checks per digit.
+    if (const std::size_t len = t.size() - 1; len != 0 && len <= 19) {
+      std::uint64_t v = 0;
+      bool digits = true;
+      for (std::size_t i = 1; i <= len; ++i) {
+        const unsigned d = static_cast<unsigned char>(t[i]) - unsigned{'0'};
+        digits = digits && d <= 9;
+        v = v * 10 + d;
+      }
+      if (digits) return v;
+    }
     std::uint64_t v = 0;
     const char* b = t.data() + 1;
     const char* e = t.data() + t.size();
@@ -381,6 +429,7 @@ void VcdReader::parse_header() {
         }
         slots_.push_back(std::move(s));
         ids_.insert(a[2], slot);
+        codes_ += fmt::format("{} {}\n", a[2], slot);
       } else if (slots_[slot].real != real || (!real && slots_[slot].width != width)) {
         error(kw_line,
               fmt::format("identifier '{}' declared again with another type or size", a[2]));
@@ -535,6 +584,7 @@ void VcdReader::prime() {
 const std::vector<std::uint32_t>& VcdReader::step() {
   changed_.clear();
   ++stamp_;
+  step_begin_ = kNoStep;
   if (!has_next_) return changed_;
   if (!first_step_ && pending_ < time_) error(tok_line_, "time goes backwards");
   first_step_ = false;
@@ -542,6 +592,10 @@ const std::vector<std::uint32_t>& VcdReader::step() {
   if (has_pushed_) {
     has_pushed_ = false;
     apply(pushed_);
+  } else {
+    step_begin_ = pos_;
+    step_line_ = line_;
+    if (step_section_ != section_) step_section_ = section_;
   }
   std::string_view t;
   for (;;) {
@@ -566,6 +620,72 @@ const std::vector<std::uint32_t>& VcdReader::step() {
       apply(t);
     }
   }
+}
+
+bool VcdReader::can_follow(const WaveReader& leader) const {
+  const auto* l = dynamic_cast<const VcdReader*>(&leader);
+  if (l == nullptr || l->ts_pow_ != ts_pow_ || l->codes_ != codes_) return false;
+  if (l->slots_.size() != slots_.size()) return false;
+  for (std::size_t i = 0; i < slots_.size(); ++i) {
+    if (l->slots_[i].width != slots_[i].width || l->slots_[i].real != slots_[i].real) return false;
+  }
+  return true;
+}
+
+bool VcdReader::follow(const WaveReader& leader) {
+  const auto& l = static_cast<const VcdReader&>(leader);
+  // The leader's step ran from its next time, like ours, to another one, not to the end of its
+  // input (at_eof's checks are left to our own step()).
+  if (l.step_begin_ == kNoStep || !l.has_next_ || !has_next_ || has_pushed_ ||
+      pending_ != l.time_ || section_ != l.step_section_) {
+    return false;
+  }
+  step_begin_ = kNoStep;  // our own last step's bytes are not needed any more
+  const std::size_t n = l.pos_ - l.step_begin_;
+  const std::uint64_t at_a = l.dropped_ + l.step_begin_;
+  const std::uint64_t at_b = dropped_ + pos_;
+  if (at_a != agree_a_ || at_b != agree_b_) agreed_ = 0;  // not where the last comparison ended
+  if (n > agreed_) {
+    // Compare ahead, once for many steps: all the leader has read from its step on (at least
+    // this step), against as much of ours; agreed_ is the length of the equal prefix.
+    if (!have(n)) return false;
+    const char* const a = l.buf_.data() + l.step_begin_;
+    const char* const b = buf_.data() + pos_;
+    const std::size_t m = std::min(l.end_ - l.step_begin_, end_ - pos_);
+    constexpr std::size_t kChunk = 4096;
+    std::size_t k = 0;
+    while (k < m && std::memcmp(a + k, b + k, std::min(kChunk, m - k)) == 0) k += kChunk;
+    if (k < m) {
+      while (a[k] == b[k]) ++k;  // the first difference, inside the chunk that differs
+    } else {
+      k = m;
+    }
+    agreed_ = k;
+    if (n > agreed_) {
+      agreed_ = 0;
+      return false;
+    }
+  }
+  agreed_ -= n;
+  agree_a_ = at_a + n;
+  agree_b_ = at_b + n;
+  pos_ += n;
+  tok_line_ = line_ + (l.tok_line_ - l.step_line_);
+  line_ += l.line_ - l.step_line_;
+  time_ = l.time_;
+  pending_ = l.pending_;
+  first_step_ = false;
+  if (section_ != l.section_) section_ = l.section_;
+  ++stamp_;
+  changed_.clear();
+  for (const std::uint32_t si : l.changed_) {
+    Slot& s = slots_[si];
+    const Slot& from = l.slots_[si];
+    std::memcpy(s.bits.data(), from.bits.data(), s.bits.size());
+    s.value = from.value;
+    s.stamp = stamp_;
+  }
+  return true;
 }
 
 }  // namespace

@@ -66,6 +66,17 @@ class WaveReader {
   // it. Call before the first has_next().
   virtual void set_limit_end(std::uint64_t /*t*/) {}
 
+  // The equal-bytes fast path (docs/wavediff.md, "Equal stretches"). can_follow: whether this
+  // reader can take a step of `leader` as its own when the input bytes agree (both VCD, one
+  // timescale, the same identifier codes for the same slots of the same shapes); asked once.
+  [[nodiscard]] virtual bool can_follow(const WaveReader& /*leader*/) const { return false; }
+  // Only after can_follow(leader). If this reader stands where the leader stood before its last
+  // step() (the same next time, the same open section) and the bytes that step consumed come next
+  // here too: consumes them, takes the leader's time, next time and line count, and the values
+  // of the slots that step changed; true. Otherwise false, and the next step() reads on as if
+  // follow had not been called.
+  virtual bool follow(const WaveReader& /*leader*/) { return false; }
+
  protected:
   std::string path_;
   const char* format_ = "vcd";

@@ -435,10 +435,103 @@ void Engine::setup(Report& rep) {
       s->slot_pairs.insert(s->slot_pairs.end(), lists[k].begin(), lists[k].end());
     }
   }
+  follow_ = o_.follow_equal_bytes && !clock_mode() && can_follow();
 }
 
-void Engine::mark(Side& s, bool is_a) {
-  const auto& changed = s.r->step();
+// B can take A's steps where the bytes agree: its reader can (the same identifier codes for the
+// same slots), and every pair watches the same slots on both sides, so that the same changes
+// mark the same pairs and leave them equal.
+bool Engine::can_follow() const {
+  if (!B.r->can_follow(*A.r) || A.ratio != B.ratio) return false;
+  if (A.slot_begin != B.slot_begin || A.slot_pairs != B.slot_pairs) return false;
+  return std::all_of(pairs.begin(), pairs.end(), [this](const Pair& p) {
+    const LSig& la = A.sigs[p.a];
+    const LSig& lb = B.sigs[p.b];
+    return la.slot == lb.slot && la.bit_slots == lb.bit_slots;
+  });
+}
+
+// After a compared point: B follows A from here if every slot holds the same value on both sides
+// (then no pair differs). Tried again after a doubling number of points (up to 1024) when that
+// fails, or when following stopped at once: files whose bytes never agree pay little for it.
+void Engine::try_follow() {
+  if (mismatches_ != 0 || ++steps_ < retry_at_) return;
+  const std::vector<Slot>& sa = A.r->slots();
+  const std::vector<Slot>& sb = B.r->slots();
+  for (std::size_t i = 0; i < sa.size(); ++i) {
+    if (sa[i].bits != sb[i].bits || std::memcmp(&sa[i].value, &sb[i].value, sizeof(double)) != 0) {
+      retry_at_ = steps_ + backoff_;
+      backoff_ = std::min<std::uint64_t>(backoff_ * 2, 1024);
+      return;
+    }
+  }
+  following_ = true;
+  stretch_ = 0;
+}
+
+// B has not followed A's last step: its values are still those before it, A's as well. The pairs
+// changed while following were equal at every point; their last common value is the current one.
+// A stretch shorter than 64 steps counts as a failed try.
+void Engine::stop_following() {
+  following_ = false;
+  if (stretch_ < 64) {
+    retry_at_ = steps_ + backoff_;
+    backoff_ = std::min<std::uint64_t>(backoff_ * 2, 1024);
+  } else {
+    backoff_ = 1;
+  }
+  for (const std::uint32_t pi : stale_) {
+    Pair& p = pairs[pi];
+    p.stale = false;
+    const LSig& lb = B.sigs[p.b];
+    // The values before A's last step on both sides: B's own, A's already moved on.
+    keep_common(p, p.real ? std::string_view{} : B.bits(lb), p.real ? B.real(lb) : 0);
+  }
+  stale_.clear();
+}
+
+// B takes A's steps while their bytes agree (the same changes on both sides: all stay equal), up
+// to the end of the window. False at a step B did not take: A's changes in it are marked, `t` is
+// its time, and B's next time is t as well (it was A's before that step).
+bool Engine::follow_steps(std::uint64_t end, std::uint64_t& t) {
+  for (;;) {
+    const auto& changed = A.r->step();
+    if (!B.r->follow(*A.r)) {
+      stop_following();
+      mark_changed(A, changed, true);
+      t = A.norm(A.r->time());
+      return false;
+    }
+    ++followed_;
+    ++stretch_;
+    for (const std::uint32_t slot : changed) {
+      for (std::uint32_t k = A.slot_begin[slot]; k < A.slot_begin[slot + 1]; ++k) {
+        Pair& p = pairs[A.slot_pairs[k]];
+        if (!p.stale) {
+          p.stale = true;
+          stale_.push_back(A.slot_pairs[k]);
+        }
+      }
+    }
+    if (A.norm(A.r->next_time()) > end) return true;  // follow() leaves both a next step
+  }
+}
+
+void Engine::keep_common(Pair& p, std::string_view bits, double real) {
+  if (p.real) {
+    p.last_common = fmt_real(real);
+  } else if (p.last_common.size() == bits.size()) {
+    // On every equal comparison: a plain copy, not string::assign's general replace.
+    std::memcpy(p.last_common.data(), bits.data(), bits.size());
+  } else {
+    p.last_common.assign(bits);
+  }
+  p.has_common = true;
+}
+
+void Engine::mark(Side& s, bool is_a) { mark_changed(s, s.r->step(), is_a); }
+
+void Engine::mark_changed(Side& s, const std::vector<std::uint32_t>& changed, bool is_a) {
   for (const std::uint32_t slot : changed) {
     for (std::uint32_t k = s.slot_begin[slot]; k < s.slot_begin[slot + 1]; ++k) {
       const std::uint32_t pi = s.slot_pairs[k];
@@ -492,6 +585,7 @@ void Engine::compare(std::uint32_t pi, std::uint64_t key, const Point& pt) {
   if (!eq) {
     if (!p.mismatch) {
       p.mismatch = true;
+      ++mismatches_;
       p.start_key = key;
       p.start_pt = pt;
       if (p.real) {
@@ -511,17 +605,10 @@ void Engine::compare(std::uint32_t pi, std::uint64_t key, const Point& pt) {
   }
   if (p.mismatch) {
     p.mismatch = false;
+    --mismatches_;
     if (key - p.start_key > tol_) record(p, false);
   }
-  if (p.real) {
-    p.last_common = fmt_real(A.real(la));
-  } else if (p.last_common.size() == va.size()) {
-    // On every equal comparison: a plain copy, not string::assign's general replace.
-    std::memcpy(p.last_common.data(), va.data(), va.size());
-  } else {
-    p.last_common.assign(va);
-  }
-  p.has_common = true;
+  keep_common(p, va, p.real ? A.real(la) : 0);
 }
 
 void Engine::compare_all(std::uint64_t key, const Point& pt) {
@@ -559,13 +646,14 @@ void Engine::run_events(const Hook& hook) {
   const std::uint64_t end = o_.end ? to_common(o_.end->value, false) : UINT64_MAX;
   bool started = false;
   bool any = false;
+  const bool may_follow = follow_ && !hook;
   for (;;) {
     const bool ha = A.r->has_next();
     const bool hb = B.r->has_next();
     if (!ha && !hb) break;
     const std::uint64_t ta = ha ? A.norm(A.r->next_time()) : UINT64_MAX;
     const std::uint64_t tb = hb ? B.norm(B.r->next_time()) : UINT64_MAX;
-    const std::uint64_t t = std::min(ta, tb);
+    std::uint64_t t = std::min(ta, tb);
     if (t > end) break;
     if (!started && has_start && any && t > start) {
       const Point ps{start, start, 0};
@@ -574,15 +662,26 @@ void Engine::run_events(const Hook& hook) {
       clear_dirty();
       if (hook && !hook(*this, ps, true)) return;
     }
-    if (ta == t) mark(A, true);
-    if (tb == t) mark(B, false);
+    bool a_marked = false;
+    if (following_) {
+      if (ta == t && tb == t) {
+        if (follow_steps(end, t)) continue;
+        a_marked = true;  // at the new t, B's next time
+      } else {
+        stop_following();
+      }
+    }
+    if (ta == t && !a_marked) mark(A, true);
+    if (tb == t || a_marked) mark(B, false);
     any = true;
     if (t < start) {
       clear_dirty();
       continue;
     }
     if (!step(t, Point{t, t, 0}, started, hook)) return;
+    if (may_follow) try_follow();
   }
+  if (following_) stop_following();
   if (!started && any && has_start && start <= end) {
     const Point ps{start, start, 0};
     compare_all(start, ps);
@@ -655,6 +754,7 @@ void Engine::finish(Report& rep) {
   }
   rep.structural.insert(rep.structural.end(), clock_structural_.begin(), clock_structural_.end());
   rep.edges = edges_;
+  rep.followed = followed_;
   std::vector<const Pair*> d;
   for (const Pair& p : pairs) {
     if (p.count > 0) d.push_back(&p);

@@ -50,6 +50,10 @@ struct Options {
   std::string wavedrom;
   unsigned wavedrom_window = 8;  // events or cycles on each side of the first divergence
   unsigned max_signals = 20;     // signals listed in the text report (JSON lists all)
+  // Event mode: where both files' bytes agree and every value does, B's steps are taken from A's
+  // instead of parsed and compared (docs/wavediff.md, "Equal stretches"). The same report either
+  // way; off: the reference path (the tests compare the two).
+  bool follow_equal_bytes = true;
 };
 
 // Where something was seen. Event mode: `time` in the common unit. Clock mode: `cycle` (the edge
@@ -101,6 +105,9 @@ struct Report {
   std::vector<SignalDiff> diffs;  // ordered by first divergence
   std::vector<std::string> warnings;
   bool ignore_missing = false;
+  // Time steps B took from A where both files' bytes agreed (Options::follow_equal_bytes); not
+  // in the text or JSON report.
+  std::uint64_t followed = 0;
 
   [[nodiscard]] bool same() const {
     return diffs.empty() && structural.empty() &&
