@@ -180,6 +180,7 @@ struct Server::Impl {
   bool unix_first = false;      // which listener is served first: alternates every round
   std::size_t round_start = 0;  // where the next round of execute_round begins
   Clock::time_point now = Clock::now();
+  std::vector<pollfd> fds;  // poll_once's, kept from round to round
 };
 
 Server::Impl::~Impl() {
@@ -439,6 +440,10 @@ void Server::Impl::read_client(Client& c) {
     if (n > 0) {
       c.in.append(buf, static_cast<std::size_t>(n));
       c.last_input = now;
+      // A short read emptied the socket; what arrives later, the next poll() reports. Not
+      // reading again until EAGAIN saves a system call per round (docs/protocol.md, "Several
+      // clients").
+      if (static_cast<std::size_t>(n) < sizeof buf) break;
       continue;
     }
     if (n == 0) {
@@ -604,7 +609,7 @@ void Server::Impl::close_client(Client& c) {
 
 void Server::Impl::poll_once() {
   now = Clock::now();
-  std::vector<pollfd> fds;
+  fds.clear();
   fds.push_back({wake_r, POLLIN, 0});
   const bool accepting = now >= accept_paused_until;
   const std::size_t first_listener = fds.size();
