@@ -35,6 +35,9 @@ constexpr std::size_t kLoneRound = 64;          // lines of a round when only on
 constexpr auto kCloseGrace = std::chrono::seconds(2);  // to flush the last lines of a client
 constexpr auto kShutdownGrace = std::chrono::seconds(1);
 constexpr auto kAcceptPause = std::chrono::milliseconds(100);  // after EMFILE and friends
+// A lone client's next line is waited for in recv() itself for up to this long, and only this
+// long after poll() last looked at every socket (docs/protocol.md, "Several clients").
+constexpr auto kLoneWait = std::chrono::milliseconds(1);
 
 std::string errno_text(int e) { return std::strerror(e); }
 
@@ -146,8 +149,16 @@ struct Server::Impl {
   void listen_tcp(const std::string& spec);
   void listen_unix(const std::string& path);
   void poll_once();
+  void poll_all();
   void accept_some(int lfd, bool tcp);
+  // One recv() into c.in: whether it filled the buffer, emptied the socket, found nothing, or
+  // found the end (eof, or an error: dead).
+  enum class Recv : std::uint8_t { full, drained, none, end };
+  Recv take(Client& c, int flags);
   void read_client(Client& c);
+  // A lone client, its replies sent: waits for its next bytes in recv() instead of poll() (one
+  // system call less per command); whether any came. Not more than kLoneWait after a poll().
+  bool read_lone();
   void check_hello(Client& c);
   void reject(Client& c, std::string_view why);
   void flush(Client& c);
@@ -180,6 +191,8 @@ struct Server::Impl {
   bool unix_first = false;      // which listener is served first: alternates every round
   std::size_t round_start = 0;  // where the next round of execute_round begins
   Clock::time_point now = Clock::now();
+  std::vector<pollfd> fds;            // poll_all's, kept from round to round
+  Clock::time_point last_poll = now;  // when poll() last looked at every socket
 };
 
 Server::Impl::~Impl() {
@@ -322,7 +335,9 @@ void Server::Impl::accept_some(int lfd, bool tcp) {
   // A few per round and listener: a connection flood on one listener neither starves the other
   // nor the clients.
   for (int i = 0; i < kAcceptBatch; ++i) {
-    const int fd = ::accept4(lfd, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
+    // Blocking, but every recv() and send() says MSG_DONTWAIT, except read_lone's, which
+    // SO_RCVTIMEO bounds.
+    const int fd = ::accept4(lfd, nullptr, nullptr, SOCK_CLOEXEC);
     if (fd < 0) {
       if (errno == EINTR || errno == ECONNABORTED) continue;
       if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM) {
@@ -361,6 +376,8 @@ void Server::Impl::accept_some(int lfd, bool tcp) {
       const int one = 1;
       ::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
     }
+    const timeval wait{0, std::chrono::microseconds(kLoneWait).count()};
+    ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &wait, sizeof wait);
     auto c = std::make_unique<Client>();
     c->fd = fd;
     c->tcp = tcp;
@@ -431,26 +448,44 @@ void Server::Impl::check_hello(Client& c) {
   queue(c, "OK auth");
 }
 
+Server::Impl::Recv Server::Impl::take(Client& c, int flags) {
+  char buf[kReadChunk];
+  const ssize_t n = ::recv(c.fd, buf, sizeof buf, flags);
+  if (n > 0) {
+    c.in.append(buf, static_cast<std::size_t>(n));
+    c.last_input = now;
+    return static_cast<std::size_t>(n) < sizeof buf ? Recv::drained : Recv::full;
+  }
+  if (n == 0) {
+    c.eof = true;
+  } else if (errno == EINTR || errno == EAGAIN || errno == EWOULDBLOCK) {
+    return Recv::none;
+  } else {
+    c.dead = true;
+  }
+  return Recv::end;
+}
+
 void Server::Impl::read_client(Client& c) {
   compact(c.in, c.in_off);
-  char buf[kReadChunk];
-  while (c.pending_in() < opt.max_input) {
-    const ssize_t n = ::recv(c.fd, buf, sizeof buf, 0);
-    if (n > 0) {
-      c.in.append(buf, static_cast<std::size_t>(n));
-      c.last_input = now;
-      continue;
-    }
-    if (n == 0) {
-      c.eof = true;
-    } else if (errno == EINTR) {
-      continue;
-    } else if (errno != EAGAIN && errno != EWOULDBLOCK) {
-      c.dead = true;
-    }
-    break;
+  // A short read emptied the socket; what arrives later, the next poll() reports. Not reading
+  // again until EAGAIN saves a system call per round (docs/protocol.md, "Several clients").
+  while (c.pending_in() < opt.max_input && take(c, MSG_DONTWAIT) == Recv::full) {
   }
   if (!c.established && !c.dead && !c.closing) check_hello(c);
+}
+
+bool Server::Impl::read_lone() {
+  if (clients.size() != 1 || shutting_down || now - last_poll >= kLoneWait) return false;
+  Client& c = *clients.front();
+  if (!c.established || c.dead || c.closing || c.eof || c.pending_out() > 0 ||
+      c.pending_in() >= opt.max_input || has_work(c)) {
+    return false;
+  }
+  compact(c.in, c.in_off);
+  const Recv r = take(c, 0);  // blocks for up to kLoneWait (SO_RCVTIMEO)
+  now = Clock::now();
+  return r != Recv::none;
 }
 
 void Server::Impl::flush(Client& c) {
@@ -602,9 +637,8 @@ void Server::Impl::close_client(Client& c) {
   c.fd = -1;
 }
 
-void Server::Impl::poll_once() {
-  now = Clock::now();
-  std::vector<pollfd> fds;
+void Server::Impl::poll_all() {
+  fds.clear();
   fds.push_back({wake_r, POLLIN, 0});
   const bool accepting = now >= accept_paused_until;
   const std::size_t first_listener = fds.size();
@@ -642,6 +676,7 @@ void Server::Impl::poll_once() {
   }
   const int n = ::poll(fds.data(), fds.size(), timeout_ms);
   now = Clock::now();
+  last_poll = now;
   if (n < 0 && errno != EINTR) throw ServerError("poll: " + errno_text(errno));
   if (n > 0) {
     if ((fds[0].revents & POLLIN) != 0) {
@@ -672,6 +707,11 @@ void Server::Impl::poll_once() {
       if ((fds[i].revents & POLLIN) != 0) accept_some(fds[i].fd, fds[i].fd == tcp_fd);
     }
   }
+}
+
+void Server::Impl::poll_once() {
+  now = Clock::now();
+  if (!read_lone()) poll_all();
   if (stop_requested.load()) {
     shutting_down = true;
     for (auto& c : clients) {

@@ -50,8 +50,9 @@ std::string one_line(std::string_view s) {
   return out;
 }
 
-Tokens split(std::string_view line) {
-  Tokens t;
+// Into `t`, whose storage is kept from line to line.
+void split(std::string_view line, Tokens& t) {
+  t.clear();
   std::size_t i = 0;
   while (i < line.size()) {
     while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
@@ -59,7 +60,6 @@ Tokens split(std::string_view line) {
     while (i < line.size() && line[i] != ' ' && line[i] != '\t') ++i;
     if (i > b) t.push_back(line.substr(b, i - b));
   }
-  return t;
 }
 
 // "0x1F" (hex, either case) or "31" (decimal); nothing else. Throws Fail: syntax for malformed
@@ -106,9 +106,11 @@ void hex_bytes(std::string_view tok, std::vector<std::uint8_t>& out, std::size_t
   }
 }
 
-void arity(const Tokens& t, std::size_t min, std::size_t max, std::string_view usage) {
+// The usage is formatted only when it is needed (a `peek` should not pay for it).
+void arity(const Tokens& t, std::size_t min, std::size_t max, std::string_view usage,
+           std::string_view args = {}) {
   if (t.size() - 1 < min || t.size() - 1 > max) {
-    throw Fail{"syntax", fmt::format("usage: {}", usage)};
+    throw Fail{"syntax", fmt::format("usage: {}{}{}", usage, args.empty() ? "" : " ", args)};
   }
 }
 
@@ -233,7 +235,8 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
                  fmt::format("byte {:#04x} at column {} is not printable ASCII", c, i + 1));
     }
   }
-  const Tokens t = split(line);
+  split(line, tokens_);
+  const Tokens& t = tokens_;
   if (t.empty()) return err("syntax", "empty command");
   const std::string_view cmd = t[0];
   const std::uint64_t amax = address_limit() - 1;
@@ -279,13 +282,13 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
           chip_.txd_pin() ? 1 : 0));
     }
     if (cmd == "read" || cmd == "peek") {
-      arity(t, 1, 1, fmt::format("{} ADDR", cmd));
+      arity(t, 1, 1, cmd, "ADDR");
       const auto a = static_cast<std::uint32_t>(number(t[1], amax, "address"));
       const std::uint8_t v = cmd == "read" ? chip_.read(a) : chip_.peek(a);
       return ok(fmt::format("{:#04x}", v));
     }
     if (cmd == "write" || cmd == "poke") {
-      arity(t, 2, 2, fmt::format("{} ADDR VALUE", cmd));
+      arity(t, 2, 2, cmd, "ADDR VALUE");
       const auto a = static_cast<std::uint32_t>(number(t[1], amax, "address"));
       const auto v = static_cast<std::uint8_t>(number(t[2], 0xFF, "value"));
       if (cmd == "write") {
@@ -296,7 +299,7 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
       return ok();
     }
     if (cmd == "readblock" || cmd == "peekblock") {
-      arity(t, 2, 2, fmt::format("{} ADDR LEN", cmd));
+      arity(t, 2, 2, cmd, "ADDR LEN");
       const auto a = static_cast<std::uint32_t>(number(t[1], amax, "address"));
       const auto n = static_cast<std::uint32_t>(number(t[2], kMaxBlock, "length"));
       if (n == 0) throw Fail{"range", "length 0"};
@@ -333,7 +336,7 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
       if (cmd == "poke_reg") {
         arity(t, 2, 2, "poke_reg NAME VALUE");
       } else {
-        arity(t, 1, 1, fmt::format("{} NAME", cmd));
+        arity(t, 1, 1, cmd, "NAME");
       }
       const RegDesc* r = find_reg(chip_.profile(), t[1]);
       if (r == nullptr) {
@@ -350,7 +353,7 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
       return ok();
     }
     if (cmd == "step" || cmd == "run_until_irq") {
-      arity(t, 1, 1, fmt::format("{} {}", cmd, cmd == "step" ? "N" : "MAX"));
+      arity(t, 1, 1, cmd, cmd == "step" ? "N" : "MAX");
       const std::uint64_t n = number(t[1], kMaxStep, "cycles");
       if (n > std::numeric_limits<std::uint64_t>::max() - chip_.cycle()) {
         throw Fail{"range", "the cycle counter would overflow"};

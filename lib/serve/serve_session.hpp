@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "dpc31/chip.hpp"
 #include "dpc31/log.hpp"
@@ -94,6 +95,7 @@ class Session {
   std::deque<std::pair<std::uint64_t, std::size_t>> injected_;  // END, bytes; oldest first
   std::size_t injected_bytes_ = 0;
   StateDir state_dir_;
+  std::vector<std::string_view> tokens_;  // the words of the line being executed
 };
 
 }  // namespace dpc31::serve
