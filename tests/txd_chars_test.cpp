@@ -24,6 +24,8 @@
 
 using namespace dpc31;
 
+// Its own namespace: the file compiles in one unity group with rxd_chars_test.cpp (Side, Edges).
+namespace txd_chars {
 namespace {
 
 using Edges = std::vector<std::pair<std::uint64_t, bool>>;
@@ -212,3 +214,5 @@ INSTANTIATE_TEST_SUITE_P(Profiles, TxdCut,
                          [](const ::testing::TestParamInfo<Profile>& i) {
                            return testutil::pname(i.param);
                          });
+
+}  // namespace txd_chars

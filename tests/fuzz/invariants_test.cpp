@@ -69,7 +69,9 @@ TEST(Invariants, WholeStartUpAndDataExchangeHoldEveryInvariant) {
     master.idle(100'000'000);     // the DP watchdog expires: Leave_Master
     EXPECT_EQ(chip.dp_state(), DpState::Wait_Prm);
     EXPECT_TRUE(seen.messages.empty()) << seen.messages.front();
-    EXPECT_GT(checker.checks(), 500u);  // every event and bus access of the session
+    // Every event and bus access of the session: some 460-480 (TxD bits are no events since the
+    // master takes them in batches, docs/engine.md "Characters on TxD").
+    EXPECT_GT(checker.checks(), 400u);
     EXPECT_GE(checker.answers_checked(), 5u);
   }
 }
