@@ -120,10 +120,7 @@ TEST_P(Startup, ReachesDataExchangeAtExactCycles) {
 INSTANTIATE_TEST_SUITE_P(ProfilesAndBaudRates, Startup,
                          ::testing::Combine(::testing::ValuesIn(kAllProfiles),
                                             ::testing::Values(9600u, 187500u, 1500000u, 12000000u)),
-                         [](const auto& i) {
-                           return testutil::pname(std::get<0>(i.param)) + "_" +
-                                  std::to_string(std::get<1>(i.param));
-                         });
+                         testutil::profile_rate_name);
 
 // A request handed to RxD before a Baud_Search window switch that it reaches into is heard at the
 // new rate: the edges wait in the chip, not in the receiver that the switch reconfigures.

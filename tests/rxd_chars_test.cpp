@@ -38,17 +38,6 @@ struct Side {
   }
 };
 
-// The first byte where two snapshots differ, for a readable failure.
-::testing::AssertionResult same_state(const Chip& a, const Chip& b) {
-  const std::vector<std::uint8_t> x = a.save_state();
-  const std::vector<std::uint8_t> y = b.save_state();
-  if (x == y) return ::testing::AssertionSuccess();
-  std::size_t i = 0;
-  while (i < x.size() && i < y.size() && x[i] == y[i]) ++i;
-  return ::testing::AssertionFailure() << "snapshots differ from byte " << i << " of " << x.size()
-                                       << " / " << y.size() << " at cycle " << a.cycle();
-}
-
 class RxdChars : public ::testing::TestWithParam<std::tuple<Profile, std::uint32_t>> {};
 
 }  // namespace
@@ -77,7 +66,7 @@ TEST_P(RxdChars, TheChipIsLeftAsByItsEdges) {
   };
   const auto check = [&](const char* what) {
     SCOPED_TRACE(what);
-    ASSERT_TRUE(same_state(edges.chip, chars.chip));
+    ASSERT_TRUE(testutil::same_state(edges.chip, chars.chip));
     ASSERT_EQ(edges.txd, chars.txd);
     ASSERT_EQ(edges.chip.fdl_counters(), chars.chip.fdl_counters());
   };
@@ -122,7 +111,4 @@ INSTANTIATE_TEST_SUITE_P(ProfilesAndRates, RxdChars,
                          ::testing::Combine(::testing::Values(Profile::spc3, Profile::vpc3plus,
                                                               Profile::dpc31),
                                             ::testing::ValuesIn(kBaudRates)),
-                         [](const ::testing::TestParamInfo<std::tuple<Profile, std::uint32_t>>& i) {
-                           return testutil::pname(std::get<0>(i.param)) + "_" +
-                                  std::to_string(std::get<1>(i.param));
-                         });
+                         testutil::profile_rate_name);

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "dpc31/chip.hpp"
@@ -26,6 +27,23 @@ struct LogCapture {
 };
 
 inline std::string pname(dpc31::Profile p) { return std::string(dpc31::profile_desc(p).name); }
+
+// Test names of a (profile, baud rate) parameter: "spc3_1500000".
+inline std::string profile_rate_name(
+    const ::testing::TestParamInfo<std::tuple<dpc31::Profile, std::uint32_t>>& i) {
+  return pname(std::get<0>(i.param)) + "_" + std::to_string(std::get<1>(i.param));
+}
+
+// Two chips in the same state (save_state), or the first byte where their snapshots differ.
+inline ::testing::AssertionResult same_state(const dpc31::Chip& a, const dpc31::Chip& b) {
+  const std::vector<std::uint8_t> x = a.save_state();
+  const std::vector<std::uint8_t> y = b.save_state();
+  if (x == y) return ::testing::AssertionSuccess();
+  std::size_t i = 0;
+  while (i < x.size() && i < y.size() && x[i] == y[i]) ++i;
+  return ::testing::AssertionFailure() << "snapshots differ from byte " << i << " of " << x.size()
+                                       << " / " << y.size() << " at cycle " << a.cycle();
+}
 
 struct ChipParam {
   dpc31::Profile profile;

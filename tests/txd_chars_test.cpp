@@ -80,16 +80,6 @@ std::vector<std::uint8_t> wire(const std::optional<fdl::Frame>& f) {
          << wire(b.answer).size() << " bytes)";
 }
 
-::testing::AssertionResult same_state(const Chip& a, const Chip& b) {
-  const std::vector<std::uint8_t> x = a.save_state();
-  const std::vector<std::uint8_t> y = b.save_state();
-  if (x == y) return ::testing::AssertionSuccess();
-  std::size_t i = 0;
-  while (i < x.size() && i < y.size() && x[i] == y[i]) ++i;
-  return ::testing::AssertionFailure() << "snapshots differ from byte " << i << " of " << x.size()
-                                       << " / " << y.size() << " at cycle " << a.cycle();
-}
-
 void expect_same(Side& bits, Side& chars, const char* what) {
   SCOPED_TRACE(what);
   const auto& h = bits.master.history();
@@ -101,7 +91,7 @@ void expect_same(Side& bits, Side& chars, const char* what) {
   ASSERT_EQ(std::tie(m.requests, m.answered, m.no_answer, m.bad_answer),
             std::tie(n.requests, n.answered, n.no_answer, n.bad_answer));
   ASSERT_EQ(bits.chip.cycle(), chars.chip.cycle());
-  ASSERT_TRUE(same_state(bits.chip, chars.chip));
+  ASSERT_TRUE(testutil::same_state(bits.chip, chars.chip));
   ASSERT_EQ(bits.chip.txd_pin(), chars.chip.txd_pin());
   chars.chip.take_txd();
   ASSERT_EQ(bits.txd, chars.txd);
@@ -153,10 +143,7 @@ INSTANTIATE_TEST_SUITE_P(ProfilesAndRates, TxdChars,
                          ::testing::Combine(::testing::Values(Profile::spc3, Profile::vpc3plus,
                                                               Profile::dpc31),
                                             ::testing::ValuesIn(kBaudRates)),
-                         [](const ::testing::TestParamInfo<std::tuple<Profile, std::uint32_t>>& i) {
-                           return testutil::pname(std::get<0>(i.param)) + "_" +
-                                  std::to_string(std::get<1>(i.param));
-                         });
+                         testutil::profile_rate_name);
 
 // Go_Offline while the answer is on the line (docs/timing.md: TxD returns to idle at the
 // completion cycle): the edges before the cut reach a batch receiver as they reached a receiver
@@ -185,7 +172,7 @@ TEST_P(TxdCut, AnAnswerCutByGoOfflineReachesBothReceiversAlike) {
   const std::uint64_t cut = end + 11 * std::uint64_t{t} + (3 * 11 + 5) * std::uint64_t{t} + 1;
   bits.chip.step(cut - bits.chip.cycle());
   chars.chip.step(cut - chars.chip.cycle());
-  ASSERT_TRUE(same_state(bits.chip, chars.chip)) << "in the middle of the answer";
+  ASSERT_TRUE(testutil::same_state(bits.chip, chars.chip)) << "in the middle of the answer";
   testutil::user_go_offline(bits.chip);
   testutil::user_go_offline(chars.chip);
   const std::uint64_t later = bits.chip.cycle() + 30 * 11 * std::uint64_t{t};
@@ -193,7 +180,7 @@ TEST_P(TxdCut, AnAnswerCutByGoOfflineReachesBothReceiversAlike) {
   chars.chip.step(later - chars.chip.cycle());
   chars.chip.take_txd();
   EXPECT_TRUE(bits.chip.txd_pin());
-  EXPECT_TRUE(same_state(bits.chip, chars.chip));
+  EXPECT_TRUE(testutil::same_state(bits.chip, chars.chip));
   std::vector<UartChar> x;
   std::vector<UartChar> y;
   a.advance(later, x);

@@ -233,10 +233,7 @@ TEST_P(WatchdogRange, MonitoringTime2msTo650sIndependentOfBaudRate) {
 INSTANTIATE_TEST_SUITE_P(ProfilesAndRates, WatchdogRange,
                          ::testing::Combine(::testing::ValuesIn(kAllProfiles),
                                             ::testing::Values(9600u, 1'500'000u, 12'000'000u)),
-                         [](const auto& i) {
-                           return testutil::pname(std::get<0>(i.param)) + "_" +
-                                  std::to_string(std::get<1>(i.param));
-                         });
+                         testutil::profile_rate_name);
 
 // Seed 002: "If the monitoring time runs out, the SPC3 goes again to 'Baud_Control,' and the
 // SPC3 generates the 'WD_DP_Control_Timeout-Interrupt'. In addition, the DP_State machine is
