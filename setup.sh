@@ -34,6 +34,8 @@ fi
 # DPC31_WERROR off). Debug information is line tables only (-g1: backtraces, perf and sanitizer
 # reports keep file:line; gdb loses locals), which keeps a fresh build within 5 minutes on two
 # cores (docs/install.md, "Build time"); configure with -g for a debugging session.
-cmake -S . -B build -DCMAKE_BUILD_TYPE=RelWithDebInfo -DDPC31_WERROR=ON \
+# DPC31_BUILD_DIR: another build directory than build/ (dpc31 bench --build times a fresh one).
+build_dir=${DPC31_BUILD_DIR:-build}
+cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DDPC31_WERROR=ON \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g1 -DNDEBUG" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O2 -g1 -DNDEBUG"
-cmake --build build -j "$(nproc)"
+cmake --build "$build_dir" -j "$(nproc)"

@@ -199,10 +199,10 @@ TEST(CliBench, QuickPrintsEveryRowWellFormed) {
   // lockstep), f (MB/s and RSS on a pair of the emulator's VCD files and on a generated pair), g
   // (pipelined over TCP, one in flight over the Unix socket and over TCP, each with the server's
   // own cost per command and the rest reported beside it; one round trip beside a flood), i
-  // (tracing).
+  // (tracing), h (the fresh build: not run without --build, last).
   const std::vector<std::string> items = {"a", "a", "a", "a", "a", "a", "b", "b'", "c",
                                           "d", "e", "e", "f", "f", "f", "f", "g",  "g",
-                                          "g", "g", "g", "g", "g", "g", "g", "i"};
+                                          "g", "g", "g", "g", "g", "g", "g", "i",  "h"};
   ASSERT_EQ(rows.size(), items.size()) << r.out;
   int reported = 0;
   for (std::size_t i = 0; i < rows.size(); ++i) {
@@ -217,12 +217,24 @@ TEST(CliBench, QuickPrintsEveryRowWellFormed) {
     }
     EXPECT_TRUE(c[3].rfind("≤ ", 0) == 0 || c[3].rfind("≥ ", 0) == 0 || c[3].rfind("< ", 0) == 0)
         << c[3];
+    if (items[i] == "h") {  // the build is timed only when asked for (--build SOURCE_DIR)
+      EXPECT_EQ(c[2], "—");
+      EXPECT_EQ(c[3], "≤ 5 min");
+      EXPECT_EQ(c[4].rfind("not run: dpc31 bench --build SOURCE_DIR", 0), 0u) << c[4];
+      continue;
+    }
     EXPECT_TRUE(c[4].rfind("met", 0) == 0 || c[4].rfind("missed by ", 0) == 0) << c[4];
   }
   EXPECT_EQ(reported, 5);
   const auto j = nlohmann::json::parse(slurp(json_path));
   ASSERT_EQ(j["rows"].size(), items.size());
   for (const auto& row : j["rows"]) {
+    if (row["item"] == "h") {
+      EXPECT_FALSE(row["measured"].get<bool>()) << row.dump();
+      EXPECT_TRUE(row["not_run"].is_string()) << row.dump();
+      EXPECT_EQ(row["target"], 5) << row.dump();
+      continue;
+    }
     EXPECT_TRUE(row["measured"].get<bool>()) << row.dump();
     EXPECT_TRUE(row["value"].is_number()) << row.dump();
   }
@@ -230,8 +242,11 @@ TEST(CliBench, QuickPrintsEveryRowWellFormed) {
 }
 
 TEST(CliBench, BadArgumentsExit2WithOneLine) {
-  for (const char* args : {"bench --min-time 0", "bench --quick --wavediff-mb 5",
-                           "bench --bench /nonexistent/dpc31_bench", "bench extra"}) {
+  // --build: a directory with a setup.sh (row h), and no smoke test of a 5-minute build.
+  for (const char* args :
+       {"bench --min-time 0", "bench --quick --wavediff-mb 5",
+        "bench --bench /nonexistent/dpc31_bench", "bench extra", "bench --build /nonexistent",
+        "bench --build /", "bench --quick --build " SOURCE_DIR}) {
     const Result r = testutil::run_command(std::string(DPC31_CLI) + " " + args + " 2>&1");
     EXPECT_EQ(r.rc, 2) << args;
     EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << args << ": " << r.out;

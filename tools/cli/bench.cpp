@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -39,6 +40,8 @@ struct RowSpec {
   Goal goal;
   double target;
 };
+
+constexpr const char* kSetupSh = "setup.sh";  // row h's "benchmark"
 
 // Every row, grouped by item (one dpc31_bench run per item); targets of issue 19.
 const std::vector<RowSpec>& rows() {
@@ -99,6 +102,9 @@ const std::vector<RowSpec>& rows() {
       // Issue 19, item 7: what a full waveform costs (docs/performance.md, docs/waveforms.md).
       {"i", "traced / untraced run, all signals (wall time, side by side)", "BM_TracedOverUntraced",
        "traced_over_untraced", 1, "x slower", Goal::at_most, 3},
+      // Issue 19 item 6: not a benchmark but a timed build (--build), after the benchmarks.
+      {"h", "fresh build: ./setup.sh with every package present, ccache off (wall time)", kSetupSh,
+       "time", 1.0 / 60, "min", Goal::at_most, 5},
   };
   return r;
 }
@@ -153,6 +159,7 @@ struct Row {
   bool measured = false;
   double value = 0;
   std::string error;
+  std::string not_run;  // why a row was not asked for (row h without --build)
   [[nodiscard]] bool met() const {
     switch (spec->goal) {
       case Goal::at_most:
@@ -178,6 +185,7 @@ struct Row {
     return rel + with_unit(spec->target, spec->unit);
   }
   [[nodiscard]] std::string result_text() const {
+    if (!not_run.empty()) return "not run: " + not_run;
     if (!measured) return "not measured";
     if (spec->goal == Goal::report) return "reported";
     const double r = ratio();
@@ -261,7 +269,9 @@ std::string table(const std::vector<Row>& rs) {
   std::string t = "| item | what | measured | target | result |\n|---|---|---|---|---|\n";
   for (const Row& r : rs) {
     t += fmt::format("| {} | {} | {} | {} | {} |\n", r.spec->item, r.spec->what,
-                     r.measured ? with_unit(r.value, r.spec->unit) : "error: " + r.error,
+                     r.measured          ? with_unit(r.value, r.spec->unit)
+                     : r.not_run.empty() ? "error: " + r.error
+                                         : std::string("—"),
                      r.target_text(), r.result_text());
   }
   return t;
@@ -289,12 +299,51 @@ json to_json(const BenchArgs& a, const std::string& bench, const std::vector<Row
       row["value"] = r.value;
       row["met"] = r.met();
       row["ratio_to_target"] = r.ratio();
+    } else if (!r.not_run.empty()) {
+      row["not_run"] = r.not_run;
     } else {
       row["error"] = r.error;
     }
     j["rows"].push_back(std::move(row));
   }
   return j;
+}
+
+// Row h: `source`/setup.sh into a fresh directory of TMPDIR with ccache off (docs/install.md,
+// "Build time"), its wall time; the directory is removed afterwards (a signal leaves it: its
+// path is printed first). setup.sh's output goes to a log whose last line is the error.
+void time_build(const std::string& source, Row& row, std::FILE* err) {
+  std::string dir = (fs::temp_directory_path() / "dpc31-bench-build-XXXXXX").string();
+  if (::mkdtemp(dir.data()) == nullptr) {
+    row.error = fmt::format("cannot create a directory in {}: {}",
+                            fs::temp_directory_path().string(), std::strerror(errno));
+    return;
+  }
+  fmt::print(err, "dpc31 bench: item h: ./setup.sh of {} into {} ...\n", source, dir);
+  std::fflush(err);
+  const fs::path log = fs::path(dir) / "setup.log";
+  const auto t0 = std::chrono::steady_clock::now();
+  const dpc31::child::Result r = dpc31::child::run(
+      {"/usr/bin/env", "CCACHE_DISABLE=1", "DPC31_BUILD_DIR=" + (fs::path(dir) / "build").string(),
+       (fs::path(source) / "setup.sh").string()},
+      log.string());
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (r.exit_code != 0) {
+    row.error = r.error.empty() ? fmt::format("setup.sh exited with {}", r.exit_code) : r.error;
+    std::ifstream f(log);
+    std::string line;
+    std::string last;
+    while (std::getline(f, line)) {
+      if (!line.empty()) last = line;
+    }
+    if (!last.empty()) row.error += ": " + last;
+  } else {
+    row.value = seconds * row.spec->scale;
+    row.measured = true;
+  }
+  std::error_code ec;
+  fs::remove_all(dir, ec);
 }
 
 }  // namespace
@@ -319,6 +368,18 @@ CLI::App* add_bench_subcommand(CLI::App& app, BenchArgs& a) {
   cmd->add_option("--wavediff-dir", a.wavediff_dir,
                   "where item f's files go (default: TMPDIR; needs twice --wavediff-mb)")
       ->check(CLI::ExistingDirectory);
+  cmd->add_option("--build", a.build_source,
+                  "row h: time a fresh ./setup.sh build of this source tree (about 5 minutes on "
+                  "two cores; every package must be installed)")
+      ->check(CLI::ExistingDirectory &
+              CLI::Validator(
+                  [](const std::string& d) {
+                    return std::filesystem::exists(std::filesystem::path(d) / "setup.sh")
+                               ? std::string()
+                               : d + " has no setup.sh";
+                  },
+                  "SOURCE_DIR"))
+      ->excludes(quick);
   cmd->add_option("--bench", a.bench_binary,
                   "the dpc31_bench program (default: next to this dpc31)")
       ->check(CLI::ExistingFile);
@@ -371,6 +432,15 @@ int run_bench(const BenchArgs& args, std::FILE* out, std::FILE* err) {
          ++k) {
       item.push_back(&rs[k]);
     }
+    if (item.front()->spec->benchmark == kSetupSh) {
+      if (a.build_source.empty()) {
+        item.front()->not_run = "dpc31 bench --build SOURCE_DIR (about 5 minutes)";
+      } else {
+        time_build(a.build_source, *item.front(), err);
+      }
+      i += item.size();
+      continue;
+    }
     fmt::print(err, "dpc31 bench: item {} ...\n", rs[i].spec->item);
     std::fflush(err);
     std::string error;
@@ -391,7 +461,7 @@ int run_bench(const BenchArgs& args, std::FILE* out, std::FILE* err) {
     }
   }
   for (const Row& r : rs) {
-    if (!r.measured) return 1;
+    if (!r.measured && r.not_run.empty()) return 1;
   }
   return 0;
 }

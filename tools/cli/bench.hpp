@@ -18,12 +18,14 @@ struct BenchArgs {
   std::uint64_t wavediff_mb = 1000;  // size of each of item f's two VCD files
   std::string wavediff_dir;          // where item f's files go (default: TMPDIR)
   std::string bench_binary;          // default: dpc31_bench next to this dpc31
+  std::string build_source;  // row h: time a fresh ./setup.sh build of this tree (empty: not run)
 };
 
 CLI::App* add_bench_subcommand(CLI::App& app, BenchArgs& a);
 
-// Exit code: 0 every row measured (met or missed), 1 a benchmark could not be run or gave no
-// value, 2 bad input (one line on `err`).
+// Exit code: 0 every row measured (met or missed) or not asked for (row h without
+// --build), 1 a benchmark or the build could not be run or gave no value, 2 bad input (one line
+// on `err`).
 int run_bench(const BenchArgs& a, std::FILE* out, std::FILE* err);
 
 }  // namespace dpc31::cli
