@@ -166,6 +166,8 @@ struct Server::Impl {
   void broadcast(const AsyncLine& l);
   Got next_line(Client& c, std::string_view& line) const;
   [[nodiscard]] bool has_work(const Client& c) const;
+  // Whether a client other than `c` has bytes waiting in its socket (a poll() that does not wait).
+  bool others_readable(const Client& c);
   void execute_round();
   void handle(Client& c, Got got, std::string_view line);
   void begin_close(Client& c, Clock::duration grace);
@@ -192,6 +194,7 @@ struct Server::Impl {
   std::size_t round_start = 0;  // where the next round of execute_round begins
   Clock::time_point now = Clock::now();
   std::vector<pollfd> fds;            // poll_all's, kept from round to round
+  std::vector<pollfd> others;         // others_readable's, kept likewise
   Clock::time_point last_poll = now;  // when poll() last looked at every socket
 };
 
@@ -617,12 +620,28 @@ void Server::Impl::execute_round() {
   // lines in all, before its replies go out and poll() looks again (a poll() and a send() per
   // line were most of the cost of a pipelined `peek`). A command of another client that arrives
   // meanwhile waits for at most these lines (docs/protocol.md, "Several clients").
-  for (std::size_t k = 1; busy == 1 && k < kLoneRound && !shutting_down && has_work(*only); ++k) {
+  // Not while another client has bytes waiting (its line might not be complete in our buffer
+  // yet, a flood's read ended short): a flood stays one line per client and round.
+  if (busy != 1 || (n > 1 && others_readable(*only))) return;
+  for (std::size_t k = 1; k < kLoneRound && !shutting_down && has_work(*only); ++k) {
     std::string_view line;
     const Got got = next_line(*only, line);
     if (got == Got::none) break;
     handle(*only, got, line);
   }
+}
+
+bool Server::Impl::others_readable(const Client& c) {
+  others.clear();
+  for (const auto& o : clients) {
+    if (o.get() != &c && o->fd >= 0 && !o->dead && !o->eof) others.push_back({o->fd, POLLIN, 0});
+  }
+  if (others.empty()) return false;
+  int r = 0;
+  do {
+    r = ::poll(others.data(), others.size(), 0);
+  } while (r < 0 && errno == EINTR);
+  return r != 0;  // an error: as if readable, the fair way
 }
 
 void Server::Impl::close_client(Client& c) {
