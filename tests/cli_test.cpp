@@ -241,6 +241,41 @@ TEST(CliBench, QuickPrintsEveryRowWellFormed) {
   std::remove(json_path.c_str());
 }
 
+// Row h with --build: the wall time of SOURCE_DIR/setup.sh, run with ccache off and
+// DPC31_BUILD_DIR a fresh directory (removed after); a setup.sh that fails is the row's error with
+// its last line, and exit 1 (bench.hpp). Stand-in setup.sh scripts, not a real 5-minute build.
+TEST(CliBench, BuildRowTimesSetupShOrReportsItsLastLine) {
+  namespace fs = std::filesystem;
+  const fs::path src = fs::path(::testing::TempDir()) / "bench-build-src";
+  fs::remove_all(src);
+  fs::create_directories(src);
+  const auto script = [&](const std::string& body) {
+    std::ofstream(src / "setup.sh") << "#!/bin/sh\n" << body;
+    fs::permissions(src / "setup.sh", fs::perms::owner_all);
+  };
+  const std::string fast = "bench --min-time 0.01 --repetitions 1 --wavediff-mb 1 --build ";
+  // Writes what it was given into the source tree, which outlives the run.
+  script("echo \"$CCACHE_DISABLE $DPC31_BUILD_DIR\" > \"$(dirname \"$0\")/seen\"\n");
+  Result r = run(fast + src.string());
+  ASSERT_EQ(r.rc, 0) << r.out;
+  const std::size_t h = r.out.find("| h | ");
+  ASSERT_NE(h, std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("| ≤ 5 min | met", h), std::string::npos) << r.out.substr(h);
+  const std::string seen = slurp((src / "seen").string());
+  ASSERT_EQ(seen.rfind("1 ", 0), 0u) << seen;
+  const fs::path build_dir = seen.substr(2, seen.size() - 3);
+  EXPECT_NE(build_dir.string().find("dpc31-bench-build-"), std::string::npos) << build_dir;
+  EXPECT_FALSE(fs::exists(build_dir.parent_path())) << "the temporary directory is left";
+  script("echo building >&2\necho 'cc: fatal error: boom' >&2\nexit 3\n");
+  r = run(fast + src.string());
+  EXPECT_EQ(r.rc, 1) << r.out;
+  EXPECT_NE(r.out.find("| h | fresh build: ./setup.sh with every package present, ccache off "
+                       "(wall time) | error: setup.sh exited with 3: cc: fatal error: boom |"),
+            std::string::npos)
+      << r.out;
+  fs::remove_all(src);
+}
+
 TEST(CliBench, BadArgumentsExit2WithOneLine) {
   // --build: a directory with a setup.sh (row h), and no smoke test of a 5-minute build.
   for (const char* args :

@@ -227,6 +227,17 @@ fs::path self_path() {
   return ec ? fs::path("dpc31") : p;
 }
 
+// ": " and the last non-empty line of a child's log (empty if it has none): the reason it failed.
+std::string last_line_of(const fs::path& log_file) {
+  std::ifstream log(log_file);
+  std::string line;
+  std::string last;
+  while (std::getline(log, line)) {
+    if (!line.empty()) last = line;
+  }
+  return last.empty() ? std::string() : ": " + last;
+}
+
 // Runs dpc31_bench on the benchmarks of one item; its JSON output, or an error.
 // Its console output goes to `log_file`; the last lines of it are in `error` if it fails.
 json run_item(const BenchArgs& a, const std::string& bench, const std::vector<Row*>& item_rows,
@@ -250,13 +261,7 @@ json run_item(const BenchArgs& a, const std::string& bench, const std::vector<Ro
       log_file.string());
   if (r.exit_code != 0) {
     error = r.error.empty() ? fmt::format("dpc31_bench exited with {}", r.exit_code) : r.error;
-    std::ifstream log(log_file);
-    std::string line;
-    std::string last;
-    while (std::getline(log, line)) {
-      if (!line.empty()) last = line;
-    }
-    if (!last.empty()) error += ": " + last;
+    error += last_line_of(log_file);
     return {};
   }
   std::ifstream f(out_file);
@@ -331,13 +336,7 @@ void time_build(const std::string& source, Row& row, std::FILE* err) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (r.exit_code != 0) {
     row.error = r.error.empty() ? fmt::format("setup.sh exited with {}", r.exit_code) : r.error;
-    std::ifstream f(log);
-    std::string line;
-    std::string last;
-    while (std::getline(f, line)) {
-      if (!line.empty()) last = line;
-    }
-    if (!last.empty()) row.error += ": " + last;
+    row.error += last_line_of(log);
   } else {
     row.value = seconds * row.spec->scale;
     row.measured = true;
