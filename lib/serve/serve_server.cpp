@@ -20,6 +20,8 @@
 #include <string_view>
 #include <vector>
 
+#include "auth.hpp"
+#include "endpoints.hpp"
 #include "serve_session.hpp"
 
 namespace dpc31::serve {
@@ -41,28 +43,8 @@ constexpr auto kLoneWait = std::chrono::milliseconds(1);
 
 std::string errno_text(int e) { return std::strerror(e); }
 
-void set_cloexec_nonblock(int fd) {
-  ::fcntl(fd, F_SETFD, FD_CLOEXEC);
-  ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) | O_NONBLOCK);
-}
-
-bool all_digits(std::string_view s) {
-  return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
-}
-
 Clock::duration seconds(double s) {
   return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
-}
-
-// Equal in time independent of where they differ: every byte of the secret is looked at,
-// whatever was given.
-bool same_secret(std::string_view given, std::string_view secret) {
-  unsigned diff = given.size() == secret.size() ? 0 : 1;
-  for (std::size_t i = 0; i < secret.size(); ++i) {
-    const auto g = static_cast<unsigned char>(i < given.size() ? given[i] : 0);
-    diff |= g ^ static_cast<unsigned char>(secret[i]);
-  }
-  return diff == 0;
 }
 
 // The first line of a connection (docs/protocol.md, "The first line"): it must start with a
@@ -116,6 +98,8 @@ struct Client {
   Clock::time_point accepted;
   Clock::time_point last_input;
   Clock::time_point close_by;
+  Clock::time_point held_until{};  // its `auth` line waits for the peer's delay (AuthThrottle)
+  std::string peer;                // who it is for AuthThrottle
   ClientState state;
 
   [[nodiscard]] std::size_t pending_in() const { return in.size() - in_off; }
@@ -196,6 +180,7 @@ struct Server::Impl {
   std::vector<pollfd> fds;            // poll_all's, kept from round to round
   std::vector<pollfd> others;         // others_readable's, kept likewise
   Clock::time_point last_poll = now;  // when poll() last looked at every socket
+  AuthThrottle throttle;
 };
 
 Server::Impl::~Impl() {
@@ -222,111 +207,19 @@ void Server::Impl::open_wake_pipe() {
 }
 
 void Server::Impl::listen_tcp(const std::string& spec) {
-  std::string host = "127.0.0.1";
-  std::string port_text = spec;
-  if (!all_digits(spec)) {
-    const std::size_t colon = spec.rfind(':');
-    if (colon == std::string::npos) {
-      throw ServerError(fmt::format("--tcp '{}': expected PORT or ADDR:PORT", spec));
-    }
-    host = spec.substr(0, colon);
-    port_text = spec.substr(colon + 1);
-    if (host.size() >= 2 && host.front() == '[' && host.back() == ']') {
-      host = host.substr(1, host.size() - 2);
-    }
-  }
-  if (host.empty() || !all_digits(port_text) || port_text.size() > 5 ||
-      std::stoul(port_text) > 65535) {
-    throw ServerError(fmt::format("--tcp '{}': expected PORT or ADDR:PORT, port 0..65535", spec));
-  }
-  addrinfo hints{};
-  hints.ai_family = AF_UNSPEC;
-  hints.ai_socktype = SOCK_STREAM;
-  hints.ai_flags = AI_PASSIVE | AI_NUMERICSERV;
-  addrinfo* res = nullptr;
-  if (const int rc = ::getaddrinfo(host.c_str(), port_text.c_str(), &hints, &res); rc != 0) {
-    throw ServerError(fmt::format("--tcp '{}': {}", spec, ::gai_strerror(rc)));
-  }
-  std::string why = "no address";
-  for (addrinfo* a = res; a != nullptr; a = a->ai_next) {
-    const int fd = ::socket(a->ai_family, a->ai_socktype | SOCK_CLOEXEC, a->ai_protocol);
-    if (fd < 0) {
-      why = errno_text(errno);
-      continue;
-    }
-    const int one = 1;
-    ::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
-    if (::bind(fd, a->ai_addr, a->ai_addrlen) != 0 || ::listen(fd, 64) != 0) {
-      why = errno_text(errno);
-      ::close(fd);
-      continue;
-    }
-    tcp_fd = fd;
-    break;
-  }
-  ::freeaddrinfo(res);
-  if (tcp_fd < 0) throw ServerError(fmt::format("cannot listen on tcp {}: {}", spec, why));
-  set_cloexec_nonblock(tcp_fd);
-  sockaddr_storage ss{};
-  socklen_t len = sizeof ss;
-  ::getsockname(tcp_fd, reinterpret_cast<sockaddr*>(&ss), &len);
-  char h[NI_MAXHOST];
-  char s[NI_MAXSERV];
-  ::getnameinfo(reinterpret_cast<sockaddr*>(&ss), len, h, sizeof h, s, sizeof s,
-                NI_NUMERICHOST | NI_NUMERICSERV);
-  port = static_cast<std::uint16_t>(std::stoul(s));
-  listening.push_back(ss.ss_family == AF_INET6 ? fmt::format("listening tcp [{}]:{}", h, s)
-                                               : fmt::format("listening tcp {}:{}", h, s));
+  Endpoint e = open_tcp(spec);
+  tcp_fd = e.fd;
+  port = e.port;
+  listening.push_back(std::move(e.line));
 }
 
 void Server::Impl::listen_unix(const std::string& path) {
-  sockaddr_un sa{};
-  sa.sun_family = AF_UNIX;
-  if (path.empty() || path.size() >= sizeof sa.sun_path) {
-    throw ServerError(
-        fmt::format("--unix '{}': the path must have 1..{} bytes", path, sizeof sa.sun_path - 1));
-  }
-  std::memcpy(sa.sun_path, path.c_str(), path.size() + 1);
-  const int fd = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
-  if (fd < 0) throw ServerError("socket: " + errno_text(errno));
-  struct stat st {};
-  if (::lstat(path.c_str(), &st) == 0) {
-    if (!S_ISSOCK(st.st_mode)) {
-      ::close(fd);
-      throw ServerError(fmt::format("--unix {}: exists and is not a socket", path));
-    }
-    // A socket nobody accepts on is left over from a server that died: replace it.
-    const int probe = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
-    const bool stale = probe >= 0 &&
-                       ::connect(probe, reinterpret_cast<sockaddr*>(&sa), sizeof sa) != 0 &&
-                       errno == ECONNREFUSED;
-    if (probe >= 0) ::close(probe);
-    if (!stale) {
-      ::close(fd);
-      throw ServerError(fmt::format("--unix {}: in use by a running server", path));
-    }
-    ::unlink(path.c_str());
-  }
-  // Only our user may connect: the socket file is created 0600 (connect() needs write permission
-  // on it). The umask makes it so from the start; the chmod is for file systems that ignore it.
-  const mode_t old_mask = ::umask(0177);
-  const int bound = ::bind(fd, reinterpret_cast<sockaddr*>(&sa), sizeof sa);
-  const int bind_errno = errno;
-  ::umask(old_mask);
-  if (bound != 0 || ::chmod(path.c_str(), 0600) != 0 || ::listen(fd, 64) != 0) {
-    const int e = bound != 0 ? bind_errno : errno;
-    if (bound == 0) ::unlink(path.c_str());
-    ::close(fd);
-    throw ServerError(fmt::format("cannot listen on unix {}: {}", path, errno_text(e)));
-  }
-  unix_fd = fd;
-  set_cloexec_nonblock(unix_fd);
-  if (::lstat(path.c_str(), &st) == 0) {
-    unix_bound = path;
-    unix_dev = st.st_dev;
-    unix_ino = st.st_ino;
-  }
-  listening.push_back("listening unix " + path);
+  Endpoint e = open_unix(path);
+  unix_fd = e.fd;
+  unix_bound = std::move(e.unix_path);
+  unix_dev = e.dev;
+  unix_ino = e.ino;
+  listening.push_back(std::move(e.line));
 }
 
 std::size_t Server::Impl::active_clients() const {
@@ -340,7 +233,9 @@ void Server::Impl::accept_some(int lfd, bool tcp) {
   for (int i = 0; i < kAcceptBatch; ++i) {
     // Blocking, but every recv() and send() says MSG_DONTWAIT, except read_lone's, which
     // SO_RCVTIMEO bounds.
-    const int fd = ::accept4(lfd, nullptr, nullptr, SOCK_CLOEXEC);
+    sockaddr_storage from{};
+    socklen_t from_len = sizeof from;
+    const int fd = ::accept4(lfd, reinterpret_cast<sockaddr*>(&from), &from_len, SOCK_CLOEXEC);
     if (fd < 0) {
       if (errno == EINTR || errno == ECONNABORTED) continue;
       if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM) {
@@ -384,6 +279,7 @@ void Server::Impl::accept_some(int lfd, bool tcp) {
     auto c = std::make_unique<Client>();
     c->fd = fd;
     c->tcp = tcp;
+    c->peer = tcp ? peer_of(from) : "the unix socket";
     c->accepted = now;
     c->last_input = now;
     clients.push_back(std::move(c));
@@ -437,6 +333,18 @@ void Server::Impl::check_hello(Client& c) {
     while (i < l.size() && l[i] != ' ' && l[i] != '\t') ++i;
     if (i > b) words.push_back(l.substr(b, i - b));
   }
+  if (opt.secret) {
+    // A peer that sent wrong secrets waits before its next one is looked at, on every
+    // connection it has: guessing is slowed to one guess per delay (docs/security.md).
+    const Clock::time_point ready = throttle.ready_at(c.peer, now);
+    if (ready > now) {
+      c.held_until = ready;
+      // A guess nobody waits for the answer to is dropped unjudged.
+      if (c.eof) begin_close(c, kCloseGrace);
+      return;
+    }
+  }
+  c.held_until = {};
   c.in_off += nl == std::string_view::npos ? in.size() : nl + 1;
   if (!opt.secret) {
     c.established = true;
@@ -444,9 +352,19 @@ void Server::Impl::check_hello(Client& c) {
     return;
   }
   if (words.size() != 2 || !same_secret(words[1], *opt.secret)) {
+    Clock::duration delay{};
+    const std::uint64_t n = throttle.failed(c.peer, now, delay);
+    if (opt.log != nullptr) {
+      fmt::print(opt.log,
+                 "dpc31 serve: a wrong secret from {} ({} in a row); its next 'auth' is looked "
+                 "at in {} ms\n",
+                 c.peer, n, std::chrono::duration_cast<std::chrono::milliseconds>(delay).count());
+      std::fflush(opt.log);
+    }
     reject(c, "ERR auth wrong secret; closing");
     return;
   }
+  throttle.succeeded(c.peer);
   c.established = true;
   queue(c, "OK auth");
 }
@@ -683,6 +601,7 @@ void Server::Impl::poll_all() {
       wake = std::min(wake, c->close_by);
     } else if (!c->established) {
       wake = std::min(wake, c->accepted + seconds(opt.hello_timeout));
+      if (c->held_until != Clock::time_point{}) wake = std::min(wake, c->held_until);
     } else if (opt.idle_timeout > 0) {
       wake = std::min(wake, c->last_input + seconds(opt.idle_timeout));
     }
@@ -740,6 +659,10 @@ void Server::Impl::poll_once() {
   if (!shutting_down) execute_round();
 
   for (auto& c : clients) {
+    if (!c->closing && !c->dead && !c->established && c->held_until != Clock::time_point{} &&
+        now >= c->held_until) {
+      check_hello(*c);
+    }
     flush(*c);
     if (!c->closing && !c->dead && !c->established &&
         std::chrono::duration<double>(now - c->accepted).count() >= opt.hello_timeout) {
@@ -779,51 +702,18 @@ void Server::Impl::final_flush() {
   clients.clear();
 }
 
-std::string read_secret_file(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
-  if (fd < 0) throw ServerError(fmt::format("--secret-file {}: {}", path, errno_text(errno)));
-  struct Closer {
-    int fd;
-    ~Closer() { ::close(fd); }
-  } closer{fd};
-  struct stat st {};
-  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-    throw ServerError(fmt::format("--secret-file {}: not a regular file", path));
-  }
-  if ((st.st_mode & 077) != 0) {
-    throw ServerError(
-        fmt::format("--secret-file {}: group or others may access it (mode {:04o}): chmod 600 it",
-                    path, st.st_mode & 07777));
-  }
-  char buf[4096];
-  std::string text;
-  for (;;) {
-    const ssize_t n = ::read(fd, buf, sizeof buf);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) throw ServerError(fmt::format("--secret-file {}: {}", path, errno_text(errno)));
-    if (n == 0 || text.size() > 4096) break;
-    text.append(buf, static_cast<std::size_t>(n));
-  }
-  std::string secret = text.substr(0, text.find('\n'));
-  if (!secret.empty() && secret.back() == '\r') secret.pop_back();
-  const bool printable = std::all_of(secret.begin(), secret.end(), [](char ch) {
-    return static_cast<unsigned char>(ch) > 0x20 && static_cast<unsigned char>(ch) < 0x7F;
-  });
-  if (secret.size() < 16 || secret.size() > 1024 || !printable) {
-    throw ServerError(fmt::format(
-        "--secret-file {}: the first line must be 16 to 1024 printable ASCII characters without "
-        "blanks",
-        path));
-  }
-  return secret;
-}
-
 Server::Server(ServerOptions opt) : impl_(std::make_unique<Impl>(std::move(opt))) {
   if (!impl_->opt.tcp && !impl_->opt.unix_path) {
     throw ServerError("nothing to listen on: give --tcp and/or --unix");
   }
   if (impl_->opt.max_clients == 0) throw ServerError("--max-clients must be at least 1");
-  if (!(impl_->opt.hello_timeout > 0)) throw ServerError("the first-line timeout must be above 0");
+  if (!(impl_->opt.hello_timeout >= kMinTimeout)) {
+    throw ServerError(fmt::format("the first-line timeout must be at least {} s", kMinTimeout));
+  }
+  if (impl_->opt.idle_timeout != 0 && !(impl_->opt.idle_timeout >= kMinTimeout)) {
+    throw ServerError(fmt::format("--idle-timeout {}: 0 (never) or at least {} s",
+                                  impl_->opt.idle_timeout, kMinTimeout));
+  }
   if (impl_->opt.idle_timeout > 0) {
     impl_->opt.hello_timeout = std::min(impl_->opt.hello_timeout, impl_->opt.idle_timeout);
   }

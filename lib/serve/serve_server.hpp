@@ -7,12 +7,14 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "auth.hpp"
 #include "dpc31/chip.hpp"
 
 namespace dpc31::serve {
@@ -22,6 +24,10 @@ class ServerError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
+
+// The shortest idle and first-line timeout, in seconds (0 turns the idle timeout off): shorter
+// ones would close every client before its first line could arrive.
+inline constexpr double kMinTimeout = 0.1;
 
 // Limits and defaults: docs/protocol.md ("Limits") and docs/security.md.
 struct ServerOptions {
@@ -35,6 +41,8 @@ struct ServerOptions {
   std::optional<std::string> secret;
   std::size_t max_clients = 16;  // connections, also those that have not sent their first line
   double idle_timeout = 300;     // seconds without input before a client is closed; 0 = never
+  // One line per wrong secret (who, how many in a row, the delay); nullptr: none.
+  std::FILE* log = nullptr;
   // Seconds a new connection has for its first line (and auth); the idle timeout if shorter.
   double hello_timeout = 10;
   std::size_t max_line = 4096;           // bytes per line, without the newline
@@ -42,11 +50,6 @@ struct ServerOptions {
   std::size_t output_pause = 64u << 10;  // stop executing a client's lines above this much output
   std::size_t max_input = 64u << 10;     // unexecuted input bytes before reading pauses
 };
-
-// The secret of --secret-file: the file's first line (a trailing CR is dropped), 16..1024
-// printable ASCII characters without blanks; the file must be a regular file that neither group
-// nor others may access (chmod 600). Throws ServerError with one line.
-std::string read_secret_file(const std::string& path);
 
 class Server {
  public:

@@ -1,10 +1,12 @@
 #include "state_dir.hpp"
 
+#include <dirent.h>
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <utility>
@@ -186,6 +188,34 @@ bool StateDir::read(std::string_view name, std::size_t max, std::vector<std::uin
   return true;
 }
 
+void StateDir::usage(int dir, int depth, std::size_t& files, std::uint64_t& bytes) const {
+  const int fd = ::openat(dir, ".", O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return;
+  DIR* d = ::fdopendir(fd);
+  if (d == nullptr) {
+    ::close(fd);
+    return;
+  }
+  while (const dirent* e = ::readdir(d)) {
+    if (files > quota_.files + 1) break;  // refused even if one of them is replaced
+    const std::string_view n = e->d_name;
+    if (n == "." || n == "..") continue;
+    struct stat st {};
+    if (::fstatat(fd, e->d_name, &st, AT_SYMLINK_NOFOLLOW) != 0) continue;
+    if (S_ISREG(st.st_mode)) {
+      ++files;
+      bytes += static_cast<std::uint64_t>(st.st_size);
+    } else if (S_ISDIR(st.st_mode) && depth < kMaxDepth) {
+      const int sub = ::openat(fd, e->d_name, O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+      if (sub >= 0) {
+        usage(sub, depth + 1, files, bytes);
+        ::close(sub);
+      }
+    }
+  }
+  ::closedir(d);
+}
+
 bool StateDir::write(std::string_view name, std::span<const std::uint8_t> bytes,
                      Error& error) const {
   std::string leaf;
@@ -193,8 +223,24 @@ bool StateDir::write(std::string_view name, std::span<const std::uint8_t> bytes,
   const int dir = parent_of(name, leaf, owned, error);
   if (dir < 0) return false;
   struct stat st {};
-  if (::fstatat(dir, leaf.c_str(), &st, AT_SYMLINK_NOFOLLOW) == 0 && !S_ISREG(st.st_mode)) {
+  const bool exists = ::fstatat(dir, leaf.c_str(), &st, AT_SYMLINK_NOFOLLOW) == 0;
+  if (exists && !S_ISREG(st.st_mode)) {
     error = classify(dir, leaf, name, 0, false);  // a link, a FIFO, a device: left alone
+    if (owned) ::close(dir);
+    return false;
+  }
+  std::size_t files = 0;
+  std::uint64_t used = 0;
+  usage(fd_, 0, files, used);
+  if (exists) {
+    --files;
+    used -= std::min<std::uint64_t>(used, static_cast<std::uint64_t>(st.st_size));
+  }
+  if (files + 1 > quota_.files || used + bytes.size() > quota_.bytes) {
+    error = failed(fmt::format(
+        "{}: the state directory is full (at most {} files and {} MiB; it holds {} files, {} "
+        "bytes): delete snapshots or save over an old one",
+        name, quota_.files, quota_.bytes >> 20, files, used));
     if (owned) ::close(dir);
     return false;
   }

@@ -37,6 +37,17 @@ class StateDir {
 
   [[nodiscard]] bool is_open() const { return fd_ >= 0; }
 
+  // What `save` may make the directory hold (docs/protocol.md, "Limits"): regular files in it and
+  // its subdirectories (kMaxDepth deep), and their bytes (st_size), counted before every write;
+  // a write beyond them fails with a message that names the limit. Replacing a file counts its
+  // new size instead of the old one, not one more file.
+  struct Quota {
+    std::size_t files = 1024;
+    std::uint64_t bytes = std::uint64_t{256} << 20;
+  };
+  static constexpr int kMaxDepth = 16;
+  void set_quota(Quota q) { quota_ = q; }
+
   // Why `name` may not be used, "" if it may: empty, absolute, an empty component ("a//b", a
   // trailing '/'), a "." or ".." component, a component longer than 255 bytes.
   [[nodiscard]] static std::string check_name(std::string_view name);
@@ -54,7 +65,12 @@ class StateDir {
   // links (the caller closes it; it may be fd_ itself, then *owned is false), and that component.
   int parent_of(std::string_view name, std::string& leaf, bool& owned, Error& error) const;
 
+  // Regular files and bytes under `dir` (not following links), stopping once both are known to
+  // exceed the quota.
+  void usage(int dir, int depth, std::size_t& files, std::uint64_t& bytes) const;
+
   int fd_ = -1;
+  Quota quota_;
 };
 
 }  // namespace dpc31::serve

@@ -140,14 +140,14 @@ class FstReader final : public WaveReader {
     }
     const fstHandle maxh = fstReaderGetMaxHandle(ctx_);
     handle_slot_.assign(static_cast<std::size_t>(maxh) + 1, kNone);
-    std::vector<std::string> scopes;
+    Declarations decl(path_);
     fstReaderSetFacProcessMaskAll(ctx_);
     std::uint64_t declared = 0;
     while (fstHier* h = fstReaderIterateHier(ctx_)) {
       if (h->htyp == FST_HT_SCOPE) {
-        scopes.emplace_back(h->u.scope.name, h->u.scope.name_length);
+        decl.open_scope(std::string_view(h->u.scope.name, h->u.scope.name_length), 0);
       } else if (h->htyp == FST_HT_UPSCOPE) {
-        if (!scopes.empty()) scopes.pop_back();
+        decl.close_scope();
       } else if (h->htyp == FST_HT_VAR) {
         ++declared;
         const auto& hv = h->u.var;
@@ -172,6 +172,7 @@ class FstReader final : public WaveReader {
         }
         std::uint32_t slot = handle_slot_[hv.handle];
         if (slot == kNone) {
+          decl.slot(real ? 64 : hv.length, 0);
           slot = static_cast<std::uint32_t>(slots_.size());
           Slot s;
           s.real = real;
@@ -187,9 +188,7 @@ class FstReader final : public WaveReader {
         }
         Var v;
         split_reference(std::string_view(hv.name, hv.name_length), v.name, v.msb, v.lsb);
-        std::string full;
-        for (const auto& s : scopes) full += s + ".";
-        v.name = full + v.name;
+        v.name = decl.name(v.name, 0);
         v.slot = slot;
         vars_.push_back(std::move(v));
       }

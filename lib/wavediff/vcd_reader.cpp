@@ -360,7 +360,7 @@ class VcdReader final : public WaveReader {
 };
 
 void VcdReader::parse_header() {
-  std::vector<std::string> scopes;
+  Declarations decl(path_);
   std::string_view t;
   bool seen_any = false;
   for (;;) {
@@ -388,10 +388,9 @@ void VcdReader::parse_header() {
     std::vector<std::string> a = until_end(kw);
     if (kw == "$scope") {
       if (a.size() != 2) error(kw_line, "bad $scope (expected '$scope type name $end')");
-      scopes.push_back(a[1]);
+      decl.open_scope(a[1], kw_line);
     } else if (kw == "$upscope") {
-      if (scopes.empty()) error(kw_line, "$upscope without $scope");
-      scopes.pop_back();
+      if (!decl.close_scope()) error(kw_line, "$upscope without $scope");
     } else if (kw == "$timescale") {
       std::string text;
       for (const auto& s : a) text += s;
@@ -413,11 +412,10 @@ void VcdReader::parse_header() {
       for (std::size_t i = 3; i < a.size(); ++i) ref += a[i];
       Var v;
       split_reference(ref, v.name, v.msb, v.lsb);
-      std::string full;
-      for (const auto& s : scopes) full += s + ".";
-      v.name = full + v.name;
+      v.name = decl.name(v.name, kw_line);
       std::uint32_t slot = ids_.find(a[2]);
       if (slot == kNone) {
+        decl.slot(real ? 64 : width, kw_line);
         slot = static_cast<std::uint32_t>(slots_.size());
         Slot s;
         s.real = real;
@@ -439,7 +437,7 @@ void VcdReader::parse_header() {
     }
     // $date, $version, $comment and unknown header sections are skipped.
   }
-  if (!scopes.empty()) error(tok_line_, "$enddefinitions inside an open $scope");
+  if (decl.depth() != 0) error(tok_line_, "$enddefinitions inside an open $scope");
 }
 
 void VcdReader::keyword(std::string_view t) {

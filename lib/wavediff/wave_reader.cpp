@@ -30,6 +30,48 @@ void fail(const std::string& file, std::uint64_t line, const std::string& what) 
   throw InputError(fmt::format("{}:{}: {}", file, line, shown));
 }
 
+void Declarations::open_scope(std::string_view name, std::uint64_t line) {
+  if (ends_.size() >= kMaxDepth) {
+    fail(path_, line, fmt::format("scopes nested deeper than {}", kMaxDepth));
+  }
+  if (prefix_.size() + name.size() + 1 > kMaxName) {
+    fail(path_, line, fmt::format("a scope path longer than {} bytes", kMaxName));
+  }
+  ends_.push_back(prefix_.size());
+  prefix_.append(name);
+  prefix_.push_back('.');
+}
+
+bool Declarations::close_scope() {
+  if (ends_.empty()) return false;
+  prefix_.resize(ends_.back());
+  ends_.pop_back();
+  return true;
+}
+
+std::string Declarations::name(std::string_view ref, std::uint64_t line) {
+  const std::size_t n = prefix_.size() + ref.size();
+  if (n > kMaxName)
+    fail(path_, line, fmt::format("a variable's full name longer than {} bytes", kMaxName));
+  names_ += n;
+  if (names_ > kMaxNames) {
+    fail(path_, line,
+         fmt::format("the variables' full names exceed {} MiB in all", kMaxNames >> 20));
+  }
+  std::string full;
+  full.reserve(n);
+  full.append(prefix_);
+  full.append(ref);
+  return full;
+}
+
+void Declarations::slot(std::uint64_t bits, std::uint64_t line) {
+  bits_ += bits;
+  if (bits_ > kMaxBits) {
+    fail(path_, line, fmt::format("the variables exceed {} Mi bits in all", kMaxBits >> 20));
+  }
+}
+
 namespace {
 
 struct Unit {

@@ -269,4 +269,20 @@ int chip_bytes(const std::uint8_t* data, std::size_t size) {
   return 0;
 }
 
+// A set-up byte and one whole item (an edge) after it.
+std::string chip_bits_check(const std::uint8_t* /*data*/, std::size_t size) {
+  return size >= 3 ? "" : "no edge after the set-up byte";
+}
+
+// A set-up byte and one whole item after it (a character, a frame, a silence or an action).
+std::string chip_bytes_check(const std::uint8_t* data, std::size_t size) {
+  if (size < 2) return "no item after the set-up byte";
+  const std::uint8_t c = data[1];
+  if (c >= 0xE0) return "";
+  if (size < 3) return "the first item is cut off";
+  if (c < 0xC0) return "";
+  const std::size_t n = data[2] % 64;
+  return n >= 3 && 3 + n <= size ? "" : "the first frame is cut off or shorter than 3 bytes";
+}
+
 }  // namespace dpc31::fuzz

@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <string_view>
 
 namespace dpc31::fuzz {
@@ -22,9 +23,25 @@ int fst_reader(const std::uint8_t* data, std::size_t size);
 int serve_lines(const std::uint8_t* data, std::size_t size);
 int snapshot_loader(const std::uint8_t* data, std::size_t size);
 
+// The first check a target's parser makes of an input (a snapshot's header and CRC, a trace's or
+// a scenario's syntax, a waveform's header, the first line `serve` accepts, a chip input's set-up
+// byte and first item): "" if the input passes it, else why not. Every seed must pass (a stale
+// seed refused at the header fuzzes nothing but the header: issue 29), seeds_test.cpp.
+using Check = std::string (*)(const std::uint8_t* data, std::size_t size);
+
+std::string chip_bits_check(const std::uint8_t* data, std::size_t size);
+std::string chip_bytes_check(const std::uint8_t* data, std::size_t size);
+std::string trace_parser_check(const std::uint8_t* data, std::size_t size);
+std::string scenario_parser_check(const std::uint8_t* data, std::size_t size);
+std::string vcd_reader_check(const std::uint8_t* data, std::size_t size);
+std::string fst_reader_check(const std::uint8_t* data, std::size_t size);
+std::string serve_lines_check(const std::uint8_t* data, std::size_t size);
+std::string snapshot_loader_check(const std::uint8_t* data, std::size_t size);
+
 struct Target {
   std::string_view name;  // also the directory under tests/fuzz/corpus and regressions
   Entry entry;
+  Check check;
 };
 std::span<const Target> targets();
 

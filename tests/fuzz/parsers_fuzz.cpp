@@ -145,4 +145,41 @@ int load_one(std::span<const std::uint8_t> bytes) {
 
 }  // namespace
 
+std::string trace_parser_check(const std::uint8_t* data, std::size_t size) {
+  Trace t;
+  TraceError err;
+  return parse_trace(text(data, size), "seed.trace", t, err) ? "" : err.message;
+}
+
+std::string scenario_parser_check(const std::uint8_t* data, std::size_t size) {
+  Scenario s;
+  ScenarioError err;
+  return parse_scenario(text(data, size), "seed.scn", s, err) ? "" : err.message;
+}
+
+// What the server asks of a connection's first line: a command word.
+std::string serve_lines_check(const std::uint8_t* data, std::size_t size) {
+  const std::string_view in = text(data, size);
+  const std::string_view word = in.substr(0, in.find_first_of(" \t\r\n"));
+  return serve::is_command(word) ? "" : "the first line is not a command";
+}
+
+// The loader's own verdict: accepted by the chip of one configuration, else its SnapshotError.
+std::string snapshot_loader_check(const std::uint8_t* data, std::size_t size) {
+  std::string why = "no configuration";
+  for (Profile p : kAllProfiles) {
+    for (BusMode bus : {BusMode::intel, BusMode::motorola}) {
+      Chip chip({p, bus});
+      chip.set_log_sink(nullptr);
+      try {
+        chip.load_state({data, size});
+        return "";
+      } catch (const SnapshotError& e) {
+        why = e.what();
+      }
+    }
+  }
+  return why;
+}
+
 }  // namespace dpc31::fuzz

@@ -11,9 +11,12 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <string>
+#include <string_view>
 
 #include "fuzz_targets.hpp"
+#include "wave_reader.hpp"
 #include "wavediff.hpp"
 
 namespace dpc31::fuzz {
@@ -75,10 +78,30 @@ int wavediff_self(const std::uint8_t* data, std::size_t size) {
   return 0;
 }
 
+// The reader's header: opened as `format`, with variables declared.
+std::string wave_check(const std::uint8_t* data, std::size_t size, std::string_view format) {
+  const MemFile f(data, size);
+  try {
+    const std::unique_ptr<wavediff::WaveReader> r = wavediff::open_wave(f.path());
+    if (r->format() != format) return std::string("read as ") + r->format();
+    return r->vars().empty() ? "no variables" : "";
+  } catch (const wavediff::InputError& e) {
+    return e.what();
+  } catch (const FstapiExit&) {
+    return "fstapi gave up";
+  }
+}
+
 }  // namespace
 
 int vcd_reader(const std::uint8_t* data, std::size_t size) { return wavediff_self(data, size); }
 int fst_reader(const std::uint8_t* data, std::size_t size) { return wavediff_self(data, size); }
+std::string vcd_reader_check(const std::uint8_t* data, std::size_t size) {
+  return wave_check(data, size, "vcd");
+}
+std::string fst_reader_check(const std::uint8_t* data, std::size_t size) {
+  return wave_check(data, size, "fst");
+}
 
 }  // namespace dpc31::fuzz
 

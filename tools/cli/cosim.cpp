@@ -133,6 +133,29 @@ bool load_rtl(const CosimOptions& o, cosim::DutOptions& dut, std::string& id) {
 const char* const kRunKeys[] = {"profile",         "bus",       "variant", "mutant", "rtl",
                                 "cycles_per_seed", "keep_going"};
 
+// A shard's summary nests 3 levels (the object, results, a result): deeper input is refused
+// while it is parsed, before it is built (a 400 KB file of '[' crashed the merge, a 40 KB one
+// printed 800 MB; docs/security.md).
+constexpr int kMaxSummaryDepth = 16;
+struct TooDeep {};
+
+// The text as JSON, discarded if it is not JSON; `too_deep` if it nests beyond kMaxSummaryDepth.
+nlohmann::json parse_summary(const std::string& text, bool& too_deep) {
+  too_deep = false;
+  try {
+    return nlohmann::json::parse(
+        text,
+        [](int depth, nlohmann::json::parse_event_t /*event*/, nlohmann::json& /*value*/) {
+          if (depth > kMaxSummaryDepth) throw TooDeep{};
+          return true;
+        },
+        false);
+  } catch (const TooDeep&) {
+    too_deep = true;
+    return nlohmann::json(nlohmann::json::value_t::discarded);
+  }
+}
+
 // The JSON summary of a random run, and of a merge of shards, which must equal it.
 nlohmann::json summary_json(nlohmann::json run, const nlohmann::json& shard, std::uint64_t from,
                             std::uint64_t to, std::uint64_t cycles, double secs,
@@ -341,7 +364,14 @@ int run_cosim_merge(const MergeOptions& o) {
     std::string text;
     std::string why;
     if (!read_text_file(f, 256u << 20, "JSON summary", text, why)) return fail(f + ": " + why);
-    nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
+    bool too_deep = false;
+    nlohmann::json j = parse_summary(text, too_deep);
+    if (too_deep) {
+      return fail(
+          fmt::format("{}: nested deeper than {} levels: not the JSON summary of a "
+                      "`dpc31 cosim --shard` run",
+                      f, kMaxSummaryDepth));
+    }
     // What a shard of a random run writes: these keys with these types (a session summary, a
     // cut-off file or another JSON document is refused here, not half-merged).
     const bool shaped = j.is_object() && j.contains("shard") && j["shard"].is_object() &&

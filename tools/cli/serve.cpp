@@ -62,6 +62,7 @@ int run_serve(const ServeArgs& a, std::FILE* out, std::FILE* err) {
   if (!a.unix_path.empty()) opt.unix_path = a.unix_path;
   opt.max_clients = a.max_clients;
   opt.idle_timeout = a.idle_timeout;
+  opt.log = err;
   if (!a.state_dir.empty()) opt.state_dir = a.state_dir;
   try {
     if (!a.secret_file.empty()) opt.secret = serve::read_secret_file(a.secret_file);

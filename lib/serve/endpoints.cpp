@@ -1,0 +1,151 @@
+#include "endpoints.hpp"
+
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <netdb.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <string_view>
+
+#include "serve_server.hpp"
+
+namespace dpc31::serve {
+
+namespace {
+
+std::string errno_text(int e) { return std::strerror(e); }
+
+bool all_digits(std::string_view s) {
+  return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
+}
+
+}  // namespace
+
+void set_cloexec_nonblock(int fd) {
+  ::fcntl(fd, F_SETFD, FD_CLOEXEC);
+  ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) | O_NONBLOCK);
+}
+
+Endpoint open_tcp(const std::string& spec) {
+  Endpoint ep;
+  int& tcp_fd = ep.fd;
+  std::string host = "127.0.0.1";
+  std::string port_text = spec;
+  if (!all_digits(spec)) {
+    const std::size_t colon = spec.rfind(':');
+    if (colon == std::string::npos) {
+      throw ServerError(fmt::format("--tcp '{}': expected PORT or ADDR:PORT", spec));
+    }
+    host = spec.substr(0, colon);
+    port_text = spec.substr(colon + 1);
+    if (host.size() >= 2 && host.front() == '[' && host.back() == ']') {
+      host = host.substr(1, host.size() - 2);
+    }
+  }
+  if (host.empty() || !all_digits(port_text) || port_text.size() > 5 ||
+      std::stoul(port_text) > 65535) {
+    throw ServerError(fmt::format("--tcp '{}': expected PORT or ADDR:PORT, port 0..65535", spec));
+  }
+  addrinfo hints{};
+  hints.ai_family = AF_UNSPEC;
+  hints.ai_socktype = SOCK_STREAM;
+  hints.ai_flags = AI_PASSIVE | AI_NUMERICSERV;
+  addrinfo* res = nullptr;
+  if (const int rc = ::getaddrinfo(host.c_str(), port_text.c_str(), &hints, &res); rc != 0) {
+    throw ServerError(fmt::format("--tcp '{}': {}", spec, ::gai_strerror(rc)));
+  }
+  std::string why = "no address";
+  for (addrinfo* a = res; a != nullptr; a = a->ai_next) {
+    const int fd = ::socket(a->ai_family, a->ai_socktype | SOCK_CLOEXEC, a->ai_protocol);
+    if (fd < 0) {
+      why = errno_text(errno);
+      continue;
+    }
+    const int one = 1;
+    ::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
+    if (::bind(fd, a->ai_addr, a->ai_addrlen) != 0 || ::listen(fd, 64) != 0) {
+      why = errno_text(errno);
+      ::close(fd);
+      continue;
+    }
+    tcp_fd = fd;
+    break;
+  }
+  ::freeaddrinfo(res);
+  if (tcp_fd < 0) throw ServerError(fmt::format("cannot listen on tcp {}: {}", spec, why));
+  set_cloexec_nonblock(tcp_fd);
+  sockaddr_storage ss{};
+  socklen_t len = sizeof ss;
+  ::getsockname(tcp_fd, reinterpret_cast<sockaddr*>(&ss), &len);
+  char h[NI_MAXHOST];
+  char s[NI_MAXSERV];
+  ::getnameinfo(reinterpret_cast<sockaddr*>(&ss), len, h, sizeof h, s, sizeof s,
+                NI_NUMERICHOST | NI_NUMERICSERV);
+  ep.port = static_cast<std::uint16_t>(std::stoul(s));
+  ep.line = ss.ss_family == AF_INET6 ? fmt::format("listening tcp [{}]:{}", h, s)
+                                     : fmt::format("listening tcp {}:{}", h, s);
+  return ep;
+}
+
+Endpoint open_unix(const std::string& path) {
+  Endpoint ep;
+  sockaddr_un sa{};
+  sa.sun_family = AF_UNIX;
+  if (path.empty() || path.size() >= sizeof sa.sun_path) {
+    throw ServerError(
+        fmt::format("--unix '{}': the path must have 1..{} bytes", path, sizeof sa.sun_path - 1));
+  }
+  std::memcpy(sa.sun_path, path.c_str(), path.size() + 1);
+  const int fd = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) throw ServerError("socket: " + errno_text(errno));
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) == 0) {
+    if (!S_ISSOCK(st.st_mode)) {
+      ::close(fd);
+      throw ServerError(fmt::format("--unix {}: exists and is not a socket", path));
+    }
+    // A socket nobody accepts on is left over from a server that died: replace it.
+    // Non-blocking: a live server whose backlog is full answers EAGAIN at once instead of
+    // holding the connect() until it accepts.
+    const int probe = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
+    const bool stale = probe >= 0 &&
+                       ::connect(probe, reinterpret_cast<sockaddr*>(&sa), sizeof sa) != 0 &&
+                       errno == ECONNREFUSED;
+    if (probe >= 0) ::close(probe);
+    if (!stale) {
+      ::close(fd);
+      throw ServerError(fmt::format("--unix {}: in use by a running server", path));
+    }
+    ::unlink(path.c_str());
+  }
+  // Only our user may connect: the socket file is created 0600 (connect() needs write permission
+  // on it). The umask makes it so from the start; the chmod is for file systems that ignore it.
+  const mode_t old_mask = ::umask(0177);
+  const int bound = ::bind(fd, reinterpret_cast<sockaddr*>(&sa), sizeof sa);
+  const int bind_errno = errno;
+  ::umask(old_mask);
+  if (bound != 0 || ::chmod(path.c_str(), 0600) != 0 || ::listen(fd, 64) != 0) {
+    const int e = bound != 0 ? bind_errno : errno;
+    if (bound == 0) ::unlink(path.c_str());
+    ::close(fd);
+    throw ServerError(fmt::format("cannot listen on unix {}: {}", path, errno_text(e)));
+  }
+  ep.fd = fd;
+  set_cloexec_nonblock(fd);
+  if (::lstat(path.c_str(), &st) == 0) {
+    ep.unix_path = path;
+    ep.dev = st.st_dev;
+    ep.ino = st.st_ino;
+  }
+  ep.line = "listening unix " + path;
+  return ep;
+}
+
+}  // namespace dpc31::serve

@@ -1,0 +1,122 @@
+// Small files that asked for gigabytes (issue 29, docs/security.md "Inputs: sizes"): VCD and FST
+// declarations (long scope names, deep scopes) and deeply nested JSON for `cosim merge`. Each
+// attack at the size it was found, under an address-space limit: exit 2 and one line.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "bad_input.hpp"
+
+using namespace badinput;
+
+namespace {
+
+// `depth` nested scopes of `name_len` bytes each, then `vars` variables in the innermost.
+std::string vcd_long_scopes(int depth, std::size_t name_len, int vars) {
+  std::string s = "$timescale 1ns $end\n";
+  for (int i = 0; i < depth; ++i) {
+    s += "$scope module s" + std::to_string(i) + "_" + std::string(name_len, 'n') + " $end\n";
+  }
+  for (int v = 0; v < vars; ++v) {
+    s += "$var wire 1 v" + std::to_string(v) + " x" + std::to_string(v) + " $end\n";
+  }
+  for (int i = 0; i < depth; ++i) s += "$upscope $end\n";
+  s += "$enddefinitions $end\n#0\n";
+  for (int v = 0; v < vars; ++v) s += "0v" + std::to_string(v) + "\n";
+  return s;
+}
+
+// `depth` nested scopes with a variable in each (the names grow with the depth).
+std::string vcd_deep_scopes(int depth) {
+  std::string s = "$timescale 1ns $end\n";
+  for (int i = 0; i < depth; ++i) s += "$scope module a $end\n$var wire 1 ! x $end\n";
+  for (int i = 0; i < depth; ++i) s += "$upscope $end\n";
+  return s + "$enddefinitions $end\n#0\n0!\n";
+}
+
+// Under 2 GB of address space (the attacks took 1.9 to 8 GB), at most 60 s. ASan reserves far
+// more address space for itself: there only the time is bounded.
+std::string bounded(const std::string& cmd) {
+#if defined(__SANITIZE_ADDRESS__)
+  return "timeout 60 " + cmd;
+#else
+  return "ulimit -v 2000000; timeout 60 " + cmd;
+#endif
+}
+
+}  // namespace
+
+// The findings: a 1 MB VCD with long scope names and 1000 variables exhausted 8 GB (every
+// variable's full name is the whole scope path); 30 000 nested scopes took over 3 GB; vcd2fst's
+// FST of such files 1.9 GB. The limits (lib/wavediff/wave_reader_impl.hpp, Declarations): a
+// scope path or full name of at most 16 KiB, 256 open scopes, 32 MiB of full names in all, 2^26
+// bits of values.
+TEST_F(BadInput, WaveformDeclarationsAreBounded) {
+  file("ok.vcd", vcd_deep_scopes(2));
+  file("long.vcd", vcd_long_scopes(60, 16000, 1000));
+  file("deep.vcd", vcd_deep_scopes(30000));
+  file("names.vcd", vcd_long_scopes(1, 16000, 2500));
+  std::string wide = "$scope module t $end\n";
+  for (int v = 0; v < 5; ++v) wide += "$var wire 16000000 w" + std::to_string(v) + " w $end\n";
+  file("wide.vcd", wide + "$upscope $end\n$enddefinitions $end\n");
+  const auto wavediff = [&](const std::string& f) {
+    const std::string out = (root_ / "io" / "out").string();
+    const std::string err = (root_ / "io" / "err").string();
+    const testutil::CommandResult c = testutil::run_command(
+        "cd " + (root_ / "work").string() + " && " +
+        bounded(std::string(kCli) + " wavediff " + f + " ok.vcd >" + out + " 2>" + err));
+    return Outcome{c.rc, slurp(out), slurp(err)};
+  };
+  // long.vcd: the second scope (line 3) makes the path 2 x (3 + 16000 + 1) bytes.
+  expect_bad(wavediff("long.vcd"),
+             "long.vcd:3: a scope path longer than 16384 bytes", "long scopes");
+  // deep.vcd: scope k (from 1) on line 2k; the 257th is too deep.
+  expect_bad(wavediff("deep.vcd"), "deep.vcd:514: scopes nested deeper than 256",
+             "deep scopes");
+  // names.vcd: variable v (line 3 + v) is "s0_nnn...n.xV": 16004 + 1 + digits(V) bytes.
+  std::uint64_t sum = 0;
+  int over = 0;
+  for (; sum <= (std::uint64_t{32} << 20); ++over) sum += 16004 + 1 + std::to_string(over).size();
+  expect_bad(wavediff("names.vcd"),
+             "names.vcd:" + std::to_string(3 + over - 1) +
+                 ": the variables' full names exceed 32 MiB in all",
+             "full names");
+  // wide.vcd: four of 16 000 000 bits fit in 2^26, the fifth (line 6) does not.
+  expect_bad(wavediff("wide.vcd"),
+             "wide.vcd:6: the variables exceed 64 Mi bits in all", "wide");
+  // The same declarations as FST (gtkwave's vcd2fst): refused alike, at line 0 (the file).
+  for (const std::string f : {"long", "deep"}) {
+    ASSERT_EQ(testutil::run_command("cd " + (root_ / "work").string() + " && vcd2fst " + f +
+                                    ".vcd " + f + ".fst >/dev/null 2>&1")
+                  .rc,
+              0);
+  }
+  // fstapi keeps at most 512 bytes of a scope name: the 33rd of these makes the path too long.
+  expect_bad(wavediff("long.fst"), "long.fst:0: a scope path longer than 16384 bytes",
+             "long scopes, FST");
+  expect_bad(wavediff("deep.fst"), "deep.fst:0: scopes nested deeper than 256",
+             "deep scopes, FST");
+}
+
+// The findings: a 400 KB file of nested arrays crashed `cosim merge` (SIGSEGV), a 40 KB one in a
+// shard's results printed 800 MB. JSON deeper than 16 levels is refused while it is parsed.
+TEST_F(BadInput, CosimMergeRefusesDeeplyNestedJson) {
+  file("arrays.json", std::string(200'000, '[') + std::string(200'000, ']'));
+  expect_bad(dpc31("cosim merge arrays.json"),
+             "dpc31 cosim merge: arrays.json: nested deeper than 16 levels: not the JSON summary "
+             "of a `dpc31 cosim --shard` run",
+             "400 KB of arrays");
+  const Outcome shard = dpc31("cosim --quiet --seeds 1 --cycles 100 --shard 1/1");
+  ASSERT_EQ(shard.rc, 0) << shard.err;
+  const std::size_t seed = shard.out.find("\"seed\"");
+  ASSERT_NE(seed, std::string::npos) << shard.out;
+  std::string deep = shard.out;
+  deep.insert(seed, "\"x\": " + std::string(20'000, '[') + std::string(20'000, ']') + ", ");
+  file("deep.json", deep);
+  const Outcome r = dpc31("cosim merge deep.json");
+  expect_bad(r,
+             "dpc31 cosim merge: deep.json: nested deeper than 16 levels: not the JSON summary "
+             "of a `dpc31 cosim --shard` run",
+             "40 KB in a result");
+  EXPECT_EQ(r.out, "");
+}

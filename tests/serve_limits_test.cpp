@@ -1,0 +1,270 @@
+// `dpc31 serve` against the findings of issue 29 (docs/security.md, "dpc31 serve"): a secret file
+// of another user, guessing the secret, a Unix socket whose backlog is full, a state directory
+// without a quota, an idle timeout of almost nothing, a hard link in the state directory. Each
+// test makes the attack and sees it refused or bounded; the real binary as a child process.
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "run_command.hpp"
+#include "serve_client.hpp"
+#include "serve_server.hpp"
+#include "state_dir.hpp"
+#include "test_files.hpp"
+
+using namespace testutil;
+using dpc31::serve::StateDir;
+
+namespace {
+
+const std::string kCli = DPC31_CLI;
+using std::chrono::milliseconds;
+using SteadyClock = std::chrono::steady_clock;
+
+std::string secret_file(const TempDir& dir, const std::string& secret) {
+  const std::string f = dir.write("secret", secret + "\n");
+  ::chmod(f.c_str(), 0600);
+  return f;
+}
+
+// The test's standard error goes to `file` while it lives (what a child spawned meanwhile
+// inherits), and comes back after.
+class StderrTo {
+ public:
+  explicit StderrTo(const std::string& file) : saved_(::dup(STDERR_FILENO)) {
+    const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+    ::dup2(fd, STDERR_FILENO);
+    ::close(fd);
+  }
+  ~StderrTo() {
+    ::dup2(saved_, STDERR_FILENO);
+    ::close(saved_);
+  }
+  StderrTo(const StderrTo&) = delete;
+  StderrTo& operator=(const StderrTo&) = delete;
+
+ private:
+  int saved_;
+};
+
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> v;
+  std::size_t b = 0;
+  for (std::size_t e; (e = text.find('\n', b)) != std::string::npos; b = e + 1) {
+    v.push_back(text.substr(b, e - b));
+  }
+  return v;
+}
+
+}  // namespace
+
+// Mode 0600 is not enough: the file's owner could read it and can change it at any time. A file
+// of another user (here nobody, 65534) is refused with one line and exit 2.
+TEST(ServeSecurity, ASecretFileOfAnotherUserIsRefused) {
+  if (::geteuid() != 0) GTEST_SKIP() << "needs root to give a file to another user";
+  TempDir dir;
+  const std::string f = secret_file(dir, "0123456789abcdef0123");
+  ASSERT_EQ(::chown(f.c_str(), 65534, 65534), 0);
+  const CommandResult r =
+      run_command(kCli + " serve --tcp 0 --secret-file '" + f + "' 2>&1 >/dev/null");
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_EQ(lines_of(r.out),
+            std::vector<std::string>{"dpc31 serve: --secret-file " + f +
+                                     ": owned by user 65534, not by this user (0): the secret "
+                                     "must be yours alone"});
+}
+
+// The finding: about 9 500 guesses a second, each on a new connection. Now a peer's wrong
+// secrets are looked at no faster than 50 ms x 2^(n-1) apart (n wrong so far, at most 5 s), on
+// all its connections together, with one log line each; other clients are served meanwhile, and
+// the right secret gets in once the delay has passed.
+TEST(ServeSecurity, WrongSecretsFromOnePeerAreSlowedDownAndLogged) {
+  TempDir dir;
+  const std::string secret = "s3cret-0123456789-abcdef";
+  const std::string log = dir.file("stderr");
+  std::unique_ptr<ServerProcess> server;
+  {
+    const StderrTo to(log);
+    server = std::make_unique<ServerProcess>(
+        kCli, std::vector<std::string>{"--tcp", "0", "--unix", dir.file("s"), "--secret-file",
+                                       secret_file(dir, secret)});
+  }
+  // Eight connections guessing in parallel for one second, each reconnecting after its answer.
+  const auto t0 = SteadyClock::now();
+  const auto stop = t0 + milliseconds(1000);
+  std::vector<SteadyClock::time_point> judged;
+  std::vector<std::unique_ptr<LineClient>> guessers;
+  for (int i = 0; i < 8; ++i) {
+    guessers.push_back(std::make_unique<LineClient>(LineClient::tcp(server->port())));
+    guessers.back()->send("auth guess" + std::to_string(i) + "\n");
+  }
+  LineClient unix_client = LineClient::unix_socket(dir.file("s"));
+  int unix_replies = 0;
+  while (SteadyClock::now() < stop) {
+    for (auto& g : guessers) {
+      pollfd p{g->fd(), POLLIN, 0};
+      if (::poll(&p, 1, 0) <= 0) continue;
+      const std::vector<std::string> got = g->read_until_closed();
+      ASSERT_EQ(got, std::vector<std::string>{"ERR auth wrong secret; closing"});
+      judged.push_back(SteadyClock::now());
+      g = std::make_unique<LineClient>(LineClient::tcp(server->port()));
+      g->send("auth guess\n");
+    }
+    // The server is not held up by the delays: a Unix client is answered all along.
+    ASSERT_EQ(unix_client.command("ping", 200), "OK pong");
+    ++unix_replies;
+    std::this_thread::sleep_for(milliseconds(2));
+  }
+  // Judged at 0, 50, 150, 350 and 750 ms at the soonest: at most five in the second (before: all).
+  EXPECT_GE(judged.size(), 4u);
+  EXPECT_LE(judged.size(), 5u);
+  for (std::size_t k = 1; k < judged.size(); ++k) {
+    const auto gap = std::chrono::duration_cast<milliseconds>(judged[k] - judged[k - 1]).count();
+    EXPECT_GE(gap, (50 << (k - 1)) - 5) << "guess " << k;
+  }
+  EXPECT_GT(unix_replies, 100);
+  guessers.clear();
+  // The right secret is looked at when the delay is over, and the delay is forgotten then.
+  LineClient good = LineClient::tcp(server->port());
+  EXPECT_EQ(good.command("auth " + secret, 10'000), "OK auth");
+  LineClient again = LineClient::tcp(server->port());
+  EXPECT_EQ(again.command("auth " + secret, 200), "OK auth");
+  EXPECT_EQ(again.command("shutdown"), "OK shutdown");
+  EXPECT_EQ(server->wait_exit(5000), 0);
+  const std::vector<std::string> lines = lines_of(slurp(log));
+  ASSERT_EQ(lines.size(), judged.size() + 0) << slurp(log);
+  for (std::size_t k = 0; k < lines.size(); ++k) {
+    EXPECT_EQ(lines[k], fmt::format("dpc31 serve: a wrong secret from 127.0.0.0/8 ({} in a row); "
+                                    "its next 'auth' is looked at in {} ms",
+                                    k + 1, 50 << k));
+  }
+}
+
+// The finding: a live server's socket whose backlog is full made `serve --unix` hang in
+// connect() at its start. Now it is refused at once as in use.
+TEST(ServeSecurity, AUnixSocketWithAFullBacklogIsRefusedAtOnce) {
+  TempDir dir;
+  const std::string path = dir.file("busy.sock");
+  const int l = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  sockaddr_un sa{};
+  sa.sun_family = AF_UNIX;
+  std::strncpy(sa.sun_path, path.c_str(), sizeof sa.sun_path - 1);
+  ASSERT_EQ(::bind(l, reinterpret_cast<sockaddr*>(&sa), sizeof sa), 0);
+  ASSERT_EQ(::listen(l, 0), 0);
+  std::vector<int> waiting;  // connections nobody accepts, until the backlog is full
+  for (int i = 0; i < 64; ++i) {
+    const int c = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
+    const int rc = ::connect(c, reinterpret_cast<sockaddr*>(&sa), sizeof sa);
+    waiting.push_back(c);
+    if (rc != 0) {
+      ASSERT_EQ(errno, EAGAIN);
+      break;
+    }
+  }
+  ASSERT_LT(waiting.size(), 64u) << "the backlog never filled";
+  const auto t0 = SteadyClock::now();
+  const CommandResult r =
+      run_command("timeout 10 " + kCli + " serve --unix '" + path + "' 2>&1 >/dev/null");
+  const double secs = std::chrono::duration<double>(SteadyClock::now() - t0).count();
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_EQ(lines_of(r.out), std::vector<std::string>{"dpc31 serve: --unix " + path +
+                                                      ": in use by a running server"});
+  EXPECT_LT(secs, 1.0);
+  for (const int c : waiting) ::close(c);
+  ::close(l);
+}
+
+// The finding: 3 550 saves, 42 MB in 5 s, no end. The state directory holds at most 1024 files
+// and 256 MiB (StateDir::Quota); beyond, `ERR snapshot` names the limit and nothing is written;
+// saving over an old file stays possible.
+TEST(ServeSecurity, TheStateDirectoryHasAQuotaOfFilesAndBytes) {
+  const StateDir::Quota q;
+  ASSERT_EQ(q.files, 1024u);
+  ASSERT_EQ(q.bytes, std::uint64_t{256} << 20);
+  TempDir dir;
+  ::mkdir(dir.file("snaps").c_str(), 0700);
+  ::mkdir(dir.file("snaps/sub").c_str(), 0700);
+  for (int i = 0; i < 1022; ++i) {  // the files of earlier saves, some in a subdirectory
+    std::ofstream(dir.file(fmt::format("snaps/{}{}", i % 2 == 0 ? "" : "sub/", i)));
+  }
+  ServerProcess server(kCli, {"--tcp", "0", "--state-dir", dir.file("snaps")});
+  LineClient c = LineClient::tcp(server.port());
+  EXPECT_EQ(c.command("save a"), "OK 0");      // the 1023rd file
+  EXPECT_EQ(c.command("save sub/b"), "OK 0");  // the 1024th
+  const std::size_t snapshot = std::filesystem::file_size(dir.file("snaps/a"));
+  const std::vector<std::string> before = dir.tree();
+  EXPECT_EQ(c.command("save c"),
+            fmt::format("ERR snapshot c: the state directory is full (at most 1024 files and 256 "
+                        "MiB; it holds 1024 files, {} bytes): delete snapshots or save over an "
+                        "old one",
+                        2 * snapshot));
+  EXPECT_EQ(dir.tree(), before);
+  EXPECT_EQ(c.command("save a"), "OK 0");  // over an old one
+  // Bytes: 1023 files, one of them so large (as stat() tells its size) that the other two
+  // snapshots fill 256 MiB exactly.
+  std::filesystem::remove(dir.file("snaps/2"));
+  std::filesystem::remove(dir.file("snaps/0"));
+  { std::ofstream big(dir.file("snaps/0")); }
+  std::filesystem::resize_file(dir.file("snaps/0"), (std::uint64_t{256} << 20) - 2 * snapshot);
+  EXPECT_EQ(c.command("save new"),
+            fmt::format("ERR snapshot new: the state directory is full (at most 1024 files and 256 "
+                        "MiB; it holds 1023 files, {} bytes): delete snapshots or save over an "
+                        "old one",
+                        (std::uint64_t{256} << 20)));
+  EXPECT_FALSE(std::filesystem::exists(dir.file("snaps/new")));
+  std::filesystem::remove(dir.file("snaps/0"));
+  EXPECT_EQ(c.command("save new"), "OK 0");
+}
+
+// The finding: --idle-timeout 1e-320 was taken (every client closed before its first line could
+// arrive). Now 0 (never) or at least 0.1 s, from the CLI and the library.
+TEST(ServeSecurity, TheIdleTimeoutHasAMinimum) {
+  for (const std::string v : {"1e-320", "0.05", "0.0999"}) {
+    const CommandResult r =
+        run_command(kCli + " serve --tcp 0 --idle-timeout " + v + " 2>&1 >/dev/null");
+    EXPECT_EQ(r.rc, 2) << v;
+    EXPECT_EQ(lines_of(r.out).size(), 1u) << r.out;
+    EXPECT_NE(r.out.find(": 0 (never) or at least 0.1 s"), std::string::npos) << r.out;
+  }
+  dpc31::serve::ServerOptions o;
+  o.tcp = "0";
+  o.idle_timeout = 1e-320;
+  EXPECT_THROW(dpc31::serve::Server{o}, dpc31::serve::ServerError);
+  o.idle_timeout = 0.1;
+  EXPECT_NO_THROW(dpc31::serve::Server{o});
+}
+
+// docs/protocol.md said a hard link in the state directory is written through; `save` replaces
+// it (a temporary renamed over the name), so the other name keeps its old content: a link to a
+// file elsewhere cannot make `save` write there.
+TEST(ServeSecurity, SaveReplacesAHardLinkInsteadOfWritingThroughIt) {
+  TempDir dir;
+  ::mkdir(dir.file("snaps").c_str(), 0700);
+  const std::string outside = dir.write("outside", "precious\n");
+  ASSERT_EQ(::link(outside.c_str(), dir.file("snaps/linked").c_str()), 0);
+  ServerProcess server(kCli, {"--tcp", "0", "--state-dir", dir.file("snaps")});
+  LineClient c = LineClient::tcp(server.port());
+  EXPECT_EQ(c.command("save linked"), "OK 0");
+  EXPECT_EQ(slurp(outside), "precious\n");
+  struct stat a {};
+  struct stat b {};
+  ASSERT_EQ(::stat(outside.c_str(), &a), 0);
+  ASSERT_EQ(::stat(dir.file("snaps/linked").c_str(), &b), 0);
+  EXPECT_NE(a.st_ino, b.st_ino);
+  EXPECT_EQ(a.st_nlink, 1u);
+  EXPECT_EQ(c.command("load linked"), "OK 0");
+}
