@@ -68,11 +68,10 @@ TEST_F(BadInput, WaveformDeclarationsAreBounded) {
     return Outcome{c.rc, slurp(out), slurp(err)};
   };
   // long.vcd: the second scope (line 3) makes the path 2 x (3 + 16000 + 1) bytes.
-  expect_bad(wavediff("long.vcd"),
-             "long.vcd:3: a scope path longer than 16384 bytes", "long scopes");
+  expect_bad(wavediff("long.vcd"), "long.vcd:3: a scope path longer than 16384 bytes",
+             "long scopes");
   // deep.vcd: scope k (from 1) on line 2k; the 257th is too deep.
-  expect_bad(wavediff("deep.vcd"), "deep.vcd:514: scopes nested deeper than 256",
-             "deep scopes");
+  expect_bad(wavediff("deep.vcd"), "deep.vcd:514: scopes nested deeper than 256", "deep scopes");
   // names.vcd: variable v (line 3 + v) is "s0_nnn...n.xV": 16004 + 1 + digits(V) bytes.
   std::uint64_t sum = 0;
   int over = 0;
@@ -82,8 +81,7 @@ TEST_F(BadInput, WaveformDeclarationsAreBounded) {
                  ": the variables' full names exceed 32 MiB in all",
              "full names");
   // wide.vcd: four of 16 000 000 bits fit in 2^26, the fifth (line 6) does not.
-  expect_bad(wavediff("wide.vcd"),
-             "wide.vcd:6: the variables exceed 64 Mi bits in all", "wide");
+  expect_bad(wavediff("wide.vcd"), "wide.vcd:6: the variables exceed 64 Mi bits in all", "wide");
   // The same declarations as FST (gtkwave's vcd2fst): refused alike, at line 0 (the file).
   for (const std::string f : {"long", "deep"}) {
     ASSERT_EQ(testutil::run_command("cd " + (root_ / "work").string() + " && vcd2fst " + f +
@@ -94,8 +92,7 @@ TEST_F(BadInput, WaveformDeclarationsAreBounded) {
   // fstapi keeps at most 512 bytes of a scope name: the 33rd of these makes the path too long.
   expect_bad(wavediff("long.fst"), "long.fst:0: a scope path longer than 16384 bytes",
              "long scopes, FST");
-  expect_bad(wavediff("deep.fst"), "deep.fst:0: scopes nested deeper than 256",
-             "deep scopes, FST");
+  expect_bad(wavediff("deep.fst"), "deep.fst:0: scopes nested deeper than 256", "deep scopes, FST");
 }
 
 // The findings: a 400 KB file of nested arrays crashed `cosim merge` (SIGSEGV), a 40 KB one in a
