@@ -95,25 +95,35 @@ TEST_F(BadInput, WaveformDeclarationsAreBounded) {
   expect_bad(wavediff("deep.fst"), "deep.fst:0: scopes nested deeper than 256", "deep scopes, FST");
 }
 
-// The findings: a 400 KB file of nested arrays crashed `cosim merge` (SIGSEGV), a 40 KB one in a
-// shard's results printed 800 MB. JSON deeper than 16 levels is refused while it is parsed.
+// The findings, as reproduced: a shard's summary with 400 KB of nested arrays in a result made
+// `cosim merge` crash (SIGSEGV, the recursion of comparing and printing), with 40 KB it printed
+// 800 MB. JSON deeper than 16 levels is refused while it is parsed, nothing printed.
 TEST_F(BadInput, CosimMergeRefusesDeeplyNestedJson) {
-  file("arrays.json", std::string(200'000, '[') + std::string(200'000, ']'));
+  const Outcome shard = dpc31("cosim --quiet --seeds 2 --cycles 100 --shard 1/2");
+  ASSERT_EQ(shard.rc, 0) << shard.err;
+  const Outcome other = dpc31("cosim --quiet --seeds 2 --cycles 100 --shard 2/2");
+  ASSERT_EQ(other.rc, 0) << other.err;
+  file("s2.json", other.out);
+  const std::size_t seed = shard.out.find("\"seed\"");
+  ASSERT_NE(seed, std::string::npos) << shard.out;
+  for (const std::size_t depth : {200'000u, 20'000u}) {
+    std::string deep = shard.out;
+    deep.insert(seed, "\"x\": " + std::string(depth, '[') + std::string(depth, ']') + ", ");
+    file("deep.json", deep);
+    const Outcome r = dpc31("cosim merge deep.json s2.json");
+    expect_bad(r,
+               "dpc31 cosim merge: deep.json: nested deeper than 16 levels: not the JSON summary "
+               "of a `dpc31 cosim --shard` run",
+               std::to_string(2 * depth) + " bytes of arrays in a result");
+    EXPECT_EQ(r.out, "");
+  }
+  file("arrays.json", std::string(17, '[') + std::string(17, ']'));
   expect_bad(dpc31("cosim merge arrays.json"),
              "dpc31 cosim merge: arrays.json: nested deeper than 16 levels: not the JSON summary "
              "of a `dpc31 cosim --shard` run",
-             "400 KB of arrays");
-  const Outcome shard = dpc31("cosim --quiet --seeds 1 --cycles 100 --shard 1/1");
-  ASSERT_EQ(shard.rc, 0) << shard.err;
-  const std::size_t seed = shard.out.find("\"seed\"");
-  ASSERT_NE(seed, std::string::npos) << shard.out;
-  std::string deep = shard.out;
-  deep.insert(seed, "\"x\": " + std::string(20'000, '[') + std::string(20'000, ']') + ", ");
-  file("deep.json", deep);
-  const Outcome r = dpc31("cosim merge deep.json");
-  expect_bad(r,
-             "dpc31 cosim merge: deep.json: nested deeper than 16 levels: not the JSON summary "
-             "of a `dpc31 cosim --shard` run",
-             "40 KB in a result");
-  EXPECT_EQ(r.out, "");
+             "17 levels");
+  file("arrays.json", std::string(16, '[') + std::string(16, ']'));
+  expect_bad(dpc31("cosim merge arrays.json"),
+             "dpc31 cosim merge: arrays.json: not the JSON summary of a `dpc31 cosim --shard` run",
+             "16 levels: parsed, then refused by its shape");
 }

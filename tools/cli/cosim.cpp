@@ -146,7 +146,7 @@ nlohmann::json parse_summary(const std::string& text, bool& too_deep) {
     return nlohmann::json::parse(
         text,
         [](int depth, nlohmann::json::parse_event_t /*event*/, nlohmann::json& /*value*/) {
-          if (depth > kMaxSummaryDepth) throw TooDeep{};
+          if (depth >= kMaxSummaryDepth) throw TooDeep{};  // depth counts from 0
           return true;
         },
         false);
