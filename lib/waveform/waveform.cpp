@@ -296,13 +296,14 @@ struct Recorder::Impl {
     return static_cast<std::uint64_t>((static_cast<u128>(cycle) * num + half) / den);
   }
 
-  // Takes every change before `upto` out of the streams: before the window they set the values
-  // it opens with; inside it they are written.
+  // Takes every change before `upto` out of the streams: up to the window's first cycle they set
+  // the values it opens with (so a pin set at that cycle is dumped once, with its value then);
+  // after it they are written.
   void drain(std::uint64_t upto) {
     Merged events(rxd.events, others.events);
     for (; events.peek() != nullptr && events.peek()->cycle < upto; events.pop()) {
       const Event& e = *events.peek();
-      if (!opened && e.cycle >= opt.from) open();
+      if (!opened && e.cycle > opt.from) open();
       if (!opened) {
         cur[e.sig] = e.value;
       } else {
