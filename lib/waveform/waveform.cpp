@@ -12,8 +12,10 @@
 #include <string_view>
 
 #include "dpc31/reg_ids.hpp"
+#include "gtkw.hpp"
 #include "gtkwave/fstapi.h"
 #include "outfile.hpp"
+#include "vocabulary.hpp"
 #include "wavediff.hpp"  // vcd_id: one VCD identifier code for every writer
 
 namespace dpc31::wave {
@@ -224,6 +226,8 @@ struct Recorder::Impl {
   std::uint64_t drained_to = 0;  // every change before this cycle has been taken
   std::string error;             // the first failure, reported by finish()
   outfile::OutFile out;          // opened by attach(), so that a bad path is found before the run
+  outfile::OutFile gtkw;         // the save file (Options::gtkw), likewise
+  std::vector<std::pair<std::uint64_t, std::string>> markers;  // its named markers (26 at most)
 
   // What has been written: the values in force, and the window's start once dumped.
   std::array<std::uint32_t, kCount> cur{};
@@ -397,6 +401,12 @@ struct Recorder::Impl {
   void write(const Event& e) {
     if (cur[e.sig] == e.value) return;
     cur[e.sig] = e.value;
+    if ((e.sig == kDpState || e.sig == kWdState) && markers.size() < 26) {
+      markers.emplace_back(units(e.cycle),
+                           e.sig == kDpState
+                               ? fmt::format("dp_state={}", dp_state_name(DpState(e.value)))
+                               : fmt::format("wd_state={}", wd_state_name(WdState(e.value))));
+    }
     if (opt.fst) {
       if (fst == nullptr) return;
       fstWriterEmitTimeChange(fst, units(e.cycle));
@@ -441,6 +451,10 @@ bool Recorder::attach(Chip& chip, std::string& error) {
   }
   if (!m.out.open(m.opt.path)) {
     error = m.out.error();
+    return false;
+  }
+  if (!m.opt.gtkw.empty() && !m.gtkw.open(m.opt.gtkw)) {
+    error = m.gtkw.error();
     return false;
   }
   m.chip = &chip;
@@ -501,6 +515,17 @@ bool Recorder::finish(std::uint64_t end_cycle, std::string& error) {
   if (!(m.opt.fst ? m.out.commit_fst() : m.out.commit())) {
     error = m.out.error();
     return false;
+  }
+  if (m.gtkw.is_open()) {
+    SaveFile f{m.opt.path, {}, {}, m.opt.flat, m.units(to), m.markers, filter_dir()};
+    for (std::size_t i : m.order) {
+      f.signals.emplace_back(kSignals[i].name);
+      f.widths.push_back(kSignals[i].width);
+    }
+    if (!(m.gtkw.write(save_file_text(f)) && m.gtkw.commit())) {
+      error = m.gtkw.error();
+      return false;
+    }
   }
   return true;
 }
