@@ -6,8 +6,9 @@ cd "$(dirname "$0")"
 
 # Build: compiler, CMake, Verilator and the libraries. Checks in the test suite: gtkwave
 # (vcd2fst / fst2vcd; the GUI under xvfb's Xvfb for our save files), sigrok-cli (UART and
-# PROFIBUS decode of our waveforms), tshark (our pcapng captures), python3 (a DP master on the pty of dpc31 bridge). The fuzz build of test.sh: clang with its
-# sanitizer and libFuzzer runtimes (libclang-rt-14-dev), ninja. The install test (Install.*):
+# PROFIBUS decode of our waveforms), tshark (our pcapng captures), python3 (a DP master on the
+# pty of dpc31 bridge). The fuzz build of test.sh: clang with its sanitizer and libFuzzer
+# runtimes (libclang-rt-14-dev), ninja. The install test (Install.*):
 # pkgconf (pkg-config), and for the Debian package (cpack -G DEB) dpkg-dev and file. GNU
 # parallel and rsync (its --return over ssh): the sharded regression's test and recipes
 # (docs/regression.md).
