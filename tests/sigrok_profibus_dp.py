@@ -35,7 +35,7 @@ import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from waveform_sigrok_demo import pcapng_blocks  # noqa: E402
+from waveform_sigrok_demo import pcapng_blocks, timescale_ns  # noqa: E402
 
 CLOCK_HZ = 48_000_000
 # The walk's fault tag -> the decoder's error text (emu/mac.cpp counts a shifted character
@@ -101,17 +101,6 @@ def decode(vcd, baud, srcdir):
             fail(f"not an annotation: {line!r}")
         anns.append((int(m.group(1)), int(m.group(2)), m.group(3)))
     return anns
-
-
-def timescale_ns(vcd):
-    with open(vcd, encoding="ascii") as f:
-        for line in f:
-            m = re.match(r"\$timescale\s*(1|10|100)\s*(s|ms|us|ns|ps|fs)\s*\$end", line)
-            if m:
-                exp = {"s": 9, "ms": 6, "us": 3, "ns": 0, "ps": -3, "fs": -6}[m.group(2)]
-                return int(m.group(1)) * 10.0 ** exp
-    fail(f"{vcd}: no $timescale")
-    return None
 
 
 def produce(dpc31, srcdir, case, d):
