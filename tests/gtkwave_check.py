@@ -13,6 +13,7 @@ CASE merge_two_runs: two runs of startup_dpc31_1m5 whose slave inputs differ in 
   where the two runs' own VCDs give X different values (walked here, independently); GTKWave
   opens ab.gtkw: one group per signal with a.X, b.X, diff.X, and at the first difference of TxD
   it shows diff 1, just before it 0.
+  (demo, too: at the markers of Wait_Cfg the telegram service shows Set_Prm.)
 GTKWave's Tcl interface (gtkwave -S) reports what it shows: the traces with their flags
 (getTraceNameFromIndex, getTraceFlagsFromIndex: group begin 0x800000, end 0x1000000), named
 markers (getNamedMarker) and a trace's value as displayed, after its translate filter
@@ -231,12 +232,13 @@ def case_demo(dpc31, d, screenshot):
                            f"{{dpc31.{s}}}]" for s in
                            ("state.dp_state[1:0]", "state.wd_state[1:0]",
                             "blocks.dout_sm[7:0]", "blocks.diag_sm[3:0]",
-                            "state.baud_code[3:0]")) + '"\n')
+                            "state.baud_code[3:0]", "state.service[7:0]")) + '"\n')
     out = gtkwave(save, tcl, d, screenshot)
     problems = []
     want_groups = {"pins": ["rxd", "txd", "x_int", "pb3"],
                    "bus": ["rd", "wr", "addr[12:0]", "data[7:0]"],
-                   "state": ["dp_state[1:0]", "wd_state[1:0]", "baud_code[3:0]"],
+                   "state": ["dp_state[1:0]", "wd_state[1:0]", "baud_code[3:0]",
+                             "service[7:0]"],
                    "blocks": ["irr[15:0]", "dout_sm[7:0]", "din_sm[7:0]", "diag_sm[3:0]"]}
     got_groups = groups(traces(out))
     if got_groups != want_groups:
@@ -266,13 +268,17 @@ def case_demo(dpc31, d, screenshot):
     if not want or got != want:
         problems.append(f"markers {got}, the state changes {want}")
     for m in markers:
-        t, (dp, wd, dout, diag, baud) = shown.get(m[0], (None, [""] * 5))
+        t, (dp, wd, dout, diag, baud, service) = shown.get(m[0], (None, [""] * 6))
         machine, state = m[1:].split("=")
         if (dp if machine == "dp_state" else wd) != state:
             problems.append(f"marker {m}: GTKWave shows dp_state {dp!r}, wd_state {wd!r}")
         if not re.fullmatch(r"F[-123] U[-123] N[-123] D[-123]", dout) or \
                 not re.fullmatch(r"buf1 \w+, buf2 \w+", diag) or baud != "1.5Mbaud":
             problems.append(f"marker {m}: dout_sm {dout!r}, diag_sm {diag!r}, baud {baud!r}")
+        # Set_Prm takes the slave from Wait_Prm to Wait_Cfg in the cycle it is acted on, which
+        # is when state.service takes it.
+        if m[1:] == "dp_state=Wait_Cfg" and service != "Set_Prm":
+            problems.append(f"marker {m}: service {service!r}, want Set_Prm")
     print(f"demo: {len(got_groups)} groups, {len(got)} markers, states by name at each")
     return problems
 

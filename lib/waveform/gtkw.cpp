@@ -22,8 +22,9 @@ constexpr const char* kGroupEnd = "@1000200";
 const std::map<std::string, std::string>& filters() {
   static const std::map<std::string, std::string> f = {
       {"state.dp_state", "dp_state.txt"},   {"state.wd_state", "wd_state.txt"},
-      {"state.baud_code", "baud_code.txt"}, {"blocks.dout_sm", "buffer_sm.txt"},
-      {"blocks.din_sm", "buffer_sm.txt"},   {"blocks.diag_sm", "diag_sm.txt"}};
+      {"state.baud_code", "baud_code.txt"}, {"state.service", "service.txt"},
+      {"blocks.dout_sm", "buffer_sm.txt"},  {"blocks.din_sm", "buffer_sm.txt"},
+      {"blocks.diag_sm", "diag_sm.txt"}};
   return f;
 }
 

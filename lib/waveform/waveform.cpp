@@ -37,7 +37,8 @@ enum Sig : std::uint16_t {
   kDoutSm,
   kDinSm,
   kDiagSm,
-  kPb3,  // last, so the older signals keep their VCD identifiers
+  kPb3,      // after the others, so the older signals keep their VCD identifiers
+  kService,  // likewise
   kCount
 };
 
@@ -57,7 +58,8 @@ constexpr std::array<SignalDef, kCount> kSignals = {{{"pins.rxd", 1},
                                                      {"blocks.dout_sm", 8},
                                                      {"blocks.din_sm", 8},
                                                      {"blocks.diag_sm", 4},
-                                                     {"pins.pb3", 1}}};
+                                                     {"pins.pb3", 1},
+                                                     {"state.service", 8}}};
 
 static_assert(std::all_of(kSignals.begin(), kSignals.end(),
                           [](const SignalDef& d) { return d.width <= 16; }),
@@ -70,6 +72,19 @@ struct Event {
   std::uint16_t value;
   std::uint8_t sig;
 };
+
+// state.service: the DP service of a request the chip received, by the slave's SAP (the DSAP,
+// 0..63); without one 80h Data_Exchange (SRD), 81h FDL_Status, 82h another FDL service; -1 for
+// what is no request (an answer, the token, SC).
+int request_service(const std::vector<std::uint8_t>& b) {
+  const std::size_t pos = !b.empty() && b[0] == 0x68 ? 4 : 1;
+  if (b.empty() || (b[0] != 0x10 && b[0] != 0x68 && b[0] != 0xA2) || b.size() < pos + 4) return -1;
+  const std::uint8_t fc = b[pos + 2];
+  if ((fc & 0x40) == 0) return -1;
+  if ((b[pos] & 0x80) != 0 && b[0] != 0x10) return b[pos + 3] & 0x3F;
+  const unsigned code = fc & 0x0Fu;
+  return code == 0xC || code == 0xD ? 0x80 : code == 0x9 ? 0x81 : 0x82;
+}
 
 bool before(const Event& a, const Event& b) {
   return a.cycle != b.cycle ? a.cycle < b.cycle : a.seq < b.seq;
@@ -462,19 +477,28 @@ bool Recorder::attach(Chip& chip, std::string& error) {
   m.set_units(m.clock_hz);
   // Declared scope by scope: PB3 (the newest signal, last in the list) beside the other pins.
   for (std::size_t i = 0; i < kCount; ++i) {
-    if (i != kPb3 && m.selected[i]) m.order.push_back(i);
+    if (i != kPb3 && i != kService && m.selected[i]) m.order.push_back(i);
     if (i == kXInt && m.selected[kPb3]) m.order.push_back(kPb3);
+    if (i == kBaud && m.selected[kService]) m.order.push_back(kService);
   }
   Impl* im = &m;
   m.push(chip.cycle(), kRxd, 1);
   m.push(chip.cycle(), kTxd, chip.txd_pin() ? 1 : 0);
   m.push(chip.cycle(), kBusRd, 0);
   m.push(chip.cycle(), kBusWr, 0);
+  m.push(chip.cycle(), kService, 0xFF);  // no request yet
   m.sample(chip.cycle());
   chip.on_rxd([im](std::uint64_t c, bool l) { im->push(c, kRxd, l ? 1 : 0); });
   chip.on_txd([im](std::uint64_t c, bool l) { im->push(c, kTxd, l ? 1 : 0); });
   chip.on_irq_change([im](std::uint64_t c, bool) { im->sample(c); });
   chip.on_state_change([im](std::uint64_t c) { im->sample(c); });
+  if (m.selected[kService]) {
+    // Reported when the request is acted on (the stop sample of its last character).
+    chip.on_telegram([im](const Telegram& t) {
+      const int code = t.from_chip ? -1 : request_service(t.bytes);
+      if (code >= 0) im->push(im->chip->cycle(), kService, static_cast<std::uint32_t>(code));
+    });
+  }
   chip.on_bus_access([im](std::uint64_t c, const BusAccess& e) {
     const Sig strobe = e.write ? kBusWr : kBusRd;
     im->push(c, kBusAddr, e.addr);
