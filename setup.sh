@@ -5,14 +5,15 @@ set -euo pipefail
 cd "$(dirname "$0")"
 
 # Build: compiler, CMake, Verilator and the libraries. Checks in the test suite: gtkwave
-# (vcd2fst / fst2vcd), sigrok-cli (UART decode of our waveforms), tshark (our pcapng captures),
-# python3 (a DP master on the pty of dpc31 bridge). The fuzz build of test.sh: clang with its
-# sanitizer and libFuzzer runtimes (libclang-rt-14-dev), ninja. The install test (Install.*):
+# (vcd2fst / fst2vcd; the GUI under xvfb's Xvfb for our save files), sigrok-cli (UART and
+# PROFIBUS decode of our waveforms), tshark (our pcapng captures), python3 (a DP master on the
+# pty of dpc31 bridge). The fuzz build of test.sh: clang with its sanitizer and libFuzzer
+# runtimes (libclang-rt-14-dev), ninja. The install test (Install.*):
 # pkgconf (pkg-config), and for the Debian package (cpack -G DEB) dpkg-dev and file. GNU
 # parallel and rsync (its --return over ssh): the sharded regression's test and recipes
 # (docs/regression.md).
 packages=(cmake g++ make ccache verilator libfmt-dev libcli11-dev nlohmann-json3-dev libgtest-dev
-  libbenchmark-dev zlib1g-dev gtkwave sigrok-cli tshark python3 clang libclang-rt-14-dev
+  libbenchmark-dev zlib1g-dev gtkwave xvfb sigrok-cli tshark python3 clang libclang-rt-14-dev
   ninja-build pkgconf dpkg-dev file parallel rsync)
 missing=()
 for p in "${packages[@]}"; do

@@ -10,6 +10,16 @@
 # do4_osp_replace.vcd once more when the DPC31's status register moved to the parameter cells
 # (0874h, DPC31 p.12): the only change is bus.addr 0004h/0005h -> 0874h/0875h at the firmware's
 # five Status_Reg reads, each at the same time as before.
+# Both do4_osp_replace files once more when the pins set at the window's first cycle stopped being
+# dumped twice at #0 (issue 33: 0 in $dumpvars, then 1 in the same #0): diffed by hand, the only
+# change is $dumpvars holding each value in force at cycle 0 (rxd, txd, x_int 1; dout_sm and
+# din_sm E1h, diag_sm 1001) and those second lines gone; every later line is as before.
+# do4_osp_replace.vcd once more for the new signal state.service (issue 33: 8 bits, VCD id `0`,
+# declared after baud_code): diffed by hand, the only changes are its $var, FFh in $dumpvars and
+# 22 values, each at the stop sample of a request's last character (the first, FDL_Status 81h,
+# at #2591166667 = cycle 124376 = the pcapng's end 124392 - 32 + 16), in the order of the DP
+# start-up: 81h FDL_Status, 3Ch Slave_Diag, 3Dh Set_Prm, 3Eh Chk_Cfg, 3Ch, 80h Data_Exchange, and
+# again after the watchdog, with 3Ah Global_Control; two of them on a time line of their own.
 # Usage: waveform_golden.sh path/to/dpc31 source-dir
 set -eu
 dpc31=$1

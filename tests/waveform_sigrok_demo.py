@@ -28,8 +28,8 @@ def fail(msg):
     sys.exit(1)
 
 
-def pcapng_telegrams(path):
-    """(start ns, direction 'rx'/'tx', bytes) of every Enhanced Packet Block."""
+def pcapng_blocks(path):
+    """(start ns, direction 'rx'/'tx', bytes, opt_comment) of every Enhanced Packet Block."""
     data = Path(path).read_bytes()
     out, pos = [], 0
     while pos + 12 <= len(data):
@@ -38,20 +38,27 @@ def pcapng_telegrams(path):
             _, hi, lo, caplen, _ = struct.unpack_from("<IIIII", data, pos + 8)
             payload = data[pos + 28:pos + 28 + caplen]
             opt = pos + 28 + (caplen + 3) // 4 * 4
-            flags = 0
+            flags, comment = 0, None
             while opt + 4 <= pos + blen - 4:
                 code, olen = struct.unpack_from("<HH", data, opt)
                 if code == 0:
                     break
+                if code == 1:  # opt_comment: "cycles START-END"
+                    comment = data[opt + 4:opt + 4 + olen].decode("utf-8")
                 if code == 2:  # epb_flags: bits 1:0 direction, 1 inbound (RxD), 2 outbound
                     flags = struct.unpack_from("<I", data, opt + 4)[0]
                 opt += 4 + (olen + 3) // 4 * 4
             direction = {1: "rx", 2: "tx"}.get(flags & 3)
             if direction is None:
                 fail(f"{path}: a packet without a direction")
-            out.append(((hi << 32) | lo, direction, bytes(payload)))
+            out.append(((hi << 32) | lo, direction, bytes(payload), comment))
         pos += blen
     return out
+
+
+def pcapng_telegrams(path):
+    """(start ns, direction 'rx'/'tx', bytes) of every Enhanced Packet Block."""
+    return [(t, d, p) for t, d, p, _ in pcapng_blocks(path)]
 
 
 def sigrok(vcd, pin, baud):

@@ -1,5 +1,6 @@
-// The diff VCD of wavediff --diff-vcd: scopes a/, b/ and diff/ with every compared signal under
-// its own hierarchy, written while the comparison walks both files.
+// The merged waveform of wavediff --diff-vcd and --merge (merge.hpp): scopes a/, b/ and diff/
+// with every compared signal under its own hierarchy, written while the comparison walks both
+// files; and its VCD sink.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -7,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "engine.hpp"
+#include "merge.hpp"
 #include "outfile.hpp"
 
 namespace dpc31::wavediff::detail {
@@ -26,133 +27,155 @@ std::vector<std::string> split_dots(const std::string& n) {
   return parts;
 }
 
-}  // namespace
-
-class DiffVcd {
+class VcdSink final : public WaveSink {
  public:
-  DiffVcd(const std::string& path, Engine& e) {
+  VcdSink(const std::string& path, int pow) {
     if (!out_.open(path)) throw InputError(out_.error());
-    const std::size_t n = e.pairs.size();
-    ids_.resize(n * 3);
-    for (std::size_t i = 0; i < ids_.size(); ++i) ids_[i] = vcd_id(i);
-    cycle_id_ = vcd_id(ids_.size());
-    flag_.assign(n, -1);
-    std::vector<std::pair<std::vector<std::string>, std::size_t>> order;
-    for (std::size_t i = 0; i < n; ++i) order.emplace_back(split_dots(e.pairs[i].name), i);
-    std::sort(order.begin(), order.end());
-    std::string h =
-        fmt::format("$version dpc31 wavediff $end\n$timescale {} $end\n", timescale_text(e.pow));
-    if (e.clock_mode()) {
-      h += fmt::format(
-          "$scope module wavediff $end\n$var integer 32 {} cycle $end\n$upscope $end\n", cycle_id_);
-    }
-    const char* tops[3] = {"a", "b", "diff"};
-    for (int side = 0; side < 3; ++side) {
-      h += fmt::format("$scope module {} $end\n", tops[side]);
-      std::vector<std::string> stack;
-      for (const auto& [parts, i] : order) {
-        std::size_t common = 0;
-        while (common < stack.size() && common + 1 < parts.size() &&
-               stack[common] == parts[common]) {
-          ++common;
-        }
-        while (stack.size() > common) {
-          h += "$upscope $end\n";
-          stack.pop_back();
-        }
-        for (std::size_t k = common; k + 1 < parts.size(); ++k) {
-          h += fmt::format("$scope module {} $end\n", parts[k]);
-          stack.push_back(parts[k]);
-        }
-        const Pair& p = e.pairs[i];
-        const std::string& leaf = parts.back();
-        const std::string& id = ids_[i * 3 + static_cast<std::size_t>(side)];
-        if (side == 2) {
-          h += fmt::format("$var wire 1 {} {} $end\n", id, leaf);
-        } else if (p.real) {
-          h += fmt::format("$var real 64 {} {} $end\n", id, leaf);
-        } else {
-          const LSig& l = side == 0 ? e.A.sigs[p.a] : e.B.sigs[p.b];
-          if (l.width == 1) {
-            h += fmt::format("$var wire 1 {} {} $end\n", id, leaf);
-          } else {
-            h += fmt::format("$var wire {} {} {} [{}:0] $end\n", l.width, id, leaf, l.width - 1);
-          }
-        }
-      }
-      while (!stack.empty()) {
-        h += "$upscope $end\n";
-        stack.pop_back();
-      }
-      h += "$upscope $end\n";
-    }
-    h += "$enddefinitions $end\n";
-    put(h);
+    line_ = fmt::format("$version dpc31 wavediff $end\n$timescale {} $end\n", timescale_text(pow));
   }
-  DiffVcd(const DiffVcd&) = delete;
-  DiffVcd& operator=(const DiffVcd&) = delete;
-
-  void point(Engine& e, const Point& pt, bool full) {
-    std::string& s = line_;
-    s.clear();
-    s += fmt::format("#{}\n", pt.time);
-    if (e.clock_mode()) s += fmt::format("b{:b} {}\n", pt.cycle, cycle_id_);
-    auto emit = [&](std::uint32_t pi) {
-      const Pair& p = e.pairs[pi];
-      if (full || p.a_changed) value(s, e.A, e.A.sigs[p.a], ids_[pi * 3]);
-      if (full || p.b_changed) value(s, e.B, e.B.sigs[p.b], ids_[pi * 3 + 1]);
-      const int f = p.differs ? 1 : 0;
-      if (full || f != flag_[pi]) {
-        s += static_cast<char>('0' + f);
-        s += ids_[pi * 3 + 2];
-        s += '\n';
-        flag_[pi] = static_cast<signed char>(f);
-      }
-    };
-    if (full) {
-      for (std::uint32_t pi = 0; pi < e.pairs.size(); ++pi) emit(pi);
+  void scope(const std::string& name) override {
+    line_ += fmt::format("$scope module {} $end\n", name);
+  }
+  void upscope() override { line_ += "$upscope $end\n"; }
+  void var(Kind kind, std::uint32_t width, const std::string& leaf) override {
+    ids_.push_back(vcd_id(ids_.size()));
+    widths_.push_back(width);
+    const std::string& id = ids_.back();
+    if (kind == Kind::integer) {
+      line_ += fmt::format("$var integer {} {} {} $end\n", width, id, leaf);
+    } else if (kind == Kind::real) {
+      line_ += fmt::format("$var real 64 {} {} $end\n", id, leaf);
+    } else if (width == 1) {
+      line_ += fmt::format("$var wire 1 {} {} $end\n", id, leaf);
     } else {
-      for (const std::uint32_t pi : e.dirty) emit(pi);
+      line_ += fmt::format("$var wire {} {} {} [{}:0] $end\n", width, id, leaf, width - 1);
     }
-    put(s);
   }
-
-  // Renames the whole file into place; without it the destructor discards it.
-  void commit() {
+  void end_header() override {
+    line_ += "$enddefinitions $end\n";
+    end_point();
+  }
+  void time(std::uint64_t t) override { line_ += fmt::format("#{}\n", t); }
+  void bits(std::size_t var, std::string_view bits) override {
+    if (widths_[var] == 1) {
+      line_ += bits;
+    } else {
+      line_ += 'b';
+      line_ += bits;
+      line_ += ' ';
+    }
+    line_ += ids_[var];
+    line_ += '\n';
+  }
+  void real(std::size_t var, double v) override {
+    line_ += std::isnan(v) ? std::string("rnan") : fmt::format("r{}", v);
+    line_ += ' ';
+    line_ += ids_[var];
+    line_ += '\n';
+  }
+  void end_point() override {
+    if (!out_.write(line_)) throw InputError(out_.error());
+    line_.clear();
+  }
+  void commit() override {
     if (!out_.commit()) throw InputError(out_.error());
   }
 
  private:
   outfile::OutFile out_;
   std::vector<std::string> ids_;
-  std::string cycle_id_;
-  std::vector<signed char> flag_;
+  std::vector<std::uint32_t> widths_;
   std::string line_;
-
-  void put(const std::string& s) {
-    if (!out_.write(s)) throw InputError(out_.error());
-  }
-  static void value(std::string& s, const Side& side, const LSig& l, const std::string& id) {
-    if (l.real) {
-      const double d = side.real(l);
-      s += std::isnan(d) ? std::string("rnan") : fmt::format("r{}", d);
-      s += ' ';
-    } else if (l.width == 1) {
-      s += side.bits(l);
-    } else {
-      s += 'b';
-      s += side.bits(l);
-      s += ' ';
-    }
-    s += id;
-    s += '\n';
-  }
 };
 
-std::shared_ptr<DiffVcd> open_diff_vcd(const std::string& path, Engine& e) {
-  return std::make_shared<DiffVcd>(path, e);
+}  // namespace
+
+std::unique_ptr<WaveSink> vcd_sink(const std::string& path, int pow) {
+  return std::make_unique<VcdSink>(path, pow);
 }
-void diff_vcd_point(DiffVcd& d, Engine& e, const Point& pt, bool full) { d.point(e, pt, full); }
-void commit_diff_vcd(DiffVcd& d) { d.commit(); }
+
+MergedWave::MergedWave(std::unique_ptr<WaveSink> sink, Engine& e) : sink_(std::move(sink)) {
+  const std::size_t n = e.pairs.size();
+  var_.resize(n * 3);
+  flag_.assign(n, -1);
+  std::vector<std::pair<std::vector<std::string>, std::size_t>> order;
+  for (std::size_t i = 0; i < n; ++i) order.emplace_back(split_dots(e.pairs[i].name), i);
+  std::sort(order.begin(), order.end());
+  WaveSink& w = *sink_;
+  std::size_t next = 0;
+  if (e.clock_mode()) {
+    w.scope("wavediff");
+    w.var(WaveSink::Kind::integer, 32, "cycle");
+    cycle_var_ = next++;
+    w.upscope();
+  }
+  const char* tops[3] = {"a", "b", "diff"};
+  for (int side = 0; side < 3; ++side) {
+    w.scope(tops[side]);
+    std::vector<std::string> stack;
+    for (const auto& [parts, i] : order) {
+      std::size_t common = 0;
+      while (common < stack.size() && common + 1 < parts.size() && stack[common] == parts[common]) {
+        ++common;
+      }
+      for (; stack.size() > common; stack.pop_back()) w.upscope();
+      for (std::size_t k = common; k + 1 < parts.size(); ++k) {
+        w.scope(parts[k]);
+        stack.push_back(parts[k]);
+      }
+      const Pair& p = e.pairs[i];
+      if (side == 2) {
+        w.var(WaveSink::Kind::wire, 1, parts.back());
+      } else if (p.real) {
+        w.var(WaveSink::Kind::real, 64, parts.back());
+      } else {
+        const LSig& l = side == 0 ? e.A.sigs[p.a] : e.B.sigs[p.b];
+        w.var(WaveSink::Kind::wire, l.width, parts.back());
+      }
+      var_[i * 3 + static_cast<std::size_t>(side)] = next++;
+    }
+    for (; !stack.empty(); stack.pop_back()) w.upscope();
+    w.upscope();
+  }
+  w.end_header();
+}
+
+void MergedWave::point(Engine& e, const Point& pt, bool full) {
+  WaveSink& w = *sink_;
+  w.time(pt.time);
+  if (e.clock_mode()) w.bits(cycle_var_, fmt::format("{:b}", pt.cycle));
+  auto value = [&w](std::size_t var, const Side& side, const LSig& l) {
+    if (l.real) {
+      w.real(var, side.real(l));
+    } else {
+      w.bits(var, side.bits(l));
+    }
+  };
+  auto emit = [&](std::uint32_t pi) {
+    const Pair& p = e.pairs[pi];
+    if (full || p.a_changed) value(var_[pi * 3], e.A, e.A.sigs[p.a]);
+    if (full || p.b_changed) value(var_[pi * 3 + 1], e.B, e.B.sigs[p.b]);
+    const int f = p.differs ? 1 : 0;
+    if (full || f != flag_[pi]) {
+      w.bits(var_[pi * 3 + 2], f != 0 ? "1" : "0");
+      flag_[pi] = static_cast<signed char>(f);
+    }
+  };
+  if (full) {
+    for (std::uint32_t pi = 0; pi < e.pairs.size(); ++pi) emit(pi);
+  } else {
+    for (const std::uint32_t pi : e.dirty) emit(pi);
+  }
+  w.end_point();
+}
+
+void MergedWave::commit() {
+  sink_->commit();
+  if (save_file.is_open() && !save_file.commit()) throw InputError(save_file.error());
+}
+
+std::shared_ptr<MergedWave> open_diff_vcd(const std::string& path, Engine& e) {
+  return std::make_shared<MergedWave>(vcd_sink(path, e.pow), e);
+}
 
 }  // namespace dpc31::wavediff::detail

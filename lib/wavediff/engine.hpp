@@ -179,12 +179,14 @@ class Engine {
   std::uint64_t edges_ = 0;
 };
 
-// The diff VCD (diff_vcd.cpp): opened before the walk, fed every compared point, renamed into
-// place after it.
-class DiffVcd;
-std::shared_ptr<DiffVcd> open_diff_vcd(const std::string& path, Engine& e);
-void diff_vcd_point(DiffVcd& d, Engine& e, const Point& pt, bool full);
-void commit_diff_vcd(DiffVcd& d);
+// The merged waveforms (merge.hpp): opened before the walk, fed every compared point, renamed
+// into place after it. --diff-vcd (diff_vcd.cpp); --merge, VCD or FST by the name's extension,
+// with its GTKWave save file (merge.cpp).
+class MergedWave;
+std::shared_ptr<MergedWave> open_diff_vcd(const std::string& path, Engine& e);
+std::shared_ptr<MergedWave> open_merge(const std::string& path, Engine& e);
+void merged_point(MergedWave& m, Engine& e, const Point& pt, bool full);
+void commit_merged(MergedWave& m);
 
 // The WaveDrom excerpt around the first divergence (wavedrom.cpp): a second pass.
 std::string wavedrom_text(const Options& o, const Report& rep);

@@ -1,6 +1,7 @@
 // The comparison engine: names to pairs (strip, map, split vectors, filters), the time-ordered
 // walk over both files (event mode) or over the clock edges of each (clock mode), difference
-// stretches with tolerance. The diff VCD and WaveDrom outputs: diff_vcd.cpp, wavedrom.cpp.
+// stretches with tolerance. The merged waveforms and WaveDrom outputs: diff_vcd.cpp, merge.cpp,
+// wavedrom.cpp.
 #include "wavediff.hpp"
 
 #include <fmt/format.h>
@@ -791,12 +792,13 @@ Report compare(const Options& o) {
   // (docs/bad-input.md).
   outfile::OutFile drom;
   if (!o.wavedrom.empty() && !drom.open(o.wavedrom)) throw InputError(drom.error());
-  std::shared_ptr<detail::DiffVcd> dv;
-  if (!o.diff_vcd.empty()) dv = detail::open_diff_vcd(o.diff_vcd, e);
+  std::vector<std::shared_ptr<detail::MergedWave>> merged;
+  if (!o.diff_vcd.empty()) merged.push_back(detail::open_diff_vcd(o.diff_vcd, e));
+  if (!o.merge.empty()) merged.push_back(detail::open_merge(o.merge, e));
   Hook hook;
-  if (dv) {
-    hook = [&dv](Engine& en, const Point& pt, bool full) {
-      detail::diff_vcd_point(*dv, en, pt, full);
+  if (!merged.empty()) {
+    hook = [&merged](Engine& en, const Point& pt, bool full) {
+      for (const auto& m : merged) detail::merged_point(*m, en, pt, full);
       return true;
     };
   }
@@ -809,7 +811,7 @@ Report compare(const Options& o) {
                                  : detail::wavedrom_text(o, rep);
     if (!drom.write(text)) throw InputError(drom.error());
   }
-  if (dv) detail::commit_diff_vcd(*dv);
+  for (const auto& m : merged) detail::commit_merged(*m);
   if (drom.is_open() && !drom.commit()) throw InputError(drom.error());
   return rep;
 }

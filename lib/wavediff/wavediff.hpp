@@ -47,6 +47,7 @@ struct Options {
   bool ignore_missing = false;
   std::string json_file;
   std::string diff_vcd;
+  std::string merge;  // --merge OUT.vcd|OUT.fst, and its GTKWave save file OUT.gtkw
   std::string wavedrom;
   unsigned wavedrom_window = 8;  // events or cycles on each side of the first divergence
   unsigned max_signals = 20;     // signals listed in the text report (JSON lists all)
@@ -130,6 +131,9 @@ std::string vcd_id(std::size_t i);
 // A value of 0/1 digits as hex digits (the leading group is the short one: "101110001" -> "171");
 // empty when it holds x, z or other characters.
 std::string bits_hex(std::string_view bits);
+
+// --merge's GTKWave save file: the merged file's name with the extension .gtkw.
+std::string save_file_name(const std::string& merge);
 
 // The whole command: compare, print the text report to `out` (errors and warnings to `err`),
 // write --json. Exit code 0 same, 1 different, 2 bad input.

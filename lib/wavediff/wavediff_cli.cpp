@@ -43,6 +43,9 @@ CLI::App* add_subcommand(CLI::App& app, CliArgs& a) {
   c->add_option("--json", o.json_file, "write the report as JSON to this file");
   c->add_option("--diff-vcd", o.diff_vcd,
                 "write a VCD with scopes a/, b/ and diff/ (1 = values differ) for GTKWave");
+  c->add_option("--merge", o.merge,
+                "write A's and B's signals (scopes a, b) with a diff signal for each, as one "
+                "VCD or FST (by the extension) and a GTKWave save file beside it (.gtkw)");
   c->add_option("--wavedrom", o.wavedrom,
                 "write WaveJSON of the window around the first divergence");
   c->add_option("--wavedrom-window", o.wavedrom_window,

@@ -12,8 +12,10 @@
 #include <string_view>
 
 #include "dpc31/reg_ids.hpp"
+#include "gtkw.hpp"
 #include "gtkwave/fstapi.h"
 #include "outfile.hpp"
+#include "vocabulary.hpp"
 #include "wavediff.hpp"  // vcd_id: one VCD identifier code for every writer
 
 namespace dpc31::wave {
@@ -35,7 +37,8 @@ enum Sig : std::uint16_t {
   kDoutSm,
   kDinSm,
   kDiagSm,
-  kPb3,  // last, so the older signals keep their VCD identifiers
+  kPb3,      // after the others, so the older signals keep their VCD identifiers
+  kService,  // likewise
   kCount
 };
 
@@ -55,7 +58,8 @@ constexpr std::array<SignalDef, kCount> kSignals = {{{"pins.rxd", 1},
                                                      {"blocks.dout_sm", 8},
                                                      {"blocks.din_sm", 8},
                                                      {"blocks.diag_sm", 4},
-                                                     {"pins.pb3", 1}}};
+                                                     {"pins.pb3", 1},
+                                                     {"state.service", 8}}};
 
 static_assert(std::all_of(kSignals.begin(), kSignals.end(),
                           [](const SignalDef& d) { return d.width <= 16; }),
@@ -68,6 +72,19 @@ struct Event {
   std::uint16_t value;
   std::uint8_t sig;
 };
+
+// state.service: the DP service of a request the chip received, by the slave's SAP (the DSAP,
+// 0..63); without one 80h Data_Exchange (SRD), 81h FDL_Status, 82h another FDL service; -1 for
+// what is no request (an answer, the token, SC).
+int request_service(const std::vector<std::uint8_t>& b) {
+  const std::size_t pos = !b.empty() && b[0] == 0x68 ? 4 : 1;
+  if (b.empty() || (b[0] != 0x10 && b[0] != 0x68 && b[0] != 0xA2) || b.size() < pos + 4) return -1;
+  const std::uint8_t fc = b[pos + 2];
+  if ((fc & 0x40) == 0) return -1;
+  if ((b[pos] & 0x80) != 0 && b[0] != 0x10) return b[pos + 3] & 0x3F;
+  const unsigned code = fc & 0x0Fu;
+  return code == 0xC || code == 0xD ? 0x80 : code == 0x9 ? 0x81 : 0x82;
+}
 
 bool before(const Event& a, const Event& b) {
   return a.cycle != b.cycle ? a.cycle < b.cycle : a.seq < b.seq;
@@ -224,6 +241,8 @@ struct Recorder::Impl {
   std::uint64_t drained_to = 0;  // every change before this cycle has been taken
   std::string error;             // the first failure, reported by finish()
   outfile::OutFile out;          // opened by attach(), so that a bad path is found before the run
+  outfile::OutFile gtkw;         // the save file (Options::gtkw), likewise
+  std::vector<std::pair<std::uint64_t, std::string>> markers;  // its named markers (26 at most)
 
   // What has been written: the values in force, and the window's start once dumped.
   std::array<std::uint32_t, kCount> cur{};
@@ -296,13 +315,14 @@ struct Recorder::Impl {
     return static_cast<std::uint64_t>((static_cast<u128>(cycle) * num + half) / den);
   }
 
-  // Takes every change before `upto` out of the streams: before the window they set the values
-  // it opens with; inside it they are written.
+  // Takes every change before `upto` out of the streams: up to the window's first cycle they set
+  // the values it opens with (so a pin set at that cycle is dumped once, with its value then);
+  // after it they are written.
   void drain(std::uint64_t upto) {
     Merged events(rxd.events, others.events);
     for (; events.peek() != nullptr && events.peek()->cycle < upto; events.pop()) {
       const Event& e = *events.peek();
-      if (!opened && e.cycle >= opt.from) open();
+      if (!opened && e.cycle > opt.from) open();
       if (!opened) {
         cur[e.sig] = e.value;
       } else {
@@ -396,6 +416,12 @@ struct Recorder::Impl {
   void write(const Event& e) {
     if (cur[e.sig] == e.value) return;
     cur[e.sig] = e.value;
+    if ((e.sig == kDpState || e.sig == kWdState) && markers.size() < 26) {
+      markers.emplace_back(units(e.cycle),
+                           e.sig == kDpState
+                               ? fmt::format("dp_state={}", dp_state_name(DpState(e.value)))
+                               : fmt::format("wd_state={}", wd_state_name(WdState(e.value))));
+    }
     if (opt.fst) {
       if (fst == nullptr) return;
       fstWriterEmitTimeChange(fst, units(e.cycle));
@@ -442,24 +468,37 @@ bool Recorder::attach(Chip& chip, std::string& error) {
     error = m.out.error();
     return false;
   }
+  if (!m.opt.gtkw.empty() && !m.gtkw.open(m.opt.gtkw)) {
+    error = m.gtkw.error();
+    return false;
+  }
   m.chip = &chip;
   m.clock_hz = chip.clock_hz();
   m.set_units(m.clock_hz);
   // Declared scope by scope: PB3 (the newest signal, last in the list) beside the other pins.
   for (std::size_t i = 0; i < kCount; ++i) {
-    if (i != kPb3 && m.selected[i]) m.order.push_back(i);
+    if (i != kPb3 && i != kService && m.selected[i]) m.order.push_back(i);
     if (i == kXInt && m.selected[kPb3]) m.order.push_back(kPb3);
+    if (i == kBaud && m.selected[kService]) m.order.push_back(kService);
   }
   Impl* im = &m;
   m.push(chip.cycle(), kRxd, 1);
   m.push(chip.cycle(), kTxd, chip.txd_pin() ? 1 : 0);
   m.push(chip.cycle(), kBusRd, 0);
   m.push(chip.cycle(), kBusWr, 0);
+  m.push(chip.cycle(), kService, 0xFF);  // no request yet
   m.sample(chip.cycle());
   chip.on_rxd([im](std::uint64_t c, bool l) { im->push(c, kRxd, l ? 1 : 0); });
   chip.on_txd([im](std::uint64_t c, bool l) { im->push(c, kTxd, l ? 1 : 0); });
   chip.on_irq_change([im](std::uint64_t c, bool) { im->sample(c); });
   chip.on_state_change([im](std::uint64_t c) { im->sample(c); });
+  if (m.selected[kService]) {
+    // Reported when the request is acted on (the stop sample of its last character).
+    chip.on_telegram([im](const Telegram& t) {
+      const int code = t.from_chip ? -1 : request_service(t.bytes);
+      if (code >= 0) im->push(im->chip->cycle(), kService, static_cast<std::uint32_t>(code));
+    });
+  }
   chip.on_bus_access([im](std::uint64_t c, const BusAccess& e) {
     const Sig strobe = e.write ? kBusWr : kBusRd;
     im->push(c, kBusAddr, e.addr);
@@ -500,6 +539,17 @@ bool Recorder::finish(std::uint64_t end_cycle, std::string& error) {
   if (!(m.opt.fst ? m.out.commit_fst() : m.out.commit())) {
     error = m.out.error();
     return false;
+  }
+  if (m.gtkw.is_open()) {
+    SaveFile f{m.opt.path, {}, {}, m.opt.flat, m.units(to), m.markers, filter_dir()};
+    for (std::size_t i : m.order) {
+      f.signals.emplace_back(kSignals[i].name);
+      f.widths.push_back(kSignals[i].width);
+    }
+    if (!(m.gtkw.write(save_file_text(f)) && m.gtkw.commit())) {
+      error = m.gtkw.error();
+      return false;
+    }
   }
   return true;
 }

@@ -20,6 +20,7 @@ struct Options {
   std::uint64_t to = UINT64_MAX;     // one past the last cycle written
   int timescale_exp = -12;           // 10^exp seconds per unit: -12 1 ps, -8 10 ns, ...
   bool flat = false;                 // one scope, 1-bit signals only (for sigrok's VCD input)
+  std::string gtkw;                  // also a GTKWave save file for it here (gtkw.hpp)
 };
 
 // The documented signal list: name (below the top scope "dpc31") and width.

@@ -25,7 +25,9 @@ foreach(f bin/dpc31 include/dpc31/chip.hpp include/dpc31/dpc31_hal.h include/dpc
     ${LIBDIR}/cmake/dpc31emu/dpc31emuConfig.cmake
     ${LIBDIR}/cmake/dpc31emu/dpc31emuConfigVersion.cmake ${LIBDIR}/pkgconfig/dpc31emu.pc
     share/dpc31emu/firmware/do4/DO4_0D04.gsd share/dpc31emu/firmware/cnt2/CNT2_0C02.gsd
-    share/dpc31emu/wireshark/profibus_dl.lua share/doc/dpc31emu/README.md
+    share/dpc31emu/wireshark/profibus_dl.lua
+    share/dpc31emu/sigrok/profibus_dp/__init__.py share/dpc31emu/sigrok/profibus_dp/pd.py
+    share/dpc31emu/gtkwave/dp_state.txt share/dpc31emu/gtkwave/buffer_sm.txt share/doc/dpc31emu/README.md
     share/doc/dpc31emu/install.md)
   if(NOT EXISTS ${prefix}/${f})
     message(FATAL_ERROR "not installed: ${f}")

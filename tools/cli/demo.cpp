@@ -180,6 +180,7 @@ int run_dp_session(const ChipOptions& opt, const std::string& out_dir, const std
   ro.scenario = "<demo>";
   ro.vcd = (std::filesystem::path(out_dir) / "dpc31-demo.vcd").string();
   ro.la_vcd = (std::filesystem::path(out_dir) / "dpc31-demo-la.vcd").string();
+  ro.gtkw = (std::filesystem::path(out_dir) / "dpc31-demo.gtkw").string();
   ro.timescale = timescale;
   ro.pcap = (std::filesystem::path(out_dir) / "dpc31-demo.pcapng").string();
   ScenarioOutcome o;
@@ -204,9 +205,10 @@ int run_dp_session(const ChipOptions& opt, const std::string& out_dir, const std
                static_cast<double>(w.cycle) * 1e6 / hz, w.port, value);
   }
   fmt::print(out,
-             "\nwaveform (VCD): {}\nwaveform for logic-analyser tools (VCD, sigrok-cli -I vcd): "
-             "{}\ntelegrams (pcapng, link type 257): {}\n",
-             ro.vcd, ro.la_vcd, ro.pcap);
+             "\nwaveform (VCD): {}\nGTKWave save file (gtkwave {}): {}\nwaveform for "
+             "logic-analyser tools (VCD, sigrok-cli -I vcd): {}\ntelegrams (pcapng, link type "
+             "257): {}\n",
+             ro.vcd, ro.gtkw, ro.gtkw, ro.la_vcd, ro.pcap);
   return rc;
 }
 

@@ -129,6 +129,9 @@ int main(int argc, char** argv) {
                   "waveform time unit, 1ps ... 1s (default 1ps; 10ns with --flat and --la-vcd)");
   run->add_flag("--flat", run_opt.flat,
                 "--vcd / --fst for logic-analyser tools: 1-bit signals, one scope");
+  run->add_option("--gtkw", run_opt.gtkw,
+                  "also write a GTKWave save file for --vcd (or --fst): signals by block, states "
+                  "by name, markers at the state changes (docs/waveforms.md)");
   run->add_option("--engine", run_opt.engine,
                   "how time advances: event (deadline to deadline) or per-cycle (every clock, "
                   "the reference; docs/engine.md)")

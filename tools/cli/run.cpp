@@ -70,7 +70,8 @@ int run_with_outputs(const RunOptions& opt, const LineSink& walk, const LineSink
                                                            {"--vcd", opt.vcd},
                                                            {"--fst", opt.fst},
                                                            {"--la-vcd", opt.la_vcd},
-                                                           {"--pcap", opt.pcap}});
+                                                           {"--pcap", opt.pcap},
+                                                           {"--gtkw", opt.gtkw}});
   if (!same.empty()) {
     fmt::print(err, "dpc31 run: {}\n", same);
     return 2;
@@ -135,6 +136,10 @@ int run_parsed_scenario(const RunOptions& opt, const Scenario& s, const LineSink
                opt.from);
     return 2;
   }
+  if (!opt.gtkw.empty() && opt.vcd.empty() && opt.fst.empty()) {
+    fmt::print(err, "dpc31 run: --gtkw {}: a save file needs --vcd or --fst\n", opt.gtkw);
+    return 2;
+  }
   std::vector<std::unique_ptr<wave::Recorder>> waves;
   for (const auto& [path, fst, flat] :
        {std::tuple{opt.vcd, false, opt.flat}, std::tuple{opt.fst, true, opt.flat},
@@ -147,6 +152,8 @@ int run_parsed_scenario(const RunOptions& opt, const Scenario& s, const LineSink
     w.from = opt.from;
     w.to = opt.to;
     w.flat = flat;
+    // The save file opens --vcd, or --fst without it.
+    if (path == (opt.vcd.empty() ? opt.fst : opt.vcd) && !path.empty()) w.gtkw = opt.gtkw;
     // The logic-analyser form's default: 10 ns, the sample period of a 100 MHz analyser (sigrok
     // makes one sample per unit; 8.3 per bit at 12 Mbaud). The full form's: 1 ps.
     parse_timescale(!opt.timescale.empty() ? opt.timescale

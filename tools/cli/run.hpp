@@ -22,6 +22,7 @@ struct RunOptions {
   std::uint64_t to = UINT64_MAX;
   std::string timescale;          // "" = 1ps, 10ns for the logic-analyser form (docs/waveforms.md)
   bool flat = false;              // --vcd / --fst in the logic-analyser form
+  std::string gtkw;               // a GTKWave save file for --vcd (or else --fst)
   std::string pcap;               // the chip's telegrams as pcapng (docs/capture.md)
   Engine engine = Engine::event;  // how time advances (docs/engine.md)
 };

@@ -1,0 +1,96 @@
+#include "gtkw.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <filesystem>
+#include <map>
+
+namespace dpc31::wave {
+
+namespace {
+
+// GTKWave's trace flags (analyzer.h): hex 0x2, binary 0x8, right-justified 0x20, blank 0x200,
+// translated by a filter file 0x2000, group begin 0x800000, group end 0x1000000.
+constexpr const char* kBin = "@28";
+constexpr const char* kHex = "@22";
+constexpr const char* kHexTranslated = "@2022";
+constexpr const char* kGroupBegin = "@800200";
+constexpr const char* kGroupEnd = "@1000200";
+
+// The translate filter of each signal that has one (lib/waveform/gtkwave/).
+const std::map<std::string, std::string>& filters() {
+  static const std::map<std::string, std::string> f = {
+      {"state.dp_state", "dp_state.txt"},   {"state.wd_state", "wd_state.txt"},
+      {"state.baud_code", "baud_code.txt"}, {"state.service", "service.txt"},
+      {"blocks.dout_sm", "buffer_sm.txt"},  {"blocks.din_sm", "buffer_sm.txt"},
+      {"blocks.diag_sm", "diag_sm.txt"}};
+  return f;
+}
+
+std::string absolute(const std::string& p) {
+  std::error_code ec;
+  const auto a = std::filesystem::absolute(p, ec);
+  return ec ? p : a.string();
+}
+
+}  // namespace
+
+std::string filter_dir() {
+  std::error_code ec;
+  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  std::vector<std::filesystem::path> dirs;
+  if (!ec) dirs.push_back(exe.parent_path().parent_path() / "share" / "dpc31emu" / "gtkwave");
+  dirs.emplace_back(DPC31_GTKWAVE_FILTER_SOURCE_DIR);
+  for (const auto& d : dirs) {
+    if (std::filesystem::is_regular_file(d / "dp_state.txt", ec)) return d.string();
+  }
+  return {};
+}
+
+std::string save_file_text(const SaveFile& f) {
+  std::string s = fmt::format(
+      "[*] dpc31emu: the run's signals by block, states by name (docs/waveforms.md)\n"
+      "[dumpfile] \"{}\"\n[timestart] 0\n",
+      absolute(f.dump));
+  // The zoom GTKWave starts with: -log2 of the run's length over 1000 (GTKWave opens the demo
+  // on its first 3 ms, the start-up), then the primary marker (none) and the named ones, A..Z.
+  const double zoom = f.end > 1000 ? -std::log2(static_cast<double>(f.end) / 1000.0) : 0.0;
+  s += fmt::format("*{:.6f} -1", zoom);
+  for (std::size_t i = 0; i < 26; ++i) {
+    s += i < f.markers.size() ? fmt::format(" {}", f.markers[i].first) : std::string(" -1");
+  }
+  s += '\n';
+  for (std::size_t i = 0; i < f.markers.size() && i < 26; ++i) {
+    s += fmt::format("[markername] {}{}\n", static_cast<char>('A' + i), f.markers[i].second);
+  }
+  s += "[sst_expanded] 1\n";
+  std::map<std::string, int> filter_index;
+  std::string group;
+  for (std::size_t i = 0; i < f.signals.size(); ++i) {
+    const std::string& name = f.signals[i];
+    const std::string block = name.substr(0, name.find('.'));
+    if (block != group) {
+      if (!group.empty()) s += fmt::format("{}\n-{}\n", kGroupEnd, group);
+      s += fmt::format("{}\n-{}\n", kGroupBegin, block);
+      group = block;
+    }
+    const std::string leaf = f.flat ? name.substr(name.find('.') + 1) : name;
+    const int w = f.widths[i];
+    const std::string full =
+        w == 1 ? fmt::format("dpc31.{}", leaf) : fmt::format("dpc31.{}[{}:0]", leaf, w - 1);
+    const auto filter = filters().find(name);
+    if (filter != filters().end() && !f.filter_dir.empty()) {
+      auto [it, added] =
+          filter_index.emplace(filter->second, static_cast<int>(filter_index.size()) + 1);
+      s += fmt::format("{}\n^{} {}/{}\n{}\n", kHexTranslated, it->second, f.filter_dir,
+                       filter->second, full);
+    } else {
+      s += fmt::format("{}\n{}\n", w == 1 ? kBin : kHex, full);
+    }
+  }
+  if (!group.empty()) s += fmt::format("{}\n-{}\n", kGroupEnd, group);
+  return s;
+}
+
+}  // namespace dpc31::wave
