@@ -36,6 +36,7 @@ void Cpu::reset() {
   raised_ = 0;
   block_ = false;
   last_pins_ = 0x3F;
+  pins_dirty_ = true;
   t1_half_ = tx_div_ = rx_div_ = 0;
   tx_bits_ = -2;
   rx_ticks_ = -1;
@@ -72,6 +73,7 @@ void Cpu::write_sfr(std::uint8_t addr, std::uint8_t v) {
       block_ = true;
       break;
     default:
+      pins_dirty_ = pins_dirty_ || is_port(addr);
       break;
   }
   sf(addr) = v;

@@ -139,11 +139,15 @@ void Cpu::raise(std::uint8_t addr, std::uint8_t mask, int source) {
   raised_ |= static_cast<std::uint8_t>(1u << source);
 }
 
-void Cpu::set_port_input(unsigned port, std::uint8_t value) { port_in_[port & 3] = value; }
+void Cpu::set_port_input(unsigned port, std::uint8_t value) {
+  port_in_[port & 3] = value;
+  pins_dirty_ = true;
+}
 
 void Cpu::set_pin(unsigned port, unsigned bit, bool high) {
   std::uint8_t m = static_cast<std::uint8_t>(1u << bit);
   port_in_[port] = static_cast<std::uint8_t>(high ? port_in_[port] | m : port_in_[port] & ~m);
+  pins_dirty_ = true;
 }
 
 bool Cpu::pin(unsigned port, unsigned bit) const {
@@ -160,15 +164,17 @@ void Cpu::serial_receive(std::uint8_t data, bool bit8) {
   rx_bit8_ = bit8;
 }
 
+// The pins change only between steps (from outside, or by a port write): sampled once per call,
+// an edge falls in the call's first cycle. Only the running blocks are advanced cycle by cycle.
 void Cpu::tick(unsigned cycles) {
-  for (unsigned i = 0; i < cycles; ++i) tick_cycle();
-}
-
-void Cpu::tick_cycle() {
-  ++cycles_;
-  std::uint8_t pins = static_cast<std::uint8_t>(
-      (pin(3, 2) ? p_int0 : 0) | (pin(3, 3) ? p_int1 : 0) | (pin(3, 4) ? p_t0 : 0) |
-      (pin(3, 5) ? p_t1 : 0) | (pin(1, 0) ? p_t2 : 0) | (pin(1, 1) ? p_t2ex : 0));
+  if (cycles == 0) return;
+  std::uint8_t pins = last_pins_;
+  if (pins_dirty_) {
+    pins_dirty_ = false;
+    pins = static_cast<std::uint8_t>((pin(3, 2) ? p_int0 : 0) | (pin(3, 3) ? p_int1 : 0) |
+                                     (pin(3, 4) ? p_t0 : 0) | (pin(3, 5) ? p_t1 : 0) |
+                                     (pin(1, 0) ? p_t2 : 0) | (pin(1, 1) ? p_t2ex : 0));
+  }
   auto fall = static_cast<std::uint8_t>(last_pins_ & ~pins);
   last_pins_ = pins;
 
@@ -189,15 +195,24 @@ void Cpu::tick_cycle() {
   } else {
     tcon &= static_cast<std::uint8_t>(~ie1);
   }
-  timers01(fall, pins);
-  timer2(fall);
-  std::uint8_t scon = sfr_latch(sfr::SCON);
-  unsigned mode = scon >> 6;
-  if (mode == 0)
-    serial_mode0();
-  else if (mode == 2) {
-    unsigned t = (sfr_latch(sfr::PCON) & smod) ? 6 : 3;  // osc/32 or osc/64 per bit
-    serial(t, t);
+  const bool t01 = (tcon & (tr0 | tr1)) != 0 || (sfr_latch(sfr::TMOD) & 3) == 3;
+  const bool t2 = (sfr_latch(sfr::T2CON) & (tr2 | exen2)) != 0;
+  const unsigned mode = sfr_latch(sfr::SCON) >> 6;
+  if (!t01 && !t2 && mode != 0 && mode != 2) {
+    cycles_ += cycles;
+    return;
+  }
+  for (unsigned i = 0; i < cycles; ++i) {
+    ++cycles_;
+    if (t01) timers01(fall, pins);
+    if (t2) timer2(fall);
+    if (mode == 0) {
+      serial_mode0();
+    } else if (mode == 2) {
+      unsigned t = (sfr_latch(sfr::PCON) & smod) ? 6 : 3;  // osc/32 or osc/64 per bit
+      serial(t, t);
+    }
+    fall = 0;
   }
 }
 

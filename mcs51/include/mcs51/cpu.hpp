@@ -133,7 +133,6 @@ class Cpu {
   int choose(std::uint8_t requested) const;
   void call_interrupt(int source);
   void tick(unsigned cycles);
-  void tick_cycle();
   void timers01(std::uint8_t fall, std::uint8_t pins);
   void timer2(std::uint8_t fall);
   void serial(unsigned tx_ticks, unsigned rx_ticks);
@@ -158,6 +157,7 @@ class Cpu {
 
   // Pin samples of the previous machine cycle (edge detection): INT0, INT1, T0, T1, T2, T2EX.
   std::uint8_t last_pins_ = 0x3F;
+  bool pins_dirty_ = true;  // a port write or a change from outside: sample the pins again
 
   // Serial port: the divide-by-16 counters (rx_div_: mode 0's bit count), the transmitter and
   // receiver in progress.
