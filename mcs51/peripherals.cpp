@@ -198,7 +198,7 @@ void Cpu::tick(unsigned cycles) {
   const bool t01 = (tcon & (tr0 | tr1)) != 0 || (sfr_latch(sfr::TMOD) & 3) == 3;
   const bool t2 = (sfr_latch(sfr::T2CON) & (tr2 | exen2)) != 0;
   const unsigned mode = sfr_latch(sfr::SCON) >> 6;
-  if (!t01 && !t2 && mode != 0 && mode != 2) {
+  if (!t2 && mode != 0 && mode != 2 && (!t01 || timers01_bulk(cycles, fall, pins))) {
     cycles_ += cycles;
     return;
   }
@@ -214,6 +214,67 @@ void Cpu::tick(unsigned cycles) {
     }
     fall = 0;
   }
+}
+
+// Timers 0 and 1 over `cycles` at once: a count that wraps modes 0 and 1 or any count in mode 3
+// goes cycle by cycle (false, nothing changed); mode 2's reloads are counted in bulk, each
+// overflow raising the flag and (timer 1) clocking the serial port as one cycle at a time would.
+bool Cpu::timers01_bulk(unsigned cycles, std::uint8_t fall, std::uint8_t pins) {
+  const std::uint8_t tmod = sfr_latch(sfr::TMOD);
+  const std::uint8_t tcon = sfr_latch(sfr::TCON);
+  if ((tmod & 3) == 3 || (tmod & 0x30) == 0x30) return false;
+  unsigned counts[2] = {};
+  for (unsigned t = 0; t < 2; ++t) {
+    const unsigned ctl = (tmod >> (4 * t)) & 0x0F;
+    const bool run = (tcon & (t ? tr1 : tr0)) && (!(ctl & 0x08) || (pins & (t ? p_int1 : p_int0)));
+    if (!run) continue;
+    counts[t] = (ctl & 0x04) ? ((fall & (t ? p_t1 : p_t0)) ? 1 : 0) : cycles;
+    const unsigned tl = sfr_latch(t ? sfr::TL1 : sfr::TL0), th = sfr_latch(t ? sfr::TH1 : sfr::TH0);
+    if ((ctl & 3) == 0 && counts[t] >= 0x2000 - (th << 5 | (tl & 0x1F))) return false;
+    if ((ctl & 3) == 1 && counts[t] >= 0x10000 - (th << 8 | tl)) return false;
+  }
+  for (unsigned t = 0; t < 2; ++t) {
+    if (counts[t] == 0) continue;
+    std::uint8_t& tl = sf(t ? sfr::TL1 : sfr::TL0);
+    std::uint8_t& th = sf(t ? sfr::TH1 : sfr::TH0);
+    const unsigned m = (tmod >> (4 * t)) & 3;
+    if (m == 0) {
+      const unsigned v = (th << 5 | (tl & 0x1Fu)) + counts[t];
+      tl = static_cast<std::uint8_t>((tl & 0xE0) | (v & 0x1F));
+      th = static_cast<std::uint8_t>(v >> 5);
+      continue;
+    }
+    if (m == 1) {
+      const unsigned v = (th << 8 | tl) + counts[t];
+      tl = static_cast<std::uint8_t>(v);
+      th = static_cast<std::uint8_t>(v >> 8);
+      continue;
+    }
+    const unsigned left = 0x100u - tl;
+    if (counts[t] < left) {
+      tl = static_cast<std::uint8_t>(tl + counts[t]);
+      continue;
+    }
+    const unsigned period = 0x100u - th, past = counts[t] - left;
+    const unsigned overflows = 1 + past / period;
+    tl = static_cast<std::uint8_t>(th + past % period);
+    raise(sfr::TCON, t ? tf1 : tf0, t ? 3 : 1);
+    if (t == 1) timer1_clocks_serial(overflows);
+  }
+  return true;
+}
+
+// Timer 1's overflows clock the serial port in modes 1 and 3 (halved unless SMOD).
+void Cpu::timer1_clocks_serial(unsigned overflows) {
+  if (((sfr_latch(sfr::SCON) >> 6) & 1) == 0) return;
+  unsigned ticks = overflows;
+  if ((sfr_latch(sfr::PCON) & smod) == 0) {
+    ticks = (t1_half_ + overflows) / 2;
+    t1_half_ = static_cast<std::uint8_t>((t1_half_ + overflows) & 1);
+  }
+  if (ticks == 0) return;
+  const std::uint8_t t2con = sfr_latch(sfr::T2CON);
+  serial((t2con & tclk) ? 0 : ticks, (t2con & rclk) ? 0 : ticks);
 }
 
 void Cpu::timers01(std::uint8_t fall, std::uint8_t pins) {
@@ -240,12 +301,7 @@ void Cpu::timers01(std::uint8_t fall, std::uint8_t pins) {
   bool in1 = (tmod & 0x40) ? (fall & p_t1) != 0 : true;
   if (!(run1 && in1) || !count(sf(sfr::TL1), sf(sfr::TH1), m1)) return;
   if (m0 != 3) raise(sfr::TCON, tf1, 3);
-  // Timer 1's overflow clocks the serial port in modes 1 and 3 (halved unless SMOD).
-  std::uint8_t scon = sfr_latch(sfr::SCON);
-  if (((scon >> 6) & 1) == 0) return;
-  if ((sfr_latch(sfr::PCON) & smod) == 0 && (t1_half_ ^= 1) != 0) return;
-  std::uint8_t t2con = sfr_latch(sfr::T2CON);
-  serial((t2con & tclk) ? 0 : 1, (t2con & rclk) ? 0 : 1);
+  timer1_clocks_serial(1);
 }
 
 void Cpu::timer2(std::uint8_t fall) {

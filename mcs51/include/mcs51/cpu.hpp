@@ -133,6 +133,8 @@ class Cpu {
   int choose(std::uint8_t requested) const;
   void call_interrupt(int source);
   void tick(unsigned cycles);
+  bool timers01_bulk(unsigned cycles, std::uint8_t fall, std::uint8_t pins);
+  void timer1_clocks_serial(unsigned overflows);
   void timers01(std::uint8_t fall, std::uint8_t pins);
   void timer2(std::uint8_t fall);
   void serial(unsigned tx_ticks, unsigned rx_ticks);
