@@ -66,9 +66,13 @@ StepResult Cpu::step() {
   const unsigned n = cycle_table[op];
   tick(n - 1);
   const auto sampled = static_cast<std::uint8_t>(before | raised_);
-  tick(1);
+  // A MOVX's bus access ends with RD / WR in S3/S4 of its second cycle, before that cycle's pin
+  // sample at S5P2: what the access does to a pin (X/INT on INT0) is sampled in that cycle.
+  const bool movx = (op & 0xEC) == 0xE0 && (op & 0x03) != 0x01;
+  if (!movx) tick(1);
   ++pc_;
   execute(op);
+  if (movx) tick(1);
   if (std::popcount(a()) & 1)
     sf(sfr::PSW) |= 1;
   else

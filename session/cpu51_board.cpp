@@ -39,7 +39,9 @@ void Cpu51Board::access_at(std::uint64_t clock) {
 std::uint8_t Cpu51Board::read(std::uint16_t addr, std::uint64_t clock) {
   if (addr < base_ || addr >= base_ + window) return ram_[addr];
   access_at(clock);
-  return chip_.read(addr - base_);
+  const std::uint8_t v = chip_.read(addr - base_);
+  cpu_.set_int0(chip_.x_int_pin());  // a command read may end the interrupt
+  return v;
 }
 
 void Cpu51Board::write(std::uint16_t addr, std::uint8_t value, std::uint64_t clock) {
@@ -49,6 +51,7 @@ void Cpu51Board::write(std::uint16_t addr, std::uint8_t value, std::uint64_t clo
   }
   access_at(clock);
   chip_.write(addr - base_, value);
+  cpu_.set_int0(chip_.x_int_pin());
 }
 
 }  // namespace dpc31

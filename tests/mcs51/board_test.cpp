@@ -50,24 +50,26 @@ Observed run_xint_ack(std::uint32_t cpu_hz) {
 
 TEST(Cpu51Board, MovxLandsAtTheStrobesEndAt24MHz) {
   // 24 MHz: one oscillator clock is 2 chip clocks. MOVX in machine cycles [5,7), [12,14) and,
-  // in the routine after the INT0 call, [23,25) (board/xint_ack.asm): strobe ends at clocks
-  // 60 + 18 = 78, 144 + 18 = 162, 276 + 18 = 294.
+  // in the routine after the INT0 call, [22,24) (board/xint_ack.asm): strobe ends at clocks
+  // 60 + 18 = 78, 144 + 18 = 162, 264 + 18 = 282. X/INT goes active at the second one's strobe,
+  // INT0 is sampled low in the same cycle (13, S5P2 after the strobe), polled in 14 (the NOP),
+  // the call is [15,17).
   Observed run = run_xint_ack(24'000'000);
   std::vector<Seen> want = {
-      {156, true, 0x004, 0xEF}, {324, true, 0x000, 0x10}, {588, true, 0x002, 0x10}};
+      {156, true, 0x004, 0xEF}, {324, true, 0x000, 0x10}, {564, true, 0x002, 0x10}};
   EXPECT_EQ(run.accesses, want);
-  std::vector<std::pair<std::uint64_t, bool>> irq = {{324, true}, {588, false}};
+  std::vector<std::pair<std::uint64_t, bool>> irq = {{324, true}, {564, false}};
   EXPECT_EQ(run.irq, irq);
 }
 
 TEST(Cpu51Board, MovxLandsAtTheStrobesEndAt11_0592MHz) {
-  // 48 MHz / 11.0592 MHz = 625/144: clocks 78, 162, 294 → ceil(338.54) = 339,
-  // ceil(703.125) = 704, ceil(1276.04) = 1277.
+  // 48 MHz / 11.0592 MHz = 625/144: clocks 78, 162, 282 → ceil(338.54) = 339,
+  // ceil(703.125) = 704, ceil(1223.96) = 1224.
   Observed run = run_xint_ack(11'059'200);
   std::vector<Seen> want = {
-      {339, true, 0x004, 0xEF}, {704, true, 0x000, 0x10}, {1277, true, 0x002, 0x10}};
+      {339, true, 0x004, 0xEF}, {704, true, 0x000, 0x10}, {1224, true, 0x002, 0x10}};
   EXPECT_EQ(run.accesses, want);
-  std::vector<std::pair<std::uint64_t, bool>> irq = {{704, true}, {1277, false}};
+  std::vector<std::pair<std::uint64_t, bool>> irq = {{704, true}, {1224, false}};
   EXPECT_EQ(run.irq, irq);
 }
 
