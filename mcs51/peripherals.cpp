@@ -18,6 +18,9 @@ constexpr std::uint8_t smod = 0x80, idl = 0x01;
 // Pin sample bits: INT0, INT1, T0, T1, T2, T2EX.
 constexpr std::uint8_t p_int0 = 1, p_int1 = 2, p_t0 = 4, p_t1 = 8, p_t2 = 16, p_t2ex = 32;
 
+// MOVX A,@DPTR / A,@Ri / @DPTR,A / @Ri,A: E0h, E2h, E3h, F0h, F2h, F3h.
+bool is_movx(std::uint8_t op) { return (op & 0xEC) == 0xE0 && (op & 0x03) != 0x01; }
+
 // One count of a timer in mode 0 (13 bits: TL's low 5 bits under TH), 1 (16 bits) or 2 (TL
 // reloaded from TH); true on overflow.
 bool count(std::uint8_t& tl, std::uint8_t& th, unsigned mode) {
@@ -68,7 +71,7 @@ StepResult Cpu::step() {
   const auto sampled = static_cast<std::uint8_t>(before | raised_);
   // A MOVX's bus access ends with RD / WR in S3/S4 of its second cycle, before that cycle's pin
   // sample at S5P2: what the access does to a pin (X/INT on INT0) is sampled in that cycle.
-  const bool movx = (op & 0xEC) == 0xE0 && (op & 0x03) != 0x01;
+  const bool movx = is_movx(op);
   if (!movx) tick(1);
   ++pc_;
   execute(op);
@@ -79,6 +82,16 @@ StepResult Cpu::step() {
     sf(sfr::PSW) &= 0xFE;
   next_irq_ = block_ ? -1 : choose(sampled & requests());
   return {StepKind::instruction, n};
+}
+
+unsigned Cpu::next_step_cycles() const {
+  if (powered_down() || idle()) return 1;
+  if (next_irq_ >= 0) return 2;
+  return cycle_table[code_[pc_]];
+}
+
+bool Cpu::next_is_movx() const {
+  return !powered_down() && !idle() && next_irq_ < 0 && is_movx(code_[pc_]);
 }
 
 std::uint64_t Cpu::run(std::uint64_t cycles) {
@@ -172,6 +185,15 @@ void Cpu::serial_receive(std::uint8_t data, bool bit8) {
 // an edge falls in the call's first cycle. Only the running blocks are advanced cycle by cycle.
 void Cpu::tick(unsigned cycles) {
   if (cycles == 0) return;
+  if (int0_change_.pending && int0_change_.at < cycles_ + cycles) {  // split at the change
+    const auto first =
+        static_cast<unsigned>(int0_change_.at > cycles_ ? int0_change_.at - cycles_ : 0);
+    int0_change_.pending = false;
+    tick(first);
+    set_int0(int0_change_.high);
+    tick(cycles - first);
+    return;
+  }
   std::uint8_t pins = last_pins_;
   if (pins_dirty_) {
     pins_dirty_ = false;

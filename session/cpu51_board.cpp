@@ -22,11 +22,26 @@ void Cpu51Board::chip_to(std::uint64_t cycle) {
   if (cycle > chip_.cycle()) chip_.step(cycle - chip_.cycle());
 }
 
-// X/INT is sampled into INT0 at the start of each instruction (docs/cpu.md, "INT0 from X/INT").
+// Before each step the chip runs to the S5P2 sample of each of the step's machine cycles (the end
+// of oscillator clock 10 of 12) until X/INT changes; INT0 changes from the first cycle whose
+// sample sees it. A MOVX's own access brings the chip to its strobe (docs/cpu.md, "INT0 from
+// X/INT").
 void Cpu51Board::run_until(std::uint64_t chip_cycle) {
+  constexpr unsigned s5p2 = 10;
   while (chip_.cycle() < chip_cycle) {
     chip_to(chip_cycle_of(cpu_.clocks()));
-    cpu_.set_int0(chip_.x_int_pin());
+    const bool level = chip_.x_int_pin();
+    cpu_.set_int0(level);
+    if (!cpu_.next_is_movx()) {
+      const unsigned n = cpu_.next_step_cycles();
+      for (unsigned j = 0; j < n; ++j) {
+        chip_to(chip_cycle_of(cpu_.clocks() + j * mcs51::clocks_per_cycle + s5p2));
+        if (chip_.x_int_pin() != level) {
+          cpu_.schedule_int0(cpu_.cycles() + j, !level);
+          break;
+        }
+      }
+    }
     cpu_.step();
   }
 }

@@ -73,6 +73,29 @@ TEST(Cpu51Board, MovxLandsAtTheStrobesEndAt11_0592MHz) {
   EXPECT_EQ(run.irq, irq);
 }
 
+TEST(Cpu51Board, AnX_IntChangeIsSampledInTheCycleWhoseS5p2SeesIt) {
+  // 24 MHz (chip cycle = 2 x clock). Start_SPC3 completes at s = 2 x (144 + 18) = 324; the first
+  // User_Timer_Clock at s + 48 000 = 48 324 (docs/timing.md, Timers) drives X/INT active. CPU
+  // cycle j samples INT0 at clock 12j + 10, chip cycle 24j + 20 >= 48 324 first for j = 2013:
+  // the second cycle of the MUL [2012, 2016) (2012 = 14 + 6 x 333). Sampled before the MUL's
+  // last cycle, it is called after it: [2016, 2018); LJMP [2018, 2020), MOV DPTR, MOV A, the
+  // acknowledge MOVX [2023, 2025): strobe at clock 24 276 + 18 = 24 294, chip cycle 48 588.
+  std::ifstream in(BOARD_DIR "/user_timer.ihx");
+  std::stringstream text;
+  text << in.rdbuf();
+  mcs51::HexImage img;
+  std::string error;
+  ASSERT_TRUE(mcs51::parse_ihex(text.str(), img, error)) << error;
+  Chip chip({Profile::spc3, BusMode::intel});
+  std::vector<std::pair<std::uint64_t, bool>> irq;
+  chip.on_irq_change([&](std::uint64_t c, bool active) { irq.emplace_back(c, active); });
+  Cpu51Board board(chip, 24'000'000, 0x8000);
+  board.cpu().load_code(0, img.bytes);
+  board.run_until(50'000);
+  std::vector<std::pair<std::uint64_t, bool>> want = {{48'324, true}, {48'588, false}};
+  EXPECT_EQ(irq, want);
+}
+
 TEST(Cpu51Board, TheTimeBaseIsExact) {
   Chip chip({Profile::spc3, BusMode::intel});
   Cpu51Board b40(chip, 40'000'000, 0);

@@ -70,6 +70,13 @@ class Cpu {
   // Pins driven from outside (true = high). The pin is the port latch AND this input.
   void set_port_input(unsigned port, std::uint8_t value);
   void set_int0(bool high) { set_pin(3, 2, high); }
+  // INT0 changes to `high` from machine cycle `at` on (>= cycles(), within the next step): a
+  // board that knows the pin's future sets it at the cycle whose S5P2 sample first sees it.
+  void schedule_int0(std::uint64_t at, bool high) { int0_change_ = {at, high, true}; }
+  // The machine cycles the next step() takes, and whether it is a MOVX (whose access may itself
+  // change a pin).
+  unsigned next_step_cycles() const;
+  bool next_is_movx() const;
   void set_int1(bool high) { set_pin(3, 3, high); }
   // A character arrives on RXD: its start bit begins now (modes 1-3; `bit8` is the stop bit in
   // mode 1, the ninth data bit in modes 2 and 3).
@@ -160,6 +167,11 @@ class Cpu {
   // Pin samples of the previous machine cycle (edge detection): INT0, INT1, T0, T1, T2, T2EX.
   std::uint8_t last_pins_ = 0x3F;
   bool pins_dirty_ = true;  // a port write or a change from outside: sample the pins again
+  struct PinChange {
+    std::uint64_t at;
+    bool high;
+    bool pending;
+  } int0_change_{0, true, false};
 
   // Serial port: the divide-by-16 counters (rx_div_: mode 0's bit count), the transmitter and
   // receiver in progress.
