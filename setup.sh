@@ -11,10 +11,11 @@ cd "$(dirname "$0")"
 # runtimes (libclang-rt-14-dev), ninja. The install test (Install.*):
 # pkgconf (pkg-config), and for the Debian package (cpack -G DEB) dpkg-dev and file. GNU
 # parallel and rsync (its --return over ssh): the sharded regression's test and recipes
-# (docs/regression.md).
+# (docs/regression.md). sdcc (sdas8051, sdld) and sdcc-ucsim (s51): the 80C32 test programs and
+# their cross-check against ucsim (docs/cpu.md).
 packages=(cmake g++ make ccache verilator libfmt-dev libcli11-dev nlohmann-json3-dev libgtest-dev
   libbenchmark-dev zlib1g-dev gtkwave xvfb sigrok-cli tshark python3 clang libclang-rt-14-dev
-  ninja-build pkgconf dpkg-dev file parallel rsync)
+  ninja-build pkgconf dpkg-dev file parallel rsync sdcc sdcc-ucsim)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -102,6 +102,9 @@ const std::vector<RowSpec>& rows() {
       // Issue 19, item 7: what a full waveform costs (docs/performance.md, docs/waveforms.md).
       {"i", "traced / untraced run, all signals (wall time, side by side)", "BM_TracedOverUntraced",
        "traced_over_untraced", 1, "x slower", Goal::at_most, 3},
+      // Issue 34 item 6: the 80C32 core alone (docs/cpu.md).
+      {"j", "80C32 core alone at 24 MHz (ALU, MOVX, MUL loop, timers 0 and 1 running)",
+       "BM_Mcs51Core", "x_realtime", 1, "x real time", Goal::at_least, 100},
       // Issue 19 item 6: not a benchmark but a timed build (--build), after the benchmarks.
       {"h", "fresh build: ./setup.sh with every package present, ccache off (wall time)", kSetupSh,
        "time", 1.0 / 60, "min", Goal::at_most, 5},

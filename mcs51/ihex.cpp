@@ -1,0 +1,74 @@
+#include "mcs51/ihex.hpp"
+
+#include <fmt/format.h>
+
+namespace mcs51 {
+
+namespace {
+int hex_digit(char c) {
+  if (c >= '0' && c <= '9') return c - '0';
+  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+  return -1;
+}
+}  // namespace
+
+bool parse_ihex(std::string_view text, HexImage& image, std::string& error) {
+  int line_no = 0;
+  bool ended = false;
+  while (!text.empty()) {
+    std::size_t nl = text.find('\n');
+    std::string_view line = text.substr(0, nl);
+    text = nl == std::string_view::npos ? std::string_view{} : text.substr(nl + 1);
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    if (line.empty()) continue;
+    auto fail = [&](std::string_view why) {
+      error = fmt::format("line {}: {}", line_no, why);
+      return false;
+    };
+    if (ended) return fail("record after the end-of-file record");
+    if (line[0] != ':') return fail("a record starts with ':'");
+    if (line.size() < 11 || (line.size() - 1) % 2 != 0) return fail("short record");
+    std::vector<std::uint8_t> rec;
+    for (std::size_t i = 1; i < line.size(); i += 2) {
+      int hi = hex_digit(line[i]), lo = hex_digit(line[i + 1]);
+      if (hi < 0 || lo < 0) return fail("not a hex digit");
+      rec.push_back(static_cast<std::uint8_t>(hi << 4 | lo));
+    }
+    if (rec.size() != rec[0] + 5u) return fail("length does not match the byte count");
+    std::uint8_t sum = 0;
+    for (std::uint8_t b : rec) sum = static_cast<std::uint8_t>(sum + b);
+    if (sum != 0) return fail("checksum");
+    const unsigned addr = rec[1] << 8 | rec[2];
+    switch (rec[3]) {
+      case 0x00:
+        if (addr + rec[0] > 0x10000) return fail("data past 64 KB");
+        for (unsigned i = 0; i < rec[0]; ++i) {
+          image.bytes[addr + i] = rec[4 + i];
+          image.used[addr + i] = true;
+        }
+        image.size += rec[0];
+        break;
+      case 0x01:
+        ended = true;
+        break;
+      case 0x02:
+      case 0x04:
+        if (rec[0] != 2 || rec[4] != 0 || rec[5] != 0) return fail("address above 64 KB");
+        break;
+      case 0x03:
+      case 0x05:
+        break;
+      default:
+        return fail(fmt::format("record type {:02X}", rec[3]));
+    }
+  }
+  if (!ended) {
+    error = fmt::format("line {}: no end-of-file record", line_no);
+    return false;
+  }
+  return true;
+}
+
+}  // namespace mcs51

@@ -1,0 +1,46 @@
+// An 80C32 beside the chip (docs/cpu.md): the MCS-51 core's XDATA space reaches the chip through
+// the parallel bus in Intel mode at a base address the board chooses, X/INT drives INT0, and the
+// CPU's oscillator and the chip's clock are merged in one time base.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "dpc31/chip.hpp"
+#include "mcs51/cpu.hpp"
+
+namespace dpc31 {
+
+class Cpu51Board final : public mcs51::XdataBus {
+ public:
+  // The chip's window: [base, base + window) of XDATA; the rest is the board's plain RAM.
+  static constexpr std::uint32_t window = 0x1000;
+
+  // Throws std::invalid_argument for a CPU clock of 0 or one so fast that a MOVX strobe would
+  // end less than one bus access after its instruction starts.
+  Cpu51Board(Chip& chip, std::uint32_t cpu_hz, std::uint16_t base);
+
+  mcs51::Cpu& cpu() { return cpu_; }
+  // The chip cycle of an instant given in CPU oscillator clocks from reset: the first chip clock
+  // edge at or after it, ceil(clock * chip_hz / cpu_hz) (docs/timing.md, "An 80C32 beside the
+  // chip").
+  std::uint64_t chip_cycle_of(std::uint64_t cpu_clock) const;
+  // Runs CPU and chip together until the chip's cycle is at least `chip_cycle`.
+  void run_until(std::uint64_t chip_cycle);
+
+  std::uint8_t read(std::uint16_t addr, std::uint64_t clock) override;
+  void write(std::uint16_t addr, std::uint8_t value, std::uint64_t clock) override;
+
+ private:
+  void chip_to(std::uint64_t cycle);
+  // Steps the chip so that an access starting now completes at the strobe's end.
+  void access_at(std::uint64_t clock);
+
+  Chip& chip_;
+  mcs51::Cpu cpu_;
+  std::uint32_t cpu_hz_;
+  std::uint16_t base_;
+  std::vector<std::uint8_t> ram_ = std::vector<std::uint8_t>(0x10000, 0);
+};
+
+}  // namespace dpc31

@@ -1,0 +1,110 @@
+// The 80C32 beside the chip (session/cpu51_board.*, docs/cpu.md): every MOVX lands in the chip
+// at the chip cycle the bus timing gives, X/INT reaches INT0. Expected cycles by hand from
+// docs/cpu.md ("MOVX timing": RD/WR rises 18 oscillator clocks after the MOVX starts; the chip
+// cycle is ceil(clock * 48 MHz / f_cpu)) and docs/timing.md (an access completes 4 clocks after
+// it starts; X/INT follows the request in the same cycle).
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include "cpu51_board.hpp"
+#include "mcs51/ihex.hpp"
+
+namespace dpc31 {
+namespace {
+
+struct Seen {
+  std::uint64_t cycle;
+  bool write;
+  std::uint16_t addr;
+  std::uint8_t data;
+  bool operator==(const Seen&) const = default;
+};
+
+struct Observed {
+  std::vector<Seen> accesses;
+  std::vector<std::pair<std::uint64_t, bool>> irq;
+};
+
+Observed run_xint_ack(std::uint32_t cpu_hz) {
+  std::ifstream in(BOARD_DIR "/xint_ack.ihx");
+  std::stringstream text;
+  text << in.rdbuf();
+  mcs51::HexImage img;
+  std::string error;
+  EXPECT_TRUE(mcs51::parse_ihex(text.str(), img, error)) << error;
+  Chip chip({Profile::spc3, BusMode::intel});
+  Observed run;
+  chip.on_bus_access([&](std::uint64_t c, const BusAccess& a) {
+    run.accesses.push_back({c, a.write, a.addr, a.data});
+  });
+  chip.on_irq_change([&](std::uint64_t c, bool active) { run.irq.emplace_back(c, active); });
+  Cpu51Board board(chip, cpu_hz, 0x8000);
+  board.cpu().load_code(0, img.bytes);
+  board.run_until(2000);
+  EXPECT_EQ(board.cpu().in_service(), 0);
+  return run;
+}
+
+TEST(Cpu51Board, MovxLandsAtTheStrobesEndAt24MHz) {
+  // 24 MHz: one oscillator clock is 2 chip clocks. MOVX in machine cycles [5,7), [12,14) and,
+  // in the routine after the INT0 call, [22,24) (board/xint_ack.asm): strobe ends at clocks
+  // 60 + 18 = 78, 144 + 18 = 162, 264 + 18 = 282. X/INT goes active at the second one's strobe,
+  // INT0 is sampled low in the same cycle (13, S5P2 after the strobe), polled in 14 (the NOP),
+  // the call is [15,17).
+  Observed run = run_xint_ack(24'000'000);
+  std::vector<Seen> want = {
+      {156, true, 0x004, 0xEF}, {324, true, 0x000, 0x10}, {564, true, 0x002, 0x10}};
+  EXPECT_EQ(run.accesses, want);
+  std::vector<std::pair<std::uint64_t, bool>> irq = {{324, true}, {564, false}};
+  EXPECT_EQ(run.irq, irq);
+}
+
+TEST(Cpu51Board, MovxLandsAtTheStrobesEndAt11_0592MHz) {
+  // 48 MHz / 11.0592 MHz = 625/144: clocks 78, 162, 282 → ceil(338.54) = 339,
+  // ceil(703.125) = 704, ceil(1223.96) = 1224.
+  Observed run = run_xint_ack(11'059'200);
+  std::vector<Seen> want = {
+      {339, true, 0x004, 0xEF}, {704, true, 0x000, 0x10}, {1224, true, 0x002, 0x10}};
+  EXPECT_EQ(run.accesses, want);
+  std::vector<std::pair<std::uint64_t, bool>> irq = {{704, true}, {1224, false}};
+  EXPECT_EQ(run.irq, irq);
+}
+
+TEST(Cpu51Board, AnX_IntChangeIsSampledInTheCycleWhoseS5p2SeesIt) {
+  // 24 MHz (chip cycle = 2 x clock). Start_SPC3 completes at s = 2 x (144 + 18) = 324; the first
+  // User_Timer_Clock at s + 48 000 = 48 324 (docs/timing.md, Timers) drives X/INT active. CPU
+  // cycle j samples INT0 at clock 12j + 10, chip cycle 24j + 20 >= 48 324 first for j = 2013:
+  // the second cycle of the MUL [2012, 2016) (2012 = 14 + 6 x 333). Sampled before the MUL's
+  // last cycle, it is called after it: [2016, 2018); LJMP [2018, 2020), MOV DPTR, MOV A, the
+  // acknowledge MOVX [2023, 2025): strobe at clock 24 276 + 18 = 24 294, chip cycle 48 588.
+  std::ifstream in(BOARD_DIR "/user_timer.ihx");
+  std::stringstream text;
+  text << in.rdbuf();
+  mcs51::HexImage img;
+  std::string error;
+  ASSERT_TRUE(mcs51::parse_ihex(text.str(), img, error)) << error;
+  Chip chip({Profile::spc3, BusMode::intel});
+  std::vector<std::pair<std::uint64_t, bool>> irq;
+  chip.on_irq_change([&](std::uint64_t c, bool active) { irq.emplace_back(c, active); });
+  Cpu51Board board(chip, 24'000'000, 0x8000);
+  board.cpu().load_code(0, img.bytes);
+  board.run_until(50'000);
+  std::vector<std::pair<std::uint64_t, bool>> want = {{48'324, true}, {48'588, false}};
+  EXPECT_EQ(irq, want);
+}
+
+TEST(Cpu51Board, TheTimeBaseIsExact) {
+  Chip chip({Profile::spc3, BusMode::intel});
+  Cpu51Board b40(chip, 40'000'000, 0);
+  EXPECT_EQ(b40.chip_cycle_of(5), 6u);                                         // 5 * 1.2
+  EXPECT_EQ(b40.chip_cycle_of(10), 12u);                                       // exact, no rounding
+  EXPECT_EQ(b40.chip_cycle_of(3'600ULL * 40'000'000), 3'600ULL * 48'000'000);  // one hour
+  EXPECT_THROW(Cpu51Board(chip, 0, 0), std::invalid_argument);
+  EXPECT_THROW(Cpu51Board(chip, 400'000'000, 0), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace dpc31

@@ -1,0 +1,44 @@
+// Intel HEX records (Intel's "Hexadecimal Object File Format Specification", rev. A).
+#include "mcs51/ihex.hpp"
+
+#include <gtest/gtest.h>
+
+namespace mcs51 {
+namespace {
+
+TEST(Mcs51Hex, DataRecordsLandAtTheirAddresses) {
+  // What sdld wrote for MOV A,#12h; MOV B,#3; MUL AB; ... (checksums by the specification).
+  HexImage img;
+  std::string err;
+  ASSERT_TRUE(parse_ihex(":0C000000741275F003A47830F6A380FEA3\r\n:00000001FF\n", img, err)) << err;
+  EXPECT_EQ(img.size, 12u);
+  EXPECT_EQ(img.bytes[0], 0x74);
+  EXPECT_EQ(img.bytes[11], 0xFE);
+  EXPECT_TRUE(img.used[11]);
+  EXPECT_FALSE(img.used[12]);
+}
+
+TEST(Mcs51Hex, BadRecordsNameTheirLine) {
+  const std::pair<const char*, const char*> bad[] = {
+      {":0C000000741275F003A47830F6A380FEA4\n", "line 1: checksum"},
+      {"\n0C000000\n", "line 2: a record starts with ':'"},
+      {":0200000074\n", "line 1: length does not match the byte count"},
+      {":02000000741\n", "line 1: short record"},
+      {":0100000G00\n", "line 1: not a hex digit"},
+      {":03000000741275\n", "line 1: length does not match the byte count"},
+      {":02FFFF00000000\n:00000001FF\n", "line 1: data past 64 KB"},
+      {":020000040001F9\n", "line 1: address above 64 KB"},
+      {":0000000AF6\n", "line 1: record type 0A"},
+      {":0100000000FF\n", "line 1: no end-of-file record"},
+      {":00000001FF\n:0100000000FF\n", "line 2: record after the end-of-file record"},
+  };
+  for (auto [text, why] : bad) {
+    HexImage img;
+    std::string err;
+    EXPECT_FALSE(parse_ihex(text, img, err)) << text;
+    EXPECT_EQ(err, why) << text;
+  }
+}
+
+}  // namespace
+}  // namespace mcs51
