@@ -284,6 +284,60 @@ void ChipCore::bus_write_ref(std::uint32_t addr, std::uint8_t value) {
   signals.state(clock.now);
 }
 
+namespace {
+
+// Where the other profiles have a register at `a` (a firmware written for another chip is the
+// usual reason for unmapped accesses): "; on spc3 it is Int_Reg, ..." or "".
+std::string other_profiles_at(Profile self, std::uint32_t a, bool write) {
+  std::string s;
+  for (const Profile p : kAllProfiles) {
+    if (p == self) continue;
+    for (const RegDesc& r : profile_desc(p).regs) {
+      const std::int32_t base = write ? r.write_addr : r.read_addr;
+      if (base < 0 || a < static_cast<std::uint32_t>(base) ||
+          a >= static_cast<std::uint32_t>(base) + r.width / 8u)
+        continue;
+      s += fmt::format("{} {} it is {}", s.empty() ? "; on" : ", on", profile_desc(p).name, r.name);
+      break;
+    }
+  }
+  return s;
+}
+
+}  // namespace
+
+// Unmapped accesses never flood the log (docs/decisions.md, "Logs that never flood"): the first
+// names the likely cause, the first kUnmappedLines addresses get a line each, and after that a
+// count at 10, 100, 1000, ... accesses.
+void ChipCore::note_unmapped(std::uint32_t a, std::string_view access) {
+  constexpr std::size_t kUnmappedLines = 16;
+  ++unmapped_count;
+  const std::uint16_t region = regs.region_index(a);
+  const std::string_view where =
+      region != kNoReg ? prof().regions[region].name : std::string_view("no region");
+  const bool write = access.starts_with("write");
+  const std::string_view result = write ? "ignored" : "reads 00h";
+  if (unmapped_count == 1) {
+    signals.log(LogLevel::warn,
+                "{} unmapped address {:#06x} ({}): {}{}; a firmware written for another chip? "
+                "(--profile, --variant); further unmapped accesses are counted",
+                access, a, where, result, other_profiles_at(prof().id, a, write));
+    unmapped_logged.push_back(a);
+    return;
+  }
+  if (unmapped_logged.size() < kUnmappedLines &&
+      std::find(unmapped_logged.begin(), unmapped_logged.end(), a) == unmapped_logged.end()) {
+    unmapped_logged.push_back(a);
+    signals.log(LogLevel::warn, "{} unmapped address {:#06x} ({}): {}", access, a, where, result);
+    return;
+  }
+  std::uint64_t p = 10;
+  while (p < unmapped_count) p *= 10;
+  if (p == unmapped_count)
+    signals.log(LogLevel::warn, "{} accesses to unmapped addresses so far (the latest: {} {:#06x})",
+                unmapped_count, access, a);
+}
+
 std::uint8_t ChipCore::read_now(std::uint32_t addr) {
   const std::uint32_t a = begin_access(addr, "read");
   const std::uint16_t i = regs.read_index(a);
@@ -295,8 +349,7 @@ std::uint8_t ChipCore::read_now(std::uint32_t addr) {
       }
       return regs.mem(a);
     }
-    signals.log(LogLevel::warn, "read of unmapped address {:#06x} ({}): reads 00h", a,
-                region != kNoReg ? prof().regions[region].name : std::string_view("no region"));
+    note_unmapped(a, "read of");
     return 0;
   }
   const RegDesc& r = prof().regs[i];
@@ -341,8 +394,7 @@ void ChipCore::write_now(std::uint32_t addr, std::uint8_t value) {
       regs.set_mem(a, value);
       return;
     }
-    signals.log(LogLevel::warn, "write {:02X}h to unmapped address {:#06x} ({}): ignored", value, a,
-                region != kNoReg ? prof().regions[region].name : std::string_view("no region"));
+    note_unmapped(a, fmt::format("write {:02X}h to", value));
     return;
   }
   const RegDesc& r = prof().regs[i];

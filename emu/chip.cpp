@@ -133,7 +133,10 @@ WdState Chip::wd_state() const { return core_->watchdog.state(); }
 void Chip::on_irq_change(std::function<void(std::uint64_t, bool)> cb) {
   core_->signals.irq.add(std::move(cb));
 }
-void Chip::set_log_sink(LogSink sink) { core_->signals.sink = std::move(sink); }
+void Chip::set_log_sink(LogSink sink) {
+  core_->signals.flush_log();  // what the old sink is still owed (a repeat count, lines left out)
+  core_->signals.sink = std::move(sink);
+}
 const ProfileDesc& Chip::profile() const { return core_->prof(); }
 BusMode Chip::bus_mode() const { return core_->regs.bus(); }
 std::optional<Vpc3Variant> Chip::vpc3_variant() const { return core_->variant; }

@@ -77,6 +77,9 @@ struct ChipCore {
   HookTable hooks{};
   bool stop = false;               // Chip::request_stop
   std::uint16_t written_bits = 0;  // the lane-aligned value of the write the hooks are serving
+  // Accesses to unmapped addresses (bus.cpp, note_unmapped): a log, not chip state.
+  std::uint64_t unmapped_count = 0;
+  std::vector<std::uint32_t> unmapped_logged;  // the first few addresses, one line each
 
   [[nodiscard]] const ProfileDesc& prof() const { return regs.profile(); }
   void reset();  // the hardware reset: cycle 0, every block in its reset state
@@ -96,6 +99,7 @@ struct ChipCore {
   // The access itself, in the current cycle (the lockstep harness strobes it per cycle).
   std::uint8_t read_now(std::uint32_t addr);
   void write_now(std::uint32_t addr, std::uint8_t value);
+  void note_unmapped(std::uint32_t a, std::string_view access);
   [[nodiscard]] std::uint8_t peek(std::uint32_t addr) const;
   bool poke(std::uint32_t addr, std::uint8_t value);
   [[nodiscard]] std::uint16_t reg_value(RegId id) const;  // storage or derived (no side effect)

@@ -21,4 +21,57 @@ LogSink stderr_sink(LogLevel min_level) {
   };
 }
 
+void LogLimiter::pass(std::vector<std::string>& out, std::string line) {
+  if (in_window_ < burst_) {
+    ++in_window_;
+    out.push_back(std::move(line));
+  } else {
+    ++left_out_;
+    ++left_out_total_;
+  }
+}
+
+std::vector<std::string> LogLimiter::add(std::uint64_t cycle, std::string_view text) {
+  std::vector<std::string> out;
+  if (cycle >= window_start_ + window_) {
+    if (left_out_ != 0)
+      out.push_back(
+          fmt::format("{} log lines left out in the {} cycles before (at most {} a window)",
+                      left_out_, window_, burst_));
+    window_start_ = cycle - (cycle - window_start_) % window_;
+    in_window_ = 0;
+    left_out_ = 0;
+  }
+  if (!last_.empty() && text == last_) {
+    ++repeats_;
+    // 10, 100, 1000, ...: a run that never ends still says how long it is.
+    std::uint64_t p = 10;
+    while (p < repeats_) p *= 10;
+    if (p == repeats_) {
+      pass(out, fmt::format("last line repeated {} times so far", repeats_));
+      repeats_reported_ = repeats_;
+    }
+    return out;
+  }
+  if (repeats_ > repeats_reported_) pass(out, fmt::format("last line repeated {} times", repeats_));
+  repeats_ = 0;
+  repeats_reported_ = 0;
+  last_.assign(text);
+  pass(out, std::string(text));
+  return out;
+}
+
+std::vector<std::string> LogLimiter::flush() {
+  std::vector<std::string> out;
+  if (repeats_ > repeats_reported_)
+    out.push_back(fmt::format("last line repeated {} times", repeats_));
+  if (left_out_ != 0)
+    out.push_back(
+        fmt::format("{} log lines left out (at most {} in {} cycles)", left_out_, burst_, window_));
+  repeats_ = repeats_reported_ = 0;
+  left_out_ = 0;
+  last_.clear();
+  return out;
+}
+
 }  // namespace dpc31

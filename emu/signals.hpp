@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <span>
@@ -50,19 +51,32 @@ struct Signals {
   Observers<const Telegram&> telegram;
   Observers<std::uint64_t, const BlockEvent&> block;
   Observers<std::uint64_t, const BusAccess&> bus;
-  Observers<std::uint64_t> state;  // after every event and every bus access
+  Observers<std::uint64_t> state;              // after every event and every bus access
+  mutable std::array<LogLimiter, 4> limiters;  // per LogLevel; they go with the sink
 
   // Reports a protocol-side action on the blocks (call sites only, never inside the actions).
   void emit(BlockEvent::Kind k, std::uint16_t value = 0, std::uint8_t data = 0) const {
     if (block) block(clock->now, BlockEvent{k, value, data});
   }
+  // Through the level's limiter (folded, bounded: dpc31::LogLimiter); one per level, so that a
+  // flood of remarks never crowds out a warning.
   template <typename... Args>
   void log(LogLevel level, fmt::format_string<Args...> f, Args&&... args) const {
-    if (sink) sink(LogRecord{clock->now, level, fmt::format(f, std::forward<Args>(args)...)});
+    if (!sink) return;
+    for (std::string& t : limiters[static_cast<std::size_t>(level)].add(
+             clock->now, fmt::format(f, std::forward<Args>(args)...)))
+      sink(LogRecord{clock->now, level, std::move(t)});
+  }
+  // What the limiters still owe goes to the sink (before it is replaced, at the end of a run).
+  void flush_log() const {
+    for (std::size_t l = 0; l < limiters.size(); ++l)
+      for (std::string& t : limiters[l].flush())
+        if (sink) sink(LogRecord{clock->now, static_cast<LogLevel>(l), std::move(t)});
   }
   // Everything attached moves to another chip's Signals (a snapshot load); the clock stays.
   void take_attachments(Signals& from) noexcept {
     sink = std::move(from.sink);
+    limiters = std::move(from.limiters);
     irq = std::move(from.irq);
     pb3 = std::move(from.pb3);
     txd = std::move(from.txd);

@@ -130,11 +130,25 @@ void Responder::init(BusPort& c) {
     return;
   }
   // The DPC31 starts its MAC through the Instruction_Queue (DPC31 p.22, Table 5.1-3): the entry
-  // MAC_Start, then InstQ_Wr past it.
+  // MAC_Start, then InstQ_Wr past it; with the user watchdog, DPS_User_Wd Enable in the same
+  // write (p.31: it loads R_User_WD_Value and counts down every 10 ms).
+  instq_wr_ = 0;
+  if (cfg_.user_watchdog) {
+    request(c, {{request::MAC_Start, 0x00}, {request::DPS_User_Wd, request::Wd_Enable}});
+  } else {
+    request(c, {{request::MAC_Start, 0x00}});
+  }
+}
+
+void Responder::request(BusPort& c,
+                        std::initializer_list<std::pair<std::uint8_t, std::uint8_t>> entries) {
   const std::uint32_t instq = buffer(c, RegId::InstQ_Base);
-  c.write(instq, request::MAC_Start);
-  c.write(instq + 1, 0x00);
-  c.write(cell_addr(c.chip(), RegId::InstQ_Wr), 1);
+  for (const auto& [code, parameter] : entries) {
+    c.write(instq + instq_wr_ * request::kEntryBytes, code);
+    c.write(instq + instq_wr_ * request::kEntryBytes + 1, parameter);
+    instq_wr_ = static_cast<std::uint8_t>((instq_wr_ + 1) % kQueueLen);
+  }
+  c.write(cell_addr(c.chip(), RegId::InstQ_Wr), instq_wr_);
 }
 
 // dpc31: after a cleared fetch the old U is the new clear buffer C; prepare the substitute values.
@@ -194,7 +208,13 @@ void Responder::isr(BusPort& c) {
       if (outputs.back().cleared && c.chip().profile().id == Profile::dpc31) refill_substitute(c);
     }
     give_inputs(c);
-    if (cfg_.user_watchdog) c.write(waddr(c.chip(), RegId::Mode_Reg1_S), m1::Res_User_WD);
+    if (cfg_.user_watchdog) {
+      if (c.chip().profile().id == Profile::dpc31) {
+        request(c, {{request::DPS_User_Wd, request::Wd_Reset}});
+      } else {
+        c.write(waddr(c.chip(), RegId::Mode_Reg1_S), m1::Res_User_WD);
+      }
+    }
   }
   const auto ack = static_cast<std::uint16_t>(ir & ~kHandledByReads);
   if (ack != 0) write16(c, RegId::Int_Ack_Reg, ack);

@@ -5,6 +5,8 @@
 #pragma once
 
 #include <cstdint>
+#include <initializer_list>
+#include <utility>
 #include <vector>
 
 #include "cpu.hpp"
@@ -18,7 +20,9 @@ struct ResponderConfig {
   bool sync_supported = true;
   bool freeze_supported = true;
   bool spec_clear_mode = true;
-  bool user_watchdog = false;  // Res_User_WD on every DX_Out
+  // The user watchdog, reset on every DX_Out: Res_User_WD on the SPC3 and VPC3+; on the DPC31 the
+  // DPS_User_Watchdog through the Instruction_Queue (Enable at the start, Reset on every DX_Out).
+  bool user_watchdog = false;
   std::uint16_t user_wd_value = 0x01FF;
   std::uint8_t wd_baud_control = 0x10;   // x 10 ms
   std::vector<std::uint8_t> substitute;  // dpc31 clear buffer C contents
@@ -54,9 +58,13 @@ class Responder {
   // Hands U over (New_Din_Buffer_Cmd) with `inputs`; without inputs only if `always`.
   void give_inputs(BusPort& c, bool always = false);
   void refill_substitute(BusPort& c);
+  // dpc31: puts requests (code, parameter) into the Instruction_Queue and moves InstQ_Wr past
+  // them with one write: the MAC executes them in that write's completion cycle.
+  void request(BusPort& c, std::initializer_list<std::pair<std::uint8_t, std::uint8_t>> entries);
 
   ResponderConfig cfg_;
   std::uint32_t seg_shift_ = 3;
+  std::uint8_t instq_wr_ = 0;  // dpc31: the next free Instruction_Queue entry
 };
 
 }  // namespace dpc31

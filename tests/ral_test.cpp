@@ -211,6 +211,9 @@ TEST_P(Ral, ReservedAddressesAreLoggedByName) {
   }
 }
 
+// Every unmapped address reads 00h and ignores writes; the log names the first accesses and then
+// counts (docs/decisions.md, "Logs that never flood"): the first line says the likely cause, the
+// first 16 addresses get a line each, and then one line at 10, 100, 1 000, ... accesses.
 TEST_P(Ral, UnmappedAddressesReadZeroAndAreLogged) {
   Chip c = make();
   const ProfileDesc& p = c.profile();
@@ -218,14 +221,18 @@ TEST_P(Ral, UnmappedAddressesReadZeroAndAreLogged) {
   for (const RegionDesc& r : p.regions) {
     if (r.ram || r.name == "processor parameters" || r.name == "access violation") continue;
     for (std::uint32_t a = r.begin; a < r.end; ++a) {
-      log_.clear();
       c.write(a, 0xFF);
       ASSERT_EQ(c.read(a), 0) << a;
-      ASSERT_EQ(log_.count_containing("unmapped"), 2u) << a;
       ++unmapped;
     }
   }
   EXPECT_EQ(unmapped, p.id == Profile::dpc31 ? 0x800u - 0x18u : 0u);
+  if (unmapped != 0) {
+    // 4 048 accesses: 16 address lines and the counts at 10, 100 and 1 000.
+    EXPECT_EQ(log_.count_containing("unmapped"), 16u + 3u);
+    EXPECT_EQ(log_.count_containing("--profile"), 1u);
+    EXPECT_EQ(log_.count_containing("1000 accesses to unmapped addresses so far"), 1u);
+  }
   log_.clear();
   c.read(0x10000u | p.user_base);  // address lines the chip does not have
   EXPECT_EQ(log_.count_containing("beyond"), 1u);

@@ -1,5 +1,6 @@
 // Scenario files (docs/scenario-format.md): parse errors name FILE:LINE, a failed expect exits 1
 // with its line, nothing runs when a file does not parse, and every shipped scenario passes.
+#include <fmt/core.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -328,4 +329,48 @@ TEST(ScenarioRun, CliExitCodes) {
   EXPECT_NE(text.find("\"failed\": 1"), std::string::npos) << text;
   EXPECT_NE(text.find("\"dp_state\": \"Data_Exchange\""), std::string::npos) << text;
   EXPECT_FALSE(fs::exists(json + ".tmp"));
+}
+
+// `user user_wd=1` on the dpc31 runs the DPS_User_Watchdog through the Instruction_Queue, as a
+// firmware would (issue 31: the option did nothing there). DPC31 p.31: "started by a
+// user-parameterized value ... decremented every 10 msec. If the timer reaches the value '0000h',
+// DPS ... executes 'Leave_Master'"; docs/dpc31.md: Enable at cycle e starts the 10 ms time base
+// (decrements at e + k x 480 000 at 48 MHz), Reset reloads the value without moving that phase,
+// requests act in the completion cycle of the InstQ_Wr write. So after the last Reset at r, with
+// value V = 5, Leave_Master falls on the 5th decrement after r: e + 480 000 x (k + 4), k the
+// first decrement after r. e and r are read off the bus, as a logic analyser on it would.
+TEST(ScenarioRun, Dpc31UserWatchdogExpiresAtItsCycle) {
+  dpc31::Scenario s;
+  dpc31::ScenarioError err;
+  ASSERT_TRUE(dpc31::load_scenario((kTraces / "user_wd_expiry_dpc31.scn").string(), s, err))
+      << err.message;
+  std::vector<std::uint64_t> instq_writes;  // completion cycles of the writes to InstQ_Wr
+  std::uint64_t leave = 0;                  // Data_Exchange -> Wait_Prm
+  dpc31::ScenarioHooks hooks;
+  hooks.at_start = [&](dpc31::Chip& chip) {
+    const auto* instq_wr = dpc31::find_reg(chip.profile(), "InstQ_Wr");
+    chip.on_bus_access(
+        [&, addr = instq_wr->write_addr](std::uint64_t c, const dpc31::BusAccess& a) {
+          if (a.write && a.addr == addr) instq_writes.push_back(c);
+        });
+    chip.on_state_change([&, dx = false](std::uint64_t c) mutable {
+      const bool now = chip.dp_state() == dpc31::DpState::Data_Exchange;
+      if (dx && !now && leave == 0) leave = c;
+      dx = now;
+    });
+  };
+  Lines walk;
+  const dpc31::ScenarioOutcome o = dpc31::run_scenario(s, walk.sink(), {}, hooks);
+  EXPECT_EQ(o.failed, 0u);
+  ASSERT_GE(instq_writes.size(), 3u);       // MAC_Start + Enable, then a Reset per DX_Out
+  constexpr std::uint64_t kTick = 480'000;  // 10 ms at 48 MHz
+  const std::uint64_t e = instq_writes.front();
+  std::uint64_t r = 0;  // the last Reset before the expiry
+  for (std::uint64_t c : instq_writes)
+    if (c < leave) r = c;
+  ASSERT_GT(r, e);
+  ASSERT_NE((r - e) % kTick, 0u);  // not on a decrement: no same-cycle order to decide
+  const std::uint64_t k = (r - e) / kTick + 1;
+  EXPECT_EQ(leave, e + kTick * (k + 4));
+  EXPECT_TRUE(walk.has(fmt::format("[cycle {:>10}] dp_state Data_Exchange -> Wait_Prm", leave)));
 }

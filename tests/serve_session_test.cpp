@@ -90,7 +90,10 @@ TEST(ServeSession, LogLinesFollowTheClientsLevel) {
   EXPECT_EQ(s("read 0x18"), "OK 0x00");
   ASSERT_EQ(s.lines.size(), 1u);  // emitted; the server filters per client
   EXPECT_EQ(s.lines[0],
-            "! log 4 warn read of unmapped address 0x0018 (register area (unused)): reads 00h");
+            "! log 4 warn read of unmapped address 0x0018 (register area (unused)): reads 00h; "
+            "on spc3 it is R_User_WD_Value, on vpc3plus it is R_User_WD_Value; a firmware "
+            "written for another chip? (--profile, --variant); further unmapped accesses are "
+            "counted");
   EXPECT_EQ(s("log info"), "OK");
   EXPECT_EQ(s.client.log_level, dpc31::LogLevel::info);
   EXPECT_EQ(s("log off"), "OK");

@@ -227,6 +227,9 @@ class Chip {
   [[nodiscard]] const FdlCounters& fdl_counters() const;
   [[nodiscard]] std::uint8_t station_address() const;
   [[nodiscard]] std::uint32_t bit_cycles() const;  // at the current (or searched) baud rate
+  // The chip's log: every line passes a LogLimiter per level first (folded repeats, at most
+  // LogLimiter::kBurst lines per level in LogLimiter::kWindow cycles). Replacing the sink (an
+  // empty one at the end of a run) first gives the old one what its limiters still owe.
   void set_log_sink(LogSink sink);
 
   [[nodiscard]] const ProfileDesc& profile() const;

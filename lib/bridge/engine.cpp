@@ -81,7 +81,9 @@ Engine::Engine(const Setup& setup, LogSink log)
     : setup_(setup),
       log_(std::move(log)),
       chip_(setup.chip),
-      t_(dpc31::bit_cycles(chip_.clock_hz(), setup.baud)) {
+      t_(dpc31::bit_cycles(chip_.clock_hz(), setup.baud)),
+      // Every telegram is a line at the telegrams level: its bound is the busiest real line's.
+      limiter_(setup.log_detail == LogDetail::telegrams ? kTelegramBurst : LogLimiter::kBurst) {
   chip_.set_log_sink([this](const LogRecord& r) {
     if (r.level >= LogLevel::info) add_line(r.cycle, "CHIP", r.text);
   });
@@ -144,12 +146,24 @@ void Engine::release_log(std::uint64_t upto) {
   std::stable_sort(held_.begin(), held_.end(),
                    [](const HeldLine& a, const HeldLine& b) { return a.cycle < b.cycle; });
   std::size_t n = 0;
-  for (; n < held_.size() && held_[n].cycle <= upto; ++n)
-    log_(held_[n].cycle, held_[n].tag, held_[n].text);
+  for (; n < held_.size() && held_[n].cycle <= upto; ++n) {
+    const HeldLine& l = held_[n];
+    const std::string key = fmt::format("{} {}", l.tag, l.text);
+    for (const std::string& s : limiter_.add(l.cycle, key)) {
+      if (s == key) {
+        log_(l.cycle, l.tag, l.text);
+      } else {
+        log_(l.cycle, "LOG", s);  // a repeat count, or how many lines were left out
+      }
+    }
+  }
   held_.erase(held_.begin(), held_.begin() + static_cast<std::ptrdiff_t>(n));
 }
 
-void Engine::flush_log() { release_log(UINT64_MAX); }
+void Engine::flush_log() {
+  release_log(UINT64_MAX);
+  for (const std::string& s : limiter_.flush()) log_(chip_.cycle(), "LOG", s);
+}
 
 void Engine::note(const std::string& text) {
   add_line(chip_.cycle(), "NOTE", text);

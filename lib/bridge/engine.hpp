@@ -55,6 +55,10 @@ struct Setup {
 // an answer's line is known at its end but stamped with its start).
 using LogSink = std::function<void(std::uint64_t cycle, std::string_view tag, const std::string&)>;
 
+// The bridge's log bound at the telegrams level (docs/bridge.md, "The log"): a line at 12 Mbaud
+// carries up to about 80 000 telegrams a second; the events level has LogLimiter::kBurst.
+inline constexpr std::uint32_t kTelegramBurst = 200'000;
+
 // "FDL_Status 2->5 FC 49", "DL 5->2 SAP 60->62 DU 02 05 00 FF 0D 04", "broken (bad_fcs)".
 std::string telegram_summary(std::span<const std::uint8_t> bytes);
 // "10 05 02 49 50 16".
@@ -164,6 +168,7 @@ class Engine {
     std::string text;
   };
   std::vector<HeldLine> held_;       // in the order they arose
+  LogLimiter limiter_;               // the log never floods (docs/bridge.md, "The log")
   std::vector<std::uint32_t> port_;  // the last value logged per port (events level)
   std::vector<bool> port_logged_;    // whether a value was logged for the port yet
 };

@@ -1,0 +1,111 @@
+// Logs that never flood (docs/decisions.md, "Logs that never flood"): dpc31::LogLimiter, and the
+// chip's log of unmapped accesses, driven through the bus as a firmware written for another chip
+// would.
+#include "dpc31/log.hpp"
+
+#include <fmt/core.h>
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "dpc31/chip.hpp"
+#include "test_util.hpp"
+
+using namespace dpc31;
+
+namespace {
+
+std::vector<std::string> feed(LogLimiter& l, std::uint64_t cycle, const std::string& text) {
+  return l.add(cycle, text);
+}
+
+}  // namespace
+
+TEST(LogLimiter, RepeatsAreFoldedAndCountedAtPowersOfTen) {
+  LogLimiter l;
+  EXPECT_EQ(feed(l, 0, "a"), std::vector<std::string>{"a"});
+  for (int i = 1; i < 10; ++i) EXPECT_TRUE(feed(l, 0, "a").empty()) << i;
+  EXPECT_EQ(feed(l, 0, "a"), std::vector<std::string>{"last line repeated 10 times so far"});
+  for (int i = 11; i < 13; ++i) EXPECT_TRUE(feed(l, 0, "a").empty());
+  // Another line: the repeats not yet said, then the line.
+  EXPECT_EQ(feed(l, 0, "b"), (std::vector<std::string>{"last line repeated 12 times", "b"}));
+  EXPECT_EQ(feed(l, 0, "a"), std::vector<std::string>{"a"});
+  EXPECT_TRUE(feed(l, 0, "a").empty());
+  EXPECT_EQ(l.flush(), std::vector<std::string>{"last line repeated 1 times"});
+  EXPECT_TRUE(l.flush().empty());
+}
+
+TEST(LogLimiter, AtMostBurstLinesPerWindowAndOneLineForTheRest) {
+  LogLimiter l(3, 100);
+  EXPECT_EQ(feed(l, 0, "1").size(), 1u);
+  EXPECT_EQ(feed(l, 10, "2").size(), 1u);
+  EXPECT_EQ(feed(l, 20, "3").size(), 1u);
+  EXPECT_TRUE(feed(l, 30, "4").empty());  // the fourth in cycles 0..99
+  EXPECT_TRUE(feed(l, 99, "5").empty());
+  EXPECT_EQ(l.left_out(), 2u);
+  // Cycle 100 opens the next window: what was left out is said first.
+  EXPECT_EQ(feed(l, 100, "6"),
+            (std::vector<std::string>{
+                "2 log lines left out in the 100 cycles before (at most 3 a window)", "6"}));
+  EXPECT_EQ(feed(l, 250, "7").size(), 1u);  // a window later, nothing owed
+  EXPECT_EQ(feed(l, 251, "8").size(), 1u);
+  EXPECT_EQ(feed(l, 252, "9").size(), 1u);
+  EXPECT_TRUE(feed(l, 253, "10").empty());
+  EXPECT_EQ(l.flush(), std::vector<std::string>{"1 log lines left out (at most 3 in 100 cycles)"});
+}
+
+// A firmware written for the SPC3 on the dpc31 profile polls Status_Reg (04H/05H on the SPC3,
+// SPC3 manual p.24; unmapped on the dpc31, docs/dpc31.md): one line with the likely cause, then a
+// count at 10, 100, 1000, ... accesses (the bridge once wrote 1.27 M such lines in 2 s).
+TEST(LogLimiter, UnmappedPollingGivesOneHintAndThenCounts) {
+  Chip c({Profile::dpc31, BusMode::intel});
+  testutil::LogCapture log;
+  log.attach(c);
+  for (int i = 0; i < 100'000; ++i) EXPECT_EQ(c.read(0x05), 0);
+  ASSERT_EQ(log.records.size(), 6u);  // the hint; 10, 100, 1 000, 10 000 and 100 000 so far
+  EXPECT_NE(log.records[0].text.find("read of unmapped address 0x0005"), std::string::npos);
+  EXPECT_NE(log.records[0].text.find("on spc3 it is Status_Reg"), std::string::npos)
+      << log.records[0].text;
+  EXPECT_NE(log.records[0].text.find("--profile"), std::string::npos);
+  EXPECT_EQ(log.records[1].text,
+            "10 accesses to unmapped addresses so far (the latest: read of 0x0005)");
+  EXPECT_EQ(log.records[5].text,
+            "100000 accesses to unmapped addresses so far (the latest: read of 0x0005)");
+  EXPECT_EQ(log.records[0].cycle, 4u);  // the first access's 4 clocks (docs/timing.md)
+}
+
+// Remarks at one level never crowd out another's lines: each level has its own bound. On the
+// dpc31 (its internal work cells are RAM the user must not touch: an info line per access).
+TEST(LogLimiter, ChipLogIsBoundedPerLevel) {
+  {
+    Chip c({Profile::dpc31, BusMode::intel});
+    testutil::LogCapture log;
+    log.attach(c);
+    std::vector<std::uint32_t> reserved;  // registers that read 00h with a warning
+    for (const RegDesc& r : c.profile().regs)
+      if (r.kind == Kind::reserved && r.read_addr >= 0)
+        reserved.push_back(static_cast<std::uint32_t>(r.read_addr));
+    std::uint32_t remark = 0;  // RAM the user must not touch: read with an info line
+    for (const RegionDesc& g : c.profile().regions)
+      if (g.ram && g.reserved) remark = g.begin;
+    ASSERT_GE(reserved.size(), 2u);
+    ASSERT_NE(remark, 0u);
+    // Two alternating warnings: no repeats to fold, so only the window bounds them.
+    for (int i = 0; i < 5000; ++i) {
+      c.read(reserved[0]);
+      c.read(reserved[1]);
+    }
+    c.read(remark);  // an info line after the flood of warnings
+    std::size_t info = 0;
+    std::size_t warn = 0;
+    for (const LogRecord& r : log.records) (r.level == LogLevel::info ? info : warn) += 1;
+    EXPECT_EQ(warn, LogLimiter::kBurst);
+    EXPECT_EQ(info, 1u);
+    c.set_log_sink(nullptr);  // the end of the run: what the warn limiter owes is said
+    ASSERT_EQ(log.records.size(), LogLimiter::kBurst + 2);
+    EXPECT_EQ(log.records.back().text,
+              fmt::format("{} log lines left out (at most {} in {} cycles)",
+                          10000 - LogLimiter::kBurst, LogLimiter::kBurst, LogLimiter::kWindow));
+  }
+}
