@@ -144,10 +144,14 @@ void bind_user_side(py::module_& m) {
 // The built-in DP master on one chip's wire. It keeps the chip (and the user side) alive.
 struct PyMaster {
   PyMaster(py::object chip_obj, const MasterConfig& mc, const SlaveConfig& sc)
-      : chip_ref(std::move(chip_obj)), chip(chip_ref.cast<PyChip&>()), master(chip.chip, mc, sc) {}
+      : chip_ref(std::move(chip_obj)),
+        chip(chip_ref.cast<PyChip&>()),
+        config(mc),
+        m(std::make_unique<DpMaster>(chip.chip, mc, sc)) {}
   py::object chip_ref;
   PyChip& chip;
-  DpMaster master;
+  MasterConfig config;
+  std::unique_ptr<DpMaster> m;
   std::shared_ptr<FirmwareHost> firmware;
   std::shared_ptr<Responder> responder;
 
@@ -155,10 +159,20 @@ struct PyMaster {
   auto act(F&& f) {
     return chip.run(std::forward<F>(f));
   }
-  void check_no_user_side() const {
-    if (firmware || responder) {
-      raise(errors().error, "the master's chip already has its user side");
+  // The user side sets the chip up before the master's first request, and the master counts
+  // its bus idle from then on, as in a scenario (session/scenario_run.cpp): it is made anew.
+  template <typename Init>
+  void start_user_side(Init&& init) {
+    if (firmware || responder || m->counters().requests != 0) {
+      raise(errors().error,
+            "the user side starts once, before the master's first request (docs/python.md)");
     }
+    const SlaveConfig slave = m->slave();
+    act([&] {
+      DirectBus bus(chip.chip);
+      init(bus);
+    });
+    m = std::make_unique<DpMaster>(chip.chip, config, slave);
   }
 };
 
@@ -177,13 +191,9 @@ void bind_master(py::module_& m) {
       .def(
           "run_firmware",
           [](PyMaster& pm, const std::string& spec) {
-            pm.check_no_user_side();
             auto fw = std::make_shared<FirmwareHost>(find_firmware(spec));
-            pm.act([&] {
-              DirectBus bus(pm.chip.chip);
-              fw->init(bus, pm.master.slave().address);
-            });
-            pm.master.set_firmware(fw->program());
+            pm.start_user_side([&](BusPort& bus) { fw->init(bus, pm.m->slave().address); });
+            pm.m->set_firmware(fw->program());
             pm.firmware = fw;
             return fw;
           },
@@ -195,9 +205,8 @@ void bind_master(py::module_& m) {
           [](PyMaster& pm, const py::bytes& inputs, bool sync_supported, bool freeze_supported,
              bool spec_clear_mode, const py::bytes& substitute, bool user_watchdog,
              bool dx_out_port) {
-            pm.check_no_user_side();
             ResponderConfig rc;
-            rc.slave = pm.master.slave();
+            rc.slave = pm.m->slave();
             rc.sync_supported = sync_supported;
             rc.freeze_supported = freeze_supported;
             rc.spec_clear_mode = spec_clear_mode;
@@ -206,11 +215,8 @@ void bind_master(py::module_& m) {
             rc.dx_out_port = dx_out_port;
             auto r = std::make_shared<Responder>(rc);
             r->inputs = from_bytes(inputs);
-            pm.act([&] {
-              DirectBus bus(pm.chip.chip);
-              r->init(bus);
-            });
-            pm.master.set_firmware([r](BusPort& b) { r->isr(b); });
+            pm.start_user_side([&](BusPort& bus) { r->init(bus); });
+            pm.m->set_firmware([r](BusPort& b) { r->isr(b); });
             pm.responder = r;
             return r;
           },
@@ -222,19 +228,19 @@ void bind_master(py::module_& m) {
       .def_property_readonly("firmware", [](const PyMaster& pm) { return pm.firmware; })
       .def_property_readonly("responder", [](const PyMaster& pm) { return pm.responder; })
       .def_property_readonly("chip", [](const PyMaster& pm) { return pm.chip_ref; })
-      .def_property_readonly("slave", [](const PyMaster& pm) { return pm.master.slave(); })
-      .def_property_readonly("bit_cycles", [](const PyMaster& pm) { return pm.master.bit_cycles(); })
-      .def_property_readonly("counters", [](const PyMaster& pm) { return pm.master.counters(); })
-      .def_property_readonly("history", [](const PyMaster& pm) { return pm.master.history(); })
-      .def("clear_history", [](PyMaster& pm) { pm.master.clear_history(); })
+      .def_property_readonly("slave", [](const PyMaster& pm) { return pm.m->slave(); })
+      .def_property_readonly("bit_cycles", [](const PyMaster& pm) { return pm.m->bit_cycles(); })
+      .def_property_readonly("counters", [](const PyMaster& pm) { return pm.m->counters(); })
+      .def_property_readonly("history", [](const PyMaster& pm) { return pm.m->history(); })
+      .def("clear_history", [](PyMaster& pm) { pm.m->clear_history(); })
       .def(
           "startup",
-          [](PyMaster& pm, int tries) { return pm.act([&] { return pm.master.startup(tries); }); },
+          [](PyMaster& pm, int tries) { return pm.act([&] { return pm.m->startup(tries); }); },
           py::arg("tries") = 200)
       .def(
           "restart",
           [](PyMaster& pm, U64 tries, std::uint32_t retries) {
-            return pm.act([&] { return pm.master.restart(tries, retries); });
+            return pm.act([&] { return pm.m->restart(tries, retries); });
           },
           py::arg("tries") = 200, py::arg("retries") = 1)
       .def(
@@ -243,31 +249,31 @@ void bind_master(py::module_& m) {
              int fault_char) {
             const std::vector<U8> v = from_bytes(out);
             const UartFault f = fault_of(fault, fault_char);
-            return pm.act([&] { return pm.master.data_exchange(v, f); });
+            return pm.act([&] { return pm.m->data_exchange(v, f); });
           },
           py::arg("outputs"), py::arg("fault") = py::none(), py::arg("fault_char") = -1)
       .def(
           "global_control",
           [](PyMaster& pm, U8 command, U8 groups) {
-            return pm.act([&] { return pm.master.global_control(command, groups); });
+            return pm.act([&] { return pm.m->global_control(command, groups); });
           },
           py::arg("command"), py::arg("groups") = 0)
-      .def("slave_diag", [](PyMaster& pm) { return pm.act([&] { return pm.master.slave_diag(); }); })
-      .def("fdl_status", [](PyMaster& pm) { return pm.act([&] { return pm.master.fdl_status(); }); })
+      .def("slave_diag", [](PyMaster& pm) { return pm.act([&] { return pm.m->slave_diag(); }); })
+      .def("fdl_status", [](PyMaster& pm) { return pm.act([&] { return pm.m->fdl_status(); }); })
       .def(
           "set_prm",
-          [](PyMaster& pm, U8 extra) { return pm.act([&] { return pm.master.set_prm(extra); }); },
+          [](PyMaster& pm, U8 extra) { return pm.act([&] { return pm.m->set_prm(extra); }); },
           py::arg("station_status_extra") = 0)
-      .def("chk_cfg", [](PyMaster& pm) { return pm.act([&] { return pm.master.chk_cfg(); }); })
-      .def("get_cfg", [](PyMaster& pm) { return pm.act([&] { return pm.master.get_cfg(); }); })
+      .def("chk_cfg", [](PyMaster& pm) { return pm.act([&] { return pm.m->chk_cfg(); }); })
+      .def("get_cfg", [](PyMaster& pm) { return pm.act([&] { return pm.m->get_cfg(); }); })
       .def("read_inputs",
-           [](PyMaster& pm) { return pm.act([&] { return pm.master.read_inputs(); }); })
+           [](PyMaster& pm) { return pm.act([&] { return pm.m->read_inputs(); }); })
       .def("read_outputs",
-           [](PyMaster& pm) { return pm.act([&] { return pm.master.read_outputs(); }); })
+           [](PyMaster& pm) { return pm.act([&] { return pm.m->read_outputs(); }); })
       .def(
           "set_slave_address",
           [](PyMaster& pm, U8 a, bool no_change) {
-            return pm.act([&] { return pm.master.set_slave_address(a, no_change); });
+            return pm.act([&] { return pm.m->set_slave_address(a, no_change); });
           },
           py::arg("new_address"), py::arg("no_add_change") = false)
       .def(
@@ -275,7 +281,7 @@ void bind_master(py::module_& m) {
           [](PyMaster& pm, const fdl::Frame& req, const std::optional<std::string>& fault,
              int fault_char) {
             const UartFault f = fault_of(fault, fault_char);
-            return pm.act([&] { return pm.master.transact(req, f); });
+            return pm.act([&] { return pm.m->transact(req, f); });
           },
           py::arg("request"), py::arg("fault") = py::none(), py::arg("fault_char") = -1)
       .def(
@@ -284,22 +290,22 @@ void bind_master(py::module_& m) {
              int fault_char) {
             const std::vector<U8> v = from_bytes(raw);
             const UartFault f = fault_of(fault, fault_char);
-            return pm.act([&] { return pm.master.transact_raw(v, f); });
+            return pm.act([&] { return pm.m->transact_raw(v, f); });
           },
           py::arg("data"), py::arg("fault") = py::none(), py::arg("fault_char") = -1)
       .def(
-          "idle", [](PyMaster& pm, U64 cycles) { pm.act([&] { pm.master.idle(cycles); }); },
+          "idle", [](PyMaster& pm, U64 cycles) { pm.act([&] { pm.m->idle(cycles); }); },
           py::arg("cycles"), "Time passes with a silent bus (cable pulled); the firmware runs.")
       .def(
           "line_noise",
           [](PyMaster& pm, const py::bytes& b, std::uint32_t idle_bits) {
             const std::vector<U8> v = from_bytes(b);
-            pm.act([&] { pm.master.line_noise(v, idle_bits); });
+            pm.act([&] { pm.m->line_noise(v, idle_bits); });
           },
           py::arg("data"), py::arg("idle_bits"))
       .def(
           "glitch",
-          [](PyMaster& pm, std::uint32_t low) { pm.act([&] { pm.master.glitch(low); }); },
+          [](PyMaster& pm, std::uint32_t low) { pm.act([&] { pm.m->glitch(low); }); },
           py::arg("low_cycles"))
       .def_static("diag_ready", &DpMaster::diag_ready, py::arg("diag_answer"));
 }

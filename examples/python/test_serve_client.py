@@ -47,7 +47,8 @@ def test_client_and_module_agree(server):
         seen_remote = session(remote)
     seen_native = session(dpc31.Chip("spc3"))
     assert seen_remote == seen_native
-    assert seen_native[:3] == (True, 12 + 48_000, [(12 + 48_000, True)])
+    # Start completes at 3 x 4 = 12, the timer fires at 12 + 48000, three block writes follow
+    assert seen_native[:3] == (True, 12 + 48_000 + 3 * 4, [(12 + 48_000, True)])
 
 
 def test_errors_are_exceptions(server):
