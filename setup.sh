@@ -10,10 +10,12 @@ cd "$(dirname "$0")"
 # sanitizer and libFuzzer runtimes (libclang-rt-14-dev), ninja. The install test (Install.*):
 # pkgconf (pkg-config), and for the Debian package (cpack -G DEB) dpkg-dev and file. GNU
 # parallel and rsync (its --return over ssh): the sharded regression's test and recipes
-# (docs/regression.md).
+# (docs/regression.md). The Python module and its pytest examples (docs/python.md): pybind11-dev,
+# python3-dev, python3-pytest; the SystemC TLM-2.0 model (docs/systemc.md): libsystemc-dev.
 packages=(cmake g++ make ccache verilator libfmt-dev libcli11-dev nlohmann-json3-dev libgtest-dev
   libbenchmark-dev zlib1g-dev gtkwave sigrok-cli tshark python3 clang libclang-rt-14-dev
-  ninja-build pkgconf dpkg-dev file parallel rsync)
+  ninja-build pkgconf dpkg-dev file parallel rsync pybind11-dev python3-dev python3-pytest
+  libsystemc-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

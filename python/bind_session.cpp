@@ -162,12 +162,11 @@ struct PyMaster {
   // The user side sets the chip up before the master's first request, and the master counts
   // its bus idle from then on, as in a scenario (session/scenario_run.cpp): it is made anew.
   template <typename Init>
-  void start_user_side(Init&& init) {
+  void start_user_side(const SlaveConfig& slave, Init&& init) {
     if (firmware || responder || m->counters().requests != 0) {
       raise(errors().error,
             "the user side starts once, before the master's first request (docs/python.md)");
     }
-    const SlaveConfig slave = m->slave();
     act([&] {
       DirectBus bus(chip.chip);
       init(bus);
@@ -190,16 +189,26 @@ void bind_master(py::module_& m) {
            py::arg("slot_bits") = 100, py::arg("idle_bits") = 33, py::arg("slave") = py::none())
       .def(
           "run_firmware",
-          [](PyMaster& pm, const std::string& spec) {
-            auto fw = std::make_shared<FirmwareHost>(find_firmware(spec));
-            pm.start_user_side([&](BusPort& bus) { fw->init(bus, pm.m->slave().address); });
+          [](PyMaster& pm, const std::string& spec, bool gsd_defaults) {
+            const dpc31_firmware& d = find_firmware(spec);
+            SlaveConfig slave = pm.m->slave();
+            if (gsd_defaults) {  // as a scenario's `firmware` line (session/scenario_parse.cpp)
+              slave.ident = d.ident;
+              slave.cfg.assign(d.cfg, d.cfg + d.cfg_len);
+              slave.in_len = d.in_len;
+              slave.out_len = d.out_len;
+              slave.user_prm.assign(d.user_prm, d.user_prm + d.user_prm_len);
+            }
+            auto fw = std::make_shared<FirmwareHost>(d);
+            pm.start_user_side(slave, [&](BusPort& bus) { fw->init(bus, slave.address); });
             pm.m->set_firmware(fw->program());
             pm.firmware = fw;
             return fw;
           },
-          py::arg("firmware"),
+          py::arg("firmware"), py::arg("gsd_defaults") = true,
           "Runs a firmware (DO4, CNT2 or a plug-in path) on the host CPU: its init now, its ISR "
-          "and main loop while the master runs the chip.")
+          "and main loop while the master runs the chip. gsd_defaults: the master's slave takes the "
+          "firmware's Ident, Cfg, lengths and User_Prm (as a scenario's `firmware` line).")
       .def(
           "run_responder",
           [](PyMaster& pm, const py::bytes& inputs, bool sync_supported, bool freeze_supported,
@@ -215,7 +224,7 @@ void bind_master(py::module_& m) {
             rc.dx_out_port = dx_out_port;
             auto r = std::make_shared<Responder>(rc);
             r->inputs = from_bytes(inputs);
-            pm.start_user_side([&](BusPort& bus) { r->init(bus); });
+            pm.start_user_side(rc.slave, [&](BusPort& bus) { r->init(bus); });
             pm.m->set_firmware([r](BusPort& b) { r->isr(b); });
             pm.responder = r;
             return r;
