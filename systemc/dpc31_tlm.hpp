@@ -29,6 +29,7 @@ class Dpc31Tlm : public sc_core::sc_module {
   sc_core::sc_out<bool> pb3;    // dpc31 port PB3 (low on the other profiles)
   sc_core::sc_out<bool> txd;    // the serial output, each edge at its cycle's time
 
+  SC_HAS_PROCESS(Dpc31Tlm);
   Dpc31Tlm(const sc_core::sc_module_name& name, const ChipOptions& options);
 
   // The chip: its serial input (drive_rxd, drive_rxd_chars) and what a testbench looks at. Use
