@@ -72,8 +72,7 @@ ChipOptions chip_options(std::string_view profile, std::string_view bus, std::ui
   o.bus = bus == "intel" ? BusMode::intel : BusMode::motorola;
   o.clock_hz = clock_hz;
   if (engine != "event" && engine != "per-cycle") {
-    throw py::value_error("engine '" + std::string(engine) +
-                          "': expected one of event, per-cycle");
+    throw py::value_error("engine '" + std::string(engine) + "': expected one of event, per-cycle");
   }
   o.engine = engine == "event" ? Engine::event : Engine::per_cycle;
   if (variant) {
@@ -147,21 +146,21 @@ void bind_description(py::module_& m) {
       .def_readonly("desc", &FieldDesc::desc)
       .def_property_readonly("mask", &field_mask)
       .def("__repr__", [](const FieldDesc& f) {
-        return "<Field " + std::string(f.name) + " [" + std::to_string(f.lsb + f.width - 1) +
-               ":" + std::to_string(f.lsb) + "] " + std::string(access_name(f.access)) + ">";
+        return "<Field " + std::string(f.name) + " [" + std::to_string(f.lsb + f.width - 1) + ":" +
+               std::to_string(f.lsb) + "] " + std::string(access_name(f.access)) + ">";
       });
   py::class_<RegDesc>(m, "Register",
                       "One register or RAM cell of a profile, as the description has it.")
       .def_readonly("name", &RegDesc::name)
       .def_readonly("alias", &RegDesc::alias)
-      .def_property_readonly("kind", [](const RegDesc& r) { return std::string(kind_name(r.kind)); })
+      .def_property_readonly("kind",
+                             [](const RegDesc& r) { return std::string(kind_name(r.kind)); })
       .def_property_readonly("block",
                              [](const RegDesc& r) { return std::string(block_name(r.block)); })
       .def_readonly("width", &RegDesc::width)
-      .def_property_readonly("reset",
-                             [](const RegDesc& r) {
-                               return r.has_reset ? py::object(py::int_(r.reset)) : py::none();
-                             })
+      .def_property_readonly(
+          "reset",
+          [](const RegDesc& r) { return r.has_reset ? py::object(py::int_(r.reset)) : py::none(); })
       .def_property_readonly("read_addr", [](const RegDesc& r) { return opt_addr(r.read_addr); })
       .def_property_readonly("write_addr", [](const RegDesc& r) { return opt_addr(r.write_addr); })
       .def_readonly("documented", &RegDesc::documented)
@@ -305,7 +304,8 @@ void bind_chip_class(py::module_& m) {
           },
           py::arg("addr"), py::arg("data"))
       .def(
-          "fill", [](PyChip& c, U32 a, U8 v, std::size_t n) { c.run([&] { c.chip.fill(a, v, n); }); },
+          "fill",
+          [](PyChip& c, U32 a, U8 v, std::size_t n) { c.run([&] { c.chip.fill(a, v, n); }); },
           py::arg("addr"), py::arg("value"), py::arg("length"))
       .def(
           "equal",
@@ -370,8 +370,7 @@ void bind_chip_class(py::module_& m) {
                              [](const PyChip& c) { return registers_of(c.chip.profile()); })
       // time
       .def(
-          "step", [](PyChip& c, U64 n) { c.run([&] { c.chip.step(n); }); },
-          py::arg("cycles") = 1)
+          "step", [](PyChip& c, U64 n) { c.run([&] { c.chip.step(n); }); }, py::arg("cycles") = 1)
       .def(
           "step_until_irq",
           [](PyChip& c, U64 n) { return c.run([&] { return c.chip.step_until_irq(n); }); },
@@ -393,8 +392,8 @@ void bind_chip_class(py::module_& m) {
       .def_property_readonly("bit_cycles", [](const PyChip& c) { return c.chip.bit_cycles(); })
       .def_property_readonly("fdl_counters",
                              [](const PyChip& c) { return counters_dict(c.chip.fdl_counters()); })
-      .def_property_readonly(
-          "profile", [](const PyChip& c) { return std::string(c.chip.profile().name); })
+      .def_property_readonly("profile",
+                             [](const PyChip& c) { return std::string(c.chip.profile().name); })
       .def_property_readonly("bus",
                              [](const PyChip& c) {
                                return c.chip.bus_mode() == BusMode::intel ? "intel" : "motorola";

@@ -181,9 +181,9 @@ void bind_master(py::module_& m) {
       .def(py::init([](py::object chip, U8 address, std::uint32_t baud, std::uint32_t slot_bits,
                        std::uint32_t idle_bits, const std::optional<SlaveConfig>& slave) {
              chip.cast<PyChip&>().enter(true);
-             return std::make_unique<PyMaster>(
-                 std::move(chip), MasterConfig{address, baud, slot_bits, idle_bits},
-                 slave.value_or(SlaveConfig{}));
+             return std::make_unique<PyMaster>(std::move(chip),
+                                               MasterConfig{address, baud, slot_bits, idle_bits},
+                                               slave.value_or(SlaveConfig{}));
            }),
            py::arg("chip"), py::arg("address") = 2, py::arg("baud") = 1'500'000,
            py::arg("slot_bits") = 100, py::arg("idle_bits") = 33, py::arg("slave") = py::none())
@@ -207,7 +207,8 @@ void bind_master(py::module_& m) {
           },
           py::arg("firmware"), py::arg("gsd_defaults") = true,
           "Runs a firmware (DO4, CNT2 or a plug-in path) on the host CPU: its init now, its ISR "
-          "and main loop while the master runs the chip. gsd_defaults: the master's slave takes the "
+          "and main loop while the master runs the chip. gsd_defaults: the master's slave takes "
+          "the "
           "firmware's Ident, Cfg, lengths and User_Prm (as a scenario's `firmware` line).")
       .def(
           "run_responder",
@@ -275,8 +276,7 @@ void bind_master(py::module_& m) {
           py::arg("station_status_extra") = 0)
       .def("chk_cfg", [](PyMaster& pm) { return pm.act([&] { return pm.m->chk_cfg(); }); })
       .def("get_cfg", [](PyMaster& pm) { return pm.act([&] { return pm.m->get_cfg(); }); })
-      .def("read_inputs",
-           [](PyMaster& pm) { return pm.act([&] { return pm.m->read_inputs(); }); })
+      .def("read_inputs", [](PyMaster& pm) { return pm.act([&] { return pm.m->read_inputs(); }); })
       .def("read_outputs",
            [](PyMaster& pm) { return pm.act([&] { return pm.m->read_outputs(); }); })
       .def(
@@ -313,8 +313,7 @@ void bind_master(py::module_& m) {
           },
           py::arg("data"), py::arg("idle_bits"))
       .def(
-          "glitch",
-          [](PyMaster& pm, std::uint32_t low) { pm.act([&] { pm.m->glitch(low); }); },
+          "glitch", [](PyMaster& pm, std::uint32_t low) { pm.act([&] { pm.m->glitch(low); }); },
           py::arg("low_cycles"))
       .def_static("diag_ready", &DpMaster::diag_ready, py::arg("diag_answer"));
 }
@@ -382,7 +381,8 @@ void bind_scenarios(py::module_& m) {
       .def_readonly("line", &ScenarioStep::line)
       .def_readonly("text", &ScenarioStep::text)
       .def_readonly("kind", &ScenarioStep::kind);
-  py::class_<ExpectResult>(m, "ExpectResult", "One expect of a run: its line, text, verdict, cycle.")
+  py::class_<ExpectResult>(m, "ExpectResult",
+                           "One expect of a run: its line, text, verdict, cycle.")
       .def_readonly("line", &ExpectResult::line)
       .def_readonly("text", &ExpectResult::text)
       .def_readonly("ok", &ExpectResult::ok)
@@ -399,8 +399,7 @@ void bind_scenarios(py::module_& m) {
       .def_property_readonly("wd_state", [](const ScenarioResult& r) { return r.outcome.wd; })
       .def_property_readonly("passed", [](const ScenarioResult& r) { return r.outcome.passed; })
       .def_property_readonly("failed", [](const ScenarioResult& r) { return r.outcome.failed; })
-      .def_property_readonly("failures",
-                             [](const ScenarioResult& r) { return r.outcome.failures; })
+      .def_property_readonly("failures", [](const ScenarioResult& r) { return r.outcome.failures; })
       .def_property_readonly(
           "counters", [](const ScenarioResult& r) { return counters_dict(r.outcome.counters); })
       .def_readonly("walk", &ScenarioResult::walk)
@@ -426,8 +425,8 @@ void bind_scenarios(py::module_& m) {
           },
           py::arg("text"), py::arg("file") = "<string>")
       .def_readonly("file", &Scenario::file)
-      .def_property_readonly("profile",
-                             [](const Scenario& s) { return std::string(profile_name(s.chip.profile)); })
+      .def_property_readonly(
+          "profile", [](const Scenario& s) { return std::string(profile_name(s.chip.profile)); })
       .def_readonly("firmware", &Scenario::firmware)
       .def_readonly("steps", &Scenario::steps)
       .def_property_readonly("expects",

@@ -4,13 +4,13 @@
 // dpc31emu::systemc (find_package(dpc31emu COMPONENTS systemc)).
 #pragma once
 
-#include <systemc>
-#include <tlm>
 #include <tlm_utils/simple_target_socket.h>
 
 #include <cstdint>
 #include <deque>
 #include <limits>
+#include <systemc>
+#include <tlm>
 #include <utility>
 
 #include "dpc31/chip.hpp"
@@ -58,8 +58,8 @@ class Dpc31Tlm : public sc_core::sc_module {
   void b_transport(tlm::tlm_generic_payload& tr, sc_core::sc_time& delay);
   unsigned int transport_dbg(tlm::tlm_generic_payload& tr);
   bool get_direct_mem_ptr(tlm::tlm_generic_payload& tr, tlm::tlm_dmi& dmi);
-  void run();           // SC_THREAD: the chip's own events at their times
-  void apply_edges();   // SC_METHOD: scheduled pin changes onto the ports
+  void run();                         // SC_THREAD: the chip's own events at their times
+  void apply_edges();                 // SC_METHOD: scheduled pin changes onto the ports
   void step_to(std::uint64_t cycle);  // never past `cycle`, never backwards
   void schedule(std::uint64_t cycle, int pin, bool level);
 

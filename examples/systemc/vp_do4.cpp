@@ -4,8 +4,6 @@
 // cycles of the native run (the same firmware on the host CPU model, session/cpu.cpp): every
 // telegram, every answer and every DO4 output write, compared one by one. Exit 0 when equal.
 //   vp_do4 [--bench N]   N: also time N b_transport accesses (register reads) per second
-#include <systemc>
-#include <tlm>
 #include <tlm_utils/simple_initiator_socket.h>
 #include <tlm_utils/tlm_quantumkeeper.h>
 
@@ -13,6 +11,8 @@
 #include <cstdio>
 #include <cstring>
 #include <string>
+#include <systemc>
+#include <tlm>
 #include <vector>
 
 #include "dp_master.hpp"
