@@ -191,14 +191,8 @@ void bind_master(py::module_& m) {
           "run_firmware",
           [](PyMaster& pm, const std::string& spec, bool gsd_defaults) {
             const dpc31_firmware& d = find_firmware(spec);
-            SlaveConfig slave = pm.m->slave();
-            if (gsd_defaults) {  // as a scenario's `firmware` line (session/scenario_parse.cpp)
-              slave.ident = d.ident;
-              slave.cfg.assign(d.cfg, d.cfg + d.cfg_len);
-              slave.in_len = d.in_len;
-              slave.out_len = d.out_len;
-              slave.user_prm.assign(d.user_prm, d.user_prm + d.user_prm_len);
-            }
+            const SlaveConfig slave =
+                gsd_defaults ? with_gsd_defaults(d, pm.m->slave()) : pm.m->slave();
             auto fw = std::make_shared<FirmwareHost>(d);
             pm.start_user_side(slave, [&](BusPort& bus) { fw->init(bus, slave.address); });
             pm.m->set_firmware(fw->program());

@@ -8,17 +8,7 @@
 # there. -DDEB=ON also builds the .deb and looks into it (minutes: not in CTest). Any failing
 # step fails the test.
 #   cmake -DBUILD_DIR=... -DWORK_DIR=... -DPYTHON=... -DLIBDIR=... -DDEB=ON|OFF -P check_install.cmake
-set(prefix ${WORK_DIR}/prefix)
-file(REMOVE_RECURSE ${WORK_DIR})
-file(MAKE_DIRECTORY ${WORK_DIR})
-
-function(run)
-  execute_process(COMMAND ${ARGN} WORKING_DIRECTORY ${WORK_DIR} COMMAND_ECHO STDOUT
-    OUTPUT_VARIABLE out COMMAND_ERROR_IS_FATAL ANY)
-  set(out "${out}" PARENT_SCOPE)
-endfunction()
-
-run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix})
+include(${CMAKE_CURRENT_LIST_DIR}/../packaging/install_test_common.cmake)
 set(site ${prefix}/lib/python3/dist-packages)
 foreach(f dpc31/__init__.py dpc31/__init__.pyi dpc31/client.py dpc31/py.typed)
   if(NOT EXISTS ${site}/${f})

@@ -3,14 +3,7 @@
 # (find_package(dpc31emu COMPONENTS systemc)) and runs it: the virtual platform reaches
 # Data_Exchange with the native run's cycles. Any failing step fails the test.
 #   cmake -DBUILD_DIR=... -DWORK_DIR=... -DEXAMPLE_DIR=... -DCXX_COMPILER=... -P check_install.cmake
-set(prefix ${WORK_DIR}/prefix)
-file(REMOVE_RECURSE ${WORK_DIR})
-
-function(run)
-  execute_process(COMMAND ${ARGN} COMMAND_ECHO STDOUT COMMAND_ERROR_IS_FATAL ANY)
-endfunction()
-
-run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix})
+include(${CMAKE_CURRENT_LIST_DIR}/../packaging/install_test_common.cmake)
 foreach(f include/dpc31/systemc/dpc31_tlm.hpp)
   if(NOT EXISTS ${prefix}/${f})
     message(FATAL_ERROR "not installed: ${f}")

@@ -34,16 +34,6 @@ struct Run {
 
 const std::vector<std::vector<std::uint8_t>> kOutputs = {{0x05, 0x01}, {0x0A, 0x01}, {0x0F, 0x01}};
 
-dpc31::SlaveConfig do4_slave(const dpc31_firmware& d) {
-  dpc31::SlaveConfig s;  // the GSD defaults, as a scenario's `firmware DO4` line gives them
-  s.ident = d.ident;
-  s.cfg.assign(d.cfg, d.cfg + d.cfg_len);
-  s.in_len = d.in_len;
-  s.out_len = d.out_len;
-  s.user_prm.assign(d.user_prm, d.user_prm + d.user_prm_len);
-  return s;
-}
-
 void master_session(dpc31::DpMaster& m, dpc31::FirmwareHost& fw, Run& r) {
   r.data_exchange = m.startup();
   for (const auto& out : kOutputs) m.data_exchange(out);
@@ -60,7 +50,7 @@ Run native() {
   dpc31::FirmwareHost fw(d);
   dpc31::DirectBus bus(chip);
   fw.init(bus, 5);
-  dpc31::DpMaster m(chip, {}, do4_slave(d));
+  dpc31::DpMaster m(chip, {}, dpc31::with_gsd_defaults(d));
   m.set_firmware(fw.program());
   Run r;
   master_session(m, fw, r);
@@ -171,7 +161,7 @@ struct Platform : sc_core::sc_module {
 
   void master() {
     wait(init_done);
-    dpc31::DpMaster m(chip.chip(), {}, do4_slave(d));
+    dpc31::DpMaster m(chip.chip(), {}, dpc31::with_gsd_defaults(d));
     m.scheduler = [this](std::uint64_t cycle) { chip.run_until(cycle); };
     master_session(m, fw, result);
     result.cycle = chip.chip().cycle();

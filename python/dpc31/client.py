@@ -141,8 +141,12 @@ class Client:
         return int(self._call(f"peek {addr}"), 16)
 
     def poke(self, addr: int, value: int) -> bool:
+        return self._store(f"poke {addr} {value}")
+
+    def _store(self, command: str) -> bool:
+        """A poke: False where the read side has no storage (ERR no_storage)."""
         try:
-            self._call(f"poke {addr} {value}")
+            self._call(command)
         except ServeError as e:
             if e.code == "no_storage":
                 return False
@@ -162,13 +166,7 @@ class Client:
         return int(self._call(f"peek_reg {name}"), 16)
 
     def poke_reg(self, name: str, value: int) -> bool:
-        try:
-            self._call(f"poke_reg {name} {value}")
-        except ServeError as e:
-            if e.code == "no_storage":
-                return False
-            raise
-        return True
+        return self._store(f"poke_reg {name} {value}")
 
     def addr_of(self, name: str) -> int:
         return int(self._call(f"addr {name}"), 16)
