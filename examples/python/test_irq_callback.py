@@ -84,3 +84,24 @@ def test_observers_may_look_but_not_touch():
     else:
         raise AssertionError("an access from an observer was not refused")
     assert seen == [(4, True, 0x16, 0x33, 4)]
+
+
+def test_the_gil_is_released_while_the_chip_runs():
+    """Another Python thread runs while one chip steps (per-cycle engine: every clock evaluated,
+    a long native run), and finds that chip busy instead of racing it."""
+    import threading
+
+    chip = dpc31.Chip("spc3", engine="per-cycle")
+    chip.write(chip.addr_of("Mode_Reg1_S"), 0x01)
+    runner = threading.Thread(target=chip.step, args=(40 * P,))
+    refused = 0
+    runner.start()
+    while runner.is_alive():
+        try:
+            chip.poke(0x100, 0x12)
+        except dpc31.Error as e:
+            assert "another thread" in str(e)
+            refused += 1
+    runner.join()
+    assert refused > 0  # the main thread ran Python while the other thread was inside step()
+    assert chip.cycle == 4 + 40 * P  # one access of 4 clocks, then the step
