@@ -28,6 +28,7 @@ Dpc31Tlm::Dpc31Tlm(const sc_core::sc_module_name& name, const ChipOptions& optio
       irq("irq"),
       pb3("pb3"),
       txd("txd"),
+      rxd("rxd"),
       chip_(options),
       ticks_per_second_(static_cast<std::uint64_t>(
           std::llround(1.0 / sc_core::sc_get_time_resolution().to_seconds()))) {
@@ -45,6 +46,7 @@ Dpc31Tlm::Dpc31Tlm(const sc_core::sc_module_name& name, const ChipOptions& optio
   chip_.on_pb3_change([this](std::uint64_t cycle, bool high) { schedule(cycle, kPb3, high); });
   chip_.on_txd([this](std::uint64_t cycle, bool level) { schedule(cycle, kTxd, level); });
   SC_THREAD(run);
+  SC_THREAD(watch_rxd);
   SC_METHOD(apply_edges);
   sensitive << edge_due_;
   dont_initialize();
@@ -107,6 +109,18 @@ void Dpc31Tlm::run() {
     // An event at or before the chip's cycle is behind it already (an access took it there).
     const sc_core::sc_time at = time_of(std::max(next, chip_.cycle() + 1));
     wait(at - sc_core::sc_time_stamp(), changed_);
+  }
+}
+
+void Dpc31Tlm::watch_rxd() {
+  if (rxd.size() == 0) return;
+  for (;;) {
+    wait(rxd->value_changed_event());
+    const sc_core::sc_time now = sc_core::sc_time_stamp();
+    std::uint64_t at = cycle_at(now);
+    if (time_of(at) < now) ++at;
+    chip_.drive_rxd(std::max(at, chip_.cycle()), rxd->read());
+    changed_.notify(sc_core::SC_ZERO_TIME);
   }
 }
 

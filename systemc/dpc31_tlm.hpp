@@ -28,6 +28,9 @@ class Dpc31Tlm : public sc_core::sc_module {
   sc_core::sc_out<bool> irq;    // the interrupt is active (independent of the polarity)
   sc_core::sc_out<bool> pb3;    // dpc31 port PB3 (low on the other profiles)
   sc_core::sc_out<bool> txd;    // the serial output, each edge at its cycle's time
+  // The serial input for a UART model (optional): each change drives RxD at the first clock at or
+  // after its time. Unbound: drive it through chip().drive_rxd / drive_rxd_chars.
+  sc_core::sc_port<sc_core::sc_signal_in_if<bool>, 1, sc_core::SC_ZERO_OR_MORE_BOUND> rxd;
 
   SC_HAS_PROCESS(Dpc31Tlm);
   Dpc31Tlm(const sc_core::sc_module_name& name, const ChipOptions& options);
@@ -59,6 +62,7 @@ class Dpc31Tlm : public sc_core::sc_module {
   unsigned int transport_dbg(tlm::tlm_generic_payload& tr);
   bool get_direct_mem_ptr(tlm::tlm_generic_payload& tr, tlm::tlm_dmi& dmi);
   void run();                         // SC_THREAD: the chip's own events at their times
+  void watch_rxd();                   // SC_THREAD: the rxd port\'s changes onto the chip\'s RxD
   void apply_edges();                 // SC_METHOD: scheduled pin changes onto the ports
   void step_to(std::uint64_t cycle);  // never past `cycle`, never backwards
   void schedule(std::uint64_t cycle, int pin, bool level);
