@@ -12,10 +12,13 @@ cd "$(dirname "$0")"
 # pkgconf (pkg-config), and for the Debian package (cpack -G DEB) dpkg-dev and file. GNU
 # parallel and rsync (its --return over ssh): the sharded regression's test and recipes
 # (docs/regression.md). sdcc (sdas8051, sdld) and sdcc-ucsim (s51): the 80C32 test programs and
-# their cross-check against ucsim (docs/cpu.md).
+# their cross-check against ucsim (docs/cpu.md). The Python module and its pytest examples
+# (docs/python.md): pybind11-dev, python3-dev, python3-pytest; the SystemC TLM-2.0 model
+# (docs/systemc.md): libsystemc-dev.
 packages=(cmake g++ make ccache verilator libfmt-dev libcli11-dev nlohmann-json3-dev libgtest-dev
   libbenchmark-dev zlib1g-dev gtkwave xvfb sigrok-cli tshark python3 clang libclang-rt-14-dev
-  ninja-build pkgconf dpkg-dev file parallel rsync sdcc sdcc-ucsim)
+  ninja-build pkgconf dpkg-dev file parallel rsync sdcc sdcc-ucsim pybind11-dev python3-dev
+  python3-pytest libsystemc-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

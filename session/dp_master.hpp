@@ -182,6 +182,11 @@ class DpMaster {
     if (history_.size() > 1) history_.erase(history_.begin(), history_.end() - 1);
   }
   [[nodiscard]] const MasterCounters& counters() const { return counters_; }
+  // Who moves time while the master waits. Empty: the master steps its chip itself (and runs
+  // its firmware's CPU). Set: a scheduler of the caller's does (the SystemC model,
+  // docs/systemc.md): it returns once the chip has reached `cycle`, or earlier when a step of the
+  // chip stopped (Chip::request_stop, wake_on_txd).
+  std::function<void(std::uint64_t cycle)> scheduler;
   // Narration of what happened (`dpc31 run` prints it).
   std::function<void(const std::string&)> narrate;
   // Told of every telegram just before it goes on RxD (requests, line noise): its first start

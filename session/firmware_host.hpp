@@ -16,6 +16,7 @@
 
 #include "board.hpp"
 #include "cpu.hpp"
+#include "dp_master.hpp"
 #include "dpc31/dpc31_firmware.h"
 #include "dpc31/hal.hpp"
 
@@ -34,6 +35,9 @@ const dpc31_firmware& find_firmware(const std::string& spec);
 [[nodiscard]] bool is_plugin_path(const std::string& spec);
 // The built-in names, "DO4, CNT2".
 [[nodiscard]] std::string builtin_firmware_names();
+// `base` with the firmware's GSD defaults a master is configured with: Ident_Number, Cfg,
+// input/output lengths, User_Prm (what a scenario's `firmware` line sets).
+[[nodiscard]] SlaveConfig with_gsd_defaults(const dpc31_firmware& fw, SlaveConfig base = {});
 // Why a descriptor cannot run (empty: it can).
 [[nodiscard]] std::string descriptor_problem(const dpc31_firmware* fw);
 

@@ -25,6 +25,15 @@ std::string builtin_firmware_names() {
   return all;
 }
 
+SlaveConfig with_gsd_defaults(const dpc31_firmware& fw, SlaveConfig base) {
+  base.ident = fw.ident;
+  base.cfg.assign(fw.cfg, fw.cfg + fw.cfg_len);
+  base.in_len = fw.in_len;
+  base.out_len = fw.out_len;
+  base.user_prm.assign(fw.user_prm, fw.user_prm + fw.user_prm_len);
+  return base;
+}
+
 std::string descriptor_problem(const dpc31_firmware* fw) {
   if (fw == nullptr) return "the descriptor pointer is NULL";
   if (fw->abi_version != DPC31_FIRMWARE_ABI_VERSION) {

@@ -384,12 +384,7 @@ class Parser {
         fail(e.what());
       }
       s_.firmware = is_plugin_path(spec) ? spec : std::string(fw_->name);
-      SlaveConfig& sl = s_.user.slave;
-      sl.ident = fw_->ident;
-      sl.cfg.assign(fw_->cfg, fw_->cfg + fw_->cfg_len);
-      sl.in_len = fw_->in_len;
-      sl.out_len = fw_->out_len;
-      sl.user_prm.assign(fw_->user_prm, fw_->user_prm + fw_->user_prm_len);
+      s_.user.slave = with_gsd_defaults(*fw_, s_.user.slave);
     } else if (cmd_ == "slave") {
       positional(0, 0, "options only");
       slave_seen_ = true;

@@ -25,12 +25,7 @@ using namespace dpc31;
 inline SlaveConfig gsd_slave(const dpc31_firmware& fw, std::uint8_t address) {
   SlaveConfig s;
   s.address = address;
-  s.ident = fw.ident;
-  s.cfg.assign(fw.cfg, fw.cfg + fw.cfg_len);
-  s.in_len = fw.in_len;
-  s.out_len = fw.out_len;
-  s.user_prm.assign(fw.user_prm, fw.user_prm + fw.user_prm_len);
-  return s;
+  return with_gsd_defaults(fw, s);
 }
 
 // One chip, one firmware on its host CPU, the built-in master.

@@ -1,0 +1,107 @@
+"""An interrupt callback counting events: the SPC3's User_Timer_Clock, acknowledged and ended by
+a Python "ISR" after each X/INT edge.
+
+Expected cycles (docs/timing.md): a bus access takes 4 clocks and acts at its end; the user timer's
+first event is at Start + P, then every P, P = ceil(1 ms x 48 MHz) = 48000 (User_Time_Base = 0);
+X/INT goes active in the cycle the event is latched and inactive when the acknowledge completes.
+"""
+
+import dpc31
+
+P = 48_000
+
+
+def test_callback_counts_every_user_timer_clock():
+    chip = dpc31.Chip("spc3")
+    utc = dpc31.register("spc3", "Int_Req_Reg").field("User_Timer_Clock").mask
+    imr, ack = chip.addr_of("Int_Mask_Reg"), chip.addr_of("Int_Ack_Reg")
+    mode1_s = chip.addr_of("Mode_Reg1_S")
+    start_bit = dpc31.register("spc3", "Mode_Reg1_S").field("Start_SPC3").mask
+    eoi_bit = dpc31.register("spc3", "Mode_Reg1_S").field("EOI").mask
+
+    edges = []
+    chip.on_irq_change(lambda cycle, active: edges.append((cycle, active)))
+    mask = ~utc & 0xFFFF
+    chip.write(imr, mask & 0xFF)  # intel: bits 7..0 at the address, 15..8 above
+    chip.write(imr + 1, mask >> 8)
+    chip.write(mode1_s, start_bit)  # completes at 3 x 4 = 12
+    start = 12
+    assert chip.cycle == start and chip.started
+
+    for k in range(1, 6):
+        assert chip.step_until_irq(2 * P)
+        assert chip.cycle == start + k * P
+        assert chip.peek_field("Int_Reg", "User_Timer_Clock") == 1
+        chip.write(ack, utc)  # acknowledge: the line goes inactive when it completes
+        chip.write(mode1_s, eoi_bit)
+
+    active = [c for c, a in edges if a]
+    inactive = [c for c, a in edges if not a]
+    assert active == [start + k * P for k in range(1, 6)]
+    assert inactive == [start + k * P + 4 for k in range(1, 6)]
+
+
+def test_an_exception_in_a_callback_stops_the_run_and_is_raised():
+    chip = dpc31.Chip("spc3")
+    utc = dpc31.register("spc3", "Int_Req_Reg").field("User_Timer_Clock").mask
+    chip.write(chip.addr_of("Int_Mask_Reg"), ~utc & 0xFF)
+    chip.write(chip.addr_of("Int_Mask_Reg") + 1, 0xFF)
+
+    calls = []
+
+    def boom(cycle, active):
+        calls.append(cycle)
+        raise ValueError(f"edge at {cycle}")
+
+    chip.on_irq_change(boom)
+    chip.write(chip.addr_of("Mode_Reg1_S"), 0x01)
+    try:
+        chip.step(10 * P)
+        raised = None
+    except ValueError as e:
+        raised = str(e)
+    assert raised == f"edge at {12 + P}"
+    # step(n) advances exactly n cycles (docs/timing.md); Python is not called again in it
+    assert chip.cycle == 12 + 10 * P and calls == [12 + P]
+    chip.on_irq_change(None)
+    chip.step(P)  # and the chip goes on
+    assert chip.cycle == 12 + 11 * P
+
+
+def test_observers_may_look_but_not_touch():
+    chip = dpc31.Chip("spc3")
+    seen = []
+
+    def look(cycle, write, addr, data):
+        seen.append((cycle, write, addr, data, chip.cycle))
+        chip.read(0)  # an access from inside an access: refused
+
+    chip.on_bus_access(look)
+    try:
+        chip.write(0x16, 0x33)
+    except dpc31.Error as e:
+        assert "observer" in str(e)
+    else:
+        raise AssertionError("an access from an observer was not refused")
+    assert seen == [(4, True, 0x16, 0x33, 4)]
+
+
+def test_the_gil_is_released_while_the_chip_runs():
+    """Another Python thread runs while one chip steps (per-cycle engine: every clock evaluated,
+    a long native run), and finds that chip busy instead of racing it."""
+    import threading
+
+    chip = dpc31.Chip("spc3", engine="per-cycle")
+    chip.write(chip.addr_of("Mode_Reg1_S"), 0x01)
+    runner = threading.Thread(target=chip.step, args=(40 * P,))
+    refused = 0
+    runner.start()
+    while runner.is_alive():
+        try:
+            chip.poke(0x100, 0x12)
+        except dpc31.Error as e:
+            assert "another thread" in str(e)
+            refused += 1
+    runner.join()
+    assert refused > 0  # the main thread ran Python while the other thread was inside step()
+    assert chip.cycle == 4 + 40 * P  # one access of 4 clocks, then the step

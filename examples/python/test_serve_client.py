@@ -1,0 +1,65 @@
+"""The pure-Python client of `dpc31 serve` (dpc31.client, standard library only) drives a chip
+in another process with the names of dpc31.Chip: the same calls give the same cycles and values
+on both (docs/protocol.md; timing from docs/timing.md: 4 clocks per access, User_Timer_Clock at
+Start + 48000).
+"""
+
+import subprocess
+import sys
+
+import pytest
+
+from dpc31.client import Client, ServeError
+
+
+@pytest.fixture
+def server(cli):
+    proc = subprocess.Popen([cli, "serve", "--tcp", "0", "--profile", "spc3"],
+                            stdout=subprocess.PIPE, text=True)
+    line = proc.stdout.readline().split()
+    assert line[:2] == ["listening", "tcp"]
+    host, port = line[2].rsplit(":", 1)
+    yield host, int(port)
+    proc.terminate()
+    assert proc.wait(timeout=30) == 0
+
+
+def session(chip):
+    """The same register-level session on either door; returns what it saw."""
+    utc = 0x10  # Int_Req_Reg.User_Timer_Clock (regs/dpc31_regs.json, bit 4)
+    edges = []
+    chip.on_irq_change(lambda cycle, active: edges.append((cycle, active)))
+    imr = chip.addr_of("Int_Mask_Reg")
+    chip.write(imr, ~utc & 0xFF)
+    chip.write(imr + 1, 0xFF)
+    chip.write(chip.addr_of("Mode_Reg1_S"), 0x01)
+    got_irq = chip.step_until_irq(100_000)
+    chip.write_block(0x40, b"\x01\x02\x03")
+    return (got_irq, chip.cycle, edges, chip.peek_reg("Int_Req_Reg") & utc,
+            chip.read_block(0x40, 3), chip.peek(0x41), chip.started)
+
+
+def test_client_and_module_agree(server):
+    import dpc31
+
+    with Client(tcp=server) as remote:
+        assert remote.info["profile"] == "spc3"
+        seen_remote = session(remote)
+    seen_native = session(dpc31.Chip("spc3"))
+    assert seen_remote == seen_native
+    # Start completes at 3 x 4 = 12, the timer fires at 12 + 48000, three block writes follow
+    assert seen_native[:3] == (True, 12 + 48_000 + 3 * 4, [(12 + 48_000, True)])
+
+
+def test_errors_are_exceptions(server):
+    with Client(tcp=server) as remote:
+        with pytest.raises(ServeError) as e:
+            remote.peek_reg("No_Such_Reg")
+        assert e.value.code and "No_Such_Reg" in e.value.message
+        assert remote.ping() == "pong"
+
+
+def test_the_client_loads_no_native_code():
+    code = ("import sys, dpc31.client; "
+            "sys.exit(1 if any(m.startswith('dpc31._') for m in sys.modules) else 0)")
+    assert subprocess.run([sys.executable, "-c", code]).returncode == 0

@@ -1,0 +1,84 @@
+"""A start-up with exact cycles: the built-in DP master finds an SPC3 at 1.5 Mbaud, parameterises
+and configures it, and the chip enters Data_Exchange.
+
+Expected cycles: docs/timing.md at 48 MHz, T = 48 MHz / 1.5 Mbaud = 32 clocks per bit, as the
+golden trace traces/startup_spc3_1m5.trace derives them by hand in its header (the same slave).
+"""
+
+import json
+import subprocess
+
+import dpc31
+
+T = 32  # clocks per bit at 1.5 Mbaud (docs/timing.md, "Serial line": round(48e6 / 1.5e6))
+SLAVE = dict(address=12, ident=0x8031, cfg=b"\x11\x21", in_len=2, out_len=2, wd_fact1=20,
+             wd_fact2=10, wd_on=True, wd_base_1ms=False)
+SCENARIO_HEAD = """profile spc3
+bus motorola
+baud 1500000
+master address=1
+slave address=12 ident=0x8031 cfg=11,21 in=2 out=2 wd=20,10 wd_on=1 wd_base=10ms
+user inputs=C0,DE
+"""
+
+
+def start_up():
+    chip = dpc31.Chip("spc3", bus="motorola")
+    edges = []
+    chip.on_irq_change(lambda cycle, active: edges.append((cycle, active)))
+    master = dpc31.Master(chip, address=1, baud=1_500_000, slave=dpc31.SlaveConfig(**SLAVE))
+    master.run_responder(inputs=b"\xC0\xDE")  # the built-in user side: init, then Start_SPC3
+    assert master.startup()
+    return chip, master, edges
+
+
+def test_startup_cycles_from_the_timing_contract():
+    chip, master, edges = start_up()
+    assert chip.dp_state == dpc31.DpState.Data_Exchange
+    assert chip.wd_state == dpc31.WdState.DP_Control
+    # The user side's init, 48 bus accesses of 4 clocks, ends with the Start_SPC3 write
+    # completing at 48 x 4 = 192; Start latches DX_Out (docs/timing.md, "Mode and state
+    # changes"), which it unmasked: X/INT active at 192.
+    start = next(c for c, active in edges if active)
+    assert start == 192
+    # The baud search listens 4096 bit times at each rate from 12 Mbaud down (12, 6, 3 Mbaud:
+    # T = 4, 8, 16), so the 1.5 Mbaud window opens at:
+    window = start + 4096 * (4 + 8 + 16)
+    assert window == 114880
+    # The first FDL_Status with >= 33 idle bit times after the window opened is answered.
+    answered = [ex for ex in master.history if ex.answer is not None]
+    fdl_status = answered[0]
+    assert fdl_status.request.service == "FDL_Status"
+    assert fdl_status.request_start == 122240
+    # acted on at the stop sample of its last character: end - T + T/2 -> Baudrate_Detect
+    acted = fdl_status.request_end - T + T // 2
+    assert acted == 124336
+    assert (acted, True) in edges
+    # the answer: 11 bit times after the request's end, 6 characters of 11 bits
+    assert fdl_status.answer_start == fdl_status.request_end + 11 * T == 124704
+    assert fdl_status.answer_end == fdl_status.answer_start + 6 * 11 * T == 126816
+    # every answer of the start-up keeps the same distance (MinTSDR 11 bit times)
+    for ex in answered:
+        assert ex.answer_start == ex.request_end + 11 * T
+    # the next request after TSYN = 33 idle bit times
+    position = [ex.request_start for ex in master.history].index(fdl_status.request_start)
+    assert master.history[position + 1].request_start == 126816 + 33 * T
+    assert [ex.request.service for ex in answered] == [
+        "FDL_Status", "Slave_Diag", "Set_Prm", "Chk_Cfg", "Slave_Diag"]
+    assert chip.fdl_counters["requests"] == 5
+
+
+def test_startup_from_python_has_the_cycles_of_dpc31_run(cli, tmp_path):
+    chip, master, _ = start_up()
+    # A scenario's step ends when the bus is free again: TSYN (33 bit times) after the last answer
+    # (session/scenario_run.cpp, settle; docs/scenario-format.md).
+    master.idle(master.history[-1].answer_end + 33 * T - chip.cycle)
+    scn = tmp_path / "startup.scn"
+    scn.write_text(SCENARIO_HEAD + "startup\nexpect dp_state Data_Exchange\n")
+    out = tmp_path / "run.json"
+    subprocess.run([cli, "run", str(scn), "--quiet", "--json", str(out)], check=True)
+    assert json.loads(out.read_text())["final_cycle"] == chip.cycle
+    # and the same scenario through the module
+    result = dpc31.run_scenario(str(scn))
+    assert result.ok and result.final_cycle == chip.cycle
+    assert [(e.line, e.ok) for e in result.expects] == [(8, True)]

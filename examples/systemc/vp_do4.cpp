@@ -1,0 +1,233 @@
+// An example virtual platform (docs/systemc.md): a CPU thread runs the DO4 firmware through the
+// model's TLM-2.0 socket with a quantum keeper (temporal decoupling), the built-in DP master is on
+// the chip's serial line. It reaches Data_Exchange, exchanges data, and must have exactly the
+// cycles of the native run (the same firmware on the host CPU model, session/cpu.cpp): every
+// telegram, every answer and every DO4 output write, compared one by one. Exit 0 when equal.
+//   vp_do4 [--bench N]   N: also time N b_transport accesses (register reads) per second
+#include <tlm_utils/simple_initiator_socket.h>
+#include <tlm_utils/tlm_quantumkeeper.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <systemc>
+#include <tlm>
+#include <vector>
+
+#include "dp_master.hpp"
+#include "dpc31/bus_port.hpp"
+#include "dpc31_tlm.hpp"
+#include "firmware_host.hpp"
+
+namespace {
+
+using dpc31::systemc::Dpc31Tlm;
+
+// What one run gave: the telegrams with their cycles, DO4's output writes, the end.
+struct Run {
+  std::vector<std::uint64_t> telegrams;  // request start/end, answer start/end of each exchange
+  std::vector<std::uint64_t> outputs;    // cycle and value of each port write
+  std::uint64_t cycle = 0;
+  bool data_exchange = false;
+};
+
+const std::vector<std::vector<std::uint8_t>> kOutputs = {{0x05, 0x01}, {0x0A, 0x01}, {0x0F, 0x01}};
+
+void master_session(dpc31::DpMaster& m, dpc31::FirmwareHost& fw, Run& r) {
+  r.data_exchange = m.startup();
+  for (const auto& out : kOutputs) m.data_exchange(out);
+  for (const dpc31::Exchange& ex : m.history()) {
+    r.telegrams.insert(r.telegrams.end(),
+                       {ex.request_start, ex.request_end, ex.answer_start, ex.answer_end});
+  }
+  for (const auto& w : fw.port_writes()) r.outputs.insert(r.outputs.end(), {w.cycle, w.value});
+}
+
+Run native() {
+  const dpc31_firmware& d = dpc31::find_firmware("DO4");
+  dpc31::Chip chip({dpc31::Profile::dpc31});
+  dpc31::FirmwareHost fw(d);
+  dpc31::DirectBus bus(chip);
+  fw.init(bus, 5);
+  dpc31::DpMaster m(chip, {}, dpc31::with_gsd_defaults(d));
+  m.set_firmware(fw.program());
+  Run r;
+  master_session(m, fw, r);
+  r.cycle = chip.cycle();
+  return r;
+}
+
+// The firmware's bus over the socket: each access a b_transport with the quantum keeper's local
+// time, which the model annotates with the access's exact time.
+class SocketBus final : public dpc31::BusPort {
+ public:
+  SocketBus(tlm_utils::simple_initiator_socket<sc_core::sc_module>& s, Dpc31Tlm& model)
+      : socket_(s), model_(model) {
+    qk_.reset();
+  }
+  std::uint8_t read(std::uint32_t addr) override {
+    std::uint8_t v = 0;
+    access(tlm::TLM_READ_COMMAND, addr, &v);
+    return v;
+  }
+  void write(std::uint32_t addr, std::uint8_t value) override {
+    access(tlm::TLM_WRITE_COMMAND, addr, &value);
+  }
+  void write_block(std::uint32_t addr, std::span<const std::uint8_t> bytes) override {
+    for (std::uint8_t b : bytes) write(addr++, b);
+  }
+  void read_block(std::uint32_t addr, std::span<std::uint8_t> out) override {
+    for (std::uint8_t& b : out) b = read(addr++);
+  }
+  void fill(std::uint32_t addr, std::uint8_t value, std::size_t len) override {
+    for (std::size_t i = 0; i < len; ++i) write(addr++, value);
+  }
+  bool equal(std::uint32_t a, std::uint32_t b, std::size_t len) override {
+    for (std::size_t i = 0; i < len; ++i) {
+      const std::uint8_t first = read(a++);  // a + i, then b + i: the drivers' order
+      if (first != read(b++)) return false;
+    }
+    return true;
+  }
+  void idle(std::uint64_t cycles) override {
+    const sc_core::sc_time now = sc_core::sc_time_stamp();
+    const std::uint64_t at = model_.cycle_at(now + qk_.get_local_time());
+    qk_.set(model_.time_of(at + cycles) - now);
+    if (qk_.need_sync()) qk_.sync();
+  }
+  [[nodiscard]] const dpc31::Chip& chip() const override { return model_.chip(); }
+  void sync() { qk_.sync(); }
+
+ private:
+  void access(tlm::tlm_command cmd, std::uint32_t addr, std::uint8_t* data) {
+    tlm::tlm_generic_payload tr;
+    tr.set_command(cmd);
+    tr.set_address(addr);
+    tr.set_data_ptr(data);
+    tr.set_data_length(1);
+    tr.set_streaming_width(1);
+    sc_core::sc_time delay = qk_.get_local_time();
+    socket_->b_transport(tr, delay);
+    if (tr.is_response_error()) SC_REPORT_FATAL("vp_do4", tr.get_response_string().c_str());
+    qk_.set(delay);
+    if (qk_.need_sync()) qk_.sync();
+  }
+  tlm_utils::simple_initiator_socket<sc_core::sc_module>& socket_;
+  Dpc31Tlm& model_;
+  tlm_utils::tlm_quantumkeeper qk_;
+};
+
+struct Platform : sc_core::sc_module {
+  tlm_utils::simple_initiator_socket<sc_core::sc_module> cpu_socket{"cpu_socket"};
+  Dpc31Tlm chip{"dpc31", dpc31::ChipOptions{}};
+  sc_core::sc_signal<bool> x_int{"x_int"}, irq{"irq"}, pb3{"pb3"}, txd{"txd"};
+  const dpc31_firmware& d = dpc31::find_firmware("DO4");
+  dpc31::FirmwareHost fw{d};
+  sc_core::sc_event init_done;
+  Run result;
+  std::uint64_t bench_accesses = 0;
+  double bench_seconds = 0;
+
+  SC_HAS_PROCESS(Platform);
+  explicit Platform(const sc_core::sc_module_name& n, std::uint64_t bench) : sc_module(n) {
+    cpu_socket.bind(chip.bus);
+    chip.x_int(x_int);
+    chip.irq(irq);
+    chip.pb3(pb3);
+    chip.txd(txd);
+    bench_accesses = bench;
+    SC_THREAD(cpu);
+    SC_THREAD(master);
+  }
+
+  // The host CPU: main()'s set-up, then the ISR whenever the interrupt is active (DO4 is
+  // interrupt-driven), level-triggered as the native CPU model.
+  void cpu() {
+    SocketBus bus(cpu_socket, chip);
+    fw.init(bus, 5);
+    bus.sync();
+    init_done.notify();
+    wait(sc_core::SC_ZERO_TIME);  // the master is set up at the end of main()'s set-up, as natively
+    for (;;) {
+      if (fw.interrupts_enabled() && chip.chip().irq_active()) {
+        fw.isr(bus);
+        continue;
+      }
+      bus.sync();
+      if (!(fw.interrupts_enabled() && chip.chip().irq_active())) wait(chip.irq_rise());
+    }
+  }
+
+  void master() {
+    wait(init_done);
+    dpc31::DpMaster m(chip.chip(), {}, dpc31::with_gsd_defaults(d));
+    m.scheduler = [this](std::uint64_t cycle) { chip.run_until(cycle); };
+    master_session(m, fw, result);
+    result.cycle = chip.chip().cycle();
+    if (bench_accesses != 0) bench();
+    sc_core::sc_stop();
+  }
+
+  // b_transport's rate: reads of one RAM byte of the user area through the socket, one payload
+  // each, the initiator running ahead as far as the model lets it.
+  void bench() {
+    const std::uint32_t addr = chip.chip().profile().user_base;
+    tlm::tlm_generic_payload tr;
+    std::uint8_t v = 0;
+    tr.set_command(tlm::TLM_READ_COMMAND);
+    tr.set_data_ptr(&v);
+    tr.set_data_length(1);
+    tr.set_streaming_width(1);
+    const auto t0 = std::chrono::steady_clock::now();
+    sc_core::sc_time delay = sc_core::SC_ZERO_TIME;
+    for (std::uint64_t i = 0; i < bench_accesses; ++i) {
+      tr.set_address(addr);
+      cpu_socket->b_transport(tr, delay);
+    }
+    bench_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+};
+
+bool same(const char* what, const std::vector<std::uint64_t>& a,
+          const std::vector<std::uint64_t>& b) {
+  if (a == b) {
+    std::printf("%s: %zu values, equal\n", what, a.size());
+    return true;
+  }
+  std::printf("%s differ: native %zu values, SystemC %zu\n", what, a.size(), b.size());
+  for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i) {
+    if (a[i] != b[i]) {
+      std::printf("  first at %zu: native %llu, SystemC %llu\n", i,
+                  static_cast<unsigned long long>(a[i]), static_cast<unsigned long long>(b[i]));
+      break;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
+int sc_main(int argc, char* argv[]) {
+  std::uint64_t bench = 0;
+  if (argc == 3 && std::strcmp(argv[1], "--bench") == 0) bench = std::stoull(argv[2]);
+  const Run ref = native();
+  tlm_utils::tlm_quantumkeeper::set_global_quantum(sc_core::sc_time(1, sc_core::SC_US));
+  Platform vp("vp", bench);
+  sc_core::sc_start();
+  const Run& got = vp.result;
+  bool ok = got.data_exchange && ref.data_exchange;
+  std::printf("Data_Exchange: native %s, SystemC %s\n", ref.data_exchange ? "yes" : "no",
+              got.data_exchange ? "yes" : "no");
+  ok = same("telegram cycles", ref.telegrams, got.telegrams) && ok;
+  ok = same("DO4 output writes", ref.outputs, got.outputs) && ok;
+  ok = same("final cycle", {ref.cycle}, {got.cycle}) && ok;
+  std::printf("b_transport: %llu accesses, %llu synchronised\n",
+              static_cast<unsigned long long>(vp.chip.accesses()),
+              static_cast<unsigned long long>(vp.chip.syncs()));
+  if (bench != 0) {
+    std::printf("bench: %.3g b_transport accesses per second\n",
+                static_cast<double>(bench) / vp.bench_seconds);
+  }
+  return ok ? 0 : 1;
+}

@@ -1,0 +1,128 @@
+// The Python module dpc31 (docs/python.md): what its two translation units share. bind_chip.cpp
+// binds the chip and the register description, bind_session.cpp the DP master, firmware,
+// scenarios and wavediff. Only the public API (include/dpc31/, the installed session headers,
+// lib/wavediff's compare()) is used.
+#pragma once
+
+#include <pybind11/functional.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <exception>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <thread>
+#include <type_traits>
+#include <utility>
+
+#include "dpc31/chip.hpp"
+
+namespace dpc31::py_bind {
+
+namespace py = pybind11;
+
+// The exception classes (dpc31.Error and its subclasses), created by bind_chip.
+struct Errors {
+  py::object error;     // dpc31.Error(RuntimeError): every error of the emulator
+  py::object snapshot;  // dpc31.SnapshotError
+  py::object scenario;  // dpc31.ScenarioError: .file, .line
+  py::object firmware;  // dpc31.FirmwareError
+  py::object input;     // dpc31.InputError: a waveform or file that cannot be read
+};
+Errors& errors();
+// Raises `type(message)` with the attributes given (as a Python exception through C++).
+[[noreturn]] void raise(const py::object& type, const std::string& message,
+                        std::initializer_list<std::pair<const char*, py::object>> attrs = {});
+
+// One chip as Python holds it. The GIL is released while the chip runs; Python observers take it
+// again. An observer's exception stops the run (Chip::request_stop) and is raised when the call
+// that ran the chip returns. While the chip runs (`busy`), only the thread running it may look
+// at it (observers may peek), and nobody may run it again: a clear error instead of a data race.
+class PyChip {
+ public:
+  explicit PyChip(const ChipOptions& o) : chip(o) {}
+  Chip chip;
+
+  // The call that lets time pass: checks, releases the GIL around `f`, rethrows an observer's
+  // exception. Called with the GIL held.
+  template <typename F>
+  auto run(F&& f) -> decltype(f()) {
+    enter(true);
+    Busy busy(*this);
+    if constexpr (std::is_void_v<decltype(f())>) {
+      {
+        py::gil_scoped_release nogil;
+        f();
+      }
+      rethrow();
+    } else {
+      auto r = [&] {
+        py::gil_scoped_release nogil;
+        return f();
+      }();
+      rethrow();
+      return r;
+    }
+  }
+  // Checks that the caller may touch the chip now (mutating: it would change it).
+  void enter(bool mutating) const;
+  // A Python callable as an observer: called with the GIL, errors kept for rethrow().
+  template <typename... Args, typename Convert>
+  std::function<void(Args...)> observer(py::function f, Convert convert);
+  void rethrow();
+
+  // An observer raised: kept until the running call returns.
+  std::exception_ptr error;
+
+ private:
+  struct Busy {
+    explicit Busy(PyChip& c) : c_(c) {
+      c_.busy_ = true;
+      c_.runner_ = std::this_thread::get_id();
+    }
+    ~Busy() { c_.busy_ = false; }
+    Busy(const Busy&) = delete;
+    Busy& operator=(const Busy&) = delete;
+    PyChip& c_;
+  };
+  bool busy_ = false;  // read and written with the GIL held only
+  std::thread::id runner_;
+};
+
+// A Python object kept by C++ code that may copy it without the GIL: the reference is dropped
+// with the GIL held.
+inline std::shared_ptr<py::object> hold(py::object o) {
+  return {new py::object(std::move(o)), [](py::object* p) {
+            py::gil_scoped_acquire gil;
+            delete p;
+          }};
+}
+
+template <typename... Args, typename Convert>
+std::function<void(Args...)> PyChip::observer(py::function f, Convert convert) {
+  return [this, fn = hold(std::move(f)), convert](Args... args) {
+    py::gil_scoped_acquire gil;
+    if (error) return;  // the first error ends the run; later calls are not made
+    try {
+      convert(*fn, args...);
+    } catch (py::error_already_set&) {
+      error = std::current_exception();
+      chip.request_stop();
+    }
+  };
+}
+
+// Names <-> values of the options (ValueError naming the allowed ones).
+ChipOptions chip_options(std::string_view profile, std::string_view bus, std::uint32_t clock_hz,
+                         std::string_view engine, const std::optional<std::string>& variant,
+                         std::string_view irq_controller);
+RegId reg_id(const Chip& chip, std::string_view name);
+py::bytes to_bytes(std::span<const std::uint8_t> b);
+std::vector<std::uint8_t> from_bytes(const py::bytes& b);
+py::dict counters_dict(const FdlCounters& c);
+
+void bind_chip(py::module_& m);
+void bind_session(py::module_& m);
+
+}  // namespace dpc31::py_bind

@@ -1,0 +1,552 @@
+// dpc31.Chip and the register description in Python (docs/python.md): dpc31::Chip
+// (include/dpc31/chip.hpp) one call for one call, with the names of the CLI and scenario files.
+#include <dlfcn.h>
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "bind.hpp"
+#include "dpc31/snapshot.hpp"
+#include "firmware_host.hpp"
+#include "vocabulary.hpp"
+#include "wave_reader.hpp"
+
+namespace dpc31::py_bind {
+
+Errors& errors() {
+  static Errors& e = *new Errors;  // never destroyed: it would outlive the interpreter
+  return e;
+}
+
+void raise(const py::object& type, const std::string& message,
+           std::initializer_list<std::pair<const char*, py::object>> attrs) {
+  py::object exc = type(message);
+  for (const auto& [name, value] : attrs) exc.attr(name) = value;
+  PyErr_SetObject(type.ptr(), exc.ptr());
+  throw py::error_already_set();
+}
+
+void PyChip::enter(bool mutating) const {
+  if (!busy_) return;
+  if (runner_ != std::this_thread::get_id()) {
+    raise(errors().error, "the chip is running in another thread (one thread at a time)");
+  }
+  if (mutating) {
+    raise(errors().error,
+          "the chip is running: an observer may look at it (peek, cycle, probe, ...) but not "
+          "access or step it");
+  }
+}
+
+void PyChip::rethrow() {
+  if (!error) return;
+  std::exception_ptr e = std::exchange(error, nullptr);
+  chip.clear_stop();
+  std::rethrow_exception(e);
+}
+
+namespace {
+
+template <typename T, typename Parse>
+T parse_name(std::string_view what, std::string_view s, Parse parse, std::string_view allowed) {
+  T v{};
+  if (!parse(s, v)) {
+    throw py::value_error(std::string(what) + " '" + std::string(s) + "': expected one of " +
+                          std::string(allowed));
+  }
+  return v;
+}
+
+}  // namespace
+
+ChipOptions chip_options(std::string_view profile, std::string_view bus, std::uint32_t clock_hz,
+                         std::string_view engine, const std::optional<std::string>& variant,
+                         std::string_view irq_controller) {
+  ChipOptions o;
+  o.profile = parse_name<Profile>(
+      "profile", profile, [](std::string_view s, Profile& p) { return parse_profile(s, p); },
+      "spc3, vpc3plus, dpc31");
+  if (bus != "intel" && bus != "motorola") {
+    throw py::value_error("bus '" + std::string(bus) + "': expected one of intel, motorola");
+  }
+  o.bus = bus == "intel" ? BusMode::intel : BusMode::motorola;
+  o.clock_hz = clock_hz;
+  if (engine != "event" && engine != "per-cycle") {
+    throw py::value_error("engine '" + std::string(engine) + "': expected one of event, per-cycle");
+  }
+  o.engine = engine == "event" ? Engine::event : Engine::per_cycle;
+  if (variant) {
+    o.variant = parse_name<Vpc3Variant>(
+        "variant", *variant,
+        [](std::string_view s, Vpc3Variant& v) { return parse_vpc3_variant(s, v); }, "b, c, s");
+  }
+  o.irq_controller = parse_name<IrqController>(
+      "irq_controller", irq_controller,
+      [](std::string_view s, IrqController& c) { return parse_irq_controller(s, c); },
+      "external, c31");
+  return o;
+}
+
+RegId reg_id(const Chip& chip, std::string_view name) {
+  const RegDesc* r = find_reg(chip.profile(), name);
+  if (r == nullptr) {
+    throw py::value_error("no register '" + std::string(name) + "' in profile " +
+                          std::string(chip.profile().name));
+  }
+  return r->id;
+}
+
+py::bytes to_bytes(std::span<const std::uint8_t> b) {
+  return {reinterpret_cast<const char*>(b.data()), b.size()};
+}
+
+std::vector<std::uint8_t> from_bytes(const py::bytes& b) {
+  const std::string_view s = b;
+  return {s.begin(), s.end()};
+}
+
+py::dict counters_dict(const FdlCounters& c) {
+  py::dict d;
+  for (const CounterField& f : fdl_counter_fields()) d[py::str(f.name)] = c.*f.member;
+  return d;
+}
+
+namespace {
+
+py::object opt_addr(std::int32_t a) { return a < 0 ? py::object(py::none()) : py::int_(a); }
+
+const FieldDesc& field_of(const RegDesc& r, std::string_view name) {
+  auto it = std::find_if(r.fields.begin(), r.fields.end(),
+                         [&](const FieldDesc& f) { return f.name == name; });
+  if (it == r.fields.end()) {
+    throw py::value_error("register " + std::string(r.name) + " has no field '" +
+                          std::string(name) + "'");
+  }
+  return *it;
+}
+
+std::uint16_t field_mask(const FieldDesc& f) {
+  return static_cast<std::uint16_t>(((1U << f.width) - 1U) << f.lsb);
+}
+
+py::list registers_of(const ProfileDesc& p) {
+  py::list l;
+  for (const RegDesc& r : p.regs) l.append(py::cast(&r, py::return_value_policy::reference));
+  return l;
+}
+
+void bind_description(py::module_& m) {
+  py::class_<FieldDesc>(m, "Field", "One field of a register (regs/dpc31_regs.json).")
+      .def_readonly("name", &FieldDesc::name)
+      .def_readonly("lsb", &FieldDesc::lsb)
+      .def_readonly("width", &FieldDesc::width)
+      .def_property_readonly("access",
+                             [](const FieldDesc& f) { return std::string(access_name(f.access)); })
+      .def_readonly("pulse", &FieldDesc::pulse)
+      .def_readonly("desc", &FieldDesc::desc)
+      .def_property_readonly("mask", &field_mask)
+      .def("__repr__", [](const FieldDesc& f) {
+        return "<Field " + std::string(f.name) + " [" + std::to_string(f.lsb + f.width - 1) + ":" +
+               std::to_string(f.lsb) + "] " + std::string(access_name(f.access)) + ">";
+      });
+  py::class_<RegDesc>(m, "Register",
+                      "One register or RAM cell of a profile, as the description has it.")
+      .def_readonly("name", &RegDesc::name)
+      .def_readonly("alias", &RegDesc::alias)
+      .def_property_readonly("kind",
+                             [](const RegDesc& r) { return std::string(kind_name(r.kind)); })
+      .def_property_readonly("block",
+                             [](const RegDesc& r) { return std::string(block_name(r.block)); })
+      .def_readonly("width", &RegDesc::width)
+      .def_property_readonly(
+          "reset",
+          [](const RegDesc& r) { return r.has_reset ? py::object(py::int_(r.reset)) : py::none(); })
+      .def_property_readonly("read_addr", [](const RegDesc& r) { return opt_addr(r.read_addr); })
+      .def_property_readonly("write_addr", [](const RegDesc& r) { return opt_addr(r.write_addr); })
+      .def_readonly("documented", &RegDesc::documented)
+      .def_readonly("source", &RegDesc::source)
+      .def_readonly("note", &RegDesc::note)
+      .def_readonly("desc", &RegDesc::desc)
+      .def_property_readonly("fields",
+                             [](const RegDesc& r) {
+                               py::list l;
+                               for (const FieldDesc& f : r.fields) {
+                                 l.append(py::cast(&f, py::return_value_policy::reference));
+                               }
+                               return l;
+                             })
+      .def(
+          "field", [](const RegDesc& r, std::string_view name) { return &field_of(r, name); },
+          py::return_value_policy::reference, py::arg("name"))
+      .def("__repr__", [](const RegDesc& r) {
+        return "<Register " + std::string(r.name) + " " + std::string(kind_name(r.kind)) + ">";
+      });
+  py::class_<RegionDesc>(m, "Region", "A contiguous memory region of a profile.")
+      .def_readonly("name", &RegionDesc::name)
+      .def_readonly("begin", &RegionDesc::begin)
+      .def_readonly("end", &RegionDesc::end)
+      .def_readonly("ram", &RegionDesc::ram)
+      .def_readonly("reserved", &RegionDesc::reserved)
+      .def_readonly("desc", &RegionDesc::desc);
+
+  const auto profile_of = [](std::string_view name) -> const ProfileDesc& {
+    return profile_desc(chip_options(name, "intel", 0, "event", std::nullopt, "external").profile);
+  };
+  m.def(
+      "registers", [profile_of](std::string_view p) { return registers_of(profile_of(p)); },
+      py::arg("profile"), "Every register and RAM cell of a profile, in the description's order.");
+  m.def(
+      "register",
+      [profile_of](std::string_view p, std::string_view name) {
+        const RegDesc* r = find_reg(profile_of(p), name);
+        if (r == nullptr) {
+          throw py::value_error("no register '" + std::string(name) + "' in profile " +
+                                std::string(p));
+        }
+        return r;
+      },
+      py::return_value_policy::reference, py::arg("profile"), py::arg("name"));
+  m.def(
+      "regions",
+      [profile_of](std::string_view p) {
+        py::list l;
+        for (const RegionDesc& r : profile_of(p).regions) {
+          l.append(py::cast(&r, py::return_value_policy::reference));
+        }
+        return l;
+      },
+      py::arg("profile"));
+  m.def("profiles", [] {
+    py::list l;
+    for (Profile p : kAllProfiles) l.append(std::string(profile_name(p)));
+    return l;
+  });
+}
+
+void bind_values(py::module_& m) {
+  py::enum_<DpState>(m, "DpState")
+      .value("Wait_Prm", DpState::Wait_Prm)
+      .value("Wait_Cfg", DpState::Wait_Cfg)
+      .value("Data_Exchange", DpState::Data_Exchange);
+  py::enum_<WdState>(m, "WdState")
+      .value("Baud_Search", WdState::Baud_Search)
+      .value("Baud_Control", WdState::Baud_Control)
+      .value("DP_Control", WdState::DP_Control);
+  py::class_<Telegram>(m, "Telegram", "A frame the chip received (RxD) or sent (TxD).")
+      .def_readonly("from_chip", &Telegram::from_chip)
+      .def_property_readonly("bytes", [](const Telegram& t) { return to_bytes(t.bytes); })
+      .def_readonly("start", &Telegram::start)
+      .def_readonly("end", &Telegram::end)
+      .def("__repr__", [](const Telegram& t) {
+        return "<Telegram " + std::string(t.from_chip ? "tx" : "rx") + " " +
+               std::to_string(t.start) + ".." + std::to_string(t.end) + ">";
+      });
+  py::class_<ChipProbe>(m, "Probe", "The state signals of the chip in one look (Chip.probe()).")
+      .def_readonly("dp_state", &ChipProbe::dp_state)
+      .def_readonly("wd_state", &ChipProbe::wd_state)
+      .def_readonly("baud_code", &ChipProbe::baud_code)
+      .def_readonly("irr", &ChipProbe::irr)
+      .def_readonly("dout_buffer_sm", &ChipProbe::dout_buffer_sm)
+      .def_readonly("din_buffer_sm", &ChipProbe::din_buffer_sm)
+      .def_readonly("diag_buffer_sm", &ChipProbe::diag_buffer_sm);
+}
+
+// Observers: on_X(callable) adds one, on_X(None) removes all of that kind (Chip's rule).
+template <typename... Args, typename Setter, typename Convert>
+void observe(PyChip& c, const py::object& f, Setter set, Convert convert) {
+  c.enter(true);
+  if (f.is_none()) {
+    set(std::function<void(Args...)>{});
+  } else {
+    set(c.observer<Args...>(f.cast<py::function>(), convert));
+  }
+}
+
+void bind_chip_class(py::module_& m) {
+  using U8 = std::uint8_t;
+  using U32 = std::uint32_t;
+  using U64 = std::uint64_t;
+  py::class_<PyChip>(m, "Chip", "One SPC3, VPC3+ or DPC31 on its parallel bus (dpc31::Chip).")
+      .def(py::init([](std::string_view profile, std::string_view bus, U32 clock_hz,
+                       std::string_view engine, const std::optional<std::string>& variant,
+                       std::string_view irq_controller) {
+             return std::make_unique<PyChip>(
+                 chip_options(profile, bus, clock_hz, engine, variant, irq_controller));
+           }),
+           py::arg("profile") = "dpc31", py::arg("bus") = "intel", py::arg("clock_hz") = 0,
+           py::arg("engine") = "event", py::arg("variant") = py::none(),
+           py::arg("irq_controller") = "external")
+      .def("reset",
+           [](PyChip& c) {
+             c.enter(true);
+             c.chip.reset();
+           })
+      // the bus: each access takes bus_access_cycles clocks, the chip runs meanwhile
+      .def(
+          "read", [](PyChip& c, U32 a) { return c.run([&] { return c.chip.read(a); }); },
+          py::arg("addr"))
+      .def(
+          "write", [](PyChip& c, U32 a, U8 v) { c.run([&] { c.chip.write(a, v); }); },
+          py::arg("addr"), py::arg("value"))
+      .def(
+          "read_block",
+          [](PyChip& c, U32 a, std::size_t n) {
+            std::vector<U8> out(n);
+            c.run([&] { c.chip.read_block(a, out); });
+            return to_bytes(out);
+          },
+          py::arg("addr"), py::arg("length"))
+      .def(
+          "write_block",
+          [](PyChip& c, U32 a, const py::bytes& b) {
+            const std::vector<U8> v = from_bytes(b);
+            c.run([&] { c.chip.write_block(a, v); });
+          },
+          py::arg("addr"), py::arg("data"))
+      .def(
+          "fill",
+          [](PyChip& c, U32 a, U8 v, std::size_t n) { c.run([&] { c.chip.fill(a, v, n); }); },
+          py::arg("addr"), py::arg("value"), py::arg("length"))
+      .def(
+          "equal",
+          [](PyChip& c, U32 a, U32 b, std::size_t n) {
+            return c.run([&] { return c.chip.equal(a, b, n); });
+          },
+          py::arg("a"), py::arg("b"), py::arg("length"))
+      // the debugger: no time, no side effects
+      .def(
+          "peek",
+          [](const PyChip& c, U32 a) {
+            c.enter(false);
+            return c.chip.peek(a);
+          },
+          py::arg("addr"))
+      .def(
+          "poke",
+          [](PyChip& c, U32 a, U8 v) {
+            c.enter(true);
+            return c.chip.poke(a, v);
+          },
+          py::arg("addr"), py::arg("value"))
+      .def(
+          "peek_block",
+          [](const PyChip& c, U32 a, std::size_t n) {
+            c.enter(false);
+            std::vector<U8> out(n);
+            for (std::size_t i = 0; i < n; ++i) out[i] = c.chip.peek(a + static_cast<U32>(i));
+            return to_bytes(out);
+          },
+          py::arg("addr"), py::arg("length"))
+      .def(
+          "peek_reg",
+          [](const PyChip& c, std::string_view name) {
+            c.enter(false);
+            return c.chip.peek_reg(reg_id(c.chip, name));
+          },
+          py::arg("name"))
+      .def(
+          "poke_reg",
+          [](PyChip& c, std::string_view name, std::uint16_t v) {
+            c.enter(true);
+            return c.chip.poke_reg(reg_id(c.chip, name), v);
+          },
+          py::arg("name"), py::arg("value"))
+      .def(
+          "peek_field",
+          [](const PyChip& c, std::string_view reg, std::string_view field) {
+            c.enter(false);
+            const RegDesc& r = *find_reg(c.chip.profile(), reg_id(c.chip, reg));
+            const FieldDesc& f = field_of(r, field);
+            return (c.chip.peek_reg(r.id) & field_mask(f)) >> f.lsb;
+          },
+          py::arg("register"), py::arg("field"))
+      .def(
+          "addr_of",
+          [](const PyChip& c, std::string_view name) {
+            return opt_addr(c.chip.addr_of(reg_id(c.chip, name)));
+          },
+          py::arg("name"))
+      .def_property_readonly("registers",
+                             [](const PyChip& c) { return registers_of(c.chip.profile()); })
+      // time
+      .def(
+          "step", [](PyChip& c, U64 n) { c.run([&] { c.chip.step(n); }); }, py::arg("cycles") = 1)
+      .def(
+          "step_until_irq",
+          [](PyChip& c, U64 n) { return c.run([&] { return c.chip.step_until_irq(n); }); },
+          py::arg("cycles"))
+      .def_property_readonly("cycle", [](const PyChip& c) { return c.chip.cycle(); })
+      .def_property_readonly("clock_hz", [](const PyChip& c) { return c.chip.clock_hz(); })
+      .def_property_readonly("bus_access_cycles",
+                             [](const PyChip& c) { return c.chip.bus_access_cycles(); })
+      // pins and state
+      .def_property_readonly("x_int", [](const PyChip& c) { return c.chip.x_int_pin(); })
+      .def_property_readonly("irq_active", [](const PyChip& c) { return c.chip.irq_active(); })
+      .def_property_readonly("pb3", [](const PyChip& c) { return c.chip.pb3_pin(); })
+      .def_property_readonly("txd", [](const PyChip& c) { return c.chip.txd_pin(); })
+      .def_property_readonly("started", [](const PyChip& c) { return c.chip.started(); })
+      .def_property_readonly("dp_state", [](const PyChip& c) { return c.chip.dp_state(); })
+      .def_property_readonly("wd_state", [](const PyChip& c) { return c.chip.wd_state(); })
+      .def_property_readonly("station_address",
+                             [](const PyChip& c) { return c.chip.station_address(); })
+      .def_property_readonly("bit_cycles", [](const PyChip& c) { return c.chip.bit_cycles(); })
+      .def_property_readonly("fdl_counters",
+                             [](const PyChip& c) { return counters_dict(c.chip.fdl_counters()); })
+      .def_property_readonly("profile",
+                             [](const PyChip& c) { return std::string(c.chip.profile().name); })
+      .def_property_readonly("bus",
+                             [](const PyChip& c) {
+                               return c.chip.bus_mode() == BusMode::intel ? "intel" : "motorola";
+                             })
+      .def_property_readonly("variant",
+                             [](const PyChip& c) {
+                               const auto v = c.chip.vpc3_variant();
+                               return v ? py::object(py::str(std::string(vpc3_variant_name(*v))))
+                                        : py::none();
+                             })
+      .def("probe",
+           [](const PyChip& c) {
+             c.enter(false);
+             return c.chip.probe();
+           })
+      .def_property_readonly("next_deadline",
+                             [](const PyChip& c) { return c.chip.next_deadline(); })
+      .def_property_readonly("watchdog_due", [](const PyChip& c) { return c.chip.watchdog_due(); })
+      // the serial side
+      .def(
+          "drive_rxd",
+          [](PyChip& c, U64 cycle, bool level) {
+            c.enter(true);
+            c.chip.drive_rxd(cycle, level);
+          },
+          py::arg("cycle"), py::arg("level"))
+      .def(
+          "drive_rxd_chars",
+          [](PyChip& c, const py::bytes& b, U64 start, U32 bit_cycles) {
+            c.enter(true);
+            return c.chip.drive_rxd_chars(from_bytes(b), start, bit_cycles);
+          },
+          py::arg("data"), py::arg("start"), py::arg("bit_cycles"))
+      // observers
+      .def(
+          "on_irq_change",
+          [](PyChip& c, const py::object& f) {
+            observe<U64, bool>(
+                c, f, [&](auto cb) { c.chip.on_irq_change(std::move(cb)); },
+                [](const py::object& fn, U64 cy, bool a) { fn(cy, a); });
+          },
+          py::arg("callback"), "callback(cycle, active) at every X/INT edge; None removes all")
+      .def(
+          "on_pb3_change",
+          [](PyChip& c, const py::object& f) {
+            observe<U64, bool>(
+                c, f, [&](auto cb) { c.chip.on_pb3_change(std::move(cb)); },
+                [](const py::object& fn, U64 cy, bool h) { fn(cy, h); });
+          },
+          py::arg("callback"))
+      .def(
+          "on_telegram",
+          [](PyChip& c, const py::object& f) {
+            observe<const Telegram&>(
+                c, f, [&](auto cb) { c.chip.on_telegram(std::move(cb)); },
+                [](const py::object& fn, const Telegram& t) { fn(t); });
+          },
+          py::arg("callback"), "callback(Telegram) for every frame received and answer sent")
+      .def(
+          "on_bus_access",
+          [](PyChip& c, const py::object& f) {
+            observe<U64, const BusAccess&>(
+                c, f, [&](auto cb) { c.chip.on_bus_access(std::move(cb)); },
+                [](const py::object& fn, U64 cy, const BusAccess& a) {
+                  fn(cy, a.write, a.addr, a.data);
+                });
+          },
+          py::arg("callback"), "callback(cycle, write, addr, data) for every CPU bus access")
+      // snapshots
+      .def("save_state",
+           [](const PyChip& c) {
+             c.enter(false);
+             return to_bytes(c.chip.save_state());
+           })
+      .def(
+          "load_state",
+          [](PyChip& c, const py::bytes& b) {
+            c.enter(true);
+            c.chip.load_state(from_bytes(b));
+          },
+          py::arg("data"))
+      .def(
+          "save_state_file",
+          [](const PyChip& c, const std::string& path) {
+            c.enter(false);
+            c.chip.save_state_file(path);
+          },
+          py::arg("path"))
+      .def(
+          "load_state_file",
+          [](PyChip& c, const std::string& path) {
+            c.enter(true);
+            c.chip.load_state_file(path);
+          },
+          py::arg("path"));
+}
+
+// A firmware plug-in (dpc31_firmware.h) takes the HAL's functions from the program that loads it.
+// Python loads this module and libdpc31emu.so with RTLD_LOCAL, where a plug-in's dlopen would not
+// find them: the library is made global once.
+void export_hal_symbols() {
+  Dl_info info{};
+  if (dladdr(reinterpret_cast<void*>(&profile_desc), &info) != 0 && info.dli_fname != nullptr) {
+    dlopen(info.dli_fname, RTLD_NOW | RTLD_NOLOAD | RTLD_GLOBAL);
+  }
+}
+
+}  // namespace
+
+void bind_chip(py::module_& m) {
+  Errors& e = errors();
+  e.error = py::exception<std::runtime_error>(m, "Error", PyExc_RuntimeError);
+  const auto sub = [&](const char* name) {
+    return py::reinterpret_steal<py::object>(
+        PyErr_NewException((std::string("dpc31.") + name).c_str(), e.error.ptr(), nullptr));
+  };
+  e.snapshot = sub("SnapshotError");
+  e.scenario = sub("ScenarioError");
+  e.firmware = sub("FirmwareError");
+  e.input = sub("InputError");
+  m.attr("SnapshotError") = e.snapshot;
+  m.attr("ScenarioError") = e.scenario;
+  m.attr("FirmwareError") = e.firmware;
+  m.attr("InputError") = e.input;
+  // The emulator's errors as dpc31.Error and its subclasses, with the C++ message;
+  // std::invalid_argument (a ChipOptions the chip refuses) as ValueError.
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const py::builtin_exception&) {
+      throw;
+    } catch (const SnapshotError& x) {
+      PyErr_SetString(errors().snapshot.ptr(), x.what());
+    } catch (const FirmwareError& x) {
+      PyErr_SetString(errors().firmware.ptr(), x.what());
+    } catch (const wavediff::InputError& x) {
+      PyErr_SetString(errors().input.ptr(), x.what());
+    } catch (const std::invalid_argument& x) {
+      PyErr_SetString(PyExc_ValueError, x.what());
+    } catch (const std::runtime_error& x) {
+      PyErr_SetString(errors().error.ptr(), x.what());
+    }
+  });
+  bind_values(m);
+  bind_description(m);
+  bind_chip_class(m);
+  export_hal_symbols();
+}
+
+}  // namespace dpc31::py_bind
+
+PYBIND11_MODULE(_dpc31, m) {
+  m.doc() = "dpc31emu: the SPC3 / VPC3+ / DPC31 PROFIBUS-DP slave ASICs, cycle-accurate";
+  dpc31::py_bind::bind_chip(m);
+  dpc31::py_bind::bind_session(m);
+}

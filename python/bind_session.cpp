@@ -1,0 +1,530 @@
+// dpc31.Master, dpc31.Firmware, dpc31.Responder, dpc31.Scenario and dpc31.wavediff in Python
+// (docs/python.md): the session layer (session/*.hpp, installed as <dpc31/session/...>) and
+// lib/wavediff's compare(), one call for one call.
+#include <pybind11/operators.h>
+
+#include <memory>
+
+#include "bind.hpp"
+#include "dp_master.hpp"
+#include "firmware_host.hpp"
+#include "responder.hpp"
+#include "scenario.hpp"
+#include "vocabulary.hpp"
+#include "wavediff.hpp"
+
+namespace dpc31::py_bind {
+
+namespace {
+
+using U8 = std::uint8_t;
+using U64 = std::uint64_t;
+
+// A class bound without a keyword constructor gets one: T() with each keyword set as an
+// attribute (an unknown keyword is an AttributeError).
+template <typename T>
+T with_kwargs(const py::kwargs& kw) {
+  py::object o = py::cast(T{});
+  for (const auto& [k, v] : kw) py::setattr(o, k, v);
+  return o.cast<T>();
+}
+
+UartFault fault_of(const std::optional<std::string>& kind, int char_index) {
+  UartFault f;
+  if (!kind) return f;
+  if (!parse_fault_kind(*kind, f.kind)) {
+    throw py::value_error("fault '" + *kind + "': expected one of parity, start, stop");
+  }
+  f.char_index = char_index;
+  return f;
+}
+
+template <typename T, typename M>
+auto bytes_property(M T::*member) {
+  return std::make_pair([member](const T& t) { return to_bytes(t.*member); },
+                        [member](T& t, const py::bytes& b) { t.*member = from_bytes(b); });
+}
+
+void bind_frames(py::module_& m) {
+  py::class_<fdl::Frame>(m, "Frame", "An FDL telegram (include/dpc31/fdl.hpp).")
+      .def(py::init([](U8 da, U8 sa, U8 fc, const py::bytes& du, std::optional<U8> dsap,
+                       std::optional<U8> ssap) {
+             return fdl::make_frame(da, sa, fc, from_bytes(du), dsap, ssap);
+           }),
+           py::arg("da"), py::arg("sa"), py::arg("fc"), py::arg("du") = py::bytes(),
+           py::arg("dsap") = py::none(), py::arg("ssap") = py::none())
+      .def_readwrite("sd", &fdl::Frame::sd)
+      .def_readwrite("da", &fdl::Frame::da)
+      .def_readwrite("sa", &fdl::Frame::sa)
+      .def_readwrite("fc", &fdl::Frame::fc)
+      .def_readwrite("dsap", &fdl::Frame::dsap)
+      .def_readwrite("ssap", &fdl::Frame::ssap)
+      .def_property("du", bytes_property(&fdl::Frame::du).first,
+                    bytes_property(&fdl::Frame::du).second)
+      .def("encode", [](const fdl::Frame& f) { return to_bytes(fdl::encode(f)); })
+      .def_property_readonly("service", [](const fdl::Frame& f) { return service_name(f); })
+      .def(py::self == py::self)
+      .def("__repr__", [](const fdl::Frame& f) {
+        return "<Frame " + service_name(f) + " da=" + std::to_string(f.da) +
+               " sa=" + std::to_string(f.sa) + ">";
+      });
+  py::class_<Exchange>(m, "Exchange", "One request of the master and the answer it got.")
+      .def_readonly("request", &Exchange::request)
+      .def_readonly("request_start", &Exchange::request_start)
+      .def_readonly("request_end", &Exchange::request_end)
+      .def_readonly("answer", &Exchange::answer)
+      .def_readonly("answer_start", &Exchange::answer_start)
+      .def_readonly("answer_end", &Exchange::answer_end);
+  py::class_<MasterCounters>(m, "MasterCounters")
+      .def_readonly("requests", &MasterCounters::requests)
+      .def_readonly("answered", &MasterCounters::answered)
+      .def_readonly("no_answer", &MasterCounters::no_answer)
+      .def_readonly("bad_answer", &MasterCounters::bad_answer)
+      .def_readonly("noise", &MasterCounters::noise);
+  py::class_<SlaveConfig>(m, "SlaveConfig", "The slave as the master parameterises it.")
+      .def(py::init(&with_kwargs<SlaveConfig>))
+      .def_readwrite("address", &SlaveConfig::address)
+      .def_readwrite("ident", &SlaveConfig::ident)
+      .def_property("cfg", bytes_property(&SlaveConfig::cfg).first,
+                    bytes_property(&SlaveConfig::cfg).second)
+      .def_readwrite("in_len", &SlaveConfig::in_len)
+      .def_readwrite("out_len", &SlaveConfig::out_len)
+      .def_readwrite("wd_on", &SlaveConfig::wd_on)
+      .def_readwrite("wd_fact1", &SlaveConfig::wd_fact1)
+      .def_readwrite("wd_fact2", &SlaveConfig::wd_fact2)
+      .def_readwrite("wd_base_1ms", &SlaveConfig::wd_base_1ms)
+      .def_readwrite("group_ident", &SlaveConfig::group_ident)
+      .def_readwrite("sync_req", &SlaveConfig::sync_req)
+      .def_readwrite("freeze_req", &SlaveConfig::freeze_req)
+      .def_readwrite("min_tsdr", &SlaveConfig::min_tsdr)
+      .def_property("user_prm", bytes_property(&SlaveConfig::user_prm).first,
+                    bytes_property(&SlaveConfig::user_prm).second);
+}
+
+// The user side a master's chip runs: a firmware (built-in or plug-in) or the built-in responder.
+void bind_user_side(py::module_& m) {
+  py::class_<FirmwareHost, std::shared_ptr<FirmwareHost>>(
+      m, "Firmware", "A C firmware (built-in DO4 / CNT2, or a plug-in .so) on the host CPU.")
+      .def_property_readonly("name",
+                             [](const FirmwareHost& f) { return std::string(f.firmware().name); })
+      .def(
+          "port", [](const FirmwareHost& f, const std::string& name) { return f.port(name); },
+          py::arg("name"), "A port's current value (0 before its first write); -1: no such port")
+      .def_property_readonly("port_writes",
+                             [](const FirmwareHost& f) {
+                               py::list l;
+                               for (const FirmwareHost::PortWrite& w : f.port_writes()) {
+                                 l.append(py::make_tuple(w.cycle, f.port_name(w.port), w.value));
+                               }
+                               return l;
+                             })
+      .def_readonly("interrupts", &FirmwareHost::interrupts)
+      .def(
+          "hw_input",
+          [](FirmwareHost& f, const std::string& name, std::uint32_t value) {
+            const std::string why = f.hw_input(name, value);
+            if (!why.empty()) throw py::value_error(why);
+          },
+          py::arg("name"), py::arg("value"));
+  py::class_<Responder::Output>(m, "Output")
+      .def_readonly("cycle", &Responder::Output::cycle)
+      .def_property_readonly("data", [](const Responder::Output& o) { return to_bytes(o.data); })
+      .def_readonly("cleared", &Responder::Output::cleared);
+  py::class_<Responder, std::shared_ptr<Responder>>(
+      m, "Responder", "The minimal built-in user side (session/responder.hpp).")
+      .def_property("inputs", bytes_property(&Responder::inputs).first,
+                    bytes_property(&Responder::inputs).second)
+      .def_readonly("outputs", &Responder::outputs)
+      .def_readonly("interrupts", &Responder::interrupts)
+      .def_readonly("prm_accepted", &Responder::prm_accepted)
+      .def_readonly("cfg_accepted", &Responder::cfg_accepted)
+      .def_readonly("cfg_rejected", &Responder::cfg_rejected);
+}
+
+// The built-in DP master on one chip's wire. It keeps the chip (and the user side) alive.
+struct PyMaster {
+  PyMaster(py::object chip_obj, const MasterConfig& mc, const SlaveConfig& sc)
+      : chip_ref(std::move(chip_obj)),
+        chip(chip_ref.cast<PyChip&>()),
+        config(mc),
+        m(std::make_unique<DpMaster>(chip.chip, mc, sc)) {}
+  py::object chip_ref;
+  PyChip& chip;
+  MasterConfig config;
+  std::unique_ptr<DpMaster> m;
+  std::shared_ptr<FirmwareHost> firmware;
+  std::shared_ptr<Responder> responder;
+
+  template <typename F>
+  auto act(F&& f) {
+    return chip.run(std::forward<F>(f));
+  }
+  // The user side sets the chip up before the master's first request, and the master counts
+  // its bus idle from then on, as in a scenario (session/scenario_run.cpp): it is made anew.
+  template <typename Init>
+  void start_user_side(const SlaveConfig& slave, Init&& init) {
+    if (firmware || responder || m->counters().requests != 0) {
+      raise(errors().error,
+            "the user side starts once, before the master's first request (docs/python.md)");
+    }
+    act([&] {
+      DirectBus bus(chip.chip);
+      init(bus);
+    });
+    m = std::make_unique<DpMaster>(chip.chip, config, slave);
+  }
+};
+
+void bind_master(py::module_& m) {
+  py::class_<PyMaster>(m, "Master",
+                       "The built-in DP master (class 1) on a chip's RxD/TxD (DpMaster).")
+      .def(py::init([](py::object chip, U8 address, std::uint32_t baud, std::uint32_t slot_bits,
+                       std::uint32_t idle_bits, const std::optional<SlaveConfig>& slave) {
+             chip.cast<PyChip&>().enter(true);
+             return std::make_unique<PyMaster>(std::move(chip),
+                                               MasterConfig{address, baud, slot_bits, idle_bits},
+                                               slave.value_or(SlaveConfig{}));
+           }),
+           py::arg("chip"), py::arg("address") = 2, py::arg("baud") = 1'500'000,
+           py::arg("slot_bits") = 100, py::arg("idle_bits") = 33, py::arg("slave") = py::none())
+      .def(
+          "run_firmware",
+          [](PyMaster& pm, const std::string& spec, bool gsd_defaults) {
+            const dpc31_firmware& d = find_firmware(spec);
+            const SlaveConfig slave =
+                gsd_defaults ? with_gsd_defaults(d, pm.m->slave()) : pm.m->slave();
+            auto fw = std::make_shared<FirmwareHost>(d);
+            pm.start_user_side(slave, [&](BusPort& bus) { fw->init(bus, slave.address); });
+            pm.m->set_firmware(fw->program());
+            pm.firmware = fw;
+            return fw;
+          },
+          py::arg("firmware"), py::arg("gsd_defaults") = true,
+          "Runs a firmware (DO4, CNT2 or a plug-in path) on the host CPU: its init now, its ISR "
+          "and main loop while the master runs the chip. gsd_defaults: the master's slave takes "
+          "the "
+          "firmware's Ident, Cfg, lengths and User_Prm (as a scenario's `firmware` line).")
+      .def(
+          "run_responder",
+          [](PyMaster& pm, const py::bytes& inputs, bool sync_supported, bool freeze_supported,
+             bool spec_clear_mode, const py::bytes& substitute, bool user_watchdog,
+             bool dx_out_port) {
+            ResponderConfig rc;
+            rc.slave = pm.m->slave();
+            rc.sync_supported = sync_supported;
+            rc.freeze_supported = freeze_supported;
+            rc.spec_clear_mode = spec_clear_mode;
+            rc.substitute = from_bytes(substitute);
+            rc.user_watchdog = user_watchdog;
+            rc.dx_out_port = dx_out_port;
+            auto r = std::make_shared<Responder>(rc);
+            r->inputs = from_bytes(inputs);
+            pm.start_user_side(rc.slave, [&](BusPort& bus) { r->init(bus); });
+            pm.m->set_firmware([r](BusPort& b) { r->isr(b); });
+            pm.responder = r;
+            return r;
+          },
+          py::arg("inputs") = py::bytes(), py::arg("sync_supported") = true,
+          py::arg("freeze_supported") = true, py::arg("spec_clear_mode") = true,
+          py::arg("substitute") = py::bytes(), py::arg("user_watchdog") = false,
+          py::arg("dx_out_port") = false,
+          "Runs the built-in responder (session/responder.hpp) as the user side.")
+      .def_property_readonly("firmware", [](const PyMaster& pm) { return pm.firmware; })
+      .def_property_readonly("responder", [](const PyMaster& pm) { return pm.responder; })
+      .def_property_readonly("chip", [](const PyMaster& pm) { return pm.chip_ref; })
+      .def_property_readonly("slave", [](const PyMaster& pm) { return pm.m->slave(); })
+      .def_property_readonly("bit_cycles", [](const PyMaster& pm) { return pm.m->bit_cycles(); })
+      .def_property_readonly("counters", [](const PyMaster& pm) { return pm.m->counters(); })
+      .def_property_readonly("history", [](const PyMaster& pm) { return pm.m->history(); })
+      .def("clear_history", [](PyMaster& pm) { pm.m->clear_history(); })
+      .def(
+          "startup",
+          [](PyMaster& pm, int tries) { return pm.act([&] { return pm.m->startup(tries); }); },
+          py::arg("tries") = 200)
+      .def(
+          "restart",
+          [](PyMaster& pm, U64 tries, std::uint32_t retries) {
+            return pm.act([&] { return pm.m->restart(tries, retries); });
+          },
+          py::arg("tries") = 200, py::arg("retries") = 1)
+      .def(
+          "data_exchange",
+          [](PyMaster& pm, const py::bytes& out, const std::optional<std::string>& fault,
+             int fault_char) {
+            const std::vector<U8> v = from_bytes(out);
+            const UartFault f = fault_of(fault, fault_char);
+            return pm.act([&] { return pm.m->data_exchange(v, f); });
+          },
+          py::arg("outputs"), py::arg("fault") = py::none(), py::arg("fault_char") = -1)
+      .def(
+          "global_control",
+          [](PyMaster& pm, U8 command, U8 groups) {
+            return pm.act([&] { return pm.m->global_control(command, groups); });
+          },
+          py::arg("command"), py::arg("groups") = 0)
+      .def("slave_diag", [](PyMaster& pm) { return pm.act([&] { return pm.m->slave_diag(); }); })
+      .def("fdl_status", [](PyMaster& pm) { return pm.act([&] { return pm.m->fdl_status(); }); })
+      .def(
+          "set_prm",
+          [](PyMaster& pm, U8 extra) { return pm.act([&] { return pm.m->set_prm(extra); }); },
+          py::arg("station_status_extra") = 0)
+      .def("chk_cfg", [](PyMaster& pm) { return pm.act([&] { return pm.m->chk_cfg(); }); })
+      .def("get_cfg", [](PyMaster& pm) { return pm.act([&] { return pm.m->get_cfg(); }); })
+      .def("read_inputs", [](PyMaster& pm) { return pm.act([&] { return pm.m->read_inputs(); }); })
+      .def("read_outputs",
+           [](PyMaster& pm) { return pm.act([&] { return pm.m->read_outputs(); }); })
+      .def(
+          "set_slave_address",
+          [](PyMaster& pm, U8 a, bool no_change) {
+            return pm.act([&] { return pm.m->set_slave_address(a, no_change); });
+          },
+          py::arg("new_address"), py::arg("no_add_change") = false)
+      .def(
+          "transact",
+          [](PyMaster& pm, const fdl::Frame& req, const std::optional<std::string>& fault,
+             int fault_char) {
+            const UartFault f = fault_of(fault, fault_char);
+            return pm.act([&] { return pm.m->transact(req, f); });
+          },
+          py::arg("request"), py::arg("fault") = py::none(), py::arg("fault_char") = -1)
+      .def(
+          "transact_raw",
+          [](PyMaster& pm, const py::bytes& raw, const std::optional<std::string>& fault,
+             int fault_char) {
+            const std::vector<U8> v = from_bytes(raw);
+            const UartFault f = fault_of(fault, fault_char);
+            return pm.act([&] { return pm.m->transact_raw(v, f); });
+          },
+          py::arg("data"), py::arg("fault") = py::none(), py::arg("fault_char") = -1)
+      .def(
+          "idle", [](PyMaster& pm, U64 cycles) { pm.act([&] { pm.m->idle(cycles); }); },
+          py::arg("cycles"), "Time passes with a silent bus (cable pulled); the firmware runs.")
+      .def(
+          "line_noise",
+          [](PyMaster& pm, const py::bytes& b, std::uint32_t idle_bits) {
+            const std::vector<U8> v = from_bytes(b);
+            pm.act([&] { pm.m->line_noise(v, idle_bits); });
+          },
+          py::arg("data"), py::arg("idle_bits"))
+      .def(
+          "glitch", [](PyMaster& pm, std::uint32_t low) { pm.act([&] { pm.m->glitch(low); }); },
+          py::arg("low_cycles"))
+      .def_static("diag_ready", &DpMaster::diag_ready, py::arg("diag_answer"));
+}
+
+// What a scenario run reports beyond ScenarioOutcome: every expect and step with its cycle.
+struct ExpectResult {
+  int line;
+  std::string text;
+  bool ok;
+  U64 cycle;
+};
+struct StepRecord {
+  int line;
+  std::string text;
+  U64 cycle;
+};
+struct ScenarioResult {
+  ScenarioOutcome outcome;
+  std::vector<std::string> walk;
+  std::vector<ExpectResult> expects;
+  std::vector<StepRecord> steps;
+};
+
+class Recorder final : public ScenarioObserver {
+ public:
+  explicit Recorder(ScenarioResult& r) : r_(r) {}
+  void step_begins(U64 cycle, const ScenarioStep& st, std::string_view) override {
+    r_.steps.push_back({st.line, st.text, cycle});
+  }
+  void expect_checked(U64 cycle, const ScenarioStep& st, bool ok, std::string_view) override {
+    r_.expects.push_back({st.line, st.text, ok, cycle});
+  }
+
+ private:
+  ScenarioResult& r_;
+};
+
+[[noreturn]] void raise_scenario(const ScenarioError& e) {
+  raise(errors().scenario, e.text(),
+        {{"file", py::str(e.file)}, {"line", py::int_(e.line)}, {"reason", py::str(e.message)}});
+}
+
+void bind_scenarios(py::module_& m) {
+  py::enum_<StepKind>(m, "StepKind")
+      .value("startup", StepKind::startup)
+      .value("restart", StepKind::restart)
+      .value("exchange", StepKind::exchange)
+      .value("gc", StepKind::gc)
+      .value("diag", StepKind::diag)
+      .value("fdl_status", StepKind::fdl_status)
+      .value("set_prm", StepKind::set_prm)
+      .value("chk_cfg", StepKind::chk_cfg)
+      .value("get_cfg", StepKind::get_cfg)
+      .value("read_inputs", StepKind::read_inputs)
+      .value("read_outputs", StepKind::read_outputs)
+      .value("set_slave_address", StepKind::set_slave_address)
+      .value("foreign_master", StepKind::foreign_master)
+      .value("silence", StepKind::silence)
+      .value("inputs", StepKind::inputs)
+      .value("hw", StepKind::hw)
+      .value("corrupt", StepKind::corrupt)
+      .value("bad_fcs", StepKind::bad_fcs)
+      .value("expect", StepKind::expect);
+  py::class_<ScenarioStep>(m, "Step", "One line of a scenario file.")
+      .def_readonly("line", &ScenarioStep::line)
+      .def_readonly("text", &ScenarioStep::text)
+      .def_readonly("kind", &ScenarioStep::kind);
+  py::class_<ExpectResult>(m, "ExpectResult",
+                           "One expect of a run: its line, text, verdict, cycle.")
+      .def_readonly("line", &ExpectResult::line)
+      .def_readonly("text", &ExpectResult::text)
+      .def_readonly("ok", &ExpectResult::ok)
+      .def_readonly("cycle", &ExpectResult::cycle);
+  py::class_<StepRecord>(m, "StepRecord", "One step of a run and the cycle it began at.")
+      .def_readonly("line", &StepRecord::line)
+      .def_readonly("text", &StepRecord::text)
+      .def_readonly("cycle", &StepRecord::cycle);
+  py::class_<ScenarioResult>(m, "ScenarioResult", "What a scenario run gave (dpc31 run's walk).")
+      .def_property_readonly("ok", [](const ScenarioResult& r) { return r.outcome.ok(); })
+      .def_property_readonly("final_cycle",
+                             [](const ScenarioResult& r) { return r.outcome.final_cycle; })
+      .def_property_readonly("dp_state", [](const ScenarioResult& r) { return r.outcome.dp; })
+      .def_property_readonly("wd_state", [](const ScenarioResult& r) { return r.outcome.wd; })
+      .def_property_readonly("passed", [](const ScenarioResult& r) { return r.outcome.passed; })
+      .def_property_readonly("failed", [](const ScenarioResult& r) { return r.outcome.failed; })
+      .def_property_readonly("failures", [](const ScenarioResult& r) { return r.outcome.failures; })
+      .def_property_readonly(
+          "counters", [](const ScenarioResult& r) { return counters_dict(r.outcome.counters); })
+      .def_readonly("walk", &ScenarioResult::walk)
+      .def_readonly("expects", &ScenarioResult::expects)
+      .def_readonly("steps", &ScenarioResult::steps);
+  py::class_<Scenario>(m, "Scenario", "A parsed scenario file (docs/scenario-format.md).")
+      .def_static(
+          "load",
+          [](const std::string& path) {
+            Scenario s;
+            ScenarioError err;
+            if (!load_scenario(path, s, err)) raise_scenario(err);
+            return s;
+          },
+          py::arg("path"))
+      .def_static(
+          "parse",
+          [](std::string_view text, const std::string& file) {
+            Scenario s;
+            ScenarioError err;
+            if (!parse_scenario(text, file, s, err)) raise_scenario(err);
+            return s;
+          },
+          py::arg("text"), py::arg("file") = "<string>")
+      .def_readonly("file", &Scenario::file)
+      .def_property_readonly(
+          "profile", [](const Scenario& s) { return std::string(profile_name(s.chip.profile)); })
+      .def_readonly("firmware", &Scenario::firmware)
+      .def_readonly("steps", &Scenario::steps)
+      .def_property_readonly("expects",
+                             [](const Scenario& s) {
+                               std::vector<ScenarioStep> e;
+                               for (const ScenarioStep& st : s.steps) {
+                                 if (st.kind == StepKind::expect) e.push_back(st);
+                               }
+                               return e;
+                             })
+      .def("run", [](const Scenario& s) {
+        ScenarioResult r;
+        Recorder rec(r);
+        ScenarioHooks hooks;
+        hooks.observer = &rec;
+        py::gil_scoped_release nogil;
+        r.outcome = run_scenario(
+            s, [&](const std::string& l) { r.walk.push_back(l); }, LineSink{}, hooks);
+        return r;
+      });
+}
+
+void bind_wavediff(py::module_& m) {
+  using namespace wavediff;
+  py::class_<Point>(m, "WavePoint")
+      .def_readonly("time", &Point::time)
+      .def_readonly("time_b", &Point::time_b)
+      .def_readonly("cycle", &Point::cycle);
+  py::class_<Divergence>(m, "Divergence")
+      .def_readonly("at", &Divergence::at)
+      .def_readonly("a", &Divergence::a)
+      .def_readonly("b", &Divergence::b)
+      .def_readonly("last_common", &Divergence::last_common)
+      .def_readonly("open", &Divergence::open);
+  py::class_<SignalDiff>(m, "SignalDiff", "One signal that differs: how often, and first where.")
+      .def_readonly("name", &SignalDiff::name)
+      .def_readonly("name_b", &SignalDiff::name_b)
+      .def_readonly("count", &SignalDiff::count)
+      .def_readonly("first", &SignalDiff::first)
+      .def_readonly("last", &SignalDiff::last);
+  py::class_<Structural>(m, "Structural")
+      .def_readonly("signal", &Structural::signal)
+      .def_readonly("what", &Structural::what);
+  py::class_<Report>(m, "WaveReport", "The differences of two waveforms (docs/wavediff.md).")
+      .def_property_readonly("same", &Report::same)
+      .def_readonly("clock_mode", &Report::clock_mode)
+      .def_readonly("pow", &Report::pow)
+      .def_readonly("edges", &Report::edges)
+      .def_readonly("compared", &Report::compared)
+      .def_readonly("only_a", &Report::only_a)
+      .def_readonly("only_b", &Report::only_b)
+      .def_readonly("structural", &Report::structural)
+      .def_readonly("diffs", &Report::diffs)
+      .def_readonly("warnings", &Report::warnings)
+      .def(
+          "text", [](const Report& r, unsigned n) { return text_report(r, n); },
+          py::arg("max_signals") = 20)
+      .def("json", &json_report);
+  m.def(
+      "wavediff",
+      [](const std::string& a, const std::string& b, const std::optional<std::string>& clock,
+         const std::optional<std::string>& clock_b, const std::string& strip_a,
+         const std::string& strip_b, bool strip_auto, const std::string& map_file,
+         std::vector<std::string> include, std::vector<std::string> exclude, bool ignore_missing,
+         const std::string& xz, const std::string& diff_vcd) {
+        Options o;
+        o.file_a = a;
+        o.file_b = b;
+        o.clock_a = clock.value_or("");
+        o.clock_b = clock_b.value_or("");
+        o.strip_a = strip_a;
+        o.strip_b = strip_b;
+        o.strip_auto = strip_auto;
+        o.map_file = map_file;
+        o.include = std::move(include);
+        o.exclude = std::move(exclude);
+        o.ignore_missing = ignore_missing;
+        o.diff_vcd = diff_vcd;
+        if (xz == "strict" || xz == "wildcard" || xz == "zero") {
+          o.xz = xz == "strict" ? XzPolicy::strict
+                                : (xz == "wildcard" ? XzPolicy::wildcard : XzPolicy::zero);
+        } else {
+          throw py::value_error("xz '" + xz + "': expected one of strict, wildcard, zero");
+        }
+        py::gil_scoped_release nogil;
+        return compare(o);
+      },
+      py::arg("a"), py::arg("b"), py::kw_only(), py::arg("clock") = py::none(),
+      py::arg("clock_b") = py::none(), py::arg("strip_a") = "", py::arg("strip_b") = "",
+      py::arg("strip_auto") = false, py::arg("map_file") = "",
+      py::arg("include") = std::vector<std::string>{},
+      py::arg("exclude") = std::vector<std::string>{}, py::arg("ignore_missing") = false,
+      py::arg("xz") = "strict", py::arg("diff_vcd") = "",
+      "Compares two waveforms (VCD or FST) as `dpc31 wavediff` does; raises InputError.");
+}
+
+}  // namespace
+
+void bind_session(py::module_& m) {
+  bind_frames(m);
+  bind_user_side(m);
+  bind_master(m);
+  bind_scenarios(m);
+  bind_wavediff(m);
+}
+
+}  // namespace dpc31::py_bind

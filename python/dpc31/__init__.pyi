@@ -1,0 +1,374 @@
+# Type stubs of the dpc31 package (docs/python.md): what the native module _dpc31 binds, for
+# editors and type checkers. Kept equal to the bindings by the test Python.stubs.
+import enum
+from typing import Callable, List, Optional, Tuple
+
+class Error(RuntimeError): ...
+class SnapshotError(Error): ...
+class ScenarioError(Error):
+    file: str
+    line: int
+    reason: str
+class FirmwareError(Error): ...
+class InputError(Error): ...
+
+class DpState(enum.Enum):
+    Wait_Prm = 0
+    Wait_Cfg = 1
+    Data_Exchange = 2
+
+class WdState(enum.Enum):
+    Baud_Search = 0
+    Baud_Control = 1
+    DP_Control = 2
+
+class Telegram:
+    from_chip: bool
+    bytes: bytes
+    start: int
+    end: int
+
+class Probe:
+    dp_state: DpState
+    wd_state: WdState
+    baud_code: int
+    irr: int
+    dout_buffer_sm: int
+    din_buffer_sm: int
+    diag_buffer_sm: int
+
+class Field:
+    name: str
+    lsb: int
+    width: int
+    access: str
+    pulse: bool
+    desc: str
+    mask: int
+
+class Register:
+    name: str
+    alias: str
+    kind: str
+    block: str
+    width: int
+    reset: Optional[int]
+    read_addr: Optional[int]
+    write_addr: Optional[int]
+    documented: bool
+    source: str
+    note: str
+    desc: str
+    fields: List[Field]
+    def field(self, name: str) -> Field: ...
+
+class Region:
+    name: str
+    begin: int
+    end: int
+    ram: bool
+    reserved: bool
+    desc: str
+
+def registers(profile: str) -> List[Register]: ...
+def register(profile: str, name: str) -> Register: ...
+def regions(profile: str) -> List[Region]: ...
+def profiles() -> List[str]: ...
+
+class Chip:
+    def __init__(self, profile: str = "dpc31", bus: str = "intel", clock_hz: int = 0,
+                 engine: str = "event", variant: Optional[str] = None,
+                 irq_controller: str = "external") -> None: ...
+    def reset(self) -> None: ...
+    # the bus: bus_access_cycles clocks per access; the GIL is released while the chip runs
+    def read(self, addr: int) -> int: ...
+    def write(self, addr: int, value: int) -> None: ...
+    def read_block(self, addr: int, length: int) -> bytes: ...
+    def write_block(self, addr: int, data: bytes) -> None: ...
+    def fill(self, addr: int, value: int, length: int) -> None: ...
+    def equal(self, a: int, b: int, length: int) -> bool: ...
+    # the debugger: no time, no side effects
+    def peek(self, addr: int) -> int: ...
+    def poke(self, addr: int, value: int) -> bool: ...
+    def peek_block(self, addr: int, length: int) -> bytes: ...
+    def peek_reg(self, name: str) -> int: ...
+    def poke_reg(self, name: str, value: int) -> bool: ...
+    def peek_field(self, register: str, field: str) -> int: ...
+    def addr_of(self, name: str) -> Optional[int]: ...
+    @property
+    def registers(self) -> List[Register]: ...
+    # time
+    def step(self, cycles: int = 1) -> None: ...
+    def step_until_irq(self, cycles: int) -> bool: ...
+    @property
+    def cycle(self) -> int: ...
+    @property
+    def clock_hz(self) -> int: ...
+    @property
+    def bus_access_cycles(self) -> int: ...
+    # pins and state
+    @property
+    def x_int(self) -> bool: ...
+    @property
+    def irq_active(self) -> bool: ...
+    @property
+    def pb3(self) -> bool: ...
+    @property
+    def txd(self) -> bool: ...
+    @property
+    def started(self) -> bool: ...
+    @property
+    def dp_state(self) -> DpState: ...
+    @property
+    def wd_state(self) -> WdState: ...
+    @property
+    def station_address(self) -> int: ...
+    @property
+    def bit_cycles(self) -> int: ...
+    @property
+    def fdl_counters(self) -> dict: ...
+    @property
+    def profile(self) -> str: ...
+    @property
+    def bus(self) -> str: ...
+    @property
+    def variant(self) -> Optional[str]: ...
+    def probe(self) -> Probe: ...
+    @property
+    def next_deadline(self) -> int: ...
+    @property
+    def watchdog_due(self) -> int: ...
+    # the serial side
+    def drive_rxd(self, cycle: int, level: bool) -> None: ...
+    def drive_rxd_chars(self, data: bytes, start: int, bit_cycles: int) -> int: ...
+    # observers: a callable adds one, None removes all of that kind
+    def on_irq_change(self, callback: Optional[Callable[[int, bool], None]]) -> None: ...
+    def on_pb3_change(self, callback: Optional[Callable[[int, bool], None]]) -> None: ...
+    def on_telegram(self, callback: Optional[Callable[[Telegram], None]]) -> None: ...
+    def on_bus_access(self, callback: Optional[Callable[[int, bool, int, int], None]]) -> None: ...
+    # snapshots
+    def save_state(self) -> bytes: ...
+    def load_state(self, data: bytes) -> None: ...
+    def save_state_file(self, path: str) -> None: ...
+    def load_state_file(self, path: str) -> None: ...
+
+class Frame:
+    sd: int
+    da: int
+    sa: int
+    fc: int
+    dsap: Optional[int]
+    ssap: Optional[int]
+    du: bytes
+    def __init__(self, da: int, sa: int, fc: int, du: bytes = b"", dsap: Optional[int] = None,
+                 ssap: Optional[int] = None) -> None: ...
+    def encode(self) -> bytes: ...
+    @property
+    def service(self) -> str: ...
+
+class Exchange:
+    request: Frame
+    request_start: int
+    request_end: int
+    answer: Optional[Frame]
+    answer_start: int
+    answer_end: int
+
+class MasterCounters:
+    requests: int
+    answered: int
+    no_answer: int
+    bad_answer: int
+    noise: int
+
+class SlaveConfig:
+    address: int
+    ident: int
+    cfg: bytes
+    in_len: int
+    out_len: int
+    wd_on: bool
+    wd_fact1: int
+    wd_fact2: int
+    wd_base_1ms: bool
+    group_ident: int
+    sync_req: bool
+    freeze_req: bool
+    min_tsdr: int
+    user_prm: bytes
+    def __init__(self, **kwargs: object) -> None: ...
+
+class Firmware:
+    @property
+    def name(self) -> str: ...
+    def port(self, name: str) -> int: ...
+    @property
+    def port_writes(self) -> List[Tuple[int, str, int]]: ...
+    interrupts: List[Tuple[int, int]]
+    def hw_input(self, name: str, value: int) -> None: ...
+
+class Output:
+    cycle: int
+    data: bytes
+    cleared: bool
+
+class Responder:
+    inputs: bytes
+    outputs: List[Output]
+    interrupts: List[Tuple[int, int]]
+    prm_accepted: int
+    cfg_accepted: int
+    cfg_rejected: int
+
+class Master:
+    def __init__(self, chip: Chip, address: int = 2, baud: int = 1500000, slot_bits: int = 100,
+                 idle_bits: int = 33, slave: Optional[SlaveConfig] = None) -> None: ...
+    def run_firmware(self, firmware: str, gsd_defaults: bool = True) -> Firmware: ...
+    def run_responder(self, inputs: bytes = b"", sync_supported: bool = True,
+                      freeze_supported: bool = True, spec_clear_mode: bool = True,
+                      substitute: bytes = b"", user_watchdog: bool = False,
+                      dx_out_port: bool = False) -> Responder: ...
+    @property
+    def firmware(self) -> Optional[Firmware]: ...
+    @property
+    def responder(self) -> Optional[Responder]: ...
+    @property
+    def chip(self) -> Chip: ...
+    @property
+    def slave(self) -> SlaveConfig: ...
+    @property
+    def bit_cycles(self) -> int: ...
+    @property
+    def counters(self) -> MasterCounters: ...
+    @property
+    def history(self) -> List[Exchange]: ...
+    def clear_history(self) -> None: ...
+    def startup(self, tries: int = 200) -> bool: ...
+    def restart(self, tries: int = 200, retries: int = 1) -> bool: ...
+    def data_exchange(self, outputs: bytes, fault: Optional[str] = None,
+                      fault_char: int = -1) -> Exchange: ...
+    def global_control(self, command: int, groups: int = 0) -> Exchange: ...
+    def slave_diag(self) -> Exchange: ...
+    def fdl_status(self) -> Exchange: ...
+    def set_prm(self, station_status_extra: int = 0) -> Exchange: ...
+    def chk_cfg(self) -> Exchange: ...
+    def get_cfg(self) -> Exchange: ...
+    def read_inputs(self) -> Exchange: ...
+    def read_outputs(self) -> Exchange: ...
+    def set_slave_address(self, new_address: int, no_add_change: bool = False) -> Exchange: ...
+    def transact(self, request: Frame, fault: Optional[str] = None,
+                 fault_char: int = -1) -> Exchange: ...
+    def transact_raw(self, data: bytes, fault: Optional[str] = None,
+                     fault_char: int = -1) -> Exchange: ...
+    def idle(self, cycles: int) -> None: ...
+    def line_noise(self, data: bytes, idle_bits: int) -> None: ...
+    def glitch(self, low_cycles: int) -> None: ...
+    @staticmethod
+    def diag_ready(diag_answer: Frame) -> bool: ...
+
+class StepKind(enum.Enum):
+    startup = 0
+    restart = 1
+    exchange = 2
+    gc = 3
+    diag = 4
+    fdl_status = 5
+    set_prm = 6
+    chk_cfg = 7
+    get_cfg = 8
+    read_inputs = 9
+    read_outputs = 10
+    set_slave_address = 11
+    foreign_master = 12
+    silence = 13
+    inputs = 14
+    hw = 15
+    corrupt = 16
+    bad_fcs = 17
+    expect = 18
+
+class Step:
+    line: int
+    text: str
+    kind: StepKind
+
+class ExpectResult:
+    line: int
+    text: str
+    ok: bool
+    cycle: int
+
+class StepRecord:
+    line: int
+    text: str
+    cycle: int
+
+class ScenarioResult:
+    ok: bool
+    final_cycle: int
+    dp_state: DpState
+    wd_state: WdState
+    passed: int
+    failed: int
+    failures: List[str]
+    counters: dict
+    walk: List[str]
+    expects: List[ExpectResult]
+    steps: List[StepRecord]
+
+class Scenario:
+    @staticmethod
+    def load(path: str) -> Scenario: ...
+    @staticmethod
+    def parse(text: str, file: str = "<string>") -> Scenario: ...
+    file: str
+    profile: str
+    firmware: str
+    steps: List[Step]
+    expects: List[Step]
+    def run(self) -> ScenarioResult: ...
+
+def run_scenario(path: str) -> ScenarioResult: ...
+
+class WavePoint:
+    time: int
+    time_b: int
+    cycle: int
+
+class Divergence:
+    at: WavePoint
+    a: str
+    b: str
+    last_common: Optional[str]
+    open: bool
+
+class SignalDiff:
+    name: str
+    name_b: str
+    count: int
+    first: Divergence
+    last: WavePoint
+
+class Structural:
+    signal: str
+    what: str
+
+class WaveReport:
+    same: bool
+    clock_mode: bool
+    pow: int
+    edges: int
+    compared: int
+    only_a: List[str]
+    only_b: List[str]
+    structural: List[Structural]
+    diffs: List[SignalDiff]
+    warnings: List[str]
+    def text(self, max_signals: int = 20) -> str: ...
+    def json(self) -> str: ...
+
+def wavediff(a: str, b: str, *, clock: Optional[str] = None, clock_b: Optional[str] = None,
+             strip_a: str = "", strip_b: str = "", strip_auto: bool = False,
+             map_file: str = "", include: List[str] = [], exclude: List[str] = [],
+             ignore_missing: bool = False, xz: str = "strict",
+             diff_vcd: str = "") -> WaveReport: ...

@@ -1,0 +1,246 @@
+"""A client for ``dpc31 serve`` (docs/protocol.md), standard library only.
+
+For scripts that must not load native code, or that talk to a chip in another process. The
+methods have the names of ``dpc31.Chip``'s; what the protocol gives is what they give::
+
+    from dpc31.client import Client
+    with Client(tcp=("127.0.0.1", 5555)) as c:
+        c.write(0x04, 0xFF)
+        c.step(48000)
+        print(c.cycle)
+
+A reply ``ERR code message`` raises ``ServeError`` (``.code``, ``.message``); a connection that
+ends or a line that is not the protocol's raises ``ConnectionError``. Asynchronous lines (``! irq``,
+``! telegram``, ``! log``) reach the observers given with ``on_irq_change``, ``on_telegram`` and
+``on_log`` while a command waits for its reply.
+"""
+
+from __future__ import annotations
+
+import socket
+from dataclasses import dataclass
+from typing import Callable, Dict, List, Optional, Tuple
+
+__all__ = ["Client", "ServeError", "Telegram"]
+
+
+class ServeError(Exception):
+    """An ``ERR CODE MESSAGE`` reply of the server."""
+
+    def __init__(self, code: str, message: str) -> None:
+        super().__init__(f"{code}: {message}" if message else code)
+        self.code = code
+        self.message = message
+
+
+@dataclass(frozen=True)
+class Telegram:
+    """A ``! telegram START END rx|tx HEX`` line, as ``dpc31.Telegram`` has it."""
+
+    from_chip: bool
+    bytes: bytes
+    start: int
+    end: int
+
+
+class Client:
+    """One connection to ``dpc31 serve``: ``tcp=(host, port)`` or ``unix=PATH``."""
+
+    def __init__(self, tcp: Optional[Tuple[str, int]] = None, unix: Optional[str] = None,
+                 secret: Optional[str] = None, timeout: float = 60.0) -> None:
+        if (tcp is None) == (unix is None):
+            raise ValueError("give exactly one of tcp=(host, port) and unix=PATH")
+        if tcp is not None:
+            self._sock = socket.create_connection(tcp, timeout=timeout)
+        else:
+            self._sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+            self._sock.settimeout(timeout)
+            self._sock.connect(unix)
+        self._file = self._sock.makefile("rb")
+        self._irq: List[Callable[[int, bool], None]] = []
+        self._telegram: List[Callable[[Telegram], None]] = []
+        self._log: List[Callable[[int, str, str], None]] = []
+        if secret is not None:
+            self._call(f"auth {secret}")
+        self.info: Dict[str, str] = dict(
+            kv.split("=", 1) for kv in self._call("info").split())
+
+    # --- the connection ---
+    def close(self) -> None:
+        self._file.close()
+        self._sock.close()
+
+    def __enter__(self) -> "Client":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def _line(self) -> str:
+        raw = self._file.readline()
+        if not raw.endswith(b"\n"):
+            raise ConnectionError("dpc31 serve closed the connection")
+        return raw.decode("ascii").rstrip("\r\n")
+
+    def _call(self, command: str) -> str:
+        self._sock.sendall(command.encode("ascii") + b"\n")
+        while True:
+            line = self._line()
+            if line.startswith("!"):
+                self._async(line)
+                continue
+            if line == "OK" or line.startswith("OK "):
+                return line[3:]
+            if line.startswith("ERR "):
+                code, _, message = line[4:].partition(" ")
+                raise ServeError(code, message)
+            raise ConnectionError(f"not a dpc31 serve reply: {line!r}")
+
+    def _async(self, line: str) -> None:
+        words = line.split()
+        if len(words) == 4 and words[1] == "irq":
+            for cb in self._irq:
+                cb(int(words[2]), words[3] == "1")
+        elif len(words) == 6 and words[1] == "telegram":
+            t = Telegram(words[4] == "tx", bytes.fromhex(words[5]), int(words[2]), int(words[3]))
+            for cb in self._telegram:
+                cb(t)
+        elif len(words) >= 4 and words[1] == "log":
+            for cb in self._log:
+                cb(int(words[2]), words[3], " ".join(words[4:]))
+        elif len(words) >= 2 and words[1] == "bye":
+            raise ConnectionError(f"dpc31 serve ended the connection: {' '.join(words[2:])}")
+
+    # --- observers: a callable adds one, None removes all of that kind (as dpc31.Chip) ---
+    def on_irq_change(self, callback: Optional[Callable[[int, bool], None]]) -> None:
+        self._observe(self._irq, callback)
+
+    def on_telegram(self, callback: Optional[Callable[[Telegram], None]]) -> None:
+        self._observe(self._telegram, callback)
+
+    def on_log(self, callback: Optional[Callable[[int, str, str], None]],
+               level: str = "info") -> None:
+        self._observe(self._log, callback)
+        self._call(f"log {level if self._log else 'off'}")
+
+    @staticmethod
+    def _observe(lst: list, callback: Optional[Callable]) -> None:
+        if callback is None:
+            lst.clear()
+        else:
+            lst.append(callback)
+
+    # --- the bus and the debugger ---
+    def read(self, addr: int) -> int:
+        return int(self._call(f"read {addr}"), 16)
+
+    def write(self, addr: int, value: int) -> None:
+        self._call(f"write {addr} {value}")
+
+    def peek(self, addr: int) -> int:
+        return int(self._call(f"peek {addr}"), 16)
+
+    def poke(self, addr: int, value: int) -> bool:
+        return self._store(f"poke {addr} {value}")
+
+    def _store(self, command: str) -> bool:
+        """A poke: False where the read side has no storage (ERR no_storage)."""
+        try:
+            self._call(command)
+        except ServeError as e:
+            if e.code == "no_storage":
+                return False
+            raise
+        return True
+
+    def read_block(self, addr: int, length: int) -> bytes:
+        return bytes.fromhex(self._call(f"readblock {addr} {length}"))
+
+    def write_block(self, addr: int, data: bytes) -> None:
+        self._call(f"writeblock {addr} {bytes(data).hex()}")
+
+    def peek_block(self, addr: int, length: int) -> bytes:
+        return bytes.fromhex(self._call(f"peekblock {addr} {length}"))
+
+    def peek_reg(self, name: str) -> int:
+        return int(self._call(f"peek_reg {name}"), 16)
+
+    def poke_reg(self, name: str, value: int) -> bool:
+        return self._store(f"poke_reg {name} {value}")
+
+    def addr_of(self, name: str) -> int:
+        return int(self._call(f"addr {name}"), 16)
+
+    # --- time ---
+    def step(self, cycles: int = 1) -> None:
+        self._call(f"step {cycles}")
+
+    def step_until_irq(self, cycles: int) -> bool:
+        return self._call(f"run_until_irq {cycles}").split()[0] == "irq"
+
+    @property
+    def cycle(self) -> int:
+        return int(self._call("cycle"))
+
+    def reset(self) -> None:
+        self._call("reset")
+
+    # --- state ---
+    def status(self) -> Dict[str, str]:
+        return dict(kv.split("=", 1) for kv in self._call("status").split())
+
+    @property
+    def x_int(self) -> bool:
+        return self.status()["xint"] == "1"
+
+    @property
+    def irq_active(self) -> bool:
+        return self.status()["irq"] == "1"
+
+    @property
+    def started(self) -> bool:
+        return self.status()["started"] == "1"
+
+    @property
+    def dp_state(self) -> str:
+        return self.status()["dp"]
+
+    @property
+    def wd_state(self) -> str:
+        return self.status()["wd"]
+
+    @property
+    def station_address(self) -> int:
+        return int(self.status()["station"])
+
+    @property
+    def fdl_counters(self) -> Dict[str, int]:
+        return {k: int(v) for k, v in
+                (kv.split("=", 1) for kv in self._call("counters").split())}
+
+    # --- the serial side ---
+    def inject(self, data: bytes, baud: Optional[int] = None, idle: Optional[int] = None,
+               fault: Optional[str] = None, fault_char: int = 0) -> Tuple[int, int]:
+        """Puts bytes on RxD as UART characters; returns (first start bit, end of last stop)."""
+        cmd = f"inject {bytes(data).hex()}"
+        if baud is not None:
+            cmd += f" baud={baud}"
+        if idle is not None:
+            cmd += f" idle={idle}"
+        if fault is not None:
+            cmd += f" fault={fault}:{fault_char}"
+        start, end = self._call(cmd).split()
+        return int(start), int(end)
+
+    # --- snapshots: by name in the server's --state-dir ---
+    def save_state_file(self, name: str) -> None:
+        self._call(f"save {name}")
+
+    def load_state_file(self, name: str) -> None:
+        self._call(f"load {name}")
+
+    def ping(self) -> str:
+        return self._call("ping")
+
+    def shutdown(self) -> None:
+        self._call("shutdown")

@@ -1,0 +1,91 @@
+// The chip as a SystemC TLM-2.0 model for virtual platforms (docs/systemc.md): one dpc31::Chip
+// behind a target socket for its parallel bus, X/INT, the interrupt, PB3 and TxD as signals, its
+// clock on the SystemC time base. Installed as <dpc31/systemc/dpc31_tlm.hpp>, target
+// dpc31emu::systemc (find_package(dpc31emu COMPONENTS systemc)).
+#pragma once
+
+#include <tlm_utils/simple_target_socket.h>
+
+#include <cstdint>
+#include <deque>
+#include <limits>
+#include <systemc>
+#include <tlm>
+#include <utility>
+
+#include "dpc31/chip.hpp"
+
+namespace dpc31::systemc {
+
+class Dpc31Tlm : public sc_core::sc_module {
+ public:
+  // The parallel bus: one byte per address, as the chip's bus is 8 bits wide. A transaction of
+  // n bytes is n accesses of bus_access_cycles() clocks each, back to back (byte enables and the
+  // streaming width honoured); b_transport annotates the exact time to its end. No DMI: every
+  // access may be a register or a command cell. Debug transport: peek / poke, no time.
+  tlm_utils::simple_target_socket<Dpc31Tlm> bus;
+  sc_core::sc_out<bool> x_int;  // the X/INT pin (its polarity: Mode_Reg0.INT_Pol)
+  sc_core::sc_out<bool> irq;    // the interrupt is active (independent of the polarity)
+  sc_core::sc_out<bool> pb3;    // dpc31 port PB3 (low on the other profiles)
+  sc_core::sc_out<bool> txd;    // the serial output, each edge at its cycle's time
+  // The serial input for a UART model (optional): each change drives RxD at the first clock at or
+  // after its time. Unbound: drive it through chip().drive_rxd / drive_rxd_chars.
+  sc_core::sc_port<sc_core::sc_signal_in_if<bool>, 1, sc_core::SC_ZERO_OR_MORE_BOUND> rxd;
+
+  SC_HAS_PROCESS(Dpc31Tlm);
+  Dpc31Tlm(const sc_core::sc_module_name& name, const ChipOptions& options);
+
+  // The chip: its serial input (drive_rxd, drive_rxd_chars) and what a testbench looks at. Use
+  // it from SystemC processes only; time moves through the model, not through Chip::step.
+  Chip& chip() { return chip_; }
+  // The time base: cycle c is at ceil(c / clock_hz) seconds on the SystemC time line (the time
+  // resolution decides the rounding); cycle_at is its inverse.
+  [[nodiscard]] sc_core::sc_time time_of(std::uint64_t cycle) const;
+  [[nodiscard]] std::uint64_t cycle_at(const sc_core::sc_time& t) const;
+  // Notified when the interrupt becomes active, at that cycle's time.
+  [[nodiscard]] const sc_core::sc_event& irq_rise() const { return irq_rise_; }
+  // For a process that moves time through the chip's serial side (the built-in DP master's
+  // DpMaster::scheduler): waits until the chip reached `cycle` or one of its steps stopped
+  // (Chip::request_stop, wake_on_txd). Accesses that would start at or after `cycle` wait until
+  // this process has acted, as the host CPU of the native run gives the bus side its turn.
+  void run_until(std::uint64_t cycle);
+  // RxD edges were driven ahead of time: the chip's next event may be sooner.
+  void rxd_driven() { changed_.notify(sc_core::SC_ZERO_TIME); }
+
+  // Accesses through the socket, and how many of them had to wait for the rest of the platform
+  // (temporal decoupling: the others ran ahead of SystemC time).
+  [[nodiscard]] std::uint64_t accesses() const { return accesses_; }
+  [[nodiscard]] std::uint64_t syncs() const { return syncs_; }
+
+ private:
+  void b_transport(tlm::tlm_generic_payload& tr, sc_core::sc_time& delay);
+  unsigned int transport_dbg(tlm::tlm_generic_payload& tr);
+  bool get_direct_mem_ptr(tlm::tlm_generic_payload& tr, tlm::tlm_dmi& dmi);
+  void run();                         // SC_THREAD: the chip's own events at their times
+  void watch_rxd();                   // SC_THREAD: the rxd port\'s changes onto the chip\'s RxD
+  void apply_edges();                 // SC_METHOD: scheduled pin changes onto the ports
+  void step_to(std::uint64_t cycle);  // never past `cycle`, never backwards
+  void schedule(std::uint64_t cycle, int pin, bool level);
+
+  Chip chip_;
+  std::uint64_t ticks_per_second_;
+  // The pins' changes as the chip reports them, applied at their times (a bus access may take the
+  // chip ahead of SystemC time: its effects wait for their time).
+  struct Edge {
+    sc_core::sc_time at;
+    int pin;
+    bool level;
+  };
+  std::deque<Edge> edges_;
+  sc_core::sc_event edge_due_;
+  sc_core::sc_event irq_rise_;
+  sc_core::sc_event changed_;  // an access or RxD moved the chip's next event
+  sc_core::sc_event stopped_;  // a step stopped (a waiting run_until may go on)
+  sc_core::sc_event scheduler_moved_;
+  // The cycle the process in run_until waits for (max: none waits).
+  std::uint64_t horizon_ = std::numeric_limits<std::uint64_t>::max();
+  std::uint64_t accesses_ = 0;
+  std::uint64_t syncs_ = 0;
+};
+
+}  // namespace dpc31::systemc
