@@ -101,13 +101,13 @@ struct Scenario {
   std::string file;
   ChipOptions chip;
   MasterConfig master;
-  ResponderConfig user;              // user.slave is also what the master parameterises
+  ResponderConfig user;  // user.slave is also what the master parameterises
   std::string firmware;  // a built-in firmware's name or a plug-in's path, instead of the responder
   // The firmware's descriptor: a built-in's from the parse, a plug-in's once bind_plugin() has
   // loaded it (nullptr before: parsing never loads code).
   const dpc31_firmware* firmware_desc = nullptr;
-  int plugin_line = 0;  // the 'firmware' line naming a plug-in
-  std::string text;     // the scenario's text while a plug-in waits for bind_plugin()
+  int plugin_line = 0;               // the 'firmware' line naming a plug-in
+  std::string text;                  // the scenario's text while a plug-in waits for bind_plugin()
   std::vector<std::uint8_t> inputs;  // the user's inputs from the start
   std::uint32_t retries = 1;         // repeats of a request that got no answer (max_retry_limit)
   std::vector<ScenarioStep> steps;

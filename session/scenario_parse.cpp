@@ -745,7 +745,7 @@ class Parser {
   ScenarioStep step_;
   std::optional<SlaveConfig> view_;  // the master's view of the slave after the steps so far
   bool headers_ = false;
-  const dpc31_firmware* bound_;        // the plug-in bind_plugin() loaded, or nullptr
+  const dpc31_firmware* bound_;         // the plug-in bind_plugin() loaded, or nullptr
   const dpc31_firmware* fw_ = nullptr;  // the firmware's descriptor, once known
   bool firmware_seen_ = false;
   bool slave_seen_ = false;
@@ -795,9 +795,7 @@ bool load_scenario(const std::string& path, Scenario& out, ScenarioError& err) {
   return parse_scenario(text, path, out, err);
 }
 
-bool plugin_pending(const Scenario& s) {
-  return !s.firmware.empty() && s.firmware_desc == nullptr;
-}
+bool plugin_pending(const Scenario& s) { return !s.firmware.empty() && s.firmware_desc == nullptr; }
 
 bool bind_plugin(Scenario& s, ScenarioError& err) {
   if (!plugin_pending(s)) return true;

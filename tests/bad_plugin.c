@@ -6,7 +6,8 @@
  *   UNDEFINED    it calls a function no host provides: dlopen (RTLD_NOW) fails
  *   SPIN         it loads, and its init spins in while(1) without a bus access (the hang guard)
  *   MARK         a valid plug-in whose loading alone (a constructor) creates the file named by
- *                DPC31_PLUGIN_MARK: shows whether a command ran its code (tests/code_security_test.cpp) */
+ *                DPC31_PLUGIN_MARK: shows whether a command ran its code
+ * (tests/code_security_test.cpp) */
 #include "dpc31/dpc31_firmware.h"
 #include "dpc31/dpc31_hal.h"
 

@@ -25,9 +25,9 @@ class CodeSecurity : public BadInput {
     fs::remove(mark_);
     const std::string out = (root_ / "io" / "out").string();
     const std::string err = (root_ / "io" / "err").string();
-    const testutil::CommandResult r = testutil::run_command(
-        "cd " + (root_ / "work").string() + " && DPC31_PLUGIN_MARK=" + mark_ + " " + kCli + " " +
-        args + " >" + out + " 2>" + err);
+    const testutil::CommandResult r =
+        testutil::run_command("cd " + (root_ / "work").string() + " && DPC31_PLUGIN_MARK=" + mark_ +
+                              " " + kCli + " " + args + " >" + out + " 2>" + err);
     return {r.rc, slurp(out), slurp(err)};
   }
   [[nodiscard]] bool loaded() const { return fs::exists(mark_); }
@@ -44,8 +44,7 @@ TEST_F(CodeSecurity, AScenarioLoadsNoPluginWhileParsing) {
   copy(BAD_PLUGIN_MARK, "mark.so");
   const std::string mark_bytes = slurp(path("mark.so"));
   file("bad.scn", "firmware ./mark.so\nstartup\nno_such_command\n");
-  expect_bad_prefix(marked("run bad.scn"), "bad.scn:3: ",
-                    "syntax error");
+  expect_bad_prefix(marked("run bad.scn"), "bad.scn:3: ", "syntax error");
   EXPECT_FALSE(loaded()) << "run: parsed a broken file and loaded its plug-in";
   expect_bad_prefix(marked("cosim --session bad.scn"), "bad.scn:3: ", "cosim --session");
   EXPECT_FALSE(loaded()) << "cosim --session";
@@ -85,7 +84,8 @@ TEST_F(CodeSecurity, PluginsAnotherUserCouldChangeAreRefused) {
   // The problem with each plug-in, as named by `name` (the command line's ./x, a scenario's
   // absolute path).
   const auto problem = [&](const std::string& rel, const std::string& name) {
-    if (rel == "sticky/theirs.so") return name + " is owned by uid 65534, not by you (uid 0) or root";
+    if (rel == "sticky/theirs.so")
+      return name + " is owned by uid 65534, not by you (uid 0) or root";
     if (rel == "open.so") return name + " is writable by others (mode 0777)";
     if (rel == "their_dir/fw.so") {
       return name + ": the directory " + path("their_dir") +
@@ -93,7 +93,8 @@ TEST_F(CodeSecurity, PluginsAnotherUserCouldChangeAreRefused) {
     }
     return name + ": the directory " + path("group_dir") + " is writable by others (mode 0775)";
   };
-  for (const std::string rel : {"sticky/theirs.so", "open.so", "their_dir/fw.so", "group_dir/fw.so"}) {
+  for (const std::string rel :
+       {"sticky/theirs.so", "open.so", "their_dir/fw.so", "group_dir/fw.so"}) {
     const std::string line = refused + problem(rel, "./" + rel) + why;
     expect_bad(marked("bridge --pty p --firmware ./" + rel), "dpc31 bridge: " + line, rel);
     expect_bad(marked("soak --cycles 1000 --firmware ./" + rel), "dpc31 soak: " + line, rel);
@@ -151,7 +152,8 @@ TEST_F(CodeSecurity, OutputsNeverReplaceAnInput) {
   EXPECT_EQ(slurp(a), "{}\n");
   const std::string t = file("t", "end 10\n");
   expect_bad(dpc31("cosim --replay t --junit t"),
-             "dpc31 cosim: --junit t: is --replay t: an output must not replace an input", "replay");
+             "dpc31 cosim: --junit t: is --replay t: an output must not replace an input",
+             "replay");
   EXPECT_EQ(slurp(t), "end 10\n");
   EXPECT_EQ(listing(), (std::vector<std::string>{"a.json", "fw.so", "t"}));
 }
@@ -167,9 +169,10 @@ TEST_F(CodeSecurity, AnotherUsersSymlinkInAStickyDirectoryIsNotFollowed) {
   fs::permissions(victim, fs::perms::owner_read | fs::perms::owner_write);
   fs::create_symlink(victim, path("sticky/out.json"));
   chown_to(path("sticky/out.json"), kNobody);
-  const std::string line = "sticky/out.json: cannot write: ./sticky/out.json is a symbolic link of "
-                           "uid 65534 in the sticky directory ./sticky, which belongs to neither "
-                           "you nor that directory's owner (not followed: protected symlinks)";
+  const std::string line =
+      "sticky/out.json: cannot write: ./sticky/out.json is a symbolic link of "
+      "uid 65534 in the sticky directory ./sticky, which belongs to neither "
+      "you nor that directory's owner (not followed: protected symlinks)";
   expect_bad(dpc31("run " + kTraces + "startup_dpc31_1m5.scn --quiet --json sticky/out.json"),
              "dpc31 run: " + line, "run --json");
   expect_bad(dpc31("bridge --pty p --firmware DO4 --log sticky/out.json"), "dpc31 bridge: " + line,
@@ -177,7 +180,8 @@ TEST_F(CodeSecurity, AnotherUsersSymlinkInAStickyDirectoryIsNotFollowed) {
   EXPECT_EQ(slurp(victim), "root only\n");
   fs::remove(path("sticky/out.json"));
   fs::create_symlink(victim, path("sticky/out.json"));  // ours: followed, as before
-  const Outcome r = dpc31("run " + kTraces + "startup_dpc31_1m5.scn --quiet --json sticky/out.json");
+  const Outcome r =
+      dpc31("run " + kTraces + "startup_dpc31_1m5.scn --quiet --json sticky/out.json");
   EXPECT_EQ(r.rc, 0) << r.err;
   EXPECT_NE(slurp(victim), "root only\n");
 }

@@ -76,9 +76,10 @@ std::shared_ptr<const RtlLibrary> RtlLibrary::load(const std::string& path, std:
   }
   if (const std::string why = untrusted_code(fd, path); !why.empty()) {
     ::close(fd);
-    error = fmt::format("RTL model refused: {} (it runs as your code: another user could have "
-                        "changed it)",
-                        why);
+    error = fmt::format(
+        "RTL model refused: {} (it runs as your code: another user could have "
+        "changed it)",
+        why);
     return nullptr;
   }
   const std::string by_fd = fmt::format("/proc/self/fd/{}", fd);
@@ -274,7 +275,9 @@ bool run_verilator(const std::string& verilator, const std::vector<std::string>&
 std::string host_code(std::string_view pre) {
   std::string file = "?";
   long line = 0;
-  const auto ident = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_'; };
+  const auto ident = [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_';
+  };
   for (std::size_t pos = 0; pos < pre.size();) {
     const std::size_t eol = std::min(pre.find('\n', pos), pre.size());
     const std::string_view l = pre.substr(pos, eol - pos);
@@ -295,8 +298,10 @@ std::string host_code(std::string_view pre) {
     bool in_string = false;
     for (std::size_t i = 0; i < l.size(); ++i) {
       if (in_string) {
-        if (l[i] == '\\') ++i;
-        else if (l[i] == '"') in_string = false;
+        if (l[i] == '\\')
+          ++i;
+        else if (l[i] == '"')
+          in_string = false;
         continue;
       }
       if (l[i] == '"') {
@@ -507,8 +512,9 @@ bool build_rtl_model(const RtlBuild& b, std::string& model_path, std::string& er
   }
   if (!b.host_code) {
     if (const std::string found = host_code(pre); !found.empty()) {
-      error = found + ": it would run on this machine inside dpc31 with your rights; refused "
-                      "unless --rtl-host-code is given (docs/golden-model.md)";
+      error = found +
+              ": it would run on this machine inside dpc31 with your rights; refused "
+              "unless --rtl-host-code is given (docs/golden-model.md)";
       return false;
     }
   }

@@ -153,8 +153,7 @@ class Log {
   void line(const std::string& text) {
     if (errno_ != 0) return;
     errno = 0;
-    if (std::fputs(text.c_str(), f_) < 0 || std::fputc('\n', f_) == EOF ||
-        std::fflush(f_) != 0) {
+    if (std::fputs(text.c_str(), f_) < 0 || std::fputc('\n', f_) == EOF || std::fflush(f_) != 0) {
       errno_ = errno != 0 ? errno : EIO;
     }
   }
@@ -441,9 +440,10 @@ int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
     if (::fstat(::fileno(owned.get()), &log_st) == 0 &&
         ::stat(pty->slave_name().c_str(), &pty_st) == 0 && log_st.st_dev == pty_st.st_dev &&
         log_st.st_ino == pty_st.st_ino) {
-      return refuse(fmt::format("--log {}: is the bridge's own pseudo-terminal {}: the log would "
-                                "feed back into it",
-                                o.log, pty->slave_name()));
+      return refuse(
+          fmt::format("--log {}: is the bridge's own pseudo-terminal {}: the log would "
+                      "feed back into it",
+                      o.log, pty->slave_name()));
     }
     log_file = owned.get();
   }
