@@ -192,19 +192,9 @@ TEST_F(CodeSecurity, TheBridgeLogIsRefusedOrReportedLikeEveryOutput) {
   expect_bad(dpc31("bridge --pty p --firmware DO4 --log p"),
              "dpc31 bridge: --log p: is --pty p: an output must not replace an input", "same path");
   EXPECT_EQ(listing(), std::vector<std::string>{});
-  const std::string full = path("full");
-  fs::create_directory(full);
-  ASSERT_EQ(::mount("tmpfs", full.c_str(), "tmpfs", 0, "size=64k"), 0) << std::strerror(errno);
-  struct Unmount {
-    std::string dir;
-    ~Unmount() { ::umount2(dir.c_str(), MNT_DETACH); }
-  } unmount{full};
-  {
-    std::ofstream fill(full + "/fill", std::ios::binary);
-    const std::string block(4096, 'x');
-    while (fill.write(block.data(), static_cast<std::streamsize>(block.size()))) {
-    }
-  }
+  const SmallTmpfs full(path("full"));
+  ASSERT_EQ(full.error(), "");
+  full.fill();
   expect_bad(dpc31("bridge --pty p --firmware DO4 --pacing free --log full/log"),
              "dpc31 bridge: cannot write the log full/log: No space left on device", "full disk");
   EXPECT_FALSE(fs::is_symlink(path("p"))) << "the pty link stays";

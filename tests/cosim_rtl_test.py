@@ -161,16 +161,23 @@ def bad(args, part, files=None, extra=()):
         one_line_exit_2(run(args, cache=cache), part.replace("@", work + "/"), cache)
 
 
-def shared_cache():
-    # The cache's models are dlopen'ed: one that others can write to is refused before any use.
+def refused_cache(below, part):
+    """A cache in (or `below`) a directory others may write, refused before it holds anything."""
     with tempfile.TemporaryDirectory() as work:
         stub(os.path.join(work, "stub.v"))
-        cache = os.path.join(work, "cache")
-        os.mkdir(cache)
-        os.chmod(cache, 0o777)
+        shared = os.path.join(work, "shared")
+        os.mkdir(shared)
+        os.chmod(shared, 0o777)
+        cache = os.path.join(shared, *below)
         one_line_exit_2(run(["--rtl", os.path.join(work, "stub.v"), "--top", "stub"], cache=cache),
-                        f"RTL cache {cache}: {cache} is writable by others (mode 0777);", cache)
-        check(os.listdir(cache) == [], f"the shared cache was written to: {os.listdir(cache)}")
+                        part.format(cache=cache, shared=shared), shared)
+        held = os.listdir(cache) if os.path.isdir(cache) else []
+        check(held == [], f"the refused cache was written to: {held}")
+
+
+def shared_cache():
+    # The cache's models are dlopen'ed: one that others can write to is refused before any use.
+    refused_cache([], "RTL cache {cache}: {cache} is writable by others (mode 0777);")
 
 
 # Issue 29 (docs/security.md, "Code a command runs"): the RTL cache against another local user
@@ -182,16 +189,8 @@ SYNTAX_ERROR = {"body": "  this is not verilog;\n"}
 def parent_writable_by_others():
     # A private cache below a directory others may write: they could rename it away and put
     # their own in its place (the swap race). The whole path is checked.
-    with tempfile.TemporaryDirectory() as work:
-        stub(os.path.join(work, "stub.v"))
-        shared = os.path.join(work, "shared")
-        os.mkdir(shared)
-        os.chmod(shared, 0o777)
-        cache = os.path.join(shared, "cache")
-        one_line_exit_2(run(["--rtl", os.path.join(work, "stub.v"), "--top", "stub"], cache=cache),
-                        f"RTL cache {cache}: {cache}: the directory {shared} is writable by others "
-                        "(mode 0777)", shared)
-        check(not os.path.exists(os.path.join(cache, "x")), "written below a shared directory")
+    refused_cache(["cache"], "RTL cache {cache}: {cache}: the directory {shared} is writable by "
+                             "others (mode 0777)")
 
 
 def umask_000_leaves_nothing_open():
