@@ -1,6 +1,9 @@
 // Scenario files: the parser (text -> Scenario). The format and every command:
 // docs/scenario-format.md; the runner is scenario_run.cpp.
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <charconv>
@@ -12,6 +15,7 @@
 #include "firmware_host.hpp"
 #include "scenario.hpp"
 #include "textfile.hpp"
+#include "trust.hpp"
 
 namespace dpc31 {
 
@@ -789,16 +793,34 @@ bool parse_scenario(std::string_view text, const std::string& file, Scenario& ou
 
 bool load_scenario(const std::string& path, Scenario& out, ScenarioError& err) {
   err = ScenarioError{path, 0, {}};
+  // Opened once: whether another user could have changed it is judged on what is read (it
+  // matters when it names a plug-in: bind_plugin). A pipe is the piping user's own.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  std::string untrusted;
+  struct stat st {};
+  if (fd >= 0 && ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode)) untrusted = untrusted_code(fd, path);
   std::string text;
-  if (!read_text_file(path, kMaxFileBytes, "scenario", text, err.message)) return false;
+  const bool read = read_text_file(fd >= 0 ? fmt::format("/proc/self/fd/{}", fd) : path,
+                                   kMaxFileBytes, "scenario", text, err.message);
+  if (fd >= 0) ::close(fd);
+  if (!read) return false;
   if ((err.line = cut_off_line(text, err.message)) != 0) return false;
-  return parse_scenario(text, path, out, err);
+  if (!parse_scenario(text, path, out, err)) return false;
+  out.untrusted = untrusted;
+  return true;
 }
 
 bool plugin_pending(const Scenario& s) { return !s.firmware.empty() && s.firmware_desc == nullptr; }
 
 bool bind_plugin(Scenario& s, ScenarioError& err) {
   if (!plugin_pending(s)) return true;
+  if (!s.untrusted.empty()) {
+    err = ScenarioError{s.file, s.plugin_line,
+                        "firmware plug-in refused: the scenario names it, and another user could "
+                        "have changed the scenario: " +
+                            s.untrusted};
+    return false;
+  }
   const dpc31_firmware* fw = nullptr;
   try {
     fw = &find_firmware(s.firmware);

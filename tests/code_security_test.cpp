@@ -105,6 +105,27 @@ TEST_F(CodeSecurity, PluginsAnotherUserCouldChangeAreRefused) {
     expect_bad(marked("cosim --session p.scn"), in_scn, rel);
     EXPECT_FALSE(loaded()) << rel;
   }
+  // A scenario naming a plug-in is code too: one another user could have changed is refused
+  // before the plug-in it names (ours, trusted) is loaded.
+  copy(BAD_PLUGIN_MARK, "ours.so");
+  const std::string theirs_scn = file("theirs.scn", "firmware ./ours.so\nstartup\n");
+  chown_to(theirs_scn, kNobody);
+  const std::string scn_why =
+      "theirs.scn:1: firmware plug-in refused: the scenario names it, and "
+      "another user could have changed the scenario: ";
+  expect_bad(marked("run theirs.scn"),
+             scn_why + "theirs.scn is owned by uid 65534, not by you (uid 0) or root", "scn owner");
+  expect_bad(marked("cosim --session theirs.scn"),
+             scn_why + "theirs.scn is owned by uid 65534, not by you (uid 0) or root", "cosim");
+  fs::create_directory(path("open_dir"));
+  fs::permissions(path("open_dir"), fs::perms::all);
+  file("open_dir/s.scn", "firmware ../ours.so\nstartup\n");
+  expect_bad(marked("run open_dir/s.scn"),
+             "open_dir/s.scn:1: firmware plug-in refused: the scenario names it, and another user "
+             "could have changed the scenario: open_dir/s.scn: the directory " +
+                 path("open_dir") + " is writable by others (mode 0777)",
+             "scn directory");
+  EXPECT_FALSE(loaded());
   // Ours (root's), not writable by others, in the sticky directory: others cannot rename or
   // remove it there, so it is taken, as the kernel's sticky rule would have it.
   copy(BAD_PLUGIN_MARK, "sticky/ours.so");
