@@ -119,6 +119,9 @@ struct Scenario {
 // Parses scenario text; `file` names it in messages. False with `err` set on the first error.
 bool parse_scenario(std::string_view text, const std::string& file, Scenario& out,
                     ScenarioError& err);
+// The same with a plug-in's loaded descriptor for its `firmware` line (bind_plugin's parse).
+bool parse_scenario(std::string_view text, const std::string& file, const dpc31_firmware* plugin,
+                    Scenario& out, ScenarioError& err);
 bool load_scenario(const std::string& path, Scenario& out, ScenarioError& err);
 
 // A scenario naming a firmware plug-in runs that plug-in's code. Parsing never loads it: the

@@ -1,9 +1,6 @@
 // Scenario files: the parser (text -> Scenario). The format and every command:
 // docs/scenario-format.md; the runner is scenario_run.cpp.
-#include <fcntl.h>
 #include <fmt/format.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <charconv>
@@ -15,7 +12,6 @@
 #include "firmware_host.hpp"
 #include "scenario.hpp"
 #include "textfile.hpp"
-#include "trust.hpp"
 
 namespace dpc31 {
 
@@ -30,7 +26,6 @@ namespace {
 constexpr std::uint64_t kMaxSeconds = 3600;
 constexpr std::uint64_t kMaxExchanges = 1'000'000;
 constexpr std::uint64_t kMaxTries = 100'000;
-constexpr std::size_t kMaxFileBytes = 16u << 20;
 constexpr std::size_t kMaxDu = 244;
 
 // Global_Control command bits (DP standard).
@@ -763,10 +758,8 @@ class Parser {
 
 }  // namespace
 
-namespace {
-
-bool parse_with(std::string_view text, const std::string& file, const dpc31_firmware* plugin,
-                Scenario& out, ScenarioError& err) {
+bool parse_scenario(std::string_view text, const std::string& file, const dpc31_firmware* plugin,
+                    Scenario& out, ScenarioError& err) {
   Scenario s;
   s.file = file;
   Parser p(s, plugin);
@@ -784,59 +777,9 @@ bool parse_with(std::string_view text, const std::string& file, const dpc31_firm
   return true;
 }
 
-}  // namespace
-
 bool parse_scenario(std::string_view text, const std::string& file, Scenario& out,
                     ScenarioError& err) {
-  return parse_with(text, file, nullptr, out, err);
-}
-
-bool load_scenario(const std::string& path, Scenario& out, ScenarioError& err) {
-  err = ScenarioError{path, 0, {}};
-  // Opened once: whether another user could have changed it is judged on what is read (it
-  // matters when it names a plug-in: bind_plugin). A pipe is the piping user's own.
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  std::string untrusted;
-  struct stat st {};
-  if (fd >= 0 && ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode)) untrusted = untrusted_code(fd, path);
-  std::string text;
-  const bool read = read_text_file(fd >= 0 ? fmt::format("/proc/self/fd/{}", fd) : path,
-                                   kMaxFileBytes, "scenario", text, err.message);
-  if (fd >= 0) ::close(fd);
-  if (!read) return false;
-  if ((err.line = cut_off_line(text, err.message)) != 0) return false;
-  if (!parse_scenario(text, path, out, err)) return false;
-  out.untrusted = untrusted;
-  return true;
-}
-
-bool plugin_pending(const Scenario& s) { return !s.firmware.empty() && s.firmware_desc == nullptr; }
-
-bool bind_plugin(Scenario& s, ScenarioError& err) {
-  if (!plugin_pending(s)) return true;
-  if (!s.untrusted.empty()) {
-    err = ScenarioError{s.file, s.plugin_line,
-                        "firmware plug-in refused: the scenario names it, and another user could "
-                        "have changed the scenario: " +
-                            s.untrusted};
-    return false;
-  }
-  const dpc31_firmware* fw = nullptr;
-  try {
-    fw = &find_firmware(s.firmware);
-  } catch (const FirmwareError& e) {
-    err = ScenarioError{s.file, s.plugin_line, e.what()};
-    return false;
-  }
-  Scenario bound;
-  if (!parse_with(s.text, s.file, fw, bound, err)) return false;
-  // What the descriptor decides: the slave's defaults (and the master's view of them in the
-  // steps), and the names of its ports and inputs, checked by this second parse.
-  s.user = std::move(bound.user);
-  s.steps = std::move(bound.steps);
-  s.firmware_desc = fw;
-  s.text.clear();
-  return true;
+  return parse_scenario(text, file, nullptr, out, err);
 }
 
 }  // namespace dpc31
