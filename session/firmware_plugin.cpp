@@ -1,14 +1,19 @@
 // Firmware by name or as a run-time plug-in (dpc31/dpc31_firmware.h), and the C host of that
 // header (dpc31_firmware_load, dpc31_module_*).
 #include <dlfcn.h>
+#include <fcntl.h>
+#include <unistd.h>
 
+#include <cerrno>
 #include <cstring>
 #include <exception>
 #include <memory>
 #include <string>
+#include <system_error>
 
 #include "firmware.h"
 #include "firmware_host.hpp"
+#include "trust.hpp"
 
 namespace dpc31 {
 
@@ -66,13 +71,30 @@ std::string file_path(const std::string& spec) {
 
 const dpc31_firmware& load_plugin(const std::string& spec) {
   const std::string path = file_path(spec);
+  // Checked and loaded through one descriptor: what was checked is what runs, whatever is renamed
+  // or swapped in at the path meanwhile (docs/security.md, "Code a command runs").
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) {
+    throw FirmwareError("cannot load firmware plug-in: " + path + ": " +
+                        std::error_code(errno, std::generic_category()).message());
+  }
+  const std::string untrusted = untrusted_code(fd, path);
+  if (!untrusted.empty()) {
+    ::close(fd);
+    throw FirmwareError("firmware plug-in refused: " + untrusted +
+                        " (a plug-in runs as your code: another user could have changed it)");
+  }
   // RTLD_NOW: an undefined symbol fails here, not in the middle of a run. RTLD_LOCAL: two
   // plug-ins may use the same names. Never closed: the descriptor points into the library.
-  void* const lib = ::dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+  const std::string by_fd = "/proc/self/fd/" + std::to_string(fd);
+  void* const lib = ::dlopen(by_fd.c_str(), RTLD_NOW | RTLD_LOCAL);
+  ::close(fd);
   if (lib == nullptr) {
-    const char* why = ::dlerror();
-    throw FirmwareError("cannot load firmware plug-in: " +
-                        std::string(why != nullptr ? why : path));
+    // dlerror() names the descriptor's path: said with the user's.
+    const char* const e = ::dlerror();
+    std::string why = e != nullptr ? e : by_fd + ": cannot be loaded";
+    if (why.starts_with(by_fd)) why.replace(0, by_fd.size(), path);
+    throw FirmwareError("cannot load firmware plug-in: " + why);
   }
   ::dlerror();
   void* const sym = ::dlsym(lib, DPC31_FIRMWARE_SYMBOL);

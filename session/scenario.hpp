@@ -22,6 +22,8 @@
 #include "responder.hpp"
 #include "vocabulary.hpp"
 
+struct dpc31_firmware;  // dpc31/dpc31_firmware.h
+
 namespace dpc31 {
 
 struct ScenarioError {
@@ -99,8 +101,16 @@ struct Scenario {
   std::string file;
   ChipOptions chip;
   MasterConfig master;
-  ResponderConfig user;              // user.slave is also what the master parameterises
-  std::string firmware;              // an example firmware (firmware.h) instead of the responder
+  ResponderConfig user;  // user.slave is also what the master parameterises
+  std::string firmware;  // a built-in firmware's name or a plug-in's path, instead of the responder
+  // The firmware's descriptor: a built-in's from the parse, a plug-in's once bind_plugin() has
+  // loaded it (nullptr before: parsing never loads code).
+  const dpc31_firmware* firmware_desc = nullptr;
+  int plugin_line = 0;  // the 'firmware' line naming a plug-in
+  std::string text;     // the scenario's text while a plug-in waits for bind_plugin()
+  // load_scenario(): why another user could have changed the file ("" if none could); a
+  // scenario that names a plug-in is then refused (docs/security.md).
+  std::string untrusted;
   std::vector<std::uint8_t> inputs;  // the user's inputs from the start
   std::uint32_t retries = 1;         // repeats of a request that got no answer (max_retry_limit)
   std::vector<ScenarioStep> steps;
@@ -109,7 +119,19 @@ struct Scenario {
 // Parses scenario text; `file` names it in messages. False with `err` set on the first error.
 bool parse_scenario(std::string_view text, const std::string& file, Scenario& out,
                     ScenarioError& err);
+// The same with a plug-in's loaded descriptor for its `firmware` line (bind_plugin's parse).
+bool parse_scenario(std::string_view text, const std::string& file, const dpc31_firmware* plugin,
+                    Scenario& out, ScenarioError& err);
 bool load_scenario(const std::string& path, Scenario& out, ScenarioError& err);
+
+// A scenario naming a firmware plug-in runs that plug-in's code. Parsing never loads it: the
+// caller checks what it must (its outputs, docs/security.md), then bind_plugin() loads it
+// (find_firmware: refused when another user could have changed it) and parses the text again with
+// its descriptor, which sets `user` and `steps` (the slave's GSD defaults, the port and input
+// names). True at once when nothing waits; false with `err` (FILE:LINE). run_scenario() binds a
+// copy itself when the caller did not.
+[[nodiscard]] bool plugin_pending(const Scenario& s);
+bool bind_plugin(Scenario& s, ScenarioError& err);
 
 struct ScenarioOutcome {
   std::uint64_t final_cycle = 0;

@@ -26,7 +26,6 @@ namespace {
 constexpr std::uint64_t kMaxSeconds = 3600;
 constexpr std::uint64_t kMaxExchanges = 1'000'000;
 constexpr std::uint64_t kMaxTries = 100'000;
-constexpr std::size_t kMaxFileBytes = 16u << 20;
 constexpr std::size_t kMaxDu = 244;
 
 // Global_Control command bits (DP standard).
@@ -95,7 +94,7 @@ bool sends_request(StepKind k) {
 
 class Parser {
  public:
-  explicit Parser(Scenario& s) : s_(s) {}
+  Parser(Scenario& s, const dpc31_firmware* bound) : s_(s), bound_(bound) {}
 
   void line(int no, std::string_view raw) {
     const std::string_view text = trim(raw.substr(0, raw.find('#')));
@@ -372,19 +371,27 @@ class Parser {
       no_options();
       if (slave_seen_) fail("'firmware' comes before 'slave': it sets the slave's GSD defaults");
       if (user_seen_) fail("'firmware' and 'user' exclude each other");
+      firmware_seen_ = true;
       std::string spec(pos_[0]);
-      // A plug-in's relative path is relative to the scenario file, as an #include's is.
-      if (is_plugin_path(spec) && spec.front() != '/') {
-        const std::filesystem::path dir = std::filesystem::path(s_.file).parent_path();
-        if (!dir.empty()) spec = (dir / spec).string();
+      if (is_plugin_path(spec)) {
+        // Relative to the scenario file's real directory, as an #include's is to its file's:
+        // not to the directory of a link that leads to it.
+        if (spec.front() != '/') spec = (scenario_dir() / spec).lexically_normal().string();
+        // Never loaded while parsing: bind_plugin() loads it before the run, once the whole file
+        // has parsed (and the command has checked everything else), then parses again with it.
+        s_.firmware = spec;
+        s_.plugin_line = step_.line;
+        fw_ = bound_;
+      } else {
+        try {
+          fw_ = &find_firmware(spec);
+        } catch (const FirmwareError& e) {
+          fail(e.what());
+        }
+        s_.firmware = fw_->name;
       }
-      try {
-        fw_ = &find_firmware(spec);
-      } catch (const FirmwareError& e) {
-        fail(e.what());
-      }
-      s_.firmware = is_plugin_path(spec) ? spec : std::string(fw_->name);
-      s_.user.slave = with_gsd_defaults(*fw_, s_.user.slave);
+      s_.firmware_desc = fw_;
+      if (fw_ != nullptr) s_.user.slave = with_gsd_defaults(*fw_, s_.user.slave);
     } else if (cmd_ == "slave") {
       positional(0, 0, "options only");
       slave_seen_ = true;
@@ -406,7 +413,7 @@ class Parser {
       }
     } else if (cmd_ == "user") {
       positional(0, 0, "options only");
-      if (fw_ != nullptr)
+      if (firmware_seen_)
         fail("'user' configures the built-in user side; a firmware configures itself");
       user_seen_ = true;
       ResponderConfig& u = s_.user;
@@ -533,15 +540,15 @@ class Parser {
       step_.kind = StepKind::hw;
       positional(2, 2, "a hardware input and a value");
       no_options();
-      if (fw_ == nullptr) fail("'hw' needs a firmware (header 'firmware NAME')");
-      if (name_index(fw_->hw_inputs, pos_[0]) < 0) {
+      if (!firmware_seen_) fail("'hw' needs a firmware (header 'firmware NAME')");
+      if (fw_ != nullptr && name_index(fw_->hw_inputs, pos_[0]) < 0) {
         fail(fmt::format("unknown hardware input '{}' of {} ({})", shown(pos_[0]), fw_->name,
                          name_list(fw_->hw_inputs)));
       }
       step_.name = std::string(pos_[0]);
       step_.value = static_cast<std::uint32_t>(number(pos_[1], "hw value", 0, 0xFFFF'FFFF));
     } else if (cmd_ == "inputs") {
-      if (fw_ != nullptr) fail("'inputs' feeds the built-in user side; a firmware makes its own");
+      if (firmware_seen_) fail("'inputs' feeds the built-in user side; a firmware makes its own");
       step_.kind = StepKind::inputs;
       positional(1, 1, "a byte list");
       no_options();
@@ -612,8 +619,8 @@ class Parser {
                     wd_state_name(WdState::DP_Control)});
     } else if (what == "port") {
       args(2, "NAME VALUE");
-      if (fw_ == nullptr) fail("'expect port' needs a firmware (header 'firmware NAME')");
-      if (name_index(fw_->ports, pos_[1]) < 0) {
+      if (!firmware_seen_) fail("'expect port' needs a firmware (header 'firmware NAME')");
+      if (fw_ != nullptr && name_index(fw_->ports, pos_[1]) < 0) {
         fail(fmt::format("unknown port '{}' of {} ({})", shown(pos_[1]), fw_->name,
                          name_list(fw_->ports)));
       }
@@ -622,7 +629,7 @@ class Parser {
       step_.value = static_cast<std::uint32_t>(number(pos_[2], "port value", 0, 0xFFFF'FFFF));
     } else if (what == "outputs" || what == "inputs") {
       args(1, "BYTES");
-      if (what == "outputs" && fw_ != nullptr) {
+      if (what == "outputs" && firmware_seen_) {
         fail("'expect outputs' checks the built-in user side; with a firmware check its ports");
       }
       step_.expect = what == "outputs" ? ExpectKind::outputs : ExpectKind::inputs;
@@ -633,7 +640,7 @@ class Parser {
       }
     } else if (what == "cleared") {
       args(1, "0|1");
-      if (fw_ != nullptr) {
+      if (firmware_seen_) {
         fail("'expect cleared' checks the built-in user side; with a firmware check its ports");
       }
       step_.expect = ExpectKind::cleared;
@@ -719,11 +726,20 @@ class Parser {
                     shown(name), profile_desc(s_.chip.profile).name));
   }
 
+  // The directory of the scenario file after every link is resolved ("" for text not from a file).
+  [[nodiscard]] std::filesystem::path scenario_dir() const {
+    std::error_code ec;
+    const std::filesystem::path real = std::filesystem::canonical(s_.file, ec);
+    return (ec ? std::filesystem::path(s_.file) : real).parent_path();
+  }
+
   Scenario& s_;
   ScenarioStep step_;
   std::optional<SlaveConfig> view_;  // the master's view of the slave after the steps so far
   bool headers_ = false;
-  const dpc31_firmware* fw_ = nullptr;
+  const dpc31_firmware* bound_;         // the plug-in bind_plugin() loaded, or nullptr
+  const dpc31_firmware* fw_ = nullptr;  // the firmware's descriptor, once known
+  bool firmware_seen_ = false;
   bool slave_seen_ = false;
   bool user_seen_ = false;
   bool body_ = false;  // an action or expect has been seen: no more headers
@@ -735,11 +751,11 @@ class Parser {
 
 }  // namespace
 
-bool parse_scenario(std::string_view text, const std::string& file, Scenario& out,
-                    ScenarioError& err) {
+bool parse_scenario(std::string_view text, const std::string& file, const dpc31_firmware* plugin,
+                    Scenario& out, ScenarioError& err) {
   Scenario s;
   s.file = file;
-  Parser p(s);
+  Parser p(s, plugin);
   int no = 0;
   if (text.starts_with("\xEF\xBB\xBF")) text.remove_prefix(3);  // a UTF-8 BOM from an editor
   try {
@@ -749,16 +765,14 @@ bool parse_scenario(std::string_view text, const std::string& file, Scenario& ou
     err = ScenarioError{file, f.line == 0 ? no : std::max(f.line, 0), f.message};
     return false;
   }
+  if (s.firmware_desc == nullptr && !s.firmware.empty()) s.text = std::string(text);
   out = std::move(s);
   return true;
 }
 
-bool load_scenario(const std::string& path, Scenario& out, ScenarioError& err) {
-  err = ScenarioError{path, 0, {}};
-  std::string text;
-  if (!read_text_file(path, kMaxFileBytes, "scenario", text, err.message)) return false;
-  if ((err.line = cut_off_line(text, err.message)) != 0) return false;
-  return parse_scenario(text, path, out, err);
+bool parse_scenario(std::string_view text, const std::string& file, Scenario& out,
+                    ScenarioError& err) {
+  return parse_scenario(text, file, nullptr, out, err);
 }
 
 }  // namespace dpc31

@@ -78,7 +78,7 @@ class Runner {
     user_.inputs = s_.inputs;
     DirectBus bus(chip_);
     if (!s_.firmware.empty()) {
-      fw_ = std::make_unique<FirmwareHost>(find_firmware(s_.firmware));
+      fw_ = std::make_unique<FirmwareHost>(*s_.firmware_desc);
       fw_->on_port = [this](std::uint64_t cycle, unsigned port, std::uint32_t value) {
         note(cycle, fmt::format("{}: {} = {} at {}", fw_->firmware().name, fw_->port_name(port),
                                 port_text(value), time_text(cycle)));
@@ -719,6 +719,12 @@ class Runner {
 
 ScenarioOutcome run_scenario(const Scenario& s, const LineSink& walk, const LineSink& errors,
                              const ScenarioHooks& hooks) {
+  if (plugin_pending(s)) {
+    Scenario bound = s;
+    ScenarioError err;
+    if (!bind_plugin(bound, err)) throw FirmwareError(err.text());
+    return run_scenario(bound, walk, errors, hooks);
+  }
   Runner r(s, walk, errors, hooks);
   return r.run();
 }
@@ -728,6 +734,10 @@ int run_scenario_file(const std::string& path, const LineSink& walk, const LineS
   Scenario s;
   ScenarioError err;
   if (!load_scenario(path, s, err)) {
+    if (errors) errors(err.text());
+    return 2;
+  }
+  if (!bind_plugin(s, err)) {
     if (errors) errors(err.text());
     return 2;
   }

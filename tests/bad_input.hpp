@@ -133,6 +133,34 @@ inline std::string unwritable_dir(const std::string& ro) {
   return ro;
 }
 
+// A 64 KiB tmpfs mounted on `dir` (made here) while it lives: a file system that fills up
+// (mounting needs root; the suite runs as root in CI and here).
+class SmallTmpfs {
+ public:
+  explicit SmallTmpfs(std::string dir) : dir_(std::move(dir)) {
+    fs::create_directory(dir_);
+    if (::mount("tmpfs", dir_.c_str(), "tmpfs", 0, "size=64k") != 0) error_ = std::strerror(errno);
+  }
+  ~SmallTmpfs() {
+    if (error_.empty()) ::umount2(dir_.c_str(), MNT_DETACH);
+  }
+  SmallTmpfs(const SmallTmpfs&) = delete;
+  SmallTmpfs& operator=(const SmallTmpfs&) = delete;
+  // "" once mounted, else why not.
+  [[nodiscard]] const std::string& error() const { return error_; }
+  // Writes the file `fill` until nothing more fits.
+  void fill() const {
+    std::ofstream f(dir_ + "/fill", std::ios::binary);
+    const std::string block(4096, 'x');
+    while (f.write(block.data(), static_cast<std::streamsize>(block.size()))) {
+    }
+  }
+
+ private:
+  std::string dir_;
+  std::string error_;
+};
+
 // The FST block chain (fstapi.h): type byte, big-endian length counting itself, data.
 struct FstBlock {
   std::size_t pos;

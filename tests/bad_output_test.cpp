@@ -75,22 +75,12 @@ TEST_F(BadInput, OutputSymlinksAreFollowedOnlyToAnExistingFile) {
 TEST_F(BadInput, FullFileSystemIsExit2AndKeepsTheOldFile) {
   if (::geteuid() != 0) GTEST_SKIP() << "mounting a tmpfs needs root";
   const std::string full = path("full");
-  fs::create_directory(full);
-  ASSERT_EQ(::mount("tmpfs", full.c_str(), "tmpfs", 0, "size=64k"), 0) << std::strerror(errno);
-  struct Unmount {
-    std::string dir;
-    ~Unmount() { ::umount2(dir.c_str(), MNT_DETACH); }
-  } unmount{full};
+  const SmallTmpfs tmpfs(full);
+  ASSERT_EQ(tmpfs.error(), "");
   spit(full + "/old.fst", "old fst");
   spit(full + "/old.vcd", "old vcd");
   spit(full + "/old.json", "old json");
-  // Fill it up: what is left cannot hold a waveform of the whole run.
-  {
-    std::ofstream fill(full + "/fill", std::ios::binary);
-    const std::string block(4096, 'x');
-    while (fill.write(block.data(), static_cast<std::streamsize>(block.size()))) {
-    }
-  }
+  tmpfs.fill();  // what is left cannot hold a waveform of the whole run
   for (const auto& [opt, name] : {std::pair{"--fst", "old.fst"}, std::pair{"--vcd", "old.vcd"},
                                   std::pair{"--json", "old.json"}}) {
     const Outcome r = dpc31("run " + kScn + " --quiet " + opt + " full/" + name);

@@ -4,9 +4,23 @@
  *   NO_INIT      a required field (init) is NULL
  *   NO_EXPORT    no DPC31_FIRMWARE_EXPORT: the well-known symbol is missing
  *   UNDEFINED    it calls a function no host provides: dlopen (RTLD_NOW) fails
- *   SPIN         it loads, and its init spins in while(1) without a bus access (the hang guard) */
+ *   SPIN         it loads, and its init spins in while(1) without a bus access (the hang guard)
+ *   MARK         a valid plug-in whose loading alone (a constructor) creates the file named by
+ *                DPC31_PLUGIN_MARK: shows whether a command ran its code
+ * (tests/code_security_test.cpp) */
 #include "dpc31/dpc31_firmware.h"
 #include "dpc31/dpc31_hal.h"
+
+#ifdef MARK
+#include <stdio.h>
+#include <stdlib.h>
+
+__attribute__((constructor)) static void mark(void) {
+  const char* path = getenv("DPC31_PLUGIN_MARK");
+  FILE* f = path != NULL ? fopen(path, "w") : NULL;
+  if (f != NULL) fclose(f);
+}
+#endif
 
 #ifdef UNDEFINED
 void no_such_board_function(void);

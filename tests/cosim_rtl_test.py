@@ -21,10 +21,10 @@ BLOCKS = os.path.join(SRC, "rtl", "dpc31_blocks.v")
 OWN = ["--rtl", BLOCKS, "--top", "dpc31_blocks"]
 
 
-def run(args, cache=CACHE, cwd=None):
+def run(args, cache=CACHE, cwd=None, **kw):
     env = dict(os.environ, DPC31EMU_RTL_CACHE=cache)
     return subprocess.run([CLI, "cosim"] + args, capture_output=True, text=True, env=env, cwd=cwd,
-                          timeout=1800)
+                          timeout=1800, **kw)
 
 
 def check(cond, what):
@@ -88,7 +88,11 @@ def own_model_clean():
     s = summary(r)
     check(s["divergent_seeds"] == 0 and s["seeds"]["run"] == 200, "not 200 clean seeds")
     check(re.fullmatch(r"[0-9a-f]{16}", s["rtl"]) is not None, f"rtl = {s['rtl']!r}")
-    check(os.path.isfile(os.path.join(CACHE, s["rtl"], "model.so")), "no model.so in the cache")
+    model = os.path.join(CACHE, s["rtl"], "model.so")
+    check(os.path.isfile(model), "no model.so in the cache")
+    # Issue 29: the entry and the model are ours alone, whatever the umask.
+    for p in (model, os.path.dirname(model)):
+        check(os.stat(p).st_mode & 0o077 == 0, f"{p}: mode {os.stat(p).st_mode & 0o777:o}")
     print(f"200 seeds clean on the model {s['rtl']}")
 
 
@@ -147,7 +151,8 @@ def waveforms_and_number():
     print("emu.vcd, rtl.vcd, rtl_internal.fst written; --mutant 7 = POLARITY")
 
 
-def bad(args, part, files=None):
+def bad(args, part, files=None, extra=()):
+    args = args + list(extra)
     with tempfile.TemporaryDirectory() as work:
         for name, kw in (files or {}).items():
             stub(os.path.join(work, name), **kw)
@@ -156,16 +161,141 @@ def bad(args, part, files=None):
         one_line_exit_2(run(args, cache=cache), part.replace("@", work + "/"), cache)
 
 
-def shared_cache():
-    # The cache's models are dlopen'ed: one that others can write to is refused before any use.
+def refused_cache(below, part):
+    """A cache in (or `below`) a directory others may write, refused before it holds anything."""
     with tempfile.TemporaryDirectory() as work:
         stub(os.path.join(work, "stub.v"))
-        cache = os.path.join(work, "cache")
-        os.mkdir(cache)
-        os.chmod(cache, 0o777)
+        shared = os.path.join(work, "shared")
+        os.mkdir(shared)
+        os.chmod(shared, 0o777)
+        cache = os.path.join(shared, *below)
         one_line_exit_2(run(["--rtl", os.path.join(work, "stub.v"), "--top", "stub"], cache=cache),
-                        f"RTL cache {cache}: writable by others;", cache)
-        check(os.listdir(cache) == [], f"the shared cache was written to: {os.listdir(cache)}")
+                        part.format(cache=cache, shared=shared), shared)
+        held = os.listdir(cache) if os.path.isdir(cache) else []
+        check(held == [], f"the refused cache was written to: {held}")
+
+
+def shared_cache():
+    # The cache's models are dlopen'ed: one that others can write to is refused before any use.
+    refused_cache([], "RTL cache {cache}: {cache} is writable by others (mode 0777);")
+
+
+# Issue 29 (docs/security.md, "Code a command runs"): the RTL cache against another local user
+# and a careless one.
+
+SYNTAX_ERROR = {"body": "  this is not verilog;\n"}
+
+
+def parent_writable_by_others():
+    # A private cache below a directory others may write: they could rename it away and put
+    # their own in its place (the swap race). The whole path is checked.
+    refused_cache(["cache"], "RTL cache {cache}: {cache}: the directory {shared} is writable by "
+                             "others (mode 0777)")
+
+
+def umask_000_leaves_nothing_open():
+    # One run under umask 000 left the entry and model.so 0777 for anyone to replace: everything
+    # made in the cache now has explicit modes. (The stub stops at Verilator: no C++ build.)
+    with tempfile.TemporaryDirectory() as work:
+        stub(os.path.join(work, "stub.v"), **SYNTAX_ERROR)
+        cache = os.path.join(work, "a", "cache")
+        r = run(["--rtl", os.path.join(work, "stub.v"), "--top", "stub"], cache=cache,
+                preexec_fn=lambda: os.umask(0))
+        check(r.returncode == 2 and "Verilator: %Error" in r.stderr, r.stderr)
+        # Every directory (so nothing below one can be reached by others; CMake copies the modes
+        # of its templates into the build tree, 0644), and every file of ours.
+        made = [os.path.join(work, "a")]
+        for d, dirs, files in os.walk(os.path.join(work, "a")):
+            made += [os.path.join(d, n) for n in dirs]
+            made += [os.path.join(d, n) for n in files if os.path.basename(d) == "project"
+                     or n.endswith((".lock", ".log", "model.so"))]
+        check(len(made) >= 8, f"expected the cache, an entry, its lock, logs and project: {made}")
+        for p in made:
+            mode = os.lstat(p).st_mode & 0o777
+            check(mode & 0o077 == 0, f"{p}: mode {mode:o} under umask 000")
+        print(f"{len(made)} directories and files of ours made under umask 000, none open to others")
+
+
+def model_others_could_change_refused():
+    # The issue's case after one careless run: the cache entry's model.so is 0777. It is checked
+    # on the descriptor it is then loaded from (no check-then-use race) and refused.
+    with tempfile.TemporaryDirectory() as work:
+        cache = os.path.join(work, "cache")
+        os.mkdir(cache, 0o700)
+        r = run(OWN + ["--seeds", "1", "--quiet"])
+        check(r.returncode == 0, r.stderr)
+        key = summary(r)["rtl"]
+        subprocess.run(["cp", "-a", os.path.join(CACHE, key), os.path.join(cache, key)], check=True)
+        model = os.path.join(cache, key, "model.so")
+        os.chmod(model, 0o777)
+        r = run(OWN + ["--seeds", "1"], cache=cache)
+        check(r.returncode == 2 and len(r.stderr.splitlines()) == 1, r.stderr)
+        check(f"RTL model refused: {model} is writable by others (mode 0777)" in r.stderr, r.stderr)
+        print(r.stderr.strip())
+
+
+def host_code_refused():
+    # $system ran a shell command and $c inline C++ inside dpc31, undocumented. Refused (found
+    # after the preprocessor, so a macro cannot hide it) unless --rtl-host-code is given.
+    with tempfile.TemporaryDirectory() as work:
+        for name, body, what in (
+                ("system.v", '  initial $system("touch pwned");\n', "$system runs a shell command"),
+                ("c.v", '  initial $c("system(\\"touch pwned\\");");\n', "$c runs inline C++"),
+                ("macro.v", '`define RUN $sys``tem\n  initial `RUN("touch pwned");\n',
+                 "$system runs a shell command"),
+                ("sysc.v", "`systemc_header\n#include <cstdlib>\n`verilog\n",
+                 "`systemc_ pastes C++ into the model"),
+                ("dpi.v", '  import "DPI-C" function int system(input string c);\n',
+                 "a DPI import calls C functions of the host")):
+            stub(os.path.join(work, name), body=body)
+            cache = os.path.join(work, "cache-" + name)
+            r = run(["--rtl", os.path.join(work, name), "--top", "stub"], cache=cache, cwd=work)
+            one_line_exit_2(r, f"{what}: it would run on this machine inside dpc31 with your "
+                            "rights; refused unless --rtl-host-code", cache)
+            check(f"{work}/{name}:" in r.stderr, f"no FILE:LINE in {r.stderr}")
+        # Text in a string is only text.
+        stub(os.path.join(work, "text.v"), body='  initial $display("$system and $c");\n  '
+                                                 'this is not verilog;\n')
+        r = run(["--rtl", os.path.join(work, "text.v"), "--top", "stub"], cache=work + "/c2")
+        check("Verilator: %Error" in r.stderr, r.stderr)
+        check(not os.path.exists(os.path.join(work, "pwned")), "a command ran")
+
+
+def names_are_data_for_cmake():
+    # A Verilog file name with ]==] closed the bracket argument of the generated CMakeLists.txt
+    # and ran its own CMake code at configure. Names now reach CMake as -D values; a name with a
+    # newline or ';' (which a CMake list cannot carry) is refused.
+    with tempfile.TemporaryDirectory() as work:
+        evil = "x]==])file(TOUCH pwned)#.v"
+        stub(os.path.join(work, evil), **SYNTAX_ERROR)
+        cache = os.path.join(work, "cache")
+        r = run(["--rtl", os.path.join(work, evil), "--top", "stub"], cache=cache, cwd=work)
+        check(r.returncode == 2 and "Verilator: %Error" in r.stderr, r.stderr)
+        nl = "y]==])\nfile(TOUCH pwned)\n#.v"
+        stub(os.path.join(work, nl))
+        one_line_exit_2(run(["--rtl", os.path.join(work, nl), "--top", "stub"], cache=cache,
+                            cwd=work),
+                        "a file name with ';' or a control character cannot be built", cache)
+        pwned = [os.path.join(d, f) for d, _, fs in os.walk(work) for f in fs if f == "pwned"]
+        check(not pwned, f"CMake code from a file name ran: {pwned}")
+        print("file names with ]==] stay data; a newline is refused")
+
+
+def key_reads_named_sources_only():
+    # A huge file beside the sources was read whole for the cache key. Now only the named
+    # sources (each at most 64 MiB) and what they `include are read: a 4 GiB sparse file beside
+    # them is not touched (the run stays under a 1 GiB address-space limit), a named one refused.
+    import resource
+    with tempfile.TemporaryDirectory() as work:
+        stub(os.path.join(work, "stub.v"), **SYNTAX_ERROR)
+        with open(os.path.join(work, "huge.v"), "wb") as f:
+            f.truncate(4 << 30)
+        limit = lambda: resource.setrlimit(resource.RLIMIT_AS, (1 << 30, 1 << 30))
+        r = run(["--rtl", os.path.join(work, "stub.v"), "--top", "stub"], cache=work + "/c",
+                preexec_fn=limit)
+        check(r.returncode == 2 and "Verilator: %Error" in r.stderr, r.stderr)
+        one_line_exit_2(run(["--rtl", os.path.join(work, "huge.v"), "--top", "stub"],
+                            cache=work + "/c"), "huge.v: larger than 64 MiB", work + "/c")
 
 
 CASES = {
@@ -195,8 +325,15 @@ CASES = {
                               "--define =1: not NAME or NAME=VALUE", {"stub.v": {}}),
     "cpp_build_error": lambda: bad(["--rtl", "@stub.v", "--top", "stub"],
                                    "C++ build of the RTL model failed: ",
-                                   {"stub.v": {"body": '  initial $c("not_cpp(;");\n'}}),
+                                   {"stub.v": {"body": '  initial $c("not_cpp(;");\n'}},
+                                   ["--rtl-host-code"]),
     "shared_cache": shared_cache,
+    "parent_writable_by_others": parent_writable_by_others,
+    "umask_000_leaves_nothing_open": umask_000_leaves_nothing_open,
+    "model_others_could_change_refused": model_others_could_change_refused,
+    "host_code_refused": host_code_refused,
+    "names_are_data_for_cmake": names_are_data_for_cmake,
+    "key_reads_named_sources_only": key_reads_named_sources_only,
     "not_a_model": lambda: bad(["--rtl-model", BLOCKS], "invalid ELF header"),
     "mutant_without_input": lambda: one_line_exit_2(
         run(OWN + ["--mutant", "NO_C_SWAP", "--seeds", "1"]),

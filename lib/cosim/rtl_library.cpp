@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cstdlib>
 #include <filesystem>
@@ -18,6 +19,8 @@
 
 #include "child.hpp"
 #include "outfile.hpp"
+#include "textfile.hpp"
+#include "trust.hpp"
 
 namespace dpc31::cosim {
 
@@ -64,12 +67,29 @@ std::shared_ptr<const RtlLibrary> RtlLibrary::load(const std::string& path, std:
         fmt::format("{}: {}", path, fs::exists(path, ec) ? "not a regular file" : "no such file");
     return nullptr;
   }
-  // dlopen searches the library path for a name without a slash: a file name means that file.
-  const std::string name = path.find('/') == std::string::npos ? "./" + path : path;
+  // Checked and loaded through one descriptor: what was checked is what runs, whatever is
+  // swapped in at the path meanwhile (docs/security.md, "Code a command runs").
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) {
+    error = fmt::format("{}: {}", path, std::error_code(errno, std::generic_category()).message());
+    return nullptr;
+  }
+  if (const std::string why = untrusted_code(fd, path); !why.empty()) {
+    ::close(fd);
+    error = fmt::format(
+        "RTL model refused: {} (it runs as your code: another user could have "
+        "changed it)",
+        why);
+    return nullptr;
+  }
+  const std::string by_fd = fmt::format("/proc/self/fd/{}", fd);
   // RTLD_LOCAL: each model keeps its own copy of Verilator's runtime.
-  void* h = ::dlopen(name.c_str(), RTLD_NOW | RTLD_LOCAL);
+  void* h = ::dlopen(by_fd.c_str(), RTLD_NOW | RTLD_LOCAL);
+  ::close(fd);
   if (h == nullptr) {
-    error = ::dlerror();  // "FILE: reason"
+    const char* const e = ::dlerror();
+    error = e != nullptr ? e : by_fd + ": cannot be loaded";  // "FILE: reason"
+    if (error.starts_with(by_fd)) error.replace(0, by_fd.size(), path);
     return nullptr;
   }
   using Entry = const dpc31_rtl_model* (*)();
@@ -114,15 +134,55 @@ std::string rtl_cache_dir() {
 
 namespace {
 
-// We dlopen what the cache holds, so it must be ours alone: owned by us, writable by nobody else
-// (where it points to, if it is a symlink). Empty: fine; else the one-line reason.
-std::string cache_not_private(const std::string& cache) {
-  struct stat st {};
-  if (::stat(cache.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) return "not a directory";
-  if (st.st_uid != ::geteuid()) return "owned by another user";
-  if ((st.st_mode & (S_IWGRP | S_IWOTH)) != 0) return "writable by others";
-  return {};
+constexpr mode_t kPrivateDir = 0700;
+
+// `dir` and what is missing above it, each made mode 0700 whatever the umask (a directory we
+// create is ours alone); then we dlopen what the cache holds, so the cache and every directory
+// above it must be ours or root's and writable by nobody else (untrusted_directory). "" or one
+// line.
+std::string private_cache(const std::string& dir) {
+  std::string made;
+  for (const fs::path& part : fs::path(dir)) {
+    made = made.empty() || made.back() == '/' ? made + part.string() : made + "/" + part.string();
+    if (::mkdir(made.c_str(), kPrivateDir) == 0) {
+      ::chmod(made.c_str(), kPrivateDir);
+    } else if (errno != EEXIST) {
+      return fmt::format("{}: {}", made, std::error_code(errno, std::generic_category()).message());
+    }
+  }
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) {
+    return fmt::format("{}: {}", dir, std::error_code(errno, std::generic_category()).message());
+  }
+  std::string why = untrusted_directory(fd, dir);
+  ::close(fd);
+  return why;
 }
+
+// A directory of the cache made mode 0700 whatever the umask; refused when something else is
+// there already (a link, a file).
+bool private_dir(const std::string& dir, std::string& error) {
+  struct stat st {};
+  if (::mkdir(dir.c_str(), kPrivateDir) == 0) {
+    if (::chmod(dir.c_str(), kPrivateDir) == 0) return true;
+  } else if (errno == EEXIST && ::lstat(dir.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) {
+    return true;
+  }
+  error = fmt::format("RTL cache {}: cannot make it a private directory", dir);
+  return false;
+}
+
+// Sets the process's umask while it lives: what the build's children create is ours alone.
+class Umask {
+ public:
+  explicit Umask(mode_t m) : old_(::umask(m)) {}
+  ~Umask() { ::umask(old_); }
+  Umask(const Umask&) = delete;
+  Umask& operator=(const Umask&) = delete;
+
+ private:
+  mode_t old_;
+};
 
 }  // namespace
 
@@ -165,22 +225,125 @@ std::string on_path(const std::string& name) {
 }
 
 // The directory with dpc31emu_rtl.cmake and the adapter (rtl_model_entry.cpp,
-// verilated_blocks.hpp, dpc31_rtl_model.h): next to an installed dpc31
-// (<bindir>/DPC31_BIN_TO_DATA/cosim), else the source tree this dpc31 was built from.
+// verilated_blocks.hpp, dpc31_rtl_model.h): <bindir>/DPC31_BIN_TO_DATA/cosim beside this dpc31,
+// installed or in the build tree (lib/cosim/CMakeLists.txt copies them there), wherever the
+// prefix was moved: no path of the machine that built it is compiled in.
 struct Support {
   std::string cmake_file;
   std::string adapter_dir;
+  std::string error;
 };
 Support support_files() {
   std::error_code ec;
   const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    const fs::path installed = exe.parent_path() / DPC31_BIN_TO_DATA / "cosim";
-    if (fs::exists(installed / "dpc31emu_rtl.cmake", ec))
-      return {(installed / "dpc31emu_rtl.cmake").lexically_normal().string(),
-              installed.lexically_normal().string()};
+  if (ec) return {{}, {}, "cannot find this program's own path (/proc/self/exe)"};
+  const fs::path dir = (exe.parent_path() / DPC31_BIN_TO_DATA / "cosim").lexically_normal();
+  return {(dir / "dpc31emu_rtl.cmake").string(), dir.string(), {}};
+}
+
+// Each named source, and what Verilator's preprocessor makes of them all, is read up to this.
+constexpr std::size_t kMaxSourceBytes = 64u << 20;
+constexpr std::size_t kMaxPreprocessed = 256u << 20;
+
+// What CMake can carry as one item of a list in a -D value: no ';', no control character.
+bool cmake_list_item(std::string_view s) {
+  return std::none_of(s.begin(), s.end(), [](char c) {
+    return c == ';' || static_cast<unsigned char>(c) < 0x20 || c == 0x7f;
+  });
+}
+
+// Runs Verilator with `args` (its standard output and error into a file of the private cache),
+// its output into `out`, bounded. False if it failed (`out` has its messages then).
+bool run_verilator(const std::string& verilator, const std::vector<std::string>& args,
+                   const std::string& cache, std::string& out) {
+  const std::string file = fmt::format("{}/verilator-output.{}", cache, ::getpid());
+  std::vector<std::string> argv = {"/bin/sh", "-c", "exec \"$@\" >&2", "sh", verilator};
+  argv.insert(argv.end(), args.begin(), args.end());
+  const child::Result r = child::run(argv, file);
+  std::string why;
+  const bool read = read_text_file(file, kMaxPreprocessed, "Verilator output", out, why);
+  std::error_code ec;
+  fs::remove(file, ec);
+  if (!read) out = why;
+  return read && r.exit_code == 0;
+}
+
+// The first construct of Verilator's preprocessed output (`line directives kept) that runs code
+// of the host: $system (a shell command), $c / $cN (inline C++), `systemc_* (C++ pasted into the
+// model), DPI imports (calls into any C function, system() too). "" or "FILE:LINE: what"; text in
+// string literals does not count.
+std::string host_code(std::string_view pre) {
+  std::string file = "?";
+  long line = 0;
+  const auto ident = [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_';
+  };
+  for (std::size_t pos = 0; pos < pre.size();) {
+    const std::size_t eol = std::min(pre.find('\n', pos), pre.size());
+    const std::string_view l = pre.substr(pos, eol - pos);
+    pos = eol + 1;
+    if (l.starts_with("`line ")) {
+      // `line N "FILE" LEVEL: the next line is line N of FILE.
+      line = std::strtol(std::string(l.substr(6)).c_str(), nullptr, 10) - 1;
+      const std::size_t q = l.find('"');
+      const std::size_t q2 = q == std::string_view::npos ? q : l.find('"', q + 1);
+      if (q2 != std::string_view::npos) file = std::string(l.substr(q + 1, q2 - q - 1));
+      continue;
+    }
+    ++line;
+    const std::string at = fmt::format("{}:{}: ", file, line);
+    if (l.find("`systemc_") != std::string_view::npos) {
+      return at + "`systemc_ pastes C++ into the model";
+    }
+    bool in_string = false;
+    for (std::size_t i = 0; i < l.size(); ++i) {
+      if (in_string) {
+        if (l[i] == '\\')
+          ++i;
+        else if (l[i] == '"')
+          in_string = false;
+        continue;
+      }
+      if (l[i] == '"') {
+        in_string = true;
+      } else if (l[i] == '$' && (i == 0 || !ident(l[i - 1]))) {
+        std::size_t e = i + 1;
+        while (e < l.size() && ident(l[e])) ++e;
+        const std::string_view name = l.substr(i, e - i);
+        if (name == "$system") return at + "$system runs a shell command";
+        if (name.size() >= 2 && name[1] == 'c' &&
+            std::all_of(name.begin() + 2, name.end(),
+                        [](char c) { return std::isdigit(static_cast<unsigned char>(c)) != 0; })) {
+          return at + std::string(name) + " runs inline C++";
+        }
+      } else if (l.compare(i, 6, "import") == 0 && (i == 0 || !ident(l[i - 1])) &&
+                 l.find("\"DPI", i) != std::string_view::npos) {
+        return at + "a DPI import calls C functions of the host";
+      }
+    }
   }
-  return {DPC31_RTL_CMAKE, DPC31_RTL_ADAPTER_DIR};
+  return {};
+}
+
+// `from` copied to `to` (mode 0700 whatever the umask) through a temporary and a rename.
+bool copy_private(const std::string& from, const std::string& to, std::string& error) {
+  const std::string tmp = to + ".tmp";
+  ::unlink(tmp.c_str());
+  const int in = ::open(from.c_str(), O_RDONLY | O_CLOEXEC);
+  const int out = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0700);
+  bool ok = in >= 0 && out >= 0 && ::fchmod(out, 0700) == 0;
+  std::array<char, 64 * 1024> buf{};
+  for (ssize_t n = 0; ok && (n = ::read(in, buf.data(), buf.size())) != 0;) {
+    ok = n > 0 && ::write(out, buf.data(), static_cast<std::size_t>(n)) == n;
+  }
+  ok = ok && ::fsync(out) == 0;
+  const int e = errno;
+  if (in >= 0) ::close(in);
+  if (out >= 0 && ::close(out) != 0) ok = false;
+  if (ok && ::rename(tmp.c_str(), to.c_str()) == 0) return true;
+  ::unlink(tmp.c_str());
+  error = fmt::format("{}: {}", to, std::error_code(e, std::generic_category()).message());
+  return false;
 }
 
 // The one line that says why a step of the build failed: our port check's, Verilator's first
@@ -219,8 +382,9 @@ bool valid_define(const std::string& d) {
 class FileLock {
  public:
   explicit FileLock(const std::string& path)
-      : fd_(::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644)) {
+      : fd_(::open(path.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0600)) {
     if (fd_ >= 0) {
+      ::fchmod(fd_, 0600);
       while (::flock(fd_, LOCK_EX) != 0 && errno == EINTR) {
       }
     }
@@ -256,49 +420,36 @@ bool build_rtl_model(const RtlBuild& b, std::string& model_path, std::string& er
     return false;
   }
   for (const std::string& d : b.defines) {
-    if (!valid_define(d)) {
-      error = fmt::format("--define {}: not NAME or NAME=VALUE", d);
+    if (!valid_define(d) || !cmake_list_item(d)) {
+      error = fmt::format("--define {}: not NAME or NAME=VALUE{}", shown(d),
+                          valid_define(d) ? " (no ';' or control character in VALUE)" : "");
       return false;
     }
   }
-  Fnv key;
-  key.add("dpc31emu rtl model 1");
   std::vector<std::string> sources;
-  std::vector<fs::path> dirs;
   std::error_code ec;
   for (const std::string& s : b.sources) {
-    std::string text;
     if (!fs::exists(s, ec)) {
       error = fmt::format("--rtl {}: no such file", s);
       return false;
     }
-    if (!fs::is_regular_file(s, ec) || !slurp(s, text)) {
+    if (!fs::is_regular_file(s, ec)) {
       error = fmt::format("--rtl {}: not a readable regular file", s);
       return false;
     }
-    const fs::path abs = fs::absolute(s, ec).lexically_normal();
-    sources.push_back(abs.string());
-    key.add(abs.filename().string());
-    key.add(text);
-    if (std::find(dirs.begin(), dirs.end(), abs.parent_path()) == dirs.end())
-      dirs.push_back(abs.parent_path());
-  }
-  // The files an `include can reach: every Verilog file in the sources' directories (the -I
-  // directories), by name and content, in name order.
-  for (const fs::path& d : dirs) {
-    std::vector<fs::path> files;
-    for (const auto& e : fs::directory_iterator(d, ec)) {
-      const std::string ext = e.path().extension().string();
-      if (e.is_regular_file(ec) && (ext == ".v" || ext == ".vh" || ext == ".sv" || ext == ".svh"))
-        files.push_back(e.path());
+    if (fs::file_size(s, ec) > kMaxSourceBytes) {
+      error = fmt::format("--rtl {}: larger than {} MiB", s, kMaxSourceBytes >> 20);
+      return false;
     }
-    std::sort(files.begin(), files.end());
-    for (const fs::path& f : files) {
-      std::string text;
-      slurp(f, text);
-      key.add(f.filename().string());
-      key.add(text);
+    const std::string abs = fs::absolute(s, ec).lexically_normal().string();
+    // The names reach CMake as the value of a -D option (data), and a list of them: ';' would
+    // split one, a control character would break CMakeCache.txt's lines.
+    if (!cmake_list_item(abs)) {
+      error = fmt::format("--rtl {}: a file name with ';' or a control character cannot be built",
+                          shown(s));
+      return false;
     }
+    sources.push_back(abs);
   }
   const std::string verilator = on_path("verilator");
   const std::string cmake = on_path("cmake");
@@ -308,11 +459,18 @@ bool build_rtl_model(const RtlBuild& b, std::string& model_path, std::string& er
     return false;
   }
   const Support support = support_files();
+  if (!support.error.empty()) {
+    error = support.error;
+    return false;
+  }
+  Fnv key;
+  key.add("dpc31emu rtl model 2");
   for (const std::string& f : {support.cmake_file, support.adapter_dir + "/rtl_model_entry.cpp",
                                support.adapter_dir + "/verilated_blocks.hpp",
                                support.adapter_dir + "/dpc31_rtl_model.h"}) {
     std::string text;
-    if (!slurp(f, text)) {
+    std::string why;
+    if (!read_text_file(f, kMaxSourceBytes, "adapter file", text, why)) {
       error = fmt::format("{}: missing (a broken installation of dpc31emu?)", f);
       return false;
     }
@@ -323,32 +481,46 @@ bool build_rtl_model(const RtlBuild& b, std::string& model_path, std::string& er
     error = "RTL cache: no home directory; set DPC31EMU_RTL_CACHE to a private directory";
     return false;
   }
-  fs::create_directories(cache, ec);
-  if (ec) {
-    error = fmt::format("RTL cache {}: {}", cache, ec.message());
-    return false;
-  }
-  if (const std::string why = cache_not_private(cache); !why.empty()) {
+  if (const std::string why = private_cache(cache); !why.empty()) {
     error = fmt::format(
         "RTL cache {}: {}; the models in it are loaded into this process, so it "
         "must be yours alone (set DPC31EMU_RTL_CACHE to a private directory)",
         cache, why);
     return false;
   }
+  const Umask private_files(077);  // the children's files too (Verilator, CMake, the compiler)
   // Verilator's version (its banner) is part of the key: a new Verilator, a new model.
   std::string version;
-  {
-    const std::string out = fmt::format("{}/verilator-version.{}", cache, ::getpid());
-    const child::Result r =
-        child::run({"/bin/sh", "-c", "exec \"$0\" --version >&2", verilator}, out);
-    slurp(out, version);
-    fs::remove(out, ec);
-    if (r.exit_code != 0) {
-      error = fmt::format("{} --version failed", verilator);
+  if (!run_verilator(verilator, {"--version"}, cache, version)) {
+    error = fmt::format("{} --version failed", verilator);
+    return false;
+  }
+  key.add(version);
+  // The key is what Verilator reads: the named sources and every file they `include, as its
+  // preprocessor puts them together (bounded), with the defines applied.
+  std::vector<std::string> pp_args = {"-E"};
+  for (const std::string& s : sources) {
+    pp_args.push_back("-I" + fs::path(s).parent_path().string());
+  }
+  for (const std::string& d : b.defines) pp_args.push_back("-D" + d);
+  pp_args.insert(pp_args.end(), sources.begin(), sources.end());
+  std::string pre;
+  if (!run_verilator(verilator, pp_args, cache, pre)) {
+    const std::string why = why_failed(pre);
+    error = !why.empty() ? why : "Verilator's preprocessor failed on the --rtl sources";
+    return false;
+  }
+  if (!b.host_code) {
+    if (const std::string found = host_code(pre); !found.empty()) {
+      error = found +
+              ": it would run on this machine inside dpc31 with your rights; refused "
+              "unless --rtl-host-code is given (docs/golden-model.md)";
       return false;
     }
   }
-  key.add(version);
+  key.add(pre);
+  key.add(b.host_code ? "host code allowed" : "");
+  for (const std::string& s : sources) key.add(fs::path(s).filename().string());
   key.add(b.top);
   key.add(std::string(profile_desc(b.profile).name));
   for (const std::string& d : b.defines) key.add(d);
@@ -363,29 +535,32 @@ bool build_rtl_model(const RtlBuild& b, std::string& model_path, std::string& er
   }
   if (fs::exists(model_path, ec)) return true;  // built before (or by a shard that came first)
 
-  // A fresh build: a CMake project of one call to dpc31emu_verilate_model().
+  // A fresh build: a CMake project of one call to dpc31emu_verilate_model(). Its text is ours
+  // alone: every name the user gave (sources, defines, the cache's path) reaches CMake as the
+  // value of a -D option, data that is never read as CMake code.
   fs::remove_all(dir, ec);
-  fs::create_directories(dir + "/project", ec);
-  const auto quoted = [](const std::string& s) { return "[==[" + s + "]==]"; };
-  std::string list = "cmake_minimum_required(VERSION 3.16)\nproject(dpc31emu_rtl_model CXX)\n";
-  // Through ccache when there is one, paths relative to the entry: a model built again in
-  // another entry (a new Verilator, other defines) reuses the compiles that did not change.
-  list += fmt::format("set(entry {})\nfind_program(ccache_program ccache)\nif(ccache_program)\n",
-                      quoted(dir));
-  list +=
-      "  set(CMAKE_CXX_COMPILER_LAUNCHER ${CMAKE_COMMAND} -E env \"CCACHE_BASEDIR=${entry}\" "
-      "CCACHE_NOHASHDIR=1 ${ccache_program})\nendif()\n";
-  list += fmt::format("set(DPC31EMU_RTL_ADAPTER_DIR {})\ninclude({})\n",
-                      quoted(support.adapter_dir), quoted(support.cmake_file));
-  list += "dpc31emu_verilate_model(TARGET model TOP " + b.top + " PROFILE " +
-          std::string(profile_desc(b.profile).name) + "\n  SOURCES";
-  for (const std::string& s : sources) list += " " + quoted(s);
-  if (!b.defines.empty()) {
-    list += "\n  DEFINES";
-    for (const std::string& d : b.defines) list += " " + quoted(d);
-  }
-  list += ")\n";
+  if (!private_dir(dir, error) || !private_dir(dir + "/project", error)) return false;
+  const std::string list = R"(cmake_minimum_required(VERSION 3.16)
+project(dpc31emu_rtl_model CXX)
+# Through ccache when there is one, paths relative to the entry: a model built again in another
+# entry (a new Verilator, other defines) reuses the compiles that did not change.
+get_filename_component(entry "${CMAKE_CURRENT_LIST_DIR}" DIRECTORY)
+find_program(ccache_program ccache)
+if(ccache_program)
+  set(CMAKE_CXX_COMPILER_LAUNCHER ${CMAKE_COMMAND} -E env "CCACHE_BASEDIR=${entry}"
+    CCACHE_NOHASHDIR=1 ${ccache_program})
+endif()
+set(DPC31EMU_RTL_ADAPTER_DIR "${DPC31_RTL_ADAPTER}")
+include("${DPC31_RTL_CMAKE}")
+dpc31emu_verilate_model(TARGET model TOP "${DPC31_RTL_TOP}" PROFILE "${DPC31_RTL_PROFILE}"
+  SOURCES ${DPC31_RTL_SOURCES} DEFINES ${DPC31_RTL_DEFINES})
+)";
   if (!outfile::write_file(dir + "/project/CMakeLists.txt", list, error)) return false;
+  const auto joined = [](const std::vector<std::string>& v) {
+    std::string out;
+    for (const std::string& x : v) out += (out.empty() ? "" : ";") + x;
+    return out;
+  };
   if (progress != nullptr) {
     fmt::print(progress, "dpc31 cosim: building the RTL model (first use of these sources) in {}\n",
                dir);
@@ -394,7 +569,12 @@ bool build_rtl_model(const RtlBuild& b, std::string& model_path, std::string& er
   // Verilator runs at the configure step: its errors are in configure.log.
   const std::string configure_log = dir + "/configure.log";
   const child::Result conf = child::run(
-      {cmake, "-S", dir + "/project", "-B", dir + "/build", "-DCMAKE_BUILD_TYPE=RelWithDebInfo"},
+      {cmake, "-S", dir + "/project", "-B", dir + "/build", "-DCMAKE_BUILD_TYPE=RelWithDebInfo",
+       "-DDPC31_RTL_ADAPTER:STRING=" + support.adapter_dir,
+       "-DDPC31_RTL_CMAKE:STRING=" + support.cmake_file, "-DDPC31_RTL_TOP:STRING=" + b.top,
+       "-DDPC31_RTL_PROFILE:STRING=" + std::string(profile_desc(b.profile).name),
+       "-DDPC31_RTL_SOURCES:STRING=" + joined(sources),
+       "-DDPC31_RTL_DEFINES:STRING=" + joined(b.defines)},
       configure_log);
   if (conf.exit_code != 0) {
     const std::string why = why_failed(read_log(configure_log));
@@ -415,15 +595,10 @@ bool build_rtl_model(const RtlBuild& b, std::string& model_path, std::string& er
                               why.empty() ? "see the log" : why, build_log);
     return false;
   }
-  // model.so appears whole or not at all: it marks a finished build.
-  fs::copy_file(built, model_path + ".tmp", fs::copy_options::overwrite_existing, ec);
-  if (!ec) fs::rename(model_path + ".tmp", model_path, ec);
-  if (ec) {
-    error = fmt::format("{}: {}", model_path, ec.message());
-    return false;
-  }
+  // model.so appears whole or not at all: it marks a finished build. Mode 0700 whatever the umask.
+  if (!copy_private(built, model_path, error)) return false;
   fs::remove_all(dir + "/build", ec);  // the objects are in ccache, if anywhere
   return true;
-}  // namespace
+}
 
 }  // namespace dpc31::cosim

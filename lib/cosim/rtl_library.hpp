@@ -48,6 +48,9 @@ struct RtlBuild {
   std::string top;                   // the top module
   std::vector<std::string> defines;  // NAME or NAME=VALUE (Verilator -D)
   Profile profile = Profile::dpc31;  // -GPROFILE=
+  // $system, $c, `systemc_* and DPI imports run code of the host inside dpc31: refused unless
+  // asked for (--rtl-host-code).
+  bool host_code = false;
 };
 
 // $DPC31EMU_RTL_CACHE, else $XDG_CACHE_HOME/dpc31emu/rtl, else <home>/.cache/dpc31emu/rtl ($HOME,
@@ -56,8 +59,10 @@ struct RtlBuild {
 std::string rtl_cache_dir();
 
 // Verilates and compiles the sources into <rtl_cache_dir()>/<key>/model.so, unless that is there
-// already (key: a hash of the sources and the Verilog files next to them, the top, defines,
-// profile, the Verilator version and the adapter's own files). `progress` gets one line when a
+// already (key: a hash of what Verilator's preprocessor makes of the named sources, each bounded,
+// and the files they `include; their names, the top, defines, profile, the Verilator version and
+// the adapter's own files). The cache and every directory above it must be ours alone; what is
+// made in it is mode 0700/0600 whatever the umask. `progress` gets one line when a
 // build starts (nullptr: silent). False with one line in `error`: a missing file, Verilator's own
 // first error, a port missing or of the wrong width, a failed C++ build.
 bool build_rtl_model(const RtlBuild& b, std::string& model_path, std::string& error,

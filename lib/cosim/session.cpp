@@ -64,6 +64,10 @@ bool record_session(const std::string& scenario_path, Session& out, std::string&
     error = err.text();
     return false;
   }
+  if (!bind_plugin(sc, err)) {  // the plug-in it names, loaded only now that it has parsed
+    error = err.text();
+    return false;
+  }
   out = Session{};
   out.options = {sc.chip.profile, sc.chip.bus, sc.chip.variant};
   ScenarioHooks hooks;

@@ -383,7 +383,14 @@ CLI::App* add_subcommand(CLI::App& app, Options& o) {
 
 int run_cli(const Options& o, std::FILE* out, std::FILE* err) {
   // The JSON report appears whole or not at all, and a bad path fails before the run
-  // (docs/bad-input.md).
+  // (docs/bad-input.md). Never over the plug-in it runs (docs/security.md).
+  if (const std::string same = outfile::distinct(
+          {{"--firmware", is_plugin_path(o.firmware) ? o.firmware : std::string()}},
+          {{"--json", o.json}});
+      !same.empty()) {
+    fmt::print(err, "dpc31 soak: {}\n", same);
+    return 2;
+  }
   outfile::OutFile json_out;
   if (!o.json.empty() && !json_out.open(o.json)) {
     fmt::print(err, "dpc31 soak: {}\n", json_out.error());

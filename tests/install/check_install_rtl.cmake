@@ -4,7 +4,11 @@
 # it (--define MUTANTS --mutant NO_C_SWAP) is caught (exit 1), both built from the prefix's
 # adapter (checked in the generated project), and examples/rtl_model builds a model with
 # find_package(dpc31emu) and dpc31emu_verilate_model() that `dpc31 cosim --rtl-model` runs clean.
-#   cmake -DBUILD_DIR=... -DWORK_DIR=... -DEXAMPLE_DIR=... -DCXX_COMPILER=... -P check_install_rtl.cmake
+# The prefix is moved after the install (issue 29: relocatable, never reading the build tree):
+# the installed dpc31, stripped as the Debian package is, holds no path of the source or build
+# tree, and everything above runs from the moved prefix.
+#   cmake -DBUILD_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... -DEXAMPLE_DIR=... -DCXX_COMPILER=...
+#     -P check_install_rtl.cmake
 set(prefix ${WORK_DIR}/prefix)
 set(cache ${WORK_DIR}/cache)
 file(REMOVE_RECURSE ${WORK_DIR})
@@ -13,7 +17,15 @@ function(run)
   execute_process(COMMAND ${ARGN} COMMAND_ECHO STDOUT COMMAND_ERROR_IS_FATAL ANY)
 endfunction()
 
-run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix})
+run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${WORK_DIR}/installed-here --strip)
+file(RENAME ${WORK_DIR}/installed-here ${prefix})
+foreach(tree ${SOURCE_DIR} ${BUILD_DIR})
+  file(STRINGS ${prefix}/bin/dpc31 hits REGEX "${tree}")
+  if(hits)
+    list(GET hits 0 hit)
+    message(FATAL_ERROR "the installed dpc31 names ${tree}: ${hit}")
+  endif()
+endforeach()
 set(share ${prefix}/share/dpc31emu)
 foreach(f cosim/dpc31emu_rtl.cmake cosim/rtl_model_entry.cpp cosim/verilated_blocks.hpp
     cosim/dpc31_rtl_model.h rtl/dpc31_blocks.v rtl/dpc31_blocks_actions.vh
@@ -36,11 +48,13 @@ list(LENGTH projects n)
 if(NOT n EQUAL 2)
   message(FATAL_ERROR "${n} models in the cache, want 2")
 endif()
+# The generated projects name no path: the installed function's comes as a -D value (data).
 foreach(p IN LISTS projects)
   file(READ ${p} text)
-  string(FIND "${text}" "include([==[${share}/cosim/dpc31emu_rtl.cmake]==])" at)
-  if(at LESS 0)
-    message(FATAL_ERROR "${p} does not use the installed ${share}/cosim/dpc31emu_rtl.cmake")
+  string(FIND "${text}" "include(\"\${DPC31_RTL_CMAKE}\")" at)
+  string(FIND "${text}" "${WORK_DIR}" slash)
+  if(at LESS 0 OR NOT slash LESS 0)
+    message(FATAL_ERROR "${p}: not the fixed project text")
   endif()
 endforeach()
 

@@ -372,7 +372,9 @@ CLI::App* add_bench_subcommand(CLI::App& app, BenchArgs& a) {
       ->check(CLI::ExistingDirectory);
   cmd->add_option("--build", a.build_source,
                   "row h: time a fresh ./setup.sh build of this source tree (about 5 minutes on "
-                  "two cores; every package must be installed)")
+                  "two cores; every package must be installed). This runs SOURCE_DIR/setup.sh, "
+                  "a shell script, with your rights: as root it apt-get installs any package it "
+                  "lists that is missing. Name only a tree you trust")
       ->check(CLI::ExistingDirectory &
               CLI::Validator(
                   [](const std::string& d) {

@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <poll.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -16,6 +17,7 @@
 #include "../bridge/engine.hpp"
 #include "../bridge/pty.hpp"
 #include "dpc31/uart.hpp"
+#include "outfile.hpp"
 
 namespace dpc31::cli {
 
@@ -79,6 +81,14 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
     return bad(
         fmt::format("--firmware is required ({} or a plug-in path)", builtin_firmware_names()));
   }
+  // Truncating the mapped plug-in would end the process with SIGBUS.
+  if (const std::string same = outfile::distinct(
+          {{"--firmware", is_plugin_path(o.firmware) ? o.firmware : std::string()},
+           {"--pty", o.pty}},
+          {{"--log", o.log}});
+      !same.empty()) {
+    return bad(same);
+  }
   try {
     c.setup.firmware = &find_firmware(o.firmware);
   } catch (const FirmwareError& e) {
@@ -139,17 +149,22 @@ std::string header(const Checked& c, const BridgeOptions& o, const std::string& 
 class Log {
  public:
   explicit Log(std::FILE* f) : f_(f) {}
+  // A write that fails (a full disk) is kept: the bridge stops on it with exit 2.
   void line(const std::string& text) {
-    std::fputs(text.c_str(), f_);
-    std::fputc('\n', f_);
-    std::fflush(f_);
+    if (errno_ != 0) return;
+    errno = 0;
+    if (std::fputs(text.c_str(), f_) < 0 || std::fputc('\n', f_) == EOF || std::fflush(f_) != 0) {
+      errno_ = errno != 0 ? errno : EIO;
+    }
   }
+  [[nodiscard]] int failed() const { return errno_; }
   void event(std::uint64_t cycle, std::string_view tag, const std::string& text) {
     line(fmt::format("{:>12} {:<5} {}", cycle, tag, text));
   }
 
  private:
   std::FILE* f_;
+  int errno_ = 0;
 };
 
 class SignalGuard {
@@ -203,6 +218,7 @@ class Bridge {
     Clock::time_point last_lag_report = anchor_wall_ - std::chrono::hours(1);
     engine_->note("waiting for a client");
     while (g_signal == 0) {
+      if (log_.failed() != 0) return 2;
       const Clock::time_point now = Clock::now();
       Clock::duration wait = present_ ? kTick : kIdleTick;
       if (engine_->partial()) {
@@ -406,11 +422,28 @@ int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
   std::FILE* log_file = out;
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> owned(nullptr, std::fclose);
   if (!o.log.empty()) {
+    const auto refuse = [&](const std::string& why) {
+      bridge::remove_link(o.pty, pty->slave_name());
+      fmt::print(err, "dpc31 bridge: {}\n", why);
+      return 2;
+    };
+    if (std::string foreign = outfile::foreign_symlink(o.log); !foreign.empty()) {
+      return refuse(foreign);
+    }
     owned.reset(std::fopen(o.log.c_str(), "w"));
     if (!owned) {
-      bridge::remove_link(o.pty, pty->slave_name());
-      fmt::print(err, "dpc31 bridge: cannot write the log {}: {}\n", o.log, std::strerror(errno));
-      return 2;
+      return refuse(fmt::format("cannot write the log {}: {}", o.log, std::strerror(errno)));
+    }
+    // The log into the bridge's own pty would be read back as telegrams by the master side.
+    struct stat log_st {};
+    struct stat pty_st {};
+    if (::fstat(::fileno(owned.get()), &log_st) == 0 &&
+        ::stat(pty->slave_name().c_str(), &pty_st) == 0 && log_st.st_dev == pty_st.st_dev &&
+        log_st.st_ino == pty_st.st_ino) {
+      return refuse(
+          fmt::format("--log {}: is the bridge's own pseudo-terminal {}: the log would "
+                      "feed back into it",
+                      o.log, pty->slave_name()));
     }
     log_file = owned.get();
   }
@@ -430,6 +463,12 @@ int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
     return 2;
   }
   bridge::remove_link(o.pty, pty->slave_name());
+  if (log.failed() != 0) {
+    fmt::print(err, "dpc31 bridge: cannot write the log {}: {}\n",
+               o.log.empty() ? std::string("to the standard output") : o.log,
+               std::strerror(log.failed()));
+    return 2;
+  }
   if (rc != 0) fmt::print(err, "dpc31 bridge: stopped on an error (see the log)\n");
   return rc;
 }

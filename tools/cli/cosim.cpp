@@ -91,6 +91,7 @@ bool load_rtl(const CosimOptions& o, cosim::DutOptions& dut, std::string& id) {
     fmt::print(stderr, "dpc31 cosim: {}\n", why);
     return false;
   };
+  if (o.rtl_sources.empty() && o.rtl_host_code) return fail("--rtl-host-code is for --rtl");
   if (o.rtl_sources.empty() && o.rtl_model.empty()) {
     if (!o.top.empty() || !o.defines.empty())
       return fail(fmt::format("--{} is for --rtl", o.top.empty() ? "define" : "top"));
@@ -104,7 +105,8 @@ bool load_rtl(const CosimOptions& o, cosim::DutOptions& dut, std::string& id) {
   // stderr is the report alone.
   std::FILE* progress = o.quiet || isatty(STDERR_FILENO) == 0 ? nullptr : stderr;
   if (!o.rtl_sources.empty() &&
-      !build_rtl_model({o.rtl_sources, o.top, o.defines, o.profile}, path, error, progress)) {
+      !build_rtl_model({o.rtl_sources, o.top, o.defines, o.profile, o.rtl_host_code}, path, error,
+                       progress)) {
     return fail(error);
   }
   if (o.rtl_sources.empty() && (!o.top.empty() || !o.defines.empty()))
@@ -211,6 +213,13 @@ int run_session_mode(const CosimOptions& o) {
 
 int run_cosim(const CosimOptions& o) {
   using namespace dpc31::cosim;
+  std::vector<outfile::Named> inputs = {
+      {"--replay", o.replay}, {"--session", o.session}, {"--rtl-model", o.rtl_model}};
+  for (const std::string& v : o.rtl_sources) inputs.push_back({"--rtl", v});
+  if (const std::string same = outfile::distinct(inputs, {{"--junit", o.junit}}); !same.empty()) {
+    fmt::print(stderr, "dpc31 cosim: {}\n", same);
+    return 2;
+  }
   if (!o.session.empty()) return run_session_mode(o);
   // Opened before the seeds run: a bad path is one line up front, not after minutes.
   outfile::OutFile junit_out;
@@ -353,6 +362,11 @@ int run_cosim_merge(const MergeOptions& o) {
     fmt::print(stderr, "dpc31 cosim merge: {}\n", why);
     return 2;
   };
+  std::vector<outfile::Named> inputs;
+  for (const std::string& f : o.inputs) inputs.push_back({"the summary", f});
+  if (const std::string same = outfile::distinct(inputs, {{"--junit", o.junit}}); !same.empty()) {
+    return fail(same);
+  }
   outfile::OutFile junit_out;
   if (!o.junit.empty() && !junit_out.open(o.junit)) return fail(junit_out.error());
   struct Part {

@@ -26,6 +26,7 @@ struct CosimOptions {
   std::string top;
   std::vector<std::string> defines;
   std::string rtl_model;
+  bool rtl_host_code = false;  // --rtl-host-code: $system, $c, ... in the --rtl sources
   std::string junit;
   std::string vcd_dir;
   std::string out_dir;   // where shrunk traces go

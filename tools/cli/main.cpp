@@ -189,6 +189,10 @@ int main(int argc, char** argv) {
   cosim->add_option("--top", cos.top, "with --rtl: the top module");
   cosim->add_option("--define", cos.defines, "with --rtl: a Verilog define NAME or NAME=VALUE")
       ->take_all();
+  cosim->add_flag("--rtl-host-code", cos.rtl_host_code,
+                  "with --rtl: build sources that use $system, $c, `systemc_ or DPI imports, "
+                  "which run shell commands and C/C++ inside dpc31 with your rights (refused "
+                  "without it)");
   cosim->add_option("--rtl-model", cos.rtl_model,
                     "a model built by dpc31emu_verilate_model() (a .so) in place of the built-in");
   // dpc31 cosim merge: the shards' JSON summaries into the whole run's (docs/regression.md).

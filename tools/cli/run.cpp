@@ -64,14 +64,10 @@ std::vector<std::string> leading_comments(const std::string& path) {
 // (--vcd / --fst) and a telegram capture (--pcap). Nothing is written unless the run completes.
 int run_with_outputs(const RunOptions& opt, const LineSink& walk, const LineSink& errors,
                      Scenario& s, ScenarioOutcome& o, std::FILE* err) {
-  const std::string same =
-      outfile::distinct({{"the scenario", opt.scenario}}, {{"--json", opt.json},
-                                                           {"--record", opt.record},
-                                                           {"--vcd", opt.vcd},
-                                                           {"--fst", opt.fst},
-                                                           {"--la-vcd", opt.la_vcd},
-                                                           {"--pcap", opt.pcap},
-                                                           {"--gtkw", opt.gtkw}});
+  const std::vector<outfile::Named> outputs = {
+      {"--json", opt.json}, {"--record", opt.record}, {"--vcd", opt.vcd},   {"--fst", opt.fst},
+      {"--la-vcd", opt.la_vcd}, {"--pcap", opt.pcap}, {"--gtkw", opt.gtkw}};
+  const std::string same = outfile::distinct({{"the scenario", opt.scenario}}, outputs);
   if (!same.empty()) {
     fmt::print(err, "dpc31 run: {}\n", same);
     return 2;
@@ -79,6 +75,13 @@ int run_with_outputs(const RunOptions& opt, const LineSink& walk, const LineSink
   ScenarioError perr;
   if (!load_scenario(opt.scenario, s, perr)) {
     errors(perr.text());
+    return 2;
+  }
+  if (const std::string plugin_same =
+          plugin_pending(s) ? outfile::distinct({{"the firmware plug-in", s.firmware}}, outputs)
+                            : std::string();
+      !plugin_same.empty()) {
+    fmt::print(err, "dpc31 run: {}\n", plugin_same);
     return 2;
   }
   s.chip.engine = opt.engine;
@@ -180,11 +183,18 @@ int run_parsed_scenario(const RunOptions& opt, const Scenario& s, const LineSink
     if (inner) inner(chip);
     end_cycle = chip.cycle();
   };
+  // The plug-in a scenario names is loaded now, after every other check (docs/security.md).
+  Scenario bound = s;
+  ScenarioError berr;
+  if (!bind_plugin(bound, berr)) {
+    errors(berr.text());
+    return 2;
+  }
   try {
     // A firmware stuck in a loop without a bus access cannot be stopped from this thread: the
     // guard ends the process with one line.
-    if (!s.firmware.empty()) board::guard_hangs("dpc31 run", find_firmware(s.firmware).name);
-    o = run_scenario(s, walk, errors, hooks);
+    if (bound.firmware_desc != nullptr) board::guard_hangs("dpc31 run", bound.firmware_desc->name);
+    o = run_scenario(bound, walk, errors, hooks);
   } catch (const FirmwareError& e) {
     fmt::print(err, "dpc31 run: {}: {}\n", s.file, e.what());
     return 2;

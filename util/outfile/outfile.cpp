@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <array>
 #include <cerrno>
 #include <cstdlib>
 #include <filesystem>
@@ -47,6 +48,42 @@ bool replace(const std::string& tmp, const std::string& path, std::string& error
   return false;
 }
 
+std::string foreign_symlink(const std::string& path) {
+  // Walked as the kernel resolves it: component by component, a link's target spliced in.
+  std::string done = path.starts_with('/') ? "" : ".";
+  std::string rest = path;
+  for (int links = 0; !rest.empty();) {
+    const std::size_t slash = rest.find('/');
+    const std::string name = rest.substr(0, slash);
+    rest = slash == std::string::npos ? "" : rest.substr(slash + 1);
+    if (name.empty() || name == ".") continue;
+    const std::string dir = done.empty() ? "/" : done;
+    const std::string here = done + "/" + name;
+    struct stat lst {};
+    if (::lstat(here.c_str(), &lst) != 0) return {};  // nothing further to follow
+    if (!S_ISLNK(lst.st_mode)) {
+      done = here;
+      continue;
+    }
+    struct stat dst {};
+    if (::stat(dir.c_str(), &dst) == 0 && (dst.st_mode & S_ISVTX) != 0 &&
+        (dst.st_mode & S_IWOTH) != 0 && lst.st_uid != ::geteuid() && lst.st_uid != dst.st_uid) {
+      return fmt::format(
+          "{}: cannot write: {} is a symbolic link of uid {} in the sticky directory {}, which "
+          "belongs to neither you nor that directory's owner (not followed: protected symlinks)",
+          path, here, lst.st_uid, dir);
+    }
+    if (++links > 40) return {};  // a loop: open() reports it
+    std::array<char, 4096> buf{};
+    const ssize_t n = ::readlink(here.c_str(), buf.data(), buf.size());
+    if (n <= 0) return {};
+    const std::string target(buf.data(), static_cast<std::size_t>(n));
+    if (target.starts_with('/')) done.clear();
+    rest = rest.empty() ? target : target + "/" + rest;
+  }
+  return {};
+}
+
 OutFile::~OutFile() { discard(); }
 
 bool OutFile::fail(std::string msg) {
@@ -61,6 +98,7 @@ bool OutFile::open(const std::string& path) {
   target_ = path;
   direct_ = false;
   int fd = -1;
+  if (std::string foreign = foreign_symlink(path); !foreign.empty()) return fail(foreign);
   struct stat st {};
   struct stat lst {};
   if (::stat(path.c_str(), &st) != 0 && ::lstat(path.c_str(), &lst) == 0 && S_ISLNK(lst.st_mode)) {

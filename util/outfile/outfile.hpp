@@ -24,6 +24,13 @@ std::string create_temp(const std::string& path,
 // rename(tmp, path); on failure the temporary is removed and `error` says why.
 bool replace(const std::string& tmp, const std::string& path, std::string& error);
 
+// The kernel's protected_symlinks rule, applied whatever the machine's setting (sysctl
+// fs.protected_symlinks): a symbolic link on the way to `path` (any component) is not followed
+// when it sits in a sticky directory writable by others (/tmp) and belongs neither to us (the
+// effective uid) nor to that directory's owner: another user may have put it there to make us
+// write where they chose. "" or one line naming the link and its owner.
+std::string foreign_symlink(const std::string& path);
+
 class OutFile {
  public:
   OutFile() = default;
@@ -32,7 +39,8 @@ class OutFile {
   OutFile& operator=(const OutFile&) = delete;
 
   // Creates the temporary. False with error() if `path` is a directory, a symbolic link to
-  // nothing, or the temporary cannot be created; nothing is touched then. A file still open is
+  // nothing, another user's link in a sticky directory (foreign_symlink), or the temporary
+  // cannot be created; nothing is touched then. A file still open is
   // discarded first. A `path` that is a device or a FIFO (/dev/stdout, /dev/null) is written in
   // place, never removed or replaced; a symlink to a file is followed: the link stays, the file it
   // names is replaced. The temporary is removed if a signal ends the process (cleanup.hpp).

@@ -1,0 +1,70 @@
+// Scenario files from disk, and the firmware plug-in a scenario names: loaded only after the whole
+// file has parsed, and only when no other user could have changed it or the scenario
+// (docs/security.md, "Code a command runs").
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "firmware_host.hpp"
+#include "scenario.hpp"
+#include "textfile.hpp"
+#include "trust.hpp"
+
+namespace dpc31 {
+
+namespace {
+
+constexpr std::size_t kMaxFileBytes = 16u << 20;
+
+}  // namespace
+
+bool load_scenario(const std::string& path, Scenario& out, ScenarioError& err) {
+  err = ScenarioError{path, 0, {}};
+  // Opened once: whether another user could have changed it is judged on what is read (it
+  // matters when it names a plug-in: bind_plugin). A pipe is the piping user's own.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  std::string untrusted;
+  struct stat st {};
+  if (fd >= 0 && ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode)) untrusted = untrusted_code(fd, path);
+  std::string text;
+  const bool read = read_text_file(fd >= 0 ? fmt::format("/proc/self/fd/{}", fd) : path,
+                                   kMaxFileBytes, "scenario", text, err.message);
+  if (fd >= 0) ::close(fd);
+  if (!read) return false;
+  if ((err.line = cut_off_line(text, err.message)) != 0) return false;
+  if (!parse_scenario(text, path, out, err)) return false;
+  out.untrusted = untrusted;
+  return true;
+}
+
+bool plugin_pending(const Scenario& s) { return !s.firmware.empty() && s.firmware_desc == nullptr; }
+
+bool bind_plugin(Scenario& s, ScenarioError& err) {
+  if (!plugin_pending(s)) return true;
+  if (!s.untrusted.empty()) {
+    err = ScenarioError{s.file, s.plugin_line,
+                        "firmware plug-in refused: the scenario names it, and another user could "
+                        "have changed the scenario: " +
+                            s.untrusted};
+    return false;
+  }
+  const dpc31_firmware* fw = nullptr;
+  try {
+    fw = &find_firmware(s.firmware);
+  } catch (const FirmwareError& e) {
+    err = ScenarioError{s.file, s.plugin_line, e.what()};
+    return false;
+  }
+  Scenario bound;
+  if (!parse_scenario(s.text, s.file, fw, bound, err)) return false;
+  // What the descriptor decides: the slave's defaults (and the master's view of them in the
+  // steps), and the names of its ports and inputs, checked by this second parse.
+  s.user = std::move(bound.user);
+  s.steps = std::move(bound.steps);
+  s.firmware_desc = fw;
+  s.text.clear();
+  return true;
+}
+
+}  // namespace dpc31
