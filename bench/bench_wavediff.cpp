@@ -132,9 +132,9 @@ void generate_and_compare(benchmark::State& st, const fs::path& dir, MakePair ma
 // ends, also when a signal ends this process (dpc31 bench passes its own on and waits for us).
 void in_own_dir(benchmark::State& st, MakePair make) {
   const std::string& base = dpc31::bench::options().wavediff_dir;
-  std::string dir = ((base.empty() ? fs::temp_directory_path() : fs::path(base)) /
-                     "dpc31-bench-wavediff-XXXXXX")
-                        .string();
+  std::string dir =
+      ((base.empty() ? fs::temp_directory_path() : fs::path(base)) / "dpc31-bench-wavediff-XXXXXX")
+          .string();
   if (::mkdtemp(dir.data()) == nullptr) {
     st.SkipWithError(("cannot create " + dir + ": " + std::strerror(errno)).c_str());
     return;

@@ -115,11 +115,15 @@ TEST_F(BadInput, ASignalToBenchEndsItsChildAndRemovesTheFiles) {
                         << slurp((root_ / "io" / "err").string());
     ASSERT_EQ(::kill(pid, SIGTERM), 0);
     // dpc31 passes the signal on to its child's group; the child takes it once continued.
-    if (stopped != pid) EXPECT_TRUE(eventually([&] { return pending(stopped, SIGTERM); })) << stop;
+    if (stopped != pid) {
+      EXPECT_TRUE(eventually([&] { return pending(stopped, SIGTERM); })) << stop;
+    }
     ASSERT_EQ(::kill(stopped, SIGCONT), 0);
     expect_ended_by_sigterm(pid, stop);
     // No waiting: by the time dpc31 has ended, its child is gone and so are the files of both.
-    if (stopped != pid) EXPECT_EQ(proc_stat(stopped).state, 0) << stop << ": the child is left";
+    if (stopped != pid) {
+      EXPECT_EQ(proc_stat(stopped).state, 0) << stop << ": the child is left";
+    }
     EXPECT_EQ(listing(), std::vector<std::string>{})
         << stop << ": left " << ::testing::PrintToString(listing());
     if (stopped == pid) {
