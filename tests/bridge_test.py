@@ -91,6 +91,13 @@ class Bridge:
         with open(self.log, encoding="utf-8") as f:
             return f.read().splitlines()
 
+    def wait_for_log(self, text, limit_s):
+        """Until a line of the log holds `text` (an event of the chip), at most `limit_s`."""
+        deadline = time.monotonic() + limit_s
+        while not any(text in line for line in self.log_lines()):
+            check(time.monotonic() < deadline, f"the log has no '{text}' after {limit_s} s")
+            time.sleep(0.01)
+
 
 def startup_do4(m, wd=(0x64, 0x0A)):
     """FDL_Status until answered, Slave_Diag, Set_Prm, Chk_Cfg, Slave_Diag until ready."""
@@ -220,7 +227,10 @@ def do4_reparameterise_after_watchdog():
             startup_do4(m, wd=(0x0A, 0x0A))
             exchange_do4(m)
             m.close()
-            time.sleep(1.5)  # > 1 s: the DP watchdog expires while no client is there
+            # The DP watchdog (1 s of chip time) expires while no client is there: waited for in
+            # the log, not for a wall time (chip time falls behind the wall clock on a loaded
+            # machine; issue 35).
+            b.wait_for_log("DP watchdog expired", 30 * SCALE)
             m = Master(b.path, 19200, 0.5 * SCALE)
             # Baud_Control expired too (the chip searches the rate again): FDL_Status until
             # answered.
