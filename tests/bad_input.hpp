@@ -106,9 +106,9 @@ class BadInput : public ::testing::Test {
 };
 
 // Starts `argv` in `dir` without waiting: its standard output on /dev/null, its standard error on
-// `stderr_file` (or the test's).
+// `stderr_file` (or the test's); in a process group of its own if `own_group`.
 inline pid_t spawn(const std::vector<std::string>& argv, const std::string& dir,
-                   const std::string& stderr_file = {}) {
+                   const std::string& stderr_file = {}, bool own_group = false) {
   std::vector<char*> args;
   for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
@@ -120,8 +120,15 @@ inline pid_t spawn(const std::vector<std::string>& argv, const std::string& dir,
                                      0644);
   }
   posix_spawn_file_actions_addchdir_np(&fa, dir.c_str());
+  posix_spawnattr_t attr;
+  posix_spawnattr_init(&attr);
+  if (own_group) {
+    posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETPGROUP);
+    posix_spawnattr_setpgroup(&attr, 0);
+  }
   pid_t pid = -1;
-  EXPECT_EQ(posix_spawn(&pid, args[0], &fa, nullptr, args.data(), environ), 0);
+  EXPECT_EQ(posix_spawn(&pid, args[0], &fa, &attr, args.data(), environ), 0);
+  posix_spawnattr_destroy(&attr);
   posix_spawn_file_actions_destroy(&fa);
   return pid;
 }

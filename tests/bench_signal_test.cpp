@@ -56,7 +56,10 @@ bool pending(pid_t pid, int sig) {
 }
 
 // `dpc31 bench --quick --items ITEM [extra]` with TMPDIR = the work directory and DPC31_STOP_AT
-// = `stop`; its standard error in io/err.
+// = `stop`; its standard error in io/err. In a process group of its own: a stopped process in the
+// test runner's group would, were that group orphaned (a suite started under nohup), bring SIGHUP
+// to every test running beside it (POSIX: a newly orphaned group with a stopped member gets SIGHUP
+// and SIGCONT).
 pid_t start_bench(const fs::path& root, const std::string& item, const std::string& stop,
                   const std::vector<std::string>& extra = {}) {
   const std::string work = (root / "work").string();
@@ -64,11 +67,20 @@ pid_t start_bench(const fs::path& root, const std::string& item, const std::stri
   argv.insert(argv.end(), extra.begin(), extra.end());
   ::setenv("TMPDIR", work.c_str(), 1);
   if (!stop.empty()) ::setenv("DPC31_STOP_AT", stop.c_str(), 1);
-  const pid_t pid = spawn(argv, work, (root / "io" / "err").string());
+  const pid_t pid = spawn(argv, work, (root / "io" / "err").string(), true);
   ::unsetenv("TMPDIR");
   ::unsetenv("DPC31_STOP_AT");
   return pid;
 }
+
+// On the way out of a case, also a failed one: dpc31's group killed (its child, stopped or not,
+// dies with it: PR_SET_PDEATHSIG) and reaped, so that no stopped process outlives the test.
+struct KillOnExit {
+  pid_t pid;
+  ~KillOnExit() {
+    if (::kill(-pid, SIGKILL) == 0) ::waitpid(pid, nullptr, 0);
+  }
+};
 
 // dpc31 ended by SIGTERM.
 void expect_ended_by_sigterm(pid_t pid, const std::string& what) {
@@ -93,6 +105,7 @@ TEST_F(BadInput, ASignalToBenchEndsItsChildAndRemovesTheFiles) {
   for (const auto& [item, stop] : phases) {
     const pid_t pid = start_bench(root_, item, stop);
     ASSERT_GT(pid, 0);
+    const KillOnExit reap{pid};
     // The stopped process: dpc31 itself or its child dpc31_bench.
     pid_t stopped = -1;
     bool ended = false;
@@ -146,6 +159,7 @@ TEST_F(BadInput, ASignalToBenchWaitsForItsChildToCleanUp) {
   fs::permissions(fake, fs::perms::owner_all);
   const pid_t pid = start_bench(root_, "a", "", {"--bench", fake});
   ASSERT_GT(pid, 0);
+  const KillOnExit reap{pid};
   ASSERT_TRUE(eventually([&] { return fs::exists(held); }));
   ASSERT_EQ(::kill(pid, SIGTERM), 0);
   expect_ended_by_sigterm(pid, "stand-in");

@@ -1,6 +1,7 @@
 #include "bench.hpp"
 
 #include <fmt/core.h>
+#include <fmt/format.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -246,14 +247,13 @@ std::string last_line_of(const fs::path& log_file) {
 json run_item(const BenchArgs& a, const std::string& bench, const std::vector<Row*>& item_rows,
               const fs::path& scratch, const fs::path& wavediff_dir, const fs::path& out_file,
               const fs::path& log_file, std::string& error) {
-  std::string filter = "^(";
-  std::string sep;
+  std::vector<std::string> names;  // each benchmark once, though several rows read it
   for (const Row* r : item_rows) {
-    if (filter.find(std::string(r->spec->benchmark) + "|") != std::string::npos) continue;
-    filter += sep + r->spec->benchmark;
-    sep = "|";
+    if (std::find(names.begin(), names.end(), r->spec->benchmark) == names.end()) {
+      names.emplace_back(r->spec->benchmark);
+    }
   }
-  filter += ")(/|$)";
+  const std::string filter = fmt::format("^({})(/|$)", fmt::join(names, "|"));
   const dpc31::child::Result r = dpc31::child::run(
       {"/usr/bin/env", "TMPDIR=" + scratch.string(), bench, "--benchmark_filter=" + filter,
        "--benchmark_min_time=" + fmt::format("{}", a.min_time),
