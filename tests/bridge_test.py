@@ -346,7 +346,9 @@ def stale_symlink_replaced():
             # the bridge's rate, and the log says so.
             time.sleep(0.05)
             m = Master(b.path, 9600, 0.5 * SCALE)
-            m.expect("FDL_Status at 9600 on the pty", m.fdl_status(), status_ok())
+            # Until answered: on a loaded host chip time can run past Baud_Control while no
+            # client is there, and the slave searches the rate again (issue 35).
+            m.expect("FDL_Status at 9600 on the pty", m.find_slave(), status_ok())
             m.close()
             # No client: the master fd reports hang-up all the time; the bridge must not spin.
             before = b.cpu_ticks()
@@ -386,7 +388,7 @@ def profibus_rates_default_log():
                 # Another client at another rate: the bridge says which.
                 other = 12000000
                 m = Master(b.path, other, 0.5 * SCALE)
-                m.expect(f"FDL_Status at {other} on the pty", m.fdl_status(), status_ok())
+                m.expect(f"FDL_Status at {other} on the pty", m.find_slave(), status_ok())
                 m.close()
                 b.stop(signal.SIGTERM)
                 lines = b.log_lines()
@@ -425,22 +427,23 @@ def answer_dropped_without_client():
     dropped, and the log says so with the cycle at which it was dropped (between the client's
     leaving and the next one's coming), not when the next client comes. Realtime, 9600 baud: the
     request (Slave_Diag, 9 characters) is on the line about 3 to 14 ms after it was written, the
-    answer comes after it; the client closes 9 ms after writing (tried up to 5 times, the wall
-    clock of a loaded machine may miss that window)."""
+    answer comes after it; the client closes 3 to 17 ms after writing (tried up to 20 times with
+    the delays spread over that window: the wall clock of a loaded machine may miss it; issue
+    35)."""
     with tempfile.TemporaryDirectory() as tmp:
         b = Bridge(tmp, "--firmware", "DO4", "--baud", "9600")
         try:
-            for _ in range(5):
+            for attempt in range(20):
                 m = Master(b.path, 9600, 0.5 * SCALE)
                 m.expect("FDL_Status", m.find_slave(), status_ok())
                 os.write(m.fd, m.srd_frame([], SAP_SLAVE_DIAG))
-                time.sleep(0.009)
+                time.sleep(0.003 + 0.002 * (attempt % 8))
                 m.close()
                 time.sleep(0.1)
-                if any("answer bytes dropped" in line for line in b.log_lines()):
+                if any("no client: 17 answer bytes dropped" in line for line in b.log_lines()):
                     break
             m = Master(b.path, 9600, 0.5 * SCALE)
-            m.expect("FDL_Status (next client)", m.fdl_status(), status_ok())
+            m.expect("FDL_Status (next client)", m.find_slave(), status_ok())
             m.close()
             b.stop(signal.SIGTERM)
             lines = b.log_lines()
