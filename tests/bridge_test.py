@@ -91,12 +91,20 @@ class Bridge:
         with open(self.log, encoding="utf-8") as f:
             return f.read().splitlines()
 
-    def wait_for_log(self, text, limit_s):
-        """Until a line of the log holds `text` (an event of the chip), at most `limit_s`."""
+    def wait_for_log(self, text, limit_s, count=1):
+        """Until `count` lines of the log hold `text` (an event of the chip or the pty), at most
+        `limit_s`: a test waits on the event, not on a wall time (issue 35)."""
         deadline = time.monotonic() + limit_s
-        while not any(text in line for line in self.log_lines()):
+        while sum(text in line for line in self.log_lines()) < count:
             check(time.monotonic() < deadline, f"the log has no '{text}' after {limit_s} s")
             time.sleep(0.01)
+
+    def close_and_wait(self, m):
+        """Closes the client `m` and waits until the bridge has reset the slave side, so that the
+        next client's tcsetattr finds it reset (a fixed 50 ms was too short beside a CPU hog)."""
+        before = sum("slave side reset" in line for line in self.log_lines())
+        m.close()
+        self.wait_for_log("slave side reset", 30 * SCALE, before + 1)
 
 
 def startup_do4(m, wd=(0x64, 0x0A)):
@@ -188,12 +196,11 @@ def do4_two_clients(pacing, baud=19200, timeout=0.5, firmware="DO4"):
             m = Master(b.path, baud, timeout * SCALE)
             startup_do4(m)
             exchange_do4(m)
-            m.close()
             # A second master program on the same pty, same speed: its 8E1 tcsetattr only works
             # because the bridge reset the slave side when the first one closed. The slave is
             # still parameterised by master 2 (watchdog 100 x 10 x 10 ms = 10 s), so FDL_Status
             # and one Slave_Diag find it ready and the outputs are still 05 01.
-            time.sleep(0.05)
+            b.close_and_wait(m)
             m = Master(b.path, baud, timeout * SCALE)
             a = None
             for _ in range(20):
@@ -337,14 +344,12 @@ def stale_symlink_replaced():
                   "the stale symlink was not replaced")
             # A client that only opens, configures and closes: the next one still gets a
             # working tcsetattr at the same speed.
-            Master(b.path, 19200, 0.5 * SCALE).close()
-            time.sleep(0.05)
+            b.close_and_wait(Master(b.path, 19200, 0.5 * SCALE))
             m = Master(b.path, 19200, 0.5 * SCALE)
             m.expect("FDL_Status", m.find_slave(), status_ok())
-            m.close()
             # A client at another speed: the pty carries no timing, the bytes go on the bus at
             # the bridge's rate, and the log says so.
-            time.sleep(0.05)
+            b.close_and_wait(m)
             m = Master(b.path, 9600, 0.5 * SCALE)
             # Until answered: on a loaded host chip time can run past Baud_Control while no
             # client is there, and the slave searches the rate again (issue 35).
@@ -383,8 +388,7 @@ def profibus_rates_default_log():
                 exchange_do4(m)
                 for _ in range(50):
                     m.expect("Data_Exchange", m.srd([0x05, 0x01]), dx_answer(0x08, [0x51]))
-                m.close()
-                time.sleep(0.05)
+                b.close_and_wait(m)
                 # Another client at another rate: the bridge says which.
                 other = 12000000
                 m = Master(b.path, other, 0.5 * SCALE)
