@@ -88,6 +88,10 @@ class Bridge:
         return int(fields[11]) + int(fields[12])
 
     def log_lines(self):
+        """The log so far; none before the bridge has made it (it may not have, beside a CPU hog,
+        when the first client comes and goes)."""
+        if not os.path.exists(self.log):
+            return []
         with open(self.log, encoding="utf-8") as f:
             return f.read().splitlines()
 
