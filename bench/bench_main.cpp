@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "bench_options.hpp"
+#include "child.hpp"
 #include "cleanup.hpp"
 
 namespace dpc31::bench {
@@ -19,6 +20,13 @@ Options& options() {
     return d;
   }();
   return o;
+}
+
+void files_made() {
+  static bool once = false;
+  if (once) return;
+  once = true;
+  child::stop_point("dpc31_bench item " + options().item + " files");
 }
 
 }  // namespace dpc31::bench
@@ -36,6 +44,8 @@ bool take_options(int& argc, char** argv) {
     };
     if (i > 0 && !value("--dpc31_cli=").empty()) {
       o.dpc31_cli = value("--dpc31_cli=");
+    } else if (i > 0 && !value("--dpc31_item=").empty()) {
+      o.item = value("--dpc31_item=");
     } else if (i > 0 && !value("--wavediff_dir=").empty()) {
       o.wavediff_dir = value("--wavediff_dir=");
     } else if (i > 0 && !value("--wavediff_mb=").empty()) {
@@ -62,6 +72,7 @@ int main(int argc, char** argv) {
   if (!take_options(argc, argv)) return 2;
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 2;
+  dpc31::child::stop_point("dpc31_bench item " + dpc31::bench::options().item);
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
   return 0;

@@ -12,7 +12,9 @@
 #include <string>
 #include <vector>
 
+#include "bench_options.hpp"
 #include "bytewise_bus.hpp"
+#include "cleanup.hpp"
 #include "dp_master.hpp"
 #include "responder.hpp"
 #include "waveform.hpp"
@@ -207,6 +209,7 @@ bool traced_run(benchmark::State& st, const dpc31::wave::Options& o, double& chi
 }
 void BM_TracedRun(benchmark::State& st) {
   const dpc31::wave::Options o = trace_options(static_cast<std::size_t>(st.range(0)));
+  const dpc31::cleanup::Entry gone = dpc31::cleanup::Entry::path(o.path);  // also on a signal
   double chip_seconds = 0;
   std::uintmax_t bytes = 0;
   for (auto _ : st) {
@@ -237,6 +240,7 @@ BENCHMARK(BM_TracedRun)
 void BM_TracedOverUntraced(benchmark::State& st) {
   const dpc31::wave::Options none = trace_options(0);
   const dpc31::wave::Options all = trace_options(dpc31::wave::signal_list().size());
+  const dpc31::cleanup::Entry gone = dpc31::cleanup::Entry::path(all.path);  // also on a signal
   double chip_seconds = 0;
   double wall[2] = {0, 0};
   double cpu[2] = {0, 0};
@@ -254,6 +258,7 @@ void BM_TracedOverUntraced(benchmark::State& st) {
       cpu[traced] += cpu_now() - c0;
     }
   }
+  dpc31::bench::files_made();
   std::error_code ec;
   std::filesystem::remove(all.path, ec);
   st.counters["traced_over_untraced"] = wall[1] / wall[0];

@@ -13,7 +13,10 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -95,14 +98,12 @@ void generate_and_compare(benchmark::State& st, const fs::path& dir, MakePair ma
   const auto& opt = dpc31::bench::options();
   const std::string a = (dir / "a.vcd").string();
   const std::string b = (dir / "b.vcd").string();
-  // Gigabytes each: removed if a signal ends the run (dpc31 bench passes its own on).
-  const dpc31::cleanup::Entry gone[] = {dpc31::cleanup::Entry::path(a),
-                                        dpc31::cleanup::Entry::path(b)};
   std::string error;
   if (!make(dir, a, b, error)) {
     st.SkipWithError(error.c_str());
     return;
   }
+  dpc31::bench::files_made();
   const double mb = static_cast<double>(fs::file_size(a) + fs::file_size(b)) / 1e6;
   struct rusage self {};
   ::getrusage(RUSAGE_SELF, &self);
@@ -127,12 +128,18 @@ void generate_and_compare(benchmark::State& st, const fs::path& dir, MakePair ma
   st.counters["peak_rss_parent_MB"] = static_cast<double>(self.ru_maxrss) / 1024.0;
 }
 
+// The pair (gigabytes each) in a new private directory, removed with all in it when the benchmark
+// ends, also when a signal ends this process (dpc31 bench passes its own on and waits for us).
 void in_own_dir(benchmark::State& st, MakePair make) {
   const std::string& base = dpc31::bench::options().wavediff_dir;
-  const fs::path dir = (base.empty() ? fs::temp_directory_path() : fs::path(base)) /
-                       ("dpc31-bench-wavediff-" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  const dpc31::cleanup::Entry gone = dpc31::cleanup::Entry::dir(dir.string());
+  std::string dir =
+      ((base.empty() ? fs::temp_directory_path() : fs::path(base)) / "dpc31-bench-wavediff-XXXXXX")
+          .string();
+  if (::mkdtemp(dir.data()) == nullptr) {
+    st.SkipWithError(("cannot create " + dir + ": " + std::strerror(errno)).c_str());
+    return;
+  }
+  const dpc31::cleanup::Entry gone = dpc31::cleanup::Entry::tree(dir);
   generate_and_compare(st, dir, make);
   std::error_code ec;
   fs::remove_all(dir, ec);

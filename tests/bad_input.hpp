@@ -105,6 +105,44 @@ class BadInput : public ::testing::Test {
   fs::path root_;
 };
 
+// Starts `argv` in `dir` without waiting: its standard output on /dev/null, its standard error on
+// `stderr_file` (or the test's); in a process group of its own if `own_group`.
+inline pid_t spawn(const std::vector<std::string>& argv, const std::string& dir,
+                   const std::string& stderr_file = {}, bool own_group = false) {
+  std::vector<char*> args;
+  for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+  if (!stderr_file.empty()) {
+    posix_spawn_file_actions_addopen(&fa, 2, stderr_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                     0644);
+  }
+  posix_spawn_file_actions_addchdir_np(&fa, dir.c_str());
+  posix_spawnattr_t attr;
+  posix_spawnattr_init(&attr);
+  if (own_group) {
+    posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETPGROUP);
+    posix_spawnattr_setpgroup(&attr, 0);
+  }
+  pid_t pid = -1;
+  EXPECT_EQ(posix_spawn(&pid, args[0], &fa, &attr, args.data(), environ), 0);
+  posix_spawnattr_destroy(&attr);
+  posix_spawn_file_actions_destroy(&fa);
+  return pid;
+}
+
+// Waits up to 60 s for `done`, an event (a file, a process state), looking every 10 ms.
+template <typename F>
+bool eventually(F done) {
+  for (int i = 0; i < 6000; ++i) {
+    if (done()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return false;
+}
+
 // Exit 2 and exactly this one line on stderr.
 inline void expect_bad(const Outcome& r, const std::string& line, const std::string& what) {
   EXPECT_EQ(r.rc, 2) << what << "\n" << r.err;

@@ -160,30 +160,6 @@ std::string long_scenario() {
          "startup\nexchange 1000000 outputs=5A,A5\n";
 }
 
-pid_t spawn(const std::vector<std::string>& argv, const std::string& dir) {
-  std::vector<char*> args;
-  for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-  args.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addchdir_np(&fa, dir.c_str());
-  pid_t pid = -1;
-  EXPECT_EQ(posix_spawn(&pid, args[0], &fa, nullptr, args.data(), environ), 0);
-  posix_spawn_file_actions_destroy(&fa);
-  return pid;
-}
-
-// Waits up to 60 s for `done`.
-template <typename F>
-bool eventually(F done) {
-  for (int i = 0; i < 6000; ++i) {
-    if (done()) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  return false;
-}
-
 bool any_ending(const fs::path& dir, const std::string& suffix) {
   for (const auto& e : fs::directory_iterator(dir)) {
     const std::string n = e.path().filename().string();
@@ -215,45 +191,6 @@ TEST_F(BadInput, ASignalDuringARunLeavesNoTemporary) {
     EXPECT_EQ(listing(), (std::vector<std::string>{"long.scn", "old.vcd"})) << sig;
     EXPECT_EQ(slurp(path("old.vcd")), "old");
   }
-}
-
-// dpc31 bench runs dpc31_bench as a child: a signal to dpc31 ends the child too, and the files
-// of both go (finding 7).
-TEST_F(BadInput, ASignalToBenchEndsItsChildAndRemovesTheFiles) {
-  const std::string work = (root_ / "work").string();
-  ::setenv("TMPDIR", work.c_str(), 1);
-  const pid_t pid = spawn({kCli, "bench", "--quick"}, work);
-  ::unsetenv("TMPDIR");
-  ASSERT_GT(pid, 0);
-  // The child: a process whose parent is `pid`.
-  pid_t child = -1;
-  EXPECT_TRUE(eventually([&] {
-    for (const auto& e : fs::directory_iterator("/proc")) {
-      std::ifstream stat(e.path() / "stat");
-      std::string text;
-      std::getline(stat, text);
-      const auto close = text.rfind(')');
-      if (close == std::string::npos) continue;
-      std::istringstream rest(text.substr(close + 2));
-      char state = 0;
-      pid_t ppid = 0;
-      rest >> state >> ppid;
-      if (ppid == pid && text.find("(dpc31_bench)") != std::string::npos) {
-        child = std::stoi(e.path().filename().string());
-        return true;
-      }
-    }
-    return false;
-  }));
-  ASSERT_GT(child, 0);
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
-  ASSERT_EQ(::kill(pid, SIGTERM), 0);
-  int status = 0;
-  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
-  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM) << status;
-  // Gone (reaped by init once it was killed), and with it everything both made in TMPDIR.
-  EXPECT_TRUE(eventually([&] { return ::kill(child, 0) != 0 && listing().empty(); }))
-      << "left: " << ::testing::PrintToString(listing());
 }
 
 // --- demo (finding 4) ------------------------------------------------------------------------

@@ -242,6 +242,31 @@ TEST(CliBench, QuickPrintsEveryRowWellFormed) {
   std::remove(json_path.c_str());
 }
 
+// `--items d,i`: only those rows are measured, every other one reads "not run: not in --items"
+// (also in the JSON), and that is exit 0.
+TEST(CliBench, ItemsRunsOnlyThose) {
+  const std::string json_path = ::testing::TempDir() + "dpc31_bench_items.json";
+  const Result r = run("bench --quick --items d,i --json " + json_path);
+  ASSERT_EQ(r.rc, 0) << r.out;
+  const auto j = nlohmann::json::parse(slurp(json_path));
+  ASSERT_EQ(j["rows"].size(), 27u);
+  int measured = 0;
+  for (const auto& row : j["rows"]) {
+    if (row["item"] == "d" || row["item"] == "i") {
+      EXPECT_TRUE(row["measured"].get<bool>()) << row.dump();
+      ++measured;
+    } else {
+      EXPECT_EQ(row["not_run"], "not in --items") << row.dump();
+    }
+  }
+  EXPECT_EQ(measured, 2);
+  EXPECT_NE(r.out.find("| d | DP watchdog, TWD = 650 s, expiring (wall time) | "),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("| — | ≤ 3 ns | not run: not in --items |"), std::string::npos) << r.out;
+  std::remove(json_path.c_str());
+}
+
 // Row h with --build: the wall time of SOURCE_DIR/setup.sh, run with ccache off and
 // DPC31_BUILD_DIR a fresh directory (removed after); a setup.sh that fails is the row's error with
 // its last line, and exit 1 (bench.hpp). Stand-in setup.sh scripts, not a real 5-minute build.
@@ -282,7 +307,8 @@ TEST(CliBench, BadArgumentsExit2WithOneLine) {
   for (const char* args :
        {"bench --min-time 0", "bench --quick --wavediff-mb 5",
         "bench --bench /nonexistent/dpc31_bench", "bench extra", "bench --build /nonexistent",
-        "bench --build /", "bench --quick --build " SOURCE_DIR}) {
+        "bench --build /", "bench --quick --build " SOURCE_DIR, "bench --quick --items z",
+        "bench --quick --items f,x"}) {
     const Result r = testutil::run_command(std::string(DPC31_CLI) + " " + args + " 2>&1");
     EXPECT_EQ(r.rc, 2) << args;
     EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << args << ": " << r.out;

@@ -547,12 +547,14 @@ FloodWaits waits_behind_a_flood(int kFlood, std::size_t depth, unsigned max_slee
   return {worst, waits.size()};
 }
 
-// 13 clients flooding (and still flooding at every stop): at most the rest of the round in
-// progress and one line of each flood client in the next, 2 x 13. (Before: up to 64 lines per
-// client and round, 832.)
+// 13 clients flooding: at most the rest of the round in progress and one line of each flood
+// client in the next, 2 x 13. (Before: up to 64 lines per client and round, 832.) Only the stops
+// that found every flood client still busy count, and nearly all must: beside a CPU hog the test
+// can be descheduled long enough between its top-up and a stop for a pipeline to drain (199 of
+// 200 once; issue 35).
 TEST(ServeSecurity, AFloodDelaysACommandByAtMostTwoLinesPerOtherClient) {
   const FloodWaits w = waits_behind_a_flood(13, 4000, 500);
-  EXPECT_EQ(w.counted, 200u);
+  EXPECT_GE(w.counted, 150u);
   EXPECT_LE(w.worst, 2u * 13);
 }
 

@@ -1,8 +1,10 @@
 #include "bench.hpp"
 
 #include <fmt/core.h>
+#include <fmt/format.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -242,25 +244,27 @@ std::string last_line_of(const fs::path& log_file) {
 }
 
 // Runs dpc31_bench on the benchmarks of one item; its JSON output, or an error.
-// Its console output goes to `log_file`; the last lines of it are in `error` if it fails.
+// Its console output goes to `log_file`; the last lines of it are in `error` if it fails. Its
+// TMPDIR is `scratch` (everything it writes there goes with that tree), item f's files go to
+// `wavediff_dir`.
 json run_item(const BenchArgs& a, const std::string& bench, const std::vector<Row*>& item_rows,
-              const fs::path& out_file, const fs::path& log_file, std::string& error) {
-  std::string filter = "^(";
-  std::string sep;
+              const fs::path& scratch, const fs::path& wavediff_dir, const fs::path& out_file,
+              const fs::path& log_file, std::string& error) {
+  std::vector<std::string> names;  // each benchmark once, though several rows read it
   for (const Row* r : item_rows) {
-    if (filter.find(std::string(r->spec->benchmark) + "|") != std::string::npos) continue;
-    filter += sep + r->spec->benchmark;
-    sep = "|";
+    if (std::find(names.begin(), names.end(), r->spec->benchmark) == names.end()) {
+      names.emplace_back(r->spec->benchmark);
+    }
   }
-  filter += ")(/|$)";
+  const std::string filter = fmt::format("^({})(/|$)", fmt::join(names, "|"));
   const dpc31::child::Result r = dpc31::child::run(
-      {bench, "--benchmark_filter=" + filter,
+      {"/usr/bin/env", "TMPDIR=" + scratch.string(), bench, "--benchmark_filter=" + filter,
        "--benchmark_min_time=" + fmt::format("{}", a.min_time),
        "--benchmark_repetitions=" + std::to_string(a.repetitions),
        "--benchmark_out=" + out_file.string(), "--benchmark_out_format=json",
        "--dpc31_cli=" + self_path().string(), "--wavediff_mb=" + std::to_string(a.wavediff_mb),
-       "--wavediff_dir=" +
-           (a.wavediff_dir.empty() ? fs::temp_directory_path().string() : a.wavediff_dir)},
+       "--wavediff_dir=" + wavediff_dir.string(),
+       std::string("--dpc31_item=") + item_rows.front()->spec->item},
       log_file.string());
   if (r.exit_code != 0) {
     error = r.error.empty() ? fmt::format("dpc31_bench exited with {}", r.exit_code) : r.error;
@@ -271,6 +275,21 @@ json run_item(const BenchArgs& a, const std::string& bench, const std::vector<Ro
   json j = json::parse(f, nullptr, false);
   if (j.is_discarded()) error = "dpc31_bench wrote no readable JSON";
   return j;
+}
+
+// A new private directory (mkdtemp) in `parent` named `prefix`XXXXXX, registered to be removed
+// with everything in it if a signal ends the process; empty, with a line on `err`, if it cannot be
+// made.
+std::string scratch_dir(const fs::path& parent, const std::string& prefix,
+                        cleanup::Entry& registered, std::FILE* err) {
+  std::string dir = (parent / (prefix + "XXXXXX")).string();
+  if (::mkdtemp(dir.data()) == nullptr) {
+    fmt::print(err, "dpc31 bench: cannot create a directory in {}: {}\n", parent.string(),
+               std::strerror(errno));
+    return {};
+  }
+  registered = cleanup::Entry::tree(dir);
+  return dir;
 }
 
 std::string table(const std::vector<Row>& rs) {
@@ -318,17 +337,20 @@ json to_json(const BenchArgs& a, const std::string& bench, const std::vector<Row
 }
 
 // Row h: `source`/setup.sh into a fresh directory of TMPDIR with ccache off (docs/install.md,
-// "Build time"), its wall time; the directory is removed afterwards (a signal leaves it: its
-// path is printed first). setup.sh's output goes to a log whose last line is the error.
+// "Build time"), its wall time; the directory is removed afterwards, also when a signal ends the
+// run (setup.sh and what it started have ended by then: util/child). setup.sh's output goes to a
+// log whose last line is the error.
 void time_build(const std::string& source, Row& row, std::FILE* err) {
-  std::string dir = (fs::temp_directory_path() / "dpc31-bench-build-XXXXXX").string();
-  if (::mkdtemp(dir.data()) == nullptr) {
-    row.error = fmt::format("cannot create a directory in {}: {}",
-                            fs::temp_directory_path().string(), std::strerror(errno));
+  cleanup::Entry registered;
+  const std::string dir =
+      scratch_dir(fs::temp_directory_path(), "dpc31-bench-build-", registered, err);
+  if (dir.empty()) {
+    row.error = "cannot create the build directory";
     return;
   }
   fmt::print(err, "dpc31 bench: item h: ./setup.sh of {} into {} ...\n", source, dir);
   std::fflush(err);
+  child::stop_point("dpc31 bench item h");
   const fs::path log = fs::path(dir) / "setup.log";
   const auto t0 = std::chrono::steady_clock::now();
   const dpc31::child::Result r = dpc31::child::run(
@@ -384,6 +406,16 @@ CLI::App* add_bench_subcommand(CLI::App& app, BenchArgs& a) {
                   },
                   "SOURCE_DIR"))
       ->excludes(quick);
+  cmd->add_option("--items", a.items, "only these items, e.g. --items f,g (default: all)")
+      ->delimiter(',')
+      ->check(CLI::Validator(
+          [](const std::string& item) {
+            for (const RowSpec& s : rows()) {
+              if (item == s.item) return std::string();
+            }
+            return "no item '" + item + "' (the table's first column)";
+          },
+          "ITEM"));
   cmd->add_option("--bench", a.bench_binary,
                   "the dpc31_bench program (default: next to this dpc31)")
       ->check(CLI::ExistingFile);
@@ -417,18 +449,23 @@ int run_bench(const BenchArgs& args, std::FILE* out, std::FILE* err) {
     r.spec = &s;
     rs.push_back(r);
   }
-  // dpc31_bench's output and log: in a private directory (a fixed name in TMPDIR could be a
-  // link another user made), all removed if a signal ends the run.
-  std::string dir = (fs::temp_directory_path() / "dpc31-bench-XXXXXX").string();
-  if (::mkdtemp(dir.data()) == nullptr) {
-    fmt::print(err, "dpc31 bench: cannot create a directory in {}: {}\n",
-               fs::temp_directory_path().string(), std::strerror(errno));
+  // dpc31_bench's output, log and TMPDIR: a private directory (a fixed name in TMPDIR could be a
+  // link another user made), removed with all in it when the run ends, also by a signal; item f's
+  // files in it too, or in one of --wavediff-dir.
+  cleanup::Entry gone;
+  const std::string dir = scratch_dir(fs::temp_directory_path(), "dpc31-bench-", gone, err);
+  if (dir.empty()) return 2;
+  cleanup::Entry wavediff_gone;
+  const std::string wavediff_dir =
+      a.wavediff_dir.empty() ? dir
+                             : scratch_dir(a.wavediff_dir, "dpc31-bench-", wavediff_gone, err);
+  if (wavediff_dir.empty()) {
+    std::error_code ec;
+    fs::remove_all(dir, ec);
     return 2;
   }
   const fs::path out_file = fs::path(dir) / "bench.json";
   const fs::path log_file = fs::path(dir) / "bench.log";
-  const cleanup::Entry gone[] = {cleanup::Entry::path(out_file.string()),
-                                 cleanup::Entry::path(log_file.string()), cleanup::Entry::dir(dir)};
   json context;
   for (std::size_t i = 0; i < rs.size();) {
     std::vector<Row*> item;
@@ -436,27 +473,31 @@ int run_bench(const BenchArgs& args, std::FILE* out, std::FILE* err) {
          ++k) {
       item.push_back(&rs[k]);
     }
+    const std::string name = item.front()->spec->item;
+    i += item.size();
+    if (!a.items.empty() && std::find(a.items.begin(), a.items.end(), name) == a.items.end()) {
+      for (Row* r : item) r->not_run = "not in --items";
+      continue;
+    }
     if (item.front()->spec->benchmark == kSetupSh) {
       if (a.build_source.empty()) {
         item.front()->not_run = "dpc31 bench --build SOURCE_DIR (about 5 minutes)";
       } else {
         time_build(a.build_source, *item.front(), err);
       }
-      i += item.size();
       continue;
     }
-    fmt::print(err, "dpc31 bench: item {} ...\n", rs[i].spec->item);
+    fmt::print(err, "dpc31 bench: item {} ...\n", name);
     std::fflush(err);
+    child::stop_point("dpc31 bench item " + name);
     std::string error;
-    const json j = run_item(a, bench, item, out_file, log_file, error);
+    const json j = run_item(a, bench, item, dir, wavediff_dir, out_file, log_file, error);
     if (context.is_null() && j.contains("context")) context = j["context"];
     for (Row* r : item) fill(*r, j, error);
-    i += item.size();
   }
   std::error_code ec;
-  fs::remove(out_file, ec);
-  fs::remove(log_file, ec);
-  fs::remove(dir, ec);
+  fs::remove_all(dir, ec);
+  fs::remove_all(wavediff_dir, ec);
   fmt::print(out, "{}", table(rs));
   if (!a.json.empty()) {
     if (!json_out.write(to_json(a, bench, rs, context).dump(2) + "\n") || !json_out.commit()) {

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 namespace dpc31::cli {
 
@@ -19,6 +20,7 @@ struct BenchArgs {
   std::string wavediff_dir;          // where item f's files go (default: TMPDIR)
   std::string bench_binary;          // default: dpc31_bench next to this dpc31
   std::string build_source;  // row h: time a fresh ./setup.sh build of this tree (empty: not run)
+  std::vector<std::string> items;  // --items: only these items (empty: all)
 };
 
 CLI::App* add_bench_subcommand(CLI::App& app, BenchArgs& a);

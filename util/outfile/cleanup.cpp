@@ -1,11 +1,14 @@
 #include "cleanup.hpp"
 
+#include <dirent.h>
+#include <fcntl.h>
 #include <limits.h>
 #include <signal.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <cerrno>
+#include <cstdint>
 #include <cstring>
 #include <mutex>
 
@@ -17,10 +20,12 @@ namespace {
 constexpr int kPaths = 64;
 constexpr int kChildren = 64;
 
+enum class Kind : std::uint8_t { file, tree, dir };  // removed in this order
+
 struct Slot {
   std::atomic<int> state{0};
   pid_t pid = 0;
-  bool dir = false;
+  Kind kind = Kind::file;
   char path[PATH_MAX] = {};
 };
 
@@ -28,18 +33,50 @@ Slot g_slots[kPaths + kChildren];
 std::atomic<pid_t> g_owner{0};  // the process that installed: a forked child only re-raises
 constexpr int kSignals[] = {SIGINT, SIGTERM, SIGHUP};
 
-// Async-signal-safe: only loads, kill(), unlink() and rmdir().
+constexpr int kTreeDepth = 16;
+
+// Removes `name` in the directory `at` and, if it is a directory, everything in it first.
+// Async-signal-safe: openat, getdents64, unlinkat, close; no allocation (a small buffer per level
+// on the stack). A pass that removed something is followed by another from the start, since a
+// directory read while it changes may skip entries.
+void remove_at(int at, const char* name, int depth) {
+  if (::unlinkat(at, name, 0) == 0 || (errno != EISDIR && errno != EPERM)) return;
+  const int fd = ::openat(at, name, O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+  if (fd < 0) return;
+  bool removed = depth < kTreeDepth;
+  while (removed) {
+    removed = false;
+    ::lseek(fd, 0, SEEK_SET);
+    alignas(struct dirent64) char buf[1024];
+    for (ssize_t n = 0; (n = ::getdents64(fd, buf, sizeof buf)) > 0;) {
+      for (ssize_t off = 0; off < n;) {
+        const auto* d = reinterpret_cast<const struct dirent64*>(buf + off);
+        off += d->d_reclen;
+        const char* e = d->d_name;
+        if (e[0] == '.' && (e[1] == 0 || (e[1] == '.' && e[2] == 0))) continue;
+        remove_at(fd, e, depth + 1);
+        removed = true;
+      }
+    }
+  }
+  ::close(fd);
+  ::unlinkat(at, name, AT_REMOVEDIR);
+}
+
+// Async-signal-safe: only loads, kill(), unlink(), rmdir() and remove_at().
 void remove_all(int sig) {
   for (int i = kPaths; i < kPaths + kChildren; ++i) {
     if (g_slots[i].state.load() == 2) ::kill(g_slots[i].pid, sig);
   }
-  for (const bool dirs : {false, true}) {  // a directory empties first
+  for (const Kind kind : {Kind::file, Kind::tree, Kind::dir}) {  // a directory empties first
     for (int i = 0; i < kPaths; ++i) {
-      if (g_slots[i].state.load() != 2 || g_slots[i].dir != dirs) continue;
-      if (dirs) {
-        ::rmdir(g_slots[i].path);
-      } else {
+      if (g_slots[i].state.load() != 2 || g_slots[i].kind != kind) continue;
+      if (kind == Kind::file) {
         ::unlink(g_slots[i].path);
+      } else if (kind == Kind::tree) {
+        remove_at(AT_FDCWD, g_slots[i].path, 0);
+      } else {
+        ::rmdir(g_slots[i].path);
       }
     }
   }
@@ -99,20 +136,21 @@ void Entry::release() {
 
 namespace {
 
-int add_path(const std::string& p, bool dir) {
+int add_path(const std::string& p, Kind kind) {
   if (p.size() >= PATH_MAX) return -1;
   const int i = take(0, kPaths);
   if (i < 0) return -1;
   std::memcpy(g_slots[i].path, p.c_str(), p.size() + 1);
-  g_slots[i].dir = dir;
+  g_slots[i].kind = kind;
   g_slots[i].state.store(2);
   return i;
 }
 
 }  // namespace
 
-Entry Entry::path(const std::string& p) { return Entry(add_path(p, false)); }
-Entry Entry::dir(const std::string& p) { return Entry(add_path(p, true)); }
+Entry Entry::path(const std::string& p) { return Entry(add_path(p, Kind::file)); }
+Entry Entry::dir(const std::string& p) { return Entry(add_path(p, Kind::dir)); }
+Entry Entry::tree(const std::string& p) { return Entry(add_path(p, Kind::tree)); }
 
 Entry Entry::child(pid_t pid) {
   const int i = take(kPaths, kPaths + kChildren);

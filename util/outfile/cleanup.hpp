@@ -1,8 +1,9 @@
 // What a process must not leave behind when SIGINT, SIGTERM or SIGHUP ends it
-// (docs/bad-input.md): the temporaries of its output files and its child processes. The handler
-// (async-signal-safe: fixed slots, unlink() and kill()) removes every registered path, sends the
-// same signal to every registered child, restores the default action and raises the signal again,
-// so the process still ends by it.
+// (docs/bad-input.md): the temporaries of its output files, its scratch directories and its child
+// processes. The handler (async-signal-safe: fixed slots, kill(), unlink(), rmdir() and the
+// system calls of a directory walk) sends the same signal to every registered child, removes every
+// registered path and tree, restores the default action and raises the signal again, so the
+// process still ends by it.
 #pragma once
 
 #include <sys/types.h>
@@ -35,7 +36,11 @@ class Entry {
 
   static Entry path(const std::string& p);  // unlink()ed
   static Entry dir(const std::string& p);   // rmdir()ed, after the paths
-  static Entry child(pid_t pid);
+  // A private scratch directory, removed with everything in it (not following links; at most
+  // 16 levels deep). Only for a directory this process made (mkdtemp) and nothing else writes
+  // to once the process's children have ended (util/child waits for them).
+  static Entry tree(const std::string& p);
+  static Entry child(pid_t pid);  // signalled; a negative pid: that process group
 
  private:
   explicit Entry(int slot) : slot_(slot) {}
