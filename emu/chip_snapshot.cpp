@@ -1,4 +1,4 @@
-// The chip's snapshot (docs/snapshots.md, format version 3): every block's state, written and
+// The chip's snapshot (docs/snapshots.md, format version 4): every block's state, written and
 // read in one place so that the format is one list. Each list is a template run with a Writer
 // (save) or a Reader (load), so save and load cannot drift apart; a static_assert on each
 // block's State makes a new member fail the build until it is listed here.
@@ -253,6 +253,18 @@ void core_fields(Ar& ar, C& c) {
   ar(rq.wd.left);
   ar(rq.wd_left);
   ar(rq.wd_locked);
+  // Format version 4: the VPC3+'s SAP list (DPV1, docs/dpv1.md).
+  auto& sl = A::state(c.sap_list);
+  static_assert(snap::member_count<SapList::State>() == 4, "a new member: add it here");
+  ar.section("SAPL");
+  ar(sl.enabled);
+  ar(sl.sending);
+  ar(sl.entry);
+  ar(sl.response);
+  if constexpr (requires { ar.fail(""); }) {
+    const std::uint32_t end = 1u << c.prof().address_bits;
+    if (sl.entry >= end || sl.response >= end) ar.fail("SAP list address beyond the address bus");
+  }
 }
 
 snap::Header header_of(const ChipCore& c) {

@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "core.hpp"
+#include "dpc31/dpv1.hpp"
 
 namespace dpc31 {
 
@@ -60,8 +61,12 @@ std::uint16_t DpStateMachine::verdict(Handshake& h, std::uint16_t event, bool& f
   return r;
 }
 
+// The same reads answer a Set_Ext_Prm (VPC3+, New_Ext_Prm_Data): it is taken only in Wait_Cfg
+// and a Set_Prm always starts from Wait_Prm, so Wait_Cfg here means the user accepted the
+// extension, which changes nothing else.
 std::uint16_t DpStateMachine::prm_verdict(Verdict v) {
-  return verdict(s_.prm, irq::New_Prm_Data, s_.prm_fault, v, [this] {
+  return verdict(s_.prm, irq::New_Prm_Data | irq::New_Ext_Prm_Data, s_.prm_fault, v, [this] {
+    if (s_.state == DpState::Wait_Cfg) return;
     // The parameters are accepted: the DP watchdog runs with the new TWD from now on.
     watchdog_.parameterise(s_.prm_wd_on, s_.prm_wd_fact1, s_.prm_wd_fact2, s_.prm_wd_1ms);
     if (s_.state == DpState::Wait_Prm) s_.state = DpState::Wait_Cfg;
@@ -223,11 +228,13 @@ std::optional<fdl::Frame> DpStateMachine::service(const fdl::Frame& req) {
       case sap::Set_Slave_Add:
         answer = set_slave_add(req);
         break;
+      case sap::Set_Ext_Prm:
+        answer = set_ext_prm(req);
+        break;
       default:
-        ++counters_.unknown_sap;
-        sig_.log(LogLevel::info, "DSAP {} from {}: not served (RS)", fdl::sap_number(*req.dsap),
-                 req.sa);
-        answer = short_answer(req, Response::RS);
+        answer = sap_list_answer(req, !broadcast && fdl::sap_number(*req.dsap) <= sap::kSapListLast
+                                          ? sap_list_.request(req)
+                                          : SapListAnswer{});
         break;
     }
   }
@@ -275,6 +282,14 @@ std::optional<fdl::Frame> DpStateMachine::set_prm(const fdl::Frame& req) {
     fault = "Sync_Req but Sync not supported";
   if ((status & kFreeze_Req) != 0 && !regs_.mode0(fields::Mode_Reg0::Freeze_Supported))
     fault = "Freeze_Req but Freeze not supported";
+  const bool dpv1 =
+      du.size() > dpv1::kStatus1 && (du[dpv1::kStatus1] & dpv1::status1::DPV1_Enable) != 0;
+  if (dpv1 && regs_.id() == Profile::dpc31) {
+    // The DPC31's DPV1 interface is not public (docs/dpc31.md): refused, never ignored.
+    fault = "DPV1_Enable: the DPC31's DPV1 is not modelled";
+  } else if (dpv1 && regs_.id() == Profile::vpc3plus) {
+    if (const char* f = dpv1_prm_fault(du); f != nullptr) fault = f;
+  }
   const bool lock = (status & kLock_Req) != 0;
   const bool unlock = (status & kUnlock_Req) != 0;
   // Lock_Req = Unlock_Req = 0 and the unlock codes adopt no parameters: only the Ident_Number
@@ -330,15 +345,21 @@ std::optional<fdl::Frame> DpStateMachine::set_prm(const fdl::Frame& req) {
     sig_.emit(BlockEvent::Kind::dis, du[7] & kDis_Start_Stop);
     m0 = static_cast<std::uint16_t>((m0 & ~kDis_Start_Stop) | (du[7] & kDis_Start_Stop));
   }
-  const bool wd_1ms = regs_.id() == Profile::vpc3plus
-                          ? regs_.mode0(fields::Mode_Reg0::WD_Base)
-                          : du.size() > 7 && (du[7] & kSpec_WD_Base_1ms) != 0;
+  // VPC3+: Mode_Reg0.WD_Base, or with DPV1 the master's DPV1_Status_1.WD_Base (p.53: "The bits
+  // of the Spec_User_Prm_Byte are included"; modelled).
+  const bool telegram_1ms = du.size() > 7 && (du[7] & kSpec_WD_Base_1ms) != 0;
+  const bool wd_1ms = regs_.id() != Profile::vpc3plus || dpv1
+                          ? telegram_1ms
+                          : regs_.mode0(fields::Mode_Reg0::WD_Base);
   // DP_Control starts with these only once the user accepts them (User_Prm_Data_Okay).
   s_.prm_wd_on = (status & kWD_On) != 0;
   s_.prm_wd_fact1 = du[1];
   s_.prm_wd_fact2 = du[2];
   s_.prm_wd_1ms = wd_1ms;
-  s_.failsafe = regs_.id() == Profile::dpc31 && du.size() > 7 && (du[7] & kSpec_Failsafe) != 0;
+  // DPC31 byte 13 Failsafe; VPC3+ DPV1_Status_1.Fail_Safe: Data_Exchange without outputs.
+  s_.failsafe =
+      (regs_.id() == Profile::dpc31 || dpv1) && du.size() > 7 && (du[7] & kSpec_Failsafe) != 0;
+  if (regs_.id() == Profile::vpc3plus) sap_list_.enable(dpv1);
   receive_via_aux(fields::R_Aux_Buf_Sel::Set_Prm, RegId::R_Prm_Buf_Ptr, RegId::R_Len_Prm_Data, du);
   sig_.emit(BlockEvent::Kind::prm);
   prm_accepted();
@@ -556,6 +577,7 @@ void DpStateMachine::dp_control_expired() {
 }
 
 void DpStateMachine::response_sent() {
+  sap_list_.response_sent();
   if (!s_.diag_in_flight) return;
   s_.diag_in_flight = false;
   // Diag_Flag is cleared when "the relevant master" fetched (SPC3 p.32): the locking master, or
@@ -572,6 +594,7 @@ namespace dpc31 {
 
 void DpStateMachine::start() {
   s_ = State{};
+  sap_list_.reset();
   s_.started = true;
   buffers_.end_clear();
   s_.station = regs_.cell(RegId::R_TS_Adr);

@@ -16,6 +16,7 @@
 #include "dpc31/fdl_counters.hpp"
 #include "irq.hpp"
 #include "regfile.hpp"
+#include "sap_list.hpp"
 #include "signals.hpp"
 #include "watchdog.hpp"
 
@@ -93,14 +94,19 @@ class DpStateMachine {
   enum class Verdict : std::uint8_t { ok, not_ok };
 
   DpStateMachine(RegisterFile& regs, InterruptController& irq, BufferUnit& buffers,
-                 Watchdog& watchdog, FdlCounters& counters, const Signals& sig)
+                 Watchdog& watchdog, SapList& sap_list, FdlCounters& counters, const Signals& sig)
       : regs_(regs),
         irq_(irq),
         buffers_(buffers),
         watchdog_(watchdog),
+        sap_list_(sap_list),
         counters_(counters),
         sig_(sig) {}
-  void reset() { s_ = State{}; }  // also the MAC reset (Go_Offline): Offline, as after reset
+  // Also the MAC reset (Go_Offline): Offline, as after reset.
+  void reset() {
+    s_ = State{};
+    sap_list_.reset();
+  }
   // Start_SPC3: the state machine from the top, at the station address of R_TS_Adr.
   void start();
   [[nodiscard]] bool started() const { return s_.started; }
@@ -142,6 +148,9 @@ class DpStateMachine {
   std::optional<fdl::Frame> slave_diag(const fdl::Frame& req);
   std::optional<fdl::Frame> read_io(const fdl::Frame& req);
   std::optional<fdl::Frame> set_slave_add(const fdl::Frame& req);
+  std::optional<fdl::Frame> set_ext_prm(const fdl::Frame& req);
+  [[nodiscard]] const char* dpv1_prm_fault(std::span<const std::uint8_t> du) const;
+  fdl::Frame sap_list_answer(const fdl::Frame& req, const SapListAnswer& a);
   std::optional<fdl::Frame> data_exchange(const fdl::Frame& req);
   void global_control(const fdl::Frame& req);
   template <typename Accepted>
@@ -160,6 +169,7 @@ class DpStateMachine {
   InterruptController& irq_;
   BufferUnit& buffers_;
   Watchdog& watchdog_;
+  SapList& sap_list_;
   FdlCounters& counters_;
   const Signals& sig_;
   State s_;

@@ -205,6 +205,16 @@ Exchange DpMaster::fdl_status() {
 
 Exchange DpMaster::slave_diag() { return transact(request(sap::Slave_Diag, {})); }
 
+Exchange DpMaster::set_ext_prm(std::vector<std::uint8_t> du) {
+  return transact(request(sap::Set_Ext_Prm, std::move(du)));
+}
+
+Exchange DpMaster::acyclic(std::uint8_t dsap, std::uint8_t ssap, std::vector<std::uint8_t> du) {
+  fdl::Frame f = request(dsap, std::move(du));
+  f.ssap = ssap;
+  return transact(f);
+}
+
 std::uint8_t prm_station_status(const SlaveConfig& s) {
   std::uint8_t status = 0x80;  // Lock_Req
   if (s.wd_on) status |= 0x08;
