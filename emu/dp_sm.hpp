@@ -14,6 +14,7 @@
 #include "dpc31/dp.hpp"
 #include "dpc31/fdl.hpp"
 #include "dpc31/fdl_counters.hpp"
+#include "dpc31/pdu.hpp"
 #include "irq.hpp"
 #include "regfile.hpp"
 #include "sap_list.hpp"
@@ -149,7 +150,7 @@ class DpStateMachine {
   std::optional<fdl::Frame> read_io(const fdl::Frame& req);
   std::optional<fdl::Frame> set_slave_add(const fdl::Frame& req);
   std::optional<fdl::Frame> set_ext_prm(const fdl::Frame& req);
-  [[nodiscard]] const char* dpv1_prm_fault(std::span<const std::uint8_t> du) const;
+  [[nodiscard]] const char* dpv1_prm_fault(const pdu::SetPrm& prm) const;
   fdl::Frame sap_list_answer(const fdl::Frame& req, const SapListAnswer& a);
   std::optional<fdl::Frame> data_exchange(const fdl::Frame& req);
   void global_control(const fdl::Frame& req);

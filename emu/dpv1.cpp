@@ -12,23 +12,22 @@ using fdl::Response;
 
 // VPC3+C p.53: a Set_Prm with DPV1_Enable carries DPV1_Status_1..3 (bytes 7-9). The reasons the
 // ASIC refuses it with Prm_Fault, or nullptr.
-const char* DpStateMachine::dpv1_prm_fault(std::span<const std::uint8_t> du) const {
-  if (du.size() < dpv1::kUserPrm) return "DPV1_Enable without DPV1_Status_2 and _3";
+const char* DpStateMachine::dpv1_prm_fault(const pdu::SetPrm& prm) const {
+  if (prm.user_prm.size() < 3) return "DPV1_Enable without DPV1_Status_2 and _3";
+  const std::uint8_t s1 = prm.status(1), s2 = prm.status(2), s3 = prm.status(3);
   const bool check_reserved =
       (regs_.latch(RegId::Mode_Reg2) & fields::Mode_Reg2::No_Check_Prm_Reserved) == 0;
-  if (check_reserved && ((du[dpv1::kStatus1] & dpv1::status1::Reserved) != 0 ||
-                         (du[dpv1::kStatus2] & dpv1::status2::Reserved) != 0 ||
-                         (du[dpv1::kStatus3] & dpv1::status3::Reserved) != 0))
+  if (check_reserved &&
+      ((s1 & dpv1::status1::Reserved) != 0 || (s2 & dpv1::status2::Reserved) != 0 ||
+       (s3 & dpv1::status3::Reserved) != 0))
     return "reserved DPV1_Status bits";
   // "If the extensions are used, the bit Spec_Clear_Mode in Mode Register 0 serves as
   // Fail_Safe_required ... If the DP-Slave requires Fail_Safe but the DP-Master doesn't the
   // Prm_Fault bit is set."
-  if (regs_.mode0(fields::Mode_Reg0::Spec_Clear_Mode) &&
-      (du[dpv1::kStatus1] & dpv1::status1::Fail_Safe) == 0)
+  if (regs_.mode0(fields::Mode_Reg0::Spec_Clear_Mode) && (s1 & dpv1::status1::Fail_Safe) == 0)
     return "Fail_Safe required (Spec_Clear_Mode) but not set by the master";
   // "If redundancy should be supported, the PrmCmd_Supported bit in Mode Register 0 must be set."
-  if ((du[dpv1::kStatus3] & dpv1::status3::PrmCmd) != 0 &&
-      !regs_.mode0(fields::Mode_Reg0::PrmCmd_Supported))
+  if ((s3 & dpv1::status3::PrmCmd) != 0 && !regs_.mode0(fields::Mode_Reg0::PrmCmd_Supported))
     return "PrmCmd but PrmCmd_Supported not set";
   return nullptr;
 }
