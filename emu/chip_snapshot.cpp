@@ -68,7 +68,7 @@ void handshake_fields(Ar& ar, S& s) {
 
 template <typename Ar, typename S>
 void dp_fields(Ar& ar, S& s) {
-  static_assert(snap::member_count<DpStateMachine::State>() == 29, "a new member: add it here");
+  static_assert(snap::member_count<DpStateMachine::State>() == 30, "a new member: add it here");
   ar.bounded(s.state, DpState::Data_Exchange);
   handshake_fields(ar, s.prm);
   handshake_fields(ar, s.cfg);
@@ -96,6 +96,7 @@ void dp_fields(Ar& ar, S& s) {
   ar(s.last_fcb);
   ar(s.last_master);
   ar.byte_vector(s.last_response, fdl::kMaxFrameLength);
+  ar(s.ext_prm);  // version 4
 }
 
 // The longest answer on the wire: every character toggling at every bit, plus the final rise.

@@ -53,16 +53,19 @@ std::uint16_t DpStateMachine::verdict(Handshake& h, std::uint16_t event, bool& f
   return r;
 }
 
-// The same reads answer a Set_Ext_Prm (VPC3+, New_Ext_Prm_Data): it is taken only in Wait_Cfg
-// and a Set_Prm always starts from Wait_Prm, so Wait_Cfg here means the user accepted the
-// extension, which changes nothing else.
+// The same reads answer a Set_Ext_Prm (VPC3+, New_Ext_Prm_Data): accepting it changes nothing
+// else.
 std::uint16_t DpStateMachine::prm_verdict(Verdict v) {
-  return verdict(s_.prm, irq::New_Prm_Data | irq::New_Ext_Prm_Data, s_.prm_fault, v, [this] {
-    if (s_.state == DpState::Wait_Cfg) return;
-    // The parameters are accepted: the DP watchdog runs with the new TWD from now on.
-    watchdog_.parameterise(s_.prm_wd_on, s_.prm_wd_fact1, s_.prm_wd_fact2, s_.prm_wd_1ms);
-    if (s_.state == DpState::Wait_Prm) s_.state = DpState::Wait_Cfg;
-  });
+  const bool ext = s_.ext_prm;
+  const std::uint16_t r = verdict(
+      s_.prm, ext ? irq::New_Ext_Prm_Data : irq::New_Prm_Data, s_.prm_fault, v, [this, ext] {
+        if (ext) return;
+        // The parameters are accepted: the DP watchdog runs with the new TWD from now on.
+        watchdog_.parameterise(s_.prm_wd_on, s_.prm_wd_fact1, s_.prm_wd_fact2, s_.prm_wd_1ms);
+        if (s_.state == DpState::Wait_Prm) s_.state = DpState::Wait_Cfg;
+      });
+  if (!s_.prm.pending) s_.ext_prm = false;
+  return r;
 }
 
 // SPC3 p.31: "the transition to 'DATA_EX' takes place immediately, if no Din_buffer is present
@@ -370,6 +373,7 @@ void DpStateMachine::prm_fault() {
 // The Prm buffer holds a new, checked Set_Prm: the faults are reported no more, the user's turn.
 void DpStateMachine::prm_accepted() {
   s_.prm_fault = s_.cfg_fault = s_.not_supported = false;
+  s_.ext_prm = false;
   s_.dx_on_new_din = false;  // the new parameters need their verdicts again
   s_.prm.arrived();
   irq_.raise(irq::New_Prm_Data);
@@ -605,6 +609,7 @@ void DpStateMachine::leave_master() {
   s_.state = DpState::Wait_Prm;
   s_.prm = Handshake{};
   s_.cfg = Handshake{};
+  s_.ext_prm = false;
   s_.master_add = 0xFF;  // unlocked: any master may parameterise us again
   s_.sync_mode = false;
   s_.freeze_mode = false;

@@ -91,6 +91,7 @@ class DpStateMachine {
     std::uint8_t last_master = 0xFF;
     std::vector<std::uint8_t> last_response;
     bool diag_in_flight = false;  // a Slave_Diag answer is being sent
+    bool ext_prm = false;         // VPC3+: the Prm verdict pending is a Set_Ext_Prm's
   };
   enum class Verdict : std::uint8_t { ok, not_ok };
 

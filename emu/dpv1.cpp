@@ -57,6 +57,7 @@ std::optional<Frame> DpStateMachine::set_ext_prm(const Frame& req) {
     return short_answer(req, Response::RR);
   }
   s_.prm.arrived();
+  s_.ext_prm = true;
   irq_.raise(irq::New_Ext_Prm_Data);
   return fdl::sc();
 }

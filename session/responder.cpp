@@ -12,8 +12,7 @@ namespace {
 namespace m0 = fields::Mode_Reg0;
 namespace m1 = fields::Mode_Reg1_S;
 constexpr std::uint8_t kHandshakeConflict = 0x01;  // the OK / Not_OK reads' 01: a newer one came
-constexpr std::uint16_t kHandledByReads =
-    irq::New_Prm_Data | irq::New_Cfg_Data | irq::New_Ext_Prm_Data;
+constexpr std::uint16_t kHandledByReads = irq::New_Prm_Data | irq::New_Cfg_Data;
 constexpr std::uint8_t kQueueLen = 4;  // dpc31: entries of each queue (one always empty)
 
 }  // namespace
@@ -76,9 +75,7 @@ void Responder::init(BusPort& c) {
                                 irq::Baudrate_Detect | irq::WD_DP_Control_Timeout |
                                 irq::New_GC_Command | irq::New_SSA_Data | irq::New_Cfg_Data |
                                 irq::New_Prm_Data | irq::Diag_Buffer_Changed | irq::DX_Out;
-  // VPC3+: a Set_Ext_Prm (SAP 53) is answered as a Set_Prm (docs/dpv1.md).
-  const std::uint16_t ext = p.id == Profile::vpc3plus ? irq::New_Ext_Prm_Data : 0;
-  write16(c, RegId::Int_Mask_Reg, static_cast<std::uint16_t>(~(enabled | ext)));
+  write16(c, RegId::Int_Mask_Reg, static_cast<std::uint16_t>(~enabled));
   c.write(waddr(c.chip(), RegId::WD_Baud_Control_Val), cfg_.wd_baud_control);
   c.write(waddr(c.chip(), RegId::MinTSDR_Val), 0x0B);
   write16(c, RegId::R_User_WD_Value, cfg_.user_wd_value);
@@ -162,7 +159,7 @@ void Responder::give_inputs(BusPort& c, bool always) {
 void Responder::isr(BusPort& c) {
   const std::uint16_t ir = read16(c, RegId::Int_Reg);
   interrupts.emplace_back(c.cycle(), ir);
-  if ((ir & (irq::New_Prm_Data | irq::New_Ext_Prm_Data)) != 0) {
+  if ((ir & irq::New_Prm_Data) != 0) {
     while (c.read(raddr(c.chip(), RegId::User_Prm_Data_Okay)) == kHandshakeConflict) {
     }
     ++prm_accepted;

@@ -71,6 +71,11 @@ struct Dpv1 : Bare {
     testutil::user_start(chip);
     found_again();
   }
+  // The SAP list set up, then the start-up with the test as the user (start_by_hand).
+  void online(const std::vector<Entry>& entries, std::uint8_t max_len = 240) {
+    set_up(entries, max_len);
+    start_by_hand(*this);
+  }
   // After a Start the chip searches the baud rate again: FDL_Status until it answers.
   void found_again() {
     for (int i = 0; i < 20 && !master.fdl_status().answer; ++i) {
@@ -238,12 +243,10 @@ TEST(Dpv1SetExtPrm, WithoutSetExtPrmSupportedRs) {
 // Without it a listed SAP is not served (RS); with it the request is taken.
 TEST(Dpv1SapList, EnabledByDpv1Enable) {
   Dpv1 off({0x00, 0x00, 0x00});
-  off.set_up({Entry{}});
-  start_by_hand(off);
+  off.online({Entry{}});
   EXPECT_EQ(wire(off.srd(kC1, kRead).answer), short_fc(kFcRS));
   Dpv1 on;
-  on.set_up({Entry{}});
-  start_by_hand(on);
+  on.online({Entry{}});
   EXPECT_EQ(wire(on.srd(kC1, kRead).answer), sc());
 }
 
@@ -265,8 +268,7 @@ TEST(Dpv1SapList, RequestSaMismatchRs) {
   Entry e;
   e.sa = 3;
   Dpv1 b;
-  b.set_up({e});
-  start_by_hand(b);
+  b.online({e});
   EXPECT_EQ(wire(b.srd(kC1, kRead).answer), short_fc(kFcRS));  // from master 2
   EXPECT_EQ(b.chip.read(kInd0 + hd::Control), 0x00);
   const std::uint8_t fc = fdl::make_request_fc(fdl::Function::SRD_high, false, false);
@@ -279,8 +281,7 @@ TEST(Dpv1SapList, RequestSsapMismatchRs) {
   Entry e;
   e.ssap = kC1;
   Dpv1 b;
-  b.set_up({e});
-  start_by_hand(b);
+  b.online({e});
   EXPECT_EQ(wire(b.srd(kC1, kRead, 50).answer), short_fc(kFcRS));
   EXPECT_EQ(wire(b.srd(kC1, kRead, kC1).answer), sc());
 }
@@ -292,8 +293,7 @@ TEST(Dpv1SapList, ServiceSupportedRestrictsTheFdlService) {
   Entry e;
   e.service = dpv1::service::SRD_L;
   Dpv1 b;
-  b.set_up({e});
-  start_by_hand(b);
+  b.online({e});
   EXPECT_EQ(wire(b.srd(kC1, kRead).answer), short_fc(kFcRS));  // SRD high
   EXPECT_EQ(wire(b.srd(kC1, kRead, kC1, fdl::make_request_fc(fdl::Function::SRD_low, false, false))
                      .answer),
@@ -308,8 +308,7 @@ TEST(Dpv1SapList, ServiceSupportedRestrictsTheFdlService) {
 // is acted on; the request answered SC 11 bit times after its end.
 TEST(Dpv1Processing, IndicationStoredThenHandedOverWithFdlInd) {
   Dpv1 b;
-  b.set_up({Entry{}});
-  start_by_hand(b);
+  b.online({Entry{}});
   b.ack_all();
   b.irq_on.clear();
   const Exchange ex = b.srd(kC1, kRead);
@@ -326,8 +325,7 @@ TEST(Dpv1Processing, IndicationStoredThenHandedOverWithFdlInd) {
 // the second request goes to Ind_Buf_Ptr[1], the third finds none free.
 TEST(Dpv1Processing, NoFreeIndicationBufferRr) {
   Dpv1 b;
-  b.set_up({Entry{}});
-  start_by_hand(b);
+  b.online({Entry{}});
   EXPECT_EQ(wire(b.srd(kC1, kRead).answer), sc());
   EXPECT_EQ(wire(b.srd(kC1, {0x5E, 0x00, 0x02, 0x04}).answer), sc());
   EXPECT_EQ(read_ram(b.chip, kInd1, 6), (Bytes{hd::USER | hd::IND, 240, 4, 0x4D, 0x5E, 0x00}));
@@ -349,8 +347,7 @@ TEST(Dpv1Processing, InuseBufferIsNotFree) {
 // answers gets SC and raises nothing.
 TEST(Dpv1Processing, PollsRaiseNoInterrupt) {
   Dpv1 b;
-  b.set_up({Entry{}});
-  start_by_hand(b);
+  b.online({Entry{}});
   b.srd(kC1, kRead);
   b.ack_all();
   b.irq_on.clear();
@@ -370,8 +367,7 @@ TEST(Dpv1Processing, PollsRaiseNoInterrupt) {
 // poll; Poll_End_Ind at the end of its last stop bit, 11 bit times per character later.
 TEST(Dpv1Processing, ResponseSentThenPollEndInd) {
   Dpv1 b;
-  b.set_up({Entry{}});
-  start_by_hand(b);
+  b.online({Entry{}});
   b.srd(kC1, kRead);
   b.chip.write(kInd0 + hd::Control, hd::USER);  // the user takes the indication
   const Bytes data = {0x5E, 0x00, 0x01, 0x04, 0xDE, 0xAD, 0xBE, 0xEF};
@@ -396,8 +392,7 @@ TEST(Dpv1Processing, ResponseSentThenPollEndInd) {
 // Modelled (docs/decisions.md, DPV1): RESP without USER is no response; the poll gets SC.
 TEST(Dpv1Processing, RespWithoutUserIsNoResponse) {
   Dpv1 b;
-  b.set_up({Entry{}});
-  start_by_hand(b);
+  b.online({Entry{}});
   b.srd(kC1, kRead);
   b.respond({0x5E, 0x00, 0x01, 0x00}, 0x08, hd::RESP);
   EXPECT_EQ(wire(b.srd(kC1, {}).answer), sc());
@@ -406,8 +401,7 @@ TEST(Dpv1Processing, RespWithoutUserIsNoResponse) {
 // Modelled: a response Length beyond Max_Length sends Max_Length bytes.
 TEST(Dpv1Processing, ResponseLongerThanMaxLengthIsCut) {
   Dpv1 b;
-  b.set_up({Entry{}}, 4);
-  start_by_hand(b);
+  b.online({Entry{}}, 4);
   b.srd(kC1, kRead);
   b.respond({0x5E, 0x00, 0x01, 0x04, 0x01, 0x02});
   EXPECT_EQ(b.srd(kC1, {}).answer->du, (Bytes{0x5E, 0x00, 0x01, 0x04}));
@@ -416,8 +410,7 @@ TEST(Dpv1Processing, ResponseLongerThanMaxLengthIsCut) {
 // Modelled: request data longer than the buffer's Max_Length get RR and no indication.
 TEST(Dpv1Processing, RequestLongerThanMaxLengthRr) {
   Dpv1 b;
-  b.set_up({Entry{}}, 3);
-  start_by_hand(b);
+  b.online({Entry{}}, 3);
   b.ack_all();
   EXPECT_EQ(wire(b.srd(kC1, kRead).answer), short_fc(kFcRR));
   EXPECT_EQ(irr(b.chip), 0);
@@ -429,8 +422,7 @@ TEST(Dpv1Processing, NoIndicationBufferRs) {
   Entry e;
   e.ind0 = 0x00;
   Dpv1 b;
-  b.set_up({e});
-  start_by_hand(b);
+  b.online({e});
   EXPECT_EQ(wire(b.srd(kC1, kRead).answer), short_fc(kFcRS));
 }
 
@@ -438,8 +430,7 @@ TEST(Dpv1Processing, NoIndicationBufferRs) {
 // was lost gets the same response again, without a second Poll_End_Ind.
 TEST(Dpv1Processing, RepeatedPollGetsTheSameResponse) {
   Dpv1 b;
-  b.set_up({Entry{}});
-  start_by_hand(b);
+  b.online({Entry{}});
   const auto fc = [](bool fcb) { return fdl::make_request_fc(fdl::Function::SRD_high, fcb, true); };
   b.srd(kC1, kRead, kC1, fc(true));  // the master's last FCB (Chk_Cfg) was 0
   b.respond({0x5E, 0x00, 0x01, 0x01, 0x77});
