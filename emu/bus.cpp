@@ -18,7 +18,8 @@ ChipCore::ChipCore(const ChipOptions& opt)
       irq(clock, regs, signals, opt.irq_controller),
       buffers(regs, irq),
       watchdog(clock, regs, irq, signals),
-      dp(regs, irq, buffers, watchdog, counters, signals),
+      sap_list(regs, irq, signals),
+      dp(regs, irq, buffers, watchdog, sap_list, counters, signals),
       mac(clock, regs, dp, watchdog, counters, signals),
       mode(clock, regs, irq, buffers, dp, watchdog, mac, signals,
            opt.variant ? static_cast<std::uint8_t>(*opt.variant)

@@ -1,4 +1,4 @@
-// The chip's snapshot (docs/snapshots.md, format version 3): every block's state, written and
+// The chip's snapshot (docs/snapshots.md, format version 4): every block's state, written and
 // read in one place so that the format is one list. Each list is a template run with a Writer
 // (save) or a Reader (load), so save and load cannot drift apart; a static_assert on each
 // block's State makes a new member fail the build until it is listed here.
@@ -68,7 +68,7 @@ void handshake_fields(Ar& ar, S& s) {
 
 template <typename Ar, typename S>
 void dp_fields(Ar& ar, S& s) {
-  static_assert(snap::member_count<DpStateMachine::State>() == 29, "a new member: add it here");
+  static_assert(snap::member_count<DpStateMachine::State>() == 30, "a new member: add it here");
   ar.bounded(s.state, DpState::Data_Exchange);
   handshake_fields(ar, s.prm);
   handshake_fields(ar, s.cfg);
@@ -96,6 +96,7 @@ void dp_fields(Ar& ar, S& s) {
   ar(s.last_fcb);
   ar(s.last_master);
   ar.byte_vector(s.last_response, fdl::kMaxFrameLength);
+  ar(s.ext_prm);  // version 4
 }
 
 // The longest answer on the wire: every character toggling at every bit, plus the final rise.
@@ -253,6 +254,18 @@ void core_fields(Ar& ar, C& c) {
   ar(rq.wd.left);
   ar(rq.wd_left);
   ar(rq.wd_locked);
+  // Format version 4: the VPC3+'s SAP list (DPV1, docs/dpv1.md).
+  auto& sl = A::state(c.sap_list);
+  static_assert(snap::member_count<SapList::State>() == 4, "a new member: add it here");
+  ar.section("SAPL");
+  ar(sl.enabled);
+  ar(sl.sending);
+  ar(sl.entry);
+  ar(sl.response);
+  if constexpr (requires { ar.fail(""); }) {
+    const std::uint32_t end = 1u << c.prof().address_bits;
+    if (sl.entry >= end || sl.response >= end) ar.fail("SAP list address beyond the address bus");
+  }
 }
 
 snap::Header header_of(const ChipCore& c) {

@@ -70,6 +70,7 @@ struct ChipCore {
   BufferUnit buffers;
   Watchdog watchdog;
   FdlCounters counters;
+  SapList sap_list;  // vpc3plus: DPV1's SAP list (docs/dpv1.md)
   DpStateMachine dp;
   Mac mac;
   ModeRegisters mode;

@@ -7,6 +7,8 @@
 #include <utility>
 
 #include "core.hpp"
+#include "dpc31/dpv1.hpp"
+#include "dpc31/pdu.hpp"
 
 namespace dpc31 {
 
@@ -16,24 +18,15 @@ namespace {
 constexpr std::uint16_t kDis_Start_Stop =
     fields::Mode_Reg0::Dis_Start_Control | fields::Mode_Reg0::Dis_Stop_Control;
 
-// Set_Prm Station_Status (DU byte 0) and Spec_User_Prm_Byte (DU byte 7, SPC3).
-constexpr std::uint8_t kLock_Req = 0x80;
-constexpr std::uint8_t kUnlock_Req = 0x40;
-constexpr std::uint8_t kSync_Req = 0x20;
-constexpr std::uint8_t kFreeze_Req = 0x10;
-constexpr std::uint8_t kWD_On = 0x08;
-constexpr std::uint8_t kStation_Status_Reserved = 0x07;
-constexpr std::uint8_t kSpec_WD_Base_1ms = 0x04;
-constexpr std::uint8_t kSpec_Failsafe = 0x40;   // DPC31 byte 13 bit 6 (p.26)
 constexpr std::uint16_t kSsaNotAllowed = 0x03;  // DPC31 User_SSA_OK Cmd 11 (p.26)
-constexpr std::size_t kMinPrmLength = 7;
+constexpr std::size_t kMinPrmLength = pdu::SetPrm::kStandard;
 constexpr std::size_t kMaxBufferLength = 244;
 
 // Diag buffer byte 0 as the user writes it.
 constexpr std::uint8_t kDiag_Ext_Diag = 0x01;
 constexpr std::uint8_t kDiag_Stat_Diag = 0x02;
 constexpr std::uint8_t kDiag_Ext_Diag_Overflow = 0x04;
-constexpr std::size_t kStandardDiagBytes = 6;
+constexpr std::size_t kStandardDiagBytes = pdu::SlaveDiag::kStandard;
 
 }  // namespace
 
@@ -60,12 +53,19 @@ std::uint16_t DpStateMachine::verdict(Handshake& h, std::uint16_t event, bool& f
   return r;
 }
 
+// The same reads answer a Set_Ext_Prm (VPC3+, New_Ext_Prm_Data): accepting it changes nothing
+// else.
 std::uint16_t DpStateMachine::prm_verdict(Verdict v) {
-  return verdict(s_.prm, irq::New_Prm_Data, s_.prm_fault, v, [this] {
-    // The parameters are accepted: the DP watchdog runs with the new TWD from now on.
-    watchdog_.parameterise(s_.prm_wd_on, s_.prm_wd_fact1, s_.prm_wd_fact2, s_.prm_wd_1ms);
-    if (s_.state == DpState::Wait_Prm) s_.state = DpState::Wait_Cfg;
-  });
+  const bool ext = s_.ext_prm;
+  const std::uint16_t r = verdict(
+      s_.prm, ext ? irq::New_Ext_Prm_Data : irq::New_Prm_Data, s_.prm_fault, v, [this, ext] {
+        if (ext) return;
+        // The parameters are accepted: the DP watchdog runs with the new TWD from now on.
+        watchdog_.parameterise(s_.prm_wd_on, s_.prm_wd_fact1, s_.prm_wd_fact2, s_.prm_wd_1ms);
+        if (s_.state == DpState::Wait_Prm) s_.state = DpState::Wait_Cfg;
+      });
+  if (!s_.prm.pending) s_.ext_prm = false;
+  return r;
 }
 
 // SPC3 p.31: "the transition to 'DATA_EX' takes place immediately, if no Din_buffer is present
@@ -223,11 +223,13 @@ std::optional<fdl::Frame> DpStateMachine::service(const fdl::Frame& req) {
       case sap::Set_Slave_Add:
         answer = set_slave_add(req);
         break;
+      case sap::Set_Ext_Prm:
+        answer = set_ext_prm(req);
+        break;
       default:
-        ++counters_.unknown_sap;
-        sig_.log(LogLevel::info, "DSAP {} from {}: not served (RS)", fdl::sap_number(*req.dsap),
-                 req.sa);
-        answer = short_answer(req, Response::RS);
+        answer = sap_list_answer(req, !broadcast && fdl::sap_number(*req.dsap) <= sap::kSapListLast
+                                          ? sap_list_.request(req)
+                                          : SapListAnswer{});
         break;
     }
   }
@@ -252,7 +254,11 @@ std::optional<fdl::Frame> DpStateMachine::set_prm(const fdl::Frame& req) {
     prm_fault();
     return fdl::sc();
   }
-  const std::uint8_t status = du[0];
+  // The data unit by its named fields (include/dpc31/pdu.hpp); 7 bytes at least, checked above.
+  const pdu::SetPrm prm = *pdu::SetPrm::parse(du);
+  const std::uint8_t status = prm.station_status;
+  // Byte 7: the Spec_User_Prm_Byte, or DPV1_Status_1 (its bits included, VPC3+C p.53).
+  const std::uint8_t spec = prm.status(1);
   if (s_.master_add != 0xFF && s_.master_add != req.sa) {
     // Locked by another master (its diag shows Master_Add): whatever the lock bits say, this
     // master never re-parameterises, unlocks or changes min TSDR.
@@ -266,17 +272,24 @@ std::optional<fdl::Frame> DpStateMachine::set_prm(const fdl::Frame& req) {
       (regs_.latch(RegId::Mode_Reg2) & fields::Mode_Reg2::No_Check_Prm_Reserved) == 0;
   const std::uint16_t ident = static_cast<std::uint16_t>(regs_.cell(RegId::R_Ident_High) << 8 |
                                                          regs_.cell(RegId::R_Ident_Low));
-  const std::uint16_t asked = static_cast<std::uint16_t>(du[4] << 8 | du[5]);
+  const std::uint16_t asked = prm.ident;
   const char* fault = nullptr;
   if (asked != ident) fault = "Ident_Number differs";
-  if (check_reserved && (status & kStation_Status_Reserved) != 0)
+  if (check_reserved && (status & pdu::SetPrm::Station_Status_Reserved) != 0)
     fault = "reserved Station_Status bits";
-  if ((status & kSync_Req) != 0 && !regs_.mode0(fields::Mode_Reg0::Sync_Supported))
+  if ((status & pdu::SetPrm::Sync_Req) != 0 && !regs_.mode0(fields::Mode_Reg0::Sync_Supported))
     fault = "Sync_Req but Sync not supported";
-  if ((status & kFreeze_Req) != 0 && !regs_.mode0(fields::Mode_Reg0::Freeze_Supported))
+  if ((status & pdu::SetPrm::Freeze_Req) != 0 && !regs_.mode0(fields::Mode_Reg0::Freeze_Supported))
     fault = "Freeze_Req but Freeze not supported";
-  const bool lock = (status & kLock_Req) != 0;
-  const bool unlock = (status & kUnlock_Req) != 0;
+  const bool dpv1 = prm.dpv1();
+  if (dpv1 && regs_.id() == Profile::dpc31) {
+    // The DPC31's DPV1 interface is not public (docs/dpc31.md): refused, never ignored.
+    fault = "DPV1_Enable: the DPC31's DPV1 is not modelled";
+  } else if (dpv1 && regs_.id() == Profile::vpc3plus) {
+    if (const char* f = dpv1_prm_fault(prm); f != nullptr) fault = f;
+  }
+  const bool lock = (status & pdu::SetPrm::Lock_Req) != 0;
+  const bool unlock = (status & pdu::SetPrm::Unlock_Req) != 0;
   // Lock_Req = Unlock_Req = 0 and the unlock codes adopt no parameters: only the Ident_Number
   // check applies to them.
   if (!lock || unlock) fault = asked != ident ? "Ident_Number differs" : nullptr;
@@ -288,7 +301,7 @@ std::optional<fdl::Frame> DpStateMachine::set_prm(const fdl::Frame& req) {
   // CP 5613/5614 DP Base manual p.198-199: 00 "The min TSDR is overwritten when parameters are
   // assigned. All other parameters remain unchanged." (0 keeps it, as for a lock: modelled)
   if (!lock && !unlock) {
-    if (du[3] != 0) s_.min_tsdr = du[3];
+    if (prm.min_tsdr != 0) s_.min_tsdr = prm.min_tsdr;
     sig_.log(LogLevel::info, "Set_Prm from {} without Lock_Req / Unlock_Req: min TSDR only",
              req.sa);
     return fdl::sc();
@@ -320,25 +333,30 @@ std::optional<fdl::Frame> DpStateMachine::set_prm(const fdl::Frame& req) {
   // 10: "disabled for other masters, all parameters are adopted (exception: min TSDR = 0)";
   // "The Group_Ident is accepted only when the Lock_Req bit is set."
   s_.master_add = req.sa;
-  s_.group_ident = du[6];
-  if (du[3] != 0) s_.min_tsdr = du[3];
+  s_.group_ident = prm.group_ident;
+  if (prm.min_tsdr != 0) s_.min_tsdr = prm.min_tsdr;
   // DPC31: byte 13 (DPV1_Status_1) "is permanently reserved for the DPC31": bits 7 DPV1_Enable,
   // 6 Failsafe, 2 WD_Base, the others reserved (p.26), so no Dis_Start / Dis_Stop there.
   if (regs_.mode0(fields::Mode_Reg0::DP_Mode) && du.size() > 7 && regs_.id() != Profile::dpc31) {
     // Spec_User_Prm_Byte overwrites Dis_Start_Control / Dis_Stop_Control in DP mode.
     std::uint16_t& m0 = regs_.latch(RegId::Mode_Reg0);
-    sig_.emit(BlockEvent::Kind::dis, du[7] & kDis_Start_Stop);
-    m0 = static_cast<std::uint16_t>((m0 & ~kDis_Start_Stop) | (du[7] & kDis_Start_Stop));
+    sig_.emit(BlockEvent::Kind::dis, spec & kDis_Start_Stop);
+    m0 = static_cast<std::uint16_t>((m0 & ~kDis_Start_Stop) | (spec & kDis_Start_Stop));
   }
-  const bool wd_1ms = regs_.id() == Profile::vpc3plus
-                          ? regs_.mode0(fields::Mode_Reg0::WD_Base)
-                          : du.size() > 7 && (du[7] & kSpec_WD_Base_1ms) != 0;
+  // VPC3+: Mode_Reg0.WD_Base, or with DPV1 the master's DPV1_Status_1.WD_Base (p.53: "The bits
+  // of the Spec_User_Prm_Byte are included"; modelled).
+  const bool telegram_1ms = (spec & dpv1::status1::WD_Base) != 0;
+  const bool wd_1ms = regs_.id() != Profile::vpc3plus || dpv1
+                          ? telegram_1ms
+                          : regs_.mode0(fields::Mode_Reg0::WD_Base);
   // DP_Control starts with these only once the user accepts them (User_Prm_Data_Okay).
-  s_.prm_wd_on = (status & kWD_On) != 0;
-  s_.prm_wd_fact1 = du[1];
-  s_.prm_wd_fact2 = du[2];
+  s_.prm_wd_on = (status & pdu::SetPrm::WD_On) != 0;
+  s_.prm_wd_fact1 = prm.wd_fact1;
+  s_.prm_wd_fact2 = prm.wd_fact2;
   s_.prm_wd_1ms = wd_1ms;
-  s_.failsafe = regs_.id() == Profile::dpc31 && du.size() > 7 && (du[7] & kSpec_Failsafe) != 0;
+  // DPC31 byte 13 Failsafe; VPC3+ DPV1_Status_1.Fail_Safe: Data_Exchange without outputs.
+  s_.failsafe = (regs_.id() == Profile::dpc31 || dpv1) && (spec & dpv1::status1::Fail_Safe) != 0;
+  if (regs_.id() == Profile::vpc3plus) sap_list_.enable(dpv1);
   receive_via_aux(fields::R_Aux_Buf_Sel::Set_Prm, RegId::R_Prm_Buf_Ptr, RegId::R_Len_Prm_Data, du);
   sig_.emit(BlockEvent::Kind::prm);
   prm_accepted();
@@ -355,6 +373,7 @@ void DpStateMachine::prm_fault() {
 // The Prm buffer holds a new, checked Set_Prm: the faults are reported no more, the user's turn.
 void DpStateMachine::prm_accepted() {
   s_.prm_fault = s_.cfg_fault = s_.not_supported = false;
+  s_.ext_prm = false;
   s_.dx_on_new_din = false;  // the new parameters need their verdicts again
   s_.prm.arrived();
   irq_.raise(irq::New_Prm_Data);
@@ -399,13 +418,17 @@ std::optional<fdl::Frame> DpStateMachine::slave_diag(const fdl::Frame& req) {
       std::clamp<std::size_t>(regs_.cell(kLen[k]), kStandardDiagBytes, kMaxBufferLength);
   std::vector<std::uint8_t> du = regs_.read_buffer(kPtr[k], len);
   const std::uint8_t user = du[0];
-  du[0] = static_cast<std::uint8_t>((s_.state != DpState::Data_Exchange ? 0x02 : 0) |
-                                    (s_.cfg_fault ? 0x04 : 0) | (user & kDiag_Ext_Diag ? 0x08 : 0) |
-                                    (s_.not_supported ? 0x10 : 0) | (s_.prm_fault ? 0x40 : 0));
-  du[1] = static_cast<std::uint8_t>(
-      (s_.state == DpState::Wait_Prm ? 0x01 : 0) | (user & kDiag_Stat_Diag ? 0x02 : 0) | 0x04 |
-      (watchdog_.dp_wd_on() ? 0x08 : 0) | (s_.freeze_mode ? 0x10 : 0) | (s_.sync_mode ? 0x20 : 0));
-  du[2] = (user & kDiag_Ext_Diag_Overflow) != 0 ? 0x80 : 0x00;
+  using D = pdu::SlaveDiag;
+  du[0] = static_cast<std::uint8_t>(
+      (s_.state != DpState::Data_Exchange ? D::St1_Station_Not_Ready : 0) |
+      (s_.cfg_fault ? D::St1_Cfg_Fault : 0) | (user & kDiag_Ext_Diag ? D::St1_Ext_Diag : 0) |
+      (s_.not_supported ? D::St1_Not_Supported : 0) | (s_.prm_fault ? D::St1_Prm_Fault : 0));
+  du[1] = static_cast<std::uint8_t>((s_.state == DpState::Wait_Prm ? D::St2_Prm_Req : 0) |
+                                    (user & kDiag_Stat_Diag ? D::St2_Stat_Diag : 0) |
+                                    D::St2_Always_1 | (watchdog_.dp_wd_on() ? D::St2_WD_On : 0) |
+                                    (s_.freeze_mode ? D::St2_Freeze_Mode : 0) |
+                                    (s_.sync_mode ? D::St2_Sync_Mode : 0));
+  du[2] = (user & kDiag_Ext_Diag_Overflow) != 0 ? D::St3_Ext_Diag_Overflow : 0x00;
   du[3] = s_.master_add;
   du[4] = regs_.cell(RegId::R_Ident_High);
   du[5] = regs_.cell(RegId::R_Ident_Low);
@@ -556,6 +579,7 @@ void DpStateMachine::dp_control_expired() {
 }
 
 void DpStateMachine::response_sent() {
+  sap_list_.response_sent();
   if (!s_.diag_in_flight) return;
   s_.diag_in_flight = false;
   // Diag_Flag is cleared when "the relevant master" fetched (SPC3 p.32): the locking master, or
@@ -572,6 +596,7 @@ namespace dpc31 {
 
 void DpStateMachine::start() {
   s_ = State{};
+  sap_list_.reset();
   s_.started = true;
   buffers_.end_clear();
   s_.station = regs_.cell(RegId::R_TS_Adr);
@@ -584,6 +609,7 @@ void DpStateMachine::leave_master() {
   s_.state = DpState::Wait_Prm;
   s_.prm = Handshake{};
   s_.cfg = Handshake{};
+  s_.ext_prm = false;
   s_.master_add = 0xFF;  // unlocked: any master may parameterise us again
   s_.sync_mode = false;
   s_.freeze_mode = false;

@@ -14,8 +14,10 @@
 #include "dpc31/dp.hpp"
 #include "dpc31/fdl.hpp"
 #include "dpc31/fdl_counters.hpp"
+#include "dpc31/pdu.hpp"
 #include "irq.hpp"
 #include "regfile.hpp"
+#include "sap_list.hpp"
 #include "signals.hpp"
 #include "watchdog.hpp"
 
@@ -89,18 +91,24 @@ class DpStateMachine {
     std::uint8_t last_master = 0xFF;
     std::vector<std::uint8_t> last_response;
     bool diag_in_flight = false;  // a Slave_Diag answer is being sent
+    bool ext_prm = false;         // VPC3+: the Prm verdict pending is a Set_Ext_Prm's
   };
   enum class Verdict : std::uint8_t { ok, not_ok };
 
   DpStateMachine(RegisterFile& regs, InterruptController& irq, BufferUnit& buffers,
-                 Watchdog& watchdog, FdlCounters& counters, const Signals& sig)
+                 Watchdog& watchdog, SapList& sap_list, FdlCounters& counters, const Signals& sig)
       : regs_(regs),
         irq_(irq),
         buffers_(buffers),
         watchdog_(watchdog),
+        sap_list_(sap_list),
         counters_(counters),
         sig_(sig) {}
-  void reset() { s_ = State{}; }  // also the MAC reset (Go_Offline): Offline, as after reset
+  // Also the MAC reset (Go_Offline): Offline, as after reset.
+  void reset() {
+    s_ = State{};
+    sap_list_.reset();
+  }
   // Start_SPC3: the state machine from the top, at the station address of R_TS_Adr.
   void start();
   [[nodiscard]] bool started() const { return s_.started; }
@@ -142,6 +150,9 @@ class DpStateMachine {
   std::optional<fdl::Frame> slave_diag(const fdl::Frame& req);
   std::optional<fdl::Frame> read_io(const fdl::Frame& req);
   std::optional<fdl::Frame> set_slave_add(const fdl::Frame& req);
+  std::optional<fdl::Frame> set_ext_prm(const fdl::Frame& req);
+  [[nodiscard]] const char* dpv1_prm_fault(const pdu::SetPrm& prm) const;
+  fdl::Frame sap_list_answer(const fdl::Frame& req, const SapListAnswer& a);
   std::optional<fdl::Frame> data_exchange(const fdl::Frame& req);
   void global_control(const fdl::Frame& req);
   template <typename Accepted>
@@ -160,6 +171,7 @@ class DpStateMachine {
   InterruptController& irq_;
   BufferUnit& buffers_;
   Watchdog& watchdog_;
+  SapList& sap_list_;
   FdlCounters& counters_;
   const Signals& sig_;
   State s_;

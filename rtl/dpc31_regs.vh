@@ -931,7 +931,7 @@
 `define VPC3_ADDR_R_TS_Adr                              13'h0016
 `define VPC3_R_TS_Adr_RESET                             8'h00
 
-// R_FDL_SAP_List_Ptr: cell, 8 bit -- segment of the FDL SAP list (DPV1, stored only)
+// R_FDL_SAP_List_Ptr: cell, 8 bit -- segment of the FDL SAP list (DPV1): served once a Set_Prm with DPV1_Enable is accepted
 `define VPC3_ADDR_R_FDL_SAP_List_Ptr                    13'h0017
 `define VPC3_R_FDL_SAP_List_Ptr_RESET                   8'h00
 

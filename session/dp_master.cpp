@@ -6,6 +6,7 @@
 #include <array>
 
 #include "dpc31/dp.hpp"
+#include "dpc31/pdu.hpp"
 
 namespace dpc31 {
 
@@ -207,30 +208,39 @@ Exchange DpMaster::fdl_status() {
 
 Exchange DpMaster::slave_diag() { return transact(request(sap::Slave_Diag, {})); }
 
+Exchange DpMaster::set_ext_prm(std::vector<std::uint8_t> du) {
+  return transact(request(sap::Set_Ext_Prm, std::move(du)));
+}
+
+Exchange DpMaster::acyclic(std::uint8_t dsap, std::uint8_t ssap, std::vector<std::uint8_t> du) {
+  fdl::Frame f = request(dsap, std::move(du));
+  f.ssap = ssap;
+  return transact(f);
+}
+
 std::uint8_t prm_station_status(const SlaveConfig& s) {
-  std::uint8_t status = 0x80;  // Lock_Req
-  if (s.wd_on) status |= 0x08;
-  if (s.freeze_req) status |= 0x10;
-  if (s.sync_req) status |= 0x20;
+  using P = pdu::SetPrm;
+  std::uint8_t status = P::Lock_Req;
+  if (s.wd_on) status |= P::WD_On;
+  if (s.freeze_req) status |= P::Freeze_Req;
+  if (s.sync_req) status |= P::Sync_Req;
   return status;
 }
 
+// Spec_User_Prm_Byte (byte 7) is always sent, 0 when the slave has no user parameters; WD_Base
+// is its bit 2 (DPV1_Status_1 includes it).
 std::vector<std::uint8_t> prm_du(const SlaveConfig& s, std::uint8_t station_status) {
-  const std::array<std::uint8_t, 7> head = {station_status,
-                                            s.wd_fact1,
-                                            s.wd_fact2,
-                                            s.min_tsdr,
-                                            static_cast<std::uint8_t>(s.ident >> 8),
-                                            static_cast<std::uint8_t>(s.ident),
-                                            s.group_ident};
-  // Sized once and filled: growing the vector (a copy of user_prm, or an insert) makes GCC 12
-  // at -O3 report false -Wfree-nonheap-object / -Warray-bounds errors (issue 17).
-  // Spec_User_Prm_Byte (byte 7) is always sent, 0 when the slave has no user parameters.
-  std::vector<std::uint8_t> du(head.size() + std::max<std::size_t>(s.user_prm.size(), 1), 0);
-  std::copy(head.begin(), head.end(), du.begin());
-  std::copy(s.user_prm.begin(), s.user_prm.end(), du.begin() + head.size());
-  if (s.wd_base_1ms) du[head.size()] |= 0x04;  // Spec_User_Prm_Byte WD_Base
-  return du;
+  pdu::SetPrm p;
+  p.station_status = station_status;
+  p.wd_fact1 = s.wd_fact1;
+  p.wd_fact2 = s.wd_fact2;
+  p.min_tsdr = s.min_tsdr;
+  p.ident = s.ident;
+  p.group_ident = s.group_ident;
+  p.user_prm.resize(std::max<std::size_t>(s.user_prm.size(), 1), 0);
+  std::copy(s.user_prm.begin(), s.user_prm.end(), p.user_prm.begin());
+  if (s.wd_base_1ms) p.user_prm[0] |= dpv1::status1::WD_Base;
+  return p.build();
 }
 
 Exchange DpMaster::set_prm(std::uint8_t station_status_extra) {
@@ -266,9 +276,12 @@ Exchange DpMaster::set_slave_address(std::uint8_t new_address, bool no_add_chang
 }
 
 bool DpMaster::diag_ready(const fdl::Frame& f) {
-  if (f.du.size() < 6) return false;
-  constexpr std::uint8_t kNotReadyOrFault = 0x02 | 0x04 | 0x10 | 0x40;
-  return (f.du[0] & kNotReadyOrFault) == 0 && (f.du[1] & 0x01) == 0;
+  using D = pdu::SlaveDiag;
+  const std::optional<D> d = D::parse(f.du);
+  constexpr std::uint8_t kNotReadyOrFault =
+      D::St1_Station_Not_Ready | D::St1_Cfg_Fault | D::St1_Not_Supported | D::St1_Prm_Fault;
+  return d && (d->station_status_1 & kNotReadyOrFault) == 0 &&
+         (d->station_status_2 & D::St2_Prm_Req) == 0;
 }
 
 bool DpMaster::startup(int tries) {
@@ -285,8 +298,10 @@ bool DpMaster::startup(int tries) {
       note(fmt::format("[cycle {:>10}] Slave_Diag: ready for Data_Exchange", chip_.cycle()));
       return true;
     }
-    if ((diag.answer->du.size() >= 2 && (diag.answer->du[1] & 0x01) != 0) ||
-        (diag.answer->du.size() >= 1 && (diag.answer->du[0] & 0x44) != 0)) {
+    using D = pdu::SlaveDiag;
+    const std::vector<std::uint8_t>& du = diag.answer->du;
+    if ((du.size() >= 2 && (du[1] & D::St2_Prm_Req) != 0) ||
+        (!du.empty() && (du[0] & (D::St1_Cfg_Fault | D::St1_Prm_Fault)) != 0)) {
       // Prm_Req (or a fault): parameterise and configure.
       note(fmt::format("[cycle {:>10}] Slave_Diag: Prm_Req, sending Set_Prm and Chk_Cfg",
                        chip_.cycle()));

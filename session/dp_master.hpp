@@ -156,6 +156,11 @@ class DpMaster {
   Exchange read_inputs();
   Exchange read_outputs();
   Exchange set_slave_address(std::uint8_t new_address, bool no_add_change);
+  // Set_Ext_Prm (SAP 53, VPC3+ DPV1) with these data.
+  Exchange set_ext_prm(std::vector<std::uint8_t> du);
+  // An SRD from our SAP `ssap` to the slave's SAP `dsap` (DPV1: MSAC_C1 on 51, MSAC_C2 on 49 and
+  // the connection's SAP), FCB as for every SRD: a request with data, or a poll without.
+  Exchange acyclic(std::uint8_t dsap, std::uint8_t ssap, std::vector<std::uint8_t> du);
 
   // The standard start-up: FDL_Status until answered, Slave_Diag, Set_Prm, Chk_Cfg, Slave_Diag
   // until the slave is ready. Returns false if it did not reach Data_Exchange within `tries`.

@@ -500,7 +500,7 @@ TEST(SnapshotFormat, BadFilesAreRefusedAndLeaveTheChipUnchanged) {
 
   b = good;
   set_le(b, 8, snap::kFormatVersion + 1, 4);
-  expect_refused(target, b, "snapshot format version 4 is newer than this build reads (3)");
+  expect_refused(target, b, "snapshot format version 5 is newer than this build reads (4)");
   set_le(b, 8, 0, 4);
   expect_refused(target, b, "snapshot format version 0 is not supported");
 

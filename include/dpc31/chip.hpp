@@ -80,6 +80,8 @@ inline constexpr std::uint16_t New_Cfg_Data = fields::Int_Req_Reg::New_Cfg_Data;
 inline constexpr std::uint16_t New_Prm_Data = fields::Int_Req_Reg::New_Prm_Data;
 inline constexpr std::uint16_t Diag_Buffer_Changed = fields::Int_Req_Reg::Diag_Buffer_Changed;
 inline constexpr std::uint16_t DX_Out = fields::Int_Req_Reg::DX_Out;
+inline constexpr std::uint16_t Poll_End_Ind = fields::Int_Req_Reg::Poll_End_Ind;  // VPC3+ only
+inline constexpr std::uint16_t FDL_Ind = fields::Int_Req_Reg::FDL_Ind;            // VPC3+ only
 }  // namespace irq
 
 // A telegram on the bus, as the chip received or sent it (for logs and captures).

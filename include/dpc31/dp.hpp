@@ -18,6 +18,13 @@ inline constexpr std::uint8_t Slave_Diag = 60;
 inline constexpr std::uint8_t Set_Prm = 61;
 inline constexpr std::uint8_t Chk_Cfg = 62;
 inline constexpr std::uint8_t Master = 62;
+// DPV1 (VPC3+C p.53 "Set_(Ext_)Prm (SAP 53 / SAP 61)"; the MSAC services of IEC 61158-6-3): the
+// SAPs a firmware puts into the VPC3+'s SAP list (0-51), and Set_Ext_Prm, which the chip serves.
+inline constexpr std::uint8_t MSAC_C2_RM = 49;  // class-2 resource manager (Initiate)
+inline constexpr std::uint8_t MSAC_C1_Alarm = 50;
+inline constexpr std::uint8_t MSAC_C1 = 51;  // class-1 Read / Write / Alarm_Ack
+inline constexpr std::uint8_t Set_Ext_Prm = 53;
+inline constexpr std::uint8_t kSapListLast = 51;  // SAP_Number: 0 - 51 (VPC3+C p.55)
 }  // namespace sap
 
 // The DPC31's request interface (DPC31 HW description p.22, Table 5.1-3, p.31; docs/dpc31.md):

@@ -600,9 +600,9 @@ enum dpc31_profile {
 #define VPC3_Int_Req_Reg_DX_Out_Pos                     13u
 #define VPC3_Int_Req_Reg_DX_Out_Msk                     0x2000u /* 13 RW: new output data in N (also after a clear by the ASIC) */
 #define VPC3_Int_Req_Reg_Poll_End_Ind_Pos               14u
-#define VPC3_Int_Req_Reg_Poll_End_Ind_Msk               0x4000u /* 14 RW: DPV1 poll end (DPV1 not modelled: only set by the user) */
+#define VPC3_Int_Req_Reg_Poll_End_Ind_Msk               0x4000u /* 14 RW: DPV1: a response buffer was sent (its last stop bit), RESP and USER cleared (VPC3+C p.56) */
 #define VPC3_Int_Req_Reg_FDL_Ind_Pos                    15u
-#define VPC3_Int_Req_Reg_FDL_Ind_Msk                    0x8000u /* 15 RW: DPV1 FDL indication (DPV1 not modelled: only set by the user) */
+#define VPC3_Int_Req_Reg_FDL_Ind_Msk                    0x8000u /* 15 RW: DPV1: a request was stored in an indication buffer of the SAP list, USER + IND set (VPC3+C p.56) */
 
 /* Int_Reg: derived, 16 bit -- IR = IRR AND NOT IMR */
 #define VPC3_Int_Reg                                    0x002u /* read */
@@ -640,9 +640,9 @@ enum dpc31_profile {
 #define VPC3_Int_Reg_DX_Out_Pos                         13u
 #define VPC3_Int_Reg_DX_Out_Msk                         0x2000u /* 13 RO: new output data in N (also after a clear by the ASIC) */
 #define VPC3_Int_Reg_Poll_End_Ind_Pos                   14u
-#define VPC3_Int_Reg_Poll_End_Ind_Msk                   0x4000u /* 14 RO: DPV1 poll end (DPV1 not modelled: only set by the user) */
+#define VPC3_Int_Reg_Poll_End_Ind_Msk                   0x4000u /* 14 RO: DPV1: a response buffer was sent (its last stop bit), RESP and USER cleared (VPC3+C p.56) */
 #define VPC3_Int_Reg_FDL_Ind_Pos                        15u
-#define VPC3_Int_Reg_FDL_Ind_Msk                        0x8000u /* 15 RO: DPV1 FDL indication (DPV1 not modelled: only set by the user) */
+#define VPC3_Int_Reg_FDL_Ind_Msk                        0x8000u /* 15 RO: DPV1: a request was stored in an indication buffer of the SAP list, USER + IND set (VPC3+C p.56) */
 
 /* Int_Ack_Reg: port -> Int_Req_Reg, 16 bit -- Interrupt acknowledge: write 1 to clear the IRR bit */
 #define VPC3_Int_Ack_Reg                                0x002u /* write */
@@ -680,9 +680,9 @@ enum dpc31_profile {
 #define VPC3_Int_Ack_Reg_DX_Out_Pos                     13u
 #define VPC3_Int_Ack_Reg_DX_Out_Msk                     0x2000u /* 13 W1C: new output data in N (also after a clear by the ASIC) */
 #define VPC3_Int_Ack_Reg_Poll_End_Ind_Pos               14u
-#define VPC3_Int_Ack_Reg_Poll_End_Ind_Msk               0x4000u /* 14 W1C: DPV1 poll end (DPV1 not modelled: only set by the user) */
+#define VPC3_Int_Ack_Reg_Poll_End_Ind_Msk               0x4000u /* 14 W1C: DPV1: a response buffer was sent (its last stop bit), RESP and USER cleared (VPC3+C p.56) */
 #define VPC3_Int_Ack_Reg_FDL_Ind_Pos                    15u
-#define VPC3_Int_Ack_Reg_FDL_Ind_Msk                    0x8000u /* 15 W1C: DPV1 FDL indication (DPV1 not modelled: only set by the user) */
+#define VPC3_Int_Ack_Reg_FDL_Ind_Msk                    0x8000u /* 15 W1C: DPV1: a request was stored in an indication buffer of the SAP list, USER + IND set (VPC3+C p.56) */
 
 /* Status_Reg: derived, 16 bit -- Status register */
 #define VPC3_Status_Reg                                 0x004u /* read */
@@ -742,9 +742,9 @@ enum dpc31_profile {
 #define VPC3_Int_Mask_Reg_DX_Out_Pos                    13u
 #define VPC3_Int_Mask_Reg_DX_Out_Msk                    0x2000u /* 13 WO: new output data in N (also after a clear by the ASIC) */
 #define VPC3_Int_Mask_Reg_Poll_End_Ind_Pos              14u
-#define VPC3_Int_Mask_Reg_Poll_End_Ind_Msk              0x4000u /* 14 WO: DPV1 poll end (DPV1 not modelled: only set by the user) */
+#define VPC3_Int_Mask_Reg_Poll_End_Ind_Msk              0x4000u /* 14 WO: DPV1: a response buffer was sent (its last stop bit), RESP and USER cleared (VPC3+C p.56) */
 #define VPC3_Int_Mask_Reg_FDL_Ind_Pos                   15u
-#define VPC3_Int_Mask_Reg_FDL_Ind_Msk                   0x8000u /* 15 WO: DPV1 FDL indication (DPV1 not modelled: only set by the user) */
+#define VPC3_Int_Mask_Reg_FDL_Ind_Msk                   0x8000u /* 15 WO: DPV1: a request was stored in an indication buffer of the SAP list, USER + IND set (VPC3+C p.56) */
 
 /* Mode_Reg0: latch, 16 bit -- Mode register 0 */
 #define VPC3_Mode_Reg0                                  0x006u /* read/write */
@@ -997,7 +997,7 @@ enum dpc31_profile {
 #define VPC3_R_TS_Adr                                   0x016u /* read/write */
 #define VPC3_R_TS_Adr_RESET                             0x00u
 
-/* R_FDL_SAP_List_Ptr: cell, 8 bit -- segment of the FDL SAP list (DPV1, stored only) */
+/* R_FDL_SAP_List_Ptr: cell, 8 bit -- segment of the FDL SAP list (DPV1): served once a Set_Prm with DPV1_Enable is accepted */
 #define VPC3_R_FDL_SAP_List_Ptr                         0x017u /* read/write */
 #define VPC3_R_FDL_SAP_List_Ptr_RESET                   0x00u
 
