@@ -23,17 +23,17 @@ using namespace conformance;
 
 namespace {
 
-enum class Kind { counter, pwm };
+enum class LogmsgHalf { counter, pwm };
 constexpr std::uint8_t kMsg0 = 0x01, kMsg1 = 0x02, kMsg2 = 0x04, kMsg3 = 0x08;
 
-class Logmsg : public ::testing::TestWithParam<std::tuple<Profile, Kind>> {
+class Logmsg : public ::testing::TestWithParam<std::tuple<Profile, LogmsgHalf>> {
  protected:
   void SetUp() override {
     b_ = std::make_unique<FirmwareBench>(std::get<0>(GetParam()), cnt2_firmware,
                                          gsd_slave(cnt2_firmware, 9));
     ASSERT_TRUE(b_->master.startup());
   }
-  [[nodiscard]] bool pwm() const { return std::get<1>(GetParam()) == Kind::pwm; }
+  [[nodiscard]] bool pwm() const { return std::get<1>(GetParam()) == LogmsgHalf::pwm; }
   // One exchange with LOGMSG of channel 1 / 2 (of the kind under test, the other kind's 0); the
   // status bytes of its answer.
   std::pair<std::uint8_t, std::uint8_t> dx(bool log1, bool log2 = false) {
@@ -185,8 +185,9 @@ TEST_P(Logmsg, ProcedureReadsOutAndSetsBackWithoutLosingMessages) {
 
 INSTANTIATE_TEST_SUITE_P(Profiles, Logmsg,
                          ::testing::Combine(::testing::ValuesIn(kAllProfiles),
-                                            ::testing::Values(Kind::counter, Kind::pwm)),
+                                            ::testing::Values(LogmsgHalf::counter,
+                                                              LogmsgHalf::pwm)),
                          [](const auto& i) {
                            return testutil::pname(std::get<0>(i.param)) +
-                                  (std::get<1>(i.param) == Kind::pwm ? "_pwm" : "_counter");
+                                  (std::get<1>(i.param) == LogmsgHalf::pwm ? "_pwm" : "_counter");
                          });
