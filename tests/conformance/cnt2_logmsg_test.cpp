@@ -1,6 +1,6 @@
 // CNT2 (firmware/cnt2, seed 001): the MSG bits held by CNTx_LOGMSG or PWMx_LOGMSG are released
-// only by the master writing LOGMSG 0, never by the ASIC clearing the outputs. The firmware runs on the host
-// CPU over the C HAL; the built-in master drives the chip on the wire.
+// only by the master writing LOGMSG 0, never by the ASIC clearing the outputs. The firmware runs on
+// the host CPU over the C HAL; the built-in master drives the chip on the wire.
 #include <utility>
 #include <vector>
 
