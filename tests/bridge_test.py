@@ -262,8 +262,9 @@ def do4_reparameterise_after_watchdog():
 
 
 def cnt2_logmsg(firmware="CNT2"):
-    """CNT2 at 500 kbaud, free pacing: CNT1_LOGMSG (outputs 81 00) sets LOGMSG_ACK (bit 7 of
-    channel 1's status byte) and the firmware's hold1 port."""
+    """CNT2 at 500 kbaud, free pacing: CNT1_LOGMSG and PWM1_LOGMSG (outputs 81 00 81 00 00 00)
+    set LOGMSG_ACK (bit 7 of counter 1's status byte 2 and PWM 1's byte 6) and the firmware's
+    hold1 and pwm_hold1 ports."""
     with tempfile.TemporaryDirectory() as tmp:
         b = Bridge(tmp, "--firmware", firmware, "--baud", "500000", "--pacing", "free",
                    "--profile", "vpc3plus", "--address", "9")
@@ -276,7 +277,7 @@ def cnt2_logmsg(firmware="CNT2"):
                      diag([0x02, 0x05, 0x00, 0xFF, 0x0C, 0x02]))
             prm = [0x88, 0x64, 0x0A, 0x00, 0x0C, 0x02, 0x00, 0x00]
             m.expect("Set_Prm", m.srd(prm, SAP_SET_PRM), bytes([SC]))
-            m.expect("Chk_Cfg", m.srd([0x21, 0x15], SAP_CHK_CFG), bytes([SC]))
+            m.expect("Chk_Cfg", m.srd([0x25, 0x17], SAP_CHK_CFG), bytes([SC]))
             ready = diag([0x00, 0x0C, 0x00, MASTER, 0x0C, 0x02])
             for _ in range(20):
                 a = m.expect("Slave_Diag", m.srd([], SAP_SLAVE_DIAG), ready,
@@ -284,10 +285,11 @@ def cnt2_logmsg(firmware="CNT2"):
                 if a == ready:
                     break
             check(a == ready, "CNT2 never became ready")
-            zero = dx_answer(0x08, [0] * 6)
-            held = dx_answer(0x08, [0x00, 0x00, 0x80, 0x00, 0x00, 0x00])
+            zero = dx_answer(0x08, [0] * 8)
+            held = dx_answer(0x08, [0x00, 0x00, 0x80, 0x00, 0x00, 0x00, 0x80, 0x00])
             for _ in range(5):
-                a = m.expect("Data_Exchange 81 00", m.srd([0x81, 0x00]), zero, held)
+                a = m.expect("Data_Exchange 81 00 81 00 00 00",
+                             m.srd([0x81, 0x00, 0x81, 0x00, 0x00, 0x00]), zero, held)
                 if a == held:
                     break
             check(a == held, "LOGMSG_ACK never came")
@@ -295,6 +297,7 @@ def cnt2_logmsg(firmware="CNT2"):
             b.stop(signal.SIGHUP)
             text = "\n".join(b.log_lines())
             check("PORT  CNT2 hold1 = 0x01" in text, "log lacks the hold1 port write")
+            check("PORT  CNT2 pwm_hold1 = 0x01" in text, "log lacks the pwm_hold1 port write")
             check("profile vpc3plus, variant c, firmware CNT2, address 9" in b.log_lines()[0],
                   f"log line 1 lacks the profile, variant or firmware: {b.log_lines()[0]}")
         finally:

@@ -99,6 +99,13 @@ INSTANTIATE_TEST_SUITE_P(Profiles, Do4,
 
 // --- CNT2: no message is lost across hold and release, at any timing ---
 
+// CNT2's four message channels: counters 1, 2 and PWM outputs 1, 2. Channel c's hardware input,
+// its LOGMSG output byte (bit 7), its status input byte, and its hold port (= c).
+constexpr int kChannels = 4;
+const char* const kEventName[kChannels] = {"event1", "event2", "pwm_event1", "pwm_event2"};
+constexpr int kLogmsgByte[kChannels] = {0, 1, 2, 4};
+constexpr int kStatusByte[kChannels] = {2, 5, 6, 7};
+
 // Everything in the order it happened (the host CPU and the bus side take turns, so this is a
 // total order): hardware events and the firmware's hold/release instants.
 struct LogEntry {
@@ -119,8 +126,10 @@ void run_property(std::uint32_t seed) {
   const Profile profile = static_cast<Profile>(pick(0, 2));
   const std::uint32_t baud = pick(0, 1) != 0 ? 12'000'000 : 1'500'000;
   Bench b(profile, cnt2_firmware, gsd_slave(cnt2_firmware, 9), baud);
-  ASSERT_EQ(cnt2_get_channel(0)->shadow, 0) << "seed " << seed;
-  ASSERT_EQ(cnt2_get_channel(1)->shadow, 0) << "seed " << seed;
+  for (int c = 0; c < 2; ++c) {
+    ASSERT_EQ(cnt2_get_channel(c)->m.shadow, 0) << "seed " << seed;
+    ASSERT_EQ(cnt2_get_pwm(c)->m.shadow, 0) << "seed " << seed;
+  }
   ASSERT_TRUE(b.master.startup()) << "seed " << seed;
 
   std::vector<LogEntry> log;
@@ -132,9 +141,9 @@ void run_property(std::uint32_t seed) {
   // Hardware events arrive at any access of either side, also inside the firmware's ISR.
   b.chip.on_state_change([&](std::uint64_t cycle) {
     while (injecting && cycle >= next_event) {
-      const int ch = pick(0, 1);
+      const int ch = pick(0, kChannels - 1);
       const auto bits = static_cast<std::uint8_t>(pick(1, 15));
-      ASSERT_EQ(cnt2_hw_input(ch == 0 ? "event1" : "event2", bits), 0);
+      ASSERT_EQ(cnt2_hw_input(kEventName[ch], bits), 0);
       log.push_back({LogEntry::event, ch, bits});
       next_event =
           cycle +
@@ -142,25 +151,27 @@ void run_property(std::uint32_t seed) {
     }
   });
   b.host.on_port = [&](std::uint64_t, unsigned port, std::uint32_t value) {
+    ASSERT_LT(port, static_cast<unsigned>(kChannels)) << "seed " << seed << ": PWM never enabled";
     log.push_back({value != 0 ? LogEntry::hold : LogEntry::release, static_cast<int>(port), 0});
   };
 
-  MasterApp app[2];
-  std::vector<std::uint8_t> out = {0x00, 0x00};
+  MasterApp app[kChannels];
+  std::vector<std::uint8_t> out(6, 0x00);
   auto exchange = [&] {
     const Exchange ex = b.master.data_exchange(out);
     if (pick(0, 2) == 0)
       b.master.idle(std::uniform_int_distribution<std::uint64_t>(1, max_gap)(rng));
-    ASSERT_TRUE(ex.answer && ex.answer->du.size() == 6) << "seed " << seed;
-    for (int c = 0; c < 2; ++c) {
-      const std::uint8_t status = ex.answer->du[3 * c + 2];
+    ASSERT_TRUE(ex.answer && ex.answer->du.size() == 8) << "seed " << seed;
+    for (int c = 0; c < kChannels; ++c) {
+      const std::uint8_t status = ex.answer->du[kStatusByte[c]];
+      std::uint8_t& ctl = out[kLogmsgByte[c]];
       const bool ack = (status & 0x80) != 0;
       MasterApp& a = app[c];
       switch (a.state) {
         case MasterApp::idle:
           // Evaluate when messages are shown, or (rarely) for no reason at all.
           if (!draining && (((status & 0x0F) != 0 && pick(0, 2) != 0) || pick(0, 15) == 0)) {
-            out[c] |= 0x80;
+            ctl |= 0x80;
             a.state = MasterApp::wait_ack;
           }
           break;
@@ -175,7 +186,7 @@ void run_property(std::uint32_t seed) {
           ASSERT_TRUE(ack) << "seed " << seed;
           ASSERT_EQ(status & 0x0F, a.reports.back()) << "seed " << seed << ": held MSG changed";
           if (a.delay-- <= 0) {
-            out[c] &= 0x7F;
+            ctl &= 0x7F;
             a.state = MasterApp::wait_release;
           }
           break;
@@ -190,10 +201,10 @@ void run_property(std::uint32_t seed) {
   // Drain: no new events; every channel completes one more hold and release.
   injecting = false;
   draining = true;
-  for (int c = 0; c < 2; ++c) {
+  for (int c = 0; c < kChannels; ++c) {
     while (app[c].state != MasterApp::idle) exchange();
     const std::size_t before = app[c].reports.size();
-    out[c] |= 0x80;
+    out[kLogmsgByte[c]] |= 0x80;
     app[c].state = MasterApp::wait_ack;
     while (app[c].reports.size() == before || app[c].state != MasterApp::idle) exchange();
   }
@@ -201,7 +212,7 @@ void run_property(std::uint32_t seed) {
 
   // Each hold must show exactly the messages since the previous hold instant: nothing lost,
   // nothing invented (a shadow that did not start at 0 would add bits to a report).
-  for (int c = 0; c < 2; ++c) {
+  for (int c = 0; c < kChannels; ++c) {
     std::vector<std::uint8_t> expected;
     std::uint8_t pending = 0;
     for (const LogEntry& e : log) {
@@ -225,17 +236,61 @@ TEST(Cnt2, NoMessageIsLostAcrossHoldAndReleaseAtAnyTiming) {
   }
 }
 
-// With no message ever raised, hold and release show MSG = 0: the shadow starts as all 0.
+// With no message ever raised, hold and release show MSG = 0 on all four channels: the shadows
+// (REG_CNTx_LOGMSG, REG_PWMx_LOGMSG) start as all 0. Inputs: counters 1, 2 (high, low, status),
+// then the status of PWM 1 and 2; LOGMSG_ACK is bit 7 of each status.
 TEST(Cnt2, ShadowStartsAsAllZero) {
   Bench b(Profile::spc3, cnt2_firmware, gsd_slave(cnt2_firmware, 9), 12'000'000);
   ASSERT_TRUE(b.master.startup());
-  EXPECT_EQ(b.master.data_exchange({0x80, 0x80}).answer->du,
-            (std::vector<std::uint8_t>{0, 0, 0, 0, 0, 0}));
-  EXPECT_EQ(b.master.data_exchange({0x80, 0x80}).answer->du,
-            (std::vector<std::uint8_t>{0, 0, 0x80, 0, 0, 0x80}));
-  b.master.data_exchange({0x00, 0x00});
-  EXPECT_EQ(b.master.data_exchange({0x00, 0x00}).answer->du,
-            (std::vector<std::uint8_t>{0, 0, 0, 0, 0, 0}));
+  const std::vector<std::uint8_t> hold = {0x80, 0x80, 0x80, 0, 0x80, 0};
+  const std::vector<std::uint8_t> release(6, 0);
+  EXPECT_EQ(b.master.data_exchange(hold).answer->du, std::vector<std::uint8_t>(8, 0));
+  EXPECT_EQ(b.master.data_exchange(hold).answer->du,
+            (std::vector<std::uint8_t>{0, 0, 0x80, 0, 0, 0x80, 0x80, 0x80}));
+  b.master.data_exchange(release);
+  EXPECT_EQ(b.master.data_exchange(release).answer->du, std::vector<std::uint8_t>(8, 0));
+}
+
+// PWM output 1 (outputs byte 2: bit 0 PWM_EN, bit 7 PWM1_LOGMSG; byte 3: duty cycle in %)
+// drives its duty cycle on port pwm1 when the DX_Out ISR has read the 6 output bytes: Int_Reg
+// (2 reads), Next_Dout_Buffer_Cmd, the U pointer cell, 6 bytes = 10 accesses of 4 clocks after
+// the request was acted on. PWM_EN 0 drives 0. A duty above 100 % drives 100 % and raises
+// MSG_DUTY (bit 0) once, when the value leaves the range. Inputs show the state after the
+// previous exchange (the ISR builds them after taking the outputs): PWM 1's status is byte 6.
+TEST(Cnt2, PwmDrivesItsDutyCycleAndReportsOneRangeMessage) {
+  Bench b(Profile::vpc3plus, cnt2_firmware, gsd_slave(cnt2_firmware, 9), 1'500'000);
+  ASSERT_TRUE(b.master.startup());
+  const auto pwm1 = [&](std::uint8_t ctl, std::uint8_t duty) {
+    return b.master.data_exchange({0, 0, ctl, duty, 0, 0});
+  };
+  const Exchange on = pwm1(0x01, 40);
+  ASSERT_TRUE(b.last_write(CNT2_PORT_PWM1));
+  EXPECT_EQ(b.last_write(CNT2_PORT_PWM1)->value, 40u);
+  EXPECT_EQ(b.last_write(CNT2_PORT_PWM1)->cycle, b.acted(on) + 10 * 4);
+  pwm1(0x00, 40);
+  EXPECT_EQ(b.last_write(CNT2_PORT_PWM1)->value, 0u);
+  EXPECT_EQ(pwm1(0x01, 150).answer->du.at(6), 0x00);
+  EXPECT_EQ(b.last_write(CNT2_PORT_PWM1)->value, 100u);
+  EXPECT_EQ(pwm1(0x01, 200).answer->du.at(6), CNT2_PWM_MSG_DUTY);        // still out: no new one
+  EXPECT_EQ(pwm1(0x81, 200).answer->du.at(6), CNT2_PWM_MSG_DUTY);        // hold
+  EXPECT_EQ(pwm1(0x01, 20).answer->du.at(6), 0x80 | CNT2_PWM_MSG_DUTY);  // release: shadow 0
+  EXPECT_EQ(pwm1(0x01, 20).answer->du.at(6), 0x00);
+  EXPECT_EQ(b.last_write(CNT2_PORT_PWM2), std::nullopt) << "PWM 2 was never enabled";
+}
+
+// "With the change from 0 -> 1 in the control bits ... PWMx_LOGMSG ... all states of the MSG
+// bits are held"; messages "newly occurring" meanwhile go to the shadow (seed 001, p.87). A
+// transfer that sets PWM1_LOGMSG together with a duty of 150 %: the hold is taken first, so the
+// range message of that same transfer is a new one and goes to REG_PWM1_LOGMSG: the held status
+// is 80h, and after the release MSG_DUTY is there (01h) -- not lost, not shown as held.
+TEST(Cnt2, RangeMessageOfTheHoldingTransferGoesToTheShadow) {
+  Bench b(Profile::dpc31, cnt2_firmware, gsd_slave(cnt2_firmware, 9), 12'000'000);
+  ASSERT_TRUE(b.master.startup());
+  b.master.data_exchange({0, 0, 0x81, 150, 0, 0});
+  EXPECT_EQ(cnt2_get_pwm(0)->m.shadow, CNT2_PWM_MSG_DUTY);
+  EXPECT_EQ(b.master.data_exchange({0, 0, 0x81, 150, 0, 0}).answer->du.at(6), 0x80);
+  EXPECT_EQ(b.master.data_exchange({0, 0, 0x01, 150, 0, 0}).answer->du.at(6), 0x80);
+  EXPECT_EQ(b.master.data_exchange({0, 0, 0x01, 150, 0, 0}).answer->du.at(6), CNT2_PWM_MSG_DUTY);
 }
 
 }  // namespace

@@ -1,6 +1,9 @@
-// CNT2 (firmware/cnt2, seed 001): the MSG bits held by CNTx_LOGMSG are released only by the
-// master writing LOGMSG 0, never by the ASIC clearing the outputs. The firmware runs on the host
-// CPU over the C HAL; the built-in master drives the chip on the wire.
+// CNT2 (firmware/cnt2, seed 001): the MSG bits held by CNTx_LOGMSG or PWMx_LOGMSG are released
+// only by the master writing LOGMSG 0, never by the ASIC clearing the outputs. The firmware runs on
+// the host CPU over the C HAL; the built-in master drives the chip on the wire.
+#include <utility>
+#include <vector>
+
 #include "../firmware_bench.hpp"
 #include "cnt2/cnt2.h"
 #include "conformance.hpp"
@@ -18,20 +21,28 @@ struct Case {
 
 class Cnt2Hold : public ::testing::TestWithParam<Case> {};
 
-std::uint8_t status1(const Exchange& ex) {
-  EXPECT_TRUE(ex.answer && ex.answer->du.size() == 6);
-  return ex.answer && ex.answer->du.size() == 6 ? ex.answer->du[2] : 0xEE;
+// The status bytes of counter 1 (input byte 2) and PWM output 1 (byte 6).
+std::pair<std::uint8_t, std::uint8_t> status1(const Exchange& ex) {
+  EXPECT_TRUE(ex.answer && ex.answer->du.size() == 8);
+  if (!ex.answer || ex.answer->du.size() != 8) return {0xEE, 0xEE};
+  return {ex.answer->du[2], ex.answer->du[6]};
 }
+using St = std::pair<std::uint8_t, std::uint8_t>;
+// Outputs: counter 1 CNT_EN (+ CNT1_LOGMSG), PWM 1 PWM_EN at 50 % (+ PWM1_LOGMSG).
+const std::vector<std::uint8_t> kRun = {0x01, 0x00, 0x01, 50, 0x00, 0};
+const std::vector<std::uint8_t> kHold = {0x81, 0x00, 0x81, 50, 0x00, 0};
 
 // Seed 001 (Eaton XNE-2CNT-2PWM p.87, "Storage of messages (MSG)"): "With the change from 0 → 1
-// in the control bits CNTx_LOGMSG ... all states of the MSG bits are held"; "If now the control
-// bits CNTx_LOGMSG ... are reset through 1 → 0, the messages that were meanwhile recorded in the
-// shadow register are copied to the MSG bits". Only the master resets the control bit: a
-// Clear_Data (Global_Control), a fail-safe Data_Exchange (no output data) or a Leave_Master (DP
-// watchdog expiry) clears the outputs in the ASIC (DX_Out with U_Buffer_Cleared) but is no
-// 1 → 0 of CNT1_LOGMSG: the held MSG_REF stays held (status 82h = LOGMSG_ACK | MSG_REF) until
-// the master transfers LOGMSG 0 in a normal Data_Exchange; then the shadow (MSG_SHORT, 04h) is
-// the MSG.
+// in the control bits CNTx_LOGMSG or respectively PWMx_LOGMSG ... all states of the MSG bits are
+// held"; "If now the control bits CNTx_LOGMSG or PWMx_LOGMSG ... are reset through 1 → 0, the
+// messages that were meanwhile recorded in the shadow register are copied to the MSG bits".
+// Only the master resets the control bit: a Clear_Data (Global_Control), a fail-safe
+// Data_Exchange (no output data) or a Leave_Master (DP watchdog expiry) clears the outputs in the
+// ASIC (DX_Out with U_Buffer_Cleared) but is no 1 → 0 of CNT1_LOGMSG or PWM1_LOGMSG: the held
+// MSG_REF of counter 1 stays held (status 82h = LOGMSG_ACK | MSG_REF), and so does PWM 1's
+// MSG_SUPPLY (84h), until the master transfers LOGMSG 0 in a normal Data_Exchange; then the
+// shadows (counter MSG_SHORT 04h, PWM MSG_OPEN_LOAD 08h) are the MSG. The PWM output itself
+// goes to its safe state, off (port pwm1 0), and runs again at 50 % with the next transfer.
 TEST_P(Cnt2Hold, HeldMsgBitsStayHeldUntilTheMasterWritesLogmsg0) {
   SlaveConfig s = firmware_bench::gsd_slave(cnt2_firmware, 9);
   s.wd_fact1 = 2;  // TWD = 2 x 5 x 10 ms = 100 ms
@@ -40,10 +51,14 @@ TEST_P(Cnt2Hold, HeldMsgBitsStayHeldUntilTheMasterWritesLogmsg0) {
   DpMaster& m = b.master;
   ASSERT_TRUE(m.startup());
   ASSERT_EQ(cnt2_hw_input("event1", CNT2_MSG_REF), 0);
-  m.data_exchange({0x01, 0x00});
-  EXPECT_EQ(status1(m.data_exchange({0x81, 0x00})), CNT2_MSG_REF);  // inputs of before the hold
-  EXPECT_EQ(status1(m.data_exchange({0x81, 0x00})), 0x80 | CNT2_MSG_REF);
-  ASSERT_EQ(cnt2_hw_input("event1", CNT2_MSG_SHORT), 0);  // held: into the shadow
+  ASSERT_EQ(cnt2_hw_input("pwm_event1", CNT2_PWM_MSG_SUPPLY), 0);
+  m.data_exchange(kRun);
+  EXPECT_EQ(cnt2_get_pwm(0)->duty, 50);
+  // The inputs of before the hold, then the held ones.
+  EXPECT_EQ(status1(m.data_exchange(kHold)), (St{CNT2_MSG_REF, CNT2_PWM_MSG_SUPPLY}));
+  EXPECT_EQ(status1(m.data_exchange(kHold)), (St{0x80 | CNT2_MSG_REF, 0x80 | CNT2_PWM_MSG_SUPPLY}));
+  ASSERT_EQ(cnt2_hw_input("event1", CNT2_MSG_SHORT), 0);  // held: into the shadows
+  ASSERT_EQ(cnt2_hw_input("pwm_event1", CNT2_PWM_MSG_OPEN_LOAD), 0);
   const std::uint32_t cleared = dps_get_stats()->cleared;
   switch (GetParam().cut) {
     case Cut::clear_data:
@@ -61,12 +76,16 @@ TEST_P(Cnt2Hold, HeldMsgBitsStayHeldUntilTheMasterWritesLogmsg0) {
       break;
   }
   EXPECT_GT(dps_get_stats()->cleared, cleared) << "the ASIC cleared the outputs";
-  EXPECT_EQ(cnt2_get_channel(0)->hold, 1);
-  EXPECT_EQ(status1(m.data_exchange({0x81, 0x00})), 0x80 | CNT2_MSG_REF);
-  EXPECT_EQ(status1(m.data_exchange({0x81, 0x00})), 0x80 | CNT2_MSG_REF);
-  // The master releases: the shadow becomes the MSG bits.
-  m.data_exchange({0x01, 0x00});
-  EXPECT_EQ(status1(m.data_exchange({0x01, 0x00})), CNT2_MSG_SHORT);
+  EXPECT_EQ(cnt2_get_channel(0)->m.hold, 1);
+  EXPECT_EQ(cnt2_get_pwm(0)->m.hold, 1);
+  ASSERT_TRUE(b.last_write(CNT2_PORT_PWM1).has_value());
+  EXPECT_EQ(b.last_write(CNT2_PORT_PWM1)->value, 0u) << "the PWM output in its safe state";
+  EXPECT_EQ(status1(m.data_exchange(kHold)), (St{0x80 | CNT2_MSG_REF, 0x80 | CNT2_PWM_MSG_SUPPLY}));
+  EXPECT_EQ(status1(m.data_exchange(kHold)), (St{0x80 | CNT2_MSG_REF, 0x80 | CNT2_PWM_MSG_SUPPLY}));
+  EXPECT_EQ(cnt2_get_pwm(0)->duty, 50);
+  // The master releases: the shadows become the MSG bits.
+  m.data_exchange(kRun);
+  EXPECT_EQ(status1(m.data_exchange(kRun)), (St{CNT2_MSG_SHORT, CNT2_PWM_MSG_OPEN_LOAD}));
 }
 
 std::vector<Case> cases() {

@@ -52,8 +52,10 @@ struct FirmwareBench {
 };
 
 // docs/firmware.md "Output latency": the DX_Out ISR starts in the cycle the Data_Exchange is
-// acted on (X/INT active at once, docs/timing.md) and writes a port after 6 bus accesses of 4
-// clocks (Int_Reg x2, Next_Dout_Buffer_Cmd, the U pointer cell, 2 output bytes).
-inline constexpr std::uint64_t kPortLatency = 6 * 4;
+// acted on (X/INT active at once, docs/timing.md) and writes a port after 4 + N bus accesses of
+// 4 clocks (Int_Reg x2, Next_Dout_Buffer_Cmd, the U pointer cell, the N output bytes): DO4 has
+// 2 output bytes, CNT2 6.
+inline constexpr std::uint64_t kPortLatency = (4 + 2) * 4;
+inline constexpr std::uint64_t kCnt2PortLatency = (4 + 6) * 4;
 
 }  // namespace conformance
