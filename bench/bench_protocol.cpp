@@ -80,9 +80,9 @@ class DpSession {
  private:
   static dpc31::ResponderConfig responder_config(std::uint8_t len, std::uint8_t wd_fact) {
     dpc31::ResponderConfig rc;
-    // As firmware on silicon must: without Res_User_WD the user watchdog (R_User_WD_Value,
-    // 511 telegrams after start-up) ends Data_Exchange.
-    rc.user_watchdog = true;
+    // The DPC31's DPS_User_Watchdog runs only once a firmware enables it (docs/dpc31.md); it
+    // counts time, not telegrams, so row d's 650 s of silence would end in its Leave_Master.
+    rc.user_watchdog = false;
     rc.slave.in_len = len;
     rc.slave.out_len = len;
     if (wd_fact != 0) {

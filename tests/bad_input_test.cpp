@@ -448,7 +448,7 @@ TEST_F(BadWaves, FstFiles) {
   for (std::size_t i = hier.pos + 9; i < hier.pos + 1 + hier.len; ++i) no_hier[i] = '\xff';
   file("nohier.fst", no_hier);
   expect_refused("nohier.fst",
-                 "nohier.fst:0: not a readable FST file (corrupt: the hierarchy has 0 of the 14 "
+                 "nohier.fst:0: not a readable FST file (corrupt: the hierarchy has 0 of the 15 "
                  "variables of the header)",
                  "hierarchy overwritten");
   // The good pair is the same waveform: the checks do not refuse a good file.

@@ -39,13 +39,9 @@ std::string absolute(const std::string& p) {
 std::string filter_dir() {
   std::error_code ec;
   const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-  std::vector<std::filesystem::path> dirs;
-  if (!ec) dirs.push_back(exe.parent_path().parent_path() / "share" / "dpc31emu" / "gtkwave");
-  dirs.emplace_back(DPC31_GTKWAVE_FILTER_SOURCE_DIR);
-  for (const auto& d : dirs) {
-    if (std::filesystem::is_regular_file(d / "dp_state.txt", ec)) return d.string();
-  }
-  return {};
+  if (ec) return {};
+  const auto d = (exe.parent_path() / DPC31_BIN_TO_DATA / "gtkwave").lexically_normal();
+  return std::filesystem::is_regular_file(d / "dp_state.txt", ec) ? d.string() : std::string();
 }
 
 std::string save_file_text(const SaveFile& f) {

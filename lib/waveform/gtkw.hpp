@@ -22,8 +22,8 @@ struct SaveFile {
   std::string filter_dir;  // "" = no translate filters (values as numbers)
 };
 
-// Where the translate filters are: share/dpc31emu/gtkwave beside the installed program, else the
-// source tree's lib/waveform/gtkwave; "" if neither has them.
+// Where the translate filters are: share/dpc31emu/gtkwave beside the program (installed, or the
+// copy in the build tree); "" if it has none.
 std::string filter_dir();
 
 // The save file's text (GTKWave 3.3's format).
