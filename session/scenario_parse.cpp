@@ -11,6 +11,8 @@
 #include "firmware.h"
 #include "firmware_host.hpp"
 #include "scenario.hpp"
+#include "scenario_bus.hpp"
+#include "scenario_lex.hpp"
 #include "textfile.hpp"
 
 namespace dpc31 {
@@ -22,11 +24,12 @@ std::string ScenarioError::text() const {
 
 namespace {
 
+using namespace scenario_lex;  // NOLINT: the parser's own lexical helpers
+
 // Simulated time one `silence` may take: bounds the run time of a typo like `silence 10000s`.
 constexpr std::uint64_t kMaxSeconds = 3600;
 constexpr std::uint64_t kMaxExchanges = 1'000'000;
 constexpr std::uint64_t kMaxTries = 100'000;
-constexpr std::size_t kMaxDu = 244;
 
 // Global_Control command bits (DP standard).
 constexpr std::pair<std::string_view, std::uint8_t> kGcNames[] = {
@@ -37,27 +40,6 @@ constexpr std::pair<std::string_view, std::uint8_t> kGcNames[] = {
 constexpr std::string_view kAnswerKinds[] = {"none", "sc", "data", "ok", "ue",
                                              "rr",   "rs", "dl",   "nr", "dh"};
 
-bool parse_u64(std::string_view s, std::uint64_t& v) {
-  int base = 10;
-  if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
-    base = 16;
-    s.remove_prefix(2);
-  }
-  if (s.empty()) return false;
-  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v, base);
-  return ec == std::errc() && p == s.data() + s.size();
-}
-
-std::vector<std::string_view> split(std::string_view s, char sep) {
-  std::vector<std::string_view> out;
-  for (;;) {
-    const std::size_t k = s.find(sep);
-    out.push_back(s.substr(0, k));
-    if (k == std::string_view::npos) return out;
-    s.remove_prefix(k + 1);
-  }
-}
-
 bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 
 std::string_view trim(std::string_view s) {
@@ -65,11 +47,6 @@ std::string_view trim(std::string_view s) {
   while (!s.empty() && is_space(s.back())) s.remove_suffix(1);
   return s;
 }
-
-struct ParseFail {
-  int line = 0;  // 0: the line being parsed
-  std::string message;
-};
 
 // Index of `name` in a NULL-terminated list of names, -1 if absent.
 int name_index(const char* const* names, std::string_view name) {
@@ -89,7 +66,8 @@ std::string name_list(const char* const* names) {
 
 // Actions whose first telegram a fault can be injected into.
 bool sends_request(StepKind k) {
-  return is_action(k) && k != StepKind::silence && k != StepKind::foreign_master;
+  return is_action(k) && k != StepKind::silence && k != StepKind::foreign_master &&
+         k != StepKind::write && k != StepKind::read;
 }
 
 class Parser {
@@ -188,40 +166,6 @@ class Parser {
   }
   [[noreturn]] void unknown_option(std::string_view key) const {
     fail(fmt::format("unknown option '{}' for {}", shown(key), cmd_));
-  }
-
-  static std::uint64_t number(std::string_view s, std::string_view what, std::uint64_t min,
-                              std::uint64_t max) {
-    std::uint64_t v = 0;
-    if (!parse_u64(s, v)) fail(fmt::format("bad number '{}' for {}", shown(s), what));
-    if (v < min || v > max) {
-      fail(fmt::format("{} {} out of range ({}..{})", what, shown(s), min, max));
-    }
-    return v;
-  }
-  static bool flag(std::string_view s, std::string_view what) {
-    if (s == "0") return false;
-    if (s == "1") return true;
-    fail(fmt::format("bad value '{}' for {}: 0 or 1", shown(s), what));
-  }
-  // Hex bytes "13,23" ("0x13" also accepted); "-" is the empty list.
-  static std::vector<std::uint8_t> bytes(std::string_view s, std::string_view what,
-                                         std::size_t max = kMaxDu) {
-    std::vector<std::uint8_t> out;
-    if (s == "-") return out;
-    if (s.empty()) fail(fmt::format("empty byte list for {} (write '-' for none)", what));
-    for (std::string_view b : split(s, ',')) {
-      std::string_view d = b;
-      if (d.size() > 2 && d[0] == '0' && (d[1] == 'x' || d[1] == 'X')) d.remove_prefix(2);
-      unsigned v = 0;
-      const auto [p, ec] = std::from_chars(d.data(), d.data() + d.size(), v, 16);
-      if (d.empty() || d.size() > 2 || ec != std::errc() || p != d.data() + d.size()) {
-        fail(fmt::format("bad byte '{}' in {} (hex bytes separated by commas)", shown(b), what));
-      }
-      out.push_back(static_cast<std::uint8_t>(v));
-    }
-    if (out.size() > max) fail(fmt::format("{}: {} bytes, at most {}", what, out.size(), max));
-    return out;
   }
 
   std::uint32_t clock() const {
@@ -571,6 +515,7 @@ class Parser {
       step_.kind = StepKind::expect;
       no_options();
       expect();
+    } else if (scenario_bus::parse_action(cmd_, pos_, opts_, s_.chip.profile, step_, last_read_)) {
     } else {
       fail(fmt::format("unknown command '{}'", shown(cmd_)));
     }
@@ -602,6 +547,16 @@ class Parser {
   void expect() {
     if (pos_.empty()) fail("'expect' needs what to check and the expected value");
     const std::string_view what = pos_[0];
+    if (pos_.size() >= 3 && (pos_[pos_.size() - 2] == "at" || pos_[pos_.size() - 2] == "after")) {
+      if (what != "dp_state" && what != "wd_state") {
+        fail(fmt::format("'{}' is for dp_state and wd_state: the cycle a state was entered",
+                         pos_[pos_.size() - 2]));
+      }
+      step_.when =
+          pos_[pos_.size() - 2] == "at" ? ScenarioStep::When::at : ScenarioStep::When::after;
+      step_.when_cycle = number(pos_.back(), "cycle", 0, kMaxSeconds * clock() * 1000);
+      pos_.resize(pos_.size() - 2);
+    }
     auto args = [&](std::size_t n, std::string_view form) {
       if (pos_.size() != n + 1) fail(fmt::format("expected 'expect {} {}'", what, form));
     };
@@ -695,10 +650,10 @@ class Parser {
       args(1, "N");
       step_.expect = ExpectKind::baud;
       step_.value = static_cast<std::uint32_t>(number(pos_[1], "baud", 1, 12'000'000));
-    } else {
+    } else if (!scenario_bus::parse_expect(pos_, s_.chip.profile, last_read_, step_)) {
       fail(
           fmt::format("unknown check '{}' (dp_state, wd_state, outputs, cleared, inputs, counter, "
-                      "irr_bit, answer, station, diag_byte, baud, port, pb3)",
+                      "irr_bit, answer, station, diag_byte, baud, port, pb3, reg, ram, read)",
                       shown(what)));
     }
   }
@@ -742,7 +697,8 @@ class Parser {
   bool firmware_seen_ = false;
   bool slave_seen_ = false;
   bool user_seen_ = false;
-  bool body_ = false;  // an action or expect has been seen: no more headers
+  bool body_ = false;                  // an action or expect has been seen: no more headers
+  scenario_bus::ReadShape last_read_;  // what `expect read` compares
   std::vector<std::string_view> words_;
   std::string_view cmd_;
   std::vector<std::string_view> pos_;

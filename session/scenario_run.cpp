@@ -13,6 +13,7 @@
 #include "dpc31/hex.hpp"
 #include "firmware_host.hpp"
 #include "scenario.hpp"
+#include "scenario_bus.hpp"
 #include "vocabulary.hpp"
 
 namespace dpc31 {
@@ -113,6 +114,7 @@ class Runner {
     });
     dp_ = chip_.dp_state();
     wd_ = chip_.wd_state();
+    dp_since_ = wd_since_ = chip_.cycle();
     outputs_.assign(s_.user.slave.out_len, 0);
     note(chip_.cycle(),
          fmt::format("started: dp_state {}, wd_state {}", dp_state_name(dp_), wd_state_name(wd_)),
@@ -129,6 +131,7 @@ class Runner {
         base_counters_ = chip_.fdl_counters();
         base_irq_ = interrupts().size();
         base_pb3_ = pb3_rises_;
+        base_cycle_ = chip_.cycle();
       }
       note(chip_.cycle(), fmt::format("line {}: {}", st.line, st.text), Event::Kind::step, &st);
       // Requests counted, not history().size(): a long exchange step forgets history as it goes.
@@ -230,6 +233,7 @@ class Runner {
     if (dp != dp_) {
       note(chip_.cycle(), fmt::format("dp_state {} -> {}", dp_state_name(dp_), dp_state_name(dp)));
       dp_ = dp;
+      dp_since_ = chip_.cycle();
     }
     if (wd != wd_) {
       std::string found;
@@ -237,6 +241,7 @@ class Runner {
       note(chip_.cycle(),
            fmt::format("wd_state {} -> {}{}", wd_state_name(wd_), wd_state_name(wd), found));
       wd_ = wd;
+      wd_since_ = chip_.cycle();
     }
   }
 
@@ -434,6 +439,12 @@ class Runner {
       case StepKind::silence:
         silence(st.cycles);
         break;
+      case StepKind::write:
+      case StepKind::read: {
+        std::string done = scenario_bus::act(chip_, st, last_read_);  // the accesses take time
+        note(chip_.cycle(), std::move(done));
+        break;
+      }
       case StepKind::inputs:
         user_.inputs = st.bytes;
         break;
@@ -570,6 +581,21 @@ class Runner {
 
   // --- checks ---
 
+  // `at CYCLE` / `after N`: when the state was entered, as the walk shows it.
+  void when(const ScenarioStep& st, std::string& want, std::string& got) const {
+    const std::uint64_t since = st.expect == ExpectKind::dp_state ? dp_since_ : wd_since_;
+    const bool at = st.when == ScenarioStep::When::at;
+    want += fmt::format(" {} {}", at ? "at" : "after", st.when_cycle);
+    if (at) {
+      got += fmt::format(" at {}", since);
+    } else if (since < base_cycle_) {
+      got += fmt::format(" since cycle {}, before the last action began (cycle {})", since,
+                         base_cycle_);
+    } else {
+      got += fmt::format(" after {}", since - base_cycle_);
+    }
+  }
+
   void check(const ScenarioStep& st) {
     std::string what;
     std::string want;
@@ -665,7 +691,17 @@ class Runner {
         want = port_text(st.value);
         got = port_text(static_cast<std::uint32_t>(fw_->port(st.name)));
         break;
+      case ExpectKind::reg:
+      case ExpectKind::ram:
+      case ExpectKind::read: {
+        scenario_bus::Check c = scenario_bus::check(chip_, st, last_read_);
+        what = std::move(c.what);
+        want = std::move(c.want);
+        got = std::move(c.got);
+        break;
+      }
     }
+    if (st.when != ScenarioStep::When::any && got == want) when(st, want, got);
     if (got == want) {
       ++out_.passed;
       note(chip_.cycle(), fmt::format("line {}: {}: ok", st.line, st.text), Event::Kind::passed,
@@ -713,6 +749,10 @@ class Runner {
   std::size_t base_irq_ = 0;
   std::size_t pb3_rises_ = 0;  // PB3 rising edges so far (dpc31 DX_Out port)
   std::size_t base_pb3_ = 0;
+  std::uint64_t base_cycle_ = 0;  // when the last action began (`after N`)
+  std::uint64_t dp_since_ = 0;    // when dp_ / wd_ were entered, as the walk shows it
+  std::uint64_t wd_since_ = 0;
+  scenario_bus::LastRead last_read_;  // what `expect read` compares
 };
 
 }  // namespace

@@ -286,6 +286,8 @@ class StepKind(enum.Enum):
     corrupt = 16
     bad_fcs = 17
     expect = 18
+    write = 19
+    read = 20
 
 class Step:
     line: int
