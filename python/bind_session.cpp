@@ -372,7 +372,8 @@ void bind_scenarios(py::module_& m) {
       .value("bad_fcs", StepKind::bad_fcs)
       .value("expect", StepKind::expect)
       .value("write", StepKind::write)
-      .value("read", StepKind::read);
+      .value("read", StepKind::read)
+      .value("send", StepKind::send);
   py::class_<ScenarioStep>(m, "Step", "One line of a scenario file.")
       .def_readonly("line", &ScenarioStep::line)
       .def_readonly("text", &ScenarioStep::text)

@@ -156,6 +156,9 @@ class DpMaster {
   Exchange read_inputs();
   Exchange read_outputs();
   Exchange set_slave_address(std::uint8_t new_address, bool no_add_change);
+  // Any service of this master with this data unit as it is (FCB as for every SRD; `srd` false:
+  // SDN to the broadcast address): a Set_Prm or Global_Control of any length.
+  Exchange service(std::uint8_t dsap, std::vector<std::uint8_t> du, bool srd = true);
 
   // The standard start-up: FDL_Status until answered, Slave_Diag, Set_Prm, Chk_Cfg, Slave_Diag
   // until the slave is ready. Returns false if it did not reach Data_Exchange within `tries`.

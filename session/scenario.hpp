@@ -59,6 +59,7 @@ enum class StepKind : std::uint8_t {
   // actions added later (after expect, so the Python enum's values stay put)
   write,  // bus writes of the CPU: a register by name, a byte, a block (docs/scenario-format.md)
   read,   // bus reads of the CPU, command reads included
+  send,   // a telegram as given: raw bytes, or fields from any station
 };
 
 enum class ExpectKind : std::uint8_t {
@@ -107,6 +108,10 @@ struct ScenarioStep {
   // the last action began (docs/scenario-format.md, "Exact cycles").
   enum class When : std::uint8_t { any, at, after } when = When::any;
   std::uint64_t when_cycle = 0;
+  // set_prm / chk_cfg / gc / send: the station that sends it (another master); nullopt: ours.
+  std::optional<std::uint8_t> from;
+  // send with fields: destination (nullopt: the slave) and SAPs (nullopt: none).
+  std::optional<std::uint8_t> to, dsap, ssap;
 };
 
 struct Scenario {

@@ -3,7 +3,6 @@
 
 #include <fmt/format.h>
 
-#include "dpc31/hex.hpp"
 #include "dpc31/regdesc.hpp"
 #include "scenario_lex.hpp"
 #include "textfile.hpp"
@@ -12,6 +11,7 @@ namespace dpc31::scenario_bus {
 
 namespace {
 
+using scenario_lex::bytes_text;
 using scenario_lex::fail;
 
 std::uint32_t map_size(Profile p) { return std::uint32_t{1} << profile_desc(p).address_bits; }
@@ -46,10 +46,6 @@ std::uint32_t address(Profile p, std::string_view s, std::size_t len) {
 
 std::string hex(std::uint32_t v, unsigned width) {
   return width > 8 ? fmt::format("0x{:04X}", v) : fmt::format("0x{:02X}", v);
-}
-
-std::string bytes_text(std::span<const std::uint8_t> b) {
-  return b.empty() ? "-" : hex_bytes(b, " ", 4096);
 }
 
 // Byte k of a register access sits at addr + k; which byte of the value it is follows the bus
@@ -219,6 +215,19 @@ Check check(const Chip& chip, const ScenarioStep& st, const LastRead& last) {
       break;
   }
   return c;
+}
+
+void when(const ScenarioStep& st, std::uint64_t since, std::uint64_t base, std::string& want,
+          std::string& got) {
+  const bool at = st.when == ScenarioStep::When::at;
+  want += fmt::format(" {} {}", at ? "at" : "after", st.when_cycle);
+  if (at) {
+    got += fmt::format(" at {}", since);
+  } else if (since < base) {
+    got += fmt::format(" since cycle {}, before the last action began (cycle {})", since, base);
+  } else {
+    got += fmt::format(" after {}", since - base);
+  }
 }
 
 }  // namespace dpc31::scenario_bus

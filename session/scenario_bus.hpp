@@ -1,6 +1,6 @@
-// Scenario files: the CPU's bus door — `write`, `read`, `expect reg`, `expect ram`, `expect read`
-// (docs/scenario-format.md, "Bus accesses"): how they parse and what they do on the chip.
-// Internal to the scenario parser and runner.
+// Scenario files: the exact-cycle checks, and the CPU's bus door — `write`, `read`, `expect reg`,
+// `expect ram`, `expect read` (docs/scenario-format.md, "Bus accesses"): how they parse and what
+// they do on the chip. Internal to the scenario parser and runner.
 #pragma once
 
 #include <cstdint>
@@ -49,5 +49,11 @@ struct Check {
   std::string what, want, got;
 };
 Check check(const Chip& chip, const ScenarioStep& st, const LastRead& last);
+
+// `expect dp_state|wd_state ... at CYCLE|after N` (docs/scenario-format.md, "Exact cycles"): the
+// state, entered at `since` as the walk shows it, against `st`; the last action began at `base`.
+// Appends the cycle parts to `want` and `got`.
+void when(const ScenarioStep& st, std::uint64_t since, std::uint64_t base, std::string& want,
+          std::string& got);
 
 }  // namespace dpc31::scenario_bus

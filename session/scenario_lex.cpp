@@ -6,6 +6,7 @@
 #include <charconv>
 #include <utility>
 
+#include "dpc31/hex.hpp"
 #include "textfile.hpp"
 
 namespace dpc31::scenario_lex {
@@ -65,6 +66,10 @@ std::vector<std::uint8_t> bytes(std::string_view s, std::string_view what, std::
     if (out.size() > max) fail(fmt::format("{}: more than {} bytes", what, max));
   }
   return out;
+}
+
+std::string bytes_text(std::span<const std::uint8_t> b) {
+  return b.empty() ? "-" : hex_bytes(b, " ", 4096);
 }
 
 }  // namespace dpc31::scenario_lex

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -31,5 +32,8 @@ bool flag(std::string_view s, std::string_view what);
 // Hex bytes "13,23" ("0x13" also accepted); "-" is the empty list.
 std::vector<std::uint8_t> bytes(std::string_view s, std::string_view what,
                                 std::size_t max = kMaxDu);
+
+// Bytes as the walk and the checks show them: "01 02 A3", or "-" for none.
+std::string bytes_text(std::span<const std::uint8_t> b);
 
 }  // namespace dpc31::scenario_lex

@@ -13,6 +13,7 @@
 #include "scenario.hpp"
 #include "scenario_bus.hpp"
 #include "scenario_lex.hpp"
+#include "scenario_send.hpp"
 #include "textfile.hpp"
 
 namespace dpc31 {
@@ -67,7 +68,7 @@ std::string name_list(const char* const* names) {
 // Actions whose first telegram a fault can be injected into.
 bool sends_request(StepKind k) {
   return is_action(k) && k != StepKind::silence && k != StepKind::foreign_master &&
-         k != StepKind::write && k != StepKind::read;
+         k != StepKind::write && k != StepKind::read && k != StepKind::send;
 }
 
 class Parser {
@@ -420,11 +421,22 @@ class Parser {
       }
     } else if (cmd_ == "gc") {
       step_.kind = StepKind::gc;
-      positional(1, 1, "a command (sync, unsync, freeze, unfreeze, clear, operate, or a number)");
-      step_.value = gc_command(pos_[0]);
       for (const auto& [k, v] : opts_) {
-        if (k != "groups") unknown_option(k);
-        step_.value2 = static_cast<std::uint32_t>(number(v, "groups", 0, 255));
+        if (k == "groups") {
+          step_.value2 = static_cast<std::uint32_t>(number(v, "groups", 0, 255));
+        } else if (k == "data") {
+          step_.bytes = bytes(v, "data");
+          step_.has_bytes = true;
+        } else if (!from_option(k, v)) {
+          unknown_option(k);
+        }
+      }
+      if (step_.has_bytes) {
+        positional(0, 0, "no command with data= (the data unit as it is)");
+        if (option("groups")) fail("gc: data= is the whole data unit; groups= goes into it");
+      } else {
+        positional(1, 1, "a command (sync, unsync, freeze, unfreeze, clear, operate, or a number)");
+        step_.value = gc_command(pos_[0]);
       }
     } else if (cmd_ == "diag") {
       simple(StepKind::diag);
@@ -441,19 +453,30 @@ class Parser {
       positional(0, 0, "options only");
       step_.slave = view_;
       for (const auto& [k, v] : opts_) {
-        if (!prm_option(*step_.slave, k, v)) unknown_option(k);
+        if (k == "bytes") {
+          step_.bytes = bytes(v, "bytes");
+          step_.has_bytes = true;
+        } else if (!from_option(k, v) && !prm_option(*step_.slave, k, v)) {
+          unknown_option(k);
+        }
       }
-      view_ = step_.slave;
+      if (step_.has_bytes && opts_.size() > (step_.from ? 2u : 1u)) {
+        fail("set_prm: bytes= is the whole data unit; no other parameter options with it");
+      }
+      if (!step_.from && !step_.has_bytes) view_ = step_.slave;
     } else if (cmd_ == "chk_cfg") {
       step_.kind = StepKind::chk_cfg;
       positional(0, 0, "options only");
       step_.slave = view_;
       for (const auto& [k, v] : opts_) {
+        if (from_option(k, v)) continue;
         if (k != "cfg") unknown_option(k);
         step_.slave->cfg = bytes(v, "cfg");
         if (step_.slave->cfg.empty()) fail("cfg: at least one byte");
       }
-      view_ = step_.slave;
+      if (!step_.from) view_ = step_.slave;
+    } else if (cmd_ == "send") {
+      scenario_send::parse(pos_, opts_, step_);
     } else if (cmd_ == "set_slave_address") {
       step_.kind = StepKind::set_slave_address;
       positional(1, 1, "the new address");
@@ -519,6 +542,19 @@ class Parser {
     } else {
       fail(fmt::format("unknown command '{}'", shown(cmd_)));
     }
+  }
+
+  // from=SA: another master sends the request (docs/scenario-format.md, "Telegrams as given").
+  bool from_option(std::string_view k, std::string_view v) {
+    if (k != "from") return false;
+    step_.from = static_cast<std::uint8_t>(number(v, "from", 0, 126));
+    if (*step_.from == s_.master.address) {
+      fail(fmt::format("from={} is our own master: leave from= out", *step_.from));
+    }
+    return true;
+  }
+  [[nodiscard]] bool option(std::string_view key) const {
+    return std::any_of(opts_.begin(), opts_.end(), [&](const auto& o) { return o.first == key; });
   }
 
   std::uint32_t gc_command(std::string_view s) const {
@@ -629,8 +665,15 @@ class Parser {
       step_.expect = ExpectKind::answer;
       if (std::find(std::begin(kAnswerKinds), std::end(kAnswerKinds), pos_[1]) ==
           std::end(kAnswerKinds)) {
-        fail(fmt::format("unknown answer kind '{}' (none, sc, data, ok, ue, rr, rs, dl, nr, dh)",
-                         shown(pos_[1])));
+        if (pos_[1].empty() || pos_[1][0] < '0' || (pos_[1][0] > '9' && pos_[1][0] < 'A') ||
+            pos_[1][0] > 'F') {
+          fail(
+              fmt::format("unknown answer kind '{}' (none, sc, data, ok, ue, rr, rs, dl, nr, dh, "
+                          "or the answer's bytes)",
+                          shown(pos_[1])));
+        }
+        step_.bytes = bytes(pos_[1], "answer", fdl::kMaxFrameLength);  // the whole telegram
+        step_.has_bytes = true;
       }
       step_.name = std::string(pos_[1]);
     } else if (what == "station") {

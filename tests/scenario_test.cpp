@@ -393,8 +393,8 @@ TEST(ScenarioParse, BusActionsRefuseWhatTheMapDoesNot) {
   EXPECT_EQ(parse_error(h + "write 0x10 1 bytes=01\n"),
             "t.scn:2: expected 'write REG VALUE', 'write ADDR VALUE' or 'write ADDR bytes=BYTES'");
   EXPECT_EQ(parse_error(h + "expect read 1\n"), "t.scn:2: 'expect read' needs a 'read' before it");
-  EXPECT_EQ(parse_error(h + "read 0x10 count=2\nexpect read 0x12\n"),
-            "t.scn:3: bad byte '0x12' in read (hex bytes separated by commas)");
+  EXPECT_EQ(parse_error(h + "read 0x10 count=2\nexpect read 123\n"),
+            "t.scn:3: bad byte '123' in read (hex bytes separated by commas)");
   EXPECT_EQ(parse_error(h + "expect reg Status_Reg 0x10000\n"),
             "t.scn:2: register value 0x10000 out of range (0..65535)");
   EXPECT_EQ(parse_error(h + "expect baud 12000000 at 5\n"),

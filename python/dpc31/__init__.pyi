@@ -288,6 +288,7 @@ class StepKind(enum.Enum):
     expect = 18
     write = 19
     read = 20
+    send = 21
 
 class Step:
     line: int
