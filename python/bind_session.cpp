@@ -373,7 +373,8 @@ void bind_scenarios(py::module_& m) {
       .value("expect", StepKind::expect)
       .value("write", StepKind::write)
       .value("read", StepKind::read)
-      .value("send", StepKind::send);
+      .value("send", StepKind::send)
+      .value("request", StepKind::request);
   py::class_<ScenarioStep>(m, "Step", "One line of a scenario file.")
       .def_readonly("line", &ScenarioStep::line)
       .def_readonly("text", &ScenarioStep::text)

@@ -60,6 +60,7 @@ enum class StepKind : std::uint8_t {
   write,  // bus writes of the CPU: a register by name, a byte, a block (docs/scenario-format.md)
   read,   // bus reads of the CPU, command reads included
   send,   // a telegram as given: raw bytes, or fields from any station
+  request,  // a DPC31 request through the Instruction_Queue (bus writes)
 };
 
 enum class ExpectKind : std::uint8_t {
@@ -79,6 +80,7 @@ enum class ExpectKind : std::uint8_t {
   reg,   // a register's whole value (peek_reg: no side effect)
   ram,   // bytes at an address (peek)
   read,  // what the last `read` returned
+  indication,  // the DPC31's newest Indication_Queue entry
 };
 
 // Steps that let time pass (and may send requests), as opposed to modifiers, inputs and checks.

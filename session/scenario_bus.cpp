@@ -3,6 +3,10 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <optional>
+
+#include "dpc31/dp.hpp"
 #include "dpc31/regdesc.hpp"
 #include "scenario_lex.hpp"
 #include "textfile.hpp"
@@ -58,6 +62,10 @@ unsigned lane(const RegDesc& r, BusMode bus, unsigned k) {
 
 bool parse_action(std::string_view cmd, std::span<const std::string_view> pos,
                   std::span<const Option> opts, Profile p, ScenarioStep& st, ReadShape& last_read) {
+  if (cmd == "request") {
+    if (!opts.empty()) fail(fmt::format("unknown option '{}' for request", shown(opts[0].first)));
+    return parse_request(pos, p, st);
+  }
   const bool write = cmd == "write";
   if (!write && cmd != "read") return false;
   st.kind = write ? StepKind::write : StepKind::read;
@@ -111,10 +119,57 @@ bool parse_action(std::string_view cmd, std::span<const std::string_view> pos,
   return true;
 }
 
+// DPC31 p.22, Table 5.1-3 (docs/dpc31.md, "The queues").
+bool parse_request(std::span<const std::string_view> pos, Profile p, ScenarioStep& st) {
+  if (p != Profile::dpc31) fail("'request' is the DPC31's Instruction_Queue: needs profile dpc31");
+  if (pos.empty()) fail("'request' needs a request name");
+  constexpr std::pair<std::string_view, std::uint8_t> kCodes[] = {
+      {"MAC_Start", request::MAC_Start},
+      {"MAC_Stop", request::MAC_Stop},
+      {"MAC_New_TRDY", request::MAC_New_TRDY},
+      {"User_Leave_Master", request::User_Leave_Master},
+      {"DPS_User_Wd", request::DPS_User_Wd}};
+  const auto* c = std::find_if(std::begin(kCodes), std::end(kCodes),
+                               [&](const auto& k) { return k.first == pos[0]; });
+  if (c == std::end(kCodes)) {
+    fail(
+        fmt::format("unknown request '{}' (MAC_Start, MAC_Stop, MAC_New_TRDY N, "
+                    "User_Leave_Master, DPS_User_Wd reset|enable|disable)",
+                    shown(pos[0])));
+  }
+  st.kind = StepKind::request;
+  st.name = std::string(pos[0]);
+  st.value = c->second;
+  if (c->second == request::MAC_New_TRDY) {
+    if (pos.size() != 2) fail("expected 'request MAC_New_TRDY N' (the ready time in bit times)");
+    st.value2 = static_cast<std::uint32_t>(scenario_lex::number(pos[1], "TRDY", 0, 255));
+  } else if (c->second == request::DPS_User_Wd) {
+    if (pos.size() != 2) fail("expected 'request DPS_User_Wd reset|enable|disable'");
+    constexpr std::pair<std::string_view, std::uint8_t> kWd[] = {{"reset", request::Wd_Reset},
+                                                                 {"enable", request::Wd_Enable},
+                                                                 {"disable", request::Wd_Disable}};
+    const auto* w = std::find_if(std::begin(kWd), std::end(kWd),
+                                 [&](const auto& k) { return k.first == pos[1]; });
+    if (w == std::end(kWd))
+      fail(fmt::format("DPS_User_Wd '{}': reset, enable or disable", shown(pos[1])));
+    st.value2 = w->second;
+  } else if (pos.size() != 1) {
+    fail(fmt::format("request {} takes no parameter", c->first));
+  }
+  return true;
+}
+
 bool parse_expect(std::span<const std::string_view> pos, Profile p, const ReadShape& last_read,
                   ScenarioStep& st) {
   const std::string_view what = pos[0];
-  if (what == "reg") {
+  if (what == "indication") {
+    if (p != Profile::dpc31) fail("'expect indication' needs profile dpc31");
+    if (pos.size() != 3) fail("expected 'expect indication CODE EVENT'");
+    st.expect = ExpectKind::indication;
+    st.value = static_cast<std::uint32_t>(scenario_lex::number(pos[1], "indication code", 0, 255));
+    st.value2 =
+        static_cast<std::uint32_t>(scenario_lex::number(pos[2], "indication event", 0, 255));
+  } else if (what == "reg") {
     if (pos.size() != 3) fail("expected 'expect reg NAME VALUE'");
     const RegDesc& r = reg_or_fail(p, pos[1]);
     st.expect = ExpectKind::reg;
@@ -148,6 +203,15 @@ bool parse_expect(std::span<const std::string_view> pos, Profile p, const ReadSh
 
 std::string act(Chip& chip, const ScenarioStep& st, LastRead& last) {
   const BusMode bus = chip.bus_mode();
+  if (st.kind == StepKind::request) {
+    // As a driver hands over a request: the entry (code, parameter), then InstQ_Wr one on.
+    const std::optional<Chip::RequestSlot> slot = chip.next_request_slot();
+    if (!slot) return "";
+    chip.write(slot->entry, static_cast<std::uint8_t>(st.value));
+    chip.write(slot->entry + 1, static_cast<std::uint8_t>(st.value2));
+    chip.write(static_cast<std::uint32_t>(chip.addr_of(RegId::InstQ_Wr)), slot->next_wr);
+    return fmt::format("request {} {:02X}h {:02X}h", st.name, st.value, st.value2);
+  }
   if (st.has_bytes) {  // a block: one access per byte, in address order
     if (st.kind == StepKind::write) {
       chip.write_block(st.addr, st.bytes);
@@ -186,6 +250,24 @@ std::string act(Chip& chip, const ScenarioStep& st, LastRead& last) {
 Check check(const Chip& chip, const ScenarioStep& st, const LastRead& last) {
   Check c;
   switch (st.expect) {
+    case ExpectKind::indication: {
+      // The entry before IndQ_Wr: the newest the chip wrote (docs/dpc31.md, "The queues").
+      const auto cell = [&](RegId id) {
+        return chip.peek(static_cast<std::uint32_t>(chip.addr_of(id)));
+      };
+      const unsigned len = cell(RegId::IndQ_Len);
+      c.what = "indication";
+      c.want = fmt::format("{:02X}h {:02X}h", st.value, st.value2);
+      if (len == 0) {
+        c.got = "no Indication_Queue (IndQ_Len 0)";
+        break;
+      }
+      const std::uint32_t at =
+          (std::uint32_t{cell(RegId::IndQ_Base)} << chip.profile().segment_shift) +
+          ((cell(RegId::IndQ_Wr) + len - 1) % len) * request::kEntryBytes;
+      c.got = fmt::format("{:02X}h {:02X}h", chip.peek(at), chip.peek(at + 1));
+      break;
+    }
     case ExpectKind::reg: {
       const RegDesc& r = *find_reg(chip.profile(), *st.reg);
       c.what = "reg " + st.name;

@@ -28,7 +28,10 @@ struct ReadShape {
 bool parse_action(std::string_view cmd, std::span<const std::string_view> pos,
                   std::span<const Option> opts, Profile profile, ScenarioStep& st,
                   ReadShape& last_read);
-// `expect reg|ram|read ...` (pos[0] is what) into `st`; false if `pos[0]` is none of them.
+// `request NAME [PARAM]` (DPC31) into `st`.
+bool parse_request(std::span<const std::string_view> pos, Profile profile, ScenarioStep& st);
+// `expect reg|ram|read|indication ...` (pos[0] is what) into `st`; false if `pos[0]` is none of
+// them.
 bool parse_expect(std::span<const std::string_view> pos, Profile profile,
                   const ReadShape& last_read, ScenarioStep& st);
 

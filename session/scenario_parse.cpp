@@ -68,7 +68,8 @@ std::string name_list(const char* const* names) {
 // Actions whose first telegram a fault can be injected into.
 bool sends_request(StepKind k) {
   return is_action(k) && k != StepKind::silence && k != StepKind::foreign_master &&
-         k != StepKind::write && k != StepKind::read && k != StepKind::send;
+         k != StepKind::write && k != StepKind::read && k != StepKind::send &&
+         k != StepKind::request;
 }
 
 class Parser {
@@ -437,6 +438,8 @@ class Parser {
       } else {
         positional(1, 1, "a command (sync, unsync, freeze, unfreeze, clear, operate, or a number)");
         step_.value = gc_command(pos_[0]);
+        step_.bytes = {static_cast<std::uint8_t>(step_.value),
+                       static_cast<std::uint8_t>(step_.value2)};
       }
     } else if (cmd_ == "diag") {
       simple(StepKind::diag);

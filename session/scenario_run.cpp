@@ -237,19 +237,13 @@ class Runner {
     switch (st.kind) {
       case StepKind::exchange:
         return srd(std::nullopt, outputs);
-      case StepKind::gc: {
-        std::vector<std::uint8_t> du =
-            st.has_bytes ? st.bytes
-                         : std::vector<std::uint8_t>{static_cast<std::uint8_t>(st.value),
-                                                     static_cast<std::uint8_t>(st.value2)};
-        if (st.from) {
+      case StepKind::gc:  // st.bytes: the data unit (Control_Command, Group_Select, or data=)
+        if (st.from)
           return scenario_send::from_other_master(st, fdl::kBroadcast, sap::Global_Control,
-                                                  std::move(du));
-        }
+                                                  st.bytes);
         return fdl::make_frame(fdl::kBroadcast, a,
                                fdl::make_request_fc(fdl::Function::SDN_high, false, false),
-                               std::move(du), sap::Global_Control, sap::Master);
-      }
+                               st.bytes, sap::Global_Control, sap::Master);
       case StepKind::diag:
         return srd(sap::Slave_Diag, {});
       case StepKind::get_cfg:
@@ -383,11 +377,8 @@ class Runner {
         if (!damage(st)) break;
         if (st.from) {
           master_->transact(predict(st, {}));
-        } else if (st.has_bytes) {
-          master_->service(sap::Global_Control, st.bytes, false);
         } else {
-          master_->global_control(static_cast<std::uint8_t>(st.value),
-                                  static_cast<std::uint8_t>(st.value2));
+          master_->service(sap::Global_Control, st.bytes, false);
         }
         break;
       case StepKind::diag:
@@ -443,8 +434,11 @@ class Runner {
         silence(st.cycles);
         break;
       case StepKind::write:
-      case StepKind::read: {
+      case StepKind::read:
+      case StepKind::request: {
         std::string done = scenario_bus::act(chip_, st, last_read_);  // the accesses take time
+        if (done.empty())
+          fail(st.line, "request: the Instruction_Queue is not set up (InstQ_Len 0)");
         note(chip_.cycle(), std::move(done));
         break;
       }
@@ -697,7 +691,8 @@ class Runner {
         break;
       case ExpectKind::reg:
       case ExpectKind::ram:
-      case ExpectKind::read: {
+      case ExpectKind::read:
+      case ExpectKind::indication: {
         scenario_bus::Check c = scenario_bus::check(chip_, st, last_read_);
         what = std::move(c.what);
         want = std::move(c.want);

@@ -289,6 +289,7 @@ class StepKind(enum.Enum):
     write = 19
     read = 20
     send = 21
+    request = 22
 
 class Step:
     line: int
