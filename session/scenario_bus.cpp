@@ -70,29 +70,29 @@ bool parse_action(std::string_view cmd, std::span<const std::string_view> pos,
   if (!write && cmd != "read") return false;
   st.kind = write ? StepKind::write : StepKind::read;
   const std::size_t want = write ? 2 : 1;
-  std::string_view block;  // bytes= (write) / count= (read)
+  std::optional<std::string_view> block;  // bytes= (write) / count= (read)
   for (const Option& o : opts) {
     if (o.first != (write ? "bytes" : "count")) {
       fail(fmt::format("unknown option '{}' for {}", shown(o.first), cmd));
     }
     block = o.second;
   }
-  const std::size_t npos = block.empty() ? want : 1;
+  const std::size_t npos = block ? 1 : want;
   if (pos.size() != npos) {
     fail(write ? std::string("expected 'write REG VALUE', 'write ADDR VALUE' or 'write ADDR "
                              "bytes=BYTES'")
                : std::string("expected 'read REG', 'read ADDR' or 'read ADDR count=N'"));
   }
   last_read = {};
-  if (!block.empty()) {
+  if (block) {
     if (is_name(pos[0]))
       fail(fmt::format("a block access starts at an address, not at a register"));
     if (write) {
-      st.bytes = scenario_lex::bytes(block, "bytes", map_size(p));
+      st.bytes = scenario_lex::bytes(*block, "bytes", map_size(p));
       if (st.bytes.empty()) fail("bytes: at least one byte");
       st.addr = address(p, pos[0], st.bytes.size());
     } else {
-      st.count = scenario_lex::number(block, "count", 1, map_size(p));
+      st.count = scenario_lex::number(*block, "count", 1, map_size(p));
       st.addr = address(p, pos[0], st.count);
       last_read = {true, true, 8};
     }

@@ -668,8 +668,7 @@ class Parser {
       step_.expect = ExpectKind::answer;
       if (std::find(std::begin(kAnswerKinds), std::end(kAnswerKinds), pos_[1]) ==
           std::end(kAnswerKinds)) {
-        if (pos_[1].empty() || pos_[1][0] < '0' || (pos_[1][0] > '9' && pos_[1][0] < 'A') ||
-            pos_[1][0] > 'F') {
+        if (pos_[1].find_first_not_of("0123456789abcdefABCDEFxX,") != std::string_view::npos) {
           fail(
               fmt::format("unknown answer kind '{}' (none, sc, data, ok, ue, rr, rs, dl, nr, dh, "
                           "or the answer's bytes)",
