@@ -405,7 +405,9 @@ TEST(ScenarioParse, BusActionsRefuseWhatTheMapDoesNot) {
   EXPECT_EQ(parse_error(h + "read 0x10 count=\n"), "t.scn:2: bad number '' for count");
   EXPECT_EQ(parse_error(h + "expect answer e5\nexpect answer 68,0x09\n"), "");
   EXPECT_EQ(parse_error(h + "expect answer dx\n"),
-            "t.scn:2: unknown answer kind 'dx' (none, sc, data, ok, ue, rr, rs, dl, nr, dh, or the "
+            "t.scn:2: bad byte 'dx' in answer (hex bytes separated by commas)");
+  EXPECT_EQ(parse_error(h + "expect answer sd\n"),
+            "t.scn:2: unknown answer kind 'sd' (none, sc, data, ok, ue, rr, rs, dl, nr, dh, or the "
             "answer's bytes)");
   EXPECT_EQ(parse_error("request MAC_Stop\n"), "");
   EXPECT_EQ(parse_error(h + "request MAC_Stop\n"),
@@ -416,9 +418,8 @@ TEST(ScenarioParse, BusActionsRefuseWhatTheMapDoesNot) {
             "t.scn:1: expected 'request MAC_New_TRDY N' (the ready time in bit times)");
   EXPECT_EQ(parse_error("set_prm bytes=88 wd=1,1\n"),
             "t.scn:1: set_prm: bytes= is the whole data unit; no other parameter options with it");
-  EXPECT_EQ(
-      parse_error("gc sync data=20,00\n"),
-      "t.scn:1: 'gc' takes no command with data= (the data unit as it is); unexpected 'sync'");
+  EXPECT_EQ(parse_error("gc sync data=20,00\n"),
+            "t.scn:1: 'gc' takes no arguments; unexpected 'sync'");
   EXPECT_EQ(parse_error("master address=2\nchk_cfg from=2\n"),
             "t.scn:2: from=2 is our own master: leave from= out");
   EXPECT_EQ(parse_error("send from=7\n"), "t.scn:1: send with fields needs from=SA and fc=N");
