@@ -57,9 +57,9 @@ enum class StepKind : std::uint8_t {
   // checks
   expect,
   // actions added later (after expect, so the Python enum's values stay put)
-  write,  // bus writes of the CPU: a register by name, a byte, a block (docs/scenario-format.md)
-  read,   // bus reads of the CPU, command reads included
-  send,   // a telegram as given: raw bytes, or fields from any station
+  write,    // bus writes of the CPU: a register by name, a byte, a block (docs/scenario-format.md)
+  read,     // bus reads of the CPU, command reads included
+  send,     // a telegram as given: raw bytes, or fields from any station
   request,  // a DPC31 request through the Instruction_Queue (bus writes)
 };
 
@@ -77,9 +77,9 @@ enum class ExpectKind : std::uint8_t {
   baud,
   port,
   pb3,
-  reg,   // a register's whole value (peek_reg: no side effect)
-  ram,   // bytes at an address (peek)
-  read,  // what the last `read` returned
+  reg,         // a register's whole value (peek_reg: no side effect)
+  ram,         // bytes at an address (peek)
+  read,        // what the last `read` returned
   indication,  // the DPC31's newest Indication_Queue entry
 };
 
