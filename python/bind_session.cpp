@@ -370,7 +370,11 @@ void bind_scenarios(py::module_& m) {
       .value("hw", StepKind::hw)
       .value("corrupt", StepKind::corrupt)
       .value("bad_fcs", StepKind::bad_fcs)
-      .value("expect", StepKind::expect);
+      .value("expect", StepKind::expect)
+      .value("write", StepKind::write)
+      .value("read", StepKind::read)
+      .value("send", StepKind::send)
+      .value("request", StepKind::request);
   py::class_<ScenarioStep>(m, "Step", "One line of a scenario file.")
       .def_readonly("line", &ScenarioStep::line)
       .def_readonly("text", &ScenarioStep::text)

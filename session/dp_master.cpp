@@ -268,6 +268,14 @@ Exchange DpMaster::global_control(std::uint8_t command, std::uint8_t groups) {
   return ex;
 }
 
+Exchange DpMaster::service(std::uint8_t dsap, std::vector<std::uint8_t> du, bool srd) {
+  const std::uint8_t keep = target_;
+  if (!srd) target_ = fdl::kBroadcast;
+  const Exchange ex = transact(request(dsap, std::move(du), srd));
+  target_ = keep;
+  return ex;
+}
+
 Exchange DpMaster::set_slave_address(std::uint8_t new_address, bool no_add_change) {
   return transact(request(
       sap::Set_Slave_Add,

@@ -161,6 +161,9 @@ class DpMaster {
   // An SRD from our SAP `ssap` to the slave's SAP `dsap` (DPV1: MSAC_C1 on 51, MSAC_C2 on 49 and
   // the connection's SAP), FCB as for every SRD: a request with data, or a poll without.
   Exchange acyclic(std::uint8_t dsap, std::uint8_t ssap, std::vector<std::uint8_t> du);
+  // Any service of this master with this data unit as it is (FCB as for every SRD; `srd` false:
+  // SDN to the broadcast address): a Set_Prm or Global_Control of any length.
+  Exchange service(std::uint8_t dsap, std::vector<std::uint8_t> du, bool srd = true);
 
   // The standard start-up: FDL_Status until answered, Slave_Diag, Set_Prm, Chk_Cfg, Slave_Diag
   // until the slave is ready. Returns false if it did not reach Data_Exchange within `tries`.

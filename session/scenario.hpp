@@ -56,6 +56,11 @@ enum class StepKind : std::uint8_t {
   bad_fcs,
   // checks
   expect,
+  // actions added later (after expect, so the Python enum's values stay put)
+  write,    // bus writes of the CPU: a register by name, a byte, a block (docs/scenario-format.md)
+  read,     // bus reads of the CPU, command reads included
+  send,     // a telegram as given: raw bytes, or fields from any station
+  request,  // a DPC31 request through the Instruction_Queue (bus writes)
 };
 
 enum class ExpectKind : std::uint8_t {
@@ -72,6 +77,10 @@ enum class ExpectKind : std::uint8_t {
   baud,
   port,
   pb3,
+  reg,         // a register's whole value (peek_reg: no side effect)
+  ram,         // bytes at an address (peek)
+  read,        // what the last `read` returned
+  indication,  // the DPC31's newest Indication_Queue entry
 };
 
 // Steps that let time pass (and may send requests), as opposed to modifiers, inputs and checks.
@@ -94,7 +103,17 @@ struct ScenarioStep {
   UartFault fault;                   // corrupt: char_index -1 = the last character
   std::optional<SlaveConfig> slave;  // set_prm / chk_cfg: the master's view from now on
   ExpectKind expect = ExpectKind::dp_state;
-  std::string name;  // expect: counter / interrupt / answer kind / port; hw: the input
+  std::string name;  // expect: counter / interrupt / answer kind / port / register; hw: the input
+  std::optional<RegId> reg;  // write / read / expect reg: the register (else `addr`)
+  std::uint32_t addr = 0;    // write / read / expect ram: the first byte address
+  // expect dp_state / wd_state: when the state was entered, `at` a cycle or `after` cycles since
+  // the last action began (docs/scenario-format.md, "Exact cycles").
+  enum class When : std::uint8_t { any, at, after } when = When::any;
+  std::uint64_t when_cycle = 0;
+  // set_prm / chk_cfg / gc / send: the station that sends it (another master); nullopt: ours.
+  std::optional<std::uint8_t> from;
+  // send with fields: destination (nullopt: the slave) and SAPs (nullopt: none).
+  std::optional<std::uint8_t> to, dsap, ssap;
 };
 
 struct Scenario {

@@ -11,6 +11,9 @@
 #include "firmware.h"
 #include "firmware_host.hpp"
 #include "scenario.hpp"
+#include "scenario_bus.hpp"
+#include "scenario_lex.hpp"
+#include "scenario_send.hpp"
 #include "textfile.hpp"
 
 namespace dpc31 {
@@ -22,11 +25,12 @@ std::string ScenarioError::text() const {
 
 namespace {
 
+using namespace scenario_lex;  // NOLINT: the parser's own lexical helpers
+
 // Simulated time one `silence` may take: bounds the run time of a typo like `silence 10000s`.
 constexpr std::uint64_t kMaxSeconds = 3600;
 constexpr std::uint64_t kMaxExchanges = 1'000'000;
 constexpr std::uint64_t kMaxTries = 100'000;
-constexpr std::size_t kMaxDu = 244;
 
 // Global_Control command bits (DP standard).
 constexpr std::pair<std::string_view, std::uint8_t> kGcNames[] = {
@@ -37,27 +41,6 @@ constexpr std::pair<std::string_view, std::uint8_t> kGcNames[] = {
 constexpr std::string_view kAnswerKinds[] = {"none", "sc", "data", "ok", "ue",
                                              "rr",   "rs", "dl",   "nr", "dh"};
 
-bool parse_u64(std::string_view s, std::uint64_t& v) {
-  int base = 10;
-  if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
-    base = 16;
-    s.remove_prefix(2);
-  }
-  if (s.empty()) return false;
-  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v, base);
-  return ec == std::errc() && p == s.data() + s.size();
-}
-
-std::vector<std::string_view> split(std::string_view s, char sep) {
-  std::vector<std::string_view> out;
-  for (;;) {
-    const std::size_t k = s.find(sep);
-    out.push_back(s.substr(0, k));
-    if (k == std::string_view::npos) return out;
-    s.remove_prefix(k + 1);
-  }
-}
-
 bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 
 std::string_view trim(std::string_view s) {
@@ -65,11 +48,6 @@ std::string_view trim(std::string_view s) {
   while (!s.empty() && is_space(s.back())) s.remove_suffix(1);
   return s;
 }
-
-struct ParseFail {
-  int line = 0;  // 0: the line being parsed
-  std::string message;
-};
 
 // Index of `name` in a NULL-terminated list of names, -1 if absent.
 int name_index(const char* const* names, std::string_view name) {
@@ -89,7 +67,9 @@ std::string name_list(const char* const* names) {
 
 // Actions whose first telegram a fault can be injected into.
 bool sends_request(StepKind k) {
-  return is_action(k) && k != StepKind::silence && k != StepKind::foreign_master;
+  return is_action(k) && k != StepKind::silence && k != StepKind::foreign_master &&
+         k != StepKind::write && k != StepKind::read && k != StepKind::send &&
+         k != StepKind::request;
 }
 
 class Parser {
@@ -188,40 +168,6 @@ class Parser {
   }
   [[noreturn]] void unknown_option(std::string_view key) const {
     fail(fmt::format("unknown option '{}' for {}", shown(key), cmd_));
-  }
-
-  static std::uint64_t number(std::string_view s, std::string_view what, std::uint64_t min,
-                              std::uint64_t max) {
-    std::uint64_t v = 0;
-    if (!parse_u64(s, v)) fail(fmt::format("bad number '{}' for {}", shown(s), what));
-    if (v < min || v > max) {
-      fail(fmt::format("{} {} out of range ({}..{})", what, shown(s), min, max));
-    }
-    return v;
-  }
-  static bool flag(std::string_view s, std::string_view what) {
-    if (s == "0") return false;
-    if (s == "1") return true;
-    fail(fmt::format("bad value '{}' for {}: 0 or 1", shown(s), what));
-  }
-  // Hex bytes "13,23" ("0x13" also accepted); "-" is the empty list.
-  static std::vector<std::uint8_t> bytes(std::string_view s, std::string_view what,
-                                         std::size_t max = kMaxDu) {
-    std::vector<std::uint8_t> out;
-    if (s == "-") return out;
-    if (s.empty()) fail(fmt::format("empty byte list for {} (write '-' for none)", what));
-    for (std::string_view b : split(s, ',')) {
-      std::string_view d = b;
-      if (d.size() > 2 && d[0] == '0' && (d[1] == 'x' || d[1] == 'X')) d.remove_prefix(2);
-      unsigned v = 0;
-      const auto [p, ec] = std::from_chars(d.data(), d.data() + d.size(), v, 16);
-      if (d.empty() || d.size() > 2 || ec != std::errc() || p != d.data() + d.size()) {
-        fail(fmt::format("bad byte '{}' in {} (hex bytes separated by commas)", shown(b), what));
-      }
-      out.push_back(static_cast<std::uint8_t>(v));
-    }
-    if (out.size() > max) fail(fmt::format("{}: {} bytes, at most {}", what, out.size(), max));
-    return out;
   }
 
   std::uint32_t clock() const {
@@ -476,11 +422,24 @@ class Parser {
       }
     } else if (cmd_ == "gc") {
       step_.kind = StepKind::gc;
-      positional(1, 1, "a command (sync, unsync, freeze, unfreeze, clear, operate, or a number)");
-      step_.value = gc_command(pos_[0]);
       for (const auto& [k, v] : opts_) {
-        if (k != "groups") unknown_option(k);
-        step_.value2 = static_cast<std::uint32_t>(number(v, "groups", 0, 255));
+        if (k == "groups") {
+          step_.value2 = static_cast<std::uint32_t>(number(v, "groups", 0, 255));
+        } else if (k == "data") {
+          step_.bytes = bytes(v, "data");
+          step_.has_bytes = true;
+        } else if (!from_option(k, v)) {
+          unknown_option(k);
+        }
+      }
+      if (step_.has_bytes) {
+        positional(0, 0, "no command with data= (the data unit as it is)");
+        if (option("groups")) fail("gc: data= is the whole data unit; groups= goes into it");
+      } else {
+        positional(1, 1, "a command (sync, unsync, freeze, unfreeze, clear, operate, or a number)");
+        step_.value = gc_command(pos_[0]);
+        step_.bytes = {static_cast<std::uint8_t>(step_.value),
+                       static_cast<std::uint8_t>(step_.value2)};
       }
     } else if (cmd_ == "diag") {
       simple(StepKind::diag);
@@ -497,19 +456,30 @@ class Parser {
       positional(0, 0, "options only");
       step_.slave = view_;
       for (const auto& [k, v] : opts_) {
-        if (!prm_option(*step_.slave, k, v)) unknown_option(k);
+        if (k == "bytes") {
+          step_.bytes = bytes(v, "bytes");
+          step_.has_bytes = true;
+        } else if (!from_option(k, v) && !prm_option(*step_.slave, k, v)) {
+          unknown_option(k);
+        }
       }
-      view_ = step_.slave;
+      if (step_.has_bytes && opts_.size() > (step_.from ? 2u : 1u)) {
+        fail("set_prm: bytes= is the whole data unit; no other parameter options with it");
+      }
+      if (!step_.from && !step_.has_bytes) view_ = step_.slave;
     } else if (cmd_ == "chk_cfg") {
       step_.kind = StepKind::chk_cfg;
       positional(0, 0, "options only");
       step_.slave = view_;
       for (const auto& [k, v] : opts_) {
+        if (from_option(k, v)) continue;
         if (k != "cfg") unknown_option(k);
         step_.slave->cfg = bytes(v, "cfg");
         if (step_.slave->cfg.empty()) fail("cfg: at least one byte");
       }
-      view_ = step_.slave;
+      if (!step_.from) view_ = step_.slave;
+    } else if (cmd_ == "send") {
+      scenario_send::parse(pos_, opts_, step_);
     } else if (cmd_ == "set_slave_address") {
       step_.kind = StepKind::set_slave_address;
       positional(1, 1, "the new address");
@@ -571,9 +541,23 @@ class Parser {
       step_.kind = StepKind::expect;
       no_options();
       expect();
+    } else if (scenario_bus::parse_action(cmd_, pos_, opts_, s_.chip.profile, step_, last_read_)) {
     } else {
       fail(fmt::format("unknown command '{}'", shown(cmd_)));
     }
+  }
+
+  // from=SA: another master sends the request (docs/scenario-format.md, "Telegrams as given").
+  bool from_option(std::string_view k, std::string_view v) {
+    if (k != "from") return false;
+    step_.from = static_cast<std::uint8_t>(number(v, "from", 0, 126));
+    if (*step_.from == s_.master.address) {
+      fail(fmt::format("from={} is our own master: leave from= out", *step_.from));
+    }
+    return true;
+  }
+  [[nodiscard]] bool option(std::string_view key) const {
+    return std::any_of(opts_.begin(), opts_.end(), [&](const auto& o) { return o.first == key; });
   }
 
   std::uint32_t gc_command(std::string_view s) const {
@@ -602,6 +586,16 @@ class Parser {
   void expect() {
     if (pos_.empty()) fail("'expect' needs what to check and the expected value");
     const std::string_view what = pos_[0];
+    if (pos_.size() >= 3 && (pos_[pos_.size() - 2] == "at" || pos_[pos_.size() - 2] == "after")) {
+      if (what != "dp_state" && what != "wd_state") {
+        fail(fmt::format("'{}' is for dp_state and wd_state: the cycle a state was entered",
+                         pos_[pos_.size() - 2]));
+      }
+      step_.when =
+          pos_[pos_.size() - 2] == "at" ? ScenarioStep::When::at : ScenarioStep::When::after;
+      step_.when_cycle = number(pos_.back(), "cycle", 0, kMaxSeconds * clock() * 1000);
+      pos_.resize(pos_.size() - 2);
+    }
     auto args = [&](std::size_t n, std::string_view form) {
       if (pos_.size() != n + 1) fail(fmt::format("expected 'expect {} {}'", what, form));
     };
@@ -674,8 +668,14 @@ class Parser {
       step_.expect = ExpectKind::answer;
       if (std::find(std::begin(kAnswerKinds), std::end(kAnswerKinds), pos_[1]) ==
           std::end(kAnswerKinds)) {
-        fail(fmt::format("unknown answer kind '{}' (none, sc, data, ok, ue, rr, rs, dl, nr, dh)",
-                         shown(pos_[1])));
+        if (pos_[1].find_first_not_of("0123456789abcdefABCDEFxX,") != std::string_view::npos) {
+          fail(
+              fmt::format("unknown answer kind '{}' (none, sc, data, ok, ue, rr, rs, dl, nr, dh, "
+                          "or the answer's bytes)",
+                          shown(pos_[1])));
+        }
+        step_.bytes = bytes(pos_[1], "answer", fdl::kMaxFrameLength);  // the whole telegram
+        step_.has_bytes = true;
       }
       step_.name = std::string(pos_[1]);
     } else if (what == "station") {
@@ -695,10 +695,10 @@ class Parser {
       args(1, "N");
       step_.expect = ExpectKind::baud;
       step_.value = static_cast<std::uint32_t>(number(pos_[1], "baud", 1, 12'000'000));
-    } else {
+    } else if (!scenario_bus::parse_expect(pos_, s_.chip.profile, last_read_, step_)) {
       fail(
           fmt::format("unknown check '{}' (dp_state, wd_state, outputs, cleared, inputs, counter, "
-                      "irr_bit, answer, station, diag_byte, baud, port, pb3)",
+                      "irr_bit, answer, station, diag_byte, baud, port, pb3, reg, ram, read)",
                       shown(what)));
     }
   }
@@ -742,7 +742,8 @@ class Parser {
   bool firmware_seen_ = false;
   bool slave_seen_ = false;
   bool user_seen_ = false;
-  bool body_ = false;  // an action or expect has been seen: no more headers
+  bool body_ = false;                  // an action or expect has been seen: no more headers
+  scenario_bus::ReadShape last_read_;  // what `expect read` compares
   std::vector<std::string_view> words_;
   std::string_view cmd_;
   std::vector<std::string_view> pos_;

@@ -13,41 +13,19 @@
 #include "dpc31/hex.hpp"
 #include "firmware_host.hpp"
 #include "scenario.hpp"
+#include "scenario_bus.hpp"
+#include "scenario_lex.hpp"
+#include "scenario_send.hpp"
 #include "vocabulary.hpp"
 
 namespace dpc31 {
 
 namespace {
 
-std::string bytes_text(std::span<const std::uint8_t> b) {
-  return b.empty() ? "-" : hex_bytes(b, " ", 244);
-}
-
-std::string answer_text(const std::optional<fdl::Frame>& a) {
-  if (!a) return "no answer";
-  if (a->sd == fdl::SC) return "SC";
-  std::string s(response_name(fdl::response_code(a->fc)));
-  if (!a->du.empty()) s += " " + hex_bytes(a->du, " ", 32);
-  return s;
-}
-
-// The kinds of `expect answer`, lower case.
-std::string answer_kind(const std::optional<fdl::Frame>& a) {
-  if (!a) return "none";
-  if (a->sd == fdl::SC) return "sc";
-  std::string s(response_name(fdl::response_code(a->fc)));
-  std::transform(s.begin(), s.end(), s.begin(), [](char c) { return static_cast<char>(c | 0x20); });
-  if (!a->du.empty()) s += fmt::format(" with {} data bytes", a->du.size());
-  return s;
-}
-
-bool answer_is(const std::optional<fdl::Frame>& a, std::string_view kind) {
-  if (kind == "none" || !a) return kind == "none" && !a;
-  if (kind == "sc" || a->sd == fdl::SC) return kind == "sc" && a->sd == fdl::SC;
-  if (kind == "data") return !a->du.empty();
-  return answer_kind(a).starts_with(kind) &&
-         (answer_kind(a).size() == kind.size() || answer_kind(a)[kind.size()] == ' ');
-}
+using scenario_lex::bytes_text;
+using scenario_send::answer_is;
+using scenario_send::answer_kind;
+using scenario_send::answer_text;
 
 class Runner {
  public:
@@ -113,6 +91,7 @@ class Runner {
     });
     dp_ = chip_.dp_state();
     wd_ = chip_.wd_state();
+    dp_since_ = wd_since_ = chip_.cycle();
     outputs_.assign(s_.user.slave.out_len, 0);
     note(chip_.cycle(),
          fmt::format("started: dp_state {}, wd_state {}", dp_state_name(dp_), wd_state_name(wd_)),
@@ -129,6 +108,7 @@ class Runner {
         base_counters_ = chip_.fdl_counters();
         base_irq_ = interrupts().size();
         base_pb3_ = pb3_rises_;
+        base_cycle_ = chip_.cycle();
       }
       note(chip_.cycle(), fmt::format("line {}: {}", st.line, st.text), Event::Kind::step, &st);
       // Requests counted, not history().size(): a long exchange step forgets history as it goes.
@@ -230,6 +210,7 @@ class Runner {
     if (dp != dp_) {
       note(chip_.cycle(), fmt::format("dp_state {} -> {}", dp_state_name(dp_), dp_state_name(dp)));
       dp_ = dp;
+      dp_since_ = chip_.cycle();
     }
     if (wd != wd_) {
       std::string found;
@@ -237,6 +218,7 @@ class Runner {
       note(chip_.cycle(),
            fmt::format("wd_state {} -> {}{}", wd_state_name(wd_), wd_state_name(wd), found));
       wd_ = wd;
+      wd_since_ = chip_.cycle();
     }
   }
 
@@ -255,11 +237,13 @@ class Runner {
     switch (st.kind) {
       case StepKind::exchange:
         return srd(std::nullopt, outputs);
-      case StepKind::gc:
-        return fdl::make_frame(
-            fdl::kBroadcast, a, fdl::make_request_fc(fdl::Function::SDN_high, false, false),
-            {static_cast<std::uint8_t>(st.value), static_cast<std::uint8_t>(st.value2)},
-            sap::Global_Control, sap::Master);
+      case StepKind::gc:  // st.bytes: the data unit (Control_Command, Group_Select, or data=)
+        if (st.from)
+          return scenario_send::from_other_master(st, fdl::kBroadcast, sap::Global_Control,
+                                                  st.bytes);
+        return fdl::make_frame(fdl::kBroadcast, a,
+                               fdl::make_request_fc(fdl::Function::SDN_high, false, false),
+                               st.bytes, sap::Global_Control, sap::Master);
       case StepKind::diag:
         return srd(sap::Slave_Diag, {});
       case StepKind::get_cfg:
@@ -269,9 +253,16 @@ class Runner {
       case StepKind::read_outputs:
         return srd(sap::Rd_Outp, {});
       case StepKind::set_prm:
-        return srd(sap::Set_Prm, prm_du(sl, prm_station_status(sl)));
-      case StepKind::chk_cfg:
-        return srd(sap::Chk_Cfg, sl.cfg);
+      case StepKind::chk_cfg: {
+        const bool prm = st.kind == StepKind::set_prm;
+        const SlaveConfig& own = st.from ? *st.slave : sl;  // another master's parameters
+        std::vector<std::uint8_t> du = !prm           ? own.cfg
+                                       : st.has_bytes ? st.bytes
+                                                      : prm_du(own, prm_station_status(own));
+        const std::uint8_t dsap = prm ? sap::Set_Prm : sap::Chk_Cfg;
+        if (st.from) return scenario_send::from_other_master(st, t, dsap, std::move(du));
+        return srd(dsap, std::move(du));
+      }
       case StepKind::set_slave_address:
         return srd(sap::Set_Slave_Add,
                    {static_cast<std::uint8_t>(st.value), static_cast<std::uint8_t>(sl.ident >> 8),
@@ -383,9 +374,11 @@ class Runner {
         break;
       }
       case StepKind::gc:
-        if (damage(st)) {
-          master_->global_control(static_cast<std::uint8_t>(st.value),
-                                  static_cast<std::uint8_t>(st.value2));
+        if (!damage(st)) break;
+        if (st.from) {
+          master_->transact(predict(st, {}));
+        } else {
+          master_->service(sap::Global_Control, st.bytes, false);
         }
         break;
       case StepKind::diag:
@@ -409,14 +402,20 @@ class Runner {
         with_retries(master_->read_outputs());
         break;
       case StepKind::set_prm:
-        master_->slave() = *st.slave;
-        damage(st);
-        with_retries(master_->set_prm());
-        break;
       case StepKind::chk_cfg:
-        master_->slave() = *st.slave;
+        if (!st.from && !st.has_bytes) master_->slave() = *st.slave;
         damage(st);
-        with_retries(master_->chk_cfg());
+        if (st.from) {  // another master: the frame as predicted, FCV = 0
+          with_retries(master_->transact(predict(st, {})));
+        } else if (st.has_bytes) {
+          with_retries(master_->service(sap::Set_Prm, st.bytes));
+        } else {
+          with_retries(st.kind == StepKind::set_prm ? master_->set_prm() : master_->chk_cfg());
+        }
+        break;
+      case StepKind::send:  // the bytes as given, kept for the walk
+        master_->transact_raw(raw_[master_->history().size()] =
+                                  scenario_send::telegram(st, master_->target()));
         break;
       case StepKind::set_slave_address: {
         damage(st);
@@ -434,6 +433,15 @@ class Runner {
       case StepKind::silence:
         silence(st.cycles);
         break;
+      case StepKind::write:
+      case StepKind::read:
+      case StepKind::request: {
+        std::string done = scenario_bus::act(chip_, st, last_read_);  // the accesses take time
+        if (done.empty())
+          fail(st.line, "request: the Instruction_Queue is not set up (InstQ_Len 0)");
+        note(chip_.cycle(), std::move(done));
+        break;
+      }
       case StepKind::inputs:
         user_.inputs = st.bytes;
         break;
@@ -463,6 +471,16 @@ class Runner {
   }
 
   std::string describe(std::size_t i) const {
+    if (const auto raw = raw_.find(i); raw != raw_.end()) {  // `send`: the bytes as given
+      const fdl::Decoded d = fdl::decode(raw->second);
+      std::string s = "send " + hex_bytes(raw->second, " ", fdl::kMaxFrameLength);
+      if (d.error != fdl::Error::none) {
+        s += fmt::format(" [{}]", fdl::error_name(d.error));
+      } else if (!wants_answer(d.frame)) {
+        return s;
+      }
+      return s + " => " + answer_text(master_->history()[i].answer);
+    }
     const fdl::Frame& req = request_of(i);
     std::string s = fmt::format("{} -> {} {}", req.sa, req.da, service_name(req));
     if (!req.du.empty()) s += " " + hex_bytes(req.du, " ", 32);
@@ -482,7 +500,7 @@ class Runner {
       }
       repeat_.reset();
     }
-    if (req.sa != s_.master.address || notes_.count(i) != 0) return;
+    if (req.sa != s_.master.address || notes_.count(i) != 0 || raw_.count(i) != 0) return;
     const fdl::Function fn = fdl::request_function(req.fc);
     if (fn == fdl::Function::SRD_high && req.da != fdl::kBroadcast) {
       fcb_ = fdl::fcb(req.fc);
@@ -539,6 +557,7 @@ class Runner {
     };
     keep_last(notes_);
     keep_last(sent_);
+    keep_last(raw_);
     master_->keep_last_exchange();
     reported_ = 1;
   }
@@ -633,8 +652,13 @@ class Runner {
         what = "answer";
         const std::optional<fdl::Frame> last =
             master_->history().empty() ? std::nullopt : master_->history().back().answer;
-        want = st.name;
-        got = answer_is(last, st.name) ? st.name : answer_kind(last);
+        if (st.has_bytes) {  // the whole answer telegram
+          want = bytes_text(st.bytes);
+          got = last ? bytes_text(fdl::encode(*last)) : "none";
+        } else {
+          want = st.name;
+          got = answer_is(last, st.name) ? st.name : answer_kind(last);
+        }
         break;
       }
       case ExpectKind::station:
@@ -665,6 +689,20 @@ class Runner {
         want = port_text(st.value);
         got = port_text(static_cast<std::uint32_t>(fw_->port(st.name)));
         break;
+      case ExpectKind::reg:
+      case ExpectKind::ram:
+      case ExpectKind::read:
+      case ExpectKind::indication: {
+        scenario_bus::Check c = scenario_bus::check(chip_, st, last_read_);
+        what = std::move(c.what);
+        want = std::move(c.want);
+        got = std::move(c.got);
+        break;
+      }
+    }
+    if (st.when != ScenarioStep::When::any && got == want) {
+      scenario_bus::when(st, st.expect == ExpectKind::dp_state ? dp_since_ : wd_since_, base_cycle_,
+                         want, got);
     }
     if (got == want) {
       ++out_.passed;
@@ -698,6 +736,7 @@ class Runner {
   int fault_line_ = 0;
   std::map<std::size_t, std::string> notes_;                  // history index -> the damage done
   std::map<std::size_t, fdl::Frame> sent_;                    // history index -> the frame damaged
+  std::map<std::size_t, std::vector<std::uint8_t>> raw_;      // history index -> `send`'s bytes
   std::optional<std::pair<std::size_t, fdl::Frame>> repeat_;  // the master's repeat, checked
   int repeat_line_ = 0;
   // The master's FCB state as DpMaster keeps it (private there), for predict().
@@ -713,6 +752,10 @@ class Runner {
   std::size_t base_irq_ = 0;
   std::size_t pb3_rises_ = 0;  // PB3 rising edges so far (dpc31 DX_Out port)
   std::size_t base_pb3_ = 0;
+  std::uint64_t base_cycle_ = 0;  // when the last action began (`after N`)
+  std::uint64_t dp_since_ = 0;    // when dp_ / wd_ were entered, as the walk shows it
+  std::uint64_t wd_since_ = 0;
+  scenario_bus::LastRead last_read_;  // what `expect read` compares
 };
 
 }  // namespace

@@ -374,3 +374,152 @@ TEST(ScenarioRun, Dpc31UserWatchdogExpiresAtItsCycle) {
   EXPECT_EQ(leave, e + kTick * (k + 4));
   EXPECT_TRUE(walk.has(fmt::format("[cycle {:>10}] dp_state Data_Exchange -> Wait_Prm", leave)));
 }
+
+// Bus actions and their checks (docs/scenario-format.md, "Bus accesses"): bad lines refused.
+TEST(ScenarioParse, BusActionsRefuseWhatTheMapDoesNot) {
+  const std::string h = "profile spc3\n";
+  EXPECT_EQ(parse_error(h + "write No_Such_Reg 1\n"),
+            "t.scn:2: 'No_Such_Reg' is not a register of spc3 (names as in docs/registers.md)");
+  EXPECT_EQ(parse_error(h + "write Status_Reg 1\n"),
+            "t.scn:2: Status_Reg has no write side in spc3");
+  EXPECT_EQ(parse_error(h + "read Int_Mask_Reg\n"),
+            "t.scn:2: Int_Mask_Reg has no read side in spc3");
+  EXPECT_EQ(parse_error(h + "write R_TS_Adr 256\n"), "t.scn:2: value 256 out of range (0..255)");
+  EXPECT_EQ(parse_error(h + "write 0x800 1\n"), "t.scn:2: address 0x800 out of range (0..2047)");
+  EXPECT_EQ(parse_error(h + "read 0x7FF count=2\n"),
+            "t.scn:2: 2 bytes from 0x7FF run past the end of the spc3 map (0x800 bytes)");
+  EXPECT_EQ(parse_error(h + "read R_TS_Adr count=2\n"),
+            "t.scn:2: a block access starts at an address, not at a register");
+  EXPECT_EQ(parse_error(h + "write 0x10 1 bytes=01\n"),
+            "t.scn:2: expected 'write REG VALUE', 'write ADDR VALUE' or 'write ADDR bytes=BYTES'");
+  EXPECT_EQ(parse_error(h + "expect read 1\n"), "t.scn:2: 'expect read' needs a 'read' before it");
+  EXPECT_EQ(parse_error(h + "read 0x10 count=2\nexpect read 123\n"),
+            "t.scn:3: bad byte '123' in read (hex bytes separated by commas)");
+  EXPECT_EQ(parse_error(h + "expect reg Status_Reg 0x10000\n"),
+            "t.scn:2: register value 0x10000 out of range (0..65535)");
+  EXPECT_EQ(parse_error(h + "expect baud 12000000 at 5\n"),
+            "t.scn:2: 'at' is for dp_state and wd_state: the cycle a state was entered");
+  EXPECT_EQ(parse_error(h + "corrupt parity\nwrite 0x10 1\nstartup\n"),
+            "t.scn:2: the next action ('write', line 3) sends no request to damage");
+  EXPECT_EQ(parse_error(h + "read 0x10\nexpect read 0x12\nexpect dp_state Wait_Prm after 4\n"), "");
+  EXPECT_EQ(parse_error(h + "read 0x10 count=\n"), "t.scn:2: bad number '' for count");
+  EXPECT_EQ(parse_error(h + "expect answer e5\nexpect answer 68,0x09\n"), "");
+  EXPECT_EQ(parse_error(h + "expect answer dx\n"),
+            "t.scn:2: bad byte 'dx' in answer (hex bytes separated by commas)");
+  EXPECT_EQ(parse_error(h + "expect answer sd\n"),
+            "t.scn:2: unknown answer kind 'sd' (none, sc, data, ok, ue, rr, rs, dl, nr, dh, or the "
+            "answer's bytes)");
+  EXPECT_EQ(parse_error("request MAC_Stop\n"), "");
+  EXPECT_EQ(parse_error(h + "request MAC_Stop\n"),
+            "t.scn:2: 'request' is the DPC31's Instruction_Queue: needs profile dpc31");
+  EXPECT_EQ(parse_error("request DPS_User_Wd on\n"),
+            "t.scn:1: DPS_User_Wd 'on': reset, enable or disable");
+  EXPECT_EQ(parse_error("request MAC_New_TRDY\n"),
+            "t.scn:1: expected 'request MAC_New_TRDY N' (the ready time in bit times)");
+  EXPECT_EQ(parse_error("set_prm bytes=88 wd=1,1\n"),
+            "t.scn:1: set_prm: bytes= is the whole data unit; no other parameter options with it");
+  EXPECT_EQ(parse_error("gc sync data=20,00\n"),
+            "t.scn:1: 'gc' takes no arguments; unexpected 'sync'");
+  EXPECT_EQ(parse_error("master address=2\nchk_cfg from=2\n"),
+            "t.scn:2: from=2 is our own master: leave from= out");
+  EXPECT_EQ(parse_error("send from=7\n"), "t.scn:1: send with fields needs from=SA and fc=N");
+}
+
+// `at CYCLE` / `after N` (docs/scenario-format.md, "Exact cycles"): User_Leave_Master acts at
+// the completion cycle of its write, which begins with the step and takes 4 clocks
+// (docs/timing.md, "Bus accesses", "Mode and state changes"). The step's first cycle comes from
+// the observer; the walk must show the change exactly there.
+TEST(ScenarioRun, StateEnteredAtAndAfterExactCycles) {
+  struct Begin : dpc31::ScenarioObserver {
+    std::vector<std::uint64_t> at;
+    void step_begins(std::uint64_t c, const dpc31::ScenarioStep& st, std::string_view) override {
+      if (st.kind == dpc31::StepKind::write) at.push_back(c);
+    }
+  } begin;
+  const std::string text =
+      "profile spc3\nbaud 12000000\nstartup\nexchange\n"
+      "write Mode_Reg1_S 0x08\n"
+      "expect dp_state Wait_Prm after 4\n"
+      "expect dp_state Wait_Prm after 5   # wrong on purpose\n"
+      "expect wd_state DP_Control after 0  # entered before the write: fails\n";
+  dpc31::Scenario s;
+  dpc31::ScenarioError err;
+  ASSERT_TRUE(dpc31::parse_scenario(text, "t.scn", s, err)) << err.text();
+  dpc31::ScenarioHooks hooks;
+  hooks.observer = &begin;
+  Lines walk;
+  Lines errors;
+  const dpc31::ScenarioOutcome o = dpc31::run_scenario(s, walk.sink(), errors.sink(), hooks);
+  ASSERT_EQ(begin.at.size(), 1u);
+  const std::uint64_t done = begin.at[0] + 4;
+  EXPECT_TRUE(walk.has(fmt::format("[cycle {:>10}] dp_state Data_Exchange -> Wait_Prm", done)));
+  ASSERT_EQ(errors.lines.size(), 2u);
+  EXPECT_EQ(errors.lines[0], "t.scn:7: expected dp_state Wait_Prm after 5, got Wait_Prm after 4");
+  EXPECT_TRUE(errors.lines[1].starts_with(
+      "t.scn:8: expected wd_state DP_Control after 0, got DP_Control since cycle "))
+      << errors.lines[1];
+  EXPECT_EQ(o.passed, 1u);
+
+  // The same change by its absolute cycle.
+  const std::string at = text.substr(0, text.find("expect")) +
+                         fmt::format("expect dp_state Wait_Prm at {}\n", done) +
+                         fmt::format("expect dp_state Wait_Prm at {}\n", done - 1);
+  ASSERT_TRUE(dpc31::parse_scenario(at, "t.scn", s, err)) << err.text();
+  Lines errors2;
+  const dpc31::ScenarioOutcome o2 = dpc31::run_scenario(s, {}, errors2.sink());
+  EXPECT_EQ(o2.passed, 1u);
+  ASSERT_EQ(errors2.lines.size(), 1u);
+  EXPECT_EQ(errors2.lines[0], fmt::format("t.scn:7: expected dp_state Wait_Prm at {}, got "
+                                          "Wait_Prm at {}",
+                                          done - 1, done));
+}
+
+// A register read through the scenario is two bus accesses of 4 clocks each, in the bus mode's
+// byte placement (docs/timing.md "Bus accesses"; Motorola: the lower address holds bits 15..8,
+// docs/registers.md "hi,lo"), made when the step begins.
+TEST(ScenarioRun, RegisterAccessesAreBusAccessesInByteOrder) {
+  const std::string text =
+      "profile spc3\nbus motorola\nread Status_Reg\nwrite Int_Mask_Reg 0x1234\n";
+  dpc31::Scenario s;
+  dpc31::ScenarioError err;
+  ASSERT_TRUE(dpc31::parse_scenario(text, "t.scn", s, err)) << err.text();
+  struct Access {
+    std::uint64_t cycle;
+    bool write;
+    std::uint32_t addr;
+    std::uint8_t data;
+  };
+  std::vector<Access> all;
+  struct Begin : dpc31::ScenarioObserver {
+    std::uint64_t first = 0;
+    void step_begins(std::uint64_t c, const dpc31::ScenarioStep& st, std::string_view) override {
+      if (st.kind == dpc31::StepKind::read) first = c;
+    }
+  } begin;
+  dpc31::ScenarioHooks hooks;
+  hooks.observer = &begin;
+  hooks.at_start = [&](dpc31::Chip& chip) {
+    chip.on_bus_access([&](std::uint64_t c, const dpc31::BusAccess& a) {
+      all.push_back({c, a.write, a.addr, a.write ? a.data : std::uint8_t{0}});
+    });
+  };
+  const dpc31::ScenarioOutcome o = dpc31::run_scenario(s, {}, {}, hooks);
+  EXPECT_TRUE(o.ok());
+  const std::uint64_t t = begin.first;
+  std::vector<Access> mine;
+  for (const Access& a : all)
+    if (a.cycle > t) mine.push_back(a);
+  ASSERT_EQ(mine.size(), 4u);
+  EXPECT_EQ(mine[0].cycle, t + 4);
+  EXPECT_FALSE(mine[0].write);
+  EXPECT_EQ(mine[0].addr, 0x04u);
+  EXPECT_EQ(mine[1].cycle, t + 8);
+  EXPECT_EQ(mine[1].addr, 0x05u);
+  EXPECT_EQ(mine[2].cycle, t + 12);
+  EXPECT_TRUE(mine[2].write);
+  EXPECT_EQ(mine[2].addr, 0x04u);
+  EXPECT_EQ(mine[2].data, 0x12);
+  EXPECT_EQ(mine[3].cycle, t + 16);
+  EXPECT_EQ(mine[3].addr, 0x05u);
+  EXPECT_EQ(mine[3].data, 0x34);
+}

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -550,3 +551,22 @@ TEST(TraceGolden, DiagExtDiag) {
 }
 
 }  // namespace
+
+// The scenario's own bus door (write, read, request) and its telegrams as given (send, from=)
+// are recorded as wr / rd / rx lines and replay on a fresh chip (docs/trace-format.md,
+// "Recording").
+TEST(TraceRun, NewScenarioActionsRecordAndReplay) {
+  for (const char* name : {"bus_access_spc3", "telegrams_as_given_dpc31", "requests_dpc31"}) {
+    std::ifstream in(std::string(SOURCE_DIR) + "/traces/" + name + ".scn");
+    const std::string scn((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    int rc = -1;
+    const std::string t = record(scn, &rc);
+    EXPECT_EQ(rc, 0) << name;
+    std::string msg;
+    EXPECT_EQ(replay_text(t, msg), 0) << name << ": " << msg;
+  }
+  // The bad-FCS telegram of `send` is an rx line as it was sent.
+  std::ifstream in(std::string(SOURCE_DIR) + "/traces/telegrams_as_given_dpc31.scn");
+  const std::string scn((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(record(scn).find(" 10 05 02 49 51 16\n"), std::string::npos);
+}

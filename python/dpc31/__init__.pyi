@@ -286,6 +286,10 @@ class StepKind(enum.Enum):
     corrupt = 16
     bad_fcs = 17
     expect = 18
+    write = 19
+    read = 20
+    send = 21
+    request = 22
 
 class Step:
     line: int

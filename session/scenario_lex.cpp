@@ -1,0 +1,75 @@
+// Scenario files: the shared lexical helpers (scenario_lex.hpp).
+#include "scenario_lex.hpp"
+
+#include <fmt/format.h>
+
+#include <charconv>
+#include <utility>
+
+#include "dpc31/hex.hpp"
+#include "textfile.hpp"
+
+namespace dpc31::scenario_lex {
+
+void fail(std::string msg) { throw ParseFail{0, std::move(msg)}; }
+
+bool parse_u64(std::string_view s, std::uint64_t& v) {
+  int base = 10;
+  if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
+    base = 16;
+    s.remove_prefix(2);
+  }
+  if (s.empty()) return false;
+  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v, base);
+  return ec == std::errc() && p == s.data() + s.size();
+}
+
+std::vector<std::string_view> split(std::string_view s, char sep) {
+  std::vector<std::string_view> out;
+  for (;;) {
+    const std::size_t k = s.find(sep);
+    out.push_back(s.substr(0, k));
+    if (k == std::string_view::npos) return out;
+    s.remove_prefix(k + 1);
+  }
+}
+
+std::uint64_t number(std::string_view s, std::string_view what, std::uint64_t min,
+                     std::uint64_t max) {
+  std::uint64_t v = 0;
+  if (!parse_u64(s, v)) fail(fmt::format("bad number '{}' for {}", shown(s), what));
+  if (v < min || v > max) {
+    fail(fmt::format("{} {} out of range ({}..{})", what, shown(s), min, max));
+  }
+  return v;
+}
+
+bool flag(std::string_view s, std::string_view what) {
+  if (s == "0") return false;
+  if (s == "1") return true;
+  fail(fmt::format("bad value '{}' for {}: 0 or 1", shown(s), what));
+}
+
+std::vector<std::uint8_t> bytes(std::string_view s, std::string_view what, std::size_t max) {
+  std::vector<std::uint8_t> out;
+  if (s == "-") return out;
+  if (s.empty()) fail(fmt::format("empty byte list for {} (write '-' for none)", what));
+  for (std::string_view b : split(s, ',')) {
+    std::string_view d = b;
+    if (d.size() > 2 && d[0] == '0' && (d[1] == 'x' || d[1] == 'X')) d.remove_prefix(2);
+    unsigned v = 0;
+    const auto [p, ec] = std::from_chars(d.data(), d.data() + d.size(), v, 16);
+    if (d.empty() || d.size() > 2 || ec != std::errc() || p != d.data() + d.size()) {
+      fail(fmt::format("bad byte '{}' in {} (hex bytes separated by commas)", shown(b), what));
+    }
+    out.push_back(static_cast<std::uint8_t>(v));
+    if (out.size() > max) fail(fmt::format("{}: more than {} bytes", what, max));
+  }
+  return out;
+}
+
+std::string bytes_text(std::span<const std::uint8_t> b) {
+  return b.empty() ? "-" : hex_bytes(b, " ", 4096);
+}
+
+}  // namespace dpc31::scenario_lex

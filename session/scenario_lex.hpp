@@ -1,0 +1,39 @@
+// Scenario files: the lexical pieces every command's parser shares (numbers, byte lists, flags)
+// and the parse failure they throw. Internal to the scenario parser (scenario_parse.cpp,
+// scenario_actions.cpp); the format is docs/scenario-format.md.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace dpc31::scenario_lex {
+
+// At most this many data bytes in one telegram's data unit (DP).
+inline constexpr std::size_t kMaxDu = 244;
+
+struct ParseFail {
+  int line = 0;  // 0: the line being parsed
+  std::string message;
+};
+
+[[noreturn]] void fail(std::string msg);
+
+// Decimal or 0x hex, the whole of `s`.
+bool parse_u64(std::string_view s, std::uint64_t& v);
+std::vector<std::string_view> split(std::string_view s, char sep);
+// A number in min..max, or ParseFail naming `what`.
+std::uint64_t number(std::string_view s, std::string_view what, std::uint64_t min,
+                     std::uint64_t max);
+bool flag(std::string_view s, std::string_view what);
+// Hex bytes "13,23" ("0x13" also accepted); "-" is the empty list.
+std::vector<std::uint8_t> bytes(std::string_view s, std::string_view what,
+                                std::size_t max = kMaxDu);
+
+// Bytes as the walk and the checks show them: "01 02 A3", or "-" for none.
+std::string bytes_text(std::span<const std::uint8_t> b);
+
+}  // namespace dpc31::scenario_lex
