@@ -24,7 +24,7 @@ struct BlockEvent {
     prm,
     cfg,
     ssa,
-    mac_stop,   // a MAC_Stop request (DPC31 Instruction_Queue)
+    mac_stop,   // the MAC goes Offline: a MAC_Stop request (DPC31), a RAM access violation
     mac_start,  // a MAC_Start request
     read,
     write

@@ -36,8 +36,12 @@ ChipCore::ChipCore(const ChipOptions& opt)
                     "core",
                     prof().name));
   }
-  // A RAM access violation takes a started chip offline.
-  regs.on_violation = [this] { mode.go_offline(); };
+  // A RAM access violation takes a started chip offline, as MAC_Stop does; the lockstep's RTL
+  // learns it from the same block event (it does not decode addresses beyond the RAM).
+  regs.on_violation = [this] {
+    signals.emit(BlockEvent::Kind::mac_stop);
+    mode.go_offline();
+  };
   install_irq_hooks(hooks);
   install_mode_hooks(hooks);
   install_buffer_hooks(hooks);
