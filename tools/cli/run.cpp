@@ -65,8 +65,8 @@ std::vector<std::string> leading_comments(const std::string& path) {
 int run_with_outputs(const RunOptions& opt, const LineSink& walk, const LineSink& errors,
                      Scenario& s, ScenarioOutcome& o, std::FILE* err) {
   const std::vector<outfile::Named> outputs = {
-      {"--json", opt.json}, {"--record", opt.record}, {"--vcd", opt.vcd},   {"--fst", opt.fst},
-      {"--la-vcd", opt.la_vcd}, {"--pcap", opt.pcap}, {"--gtkw", opt.gtkw}};
+      {"--json", opt.json},     {"--record", opt.record}, {"--vcd", opt.vcd},  {"--fst", opt.fst},
+      {"--la-vcd", opt.la_vcd}, {"--pcap", opt.pcap},     {"--gtkw", opt.gtkw}};
   const std::string same = outfile::distinct({{"the scenario", opt.scenario}}, outputs);
   if (!same.empty()) {
     fmt::print(err, "dpc31 run: {}\n", same);
