@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "dpc31/chip.hpp"
@@ -25,8 +26,13 @@ class Cpu51Board final : public mcs51::XdataBus {
   // edge at or after it, ceil(clock * chip_hz / cpu_hz) (docs/timing.md, "An 80C32 beside the
   // chip").
   std::uint64_t chip_cycle_of(std::uint64_t cpu_clock) const;
-  // Runs CPU and chip together until the chip's cycle is at least `chip_cycle`.
+  // Runs CPU and chip together until the chip's cycle is at least `chip_cycle`, or until the
+  // instruction during which the chip asked to stop (Chip::request_stop, wake_on_txd) ends.
   void run_until(std::uint64_t chip_cycle);
+
+  // A write to the board's RAM (outside the chip's window), with the chip cycle of its strobe's
+  // end: an output latch decoded there (Cpu51Module's ports).
+  std::function<void(std::uint16_t addr, std::uint8_t value, std::uint64_t cycle)> on_ram_write;
 
   std::uint8_t read(std::uint16_t addr, std::uint64_t clock) override;
   void write(std::uint16_t addr, std::uint8_t value, std::uint64_t clock) override;

@@ -71,7 +71,9 @@ void DpMaster::note(const std::string& s) {
 void DpMaster::run_until(std::uint64_t cycle) {
   // A falling edge may be a start bit: look at the line again (the wait is event-driven).
   if (wake_on_txd_) chip_.wake_on_txd(true);
-  if (cpu_) {
+  if (user_run_) {
+    while (chip_.cycle() < cycle && !chip_.stop_requested()) user_run_(cycle);
+  } else if (cpu_) {
     cpu_->run_until(cycle);
   } else {
     while (chip_.cycle() < cycle && !chip_.stop_requested()) {

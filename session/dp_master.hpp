@@ -126,6 +126,9 @@ class DpMaster {
   void set_firmware(Cpu::Program program) {
     cpu_ = std::make_unique<Cpu>(chip_, std::move(program));
   }
+  // A user side that runs itself beside the chip (an 80C32 board, Cpu51Module): `run` brings chip
+  // and user side to a chip cycle, or less once the chip asked to stop (Chip::stop_requested).
+  void set_user_side(std::function<void(std::uint64_t)> run) { user_run_ = std::move(run); }
   // Sends one request after the idle time and waits for its answer. `fault` corrupts one
   // character on the wire (parity, start or stop bit).
   Exchange transact(const fdl::Frame& req, UartFault fault = {});
@@ -210,6 +213,7 @@ class DpMaster {
   bool wake_on_txd_ = false;    // waiting for an answer whose length is not known yet
   std::uint64_t bus_free_ = 0;  // end of the last telegram on the bus
   std::unique_ptr<Cpu> cpu_;
+  std::function<void(std::uint64_t)> user_run_;
   std::vector<Exchange> history_;
   MasterCounters counters_;
 };

@@ -15,6 +15,7 @@
 #include <string_view>
 #include <vector>
 
+#include "cpu51_module.hpp"
 #include "dp_master.hpp"
 #include "dpc31/chip.hpp"
 #include "dpc31/fdl_counters.hpp"
@@ -101,6 +102,7 @@ struct Scenario {
   MasterConfig master;
   ResponderConfig user;              // user.slave is also what the master parameterises
   std::string firmware;              // an example firmware (firmware.h) instead of the responder
+  std::optional<Cpu51Config> cpu;    // `cpu 80c32`: a firmware image on an 80C32 instead
   std::vector<std::uint8_t> inputs;  // the user's inputs from the start
   std::uint32_t retries = 1;         // repeats of a request that got no answer (max_retry_limit)
   std::vector<ScenarioStep> steps;

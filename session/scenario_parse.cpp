@@ -301,6 +301,42 @@ class Parser {
     return true;
   }
 
+  // `cpu 80c32 clock=HZ firmware FILE.ihx [base=A] [latch=A] [ports=N1,N2...]`: only checked
+  // here; the image is read when the run starts (cpu51_module.hpp). A relative path is relative
+  // to the scenario file, as a plug-in's is.
+  void cpu_header() {
+    positional(3, 3, "80c32 firmware FILE.ihx");
+    if (pos_[0] != "80c32") fail(fmt::format("unknown cpu '{}' (80c32)", shown(pos_[0])));
+    if (pos_[1] != "firmware") fail("'cpu 80c32' needs 'firmware FILE.ihx'");
+    if (fw_ != nullptr || user_seen_) fail("'cpu' excludes 'firmware' and 'user'");
+    if (slave_seen_) fail("'cpu' comes before 'slave'");
+    Cpu51Config c;
+    std::filesystem::path hex(std::string(pos_[2]));
+    const std::filesystem::path dir = std::filesystem::path(s_.file).parent_path();
+    if (hex.is_relative() && !dir.empty()) hex = dir / hex;
+    c.hex = hex.string();
+    for (const auto& [k, v] : opts_) {
+      if (k == "clock") {
+        c.hz = static_cast<std::uint32_t>(number(v, "clock", 1'000'000, 40'000'000));
+      } else if (k == "base" || k == "latch") {
+        const auto a = static_cast<std::uint16_t>(number(v, k, 0, 0xF000));
+        (k == "base" ? c.base : c.latch) = a;
+      } else if (k == "ports") {
+        for (std::size_t p = 0; p <= v.size();) {
+          const std::size_t e = std::min(v.find(',', p), v.size());
+          if (e == p) fail("ports: a name between every two commas");
+          c.ports.emplace_back(v.substr(p, e - p));
+          p = e + 1;
+        }
+      } else {
+        unknown_option(k);
+      }
+    }
+    if (c.latch + c.ports.size() > c.base && c.latch < c.base + Cpu51Board::window)
+      fail("the port latch lies in the chip's window");
+    s_.cpu = std::move(c);
+  }
+
   bool header() {
     if (cmd_ == "profile") {
       positional(1, 1, "one of spc3, vpc3plus, dpc31");
@@ -372,6 +408,7 @@ class Parser {
       no_options();
       if (slave_seen_) fail("'firmware' comes before 'slave': it sets the slave's GSD defaults");
       if (user_seen_) fail("'firmware' and 'user' exclude each other");
+      if (s_.cpu) fail("'firmware' and 'cpu' exclude each other");
       std::string spec(pos_[0]);
       // A plug-in's relative path is relative to the scenario file, as an #include's is.
       if (is_plugin_path(spec) && spec.front() != '/') {
@@ -390,6 +427,8 @@ class Parser {
       sl.in_len = fw_->in_len;
       sl.out_len = fw_->out_len;
       sl.user_prm.assign(fw_->user_prm, fw_->user_prm + fw_->user_prm_len);
+    } else if (cmd_ == "cpu") {
+      cpu_header();
     } else if (cmd_ == "slave") {
       positional(0, 0, "options only");
       slave_seen_ = true;
@@ -411,7 +450,7 @@ class Parser {
       }
     } else if (cmd_ == "user") {
       positional(0, 0, "options only");
-      if (fw_ != nullptr)
+      if (fw_ != nullptr || s_.cpu)
         fail("'user' configures the built-in user side; a firmware configures itself");
       user_seen_ = true;
       ResponderConfig& u = s_.user;
@@ -546,7 +585,8 @@ class Parser {
       step_.name = std::string(pos_[0]);
       step_.value = static_cast<std::uint32_t>(number(pos_[1], "hw value", 0, 0xFFFF'FFFF));
     } else if (cmd_ == "inputs") {
-      if (fw_ != nullptr) fail("'inputs' feeds the built-in user side; a firmware makes its own");
+      if (fw_ != nullptr || s_.cpu)
+        fail("'inputs' feeds the built-in user side; a firmware makes its own");
       step_.kind = StepKind::inputs;
       positional(1, 1, "a byte list");
       no_options();
@@ -617,8 +657,13 @@ class Parser {
                     wd_state_name(WdState::DP_Control)});
     } else if (what == "port") {
       args(2, "NAME VALUE");
-      if (fw_ == nullptr) fail("'expect port' needs a firmware (header 'firmware NAME')");
-      if (name_index(fw_->ports, pos_[1]) < 0) {
+      if (s_.cpu) {
+        if (std::find(s_.cpu->ports.begin(), s_.cpu->ports.end(), pos_[1]) == s_.cpu->ports.end())
+          fail(fmt::format("unknown port '{}' of the 80C32 board (its 'cpu ... ports=')",
+                           shown(pos_[1])));
+      } else if (fw_ == nullptr) {
+        fail("'expect port' needs a firmware (header 'firmware NAME' or 'cpu')");
+      } else if (name_index(fw_->ports, pos_[1]) < 0) {
         fail(fmt::format("unknown port '{}' of {} ({})", shown(pos_[1]), fw_->name,
                          name_list(fw_->ports)));
       }
@@ -627,7 +672,7 @@ class Parser {
       step_.value = static_cast<std::uint32_t>(number(pos_[2], "port value", 0, 0xFFFF'FFFF));
     } else if (what == "outputs" || what == "inputs") {
       args(1, "BYTES");
-      if (what == "outputs" && fw_ != nullptr) {
+      if (what == "outputs" && (fw_ != nullptr || s_.cpu)) {
         fail("'expect outputs' checks the built-in user side; with a firmware check its ports");
       }
       step_.expect = what == "outputs" ? ExpectKind::outputs : ExpectKind::inputs;
@@ -638,7 +683,7 @@ class Parser {
       }
     } else if (what == "cleared") {
       args(1, "0|1");
-      if (fw_ != nullptr) {
+      if (fw_ != nullptr || s_.cpu) {
         fail("'expect cleared' checks the built-in user side; with a firmware check its ports");
       }
       step_.expect = ExpectKind::cleared;
