@@ -42,6 +42,7 @@ void Cpu51Board::run_until(std::uint64_t chip_cycle) {
         }
       }
     }
+    if (on_step) on_step(cpu_.pc(), cpu_.cycles());
     cpu_.step();
   }
 }

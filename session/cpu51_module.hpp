@@ -23,6 +23,9 @@ struct Cpu51Config {
   std::uint16_t base = 0x8000;
   std::uint16_t latch = 0x4000;
   std::vector<std::string> ports;  // latch bytes by name, from `latch` on
+  [[nodiscard]] bool latch_in_window() const {
+    return latch + ports.size() > base && latch < base + Cpu51Board::window;
+  }
 };
 
 // What was loaded: the code image and the map's code symbols (address -> name, without SDCC's
@@ -61,6 +64,11 @@ class Cpu51Module {
   // Int_Req_Reg whenever X/INT goes active (peeked: no bus time), for `expect irr_bit`.
   std::vector<std::pair<std::uint64_t, std::uint16_t>> interrupts;
   std::function<void(std::uint64_t cycle, unsigned port, std::uint32_t value)> on_port;
+  // Forgets port_writes() and interrupts (the port values stay), as FirmwareHost's.
+  void clear_history() {
+    writes_.clear();
+    interrupts.clear();
+  }
 
  private:
   const Cpu51Config& cfg_;

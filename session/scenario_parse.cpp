@@ -301,40 +301,33 @@ class Parser {
     return true;
   }
 
+  // A relative path in the file is relative to the scenario file, as an #include's is.
+  std::string beside_scenario(const std::string& path) const {
+    const std::filesystem::path dir = std::filesystem::path(s_.file).parent_path();
+    return path.front() == '/' || dir.empty() ? path : (dir / path).string();
+  }
   // `cpu 80c32 clock=HZ firmware FILE.ihx [base=A] [latch=A] [ports=N1,N2...]`: only checked
-  // here; the image is read when the run starts (cpu51_module.hpp). A relative path is relative
-  // to the scenario file, as a plug-in's is.
+  // here; the image is read when the run starts (cpu51_module.hpp).
   void cpu_header() {
     positional(3, 3, "80c32 firmware FILE.ihx");
-    if (pos_[0] != "80c32") fail(fmt::format("unknown cpu '{}' (80c32)", shown(pos_[0])));
-    if (pos_[1] != "firmware") fail("'cpu 80c32' needs 'firmware FILE.ihx'");
-    if (fw_ != nullptr || user_seen_) fail("'cpu' excludes 'firmware' and 'user'");
-    if (slave_seen_) fail("'cpu' comes before 'slave'");
-    Cpu51Config c;
-    std::filesystem::path hex(std::string(pos_[2]));
-    const std::filesystem::path dir = std::filesystem::path(s_.file).parent_path();
-    if (hex.is_relative() && !dir.empty()) hex = dir / hex;
-    c.hex = hex.string();
+    if (pos_[0] != "80c32" || pos_[1] != "firmware") fail("the form is 'cpu 80c32 firmware FILE'");
+    if (fw_ != nullptr || user_seen_ || slave_seen_)
+      fail("'cpu' comes before 'slave', without 'firmware' and 'user'");
+    Cpu51Config c{.hex = beside_scenario(std::string(pos_[2]))};
     for (const auto& [k, v] : opts_) {
       if (k == "clock") {
         c.hz = static_cast<std::uint32_t>(number(v, "clock", 1'000'000, 40'000'000));
       } else if (k == "base" || k == "latch") {
-        const auto a = static_cast<std::uint16_t>(number(v, k, 0, 0xF000));
-        (k == "base" ? c.base : c.latch) = a;
+        (k == "base" ? c.base : c.latch) = static_cast<std::uint16_t>(number(v, k, 0, 0xF000));
       } else if (k == "ports") {
-        for (std::size_t p = 0; p <= v.size();) {
-          const std::size_t e = std::min(v.find(',', p), v.size());
-          if (e == p) fail("ports: a name between every two commas");
-          c.ports.emplace_back(v.substr(p, e - p));
-          p = e + 1;
-        }
+        for (std::string_view n : split(v, ',')) c.ports.emplace_back(n);
       } else {
         unknown_option(k);
       }
     }
-    if (c.latch + c.ports.size() > c.base && c.latch < c.base + Cpu51Board::window)
-      fail("the port latch lies in the chip's window");
+    if (c.latch_in_window()) fail("the port latch lies in the chip's window");
     s_.cpu = std::move(c);
+    for (const std::string& n : s_.cpu->ports) ports_.insert(ports_.end() - 1, n.c_str());
   }
 
   bool header() {
@@ -410,13 +403,10 @@ class Parser {
       if (user_seen_) fail("'firmware' and 'user' exclude each other");
       if (s_.cpu) fail("'firmware' and 'cpu' exclude each other");
       std::string spec(pos_[0]);
-      // A plug-in's relative path is relative to the scenario file, as an #include's is.
-      if (is_plugin_path(spec) && spec.front() != '/') {
-        const std::filesystem::path dir = std::filesystem::path(s_.file).parent_path();
-        if (!dir.empty()) spec = (dir / spec).string();
-      }
+      if (is_plugin_path(spec)) spec = beside_scenario(spec);
       try {
         fw_ = &find_firmware(spec);
+        for (auto n = fw_->ports; n && *n; ++n) ports_.insert(ports_.end() - 1, *n);
       } catch (const FirmwareError& e) {
         fail(e.what());
       }
@@ -657,15 +647,10 @@ class Parser {
                     wd_state_name(WdState::DP_Control)});
     } else if (what == "port") {
       args(2, "NAME VALUE");
-      if (s_.cpu) {
-        if (std::find(s_.cpu->ports.begin(), s_.cpu->ports.end(), pos_[1]) == s_.cpu->ports.end())
-          fail(fmt::format("unknown port '{}' of the 80C32 board (its 'cpu ... ports=')",
-                           shown(pos_[1])));
-      } else if (fw_ == nullptr) {
-        fail("'expect port' needs a firmware (header 'firmware NAME' or 'cpu')");
-      } else if (name_index(fw_->ports, pos_[1]) < 0) {
-        fail(fmt::format("unknown port '{}' of {} ({})", shown(pos_[1]), fw_->name,
-                         name_list(fw_->ports)));
+      if (fw_ == nullptr && !s_.cpu) fail("'expect port' needs a firmware ('firmware' or 'cpu')");
+      if (name_index(ports_.data(), pos_[1]) < 0) {
+        fail(fmt::format("unknown port '{}' of {} ({})", shown(pos_[1]),
+                         fw_ ? fw_->name : "the 80C32 board", name_list(ports_.data())));
       }
       step_.expect = ExpectKind::port;
       step_.name = std::string(pos_[1]);
@@ -774,6 +759,7 @@ class Parser {
   std::optional<SlaveConfig> view_;  // the master's view of the slave after the steps so far
   bool headers_ = false;
   const dpc31_firmware* fw_ = nullptr;
+  std::vector<const char*> ports_{nullptr};  // the firmware's port names, NULL-terminated
   bool slave_seen_ = false;
   bool user_seen_ = false;
   bool body_ = false;  // an action or expect has been seen: no more headers
