@@ -7,6 +7,7 @@
 #include <functional>
 #include <vector>
 
+#include "cpu51_config.hpp"
 #include "dpc31/chip.hpp"
 #include "mcs51/cpu.hpp"
 
@@ -15,7 +16,7 @@ namespace dpc31 {
 class Cpu51Board final : public mcs51::XdataBus {
  public:
   // The chip's window: [base, base + window) of XDATA; the rest is the board's plain RAM.
-  static constexpr std::uint32_t window = 0x1000;
+  static constexpr std::uint32_t window = kCpu51Window;
 
   // Throws std::invalid_argument for a CPU clock of 0 or one so fast that a MOVX strobe would
   // end less than one bus access after its instruction starts.

@@ -13,20 +13,10 @@
 #include <vector>
 
 #include "cpu51_board.hpp"
+#include "cpu51_config.hpp"
 #include "dpc31/chip.hpp"
 
 namespace dpc31 {
-
-struct Cpu51Config {
-  std::uint32_t hz = 24'000'000;
-  std::string hex{};  // the Intel HEX file (a scenario's relative path already resolved)
-  std::uint16_t base = 0x8000;
-  std::uint16_t latch = 0x4000;
-  std::vector<std::string> ports{};  // latch bytes by name, from `latch` on
-  [[nodiscard]] bool latch_in_window() const {
-    return latch + ports.size() > base && latch < base + Cpu51Board::window;
-  }
-};
 
 // What was loaded: the code image and the map's code symbols (address -> name, without SDCC's
 // leading underscore).

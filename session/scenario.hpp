@@ -15,7 +15,7 @@
 #include <string_view>
 #include <vector>
 
-#include "cpu51_module.hpp"
+#include "cpu51_config.hpp"
 #include "dp_master.hpp"
 #include "dpc31/chip.hpp"
 #include "dpc31/fdl_counters.hpp"

@@ -8,6 +8,7 @@
 #include <optional>
 #include <utility>
 
+#include "cpu51_module.hpp"
 #include "dpc31/dp.hpp"
 #include "dpc31/fdl.hpp"
 #include "dpc31/hex.hpp"
