@@ -173,12 +173,17 @@ def plugin(name):
                         f"libdpc31_fw_{name}.so")
 
 
+def ihx_80c32():
+    """DO4 for the 80C32 as the build makes it (firmware/CMakeLists.txt)."""
+    return os.path.join(os.path.dirname(os.path.abspath(CLI)), "..", "firmware", "mcs51",
+                        "do4_80c32.ihx")
+
+
 def do4_80c32_free():
     """DO4 built by SDCC on an 80C32 at 24 MHz beside an SPC3 (docs/cpu.md): the same start-up and
     Data_Exchange as the host-built DO4, and --trace-cpu writes every instruction with its cycle:
     the reset vector first, cycles rising, the INT0 routine entered by its map name."""
-    ihx = os.path.join(os.path.dirname(os.path.abspath(CLI)), "..", "firmware", "mcs51",
-                       "do4_80c32.ihx")
+    ihx = ihx_80c32()
     with tempfile.TemporaryDirectory() as tmp:
         trace = os.path.join(tmp, "cpu.trace")
         b = Bridge(tmp, "--cpu", "80c32:24000000", "--firmware", ihx, "--profile", "spc3",
@@ -336,6 +341,15 @@ def bad_arguments():
             ["bridge", "--pty", regular, "--firmware", "DO4"],             # a regular file
             ["bridge", "--pty", os.path.join(tmp, "no", "dir"), "--firmware", "DO4"],
             ["bridge", "--pty", link, "--firmware", "DO4", "--log", os.path.join(tmp, "no", "x")],
+            # The 80C32: a bad --cpu, a broken or missing image, --trace-cpu without --cpu or
+            # into a directory that does not exist.
+            ["bridge", "--pty", link, "--cpu", "8051", "--firmware", regular],
+            ["bridge", "--pty", link, "--cpu", "80c32:99000000", "--firmware", regular],
+            ["bridge", "--pty", link, "--cpu", "80c32", "--firmware", regular],  # not Intel HEX
+            ["bridge", "--pty", link, "--cpu", "80c32", "--firmware", os.path.join(tmp, "none")],
+            ["bridge", "--pty", link, "--firmware", "DO4", "--trace-cpu", os.path.join(tmp, "t")],
+            ["bridge", "--pty", link, "--cpu", "80c32", "--firmware", ihx_80c32(),
+             "--trace-cpu", os.path.join(tmp, "no", "t")],
         ]
         for args in cases:
             p = subprocess.run([CLI] + args, capture_output=True, timeout=20 * SCALE, check=False)
