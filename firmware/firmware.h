@@ -18,7 +18,9 @@ const dpc31_firmware* dpc31_find_firmware(const char* name);
 /* All of them, NULL-terminated. */
 extern const dpc31_firmware* const dpc31_firmwares[];
 
-/* The board as the dps driver layer takes it. */
+/* The board as the dps driver layer takes it. (Host builds only: SDCC returns no struct; an
+ * 80C32 firmware fills its dps_board itself, firmware/mcs51/.) */
+#ifndef __SDCC
 static inline dps_board dpc31_dps_board(const dpc31_board* board) {
   dps_board b;
   b.profile = board->profile;
@@ -26,6 +28,7 @@ static inline dps_board dpc31_dps_board(const dpc31_board* board) {
   b.station_address = board->station_address;
   return b;
 }
+#endif
 
 #ifdef __cplusplus
 }

@@ -48,6 +48,9 @@ StepResult Cpu::step() {
   if (next_irq_ >= 0) {
     int source = next_irq_;
     next_irq_ = -1;  // the first instruction of the routine runs before any further call
+    // An instruction that set IDL and was followed by an accepted call: the call ends idle ("the
+    // activation of any enabled interrupt will cause PCON.0 to be cleared by hardware").
+    sf(sfr::PCON) &= static_cast<std::uint8_t>(~idl);
     call_interrupt(source);
     return {StepKind::interrupt, 2};
   }

@@ -28,7 +28,7 @@ void Cpu51Board::chip_to(std::uint64_t cycle) {
 // X/INT").
 void Cpu51Board::run_until(std::uint64_t chip_cycle) {
   constexpr unsigned s5p2 = 10;
-  while (chip_.cycle() < chip_cycle) {
+  while (chip_.cycle() < chip_cycle && !chip_.stop_requested()) {
     chip_to(chip_cycle_of(cpu_.clocks()));
     const bool level = chip_.x_int_pin();
     cpu_.set_int0(level);
@@ -42,6 +42,7 @@ void Cpu51Board::run_until(std::uint64_t chip_cycle) {
         }
       }
     }
+    if (on_step) on_step(cpu_.pc(), cpu_.cycles());
     cpu_.step();
   }
 }
@@ -62,6 +63,7 @@ std::uint8_t Cpu51Board::read(std::uint16_t addr, std::uint64_t clock) {
 void Cpu51Board::write(std::uint16_t addr, std::uint8_t value, std::uint64_t clock) {
   if (addr < base_ || addr >= base_ + window) {
     ram_[addr] = value;
+    if (on_ram_write) on_ram_write(addr, value, chip_cycle_of(clock));
     return;
   }
   access_at(clock);

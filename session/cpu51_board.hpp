@@ -4,8 +4,10 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
+#include "cpu51_config.hpp"
 #include "dpc31/chip.hpp"
 #include "mcs51/cpu.hpp"
 
@@ -14,7 +16,7 @@ namespace dpc31 {
 class Cpu51Board final : public mcs51::XdataBus {
  public:
   // The chip's window: [base, base + window) of XDATA; the rest is the board's plain RAM.
-  static constexpr std::uint32_t window = 0x1000;
+  static constexpr std::uint32_t window = kCpu51Window;
 
   // Throws std::invalid_argument for a CPU clock of 0 or one so fast that a MOVX strobe would
   // end less than one bus access after its instruction starts.
@@ -25,8 +27,17 @@ class Cpu51Board final : public mcs51::XdataBus {
   // edge at or after it, ceil(clock * chip_hz / cpu_hz) (docs/timing.md, "An 80C32 beside the
   // chip").
   std::uint64_t chip_cycle_of(std::uint64_t cpu_clock) const;
-  // Runs CPU and chip together until the chip's cycle is at least `chip_cycle`.
+  // Runs CPU and chip together until the chip's cycle is at least `chip_cycle`, or until the
+  // instruction during which the chip asked to stop (Chip::request_stop, wake_on_txd) ends.
   void run_until(std::uint64_t chip_cycle);
+
+  // A write to the board's RAM (outside the chip's window), with the chip cycle of its strobe's
+  // end: an output latch decoded there (Cpu51Module's ports).
+  std::function<void(std::uint16_t addr, std::uint8_t value, std::uint64_t cycle)> on_ram_write;
+
+  // Before every step of the CPU (an instruction, or an interrupt call with the routine's first
+  // instruction): its PC and machine cycle (`dpc31 bridge --trace-cpu`). Empty: nothing.
+  std::function<void(std::uint16_t pc, std::uint64_t cycle)> on_step;
 
   std::uint8_t read(std::uint16_t addr, std::uint64_t clock) override;
   void write(std::uint16_t addr, std::uint8_t value, std::uint64_t clock) override;

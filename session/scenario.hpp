@@ -15,6 +15,7 @@
 #include <string_view>
 #include <vector>
 
+#include "cpu51_config.hpp"
 #include "dp_master.hpp"
 #include "dpc31/chip.hpp"
 #include "dpc31/fdl_counters.hpp"
@@ -130,6 +131,7 @@ struct Scenario {
   // load_scenario(): why another user could have changed the file ("" if none could); a
   // scenario that names a plug-in is then refused (docs/security.md).
   std::string untrusted;
+  std::optional<Cpu51Config> cpu;    // `cpu 80c32`: a firmware image on an 80C32 instead
   std::vector<std::uint8_t> inputs;  // the user's inputs from the start
   std::uint32_t retries = 1;         // repeats of a request that got no answer (max_retry_limit)
   std::vector<ScenarioStep> steps;

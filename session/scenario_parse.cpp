@@ -246,6 +246,36 @@ class Parser {
     return true;
   }
 
+  // A relative path in the file is relative to the scenario file, as an #include's is.
+  // A path relative to the scenario file's real directory, as an #include's is to its file's:
+  // not to the directory of a link that leads to it.
+  [[nodiscard]] std::string beside_scenario(const std::string& path) const {
+    return path.front() == '/' ? path : (scenario_dir() / path).lexically_normal().string();
+  }
+  // `cpu 80c32 clock=HZ firmware FILE.ihx [base=A] [latch=A] [ports=N1,N2...]`: only checked
+  // here; the image is read when the run starts (cpu51_module.hpp).
+  void cpu_header() {
+    positional(3, 3, "80c32 firmware FILE.ihx");
+    if (pos_[0] != "80c32" || pos_[1] != "firmware") fail("the form is 'cpu 80c32 firmware FILE'");
+    if (firmware_seen_ || user_seen_ || slave_seen_)
+      fail("'cpu' comes before 'slave', without 'firmware' and 'user'");
+    Cpu51Config c{.hex = beside_scenario(std::string(pos_[2]))};
+    for (const auto& [k, v] : opts_) {
+      if (k == "clock") {
+        c.hz = static_cast<std::uint32_t>(number(v, "clock", 1'000'000, 40'000'000));
+      } else if (k == "base" || k == "latch") {
+        (k == "base" ? c.base : c.latch) = static_cast<std::uint16_t>(number(v, k, 0, 0xF000));
+      } else if (k == "ports") {
+        for (std::string_view n : split(v, ',')) c.ports.emplace_back(n);
+      } else {
+        unknown_option(k);
+      }
+    }
+    if (c.latch_in_window()) fail("the port latch lies in the chip's window");
+    s_.cpu = std::move(c);
+    for (const std::string& n : s_.cpu->ports) ports_.insert(ports_.end() - 1, n.c_str());
+  }
+
   bool header() {
     if (cmd_ == "profile") {
       positional(1, 1, "one of spc3, vpc3plus, dpc31");
@@ -317,12 +347,11 @@ class Parser {
       no_options();
       if (slave_seen_) fail("'firmware' comes before 'slave': it sets the slave's GSD defaults");
       if (user_seen_) fail("'firmware' and 'user' exclude each other");
+      if (s_.cpu) fail("'firmware' and 'cpu' exclude each other");
       firmware_seen_ = true;
       std::string spec(pos_[0]);
       if (is_plugin_path(spec)) {
-        // Relative to the scenario file's real directory, as an #include's is to its file's:
-        // not to the directory of a link that leads to it.
-        if (spec.front() != '/') spec = (scenario_dir() / spec).lexically_normal().string();
+        spec = beside_scenario(spec);
         // Never loaded while parsing: bind_plugin() loads it before the run, once the whole file
         // has parsed (and the command has checked everything else), then parses again with it.
         s_.firmware = spec;
@@ -337,7 +366,12 @@ class Parser {
         s_.firmware = fw_->name;
       }
       s_.firmware_desc = fw_;
+      if (fw_ != nullptr) {
+        for (auto n = fw_->ports; n && *n; ++n) ports_.insert(ports_.end() - 1, *n);
+      }
       if (fw_ != nullptr) s_.user.slave = with_gsd_defaults(*fw_, s_.user.slave);
+    } else if (cmd_ == "cpu") {
+      cpu_header();
     } else if (cmd_ == "slave") {
       positional(0, 0, "options only");
       slave_seen_ = true;
@@ -359,7 +393,7 @@ class Parser {
       }
     } else if (cmd_ == "user") {
       positional(0, 0, "options only");
-      if (firmware_seen_)
+      if (firmware_seen_ || s_.cpu)
         fail("'user' configures the built-in user side; a firmware configures itself");
       user_seen_ = true;
       ResponderConfig& u = s_.user;
@@ -518,7 +552,8 @@ class Parser {
       step_.name = std::string(pos_[0]);
       step_.value = static_cast<std::uint32_t>(number(pos_[1], "hw value", 0, 0xFFFF'FFFF));
     } else if (cmd_ == "inputs") {
-      if (firmware_seen_) fail("'inputs' feeds the built-in user side; a firmware makes its own");
+      if (firmware_seen_ || s_.cpu)
+        fail("'inputs' feeds the built-in user side; a firmware makes its own");
       step_.kind = StepKind::inputs;
       positional(1, 1, "a byte list");
       no_options();
@@ -613,17 +648,17 @@ class Parser {
                     wd_state_name(WdState::DP_Control)});
     } else if (what == "port") {
       args(2, "NAME VALUE");
-      if (!firmware_seen_) fail("'expect port' needs a firmware (header 'firmware NAME')");
-      if (fw_ != nullptr && name_index(fw_->ports, pos_[1]) < 0) {
-        fail(fmt::format("unknown port '{}' of {} ({})", shown(pos_[1]), fw_->name,
-                         name_list(fw_->ports)));
+      if (!firmware_seen_ && !s_.cpu) fail("'expect port' needs a firmware ('firmware' or 'cpu')");
+      if ((fw_ != nullptr || s_.cpu) && name_index(ports_.data(), pos_[1]) < 0) {
+        fail(fmt::format("unknown port '{}' of {} ({})", shown(pos_[1]),
+                         fw_ ? fw_->name : "the 80C32 board", name_list(ports_.data())));
       }
       step_.expect = ExpectKind::port;
       step_.name = std::string(pos_[1]);
       step_.value = static_cast<std::uint32_t>(number(pos_[2], "port value", 0, 0xFFFF'FFFF));
     } else if (what == "outputs" || what == "inputs") {
       args(1, "BYTES");
-      if (what == "outputs" && firmware_seen_) {
+      if (what == "outputs" && (firmware_seen_ || s_.cpu)) {
         fail("'expect outputs' checks the built-in user side; with a firmware check its ports");
       }
       step_.expect = what == "outputs" ? ExpectKind::outputs : ExpectKind::inputs;
@@ -634,7 +669,7 @@ class Parser {
       }
     } else if (what == "cleared") {
       args(1, "0|1");
-      if (firmware_seen_) {
+      if (firmware_seen_ || s_.cpu) {
         fail("'expect cleared' checks the built-in user side; with a firmware check its ports");
       }
       step_.expect = ExpectKind::cleared;
@@ -740,6 +775,7 @@ class Parser {
   const dpc31_firmware* bound_;         // the plug-in bind_plugin() loaded, or nullptr
   const dpc31_firmware* fw_ = nullptr;  // the firmware's descriptor, once known
   bool firmware_seen_ = false;
+  std::vector<const char*> ports_{nullptr};  // the firmware's port names, NULL-terminated
   bool slave_seen_ = false;
   bool user_seen_ = false;
   bool body_ = false;                  // an action or expect has been seen: no more headers

@@ -8,6 +8,7 @@
 #include <optional>
 #include <utility>
 
+#include "cpu51_module.hpp"
 #include "dpc31/dp.hpp"
 #include "dpc31/fdl.hpp"
 #include "dpc31/hex.hpp"
@@ -55,7 +56,9 @@ class Runner {
     if (hooks_.at_start) hooks_.at_start(chip_);
     user_.inputs = s_.inputs;
     DirectBus bus(chip_);
-    if (!s_.firmware.empty()) {
+    if (s_.cpu && !start_cpu()) return out_;
+    if (s_.cpu) {
+    } else if (!s_.firmware.empty()) {
       fw_ = std::make_unique<FirmwareHost>(*s_.firmware_desc);
       fw_->on_port = [this](std::uint64_t cycle, unsigned port, std::uint32_t value) {
         note(cycle, fmt::format("{}: {} = {} at {}", fw_->firmware().name, fw_->port_name(port),
@@ -75,7 +78,13 @@ class Runner {
     // State changes are looked for wherever they can happen: after the firmware's ISR (its
     // Prm/Cfg verdicts), at every telegram, at every X/INT edge, after every transaction.
     // (A firmware's main loop likewise after each pass.)
-    if (fw_) {
+    if (m51_) {
+      // The 80C32 board moves time itself (DpMaster::scheduler): it brings CPU and chip to the
+      // cycle, or stops early when a step of the chip asked to.
+      master_->scheduler = [this](std::uint64_t cycle) {
+        while (chip_.cycle() < cycle && !chip_.stop_requested()) m51_->run_until(cycle);
+      };
+    } else if (fw_) {
       master_->set_firmware(fw_->program([this](BusPort&) { check_states(); }));
     } else {
       master_->set_firmware([this](BusPort& b) {
@@ -130,6 +139,11 @@ class Runner {
     if (fw_) {
       for (const FirmwareHost::PortWrite& w : fw_->port_writes()) {
         out_.port_writes.push_back({w.cycle, fw_->port_name(w.port), w.value});
+      }
+    }
+    if (m51_) {
+      for (const Cpu51Module::PortWrite& w : m51_->port_writes()) {
+        out_.port_writes.push_back({w.cycle, m51_->port_name(w.port), w.value});
       }
     }
     note(chip_.cycle(),
@@ -521,6 +535,29 @@ class Runner {
     if (req.dsap && fdl::sap_number(*req.dsap) == sap::Slave_Diag && data) last_diag_ = a.du;
   }
 
+  // The 80C32 board: its image read now, when the run starts (a bad file is one line and a
+  // failure, nothing run); the CPU starts from reset at cycle 0 with the chip.
+  bool start_cpu() {
+    std::string err;
+    if (!load_cpu51_image(*s_.cpu, image_, err)) {
+      out_.failures.push_back(err);
+      if (errors_) errors_(err);
+      return false;
+    }
+    m51_ = std::make_unique<Cpu51Module>(chip_, *s_.cpu, image_, s_.user.slave.address);
+    m51_->on_port = [this](std::uint64_t cycle, unsigned port, std::uint32_t value) {
+      // The MOVX (one byte) has been fetched: it is the byte before the PC.
+      const auto at = static_cast<std::uint16_t>(m51_->board().cpu().pc() - 1);
+      note(cycle, fmt::format("80C32 at {}: {} = {} at {}", code_name(image_, at),
+                              m51_->port_name(port), port_text(value), time_text(cycle)));
+    };
+    note(0, fmt::format("80C32 at {} Hz: {} ({} bytes{}), the chip at XDATA {:04X}h", s_.cpu->hz,
+                        s_.cpu->hex, image_.size,
+                        image_.map_file.empty() ? "" : ", symbols from " + image_.map_file,
+                        s_.cpu->base));
+    return true;
+  }
+
   void report_history() {
     const std::vector<Exchange>& h = master_->history();
     while (reported_ < h.size()) {
@@ -575,7 +612,7 @@ class Runner {
   }
 
   const std::vector<std::pair<std::uint64_t, std::uint16_t>>& interrupts() const {
-    return fw_ ? fw_->interrupts : user_.interrupts;
+    return m51_ ? m51_->interrupts : fw_ ? fw_->interrupts : user_.interrupts;
   }
 
   // Port values in hex and, for the bit patterns of digital outputs, binary.
@@ -687,7 +724,8 @@ class Runner {
       case ExpectKind::port:
         what = "port " + st.name;
         want = port_text(st.value);
-        got = port_text(static_cast<std::uint32_t>(fw_->port(st.name)));
+        got =
+            port_text(static_cast<std::uint32_t>(m51_ ? m51_->port(st.name) : fw_->port(st.name)));
         break;
       case ExpectKind::reg:
       case ExpectKind::ram:
@@ -724,6 +762,8 @@ class Runner {
   Chip chip_;
   Responder user_;
   std::unique_ptr<FirmwareHost> fw_;  // instead of user_ when the scenario names a firmware
+  Cpu51Image image_;
+  std::unique_ptr<Cpu51Module> m51_;  // instead of both on `cpu 80c32`
   std::unique_ptr<DpMaster> master_;
   ScenarioOutcome out_;
   std::vector<Event> events_;
@@ -783,6 +823,14 @@ int run_scenario_file(const std::string& path, const LineSink& walk, const LineS
   if (!bind_plugin(s, err)) {
     if (errors) errors(err.text());
     return 2;
+  }
+  if (s.cpu) {  // parsed whole first; then the image, before anything runs
+    Cpu51Image image;
+    std::string why;
+    if (!load_cpu51_image(*s.cpu, image, why)) {
+      if (errors) errors(why);
+      return 2;
+    }
   }
   const ScenarioOutcome o = run_scenario(s, walk, errors);
   const int rc = o.ok() ? 0 : 1;

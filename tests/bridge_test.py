@@ -192,6 +192,44 @@ def plugin(name):
                         f"libdpc31_fw_{name}.so")
 
 
+def ihx_80c32():
+    """DO4 for the 80C32 as the build makes it (firmware/CMakeLists.txt)."""
+    return os.path.join(os.path.dirname(os.path.abspath(CLI)), "..", "firmware", "mcs51",
+                        "do4_80c32.ihx")
+
+
+def do4_80c32_free():
+    """DO4 built by SDCC on an 80C32 at 24 MHz beside an SPC3 (docs/cpu.md): the same start-up and
+    Data_Exchange as the host-built DO4, and --trace-cpu writes every instruction with its cycle:
+    the reset vector first, cycles rising, the INT0 routine entered by its map name."""
+    ihx = ihx_80c32()
+    with tempfile.TemporaryDirectory() as tmp:
+        trace = os.path.join(tmp, "cpu.trace")
+        b = Bridge(tmp, "--cpu", "80c32:24000000", "--firmware", ihx, "--profile", "spc3",
+                   "--baud", "19200", "--pacing", "free", "--trace-cpu", trace)
+        try:
+            m = Master(b.path, 19200, 0.5 * SCALE)
+            startup_do4(m)
+            exchange_do4(m)
+            m.close()
+            b.stop(signal.SIGTERM)
+            check("on an 80C32 at 24000000 Hz" in b.log_lines()[0],
+                  f"log line 1 lacks the 80C32: {b.log_lines()[0]}")
+            with open(trace, encoding="utf-8") as f:
+                lines = f.read().splitlines()
+            check(lines and lines[0].split()[:3] == ["0", "0", "0000"],
+                  f"the trace does not start at the reset vector in cycle 0: {lines[:1]}")
+            last = -1
+            for line in lines:
+                chip, machine = (int(x) for x in line.split()[:2])
+                check(machine > last, f"machine cycles do not rise: {line}")
+                last = machine
+            check(any(line.endswith(" int0_isr") for line in lines),
+                  "the trace never enters int0_isr by its map name")
+        finally:
+            b.kill()
+
+
 def do4_two_clients(pacing, baud=19200, timeout=0.5, firmware="DO4"):
     with tempfile.TemporaryDirectory() as tmp:
         b = Bridge(tmp, "--firmware", firmware, "--baud", str(baud), "--pacing", pacing,
@@ -327,6 +365,15 @@ def bad_arguments():
             ["bridge", "--pty", regular, "--firmware", "DO4"],             # a regular file
             ["bridge", "--pty", os.path.join(tmp, "no", "dir"), "--firmware", "DO4"],
             ["bridge", "--pty", link, "--firmware", "DO4", "--log", os.path.join(tmp, "no", "x")],
+            # The 80C32: a bad --cpu, a broken or missing image, --trace-cpu without --cpu or
+            # into a directory that does not exist.
+            ["bridge", "--pty", link, "--cpu", "8051", "--firmware", regular],
+            ["bridge", "--pty", link, "--cpu", "80c32:99000000", "--firmware", regular],
+            ["bridge", "--pty", link, "--cpu", "80c32", "--firmware", regular],  # not Intel HEX
+            ["bridge", "--pty", link, "--cpu", "80c32", "--firmware", os.path.join(tmp, "none")],
+            ["bridge", "--pty", link, "--firmware", "DO4", "--trace-cpu", os.path.join(tmp, "t")],
+            ["bridge", "--pty", link, "--cpu", "80c32", "--firmware", ihx_80c32(),
+             "--trace-cpu", os.path.join(tmp, "no", "t")],
         ]
         for args in cases:
             p = subprocess.run([CLI] + args, capture_output=True, timeout=20 * SCALE, check=False)
@@ -480,6 +527,7 @@ CASES = {
     "do4_plugin_free_two_clients": lambda: do4_two_clients("free", firmware=plugin("do4")),
     "cnt2_plugin_free_logmsg": lambda: cnt2_logmsg(plugin("cnt2")),
     "bad_arguments_exit_2": bad_arguments,
+    "do4_80c32_free": do4_80c32_free,
     "stale_symlink_and_silent_client": stale_symlink_replaced,
     "profibus_rates_default_log": profibus_rates_default_log,
     "answer_dropped_without_client": answer_dropped_without_client,

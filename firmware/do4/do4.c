@@ -31,7 +31,7 @@ static void enter_osp(void) {
   drive(S.osp_mode == DO4_REPLACE ? S.osp_value : S.last_valid, 0);
 }
 
-static int check_prm(const uint8_t* prm, uint8_t len) {
+static int check_prm(const uint8_t* prm, uint8_t len) DPS_REENTRANT {
   if (len != 3 || prm[0] > DO4_REPLACE || (prm[1] & 0xF0u) != 0) return 0;
   S.osp_mode = prm[0];
   S.osp_value = prm[1];
@@ -42,7 +42,7 @@ static int check_prm(const uint8_t* prm, uint8_t len) {
   return 1;
 }
 
-static void outputs(const uint8_t* out, int cleared) {
+static void outputs(const uint8_t* out, int cleared) DPS_REENTRANT {
   S.ms_since_refresh = 0;
   if (cleared) { /* Clear_Data or a fail-safe telegram: communication interrupted */
     ++S.osp_events;
@@ -85,12 +85,15 @@ void do4_init(const dps_board* board) {
 
 void do4_isr(void) { dps_isr(); }
 
+const do4_state* do4_get_state(void) { return &S; }
+
+/* The plug-in descriptor is the host's (firmware.h); an 80C32 build has its own main(). */
+#ifndef __SDCC
+
 static void start(const dpc31_board* board) {
   const dps_board b = dpc31_dps_board(board);
   do4_init(&b);
 }
-
-const do4_state* do4_get_state(void) { return &S; }
 
 static const char* const kPorts[] = {"outputs", "modul_ok", 0};
 /* Spec_User_Prm_Byte 00; OSPMode 0 (retain); replacement value 0; refresh monitor 100 ms: a
@@ -112,3 +115,4 @@ const dpc31_firmware do4_firmware = {DPC31_FIRMWARE_ABI_VERSION,
                                      2,
                                      kPrm,
                                      sizeof kPrm};
+#endif

@@ -8,7 +8,9 @@
 /* The drivers' serial-mode types, as their platform.h defines them (the HAL uses the plain
  * types): a chip address, and a chip "pointer" that carries the address in its value. */
 typedef uint16_t VPC3_ADR;
+#ifndef CHIP_PTR /* the target's HAL header may define its own (firmware/mcs51/) */
 #define CHIP_PTR(a) ((uint8_t*)(uintptr_t)(a))
+#endif
 
 /* The addresses this driver uses, per chip. A driver for one chip would use the macros
  * directly; the examples run on all three, so they pick a table at init. */

@@ -21,6 +21,15 @@
 extern "C" {
 #endif
 
+/* SDCC calls a function through a pointer with more than one argument only if it is reentrant
+ * (its arguments on the stack); the module callbacks with two arguments are declared so. Other
+ * compilers: nothing. */
+#ifdef __SDCC
+#define DPS_REENTRANT __reentrant
+#else
+#define DPS_REENTRANT
+#endif
+
 /* What the board tells the firmware: which chip it is wired to and the station address from
  * its address switch. */
 typedef struct dps_board {
@@ -50,10 +59,10 @@ typedef struct dps_module {
   uint8_t prm_len; /* total Set_Prm length, 7 standard bytes + Spec_User_Prm_Byte + module bytes */
   /* Module parameters (Set_Prm bytes 8..): 1 = accept (and take them), 0 = User_Prm_Data_Not_Okay.
    */
-  int (*check_prm)(const uint8_t* prm, uint8_t len);
+  int (*check_prm)(const uint8_t* prm, uint8_t len) DPS_REENTRANT;
   /* New outputs from the master (DX_Out); cleared = 1 when the ASIC cleared them (Clear_Data,
    * fail-safe telegram). */
-  void (*outputs)(const uint8_t* out, int cleared);
+  void (*outputs)(const uint8_t* out, int cleared) DPS_REENTRANT;
   /* The inputs to hand over next. */
   void (*inputs)(uint8_t* in);
   void (*comm_lost)(int why);

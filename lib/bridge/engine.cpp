@@ -87,30 +87,41 @@ Engine::Engine(const Setup& setup, LogSink log)
   chip_.set_log_sink([this](const LogRecord& r) {
     if (r.level >= LogLevel::info) add_line(r.cycle, "CHIP", r.text);
   });
-  fw_ = std::make_unique<FirmwareHost>(*setup_.firmware);
-  fw_->on_port = [this](std::uint64_t cycle, unsigned port, std::uint32_t value) {
-    // At the events level a port write is logged when it changes the port's value.
-    if (port >= port_.size()) {
-      port_.resize(port + 1, 0);
-      port_logged_.resize(port + 1, false);
-    }
-    if (setup_.log_detail == LogDetail::events && port_logged_[port] && port_[port] == value)
-      return;
-    port_[port] = value;
-    port_logged_[port] = true;
-    add_line(cycle, "PORT",
-             fmt::format("{} {} = 0x{:02X}", fw_->firmware().name, fw_->port_name(port), value));
-  };
   dp_ = chip_.dp_state();
   wd_ = chip_.wd_state();
   chip_.on_state_change([this](std::uint64_t cycle) { check_states(cycle); });
-  DirectBus bus(chip_);
-  fw_->init(bus, setup_.address);
+  if (setup_.cpu) {  // the 80C32 starts from reset with the chip and runs its own main()
+    m51_ = std::make_unique<Cpu51Module>(chip_, *setup_.cpu, setup_.cpu_image, setup_.address);
+    m51_->on_port = [this](std::uint64_t cycle, unsigned port, std::uint32_t value) {
+      port_written(cycle, "80C32", m51_->port_name(port), port, value);
+    };
+  } else {
+    fw_ = std::make_unique<FirmwareHost>(*setup_.firmware);
+    fw_->on_port = [this](std::uint64_t cycle, unsigned port, std::uint32_t value) {
+      port_written(cycle, fw_->firmware().name, fw_->port_name(port), port, value);
+    };
+    DirectBus bus(chip_);
+    fw_->init(bus, setup_.address);
+  }
   rx_.configure(t_, chip_.cycle());
   // TxD in batches, taken when the bridge looks (collect): no event per bit.
   chip_.on_txd_edges([this](std::span<const std::pair<std::uint64_t, bool>> e) { rx_.edges(e); });
-  cpu_ = std::make_unique<Cpu>(chip_, fw_->program());
+  if (fw_) cpu_ = std::make_unique<Cpu>(chip_, fw_->program());
   bus_free_ = chip_.cycle();
+}
+
+// At the events level a port write is logged when it changes the port's value.
+void Engine::port_written(std::uint64_t cycle, const std::string& module, const std::string& port,
+                          unsigned index, std::uint32_t value) {
+  if (index >= port_.size()) {
+    port_.resize(index + 1, 0);
+    port_logged_.resize(index + 1, false);
+  }
+  if (setup_.log_detail == LogDetail::events && port_logged_[index] && port_[index] == value)
+    return;
+  port_[index] = value;
+  port_logged_[index] = true;
+  add_line(cycle, "PORT", fmt::format("{} {} = 0x{:02X}", module, port, value));
 }
 
 Engine::~Engine() {
@@ -345,11 +356,19 @@ std::uint64_t Engine::next_wake(std::uint64_t limit) const {
 }
 
 void Engine::step_to(std::uint64_t cycle) {
-  cpu_->run_until(cycle);
-  collect();
-  if (fw_->port_writes().size() > kHistoryLimit || fw_->interrupts.size() > kHistoryLimit) {
-    fw_->clear_history();
+  if (m51_) {
+    m51_->run_until(cycle);
+    chip_.clear_stop();
+    if (m51_->port_writes().size() > kHistoryLimit || m51_->interrupts.size() > kHistoryLimit) {
+      m51_->clear_history();
+    }
+  } else {
+    cpu_->run_until(cycle);
+    if (fw_->port_writes().size() > kHistoryLimit || fw_->interrupts.size() > kHistoryLimit) {
+      fw_->clear_history();
+    }
   }
+  collect();
 }
 
 void Engine::run_until(std::uint64_t cycle) {

@@ -15,10 +15,12 @@
 #include <deque>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
 
+#include "cpu51_module.hpp"
 #include "dp_master.hpp"
 #include "dpc31/chip.hpp"
 #include "dpc31/hex.hpp"
@@ -46,6 +48,9 @@ struct Setup {
   std::uint32_t baud = 19200;  // one of kBaudRates
   std::uint8_t address = 5;    // the station address the firmware gives the chip
   const dpc31_firmware* firmware = nullptr;
+  // Instead of `firmware`: an image on an 80C32 beside the chip (--cpu 80c32, docs/cpu.md).
+  std::optional<Cpu51Config> cpu;
+  Cpu51Image cpu_image;
   std::uint32_t slot_bits = 100;  // how long a request waits for the first answer character
 };
 
@@ -103,7 +108,8 @@ class Engine {
   [[nodiscard]] const Chip& chip() const { return chip_; }
   [[nodiscard]] std::uint64_t cycle() const { return chip_.cycle(); }
   [[nodiscard]] std::uint32_t bit_cycles() const { return t_; }
-  [[nodiscard]] const FirmwareHost& firmware() const { return *fw_; }
+  // The 80C32 board (nullptr: the firmware runs on the host CPU).
+  [[nodiscard]] Cpu51Module* cpu51() { return m51_.get(); }
   // An event line at the current cycle.
   void note(const std::string& text);
   // Every line held back goes to the sink now: the owner calls it at the end (nothing more will
@@ -124,6 +130,8 @@ class Engine {
   void step_to(std::uint64_t cycle);
   std::uint64_t next_wake(std::uint64_t limit) const;
   void check_states(std::uint64_t cycle);
+  void port_written(std::uint64_t cycle, const std::string& module, const std::string& port,
+                    unsigned index, std::uint32_t value);
   void add_line(std::uint64_t cycle, std::string_view tag, std::string text);
   // A telegram line, at the telegrams level or when it is broken or `how` says what is wrong.
   void log_telegram(std::uint64_t cycle, std::string_view tag, std::span<const std::uint8_t> bytes,
@@ -139,6 +147,7 @@ class Engine {
   std::uint32_t t_;
   std::unique_ptr<FirmwareHost> fw_;
   std::unique_ptr<Cpu> cpu_;
+  std::unique_ptr<Cpu51Module> m51_;
 
   fdl::Assembler in_;                  // the client's bytes, split into telegrams
   std::vector<std::uint8_t> partial_;  // the telegram being assembled

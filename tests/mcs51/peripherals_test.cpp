@@ -287,5 +287,22 @@ TEST(Mcs51PowerSaving, IdleEndsWithAnInterruptPowerDownOnlyWithReset) {
   EXPECT_EQ(pd.step().kind, StepKind::instruction);
 }
 
+TEST(Mcs51PowerSaving, ACallAcceptedAfterTheInstructionThatSetsIdleEndsIdle) {
+  // INT0 low (level-triggered) and enabled; ORL PCON,#01h sets IDL while the request is pending:
+  // the call follows the ORL and ends idle ("the activation of any enabled interrupt will cause
+  // PCON.0 to be cleared by hardware"), so the routine (INC R7; RETI) runs and returns to SJMP $.
+  Cpu cpu = with_code({0x75, 0xA8, 0x81, 0x43, 0x87, 0x01, 0x80, 0xFE}, 0x30);
+  isr_counting_r7(cpu, 0x0003);
+  cpu.set_int0(false);
+  steps(cpu, 2);
+  EXPECT_TRUE(cpu.idle());
+  EXPECT_EQ(cpu.step().kind, StepKind::interrupt);
+  EXPECT_FALSE(cpu.idle());
+  cpu.set_int0(true);
+  steps(cpu, 2);
+  EXPECT_EQ(cpu.reg(7), 1);
+  EXPECT_EQ(cpu.pc(), 0x0036);
+}
+
 }  // namespace
 }  // namespace mcs51::test

@@ -83,18 +83,32 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
   }
   // Truncating the mapped plug-in would end the process with SIGBUS.
   if (const std::string same = outfile::distinct(
-          {{"--firmware", is_plugin_path(o.firmware) ? o.firmware : std::string()},
+          {{"--firmware",
+            is_plugin_path(o.firmware) || !o.cpu.empty() ? o.firmware : std::string()},
            {"--pty", o.pty}},
-          {{"--log", o.log}});
+          {{"--log", o.log}, {"--trace-cpu", o.trace_cpu}});
       !same.empty()) {
     return bad(same);
   }
-  try {
-    c.setup.firmware = &find_firmware(o.firmware);
-  } catch (const FirmwareError& e) {
-    return bad(e.what());
-  }
   std::uint64_t v = 0;
+  if (!o.cpu.empty()) {  // 80c32 or 80c32:HZ; --firmware is then its Intel HEX image
+    const std::string hz = o.cpu.size() > 6 && o.cpu[5] == ':' ? o.cpu.substr(6) : "24000000";
+    if (!o.cpu.starts_with("80c32") || (o.cpu.size() > 5 && o.cpu[5] != ':') ||
+        !parse_uint(hz, 40'000'000, v) || v < 1'000'000) {
+      return bad(fmt::format("--cpu '{}' must be 80c32 or 80c32:HZ (1000000..40000000)", o.cpu));
+    }
+    c.setup.cpu = Cpu51Config{
+        .hz = static_cast<std::uint32_t>(v), .hex = o.firmware, .ports = {"outputs", "modul_ok"}};
+    std::string why;
+    if (!load_cpu51_image(*c.setup.cpu, c.setup.cpu_image, why)) return bad(why);
+  } else {
+    if (!o.trace_cpu.empty()) return bad("--trace-cpu needs --cpu 80c32");
+    try {
+      c.setup.firmware = &find_firmware(o.firmware);
+    } catch (const FirmwareError& e) {
+      return bad(e.what());
+    }
+  }
   if (!parse_uint(o.baud, 12'000'000, v) || baud_code(static_cast<std::uint32_t>(v)) < 0) {
     return bad(fmt::format(
         "--baud '{}' is no PROFIBUS rate (9600, 19200, 45450, 93750, 187500, 500000, 1500000, "
@@ -142,7 +156,9 @@ std::string header(const Checked& c, const BridgeOptions& o, const std::string& 
   return fmt::format(
       "dpc31 bridge: pacing {}, baud {}, profile {}, firmware {}, address {}, slot {} bit times, "
       "log level {}, pty {} -> {}",
-      c.realtime ? "realtime" : "free", c.setup.baud, profile, c.setup.firmware->name,
+      c.realtime ? "realtime" : "free", c.setup.baud, profile,
+      c.setup.cpu ? fmt::format("{} on an 80C32 at {} Hz", o.firmware, c.setup.cpu->hz)
+                  : std::string(c.setup.firmware->name),
       c.setup.address, c.setup.slot_bits, o.log_level, o.pty, slave);
 }
 
@@ -198,6 +214,16 @@ class SignalGuard {
   struct sigaction old_term_ {};
   struct sigaction old_hup_ {};
 };
+
+// --trace-cpu: one line per step of the 80C32, "CHIP_CYCLE MACHINE_CYCLE PC OPCODE SYMBOL" (the
+// chip cycle its first clock falls in; the map's name of the place).
+void trace_cpu(bridge::Engine& e, const Cpu51Image& image, std::FILE* f) {
+  Cpu51Board& board = e.cpu51()->board();
+  board.on_step = [&board, &image, f](std::uint16_t pc, std::uint64_t cycle) {
+    fmt::print(f, "{} {} {:04X} {:02X} {}\n", board.chip_cycle_of(cycle * mcs51::clocks_per_cycle),
+               cycle, pc, board.cpu().code(pc), code_name(image, pc));
+  };
+}
 
 class Bridge {
  public:
@@ -270,6 +296,8 @@ class Bridge {
     engine_->flush_log();
     return 0;
   }
+
+  bridge::Engine& engine() { return *engine_; }
 
  private:
   // Writes what the chip sent to the client (if there is one).
@@ -381,6 +409,9 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
   add_chip_options(b, o.chip);
   b->add_option("--firmware", o.firmware,
                 "firmware: " + builtin_firmware_names() + ", or a plug-in ./libmine.so (required)");
+  b->add_option("--cpu", o.cpu,
+                "80c32[:HZ]: run --firmware, an Intel HEX image, on an 80C32 beside the chip");
+  b->add_option("--trace-cpu", o.trace_cpu, "write every 80C32 instruction with its cycle here");
   b->add_option("--address", o.address, "station address 0..125")->capture_default_str();
   b->add_option("--pacing", o.pacing,
                 "realtime: chip time follows the wall clock; free: "
@@ -451,10 +482,17 @@ int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
   log.line(header(*c, o, pty->slave_name()));
   // A firmware stuck in a loop without a bus access cannot be stopped from this thread: the guard
   // ends the process with one line (and takes the symlink away first).
-  board::guard_hangs("dpc31 bridge", c->setup.firmware->name, o.pty);
+  if (!c->setup.cpu) board::guard_hangs("dpc31 bridge", c->setup.firmware->name, o.pty);
+  outfile::OutFile trace;
+  if (!o.trace_cpu.empty() && !trace.open(o.trace_cpu)) {
+    bridge::remove_link(o.pty, pty->slave_name());
+    fmt::print(err, "dpc31 bridge: {}\n", trace.error());
+    return 2;
+  }
   int rc = 0;
   try {
     Bridge b(*c, *pty, log);
+    if (trace.is_open()) trace_cpu(b.engine(), c->setup.cpu_image, trace.stream());
     rc = b.run();
   } catch (const FirmwareError& e) {
     bridge::remove_link(o.pty, pty->slave_name());
@@ -463,6 +501,10 @@ int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
     return 2;
   }
   bridge::remove_link(o.pty, pty->slave_name());
+  if (trace.is_open() && !trace.commit()) {
+    fmt::print(err, "dpc31 bridge: {}\n", trace.error());
+    return 2;
+  }
   if (log.failed() != 0) {
     fmt::print(err, "dpc31 bridge: cannot write the log {}: {}\n",
                o.log.empty() ? std::string("to the standard output") : o.log,

@@ -23,6 +23,8 @@ struct BridgeOptions {
   std::string log;  // "" = stdout
   std::string log_level = "events";
   std::string slot = "100";
+  std::string cpu;        // "80c32[:HZ]": --firmware is an Intel HEX image for it (docs/cpu.md)
+  std::string trace_cpu;  // every 80C32 instruction with its cycle, to this file
   std::vector<std::string> extra;  // unknown arguments, refused by run_bridge
 };
 

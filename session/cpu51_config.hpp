@@ -1,0 +1,26 @@
+// What a board with an 80C32 beside the chip is (the scenario header `cpu 80c32`, `dpc31 bridge
+// --cpu`): its clock, the firmware image and where the chip and the module's output latch sit in
+// XDATA (docs/cpu.md, "DO4 on the 80C32"). Plain data: users of scenario.hpp need no MCS-51 core.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace dpc31 {
+
+// The chip's window in XDATA: [base, base + kCpu51Window).
+inline constexpr std::uint32_t kCpu51Window = 0x1000;
+
+struct Cpu51Config {
+  std::uint32_t hz = 24'000'000;
+  std::string hex{};  // the Intel HEX file (a scenario's relative path already resolved)
+  std::uint16_t base = 0x8000;
+  std::uint16_t latch = 0x4000;
+  std::vector<std::string> ports{};  // latch bytes by name, from `latch` on
+  [[nodiscard]] bool latch_in_window() const {
+    return latch + ports.size() > base && latch < base + kCpu51Window;
+  }
+};
+
+}  // namespace dpc31

@@ -1,0 +1,70 @@
+// A module whose firmware runs on an 80C32 beside the chip (docs/cpu.md, "DO4 on the 80C32"): an
+// Intel HEX image (SDCC's or Keil's) and, when it lies beside it, SDCC's map, loaded as data; the
+// board (Cpu51Board) with the chip's window at `base`, the address switch on port 1 and the
+// module's output latch in XDATA at `latch` + port.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "cpu51_board.hpp"
+#include "cpu51_config.hpp"
+#include "dpc31/chip.hpp"
+
+namespace dpc31 {
+
+// What was loaded: the code image and the map's code symbols (address -> name, without SDCC's
+// leading underscore).
+struct Cpu51Image {
+  std::vector<std::uint8_t> code;
+  std::uint32_t size = 0;
+  std::map<std::uint16_t, std::string> symbols;
+  std::string map_file;  // empty: no map beside the HEX file
+};
+
+// Reads cfg.hex (and FILE.map beside it, if there is one). False with one line in `error`:
+// "FILE:LINE: reason" for a bad record, "FILE: reason" when it cannot be read.
+bool load_cpu51_image(const Cpu51Config& cfg, Cpu51Image& image, std::string& error);
+
+// "dps_isr+0x1c" for a code address (hex alone without a symbol below it).
+std::string code_name(const Cpu51Image& image, std::uint16_t pc);
+
+class Cpu51Module {
+ public:
+  Cpu51Module(Chip& chip, const Cpu51Config& cfg, const Cpu51Image& image,
+              std::uint8_t station_address);
+
+  Cpu51Board& board() { return *board_; }
+  void run_until(std::uint64_t chip_cycle) { board_->run_until(chip_cycle); }
+
+  struct PortWrite {
+    std::uint64_t cycle;
+    unsigned port;
+    std::uint32_t value;
+  };
+  [[nodiscard]] const std::vector<PortWrite>& port_writes() const { return writes_; }
+  // A port's current value (0 before the first write); -1 for an unknown name.
+  [[nodiscard]] std::int64_t port(const std::string& name) const;
+  [[nodiscard]] std::string port_name(unsigned port) const;
+  // Int_Req_Reg whenever X/INT goes active (peeked: no bus time), for `expect irr_bit`.
+  std::vector<std::pair<std::uint64_t, std::uint16_t>> interrupts;
+  std::function<void(std::uint64_t cycle, unsigned port, std::uint32_t value)> on_port;
+  // Forgets port_writes() and interrupts (the port values stay), as FirmwareHost's.
+  void clear_history() {
+    writes_.clear();
+    interrupts.clear();
+  }
+
+ private:
+  const Cpu51Config& cfg_;
+  std::unique_ptr<Cpu51Board> board_;
+  std::vector<PortWrite> writes_;
+  std::vector<std::uint32_t> values_;
+};
+
+}  // namespace dpc31
