@@ -31,15 +31,21 @@ const std::map<std::string, std::vector<std::string>>& expected_signals() {
       {"FREEZE_IGNORED", {"din_sm"}},
       {"NO_CONFLICT", {"bus_rdata", "prm_pending", "cfg_pending"}},
       {"DIAG_FLAG_STICKY", {"diag_flag"}},
+      // vpc3plus, the SAP-buffer header machine: a Control byte read, or the interrupt bits.
+      {"SAP_IND_NOT_SET", {"bus_rdata"}},
+      {"SAP_RESP_KEPT", {"bus_rdata", "irr"}},
+      {"SAP_NO_RR", {"irr", "bus_rdata"}},
+      {"SAP_POLL_END_EARLY", {"irr"}},
   };
   return m;
 }
 
 // The regression budget a mutant must be caught within: the default suite's 200 seeds.
 RunResult first_divergence(std::string_view mutant, std::uint64_t& seed) {
+  const Profile p = rtl_mutant_profile(mutant).value_or(Profile::dpc31);
   for (seed = 1; seed <= 200; ++seed) {
-    const Stimulus s = random_stimulus({Profile::dpc31, seed, 20'000});
-    RunResult r = run_lockstep(s, {Profile::dpc31, BusMode::intel}, mutant);
+    const Stimulus s = random_stimulus({p, seed, 20'000});
+    RunResult r = run_lockstep(s, {p, BusMode::intel}, mutant);
     if (r.divergence >= 0) return r;
   }
   return {};
