@@ -310,6 +310,7 @@ namespace {
 struct SapLayout {
   static constexpr std::uint8_t kListSegment = 0x10;  // 080h, in the user area
   static constexpr std::uint8_t kFirstBuffer = 0x20;  // 100h on: 32 bytes (4 segments) each
+  static constexpr std::uint32_t kMaxData = 28;       // 32 less the header
   std::vector<std::uint16_t> entries;                 // RAM addresses
   std::vector<std::uint8_t> saps;
   std::vector<std::uint16_t> headers;  // every buffer's header (RAM address)
@@ -339,7 +340,8 @@ SapLayout sap_layout(Gen& g) {
     l.headers.push_back(hdr);
     l.setup.push_back(ram_write(static_cast<std::uint16_t>(hdr + h::Control), 0x00));
     // Max_Length up to the 28 bytes the 32-byte buffer holds, now and then less.
-    const auto max = static_cast<std::uint8_t>(g.chance(0.7) ? 28 : g.pick(29));
+    const auto max = static_cast<std::uint8_t>(g.chance(0.7) ? SapLayout::kMaxData
+                                                             : g.pick(SapLayout::kMaxData + 1));
     l.setup.push_back(ram_write(static_cast<std::uint16_t>(hdr + h::Max_Length), max));
     return seg;
   };
@@ -398,10 +400,10 @@ void dpv1_action(Gen& g, const SapLayout& l, Inputs& in) {
     in.bus_wr = true;
     in.bus_addr = l.entries[k];
     in.bus_wdata = l.saps[k];
-  } else {  // a new Max_Length
+  } else {  // a new Max_Length, within the buffer (the chip writes up to Max_Length bytes)
     in.bus_wr = true;
     in.bus_addr = static_cast<std::uint16_t>(hdr + h::Max_Length);
-    in.bus_wdata = static_cast<std::uint8_t>(g.pick(33));
+    in.bus_wdata = static_cast<std::uint8_t>(g.pick(SapLayout::kMaxData + 1));
   }
 }
 
