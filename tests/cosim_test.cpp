@@ -9,8 +9,13 @@
 #include <map>
 
 #include "block_event.hpp"
+#include "dp_master.hpp"
+#include "dpc31/bus_port.hpp"
 #include "dpc31/dp.hpp"
+#include "dpc31/dpv1.hpp"
+#include "dpc31/reg_fields.hpp"
 #include "lockstep.hpp"
+#include "responder.hpp"
 #include "session.hpp"
 
 using namespace dpc31;
@@ -91,12 +96,11 @@ TEST(Cosim, SapEventsRoundTripThroughATraceLine) {
   EXPECT_EQ(in.sap_entry, 0x0080);
   EXPECT_EQ(in.sap_len, 0x1d);
   EXPECT_EQ(in.describe(), a);
-  EXPECT_FALSE(parse_trace("1 ev_sap_srd(2000)\nend 2\n", "big.trace", s, e));
-  EXPECT_EQ(e, "big.trace:1: unknown stimulus 'ev_sap_srd(2000)'");
-  EXPECT_FALSE(parse_trace("1 ev_sap_ind(0080,100)\nend 2\n", "len.trace", s, e));
-  EXPECT_EQ(e, "len.trace:1: unknown stimulus 'ev_sap_ind(0080,100)'");
-  EXPECT_FALSE(parse_trace("1 ev_sap_ind(0080)\nend 2\n", "one.trace", s, e));
-  EXPECT_EQ(e, "one.trace:1: unknown stimulus 'ev_sap_ind(0080)'");
+  // An entry beyond 13 bits, a length beyond a byte, the length missing.
+  for (const std::string bad : {"ev_sap_srd(2000)", "ev_sap_ind(0080,100)", "ev_sap_ind(0080)"}) {
+    EXPECT_FALSE(parse_trace("1 " + bad + "\nend 2\n", "bad.trace", s, e)) << bad;
+    EXPECT_EQ(e, "bad.trace:1: unknown stimulus '" + bad + "'");
+  }
 }
 
 // docs/dpv1.md, "A request, a poll, a response", at block level with the exact values of the
@@ -151,11 +155,8 @@ TEST(Cosim, SapHeaderMachineFollowsTheManual) {
   auto emu = make_cpp_dut(o);
   auto rtl = make_rtl_dut(o);
   ASSERT_TRUE(rtl);
-  std::map<std::uint64_t, std::uint32_t> want = {{after_ind, 0xC0},
-                                                 {irr_ind, 0x80},
-                                                 {after_sent, 0x00},
-                                                 {rs, 0x80 | 51},
-                                                 {irr_sent, 0xC0}};
+  std::map<std::uint64_t, std::uint32_t> want = {
+      {after_ind, 0xC0}, {irr_ind, 0x80}, {after_sent, 0x00}, {rs, 0x80 | 51}, {irr_sent, 0xC0}};
   std::uint64_t i = 0;
   for (const Inputs& in : s) {
     emu->step(in);
@@ -316,6 +317,100 @@ TEST(CosimSession, RequestsInAnOrderTheInputsCannotCarryAreNamed) {
             fmt::format("cycle {}: requests of one InstQ_Wr write in an order the block events "
                         "cannot replay (they act as User_Leave_Master, MAC_Stop, MAC_Start)",
                         cycle));
+}
+
+// Issue 28: a DPV1 exchange of a whole VPC3+ (the built-in master on the wire, the Responder as
+// the cyclic firmware, the test as the DPV1 user on the bus, docs/dpv1.md "A request, a poll, a
+// response") reaches the blocks as block events: Set_Ext_Prm (ext_prm), an MSAC_C1 request
+// stored (sap_ind, sap_srd), the poll with the response (sap_srd) and its end (sap_sent), a
+// request with no free buffer (RR). The RTL's header machine stays in lockstep on every cycle,
+// its Control bytes and Response_Sent read by the firmware included.
+TEST(CosimSession, Dpv1ExchangeReachesTheBlocks) {
+  namespace hd = dpv1::header;
+  constexpr std::uint32_t kList = 0x400, kInd0 = 0x500, kInd1 = 0x600, kResp = 0x700;
+  auto seg = [](std::uint32_t a) { return static_cast<std::uint8_t>(a >> 3); };
+  ResponderConfig rc;
+  rc.slave.user_prm = {dpv1::status1::DPV1_Enable, 0x00, 0x00};
+  rc.spec_clear_mode = false;  // no Fail_Safe required
+  Chip chip(ChipOptions{Profile::vpc3plus});
+  chip.set_log_sink(nullptr);
+  Session s;
+  s.options = {Profile::vpc3plus, BusMode::intel};
+  begin_recording(chip, s);
+  Responder user(rc);
+  user.inputs = {0xA1, 0xA2, 0xA3, 0xA4};
+  DirectBus bus(chip);
+  user.init(bus);
+  DpMaster master(chip, MasterConfig{2, 12'000'000, 100, 33}, rc.slave);
+  master.set_firmware([&user](BusPort& b) { user.isr(b); });
+  auto at = [&chip](RegId id) { return static_cast<std::uint32_t>(chip.addr_of(id)); };
+  // Offline (p.54): the SAP list (SAP 51, two indication buffers, one response buffer), the
+  // headers, Set_Ext_Prm_Supported; then Start.
+  chip.write(at(RegId::Mode_Reg1_S), fields::Mode_Reg1_S::Go_Offline);
+  chip.write(at(RegId::R_FDL_SAP_List_Ptr), seg(kList));
+  std::uint32_t a = kList;
+  for (const std::uint8_t v : {std::uint8_t{51}, dpv1::entry::kAll, dpv1::entry::kAll,
+                               dpv1::service::All, seg(kInd0), seg(kInd1), seg(kResp)})
+    chip.write(a++, v);
+  chip.write(a, dpv1::entry::kEndOfList);
+  for (const std::uint32_t buf : {kInd0, kInd1, kResp}) {
+    chip.write(buf + hd::Control, 0x00);
+    chip.write(buf + hd::Max_Length, 240);
+  }
+  const std::uint32_t m0_hi = at(RegId::Mode_Reg0) + 1;
+  chip.write(m0_hi, static_cast<std::uint8_t>(chip.read(m0_hi) |
+                                              (fields::Mode_Reg0::Set_Ext_Prm_Supported >> 8)));
+  chip.write(at(RegId::Mode_Reg1_S), fields::Mode_Reg1_S::Start_SPC3);
+  for (int i = 0; i < 20 && !master.fdl_status().answer; ++i) {
+  }
+  master.set_prm();  // the Responder answers User_Prm_Data_Okay in its ISR
+  EXPECT_EQ(fdl::encode(*master.set_ext_prm({0x07, 0x81, 0x00, 0x00, 0x42}).answer),
+            std::vector<std::uint8_t>{0xE5});
+  EXPECT_EQ(chip.read(at(RegId::User_Prm_Data_Okay)), 0x00);  // the Set_Ext_Prm's verdict
+  master.chk_cfg();
+  master.data_exchange({1, 2, 3, 4});
+  ASSERT_EQ(chip.dp_state(), DpState::Data_Exchange);
+  // MSAC_C1 Read: stored in indication buffer 0 (USER + IND), answered SC.
+  const std::vector<std::uint8_t> read = {0x5E, 0x00, 0x01, 0x04};
+  EXPECT_EQ(fdl::encode(*master.acyclic(51, 51, read).answer), std::vector<std::uint8_t>{0xE5});
+  EXPECT_EQ(chip.read(kInd0 + hd::Control), hd::USER | hd::IND);
+  chip.write(kInd0 + hd::Control, hd::USER);  // IND taken
+  // The response: data, Length, Function Code 08h, then USER + RESP; the next poll carries it.
+  const std::vector<std::uint8_t> resp = {0x5E, 0x00, 0x01, 0x04, 0x11, 0x22, 0x33, 0x44};
+  for (std::size_t i = 0; i < resp.size(); ++i)
+    chip.write(kResp + hd::kBytes + static_cast<std::uint32_t>(i), resp[i]);
+  chip.write(kResp + hd::Length, static_cast<std::uint8_t>(resp.size()));
+  chip.write(kResp + hd::Function_Code, 0x08);
+  chip.write(kResp + hd::Control, hd::USER | hd::RESP);
+  const Exchange poll = master.acyclic(51, 51, {});
+  ASSERT_TRUE(poll.answer.has_value());
+  EXPECT_EQ(poll.answer->du, resp);
+  master.data_exchange({1, 2, 3, 4});
+  EXPECT_EQ(chip.read(kResp + hd::Control), 0x00);               // RESP, USER cleared
+  EXPECT_EQ(chip.read(kList), dpv1::entry::Response_Sent | 51);  // Response_Sent
+  chip.write(kList, 51);                                         // the user clears it
+  chip.write(kInd1 + hd::Control, hd::USER);                     // both buffers busy
+  const Exchange rr = master.acyclic(51, 51, read);              // RR, nothing stored
+  ASSERT_TRUE(rr.answer.has_value());
+  EXPECT_EQ(fdl::response_code(rr.answer->fc), fdl::Response::RR);
+  master.data_exchange({1, 2, 3, 4});
+  end_recording(chip, s);
+  ASSERT_EQ(s.unreplayable, "");
+  std::map<std::string, int> seen;
+  for (const auto& [cycle, in] : s.events) {
+    seen["ext_prm"] += in.ev_ext_prm;
+    seen["sap_ind"] += in.ev_sap_ind;
+    seen["sap_srd"] += in.ev_sap_srd;
+    seen["sap_sent"] += in.ev_sap_sent;
+  }
+  EXPECT_EQ(seen, (std::map<std::string, int>{
+                      {"ext_prm", 1}, {"sap_ind", 2}, {"sap_srd", 3}, {"sap_sent", 1}}));
+  const RunResult r = run_session(s);
+  std::string report;
+  for (const std::string& line : r.report) report += line + "\n";
+  EXPECT_LT(r.divergence, 0) << report;
+  // A header mutant in this session: caught.
+  EXPECT_GE(run_session(s, "SAP_RESP_KEPT").divergence, 0);
 }
 
 // Issue 14 item 9: a stimulus trace of a few bytes that names 10^8 cycles holds what the file

@@ -353,16 +353,16 @@ SapLayout sap_layout(Gen& g) {
     const std::uint32_t two = g.pick(3);  // a second buffer, none (00h), or the same one
     const std::uint8_t ind1 = two == 0 ? buffer() : two == 1 ? 0 : ind0;
     const std::uint8_t resp = g.chance(0.5) ? ind0 : buffer();
-    const std::uint8_t bytes[e::kBytes] = {sap, e::kAll, e::kAll, dpv1::service::All,
-                                           ind0, ind1, resp};
+    const std::uint8_t bytes[e::kBytes] = {sap,  e::kAll, e::kAll, dpv1::service::All,
+                                           ind0, ind1,    resp};
     for (std::uint32_t k = 0; k < e::kBytes; ++k)
       l.setup.push_back(ram_write(static_cast<std::uint16_t>(entry + k), bytes[k]));
     l.entries.push_back(entry);
     l.saps.push_back(sap);
   }
-  l.setup.push_back(ram_write(
-      static_cast<std::uint16_t>((SapLayout::kListSegment << kShift) + n * e::kBytes),
-      e::kEndOfList));
+  l.setup.push_back(
+      ram_write(static_cast<std::uint16_t>((SapLayout::kListSegment << kShift) + n * e::kBytes),
+                e::kEndOfList));
   return l;
 }
 
@@ -391,8 +391,8 @@ void dpv1_action(Gen& g, const SapLayout& l, Inputs& in) {
     in.bus_rd = true;
     in.bus_addr = g.chance(0.7) ? hdr : l.entries[k];
   } else if (what < 90) {  // the firmware writes a Control byte
-    static constexpr std::uint8_t kControl[] = {h::USER, h::USER | h::RESP, 0x00, h::USER | h::RESP,
-                                                h::USER | h::IND, h::RESP, h::INUSE};
+    static constexpr std::uint8_t kControl[] = {
+        h::USER, h::USER | h::RESP, 0x00, h::USER | h::RESP, h::USER | h::IND, h::RESP, h::INUSE};
     in.bus_wr = true;
     in.bus_addr = hdr;
     in.bus_wdata = g.chance(0.9) ? kControl[g.pick(std::size(kControl))] : g.byte();
