@@ -251,6 +251,20 @@ TEST(Cosim, EveryBlockEventDrivesAnInput) {
 
 namespace {
 
+// A chip of the profile whose block events and bus accesses are recorded into `s` from its
+// first cycle on (not movable: the recorder holds `s`).
+struct Recording {
+  Chip chip;
+  Session s;
+  explicit Recording(Profile p) : chip(ChipOptions{p}) {
+    chip.set_log_sink(nullptr);
+    s.options = {p, BusMode::intel};
+    begin_recording(chip, s);
+  }
+  Recording(const Recording&) = delete;
+  Recording& operator=(const Recording&) = delete;
+};
+
 // A DPC31 firmware's side of the Instruction_Queue (DPC31 p.22): a ring of 4 entries at 1F00h.
 struct InstQueue {
   Chip& c;
@@ -277,11 +291,9 @@ struct InstQueue {
 // MAC_Stop and MAC_Start in one InstQ_Wr write. The RTL gets them as ev_mac_start / ev_mac_stop
 // and the lockstep stays clean (before, the RTL never started: a divergence in `started`).
 TEST(CosimSession, MacStartAndMacStopReachTheBlocks) {
-  Chip chip(ChipOptions{Profile::dpc31});
-  chip.set_log_sink(nullptr);
-  Session s;
-  s.options = {Profile::dpc31, BusMode::intel};
-  begin_recording(chip, s);
+  Recording rec(Profile::dpc31);
+  Chip& chip = rec.chip;
+  Session& s = rec.s;
   InstQueue q(chip);
   q.request({request::MAC_Start});
   chip.step(100'000);  // two User_Timer_Clock ticks
@@ -332,11 +344,9 @@ TEST(CosimSession, Dpv1ExchangeReachesTheBlocks) {
   ResponderConfig rc;
   rc.slave.user_prm = {dpv1::status1::DPV1_Enable, 0x00, 0x00};
   rc.spec_clear_mode = false;  // no Fail_Safe required
-  Chip chip(ChipOptions{Profile::vpc3plus});
-  chip.set_log_sink(nullptr);
-  Session s;
-  s.options = {Profile::vpc3plus, BusMode::intel};
-  begin_recording(chip, s);
+  Recording rec(Profile::vpc3plus);
+  Chip& chip = rec.chip;
+  Session& s = rec.s;
   Responder user(rc);
   user.inputs = {0xA1, 0xA2, 0xA3, 0xA4};
   DirectBus bus(chip);
