@@ -157,7 +157,18 @@ class CppDut final : public Dut {
 const std::array<std::string_view, Outputs::kCount>& Outputs::names() { return kNames; }
 const std::array<int, Outputs::kCount>& Outputs::widths() { return kWidths; }
 
-bool Inputs::idle() const { return *this == Inputs{}; }
+// Asked twice per lockstep cycle: one OR over every member, without a branch per member (the
+// member-wise comparison with Inputs{} was a tenth of the lockstep's instructions).
+bool Inputs::idle() const {
+  static_assert(sizeof(Inputs) == 36, "a new member of Inputs: add it here");
+  const unsigned strobes = rst | ev_dx | bus_rd | bus_wr | ev_leave_master | ev_wd_expired |
+                           ev_prm_fault | ev_gc | ev_dout | ev_failsafe | ev_din | ev_diag_begin |
+                           ev_diag_end | stat_diag | ev_prm | ev_cfg | ev_ssa | ev_dis |
+                           ev_mac_stop | ev_mac_start | ev_ext_prm | ev_sap_sent | ev_sap_ind |
+                           ev_sap_srd;
+  const unsigned values = bus_addr | bus_wdata | ev_irq | gc_cmd | dis_bits | sap_entry | sap_len;
+  return (strobes | values) == 0;
+}
 
 Outputs block_outputs(const ChipCore& c, std::uint8_t rdata) {
   auto latch = [&](RegId id) { return std::uint32_t{c.regs.latch(id)}; };
