@@ -26,12 +26,17 @@ struct BlockEvent {
     ssa,
     mac_stop,   // the MAC goes Offline: a MAC_Stop request (DPC31), a RAM access violation
     mac_start,  // a MAC_Start request
+    ext_prm,    // vpc3plus: a Set_Ext_Prm is in the Prm buffer (New_Ext_Prm_Data)
+    sap_ind,    // vpc3plus: a request with data for a SAP-list entry passed its checks
+    sap_srd,    // vpc3plus: an SRD for a SAP-list entry passed its checks: response or SC
+    sap_sent,   // vpc3plus: the last stop bit of a response from a SAP-list buffer is out
     read,
     write
   };
   Kind kind;
-  std::uint16_t value = 0;  // irq bits, gc command, stat_diag, dis bits, bus address
-  std::uint8_t data = 0;    // bus write data
+  // irq bits, gc command, stat_diag, dis bits, bus address, SAP-list entry address
+  std::uint16_t value = 0;
+  std::uint8_t data = 0;  // bus write data, sap_ind: the request's data length
 };
 
 }  // namespace dpc31

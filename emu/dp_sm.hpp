@@ -122,10 +122,11 @@ class DpStateMachine {
   // machine (DPC31 p.26).
   void dp_control_expired();
   // The block-level actions of the services (docs/golden-model.md), also for the harness.
-  void prm_accepted();  // New_Prm_Data
-  void prm_fault();     // a Set_Prm that failed the ASIC's checks
-  void cfg_accepted();  // New_Cfg_Data
-  void ssa_accepted();  // New_SSA_Data
+  void prm_accepted();      // New_Prm_Data
+  void ext_prm_accepted();  // vpc3plus: New_Ext_Prm_Data (Set_Ext_Prm, emu/dpv1.cpp)
+  void prm_fault();         // a Set_Prm that failed the ASIC's checks
+  void cfg_accepted();      // New_Cfg_Data
+  void ssa_accepted();      // New_SSA_Data
   void apply_global_control(std::uint8_t command);
 
   // The user's side (the command reads of User_Prm/Cfg_Data_(Not_)Okay, SSA_Buffer_Free_Cmd,

@@ -56,10 +56,16 @@ std::optional<Frame> DpStateMachine::set_ext_prm(const Frame& req) {
     ++counters_.no_resource;
     return short_answer(req, Response::RR);
   }
+  sig_.emit(BlockEvent::Kind::ext_prm);
+  ext_prm_accepted();
+  return fdl::sc();
+}
+
+// The Prm buffer holds a Set_Ext_Prm: the user's verdict is asked with New_Ext_Prm_Data.
+void DpStateMachine::ext_prm_accepted() {
   s_.prm.arrived();
   s_.ext_prm = true;
   irq_.raise(irq::New_Ext_Prm_Data);
-  return fdl::sc();
 }
 
 // The SAP list's verdict as a telegram: RS and RR as for the DP SAPs, SC, or the user's response

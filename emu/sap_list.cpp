@@ -87,26 +87,34 @@ SapListAnswer SapList::request(const fdl::Frame& req) {
   const bool srd = fn == fdl::Function::SRD_low || fn == fdl::Function::SRD_high;
   // A request without data is a poll: "Polling telegrams do not produce interrupts."
   if (!req.du.empty()) {
-    const std::uint8_t ind1 = regs_.ram_read(entry + e::Ind_Buf_Ptr1);
-    bool stored = false;
-    // Ind_Buf_Ptr[1] = 00h or the same buffer (the Profichip driver's MSAC_C1 SAPs): one buffer.
-    for (const std::uint8_t p : {ind0, ind1 != ind0 ? ind1 : std::uint8_t{0}}) {
-      if (p == 0) continue;
-      const std::uint32_t buf = segment(p);
-      if ((regs_.ram_read(buf + h::Control) & (h::USER | h::IND | h::RESP | h::INUSE)) != 0)
-        continue;  // not free
-      stored = store(buf, req);
-      break;  // the first free buffer takes it, or nothing does
-    }
-    if (!stored) {
+    sig_.emit(BlockEvent::Kind::sap_ind, static_cast<std::uint16_t>(entry),
+              static_cast<std::uint8_t>(req.du.size()));
+    if (!indicate(entry, req)) {
       sig_.log(LogLevel::info, "SAP {} from {}: no free indication buffer for {} bytes (RR)", sap,
                req.sa, req.du.size());
       return {Kind::no_buffer, 0, {}};
     }
-    irq_.raise(irq::FDL_Ind);
   }
   if (!srd) return {Kind::sc, 0, {}};
-  return answer(entry, srd);
+  sig_.emit(BlockEvent::Kind::sap_srd, static_cast<std::uint16_t>(entry));
+  return answer(entry);
+}
+
+bool SapList::indicate(std::uint32_t entry, const fdl::Frame& req) {
+  const std::uint8_t ind0 = regs_.ram_read(entry + e::Ind_Buf_Ptr0);
+  const std::uint8_t ind1 = regs_.ram_read(entry + e::Ind_Buf_Ptr1);
+  // Ind_Buf_Ptr[1] = 00h or the same buffer (the Profichip driver's MSAC_C1 SAPs): one buffer.
+  for (const std::uint8_t p : {ind0, ind1 != ind0 ? ind1 : std::uint8_t{0}}) {
+    if (p == 0) continue;
+    const std::uint32_t buf = segment(p);
+    if ((regs_.ram_read(buf + h::Control) & (h::USER | h::IND | h::RESP | h::INUSE)) != 0)
+      continue;  // not free
+    // The first free buffer takes it, or nothing does.
+    if (!store(buf, req)) return false;
+    irq_.raise(irq::FDL_Ind);
+    return true;
+  }
+  return false;
 }
 
 // The telegram into a free buffer: INUSE while the chip fills it, then USER + IND.
@@ -122,10 +130,10 @@ bool SapList::store(std::uint32_t buf, const fdl::Frame& req) {
 }
 
 // SC until the user has put a response into the response buffer (RESP with USER).
-SapListAnswer SapList::answer(std::uint32_t entry, bool srd) {
+SapListAnswer SapList::answer(std::uint32_t entry) {
   using Kind = SapListAnswer::Kind;
   const std::uint8_t rp = regs_.ram_read(entry + e::Resp_Buf_Ptr);
-  if (!srd || rp == 0) return {Kind::sc, 0, {}};
+  if (rp == 0) return {Kind::sc, 0, {}};
   const std::uint32_t buf = segment(rp);
   if ((regs_.ram_read(buf + h::Control) & (h::USER | h::RESP)) != (h::USER | h::RESP))
     return {Kind::sc, 0, {}};
@@ -147,6 +155,7 @@ SapListAnswer SapList::answer(std::uint32_t entry, bool srd) {
 // are cleared." Response_Sent: "1 = Response sent".
 void SapList::response_sent() {
   if (!s_.sending) return;
+  sig_.emit(BlockEvent::Kind::sap_sent);
   s_.sending = false;
   regs_.ram_write(
       s_.response + h::Control,

@@ -49,6 +49,11 @@ class SapList {
   // A request (SRD or SDN, not broadcast) to SAP `dsap` <= 51, acted on now.
   SapListAnswer request(const fdl::Frame& req);
   void response_sent();  // our answer's last stop bit is out
+  // The two steps after the checks (the lockstep's adapter replays them from the block events
+  // sap_ind and sap_srd): the data into the first free indication buffer of the entry (false:
+  // RR), and the SRD's answer from the entry's response buffer.
+  bool indicate(std::uint32_t entry, const fdl::Frame& req);
+  SapListAnswer answer(std::uint32_t entry);
 
  private:
   friend struct BlockAccess;
@@ -57,7 +62,6 @@ class SapList {
     return std::uint32_t{ptr} << regs_.segment_shift();
   }
   bool store(std::uint32_t buf, const fdl::Frame& req);
-  SapListAnswer answer(std::uint32_t entry, bool srd);
 
   RegisterFile& regs_;
   InterruptController& irq_;

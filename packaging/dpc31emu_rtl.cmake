@@ -23,6 +23,8 @@ set(_dpc31emu_rtl_ports
   "IN ev_dout 1" "IN ev_failsafe 1" "IN ev_din 1" "IN ev_diag_begin 1" "IN ev_diag_end 1"
   "IN stat_diag 1" "IN ev_prm 1" "IN ev_cfg 1" "IN ev_ssa 1" "IN ev_prm_fault 1" "IN ev_dx 1"
   "IN ev_dis 1" "IN dis_bits 2" "IN ev_mac_stop 1" "IN ev_mac_start 1"
+  "IN ev_ext_prm 1" "IN ev_sap_sent 1" "IN ev_sap_ind 1" "IN ev_sap_srd 1" "IN sap_entry 13"
+  "IN sap_len 8"
   "OUT x_int 1" "OUT irr 16" "OUT imr 16" "OUT mode_reg0 16" "OUT mode_reg1 8" "OUT started 1"
   "OUT dp_state 2" "OUT prm_pending 1" "OUT cfg_pending 1" "OUT ssa_free 1" "OUT prm_fault 1"
   "OUT cfg_fault 1" "OUT not_supported 1" "OUT sync_mode 1" "OUT freeze_mode 1"

@@ -67,6 +67,13 @@ module dpc31_blocks #(
   input  wire  [1:0] dis_bits,
   input  wire        ev_mac_stop,   // dpc31: a MAC_Stop request (the Instruction_Queue)
   input  wire        ev_mac_start,  // dpc31: a MAC_Start request
+  // vpc3plus, DPV1: the SAP-buffer header machine (docs/golden-model.md)
+  input  wire        ev_ext_prm,   // a Set_Ext_Prm is in the Prm buffer
+  input  wire        ev_sap_sent,  // the last stop bit of a SAP-list response is out
+  input  wire        ev_sap_ind,   // a request with sap_len data bytes for the entry at sap_entry
+  input  wire        ev_sap_srd,   // an SRD for the entry at sap_entry: response or SC
+  input  wire [12:0] sap_entry,
+  input  wire  [7:0] sap_len,
   // compared outputs
   output wire        x_int,
   output reg  [15:0] irr,
@@ -117,6 +124,16 @@ module dpc31_blocks #(
   reg  [1:0] dout_d, dout_n, dout_u, dout_f;
   reg  [1:0] din_d, din_n, din_u, din_f;
   reg  [1:0] diag1, diag2;
+  // vpc3plus, DPV1
+  reg        ext_prm;         // the Prm verdict pending is a Set_Ext_Prm's (New_Ext_Prm_Data)
+  reg        large_ram;       // Mode_Reg2.4kB_Mode: 16-byte segments
+  reg        sap_sending;     // a response buffer is on the wire
+  reg [11:0] sap_sent_entry;  // its entry (RAM index)
+  reg [11:0] sap_resp;        // its header (RAM index)
+  // The user area of the RAM as the user writes it and the header machine changes it. Written
+  // with blocking assignments inside the clocked process (one evaluation per cycle, in order).
+  reg  [7:0] ram [0:RAM_WORDS-1];
+  integer    ram_i;
 
   // ===========================================================================================
   // Outputs combinational from registers (step 4: X/INT)
@@ -150,6 +167,8 @@ module dpc31_blocks #(
   reg [18:0] nx_eoi_cnt, nx_ut_cnt;
   reg  [7:0] nx_bus_rdata;
   reg [15:0] ev_set;     // IRR bits latched by steps 1 and 2 of this cycle (survive IRR / IAR)
+  reg        nx_ext_prm, nx_large_ram, nx_sap_sending;
+  reg [11:0] nx_sap_sent_entry, nx_sap_resp;
 
   // Bus access decode (step 3).
   wire [12:0] a = bus_addr & ADDR_MASK;
@@ -220,6 +239,11 @@ module dpc31_blocks #(
     nx_eoi_cnt = eoi_cnt;
     nx_ut_cnt = ut_cnt;
     nx_bus_rdata = bus_rdata;  // holds its value until the next read
+    nx_ext_prm = ext_prm;
+    nx_large_ram = large_ram;
+    nx_sap_sending = sap_sending;
+    nx_sap_sent_entry = sap_sent_entry;
+    nx_sap_resp = sap_resp;
     ev_set = 16'h0000;
     rd16 = 16'h0000;
     w8 = 8'h00;
@@ -293,8 +317,16 @@ module dpc31_blocks #(
       nx_cfg_fault = 1'b0;
       nx_not_supported = 1'b0;
       nx_dx_on_new_din = 1'b0;  // the new parameters need their verdicts again
+      nx_ext_prm = 1'b0;
       prm_arrived;
       raise(IRQ_NEW_PRM);
+    end
+
+    // ev_ext_prm (vpc3plus): Prm handshake arrived, for a Set_Ext_Prm; New_Ext_Prm_Data.
+    if (IS_VPC3 && ev_ext_prm) begin
+      prm_arrived;
+      nx_ext_prm = 1'b1;
+      raise(IRQ_NEW_EXT_PRM);
     end
 
     // ev_cfg: in Data_Exchange: Wait_Cfg and Go_Leave_Data_Exchange; Cfg arrived; New_Cfg_Data.
@@ -313,6 +345,12 @@ module dpc31_blocks #(
       nx_ssa_free = 1'b0;
       raise(IRQ_NEW_SSA);
     end
+
+    // The SAP-buffer header machine (vpc3plus): the response that was on the wire, then the
+    // request's data into an indication buffer, then its answer.
+    if (IS_VPC3 && ev_sap_sent) sap_response_sent;
+    if (IS_VPC3 && ev_sap_ind) sap_indicate(sap_entry, sap_len);
+    if (IS_VPC3 && ev_sap_srd) sap_answer(sap_entry);
 
     // ev_mac_stop / ev_mac_start: the requests of the InstQ_Wr write of this cycle, after every
     // other event (the chip executes them with the bus access): Stop, then Start (a restart).
@@ -392,6 +430,8 @@ module dpc31_blocks #(
         nx_bus_rdata = nx_read_cfg_ptr;
       end else if (a == A_GC_COMMAND) begin
         nx_bus_rdata = nx_gc_command;
+      end else if (IS_VPC3 && a >= USER_BASE) begin
+        nx_bus_rdata = ram[ram_index(a)];
       end
     end else if (bus_wr) begin
       if (a[12:1] == A_IRR[12:1]) begin
@@ -427,7 +467,10 @@ module dpc31_blocks #(
         nx_mode_reg1 = nx_mode_reg1 & ~w8;
       end else if (IS_VPC3 && a == A_MODE_REG2) begin
         // vpc3plus Mode_Reg2: only bits 0 and 1 matter here; written only while Offline.
-        if (!nx_started) nx_opt_reg = bus_wdata & OPT_MASK;
+        if (!nx_started) begin
+          nx_opt_reg = bus_wdata & OPT_MASK;
+          nx_large_ram = bus_wdata[M2_4KB_MODE];
+        end
       end else if (IS_DPC31 && a == A_PARAM_REG) begin
         // dpc31 Param_Reg (RW, reserved bits 7..2 not writable).
         // CHOICE: writable also while started (no restriction is documented for it).
@@ -448,6 +491,8 @@ module dpc31_blocks #(
         nx_gc_command = bus_wdata;
       end else if (a == A_LEN_DIN) begin
         nx_len_din = bus_wdata;
+      end else if (IS_VPC3 && a >= USER_BASE) begin
+        ram[ram_index(a)] = bus_wdata;
       end
       // Other write addresses (WD_Baud_Control_Val, MinTSDR_Val, reserved, RAM) are not part of
       // the block.
@@ -456,10 +501,9 @@ module dpc31_blocks #(
     // combinational from the registered result (x_int above).
     end
   endtask
-  /* verilator lint_on BLKSEQ */
 
   // ===========================================================================================
-  // Registers
+  // Registers (the RAM mirror is written with blocking assignments: the same process reads it)
   // ===========================================================================================
   always @(posedge clk) begin
     if (rst) begin
@@ -510,6 +554,13 @@ module dpc31_blocks #(
       ut_cnt <= 19'd0;
       // CHOICE: bus_rdata resets to 00h.
       bus_rdata <= 8'h00;
+      ext_prm <= 1'b0;
+      large_ram <= 1'b0;
+      sap_sending <= 1'b0;
+      sap_sent_entry <= 12'd0;
+      sap_resp <= 12'd0;
+      // The hardware reset clears the RAM (as the C++ register file does).
+      if (IS_VPC3) for (ram_i = 0; ram_i < RAM_WORDS; ram_i = ram_i + 1) ram[ram_i] = 8'h00;
     end else begin
       next_state;
       irr <= nx_irr;
@@ -557,8 +608,14 @@ module dpc31_blocks #(
       eoi_cnt <= nx_eoi_cnt;
       ut_cnt <= nx_ut_cnt;
       bus_rdata <= nx_bus_rdata;
+      ext_prm <= nx_ext_prm;
+      large_ram <= nx_large_ram;
+      sap_sending <= nx_sap_sending;
+      sap_sent_entry <= nx_sap_sent_entry;
+      sap_resp <= nx_sap_resp;
     end
   end
+  /* verilator lint_on BLKSEQ */
 
 endmodule
 

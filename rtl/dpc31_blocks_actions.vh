@@ -148,6 +148,8 @@
       nx_sync_mode = 1'b0;
       nx_freeze_mode = 1'b0;
       nx_dx_on_new_din = 1'b0;
+      nx_ext_prm = 1'b0;
+      nx_sap_sending = 1'b0;  // the MAC reset: no response on the wire
     end
   endtask
 
@@ -168,6 +170,7 @@
         nx_n_cl = 1'b0;
         nx_in_clear = 1'b0;
         nx_dx_on_new_din = 1'b0;
+        nx_ext_prm = 1'b0;
         if (was_dx) raise(IRQ_GO_LEAVE_DX);
         dout_clear;
       end
@@ -265,11 +268,15 @@
   // The OK / Not_OK reads: 11 when not pending (and the event bit cleared: a leave_master may
   // have discarded what it announced); 01 (conflict, newer cleared, still pending) when a newer
   // one arrived; else 00, not pending, and the completion.
+  // vpc3plus: the same reads answer a Set_Ext_Prm (ext_prm): they clear New_Ext_Prm_Data, and
+  // accepting it changes nothing else.
   task prm_handshake(input not_ok, output [7:0] res);
+    reg [15:0] ev_bit;
     begin
+      ev_bit = nx_ext_prm ? IRQ_NEW_EXT_PRM : IRQ_NEW_PRM;
       if (!nx_prm_pending) begin
         res = 8'h03;
-        nx_irr = nx_irr & ~IRQ_NEW_PRM;
+        nx_irr = nx_irr & ~ev_bit;
       end else if (nx_prm_newer) begin
         res = 8'h01;
         nx_prm_newer = 1'b0;
@@ -278,11 +285,12 @@
         nx_prm_pending = 1'b0;
         // Not an IRR / IAR write: the command's clear wins over an event of this cycle (the
         // event made the handshake pending, and this read completes it).
-        nx_irr = nx_irr & ~IRQ_NEW_PRM;
+        nx_irr = nx_irr & ~ev_bit;
         nx_prm_fault = not_ok;
         if (not_ok) leave_master;
-        else if (nx_dp_state == DP_WAIT_PRM) nx_dp_state = DP_WAIT_CFG;
+        else if (!nx_ext_prm && nx_dp_state == DP_WAIT_PRM) nx_dp_state = DP_WAIT_CFG;
       end
+      if (!nx_prm_pending) nx_ext_prm = 1'b0;
     end
   endtask
 
@@ -413,6 +421,86 @@
         end else begin
           nx_diag2 = DIAG_SPC3;
         end
+      end
+    end
+  endtask
+
+  // ---------------------------------------------------------------------------- SAP list
+  // vpc3plus, DPV1 (docs/dpv1.md): the indication / response buffer headers and Response_Sent in
+  // the RAM mirror. The SAP list's verdict (which entry, whether the request passed its checks)
+  // comes in with the events; which buffer, RR, the Control bits and the interrupts are ours.
+
+  // The RAM cell of an address (2 KB: 800h-FFFh wraps, as the C++ decode does; bit 12 is beyond
+  // the VPC3+'s 12 address bits).
+  /* verilator lint_off UNUSEDSIGNAL */
+  function [11:0] ram_index(input [12:0] addr);
+    begin
+      ram_index = nx_large_ram ? addr[11:0] : {1'b0, addr[10:0]};
+    end
+  endfunction
+  /* verilator lint_on UNUSEDSIGNAL */
+
+  // The header of the buffer whose segment is seg.
+  function [11:0] seg_index(input [7:0] seg);
+    begin
+      seg_index = nx_large_ram ? {seg, 4'd0} : {1'b0, seg, 3'd0};
+    end
+  endfunction
+
+  // A buffer is free with none of USER, IND, RESP, INUSE in its Control.
+  function buf_free(input [7:0] seg);
+    begin
+      buf_free = (ram[seg_index(seg)] & (HC_USER | HC_IND | HC_RESP | HC_INUSE)) == 8'h00;
+    end
+  endfunction
+
+  // The data into the first free indication buffer of the entry (Ind_Buf_Ptr[1] = 00h or equal
+  // to [0]: one buffer): INUSE while the chip fills it (within this cycle), then USER + IND and
+  // FDL_Ind; longer than its Max_Length, or no buffer free: RR, nothing changes.
+  task sap_indicate(input [12:0] entry, input [7:0] len);
+    reg [7:0] ind0, ind1, seg;
+    reg found;
+    begin
+      ind0 = ram[ram_index(entry + SE_IND0)];
+      ind1 = ram[ram_index(entry + SE_IND1)];
+      found = 1'b1;
+      if (ind0 != 8'h00 && buf_free(ind0)) seg = ind0;
+      else if (ind1 != 8'h00 && ind1 != ind0 && buf_free(ind1)) seg = ind1;
+      else if (`DPC31B_MUT(MUT_SAP_NO_RR) && ind0 != 8'h00) seg = ind0;
+      else begin
+        seg = 8'h00;
+        found = 1'b0;
+      end
+      if (found && len <= ram[seg_index(seg) + SH_MAX_LENGTH]) begin
+        ram[seg_index(seg)] = `DPC31B_MUT(MUT_SAP_IND_NOT_SET) ? HC_USER : (HC_USER | HC_IND);
+        raise(IRQ_FDL_IND);
+      end
+    end
+  endtask
+
+  // An SRD: the response when the response buffer's Control has RESP and USER, else SC.
+  task sap_answer(input [12:0] entry);
+    reg [7:0] rp;
+    begin
+      rp = ram[ram_index(entry + SE_RESP)];
+      if (rp != 8'h00 && (ram[seg_index(rp)] & (HC_USER | HC_RESP)) == (HC_USER | HC_RESP)) begin
+        nx_sap_sending = 1'b1;
+        nx_sap_sent_entry = ram_index(entry);
+        nx_sap_resp = seg_index(rp);
+        if (`DPC31B_MUT(MUT_SAP_POLL_END_EARLY)) raise(IRQ_POLL_END);
+      end
+    end
+  endtask
+
+  // The response's last stop bit is out: RESP and USER cleared, Response_Sent, Poll_End_Ind.
+  task sap_response_sent;
+    begin
+      if (nx_sap_sending) begin
+        nx_sap_sending = 1'b0;
+        ram[nx_sap_resp] = ram[nx_sap_resp] &
+                           ~(`DPC31B_MUT(MUT_SAP_RESP_KEPT) ? HC_USER : (HC_RESP | HC_USER));
+        ram[nx_sap_sent_entry] = ram[nx_sap_sent_entry] | SE_RESPONSE_SENT;
+        if (!`DPC31B_MUT(MUT_SAP_POLL_END_EARLY)) raise(IRQ_POLL_END);
       end
     end
   endtask

@@ -310,6 +310,26 @@
                                                      `VPC3_R_Read_Cfg_Buf_Ptr_RESET,
                                                      `DPC31_R_Read_Cfg_Buf_Ptr_RESET);
 
+  // vpc3plus, DPV1: the SAP list and its buffer headers in RAM (VPC3+C pp. 54-56, docs/dpv1.md;
+  // the layout of include/dpc31/dpv1.hpp). The block mirrors the user area of the RAM.
+  localparam [12:0] USER_BASE = `VPC3_USER_BASE;
+  localparam integer RAM_WORDS = `VPC3_RAM_SIZE_LARGE;
+  localparam integer M2_4KB_MODE = `VPC3_Mode_Reg2_4kB_Mode_POS;
+  localparam [15:0] IRQ_NEW_EXT_PRM = 16'd1 << `VPC3_Int_Req_Reg_New_Ext_Prm_Data_POS;
+  localparam [15:0] IRQ_POLL_END = 16'd1 << `VPC3_Int_Req_Reg_Poll_End_Ind_POS;
+  localparam [15:0] IRQ_FDL_IND = 16'd1 << `VPC3_Int_Req_Reg_FDL_Ind_POS;
+  // Entry byte offsets (Figure 7-3) and byte 0's Response_Sent.
+  localparam [12:0] SE_IND0 = 13'd4;
+  localparam [12:0] SE_IND1 = 13'd5;
+  localparam [12:0] SE_RESP = 13'd6;
+  localparam [7:0] SE_RESPONSE_SENT = 8'h80;
+  // Header (Figure 7-4): byte 0 Control, byte 1 Max_Length; the Control bits.
+  localparam [11:0] SH_MAX_LENGTH = 12'd1;
+  localparam [7:0] HC_USER = 8'h80;
+  localparam [7:0] HC_IND = 8'h40;
+  localparam [7:0] HC_RESP = 8'h20;
+  localparam [7:0] HC_INUSE = 8'h10;
+
   // Model constants (docs/timing.md, 48 MHz).
   localparam [18:0] EOI_T_1US = 19'd48;       // EOI_Time_Base = 0
   localparam [18:0] EOI_T_1MS = 19'd48000;    // EOI_Time_Base = 1
@@ -356,4 +376,14 @@
   localparam [3:0] MUT_NO_CONFLICT = 4'd9;
   // ev_diag_end leaves Diag_Flag at 1 when stat_diag is 0
   localparam [3:0] MUT_DIAG_FLAG_STICKY = 4'd10;
+  // The SAP-buffer header machine (vpc3plus, DPV1): the mutants below are built into the
+  // vpc3plus mutants' model (rtl/CMakeLists.txt reads the trailing "vpc3plus").
+  // an indication is handed over with USER alone: IND is not set
+  localparam [3:0] MUT_SAP_IND_NOT_SET = 4'd11;  // vpc3plus
+  // after the response is sent USER is cleared, RESP is not
+  localparam [3:0] MUT_SAP_RESP_KEPT = 4'd12;  // vpc3plus
+  // no free indication buffer: the request overwrites buffer 0 instead of RR
+  localparam [3:0] MUT_SAP_NO_RR = 4'd13;  // vpc3plus
+  // Poll_End_Ind raised when the response is chosen, before its last character is out
+  localparam [3:0] MUT_SAP_POLL_END_EARLY = 4'd14;  // vpc3plus
 `endif

@@ -272,7 +272,11 @@ TEST_F(BadInput, CosimOptionsAndOutputs) {
   expect_bad(dpc31("cosim --shard 3/2 --junit old.xml"),
              "dpc31 cosim: --shard must be K/N with 1 <= K <= N, not '3/2'", "shard");
   expect_bad(dpc31("cosim --mutant NOPE --junit old.xml"),
-             "dpc31 cosim: no RTL model for profile dpc31 mutant 'NOPE' (built mutants use dpc31)",
+             "dpc31 cosim: no RTL model for profile dpc31 mutant 'NOPE' (no such mutant)",
+             "mutant");
+  expect_bad(dpc31("cosim --mutant SAP_NO_RR --junit old.xml"),
+             "dpc31 cosim: mutant 'SAP_NO_RR' is built for profile vpc3plus, not dpc31 (--profile "
+             "vpc3plus)",
              "mutant");
   for (const char* args : {"--seeds 0", "--cycles abc", "--profile z80", "--bus sideways"}) {
     expect_bad_prefix(dpc31(std::string("cosim --junit old.xml ") + args), "dpc31 cosim: ", args);

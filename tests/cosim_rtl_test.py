@@ -33,10 +33,14 @@ def check(cond, what):
         sys.exit(1)
 
 
-def mutants():
-    """The MUT_* names of rtl/dpc31_blocks_constants.vh (as rtl/CMakeLists.txt reads them)."""
+def mutant_profiles():
+    """The MUT_* names of rtl/dpc31_blocks_constants.vh (as rtl/CMakeLists.txt reads them), each
+    with the profile of its built-in model: vpc3plus when the line ends in "// vpc3plus" (the
+    SAP-buffer header machine's), else dpc31."""
     text = open(os.path.join(SRC, "rtl", "dpc31_blocks_constants.vh")).read()
-    return re.findall(r"^ *localparam \[3:0\] MUT_([A-Z0-9_]+) = 4'd[0-9]+;", text, re.M)
+    found = re.findall(r"^ *localparam \[3:0\] MUT_([A-Z0-9_]+) = 4'd[0-9]+;( *// *vpc3plus)?",
+                       text, re.M)
+    return [(m, "vpc3plus" if tag else "dpc31") for m, tag in found]
 
 
 def ports():
@@ -107,15 +111,16 @@ def mutant_model_unselected_clean():
 def mutants_same_report():
     # Each mutant through --rtl: caught with the same report, results and shrunk trace as
     # the built-in --mutant (each run in its own directory, so the report's paths are equal).
-    names = mutants()
+    names = mutant_profiles()
     check(len(names) >= 8, f"only {len(names)} mutants found")
     with tempfile.TemporaryDirectory() as work:
-        for m in names:
+        for m, profile in names:
             out = {}
             for side, extra in (("builtin", []), ("rtl", OWN + ["--define", "MUTANTS"])):
                 d = os.path.join(work, m, side)
                 os.makedirs(d)
-                r = run(extra + ["--mutant", m, "--seeds", "200", "--out", "out"], cwd=d)
+                r = run(extra + ["--profile", profile, "--mutant", m, "--seeds", "200", "--out",
+                                 "out"], cwd=d)
                 check(r.returncode == 1, f"{m} {side}: exit {r.returncode}: {r.stderr[-500:]}")
                 s = summary(r)
                 trace = os.path.join(d, s["results"][-1]["trace"])

@@ -9,8 +9,13 @@
 #include <map>
 
 #include "block_event.hpp"
+#include "dp_master.hpp"
+#include "dpc31/bus_port.hpp"
 #include "dpc31/dp.hpp"
+#include "dpc31/dpv1.hpp"
+#include "dpc31/reg_fields.hpp"
 #include "lockstep.hpp"
+#include "responder.hpp"
 #include "session.hpp"
 
 using namespace dpc31;
@@ -31,15 +36,21 @@ const std::map<std::string, std::vector<std::string>>& expected_signals() {
       {"FREEZE_IGNORED", {"din_sm"}},
       {"NO_CONFLICT", {"bus_rdata", "prm_pending", "cfg_pending"}},
       {"DIAG_FLAG_STICKY", {"diag_flag"}},
+      // vpc3plus, the SAP-buffer header machine: a Control byte read, or the interrupt bits.
+      {"SAP_IND_NOT_SET", {"bus_rdata"}},
+      {"SAP_RESP_KEPT", {"bus_rdata", "irr"}},
+      {"SAP_NO_RR", {"irr", "bus_rdata"}},
+      {"SAP_POLL_END_EARLY", {"irr"}},
   };
   return m;
 }
 
 // The regression budget a mutant must be caught within: the default suite's 200 seeds.
 RunResult first_divergence(std::string_view mutant, std::uint64_t& seed) {
+  const Profile p = rtl_mutant_profile(mutant).value_or(Profile::dpc31);
   for (seed = 1; seed <= 200; ++seed) {
-    const Stimulus s = random_stimulus({Profile::dpc31, seed, 20'000});
-    RunResult r = run_lockstep(s, {Profile::dpc31, BusMode::intel}, mutant);
+    const Stimulus s = random_stimulus({p, seed, 20'000});
+    RunResult r = run_lockstep(s, {p, BusMode::intel}, mutant);
     if (r.divergence >= 0) return r;
   }
   return {};
@@ -71,6 +82,95 @@ INSTANTIATE_TEST_SUITE_P(Rtl, Mutant, ::testing::ValuesIn(rtl_mutants()),
 TEST(Cosim, EveryMutantHasAnExpectation) {
   for (const std::string& m : rtl_mutants()) EXPECT_EQ(expected_signals().count(m), 1u) << m;
   EXPECT_GE(rtl_mutants().size(), 8u);
+}
+
+// The SAP-buffer header machine's inputs (vpc3plus, DPV1) read back as written; the entry is a
+// 13-bit address and the length one byte.
+TEST(Cosim, SapEventsRoundTripThroughATraceLine) {
+  const std::string a = "ev_ext_prm ev_sap_sent ev_sap_ind(0080,1d) ev_sap_srd(0080)";
+  Stimulus s;
+  std::string e;
+  ASSERT_TRUE(parse_trace("7 " + a + "\nend 8\n", "sap.trace", s, e)) << e;
+  const Inputs& in = s[7];
+  EXPECT_TRUE(in.ev_ext_prm && in.ev_sap_sent && in.ev_sap_ind && in.ev_sap_srd);
+  EXPECT_EQ(in.sap_entry, 0x0080);
+  EXPECT_EQ(in.sap_len, 0x1d);
+  EXPECT_EQ(in.describe(), a);
+  // An entry beyond 13 bits, a length beyond a byte, the length missing.
+  for (const std::string bad : {"ev_sap_srd(2000)", "ev_sap_ind(0080,100)", "ev_sap_ind(0080)"}) {
+    EXPECT_FALSE(parse_trace("1 " + bad + "\nend 2\n", "bad.trace", s, e)) << bad;
+    EXPECT_EQ(e, "bad.trace:1: unknown stimulus '" + bad + "'");
+  }
+}
+
+// docs/dpv1.md, "A request, a poll, a response", at block level with the exact values of the
+// header (Figure 7-4) and the interrupts (FDL_Ind bit 15, Poll_End_Ind bit 14): a request stored
+// with USER + IND and FDL_Ind; the user sets USER + RESP; a poll picks the response, and at its
+// last stop bit RESP and USER are cleared, Response_Sent set and Poll_End_Ind raised. Both sides
+// must agree on every cycle, and the RTL's values are checked here against the manual's.
+TEST(Cosim, SapHeaderMachineFollowsTheManual) {
+  // Entry at 080h: SAP 51, any SA / SSAP, all services, indication buffer 100h, response 100h.
+  Stimulus s;
+  std::uint64_t c = 0;
+  auto wr = [&](std::uint16_t a, std::uint8_t v) {
+    Inputs in;
+    in.bus_wr = true;
+    in.bus_addr = a;
+    in.bus_wdata = v;
+    s.set(c++, in);
+  };
+  auto rd = [&](std::uint16_t a) {
+    Inputs in;
+    in.bus_rd = true;
+    in.bus_addr = a;
+    s.set(c++, in);
+    return c - 1;
+  };
+  wr(0x17, 0x10);
+  const std::uint8_t entry[] = {51, 0x7F, 0x7F, 0x00, 0x20, 0x00, 0x20};
+  for (std::uint16_t k = 0; k < 7; ++k) wr(static_cast<std::uint16_t>(0x80 + k), entry[k]);
+  wr(0x87, 0xFF);
+  wr(0x100, 0x00);
+  wr(0x101, 28);
+  Inputs ind;
+  ind.ev_sap_ind = ind.ev_sap_srd = true;
+  ind.sap_entry = 0x80;
+  ind.sap_len = 4;
+  s.set(c++, ind);
+  const std::uint64_t after_ind = rd(0x100);  // USER + IND
+  const std::uint64_t irr_ind = rd(0x01);     // Int_Req_Reg bits 15..8
+  wr(0x100, 0xA0);                            // USER + RESP
+  Inputs poll;
+  poll.ev_sap_srd = true;
+  poll.sap_entry = 0x80;
+  s.set(c++, poll);
+  Inputs sent;
+  sent.ev_sap_sent = true;
+  s.set(c++, sent);
+  const std::uint64_t after_sent = rd(0x100);  // RESP and USER cleared
+  const std::uint64_t rs = rd(0x80);           // Response_Sent + SAP 51
+  const std::uint64_t irr_sent = rd(0x01);
+  s.resize(c + 1);
+  const DutOptions o{Profile::vpc3plus, BusMode::intel};
+  auto emu = make_cpp_dut(o);
+  auto rtl = make_rtl_dut(o);
+  ASSERT_TRUE(rtl);
+  std::map<std::uint64_t, std::uint32_t> want = {
+      {after_ind, 0xC0}, {irr_ind, 0x80}, {after_sent, 0x00}, {rs, 0x80 | 51}, {irr_sent, 0xC0}};
+  std::uint64_t i = 0;
+  for (const Inputs& in : s) {
+    emu->step(in);
+    rtl->step(in);
+    if (const auto w = want.find(i); w != want.end()) {
+      EXPECT_EQ(emu->outputs().v[Outputs::kRdata], w->second) << "EMU, cycle " << i;
+      EXPECT_EQ(rtl->outputs().v[Outputs::kRdata], w->second) << "RTL, cycle " << i;
+      EXPECT_TRUE(emu->compares_ram(in.bus_addr) || in.bus_addr == 0x01) << i;
+    }
+    ++i;
+  }
+  EXPECT_LT(run_lockstep(s, o).divergence, 0);
+  for (const char* m : {"SAP_IND_NOT_SET", "SAP_RESP_KEPT", "SAP_POLL_END_EARLY"})
+    EXPECT_GE(run_lockstep(s, o, m).divergence, 0) << m;
 }
 
 TEST(Cosim, ShrinksToAShortReplayableTrace) {
@@ -151,6 +251,20 @@ TEST(Cosim, EveryBlockEventDrivesAnInput) {
 
 namespace {
 
+// A chip of the profile whose block events and bus accesses are recorded into `s` from its
+// first cycle on (not movable: the recorder holds `s`).
+struct Recording {
+  Chip chip;
+  Session s;
+  explicit Recording(Profile p) : chip(ChipOptions{p}) {
+    chip.set_log_sink(nullptr);
+    s.options = {p, BusMode::intel};
+    begin_recording(chip, s);
+  }
+  Recording(const Recording&) = delete;
+  Recording& operator=(const Recording&) = delete;
+};
+
 // A DPC31 firmware's side of the Instruction_Queue (DPC31 p.22): a ring of 4 entries at 1F00h.
 struct InstQueue {
   Chip& c;
@@ -177,11 +291,9 @@ struct InstQueue {
 // MAC_Stop and MAC_Start in one InstQ_Wr write. The RTL gets them as ev_mac_start / ev_mac_stop
 // and the lockstep stays clean (before, the RTL never started: a divergence in `started`).
 TEST(CosimSession, MacStartAndMacStopReachTheBlocks) {
-  Chip chip(ChipOptions{Profile::dpc31});
-  chip.set_log_sink(nullptr);
-  Session s;
-  s.options = {Profile::dpc31, BusMode::intel};
-  begin_recording(chip, s);
+  Recording rec(Profile::dpc31);
+  Chip& chip = rec.chip;
+  Session& s = rec.s;
   InstQueue q(chip);
   q.request({request::MAC_Start});
   chip.step(100'000);  // two User_Timer_Clock ticks
@@ -217,6 +329,100 @@ TEST(CosimSession, RequestsInAnOrderTheInputsCannotCarryAreNamed) {
             fmt::format("cycle {}: requests of one InstQ_Wr write in an order the block events "
                         "cannot replay (they act as User_Leave_Master, MAC_Stop, MAC_Start)",
                         cycle));
+}
+
+// Issue 28: a DPV1 exchange of a whole VPC3+ (the built-in master on the wire, the Responder as
+// the cyclic firmware, the test as the DPV1 user on the bus, docs/dpv1.md "A request, a poll, a
+// response") reaches the blocks as block events: Set_Ext_Prm (ext_prm), an MSAC_C1 request
+// stored (sap_ind, sap_srd), the poll with the response (sap_srd) and its end (sap_sent), a
+// request with no free buffer (RR). The RTL's header machine stays in lockstep on every cycle,
+// its Control bytes and Response_Sent read by the firmware included.
+TEST(CosimSession, Dpv1ExchangeReachesTheBlocks) {
+  namespace hd = dpv1::header;
+  constexpr std::uint32_t kList = 0x400, kInd0 = 0x500, kInd1 = 0x600, kResp = 0x700;
+  auto seg = [](std::uint32_t a) { return static_cast<std::uint8_t>(a >> 3); };
+  ResponderConfig rc;
+  rc.slave.user_prm = {dpv1::status1::DPV1_Enable, 0x00, 0x00};
+  rc.spec_clear_mode = false;  // no Fail_Safe required
+  Recording rec(Profile::vpc3plus);
+  Chip& chip = rec.chip;
+  Session& s = rec.s;
+  Responder user(rc);
+  user.inputs = {0xA1, 0xA2, 0xA3, 0xA4};
+  DirectBus bus(chip);
+  user.init(bus);
+  DpMaster master(chip, MasterConfig{2, 12'000'000, 100, 33}, rc.slave);
+  master.set_firmware([&user](BusPort& b) { user.isr(b); });
+  auto at = [&chip](RegId id) { return static_cast<std::uint32_t>(chip.addr_of(id)); };
+  // Offline (p.54): the SAP list (SAP 51, two indication buffers, one response buffer), the
+  // headers, Set_Ext_Prm_Supported; then Start.
+  chip.write(at(RegId::Mode_Reg1_S), fields::Mode_Reg1_S::Go_Offline);
+  chip.write(at(RegId::R_FDL_SAP_List_Ptr), seg(kList));
+  std::uint32_t a = kList;
+  for (const std::uint8_t v : {std::uint8_t{51}, dpv1::entry::kAll, dpv1::entry::kAll,
+                               dpv1::service::All, seg(kInd0), seg(kInd1), seg(kResp)})
+    chip.write(a++, v);
+  chip.write(a, dpv1::entry::kEndOfList);
+  for (const std::uint32_t buf : {kInd0, kInd1, kResp}) {
+    chip.write(buf + hd::Control, 0x00);
+    chip.write(buf + hd::Max_Length, 240);
+  }
+  const std::uint32_t m0_hi = at(RegId::Mode_Reg0) + 1;
+  chip.write(m0_hi, static_cast<std::uint8_t>(chip.read(m0_hi) |
+                                              (fields::Mode_Reg0::Set_Ext_Prm_Supported >> 8)));
+  chip.write(at(RegId::Mode_Reg1_S), fields::Mode_Reg1_S::Start_SPC3);
+  for (int i = 0; i < 20 && !master.fdl_status().answer; ++i) {
+  }
+  master.set_prm();  // the Responder answers User_Prm_Data_Okay in its ISR
+  EXPECT_EQ(fdl::encode(*master.set_ext_prm({0x07, 0x81, 0x00, 0x00, 0x42}).answer),
+            std::vector<std::uint8_t>{0xE5});
+  EXPECT_EQ(chip.read(at(RegId::User_Prm_Data_Okay)), 0x00);  // the Set_Ext_Prm's verdict
+  master.chk_cfg();
+  master.data_exchange({1, 2, 3, 4});
+  ASSERT_EQ(chip.dp_state(), DpState::Data_Exchange);
+  // MSAC_C1 Read: stored in indication buffer 0 (USER + IND), answered SC.
+  const std::vector<std::uint8_t> read = {0x5E, 0x00, 0x01, 0x04};
+  EXPECT_EQ(fdl::encode(*master.acyclic(51, 51, read).answer), std::vector<std::uint8_t>{0xE5});
+  EXPECT_EQ(chip.read(kInd0 + hd::Control), hd::USER | hd::IND);
+  chip.write(kInd0 + hd::Control, hd::USER);  // IND taken
+  // The response: data, Length, Function Code 08h, then USER + RESP; the next poll carries it.
+  const std::vector<std::uint8_t> resp = {0x5E, 0x00, 0x01, 0x04, 0x11, 0x22, 0x33, 0x44};
+  for (std::size_t i = 0; i < resp.size(); ++i)
+    chip.write(kResp + hd::kBytes + static_cast<std::uint32_t>(i), resp[i]);
+  chip.write(kResp + hd::Length, static_cast<std::uint8_t>(resp.size()));
+  chip.write(kResp + hd::Function_Code, 0x08);
+  chip.write(kResp + hd::Control, hd::USER | hd::RESP);
+  const Exchange poll = master.acyclic(51, 51, {});
+  ASSERT_TRUE(poll.answer.has_value());
+  EXPECT_EQ(poll.answer->du, resp);
+  master.data_exchange({1, 2, 3, 4});
+  EXPECT_EQ(chip.read(kResp + hd::Control), 0x00);               // RESP, USER cleared
+  EXPECT_EQ(chip.read(kList), dpv1::entry::Response_Sent | 51);  // Response_Sent
+  chip.write(kList, 51);                                         // the user clears it
+  chip.write(kInd1 + hd::Control, hd::USER);                     // both buffers busy
+  const Exchange rr = master.acyclic(51, 51, read);              // RR, nothing stored
+  ASSERT_TRUE(rr.answer.has_value());
+  EXPECT_EQ(fdl::response_code(rr.answer->fc), fdl::Response::RR);
+  master.data_exchange({1, 2, 3, 4});
+  end_recording(chip, s);
+  ASSERT_EQ(s.unreplayable, "");
+  // Two requests with data (one stored, one RR), two SRD answers (the RR is no answer step), one
+  // response sent.
+  std::map<std::string, int> seen;
+  for (const auto& [cycle, in] : s.events) {
+    seen["ext_prm"] += in.ev_ext_prm;
+    seen["sap_ind"] += in.ev_sap_ind;
+    seen["sap_srd"] += in.ev_sap_srd;
+    seen["sap_sent"] += in.ev_sap_sent;
+  }
+  EXPECT_EQ(seen, (std::map<std::string, int>{
+                      {"ext_prm", 1}, {"sap_ind", 2}, {"sap_srd", 2}, {"sap_sent", 1}}));
+  const RunResult r = run_session(s);
+  std::string report;
+  for (const std::string& line : r.report) report += line + "\n";
+  EXPECT_LT(r.divergence, 0) << report;
+  // A header mutant in this session: caught.
+  EXPECT_GE(run_session(s, "SAP_RESP_KEPT").divergence, 0);
 }
 
 // Issue 14 item 9: a stimulus trace of a few bytes that names 10^8 cycles holds what the file

@@ -49,6 +49,13 @@ struct Inputs {
   std::uint8_t dis_bits = 0;
   bool ev_mac_stop = false;
   bool ev_mac_start = false;
+  // vpc3plus, DPV1 (docs/golden-model.md, "The SAP-buffer header machine")
+  bool ev_ext_prm = false;
+  bool ev_sap_sent = false;
+  bool ev_sap_ind = false;
+  bool ev_sap_srd = false;
+  std::uint16_t sap_entry = 0;  // ev_sap_ind / ev_sap_srd: the SAP-list entry's RAM address
+  std::uint8_t sap_len = 0;     // ev_sap_ind: the request's data length
 
   [[nodiscard]] bool idle() const;
   [[nodiscard]] std::string describe() const;  // "wr 0008<-02 ev_gc(08)"; empty when idle
@@ -78,6 +85,9 @@ class Dut {
   virtual void step(const Inputs& in) = 0;
   [[nodiscard]] virtual Outputs outputs() const = 0;
   [[nodiscard]] virtual std::string name() const = 0;
+  // Whether a read of this RAM address is compared besides the registers and mirrored cells
+  // (compared_read): the C++ side names the cells of the SAP-buffer header machine.
+  [[nodiscard]] virtual bool compares_ram(std::uint16_t /*addr*/) const { return false; }
   // Internal waveform of the whole model from now on (Verilated models built with tracing:
   // FST). False where the model has none.
   virtual bool trace_to(const std::string& /*path*/) { return false; }
@@ -105,6 +115,9 @@ std::unique_ptr<Dut> make_cpp_dut(const DutOptions& o);
 // o.rtl, that model, its mutant_sel input set from the mutant's name (or number).
 std::unique_ptr<Dut> make_rtl_dut(const DutOptions& o, std::string_view mutant = "");
 std::vector<std::string> rtl_mutants();
+// The profile of the built-in model that carries the mutant (vpc3plus: the SAP-buffer header
+// machine's, dpc31: the others); nullopt for no such mutant.
+std::optional<Profile> rtl_mutant_profile(std::string_view mutant);
 
 // Whether a read of this address is compared (registers and mirrored cells of the block).
 bool compared_read(const ProfileDesc& p, std::uint16_t addr);

@@ -9,6 +9,7 @@
 #include <random>
 #include <sstream>
 
+#include "dpc31/dpv1.hpp"
 #include "dpc31/reg_ids.hpp"
 #include "outfile.hpp"
 #include "textfile.hpp"
@@ -37,7 +38,9 @@ bool Lockstep::step(const Inputs& in) {
   }
   const Outputs a = emu_->outputs();
   const Outputs b = rtl_->outputs();
-  const bool read_compared = in.bus_rd && !in.rst && compared_read(profile_, in.bus_addr);
+  const bool read_compared =
+      in.bus_rd && !in.rst &&
+      (compared_read(profile_, in.bus_addr) || emu_->compares_ram(in.bus_addr));
   // Nearly every cycle agrees: one comparison of the arrays, the report only on a difference.
   if (std::equal(a.v.begin(), a.v.begin() + Outputs::kRdata, b.v.begin()) &&
       (!read_compared || a.v[Outputs::kRdata] == b.v[Outputs::kRdata])) {
@@ -297,23 +300,144 @@ void random_event(Gen& g, Inputs& in) {
 
 }  // namespace
 
+// --- DPV1 on the vpc3plus: a SAP list, its buffers and the header machine's events ---
+
+namespace {
+
+// A SAP list as a firmware lays it out while Offline (docs/dpv1.md): up to four entries (SAP 51
+// and 49 as the Profichip driver's MSAC_C1 and resource manager, then others), each with one or
+// two indication buffers and a response buffer that may be its first indication buffer.
+struct SapLayout {
+  static constexpr std::uint8_t kListSegment = 0x10;  // 080h, in the user area
+  static constexpr std::uint8_t kFirstBuffer = 0x20;  // 100h on: 32 bytes (4 segments) each
+  static constexpr std::uint32_t kMaxData = 28;       // 32 less the header
+  std::vector<std::uint16_t> entries;                 // RAM addresses
+  std::vector<std::uint8_t> saps;
+  std::vector<std::uint16_t> headers;  // every buffer's header (RAM address)
+  std::vector<Inputs> setup;           // the writes that lay it out, in order
+};
+
+Inputs ram_write(std::uint16_t addr, std::uint8_t v) {
+  Inputs in;
+  in.bus_wr = true;
+  in.bus_addr = addr;
+  in.bus_wdata = v;
+  return in;
+}
+
+SapLayout sap_layout(Gen& g) {
+  namespace e = dpv1::entry;
+  namespace h = dpv1::header;
+  constexpr std::uint32_t kShift = 3;  // 2 KB mode: the stimulus never sets 4kB_Mode
+  SapLayout l;
+  l.setup.push_back(ram_write(g.addr(RegId::R_FDL_SAP_List_Ptr), SapLayout::kListSegment));
+  const std::uint32_t n = 1 + g.pick(4);
+  std::uint8_t next = SapLayout::kFirstBuffer;
+  auto buffer = [&] {
+    const std::uint8_t seg = next;
+    next = static_cast<std::uint8_t>(next + 4);
+    const auto hdr = static_cast<std::uint16_t>(seg << kShift);
+    l.headers.push_back(hdr);
+    l.setup.push_back(ram_write(static_cast<std::uint16_t>(hdr + h::Control), 0x00));
+    // Max_Length up to the 28 bytes the 32-byte buffer holds, now and then less.
+    const auto max = static_cast<std::uint8_t>(g.chance(0.7) ? SapLayout::kMaxData
+                                                             : g.pick(SapLayout::kMaxData + 1));
+    l.setup.push_back(ram_write(static_cast<std::uint16_t>(hdr + h::Max_Length), max));
+    return seg;
+  };
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const auto entry =
+        static_cast<std::uint16_t>((SapLayout::kListSegment << kShift) + i * e::kBytes);
+    const std::uint8_t sap = i == 0 ? 51 : i == 1 ? 49 : static_cast<std::uint8_t>(g.pick(49));
+    const std::uint8_t ind0 = buffer();
+    const std::uint32_t two = g.pick(3);  // a second buffer, none (00h), or the same one
+    const std::uint8_t ind1 = two == 0 ? buffer() : two == 1 ? 0 : ind0;
+    const std::uint8_t resp = g.chance(0.5) ? ind0 : buffer();
+    const std::uint8_t bytes[e::kBytes] = {sap,  e::kAll, e::kAll, dpv1::service::All,
+                                           ind0, ind1,    resp};
+    for (std::uint32_t k = 0; k < e::kBytes; ++k)
+      l.setup.push_back(ram_write(static_cast<std::uint16_t>(entry + k), bytes[k]));
+    l.entries.push_back(entry);
+    l.saps.push_back(sap);
+  }
+  l.setup.push_back(
+      ram_write(static_cast<std::uint16_t>((SapLayout::kListSegment << kShift) + n * e::kBytes),
+                e::kEndOfList));
+  return l;
+}
+
+// One DPV1 action: what the SAP list hands the header machine (the verdicts of the C++ chip: a
+// request or poll for an entry, the response's end, a Set_Ext_Prm), or the firmware's side
+// (reads of the headers and Response_Sent, IND cleared, a response with USER + RESP, a buffer
+// freed, Response_Sent cleared).
+void dpv1_action(Gen& g, const SapLayout& l, Inputs& in) {
+  namespace h = dpv1::header;
+  const std::uint32_t k = g.pick(static_cast<std::uint32_t>(l.entries.size()));
+  const std::uint16_t hdr = l.headers[g.pick(static_cast<std::uint32_t>(l.headers.size()))];
+  const std::uint32_t what = g.pick(100);
+  if (what < 18) {  // a request with data; an SRD is answered in the same cycle
+    in.ev_sap_ind = true;
+    in.sap_entry = l.entries[k];
+    in.sap_len = static_cast<std::uint8_t>(1 + g.pick(32));
+    in.ev_sap_srd = g.chance(0.6);
+  } else if (what < 30) {  // a poll
+    in.ev_sap_srd = true;
+    in.sap_entry = l.entries[k];
+  } else if (what < 38) {
+    in.ev_sap_sent = true;
+  } else if (what < 40) {
+    in.ev_ext_prm = true;
+  } else if (what < 62) {  // the firmware reads a Control byte or an entry's byte 0
+    in.bus_rd = true;
+    in.bus_addr = g.chance(0.7) ? hdr : l.entries[k];
+  } else if (what < 90) {  // the firmware writes a Control byte
+    static constexpr std::uint8_t kControl[] = {
+        h::USER, h::USER | h::RESP, 0x00, h::USER | h::RESP, h::USER | h::IND, h::RESP, h::INUSE};
+    in.bus_wr = true;
+    in.bus_addr = hdr;
+    in.bus_wdata = g.chance(0.9) ? kControl[g.pick(std::size(kControl))] : g.byte();
+  } else if (what < 97) {  // Response_Sent cleared (the SAP number written back)
+    in.bus_wr = true;
+    in.bus_addr = l.entries[k];
+    in.bus_wdata = l.saps[k];
+  } else {  // a new Max_Length, within the buffer (the chip writes up to Max_Length bytes)
+    in.bus_wr = true;
+    in.bus_addr = static_cast<std::uint16_t>(hdr + h::Max_Length);
+    in.bus_wdata = static_cast<std::uint8_t>(g.pick(SapLayout::kMaxData + 1));
+  }
+}
+
+}  // namespace
+
 Stimulus random_stimulus(const RandomConfig& c) {
   Gen g{std::mt19937_64(c.seed * 0x9E3779B97F4A7C15ull + static_cast<unsigned>(c.profile)),
         profile_desc(c.profile)};
   Stimulus s(c.cycles);
+  // vpc3plus: a SAP list laid out at the start and again after every reset.
+  const bool dpv1 = c.profile == Profile::vpc3plus;
+  SapLayout sap;
+  std::size_t setup = 0;  // the next write of sap.setup
+  if (dpv1) sap = sap_layout(g);
   // Bursts of activity and quiet stretches, so timers (EOI, user timer) run out too.
   double activity = 0.3;
   for (std::uint64_t i = 0; i < c.cycles; ++i) {
     if (i % 256 == 0)
       activity = g.chance(0.25) ? 0.01 : 0.1 + 0.5 * std::uniform_real_distribution<>(0, 1)(g.rng);
     Inputs in;
-    if (g.chance(0.00005)) {
+    if (setup < sap.setup.size()) {
+      in = sap.setup[setup++];
+    } else if (g.chance(0.00005)) {
       in.rst = true;
+      setup = 0;
     } else if (g.chance(activity)) {
-      const std::uint32_t what = g.pick(10);
-      if (what < 5) random_access(g, in);
-      if (what >= 4) random_event(g, in);  // 4: an event and an access in the same cycle
-      if (what == 9) random_event(g, in);  // two events in one cycle
+      if (dpv1 && g.chance(0.3)) {
+        dpv1_action(g, sap, in);
+      } else {
+        const std::uint32_t what = g.pick(10);
+        if (what < 5) random_access(g, in);
+        if (what >= 4) random_event(g, in);  // 4: an event and an access in the same cycle
+        if (what == 9) random_event(g, in);  // two events in one cycle
+      }
     }
     s.set(i, in);
   }

@@ -37,6 +37,12 @@ dpc31_rtl_inputs rtl_inputs(const Inputs& in) {
   r.dis_bits = in.dis_bits;
   r.ev_mac_stop = in.ev_mac_stop;
   r.ev_mac_start = in.ev_mac_start;
+  r.ev_ext_prm = in.ev_ext_prm;
+  r.ev_sap_sent = in.ev_sap_sent;
+  r.ev_sap_ind = in.ev_sap_ind;
+  r.ev_sap_srd = in.ev_sap_srd;
+  r.sap_entry = in.sap_entry;
+  r.sap_len = in.sap_len;
   return r;
 }
 
@@ -98,6 +104,13 @@ std::vector<std::string> rtl_mutants() {
     if (*m.mutant != '\0') out.emplace_back(m.mutant);
   }
   return out;
+}
+
+std::optional<Profile> rtl_mutant_profile(std::string_view mutant) {
+  for (const Model& m : kModels) {
+    if (*m.mutant != '\0' && mutant == m.mutant) return static_cast<Profile>(m.profile);
+  }
+  return std::nullopt;
 }
 
 std::optional<unsigned> mutant_sel(std::string_view mutant) {

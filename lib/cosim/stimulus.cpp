@@ -27,6 +27,8 @@ enum class Arg : std::uint8_t {
   dis_bits,   // ev_dis(3)
   bus_read,   // rd 0008
   bus_write,  // wr 0008<-02
+  sap_ind,    // ev_sap_ind(0200,0c): the entry's address, the data length
+  sap_entry,  // ev_sap_srd(0200)
 };
 
 struct EventInput {
@@ -37,7 +39,7 @@ struct EventInput {
 };
 
 // In the order a trace line names them (Inputs::describe).
-constexpr std::array<EventInput, 19> kEventInputs = {{
+constexpr std::array<EventInput, 23> kEventInputs = {{
     {"ev_dx", K::dx, &Inputs::ev_dx, Arg::none},
     {"rd", K::read, &Inputs::bus_rd, Arg::bus_read},
     {"wr", K::write, &Inputs::bus_wr, Arg::bus_write},
@@ -57,6 +59,10 @@ constexpr std::array<EventInput, 19> kEventInputs = {{
     {"ev_dis", K::dis, &Inputs::ev_dis, Arg::dis_bits},
     {"ev_mac_stop", K::mac_stop, &Inputs::ev_mac_stop, Arg::none},
     {"ev_mac_start", K::mac_start, &Inputs::ev_mac_start, Arg::none},
+    {"ev_ext_prm", K::ext_prm, &Inputs::ev_ext_prm, Arg::none},
+    {"ev_sap_sent", K::sap_sent, &Inputs::ev_sap_sent, Arg::none},
+    {"ev_sap_ind", K::sap_ind, &Inputs::ev_sap_ind, Arg::sap_ind},
+    {"ev_sap_srd", K::sap_srd, &Inputs::ev_sap_srd, Arg::sap_entry},
 }};
 static_assert(kEventInputs.size() == static_cast<std::size_t>(K::write) + 1,
               "a new BlockEvent::Kind: add its input here");
@@ -81,6 +87,10 @@ std::string token(const Inputs& in, const EventInput& e) {
       return fmt::format("{} {:04x}", e.name, in.bus_addr);
     case Arg::bus_write:
       return fmt::format("{} {:04x}<-{:02x}", e.name, in.bus_addr, in.bus_wdata);
+    case Arg::sap_ind:
+      return fmt::format("{}({:04x},{:02x})", e.name, in.sap_entry, in.sap_len);
+    case Arg::sap_entry:
+      return fmt::format("{}({:04x})", e.name, in.sap_entry);
   }
   return {};
 }
@@ -111,8 +121,18 @@ void set(Inputs& in, const EventInput& e, std::uint32_t value, std::uint8_t data
       in.bus_addr = static_cast<std::uint16_t>(value);
       in.bus_wdata = data;
       break;
+    case Arg::sap_ind:
+      in.sap_entry = static_cast<std::uint16_t>(value);
+      in.sap_len = data;
+      break;
+    case Arg::sap_entry:
+      in.sap_entry = static_cast<std::uint16_t>(value);
+      break;
   }
 }
+
+// sap_entry is a 13-bit port, as bus_addr.
+constexpr std::uint32_t kSapEntryMax = 0x1FFF;
 
 bool parse_hex(std::string_view t, std::uint32_t max, std::uint32_t& v) {
   if (t.empty() || t.size() > 4) return false;
@@ -153,6 +173,20 @@ bool parse(const EventInput& e, const std::string& tok, std::istringstream& rest
       break;
     case Arg::dis_bits:
       if (!arg(e.name, 3)) return false;
+      break;
+    case Arg::sap_ind: {  // name(EEEE,LL)
+      const std::string_view t(tok);
+      const auto comma = t.find(',');
+      const std::string_view head = t.substr(0, comma == std::string_view::npos ? 0 : comma);
+      if (comma == std::string_view::npos || t.size() < comma + 3 || t.back() != ')' ||
+          head.substr(0, e.name.size() + 1) != fmt::format("{}(", e.name) ||
+          !parse_hex(head.substr(e.name.size() + 1), kSapEntryMax, v) ||
+          !parse_hex(t.substr(comma + 1, t.size() - comma - 2), 0xFF, d))
+        return false;
+      break;
+    }
+    case Arg::sap_entry:
+      if (!arg(e.name, kSapEntryMax)) return false;
       break;
     case Arg::bus_read: {
       std::string a;

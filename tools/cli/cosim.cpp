@@ -239,9 +239,15 @@ int run_cosim(const CosimOptions& o) {
   std::string rtl_id;
   if (!load_rtl(o, dut, rtl_id)) return 2;
   if (!make_rtl_dut(dut, o.mutant)) {
-    fmt::print(stderr,
-               "dpc31 cosim: no RTL model for profile {} mutant '{}' (built mutants use dpc31)\n",
-               o.profile_name, o.mutant);
+    // The built-in mutants live in a model of one profile (the SAP header machine's: vpc3plus).
+    if (const auto p = rtl_mutant_profile(o.mutant)) {
+      fmt::print(stderr,
+                 "dpc31 cosim: mutant '{}' is built for profile {}, not {} (--profile {})\n",
+                 o.mutant, profile_name(*p), o.profile_name, profile_name(*p));
+    } else {
+      fmt::print(stderr, "dpc31 cosim: no RTL model for profile {} mutant '{}' (no such mutant)\n",
+                 o.profile_name, o.mutant);
+    }
     return 2;
   }
   // Seeds of this shard: a contiguous part of [seed_base, seed_base + seeds).

@@ -12,7 +12,7 @@ extern "C" {
 #endif
 
 /* Raised whenever a struct below changes; the harness refuses any other value. */
-#define DPC31_RTL_MODEL_ABI 2
+#define DPC31_RTL_MODEL_ABI 3
 /* Outputs in the order of docs/golden-model.md "Outputs compared on every cycle", bus_rdata last.
  */
 #define DPC31_RTL_OUTPUTS 31
@@ -26,6 +26,10 @@ struct dpc31_rtl_inputs {
   uint8_t ev_leave_master, ev_wd_expired, ev_prm_fault, ev_gc, gc_cmd, ev_dout, ev_failsafe, ev_din,
       ev_diag_begin, ev_diag_end, stat_diag, ev_prm, ev_cfg, ev_ssa, ev_dis, dis_bits, ev_mac_stop,
       ev_mac_start;
+  /* vpc3plus, DPV1: the SAP-buffer header machine (ABI 3) */
+  uint8_t ev_ext_prm, ev_sap_sent, ev_sap_ind, ev_sap_srd;
+  uint16_t sap_entry;
+  uint8_t sap_len;
 };
 
 struct dpc31_rtl_model {

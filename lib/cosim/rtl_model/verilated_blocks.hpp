@@ -75,6 +75,12 @@ class VerilatedBlocks {
     top_->dis_bits = in.dis_bits;
     top_->ev_mac_stop = in.ev_mac_stop;
     top_->ev_mac_start = in.ev_mac_start;
+    top_->ev_ext_prm = in.ev_ext_prm;
+    top_->ev_sap_sent = in.ev_sap_sent;
+    top_->ev_sap_ind = in.ev_sap_ind;
+    top_->ev_sap_srd = in.ev_sap_srd;
+    top_->sap_entry = in.sap_entry;
+    top_->sap_len = in.sap_len;
     clock();
   }
 
