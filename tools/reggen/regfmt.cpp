@@ -438,6 +438,16 @@ std::string emit_c_header(Profiles profiles) {
   }
   w.raw("};");
   write_defines(w, profiles, CFormat{});
+  for (const ProfileDesc* p : profiles) {
+    for (const LayoutDefine& d : layout_defines(*p)) {
+      if (!d.name.empty()) {
+        w.define(d.name, d.value, d.comment);
+      } else {
+        w.blank();
+        w.comment(d.comment);
+      }
+    }
+  }
   w.blank();
   w.raw("#endif /* DPC31_REGS_H */");
   return w.str();
@@ -683,6 +693,11 @@ std::string emit_markdown(Profiles profiles) {
                          yes_no(g.reserved), std::string{g.desc}});
     }
     out += md_table(regions);
+    for (const LayoutDesc& l : p.layouts) {
+      fmt::format_to(std::back_inserter(out), "\n### RAM layout {} ({} bytes)\n\n{} ({}).\n\n",
+                     l.name, l.size, md_escape(l.desc), md_escape(l.source));
+      out += md_table(layout_rows(l), {false, true});
+    }
 
     out += "\n### Registers\n\n";
     out += md_table(register_rows(p, kMarkdownCols), {false, false, true});

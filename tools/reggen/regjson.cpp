@@ -45,7 +45,11 @@ constexpr std::string_view kProfileKeys[] = {"name",
                                              "release",
                                              "bus_access_cycles",
                                              "note",
-                                             "regions"};
+                                             "regions",
+                                             "layouts"};
+constexpr std::string_view kLayoutKeys[] = {"name", "size", "source", "desc", "bytes"};
+constexpr std::string_view kLayoutByteKeys[] = {"offset", "name", "desc", "bits", "values"};
+constexpr std::string_view kLayoutValueKeys[] = {"name", "mask", "value", "desc"};
 constexpr std::string_view kRegionKeys[] = {"name", "begin", "end", "ram", "reserved", "desc"};
 constexpr std::string_view kFieldKeys[] = {"bits", "name", "access", "pulse", "desc"};
 constexpr std::string_view kRegisterKeys[] = {
@@ -345,6 +349,7 @@ class Loader {
       if (p.bus_access_cycles == 0) fail("'bus_access_cycles' must be > 0");
       p.note = intern(string(j, "note", false));
       load_regions(p, required(j, "regions"));
+      if (const Json* layouts = optional(j, "layouts")) load_layouts(p, *layouts);
     }
     ctx_ = "top level";
     for (Profile p : kAllProfiles) {
@@ -378,6 +383,66 @@ class Loader {
                          regions.back().name));
       }
       regions.push_back(g);
+    }
+    ctx_ = profile_ctx;
+  }
+
+  // A structure in RAM (regdesc.hpp LayoutDesc): bytes at distinct offsets below its size, each
+  // with its bit masks ("bits") and codes ("values").
+  void load_layouts(const ProfileDesc& p, const Json& list) {
+    if (!list.is_array()) fail("'layouts' must be an array");
+    const std::string profile_ctx = ctx_;
+    auto& layouts = m_.layouts_[index_of(p.id)];
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      const Json& j = list[i];
+      ctx_ = fmt::format("{}: layout #{}", profile_ctx, i);
+      expect_object(j, "a layout");
+      const std::string name = string(j, "name", true);
+      ctx_ = fmt::format("{}: layout '{}'", profile_ctx, name);
+      check_keys(j, kLayoutKeys);
+      if (!is_identifier(name, false)) fail("the name is not an identifier");
+      LayoutDesc l{};
+      l.name = intern(name);
+      l.size = static_cast<std::uint8_t>(bounded(j, "size", 255));
+      l.source = intern(string(j, "source", true));
+      l.desc = intern(string(j, "desc", true));
+      auto& bytes = m_.layout_bytes_.emplace_back();
+      for (const Json& b : required(j, "bytes")) {
+        expect_object(b, "a layout byte");
+        check_keys(b, kLayoutByteKeys);
+        LayoutByte lb{};
+        lb.name = intern(string(b, "name", true));
+        if (!is_identifier(lb.name, false))
+          fail(fmt::format("byte name '{}' is not an identifier", lb.name));
+        lb.offset = static_cast<std::uint8_t>(bounded(b, "offset", 254));
+        if (lb.offset >= l.size) fail(fmt::format("byte '{}' lies beyond 'size'", lb.name));
+        for (const LayoutByte& other : bytes) {
+          if (other.offset == lb.offset || other.name == lb.name)
+            fail(fmt::format("byte '{}' repeats offset or name of '{}'", lb.name, other.name));
+        }
+        lb.desc = intern(string(b, "desc", true));
+        auto& values = m_.layout_values_.emplace_back();
+        for (const bool mask : {true, false}) {
+          const Json* vs = optional(b, mask ? "bits" : "values");
+          if (vs == nullptr) continue;
+          for (const Json& v : *vs) {
+            expect_object(v, "a layout value");
+            check_keys(v, kLayoutValueKeys);
+            LayoutValue lv{};
+            lv.name = intern(string(v, "name", true));
+            if (!is_identifier(lv.name, false))
+              fail(fmt::format("value name '{}' is not an identifier", lv.name));
+            lv.value = static_cast<std::uint8_t>(bounded(v, mask ? "mask" : "value", 255));
+            lv.mask = mask;
+            lv.desc = intern(string(v, "desc", true));
+            values.push_back(lv);
+          }
+        }
+        lb.values = values;
+        bytes.push_back(lb);
+      }
+      l.bytes = bytes;
+      layouts.push_back(l);
     }
     ctx_ = profile_ctx;
   }
@@ -772,6 +837,7 @@ class Loader {
       ProfileDesc& prof = m_.profile_store_[index_of(p)];
       prof.regs = m_.regs_[index_of(p)];
       prof.regions = m_.regions_[index_of(p)];
+      prof.layouts = m_.layouts_[index_of(p)];
       if (prof.regs.empty()) {
         ctx_ = fmt::format("profile '{}'", prof.name);
         fail("no register applies to this profile");
