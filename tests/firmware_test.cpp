@@ -85,8 +85,11 @@ TEST_P(Do4, ParametersOutsideTheGsdRangesAreRefused) {
     EXPECT_EQ(dps_get_stats()->prm_ok, 0u);
     EXPECT_GE(dps_get_stats()->prm_rejected, 1u);
   }
+  // One byte more than the Aux buffers hold: RR. On the VPC3+ they hold the DPV1 Set_Prm, two
+  // bytes longer than the DP one (docs/firmware.md, "DO4 with DPV1").
   SlaveConfig s = gsd_slave(do4_firmware, 5);
   s.user_prm = {0x00, 0x00, 0x00, 0x0A, 0x00};
+  if (GetParam() == Profile::vpc3plus) s.user_prm.insert(s.user_prm.end(), {0x00, 0x00});
   Bench b(GetParam(), do4_firmware, s, 12'000'000);
   EXPECT_FALSE(b.master.startup(20));
   EXPECT_GE(b.chip.fdl_counters().no_resource, 1u);
