@@ -146,28 +146,6 @@ std::vector<NamedMask> masks(const RegDesc& r) {
           {"wo", r.wo}, {"ign", r.ign}, {"rsvd", r.rsvd}, {"unimp", r.unimp}, {"pulse", r.pulse}};
 }
 
-std::vector<std::string> wrap(std::string_view text, std::size_t width) {
-  std::vector<std::string> lines;
-  std::string line;
-  std::size_t pos = 0;
-  while (pos < text.size()) {
-    while (pos < text.size() && (text[pos] == ' ' || text[pos] == '\n')) ++pos;
-    if (pos >= text.size()) break;
-    std::size_t end = text.find_first_of(" \n", pos);
-    if (end == std::string_view::npos) end = text.size();
-    const std::string_view word = text.substr(pos, end - pos);
-    if (!line.empty() && line.size() + 1 + word.size() > width) {
-      lines.push_back(std::move(line));
-      line.clear();
-    }
-    if (!line.empty()) line += ' ';
-    line += word;
-    pos = end;
-  }
-  if (!line.empty()) lines.push_back(std::move(line));
-  return lines;
-}
-
 // =============================================================================================
 // C header and Verilog include: both are lists of macros, written by one DefineWriter
 // =============================================================================================

@@ -1,4 +1,5 @@
-// The RAM layouts of a profile (regdesc.hpp LayoutDesc) for the C header and docs/registers.md.
+// The RAM layouts of a profile (regdesc.hpp LayoutDesc) for the C header and docs/registers.md,
+// and the word wrap the text emitters share.
 #include <fmt/format.h>
 
 #include "regfmt.hpp"
@@ -35,6 +36,28 @@ std::vector<std::vector<std::string>> layout_rows(const LayoutDesc& l) {
     rows.push_back({std::to_string(b.offset), std::string{b.name}, values, std::string{b.desc}});
   }
   return rows;
+}
+
+std::vector<std::string> wrap(std::string_view text, std::size_t width) {
+  std::vector<std::string> lines;
+  std::string line;
+  std::size_t pos = 0;
+  while (pos < text.size()) {
+    while (pos < text.size() && (text[pos] == ' ' || text[pos] == '\n')) ++pos;
+    if (pos >= text.size()) break;
+    std::size_t end = text.find_first_of(" \n", pos);
+    if (end == std::string_view::npos) end = text.size();
+    const std::string_view word = text.substr(pos, end - pos);
+    if (!line.empty() && line.size() + 1 + word.size() > width) {
+      lines.push_back(std::move(line));
+      line.clear();
+    }
+    if (!line.empty()) line += ' ';
+    line += word;
+    pos = end;
+  }
+  if (!line.empty()) lines.push_back(std::move(line));
+  return lines;
 }
 
 }  // namespace dpc31::regfmt
