@@ -266,11 +266,7 @@ TEST(Do4Dpv1, GsdFileDescribesTheDpv1Slave) {
             pdu::Bytes(dp.prm_const.begin() + 1, dp.prm_const.end()));
   EXPECT_EQ(std::stoul(g.keys.at("Max_User_Prm_Data_Len")), g.prm_const.size());
   for (const auto& [n, p] : g.params) EXPECT_EQ(g.prm_const.at(p.offset), p.def) << n;
-  static const std::pair<const char*, std::uint32_t> kRates[] = {
-      {"9.6_supp", 9600},     {"19.2_supp", 19200},  {"45.45_supp", 45450},  {"93.75_supp", 93750},
-      {"187.5_supp", 187500}, {"500_supp", 500000},  {"1.5M_supp", 1500000}, {"3M_supp", 3000000},
-      {"6M_supp", 6000000},   {"12M_supp", 12000000}};
-  for (const auto& [key, baud] : kRates) {
+  for (const auto& [key, baud] : firmware_bench::kGsdRates) {
     if (g.keys.at(key) != "1") continue;
     Bench b(Profile::vpc3plus, do4_firmware,
             firmware_bench::gsd_configured_slave(do4_firmware, g, 5), baud);

@@ -325,11 +325,7 @@ TEST_P(GsdFile, EveryMasterConfiguredFromItReachesDataExchange) {
   const dpc31_firmware& fw = *GetParam();
   const Gsd g = load_gsd(std::string(SOURCE_DIR) + "/firmware/" + fw.gsd);
   const auto slave_from_gsd = [&] { return gsd_configured_slave(fw, g, 5); };
-  static const std::pair<const char*, std::uint32_t> kRates[] = {
-      {"9.6_supp", 9600},     {"19.2_supp", 19200},  {"45.45_supp", 45450},  {"93.75_supp", 93750},
-      {"187.5_supp", 187500}, {"500_supp", 500000},  {"1.5M_supp", 1500000}, {"3M_supp", 3000000},
-      {"6M_supp", 6000000},   {"12M_supp", 12000000}};
-  for (const auto& [key, baud] : kRates) {
+  for (const auto& [key, baud] : firmware_bench::kGsdRates) {
     if (g.keys.at(key) != "1") continue;
     for (Profile p : {Profile::spc3, Profile::vpc3plus, Profile::dpc31}) {
       Bench b(p, fw, slave_from_gsd(), baud);
