@@ -627,6 +627,8 @@ TEST(Capture, TsharkReportsMalformedFrames) {
 //   negative       DE 80 B0 00          Read, DPV1, class 11 (access) code 0 (invalid index)
 //   Write request  5F 00 01 02 01 06
 //   Write response 5F 00 01 02
+//   Alarm_Ack      5C 00 01 01          to SAP 50: slot 0, Alarm_Type 1 (Diagnosis), Specifier
+//                                       01h = Seq_Nr 0, appears; the response echoes it from 50
 // Polls (SRD without data) and the SC answers carry no data unit: no DPV1 fields.
 TEST(Capture, TsharkDecodesTheShippedDpv1Capture) {
   ASSERT_TRUE(have_tshark()) << kNoTshark;
@@ -644,8 +646,14 @@ TEST(Capture, TsharkDecodesTheShippedDpv1Capture) {
       "51,51,0x5e,0,0,1,2,,,,,,",     "51,51,0x5e,0,0,1,2,0109,,,,,",
       "51,51,0x5e,0,0,7,2,,,,,,",     "51,51,0x5e,1,,,,,0x80,0xb0,11,0,0x00",
       "51,51,0x5f,0,0,1,2,0106,,,,,", "51,51,0x5f,0,0,1,2,,,,,,",
+      "50,51,0x5c,0,0,,,,,,,,",       "51,50,0x5c,0,0,,,,,,,,",
   };
   EXPECT_EQ(lines(normalise_bools(out)), expected) << out;
+  const std::string alarm = tshark(dir, "-r " + quote(path) +
+                                            " -Y 'profibus.dpv1.function == 0x5c' -T fields"
+                                            " -E separator=, -e profibus.dpv1.alarm_type"
+                                            " -e profibus.dpv1.seq_nr -e profibus.dpv1.spec");
+  EXPECT_EQ(lines(alarm), (std::vector<std::string>{"1,0,1", "1,0,1"})) << alarm;
   const std::string info =
       tshark(dir, "-r " + quote(path) + " -Y profibus.dpv1.negative -T fields -e _ws.col.Info");
   EXPECT_NE(info.find("DPV1 Read negative B0h invalid index"), std::string::npos) << info;
