@@ -614,3 +614,100 @@ TEST(Capture, TsharkReportsMalformedFrames) {
                                              " -Y 'frame.number == 1 || frame.number == 10'");
   EXPECT_EQ(lines(protos), (std::vector<std::string>{"UNKNOWN\t1", "UNKNOWN\t10"})) << protos;
 }
+
+// --- DPV1: the dissector decodes the data units on the slave's SAPs 0..51 ---
+
+// The shipped capture of traces/do4_dpv1_vpc3plus.scn (`dpc31 run ... --pcap`, our capture
+// door), its DPV1 data units field by field as IEC 61158-6 type 3 lays them out (function number,
+// Slot_Number, Index, Length, data; a negative response: function | 80h, Error_Decode,
+// Error_Code_1 = class | code, Error_Code_2), derived from the scenario's telegrams:
+//   Read request   5E 00 01 02          slot 0 index 1 length 2
+//   Read response  5E 00 01 02 01 09    the record: OSPMode 1, replacement value 9
+//   Read request   5E 00 07 02          index 7 (no such record)
+//   negative       DE 80 B0 00          Read, DPV1, class 11 (access) code 0 (invalid index)
+//   Write request  5F 00 01 02 01 06
+//   Write response 5F 00 01 02
+//   Alarm_Ack      5C 00 01 01          to SAP 50: slot 0, Alarm_Type 1 (Diagnosis), Specifier
+//                                       01h = Seq_Nr 0, appears; the response echoes it from 50
+// Polls (SRD without data) and the SC answers carry no data unit: no DPV1 fields.
+TEST(Capture, TsharkDecodesTheShippedDpv1Capture) {
+  ASSERT_TRUE(have_tshark()) << kNoTshark;
+  TempDir dir;
+  const std::string path = std::string(DPC31_TEST_DATA) + "/capture/do4_dpv1_vpc3plus.pcapng";
+  const std::string out = tshark(
+      dir, "-r " + quote(path) +
+               " -Y profibus.dpv1.function -T fields -E separator=, -e profibus.dsap"
+               " -e profibus.ssap -e profibus.dpv1.function -e profibus.dpv1.negative"
+               " -e profibus.dpv1.slot -e profibus.dpv1.index -e profibus.dpv1.length"
+               " -e profibus.dpv1.data -e profibus.dpv1.error_decode -e profibus.dpv1.error_code_1"
+               " -e profibus.dpv1.error_class -e profibus.dpv1.error_code"
+               " -e profibus.dpv1.error_code_2");
+  const std::vector<std::string> expected = {
+      "51,51,0x5e,0,0,1,2,,,,,,",     "51,51,0x5e,0,0,1,2,0109,,,,,",
+      "51,51,0x5e,0,0,7,2,,,,,,",     "51,51,0x5e,1,,,,,0x80,0xb0,11,0,0x00",
+      "51,51,0x5f,0,0,1,2,0106,,,,,", "51,51,0x5f,0,0,1,2,,,,,,",
+      "50,51,0x5c,0,0,,,,,,,,",       "51,50,0x5c,0,0,,,,,,,,",
+  };
+  EXPECT_EQ(lines(normalise_bools(out)), expected) << out;
+  const std::string alarm = tshark(dir, "-r " + quote(path) +
+                                            " -Y 'profibus.dpv1.function == 0x5c' -T fields"
+                                            " -E separator=, -e profibus.dpv1.alarm_type"
+                                            " -e profibus.dpv1.seq_nr -e profibus.dpv1.spec");
+  EXPECT_EQ(lines(alarm), (std::vector<std::string>{"1,0,1", "1,0,1"})) << alarm;
+  const std::string info =
+      tshark(dir, "-r " + quote(path) + " -Y profibus.dpv1.negative -T fields -e _ws.col.Info");
+  EXPECT_NE(info.find("DPV1 Read negative B0h invalid index"), std::string::npos) << info;
+}
+
+// The other DPV1 data units, built by hand into SD2 telegrams and written by the pcapng writer:
+//   Alarm_Ack  5C 00 01 09: slot 0, Alarm_Type 1 (Diagnosis), Specifier 09h = Seq_Nr 1,
+//              Add_Ack 0, specifier 1 (appears)
+//   Initiate request  57 00 00 00 01 2C 00 01 00 00 00 00 00 02 00 02 01 02 03 04:
+//              Send_Timeout 012Ch = 300, Features_Supported 0001h, Profile_Features_Supported 0,
+//              Profile_Ident_Number 0, S_Type 0, S_Len 2, D_Type 0, D_Len 2, S_Addr 0102,
+//              D_Addr 0304
+//   Initiate response 57 F0 00 01 00 00 00 00 00 02 00 02 03 04 01 02: Max_Len_Data_Unit 240
+//   Abort      58 00 13 00: Subnet 0, Instance 1 (MSAC_C2, bits 5..4), Reason_Code 3 (bits 3..0)
+//   a Write request cut after the slot: an expert info, no Lua error.
+TEST(Capture, TsharkDecodesDpv1AlarmAckInitiateAbort) {
+  ASSERT_TRUE(have_tshark()) << kNoTshark;
+  TempDir dir;
+  const std::string path = dir.file("dpv1.pcapng");
+  const auto frame = [](bool request, std::uint8_t slave_sap, Bytes du) {
+    return request ? fdl::encode(fdl::make_frame(5, 2, 0x4D, std::move(du), slave_sap, 51))
+                   : fdl::encode(fdl::make_frame(2, 5, 0x08, std::move(du), 51, slave_sap));
+  };
+  const std::vector<Bytes> packets = {
+      frame(true, 50, {0x5C, 0x00, 0x01, 0x09}),
+      frame(true, 49, {0x57, 0x00, 0x00, 0x00, 0x01, 0x2C, 0x00, 0x01, 0x00, 0x00,
+                       0x00, 0x00, 0x00, 0x02, 0x00, 0x02, 0x01, 0x02, 0x03, 0x04}),
+      frame(false, 48,
+            {0x57, 0xF0, 0x00, 0x01, 0x00, 0x00, 0x00, 0x00, 0x00, 0x02, 0x00, 0x02, 0x03, 0x04,
+             0x01, 0x02}),
+      frame(true, 48, {0x58, 0x00, 0x13, 0x00}),
+      frame(true, 51, {0x5F, 0x00}),
+  };
+  PcapngWriter w(WriterOptions{"", "", false});
+  ASSERT_TRUE(w.open(path)) << w.error();
+  for (const Bytes& p : packets) ASSERT_TRUE(w.add(Packet{0, Direction::inbound, p, ""}));
+  ASSERT_TRUE(w.close()) << w.error();
+  const std::string out = tshark(
+      dir, "-r " + quote(path) +
+               " -T fields -E separator=, -e profibus.dpv1.function -e profibus.dpv1.slot"
+               " -e profibus.dpv1.alarm_type -e profibus.dpv1.seq_nr -e profibus.dpv1.add_ack"
+               " -e profibus.dpv1.spec -e profibus.dpv1.send_timeout"
+               " -e profibus.dpv1.max_len_data_unit -e profibus.dpv1.features_supported"
+               " -e profibus.dpv1.s_len -e profibus.dpv1.d_len -e profibus.dpv1.s_addr"
+               " -e profibus.dpv1.d_addr -e profibus.dpv1.subnet -e profibus.dpv1.instance"
+               " -e profibus.dpv1.reason_code -e _ws.expert.message");
+  const std::vector<std::string> expected = {
+      "0x5c,0,1,1,0,1,,,,,,,,,,,",
+      "0x57,,,,,,300,,0x0001,2,2,0102,0304,,,,",
+      "0x57,,,,,,,240,0x0001,2,2,0304,0102,,,,",
+      "0x58,,,,,,,,,,,,,0,1,3,",
+      "0x5f,0,,,,,,,,,,,,,,,Write: the data unit ends at byte 2",
+  };
+  EXPECT_EQ(lines(normalise_bools(out)), expected) << out;
+  const std::string tree = tshark(dir, "-V -r " + quote(path));
+  EXPECT_EQ(tree.find("Dissector error"), std::string::npos) << tree;
+}

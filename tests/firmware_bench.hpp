@@ -66,6 +66,12 @@ struct Bench {
   bool in_init_ = true;
 };
 
+// The GSD keys of the ten baud rates and the rates.
+inline constexpr std::pair<const char*, std::uint32_t> kGsdRates[] = {
+    {"9.6_supp", 9600},     {"19.2_supp", 19200},  {"45.45_supp", 45450},  {"93.75_supp", 93750},
+    {"187.5_supp", 187500}, {"500_supp", 500000},  {"1.5M_supp", 1500000}, {"3M_supp", 3000000},
+    {"6M_supp", 6000000},   {"12M_supp", 12000000}};
+
 struct Gsd {
   std::map<std::string, std::string> keys;
   std::vector<std::uint8_t> module_cfg;

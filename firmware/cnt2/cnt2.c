@@ -104,8 +104,8 @@ static void comm_lost(int why) {
 }
 
 static const uint8_t kCfg[2] = {0x25, 0x17};
-static const dps_module kModule = {"CNT2", CNT2_IDENT, kCfg,    sizeof kCfg, 8,         6,
-                                   7 + 1,  check_prm,  outputs, inputs,      comm_lost, 0};
+static const dps_module kModule = {"CNT2",    CNT2_IDENT, kCfg,   sizeof kCfg, 8, 6, 7 + 1,
+                                   check_prm, outputs,    inputs, comm_lost,   0, 0};
 
 void cnt2_init(const dps_board* board) {
   memset(C, 0, sizeof C); /* the shadows start as all MSG = 0 */

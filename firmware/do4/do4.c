@@ -4,9 +4,35 @@
 #include <string.h>
 
 #include "../firmware.h"
+#include "dpc31/dpc31_regs.h"
 
 static const uint8_t kCfg[2] = {0x21, 0x10}; /* 2 output bytes, 1 input byte */
 static do4_state S;
+
+/* The diag block after the 6 standard bytes. DP: `02h, S` (device-related, S bit 0 = OSP). With
+ * DPV1 a device-related block holds an alarm or status block (header 05h, Alarm_Type / Status_Type,
+ * Slot_Number 0, Specifier, S): the diagnostic alarm (Alarm_Type 01h) while one is outstanding,
+ * else the status (Status_Type 81h: status message) with Specifier 1 OSP appears, 2 disappears.
+ * Ext_Diag is set while an alarm is outstanding. */
+enum { kDiagAlarm = 0x01u, kStatusMessage = 0x81u, kAppears = 0x01u, kDisappears = 0x02u };
+static uint8_t
+    g_alarm_spec; /* Specifier of the outstanding alarm (Seq_Nr << 3 | appears); 0: none */
+static uint8_t g_alarm_seq; /* the next alarm's Seq_Nr, 0..31 */
+
+static int dpv1_on(void) { return (dps_dpv1_status(1) & VPC3_Prm_Status_1_DPV1_Enable_Msk) != 0; }
+
+static void publish_diag(void) {
+  const uint8_t osp = (uint8_t)(S.modul_ok ? 0x00 : 0x01);
+  if (!dpv1_on()) {
+    const uint8_t diag[2] = {0x02, osp};
+    dps_set_diag(diag, sizeof diag, 0);
+  } else {
+    const uint8_t diag[5] = {
+        0x05, g_alarm_spec ? (uint8_t)kDiagAlarm : (uint8_t)kStatusMessage, 0x00,
+        g_alarm_spec ? g_alarm_spec : (uint8_t)(osp ? kAppears : kDisappears), osp};
+    dps_set_diag(diag, sizeof diag, g_alarm_spec != 0);
+  }
+}
 
 /* The terminals are the module's real outputs: the host sees each change with its cycle. */
 static void drive(uint8_t terminals, uint8_t modul_ok) {
@@ -17,11 +43,14 @@ static void drive(uint8_t terminals, uint8_t modul_ok) {
   if (modul_ok != S.modul_ok) {
     S.modul_ok = modul_ok;
     dpc31_port_write(DO4_PORT_MODUL_OK, modul_ok);
-    /* The mode is also a status for the master: device-related diag byte, bit 0 = OSP. */
-    {
-      const uint8_t diag[2] = {0x02, (uint8_t)(modul_ok ? 0x00 : 0x01)};
-      dps_set_diag(diag, sizeof diag, 0);
+    /* Entering OSP mode is a diagnostic alarm if the master enabled them (one outstanding). */
+    if (!modul_ok && !g_alarm_spec && dpv1_on() &&
+        (dps_dpv1_status(2) & VPC3_Prm_Status_2_Enable_Diagnostic_Alarm_Msk) != 0) {
+      g_alarm_spec = (uint8_t)(g_alarm_seq << 3 | kAppears);
+      g_alarm_seq = (uint8_t)((g_alarm_seq + 1u) & 0x1Fu);
     }
+    /* The mode is also a status for the master. */
+    publish_diag();
   }
 }
 
@@ -31,11 +60,87 @@ static void enter_osp(void) {
   drive(S.osp_mode == DO4_REPLACE ? S.osp_value : S.last_valid, 0);
 }
 
+/* DPV1 (VPC3+, docs/firmware.md "DO4 with DPV1"): the OSP configuration as the record of slot 0
+ * index 1, two bytes as in Set_Prm: OSPMode, replacement value. Function numbers and error codes
+ * per IEC 61158-6 type 3 (docs/dpv1.md, "Negative responses"). */
+enum {
+  kRead = 0x5Eu,
+  kWrite = 0x5Fu,
+  kAlarmAck = 0x5Cu,
+  kErrorBit = 0x80u,
+  kErrorDecodeDpv1 = 0x80u
+};
+enum {
+  kInvalidIndex = 0xB0u,       /* access: invalid index */
+  kWriteLengthError = 0xB1u,   /* access: write length error */
+  kInvalidSlot = 0xB2u,        /* access: invalid slot */
+  kStateConflict = 0xB5u,      /* access: state conflict */
+  kInvalidRange = 0xB7u,       /* access: invalid range */
+  kInvalidParameter = 0xB8u,   /* access: invalid parameter */
+  kFeatureNotSupported = 0xA9u /* application: feature not supported */
+};
+enum { kOspSlot = 0u, kOspIndex = 1u, kOspRecordLen = 2u };
+
+static uint8_t dpv1_error(uint8_t* resp, uint8_t function, uint8_t code) {
+  resp[0] = (uint8_t)(function | kErrorBit);
+  resp[1] = kErrorDecodeDpv1;
+  resp[2] = code;
+  resp[3] = 0x00; /* Error_Code_2: no detail */
+  return 4;
+}
+
+/* Read or Write of a record: slot, index, then (Write) the length and the module's state. */
+static uint8_t dpv1_record(const uint8_t* req, uint8_t len, uint8_t* resp) {
+  const uint8_t fn = req[0];
+  if (req[1] != kOspSlot) return dpv1_error(resp, fn, kInvalidSlot);
+  if (req[2] != kOspIndex) return dpv1_error(resp, fn, kInvalidIndex);
+  resp[0] = fn;
+  resp[1] = req[1];
+  resp[2] = req[2];
+  if (fn == kRead) { /* the record's bytes, at most as many as asked for */
+    resp[3] = req[3] < kOspRecordLen ? req[3] : (uint8_t)kOspRecordLen;
+    resp[4] = S.osp_mode;
+    resp[5] = S.osp_value;
+    return (uint8_t)(4u + resp[3]);
+  }
+  if (req[3] != kOspRecordLen || len != 4u + kOspRecordLen)
+    return dpv1_error(resp, fn, kWriteLengthError);
+  /* The replacement value is what drives the terminals in OSP mode: not changed under them. */
+  if (!S.modul_ok) return dpv1_error(resp, fn, kStateConflict);
+  if (req[4] > DO4_REPLACE || (req[5] & 0xF0u) != 0) return dpv1_error(resp, fn, kInvalidRange);
+  S.osp_mode = req[4];
+  S.osp_value = req[5];
+  resp[3] = kOspRecordLen;
+  return 4;
+}
+
+/* Alarm_Ack (5Ch, Slot_Number, Alarm_Type, Specifier): the outstanding alarm acknowledged, the
+ * positive response echoes the request; the diag no longer holds the alarm. */
+static uint8_t dpv1_alarm_ack(const uint8_t* req, uint8_t* resp) {
+  if (!g_alarm_spec) return dpv1_error(resp, kAlarmAck, kStateConflict);
+  if (req[1] != kOspSlot || req[2] != kDiagAlarm || req[3] != g_alarm_spec)
+    return dpv1_error(resp, kAlarmAck, kInvalidParameter);
+  g_alarm_spec = 0;
+  publish_diag();
+  memcpy(resp, req, 4);
+  return 4;
+}
+
+static uint8_t dpv1_request(uint8_t sap, const uint8_t* req, uint8_t len,
+                            uint8_t* resp) DPS_REENTRANT {
+  const uint8_t fn = req[0];
+  if (sap == DPS_SAP_ALARM && len == 4u && fn == kAlarmAck) return dpv1_alarm_ack(req, resp);
+  if (sap == DPS_SAP_C1 && len >= 4u && (fn == kRead || fn == kWrite))
+    return dpv1_record(req, len, resp);
+  return dpv1_error(resp, fn, kFeatureNotSupported);
+}
+
 static int check_prm(const uint8_t* prm, uint8_t len) DPS_REENTRANT {
   if (len != 3 || prm[0] > DO4_REPLACE || (prm[1] & 0xF0u) != 0) return 0;
   S.osp_mode = prm[0];
   S.osp_value = prm[1];
   S.refresh_ms = prm[2];
+  g_alarm_spec = 0; /* a new parameterisation: no alarm outstanding */
   S.ms_since_refresh = 0;
   dps_timer_enable(S.refresh_ms != 0);
   if (!S.osp_valid) enter_osp(); /* the new replacement value applies at once */
@@ -75,11 +180,14 @@ static void tick(void) {
   }
 }
 
-static const dps_module kModule = {"DO4",     DO4_IDENT, kCfg,    sizeof kCfg, 1,         2,
-                                   7 + 1 + 3, check_prm, outputs, inputs,      comm_lost, tick};
+static const dps_module kModule = {"DO4",     DO4_IDENT, kCfg,        sizeof kCfg, 1,
+                                   2,         7 + 1 + 3, check_prm,   outputs,     inputs,
+                                   comm_lost, tick,      dpv1_request};
 
 void do4_init(const dps_board* board) {
   memset(&S, 0, sizeof S); /* power on: outputs off, OSP until the master sets OSPValid */
+  g_alarm_spec = 0;
+  g_alarm_seq = 0;
   dps_init(board, &kModule);
 }
 

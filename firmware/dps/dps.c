@@ -97,6 +97,21 @@ static int g_diag_pending;
 static int g_dpc31;              /* the chip takes requests, not Mode_Reg1 commands */
 static VPC3_ADR g_instq, g_indq; /* dpc31: the queues' first entries */
 static uint8_t g_instq_wr, g_indq_rd;
+static int g_timer_module; /* the module asked for User_Timer_Clock */
+
+/* DPV1 on the VPC3+ (docs/dpv1.md, docs/firmware.md): a SAP list of two entries, MSAC_C1 (SAP
+ * 51) and its alarm SAP (50), each with one buffer that is indication and response buffer at
+ * once, as the Profichip driver has it for its MSAC_C1 SAPs. The ISR takes a request on FDL_Ind;
+ * the 1 ms task answers it (the master's polls get SC meanwhile); Poll_End_Ind frees the buffer. */
+enum { kDpv1Saps = 2u, kFcResponse = 0x08u /* DL: response data low */ };
+enum { FDL_Ind = VPC3_Int_Req_Reg_FDL_Ind_Msk, Poll_End_Ind = VPC3_Int_Req_Reg_Poll_End_Ind_Msk };
+static const uint8_t kDpv1Sap[kDpv1Saps] = {DPS_SAP_C1, DPS_SAP_ALARM};
+static int g_sap_list; /* set up at init: a VPC3+ and a module with dpv1_request */
+static VPC3_ADR g_sap_entry[kDpv1Saps], g_dpv1_buf[kDpv1Saps];
+static uint8_t g_dpv1_status[3];
+static uint8_t g_dpv1_req[kDpv1Saps][DPS_DPV1_MAX_PDU];
+static uint8_t g_dpv1_len[kDpv1Saps];
+static uint8_t g_dpv1_pending; /* bit k: the request of SAP k waits for the 1 ms task */
 
 /* 16-bit registers go over the 8-bit bus byte by byte; which address holds the low byte
  * depends on the bus mode (Intel: the lower address). */
@@ -124,7 +139,9 @@ static void set_mask(uint16_t enabled) {
 static void allocate_buffers(void) {
   const unsigned seg = 1u << R->segment_shift;
   unsigned next = (R->user_base + seg - 1u) / seg;
-  const uint8_t aux_len = M->prm_len > M->cfg_len ? M->prm_len : M->cfg_len;
+  /* A DPV1 Set_Prm carries DPV1_Status_2 and _3 besides the module's bytes. */
+  const uint8_t prm_len = (uint8_t)(g_sap_list ? M->prm_len + 2u : M->prm_len);
+  const uint8_t aux_len = prm_len > M->cfg_len ? prm_len : M->cfg_len;
   unsigned k;
 #define DPS_ALLOC(cell, len)                                                 \
   do {                                                                       \
@@ -147,6 +164,28 @@ static void allocate_buffers(void) {
   DPS_ALLOC(R->cfg_ptr, aux_len);
   DPS_ALLOC(R->read_cfg_ptr, M->cfg_len);
   DPS_ALLOC(R->ssa_ptr, aux_len);
+  if (g_sap_list) {
+    /* While Offline (VPC3+C p.54): the list, FFh after its last entry, the buffer headers. */
+    const VPC3_ADR list = (VPC3_ADR)(next << R->segment_shift);
+    DPS_ALLOC(VPC3_R_FDL_SAP_List_Ptr, kDpv1Saps * VPC3_SAP_Entry_SIZE + 1u);
+    for (k = 0; k < kDpv1Saps; ++k) {
+      const VPC3_ADR e = (VPC3_ADR)(list + k * VPC3_SAP_Entry_SIZE);
+      const uint8_t buf = (uint8_t)next;
+      g_sap_entry[k] = e;
+      g_dpv1_buf[k] = (VPC3_ADR)(next << R->segment_shift);
+      Vpc3Write(e + VPC3_SAP_Entry_Sap, kDpv1Sap[k]);
+      Vpc3Write(e + VPC3_SAP_Entry_Request_SA, VPC3_SAP_Entry_Request_SA_All);
+      Vpc3Write(e + VPC3_SAP_Entry_Request_SSAP, VPC3_SAP_Entry_Request_SSAP_All);
+      Vpc3Write(e + VPC3_SAP_Entry_Service_Supported, VPC3_SAP_Entry_Service_Supported_All);
+      Vpc3Write(e + VPC3_SAP_Entry_Ind_Buf_Ptr0, buf);
+      Vpc3Write(e + VPC3_SAP_Entry_Ind_Buf_Ptr1, buf);
+      Vpc3Write(e + VPC3_SAP_Entry_Resp_Buf_Ptr, buf);
+      Vpc3Write(g_dpv1_buf[k] + VPC3_DPV1_Buf_Control, 0x00);
+      Vpc3Write(g_dpv1_buf[k] + VPC3_DPV1_Buf_Max_Length, DPS_DPV1_MAX_PDU);
+      next += (VPC3_DPV1_Buf_SIZE + DPS_DPV1_MAX_PDU + seg - 1u) / seg;
+    }
+    Vpc3Write((VPC3_ADR)(list + kDpv1Saps * VPC3_SAP_Entry_SIZE), VPC3_SAP_Entry_Sap_End_Of_List);
+  }
   if (g_dpc31) {
     DPS_ALLOC(DPC31_InstQ_Base, 2u * DPS_QUEUE_LEN);
     DPS_ALLOC(DPC31_IndQ_Base, 2u * DPS_QUEUE_LEN);
@@ -202,6 +241,10 @@ void dps_init(const dps_board* board, const dps_module* module) {
   R = &kMaps[board->profile];
   M = module;
   g_dpc31 = board->profile == DPC31_PROFILE_DPC31;
+  g_sap_list = board->profile == DPC31_PROFILE_VPC3PLUS && module->dpv1_request != 0;
+  g_timer_module = 0;
+  g_dpv1_pending = 0;
+  memset(g_dpv1_status, 0, sizeof g_dpv1_status);
   g_instq_wr = 0;
   g_indq_rd = 0;
   g_motorola = board->motorola;
@@ -217,7 +260,9 @@ void dps_init(const dps_board* board, const dps_module* module) {
   /* DP mode, fail-safe telegrams accepted; no Sync/Freeze (the GSD says so); EOI inactive
    * time 1 us, user timer 1 ms. */
   write16(R->mode0, DP_Mode | Spec_Clear_Mode);
-  set_mask(g_dpc31 ? (uint16_t)(kSources | Indication) : kSources);
+  set_mask(g_dpc31      ? (uint16_t)(kSources | Indication)
+           : g_sap_list ? (uint16_t)(kSources | FDL_Ind | Poll_End_Ind)
+                        : kSources);
   Vpc3Write(R->wd_baud, 0x10);  /* Baud_Control: 16 x 10 ms */
   Vpc3Write(R->min_tsdr, 0x0B); /* 11 bit times */
   write16(R->user_wd, 0x01FF);
@@ -252,9 +297,14 @@ void dps_update_inputs(void) {
   (void)Vpc3Read(R->new_din);
 }
 
+/* The 1 ms task runs while the module wants it or a DPV1 request waits. */
 void dps_timer_enable(int on) {
-  set_mask(on ? (uint16_t)(g_mask | User_Timer_Clock) : (uint16_t)(g_mask & ~User_Timer_Clock));
+  g_timer_module = on;
+  set_mask(on || g_dpv1_pending ? (uint16_t)(g_mask | User_Timer_Clock)
+                                : (uint16_t)(g_mask & ~User_Timer_Clock));
 }
+
+uint8_t dps_dpv1_status(uint8_t k) { return k >= 1u && k <= 3u ? g_dpv1_status[k - 1u] : 0u; }
 
 /* The user's diag buffer is the one in state 01 (User); both may be with the ASIC. */
 static void publish_diag(void) {
@@ -285,6 +335,72 @@ void dps_set_diag(const uint8_t* bytes, uint8_t len, int ext_diag) {
   publish_diag();
 }
 
+/* A Set_Prm with DPV1_Enable starts MSAC_C1 afresh: its status bytes kept for the module, both
+ * buffers free, no request pending. */
+static void dpv1_restart(const uint8_t* status) {
+  uint8_t k;
+  memcpy(g_dpv1_status, status, sizeof g_dpv1_status);
+  g_dpv1_pending = 0;
+  for (k = 0; k < kDpv1Saps; ++k) Vpc3Write(g_dpv1_buf[k] + VPC3_DPV1_Buf_Control, 0x00);
+}
+
+/* FDL_Ind: take each request whose buffer holds IND (the buffer stays the user's until the
+ * response is in it) and have the 1 ms task answer it. */
+static void dpv1_take_indications(void) {
+  uint8_t k;
+  for (k = 0; k < kDpv1Saps; ++k) {
+    const VPC3_ADR b = g_dpv1_buf[k];
+    uint8_t len;
+    if ((g_dpv1_pending >> k) & 1u) continue;
+    if ((Vpc3Read(b + VPC3_DPV1_Buf_Control) & VPC3_DPV1_Buf_Control_IND_Msk) == 0) continue;
+    Vpc3Write(b + VPC3_DPV1_Buf_Control, VPC3_DPV1_Buf_Control_USER_Msk);
+    len = Vpc3Read(b + VPC3_DPV1_Buf_Length);
+    if (len > DPS_DPV1_MAX_PDU) len = DPS_DPV1_MAX_PDU;
+    CopyFromVpc3(g_dpv1_req[k], CHIP_PTR(b + VPC3_DPV1_Buf_SIZE), len);
+    g_dpv1_len[k] = len;
+    g_dpv1_pending = (uint8_t)(g_dpv1_pending | 1u << k);
+    ++g_stats.dpv1_requests;
+  }
+  if (g_dpv1_pending && (g_mask & User_Timer_Clock) == 0) {
+    /* A tick latched while masked is stale: the answer comes with the next one. */
+    write16(R->int_ack, User_Timer_Clock);
+    set_mask((uint16_t)(g_mask | User_Timer_Clock));
+  }
+}
+
+/* The 1 ms task: the module answers; the response into the buffer, RESP with USER last. */
+static void dpv1_answer(void) {
+  uint8_t k;
+  for (k = 0; k < kDpv1Saps; ++k) {
+    uint8_t resp[DPS_DPV1_MAX_PDU];
+    const VPC3_ADR b = g_dpv1_buf[k];
+    uint8_t n;
+    if (((g_dpv1_pending >> k) & 1u) == 0) continue;
+    n = M->dpv1_request(kDpv1Sap[k], g_dpv1_req[k], g_dpv1_len[k], resp);
+    if (n > DPS_DPV1_MAX_PDU) n = DPS_DPV1_MAX_PDU;
+    CopyToVpc3(CHIP_PTR(b + VPC3_DPV1_Buf_SIZE), resp, n);
+    Vpc3Write(b + VPC3_DPV1_Buf_Length, n);
+    Vpc3Write(b + VPC3_DPV1_Buf_Function_Code, kFcResponse);
+    Vpc3Write(b + VPC3_DPV1_Buf_Control,
+              VPC3_DPV1_Buf_Control_USER_Msk | VPC3_DPV1_Buf_Control_RESP_Msk);
+    g_dpv1_pending = (uint8_t)(g_dpv1_pending & ~(1u << k));
+  }
+  if (!g_timer_module) set_mask((uint16_t)(g_mask & ~User_Timer_Clock));
+}
+
+/* Poll_End_Ind: a response went out (the chip cleared RESP and USER: the buffer is free again);
+ * Response_Sent is the user's to clear. */
+static void dpv1_response_sent(void) {
+  uint8_t k;
+  for (k = 0; k < kDpv1Saps; ++k) {
+    const uint8_t b0 = Vpc3Read(g_sap_entry[k] + VPC3_SAP_Entry_Sap);
+    if ((b0 & VPC3_SAP_Entry_Sap_Response_Sent_Msk) == 0) continue;
+    Vpc3Write(g_sap_entry[k] + VPC3_SAP_Entry_Sap,
+              (uint8_t)(b0 & ~VPC3_SAP_Entry_Sap_Response_Sent_Msk));
+    ++g_stats.dpv1_responses_sent;
+  }
+}
+
 /* Set_Prm: the ASIC checked ident, lock and reserved bits; the module checks its own bytes.
  * A new Set_Prm arriving during the check makes the verdict read return Prm_Conflict: check
  * the new buffer. */
@@ -292,16 +408,26 @@ static void handle_prm(void) {
   for (;;) {
     uint8_t prm[DPS_MAX_PRM];
     const uint8_t len = Vpc3Read(R->len_prm);
-    int ok = len == M->prm_len && len <= DPS_MAX_PRM;
+    /* With DPV1_Enable (VPC3+) bytes 7..9 are DPV1_Status_1..3 and the module's bytes start at
+     * 10: two bytes longer than with the Spec_User_Prm_Byte. */
+    const int dpv1 = g_sap_list && len == M->prm_len + 2u;
+    const uint8_t user = (uint8_t)(dpv1 ? kStdPrm + 3u : kStdPrm + 1u);
+    int ok = (len == M->prm_len || dpv1) && len <= DPS_MAX_PRM;
     uint8_t result;
     if (ok) {
       CopyFromVpc3(prm, CHIP_PTR(buffer(R->prm_ptr)), len);
-      ok = M->check_prm(prm + kStdPrm + 1u, (uint8_t)(len - kStdPrm - 1u));
+      ok = ((prm[VPC3_Prm_Status_1] & VPC3_Prm_Status_1_DPV1_Enable_Msk) != 0) == dpv1 &&
+           M->check_prm(prm + user, (uint8_t)(len - user));
     }
     result = Vpc3Read(ok ? R->prm_ok : R->prm_not_ok);
     if (result != Prm_Conflict) {
       if (ok) {
         ++g_stats.prm_ok;
+        if (dpv1) {
+          dpv1_restart(prm + VPC3_Prm_Status_1);
+        } else {
+          memset(g_dpv1_status, 0, sizeof g_dpv1_status);
+        }
       } else {
         ++g_stats.prm_rejected;
       }
@@ -396,7 +522,10 @@ void dps_isr(void) {
   }
   if (ir & New_SSA_Data) handle_ssa();
   if ((ir & Diag_Buffer_Changed) && g_diag_pending) publish_diag();
-  if ((ir & User_Timer_Clock) && M->tick != 0) {
+  if (g_sap_list && (ir & FDL_Ind)) dpv1_take_indications();
+  if (g_sap_list && (ir & Poll_End_Ind)) dpv1_response_sent();
+  if ((ir & User_Timer_Clock) && g_dpv1_pending) dpv1_answer();
+  if ((ir & User_Timer_Clock) && g_timer_module && M->tick != 0) {
     ++g_stats.ticks;
     M->tick();
   }

@@ -48,6 +48,11 @@ enum dps_comm_loss {
 #define DPS_MAX_IO 32u   /* input and output bytes of the example modules */
 #define DPS_MAX_PRM 32u  /* Set_Prm bytes, the 7 standard ones included */
 #define DPS_MAX_DIAG 16u /* user diag bytes after the 6 standard ones */
+/* DPV1 (VPC3+): the longest MSAC_C1 data unit a module takes or answers, the 4 bytes of function
+ * number, slot, index and length included (GSD C1_Max_Data_Len = DPS_DPV1_MAX_PDU - 4). */
+#define DPS_DPV1_MAX_PDU 20u
+#define DPS_SAP_C1 51u    /* MSAC_C1 Read / Write */
+#define DPS_SAP_ALARM 50u /* MSAC_C1 Alarm_Ack */
 
 typedef struct dps_module {
   const char* name;
@@ -68,6 +73,12 @@ typedef struct dps_module {
   void (*comm_lost)(int why);
   /* User_Timer_Clock (1 ms) while the module asked for it (dps_timer_enable); may be NULL. */
   void (*tick)(void);
+  /* DPV1 on the VPC3+ (NULL: the module speaks DP only). A request that came on SAP `sap`
+   * (DPS_SAP_C1 or DPS_SAP_ALARM) while the master enabled DPV1 in Set_Prm: the module writes
+   * its response data unit (at most DPS_DPV1_MAX_PDU bytes) into resp and returns its length.
+   * Called from the 1 ms task after the indication: the master's polls get SC until then. */
+  uint8_t (*dpv1_request)(uint8_t sap, const uint8_t* req, uint8_t len,
+                          uint8_t* resp) DPS_REENTRANT;
 } dps_module;
 
 /* main(): configure the chip for this module and start it (Start_SPC3; DPC31: MAC_Start). */
@@ -82,14 +93,17 @@ void dps_update_inputs(void);
 void dps_set_diag(const uint8_t* bytes, uint8_t len, int ext_diag);
 /* User_Timer_Clock interrupts on (1) or off (0). */
 void dps_timer_enable(int on);
+/* DPV1_Status_1..3 (k = 1..3) of the Set_Prm taken last; all 0 when it had no DPV1_Enable. */
+uint8_t dps_dpv1_status(uint8_t k);
 
 /* Bookkeeping for hosts and tests. */
 typedef struct dps_stats {
   uint32_t prm_ok, prm_rejected, cfg_ok, cfg_rejected, prm_conflicts, cfg_conflicts;
   uint32_t dx_out, cleared, gc_commands, ssa, diag_updates, baud_detects, wd_timeouts;
   uint32_t leave_dx, mac_resets, ticks, interrupts;
-  uint32_t user_wd_expiries; /* dpc31: DPS_User_WD Expired indications */
-  uint8_t last_gc;           /* R_GC_Command at the last New_GC_Command */
+  uint32_t user_wd_expiries;                   /* dpc31: DPS_User_WD Expired indications */
+  uint32_t dpv1_requests, dpv1_responses_sent; /* FDL_Ind taken, Poll_End_Ind */
+  uint8_t last_gc;                             /* R_GC_Command at the last New_GC_Command */
   uint8_t station_address;
 } dps_stats;
 const dps_stats* dps_get_stats(void);

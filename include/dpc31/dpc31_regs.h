@@ -1766,4 +1766,61 @@ enum dpc31_profile {
 #define DPC31_IndQ_Rd                                   0x0871u /* read/write */
 #define DPC31_IndQ_Rd_RESET                             0x00u
 
+/* SAP_Entry: one entry of the DPV1 SAP list, whose segment is in R_FDL_SAP_List_Ptr; the byte after the last entry is FFh (docs/dpv1.md) (VPC3+C p.55, Figure 7-3); byte offsets */
+#define VPC3_SAP_Entry_SIZE                             7u /* bytes */
+#define VPC3_SAP_Entry_Sap                              0u /* Response_Sent and SAP_Number */
+#define VPC3_SAP_Entry_Sap_Response_Sent_Msk            0x80u /* set by the chip when the response was sent, cleared by the user */
+#define VPC3_SAP_Entry_Sap_SAP_Number_Msk               0x3Fu /* the SAP, 0-51 */
+#define VPC3_SAP_Entry_Sap_End_Of_List                  0xFFu /* no further entry */
+#define VPC3_SAP_Entry_Request_SA                       1u /* the only station whose requests are taken */
+#define VPC3_SAP_Entry_Request_SA_All                   0x7Fu /* any station (default) */
+#define VPC3_SAP_Entry_Request_SSAP                     2u /* the only source SAP whose requests are taken */
+#define VPC3_SAP_Entry_Request_SSAP_All                 0x7Fu /* any source SAP (default) */
+#define VPC3_SAP_Entry_Service_Supported                3u /* the FDL services taken (codes other than 00h modelled from the Profichip driver) */
+#define VPC3_SAP_Entry_Service_Supported_All            0x00u /* all FDL services */
+#define VPC3_SAP_Entry_Service_Supported_SDN_L          0x01u /* SDN low */
+#define VPC3_SAP_Entry_Service_Supported_SDN_H          0x02u /* SDN high */
+#define VPC3_SAP_Entry_Service_Supported_SDN_LH         0x03u /* SDN low and high */
+#define VPC3_SAP_Entry_Service_Supported_SDN_SRD_LH     0x04u /* SDN and SRD, low and high */
+#define VPC3_SAP_Entry_Service_Supported_SRD_L          0x09u /* SRD low */
+#define VPC3_SAP_Entry_Service_Supported_SRD_H          0x0Au /* SRD high */
+#define VPC3_SAP_Entry_Service_Supported_SRD_LH         0x0Bu /* SRD low and high */
+#define VPC3_SAP_Entry_Ind_Buf_Ptr0                     4u /* segment of indication buffer 0; 00h: SAP not activated */
+#define VPC3_SAP_Entry_Ind_Buf_Ptr1                     5u /* segment of indication buffer 1; 00h or equal to Ind_Buf_Ptr0: one buffer */
+#define VPC3_SAP_Entry_Resp_Buf_Ptr                     6u /* segment of the response buffer (may be an indication buffer); 00h: none */
+
+/* DPV1_Buf: the header of a DPV1 indication or response buffer; its data follow it (VPC3+C p.56, Figure 7-4); byte offsets */
+#define VPC3_DPV1_Buf_SIZE                              4u /* bytes */
+#define VPC3_DPV1_Buf_Control                           0u /* who owns the buffer and what it holds */
+#define VPC3_DPV1_Buf_Control_USER_Msk                  0x80u /* buffer assigned to the user */
+#define VPC3_DPV1_Buf_Control_IND_Msk                   0x40u /* indication data included in the buffer */
+#define VPC3_DPV1_Buf_Control_RESP_Msk                  0x20u /* response data included in the buffer */
+#define VPC3_DPV1_Buf_Control_INUSE_Msk                 0x10u /* buffer assigned to the VPC3+ */
+#define VPC3_DPV1_Buf_Max_Length                        1u /* length of the data block */
+#define VPC3_DPV1_Buf_Length                            2u /* length of the data in it */
+#define VPC3_DPV1_Buf_Function_Code                     3u /* indication: the request's FC; response: the FC to answer with */
+
+/* Prm: the DPV1 status bytes of a Set_Prm with DPV1_Enable (DPV1_Status_1..3), in the Prm buffer; the User_Prm_Data start at byte 10 (VPC3+C p.53, Figure 7-1); byte offsets */
+#define VPC3_Prm_SIZE                                   10u /* bytes */
+#define VPC3_Prm_Status_1                               7u /* DPV1_Status_1: DPV1_Enable and the Spec_User_Prm_Byte bits */
+#define VPC3_Prm_Status_1_DPV1_Enable_Msk               0x80u /* the DP extensions are used */
+#define VPC3_Prm_Status_1_Fail_Safe_Msk                 0x40u /* the master sends Data_Exchange without outputs in Clear */
+#define VPC3_Prm_Status_1_Publisher_Enable_Msk          0x20u /* DXB publisher */
+#define VPC3_Prm_Status_1_WD_Base_Msk                   0x04u /* watchdog time base 1 ms */
+#define VPC3_Prm_Status_1_Dis_Stop_Control_Msk          0x02u /* no stop-bit check */
+#define VPC3_Prm_Status_1_Dis_Start_Control_Msk         0x01u /* no start-bit check */
+#define VPC3_Prm_Status_2                               8u /* DPV1_Status_2: the alarms the master enables */
+#define VPC3_Prm_Status_2_Enable_Pull_Plug_Alarm_Msk    0x80u /* pull and plug alarms */
+#define VPC3_Prm_Status_2_Enable_Process_Alarm_Msk      0x40u /* process alarms */
+#define VPC3_Prm_Status_2_Enable_Diagnostic_Alarm_Msk   0x20u /* diagnostic alarms */
+#define VPC3_Prm_Status_2_Enable_Manufacturer_Alarm_Msk 0x10u /* Enable_Manufacturer_Specific_Alarm: manufacturer-specific alarms (the name shortened to fit the macro columns) */
+#define VPC3_Prm_Status_2_Enable_Status_Alarm_Msk       0x08u /* status alarms */
+#define VPC3_Prm_Status_2_Enable_Update_Alarm_Msk       0x04u /* update alarms */
+#define VPC3_Prm_Status_2_Chk_Cfg_Mode_Msk              0x01u /* user-specific Chk_Cfg evaluation */
+#define VPC3_Prm_Status_3                               9u /* DPV1_Status_3 */
+#define VPC3_Prm_Status_3_PrmCmd_Msk                    0x80u /* redundancy */
+#define VPC3_Prm_Status_3_IsoM_Req_Msk                  0x10u /* isochronous mode */
+#define VPC3_Prm_Status_3_Prm_Structure_Msk             0x08u /* structured User_Prm_Data */
+#define VPC3_Prm_Status_3_Alarm_Mode_Msk                0x07u /* alarms outstanding at a time: 0 one, 1 two, 2 four, ... 7 32 */
+
 #endif /* DPC31_REGS_H */

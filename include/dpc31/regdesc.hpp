@@ -108,6 +108,29 @@ struct RegionDesc {
   std::string_view desc;
 };
 
+// A structure the firmware lays out in RAM and the chip reads there (the VPC3+'s SAP-list entry
+// and the header of its DPV1 buffers): no fixed address, so its C macros are byte offsets, bit
+// masks and codes.
+struct LayoutValue {
+  std::string_view name;
+  std::uint8_t value;
+  bool mask;  // a bit mask (macro suffix _Msk), else a code the byte may hold
+  std::string_view desc;
+};
+struct LayoutByte {
+  std::string_view name;
+  std::uint8_t offset;
+  std::string_view desc;
+  std::span<const LayoutValue> values;
+};
+struct LayoutDesc {
+  std::string_view name;  // macro infix: P_<name>_<byte>
+  std::uint8_t size;      // bytes of the structure
+  std::string_view source;
+  std::string_view desc;
+  std::span<const LayoutByte> bytes;
+};
+
 struct ProfileDesc {
   Profile id;
   std::string_view name;   // "spc3"
@@ -128,6 +151,7 @@ struct ProfileDesc {
   std::string_view note;
   std::span<const RegDesc> regs;
   std::span<const RegionDesc> regions;
+  std::span<const LayoutDesc> layouts{};
 };
 
 // Clock and timing constants from the description (docs/timing.md).

@@ -79,7 +79,79 @@ local dp_saps = {
   [59] = "Get_Cfg", [60] = "Slave_Diag", [61] = "Set_Prm", [62] = "Chk_Cfg",
 }
 
+-- DPV1 (IEC 61158-6 type 3, MSAC_C1 / MSAC_C2) data units on the slave's SAPs 0..51: the
+-- function number, then per function the fields below (dpc31/pdu.hpp declares the same).
+local dpv1_functions = {
+  [0x48] = "Idle", [0x51] = "Data_Transport", [0x56] = "Resource_Manager", [0x57] = "Initiate",
+  [0x58] = "Abort", [0x5C] = "Alarm_Ack", [0x5E] = "Read", [0x5F] = "Write",
+}
+local dpv1_error_decode = { [0x80] = "DPV1", [0xFE] = "FMS", [0xFF] = "HART" }
+local dpv1_error_classes = { [0xA] = "application", [0xB] = "access", [0xC] = "resource" }
+local dpv1_error_codes = {
+  [0xA] = { [0] = "read error", [1] = "write error", [2] = "module failure",
+            [8] = "version conflict", [9] = "feature not supported" },
+  [0xB] = { [0] = "invalid index", [1] = "write length error", [2] = "invalid slot",
+            [3] = "type conflict", [4] = "invalid area", [5] = "state conflict",
+            [6] = "access denied", [7] = "invalid range", [8] = "invalid parameter",
+            [9] = "invalid type" },
+  [0xC] = { [0] = "read constrain conflict", [1] = "write constrain conflict",
+            [2] = "resource busy", [3] = "resource unavailable" },
+}
+local dpv1_alarm_types = {
+  [1] = "Diagnosis", [2] = "Process", [3] = "Pull", [4] = "Plug", [5] = "Status", [6] = "Update",
+}
+local dpv1_specifiers = {
+  [0] = "no further differentiation", [1] = "appears", [2] = "disappears",
+  [3] = "disappears, other errors remain",
+}
+local dpv1_instances = { [0] = "FDL", [1] = "MSAC_C2", [2] = "user" }
+
 local f = {
+  dpv1_function = ProtoField.uint8("profibus.dpv1.function", "DPV1 function", base.HEX,
+                                   dpv1_functions, 0x7F),
+  dpv1_negative = ProtoField.bool("profibus.dpv1.negative", "Negative response", 8, nil, 0x80),
+  dpv1_slot = ProtoField.uint8("profibus.dpv1.slot", "Slot_Number", base.DEC),
+  dpv1_index = ProtoField.uint8("profibus.dpv1.index", "Index", base.DEC),
+  dpv1_length = ProtoField.uint8("profibus.dpv1.length", "Length", base.DEC),
+  dpv1_data = ProtoField.bytes("profibus.dpv1.data", "Data"),
+  dpv1_error_decode = ProtoField.uint8("profibus.dpv1.error_decode", "Error_Decode", base.HEX,
+                                       dpv1_error_decode),
+  dpv1_error_code_1 = ProtoField.uint8("profibus.dpv1.error_code_1", "Error_Code_1", base.HEX),
+  dpv1_error_class = ProtoField.uint8("profibus.dpv1.error_class", "Error class", base.DEC,
+                                      dpv1_error_classes, 0xF0),
+  dpv1_error_code = ProtoField.uint8("profibus.dpv1.error_code", "Error code", base.DEC, nil,
+                                     0x0F),
+  dpv1_error_code_2 = ProtoField.uint8("profibus.dpv1.error_code_2", "Error_Code_2", base.HEX),
+  dpv1_alarm_type = ProtoField.uint8("profibus.dpv1.alarm_type", "Alarm_Type", base.DEC,
+                                     dpv1_alarm_types),
+  dpv1_specifier = ProtoField.uint8("profibus.dpv1.specifier", "Specifier", base.HEX),
+  dpv1_seq_nr = ProtoField.uint8("profibus.dpv1.seq_nr", "Seq_Nr", base.DEC, nil, 0xF8),
+  dpv1_add_ack = ProtoField.bool("profibus.dpv1.add_ack", "Add_Ack", 8, nil, 0x04),
+  dpv1_spec = ProtoField.uint8("profibus.dpv1.spec", "Specifier", base.DEC, dpv1_specifiers,
+                               0x03),
+  dpv1_send_timeout = ProtoField.uint16("profibus.dpv1.send_timeout", "Send_Timeout (10 ms)",
+                                        base.DEC),
+  dpv1_max_len = ProtoField.uint8("profibus.dpv1.max_len_data_unit", "Max_Len_Data_Unit",
+                                  base.DEC),
+  dpv1_features = ProtoField.uint16("profibus.dpv1.features_supported", "Features_Supported",
+                                    base.HEX),
+  dpv1_profile_features = ProtoField.uint16("profibus.dpv1.profile_features_supported",
+                                            "Profile_Features_Supported", base.HEX),
+  dpv1_profile_ident = ProtoField.uint16("profibus.dpv1.profile_ident_number",
+                                         "Profile_Ident_Number", base.HEX),
+  dpv1_s_type = ProtoField.uint8("profibus.dpv1.s_type", "S_Type", base.HEX),
+  dpv1_s_len = ProtoField.uint8("profibus.dpv1.s_len", "S_Len", base.DEC),
+  dpv1_d_type = ProtoField.uint8("profibus.dpv1.d_type", "D_Type", base.HEX),
+  dpv1_d_len = ProtoField.uint8("profibus.dpv1.d_len", "D_Len", base.DEC),
+  dpv1_s_addr = ProtoField.bytes("profibus.dpv1.s_addr", "S_Addr"),
+  dpv1_d_addr = ProtoField.bytes("profibus.dpv1.d_addr", "D_Addr"),
+  dpv1_subnet = ProtoField.uint8("profibus.dpv1.subnet", "Subnet", base.DEC),
+  dpv1_instance = ProtoField.uint8("profibus.dpv1.instance", "Instance", base.DEC,
+                                   dpv1_instances, 0x30),
+  dpv1_reason = ProtoField.uint8("profibus.dpv1.reason_code", "Reason_Code", base.DEC, nil, 0x0F),
+  dpv1_detail = ProtoField.uint8("profibus.dpv1.additional_detail", "Additional_Detail",
+                                 base.HEX),
+  dpv1_rm_sap = ProtoField.uint8("profibus.dpv1.sap", "Connection SAP", base.DEC),
   sd = ProtoField.uint8("profibus.sd", "Start delimiter", base.HEX, sd_long),
   le = ProtoField.uint8("profibus.le", "Length (LE)", base.DEC),
   ler = ProtoField.uint8("profibus.ler", "Length repeated (LEr)", base.DEC),
@@ -138,6 +210,8 @@ local e = {
                              expert.severity.WARN),
   internal = ProtoExpert.new("profibus.internal", "Dissector error", expert.group.MALFORMED,
                              expert.severity.ERROR),
+  dpv1_short = ProtoExpert.new("profibus.dpv1.short", "DPV1 data unit too short",
+                               expert.group.MALFORMED, expert.severity.ERROR),
 }
 p.experts = e
 
@@ -159,6 +233,87 @@ end
 local function hex2(v) return string.format("%02Xh", v) end
 
 -- Parses one telegram; `tree` is the protocol subtree. Returns the Info text.
+-- A DPV1 data unit in tvb[from, to): its fields under `tree`; returns a summary for the Info
+-- column. Too short for its function: an expert info, the fields that are there.
+local function dpv1(tvb, tree, from, to, is_request)
+  local b0 = tvb(from, 1):uint()
+  local fn = bit.band(b0, 0x7F)
+  local name = dpv1_functions[fn] or ("function " .. hex2(fn))
+  local item = tree:add(f.dpv1_function, tvb(from, 1))
+  item:add(f.dpv1_negative, tvb(from, 1))
+  local at = from + 1
+  -- The next n bytes as field pf; their value, or nil past the end.
+  local function field(pf, n)
+    if at + n > to then return nil end
+    local fi = item:add(pf, tvb(at, n))
+    at = at + n
+    return n <= 4 and tvb(at - n, n):uint() or true, fi
+  end
+  local function short()
+    item:add_proto_expert_info(e.dpv1_short, name .. ": the data unit ends at byte " .. (to - from))
+  end
+  local function rest(pf)
+    if at < to then item:add(pf, tvb(at, to - at)) end
+    at = to
+  end
+  if bit.band(b0, 0x80) ~= 0 then
+    if at + 3 > to then short(); return "DPV1 " .. name .. " negative" end
+    item:add(f.dpv1_error_decode, tvb(at, 1))
+    local code = tvb(at + 1, 1):uint()
+    local ec = item:add(f.dpv1_error_code_1, tvb(at + 1, 1))
+    ec:add(f.dpv1_error_class, tvb(at + 1, 1))
+    local ci = ec:add(f.dpv1_error_code, tvb(at + 1, 1))
+    local cls = bit.rshift(code, 4)
+    local text = dpv1_error_codes[cls] and dpv1_error_codes[cls][bit.band(code, 0x0F)]
+    if text then ci:append_text(" (" .. text .. ")") end
+    item:add(f.dpv1_error_code_2, tvb(at + 2, 1))
+    return string.format("DPV1 %s negative %s%s", name, hex2(code), text and (" " .. text) or "")
+  end
+  if fn == 0x5E or fn == 0x5F or fn == 0x51 then
+    local s = field(f.dpv1_slot, 1); local i = field(f.dpv1_index, 1)
+    local l = field(f.dpv1_length, 1)
+    if not l then short(); return "DPV1 " .. name end
+    rest(f.dpv1_data)
+    return string.format("DPV1 %s slot %d index %d length %d", name, s, i, l)
+  elseif fn == 0x5C then
+    local s = field(f.dpv1_slot, 1); field(f.dpv1_alarm_type, 1)
+    local sp, sp_item = field(f.dpv1_specifier, 1)
+    if not sp then short(); return "DPV1 " .. name end
+    sp_item:add(f.dpv1_seq_nr, tvb(at - 1, 1)); sp_item:add(f.dpv1_add_ack, tvb(at - 1, 1))
+    sp_item:add(f.dpv1_spec, tvb(at - 1, 1))
+    return string.format("DPV1 %s slot %d", name, s)
+  elseif fn == 0x57 then
+    if is_request then
+      at = at + 3  -- reserved
+      field(f.dpv1_send_timeout, 2)
+    else
+      field(f.dpv1_max_len, 1)
+    end
+    field(f.dpv1_features, 2); field(f.dpv1_profile_features, 2)
+    if not field(f.dpv1_profile_ident, 2) then short(); return "DPV1 " .. name end
+    field(f.dpv1_s_type, 1); local sl = field(f.dpv1_s_len, 1)
+    field(f.dpv1_d_type, 1); local dl = field(f.dpv1_d_len, 1)
+    if not (sl and dl) then short(); return "DPV1 " .. name end
+    if (sl > 0 and not field(f.dpv1_s_addr, sl)) or (dl > 0 and not field(f.dpv1_d_addr, dl)) then
+      short()
+    end
+    return "DPV1 " .. name .. (is_request and " request" or " response")
+  elseif fn == 0x58 then
+    field(f.dpv1_subnet, 1)
+    if at + 2 > to then short(); return "DPV1 " .. name end
+    item:add(f.dpv1_instance, tvb(at, 1)); item:add(f.dpv1_reason, tvb(at, 1))
+    at = at + 1
+    field(f.dpv1_detail, 1)
+    return "DPV1 " .. name
+  elseif fn == 0x56 then
+    field(f.dpv1_rm_sap, 1)
+    if not field(f.dpv1_send_timeout, 2) then short() end
+    return "DPV1 " .. name
+  end
+  rest(f.dpv1_data)
+  return "DPV1 " .. name
+end
+
 local function parse(tvb, pinfo, tree)
   local len = tvb:len()
   if len == 0 then
@@ -323,8 +478,14 @@ local function parse(tvb, pinfo, tree)
       sa_item:add_proto_expert_info(e.bad_sap, "SSAP announced, but the frame has no room for it")
     end
   end
+  local dpv1_info
   if du_start < du_end then
     tree:add(f.du, tvb(du_start, du_end - du_start))
+    -- DPV1 on the slave's SAPs 0..51 (MSAC_C1 50, 51; MSAC_C2 49 and its connections)
+    local slave_sap = is_request and dsap or ssap
+    if slave_sap ~= nil and slave_sap <= 51 then
+      dpv1_info = dpv1(tvb, tree, du_start, du_end, is_request)
+    end
   end
   if du_start <= pos + body then
     tree:add(f.du_len, math.max(0, pos + body - du_start)):set_generated()
@@ -364,6 +525,8 @@ local function parse(tvb, pinfo, tree)
     if svc then tree:add(f.service, svc .. " response"):set_generated() end
     info = string.format("%s response %s  %s", svc or "FDL", route, code_name)
   end
+
+  if dpv1_info then info = info .. "  " .. dpv1_info end
 
   -- FCS and ED
   local fcs_at = pos + body

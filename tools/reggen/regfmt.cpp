@@ -146,28 +146,6 @@ std::vector<NamedMask> masks(const RegDesc& r) {
           {"wo", r.wo}, {"ign", r.ign}, {"rsvd", r.rsvd}, {"unimp", r.unimp}, {"pulse", r.pulse}};
 }
 
-std::vector<std::string> wrap(std::string_view text, std::size_t width) {
-  std::vector<std::string> lines;
-  std::string line;
-  std::size_t pos = 0;
-  while (pos < text.size()) {
-    while (pos < text.size() && (text[pos] == ' ' || text[pos] == '\n')) ++pos;
-    if (pos >= text.size()) break;
-    std::size_t end = text.find_first_of(" \n", pos);
-    if (end == std::string_view::npos) end = text.size();
-    const std::string_view word = text.substr(pos, end - pos);
-    if (!line.empty() && line.size() + 1 + word.size() > width) {
-      lines.push_back(std::move(line));
-      line.clear();
-    }
-    if (!line.empty()) line += ' ';
-    line += word;
-    pos = end;
-  }
-  if (!line.empty()) lines.push_back(std::move(line));
-  return lines;
-}
-
 // =============================================================================================
 // C header and Verilog include: both are lists of macros, written by one DefineWriter
 // =============================================================================================
@@ -438,6 +416,16 @@ std::string emit_c_header(Profiles profiles) {
   }
   w.raw("};");
   write_defines(w, profiles, CFormat{});
+  for (const ProfileDesc* p : profiles) {
+    for (const LayoutDefine& d : layout_defines(*p)) {
+      if (!d.name.empty()) {
+        w.define(d.name, d.value, d.comment);
+      } else {
+        w.blank();
+        w.comment(d.comment);
+      }
+    }
+  }
   w.blank();
   w.raw("#endif /* DPC31_REGS_H */");
   return w.str();
@@ -683,6 +671,11 @@ std::string emit_markdown(Profiles profiles) {
                          yes_no(g.reserved), std::string{g.desc}});
     }
     out += md_table(regions);
+    for (const LayoutDesc& l : p.layouts) {
+      fmt::format_to(std::back_inserter(out), "\n### RAM layout {} ({} bytes)\n\n{} ({}).\n\n",
+                     l.name, l.size, md_escape(l.desc), md_escape(l.source));
+      out += md_table(layout_rows(l), {false, true});
+    }
 
     out += "\n### Registers\n\n";
     out += md_table(register_rows(p, kMarkdownCols), {false, false, true});

@@ -89,6 +89,18 @@ struct NamedMask {
 };
 std::vector<NamedMask> masks(const RegDesc& r);
 
+// The RAM layouts of a profile (regdesc.hpp LayoutDesc) as C macros, each layout preceded by
+// its comment line (name empty): P_<Layout>_SIZE, P_<Layout>_<Byte> (offset),
+// P_<Layout>_<Byte>_<Bit>_Msk, P_<Layout>_<Byte>_<Value>. regfmt_layouts.cpp.
+struct LayoutDefine {
+  std::string name;  // empty: `comment` is a comment line before the layout's macros
+  std::string value;
+  std::string comment;
+};
+std::vector<LayoutDefine> layout_defines(const ProfileDesc& p);
+// One layout as table rows (the first the header): offset, byte, bits and values, description.
+std::vector<std::vector<std::string>> layout_rows(const LayoutDesc& l);
+
 // Greedy word wrap to at most `width` columns (longer words stay whole).
 std::vector<std::string> wrap(std::string_view text, std::size_t width);
 

@@ -177,6 +177,44 @@ std::string emit_cpp_tables(Profiles profiles, const ChipTiming& timing,
       }
       out += "};\n";
     }
+    // RAM layouts: the values of each byte, the bytes of each layout, the layouts.
+    for (std::size_t li = 0; li < p.layouts.size(); ++li) {
+      const LayoutDesc& l = p.layouts[li];
+      for (std::size_t bi = 0; bi < l.bytes.size(); ++bi) {
+        if (l.bytes[bi].values.empty()) continue;
+        fmt::format_to(std::back_inserter(out),
+                       "\nstatic constexpr LayoutValue k{}_layout{}_byte{}[] = {{\n", P, li, bi);
+        for (const LayoutValue& v : l.bytes[bi].values) {
+          fmt::format_to(std::back_inserter(out),
+                         "    {{.name = {}, .value = {}, .mask = {}, .desc = {}}},\n",
+                         cpp_string(v.name), hex(v.value, 2), cpp_bool(v.mask), cpp_string(v.desc));
+        }
+        out += "};\n";
+      }
+      fmt::format_to(std::back_inserter(out), "\nstatic constexpr LayoutByte k{}_layout{}[] = {{\n",
+                     P, li);
+      for (std::size_t bi = 0; bi < l.bytes.size(); ++bi) {
+        const LayoutByte& b = l.bytes[bi];
+        fmt::format_to(
+            std::back_inserter(out),
+            "    {{.name = {}, .offset = {}, .desc = {}, .values = {}}},\n", cpp_string(b.name),
+            b.offset, cpp_string(b.desc),
+            b.values.empty() ? std::string{"{}"} : fmt::format("k{}_layout{}_byte{}", P, li, bi));
+      }
+      out += "};\n";
+    }
+    if (!p.layouts.empty()) {
+      fmt::format_to(std::back_inserter(out), "\nstatic constexpr LayoutDesc k{}_layouts[] = {{\n",
+                     P);
+      for (std::size_t li = 0; li < p.layouts.size(); ++li) {
+        const LayoutDesc& l = p.layouts[li];
+        fmt::format_to(std::back_inserter(out),
+                       "    {{.name = {}, .size = {}, .source = {}, .desc = {}, .bytes = "
+                       "k{}_layout{}}},\n",
+                       cpp_string(l.name), l.size, cpp_string(l.source), cpp_string(l.desc), P, li);
+      }
+      out += "};\n";
+    }
     // The profile.
     fmt::format_to(
         std::back_inserter(out),
@@ -199,7 +237,8 @@ std::string emit_cpp_tables(Profiles profiles, const ChipTiming& timing,
         "    .bus_access_cycles = {bac},\n"
         "    .note = {note},\n"
         "    .regs = k{P}_regs,\n"
-        "    .regions = {regions}}};\n",
+        "    .regions = {regions},\n"
+        "    .layouts = {layouts}}};\n",
         fmt::arg("P", P), fmt::arg("id", profile_enum(p.id)), fmt::arg("name", cpp_string(p.name)),
         fmt::arg("title", cpp_string(p.title)), fmt::arg("macro", cpp_string(p.macro)),
         fmt::arg("ab", p.address_bits), fmt::arg("rb", hex(p.ram_begin, 4)),
@@ -209,7 +248,8 @@ std::string emit_cpp_tables(Profiles profiles, const ChipTiming& timing,
         fmt::arg("vf", hex(p.violation_from, 4)), fmt::arg("vs", hex(p.violation_subtract, 4)),
         fmt::arg("rel", p.release), fmt::arg("bac", p.bus_access_cycles),
         fmt::arg("note", cpp_string(p.note)),
-        fmt::arg("regions", p.regions.empty() ? std::string{"{}"} : fmt::format("k{}_regions", P)));
+        fmt::arg("regions", p.regions.empty() ? std::string{"{}"} : fmt::format("k{}_regions", P)),
+        fmt::arg("layouts", p.layouts.empty() ? std::string{"{}"} : fmt::format("k{}_layouts", P)));
   }
   fmt::format_to(std::back_inserter(out),
                  "\nstatic constexpr ChipTiming kChipTiming{{.clock_hz = {}}};\n\n"

@@ -15,6 +15,7 @@
 #include <utility>
 
 #include "regfmt.hpp"
+#include "regjson_text.hpp"
 
 namespace dpc31::regjson {
 
@@ -45,7 +46,11 @@ constexpr std::string_view kProfileKeys[] = {"name",
                                              "release",
                                              "bus_access_cycles",
                                              "note",
-                                             "regions"};
+                                             "regions",
+                                             "layouts"};
+constexpr std::string_view kLayoutKeys[] = {"name", "size", "source", "desc", "bytes"};
+constexpr std::string_view kLayoutByteKeys[] = {"offset", "name", "desc", "bits", "values"};
+constexpr std::string_view kLayoutValueKeys[] = {"name", "mask", "value", "desc"};
 constexpr std::string_view kRegionKeys[] = {"name", "begin", "end", "ram", "reserved", "desc"};
 constexpr std::string_view kFieldKeys[] = {"bits", "name", "access", "pulse", "desc"};
 constexpr std::string_view kRegisterKeys[] = {
@@ -58,41 +63,6 @@ std::size_t index_of(Profile p) { return static_cast<std::size_t>(p); }
 // An address in messages, with the digits of the profile ("0x015", "0x0840").
 std::string hex_addr(const ProfileDesc& p, std::uint32_t addr) {
   return regfmt::hex(addr, regfmt::addr_digits(p));
-}
-
-// The policy mask of a register that collects the bits of one access.
-std::uint16_t& access_mask(RegDesc& r, Access a) {
-  switch (a) {
-    case Access::RO:
-      return r.ro;
-    case Access::RW:
-      return r.rw;
-    case Access::W1C:
-      return r.w1c;
-    case Access::W1S:
-      return r.w1s;
-    case Access::CMD:
-      return r.cmd;
-    case Access::WO:
-      return r.wo;
-    case Access::IGN:
-      return r.ign;
-    case Access::RSVD:
-      return r.rsvd;
-    case Access::UNIMP:
-      return r.unimp;
-  }
-  return r.unimp;
-}
-
-bool is_identifier(std::string_view s, bool leading_digit_ok) {
-  if (s.empty()) return false;
-  for (std::size_t i = 0; i < s.size(); ++i) {
-    const auto c = static_cast<unsigned char>(s[i]);
-    const bool ok = std::isalnum(c) != 0 || c == '_';
-    if (!ok || (i == 0 && !leading_digit_ok && std::isdigit(c) != 0)) return false;
-  }
-  return true;
 }
 
 // A field as written in the description, before it is bound to a register.
@@ -111,59 +81,6 @@ struct RawField {
 struct PerProfile {
   std::array<std::optional<std::uint32_t>, kProfileCount> value{};
 };
-
-Json parse_text(std::string_view text, const std::string& file) {
-  // Duplicate keys are legal JSON but almost always a mistake here: reject them.
-  std::vector<std::set<std::string>> open_objects;
-  std::string duplicate;
-  auto cb = [&](int /*depth*/, Json::parse_event_t ev, Json& parsed) {
-    switch (ev) {
-      case Json::parse_event_t::object_start:
-        open_objects.emplace_back();
-        break;
-      case Json::parse_event_t::object_end:
-        if (!open_objects.empty()) open_objects.pop_back();
-        break;
-      case Json::parse_event_t::key:
-        if (!open_objects.empty() &&
-            !open_objects.back().insert(parsed.get<std::string>()).second && duplicate.empty()) {
-          duplicate = parsed.get<std::string>();
-        }
-        break;
-      default:
-        break;
-    }
-    return true;
-  };
-  Json root;
-  try {
-    root = Json::parse(text.begin(), text.end(), cb);
-  } catch (const Json::parse_error& e) {
-    std::string what = e.what();
-    if (const auto p = what.find("] "); what.rfind("[json.exception.", 0) == 0 && p != what.npos) {
-      what.erase(0, p + 2);
-    }
-    std::replace(what.begin(), what.end(), '\n', ' ');
-    throw Error(fmt::format("{}: JSON parse error at byte {}: {}", file, e.byte, what));
-  }
-  if (!duplicate.empty()) {
-    throw Error(fmt::format("{}: duplicate key '{}' in one JSON object", file, duplicate));
-  }
-  return root;
-}
-
-// RegDesc::plain: the lanes whose accesses are straight stores and loads by the description.
-std::uint8_t plain_lanes(const RegDesc& r) {
-  const std::uint8_t all = r.width == 16 ? 0b11 : 0b01;
-  if (r.kind == Kind::cell) return r.reserved ? 0 : all;
-  if (r.kind != Kind::latch || r.unimp != 0) return 0;
-  const auto acting = static_cast<std::uint16_t>(r.w1c | r.w1s | r.cmd | r.ign | r.pulse);
-  std::uint8_t lanes = 0;
-  for (unsigned b = 0; b < static_cast<unsigned>(r.bytes()); ++b) {
-    if ((acting & (0xFFu << (8 * b))) == 0) lanes = static_cast<std::uint8_t>(lanes | 1u << b);
-  }
-  return lanes;
-}
 
 }  // namespace
 
@@ -345,6 +262,7 @@ class Loader {
       if (p.bus_access_cycles == 0) fail("'bus_access_cycles' must be > 0");
       p.note = intern(string(j, "note", false));
       load_regions(p, required(j, "regions"));
+      if (const Json* layouts = optional(j, "layouts")) load_layouts(p, *layouts);
     }
     ctx_ = "top level";
     for (Profile p : kAllProfiles) {
@@ -378,6 +296,66 @@ class Loader {
                          regions.back().name));
       }
       regions.push_back(g);
+    }
+    ctx_ = profile_ctx;
+  }
+
+  // A structure in RAM (regdesc.hpp LayoutDesc): bytes at distinct offsets below its size, each
+  // with its bit masks ("bits") and codes ("values").
+  void load_layouts(const ProfileDesc& p, const Json& list) {
+    if (!list.is_array()) fail("'layouts' must be an array");
+    const std::string profile_ctx = ctx_;
+    auto& layouts = m_.layouts_[index_of(p.id)];
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      const Json& j = list[i];
+      ctx_ = fmt::format("{}: layout #{}", profile_ctx, i);
+      expect_object(j, "a layout");
+      const std::string name = string(j, "name", true);
+      ctx_ = fmt::format("{}: layout '{}'", profile_ctx, name);
+      check_keys(j, kLayoutKeys);
+      if (!is_identifier(name, false)) fail("the name is not an identifier");
+      LayoutDesc l{};
+      l.name = intern(name);
+      l.size = static_cast<std::uint8_t>(bounded(j, "size", 255));
+      l.source = intern(string(j, "source", true));
+      l.desc = intern(string(j, "desc", true));
+      auto& bytes = m_.layout_bytes_.emplace_back();
+      for (const Json& b : required(j, "bytes")) {
+        expect_object(b, "a layout byte");
+        check_keys(b, kLayoutByteKeys);
+        LayoutByte lb{};
+        lb.name = intern(string(b, "name", true));
+        if (!is_identifier(lb.name, false))
+          fail(fmt::format("byte name '{}' is not an identifier", lb.name));
+        lb.offset = static_cast<std::uint8_t>(bounded(b, "offset", 254));
+        if (lb.offset >= l.size) fail(fmt::format("byte '{}' lies beyond 'size'", lb.name));
+        for (const LayoutByte& other : bytes) {
+          if (other.offset == lb.offset || other.name == lb.name)
+            fail(fmt::format("byte '{}' repeats offset or name of '{}'", lb.name, other.name));
+        }
+        lb.desc = intern(string(b, "desc", true));
+        auto& values = m_.layout_values_.emplace_back();
+        for (const bool mask : {true, false}) {
+          const Json* vs = optional(b, mask ? "bits" : "values");
+          if (vs == nullptr) continue;
+          for (const Json& v : *vs) {
+            expect_object(v, "a layout value");
+            check_keys(v, kLayoutValueKeys);
+            LayoutValue lv{};
+            lv.name = intern(string(v, "name", true));
+            if (!is_identifier(lv.name, false))
+              fail(fmt::format("value name '{}' is not an identifier", lv.name));
+            lv.value = static_cast<std::uint8_t>(bounded(v, mask ? "mask" : "value", 255));
+            lv.mask = mask;
+            lv.desc = intern(string(v, "desc", true));
+            values.push_back(lv);
+          }
+        }
+        lb.values = values;
+        bytes.push_back(lb);
+      }
+      l.bytes = bytes;
+      layouts.push_back(l);
     }
     ctx_ = profile_ctx;
   }
@@ -772,6 +750,7 @@ class Loader {
       ProfileDesc& prof = m_.profile_store_[index_of(p)];
       prof.regs = m_.regs_[index_of(p)];
       prof.regions = m_.regions_[index_of(p)];
+      prof.layouts = m_.layouts_[index_of(p)];
       if (prof.regs.empty()) {
         ctx_ = fmt::format("profile '{}'", prof.name);
         fail("no register applies to this profile");

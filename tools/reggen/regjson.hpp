@@ -51,6 +51,9 @@ class RegModel {
   std::deque<std::vector<FieldDesc>> field_lists_;  // one per register entry
   std::array<std::vector<RegDesc>, 3> regs_;        // indexed by Profile
   std::array<std::vector<RegionDesc>, 3> regions_;
+  std::array<std::vector<LayoutDesc>, 3> layouts_;
+  std::deque<std::vector<LayoutByte>> layout_bytes_;    // one per layout
+  std::deque<std::vector<LayoutValue>> layout_values_;  // one per layout byte
   std::array<ProfileDesc, 3> profile_store_{};
   std::vector<const ProfileDesc*> profile_ptrs_;
   std::vector<std::string> reg_names_;

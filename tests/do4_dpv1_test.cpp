@@ -1,0 +1,322 @@
+// DO4 speaking DPV1 on the VPC3+ (docs/firmware.md "DO4 with DPV1", docs/dpv1.md): the master
+// reads and writes the OSP configuration record at run time through MSAC_C1 (SAP 51), driven
+// only from the bus side (DpMaster::acyclic, the PDU builders of dpc31/pdu.hpp). Expected bytes
+// come from the PDU layouts of IEC 61158-6 type 3 (function number, slot, index, length; the
+// negative response: function | 80h, Error_Decode 80h, Error_Code_1 class | code, Error_Code_2)
+// and the record as docs/firmware.md defines it; cycles from docs/timing.md: a request is acted
+// on at the stop sample of its last character, an answer starts max(11, MinTSDR) = 11 bit times
+// after the request's end (the firmware writes MinTSDR_Val 0Bh) and takes 11 bit times per
+// character; Poll_End_Ind is raised at the last stop bit of the response (VPC3+C p.56).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <string>
+#include <utility>
+
+#include "do4/do4.h"
+#include "dp_master.hpp"
+#include "dpc31/dpc31_regs.h"
+#include "dpc31/dpv1.hpp"
+#include "dpc31/pdu.hpp"
+#include "firmware_bench.hpp"
+
+namespace {
+
+using namespace dpc31;
+using firmware_bench::Bench;
+using firmware_bench::gsd_slave;
+
+constexpr std::uint8_t kC1 = 51;     // MSAC_C1 Read / Write: the slave's SAP, the master's SSAP
+constexpr std::uint8_t kAlarm = 50;  // MSAC_C1 Alarm_Ack
+constexpr std::uint32_t kBaud = 1'500'000;
+constexpr std::uint64_t kT = 48'000'000 / kBaud;  // clocks per bit
+
+// Set_Prm bytes 7..: DPV1_Status_1 = DPV1_Enable | Fail_Safe (C0h: DO4 runs with
+// Spec_Clear_Mode, "Fail_Safe_required", VPC3+C p.53), DPV1_Status_2, _3 = 0; then DO4's
+// OSPMode, replacement value, refresh monitor (0: off).
+SlaveConfig dpv1_slave(std::uint8_t mode, std::uint8_t value, std::uint8_t status2) {
+  SlaveConfig s = gsd_slave(do4_firmware, 5);
+  s.wd_fact1 = 2;
+  s.wd_fact2 = 5;  // TWD = 2 x 5 x 10 ms = 100 ms
+  s.user_prm = {0xC0, status2, 0x00, mode, value, 0x00};
+  return s;
+}
+
+struct Dpv1Bench : Bench {
+  explicit Dpv1Bench(std::uint8_t status2 = 0x00)
+      : Bench(Profile::vpc3plus, do4_firmware, dpv1_slave(DO4_REPLACE, 0x09, status2), kBaud) {}
+
+  // A request to SAP 51, then polls (SRD without data) until the answer has data. `polls` gets
+  // every poll that was answered SC.
+  fdl::Frame request(const pdu::Bytes& du, std::vector<Exchange>* polls = nullptr,
+                     std::uint8_t sap = kC1) {
+    first = master.acyclic(sap, kC1, du);
+    EXPECT_TRUE(first.answer && *first.answer == fdl::sc()) << "the request is answered SC";
+    for (int i = 0; i < 200; ++i) {
+      last = master.acyclic(sap, kC1, {});
+      if (last.answer && !last.answer->du.empty()) return *last.answer;
+      EXPECT_TRUE(last.answer && *last.answer == fdl::sc());
+      if (polls != nullptr) polls->push_back(last);
+    }
+    ADD_FAILURE() << "no response after 200 polls";
+    return {};
+  }
+  Exchange first, last;
+};
+
+// Read slot 0 index 1 (the OSP record, 2 bytes) with Length 2: 5Eh 00h 01h 02h. The request is
+// stored (FDL_Ind at its acted-on cycle) and answered SC; the 1 ms task answers, so the polls
+// before it get SC and raise no interrupt; the response is 5Eh 00h 01h 02h, OSPMode 01h,
+// replacement value 09h, with FC 08h (DL) from SAP 51 to SAP 51; Poll_End_Ind at its last stop
+// bit: request end + 11 T + 17 characters x 11 T (68h LE LEr 68h DA SA FC DSAP SSAP, 6 data
+// bytes, FCS, 16h).
+TEST(Do4Dpv1, ReadOspRecordAfterPollsWithPollEndIndAtItsLastStopBit) {
+  Dpv1Bench b;
+  ASSERT_TRUE(b.master.startup());
+  b.master.data_exchange({0x05, 0x01});  // normal operation
+  const std::uint64_t requests_before = dps_get_stats()->dpv1_requests;
+  std::vector<Exchange> polls;
+  const fdl::Frame resp = b.request(pdu::read_request(0, 1, 2).build(), &polls);
+  EXPECT_EQ(resp.du, (pdu::Bytes{0x5E, 0x00, 0x01, 0x02, 0x01, 0x09}));
+  EXPECT_EQ(resp.fc, 0x08);
+  EXPECT_EQ(resp.dsap, kC1);
+  EXPECT_EQ(resp.ssap, kC1);
+  // FDL_Ind at the request's acted-on cycle; one indication, the polls none.
+  EXPECT_NE(std::find(b.activations.begin(), b.activations.end(), b.acted(b.first)),
+            b.activations.end());
+  EXPECT_EQ(dps_get_stats()->dpv1_requests, requests_before + 1);
+  ASSERT_FALSE(polls.empty()) << "the answer is delayed to the 1 ms task";
+  for (const Exchange& p : polls) {
+    EXPECT_EQ(std::find(b.activations.begin(), b.activations.end(), b.acted(p)),
+              b.activations.end());
+  }
+  // Delayed by at most one 1 ms tick (48 000 clocks) and one poll cycle.
+  EXPECT_LT(b.acted(b.last) - b.acted(b.first),
+            48'000u + (b.last.request_end - polls.back().request_end));
+  const std::uint64_t end = b.last.request_end + 11 * kT + 17 * 11 * kT;
+  EXPECT_EQ(b.last.answer_end, end);
+  b.master.idle(2000);
+  EXPECT_NE(std::find(b.activations.begin(), b.activations.end(), end), b.activations.end());
+  EXPECT_EQ(dps_get_stats()->dpv1_responses_sent, 1u);
+  // A Read with Length 1 gets the first byte only.
+  EXPECT_EQ(b.request(pdu::read_request(0, 1, 1).build()).du,
+            (pdu::Bytes{0x5E, 0x00, 0x01, 0x01, 0x01}));
+}
+
+// Write slot 0 index 1, 2 bytes: OSPMode 01h, replacement value 06h. The positive response
+// echoes function, slot, index, length (5Fh 00h 01h 02h). The cable pulled: the DP watchdog
+// expires and DO4 drives the new replacement value 6.
+TEST(Do4Dpv1, WriteChangesTheReplacementValueOfTheNextOsp) {
+  Dpv1Bench b;
+  ASSERT_TRUE(b.master.startup());
+  b.master.data_exchange({0x05, 0x01});
+  EXPECT_EQ(b.request(pdu::write_request(0, 1, {0x01, 0x06}).build()).du,
+            (pdu::Bytes{0x5F, 0x00, 0x01, 0x02}));
+  EXPECT_EQ(b.request(pdu::read_request(0, 1, 2).build()).du,
+            (pdu::Bytes{0x5E, 0x00, 0x01, 0x02, 0x01, 0x06}));
+  b.master.data_exchange({0x05, 0x01});
+  EXPECT_EQ(do4_get_state()->terminals, 0x5);
+  b.master.idle(6'000'000);  // 125 ms > TWD
+  EXPECT_EQ(do4_get_state()->modul_ok, 0);
+  EXPECT_EQ(do4_get_state()->terminals, 0x6);
+}
+
+// The negative responses (4 bytes: function | 80h, Error_Decode 80h = DPV1, Error_Code_1 =
+// class (bits 7..4) | code (bits 3..0), Error_Code_2 00h), IEC 61158-6 class 11 "access" and 10
+// "application" (docs/dpv1.md, "Negative responses"):
+//   a record that does not exist: index 7 -> B0h invalid index; slot 3 -> B2h invalid slot;
+//   a wrong length: Write with 1 byte -> B1h write length error;
+//   a value outside the record's range: OSPMode 2 -> B7h invalid range;
+//   a write in the wrong state (the module in OSP mode) -> B5h state conflict;
+//   a service DO4 does not offer on SAP 51 (Data_Transport) -> A9h feature not supported.
+TEST(Do4Dpv1, NegativeResponses) {
+  Dpv1Bench b;
+  ASSERT_TRUE(b.master.startup());
+  b.master.data_exchange({0x05, 0x01});
+  EXPECT_EQ(b.request(pdu::read_request(0, 7, 2).build()).du, (pdu::Bytes{0xDE, 0x80, 0xB0, 0x00}));
+  EXPECT_EQ(b.request(pdu::read_request(3, 1, 2).build()).du, (pdu::Bytes{0xDE, 0x80, 0xB2, 0x00}));
+  EXPECT_EQ(b.request(pdu::write_request(0, 7, {0x01, 0x06}).build()).du,
+            (pdu::Bytes{0xDF, 0x80, 0xB0, 0x00}));
+  EXPECT_EQ(b.request(pdu::write_request(0, 1, {0x01}).build()).du,
+            (pdu::Bytes{0xDF, 0x80, 0xB1, 0x00}));
+  EXPECT_EQ(b.request(pdu::write_request(0, 1, {0x02, 0x06}).build()).du,
+            (pdu::Bytes{0xDF, 0x80, 0xB7, 0x00}));
+  EXPECT_EQ(b.request({0x51, 0x00, 0x01, 0x00}).du, (pdu::Bytes{0xD1, 0x80, 0xA9, 0x00}));
+  b.master.data_exchange({0x05, 0x00});  // OSPValid 0: the master requests OSP
+  EXPECT_EQ(do4_get_state()->modul_ok, 0);
+  EXPECT_EQ(b.request(pdu::write_request(0, 1, {0x01, 0x06}).build()).du,
+            (pdu::Bytes{0xDF, 0x80, 0xB5, 0x00}));
+  // The refused writes changed nothing.
+  EXPECT_EQ(b.request(pdu::read_request(0, 1, 2).build()).du,
+            (pdu::Bytes{0x5E, 0x00, 0x01, 0x02, 0x01, 0x09}));
+  // The same bytes as the PDU views build them.
+  EXPECT_EQ((pdu::ErrorResponse{pdu::Function::Write, pdu::Error_Decode_DPV1,
+                                pdu::error::State_Conflict, 0})
+                .build(),
+            (pdu::Bytes{0xDF, 0x80, 0xB5, 0x00}));
+}
+
+// Without DPV1_Enable in Set_Prm (the GSD defaults) the SAP list is off: a request to SAP 51 is
+// refused RS as for any SAP the chip does not serve, and DO4 is the DP-only module it was.
+TEST(Do4Dpv1, WithoutDpv1EnableSap51IsRefused) {
+  Bench b(Profile::vpc3plus, do4_firmware, gsd_slave(do4_firmware, 5), kBaud);
+  ASSERT_TRUE(b.master.startup());
+  const Exchange ex = b.master.acyclic(kC1, kC1, pdu::read_request(0, 1, 2).build());
+  ASSERT_TRUE(ex.answer);
+  EXPECT_EQ(ex.answer->fc & fdl::kFcCodeMask, 0x03);  // RS: no service activated
+  EXPECT_EQ(dps_get_stats()->dpv1_requests, 0u);
+}
+
+// The DPV1 diagnostic alarm (IEC 61158-6 type 3 Slave_Diag, the alarm block inside the
+// device-related block; docs/firmware.md "DO4 with DPV1"): with Enable_Diagnostic_Alarm
+// (DPV1_Status_2 bit 5) entering OSP mode puts header 05h, Alarm_Type 01h (diagnosis), Slot 0,
+// Specifier Seq_Nr 0 << 3 | 01h (appears), then S = 01h (OSP) after the six standard bytes, with
+// Ext_Diag (Station_Status_1 bit 3). The master acknowledges it with Alarm_Ack on SAP 50
+// (5Ch, slot, Alarm_Type, Specifier): the positive response echoes the four bytes and the block
+// becomes the status (Status_Type 81h, Specifier 01h appears, S 01h) without Ext_Diag. A second
+// Alarm_Ack finds none outstanding: DC 80 B5 00 (state conflict). The next OSP entry carries
+// Seq_Nr 1: Specifier 09h.
+TEST(Do4Dpv1, DiagnosticAlarmOnEnteringOspAcknowledgedByTheMaster) {
+  Dpv1Bench b(0x20);
+  ASSERT_TRUE(b.master.startup());
+  b.master.data_exchange({0x05, 0x01});
+  auto diag_blocks = [&b]() {
+    const Exchange d = b.master.slave_diag();
+    EXPECT_TRUE(d.answer);
+    const auto sd = pdu::SlaveDiag::parse(d.answer ? d.answer->du : pdu::Bytes{});
+    EXPECT_TRUE(sd);
+    return sd ? *sd : pdu::SlaveDiag{};
+  };
+  pdu::SlaveDiag d = diag_blocks();
+  ASSERT_EQ(d.blocks.size(), 1u);
+  EXPECT_EQ(d.blocks[0].bytes, (pdu::Bytes{0x05, 0x81, 0x00, 0x02, 0x00}));  // status: normal
+  EXPECT_EQ(d.station_status_1 & pdu::SlaveDiag::St1_Ext_Diag, 0);
+
+  b.master.data_exchange({0x05, 0x00});  // the master requests OSP
+  ASSERT_EQ(do4_get_state()->modul_ok, 0);
+  d = diag_blocks();
+  ASSERT_EQ(d.blocks.size(), 1u);
+  EXPECT_EQ(d.blocks[0].bytes, (pdu::Bytes{0x05, 0x01, 0x00, 0x01, 0x01}));
+  EXPECT_EQ(d.station_status_1 & pdu::SlaveDiag::St1_Ext_Diag, pdu::SlaveDiag::St1_Ext_Diag);
+  const auto alarm = pdu::Dpv1DiagBlock::parse(d.blocks[0]);
+  ASSERT_TRUE(alarm);
+  EXPECT_FALSE(alarm->status);
+  EXPECT_EQ(alarm->type, 1);
+  EXPECT_EQ(alarm->seq_nr(), 0);
+
+  const pdu::Bytes ack = pdu::AlarmAck{0x00, 0x01, 0x01}.build();
+  ASSERT_EQ(ack, (pdu::Bytes{0x5C, 0x00, 0x01, 0x01}));
+  EXPECT_EQ(b.request(ack, nullptr, kAlarm).du, ack);
+  d = diag_blocks();
+  ASSERT_EQ(d.blocks.size(), 1u);
+  EXPECT_EQ(d.blocks[0].bytes, (pdu::Bytes{0x05, 0x81, 0x00, 0x01, 0x01}));
+  EXPECT_EQ(d.station_status_1 & pdu::SlaveDiag::St1_Ext_Diag, 0);
+  EXPECT_EQ(b.request(ack, nullptr, kAlarm).du, (pdu::Bytes{0xDC, 0x80, 0xB5, 0x00}));
+
+  b.master.data_exchange({0x05, 0x01});
+  b.master.data_exchange({0x05, 0x00});
+  d = diag_blocks();
+  ASSERT_EQ(d.blocks.size(), 1u);
+  EXPECT_EQ(d.blocks[0].bytes, (pdu::Bytes{0x05, 0x01, 0x00, 0x09, 0x01}));
+  // An Alarm_Ack with another Specifier than the outstanding alarm's: B8h invalid parameter.
+  EXPECT_EQ(b.request(ack, nullptr, kAlarm).du, (pdu::Bytes{0xDC, 0x80, 0xB8, 0x00}));
+}
+
+// Without Enable_Diagnostic_Alarm the OSP mode is only a status block: no Ext_Diag, and an
+// Alarm_Ack finds no alarm (state conflict).
+TEST(Do4Dpv1, NoAlarmWithoutEnableDiagnosticAlarm) {
+  Dpv1Bench b;
+  ASSERT_TRUE(b.master.startup());
+  b.master.data_exchange({0x05, 0x01});
+  b.master.data_exchange({0x05, 0x00});
+  const Exchange d = b.master.slave_diag();
+  ASSERT_TRUE(d.answer);
+  ASSERT_GE(d.answer->du.size(), 11u);
+  EXPECT_EQ(d.answer->du[0] & pdu::SlaveDiag::St1_Ext_Diag, 0);
+  EXPECT_EQ(pdu::Bytes(d.answer->du.begin() + 6, d.answer->du.end()),
+            (pdu::Bytes{0x05, 0x81, 0x00, 0x01, 0x01}));
+  EXPECT_EQ(b.request(pdu::AlarmAck{0x00, 0x01, 0x01}.build(), nullptr, kAlarm).du,
+            (pdu::Bytes{0xDC, 0x80, 0xB5, 0x00}));
+}
+
+// The DPV1 GSD file (firmware/do4/DO4V0D04.gsd) describes what the firmware does: the GSD
+// keywords of DPV1 (DPV1_Slave, C1_Read_Write_supp, C1_Max_Data_Len = the buffer's 20 bytes less
+// the 4-byte record header, the alarm keywords), the same ident, Cfg and module parameter
+// defaults as DO4_0D04.gsd after the three DPV1_Status bytes; a master configured from it reaches
+// Data_Exchange on the VPC3+ at every rate it claims and reads the record (OSPMode, value at
+// their GSD defaults 0, 0); each parameter beyond its range is refused.
+TEST(Do4Dpv1, GsdFileDescribesTheDpv1Slave) {
+  const firmware_bench::Gsd g =
+      firmware_bench::load_gsd(std::string(SOURCE_DIR) + "/firmware/do4/DO4V0D04.gsd");
+  const firmware_bench::Gsd dp =
+      firmware_bench::load_gsd(std::string(SOURCE_DIR) + "/firmware/" + do4_firmware.gsd);
+  EXPECT_EQ(g.keys.at("DPV1_Slave"), "1");
+  EXPECT_EQ(g.keys.at("C1_Read_Write_supp"), "1");
+  EXPECT_EQ(std::stoul(g.keys.at("C1_Max_Data_Len")), DPS_DPV1_MAX_PDU - 4u);
+  EXPECT_EQ(g.keys.at("Diagnostic_Alarm_supp"), "1");
+  EXPECT_EQ(g.keys.at("Extra_Alarm_SAP_supp"), "1");  // Alarm_Ack on SAP 50
+  EXPECT_EQ(g.keys.at("Process_Alarm_supp"), "0");
+  EXPECT_EQ(g.keys.at("Ident_Number"), dp.keys.at("Ident_Number"));
+  EXPECT_EQ(g.module_cfg, dp.module_cfg);
+  ASSERT_EQ(g.prm_const.size(), dp.prm_const.size() + 2);
+  EXPECT_EQ(g.prm_const[0], 0xC0);  // DPV1_Enable | Fail_Safe
+  EXPECT_EQ(g.prm_const[1], 0x20);  // Enable_Diagnostic_Alarm
+  EXPECT_EQ(g.prm_const[2], 0x00);
+  EXPECT_EQ(pdu::Bytes(g.prm_const.begin() + 3, g.prm_const.end()),
+            pdu::Bytes(dp.prm_const.begin() + 1, dp.prm_const.end()));
+  EXPECT_EQ(std::stoul(g.keys.at("Max_User_Prm_Data_Len")), g.prm_const.size());
+  for (const auto& [n, p] : g.params) EXPECT_EQ(g.prm_const.at(p.offset), p.def) << n;
+  for (const auto& [key, baud] : firmware_bench::kGsdRates) {
+    if (g.keys.at(key) != "1") continue;
+    Bench b(Profile::vpc3plus, do4_firmware,
+            firmware_bench::gsd_configured_slave(do4_firmware, g, 5), baud);
+    ASSERT_TRUE(b.master.startup()) << key;
+    b.master.data_exchange({0x05, 0x01});
+    EXPECT_EQ(b.master.acyclic(kC1, kC1, pdu::read_request(0, 1, 2).build()).answer, fdl::sc())
+        << key;
+  }
+  for (const auto& [n, param] : g.params) {
+    for (int v : {param.min, param.max, param.max + 1}) {
+      if (v > 255) continue;
+      SlaveConfig s = firmware_bench::gsd_configured_slave(do4_firmware, g, 5);
+      s.user_prm.at(param.offset) = static_cast<std::uint8_t>(v);
+      Bench b(Profile::vpc3plus, do4_firmware, s, 12'000'000);
+      EXPECT_EQ(b.master.startup(40), v <= param.max) << "param " << n << " = " << v;
+    }
+  }
+}
+
+// The generated C layouts (regs/dpc31_regs.json) and the emulator's dpv1.hpp say the same.
+static_assert(VPC3_SAP_Entry_SIZE == dpv1::entry::kBytes);
+static_assert(VPC3_SAP_Entry_Sap == dpv1::entry::Sap);
+static_assert(VPC3_SAP_Entry_Request_SA == dpv1::entry::Request_SA);
+static_assert(VPC3_SAP_Entry_Request_SSAP == dpv1::entry::Request_SSAP);
+static_assert(VPC3_SAP_Entry_Service_Supported == dpv1::entry::Service_Supported);
+static_assert(VPC3_SAP_Entry_Ind_Buf_Ptr0 == dpv1::entry::Ind_Buf_Ptr0);
+static_assert(VPC3_SAP_Entry_Ind_Buf_Ptr1 == dpv1::entry::Ind_Buf_Ptr1);
+static_assert(VPC3_SAP_Entry_Resp_Buf_Ptr == dpv1::entry::Resp_Buf_Ptr);
+static_assert(VPC3_SAP_Entry_Sap_Response_Sent_Msk == dpv1::entry::Response_Sent);
+static_assert(VPC3_SAP_Entry_Sap_SAP_Number_Msk == dpv1::entry::SAP_Number);
+static_assert(VPC3_SAP_Entry_Sap_End_Of_List == dpv1::entry::kEndOfList);
+static_assert(VPC3_SAP_Entry_Request_SA_All == dpv1::entry::kAll);
+static_assert(VPC3_SAP_Entry_Service_Supported_SRD_LH == dpv1::service::SRD_LH);
+static_assert(VPC3_DPV1_Buf_SIZE == dpv1::header::kBytes);
+static_assert(VPC3_DPV1_Buf_Control == dpv1::header::Control);
+static_assert(VPC3_DPV1_Buf_Max_Length == dpv1::header::Max_Length);
+static_assert(VPC3_DPV1_Buf_Length == dpv1::header::Length);
+static_assert(VPC3_DPV1_Buf_Function_Code == dpv1::header::Function_Code);
+static_assert(VPC3_DPV1_Buf_Control_USER_Msk == dpv1::header::USER);
+static_assert(VPC3_DPV1_Buf_Control_IND_Msk == dpv1::header::IND);
+static_assert(VPC3_DPV1_Buf_Control_RESP_Msk == dpv1::header::RESP);
+static_assert(VPC3_DPV1_Buf_Control_INUSE_Msk == dpv1::header::INUSE);
+static_assert(VPC3_Prm_Status_1 == dpv1::kStatus1);
+static_assert(VPC3_Prm_Status_2 == dpv1::kStatus2);
+static_assert(VPC3_Prm_Status_3 == dpv1::kStatus3);
+static_assert(VPC3_Prm_SIZE == dpv1::kUserPrm);
+static_assert(VPC3_Prm_Status_1_DPV1_Enable_Msk == dpv1::status1::DPV1_Enable);
+static_assert(VPC3_Prm_Status_1_Fail_Safe_Msk == dpv1::status1::Fail_Safe);
+static_assert(VPC3_Prm_Status_2_Enable_Diagnostic_Alarm_Msk ==
+              dpv1::status2::Enable_Diagnostic_Alarm);
+static_assert(VPC3_Prm_Status_3_Alarm_Mode_Msk == dpv1::status3::Alarm_Mode);
+
+}  // namespace
