@@ -223,7 +223,36 @@ def pcap_tshark_fields():
                            "slave5"], f"last answer {last_ans}")
 
 
+def tcp_bad_arguments():
+    """One line on stderr, exit 2, nothing listening, no log or capture made (docs/bad-input.md)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        busy = socket.socket()
+        busy.bind(("127.0.0.1", 0))
+        busy.listen(1)
+        log, pcap = os.path.join(tmp, "log"), os.path.join(tmp, "x.pcapng")
+        cases = [
+            (["--tcp", "0", "--pty", os.path.join(tmp, "dp0")], "one of --pty PATH"),
+            ([], "one of --pty PATH"),
+            (["--tcp", "0.0.0.0:0"], "not a loopback address"),
+            (["--tcp", "127.0.0.1:70000"], "has no port 0..65535"),
+            (["--tcp", "localhost:5000"], "is no numeric IPv4 or IPv6 address"),
+            (["--tcp", "0", "--allow-remote", "--pty", "x"], "one of --pty PATH"),
+            (["--pty", os.path.join(tmp, "dp0"), "--allow-remote"], "--allow-remote needs --tcp"),
+            (["--tcp", str(busy.getsockname()[1])], "Address already in use"),
+            (["--tcp", "0", "--pcap", log], "--pcap"),
+        ]
+        for args, want in cases:
+            r = subprocess.run([bt.CLI, "bridge", "--firmware", "DO4", "--log", log] + args,
+                               capture_output=True, text=True, timeout=30 * SCALE, check=False)
+            lines = r.stderr.splitlines()
+            check(r.returncode == 2 and len(lines) == 1 and want in lines[0],
+                  f"{args}: exit {r.returncode}, stderr {r.stderr!r}")
+            check(not os.path.exists(log) and not os.path.exists(pcap), f"{args}: a file made")
+        busy.close()
+
+
 CASES = {
+    "tcp_bad_arguments": tcp_bad_arguments,
     "tcp_two_clients_and_garbage": tcp_two_clients_and_garbage,
     "pcap_tshark_fields": pcap_tshark_fields,
 }
