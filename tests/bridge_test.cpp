@@ -54,13 +54,14 @@ class BridgeEngine : public ::testing::Test {
     s.firmware = dpc31_find_firmware("DO4");
     s.baud = baud;
     s.log_detail = detail;
-    engine_ = std::make_unique<Engine>(
-        s, [this](std::uint64_t cycle, std::string_view tag, std::string_view station,
-                  const std::string& text) {
+    engine_ =
+        std::make_unique<Engine>(s, [this](std::uint64_t cycle, std::string_view tag,
+                                           std::string_view station, const std::string& text) {
           lines_.push_back({cycle, std::string(tag), text, std::string(station)});
         });
     engine_->on_line([this](const dpc31::bridge::LineTelegram& t) {
-      line_.push_back({t.start, t.end, std::string(t.sender), Bytes(t.bytes.begin(), t.bytes.end())});
+      line_.push_back(
+          {t.start, t.end, std::string(t.sender), Bytes(t.bytes.begin(), t.bytes.end())});
     });
   }
 
@@ -143,9 +144,9 @@ TEST_F(BridgeEngine, EveryLogLineNamesItsStation) {
   start_up(2);
   ASSERT_FALSE(lines_.empty());
   for (const Line& l : lines_) {
-    const std::string want = l.tag == "RxD"                     ? "master"
+    const std::string want = l.tag == "RxD"                      ? "master"
                              : l.tag == "NOTE" || l.tag == "LOG" ? "bridge"
-                                                                  : "slave5";
+                                                                 : "slave5";
     EXPECT_EQ(l.station, want) << l.tag << " " << l.text;
   }
   ASSERT_EQ(engine_->stations().size(), 1u);

@@ -76,10 +76,10 @@ struct LineTelegram {
 using LineSink = std::function<void(const LineTelegram&)>;
 
 // One log line: its cycle, a tag ("RxD", "TxD", "PORT", "STATE", "CHIP", "NOTE"), the station it
-// is about (kMasterName for RxD, kBridgeName for NOTE and LOG, else a station's name) and text. Lines
-// come in cycle order (those of one cycle in the order they arose): the engine holds each line
-// until no line with a smaller cycle can come any more (a request goes on RxD up to TSYN ahead;
-// an answer's line is known at its end but stamped with its start).
+// is about (kMasterName for RxD, kBridgeName for NOTE and LOG, else a station's name) and text.
+// Lines come in cycle order (those of one cycle in the order they arose): the engine holds each
+// line until no line with a smaller cycle can come any more (a request goes on RxD up to TSYN
+// ahead; an answer's line is known at its end but stamped with its start).
 using LogSink = std::function<void(std::uint64_t cycle, std::string_view tag,
                                    std::string_view station, const std::string&)>;
 

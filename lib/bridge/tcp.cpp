@@ -54,7 +54,8 @@ std::string parse_listen(const std::string& text, ListenAddress& a) {
     return fmt::format("'{}' has no port 0..65535", text);
   }
   in6_addr buf{};
-  if (::inet_pton(AF_INET, host.c_str(), &buf) != 1 && ::inet_pton(AF_INET6, host.c_str(), &buf) != 1) {
+  if (::inet_pton(AF_INET, host.c_str(), &buf) != 1 &&
+      ::inet_pton(AF_INET6, host.c_str(), &buf) != 1) {
     return fmt::format("'{}' is no numeric IPv4 or IPv6 address", host);
   }
   a.host = host;

@@ -467,12 +467,12 @@ void capture_line(bridge::Engine& e, capture::PcapngWriter& pcap) {
   e.on_line([&pcap, hz](const bridge::LineTelegram& t) {
     const std::optional<std::uint64_t> ns = capture::cycles_to_ns(t.start, hz);
     if (!ns) return;  // beyond 584 years of chip time
-    pcap.add(capture::Packet{
-        .timestamp_ns = *ns,
-        .direction = t.sender == bridge::kMasterName ? capture::Direction::inbound
-                                                     : capture::Direction::outbound,
-        .bytes = t.bytes,
-        .comment = fmt::format("cycles {}-{}, {}", t.start, t.end, t.sender)});
+    pcap.add(capture::Packet{.timestamp_ns = *ns,
+                             .direction = t.sender == bridge::kMasterName
+                                              ? capture::Direction::inbound
+                                              : capture::Direction::outbound,
+                             .bytes = t.bytes,
+                             .comment = fmt::format("cycles {}-{}, {}", t.start, t.end, t.sender)});
   });
 }
 
