@@ -32,6 +32,7 @@ struct Line {
   std::uint64_t cycle;
   std::string tag;
   std::string text;
+  std::string station;
 };
 
 constexpr std::uint32_t kT = 2500;  // bit time at 19200 baud, 48 MHz
@@ -53,10 +54,15 @@ class BridgeEngine : public ::testing::Test {
     s.firmware = dpc31_find_firmware("DO4");
     s.baud = baud;
     s.log_detail = detail;
-    engine_ = std::make_unique<Engine>(
-        s, [this](std::uint64_t cycle, std::string_view tag, const std::string& text) {
-          lines_.push_back({cycle, std::string(tag), text});
+    engine_ =
+        std::make_unique<Engine>(s, [this](std::uint64_t cycle, std::string_view tag,
+                                           std::string_view station, const std::string& text) {
+          lines_.push_back({cycle, std::string(tag), text, std::string(station)});
         });
+    engine_->on_line([this](const dpc31::bridge::LineTelegram& t) {
+      line_.push_back(
+          {t.start, t.end, std::string(t.sender), Bytes(t.bytes.begin(), t.bytes.end())});
+    });
   }
 
   Bytes exchange(const Bytes& req) {
@@ -107,8 +113,14 @@ class BridgeEngine : public ::testing::Test {
     return out;
   }
 
+  struct Sent {
+    std::uint64_t start, end;
+    std::string sender;
+    Bytes bytes;
+  };
   std::unique_ptr<Engine> engine_;
   std::vector<Line> lines_;
+  std::vector<Sent> line_;  // the line as the capture sees it (Engine::on_line)
 };
 
 TEST_F(BridgeEngine, AnswersFdlStatusOnceTheBaudSearchReachesTheRate) {
@@ -124,6 +136,44 @@ TEST_F(BridgeEngine, AnswersFdlStatusOnceTheBaudSearchReachesTheRate) {
   ASSERT_GE(rx.size(), 2u);
   EXPECT_EQ(rx[1].cycle - rx[0].cycle, (33 + 66 + 100) * kT);
   EXPECT_EQ(engine_->chip().wd_state(), dpc31::WdState::Baud_Control);
+}
+
+// docs/bridge.md, "The log": every line names its station: the master's requests, the slave's
+// answers and its own events (slave5: --address 5), the bridge's notes.
+TEST_F(BridgeEngine, EveryLogLineNamesItsStation) {
+  start_up(2);
+  ASSERT_FALSE(lines_.empty());
+  for (const Line& l : lines_) {
+    const std::string want = l.tag == "RxD"                      ? "master"
+                             : l.tag == "NOTE" || l.tag == "LOG" ? "bridge"
+                                                                 : "slave5";
+    EXPECT_EQ(l.station, want) << l.tag << " " << l.text;
+  }
+  ASSERT_EQ(engine_->stations().size(), 1u);
+  EXPECT_EQ(engine_->stations()[0].name, "slave5");
+}
+
+// The line as --pcap captures it: each request with the cycles of its first start bit and last
+// stop bit (6 characters of 11 bits: 66 bit times), then the answer MinTSDR = 11 bit times after
+// it (docs/timing.md), 6 characters long, sent by the station.
+TEST_F(BridgeEngine, LineTelegramsCarryTheirCyclesAndSender) {
+  find_slave();
+  ASSERT_GE(line_.size(), 2u);
+  const Sent& req = line_[line_.size() - 2];
+  const Sent& ans = line_.back();
+  EXPECT_EQ(req.sender, "master");
+  EXPECT_EQ(req.bytes, kFdlStatus);
+  EXPECT_EQ(req.end - req.start, 6u * 11 * kT);
+  EXPECT_EQ(ans.sender, "slave5");
+  EXPECT_EQ(ans.bytes, kStatusOk);
+  EXPECT_EQ(ans.start, req.end + 11 * kT);
+  EXPECT_EQ(ans.end - ans.start, 6u * 11 * kT);
+  EXPECT_EQ(ans.start, tagged("TxD").back().cycle);
+  // Every unanswered request before it is on the line too, the master's, in start order.
+  for (std::size_t i = 0; i + 2 < line_.size(); ++i) {
+    EXPECT_EQ(line_[i].sender, "master");
+    EXPECT_LT(line_[i].start, line_[i + 1].start);
+  }
 }
 
 TEST_F(BridgeEngine, EveryRequestWaitsTsynAfterTheLastAnswer) {

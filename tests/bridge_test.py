@@ -174,13 +174,13 @@ def check_log(b, pacing, baud):
         check(want in first, f"log line 1 lacks '{want}': {first}")
     check("variant" not in first, f"log line 1 names a variant for the dpc31: {first}")
     text = "\n".join(lines)
-    for want in ("RxD   10 05 02 49 50 16  | FDL_Status 2->5",
-                 "TxD   10 02 05 00 07 16  | OK 5->2",
+    for want in ("RxD   master   10 05 02 49 50 16  | FDL_Status 2->5",
+                 "TxD   slave5   10 02 05 00 07 16  | OK 5->2",
                  "| Set_Prm 2->5 SRD_high FCB 0 SAP 62->61 DU 88 64 0A 00 0D 04 00 00 00 00 00",
-                 "TxD   E5  | SC", "| Chk_Cfg 2->5", "| Data_Exchange 2->5 SRD_high",
-                 "DL 5->2 DU 51", "PORT  DO4 outputs = 0x05", "PORT  DO4 modul_ok = 0x01",
-                 "CHIP  request MAC_Start",  # the DPC31 starts by request (docs/dpc31.md)
-                 "client opened the pty", "client closed the pty", "STATE dp_state Wait_Cfg -> "
+                 "TxD   slave5   E5  | SC", "| Chk_Cfg 2->5", "| Data_Exchange 2->5 SRD_high",
+                 "DL 5->2 DU 51", "PORT  slave5   DO4 outputs = 0x05", "PORT  slave5   DO4 modul_ok = 0x01",
+                 "CHIP  slave5   request MAC_Start",  # the DPC31 starts by request (docs/dpc31.md)
+                 "client opened the pty", "client closed the pty", "STATE slave5   dp_state Wait_Cfg -> "
                  "Data_Exchange"):
         check(want in text, f"log lacks '{want}'")
     check_order(lines)
@@ -334,8 +334,8 @@ def cnt2_logmsg(firmware="CNT2"):
             m.close()
             b.stop(signal.SIGHUP)
             text = "\n".join(b.log_lines())
-            check("PORT  CNT2 hold1 = 0x01" in text, "log lacks the hold1 port write")
-            check("PORT  CNT2 pwm_hold1 = 0x01" in text, "log lacks the pwm_hold1 port write")
+            check("PORT  slave9   CNT2 hold1 = 0x01" in text, "log lacks the hold1 port write")
+            check("PORT  slave9   CNT2 pwm_hold1 = 0x01" in text, "log lacks the pwm_hold1 port write")
             check("profile vpc3plus, variant c, firmware CNT2, address 9" in b.log_lines()[0],
                   f"log line 1 lacks the profile, variant or firmware: {b.log_lines()[0]}")
         finally:
@@ -458,13 +458,13 @@ def profibus_rates_default_log():
                 text = "\n".join(lines)
                 # DO4 on the DPC31 started by MAC_Start (Table 5.1-3), its outputs fetched
                 # with User_New_Dout: Data_Exchange with an outside master.
-                for want in ("CHIP  request MAC_Start", "STATE dp_state Wait_Cfg -> Data_Exchange",
-                             "PORT  DO4 outputs = 0x05", "client opened the pty",
+                for want in ("CHIP  slave5   request MAC_Start", "STATE slave5   dp_state Wait_Cfg -> Data_Exchange",
+                             "PORT  slave5   DO4 outputs = 0x05", "client opened the pty",
                              f"the client set {other} baud on the pty; the bridge carries its "
                              f"bytes at {baud} baud"):
                     check(want in text, f"log lacks '{want}'")
                 check(text.count("the client set") == 1, "a speed note for the matching client")
-                check(text.count("PORT  DO4 outputs = 0x05") == 1,
+                check(text.count("PORT  slave5   DO4 outputs = 0x05") == 1,
                       "PORT logged without a change")
                 check(len(lines) < 40, f"{len(lines)} log lines at the events level")
                 check_order(lines)
@@ -508,8 +508,8 @@ def answer_dropped_without_client():
             check_order(lines)
             at = [i for i, line in enumerate(lines) if "no client: 17 answer bytes dropped" in line]
             check(len(at) == 1, "no line 'no client: 17 answer bytes dropped' (or several)")
-            before = [line for line in lines[:at[0]] if "NOTE  client" in line]
-            after = [line for line in lines[at[0]:] if "NOTE  client" in line]
+            before = [line for line in lines[:at[0]] if "NOTE  bridge   client" in line]
+            after = [line for line in lines[at[0]:] if "NOTE  bridge   client" in line]
             check(before and "client closed the pty" in before[-1],
                   f"the drop is not after the client left: {before[-1:]}")
             check(after and "client opened the pty" in after[0],

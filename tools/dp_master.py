@@ -9,6 +9,10 @@ then FDL telegrams (EN 50170: SD1/SD2, FCS, FCB/FCV) with a timeout per answer. 
     python3 tools/dp_master.py /tmp/dp0 --baud 19200 --ident 0x0D04 --cfg 21,10 \
         --user-prm 00,00,00,00 --outputs 05,01
 
+The device may also be pyserial's URL of a raw TCP port, socket://HOST:PORT (`dpc31 bridge
+--tcp PORT`): the same byte stream, no termios; the rate is the bridge's own (--baud then only
+sets the master's timing).
+
 Prints one line per step and the inputs of the last Data_Exchange. Exit codes: 0 Data_Exchange
 reached, 1 the slave did not come up (the line says where), 2 bad arguments or device.
 Python 3 standard library only; tests/bridge_test.py uses the same Master class.
@@ -18,6 +22,7 @@ import argparse
 import fcntl
 import os
 import select
+import socket
 import struct
 import sys
 import termios
@@ -119,12 +124,19 @@ class Master:
     """A DP master on the device: 8E1 raw, FCB/FCV per EN 50170, a timeout per answer."""
 
     def __init__(self, path, baud, timeout, address=2, slave=5):
-        self.fd = os.open(path, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
-        try:
-            set_8e1(self.fd, baud)
-        except OSError:
-            os.close(self.fd)
-            raise
+        self.sock = None
+        if path.startswith("socket://"):
+            self.sock = connect(path, 10)
+            self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            self.sock.setblocking(False)
+            self.fd = self.sock.fileno()
+        else:
+            self.fd = os.open(path, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
+            try:
+                set_8e1(self.fd, baud)
+            except OSError:
+                os.close(self.fd)
+                raise
         self.baud = baud
         self.timeout = timeout
         self.address = address
@@ -134,14 +146,33 @@ class Master:
         self.lost = 0
 
     def close(self):
-        os.close(self.fd)
+        if self.sock is not None:
+            self.sock.close()
+        else:
+            os.close(self.fd)
+
+    def flush_input(self):
+        """Drops what arrived before the request: tcflush on a tty; on a socket, what is there."""
+        if self.sock is None:
+            termios.tcflush(self.fd, termios.TCIFLUSH)
+            return
+        while select.select([self.fd], [], [], 0)[0]:
+            self.read()
+
+    def read(self):
+        try:
+            b = os.read(self.fd, 512)
+        except BlockingIOError:
+            return b""
+        check(b or self.sock is None, "the bridge closed the connection")
+        return b
 
     def transact(self, req, timeout=None, searching=False):
         """Writes one request, returns the answer telegram (bytes) or None after the timeout.
         `searching` (find_slave): bytes before a start delimiter are dropped, an answer begun by
         the timeout is awaited for the answer timeout, and bytes after the first whole telegram
         (late answers to earlier requests) are left to find_slave's drain."""
-        termios.tcflush(self.fd, termios.TCIFLUSH)
+        self.flush_input()
         os.write(self.fd, req)
         buf = b""
         deadline = time.monotonic() + (timeout or self.timeout)
@@ -168,7 +199,7 @@ class Master:
                 return None
             r, _, _ = select.select([self.fd], [], [], left)
             if r:
-                buf += os.read(self.fd, 512)
+                buf += self.read()
 
     def fdl_status(self, timeout=None, searching=False):
         a = self.transact(sd1(self.slave, self.address, 0x49), timeout, searching)
@@ -203,7 +234,7 @@ class Master:
             r, _, _ = select.select([self.fd], [], [], quiet)
             if not r:
                 return
-            os.read(self.fd, 512)
+            self.read()
 
     def srd(self, du, dsap=None):
         """SRD_high with FCB/FCV. No answer: the station is lost (on a loaded host chip time can
@@ -287,8 +318,31 @@ def exchange(m, args, say):
             say(f"Slave_Diag (after DH): {hexs(m.slave_diag())}")
 
 
+def socket_address(url):
+    """socket://HOST:PORT (pyserial's URL; HOST may be [V6]) -> (host, port)."""
+    hostport = url[len("socket://"):].split("/", 1)[0]
+    host, sep, port = hostport.rpartition(":")
+    if not sep or not port.isdigit():
+        raise OSError(f"{url}: not socket://HOST:PORT")
+    return host.strip("[]") or "127.0.0.1", int(port)
+
+
+def connect(url, seconds):
+    """A connection to socket://HOST:PORT, retried while refused (the bridge is starting)."""
+    deadline = time.monotonic() + seconds
+    while True:
+        try:
+            return socket.create_connection(socket_address(url), timeout=seconds)
+        except ConnectionRefusedError:
+            if time.monotonic() > deadline:
+                raise
+            time.sleep(0.02)
+
+
 def wait_for(path, seconds):
     deadline = time.monotonic() + seconds
+    if path.startswith("socket://"):  # Master connects (a probe connection would be a client)
+        return
     while not os.path.exists(path):
         if time.monotonic() > deadline:
             raise FileNotFoundError(f"{path}: no such device (waited {seconds:g} s)")
@@ -297,7 +351,8 @@ def wait_for(path, seconds):
 
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("device", help="serial device, e.g. the path given to dpc31 bridge --pty")
+    p.add_argument("device", help="serial device, e.g. the path given to dpc31 bridge --pty, or "
+                   "socket://HOST:PORT (dpc31 bridge --tcp PORT)")
     p.add_argument("--baud", type=int, default=19200, choices=RATES,
                    help="the bus rate, one of the ten PROFIBUS rates (default 19200)")
     p.add_argument("--address", type=int, default=2, help="the master's station address")

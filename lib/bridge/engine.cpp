@@ -80,12 +80,13 @@ std::string telegram_summary(std::span<const std::uint8_t> bytes) {
 Engine::Engine(const Setup& setup, LogSink log)
     : setup_(setup),
       log_(std::move(log)),
+      stations_{{fmt::format("slave{}", setup.address), setup.address}},
       chip_(setup.chip),
       t_(dpc31::bit_cycles(chip_.clock_hz(), setup.baud)),
       // Every telegram is a line at the telegrams level: its bound is the busiest real line's.
       limiter_(setup.log_detail == LogDetail::telegrams ? kTelegramBurst : LogLimiter::kBurst) {
   chip_.set_log_sink([this](const LogRecord& r) {
-    if (r.level >= LogLevel::info) add_line(r.cycle, "CHIP", r.text);
+    if (r.level >= LogLevel::info) add_line(r.cycle, "CHIP", slave(), r.text);
   });
   dp_ = chip_.dp_state();
   wd_ = chip_.wd_state();
@@ -121,7 +122,7 @@ void Engine::port_written(std::uint64_t cycle, const std::string& module, const 
     return;
   port_[index] = value;
   port_logged_[index] = true;
-  add_line(cycle, "PORT", fmt::format("{} {} = 0x{:02X}", module, port, value));
+  add_line(cycle, "PORT", slave(), fmt::format("{} {} = 0x{:02X}", module, port, value));
 }
 
 Engine::~Engine() {
@@ -131,17 +132,18 @@ Engine::~Engine() {
   chip_.set_log_sink({});
 }
 
-void Engine::add_line(std::uint64_t cycle, std::string_view tag, std::string text) {
-  if (log_) held_.push_back({cycle, tag, std::move(text)});
+void Engine::add_line(std::uint64_t cycle, std::string_view tag, std::string_view who,
+                      std::string text) {
+  if (log_) held_.push_back({cycle, tag, who, std::move(text)});
 }
 
-void Engine::log_telegram(std::uint64_t cycle, std::string_view tag,
+void Engine::log_telegram(std::uint64_t cycle, std::string_view tag, std::string_view who,
                           std::span<const std::uint8_t> bytes, std::string_view how) {
   const bool broken = fdl::decode(bytes).error != fdl::Error::none;
   if (setup_.log_detail == LogDetail::events && !broken && how.empty()) return;
   std::string s = fmt::format("{}  | {}", hex_bytes(bytes), telegram_summary(bytes));
   if (!how.empty()) s += fmt::format(" ({})", how);
-  add_line(cycle, tag, std::move(s));
+  add_line(cycle, tag, who, std::move(s));
 }
 
 std::uint64_t Engine::log_horizon() const {
@@ -159,12 +161,12 @@ void Engine::release_log(std::uint64_t upto) {
   std::size_t n = 0;
   for (; n < held_.size() && held_[n].cycle <= upto; ++n) {
     const HeldLine& l = held_[n];
-    const std::string key = fmt::format("{} {}", l.tag, l.text);
+    const std::string key = fmt::format("{} {} {}", l.tag, l.who, l.text);
     for (const std::string& s : limiter_.add(l.cycle, key)) {
       if (s == key) {
-        log_(l.cycle, l.tag, l.text);
+        log_(l.cycle, l.tag, l.who, l.text);
       } else {
-        log_(l.cycle, "LOG", s);  // a repeat count, or how many lines were left out
+        log_(l.cycle, "LOG", kBridgeName, s);  // a repeat count, or how many lines were left out
       }
     }
   }
@@ -173,11 +175,11 @@ void Engine::release_log(std::uint64_t upto) {
 
 void Engine::flush_log() {
   release_log(UINT64_MAX);
-  for (const std::string& s : limiter_.flush()) log_(chip_.cycle(), "LOG", s);
+  for (const std::string& s : limiter_.flush()) log_(chip_.cycle(), "LOG", kBridgeName, s);
 }
 
 void Engine::note(const std::string& text) {
-  add_line(chip_.cycle(), "NOTE", text);
+  add_line(chip_.cycle(), "NOTE", kBridgeName, text);
   release_log(log_horizon());
 }
 
@@ -191,7 +193,7 @@ void Engine::check_states(std::uint64_t cycle) {
     if (!s.empty()) s += ", ";
     s += fmt::format("wd_state {} -> {}", wd_state_name(wd_), wd_state_name(wd));
   }
-  add_line(cycle, "STATE", std::move(s));
+  add_line(cycle, "STATE", slave(), std::move(s));
   dp_ = dp;
   wd_ = wd;
 }
@@ -282,8 +284,9 @@ void Engine::start_next() {
     Request r = std::move(queue_.front());
     queue_.pop_front();
     queued_bytes_ -= r.bytes.size();
-    log_telegram(start, "RxD", r.bytes, "");
+    log_telegram(start, "RxD", kMasterName, r.bytes, "");
     request_end_ = send_on_rxd(chip_, r.bytes, start, t_);
+    if (line_) line_({start, request_end_, kMasterName, r.bytes});
     if (r.wants_answer) {
       in_flight_ = true;
       slot_end_ = request_end_ + std::uint64_t{setup_.slot_bits} * t_;
@@ -295,7 +298,8 @@ void Engine::start_next() {
 }
 
 void Engine::finish_answer(AnswerCollector& a, std::string_view how) {
-  log_telegram(a.start(), "TxD", a.bytes(), how);
+  log_telegram(a.start(), "TxD", slave(), a.bytes(), how);
+  if (line_) line_({a.start(), a.end(), slave(), a.bytes()});
   bus_free_ = std::max(bus_free_, a.end());
   a.reset();
 }
@@ -317,7 +321,7 @@ void Engine::collect() {
   if (!in_flight_) return;
   if (answer_.finished() && !rx_.receiving()) {
     if (unanswered_ > 1) {
-      add_line(answer_.start(), "NOTE",
+      add_line(answer_.start(), "NOTE", kBridgeName,
                fmt::format("answered again, after {} requests without an answer", unanswered_));
     }
     unanswered_ = 0;
@@ -327,9 +331,9 @@ void Engine::collect() {
     // At the events level a run of them (a master looking for a slave during its baud search,
     // or for one that is not there) is one line at its start and one at its end.
     if (setup_.log_detail == LogDetail::telegrams) {
-      add_line(slot_end_, "NOTE", "no answer within the slot time");
+      add_line(slot_end_, "NOTE", kBridgeName, "no answer within the slot time");
     } else if (unanswered_ == 0) {
-      add_line(slot_end_, "NOTE",
+      add_line(slot_end_, "NOTE", kBridgeName,
                "no answer within the slot time (the next ones are counted until an answer)");
     }
     ++unanswered_;

@@ -54,11 +54,34 @@ struct Setup {
   std::uint32_t slot_bits = 100;  // how long a request waits for the first answer character
 };
 
-// One log line: its cycle, a tag ("RxD", "TxD", "PORT", "STATE", "CHIP", "NOTE") and text. Lines
-// come in cycle order (those of one cycle in the order they arose): the engine holds each line
-// until no line with a smaller cycle can come any more (a request goes on RxD up to TSYN ahead;
-// an answer's line is known at its end but stamped with its start).
-using LogSink = std::function<void(std::uint64_t cycle, std::string_view tag, const std::string&)>;
+// The names the log and the capture give the line's parties besides the stations (docs/bridge.md).
+inline constexpr std::string_view kMasterName = "master";  // the client: what it sent
+inline constexpr std::string_view kBridgeName = "bridge";  // the bridge's own NOTE and LOG lines
+
+// A station on the bridge's line: a chip with its firmware, named in the log and the capture
+// ("slave5"). The line has a list of them; today the bridge builds one.
+struct Station {
+  std::string name;
+  std::uint8_t address = 0;
+};
+
+// One telegram on the line, as the bridge put it on RxD (the master's) or decoded it from TxD (a
+// station's answer): its first start bit, the end of its last stop bit, who sent it, its bytes.
+struct LineTelegram {
+  std::uint64_t start = 0;
+  std::uint64_t end = 0;
+  std::string_view sender;  // kMasterName or a station's name
+  std::span<const std::uint8_t> bytes;
+};
+using LineSink = std::function<void(const LineTelegram&)>;
+
+// One log line: its cycle, a tag ("RxD", "TxD", "PORT", "STATE", "CHIP", "NOTE"), the station it
+// is about (kMasterName for RxD, kBridgeName for NOTE and LOG, else a station's name) and text.
+// Lines come in cycle order (those of one cycle in the order they arose): the engine holds each
+// line until no line with a smaller cycle can come any more (a request goes on RxD up to TSYN
+// ahead; an answer's line is known at its end but stamped with its start).
+using LogSink = std::function<void(std::uint64_t cycle, std::string_view tag,
+                                   std::string_view station, const std::string&)>;
 
 // The bridge's log bound at the telegrams level (docs/bridge.md, "The log"): a line at 12 Mbaud
 // carries up to about 80 000 telegrams a second; the events level has LogLimiter::kBurst.
@@ -96,6 +119,11 @@ class Engine {
   // (or the request's last stop bit). Returns whether it is no longer busy().
   bool settle(std::uint64_t max_cycles);
 
+  // Every telegram on the line from now on, in the order each is complete (a request when it goes
+  // on RxD, an answer at its last stop bit): the capture (--pcap).
+  void on_line(LineSink sink) { line_ = std::move(sink); }
+  [[nodiscard]] const std::vector<Station>& stations() const { return stations_; }
+
   // TxD characters decoded since the last call, in order.
   std::vector<std::uint8_t> take_output();
   // The client went away: its incomplete telegram and every queued telegram that has not reached
@@ -132,10 +160,11 @@ class Engine {
   void check_states(std::uint64_t cycle);
   void port_written(std::uint64_t cycle, const std::string& module, const std::string& port,
                     unsigned index, std::uint32_t value);
-  void add_line(std::uint64_t cycle, std::string_view tag, std::string text);
+  void add_line(std::uint64_t cycle, std::string_view tag, std::string_view who, std::string text);
   // A telegram line, at the telegrams level or when it is broken or `how` says what is wrong.
-  void log_telegram(std::uint64_t cycle, std::string_view tag, std::span<const std::uint8_t> bytes,
-                    std::string_view how);
+  void log_telegram(std::uint64_t cycle, std::string_view tag, std::string_view who,
+                    std::span<const std::uint8_t> bytes, std::string_view how);
+  [[nodiscard]] std::string_view slave() const { return stations_.front().name; }
   // Hands over the held lines with a cycle up to `upto`.
   void release_log(std::uint64_t upto);
   // No line with a smaller cycle can come: the chip's time, or an earlier start still pending.
@@ -143,6 +172,8 @@ class Engine {
 
   Setup setup_;
   LogSink log_;
+  LineSink line_;
+  std::vector<Station> stations_;  // never resized after construction: the log keeps their names
   Chip chip_;
   std::uint32_t t_;
   std::unique_ptr<FirmwareHost> fw_;
@@ -174,6 +205,7 @@ class Engine {
   struct HeldLine {
     std::uint64_t cycle;
     std::string_view tag;  // one of the literal tags
+    std::string_view who;  // kMasterName, kBridgeName or a name in stations_
     std::string text;
   };
   std::vector<HeldLine> held_;       // in the order they arose

@@ -1,6 +1,7 @@
 #include "pty.hpp"
 
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <poll.h>
 #include <stdlib.h>
 #include <sys/ioctl.h>
@@ -180,6 +181,61 @@ unsigned long Pty::write(const unsigned char* buf, unsigned long size) const {
     break;  // EAGAIN: the client does not read; the rest is dropped
   }
   return done;
+}
+
+std::string PtyPort::describe() const {
+  return fmt::format("pty {} -> {}", link_, pty_.slave_name());
+}
+
+std::vector<pollfd> PtyPort::poll_fds() const {
+  if (!present_) return {};
+  return {{pty_.master_fd(), POLLIN, 0}};
+}
+
+void PtyPort::service(std::span<const pollfd> fds, const PortEvents& ev) {
+  if (present_) {
+    if (!fds.empty() && (fds[0].revents & (POLLIN | POLLHUP | POLLERR)) != 0) read_client(ev);
+  } else if (pty_.client_open()) {
+    present_ = true;
+    speed_checked_ = false;
+    ev.note("client opened the pty");
+  } else if (pty_.changed()) {
+    // A client opened, configured and closed the pty between two looks.
+    pty_.reset();
+    ev.note("a client changed the pty's settings and left: slave side reset");
+  }
+}
+
+void PtyPort::read_client(const PortEvents& ev) {
+  unsigned char buf[4096];
+  for (;;) {
+    const long n = pty_.read(buf, sizeof buf);
+    if (n > 0) {
+      if (!speed_checked_) {
+        speed_checked_ = true;
+        const unsigned s = pty_.speed();
+        if (s != baud_) {
+          ev.note(fmt::format(
+              "the client set {} on the pty; the bridge carries its bytes at {} baud",
+              s == 0 ? std::string("a non-standard speed") : fmt::format("{} baud", s), baud_));
+        }
+      }
+      ev.bytes({buf, static_cast<std::size_t>(n)});
+      continue;
+    }
+    if (n == 0) return;  // all read, the client is still there
+    break;               // hang-up: no slave fd open any more
+  }
+  present_ = false;
+  // What it queued and the bus has not carried yet goes with it (a flood of its bytes must not
+  // keep the next client waiting).
+  ev.gone();
+  pty_.reset();
+  ev.note("client closed the pty: slave side reset (raw, 38400 baud), queues flushed");
+}
+
+std::size_t PtyPort::write(std::span<const std::uint8_t> bytes) {
+  return pty_.write(bytes.data(), bytes.size());
 }
 
 std::string make_link(const std::string& path, const std::string& target) {

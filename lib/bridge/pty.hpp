@@ -18,6 +18,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "port.hpp"
+
 namespace dpc31::bridge {
 
 struct PtyError : std::runtime_error {
@@ -58,6 +60,29 @@ class Pty {
   int master_ = -1;
   std::string slave_;
   termios ref_{};  // the reset state as the kernel keeps it
+};
+
+// The pty as the bridge's client port: polled only while a client has the slave side open (with
+// none, the master reports hang-up continuously); otherwise each look checks whether one came.
+class PtyPort final : public ClientPort {
+ public:
+  // `link` is the symlink the client opens (for the log); `baud` the bridge's rate, against
+  // which the client's termios speed is compared once per connection.
+  PtyPort(Pty& pty, std::string link, unsigned baud)
+      : pty_(pty), link_(std::move(link)), baud_(baud) {}
+  [[nodiscard]] std::string describe() const override;
+  [[nodiscard]] std::vector<pollfd> poll_fds() const override;
+  void service(std::span<const pollfd> fds, const PortEvents& ev) override;
+  [[nodiscard]] bool present() const override { return present_; }
+  std::size_t write(std::span<const std::uint8_t> bytes) override;
+
+ private:
+  void read_client(const PortEvents& ev);
+  Pty& pty_;
+  std::string link_;
+  unsigned baud_;
+  bool present_ = false;
+  bool speed_checked_ = false;
 };
 
 // Makes `path` a symlink to `target`. An existing symlink is replaced (atomically); any other

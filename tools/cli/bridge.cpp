@@ -16,8 +16,10 @@
 
 #include "../bridge/engine.hpp"
 #include "../bridge/pty.hpp"
+#include "../bridge/tcp.hpp"
 #include "dpc31/uart.hpp"
 #include "outfile.hpp"
+#include "pcapng.hpp"
 
 namespace dpc31::cli {
 
@@ -66,6 +68,7 @@ std::uint64_t to_cycles(Clock::duration d, std::uint32_t clock_hz) {
 struct Checked {
   bridge::Setup setup;
   bool realtime = true;
+  std::optional<bridge::ListenAddress> tcp;  // --tcp: a TCP port instead of the pty
 };
 
 // One line on `err` and nullopt for a bad option.
@@ -75,8 +78,28 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
     return std::nullopt;
   };
   if (!o.extra.empty()) return bad(fmt::format("unexpected argument '{}'", o.extra.front()));
-  if (o.pty.empty()) return bad("--pty PATH is required (the symlink the master program opens)");
   Checked c;
+  if (o.pty.empty() == o.tcp.empty()) {
+    return bad(
+        "one of --pty PATH (the symlink the master program opens) or --tcp [HOST:]PORT is "
+        "required");
+  }
+  if (!o.tcp.empty()) {
+    bridge::ListenAddress a;
+    if (const std::string why = bridge::parse_listen(o.tcp, a); !why.empty()) {
+      return bad(fmt::format("--tcp {}", why));
+    }
+    // The bridge has no authentication (docs/security.md): another host only when asked.
+    if (!bridge::is_loopback(a.host) && !o.allow_remote) {
+      return bad(fmt::format(
+          "--tcp {}: not a loopback address; the bridge has no authentication, so listening "
+          "where other hosts reach it needs --allow-remote (docs/security.md)",
+          o.tcp));
+    }
+    c.tcp = a;
+  } else if (o.allow_remote) {
+    return bad("--allow-remote needs --tcp");
+  }
   if (o.firmware.empty()) {
     return bad(
         fmt::format("--firmware is required ({} or a plug-in path)", builtin_firmware_names()));
@@ -86,7 +109,7 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
           {{"--firmware",
             is_plugin_path(o.firmware) || !o.cpu.empty() ? o.firmware : std::string()},
            {"--pty", o.pty}},
-          {{"--log", o.log}, {"--trace-cpu", o.trace_cpu}});
+          {{"--log", o.log}, {"--trace-cpu", o.trace_cpu}, {"--pcap", o.pcap}});
       !same.empty()) {
     return bad(same);
   }
@@ -143,7 +166,7 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
 
 // Line 1 of the log: every setting that acts on this run, and only those (a variant only for
 // the profile that has variants, the interrupt controller only for the dpc31).
-std::string header(const Checked& c, const BridgeOptions& o, const std::string& slave) {
+std::string header(const Checked& c, const BridgeOptions& o, const std::string& port) {
   const ChipOptions& chip = c.setup.chip;
   std::string profile(profile_name(chip.profile));
   if (chip.profile == Profile::vpc3plus) {
@@ -155,11 +178,11 @@ std::string header(const Checked& c, const BridgeOptions& o, const std::string& 
   }
   return fmt::format(
       "dpc31 bridge: pacing {}, baud {}, profile {}, firmware {}, address {}, slot {} bit times, "
-      "log level {}, pty {} -> {}",
+      "log level {}, {}",
       c.realtime ? "realtime" : "free", c.setup.baud, profile,
       c.setup.cpu ? fmt::format("{} on an 80C32 at {} Hz", o.firmware, c.setup.cpu->hz)
                   : std::string(c.setup.firmware->name),
-      c.setup.address, c.setup.slot_bits, o.log_level, o.pty, slave);
+      c.setup.address, c.setup.slot_bits, o.log_level, port);
 }
 
 class Log {
@@ -174,8 +197,9 @@ class Log {
     }
   }
   [[nodiscard]] int failed() const { return errno_; }
-  void event(std::uint64_t cycle, std::string_view tag, const std::string& text) {
-    line(fmt::format("{:>12} {:<5} {}", cycle, tag, text));
+  void event(std::uint64_t cycle, std::string_view tag, std::string_view station,
+             const std::string& text) {
+    line(fmt::format("{:>12} {:<5} {:<8} {}", cycle, tag, station, text));
   }
 
  private:
@@ -227,12 +251,11 @@ void trace_cpu(bridge::Engine& e, const Cpu51Image& image, std::FILE* f) {
 
 class Bridge {
  public:
-  Bridge(const Checked& c, bridge::Pty& pty, Log& log)
-      : realtime_(c.realtime), baud_(c.setup.baud), pty_(pty), log_(log) {
+  Bridge(const Checked& c, bridge::ClientPort& port, Log& log)
+      : realtime_(c.realtime), port_(port), log_(log) {
     engine_ = std::make_unique<bridge::Engine>(
-        c.setup, [this](std::uint64_t cycle, std::string_view tag, const std::string& text) {
-          log_.event(cycle, tag, text);
-        });
+        c.setup, [this](std::uint64_t cycle, std::string_view tag, std::string_view station,
+                        const std::string& text) { log_.event(cycle, tag, station, text); });
   }
 
   // Returns the exit code.
@@ -246,7 +269,7 @@ class Bridge {
     while (g_signal == 0) {
       if (log_.failed() != 0) return 2;
       const Clock::time_point now = Clock::now();
-      Clock::duration wait = present_ ? kTick : kIdleTick;
+      Clock::duration wait = port_.present() ? kTick : kIdleTick;
       if (engine_->partial()) {
         if (now - last_input_ >= kPause) {
           engine_->flush_partial();
@@ -303,7 +326,7 @@ class Bridge {
   // Writes what the chip sent to the client (if there is one).
   void deliver() {
     const std::vector<std::uint8_t> out = engine_->take_output();
-    if (!present_) {
+    if (!port_.present()) {
       // The answer to a request the last client left on the line: one line when it is over
       // (its bytes come over several loop turns), stamped then, not when the next client comes.
       dropped_ += out.size();
@@ -314,86 +337,52 @@ class Bridge {
       return;
     }
     if (out.empty()) return;
-    const unsigned long n = pty_.write(out.data(), out.size());
+    const std::size_t n = port_.write(out);
     if (n < out.size()) {
       engine_->note(
           fmt::format("the client does not read: {} answer bytes dropped", out.size() - n));
     }
   }
 
-  // Polls for the client's bytes (only while one is connected: with no slave fd open the master
-  // reports POLLHUP continuously) and the signal pipe; looks for a client while none is there.
+  // Polls the port's descriptors (the pty only while a client is connected: with no slave fd
+  // open the master reports POLLHUP continuously) and the signal pipe, then lets the port look.
   bool wait_events(Clock::duration wait) {
-    pollfd fds[2] = {{g_signal_pipe[0], POLLIN, 0}, {pty_.master_fd(), POLLIN, 0}};
-    const nfds_t n = present_ ? 2 : 1;
+    std::vector<pollfd> fds{{g_signal_pipe[0], POLLIN, 0}};
+    const std::vector<pollfd> own = port_.poll_fds();
+    fds.insert(fds.end(), own.begin(), own.end());
     const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(wait).count();
     const timespec ts{static_cast<time_t>(ns / 1'000'000'000),
                       static_cast<long>(ns % 1'000'000'000)};
-    const int r = ::ppoll(fds, n, &ts, nullptr);
+    const int r = ::ppoll(fds.data(), fds.size(), &ts, nullptr);
     if (r < 0 && errno != EINTR) {
       engine_->note(fmt::format("poll: {}", std::strerror(errno)));
       return false;
     }
     if (g_signal != 0) return true;
     try {
-      if (present_) {
-        if ((fds[1].revents & (POLLIN | POLLHUP | POLLERR)) != 0) read_client();
-      } else if (pty_.client_open()) {
-        present_ = true;
-        speed_checked_ = false;
-        engine_->note("client opened the pty");
-      } else if (pty_.changed()) {
-        // A client opened, configured and closed the pty between two looks.
-        pty_.reset();
-        engine_->note("a client changed the pty's settings and left: slave side reset");
-      }
+      port_.service(std::span(fds).subspan(1), events_);
     } catch (const bridge::PtyError& e) {
-      engine_->note(fmt::format("pty: {}", e.what()));
+      engine_->note(fmt::format("{}: {}", port_.describe(), e.what()));
       return false;
     }
     return true;
   }
 
-  void read_client() {
-    unsigned char buf[4096];
-    for (;;) {
-      const long n = pty_.read(buf, sizeof buf);
-      if (n > 0) {
-        if (!speed_checked_) {
-          speed_checked_ = true;
-          const unsigned s = pty_.speed();
-          if (s != baud_) {
-            engine_->note(fmt::format(
-                "the client set {} on the pty; the bridge carries its bytes "
-                "at {} baud",
-                s == 0 ? std::string("a non-standard speed") : fmt::format("{} baud", s), baud_));
-          }
-        }
-        last_input_ = Clock::now();
-        engine_->feed({buf, static_cast<std::size_t>(n)});
-        continue;
-      }
-      if (n == 0) return;  // all read, the client is still there
-      break;               // hang-up: no slave fd open any more
-    }
-    present_ = false;
-    // What it queued and the bus has not carried yet goes with it (a flood of its bytes must
-    // not keep the next client waiting).
-    engine_->client_gone();
-    pty_.reset();
-    engine_->note("client closed the pty: slave side reset (raw, 38400 baud), queues flushed");
-  }
-
   bool realtime_;
-  std::uint32_t baud_;
-  bridge::Pty& pty_;
+  bridge::ClientPort& port_;
   Log& log_;
   std::unique_ptr<bridge::Engine> engine_;
+  const bridge::PortEvents events_{
+      .bytes =
+          [this](std::span<const std::uint8_t> b) {
+            last_input_ = Clock::now();
+            engine_->feed(b);
+          },
+      .gone = [this] { engine_->client_gone(); },
+      .note = [this](const std::string& text) { engine_->note(text); }};
   Clock::time_point anchor_wall_;
   std::uint64_t anchor_chip_ = 0;
   Clock::time_point last_input_;
-  bool present_ = false;
-  bool speed_checked_ = false;
   std::size_t dropped_ = 0;  // answer bytes dropped (no client) and not yet logged
 };
 
@@ -402,7 +391,13 @@ class Bridge {
 CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
   auto* b = app.add_subcommand(
       "bridge", "the slave's RS-485 side as a pseudo-terminal for a DP master program");
-  b->add_option("--pty", o.pty, "symlink to create to the pty's slave side (required)");
+  b->add_option("--pty", o.pty, "symlink to create to the pty's slave side (or --tcp)");
+  b->add_option("--tcp", o.tcp,
+                "[HOST:]PORT: a raw TCP port instead of the pty (127.0.0.1 unless HOST; 0: any "
+                "free port, named in the log)");
+  b->add_flag("--allow-remote", o.allow_remote,
+              "let --tcp listen on an address other hosts reach (no authentication!)");
+  b->add_option("--pcap", o.pcap, "write every telegram on the line here as pcapng at the end");
   b->add_option("--baud", o.baud, "baud rate of the bus (a PROFIBUS rate)")->capture_default_str();
   b->add_option("--profile", o.profile, "chip profile: spc3, vpc3plus, dpc31")
       ->capture_default_str();
@@ -428,23 +423,68 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
   return b;
 }
 
+namespace {
+
+// The client's door: the pty (and its symlink, removed on every way out) or the TCP port.
+struct Door {
+  std::unique_ptr<bridge::Pty> pty;
+  std::unique_ptr<bridge::ClientPort> port;
+  std::string link;  // the --pty symlink, "" for TCP
+  Door() = default;
+  Door(const Door&) = delete;
+  Door& operator=(const Door&) = delete;
+  ~Door() {
+    if (pty) bridge::remove_link(link, pty->slave_name());
+  }
+};
+
+// One line on `err` and false when the door cannot be opened.
+bool open_door(const Checked& c, const BridgeOptions& o, Door& d, std::FILE* err) {
+  try {
+    if (c.tcp) {
+      d.port = std::make_unique<bridge::TcpPort>(*c.tcp);
+      return true;
+    }
+    d.pty = std::make_unique<bridge::Pty>();
+  } catch (const bridge::PtyError& e) {
+    fmt::print(err, "dpc31 bridge: cannot set up {}: {}\n",
+               c.tcp ? "the TCP port" : "a pseudo-terminal", e.what());
+    return false;
+  }
+  if (const std::string why = bridge::make_link(o.pty, d.pty->slave_name()); !why.empty()) {
+    fmt::print(err, "dpc31 bridge: {}\n", why);
+    return false;
+  }
+  d.link = o.pty;
+  d.port = std::make_unique<bridge::PtyPort>(*d.pty, o.pty, c.setup.baud);
+  return true;
+}
+
+// --pcap: every telegram on the line, timestamped from line time (docs/capture.md), the sender
+// named in the packet's comment and its direction (inbound: the master's; outbound: a station's).
+void capture_line(bridge::Engine& e, capture::PcapngWriter& pcap) {
+  const std::uint32_t hz = e.chip().clock_hz();
+  e.on_line([&pcap, hz](const bridge::LineTelegram& t) {
+    const std::optional<std::uint64_t> ns = capture::cycles_to_ns(t.start, hz);
+    if (!ns) return;  // beyond 584 years of chip time
+    pcap.add(capture::Packet{.timestamp_ns = *ns,
+                             .direction = t.sender == bridge::kMasterName
+                                              ? capture::Direction::inbound
+                                              : capture::Direction::outbound,
+                             .bytes = t.bytes,
+                             .comment = fmt::format("cycles {}-{}, {}", t.start, t.end, t.sender)});
+  });
+}
+
+}  // namespace
+
 int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
   const std::optional<Checked> c = check(o, err);
   if (!c) return 2;
-  std::unique_ptr<bridge::Pty> pty;
-  try {
-    pty = std::make_unique<bridge::Pty>();
-  } catch (const bridge::PtyError& e) {
-    fmt::print(err, "dpc31 bridge: cannot set up a pseudo-terminal: {}\n", e.what());
-    return 2;
-  }
-  if (const std::string why = bridge::make_link(o.pty, pty->slave_name()); !why.empty()) {
-    fmt::print(err, "dpc31 bridge: {}\n", why);
-    return 2;
-  }
+  Door door;
+  if (!open_door(*c, o, door, err)) return 2;
   SignalGuard signals;
   if (!signals.ok()) {
-    bridge::remove_link(o.pty, pty->slave_name());
     fmt::print(err, "dpc31 bridge: cannot install the signal handlers: {}\n", std::strerror(errno));
     return 2;
   }
@@ -452,12 +492,11 @@ int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
   // opened last, when every input has been checked, so that bad input never creates it.
   std::FILE* log_file = out;
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> owned(nullptr, std::fclose);
+  const auto refuse = [&](const std::string& why) {
+    fmt::print(err, "dpc31 bridge: {}\n", why);
+    return 2;
+  };
   if (!o.log.empty()) {
-    const auto refuse = [&](const std::string& why) {
-      bridge::remove_link(o.pty, pty->slave_name());
-      fmt::print(err, "dpc31 bridge: {}\n", why);
-      return 2;
-    };
     if (std::string foreign = outfile::foreign_symlink(o.log); !foreign.empty()) {
       return refuse(foreign);
     }
@@ -468,43 +507,37 @@ int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
     // The log into the bridge's own pty would be read back as telegrams by the master side.
     struct stat log_st {};
     struct stat pty_st {};
-    if (::fstat(::fileno(owned.get()), &log_st) == 0 &&
-        ::stat(pty->slave_name().c_str(), &pty_st) == 0 && log_st.st_dev == pty_st.st_dev &&
+    if (door.pty && ::fstat(::fileno(owned.get()), &log_st) == 0 &&
+        ::stat(door.pty->slave_name().c_str(), &pty_st) == 0 && log_st.st_dev == pty_st.st_dev &&
         log_st.st_ino == pty_st.st_ino) {
       return refuse(
           fmt::format("--log {}: is the bridge's own pseudo-terminal {}: the log would "
                       "feed back into it",
-                      o.log, pty->slave_name()));
+                      o.log, door.pty->slave_name()));
     }
     log_file = owned.get();
   }
   Log log(log_file);
-  log.line(header(*c, o, pty->slave_name()));
+  log.line(header(*c, o, door.port->describe()));
   // A firmware stuck in a loop without a bus access cannot be stopped from this thread: the guard
   // ends the process with one line (and takes the symlink away first).
-  if (!c->setup.cpu) board::guard_hangs("dpc31 bridge", c->setup.firmware->name, o.pty);
+  if (!c->setup.cpu) board::guard_hangs("dpc31 bridge", c->setup.firmware->name, door.link);
   outfile::OutFile trace;
-  if (!o.trace_cpu.empty() && !trace.open(o.trace_cpu)) {
-    bridge::remove_link(o.pty, pty->slave_name());
-    fmt::print(err, "dpc31 bridge: {}\n", trace.error());
-    return 2;
-  }
+  if (!o.trace_cpu.empty() && !trace.open(o.trace_cpu)) return refuse(trace.error());
+  capture::PcapngWriter pcap;
+  if (!o.pcap.empty() && !pcap.open(o.pcap)) return refuse(pcap.error());
   int rc = 0;
   try {
-    Bridge b(*c, *pty, log);
+    Bridge b(*c, *door.port, log);
     if (trace.is_open()) trace_cpu(b.engine(), c->setup.cpu_image, trace.stream());
+    if (pcap.is_open()) capture_line(b.engine(), pcap);
     rc = b.run();
   } catch (const FirmwareError& e) {
-    bridge::remove_link(o.pty, pty->slave_name());
     log.line(fmt::format("dpc31 bridge: {}", e.what()));
-    fmt::print(err, "dpc31 bridge: {}\n", e.what());
-    return 2;
+    return refuse(e.what());
   }
-  bridge::remove_link(o.pty, pty->slave_name());
-  if (trace.is_open() && !trace.commit()) {
-    fmt::print(err, "dpc31 bridge: {}\n", trace.error());
-    return 2;
-  }
+  if (trace.is_open() && !trace.commit()) return refuse(trace.error());
+  if (pcap.is_open() && !pcap.close()) return refuse(pcap.error());
   if (log.failed() != 0) {
     fmt::print(err, "dpc31 bridge: cannot write the log {}: {}\n",
                o.log.empty() ? std::string("to the standard output") : o.log,

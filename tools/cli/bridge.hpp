@@ -13,7 +13,10 @@ namespace dpc31::cli {
 // Every option is kept as text and checked by run_bridge, so a bad value gives one line on
 // stderr and exit code 2 (CLI11's own messages take two lines).
 struct BridgeOptions {
-  std::string pty;  // the symlink to create
+  std::string pty;            // the symlink to create
+  std::string tcp;            // or "[HOST:]PORT": a TCP port (docs/bridge.md, "Over TCP")
+  bool allow_remote = false;  // --tcp on an address that is not the loopback
+  std::string pcap;           // the line as pcapng, written when the bridge stops
   std::string baud = "19200";
   std::string profile = "dpc31";
   ChipChoice chip;  // --variant, --irq-controller
