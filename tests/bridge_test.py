@@ -47,6 +47,21 @@ def dx_answer(code, inputs):  # Data_Exchange answer: DL (0x08) or DH (0x0A), no
     return sd2(MASTER, SLAVE, code, inputs)
 
 
+def fate_tags(lines):
+    """The fate of each request in a bridge log at the telegrams level, in order: "TxD" (its
+    answer's line) or "NOTE" ("no answer within the slot time"); a late answer is none."""
+    tags = []
+    for line in lines[1:]:
+        parts = line.split(maxsplit=2)
+        if len(parts) < 3:
+            continue
+        if parts[1] == "TxD" and not parts[2].endswith("(late)"):
+            tags.append("TxD")
+        elif parts[1] == "NOTE" and parts[2] == "no answer within the slot time":
+            tags.append("NOTE")
+    return tags
+
+
 class Bridge:
     """The bridge as a child process; its symlink in a temporary directory."""
 
@@ -100,18 +115,9 @@ class Bridge:
             return f.read().splitlines()
 
     def fates(self, all_lines=False):
-        """How many requests have met their fate so far (telegrams level: the answer's TxD line,
-        or "no answer within the slot time"; a late answer is none); with `all_lines`, also the
+        """How many requests have met their fate so far (fate_tags); with `all_lines`, also the
         list of their tags."""
-        tags = []
-        for line in self.log_lines()[1:]:
-            parts = line.split(maxsplit=2)
-            if len(parts) < 3:
-                continue
-            if parts[1] == "TxD" and not parts[2].endswith("(late)"):
-                tags.append("TxD")
-            elif parts[1] == "NOTE" and parts[2] == "no answer within the slot time":
-                tags.append("NOTE")
+        tags = fate_tags(self.log_lines())
         return (len(tags), tags) if all_lines else len(tags)
 
     def wait_for_log(self, text, limit_s, count=1):
@@ -551,7 +557,6 @@ def answer_dropped_without_client():
     with tempfile.TemporaryDirectory() as tmp:
         b = Bridge(tmp, "--firmware", "DO4", "--baud", "9600", "--log-level", "telegrams")
         try:
-            req = None
             for attempt in range(20):
                 m = Master(b.path, 9600, 0.5 * SCALE)
                 m.expect("FDL_Status", m.find_slave(), status_ok())
@@ -565,12 +570,23 @@ def answer_dropped_without_client():
                 at = max(i for i, line in enumerate(lines) if on_line in line)
                 answered = any(" TxD " in line for line in lines[at:])
                 waiting = fcntl.ioctl(m.fd, termios.FIONREAD, struct.pack("i", 0))
+                resets = sum("slave side reset" in line for line in lines)
+                drops = sum("no client:" in line for line in lines)
                 m.close()
                 b.proc.send_signal(signal.SIGCONT)
+                # The next client's tcsetattr needs the slave side reset (close_and_wait), and
+                # comes after the Slave_Diag's fate (its answer, or none), so that no tail of it
+                # reaches the next client.
+                b.wait_for_log("slave side reset", 30 * SCALE, resets + 1)
+                deadline = time.monotonic() + 30 * SCALE
+                while b.fates() <= len(fate_tags(lines[:at])):
+                    check(time.monotonic() < deadline, "the Slave_Diag met no fate in 30 s")
+                    time.sleep(0.01)
                 if not answered and struct.unpack("i", waiting)[0] == 0:
-                    # The answer's fate: dropped, or (the bridge wrote its first characters in
-                    # the turn before it looked at the pty) partly gone to the closed pty.
-                    b.wait_for_log("answer bytes dropped", 30 * SCALE)
+                    # At least the answer's tail is dropped (it takes 19.5 ms of chip time, the
+                    # bridge's first turn after SIGCONT 5 ms at most); all 17 bytes unless that
+                    # turn wrote its first characters to the closed pty.
+                    b.wait_for_log("no client:", 30 * SCALE, drops + 1)
                     if any("no client: 17 answer bytes dropped" in line for line in b.log_lines()):
                         break
                 print(f"answer_dropped_without_client: attempt {attempt} lost", file=sys.stderr)
