@@ -10,16 +10,20 @@ Usage: bridge_test.py DPC31_CLI CASE     (CASE: see CASES at the bottom)
 Python 3 standard library only.
 """
 
+import fcntl
 import os
+import select
 import signal
+import struct
 import subprocess
 import sys
 import tempfile
+import termios
 import time
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tools"))
-from dp_master import (SAP_SLAVE_DIAG, SAP_SET_PRM, SAP_CHK_CFG, SAP_MASTER, SC,  # noqa: E402
-                       Fail, Master, check, hexs, sd1, sd2)
+from dp_master import (SAP_SLAVE_DIAG, SAP_SET_PRM, SAP_CHK_CFG, SAP_MASTER, SC, SD1,  # noqa: E402
+                       SD2, Fail, Master, check, frame_length, hexs, sd1, sd2)
 
 CLI = None
 # Wall-clock limits are multiplied by this; only the sanitizer build (CMakePresets.json, asan)
@@ -41,6 +45,21 @@ def diag(du):  # Slave_Diag answer: DL from SAP 60 to SAP 62
 
 def dx_answer(code, inputs):  # Data_Exchange answer: DL (0x08) or DH (0x0A), no SAPs
     return sd2(MASTER, SLAVE, code, inputs)
+
+
+def fate_tags(lines):
+    """The fate of each request in a bridge log at the telegrams level, in order: "TxD" (its
+    answer's line) or "NOTE" ("no answer within the slot time"); a late answer is none."""
+    tags = []
+    for line in lines[1:]:
+        parts = line.split(maxsplit=2)
+        if len(parts) < 3:
+            continue
+        if parts[1] == "TxD" and not parts[2].endswith("(late)"):
+            tags.append("TxD")
+        elif parts[1] == "NOTE" and parts[2] == "no answer within the slot time":
+            tags.append("NOTE")
+    return tags
 
 
 class Bridge:
@@ -95,6 +114,12 @@ class Bridge:
         with open(self.log, encoding="utf-8") as f:
             return f.read().splitlines()
 
+    def fates(self, all_lines=False):
+        """How many requests have met their fate so far (fate_tags); with `all_lines`, also the
+        list of their tags."""
+        tags = fate_tags(self.log_lines())
+        return (len(tags), tags) if all_lines else len(tags)
+
     def wait_for_log(self, text, limit_s, count=1):
         """Until `count` lines of the log hold `text` (an event of the chip or the pty), at most
         `limit_s`: a test waits on the event, not on a wall time (issue 35)."""
@@ -109,6 +134,44 @@ class Bridge:
         before = sum("slave side reset" in line for line in self.log_lines())
         m.close()
         self.wait_for_log("slave side reset", 30 * SCALE, before + 1)
+
+
+class PacedMaster(Master):
+    """A master for a bridge in free pacing at the telegrams log level that waits on each
+    request's fate in the bridge's log (its answer, or "no answer within the slot time") instead
+    of a wall-clock timeout. A host slower than the chip's time (the 80C32 with --trace-cpu
+    beside a CPU hog ran at 1/17 of real time) otherwise fills the bridge's queue with the
+    FDL_Status requests of find_slave's retries faster than the chip works them off, and the
+    first Slave_Diag was answered, but behind 230 stale FDL_Status exchanges, long after the
+    master's 0.5 s (issue 35). `limit_s` only guards against a hang."""
+
+    def __init__(self, bridge, baud, limit_s):
+        super().__init__(bridge.path, baud, limit_s)
+        self.bridge = bridge
+        self.fates = bridge.fates()
+
+    def transact(self, req, timeout=None, searching=False):
+        termios.tcflush(self.fd, termios.TCIFLUSH)
+        os.write(self.fd, req)
+        self.fates += 1
+        deadline = time.monotonic() + self.timeout
+        while (fates := self.bridge.fates(all_lines=True))[0] < self.fates:
+            check(time.monotonic() < deadline, f"no fate of {hexs(req)} in the log")
+            time.sleep(0.005)
+        if fates[1][self.fates - 1] != "TxD":
+            return None
+        buf = b""
+        while True:
+            # A late answer's tail (a request before) is not ours: bytes before a delimiter.
+            buf = buf.lstrip(bytes(b for b in range(256) if b not in (SD1, SD2, SC)))
+            n = frame_length(buf)
+            if n is not None and len(buf) >= n:
+                return buf[:n]
+            left = deadline - time.monotonic()
+            check(left > 0, f"the answer to {hexs(req)} is in the log but not on the pty")
+            r, _, _ = select.select([self.fd], [], [], left)
+            if r:
+                buf += os.read(self.fd, 512)
 
 
 def startup_do4(m, wd=(0x64, 0x0A)):
@@ -206,9 +269,10 @@ def do4_80c32_free():
     with tempfile.TemporaryDirectory() as tmp:
         trace = os.path.join(tmp, "cpu.trace")
         b = Bridge(tmp, "--cpu", "80c32:24000000", "--firmware", ihx, "--profile", "spc3",
-                   "--baud", "19200", "--pacing", "free", "--trace-cpu", trace)
+                   "--baud", "19200", "--pacing", "free", "--trace-cpu", trace,
+                   "--log-level", "telegrams")
         try:
-            m = Master(b.path, 19200, 0.5 * SCALE)
+            m = PacedMaster(b, 19200, 60 * SCALE)
             startup_do4(m)
             exchange_do4(m)
             m.close()
@@ -483,23 +547,51 @@ def profibus_rates_default_log():
 def answer_dropped_without_client():
     """A client that leaves after its request went on the line, before the answer: the answer is
     dropped, and the log says so with the cycle at which it was dropped (between the client's
-    leaving and the next one's coming), not when the next client comes. Realtime, 9600 baud: the
-    request (Slave_Diag, 9 characters) is on the line about 3 to 14 ms after it was written, the
-    answer comes after it; the client closes 3 to 17 ms after writing (tried up to 20 times with
-    the delays spread over that window: the wall clock of a loaded machine may miss it; issue
-    35)."""
+    leaving and the next one's coming), not when the next client comes. Realtime, 9600 baud,
+    telegrams level. Each attempt waits on events, not on wall time (issue 35): the Slave_Diag's
+    RxD line in the log (the request is on the line: 9 characters, 10.3 ms, then at least TSDR
+    before the answer), then the bridge is stopped (SIGSTOP) and the test looks: no answer byte
+    on the pty and no TxD line yet, so the client closes while the bridge cannot run, and the
+    bridge, continued, finds it gone. An attempt is lost only when the test reacted to the RxD
+    line later than the answer came (beside a CPU hog it may): the next client tries again."""
     with tempfile.TemporaryDirectory() as tmp:
-        b = Bridge(tmp, "--firmware", "DO4", "--baud", "9600")
+        b = Bridge(tmp, "--firmware", "DO4", "--baud", "9600", "--log-level", "telegrams")
         try:
             for attempt in range(20):
                 m = Master(b.path, 9600, 0.5 * SCALE)
                 m.expect("FDL_Status", m.find_slave(), status_ok())
-                os.write(m.fd, m.srd_frame([], SAP_SLAVE_DIAG))
-                time.sleep(0.003 + 0.002 * (attempt % 8))
+                req = m.srd_frame([], SAP_SLAVE_DIAG)
+                on_line = f"RxD   {hexs(req)}  |"
+                before = sum(on_line in line for line in b.log_lines())
+                os.write(m.fd, req)
+                b.wait_for_log(on_line, 30 * SCALE, before + 1)
+                b.proc.send_signal(signal.SIGSTOP)
+                lines = b.log_lines()
+                at = max(i for i, line in enumerate(lines) if on_line in line)
+                answered = any(" TxD " in line for line in lines[at:])
+                waiting = fcntl.ioctl(m.fd, termios.FIONREAD, struct.pack("i", 0))
+                resets = sum("slave side reset" in line for line in lines)
+                drops = sum("no client:" in line for line in lines)
                 m.close()
-                time.sleep(0.1)
-                if any("no client: 17 answer bytes dropped" in line for line in b.log_lines()):
-                    break
+                b.proc.send_signal(signal.SIGCONT)
+                # The next client's tcsetattr needs the slave side reset (close_and_wait), and
+                # comes after the Slave_Diag's fate (its answer, or none), so that no tail of it
+                # reaches the next client.
+                b.wait_for_log("slave side reset", 30 * SCALE, resets + 1)
+                deadline = time.monotonic() + 30 * SCALE
+                k = len(fate_tags(lines[:at]))
+                while (fates := b.fates(all_lines=True))[0] <= k:
+                    check(time.monotonic() < deadline, "the Slave_Diag met no fate in 30 s")
+                    time.sleep(0.01)
+                # No answer at all: Baud_Control expired after find_slave (a loaded host).
+                if fates[1][k] == "TxD" and not answered and struct.unpack("i", waiting)[0] == 0:
+                    # At least the answer's tail is dropped (it takes 19.5 ms of chip time, the
+                    # bridge's first turn after SIGCONT 5 ms at most); all 17 bytes unless that
+                    # turn wrote its first characters to the closed pty.
+                    b.wait_for_log("no client:", 30 * SCALE, drops + 1)
+                    if any("no client: 17 answer bytes dropped" in line for line in b.log_lines()):
+                        break
+                print(f"answer_dropped_without_client: attempt {attempt} lost", file=sys.stderr)
             m = Master(b.path, 9600, 0.5 * SCALE)
             m.expect("FDL_Status (next client)", m.find_slave(), status_ok())
             m.close()
