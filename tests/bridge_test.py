@@ -48,16 +48,17 @@ def dx_answer(code, inputs):  # Data_Exchange answer: DL (0x08) or DH (0x0A), no
 
 
 def fate_tags(lines):
-    """The fate of each request in a bridge log at the telegrams level, in order: "TxD" (its
-    answer's line) or "NOTE" ("no answer within the slot time"); a late answer is none."""
+    """The fate of each request in a bridge log at the telegrams level (lines "CYCLE TAG STATION
+    TEXT"), in order: "TxD" (its answer's line) or "NOTE" ("no answer within the slot time"); a
+    late answer is none."""
     tags = []
     for line in lines[1:]:
-        parts = line.split(maxsplit=2)
-        if len(parts) < 3:
+        parts = line.split(maxsplit=3)
+        if len(parts) < 4:
             continue
-        if parts[1] == "TxD" and not parts[2].endswith("(late)"):
+        if parts[1] == "TxD" and not parts[3].endswith("(late)"):
             tags.append("TxD")
-        elif parts[1] == "NOTE" and parts[2] == "no answer within the slot time":
+        elif parts[1] == "NOTE" and parts[3] == "no answer within the slot time":
             tags.append("NOTE")
     return tags
 
@@ -561,7 +562,7 @@ def answer_dropped_without_client():
                 m = Master(b.path, 9600, 0.5 * SCALE)
                 m.expect("FDL_Status", m.find_slave(), status_ok())
                 req = m.srd_frame([], SAP_SLAVE_DIAG)
-                on_line = f"RxD   {hexs(req)}  |"
+                on_line = f"RxD   master   {hexs(req)}  |"
                 before = sum(on_line in line for line in b.log_lines())
                 os.write(m.fd, req)
                 b.wait_for_log(on_line, 30 * SCALE, before + 1)
