@@ -12,6 +12,7 @@
 #include "firmware_host.hpp"
 #include "scenario.hpp"
 #include "scenario_bus.hpp"
+#include "scenario_dpv1.hpp"
 #include "scenario_lex.hpp"
 #include "scenario_send.hpp"
 #include "textfile.hpp"
@@ -69,7 +70,7 @@ std::string name_list(const char* const* names) {
 bool sends_request(StepKind k) {
   return is_action(k) && k != StepKind::silence && k != StepKind::foreign_master &&
          k != StepKind::write && k != StepKind::read && k != StepKind::send &&
-         k != StepKind::request;
+         k != StepKind::request && k != StepKind::dpv1;
 }
 
 class Parser {
@@ -420,7 +421,7 @@ class Parser {
           unknown_option(k);
         }
       }
-    } else {
+    } else if (!scenario_dpv1::parse_header(cmd_, pos_, opts_, s_)) {
       return false;
     }
     return true;
@@ -577,6 +578,7 @@ class Parser {
       no_options();
       expect();
     } else if (scenario_bus::parse_action(cmd_, pos_, opts_, s_.chip.profile, step_, last_read_)) {
+    } else if (scenario_dpv1::parse_action(cmd_, pos_, opts_, s_, step_)) {
     } else {
       fail(fmt::format("unknown command '{}'", shown(cmd_)));
     }
@@ -622,8 +624,8 @@ class Parser {
     if (pos_.empty()) fail("'expect' needs what to check and the expected value");
     const std::string_view what = pos_[0];
     if (pos_.size() >= 3 && (pos_[pos_.size() - 2] == "at" || pos_[pos_.size() - 2] == "after")) {
-      if (what != "dp_state" && what != "wd_state") {
-        fail(fmt::format("'{}' is for dp_state and wd_state: the cycle a state was entered",
+      if (what != "dp_state" && what != "wd_state" && what != "dpv1") {
+        fail(fmt::format("'{}' is for dp_state, wd_state and dpv1: the cycle a state was entered",
                          pos_[pos_.size() - 2]));
       }
       step_.when =
@@ -730,10 +732,12 @@ class Parser {
       args(1, "N");
       step_.expect = ExpectKind::baud;
       step_.value = static_cast<std::uint32_t>(number(pos_[1], "baud", 1, 12'000'000));
+    } else if (what == "dpv1") {
+      scenario_dpv1::parse_expect(pos_, step_);
     } else if (!scenario_bus::parse_expect(pos_, s_.chip.profile, last_read_, step_)) {
       fail(
           fmt::format("unknown check '{}' (dp_state, wd_state, outputs, cleared, inputs, counter, "
-                      "irr_bit, answer, station, diag_byte, baud, port, pb3, reg, ram, read)",
+                      "irr_bit, answer, station, diag_byte, baud, port, pb3, reg, ram, read, dpv1)",
                       shown(what)));
     }
   }
