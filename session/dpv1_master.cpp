@@ -35,6 +35,8 @@ std::string answer_summary(const Dpv1Answer& a) {
   const std::string polls = fmt::format("after {} poll{}", a.polls, a.polls == 1 ? "" : "s");
   switch (a.outcome) {
     case Dpv1Answer::Outcome::positive:
+      if (a.du.empty()) return fmt::format("SC {}", polls);  // Abort: no response PDU
+      [[fallthrough]];
     case Dpv1Answer::Outcome::malformed:
       return fmt::format("{}{} {}", a.outcome == Dpv1Answer::Outcome::malformed ? "malformed " : "",
                          hex_bytes(a.du, " ", 16), polls);
@@ -118,8 +120,6 @@ Dpv1Answer Dpv1Master::alarm_ack(const pdu::AlarmAck& ack) {
 }
 
 Dpv1Answer Dpv1Master::initiate(const pdu::Initiate& req) {
-  c2_sap_.reset();
-  c2_timeout_ = req.send_timeout;
   const std::uint64_t timeout = cycles_10ms(req.send_timeout);
   Dpv1Answer rm = transfer(sap::MSAC_C2_RM, rules_.c2_ssap, req.build(), timeout);
   const auto immediate = pdu::ResourceManager::parse(rm.du);
@@ -131,7 +131,10 @@ Dpv1Answer Dpv1Master::initiate(const pdu::Initiate& req) {
   a.start = rm.start;
   a.polls += rm.polls;
   classify(a, Function::Initiate, pdu::Initiate::parse(a.du, true).has_value());
-  if (a.outcome == Dpv1Answer::Outcome::positive) c2_sap_ = immediate->sap;
+  if (a.outcome == Dpv1Answer::Outcome::positive) {  // else an open connection stays open
+    c2_sap_ = immediate->sap;
+    c2_timeout_ = req.send_timeout;
+  }
   return a;
 }
 

@@ -60,7 +60,8 @@ class Dpv1Master {
 
   // MSAC_C2. initiate sends the Initiate request to SAP 49 and polls it until the resource
   // manager's immediate response (56h: the connection's SAP), then polls the connection's SAP
-  // for the Initiate response; positive: the connection is open (c2_sap()).
+  // for the Initiate response; positive: the connection is open (c2_sap()); otherwise the
+  // connection open before, if any, stays open.
   Dpv1Answer initiate(const pdu::Initiate& req);
   Dpv1Answer c2_read(std::uint8_t slot, std::uint8_t index, std::uint8_t length);
   Dpv1Answer c2_write(std::uint8_t slot, std::uint8_t index, pdu::Bytes data);

@@ -57,6 +57,7 @@ std::optional<pdu::Bytes> Dpv1User::record(Function f, const pdu::Bytes& req) {
   const std::optional<pdu::Record> r = pdu::Record::parse(req, f, f != Function::Read);
   if (!r)
     return pdu::ErrorResponse{f, pdu::Error_Decode_DPV1, pdu::error::Invalid_Parameter, 0}.build();
+  if (f == Function::Data_Transport) return r->build();  // the data echoed, whatever the record
   const auto it = std::find_if(cfg_.records.begin(), cfg_.records.end(), [&](const Dpv1Record& d) {
     return d.slot == r->slot && d.index == r->index;
   });
@@ -81,8 +82,8 @@ std::optional<pdu::Bytes> Dpv1User::record(Function f, const pdu::Bytes& req) {
       }
       it->data = r->data;
       return pdu::Record{f, r->slot, r->index, r->length, {}}.build();
-    default:  // Data_Transport: the record's answer to the data is the data itself (an echo)
-      return r->build();
+    default:
+      return std::nullopt;
   }
 }
 

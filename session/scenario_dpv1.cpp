@@ -108,6 +108,7 @@ bool parse_action(std::string_view cmd, std::span<const std::string_view> pos,
     // Specifier: Seq_Nr bits 7..3, Add_Ack bit 2, the specifier bits 1..0 (pdu::Dpv1DiagBlock).
     bool slot = false, type = false, seq = false;
     std::uint32_t spec = 0;
+    st.count = 0;
     for (const auto& [k, v] : opts) {
       if (k == "slot") {
         st.value = static_cast<std::uint32_t>(number(v, k, 0, 254));
