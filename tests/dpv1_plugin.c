@@ -9,6 +9,7 @@
 
 #include "dp_slave.h"
 #include "platform.h"
+#include "vpc3.h"
 
 #define DPV1_IDENT 0x0E01u
 #define CELL_SAP_LIST_PTR 0x17u /* R_FDL_SAP_List_Ptr */
