@@ -9,6 +9,7 @@
 
 #include "dpc31/dp.hpp"
 #include "responder.hpp"
+#include "scenario.hpp"
 
 using namespace dpc31;
 
@@ -141,6 +142,36 @@ TEST(Dpv1Master, ClassTwoConnection) {
   EXPECT_EQ(r.user.dpv1()->timeouts, 1u);
   a = r.dpv1.c2_idle();
   EXPECT_EQ(a.outcome, Dpv1Answer::Outcome::refused);
+}
+
+// Bad DPV1 lines are parse errors with their line (docs/scenario-format.md, "DPV1"): nothing
+// runs.
+TEST(Dpv1Scenario, ParseErrorsNameTheLine) {
+  const std::pair<const char*, const char*> cases[] = {
+      {"profile spc3\nrecord slot=0 index=1 data=01\n",
+       "t.scn:2: 'record' needs 'profile vpc3plus' before it: only the VPC3+ has DPV1"},
+      {"profile vpc3plus\nstartup\ndpv1_read slot=0 index=1\n",
+       "t.scn:3: dpv1_read needs slot=N index=N length=N"},
+      {"profile vpc3plus\nstartup\nexpect dpv1 error 80,B0\n",
+       "t.scn:3: expect dpv1 error: three bytes, Error_Decode,Error_Code_1,Error_Code_2"},
+      {"profile vpc3plus\ncorrupt parity\ndpv1_read slot=0 index=1 length=4\n",
+       "t.scn:2: the next action ('dpv1_read', line 3) sends no request to damage"},
+      {"profile vpc3plus\nrecord slot=0 index=1 data=01\nrecord slot=0 index=1 data=02\n",
+       "t.scn:3: record slot=0 index=1 given twice"},
+      {"profile vpc3plus\nalarm_ack slot=0 type=1\n",
+       "t.scn:2: alarm_ack needs slot=N type=N seq=N"},
+  };
+  for (const auto& [text, want] : cases) {
+    Scenario s;
+    ScenarioError err;
+    EXPECT_FALSE(parse_scenario(text, "t.scn", s, err)) << text;
+    EXPECT_EQ(err.text(), want);
+  }
+  // A Reason_Code beyond its 4 bits.
+  Scenario s;
+  ScenarioError err;
+  EXPECT_FALSE(parse_scenario("profile vpc3plus\nc2_abort reason=16\n", "t.scn", s, err));
+  EXPECT_EQ(err.line, 2);
 }
 
 }  // namespace
