@@ -625,8 +625,10 @@ class Parser {
     const std::string_view what = pos_[0];
     if (pos_.size() >= 3 && (pos_[pos_.size() - 2] == "at" || pos_[pos_.size() - 2] == "after")) {
       if (what != "dp_state" && what != "wd_state" && what != "dpv1") {
-        fail(fmt::format("'{}' is for dp_state, wd_state and dpv1: the cycle a state was entered",
-                         pos_[pos_.size() - 2]));
+        fail(fmt::format(
+            "'{}' is for dp_state, wd_state and dpv1: the cycle a state was entered or a "
+            "response ended",
+            pos_[pos_.size() - 2]));
       }
       step_.when =
           pos_[pos_.size() - 2] == "at" ? ScenarioStep::When::at : ScenarioStep::When::after;
