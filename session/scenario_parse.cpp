@@ -258,8 +258,8 @@ class Parser {
   void cpu_header() {
     positional(3, 3, "80c32 firmware FILE.ihx");
     if (pos_[0] != "80c32" || pos_[1] != "firmware") fail("the form is 'cpu 80c32 firmware FILE'");
-    if (firmware_seen_ || user_seen_ || slave_seen_)
-      fail("'cpu' comes before 'slave', without 'firmware' and 'user'");
+    if (firmware_seen_ || user_seen_ || slave_seen_ || !s_.user.dpv1.records.empty())
+      fail("'cpu' comes before 'slave', without 'firmware', 'user' and 'record'");
     Cpu51Config c{.hex = beside_scenario(std::string(pos_[2]))};
     for (const auto& [k, v] : opts_) {
       if (k == "clock") {
@@ -347,7 +347,8 @@ class Parser {
       positional(1, 1, "a firmware name or plug-in path");
       no_options();
       if (slave_seen_) fail("'firmware' comes before 'slave': it sets the slave's GSD defaults");
-      if (user_seen_) fail("'firmware' and 'user' exclude each other");
+      if (user_seen_ || !s_.user.dpv1.records.empty())
+        fail("'firmware' excludes 'user' and 'record' (the built-in user side's)");
       if (s_.cpu) fail("'firmware' and 'cpu' exclude each other");
       firmware_seen_ = true;
       std::string spec(pos_[0]);
