@@ -374,7 +374,8 @@ void bind_scenarios(py::module_& m) {
       .value("write", StepKind::write)
       .value("read", StepKind::read)
       .value("send", StepKind::send)
-      .value("request", StepKind::request);
+      .value("request", StepKind::request)
+      .value("dpv1", StepKind::dpv1);
   py::class_<ScenarioStep>(m, "Step", "One line of a scenario file.")
       .def_readonly("line", &ScenarioStep::line)
       .def_readonly("text", &ScenarioStep::text)

@@ -301,12 +301,11 @@ void Cpu::idle(std::uint64_t cycles) {
     gate();
     if (chip_.cycle() >= end) return;  // an ISR served in gate() took the rest of the wait
     const std::uint64_t n = std::min(end, limit_) - chip_.cycle();
-    // An interrupt that would preempt the wait ends this piece where it becomes active.
-    if (program_.main_step && !in_isr_ && interrupts_enabled()) {
-      chip_.step_until_irq(n);
-    } else {
-      chip_.step(n);
-    }
+    // An interrupt that would preempt the wait ends this piece where it becomes active, and so
+    // does a stop request (the master seeing its answer start, wake_on_txd) in every case, an
+    // ISR's busy wait too: gate() then hands the bus side its turn, which a plain step() would
+    // have held back to the limit.
+    chip_.step_until_irq(n);
     if (chip_.cycle() >= end) return;
   }
 }

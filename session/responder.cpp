@@ -14,6 +14,7 @@ namespace m1 = fields::Mode_Reg1_S;
 constexpr std::uint8_t kHandshakeConflict = 0x01;  // the OK / Not_OK reads' 01: a newer one came
 constexpr std::uint16_t kHandledByReads = irq::New_Prm_Data | irq::New_Cfg_Data;
 constexpr std::uint8_t kQueueLen = 4;  // dpc31: entries of each queue (one always empty)
+constexpr std::uint16_t kDpv1Events = irq::FDL_Ind | irq::Poll_End_Ind | irq::User_Timer_Clock;
 
 }  // namespace
 
@@ -74,8 +75,10 @@ void Responder::init(BusPort& c) {
   const std::uint16_t enabled = irq::MAC_Reset | irq::Go_Leave_Data_Exchange |
                                 irq::Baudrate_Detect | irq::WD_DP_Control_Timeout |
                                 irq::New_GC_Command | irq::New_SSA_Data | irq::New_Cfg_Data |
-                                irq::New_Prm_Data | irq::Diag_Buffer_Changed | irq::DX_Out;
-  write16(c, RegId::Int_Mask_Reg, static_cast<std::uint16_t>(~enabled));
+                                irq::New_Prm_Data | irq::Diag_Buffer_Changed | irq::DX_Out |
+                                (dpv1_ ? irq::FDL_Ind | irq::Poll_End_Ind : 0);
+  mask_ = static_cast<std::uint16_t>(~enabled);
+  write16(c, RegId::Int_Mask_Reg, mask_);
   c.write(waddr(c.chip(), RegId::WD_Baud_Control_Val), cfg_.wd_baud_control);
   c.write(waddr(c.chip(), RegId::MinTSDR_Val), 0x0B);
   write16(c, RegId::R_User_WD_Value, cfg_.user_wd_value);
@@ -123,6 +126,7 @@ void Responder::init(BusPort& c) {
   }
   if (p.id == Profile::dpc31 && cfg_.dx_out_port)
     c.write(waddr(c.chip(), RegId::C31_Control), fields::C31_Control::Enable_DX_Out_Port);
+  if (dpv1_) next = dpv1_->init(c, next, seg_shift_);
   give_inputs(c);
   if (p.id != Profile::dpc31) {
     c.write(waddr(c.chip(), RegId::Mode_Reg1_S),
@@ -216,7 +220,17 @@ void Responder::isr(BusPort& c) {
       }
     }
   }
-  const auto ack = static_cast<std::uint16_t>(ir & ~kHandledByReads);
+  if (dpv1_ && (ir & kDpv1Events) != 0) {
+    // Acknowledged before the buffers are looked at: an indication stored meanwhile raises the
+    // event again instead of being lost.
+    write16(c, RegId::Int_Ack_Reg, static_cast<std::uint16_t>(ir & kDpv1Events));
+    dpv1_->serve(c, ir);
+    const std::uint16_t mask = dpv1_->timer_wanted()
+                                   ? static_cast<std::uint16_t>(mask_ & ~irq::User_Timer_Clock)
+                                   : static_cast<std::uint16_t>(mask_ | irq::User_Timer_Clock);
+    if (mask != mask_) write16(c, RegId::Int_Mask_Reg, mask_ = mask);
+  }
+  const auto ack = static_cast<std::uint16_t>(ir & ~kHandledByReads & ~kDpv1Events);
   if (ack != 0) write16(c, RegId::Int_Ack_Reg, ack);
   c.write(waddr(c.chip(), RegId::Mode_Reg1_S), m1::EOI);
 }

@@ -6,12 +6,14 @@
 
 #include <cstdint>
 #include <initializer_list>
+#include <optional>
 #include <utility>
 #include <vector>
 
 #include "cpu.hpp"
 #include "dp_master.hpp"
 #include "dpc31/chip.hpp"
+#include "responder_dpv1.hpp"
 
 namespace dpc31 {
 
@@ -27,11 +29,14 @@ struct ResponderConfig {
   std::uint8_t wd_baud_control = 0x10;   // x 10 ms
   std::vector<std::uint8_t> substitute;  // dpc31 clear buffer C contents
   bool dx_out_port = false;              // dpc31 C31_Control.Enable_DX_Out_Port (PB3)
+  Dpv1UserConfig dpv1;                   // vpc3plus: records to serve over DPV1 (none: off)
 };
 
 class Responder {
  public:
-  explicit Responder(ResponderConfig cfg) : cfg_(std::move(cfg)) {}
+  explicit Responder(ResponderConfig cfg) : cfg_(std::move(cfg)) {
+    if (!cfg_.dpv1.records.empty()) dpv1_.emplace(cfg_.dpv1);
+  }
 
   void init(BusPort& bus);  // registers, buffers, Start_SPC3 (dpc31: the queues, MAC_Start)
   void isr(BusPort& bus);
@@ -47,6 +52,8 @@ class Responder {
   std::uint32_t prm_accepted = 0;
   std::uint32_t cfg_accepted = 0;
   std::uint32_t cfg_rejected = 0;
+  // The DPV1 part (records, Alarm_Acks taken), when the configuration has records.
+  [[nodiscard]] const std::optional<Dpv1User>& dpv1() const { return dpv1_; }
 
  private:
   std::uint32_t waddr(const Chip& c, RegId id) const;
@@ -63,6 +70,8 @@ class Responder {
   void request(BusPort& c, std::initializer_list<std::pair<std::uint8_t, std::uint8_t>> entries);
 
   ResponderConfig cfg_;
+  std::optional<Dpv1User> dpv1_;
+  std::uint16_t mask_ = 0xFFFF;  // Int_Mask_Reg as written
   std::uint32_t seg_shift_ = 3;
   std::uint8_t instq_wr_ = 0;  // dpc31: the next free Instruction_Queue entry
 };

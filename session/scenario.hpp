@@ -20,6 +20,7 @@
 #include "dpc31/chip.hpp"
 #include "dpc31/fdl_counters.hpp"
 #include "dpc31/uart.hpp"
+#include "dpv1_master.hpp"
 #include "responder.hpp"
 #include "vocabulary.hpp"
 
@@ -62,6 +63,7 @@ enum class StepKind : std::uint8_t {
   read,     // bus reads of the CPU, command reads included
   send,     // a telegram as given: raw bytes, or fields from any station
   request,  // a DPC31 request through the Instruction_Queue (bus writes)
+  dpv1,     // a DPV1 service of the master (MSAC_C1, MSAC_C2): `name` says which
 };
 
 enum class ExpectKind : std::uint8_t {
@@ -82,6 +84,7 @@ enum class ExpectKind : std::uint8_t {
   ram,         // bytes at an address (peek)
   read,        // what the last `read` returned
   indication,  // the DPC31's newest Indication_Queue entry
+  dpv1,        // the last DPV1 service's response
 };
 
 // Steps that let time pass (and may send requests), as opposed to modifiers, inputs and checks.
@@ -107,8 +110,9 @@ struct ScenarioStep {
   std::string name;  // expect: counter / interrupt / answer kind / port / register; hw: the input
   std::optional<RegId> reg;  // write / read / expect reg: the register (else `addr`)
   std::uint32_t addr = 0;    // write / read / expect ram: the first byte address
-  // expect dp_state / wd_state: when the state was entered, `at` a cycle or `after` cycles since
-  // the last action began (docs/scenario-format.md, "Exact cycles").
+  // expect dp_state / wd_state / dpv1: when the state was entered (dpv1: the response's end), `at`
+  // a cycle or `after` cycles since the last action began (docs/scenario-format.md, "Exact
+  // cycles").
   enum class When : std::uint8_t { any, at, after } when = When::any;
   std::uint64_t when_cycle = 0;
   // set_prm / chk_cfg / gc / send: the station that sends it (another master); nullopt: ours.
@@ -134,6 +138,7 @@ struct Scenario {
   std::optional<Cpu51Config> cpu;    // `cpu 80c32`: a firmware image on an 80C32 instead
   std::vector<std::uint8_t> inputs;  // the user's inputs from the start
   std::uint32_t retries = 1;         // repeats of a request that got no answer (max_retry_limit)
+  Dpv1Rules dpv1;                    // the master's DPV1 rules (header `dpv1`)
   std::vector<ScenarioStep> steps;
 };
 

@@ -12,6 +12,7 @@
 #include "firmware_host.hpp"
 #include "scenario.hpp"
 #include "scenario_bus.hpp"
+#include "scenario_dpv1.hpp"
 #include "scenario_lex.hpp"
 #include "scenario_send.hpp"
 #include "textfile.hpp"
@@ -69,7 +70,7 @@ std::string name_list(const char* const* names) {
 bool sends_request(StepKind k) {
   return is_action(k) && k != StepKind::silence && k != StepKind::foreign_master &&
          k != StepKind::write && k != StepKind::read && k != StepKind::send &&
-         k != StepKind::request;
+         k != StepKind::request && k != StepKind::dpv1;
 }
 
 class Parser {
@@ -257,8 +258,8 @@ class Parser {
   void cpu_header() {
     positional(3, 3, "80c32 firmware FILE.ihx");
     if (pos_[0] != "80c32" || pos_[1] != "firmware") fail("the form is 'cpu 80c32 firmware FILE'");
-    if (firmware_seen_ || user_seen_ || slave_seen_)
-      fail("'cpu' comes before 'slave', without 'firmware' and 'user'");
+    if (firmware_seen_ || user_seen_ || slave_seen_ || !s_.user.dpv1.records.empty())
+      fail("'cpu' comes before 'slave', without 'firmware', 'user' and 'record'");
     Cpu51Config c{.hex = beside_scenario(std::string(pos_[2]))};
     for (const auto& [k, v] : opts_) {
       if (k == "clock") {
@@ -346,7 +347,8 @@ class Parser {
       positional(1, 1, "a firmware name or plug-in path");
       no_options();
       if (slave_seen_) fail("'firmware' comes before 'slave': it sets the slave's GSD defaults");
-      if (user_seen_) fail("'firmware' and 'user' exclude each other");
+      if (user_seen_ || !s_.user.dpv1.records.empty())
+        fail("'firmware' excludes 'user' and 'record' (the built-in user side's)");
       if (s_.cpu) fail("'firmware' and 'cpu' exclude each other");
       firmware_seen_ = true;
       std::string spec(pos_[0]);
@@ -420,7 +422,7 @@ class Parser {
           unknown_option(k);
         }
       }
-    } else {
+    } else if (!scenario_dpv1::parse_header(cmd_, pos_, opts_, s_)) {
       return false;
     }
     return true;
@@ -577,6 +579,7 @@ class Parser {
       no_options();
       expect();
     } else if (scenario_bus::parse_action(cmd_, pos_, opts_, s_.chip.profile, step_, last_read_)) {
+    } else if (scenario_dpv1::parse_action(cmd_, pos_, opts_, s_, step_)) {
     } else {
       fail(fmt::format("unknown command '{}'", shown(cmd_)));
     }
@@ -622,9 +625,11 @@ class Parser {
     if (pos_.empty()) fail("'expect' needs what to check and the expected value");
     const std::string_view what = pos_[0];
     if (pos_.size() >= 3 && (pos_[pos_.size() - 2] == "at" || pos_[pos_.size() - 2] == "after")) {
-      if (what != "dp_state" && what != "wd_state") {
-        fail(fmt::format("'{}' is for dp_state and wd_state: the cycle a state was entered",
-                         pos_[pos_.size() - 2]));
+      if (what != "dp_state" && what != "wd_state" && what != "dpv1") {
+        fail(fmt::format(
+            "'{}' is for dp_state, wd_state and dpv1: the cycle a state was entered or a "
+            "response ended",
+            pos_[pos_.size() - 2]));
       }
       step_.when =
           pos_[pos_.size() - 2] == "at" ? ScenarioStep::When::at : ScenarioStep::When::after;
@@ -730,10 +735,12 @@ class Parser {
       args(1, "N");
       step_.expect = ExpectKind::baud;
       step_.value = static_cast<std::uint32_t>(number(pos_[1], "baud", 1, 12'000'000));
+    } else if (what == "dpv1") {
+      scenario_dpv1::parse_expect(pos_, step_);
     } else if (!scenario_bus::parse_expect(pos_, s_.chip.profile, last_read_, step_)) {
       fail(
           fmt::format("unknown check '{}' (dp_state, wd_state, outputs, cleared, inputs, counter, "
-                      "irr_bit, answer, station, diag_byte, baud, port, pb3, reg, ram, read)",
+                      "irr_bit, answer, station, diag_byte, baud, port, pb3, reg, ram, read, dpv1)",
                       shown(what)));
     }
   }

@@ -15,6 +15,7 @@
 #include "firmware_host.hpp"
 #include "scenario.hpp"
 #include "scenario_bus.hpp"
+#include "scenario_dpv1.hpp"
 #include "scenario_lex.hpp"
 #include "scenario_send.hpp"
 #include "vocabulary.hpp"
@@ -69,6 +70,8 @@ class Runner {
       user_.init(bus);
     }
     master_ = std::make_unique<DpMaster>(chip_, s_.master, s_.user.slave);
+    dpv1_ = std::make_unique<Dpv1Master>(chip_, *master_, s_.dpv1);
+    dpv1_->rules().retries = s_.retries;
     if (hooks_.observer != nullptr) {
       master_->on_send = [this](std::uint64_t start, std::span<const std::uint8_t> bytes,
                                 UartFault fault) {
@@ -456,6 +459,11 @@ class Runner {
         note(chip_.cycle(), std::move(done));
         break;
       }
+      case StepKind::dpv1: {
+        dpv1_last_ = scenario_dpv1::act(*dpv1_, st);
+        note(chip_.cycle(), fmt::format("{}: {}", st.name, answer_summary(*dpv1_last_)));
+        break;
+      }
       case StepKind::inputs:
         user_.inputs = st.bytes;
         break;
@@ -737,10 +745,19 @@ class Runner {
         got = std::move(c.got);
         break;
       }
+      case ExpectKind::dpv1: {
+        scenario_dpv1::Check c = scenario_dpv1::check(st, dpv1_last_);
+        what = std::move(c.what);
+        want = std::move(c.want);
+        got = std::move(c.got);
+        break;
+      }
     }
     if (st.when != ScenarioStep::When::any && got == want) {
-      scenario_bus::when(st, st.expect == ExpectKind::dp_state ? dp_since_ : wd_since_, base_cycle_,
-                         want, got);
+      const std::uint64_t since = st.expect == ExpectKind::dpv1       ? dpv1_last_->end
+                                  : st.expect == ExpectKind::dp_state ? dp_since_
+                                                                      : wd_since_;
+      scenario_bus::when(st, since, base_cycle_, want, got);
     }
     if (got == want) {
       ++out_.passed;
@@ -765,6 +782,8 @@ class Runner {
   Cpu51Image image_;
   std::unique_ptr<Cpu51Module> m51_;  // instead of both on `cpu 80c32`
   std::unique_ptr<DpMaster> master_;
+  std::unique_ptr<Dpv1Master> dpv1_;
+  std::optional<Dpv1Answer> dpv1_last_;  // what `expect dpv1` compares
   ScenarioOutcome out_;
   std::vector<Event> events_;
   DpState dp_ = DpState::Wait_Prm;

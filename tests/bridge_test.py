@@ -611,7 +611,45 @@ def answer_dropped_without_client():
             b.kill()
 
 
+def dpv1_plugin_read_write():
+    """tools/dp_master.py's MSAC_C1 Read and Write (docs/dpv1.md, "The master's side") end to end:
+    the program itself on the pty, against the test plug-in tests/dpv1_plugin.c behind the bridge
+    (a VPC3+ whose firmware answers SAP 51 through the SAP list; its record at slot 0, index 1
+    reads 11 22 33 44). One client reads and writes the record, the next reads the new value, a
+    third reads index 7: the negative response, exit 1 with its error bytes."""
+    tool = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tools", "dp_master.py")
+    fw = os.environ["DPC31_DPV1_PLUGIN"]
+    with tempfile.TemporaryDirectory() as tmp:
+        b = Bridge(tmp, "--firmware", fw, "--profile", "vpc3plus", "--baud", "19200",
+                   "--pacing", "free")
+        try:
+            def run(*dpv1):
+                before = sum("slave side reset" in line for line in b.log_lines())
+                r = subprocess.run([sys.executable, tool, b.path, "--ident", "0x0E01", "--cfg",
+                                    "20,10", "--user-prm", "80,00,00", "--outputs", "05",
+                                    "--cycles", "2", "--timeout", str(0.5 * SCALE),
+                                    "--c1-timeout", str(2 * SCALE)] + list(dpv1),
+                                   capture_output=True, text=True, timeout=60 * SCALE)
+                b.wait_for_log("slave side reset", 30 * SCALE, before + 1)
+                return r
+            r = run("--dpv1-read", "00,01,04", "--dpv1-write", "00,01,A1,A2,A3,A4")
+            check(r.returncode == 0, f"dp_master exit {r.returncode}: {r.stderr}")
+            check("MSAC_C1 Read slot 0 index 1: 11 22 33 44 (" in r.stdout, r.stdout)
+            check("MSAC_C1 Write slot 0 index 1: A1 A2 A3 A4 (" in r.stdout, r.stdout)
+            r = run("--dpv1-read", "00,01,04")
+            check(r.returncode == 0, f"dp_master exit {r.returncode}: {r.stderr}")
+            check("MSAC_C1 Read slot 0 index 1: A1 A2 A3 A4 (" in r.stdout, r.stdout)
+            r = run("--dpv1-read", "00,07,04")
+            check(r.returncode == 1, f"dp_master exit {r.returncode}: {r.stderr}")
+            check("negative response, Error_Decode 80, Error_Code_1 B0, Error_Code_2 00"
+                  in r.stderr, r.stderr)
+            b.stop(signal.SIGTERM)
+        finally:
+            b.kill()
+
+
 CASES = {
+    "dpv1_plugin_read_write": dpv1_plugin_read_write,
     "do4_realtime_two_clients": lambda: do4_two_clients("realtime"),
     "do4_free_two_clients": lambda: do4_two_clients("free"),
     "do4_free_watchdog_then_reparameterise": do4_reparameterise_after_watchdog,

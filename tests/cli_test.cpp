@@ -199,11 +199,11 @@ TEST(CliBench, QuickPrintsEveryRowWellFormed) {
   // lockstep), f (MB/s and RSS on a pair of the emulator's VCD files and on a generated pair), g
   // (pipelined over TCP, one in flight over the Unix socket and over TCP, each with the server's
   // own cost per command and the rest reported beside it; one round trip beside a flood), i
-  // (tracing), j (the 80C32 core, docs/cpu.md), h (the fresh build: not run without --build,
-  // last).
+  // (tracing), j (the 80C32 core, docs/cpu.md), k (DPV1 Reads), h (the fresh build: not run without
+  // --build, last).
   const std::vector<std::string> items = {"a", "a", "a", "a", "a", "a", "b", "b'", "c", "d",
                                           "e", "e", "f", "f", "f", "f", "g", "g",  "g", "g",
-                                          "g", "g", "g", "g", "g", "i", "j", "h"};
+                                          "g", "g", "g", "g", "g", "i", "j", "k",  "h"};
   ASSERT_EQ(rows.size(), items.size()) << r.out;
   int reported = 0;
   for (std::size_t i = 0; i < rows.size(); ++i) {
@@ -249,7 +249,8 @@ TEST(CliBench, ItemsRunsOnlyThose) {
   const Result r = run("bench --quick --items d,i --json " + json_path);
   ASSERT_EQ(r.rc, 0) << r.out;
   const auto j = nlohmann::json::parse(slurp(json_path));
-  ASSERT_EQ(j["rows"].size(), 28u);  // every row of docs/performance.md, row j (the 80C32) included
+  // Every row of docs/performance.md, rows j (the 80C32) and k (DPV1) included.
+  ASSERT_EQ(j["rows"].size(), 29u);
   int measured = 0;
   for (const auto& row : j["rows"]) {
     if (row["item"] == "d" || row["item"] == "i") {

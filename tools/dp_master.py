@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A small DP master (class 1) on a serial device: start-up of one slave and Data_Exchange.
+"""A small DP master (class 1) on a serial device: start-up of one slave, Data_Exchange, DPV1.
 
 Made for `dpc31 bridge` (docs/bridge.md, docs/bring-up.md section 6) but written as a master on
 any 8E1 serial device is: open the device, one call that sets raw, 8 data bits, even parity and
@@ -12,9 +12,15 @@ then FDL telegrams (EN 50170: SD1/SD2, FCS, FCB/FCV) with a timeout per answer. 
 The device may also be pyserial's URL of a raw TCP port, socket://HOST:PORT (`dpc31 bridge
 --tcp PORT`): the same byte stream, no termios; the rate is the bridge's own (--baud then only
 sets the master's timing).
+With `--dpv1-read SLOT,INDEX,LENGTH` / `--dpv1-write SLOT,INDEX,DATA...` (hex bytes) it then
+reads / writes a record with MSAC_C1 (SAP 51 to SAP 51; set DPV1_Enable in --user-prm): the
+request, then polls while the slave answers SC, until the response or --c1-timeout
+(docs/dpv1.md, "The master's side").
 
 Prints one line per step and the inputs of the last Data_Exchange. Exit codes: 0 Data_Exchange
-reached, 1 the slave did not come up (the line says where), 2 bad arguments or device.
+reached (and every DPV1 service answered positively), 1 the slave did not come up, or a DPV1
+service failed (the line says where: a negative response with its error bytes, RS, the
+time-out), 2 bad arguments or device.
 Python 3 standard library only; tests/bridge_test.py uses the same Master class.
 """
 
@@ -30,6 +36,8 @@ import time
 
 SD1, SD2, SC, ED = 0x10, 0x68, 0xE5, 0x16
 SAP_SLAVE_DIAG, SAP_SET_PRM, SAP_CHK_CFG, SAP_MASTER = 60, 61, 62, 62
+# DPV1 (include/dpc31/pdu.hpp): MSAC_C1's SAP, Read and Write, the negative response's bit.
+SAP_MSAC_C1, DPV1_READ, DPV1_WRITE, DPV1_ERROR = 51, 0x5E, 0x5F, 0x80
 # The ten PROFIBUS DP rates (EN 50170). Five have a termios constant; the others (45.45, 93.75,
 # 187.5 kbaud, 6 and 12 Mbaud) are set as Linux's "other" rate: struct termios2 with BOTHER and
 # the rate itself, through the TCSETS2 ioctl (as pyserial does for such rates).
@@ -236,13 +244,13 @@ class Master:
                 return
             self.read()
 
-    def srd(self, du, dsap=None):
+    def srd(self, du, dsap=None, ssap=SAP_MASTER):
         """SRD_high with FCB/FCV. No answer: the station is lost (on a loaded host chip time can
         run past Baud_Control between two requests, and the slave searches the rate again), so
         FDL_Status until it answers, then the request once more, as a master re-finds a lost
         station; up to three times (once was not enough for a bridge in realtime pacing beside a
         CPU hog; issue 35). Counted in `self.lost` and said on stderr."""
-        a = self.transact(self.srd_frame(du, dsap))
+        a = self.transact(self.srd_frame(du, dsap, ssap))
         for _ in range(3):
             if a is not None:
                 break
@@ -250,14 +258,33 @@ class Master:
             print(f"dp_master: no answer from station {self.slave}, searching it again",
                   file=sys.stderr)
             self.find_slave()
-            a = self.transact(self.srd_frame(du, dsap))
+            a = self.transact(self.srd_frame(du, dsap, ssap))
         return a
 
-    def srd_frame(self, du, dsap):
+    def srd_frame(self, du, dsap, ssap=SAP_MASTER):
         self.fcb = not self.fcb
         fc = 0x40 | (0x20 if self.fcb else 0) | (0x10 if self.fcv else 0) | 0x0D
-        ssap = SAP_MASTER if dsap is not None else None
-        return sd2(self.slave, self.address, fc, du, dsap=dsap, ssap=ssap)
+        return sd2(self.slave, self.address, fc, du, dsap=dsap,
+                   ssap=ssap if dsap is not None else None)
+
+    def msac_c1(self, pdu, time_out):
+        """MSAC_C1: `pdu` from SAP 51 to SAP 51, then polls (SRD without data, the same SAPs, the
+        next FCB each) while the slave answers SC, until its response or `time_out` seconds (the
+        GSD's C1_Response_Timeout). Returns (the response's data unit, the polls answered SC).
+        Anything else fails: no answer, RS / RR (the slave serves no SAP 51 now), the time-out."""
+        a = self.srd(pdu, SAP_MSAC_C1, SAP_MSAC_C1)
+        deadline = time.monotonic() + time_out
+        polls = -1  # the request's own SC is not a poll's
+        while a == bytes([SC]):
+            polls += 1
+            check(time.monotonic() < deadline,
+                  f"MSAC_C1 {hexs(pdu)}: no response within {time_out:g} s ({polls} polls)")
+            a = self.srd([], SAP_MSAC_C1, SAP_MSAC_C1)
+        if a is not None and a[0] == SD1:
+            names = {0x02: "UE", 0x03: "RS", 0x09: "RR"}
+            raise Fail(f"MSAC_C1 {hexs(pdu)}: {names.get(a[3] & 0x0F, hexs(a))} "
+                       f"(the slave serves no SAP {SAP_MSAC_C1})")
+        return answer_du(a, True), max(polls, 0)
 
     def slave_diag(self):
         return answer_du(self.srd([], SAP_SLAVE_DIAG), True)
@@ -337,6 +364,30 @@ def connect(url, seconds):
             if time.monotonic() > deadline:
                 raise
             time.sleep(0.02)
+def dpv1_record(m, function, slot, index, data, length, time_out):
+    """MSAC_C1 Read (`length` bytes wanted) or Write (`data`) of slot / index: the positive
+    response's data unit and the polls; a negative response fails with its three error bytes."""
+    pdu = bytes([function, slot, index, length if function == DPV1_READ else len(data)]) + data
+    du, polls = m.msac_c1(pdu, time_out)
+    if du[:1] == bytes([function | DPV1_ERROR]) and len(du) == 4:
+        raise Fail(f"MSAC_C1 {hexs(pdu)}: negative response, Error_Decode {du[1]:02X}, "
+                   f"Error_Code_1 {du[2]:02X}, Error_Code_2 {du[3]:02X}")
+    check(len(du) >= 4 and du[:3] == pdu[:3] and len(du) == 4 + (du[3] if function == DPV1_READ
+                                                                 else 0),
+          f"MSAC_C1 {hexs(pdu)}: response {hexs(du)}")
+    return du, polls
+
+
+def dpv1(m, args, say):
+    """The --dpv1-read / --dpv1-write services, in that order."""
+    if args.dpv1_read:
+        slot, index, length = args.dpv1_read
+        du, polls = dpv1_record(m, DPV1_READ, slot, index, b"", length, args.c1_timeout)
+        say(f"MSAC_C1 Read slot {slot} index {index}: {hexs(du[4:])} ({polls} polls)")
+    if args.dpv1_write:
+        slot, index, data = args.dpv1_write[0], args.dpv1_write[1], bytes(args.dpv1_write[2:])
+        _, polls = dpv1_record(m, DPV1_WRITE, slot, index, data, len(data), args.c1_timeout)
+        say(f"MSAC_C1 Write slot {slot} index {index}: {hexs(data)} ({polls} polls)")
 
 
 def wait_for(path, seconds):
@@ -365,11 +416,21 @@ def main():
     p.add_argument("--outputs", type=byte_list, default=[], help="output bytes")
     p.add_argument("--cycles", type=int, default=10, help="Data_Exchange cycles")
     p.add_argument("--timeout", type=float, default=0.5, help="seconds to wait for an answer")
+    p.add_argument("--dpv1-read", type=byte_list, metavar="SLOT,INDEX,LENGTH",
+                   help="then MSAC_C1 Read of this record (hex bytes)")
+    p.add_argument("--dpv1-write", type=byte_list, metavar="SLOT,INDEX,DATA",
+                   help="then MSAC_C1 Write of these data bytes to this record (hex bytes)")
+    p.add_argument("--c1-timeout", type=float, default=1.0,
+                   help="seconds a DPV1 service may take (C1_Response_Timeout, default 1)")
     p.add_argument("--wait", type=float, default=10.0,
                    help="seconds to wait for the device to appear")
     args = p.parse_args()
     if len(args.watchdog) != 2:
         p.error("--watchdog takes two bytes")
+    if args.dpv1_read is not None and len(args.dpv1_read) != 3:
+        p.error("--dpv1-read takes three bytes: SLOT,INDEX,LENGTH")
+    if args.dpv1_write is not None and len(args.dpv1_write) < 3:
+        p.error("--dpv1-write takes SLOT,INDEX and at least one data byte")
 
     def say(line):
         print(line, flush=True)
@@ -383,6 +444,7 @@ def main():
     try:
         start_up(m, args, say)
         exchange(m, args, say)
+        dpv1(m, args, say)
     except Fail as e:
         print(f"dp_master: {e}", file=sys.stderr)
         return 1

@@ -290,6 +290,7 @@ class StepKind(enum.Enum):
     read = 20
     send = 21
     request = 22
+    dpv1 = 23
 
 class Step:
     line: int

@@ -107,6 +107,9 @@ const std::vector<RowSpec>& rows() {
       // Issue 34 item 6: the 80C32 core alone (docs/cpu.md).
       {"j", "80C32 core alone at 24 MHz (ALU, MOVX, MUL loop, timers 0 and 1 running)",
        "BM_Mcs51Core", "x_realtime", 1, "x real time", Goal::at_least, 100},
+      // Issue 28: MSAC_C1 Reads of a 240-byte record, request and polls (docs/dpv1.md).
+      {"k", "1 000 MSAC_C1 Reads of 240 bytes at 12 Mbaud (VPC3+, polled)", "BM_Dpv1Read",
+       "x_realtime", 1, "x real time", Goal::at_least, 10},
       // Issue 19 item 6: not a benchmark but a timed build (--build), after the benchmarks.
       {"h", "fresh build: ./setup.sh with every package present, ccache off (wall time)", kSetupSh,
        "time", 1.0 / 60, "min", Goal::at_most, 5},

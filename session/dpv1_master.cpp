@@ -1,0 +1,194 @@
+// The built-in master's DPV1 side (dpv1_master.hpp).
+#include "dpv1_master.hpp"
+
+#include <fmt/format.h>
+
+#include "dpc31/dp.hpp"
+#include "dpc31/hex.hpp"
+
+namespace dpc31 {
+
+namespace {
+using pdu::Function;
+constexpr std::size_t kRecordHead = 4;  // Function_Num, Slot_Number, Index, Length
+}  // namespace
+
+std::string outcome_name(Dpv1Answer::Outcome o) {
+  switch (o) {
+    case Dpv1Answer::Outcome::positive:
+      return "positive";
+    case Dpv1Answer::Outcome::negative:
+      return "negative";
+    case Dpv1Answer::Outcome::refused:
+      return "refused";
+    case Dpv1Answer::Outcome::no_answer:
+      return "no answer";
+    case Dpv1Answer::Outcome::timeout:
+      return "timeout";
+    case Dpv1Answer::Outcome::malformed:
+      return "malformed";
+  }
+  return "?";
+}
+
+std::string answer_summary(const Dpv1Answer& a) {
+  const std::string polls = fmt::format("after {} poll{}", a.polls, a.polls == 1 ? "" : "s");
+  switch (a.outcome) {
+    case Dpv1Answer::Outcome::positive:
+      if (a.du.empty()) return fmt::format("SC {}", polls);  // Abort: no response PDU
+      [[fallthrough]];
+    case Dpv1Answer::Outcome::malformed:
+      return fmt::format("{}{} {}", a.outcome == Dpv1Answer::Outcome::malformed ? "malformed " : "",
+                         hex_bytes(a.du, " ", 16), polls);
+    case Dpv1Answer::Outcome::negative:
+      return fmt::format("negative {} {}", hex_bytes(a.du, " ", 4), polls);
+    default:
+      return fmt::format("{} {}", outcome_name(a.outcome), polls);
+  }
+}
+
+std::uint64_t Dpv1Master::cycles_10ms(std::uint32_t units) const {
+  return std::uint64_t{units} * chip_.clock_hz() / 100;
+}
+
+Dpv1Answer Dpv1Master::transfer(std::uint8_t dsap, std::uint8_t ssap, pdu::Bytes req,
+                                std::uint64_t timeout) {
+  Dpv1Answer a;
+  Exchange ex = m_.retry(m_.acyclic(dsap, ssap, std::move(req)), rules_.retries);
+  a.start = ex.request_start;
+  for (;;) {
+    a.last = ex.answer;
+    a.end = ex.answer ? ex.answer_end : ex.request_end;
+    if (!ex.answer) {
+      a.outcome = Dpv1Answer::Outcome::no_answer;
+      return a;
+    }
+    if (!ex.answer->du.empty()) {  // the response (classified by the caller)
+      a.du = ex.answer->du;
+      a.outcome = Dpv1Answer::Outcome::positive;
+      return a;
+    }
+    if (ex.answer->sd != fdl::SC) {
+      a.outcome = Dpv1Answer::Outcome::refused;
+      return a;
+    }
+    // SC: the slave is still working. Past the time-out the master gives up instead of polling
+    // again (the standard's response time-out).
+    if (ex.request.du.empty()) ++a.polls;  // the request's own SC is not a poll's
+    if (a.end - a.start >= timeout) {
+      a.outcome = Dpv1Answer::Outcome::timeout;
+      return a;
+    }
+    ex = m_.retry(m_.acyclic(dsap, ssap, {}), rules_.retries);
+  }
+}
+
+void Dpv1Master::classify(Dpv1Answer& a, Function f, bool positive_ok) {
+  if (a.outcome != Dpv1Answer::Outcome::positive) return;
+  if (const auto e = pdu::ErrorResponse::parse(a.du); e && e->function == f) {
+    a.error = e;
+    a.outcome = Dpv1Answer::Outcome::negative;
+  } else if (!positive_ok) {
+    a.outcome = Dpv1Answer::Outcome::malformed;
+  }
+}
+
+Dpv1Answer Dpv1Master::read(std::uint8_t slot, std::uint8_t index, std::uint8_t length) {
+  Dpv1Answer a =
+      transfer(sap::MSAC_C1, sap::MSAC_C1, pdu::read_request(slot, index, length).build(),
+               cycles_10ms(rules_.c1_response_timeout));
+  const auto r = pdu::Record::parse(a.du, Function::Read, true);
+  classify(a, Function::Read, r && r->slot == slot && r->index == index && r->length <= length);
+  return a;
+}
+
+Dpv1Answer Dpv1Master::write(std::uint8_t slot, std::uint8_t index, pdu::Bytes data) {
+  const auto n = static_cast<std::uint8_t>(data.size());
+  Dpv1Answer a =
+      transfer(sap::MSAC_C1, sap::MSAC_C1, pdu::write_request(slot, index, std::move(data)).build(),
+               cycles_10ms(rules_.c1_response_timeout));
+  const auto r = pdu::Record::parse(a.du, Function::Write, false);
+  classify(a, Function::Write, r && r->slot == slot && r->index == index && r->length == n);
+  return a;
+}
+
+Dpv1Answer Dpv1Master::alarm_ack(const pdu::AlarmAck& ack) {
+  Dpv1Answer a = transfer(sap::MSAC_C1_Alarm, sap::MSAC_C1, ack.build(),
+                          cycles_10ms(rules_.c1_response_timeout));
+  classify(a, Function::Alarm_Ack, pdu::AlarmAck::parse(a.du) == ack);
+  return a;
+}
+
+Dpv1Answer Dpv1Master::initiate(const pdu::Initiate& req) {
+  const std::uint64_t timeout = cycles_10ms(req.send_timeout);
+  Dpv1Answer rm = transfer(sap::MSAC_C2_RM, rules_.c2_ssap, req.build(), timeout);
+  const auto immediate = pdu::ResourceManager::parse(rm.du);
+  classify(rm, Function::Initiate, immediate.has_value());
+  if (rm.outcome != Dpv1Answer::Outcome::positive) return rm;
+  // The resource manager's immediate response names the connection's SAP: the Initiate response
+  // is polled for there.
+  Dpv1Answer a = transfer(immediate->sap, rules_.c2_ssap, {}, timeout);
+  a.start = rm.start;
+  a.polls += rm.polls;
+  classify(a, Function::Initiate, pdu::Initiate::parse(a.du, true).has_value());
+  if (a.outcome == Dpv1Answer::Outcome::positive) {  // else an open connection stays open
+    c2_sap_ = immediate->sap;
+    c2_timeout_ = req.send_timeout;
+  }
+  return a;
+}
+
+Dpv1Answer Dpv1Master::on_connection(Function f, pdu::Bytes req, bool with_data) {
+  if (!c2_sap_) {
+    Dpv1Answer a;
+    a.outcome = Dpv1Answer::Outcome::refused;
+    return a;
+  }
+  const pdu::Bytes sent = req;
+  Dpv1Answer a = transfer(*c2_sap_, rules_.c2_ssap, std::move(req), cycles_10ms(c2_timeout_));
+  bool ok = false;
+  if (f == Function::Idle) {
+    ok = pdu::Idle::parse(a.du).has_value();
+  } else if (const auto r = pdu::Record::parse(a.du, f, with_data)) {
+    ok = r->slot == sent[1] && r->index == sent[2];
+  }
+  classify(a, f, ok);
+  if (pdu::Abort::parse(a.du)) c2_sap_.reset();  // the slave closed the connection
+  return a;
+}
+
+Dpv1Answer Dpv1Master::c2_read(std::uint8_t slot, std::uint8_t index, std::uint8_t length) {
+  return on_connection(Function::Read, pdu::read_request(slot, index, length).build(), true);
+}
+Dpv1Answer Dpv1Master::c2_write(std::uint8_t slot, std::uint8_t index, pdu::Bytes data) {
+  return on_connection(Function::Write, pdu::write_request(slot, index, std::move(data)).build(),
+                       false);
+}
+Dpv1Answer Dpv1Master::c2_transport(std::uint8_t slot, std::uint8_t index, pdu::Bytes data) {
+  const auto n = static_cast<std::uint8_t>(data.size());
+  return on_connection(
+      Function::Data_Transport,
+      pdu::Record{Function::Data_Transport, slot, index, n, std::move(data)}.build(), true);
+}
+Dpv1Answer Dpv1Master::c2_idle() {
+  return on_connection(Function::Idle, pdu::Idle{}.build(), false);
+}
+
+Dpv1Answer Dpv1Master::c2_abort(const pdu::Abort& abort) {
+  Dpv1Answer a;
+  if (!c2_sap_) {
+    a.outcome = Dpv1Answer::Outcome::refused;
+    return a;
+  }
+  const Exchange ex = m_.retry(m_.acyclic(*c2_sap_, rules_.c2_ssap, abort.build()), rules_.retries);
+  c2_sap_.reset();
+  a.start = ex.request_start;
+  a.last = ex.answer;
+  a.end = ex.answer ? ex.answer_end : ex.request_end;
+  a.outcome = !ex.answer                 ? Dpv1Answer::Outcome::no_answer
+              : ex.answer->sd == fdl::SC ? Dpv1Answer::Outcome::positive
+                                         : Dpv1Answer::Outcome::refused;
+  return a;
+}
+
+}  // namespace dpc31

@@ -1,0 +1,92 @@
+// The built-in master's DPV1 side (docs/dpv1.md, "The master's side"): MSAC_C1 as a class-1
+// master (Read / Write / Alarm_Ack on SAP 51) and MSAC_C2 as a class-2 master (Initiate on SAP 49,
+// then Read / Write / Data_Transport / Idle on the connection's SAP, Abort). A layer on
+// DpMaster's public API only (acyclic, retry): each service sends its request, polls (an SRD
+// without data, same SAPs, a new FCB each) while the slave answers SC, and returns the positive
+// or negative response parsed with pdu.hpp, with the cycles of the exchange. The rules (retries,
+// the response time-out) are EN 50170 / IEC 61158-6's, with the values of docs/decisions.md.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "dp_master.hpp"
+#include "dpc31/pdu.hpp"
+
+namespace dpc31 {
+
+struct Dpv1Rules {
+  // A request or poll without any answer within the slot time is sent again, unchanged (same
+  // FCB), this often (the FDL's max_retry_limit) before the service fails with no_answer.
+  std::uint32_t retries = 1;
+  // The response time-out from the request's first start bit: the GSD's C1_Response_Timeout
+  // (10 ms units); MSAC_C2 uses the connection's Send_Timeout instead. 100 = 1 s.
+  std::uint16_t c1_response_timeout = 100;
+  // The class-2 master's own SAP (SSAP of every MSAC_C2 telegram; modelled).
+  std::uint8_t c2_ssap = 48;
+};
+
+struct Dpv1Answer {
+  enum class Outcome : std::uint8_t {
+    positive,   // the response of the request's function
+    negative,   // function | 80h, Error_Decode, Error_Code_1, Error_Code_2
+    refused,    // an FDL answer without data that is not SC (RS, RR, UE...)
+    no_answer,  // a request or poll stayed unanswered after its retries
+    timeout,    // still SC when the response time-out ran out
+    malformed,  // data that is neither the positive nor the negative response
+  };
+  Outcome outcome = Outcome::no_answer;
+  pdu::Bytes du;                            // the response's data unit as received
+  std::optional<pdu::ErrorResponse> error;  // negative
+  std::optional<fdl::Frame> last;           // the last answer on the wire
+  std::uint32_t polls = 0;                  // polls answered SC before the response
+  std::uint64_t start = 0;                  // the request's first start bit
+  std::uint64_t end = 0;  // the last answer's last stop bit (or the last request's end)
+};
+
+[[nodiscard]] std::string outcome_name(Dpv1Answer::Outcome o);
+// "5E 00 01 04 11 22 33 44 after 2 polls", "negative 80 B0 00", "timeout after 40 polls" ...
+[[nodiscard]] std::string answer_summary(const Dpv1Answer& a);
+
+class Dpv1Master {
+ public:
+  Dpv1Master(const Chip& chip, DpMaster& m, Dpv1Rules r = {}) : chip_(chip), m_(m), rules_(r) {}
+
+  // MSAC_C1: Read / Write from SAP 51 to SAP 51, Alarm_Ack from SAP 51 to SAP 50.
+  Dpv1Answer read(std::uint8_t slot, std::uint8_t index, std::uint8_t length);
+  Dpv1Answer write(std::uint8_t slot, std::uint8_t index, pdu::Bytes data);
+  Dpv1Answer alarm_ack(const pdu::AlarmAck& ack);
+
+  // MSAC_C2. initiate sends the Initiate request to SAP 49 and polls it until the resource
+  // manager's immediate response (56h: the connection's SAP), then polls the connection's SAP
+  // for the Initiate response; positive: the connection is open (c2_sap()); otherwise the
+  // connection open before, if any, stays open.
+  Dpv1Answer initiate(const pdu::Initiate& req);
+  Dpv1Answer c2_read(std::uint8_t slot, std::uint8_t index, std::uint8_t length);
+  Dpv1Answer c2_write(std::uint8_t slot, std::uint8_t index, pdu::Bytes data);
+  Dpv1Answer c2_transport(std::uint8_t slot, std::uint8_t index, pdu::Bytes data);
+  Dpv1Answer c2_idle();
+  // Abort: one SRD, answered SC; the connection is closed on our side whatever the answer.
+  Dpv1Answer c2_abort(const pdu::Abort& a);
+  [[nodiscard]] std::optional<std::uint8_t> c2_sap() const { return c2_sap_; }
+
+  [[nodiscard]] const Dpv1Rules& rules() const { return rules_; }
+  Dpv1Rules& rules() { return rules_; }
+
+ private:
+  // Sends `req` from `ssap` to `dsap`, polls while SC until `timeout` cycles after its start.
+  Dpv1Answer transfer(std::uint8_t dsap, std::uint8_t ssap, pdu::Bytes req, std::uint64_t timeout);
+  // The positive response is of `f` and parses as `ok` says, or the negative one of `f`.
+  static void classify(Dpv1Answer& a, pdu::Function f, bool positive_ok);
+  Dpv1Answer on_connection(pdu::Function f, pdu::Bytes req, bool with_data);
+  [[nodiscard]] std::uint64_t cycles_10ms(std::uint32_t units) const;
+
+  const Chip& chip_;
+  DpMaster& m_;
+  Dpv1Rules rules_;
+  std::optional<std::uint8_t> c2_sap_;
+  std::uint16_t c2_timeout_ = 0;  // the connection's Send_Timeout (10 ms)
+};
+
+}  // namespace dpc31

@@ -1,0 +1,184 @@
+// The built-in user side's DPV1 part (responder_dpv1.hpp).
+#include "responder_dpv1.hpp"
+
+#include <algorithm>
+
+#include "dpc31/chip.hpp"
+#include "dpc31/dp.hpp"
+#include "dpc31/dpv1.hpp"
+
+namespace dpc31 {
+
+namespace {
+namespace en = dpv1::entry;
+namespace hd = dpv1::header;
+using pdu::Function;
+constexpr std::uint8_t kFcResponse = 0x08;  // DL, as the Profichip driver writes it
+constexpr std::uint8_t kMaxLen[] = {Dpv1User::kRecordMax, Dpv1User::kAlarmMax, Dpv1User::kRmMax,
+                                    Dpv1User::kRecordMax};
+}  // namespace
+
+std::uint32_t Dpv1User::init(BusPort& c, std::uint32_t next, std::uint32_t seg_shift) {
+  seg_shift_ = seg_shift;
+  const std::uint32_t seg = 1u << seg_shift;
+  const std::uint32_t list = next;
+  next += (kSaps * en::kBytes + 1 + seg - 1) / seg;
+  const std::uint8_t saps[kSaps] = {sap::MSAC_C1, sap::MSAC_C1_Alarm, sap::MSAC_C2_RM, cfg_.c2_sap};
+  for (unsigned s = 0; s < kSaps; ++s) {
+    Slot& sl = slots_[s];
+    sl.sap = saps[s];
+    sl.entry = (list << seg_shift) + s * en::kBytes;
+    sl.segment = static_cast<std::uint8_t>(next);
+    sl.buffer = next << seg_shift;
+    next += (hd::kBytes + kMaxLen[s] + seg - 1) / seg;
+    // The connection's SAP stays off (Ind_Buf_Ptr0 00h) until an Initiate opens it.
+    const std::uint8_t ind = s == connection ? 0 : sl.segment;
+    const std::uint8_t e[en::kBytes] = {sl.sap, en::kAll, en::kAll,  dpv1::service::All,
+                                        ind,    0x00,     sl.segment};
+    c.write_block(sl.entry, e);
+    c.write(sl.buffer + hd::Control, 0x00);
+    c.write(sl.buffer + hd::Max_Length, kMaxLen[s]);
+  }
+  c.write(slots_[kSaps - 1].entry + en::kBytes, en::kEndOfList);
+  c.write(static_cast<std::uint32_t>(
+              find_reg(c.chip().profile(), RegId::R_FDL_SAP_List_Ptr)->read_addr),
+          static_cast<std::uint8_t>(list));
+  return next;
+}
+
+void Dpv1User::close(BusPort& c) {
+  const Slot& k = slots_[connection];
+  c.write(k.entry + en::Ind_Buf_Ptr0, 0x00);
+  c.write(k.buffer + hd::Control, 0x00);
+  open_ = false;
+}
+
+std::optional<pdu::Bytes> Dpv1User::record(Function f, const pdu::Bytes& req) {
+  const std::optional<pdu::Record> r = pdu::Record::parse(req, f, f != Function::Read);
+  if (!r)
+    return pdu::ErrorResponse{f, pdu::Error_Decode_DPV1, pdu::error::Invalid_Parameter, 0}.build();
+  if (f == Function::Data_Transport) return r->build();  // the data echoed, whatever the record
+  const auto it = std::find_if(cfg_.records.begin(), cfg_.records.end(), [&](const Dpv1Record& d) {
+    return d.slot == r->slot && d.index == r->index;
+  });
+  const auto in_slot = [&](const Dpv1Record& d) { return d.slot == r->slot; };
+  if (it == cfg_.records.end()) {
+    const std::uint8_t code = std::any_of(cfg_.records.begin(), cfg_.records.end(), in_slot)
+                                  ? pdu::error::Invalid_Index
+                                  : pdu::error::Invalid_Slot;
+    return pdu::ErrorResponse{f, pdu::Error_Decode_DPV1, code, 0}.build();
+  }
+  switch (f) {
+    case Function::Read: {
+      const auto n = static_cast<std::uint8_t>(std::min<std::size_t>(r->length, it->data.size()));
+      return pdu::Record{f, r->slot, r->index, n,
+                         pdu::Bytes(it->data.begin(), it->data.begin() + n)}
+          .build();
+    }
+    case Function::Write:
+      if (r->data.size() != it->data.size()) {
+        return pdu::ErrorResponse{f, pdu::Error_Decode_DPV1, pdu::error::Write_Length_Error, 0}
+            .build();
+      }
+      it->data = r->data;
+      return pdu::Record{f, r->slot, r->index, r->length, {}}.build();
+    default:
+      return std::nullopt;
+  }
+}
+
+std::optional<pdu::Bytes> Dpv1User::answer(BusPort& c, Sap s, const pdu::Bytes& req) {
+  const std::optional<Function> f = pdu::function_of(req);
+  if (!f) return std::nullopt;
+  switch (s) {
+    case c1:
+      if (*f != Function::Read && *f != Function::Write) return std::nullopt;
+      return record(*f, req);
+    case alarm: {
+      const std::optional<pdu::AlarmAck> a = pdu::AlarmAck::parse(req);
+      if (!a) return std::nullopt;
+      alarm_acks.push_back(*a);
+      return a->build();
+    }
+    case rm: {
+      const std::optional<pdu::Initiate> i = pdu::Initiate::parse(req, false);
+      if (!i) return std::nullopt;
+      if (open_) {
+        return pdu::ErrorResponse{Function::Initiate, pdu::Error_Decode_DPV1,
+                                  pdu::error::Resource_Busy, 0}
+            .build();
+      }
+      // Open: the Initiate response waits in the connection's buffer for the master's first
+      // poll there; the resource manager answers with the connection's SAP.
+      const Slot& k = slots_[connection];
+      pdu::Initiate res = *i;
+      res.response = true;
+      res.send_timeout = 0;
+      res.max_len_data_unit = kRecordMax - 4;
+      std::swap(res.s_type, res.d_type);
+      std::swap(res.s_addr, res.d_addr);
+      const pdu::Bytes r = res.build();
+      c.write_block(k.buffer + hd::kBytes, r);
+      c.write(k.buffer + hd::Length, static_cast<std::uint8_t>(r.size()));
+      c.write(k.buffer + hd::Function_Code, kFcResponse);
+      c.write(k.buffer + hd::Control, hd::USER | hd::RESP);
+      c.write(k.entry + en::Ind_Buf_Ptr0, k.segment);
+      open_ = true;
+      send_timeout_ = i->send_timeout;
+      activity_ = c.cycle();
+      return pdu::ResourceManager{cfg_.c2_sap, i->send_timeout}.build();
+    }
+    case connection:
+      activity_ = c.cycle();
+      if (*f == Function::Abort) {
+        close(c);
+        return std::nullopt;
+      }
+      if (*f == Function::Idle) return pdu::Idle{}.build();
+      if (*f == Function::Read || *f == Function::Write || *f == Function::Data_Transport)
+        return record(*f, req);
+      return std::nullopt;
+    case kSaps:
+      break;
+  }
+  return std::nullopt;
+}
+
+void Dpv1User::serve(BusPort& c, std::uint16_t ir) {
+  if ((ir & irq::FDL_Ind) != 0) {
+    for (unsigned s = 0; s < kSaps; ++s) {
+      const Slot& sl = slots_[s];
+      if ((c.read(sl.buffer + hd::Control) & hd::IND) == 0) continue;
+      c.write(sl.buffer + hd::Control, hd::USER);  // taken
+      pdu::Bytes req(c.read(sl.buffer + hd::Length));
+      c.read_block(sl.buffer + hd::kBytes, req);
+      const std::optional<pdu::Bytes> res = answer(c, static_cast<Sap>(s), req);
+      if (!res) {
+        if (s != connection || open_) c.write(sl.buffer + hd::Control, 0x00);  // freed
+        continue;
+      }
+      if (cfg_.work_cycles != 0) c.idle(cfg_.work_cycles);
+      c.write_block(sl.buffer + hd::kBytes, *res);
+      c.write(sl.buffer + hd::Length, static_cast<std::uint8_t>(res->size()));
+      c.write(sl.buffer + hd::Function_Code, kFcResponse);
+      c.write(sl.buffer + hd::Control, hd::USER | hd::RESP);
+    }
+  }
+  if ((ir & irq::Poll_End_Ind) != 0) {
+    for (unsigned s = 0; s < kSaps; ++s) {
+      const std::uint8_t b0 = c.read(slots_[s].entry + en::Sap);
+      if ((b0 & en::Response_Sent) == 0) continue;
+      c.write(slots_[s].entry + en::Sap, static_cast<std::uint8_t>(b0 & ~en::Response_Sent));
+      if (s == connection) activity_ = c.cycle();
+    }
+  }
+  // The slave's side of the connection time-out: no request stored and no response sent for
+  // Send_Timeout closes it (the master's next request there gets RS).
+  if ((ir & irq::User_Timer_Clock) != 0 && open_ &&
+      c.cycle() - activity_ >= std::uint64_t{send_timeout_} * c.chip().clock_hz() / 100) {
+    close(c);
+    ++timeouts;
+  }
+}
+
+}  // namespace dpc31

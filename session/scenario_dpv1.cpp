@@ -1,0 +1,235 @@
+// Scenario files: DPV1 (scenario_dpv1.hpp).
+#include "scenario_dpv1.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+
+#include "scenario_lex.hpp"
+#include "textfile.hpp"
+
+namespace dpc31::scenario_dpv1 {
+
+using scenario_lex::bytes;
+using scenario_lex::bytes_text;
+using scenario_lex::fail;
+using scenario_lex::number;
+
+namespace {
+
+constexpr std::uint8_t kMaxRecord = 240;  // a record's data (the PDU's 4-byte head + 240 = 244)
+constexpr std::string_view kOutcomes[] = {"refused", "timeout", "no_answer"};
+
+[[noreturn]] void unknown(std::string_view k, std::string_view cmd) {
+  fail(fmt::format("unknown option '{}' for {}", shown(k), cmd));
+}
+
+void no_positional(std::span<const std::string_view> pos, std::string_view cmd) {
+  if (!pos.empty()) fail(fmt::format("{} takes options only; unexpected '{}'", cmd, shown(pos[0])));
+}
+
+// slot= index= and one of length= (reads) or data= (writes); all required.
+void record_options(std::span<const Option> opts, std::string_view cmd, bool read,
+                    ScenarioStep& st) {
+  bool slot = false, index = false, third = false;
+  for (const auto& [k, v] : opts) {
+    if (k == "slot") {
+      st.value = static_cast<std::uint32_t>(number(v, k, 0, 254));
+      slot = true;
+    } else if (k == "index") {
+      st.value2 = static_cast<std::uint32_t>(number(v, k, 0, 255));
+      index = true;
+    } else if (read && k == "length") {
+      st.count = number(v, k, 1, kMaxRecord);
+      third = true;
+    } else if (!read && k == "data") {
+      st.bytes = bytes(v, k, kMaxRecord);
+      third = true;
+    } else {
+      unknown(k, cmd);
+    }
+  }
+  if (!slot || !index || !third)
+    fail(fmt::format("{} needs slot=N index=N {}", cmd, read ? "length=N" : "data=BYTES"));
+}
+
+}  // namespace
+
+bool parse_header(std::string_view cmd, std::span<const std::string_view> pos,
+                  std::span<const Option> opts, Scenario& s) {
+  if (cmd != "record" && cmd != "dpv1") return false;
+  no_positional(pos, cmd);
+  if (s.chip.profile != Profile::vpc3plus)
+    fail(fmt::format("'{}' needs 'profile vpc3plus' before it: only the VPC3+ has DPV1", cmd));
+  if (!s.firmware.empty() || s.cpu)
+    fail(
+        fmt::format("'{}' configures the built-in user side; a firmware answers DPV1 itself", cmd));
+  if (cmd == "record") {
+    ScenarioStep st;
+    record_options(opts, cmd, false, st);
+    for (const Dpv1Record& r : s.user.dpv1.records) {
+      if (r.slot == st.value && r.index == st.value2)
+        fail(fmt::format("record slot={} index={} given twice", st.value, st.value2));
+    }
+    s.user.dpv1.records.push_back(
+        {static_cast<std::uint8_t>(st.value), static_cast<std::uint8_t>(st.value2), st.bytes});
+    return true;
+  }
+  for (const auto& [k, v] : opts) {
+    if (k == "work") {
+      s.user.dpv1.work_cycles = number(v, k, 0, 48'000'000);
+    } else if (k == "c1_timeout") {
+      s.dpv1.c1_response_timeout = static_cast<std::uint16_t>(number(v, k, 1, 0xFFFF));
+    } else if (k == "c2_ssap") {
+      s.dpv1.c2_ssap = static_cast<std::uint8_t>(number(v, k, 0, 62));
+    } else {
+      unknown(k, cmd);
+    }
+  }
+  return true;
+}
+
+bool parse_action(std::string_view cmd, std::span<const std::string_view> pos,
+                  std::span<const Option> opts, const Scenario& s, ScenarioStep& st) {
+  static constexpr std::string_view kActions[] = {"dpv1_read",    "dpv1_write", "alarm_ack",
+                                                  "c2_initiate",  "c2_read",    "c2_write",
+                                                  "c2_transport", "c2_idle",    "c2_abort"};
+  if (std::find(std::begin(kActions), std::end(kActions), cmd) == std::end(kActions)) return false;
+  if (s.chip.profile != Profile::vpc3plus)
+    fail(fmt::format("'{}' needs 'profile vpc3plus': only the VPC3+ has DPV1", cmd));
+  no_positional(pos, cmd);
+  st.kind = StepKind::dpv1;
+  st.name = std::string(cmd);
+  if (cmd == "dpv1_read" || cmd == "c2_read") {
+    record_options(opts, cmd, true, st);
+  } else if (cmd == "dpv1_write" || cmd == "c2_write" || cmd == "c2_transport") {
+    record_options(opts, cmd, false, st);
+  } else if (cmd == "alarm_ack") {
+    // Specifier: Seq_Nr bits 7..3, Add_Ack bit 2, the specifier bits 1..0 (pdu::Dpv1DiagBlock).
+    bool slot = false, type = false, seq = false;
+    std::uint32_t spec = 0;
+    st.count = 0;
+    for (const auto& [k, v] : opts) {
+      if (k == "slot") {
+        st.value = static_cast<std::uint32_t>(number(v, k, 0, 254));
+        slot = true;
+      } else if (k == "type") {
+        st.value2 = static_cast<std::uint32_t>(number(v, k, 1, 127));
+        type = true;
+      } else if (k == "seq") {
+        st.count |= number(v, k, 0, 31) << 3;
+        seq = true;
+      } else if (k == "spec") {
+        spec = static_cast<std::uint32_t>(number(v, k, 0, 3));
+      } else if (k == "add_ack") {
+        if (scenario_lex::flag(v, k)) st.count |= 0x04;
+      } else {
+        unknown(k, cmd);
+      }
+    }
+    if (!slot || !type || !seq) fail("alarm_ack needs slot=N type=N seq=N");
+    st.count |= spec;
+  } else if (cmd == "c2_initiate") {
+    st.count = 100;  // Send_Timeout 1 s unless given
+    for (const auto& [k, v] : opts) {
+      if (k != "send_timeout") unknown(k, cmd);
+      st.count = number(v, k, 1, 0xFFFF);
+    }
+  } else if (cmd == "c2_abort") {
+    st.value = 0x02;  // instance: the user (0 FDL, 1 MSAC_C2, 2 user)
+    for (const auto& [k, v] : opts) {
+      if (k == "reason") {
+        st.value2 = static_cast<std::uint32_t>(number(v, k, 0, 15));
+      } else if (k == "instance") {
+        st.value = static_cast<std::uint32_t>(number(v, k, 0, 3));
+      } else {
+        unknown(k, cmd);
+      }
+    }
+  } else if (!opts.empty()) {  // c2_idle
+    unknown(opts[0].first, cmd);
+  }
+  return true;
+}
+
+void parse_expect(std::span<const std::string_view> pos, ScenarioStep& st) {
+  st.expect = ExpectKind::dpv1;
+  const auto form = [] {
+    fail(
+        "expected 'expect dpv1 BYTES', 'expect dpv1 error DECODE,CODE1,CODE2', 'expect dpv1 "
+        "polls N' or 'expect dpv1 refused|timeout|no_answer'");
+  };
+  if (pos.size() == 2) {
+    if (std::find(std::begin(kOutcomes), std::end(kOutcomes), pos[1]) != std::end(kOutcomes)) {
+      st.name = std::string(pos[1]);
+      return;
+    }
+    st.name = "data";
+    st.bytes = bytes(pos[1], "dpv1 response", scenario_lex::kMaxDu);
+    if (st.bytes.empty()) fail("expect dpv1: a response has at least one byte");
+    return;
+  }
+  if (pos.size() != 3) form();
+  if (pos[1] == "error") {
+    st.name = "error";
+    st.bytes = bytes(pos[2], "dpv1 error", 3);
+    if (st.bytes.size() != 3)
+      fail("expect dpv1 error: three bytes, Error_Decode,Error_Code_1,Error_Code_2");
+  } else if (pos[1] == "polls") {
+    st.name = "polls";
+    st.value = static_cast<std::uint32_t>(number(pos[2], "polls", 0, 0xFFFF'FFFF));
+  } else {
+    form();
+  }
+}
+
+Dpv1Answer act(Dpv1Master& m, const ScenarioStep& st) {
+  const auto slot = static_cast<std::uint8_t>(st.value);
+  const auto index = static_cast<std::uint8_t>(st.value2);
+  const auto length = static_cast<std::uint8_t>(st.count);
+  const std::string_view c = st.name;
+  if (c == "dpv1_read") return m.read(slot, index, length);
+  if (c == "dpv1_write") return m.write(slot, index, st.bytes);
+  if (c == "alarm_ack") return m.alarm_ack({slot, index, length});
+  if (c == "c2_initiate") {
+    pdu::Initiate req;
+    req.send_timeout = static_cast<std::uint16_t>(st.count);
+    req.features_supported = 0x0001;  // the DPV1 services (Read, Write, Data_Transport)
+    return m.initiate(req);
+  }
+  if (c == "c2_read") return m.c2_read(slot, index, length);
+  if (c == "c2_write") return m.c2_write(slot, index, st.bytes);
+  if (c == "c2_transport") return m.c2_transport(slot, index, st.bytes);
+  if (c == "c2_idle") return m.c2_idle();
+  return m.c2_abort(
+      {0, static_cast<std::uint8_t>(st.value), static_cast<std::uint8_t>(st.value2), 0});
+}
+
+Check check(const ScenarioStep& st, const std::optional<Dpv1Answer>& last) {
+  Check c{"dpv1 " + (st.name == "data" ? std::string("response") : st.name), "", ""};
+  if (!last) {
+    c.want = st.name == "polls" ? std::to_string(st.value) : bytes_text(st.bytes);
+    c.got = "no DPV1 exchange yet";
+    return c;
+  }
+  const std::string got = answer_summary(*last);
+  if (st.name == "polls") {
+    c.want = std::to_string(st.value);
+    c.got = std::to_string(last->polls);
+  } else if (st.name == "data") {
+    c.want = bytes_text(st.bytes);
+    c.got = last->outcome == Dpv1Answer::Outcome::positive ? bytes_text(last->du) : got;
+  } else if (st.name == "error") {
+    c.want = "negative " + bytes_text(st.bytes);
+    c.got = last->error ? fmt::format("negative {:02X} {:02X} {:02X}", last->error->error_decode,
+                                      last->error->error_code_1, last->error->error_code_2)
+                        : got;
+  } else {
+    c.want = st.name;
+    const std::string o = outcome_name(last->outcome);
+    c.got = (o == "no answer" ? "no_answer" : o) == st.name ? st.name : got;
+  }
+  return c;
+}
+
+}  // namespace dpc31::scenario_dpv1

@@ -1,0 +1,39 @@
+// Scenario files: DPV1 (docs/scenario-format.md, "DPV1") — the header lines `record` and `dpv1`
+// (the built-in user side's records, the master's rules), the actions `dpv1_read`, `dpv1_write`,
+// `alarm_ack` (MSAC_C1) and `c2_initiate`, `c2_read`, `c2_write`, `c2_transport`, `c2_idle`,
+// `c2_abort` (MSAC_C2), and `expect dpv1 ...`: how they parse and what they do. Internal to the
+// scenario parser and runner.
+#pragma once
+
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <utility>
+
+#include "dpv1_master.hpp"
+#include "scenario.hpp"
+
+namespace dpc31::scenario_dpv1 {
+
+using Option = std::pair<std::string_view, std::string_view>;
+
+// `record slot=N index=N data=BYTES`, `dpv1 work=N c1_timeout=N c2_ssap=N` into `s`; false if
+// `cmd` is neither (throws scenario_lex::ParseFail).
+bool parse_header(std::string_view cmd, std::span<const std::string_view> pos,
+                  std::span<const Option> opts, Scenario& s);
+// The DPV1 actions into `st`; false if `cmd` is none of them.
+bool parse_action(std::string_view cmd, std::span<const std::string_view> pos,
+                  std::span<const Option> opts, const Scenario& s, ScenarioStep& st);
+// `expect dpv1 BYTES|error D,C1,C2|polls N|refused|timeout|no_answer` (pos[0] == "dpv1").
+void parse_expect(std::span<const std::string_view> pos, ScenarioStep& st);
+
+// Performs the step on the master.
+Dpv1Answer act(Dpv1Master& m, const ScenarioStep& st);
+
+struct Check {
+  std::string what, want, got;
+};
+Check check(const ScenarioStep& st, const std::optional<Dpv1Answer>& last);
+
+}  // namespace dpc31::scenario_dpv1
