@@ -123,8 +123,8 @@ class Run {
       // wait in steps of a 64th of a window, so the input starts near the beginning of the chosen
       // rate's window.
       for (int i = 0; i < 12 * 64 && chip_.bit_cycles() != t_; ++i) {
-        const std::uint64_t step = std::max<std::uint64_t>(64ull * chip_.bit_cycles(),
-                                                           chip_.clock_hz() / 50 / 64);
+        const std::uint64_t step =
+            std::max<std::uint64_t>(64ull * chip_.bit_cycles(), chip_.clock_hz() / 50 / 64);
         run_until(chip_, *user_, chip_.cycle() + step);
       }
     }
