@@ -71,8 +71,9 @@ void Mac::listen(std::uint8_t code) {
 }
 
 void Mac::search_next() {
-  // The windows are fixed (4096 bit times each), whatever is on the line: a character or
-  // telegram in progress is dropped with the old rate.
+  // A window has its fixed length whatever is on the line: garbage heard at a wrong rate neither
+  // restarts nor extends it (a master at another rate would hold the search forever), and a
+  // character or telegram in progress is dropped with the old rate.
   listen(static_cast<std::uint8_t>((s_.search_code + 1) % std::size(kBaudRates)));
   s_.in_frame = false;
   s_.frame.reset();
@@ -202,7 +203,7 @@ void Mac::process() {
 }
 
 // Per-cycle engine: the MAC's clock (docs/engine.md, step 4): the receiver looks at RxD, the
-// TSYN gap, the Baud_Search window and the transmitter count bit times.
+// TSYN gap and the transmitter count bit times, the Baud_Search window clocks.
 void Mac::clock() {
   while (!s_.rxd_pending.empty() && s_.rxd_pending.front().first <= clock_.now) {
     s_.rxd_level = s_.rxd_pending.front().second;
@@ -217,7 +218,7 @@ void Mac::clock() {
   if (s_.gap.tick(t) && s_.in_frame) truncated();
   if (r.ended && s_.in_frame) s_.gap.start(kTsynBits);
   if (r.started) s_.gap.on = false;
-  if (s_.search.tick(t)) search_next();
+  if (s_.search.tick(1)) search_next();
   TxShifter& tx = s_.shifter;
   switch (tx.phase) {
     case TxShifter::Phase::idle:
@@ -373,11 +374,15 @@ void Mac::reset() {
 }
 
 void Mac::arm_search_window() {
+  // 4096 bit times, at least 20 ms: 20 ms ... 427 ms at 48 MHz (at most 4096 x 447 392 clocks
+  // at 9.6 kbaud with the fastest clock a uint32_t holds, so the count fits the BitTimer).
+  const std::uint64_t window = std::max(std::uint64_t{kBaudSearchBits} * s_.rx.bit_time(),
+                                        clock_.cycles_for_us(kBaudSearchFloorUs));
   if (clock_.engine == Engine::event) {
-    s_.search_deadline = clock_.now + std::uint64_t{kBaudSearchBits} * s_.rx.bit_time();
+    s_.search_deadline = clock_.now + window;
     clock_.note_deadline(s_.search_deadline);
   } else {
-    s_.search.start(kBaudSearchBits);
+    s_.search.start(static_cast<std::uint32_t>(window));
   }
 }
 

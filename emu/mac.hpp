@@ -21,8 +21,11 @@
 namespace dpc31 {
 
 inline constexpr std::uint32_t kTsynBits = 33;  // idle before a request (synchronisation time)
-// Baud_Search listens this many bit times at each rate before trying the next lower one.
+// Baud_Search listens at each rate for max(kBaudSearchBits bit times, kBaudSearchFloorUs) before
+// trying the next lower one (modelled, docs/timing.md "Baud_Search"): the floor in time lets a
+// master that repeats FDL_Status every 10 ms be heard at every rate within one round.
 inline constexpr std::uint32_t kBaudSearchBits = 4096;
+inline constexpr std::uint32_t kBaudSearchFloorUs = 20'000;
 inline constexpr std::uint32_t kMinTsdrBits = 11;
 
 // Per-cycle engine: counts whole bit times of `t` clocks, one tick per clock.
@@ -75,7 +78,7 @@ class Mac {
     // Per-cycle engine (docs/engine.md): its own receiver and counters; never the deadlines above.
     UartSampler sampler;
     BitTimer gap;     // idle inside a telegram, from the end of a character (TSYN ends it)
-    BitTimer search;  // the Baud_Search window at the current rate
+    BitTimer search;  // the Baud_Search window at the current rate, in clocks
     TxShifter shifter;
     // RxD edges driven for later cycles. Kept here, not in the receiver, so they survive a
     // receiver (re)configure (Baud_Search switching the rate, Start).

@@ -240,13 +240,13 @@ void bind_master(py::module_& m) {
       .def(
           "startup",
           [](PyMaster& pm, int tries) { return pm.act([&] { return pm.m->startup(tries); }); },
-          py::arg("tries") = 200)
+          py::arg("tries") = kStartupTries)
       .def(
           "restart",
           [](PyMaster& pm, U64 tries, std::uint32_t retries) {
             return pm.act([&] { return pm.m->restart(tries, retries); });
           },
-          py::arg("tries") = 200, py::arg("retries") = 1)
+          py::arg("tries") = kStartupTries, py::arg("retries") = 1)
       .def(
           "data_exchange",
           [](PyMaster& pm, const py::bytes& out, const std::optional<std::string>& fault,

@@ -115,6 +115,11 @@ struct MasterCounters {
   std::uint64_t noise = 0;       // noise bursts and glitches put on the line (line_noise, glitch)
 };
 
+// Requests of a start-up by default: enough FDL_Status for the chip's baud search from Start at
+// every rate (605 at 3 and 6 Mbaud, where the 199-bit-time period of unanswered requests meets
+// the 20 ms windows; docs/timing.md, "Baud_Search").
+inline constexpr int kStartupTries = 1000;
+
 class DpMaster {
  public:
   using Firmware = Cpu::Isr;  // the ISR, run (on the host CPU) while X/INT is active
@@ -167,7 +172,7 @@ class DpMaster {
 
   // The standard start-up: FDL_Status until answered, Slave_Diag, Set_Prm, Chk_Cfg, Slave_Diag
   // until the slave is ready. Returns false if it did not reach Data_Exchange within `tries`.
-  bool startup(int tries = 200);
+  bool startup(int tries = kStartupTries);
   // A master restart: FDL_Status until answered, Slave_Diag, Set_Prm, Chk_Cfg, then Slave_Diag
   // until ready. Unlike startup it parameterises even a slave that reports itself ready. Every
   // request without an answer is repeated up to `retries` times.

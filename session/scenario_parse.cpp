@@ -446,7 +446,7 @@ class Parser {
   void body() {
     if (cmd_ == "startup" || cmd_ == "restart") {
       step_.kind = cmd_ == "startup" ? StepKind::startup : StepKind::restart;
-      tries(200);
+      tries(kStartupTries);
     } else if (cmd_ == "exchange") {
       step_.kind = StepKind::exchange;
       positional(0, 1, "one count");

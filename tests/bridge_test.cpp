@@ -20,6 +20,7 @@
 
 #include "../lib/bridge/engine.hpp"
 #include "../lib/bridge/pty.hpp"
+#include "baud_search.hpp"
 #include "dpc31/fdl.hpp"
 #include "dpc31/fdl_counters.hpp"
 
@@ -71,9 +72,11 @@ class BridgeEngine : public ::testing::Test {
     return engine_->take_output();
   }
 
-  // FDL_Status until the chip's baud search has found 19200 baud.
+  // FDL_Status until the chip's baud search has found the rate: within one round of it
+  // (docs/timing.md, "Baud_Search"; 453 requests back to back at 1.5 Mbaud from Start).
   void find_slave() {
-    for (int i = 0; i < 100; ++i) {
+    const std::uint64_t from = engine_->cycle();
+    while (engine_->cycle() - from <= testutil::kBaudSearchRound) {
       const Bytes a = exchange(kFdlStatus);
       if (!a.empty()) {
         ASSERT_EQ(a, kStatusOk);
@@ -296,10 +299,10 @@ TEST_F(BridgeEngine, AGarbageFloodIsLoggedInAFewLinesAndDiscardedWithItsClient) 
 }
 
 // The next master after such a flood is answered within one round of the baud search (the
-// flood fixed no rate, so Baud_Control has expired): docs/timing.md, Baud_Search: 4096 bit times
-// at each of the 10 rates, 12 M first; at 48 MHz the bit times are 4, 8, 16, 32, 96, 256, 512,
-// 1056, 2500 and 5000 cycles. Plus one unanswered FDL_Status period (66 + slot 100 + TSYN 33
-// bit times) for the request in progress when the search reaches 19200 baud.
+// flood fixed no rate, so Baud_Control has expired): docs/timing.md, Baud_Search: max(4096 bit
+// times, 20 ms) at each of the 10 rates, 12 M first (tests/baud_search.hpp). Plus one unanswered
+// FDL_Status period (66 + slot 100 + TSYN 33 bit times) for the request in progress when the
+// search reaches 19200 baud.
 TEST_F(BridgeEngine, TheNextMasterAfterAFloodIsAnsweredWithinOneBaudSearchRound) {
   find_slave();
   for (int i = 0; i < 256; ++i) {
@@ -309,8 +312,7 @@ TEST_F(BridgeEngine, TheNextMasterAfterAFloodIsAnsweredWithinOneBaudSearchRound)
   EXPECT_EQ(engine_->chip().wd_state(), dpc31::WdState::Baud_Search);
   engine_->client_gone();
   const std::uint64_t closed = engine_->cycle();
-  constexpr std::uint64_t kRound =
-      4096ull * (4 + 8 + 16 + 32 + 96 + 256 + 512 + 1056 + 2500 + 5000);
+  constexpr std::uint64_t kRound = testutil::kBaudSearchRound;
   constexpr std::uint64_t kPeriod = (66 + 100 + 33) * kT;
   for (int i = 0; i < 1000 && engine_->cycle() - closed <= kRound + 2 * kPeriod; ++i) {
     if (exchange(kFdlStatus) == kStatusOk) break;

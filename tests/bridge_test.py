@@ -494,10 +494,9 @@ def profibus_rates_default_log():
     set with TCSETS2 and BOTHER) brings DO4 to Data_Exchange; the bridge reads the client's rate
     (no speed note when it matches; 12 Mbaud, named, when it does not: the bytes travel at the
     bridge's rate all the same). The default log level says state changes and faults only: no
-    telegram lines, lines in cycle order. (Data_Exchange at 12 Mbaud through the pty works too,
-    but the master's FDL_Status every 3 ms (find_slave: the exchange time plus the host's) meets
-    the chip's 0.34 ms at 12 Mbaud of each 0.8 s baud-search round only by chance: too slow for a
-    test.)"""
+    telegram lines, lines in cycle order. (Data_Exchange at 12 Mbaud through the pty works too:
+    the master's FDL_Status every 3 ms lands in the chip's 20 ms window at 12 Mbaud; the search
+    at all ten rates is BridgeBaudSearch.*, on the engine.)"""
     for baud in (45450, 187500):
         with tempfile.TemporaryDirectory() as tmp:
             b = Bridge(tmp, "--firmware", "DO4", "--baud", str(baud), "--pacing", "free")

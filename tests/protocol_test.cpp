@@ -2,12 +2,14 @@
 // side. Cycles are derived from docs/timing.md: T = round(48 MHz / baud); a request is acted on
 // at the stop sample of its last character (end - T + T/2); the answer starts MinTSDR = 11 bit
 // times after the request's end; the master keeps 33 idle bits (TSYN) before each request and
-// waits a slot time of 100 bits; Baud_Search listens 4096 bit times per rate, 12 M first.
+// waits a slot time of 100 bits; Baud_Search listens max(4096 bit times, 20 ms) per rate, 12 M
+// first (tests/baud_search.hpp).
 // Telegram bytes and FCS are worked out by hand.
 #include <gtest/gtest.h>
 
 #include <numeric>
 
+#include "baud_search.hpp"
 #include "dp_master.hpp"
 #include "dpc31/fdl_counters.hpp"
 #include "dpc31/reg_ids.hpp"
@@ -64,11 +66,10 @@ TEST_P(Startup, ReachesDataExchangeAtExactCycles) {
   ASSERT_TRUE(b.master.startup());
   const auto& h = b.master.history();
 
-  // Baud_Search: window i of the searched rate opens 4096 bit times per faster rate after Start.
+  // Baud_Search: the window of the searched rate opens after the windows of the faster rates.
   std::size_t rate = 0;
   while (kBaudRates[rate] != baud) ++rate;
-  std::uint64_t window = b.start;
-  for (std::size_t j = 0; j < rate; ++j) window += 4096u * T_of(kBaudRates[j]);
+  const std::uint64_t window = b.start + testutil::baud_search_opens(baud);
   // Unanswered FDL_Status requests repeat every 6*11 + 100 + 33 = 199 bit times; the first one
   // starting TSYN after the window opens is heard.
   std::size_t first = 0;
@@ -139,7 +140,7 @@ class AheadOfTime : public ::testing::TestWithParam<Engine> {
 TEST_P(AheadOfTime, RequestDrivenBeforeAWindowSwitchIsHeardAtTheNewRate) {
   const std::uint64_t s = chip.cycle();  // Start_SPC3 completed: the 12 Mbaud window opens
   const std::uint64_t t = 8;             // 6 Mbaud
-  const std::uint64_t window = s + 4096 * 4;
+  const std::uint64_t window = s + testutil::baud_search_window(12'000'000);  // 20 ms
   std::vector<std::pair<std::uint64_t, bool>> txd;
   chip.on_txd([&](std::uint64_t c, bool l) { txd.emplace_back(c, l); });
   // FDL_Status 5 <- 2 (FCS 05+02+49 = 50h), starting TSYN after the 6 Mbaud window opens, handed
@@ -429,12 +430,10 @@ TEST_P(Protocol, WatchdogOffKeepsDataExchangeThroughASilentBus) {
   EXPECT_EQ(b.chip.dp_state(), DpState::Data_Exchange);
   EXPECT_EQ(b.chip.wd_state(), WdState::Baud_Search);
   // Baud_Control (16 x 10 ms, x 2 on the VPC3+) ran out after the last telegram to us; from
-  // there the search cycles through all ten 4096-bit windows, 12 M first.
+  // there the search cycles through all ten windows, 12 M first (one round: kBaudSearchRound).
   const std::uint64_t baud_control = (GetParam() == Profile::vpc3plus ? 320u : 160u) * 48'000u;
   std::uint64_t window = b.acted(b.master.history().back()) + baud_control;
-  std::uint64_t cycle_length = 0;
-  for (std::uint32_t baud : kBaudRates) cycle_length += 4096u * T_of(baud);
-  while (window + 33 * 4 < b.chip.cycle()) window += cycle_length;
+  while (window + 33 * 4 < b.chip.cycle()) window += testutil::kBaudSearchRound;
   b.master.idle(window + 33 * 4 - b.chip.cycle());  // the first request TSYN into the window
   const Exchange dx = b.master.data_exchange({8, 8, 8, 8});
   EXPECT_EQ(dx.request_start, window + 33 * 4);

@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "baud_search.hpp"
 #include "dp_master.hpp"
 #include "dpc31/bus_port.hpp"
 #include "dpc31/dp.hpp"
@@ -75,7 +76,7 @@ TEST_P(RxdChars, TheChipIsLeftAsByItsEdges) {
   const std::vector<std::uint8_t> status = fdl::encode(fdl::make_frame(
       slave, master, fdl::make_request_fc(fdl::Function::FDL_Status, false, false)));
   // The baud search: FDL_Status until the chip has found the rate (two rounds at most).
-  const std::uint64_t give_up = next + 2 * 4096ull * 9480 * 4 + 10'000'000;
+  const std::uint64_t give_up = next + 2 * testutil::kBaudSearchRound + 10'000'000;
   while (chars.chip.wd_state() == WdState::Baud_Search && next < give_up) {
     send(status, {});
     check("baud search");

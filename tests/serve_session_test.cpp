@@ -9,6 +9,7 @@
 #include <string_view>
 #include <vector>
 
+#include "baud_search.hpp"
 #include "cpu.hpp"
 #include "dpc31/chip.hpp"
 #include "responder.hpp"
@@ -53,7 +54,7 @@ TEST(ServeSession, InjectUsesTheDetectedRate) {
   r.init(bus);
   const std::uint64_t now = s.s.chip().cycle();
   // 1.5 Mbaud is heard in its search window; afterwards inject defaults to it (T = 32).
-  const std::uint64_t window = now + 4096u * (4 + 8 + 16);
+  const std::uint64_t window = now + testutil::baud_search_opens(1'500'000);
   EXPECT_EQ(s(fmt::format("step {}", window - now)), fmt::format("OK {}", window));
   EXPECT_EQ(s("inject_fdl 5 2 0x49 baud=1500000"),
             fmt::format("OK {} {}", window + 33 * 32, window + 33 * 32 + 6 * 11 * 32));

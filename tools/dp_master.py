@@ -218,12 +218,12 @@ class Master:
 
     def find_slave(self, budget=20.0):
         """FDL_Status until answered, for `budget` seconds at most. While the chip searches the
-        rate it listens 4096 bit times at each of the ten (12 Mbaud first; the round is ~0.8 s of
-        chip time, docs/timing.md "Baud_Search"): a request goes out every exchange time at this
-        rate (request, TSYN, slot time, answer: under 300 bit times) plus 3 ms for the host, so
-        from 45.45 kbaud down one lands whole in the first window at our rate. A fixed period (60
-        ms before) can be nearly a divisor of the round (54 ms of chip time at 500 kbaud: 15 x
-        = 0.809 s) and then misses the window round after round. Once answered, the answers to
+        rate it listens max(4096 bit times, 20 ms) at each of the ten (12 Mbaud first; the round
+        is 0.896 s of chip time, docs/timing.md "Baud_Search"): a request goes out every exchange
+        time at this rate (request, TSYN, slot time, answer: under 300 bit times) plus 3 ms for
+        the host, so at every rate one lands whole in the first window at our rate (a period of
+        at most 19.8 ms does). A longer fixed period can be nearly a divisor of the round and then
+        miss the window round after round. Once answered, the answers to
         requests still on their way are read and dropped (until the line has been quiet for two
         periods: not longer, or Baud_Control, a few hundred ms of a silent bus, sends the chip
         back to its search), so the next request gets its own answer."""

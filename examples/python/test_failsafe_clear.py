@@ -49,10 +49,11 @@ def test_the_same_through_its_scenario_file(traces):
     result = scenario.run()
     assert result.ok, result.failures
     assert [(e.line, e.ok) for e in result.expects] == [(e.line, True) for e in expects]
-    # The trace's hand check: the Clear_Data telegram starts at 186336 + 28, 13 characters, and
+    # The trace's hand check: the Clear_Data telegram starts at 186336 + 28 + 2763712 (its
+    # rechecks: the DPC31's MAC_Start, then the 20 ms baud-search windows), 13 characters, and
     # is acted on at its last stop sample; the user fetches the substitute values after that.
     gc = next(s for s in result.steps if s.text.startswith("gc clear"))
-    assert gc.cycle == 186336 + 28
+    assert gc.cycle == 186336 + 28 + 2763712
     acted = gc.cycle + 13 * 11 * T - T + T // 2
     fetch = next(line for line in result.walk if "user: outputs 5A 5A 5A 5A (cleared)" in line)
     assert acted < int(fetch.split("]")[0].split()[-1]) < acted + 100

@@ -41,28 +41,31 @@ def test_startup_cycles_from_the_timing_contract():
     # changes"), which it unmasked: X/INT active at 192.
     start = next(c for c, active in edges if active)
     assert start == 192
-    # The baud search listens 4096 bit times at each rate from 12 Mbaud down (12, 6, 3 Mbaud:
-    # T = 4, 8, 16), so the 1.5 Mbaud window opens at:
-    window = start + 4096 * (4 + 8 + 16)
-    assert window == 114880
-    # The first FDL_Status with >= 33 idle bit times after the window opened is answered.
+    # The baud search listens max(4096 bit times, 20 ms) at each rate from 12 Mbaud down
+    # (docs/timing.md, "Baud_Search"): 12, 6 and 3 Mbaud have 20 ms = 960 000 cycles each, so the
+    # 1.5 Mbaud window opens at:
+    window = start + 3 * 960000
+    assert window == 2880192
+    # The master's unanswered FDL_Status requests start at start + 33 T and repeat every
+    # 66 + 100 (slot) + 33 = 199 bit times; the first with >= 33 idle bit times after the window
+    # opened is answered: start + 33 T + k x 199 T >= window + 33 T for k = 453.
     answered = [ex for ex in master.history if ex.answer is not None]
     fdl_status = answered[0]
     assert fdl_status.request.service == "FDL_Status"
-    assert fdl_status.request_start == 122240
+    assert fdl_status.request_start == start + 33 * T + 453 * 199 * T == 2885952
     # acted on at the stop sample of its last character: end - T + T/2 -> Baudrate_Detect
     acted = fdl_status.request_end - T + T // 2
-    assert acted == 124336
+    assert acted == 2885952 + 66 * T - T + T // 2 == 2888048
     assert (acted, True) in edges
     # the answer: 11 bit times after the request's end, 6 characters of 11 bits
-    assert fdl_status.answer_start == fdl_status.request_end + 11 * T == 124704
-    assert fdl_status.answer_end == fdl_status.answer_start + 6 * 11 * T == 126816
+    assert fdl_status.answer_start == fdl_status.request_end + 11 * T == 2888416
+    assert fdl_status.answer_end == fdl_status.answer_start + 6 * 11 * T == 2890528
     # every answer of the start-up keeps the same distance (MinTSDR 11 bit times)
     for ex in answered:
         assert ex.answer_start == ex.request_end + 11 * T
     # the next request after TSYN = 33 idle bit times
     position = [ex.request_start for ex in master.history].index(fdl_status.request_start)
-    assert master.history[position + 1].request_start == 126816 + 33 * T
+    assert master.history[position + 1].request_start == 2890528 + 33 * T
     assert [ex.request.service for ex in answered] == [
         "FDL_Status", "Slave_Diag", "Set_Prm", "Chk_Cfg", "Slave_Diag"]
     assert chip.fdl_counters["requests"] == 5

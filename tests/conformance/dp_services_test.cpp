@@ -286,7 +286,7 @@ TEST_P(DpServices, DpModeZeroSetsUpNoDpSaps) {
   c.write(m0 + 1, 0x20);    // Spec_Clear_Mode; DP_Mode (bit 8) = 0
   testutil::user_start(c);  // Start_SPC3
   Exchange st;
-  for (int k = 0; k < 200 && !st.answer; ++k) st = b.master.fdl_status();
+  for (int k = 0; k < dpc31::kStartupTries && !st.answer; ++k) st = b.master.fdl_status();
   EXPECT_EQ(wire(st.answer), (Bytes{0x10, 0x02, 0x05, 0x00, 0x07, 0x16}));
   const Bytes kRs = {0x10, 0x02, 0x05, 0x03, 0x0A, 0x16};
   EXPECT_EQ(wire(b.master.slave_diag().answer), kRs);

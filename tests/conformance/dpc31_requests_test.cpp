@@ -78,7 +78,8 @@ bool started(Chip& c) { return (rd(c, RegId::Status_Reg) & 0x01) != 0; }
 
 // Baud_Search has found the master's rate once an FDL_Status is answered.
 void until_answered(Bench& b) {
-  for (int i = 0; i < 50 && !b.master.fdl_status().answer; ++i) {
+  // Enough FDL_Status for the baud search from Start at every rate (docs/timing.md).
+  for (int i = 0; i < dpc31::kStartupTries && !b.master.fdl_status().answer; ++i) {
   }
 }
 

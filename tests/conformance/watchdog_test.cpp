@@ -294,7 +294,8 @@ TEST_P(BaudCode, StatusBaudRateBits_TheRateFound) {
   static constexpr std::uint32_t kRate[] = {12'000'000, 6'000'000, 3'000'000, 1'500'000, 500'000,
                                             187'500,    93'750,    45'450,    19'200,    9'600};
   Bench b(profile, kRate[code]);
-  for (int i = 0; i < 400 && !b.master.fdl_status().answer; ++i) {
+  // Enough FDL_Status for the baud search from Start at every rate (docs/timing.md).
+  for (int i = 0; i < dpc31::kStartupTries && !b.master.fdl_status().answer; ++i) {
   }
   const std::uint16_t s = status(b.chip);
   EXPECT_EQ((s >> 8) & 0x0F, code);

@@ -11,6 +11,7 @@
 //   bits 7..4  baud code (0 = 12 Mbaud ... 9 = 9.6 kbaud, 10..15 = 9 - n % 10) for the fresh chip
 // The rest is the line (see chip_bits / chip_bytes below). After the last item the chip runs on
 // for a while with a silent line (watchdogs, the user's answers).
+#include <algorithm>
 #include <array>
 #include <cstring>
 #include <map>
@@ -118,10 +119,13 @@ class Run {
       DirectBus direct(chip_);
       user_->init(direct);
       t_ = bit_time(kRates[s.baud_code]);
-      // Baud_Search steps down from 12 Mbaud, 4096 bit times per rate (docs/timing.md): wait in
-      // steps of 64 bit times, so the input starts near the beginning of the chosen rate's window.
+      // Baud_Search steps down from 12 Mbaud, max(4096 bit times, 20 ms) per rate (docs/timing.md):
+      // wait in steps of a 64th of a window, so the input starts near the beginning of the chosen
+      // rate's window.
       for (int i = 0; i < 12 * 64 && chip_.bit_cycles() != t_; ++i) {
-        run_until(chip_, *user_, chip_.cycle() + 64ull * chip_.bit_cycles());
+        const std::uint64_t step =
+            std::max<std::uint64_t>(64ull * chip_.bit_cycles(), chip_.clock_hz() / 50 / 64);
+        run_until(chip_, *user_, chip_.cycle() + step);
       }
     }
     at_ = chip_.cycle();
