@@ -7,7 +7,7 @@ the bus rate (tcsetattr, or the TCSETS2 ioctl for the five rates termios has no 
 then FDL telegrams (EN 50170: SD1/SD2, FCS, FCB/FCV) with a timeout per answer. Linux only.
 
     python3 tools/dp_master.py /tmp/dp0 --baud 19200 --ident 0x0D04 --cfg 21,10 \
-        --user-prm 00,00,00,00 --outputs 05,01
+        --user-prm 00,00,00,64 --outputs 05,01
 
 Prints one line per step and the inputs of the last Data_Exchange. Exit codes: 0 Data_Exchange
 reached, 1 the slave did not come up (the line says where), 2 bad arguments or device.
