@@ -555,3 +555,38 @@ TEST(ScenarioCpu51, HeaderIsCheckedAndTheImageReadWhenTheRunStarts) {
 }
 
 }  // namespace
+
+// No silent options (docs/decisions.md): an option the chosen profile has nothing for is refused
+// at its line, whichever order the headers come in.
+TEST(ScenarioParse, OptionsWithoutEffectOnTheProfileAreRefused) {
+  const std::string dpc31_only = "startup\n";
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {"profile spc3\nirq-controller external\n" + dpc31_only,
+       "t.scn:2: 'irq-controller' is for profile dpc31: only the DPC31 has a C31 core"},
+      {"irq-controller external\nprofile vpc3plus\n" + dpc31_only,
+       "t.scn:1: 'irq-controller' is for profile dpc31: only the DPC31 has a C31 core"},
+      {"profile spc3\nuser substitute=01,02\n" + dpc31_only,
+       "t.scn:2: user substitute= is for profile dpc31: only the DPC31 has the clear buffer C"},
+      {"user dx_out_port=1\nprofile vpc3plus\n" + dpc31_only,
+       "t.scn:1: user dx_out_port= is for profile dpc31: only the DPC31 has "
+       "C31_Control.Enable_DX_Out_Port"},
+      {"profile dpc31\nuser user_wd_value=5\n" + dpc31_only,
+       "t.scn:2: user user_wd_value= needs user_wd=1 on profile dpc31: the DPS_User_Watchdog "
+       "loads R_User_WD_Value only through its requests"},
+      {"profile vpc3plus\nslave wd_base=1ms\n" + dpc31_only,
+       "t.scn:2: wd_base= on profile vpc3plus needs DPV1_Enable (user_prm byte 0 bit 7): without "
+       "DPV1 the VPC3+ takes WD_Base from Mode_Reg0, not from Set_Prm"},
+      {"profile vpc3plus\nstartup\nset_prm wd_base=10ms\n",
+       "t.scn:3: wd_base= on profile vpc3plus needs DPV1_Enable (user_prm byte 0 bit 7): without "
+       "DPV1 the VPC3+ takes WD_Base from Mode_Reg0, not from Set_Prm"},
+  };
+  for (const auto& [text, line] : refused) EXPECT_EQ(parse_error(text), line) << text;
+  // The same options where the profile acts on them.
+  for (const std::string ok :
+       {"profile dpc31\nirq-controller external\n", "profile dpc31\nuser substitute=01,02\n",
+        "profile dpc31\nuser dx_out_port=1\n", "profile dpc31\nuser user_wd=1 user_wd_value=5\n",
+        "profile spc3\nuser user_wd_value=5\n", "profile spc3\nslave wd_base=1ms\n",
+        "profile vpc3plus\nslave wd_base=1ms user_prm=80,00,00\n"}) {
+    EXPECT_EQ(parse_error(ok + dpc31_only), "") << ok;
+  }
+}
