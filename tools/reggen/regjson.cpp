@@ -15,12 +15,17 @@
 #include <utility>
 
 #include "regfmt.hpp"
+#include "regjson_text.hpp"
 
 namespace dpc31::regjson {
 
 namespace {
 
 using Json = nlohmann::json;
+using detail::access_mask;
+using detail::is_identifier;
+using detail::parse_text;
+using detail::plain_lanes;
 
 constexpr std::size_t kProfileCount = std::size(kAllProfiles);
 constexpr std::uint32_t kFirstCell = 0x16;
@@ -60,41 +65,6 @@ std::string hex_addr(const ProfileDesc& p, std::uint32_t addr) {
   return regfmt::hex(addr, regfmt::addr_digits(p));
 }
 
-// The policy mask of a register that collects the bits of one access.
-std::uint16_t& access_mask(RegDesc& r, Access a) {
-  switch (a) {
-    case Access::RO:
-      return r.ro;
-    case Access::RW:
-      return r.rw;
-    case Access::W1C:
-      return r.w1c;
-    case Access::W1S:
-      return r.w1s;
-    case Access::CMD:
-      return r.cmd;
-    case Access::WO:
-      return r.wo;
-    case Access::IGN:
-      return r.ign;
-    case Access::RSVD:
-      return r.rsvd;
-    case Access::UNIMP:
-      return r.unimp;
-  }
-  return r.unimp;
-}
-
-bool is_identifier(std::string_view s, bool leading_digit_ok) {
-  if (s.empty()) return false;
-  for (std::size_t i = 0; i < s.size(); ++i) {
-    const auto c = static_cast<unsigned char>(s[i]);
-    const bool ok = std::isalnum(c) != 0 || c == '_';
-    if (!ok || (i == 0 && !leading_digit_ok && std::isdigit(c) != 0)) return false;
-  }
-  return true;
-}
-
 // A field as written in the description, before it is bound to a register.
 struct RawField {
   std::string name;
@@ -111,59 +81,6 @@ struct RawField {
 struct PerProfile {
   std::array<std::optional<std::uint32_t>, kProfileCount> value{};
 };
-
-Json parse_text(std::string_view text, const std::string& file) {
-  // Duplicate keys are legal JSON but almost always a mistake here: reject them.
-  std::vector<std::set<std::string>> open_objects;
-  std::string duplicate;
-  auto cb = [&](int /*depth*/, Json::parse_event_t ev, Json& parsed) {
-    switch (ev) {
-      case Json::parse_event_t::object_start:
-        open_objects.emplace_back();
-        break;
-      case Json::parse_event_t::object_end:
-        if (!open_objects.empty()) open_objects.pop_back();
-        break;
-      case Json::parse_event_t::key:
-        if (!open_objects.empty() &&
-            !open_objects.back().insert(parsed.get<std::string>()).second && duplicate.empty()) {
-          duplicate = parsed.get<std::string>();
-        }
-        break;
-      default:
-        break;
-    }
-    return true;
-  };
-  Json root;
-  try {
-    root = Json::parse(text.begin(), text.end(), cb);
-  } catch (const Json::parse_error& e) {
-    std::string what = e.what();
-    if (const auto p = what.find("] "); what.rfind("[json.exception.", 0) == 0 && p != what.npos) {
-      what.erase(0, p + 2);
-    }
-    std::replace(what.begin(), what.end(), '\n', ' ');
-    throw Error(fmt::format("{}: JSON parse error at byte {}: {}", file, e.byte, what));
-  }
-  if (!duplicate.empty()) {
-    throw Error(fmt::format("{}: duplicate key '{}' in one JSON object", file, duplicate));
-  }
-  return root;
-}
-
-// RegDesc::plain: the lanes whose accesses are straight stores and loads by the description.
-std::uint8_t plain_lanes(const RegDesc& r) {
-  const std::uint8_t all = r.width == 16 ? 0b11 : 0b01;
-  if (r.kind == Kind::cell) return r.reserved ? 0 : all;
-  if (r.kind != Kind::latch || r.unimp != 0) return 0;
-  const auto acting = static_cast<std::uint16_t>(r.w1c | r.w1s | r.cmd | r.ign | r.pulse);
-  std::uint8_t lanes = 0;
-  for (unsigned b = 0; b < static_cast<unsigned>(r.bytes()); ++b) {
-    if ((acting & (0xFFu << (8 * b))) == 0) lanes = static_cast<std::uint8_t>(lanes | 1u << b);
-  }
-  return lanes;
-}
 
 }  // namespace
 
