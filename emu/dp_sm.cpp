@@ -104,27 +104,30 @@ Frame DpStateMachine::short_answer(const Frame& req, Response code) const {
   return fdl::make_frame(req.sa, s_.station, fdl::make_response_fc(code));
 }
 
+namespace {
+
+// The command read of a verdict register: the handshake `Handshake` with verdict `v`.
+template <std::uint16_t (DpStateMachine::*Handshake)(DpStateMachine::Verdict),
+          DpStateMachine::Verdict v>
+std::uint16_t verdict(void* b) {
+  return (self<DpStateMachine>(b).*Handshake)(v);
+}
+
+}  // namespace
+
 void DpStateMachine::install_hooks(HookTable& h) {
   using V = DpStateMachine::Verdict;
   auto at = [&h, this](RegId id) -> RegHooks& { return bind_hooks(h, id, *this); };
   auto prm_preview = [](const void* b) { return self<DpStateMachine>(b).prm_preview(); };
   auto cfg_preview = [](const void* b) { return self<DpStateMachine>(b).cfg_preview(); };
   at(RegId::User_Prm_Data_Okay).read = prm_preview;
-  at(RegId::User_Prm_Data_Okay).command = [](void* b) {
-    return self<DpStateMachine>(b).prm_verdict(V::ok);
-  };
+  at(RegId::User_Prm_Data_Okay).command = verdict<&DpStateMachine::prm_verdict, V::ok>;
   at(RegId::User_Prm_Data_Not_Okay).read = prm_preview;
-  at(RegId::User_Prm_Data_Not_Okay).command = [](void* b) {
-    return self<DpStateMachine>(b).prm_verdict(V::not_ok);
-  };
+  at(RegId::User_Prm_Data_Not_Okay).command = verdict<&DpStateMachine::prm_verdict, V::not_ok>;
   at(RegId::User_Cfg_Data_Okay).read = cfg_preview;
-  at(RegId::User_Cfg_Data_Okay).command = [](void* b) {
-    return self<DpStateMachine>(b).cfg_verdict(V::ok);
-  };
+  at(RegId::User_Cfg_Data_Okay).command = verdict<&DpStateMachine::cfg_verdict, V::ok>;
   at(RegId::User_Cfg_Data_Not_Okay).read = cfg_preview;
-  at(RegId::User_Cfg_Data_Not_Okay).command = [](void* b) {
-    return self<DpStateMachine>(b).cfg_verdict(V::not_ok);
-  };
+  at(RegId::User_Cfg_Data_Not_Okay).command = verdict<&DpStateMachine::cfg_verdict, V::not_ok>;
   // The DPC31's User_SSA_OK Cmd answers 00 User_SSA_Finished or 11 Not_Allowed (DPC31 p.26;
   // which one when: modelled); the SPC3's SSA_Buffer_Free_Cmd reads don't care (00h).
   at(RegId::SSA_Buffer_Free_Cmd).read = [](const void* b) -> std::uint16_t {
