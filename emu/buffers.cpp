@@ -3,8 +3,6 @@
 // fetched, diag sent).
 #include "buffers.hpp"
 
-#include "core.hpp"
-
 namespace dpc31 {
 
 namespace {
@@ -62,33 +60,30 @@ std::uint16_t new_diag(State& b, bool& changed) {
 
 }  // namespace
 
-void install_buffer_hooks(HookTable& h) {
-  auto at = [&h](RegId id) -> RegHooks& { return h[RegisterFile::idx(id)]; };
-  at(RegId::Din_Buffer_SM).read = [](const ChipCore& c) -> std::uint16_t {
-    return c.buffers.din_sm();
+// New_Din_Buffer_Cmd is the DP state machine's (DpStateMachine::install_hooks).
+void BufferUnit::install_hooks(HookTable& h) {
+  auto at = [&h, this](RegId id) -> RegHooks& { return bind_hooks(h, id, *this); };
+  at(RegId::Din_Buffer_SM).read = [](const void* b) -> std::uint16_t {
+    return self<BufferUnit>(b).din_sm();
   };
-  at(RegId::Dout_Buffer_SM).read = [](const ChipCore& c) -> std::uint16_t {
-    return c.buffers.dout_sm();
+  at(RegId::Dout_Buffer_SM).read = [](const void* b) -> std::uint16_t {
+    return self<BufferUnit>(b).dout_sm();
   };
-  at(RegId::Diag_Buffer_SM).read = [](const ChipCore& c) -> std::uint16_t {
-    return c.buffers.diag_sm();
+  at(RegId::Diag_Buffer_SM).read = [](const void* b) -> std::uint16_t {
+    return self<BufferUnit>(b).diag_sm();
   };
-  at(RegId::New_Din_Buffer_Cmd).read = [](const ChipCore& c) {
-    return c.buffers.new_din_preview();
+  at(RegId::Next_Dout_Buffer_Cmd).read = [](const void* b) {
+    return self<BufferUnit>(b).next_dout_preview();
   };
-  at(RegId::New_Din_Buffer_Cmd).command = [](ChipCore& c) {
-    const std::uint16_t r = c.buffers.new_din_cmd();
-    c.dp.din_handed_over();
-    return r;
+  at(RegId::Next_Dout_Buffer_Cmd).command = [](void* b) {
+    return self<BufferUnit>(b).next_dout_cmd();
   };
-  at(RegId::Next_Dout_Buffer_Cmd).read = [](const ChipCore& c) {
-    return c.buffers.next_dout_preview();
+  at(RegId::New_Diag_Buffer_Cmd).read = [](const void* b) {
+    return self<BufferUnit>(b).new_diag_preview();
   };
-  at(RegId::Next_Dout_Buffer_Cmd).command = [](ChipCore& c) { return c.buffers.next_dout_cmd(); };
-  at(RegId::New_Diag_Buffer_Cmd).read = [](const ChipCore& c) {
-    return c.buffers.new_diag_preview();
+  at(RegId::New_Diag_Buffer_Cmd).command = [](void* b) {
+    return self<BufferUnit>(b).new_diag_cmd();
   };
-  at(RegId::New_Diag_Buffer_Cmd).command = [](ChipCore& c) { return c.buffers.new_diag_cmd(); };
 }
 
 std::uint8_t BufferUnit::dout_sm() const {

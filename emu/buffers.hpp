@@ -6,6 +6,7 @@
 #include <cstdint>
 
 #include "irq.hpp"
+#include "reg_hooks.hpp"
 #include "regfile.hpp"
 
 namespace dpc31 {
@@ -82,6 +83,8 @@ class BufferUnit {
 
   BufferUnit(RegisterFile& regs, InterruptController& irq) : regs_(regs), irq_(irq) {}
   void reset() { s_ = State{}; }
+  // Binds the hooks of the registers this block owns (reg_hooks.hpp).
+  void install_hooks(HookTable& h);
 
   // The *_Buffer_SM bytes.
   [[nodiscard]] std::uint8_t din_sm() const { return s_.din.sm(); }

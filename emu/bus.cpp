@@ -42,11 +42,11 @@ ChipCore::ChipCore(const ChipOptions& opt)
     signals.emit(BlockEvent::Kind::mac_stop);
     mode.go_offline();
   };
-  install_irq_hooks(hooks);
-  install_mode_hooks(hooks);
-  install_buffer_hooks(hooks);
-  install_dp_sm_hooks(hooks);
-  install_request_hooks(hooks);
+  irq.install_hooks(hooks);
+  mode.install_hooks(hooks);
+  buffers.install_hooks(hooks);
+  dp.install_hooks(hooks);
+  requests.install_hooks(hooks);
   // Every derived value the description promises must have a block that computes it.
   for (const RegDesc& r : prof().regs) {
     const RegHooks& h = hooks[RegisterFile::idx(r.id)];
@@ -258,7 +258,7 @@ std::uint16_t ChipCore::reg_value(RegId id) const {
     case Kind::derived:
       break;
   }
-  const std::uint16_t v = h.read != nullptr ? h.read(*this) : regs.latch(id);
+  const std::uint16_t v = h.read != nullptr ? h.read(h.block) : regs.latch(id);
   return static_cast<std::uint16_t>(v & r->mask() & ~r->rsvd);
 }
 
@@ -374,10 +374,10 @@ std::uint8_t ChipCore::read_now(std::uint32_t addr) {
   const RegHooks& h = hooks[RegisterFile::idx(r.id)];
   std::uint16_t v = 0;
   if (h.command != nullptr) {
-    v = h.command(*this);
+    v = h.command(h.block);
     irq.update_line();
   } else {
-    v = h.read != nullptr ? h.read(*this) : regs.latch(r.id);  // reg_value for these kinds
+    v = h.read != nullptr ? h.read(h.block) : regs.latch(r.id);  // reg_value for these kinds
   }
   v = static_cast<std::uint16_t>(v & r.mask() & ~r.rsvd);
   if (r.unimp != 0)
@@ -412,7 +412,7 @@ void ChipCore::write_now(std::uint32_t addr, std::uint8_t value) {
       // A cell is RAM; a few start an action when written (the DPC31's InstQ_Wr).
       const RegHooks& h = hooks[RegisterFile::idx(r.id)];
       if (h.post_write != nullptr) {
-        h.post_write(*this, 0, value);
+        h.post_write(h.block, 0, value, value);
         irq.update_line();
       }
       return;
@@ -460,9 +460,9 @@ void ChipCore::write_reg(const RegDesc& r, std::uint32_t offset, std::uint8_t va
     signals.log(LogLevel::info, "{}: stored, behaviour not modelled", r.name);
   const RegHooks& h = hooks[RegisterFile::idx(r.id)];
   written_bits = w;
-  if (h.pre_write != nullptr) next = h.pre_write(*this, old, next);
+  if (h.pre_write != nullptr) next = h.pre_write(h.block, old, next);
   regs.latch(r.target) = next;
-  if (h.post_write != nullptr) h.post_write(*this, old, next);
+  if (h.post_write != nullptr) h.post_write(h.block, old, next, w);
   regs.latch(r.target) = static_cast<std::uint16_t>(regs.latch(r.target) & ~r.pulse);
   irq.update_line();
 }

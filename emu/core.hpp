@@ -25,6 +25,7 @@
 #include "irq.hpp"
 #include "mac.hpp"
 #include "mode.hpp"
+#include "reg_hooks.hpp"
 #include "regfile.hpp"
 #include "requests.hpp"
 #include "signals.hpp"
@@ -34,27 +35,6 @@
 namespace dpc31 {
 
 struct ChipCore;
-
-// Behaviour attached to one register (keyed by the RegId that is accessed, port or latch): each
-// block installs the hooks of its registers next to its behaviour (install_*_hooks).
-struct RegHooks {
-  // Derived read side without side effects (for command reads: the result they would give).
-  std::uint16_t (*read)(const ChipCore&) = nullptr;
-  // Command reads: perform the command, return its result.
-  std::uint16_t (*command)(ChipCore&) = nullptr;
-  // After the access-policy rule: may change what is stored (veto, keep events).
-  std::uint16_t (*pre_write)(ChipCore&, std::uint16_t old, std::uint16_t next) = nullptr;
-  // After the store: actions of the write (Start, EOI, Go_Offline).
-  void (*post_write)(ChipCore&, std::uint16_t old, std::uint16_t now) = nullptr;
-};
-
-using HookTable = std::array<RegHooks, kRegIdCount>;
-
-void install_irq_hooks(HookTable& h);
-void install_mode_hooks(HookTable& h);
-void install_buffer_hooks(HookTable& h);
-void install_dp_sm_hooks(HookTable& h);
-void install_request_hooks(HookTable& h);
 
 struct ChipCore {
   explicit ChipCore(const ChipOptions& opt);

@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <utility>
 
-#include "core.hpp"
 #include "dpc31/dpv1.hpp"
 #include "dpc31/pdu.hpp"
 
@@ -105,32 +104,51 @@ Frame DpStateMachine::short_answer(const Frame& req, Response code) const {
   return fdl::make_frame(req.sa, s_.station, fdl::make_response_fc(code));
 }
 
-void install_dp_sm_hooks(HookTable& h) {
+namespace {
+
+// The command read of a verdict register: the handshake `Handshake` with verdict `v`.
+template <std::uint16_t (DpStateMachine::*Handshake)(DpStateMachine::Verdict),
+          DpStateMachine::Verdict v>
+std::uint16_t verdict(void* b) {
+  return (self<DpStateMachine>(b).*Handshake)(v);
+}
+
+}  // namespace
+
+void DpStateMachine::install_hooks(HookTable& h) {
   using V = DpStateMachine::Verdict;
-  auto at = [&h](RegId id) -> RegHooks& { return h[RegisterFile::idx(id)]; };
-  auto prm_preview = [](const ChipCore& c) { return c.dp.prm_preview(); };
-  auto cfg_preview = [](const ChipCore& c) { return c.dp.cfg_preview(); };
+  auto at = [&h, this](RegId id) -> RegHooks& { return bind_hooks(h, id, *this); };
+  auto prm_preview = [](const void* b) { return self<DpStateMachine>(b).prm_preview(); };
+  auto cfg_preview = [](const void* b) { return self<DpStateMachine>(b).cfg_preview(); };
   at(RegId::User_Prm_Data_Okay).read = prm_preview;
-  at(RegId::User_Prm_Data_Okay).command = [](ChipCore& c) { return c.dp.prm_verdict(V::ok); };
+  at(RegId::User_Prm_Data_Okay).command = verdict<&DpStateMachine::prm_verdict, V::ok>;
   at(RegId::User_Prm_Data_Not_Okay).read = prm_preview;
-  at(RegId::User_Prm_Data_Not_Okay).command = [](ChipCore& c) {
-    return c.dp.prm_verdict(V::not_ok);
-  };
+  at(RegId::User_Prm_Data_Not_Okay).command = verdict<&DpStateMachine::prm_verdict, V::not_ok>;
   at(RegId::User_Cfg_Data_Okay).read = cfg_preview;
-  at(RegId::User_Cfg_Data_Okay).command = [](ChipCore& c) { return c.dp.cfg_verdict(V::ok); };
+  at(RegId::User_Cfg_Data_Okay).command = verdict<&DpStateMachine::cfg_verdict, V::ok>;
   at(RegId::User_Cfg_Data_Not_Okay).read = cfg_preview;
-  at(RegId::User_Cfg_Data_Not_Okay).command = [](ChipCore& c) {
-    return c.dp.cfg_verdict(V::not_ok);
-  };
+  at(RegId::User_Cfg_Data_Not_Okay).command = verdict<&DpStateMachine::cfg_verdict, V::not_ok>;
   // The DPC31's User_SSA_OK Cmd answers 00 User_SSA_Finished or 11 Not_Allowed (DPC31 p.26;
   // which one when: modelled); the SPC3's SSA_Buffer_Free_Cmd reads don't care (00h).
-  at(RegId::SSA_Buffer_Free_Cmd).read = [](const ChipCore& c) -> std::uint16_t {
-    return c.regs.id() == Profile::dpc31 && c.dp.ssa_free() ? kSsaNotAllowed : 0;
+  at(RegId::SSA_Buffer_Free_Cmd).read = [](const void* b) -> std::uint16_t {
+    const DpStateMachine& dp = self<DpStateMachine>(b);
+    return dp.regs_.id() == Profile::dpc31 && dp.ssa_free() ? kSsaNotAllowed : 0;
   };
-  at(RegId::SSA_Buffer_Free_Cmd).command = [](ChipCore& c) -> std::uint16_t {
-    const bool pending = !c.dp.ssa_free();
-    c.dp.ssa_buffer_free();
-    return c.regs.id() == Profile::dpc31 && !pending ? kSsaNotAllowed : 0;
+  at(RegId::SSA_Buffer_Free_Cmd).command = [](void* b) -> std::uint16_t {
+    DpStateMachine& dp = self<DpStateMachine>(b);
+    const bool pending = !dp.ssa_free();
+    dp.ssa_buffer_free();
+    return dp.regs_.id() == Profile::dpc31 && !pending ? kSsaNotAllowed : 0;
+  };
+  // The user hands the inputs over: the buffers' exchange, then the state machine's step.
+  at(RegId::New_Din_Buffer_Cmd).read = [](const void* b) {
+    return self<DpStateMachine>(b).buffers_.new_din_preview();
+  };
+  at(RegId::New_Din_Buffer_Cmd).command = [](void* b) {
+    DpStateMachine& dp = self<DpStateMachine>(b);
+    const std::uint16_t r = dp.buffers_.new_din_cmd();
+    dp.din_handed_over();
+    return r;
   };
 }
 

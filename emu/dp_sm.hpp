@@ -16,6 +16,7 @@
 #include "dpc31/fdl_counters.hpp"
 #include "dpc31/pdu.hpp"
 #include "irq.hpp"
+#include "reg_hooks.hpp"
 #include "regfile.hpp"
 #include "sap_list.hpp"
 #include "signals.hpp"
@@ -104,6 +105,9 @@ class DpStateMachine {
         sap_list_(sap_list),
         counters_(counters),
         sig_(sig) {}
+  // Binds the hooks of the registers this block owns (reg_hooks.hpp); New_Din_Buffer_Cmd is
+  // among them: the handover of the inputs is the state machine's step, through its buffers.
+  void install_hooks(HookTable& h);
   // Also the MAC reset (Go_Offline): Offline, as after reset.
   void reset() {
     s_ = State{};

@@ -2,28 +2,20 @@
 // event latched in the same cycle, and the X/INT line follows IR and the EOI inactive time.
 #include "irq.hpp"
 
-#include "core.hpp"
-
 namespace dpc31 {
 
-namespace {
-
-std::uint16_t int_reg(const ChipCore& c) {
-  return static_cast<std::uint16_t>(c.regs.latch(RegId::Int_Req_Reg) &
-                                    ~c.regs.latch(RegId::Int_Mask_Reg));
-}
-
-// "If a new event and an acknowledge for the same bit coincide, the event stays set."
-std::uint16_t keep_events(ChipCore& c, std::uint16_t /*old*/, std::uint16_t next) {
-  return static_cast<std::uint16_t>(next | c.irq.events_now());
-}
-
-}  // namespace
-
-void install_irq_hooks(HookTable& h) {
-  h[RegisterFile::idx(RegId::Int_Reg)].read = int_reg;
-  h[RegisterFile::idx(RegId::Int_Req_Reg)].pre_write = keep_events;
-  h[RegisterFile::idx(RegId::Int_Ack_Reg)].pre_write = keep_events;
+void InterruptController::install_hooks(HookTable& h) {
+  bind_hooks(h, RegId::Int_Reg, *this).read = [](const void* b) {
+    const RegisterFile& regs = self<InterruptController>(b).regs_;
+    return static_cast<std::uint16_t>(regs.latch(RegId::Int_Req_Reg) &
+                                      ~regs.latch(RegId::Int_Mask_Reg));
+  };
+  // "If a new event and an acknowledge for the same bit coincide, the event stays set."
+  const auto keep_events = [](void* b, std::uint16_t /*old*/, std::uint16_t next) {
+    return static_cast<std::uint16_t>(next | self<InterruptController>(b).events_now());
+  };
+  bind_hooks(h, RegId::Int_Req_Reg, *this).pre_write = keep_events;
+  bind_hooks(h, RegId::Int_Ack_Reg, *this).pre_write = keep_events;
 }
 
 // After the register file's reset (X/INT follows the reset IRR and IMR). PB3 keeps its level,

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <limits>
 
+#include "reg_hooks.hpp"
 #include "regfile.hpp"
 #include "signals.hpp"
 #include "timer.hpp"
@@ -31,6 +32,8 @@ class InterruptController {
   InterruptController(Clock& clock, RegisterFile& regs, const Signals& sig, IrqController served)
       : clock_(clock), regs_(regs), sig_(sig), served_(served) {}
   void reset();
+  // Binds the hooks of the registers this block owns (reg_hooks.hpp).
+  void install_hooks(HookTable& h);
 
   void raise(std::uint16_t bits);  // IRR |= bits, noted as this cycle's events
   void end_of_interrupt();         // EOI (Mode_Reg1): the inactive time starts

@@ -3,36 +3,33 @@
 // the Status register that reports the result, and the User_Timer_Clock.
 #include "mode.hpp"
 
-#include "core.hpp"
-
 namespace dpc31 {
 
-namespace {
-
-// Mode_Reg0 and Mode_Reg2 configure the chip and may only change while it is Offline.
-std::uint16_t offline_only(ChipCore& c, std::uint16_t old, std::uint16_t next) {
-  if (!c.dp.started() || old == next) return next;
-  c.signals.log(LogLevel::warn,
-                "mode register written while started (Passive_Idle): ignored, write it in Offline");
-  return old;
-}
-
-}  // namespace
-
-void install_mode_hooks(HookTable& h) {
-  auto at = [&h](RegId id) -> RegHooks& { return h[RegisterFile::idx(id)]; };
+void ModeRegisters::install_hooks(HookTable& h) {
+  auto at = [&h, this](RegId id) -> RegHooks& { return bind_hooks(h, id, *this); };
+  // Mode_Reg0 and Mode_Reg2 configure the chip and may only change while it is Offline.
+  const auto offline_only = [](void* b, std::uint16_t old, std::uint16_t next) {
+    const ModeRegisters& m = self<ModeRegisters>(b);
+    if (!m.dp_.started() || old == next) return next;
+    m.sig_.log(LogLevel::warn,
+               "mode register written while started (Passive_Idle): ignored, write it in Offline");
+    return old;
+  };
   at(RegId::Mode_Reg0).pre_write = offline_only;
   at(RegId::Mode_Reg2).pre_write = offline_only;
-  at(RegId::Mode_Reg2).post_write = [](ChipCore& c, std::uint16_t, std::uint16_t now) {
-    c.regs.set_large_ram(c.regs.profile().ram_size_large != 0 &&
-                         (now & fields::Mode_Reg2::_4kB_Mode) != 0);
+  at(RegId::Mode_Reg2).post_write = [](void* b, std::uint16_t, std::uint16_t now, std::uint16_t) {
+    RegisterFile& regs = self<ModeRegisters>(b).regs_;
+    regs.set_large_ram(regs.profile().ram_size_large != 0 &&
+                       (now & fields::Mode_Reg2::_4kB_Mode) != 0);
   };
   // Only the bits the profile's Mode_Reg1_S takes act: on the DPC31 Start_SPC3, Go_Offline,
   // User_Leave_Master and Res_User_WD are requests (IGN here, docs/dpc31.md).
-  at(RegId::Mode_Reg1_S).post_write = [](ChipCore& c, std::uint16_t, std::uint16_t) {
-    c.mode.command(c.written_bits & c.regs.reg(RegId::Mode_Reg1_S)->w1s);
+  at(RegId::Mode_Reg1_S).post_write = [](void* b, std::uint16_t, std::uint16_t,
+                                         std::uint16_t written) {
+    ModeRegisters& m = self<ModeRegisters>(b);
+    m.command(written & m.regs_.reg(RegId::Mode_Reg1_S)->w1s);
   };
-  at(RegId::Status_Reg).read = [](const ChipCore& c) { return c.mode.status(); };
+  at(RegId::Status_Reg).read = [](const void* b) { return self<ModeRegisters>(b).status(); };
 }
 
 // The actions follow the bits written as 1 (a command), not the stored value: Go_Offline stays

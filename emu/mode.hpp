@@ -10,6 +10,7 @@
 #include "dp_sm.hpp"
 #include "irq.hpp"
 #include "mac.hpp"
+#include "reg_hooks.hpp"
 #include "regfile.hpp"
 #include "signals.hpp"
 #include "timer.hpp"
@@ -36,6 +37,8 @@ class ModeRegisters {
         sig_(sig),
         release_(release) {}
   void reset() { s_ = State{}; }
+  // Binds the hooks of the registers this block owns (reg_hooks.hpp).
+  void install_hooks(HookTable& h);
 
   // Mode_Reg1_S written: the actions of the bits written as 1.
   void command(std::uint16_t written);

@@ -4,8 +4,6 @@
 // pointers mean an empty queue.
 #include "requests.hpp"
 
-#include "core.hpp"
-
 namespace dpc31 {
 
 namespace {
@@ -32,9 +30,10 @@ Ring ring(const RegisterFile& regs, RegId base, RegId len, RegId wr, RegId rd) {
 
 }  // namespace
 
-void install_request_hooks(HookTable& h) {
-  h[RegisterFile::idx(RegId::InstQ_Wr)].post_write = [](ChipCore& c, std::uint16_t, std::uint16_t) {
-    c.requests.instq_written();
+void RequestInterface::install_hooks(HookTable& h) {
+  bind_hooks(h, RegId::InstQ_Wr, *this).post_write = [](void* b, std::uint16_t, std::uint16_t,
+                                                        std::uint16_t) {
+    self<RequestInterface>(b).instq_written();
   };
 }
 

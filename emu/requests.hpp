@@ -12,6 +12,7 @@
 #include "dpc31/dp.hpp"
 #include "irq.hpp"
 #include "mode.hpp"
+#include "reg_hooks.hpp"
 #include "regfile.hpp"
 #include "signals.hpp"
 #include "timer.hpp"
@@ -30,6 +31,8 @@ class RequestInterface {
                    ModeRegisters& mode, const Signals& sig)
       : clock_(clock), regs_(regs), irq_(irq), dp_(dp), mode_(mode), sig_(sig) {}
   void reset() { s_ = State{}; }
+  // Binds the hooks of the registers this block owns (reg_hooks.hpp).
+  void install_hooks(HookTable& h);
 
   // InstQ_Wr written: the MAC executes every request from InstQ_Rd up to it.
   void instq_written();

@@ -13,6 +13,7 @@
 
 #include "dpv1_master.hpp"
 #include "scenario.hpp"
+#include "scenario_bus.hpp"
 
 namespace dpc31::scenario_dpv1 {
 
@@ -31,9 +32,8 @@ void parse_expect(std::span<const std::string_view> pos, ScenarioStep& st);
 // Performs the step on the master.
 Dpv1Answer act(Dpv1Master& m, const ScenarioStep& st);
 
-struct Check {
-  std::string what, want, got;
-};
+// What `expect dpv1` compares (the runner's one check record).
+using Check = scenario_bus::Check;
 Check check(const ScenarioStep& st, const std::optional<Dpv1Answer>& last);
 
 }  // namespace dpc31::scenario_dpv1

@@ -72,4 +72,74 @@ std::string bytes_text(std::span<const std::uint8_t> b) {
   return b.empty() ? "-" : hex_bytes(b, " ", 4096);
 }
 
+std::uint64_t duration(std::string_view s, std::uint32_t clock_hz, std::uint64_t bit_time) {
+  std::uint64_t v = 0;
+  const std::uint64_t f = clock_hz;
+  if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
+    v = number(s, "time", 0, kMaxSeconds * f);
+    return v;
+  }
+  std::size_t k = 0;
+  while (k < s.size() && s[k] >= '0' && s[k] <= '9') ++k;
+  const std::string_view unit = s.substr(k);
+  if (k == 0 || !parse_u64(s.substr(0, k), v)) {
+    fail(fmt::format("bad time '{}' (cycles, or a number with us, ms, s or bits)", shown(s)));
+  }
+  const auto check = [&](std::uint64_t max) {
+    if (v > max) fail(fmt::format("time '{}' too long (at most {} s)", shown(s), kMaxSeconds));
+  };
+  if (unit.empty() || unit == "cycles") {
+    check(kMaxSeconds * f);
+    return v;
+  }
+  if (unit == "us") {
+    check(kMaxSeconds * 1'000'000);
+    return (v * f + 999'999) / 1'000'000;
+  }
+  if (unit == "ms") {
+    check(kMaxSeconds * 1'000);
+    return (v * f + 999) / 1'000;
+  }
+  if (unit == "s") {
+    check(kMaxSeconds);
+    return v * f;
+  }
+  if (unit == "bits") {
+    const std::uint64_t t = bit_time;
+    check(kMaxSeconds * f / t);
+    return v * t;
+  }
+  fail(fmt::format("bad time unit '{}' in '{}' (us, ms, s, bits, or none for cycles)", shown(unit),
+                   shown(s)));
+}
+
+// Global_Control command bits (DP standard).
+constexpr std::pair<std::string_view, std::uint8_t> kGcNames[] = {
+    {"sync", 0x20},     {"unsync", 0x10}, {"freeze", 0x08},
+    {"unfreeze", 0x04}, {"clear", 0x02},  {"operate", 0x00},
+};
+
+std::uint32_t gc_command(std::string_view s) {
+  if (!s.empty() && s[0] >= '0' && s[0] <= '9') {
+    return static_cast<std::uint32_t>(number(s, "gc command", 0, 255));
+  }
+  std::uint32_t c = 0;
+  for (std::string_view n : split(s, ',')) {
+    bool found = false;
+    for (const auto& [name, bits] : kGcNames) {
+      if (n == name) {
+        c |= bits;
+        found = true;
+      }
+    }
+    if (!found) {
+      fail(
+          fmt::format("unknown gc command '{}' (sync, unsync, freeze, unfreeze, clear, "
+                      "operate, or a number)",
+                      shown(n)));
+    }
+  }
+  return c;
+}
+
 }  // namespace dpc31::scenario_lex

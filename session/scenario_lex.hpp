@@ -12,6 +12,9 @@
 
 namespace dpc31::scenario_lex {
 
+// Simulated time one `silence` may take: bounds the run time of a typo like `silence 10000s`.
+inline constexpr std::uint64_t kMaxSeconds = 3600;
+
 // At most this many data bytes in one telegram's data unit (DP).
 inline constexpr std::size_t kMaxDu = 244;
 
@@ -32,6 +35,14 @@ bool flag(std::string_view s, std::string_view what);
 // Hex bytes "13,23" ("0x13" also accepted); "-" is the empty list.
 std::vector<std::uint8_t> bytes(std::string_view s, std::string_view what,
                                 std::size_t max = kMaxDu);
+
+// Cycles, or a time with a unit (us, ms, s; bits of `bit_time` cycles) at `clock_hz`, rounded up
+// like every minimum time (docs/timing.md); at most an hour.
+std::uint64_t duration(std::string_view s, std::uint32_t clock_hz, std::uint64_t bit_time);
+
+// A Global_Control command: names (sync, unsync, freeze, unfreeze, clear, operate) joined by
+// commas, or a number 0..255.
+std::uint32_t gc_command(std::string_view s);
 
 // Bytes as the walk and the checks show them: "01 02 A3", or "-" for none.
 std::string bytes_text(std::span<const std::uint8_t> b);

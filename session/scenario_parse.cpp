@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <utility>
 
+#include "dpc31/dpv1.hpp"
 #include "dpc31/fdl.hpp"
 #include "firmware.h"
 #include "firmware_host.hpp"
@@ -28,16 +29,8 @@ namespace {
 
 using namespace scenario_lex;  // NOLINT: the parser's own lexical helpers
 
-// Simulated time one `silence` may take: bounds the run time of a typo like `silence 10000s`.
-constexpr std::uint64_t kMaxSeconds = 3600;
 constexpr std::uint64_t kMaxExchanges = 1'000'000;
 constexpr std::uint64_t kMaxTries = 100'000;
-
-// Global_Control command bits (DP standard).
-constexpr std::pair<std::string_view, std::uint8_t> kGcNames[] = {
-    {"sync", 0x20},     {"unsync", 0x10}, {"freeze", 0x08},
-    {"unfreeze", 0x04}, {"clear", 0x02},  {"operate", 0x00},
-};
 
 constexpr std::string_view kAnswerKinds[] = {"none", "sc", "data", "ok", "ue",
                                              "rr",   "rs", "dl",   "nr", "dh"};
@@ -115,7 +108,10 @@ class Parser {
       }
       return;
     }
-    if (!body_) view_ = s_.user.slave;
+    if (!body_) {
+      profile_options_checked();
+      view_ = s_.user.slave;
+    }
     body_ = true;
     body();
     s_.steps.push_back(std::move(step_));
@@ -175,46 +171,38 @@ class Parser {
     return s_.chip.clock_hz != 0 ? s_.chip.clock_hz : chip_timing().clock_hz;
   }
 
-  // Cycles, or a time with a unit; rounded up like every minimum time (docs/timing.md).
-  std::uint64_t duration(std::string_view s) const {
-    std::uint64_t v = 0;
-    const std::uint64_t f = clock();
-    if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
-      v = number(s, "time", 0, kMaxSeconds * f);
-      return v;
+  // No silent options (docs/decisions.md, "No silent options"): once the headers are complete, an
+  // option the chosen profile has nothing for is refused at its line.
+  void profile_options_checked() const {
+    const Profile p = s_.chip.profile;
+    if (irq_controller_line_ != 0 && p != Profile::dpc31) {
+      fail_at(irq_controller_line_,
+              "'irq-controller' is for profile dpc31: only the DPC31 has a C31 core");
     }
-    std::size_t k = 0;
-    while (k < s.size() && s[k] >= '0' && s[k] <= '9') ++k;
-    const std::string_view unit = s.substr(k);
-    if (k == 0 || !parse_u64(s.substr(0, k), v)) {
-      fail(fmt::format("bad time '{}' (cycles, or a number with us, ms, s or bits)", shown(s)));
+    if (substitute_line_ != 0 && p != Profile::dpc31) {
+      fail_at(substitute_line_,
+              "user substitute= is for profile dpc31: only the DPC31 has the clear buffer C");
     }
-    const auto check = [&](std::uint64_t max) {
-      if (v > max) fail(fmt::format("time '{}' too long (at most {} s)", shown(s), kMaxSeconds));
-    };
-    if (unit.empty() || unit == "cycles") {
-      check(kMaxSeconds * f);
-      return v;
+    if (dx_out_port_line_ != 0 && p != Profile::dpc31) {
+      fail_at(dx_out_port_line_,
+              "user dx_out_port= is for profile dpc31: only the DPC31 has "
+              "C31_Control.Enable_DX_Out_Port");
     }
-    if (unit == "us") {
-      check(kMaxSeconds * 1'000'000);
-      return (v * f + 999'999) / 1'000'000;
+    if (user_wd_value_line_ != 0 && p == Profile::dpc31 && !s_.user.user_watchdog) {
+      fail_at(user_wd_value_line_,
+              "user user_wd_value= needs user_wd=1 on profile dpc31: the DPS_User_Watchdog "
+              "loads R_User_WD_Value only through its requests");
     }
-    if (unit == "ms") {
-      check(kMaxSeconds * 1'000);
-      return (v * f + 999) / 1'000;
-    }
-    if (unit == "s") {
-      check(kMaxSeconds);
-      return v * f;
-    }
-    if (unit == "bits") {
-      const std::uint64_t t = bit_cycles(clock(), s_.master.baud);
-      check(kMaxSeconds * f / t);
-      return v * t;
-    }
-    fail(fmt::format("bad time unit '{}' in '{}' (us, ms, s, bits, or none for cycles)",
-                     shown(unit), shown(s)));
+    if (wd_base_line_ != 0) wd_base_checked(s_.user.slave, wd_base_line_);
+  }
+  // The VPC3+ takes WD_Base from Set_Prm's DPV1_Status_1 only with DPV1_Enable; without it
+  // Mode_Reg0.WD_Base decides (VPC3+C p.53, docs/dpv1.md).
+  void wd_base_checked(const SlaveConfig& sl, int line) const {
+    if (s_.chip.profile != Profile::vpc3plus) return;
+    if (!sl.user_prm.empty() && (sl.user_prm[0] & dpv1::status1::DPV1_Enable) != 0) return;
+    fail_at(line,
+            "wd_base= on profile vpc3plus needs DPV1_Enable (user_prm byte 0 bit 7): without "
+            "DPV1 the VPC3+ takes WD_Base from Mode_Reg0, not from Set_Prm");
   }
 
   // Options of `slave` that also apply to `set_prm` (what Set_Prm carries).
@@ -231,6 +219,7 @@ class Parser {
     } else if (k == "wd_base") {
       if (v != "1ms" && v != "10ms") fail(fmt::format("wd_base '{}': 1ms or 10ms", shown(v)));
       sl.wd_base_1ms = v == "1ms";
+      wd_base_line_ = step_.line;
     } else if (k == "group") {
       sl.group_ident = static_cast<std::uint8_t>(number(v, "group", 0, 255));
     } else if (k == "sync") {
@@ -304,6 +293,7 @@ class Parser {
     } else if (cmd_ == "irq-controller") {
       positional(1, 1, "external or c31");
       no_options();
+      irq_controller_line_ = step_.line;
       if (!parse_irq_controller(pos_[0], s_.chip.irq_controller)) {
         fail(fmt::format("unknown irq-controller '{}' (external, c31)", shown(pos_[0])));
       }
@@ -411,12 +401,15 @@ class Parser {
         } else if (k == "user_wd") {
           u.user_watchdog = flag(v, k);
         } else if (k == "user_wd_value") {
+          user_wd_value_line_ = step_.line;
           u.user_wd_value = static_cast<std::uint16_t>(number(v, k, 0, 0xFFFF));
         } else if (k == "wd_baud_control") {
           u.wd_baud_control = static_cast<std::uint8_t>(number(v, k, 0, 255));
         } else if (k == "substitute") {
+          substitute_line_ = step_.line;
           u.substitute = bytes(v, k);
         } else if (k == "dx_out_port") {
+          dx_out_port_line_ = step_.line;
           u.dx_out_port = flag(v, k);
         } else {
           unknown_option(k);
@@ -502,6 +495,7 @@ class Parser {
       if (step_.has_bytes && opts_.size() > (step_.from ? 2u : 1u)) {
         fail("set_prm: bytes= is the whole data unit; no other parameter options with it");
       }
+      if (wd_base_line_ == step_.line) wd_base_checked(*step_.slave, step_.line);
       if (!step_.from && !step_.has_bytes) view_ = step_.slave;
     } else if (cmd_ == "chk_cfg") {
       step_.kind = StepKind::chk_cfg;
@@ -541,7 +535,7 @@ class Parser {
       step_.kind = StepKind::silence;
       positional(1, 1, "one time (e.g. 200ms)");
       no_options();
-      step_.cycles = duration(pos_[0]);
+      step_.cycles = duration(pos_[0], clock(), bit_cycles(clock(), s_.master.baud));
     } else if (cmd_ == "hw") {
       step_.kind = StepKind::hw;
       positional(2, 2, "a hardware input and a value");
@@ -596,29 +590,6 @@ class Parser {
   }
   [[nodiscard]] bool option(std::string_view key) const {
     return std::any_of(opts_.begin(), opts_.end(), [&](const auto& o) { return o.first == key; });
-  }
-
-  std::uint32_t gc_command(std::string_view s) const {
-    if (!s.empty() && s[0] >= '0' && s[0] <= '9') {
-      return static_cast<std::uint32_t>(number(s, "gc command", 0, 255));
-    }
-    std::uint32_t c = 0;
-    for (std::string_view n : split(s, ',')) {
-      bool found = false;
-      for (const auto& [name, bits] : kGcNames) {
-        if (n == name) {
-          c |= bits;
-          found = true;
-        }
-      }
-      if (!found) {
-        fail(
-            fmt::format("unknown gc command '{}' (sync, unsync, freeze, unfreeze, clear, "
-                        "operate, or a number)",
-                        shown(n)));
-      }
-    }
-    return c;
   }
 
   void expect() {
@@ -785,6 +756,12 @@ class Parser {
   std::vector<const char*> ports_{nullptr};  // the firmware's port names, NULL-terminated
   bool slave_seen_ = false;
   bool user_seen_ = false;
+  // The lines of options only some profiles act on (profile_options_checked); 0: not given.
+  int irq_controller_line_ = 0;
+  int substitute_line_ = 0;
+  int dx_out_port_line_ = 0;
+  int user_wd_value_line_ = 0;
+  mutable int wd_base_line_ = 0;
   bool body_ = false;                  // an action or expect has been seen: no more headers
   scenario_bus::ReadShape last_read_;  // what `expect read` compares
   std::vector<std::string_view> words_;

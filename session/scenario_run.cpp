@@ -16,6 +16,7 @@
 #include "scenario.hpp"
 #include "scenario_bus.hpp"
 #include "scenario_dpv1.hpp"
+#include "scenario_expect.hpp"
 #include "scenario_lex.hpp"
 #include "scenario_send.hpp"
 #include "vocabulary.hpp"
@@ -24,9 +25,8 @@ namespace dpc31 {
 
 namespace {
 
+using scenario_expect::port_text;
 using scenario_lex::bytes_text;
-using scenario_send::answer_is;
-using scenario_send::answer_kind;
 using scenario_send::answer_text;
 
 class Runner {
@@ -624,9 +624,6 @@ class Runner {
   }
 
   // Port values in hex and, for the bit patterns of digital outputs, binary.
-  static std::string port_text(std::uint32_t v) {
-    return v <= 0xF ? fmt::format("0x{:X} ({:04b})", v, v) : fmt::format("0x{:X}", v);
-  }
 
   std::string time_text(std::uint64_t cycle) const {
     return fmt::format("{:.3f} us", static_cast<double>(cycle) * 1e6 / chip_.clock_hz());
@@ -635,129 +632,37 @@ class Runner {
   // --- checks ---
 
   void check(const ScenarioStep& st) {
-    std::string what;
-    std::string want;
-    std::string got;
-    const std::vector<Responder::Output>& outs = user_.outputs;
-    switch (st.expect) {
-      case ExpectKind::dp_state:
-        what = "dp_state";
-        want = dp_state_name(static_cast<DpState>(st.value));
-        got = dp_state_name(chip_.dp_state());
-        break;
-      case ExpectKind::wd_state:
-        what = "wd_state";
-        want = wd_state_name(static_cast<WdState>(st.value));
-        got = wd_state_name(chip_.wd_state());
-        break;
-      case ExpectKind::outputs:
-        what = "outputs";
-        want = st.value != 0 ? "none" : bytes_text(st.bytes);
-        got = outs.empty() ? "none" : bytes_text(outs.back().data);
-        break;
-      case ExpectKind::cleared:
-        what = "cleared";
-        want = std::to_string(st.value);
-        got = outs.empty() ? "no outputs fetched" : outs.back().cleared ? "1" : "0";
-        break;
-      case ExpectKind::inputs:
-        what = "inputs";
-        want = bytes_text(st.bytes);
-        got = last_inputs_ ? bytes_text(*last_inputs_) : "no inputs received";
-        break;
-      case ExpectKind::counter: {
-        what = "counter " + st.name;
-        const auto fields = fdl_counter_fields();
-        const auto f = std::find_if(fields.begin(), fields.end(),
-                                    [&](const CounterField& c) { return c.name == st.name; });
-        const std::uint32_t now = chip_.fdl_counters().*(f->member);
-        if (st.value2 != 0) {
-          want = fmt::format("+{}", st.value);
-          got = fmt::format("+{}", now - base_counters_.*(f->member));
-          if (got != want) got += fmt::format(" (now {})", now);
-        } else {
-          want = std::to_string(st.value);
-          got = std::to_string(now);
-        }
-        break;
-      }
-      case ExpectKind::irr_bit: {
-        what = "irr_bit " + st.name;
-        // The firmware acknowledges what it handles, so the register alone rarely shows an
-        // event: what its ISR saw during the last action counts as well.
-        std::uint16_t seen = chip_.peek_reg(RegId::Int_Req_Reg);
-        for (std::size_t i = base_irq_; i < interrupts().size(); ++i) {
-          seen |= interrupts()[i].second;
-        }
-        want = std::to_string(st.value);
-        got = ((seen >> st.value2) & 1) != 0 ? "1" : "0";
-        break;
-      }
-      case ExpectKind::answer: {
-        what = "answer";
-        const std::optional<fdl::Frame> last =
-            master_->history().empty() ? std::nullopt : master_->history().back().answer;
-        if (st.has_bytes) {  // the whole answer telegram
-          want = bytes_text(st.bytes);
-          got = last ? bytes_text(fdl::encode(*last)) : "none";
-        } else {
-          want = st.name;
-          got = answer_is(last, st.name) ? st.name : answer_kind(last);
-        }
-        break;
-      }
-      case ExpectKind::station:
-        what = "station";
-        want = std::to_string(st.value);
-        got = std::to_string(chip_.station_address());
-        break;
-      case ExpectKind::diag_byte:
-        what = fmt::format("diag_byte {}", st.value2);
-        want = fmt::format("0x{:02X}", st.value);
-        got = !last_diag_                       ? std::string("no diagnosis received")
-              : st.value2 >= last_diag_->size() ? fmt::format("{} bytes", last_diag_->size())
-                                                : fmt::format("0x{:02X}", (*last_diag_)[st.value2]);
-        break;
-      case ExpectKind::baud:
-        what = "baud";
-        want = std::to_string(st.value);
-        got = std::to_string(chip_baud());
-        break;
-      case ExpectKind::pb3:
+    std::uint16_t irr_seen = chip_.peek_reg(RegId::Int_Req_Reg);
+    // The firmware acknowledges what it handles, so the register alone rarely shows an event:
+    // what its ISR saw during the last action counts as well.
+    for (std::size_t i = base_irq_; i < interrupts().size(); ++i)
+      irr_seen |= interrupts()[i].second;
+    const scenario_expect::Seen seen{
+        .chip = chip_,
+        .outputs = user_.outputs,
+        .last_inputs = last_inputs_,
+        .last_diag = last_diag_,
+        .base_counters = base_counters_,
+        .irr = irr_seen,
+        .last_answer = master_->history().empty() ? std::nullopt : master_->history().back().answer,
+        .baud = chip_baud(),
         // DX_Out is acknowledged by the ISR at once, so a rise during the last action counts.
-        what = "pb3";
-        want = std::to_string(st.value);
-        got = chip_.pb3_pin() || pb3_rises_ > base_pb3_ ? "1" : "0";
-        break;
-      case ExpectKind::port:
-        what = "port " + st.name;
-        want = port_text(st.value);
-        got =
-            port_text(static_cast<std::uint32_t>(m51_ ? m51_->port(st.name) : fw_->port(st.name)));
-        break;
-      case ExpectKind::reg:
-      case ExpectKind::ram:
-      case ExpectKind::read:
-      case ExpectKind::indication: {
-        scenario_bus::Check c = scenario_bus::check(chip_, st, last_read_);
-        what = std::move(c.what);
-        want = std::move(c.want);
-        got = std::move(c.got);
-        break;
-      }
-      case ExpectKind::dpv1: {
-        scenario_dpv1::Check c = scenario_dpv1::check(st, dpv1_last_);
-        what = std::move(c.what);
-        want = std::move(c.want);
-        got = std::move(c.got);
-        break;
-      }
-    }
+        .pb3 = chip_.pb3_pin() || pb3_rises_ > base_pb3_,
+        .port = [this](const std::string& name) {
+          return static_cast<std::uint32_t>(m51_ ? m51_->port(name) : fw_->port(name));
+        }};
+    scenario_bus::Check c = scenario_expect::is_bus(st.expect)
+                                ? scenario_bus::check(chip_, st, last_read_)
+                            : st.expect == ExpectKind::dpv1 ? scenario_dpv1::check(st, dpv1_last_)
+                                                            : scenario_expect::check(st, seen);
+    const std::string& what = c.what;
+    const std::string& want = c.want;
+    std::string& got = c.got;
     if (st.when != ScenarioStep::When::any && got == want) {
       const std::uint64_t since = st.expect == ExpectKind::dpv1       ? dpv1_last_->end
                                   : st.expect == ExpectKind::dp_state ? dp_since_
                                                                       : wd_since_;
-      scenario_bus::when(st, since, base_cycle_, want, got);
+      scenario_bus::when(st, since, base_cycle_, c.want, got);
     }
     if (got == want) {
       ++out_.passed;

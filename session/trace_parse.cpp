@@ -215,9 +215,10 @@ class TraceParser {
       arity(w, 2, "irq-controller external|c31");
       if (!parse_irq_controller(w[1], t_.chip.irq_controller))
         fail(fmt::format("unknown irq-controller '{}' (external, c31)", shown(w[1])));
-      if (t_.chip.irq_controller == IrqController::c31 &&
-          (t_.chip.profile != Profile::dpc31 || !have_profile_)) {
-        fail("'irq-controller c31' follows 'profile dpc31': only the DPC31 has a C31 core");
+      // Any value, external too: no other profile has a choice (docs/decisions.md).
+      if (t_.chip.profile != Profile::dpc31 || !have_profile_) {
+        fail(fmt::format(
+            "'irq-controller {}' follows 'profile dpc31': only the DPC31 has a C31 core", w[1]));
       }
     } else if (k == "bus") {
       once(have_bus_);

@@ -558,6 +558,12 @@ TEST_F(BadInput, IrqControllerOptions) {
                    ": --irq-controller c31 is for --profile dpc31: only the DPC31 has a C31 core",
                sub);
     EXPECT_EQ(r.out, "") << sub;
+    // external too: no choice off the dpc31, so no silent option (docs/decisions.md).
+    expect_bad(dpc31(sub + " --profile vpc3plus --irq-controller external"),
+               "dpc31 " + name +
+                   ": --irq-controller external is for --profile dpc31: only the DPC31 has a C31 "
+                   "core",
+               sub + " external");
     const Outcome x = dpc31(sub + " --profile dpc31 --irq-controller cpu");
     expect_bad_prefix(x, "dpc31 " + name + ": --irq-controller", sub + " cpu");
     EXPECT_EQ(x.out, "") << sub;

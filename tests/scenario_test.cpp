@@ -381,52 +381,50 @@ TEST(ScenarioRun, Dpc31UserWatchdogExpiresAtItsCycle) {
 // Bus actions and their checks (docs/scenario-format.md, "Bus accesses"): bad lines refused.
 TEST(ScenarioParse, BusActionsRefuseWhatTheMapDoesNot) {
   const std::string h = "profile spc3\n";
-  EXPECT_EQ(parse_error(h + "write No_Such_Reg 1\n"),
-            "t.scn:2: 'No_Such_Reg' is not a register of spc3 (names as in docs/registers.md)");
-  EXPECT_EQ(parse_error(h + "write Status_Reg 1\n"),
-            "t.scn:2: Status_Reg has no write side in spc3");
-  EXPECT_EQ(parse_error(h + "read Int_Mask_Reg\n"),
-            "t.scn:2: Int_Mask_Reg has no read side in spc3");
-  EXPECT_EQ(parse_error(h + "write R_TS_Adr 256\n"), "t.scn:2: value 256 out of range (0..255)");
-  EXPECT_EQ(parse_error(h + "write 0x800 1\n"), "t.scn:2: address 0x800 out of range (0..2047)");
-  EXPECT_EQ(parse_error(h + "read 0x7FF count=2\n"),
-            "t.scn:2: 2 bytes from 0x7FF run past the end of the spc3 map (0x800 bytes)");
-  EXPECT_EQ(parse_error(h + "read R_TS_Adr count=2\n"),
-            "t.scn:2: a block access starts at an address, not at a register");
-  EXPECT_EQ(parse_error(h + "write 0x10 1 bytes=01\n"),
-            "t.scn:2: expected 'write REG VALUE', 'write ADDR VALUE' or 'write ADDR bytes=BYTES'");
-  EXPECT_EQ(parse_error(h + "expect read 1\n"), "t.scn:2: 'expect read' needs a 'read' before it");
-  EXPECT_EQ(parse_error(h + "read 0x10 count=2\nexpect read 123\n"),
-            "t.scn:3: bad byte '123' in read (hex bytes separated by commas)");
-  EXPECT_EQ(parse_error(h + "expect reg Status_Reg 0x10000\n"),
-            "t.scn:2: register value 0x10000 out of range (0..65535)");
-  EXPECT_EQ(parse_error(h + "expect baud 12000000 at 5\n"),
-            "t.scn:2: 'at' is for dp_state, wd_state and dpv1: the cycle a state was entered or a "
-            "response ended");
-  EXPECT_EQ(parse_error(h + "corrupt parity\nwrite 0x10 1\nstartup\n"),
-            "t.scn:2: the next action ('write', line 3) sends no request to damage");
-  EXPECT_EQ(parse_error(h + "read 0x10\nexpect read 0x12\nexpect dp_state Wait_Prm after 4\n"), "");
-  EXPECT_EQ(parse_error(h + "read 0x10 count=\n"), "t.scn:2: bad number '' for count");
-  EXPECT_EQ(parse_error(h + "expect answer e5\nexpect answer 68,0x09\n"), "");
-  EXPECT_EQ(parse_error(h + "expect answer dx\n"),
-            "t.scn:2: bad byte 'dx' in answer (hex bytes separated by commas)");
-  EXPECT_EQ(parse_error(h + "expect answer sd\n"),
-            "t.scn:2: unknown answer kind 'sd' (none, sc, data, ok, ue, rr, rs, dl, nr, dh, or the "
-            "answer's bytes)");
-  EXPECT_EQ(parse_error("request MAC_Stop\n"), "");
-  EXPECT_EQ(parse_error(h + "request MAC_Stop\n"),
-            "t.scn:2: 'request' is the DPC31's Instruction_Queue: needs profile dpc31");
-  EXPECT_EQ(parse_error("request DPS_User_Wd on\n"),
-            "t.scn:1: DPS_User_Wd 'on': reset, enable or disable");
-  EXPECT_EQ(parse_error("request MAC_New_TRDY\n"),
-            "t.scn:1: expected 'request MAC_New_TRDY N' (the ready time in bit times)");
-  EXPECT_EQ(parse_error("set_prm bytes=88 wd=1,1\n"),
-            "t.scn:1: set_prm: bytes= is the whole data unit; no other parameter options with it");
-  EXPECT_EQ(parse_error("gc sync data=20,00\n"),
-            "t.scn:1: 'gc' takes no arguments; unexpected 'sync'");
-  EXPECT_EQ(parse_error("master address=2\nchk_cfg from=2\n"),
-            "t.scn:2: from=2 is our own master: leave from= out");
-  EXPECT_EQ(parse_error("send from=7\n"), "t.scn:1: send with fields needs from=SA and fc=N");
+  const std::pair<std::string, std::string> cases[] = {
+      {h + "write No_Such_Reg 1\n",
+       "t.scn:2: 'No_Such_Reg' is not a register of spc3 (names as in docs/registers.md)"},
+      {h + "write Status_Reg 1\n", "t.scn:2: Status_Reg has no write side in spc3"},
+      {h + "read Int_Mask_Reg\n", "t.scn:2: Int_Mask_Reg has no read side in spc3"},
+      {h + "write R_TS_Adr 256\n", "t.scn:2: value 256 out of range (0..255)"},
+      {h + "write 0x800 1\n", "t.scn:2: address 0x800 out of range (0..2047)"},
+      {h + "read 0x7FF count=2\n",
+       "t.scn:2: 2 bytes from 0x7FF run past the end of the spc3 map (0x800 bytes)"},
+      {h + "read R_TS_Adr count=2\n",
+       "t.scn:2: a block access starts at an address, not at a register"},
+      {h + "write 0x10 1 bytes=01\n",
+       "t.scn:2: expected 'write REG VALUE', 'write ADDR VALUE' or 'write ADDR bytes=BYTES'"},
+      {h + "expect read 1\n", "t.scn:2: 'expect read' needs a 'read' before it"},
+      {h + "read 0x10 count=2\nexpect read 123\n",
+       "t.scn:3: bad byte '123' in read (hex bytes separated by commas)"},
+      {h + "expect reg Status_Reg 0x10000\n",
+       "t.scn:2: register value 0x10000 out of range (0..65535)"},
+      {h + "expect baud 12000000 at 5\n",
+       "t.scn:2: 'at' is for dp_state, wd_state and dpv1: the cycle a state was entered or a "
+       "response ended"},
+      {h + "corrupt parity\nwrite 0x10 1\nstartup\n",
+       "t.scn:2: the next action ('write', line 3) sends no request to damage"},
+      {h + "read 0x10\nexpect read 0x12\nexpect dp_state Wait_Prm after 4\n", ""},
+      {h + "read 0x10 count=\n", "t.scn:2: bad number '' for count"},
+      {h + "expect answer e5\nexpect answer 68,0x09\n", ""},
+      {h + "expect answer dx\n",
+       "t.scn:2: bad byte 'dx' in answer (hex bytes separated by commas)"},
+      {h + "expect answer sd\n",
+       "t.scn:2: unknown answer kind 'sd' (none, sc, data, ok, ue, rr, rs, dl, nr, dh, or the "
+       "answer's bytes)"},
+      {"request MAC_Stop\n", ""},
+      {h + "request MAC_Stop\n",
+       "t.scn:2: 'request' is the DPC31's Instruction_Queue: needs profile dpc31"},
+      {"request DPS_User_Wd on\n", "t.scn:1: DPS_User_Wd 'on': reset, enable or disable"},
+      {"request MAC_New_TRDY\n",
+       "t.scn:1: expected 'request MAC_New_TRDY N' (the ready time in bit times)"},
+      {"set_prm bytes=88 wd=1,1\n",
+       "t.scn:1: set_prm: bytes= is the whole data unit; no other parameter options with it"},
+      {"gc sync data=20,00\n", "t.scn:1: 'gc' takes no arguments; unexpected 'sync'"},
+      {"master address=2\nchk_cfg from=2\n", "t.scn:2: from=2 is our own master: leave from= out"},
+      {"send from=7\n", "t.scn:1: send with fields needs from=SA and fc=N"},
+  };
+  for (const auto& [text, line] : cases) EXPECT_EQ(parse_error(text), line) << text;
 }
 
 // `at CYCLE` / `after N` (docs/scenario-format.md, "Exact cycles"): User_Leave_Master acts at
@@ -556,3 +554,38 @@ TEST(ScenarioCpu51, HeaderIsCheckedAndTheImageReadWhenTheRunStarts) {
 }
 
 }  // namespace
+
+// No silent options (docs/decisions.md): an option the chosen profile has nothing for is refused
+// at its line, whichever order the headers come in.
+TEST(ScenarioParse, OptionsWithoutEffectOnTheProfileAreRefused) {
+  const std::string dpc31_only = "startup\n";
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {"profile spc3\nirq-controller external\n" + dpc31_only,
+       "t.scn:2: 'irq-controller' is for profile dpc31: only the DPC31 has a C31 core"},
+      {"irq-controller external\nprofile vpc3plus\n" + dpc31_only,
+       "t.scn:1: 'irq-controller' is for profile dpc31: only the DPC31 has a C31 core"},
+      {"profile spc3\nuser substitute=01,02\n" + dpc31_only,
+       "t.scn:2: user substitute= is for profile dpc31: only the DPC31 has the clear buffer C"},
+      {"user dx_out_port=1\nprofile vpc3plus\n" + dpc31_only,
+       "t.scn:1: user dx_out_port= is for profile dpc31: only the DPC31 has "
+       "C31_Control.Enable_DX_Out_Port"},
+      {"profile dpc31\nuser user_wd_value=5\n" + dpc31_only,
+       "t.scn:2: user user_wd_value= needs user_wd=1 on profile dpc31: the DPS_User_Watchdog "
+       "loads R_User_WD_Value only through its requests"},
+      {"profile vpc3plus\nslave wd_base=1ms\n" + dpc31_only,
+       "t.scn:2: wd_base= on profile vpc3plus needs DPV1_Enable (user_prm byte 0 bit 7): without "
+       "DPV1 the VPC3+ takes WD_Base from Mode_Reg0, not from Set_Prm"},
+      {"profile vpc3plus\nstartup\nset_prm wd_base=10ms\n",
+       "t.scn:3: wd_base= on profile vpc3plus needs DPV1_Enable (user_prm byte 0 bit 7): without "
+       "DPV1 the VPC3+ takes WD_Base from Mode_Reg0, not from Set_Prm"},
+  };
+  for (const auto& [text, line] : refused) EXPECT_EQ(parse_error(text), line) << text;
+  // The same options where the profile acts on them.
+  for (const std::string ok :
+       {"profile dpc31\nirq-controller external\n", "profile dpc31\nuser substitute=01,02\n",
+        "profile dpc31\nuser dx_out_port=1\n", "profile dpc31\nuser user_wd=1 user_wd_value=5\n",
+        "profile spc3\nuser user_wd_value=5\n", "profile spc3\nslave wd_base=1ms\n",
+        "profile vpc3plus\nslave wd_base=1ms user_prm=80,00,00\n"}) {
+    EXPECT_EQ(parse_error(ok + dpc31_only), "") << ok;
+  }
+}

@@ -303,6 +303,12 @@ TEST(TraceFile, TheIrqControllerIsRecordedAndReplayed) {
                 ": 'irq-controller c31' follows 'profile dpc31': only the DPC31 has a C31 core");
   EXPECT_EQ(lines_of(record("profile dpc31\nstartup\n")).at(p + 1).rfind("irq-controller", 0),
             std::string::npos);  // the external one is the default and not written
+  // external is no choice off the dpc31: a silent header line, refused (docs/decisions.md).
+  v[p + 1] = "irq-controller external";
+  EXPECT_EQ(replay_text(join(v), msg), 2);
+  EXPECT_EQ(msg, "t.trace:" + std::to_string(p + 2) +
+                     ": 'irq-controller external' follows 'profile dpc31': only the DPC31 has a "
+                     "C31 core");
 }
 
 TEST(TraceFile, ReplayChecksAHandWrittenTrace) {

@@ -108,15 +108,22 @@ TEST(WavediffTimescale, PsAndNsOfTheSameRunAreTheSame) {
   EXPECT_EQ(file_time(1500, 3, 6), "1.5");
 }
 
+namespace {
+// A file in picoseconds: model time x 1000.
+Style picoseconds() {
+  Style ps;
+  ps.timescale = "1ps";
+  ps.mult = 1000;
+  return ps;
+}
+}  // namespace
+
 TEST(WavediffClock, DifferentTimeBasesSampleTheSame) {
   Dir d;
   // A: period 10 ns in a 1 ns file; B: period 20 ns in a 1 ps file. Event mode sees differences
   // everywhere; on the clock the two runs are the same, cycle by cycle.
   const auto a = d.write("a.vcd", render(counter(12), {}));
-  Style ps;
-  ps.timescale = "1ps";
-  ps.mult = 1000;
-  const auto b = d.write("b.vcd", render(counter(12, 20), ps));
+  const auto b = d.write("b.vcd", render(counter(12, 20), picoseconds()));
   EXPECT_EQ(run_opts(opts(a, b)).rc, 1);
   Options o = opts(a, b);
   o.clock_a = "top.clk";
@@ -130,10 +137,7 @@ TEST(WavediffClock, DifferentTimeBasesSampleTheSame) {
 TEST(WavediffClock, DifferenceAtEdgeSevenIsCycleSeven) {
   Dir d;
   const auto a = d.write("a.vcd", render(counter(12), {}));
-  Style ps;
-  ps.timescale = "1ps";
-  ps.mult = 1000;
-  const auto b = d.write("b.vcd", render(counter(12, 20, cnt_aa_at_7), ps));
+  const auto b = d.write("b.vcd", render(counter(12, 20, cnt_aa_at_7), picoseconds()));
   Options o = opts(a, b);
   o.clock_a = "top.clk";
   o.json_file = d.file("r.json");

@@ -7,7 +7,7 @@ the bus rate (tcsetattr, or the TCSETS2 ioctl for the five rates termios has no 
 then FDL telegrams (EN 50170: SD1/SD2, FCS, FCB/FCV) with a timeout per answer. Linux only.
 
     python3 tools/dp_master.py /tmp/dp0 --baud 19200 --ident 0x0D04 --cfg 21,10 \
-        --user-prm 00,00,00,00 --outputs 05,01
+        --user-prm 00,00,00,64 --outputs 05,01
 
 The device may also be pyserial's URL of a raw TCP port, socket://HOST:PORT (`dpc31 bridge
 --tcp PORT`): the same byte stream, no termios; the rate is the bridge's own (--baud then only

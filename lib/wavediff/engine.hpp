@@ -89,6 +89,14 @@ struct MapEntry {
   bool used_b = false;
 };
 
+// Names (names.cpp): a name without the stripped scope; the scopes every variable shares and
+// their prefixes; the map file; the base and index of one bit of a split vector.
+std::string strip_name(const std::string& name, const std::string& prefix);
+std::vector<std::string> common_scopes(const std::vector<Var>& vars);
+std::vector<std::string> prefixes(const std::vector<std::string>& scopes);
+std::vector<MapEntry> read_map(const std::string& path);
+bool bit_of(const std::string& name, std::string& base, int& idx);
+
 // ---------------------------------------------------------------------------------------------
 
 struct Pair {

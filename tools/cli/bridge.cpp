@@ -165,8 +165,11 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
 }
 
 // Line 1 of the log: every setting that acts on this run, and only those (a variant only for
-// the profile that has variants, the interrupt controller only for the dpc31).
-std::string header(const Checked& c, const BridgeOptions& o, const std::string& port) {
+// the profile that has variants, the interrupt controller only for the dpc31). The address is the
+// one the chip holds after the firmware's init (a plug-in may choose its own); an 80C32 has not
+// run yet, so for it the address is what its switch on port 1 offers.
+std::string header(const Checked& c, const BridgeOptions& o, const std::string& port,
+                   const Chip& chip_after_init) {
   const ChipOptions& chip = c.setup.chip;
   std::string profile(profile_name(chip.profile));
   if (chip.profile == Profile::vpc3plus) {
@@ -177,12 +180,14 @@ std::string header(const Checked& c, const BridgeOptions& o, const std::string& 
     profile += fmt::format(", irq-controller {}", irq_controller_name(chip.irq_controller));
   }
   return fmt::format(
-      "dpc31 bridge: pacing {}, baud {}, profile {}, firmware {}, address {}, slot {} bit times, "
+      "dpc31 bridge: pacing {}, baud {}, profile {}, firmware {}, {}, slot {} bit times, "
       "log level {}, {}",
       c.realtime ? "realtime" : "free", c.setup.baud, profile,
       c.setup.cpu ? fmt::format("{} on an 80C32 at {} Hz", o.firmware, c.setup.cpu->hz)
                   : std::string(c.setup.firmware->name),
-      c.setup.address, c.setup.slot_bits, o.log_level, port);
+      c.setup.cpu ? fmt::format("address switch {} (port 1)", c.setup.address)
+                  : fmt::format("address {}", chip_after_init.station_address()),
+      c.setup.slot_bits, o.log_level, port);
 }
 
 class Log {
@@ -518,7 +523,6 @@ int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
     log_file = owned.get();
   }
   Log log(log_file);
-  log.line(header(*c, o, door.port->describe()));
   // A firmware stuck in a loop without a bus access cannot be stopped from this thread: the guard
   // ends the process with one line (and takes the symlink away first).
   if (!c->setup.cpu) board::guard_hangs("dpc31 bridge", c->setup.firmware->name, door.link);
@@ -529,6 +533,7 @@ int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
   int rc = 0;
   try {
     Bridge b(*c, *door.port, log);
+    log.line(header(*c, o, door.port->describe(), b.engine().chip()));
     if (trace.is_open()) trace_cpu(b.engine(), c->setup.cpu_image, trace.stream());
     if (pcap.is_open()) capture_line(b.engine(), pcap);
     rc = b.run();

@@ -22,6 +22,10 @@ namespace dpc31::regjson {
 namespace {
 
 using Json = nlohmann::json;
+using detail::access_mask;
+using detail::is_identifier;
+using detail::parse_text;
+using detail::plain_lanes;
 
 constexpr std::size_t kProfileCount = std::size(kAllProfiles);
 constexpr std::uint32_t kFirstCell = 0x16;

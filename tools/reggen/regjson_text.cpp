@@ -1,4 +1,4 @@
-// The free helpers of the register description loader (regjson_text.hpp).
+// The strict JSON reader and the RegDesc bit helpers of the loader (regjson_text.hpp).
 #include "regjson_text.hpp"
 
 #include <fmt/format.h>
@@ -10,11 +10,10 @@
 
 #include "regjson.hpp"
 
-namespace dpc31::regjson {
+namespace dpc31::regjson::detail {
 
 using Json = nlohmann::json;
 
-// The policy mask of a register that collects the bits of one access.
 std::uint16_t& access_mask(RegDesc& r, Access a) {
   switch (a) {
     case Access::RO:
@@ -101,4 +100,4 @@ std::uint8_t plain_lanes(const RegDesc& r) {
   return lanes;
 }
 
-}  // namespace dpc31::regjson
+}  // namespace dpc31::regjson::detail

@@ -1,5 +1,5 @@
-// The free helpers of the register description loader (regjson.cpp): the JSON text with
-// duplicate keys refused, identifiers, and what a register's description implies.
+// The description's text and small per-register helpers of the loader (regjson.cpp): the strict
+// JSON reader (a duplicate key is an error) and the bit bookkeeping of a RegDesc.
 #pragma once
 
 #include <cstdint>
@@ -9,16 +9,15 @@
 
 #include "dpc31/regdesc.hpp"
 
-namespace dpc31::regjson {
+namespace dpc31::regjson::detail {
 
-// The description text as JSON; throws Error (regjson.hpp) on a syntax error or a key that
-// appears twice in one object, naming `file` and the byte.
+// The JSON of `text`; a syntax error or a duplicate key in one object throws Error naming `file`.
 nlohmann::json parse_text(std::string_view text, const std::string& file);
-// [A-Za-z_][A-Za-z0-9_]*, or also a leading digit.
-bool is_identifier(std::string_view s, bool leading_digit_ok);
-// The RegDesc mask that holds the bits of policy `a`.
+// The policy mask of a register that collects the bits of one access.
 std::uint16_t& access_mask(RegDesc& r, Access a);
+// Letters, digits and '_' (a leading digit only when allowed).
+bool is_identifier(std::string_view s, bool leading_digit_ok);
 // RegDesc::plain: the lanes whose accesses are straight stores and loads by the description.
 std::uint8_t plain_lanes(const RegDesc& r);
 
-}  // namespace dpc31::regjson
+}  // namespace dpc31::regjson::detail

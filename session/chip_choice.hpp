@@ -1,7 +1,8 @@
 // The chip's make on every subcommand that takes --profile: --variant b|c|s, the VPC3+ variant
 // (Status_Reg bits 15..12 read Bh, Ch or Eh, docs/decisions.md), and --irq-controller
 // external|c31, the DPC31 interrupt controller the bus reaches (docs/dpc31.md). cosim takes
-// --variant only: the blocks it compares behave the same behind either controller.
+// --variant only: the blocks it compares behave the same behind either controller. In session/, not
+// util/: it names the chip's types, and util/ is below the chip.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -53,8 +54,10 @@ inline std::string apply_chip_choice(const ChipChoice& choice, ChipOptions& o) {
   if (!parse_irq_controller(choice.irq_controller, c)) {
     return "--irq-controller '" + choice.irq_controller + "' must be external or c31";
   }
-  if (c == IrqController::c31 && o.profile != Profile::dpc31) {
-    return "--irq-controller c31 is for --profile dpc31: only the DPC31 has a C31 core";
+  // external too: on another profile it is no choice, so it would be a silent option.
+  if (o.profile != Profile::dpc31) {
+    return "--irq-controller " + choice.irq_controller +
+           " is for --profile dpc31: only the DPC31 has a C31 core";
   }
   o.irq_controller = c;
   return {};
