@@ -109,7 +109,7 @@ namespace {
 // The command read of a verdict register: the handshake `Handshake` with verdict `v`.
 template <std::uint16_t (DpStateMachine::*Handshake)(DpStateMachine::Verdict),
           DpStateMachine::Verdict v>
-std::uint16_t verdict(void* b) {
+std::uint16_t verdict_command(void* b) {
   return (self<DpStateMachine>(b).*Handshake)(v);
 }
 
@@ -121,13 +121,15 @@ void DpStateMachine::install_hooks(HookTable& h) {
   auto prm_preview = [](const void* b) { return self<DpStateMachine>(b).prm_preview(); };
   auto cfg_preview = [](const void* b) { return self<DpStateMachine>(b).cfg_preview(); };
   at(RegId::User_Prm_Data_Okay).read = prm_preview;
-  at(RegId::User_Prm_Data_Okay).command = verdict<&DpStateMachine::prm_verdict, V::ok>;
+  at(RegId::User_Prm_Data_Okay).command = verdict_command<&DpStateMachine::prm_verdict, V::ok>;
   at(RegId::User_Prm_Data_Not_Okay).read = prm_preview;
-  at(RegId::User_Prm_Data_Not_Okay).command = verdict<&DpStateMachine::prm_verdict, V::not_ok>;
+  at(RegId::User_Prm_Data_Not_Okay).command =
+      verdict_command<&DpStateMachine::prm_verdict, V::not_ok>;
   at(RegId::User_Cfg_Data_Okay).read = cfg_preview;
-  at(RegId::User_Cfg_Data_Okay).command = verdict<&DpStateMachine::cfg_verdict, V::ok>;
+  at(RegId::User_Cfg_Data_Okay).command = verdict_command<&DpStateMachine::cfg_verdict, V::ok>;
   at(RegId::User_Cfg_Data_Not_Okay).read = cfg_preview;
-  at(RegId::User_Cfg_Data_Not_Okay).command = verdict<&DpStateMachine::cfg_verdict, V::not_ok>;
+  at(RegId::User_Cfg_Data_Not_Okay).command =
+      verdict_command<&DpStateMachine::cfg_verdict, V::not_ok>;
   // The DPC31's User_SSA_OK Cmd answers 00 User_SSA_Finished or 11 Not_Allowed (DPC31 p.26;
   // which one when: modelled); the SPC3's SSA_Buffer_Free_Cmd reads don't care (00h).
   at(RegId::SSA_Buffer_Free_Cmd).read = [](const void* b) -> std::uint16_t {

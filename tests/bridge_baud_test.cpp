@@ -47,7 +47,8 @@ class BridgeBaudSearch : public ::testing::TestWithParam<std::tuple<std::uint32_
     s.baud = std::get<0>(GetParam());
     s.log_detail = dpc31::bridge::LogDetail::telegrams;
     engine_ = std::make_unique<dpc31::bridge::Engine>(
-        s, [this](std::uint64_t cycle, std::string_view tag, const std::string& text) {
+        s, [this](std::uint64_t cycle, std::string_view tag, std::string_view /*station*/,
+                  const std::string& text) {
           lines_.push_back({cycle, std::string(tag), text});
         });
   }
