@@ -50,6 +50,44 @@ bool flag(std::string_view s, std::string_view what) {
   fail(fmt::format("bad value '{}' for {}: 0 or 1", shown(s), what));
 }
 
+std::uint64_t duration(std::string_view s, std::uint64_t f, std::uint64_t t) {
+  std::uint64_t v = 0;
+  if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
+    return number(s, "time", 0, kMaxSeconds * f);
+  }
+  std::size_t k = 0;
+  while (k < s.size() && s[k] >= '0' && s[k] <= '9') ++k;
+  const std::string_view unit = s.substr(k);
+  if (k == 0 || !parse_u64(s.substr(0, k), v)) {
+    fail(fmt::format("bad time '{}' (cycles, or a number with us, ms, s or bits)", shown(s)));
+  }
+  const auto check = [&](std::uint64_t max) {
+    if (v > max) fail(fmt::format("time '{}' too long (at most {} s)", shown(s), kMaxSeconds));
+  };
+  if (unit.empty() || unit == "cycles") {
+    check(kMaxSeconds * f);
+    return v;
+  }
+  if (unit == "us") {
+    check(kMaxSeconds * 1'000'000);
+    return (v * f + 999'999) / 1'000'000;
+  }
+  if (unit == "ms") {
+    check(kMaxSeconds * 1'000);
+    return (v * f + 999) / 1'000;
+  }
+  if (unit == "s") {
+    check(kMaxSeconds);
+    return v * f;
+  }
+  if (unit == "bits") {
+    check(kMaxSeconds * f / t);
+    return v * t;
+  }
+  fail(fmt::format("bad time unit '{}' in '{}' (us, ms, s, bits, or none for cycles)", shown(unit),
+                   shown(s)));
+}
+
 std::vector<std::uint8_t> bytes(std::string_view s, std::string_view what, std::size_t max) {
   std::vector<std::uint8_t> out;
   if (s == "-") return out;

@@ -27,8 +27,6 @@ namespace {
 
 using namespace scenario_lex;  // NOLINT: the parser's own lexical helpers
 
-// Simulated time one `silence` may take: bounds the run time of a typo like `silence 10000s`.
-constexpr std::uint64_t kMaxSeconds = 3600;
 constexpr std::uint64_t kMaxExchanges = 1'000'000;
 constexpr std::uint64_t kMaxTries = 100'000;
 
@@ -176,44 +174,7 @@ class Parser {
 
   // Cycles, or a time with a unit; rounded up like every minimum time (docs/timing.md).
   std::uint64_t duration(std::string_view s) const {
-    std::uint64_t v = 0;
-    const std::uint64_t f = clock();
-    if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
-      v = number(s, "time", 0, kMaxSeconds * f);
-      return v;
-    }
-    std::size_t k = 0;
-    while (k < s.size() && s[k] >= '0' && s[k] <= '9') ++k;
-    const std::string_view unit = s.substr(k);
-    if (k == 0 || !parse_u64(s.substr(0, k), v)) {
-      fail(fmt::format("bad time '{}' (cycles, or a number with us, ms, s or bits)", shown(s)));
-    }
-    const auto check = [&](std::uint64_t max) {
-      if (v > max) fail(fmt::format("time '{}' too long (at most {} s)", shown(s), kMaxSeconds));
-    };
-    if (unit.empty() || unit == "cycles") {
-      check(kMaxSeconds * f);
-      return v;
-    }
-    if (unit == "us") {
-      check(kMaxSeconds * 1'000'000);
-      return (v * f + 999'999) / 1'000'000;
-    }
-    if (unit == "ms") {
-      check(kMaxSeconds * 1'000);
-      return (v * f + 999) / 1'000;
-    }
-    if (unit == "s") {
-      check(kMaxSeconds);
-      return v * f;
-    }
-    if (unit == "bits") {
-      const std::uint64_t t = bit_cycles(clock(), s_.master.baud);
-      check(kMaxSeconds * f / t);
-      return v * t;
-    }
-    fail(fmt::format("bad time unit '{}' in '{}' (us, ms, s, bits, or none for cycles)",
-                     shown(unit), shown(s)));
+    return scenario_lex::duration(s, clock(), bit_cycles(clock(), s_.master.baud));
   }
 
   // Options of `slave` that also apply to `set_prm` (what Set_Prm carries).
