@@ -64,6 +64,13 @@ struct Faults {
     seg.flush();
     check.idle_until(seg.cycle());
   }
+  // Master 2 asks station 20 for its FDL status; the rogue answers `answer` `delay` bit times
+  // after the request's end.
+  void ask_and_answer(const std::vector<std::uint8_t>& answer, std::uint64_t delay) {
+    const std::uint64_t end = seg.send(master, fdl_status(20, 2), bits(100));
+    seg.send(rogue, answer, end + bits(delay));
+    settle(end + bits(400));
+  }
   // Everything but `v` is zero, `v` is n.
   void expect_only(BusViolation v, std::uint64_t n) {
     for (std::size_t k = 0; k < kBusViolationKinds; ++k) {
@@ -83,27 +90,21 @@ struct Faults {
 
 TEST(SegmentFaults, AStationThatAnswersLate) {
   Faults f;
-  const std::uint64_t end = f.seg.send(f.master, fdl_status(20, 2), f.bits(100));
   // TSL + 1 bit after the request's end: one bit too late.
-  f.seg.send(f.rogue, status_answer(2, 20), end + f.bits(kSlot + 1));
-  f.settle(end + f.bits(400));
+  f.ask_and_answer(status_answer(2, 20), kSlot + 1);
   f.expect_only(BusViolation::late_answer, 1);
 }
 
 TEST(SegmentFaults, AnAnswerAtTheSlotTimeIsInTime) {
   Faults f;
-  const std::uint64_t end = f.seg.send(f.master, fdl_status(20, 2), f.bits(100));
-  f.seg.send(f.rogue, status_answer(2, 20), end + f.bits(kSlot));
-  f.settle(end + f.bits(400));
+  f.ask_and_answer(status_answer(2, 20), kSlot);
   EXPECT_EQ(f.check.total(), 0U);
 }
 
 TEST(SegmentFaults, AStationThatAnswersEarly) {
   Faults f;
-  const std::uint64_t end = f.seg.send(f.master, fdl_status(20, 2), f.bits(100));
   // 10 bit times: one short of min TSDR (11).
-  f.seg.send(f.rogue, status_answer(2, 20), end + f.bits(10));
-  f.settle(end + f.bits(400));
+  f.ask_and_answer(status_answer(2, 20), 10);
   f.expect_only(BusViolation::early_answer, 1);
 }
 
@@ -197,21 +198,17 @@ TEST(SegmentFaults, AShortTsyn) {
 
 TEST(SegmentFaults, ATruncatedAnswer) {
   Faults f;
-  const std::uint64_t end = f.seg.send(f.master, fdl_status(20, 2), f.bits(100));
   std::vector<std::uint8_t> answer = status_answer(2, 20);
   answer.resize(4);
-  f.seg.send(f.rogue, answer, end + f.bits(11));
-  f.settle(end + f.bits(400));
+  f.ask_and_answer(answer, 11);
   f.expect_only(BusViolation::bad_frame, 1);
 }
 
 TEST(SegmentFaults, ACorruptedFcs) {
   Faults f;
-  const std::uint64_t end = f.seg.send(f.master, fdl_status(20, 2), f.bits(100));
   std::vector<std::uint8_t> answer = status_answer(2, 20);
   ++answer[answer.size() - 2];  // SD1: SD DA SA FC FCS ED
-  f.seg.send(f.rogue, answer, end + f.bits(11));
-  f.settle(end + f.bits(400));
+  f.ask_and_answer(answer, 11);
   f.expect_only(BusViolation::bad_frame, 1);
   EXPECT_NE(f.log.front().text.find(std::string(fdl::error_name(fdl::Error::bad_fcs))),
             std::string::npos);
@@ -219,9 +216,7 @@ TEST(SegmentFaults, ACorruptedFcs) {
 
 TEST(SegmentFaults, AStationThatAnswersForAnotherAddress) {
   Faults f;
-  const std::uint64_t end = f.seg.send(f.master, fdl_status(20, 2), f.bits(100));
-  f.seg.send(f.rogue, status_answer(2, 21), end + f.bits(11));
-  f.settle(end + f.bits(400));
+  f.ask_and_answer(status_answer(2, 21), 11);
   f.expect_only(BusViolation::wrong_responder, 1);
 }
 
