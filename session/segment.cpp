@@ -34,9 +34,9 @@ std::size_t Segment::add_chip(std::string name, ChipOptions opt) {
   // A station joins the line at the line's time.
   if (now_ > 0) s->chip->step(now_);
   Station* raw = s.get();
-  s->chip->on_txd_edges([raw](std::span<const std::pair<std::uint64_t, bool>> e) {
-    raw->txd.insert(raw->txd.end(), e.begin(), e.end());
-  });
+  // Every TxD edge an event of the chip (Chip::on_txd): next_deadline() then bounds the next one,
+  // which the rounds of run_until rely on. (on_txd_edges hands edges over late, in batches.)
+  s->chip->on_txd([raw](std::uint64_t cycle, bool level) { raw->txd.emplace_back(cycle, level); });
   stations_.push_back(std::move(s));
   return stations_.size() - 1;
 }
@@ -73,19 +73,23 @@ const Chip& Segment::chip(std::size_t i) const {
 
 void Segment::step_station(Station& s, std::uint64_t to) {
   if (!s.chip || s.chip->cycle() >= to) return;
-  if (s.cpu) {
-    s.cpu->run_until(to);
+  // The host CPU never splits a bus access and may end one up to kCpuSlack clocks past its goal:
+  // it runs to that much short of `to`, and the chip alone the rest (the CPU's next access starts
+  // at `to`), so the chip stands exactly at `to` for what the line brings next.
+  if (s.cpu && to > kCpuSlack) {
+    s.cpu->run_until(to - kCpuSlack);
     s.chip->clear_stop();
-  } else {
-    s.chip->step(to - s.chip->cycle());
   }
-  s.chip->take_txd();
+  if (s.chip->cycle() < to) s.chip->step(to - s.chip->cycle());
 }
 
 void Segment::collide(std::size_t first, std::size_t second, std::uint64_t cycle) {
+  // One collision per burst of the second driver: each of its falling edges holds the burst open
+  // one character time, as the line's holder's do.
   Station& s = *stations_[second];
-  if (cycle < s.colliding_until) return;
-  s.colliding_until = owned_until_;
+  const bool fresh = s.colliding_until == 0 || cycle > s.colliding_until;
+  s.colliding_until = std::max(s.colliding_until, cycle + std::uint64_t{kUartCharBits} * t_);
+  if (!fresh) return;
   collisions_.push_back({cycle, first, second});
   if (on_collision) on_collision(collisions_.back());
 }
@@ -221,10 +225,7 @@ void Segment::run_until(std::uint64_t cycle, std::optional<std::size_t> wake_for
       if (s->chip) bound = std::min(bound, s->chip->next_deadline());
     }
     bound = std::max(bound, now_ + 1);
-    for (const auto& s : stations_) {
-      const bool last = bound == cycle;
-      step_station(*s, s->cpu && !last ? bound - std::min(bound, kCpuSlack) : bound);
-    }
+    for (const auto& s : stations_) step_station(*s, bound);
     now_ = bound;
     // What the chips drove, in the order of its cycles (ties: station order).
     round.clear();

@@ -60,8 +60,7 @@ class Segment {
   [[nodiscard]] const Chip& chip(std::size_t i) const;
   [[nodiscard]] std::uint32_t bit_cycles() const { return t_; }
   [[nodiscard]] std::uint32_t clock_hz() const { return clock_hz_; }
-  // The line's time: every station has run to here (a chip with a host CPU up to kCpuSlack
-  // short of it, as a firmware access is never split).
+  // The line's time: every chip has run to here.
   [[nodiscard]] std::uint64_t cycle() const { return now_; }
 
   // `bytes` as back-to-back characters from `start` (>= cycle()) driven by station `from`
@@ -89,7 +88,8 @@ class Segment {
   // Hands on_telegram what is still open (the end of a run).
   void flush();
 
-  // A host CPU may end a firmware access this many clocks after the cycle it was asked to reach.
+  // A host CPU may end a firmware access this many clocks after the cycle it was asked to reach:
+  // it is run to that much short of a round's end, the chip alone the rest.
   static constexpr std::uint64_t kCpuSlack = 3;
 
  private:

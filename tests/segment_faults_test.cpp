@@ -41,9 +41,13 @@ struct Faults {
   // ttr = 0: a line without a token (one master); else masters 2 and 3 share it.
   explicit Faults(bool with_chip = false, std::uint64_t ttr = 0)
       : seg(kBaud),
-        check(BusTiming{seg.bit_cycles(), 11, kSlot, kTsyn, ttr,
-                        ttr == 0 ? std::vector<std::uint8_t>{2} : std::vector<std::uint8_t>{2, 3}},
-              [this](const LogRecord& r) { log.push_back(r); }) {
+        timing_{seg.bit_cycles(),
+                11,
+                kSlot,
+                kTsyn,
+                ttr,
+                ttr == 0 ? std::vector<std::uint8_t>{2} : std::vector<std::uint8_t>{2, 3}},
+        check(timing_, [this](const LogRecord& r) { log.push_back(r); }) {
     if (with_chip) {
       ResponderConfig rc;
       rc.slave.address = 5;
@@ -64,6 +68,19 @@ struct Faults {
     seg.flush();
     check.idle_until(seg.cycle());
   }
+  // FDL_Status from master 2 to station 5 until the chips have found the rate (their baud
+  // search) and station 5 answers; the line then stands idle for good.
+  void find_rate() {
+    for (int i = 0; i < 200; ++i) {
+      const std::uint64_t end = seg.send(master, fdl_status(5, 2), seg.cycle() + bits(kTsyn));
+      seg.run_until(end + bits(kSlot + 20));
+      if (seg.chip(chip).wd_state() != WdState::Baud_Search) break;
+    }
+    settle(seg.cycle() + bits(200));
+    check = BusCheck(timing_, [this](const LogRecord& r) { log.push_back(r); });
+    check.watch(seg);
+    log.clear();
+  }
   // Master 2 asks station 20 for its FDL status; the rogue answers `answer` `delay` bit times
   // after the request's end.
   void ask_and_answer(const std::vector<std::uint8_t>& answer, std::uint64_t delay) {
@@ -80,6 +97,7 @@ struct Faults {
     EXPECT_FALSE(log.empty());
   }
   Segment seg;
+  BusTiming timing_;
   BusCheck check;
   std::vector<LogRecord> log;
   std::unique_ptr<Responder> user;
@@ -131,18 +149,21 @@ TEST(SegmentFaults, TwoStationsWithOneAddressCollide) {
   DirectBus bus(f.seg.chip(second));
   twin.init(bus);
   f.seg.set_firmware(second, [&twin](BusPort& b) { twin.isr(b); });
-  const std::uint64_t end = f.seg.send(f.master, fdl_status(5, 2), f.bits(100));
+  f.find_rate();
+  const std::size_t before = f.seg.collisions().size();
+  const std::uint64_t end = f.seg.send(f.master, fdl_status(5, 2), f.seg.cycle() + f.bits(kTsyn));
   f.settle(end + f.bits(400));
   // Both answer at end + 11 T (docs/timing.md): the second driver collides at that cycle.
-  ASSERT_EQ(f.seg.collisions().size(), 1U);
-  EXPECT_EQ(f.seg.collisions()[0].cycle, end + f.bits(11));
+  ASSERT_EQ(f.seg.collisions().size(), before + 1);
+  EXPECT_EQ(f.seg.collisions().back().cycle, end + f.bits(11));
   EXPECT_EQ(f.check.count(BusViolation::collision), 1U);
   EXPECT_NE(f.log.front().text.find("dpc31 drove the line while spc3 had it"), std::string::npos);
 }
 
 TEST(SegmentFaults, AStationDrivingIntoAnAnswerCollides) {
   Faults f(true);
-  const std::uint64_t end = f.seg.send(f.master, fdl_status(5, 2), f.bits(100));
+  f.find_rate();
+  const std::uint64_t end = f.seg.send(f.master, fdl_status(5, 2), f.seg.cycle() + f.bits(kTsyn));
   // The spc3 answers from end + 11 T; the rogue starts 2 bit times into it.
   f.seg.run_until(end + f.bits(13));
   f.seg.send(f.rogue, status_answer(2, 9), end + f.bits(13));
@@ -185,12 +206,11 @@ TEST(SegmentFaults, AForeignMasterThatNeverPassesTheToken) {
 
 TEST(SegmentFaults, AShortTsyn) {
   Faults f(true);
-  const std::uint64_t end = f.seg.send(f.master, fdl_status(30, 2), f.bits(100));
-  f.settle(end + f.bits(kSlot + 10));
+  f.find_rate();
   const std::uint32_t no_sync = f.seg.chip(f.chip).fdl_counters().no_sync;
-  const std::uint64_t end2 = f.seg.send(f.master, fdl_status(30, 2), f.seg.cycle());
-  f.seg.send(f.master, fdl_status(5, 2), end2 + f.bits(kTsyn - 1));  // one bit short
-  f.settle(end2 + f.bits(400));
+  const std::uint64_t end = f.seg.send(f.master, fdl_status(30, 2), f.seg.cycle() + f.bits(kTsyn));
+  f.seg.send(f.master, fdl_status(5, 2), end + f.bits(kTsyn - 1));  // one bit short
+  f.settle(end + f.bits(400));
   f.expect_only(BusViolation::short_tsyn, 1);
   // The chip holds the same rule: it did not take the request (docs/timing.md, TSYN).
   EXPECT_EQ(f.seg.chip(f.chip).fdl_counters().no_sync, no_sync + 1);
