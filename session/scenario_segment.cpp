@@ -127,9 +127,12 @@ class Parser {
         fail(e.what());
       }
       for (const SegmentStation& o : s_.stations) {
-        // Its state is C globals: one image runs once in a process (firmware_host.hpp).
-        if (o.firmware == st.firmware)
-          fail(fmt::format("firmware {} already runs on {}", *v, o.name));
+        // The built-in firmwares and their dps driver keep their state in C globals, one set per
+        // process (firmware_host.hpp): one station of a segment may run one.
+        if (!o.firmware.empty()) {
+          fail(fmt::format("firmware {}: {} already runs {} (one built-in firmware per segment)",
+                           *v, o.name, o.firmware));
+        }
       }
     }
     if (auto v = take("wd")) {
