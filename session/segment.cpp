@@ -71,6 +71,21 @@ const Chip& Segment::chip(std::size_t i) const {
   return *s.chip;
 }
 
+std::uint64_t Segment::cycle() const {
+  std::uint64_t c = now_;
+  for (const auto& s : stations_) {
+    if (s->chip) c = std::max(c, s->chip->cycle());
+  }
+  return c;
+}
+
+void Segment::catch_up() {
+  const std::uint64_t front = cycle();
+  if (front == now_) return;
+  for (const auto& s : stations_) step_station(*s, front);
+  now_ = front;
+}
+
 void Segment::step_station(Station& s, std::uint64_t to) {
   if (!s.chip || s.chip->cycle() >= to) return;
   // The host CPU never splits a bus access and may end one up to kCpuSlack clocks past its goal:
@@ -214,6 +229,7 @@ void Segment::pulse(std::size_t from, std::uint64_t start, std::uint64_t low_cyc
 }
 
 void Segment::run_until(std::uint64_t cycle, std::optional<std::size_t> wake_for) {
+  catch_up();
   wake_for_ = wake_for;
   woken_ = false;
   Edges round;

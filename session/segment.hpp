@@ -60,8 +60,9 @@ class Segment {
   [[nodiscard]] const Chip& chip(std::size_t i) const;
   [[nodiscard]] std::uint32_t bit_cycles() const { return t_; }
   [[nodiscard]] std::uint32_t clock_hz() const { return clock_hz_; }
-  // The line's time: every chip has run to here.
-  [[nodiscard]] std::uint64_t cycle() const { return now_; }
+  // The line's time: every chip has run to here (or will, before anything else happens on the
+  // line: a chip's user side may have run it ahead with bus accesses, its init for one).
+  [[nodiscard]] std::uint64_t cycle() const;
 
   // `bytes` as back-to-back characters from `start` (>= cycle()) driven by station `from`
   // (`fault` damages one character, as uart_encode does). Every station runs to `start` first.
@@ -96,6 +97,8 @@ class Segment {
   struct Station;
   using Edges = std::vector<std::pair<std::uint64_t, bool>>;
   void step_station(Station& s, std::uint64_t to);
+  // Every chip to cycle(): what its user side did directly on its bus moved it alone.
+  void catch_up();
   // Edges station `i` drove (in order, up to its cycle): the line's owner's are heard by all.
   void relay(std::size_t i, const Edges& edges);
   void hear(std::size_t from, std::uint64_t cycle, bool level);
