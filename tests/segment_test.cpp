@@ -14,6 +14,7 @@
 #include "dpc31/bus_port.hpp"
 #include "dpc31/fdl.hpp"
 #include "responder.hpp"
+#include "scenario_segment.hpp"
 
 namespace dpc31 {
 namespace {
@@ -185,6 +186,32 @@ TEST(Segment, TwoMastersPassTheTokenAndReachDataExchangeWithASlaveEach) {
   // TRR of master 3: from its first token's end to its second's.
   EXPECT_EQ(m3.token_rotation(), tokens[2].end - tokens[0].end);
   EXPECT_TRUE(seg.collisions().empty());
+}
+
+}  // namespace
+}  // namespace dpc31
+
+namespace dpc31 {
+namespace {
+
+// Bad input in a segment scenario: one line, FILE:LINE, nothing run (docs/bad-input.md).
+TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
+  const std::pair<const char*, const char*> cases[] = {
+      {"segment\nstation 5\nbogus 3\n", "f.scn:3: unknown command 'bogus'"},
+      {"station 5\n", "f.scn:1: a segment scenario begins with 'segment'"},
+      {"segment\nstation 5 firmware=DO4\nstation 6 firmware=CNT2\n",
+       "f.scn:3: firmware CNT2: station 5 already runs DO4 (one built-in firmware per segment)"},
+      {"segment\nstation 5\nexpect state 9 Data_Exchange\n", "f.scn:3: no station 9"},
+      {"segment\nstation 5\nstartup\nstation 6\n", "f.scn:4: 'station' after the first action"},
+  };
+  for (const auto& [text, want] : cases) {
+    SegmentScenario s;
+    ScenarioError err;
+    EXPECT_FALSE(parse_segment_scenario(text, "f.scn", s, err)) << text;
+    EXPECT_EQ(err.text(), want);
+  }
+  EXPECT_TRUE(is_segment_scenario("# a comment\n\nsegment baud=12000000\n"));
+  EXPECT_FALSE(is_segment_scenario("profile spc3\n"));
 }
 
 }  // namespace
