@@ -4,9 +4,11 @@
 
 #include <algorithm>
 #include <array>
+#include <stdexcept>
 
 #include "dpc31/dp.hpp"
 #include "dpc31/pdu.hpp"
+#include "segment.hpp"
 
 namespace dpc31 {
 
@@ -48,7 +50,7 @@ std::optional<fdl::Frame> AnswerCollector::frame() const {
 }
 
 DpMaster::DpMaster(Chip& chip, MasterConfig m, SlaveConfig s)
-    : chip_(chip),
+    : chip_(&chip),
       cfg_(m),
       slave_(std::move(s)),
       t_(dpc31::bit_cycles(chip.clock_hz(), m.baud)),
@@ -56,12 +58,107 @@ DpMaster::DpMaster(Chip& chip, MasterConfig m, SlaveConfig s)
       rx_(t_, chip.cycle()),
       bus_free_(chip.cycle()) {
   // TxD in batches, taken when the master looks (take_txd): no event per bit.
-  chip_.on_txd_edges([this](std::span<const std::pair<std::uint64_t, bool>> e) { rx_.edges(e); });
+  chip_->on_txd_edges([this](std::span<const std::pair<std::uint64_t, bool>> e) { rx_.edges(e); });
+  slaves_.push_back({slave_, target_, fcb_, fcv_started_});
+}
+
+DpMaster::DpMaster(Segment& seg, std::size_t station, MasterConfig m,
+                   std::vector<SlaveConfig> slaves)
+    : seg_(&seg),
+      station_(station),
+      cfg_(m),
+      slave_(slaves.at(0)),
+      t_(seg.bit_cycles()),
+      target_(slave_.address),
+      rx_(t_, seg.cycle()),
+      bus_free_(seg.cycle()) {
+  if (dpc31::bit_cycles(seg.clock_hz(), m.baud) != t_) {
+    throw std::invalid_argument("DpMaster: the master's baud rate is not the segment's");
+  }
+  for (SlaveConfig& s : slaves) {
+    const std::uint8_t a = s.address;
+    slaves_.push_back({std::move(s), a, true, false});
+  }
+  // The line as this station hears it: what the others drive.
+  scheduler = [this](std::uint64_t cycle) {
+    seg_->run_until(cycle, wake_on_txd_ ? std::optional<std::size_t>(station_) : std::nullopt);
+  };
+}
+
+std::uint64_t DpMaster::now() const { return seg_ ? seg_->cycle() : chip_->cycle(); }
+
+std::uint64_t DpMaster::put_on_line(std::span<const std::uint8_t> bytes, std::uint64_t start,
+                                    UartFault fault) {
+  return seg_ ? seg_->send(station_, bytes, start, fault)
+              : send_on_rxd(*chip_, bytes, start, t_, fault);
+}
+
+void DpMaster::select(std::size_t i) {
+  slaves_.at(current_) = {slave_, target_, fcb_, fcv_started_};
+  const SlaveState& s = slaves_.at(i);
+  slave_ = s.config;
+  target_ = s.target;
+  fcb_ = s.fcb;
+  fcv_started_ = s.fcv_started;
+  current_ = i;
+}
+
+bool DpMaster::startup_all(int tries) {
+  bool all = true;
+  for (std::size_t i = 0; i < slaves_.size(); ++i) {
+    select(i);
+    all = startup(tries) && all;
+  }
+  select(0);
+  return all;
+}
+
+std::vector<Exchange> DpMaster::dp_cycle(const std::vector<std::vector<std::uint8_t>>& outputs) {
+  std::vector<Exchange> out;
+  for (std::size_t i = 0; i < slaves_.size(); ++i) {
+    select(i);
+    out.push_back(
+        data_exchange(i < outputs.size() ? outputs[i] : std::vector<std::uint8_t>(slave_.out_len)));
+  }
+  select(0);
+  return out;
+}
+
+Exchange DpMaster::pass_token(std::uint8_t next) {
+  return transact(fdl::token(next, cfg_.address));
+}
+
+bool DpMaster::wait_token(std::uint64_t timeout) {
+  const std::uint64_t until = now() + timeout;
+  AnswerCollector heard;
+  for (;;) {
+    chars_.clear();
+    look(chars_);
+    for (const UartChar& c : chars_) {
+      if (heard.finished()) heard.reset();
+      heard.push(c);
+      const std::optional<fdl::Frame> f = heard.frame();
+      if (f && f->sd == fdl::SD4 && f->da == cfg_.address) {
+        bus_free_ = heard.end();
+        if (token_at_ != 0) trr_ = heard.end() - token_at_;
+        token_at_ = heard.end();
+        return true;
+      }
+    }
+    if (now() >= until) return false;
+    wake_on_txd_ = true;
+    run_until(std::min(until, std::max(now() + 1, rx_.receiving() ? rx_.next_deadline() : until)));
+    wake_on_txd_ = false;
+  }
 }
 
 void DpMaster::look(std::vector<UartChar>& out) {
-  chip_.take_txd();
-  rx_.advance(chip_.cycle(), out);
+  if (seg_) {
+    seg_->take_line(station_, rx_);
+  } else {
+    chip_->take_txd();
+  }
+  rx_.advance(now(), out);
 }
 
 void DpMaster::note(const std::string& s) {
@@ -71,21 +168,25 @@ void DpMaster::note(const std::string& s) {
 // To `cycle`, or less when the chip's TxD wakes the master up (wake_on_txd_).
 void DpMaster::run_until(std::uint64_t cycle) {
   // A falling edge may be a start bit: look at the line again (the wait is event-driven).
-  if (wake_on_txd_) chip_.wake_on_txd(true);
+  if (seg_) {
+    scheduler(cycle);
+    return;
+  }
+  if (wake_on_txd_) chip_->wake_on_txd(true);
   if (scheduler) {
     scheduler(cycle);
   } else if (cpu_) {
     cpu_->run_until(cycle);
   } else {
-    while (chip_.cycle() < cycle && !chip_.stop_requested()) {
-      chip_.step_until_irq(cycle - chip_.cycle());
+    while (chip_->cycle() < cycle && !chip_->stop_requested()) {
+      chip_->step_until_irq(cycle - chip_->cycle());
     }
   }
-  if (wake_on_txd_) chip_.wake_on_txd(false);
-  chip_.clear_stop();
+  if (wake_on_txd_) chip_->wake_on_txd(false);
+  chip_->clear_stop();
 }
 
-void DpMaster::idle(std::uint64_t cycles) { run_until(chip_.cycle() + cycles); }
+void DpMaster::idle(std::uint64_t cycles) { run_until(now() + cycles); }
 
 Exchange DpMaster::retry(Exchange ex, std::uint32_t retries) {
   for (std::uint32_t i = 0; i < retries && !ex.answer && wants_answer(ex.request); ++i) {
@@ -95,18 +196,21 @@ Exchange DpMaster::retry(Exchange ex, std::uint32_t retries) {
 }
 
 void DpMaster::line_noise(std::span<const std::uint8_t> bytes, std::uint32_t idle_bits) {
-  const std::uint64_t start = std::max(chip_.cycle(), bus_free_ + std::uint64_t{idle_bits} * t_);
+  const std::uint64_t start = std::max(now(), bus_free_ + std::uint64_t{idle_bits} * t_);
   if (on_send) on_send(start, bytes, {});
-  bus_free_ = send_on_rxd(chip_, bytes, start, t_);
+  bus_free_ = put_on_line(bytes, start, {});
   ++counters_.noise;
   run_until(bus_free_);
 }
 
 void DpMaster::glitch(std::uint32_t low_cycles) {
-  const std::uint64_t start =
-      std::max(chip_.cycle(), bus_free_ + std::uint64_t{cfg_.idle_bits} * t_);
-  chip_.drive_rxd(start, false);
-  chip_.drive_rxd(start + low_cycles, true);
+  const std::uint64_t start = std::max(now(), bus_free_ + std::uint64_t{cfg_.idle_bits} * t_);
+  if (seg_) {
+    seg_->pulse(station_, start, low_cycles);
+  } else {
+    chip_->drive_rxd(start, false);
+    chip_->drive_rxd(start + low_cycles, true);
+  }
   bus_free_ = start + std::uint64_t{kUartCharBits} * t_;
   ++counters_.noise;
   run_until(bus_free_);
@@ -136,14 +240,16 @@ Exchange DpMaster::transact_raw(const std::vector<std::uint8_t>& bytes, UartFaul
   // What the line carried before (another master's traffic, for instance) is no answer to us.
   chars_.clear();
   look(chars_);
-  ex.request_start = std::max(chip_.cycle(), bus_free_ + std::uint64_t{cfg_.idle_bits} * t_);
+  ex.request_start = std::max(now(), bus_free_ + std::uint64_t{cfg_.idle_bits} * t_);
   if (on_send) on_send(ex.request_start, bytes, fault);
-  ex.request_end = send_on_rxd(chip_, bytes, ex.request_start, t_, fault);
+  ex.request_end = put_on_line(bytes, ex.request_start, fault);
   run_until(ex.request_end);
   const fdl::Decoded d = fdl::decode(bytes);
-  const bool sdn = d.error == fdl::Error::none &&
-                   (fdl::request_function(d.frame.fc) == fdl::Function::SDN_high ||
-                    fdl::request_function(d.frame.fc) == fdl::Function::SDN_low);
+  // SDN and the token (SD4) want no answer.
+  const bool sdn =
+      d.error == fdl::Error::none &&
+      (d.frame.sd == fdl::SD4 || fdl::request_function(d.frame.fc) == fdl::Function::SDN_high ||
+       fdl::request_function(d.frame.fc) == fdl::Function::SDN_low);
   ++counters_.requests;
   if (sdn) {
     bus_free_ = ex.request_end;  // send-data-no-acknowledge: nothing to wait for
@@ -169,14 +275,14 @@ Exchange DpMaster::wait_answer(Exchange ex) {
     look(chars_);
     for (const UartChar& c : chars_) answer_.push(c);
     if (answer_.finished() && !rx_.receiving()) break;
-    if (!answer_.started() && !rx_.receiving() && chip_.cycle() >= slot_end) {
-      bus_free_ = chip_.cycle();
+    if (!answer_.started() && !rx_.receiving() && now() >= slot_end) {
+      bus_free_ = now();
       wake_on_txd_ = false;
       return ex;  // no answer within the slot time
     }
     // An answer that stops for a slot time between characters is broken.
     const std::uint64_t gap_end = answer_.end() + std::uint64_t{cfg_.slot_bits} * t_;
-    if (answer_.started() && !rx_.receiving() && chip_.cycle() >= gap_end) break;
+    if (answer_.started() && !rx_.receiving() && now() >= gap_end) break;
     // Event-driven: sleep until a start bit (TxD falls) or the slot time ends; once the length
     // is known, until the stop sample of the answer's last character (sent back to back).
     const std::size_t len = answer_.expected_length();
@@ -186,7 +292,7 @@ Exchange DpMaster::wait_answer(Exchange ex) {
                       : answer_.start() + (len * kUartCharBits - 1) * std::uint64_t{t_} + t_ / 2;
     }
     wake_on_txd_ = len == 0 || !rx_.receiving();
-    run_until(std::max(next, chip_.cycle() + 1));
+    run_until(std::max(next, now() + 1));
   }
   wake_on_txd_ = false;
   ex.answer_start = answer_.start();
@@ -298,12 +404,12 @@ bool DpMaster::startup(int tries) {
     if (fdl_status().answer) break;
   }
   if (n == tries) return false;
-  note(fmt::format("[cycle {:>10}] FDL_Status answered", chip_.cycle()));
+  note(fmt::format("[cycle {:>10}] FDL_Status answered", now()));
   for (; n < tries; ++n) {
     const Exchange diag = slave_diag();
     if (!diag.answer) continue;
     if (diag_ready(*diag.answer)) {
-      note(fmt::format("[cycle {:>10}] Slave_Diag: ready for Data_Exchange", chip_.cycle()));
+      note(fmt::format("[cycle {:>10}] Slave_Diag: ready for Data_Exchange", now()));
       return true;
     }
     using D = pdu::SlaveDiag;
@@ -311,8 +417,7 @@ bool DpMaster::startup(int tries) {
     if ((du.size() >= 2 && (du[1] & D::St2_Prm_Req) != 0) ||
         (!du.empty() && (du[0] & (D::St1_Cfg_Fault | D::St1_Prm_Fault)) != 0)) {
       // Prm_Req (or a fault): parameterise and configure.
-      note(fmt::format("[cycle {:>10}] Slave_Diag: Prm_Req, sending Set_Prm and Chk_Cfg",
-                       chip_.cycle()));
+      note(fmt::format("[cycle {:>10}] Slave_Diag: Prm_Req, sending Set_Prm and Chk_Cfg", now()));
       set_prm();
       chk_cfg();
     }

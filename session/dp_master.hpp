@@ -20,6 +20,8 @@
 
 namespace dpc31 {
 
+class Segment;
+
 // The default Cfg: 4 bytes in, 4 bytes out (byte consistency). A named array, not an
 // initializer list in SlaveConfig: GCC 12 at -O3 takes the list's backing array for
 // uninitialized where SlaveConfig() is inlined (a false -Wmaybe-uninitialized, issue 17).
@@ -125,12 +127,35 @@ class DpMaster {
   using Firmware = Cpu::Isr;  // the ISR, run (on the host CPU) while X/INT is active
 
   DpMaster(Chip& chip, MasterConfig m, SlaveConfig s);
+  // A master on a segment (docs/segment.md): station `station` of `seg` (a sender), polling
+  // `slaves` (at least one), each with its own FCB state; the first is selected. The stations'
+  // firmware is the segment's, not the master's.
+  DpMaster(Segment& seg, std::size_t station, MasterConfig m, std::vector<SlaveConfig> slaves);
 
-  void set_firmware(Firmware isr) { cpu_ = std::make_unique<Cpu>(chip_, std::move(isr)); }
+  void set_firmware(Firmware isr) { cpu_ = std::make_unique<Cpu>(*chip_, std::move(isr)); }
   // A firmware with a main loop and the board's interrupt input (FirmwareHost::program).
   void set_firmware(Cpu::Program program) {
-    cpu_ = std::make_unique<Cpu>(chip_, std::move(program));
+    cpu_ = std::make_unique<Cpu>(*chip_, std::move(program));
   }
+
+  // --- several slaves (a segment; one slave is the special case of the other constructor) ---
+  [[nodiscard]] std::size_t slave_count() const { return slaves_.size(); }
+  // The slave the services address from now on (its SlaveConfig, target and FCB state).
+  void select(std::size_t i);
+  [[nodiscard]] std::size_t selected() const { return current_; }
+  // startup() of every slave in turn; false if one did not reach Data_Exchange.
+  bool startup_all(int tries = 200);
+  // One DP cycle: Data_Exchange with every slave in order, `outputs[i]` to slave i (its out_len
+  // bytes of zeros where none are given).
+  std::vector<Exchange> dp_cycle(const std::vector<std::vector<std::uint8_t>>& outputs = {});
+  // Passes the token (SD4) to `next` (its own address: keeps it); nothing is waited for.
+  Exchange pass_token(std::uint8_t next);
+  // Listens until an SD4 to this master arrives (true: the token is ours, token_rotation() is the
+  // time since the last one) or `timeout` cycles of line time pass.
+  bool wait_token(std::uint64_t timeout);
+  // TRR: the real rotation time measured at the last token received (0 before the second).
+  [[nodiscard]] std::uint64_t token_rotation() const { return trr_; }
+  [[nodiscard]] std::uint8_t address() const { return cfg_.address; }
   // Sends one request after the idle time and waits for its answer. `fault` corrupts one
   // character on the wire (parity, start or stop bit).
   Exchange transact(const fdl::Frame& req, UartFault fault = {});
@@ -214,8 +239,24 @@ class DpMaster {
   Exchange wait_answer(Exchange ex);
   void look(std::vector<UartChar>& out);  // the characters on TxD whose stop bit is sampled by now
   void note(const std::string& s);
+  [[nodiscard]] std::uint64_t now() const;
+  std::uint64_t put_on_line(std::span<const std::uint8_t> bytes, std::uint64_t start,
+                            UartFault fault);
 
-  Chip& chip_;
+  struct SlaveState {
+    SlaveConfig config;
+    std::uint8_t target = 0;
+    bool fcb = true;
+    bool fcv_started = false;
+  };
+
+  Chip* chip_ = nullptr;    // the one chip (single-slave master)
+  Segment* seg_ = nullptr;  // or the segment and this master's station on it
+  std::size_t station_ = 0;
+  std::vector<SlaveState> slaves_;  // the others' state while one is selected
+  std::size_t current_ = 0;
+  std::uint64_t token_at_ = 0;  // when the token last came
+  std::uint64_t trr_ = 0;
   MasterConfig cfg_;
   SlaveConfig slave_;
   std::uint32_t t_;

@@ -50,34 +50,10 @@ bool flag(std::string_view s, std::string_view what) {
   fail(fmt::format("bad value '{}' for {}: 0 or 1", shown(s), what));
 }
 
-std::vector<std::uint8_t> bytes(std::string_view s, std::string_view what, std::size_t max) {
-  std::vector<std::uint8_t> out;
-  if (s == "-") return out;
-  if (s.empty()) fail(fmt::format("empty byte list for {} (write '-' for none)", what));
-  for (std::string_view b : split(s, ',')) {
-    std::string_view d = b;
-    if (d.size() > 2 && d[0] == '0' && (d[1] == 'x' || d[1] == 'X')) d.remove_prefix(2);
-    unsigned v = 0;
-    const auto [p, ec] = std::from_chars(d.data(), d.data() + d.size(), v, 16);
-    if (d.empty() || d.size() > 2 || ec != std::errc() || p != d.data() + d.size()) {
-      fail(fmt::format("bad byte '{}' in {} (hex bytes separated by commas)", shown(b), what));
-    }
-    out.push_back(static_cast<std::uint8_t>(v));
-    if (out.size() > max) fail(fmt::format("{}: more than {} bytes", what, max));
-  }
-  return out;
-}
-
-std::string bytes_text(std::span<const std::uint8_t> b) {
-  return b.empty() ? "-" : hex_bytes(b, " ", 4096);
-}
-
-std::uint64_t duration(std::string_view s, std::uint32_t clock_hz, std::uint64_t bit_time) {
+std::uint64_t duration(std::string_view s, std::uint64_t f, std::uint64_t t) {
   std::uint64_t v = 0;
-  const std::uint64_t f = clock_hz;
   if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
-    v = number(s, "time", 0, kMaxSeconds * f);
-    return v;
+    return number(s, "time", 0, kMaxSeconds * f);
   }
   std::size_t k = 0;
   while (k < s.size() && s[k] >= '0' && s[k] <= '9') ++k;
@@ -105,12 +81,33 @@ std::uint64_t duration(std::string_view s, std::uint32_t clock_hz, std::uint64_t
     return v * f;
   }
   if (unit == "bits") {
-    const std::uint64_t t = bit_time;
     check(kMaxSeconds * f / t);
     return v * t;
   }
   fail(fmt::format("bad time unit '{}' in '{}' (us, ms, s, bits, or none for cycles)", shown(unit),
                    shown(s)));
+}
+
+std::vector<std::uint8_t> bytes(std::string_view s, std::string_view what, std::size_t max) {
+  std::vector<std::uint8_t> out;
+  if (s == "-") return out;
+  if (s.empty()) fail(fmt::format("empty byte list for {} (write '-' for none)", what));
+  for (std::string_view b : split(s, ',')) {
+    std::string_view d = b;
+    if (d.size() > 2 && d[0] == '0' && (d[1] == 'x' || d[1] == 'X')) d.remove_prefix(2);
+    unsigned v = 0;
+    const auto [p, ec] = std::from_chars(d.data(), d.data() + d.size(), v, 16);
+    if (d.empty() || d.size() > 2 || ec != std::errc() || p != d.data() + d.size()) {
+      fail(fmt::format("bad byte '{}' in {} (hex bytes separated by commas)", shown(b), what));
+    }
+    out.push_back(static_cast<std::uint8_t>(v));
+    if (out.size() > max) fail(fmt::format("{}: more than {} bytes", what, max));
+  }
+  return out;
+}
+
+std::string bytes_text(std::span<const std::uint8_t> b) {
+  return b.empty() ? "-" : hex_bytes(b, " ", 4096);
 }
 
 // Global_Control command bits (DP standard).

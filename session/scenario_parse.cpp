@@ -205,6 +205,11 @@ class Parser {
             "DPV1 the VPC3+ takes WD_Base from Mode_Reg0, not from Set_Prm");
   }
 
+  // Cycles, or a time with a unit; rounded up like every minimum time (docs/timing.md).
+  std::uint64_t duration(std::string_view s) const {
+    return scenario_lex::duration(s, clock(), bit_cycles(clock(), s_.master.baud));
+  }
+
   // Options of `slave` that also apply to `set_prm` (what Set_Prm carries).
   bool prm_option(SlaveConfig& sl, std::string_view k, std::string_view v) const {
     if (k == "ident") {
@@ -535,7 +540,7 @@ class Parser {
       step_.kind = StepKind::silence;
       positional(1, 1, "one time (e.g. 200ms)");
       no_options();
-      step_.cycles = duration(pos_[0], clock(), bit_cycles(clock(), s_.master.baud));
+      step_.cycles = duration(pos_[0]);
     } else if (cmd_ == "hw") {
       step_.kind = StepKind::hw;
       positional(2, 2, "a hardware input and a value");

@@ -199,11 +199,15 @@ TEST(CliBench, QuickPrintsEveryRowWellFormed) {
   // lockstep), f (MB/s and RSS on a pair of the emulator's VCD files and on a generated pair), g
   // (pipelined over TCP, one in flight over the Unix socket and over TCP, each with the server's
   // own cost per command and the rest reported beside it; one round trip beside a flood), i
-  // (tracing), j (the 80C32 core, docs/cpu.md), k (DPV1 Reads), h (the fresh build: not run without
-  // --build, last).
-  const std::vector<std::string> items = {"a", "a", "a", "a", "a", "a", "b", "b'", "c", "d",
-                                          "e", "e", "f", "f", "f", "f", "g", "g",  "g", "g",
-                                          "g", "g", "g", "g", "g", "i", "j", "k",  "h"};
+  // (tracing), j (the 80C32 core, docs/cpu.md), k (DPV1 Reads), l (a segment), h (the fresh
+  // build: not run without --build, last).
+  std::vector<std::string> items = {"a", "a", "a", "a", "a", "a", "b", "b'", "c", "d",
+                                    "e", "e", "f", "f", "f", "f", "g", "g",  "g", "g",
+                                    "g", "g", "g", "g", "g", "i", "j", "k"};
+  // l: one DP cycle over a segment of 1, 2, 4, 8, 16, 32 slaves at 1.5 and 12 Mbaud (issue 30);
+  // only the 32-slave rows have targets.
+  items.insert(items.end(), 12, "l");
+  items.push_back("h");
   ASSERT_EQ(rows.size(), items.size()) << r.out;
   int reported = 0;
   for (std::size_t i = 0; i < rows.size(); ++i) {
@@ -226,7 +230,7 @@ TEST(CliBench, QuickPrintsEveryRowWellFormed) {
     }
     EXPECT_TRUE(c[4].rfind("met", 0) == 0 || c[4].rfind("missed by ", 0) == 0) << c[4];
   }
-  EXPECT_EQ(reported, 5);
+  EXPECT_EQ(reported, 15);
   const auto j = nlohmann::json::parse(slurp(json_path));
   ASSERT_EQ(j["rows"].size(), items.size());
   for (const auto& row : j["rows"]) {
@@ -249,8 +253,9 @@ TEST(CliBench, ItemsRunsOnlyThose) {
   const Result r = run("bench --quick --items d,i --json " + json_path);
   ASSERT_EQ(r.rc, 0) << r.out;
   const auto j = nlohmann::json::parse(slurp(json_path));
-  // Every row of docs/performance.md, rows j (the 80C32) and k (DPV1) included.
-  ASSERT_EQ(j["rows"].size(), 29u);
+  // Every row of docs/performance.md, rows j (the 80C32), k (DPV1) and the twelve of row l (a
+  // segment) included.
+  ASSERT_EQ(j["rows"].size(), 41u);
   int measured = 0;
   for (const auto& row : j["rows"]) {
     if (row["item"] == "d" || row["item"] == "i") {

@@ -16,6 +16,7 @@
 
 // The scenario runner lives with the emulator (emu/ is not on this target's include path).
 #include "scenario.hpp"
+#include "scenario_segment.hpp"
 #include "trace.hpp"
 
 namespace dpc31::cli {
@@ -234,6 +235,24 @@ int run_scenario_command(const RunOptions& opt, std::FILE* out, std::FILE* err) 
   LineSink walk;
   if (!opt.quiet) walk = [out](const std::string& line) { fmt::print(out, "{}\n", line); };
   const LineSink errors = [err](const std::string& line) { fmt::print(err, "{}\n", line); };
+  // A segment's scenario (docs/segment.md) has a runner of its own, without the outputs yet.
+  SegmentScenario seg;
+  ScenarioError serr;
+  switch (load_segment_scenario(opt.scenario, seg, serr)) {
+    case SegmentLoad::error:
+      errors(serr.text());
+      return 2;
+    case SegmentLoad::ok:
+      if (!opt.json.empty() || !opt.record.empty() || !opt.vcd.empty() || !opt.fst.empty() ||
+          !opt.la_vcd.empty() || !opt.pcap.empty() || !opt.gtkw.empty()) {
+        fmt::print(err, "dpc31 run: {}: a segment scenario writes no output files yet\n",
+                   opt.scenario);
+        return 2;
+      }
+      return run_segment_scenario(seg, walk, errors);
+    case SegmentLoad::not_segment:
+      break;
+  }
   Scenario s;
   ScenarioOutcome o;
   return run_with_outputs(opt, walk, errors, s, o, err);

@@ -1,0 +1,154 @@
+#include "bus_check.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+
+#include "dp_master.hpp"
+
+namespace dpc31 {
+
+namespace {
+constexpr std::array<std::string_view, kBusViolationKinds> kNames = {
+    "early_answer", "late_answer", "short_tsyn", "wrong_responder", "bad_frame",
+    "unsolicited",  "collision",   "token_lost", "duplicate_token", "token_hold"};
+
+bool is_token(const fdl::Frame& f) { return f.sd == fdl::SD4; }
+bool is_request(const fdl::Frame& f) {
+  return is_token(f) || (f.sd != fdl::SC && fdl::is_request(f.fc));
+}
+}  // namespace
+
+std::string_view bus_violation_name(BusViolation v) { return kNames[static_cast<std::size_t>(v)]; }
+
+bool parse_bus_violation(std::string_view s, BusViolation& out) {
+  const auto it = std::find(kNames.begin(), kNames.end(), s);
+  if (it == kNames.end()) return false;
+  out = static_cast<BusViolation>(it - kNames.begin());
+  return true;
+}
+
+BusCheck::BusCheck(BusTiming timing, LogSink sink)
+    : timing_(std::move(timing)), sink_(std::move(sink)) {}
+
+void BusCheck::watch(Segment& seg) {
+  seg.on_telegram = [this](const LineTelegram& t) { telegram(t); };
+  seg.on_collision = [this, &seg](const Collision& c) {
+    collision(c, seg.name(c.first), seg.name(c.second));
+  };
+}
+
+std::uint64_t BusCheck::total() const {
+  std::uint64_t n = 0;
+  for (const std::uint64_t c : counts_) n += c;
+  return n;
+}
+
+void BusCheck::violation(BusViolation v, std::uint64_t cycle, const std::string& text) {
+  ++counts_[static_cast<std::size_t>(v)];
+  for (std::string& line :
+       limiter_.add(cycle, fmt::format("bus: {}: {}", bus_violation_name(v), text))) {
+    if (sink_) sink_(LogRecord{cycle, LogLevel::warn, std::move(line)});
+  }
+}
+
+void BusCheck::flush() {
+  for (std::string& line : limiter_.flush()) {
+    if (sink_) sink_(LogRecord{last_end_.value_or(0), LogLevel::warn, std::move(line)});
+  }
+}
+
+// TTO = TSL x (6 + 2 x n): the master with the lowest address n times out first.
+std::uint64_t BusCheck::token_lost_timeout() const {
+  const std::uint64_t n = timing_.masters.empty()
+                              ? 0
+                              : *std::min_element(timing_.masters.begin(), timing_.masters.end());
+  return bits(std::uint64_t{timing_.slot_bits} * (6 + 2 * n));
+}
+
+void BusCheck::idle_until(std::uint64_t now) {
+  if (timing_.ttr_bits == 0 || !last_end_ || token_lost_reported_) return;
+  const std::uint64_t due = *last_end_ + token_lost_timeout();
+  if (now < due) return;
+  token_lost_reported_ = true;
+  holder_.reset();
+  violation(BusViolation::token_lost, due,
+            fmt::format("the line idle for TTO ({} bit times) since cycle {}",
+                        token_lost_timeout() / timing_.bit_cycles, *last_end_));
+}
+
+void BusCheck::collision(const Collision& c, const std::string& first, const std::string& second) {
+  violation(BusViolation::collision, c.cycle,
+            fmt::format("{} drove the line while {} had it", second, first));
+}
+
+void BusCheck::telegram(const LineTelegram& t) {
+  idle_until(t.start);
+  token_lost_reported_ = false;
+  const fdl::Decoded d = fdl::decode(t.bytes);
+  const bool ok = d.error == fdl::Error::none;
+  const bool request = ok && is_request(d.frame);
+  if (!ok) {
+    violation(BusViolation::bad_frame, t.start,
+              fmt::format("{} bytes from cycle {} do not decode ({})", t.bytes.size(), t.start,
+                          fdl::error_name(d.error)));
+  }
+  if (pending_ && !request) {
+    // The answer to the pending request: its delay, its sender.
+    const std::uint64_t delay = t.start - pending_->end;
+    const std::uint64_t tbits = delay / timing_.bit_cycles;
+    if (delay < bits(timing_.min_tsdr_bits)) {
+      violation(BusViolation::early_answer, t.start,
+                fmt::format("answer to station {} {} bit times after the request (min TSDR {})",
+                            pending_->request.da, tbits, timing_.min_tsdr_bits));
+    } else if (delay > bits(timing_.slot_bits)) {
+      violation(BusViolation::late_answer, t.start,
+                fmt::format("answer to station {} {} bit times after the request (slot time {})",
+                            pending_->request.da, tbits, timing_.slot_bits));
+    }
+    if (ok && d.frame.sd != fdl::SC &&
+        (d.frame.sa != pending_->request.da || d.frame.da != pending_->request.sa)) {
+      violation(BusViolation::wrong_responder, t.start,
+                fmt::format("station {} answered to {}, asked: {} by {}", d.frame.sa, d.frame.da,
+                            pending_->request.da, pending_->request.sa));
+    }
+    pending_.reset();
+  } else if (!request && ok) {
+    violation(BusViolation::unsolicited, t.start,
+              fmt::format("an answer from station {} nobody asked for", d.frame.sa));
+  }
+  if (request) {
+    pending_.reset();
+    if (last_end_ && t.start < *last_end_ + bits(timing_.tsyn_bits)) {
+      violation(BusViolation::short_tsyn, t.start,
+                fmt::format("station {} sent after {} bit times of idle (TSYN {})", d.frame.sa,
+                            (t.start - *last_end_) / timing_.bit_cycles, timing_.tsyn_bits));
+    }
+    if (timing_.ttr_bits != 0) {
+      if (holder_ && d.frame.sa != *holder_) {
+        violation(
+            BusViolation::duplicate_token, t.start,
+            fmt::format("station {} sent while station {} holds the token", d.frame.sa, *holder_));
+      } else if (!is_token(d.frame) && held_cycle_started_ &&
+                 t.start > token_at_ + bits(timing_.ttr_bits)) {
+        violation(
+            BusViolation::token_hold, t.start,
+            fmt::format("station {} started a message cycle {} bit times after it got the "
+                        "token (TTR {})",
+                        d.frame.sa, (t.start - token_at_) / timing_.bit_cycles, timing_.ttr_bits));
+      }
+      if (is_token(d.frame)) {
+        holder_ = d.frame.da;
+        token_at_ = t.end;
+        held_cycle_started_ = false;
+      } else {
+        if (!holder_) holder_ = d.frame.sa;
+        held_cycle_started_ = true;
+      }
+    }
+    if (wants_answer(d.frame)) pending_ = Pending{d.frame, t.end};
+  }
+  last_end_ = t.end;
+}
+
+}  // namespace dpc31

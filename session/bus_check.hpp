@@ -1,0 +1,87 @@
+// The bus checks of a segment (docs/segment.md, "Bus checks"): every telegram on the line
+// against the timing rules of EN 50170 / IEC 61158-4-3 as docs/timing.md states them. Each
+// violation is a count and a log line (through a LogLimiter: a babbling station cannot flood).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "dpc31/fdl.hpp"
+#include "dpc31/log.hpp"
+#include "segment.hpp"
+
+namespace dpc31 {
+
+enum class BusViolation : std::uint8_t {
+  early_answer,     // an answer sooner than min TSDR after the request's end
+  late_answer,      // an answer later than the slot time after the request's end
+  short_tsyn,       // a request or token with less than TSYN idle before it
+  wrong_responder,  // an answer from another station than the one asked, or to another
+  bad_frame,        // a telegram that does not decode (FCS, ED, length, truncated)
+  unsolicited,      // an answer nobody asked for (a babbling station)
+  collision,        // two stations driving at once (Segment::collisions)
+  token_lost,       // the line idle longer than the token-lost timeout TTO
+  duplicate_token,  // a request or token from a master that does not hold the token
+  token_hold,       // a new message cycle after the holder's TTR ran out
+};
+inline constexpr std::size_t kBusViolationKinds = 10;
+[[nodiscard]] std::string_view bus_violation_name(BusViolation v);
+[[nodiscard]] bool parse_bus_violation(std::string_view s, BusViolation& out);
+
+struct BusTiming {
+  std::uint32_t bit_cycles = 0;
+  std::uint32_t min_tsdr_bits = 11;  // the smallest answer delay a slave may use
+  std::uint32_t slot_bits = 100;     // TSL
+  std::uint32_t tsyn_bits = 33;      // TSYN
+  // TTR in bit times; 0: no token on this line (a single master without SD4): no token checks.
+  std::uint64_t ttr_bits = 0;
+  // The masters' addresses (for TTO = TSL x (6 + 2 x lowest address)).
+  std::vector<std::uint8_t> masters;
+};
+
+class BusCheck {
+ public:
+  // `names`: the segment's station names, for the log (may be empty: station indices).
+  explicit BusCheck(BusTiming timing, LogSink sink = {});
+
+  // Wires itself to the segment's telegrams and collisions.
+  void watch(Segment& seg);
+  void telegram(const LineTelegram& t);
+  void collision(const Collision& c, const std::string& first, const std::string& second);
+  // The line is idle up to `now` (a token lost is found once TTO has passed without a telegram).
+  void idle_until(std::uint64_t now);
+  // Hands the sink what the limiter still owes.
+  void flush();
+
+  [[nodiscard]] std::uint64_t count(BusViolation v) const {
+    return counts_[static_cast<std::size_t>(v)];
+  }
+  [[nodiscard]] std::uint64_t total() const;
+
+ private:
+  void violation(BusViolation v, std::uint64_t cycle, const std::string& text);
+  [[nodiscard]] std::uint64_t bits(std::uint64_t n) const { return n * timing_.bit_cycles; }
+  [[nodiscard]] std::uint64_t token_lost_timeout() const;
+
+  BusTiming timing_;
+  LogSink sink_;
+  LogLimiter limiter_;
+  std::array<std::uint64_t, kBusViolationKinds> counts_{};
+  std::optional<std::uint64_t> last_end_;  // end of the last telegram on the line
+  bool token_lost_reported_ = false;
+  struct Pending {
+    fdl::Frame request;
+    std::uint64_t end;
+  };
+  std::optional<Pending> pending_;      // a request waiting for its answer
+  std::optional<std::uint8_t> holder_;  // who holds the token
+  std::uint64_t token_at_ = 0;          // when the holder got it
+  bool held_cycle_started_ = false;     // the holder started a message cycle since then
+};
+
+}  // namespace dpc31

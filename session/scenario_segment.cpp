@@ -1,0 +1,300 @@
+// Segment scenarios: the parser and the runner (scenario_segment.hpp).
+#include "scenario_segment.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <map>
+#include <memory>
+
+#include "dpc31/bus_port.hpp"
+#include "firmware_host.hpp"
+#include "responder.hpp"
+#include "scenario_lex.hpp"
+#include "segment.hpp"
+#include "textfile.hpp"
+#include "vocabulary.hpp"
+
+namespace dpc31 {
+
+namespace {
+
+using namespace scenario_lex;  // NOLINT: the scenario's lexical helpers
+
+std::vector<std::string_view> words(std::string_view line) {
+  const std::size_t hash = line.find('#');
+  if (hash != std::string_view::npos) line = line.substr(0, hash);
+  std::vector<std::string_view> out;
+  for (std::string_view w : split(line, ' ')) {
+    for (std::string_view x : split(w, '\t')) {
+      if (!x.empty() && x != "\r") out.push_back(x.back() == '\r' ? x.substr(0, x.size() - 1) : x);
+    }
+  }
+  return out;
+}
+
+class Parser {
+ public:
+  explicit Parser(SegmentScenario& s) : s_(s) {}
+
+  void command(int line, const std::vector<std::string_view>& w) {
+    opts_.clear();
+    pos_.clear();
+    for (std::size_t k = 1; k < w.size(); ++k) {
+      const std::size_t eq = w[k].find('=');
+      if (eq == std::string_view::npos) {
+        pos_.push_back(w[k]);
+      } else if (!opts_.emplace(w[k].substr(0, eq), w[k].substr(eq + 1)).second) {
+        fail(fmt::format("option '{}' given twice", w[k].substr(0, eq)));
+      }
+    }
+    const std::string_view c = w[0];
+    if (first_ && c != "segment") fail("a segment scenario begins with 'segment'");
+    first_ = false;
+    const bool header = c == "segment" || c == "station" || c == "master" || c == "sender";
+    if (header && !s_.steps.empty()) fail(fmt::format("'{}' after the first action", c));
+    if (c == "segment") {
+      segment();
+    } else if (c == "station") {
+      station();
+    } else if (c == "master") {
+      master();
+    } else if (c == "sender") {
+      s_.senders.emplace_back(positional(0, "a sender's name"));
+    } else {
+      step(line, c);
+    }
+    for (const auto& [k, v] : opts_) fail(fmt::format("unknown option '{}' for {}", k, c));
+  }
+
+  void finish() {
+    if (s_.stations.empty()) fail("a segment needs at least one station");
+    if (s_.masters.empty()) s_.masters.push_back({2, {}});
+    for (SegmentMaster& m : s_.masters) {
+      if (m.slaves.empty()) {
+        for (const SegmentStation& st : s_.stations) m.slaves.push_back(st.slave.address);
+      }
+    }
+  }
+
+ private:
+  std::string_view positional(std::size_t i, std::string_view what) const {
+    if (i >= pos_.size()) fail(fmt::format("missing {}", what));
+    return pos_[i];
+  }
+  std::optional<std::string_view> take(std::string_view key) {
+    const auto it = opts_.find(key);
+    if (it == opts_.end()) return std::nullopt;
+    std::string_view v = it->second;
+    opts_.erase(it);
+    return v;
+  }
+  std::uint64_t bit_cycles_() const { return bit_cycles(clock_hz(), s_.baud); }
+  static std::uint32_t clock_hz() { return Chip().clock_hz(); }
+  std::uint64_t time(std::string_view v) const { return duration(v, clock_hz(), bit_cycles_()); }
+
+  void segment() {
+    if (auto v = take("baud"))
+      s_.baud = static_cast<std::uint32_t>(number(*v, "baud", 9600, 12'000'000));
+    if (auto v = take("slot"))
+      s_.slot_bits = static_cast<std::uint32_t>(number(*v, "slot", 37, 16383));
+    if (auto v = take("ttr")) s_.ttr_bits = number(*v, "ttr", 256, 16'777'215);
+  }
+
+  void station() {
+    SegmentStation st;
+    st.slave.address = static_cast<std::uint8_t>(
+        number(positional(0, "station address"), "station address", 0, 125));
+    st.name = fmt::format("station {}", st.slave.address);
+    if (auto v = take("name")) st.name = std::string(*v);
+    if (auto v = take("profile")) {
+      if (!parse_profile(*v, st.chip.profile)) fail(fmt::format("unknown profile '{}'", *v));
+    }
+    if (auto v = take("variant")) {
+      Vpc3Variant var{};
+      if (st.chip.profile != Profile::vpc3plus || !parse_vpc3_variant(*v, var)) {
+        fail(fmt::format("variant '{}': b, c or s, on profile=vpc3plus only", *v));
+      }
+      st.chip.variant = var;
+    }
+    if (auto v = take("firmware")) {
+      st.firmware = std::string(*v);
+      try {
+        const dpc31_firmware& fw = find_firmware(st.firmware);
+        if (is_plugin_path(st.firmware)) fail("a segment station runs a built-in firmware");
+        st.slave = with_gsd_defaults(fw, st.slave);
+      } catch (const FirmwareError& e) {
+        fail(e.what());
+      }
+      for (const SegmentStation& o : s_.stations) {
+        // The built-in firmwares and their dps driver keep their state in C globals, one set per
+        // process (firmware_host.hpp): one station of a segment may run one.
+        if (!o.firmware.empty()) {
+          fail(fmt::format("firmware {}: {} already runs {} (one built-in firmware per segment)",
+                           *v, o.name, o.firmware));
+        }
+      }
+    }
+    if (auto v = take("wd")) {
+      const std::vector<std::string_view> f = split(*v, ',');
+      if (f.size() != 2) fail(fmt::format("wd='{}': two factors, as in wd=10,10", *v));
+      st.slave.wd_fact1 = static_cast<std::uint8_t>(number(f[0], "wd factor 1", 1, 255));
+      st.slave.wd_fact2 = static_cast<std::uint8_t>(number(f[1], "wd factor 2", 1, 255));
+    }
+    for (const SegmentStation& o : s_.stations) {
+      if (o.name == st.name) fail(fmt::format("a second station named '{}'", st.name));
+    }
+    s_.stations.push_back(std::move(st));
+  }
+
+  void master() {
+    SegmentMaster m;
+    m.address = static_cast<std::uint8_t>(
+        number(positional(0, "master address"), "master address", 0, 126));
+    if (auto v = take("slaves")) m.slaves = bytes_list(*v);
+    s_.masters.push_back(std::move(m));
+  }
+
+  static std::vector<std::uint8_t> bytes_list(std::string_view v) {
+    std::vector<std::uint8_t> out;
+    for (std::string_view a : split(v, ','))
+      out.push_back(static_cast<std::uint8_t>(number(a, "address", 0, 125)));
+    return out;
+  }
+
+  std::uint8_t station_address(std::string_view v) const {
+    const auto a = static_cast<std::uint8_t>(number(v, "station", 0, 126));
+    const bool known = std::any_of(s_.stations.begin(), s_.stations.end(),
+                                   [a](const SegmentStation& s) { return s.slave.address == a; });
+    if (!known) fail(fmt::format("no station {}", a));
+    return a;
+  }
+
+  void step(int line, std::string_view c) {
+    using K = SegmentStep::Kind;
+    SegmentStep st;
+    st.line = line;
+    if (c == "startup") {
+      st.kind = K::startup;
+    } else if (c == "cycle") {
+      st.kind = K::cycle;
+      st.count = number(positional(0, "number of rotations"), "rotations", 1, 1'000'000);
+      if (auto v = take("skip")) st.skip = station_address(*v);
+    } else if (c == "run") {
+      st.kind = K::run;
+      st.time = time(positional(0, "time"));
+    } else if (c == "send") {
+      st.kind = K::send;
+      st.name = std::string(take("from").value_or(""));
+      if (std::find(s_.senders.begin(), s_.senders.end(), st.name) == s_.senders.end()) {
+        fail(fmt::format("send from='{}': no sender of that name", st.name));
+      }
+      st.time = time(take("after").value_or("33bits"));
+      st.bytes = bytes(positional(0, "bytes"), "telegram", 255);
+    } else if (c == "pass_token") {
+      st.kind = K::pass_token;
+      st.address = static_cast<std::uint8_t>(number(take("from").value_or(""), "from", 0, 126));
+      st.station = static_cast<std::uint8_t>(number(take("to").value_or(""), "to", 0, 126));
+    } else if (c == "expect") {
+      expect(st, positional(0, "what to expect"));
+    } else {
+      fail(fmt::format("unknown command '{}'", c));
+    }
+    s_.steps.push_back(std::move(st));
+  }
+
+  void expect(SegmentStep& st, std::string_view what) {
+    using K = SegmentStep::Kind;
+    if (what == "state") {
+      st.kind = K::expect_state;
+      st.station = station_address(positional(1, "station"));
+      const std::string_view dp = positional(2, "DP state");
+      bool ok = false;
+      for (const DpState d : {DpState::Wait_Prm, DpState::Wait_Cfg, DpState::Data_Exchange}) {
+        if (dp_state_name(d) == dp) {
+          st.dp = d;
+          ok = true;
+        }
+      }
+      if (!ok) fail(fmt::format("unknown DP state '{}'", dp));
+      if (auto v = take("wd")) {
+        for (const WdState w : {WdState::Baud_Search, WdState::Baud_Control, WdState::DP_Control}) {
+          if (wd_state_name(w) == *v) st.wd = w;
+        }
+        if (!st.wd) fail(fmt::format("unknown watchdog state '{}'", *v));
+      }
+    } else if (what == "tsdr") {
+      st.kind = K::expect_tsdr;
+      st.count = number(positional(1, "bit times"), "TSDR", 11, 255);
+    } else if (what == "watchdog_expired") {
+      st.kind = K::expect_expired;
+      st.station = station_address(positional(1, "station"));
+      st.time = time(take("twd").value_or(""));
+    } else if (what == "bus_violation") {
+      st.kind = K::expect_violation;
+      if (!parse_bus_violation(positional(1, "violation kind"), st.violation)) {
+        fail(fmt::format("unknown bus violation '{}'", pos_[1]));
+      }
+      st.count = number(positional(2, "count"), "count", 0, 1'000'000'000);
+    } else if (what == "collisions") {
+      st.kind = K::expect_collisions;
+      st.count = number(positional(1, "count"), "count", 0, 1'000'000'000);
+    } else {
+      fail(fmt::format("unknown expect '{}'", what));
+    }
+  }
+
+  SegmentScenario& s_;
+  bool first_ = true;
+  std::map<std::string_view, std::string_view> opts_;
+  std::vector<std::string_view> pos_;
+};
+
+}  // namespace
+
+bool is_segment_scenario(std::string_view text) {
+  for (std::string_view line : split(text, '\n')) {
+    const std::vector<std::string_view> w = words(line);
+    if (!w.empty()) return w[0] == "segment";
+  }
+  return false;
+}
+
+bool parse_segment_scenario(std::string_view text, const std::string& file, SegmentScenario& out,
+                            ScenarioError& err) {
+  out = SegmentScenario{};
+  out.file = file;
+  Parser p(out);
+  int line = 0;
+  try {
+    for (std::string_view l : split(text, '\n')) {
+      ++line;
+      const std::vector<std::string_view> w = words(l);
+      if (!w.empty()) p.command(line, w);
+      if (!w.empty() && !out.steps.empty() && out.steps.back().line == line) {
+        out.steps.back().text = std::string(l.substr(0, l.find('#')));
+      }
+    }
+    line = 0;
+    p.finish();
+  } catch (const ParseFail& f) {
+    err = ScenarioError{file, line, f.message};
+    return false;
+  }
+  return true;
+}
+
+SegmentLoad load_segment_scenario(const std::string& path, SegmentScenario& out,
+                                  ScenarioError& err) {
+  constexpr std::size_t kMaxFileBytes = 16u << 20;
+  err = ScenarioError{path, 0, {}};
+  std::string text;
+  if (!read_text_file(path, kMaxFileBytes, "scenario", text, err.message)) {
+    return SegmentLoad::not_segment;  // the ordinary loader says why, in its words
+  }
+  if (!is_segment_scenario(text)) return SegmentLoad::not_segment;
+  if ((err.line = cut_off_line(text, err.message)) != 0) return SegmentLoad::error;
+  return parse_segment_scenario(text, path, out, err) ? SegmentLoad::ok : SegmentLoad::error;
+}
+
+}  // namespace dpc31

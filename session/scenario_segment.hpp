@@ -1,0 +1,79 @@
+// Segment scenarios (docs/scenario-format.md, "Segments"; docs/segment.md): several stations,
+// masters and scripted senders on one line, their actions and checks. A file whose first command
+// is `segment` is one; every other scenario stays as it is.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "bus_check.hpp"
+#include "scenario.hpp"
+
+namespace dpc31 {
+
+struct SegmentStation {
+  std::string name;
+  ChipOptions chip;
+  std::string firmware;  // "" (the built-in responder), or a built-in firmware's name
+  SlaveConfig slave;     // what its master parameterises (address, watchdog, GSD defaults)
+};
+
+struct SegmentMaster {
+  std::uint8_t address = 2;
+  std::vector<std::uint8_t> slaves;  // station addresses, in polling order
+};
+
+struct SegmentStep {
+  enum class Kind : std::uint8_t {
+    startup,     // each master's start-up of its slaves, the token passed on after each
+    cycle,       // `count` rotations: each master one DP cycle (not `station`), then the token
+    run,         // the line idle for `time`
+    send,        // sender `name` puts `bytes` on the line `time` after the last telegram's end
+    pass_token,  // master `address` passes the token to `station`
+    expect_state,
+    expect_tsdr,        // every answer so far began `count` bit times after its request's end
+    expect_expired,     // `station` left DP_Control at its last restart + `time` (TWD)
+    expect_violation,   // `violation` counted `count` times
+    expect_collisions,  // `count` collisions
+  };
+  Kind kind = Kind::run;
+  int line = 0;
+  std::string text;
+  std::uint64_t count = 0;
+  std::uint64_t time = 0;
+  std::uint8_t address = 0;
+  std::uint8_t station = 0;
+  std::optional<std::uint8_t> skip;
+  std::string name;
+  std::vector<std::uint8_t> bytes;
+  DpState dp = DpState::Wait_Prm;
+  std::optional<WdState> wd;
+  BusViolation violation = BusViolation::collision;
+};
+
+struct SegmentScenario {
+  std::string file;
+  std::uint32_t baud = 1'500'000;
+  std::uint32_t slot_bits = 100;
+  std::uint64_t ttr_bits = 0;  // 0: no token checks (one master)
+  std::vector<SegmentStation> stations;
+  std::vector<SegmentMaster> masters;
+  std::vector<std::string> senders;
+  std::vector<SegmentStep> steps;
+};
+
+// The first command of `text` is `segment`.
+[[nodiscard]] bool is_segment_scenario(std::string_view text);
+bool parse_segment_scenario(std::string_view text, const std::string& file, SegmentScenario& out,
+                            ScenarioError& err);
+// A scenario file read (util/textfile, as load_scenario does) and parsed if it is a segment's.
+enum class SegmentLoad : std::uint8_t { not_segment, error, ok };
+SegmentLoad load_segment_scenario(const std::string& path, SegmentScenario& out,
+                                  ScenarioError& err);
+// Plays it: the walk to `walk`, failed expects to `errors`. Exit code as run_scenario_file.
+int run_segment_scenario(const SegmentScenario& s, const LineSink& walk, const LineSink& errors);
+
+}  // namespace dpc31

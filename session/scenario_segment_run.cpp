@@ -1,0 +1,264 @@
+// Segment scenarios: the runner (scenario_segment.hpp). Every station is a chip with its user side
+// on its own host CPU, every master a DpMaster on the segment; the bus check sees every telegram.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <map>
+#include <memory>
+
+#include "dp_master.hpp"
+#include "dpc31/bus_port.hpp"
+#include "firmware_host.hpp"
+#include "responder.hpp"
+#include "scenario_lex.hpp"
+#include "scenario_segment.hpp"
+#include "segment.hpp"
+#include "vocabulary.hpp"
+
+namespace dpc31 {
+
+namespace {
+
+class SegmentRun {
+ public:
+  SegmentRun(const SegmentScenario& s, const LineSink& walk, const LineSink& errors)
+      : s_(s),
+        walk_(walk),
+        errors_(errors),
+        seg_(s.baud),
+        check_(BusTiming{seg_.bit_cycles(), 11, s.slot_bits, 33,
+                         s.masters.size() > 1 ? s.ttr_bits : 0, masters()},
+               [this](const LogRecord& r) { say(r.cycle, r.text); }) {}
+
+  int run() {
+    build();
+    for (const SegmentStep& st : s_.steps) {
+      say(seg_.cycle(), fmt::format("line {}: {}", st.line, st.text));
+      act(st);
+      settle();
+    }
+    seg_.flush();
+    check_.flush();
+    say(seg_.cycle(), fmt::format("{} expects passed, {} failed", passed_, failed_));
+    return failed_ == 0 ? 0 : 1;
+  }
+
+ private:
+  struct Station {
+    std::size_t index = 0;
+    std::unique_ptr<Responder> responder;
+    std::unique_ptr<FirmwareHost> firmware;
+    DpState dp = DpState::Wait_Prm;
+    WdState wd = WdState::Baud_Search;
+    std::uint64_t left_dp_control = 0;  // the cycle DP_Control last ended
+  };
+
+  std::vector<std::uint8_t> masters() const {
+    std::vector<std::uint8_t> out;
+    for (const SegmentMaster& m : s_.masters) out.push_back(m.address);
+    return out;
+  }
+
+  void say(std::uint64_t cycle, const std::string& text) {
+    if (walk_) walk_(fmt::format("[cycle {:>10}] {}", cycle, text));
+  }
+
+  void build() {
+    for (const SegmentStation& def : s_.stations) {
+      auto st = std::make_unique<Station>();
+      st->index = seg_.add_chip(def.name, def.chip);
+      Chip& chip = seg_.chip(st->index);
+      DirectBus bus(chip);
+      if (def.firmware.empty()) {
+        ResponderConfig rc;
+        rc.slave = def.slave;
+        st->responder = std::make_unique<Responder>(rc);
+        st->responder->init(bus);
+        Responder* r = st->responder.get();
+        seg_.set_firmware(st->index, [r](BusPort& b) { r->isr(b); });
+      } else {
+        st->firmware = std::make_unique<FirmwareHost>(find_firmware(def.firmware));
+        st->firmware->init(bus, def.slave.address);
+        seg_.set_firmware(st->index, st->firmware->program());
+      }
+      Station* raw = st.get();
+      const std::string name = def.name;
+      chip.on_state_change([this, raw, name, &chip](std::uint64_t cycle) {
+        const DpState dp = chip.dp_state();
+        const WdState wd = chip.wd_state();
+        if (dp == raw->dp && wd == raw->wd) return;
+        if (raw->wd == WdState::DP_Control && wd != WdState::DP_Control)
+          raw->left_dp_control = cycle;
+        raw->dp = dp;
+        raw->wd = wd;
+        say(cycle, fmt::format("{}: {} / {}", name, dp_state_name(dp), wd_state_name(wd)));
+      });
+      by_address_[def.slave.address] = st.get();
+      stations_.push_back(std::move(st));
+    }
+    for (const std::string& name : s_.senders) senders_[name] = seg_.add_sender(name);
+    for (const SegmentMaster& m : s_.masters) {
+      std::vector<SlaveConfig> slaves;
+      for (const std::uint8_t a : m.slaves) {
+        for (const SegmentStation& def : s_.stations) {
+          if (def.slave.address == a) slaves.push_back(def.slave);
+        }
+      }
+      const std::size_t station = seg_.add_sender(fmt::format("master {}", m.address));
+      masters_.push_back(std::make_unique<DpMaster>(
+          seg_, station, MasterConfig{m.address, s_.baud, s_.slot_bits}, slaves));
+    }
+    seg_.on_telegram = [this](const LineTelegram& t) {
+      check_.telegram(t);
+      telegram(t);
+    };
+    seg_.on_collision = [this](const Collision& c) {
+      check_.collision(c, seg_.name(c.first), seg_.name(c.second));
+    };
+  }
+
+  // Requests that want an answer, and the answers' delays (expect tsdr); the last request to each
+  // station from its master (expect watchdog_expired).
+  void telegram(const LineTelegram& t) {
+    const fdl::Decoded d = fdl::decode(t.bytes);
+    say(t.start, fmt::format("{}: {}", seg_.name(t.from), scenario_lex::bytes_text(t.bytes)));
+    if (d.error == fdl::Error::none && d.frame.sd != fdl::SD4 && fdl::is_request(d.frame.fc)) {
+      last_request_[d.frame.da] = t.end;
+      pending_ = wants_answer(d.frame) ? std::optional<std::uint64_t>(t.end) : std::nullopt;
+    } else if (pending_) {
+      delays_.push_back(t.start - *pending_);
+      pending_.reset();
+    }
+  }
+
+  void settle() {
+    seg_.run_until(seg_.cycle() + 1);
+    check_.idle_until(seg_.cycle());
+  }
+
+  // Each master in turn, the token passed on after it (with several masters).
+  template <typename Work>
+  void rotation(Work work) {
+    for (std::size_t m = 0; m < masters_.size(); ++m) {
+      if (masters_.size() > 1 && m > 0) masters_[m]->wait_token(token_wait());
+      work(*masters_[m]);
+      if (masters_.size() > 1) {
+        masters_[m]->pass_token(masters_[(m + 1) % masters_.size()]->address());
+      }
+    }
+    if (masters_.size() > 1) masters_[0]->wait_token(token_wait());
+  }
+  std::uint64_t token_wait() const { return std::uint64_t{s_.slot_bits} * 300 * seg_.bit_cycles(); }
+
+  void act(const SegmentStep& st) {
+    using K = SegmentStep::Kind;
+    switch (st.kind) {
+      case K::startup:
+        rotation([](DpMaster& m) { m.startup_all(); });
+        break;
+      case K::cycle:
+        for (std::uint64_t n = 0; n < st.count; ++n) {
+          rotation([&st](DpMaster& m) {
+            for (std::size_t i = 0; i < m.slave_count(); ++i) {
+              m.select(i);
+              if (st.skip && m.slave().address == *st.skip) continue;
+              m.data_exchange(std::vector<std::uint8_t>(m.slave().out_len));
+            }
+            m.select(0);
+          });
+        }
+        break;
+      case K::run:
+        seg_.run_until(seg_.cycle() + st.time);
+        break;
+      case K::send:
+        seg_.send(senders_.at(st.name), st.bytes, seg_.cycle() + st.time);
+        seg_.run_until(seg_.cycle() + st.bytes.size() * 11 * seg_.bit_cycles());
+        break;
+      case K::pass_token:
+        for (auto& m : masters_) {
+          if (m->address() == st.address) m->pass_token(st.station);
+        }
+        break;
+      default:
+        check(st);
+    }
+  }
+
+  void check(const SegmentStep& st) {
+    using K = SegmentStep::Kind;
+    std::string got;
+    bool ok = false;
+    switch (st.kind) {
+      case K::expect_state: {
+        const Chip& c = seg_.chip(by_address_.at(st.station)->index);
+        ok = c.dp_state() == st.dp && (!st.wd || c.wd_state() == *st.wd);
+        got = fmt::format("{} / {}", dp_state_name(c.dp_state()), wd_state_name(c.wd_state()));
+        break;
+      }
+      case K::expect_tsdr: {
+        ok = !delays_.empty() && std::all_of(delays_.begin(), delays_.end(), [&](std::uint64_t d) {
+          return d == st.count * seg_.bit_cycles();
+        });
+        got = fmt::format("{} answers, delays {}..{} cycles", delays_.size(),
+                          delays_.empty() ? 0 : *std::min_element(delays_.begin(), delays_.end()),
+                          delays_.empty() ? 0 : *std::max_element(delays_.begin(), delays_.end()));
+        break;
+      }
+      case K::expect_expired: {
+        // docs/timing.md: restarted at the acted-on cycle of the last request (end - T + T/2),
+        // expiry at that restart + TWD.
+        const std::uint64_t t = seg_.bit_cycles();
+        const auto it = last_request_.find(st.station);
+        const std::uint64_t want = it == last_request_.end() ? 0 : it->second - t + t / 2 + st.time;
+        const std::uint64_t left = by_address_.at(st.station)->left_dp_control;
+        ok = it != last_request_.end() && left == want;
+        got = fmt::format("left DP_Control at cycle {}, expected {}", left, want);
+        break;
+      }
+      case K::expect_violation:
+        ok = check_.count(st.violation) == st.count;
+        got = std::to_string(check_.count(st.violation));
+        break;
+      case K::expect_collisions:
+        ok = seg_.collisions().size() == st.count;
+        got = std::to_string(seg_.collisions().size());
+        break;
+      default:
+        break;
+    }
+    if (ok) {
+      ++passed_;
+      say(seg_.cycle(), "ok");
+      return;
+    }
+    ++failed_;
+    const std::string e = fmt::format("{}:{}: expected {}, got {}", s_.file, st.line, st.text, got);
+    say(seg_.cycle(), "FAILED: " + e);
+    if (errors_) errors_(e);
+  }
+
+  const SegmentScenario& s_;
+  const LineSink& walk_;
+  const LineSink& errors_;
+  Segment seg_;
+  BusCheck check_;
+  std::vector<std::unique_ptr<Station>> stations_;
+  std::map<std::uint8_t, Station*> by_address_;
+  std::map<std::string, std::size_t> senders_;
+  std::vector<std::unique_ptr<DpMaster>> masters_;
+  std::map<std::uint8_t, std::uint64_t> last_request_;
+  std::optional<std::uint64_t> pending_;
+  std::vector<std::uint64_t> delays_;
+  std::uint32_t passed_ = 0;
+  std::uint32_t failed_ = 0;
+};
+
+}  // namespace
+
+int run_segment_scenario(const SegmentScenario& s, const LineSink& walk, const LineSink& errors) {
+  SegmentRun r(s, walk, errors);
+  return r.run();
+}
+
+}  // namespace dpc31

@@ -1,0 +1,275 @@
+#include "segment.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace dpc31 {
+
+struct Segment::Station {
+  std::string name;
+  std::unique_ptr<Chip> chip;  // null: a sender
+  std::unique_ptr<Cpu> cpu;
+  Edges txd;    // the chip's TxD edges not yet relayed
+  Edges heard;  // a sender's: the line as it hears it, not yet taken (sorted by cycle)
+  std::uint64_t colliding_until = 0;  // a collision of this station is reported once per burst
+};
+
+Segment::Segment(std::uint32_t baud, std::uint32_t clock_hz)
+    : clock_hz_(clock_hz != 0 ? clock_hz : Chip().clock_hz()),
+      t_(dpc31::bit_cycles(clock_hz_, baud)),
+      line_rx_(t_, 0) {}
+
+Segment::~Segment() = default;
+
+std::size_t Segment::add_chip(std::string name, ChipOptions opt) {
+  auto s = std::make_unique<Station>();
+  s->name = std::move(name);
+  s->chip = std::make_unique<Chip>(opt);
+  if (s->chip->clock_hz() != clock_hz_) {
+    throw std::invalid_argument(fmt::format("segment: station {} runs at {} Hz, the line at {} Hz",
+                                            s->name, s->chip->clock_hz(), clock_hz_));
+  }
+  // A station joins the line at the line's time.
+  if (now_ > 0) s->chip->step(now_);
+  Station* raw = s.get();
+  // Every TxD edge an event of the chip (Chip::on_txd): next_deadline() then bounds the next one,
+  // which the rounds of run_until rely on. (on_txd_edges hands edges over late, in batches.)
+  s->chip->on_txd([raw](std::uint64_t cycle, bool level) { raw->txd.emplace_back(cycle, level); });
+  stations_.push_back(std::move(s));
+  return stations_.size() - 1;
+}
+
+std::size_t Segment::add_sender(std::string name) {
+  auto s = std::make_unique<Station>();
+  s->name = std::move(name);
+  stations_.push_back(std::move(s));
+  return stations_.size() - 1;
+}
+
+void Segment::set_firmware(std::size_t i, Cpu::Isr isr) {
+  stations_.at(i)->cpu = std::make_unique<Cpu>(chip(i), std::move(isr));
+}
+
+void Segment::set_firmware(std::size_t i, Cpu::Program program) {
+  stations_.at(i)->cpu = std::make_unique<Cpu>(chip(i), std::move(program));
+}
+
+const std::string& Segment::name(std::size_t i) const { return stations_.at(i)->name; }
+bool Segment::is_chip(std::size_t i) const { return stations_.at(i)->chip != nullptr; }
+
+Chip& Segment::chip(std::size_t i) {
+  Station& s = *stations_.at(i);
+  if (!s.chip) throw std::invalid_argument("segment: station " + s.name + " has no chip");
+  return *s.chip;
+}
+
+const Chip& Segment::chip(std::size_t i) const {
+  const Station& s = *stations_.at(i);
+  if (!s.chip) throw std::invalid_argument("segment: station " + s.name + " has no chip");
+  return *s.chip;
+}
+
+std::uint64_t Segment::cycle() const {
+  std::uint64_t c = now_;
+  for (const auto& s : stations_) {
+    if (s->chip) c = std::max(c, s->chip->cycle());
+  }
+  return c;
+}
+
+void Segment::catch_up() {
+  const std::uint64_t front = cycle();
+  if (front == now_) return;
+  for (const auto& s : stations_) step_station(*s, front);
+  now_ = front;
+}
+
+void Segment::step_station(Station& s, std::uint64_t to) {
+  if (!s.chip || s.chip->cycle() >= to) return;
+  // The host CPU never splits a bus access and may end one up to kCpuSlack clocks past its goal:
+  // it runs to that much short of `to`, and the chip alone the rest (the CPU's next access starts
+  // at `to`), so the chip stands exactly at `to` for what the line brings next.
+  if (s.cpu && to > kCpuSlack) {
+    s.cpu->run_until(to - kCpuSlack);
+    s.chip->clear_stop();
+  }
+  if (s.chip->cycle() < to) s.chip->step(to - s.chip->cycle());
+}
+
+void Segment::collide(std::size_t first, std::size_t second, std::uint64_t cycle) {
+  // One collision per burst of the second driver: each of its falling edges holds the burst open
+  // one character time, as the line's holder's do.
+  Station& s = *stations_[second];
+  const bool fresh = s.colliding_until == 0 || cycle > s.colliding_until;
+  s.colliding_until = std::max(s.colliding_until, cycle + std::uint64_t{kUartCharBits} * t_);
+  if (!fresh) return;
+  collisions_.push_back({cycle, first, second});
+  if (on_collision) on_collision(collisions_.back());
+}
+
+// The line is held by whoever drove the first start bit while it was free, for one character
+// time from each of its falling edges (a start bit or a data bit: at most ten bit times too
+// long, shorter than any legal gap). Another driver meanwhile collides and is not heard.
+void Segment::relay(std::size_t i, const Edges& edges) {
+  for (const auto& [cycle, level] : edges) {
+    const bool free = !owner_ || cycle >= owned_until_;
+    if (!free && *owner_ != i) {
+      if (!level) collide(*owner_, i, cycle);
+      continue;
+    }
+    if (free && level) continue;  // the end of a burst nobody else hears
+    if (!level) {
+      if (free && wake_for_ && *wake_for_ != i) woken_ = true;
+      owner_ = i;
+      owned_until_ = std::max(owned_until_, cycle + std::uint64_t{kUartCharBits} * t_);
+    }
+    hear(i, cycle, level);
+  }
+}
+
+void Segment::hear(std::size_t from, std::uint64_t cycle, bool level) {
+  for (std::size_t k = 0; k < stations_.size(); ++k) {
+    if (k == from) continue;
+    Station& s = *stations_[k];
+    if (s.chip) {
+      if (cycle < s.chip->cycle()) {
+        throw std::logic_error(fmt::format(
+            "segment: the edge of {} at cycle {} reached {} at cycle {} (line order broken)",
+            stations_[from]->name, cycle, s.name, s.chip->cycle()));
+      }
+      s.chip->drive_rxd(cycle, level);
+    } else {
+      const auto at = std::upper_bound(
+          s.heard.begin(), s.heard.end(), cycle,
+          [](std::uint64_t c, const std::pair<std::uint64_t, bool>& e) { return c < e.first; });
+      s.heard.insert(at, {cycle, level});
+    }
+  }
+  decode(from, cycle, level);
+}
+
+void Segment::decode(std::size_t from, std::uint64_t cycle, bool level) {
+  if (!level && (claims_.empty() || claims_.back().second != from))
+    claims_.emplace_back(cycle, from);
+  line_rx_.edge(cycle, level);
+}
+
+// Characters whose stop sample is by `upto` join the open telegram (the driver of its first
+// character is its sender); it closes when the line stayed idle past its end (a character back
+// to back would have started at its end).
+void Segment::close_telegrams(std::uint64_t upto) {
+  chars_.clear();
+  line_rx_.advance(std::min(upto, now_), chars_);
+  for (const UartChar& c : chars_) {
+    if (open_ && c.start > open_->end) {
+      if (on_telegram) on_telegram(*open_);
+      open_.reset();
+    }
+    if (!open_) {
+      std::size_t from = 0;
+      for (const auto& [at, who] : claims_) {
+        if (at <= c.start) from = who;
+      }
+      while (claims_.size() > 1 && claims_[1].first <= c.start) claims_.erase(claims_.begin());
+      open_ = LineTelegram{from, c.start, c.start, {}};
+    }
+    open_->bytes.push_back(c.data);
+    open_->end = c.end;
+  }
+  if (open_ && (upto == UINT64_MAX || (upto > open_->end && line_rx_.busy_from() != open_->end))) {
+    if (on_telegram) on_telegram(*open_);
+    open_.reset();
+  }
+}
+
+void Segment::flush() { close_telegrams(UINT64_MAX); }
+
+std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> bytes,
+                            std::uint64_t start, UartFault fault) {
+  run_until(start);
+  const std::uint64_t end = start + bytes.size() * std::uint64_t{kUartCharBits} * t_;
+  if (owner_ && *owner_ != from && start < owned_until_) {
+    collide(*owner_, from, start);
+    return end;
+  }
+  owner_ = from;
+  owned_until_ = end;
+  Edges edges;
+  uart_encode(bytes, start, t_, edges, fault);
+  for (std::size_t k = 0; k < stations_.size(); ++k) {
+    Station& s = *stations_[k];
+    if (k == from || !s.chip) continue;
+    if (start < s.chip->cycle()) {
+      throw std::logic_error(fmt::format("segment: {} sends at cycle {}, {} is at cycle {}",
+                                         stations_[from]->name, start, s.name, s.chip->cycle()));
+    }
+    s.chip->drive_rxd_chars(bytes, start, t_, fault);
+  }
+  for (const auto& [cycle, level] : edges) {
+    for (std::size_t k = 0; k < stations_.size(); ++k) {
+      if (k != from && !stations_[k]->chip) stations_[k]->heard.emplace_back(cycle, level);
+    }
+    decode(from, cycle, level);
+  }
+  return end;
+}
+
+void Segment::pulse(std::size_t from, std::uint64_t start, std::uint64_t low_cycles) {
+  run_until(start);
+  if (owner_ && *owner_ != from && start < owned_until_) {
+    collide(*owner_, from, start);
+    return;
+  }
+  owner_ = from;
+  owned_until_ = start + std::uint64_t{kUartCharBits} * t_;
+  hear(from, start, false);
+  hear(from, start + low_cycles, true);
+}
+
+void Segment::run_until(std::uint64_t cycle, std::optional<std::size_t> wake_for) {
+  catch_up();
+  wake_for_ = wake_for;
+  woken_ = false;
+  Edges round;
+  while (now_ < cycle && !woken_) {
+    // No chip's TxD changes before its next deadline: every station may run to the earliest,
+    // and what a chip drives there reaches the others at that very cycle.
+    std::uint64_t bound = cycle;
+    for (const auto& s : stations_) {
+      if (s->chip) bound = std::min(bound, s->chip->next_deadline());
+    }
+    bound = std::max(bound, now_ + 1);
+    for (const auto& s : stations_) step_station(*s, bound);
+    now_ = bound;
+    // What the chips drove, in the order of its cycles (ties: station order).
+    round.clear();
+    std::vector<std::size_t> who;
+    for (std::size_t i = 0; i < stations_.size(); ++i) {
+      for (const auto& e : stations_[i]->txd) {
+        round.push_back(e);
+        who.push_back(i);
+      }
+      stations_[i]->txd.clear();
+    }
+    std::vector<std::size_t> order(round.size());
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return round[a].first < round[b].first; });
+    for (const std::size_t k : order) relay(who[k], Edges{round[k]});
+    close_telegrams(now_);
+  }
+  wake_for_.reset();
+}
+
+void Segment::take_line(std::size_t listener, UartRx& rx) {
+  Station& s = *stations_.at(listener);
+  const auto end = std::upper_bound(
+      s.heard.begin(), s.heard.end(), now_,
+      [](std::uint64_t c, const std::pair<std::uint64_t, bool>& e) { return c < e.first; });
+  rx.edges(std::span<const std::pair<std::uint64_t, bool>>(s.heard.begin(), end));
+  s.heard.erase(s.heard.begin(), end);
+}
+
+}  // namespace dpc31

@@ -1,0 +1,127 @@
+// A bus segment (docs/segment.md): one RS-485 line that every station hangs on. A station is a
+// chip (its own profile, variant, address and user side) or a sender without a chip (a built-in
+// master, a scripted station of a fault). Every character on the line reaches every other
+// station at the same cycle; each chip's TxD drives the line. Two stations driving at once is a
+// collision, reported with both names and the cycle; the first driver keeps the line.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "cpu.hpp"
+#include "dpc31/chip.hpp"
+#include "dpc31/uart.hpp"
+
+namespace dpc31 {
+
+// One telegram on the line: who drove it, its first start bit, the end of its last stop bit and
+// its characters' data (a broken character as its data bits read).
+struct LineTelegram {
+  std::size_t from = 0;
+  std::uint64_t start = 0;
+  std::uint64_t end = 0;
+  std::vector<std::uint8_t> bytes;
+};
+
+struct Collision {
+  std::uint64_t cycle = 0;  // the second driver's first edge while the first drove
+  std::size_t first = 0;    // the station that had the line
+  std::size_t second = 0;   // the station that drove into it (not heard by the others)
+};
+
+class Segment {
+ public:
+  // All stations share one time base (the chips' clock, 48 MHz unless given) and one bit rate.
+  Segment(std::uint32_t baud, std::uint32_t clock_hz = 0);
+  ~Segment();
+  Segment(const Segment&) = delete;
+  Segment& operator=(const Segment&) = delete;
+
+  // A chip station; its clock must be the segment's. Returns its index.
+  std::size_t add_chip(std::string name, ChipOptions opt);
+  // A station without a chip (a master, a scripted station): it drives the line with send().
+  std::size_t add_sender(std::string name);
+  // The user side of chip station `i`, run on its own host CPU whenever its X/INT is active
+  // (or with a main loop).
+  void set_firmware(std::size_t i, Cpu::Isr isr);
+  void set_firmware(std::size_t i, Cpu::Program program);
+
+  [[nodiscard]] std::size_t size() const { return stations_.size(); }
+  [[nodiscard]] const std::string& name(std::size_t i) const;
+  [[nodiscard]] bool is_chip(std::size_t i) const;
+  [[nodiscard]] Chip& chip(std::size_t i);
+  [[nodiscard]] const Chip& chip(std::size_t i) const;
+  [[nodiscard]] std::uint32_t bit_cycles() const { return t_; }
+  [[nodiscard]] std::uint32_t clock_hz() const { return clock_hz_; }
+  // The line's time: every chip has run to here (or will, before anything else happens on the
+  // line: a chip's user side may have run it ahead with bus accesses, its init for one).
+  [[nodiscard]] std::uint64_t cycle() const;
+
+  // `bytes` as back-to-back characters from `start` (>= cycle()) driven by station `from`
+  // (`fault` damages one character, as uart_encode does). Every station runs to `start` first.
+  // Returns the end of the last stop bit.
+  std::uint64_t send(std::size_t from, std::span<const std::uint8_t> bytes, std::uint64_t start,
+                     UartFault fault = {});
+  // A low pulse from `from` of `low_cycles` at `start` (a glitch, line noise).
+  void pulse(std::size_t from, std::uint64_t start, std::uint64_t low_cycles);
+
+  // Runs every station to `cycle`. With `wake_for`, returns as soon as a start bit from another
+  // station than that one is on the line (cycle() is then where the line stands).
+  void run_until(std::uint64_t cycle, std::optional<std::size_t> wake_for = std::nullopt);
+
+  // What station `listener` hears of the line (everything but its own driving) up to cycle(),
+  // fed to its receiver in order. A sender's receiver (a master) uses it.
+  void take_line(std::size_t listener, UartRx& rx);
+
+  [[nodiscard]] const std::vector<Collision>& collisions() const { return collisions_; }
+  // Every telegram on the line, in order of its start, as soon as its end is known (at the latest
+  // one character time after its last stop bit, or at flush()).
+  std::function<void(const LineTelegram&)> on_telegram;
+  // Told of every collision as it is found.
+  std::function<void(const Collision&)> on_collision;
+  // Hands on_telegram what is still open (the end of a run).
+  void flush();
+
+  // A host CPU may end a firmware access this many clocks after the cycle it was asked to reach:
+  // it is run to that much short of a round's end, the chip alone the rest.
+  static constexpr std::uint64_t kCpuSlack = 3;
+
+ private:
+  struct Station;
+  using Edges = std::vector<std::pair<std::uint64_t, bool>>;
+  void step_station(Station& s, std::uint64_t to);
+  // Every chip to cycle(): what its user side did directly on its bus moved it alone.
+  void catch_up();
+  // Edges station `i` drove (in order, up to its cycle): the line's owner's are heard by all.
+  void relay(std::size_t i, const Edges& edges);
+  void hear(std::size_t from, std::uint64_t cycle, bool level);
+  // The character decoder of the line (for on_telegram), fed with what the owner drove.
+  void decode(std::size_t from, std::uint64_t cycle, bool level);
+  void close_telegrams(std::uint64_t upto);
+  void collide(std::size_t first, std::size_t second, std::uint64_t cycle);
+
+  std::uint32_t clock_hz_;
+  std::uint32_t t_;
+  std::uint64_t now_ = 0;
+  std::vector<std::unique_ptr<Station>> stations_;
+  std::vector<Collision> collisions_;
+  // The line: who drives it until when (a falling edge holds it one character time).
+  std::optional<std::size_t> owner_;
+  std::uint64_t owned_until_ = 0;
+  bool woken_ = false;
+  std::optional<std::size_t> wake_for_;
+  // The telegram being decoded from the line.
+  UartRx line_rx_;
+  std::vector<UartChar> chars_;
+  std::optional<LineTelegram> open_;
+  std::vector<std::pair<std::uint64_t, std::size_t>> claims_;  // (first edge, driver) in order
+};
+
+}  // namespace dpc31

@@ -1,0 +1,257 @@
+// The fault catalogue of a segment (docs/segment.md, "Fault catalogue"): each scripted fault
+// breaks one rule, and the bus check counts exactly that violation. The rules (EN 50170 /
+// IEC 61158-4-3, docs/timing.md): an answer starts no sooner than min TSDR (11 bit times) and no
+// later than the slot time TSL after the request's end; a request or token follows at least TSYN
+// (33 bit times) of idle; the answer comes from the station asked, to the master that asked; a
+// frame's FCS is the sum of DA..DU; the token-lost timeout is TTO = TSL x (6 + 2 x n) for the
+// master of address n; only the token holder sends, and after its TTR it starts no new message
+// cycle; two drivers at once are a collision.
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "bus_check.hpp"
+#include "dpc31/bus_port.hpp"
+#include "dpc31/fdl.hpp"
+#include "responder.hpp"
+#include "segment.hpp"
+
+namespace dpc31 {
+namespace {
+
+constexpr std::uint32_t kBaud = 1'500'000;
+constexpr std::uint64_t kTsyn = 33;
+constexpr std::uint64_t kSlot = 100;
+constexpr std::uint64_t kTtr = 2000;
+
+std::vector<std::uint8_t> bytes_of(const fdl::Frame& f) { return fdl::encode(f); }
+std::vector<std::uint8_t> fdl_status(std::uint8_t da, std::uint8_t sa) {
+  return bytes_of(
+      fdl::make_frame(da, sa, fdl::make_request_fc(fdl::Function::FDL_Status, false, false)));
+}
+// An FDL_Status answer: SD1, "passive station".
+std::vector<std::uint8_t> status_answer(std::uint8_t da, std::uint8_t sa) {
+  return bytes_of(fdl::make_frame(da, sa, fdl::make_response_fc(fdl::Response::OK)));
+}
+
+// A line with a master (2), a scripted station and, if asked, a spc3 at address 5.
+struct Faults {
+  // ttr = 0: a line without a token (one master); else masters 2 and 3 share it.
+  explicit Faults(bool with_chip = false, std::uint64_t ttr = 0)
+      : seg(kBaud),
+        timing_{seg.bit_cycles(),
+                11,
+                kSlot,
+                kTsyn,
+                ttr,
+                ttr == 0 ? std::vector<std::uint8_t>{2} : std::vector<std::uint8_t>{2, 3}},
+        check(timing_, [this](const LogRecord& r) { log.push_back(r); }) {
+    if (with_chip) {
+      ResponderConfig rc;
+      rc.slave.address = 5;
+      user = std::make_unique<Responder>(rc);
+      chip = seg.add_chip("spc3", ChipOptions{Profile::spc3});
+      DirectBus bus(seg.chip(chip));
+      user->init(bus);
+      seg.set_firmware(chip, [this](BusPort& b) { user->isr(b); });
+    }
+    master = seg.add_sender("master 2");
+    rogue = seg.add_sender("rogue");
+    check.watch(seg);
+  }
+  std::uint64_t bits(std::uint64_t n) const { return n * seg.bit_cycles(); }
+  // The line quiet to `cycle`, every telegram handed to the check.
+  void settle(std::uint64_t cycle) {
+    seg.run_until(cycle);
+    seg.flush();
+    check.idle_until(seg.cycle());
+  }
+  // FDL_Status from master 2 to station 5 until the chips have found the rate (their baud
+  // search) and station 5 answers; the line then stands idle for good.
+  void find_rate() {
+    for (int i = 0; i < 200; ++i) {
+      const std::uint64_t end = seg.send(master, fdl_status(5, 2), seg.cycle() + bits(kTsyn));
+      seg.run_until(end + bits(kSlot + 20));
+      if (seg.chip(chip).wd_state() != WdState::Baud_Search) break;
+    }
+    settle(seg.cycle() + bits(200));
+    check = BusCheck(timing_, [this](const LogRecord& r) { log.push_back(r); });
+    check.watch(seg);
+    log.clear();
+  }
+  // Master 2 asks station 20 for its FDL status; the rogue answers `answer` `delay` bit times
+  // after the request's end.
+  void ask_and_answer(const std::vector<std::uint8_t>& answer, std::uint64_t delay) {
+    const std::uint64_t end = seg.send(master, fdl_status(20, 2), bits(100));
+    seg.send(rogue, answer, end + bits(delay));
+    settle(end + bits(400));
+  }
+  // Everything but `v` is zero, `v` is n.
+  void expect_only(BusViolation v, std::uint64_t n) {
+    for (std::size_t k = 0; k < kBusViolationKinds; ++k) {
+      const auto kind = static_cast<BusViolation>(k);
+      EXPECT_EQ(check.count(kind), kind == v ? n : 0) << bus_violation_name(kind);
+    }
+    EXPECT_FALSE(log.empty());
+  }
+  Segment seg;
+  BusTiming timing_;
+  BusCheck check;
+  std::vector<LogRecord> log;
+  std::unique_ptr<Responder> user;
+  std::size_t chip = 0;
+  std::size_t master = 0;
+  std::size_t rogue = 0;
+};
+
+TEST(SegmentFaults, AStationThatAnswersLate) {
+  Faults f;
+  // TSL + 1 bit after the request's end: one bit too late.
+  f.ask_and_answer(status_answer(2, 20), kSlot + 1);
+  f.expect_only(BusViolation::late_answer, 1);
+}
+
+TEST(SegmentFaults, AnAnswerAtTheSlotTimeIsInTime) {
+  Faults f;
+  f.ask_and_answer(status_answer(2, 20), kSlot);
+  EXPECT_EQ(f.check.total(), 0U);
+}
+
+TEST(SegmentFaults, AStationThatAnswersEarly) {
+  Faults f;
+  // 10 bit times: one short of min TSDR (11).
+  f.ask_and_answer(status_answer(2, 20), 10);
+  f.expect_only(BusViolation::early_answer, 1);
+}
+
+TEST(SegmentFaults, ABabblingStationIsCountedEveryTimeButLogsStayBounded) {
+  Faults f;
+  std::uint64_t at = f.bits(100);
+  constexpr int kBabble = 3000;
+  for (int i = 0; i < kBabble; ++i) {
+    at = f.seg.send(f.rogue, status_answer(2, 21), at) + f.bits(kTsyn);
+  }
+  f.settle(at + f.bits(100));
+  f.check.flush();
+  f.expect_only(BusViolation::unsolicited, kBabble);
+  // One line per distinct text, then the limiter's bound (LogLimiter::kBurst per window).
+  EXPECT_LE(f.log.size(), LogLimiter::kBurst + 2);
+}
+
+TEST(SegmentFaults, TwoStationsWithOneAddressCollide) {
+  Faults f(true);
+  ResponderConfig rc;
+  rc.slave.address = 5;
+  Responder twin(rc);
+  const std::size_t second = f.seg.add_chip("dpc31", ChipOptions{Profile::dpc31});
+  DirectBus bus(f.seg.chip(second));
+  twin.init(bus);
+  f.seg.set_firmware(second, [&twin](BusPort& b) { twin.isr(b); });
+  f.find_rate();
+  const std::size_t before = f.seg.collisions().size();
+  const std::uint64_t end = f.seg.send(f.master, fdl_status(5, 2), f.seg.cycle() + f.bits(kTsyn));
+  f.settle(end + f.bits(400));
+  // Both answer at end + 11 T (docs/timing.md): the second driver collides at that cycle.
+  ASSERT_EQ(f.seg.collisions().size(), before + 1);
+  EXPECT_EQ(f.seg.collisions().back().cycle, end + f.bits(11));
+  EXPECT_EQ(f.check.count(BusViolation::collision), 1U);
+  EXPECT_NE(f.log.front().text.find("dpc31 drove the line while spc3 had it"), std::string::npos);
+}
+
+TEST(SegmentFaults, AStationDrivingIntoAnAnswerCollides) {
+  Faults f(true);
+  f.find_rate();
+  const std::uint64_t end = f.seg.send(f.master, fdl_status(5, 2), f.seg.cycle() + f.bits(kTsyn));
+  // The spc3 answers from end + 11 T; the rogue starts 2 bit times into it.
+  f.seg.run_until(end + f.bits(13));
+  f.seg.send(f.rogue, status_answer(2, 9), end + f.bits(13));
+  f.settle(end + f.bits(400));
+  ASSERT_EQ(f.seg.collisions().size(), 1U);
+  EXPECT_EQ(f.seg.collisions()[0].cycle, end + f.bits(13));
+  EXPECT_EQ(f.seg.name(f.seg.collisions()[0].first), "spc3");
+  EXPECT_EQ(f.seg.name(f.seg.collisions()[0].second), "rogue");
+  // The spc3's answer stays whole and in time: only the collision is a violation.
+  f.expect_only(BusViolation::collision, 1);
+}
+
+TEST(SegmentFaults, ALostToken) {
+  Faults f(false, kTtr);
+  // Master 2 passes the token to 3, which is not there: the line stays idle.
+  const std::uint64_t end = f.seg.send(f.master, bytes_of(fdl::token(3, 2)), f.bits(100));
+  const std::uint64_t tto = f.bits(kSlot * (6 + 2 * 2));  // the lowest master, address 2
+  f.settle(end + tto - 1);
+  EXPECT_EQ(f.check.count(BusViolation::token_lost), 0U);
+  f.settle(end + tto);
+  f.expect_only(BusViolation::token_lost, 1);
+  EXPECT_EQ(f.log.front().cycle, end + tto);
+}
+
+TEST(SegmentFaults, AForeignMasterThatNeverPassesTheToken) {
+  Faults f(false, kTtr);
+  const std::uint64_t got = f.seg.send(f.master, bytes_of(fdl::token(3, 2)), f.bits(100));
+  // Master 3 (the rogue) polls station 40 over and over and never passes the token on.
+  std::uint64_t at = got + f.bits(kTsyn);
+  std::uint64_t late = 0;
+  for (int i = 0; i < 40; ++i) {
+    if (i > 0 && at > got + f.bits(kTtr)) ++late;  // a new message cycle after TTR
+    const std::uint64_t end = f.seg.send(f.rogue, fdl_status(40, 3), at);
+    at = end + f.bits(kSlot) + f.bits(kTsyn);
+  }
+  f.settle(at);
+  ASSERT_GT(late, 0U);
+  f.expect_only(BusViolation::token_hold, late);
+}
+
+TEST(SegmentFaults, AShortTsyn) {
+  Faults f(true);
+  f.find_rate();
+  const std::uint32_t no_sync = f.seg.chip(f.chip).fdl_counters().no_sync;
+  const std::uint64_t end = f.seg.send(f.master, fdl_status(30, 2), f.seg.cycle() + f.bits(kTsyn));
+  f.seg.send(f.master, fdl_status(5, 2), end + f.bits(kTsyn - 1));  // one bit short
+  f.settle(end + f.bits(400));
+  f.expect_only(BusViolation::short_tsyn, 1);
+  // The chip holds the same rule: it did not take the request (docs/timing.md, TSYN).
+  EXPECT_EQ(f.seg.chip(f.chip).fdl_counters().no_sync, no_sync + 1);
+}
+
+TEST(SegmentFaults, ATruncatedAnswer) {
+  Faults f;
+  std::vector<std::uint8_t> answer = status_answer(2, 20);
+  answer.resize(4);
+  f.ask_and_answer(answer, 11);
+  f.expect_only(BusViolation::bad_frame, 1);
+}
+
+TEST(SegmentFaults, ACorruptedFcs) {
+  Faults f;
+  std::vector<std::uint8_t> answer = status_answer(2, 20);
+  ++answer[answer.size() - 2];  // SD1: SD DA SA FC FCS ED
+  f.ask_and_answer(answer, 11);
+  f.expect_only(BusViolation::bad_frame, 1);
+  EXPECT_NE(f.log.front().text.find(std::string(fdl::error_name(fdl::Error::bad_fcs))),
+            std::string::npos);
+}
+
+TEST(SegmentFaults, AStationThatAnswersForAnotherAddress) {
+  Faults f;
+  f.ask_and_answer(status_answer(2, 21), 11);
+  f.expect_only(BusViolation::wrong_responder, 1);
+}
+
+TEST(SegmentFaults, ADuplicateToken) {
+  Faults f(false, kTtr);
+  const std::uint64_t end = f.seg.send(f.master, bytes_of(fdl::token(3, 2)), f.bits(100));
+  // Master 2 passed the token to 3 and still sends a request (SDN: no answer due).
+  f.seg.send(f.master,
+             bytes_of(fdl::make_frame(fdl::kBroadcast, 2,
+                                      fdl::make_request_fc(fdl::Function::SDN_high, false, false),
+                                      {0, 0}, std::uint8_t{58}, std::uint8_t{62})),
+             end + f.bits(kTsyn));
+  f.settle(end + f.bits(400));
+  f.expect_only(BusViolation::duplicate_token, 1);
+}
+
+}  // namespace
+}  // namespace dpc31
