@@ -36,8 +36,6 @@ bool flag(std::string_view s, std::string_view what);
 std::vector<std::uint8_t> bytes(std::string_view s, std::string_view what,
                                 std::size_t max = kMaxDu);
 
-// The longest time a scenario names: bounds the run time of a typo like `silence 10000s`.
-inline constexpr std::uint64_t kMaxSeconds = 3600;
 // Cycles (a plain number, decimal or 0x hex), or a decimal number with a unit: us, ms, s, or bits
 // (of `bit_cycles` clocks); rounded up to whole cycles like every minimum time (docs/timing.md).
 std::uint64_t duration(std::string_view s, std::uint64_t clock_hz, std::uint64_t bit_cycles);
