@@ -61,7 +61,9 @@ bool ChipCore::advance_events(std::uint64_t end, Stop stop_at) {
   clock.quiet_until = 0;  // the events below may arm new deadlines
   for (;;) {
     const std::uint64_t other = next_event_but_user_timer();
-    mode.skip_quiet_user_ticks(std::min(end, other));
+    // Quiet ticks up to and including `end`: a tick that falls exactly on a step's end must not
+    // become an event in one run and be skipped in another cut into other steps.
+    mode.skip_quiet_user_ticks(end < other ? end + 1 : other);
     const std::uint64_t next = std::min(mode.user_timer_at(), other);
     if (next > end) {
       clock.quiet_until = next;

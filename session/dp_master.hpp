@@ -144,7 +144,7 @@ class DpMaster {
   void select(std::size_t i);
   [[nodiscard]] std::size_t selected() const { return current_; }
   // startup() of every slave in turn; false if one did not reach Data_Exchange.
-  bool startup_all(int tries = 200);
+  bool startup_all(int tries = kStartupTries);
   // One DP cycle: Data_Exchange with every slave in order, `outputs[i]` to slave i (its out_len
   // bytes of zeros where none are given).
   std::vector<Exchange> dp_cycle(const std::vector<std::vector<std::uint8_t>>& outputs = {});

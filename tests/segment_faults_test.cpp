@@ -71,7 +71,7 @@ struct Faults {
   // FDL_Status from master 2 to station 5 until the chips have found the rate (their baud
   // search) and station 5 answers; the line then stands idle for good.
   void find_rate() {
-    for (int i = 0; i < 200; ++i) {
+    for (int i = 0; i < dpc31::kStartupTries; ++i) {
       const std::uint64_t end = seg.send(master, fdl_status(5, 2), seg.cycle() + bits(kTsyn));
       seg.run_until(end + bits(kSlot + 20));
       if (seg.chip(chip).wd_state() != WdState::Baud_Search) break;
