@@ -650,8 +650,43 @@ def dpv1_plugin_read_write():
             b.kill()
 
 
+def do4_dpv1_read_write():
+    """Issue 28's done-when: `dpc31 bridge --profile vpc3plus --firmware DO4` with
+    tools/dp_master.py reads and writes DO4's OSP record over the pty (docs/firmware.md, "DO4
+    with DPV1"; the bytes as traces/do4_dpv1_vpc3plus.scn derives them): user_prm C0,20,00
+    (DPV1_Enable, Fail_Safe; Enable_Diagnostic_Alarm) then OSPMode 1, replacement value 9, refresh
+    monitor off. Slot 0 index 1 reads 01 09; a Write of 01 07 reads back 01 07; index 7 is the
+    negative response DE 80 B0 00 (exit 1 with its error bytes)."""
+    tool = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tools", "dp_master.py")
+    with tempfile.TemporaryDirectory() as tmp:
+        b = Bridge(tmp, "--firmware", "DO4", "--profile", "vpc3plus", "--baud", "19200",
+                   "--pacing", "free")
+        try:
+            def run(*dpv1):
+                before = sum("slave side reset" in line for line in b.log_lines())
+                r = subprocess.run([sys.executable, tool, b.path, "--ident", "0x0D04", "--cfg",
+                                    "21,10", "--user-prm", "C0,20,00,01,09,00", "--outputs",
+                                    "05,01", "--cycles", "2", "--timeout", str(0.5 * SCALE),
+                                    "--c1-timeout", str(2 * SCALE)] + list(dpv1),
+                                   capture_output=True, text=True, timeout=60 * SCALE)
+                b.wait_for_log("slave side reset", 30 * SCALE, before + 1)
+                return r
+            r = run("--dpv1-read", "00,01,02", "--dpv1-write", "00,01,01,07")
+            check(r.returncode == 0, f"dp_master exit {r.returncode}: {r.stdout} {r.stderr}")
+            check("MSAC_C1 Read slot 0 index 1: 01 09 (" in r.stdout, r.stdout)
+            check("MSAC_C1 Write slot 0 index 1: 01 07 (" in r.stdout, r.stdout)
+            r = run("--dpv1-read", "00,07,02")
+            check(r.returncode == 1, f"dp_master exit {r.returncode}: {r.stdout} {r.stderr}")
+            check("negative response, Error_Decode 80, Error_Code_1 B0, Error_Code_2 00"
+                  in r.stderr, r.stderr)
+            b.stop(signal.SIGTERM)
+        finally:
+            b.kill()
+
+
 CASES = {
     "dpv1_plugin_read_write": dpv1_plugin_read_write,
+    "do4_dpv1_read_write": do4_dpv1_read_write,
     "do4_realtime_two_clients": lambda: do4_two_clients("realtime"),
     "do4_free_two_clients": lambda: do4_two_clients("free"),
     "do4_free_watchdog_then_reparameterise": do4_reparameterise_after_watchdog,
