@@ -10,7 +10,6 @@ namespace dpc31 {
 
 namespace {
 using pdu::Function;
-constexpr std::size_t kRecordHead = 4;  // Function_Num, Slot_Number, Index, Length
 }  // namespace
 
 std::string outcome_name(Dpv1Answer::Outcome o) {
