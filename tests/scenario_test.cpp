@@ -75,9 +75,11 @@ std::vector<fs::path> shipped() {
   std::vector<fs::path> v;
   for (const auto& e : fs::directory_iterator(kTraces)) {
     if (e.path().extension() != ".scn") continue;
-    // DO4 on the 80C32 runs as the build's copy, beside the image it names (firmware/).
-    v.push_back(e.path().filename() == "do4_80c32.scn" ? fs::path(FW51_DIR) / "do4_80c32.scn"
-                                                       : e.path());
+    // DO4 and CNT2 on the 80C32 run as the build's copies, beside the images they name
+    // (firmware/).
+    v.push_back(e.path().stem().string().ends_with("_80c32")
+                    ? fs::path(FW51_DIR) / e.path().filename()
+                    : e.path());
   }
   std::sort(v.begin(), v.end());
   return v;

@@ -47,7 +47,7 @@ static void drive_pwm(int c, uint8_t duty) {
   dpc31_port_write(c == 0 ? CNT2_PORT_PWM1 : CNT2_PORT_PWM2, duty);
 }
 
-static int check_prm(const uint8_t* prm, uint8_t len) {
+static int check_prm(const uint8_t* prm, uint8_t len) DPS_REENTRANT {
   (void)prm;
   return len == 0;
 }
@@ -60,7 +60,7 @@ static void safe_state(void) {
   drive_pwm(1, 0);
 }
 
-static void outputs(const uint8_t* out, int cleared) {
+static void outputs(const uint8_t* out, int cleared) DPS_REENTRANT {
   int c;
   if (cleared) { /* Clear_Data, a fail-safe exchange, Leave_Master: the ASIC cleared the outputs, */
     safe_state(); /* the master did not write LOGMSG 0: a hold stays until it does */
@@ -115,6 +115,14 @@ void cnt2_init(const dps_board* board) {
 
 void cnt2_isr(void) { dps_isr(); }
 
+const cnt2_channel* cnt2_get_channel(int channel) { return &C[channel & 1]; }
+const cnt2_pwm* cnt2_get_pwm(int channel) { return &P[channel & 1]; }
+
+/* The module's hardware inputs as a host feeds them, and the plug-in descriptor, are the host's
+ * (firmware.h); an 80C32 build has its own main() and no such inputs wired (docs/cpu.md, "CNT2 on
+ * the 80C32"). */
+#ifndef __SDCC
+
 static int channel_of(const char* name, const char* stem) {
   const size_t n = strlen(stem);
   if (strncmp(name, stem, n) != 0 || (name[n] != '1' && name[n] != '2') || name[n + 1] != 0)
@@ -146,9 +154,6 @@ int cnt2_hw_input(const char* name, uint32_t value) {
   return 0;
 }
 
-const cnt2_channel* cnt2_get_channel(int channel) { return &C[channel & 1]; }
-const cnt2_pwm* cnt2_get_pwm(int channel) { return &P[channel & 1]; }
-
 static const char* const kPorts[] = {"hold1", "hold2", "pwm_hold1", "pwm_hold2", "pwm1", "pwm2", 0};
 static const char* const kHwInputs[] = {"count1",     "count2",     "event1", "event2",
                                         "pwm_event1", "pwm_event2", 0};
@@ -174,3 +179,4 @@ const dpc31_firmware cnt2_firmware = {DPC31_FIRMWARE_ABI_VERSION,
                                       6,
                                       kPrm,
                                       sizeof kPrm};
+#endif
