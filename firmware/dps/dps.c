@@ -100,12 +100,14 @@ static uint8_t g_instq_wr, g_indq_rd;
 static int g_timer_module; /* the module asked for User_Timer_Clock */
 
 /* DPV1 on the VPC3+ (docs/dpv1.md, docs/firmware.md): a SAP list of four entries, MSAC_C1 (SAP
- * 51) and its alarm SAP (50), the MSAC_C2 resource manager (49) and the one MSAC_C2 connection
- * (40, Ind_Buf_Ptr[0] 00h while closed: the chip answers RS there), each with one buffer that is
+ * 51) and its alarm SAP (50), the one MSAC_C2 connection (40, Ind_Buf_Ptr[0] 00h while closed:
+ * the chip answers RS there) and the MSAC_C2 resource manager (49), each with one buffer that is
  * indication and response buffer at once, as the Profichip driver has it for its MSAC_C1 SAPs.
  * The ISR takes a request on FDL_Ind; the 1 ms task answers it (the master's polls get SC
  * meanwhile); Poll_End_Ind frees the buffer. */
-enum { kDpv1Saps = 4u, kC1Saps = 2u, kRm = 2u, kConn = 3u };
+/* The connection before the resource manager: an Abort and a new Initiate taken in the same tick
+ * close first, then open. */
+enum { kDpv1Saps = 4u, kC1Saps = 2u, kConn = 2u, kRm = 3u };
 enum { kFcResponse = 0x08u /* DL: response data low */ };
 /* MSAC_C2 (IEC 61158-6 type 3; docs/dpv1.md "The master's side"): function numbers, the
  * Initiate request's fixed part (57h, 3 reserved, Send_Timeout, Features_Supported,
@@ -115,7 +117,7 @@ enum { kIdle = 0x48u, kRmResponse = 0x56u, kInitiate = 0x57u, kAbort = 0x58u };
 enum { kInitiateReq = 16u, kInitiateRes = 12u, kNegative = 0x80u, kDecodeDpv1 = 0x80u };
 enum { kInvalidParameter = 0xB8u, kResourceBusy = 0xC2u };
 enum { FDL_Ind = VPC3_Int_Req_Reg_FDL_Ind_Msk, Poll_End_Ind = VPC3_Int_Req_Reg_Poll_End_Ind_Msk };
-static const uint8_t kDpv1Sap[kDpv1Saps] = {DPS_SAP_C1, DPS_SAP_ALARM, DPS_SAP_C2_RM, DPS_SAP_C2};
+static const uint8_t kDpv1Sap[kDpv1Saps] = {DPS_SAP_C1, DPS_SAP_ALARM, DPS_SAP_C2, DPS_SAP_C2_RM};
 static int g_sap_list; /* set up at init: a VPC3+ and a module with dpv1_request */
 static VPC3_ADR g_sap_entry[kDpv1Saps], g_dpv1_buf[kDpv1Saps];
 static uint8_t g_dpv1_status[3];
