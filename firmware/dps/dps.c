@@ -455,7 +455,7 @@ static uint8_t c2_initiate(const uint8_t* req, uint8_t len, uint8_t* resp) {
 
 /* A request on the open connection: Abort closes it (no response), Idle is answered 48h 00h,
  * the rest is the module's. 0: no response. */
-static uint8_t c2_request(const uint8_t* req, uint8_t len, uint8_t* resp) DPS_REENTRANT {
+static uint8_t c2_request(const uint8_t* req, uint8_t len, uint8_t* resp) {
   if (req[0] == kAbort) {
     c2_close();
     ++g_stats.c2_aborted;
