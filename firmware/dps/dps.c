@@ -427,7 +427,8 @@ static uint8_t c2_initiate(const uint8_t* req, uint8_t len, uint8_t* resp) {
     return dpv1_negative(resp, kInitiate, kInvalidParameter);
   s_len = req[13];
   d_len = req[15];
-  if (len != kInitiateReq + s_len + d_len || kInitiateRes + s_len + d_len > DPS_DPV1_MAX_PDU)
+  if ((unsigned)len != (unsigned)kInitiateReq + s_len + d_len ||
+      (unsigned)kInitiateRes + s_len + d_len > DPS_DPV1_MAX_PDU)
     return dpv1_negative(resp, kInitiate, kInvalidParameter);
   if (g_c2_open) return dpv1_negative(resp, kInitiate, kResourceBusy);
   res[0] = kInitiate;
