@@ -253,6 +253,11 @@ TEST(Do4Dpv1, GsdFileDescribesTheDpv1Slave) {
   EXPECT_EQ(g.keys.at("DPV1_Slave"), "1");
   EXPECT_EQ(g.keys.at("C1_Read_Write_supp"), "1");
   EXPECT_EQ(std::stoul(g.keys.at("C1_Max_Data_Len")), DPS_DPV1_MAX_PDU - 4u);
+  // MSAC_C2 (firmware/dps): one connection, the same records and buffer length.
+  EXPECT_EQ(g.keys.at("C2_Read_Write_supp"), "1");
+  EXPECT_EQ(std::stoul(g.keys.at("C2_Max_Data_Len")), DPS_DPV1_MAX_PDU - 4u);
+  EXPECT_EQ(g.keys.at("C2_Response_Timeout"), g.keys.at("C1_Response_Timeout"));
+  EXPECT_EQ(g.keys.at("C2_Max_Count_Channels"), "1");
   EXPECT_EQ(g.keys.at("Diagnostic_Alarm_supp"), "1");
   EXPECT_EQ(g.keys.at("Extra_Alarm_SAP_supp"), "1");  // Alarm_Ack on SAP 50
   EXPECT_EQ(g.keys.at("Process_Alarm_supp"), "0");

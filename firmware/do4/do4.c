@@ -130,7 +130,8 @@ static uint8_t dpv1_request(uint8_t sap, const uint8_t* req, uint8_t len,
                             uint8_t* resp) DPS_REENTRANT {
   const uint8_t fn = req[0];
   if (sap == DPS_SAP_ALARM && len == 4u && fn == kAlarmAck) return dpv1_alarm_ack(req, resp);
-  if (sap == DPS_SAP_C1 && len >= 4u && (fn == kRead || fn == kWrite))
+  /* MSAC_C1 and the MSAC_C2 connection: the same record, the same answers. */
+  if ((sap == DPS_SAP_C1 || sap == DPS_SAP_C2) && len >= 4u && (fn == kRead || fn == kWrite))
     return dpv1_record(req, len, resp);
   return dpv1_error(resp, fn, kFeatureNotSupported);
 }

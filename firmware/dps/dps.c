@@ -99,19 +99,34 @@ static VPC3_ADR g_instq, g_indq; /* dpc31: the queues' first entries */
 static uint8_t g_instq_wr, g_indq_rd;
 static int g_timer_module; /* the module asked for User_Timer_Clock */
 
-/* DPV1 on the VPC3+ (docs/dpv1.md, docs/firmware.md): a SAP list of two entries, MSAC_C1 (SAP
- * 51) and its alarm SAP (50), each with one buffer that is indication and response buffer at
- * once, as the Profichip driver has it for its MSAC_C1 SAPs. The ISR takes a request on FDL_Ind;
- * the 1 ms task answers it (the master's polls get SC meanwhile); Poll_End_Ind frees the buffer. */
-enum { kDpv1Saps = 2u, kFcResponse = 0x08u /* DL: response data low */ };
+/* DPV1 on the VPC3+ (docs/dpv1.md, docs/firmware.md): a SAP list of four entries, MSAC_C1 (SAP
+ * 51) and its alarm SAP (50), the one MSAC_C2 connection (40, Ind_Buf_Ptr[0] 00h while closed:
+ * the chip answers RS there) and the MSAC_C2 resource manager (49), each with one buffer that is
+ * indication and response buffer at once, as the Profichip driver has it for its MSAC_C1 SAPs.
+ * The ISR takes a request on FDL_Ind; the 1 ms task answers it (the master's polls get SC
+ * meanwhile); Poll_End_Ind frees the buffer. */
+/* The connection before the resource manager: an Abort and a new Initiate taken in the same tick
+ * close first, then open. */
+enum { kDpv1Saps = 4u, kC1Saps = 2u, kConn = 2u, kRm = 3u };
+enum { kFcResponse = 0x08u /* DL: response data low */ };
+/* MSAC_C2 (IEC 61158-6 type 3; docs/dpv1.md "The master's side"): function numbers, the
+ * Initiate request's fixed part (57h, 3 reserved, Send_Timeout, Features_Supported,
+ * Profile_Features_Supported, Profile_Ident_Number, S_Type, S_Len, D_Type, D_Len) and its
+ * response's (57h, Max_Len_Data_Unit, then the same from Features_Supported on). */
+enum { kIdle = 0x48u, kRmResponse = 0x56u, kInitiate = 0x57u, kAbort = 0x58u };
+enum { kInitiateReq = 16u, kInitiateRes = 12u, kNegative = 0x80u, kDecodeDpv1 = 0x80u };
+enum { kInvalidParameter = 0xB8u, kResourceBusy = 0xC2u };
 enum { FDL_Ind = VPC3_Int_Req_Reg_FDL_Ind_Msk, Poll_End_Ind = VPC3_Int_Req_Reg_Poll_End_Ind_Msk };
-static const uint8_t kDpv1Sap[kDpv1Saps] = {DPS_SAP_C1, DPS_SAP_ALARM};
+static const uint8_t kDpv1Sap[kDpv1Saps] = {DPS_SAP_C1, DPS_SAP_ALARM, DPS_SAP_C2, DPS_SAP_C2_RM};
 static int g_sap_list; /* set up at init: a VPC3+ and a module with dpv1_request */
 static VPC3_ADR g_sap_entry[kDpv1Saps], g_dpv1_buf[kDpv1Saps];
 static uint8_t g_dpv1_status[3];
 static uint8_t g_dpv1_req[kDpv1Saps][DPS_DPV1_MAX_PDU];
 static uint8_t g_dpv1_len[kDpv1Saps];
 static uint8_t g_dpv1_pending; /* bit k: the request of SAP k waits for the 1 ms task */
+static int g_c2_open;          /* the MSAC_C2 connection is open */
+static uint32_t g_c2_limit_ms; /* its Send_Timeout in ms (Initiate: 10 ms units) */
+static uint32_t g_c2_quiet_ms; /* 1 ms ticks since its last request taken or response sent */
 
 /* 16-bit registers go over the 8-bit bus byte by byte; which address holds the low byte
  * depends on the bus mode (Intel: the lower address). */
@@ -171,13 +186,15 @@ static void allocate_buffers(void) {
     for (k = 0; k < kDpv1Saps; ++k) {
       const VPC3_ADR e = (VPC3_ADR)(list + k * VPC3_SAP_Entry_SIZE);
       const uint8_t buf = (uint8_t)next;
+      /* The connection's SAP stays off until an Initiate opens it. */
+      const uint8_t ind0 = k == kConn ? 0x00u : buf;
       g_sap_entry[k] = e;
       g_dpv1_buf[k] = (VPC3_ADR)(next << R->segment_shift);
       Vpc3Write(e + VPC3_SAP_Entry_Sap, kDpv1Sap[k]);
       Vpc3Write(e + VPC3_SAP_Entry_Request_SA, VPC3_SAP_Entry_Request_SA_All);
       Vpc3Write(e + VPC3_SAP_Entry_Request_SSAP, VPC3_SAP_Entry_Request_SSAP_All);
       Vpc3Write(e + VPC3_SAP_Entry_Service_Supported, VPC3_SAP_Entry_Service_Supported_All);
-      Vpc3Write(e + VPC3_SAP_Entry_Ind_Buf_Ptr0, buf);
+      Vpc3Write(e + VPC3_SAP_Entry_Ind_Buf_Ptr0, ind0);
       Vpc3Write(e + VPC3_SAP_Entry_Ind_Buf_Ptr1, buf);
       Vpc3Write(e + VPC3_SAP_Entry_Resp_Buf_Ptr, buf);
       Vpc3Write(g_dpv1_buf[k] + VPC3_DPV1_Buf_Control, 0x00);
@@ -244,6 +261,7 @@ void dps_init(const dps_board* board, const dps_module* module) {
   g_sap_list = board->profile == DPC31_PROFILE_VPC3PLUS && module->dpv1_request != 0;
   g_timer_module = 0;
   g_dpv1_pending = 0;
+  g_c2_open = 0;
   memset(g_dpv1_status, 0, sizeof g_dpv1_status);
   g_instq_wr = 0;
   g_indq_rd = 0;
@@ -300,8 +318,8 @@ void dps_update_inputs(void) {
 /* The 1 ms task runs while the module wants it or a DPV1 request waits. */
 void dps_timer_enable(int on) {
   g_timer_module = on;
-  set_mask(on || g_dpv1_pending ? (uint16_t)(g_mask | User_Timer_Clock)
-                                : (uint16_t)(g_mask & ~User_Timer_Clock));
+  set_mask(on || g_dpv1_pending || g_c2_open ? (uint16_t)(g_mask | User_Timer_Clock)
+                                             : (uint16_t)(g_mask & ~User_Timer_Clock));
 }
 
 uint8_t dps_dpv1_status(uint8_t k) { return k >= 1u && k <= 3u ? g_dpv1_status[k - 1u] : 0u; }
@@ -336,12 +354,13 @@ void dps_set_diag(const uint8_t* bytes, uint8_t len, int ext_diag) {
 }
 
 /* A Set_Prm with DPV1_Enable starts MSAC_C1 afresh: its status bytes kept for the module, both
- * buffers free, no request pending. */
+ * buffers free, no request pending. The class-1 master's Set_Prm leaves a class-2 master's
+ * connection alone (docs/decisions.md). */
 static void dpv1_restart(const uint8_t* status) {
   uint8_t k;
   memcpy(g_dpv1_status, status, sizeof g_dpv1_status);
-  g_dpv1_pending = 0;
-  for (k = 0; k < kDpv1Saps; ++k) Vpc3Write(g_dpv1_buf[k] + VPC3_DPV1_Buf_Control, 0x00);
+  g_dpv1_pending = (uint8_t)(g_dpv1_pending & ~((1u << kC1Saps) - 1u));
+  for (k = 0; k < kC1Saps; ++k) Vpc3Write(g_dpv1_buf[k] + VPC3_DPV1_Buf_Control, 0x00);
 }
 
 /* FDL_Ind: take each request whose buffer holds IND (the buffer stays the user's until the
@@ -359,6 +378,7 @@ static void dpv1_take_indications(void) {
     CopyFromVpc3(g_dpv1_req[k], CHIP_PTR(b + VPC3_DPV1_Buf_SIZE), len);
     g_dpv1_len[k] = len;
     g_dpv1_pending = (uint8_t)(g_dpv1_pending | 1u << k);
+    if (k == kConn) g_c2_quiet_ms = 0;
     ++g_stats.dpv1_requests;
   }
   if (g_dpv1_pending && (g_mask & User_Timer_Clock) == 0) {
@@ -368,24 +388,117 @@ static void dpv1_take_indications(void) {
   }
 }
 
-/* The 1 ms task: the module answers; the response into the buffer, RESP with USER last. */
+/* A response into buffer k: the data unit, Length, Function_Code, RESP with USER last. */
+static void dpv1_respond(uint8_t k, const uint8_t* resp, uint8_t n) {
+  const VPC3_ADR b = g_dpv1_buf[k];
+  if (n > DPS_DPV1_MAX_PDU) n = DPS_DPV1_MAX_PDU;
+  CopyToVpc3(CHIP_PTR(b + VPC3_DPV1_Buf_SIZE), (uint8_t*)resp, n);
+  Vpc3Write(b + VPC3_DPV1_Buf_Length, n);
+  Vpc3Write(b + VPC3_DPV1_Buf_Function_Code, kFcResponse);
+  Vpc3Write(b + VPC3_DPV1_Buf_Control,
+            VPC3_DPV1_Buf_Control_USER_Msk | VPC3_DPV1_Buf_Control_RESP_Msk);
+}
+
+static uint8_t dpv1_negative(uint8_t* resp, uint8_t function, uint8_t code) {
+  resp[0] = (uint8_t)(function | kNegative);
+  resp[1] = kDecodeDpv1;
+  resp[2] = code;
+  resp[3] = 0x00;
+  return 4;
+}
+
+/* The connection closed (Abort, time-out): its SAP off (the chip answers RS there), its buffer
+ * free, a request waiting there dropped. */
+static void c2_close(void) {
+  Vpc3Write(g_sap_entry[kConn] + VPC3_SAP_Entry_Ind_Buf_Ptr0, 0x00);
+  Vpc3Write(g_dpv1_buf[kConn] + VPC3_DPV1_Buf_Control, 0x00);
+  g_dpv1_pending = (uint8_t)(g_dpv1_pending & ~(1u << kConn));
+  g_c2_open = 0;
+}
+
+/* Initiate on SAP 49. Open: Initiate | 80h, Resource_Busy. Else the Initiate response
+ * (Max_Len_Data_Unit, the request's features and profile, S and D address swapped) waits in the
+ * connection's buffer for the master's first poll there, the connection's SAP is switched on, and
+ * the resource manager answers 56h, the connection's SAP, the Send_Timeout. */
+static uint8_t c2_initiate(const uint8_t* req, uint8_t len, uint8_t* resp) {
+  uint8_t res[DPS_DPV1_MAX_PDU];
+  uint8_t s_len, d_len;
+  if (len < kInitiateReq || req[0] != kInitiate)
+    return dpv1_negative(resp, kInitiate, kInvalidParameter);
+  s_len = req[13];
+  d_len = req[15];
+  if ((unsigned)len != (unsigned)kInitiateReq + s_len + d_len ||
+      (unsigned)kInitiateRes + s_len + d_len > DPS_DPV1_MAX_PDU)
+    return dpv1_negative(resp, kInitiate, kInvalidParameter);
+  if (g_c2_open) return dpv1_negative(resp, kInitiate, kResourceBusy);
+  res[0] = kInitiate;
+  res[1] = DPS_DPV1_MAX_PDU - 4u;
+  memcpy(res + 2, req + 6, 6); /* Features_Supported, Profile_Features_Supported, Ident */
+  res[8] = req[14];            /* S_Type, S_Len: the request's D_Type, D_Len */
+  res[9] = d_len;
+  res[10] = req[12];
+  res[11] = s_len;
+  memcpy(res + kInitiateRes, req + kInitiateReq + s_len, d_len);
+  memcpy(res + kInitiateRes + d_len, req + kInitiateReq, s_len);
+  dpv1_respond(kConn, res, (uint8_t)(kInitiateRes + s_len + d_len));
+  Vpc3Write(g_sap_entry[kConn] + VPC3_SAP_Entry_Ind_Buf_Ptr0,
+            (uint8_t)(g_dpv1_buf[kConn] >> R->segment_shift));
+  g_c2_open = 1;
+  g_c2_limit_ms = (uint32_t)((uint16_t)req[4] << 8 | req[5]) * 10u;
+  g_c2_quiet_ms = 0;
+  ++g_stats.c2_opened;
+  resp[0] = kRmResponse;
+  resp[1] = DPS_SAP_C2;
+  resp[2] = req[4];
+  resp[3] = req[5];
+  return 4;
+}
+
+/* A request on the open connection: Abort closes it (no response), Idle is answered 48h 00h,
+ * the rest is the module's. 0: no response. */
+static uint8_t c2_request(const uint8_t* req, uint8_t len, uint8_t* resp) {
+  if (req[0] == kAbort) {
+    c2_close();
+    ++g_stats.c2_aborted;
+    return 0;
+  }
+  if (req[0] == kIdle) {
+    resp[0] = kIdle;
+    resp[1] = 0x00;
+    return 2;
+  }
+  return M->dpv1_request(DPS_SAP_C2, req, len, resp);
+}
+
+/* The 1 ms task: the requests answered. */
 static void dpv1_answer(void) {
   uint8_t k;
   for (k = 0; k < kDpv1Saps; ++k) {
     uint8_t resp[DPS_DPV1_MAX_PDU];
-    const VPC3_ADR b = g_dpv1_buf[k];
     uint8_t n;
     if (((g_dpv1_pending >> k) & 1u) == 0) continue;
-    n = M->dpv1_request(kDpv1Sap[k], g_dpv1_req[k], g_dpv1_len[k], resp);
-    if (n > DPS_DPV1_MAX_PDU) n = DPS_DPV1_MAX_PDU;
-    CopyToVpc3(CHIP_PTR(b + VPC3_DPV1_Buf_SIZE), resp, n);
-    Vpc3Write(b + VPC3_DPV1_Buf_Length, n);
-    Vpc3Write(b + VPC3_DPV1_Buf_Function_Code, kFcResponse);
-    Vpc3Write(b + VPC3_DPV1_Buf_Control,
-              VPC3_DPV1_Buf_Control_USER_Msk | VPC3_DPV1_Buf_Control_RESP_Msk);
     g_dpv1_pending = (uint8_t)(g_dpv1_pending & ~(1u << k));
+    if (k == kRm) {
+      n = c2_initiate(g_dpv1_req[k], g_dpv1_len[k], resp);
+    } else if (k == kConn) {
+      n = c2_request(g_dpv1_req[k], g_dpv1_len[k], resp);
+      if (n == 0) continue;
+    } else {
+      n = M->dpv1_request(kDpv1Sap[k], g_dpv1_req[k], g_dpv1_len[k], resp);
+    }
+    dpv1_respond(k, resp, n);
   }
-  if (!g_timer_module) set_mask((uint16_t)(g_mask & ~User_Timer_Clock));
+  if (!g_timer_module && !g_c2_open) set_mask((uint16_t)(g_mask & ~User_Timer_Clock));
+}
+
+/* The connection's time-out, on each 1 ms tick while it is open: closed at the first tick that
+ * finds it quiet longer than Send_Timeout, the (10 x Send_Timeout + 1)-th tick after its last
+ * request taken or response sent, so never before Send_Timeout has run out (docs/firmware.md). */
+static void c2_tick(void) {
+  if (++g_c2_quiet_ms <= g_c2_limit_ms) return;
+  c2_close();
+  ++g_stats.c2_timeouts;
+  if (!g_timer_module && !g_dpv1_pending) set_mask((uint16_t)(g_mask & ~User_Timer_Clock));
 }
 
 /* Poll_End_Ind: a response went out (the chip cleared RESP and USER: the buffer is free again);
@@ -397,6 +510,7 @@ static void dpv1_response_sent(void) {
     if ((b0 & VPC3_SAP_Entry_Sap_Response_Sent_Msk) == 0) continue;
     Vpc3Write(g_sap_entry[k] + VPC3_SAP_Entry_Sap,
               (uint8_t)(b0 & ~VPC3_SAP_Entry_Sap_Response_Sent_Msk));
+    if (k == kConn) g_c2_quiet_ms = 0;
     ++g_stats.dpv1_responses_sent;
   }
 }
@@ -524,6 +638,8 @@ void dps_isr(void) {
   if ((ir & Diag_Buffer_Changed) && g_diag_pending) publish_diag();
   if (g_sap_list && (ir & FDL_Ind)) dpv1_take_indications();
   if (g_sap_list && (ir & Poll_End_Ind)) dpv1_response_sent();
+  /* The tick first: the one that answers an Initiate does not count for its connection. */
+  if ((ir & User_Timer_Clock) && g_c2_open) c2_tick();
   if ((ir & User_Timer_Clock) && g_dpv1_pending) dpv1_answer();
   if ((ir & User_Timer_Clock) && g_timer_module && M->tick != 0) {
     ++g_stats.ticks;

@@ -53,6 +53,8 @@ enum dps_comm_loss {
 #define DPS_DPV1_MAX_PDU 20u
 #define DPS_SAP_C1 51u    /* MSAC_C1 Read / Write */
 #define DPS_SAP_ALARM 50u /* MSAC_C1 Alarm_Ack */
+#define DPS_SAP_C2_RM 49u /* MSAC_C2 resource manager: Initiate (the driver answers it) */
+#define DPS_SAP_C2 40u    /* the one MSAC_C2 connection, open from Initiate to Abort / time-out */
 
 typedef struct dps_module {
   const char* name;
@@ -74,7 +76,8 @@ typedef struct dps_module {
   /* User_Timer_Clock (1 ms) while the module asked for it (dps_timer_enable); may be NULL. */
   void (*tick)(void);
   /* DPV1 on the VPC3+ (NULL: the module speaks DP only). A request that came on SAP `sap`
-   * (DPS_SAP_C1 or DPS_SAP_ALARM) while the master enabled DPV1 in Set_Prm: the module writes
+   * (DPS_SAP_C1 or DPS_SAP_ALARM; DPS_SAP_C2 a Read, Write or Data_Transport on the open MSAC_C2
+   * connection: the driver itself serves Initiate, Idle, Abort and the time-out): the module writes
    * its response data unit (at most DPS_DPV1_MAX_PDU bytes) into resp and returns its length.
    * Called from the 1 ms task after the indication: the master's polls get SC until then. */
   uint8_t (*dpv1_request)(uint8_t sap, const uint8_t* req, uint8_t len,
@@ -103,6 +106,7 @@ typedef struct dps_stats {
   uint32_t leave_dx, mac_resets, ticks, interrupts;
   uint32_t user_wd_expiries;                   /* dpc31: DPS_User_WD Expired indications */
   uint32_t dpv1_requests, dpv1_responses_sent; /* FDL_Ind taken, Poll_End_Ind */
+  uint32_t c2_opened, c2_aborted, c2_timeouts; /* MSAC_C2 connections */
   uint8_t last_gc;                             /* R_GC_Command at the last New_GC_Command */
   uint8_t station_address;
 } dps_stats;
