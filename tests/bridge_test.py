@@ -613,41 +613,55 @@ def answer_dropped_without_client():
             b.kill()
 
 
+def dpv1_over_bridge(firmware, master_args, body):
+    """A VPC3+ with `firmware` behind the bridge (free pacing, 19200 baud); `body(run)` calls
+    run(*dpv1_options) for each client: tools/dp_master.py with `master_args` and those options,
+    to Data_Exchange and then its MSAC_C1 services; returns its CompletedProcess once the bridge
+    has reset the slave side."""
+    tool = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tools", "dp_master.py")
+    with tempfile.TemporaryDirectory() as tmp:
+        b = Bridge(tmp, "--firmware", firmware, "--profile", "vpc3plus", "--baud", "19200",
+                   "--pacing", "free")
+        try:
+            def run(*dpv1):
+                before = sum("slave side reset" in line for line in b.log_lines())
+                r = subprocess.run([sys.executable, tool, b.path] + master_args +
+                                   ["--cycles", "2", "--timeout", str(0.5 * SCALE),
+                                    "--c1-timeout", str(2 * SCALE)] + list(dpv1),
+                                   capture_output=True, text=True, timeout=60 * SCALE)
+                b.wait_for_log("slave side reset", 30 * SCALE, before + 1)
+                return r
+            body(run)
+            b.stop(signal.SIGTERM)
+        finally:
+            b.kill()
+
+
+def expect_missing_index(r):
+    """Index 7 does not exist: the negative response DE 80 B0 00, exit 1 with its error bytes."""
+    check(r.returncode == 1, f"dp_master exit {r.returncode}: {r.stdout} {r.stderr}")
+    check("negative response, Error_Decode 80, Error_Code_1 B0, Error_Code_2 00" in r.stderr,
+          r.stderr)
+
+
 def dpv1_plugin_read_write():
     """tools/dp_master.py's MSAC_C1 Read and Write (docs/dpv1.md, "The master's side") end to end:
     the program itself on the pty, against the test plug-in tests/dpv1_plugin.c behind the bridge
     (a VPC3+ whose firmware answers SAP 51 through the SAP list; its record at slot 0, index 1
     reads 11 22 33 44). One client reads and writes the record, the next reads the new value, a
     third reads index 7: the negative response, exit 1 with its error bytes."""
-    tool = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tools", "dp_master.py")
-    fw = os.environ["DPC31_DPV1_PLUGIN"]
-    with tempfile.TemporaryDirectory() as tmp:
-        b = Bridge(tmp, "--firmware", fw, "--profile", "vpc3plus", "--baud", "19200",
-                   "--pacing", "free")
-        try:
-            def run(*dpv1):
-                before = sum("slave side reset" in line for line in b.log_lines())
-                r = subprocess.run([sys.executable, tool, b.path, "--ident", "0x0E01", "--cfg",
-                                    "20,10", "--user-prm", "80,00,00", "--outputs", "05",
-                                    "--cycles", "2", "--timeout", str(0.5 * SCALE),
-                                    "--c1-timeout", str(2 * SCALE)] + list(dpv1),
-                                   capture_output=True, text=True, timeout=60 * SCALE)
-                b.wait_for_log("slave side reset", 30 * SCALE, before + 1)
-                return r
-            r = run("--dpv1-read", "00,01,04", "--dpv1-write", "00,01,A1,A2,A3,A4")
-            check(r.returncode == 0, f"dp_master exit {r.returncode}: {r.stderr}")
-            check("MSAC_C1 Read slot 0 index 1: 11 22 33 44 (" in r.stdout, r.stdout)
-            check("MSAC_C1 Write slot 0 index 1: A1 A2 A3 A4 (" in r.stdout, r.stdout)
-            r = run("--dpv1-read", "00,01,04")
-            check(r.returncode == 0, f"dp_master exit {r.returncode}: {r.stderr}")
-            check("MSAC_C1 Read slot 0 index 1: A1 A2 A3 A4 (" in r.stdout, r.stdout)
-            r = run("--dpv1-read", "00,07,04")
-            check(r.returncode == 1, f"dp_master exit {r.returncode}: {r.stderr}")
-            check("negative response, Error_Decode 80, Error_Code_1 B0, Error_Code_2 00"
-                  in r.stderr, r.stderr)
-            b.stop(signal.SIGTERM)
-        finally:
-            b.kill()
+    def body(run):
+        r = run("--dpv1-read", "00,01,04", "--dpv1-write", "00,01,A1,A2,A3,A4")
+        check(r.returncode == 0, f"dp_master exit {r.returncode}: {r.stderr}")
+        check("MSAC_C1 Read slot 0 index 1: 11 22 33 44 (" in r.stdout, r.stdout)
+        check("MSAC_C1 Write slot 0 index 1: A1 A2 A3 A4 (" in r.stdout, r.stdout)
+        r = run("--dpv1-read", "00,01,04")
+        check(r.returncode == 0, f"dp_master exit {r.returncode}: {r.stderr}")
+        check("MSAC_C1 Read slot 0 index 1: A1 A2 A3 A4 (" in r.stdout, r.stdout)
+        expect_missing_index(run("--dpv1-read", "00,07,04"))
+    dpv1_over_bridge(os.environ["DPC31_DPV1_PLUGIN"],
+                     ["--ident", "0x0E01", "--cfg", "20,10", "--user-prm", "80,00,00",
+                      "--outputs", "05"], body)
 
 
 def do4_dpv1_read_write():
@@ -655,34 +669,17 @@ def do4_dpv1_read_write():
     tools/dp_master.py reads and writes DO4's OSP record over the pty (docs/firmware.md, "DO4
     with DPV1"; the bytes as traces/do4_dpv1_vpc3plus.scn derives them): user_prm C0,20,00
     (DPV1_Enable, Fail_Safe; Enable_Diagnostic_Alarm) then OSPMode 1, replacement value 9, refresh
-    monitor off. Slot 0 index 1 reads 01 09; a Write of 01 07 reads back 01 07; index 7 is the
-    negative response DE 80 B0 00 (exit 1 with its error bytes)."""
-    tool = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tools", "dp_master.py")
-    with tempfile.TemporaryDirectory() as tmp:
-        b = Bridge(tmp, "--firmware", "DO4", "--profile", "vpc3plus", "--baud", "19200",
-                   "--pacing", "free")
-        try:
-            def run(*dpv1):
-                before = sum("slave side reset" in line for line in b.log_lines())
-                r = subprocess.run([sys.executable, tool, b.path, "--ident", "0x0D04", "--cfg",
-                                    "21,10", "--user-prm", "C0,20,00,01,09,00", "--outputs",
-                                    "05,01", "--cycles", "2", "--timeout", str(0.5 * SCALE),
-                                    "--c1-timeout", str(2 * SCALE)] + list(dpv1),
-                                   capture_output=True, text=True, timeout=60 * SCALE)
-                b.wait_for_log("slave side reset", 30 * SCALE, before + 1)
-                return r
-            r = run("--dpv1-read", "00,01,02", "--dpv1-write", "00,01,01,07")
-            check(r.returncode == 0, f"dp_master exit {r.returncode}: {r.stdout} {r.stderr}")
-            check("MSAC_C1 Read slot 0 index 1: 01 09 (" in r.stdout, r.stdout)
-            check("MSAC_C1 Write slot 0 index 1: 01 07 (" in r.stdout, r.stdout)
-            r = run("--dpv1-read", "00,07,02")
-            check(r.returncode == 1, f"dp_master exit {r.returncode}: {r.stdout} {r.stderr}")
-            check("negative response, Error_Decode 80, Error_Code_1 B0, Error_Code_2 00"
-                  in r.stderr, r.stderr)
-            b.stop(signal.SIGTERM)
-        finally:
-            b.kill()
-
+    monitor off. Slot 0 index 1 reads 01 09 (the Set_Prm's values); a Write of 01 07 is answered
+    with its header; index 7 is the negative response DE 80 B0 00. (The read-back of a written
+    value within one session is checked by traces/do4_dpv1_vpc3plus.scn.)"""
+    def body(run):
+        r = run("--dpv1-read", "00,01,02", "--dpv1-write", "00,01,01,07")
+        check(r.returncode == 0, f"dp_master exit {r.returncode}: {r.stdout} {r.stderr}")
+        check("MSAC_C1 Read slot 0 index 1: 01 09 (" in r.stdout, r.stdout)
+        check("MSAC_C1 Write slot 0 index 1: 01 07 (" in r.stdout, r.stdout)
+        expect_missing_index(run("--dpv1-read", "00,07,02"))
+    dpv1_over_bridge("DO4", ["--ident", "0x0D04", "--cfg", "21,10", "--user-prm",
+                             "C0,20,00,01,09,00", "--outputs", "05,01"], body)
 
 CASES = {
     "dpv1_plugin_read_write": dpv1_plugin_read_write,

@@ -129,7 +129,8 @@ TEST(Segment, TwoSlavesOnOneAddressCollideWithBothNamesAndTheCycle) {
   line.seg.on_collision = [&seen](const Collision& c) { seen.push_back(c); };
   // FDL_Status until both have found the rate (their baud search) and answer at once.
   Exchange ex;
-  for (int i = 0; i < kStartupTries && line.seg.collisions().empty(); ++i) ex = line.master->fdl_status();
+  for (int i = 0; i < kStartupTries && line.seg.collisions().empty(); ++i)
+    ex = line.master->fdl_status();
   ASSERT_EQ(line.seg.collisions().size(), 1U);
   const Collision& c = line.seg.collisions()[0];
   // Both answer at the request's end + 11 T (docs/timing.md): the second drives into the first.

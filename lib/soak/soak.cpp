@@ -23,7 +23,7 @@ namespace dpc31::soak {
 
 namespace {
 
-constexpr std::uint32_t kRetries = 1;  // a request without an answer is sent once more
+constexpr std::uint32_t kRetries = 1;            // a request without an answer is sent once more
 constexpr std::uint64_t kTries = kStartupTries;  // start-up and restart give up after this many
 constexpr std::uint8_t kSlave = 5;
 constexpr std::uint8_t kMaster = 2;
