@@ -73,12 +73,14 @@ def check_two_stations_log(lines, header_end):
     for a in (5, 6):
         check(f"STATE slave{a}   dp_state Wait_Cfg -> Data_Exchange" in text,
               f"slave{a} never reached Data_Exchange in the log")
-    # Every answer's line names the station whose address it carries (SC has none).
+    # Every answer's line names the station whose address its summary gives as the source
+    # ("DL 5->2"; SC has none).
     for line in lines[1:]:
-        parts = line.split()
-        if parts[1] == "TxD" and parts[3] != "E5":
-            check(parts[5] == f"0{parts[2][-1]}" or parts[3] == "68" and
-                  parts[8] == f"0{parts[2][-1]}", f"answer from another station: {line}")
+        parts = line.split(maxsplit=3)
+        if parts[1] == "TxD" and "->" in parts[3]:
+            source = re.search(r" (\d+)->2\b", parts[3])
+            check(source and f"slave{source.group(1)}" == parts[2],
+                  f"answer from another station: {line}")
 
 
 def pty_two_slaves():
@@ -92,8 +94,9 @@ def pty_two_slaves():
             lines = b.log_lines()
             check_two_stations_log(lines, f"pty {b.path} -> " + lines[0].rsplit(" -> ", 1)[-1])
             text = "\n".join(lines)
+            # LE 7: DA, SA, FC and 4 bytes; FCS 02 + 06 + 08 + 11 + 22 + 33 + 44 = BAh.
             for want in ("TxD   slave6   10 02 06 00 08 16  | OK 6->2",
-                         "TxD   slave6   68 08 08 68 02 06 08 11 22 33 44",
+                         "TxD   slave6   68 07 07 68 02 06 08 11 22 33 44 BA 16  | DL 6->2",
                          "PORT  slave5   DO4 outputs = 0x05"):
                 check(want in text, f"log lacks '{want}'")
         finally:
