@@ -12,6 +12,7 @@
 
 #include "../lib/bridge/engine.hpp"
 #include "baud_search.hpp"
+#include "bridge_engine_record.hpp"
 #include "dpc31/fdl.hpp"
 
 namespace {
@@ -22,18 +23,8 @@ using dpc31::bridge::SlaveSpec;
 
 constexpr std::uint32_t kT = 2500;  // bit time at 19200 baud, 48 MHz
 
-struct Line {
-  std::uint64_t cycle;
-  std::string tag;
-  std::string station;
-  std::string text;
-};
-
-struct Sent {
-  std::uint64_t start, end;
-  std::string sender;
-  Bytes bytes;
-};
+using Line = testutil::LogLine;
+using testutil::Sent;
 
 Bytes frame(std::uint8_t da, std::uint8_t fc, Bytes du = {},
             std::optional<std::uint8_t> dsap = std::nullopt) {
@@ -43,28 +34,14 @@ Bytes frame(std::uint8_t da, std::uint8_t fc, Bytes du = {},
 
 // Two stations with the built-in user side (ident 0C31h, Cfg 13 23; docs/bridge.md): an SPC3 at
 // address 5, a VPC3+ at 6.
-class BridgeSegment : public ::testing::Test {
+class BridgeSegment : public ::testing::Test, protected testutil::EngineRecord {
  protected:
   void SetUp() override {
     dpc31::bridge::Setup s;
     s.log_detail = dpc31::bridge::LogDetail::telegrams;
     s.slaves = {SlaveSpec{5, {dpc31::Profile::spc3}, nullptr},
                 SlaveSpec{6, {dpc31::Profile::vpc3plus}, nullptr}};
-    engine_ =
-        std::make_unique<Engine>(s, [this](std::uint64_t cycle, std::string_view tag,
-                                           std::string_view station, const std::string& text) {
-          lines_.push_back({cycle, std::string(tag), std::string(station), text});
-        });
-    engine_->on_line([this](const dpc31::bridge::LineTelegram& t) {
-      line_.push_back(
-          {t.start, t.end, std::string(t.sender), Bytes(t.bytes.begin(), t.bytes.end())});
-    });
-  }
-
-  Bytes exchange(const Bytes& req) {
-    engine_->feed(req);
-    EXPECT_TRUE(engine_->settle(48'000'000));
-    return engine_->take_output();
+    make(s);
   }
 
   // FDL_Status to `da` until answered (within one round of the baud search).
@@ -86,17 +63,6 @@ class BridgeSegment : public ::testing::Test {
     return exchange(frame(da, fc, std::move(du), dsap));
   }
 
-  std::vector<Line> tagged(const std::string& tag) const {
-    std::vector<Line> out;
-    for (const Line& l : lines_) {
-      if (l.tag == tag) out.push_back(l);
-    }
-    return out;
-  }
-
-  std::unique_ptr<Engine> engine_;
-  std::vector<Line> lines_;
-  std::vector<Sent> line_;
   bool fcb_[2] = {true, true};
 };
 

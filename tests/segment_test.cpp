@@ -199,14 +199,24 @@ TEST(Segment, TwoMastersPassTheTokenAndReachDataExchangeWithASlaveEach) {
 // 33 T after the telegram before; the token is 3 characters (33 T). So from a token's arrival A,
 // the n-th cycle of the visit starts at A + 33 T + 330 T x n, and the token after k cycles ends at
 // A + 330 T x k + 66 T.
+// The master at 2 with TTR, G and HSA as given starts its slaves up (watchdog 100 x 100 x 10 ms:
+// never expiring here), then passes the token to itself: `a0` is that SD4's end.
 struct TokenRing {
-  explicit TokenRing(MasterConfig cfg, std::vector<std::uint8_t> addresses)
-      : line(kBaud, std::move(addresses), 100) {
+  TokenRing(std::uint64_t ttr_bits, std::uint8_t gap_factor, std::vector<std::uint8_t> addresses)
+      : line(kBaud, std::move(addresses), 100), t(line.seg.bit_cycles()) {
+    MasterConfig cfg{2, kBaud};
+    cfg.ttr_bits = ttr_bits;
+    cfg.gap_factor = gap_factor;
+    cfg.hsa = 8;
     line.master = std::make_unique<DpMaster>(line.seg, line.master_station, cfg, line.slaves);
-    line.seg.on_telegram = [this](const LineTelegram& t) {
-      if (t.from == line.master_station) sent.push_back(t);
+    line.seg.on_telegram = [this](const LineTelegram& tg) {
+      if (tg.from == line.master_station) sent.push_back(tg);
     };
+    EXPECT_TRUE(master().startup_all());
+    master().pass_token(2);
+    a0 = since(0).back().end;
   }
+  DpMaster& master() { return *line.master; }
   // The master's requests from cycle `from` on (tokens included).
   std::vector<LineTelegram> since(std::uint64_t from) {
     line.seg.flush();
@@ -217,7 +227,9 @@ struct TokenRing {
     return out;
   }
   Line line;
+  std::uint64_t t;  // bit time in clocks
   std::vector<LineTelegram> sent;
+  std::uint64_t a0 = 0;
 };
 
 // TTR = 1000 bit times, three slaves. Visit 1 (TRR 0: TTH = TTR): cycles at 33, 363, 693 T, all
@@ -226,18 +238,13 @@ struct TokenRing {
 // T does not: slaves 1 and 2; token end + 726 T. Visit 4: TRR 726 T, TTH 274 T: the first cycle
 // (slave 0) only. Visit 5: TRR 396 T again: slaves 1 and 2.
 TEST(Segment, AMasterStartsCyclesOnlyWhileTheRotationIsUnderTtr) {
-  MasterConfig cfg{2, kBaud};
-  cfg.ttr_bits = 1000;
-  TokenRing ring(cfg, {5, 6, 7});
-  DpMaster& m = *ring.line.master;
-  ASSERT_TRUE(m.startup_all());
-  const std::uint64_t t = ring.line.seg.bit_cycles();
-  m.pass_token(2);
-  const std::uint64_t a0 = ring.since(0).back().end;
+  TokenRing ring(1000, 0, {5, 6, 7});
+  DpMaster& m = ring.master();
+  const std::uint64_t t = ring.t;
   const std::vector<std::vector<std::size_t>> polled = {{0, 1, 2}, {0}, {1, 2}, {0}, {1, 2}};
   const std::uint64_t rotation[] = {0, 1056, 396, 726, 396};
   const std::uint64_t hold[] = {1000, 0, 604, 274, 604};
-  std::uint64_t arrived = a0;
+  std::uint64_t arrived = ring.a0;
   for (std::size_t k = 0; k < polled.size(); ++k) {
     const TokenVisit v = m.use_token(2);
     arrived += rotation[k] * t;
@@ -265,15 +272,10 @@ TEST(Segment, AMasterStartsCyclesOnlyWhileTheRotationIsUnderTtr) {
 // end A + 925 T), then 5 and 6 (answered 11 T after the request, 6 characters: token end A + 902
 // T). Without a GAP poll the token ends at A + 726 T.
 TEST(Segment, EveryGRotationsTheMasterAsksOneGapAddress) {
-  MasterConfig cfg{2, kBaud};
-  cfg.gap_factor = 2;
-  cfg.hsa = 8;
-  TokenRing ring(cfg, {5, 6});
-  DpMaster& m = *ring.line.master;
-  ASSERT_TRUE(m.startup_all());
-  const std::uint64_t t = ring.line.seg.bit_cycles();
-  m.pass_token(2);
-  std::uint64_t arrived = ring.since(0).back().end;
+  TokenRing ring(0, 2, {5, 6});
+  DpMaster& m = ring.master();
+  const std::uint64_t t = ring.t;
+  std::uint64_t arrived = ring.a0;
   const std::optional<std::uint8_t> gap[] = {std::nullopt, 3, std::nullopt, 4,
                                              std::nullopt, 5, std::nullopt, 6};
   for (std::size_t k = 0; k < std::size(gap); ++k) {
@@ -302,15 +304,9 @@ TEST(Segment, EveryGRotationsTheMasterAsksOneGapAddress) {
 // the GAP at 363 T do not start; token end + 396 T. Visit 3: TRR 396 T, TTH 704 T: slave 1 at 33,
 // slave 0 at 363, the postponed GAP poll (address 4) at 693 T.
 TEST(Segment, TheGapUpdateWaitsForTokenHoldTime) {
-  MasterConfig cfg{2, kBaud};
-  cfg.ttr_bits = 1100;
-  cfg.gap_factor = 1;
-  cfg.hsa = 8;
-  TokenRing ring(cfg, {5, 6});
-  DpMaster& m = *ring.line.master;
-  ASSERT_TRUE(m.startup_all());
-  const std::uint64_t t = ring.line.seg.bit_cycles();
-  m.pass_token(2);
+  TokenRing ring(1100, 1, {5, 6});
+  DpMaster& m = ring.master();
+  const std::uint64_t t = ring.t;
   const TokenVisit v1 = m.use_token(2);
   const TokenVisit v2 = m.use_token(2);
   const TokenVisit v3 = m.use_token(2);
