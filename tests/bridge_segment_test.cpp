@@ -164,6 +164,26 @@ TEST_F(BridgeSegment, AnAddressWithoutStationTimesOutAtTheSlotTime) {
   EXPECT_EQ(line_[n].start, lost.end + (100 + 33) * kT);
 }
 
+// Set_Slave_Add (SAP 55, in Wait_Prm) moves station 6 onto address 5; the chip answers at its new
+// address at once (emu/dp_sm.cpp). The next FDL_Status to 5 is answered by both at the request's
+// end + 11 T: a collision at that cycle, the first driver (slave5) keeps the line and is the
+// answer the client gets, and the log says who drove into whom.
+TEST_F(BridgeSegment, AStationMovedOntoAnotherAddressCollides) {
+  find(5);
+  exchange(frame(6, 0x49));
+  EXPECT_EQ(srd(6, {0x05, 0x0C, 0x31, 0x00}, 55), Bytes{0xE5});
+  const std::size_t n = line_.size();
+  EXPECT_EQ(exchange(frame(5, 0x49)), (Bytes{0x10, 0x02, 0x05, 0x00, 0x07, 0x16}));
+  engine_->flush_log();
+  ASSERT_EQ(line_.size(), n + 2);
+  EXPECT_EQ(line_[n + 1].sender, "slave5");
+  EXPECT_EQ(line_[n + 1].start, line_[n].end + 11 * kT);
+  const std::vector<Line> notes = tagged("NOTE");
+  ASSERT_FALSE(notes.empty());
+  EXPECT_EQ(notes.back().text, "collision: slave6 drove into the telegram of slave5");
+  EXPECT_EQ(notes.back().cycle, line_[n + 1].start);
+}
+
 TEST(BridgeSegmentSetup, RefusesTwoStationsAtOneAddressAndASecondFirmware) {
   const dpc31_firmware* do4 = dpc31_find_firmware("DO4");
   const dpc31_firmware* cnt2 = dpc31_find_firmware("CNT2");

@@ -362,10 +362,15 @@ std::uint64_t Engine::put_on_line(std::span<const std::uint8_t> bytes, std::uint
 
 std::string_view Engine::sender_of(std::uint64_t start) const {
   if (!seg_) return stations_.front().name;
-  // The last chip that began an answer by `start` (every character the client hears is a chip's).
+  // The chip that began the latest answer by `start` (every character the client hears is a
+  // chip's); of two that began at once the first, which the segment lets keep the line.
   std::size_t who = 0;
+  std::optional<std::uint64_t> latest;
   for (const auto& [at, i] : sent_) {
-    if (at <= start) who = i;
+    if (at <= start && (!latest || at > *latest)) {
+      latest = at;
+      who = i;
+    }
   }
   return stations_[who].name;
 }
