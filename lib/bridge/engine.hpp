@@ -204,7 +204,7 @@ class Engine {
   LineSink line_;
   std::vector<Station> stations_;  // never resized after construction: the log keeps their names
   std::unique_ptr<Chip> solo_;     // the one chip (no --slave)
-  std::vector<Slave> slaves_;      // parallel to stations_; before seg_: its CPUs run their code
+  std::vector<Slave> slaves_;      // parallel to stations_; outlives seg_'s CPUs that run them
   std::unique_ptr<Segment> seg_;   // or the segment (--slave)
   std::size_t master_ = 0;         // the client's station on seg_
   // The answers the segment's chips began (their first start bit, the station), for sender_of.
