@@ -125,7 +125,62 @@ std::vector<Exchange> DpMaster::dp_cycle(const std::vector<std::vector<std::uint
 }
 
 Exchange DpMaster::pass_token(std::uint8_t next) {
-  return transact(fdl::token(next, cfg_.address));
+  const Exchange ex = transact(fdl::token(next, cfg_.address));
+  holding_ = next == cfg_.address;
+  if (holding_) {  // the only master: it receives its own token at the end of the SD4
+    trr_ = token_at_ != 0 ? ex.request_end - token_at_ : 0;
+    token_at_ = ex.request_end;
+  }
+  return ex;
+}
+
+TokenVisit DpMaster::use_token(std::uint8_t next,
+                               const std::vector<std::vector<std::uint8_t>>& outputs) {
+  if (!holding_) {  // claimed: no rotation before it
+    token_at_ = now();
+    trr_ = 0;
+    holding_ = true;
+  }
+  TokenVisit v;
+  v.arrived = token_at_;
+  v.rotation = trr_;
+  const std::uint64_t ttr = cfg_.ttr_bits * t_;
+  v.hold = trr_ < ttr ? ttr - trr_ : 0;
+  // A message cycle starts with its request's first start bit: after the idle time.
+  const auto time_left = [&] {
+    const std::uint64_t start = std::max(now(), bus_free_ + std::uint64_t{cfg_.idle_bits} * t_);
+    return cfg_.ttr_bits == 0 || start < v.arrived + v.hold;
+  };
+  const std::size_t keep = current_;
+  for (std::size_t n = 0; n < slaves_.size() && (v.polled.empty() || time_left()); ++n) {
+    const std::size_t i = next_slave_;
+    select(i);
+    data_exchange(i < outputs.size() ? outputs[i] : std::vector<std::uint8_t>(slave_.out_len));
+    v.polled.push_back(i);
+    next_slave_ = (next_slave_ + 1) % slaves_.size();
+  }
+  select(keep);
+  if (cfg_.gap_factor != 0) {
+    ++visits_since_gap_;
+    if (visits_since_gap_ >= cfg_.gap_factor && time_left()) {
+      const auto after = [&](std::uint8_t a) {
+        return static_cast<std::uint8_t>(a >= cfg_.hsa ? 0 : a + 1);
+      };
+      std::uint8_t a = gap_next_.value_or(after(cfg_.address));
+      if (a == next || a == cfg_.address) a = after(cfg_.address);  // the GAP begins again
+      if (a != next && a != cfg_.address) {  // an empty GAP (next = own address + 1) has none
+        v.gap = a;
+        v.gap_answered =
+            transact(fdl::make_frame(a, cfg_.address,
+                                     fdl::make_request_fc(fdl::Function::FDL_Status, false, false)))
+                .answer.has_value();
+        gap_next_ = after(a);
+        visits_since_gap_ = 0;
+      }
+    }
+  }
+  pass_token(next);
+  return v;
 }
 
 bool DpMaster::wait_token(std::uint64_t timeout) {
@@ -142,6 +197,7 @@ bool DpMaster::wait_token(std::uint64_t timeout) {
         bus_free_ = heard.end();
         if (token_at_ != 0) trr_ = heard.end() - token_at_;
         token_at_ = heard.end();
+        holding_ = true;
         return true;
       }
     }

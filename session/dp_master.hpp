@@ -56,6 +56,22 @@ struct MasterConfig {
   std::uint32_t baud = 1'500'000;
   std::uint32_t slot_bits = 100;  // TSL: wait for the first character of an answer
   std::uint32_t idle_bits = 33;   // idle before each request (at least TSYN)
+  // The token (use_token, docs/segment.md "The token"): TTR, the target rotation time in bit
+  // times (0: no limit, every cycle of a visit is done); G, the GAP update factor (0: no GAP
+  // update); HSA, the highest station address, where the GAP wraps to 0.
+  std::uint64_t ttr_bits = 0;
+  std::uint8_t gap_factor = 0;
+  std::uint8_t hsa = 126;
+};
+
+// What one visit of the token did (DpMaster::use_token).
+struct TokenVisit {
+  std::uint64_t arrived = 0;        // the token's arrival: the end of its SD4, or the claim
+  std::uint64_t rotation = 0;       // TRR: from the arrival before (0: the ring's first visit)
+  std::uint64_t hold = 0;           // TTH = TTR - TRR in cycles (0: a late token)
+  std::vector<std::size_t> polled;  // the slaves (indices) exchanged with, in order
+  std::optional<std::uint8_t> gap;  // the address the GAP update asked with FDL_Status
+  bool gap_answered = false;
 };
 
 struct Exchange {
@@ -155,6 +171,15 @@ class DpMaster {
   bool wait_token(std::uint64_t timeout);
   // TRR: the real rotation time measured at the last token received (0 before the second).
   [[nodiscard]] std::uint64_t token_rotation() const { return trr_; }
+  // One visit of the token (docs/segment.md, "The token"), once this master holds it (after
+  // wait_token, or now, claiming it: the ring starts here, TRR 0): Data_Exchange with its slaves
+  // in turn, from where the last visit stopped, each a high-priority message cycle that starts
+  // only while the rotation time since the token before is under TTR (the first cycle of a visit
+  // always: a late token allows that one only); every G visits, while time remains, one address
+  // of the GAP (this address + 1 up to `next` - 1, wrapping after HSA) asked with FDL_Status;
+  // then the token to `next`. `outputs[i]` go to slave i (zeros where none are given).
+  TokenVisit use_token(std::uint8_t next,
+                       const std::vector<std::vector<std::uint8_t>>& outputs = {});
   [[nodiscard]] std::uint8_t address() const { return cfg_.address; }
   // Sends one request after the idle time and waits for its answer. `fault` corrupts one
   // character on the wire (parity, start or stop bit).
@@ -257,6 +282,10 @@ class DpMaster {
   std::size_t current_ = 0;
   std::uint64_t token_at_ = 0;  // when the token last came
   std::uint64_t trr_ = 0;
+  bool holding_ = false;        // the token is ours (received or claimed, not passed on)
+  std::size_t next_slave_ = 0;  // where the next visit's cycles begin
+  std::uint64_t visits_since_gap_ = 0;
+  std::optional<std::uint8_t> gap_next_;  // the GAP address asked next (none: the first)
   MasterConfig cfg_;
   SlaveConfig slave_;
   std::uint32_t t_;

@@ -223,6 +223,17 @@ def pcap_tshark_fields():
                            "slave5"], f"last answer {last_ans}")
 
 
+def expect_refused(args, want, *files):
+    """`dpc31 bridge ARGS` refused: exit 2, one line on stderr holding `want`, none of `files`
+    made (docs/bad-input.md)."""
+    r = subprocess.run([bt.CLI, "bridge"] + args, capture_output=True, text=True,
+                       timeout=30 * SCALE, check=False)
+    lines = r.stderr.splitlines()
+    check(r.returncode == 2 and len(lines) == 1 and want in lines[0],
+          f"{args}: exit {r.returncode}, stderr {r.stderr!r}")
+    check(not any(os.path.exists(f) for f in files), f"{args}: a file made")
+
+
 def tcp_bad_arguments():
     """One line on stderr, exit 2, nothing listening, no log or capture made (docs/bad-input.md)."""
     with tempfile.TemporaryDirectory() as tmp:
@@ -242,12 +253,7 @@ def tcp_bad_arguments():
             (["--tcp", "0", "--pcap", log], "--pcap"),
         ]
         for args, want in cases:
-            r = subprocess.run([bt.CLI, "bridge", "--firmware", "DO4", "--log", log] + args,
-                               capture_output=True, text=True, timeout=30 * SCALE, check=False)
-            lines = r.stderr.splitlines()
-            check(r.returncode == 2 and len(lines) == 1 and want in lines[0],
-                  f"{args}: exit {r.returncode}, stderr {r.stderr!r}")
-            check(not os.path.exists(log) and not os.path.exists(pcap), f"{args}: a file made")
+            expect_refused(["--firmware", "DO4", "--log", log] + args, want, log, pcap)
         busy.close()
 
 
@@ -258,15 +264,17 @@ CASES = {
 }
 
 
-def main():
+def main(cases=None):
+    """DPC31_CLI DISSECTOR CASE: runs one of `cases` (this file's by default); the exit code."""
     global DISSECTOR
-    if len(sys.argv) != 4 or sys.argv[3] not in CASES:
-        print(f"usage: {sys.argv[0]} DPC31_CLI DISSECTOR CASE ({', '.join(CASES)})",
+    cases = cases or CASES
+    if len(sys.argv) != 4 or sys.argv[3] not in cases:
+        print(f"usage: {sys.argv[0]} DPC31_CLI DISSECTOR CASE ({', '.join(cases)})",
               file=sys.stderr)
         return 2
     bt.CLI, DISSECTOR = sys.argv[1], sys.argv[2]
     try:
-        CASES[sys.argv[3]]()
+        cases[sys.argv[3]]()
     except Fail as e:
         print(f"FAIL {sys.argv[3]}: {e}", file=sys.stderr)
         return 1

@@ -21,6 +21,7 @@
 #include "../lib/bridge/engine.hpp"
 #include "../lib/bridge/pty.hpp"
 #include "baud_search.hpp"
+#include "bridge_engine_record.hpp"
 #include "dpc31/fdl.hpp"
 #include "dpc31/fdl_counters.hpp"
 
@@ -28,13 +29,8 @@ namespace {
 
 using Bytes = std::vector<std::uint8_t>;
 using dpc31::bridge::Engine;
-
-struct Line {
-  std::uint64_t cycle;
-  std::string tag;
-  std::string text;
-  std::string station;
-};
+using Line = testutil::LogLine;
+using testutil::Sent;
 
 constexpr std::uint32_t kT = 2500;  // bit time at 19200 baud, 48 MHz
 
@@ -45,31 +41,15 @@ Bytes sd1(std::uint8_t da, std::uint8_t sa, std::uint8_t fc) {
 const Bytes kFdlStatus = sd1(5, 2, 0x49);
 const Bytes kStatusOk = {0x10, 0x02, 0x05, 0x00, 0x07, 0x16};
 
-class BridgeEngine : public ::testing::Test {
+class BridgeEngine : public ::testing::Test, protected testutil::EngineRecord {
  protected:
   void SetUp() override { make(dpc31::bridge::LogDetail::telegrams); }
   void make(dpc31::bridge::LogDetail detail, std::uint32_t baud = 19200) {
-    engine_.reset();
-    lines_.clear();
     dpc31::bridge::Setup s;
     s.firmware = dpc31_find_firmware("DO4");
     s.baud = baud;
     s.log_detail = detail;
-    engine_ =
-        std::make_unique<Engine>(s, [this](std::uint64_t cycle, std::string_view tag,
-                                           std::string_view station, const std::string& text) {
-          lines_.push_back({cycle, std::string(tag), text, std::string(station)});
-        });
-    engine_->on_line([this](const dpc31::bridge::LineTelegram& t) {
-      line_.push_back(
-          {t.start, t.end, std::string(t.sender), Bytes(t.bytes.begin(), t.bytes.end())});
-    });
-  }
-
-  Bytes exchange(const Bytes& req) {
-    engine_->feed(req);
-    EXPECT_TRUE(engine_->settle(48'000'000));
-    return engine_->take_output();
+    EngineRecord::make(s);
   }
 
   // FDL_Status until the chip's baud search has found the rate: within one round of it
@@ -107,23 +87,6 @@ class BridgeEngine : public ::testing::Test {
     engine_->run_until(engine_->cycle() + 48'000'000 / 10);
     engine_->flush_log();
   }
-
-  std::vector<Line> tagged(const std::string& tag) const {
-    std::vector<Line> out;
-    for (const Line& l : lines_) {
-      if (l.tag == tag) out.push_back(l);
-    }
-    return out;
-  }
-
-  struct Sent {
-    std::uint64_t start, end;
-    std::string sender;
-    Bytes bytes;
-  };
-  std::unique_ptr<Engine> engine_;
-  std::vector<Line> lines_;
-  std::vector<Sent> line_;  // the line as the capture sees it (Engine::on_line)
 };
 
 TEST_F(BridgeEngine, AnswersFdlStatusOnceTheBaudSearchReachesTheRate) {

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "dp_master.hpp"
@@ -187,6 +188,138 @@ TEST(Segment, TwoMastersPassTheTokenAndReachDataExchangeWithASlaveEach) {
   // TRR of master 3: from its first token's end to its second's.
   EXPECT_EQ(m3.token_rotation(), tokens[2].end - tokens[0].end);
   EXPECT_TRUE(seg.collisions().empty());
+}
+
+// The token's visits (docs/segment.md, "The token"; IEC 61158-4-3 / EN 50170 part 2): a master
+// alone on the line passes the token to itself, so each visit's TRR is from the end of one SD4 to
+// the end of the next. The cycles of a visit, by hand at 1.5 Mbaud (T = 32 clocks): a
+// Data_Exchange of 4 bytes out and 4 in is a 13-character request (SD2, LE 7: 143 T), the answer
+// MinTSDR = 11 T after it (the chips' MinTSDR_Val resets to 11), 13 characters (143 T): 297 T
+// from its request's first start bit to the answer's end; every request and token follows TSYN =
+// 33 T after the telegram before; the token is 3 characters (33 T). So from a token's arrival A,
+// the n-th cycle of the visit starts at A + 33 T + 330 T x n, and the token after k cycles ends at
+// A + 330 T x k + 66 T.
+// The master at 2 with TTR, G and HSA as given starts its slaves up (watchdog 100 x 100 x 10 ms:
+// never expiring here), then passes the token to itself: `a0` is that SD4's end.
+struct TokenRing {
+  TokenRing(std::uint64_t ttr_bits, std::uint8_t gap_factor, std::vector<std::uint8_t> addresses)
+      : line(kBaud, std::move(addresses), 100), t(line.seg.bit_cycles()) {
+    MasterConfig cfg{2, kBaud};
+    cfg.ttr_bits = ttr_bits;
+    cfg.gap_factor = gap_factor;
+    cfg.hsa = 8;
+    line.master = std::make_unique<DpMaster>(line.seg, line.master_station, cfg, line.slaves);
+    line.seg.on_telegram = [this](const LineTelegram& tg) {
+      if (tg.from == line.master_station) sent.push_back(tg);
+    };
+    EXPECT_TRUE(master().startup_all());
+    master().pass_token(2);
+    a0 = since(0).back().end;
+  }
+  DpMaster& master() { return *line.master; }
+  // The master's requests from cycle `from` on (tokens included).
+  std::vector<LineTelegram> since(std::uint64_t from) {
+    line.seg.flush();
+    std::vector<LineTelegram> out;
+    for (const LineTelegram& t : sent) {
+      if (t.start >= from) out.push_back(t);
+    }
+    return out;
+  }
+  Line line;
+  std::uint64_t t;  // bit time in clocks
+  std::vector<LineTelegram> sent;
+  std::uint64_t a0 = 0;
+};
+
+// TTR = 1000 bit times, three slaves. Visit 1 (TRR 0: TTH = TTR): cycles at 33, 363, 693 T, all
+// under 1000: slaves 0, 1, 2; token end A + 1056 T. Visit 2: TRR 1056 T >= TTR, a late token:
+// one cycle (slave 0); token end + 396 T. Visit 3: TRR 396 T, TTH 604 T: 33 and 363 T start, 693
+// T does not: slaves 1 and 2; token end + 726 T. Visit 4: TRR 726 T, TTH 274 T: the first cycle
+// (slave 0) only. Visit 5: TRR 396 T again: slaves 1 and 2.
+TEST(Segment, AMasterStartsCyclesOnlyWhileTheRotationIsUnderTtr) {
+  TokenRing ring(1000, 0, {5, 6, 7});
+  DpMaster& m = ring.master();
+  const std::uint64_t t = ring.t;
+  const std::vector<std::vector<std::size_t>> polled = {{0, 1, 2}, {0}, {1, 2}, {0}, {1, 2}};
+  const std::uint64_t rotation[] = {0, 1056, 396, 726, 396};
+  const std::uint64_t hold[] = {1000, 0, 604, 274, 604};
+  std::uint64_t arrived = ring.a0;
+  for (std::size_t k = 0; k < polled.size(); ++k) {
+    const TokenVisit v = m.use_token(2);
+    arrived += rotation[k] * t;
+    EXPECT_EQ(v.arrived, arrived) << k;
+    EXPECT_EQ(v.rotation, rotation[k] * t) << k;
+    EXPECT_EQ(v.hold, hold[k] * t) << k;
+    EXPECT_EQ(v.polled, polled[k]) << k;
+    const std::vector<LineTelegram> visit = ring.since(arrived);
+    ASSERT_EQ(visit.size(), polled[k].size() + 1) << k;
+    for (std::size_t n = 0; n < polled[k].size(); ++n) {
+      EXPECT_EQ(visit[n].start, arrived + (33 + 330 * n) * t) << k << " " << n;
+      EXPECT_EQ(visit[n].bytes[4], ring.line.slaves[polled[k][n]].address) << k << " " << n;
+    }
+    EXPECT_EQ(visit.back().bytes, (std::vector<std::uint8_t>{fdl::SD4, 2, 2})) << k;
+    EXPECT_EQ(visit.back().end, arrived + (330 * polled[k].size() + 66) * t) << k;
+  }
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(ring.line.seg.chip(ring.line.chips[i]).dp_state(), DpState::Data_Exchange) << i;
+  }
+}
+
+// G = 2, HSA 8, no TTR (every visit polls both slaves 5 and 6): the GAP of a master alone at 2 is
+// 3..8, 0, 1. Every second visit asks one address with FDL_Status (10 DA 02 49 FCS 16) after the
+// two cycles, at A + 693 T: 3 and 4 (nobody: the slot time, 100 T, then TSYN and the token: token
+// end A + 925 T), then 5 and 6 (answered 11 T after the request, 6 characters: token end A + 902
+// T). Without a GAP poll the token ends at A + 726 T.
+TEST(Segment, EveryGRotationsTheMasterAsksOneGapAddress) {
+  TokenRing ring(0, 2, {5, 6});
+  DpMaster& m = ring.master();
+  const std::uint64_t t = ring.t;
+  std::uint64_t arrived = ring.a0;
+  const std::optional<std::uint8_t> gap[] = {std::nullopt, 3, std::nullopt, 4,
+                                             std::nullopt, 5, std::nullopt, 6};
+  for (std::size_t k = 0; k < std::size(gap); ++k) {
+    const TokenVisit v = m.use_token(2);
+    EXPECT_EQ(v.arrived, arrived) << k;
+    EXPECT_EQ(v.gap, gap[k]) << k;
+    EXPECT_EQ(v.gap_answered, gap[k] && *gap[k] >= 5) << k;
+    const std::vector<LineTelegram> visit = ring.since(arrived);
+    ASSERT_EQ(visit.size(), gap[k] ? 4U : 3U) << k;
+    if (gap[k]) {
+      const std::uint8_t a = *gap[k];
+      EXPECT_EQ(visit[2].bytes,
+                (std::vector<std::uint8_t>{fdl::SD1, a, 2, 0x49,
+                                           static_cast<std::uint8_t>(a + 2 + 0x49), fdl::ED}))
+          << k;
+      EXPECT_EQ(visit[2].start, arrived + 693 * t) << k;
+    }
+    arrived += (gap[k] ? (*gap[k] >= 5 ? 902 : 925) : 726) * t;
+    EXPECT_EQ(visit.back().end, arrived) << k;
+  }
+}
+
+// G = 1 under TTR = 1100 (slaves 5, 6): the GAP update is a low-priority job done only while the
+// token hold time lasts. Visit 1 (TTH 1100 T): cycles at 33 and 363 T, FDL_Status to 3 at 693 T
+// (no answer: token end A + 925 T). Visit 2: TRR 925 T, TTH 175 T: slave 0 at 33 T; slave 1 and
+// the GAP at 363 T do not start; token end + 396 T. Visit 3: TRR 396 T, TTH 704 T: slave 1 at 33,
+// slave 0 at 363, the postponed GAP poll (address 4) at 693 T.
+TEST(Segment, TheGapUpdateWaitsForTokenHoldTime) {
+  TokenRing ring(1100, 1, {5, 6});
+  DpMaster& m = ring.master();
+  const std::uint64_t t = ring.t;
+  const TokenVisit v1 = m.use_token(2);
+  const TokenVisit v2 = m.use_token(2);
+  const TokenVisit v3 = m.use_token(2);
+  EXPECT_EQ(v1.polled, (std::vector<std::size_t>{0, 1}));
+  EXPECT_EQ(v1.gap, std::optional<std::uint8_t>(3));
+  EXPECT_EQ(v2.rotation, 925 * t);
+  EXPECT_EQ(v2.hold, 175 * t);
+  EXPECT_EQ(v2.polled, (std::vector<std::size_t>{0}));
+  EXPECT_EQ(v2.gap, std::nullopt);
+  EXPECT_EQ(v3.rotation, 396 * t);
+  EXPECT_EQ(v3.polled, (std::vector<std::size_t>{1, 0}));
+  EXPECT_EQ(v3.gap, std::optional<std::uint8_t>(4));
+  EXPECT_EQ(ring.since(v3.arrived)[2].start, v3.arrived + 693 * t);
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A small DP master (class 1) on a serial device: start-up of one slave, Data_Exchange, DPV1.
+"""A small DP master (class 1) on a serial device: start-up of its slaves, Data_Exchange, DPV1.
 
 Made for `dpc31 bridge` (docs/bridge.md, docs/bring-up.md section 6) but written as a master on
 any 8E1 serial device is: open the device, one call that sets raw, 8 data bits, even parity and
@@ -8,6 +8,14 @@ then FDL telegrams (EN 50170: SD1/SD2, FCS, FCB/FCV) with a timeout per answer. 
 
     python3 tools/dp_master.py /tmp/dp0 --baud 19200 --ident 0x0D04 --cfg 21,10 \
         --user-prm 00,00,00,64 --outputs 05,01
+
+Several slaves (`dpc31 bridge --slave ...`, docs/bridge.md "Several slaves"): `--slave` once per
+station, ADDR or ADDR:IDENT:CFG[:USER_PRM[:OUTPUTS]] (hex bytes as for --cfg; what is left out comes
+from --ident, --cfg, --user-prm, --outputs). Each is started up in turn, then every DP cycle
+exchanges data with each in the order given; the lines of a station begin with "slave ADDR: ".
+
+    python3 tools/dp_master.py socket://127.0.0.1:5000 --slave 5:0x0D04:21,10:00,00,00,64:05,01 \
+        --slave 6:0x0C31:13,23:00:01,02,03,04
 
 The device may also be pyserial's URL of a raw TCP port, socket://HOST:PORT (`dpc31 bridge
 --tcp PORT`): the same byte stream, no termios; the rate is the bridge's own (--baud then only
@@ -18,7 +26,7 @@ request, then polls while the slave answers SC, until the response or --c1-timeo
 (docs/dpv1.md, "The master's side").
 
 Prints one line per step and the inputs of the last Data_Exchange. Exit codes: 0 Data_Exchange
-reached (and every DPV1 service answered positively), 1 the slave did not come up, or a DPV1
+reached with every slave (and every DPV1 service answered positively), 1 a slave did not come up, or a DPV1
 service failed (the line says where: a negative response with its error bytes, RS, the
 time-out), 2 bad arguments or device.
 Python 3 standard library only; tests/bridge_test.py uses the same Master class.
@@ -151,7 +159,17 @@ class Master:
         self.slave = slave
         self.fcb = True
         self.fcv = False
+        self.others = {}  # the FCB state of the slaves not selected: address -> (fcb, fcv)
         self.lost = 0
+
+    def select(self, slave):
+        """Makes `slave` the station every request goes to, with its own FCB state (EN 50170: FCB
+        and FCV belong to one master-slave pair)."""
+        if slave == self.slave:
+            return
+        self.others[self.slave] = (self.fcb, self.fcv)
+        self.fcb, self.fcv = self.others.pop(slave, (True, False))
+        self.slave = slave
 
     def close(self):
         if self.sock is not None:
@@ -329,20 +347,59 @@ def start_up(m, args, say):
     raise Fail(f"the slave never became ready; last Slave_Diag {hexs(du)}")
 
 
-def exchange(m, args, say):
-    """Data_Exchange `--cycles` times; a DH answer (new diagnosis) is followed by a Slave_Diag.
-    Prints the inputs whenever they change."""
-    last = None
-    for _ in range(args.cycles):
-        a = m.srd(args.outputs)
-        check(a is not None and a[0] == SD2 and a[6] in (0x08, 0x0A),
-              f"Data_Exchange: got {hexs(a)}")
-        inputs = answer_du(a, False)
-        if inputs != last:
-            say(f"Data_Exchange {hexs(args.outputs)}: inputs {hexs(inputs)}")
-            last = inputs
-        if a[6] == 0x0A:
-            say(f"Slave_Diag (after DH): {hexs(m.slave_diag())}")
+def exchange(m, slaves, cycles, say_for):
+    """`cycles` DP cycles, each a Data_Exchange with every slave in turn (its own outputs); a DH
+    answer (new diagnosis) is followed by a Slave_Diag. Prints a slave's inputs whenever they
+    change."""
+    last = {}
+    for _ in range(cycles):
+        for s in slaves:
+            m.select(s.address)
+            say = say_for(s)
+            a = m.srd(s.outputs)
+            check(a is not None and a[0] == SD2 and a[6] in (0x08, 0x0A),
+                  f"Data_Exchange with station {s.address}: got {hexs(a)}")
+            inputs = answer_du(a, False)
+            if inputs != last.get(s.address):
+                say(f"Data_Exchange {hexs(s.outputs)}: inputs {hexs(inputs)}")
+                last[s.address] = inputs
+            if a[6] == 0x0A:
+                say(f"Slave_Diag (after DH): {hexs(m.slave_diag())}")
+
+
+def slave_spec(text):
+    """--slave ADDR[:IDENT:CFG[:USER_PRM[:OUTPUTS]]] -> its fields (None: from the options)."""
+    f = text.split(":")
+    try:
+        address = int(f[0])
+        ident = int(f[1], 0) if len(f) > 1 else None
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}': not ADDR[:IDENT:CFG[:USER_PRM[:OUTPUTS]]]") \
+            from None
+    if not 0 <= address <= 125 or len(f) == 2 or len(f) > 5:
+        raise argparse.ArgumentTypeError(f"'{text}': not ADDR[:IDENT:CFG[:USER_PRM[:OUTPUTS]]] "
+                                         "with ADDR 0..125")
+    return argparse.Namespace(address=address, ident=ident,
+                              cfg=byte_list(f[2]) if len(f) > 2 else None,
+                              user_prm=byte_list(f[3]) if len(f) > 3 else None,
+                              outputs=byte_list(f[4]) if len(f) > 4 else None)
+
+
+def slaves_of(args, error):
+    """The stations to poll, each with its start-up's settings; `error` for one that lacks one."""
+    out = []
+    for s in args.slave or [slave_spec("5")]:
+        for name in ("ident", "cfg", "user_prm", "outputs"):
+            if getattr(s, name) is None:
+                setattr(s, name, getattr(args, name))
+        if s.ident is None or s.cfg is None:
+            error(f"station {s.address}: no Ident_Number or Chk_Cfg (--ident and --cfg, or "
+                  "--slave ADDR:IDENT:CFG)")
+        if s.address in [o.address for o in out]:
+            error(f"--slave {s.address} twice")
+        s.watchdog = args.watchdog
+        out.append(s)
+    return out
 
 
 def socket_address(url):
@@ -407,9 +464,12 @@ def main():
     p.add_argument("--baud", type=int, default=19200, choices=RATES,
                    help="the bus rate, one of the ten PROFIBUS rates (default 19200)")
     p.add_argument("--address", type=int, default=2, help="the master's station address")
-    p.add_argument("--slave", type=int, default=5, help="the slave's station address")
-    p.add_argument("--ident", type=lambda s: int(s, 0), required=True, help="Ident_Number")
-    p.add_argument("--cfg", type=byte_list, required=True, help="Chk_Cfg bytes, e.g. 21,10")
+    p.add_argument("--slave", type=slave_spec, action="append",
+                   metavar="ADDR[:IDENT:CFG[:USER_PRM[:OUTPUTS]]]",
+                   help="a slave's station address (default 5), and what it is started with; "
+                   "once per slave, polled in this order")
+    p.add_argument("--ident", type=lambda s: int(s, 0), help="Ident_Number")
+    p.add_argument("--cfg", type=byte_list, help="Chk_Cfg bytes, e.g. 21,10")
     p.add_argument("--user-prm", type=byte_list, default=[], help="user parameter bytes")
     p.add_argument("--watchdog", type=byte_list, default=[0x64, 0x0A],
                    help="WD_Fact_1,WD_Fact_2 (default 64,0A: 10 s)")
@@ -431,19 +491,27 @@ def main():
         p.error("--dpv1-read takes three bytes: SLOT,INDEX,LENGTH")
     if args.dpv1_write is not None and len(args.dpv1_write) < 3:
         p.error("--dpv1-write takes SLOT,INDEX and at least one data byte")
+    slaves = slaves_of(args, p.error)
+    if len(slaves) > 1 and (args.dpv1_read or args.dpv1_write):
+        p.error("--dpv1-read and --dpv1-write are for one --slave")
 
     def say(line):
         print(line, flush=True)
 
+    def say_for(s):
+        return say if len(slaves) == 1 else lambda line: say(f"slave {s.address}: {line}")
+
     try:
         wait_for(args.device, args.wait)
-        m = Master(args.device, args.baud, args.timeout, args.address, args.slave)
+        m = Master(args.device, args.baud, args.timeout, args.address, slaves[0].address)
     except OSError as e:
         print(f"dp_master: {e}", file=sys.stderr)
         return 2
     try:
-        start_up(m, args, say)
-        exchange(m, args, say)
+        for s in slaves:
+            m.select(s.address)
+            start_up(m, s, say_for(s))
+        exchange(m, slaves, args.cycles, say_for)
         dpv1(m, args, say)
     except Fail as e:
         print(f"dp_master: {e}", file=sys.stderr)

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <stdexcept>
 #include <utility>
 
 #include "vocabulary.hpp"  // state, service and response names
@@ -80,56 +81,107 @@ std::string telegram_summary(std::span<const std::uint8_t> bytes) {
 Engine::Engine(const Setup& setup, LogSink log)
     : setup_(setup),
       log_(std::move(log)),
-      stations_{{fmt::format("slave{}", setup.address), setup.address}},
-      chip_(setup.chip),
-      t_(dpc31::bit_cycles(chip_.clock_hz(), setup.baud)),
       // Every telegram is a line at the telegrams level: its bound is the busiest real line's.
       limiter_(setup.log_detail == LogDetail::telegrams ? kTelegramBurst : LogLimiter::kBurst) {
-  chip_.set_log_sink([this](const LogRecord& r) {
-    if (r.level >= LogLevel::info) add_line(r.cycle, "CHIP", slave(), r.text);
-  });
-  dp_ = chip_.dp_state();
-  wd_ = chip_.wd_state();
-  chip_.on_state_change([this](std::uint64_t cycle) { check_states(cycle); });
+  if (!setup_.slaves.empty()) {
+    if (const std::string why = stations_problem(setup_.slaves); !why.empty()) {
+      throw std::invalid_argument(why);
+    }
+    seg_ = std::make_unique<Segment>(setup_.baud);
+    master_ = seg_->add_sender(std::string(kMasterName));
+    t_ = seg_->bit_cycles();
+    stations_.reserve(setup_.slaves.size());
+    slaves_.resize(setup_.slaves.size());
+    for (std::size_t i = 0; i < setup_.slaves.size(); ++i) {
+      const SlaveSpec& s = setup_.slaves[i];
+      stations_.push_back({fmt::format("slave{}", s.address), s.address});
+      const std::size_t index = seg_->add_chip(stations_.back().name, s.chip);
+      Chip& chip = seg_->chip(index);
+      add_slave(i, chip, s.firmware, s.address);
+      seg_->set_firmware(index, slaves_[i].user.program);
+      // Who drove an answer: each chip tells of its own when it starts sending it.
+      chip.on_telegram([this, i](const Telegram& t) {
+        if (t.from_chip) sent_.emplace_back(t.start, i);
+      });
+    }
+    seg_->on_collision = [this](const Collision& c) {
+      add_line(c.cycle, "NOTE", kBridgeName,
+               fmt::format("collision: {} drove into the telegram of {}", seg_->name(c.second),
+                           seg_->name(c.first)));
+    };
+    rx_.configure(t_, seg_->cycle());
+    bus_free_ = seg_->cycle();
+    return;
+  }
+  stations_.push_back({fmt::format("slave{}", setup_.address), setup_.address});
+  solo_ = std::make_unique<Chip>(setup_.chip);
+  t_ = dpc31::bit_cycles(solo_->clock_hz(), setup_.baud);
+  slaves_.resize(1);
   if (setup_.cpu) {  // the 80C32 starts from reset with the chip and runs its own main()
-    m51_ = std::make_unique<Cpu51Module>(chip_, *setup_.cpu, setup_.cpu_image, setup_.address);
+    slaves_[0].chip = solo_.get();
+    watch_slave(0);
+    m51_ = std::make_unique<Cpu51Module>(*solo_, *setup_.cpu, setup_.cpu_image, setup_.address);
     m51_->on_port = [this](std::uint64_t cycle, unsigned port, std::uint32_t value) {
-      port_written(cycle, "80C32", m51_->port_name(port), port, value);
+      port_written(0, cycle, "80C32", m51_->port_name(port), port, value);
     };
   } else {
-    fw_ = std::make_unique<FirmwareHost>(*setup_.firmware);
-    fw_->on_port = [this](std::uint64_t cycle, unsigned port, std::uint32_t value) {
-      port_written(cycle, fw_->firmware().name, fw_->port_name(port), port, value);
-    };
-    DirectBus bus(chip_);
-    fw_->init(bus, setup_.address);
+    add_slave(0, *solo_, setup_.firmware, setup_.address);
   }
-  rx_.configure(t_, chip_.cycle());
+  rx_.configure(t_, solo_->cycle());
   // TxD in batches, taken when the bridge looks (collect): no event per bit.
-  chip_.on_txd_edges([this](std::span<const std::pair<std::uint64_t, bool>> e) { rx_.edges(e); });
-  if (fw_) cpu_ = std::make_unique<Cpu>(chip_, fw_->program());
-  bus_free_ = chip_.cycle();
+  solo_->on_txd_edges([this](std::span<const std::pair<std::uint64_t, bool>> e) { rx_.edges(e); });
+  if (!m51_) cpu_ = std::make_unique<Cpu>(*solo_, slaves_[0].user.program);
+  bus_free_ = solo_->cycle();
+}
+
+// The log's view of station `i`: its chip's messages and state changes.
+void Engine::watch_slave(std::size_t i) {
+  Slave& s = slaves_[i];
+  s.chip->set_log_sink([this, i](const LogRecord& r) {
+    if (r.level >= LogLevel::info) add_line(r.cycle, "CHIP", stations_[i].name, r.text);
+  });
+  s.dp = s.chip->dp_state();
+  s.wd = s.chip->wd_state();
+  s.chip->on_state_change([this, i](std::uint64_t cycle) { check_states(i, cycle); });
+}
+
+void Engine::add_slave(std::size_t i, Chip& chip, const dpc31_firmware* firmware,
+                       std::uint8_t address) {
+  Slave& s = slaves_[i];
+  s.chip = &chip;
+  watch_slave(i);
+  s.user = make_user_side(chip, firmware, address);
+  if (FirmwareHost* fw = s.user.firmware.get()) {
+    fw->on_port = [this, i, fw](std::uint64_t cycle, unsigned port, std::uint32_t value) {
+      port_written(i, cycle, fw->firmware().name, fw->port_name(port), port, value);
+    };
+  }
 }
 
 // At the events level a port write is logged when it changes the port's value.
-void Engine::port_written(std::uint64_t cycle, const std::string& module, const std::string& port,
-                          unsigned index, std::uint32_t value) {
-  if (index >= port_.size()) {
-    port_.resize(index + 1, 0);
-    port_logged_.resize(index + 1, false);
+void Engine::port_written(std::size_t i, std::uint64_t cycle, const std::string& module,
+                          const std::string& port, unsigned index, std::uint32_t value) {
+  Slave& s = slaves_[i];
+  if (index >= s.port.size()) {
+    s.port.resize(index + 1, 0);
+    s.port_logged.resize(index + 1, false);
   }
-  if (setup_.log_detail == LogDetail::events && port_logged_[index] && port_[index] == value)
+  if (setup_.log_detail == LogDetail::events && s.port_logged[index] && s.port[index] == value)
     return;
-  port_[index] = value;
-  port_logged_[index] = true;
-  add_line(cycle, "PORT", slave(), fmt::format("{} {} = 0x{:02X}", module, port, value));
+  s.port[index] = value;
+  s.port_logged[index] = true;
+  add_line(cycle, "PORT", stations_[i].name, fmt::format("{} {} = 0x{:02X}", module, port, value));
 }
 
 Engine::~Engine() {
-  cpu_.reset();  // stops the firmware thread before the chip goes away
-  chip_.on_txd_edges({});
-  chip_.on_state_change({});
-  chip_.set_log_sink({});
+  // The host CPUs stop before their user sides and chips go away.
+  cpu_.reset();
+  seg_.reset();
+  if (solo_) {
+    solo_->on_txd_edges({});
+    solo_->on_state_change({});
+    solo_->set_log_sink({});
+  }
 }
 
 void Engine::add_line(std::uint64_t cycle, std::string_view tag, std::string_view who,
@@ -147,7 +199,9 @@ void Engine::log_telegram(std::uint64_t cycle, std::string_view tag, std::string
 }
 
 std::uint64_t Engine::log_horizon() const {
-  std::uint64_t h = std::min(chip_.cycle(), rx_.busy_from());
+  // A station behind the segment's front may still log below it.
+  std::uint64_t h = rx_.busy_from();
+  for (const Slave& s : slaves_) h = std::min(h, s.chip->cycle());
   if (answer_.started()) h = std::min(h, answer_.start());
   if (stray_.started()) h = std::min(h, stray_.start());
   if (in_flight_ && !answer_.started()) h = std::min(h, slot_end_);
@@ -175,27 +229,30 @@ void Engine::release_log(std::uint64_t upto) {
 
 void Engine::flush_log() {
   release_log(UINT64_MAX);
-  for (const std::string& s : limiter_.flush()) log_(chip_.cycle(), "LOG", kBridgeName, s);
+  for (const std::string& s : limiter_.flush()) log_(cycle(), "LOG", kBridgeName, s);
 }
 
 void Engine::note(const std::string& text) {
-  add_line(chip_.cycle(), "NOTE", kBridgeName, text);
+  add_line(cycle(), "NOTE", kBridgeName, text);
   release_log(log_horizon());
 }
 
-void Engine::check_states(std::uint64_t cycle) {
-  const DpState dp = chip_.dp_state();
-  const WdState wd = chip_.wd_state();
-  if (dp == dp_ && wd == wd_) return;
+void Engine::check_states(std::size_t i, std::uint64_t cycle) {
+  Slave& st = slaves_[i];
+  const DpState dp = st.chip->dp_state();
+  const WdState wd = st.chip->wd_state();
+  if (dp == st.dp && wd == st.wd) return;
   std::string s;
-  if (dp != dp_) s = fmt::format("dp_state {} -> {}", dp_state_name(dp_), dp_state_name(dp));
-  if (wd != wd_) {
-    if (!s.empty()) s += ", ";
-    s += fmt::format("wd_state {} -> {}", wd_state_name(wd_), wd_state_name(wd));
+  if (dp != st.dp) {
+    s = fmt::format("dp_state {} -> {}", dp_state_name(st.dp), dp_state_name(dp));
   }
-  add_line(cycle, "STATE", slave(), std::move(s));
-  dp_ = dp;
-  wd_ = wd;
+  if (wd != st.wd) {
+    if (!s.empty()) s += ", ";
+    s += fmt::format("wd_state {} -> {}", wd_state_name(st.wd), wd_state_name(wd));
+  }
+  add_line(cycle, "STATE", stations_[i].name, std::move(s));
+  st.dp = dp;
+  st.wd = wd;
 }
 
 void Engine::feed(std::span<const std::uint8_t> bytes) {
@@ -240,9 +297,9 @@ void Engine::client_gone() {
 }
 
 void Engine::drop(std::size_t bytes) {
-  if (dropped_ == 0) dropped_since_ = chip_.cycle();
+  if (dropped_ == 0) dropped_since_ = cycle();
   dropped_ += bytes;
-  if (chip_.cycle() - last_drop_report_ >= chip_.clock_hz()) report_dropped();
+  if (cycle() - last_drop_report_ >= chip().clock_hz()) report_dropped();
 }
 
 void Engine::report_dropped() {
@@ -250,9 +307,9 @@ void Engine::report_dropped() {
   note(
       fmt::format("{} bytes dropped in the last {} ms: the client writes faster than the bus "
                   "carries",
-                  dropped_, (chip_.cycle() - dropped_since_) * 1000 / chip_.clock_hz()));
+                  dropped_, (cycle() - dropped_since_) * 1000 / chip().clock_hz()));
   dropped_ = 0;
-  last_drop_report_ = chip_.cycle();
+  last_drop_report_ = cycle();
 }
 
 void Engine::queue_group(std::vector<std::uint8_t> bytes, bool garbage) {
@@ -277,15 +334,17 @@ void Engine::queue_group(std::vector<std::uint8_t> bytes, bool garbage) {
 // that waits for an answer, and none that would start more than TSYN from now: the rest waits
 // in the queue (bounded, and dropped with its client), not as RxD edges driven minutes ahead.
 // (A request behind one that wants no answer starts when the chip reaches that one's end.)
+// On a segment a request starts only when the line has reached its start (Segment::send runs
+// every station there first).
 void Engine::start_next() {
   while (!in_flight_ && !queue_.empty()) {
-    const std::uint64_t start = std::max(chip_.cycle(), bus_free_ + std::uint64_t{kTsynBits} * t_);
-    if (start > chip_.cycle() + std::uint64_t{kTsynBits} * t_) break;
+    const std::uint64_t start = std::max(cycle(), bus_free_ + std::uint64_t{kTsynBits} * t_);
+    if (start > cycle() + lead()) break;
     Request r = std::move(queue_.front());
     queue_.pop_front();
     queued_bytes_ -= r.bytes.size();
     log_telegram(start, "RxD", kMasterName, r.bytes, "");
-    request_end_ = send_on_rxd(chip_, r.bytes, start, t_);
+    request_end_ = put_on_line(r.bytes, start);
     if (line_) line_({start, request_end_, kMasterName, r.bytes});
     if (r.wants_answer) {
       in_flight_ = true;
@@ -297,17 +356,42 @@ void Engine::start_next() {
   }
 }
 
+std::uint64_t Engine::put_on_line(std::span<const std::uint8_t> bytes, std::uint64_t start) {
+  return seg_ ? seg_->send(master_, bytes, start) : send_on_rxd(*solo_, bytes, start, t_);
+}
+
+std::string_view Engine::sender_of(std::uint64_t start) const {
+  if (!seg_) return stations_.front().name;
+  // The chip that began the latest answer by `start` (every character the client hears is a
+  // chip's); of two that began at once the first, which the segment lets keep the line.
+  std::size_t who = 0;
+  std::optional<std::uint64_t> latest;
+  for (const auto& [at, i] : sent_) {
+    if (at <= start && (!latest || at > *latest)) {
+      latest = at;
+      who = i;
+    }
+  }
+  return stations_[who].name;
+}
+
 void Engine::finish_answer(AnswerCollector& a, std::string_view how) {
-  log_telegram(a.start(), "TxD", slave(), a.bytes(), how);
-  if (line_) line_({a.start(), a.end(), slave(), a.bytes()});
+  const std::string_view who = sender_of(a.start());
+  while (sent_.size() > 1 && sent_[1].first <= a.start()) sent_.pop_front();
+  log_telegram(a.start(), "TxD", who, a.bytes(), how);
+  if (line_) line_({a.start(), a.end(), who, a.bytes()});
   bus_free_ = std::max(bus_free_, a.end());
   a.reset();
 }
 
 void Engine::collect() {
   chars_.clear();
-  chip_.take_txd();
-  rx_.advance(chip_.cycle(), chars_);
+  if (seg_) {
+    seg_->take_line(master_, rx_);
+  } else {
+    solo_->take_txd();
+  }
+  rx_.advance(cycle(), chars_);
   for (const UartChar& c : chars_) {
     out_.push_back(c.data);
     // Before the request's end the line carries nothing of ours: such characters are late.
@@ -327,7 +411,7 @@ void Engine::collect() {
     unanswered_ = 0;
     finish_answer(answer_, "");
     in_flight_ = false;
-  } else if (!answer_.started() && !rx_.receiving() && chip_.cycle() >= slot_end_) {
+  } else if (!answer_.started() && !rx_.receiving() && cycle() >= slot_end_) {
     // At the events level a run of them (a master looking for a slave during its baud search,
     // or for one that is not there) is one line at its start and one at its end.
     if (setup_.log_detail == LogDetail::telegrams) {
@@ -345,7 +429,7 @@ void Engine::collect() {
 // Where to look at the line next: as DpMaster does, bit by bit while an answer is awaited until
 // a character starts, then at the receiver's samples; the end of a request that waits for none.
 std::uint64_t Engine::next_wake(std::uint64_t limit) const {
-  const std::uint64_t now = chip_.cycle();
+  const std::uint64_t now = cycle();
   std::uint64_t next = limit;
   if (rx_.receiving()) {
     next = std::min(next, rx_.next_deadline());
@@ -354,41 +438,51 @@ std::uint64_t Engine::next_wake(std::uint64_t limit) const {
         std::min(next, in_flight_ && !answer_.started() ? std::min(slot_end_, now + t_) : now + t_);
   }
   if (!in_flight_ && now < request_end_) next = std::min(next, request_end_);
-  // A queued request starts once its start is TSYN ahead (start_next()).
-  if (!in_flight_ && !queue_.empty()) next = std::min(next, bus_free_);
+  // A queued request starts once its start is lead() ahead (start_next()).
+  if (!in_flight_ && !queue_.empty()) {
+    next = std::min(next, bus_free_ + std::uint64_t{kTsynBits} * t_ - lead());
+  }
   return std::clamp(next, now + 1, std::max(limit, now + 1));
 }
 
-void Engine::step_to(std::uint64_t cycle) {
+void Engine::step_to(std::uint64_t to) {
   if (m51_) {
-    m51_->run_until(cycle);
-    chip_.clear_stop();
+    m51_->run_until(to);
+    solo_->clear_stop();
     if (m51_->port_writes().size() > kHistoryLimit || m51_->interrupts.size() > kHistoryLimit) {
       m51_->clear_history();
     }
   } else {
-    cpu_->run_until(cycle);
-    if (fw_->port_writes().size() > kHistoryLimit || fw_->interrupts.size() > kHistoryLimit) {
-      fw_->clear_history();
+    if (seg_) {
+      seg_->run_until(to);
+    } else {
+      cpu_->run_until(to);
+    }
+    for (Slave& s : slaves_) {
+      FirmwareHost* fw = s.user.firmware.get();
+      if (fw &&
+          (fw->port_writes().size() > kHistoryLimit || fw->interrupts.size() > kHistoryLimit)) {
+        fw->clear_history();
+      }
     }
   }
   collect();
 }
 
-void Engine::run_until(std::uint64_t cycle) {
-  while (chip_.cycle() < cycle) {
+void Engine::run_until(std::uint64_t to) {
+  while (cycle() < to) {
     start_next();
-    step_to(next_wake(cycle));
+    step_to(next_wake(to));
   }
   start_next();
-  if (dropped_ != 0 && chip_.cycle() - last_drop_report_ >= chip_.clock_hz()) report_dropped();
+  if (dropped_ != 0 && cycle() - last_drop_report_ >= chip().clock_hz()) report_dropped();
   release_log(log_horizon());
 }
 
 bool Engine::settle(std::uint64_t max_cycles) {
-  const std::uint64_t limit = chip_.cycle() + max_cycles;
+  const std::uint64_t limit = cycle() + max_cycles;
   start_next();
-  while (busy() && chip_.cycle() < limit) {
+  while (busy() && cycle() < limit) {
     step_to(next_wake(limit));
     start_next();
   }
@@ -396,7 +490,7 @@ bool Engine::settle(std::uint64_t max_cycles) {
   return !busy();
 }
 
-bool Engine::busy() const { return in_flight_ || !queue_.empty() || chip_.cycle() < request_end_; }
+bool Engine::busy() const { return in_flight_ || !queue_.empty() || cycle() < request_end_; }
 
 std::vector<std::uint8_t> Engine::take_output() {
   std::vector<std::uint8_t> out;

@@ -3,6 +3,9 @@
 // No operating system here: the pty, the wall clock and the pacing are the caller's
 // (tools/cli/bridge.cpp), so tests can drive it cycle-exactly.
 //
+// With several slaves (Setup::slaves, --slave) the line is a Segment (session/segment.hpp): the
+// client is the segment's sender "master", every station a chip with its user side.
+//
 // Client bytes are split into telegrams by their SD and LE (fdl::Assembler); each telegram goes on
 // RxD as 11-bit characters at the bridge's baud rate after TSYN (33 bit times) of bus idle,
 // measured from the end of the last telegram on the bus (request or answer). A request that wants
@@ -26,6 +29,8 @@
 #include "dpc31/hex.hpp"
 #include "firmware.h"
 #include "firmware_host.hpp"
+#include "segment.hpp"
+#include "station.hpp"
 
 namespace dpc31::bridge {
 
@@ -52,14 +57,18 @@ struct Setup {
   std::optional<Cpu51Config> cpu;
   Cpu51Image cpu_image;
   std::uint32_t slot_bits = 100;  // how long a request waits for the first answer character
+  // Not empty: these stations on one segment instead of the one chip above (`chip`, `address`,
+  // `firmware` and `cpu` then unused); stations_problem() must find nothing (else the Engine
+  // throws std::invalid_argument with its line).
+  std::vector<SlaveSpec> slaves;
 };
 
 // The names the log and the capture give the line's parties besides the stations (docs/bridge.md).
 inline constexpr std::string_view kMasterName = "master";  // the client: what it sent
 inline constexpr std::string_view kBridgeName = "bridge";  // the bridge's own NOTE and LOG lines
 
-// A station on the bridge's line: a chip with its firmware, named in the log and the capture
-// ("slave5"). The line has a list of them; today the bridge builds one.
+// A station on the bridge's line: a chip with its user side, named in the log and the capture
+// ("slave5"). One without --slave, the --slave list with it.
 struct Station {
   std::string name;
   std::uint8_t address = 0;
@@ -94,7 +103,7 @@ using dpc31::hex_bytes;
 
 class Engine {
  public:
-  // Builds the chip and runs the firmware's main() (which starts the chip).
+  // Builds the chip (or the segment) and runs each firmware's main() (which starts its chip).
   Engine(const Setup& setup, LogSink log);
   ~Engine();
   Engine(const Engine&) = delete;
@@ -133,8 +142,9 @@ class Engine {
   // Reports bytes dropped since the last report, whether or not a second has passed.
   void report_dropped();
 
-  [[nodiscard]] const Chip& chip() const { return chip_; }
-  [[nodiscard]] std::uint64_t cycle() const { return chip_.cycle(); }
+  // The first station's chip; station `i`'s (in the order of stations()).
+  [[nodiscard]] const Chip& chip(std::size_t i = 0) const { return *slaves_.at(i).chip; }
+  [[nodiscard]] std::uint64_t cycle() const { return seg_ ? seg_->cycle() : solo_->cycle(); }
   [[nodiscard]] std::uint32_t bit_cycles() const { return t_; }
   // The 80C32 board (nullptr: the firmware runs on the host CPU).
   [[nodiscard]] Cpu51Module* cpu51() { return m51_.get(); }
@@ -157,27 +167,50 @@ class Engine {
   void finish_answer(AnswerCollector& a, std::string_view how);
   void step_to(std::uint64_t cycle);
   std::uint64_t next_wake(std::uint64_t limit) const;
-  void check_states(std::uint64_t cycle);
-  void port_written(std::uint64_t cycle, const std::string& module, const std::string& port,
-                    unsigned index, std::uint32_t value);
+  // Station `i`'s chip, its user side, and the log's view of it.
+  void add_slave(std::size_t i, Chip& chip, const dpc31_firmware* firmware, std::uint8_t address);
+  void watch_slave(std::size_t i);
+  void check_states(std::size_t i, std::uint64_t cycle);
+  void port_written(std::size_t i, std::uint64_t cycle, const std::string& module,
+                    const std::string& port, unsigned index, std::uint32_t value);
+  // The request on the line: on the one chip's RxD, or sent by the segment's master station.
+  std::uint64_t put_on_line(std::span<const std::uint8_t> bytes, std::uint64_t start);
+  // How far ahead of the line's time a request may go on the line: TSYN on the one chip (its RxD
+  // takes edges ahead), none on a segment (every station hears it at its cycle).
+  [[nodiscard]] std::uint64_t lead() const { return seg_ ? 0 : std::uint64_t{kTsynBits} * t_; }
+  // Who drove the answer whose first start bit is `start`.
+  [[nodiscard]] std::string_view sender_of(std::uint64_t start) const;
   void add_line(std::uint64_t cycle, std::string_view tag, std::string_view who, std::string text);
   // A telegram line, at the telegrams level or when it is broken or `how` says what is wrong.
   void log_telegram(std::uint64_t cycle, std::string_view tag, std::string_view who,
                     std::span<const std::uint8_t> bytes, std::string_view how);
-  [[nodiscard]] std::string_view slave() const { return stations_.front().name; }
   // Hands over the held lines with a cycle up to `upto`.
   void release_log(std::uint64_t upto);
   // No line with a smaller cycle can come: the chip's time, or an earlier start still pending.
   [[nodiscard]] std::uint64_t log_horizon() const;
 
+  // What the engine keeps of one station.
+  struct Slave {
+    Chip* chip = nullptr;
+    UserSide user;  // empty with the 80C32 (m51_)
+    DpState dp = DpState::Wait_Prm;
+    WdState wd = WdState::Baud_Search;
+    std::vector<std::uint32_t> port;  // the last value logged per port (events level)
+    std::vector<bool> port_logged;    // whether a value was logged for the port yet
+  };
+
   Setup setup_;
   LogSink log_;
   LineSink line_;
   std::vector<Station> stations_;  // never resized after construction: the log keeps their names
-  Chip chip_;
+  std::unique_ptr<Chip> solo_;     // the one chip (no --slave)
+  std::vector<Slave> slaves_;      // parallel to stations_; outlives seg_'s CPUs that run them
+  std::unique_ptr<Segment> seg_;   // or the segment (--slave)
+  std::size_t master_ = 0;         // the client's station on seg_
+  // The answers the segment's chips began (their first start bit, the station), for sender_of.
+  std::deque<std::pair<std::uint64_t, std::size_t>> sent_;
   std::uint32_t t_;
-  std::unique_ptr<FirmwareHost> fw_;
-  std::unique_ptr<Cpu> cpu_;
+  std::unique_ptr<Cpu> cpu_;  // the one chip's host CPU
   std::unique_ptr<Cpu51Module> m51_;
 
   fdl::Assembler in_;                  // the client's bytes, split into telegrams
@@ -199,19 +232,14 @@ class Engine {
   AnswerCollector stray_;   // characters while no request is in flight (a late answer)
   std::vector<std::uint8_t> out_;
 
-  DpState dp_;
-  WdState wd_;
-
   struct HeldLine {
     std::uint64_t cycle;
     std::string_view tag;  // one of the literal tags
     std::string_view who;  // kMasterName, kBridgeName or a name in stations_
     std::string text;
   };
-  std::vector<HeldLine> held_;       // in the order they arose
-  LogLimiter limiter_;               // the log never floods (docs/bridge.md, "The log")
-  std::vector<std::uint32_t> port_;  // the last value logged per port (events level)
-  std::vector<bool> port_logged_;    // whether a value was logged for the port yet
+  std::vector<HeldLine> held_;  // in the order they arose
+  LogLimiter limiter_;          // the log never floods (docs/bridge.md, "The log")
 };
 
 }  // namespace dpc31::bridge

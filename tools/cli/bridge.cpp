@@ -71,6 +71,53 @@ struct Checked {
   std::optional<bridge::ListenAddress> tcp;  // --tcp: a TCP port instead of the pty
 };
 
+// One --slave ADDR:FIRMWARE[:PROFILE[:VARIANT]] (VARIANT: the VPC3+'s b|c|s, the DPC31's
+// interrupt controller external|c31). "" or why not.
+std::vector<std::string> slave_fields(const std::string& spec) {
+  std::vector<std::string> f;
+  for (std::size_t from = 0;;) {
+    const std::size_t colon = spec.find(':', from);
+    f.push_back(spec.substr(from, colon - from));
+    if (colon == std::string::npos) return f;
+    from = colon + 1;
+  }
+}
+
+std::string parse_slave(const std::string& spec, bridge::SlaveSpec& s) {
+  const std::vector<std::string> f = slave_fields(spec);
+  const std::string usage = fmt::format(
+      "--slave '{}' must be ADDR:FIRMWARE[:PROFILE[:VARIANT]] (FIRMWARE {}, {} or a plug-in "
+      "path; PROFILE spc3, vpc3plus, dpc31)",
+      spec, bridge::kResponderName, builtin_firmware_names());
+  if (f.size() < 2 || f.size() > 4 || f[1].empty()) return usage;
+  std::uint64_t v = 0;
+  if (!parse_uint(f[0], 125, v)) {
+    return fmt::format("--slave '{}': the address '{}' must be a station address 0..125", spec,
+                       f[0]);
+  }
+  s.address = static_cast<std::uint8_t>(v);
+  if (f.size() > 2 && !parse_profile(f[2], s.chip.profile)) {
+    return fmt::format("--slave '{}': unknown profile '{}' (spc3, vpc3plus, dpc31)", spec, f[2]);
+  }
+  if (f.size() > 3) {
+    ChipChoice choice;
+    (s.chip.profile == Profile::dpc31 ? choice.irq_controller : choice.variant) = f[3];
+    if (s.chip.profile == Profile::spc3) {
+      return fmt::format("--slave '{}': the SPC3 has no variant", spec);
+    }
+    if (const std::string why = apply_chip_choice(choice, s.chip); !why.empty()) {
+      return fmt::format("--slave '{}': {}", spec, why);
+    }
+  }
+  if (f[1] == bridge::kResponderName) return {};
+  try {
+    s.firmware = &find_firmware(f[1]);
+  } catch (const FirmwareError& e) {
+    return fmt::format("--slave '{}': {}", spec, e.what());
+  }
+  return {};
+}
+
 // One line on `err` and nullopt for a bad option.
 std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
   const auto bad = [err](const std::string& msg) {
@@ -100,21 +147,41 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
   } else if (o.allow_remote) {
     return bad("--allow-remote needs --tcp");
   }
-  if (o.firmware.empty()) {
+  if (o.firmware.empty() && o.slaves.empty()) {
     return bad(
-        fmt::format("--firmware is required ({} or a plug-in path)", builtin_firmware_names()));
+        fmt::format("--firmware (the one slave's: {} or a plug-in path) or --slave is required",
+                    builtin_firmware_names()));
+  }
+  if (!o.slaves.empty() && !o.single.empty()) {
+    return bad(fmt::format(
+        "{} is for the one slave without --slave; --slave ADDR:FIRMWARE[:PROFILE[:VARIANT]] "
+        "gives each station its address, firmware, profile and variant",
+        o.single.front()));
   }
   // Truncating the mapped plug-in would end the process with SIGBUS.
+  std::vector<outfile::Named> inputs{
+      {"--firmware", is_plugin_path(o.firmware) || !o.cpu.empty() ? o.firmware : std::string()},
+      {"--pty", o.pty}};
+  for (const std::string& spec : o.slaves) {
+    bridge::SlaveSpec s;
+    if (const std::string why = parse_slave(spec, s); !why.empty()) return bad(why);
+    c.setup.slaves.push_back(s);
+    if (const std::string fw = slave_fields(spec)[1]; is_plugin_path(fw)) {
+      inputs.push_back({"--slave", fw});
+    }
+  }
   if (const std::string same = outfile::distinct(
-          {{"--firmware",
-            is_plugin_path(o.firmware) || !o.cpu.empty() ? o.firmware : std::string()},
-           {"--pty", o.pty}},
-          {{"--log", o.log}, {"--trace-cpu", o.trace_cpu}, {"--pcap", o.pcap}});
+          inputs, {{"--log", o.log}, {"--trace-cpu", o.trace_cpu}, {"--pcap", o.pcap}});
       !same.empty()) {
     return bad(same);
   }
+  if (const std::string why = bridge::stations_problem(c.setup.slaves); !why.empty()) {
+    return bad(why);
+  }
   std::uint64_t v = 0;
-  if (!o.cpu.empty()) {  // 80c32 or 80c32:HZ; --firmware is then its Intel HEX image
+  if (!o.slaves.empty()) {
+    // Each station's chip, address and user side come from its --slave.
+  } else if (!o.cpu.empty()) {  // 80c32 or 80c32:HZ; --firmware is then its Intel HEX image
     const std::string hz = o.cpu.size() > 6 && o.cpu[5] == ':' ? o.cpu.substr(6) : "24000000";
     if (!o.cpu.starts_with("80c32") || (o.cpu.size() > 5 && o.cpu[5] != ':') ||
         !parse_uint(hz, 40'000'000, v) || v < 1'000'000) {
@@ -168,9 +235,7 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
 // the profile that has variants, the interrupt controller only for the dpc31). The address is the
 // one the chip holds after the firmware's init (a plug-in may choose its own); an 80C32 has not
 // run yet, so for it the address is what its switch on port 1 offers.
-std::string header(const Checked& c, const BridgeOptions& o, const std::string& port,
-                   const Chip& chip_after_init) {
-  const ChipOptions& chip = c.setup.chip;
+std::string profile_text(const ChipOptions& chip) {
   std::string profile(profile_name(chip.profile));
   if (chip.profile == Profile::vpc3plus) {
     profile +=
@@ -179,6 +244,29 @@ std::string header(const Checked& c, const BridgeOptions& o, const std::string& 
   if (chip.profile == Profile::dpc31) {
     profile += fmt::format(", irq-controller {}", irq_controller_name(chip.irq_controller));
   }
+  return profile;
+}
+
+// With --slave: each station in the order given, "slave5 (profile dpc31, irq-controller
+// external, firmware DO4)".
+std::string header(const Checked& c, const BridgeOptions& o, const std::string& port,
+                   const bridge::Engine& e) {
+  if (!c.setup.slaves.empty()) {
+    std::string stations;
+    for (std::size_t i = 0; i < c.setup.slaves.size(); ++i) {
+      const bridge::SlaveSpec& s = c.setup.slaves[i];
+      stations += fmt::format(
+          "{}{} (profile {}, firmware {})", i == 0 ? "" : ", ", e.stations()[i].name,
+          profile_text(s.chip),
+          s.firmware != nullptr ? std::string_view(s.firmware->name) : bridge::kResponderName);
+    }
+    return fmt::format(
+        "dpc31 bridge: pacing {}, baud {}, {} slaves: {}, slot {} bit times, log level {}, {}",
+        c.realtime ? "realtime" : "free", c.setup.baud, c.setup.slaves.size(), stations,
+        c.setup.slot_bits, o.log_level, port);
+  }
+  const Chip& chip_after_init = e.chip();
+  const std::string profile = profile_text(c.setup.chip);
   return fmt::format(
       "dpc31 bridge: pacing {}, baud {}, profile {}, firmware {}, {}, slot {} bit times, "
       "log level {}, {}",
@@ -413,6 +501,12 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
                 "80c32[:HZ]: run --firmware, an Intel HEX image, on an 80C32 beside the chip");
   b->add_option("--trace-cpu", o.trace_cpu, "write every 80C32 instruction with its cycle here");
   b->add_option("--address", o.address, "station address 0..125")->capture_default_str();
+  b->add_option("--slave", o.slaves,
+                "ADDR:FIRMWARE[:PROFILE[:VARIANT]], repeated: several stations on the one line "
+                "(FIRMWARE responder for the built-in user side; instead of --firmware, "
+                "--address, --profile)")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   b->add_option("--pacing", o.pacing,
                 "realtime: chip time follows the wall clock; free: "
                 "exchanges take no wall time")
@@ -424,7 +518,13 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
                 "events: state changes and faults; telegrams: also every telegram and port write")
       ->capture_default_str();
   b->allow_extras();
-  b->callback([b, &o] { o.extra = b->remaining(); });
+  b->callback([b, &o] {
+    o.extra = b->remaining();
+    for (const char* name : {"--firmware", "--address", "--profile", "--variant",
+                             "--irq-controller", "--cpu", "--trace-cpu"}) {
+      if (b->get_option(name)->count() > 0) o.single.emplace_back(name);
+    }
+  });
   return b;
 }
 
@@ -525,7 +625,15 @@ int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
   Log log(log_file);
   // A firmware stuck in a loop without a bus access cannot be stopped from this thread: the guard
   // ends the process with one line (and takes the symlink away first).
-  if (!c->setup.cpu) board::guard_hangs("dpc31 bridge", c->setup.firmware->name, door.link);
+  if (!c->setup.slaves.empty()) {
+    // At most one station runs a firmware (stations_problem); the built-in user side always
+    // makes bus accesses.
+    for (const bridge::SlaveSpec& s : c->setup.slaves) {
+      if (s.firmware != nullptr) board::guard_hangs("dpc31 bridge", s.firmware->name, door.link);
+    }
+  } else if (!c->setup.cpu) {
+    board::guard_hangs("dpc31 bridge", c->setup.firmware->name, door.link);
+  }
   outfile::OutFile trace;
   if (!o.trace_cpu.empty() && !trace.open(o.trace_cpu)) return refuse(trace.error());
   capture::PcapngWriter pcap;
@@ -533,7 +641,7 @@ int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
   int rc = 0;
   try {
     Bridge b(*c, *door.port, log);
-    log.line(header(*c, o, door.port->describe(), b.engine().chip()));
+    log.line(header(*c, o, door.port->describe(), b.engine()));
     if (trace.is_open()) trace_cpu(b.engine(), c->setup.cpu_image, trace.stream());
     if (pcap.is_open()) capture_line(b.engine(), pcap);
     rc = b.run();

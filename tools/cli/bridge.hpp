@@ -28,7 +28,11 @@ struct BridgeOptions {
   std::string slot = "100";
   std::string cpu;        // "80c32[:HZ]": --firmware is an Intel HEX image for it (docs/cpu.md)
   std::string trace_cpu;  // every 80C32 instruction with its cycle, to this file
-  std::vector<std::string> extra;  // unknown arguments, refused by run_bridge
+  // --slave ADDR:FIRMWARE[:PROFILE[:VARIANT]], repeated: stations on one line (docs/bridge.md,
+  // "Several slaves")
+  std::vector<std::string> slaves;
+  std::vector<std::string> single;  // the single-slave options given (refused beside --slave)
+  std::vector<std::string> extra;   // unknown arguments, refused by run_bridge
 };
 
 CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o);

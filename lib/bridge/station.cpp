@@ -1,0 +1,66 @@
+#include "station.hpp"
+
+#include <fmt/format.h>
+
+#include <utility>
+
+#include "dpc31/bus_port.hpp"
+
+namespace dpc31::bridge {
+
+std::string_view UserSide::name() const {
+  return firmware ? std::string_view(firmware->firmware().name) : kResponderName;
+}
+
+UserSide make_user_side(Chip& chip, const dpc31_firmware* firmware, std::uint8_t address) {
+  UserSide u;
+  DirectBus bus(chip);
+  if (firmware != nullptr) {
+    u.firmware = std::make_unique<FirmwareHost>(*firmware);
+    u.firmware->init(bus, address);
+    u.program = u.firmware->program();
+    return u;
+  }
+  ResponderConfig rc;
+  rc.slave.address = address;
+  u.responder = std::make_unique<Responder>(rc);
+  u.responder->init(bus);
+  Responder* r = u.responder.get();
+  // The loop-back: the outputs of the last DX_Out are the inputs handed over at the next. What
+  // the responder records is taken here, so a bridge running for days does not grow.
+  u.program.isr = [r](BusPort& b) {
+    r->isr(b);
+    if (!r->outputs.empty()) r->inputs = std::move(r->outputs.back().data);
+    r->outputs.clear();
+    r->interrupts.clear();
+  };
+  return u;
+}
+
+bool instance_safe(const dpc31_firmware& /*fw*/) { return false; }
+
+std::string stations_problem(std::span<const SlaveSpec> slaves) {
+  for (std::size_t i = 0; i < slaves.size(); ++i) {
+    for (std::size_t k = 0; k < i; ++k) {
+      if (slaves[k].address == slaves[i].address) {
+        return fmt::format(
+            "--slave {}: a second station at address {} (two stations at one address both "
+            "answer: a collision on every request)",
+            slaves[i].address, slaves[i].address);
+      }
+      const dpc31_firmware* a = slaves[k].firmware;
+      const dpc31_firmware* b = slaves[i].firmware;
+      if (a != nullptr && b != nullptr && (!instance_safe(*a) || !instance_safe(*b))) {
+        return fmt::format(
+            "--slave {}:{}: station {} runs {} already; one station of a bridge runs a firmware "
+            "(the example firmwares and their dps driver keep their state in C globals, one set "
+            "per process), the others the built-in user side ({}:{})",
+            slaves[i].address, b->name, slaves[k].address, a->name, slaves[i].address,
+            kResponderName);
+      }
+    }
+  }
+  return {};
+}
+
+}  // namespace dpc31::bridge

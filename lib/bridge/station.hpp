@@ -1,0 +1,54 @@
+// The stations of `dpc31 bridge` (docs/bridge.md, "Several slaves"): how each station's user side
+// is made (one function for the single slave and for every --slave) and which sets of stations
+// one line refuses.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "cpu.hpp"
+#include "dpc31/chip.hpp"
+#include "dpc31/dpc31_firmware.h"
+#include "firmware_host.hpp"
+#include "responder.hpp"
+
+namespace dpc31::bridge {
+
+// The FIRMWARE of `--slave ADDR:responder`: the built-in user side instead of a firmware.
+inline constexpr std::string_view kResponderName = "responder";
+
+// One station of a segment (--slave ADDR:FIRMWARE[:PROFILE[:VARIANT]]).
+struct SlaveSpec {
+  std::uint8_t address = 5;
+  ChipOptions chip;
+  const dpc31_firmware* firmware = nullptr;  // nullptr: the built-in user side (responder)
+};
+
+// A station's user side once made: a firmware on the host CPU, or the built-in user side
+// (`Responder`: ident 0C31h, Cfg 13 23, 4 bytes in and out, its inputs the outputs it last
+// fetched: a loop-back a master can check its own data with).
+struct UserSide {
+  std::unique_ptr<FirmwareHost> firmware;
+  std::unique_ptr<Responder> responder;
+  Cpu::Program program;  // what the station's host CPU runs after the init
+  [[nodiscard]] std::string_view name() const;
+};
+
+// Makes the user side of the chip at station `address` and runs its init (which configures and
+// starts the chip): the one place a station's firmware is made.
+UserSide make_user_side(Chip& chip, const dpc31_firmware* firmware, std::uint8_t address);
+
+// Whether `fw` may run on two stations of one process at once. Not yet for any: the example
+// firmwares and their dps driver keep their state in C globals, one set per process (and a
+// plug-in loaded twice is one image); DO4 beside CNT2 had CNT2's module judge DO4's Set_Prm
+// (docs/segment.md, "Stations").
+[[nodiscard]] bool instance_safe(const dpc31_firmware& fw);
+
+// Why these stations cannot share one line ("" when they can): two at one address, or a second
+// station with a firmware beside one that is not instance_safe. One line, for the CLI's exit 2.
+[[nodiscard]] std::string stations_problem(std::span<const SlaveSpec> slaves);
+
+}  // namespace dpc31::bridge
