@@ -217,15 +217,15 @@ void bind_dpv1(py::module_& m, py::class_<PyMaster>& master) {
       .def_readonly("polls", &Dpv1Answer::polls)
       .def_readonly("start", &Dpv1Answer::start)
       .def_readonly("end", &Dpv1Answer::end)
-      .def("__repr__", [](const Dpv1Answer& a) { return "<Dpv1Answer " + answer_summary(a) + ">"; });
+      .def("__repr__",
+           [](const Dpv1Answer& a) { return "<Dpv1Answer " + answer_summary(a) + ">"; });
   master
       .def_property(
           "dpv1_rules", [](const PyMaster& pm) { return pm.dpv1_rules; },
           [](PyMaster& pm, const Dpv1Rules& r) { pm.dpv1_rules = r; })
-      .def_property_readonly("c2_sap",
-                             [](const PyMaster& pm) {
-                               return pm.dpv1_m ? pm.dpv1_m->c2_sap() : std::nullopt;
-                             })
+      .def_property_readonly(
+          "c2_sap",
+          [](const PyMaster& pm) { return pm.dpv1_m ? pm.dpv1_m->c2_sap() : std::nullopt; })
       .def(
           "dpv1_read",
           [](PyMaster& pm, U8 slot, U8 index, U8 length) {
@@ -243,7 +243,9 @@ void bind_dpv1(py::module_& m, py::class_<PyMaster>& master) {
       .def(
           "alarm_ack",
           [](PyMaster& pm, U8 slot, U8 alarm_type, U8 specifier) {
-            return pm.dpv1([&](Dpv1Master& d) { return d.alarm_ack({slot, alarm_type, specifier}); });
+            return pm.dpv1([&](Dpv1Master& d) {
+              return d.alarm_ack({slot, alarm_type, specifier});
+            });
           },
           py::arg("slot"), py::arg("alarm_type"), py::arg("specifier"),
           "MSAC_C1 Alarm_Ack (SAP 51 -> 50); specifier = Seq_Nr << 3 | Add_Ack << 2 | bits 1..0")
@@ -277,7 +279,8 @@ void bind_dpv1(py::module_& m, py::class_<PyMaster>& master) {
             return pm.dpv1([&](Dpv1Master& d) { return d.c2_transport(slot, index, v); });
           },
           py::arg("slot"), py::arg("index"), py::arg("data"))
-      .def("c2_idle", [](PyMaster& pm) { return pm.dpv1([](Dpv1Master& d) { return d.c2_idle(); }); })
+      .def("c2_idle",
+           [](PyMaster& pm) { return pm.dpv1([](Dpv1Master& d) { return d.c2_idle(); }); })
       .def(
           "c2_abort",
           [](PyMaster& pm, U8 reason, U8 instance) {

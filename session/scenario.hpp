@@ -112,8 +112,8 @@ struct ScenarioStep {
   std::optional<RegId> reg;  // write / read / expect reg: the register (else `addr`)
   std::uint32_t addr = 0;    // write / read / expect ram: the first byte address
   // expect dp_state / wd_state / dpv1 / irq: when the state was entered (dpv1: the response's
-  // end; irq: X/INT went active), `at` a cycle or `after` cycles since the last action began (docs/scenario-format.md, "Exact
-  // cycles").
+  // end; irq: X/INT went active), `at` a cycle or `after` cycles since the last action began
+  // (docs/scenario-format.md, "Exact cycles").
   enum class When : std::uint8_t { any, at, after } when = When::any;
   std::uint64_t when_cycle = 0;
   // set_prm / chk_cfg / gc / send: the station that sends it (another master); nullopt: ours.

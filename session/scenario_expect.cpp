@@ -38,7 +38,8 @@ std::string rises_text(const Seen& seen, bool after) {
   for (const auto& [cycle, ir] : seen.irq_rises) {
     std::string causes;
     for (const FieldDesc& f : int_req_reg(seen.chip.profile().id).fields) {
-      if (is_irq_field(f) && ((ir >> f.lsb) & 1U) != 0) causes += (causes.empty() ? "" : "+") + f.name;
+      if (is_irq_field(f) && ((ir >> f.lsb) & 1U) != 0)
+        causes += (causes.empty() ? "" : "+") + f.name;
     }
     s += fmt::format("{}{} {} ({})", s.empty() ? "" : ", ", after ? "after" : "at",
                      after ? cycle - seen.base_cycle : cycle, causes);

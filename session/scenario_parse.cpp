@@ -717,10 +717,10 @@ class Parser {
     } else if (what == "irq") {
       scenario_expect::parse_irq(pos_, s_.chip.profile, step_);
     } else if (!scenario_bus::parse_expect(pos_, s_.chip.profile, last_read_, step_)) {
-      fail(
-          fmt::format("unknown check '{}' (dp_state, wd_state, outputs, cleared, inputs, counter, "
-                      "irr_bit, irq, answer, station, diag_byte, baud, port, pb3, reg, ram, read, dpv1)",
-                      shown(what)));
+      fail(fmt::format(
+          "unknown check '{}' (dp_state, wd_state, outputs, cleared, inputs, counter, "
+          "irr_bit, irq, answer, station, diag_byte, baud, port, pb3, reg, ram, read, dpv1)",
+          shown(what)));
     }
   }
 

@@ -652,9 +652,10 @@ class Runner {
         .baud = chip_baud(),
         // DX_Out is acknowledged by the ISR at once, so a rise during the last action counts.
         .pb3 = chip_.pb3_pin() || pb3_rises_ > base_pb3_,
-        .port = [this](const std::string& name) {
-          return static_cast<std::uint32_t>(m51_ ? m51_->port(name) : fw_->port(name));
-        },
+        .port =
+            [this](const std::string& name) {
+              return static_cast<std::uint32_t>(m51_ ? m51_->port(name) : fw_->port(name));
+            },
         .irq_rises = irq_rises_,
         .base_cycle = base_cycle_};
     scenario_bus::Check c = scenario_expect::is_bus(st.expect)
@@ -722,9 +723,9 @@ class Runner {
   std::size_t base_irq_ = 0;
   std::size_t pb3_rises_ = 0;  // PB3 rising edges so far (dpc31 DX_Out port)
   std::size_t base_pb3_ = 0;
-  std::uint64_t base_cycle_ = 0;  // when the last action began (`after N`)
+  std::uint64_t base_cycle_ = 0;                     // when the last action began (`after N`)
   std::vector<scenario_expect::IrqRise> irq_rises_;  // X/INT activations since then
-  std::uint64_t dp_since_ = 0;    // when dp_ / wd_ were entered, as the walk shows it
+  std::uint64_t dp_since_ = 0;  // when dp_ / wd_ were entered, as the walk shows it
   std::uint64_t wd_since_ = 0;
   scenario_bus::LastRead last_read_;  // what `expect read` compares
 };
