@@ -39,7 +39,7 @@ std::string rises_text(const Seen& seen, bool after) {
     std::string causes;
     for (const FieldDesc& f : int_req_reg(seen.chip.profile().id).fields) {
       if (is_irq_field(f) && ((ir >> f.lsb) & 1U) != 0)
-        causes += (causes.empty() ? "" : "+") + f.name;
+        causes += fmt::format("{}{}", causes.empty() ? "" : "+", f.name);
     }
     s += fmt::format("{}{} {} ({})", s.empty() ? "" : ", ", after ? "after" : "at",
                      after ? cycle - seen.base_cycle : cycle, causes);
