@@ -67,7 +67,8 @@ void parse_irq(std::span<const std::string_view> pos, Profile profile, ScenarioS
     st.value = static_cast<std::uint32_t>(scenario_lex::number(pos[2], "count", 0, 0xFFFF'FFFF));
     return;
   }
-  if (pos.size() != 2) fail("expected 'expect irq NAME at CYCLE|after N' or 'expect irq count N'");
+  if (pos.size() != 2 || pos[1] == "count")
+    fail("expected 'expect irq NAME at CYCLE|after N' or 'expect irq count N'");
   st.name = std::string(pos[1]);
   st.value2 = irq_bit(profile, pos[1]);
   if (st.when == ScenarioStep::When::any)

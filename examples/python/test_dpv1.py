@@ -33,10 +33,10 @@ def test_read_and_write_the_osp_record():
     assert a.du == bytes([0x5E, 0x00, 0x01, 0x02, 0x01, 0x09])  # Read, slot, index, 2, OSPMode, 9
     assert a.error is None
     # traces/do4_dpv1_vpc3plus.scn: the Read from t0 = 2 939 600, its response (17 characters)
-    # after poll 5, ending at t0 + 45 408; polls 1-4 answered SC.
+    # after poll 6, ending at t0 + 45 408; polls 1-5 answered SC.
     assert a.start == 2_939_600
     assert a.end == 2_939_600 + 45_408 == 2_985_008
-    assert a.polls == 4
+    assert a.polls == 5
     # The response telegram: DA 82h, SA 85h, FC 08h, DSAP = SSAP = 33h, FCS E0h.
     assert a.last.encode() == bytes([0x68, 0x0B, 0x0B, 0x68, 0x82, 0x85, 0x08, 0x33, 0x33, 0x5E,
                                      0x00, 0x01, 0x02, 0x01, 0x09, 0xE0, 0x16])
