@@ -91,11 +91,14 @@ std::uint64_t UartRx::sample_at(std::uint32_t k) const {
 }
 
 void UartRx::sample_through(std::uint64_t last) {
-  // The line has held level_ since the last edge, so every sample up to `last` reads it.
-  while (receiving() && sample_at(k_) <= last) {
-    if (level_) bits_ = static_cast<std::uint16_t>(bits_ | (1u << k_));
-    if (++k_ == kUartCharBits) finish();
-  }
+  // The line has held level_ since the last edge, so every sample up to `last` reads it: all of
+  // them at once (a character ends at its stop sample, so one frame at most).
+  if (!receiving() || sample_at(k_) > last) return;
+  const auto m = static_cast<std::uint32_t>(
+      std::min<std::uint64_t>(kUartCharBits - k_, (last - sample_at(k_)) / t_ + 1));
+  if (level_) bits_ = static_cast<std::uint16_t>(bits_ | ((1u << m) - 1) << k_);
+  k_ += m;
+  if (k_ == kUartCharBits) finish();
 }
 
 void UartRx::finish() {
