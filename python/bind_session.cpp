@@ -188,6 +188,18 @@ struct PyMaster {
   }
 };
 
+// A Read (MSAC_C1 or on the connection) and a service with record data (Write, Data_Transport):
+// one binding per Dpv1Master member.
+template <Dpv1Answer (Dpv1Master::*Read)(U8, U8, U8)>
+Dpv1Answer read_record(PyMaster& pm, U8 slot, U8 index, U8 length) {
+  return pm.dpv1([&](Dpv1Master& d) { return (d.*Read)(slot, index, length); });
+}
+template <Dpv1Answer (Dpv1Master::*Send)(U8, U8, pdu::Bytes)>
+Dpv1Answer send_record(PyMaster& pm, U8 slot, U8 index, const py::bytes& data) {
+  pdu::Bytes v = from_bytes(data);
+  return pm.dpv1([&](Dpv1Master& d) { return (d.*Send)(slot, index, std::move(v)); });
+}
+
 // The master's DPV1 services (docs/dpv1.md, "The master's side"), one call for one call of
 // Dpv1Master; each runs the chip until the response, the time-out or no answer.
 void bind_dpv1(py::module_& m, py::class_<PyMaster>& master) {
@@ -226,20 +238,10 @@ void bind_dpv1(py::module_& m, py::class_<PyMaster>& master) {
       .def_property_readonly(
           "c2_sap",
           [](const PyMaster& pm) { return pm.dpv1_m ? pm.dpv1_m->c2_sap() : std::nullopt; })
-      .def(
-          "dpv1_read",
-          [](PyMaster& pm, U8 slot, U8 index, U8 length) {
-            return pm.dpv1([&](Dpv1Master& d) { return d.read(slot, index, length); });
-          },
-          py::arg("slot"), py::arg("index"), py::arg("length"),
-          "MSAC_C1 Read (SAP 51 -> 51), polled until the response")
-      .def(
-          "dpv1_write",
-          [](PyMaster& pm, U8 slot, U8 index, const py::bytes& data) {
-            const std::vector<U8> v = from_bytes(data);
-            return pm.dpv1([&](Dpv1Master& d) { return d.write(slot, index, v); });
-          },
-          py::arg("slot"), py::arg("index"), py::arg("data"), "MSAC_C1 Write")
+      .def("dpv1_read", &read_record<&Dpv1Master::read>, py::arg("slot"), py::arg("index"),
+           py::arg("length"), "MSAC_C1 Read (SAP 51 -> 51), polled until the response")
+      .def("dpv1_write", &send_record<&Dpv1Master::write>, py::arg("slot"), py::arg("index"),
+           py::arg("data"), "MSAC_C1 Write")
       .def(
           "alarm_ack",
           [](PyMaster& pm, U8 slot, U8 alarm_type, U8 specifier) {
@@ -259,26 +261,12 @@ void bind_dpv1(py::module_& m, py::class_<PyMaster>& master) {
           },
           py::arg("send_timeout") = 100, py::arg("features_supported") = 1,
           "MSAC_C2 Initiate to SAP 49, then the connection's SAP polled for its response")
-      .def(
-          "c2_read",
-          [](PyMaster& pm, U8 slot, U8 index, U8 length) {
-            return pm.dpv1([&](Dpv1Master& d) { return d.c2_read(slot, index, length); });
-          },
-          py::arg("slot"), py::arg("index"), py::arg("length"))
-      .def(
-          "c2_write",
-          [](PyMaster& pm, U8 slot, U8 index, const py::bytes& data) {
-            const std::vector<U8> v = from_bytes(data);
-            return pm.dpv1([&](Dpv1Master& d) { return d.c2_write(slot, index, v); });
-          },
-          py::arg("slot"), py::arg("index"), py::arg("data"))
-      .def(
-          "c2_transport",
-          [](PyMaster& pm, U8 slot, U8 index, const py::bytes& data) {
-            const std::vector<U8> v = from_bytes(data);
-            return pm.dpv1([&](Dpv1Master& d) { return d.c2_transport(slot, index, v); });
-          },
-          py::arg("slot"), py::arg("index"), py::arg("data"))
+      .def("c2_read", &read_record<&Dpv1Master::c2_read>, py::arg("slot"), py::arg("index"),
+           py::arg("length"))
+      .def("c2_write", &send_record<&Dpv1Master::c2_write>, py::arg("slot"), py::arg("index"),
+           py::arg("data"))
+      .def("c2_transport", &send_record<&Dpv1Master::c2_transport>, py::arg("slot"),
+           py::arg("index"), py::arg("data"))
       .def("c2_idle",
            [](PyMaster& pm) { return pm.dpv1([](Dpv1Master& d) { return d.c2_idle(); }); })
       .def(
