@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <limits>
 
 #include "snapshot.hpp"
 
@@ -91,11 +92,14 @@ std::uint64_t UartRx::sample_at(std::uint32_t k) const {
 }
 
 void UartRx::sample_through(std::uint64_t last) {
-  // The line has held level_ since the last edge, so every sample up to `last` reads it.
-  while (receiving() && sample_at(k_) <= last) {
-    if (level_) bits_ = static_cast<std::uint16_t>(bits_ | (1u << k_));
-    if (++k_ == kUartCharBits) finish();
-  }
+  // The line has held level_ since the last edge, so every sample up to `last` reads it: all of
+  // them at once (a character ends at its stop sample, so one frame at most).
+  if (!receiving() || sample_at(k_) > last) return;
+  const auto m = static_cast<std::uint32_t>(
+      std::min<std::uint64_t>(kUartCharBits - k_, (last - sample_at(k_)) / t_ + 1));
+  if (level_) bits_ = static_cast<std::uint16_t>(bits_ | ((1u << m) - 1) << k_);
+  k_ += m;
+  if (k_ == kUartCharBits) finish();
 }
 
 void UartRx::finish() {
@@ -149,19 +153,23 @@ std::size_t UartRx::whole_run(std::span<const std::pair<std::uint64_t, bool>> e)
   // leave, so an edge still to come inside the frame (a later batch) reads as it would.
   if (e.empty() || e[0].second || t_ < 2) return 0;
   const std::uint64_t s = e[0].first;
-  std::uint16_t frame = 0;
-  bool line = false;
+  // The next edge's cycle is kept at hand (none: the largest cycle): the loop runs per bit, and
+  // this is the hottest loop of a master receiving long answers (docs/performance.md, row k).
+  constexpr std::uint64_t kNone = std::numeric_limits<std::uint64_t>::max();
+  std::uint32_t frame = 0;
+  std::uint32_t line = 0;
   std::size_t n = 1;
+  std::uint64_t next = e.size() > 1 ? e[1].first : kNone;
   std::uint64_t at = s;
   for (std::uint32_t k = 1; k < kUartCharBits; ++k) {
     at += t_;
-    if (n < e.size() && e[n].first < at) return 0;  // off a bit boundary: not a character's edge
-    if (n < e.size() && e[n].first == at) {
-      if (e[n].second == line) return 0;
-      line = e[n].second;
-      ++n;
+    if (next < at) return 0;  // off a bit boundary: not a character's edge
+    if (next == at) {
+      if (e[n].second == (line != 0)) return 0;
+      line ^= 1u;
+      next = ++n < e.size() ? e[n].first : kNone;
     }
-    if (line) frame = static_cast<std::uint16_t>(frame | 1u << k);
+    frame |= line << k;
   }
   const auto data = static_cast<std::uint8_t>(frame >> 1);
   if (frame != uart_frame(data) || !whole_char(s, data, t_)) return 0;

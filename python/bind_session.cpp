@@ -1,4 +1,5 @@
-// dpc31.Master, dpc31.Firmware, dpc31.Responder, dpc31.Scenario and dpc31.wavediff in Python
+// dpc31.Master (with its DPV1 services), dpc31.Firmware, dpc31.Responder, dpc31.Scenario and
+// dpc31.wavediff in Python
 // (docs/python.md): the session layer (session/*.hpp, installed as <dpc31/session/...>) and
 // lib/wavediff's compare(), one call for one call.
 #include <pybind11/operators.h>
@@ -7,6 +8,7 @@
 
 #include "bind.hpp"
 #include "dp_master.hpp"
+#include "dpv1_master.hpp"
 #include "firmware_host.hpp"
 #include "responder.hpp"
 #include "scenario.hpp"
@@ -154,6 +156,16 @@ struct PyMaster {
   std::unique_ptr<DpMaster> m;
   std::shared_ptr<FirmwareHost> firmware;
   std::shared_ptr<Responder> responder;
+  Dpv1Rules dpv1_rules;
+  std::unique_ptr<Dpv1Master> dpv1_m;  // on `m`: made at the first DPV1 service
+
+  // A DPV1 service of the master (session/dpv1_master.hpp), with the rules as Python set them.
+  template <typename F>
+  Dpv1Answer dpv1(F&& f) {
+    if (!dpv1_m) dpv1_m = std::make_unique<Dpv1Master>(chip.chip, *m, dpv1_rules);
+    dpv1_m->rules() = dpv1_rules;
+    return act([&] { return f(*dpv1_m); });
+  }
 
   template <typename F>
   auto act(F&& f) {
@@ -172,12 +184,104 @@ struct PyMaster {
       init(bus);
     });
     m = std::make_unique<DpMaster>(chip.chip, config, slave);
+    dpv1_m.reset();
   }
 };
 
+// A Read (MSAC_C1 or on the connection) and a service with record data (Write, Data_Transport):
+// one binding per Dpv1Master member.
+template <Dpv1Answer (Dpv1Master::*Read)(U8, U8, U8)>
+Dpv1Answer read_record(PyMaster& pm, U8 slot, U8 index, U8 length) {
+  return pm.dpv1([&](Dpv1Master& d) { return (d.*Read)(slot, index, length); });
+}
+template <Dpv1Answer (Dpv1Master::*Send)(U8, U8, pdu::Bytes)>
+Dpv1Answer send_record(PyMaster& pm, U8 slot, U8 index, const py::bytes& data) {
+  pdu::Bytes v = from_bytes(data);
+  return pm.dpv1([&](Dpv1Master& d) { return (d.*Send)(slot, index, std::move(v)); });
+}
+
+// The master's DPV1 services (docs/dpv1.md, "The master's side"), one call for one call of
+// Dpv1Master; each runs the chip until the response, the time-out or no answer.
+void bind_dpv1(py::module_& m, py::class_<PyMaster>& master) {
+  using O = Dpv1Answer::Outcome;
+  py::enum_<O>(m, "Dpv1Outcome")
+      .value("positive", O::positive)
+      .value("negative", O::negative)
+      .value("refused", O::refused)
+      .value("no_answer", O::no_answer)
+      .value("timeout", O::timeout)
+      .value("malformed", O::malformed);
+  py::class_<Dpv1Rules>(m, "Dpv1Rules", "The master's DPV1 rules (retries, time-out, C2 SAP).")
+      .def(py::init(&with_kwargs<Dpv1Rules>))
+      .def_readwrite("retries", &Dpv1Rules::retries)
+      .def_readwrite("c1_response_timeout", &Dpv1Rules::c1_response_timeout)
+      .def_readwrite("c2_ssap", &Dpv1Rules::c2_ssap);
+  py::class_<Dpv1Answer>(m, "Dpv1Answer", "What a DPV1 service got (session/dpv1_master.hpp).")
+      .def_readonly("outcome", &Dpv1Answer::outcome)
+      .def_property_readonly("du", [](const Dpv1Answer& a) { return to_bytes(a.du); })
+      .def_property_readonly("error",
+                             [](const Dpv1Answer& a) -> std::optional<py::tuple> {
+                               if (!a.error) return std::nullopt;
+                               return py::make_tuple(a.error->error_decode, a.error->error_code_1,
+                                                     a.error->error_code_2);
+                             })
+      .def_readonly("last", &Dpv1Answer::last)
+      .def_readonly("polls", &Dpv1Answer::polls)
+      .def_readonly("start", &Dpv1Answer::start)
+      .def_readonly("end", &Dpv1Answer::end)
+      .def("__repr__",
+           [](const Dpv1Answer& a) { return "<Dpv1Answer " + answer_summary(a) + ">"; });
+  master
+      .def_property(
+          "dpv1_rules", [](const PyMaster& pm) { return pm.dpv1_rules; },
+          [](PyMaster& pm, const Dpv1Rules& r) { pm.dpv1_rules = r; })
+      .def_property_readonly(
+          "c2_sap",
+          [](const PyMaster& pm) { return pm.dpv1_m ? pm.dpv1_m->c2_sap() : std::nullopt; })
+      .def("dpv1_read", &read_record<&Dpv1Master::read>, py::arg("slot"), py::arg("index"),
+           py::arg("length"), "MSAC_C1 Read (SAP 51 -> 51), polled until the response")
+      .def("dpv1_write", &send_record<&Dpv1Master::write>, py::arg("slot"), py::arg("index"),
+           py::arg("data"), "MSAC_C1 Write")
+      .def(
+          "alarm_ack",
+          [](PyMaster& pm, U8 slot, U8 alarm_type, U8 specifier) {
+            return pm.dpv1([&](Dpv1Master& d) {
+              return d.alarm_ack({slot, alarm_type, specifier});
+            });
+          },
+          py::arg("slot"), py::arg("alarm_type"), py::arg("specifier"),
+          "MSAC_C1 Alarm_Ack (SAP 51 -> 50); specifier = Seq_Nr << 3 | Add_Ack << 2 | bits 1..0")
+      .def(
+          "c2_initiate",
+          [](PyMaster& pm, std::uint16_t send_timeout, std::uint16_t features_supported) {
+            pdu::Initiate req;
+            req.send_timeout = send_timeout;
+            req.features_supported = features_supported;
+            return pm.dpv1([&](Dpv1Master& d) { return d.initiate(req); });
+          },
+          py::arg("send_timeout") = 100, py::arg("features_supported") = 1,
+          "MSAC_C2 Initiate to SAP 49, then the connection's SAP polled for its response")
+      .def("c2_read", &read_record<&Dpv1Master::c2_read>, py::arg("slot"), py::arg("index"),
+           py::arg("length"))
+      .def("c2_write", &send_record<&Dpv1Master::c2_write>, py::arg("slot"), py::arg("index"),
+           py::arg("data"))
+      .def("c2_transport", &send_record<&Dpv1Master::c2_transport>, py::arg("slot"),
+           py::arg("index"), py::arg("data"))
+      .def("c2_idle",
+           [](PyMaster& pm) { return pm.dpv1([](Dpv1Master& d) { return d.c2_idle(); }); })
+      .def(
+          "c2_abort",
+          [](PyMaster& pm, U8 reason, U8 instance) {
+            return pm.dpv1([&](Dpv1Master& d) { return d.c2_abort({0, instance, reason, 0}); });
+          },
+          py::arg("reason") = 0, py::arg("instance") = 2,
+          "MSAC_C2 Abort on the open connection (Instance 2: the user)");
+}
+
 void bind_master(py::module_& m) {
-  py::class_<PyMaster>(m, "Master",
-                       "The built-in DP master (class 1) on a chip's RxD/TxD (DpMaster).")
+  py::class_<PyMaster> master(m, "Master",
+                              "The built-in DP master (class 1) on a chip's RxD/TxD (DpMaster).");
+  master
       .def(py::init([](py::object chip, U8 address, std::uint32_t baud, std::uint32_t slot_bits,
                        std::uint32_t idle_bits, const std::optional<SlaveConfig>& slave) {
              chip.cast<PyChip&>().enter(true);
@@ -310,6 +414,7 @@ void bind_master(py::module_& m) {
           "glitch", [](PyMaster& pm, std::uint32_t low) { pm.act([&] { pm.m->glitch(low); }); },
           py::arg("low_cycles"))
       .def_static("diag_ready", &DpMaster::diag_ready, py::arg("diag_answer"));
+  bind_dpv1(m, master);
 }
 
 // What a scenario run reports beyond ScenarioOutcome: every expect and step with its cycle.

@@ -85,6 +85,7 @@ enum class ExpectKind : std::uint8_t {
   read,        // what the last `read` returned
   indication,  // the DPC31's newest Indication_Queue entry
   dpv1,        // the last DPV1 service's response
+  irq,         // X/INT activations of the last action: one at a cycle, or their count
 };
 
 // Steps that let time pass (and may send requests), as opposed to modifiers, inputs and checks.
@@ -110,9 +111,9 @@ struct ScenarioStep {
   std::string name;  // expect: counter / interrupt / answer kind / port / register; hw: the input
   std::optional<RegId> reg;  // write / read / expect reg: the register (else `addr`)
   std::uint32_t addr = 0;    // write / read / expect ram: the first byte address
-  // expect dp_state / wd_state / dpv1: when the state was entered (dpv1: the response's end), `at`
-  // a cycle or `after` cycles since the last action began (docs/scenario-format.md, "Exact
-  // cycles").
+  // expect dp_state / wd_state / dpv1 / irq: when the state was entered (dpv1: the response's
+  // end; irq: X/INT went active), `at` a cycle or `after` cycles since the last action began
+  // (docs/scenario-format.md, "Exact cycles").
   enum class When : std::uint8_t { any, at, after } when = When::any;
   std::uint64_t when_cycle = 0;
   // set_prm / chk_cfg / gc / send: the station that sends it (another master); nullopt: ours.

@@ -18,7 +18,8 @@ using scenario_lex::number;
 namespace {
 
 constexpr std::uint8_t kMaxRecord = 240;  // a record's data (the PDU's 4-byte head + 240 = 244)
-constexpr std::string_view kOutcomes[] = {"refused", "timeout", "no_answer"};
+// `sc`: positive without a data unit, the Abort's SC.
+constexpr std::string_view kOutcomes[] = {"refused", "timeout", "no_answer", "sc"};
 
 [[noreturn]] void unknown(std::string_view k, std::string_view cmd) {
   fail(fmt::format("unknown option '{}' for {}", shown(k), cmd));
@@ -157,7 +158,7 @@ void parse_expect(std::span<const std::string_view> pos, ScenarioStep& st) {
   const auto form = [] {
     fail(
         "expected 'expect dpv1 BYTES', 'expect dpv1 error DECODE,CODE1,CODE2', 'expect dpv1 "
-        "polls N' or 'expect dpv1 refused|timeout|no_answer'");
+        "polls N' or 'expect dpv1 refused|timeout|no_answer|sc'");
   };
   if (pos.size() == 2) {
     if (std::find(std::begin(kOutcomes), std::end(kOutcomes), pos[1]) != std::end(kOutcomes)) {
@@ -224,6 +225,9 @@ Check check(const ScenarioStep& st, const std::optional<Dpv1Answer>& last) {
     c.got = last->error ? fmt::format("negative {:02X} {:02X} {:02X}", last->error->error_decode,
                                       last->error->error_code_1, last->error->error_code_2)
                         : got;
+  } else if (st.name == "sc") {
+    c.want = "sc";
+    c.got = last->outcome == Dpv1Answer::Outcome::positive && last->du.empty() ? "sc" : got;
   } else {
     c.want = st.name;
     const std::string o = outcome_name(last->outcome);

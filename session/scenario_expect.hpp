@@ -7,7 +7,10 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
+#include <span>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include "dpc31/chip.hpp"
@@ -18,6 +21,9 @@
 #include "scenario_bus.hpp"
 
 namespace dpc31::scenario_expect {
+
+// An X/INT activation: its cycle and Int_Reg at that cycle (the interrupt's causes).
+using IrqRise = std::pair<std::uint64_t, std::uint16_t>;
 
 // What the run has seen when an expect is checked.
 struct Seen {
@@ -31,7 +37,16 @@ struct Seen {
   std::uint32_t baud;                     // the chip's baud rate (0: searching)
   bool pb3;                               // PB3 high now or risen during the last action
   std::function<std::uint32_t(const std::string&)> port;  // a firmware port's value
+  std::span<const IrqRise> irq_rises;                     // X/INT activations in the last action
+  std::uint64_t base_cycle = 0;                           // when the last action began
 };
+
+// The bit of interrupt `name`: a one-bit Int_Req_Reg field of `profile` (throws
+// scenario_lex::ParseFail naming a few).
+std::uint32_t irq_bit(Profile profile, std::string_view name);
+// `expect irq NAME` (with `at` / `after`, which the caller has taken into `st.when`) and
+// `expect irq count N` (pos[0] == "irq").
+void parse_irq(std::span<const std::string_view> pos, Profile profile, ScenarioStep& st);
 
 // `expect reg|ram|read|indication`: scenario_bus::check.
 bool is_bus(ExpectKind k);

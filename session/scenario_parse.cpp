@@ -14,6 +14,7 @@
 #include "scenario.hpp"
 #include "scenario_bus.hpp"
 #include "scenario_dpv1.hpp"
+#include "scenario_expect.hpp"
 #include "scenario_lex.hpp"
 #include "scenario_send.hpp"
 #include "textfile.hpp"
@@ -601,10 +602,10 @@ class Parser {
     if (pos_.empty()) fail("'expect' needs what to check and the expected value");
     const std::string_view what = pos_[0];
     if (pos_.size() >= 3 && (pos_[pos_.size() - 2] == "at" || pos_[pos_.size() - 2] == "after")) {
-      if (what != "dp_state" && what != "wd_state" && what != "dpv1") {
+      if (what != "dp_state" && what != "wd_state" && what != "dpv1" && what != "irq") {
         fail(fmt::format(
-            "'{}' is for dp_state, wd_state and dpv1: the cycle a state was entered or a "
-            "response ended",
+            "'{}' is for dp_state, wd_state, dpv1 and irq: the cycle a state was entered, a "
+            "response ended or X/INT went active",
             pos_[pos_.size() - 2]));
       }
       step_.when =
@@ -677,7 +678,7 @@ class Parser {
       args(2, "NAME 0|1");
       step_.expect = ExpectKind::irr_bit;
       step_.name = std::string(pos_[1]);
-      step_.value2 = irq_bit(pos_[1]);
+      step_.value2 = scenario_expect::irq_bit(s_.chip.profile, pos_[1]);
       step_.value = flag(pos_[2], "irr_bit") ? 1 : 0;
     } else if (what == "answer") {
       args(1, "none|sc|data|ok|ue|rr|rs|dl|nr|dh");
@@ -713,11 +714,13 @@ class Parser {
       step_.value = static_cast<std::uint32_t>(number(pos_[1], "baud", 1, 12'000'000));
     } else if (what == "dpv1") {
       scenario_dpv1::parse_expect(pos_, step_);
+    } else if (what == "irq") {
+      scenario_expect::parse_irq(pos_, s_.chip.profile, step_);
     } else if (!scenario_bus::parse_expect(pos_, s_.chip.profile, last_read_, step_)) {
-      fail(
-          fmt::format("unknown check '{}' (dp_state, wd_state, outputs, cleared, inputs, counter, "
-                      "irr_bit, answer, station, diag_byte, baud, port, pb3, reg, ram, read, dpv1)",
-                      shown(what)));
+      fail(fmt::format(
+          "unknown check '{}' (dp_state, wd_state, outputs, cleared, inputs, counter, "
+          "irr_bit, irq, answer, station, diag_byte, baud, port, pb3, reg, ram, read, dpv1)",
+          shown(what)));
     }
   }
 
@@ -730,18 +733,6 @@ class Parser {
     std::string all;
     for (std::string_view name : n) all += (all.empty() ? "" : ", ") + std::string(name);
     fail(fmt::format("unknown state '{}' ({})", shown(s), all));
-  }
-
-  // Interrupt names are the Int_Req_Reg fields of the chosen profile.
-  std::uint32_t irq_bit(std::string_view name) const {
-    const RegDesc* r = find_reg(profile_desc(s_.chip.profile), RegId::Int_Req_Reg);
-    for (const FieldDesc& f : r->fields) {
-      if (f.name == name && f.width == 1 && f.access != Access::RSVD) return f.lsb;
-    }
-    fail(
-        fmt::format("'{}' is not an interrupt of {} (Int_Req_Reg: DX_Out, New_Prm_Data, "
-                    "WD_DP_Control_Timeout, ...)",
-                    shown(name), profile_desc(s_.chip.profile).name));
   }
 
   // The directory of the scenario file after every link is resolved ("" for text not from a file).

@@ -96,7 +96,10 @@ class Runner {
       });
     }
     chip_.on_telegram([this](const Telegram&) { check_states(); });
-    chip_.on_irq_change([this](std::uint64_t, bool) { check_states(); });
+    chip_.on_irq_change([this](std::uint64_t cycle, bool active) {
+      if (active) irq_rises_.emplace_back(cycle, chip_.peek_reg(RegId::Int_Reg));
+      check_states();
+    });
     chip_.on_pb3_change([this](std::uint64_t cycle, bool high) {
       pb3_rises_ += high ? 1 : 0;
       note(cycle, fmt::format("PB3 {}", high ? "high (DX_Out of a Sync)" : "low"));
@@ -121,6 +124,7 @@ class Runner {
         base_irq_ = interrupts().size();
         base_pb3_ = pb3_rises_;
         base_cycle_ = chip_.cycle();
+        irq_rises_.clear();  // `expect irq` looks at the last action only
       }
       note(chip_.cycle(), fmt::format("line {}: {}", st.line, st.text), Event::Kind::step, &st);
       // Requests counted, not history().size(): a long exchange step forgets history as it goes.
@@ -648,9 +652,12 @@ class Runner {
         .baud = chip_baud(),
         // DX_Out is acknowledged by the ISR at once, so a rise during the last action counts.
         .pb3 = chip_.pb3_pin() || pb3_rises_ > base_pb3_,
-        .port = [this](const std::string& name) {
-          return static_cast<std::uint32_t>(m51_ ? m51_->port(name) : fw_->port(name));
-        }};
+        .port =
+            [this](const std::string& name) {
+              return static_cast<std::uint32_t>(m51_ ? m51_->port(name) : fw_->port(name));
+            },
+        .irq_rises = irq_rises_,
+        .base_cycle = base_cycle_};
     scenario_bus::Check c = scenario_expect::is_bus(st.expect)
                                 ? scenario_bus::check(chip_, st, last_read_)
                             : st.expect == ExpectKind::dpv1 ? scenario_dpv1::check(st, dpv1_last_)
@@ -658,7 +665,7 @@ class Runner {
     const std::string& what = c.what;
     const std::string& want = c.want;
     std::string& got = c.got;
-    if (st.when != ScenarioStep::When::any && got == want) {
+    if (st.when != ScenarioStep::When::any && st.expect != ExpectKind::irq && got == want) {
       const std::uint64_t since = st.expect == ExpectKind::dpv1       ? dpv1_last_->end
                                   : st.expect == ExpectKind::dp_state ? dp_since_
                                                                       : wd_since_;
@@ -716,8 +723,9 @@ class Runner {
   std::size_t base_irq_ = 0;
   std::size_t pb3_rises_ = 0;  // PB3 rising edges so far (dpc31 DX_Out port)
   std::size_t base_pb3_ = 0;
-  std::uint64_t base_cycle_ = 0;  // when the last action began (`after N`)
-  std::uint64_t dp_since_ = 0;    // when dp_ / wd_ were entered, as the walk shows it
+  std::uint64_t base_cycle_ = 0;                     // when the last action began (`after N`)
+  std::vector<scenario_expect::IrqRise> irq_rises_;  // X/INT activations since then
+  std::uint64_t dp_since_ = 0;  // when dp_ / wd_ were entered, as the walk shows it
   std::uint64_t wd_since_ = 0;
   scenario_bus::LastRead last_read_;  // what `expect read` compares
 };

@@ -144,6 +144,25 @@ TEST(Dpv1Master, ClassTwoConnection) {
   EXPECT_EQ(a.outcome, Dpv1Answer::Outcome::refused);
 }
 
+// `expect dpv1 sc` (docs/scenario-format.md, "DPV1"): the Abort gets SC and no response; a check
+// of another outcome fails and says what came.
+TEST(Dpv1Scenario, AbortIsCheckedAsSc) {
+  const char* text =
+      "profile vpc3plus\nslave user_prm=C0,00,00\nrecord slot=0 index=1 data=01\nstartup\n"
+      "c2_initiate\nexpect dpv1 sc   # the Initiate response: fails\nc2_abort\nexpect dpv1 sc\n"
+      "expect dpv1 refused   # fails\n";
+  Scenario s;
+  ScenarioError err;
+  ASSERT_TRUE(parse_scenario(text, "t.scn", s, err)) << err.text();
+  std::vector<std::string> errors;
+  const ScenarioOutcome o =
+      run_scenario(s, {}, [&](const std::string& line) { errors.push_back(line); });
+  EXPECT_EQ(o.passed, 1u);
+  ASSERT_EQ(errors.size(), 2u);
+  EXPECT_TRUE(errors[0].starts_with("t.scn:6: expected dpv1 sc sc, got 57 ")) << errors[0];
+  EXPECT_EQ(errors[1], "t.scn:9: expected dpv1 refused refused, got SC after 0 polls");
+}
+
 // Bad DPV1 lines are parse errors with their line (docs/scenario-format.md, "DPV1"): nothing
 // runs.
 TEST(Dpv1Scenario, ParseErrorsNameTheLine) {

@@ -402,8 +402,19 @@ TEST(ScenarioParse, BusActionsRefuseWhatTheMapDoesNot) {
       {h + "expect reg Status_Reg 0x10000\n",
        "t.scn:2: register value 0x10000 out of range (0..65535)"},
       {h + "expect baud 12000000 at 5\n",
-       "t.scn:2: 'at' is for dp_state, wd_state and dpv1: the cycle a state was entered or a "
-       "response ended"},
+       "t.scn:2: 'at' is for dp_state, wd_state, dpv1 and irq: the cycle a state was entered, a "
+       "response ended or X/INT went active"},
+      // `expect irq`: the cycle X/INT went active, or how often (docs/scenario-format.md).
+      {h + "expect irq DX_Out after 12\nexpect irq count 0\nexpect irq MAC_Reset at 7\n", ""},
+      {h + "expect irq DX_Out\n",
+       "t.scn:2: 'expect irq DX_Out' needs 'at CYCLE' or 'after N': the cycle X/INT went active"},
+      {h + "expect irq count 2 after 5\n", "t.scn:2: 'expect irq count N' takes no 'at' / 'after'"},
+      {h + "expect irq count\n",
+       "t.scn:2: expected 'expect irq NAME at CYCLE|after N' or 'expect irq count N'"},
+      {h + "expect irq count x\n", "t.scn:2: bad number 'x' for count"},
+      {h + "expect irq FDL_Ind at 5\n",
+       "t.scn:2: 'FDL_Ind' is not an interrupt of spc3 (Int_Req_Reg: DX_Out, New_Prm_Data, "
+       "WD_DP_Control_Timeout, ...)"},
       {h + "corrupt parity\nwrite 0x10 1\nstartup\n",
        "t.scn:2: the next action ('write', line 3) sends no request to damage"},
       {h + "read 0x10\nexpect read 0x12\nexpect dp_state Wait_Prm after 4\n", ""},
@@ -476,6 +487,33 @@ TEST(ScenarioRun, StateEnteredAtAndAfterExactCycles) {
   EXPECT_EQ(errors2.lines[0], fmt::format("t.scn:7: expected dp_state Wait_Prm at {}, got "
                                           "Wait_Prm at {}",
                                           done - 1, done));
+}
+
+// `expect irq` (docs/scenario-format.md): X/INT goes active in the cycle the event is latched
+// (docs/timing.md, "Interrupt line": latency 0), here User_Leave_Master's Go_Leave_Data_Exchange
+// at the completion of its write, 4 clocks after the step began; a wrong cycle or count fails
+// and lists what X/INT did.
+TEST(ScenarioRun, IrqActivationAtExactCycle) {
+  const std::string text =
+      "profile spc3\nbaud 12000000\nstartup\nexchange\n"
+      "write Mode_Reg1_S 0x08\n"
+      "expect irq Go_Leave_Data_Exchange after 4\n"
+      "expect irq count 1\n"
+      "expect irq Go_Leave_Data_Exchange after 5   # wrong on purpose\n"
+      "expect irq count 2                          # wrong on purpose\n";
+  dpc31::Scenario s;
+  dpc31::ScenarioError err;
+  ASSERT_TRUE(dpc31::parse_scenario(text, "t.scn", s, err)) << err.text();
+  Lines errors;
+  const dpc31::ScenarioOutcome o = dpc31::run_scenario(s, {}, errors.sink());
+  EXPECT_EQ(o.passed, 2u);
+  ASSERT_EQ(errors.lines.size(), 2u);
+  EXPECT_TRUE(errors.lines[0].starts_with(
+      "t.scn:8: expected irq Go_Leave_Data_Exchange after 5, got after 4 ("))
+      << errors.lines[0];
+  EXPECT_NE(errors.lines[0].find("Go_Leave_Data_Exchange"), std::string::npos);
+  EXPECT_TRUE(errors.lines[1].starts_with("t.scn:9: expected irq count 2, got 1: after 4 ("))
+      << errors.lines[1];
 }
 
 // A register read through the scenario is two bus accesses of 4 clocks each, in the bus mode's

@@ -13,7 +13,7 @@ __all__ = [
     "StepKind", "DpState", "WdState", "Telegram", "Probe", "Register", "Field", "Region",
     "registers", "register", "regions", "profiles", "run_scenario", "wavediff", "WaveReport",
     "SignalDiff", "Divergence", "WavePoint", "Structural", "Error", "SnapshotError",
-    "ScenarioError", "FirmwareError", "InputError",
+    "ScenarioError", "FirmwareError", "InputError", "Dpv1Answer", "Dpv1Outcome", "Dpv1Rules",
 ]
 
 

@@ -1,0 +1,76 @@
+"""DPV1 from Python: the built-in master reads and writes DO4's OSP record (slot 0, index 1) on a
+VPC3+ over MSAC_C1, is refused a missing index, and opens, uses and aborts an MSAC_C2 connection.
+
+The bytes are DO4's record as docs/firmware.md ("DO4 with DPV1") and docs/dpv1.md ("Negative
+responses") give it; the cycles are derived by hand in traces/do4_dpv1_vpc3plus.scn (the same
+slave, master and firmware: one call is one call, so the Read starts where the scenario's does).
+"""
+
+import dpc31
+
+T = 32  # clocks per bit at 1.5 Mbaud (docs/timing.md, "Serial line")
+CHAR = 11 * T
+# DO4's GSD values, with DPV1_Status_1..3 C0 20 00 before its OSPMode 1, replacement value 9,
+# refresh monitor off (the scenario's `slave` line).
+SLAVE = dict(address=5, ident=0x0D04, cfg=b"\x21\x10", in_len=1, out_len=2, wd_on=True,
+             wd_fact1=2, wd_fact2=5, user_prm=b"\xC0\x20\x00\x01\x09\x00")
+
+
+def do4_in_data_exchange():
+    chip = dpc31.Chip("vpc3plus")
+    master = dpc31.Master(chip, address=2, baud=1_500_000, slave=dpc31.SlaveConfig(**SLAVE))
+    fw = master.run_firmware("DO4", gsd_defaults=False)
+    assert master.startup()
+    master.data_exchange(b"\x05\x01")  # OSPValid: normal operation, outputs 5
+    assert fw.port("modul_ok") == 1
+    return chip, master, fw
+
+
+def test_read_and_write_the_osp_record():
+    chip, master, fw = do4_in_data_exchange()
+    a = master.dpv1_read(0, 1, 2)
+    assert a.outcome == dpc31.Dpv1Outcome.positive
+    assert a.du == bytes([0x5E, 0x00, 0x01, 0x02, 0x01, 0x09])  # Read, slot, index, 2, OSPMode, 9
+    assert a.error is None
+    # traces/do4_dpv1_vpc3plus.scn: the Read from t0 = 2 939 600, its response (17 characters)
+    # after poll 6, ending at t0 + 45 408; polls 1-5 answered SC.
+    assert a.start == 2_939_600
+    assert a.end == 2_939_600 + 45_408 == 2_985_008
+    assert a.polls == 5
+    # The response telegram: DA 82h, SA 85h, FC 08h, DSAP = SSAP = 33h, FCS E0h.
+    assert a.last.encode() == bytes([0x68, 0x0B, 0x0B, 0x68, 0x82, 0x85, 0x08, 0x33, 0x33, 0x5E,
+                                     0x00, 0x01, 0x02, 0x01, 0x09, 0xE0, 0x16])
+
+    w = master.dpv1_write(0, 1, b"\x01\x06")
+    assert w.outcome == dpc31.Dpv1Outcome.positive
+    assert w.du == bytes([0x5F, 0x00, 0x01, 0x02])
+    assert master.dpv1_read(0, 1, 2).du == bytes([0x5E, 0x00, 0x01, 0x02, 0x01, 0x06])
+    # The new replacement value drives the terminals once the master requests OSP.
+    master.data_exchange(b"\x05\x00")
+    assert fw.port("outputs") == 6 and fw.port("modul_ok") == 0
+
+
+def test_negative_responses():
+    _, master, _ = do4_in_data_exchange()
+    a = master.dpv1_read(0, 7, 2)  # no index 7: Read | 80h, DPV1, access / invalid index
+    assert a.outcome == dpc31.Dpv1Outcome.negative
+    assert a.du == bytes([0xDE, 0x80, 0xB0, 0x00])
+    assert a.error == (0x80, 0xB0, 0x00)
+    assert master.dpv1_write(0, 1, b"\x01").error == (0x80, 0xB1, 0x00)  # write length error
+    assert master.dpv1_write(0, 1, b"\x02\x06").error == (0x80, 0xB7, 0x00)  # OSPMode 2: range
+
+
+def test_class2_connection():
+    _, master, _ = do4_in_data_exchange()
+    master.dpv1_rules = dpc31.Dpv1Rules(c2_ssap=48)
+    init = master.c2_initiate(send_timeout=100)
+    # 57h, Max_Len_Data_Unit 10h, Features 00 01, the rest 0 (traces/do4_dpv1_c2_vpc3plus.scn)
+    assert init.du == bytes([0x57, 0x10, 0x00, 0x01] + [0x00] * 8)
+    assert master.c2_sap == 40
+    assert master.c2_read(0, 1, 2).du == bytes([0x5E, 0x00, 0x01, 0x02, 0x01, 0x09])
+    assert master.c2_idle().du == bytes([0x48, 0x00])
+    abort = master.c2_abort(reason=3)
+    assert abort.outcome == dpc31.Dpv1Outcome.positive and abort.du == b""
+    assert abort.last.encode() == b"\xE5"  # SC
+    assert master.c2_sap is None
+    assert master.c2_read(0, 1, 2).outcome == dpc31.Dpv1Outcome.refused  # nothing sent
