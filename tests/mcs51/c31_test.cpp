@@ -1,0 +1,119 @@
+// The DPC31's internal C31 (session/cpu51_board.*, Cpu51Board::C31; docs/dpc31.md "The C31"):
+// its XDATA is the chip's own address space, its code the chip's RAM from the code area's start,
+// INT0 the C31's interrupt controller. Expected cycles by hand, as for the 80C32 (board_test.cpp):
+// docs/cpu.md ("MOVX timing": WR rises 18 oscillator clocks after the MOVX starts; the chip cycle
+// is ceil(clock * 48 MHz / f_cpu)) and docs/timing.md (an access completes 4 clocks after it
+// starts; the interrupt output follows the request in the same cycle).
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+#include "cpu51_board.hpp"
+#include "mcs51/ihex.hpp"
+
+namespace dpc31 {
+namespace {
+
+struct Access {
+  std::uint64_t cycle;
+  bool write;
+  std::uint16_t addr;
+  std::uint8_t data;
+  bool operator==(const Access&) const = default;
+};
+
+mcs51::HexImage c31_ack_image() {
+  std::ifstream in(BOARD_DIR "/c31_ack.ihx");
+  std::stringstream text;
+  text << in.rdbuf();
+  mcs51::HexImage img;
+  std::string error;
+  EXPECT_TRUE(mcs51::parse_ihex(text.str(), img, error)) << error;
+  return img;
+}
+
+mcs51::HexImage image_of(const std::vector<std::uint8_t>& code) {
+  mcs51::HexImage img;
+  for (std::size_t a = 0; a < code.size(); ++a) {
+    img.bytes[a] = code[a];
+    img.used[a] = true;
+  }
+  return img;
+}
+
+ChipOptions c31_chip() {
+  return {.profile = Profile::dpc31, .bus = BusMode::intel, .irq_controller = IrqController::c31};
+}
+
+TEST(C31, RunsFromTheChipsRamAndTakesTheC31sInterrupt) {
+  // C31 at 24 MHz (one oscillator clock = 2 chip clocks), code area from 1000h. MOVX in machine
+  // cycles [5,7), [12,14), in the routine [22,24), then [29,31) and [34,36) (board/c31_ack.asm):
+  // strobes end at clocks 78, 162, 282, 366, 426 = chip cycles 156, 324, 564, 732, 852. The C31's
+  // interrupt goes active at the second (Int_Req_Reg), INT0 is sampled low in cycle 13, polled
+  // in 14, the call is [15,17); the routine's Int_Ack_Reg ends it at 564. The write at 732 is
+  // to the operand of the instruction at code 0046h (chip 1047h), which then loads 77h into A:
+  // the C31 fetches from the chip's RAM; A goes to the user area's first byte (08A0h) at 852.
+  Chip chip(c31_chip());
+  std::vector<Access> seen;
+  chip.on_bus_access(
+      [&](std::uint64_t c, const BusAccess& a) { seen.push_back({c, a.write, a.addr, a.data}); });
+  std::vector<std::pair<std::uint64_t, bool>> irq;
+  chip.on_irq_change([&](std::uint64_t c, bool active) { irq.emplace_back(c, active); });
+  Cpu51Board board(chip, 24'000'000, Cpu51Board::C31{0x1000});
+  const mcs51::HexImage img = c31_ack_image();
+  ASSERT_TRUE(board.load_c31_code(img));
+  EXPECT_EQ(chip.peek(0x1000), 0x02);  // LJMP start: the image is in the code area
+  bool x_int_went_low = false;
+  chip.on_bus_access([&](std::uint64_t, const BusAccess&) {
+    x_int_went_low = x_int_went_low || !chip.x_int_pin();
+  });
+  board.run_until(1000);
+  const std::vector<Access> want = {{156, true, 0x0004, 0xEF},
+                                    {324, true, 0x0000, 0x10},
+                                    {564, true, 0x0002, 0x10},
+                                    {732, true, 0x1047, 0x77},
+                                    {852, true, 0x08A0, 0x77}};
+  EXPECT_EQ(seen, want);
+  const std::vector<std::pair<std::uint64_t, bool>> want_irq = {{324, true}, {564, false}};
+  EXPECT_EQ(irq, want_irq);
+  EXPECT_EQ(board.cpu().a(), 0x77);
+  EXPECT_EQ(chip.peek(0x1047), 0x77);
+  EXPECT_EQ(chip.peek(0x08A0), 0x77);
+  EXPECT_FALSE(x_int_went_low);  // X/INT is the external processor's: never active
+  EXPECT_EQ(board.cpu().in_service(), 0);
+}
+
+TEST(C31, NothingAnswersAbove1FFFh) {
+  // MOVX A,@DPTR from 2000h and MOVX @DPTR,A to it: no chip access, FFh read (modelled).
+  Chip chip(c31_chip());
+  unsigned accesses = 0;
+  chip.on_bus_access([&](std::uint64_t, const BusAccess&) { ++accesses; });
+  Cpu51Board board(chip, 24'000'000, Cpu51Board::C31{0x1F00});
+  const std::vector<std::uint8_t> code = {0x90, 0x20, 0x00,  // MOV DPTR,#2000h
+                                          0xF0,              // MOVX @DPTR,A
+                                          0xE0,              // MOVX A,@DPTR
+                                          0x80, 0xFE};       // SJMP $
+  ASSERT_TRUE(board.load_c31_code(image_of(code)));
+  board.run_until(500);
+  EXPECT_EQ(accesses, 0u);
+  EXPECT_EQ(board.cpu().a(), 0xFF);
+}
+
+TEST(C31, OnlyTheDpc31sC31WithItsControllerAndACodeAreaInItsRam) {
+  Chip spc3({.profile = Profile::spc3});
+  EXPECT_THROW(Cpu51Board(spc3, 24'000'000, Cpu51Board::C31{0x1000}), std::invalid_argument);
+  Chip external({.profile = Profile::dpc31});
+  EXPECT_THROW(Cpu51Board(external, 24'000'000, Cpu51Board::C31{0x1000}), std::invalid_argument);
+  Chip chip(c31_chip());
+  EXPECT_THROW(Cpu51Board(chip, 24'000'000, Cpu51Board::C31{0x0800}), std::invalid_argument);
+  EXPECT_THROW(Cpu51Board(chip, 24'000'000, Cpu51Board::C31{0x2000}), std::invalid_argument);
+  Cpu51Board board(chip, 24'000'000, Cpu51Board::C31{0x1FF0});
+  EXPECT_FALSE(board.load_c31_code(image_of(std::vector<std::uint8_t>(0x11, 0))));  // past 1FFFh
+  EXPECT_TRUE(board.load_c31_code(image_of(std::vector<std::uint8_t>(0x10, 0))));
+}
+
+}  // namespace
+}  // namespace dpc31
