@@ -29,14 +29,15 @@ Cpu51Board::Cpu51Board(Chip& chip, std::uint32_t cpu_hz, C31 c31)
   code_base_ = c31.code_base;
 }
 
-bool Cpu51Board::load_c31_code(const mcs51::HexImage& image) {
+bool Cpu51Board::load_c31_code(const std::vector<std::uint8_t>& bytes,
+                               const std::vector<bool>& used) {
   const std::uint32_t room = c31_space - code_base_;
-  for (std::uint32_t a = room; a < image.used.size(); ++a)
-    if (!c31_ || image.used[a]) return false;
-  for (std::uint32_t a = 0; a < room; ++a) {
-    if (!image.used[a]) continue;
-    chip_.poke(code_base_ + a, image.bytes[a]);
-    cpu_.load_code(static_cast<std::uint16_t>(a), std::span(&image.bytes[a], 1));
+  for (std::uint32_t a = room; a < used.size(); ++a)
+    if (!c31_ || used[a]) return false;
+  for (std::uint32_t a = 0; a < room && a < used.size() && a < bytes.size(); ++a) {
+    if (!used[a]) continue;
+    chip_.poke(code_base_ + a, bytes[a]);
+    cpu_.load_code(static_cast<std::uint16_t>(a), std::span(&bytes[a], 1));
   }
   return true;
 }

@@ -10,7 +10,6 @@
 #include "cpu51_config.hpp"
 #include "dpc31/chip.hpp"
 #include "mcs51/cpu.hpp"
-#include "mcs51/ihex.hpp"
 
 namespace dpc31 {
 
@@ -35,7 +34,7 @@ class Cpu51Board final : public mcs51::XdataBus {
   Cpu51Board(Chip& chip, std::uint32_t cpu_hz, C31 c31);
   // Puts the image's bytes into the code area (back door: before the C31 runs, as a loader
   // would) and the core's program memory; false, nothing loaded, when one lies past 1FFFh.
-  bool load_c31_code(const mcs51::HexImage& image);
+  bool load_c31_code(const std::vector<std::uint8_t>& bytes, const std::vector<bool>& used);
 
   mcs51::Cpu& cpu() { return cpu_; }
   // The chip cycle of an instant given in CPU oscillator clocks from reset: the first chip clock

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "cpu51_board.hpp"
+#include "scenario.hpp"
 #include "mcs51/ihex.hpp"
 
 namespace dpc31 {
@@ -35,13 +36,8 @@ mcs51::HexImage c31_ack_image() {
   return img;
 }
 
-mcs51::HexImage image_of(const std::vector<std::uint8_t>& code) {
-  mcs51::HexImage img;
-  for (std::size_t a = 0; a < code.size(); ++a) {
-    img.bytes[a] = code[a];
-    img.used[a] = true;
-  }
-  return img;
+bool load(Cpu51Board& board, const std::vector<std::uint8_t>& code) {
+  return board.load_c31_code(code, std::vector<bool>(code.size(), true));
 }
 
 ChipOptions c31_chip() {
@@ -64,7 +60,7 @@ TEST(C31, RunsFromTheChipsRamAndTakesTheC31sInterrupt) {
   chip.on_irq_change([&](std::uint64_t c, bool active) { irq.emplace_back(c, active); });
   Cpu51Board board(chip, 24'000'000, Cpu51Board::C31{0x1000});
   const mcs51::HexImage img = c31_ack_image();
-  ASSERT_TRUE(board.load_c31_code(img));
+  ASSERT_TRUE(board.load_c31_code(img.bytes, img.used));
   EXPECT_EQ(chip.peek(0x1000), 0x02);  // LJMP start: the image is in the code area
   bool x_int_went_low = false;
   chip.on_bus_access([&](std::uint64_t, const BusAccess&) {
@@ -96,7 +92,7 @@ TEST(C31, NothingAnswersAbove1FFFh) {
                                           0xF0,              // MOVX @DPTR,A
                                           0xE0,              // MOVX A,@DPTR
                                           0x80, 0xFE};       // SJMP $
-  ASSERT_TRUE(board.load_c31_code(image_of(code)));
+  ASSERT_TRUE(load(board, code));
   board.run_until(500);
   EXPECT_EQ(accesses, 0u);
   EXPECT_EQ(board.cpu().a(), 0xFF);
@@ -111,8 +107,48 @@ TEST(C31, OnlyTheDpc31sC31WithItsControllerAndACodeAreaInItsRam) {
   EXPECT_THROW(Cpu51Board(chip, 24'000'000, Cpu51Board::C31{0x0800}), std::invalid_argument);
   EXPECT_THROW(Cpu51Board(chip, 24'000'000, Cpu51Board::C31{0x2000}), std::invalid_argument);
   Cpu51Board board(chip, 24'000'000, Cpu51Board::C31{0x1FF0});
-  EXPECT_FALSE(board.load_c31_code(image_of(std::vector<std::uint8_t>(0x11, 0))));  // past 1FFFh
-  EXPECT_TRUE(board.load_c31_code(image_of(std::vector<std::uint8_t>(0x10, 0))));
+  EXPECT_FALSE(load(board, std::vector<std::uint8_t>(0x11, 0)));  // past 1FFFh
+  EXPECT_TRUE(load(board, std::vector<std::uint8_t>(0x10, 0)));
+}
+
+// The scenario's door: `cpu c31 firmware FILE.ihx code=A` on profile dpc31 (docs/dpc31.md, "The
+// C31"). The same program: its last write puts 77h at 08A0h at chip cycle 852 (above).
+TEST(C31, TheScenarioHeaderRunsTheImageOnTheC31) {
+  Scenario s;
+  ScenarioError err;
+  const std::string head = "profile dpc31\ncpu c31 clock=24000000 firmware " BOARD_DIR
+                           "/c31_ack.ihx code=0x1000\n";
+  ASSERT_TRUE(parse_scenario(head + "silence 20us\nexpect ram 0x08A0 77\n", "t.scn", s, err))
+      << err.text();
+  EXPECT_EQ(s.chip.irq_controller, IrqController::c31);  // the C31 serves its own controller
+  std::vector<std::string> errors;
+  std::vector<std::string> walk;
+  const ScenarioOutcome out = run_scenario(
+      s, [&](const std::string& l) { walk.push_back(l); },
+      [&](const std::string& l) { errors.push_back(l); });
+  EXPECT_TRUE(errors.empty()) << errors.front();
+  ASSERT_FALSE(walk.empty());
+  EXPECT_NE(walk.front().find("C31 at 24000000 Hz"), std::string::npos) << walk.front();
+  // Before the write (chip cycle 852 = 17.75 us) the byte is still 00h.
+  ASSERT_TRUE(parse_scenario(head + "silence 17us\nexpect ram 0x08A0 00\n", "t.scn", s, err));
+  errors.clear();
+  run_scenario(s, [](const std::string&) {}, [&](const std::string& l) { errors.push_back(l); });
+  EXPECT_TRUE(errors.empty()) << errors.front();
+}
+
+TEST(C31, TheScenarioHeaderIsCheckedWhenParsed) {
+  const auto error = [](const std::string& text) {
+    Scenario s;
+    ScenarioError err;
+    return parse_scenario(text, "t.scn", s, err) ? std::string() : err.text();
+  };
+  EXPECT_EQ(error("profile spc3\ncpu c31 firmware a.ihx\n"),
+            "t.scn:2: 'cpu c31' needs 'profile dpc31' before it: only the DPC31 has a C31 core");
+  EXPECT_EQ(error("profile dpc31\ncpu c31 firmware a.ihx base=0x8000\n"),
+            "t.scn:2: 'cpu c31' takes clock= and code= ('base=' is the 80C32 board's)");
+  EXPECT_EQ(error("profile dpc31\ncpu c31 firmware a.ihx code=0x0800\n"),
+            "t.scn:2: code 2048 out of range (2208..8191)");
+  EXPECT_EQ(error("profile dpc31\ncpu c31 firmware a.ihx code=0x1F00\n"), "");
 }
 
 }  // namespace
