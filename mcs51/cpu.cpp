@@ -185,7 +185,6 @@ void Cpu::movx_write(std::uint16_t addr, std::uint8_t v) {
     bus_->write(addr, v, insn_start_ * clocks_per_cycle + movx_strobe_end);
 }
 
-
 [[gnu::always_inline]] inline void Cpu::execute(std::uint8_t op) {
   if (op < 0x80)
     execute_low(op);

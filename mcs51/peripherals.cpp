@@ -20,7 +20,6 @@ constexpr std::uint8_t smod = 0x80, idl = 0x01;
 // Pin sample bits: INT0, INT1, T0, T1, T2, T2EX.
 constexpr std::uint8_t p_int0 = 1, p_int1 = 2, p_t0 = 4, p_t1 = 8, p_t2 = 16, p_t2ex = 32;
 
-
 constexpr std::uint64_t max_horizon = 1u << 20;
 
 // One count of a timer in mode 0 (13 bits: TL's low 5 bits under TH), 1 (16 bits) or 2 (TL
@@ -127,7 +126,6 @@ bool Cpu::next_is_movx() const {
   return !powered_down() && !idle() && next_irq_ < 0 && is_movx(code_[pc_]);
 }
 
-
 std::uint8_t Cpu::requests() const {
   std::uint8_t tcon = sfr_latch(sfr::TCON);
   return static_cast<std::uint8_t>(((tcon & ie0) ? 1 : 0) | ((tcon & tf0) ? 2 : 0) |
@@ -187,7 +185,7 @@ void Cpu::raise(std::uint8_t addr, std::uint8_t mask, int source) {
 
 void Cpu::set_port_input(unsigned port, std::uint8_t value) {
   if (port_in_[port & 3] == value) return;  // the same pins: nothing to sample again
-  sync();  // the cycles so far ran with the old pins
+  sync();                                   // the cycles so far ran with the old pins
   port_in_[port & 3] = value;
   pins_dirty_ = stale_ = true;
   horizon_ = 0;

@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "cpu51_board.hpp"
-#include "scenario.hpp"
 #include "mcs51/ihex.hpp"
+#include "scenario.hpp"
 
 namespace dpc31 {
 namespace {
@@ -54,8 +54,9 @@ TEST(C31, RunsFromTheChipsRamAndTakesTheC31sInterrupt) {
   // the C31 fetches from the chip's RAM; A goes to the user area's first byte (08A0h) at 852.
   Chip chip(c31_chip());
   std::vector<Access> seen;
-  chip.on_bus_access(
-      [&](std::uint64_t c, const BusAccess& a) { seen.push_back({c, a.write, a.addr, a.data}); });
+  chip.on_bus_access([&](std::uint64_t c, const BusAccess& a) {
+    seen.push_back({c, a.write, a.addr, a.data});
+  });
   std::vector<std::pair<std::uint64_t, bool>> irq;
   chip.on_irq_change([&](std::uint64_t c, bool active) { irq.emplace_back(c, active); });
   Cpu51Board board(chip, 24'000'000, Cpu51Board::C31{0x1000});
@@ -116,8 +117,8 @@ TEST(C31, OnlyTheDpc31sC31WithItsControllerAndACodeAreaInItsRam) {
 TEST(C31, TheScenarioHeaderRunsTheImageOnTheC31) {
   Scenario s;
   ScenarioError err;
-  const std::string head = "profile dpc31\ncpu c31 clock=24000000 firmware " BOARD_DIR
-                           "/c31_ack.ihx code=0x1000\n";
+  const std::string head =
+      "profile dpc31\ncpu c31 clock=24000000 firmware " BOARD_DIR "/c31_ack.ihx code=0x1000\n";
   ASSERT_TRUE(parse_scenario(head + "silence 20us\nexpect ram 0x08A0 77\n", "t.scn", s, err))
       << err.text();
   EXPECT_EQ(s.chip.irq_controller, IrqController::c31);  // the C31 serves its own controller
@@ -132,7 +133,8 @@ TEST(C31, TheScenarioHeaderRunsTheImageOnTheC31) {
   // Before the write (chip cycle 852 = 17.75 us) the byte is still 00h.
   ASSERT_TRUE(parse_scenario(head + "silence 17us\nexpect ram 0x08A0 00\n", "t.scn", s, err));
   errors.clear();
-  run_scenario(s, [](const std::string&) {}, [&](const std::string& l) { errors.push_back(l); });
+  run_scenario(
+      s, [](const std::string&) {}, [&](const std::string& l) { errors.push_back(l); });
   EXPECT_TRUE(errors.empty()) << errors.front();
 }
 

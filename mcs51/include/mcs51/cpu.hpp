@@ -149,9 +149,7 @@ class Cpu {
   StepResult advance();
   StepResult slow_step();
   // P is the parity of A after every instruction.
-  void set_parity() {
-    sf(sfr::PSW) = static_cast<std::uint8_t>((psw() & 0xFE) | parity_[a()]);
-  }
+  void set_parity() { sf(sfr::PSW) = static_cast<std::uint8_t>((psw() & 0xFE) | parity_[a()]); }
   static const std::array<std::uint8_t, 256> parity_;
   void poll_after(std::uint8_t sampled);
 
