@@ -6,13 +6,11 @@
 // starts; the interrupt output follows the request in the same cycle).
 #include <gtest/gtest.h>
 
-#include <fstream>
-#include <sstream>
 #include <stdexcept>
 #include <vector>
 
+#include "board_image.hpp"
 #include "cpu51_board.hpp"
-#include "mcs51/ihex.hpp"
 #include "scenario.hpp"
 
 namespace dpc31 {
@@ -25,16 +23,6 @@ struct Access {
   std::uint8_t data;
   bool operator==(const Access&) const = default;
 };
-
-mcs51::HexImage c31_ack_image() {
-  std::ifstream in(BOARD_DIR "/c31_ack.ihx");
-  std::stringstream text;
-  text << in.rdbuf();
-  mcs51::HexImage img;
-  std::string error;
-  EXPECT_TRUE(mcs51::parse_ihex(text.str(), img, error)) << error;
-  return img;
-}
 
 bool load(Cpu51Board& board, const std::vector<std::uint8_t>& code) {
   return board.load_c31_code(code, std::vector<bool>(code.size(), true));
@@ -60,7 +48,7 @@ TEST(C31, RunsFromTheChipsRamAndTakesTheC31sInterrupt) {
   std::vector<std::pair<std::uint64_t, bool>> irq;
   chip.on_irq_change([&](std::uint64_t c, bool active) { irq.emplace_back(c, active); });
   Cpu51Board board(chip, 24'000'000, Cpu51Board::C31{0x1000});
-  const mcs51::HexImage img = c31_ack_image();
+  const mcs51::HexImage img = board_image("c31_ack");
   ASSERT_TRUE(board.load_c31_code(img.bytes, img.used));
   EXPECT_EQ(chip.peek(0x1000), 0x02);  // LJMP start: the image is in the code area
   bool x_int_went_low = false;
