@@ -108,12 +108,13 @@ void Cpu::poll_after(std::uint8_t sampled) {
 }
 
 void Cpu::sync() {
-  while (lag_ != 0) {
-    const auto n = static_cast<unsigned>(std::min<std::uint64_t>(lag_, 1u << 30));
-    lag_ -= n;
-    cycles_ -= n;
+  std::uint64_t left = lag_;
+  lag_ = 0;
+  cycles_ -= left;  // tick() counts them again
+  while (left != 0) {
+    const auto n = static_cast<unsigned>(std::min<std::uint64_t>(left, 1u << 30));
+    left -= n;
     tick(n);
-    cycles_ += lag_;
   }
 }
 unsigned Cpu::next_step_cycles() const {
