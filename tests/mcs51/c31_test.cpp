@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <filesystem>
+#include <fstream>
 #include <stdexcept>
 #include <vector>
 
@@ -144,6 +146,26 @@ TEST(C31, TheScenarioHeaderIsCheckedWhenParsed) {
   EXPECT_EQ(error("profile dpc31\ncpu c31 firmware a.ihx code=0x0800\n"),
             "t.scn:2: code 0x0800 out of range (2208..8191)");
   EXPECT_EQ(error("profile dpc31\ncpu c31 firmware a.ihx code=0x1F00\nsilence 1ms\n"), "");
+}
+
+// An image past 1FFFh is one line, FILE: reason, exit 2, nothing run (docs/bad-input.md).
+TEST(C31, AnImagePastTheCodeAreaIsRefusedWhenTheRunStarts) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "c31_test_image";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "big.ihx") << ":0101000000FE\n:00000001FF\n";  // one byte at 0100h
+  std::ofstream(dir / "s.scn") << "profile dpc31\ncpu c31 firmware big.ihx code=0x1F00\n"
+                                  "silence 1ms\n";
+  std::vector<std::string> errors;
+  std::vector<std::string> walk;
+  EXPECT_EQ(
+      run_scenario_file((dir / "s.scn").string(), [&](const std::string& l) { walk.push_back(l); },
+                        [&](const std::string& l) { errors.push_back(l); }),
+      2);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_EQ(errors[0], (dir / "big.ihx").string() +
+                           ": the image does not fit the C31's code area (1F00h..1FFFh)");
+  EXPECT_TRUE(walk.empty());
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
