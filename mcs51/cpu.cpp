@@ -11,6 +11,22 @@ constexpr std::uint8_t cy_bit = 0x80, ac_bit = 0x40, ov_bit = 0x04;
 bool is_port(std::uint8_t addr) { return (addr & 0x8F) == 0x80; }
 }  // namespace
 
+// The SFRs of the core itself: no peripheral reads or changes them, so their accesses need no
+// sync() of the deferred peripheral cycles.
+bool Cpu::core_sfr(std::uint8_t addr) {
+  switch (addr) {
+    case sfr::ACC:
+    case sfr::B:
+    case sfr::PSW:
+    case sfr::SP:
+    case sfr::DPL:
+    case sfr::DPH:
+      return true;
+    default:
+      return false;
+  }
+}
+
 // Machine cycles per opcode, one string per high nibble (Intel MCS-51 User's Manual, instruction
 // set summary; A5h, reserved, runs as a one-cycle no-op).
 const std::array<std::uint8_t, 256> Cpu::cycle_table = [] {
@@ -22,6 +38,12 @@ const std::array<std::uint8_t, 256> Cpu::cycle_table = [] {
   std::array<std::uint8_t, 256> t{};
   for (unsigned op = 0; op < 256; ++op)
     t[op] = static_cast<std::uint8_t>(rows[op >> 4][op & 15] - '0');
+  return t;
+}();
+
+const std::array<std::uint8_t, 256> Cpu::parity_ = [] {
+  std::array<std::uint8_t, 256> t{};
+  for (unsigned v = 0; v < 256; ++v) t[v] = static_cast<std::uint8_t>(std::popcount(v) & 1);
   return t;
 }();
 
@@ -40,6 +62,9 @@ void Cpu::reset() {
   t1_half_ = tx_div_ = rx_div_ = 0;
   tx_bits_ = -2;
   rx_ticks_ = -1;
+  lag_ = 0;
+  irq_dirty_ = stale_ = true;
+  horizon_ = 0;
 }
 
 void Cpu::load_code(std::uint16_t addr, std::span<const std::uint8_t> bytes) {
@@ -57,11 +82,16 @@ std::uint16_t Cpu::fetch16() {
 
 // Ports read their pins, except in read-modify-write instructions, which read the latch.
 std::uint8_t Cpu::read_sfr(std::uint8_t addr, bool rmw) {
+  if (!core_sfr(addr)) sync();
   if (is_port(addr) && !rmw) return sf(addr) & port_in_[(addr >> 4) & 3];
   return sf(addr);
 }
 
 void Cpu::write_sfr(std::uint8_t addr, std::uint8_t v) {
+  if (!core_sfr(addr)) {  // a peripheral's set-up, a flag or a pin may change: plan again
+    sync();
+    irq_dirty_ = stale_ = true;
+  }
   switch (addr) {
     case sfr::SBUF:  // the transmit register; SBUF reads give the receive buffer
       tx_data_ = v;
@@ -155,7 +185,7 @@ void Cpu::movx_write(std::uint16_t addr, std::uint8_t v) {
     bus_->write(addr, v, insn_start_ * clocks_per_cycle + movx_strobe_end);
 }
 
-void Cpu::execute(std::uint8_t op) {
+[[gnu::always_inline]] inline void Cpu::execute(std::uint8_t op) {
   if (op < 0x80)
     execute_low(op);
   else
@@ -163,7 +193,7 @@ void Cpu::execute(std::uint8_t op) {
 }
 
 // Opcodes 00h..7Fh.
-void Cpu::execute_low(std::uint8_t op) {
+[[gnu::always_inline]] inline void Cpu::execute_low(std::uint8_t op) {
   const unsigned col = op & 0x0F;
   if (col == 0x01) {  // AJMP / ACALL addr11
     std::uint8_t lo = fetch();
@@ -252,7 +282,7 @@ void Cpu::execute_low(std::uint8_t op) {
       pc_ = static_cast<std::uint16_t>(hi << 8 | pop());
       if (op == 0x32) {
         in_service_ = (in_service_ & 2) ? (in_service_ & 1) : 0;
-        block_ = true;
+        block_ = irq_dirty_ = true;
       }
       return;
     }
@@ -332,7 +362,7 @@ void Cpu::execute_low(std::uint8_t op) {
 }
 
 // Opcodes 80h..FFh.
-void Cpu::execute_high(std::uint8_t op) {
+[[gnu::always_inline]] inline void Cpu::execute_high(std::uint8_t op) {
   const unsigned col = op & 0x0F;
   if (col == 0x01) {  // AJMP / ACALL
     execute_low(op);
@@ -541,6 +571,64 @@ void Cpu::execute_high(std::uint8_t op) {
     default:
       return;  // every opcode of 80h..FFh is handled above
   }
+}
+
+template <unsigned Op>
+void Cpu::op_fn(Cpu& cpu) {
+  cpu.execute(static_cast<std::uint8_t>(Op));
+}
+
+template <std::size_t... Op>
+constexpr std::array<Cpu::OpFn, 256> Cpu::make_dispatch(std::index_sequence<Op...>) {
+  return {&Cpu::op_fn<Op>...};
+}
+
+const std::array<Cpu::OpFn, 256> Cpu::dispatch_ = make_dispatch(std::make_index_sequence<256>{});
+
+// One instruction on the quiet path, here beside the instructions so that it inlines them; the
+// rest goes to slow_step (peripherals.cpp).
+[[gnu::always_inline]] inline StepResult Cpu::advance() {
+  const std::uint8_t op = code_[pc_];
+  const unsigned n = cycle_table[op];
+  if (cycles_ + n > horizon_) return slow_step();
+  // Quiet: no peripheral can raise a new request within the instruction, so its cycles are only
+  // counted; an SFR access of the instruction syncs them first (all of them, or all but a MOVX's
+  // second, as slow_step orders them).
+  ++pc_;
+  if (!is_movx(op)) {
+    cycles_ += n;
+    lag_ += n;
+    dispatch_[op](*this);
+  } else {
+    insn_start_ = cycles_;
+    ++cycles_;
+    ++lag_;
+    dispatch_[op](*this);
+    if (stale_) {  // the access changed a pin: its last cycle samples it
+      sync();
+      tick(1);
+    } else {
+      ++cycles_;
+      ++lag_;
+    }
+  }
+  set_parity();
+  if (irq_dirty_) poll_after(last_req_);
+  if (stale_ || irq_dirty_) replan();
+  return {StepKind::instruction, n};
+}
+
+StepResult Cpu::step() {
+  const StepResult r = advance();
+  sync();
+  return r;
+}
+
+std::uint64_t Cpu::run(std::uint64_t cycles) {
+  std::uint64_t done = 0;
+  while (done < cycles) done += advance().cycles;
+  sync();
+  return done;
 }
 
 }  // namespace mcs51

@@ -1,6 +1,8 @@
 // The 80C32's timers 0, 1 and 2, its serial port and its interrupt system, advanced machine cycle
 // by machine cycle (Intel MCS-51 User's Manual, "Hardware Description of the 8051, 8052 and
 // 80C51"; the sampling rules are written down in docs/cpu.md).
+#include <algorithm>
+#include <array>
 #include <bit>
 
 #include "mcs51/cpu.hpp"
@@ -18,8 +20,7 @@ constexpr std::uint8_t smod = 0x80, idl = 0x01;
 // Pin sample bits: INT0, INT1, T0, T1, T2, T2EX.
 constexpr std::uint8_t p_int0 = 1, p_int1 = 2, p_t0 = 4, p_t1 = 8, p_t2 = 16, p_t2ex = 32;
 
-// MOVX A,@DPTR / A,@Ri / @DPTR,A / @Ri,A: E0h, E2h, E3h, F0h, F2h, F3h.
-bool is_movx(std::uint8_t op) { return (op & 0xEC) == 0xE0 && (op & 0x03) != 0x01; }
+constexpr std::uint64_t max_horizon = 1u << 20;
 
 // One count of a timer in mode 0 (13 bits: TL's low 5 bits under TH), 1 (16 bits) or 2 (TL
 // reloaded from TH); true on overflow.
@@ -38,9 +39,14 @@ bool count(std::uint8_t& tl, std::uint8_t& th, unsigned mode) {
       return true;
   }
 }
+
 }  // namespace
 
-StepResult Cpu::step() {
+// An instruction, call or idle cycle that cannot be deferred: the peripherals tick every cycle.
+StepResult Cpu::slow_step() {
+  const std::uint8_t op = code_[pc_];
+  const unsigned n = cycle_table[op];
+  sync();
   if (powered_down()) {  // the oscillator is stopped: only time outside passes
     ++cycles_;
     return {StepKind::power_down, 1};
@@ -52,6 +58,8 @@ StepResult Cpu::step() {
     // activation of any enabled interrupt will cause PCON.0 to be cleared by hardware").
     sf(sfr::PCON) &= static_cast<std::uint8_t>(~idl);
     call_interrupt(source);
+    irq_dirty_ = stale_ = true;
+    replan();
     return {StepKind::interrupt, 2};
   }
   std::uint8_t before = requests();
@@ -60,6 +68,8 @@ StepResult Cpu::step() {
     tick(1);
     next_irq_ = choose(before & requests());
     if (next_irq_ >= 0) sf(sfr::PCON) &= static_cast<std::uint8_t>(~idl);
+    irq_dirty_ = true;
+    replan();
     return {StepKind::idle, 1};
   }
   block_ = false;
@@ -68,8 +78,6 @@ StepResult Cpu::step() {
   // latch during S6P2 of the final cycle"): the peripherals run all its cycles on the old
   // values. A request counts if it was sampled before that last cycle (the poll happens in the
   // cycle after the sample) and is still pending after the instruction (docs/cpu.md).
-  const std::uint8_t op = code_[pc_];
-  const unsigned n = cycle_table[op];
   tick(n - 1);
   const auto sampled = static_cast<std::uint8_t>(before | raised_);
   // A MOVX's bus access ends with RD / WR in S3/S4 of its second cycle, before that cycle's pin
@@ -77,16 +85,38 @@ StepResult Cpu::step() {
   const bool movx = is_movx(op);
   if (!movx) tick(1);
   ++pc_;
-  execute(op);
-  if (movx) tick(1);
-  if (std::popcount(a()) & 1)
-    sf(sfr::PSW) |= 1;
-  else
-    sf(sfr::PSW) &= 0xFE;
-  next_irq_ = block_ ? -1 : choose(sampled & requests());
+  dispatch_[op](*this);
+  if (movx) {
+    sync();
+    tick(1);
+  }
+  set_parity();
+  poll_after(sampled);
+  replan();
   return {StepKind::instruction, n};
 }
 
+// The poll at the end of an instruction: a request sampled before its last cycle and still
+// pending. The poll is clean (its answer, none, holds until an input changes) unless a call was
+// chosen, the next call is held off, or a request is pending that this poll did not sample.
+void Cpu::poll_after(std::uint8_t sampled) {
+  const std::uint8_t req = requests();
+  next_irq_ = block_ ? -1 : choose(sampled & req);
+  irq_dirty_ = block_ || next_irq_ >= 0 || (req & ~sampled) != 0;
+  last_req_ = req;
+  block_ = false;  // set again only by an instruction, which makes the poll dirty
+}
+
+void Cpu::sync() {
+  std::uint64_t left = lag_;
+  lag_ = 0;
+  cycles_ -= left;  // tick() counts them again
+  while (left != 0) {
+    const auto n = static_cast<unsigned>(std::min<std::uint64_t>(left, 1u << 30));
+    left -= n;
+    tick(n);
+  }
+}
 unsigned Cpu::next_step_cycles() const {
   if (powered_down() || idle()) return 1;
   if (next_irq_ >= 0) return 2;
@@ -95,12 +125,6 @@ unsigned Cpu::next_step_cycles() const {
 
 bool Cpu::next_is_movx() const {
   return !powered_down() && !idle() && next_irq_ < 0 && is_movx(code_[pc_]);
-}
-
-std::uint64_t Cpu::run(std::uint64_t cycles) {
-  std::uint64_t done = 0;
-  while (done < cycles) done += step().cycles;
-  return done;
 }
 
 std::uint8_t Cpu::requests() const {
@@ -155,19 +179,68 @@ void Cpu::call_interrupt(int source) {
 }
 
 void Cpu::raise(std::uint8_t addr, std::uint8_t mask, int source) {
+  if ((sf(addr) & mask) == 0) irq_dirty_ = true;
   sf(addr) |= mask;
   raised_ |= static_cast<std::uint8_t>(1u << source);
 }
 
 void Cpu::set_port_input(unsigned port, std::uint8_t value) {
+  if (port_in_[port & 3] == value) return;  // the same pins: nothing to sample again
+  sync();                                   // the cycles so far ran with the old pins
   port_in_[port & 3] = value;
-  pins_dirty_ = true;
+  pins_dirty_ = stale_ = true;
+  horizon_ = 0;
 }
 
 void Cpu::set_pin(unsigned port, unsigned bit, bool high) {
   std::uint8_t m = static_cast<std::uint8_t>(1u << bit);
-  port_in_[port] = static_cast<std::uint8_t>(high ? port_in_[port] | m : port_in_[port] & ~m);
-  pins_dirty_ = true;
+  set_port_input(port, static_cast<std::uint8_t>(high ? port_in_[port] | m : port_in_[port] & ~m));
+}
+
+void Cpu::schedule_int0(std::uint64_t at, bool high) {
+  sync();
+  int0_change_ = {at, high, true};
+  stale_ = true;
+  horizon_ = 0;
+}
+
+// The machine cycle up to which the peripherals may lag: while no level-triggered input is
+// low (or its flag set), timer 2 and serial modes 0 and 2 stop, no character is on its way and
+// timers 0 and 1 are not in mode 3, a running timer's next overflow is the only new request it
+// can raise; one that would only raise a flag already set (mode 2) sets no bound.
+void Cpu::replan() {
+  stale_ = false;
+  horizon_ = cycles_;
+  if (irq_dirty_ || next_irq_ >= 0 || pins_dirty_ || int0_change_.pending) return;
+  const std::uint8_t tcon = sfr_latch(sfr::TCON), tmod = sfr_latch(sfr::TMOD);
+  const std::uint8_t pins = last_pins_;
+  if ((sfr_latch(sfr::PCON) & 3) != 0) return;  // idle or power-down: one cycle per step
+  if (!(tcon & it0) && (!(pins & p_int0) || (tcon & ie0))) return;
+  if (!(tcon & it1) && (!(pins & p_int1) || (tcon & ie1))) return;
+  if ((sfr_latch(sfr::T2CON) & (tr2 | exen2)) != 0) return;
+  const unsigned mode = sfr_latch(sfr::SCON) >> 6;
+  if (mode == 0 || mode == 2 || tx_bits_ != -2 || rx_ticks_ >= 0) return;
+  if ((tmod & 3) == 3 || (tmod & 0x30) == 0x30) return;
+  std::uint64_t h = max_horizon;
+  for (unsigned t = 0; t < 2; ++t) {
+    const unsigned ctl = (tmod >> (4 * t)) & 0x0F;
+    const bool run = (tcon & (t ? tr1 : tr0)) && (!(ctl & 0x08) || (pins & (t ? p_int1 : p_int0)));
+    if (!run || (ctl & 0x04)) continue;  // stopped, or counting edges of a pin that holds still
+    const unsigned tl = sfr_latch(t ? sfr::TL1 : sfr::TL0), th = sfr_latch(t ? sfr::TH1 : sfr::TH0);
+    const bool flag = (tcon & (t ? tf1 : tf0)) != 0;
+    switch (ctl & 3) {
+      case 0:
+        h = std::min<std::uint64_t>(h, 0x2000u - (th << 5 | (tl & 0x1Fu)) - 1);
+        break;
+      case 1:
+        h = std::min<std::uint64_t>(h, 0x10000u - (th << 8 | tl) - 1);
+        break;
+      default:
+        if (!flag) h = std::min<std::uint64_t>(h, 0x100u - tl - 1);
+        break;
+    }
+  }
+  horizon_ = cycles_ - lag_ + h;
 }
 
 bool Cpu::pin(unsigned port, unsigned bit) const {
@@ -176,6 +249,9 @@ bool Cpu::pin(unsigned port, unsigned bit) const {
 }
 
 void Cpu::serial_receive(std::uint8_t data, bool bit8) {
+  sync();
+  stale_ = true;
+  horizon_ = 0;
   std::uint8_t scon = sfr_latch(sfr::SCON);
   if ((scon & ren) == 0 || (scon >> 6) == 0) return;  // receiver off, or mode 0 (no start bit)
   // The stop bit is sampled at 9.5 bit times (mode 1), the ninth data bit's stop at 10.5.
@@ -214,15 +290,17 @@ void Cpu::tick(unsigned cycles) {
     if (fall & p_int0) raise(sfr::TCON, ie0, 0);
   } else if ((pins & p_int0) == 0) {
     raise(sfr::TCON, ie0, 0);
-  } else {
+  } else if (tcon & ie0) {
     tcon &= static_cast<std::uint8_t>(~ie0);
+    irq_dirty_ = true;
   }
   if (tcon & it1) {
     if (fall & p_int1) raise(sfr::TCON, ie1, 2);
   } else if ((pins & p_int1) == 0) {
     raise(sfr::TCON, ie1, 2);
-  } else {
+  } else if (tcon & ie1) {
     tcon &= static_cast<std::uint8_t>(~ie1);
+    irq_dirty_ = true;
   }
   const bool t01 = (tcon & (tr0 | tr1)) != 0 || (sfr_latch(sfr::TMOD) & 3) == 3;
   const bool t2 = (sfr_latch(sfr::T2CON) & (tr2 | exen2)) != 0;
@@ -373,6 +451,10 @@ void Cpu::timer2(std::uint8_t fall) {
 void Cpu::serial(unsigned tx_ticks, unsigned rx_ticks) {
   std::uint8_t& scon = sf(sfr::SCON);
   const unsigned mode = scon >> 6;
+  if (tx_bits_ == -2) {  // no character to send: only the free-running divider moves
+    tx_div_ = static_cast<std::uint8_t>((tx_div_ + tx_ticks) & 15);
+    tx_ticks = 0;
+  }
   for (unsigned i = 0; i < tx_ticks; ++i) {  // the divider runs free; bits start at its wrap
     tx_div_ = (tx_div_ + 1) & 15;
     if (tx_div_ != 0 || tx_bits_ == -2) continue;

@@ -1,5 +1,6 @@
 #include "cpu51_board.hpp"
 
+#include <span>
 #include <stdexcept>
 
 namespace dpc31 {
@@ -10,6 +11,38 @@ Cpu51Board::Cpu51Board(Chip& chip, std::uint32_t cpu_hz, std::uint16_t base)
     throw std::invalid_argument("CPU clock out of range for the chip's bus");
   cpu_.set_xdata(this);
 }
+
+namespace {
+// The DPC31's address space and its RAM's user area (manual p.12, docs/dpc31.md "The map").
+constexpr std::uint32_t c31_space = 0x2000;
+constexpr std::uint16_t c31_user_area = 0x08A0;
+}  // namespace
+
+Cpu51Board::Cpu51Board(Chip& chip, std::uint32_t cpu_hz, C31 c31)
+    : Cpu51Board(chip, cpu_hz, std::uint16_t{0}) {
+  if (chip.profile().id != Profile::dpc31 || chip.irq_controller() != IrqController::c31)
+    throw std::invalid_argument("the C31 is the dpc31's, with its interrupt controller (c31)");
+  if (c31.code_base < c31_user_area || c31.code_base >= c31_space)
+    throw std::invalid_argument("the C31's code area lies in the RAM from 08A0h to 1FFFh");
+  window_ = c31_space;
+  c31_ = true;
+  code_base_ = c31.code_base;
+}
+
+bool Cpu51Board::load_c31_code(const std::vector<std::uint8_t>& bytes,
+                               const std::vector<bool>& used) {
+  const std::uint32_t room = c31_space - code_base_;
+  for (std::uint32_t a = room; a < used.size(); ++a)
+    if (!c31_ || used[a]) return false;
+  for (std::uint32_t a = 0; a < room && a < used.size() && a < bytes.size(); ++a) {
+    if (!used[a]) continue;
+    chip_.poke(code_base_ + a, bytes[a]);
+    cpu_.load_code(static_cast<std::uint16_t>(a), std::span(&bytes[a], 1));
+  }
+  return true;
+}
+
+bool Cpu51Board::int0_level() const { return c31_ ? !chip_.irq_active() : chip_.x_int_pin(); }
 
 std::uint64_t Cpu51Board::chip_cycle_of(std::uint64_t cpu_clock) const {
   // Exact in 64 bits: whole CPU seconds, then the remainder (< cpu_hz) times chip_hz (< 2^64).
@@ -30,13 +63,13 @@ void Cpu51Board::run_until(std::uint64_t chip_cycle) {
   constexpr unsigned s5p2 = 10;
   while (chip_.cycle() < chip_cycle && !chip_.stop_requested()) {
     chip_to(chip_cycle_of(cpu_.clocks()));
-    const bool level = chip_.x_int_pin();
+    const bool level = int0_level();
     cpu_.set_int0(level);
     if (!cpu_.next_is_movx()) {
       const unsigned n = cpu_.next_step_cycles();
       for (unsigned j = 0; j < n; ++j) {
         chip_to(chip_cycle_of(cpu_.clocks() + j * mcs51::clocks_per_cycle + s5p2));
-        if (chip_.x_int_pin() != level) {
+        if (int0_level() != level) {
           cpu_.schedule_int0(cpu_.cycles() + j, !level);
           break;
         }
@@ -53,22 +86,25 @@ void Cpu51Board::access_at(std::uint64_t clock) {
 }
 
 std::uint8_t Cpu51Board::read(std::uint16_t addr, std::uint64_t clock) {
-  if (addr < base_ || addr >= base_ + window) return ram_[addr];
+  if (!in_window(addr)) return c31_ ? 0xFF : ram_[addr];  // the C31: nothing above 1FFFh
   access_at(clock);
   const std::uint8_t v = chip_.read(addr - base_);
-  cpu_.set_int0(chip_.x_int_pin());  // a command read may end the interrupt
+  cpu_.set_int0(int0_level());  // a command read may end the interrupt
   return v;
 }
 
 void Cpu51Board::write(std::uint16_t addr, std::uint8_t value, std::uint64_t clock) {
-  if (addr < base_ || addr >= base_ + window) {
+  if (c31_ && !in_window(addr)) return;
+  if (!in_window(addr)) {
     ram_[addr] = value;
     if (on_ram_write) on_ram_write(addr, value, chip_cycle_of(clock));
     return;
   }
   access_at(clock);
   chip_.write(addr - base_, value);
-  cpu_.set_int0(chip_.x_int_pin());
+  // The C31 fetches its code from the chip's RAM: a write to the code area is its program.
+  if (c31_ && addr >= code_base_) cpu_.load_code(addr - code_base_, std::span(&value, 1));
+  cpu_.set_int0(int0_level());
 }
 
 }  // namespace dpc31

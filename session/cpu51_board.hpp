@@ -22,6 +22,20 @@ class Cpu51Board final : public mcs51::XdataBus {
   // end less than one bus access after its instruction starts.
   Cpu51Board(Chip& chip, std::uint32_t cpu_hz, std::uint16_t base);
 
+  // The DPC31's internal C31 instead (docs/dpc31.md, "The C31"): XDATA 0000h..1FFFh is the
+  // chip's own address space (the manual: "the interface is identical in both cases"), nothing
+  // above it; program memory from 0000h is the chip's RAM from `code_base` up to 1FFFh (its code
+  // area, copied there by load_c31_code); INT0 is the output of the C31's interrupt controller.
+  // Throws std::invalid_argument unless the chip is a dpc31 serving the C31's controller and
+  // code_base lies in the RAM's user area (08A0h..1FFFh).
+  struct C31 {
+    std::uint16_t code_base;
+  };
+  Cpu51Board(Chip& chip, std::uint32_t cpu_hz, C31 c31);
+  // Puts the image's bytes into the code area (back door: before the C31 runs, as a loader
+  // would) and the core's program memory; false, nothing loaded, when one lies past 1FFFh.
+  bool load_c31_code(const std::vector<std::uint8_t>& bytes, const std::vector<bool>& used);
+
   mcs51::Cpu& cpu() { return cpu_; }
   // The chip cycle of an instant given in CPU oscillator clocks from reset: the first chip clock
   // edge at or after it, ceil(clock * chip_hz / cpu_hz) (docs/timing.md, "An 80C32 beside the
@@ -46,11 +60,19 @@ class Cpu51Board final : public mcs51::XdataBus {
   void chip_to(std::uint64_t cycle);
   // Steps the chip so that an access starting now completes at the strobe's end.
   void access_at(std::uint64_t clock);
+  // INT0's level: X/INT for the 80C32, the C31's interrupt (low-active) for the C31.
+  [[nodiscard]] bool int0_level() const;
+  [[nodiscard]] bool in_window(std::uint16_t addr) const {
+    return addr >= base_ && static_cast<std::uint32_t>(addr - base_) < window_;
+  }
 
   Chip& chip_;
   mcs51::Cpu cpu_;
   std::uint32_t cpu_hz_;
   std::uint16_t base_;
+  std::uint32_t window_ = window;
+  bool c31_ = false;
+  std::uint16_t code_base_ = 0;
   std::vector<std::uint8_t> ram_ = std::vector<std::uint8_t>(0x10000, 0);
 };
 

@@ -18,6 +18,10 @@ struct Cpu51Config {
   std::uint16_t base = 0x8000;
   std::uint16_t latch = 0x4000;
   std::vector<std::string> ports{};  // latch bytes by name, from `latch` on
+  // `cpu c31`: the DPC31's internal C31 instead (docs/dpc31.md, "The C31"): its XDATA is the
+  // chip's own space, its code the chip's RAM from `code` up to 1FFFh; no board RAM, no latch.
+  bool c31 = false;
+  std::uint16_t code = 0x1000;
   [[nodiscard]] bool latch_in_window() const {
     return latch + ports.size() > base && latch < base + kCpu51Window;
   }

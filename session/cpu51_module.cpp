@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <sstream>
 
@@ -49,7 +50,14 @@ bool load_cpu51_image(const Cpu51Config& cfg, Cpu51Image& image, std::string& er
     return false;
   }
   image.code = std::move(hex.bytes);
+  image.used = std::move(hex.used);
   image.size = hex.size;
+  if (cfg.c31 && std::find(image.used.begin() + (0x2000 - cfg.code), image.used.end(), true) !=
+                     image.used.end()) {
+    error = fmt::format("{}: the image does not fit the C31's code area ({:04X}h..1FFFh)", cfg.hex,
+                        cfg.code);
+    return false;
+  }
   std::filesystem::path map(cfg.hex);
   map.replace_extension(".map");
   std::error_code ec;
@@ -72,9 +80,13 @@ std::string code_name(const Cpu51Image& image, std::uint16_t pc) {
 Cpu51Module::Cpu51Module(Chip& chip, const Cpu51Config& cfg, const Cpu51Image& image,
                          std::uint8_t station_address)
     : cfg_(cfg),
-      board_(std::make_unique<Cpu51Board>(chip, cfg.hz, cfg.base)),
+      board_(cfg.c31 ? std::make_unique<Cpu51Board>(chip, cfg.hz, Cpu51Board::C31{cfg.code})
+                     : std::make_unique<Cpu51Board>(chip, cfg.hz, cfg.base)),
       values_(cfg.ports.size(), 0) {
-  board_->cpu().load_code(0, image.code);
+  if (cfg.c31)
+    board_->load_c31_code(image.code, image.used);  // fits: load_cpu51_image checked it
+  else
+    board_->cpu().load_code(0, image.code);
   board_->cpu().set_port_input(1, station_address);  // the address switch
   board_->on_ram_write = [this](std::uint16_t addr, std::uint8_t value, std::uint64_t cycle) {
     if (addr < cfg_.latch || addr >= cfg_.latch + values_.size()) return;

@@ -22,6 +22,7 @@ namespace dpc31 {
 // leading underscore).
 struct Cpu51Image {
   std::vector<std::uint8_t> code;
+  std::vector<bool> used;  // the addresses the image gives
   std::uint32_t size = 0;
   std::map<std::uint16_t, std::string> symbols;
   std::string map_file;  // empty: no map beside the HEX file

@@ -248,17 +248,26 @@ class Parser {
   [[nodiscard]] std::string beside_scenario(const std::string& path) const {
     return path.front() == '/' ? path : (scenario_dir() / path).lexically_normal().string();
   }
-  // `cpu 80c32 clock=HZ firmware FILE.ihx [base=A] [latch=A] [ports=N1,N2...]`: only checked
-  // here; the image is read when the run starts (cpu51_module.hpp).
+  // `cpu 80c32 clock=HZ firmware FILE.ihx [base=A] [latch=A] [ports=N1,N2...]`, or `cpu c31
+  // clock=HZ firmware FILE.ihx [code=A]` on the dpc31 (the C31 serves its own interrupt
+  // controller): only checked here; the image is read when the run starts (cpu51_module.hpp).
   void cpu_header() {
     positional(3, 3, "80c32 firmware FILE.ihx");
-    if (pos_[0] != "80c32" || pos_[1] != "firmware") fail("the form is 'cpu 80c32 firmware FILE'");
+    const bool c31 = pos_[0] == "c31";
+    if ((pos_[0] != "80c32" && !c31) || pos_[1] != "firmware")
+      fail("the form is 'cpu 80c32 firmware FILE'");
+    if (c31 && s_.chip.profile != Profile::dpc31)
+      fail("'cpu c31' needs 'profile dpc31' before it: only the DPC31 has a C31 core");
     if (firmware_seen_ || user_seen_ || slave_seen_ || !s_.user.dpv1.records.empty())
       fail("'cpu' comes before 'slave', without 'firmware', 'user' and 'record'");
-    Cpu51Config c{.hex = beside_scenario(std::string(pos_[2]))};
+    Cpu51Config c{.hex = beside_scenario(std::string(pos_[2])), .c31 = c31};
     for (const auto& [k, v] : opts_) {
       if (k == "clock") {
         c.hz = static_cast<std::uint32_t>(number(v, "clock", 1'000'000, 40'000'000));
+      } else if (c31 && k == "code") {  // the code area: in the RAM's user area (docs/dpc31.md)
+        c.code = static_cast<std::uint16_t>(number(v, "code", 0x08A0, 0x1FFF));
+      } else if (c31) {
+        fail(fmt::format("'cpu c31' takes clock= and code= ('{}=' is the 80C32 board's)", k));
       } else if (k == "base" || k == "latch") {
         (k == "base" ? c.base : c.latch) = static_cast<std::uint16_t>(number(v, k, 0, 0xF000));
       } else if (k == "ports") {
@@ -267,7 +276,8 @@ class Parser {
         unknown_option(k);
       }
     }
-    if (c.latch_in_window()) fail("the port latch lies in the chip's window");
+    if (!c31 && c.latch_in_window()) fail("the port latch lies in the chip's window");
+    if (c31) s_.chip.irq_controller = IrqController::c31;
     s_.cpu = std::move(c);
     for (const std::string& n : s_.cpu->ports) ports_.insert(ports_.end() - 1, n.c_str());
   }

@@ -5,12 +5,10 @@
 // it starts; X/INT follows the request in the same cycle).
 #include <gtest/gtest.h>
 
-#include <fstream>
-#include <sstream>
 #include <vector>
 
+#include "board_image.hpp"
 #include "cpu51_board.hpp"
-#include "mcs51/ihex.hpp"
 
 namespace dpc31 {
 namespace {
@@ -29,12 +27,7 @@ struct Observed {
 };
 
 Observed run_xint_ack(std::uint32_t cpu_hz) {
-  std::ifstream in(BOARD_DIR "/xint_ack.ihx");
-  std::stringstream text;
-  text << in.rdbuf();
-  mcs51::HexImage img;
-  std::string error;
-  EXPECT_TRUE(mcs51::parse_ihex(text.str(), img, error)) << error;
+  const mcs51::HexImage img = board_image("xint_ack");
   Chip chip({Profile::spc3, BusMode::intel});
   Observed run;
   chip.on_bus_access([&](std::uint64_t c, const BusAccess& a) {
@@ -80,12 +73,8 @@ TEST(Cpu51Board, AnX_IntChangeIsSampledInTheCycleWhoseS5p2SeesIt) {
   // the second cycle of the MUL [2012, 2016) (2012 = 14 + 6 x 333). Sampled before the MUL's
   // last cycle, it is called after it: [2016, 2018); LJMP [2018, 2020), MOV DPTR, MOV A, the
   // acknowledge MOVX [2023, 2025): strobe at clock 24 276 + 18 = 24 294, chip cycle 48 588.
-  std::ifstream in(BOARD_DIR "/user_timer.ihx");
-  std::stringstream text;
-  text << in.rdbuf();
-  mcs51::HexImage img;
-  std::string error;
-  ASSERT_TRUE(mcs51::parse_ihex(text.str(), img, error)) << error;
+  const mcs51::HexImage img = board_image("user_timer");
+  ASSERT_GT(img.size, 0u);
   Chip chip({Profile::spc3, BusMode::intel});
   std::vector<std::pair<std::uint64_t, bool>> irq;
   chip.on_irq_change([&](std::uint64_t c, bool active) { irq.emplace_back(c, active); });

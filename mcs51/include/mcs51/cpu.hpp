@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 #include <span>
+#include <utility>
 #include <vector>
 
 namespace mcs51 {
@@ -34,6 +35,9 @@ class XdataBus {
 // Oscillator clocks from the start of a MOVX's first machine cycle to the rising edge of RD or
 // WR: the strobe spans S1P1..S3P2 of the second machine cycle (docs/cpu.md).
 inline constexpr unsigned movx_strobe_end = 18;
+
+// MOVX A,@DPTR / A,@Ri / @DPTR,A / @Ri,A: E0h, E2h, E3h, F0h, F2h, F3h.
+constexpr bool is_movx(std::uint8_t op) { return (op & 0xEC) == 0xE0 && (op & 0x03) != 0x01; }
 
 // Interrupt sources in their polling order within one priority level (vector 3 + 8 * index).
 enum class Source : std::uint8_t { ie0, tf0, ie1, tf1, serial, timer2 };
@@ -72,7 +76,7 @@ class Cpu {
   void set_int0(bool high) { set_pin(3, 2, high); }
   // INT0 changes to `high` from machine cycle `at` on (>= cycles(), within the next step): a
   // board that knows the pin's future sets it at the cycle whose S5P2 sample first sees it.
-  void schedule_int0(std::uint64_t at, bool high) { int0_change_ = {at, high, true}; }
+  void schedule_int0(std::uint64_t at, bool high);
   // The machine cycles the next step() takes, and whether it is a MOVX (whose access may itself
   // change a pin).
   unsigned next_step_cycles() const;
@@ -120,6 +124,7 @@ class Cpu {
   void write_sfr(std::uint8_t addr, std::uint8_t v);
   void push(std::uint8_t v);
   std::uint8_t pop();
+  static bool core_sfr(std::uint8_t addr);
   void set_cy(bool c);
   bool cy() const { return (psw() & 0x80) != 0; }
   void add(std::uint8_t v, bool carry_in);
@@ -129,9 +134,30 @@ class Cpu {
   std::uint8_t movx_read(std::uint16_t addr);
   void movx_write(std::uint16_t addr, std::uint8_t v);
   static const std::array<std::uint8_t, 256> cycle_table;
+  // The instructions (cpu.cpp): one function per opcode, `op_fn<Op>`, each the instruction set's
+  // code with the opcode a constant, so that the compiler folds the decoding away; `dispatch_`
+  // the table of them by opcode.
   void execute(std::uint8_t op);
   void execute_low(std::uint8_t op);
   void execute_high(std::uint8_t op);
+  using OpFn = void (*)(Cpu&);
+  template <unsigned Op>
+  static void op_fn(Cpu& cpu);
+  template <std::size_t... Op>
+  static constexpr std::array<OpFn, 256> make_dispatch(std::index_sequence<Op...>);
+  static const std::array<OpFn, 256> dispatch_;
+  StepResult advance();
+  StepResult slow_step();
+  // P is the parity of A after every instruction.
+  void set_parity() { sf(sfr::PSW) = static_cast<std::uint8_t>((psw() & 0xFE) | parity_[a()]); }
+  static const std::array<std::uint8_t, 256> parity_;
+  void poll_after(std::uint8_t sampled);
+
+  // Lazy peripherals (docs/cpu.md, "Speed"): while nothing the peripherals do can raise a new
+  // request or be seen outside, their machine cycles are only counted (`lag_`) and applied in one
+  // go by sync() before anything reads or writes their SFRs, a pin changes, or a step returns.
+  void sync();
+  void replan();
 
   // Peripherals (peripherals.cpp).
   void set_pin(unsigned port, unsigned bit, bool high);
@@ -163,6 +189,15 @@ class Cpu {
   std::uint8_t raised_ = 0;  // requests raised by hardware in the cycles ticked so far
   bool block_ = false;
   int next_irq_ = -1;  // the source whose call follows the instruction just ended, -1 none
+  // The poll's inputs (flags, IE, IP, levels in service) changed since the last poll; the
+  // requests of that poll. While clean, the poll's answer is the last one: none.
+  bool irq_dirty_ = true;
+  std::uint8_t last_req_ = 0;
+  // Deferred peripheral cycles, and the machine cycle up to which instructions may defer them:
+  // the peripherals' next possible new request, or `cycles_` when every cycle must be ticked.
+  std::uint64_t lag_ = 0;
+  std::uint64_t horizon_ = 0;
+  bool stale_ = true;  // the peripherals' set-up changed: replan() before the next step
 
   // Pin samples of the previous machine cycle (edge detection): INT0, INT1, T0, T1, T2, T2EX.
   std::uint8_t last_pins_ = 0x3F;
