@@ -21,10 +21,12 @@ namespace {
 
 class SegmentRun {
  public:
-  SegmentRun(const SegmentScenario& s, const LineSink& walk, const LineSink& errors)
+  SegmentRun(const SegmentScenario& s, const LineSink& walk, const LineSink& errors,
+             SegmentObserver* observer)
       : s_(s),
         walk_(walk),
         errors_(errors),
+        observer_(observer != nullptr ? observer : &quiet_),
         seg_(s.baud),
         check_(BusTiming{seg_.bit_cycles(), 11, s.slot_bits, 33,
                          s.masters.size() > 1 ? s.ttr_bits : 0, masters()},
@@ -33,12 +35,16 @@ class SegmentRun {
   int run() {
     build();
     for (const SegmentStep& st : s_.steps) {
-      say(seg_.cycle(), fmt::format("line {}: {}", st.line, st.text));
+      const std::string text = fmt::format("line {}: {}", st.line, st.text);
+      say(seg_.cycle(), text);
+      observer_->step_begins(st, text);
       act(st);
       settle();
+      observer_->step_ends(st);
     }
     seg_.flush();
     check_.flush();
+    observer_->run_ends(seg_, passed_, failed_);
     say(seg_.cycle(), fmt::format("{} expects passed, {} failed", passed_, failed_));
     return failed_ == 0 ? 0 : 1;
   }
@@ -67,32 +73,6 @@ class SegmentRun {
     for (const SegmentStation& def : s_.stations) {
       auto st = std::make_unique<Station>();
       st->index = seg_.add_chip(def.name, def.chip);
-      Chip& chip = seg_.chip(st->index);
-      DirectBus bus(chip);
-      if (def.firmware.empty()) {
-        ResponderConfig rc;
-        rc.slave = def.slave;
-        st->responder = std::make_unique<Responder>(rc);
-        st->responder->init(bus);
-        Responder* r = st->responder.get();
-        seg_.set_firmware(st->index, [r](BusPort& b) { r->isr(b); });
-      } else {
-        st->firmware = std::make_unique<FirmwareHost>(find_firmware(def.firmware));
-        st->firmware->init(bus, def.slave.address);
-        seg_.set_firmware(st->index, st->firmware->program());
-      }
-      Station* raw = st.get();
-      const std::string name = def.name;
-      chip.on_state_change([this, raw, name, &chip](std::uint64_t cycle) {
-        const DpState dp = chip.dp_state();
-        const WdState wd = chip.wd_state();
-        if (dp == raw->dp && wd == raw->wd) return;
-        if (raw->wd == WdState::DP_Control && wd != WdState::DP_Control)
-          raw->left_dp_control = cycle;
-        raw->dp = dp;
-        raw->wd = wd;
-        say(cycle, fmt::format("{}: {} / {}", name, dp_state_name(dp), wd_state_name(wd)));
-      });
       by_address_[def.slave.address] = st.get();
       stations_.push_back(std::move(st));
     }
@@ -108,13 +88,47 @@ class SegmentRun {
       masters_.push_back(std::make_unique<DpMaster>(
           seg_, station, MasterConfig{m.address, s_.baud, s_.slot_bits}, slaves));
     }
+    observer_->stations_added(seg_);
+    for (std::size_t k = 0; k < s_.stations.size(); ++k) user_side(s_.stations[k], *stations_[k]);
     seg_.on_telegram = [this](const LineTelegram& t) {
       check_.telegram(t);
       telegram(t);
+      observer_->telegram(t);
     };
     seg_.on_collision = [this](const Collision& c) {
       check_.collision(c, seg_.name(c.first), seg_.name(c.second));
     };
+  }
+
+  // The station's firmware or built-in user side: its init on the chip's bus, then its host CPU.
+  void user_side(const SegmentStation& def, Station& st) {
+    Chip& chip = seg_.chip(st.index);
+    DirectBus bus(chip);
+    if (def.firmware.empty()) {
+      ResponderConfig rc;
+      rc.slave = def.slave;
+      st.responder = std::make_unique<Responder>(rc);
+      st.responder->init(bus);
+      Responder* r = st.responder.get();
+      seg_.set_firmware(st.index, [r](BusPort& b) { r->isr(b); });
+    } else {
+      st.firmware = std::make_unique<FirmwareHost>(find_firmware(def.firmware));
+      st.firmware->init(bus, def.slave.address);
+      seg_.set_firmware(st.index, st.firmware->program());
+    }
+    Station* raw = &st;
+    const std::string name = def.name;
+    chip.on_state_change([this, raw, name, &chip](std::uint64_t cycle) {
+      const DpState dp = chip.dp_state();
+      const WdState wd = chip.wd_state();
+      if (dp == raw->dp && wd == raw->wd) return;
+      if (raw->wd == WdState::DP_Control && wd != WdState::DP_Control) raw->left_dp_control = cycle;
+      raw->dp = dp;
+      raw->wd = wd;
+      say(cycle, fmt::format("{}: {} / {}", name, dp_state_name(dp), wd_state_name(wd)));
+    });
+    observer_->user_side_started(
+        st.index, def.firmware.empty() ? std::string_view("the built-in user side") : def.firmware);
   }
 
   // Requests that want an answer, and the answers' delays (expect tsdr); the last request to each
@@ -241,6 +255,8 @@ class SegmentRun {
   const SegmentScenario& s_;
   const LineSink& walk_;
   const LineSink& errors_;
+  SegmentObserver quiet_;
+  SegmentObserver* observer_;
   Segment seg_;
   BusCheck check_;
   std::vector<std::unique_ptr<Station>> stations_;
@@ -256,8 +272,9 @@ class SegmentRun {
 
 }  // namespace
 
-int run_segment_scenario(const SegmentScenario& s, const LineSink& walk, const LineSink& errors) {
-  SegmentRun r(s, walk, errors);
+int run_segment_scenario(const SegmentScenario& s, const LineSink& walk, const LineSink& errors,
+                         SegmentObserver* observer) {
+  SegmentRun r(s, walk, errors, observer);
   return r.run();
 }
 

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -30,9 +31,15 @@ struct SignalDef {
 };
 const std::vector<SignalDef>& signal_list();
 
-// Watches a chip from now on and writes the waveform as the run goes: changes wait in a small
-// buffer until the chip's time has passed them (RxD edges are known ahead of time), so memory
-// stays bounded however long the run. finish() writes the rest and puts the file in place.
+// line.driver of a segment's waveform: the PROFIBUS address of the station that drives the line,
+// or one of these.
+inline constexpr std::uint8_t kNoDriver = 0xFF;              // the line is idle
+inline constexpr std::uint8_t kDriverWithoutAddress = 0xFE;  // a scripted sender
+
+// Watches a chip (or the chips of a segment) from now on and writes the waveform as the run goes:
+// changes wait in a small buffer until the chip's time has passed them (RxD edges are known ahead
+// of time), so memory stays bounded however long the run. finish() writes the rest and puts the
+// file in place.
 class Recorder {
  public:
   explicit Recorder(const Options& o);
@@ -42,6 +49,19 @@ class Recorder {
 
   // False (with a one-line error) if a signal pattern matches nothing or the options are bad.
   bool attach(Chip& chip, std::string& error);
+  // A segment (docs/segment.md, docs/waveforms.md "Segments"): under the top scope "segment",
+  // the line (line.level, line.driver) and each chip's signals under its station's scope. Every
+  // station of the segment in its order, before any of them has run (cycle 0), then every edge
+  // its line's holder drives through line_edge (Segment::on_line). `line_final`: the cycle before
+  // which every edge of the line has been reported (Segment::line_final). False as attach().
+  struct Station {
+    Chip* chip = nullptr;  // null: a station without a chip (a master, a scripted sender)
+    std::string scope;     // a chip's scope, e.g. station5_spc3
+    std::uint8_t driver = kDriverWithoutAddress;  // its code in line.driver
+  };
+  bool attach_segment(const std::vector<Station>& stations, std::uint32_t bit_cycles,
+                      std::function<std::uint64_t()> line_final, std::string& error);
+  void line_edge(std::size_t station, std::uint64_t cycle, bool level);
   // Writes everything up to `end_cycle` (temporary file, then rename). False with a reason.
   bool finish(std::uint64_t end_cycle, std::string& error);
 
