@@ -57,6 +57,8 @@ class TraceRecorder final : public ScenarioObserver {
   void heading(std::string text);
   // A comment placed among the current segment's events at `cycle`.
   void note(std::uint64_t cycle, std::string text);
+  // A comment on the telegram heard from `start` (hear_line): right after its `rx` line.
+  void note_heard(std::uint64_t start, std::string text);
   // Closes the current segment: its events in cycle order, then a `state` line at the chip's
   // current cycle (left out when nothing changed since the previous one).
   void checkpoint();

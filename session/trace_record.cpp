@@ -148,6 +148,13 @@ void TraceRecorder::note(std::uint64_t cycle, std::string text) {
   seg_.push_back(Entry{cycle, "# " + std::move(text)});
 }
 
+void TraceRecorder::note_heard(std::uint64_t start, std::string text) {
+  if (finished_) return;
+  // Its batch is complete once the segment reports the telegram: closed now, its line comes first.
+  if (!rxd_.empty() && rxd_.front().first == start) close_rxd();
+  note(start, std::move(text));
+}
+
 std::string TraceRecorder::state_line() const {
   std::string s = fmt::format("state {}", chip_->cycle());
   for (const TraceStateKey& k : trace_state(*chip_)) s += fmt::format(" {}={}", k.key, k.value);

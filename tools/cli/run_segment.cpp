@@ -134,6 +134,7 @@ class SegmentOutputs final : public SegmentObserver {
       r->hear_line(seg.bit_cycles());
       r->attach(seg.chip(k));
     }
+    heard_from_.assign(traces_.size(), seg.size());
   }
 
   void user_side_started(std::size_t index, std::string_view text) override {
@@ -152,8 +153,11 @@ class SegmentOutputs final : public SegmentObserver {
   }
 
   void telegram(const LineTelegram& t) override {
+    // Each station's trace names the sender of what it heard when the sender changes.
     for (std::size_t k = 0; k < traces_.size(); ++k) {
-      if (k != t.from) traces_[k]->note(t.start, fmt::format("{} on the line", seg_->name(t.from)));
+      if (k == t.from || heard_from_[k] == t.from) continue;
+      heard_from_[k] = t.from;
+      traces_[k]->note_heard(t.start, fmt::format("from {}", seg_->name(t.from)));
     }
     if (pcap_.is_open()) capture(t);
   }
@@ -200,14 +204,15 @@ class SegmentOutputs final : public SegmentObserver {
   };
 
   // The line's telegrams (docs/capture.md, "A segment's line"): each with its sender; a request
-  // that wants an answer is held until the next telegram says who answered it.
+  // that wants an answer is held until the next telegram says who answered it (a frame that
+  // decodes, from another station: what is left of a collision answers nothing).
   void capture(const LineTelegram& t) {
     const fdl::Decoded d = fdl::decode(t.bytes);
     const bool ok = d.error == fdl::Error::none && d.frame.sd != fdl::SD4;
     const bool request = ok && fdl::is_request(d.frame.fc);
     Held h{t, fmt::format("cycles {}-{}, {}", t.start, t.end, seg_->name(t.from))};
     if (held_) {
-      if (!request && d.frame.sd != fdl::SD4 && t.from != held_->t.from) {
+      if (ok && !request && t.from != held_->t.from) {
         held_->comment += fmt::format(", answered by {}", seg_->name(t.from));
         h.comment += fmt::format(", answer to {}", seg_->name(held_->t.from));
       }
@@ -261,6 +266,7 @@ class SegmentOutputs final : public SegmentObserver {
   std::optional<Held> held_;
   std::vector<std::unique_ptr<TraceRecorder>> traces_;
   std::vector<std::unique_ptr<outfile::OutFile>> trace_files_;
+  std::vector<std::size_t> heard_from_;  // per trace: the sender of the last telegram noted
   outfile::OutFile json_;
   std::string json_text_;
   std::uint64_t end_cycle_ = 0;
