@@ -42,6 +42,12 @@ class SegmentRun {
       settle();
       observer_->step_ends(st);
     }
+    // The run ends on a quiet line: an answer a chip is still sending is finished first, so that
+    // every output holds it whole (a station's trace ends after its last `tx`).
+    if (tx_until_ > seg_.cycle()) {
+      seg_.run_until(tx_until_);
+      settle();
+    }
     seg_.flush();
     check_.flush();
     observer_->run_ends(seg_, passed_, failed_);
@@ -116,6 +122,9 @@ class SegmentRun {
       st.firmware->init(bus, def.slave.address);
       seg_.set_firmware(st.index, st.firmware->program());
     }
+    chip.on_telegram([this](const Telegram& t) {
+      if (t.from_chip) tx_until_ = std::max(tx_until_, t.end);
+    });
     Station* raw = &st;
     const std::string name = def.name;
     chip.on_state_change([this, raw, name, &chip](std::uint64_t cycle) {
@@ -265,6 +274,7 @@ class SegmentRun {
   std::vector<std::unique_ptr<DpMaster>> masters_;
   std::map<std::uint8_t, std::uint64_t> last_request_;
   std::optional<std::uint64_t> pending_;
+  std::uint64_t tx_until_ = 0;  // the end of the last answer a chip decided to send
   std::vector<std::uint64_t> delays_;
   std::uint32_t passed_ = 0;
   std::uint32_t failed_ = 0;

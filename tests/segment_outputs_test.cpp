@@ -405,3 +405,21 @@ TEST(SegmentOutputs, BadInputIsOneLineAndNoFile) {
   EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;
   EXPECT_EQ(slurp(scn), slurp(kScenario));
 }
+
+// The three-slave segment (a firmware, a VPC3+, a DPC31): every station's trace replays alone, the
+// VPC3+'s last answer of the run whole in it (the run ends once the line is quiet).
+TEST(SegmentOutputs, ThreeSlavesTracesReplay) {
+  const std::string rec = tmp("three.trace");
+  auto r = sh(fmt::format("{} run --quiet {}/traces/segment/three_slaves.scn --record {}",
+                          DPC31_CLI, SOURCE_DIR, rec));
+  ASSERT_EQ(r.rc, 0) << r.out;
+  std::size_t traces = 0;
+  for (const auto& e : fs::directory_iterator(fs::path(rec).parent_path())) {
+    const std::string name = e.path().filename().string();
+    if (!name.starts_with("three.station") || !name.ends_with(".trace")) continue;
+    ++traces;
+    r = sh(fmt::format("{} replay --quiet {}", DPC31_CLI, e.path().string()));
+    EXPECT_EQ(r.rc, 0) << name << ": " << r.out;
+  }
+  EXPECT_EQ(traces, 3u);
+}
