@@ -423,3 +423,37 @@ TEST(SegmentOutputs, ThreeSlavesTracesReplay) {
   }
   EXPECT_EQ(traces, 3u);
 }
+
+// sigrok-cli's UART decoder (8E1) reads the logic-analyser form of a window (the SPC3's start-up
+// answers and master 3's first exchange with the DPC31, cycles 2 885 000 to 2 936 000): `line`
+// gives exactly the bytes of every telegram of the full waveform's line in it, and the DPC31's
+// `station6_dpc31_txd` exactly its answer.
+TEST(SegmentOutputs, SigrokDecodesTheLine) {
+  constexpr std::uint64_t kFrom = 2'885'000;
+  constexpr std::uint64_t kTo = 2'936'000;
+  const std::string la = tmp("window-la.vcd");
+  auto r = sh(fmt::format("{} run --quiet {} --la-vcd {} --from {} --to {}", DPC31_CLI, kScenario,
+                          la, kFrom, kTo));
+  ASSERT_EQ(r.rc, 0) << r.out;
+  const Vcd v(slurp(outputs().vcd));
+  std::string line;
+  std::string dpc31;
+  for (const OnLine& run : line_runs(v)) {
+    if (run.start < kFrom || run.end > kTo) continue;
+    for (const std::uint8_t b : run.bytes) {
+      line += fmt::format("{:02X}\n", b);
+      if (run.driver == 6) dpc31 += fmt::format("{:02X}\n", b);
+    }
+  }
+  ASSERT_FALSE(dpc31.empty());
+  const auto decode = [&](const char* pin) {
+    return testutil::run_command(
+        fmt::format("sigrok-cli -I vcd -i {} -P uart:rx={}:baudrate=1500000:parity=even:format=hex "
+                    "-A uart=rx-data 2>/dev/null | sed 's/^.* //' | tr a-f A-F",
+                    la, pin));
+  };
+  r = decode("line");
+  ASSERT_EQ(r.rc, 0);
+  EXPECT_EQ(r.out, line);
+  EXPECT_EQ(decode("station6_dpc31_txd").out, dpc31);
+}
