@@ -172,6 +172,20 @@ TEST(SegmentOutputs, RunWritesEveryOutput) {
                                tmp("two.station5_spc3.trace"), tmp("two.station6_dpc31.trace")}) {
     EXPECT_TRUE(fs::is_regular_file(f)) << f;
   }
+  // The summary: both stations in Data_Exchange, the collision, every expect passed.
+  const std::string j = slurp(o.json);
+  for (const std::string want :
+       {"\"scope\": \"station5_spc3\"", "\"scope\": \"station6_dpc31\"", "\"collisions\": 1",
+        "\"passed\": 9", "\"failed\": 0", "\"ok\": true", "\"final_cycle\": 3253000"}) {
+    EXPECT_NE(j.find(want), std::string::npos) << want << "\n" << j;
+  }
+  // The summary's objects: itself, the expects, and each station's with its counters.
+  EXPECT_EQ(std::count(j.begin(), j.end(), '{'), 1 + 1 + 2 * 2) << j;
+  std::size_t dx = 0;
+  for (std::size_t at = j.find("\"dp_state\": \"Data_Exchange\""); at != std::string::npos;
+       at = j.find("\"dp_state\": \"Data_Exchange\"", at + 1))
+    ++dx;
+  EXPECT_EQ(dx, 2u) << j;
 }
 
 // The line at the top, every station's signals (the single chip's list) under its scope.
