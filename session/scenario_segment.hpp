@@ -82,7 +82,9 @@ struct LineTelegram;
 class SegmentObserver {
  public:
   virtual ~SegmentObserver() = default;
-  // Every station is on the segment, at cycle 0, before any user side's init.
+  // Chip station `index` joined the segment, at cycle 0, before its user side's init.
+  virtual void station_added(Segment& /*seg*/, std::size_t /*index*/) {}
+  // Every station (chips, senders, masters) is on the segment, before the first step.
   virtual void stations_added(Segment& /*seg*/) {}
   // Station `index`'s user side has set up and started its chip.
   virtual void user_side_started(std::size_t /*index*/, std::string_view /*text*/) {}

@@ -79,6 +79,39 @@ class SegmentRun {
     for (const SegmentStation& def : s_.stations) {
       auto st = std::make_unique<Station>();
       st->index = seg_.add_chip(def.name, def.chip);
+      observer_->station_added(seg_, st->index);
+      Chip& chip = seg_.chip(st->index);
+      DirectBus bus(chip);
+      if (def.firmware.empty()) {
+        ResponderConfig rc;
+        rc.slave = def.slave;
+        st->responder = std::make_unique<Responder>(rc);
+        st->responder->init(bus);
+        Responder* r = st->responder.get();
+        seg_.set_firmware(st->index, [r](BusPort& b) { r->isr(b); });
+      } else {
+        st->firmware = std::make_unique<FirmwareHost>(find_firmware(def.firmware));
+        st->firmware->init(bus, def.slave.address);
+        seg_.set_firmware(st->index, st->firmware->program());
+      }
+      Station* raw = st.get();
+      const std::string name = def.name;
+      chip.on_state_change([this, raw, name, &chip](std::uint64_t cycle) {
+        const DpState dp = chip.dp_state();
+        const WdState wd = chip.wd_state();
+        if (dp == raw->dp && wd == raw->wd) return;
+        if (raw->wd == WdState::DP_Control && wd != WdState::DP_Control)
+          raw->left_dp_control = cycle;
+        raw->dp = dp;
+        raw->wd = wd;
+        say(cycle, fmt::format("{}: {} / {}", name, dp_state_name(dp), wd_state_name(wd)));
+      });
+      chip.on_telegram([this](const Telegram& t) {
+        if (t.from_chip) tx_until_ = std::max(tx_until_, t.end);
+      });
+      observer_->user_side_started(st->index, def.firmware.empty()
+                                                  ? std::string_view("the built-in user side")
+                                                  : std::string_view(def.firmware));
       by_address_[def.slave.address] = st.get();
       stations_.push_back(std::move(st));
     }
@@ -95,7 +128,6 @@ class SegmentRun {
           seg_, station, MasterConfig{m.address, s_.baud, s_.slot_bits}, slaves));
     }
     observer_->stations_added(seg_);
-    for (std::size_t k = 0; k < s_.stations.size(); ++k) user_side(s_.stations[k], *stations_[k]);
     seg_.on_telegram = [this](const LineTelegram& t) {
       check_.telegram(t);
       telegram(t);
@@ -104,40 +136,6 @@ class SegmentRun {
     seg_.on_collision = [this](const Collision& c) {
       check_.collision(c, seg_.name(c.first), seg_.name(c.second));
     };
-  }
-
-  // The station's firmware or built-in user side: its init on the chip's bus, then its host CPU.
-  void user_side(const SegmentStation& def, Station& st) {
-    Chip& chip = seg_.chip(st.index);
-    DirectBus bus(chip);
-    if (def.firmware.empty()) {
-      ResponderConfig rc;
-      rc.slave = def.slave;
-      st.responder = std::make_unique<Responder>(rc);
-      st.responder->init(bus);
-      Responder* r = st.responder.get();
-      seg_.set_firmware(st.index, [r](BusPort& b) { r->isr(b); });
-    } else {
-      st.firmware = std::make_unique<FirmwareHost>(find_firmware(def.firmware));
-      st.firmware->init(bus, def.slave.address);
-      seg_.set_firmware(st.index, st.firmware->program());
-    }
-    chip.on_telegram([this](const Telegram& t) {
-      if (t.from_chip) tx_until_ = std::max(tx_until_, t.end);
-    });
-    Station* raw = &st;
-    const std::string name = def.name;
-    chip.on_state_change([this, raw, name, &chip](std::uint64_t cycle) {
-      const DpState dp = chip.dp_state();
-      const WdState wd = chip.wd_state();
-      if (dp == raw->dp && wd == raw->wd) return;
-      if (raw->wd == WdState::DP_Control && wd != WdState::DP_Control) raw->left_dp_control = cycle;
-      raw->dp = dp;
-      raw->wd = wd;
-      say(cycle, fmt::format("{}: {} / {}", name, dp_state_name(dp), wd_state_name(wd)));
-    });
-    observer_->user_side_started(
-        st.index, def.firmware.empty() ? std::string_view("the built-in user side") : def.firmware);
   }
 
   // Requests that want an answer, and the answers' delays (expect tsdr); the last request to each

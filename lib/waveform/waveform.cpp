@@ -220,6 +220,9 @@ struct Recorder::Impl {
   }
 
   [[nodiscard]] std::uint64_t now() const {
+    // A segment's stations join one by one, each running its init first: nothing is final
+    // before the line is attached (attach_line) and every station with it.
+    if (line != nullptr && !horizon) return 0;
     std::uint64_t h = horizon ? horizon() : UINT64_MAX;
     for (const auto& s : sources) {
       if (s->chip != nullptr) h = std::min(h, s->chip->cycle());
@@ -555,26 +558,36 @@ bool Recorder::attach(Chip& chip, std::string& error) {
   return impl_->attach_chip(chip, {}, error);
 }
 
-bool Recorder::attach_segment(const std::vector<Station>& stations, std::uint32_t bit_cycles,
-                              std::function<std::uint64_t()> line_final, std::string& error) {
+bool Recorder::attach_station(Chip& chip, const std::string& scope, std::string& error) {
   Impl& m = *impl_;
-  if (!m.open_outputs(error)) return false;
-  m.top = "segment";
-  // The line first, at the top; then each chip's scope.
-  m.sources.push_back(std::make_unique<Impl::Source>());
-  Impl::Source& s = *m.sources.back();
-  s.var.fill(Impl::kNoVar);
-  m.line = &s;
-  for (std::uint8_t i = 0; i < kLineCount; ++i) {
-    if (m.take(kLineSignals[i].name, kLineSignals[i].name, kLineSignals[i].width))
-      m.add_var(s, i, kLineSignals[i]);
+  if (m.line == nullptr) {
+    // The first station: the line's variables first, at the top; the stations' scopes follow.
+    if (!m.open_outputs(error)) return false;
+    m.top = "segment";
+    m.sources.push_back(std::make_unique<Impl::Source>());
+    Impl::Source& s = *m.sources.back();
+    s.var.fill(Impl::kNoVar);
+    m.line = &s;
+    for (std::uint8_t i = 0; i < kLineCount; ++i) {
+      if (m.take(kLineSignals[i].name, kLineSignals[i].name, kLineSignals[i].width))
+        m.add_var(s, i, kLineSignals[i]);
+    }
+    m.push(s, 0, kLineLevel, 1);
+    m.push(s, 0, kLineDriver, kNoDriver);
   }
+  return m.attach_chip(chip, scope, error);
+}
+
+bool Recorder::attach_line(std::vector<std::uint8_t> driver_codes, std::uint32_t bit_cycles,
+                           std::function<std::uint64_t()> line_final, std::string& error) {
+  Impl& m = *impl_;
+  if (m.line == nullptr) {
+    error = fmt::format("{}: a segment's line without a station", m.opt.path);
+    return false;
+  }
+  m.driver_codes = std::move(driver_codes);
   m.char_cycles = std::uint64_t{kUartCharBits} * bit_cycles;
   m.horizon = std::move(line_final);
-  for (const Station& st : stations) {
-    m.driver_codes.push_back(st.driver);
-    if (st.chip != nullptr && !m.attach_chip(*st.chip, st.scope, error)) return false;
-  }
   for (const std::string& p : m.opt.signals) {
     const bool any = std::any_of(m.vars.begin(), m.vars.end(), [&](const Var& v) {
       const std::size_t dot = v.name.find('.');
@@ -586,8 +599,6 @@ bool Recorder::attach_segment(const std::vector<Station>& stations, std::uint32_
       return false;
     }
   }
-  m.push(s, 0, kLineLevel, 1);
-  m.push(s, 0, kLineDriver, kNoDriver);
   return true;
 }
 

@@ -50,17 +50,15 @@ class Recorder {
   // False (with a one-line error) if a signal pattern matches nothing or the options are bad.
   bool attach(Chip& chip, std::string& error);
   // A segment (docs/segment.md, docs/waveforms.md "Segments"): under the top scope "segment",
-  // the line (line.level, line.driver) and each chip's signals under its station's scope. Every
-  // station of the segment in its order, before any of them has run (cycle 0), then every edge
-  // its line's holder drives through line_edge (Segment::on_line). `line_final`: the cycle before
-  // which every edge of the line has been reported (Segment::line_final). False as attach().
-  struct Station {
-    Chip* chip = nullptr;  // null: a station without a chip (a master, a scripted sender)
-    std::string scope;     // a chip's scope, e.g. station5_spc3
-    std::uint8_t driver = kDriverWithoutAddress;  // its code in line.driver
-  };
-  bool attach_segment(const std::vector<Station>& stations, std::uint32_t bit_cycles,
-                      std::function<std::uint64_t()> line_final, std::string& error);
+  // the line (line.level, line.driver) and each chip's signals under its station's scope.
+  // attach_station() each chip station as it joins (before it runs), then attach_line() once
+  // every station is on the line: `driver_codes` has each station's code in line.driver (in the
+  // segment's order, senders too), `line_final` the cycle before which every edge of the line
+  // has been reported (Segment::line_final). Then every edge the line's holder drives through
+  // line_edge (Segment::on_line). False with a one-line error as attach().
+  bool attach_station(Chip& chip, const std::string& scope, std::string& error);
+  bool attach_line(std::vector<std::uint8_t> driver_codes, std::uint32_t bit_cycles,
+                   std::function<std::uint64_t()> line_final, std::string& error);
   void line_edge(std::size_t station, std::uint64_t cycle, bool level);
   // Writes everything up to `end_cycle` (temporary file, then rename). False with a reason.
   bool finish(std::uint64_t end_cycle, std::string& error);

@@ -4,6 +4,7 @@
 #include <fmt/core.h>
 
 #include <cctype>
+#include <cstdint>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -82,38 +83,38 @@ class SegmentOutputs final : public SegmentObserver {
     return true;
   }
 
-  void stations_added(Segment& seg) override {
+  // A chip station at cycle 0, before its init: its scope in every waveform, its trace.
+  void station_added(Segment& seg, std::size_t index) override {
     seg_ = &seg;
-    std::vector<wave::Recorder::Station> line;
-    for (std::size_t k = 0; k < seg.size(); ++k) {
-      wave::Recorder::Station st;
-      if (k < s_.stations.size()) {
-        st = {&seg.chip(k), scopes_[k], s_.stations[k].slave.address};
-      } else if (k >= s_.stations.size() + s_.senders.size()) {
-        st.driver = s_.masters[k - s_.stations.size() - s_.senders.size()].address;
-      }
-      line.push_back(st);
+    if (index == 0) make_waves();
+    std::string error;
+    for (auto& w : waves_) {
+      if (!w->attach_station(seg.chip(index), scopes_[index], error)) throw OutputError{error};
     }
-    for (const auto& [path, fst, flat] :
-         {std::tuple{opt_.vcd, false, opt_.flat}, std::tuple{opt_.fst, true, opt_.flat},
-          std::tuple{opt_.la_vcd, false, true}}) {
-      if (path.empty()) continue;
-      wave::Options w;
-      w.path = path;
-      w.fst = fst;
-      w.signals = opt_.signals;
-      w.from = opt_.from;
-      w.to = opt_.to;
-      w.flat = flat;
-      if (path == (opt_.vcd.empty() ? opt_.fst : opt_.vcd)) w.gtkw = opt_.gtkw;
-      parse_timescale(!opt_.timescale.empty() ? opt_.timescale
-                      : flat                  ? "10ns"
-                                              : "1ps",
-                      w.timescale_exp);
-      auto& r = waves_.emplace_back(std::make_unique<wave::Recorder>(w));
-      std::string error;
-      if (!r->attach_segment(
-              line, seg.bit_cycles(), [&seg] { return seg.line_final(); }, error))
+    if (opt_.record.empty()) return;
+    std::vector<std::string> notes = leading_comments(opt_.scenario);
+    if (!notes.empty()) notes.emplace_back();
+    notes.push_back(
+        fmt::format("recorded by `dpc31 run --record` from {}, station {} ({}) of its segment "
+                    "(docs/trace-format.md)",
+                    s_.file, s_.stations[index].slave.address, s_.stations[index].name));
+    auto& r = traces_.emplace_back(std::make_unique<TraceRecorder>(s_.baud, std::move(notes)));
+    r->hear_line(seg.bit_cycles());
+    r->attach(seg.chip(index));
+    heard_from_.push_back(SIZE_MAX);
+  }
+
+  // Every station on the line: each one's code in line.driver (a chip's and a master's address,
+  // FEh a sender), and the line's edges to the waveforms.
+  void stations_added(Segment& seg) override {
+    std::vector<std::uint8_t> codes;
+    for (const SegmentStation& st : s_.stations) codes.push_back(st.slave.address);
+    codes.resize(codes.size() + s_.senders.size(), wave::kDriverWithoutAddress);
+    for (const SegmentMaster& m : s_.masters) codes.push_back(m.address);
+    std::string error;
+    for (auto& w : waves_) {
+      if (!w->attach_line(
+              codes, seg.bit_cycles(), [&seg] { return seg.line_final(); }, error))
         throw OutputError{error};
     }
     if (!waves_.empty()) {
@@ -121,20 +122,6 @@ class SegmentOutputs final : public SegmentObserver {
         for (auto& w : waves_) w->line_edge(from, cycle, level);
       };
     }
-    if (opt_.record.empty()) return;
-    std::vector<std::string> notes = leading_comments(opt_.scenario);
-    if (!notes.empty()) notes.emplace_back();
-    for (std::size_t k = 0; k < s_.stations.size(); ++k) {
-      std::vector<std::string> n = notes;
-      n.push_back(
-          fmt::format("recorded by `dpc31 run --record` from {}, station {} ({}) of its segment "
-                      "(docs/trace-format.md)",
-                      s_.file, s_.stations[k].slave.address, s_.stations[k].name));
-      auto& r = traces_.emplace_back(std::make_unique<TraceRecorder>(s_.baud, std::move(n)));
-      r->hear_line(seg.bit_cycles());
-      r->attach(seg.chip(k));
-    }
-    heard_from_.assign(traces_.size(), seg.size());
   }
 
   void user_side_started(std::size_t index, std::string_view text) override {
@@ -198,6 +185,28 @@ class SegmentOutputs final : public SegmentObserver {
   }
 
  private:
+  // The waveforms asked for (--vcd, --fst, --la-vcd), as for one chip.
+  void make_waves() {
+    for (const auto& [path, fst, flat] :
+         {std::tuple{opt_.vcd, false, opt_.flat}, std::tuple{opt_.fst, true, opt_.flat},
+          std::tuple{opt_.la_vcd, false, true}}) {
+      if (path.empty()) continue;
+      wave::Options w;
+      w.path = path;
+      w.fst = fst;
+      w.signals = opt_.signals;
+      w.from = opt_.from;
+      w.to = opt_.to;
+      w.flat = flat;
+      if (path == (opt_.vcd.empty() ? opt_.fst : opt_.vcd)) w.gtkw = opt_.gtkw;
+      parse_timescale(!opt_.timescale.empty() ? opt_.timescale
+                      : flat                  ? "10ns"
+                                              : "1ps",
+                      w.timescale_exp);
+      waves_.push_back(std::make_unique<wave::Recorder>(w));
+    }
+  }
+
   struct Held {
     LineTelegram t;
     std::string comment;
