@@ -73,7 +73,32 @@ bool parse_segment_scenario(std::string_view text, const std::string& file, Segm
 enum class SegmentLoad : std::uint8_t { not_segment, error, ok };
 SegmentLoad load_segment_scenario(const std::string& path, SegmentScenario& out,
                                   ScenarioError& err);
+class Segment;
+struct LineTelegram;
+
+// What watches a segment's run (the outputs of `dpc31 run`, docs/segment.md "Outputs"). The
+// segment's stations are, in this order: the chips of `SegmentScenario::stations`, the senders,
+// the masters.
+class SegmentObserver {
+ public:
+  virtual ~SegmentObserver() = default;
+  // Chip station `index` joined the segment, at cycle 0, before its user side's init.
+  virtual void station_added(Segment& /*seg*/, std::size_t /*index*/) {}
+  // Every station (chips, senders, masters) is on the segment, before the first step.
+  virtual void stations_added(Segment& /*seg*/) {}
+  // Station `index`'s user side has set up and started its chip.
+  virtual void user_side_started(std::size_t /*index*/, std::string_view /*text*/) {}
+  // Step `st` begins ("line K: TEXT"), and it ended (the line settled after it).
+  virtual void step_begins(const SegmentStep& /*st*/, std::string_view /*text*/) {}
+  virtual void step_ends(const SegmentStep& /*st*/) {}
+  // Every telegram on the line (Segment::on_telegram).
+  virtual void telegram(const LineTelegram& /*t*/) {}
+  // After the last step and the line's flush.
+  virtual void run_ends(Segment& /*seg*/, std::uint32_t /*passed*/, std::uint32_t /*failed*/) {}
+};
+
 // Plays it: the walk to `walk`, failed expects to `errors`. Exit code as run_scenario_file.
-int run_segment_scenario(const SegmentScenario& s, const LineSink& walk, const LineSink& errors);
+int run_segment_scenario(const SegmentScenario& s, const LineSink& walk, const LineSink& errors,
+                         SegmentObserver* observer = nullptr);
 
 }  // namespace dpc31

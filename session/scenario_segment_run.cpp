@@ -21,10 +21,12 @@ namespace {
 
 class SegmentRun {
  public:
-  SegmentRun(const SegmentScenario& s, const LineSink& walk, const LineSink& errors)
+  SegmentRun(const SegmentScenario& s, const LineSink& walk, const LineSink& errors,
+             SegmentObserver* observer)
       : s_(s),
         walk_(walk),
         errors_(errors),
+        observer_(observer != nullptr ? observer : &quiet_),
         seg_(s.baud),
         check_(BusTiming{seg_.bit_cycles(), 11, s.slot_bits, 33,
                          s.masters.size() > 1 ? s.ttr_bits : 0, masters()},
@@ -33,12 +35,22 @@ class SegmentRun {
   int run() {
     build();
     for (const SegmentStep& st : s_.steps) {
-      say(seg_.cycle(), fmt::format("line {}: {}", st.line, st.text));
+      const std::string text = fmt::format("line {}: {}", st.line, st.text);
+      say(seg_.cycle(), text);
+      observer_->step_begins(st, text);
       act(st);
+      settle();
+      observer_->step_ends(st);
+    }
+    // The run ends on a quiet line: an answer a chip is still sending is finished first, so that
+    // every output holds it whole (a station's trace ends after its last `tx`).
+    if (tx_until_ > seg_.cycle()) {
+      seg_.run_until(tx_until_);
       settle();
     }
     seg_.flush();
     check_.flush();
+    observer_->run_ends(seg_, passed_, failed_);
     say(seg_.cycle(), fmt::format("{} expects passed, {} failed", passed_, failed_));
     return failed_ == 0 ? 0 : 1;
   }
@@ -67,6 +79,7 @@ class SegmentRun {
     for (const SegmentStation& def : s_.stations) {
       auto st = std::make_unique<Station>();
       st->index = seg_.add_chip(def.name, def.chip);
+      observer_->station_added(seg_, st->index);
       Chip& chip = seg_.chip(st->index);
       DirectBus bus(chip);
       if (def.firmware.empty()) {
@@ -93,6 +106,12 @@ class SegmentRun {
         raw->wd = wd;
         say(cycle, fmt::format("{}: {} / {}", name, dp_state_name(dp), wd_state_name(wd)));
       });
+      chip.on_telegram([this](const Telegram& t) {
+        if (t.from_chip) tx_until_ = std::max(tx_until_, t.end);
+      });
+      observer_->user_side_started(st->index, def.firmware.empty()
+                                                  ? std::string_view("the built-in user side")
+                                                  : std::string_view(def.firmware));
       by_address_[def.slave.address] = st.get();
       stations_.push_back(std::move(st));
     }
@@ -108,9 +127,11 @@ class SegmentRun {
       masters_.push_back(std::make_unique<DpMaster>(
           seg_, station, MasterConfig{m.address, s_.baud, s_.slot_bits}, slaves));
     }
+    observer_->stations_added(seg_);
     seg_.on_telegram = [this](const LineTelegram& t) {
       check_.telegram(t);
       telegram(t);
+      observer_->telegram(t);
     };
     seg_.on_collision = [this](const Collision& c) {
       check_.collision(c, seg_.name(c.first), seg_.name(c.second));
@@ -241,6 +262,8 @@ class SegmentRun {
   const SegmentScenario& s_;
   const LineSink& walk_;
   const LineSink& errors_;
+  SegmentObserver quiet_;
+  SegmentObserver* observer_;
   Segment seg_;
   BusCheck check_;
   std::vector<std::unique_ptr<Station>> stations_;
@@ -249,6 +272,7 @@ class SegmentRun {
   std::vector<std::unique_ptr<DpMaster>> masters_;
   std::map<std::uint8_t, std::uint64_t> last_request_;
   std::optional<std::uint64_t> pending_;
+  std::uint64_t tx_until_ = 0;  // the end of the last answer a chip decided to send
   std::vector<std::uint64_t> delays_;
   std::uint32_t passed_ = 0;
   std::uint32_t failed_ = 0;
@@ -256,8 +280,9 @@ class SegmentRun {
 
 }  // namespace
 
-int run_segment_scenario(const SegmentScenario& s, const LineSink& walk, const LineSink& errors) {
-  SegmentRun r(s, walk, errors);
+int run_segment_scenario(const SegmentScenario& s, const LineSink& walk, const LineSink& errors,
+                         SegmentObserver* observer) {
+  SegmentRun r(s, walk, errors, observer);
   return r.run();
 }
 

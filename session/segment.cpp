@@ -154,6 +154,7 @@ void Segment::decode(std::size_t from, std::uint64_t cycle, bool level) {
   if (!level && (claims_.empty() || claims_.back().second != from))
     claims_.emplace_back(cycle, from);
   line_rx_.edge(cycle, level);
+  if (on_line) on_line(from, cycle, level);
 }
 
 // Characters whose stop sample is by `upto` join the open telegram (the driver of its first
@@ -259,6 +260,7 @@ void Segment::run_until(std::uint64_t cycle, std::optional<std::size_t> wake_for
                      [&](std::size_t a, std::size_t b) { return round[a].first < round[b].first; });
     for (const std::size_t k : order) relay(who[k], Edges{round[k]});
     close_telegrams(now_);
+    line_final_ = now_;
   }
   wake_for_.reset();
 }

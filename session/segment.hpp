@@ -86,6 +86,11 @@ class Segment {
   std::function<void(const LineTelegram&)> on_telegram;
   // Told of every collision as it is found.
   std::function<void(const Collision&)> on_collision;
+  // Every edge on the line as its holder drives it (the station, the cycle, the level), in cycle
+  // order: a sender's when it sends (ahead of time), a chip's when it is relayed. Waveforms use it.
+  std::function<void(std::size_t, std::uint64_t, bool)> on_line;
+  // Every edge on the line before this cycle has been handed to on_line.
+  [[nodiscard]] std::uint64_t line_final() const { return line_final_; }
   // Hands on_telegram what is still open (the end of a run).
   void flush();
 
@@ -110,6 +115,7 @@ class Segment {
   std::uint32_t clock_hz_;
   std::uint32_t t_;
   std::uint64_t now_ = 0;
+  std::uint64_t line_final_ = 0;
   std::vector<std::unique_ptr<Station>> stations_;
   std::vector<Collision> collisions_;
   // The line: who drives it until when (a falling edge holds it one character time).

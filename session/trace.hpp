@@ -47,10 +47,18 @@ class TraceRecorder final : public ScenarioObserver {
   TraceRecorder& operator=(const TraceRecorder&) = delete;
 
   void attach(Chip& chip);
+  // The chip is a station of a segment (docs/segment.md, "Outputs"): its RxD is the line, handed
+  // over edge by edge at their cycles when another chip drives it. Every telegram it hears
+  // (characters back to back, T = `bit_cycles`) is one batch, and the recorder reads its
+  // characters itself: the batch is an `rx` line when uart_encode of them gives exactly its
+  // edges. Call before attach().
+  void hear_line(std::uint32_t bit_cycles) { line_t_ = bit_cycles; }
   // A comment heading the current segment (e.g. the scenario line being executed).
   void heading(std::string text);
   // A comment placed among the current segment's events at `cycle`.
   void note(std::uint64_t cycle, std::string text);
+  // A comment on the telegram heard from `start` (hear_line): right after its `rx` line.
+  void note_heard(std::uint64_t start, std::string text);
   // Closes the current segment: its events in cycle order, then a `state` line at the chip's
   // current cycle (left out when nothing changed since the previous one).
   void checkpoint();
@@ -104,6 +112,8 @@ class TraceRecorder final : public ScenarioObserver {
   std::uint64_t rxd_fed_ = 0;
   std::vector<std::pair<std::uint64_t, bool>> rxd_;
   std::optional<RxdTelegram> sent_;  // what the sender said the next batch is
+  std::uint32_t line_t_ = 0;         // hear_line(): the line's bit time
+  std::uint64_t line_char_end_ = 0;  // end of the stop bit of the last character heard
   std::uint64_t last_key_ = 0;
   // The state at the segment's checkpoint (cycle, line), taken when it was due.
   std::optional<std::pair<std::uint64_t, std::string>> pending_state_;
@@ -118,6 +128,11 @@ class TraceRecorder final : public ScenarioObserver {
 // line with the raw edges.
 std::string format_rxd(std::uint64_t fed, const std::vector<std::pair<std::uint64_t, bool>>& edges,
                        std::uint32_t t, const RxdTelegram* sent);
+
+// The batch's clean characters back to back from its first edge at bit time `t`, when
+// uart_encode of them gives exactly `edges` (TraceRecorder::hear_line).
+std::optional<RxdTelegram> read_chars(const std::vector<std::pair<std::uint64_t, bool>>& edges,
+                                      std::uint32_t t);
 
 // --- the trace file ---
 

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <iterator>
 
 #include "dpc31/hex.hpp"
 #include "trace.hpp"
@@ -45,6 +46,22 @@ std::string format_rxd(std::uint64_t fed, const std::vector<std::pair<std::uint6
   std::string line = fmt::format("rxd {}", fed);
   for (const auto& [c, l] : edges) line += fmt::format(" {}:{}", c, l ? 1 : 0);
   return line;
+}
+
+std::optional<RxdTelegram> read_chars(const std::vector<std::pair<std::uint64_t, bool>>& edges,
+                                      std::uint32_t t) {
+  if (t == 0 || edges.empty() || edges.front().second) return std::nullopt;
+  const std::uint64_t start = edges.front().first;
+  UartRx rx(t, start);
+  for (const auto& [c, l] : edges) rx.edge(c, l);
+  std::vector<UartChar> chars;
+  rx.advance(edges.back().first + std::uint64_t{kUartCharBits} * t, chars);
+  RxdTelegram out{start, {}, {}};
+  for (const UartChar& c : chars) out.bytes.push_back(c.data);
+  std::vector<std::pair<std::uint64_t, bool>> enc;
+  uart_encode(out.bytes, start, t, enc);
+  if (out.bytes.empty() || enc != edges) return std::nullopt;
+  return out;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -92,8 +109,16 @@ void TraceRecorder::attach(Chip& chip) {
     if (finished_) return;
     if (closing_) close_segment();
     const std::uint64_t fed = chip_->cycle();
-    if (!rxd_.empty() && fed != rxd_fed_) close_rxd();
-    rxd_fed_ = fed;
+    if (line_t_ != 0) {
+      // A segment's line: a start bit later than the end of the last character begins a
+      // telegram (one back to back continues it).
+      const bool start = !level && cycle >= line_char_end_;
+      if (start && cycle > line_char_end_) close_rxd();
+      if (start) line_char_end_ = cycle + std::uint64_t{kUartCharBits} * line_t_;
+    } else if (!rxd_.empty() && fed != rxd_fed_) {
+      close_rxd();
+    }
+    if (rxd_.empty()) rxd_fed_ = fed;
     rxd_.emplace_back(cycle, level);
   });
 }
@@ -111,6 +136,7 @@ void TraceRecorder::add(std::uint64_t key, std::string text) {
 void TraceRecorder::close_rxd() {
   if (rxd_.empty()) return;
   const std::uint32_t t = chip_ != nullptr ? bit_cycles(chip_->clock_hz(), baud_) : 0;
+  if (line_t_ != 0 && !sent_) sent_ = read_chars(rxd_, line_t_);
   seg_.push_back(Entry{rxd_fed_, format_rxd(rxd_fed_, rxd_, t, sent_ ? &*sent_ : nullptr)});
   rxd_.clear();
   sent_.reset();
@@ -120,6 +146,13 @@ void TraceRecorder::heading(std::string text) { headings_.push_back(std::move(te
 
 void TraceRecorder::note(std::uint64_t cycle, std::string text) {
   seg_.push_back(Entry{cycle, "# " + std::move(text)});
+}
+
+void TraceRecorder::note_heard(std::uint64_t start, std::string text) {
+  if (finished_) return;
+  // Its batch is complete once the segment reports the telegram: closed now, its line comes first.
+  if (!rxd_.empty() && rxd_.front().first == start) close_rxd();
+  note(start, std::move(text));
 }
 
 std::string TraceRecorder::state_line() const {
@@ -133,6 +166,15 @@ void TraceRecorder::close_segment() {
   closing_ = false;
   std::stable_sort(seg_.begin(), seg_.end(),
                    [](const Entry& a, const Entry& b) { return a.key < b.key; });
+  // What lies beyond the checkpoint (an answer the chip decided at its request's end, due
+  // TSDR later, when a segment's step ended in between) opens the next segment.
+  std::vector<Entry> later;
+  if (pending_state_) {
+    const auto beyond = std::find_if(seg_.begin(), seg_.end(),
+                                     [&](const Entry& e) { return e.key > pending_state_->first; });
+    later.assign(std::make_move_iterator(beyond), std::make_move_iterator(seg_.end()));
+    seg_.erase(beyond, seg_.end());
+  }
   for (const std::string& h : headings_) body_.push_back("# " + h);
   for (const Entry& e : seg_) {
     const bool comment = e.text.starts_with('#');
@@ -143,7 +185,7 @@ void TraceRecorder::close_segment() {
     body_.push_back(e.text);
   }
   headings_.clear();
-  seg_.clear();
+  seg_ = std::move(later);
   if (pending_state_) {
     const auto& [cycle, line] = *pending_state_;
     if (cycle < last_key_ && error_.empty()) {

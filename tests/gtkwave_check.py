@@ -333,13 +333,56 @@ def case_merge(dpc31, src, d):
     return problems
 
 
+def case_segment(dpc31, d):
+    """A segment's save file: the line and a group per station, each state by name at its
+    station's markers (docs/waveforms.md, "Segments")."""
+    save = f"{d}/two.gtkw"
+    run([dpc31, "run", "--quiet", f"{SRC}/traces/segment/two_masters.scn", "--vcd", f"{d}/two.vcd",
+         "--gtkw", save])
+    markers = [ln.split(" ", 1)[1] for ln in Path(save).read_text().splitlines()
+               if ln.startswith("[markername] ")]
+    tcl = TRACES_TCL
+    for m in markers:
+        letter, station = m[0], m[1:].split(" ")[0]
+        tcl += (f'puts "marker {letter} [gtkwave::getNamedMarker {letter}]|'
+                + "|".join(f"[gtkwave::getTraceValueAtNamedMarkerFromName {letter} "
+                           f"{{segment.{station}.{s}}}]" for s in
+                           ("state.dp_state[1:0]", "state.wd_state[1:0]")) + '"\n')
+    out = gtkwave(save, tcl, d)
+    problems = []
+    chip = ["rxd", "txd", "x_int", "rd", "wr", "addr[12:0]", "data[7:0]", "dp_state[1:0]",
+            "wd_state[1:0]", "baud_code[3:0]", "service[7:0]", "irr[15:0]", "dout_sm[7:0]",
+            "din_sm[7:0]", "diag_sm[3:0]"]
+    want_groups = {"line": ["level", "driver[7:0]"], "station5_spc3": chip,
+                   "station6_dpc31": chip[:3] + ["pb3"] + chip[3:]}
+    got_groups = groups(traces(out))
+    if got_groups != want_groups:
+        problems.append(f"groups shown {got_groups}, want {want_groups}")
+    vcd = vcd_changes(f"{d}/two.vcd")
+    shown = {m.group(1): (int(m.group(2)), m.group(3).split("|"))
+             for m in re.finditer(r"^marker (\w) (-?\d+)\|(.*)$", out, re.M)}
+    if len(markers) != 8 or len(shown) != len(markers):
+        problems.append(f"markers {markers}, shown {shown}")
+    for m in markers:
+        station, change = m[1:].split(" ")
+        machine, state = change.split("=")
+        t, (dp, wd) = shown.get(m[0], (None, ["", ""]))
+        if (dp if machine == "dp_state" else wd) != state:
+            problems.append(f"marker {m}: GTKWave shows dp_state {dp!r}, wd_state {wd!r}")
+        if t not in [c for c, _ in vcd[f"segment.{station}.state.{machine}"]]:
+            problems.append(f"marker {m} at {t}: no change of {station}'s {machine} there")
+    print(f"segment: {len(got_groups)} groups, {len(shown)} markers, states by name at each")
+    return problems
+
+
 def main():
     global SRC
     dpc31, src, case = sys.argv[1:4]
     SRC = src
     shot = sys.argv[5] if len(sys.argv) > 5 and sys.argv[4] == "--screenshot" else None
     with tempfile.TemporaryDirectory() as d:
-        problems = case_demo(dpc31, d, shot) if case == "demo" else case_merge(dpc31, src, d)
+        problems = (case_demo(dpc31, d, shot) if case == "demo" else
+                    case_segment(dpc31, d) if case == "segment" else case_merge(dpc31, src, d))
     if problems:
         fail("\n".join(problems[:20]))
     print("ok")

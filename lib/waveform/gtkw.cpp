@@ -74,8 +74,10 @@ std::string save_file_text(const SaveFile& f) {
     const std::string leaf = f.flat ? name.substr(name.find('.') + 1) : name;
     const int w = f.widths[i];
     const std::string full =
-        w == 1 ? fmt::format("dpc31.{}", leaf) : fmt::format("dpc31.{}[{}:0]", leaf, w - 1);
-    const auto filter = filters().find(name);
+        w == 1 ? fmt::format("{}.{}", f.top, leaf) : fmt::format("{}.{}[{}:0]", f.top, leaf, w - 1);
+    // A station's signal in a segment's waveform has the filter of the chip's signal.
+    auto filter = filters().find(name);
+    if (filter == filters().end()) filter = filters().find(name.substr(name.find('.') + 1));
     if (filter != filters().end() && !f.filter_dir.empty()) {
       auto [it, added] =
           filter_index.emplace(filter->second, static_cast<int>(filter_index.size()) + 1);

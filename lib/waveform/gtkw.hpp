@@ -13,13 +13,14 @@ namespace dpc31::wave {
 
 struct SaveFile {
   std::string dump;                  // the waveform the save file opens
-  std::vector<std::string> signals;  // the names written, below "dpc31", in declaration order
+  std::vector<std::string> signals;  // the names written, below `top`, in declaration order
   std::vector<int> widths;
   bool flat = false;      // the logic-analyser form: the leaves directly under "dpc31"
   std::uint64_t end = 0;  // the last time, in the file's units (for the zoom)
   // Named markers (GTKWave has 26, A to Z): time in the file's units and the name.
   std::vector<std::pair<std::uint64_t, std::string>> markers;
-  std::string filter_dir;  // "" = no translate filters (values as numbers)
+  std::string filter_dir;     // "" = no translate filters (values as numbers)
+  std::string top = "dpc31";  // the top scope ("segment" for a segment's waveform)
 };
 
 // Where the translate filters are: share/dpc31emu/gtkwave beside the program (installed, or the

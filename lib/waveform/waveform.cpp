@@ -5,16 +5,16 @@
 
 #include <algorithm>
 #include <array>
-#include <charconv>
 #include <cstdio>
-#include <cstring>
 #include <numeric>
+#include <optional>
 #include <string_view>
 
 #include "dpc31/reg_ids.hpp"
 #include "gtkw.hpp"
 #include "gtkwave/fstapi.h"
 #include "outfile.hpp"
+#include "vcd_body.hpp"
 #include "vocabulary.hpp"
 #include "wavediff.hpp"  // vcd_id: one VCD identifier code for every writer
 
@@ -70,7 +70,7 @@ struct Event {
   std::uint64_t cycle;
   std::uint32_t seq;  // the order of recording, for changes in the same cycle
   std::uint16_t value;
-  std::uint8_t sig;
+  std::uint16_t var;  // the recording's variable (Recorder::Impl::vars)
 };
 
 // state.service: the DP service of a request the chip received, by the slave's SAP (the DSAP,
@@ -106,112 +106,28 @@ struct Stream {
   }
 };
 
-// The two streams (RxD, driven ahead of time, and everything else) merged in (cycle, seq) order.
-class Merged {
- public:
-  Merged(const std::vector<Event>& a, const std::vector<Event>& b) : a_(a), b_(b) {}
-  [[nodiscard]] const Event* peek() const {
-    if (i_ < a_.size() && (j_ == b_.size() || before(a_[i_], b_[j_]))) return &a_[i_];
-    return j_ < b_.size() ? &b_[j_] : nullptr;
-  }
-  void pop() {
-    if (i_ < a_.size() && (j_ == b_.size() || before(a_[i_], b_[j_]))) {
-      ++i_;
-    } else {
-      ++j_;
-    }
-  }
-  [[nodiscard]] std::size_t taken_a() const { return i_; }
-  [[nodiscard]] std::size_t taken_b() const { return j_; }
-
- private:
-  const std::vector<Event>& a_;
-  const std::vector<Event>& b_;
-  std::size_t i_ = 0;
-  std::size_t j_ = 0;
-};
-
 std::string bits(std::uint32_t v, int width) {
   std::string s;
   for (int b = width - 1; b >= 0; --b) s += ((v >> b) & 1) != 0 ? '1' : '0';
   return s;
 }
 
-// The VCD body, formatted by hand into a 16 KiB buffer: a traced run writes a line per change, and
-// a formatted print per line (fmt into stdio) was a fifth of its cost (docs/performance.md, i).
-class VcdBody {
- public:
-  explicit VcdBody(std::FILE* f) : f_(f) {}
-  VcdBody(const VcdBody&) = delete;
-  VcdBody& operator=(const VcdBody&) = delete;
-  ~VcdBody() { flush(); }
-  // Times only grow, and a VCD of a run writes one for nearly every change: the digits above the
-  // last eight are kept from the previous time, the last eight converted two at a time.
-  void time(std::uint64_t t) {
-    room(32);
-    *p_++ = '#';
-    const std::uint64_t high = t / 100'000'000;
-    const auto low = static_cast<std::uint32_t>(t % 100'000'000);
-    if (high == 0) {
-      int n = 1;
-      for (std::uint32_t v = low; v >= 10; v /= 10) ++n;
-      p_ = digits(low, n, p_);
-    } else {
-      if (high != high_) {
-        high_ = high;
-        high_len_ = static_cast<std::size_t>(
-            std::to_chars(high_digits_.data(), high_digits_.data() + high_digits_.size(), high)
-                .ptr -
-            high_digits_.data());
-      }
-      p_ = digits(low, 8, std::copy_n(high_digits_.data(), high_len_, p_));
-    }
-    *p_++ = '\n';
-  }
-  // `id` is the signal's identifier code; `width` 1 writes the scalar form.
-  void value(std::string_view id, int width, std::uint32_t v) {
-    room(id.size() + 20);
-    if (width == 1) {
-      *p_++ = (v & 1) != 0 ? '1' : '0';
-    } else {
-      *p_++ = 'b';
-      for (int b = width - 1; b >= 0; --b) *p_++ = ((v >> b) & 1) != 0 ? '1' : '0';
-      *p_++ = ' ';
-    }
-    p_ = std::copy(id.begin(), id.end(), p_);
-    *p_++ = '\n';
-  }
-  void flush() {
-    std::fwrite(buf_.get(), 1, static_cast<std::size_t>(p_ - buf_.get()), f_);
-    p_ = buf_.get();
-  }
+// The line of a segment: its level and who drives it.
+enum LineSig : std::uint8_t { kLineLevel, kLineDriver, kLineCount };
+constexpr std::array<SignalDef, kLineCount> kLineSignals = {
+    {{"line.level", 1}, {"line.driver", 8}}};
 
- private:
-  // The last `n` decimal digits of `v` (with leading zeros) at `p`; returns the end.
-  static char* digits(std::uint32_t v, int n, char* p) {
-    static constexpr char kPairs[] =
-        "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
-        "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
-        "8081828384858687888990919293949596979899";
-    char* const end = p + n;
-    for (; n >= 2; n -= 2, v /= 100) {
-      std::memcpy(p + n - 2, &kPairs[2 * (v % 100)], 2);
-    }
-    if (n == 1) *p = static_cast<char>('0' + v % 10);
-    return end;
-  }
-  char* end() { return buf_.get() + kSize; }
-  void room(std::size_t n) {
-    if (static_cast<std::size_t>(end() - p_) < n) flush();
-  }
-  std::FILE* f_;
-  std::uint64_t high_ = 0;
-  std::array<char, 20> high_digits_{};
-  std::size_t high_len_ = 0;
-  static constexpr std::size_t kSize = 16 * 1024;
-  std::unique_ptr<char[]> buf_ = std::make_unique_for_overwrite<char[]>(kSize);
-  char* p_ = buf_.get();
+// A variable of the file: its name below the top scope, its width, and what it shows.
+struct Var {
+  std::string name;
+  int width = 1;
+  std::size_t source = 0;  // Recorder::Impl::sources: the line first, then the chips
+  std::uint8_t sig = 0;    // Sig of a chip, LineSig of the line
 };
+
+bool glob(const std::string& pattern, const std::string& name) {
+  return fnmatch(pattern.c_str(), name.c_str(), 0) == 0;
+}
 
 }  // namespace
 
@@ -220,46 +136,103 @@ const std::vector<SignalDef>& signal_list() {
   return list;
 }
 
-// Changes are written as the run goes: every change before the chip's current cycle is final
-// (sources report at or after it; RxD ahead of it), so the streams hold only what is ahead and
-// what came since the last drain, and memory stays bounded however long the run.
+// Changes are written as the run goes: every change before the horizon (the chips' current
+// cycle; in a segment also the line's, Segment::line_final) is final (sources report at or after
+// it; RxD and the line ahead of it), so the streams hold only what is ahead and what came since
+// the last drain, and memory stays bounded however long the run.
 struct Recorder::Impl {
   // A drain runs after this many new changes: the buffer stays within about 64 KiB, small enough
   // to be reused from the heap (larger, it came and went as fresh pages on every run).
   static constexpr std::size_t kDrainEvery = 4096;
+  static constexpr std::uint32_t kNoVar = UINT32_MAX;
+
+  // One chip (its scope "" on its own, the station's in a segment), or the line (no chip).
+  struct Source {
+    Chip* chip = nullptr;
+    std::string scope;
+    Stream ahead;   // RxD edges, driven (and reported) ahead of time; the line's changes
+    Stream others;  // the rest, reported when time reaches them
+    std::array<std::uint32_t, kCount> var{};  // the variable of each signal, kNoVar if not taken
+    std::array<std::uint32_t, kCount> sampled{};
+  };
 
   Options opt;
-  Chip* chip = nullptr;
+  std::string top = "dpc31";
   std::uint32_t clock_hz = 48'000'000;
-  std::vector<bool> selected = std::vector<bool>(kCount, false);
-  std::vector<std::size_t> order;  // declaration order of the selected signals
-  Stream rxd;                      // RxD edges, driven (and reported) ahead of time
-  Stream others;                   // the rest, reported when time reaches them
+  std::vector<std::unique_ptr<Source>> sources;
+  std::vector<Var> vars;
+  std::function<std::uint64_t()> horizon;  // the line's (a segment); the chips' always count
+  std::size_t buffered = 0;
   std::size_t next_drain = kDrainEvery;
-  std::vector<std::uint32_t> sampled = std::vector<std::uint32_t>(kCount, 0xFFFFFFFF);
   std::uint32_t seq = 0;
   std::uint64_t drained_to = 0;  // every change before this cycle has been taken
   std::string error;             // the first failure, reported by finish()
-  outfile::OutFile out;          // opened by attach(), so that a bad path is found before the run
+  outfile::OutFile out;          // opened by the first attach, so that a bad path is found early
   outfile::OutFile gtkw;         // the save file (Options::gtkw), likewise
   std::vector<std::pair<std::uint64_t, std::string>> markers;  // its named markers (26 at most)
 
+  // The line (attach_line): station -> driver code, the bit time, the character on the line.
+  Source* line = nullptr;
+  std::vector<std::uint8_t> driver_codes;
+  std::uint64_t char_cycles = 0;
+  std::uint64_t char_end = 0;            // end of the last stop bit of the character
+  std::optional<std::uint64_t> release;  // driver back to none here, unless continued
+  std::uint32_t driver = kNoDriver;
+
   // What has been written: the values in force, and the window's start once dumped.
-  std::array<std::uint32_t, kCount> cur{};
+  std::vector<std::uint32_t> cur;
   bool opened = false;
   std::uint64_t last_cycle = 0;
   std::uint64_t last_t = 0;
-  std::array<std::string, kCount> id;
+  std::vector<std::string> id;
   std::unique_ptr<VcdBody> body;
   void* fst = nullptr;
-  std::array<fstHandle, kCount> handle{};
+  std::vector<fstHandle> handle;
 
   ~Impl() {
     if (fst != nullptr) fstWriterClose(fst);  // an unfinished recording: `out` discards it
   }
 
-  void push(std::uint64_t cycle, Sig s, std::uint32_t v) {
-    if (!selected[s] || cycle >= opt.to || !error.empty()) return;
+  [[nodiscard]] bool take(const std::string& local, const std::string& full, int width) const {
+    if (opt.flat && width != 1) return false;
+    bool t = opt.signals.empty();
+    for (const std::string& p : opt.signals) t = t || glob(p, local) || glob(p, full);
+    return t;
+  }
+  [[nodiscard]] std::string full_name(const Source& s, const char* name) const {
+    return s.scope.empty() ? std::string(name) : s.scope + "." + name;
+  }
+  // Opens the outputs at the first attach: a bad path is found before the run.
+  bool open_outputs(std::string& err) {
+    if (opt.timescale_exp > 0 || opt.timescale_exp < -15) {
+      err = "timescale must be between 1 fs and 1 s";
+      return false;
+    }
+    if (!out.is_open() && !out.open(opt.path)) {
+      err = out.error();
+      return false;
+    }
+    if (!opt.gtkw.empty() && !gtkw.is_open() && !gtkw.open(opt.gtkw)) {
+      err = gtkw.error();
+      return false;
+    }
+    return true;
+  }
+
+  [[nodiscard]] std::uint64_t now() const {
+    // A segment's stations join one by one, each running its init first: nothing is final
+    // before the line is attached (attach_line) and every station with it.
+    if (line != nullptr && !horizon) return 0;
+    std::uint64_t h = horizon ? horizon() : UINT64_MAX;
+    for (const auto& s : sources) {
+      if (s->chip != nullptr) h = std::min(h, s->chip->cycle());
+    }
+    return h;
+  }
+
+  void push(Source& s, std::uint64_t cycle, std::uint8_t sig, std::uint32_t v) {
+    const std::uint32_t var = s.var[sig];
+    if (var == kNoVar || cycle >= opt.to || !error.empty()) return;
     if (cycle < drained_to) {
       error = fmt::format("{}: a change at cycle {} was reported after cycle {} was written",
                           opt.path, cycle, drained_to);
@@ -269,16 +242,18 @@ struct Recorder::Impl {
       error = fmt::format("{}: more than {} changes in one recording", opt.path, seq);
       return;
     }
-    (s == kRxd ? rxd : others)
-        .push({cycle, seq++, static_cast<std::uint16_t>(v), static_cast<std::uint8_t>(s)});
-    if (rxd.events.size() + others.events.size() >= next_drain) {
-      drain(chip->cycle());
-      next_drain = rxd.events.size() + others.events.size() + kDrainEvery;
+    const bool ahead = s.chip == nullptr || sig == kRxd;
+    (ahead ? s.ahead : s.others)
+        .push({cycle, seq++, static_cast<std::uint16_t>(v), static_cast<std::uint16_t>(var)});
+    if (++buffered >= next_drain) {
+      drain(now());
+      next_drain = buffered + kDrainEvery;
     }
   }
+
   // State signals: recorded when they change.
-  void sample(std::uint64_t cycle) {
-    const ChipProbe c = chip->probe();
+  void sample(Source& s, std::uint64_t cycle) {
+    const ChipProbe c = s.chip->probe();
     const std::uint32_t now[] = {static_cast<std::uint32_t>(c.dp_state),
                                  static_cast<std::uint32_t>(c.wd_state),
                                  c.baud_code,
@@ -286,15 +261,39 @@ struct Recorder::Impl {
                                  c.dout_buffer_sm,
                                  c.din_buffer_sm,
                                  c.diag_buffer_sm,
-                                 chip->x_int_pin() ? 1u : 0u,
-                                 chip->pb3_pin() ? 1u : 0u};
+                                 s.chip->x_int_pin() ? 1u : 0u,
+                                 s.chip->pb3_pin() ? 1u : 0u};
     const Sig sigs[] = {kDpState, kWdState, kBaud, kIrr, kDoutSm, kDinSm, kDiagSm, kXInt, kPb3};
     for (std::size_t i = 0; i < std::size(sigs); ++i) {
-      if (sampled[sigs[i]] == now[i]) continue;
-      sampled[sigs[i]] = now[i];
-      push(cycle, sigs[i], now[i]);
+      if (s.sampled[sigs[i]] == now[i]) continue;
+      s.sampled[sigs[i]] = now[i];
+      push(s, cycle, sigs[i], now[i]);
     }
   }
+
+  // The line: every edge of its holder (Segment::on_line). The driver is the holder from the
+  // start bit of its first character to the end of the stop bit of its last one back to back.
+  void line_edge(std::size_t from, std::uint64_t cycle, bool level) {
+    settle_line(cycle);
+    if (!level && cycle >= char_end) {
+      const std::uint32_t code = from < driver_codes.size() ? driver_codes[from] : kNoDriver;
+      if (code != driver) push(*line, cycle, kLineDriver, code);
+      driver = code;
+      char_end = cycle + char_cycles;
+      release = char_end;
+    }
+    push(*line, cycle, kLineLevel, level ? 1 : 0);
+  }
+  // The driver is released at the end of its last character once nothing continued it before
+  // `upto` (every edge before it has been reported).
+  void settle_line(std::uint64_t upto) {
+    if (line == nullptr || !release || *release >= upto) return;
+    const std::uint64_t at = *release;
+    release.reset();
+    driver = kNoDriver;
+    push(*line, at, kLineDriver, kNoDriver);
+  }
+
   // cycle -> time units, rounded to the nearest unit: floor((cycle x 10^-exp + f / 2) / f),
   // computed from the absolute cycle so the rounding never accumulates. With g = gcd(10^-exp, f)
   // that is floor((cycle x num + floor(f / 2 / g)) / den), in 64 bits while it fits.
@@ -315,22 +314,41 @@ struct Recorder::Impl {
     return static_cast<std::uint64_t>((static_cast<u128>(cycle) * num + half) / den);
   }
 
-  // Takes every change before `upto` out of the streams: up to the window's first cycle they set
-  // the values it opens with (so a pin set at that cycle is dumped once, with its value then);
-  // after it they are written.
+  // Takes every change before `upto` out of the streams, merged in (cycle, seq) order: up to the
+  // window's first cycle they set the values it opens with (so a pin set at that cycle is dumped
+  // once, with its value then); after it they are written.
   void drain(std::uint64_t upto) {
-    Merged events(rxd.events, others.events);
-    for (; events.peek() != nullptr && events.peek()->cycle < upto; events.pop()) {
-      const Event& e = *events.peek();
-      if (!opened && e.cycle > opt.from) open();
-      if (!opened) {
-        cur[e.sig] = e.value;
-      } else {
-        write(e);
-      }
+    settle_line(upto);
+    std::vector<Stream*> streams;
+    for (const auto& s : sources) {
+      streams.push_back(&s->ahead);
+      streams.push_back(&s->others);
     }
-    rxd.drop(events.taken_a());
-    others.drop(events.taken_b());
+    std::vector<std::size_t> taken(streams.size(), 0);
+    for (;;) {
+      const Event* e = nullptr;
+      std::size_t from = 0;
+      for (std::size_t k = 0; k < streams.size(); ++k) {
+        const std::vector<Event>& ev = streams[k]->events;
+        if (taken[k] < ev.size() && ev[taken[k]].cycle < upto &&
+            (e == nullptr || before(ev[taken[k]], *e))) {
+          e = &ev[taken[k]];
+          from = k;
+        }
+      }
+      if (e == nullptr) break;
+      if (!opened && e->cycle > opt.from) open();
+      if (!opened) {
+        cur[e->var] = e->value;
+      } else {
+        write(*e);
+      }
+      ++taken[from];
+    }
+    for (std::size_t k = 0; k < streams.size(); ++k) {
+      streams[k]->drop(taken[k]);
+      buffered -= taken[k];
+    }
     drained_to = std::max(drained_to, upto);
   }
 
@@ -346,6 +364,38 @@ struct Recorder::Impl {
     }
   }
 
+  // The scopes of a variable below the top (none in the logic-analyser form) and its leaf.
+  [[nodiscard]] std::pair<std::vector<std::string>, std::string> path(const Var& v) const {
+    std::vector<std::string> scopes;
+    std::size_t at = 0;
+    for (std::size_t dot = v.name.find('.'); dot != std::string::npos; dot = v.name.find('.', at)) {
+      scopes.push_back(v.name.substr(at, dot - at));
+      at = dot + 1;
+    }
+    std::string leaf = v.name.substr(at);
+    if (!opt.flat) return {scopes, leaf};
+    // One scope: a station's pins as station5_spc3_rxd, the line's level as `line`.
+    if (v.name == kLineSignals[kLineLevel].name) return {{}, "line"};
+    return {{}, scopes.size() > 1 ? scopes.front() + "_" + leaf : leaf};
+  }
+
+  // Every variable in order, the scopes opened and closed around them as their names say.
+  template <typename Scope, typename Up, typename Decl>
+  void declare(Scope scope, Up up, Decl decl) const {
+    std::vector<std::string> open_scopes;
+    for (std::size_t i = 0; i < vars.size(); ++i) {
+      const auto [scopes, leaf] = path(vars[i]);
+      std::size_t same = 0;
+      while (same < open_scopes.size() && same < scopes.size() && open_scopes[same] == scopes[same])
+        ++same;
+      for (; open_scopes.size() > same; open_scopes.pop_back()) up();
+      for (; open_scopes.size() < scopes.size(); open_scopes.push_back(scopes[open_scopes.size()]))
+        scope(scopes[open_scopes.size()]);
+      decl(i, leaf);
+    }
+    for (; !open_scopes.empty(); open_scopes.pop_back()) up();
+  }
+
   void open_fst() {
     // fstapi opens the file by name (it unlinks it first): it writes a regular file of ours.
     const std::string name = out.library_path();
@@ -357,27 +407,21 @@ struct Recorder::Impl {
     }
     fstWriterSetTimescale(fst, opt.timescale_exp);
     fstWriterSetVersion(fst, "dpc31emu");
-    fstWriterSetScope(fst, FST_ST_VCD_MODULE, "dpc31", nullptr);
-    std::string scope;
-    for (std::size_t i : order) {
-      std::string name = kSignals[i].name;
-      const auto dot = name.find('.');
-      const std::string sc = opt.flat ? "" : name.substr(0, dot);
-      if (!opt.flat && sc != scope) {
-        if (!scope.empty()) fstWriterSetUpscope(fst);
-        fstWriterSetScope(fst, FST_ST_VCD_MODULE, sc.c_str(), nullptr);
-        scope = sc;
-      }
-      const std::string leaf = name.substr(dot + 1);
-      handle[i] =
-          fstWriterCreateVar(fst, FST_VT_VCD_WIRE, FST_VD_IMPLICIT,
-                             static_cast<std::uint32_t>(kSignals[i].width), leaf.c_str(), 0);
-    }
-    if (!scope.empty()) fstWriterSetUpscope(fst);
+    fstWriterSetScope(fst, FST_ST_VCD_MODULE, top.c_str(), nullptr);
+    declare(
+        [&](const std::string& s) {
+          fstWriterSetScope(fst, FST_ST_VCD_MODULE, s.c_str(), nullptr);
+        },
+        [&] { fstWriterSetUpscope(fst); },
+        [&](std::size_t i, const std::string& leaf) {
+          handle[i] =
+              fstWriterCreateVar(fst, FST_VT_VCD_WIRE, FST_VD_IMPLICIT,
+                                 static_cast<std::uint32_t>(vars[i].width), leaf.c_str(), 0);
+        });
     fstWriterSetUpscope(fst);
     fstWriterEmitTimeChange(fst, last_t);
-    for (std::size_t i : order)
-      fstWriterEmitValueChange(fst, handle[i], bits(cur[i], kSignals[i].width).c_str());
+    for (std::size_t i = 0; i < vars.size(); ++i)
+      fstWriterEmitValueChange(fst, handle[i], bits(cur[i], vars[i].width).c_str());
   }
 
   void open_vcd() {
@@ -391,41 +435,38 @@ struct Recorder::Impl {
                : e % 3 == 1 ? 100
                             : 10,
                kUnit[(e + 2) / 3]);
-    fmt::print(f, "$scope module dpc31 $end\n");
-    std::string scope;
-    for (std::size_t i = 0; i < kCount; ++i) id[i] = wavediff::vcd_id(i);
-    for (std::size_t i : order) {
-      const std::string name = kSignals[i].name;
-      const auto dot = name.find('.');
-      const std::string sc = name.substr(0, dot);
-      if (!opt.flat && sc != scope) {
-        if (!scope.empty()) fmt::print(f, "$upscope $end\n");
-        fmt::print(f, "$scope module {} $end\n", sc);
-        scope = sc;
-      }
-      fmt::print(f, "$var wire {} {} {} $end\n", kSignals[i].width, id[i], name.substr(dot + 1));
-    }
-    if (!opt.flat && !scope.empty()) fmt::print(f, "$upscope $end\n");
+    fmt::print(f, "$scope module {} $end\n", top);
+    // One chip: a signal's identifier is its place in the list, whatever was selected (files of
+    // older runs keep theirs); a segment numbers its variables.
+    for (std::size_t i = 0; i < vars.size(); ++i)
+      id[i] = wavediff::vcd_id(line == nullptr ? vars[i].sig : i);
+    declare([&](const std::string& s) { fmt::print(f, "$scope module {} $end\n", s); },
+            [&] { fmt::print(f, "$upscope $end\n"); },
+            [&](std::size_t i, const std::string& leaf) {
+              fmt::print(f, "$var wire {} {} {} $end\n", vars[i].width, id[i], leaf);
+            });
     fmt::print(f, "$upscope $end\n$enddefinitions $end\n#{}\n$dumpvars\n", last_t);
     body = std::make_unique<VcdBody>(f);
-    for (std::size_t i : order) body->value(id[i], kSignals[i].width, cur[i]);
+    for (std::size_t i = 0; i < vars.size(); ++i) body->value(id[i], vars[i].width, cur[i]);
     body->flush();
     std::fputs("$end\n", f);
   }
 
   void write(const Event& e) {
-    if (cur[e.sig] == e.value) return;
-    cur[e.sig] = e.value;
-    if ((e.sig == kDpState || e.sig == kWdState) && markers.size() < 26) {
-      markers.emplace_back(units(e.cycle),
-                           e.sig == kDpState
-                               ? fmt::format("dp_state={}", dp_state_name(DpState(e.value)))
-                               : fmt::format("wd_state={}", wd_state_name(WdState(e.value))));
+    if (cur[e.var] == e.value) return;
+    cur[e.var] = e.value;
+    const Var& v = vars[e.var];
+    const Source& s = *sources[v.source];
+    if (s.chip != nullptr && (v.sig == kDpState || v.sig == kWdState) && markers.size() < 26) {
+      const std::string m = v.sig == kDpState
+                                ? fmt::format("dp_state={}", dp_state_name(DpState(e.value)))
+                                : fmt::format("wd_state={}", wd_state_name(WdState(e.value)));
+      markers.emplace_back(units(e.cycle), s.scope.empty() ? m : s.scope + " " + m);
     }
     if (opt.fst) {
       if (fst == nullptr) return;
       fstWriterEmitTimeChange(fst, units(e.cycle));
-      fstWriterEmitValueChange(fst, handle[e.sig], bits(e.value, kSignals[e.sig].width).c_str());
+      fstWriterEmitValueChange(fst, handle[e.var], bits(e.value, v.width).c_str());
       return;
     }
     if (e.cycle != last_cycle) {
@@ -434,84 +475,140 @@ struct Recorder::Impl {
       if (t != last_t) body->time(t);
       last_t = t;
     }
-    body->value(id[e.sig], kSignals[e.sig].width, e.value);
+    body->value(id[e.var], v.width, e.value);
   }
+
+  void add_var(Source& s, std::uint8_t sig, const SignalDef& d) {
+    s.var[sig] = static_cast<std::uint32_t>(vars.size());
+    vars.push_back({full_name(s, d.name), d.width, sources.size() - 1, sig});
+    cur.push_back(0);
+    id.emplace_back();
+    handle.push_back(0);
+  }
+
+  bool attach_chip(Chip& chip, std::string scope, std::string& err);
 };
+
+bool Recorder::Impl::attach_chip(Chip& chip, std::string scope, std::string& err) {
+  if (!open_outputs(err)) return false;
+  if (vars.size() + kCount > UINT16_MAX) {
+    err = fmt::format("{}: too many signals for one waveform", opt.path);
+    return false;
+  }
+  sources.push_back(std::make_unique<Source>());
+  Source& s = *sources.back();
+  s.chip = &chip;
+  s.scope = std::move(scope);
+  s.var.fill(kNoVar);
+  s.sampled.fill(0xFFFFFFFF);
+  clock_hz = chip.clock_hz();
+  set_units(clock_hz);
+  // Declared scope by scope: PB3 (the newest signal, last in the list) beside the other pins.
+  const auto add = [&](std::size_t i) {
+    const std::string full = full_name(s, kSignals[i].name);
+    if (i == kPb3 && chip.profile().id != Profile::dpc31) return;  // a DPC31 port
+    if (take(kSignals[i].name, full, kSignals[i].width))
+      add_var(s, static_cast<std::uint8_t>(i), kSignals[i]);
+  };
+  for (std::size_t i = 0; i < kCount; ++i) {
+    if (i != kPb3 && i != kService) add(i);
+    if (i == kXInt) add(kPb3);
+    if (i == kBaud) add(kService);
+  }
+  Source* src = &s;
+  push(s, chip.cycle(), kRxd, 1);
+  push(s, chip.cycle(), kTxd, chip.txd_pin() ? 1 : 0);
+  push(s, chip.cycle(), kBusRd, 0);
+  push(s, chip.cycle(), kBusWr, 0);
+  push(s, chip.cycle(), kService, 0xFF);  // no request yet
+  sample(s, chip.cycle());
+  chip.on_rxd([this, src](std::uint64_t c, bool l) { push(*src, c, kRxd, l ? 1 : 0); });
+  chip.on_txd([this, src](std::uint64_t c, bool l) { push(*src, c, kTxd, l ? 1 : 0); });
+  chip.on_irq_change([this, src](std::uint64_t c, bool) { sample(*src, c); });
+  chip.on_state_change([this, src](std::uint64_t c) { sample(*src, c); });
+  if (s.var[kService] != kNoVar) {
+    // Reported when the request is acted on (the stop sample of its last character).
+    chip.on_telegram([this, src](const Telegram& t) {
+      const int code = t.from_chip ? -1 : request_service(t.bytes);
+      if (code >= 0) push(*src, src->chip->cycle(), kService, static_cast<std::uint32_t>(code));
+    });
+  }
+  chip.on_bus_access([this, src](std::uint64_t c, const BusAccess& e) {
+    const Sig strobe = e.write ? kBusWr : kBusRd;
+    push(*src, c, kBusAddr, e.addr);
+    if (e.write) push(*src, c, kBusData, e.data);
+    push(*src, c, strobe, 1);  // the strobe is high for the access's completion cycle
+    push(*src, c + 1, strobe, 0);
+  });
+  return true;
+}
 
 Recorder::Recorder(const Options& o) : impl_(std::make_unique<Impl>()) { impl_->opt = o; }
 Recorder::~Recorder() = default;
 
 bool Recorder::attach(Chip& chip, std::string& error) {
+  for (const std::string& p : impl_->opt.signals) {
+    const bool any = std::any_of(kSignals.begin(), kSignals.end(),
+                                 [&](const SignalDef& d) { return glob(p, d.name); });
+    if (!any) {
+      error = fmt::format("no signal matches '{}' (see docs/waveforms.md)", p);
+      return false;
+    }
+  }
+  return impl_->attach_chip(chip, {}, error);
+}
+
+bool Recorder::attach_station(Chip& chip, const std::string& scope, std::string& error) {
   Impl& m = *impl_;
-  if (m.opt.timescale_exp > 0 || m.opt.timescale_exp < -15) {
-    error = "timescale must be between 1 fs and 1 s";
+  if (m.line == nullptr) {
+    // The first station: the line's variables first, at the top; the stations' scopes follow.
+    if (!m.open_outputs(error)) return false;
+    m.top = "segment";
+    m.sources.push_back(std::make_unique<Impl::Source>());
+    Impl::Source& s = *m.sources.back();
+    s.var.fill(Impl::kNoVar);
+    m.line = &s;
+    for (std::uint8_t i = 0; i < kLineCount; ++i) {
+      if (m.take(kLineSignals[i].name, kLineSignals[i].name, kLineSignals[i].width))
+        m.add_var(s, i, kLineSignals[i]);
+    }
+    m.push(s, 0, kLineLevel, 1);
+    m.push(s, 0, kLineDriver, kNoDriver);
+  }
+  return m.attach_chip(chip, scope, error);
+}
+
+bool Recorder::attach_line(std::vector<std::uint8_t> driver_codes, std::uint32_t bit_cycles,
+                           std::function<std::uint64_t()> line_final, std::string& error) {
+  Impl& m = *impl_;
+  if (m.line == nullptr) {
+    error = fmt::format("{}: a segment's line without a station", m.opt.path);
     return false;
   }
-  for (std::size_t i = 0; i < kCount; ++i) {
-    bool take = m.opt.signals.empty();
-    for (const std::string& p : m.opt.signals)
-      take = take || fnmatch(p.c_str(), kSignals[i].name, 0) == 0;
-    if (m.opt.flat && kSignals[i].width != 1) take = false;
-    if (i == kPb3 && chip.profile().id != Profile::dpc31) take = false;  // a DPC31 port
-    m.selected[i] = take;
-  }
+  m.driver_codes = std::move(driver_codes);
+  m.char_cycles = std::uint64_t{kUartCharBits} * bit_cycles;
+  m.horizon = std::move(line_final);
   for (const std::string& p : m.opt.signals) {
-    const bool any = std::any_of(kSignals.begin(), kSignals.end(), [&](const SignalDef& d) {
-      return fnmatch(p.c_str(), d.name, 0) == 0;
+    const bool any = std::any_of(m.vars.begin(), m.vars.end(), [&](const Var& v) {
+      const std::size_t dot = v.name.find('.');
+      return glob(p, v.name) ||
+             (m.sources[v.source]->chip != nullptr && glob(p, v.name.substr(dot + 1)));
     });
     if (!any) {
       error = fmt::format("no signal matches '{}' (see docs/waveforms.md)", p);
       return false;
     }
   }
-  if (!m.out.open(m.opt.path)) {
-    error = m.out.error();
-    return false;
-  }
-  if (!m.opt.gtkw.empty() && !m.gtkw.open(m.opt.gtkw)) {
-    error = m.gtkw.error();
-    return false;
-  }
-  m.chip = &chip;
-  m.clock_hz = chip.clock_hz();
-  m.set_units(m.clock_hz);
-  // Declared scope by scope: PB3 (the newest signal, last in the list) beside the other pins.
-  for (std::size_t i = 0; i < kCount; ++i) {
-    if (i != kPb3 && i != kService && m.selected[i]) m.order.push_back(i);
-    if (i == kXInt && m.selected[kPb3]) m.order.push_back(kPb3);
-    if (i == kBaud && m.selected[kService]) m.order.push_back(kService);
-  }
-  Impl* im = &m;
-  m.push(chip.cycle(), kRxd, 1);
-  m.push(chip.cycle(), kTxd, chip.txd_pin() ? 1 : 0);
-  m.push(chip.cycle(), kBusRd, 0);
-  m.push(chip.cycle(), kBusWr, 0);
-  m.push(chip.cycle(), kService, 0xFF);  // no request yet
-  m.sample(chip.cycle());
-  chip.on_rxd([im](std::uint64_t c, bool l) { im->push(c, kRxd, l ? 1 : 0); });
-  chip.on_txd([im](std::uint64_t c, bool l) { im->push(c, kTxd, l ? 1 : 0); });
-  chip.on_irq_change([im](std::uint64_t c, bool) { im->sample(c); });
-  chip.on_state_change([im](std::uint64_t c) { im->sample(c); });
-  if (m.selected[kService]) {
-    // Reported when the request is acted on (the stop sample of its last character).
-    chip.on_telegram([im](const Telegram& t) {
-      const int code = t.from_chip ? -1 : request_service(t.bytes);
-      if (code >= 0) im->push(im->chip->cycle(), kService, static_cast<std::uint32_t>(code));
-    });
-  }
-  chip.on_bus_access([im](std::uint64_t c, const BusAccess& e) {
-    const Sig strobe = e.write ? kBusWr : kBusRd;
-    im->push(c, kBusAddr, e.addr);
-    if (e.write) im->push(c, kBusData, e.data);
-    im->push(c, strobe, 1);  // the strobe is high for the access's completion cycle
-    im->push(c + 1, strobe, 0);
-  });
   return true;
+}
+
+void Recorder::line_edge(std::size_t from, std::uint64_t cycle, bool level) {
+  if (impl_->line != nullptr) impl_->line_edge(from, cycle, level);
 }
 
 bool Recorder::finish(std::uint64_t end_cycle, std::string& error) {
   Impl& m = *impl_;
-  if (!m.out.is_open()) {
+  if (!m.out.is_open() || m.sources.empty()) {
     error = fmt::format("{}: not attached to a chip", m.opt.path);
     return false;
   }
@@ -542,9 +639,12 @@ bool Recorder::finish(std::uint64_t end_cycle, std::string& error) {
   }
   if (m.gtkw.is_open()) {
     SaveFile f{m.opt.path, {}, {}, m.opt.flat, m.units(to), m.markers, filter_dir()};
-    for (std::size_t i : m.order) {
-      f.signals.emplace_back(kSignals[i].name);
-      f.widths.push_back(kSignals[i].width);
+    f.top = m.top;
+    for (const Var& v : m.vars) {
+      // The logic-analyser form: grouped by the first scope, the leaf as declared.
+      f.signals.push_back(m.opt.flat ? v.name.substr(0, v.name.find('.')) + "." + m.path(v).second
+                                     : v.name);
+      f.widths.push_back(v.width);
     }
     if (!(m.gtkw.write(save_file_text(f)) && m.gtkw.commit())) {
       error = m.gtkw.error();

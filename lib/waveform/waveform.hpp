@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -30,9 +31,15 @@ struct SignalDef {
 };
 const std::vector<SignalDef>& signal_list();
 
-// Watches a chip from now on and writes the waveform as the run goes: changes wait in a small
-// buffer until the chip's time has passed them (RxD edges are known ahead of time), so memory
-// stays bounded however long the run. finish() writes the rest and puts the file in place.
+// line.driver of a segment's waveform: the PROFIBUS address of the station that drives the line,
+// or one of these.
+inline constexpr std::uint8_t kNoDriver = 0xFF;              // the line is idle
+inline constexpr std::uint8_t kDriverWithoutAddress = 0xFE;  // a scripted sender
+
+// Watches a chip (or the chips of a segment) from now on and writes the waveform as the run goes:
+// changes wait in a small buffer until the chip's time has passed them (RxD edges are known ahead
+// of time), so memory stays bounded however long the run. finish() writes the rest and puts the
+// file in place.
 class Recorder {
  public:
   explicit Recorder(const Options& o);
@@ -42,6 +49,17 @@ class Recorder {
 
   // False (with a one-line error) if a signal pattern matches nothing or the options are bad.
   bool attach(Chip& chip, std::string& error);
+  // A segment (docs/segment.md, docs/waveforms.md "Segments"): under the top scope "segment",
+  // the line (line.level, line.driver) and each chip's signals under its station's scope.
+  // attach_station() each chip station as it joins (before it runs), then attach_line() once
+  // every station is on the line: `driver_codes` has each station's code in line.driver (in the
+  // segment's order, senders too), `line_final` the cycle before which every edge of the line
+  // has been reported (Segment::line_final). Then every edge the line's holder drives through
+  // line_edge (Segment::on_line). False with a one-line error as attach().
+  bool attach_station(Chip& chip, const std::string& scope, std::string& error);
+  bool attach_line(std::vector<std::uint8_t> driver_codes, std::uint32_t bit_cycles,
+                   std::function<std::uint64_t()> line_final, std::string& error);
+  void line_edge(std::size_t station, std::uint64_t cycle, bool level);
   // Writes everything up to `end_cycle` (temporary file, then rename). False with a reason.
   bool finish(std::uint64_t end_cycle, std::string& error);
 

@@ -16,7 +16,6 @@
 
 // The scenario runner lives with the emulator (emu/ is not on this target's include path).
 #include "scenario.hpp"
-#include "scenario_segment.hpp"
 #include "trace.hpp"
 
 namespace dpc31::cli {
@@ -41,24 +40,6 @@ nlohmann::json summary(const Scenario& s, const ScenarioOutcome& o) {
       {"failures", o.failures},
       {"ok", o.ok()},
   };
-}
-
-// The comment block at the top of a scenario file (its description, and for golden traces what
-// was checked by hand): it heads the recorded trace.
-std::vector<std::string> leading_comments(const std::string& path) {
-  std::vector<std::string> out;
-  std::ifstream f(path, std::ios::binary);
-  std::string line;
-  bool first = true;
-  while (std::getline(f, line)) {
-    if (first && line.starts_with("\xEF\xBB\xBF")) line.erase(0, 3);
-    first = false;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (!line.starts_with('#')) break;
-    line.erase(0, line.starts_with("# ") ? 2 : 1);
-    out.push_back(line);
-  }
-  return out;
 }
 
 // The run with everything asked for watching it: a trace recorder (--record), a waveform
@@ -90,6 +71,23 @@ int run_with_outputs(const RunOptions& opt, const LineSink& walk, const LineSink
 }
 
 }  // namespace
+
+// Its description, and for golden traces what was checked by hand.
+std::vector<std::string> leading_comments(const std::string& path) {
+  std::vector<std::string> out;
+  std::ifstream f(path, std::ios::binary);
+  std::string line;
+  bool first = true;
+  while (std::getline(f, line)) {
+    if (first && line.starts_with("\xEF\xBB\xBF")) line.erase(0, 3);
+    first = false;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (!line.starts_with('#')) break;
+    line.erase(0, line.starts_with("# ") ? 2 : 1);
+    out.push_back(line);
+  }
+  return out;
+}
 
 bool parse_timescale(const std::string& t, int& exp) {
   static const std::pair<const char*, int> kUnits[] = {{"fs", -15}, {"ps", -12}, {"ns", -9},
@@ -235,7 +233,7 @@ int run_scenario_command(const RunOptions& opt, std::FILE* out, std::FILE* err) 
   LineSink walk;
   if (!opt.quiet) walk = [out](const std::string& line) { fmt::print(out, "{}\n", line); };
   const LineSink errors = [err](const std::string& line) { fmt::print(err, "{}\n", line); };
-  // A segment's scenario (docs/segment.md) has a runner of its own, without the outputs yet.
+  // A segment's scenario (docs/segment.md) has a runner of its own (run_segment.cpp).
   SegmentScenario seg;
   ScenarioError serr;
   switch (load_segment_scenario(opt.scenario, seg, serr)) {
@@ -243,13 +241,7 @@ int run_scenario_command(const RunOptions& opt, std::FILE* out, std::FILE* err) 
       errors(serr.text());
       return 2;
     case SegmentLoad::ok:
-      if (!opt.json.empty() || !opt.record.empty() || !opt.vcd.empty() || !opt.fst.empty() ||
-          !opt.la_vcd.empty() || !opt.pcap.empty() || !opt.gtkw.empty()) {
-        fmt::print(err, "dpc31 run: {}: a segment scenario writes no output files yet\n",
-                   opt.scenario);
-        return 2;
-      }
-      return run_segment_scenario(seg, walk, errors);
+      return run_segment_command(opt, seg, walk, errors, err);
     case SegmentLoad::not_segment:
       break;
   }

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "scenario.hpp"
+#include "scenario_segment.hpp"
 
 namespace dpc31::cli {
 
@@ -42,5 +43,18 @@ int run_scenario_command(const RunOptions& opt, std::FILE* out, std::FILE* err);
 // only used to name it). Returns 0, 1 or 2 like the command.
 int run_parsed_scenario(const RunOptions& opt, const Scenario& s, const LineSink& walk,
                         const LineSink& errors, ScenarioOutcome& o, std::FILE* err);
+
+// The comment block at the top of a scenario file: it heads the recorded traces.
+std::vector<std::string> leading_comments(const std::string& path);
+
+// A segment's scenario with the outputs `opt` asks for (run_segment.cpp, docs/segment.md
+// "Outputs"). Returns 0, 1 or 2 like the command.
+int run_segment_command(const RunOptions& opt, const SegmentScenario& s, const LineSink& walk,
+                        const LineSink& errors, std::FILE* err);
+// A station's scope in a segment's waveform, and the name of its trace: station5_spc3 (the
+// address, and the name when it is not the default "station 5"); FILE.trace ->
+// FILE.station5_spc3.trace.
+std::string station_scope(const SegmentStation& st);
+std::string station_trace_path(const std::string& record, const std::string& scope);
 
 }  // namespace dpc31::cli

@@ -1,0 +1,479 @@
+// The outputs of a segment's run (docs/segment.md, "Outputs"): the waveform with the line at the
+// top and every station under its own scope (read back from the VCD, and from the FST through
+// gtkwave's fst2vcd), the pcapng of the line through tshark and the shipped dissector, a trace per
+// station that replays alone, and the bad input of a segment's run. Every expected cycle comes
+// from docs/timing.md at 1.5 Mbaud: T = 48 MHz / 1.5 Mbaud = 32 clocks, a character 11 T = 352.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "run_command.hpp"
+#include "test_files.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using testutil::slurp;
+
+constexpr std::uint64_t kT = 32;          // clocks per bit at 1.5 Mbaud
+constexpr std::uint64_t kChar = 11 * kT;  // one character (start, 8 data, parity, stop)
+constexpr std::uint64_t kTsdr = 11 * kT;  // an answer's first start bit after the request's end
+constexpr std::uint32_t kNone = 0xFF;     // line.driver: nobody drives
+constexpr std::uint32_t kRogue = 0xFE;    // line.driver: a sender without an address
+
+const std::string kScenario = std::string(SOURCE_DIR) + "/traces/segment/two_masters.scn";
+
+testutil::CommandResult sh(const std::string& cmd) { return testutil::run_command(cmd + " 2>&1"); }
+
+std::string tmp(const std::string& name) {
+  // One directory per process: CTest runs each test in a process of its own, in parallel.
+  const std::string d = fmt::format("{}segment_outputs.{}/", ::testing::TempDir(), getpid());
+  fs::create_directories(d);
+  return d + name;
+}
+
+// A VCD read back: every variable by its full name, its changes as (cycle, value). Times are
+// units of `ps` picoseconds at 48 MHz (1 ps the full form, 10 ns the logic-analyser form):
+// unit = round(cycle x 10^12 / (ps x f)), so cycle = round(unit x ps x f / 10^12).
+struct Vcd {
+  std::map<std::string, int> width;
+  std::map<std::string, std::vector<std::pair<std::uint64_t, std::uint32_t>>> changes;
+  std::uint64_t ps = 1;
+
+  [[nodiscard]] std::uint64_t cycle_of(std::uint64_t unit) const {
+    return (unit * ps * 24 + 250'000) / 500'000;
+  }
+
+  explicit Vcd(const std::string& text, std::uint64_t unit_ps = 1) : ps(unit_ps) {
+    std::istringstream in(text);
+    std::vector<std::string> scopes;
+    std::map<std::string, std::string> name_of;  // id code -> full name
+    std::uint64_t cycle = 0;
+    for (std::string w; in >> w;) {
+      if (w == "$scope") {
+        std::string kind, name;
+        in >> kind >> name;
+        scopes.push_back(name);
+      } else if (w == "$upscope") {
+        scopes.pop_back();
+      } else if (w == "$var") {
+        std::string kind, id, leaf;
+        int n = 0;
+        in >> kind >> n >> id >> leaf;
+        std::string full;
+        for (const std::string& s : scopes) full += s + ".";
+        full += leaf;
+        name_of[id] = full;
+        width[full] = n;
+      } else if (w[0] == '#') {
+        cycle = cycle_of(std::stoull(w.substr(1)));
+      } else if (w[0] == 'b') {
+        std::string id;
+        in >> id;
+        add(name_of.at(id), cycle, static_cast<std::uint32_t>(std::stoul(w.substr(1), nullptr, 2)));
+      } else if ((w[0] == '0' || w[0] == '1') && name_of.count(w.substr(1)) != 0) {
+        add(name_of.at(w.substr(1)), cycle, w[0] == '1' ? 1u : 0u);
+      }
+    }
+  }
+  void add(const std::string& n, std::uint64_t c, std::uint32_t v) {
+    auto& ch = changes[n];
+    if (!ch.empty() && ch.back().first == c) {
+      ch.back().second = v;  // $dumpvars, then a change in the same time
+    } else if (ch.empty() || ch.back().second != v) {
+      ch.emplace_back(c, v);
+    }
+  }
+  [[nodiscard]] std::uint32_t at(const std::string& n, std::uint64_t c) const {
+    std::uint32_t v = 0;
+    for (const auto& [cc, vv] : changes.at(n)) {
+      if (cc > c) break;
+      v = vv;
+    }
+    return v;
+  }
+  // Changes in [from, to).
+  [[nodiscard]] std::size_t changes_in(const std::string& n, std::uint64_t from,
+                                       std::uint64_t to) const {
+    std::size_t k = 0;
+    for (const auto& [c, v] : changes.at(n)) k += c >= from && c < to ? 1 : 0;
+    return k;
+  }
+};
+
+// A telegram on the line as the waveform shows it: line.driver from its first start bit to the
+// end of its last stop bit, the bytes read from line.level (8E1, sampled mid-bit).
+struct OnLine {
+  std::uint32_t driver = 0;
+  std::uint64_t start = 0;
+  std::uint64_t end = 0;
+  std::vector<std::uint8_t> bytes;
+};
+
+std::vector<OnLine> line_runs(const Vcd& v) {
+  std::vector<OnLine> runs;
+  const auto& d = v.changes.at("segment.line.driver");
+  for (std::size_t i = 0; i + 1 < d.size(); ++i) {
+    if (d[i].second == kNone) continue;
+    OnLine r{d[i].second, d[i].first, d[i + 1].first, {}};
+    for (std::uint64_t c = r.start; c + kChar <= r.end; c += kChar) {
+      std::uint8_t b = 0;
+      for (unsigned k = 0; k < 8; ++k)
+        b |= static_cast<std::uint8_t>(v.at("segment.line.level", c + (k + 1) * kT + kT / 2) << k);
+      r.bytes.push_back(b);
+    }
+    runs.push_back(r);
+  }
+  return runs;
+}
+
+// One run of the shipped two-master scenario with every output, shared by the tests.
+struct Outputs {
+  std::string vcd = tmp("two.vcd");
+  std::string fst = tmp("two.fst");
+  std::string la = tmp("two-la.vcd");
+  std::string pcap = tmp("two.pcapng");
+  std::string gtkw = tmp("two.gtkw");
+  std::string record = tmp("two.trace");
+  std::string json = tmp("two.json");
+  int rc = -1;
+  std::string out;
+  Outputs() {
+    // From the source tree, as the golden traces were recorded: they name the scenario so.
+    const auto r = sh(fmt::format(
+        "cd {} && {} run --quiet traces/segment/two_masters.scn --vcd {} --fst {} --la-vcd {} "
+        "--pcap {} --gtkw {} --record {} --json {}",
+        SOURCE_DIR, DPC31_CLI, vcd, fst, la, pcap, gtkw, record, json));
+    rc = r.rc;
+    out = r.out;
+  }
+};
+
+const Outputs& outputs() {
+  static const Outputs o;
+  return o;
+}
+
+}  // namespace
+
+TEST(SegmentOutputs, RunWritesEveryOutput) {
+  const Outputs& o = outputs();
+  ASSERT_EQ(o.rc, 0) << o.out;
+  EXPECT_EQ(o.out, "");
+  for (const std::string& f : {o.vcd, o.fst, o.la, o.pcap, o.gtkw, o.json,
+                               tmp("two.station5_spc3.trace"), tmp("two.station6_dpc31.trace")}) {
+    EXPECT_TRUE(fs::is_regular_file(f)) << f;
+  }
+  // The summary: both stations in Data_Exchange, the collision, every expect passed.
+  const std::string j = slurp(o.json);
+  for (const std::string want :
+       {"\"scope\": \"station5_spc3\"", "\"scope\": \"station6_dpc31\"", "\"collisions\": 1",
+        "\"passed\": 9", "\"failed\": 0", "\"ok\": true"}) {
+    EXPECT_NE(j.find(want), std::string::npos) << want << "\n" << j;
+  }
+  // The run's last cycle, where each station's trace ends too.
+  const std::string trace = slurp(tmp("two.station5_spc3.trace"));
+  const std::size_t end = trace.rfind("\nend ");
+  ASSERT_NE(end, std::string::npos);
+  const std::string last = trace.substr(end + 5, trace.find('\n', end + 1) - end - 5);
+  EXPECT_NE(j.find("\"final_cycle\": " + last + ",\n"), std::string::npos) << last << "\n" << j;
+  // The summary's objects: itself, the expects, and each station's with its counters.
+  EXPECT_EQ(std::count(j.begin(), j.end(), '{'), 1 + 1 + 2 * 2) << j;
+  std::size_t dx = 0;
+  for (std::size_t at = j.find("\"dp_state\": \"Data_Exchange\""); at != std::string::npos;
+       at = j.find("\"dp_state\": \"Data_Exchange\"", at + 1))
+    ++dx;
+  EXPECT_EQ(dx, 2u) << j;
+}
+
+// The line at the top, every station's signals (the single chip's list) under its scope.
+TEST(SegmentOutputs, WaveformScopes) {
+  const Vcd v(slurp(outputs().vcd));
+  EXPECT_EQ(v.width.at("segment.line.level"), 1);
+  EXPECT_EQ(v.width.at("segment.line.driver"), 8);
+  for (const std::string st : {"station5_spc3", "station6_dpc31"}) {
+    for (const auto& [sig, w] : std::vector<std::pair<std::string, int>>{{"pins.rxd", 1},
+                                                                         {"pins.txd", 1},
+                                                                         {"pins.x_int", 1},
+                                                                         {"bus.rd", 1},
+                                                                         {"bus.wr", 1},
+                                                                         {"bus.addr", 13},
+                                                                         {"bus.data", 8},
+                                                                         {"state.dp_state", 2},
+                                                                         {"state.wd_state", 2},
+                                                                         {"state.baud_code", 4},
+                                                                         {"state.service", 8},
+                                                                         {"blocks.irr", 16},
+                                                                         {"blocks.dout_sm", 8},
+                                                                         {"blocks.din_sm", 8},
+                                                                         {"blocks.diag_sm", 4}}) {
+      EXPECT_EQ(v.width.at("segment." + st + "." + sig), w) << st << "." << sig;
+    }
+  }
+  // PB3 is a DPC31 port.
+  EXPECT_EQ(v.width.count("segment.station6_dpc31.pins.pb3"), 1u);
+  EXPECT_EQ(v.width.count("segment.station5_spc3.pins.pb3"), 0u);
+  // Both reach Data_Exchange (2) and DP_Control (2).
+  EXPECT_EQ(v.changes.at("segment.station5_spc3.state.dp_state").back().second, 2u);
+  EXPECT_EQ(v.changes.at("segment.station6_dpc31.state.dp_state").back().second, 2u);
+}
+
+// Every answer 11 T after its request (docs/timing.md, TSDR with MinTSDR 11), driven by the slave
+// asked: line.driver is its address from that cycle, its TxD falls there, the other station hears
+// it at the same cycle and it does not hear itself; every telegram is whole characters.
+TEST(SegmentOutputs, WaveformLineAndAnswersAtTheirCycles) {
+  const Vcd v(slurp(outputs().vcd));
+  const std::vector<OnLine> runs = line_runs(v);
+  ASSERT_GT(runs.size(), 40u);
+  std::size_t answers = 0;
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const OnLine& r = runs[i];
+    EXPECT_EQ((r.end - r.start) % kChar, 0u) << r.start;
+    EXPECT_EQ(v.at("segment.line.level", r.start), 0u) << r.start;  // a start bit
+    // An answer to a master's request (the collision's remains follow the rogue's).
+    if ((r.driver != 5 && r.driver != 6) || i == 0 || runs[i - 1].driver > 3) continue;
+    ++answers;
+    const std::string me = r.driver == 5 ? "station5_spc3" : "station6_dpc31";
+    const std::string other = r.driver == 5 ? "station6_dpc31" : "station5_spc3";
+    const OnLine& req = runs[i - 1];
+    EXPECT_EQ(req.driver, r.driver == 5 ? 2u : 3u) << r.start;  // each master's own slave
+    EXPECT_EQ(r.start, req.end + kTsdr) << "answer of " << r.driver;
+    // The request's DA is the answering station (SD1/SD2/SD3: byte 1 or 4).
+    ASSERT_FALSE(req.bytes.empty());
+    EXPECT_EQ(req.bytes[req.bytes[0] == 0x68 ? 4 : 1] & 0x7F, r.driver) << req.start;
+    EXPECT_EQ(v.at("segment." + me + ".pins.txd", r.start), 0u);
+    EXPECT_EQ(v.at("segment." + me + ".pins.txd", r.start - 1), 1u);
+    EXPECT_EQ(v.at("segment." + other + ".pins.rxd", r.start), 0u);
+    EXPECT_EQ(v.at("segment." + other + ".pins.rxd", r.start - 1), 1u);
+    EXPECT_EQ(v.changes_in("segment." + me + ".pins.rxd", req.end, r.end), 0u);
+  }
+  // Each slave answers its start-up (FDL_Status once out of its baud search, Slave_Diag, Set_Prm,
+  // Chk_Cfg, Slave_Diag) and the 5 Data_Exchange of `cycle 5`: 10 each.
+  EXPECT_EQ(answers, 20u);
+}
+
+// A request is acted on at the stop sample of its last character, end - T + T/2 (docs/timing.md):
+// state.service shows its SAP there, at the station asked and at the other one, which hears it
+// too (the Set_Prm of master 3 to station 6, once station 5 is out of its baud search).
+TEST(SegmentOutputs, WaveformServiceAtTheStopSample) {
+  const Vcd v(slurp(outputs().vcd));
+  std::size_t seen = 0;
+  for (const OnLine& r : line_runs(v)) {
+    if (r.bytes.size() < 9 || r.bytes[0] != 0x68 || r.bytes[7] != 0x3D) continue;  // Set_Prm
+    const std::uint64_t acted = r.end - kT + kT / 2;
+    for (const std::string st : {"station5_spc3", "station6_dpc31"}) {
+      const std::string n = "segment." + st + ".state.service";
+      if (st == "station6_dpc31" && (r.bytes[4] & 0x7F) == 5) continue;  // 6 still searching
+      EXPECT_EQ(v.at(n, acted), 0x3Du) << st << " " << r.start;
+      EXPECT_NE(v.at(n, acted - 1), 0x3Du) << st << " " << r.start;
+    }
+    ++seen;
+  }
+  EXPECT_EQ(seen, 2u);
+}
+
+// The collision of two_masters.scn: the rogue's FDL_Status to 5 (10 05 02 49 50 16), then its
+// second telegram, to 7, 2 T after the step that sent the first (the runner's steps begin one
+// cycle after the previous one ended). The SPC3's answer is due 11 T after the first's end: its
+// TxD falls there, while the line stays the rogue's (the first driver keeps it) and station 6
+// hears only the rogue.
+TEST(SegmentOutputs, WaveformCollision) {
+  const Vcd v(slurp(outputs().vcd));
+  const std::vector<OnLine> runs = line_runs(v);
+  const std::vector<std::uint8_t> to5 = {0x10, 0x05, 0x02, 0x49, 0x50, 0x16};
+  const auto it = std::find_if(runs.begin(), runs.end(), [&](const OnLine& r) {
+    return r.driver == kRogue && r.bytes == to5;
+  });
+  ASSERT_NE(it, runs.end());
+  ASSERT_NE(it + 1, runs.end());
+  const OnLine& first = *it;
+  const OnLine& second = *(it + 1);
+  EXPECT_EQ(first.end, first.start + 6 * kChar);
+  EXPECT_EQ(second.driver, kRogue);
+  EXPECT_EQ(second.start, first.end + 1 + 2 * kT);
+  EXPECT_EQ(second.bytes, (std::vector<std::uint8_t>{0x10, 0x07, 0x02, 0x49, 0x52, 0x16}));
+  const std::uint64_t due = first.end + kTsdr;
+  EXPECT_EQ(v.at("segment.station5_spc3.pins.txd", due), 0u);
+  EXPECT_EQ(v.at("segment.station5_spc3.pins.txd", due - 1), 1u);
+  EXPECT_EQ(v.at("segment.line.driver", due), kRogue);
+  // Station 6 hears the line, not the SPC3: its RxD is the rogue's second telegram throughout.
+  for (std::uint64_t c = second.start; c < second.end; c += kT / 2)
+    EXPECT_EQ(v.at("segment.station6_dpc31.pins.rxd", c), v.at("segment.line.level", c)) << c;
+}
+
+// The FST holds the same changes (read by gtkwave's fst2vcd), the logic-analyser form the line
+// and each station's 1-bit pins in one scope, the save file a group per station.
+TEST(SegmentOutputs, FstLaVcdAndSaveFile) {
+  const Outputs& o = outputs();
+  const auto conv = sh(fmt::format("fst2vcd -f {} -o {}", o.fst, tmp("from-fst.vcd")));
+  ASSERT_EQ(conv.rc, 0) << conv.out;
+  const Vcd a(slurp(o.vcd));
+  const Vcd b(slurp(tmp("from-fst.vcd")));
+  EXPECT_EQ(a.width, b.width);
+  EXPECT_EQ(a.changes, b.changes);
+  const Vcd la(slurp(o.la), 10'000);
+  EXPECT_EQ(la.width.count("segment.line"), 1u);
+  EXPECT_EQ(la.width.count("segment.station5_spc3_txd"), 1u);
+  EXPECT_EQ(la.width.count("segment.station6_dpc31_pb3"), 1u);
+  EXPECT_EQ(la.width.count("segment.line.driver"), 0u);
+  EXPECT_EQ(la.changes.at("segment.line"), a.changes.at("segment.line.level"));
+  const std::string g = slurp(o.gtkw);
+  EXPECT_NE(g.find("-station5_spc3\n"), std::string::npos) << g;
+  EXPECT_NE(g.find("segment.station6_dpc31.state.dp_state[1:0]"), std::string::npos) << g;
+  EXPECT_NE(g.find("dp_state.txt\nsegment.station5_spc3.state.dp_state[1:0]"), std::string::npos);
+  EXPECT_NE(g.find("segment.line.driver[7:0]"), std::string::npos);
+}
+
+// The pcapng of the line through tshark and lib/capture/profibus_dl.lua: every telegram of the
+// waveform's line, at its first start bit (ns = round(cycle x 10^9 / 48 MHz)), its sender and,
+// for a request, who answered it.
+TEST(SegmentOutputs, PcapOfTheLineInTshark) {
+  const Outputs& o = outputs();
+  const auto r = testutil::run_command(fmt::format(
+      "env HOME={0} XDG_CONFIG_HOME={0} tshark -n -X lua_script:{1}/lib/capture/profibus_dl.lua "
+      "-r {2} -T fields -E 'separator=|' -e frame.time_epoch -e frame.comment -e profibus.sd "
+      "-e profibus.sa -e profibus.da 2>/dev/null",
+      ::testing::TempDir(), SOURCE_DIR, o.pcap));
+  ASSERT_EQ(r.rc, 0) << r.out;
+  const Vcd v(slurp(o.vcd));
+  const std::vector<OnLine> runs = line_runs(v);
+  std::vector<std::string> lines;
+  std::istringstream in(r.out);
+  for (std::string l; std::getline(in, l);) lines.push_back(l);
+  ASSERT_EQ(lines.size(), runs.size()) << r.out;
+  const std::map<std::uint32_t, std::string> names = {
+      {2, "master 2"}, {3, "master 3"}, {5, "spc3"}, {6, "dpc31"}, {kRogue, "rogue"}};
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const OnLine& run = runs[i];
+    const std::uint64_t ns = (run.start * 1'000'000'000 + 24'000'000) / 48'000'000;
+    std::string want = fmt::format("{}.{:09}|cycles {}-{}, {}", ns / 1'000'000'000,
+                                   ns % 1'000'000'000, run.start, run.end, names.at(run.driver));
+    // An answer: a slave's telegram right after a master's request (the collision's remains
+    // after the rogue's are no frame and answer nothing).
+    const auto answer = [&](std::size_t k) {
+      return (runs[k].driver == 5 || runs[k].driver == 6) && k > 0 && runs[k - 1].driver <= 3;
+    };
+    if (answer(i)) want += fmt::format(", answer to master {}", runs[i - 1].driver);
+    if (i + 1 < runs.size() && answer(i + 1))
+      want += fmt::format(", answered by {}", names.at(runs[i + 1].driver));
+    EXPECT_EQ(lines[i].substr(0, want.size()), want) << i;
+    // The dissector's SD is the first byte on the line (F1, the collision's remains, is none).
+    if (run.bytes.at(0) != 0xF1) {
+      EXPECT_NE(lines[i].find(fmt::format("|0x{:02x}|", run.bytes.at(0))), std::string::npos)
+          << lines[i];
+    }
+  }
+}
+
+// A trace per station; each replays alone on a single chip, and is the shipped golden trace (its
+// hand-check block aside).
+TEST(SegmentOutputs, TracePerStationReplaysAndIsGolden) {
+  ASSERT_EQ(outputs().rc, 0);
+  for (const std::string st : {"station5_spc3", "station6_dpc31"}) {
+    const std::string rec = tmp("two." + st + ".trace");
+    const auto r = sh(fmt::format("{} replay --quiet {}", DPC31_CLI, rec));
+    EXPECT_EQ(r.rc, 0) << r.out;
+    const std::string golden =
+        slurp(std::string(SOURCE_DIR) + "/traces/segment/two_masters." + st + ".trace");
+    // The golden file: the recording with the block `# checked by hand ...` after line 1.
+    std::string stripped;
+    std::istringstream in(golden);
+    bool in_block = false;
+    int n = 0;
+    for (std::string l; std::getline(in, l); ++n) {
+      if (n == 1 && l.starts_with("# checked by hand")) in_block = true;
+      if (in_block && l == "#") {
+        in_block = false;
+        continue;
+      }
+      if (!in_block) stripped += l + "\n";
+    }
+    EXPECT_EQ(slurp(rec), stripped) << st;
+  }
+}
+
+TEST(SegmentOutputs, BadInputIsOneLineAndNoFile) {
+  const std::string out = tmp("bad.vcd");
+  auto r =
+      sh(fmt::format("{} run --quiet {} --vcd {} --signals 'nosuch.*'", DPC31_CLI, kScenario, out));
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_EQ(r.out, "dpc31 run: no signal matches 'nosuch.*' (see docs/waveforms.md)\n");
+  EXPECT_FALSE(fs::exists(out));
+  r = sh(fmt::format("{} run --quiet {} --vcd {} --engine per-cycle", DPC31_CLI, kScenario, out));
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_EQ(r.out, fmt::format("dpc31 run: {}: --engine per-cycle: a segment runs on the event "
+                               "engine\n",
+                               kScenario));
+  EXPECT_FALSE(fs::exists(out));
+  r = sh(fmt::format("{} run --quiet {} --vcd {} --pcap {}", DPC31_CLI, kScenario, out, out));
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;
+  EXPECT_FALSE(fs::exists(out));
+  // The trace of station 5 would overwrite the scenario itself.
+  const std::string scn = tmp("x.station5_spc3.trace");
+  fs::copy_file(kScenario, scn, fs::copy_options::overwrite_existing);
+  r = sh(fmt::format("{} run --quiet {} --record {}", DPC31_CLI, scn, tmp("x.trace")));
+  EXPECT_EQ(r.rc, 2) << r.out;
+  EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;
+  EXPECT_EQ(slurp(scn), slurp(kScenario));
+}
+
+// The three-slave segment (a firmware, a VPC3+, a DPC31): every station's trace replays alone, the
+// VPC3+'s last answer of the run whole in it (the run ends once the line is quiet).
+TEST(SegmentOutputs, ThreeSlavesTracesReplay) {
+  const std::string rec = tmp("three.trace");
+  auto r = sh(fmt::format("{} run --quiet {}/traces/segment/three_slaves.scn --record {}",
+                          DPC31_CLI, SOURCE_DIR, rec));
+  ASSERT_EQ(r.rc, 0) << r.out;
+  std::size_t traces = 0;
+  for (const auto& e : fs::directory_iterator(fs::path(rec).parent_path())) {
+    const std::string name = e.path().filename().string();
+    if (!name.starts_with("three.station") || !name.ends_with(".trace")) continue;
+    ++traces;
+    r = sh(fmt::format("{} replay --quiet {}", DPC31_CLI, e.path().string()));
+    EXPECT_EQ(r.rc, 0) << name << ": " << r.out;
+  }
+  EXPECT_EQ(traces, 3u);
+}
+
+// sigrok-cli's UART decoder (8E1) reads the logic-analyser form of a window (the SPC3's start-up
+// answers and master 3's first exchange with the DPC31, cycles 2 885 000 to 2 936 000): `line`
+// gives exactly the bytes of every telegram of the full waveform's line in it, and the DPC31's
+// `station6_dpc31_txd` exactly its answer.
+TEST(SegmentOutputs, SigrokDecodesTheLine) {
+  constexpr std::uint64_t kFrom = 2'885'000;
+  constexpr std::uint64_t kTo = 2'936'000;
+  const std::string la = tmp("window-la.vcd");
+  auto r = sh(fmt::format("{} run --quiet {} --la-vcd {} --from {} --to {}", DPC31_CLI, kScenario,
+                          la, kFrom, kTo));
+  ASSERT_EQ(r.rc, 0) << r.out;
+  const Vcd v(slurp(outputs().vcd));
+  std::string line;
+  std::string dpc31;
+  for (const OnLine& run : line_runs(v)) {
+    if (run.start < kFrom || run.end > kTo) continue;
+    for (const std::uint8_t b : run.bytes) {
+      line += fmt::format("{:02X}\n", b);
+      if (run.driver == 6) dpc31 += fmt::format("{:02X}\n", b);
+    }
+  }
+  ASSERT_FALSE(dpc31.empty());
+  const auto decode = [&](const char* pin) {
+    return testutil::run_command(
+        fmt::format("sigrok-cli -I vcd -i {} -P uart:rx={}:baudrate=1500000:parity=even:format=hex "
+                    "-A uart=rx-data 2>/dev/null | sed 's/^.* //' | tr a-f A-F",
+                    la, pin));
+  };
+  r = decode("line");
+  ASSERT_EQ(r.rc, 0);
+  EXPECT_EQ(r.out, line);
+  EXPECT_EQ(decode("station6_dpc31_txd").out, dpc31);
+}
