@@ -601,10 +601,10 @@ class Parser {
     if (pos_.empty()) fail("'expect' needs what to check and the expected value");
     const std::string_view what = pos_[0];
     if (pos_.size() >= 3 && (pos_[pos_.size() - 2] == "at" || pos_[pos_.size() - 2] == "after")) {
-      if (what != "dp_state" && what != "wd_state" && what != "dpv1") {
+      if (what != "dp_state" && what != "wd_state" && what != "dpv1" && what != "port") {
         fail(fmt::format(
-            "'{}' is for dp_state, wd_state and dpv1: the cycle a state was entered or a "
-            "response ended",
+            "'{}' is for dp_state, wd_state, dpv1 and port: the cycle a state was entered, a "
+            "response ended or a port was written",
             pos_[pos_.size() - 2]));
       }
       step_.when =

@@ -402,8 +402,8 @@ TEST(ScenarioParse, BusActionsRefuseWhatTheMapDoesNot) {
       {h + "expect reg Status_Reg 0x10000\n",
        "t.scn:2: register value 0x10000 out of range (0..65535)"},
       {h + "expect baud 12000000 at 5\n",
-       "t.scn:2: 'at' is for dp_state, wd_state and dpv1: the cycle a state was entered or a "
-       "response ended"},
+       "t.scn:2: 'at' is for dp_state, wd_state, dpv1 and port: the cycle a state was entered, a "
+       "response ended or a port was written"},
       {h + "corrupt parity\nwrite 0x10 1\nstartup\n",
        "t.scn:2: the next action ('write', line 3) sends no request to damage"},
       {h + "read 0x10\nexpect read 0x12\nexpect dp_state Wait_Prm after 4\n", ""},

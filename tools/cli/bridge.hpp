@@ -28,6 +28,7 @@ struct BridgeOptions {
   std::string slot = "100";
   std::string cpu;        // "80c32[:HZ]": --firmware is an Intel HEX image for it (docs/cpu.md)
   std::string trace_cpu;  // every 80C32 instruction with its cycle, to this file
+  std::string ports;      // the 80C32 latch bytes by name, as `ports=`; empty: DO4's
   std::vector<std::string> extra;  // unknown arguments, refused by run_bridge
 };
 
