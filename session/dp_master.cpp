@@ -461,6 +461,8 @@ bool DpMaster::startup(int tries) {
   }
   if (n == tries) return false;
   note(fmt::format("[cycle {:>10}] FDL_Status answered", now()));
+  const std::uint64_t ms = (seg_ ? seg_->clock_hz() : chip_->clock_hz()) / 1000;
+  std::uint64_t check_until = 0;  // our accepted Set_Prm's start + kPrmCheckMs; 0: none yet
   for (; n < tries; ++n) {
     const Exchange diag = slave_diag();
     if (!diag.answer) continue;
@@ -470,11 +472,21 @@ bool DpMaster::startup(int tries) {
     }
     using D = pdu::SlaveDiag;
     const std::vector<std::uint8_t>& du = diag.answer->du;
-    if ((du.size() >= 2 && (du[1] & D::St2_Prm_Req) != 0) ||
-        (!du.empty() && (du[0] & (D::St1_Cfg_Fault | D::St1_Prm_Fault)) != 0)) {
+    const bool fault = !du.empty() && (du[0] & (D::St1_Cfg_Fault | D::St1_Prm_Fault)) != 0;
+    if ((du.size() >= 2 && (du[1] & D::St2_Prm_Req) != 0) || fault) {
+      // The slave holds our parameters (Master_Add is ours, no fault) and its user is still
+      // checking them: a new Set_Prm would only restart the check (Prm_Conflict). Poll every
+      // 1 ms for up to kPrmCheckMs after our Set_Prm before parameterising again
+      // (docs/decisions.md, "The built-in master waits for a slave's Prm check").
+      if (!fault && du.size() >= 4 && du[3] == cfg_.address && now() < check_until) {
+        idle(ms);
+        continue;
+      }
       // Prm_Req (or a fault): parameterise and configure.
       note(fmt::format("[cycle {:>10}] Slave_Diag: Prm_Req, sending Set_Prm and Chk_Cfg", now()));
-      set_prm();
+      const Exchange prm = set_prm();
+      check_until =
+          prm.answer && prm.answer->sd == fdl::SC ? prm.request_start + kPrmCheckMs * ms : 0;
       chk_cfg();
     }
   }

@@ -222,7 +222,10 @@ class DpMaster {
 
   // The standard start-up: FDL_Status until answered, Slave_Diag, Set_Prm, Chk_Cfg, Slave_Diag
   // until the slave is ready. Returns false if it did not reach Data_Exchange within `tries`.
+  // A slave still checking our accepted Set_Prm (Prm_Req, Master_Add ours, no fault) is polled
+  // every 1 ms for up to kPrmCheckMs before it is parameterised again.
   bool startup(int tries = kStartupTries);
+  static constexpr std::uint64_t kPrmCheckMs = 10;
   // A master restart: FDL_Status until answered, Slave_Diag, Set_Prm, Chk_Cfg, then Slave_Diag
   // until ready. Unlike startup it parameterises even a slave that reports itself ready. Every
   // request without an answer is repeated up to `retries` times.

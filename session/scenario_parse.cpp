@@ -612,10 +612,11 @@ class Parser {
     if (pos_.empty()) fail("'expect' needs what to check and the expected value");
     const std::string_view what = pos_[0];
     if (pos_.size() >= 3 && (pos_[pos_.size() - 2] == "at" || pos_[pos_.size() - 2] == "after")) {
-      if (what != "dp_state" && what != "wd_state" && what != "dpv1" && what != "irq") {
+      if (what != "dp_state" && what != "wd_state" && what != "dpv1" && what != "irq" &&
+          what != "port") {
         fail(fmt::format(
-            "'{}' is for dp_state, wd_state, dpv1 and irq: the cycle a state was entered, a "
-            "response ended or X/INT went active",
+            "'{}' is for dp_state, wd_state, dpv1, irq and port: the cycle a state was entered, a "
+            "response ended, X/INT went active or a port was written",
             pos_[pos_.size() - 2]));
       }
       step_.when =

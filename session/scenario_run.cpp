@@ -62,6 +62,7 @@ class Runner {
     } else if (!s_.firmware.empty()) {
       fw_ = std::make_unique<FirmwareHost>(*s_.firmware_desc);
       fw_->on_port = [this](std::uint64_t cycle, unsigned port, std::uint32_t value) {
+        port_since_[fw_->port_name(port)] = cycle;
         note(cycle, fmt::format("{}: {} = {} at {}", fw_->firmware().name, fw_->port_name(port),
                                 port_text(value), time_text(cycle)));
       };
@@ -560,6 +561,7 @@ class Runner {
     m51_->on_port = [this](std::uint64_t cycle, unsigned port, std::uint32_t value) {
       // The MOVX (one byte) has been fetched: it is the byte before the PC.
       const auto at = static_cast<std::uint16_t>(m51_->board().cpu().pc() - 1);
+      port_since_[m51_->port_name(port)] = cycle;
       note(cycle, fmt::format("80C32 at {}: {} = {} at {}", code_name(image_, at),
                               m51_->port_name(port), port_text(value), time_text(cycle)));
     };
@@ -672,6 +674,7 @@ class Runner {
     if (st.when != ScenarioStep::When::any && st.expect != ExpectKind::irq && got == want) {
       const std::uint64_t since = st.expect == ExpectKind::dpv1       ? dpv1_last_->end
                                   : st.expect == ExpectKind::dp_state ? dp_since_
+                                  : st.expect == ExpectKind::port     ? port_since_[st.name]
                                                                       : wd_since_;
       scenario_bus::when(st, since, base_cycle_, c.want, got);
     }
@@ -731,6 +734,8 @@ class Runner {
   std::vector<scenario_expect::IrqRise> irq_rises_;  // X/INT activations since then
   std::uint64_t dp_since_ = 0;  // when dp_ / wd_ were entered, as the walk shows it
   std::uint64_t wd_since_ = 0;
+  // The cycle of each firmware port's last write (`expect port NAME V at|after N`); 0 before it.
+  std::map<std::string, std::uint64_t> port_since_;
   scenario_bus::LastRead last_read_;  // what `expect read` compares
 };
 

@@ -256,10 +256,10 @@ def plugin(name):
                         f"libdpc31_fw_{name}.so")
 
 
-def ihx_80c32():
-    """DO4 for the 80C32 as the build makes it (firmware/CMakeLists.txt)."""
+def ihx_80c32(fw="do4"):
+    """DO4 (or CNT2) for the 80C32 as the build makes it (firmware/CMakeLists.txt)."""
     return os.path.join(os.path.dirname(os.path.abspath(CLI)), "..", "firmware", "mcs51",
-                        "do4_80c32.ihx")
+                        f"{fw}_80c32.ihx")
 
 
 def do4_80c32_free():
@@ -367,13 +367,15 @@ def do4_reparameterise_after_watchdog():
             b.kill()
 
 
-def cnt2_logmsg(firmware="CNT2"):
+def cnt2_logmsg(firmware="CNT2", board=("--profile", "vpc3plus"), module="CNT2",
+                first="profile vpc3plus, variant c, firmware CNT2, address 9"):
     """CNT2 at 500 kbaud, free pacing: CNT1_LOGMSG and PWM1_LOGMSG (outputs 81 00 81 00 00 00)
     set LOGMSG_ACK (bit 7 of counter 1's status byte 2 and PWM 1's byte 6) and the firmware's
-    hold1 and pwm_hold1 ports."""
+    hold1 and pwm_hold1 ports. `board`: the options that put the firmware on its board, `module`
+    the log's name of who wrote the ports, `first` part of log line 1."""
     with tempfile.TemporaryDirectory() as tmp:
         b = Bridge(tmp, "--firmware", firmware, "--baud", "500000", "--pacing", "free",
-                   "--profile", "vpc3plus", "--address", "9")
+                   *board, "--address", "9")
         global SLAVE
         SLAVE = 9
         try:
@@ -402,13 +404,24 @@ def cnt2_logmsg(firmware="CNT2"):
             m.close()
             b.stop(signal.SIGHUP)
             text = "\n".join(b.log_lines())
-            check("PORT  slave9   CNT2 hold1 = 0x01" in text, "log lacks the hold1 port write")
-            check("PORT  slave9   CNT2 pwm_hold1 = 0x01" in text, "log lacks the pwm_hold1 port write")
-            check("profile vpc3plus, variant c, firmware CNT2, address 9" in b.log_lines()[0],
+            check(f"PORT  slave9   {module} hold1 = 0x01" in text, "log lacks the hold1 port write")
+            check(f"PORT  slave9   {module} pwm_hold1 = 0x01" in text,
+                  "log lacks the pwm_hold1 port write")
+            check(first in b.log_lines()[0],
                   f"log line 1 lacks the profile, variant or firmware: {b.log_lines()[0]}")
         finally:
             SLAVE = 5
             b.kill()
+
+
+def cnt2_80c32_free():
+    """CNT2 built by SDCC on an 80C32 at 24 MHz beside an SPC3 (docs/cpu.md, "CNT2 on the
+    80C32"), its latch bytes named by --ports as the scenario's ports= names them: the same
+    LOGMSG hold as the host-built CNT2, the port writes logged by the 80C32 under CNT2's names."""
+    cnt2_logmsg(ihx_80c32("cnt2"),
+                ("--cpu", "80c32", "--profile", "spc3",
+                 "--ports", "hold1,hold2,pwm_hold1,pwm_hold2,pwm1,pwm2"),
+                "80C32", "profile spc3, ")
 
 
 def bad_arguments():
@@ -440,6 +453,9 @@ def bad_arguments():
             ["bridge", "--pty", link, "--cpu", "80c32", "--firmware", regular],  # not Intel HEX
             ["bridge", "--pty", link, "--cpu", "80c32", "--firmware", os.path.join(tmp, "none")],
             ["bridge", "--pty", link, "--firmware", "DO4", "--trace-cpu", os.path.join(tmp, "t")],
+            ["bridge", "--pty", link, "--firmware", "DO4", "--ports", "outputs"],
+            ["bridge", "--pty", link, "--cpu", "80c32", "--firmware", ihx_80c32(),
+             "--ports", "outputs,,modul_ok"],
             ["bridge", "--pty", link, "--cpu", "80c32", "--firmware", ihx_80c32(),
              "--trace-cpu", os.path.join(tmp, "no", "t")],
         ]
@@ -693,6 +709,7 @@ CASES = {
     "cnt2_plugin_free_logmsg": lambda: cnt2_logmsg(plugin("cnt2")),
     "bad_arguments_exit_2": bad_arguments,
     "do4_80c32_free": do4_80c32_free,
+    "cnt2_80c32_free": cnt2_80c32_free,
     "stale_symlink_and_silent_client": stale_symlink_replaced,
     "profibus_rates_default_log": profibus_rates_default_log,
     "answer_dropped_without_client": answer_dropped_without_client,

@@ -199,14 +199,15 @@ TEST(CliBench, QuickPrintsEveryRowWellFormed) {
   // lockstep), f (MB/s and RSS on a pair of the emulator's VCD files and on a generated pair), g
   // (pipelined over TCP, one in flight over the Unix socket and over TCP, each with the server's
   // own cost per command and the rest reported beside it; one round trip beside a flood), i
-  // (tracing), j (the 80C32 core, docs/cpu.md), k (DPV1 Reads), l (a segment), h (the fresh
-  // build: not run without --build, last).
+  // (tracing), j (the 80C32 core, docs/cpu.md), k (DPV1 Reads), l (a segment), m (DO4 on the
+  // 80C32), h (the fresh build: not run without --build, last).
   std::vector<std::string> items = {"a", "a", "a", "a", "a", "a", "b", "b'", "c", "d",
                                     "e", "e", "f", "f", "f", "f", "g", "g",  "g", "g",
                                     "g", "g", "g", "g", "g", "i", "j", "k"};
   // l: one DP cycle over a segment of 1, 2, 4, 8, 16, 32 slaves at 1.5 and 12 Mbaud (issue 30);
   // only the 32-slave rows have targets.
   items.insert(items.end(), 12, "l");
+  items.push_back("m");  // a whole DO4 session on the 80C32 (docs/cpu.md)
   items.push_back("h");
   ASSERT_EQ(rows.size(), items.size()) << r.out;
   int reported = 0;
@@ -253,9 +254,9 @@ TEST(CliBench, ItemsRunsOnlyThose) {
   const Result r = run("bench --quick --items d,i --json " + json_path);
   ASSERT_EQ(r.rc, 0) << r.out;
   const auto j = nlohmann::json::parse(slurp(json_path));
-  // Every row of docs/performance.md, rows j (the 80C32), k (DPV1) and the twelve of row l (a
-  // segment) included.
-  ASSERT_EQ(j["rows"].size(), 41u);
+  // Every row of docs/performance.md, rows j (the 80C32), k (DPV1), the twelve of row l (a
+  // segment) and m (DO4 on the 80C32) included.
+  ASSERT_EQ(j["rows"].size(), 42u);
   int measured = 0;
   for (const auto& row : j["rows"]) {
     if (row["item"] == "d" || row["item"] == "i") {

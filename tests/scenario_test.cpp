@@ -402,8 +402,8 @@ TEST(ScenarioParse, BusActionsRefuseWhatTheMapDoesNot) {
       {h + "expect reg Status_Reg 0x10000\n",
        "t.scn:2: register value 0x10000 out of range (0..65535)"},
       {h + "expect baud 12000000 at 5\n",
-       "t.scn:2: 'at' is for dp_state, wd_state, dpv1 and irq: the cycle a state was entered, a "
-       "response ended or X/INT went active"},
+       "t.scn:2: 'at' is for dp_state, wd_state, dpv1, irq and port: the cycle a state was "
+       "entered, a response ended, X/INT went active or a port was written"},
       // `expect irq`: the cycle X/INT went active, or how often (docs/scenario-format.md).
       {h + "expect irq DX_Out after 12\nexpect irq count 0\nexpect irq MAC_Reset at 7\n", ""},
       {h + "expect irq DX_Out\n",

@@ -136,6 +136,9 @@ const std::vector<RowSpec>& rows() {
        "x real time", Goal::report, 0},
       {"l", "  32 slaves, 12 Mbaud", "BM_SegmentDpCycle/baud:12000000/slaves:32", "x_realtime", 1,
        "x real time", Goal::at_least, 20},
+      // Issue 34 item 6 (row m): a whole DO4 session on the 80C32 (docs/cpu.md).
+      {"m", "DO4 on the 80C32 at 24 MHz, SPC3 at 1.5 Mbaud: start-up, 2 000 Data_Exchange, OSP",
+       "BM_Do4Cpu51Session", "x_realtime", 1, "x real time", Goal::at_least, 20},
       // Issue 19 item 6: not a benchmark but a timed build (--build), after the benchmarks.
       {"h", "fresh build: ./setup.sh with every package present, ccache off (wall time)", kSetupSh,
        "time", 1.0 / 60, "min", Goal::at_most, 5},

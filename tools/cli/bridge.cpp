@@ -187,12 +187,20 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
         !parse_uint(hz, 40'000'000, v) || v < 1'000'000) {
       return bad(fmt::format("--cpu '{}' must be 80c32 or 80c32:HZ (1000000..40000000)", o.cpu));
     }
-    c.setup.cpu = Cpu51Config{
-        .hz = static_cast<std::uint32_t>(v), .hex = o.firmware, .ports = {"outputs", "modul_ok"}};
+    c.setup.cpu = Cpu51Config{.hz = static_cast<std::uint32_t>(v), .hex = o.firmware};
+    // The latch bytes from 4000h on, named as the scenario's `ports=` names them (docs/bridge.md).
+    const std::string ports = o.ports.empty() ? "outputs,modul_ok" : o.ports;
+    for (std::size_t at = 0, end = 0; end != std::string::npos; at = end + 1) {
+      end = ports.find(',', at);
+      c.setup.cpu->ports.push_back(ports.substr(at, end == std::string::npos ? end : end - at));
+      if (c.setup.cpu->ports.back().empty())
+        return bad(fmt::format("--ports '{}': an empty port name", ports));
+    }
     std::string why;
     if (!load_cpu51_image(*c.setup.cpu, c.setup.cpu_image, why)) return bad(why);
   } else {
     if (!o.trace_cpu.empty()) return bad("--trace-cpu needs --cpu 80c32");
+    if (!o.ports.empty()) return bad("--ports needs --cpu 80c32");
     try {
       c.setup.firmware = &find_firmware(o.firmware);
     } catch (const FirmwareError& e) {
@@ -500,6 +508,9 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
   b->add_option("--cpu", o.cpu,
                 "80c32[:HZ]: run --firmware, an Intel HEX image, on an 80C32 beside the chip");
   b->add_option("--trace-cpu", o.trace_cpu, "write every 80C32 instruction with its cycle here");
+  b->add_option("--ports", o.ports,
+                "N1,N2...: the 80C32 board's output latch bytes (XDATA 4000h on) by name; "
+                "default DO4's: outputs,modul_ok");
   b->add_option("--address", o.address, "station address 0..125")->capture_default_str();
   b->add_option("--slave", o.slaves,
                 "ADDR:FIRMWARE[:PROFILE[:VARIANT]], repeated: several stations on the one line "

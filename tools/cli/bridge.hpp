@@ -32,6 +32,7 @@ struct BridgeOptions {
   // "Several slaves")
   std::vector<std::string> slaves;
   std::vector<std::string> single;  // the single-slave options given (refused beside --slave)
+  std::string ports;                // the 80C32 latch bytes by name, as `ports=`; empty: DO4's
   std::vector<std::string> extra;   // unknown arguments, refused by run_bridge
 };
 
