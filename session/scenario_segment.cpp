@@ -126,14 +126,6 @@ class Parser {
       } catch (const FirmwareError& e) {
         fail(e.what());
       }
-      for (const SegmentStation& o : s_.stations) {
-        // The built-in firmwares and their dps driver keep their state in C globals, one set per
-        // process (firmware_host.hpp): one station of a segment may run one.
-        if (!o.firmware.empty()) {
-          fail(fmt::format("firmware {}: {} already runs {} (one built-in firmware per segment)",
-                           *v, o.name, o.firmware));
-        }
-      }
     }
     if (auto v = take("wd")) {
       const std::vector<std::string_view> f = split(*v, ',');
