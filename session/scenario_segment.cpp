@@ -119,9 +119,10 @@ class Parser {
     }
     if (auto v = take("firmware")) {
       st.firmware = std::string(*v);
+      // Checked before anything is loaded: a plug-in's path rules are not applied to stations.
+      if (is_plugin_path(st.firmware)) fail("a segment station runs a built-in firmware");
       try {
         const dpc31_firmware& fw = find_firmware(st.firmware);
-        if (is_plugin_path(st.firmware)) fail("a segment station runs a built-in firmware");
         st.slave = with_gsd_defaults(fw, st.slave);
       } catch (const FirmwareError& e) {
         fail(e.what());
