@@ -9,19 +9,20 @@
 
 int main(void) {
   dps_board board = {DPC31_PROFILE_DPC31, 0, 5}; /* chip, bus mode, station address */
+  static do4 fw;                                 /* the firmware's instance: all its state */
   dpc31_chip* chip = dpc31_create("dpc31", 0);
   int i;
   dpc31_select(chip);
-  do4_init(&board); /* your driver's init: registers, buffers, Start */
+  do4_init(&fw, &board); /* your driver's init: registers, buffers, Start */
   for (i = 0; i < 1000; ++i) {
     if (dpc31_irq_active(chip)) {
-      do4_isr();
+      do4_isr(&fw);
     } else {
       dpc31_run_until_irq_change(chip, 48000);
     }
   }
   printf("cycle %llu: %u interrupts served, DP state %u\n", (unsigned long long)dpc31_cycle(chip),
-         (unsigned)dps_get_stats()->interrupts,
+         (unsigned)dps_get_stats(&fw.drv)->interrupts,
          (unsigned)((dpc31_peek(chip, DPC31_Status_Reg) >> 4) & 3u));
   dpc31_destroy(chip);
   return 0;

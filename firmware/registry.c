@@ -6,6 +6,7 @@
 #include "firmware.h"
 
 const dpc31_firmware* const dpc31_firmwares[] = {&do4_firmware, &cnt2_firmware, 0};
+static const dpc31_builtin* const kBuiltins[] = {&do4_builtin, &cnt2_builtin, 0};
 
 static int same_name(const char* a, const char* b) {
   for (; *a && *b; ++a, ++b) {
@@ -18,6 +19,14 @@ const dpc31_firmware* dpc31_find_firmware(const char* name) {
   int i;
   for (i = 0; dpc31_firmwares[i] != 0; ++i) {
     if (same_name(dpc31_firmwares[i]->name, name)) return dpc31_firmwares[i];
+  }
+  return 0;
+}
+
+const dpc31_builtin* dpc31_builtin_of(const dpc31_firmware* fw) {
+  int i;
+  for (i = 0; kBuiltins[i] != 0; ++i) {
+    if (kBuiltins[i]->descriptor == fw) return kBuiltins[i];
   }
   return 0;
 }

@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include "firmware.h"
+
 namespace dpc31 {
 
 class FirmwareHost::Entered {
@@ -25,8 +27,24 @@ class FirmwareHost::Entered {
   board::Hooks* hooks_;
 };
 
+namespace {
+
+// A built-in's instance: zeroed, aligned for any type.
+std::unique_ptr<std::max_align_t[]> new_instance(const dpc31_builtin* b) {
+  if (b == nullptr) return nullptr;
+  const std::size_t n =
+      (b->instance_size + sizeof(std::max_align_t) - 1) / sizeof(std::max_align_t);
+  return std::make_unique<std::max_align_t[]>(n);  // value-initialised: all zero
+}
+
+}  // namespace
+
 FirmwareHost::FirmwareHost(const dpc31_firmware& fw)
-    : fw_(fw), sink_([this](std::uint64_t cycle, unsigned port, std::uint32_t value) {
+    : fw_(fw),
+      builtin_(dpc31_builtin_of(&fw)),
+      self_(new_instance(builtin_)),
+      run_(builtin_ != nullptr ? nullptr : plugin_copy(fw)),
+      sink_([this](std::uint64_t cycle, unsigned port, std::uint32_t value) {
         writes_.push_back(PortWrite{cycle, port, value});
         if (port >= values_.size()) values_.resize(port + 1, 0);
         values_[port] = value;
@@ -41,7 +59,11 @@ void FirmwareHost::init(BusPort& bus, std::uint8_t station_address) {
   // init runs on the caller's stack (the host CPU's hand-overs count the rest for the guard).
   board::firmware_entered();
   try {
-    fw_.init(&board);
+    if (builtin_ != nullptr) {
+      builtin_->init(self_.get(), &board);
+    } else {
+      run_->init(&board);
+    }
   } catch (...) {
     board::firmware_left();
     throw;
@@ -52,12 +74,16 @@ void FirmwareHost::init(BusPort& bus, std::uint8_t station_address) {
 void FirmwareHost::isr(BusPort& bus) {
   interrupts.emplace_back(bus.cycle(), bus.chip().peek_reg(RegId::Int_Reg));
   Entered e(*this, bus);
-  fw_.isr();
+  if (builtin_ != nullptr) {
+    builtin_->isr(self_.get());
+  } else {
+    run_->isr();
+  }
 }
 
 void FirmwareHost::main_step(BusPort& bus) {
   Entered e(*this, bus);
-  fw_.main_step();
+  run_->main_step();  // a built-in has none (program)
 }
 
 Cpu::Program FirmwareHost::program(const Cpu::Isr& after) {
@@ -68,7 +94,7 @@ Cpu::Program FirmwareHost::program(const Cpu::Isr& after) {
       if (after) after(b);
     };
   }
-  if (fw_.main_step != nullptr) {
+  if (builtin_ == nullptr && run_->main_step != nullptr) {
     p.main_step = [this, after](BusPort& b) {
       main_step(b);
       if (after) after(b);
@@ -79,7 +105,12 @@ Cpu::Program FirmwareHost::program(const Cpu::Isr& after) {
 }
 
 std::string FirmwareHost::hw_input(const std::string& name, std::uint32_t value) {
-  const int r = fw_.hw_input != nullptr ? fw_.hw_input(name.c_str(), value) : -1;
+  int r = -1;
+  if (builtin_ != nullptr) {
+    if (builtin_->hw_input != nullptr) r = builtin_->hw_input(self_.get(), name.c_str(), value);
+  } else if (run_->hw_input != nullptr) {
+    r = run_->hw_input(name.c_str(), value);
+  }
   if (r == -1) return "unknown hardware input '" + name + "' of " + fw_.name;
   if (r == -2) return "value " + std::to_string(value) + " out of range for " + name;
   return {};

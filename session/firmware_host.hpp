@@ -3,10 +3,15 @@
 // and its ISR on the host CPU (cpu.hpp). Every access goes through the C HAL's driver-shaped
 // functions and costs its bus cycles; the board hooks (board.hpp) act on this host.
 //
-// The firmwares keep their state in C globals, as on silicon: one FirmwareHost per firmware
-// image is alive at a time in a process.
+// Every FirmwareHost is an instance of its firmware of its own, so any number of stations run the
+// same firmware or different ones at once: a built-in firmware (firmware.h) gets its instance
+// memory here; a plug-in, which keeps its state in C globals as a driver on silicon does, runs in
+// a private copy of its library (plugin_copy; docs/decisions.md). A station's firmware is
+// `FirmwareHost host(find_firmware(spec)); host.init(bus, address);` then `host.program()` on its
+// host CPU.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <stdexcept>
@@ -19,6 +24,8 @@
 #include "dp_master.hpp"
 #include "dpc31/dpc31_firmware.h"
 #include "dpc31/hal.hpp"
+
+struct dpc31_builtin;  // firmware.h
 
 namespace dpc31 {
 
@@ -40,6 +47,11 @@ const dpc31_firmware& find_firmware(const std::string& spec);
 [[nodiscard]] SlaveConfig with_gsd_defaults(const dpc31_firmware& fw, SlaveConfig base = {});
 // Why a descriptor cannot run (empty: it can).
 [[nodiscard]] std::string descriptor_problem(const dpc31_firmware* fw);
+// A private copy of the plug-in `fw` belongs to (the library loaded again from the file that was
+// checked, its globals its own) for one station, given back when the last owner lets go: a copy
+// nobody holds is the next station's. A descriptor of no loaded plug-in (a built-in, one a
+// program defines itself) is returned as it is. Throws FirmwareError when a copy cannot load.
+[[nodiscard]] std::shared_ptr<const dpc31_firmware> plugin_copy(const dpc31_firmware& fw);
 
 class FirmwareHost final : private board::Hooks {
  public:
@@ -62,6 +74,9 @@ class FirmwareHost final : private board::Hooks {
     std::uint32_t value;
   };
   [[nodiscard]] const dpc31_firmware& firmware() const { return fw_; }
+  // A built-in firmware's instance (its type per firmware.h: do4, cnt2), for tests and debuggers;
+  // nullptr for a plug-in.
+  [[nodiscard]] void* instance() const { return self_.get(); }
   [[nodiscard]] const std::vector<PortWrite>& port_writes() const { return writes_; }
   // A port's current value (0 before the first write); -1 for an unknown name.
   [[nodiscard]] std::int64_t port(const std::string& name) const;
@@ -85,6 +100,9 @@ class FirmwareHost final : private board::Hooks {
   void wait_1ms() override;
 
   const dpc31_firmware& fw_;
+  const dpc31_builtin* builtin_;               // a built-in: its entry points on self_
+  std::unique_ptr<std::max_align_t[]> self_;   // the built-in's instance
+  std::shared_ptr<const dpc31_firmware> run_;  // else the plug-in copy this station runs
   hal::PortSink sink_;
   std::vector<PortWrite> writes_;
   std::vector<std::uint32_t> values_;

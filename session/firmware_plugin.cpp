@@ -2,14 +2,18 @@
 // header (dpc31_firmware_load, dpc31_module_*).
 #include <dlfcn.h>
 #include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
 #include <exception>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <system_error>
+#include <vector>
 
 #include "firmware.h"
 #include "firmware_host.hpp"
@@ -69,27 +73,43 @@ std::string file_path(const std::string& spec) {
   return spec.find('/') == std::string::npos ? "./" + spec : spec;
 }
 
-const dpc31_firmware& load_plugin(const std::string& spec) {
-  const std::string path = file_path(spec);
-  // Checked and loaded through one descriptor: what was checked is what runs, whatever is renamed
-  // or swapped in at the path meanwhile (docs/security.md, "Code a command runs").
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) {
-    throw FirmwareError("cannot load firmware plug-in: " + path + ": " +
-                        std::error_code(errno, std::generic_category()).message());
+// A plug-in as loaded, with the private copies of its library (plugin_copy). Every file a library
+// was loaded from stays open for as long as the process runs, as the library stays loaded: the
+// copies are made from what was checked, and dlopen takes a name it has loaded before
+// ("/proc/self/fd/N") for that library, so no later file may get the same descriptor number. The
+// same file named again (dev, inode) is the library loaded before, without a dlopen.
+struct Loaded {
+  int fd = -1;
+  dev_t dev = 0;
+  ino_t ino = 0;
+  std::string path;
+  struct Copy {
+    const dpc31_firmware* fw;
+    bool held;
+  };
+  std::vector<Copy> copies;  // [0]: the library load_plugin loaded
+};
+std::mutex g_loaded_mutex;
+std::vector<std::unique_ptr<Loaded>> g_loaded;  // never freed: the libraries are never closed
+
+Loaded* family_of(const dpc31_firmware* fw) {
+  for (const auto& l : g_loaded) {
+    for (const Loaded::Copy& c : l->copies) {
+      if (c.fw == fw) return l.get();
+    }
   }
-  const std::string untrusted = untrusted_code(fd, path);
-  if (!untrusted.empty()) {
-    ::close(fd);
-    throw FirmwareError("firmware plug-in refused: " + untrusted +
-                        " (a plug-in runs as your code: another user could have changed it)");
-  }
+  return nullptr;
+}
+
+// The descriptor of the library open at `fd` (dlopen through /proc/self/fd/N); `path` names it
+// in messages. `fd` is closed when dlopen fails, else it stays open with the library.
+const dpc31_firmware& open_library(int fd, const std::string& path) {
   // RTLD_NOW: an undefined symbol fails here, not in the middle of a run. RTLD_LOCAL: two
   // plug-ins may use the same names. Never closed: the descriptor points into the library.
   const std::string by_fd = "/proc/self/fd/" + std::to_string(fd);
   void* const lib = ::dlopen(by_fd.c_str(), RTLD_NOW | RTLD_LOCAL);
-  ::close(fd);
   if (lib == nullptr) {
+    ::close(fd);
     // dlerror() names the descriptor's path: said with the user's.
     const char* const e = ::dlerror();
     std::string why = e != nullptr ? e : by_fd + ": cannot be loaded";
@@ -109,7 +129,95 @@ const dpc31_firmware& load_plugin(const std::string& spec) {
   return *fw;
 }
 
+// Another copy of a loaded plug-in: its file's bytes in a new anonymous file (a new inode, so
+// dlopen loads the library anew, with globals of its own).
+const dpc31_firmware& load_copy(const Loaded& l) {
+  const auto fail = [&l](const std::string& what) {
+    return FirmwareError("cannot load another copy of firmware plug-in " + l.path + ": " + what +
+                         ": " + std::error_code(errno, std::generic_category()).message());
+  };
+  const int copy = ::memfd_create("dpc31-firmware-copy", MFD_CLOEXEC);
+  if (copy < 0) throw fail("memfd_create");
+  char buf[65536];
+  for (off_t at = 0;;) {
+    const ssize_t n = ::pread(l.fd, buf, sizeof buf, at);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      const FirmwareError e = fail("read");
+      ::close(copy);
+      throw e;
+    }
+    if (n == 0) break;
+    for (ssize_t done = 0; done < n;) {
+      const ssize_t w = ::write(copy, buf + done, static_cast<std::size_t>(n - done));
+      if (w < 0 && errno == EINTR) continue;
+      if (w < 0) {
+        const FirmwareError e = fail("write");
+        ::close(copy);
+        throw e;
+      }
+      done += w;
+    }
+    at += n;
+  }
+  return open_library(copy, l.path);
+}
+
+const dpc31_firmware& load_plugin(const std::string& spec) {
+  const std::string path = file_path(spec);
+  // Checked and loaded through one descriptor: what was checked is what runs, whatever is renamed
+  // or swapped in at the path meanwhile (docs/security.md, "Code a command runs").
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) {
+    throw FirmwareError("cannot load firmware plug-in: " + path + ": " +
+                        std::error_code(errno, std::generic_category()).message());
+  }
+  const std::string untrusted = untrusted_code(fd, path);
+  if (!untrusted.empty()) {
+    ::close(fd);
+    throw FirmwareError("firmware plug-in refused: " + untrusted +
+                        " (a plug-in runs as your code: another user could have changed it)");
+  }
+  const std::lock_guard<std::mutex> lock(g_loaded_mutex);
+  struct stat st {};
+  if (::fstat(fd, &st) != 0) {
+    const int e = errno;
+    ::close(fd);
+    throw FirmwareError("cannot load firmware plug-in: " + path + ": " +
+                        std::error_code(e, std::generic_category()).message());
+  }
+  for (const auto& known : g_loaded) {
+    if (known->dev == st.st_dev && known->ino == st.st_ino) {
+      ::close(fd);
+      return *known->copies.front().fw;
+    }
+  }
+  const dpc31_firmware& fw = open_library(fd, path);
+  auto l = std::make_unique<Loaded>();
+  l->fd = fd;
+  l->dev = st.st_dev;
+  l->ino = st.st_ino;
+  l->path = path;
+  l->copies.push_back({&fw, false});
+  g_loaded.push_back(std::move(l));
+  return fw;
+}
+
 }  // namespace
+
+std::shared_ptr<const dpc31_firmware> plugin_copy(const dpc31_firmware& fw) {
+  const std::lock_guard<std::mutex> lock(g_loaded_mutex);
+  Loaded* const l = family_of(&fw);
+  if (l == nullptr) return {&fw, [](const dpc31_firmware*) {}};
+  std::size_t i = 0;
+  while (i < l->copies.size() && l->copies[i].held) ++i;
+  if (i == l->copies.size()) l->copies.push_back({&load_copy(*l), false});
+  l->copies[i].held = true;
+  return {l->copies[i].fw, [l, i](const dpc31_firmware*) {
+            const std::lock_guard<std::mutex> relock(g_loaded_mutex);
+            l->copies[i].held = false;
+          }};
+}
 
 const dpc31_firmware& find_firmware(const std::string& spec) {
   if (is_plugin_path(spec)) return load_plugin(spec);

@@ -119,20 +119,13 @@ class Parser {
     }
     if (auto v = take("firmware")) {
       st.firmware = std::string(*v);
+      // Checked before anything is loaded: a plug-in's path rules are not applied to stations.
+      if (is_plugin_path(st.firmware)) fail("a segment station runs a built-in firmware");
       try {
         const dpc31_firmware& fw = find_firmware(st.firmware);
-        if (is_plugin_path(st.firmware)) fail("a segment station runs a built-in firmware");
         st.slave = with_gsd_defaults(fw, st.slave);
       } catch (const FirmwareError& e) {
         fail(e.what());
-      }
-      for (const SegmentStation& o : s_.stations) {
-        // The built-in firmwares and their dps driver keep their state in C globals, one set per
-        // process (firmware_host.hpp): one station of a segment may run one.
-        if (!o.firmware.empty()) {
-          fail(fmt::format("firmware {}: {} already runs {} (one built-in firmware per segment)",
-                           *v, o.name, o.firmware));
-        }
       }
     }
     if (auto v = take("wd")) {

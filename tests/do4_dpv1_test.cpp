@@ -74,7 +74,7 @@ TEST(Do4Dpv1, ReadOspRecordAfterPollsWithPollEndIndAtItsLastStopBit) {
   Dpv1Bench b;
   ASSERT_TRUE(b.master.startup());
   b.master.data_exchange({0x05, 0x01});  // normal operation
-  const std::uint64_t requests_before = dps_get_stats()->dpv1_requests;
+  const std::uint64_t requests_before = firmware_bench::stats_of(b.host)->dpv1_requests;
   std::vector<Exchange> polls;
   const fdl::Frame resp = b.request(pdu::read_request(0, 1, 2).build(), &polls);
   EXPECT_EQ(resp.du, (pdu::Bytes{0x5E, 0x00, 0x01, 0x02, 0x01, 0x09}));
@@ -84,7 +84,7 @@ TEST(Do4Dpv1, ReadOspRecordAfterPollsWithPollEndIndAtItsLastStopBit) {
   // FDL_Ind at the request's acted-on cycle; one indication, the polls none.
   EXPECT_NE(std::find(b.activations.begin(), b.activations.end(), b.acted(b.first)),
             b.activations.end());
-  EXPECT_EQ(dps_get_stats()->dpv1_requests, requests_before + 1);
+  EXPECT_EQ(firmware_bench::stats_of(b.host)->dpv1_requests, requests_before + 1);
   ASSERT_FALSE(polls.empty()) << "the answer is delayed to the 1 ms task";
   for (const Exchange& p : polls) {
     EXPECT_EQ(std::find(b.activations.begin(), b.activations.end(), b.acted(p)),
@@ -97,7 +97,7 @@ TEST(Do4Dpv1, ReadOspRecordAfterPollsWithPollEndIndAtItsLastStopBit) {
   EXPECT_EQ(b.last.answer_end, end);
   b.master.idle(2000);
   EXPECT_NE(std::find(b.activations.begin(), b.activations.end(), end), b.activations.end());
-  EXPECT_EQ(dps_get_stats()->dpv1_responses_sent, 1u);
+  EXPECT_EQ(firmware_bench::stats_of(b.host)->dpv1_responses_sent, 1u);
   // A Read with Length 1 gets the first byte only.
   EXPECT_EQ(b.request(pdu::read_request(0, 1, 1).build()).du,
             (pdu::Bytes{0x5E, 0x00, 0x01, 0x01, 0x01}));
@@ -115,10 +115,10 @@ TEST(Do4Dpv1, WriteChangesTheReplacementValueOfTheNextOsp) {
   EXPECT_EQ(b.request(pdu::read_request(0, 1, 2).build()).du,
             (pdu::Bytes{0x5E, 0x00, 0x01, 0x02, 0x01, 0x06}));
   b.master.data_exchange({0x05, 0x01});
-  EXPECT_EQ(do4_get_state()->terminals, 0x5);
+  EXPECT_EQ(do4_get_state(firmware_bench::do4_of(b.host))->terminals, 0x5);
   b.master.idle(6'000'000);  // 125 ms > TWD
-  EXPECT_EQ(do4_get_state()->modul_ok, 0);
-  EXPECT_EQ(do4_get_state()->terminals, 0x6);
+  EXPECT_EQ(do4_get_state(firmware_bench::do4_of(b.host))->modul_ok, 0);
+  EXPECT_EQ(do4_get_state(firmware_bench::do4_of(b.host))->terminals, 0x6);
 }
 
 // The negative responses (4 bytes: function | 80h, Error_Decode 80h = DPV1, Error_Code_1 =
@@ -143,7 +143,7 @@ TEST(Do4Dpv1, NegativeResponses) {
             (pdu::Bytes{0xDF, 0x80, 0xB7, 0x00}));
   EXPECT_EQ(b.request({0x51, 0x00, 0x01, 0x00}).du, (pdu::Bytes{0xD1, 0x80, 0xA9, 0x00}));
   b.master.data_exchange({0x05, 0x00});  // OSPValid 0: the master requests OSP
-  EXPECT_EQ(do4_get_state()->modul_ok, 0);
+  EXPECT_EQ(do4_get_state(firmware_bench::do4_of(b.host))->modul_ok, 0);
   EXPECT_EQ(b.request(pdu::write_request(0, 1, {0x01, 0x06}).build()).du,
             (pdu::Bytes{0xDF, 0x80, 0xB5, 0x00}));
   // The refused writes changed nothing.
@@ -164,7 +164,7 @@ TEST(Do4Dpv1, WithoutDpv1EnableSap51IsRefused) {
   const Exchange ex = b.master.acyclic(kC1, kC1, pdu::read_request(0, 1, 2).build());
   ASSERT_TRUE(ex.answer);
   EXPECT_EQ(ex.answer->fc & fdl::kFcCodeMask, 0x03);  // RS: no service activated
-  EXPECT_EQ(dps_get_stats()->dpv1_requests, 0u);
+  EXPECT_EQ(firmware_bench::stats_of(b.host)->dpv1_requests, 0u);
 }
 
 // The DPV1 diagnostic alarm (IEC 61158-6 type 3 Slave_Diag, the alarm block inside the
@@ -193,7 +193,7 @@ TEST(Do4Dpv1, DiagnosticAlarmOnEnteringOspAcknowledgedByTheMaster) {
   EXPECT_EQ(d.station_status_1 & pdu::SlaveDiag::St1_Ext_Diag, 0);
 
   b.master.data_exchange({0x05, 0x00});  // the master requests OSP
-  ASSERT_EQ(do4_get_state()->modul_ok, 0);
+  ASSERT_EQ(do4_get_state(firmware_bench::do4_of(b.host))->modul_ok, 0);
   d = diag_blocks();
   ASSERT_EQ(d.blocks.size(), 1u);
   EXPECT_EQ(d.blocks[0].bytes, (pdu::Bytes{0x05, 0x01, 0x00, 0x01, 0x01}));

@@ -14,6 +14,8 @@
 #include <utility>
 #include <vector>
 
+#include "cnt2/cnt2.h"
+#include "do4/do4.h"
 #include "dp_master.hpp"
 #include "firmware.h"
 #include "firmware_host.hpp"
@@ -26,6 +28,13 @@ inline SlaveConfig gsd_slave(const dpc31_firmware& fw, std::uint8_t address) {
   SlaveConfig s;
   s.address = address;
   return with_gsd_defaults(fw, s);
+}
+
+// A built-in firmware's instance on a host, as its type (firmware.h), and its driver's counters.
+inline do4* do4_of(const FirmwareHost& h) { return static_cast<do4*>(h.instance()); }
+inline cnt2* cnt2_of(const FirmwareHost& h) { return static_cast<cnt2*>(h.instance()); }
+inline const dps_stats* stats_of(const FirmwareHost& h) {
+  return dps_get_stats(static_cast<dps*>(h.instance()));  // the driver comes first (dps.h)
 }
 
 // One chip, one firmware on its host CPU, the built-in master.

@@ -42,7 +42,7 @@ TEST_P(Do4, TerminalsFollowDxOutAfterSixBusAccesses) {
             b.activations.end());
   EXPECT_EQ(w->value, 0x5u);
   EXPECT_EQ(w->cycle, b.acted(ex) + 6 * 4);
-  EXPECT_EQ(do4_get_state()->modul_ok, 1);
+  EXPECT_EQ(do4_get_state(firmware_bench::do4_of(b.host))->modul_ok, 1);
 }
 
 // The watchdog expires at acted + TWD (TWD = 2 x 5 x 10 ms). In that cycle Leave_Master also
@@ -66,8 +66,8 @@ TEST_P(Do4, OspReplacementValue24ClocksAfterWatchdogExpiry) {
   EXPECT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
   EXPECT_EQ(w->value, 0x9u);
   EXPECT_EQ(w->cycle, expiry + 6 * 4);
-  EXPECT_EQ(do4_get_state()->modul_ok, 0);
-  EXPECT_EQ(do4_get_state()->osp_valid, 0);
+  EXPECT_EQ(do4_get_state(firmware_bench::do4_of(b.host))->modul_ok, 0);
+  EXPECT_EQ(do4_get_state(firmware_bench::do4_of(b.host))->osp_valid, 0);
 }
 
 // OSPMode 2, a replacement value beyond 4 bits, a short Set_Prm: the firmware answers
@@ -82,8 +82,8 @@ TEST_P(Do4, ParametersOutsideTheGsdRangesAreRefused) {
     Bench b(GetParam(), do4_firmware, s, 12'000'000);
     EXPECT_FALSE(b.master.startup(20));
     EXPECT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
-    EXPECT_EQ(dps_get_stats()->prm_ok, 0u);
-    EXPECT_GE(dps_get_stats()->prm_rejected, 1u);
+    EXPECT_EQ(firmware_bench::stats_of(b.host)->prm_ok, 0u);
+    EXPECT_GE(firmware_bench::stats_of(b.host)->prm_rejected, 1u);
   }
   // One byte more than the Aux buffers hold: RR. On the VPC3+ they hold the DPV1 Set_Prm, two
   // bytes longer than the DP one (docs/firmware.md, "DO4 with DPV1").
@@ -93,7 +93,9 @@ TEST_P(Do4, ParametersOutsideTheGsdRangesAreRefused) {
   Bench b(GetParam(), do4_firmware, s, 12'000'000);
   EXPECT_FALSE(b.master.startup(20));
   EXPECT_GE(b.chip.fdl_counters().no_resource, 1u);
-  EXPECT_EQ(dps_get_stats()->prm_ok + dps_get_stats()->prm_rejected, 0u);
+  EXPECT_EQ(
+      firmware_bench::stats_of(b.host)->prm_ok + firmware_bench::stats_of(b.host)->prm_rejected,
+      0u);
 }
 
 INSTANTIATE_TEST_SUITE_P(Profiles, Do4,
@@ -130,8 +132,8 @@ void run_property(std::uint32_t seed) {
   const std::uint32_t baud = pick(0, 1) != 0 ? 12'000'000 : 1'500'000;
   Bench b(profile, cnt2_firmware, gsd_slave(cnt2_firmware, 9), baud);
   for (int c = 0; c < 2; ++c) {
-    ASSERT_EQ(cnt2_get_channel(c)->m.shadow, 0) << "seed " << seed;
-    ASSERT_EQ(cnt2_get_pwm(c)->m.shadow, 0) << "seed " << seed;
+    ASSERT_EQ(cnt2_get_channel(firmware_bench::cnt2_of(b.host), c)->m.shadow, 0) << "seed " << seed;
+    ASSERT_EQ(cnt2_get_pwm(firmware_bench::cnt2_of(b.host), c)->m.shadow, 0) << "seed " << seed;
   }
   ASSERT_TRUE(b.master.startup()) << "seed " << seed;
 
@@ -146,7 +148,7 @@ void run_property(std::uint32_t seed) {
     while (injecting && cycle >= next_event) {
       const int ch = pick(0, kChannels - 1);
       const auto bits = static_cast<std::uint8_t>(pick(1, 15));
-      ASSERT_EQ(cnt2_hw_input(kEventName[ch], bits), 0);
+      ASSERT_EQ(cnt2_hw_input(firmware_bench::cnt2_of(b.host), kEventName[ch], bits), 0);
       log.push_back({LogEntry::event, ch, bits});
       next_event =
           cycle +
@@ -290,7 +292,7 @@ TEST(Cnt2, RangeMessageOfTheHoldingTransferGoesToTheShadow) {
   Bench b(Profile::dpc31, cnt2_firmware, gsd_slave(cnt2_firmware, 9), 12'000'000);
   ASSERT_TRUE(b.master.startup());
   b.master.data_exchange({0, 0, 0x81, 150, 0, 0});
-  EXPECT_EQ(cnt2_get_pwm(0)->m.shadow, CNT2_PWM_MSG_DUTY);
+  EXPECT_EQ(cnt2_get_pwm(firmware_bench::cnt2_of(b.host), 0)->m.shadow, CNT2_PWM_MSG_DUTY);
   EXPECT_EQ(b.master.data_exchange({0, 0, 0x81, 150, 0, 0}).answer->du.at(6), 0x80);
   EXPECT_EQ(b.master.data_exchange({0, 0, 0x01, 150, 0, 0}).answer->du.at(6), 0x80);
   EXPECT_EQ(b.master.data_exchange({0, 0, 0x01, 150, 0, 0}).answer->du.at(6), CNT2_PWM_MSG_DUTY);
@@ -402,7 +404,7 @@ TEST(Do4Dpc31, FetchesThroughUserNewDoutAndWatchesItselfThroughRequests) {
       << p.segment_shift;
   for (std::uint32_t i = 0; i < s.out_len; ++i) EXPECT_EQ(b.chip.peek(u_buf + i), 0x00) << i;
   EXPECT_EQ(b.last_write(DO4_PORT_OUTPUTS)->value, 0x9u);
-  EXPECT_EQ(do4_get_state()->modul_ok, 0);
+  EXPECT_EQ(do4_get_state(firmware_bench::do4_of(b.host))->modul_ok, 0);
   const auto count = [&](auto pred) {
     return std::count_if(accesses.begin(), accesses.end(), pred);
   };

@@ -59,12 +59,7 @@ enum {
 
 /* The firmware as hosts find it (firmware.h). */
 extern const dpc31_firmware cnt2_firmware;
-
-void cnt2_init(const dps_board* board);
-void cnt2_isr(void);
-/* The module's hardware: "count1"/"count2" N pulses, "event1"/"event2" counter MSG bits (1..15),
- * "pwm_event1"/"pwm_event2" PWM MSG bits (1..15). */
-int cnt2_hw_input(const char* name, uint32_t value);
+extern const dpc31_builtin cnt2_builtin;
 
 /* The message storage of one channel. */
 typedef struct cnt2_msgs {
@@ -79,14 +74,30 @@ typedef struct cnt2_channel {
   uint8_t enabled;  /* hardware gate (CNT_EN and not CNT_RESET) */
   cnt2_msgs m;
 } cnt2_channel;
-const cnt2_channel* cnt2_get_channel(int channel); /* 0 or 1 */
 
 typedef struct cnt2_pwm {
   uint8_t duty;      /* duty cycle driven, % (0 while PWM_EN is 0 or the outputs are safe) */
   uint8_t requested; /* duty cycle byte of the master's last transfer */
   cnt2_msgs m;
 } cnt2_pwm;
-const cnt2_pwm* cnt2_get_pwm(int channel); /* 0 or 1 */
+
+/* One CNT2 (dps.h, "One instance"): the driver first (its callbacks find the module around it;
+ * the 80C32's driver is a static of its own), then the module's channels. */
+typedef struct cnt2 {
+#ifndef __SDCC
+  dps drv;
+#endif
+  cnt2_channel c[2];
+  cnt2_pwm p[2];
+} cnt2;
+
+void cnt2_init(DPS_P_(cnt2) const dps_board* board);
+void cnt2_isr(DPS_P(cnt2));
+const cnt2_channel* cnt2_get_channel(DPS_P_(cnt2) int channel); /* 0 or 1 */
+const cnt2_pwm* cnt2_get_pwm(DPS_P_(cnt2) int channel);         /* 0 or 1 */
+/* The module's hardware (hosts only): "count1"/"count2" N pulses, "event1"/"event2" counter MSG
+ * bits (1..15), "pwm_event1"/"pwm_event2" PWM MSG bits (1..15). */
+int cnt2_hw_input(cnt2* self, const char* name, uint32_t value);
 
 #ifdef __cplusplus
 }

@@ -32,9 +32,7 @@ enum do4_osp_mode { DO4_RETAIN_LAST = 0, DO4_REPLACE = 1 };
 
 /* The firmware as hosts find it (firmware.h). */
 extern const dpc31_firmware do4_firmware;
-
-void do4_init(const dps_board* board);
-void do4_isr(void);
+extern const dpc31_builtin do4_builtin;
 
 /* The module as the test bench sees it. */
 typedef struct do4_state {
@@ -48,7 +46,21 @@ typedef struct do4_state {
   uint8_t ms_since_refresh;
   uint32_t osp_events;
 } do4_state;
-const do4_state* do4_get_state(void);
+
+/* One DO4 (dps.h, "One instance"): the driver first (its callbacks find the module around it; the
+ * 80C32's driver is a static of its own), then the module. */
+typedef struct do4 {
+#ifndef __SDCC
+  dps drv;
+#endif
+  do4_state s;
+  uint8_t alarm_spec; /* Specifier of the outstanding alarm (Seq_Nr << 3 | appears); 0: none */
+  uint8_t alarm_seq;  /* the next alarm's Seq_Nr, 0..31 */
+} do4;
+
+void do4_init(DPS_P_(do4) const dps_board* board);
+void do4_isr(DPS_P(do4));
+const do4_state* do4_get_state(DPS_P(do4));
 
 #ifdef __cplusplus
 }

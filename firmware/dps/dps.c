@@ -14,7 +14,7 @@ typedef uint16_t VPC3_ADR;
 
 /* The addresses this driver uses, per chip. A driver for one chip would use the macros
  * directly; the examples run on all three, so they pick a table at init. */
-typedef struct regmap {
+struct dps_regmap {
   VPC3_ADR int_req, int_reg, int_ack, status, int_mask, mode0, mode1_s, mode1_r, mode2;
   VPC3_ADR din_sm, new_din, dout_sm, next_dout, diag_sm, new_diag, wd_baud, min_tsdr;
   VPC3_ADR prm_ok, prm_not_ok, cfg_ok, cfg_not_ok, ssa_free;
@@ -23,7 +23,8 @@ typedef struct regmap {
   VPC3_ADR len_ssa, ssa_ptr, len_prm, prm_ptr, len_cfg, cfg_ptr, len_read_cfg, read_cfg_ptr;
   VPC3_ADR real_no_add_change, ident_lo, ident_hi, gc_command;
   VPC3_ADR user_base, segment_shift;
-} regmap;
+};
+typedef struct dps_regmap regmap;
 
 #define DPS_REGMAP(P, MODE2, PTR_C, NEW_DIN, NEXT_DOUT, SSA_FREE)                                 \
   {                                                                                               \
@@ -85,19 +86,14 @@ enum { DP_Mode = 0x0100u, Spec_Clear_Mode = 0x2000u };     /* Mode_Reg0 */
 enum { Ext_Diag = 0x01u };                                 /* diag byte 0 */
 enum { kStdPrm = 7u, kStdDiag = 6u };
 
-static const regmap* R;
-static const dps_module* M;
-static int g_motorola;
-static dps_stats g_stats;
-static uint16_t g_mask;
-static uint8_t g_diag[DPS_MAX_DIAG];
-static uint8_t g_diag_len;
-static uint8_t g_diag_ext;
-static int g_diag_pending;
-static int g_dpc31;              /* the chip takes requests, not Mode_Reg1 commands */
-static VPC3_ADR g_instq, g_indq; /* dpc31: the queues' first entries */
-static uint8_t g_instq_wr, g_indq_rd;
-static int g_timer_module; /* the module asked for User_Timer_Clock */
+/* The instance every function works on (dps.h, "One instance"): passed on as ME / ME_. On the
+ * 80C32 the one static instance, reached by its address. */
+#define ME DPS_A(self)
+#define ME_ DPS_A_(self)
+#ifdef __SDCC
+static dps dps_the;
+#define self (&dps_the)
+#endif
 
 /* DPV1 on the VPC3+ (docs/dpv1.md, docs/firmware.md): a SAP list of four entries, MSAC_C1 (SAP
  * 51) and its alarm SAP (50), the one MSAC_C2 connection (40, Ind_Buf_Ptr[0] 00h while closed:
@@ -107,7 +103,7 @@ static int g_timer_module; /* the module asked for User_Timer_Clock */
  * meanwhile); Poll_End_Ind frees the buffer. */
 /* The connection before the resource manager: an Abort and a new Initiate taken in the same tick
  * close first, then open. */
-enum { kDpv1Saps = 4u, kC1Saps = 2u, kConn = 2u, kRm = 3u };
+enum { kDpv1Saps = DPS_DPV1_SAPS, kC1Saps = 2u, kConn = 2u, kRm = 3u };
 enum { kFcResponse = 0x08u /* DL: response data low */ };
 /* MSAC_C2 (IEC 61158-6 type 3; docs/dpv1.md "The master's side"): function numbers, the
  * Initiate request's fixed part (57h, 3 reserved, Send_Timeout, Features_Supported,
@@ -118,78 +114,69 @@ enum { kInitiateReq = 16u, kInitiateRes = 12u, kNegative = 0x80u, kDecodeDpv1 = 
 enum { kInvalidParameter = 0xB8u, kResourceBusy = 0xC2u };
 enum { FDL_Ind = VPC3_Int_Req_Reg_FDL_Ind_Msk, Poll_End_Ind = VPC3_Int_Req_Reg_Poll_End_Ind_Msk };
 static const uint8_t kDpv1Sap[kDpv1Saps] = {DPS_SAP_C1, DPS_SAP_ALARM, DPS_SAP_C2, DPS_SAP_C2_RM};
-static int g_sap_list; /* set up at init: a VPC3+ and a module with dpv1_request */
-static VPC3_ADR g_sap_entry[kDpv1Saps], g_dpv1_buf[kDpv1Saps];
-static uint8_t g_dpv1_status[3];
-static uint8_t g_dpv1_req[kDpv1Saps][DPS_DPV1_MAX_PDU];
-static uint8_t g_dpv1_len[kDpv1Saps];
-static uint8_t g_dpv1_pending; /* bit k: the request of SAP k waits for the 1 ms task */
-static int g_c2_open;          /* the MSAC_C2 connection is open */
-static uint32_t g_c2_limit_ms; /* its Send_Timeout in ms (Initiate: 10 ms units) */
-static uint32_t g_c2_quiet_ms; /* 1 ms ticks since its last request taken or response sent */
 
 /* 16-bit registers go over the 8-bit bus byte by byte; which address holds the low byte
  * depends on the bus mode (Intel: the lower address). */
-static void write16(VPC3_ADR a, uint16_t v) {
-  Vpc3Write(g_motorola ? (VPC3_ADR)(a + 1u) : a, (uint8_t)v);
-  Vpc3Write(g_motorola ? a : (VPC3_ADR)(a + 1u), (uint8_t)(v >> 8));
+static void write16(DPS_P_(dps) VPC3_ADR a, uint16_t v) {
+  Vpc3Write(self->motorola ? (VPC3_ADR)(a + 1u) : a, (uint8_t)v);
+  Vpc3Write(self->motorola ? a : (VPC3_ADR)(a + 1u), (uint8_t)(v >> 8));
 }
 
-static uint16_t read16(VPC3_ADR a) {
-  const uint8_t lo = Vpc3Read(g_motorola ? (VPC3_ADR)(a + 1u) : a);
-  return (uint16_t)(Vpc3Read(g_motorola ? a : (VPC3_ADR)(a + 1u)) << 8 | lo);
+static uint16_t read16(DPS_P_(dps) VPC3_ADR a) {
+  const uint8_t lo = Vpc3Read(self->motorola ? (VPC3_ADR)(a + 1u) : a);
+  return (uint16_t)(Vpc3Read(self->motorola ? a : (VPC3_ADR)(a + 1u)) << 8 | lo);
 }
 
 /* A buffer pointer cell holds the segment number. */
-static VPC3_ADR buffer(VPC3_ADR ptr_cell) {
-  return (VPC3_ADR)((VPC3_ADR)Vpc3Read(ptr_cell) << R->segment_shift);
+static VPC3_ADR buffer(DPS_P_(dps) VPC3_ADR ptr_cell) {
+  return (VPC3_ADR)((VPC3_ADR)Vpc3Read(ptr_cell) << self->map->segment_shift);
 }
 
-static void set_mask(uint16_t enabled) {
-  g_mask = enabled;
-  write16(R->int_mask, (uint16_t)~enabled);
+static void set_mask(DPS_P_(dps) uint16_t enabled) {
+  self->mask = enabled;
+  write16(ME_ self->map->int_mask, (uint16_t)~enabled);
 }
 
 /* Buffers, segment by segment from the start of the user area. */
-static void allocate_buffers(void) {
-  const unsigned seg = 1u << R->segment_shift;
-  unsigned next = (R->user_base + seg - 1u) / seg;
+static void allocate_buffers(DPS_P(dps)) {
+  const unsigned seg = 1u << self->map->segment_shift;
+  unsigned next = (self->map->user_base + seg - 1u) / seg;
   /* A DPV1 Set_Prm carries DPV1_Status_2 and _3 besides the module's bytes. */
-  const uint8_t prm_len = (uint8_t)(g_sap_list ? M->prm_len + 2u : M->prm_len);
-  const uint8_t aux_len = prm_len > M->cfg_len ? prm_len : M->cfg_len;
+  const uint8_t prm_len = (uint8_t)(self->sap_list ? self->mod->prm_len + 2u : self->mod->prm_len);
+  const uint8_t aux_len = prm_len > self->mod->cfg_len ? prm_len : self->mod->cfg_len;
   unsigned k;
 #define DPS_ALLOC(cell, len)                                                 \
   do {                                                                       \
     Vpc3Write((cell), (uint8_t)next);                                        \
     next += (unsigned)(len) > seg ? ((unsigned)(len) + seg - 1u) / seg : 1u; \
   } while (0)
-  Vpc3Write(R->len_dout, M->out_len);
-  Vpc3Write(R->len_din, M->in_len);
-  for (k = 0; k < 3; ++k) DPS_ALLOC(R->dout_ptr[k], M->out_len);
-  for (k = 0; k < 3; ++k) DPS_ALLOC(R->din_ptr[k], M->in_len);
-  if (R->dout_ptr_c != NONE) DPS_ALLOC(R->dout_ptr_c, M->out_len);
+  Vpc3Write(self->map->len_dout, self->mod->out_len);
+  Vpc3Write(self->map->len_din, self->mod->in_len);
+  for (k = 0; k < 3; ++k) DPS_ALLOC(self->map->dout_ptr[k], self->mod->out_len);
+  for (k = 0; k < 3; ++k) DPS_ALLOC(self->map->din_ptr[k], self->mod->in_len);
+  if (self->map->dout_ptr_c != NONE) DPS_ALLOC(self->map->dout_ptr_c, self->mod->out_len);
   for (k = 0; k < 2; ++k) {
-    Vpc3Write(R->len_diag[k], kStdDiag);
-    DPS_ALLOC(R->diag_ptr[k], kStdDiag + DPS_MAX_DIAG);
-    Vpc3Write(R->len_cntrl[k], aux_len);
-    DPS_ALLOC(R->aux_ptr[k], aux_len);
+    Vpc3Write(self->map->len_diag[k], kStdDiag);
+    DPS_ALLOC(self->map->diag_ptr[k], kStdDiag + DPS_MAX_DIAG);
+    Vpc3Write(self->map->len_cntrl[k], aux_len);
+    DPS_ALLOC(self->map->aux_ptr[k], aux_len);
   }
-  Vpc3Write(R->aux_sel, 0x00);
-  DPS_ALLOC(R->prm_ptr, aux_len);
-  DPS_ALLOC(R->cfg_ptr, aux_len);
-  DPS_ALLOC(R->read_cfg_ptr, M->cfg_len);
-  DPS_ALLOC(R->ssa_ptr, aux_len);
-  if (g_sap_list) {
+  Vpc3Write(self->map->aux_sel, 0x00);
+  DPS_ALLOC(self->map->prm_ptr, aux_len);
+  DPS_ALLOC(self->map->cfg_ptr, aux_len);
+  DPS_ALLOC(self->map->read_cfg_ptr, self->mod->cfg_len);
+  DPS_ALLOC(self->map->ssa_ptr, aux_len);
+  if (self->sap_list) {
     /* While Offline (VPC3+C p.54): the list, FFh after its last entry, the buffer headers. */
-    const VPC3_ADR list = (VPC3_ADR)(next << R->segment_shift);
+    const VPC3_ADR list = (VPC3_ADR)(next << self->map->segment_shift);
     DPS_ALLOC(VPC3_R_FDL_SAP_List_Ptr, kDpv1Saps * VPC3_SAP_Entry_SIZE + 1u);
     for (k = 0; k < kDpv1Saps; ++k) {
       const VPC3_ADR e = (VPC3_ADR)(list + k * VPC3_SAP_Entry_SIZE);
       const uint8_t buf = (uint8_t)next;
       /* The connection's SAP stays off until an Initiate opens it. */
       const uint8_t ind0 = k == kConn ? 0x00u : buf;
-      g_sap_entry[k] = e;
-      g_dpv1_buf[k] = (VPC3_ADR)(next << R->segment_shift);
+      self->sap_entry[k] = e;
+      self->dpv1_buf[k] = (VPC3_ADR)(next << self->map->segment_shift);
       Vpc3Write(e + VPC3_SAP_Entry_Sap, kDpv1Sap[k]);
       Vpc3Write(e + VPC3_SAP_Entry_Request_SA, VPC3_SAP_Entry_Request_SA_All);
       Vpc3Write(e + VPC3_SAP_Entry_Request_SSAP, VPC3_SAP_Entry_Request_SSAP_All);
@@ -197,13 +184,13 @@ static void allocate_buffers(void) {
       Vpc3Write(e + VPC3_SAP_Entry_Ind_Buf_Ptr0, ind0);
       Vpc3Write(e + VPC3_SAP_Entry_Ind_Buf_Ptr1, buf);
       Vpc3Write(e + VPC3_SAP_Entry_Resp_Buf_Ptr, buf);
-      Vpc3Write(g_dpv1_buf[k] + VPC3_DPV1_Buf_Control, 0x00);
-      Vpc3Write(g_dpv1_buf[k] + VPC3_DPV1_Buf_Max_Length, DPS_DPV1_MAX_PDU);
+      Vpc3Write(self->dpv1_buf[k] + VPC3_DPV1_Buf_Control, 0x00);
+      Vpc3Write(self->dpv1_buf[k] + VPC3_DPV1_Buf_Max_Length, DPS_DPV1_MAX_PDU);
       next += (VPC3_DPV1_Buf_SIZE + DPS_DPV1_MAX_PDU + seg - 1u) / seg;
     }
     Vpc3Write((VPC3_ADR)(list + kDpv1Saps * VPC3_SAP_Entry_SIZE), VPC3_SAP_Entry_Sap_End_Of_List);
   }
-  if (g_dpc31) {
+  if (self->dpc31) {
     DPS_ALLOC(DPC31_InstQ_Base, 2u * DPS_QUEUE_LEN);
     DPS_ALLOC(DPC31_IndQ_Base, 2u * DPS_QUEUE_LEN);
     Vpc3Write(DPC31_InstQ_Len, DPS_QUEUE_LEN);
@@ -214,119 +201,123 @@ static void allocate_buffers(void) {
 
 /* dpc31: queue requests; the MAC executes them when InstQ_Wr moves past them (one write for
  * several). */
-static void queue_request(uint8_t code, uint8_t param) {
-  Vpc3Write((VPC3_ADR)(g_instq + 2u * g_instq_wr), code);
-  Vpc3Write((VPC3_ADR)(g_instq + 2u * g_instq_wr + 1u), param);
-  g_instq_wr = (uint8_t)((g_instq_wr + 1u) % DPS_QUEUE_LEN);
+static void queue_request(DPS_P_(dps) uint8_t code, uint8_t param) {
+  Vpc3Write((VPC3_ADR)(self->instq + 2u * self->instq_wr), code);
+  Vpc3Write((VPC3_ADR)(self->instq + 2u * self->instq_wr + 1u), param);
+  self->instq_wr = (uint8_t)((self->instq_wr + 1u) % DPS_QUEUE_LEN);
 }
-static void send_requests(void) { Vpc3Write(DPC31_InstQ_Wr, g_instq_wr); }
+static void send_requests(DPS_P(dps)) { Vpc3Write(DPC31_InstQ_Wr, self->instq_wr); }
 
 /* The user watchdog: the SPC3 and VPC3+ count Data_Exchange telegrams from Res_User_WD on; the
  * DPC31's DPS_User_Watchdog runs on 10 ms from its Enable request, and Reset retriggers it. */
-static void user_wd(uint8_t action) {
-  if (!g_dpc31) {
-    if (action == Wd_Reset) Vpc3Write(R->mode1_s, Res_User_WD);
+static void user_wd(DPS_P_(dps) uint8_t action) {
+  if (!self->dpc31) {
+    if (action == Wd_Reset) Vpc3Write(self->map->mode1_s, Res_User_WD);
     return;
   }
   /* Reset first: it lifts the lock an expiry leaves, which Enable alone would not. */
-  if (action == Wd_Enable) queue_request(DPS_User_Wd, Wd_Reset);
-  queue_request(DPS_User_Wd, action);
-  send_requests();
+  if (action == Wd_Enable) queue_request(ME_ DPS_User_Wd, Wd_Reset);
+  queue_request(ME_ DPS_User_Wd, action);
+  send_requests(ME);
 }
 
 /* dpc31: read the Indication_Queue up to IndQ_Wr and free the entries. */
-static void drain_indications(void) {
+static void drain_indications(DPS_P(dps)) {
   const uint8_t wr = Vpc3Read(DPC31_IndQ_Wr);
-  while (g_indq_rd != wr && wr < DPS_QUEUE_LEN) {
-    const uint8_t code = Vpc3Read((VPC3_ADR)(g_indq + 2u * g_indq_rd));
-    const uint8_t event = Vpc3Read((VPC3_ADR)(g_indq + 2u * g_indq_rd + 1u));
-    if (code == DPS_User_Wd && event == Wd_Expired) ++g_stats.user_wd_expiries;
-    g_indq_rd = (uint8_t)((g_indq_rd + 1u) % DPS_QUEUE_LEN);
+  while (self->indq_rd != wr && wr < DPS_QUEUE_LEN) {
+    const uint8_t code = Vpc3Read((VPC3_ADR)(self->indq + 2u * self->indq_rd));
+    const uint8_t event = Vpc3Read((VPC3_ADR)(self->indq + 2u * self->indq_rd + 1u));
+    if (code == DPS_User_Wd && event == Wd_Expired) ++self->stats.user_wd_expiries;
+    self->indq_rd = (uint8_t)((self->indq_rd + 1u) % DPS_QUEUE_LEN);
   }
-  Vpc3Write(DPC31_IndQ_Rd, g_indq_rd);
+  Vpc3Write(DPC31_IndQ_Rd, self->indq_rd);
 }
 
 /* dpc31: the clear buffer C holds what a Clear hands over as outputs: all zero. */
-static void refill_clear_buffer(void) {
-  if (R->dout_ptr_c != NONE) Vpc3MemSet(buffer(R->dout_ptr_c), 0x00, M->out_len);
+static void refill_clear_buffer(DPS_P(dps)) {
+  if (self->map->dout_ptr_c != NONE)
+    Vpc3MemSet(buffer(ME_ self->map->dout_ptr_c), 0x00, self->mod->out_len);
 }
 
-void dps_init(const dps_board* board, const dps_module* module) {
+void dps_init(DPS_P_(dps) const dps_board* board, const dps_module* module) {
   static const uint16_t kSources = MAC_Reset | Go_Leave_Data_Exchange | Baudrate_Detect |
                                    WD_DP_Control_Timeout | New_GC_Command | New_SSA_Data |
                                    New_Cfg_Data | New_Prm_Data | Diag_Buffer_Changed | DX_Out;
-  R = &kMaps[board->profile];
-  M = module;
-  g_dpc31 = board->profile == DPC31_PROFILE_DPC31;
-  g_sap_list = board->profile == DPC31_PROFILE_VPC3PLUS && module->dpv1_request != 0;
-  g_timer_module = 0;
-  g_dpv1_pending = 0;
-  g_c2_open = 0;
-  memset(g_dpv1_status, 0, sizeof g_dpv1_status);
-  g_instq_wr = 0;
-  g_indq_rd = 0;
-  g_motorola = board->motorola;
-  memset(&g_stats, 0, sizeof g_stats);
-  g_diag_len = 0;
-  g_diag_ext = 0;
-  g_diag_pending = 0;
-  g_stats.station_address = board->station_address;
+  self->map = &kMaps[board->profile];
+  self->mod = module;
+  self->dpc31 = board->profile == DPC31_PROFILE_DPC31;
+  self->sap_list = board->profile == DPC31_PROFILE_VPC3PLUS && module->dpv1_request != 0;
+  self->timer_module = 0;
+  self->dpv1_pending = 0;
+  self->c2_open = 0;
+  memset(self->dpv1_status, 0, sizeof self->dpv1_status);
+  self->instq_wr = 0;
+  self->indq_rd = 0;
+  self->motorola = board->motorola;
+  memset(&self->stats, 0, sizeof self->stats);
+  self->diag_len = 0;
+  self->diag_ext = 0;
+  self->diag_pending = 0;
+  self->stats.station_address = board->station_address;
 
-  write16(R->int_req, 0x0000);
+  write16(ME_ self->map->int_req, 0x0000);
   /* Stale events from before the reset go; New_Prm/Cfg_Data only go with their verdict reads. */
-  write16(R->int_ack, (uint16_t)(kSources & ~(New_Prm_Data | New_Cfg_Data)));
+  write16(ME_ self->map->int_ack, (uint16_t)(kSources & ~(New_Prm_Data | New_Cfg_Data)));
   /* DP mode, fail-safe telegrams accepted; no Sync/Freeze (the GSD says so); EOI inactive
    * time 1 us, user timer 1 ms. */
-  write16(R->mode0, DP_Mode | Spec_Clear_Mode);
-  set_mask(g_dpc31      ? (uint16_t)(kSources | Indication)
-           : g_sap_list ? (uint16_t)(kSources | FDL_Ind | Poll_End_Ind)
-                        : kSources);
-  Vpc3Write(R->wd_baud, 0x10);  /* Baud_Control: 16 x 10 ms */
-  Vpc3Write(R->min_tsdr, 0x0B); /* 11 bit times */
-  write16(R->user_wd, 0x01FF);
-  Vpc3Write(R->ident_lo, (uint8_t)module->ident);
-  Vpc3Write(R->ident_hi, (uint8_t)(module->ident >> 8));
-  Vpc3Write(R->ts_adr, board->station_address);
-  Vpc3Write(R->real_no_add_change, 0x00); /* Set_Slave_Add allowed */
-  allocate_buffers();
-  Vpc3Write(R->len_read_cfg, module->cfg_len);
-  CopyToVpc3(CHIP_PTR(buffer(R->read_cfg_ptr)), (uint8_t*)module->cfg, module->cfg_len);
-  refill_clear_buffer();
-  dps_update_inputs();
-  if (!g_dpc31) {
-    Vpc3Write(R->mode1_s, Start_SPC3 | Res_User_WD);
+  write16(ME_ self->map->mode0, DP_Mode | Spec_Clear_Mode);
+  set_mask(ME_ self->dpc31  ? (uint16_t)(kSources | Indication)
+           : self->sap_list ? (uint16_t)(kSources | FDL_Ind | Poll_End_Ind)
+                            : kSources);
+  Vpc3Write(self->map->wd_baud, 0x10);  /* Baud_Control: 16 x 10 ms */
+  Vpc3Write(self->map->min_tsdr, 0x0B); /* 11 bit times */
+  write16(ME_ self->map->user_wd, 0x01FF);
+  Vpc3Write(self->map->ident_lo, (uint8_t)module->ident);
+  Vpc3Write(self->map->ident_hi, (uint8_t)(module->ident >> 8));
+  Vpc3Write(self->map->ts_adr, board->station_address);
+  Vpc3Write(self->map->real_no_add_change, 0x00); /* Set_Slave_Add allowed */
+  allocate_buffers(ME);
+  Vpc3Write(self->map->len_read_cfg, module->cfg_len);
+  CopyToVpc3(CHIP_PTR(buffer(ME_ self->map->read_cfg_ptr)), (uint8_t*)module->cfg, module->cfg_len);
+  refill_clear_buffer(ME);
+  dps_update_inputs(ME);
+  if (!self->dpc31) {
+    Vpc3Write(self->map->mode1_s, Start_SPC3 | Res_User_WD);
     return;
   }
   /* The DPC31 has no Start_SPC3: the MAC starts with a MAC_Start request (Table 5.1-3). Its
    * user watchdog runs while in Data_Exchange (DPS_User_Wd requests). */
-  g_instq = buffer(DPC31_InstQ_Base);
-  g_indq = buffer(DPC31_IndQ_Base);
-  queue_request(MAC_Start, 0x00);
-  send_requests();
+  self->instq = buffer(ME_ DPC31_InstQ_Base);
+  self->indq = buffer(ME_ DPC31_IndQ_Base);
+  queue_request(ME_ MAC_Start, 0x00);
+  send_requests(ME);
 }
 
-void dps_update_inputs(void) {
+void dps_update_inputs(DPS_P(dps)) {
   uint8_t in[DPS_MAX_IO];
   /* Din_Buffer_SM bits 5:4 name the buffer the user owns (U). */
-  const uint8_t u = (uint8_t)((Vpc3Read(R->din_sm) >> 4) & 3u);
-  if (u == 0 || M->in_len == 0) return;
-  M->inputs(in);
-  CopyToVpc3(CHIP_PTR(buffer(R->din_ptr[u - 1u])), in, M->in_len);
-  (void)Vpc3Read(R->new_din);
+  const uint8_t u = (uint8_t)((Vpc3Read(self->map->din_sm) >> 4) & 3u);
+  if (u == 0 || self->mod->in_len == 0) return;
+  self->mod->inputs(ME_ in);
+  CopyToVpc3(CHIP_PTR(buffer(ME_ self->map->din_ptr[u - 1u])), in, self->mod->in_len);
+  (void)Vpc3Read(self->map->new_din);
 }
 
 /* The 1 ms task runs while the module wants it or a DPV1 request waits. */
-void dps_timer_enable(int on) {
-  g_timer_module = on;
-  set_mask(on || g_dpv1_pending || g_c2_open ? (uint16_t)(g_mask | User_Timer_Clock)
-                                             : (uint16_t)(g_mask & ~User_Timer_Clock));
+void dps_timer_enable(DPS_P_(dps) int on) {
+  self->timer_module = on;
+  set_mask(ME_ on || self->dpv1_pending || self->c2_open
+               ? (uint16_t)(self->mask | User_Timer_Clock)
+               : (uint16_t)(self->mask & ~User_Timer_Clock));
 }
 
-uint8_t dps_dpv1_status(uint8_t k) { return k >= 1u && k <= 3u ? g_dpv1_status[k - 1u] : 0u; }
+uint8_t dps_dpv1_status(DPS_P_(dps) uint8_t k) {
+  return k >= 1u && k <= 3u ? self->dpv1_status[k - 1u] : 0u;
+}
 
 /* The user's diag buffer is the one in state 01 (User); both may be with the ASIC. */
-static void publish_diag(void) {
-  const uint8_t sm = Vpc3Read(R->diag_sm);
+static void publish_diag(DPS_P(dps)) {
+  const uint8_t sm = Vpc3Read(self->map->diag_sm);
   int k;
   VPC3_ADR base;
   if ((sm & 3u) == 1u) {
@@ -334,63 +325,63 @@ static void publish_diag(void) {
   } else if (((sm >> 2) & 3u) == 1u) {
     k = 1;
   } else {
-    g_diag_pending = 1; /* retried on Diag_Buffer_Changed */
+    self->diag_pending = 1; /* retried on Diag_Buffer_Changed */
     return;
   }
-  base = buffer(R->diag_ptr[k]);
-  Vpc3Write(base, g_diag_ext ? Ext_Diag : 0x00); /* bytes 1..5 are the ASIC's */
-  CopyToVpc3(CHIP_PTR(base + kStdDiag), g_diag, g_diag_len);
-  Vpc3Write(R->len_diag[k], (uint8_t)(kStdDiag + g_diag_len));
-  (void)Vpc3Read(R->new_diag);
-  g_diag_pending = 0;
-  ++g_stats.diag_updates;
+  base = buffer(ME_ self->map->diag_ptr[k]);
+  Vpc3Write(base, self->diag_ext ? Ext_Diag : 0x00); /* bytes 1..5 are the ASIC's */
+  CopyToVpc3(CHIP_PTR(base + kStdDiag), self->diag, self->diag_len);
+  Vpc3Write(self->map->len_diag[k], (uint8_t)(kStdDiag + self->diag_len));
+  (void)Vpc3Read(self->map->new_diag);
+  self->diag_pending = 0;
+  ++self->stats.diag_updates;
 }
 
-void dps_set_diag(const uint8_t* bytes, uint8_t len, int ext_diag) {
-  g_diag_len = len > DPS_MAX_DIAG ? (uint8_t)DPS_MAX_DIAG : len;
-  memcpy(g_diag, bytes, g_diag_len);
-  g_diag_ext = (uint8_t)(ext_diag != 0);
-  publish_diag();
+void dps_set_diag(DPS_P_(dps) const uint8_t* bytes, uint8_t len, int ext_diag) {
+  self->diag_len = len > DPS_MAX_DIAG ? (uint8_t)DPS_MAX_DIAG : len;
+  memcpy(self->diag, bytes, self->diag_len);
+  self->diag_ext = (uint8_t)(ext_diag != 0);
+  publish_diag(ME);
 }
 
 /* A Set_Prm with DPV1_Enable starts MSAC_C1 afresh: its status bytes kept for the module, both
  * buffers free, no request pending. The class-1 master's Set_Prm leaves a class-2 master's
  * connection alone (docs/decisions.md). */
-static void dpv1_restart(const uint8_t* status) {
+static void dpv1_restart(DPS_P_(dps) const uint8_t* status) {
   uint8_t k;
-  memcpy(g_dpv1_status, status, sizeof g_dpv1_status);
-  g_dpv1_pending = (uint8_t)(g_dpv1_pending & ~((1u << kC1Saps) - 1u));
-  for (k = 0; k < kC1Saps; ++k) Vpc3Write(g_dpv1_buf[k] + VPC3_DPV1_Buf_Control, 0x00);
+  memcpy(self->dpv1_status, status, sizeof self->dpv1_status);
+  self->dpv1_pending = (uint8_t)(self->dpv1_pending & ~((1u << kC1Saps) - 1u));
+  for (k = 0; k < kC1Saps; ++k) Vpc3Write(self->dpv1_buf[k] + VPC3_DPV1_Buf_Control, 0x00);
 }
 
 /* FDL_Ind: take each request whose buffer holds IND (the buffer stays the user's until the
  * response is in it) and have the 1 ms task answer it. */
-static void dpv1_take_indications(void) {
+static void dpv1_take_indications(DPS_P(dps)) {
   uint8_t k;
   for (k = 0; k < kDpv1Saps; ++k) {
-    const VPC3_ADR b = g_dpv1_buf[k];
+    const VPC3_ADR b = self->dpv1_buf[k];
     uint8_t len;
-    if ((g_dpv1_pending >> k) & 1u) continue;
+    if ((self->dpv1_pending >> k) & 1u) continue;
     if ((Vpc3Read(b + VPC3_DPV1_Buf_Control) & VPC3_DPV1_Buf_Control_IND_Msk) == 0) continue;
     Vpc3Write(b + VPC3_DPV1_Buf_Control, VPC3_DPV1_Buf_Control_USER_Msk);
     len = Vpc3Read(b + VPC3_DPV1_Buf_Length);
     if (len > DPS_DPV1_MAX_PDU) len = DPS_DPV1_MAX_PDU;
-    CopyFromVpc3(g_dpv1_req[k], CHIP_PTR(b + VPC3_DPV1_Buf_SIZE), len);
-    g_dpv1_len[k] = len;
-    g_dpv1_pending = (uint8_t)(g_dpv1_pending | 1u << k);
-    if (k == kConn) g_c2_quiet_ms = 0;
-    ++g_stats.dpv1_requests;
+    CopyFromVpc3(self->dpv1_req[k], CHIP_PTR(b + VPC3_DPV1_Buf_SIZE), len);
+    self->dpv1_len[k] = len;
+    self->dpv1_pending = (uint8_t)(self->dpv1_pending | 1u << k);
+    if (k == kConn) self->c2_quiet_ms = 0;
+    ++self->stats.dpv1_requests;
   }
-  if (g_dpv1_pending && (g_mask & User_Timer_Clock) == 0) {
+  if (self->dpv1_pending && (self->mask & User_Timer_Clock) == 0) {
     /* A tick latched while masked is stale: the answer comes with the next one. */
-    write16(R->int_ack, User_Timer_Clock);
-    set_mask((uint16_t)(g_mask | User_Timer_Clock));
+    write16(ME_ self->map->int_ack, User_Timer_Clock);
+    set_mask(ME_(uint16_t)(self->mask | User_Timer_Clock));
   }
 }
 
 /* A response into buffer k: the data unit, Length, Function_Code, RESP with USER last. */
-static void dpv1_respond(uint8_t k, const uint8_t* resp, uint8_t n) {
-  const VPC3_ADR b = g_dpv1_buf[k];
+static void dpv1_respond(DPS_P_(dps) uint8_t k, const uint8_t* resp, uint8_t n) {
+  const VPC3_ADR b = self->dpv1_buf[k];
   if (n > DPS_DPV1_MAX_PDU) n = DPS_DPV1_MAX_PDU;
   CopyToVpc3(CHIP_PTR(b + VPC3_DPV1_Buf_SIZE), (uint8_t*)resp, n);
   Vpc3Write(b + VPC3_DPV1_Buf_Length, n);
@@ -409,18 +400,18 @@ static uint8_t dpv1_negative(uint8_t* resp, uint8_t function, uint8_t code) {
 
 /* The connection closed (Abort, time-out): its SAP off (the chip answers RS there), its buffer
  * free, a request waiting there dropped. */
-static void c2_close(void) {
-  Vpc3Write(g_sap_entry[kConn] + VPC3_SAP_Entry_Ind_Buf_Ptr0, 0x00);
-  Vpc3Write(g_dpv1_buf[kConn] + VPC3_DPV1_Buf_Control, 0x00);
-  g_dpv1_pending = (uint8_t)(g_dpv1_pending & ~(1u << kConn));
-  g_c2_open = 0;
+static void c2_close(DPS_P(dps)) {
+  Vpc3Write(self->sap_entry[kConn] + VPC3_SAP_Entry_Ind_Buf_Ptr0, 0x00);
+  Vpc3Write(self->dpv1_buf[kConn] + VPC3_DPV1_Buf_Control, 0x00);
+  self->dpv1_pending = (uint8_t)(self->dpv1_pending & ~(1u << kConn));
+  self->c2_open = 0;
 }
 
 /* Initiate on SAP 49. Open: Initiate | 80h, Resource_Busy. Else the Initiate response
  * (Max_Len_Data_Unit, the request's features and profile, S and D address swapped) waits in the
  * connection's buffer for the master's first poll there, the connection's SAP is switched on, and
  * the resource manager answers 56h, the connection's SAP, the Send_Timeout. */
-static uint8_t c2_initiate(const uint8_t* req, uint8_t len, uint8_t* resp) {
+static uint8_t c2_initiate(DPS_P_(dps) const uint8_t* req, uint8_t len, uint8_t* resp) {
   uint8_t res[DPS_DPV1_MAX_PDU];
   uint8_t s_len, d_len;
   if (len < kInitiateReq || req[0] != kInitiate)
@@ -430,7 +421,7 @@ static uint8_t c2_initiate(const uint8_t* req, uint8_t len, uint8_t* resp) {
   if ((unsigned)len != (unsigned)kInitiateReq + s_len + d_len ||
       (unsigned)kInitiateRes + s_len + d_len > DPS_DPV1_MAX_PDU)
     return dpv1_negative(resp, kInitiate, kInvalidParameter);
-  if (g_c2_open) return dpv1_negative(resp, kInitiate, kResourceBusy);
+  if (self->c2_open) return dpv1_negative(resp, kInitiate, kResourceBusy);
   res[0] = kInitiate;
   res[1] = DPS_DPV1_MAX_PDU - 4u;
   memcpy(res + 2, req + 6, 6); /* Features_Supported, Profile_Features_Supported, Ident */
@@ -440,13 +431,13 @@ static uint8_t c2_initiate(const uint8_t* req, uint8_t len, uint8_t* resp) {
   res[11] = s_len;
   memcpy(res + kInitiateRes, req + kInitiateReq + s_len, d_len);
   memcpy(res + kInitiateRes + d_len, req + kInitiateReq, s_len);
-  dpv1_respond(kConn, res, (uint8_t)(kInitiateRes + s_len + d_len));
-  Vpc3Write(g_sap_entry[kConn] + VPC3_SAP_Entry_Ind_Buf_Ptr0,
-            (uint8_t)(g_dpv1_buf[kConn] >> R->segment_shift));
-  g_c2_open = 1;
-  g_c2_limit_ms = (uint32_t)((uint16_t)req[4] << 8 | req[5]) * 10u;
-  g_c2_quiet_ms = 0;
-  ++g_stats.c2_opened;
+  dpv1_respond(ME_ kConn, res, (uint8_t)(kInitiateRes + s_len + d_len));
+  Vpc3Write(self->sap_entry[kConn] + VPC3_SAP_Entry_Ind_Buf_Ptr0,
+            (uint8_t)(self->dpv1_buf[kConn] >> self->map->segment_shift));
+  self->c2_open = 1;
+  self->c2_limit_ms = (uint32_t)((uint16_t)req[4] << 8 | req[5]) * 10u;
+  self->c2_quiet_ms = 0;
+  ++self->stats.c2_opened;
   resp[0] = kRmResponse;
   resp[1] = DPS_SAP_C2;
   resp[2] = req[4];
@@ -456,10 +447,10 @@ static uint8_t c2_initiate(const uint8_t* req, uint8_t len, uint8_t* resp) {
 
 /* A request on the open connection: Abort closes it (no response), Idle is answered 48h 00h,
  * the rest is the module's. 0: no response. */
-static uint8_t c2_request(const uint8_t* req, uint8_t len, uint8_t* resp) {
+static uint8_t c2_request(DPS_P_(dps) const uint8_t* req, uint8_t len, uint8_t* resp) {
   if (req[0] == kAbort) {
-    c2_close();
-    ++g_stats.c2_aborted;
+    c2_close(ME);
+    ++self->stats.c2_aborted;
     return 0;
   }
   if (req[0] == kIdle) {
@@ -467,190 +458,194 @@ static uint8_t c2_request(const uint8_t* req, uint8_t len, uint8_t* resp) {
     resp[1] = 0x00;
     return 2;
   }
-  return M->dpv1_request(DPS_SAP_C2, req, len, resp);
+  return self->mod->dpv1_request(ME_ DPS_SAP_C2, req, len, resp);
 }
 
 /* The 1 ms task: the requests answered. */
-static void dpv1_answer(void) {
+static void dpv1_answer(DPS_P(dps)) {
   uint8_t k;
   for (k = 0; k < kDpv1Saps; ++k) {
     uint8_t resp[DPS_DPV1_MAX_PDU];
     uint8_t n;
-    if (((g_dpv1_pending >> k) & 1u) == 0) continue;
-    g_dpv1_pending = (uint8_t)(g_dpv1_pending & ~(1u << k));
+    if (((self->dpv1_pending >> k) & 1u) == 0) continue;
+    self->dpv1_pending = (uint8_t)(self->dpv1_pending & ~(1u << k));
     if (k == kRm) {
-      n = c2_initiate(g_dpv1_req[k], g_dpv1_len[k], resp);
+      n = c2_initiate(ME_ self->dpv1_req[k], self->dpv1_len[k], resp);
     } else if (k == kConn) {
-      n = c2_request(g_dpv1_req[k], g_dpv1_len[k], resp);
+      n = c2_request(ME_ self->dpv1_req[k], self->dpv1_len[k], resp);
       if (n == 0) continue;
     } else {
-      n = M->dpv1_request(kDpv1Sap[k], g_dpv1_req[k], g_dpv1_len[k], resp);
+      n = self->mod->dpv1_request(ME_ kDpv1Sap[k], self->dpv1_req[k], self->dpv1_len[k], resp);
     }
-    dpv1_respond(k, resp, n);
+    dpv1_respond(ME_ k, resp, n);
   }
-  if (!g_timer_module && !g_c2_open) set_mask((uint16_t)(g_mask & ~User_Timer_Clock));
+  if (!self->timer_module && !self->c2_open)
+    set_mask(ME_(uint16_t)(self->mask & ~User_Timer_Clock));
 }
 
 /* The connection's time-out, on each 1 ms tick while it is open: closed at the first tick that
  * finds it quiet longer than Send_Timeout, the (10 x Send_Timeout + 1)-th tick after its last
  * request taken or response sent, so never before Send_Timeout has run out (docs/firmware.md). */
-static void c2_tick(void) {
-  if (++g_c2_quiet_ms <= g_c2_limit_ms) return;
-  c2_close();
-  ++g_stats.c2_timeouts;
-  if (!g_timer_module && !g_dpv1_pending) set_mask((uint16_t)(g_mask & ~User_Timer_Clock));
+static void c2_tick(DPS_P(dps)) {
+  if (++self->c2_quiet_ms <= self->c2_limit_ms) return;
+  c2_close(ME);
+  ++self->stats.c2_timeouts;
+  if (!self->timer_module && !self->dpv1_pending)
+    set_mask(ME_(uint16_t)(self->mask & ~User_Timer_Clock));
 }
 
 /* Poll_End_Ind: a response went out (the chip cleared RESP and USER: the buffer is free again);
  * Response_Sent is the user's to clear. */
-static void dpv1_response_sent(void) {
+static void dpv1_response_sent(DPS_P(dps)) {
   uint8_t k;
   for (k = 0; k < kDpv1Saps; ++k) {
-    const uint8_t b0 = Vpc3Read(g_sap_entry[k] + VPC3_SAP_Entry_Sap);
+    const uint8_t b0 = Vpc3Read(self->sap_entry[k] + VPC3_SAP_Entry_Sap);
     if ((b0 & VPC3_SAP_Entry_Sap_Response_Sent_Msk) == 0) continue;
-    Vpc3Write(g_sap_entry[k] + VPC3_SAP_Entry_Sap,
+    Vpc3Write(self->sap_entry[k] + VPC3_SAP_Entry_Sap,
               (uint8_t)(b0 & ~VPC3_SAP_Entry_Sap_Response_Sent_Msk));
-    if (k == kConn) g_c2_quiet_ms = 0;
-    ++g_stats.dpv1_responses_sent;
+    if (k == kConn) self->c2_quiet_ms = 0;
+    ++self->stats.dpv1_responses_sent;
   }
 }
 
 /* Set_Prm: the ASIC checked ident, lock and reserved bits; the module checks its own bytes.
  * A new Set_Prm arriving during the check makes the verdict read return Prm_Conflict: check
  * the new buffer. */
-static void handle_prm(void) {
+static void handle_prm(DPS_P(dps)) {
   for (;;) {
     uint8_t prm[DPS_MAX_PRM];
-    const uint8_t len = Vpc3Read(R->len_prm);
+    const uint8_t len = Vpc3Read(self->map->len_prm);
     /* With DPV1_Enable (VPC3+) bytes 7..9 are DPV1_Status_1..3 and the module's bytes start at
      * 10: two bytes longer than with the Spec_User_Prm_Byte. */
-    const int dpv1 = g_sap_list && len == M->prm_len + 2u;
+    const int dpv1 = self->sap_list && len == self->mod->prm_len + 2u;
     const uint8_t user = (uint8_t)(dpv1 ? kStdPrm + 3u : kStdPrm + 1u);
-    int ok = (len == M->prm_len || dpv1) && len <= DPS_MAX_PRM;
+    int ok = (len == self->mod->prm_len || dpv1) && len <= DPS_MAX_PRM;
     uint8_t result;
     if (ok) {
-      CopyFromVpc3(prm, CHIP_PTR(buffer(R->prm_ptr)), len);
+      CopyFromVpc3(prm, CHIP_PTR(buffer(ME_ self->map->prm_ptr)), len);
       ok = ((prm[VPC3_Prm_Status_1] & VPC3_Prm_Status_1_DPV1_Enable_Msk) != 0) == dpv1 &&
-           M->check_prm(prm + user, (uint8_t)(len - user));
+           self->mod->check_prm(ME_ prm + user, (uint8_t)(len - user));
     }
-    result = Vpc3Read(ok ? R->prm_ok : R->prm_not_ok);
+    result = Vpc3Read(ok ? self->map->prm_ok : self->map->prm_not_ok);
     if (result != Prm_Conflict) {
       if (ok) {
-        ++g_stats.prm_ok;
+        ++self->stats.prm_ok;
         if (dpv1) {
-          dpv1_restart(prm + VPC3_Prm_Status_1);
+          dpv1_restart(ME_ prm + VPC3_Prm_Status_1);
         } else {
-          memset(g_dpv1_status, 0, sizeof g_dpv1_status);
+          memset(self->dpv1_status, 0, sizeof self->dpv1_status);
         }
       } else {
-        ++g_stats.prm_rejected;
+        ++self->stats.prm_rejected;
       }
       return;
     }
-    ++g_stats.prm_conflicts;
+    ++self->stats.prm_conflicts;
   }
 }
 
 /* Chk_Cfg: the master's configuration must equal the module's; same conflict rule. */
-static void handle_cfg(void) {
+static void handle_cfg(DPS_P(dps)) {
   for (;;) {
-    const uint8_t len = Vpc3Read(R->len_cfg);
-    int ok = len == M->cfg_len;
+    const uint8_t len = Vpc3Read(self->map->len_cfg);
+    int ok = len == self->mod->cfg_len;
     if (ok) {
       /* One pointer read after the other, not both as arguments: C leaves the order of argument
        * evaluation open, and the bus trace must not depend on the compiler. */
-      const VPC3_ADR read_cfg = buffer(R->read_cfg_ptr);
-      const VPC3_ADR cfg = buffer(R->cfg_ptr);
+      const VPC3_ADR read_cfg = buffer(ME_ self->map->read_cfg_ptr);
+      const VPC3_ADR cfg = buffer(ME_ self->map->cfg_ptr);
       ok = Vpc3MemCmp(CHIP_PTR(cfg), CHIP_PTR(read_cfg), len) == 0;
     }
-    const uint8_t result = Vpc3Read(ok ? R->cfg_ok : R->cfg_not_ok);
+    const uint8_t result = Vpc3Read(ok ? self->map->cfg_ok : self->map->cfg_not_ok);
     if (result != Prm_Conflict) {
       if (ok) {
-        ++g_stats.cfg_ok;
-        dps_update_inputs(); /* the first Data_Exchange answers with valid inputs */
+        ++self->stats.cfg_ok;
+        dps_update_inputs(ME); /* the first Data_Exchange answers with valid inputs */
       } else {
-        ++g_stats.cfg_rejected;
+        ++self->stats.cfg_rejected;
       }
       return;
     }
-    ++g_stats.cfg_conflicts;
+    ++self->stats.cfg_conflicts;
   }
 }
 
-static void handle_dx_out(void) {
-  const uint8_t r = Vpc3Read(R->next_dout);
-  ++g_stats.dx_out;
+static void handle_dx_out(DPS_P(dps)) {
+  const uint8_t r = Vpc3Read(self->map->next_dout);
+  ++self->stats.dx_out;
   if ((r & State_U_Buffer) != 0 && (r & 3u) != 0) {
     uint8_t out[DPS_MAX_IO];
     const int cleared = (r & U_Buffer_Cleared) != 0;
-    CopyFromVpc3(out, CHIP_PTR(buffer(R->dout_ptr[(r & 3u) - 1u])), M->out_len);
-    M->outputs(out, cleared); /* the terminals first: they are what is time-critical */
+    CopyFromVpc3(out, CHIP_PTR(buffer(ME_ self->map->dout_ptr[(r & 3u) - 1u])), self->mod->out_len);
+    self->mod->outputs(ME_ out, cleared); /* the terminals first: they are what is time-critical */
     if (cleared) {
-      ++g_stats.cleared;
-      refill_clear_buffer(); /* dpc31: the old U is the new C */
+      ++self->stats.cleared;
+      refill_clear_buffer(ME); /* dpc31: the old U is the new C */
     }
   }
-  dps_update_inputs();
-  user_wd(Wd_Reset);
+  dps_update_inputs(ME);
+  user_wd(ME_ Wd_Reset);
 }
 
 /* Set_Slave_Add: the new address would go to the board's non-volatile memory. */
-static void handle_ssa(void) {
+static void handle_ssa(DPS_P(dps)) {
   uint8_t ssa[4];
-  CopyFromVpc3(ssa, CHIP_PTR(buffer(R->ssa_ptr)), sizeof ssa);
-  g_stats.station_address = ssa[0];
-  ++g_stats.ssa;
-  (void)Vpc3Read(R->ssa_free);
+  CopyFromVpc3(ssa, CHIP_PTR(buffer(ME_ self->map->ssa_ptr)), sizeof ssa);
+  self->stats.station_address = ssa[0];
+  ++self->stats.ssa;
+  (void)Vpc3Read(self->map->ssa_free);
 }
 
-static int in_data_exchange(void) { return ((read16(R->status) >> 4) & 3u) == 2u; }
+static int in_data_exchange(DPS_P(dps)) {
+  return ((read16(ME_ self->map->status) >> 4) & 3u) == 2u;
+}
 
-void dps_isr(void) {
-  const uint16_t ir = read16(R->int_reg);
-  ++g_stats.interrupts;
-  if (ir & New_Prm_Data) handle_prm();
-  if (ir & New_Cfg_Data) handle_cfg();
-  if (ir & DX_Out) handle_dx_out();
+void dps_isr(DPS_P(dps)) {
+  const uint16_t ir = read16(ME_ self->map->int_reg);
+  ++self->stats.interrupts;
+  if (ir & New_Prm_Data) handle_prm(ME);
+  if (ir & New_Cfg_Data) handle_cfg(ME);
+  if (ir & DX_Out) handle_dx_out(ME);
   if (ir & WD_DP_Control_Timeout) {
-    ++g_stats.wd_timeouts;
-    M->comm_lost(DPS_LOSS_WATCHDOG);
+    ++self->stats.wd_timeouts;
+    self->mod->comm_lost(ME_ DPS_LOSS_WATCHDOG);
   }
   if (ir & Go_Leave_Data_Exchange) {
-    if (in_data_exchange()) {
-      user_wd(Wd_Enable);
+    if (in_data_exchange(ME)) {
+      user_wd(ME_ Wd_Enable);
     } else {
-      ++g_stats.leave_dx;
-      user_wd(Wd_Disable);
-      M->comm_lost(DPS_LOSS_LEFT_DATA_EXCH);
+      ++self->stats.leave_dx;
+      user_wd(ME_ Wd_Disable);
+      self->mod->comm_lost(ME_ DPS_LOSS_LEFT_DATA_EXCH);
     }
   }
-  if (ir & Indication) drain_indications();
+  if (ir & Indication) drain_indications(ME);
   if (ir & MAC_Reset) {
-    ++g_stats.mac_resets;
-    M->comm_lost(DPS_LOSS_OFFLINE);
+    ++self->stats.mac_resets;
+    self->mod->comm_lost(ME_ DPS_LOSS_OFFLINE);
   }
-  if (ir & Baudrate_Detect) ++g_stats.baud_detects;
+  if (ir & Baudrate_Detect) ++self->stats.baud_detects;
   if (ir & New_GC_Command) {
-    g_stats.last_gc = Vpc3Read(R->gc_command);
-    ++g_stats.gc_commands;
+    self->stats.last_gc = Vpc3Read(self->map->gc_command);
+    ++self->stats.gc_commands;
   }
-  if (ir & New_SSA_Data) handle_ssa();
-  if ((ir & Diag_Buffer_Changed) && g_diag_pending) publish_diag();
-  if (g_sap_list && (ir & FDL_Ind)) dpv1_take_indications();
-  if (g_sap_list && (ir & Poll_End_Ind)) dpv1_response_sent();
+  if (ir & New_SSA_Data) handle_ssa(ME);
+  if ((ir & Diag_Buffer_Changed) && self->diag_pending) publish_diag(ME);
+  if (self->sap_list && (ir & FDL_Ind)) dpv1_take_indications(ME);
+  if (self->sap_list && (ir & Poll_End_Ind)) dpv1_response_sent(ME);
   /* The tick first: the one that answers an Initiate does not count for its connection. */
-  if ((ir & User_Timer_Clock) && g_c2_open) c2_tick();
-  if ((ir & User_Timer_Clock) && g_dpv1_pending) dpv1_answer();
-  if ((ir & User_Timer_Clock) && g_timer_module && M->tick != 0) {
-    ++g_stats.ticks;
-    M->tick();
+  if ((ir & User_Timer_Clock) && self->c2_open) c2_tick(ME);
+  if ((ir & User_Timer_Clock) && self->dpv1_pending) dpv1_answer(ME);
+  if ((ir & User_Timer_Clock) && self->timer_module && self->mod->tick != 0) {
+    ++self->stats.ticks;
+    self->mod->tick(ME);
   }
   /* New_Prm/Cfg_Data are cleared by the verdict reads; New_Ext_Prm_Data (VPC3+ SAP53) is not
    * enabled, acknowledged like the rest should it ever be latched. */
   if (ir & ~(New_Prm_Data | New_Cfg_Data)) {
-    write16(R->int_ack, (uint16_t)(ir & ~(New_Prm_Data | New_Cfg_Data)));
+    write16(ME_ self->map->int_ack, (uint16_t)(ir & ~(New_Prm_Data | New_Cfg_Data)));
   }
-  Vpc3Write(R->mode1_s, EOI);
+  Vpc3Write(self->map->mode1_s, EOI);
 }
 
-const dps_stats* dps_get_stats(void) { return &g_stats; }
+const dps_stats* dps_get_stats(DPS_P(dps)) { return &self->stats; }

@@ -30,6 +30,38 @@ extern "C" {
 #define DPS_REENTRANT
 #endif
 
+/* One instance: everything the driver keeps between calls lives in a `dps` (and a module's state
+ * in its own struct around it), so a host runs any number of stations at once, the same firmware
+ * or different ones. Every function takes its instance first, declared with DPS_P(type) (the only
+ * parameter) or DPS_P_(type) (more follow) and passed on with DPS_A(x) / DPS_A_(x). An 80C32
+ * board runs one firmware: there the instance is a static and no argument travels (SDCC), so the
+ * target's code stays what it was with globals, direct XDATA accesses. */
+#ifdef __SDCC
+#define DPS_P(type) void
+#define DPS_P_(type)
+#define DPS_A(x)
+#define DPS_A_(x)
+#else
+#define DPS_P(type) type* self
+#define DPS_P_(type) type *self,
+#define DPS_A(x) x
+#define DPS_A_(x) x,
+#endif
+/* A module's callbacks get the driver's instance (`drv`): the module's own state is the struct
+ * around it, `drv` its first member, and DPS_MODULE_SELF(type) names it `self`. On the 80C32 the
+ * module's static is `self` (a macro of its file) and the callbacks take no instance. */
+#ifdef __SDCC
+#define DPS_CB_P void
+#define DPS_CB_P_
+#define DPS_MODULE_SELF(type)
+#else
+#define DPS_CB_P dps* drv
+#define DPS_CB_P_ dps *drv,
+#define DPS_MODULE_SELF(type) type* const self = (type*)drv
+#endif
+
+typedef struct dps dps;
+
 /* What the board tells the firmware: which chip it is wired to and the station address from
  * its address switch. */
 typedef struct dps_board {
@@ -66,38 +98,23 @@ typedef struct dps_module {
   uint8_t prm_len; /* total Set_Prm length, 7 standard bytes + Spec_User_Prm_Byte + module bytes */
   /* Module parameters (Set_Prm bytes 8..): 1 = accept (and take them), 0 = User_Prm_Data_Not_Okay.
    */
-  int (*check_prm)(const uint8_t* prm, uint8_t len) DPS_REENTRANT;
+  int (*check_prm)(DPS_CB_P_ const uint8_t* prm, uint8_t len) DPS_REENTRANT;
   /* New outputs from the master (DX_Out); cleared = 1 when the ASIC cleared them (Clear_Data,
    * fail-safe telegram). */
-  void (*outputs)(const uint8_t* out, int cleared) DPS_REENTRANT;
+  void (*outputs)(DPS_CB_P_ const uint8_t* out, int cleared) DPS_REENTRANT;
   /* The inputs to hand over next. */
-  void (*inputs)(uint8_t* in);
-  void (*comm_lost)(int why);
+  void (*inputs)(DPS_CB_P_ uint8_t* in);
+  void (*comm_lost)(DPS_CB_P_ int why);
   /* User_Timer_Clock (1 ms) while the module asked for it (dps_timer_enable); may be NULL. */
-  void (*tick)(void);
+  void (*tick)(DPS_CB_P);
   /* DPV1 on the VPC3+ (NULL: the module speaks DP only). A request that came on SAP `sap`
    * (DPS_SAP_C1 or DPS_SAP_ALARM; DPS_SAP_C2 a Read, Write or Data_Transport on the open MSAC_C2
    * connection: the driver itself serves Initiate, Idle, Abort and the time-out): the module writes
    * its response data unit (at most DPS_DPV1_MAX_PDU bytes) into resp and returns its length.
    * Called from the 1 ms task after the indication: the master's polls get SC until then. */
-  uint8_t (*dpv1_request)(uint8_t sap, const uint8_t* req, uint8_t len,
+  uint8_t (*dpv1_request)(DPS_CB_P_ uint8_t sap, const uint8_t* req, uint8_t len,
                           uint8_t* resp) DPS_REENTRANT;
 } dps_module;
-
-/* main(): configure the chip for this module and start it (Start_SPC3; DPC31: MAC_Start). */
-void dps_init(const dps_board* board, const dps_module* module);
-/* The X/INT interrupt service routine. */
-void dps_isr(void);
-
-/* Hand the module's current inputs (module->inputs) to the chip now. */
-void dps_update_inputs(void);
-/* Publish user diag bytes (device-related block) after the 6 standard bytes; ext_diag sets
- * Ext_Diag in byte 0. Queued until a diag buffer is free (Diag_Buffer_Changed). */
-void dps_set_diag(const uint8_t* bytes, uint8_t len, int ext_diag);
-/* User_Timer_Clock interrupts on (1) or off (0). */
-void dps_timer_enable(int on);
-/* DPV1_Status_1..3 (k = 1..3) of the Set_Prm taken last; all 0 when it had no DPV1_Enable. */
-uint8_t dps_dpv1_status(uint8_t k);
 
 /* Bookkeeping for hosts and tests. */
 typedef struct dps_stats {
@@ -110,7 +127,53 @@ typedef struct dps_stats {
   uint8_t last_gc;                             /* R_GC_Command at the last New_GC_Command */
   uint8_t station_address;
 } dps_stats;
-const dps_stats* dps_get_stats(void);
+
+/* The driver's state, one per station (the fields are the driver's; a host reads the counters
+ * with dps_get_stats). */
+#define DPS_DPV1_SAPS 4u /* MSAC_C1, its alarm SAP, the MSAC_C2 connection and resource manager */
+struct dps_regmap;
+struct dps {
+  const struct dps_regmap* map; /* the chip's addresses (dps.c) */
+  const dps_module* mod;
+  int motorola;
+  dps_stats stats;
+  uint16_t mask;
+  uint8_t diag[DPS_MAX_DIAG];
+  uint8_t diag_len;
+  uint8_t diag_ext;
+  int diag_pending;
+  int dpc31;            /* the chip takes requests, not Mode_Reg1 commands */
+  uint16_t instq, indq; /* dpc31: the queues' first entries */
+  uint8_t instq_wr, indq_rd;
+  int timer_module; /* the module asked for User_Timer_Clock */
+  int sap_list;     /* set up at init: a VPC3+ and a module with dpv1_request */
+  uint16_t sap_entry[DPS_DPV1_SAPS], dpv1_buf[DPS_DPV1_SAPS];
+  uint8_t dpv1_status[3];
+  uint8_t dpv1_req[DPS_DPV1_SAPS][DPS_DPV1_MAX_PDU];
+  uint8_t dpv1_len[DPS_DPV1_SAPS];
+  uint8_t dpv1_pending; /* bit k: the request of SAP k waits for the 1 ms task */
+  int c2_open;          /* the MSAC_C2 connection is open */
+  uint32_t c2_limit_ms; /* its Send_Timeout in ms (Initiate: 10 ms units) */
+  uint32_t c2_quiet_ms; /* 1 ms ticks since its last request taken or response sent */
+};
+
+/* main(): configure the chip for this module and start it (Start_SPC3; DPC31: MAC_Start). */
+void dps_init(DPS_P_(dps) const dps_board* board, const dps_module* module);
+/* The X/INT interrupt service routine. */
+void dps_isr(DPS_P(dps));
+
+/* Hand the module's current inputs (module->inputs) to the chip now. */
+void dps_update_inputs(DPS_P(dps));
+/* Publish user diag bytes (device-related block) after the 6 standard bytes; ext_diag sets
+ * Ext_Diag in byte 0. Queued until a diag buffer is free (Diag_Buffer_Changed). */
+void dps_set_diag(DPS_P_(dps) const uint8_t* bytes, uint8_t len, int ext_diag);
+/* User_Timer_Clock interrupts on (1) or off (0). */
+void dps_timer_enable(DPS_P_(dps) int on);
+/* DPV1_Status_1..3 (k = 1..3) of the Set_Prm taken last; all 0 when it had no DPV1_Enable. */
+uint8_t dps_dpv1_status(DPS_P_(dps) uint8_t k);
+
+/* The instance's counters. */
+const dps_stats* dps_get_stats(DPS_P(dps));
 
 #ifdef __cplusplus
 }

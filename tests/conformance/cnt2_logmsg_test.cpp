@@ -50,16 +50,18 @@ TEST_P(Cnt2Hold, HeldMsgBitsStayHeldUntilTheMasterWritesLogmsg0) {
   firmware_bench::Bench b(GetParam().profile, cnt2_firmware, s, 1'500'000);
   DpMaster& m = b.master;
   ASSERT_TRUE(m.startup());
-  ASSERT_EQ(cnt2_hw_input("event1", CNT2_MSG_REF), 0);
-  ASSERT_EQ(cnt2_hw_input("pwm_event1", CNT2_PWM_MSG_SUPPLY), 0);
+  ASSERT_EQ(cnt2_hw_input(firmware_bench::cnt2_of(b.host), "event1", CNT2_MSG_REF), 0);
+  ASSERT_EQ(cnt2_hw_input(firmware_bench::cnt2_of(b.host), "pwm_event1", CNT2_PWM_MSG_SUPPLY), 0);
   m.data_exchange(kRun);
-  EXPECT_EQ(cnt2_get_pwm(0)->duty, 50);
+  EXPECT_EQ(cnt2_get_pwm(firmware_bench::cnt2_of(b.host), 0)->duty, 50);
   // The inputs of before the hold, then the held ones.
   EXPECT_EQ(status1(m.data_exchange(kHold)), (St{CNT2_MSG_REF, CNT2_PWM_MSG_SUPPLY}));
   EXPECT_EQ(status1(m.data_exchange(kHold)), (St{0x80 | CNT2_MSG_REF, 0x80 | CNT2_PWM_MSG_SUPPLY}));
-  ASSERT_EQ(cnt2_hw_input("event1", CNT2_MSG_SHORT), 0);  // held: into the shadows
-  ASSERT_EQ(cnt2_hw_input("pwm_event1", CNT2_PWM_MSG_OPEN_LOAD), 0);
-  const std::uint32_t cleared = dps_get_stats()->cleared;
+  ASSERT_EQ(cnt2_hw_input(firmware_bench::cnt2_of(b.host), "event1", CNT2_MSG_SHORT),
+            0);  // held: into the shadows
+  ASSERT_EQ(cnt2_hw_input(firmware_bench::cnt2_of(b.host), "pwm_event1", CNT2_PWM_MSG_OPEN_LOAD),
+            0);
+  const std::uint32_t cleared = firmware_bench::stats_of(b.host)->cleared;
   switch (GetParam().cut) {
     case Cut::clear_data:
       m.global_control(0x02);  // Control_Command bit 1 Clear_Data
@@ -75,14 +77,14 @@ TEST_P(Cnt2Hold, HeldMsgBitsStayHeldUntilTheMasterWritesLogmsg0) {
       ASSERT_TRUE(m.startup());
       break;
   }
-  EXPECT_GT(dps_get_stats()->cleared, cleared) << "the ASIC cleared the outputs";
-  EXPECT_EQ(cnt2_get_channel(0)->m.hold, 1);
-  EXPECT_EQ(cnt2_get_pwm(0)->m.hold, 1);
+  EXPECT_GT(firmware_bench::stats_of(b.host)->cleared, cleared) << "the ASIC cleared the outputs";
+  EXPECT_EQ(cnt2_get_channel(firmware_bench::cnt2_of(b.host), 0)->m.hold, 1);
+  EXPECT_EQ(cnt2_get_pwm(firmware_bench::cnt2_of(b.host), 0)->m.hold, 1);
   ASSERT_TRUE(b.last_write(CNT2_PORT_PWM1).has_value());
   EXPECT_EQ(b.last_write(CNT2_PORT_PWM1)->value, 0u) << "the PWM output in its safe state";
   EXPECT_EQ(status1(m.data_exchange(kHold)), (St{0x80 | CNT2_MSG_REF, 0x80 | CNT2_PWM_MSG_SUPPLY}));
   EXPECT_EQ(status1(m.data_exchange(kHold)), (St{0x80 | CNT2_MSG_REF, 0x80 | CNT2_PWM_MSG_SUPPLY}));
-  EXPECT_EQ(cnt2_get_pwm(0)->duty, 50);
+  EXPECT_EQ(cnt2_get_pwm(firmware_bench::cnt2_of(b.host), 0)->duty, 50);
   // The master releases: the shadows become the MSG bits.
   m.data_exchange(kRun);
   EXPECT_EQ(status1(m.data_exchange(kRun)), (St{CNT2_MSG_SHORT, CNT2_PWM_MSG_OPEN_LOAD}));

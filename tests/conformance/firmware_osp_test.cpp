@@ -15,7 +15,7 @@ namespace {
 
 constexpr std::uint64_t k10ms = 480'000;
 
-SlaveConfig do4(std::uint8_t mode, std::uint8_t value, std::uint8_t refresh_ms = 0) {
+SlaveConfig do4_slave(std::uint8_t mode, std::uint8_t value, std::uint8_t refresh_ms = 0) {
   SlaveConfig s = gsd_slave(do4_firmware, 5);
   s.user_prm = {0x00, mode, value, refresh_ms};
   s.wd_fact1 = 2;
@@ -43,7 +43,7 @@ std::uint64_t run_then_interrupt(FirmwareBench& b, std::uint8_t value) {
 // Leave_Master clears the outputs in that cycle (DX_Out, U_Buffer_Cleared), the ISR starts there
 // and drives 9h after 6 bus accesses: expiry + 24.
 TEST_P(Osp, OspValueOutputAsSoonAsCommunicationInterrupted) {
-  FirmwareBench b(GetParam(), do4_firmware, do4(DO4_REPLACE, 0x9));
+  FirmwareBench b(GetParam(), do4_firmware, do4_slave(DO4_REPLACE, 0x9));
   const std::uint64_t expiry = run_then_interrupt(b, 0x5);
   const auto w = b.writes(DO4_PORT_OUTPUTS, expiry - 1);
   ASSERT_EQ(w.size(), 1u);
@@ -56,7 +56,7 @@ TEST_P(Osp, OspValueOutputAsSoonAsCommunicationInterrupted) {
 // requested OSP with 3h (OSPValid 0): the terminals stay 6h, also after the watchdog expiry;
 // only ModulOK drops (port 1, at the acted + 24 of the OSPValid 0 exchange).
 TEST_P(Osp, RetainLastValidValue_KeepsLastValidlyRecognisedOutputState) {
-  FirmwareBench b(GetParam(), do4_firmware, do4(DO4_RETAIN_LAST, 0x0));
+  FirmwareBench b(GetParam(), do4_firmware, do4_slave(DO4_RETAIN_LAST, 0x0));
   ASSERT_TRUE(b.master.startup());
   const Exchange valid = b.master.data_exchange({0x6, 0x01});
   const Exchange osp = b.master.data_exchange({0x3, 0x00});
@@ -75,7 +75,7 @@ TEST_P(Osp, RetainLastValidValue_KeepsLastValidlyRecognisedOutputState) {
 // will be output instead of the value currently requested by the task." The task requests Ch;
 // the replacement value 3h is output at the event (watchdog expiry + 24).
 TEST_P(Osp, ReplaceWithStaticValue_OutputInsteadOfRequestedValue) {
-  FirmwareBench b(GetParam(), do4_firmware, do4(DO4_REPLACE, 0x3));
+  FirmwareBench b(GetParam(), do4_firmware, do4_slave(DO4_REPLACE, 0x3));
   const std::uint64_t expiry = run_then_interrupt(b, 0xC);
   ASSERT_TRUE(b.last(DO4_PORT_OUTPUTS));
   EXPECT_EQ(b.last(DO4_PORT_OUTPUTS)->value, 0x3u);
@@ -87,7 +87,7 @@ TEST_P(Osp, ReplaceWithStaticValue_OutputInsteadOfRequestedValue) {
 // is in OSP (inputs: ModulOK 0, terminals 0 = power-on outputs off, retain mode); a request with
 // OSPValid 0 does not drive the terminals.
 TEST_P(Osp, OspValidBit0_RequestsOspAfterInitialStart) {
-  FirmwareBench b(GetParam(), do4_firmware, do4(DO4_RETAIN_LAST, 0x0));
+  FirmwareBench b(GetParam(), do4_firmware, do4_slave(DO4_RETAIN_LAST, 0x0));
   ASSERT_TRUE(b.master.startup());
   const Exchange first = b.master.data_exchange({0x5, 0x00});
   ASSERT_TRUE(first.answer);
@@ -103,7 +103,7 @@ TEST_P(Osp, OspValidBit0_RequestsOspAfterInitialStart) {
 // terminals 5h, ModulOK 1; 6h with OSPValid 0: the replacement value 9h, ModulOK 0; 7h with
 // OSPValid 1: 7h, ModulOK 1 — each at acted + 24.
 TEST_P(Osp, OspValidBit0_0RequestsOsp_1RequestsNormalOperation) {
-  FirmwareBench b(GetParam(), do4_firmware, do4(DO4_REPLACE, 0x9));
+  FirmwareBench b(GetParam(), do4_firmware, do4_slave(DO4_REPLACE, 0x9));
   ASSERT_TRUE(b.master.startup());
   b.master.idle(2000);
   const std::uint64_t before = b.chip.cycle();  // the Set_Prm drove 9h already (OSP at start)
@@ -130,7 +130,7 @@ TEST_P(Osp, OspValidBit0_0RequestsOsp_1RequestsNormalOperation) {
 // 'Standard' function model." Every transfer with OSPValid 1 drives its value: 1, 2, 4, 8, Fh,
 // each at acted + 24, ModulOK stays 1.
 TEST_P(Osp, OspValidSet_BehavesAsStandardFunctionModel) {
-  FirmwareBench b(GetParam(), do4_firmware, do4(DO4_RETAIN_LAST, 0x0));
+  FirmwareBench b(GetParam(), do4_firmware, do4_slave(DO4_RETAIN_LAST, 0x0));
   ASSERT_TRUE(b.master.startup());
   std::vector<std::uint64_t> acted;
   for (std::uint8_t v : {0x1, 0x2, 0x4, 0x8, 0xF}) {
@@ -153,7 +153,7 @@ TEST_P(Osp, OspValidSet_BehavesAsStandardFunctionModel) {
 // ... according to the configuration." ModulOK drops at expiry + 24; when the master is back the
 // module reports ModulOK 0 with the replacement value 9h on its terminals: input byte 90h.
 TEST_P(Osp, OspEvent_ResetsOspValidAndEntersOspMode) {
-  FirmwareBench b(GetParam(), do4_firmware, do4(DO4_REPLACE, 0x9));
+  FirmwareBench b(GetParam(), do4_firmware, do4_slave(DO4_REPLACE, 0x9));
   const std::uint64_t expiry = run_then_interrupt(b, 0x5);
   const auto ok = b.writes(DO4_PORT_MODUL_OK, expiry - 1);
   ASSERT_EQ(ok.size(), 1u);
@@ -169,7 +169,7 @@ TEST_P(Osp, OspEvent_ResetsOspValidAndEntersOspMode) {
 // back and sends Ch with OSPValid 0 three times: the terminals stay 9h; Ch with OSPValid 1 leaves
 // OSP at its acted + 24.
 TEST_P(Osp, OspRemainsAfterRecovery_ExitedOnlyBySetOspValid) {
-  FirmwareBench b(GetParam(), do4_firmware, do4(DO4_REPLACE, 0x9));
+  FirmwareBench b(GetParam(), do4_firmware, do4_slave(DO4_REPLACE, 0x9));
   const std::uint64_t expiry = run_then_interrupt(b, 0x5);
   ASSERT_TRUE(b.master.restart(200, 3));
   for (int i = 0; i < 3; ++i) b.master.data_exchange({0xC, 0x00});
@@ -191,7 +191,7 @@ TEST_P(Osp, OspRemainsAfterRecovery_ExitedOnlyBySetOspValid) {
 // (FDL_Status, Set_Prm, Chk_Cfg again) whose application sends OSPValid 0: the module is in OSP
 // (replacement 9h, ModulOK 0) until OSPValid 1 is transferred again.
 TEST_P(Osp, MasterRestart_OspValidMustBeSetAndTransferredAgain) {
-  FirmwareBench b(GetParam(), do4_firmware, do4(DO4_REPLACE, 0x9));
+  FirmwareBench b(GetParam(), do4_firmware, do4_slave(DO4_REPLACE, 0x9));
   ASSERT_TRUE(b.master.startup());
   b.master.data_exchange({0x5, 0x01});
   ASSERT_TRUE(b.master.restart(200, 3));
@@ -215,7 +215,7 @@ TEST_P(Osp, MasterRestart_OspValidMustBeSetAndTransferredAgain) {
 // watchdog (100 ms) still runs: OSP in the ISR of the 10th tick after the last refresh, the DP
 // state stays Data_Exchange; the next transfer (OSPValid still 1) is normal operation again.
 TEST_P(Osp, TemporaryCommunicationError_OspValidResetUntilNextSuccessfulTransfer) {
-  FirmwareBench b(GetParam(), do4_firmware, do4(DO4_REPLACE, 0x9, 10));
+  FirmwareBench b(GetParam(), do4_firmware, do4_slave(DO4_REPLACE, 0x9, 10));
   ASSERT_TRUE(b.master.startup());
   const Exchange last = b.master.data_exchange({0x5, 0x01});
   b.master.idle(b.acted(last) + 15 * 48'000 - b.chip.cycle());
@@ -247,7 +247,7 @@ TEST_P(Osp, TemporaryCommunicationError_OspValidResetUntilNextSuccessfulTransfer
 // in the DX_Out ISR and so seen one exchange later: 51h in normal operation with 5h, 90h in OSP
 // with the replacement value 9h.
 TEST_P(Osp, ModulOkBit_TellsTheMasterTheOutputMode) {
-  FirmwareBench b(GetParam(), do4_firmware, do4(DO4_REPLACE, 0x9));
+  FirmwareBench b(GetParam(), do4_firmware, do4_slave(DO4_REPLACE, 0x9));
   ASSERT_TRUE(b.master.startup());
   b.master.data_exchange({0x5, 0x01});
   EXPECT_EQ(b.master.data_exchange({0x5, 0x00}).answer->du, (Bytes{0x51}));
@@ -259,7 +259,7 @@ TEST_P(Osp, ModulOkBit_TellsTheMasterTheOutputMode) {
 // configuration of the OSP replacement value." In OSP the task sends 1h, 2h, 4h with OSPValid
 // 0: no terminal change after the replacement value.
 TEST_P(Osp, OspMode_OutputNoLongerDependsOnTheTask) {
-  FirmwareBench b(GetParam(), do4_firmware, do4(DO4_REPLACE, 0x9));
+  FirmwareBench b(GetParam(), do4_firmware, do4_slave(DO4_REPLACE, 0x9));
   const std::uint64_t expiry = run_then_interrupt(b, 0x5);
   ASSERT_TRUE(b.master.restart(200, 3));
   for (std::uint8_t v : {0x1, 0x2, 0x4}) b.master.data_exchange({v, 0x00});
