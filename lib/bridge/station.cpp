@@ -37,8 +37,6 @@ UserSide make_user_side(Chip& chip, const dpc31_firmware* firmware, std::uint8_t
   return u;
 }
 
-bool instance_safe(const dpc31_firmware& /*fw*/) { return false; }
-
 std::string stations_problem(std::span<const SlaveSpec> slaves) {
   for (std::size_t i = 0; i < slaves.size(); ++i) {
     for (std::size_t k = 0; k < i; ++k) {
@@ -47,16 +45,6 @@ std::string stations_problem(std::span<const SlaveSpec> slaves) {
             "--slave {}: a second station at address {} (two stations at one address both "
             "answer: a collision on every request)",
             slaves[i].address, slaves[i].address);
-      }
-      const dpc31_firmware* a = slaves[k].firmware;
-      const dpc31_firmware* b = slaves[i].firmware;
-      if (a != nullptr && b != nullptr && (!instance_safe(*a) || !instance_safe(*b))) {
-        return fmt::format(
-            "--slave {}:{}: station {} runs {} already; one station of a bridge runs a firmware "
-            "(the example firmwares and their dps driver keep their state in C globals, one set "
-            "per process), the others the built-in user side ({}:{})",
-            slaves[i].address, b->name, slaves[k].address, a->name, slaves[i].address,
-            kResponderName);
       }
     }
   }

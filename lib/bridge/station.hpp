@@ -41,14 +41,9 @@ struct UserSide {
 // starts the chip): the one place a station's firmware is made.
 UserSide make_user_side(Chip& chip, const dpc31_firmware* firmware, std::uint8_t address);
 
-// Whether `fw` may run on two stations of one process at once. Not yet for any: the example
-// firmwares and their dps driver keep their state in C globals, one set per process (and a
-// plug-in loaded twice is one image); DO4 beside CNT2 had CNT2's module judge DO4's Set_Prm
-// (docs/segment.md, "Stations").
-[[nodiscard]] bool instance_safe(const dpc31_firmware& fw);
-
-// Why these stations cannot share one line ("" when they can): two at one address, or a second
-// station with a firmware beside one that is not instance_safe. One line, for the CLI's exit 2.
+// Why these stations cannot share one line ("" when they can): two at one address. Any number
+// of stations may run firmware, the same or another: each FirmwareHost is an instance of its own
+// (docs/firmware.md, "Instances"). One line, for the CLI's exit 2.
 [[nodiscard]] std::string stations_problem(std::span<const SlaveSpec> slaves);
 
 }  // namespace dpc31::bridge

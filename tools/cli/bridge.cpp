@@ -637,8 +637,7 @@ int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
   // A firmware stuck in a loop without a bus access cannot be stopped from this thread: the guard
   // ends the process with one line (and takes the symlink away first).
   if (!c->setup.slaves.empty()) {
-    // At most one station runs a firmware (stations_problem); the built-in user side always
-    // makes bus accesses.
+    // Every station's firmware is guarded; the built-in user side always makes bus accesses.
     for (const bridge::SlaveSpec& s : c->setup.slaves) {
       if (s.firmware != nullptr) board::guard_hangs("dpc31 bridge", s.firmware->name, door.link);
     }
