@@ -29,6 +29,8 @@ std::string counters_text(const FdlCounters& c);
 
 // The DP service a request asks for ("Set_Prm", "Data_Exchange", "SAP 12", ...).
 std::string service_name(const fdl::Frame& request);
+// An FDL request function: "SRD_high", "SDN_low", "FDL_Status", ...
+std::string_view function_name(fdl::Function f);
 // An FDL response code: "OK", "DL", "RS", ...
 std::string_view response_name(fdl::Response r);
 // A UART fault as the walk tells it ("parity error") and as trace files write it ("parity").

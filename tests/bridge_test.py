@@ -68,28 +68,36 @@ class Bridge:
 
     def __init__(self, tmp, *args, link="dp0"):
         self.path = os.path.join(tmp, link)
+        self.start(tmp, ["--pty", self.path], args,
+                   lambda: os.path.islink(self.path) and os.path.exists(self.path),
+                   "the bridge made no symlink within 10 s")
+
+    def start(self, tmp, line, args, ready, missing):
+        """Runs the bridge on `line` (its --pty or --tcp option) with its log in `tmp`, and waits
+        until `ready()` (or fails with `missing` after 10 s, or when the bridge exits)."""
         self.log = os.path.join(tmp, "bridge.log")
-        self.proc = subprocess.Popen([CLI, "bridge", "--pty", self.path, "--log", self.log] +
-                                     list(args), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        self.proc = subprocess.Popen([CLI, "bridge"] + line + ["--log", self.log] + list(args),
+                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         deadline = time.monotonic() + 10 * SCALE
-        while not os.path.islink(self.path) or not os.path.exists(self.path):
+        while not ready():
             if self.proc.poll() is not None:
                 raise Fail(f"bridge exited with {self.proc.returncode}: "
                            f"{self.proc.stderr.read()!r}")
-            check(time.monotonic() < deadline, "the bridge made no symlink within 10 s")
+            check(time.monotonic() < deadline, missing)
             time.sleep(0.01)
 
     def stop(self, sig=signal.SIGTERM):
         self.proc.send_signal(sig)
         try:
-            out, err = self.proc.communicate(timeout=10 * SCALE)
+            _, err = self.proc.communicate(timeout=10 * SCALE)
         except subprocess.TimeoutExpired:
             self.proc.kill()
-            raise Fail(f"the bridge did not stop on signal {sig}")
+            raise Fail(f"the bridge did not stop on signal {sig}") from None
         check(self.proc.returncode == 0,
               f"bridge exit code {self.proc.returncode} on signal {sig}, stderr {err!r}")
         check(err == b"", f"bridge wrote to stderr: {err!r}")
-        check(not os.path.lexists(self.path), "the symlink is still there after the bridge stopped")
+        check(self.path is None or not os.path.lexists(self.path),
+              "the symlink is still there after the bridge stopped")
 
     def kill(self):
         if self.proc.poll() is None:

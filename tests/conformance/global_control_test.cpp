@@ -44,6 +44,16 @@ void no_gc_reserved_check(Chip& c) {
   testutil::user_start(c);
 }
 
+// Started, the inputs A1..A4 frozen by a Freeze, then the user hands B1..B4 over: the exchange
+// that lets the ISR hand B to N still answers A1..A4.
+void freeze_a_then_hand_over_b(Bench& b) {
+  ASSERT_TRUE(b.master.startup());
+  b.master.data_exchange({0, 0, 0, 0});
+  b.master.global_control(kFreeze);
+  b.user.inputs = {0xB1, 0xB2, 0xB3, 0xB4};
+  EXPECT_EQ(b.master.data_exchange({0, 0, 0, 0}).answer->du, kA);
+}
+
 std::size_t gc_interrupts(const Responder& u) {
   std::size_t n = 0;
   for (const auto& [cycle, ir] : u.interrupts) n += (ir & irq::New_GC_Command) != 0 ? 1 : 0;
@@ -58,11 +68,7 @@ std::size_t gc_interrupts(const Responder& u) {
 // they answer B1..B4. The diag shows Freeze_Mode (St2 bit 4).
 TEST_P(GlobalControl, Freeze_InputsFetchedNToDAndFrozenUntilNextFreeze) {
   Bench b(GetParam(), 12'000'000);
-  ASSERT_TRUE(b.master.startup());
-  b.master.data_exchange({0, 0, 0, 0});
-  b.master.global_control(kFreeze);
-  b.user.inputs = {0xB1, 0xB2, 0xB3, 0xB4};
-  EXPECT_EQ(b.master.data_exchange({0, 0, 0, 0}).answer->du, kA);  // the ISR hands B to N
+  freeze_a_then_hand_over_b(b);
   EXPECT_EQ(b.master.data_exchange({0, 0, 0, 0}).answer->du, kA);
   EXPECT_EQ(b.master.read_inputs().answer->du, kA);
   EXPECT_EQ(diag(b.master).at(1) & 0x10, 0x10);
@@ -76,11 +82,7 @@ TEST_P(GlobalControl, Freeze_InputsFetchedNToDAndFrozenUntilNextFreeze) {
 // after the user hands them over); Freeze_Mode off.
 TEST_P(GlobalControl, Unfreeze_CancelsFreezeAndFetchesNewInputsNToD) {
   Bench b(GetParam(), 12'000'000);
-  ASSERT_TRUE(b.master.startup());
-  b.master.data_exchange({0, 0, 0, 0});
-  b.master.global_control(kFreeze);
-  b.user.inputs = {0xB1, 0xB2, 0xB3, 0xB4};
-  EXPECT_EQ(b.master.data_exchange({0, 0, 0, 0}).answer->du, kA);
+  freeze_a_then_hand_over_b(b);
   b.master.global_control(kUnfreeze);
   b.user.inputs = {0xC1, 0xC2, 0xC3, 0xC4};
   EXPECT_EQ(b.master.data_exchange({0, 0, 0, 0}).answer->du, (Bytes{0xB1, 0xB2, 0xB3, 0xB4}));
