@@ -247,13 +247,7 @@ def main():
               file=sys.stderr)
         return 2
     bt.CLI, DISSECTOR = sys.argv[1], sys.argv[2]
-    try:
-        CASES[sys.argv[3]]()
-    except Fail as e:
-        print(f"FAIL {sys.argv[3]}: {e}", file=sys.stderr)
-        return 1
-    print(f"ok {sys.argv[3]}")
-    return 0
+    return bt.run_case(CASES, sys.argv[3])
 
 
 if __name__ == "__main__":

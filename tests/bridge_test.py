@@ -707,19 +707,24 @@ CASES = {
 }
 
 
+def run_case(cases, name):
+    """Runs the case `name` of `cases`: exit code 0 when it holds, 1 with its failure."""
+    try:
+        cases[name]()
+    except Fail as e:
+        print(f"FAIL {name}: {e}", file=sys.stderr)
+        return 1
+    print(f"ok {name}")
+    return 0
+
+
 def main():
     global CLI
     if len(sys.argv) != 3 or sys.argv[2] not in CASES:
         print(f"usage: {sys.argv[0]} DPC31_CLI CASE ({', '.join(CASES)})", file=sys.stderr)
         return 2
     CLI = sys.argv[1]
-    try:
-        CASES[sys.argv[2]]()
-    except Fail as e:
-        print(f"FAIL {sys.argv[2]}: {e}", file=sys.stderr)
-        return 1
-    print(f"ok {sys.argv[2]}")
-    return 0
+    return run_case(CASES, sys.argv[2])
 
 
 if __name__ == "__main__":
