@@ -21,31 +21,7 @@ static_assert(kWdStateNames.size() == static_cast<std::size_t>(WdState::DP_Contr
 
 std::string_view wd_state_name(WdState s) { return name_of(s, kWdStateNames); }
 
-std::span<const CounterField> fdl_counter_fields() {
-  static constexpr CounterField kFields[] = {
-      {"parity", &FdlCounters::parity},
-      {"start_bit", &FdlCounters::start_bit},
-      {"stop_bit", &FdlCounters::stop_bit},
-      {"bad_sd", &FdlCounters::bad_sd},
-      {"le_mismatch", &FdlCounters::le_mismatch},
-      {"bad_le", &FdlCounters::bad_le},
-      {"bad_fcs", &FdlCounters::bad_fcs},
-      {"wrong_ed", &FdlCounters::wrong_ed},
-      {"truncated", &FdlCounters::truncated},
-      {"oversize", &FdlCounters::oversize},
-      {"bad_sap", &FdlCounters::bad_sap},
-      {"no_sync", &FdlCounters::no_sync},
-      {"foreign_address", &FdlCounters::foreign_address},
-      {"unknown_sap", &FdlCounters::unknown_sap},
-      {"unsupported_function", &FdlCounters::unsupported_function},
-      {"not_allowed", &FdlCounters::not_allowed},
-      {"no_resource", &FdlCounters::no_resource},
-      {"offline", &FdlCounters::offline},
-      {"repeated", &FdlCounters::repeated},
-      {"requests", &FdlCounters::requests},
-  };
-  return kFields;
-}
+std::span<const CounterField> fdl_counter_fields() { return kFdlCounterFields; }
 
 std::string counters_text(const FdlCounters& c) {
   std::string s;

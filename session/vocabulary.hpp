@@ -19,10 +19,6 @@ std::string_view dp_state_name(DpState s);
 std::string_view wd_state_name(WdState s);
 
 // The FdlCounters fields by name, in declaration order (expect counter, JSON summaries).
-struct CounterField {
-  std::string_view name;
-  std::uint32_t FdlCounters::*member;
-};
 std::span<const CounterField> fdl_counter_fields();
 // The counters that are not 0, "name:N,name:N", or "-" (a trace's `state ... fdl=`).
 std::string counters_text(const FdlCounters& c);
