@@ -113,9 +113,9 @@ std::string bytes_text(std::span<const std::uint8_t> b) {
 
 // Global_Control command bits by their scenario names.
 constexpr std::pair<std::string_view, std::uint8_t> kGcNames[] = {
-    {"sync", pdu::control_command::Sync},         {"unsync", pdu::control_command::Unsync},
-    {"freeze", pdu::control_command::Freeze},     {"unfreeze", pdu::control_command::Unfreeze},
-    {"clear", pdu::control_command::Clear_Data},  {"operate", 0x00},
+    {"sync", pdu::control_command::Sync},        {"unsync", pdu::control_command::Unsync},
+    {"freeze", pdu::control_command::Freeze},    {"unfreeze", pdu::control_command::Unfreeze},
+    {"clear", pdu::control_command::Clear_Data}, {"operate", 0x00},
 };
 
 std::uint32_t gc_command(std::string_view s) {

@@ -33,8 +33,10 @@ using scenario_send::answer_text;
 // The master's call for each request step that takes no data.
 using PlainRequest = Exchange (DpMaster::*)();
 constexpr std::pair<StepKind, PlainRequest> kPlainRequests[] = {
-    {StepKind::diag, &DpMaster::slave_diag},   {StepKind::fdl_status, &DpMaster::fdl_status},
-    {StepKind::get_cfg, &DpMaster::get_cfg},   {StepKind::read_inputs, &DpMaster::read_inputs},
+    {StepKind::diag, &DpMaster::slave_diag},
+    {StepKind::fdl_status, &DpMaster::fdl_status},
+    {StepKind::get_cfg, &DpMaster::get_cfg},
+    {StepKind::read_inputs, &DpMaster::read_inputs},
     {StepKind::read_outputs, &DpMaster::read_outputs}};
 
 PlainRequest plain_request(StepKind k) {

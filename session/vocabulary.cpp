@@ -36,7 +36,7 @@ std::string counters_text(const FdlCounters& c) {
 
 // The DP services' SAPs, 55 (Set_Slave_Add) to 62 (Chk_Cfg), in order (include/dpc31/dp.hpp).
 constexpr std::array<std::string_view, 8> kDpServiceNames = {
-    "Set_Slave_Add", "Rd_Inp", "Rd_Outp", "Global_Control",
+    "Set_Slave_Add", "Rd_Inp",     "Rd_Outp", "Global_Control",
     "Get_Cfg",       "Slave_Diag", "Set_Prm", "Chk_Cfg"};
 static_assert(sap::Set_Slave_Add + kDpServiceNames.size() == sap::Chk_Cfg + 1u,
               "the DP services' SAPs are 55..62");
@@ -55,8 +55,8 @@ std::string service_name(const fdl::Frame& f) {
 
 // Indexed by the 4-bit code (EN 50170): the request function codes and the response codes.
 constexpr std::array<std::string_view, 16> kFunctionNames = {
-    "",   "",         "",           "SDA_low", "SDN_low", "SDA_high", "SDN_high",   "DDB",
-    "",   "FDL_Status", "",         "",        "SRD_low", "SRD_high", "Ident",      "LSAP_Status"};
+    "", "",           "", "SDA_low", "SDN_low", "SDA_high", "SDN_high", "DDB",
+    "", "FDL_Status", "", "",        "SRD_low", "SRD_high", "Ident",    "LSAP_Status"};
 constexpr std::array<std::string_view, 16> kResponseNames = {
     "OK", "UE", "RR", "RS", "", "", "", "", "DL", "NR", "DH", "", "RDL", "RDH", "", ""};
 
@@ -68,7 +68,9 @@ std::string_view code_name(E code, const std::array<std::string_view, 16>& names
   return i < names.size() && !names[i].empty() ? names[i] : other;
 }
 
-std::string_view function_name(fdl::Function f) { return code_name(f, kFunctionNames, "function?"); }
+std::string_view function_name(fdl::Function f) {
+  return code_name(f, kFunctionNames, "function?");
+}
 
 std::string_view response_name(fdl::Response r) { return code_name(r, kResponseNames, "FC?"); }
 

@@ -171,8 +171,7 @@ TEST(HostCpu, EnabledInterruptPreemptsTheMainLoopBetweenTwoAccesses) {
   Chip c = chip_with_pending_irq();  // X/INT active at 8
   std::vector<std::uint64_t> isr_entries;
   std::vector<std::uint64_t> main_reads;
-  Cpu cpu(c, Cpu::Program{recording_isr(isr_entries),
-                          [&](BusPort& b) {
+  Cpu cpu(c, Cpu::Program{recording_isr(isr_entries), [&](BusPort& b) {
                             b.read(kRam);
                             main_reads.push_back(b.cycle());
                           }});
@@ -210,8 +209,7 @@ TEST(HostCpu, IdleWaitIsPreemptedAndStillTakesItsTime) {
   Chip c = chip_with_pending_irq();
   std::vector<std::uint64_t> isr_entries;
   std::vector<std::uint64_t> waits_done;
-  Cpu cpu(c, Cpu::Program{recording_isr(isr_entries),
-                          [&](BusPort& b) {
+  Cpu cpu(c, Cpu::Program{recording_isr(isr_entries), [&](BusPort& b) {
                             b.idle(100);
                             waits_done.push_back(b.cycle());
                           }});

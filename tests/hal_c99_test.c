@@ -1,20 +1,18 @@
 /* The C HAL from strict C99: every function once, with the cycle costs of docs/timing.md
  * (4 clocks per byte access). Exit 0 when all hold; each failure prints its line.
  *
- * Compiled the way a public SPC3/VPC3+ driver includes it: the example driver's platform.h
- * (examples/plugin/) #defines the address types first (serial mode), and its vpc3.h declares the
- * six access functions with them. Both must compile next to the HAL's prototypes (the
- * declarations agree). */
+ * Compiled with a public SPC3/VPC3+ driver's headers: the example driver's platform.h
+ * (examples/plugin/) #defines the address types (serial mode), and its vpc3.h declares the six
+ * access functions with them. Both must compile next to the HAL's prototypes (the declarations
+ * agree). */
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
 
-/* clang-format off: the driver's order, its types before the HAL's prototypes */
-#include "platform.h"
-#include "vpc3.h"
 #include "dpc31/dpc31_hal.h"
 #include "dpc31/dpc31_regs.h"
-/* clang-format on */
+#include "platform.h"
+#include "vpc3.h"
 
 /* A chip address as the serial mode's chip pointer. */
 #define CHIP_PTR(a) VPC3_PTR(a)

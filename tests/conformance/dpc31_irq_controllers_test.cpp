@@ -73,13 +73,15 @@ void expect_both(const Edges& expect, bool int_pol, const std::vector<bool>& ext
 TEST(Dpc31IrqControllers, TheBusReachesTheChosenControllerAtTheSameAddresses) {
   // With the C31's served, the external controller is never unmasked: X/INT stays high, inactive
   // at INT_Pol = 0.
-  expect_both({{16, true}, {32, false}, {80, true}}, false, {false, true, false}, {true, true, true});
+  expect_both({{16, true}, {32, false}, {80, true}}, false, {false, true, false},
+              {true, true, true});
 }
 
 // INT_Pol (Mode_Reg0 bit 4) sets X/INT's polarity: with the C31's controller served, X/INT is
 // inactive at either polarity — low when high-active.
 TEST(Dpc31IrqControllers, XIntStaysInactiveAtEitherPolarityWhenTheC31sIsServed) {
-  expect_both({{24, true}, {40, false}, {88, true}}, true, {true, false, true}, {false, false, false});
+  expect_both({{24, true}, {40, false}, {88, true}}, true, {true, false, true},
+              {false, false, false});
 }
 
 // SPC3 and VPC3+ have no C31 core, so no second controller.

@@ -103,10 +103,9 @@ TEST_P(Osp, OspValidBit0_0RequestsOsp_1RequestsNormalOperation) {
   const Exchange o = b.master.data_exchange({0x6, 0x00});
   const Exchange n = b.master.data_exchange({0x7, 0x01});
   b.master.idle(2000);
-  EXPECT_EQ(b.values_at(DO4_PORT_OUTPUTS, before),
-            (Writes{{0x5, b.acted(a) + kPortLatency},
-                    {0x9, b.acted(o) + kPortLatency},
-                    {0x7, b.acted(n) + kPortLatency}}));
+  EXPECT_EQ(b.values_at(DO4_PORT_OUTPUTS, before), (Writes{{0x5, b.acted(a) + kPortLatency},
+                                                           {0x9, b.acted(o) + kPortLatency},
+                                                           {0x7, b.acted(n) + kPortLatency}}));
   const auto ok = b.writes(DO4_PORT_MODUL_OK, before);
   ASSERT_EQ(ok.size(), 3u);
   EXPECT_EQ(ok[0].value, 1u);

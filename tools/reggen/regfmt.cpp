@@ -455,9 +455,17 @@ namespace {
 
 enum class Col { read, write, name, kind, width, reset, fields, bytes, origin, source, desc };
 
-constexpr std::array<std::string_view, 11> kColTitles = {
-    "Read",   "Write",  "Name",   "Kind",        "Bits", "Reset", "Fields (msb..lsb)",
-    "Bytes Intel / Motorola", "Origin", "Source", "Description"};
+constexpr std::array<std::string_view, 11> kColTitles = {"Read",
+                                                         "Write",
+                                                         "Name",
+                                                         "Kind",
+                                                         "Bits",
+                                                         "Reset",
+                                                         "Fields (msb..lsb)",
+                                                         "Bytes Intel / Motorola",
+                                                         "Origin",
+                                                         "Source",
+                                                         "Description"};
 static_assert(kColTitles.size() == static_cast<std::size_t>(Col::desc) + 1, "a title a column");
 
 std::string_view col_title(Col c) { return kColTitles.at(static_cast<std::size_t>(c)); }

@@ -17,8 +17,8 @@ using Json = nlohmann::json;
 
 // Each policy's mask in a RegDesc, in the order of Access (RO .. UNIMP).
 constexpr std::array<std::uint16_t RegDesc::*, 9> kAccessMasks = {
-    &RegDesc::ro,  &RegDesc::rw,  &RegDesc::w1c,  &RegDesc::w1s,  &RegDesc::cmd,
-    &RegDesc::wo,  &RegDesc::ign, &RegDesc::rsvd, &RegDesc::unimp};
+    &RegDesc::ro, &RegDesc::rw,  &RegDesc::w1c,  &RegDesc::w1s,  &RegDesc::cmd,
+    &RegDesc::wo, &RegDesc::ign, &RegDesc::rsvd, &RegDesc::unimp};
 static_assert(kAccessMasks.size() == static_cast<std::size_t>(Access::UNIMP) + 1,
               "a mask for every access policy");
 
