@@ -2,6 +2,8 @@
 #include "dpc31/chip.hpp"
 
 #include <algorithm>
+#include <array>
+#include <iterator>
 #include <type_traits>
 
 #include "core.hpp"
@@ -152,14 +154,15 @@ bool parse_vpc3_variant(std::string_view s, Vpc3Variant& out) {
   return false;
 }
 
+namespace {
+// The names of kAllVpc3Variants, in its order.
+constexpr std::array<std::string_view, 3> kVpc3VariantNames = {"b", "c", "s"};
+static_assert(std::size(kAllVpc3Variants) == kVpc3VariantNames.size(), "name every variant");
+}  // namespace
+
 std::string_view vpc3_variant_name(Vpc3Variant v) {
-  switch (v) {
-    case Vpc3Variant::b:
-      return "b";
-    case Vpc3Variant::c:
-      return "c";
-    case Vpc3Variant::s:
-      return "s";
+  for (std::size_t i = 0; i < kVpc3VariantNames.size(); ++i) {
+    if (kAllVpc3Variants[i] == v) return kVpc3VariantNames[i];
   }
   return "?";
 }

@@ -154,27 +154,9 @@ void mac_fields(Ar& ar, S& s, std::uint64_t now) {
 
 template <typename Ar, typename S>
 void counter_fields(Ar& ar, S& s) {
-  static_assert(snap::member_count<FdlCounters>() == 20, "a new member: add it here");
-  ar(s.parity);
-  ar(s.start_bit);
-  ar(s.stop_bit);
-  ar(s.bad_sd);
-  ar(s.le_mismatch);
-  ar(s.bad_le);
-  ar(s.bad_fcs);
-  ar(s.wrong_ed);
-  ar(s.truncated);
-  ar(s.oversize);
-  ar(s.bad_sap);
-  ar(s.no_sync);
-  ar(s.foreign_address);
-  ar(s.unknown_sap);
-  ar(s.unsupported_function);
-  ar(s.not_allowed);
-  ar(s.no_resource);
-  ar(s.offline);
-  ar(s.repeated);
-  ar(s.requests);
+  static_assert(snap::member_count<FdlCounters>() == kFdlCounterFields.size(),
+                "a new member: add it to kFdlCounterFields");
+  for (const CounterField& f : kFdlCounterFields) ar(s.*(f.member));
 }
 
 // Everything that influences future behaviour. Not here: the configuration (profile, bus,

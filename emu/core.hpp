@@ -116,6 +116,8 @@ struct ChipCore {
   bool advance_clocks(std::uint64_t end, Stop stop_at);
   [[nodiscard]] std::uint64_t next_event_but_user_timer() const;
   void process_events();
+  template <bool kPerCycle>
+  void run_due();
   void tick();  // per-cycle engine: one clock, everything in the order of docs/timing.md
   void watchdog_expired();
   std::uint32_t begin_access(std::uint32_t addr, std::string_view what);

@@ -47,9 +47,18 @@ std::uint64_t ChipCore::next_event_but_user_timer() const {
 }
 
 // Everything due at `now`, in the order of docs/timing.md.
-void ChipCore::process_events() {
+void ChipCore::process_events() { run_due<false>(); }
+
+// The events of both engines; the MAC's step is `Mac::process` (the event engine: up to now) or
+// `Mac::clock` (the per-cycle reference: this clock).
+template <bool kPerCycle>
+void ChipCore::run_due() {
   if (clock.reached(mode.user_timer())) mode.user_timer_tick();
-  mac.process();
+  if constexpr (kPerCycle) {
+    mac.clock();
+  } else {
+    mac.process();
+  }
   if (mac.take_txd_wake()) stop = true;
   if (clock.reached(watchdog.timer())) watchdog_expired();
   if (clock.reached(requests.timer())) requests.wd_tick();
@@ -103,13 +112,7 @@ void ChipCore::tick() {
   count_clock(watchdog.timer());
   count_clock(mode.user_timer());
   count_clock(requests.timer());
-  if (clock.reached(mode.user_timer())) mode.user_timer_tick();
-  mac.clock();
-  if (mac.take_txd_wake()) stop = true;
-  if (clock.reached(watchdog.timer())) watchdog_expired();
-  if (clock.reached(requests.timer())) requests.wd_tick();
-  irq.update_line();
-  signals.state(clock.now);
+  run_due<true>();
 }
 
 }  // namespace dpc31

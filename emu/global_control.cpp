@@ -5,16 +5,7 @@
 
 namespace dpc31 {
 
-namespace {
-
-constexpr std::uint8_t kGC_Reserved = 0xC1;
-constexpr std::uint8_t kGC_Sync = 0x20;
-constexpr std::uint8_t kGC_Unsync = 0x10;
-constexpr std::uint8_t kGC_Freeze = 0x08;
-constexpr std::uint8_t kGC_Unfreeze = 0x04;
-constexpr std::uint8_t kGC_Clear_Data = 0x02;
-
-}  // namespace
+namespace cc = pdu::control_command;
 
 void DpStateMachine::global_control(const fdl::Frame& req) {
   if (s_.state != DpState::Data_Exchange || req.sa != s_.master_add || req.du.size() != 2) {
@@ -39,9 +30,9 @@ void DpStateMachine::apply_global_control(std::uint8_t command) {
   const bool every_gc_interrupts = (options & fields::Mode_Reg2::GC_Int_Mode) != 0;
   const bool check_reserved = (options & fields::Mode_Reg2::No_Check_GC_Reserved) == 0;
   const bool bad =
-      (check_reserved && (command & kGC_Reserved) != 0) ||
-      ((command & kGC_Sync) != 0 && !regs_.mode0(fields::Mode_Reg0::Sync_Supported)) ||
-      ((command & kGC_Freeze) != 0 && !regs_.mode0(fields::Mode_Reg0::Freeze_Supported));
+      (check_reserved && (command & cc::Reserved) != 0) ||
+      ((command & cc::Sync) != 0 && !regs_.mode0(fields::Mode_Reg0::Sync_Supported)) ||
+      ((command & cc::Freeze) != 0 && !regs_.mode0(fields::Mode_Reg0::Freeze_Supported));
   if (bad) {
     sig_.log(LogLevel::info, "Global_Control {:02X}h: not supported: Not_Supported, Leave_Master",
              command);
@@ -53,15 +44,15 @@ void DpStateMachine::apply_global_control(std::uint8_t command) {
   regs_.set_cell(RegId::R_GC_Command, command);
   if (every_gc_interrupts || command != previous) irq_.raise(irq::New_GC_Command);
 
-  if ((command & kGC_Clear_Data) != 0) {
+  if ((command & cc::Clear_Data) != 0) {
     buffers_.failsafe_clear();
   }
   // Unsync wins over Sync; both hand the outputs received since the last hand-over (D) to the
   // user with DX_Out, unless Clear_Data already did. With nothing new in D, DX_Out comes all the
   // same (the manual's wording is unconditional) and no buffer changes hands.
-  if ((command & (kGC_Sync | kGC_Unsync)) != 0) {
-    s_.sync_mode = (command & kGC_Unsync) == 0;
-    if ((command & kGC_Clear_Data) == 0) {
+  if ((command & (cc::Sync | cc::Unsync)) != 0) {
+    s_.sync_mode = (command & cc::Unsync) == 0;
+    if ((command & cc::Clear_Data) == 0) {
       if (buffers_.d_fresh()) {
         buffers_.dout_received();
       } else {
@@ -72,13 +63,13 @@ void DpStateMachine::apply_global_control(std::uint8_t command) {
   // "the interrupt 'DX_OUT' can directly be applied to the port PB3 if a global control message
   // is received with 'Sync', provided 'Enable DX_OUT_Port=1' was parameterized in the C31_Control
   // register beforehand" (seed 003, p.32).
-  if ((command & kGC_Sync) != 0 && regs_.id() == Profile::dpc31 &&
+  if ((command & cc::Sync) != 0 && regs_.id() == Profile::dpc31 &&
       (regs_.latch(RegId::C31_Control) & fields::C31_Control::Enable_DX_Out_Port) != 0 &&
       (regs_.latch(RegId::Int_Req_Reg) & irq::DX_Out) != 0) {
     irq_.set_pb3(true);
   }
-  if ((command & (kGC_Freeze | kGC_Unfreeze)) != 0) {
-    s_.freeze_mode = (command & kGC_Unfreeze) == 0;
+  if ((command & (cc::Freeze | cc::Unfreeze)) != 0) {
+    s_.freeze_mode = (command & cc::Unfreeze) == 0;
     buffers_.din_fetch();  // the newest inputs (N) are taken into D, then frozen or not
   }
 }

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <span>
 #include <string>
 
@@ -162,6 +163,10 @@ namespace {
 std::uint16_t chip_address(const std::uint8_t* p) {
   return static_cast<std::uint16_t>(reinterpret_cast<std::uintptr_t>(p) & 0xFFFFu);
 }
+// A pin's C callback as the chip's observer: fn(user, cycle, 1 when active / high).
+std::function<void(std::uint64_t, bool)> pin_observer(dpc31_irq_fn fn, void* user) {
+  return [fn, user](std::uint64_t cycle, bool level) { fn(user, cycle, level ? 1 : 0); };
+}
 }  // namespace
 
 extern "C" {
@@ -238,20 +243,14 @@ int dpc31_irq_active(const dpc31_chip* chip) { return chip->chip.irq_active() ? 
 
 void dpc31_set_irq_callback(dpc31_chip* chip, dpc31_irq_fn fn, void* user) {
   chip->chip.on_irq_change({});
-  if (fn != nullptr) {
-    chip->chip.on_irq_change(
-        [fn, user](std::uint64_t cycle, bool active) { fn(user, cycle, active ? 1 : 0); });
-  }
+  if (fn != nullptr) chip->chip.on_irq_change(pin_observer(fn, user));
 }
 
 int dpc31_pb3(const dpc31_chip* chip) { return chip->chip.pb3_pin() ? 1 : 0; }
 
 void dpc31_set_pb3_callback(dpc31_chip* chip, dpc31_irq_fn fn, void* user) {
   chip->chip.on_pb3_change({});
-  if (fn != nullptr) {
-    chip->chip.on_pb3_change(
-        [fn, user](std::uint64_t cycle, bool high) { fn(user, cycle, high ? 1 : 0); });
-  }
+  if (fn != nullptr) chip->chip.on_pb3_change(pin_observer(fn, user));
 }
 
 void dpc31_select(dpc31_chip* chip) {

@@ -21,6 +21,17 @@ std::size_t put(Bytes& out, std::size_t i, View bytes) {
   std::copy(bytes.begin(), bytes.end(), out.begin() + static_cast<std::ptrdiff_t>(i));
   return i + bytes.size();
 }
+// Bytes i, i + 1, ... of `du` into `fields`, in order.
+template <typename... F>
+void get_bytes(View du, std::size_t i, F&... fields) {
+  ((fields = du[i++]), ...);
+}
+// `fields` into out[i], out[i + 1], ...; the index after them.
+template <typename... F>
+std::size_t put_bytes(Bytes& out, std::size_t i, F... fields) {
+  ((out[i++] = fields), ...);
+  return i;
+}
 bool has(View du, Function f) { return !du.empty() && du[0] == static_cast<std::uint8_t>(f); }
 
 // Chk_Cfg identifier bytes (EN 50170): general format bits 5..4 00 special, 01 input,
@@ -50,10 +61,7 @@ View SetPrm::user_data() const {
 std::optional<SetPrm> SetPrm::parse(View du) {
   if (du.size() < kStandard) return std::nullopt;
   SetPrm p;
-  p.station_status = du[0];
-  p.wd_fact1 = du[1];
-  p.wd_fact2 = du[2];
-  p.min_tsdr = du[3];
+  get_bytes(du, 0, p.station_status, p.wd_fact1, p.wd_fact2, p.min_tsdr);
   p.ident = be16(du, 4);
   p.group_ident = du[6];
   p.user_prm.assign(du.begin() + kStandard, du.end());
@@ -62,11 +70,7 @@ std::optional<SetPrm> SetPrm::parse(View du) {
 
 Bytes SetPrm::build() const {
   Bytes out(kStandard + user_prm.size());
-  out[0] = station_status;
-  out[1] = wd_fact1;
-  out[2] = wd_fact2;
-  out[3] = min_tsdr;
-  put16(out, 4, ident);
+  put16(out, put_bytes(out, 0, station_status, wd_fact1, wd_fact2, min_tsdr), ident);
   out[6] = group_ident;
   put(out, kStandard, user_prm);
   return out;
@@ -77,10 +81,7 @@ Bytes SetPrm::build() const {
 std::optional<SlaveDiag> SlaveDiag::parse(View du) {
   if (du.size() < kStandard) return std::nullopt;
   SlaveDiag d;
-  d.station_status_1 = du[0];
-  d.station_status_2 = du[1];
-  d.station_status_3 = du[2];
-  d.master_add = du[3];
+  get_bytes(du, 0, d.station_status_1, d.station_status_2, d.station_status_3, d.master_add);
   d.ident = be16(du, 4);
   for (std::size_t i = kStandard; i < du.size();) {
     const auto kind = static_cast<Kind>(du[i] >> 6);
@@ -99,11 +100,9 @@ Bytes SlaveDiag::build() const {
   std::size_t n = kStandard;
   for (const Block& b : blocks) n += b.bytes.size();
   Bytes out(n);
-  out[0] = station_status_1;
-  out[1] = station_status_2;
-  out[2] = station_status_3;
-  out[3] = master_add;
-  std::size_t i = put16(out, 4, ident);
+  std::size_t i = put16(
+      out, put_bytes(out, 0, station_status_1, station_status_2, station_status_3, master_add),
+      ident);
   for (const Block& b : blocks) i = put(out, i, b.bytes);
   return out;
 }

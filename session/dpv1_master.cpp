@@ -5,6 +5,7 @@
 
 #include "dpc31/dp.hpp"
 #include "dpc31/hex.hpp"
+#include "dpc31/names.hpp"
 
 namespace dpc31 {
 
@@ -12,23 +13,12 @@ namespace {
 using pdu::Function;
 }  // namespace
 
-std::string outcome_name(Dpv1Answer::Outcome o) {
-  switch (o) {
-    case Dpv1Answer::Outcome::positive:
-      return "positive";
-    case Dpv1Answer::Outcome::negative:
-      return "negative";
-    case Dpv1Answer::Outcome::refused:
-      return "refused";
-    case Dpv1Answer::Outcome::no_answer:
-      return "no answer";
-    case Dpv1Answer::Outcome::timeout:
-      return "timeout";
-    case Dpv1Answer::Outcome::malformed:
-      return "malformed";
-  }
-  return "?";
-}
+constexpr std::array<std::string_view, 6> kOutcomeNames = {"positive",  "negative", "refused",
+                                                           "no answer", "timeout",  "malformed"};
+static_assert(kOutcomeNames.size() == static_cast<std::size_t>(Dpv1Answer::Outcome::malformed) + 1,
+              "a new value: name it here");
+
+std::string outcome_name(Dpv1Answer::Outcome o) { return std::string(name_of(o, kOutcomeNames)); }
 
 std::string answer_summary(const Dpv1Answer& a) {
   const std::string polls = fmt::format("after {} poll{}", a.polls, a.polls == 1 ? "" : "s");

@@ -29,18 +29,29 @@ void no_positional(std::span<const std::string_view> pos, std::string_view cmd) 
   if (!pos.empty()) fail(fmt::format("{} takes options only; unexpected '{}'", cmd, shown(pos[0])));
 }
 
+// slot=N (0..254) into st.value, or `second`=N (min..max) into st.value2, each noted in its
+// flag; false for any other key.
+bool slot_or(std::string_view k, std::string_view v, std::string_view second, std::uint64_t min,
+             std::uint64_t max, ScenarioStep& st, bool& has_slot, bool& has_second) {
+  if (k == "slot") {
+    st.value = static_cast<std::uint32_t>(number(v, k, 0, 254));
+    has_slot = true;
+  } else if (k == second) {
+    st.value2 = static_cast<std::uint32_t>(number(v, k, min, max));
+    has_second = true;
+  } else {
+    return false;
+  }
+  return true;
+}
+
 // slot= index= and one of length= (reads) or data= (writes); all required.
 void record_options(std::span<const Option> opts, std::string_view cmd, bool read,
                     ScenarioStep& st) {
   bool slot = false, index = false, third = false;
   for (const auto& [k, v] : opts) {
-    if (k == "slot") {
-      st.value = static_cast<std::uint32_t>(number(v, k, 0, 254));
-      slot = true;
-    } else if (k == "index") {
-      st.value2 = static_cast<std::uint32_t>(number(v, k, 0, 255));
-      index = true;
-    } else if (read && k == "length") {
+    if (slot_or(k, v, "index", 0, 255, st, slot, index)) continue;
+    if (read && k == "length") {
       st.count = number(v, k, 1, kMaxRecord);
       third = true;
     } else if (!read && k == "data") {
@@ -111,13 +122,8 @@ bool parse_action(std::string_view cmd, std::span<const std::string_view> pos,
     std::uint32_t spec = 0;
     st.count = 0;
     for (const auto& [k, v] : opts) {
-      if (k == "slot") {
-        st.value = static_cast<std::uint32_t>(number(v, k, 0, 254));
-        slot = true;
-      } else if (k == "type") {
-        st.value2 = static_cast<std::uint32_t>(number(v, k, 1, 127));
-        type = true;
-      } else if (k == "seq") {
+      if (slot_or(k, v, "type", 1, 127, st, slot, type)) continue;
+      if (k == "seq") {
         st.count |= number(v, k, 0, 31) << 3;
         seq = true;
       } else if (k == "spec") {

@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "dpc31/hex.hpp"
+#include "dpc31/pdu.hpp"
 #include "textfile.hpp"
 
 namespace dpc31::scenario_lex {
@@ -110,10 +111,11 @@ std::string bytes_text(std::span<const std::uint8_t> b) {
   return b.empty() ? "-" : hex_bytes(b, " ", 4096);
 }
 
-// Global_Control command bits (DP standard).
+// Global_Control command bits by their scenario names.
 constexpr std::pair<std::string_view, std::uint8_t> kGcNames[] = {
-    {"sync", 0x20},     {"unsync", 0x10}, {"freeze", 0x08},
-    {"unfreeze", 0x04}, {"clear", 0x02},  {"operate", 0x00},
+    {"sync", pdu::control_command::Sync},        {"unsync", pdu::control_command::Unsync},
+    {"freeze", pdu::control_command::Freeze},    {"unfreeze", pdu::control_command::Unfreeze},
+    {"clear", pdu::control_command::Clear_Data}, {"operate", 0x00},
 };
 
 std::uint32_t gc_command(std::string_view s) {

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <iterator>
 #include <map>
 #include <memory>
 #include <optional>
@@ -28,6 +29,21 @@ namespace {
 using scenario_expect::port_text;
 using scenario_lex::bytes_text;
 using scenario_send::answer_text;
+
+// The master's call for each request step that takes no data.
+using PlainRequest = Exchange (DpMaster::*)();
+constexpr std::pair<StepKind, PlainRequest> kPlainRequests[] = {
+    {StepKind::diag, &DpMaster::slave_diag},
+    {StepKind::fdl_status, &DpMaster::fdl_status},
+    {StepKind::get_cfg, &DpMaster::get_cfg},
+    {StepKind::read_inputs, &DpMaster::read_inputs},
+    {StepKind::read_outputs, &DpMaster::read_outputs}};
+
+PlainRequest plain_request(StepKind k) {
+  return std::find_if(std::begin(kPlainRequests), std::end(kPlainRequests),
+                      [k](const auto& r) { return r.first == k; })
+      ->second;
+}
 
 class Runner {
  public:
@@ -404,24 +420,12 @@ class Runner {
         }
         break;
       case StepKind::diag:
-        damage(st);
-        with_retries(master_->slave_diag());
-        break;
       case StepKind::fdl_status:
-        damage(st);
-        with_retries(master_->fdl_status());
-        break;
       case StepKind::get_cfg:
-        damage(st);
-        with_retries(master_->get_cfg());
-        break;
       case StepKind::read_inputs:
-        damage(st);
-        with_retries(master_->read_inputs());
-        break;
       case StepKind::read_outputs:
         damage(st);
-        with_retries(master_->read_outputs());
+        with_retries((*master_.*plain_request(st.kind))());
         break;
       case StepKind::set_prm:
       case StepKind::chk_cfg:

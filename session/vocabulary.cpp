@@ -21,31 +21,7 @@ static_assert(kWdStateNames.size() == static_cast<std::size_t>(WdState::DP_Contr
 
 std::string_view wd_state_name(WdState s) { return name_of(s, kWdStateNames); }
 
-std::span<const CounterField> fdl_counter_fields() {
-  static constexpr CounterField kFields[] = {
-      {"parity", &FdlCounters::parity},
-      {"start_bit", &FdlCounters::start_bit},
-      {"stop_bit", &FdlCounters::stop_bit},
-      {"bad_sd", &FdlCounters::bad_sd},
-      {"le_mismatch", &FdlCounters::le_mismatch},
-      {"bad_le", &FdlCounters::bad_le},
-      {"bad_fcs", &FdlCounters::bad_fcs},
-      {"wrong_ed", &FdlCounters::wrong_ed},
-      {"truncated", &FdlCounters::truncated},
-      {"oversize", &FdlCounters::oversize},
-      {"bad_sap", &FdlCounters::bad_sap},
-      {"no_sync", &FdlCounters::no_sync},
-      {"foreign_address", &FdlCounters::foreign_address},
-      {"unknown_sap", &FdlCounters::unknown_sap},
-      {"unsupported_function", &FdlCounters::unsupported_function},
-      {"not_allowed", &FdlCounters::not_allowed},
-      {"no_resource", &FdlCounters::no_resource},
-      {"offline", &FdlCounters::offline},
-      {"repeated", &FdlCounters::repeated},
-      {"requests", &FdlCounters::requests},
-  };
-  return kFields;
-}
+std::span<const CounterField> fdl_counter_fields() { return kFdlCounterFields; }
 
 std::string counters_text(const FdlCounters& c) {
   std::string s;
@@ -58,6 +34,13 @@ std::string counters_text(const FdlCounters& c) {
   return s.empty() ? "-" : s;
 }
 
+// The DP services' SAPs, 55 (Set_Slave_Add) to 62 (Chk_Cfg), in order (include/dpc31/dp.hpp).
+constexpr std::array<std::string_view, 8> kDpServiceNames = {
+    "Set_Slave_Add", "Rd_Inp",     "Rd_Outp", "Global_Control",
+    "Get_Cfg",       "Slave_Diag", "Set_Prm", "Chk_Cfg"};
+static_assert(sap::Set_Slave_Add + kDpServiceNames.size() == sap::Chk_Cfg + 1u,
+              "the DP services' SAPs are 55..62");
+
 std::string service_name(const fdl::Frame& f) {
   const fdl::Function fn = fdl::request_function(f.fc);
   if (fn == fdl::Function::FDL_Status) return "FDL_Status";
@@ -65,79 +48,42 @@ std::string service_name(const fdl::Frame& f) {
     return fn == fdl::Function::SRD_high || fn == fdl::Function::SRD_low ? "Data_Exchange"
                                                                          : "no SAP";
   }
-  switch (fdl::sap_number(*f.dsap)) {
-    case sap::Set_Slave_Add:
-      return "Set_Slave_Add";
-    case sap::Rd_Inp:
-      return "Rd_Inp";
-    case sap::Rd_Outp:
-      return "Rd_Outp";
-    case sap::Global_Control:
-      return "Global_Control";
-    case sap::Get_Cfg:
-      return "Get_Cfg";
-    case sap::Slave_Diag:
-      return "Slave_Diag";
-    case sap::Set_Prm:
-      return "Set_Prm";
-    case sap::Chk_Cfg:
-      return "Chk_Cfg";
-    default:
-      return fmt::format("SAP {}", fdl::sap_number(*f.dsap));
-  }
+  const std::uint8_t sap = fdl::sap_number(*f.dsap);
+  if (sap < sap::Set_Slave_Add || sap > sap::Chk_Cfg) return fmt::format("SAP {}", sap);
+  return std::string(kDpServiceNames[sap - sap::Set_Slave_Add]);
 }
 
-std::string_view response_name(fdl::Response r) {
-  switch (r) {
-    case fdl::Response::OK:
-      return "OK";
-    case fdl::Response::UE:
-      return "UE";
-    case fdl::Response::RR:
-      return "RR";
-    case fdl::Response::RS:
-      return "RS";
-    case fdl::Response::DL:
-      return "DL";
-    case fdl::Response::NR:
-      return "NR";
-    case fdl::Response::DH:
-      return "DH";
-    case fdl::Response::RDL:
-      return "RDL";
-    case fdl::Response::RDH:
-      return "RDH";
-  }
-  return "FC?";
+// Indexed by the 4-bit code (EN 50170): the request function codes and the response codes.
+constexpr std::array<std::string_view, 16> kFunctionNames = {
+    "", "",           "", "SDA_low", "SDN_low", "SDA_high", "SDN_high", "DDB",
+    "", "FDL_Status", "", "",        "SRD_low", "SRD_high", "Ident",    "LSAP_Status"};
+constexpr std::array<std::string_view, 16> kResponseNames = {
+    "OK", "UE", "RR", "RS", "", "", "", "", "DL", "NR", "DH", "", "RDL", "RDH", "", ""};
+
+// The name of a 4-bit code, or `other` for a code without one.
+template <typename E>
+std::string_view code_name(E code, const std::array<std::string_view, 16>& names,
+                           std::string_view other) {
+  const auto i = static_cast<std::size_t>(code);
+  return i < names.size() && !names[i].empty() ? names[i] : other;
 }
 
-std::string_view fault_name(UartFault::Kind k) {
-  switch (k) {
-    case UartFault::Kind::parity:
-      return "parity error";
-    case UartFault::Kind::start:
-      return "no start bit";
-    case UartFault::Kind::stop:
-      return "stop bit 0";
-    case UartFault::Kind::none:
-      break;
-  }
-  return "no fault";
+std::string_view function_name(fdl::Function f) {
+  return code_name(f, kFunctionNames, "function?");
 }
 
-std::string_view fault_kind_name(UartFault::Kind k) {
-  switch (k) {
-    case UartFault::Kind::parity:
-      return "parity";
-    case UartFault::Kind::start:
-      return "start";
-    case UartFault::Kind::stop:
-      return "stop";
-    case UartFault::Kind::none:
-      break;
-  }
-  return "none";
-}
+std::string_view response_name(fdl::Response r) { return code_name(r, kResponseNames, "FC?"); }
+
+// By UartFault::Kind: none, parity, start, stop.
+constexpr std::array<std::string_view, 4> kFaultNames = {"no fault", "parity error", "no start bit",
+                                                         "stop bit 0"};
+constexpr std::array<std::string_view, 4> kFaultKindNames = {"none", "parity", "start", "stop"};
+static_assert(kFaultNames.size() == static_cast<std::size_t>(UartFault::Kind::stop) + 1,
+              "a new value: name it here");
+
+std::string_view fault_name(UartFault::Kind k) { return name_of(k, kFaultNames); }
+
+std::string_view fault_kind_name(UartFault::Kind k) { return name_of(k, kFaultKindNames); }
 
 bool parse_fault_kind(std::string_view name, UartFault::Kind& kind) {
   for (const UartFault::Kind k :

@@ -19,16 +19,14 @@ std::string_view dp_state_name(DpState s);
 std::string_view wd_state_name(WdState s);
 
 // The FdlCounters fields by name, in declaration order (expect counter, JSON summaries).
-struct CounterField {
-  std::string_view name;
-  std::uint32_t FdlCounters::*member;
-};
 std::span<const CounterField> fdl_counter_fields();
 // The counters that are not 0, "name:N,name:N", or "-" (a trace's `state ... fdl=`).
 std::string counters_text(const FdlCounters& c);
 
 // The DP service a request asks for ("Set_Prm", "Data_Exchange", "SAP 12", ...).
 std::string service_name(const fdl::Frame& request);
+// An FDL request function: "SRD_high", "SDN_low", "FDL_Status", ...
+std::string_view function_name(fdl::Function f);
 // An FDL response code: "OK", "DL", "RS", ...
 std::string_view response_name(fdl::Response r);
 // A UART fault as the walk tells it ("parity error") and as trace files write it ("parity").

@@ -19,6 +19,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <map>
 #include <sstream>
 #include <string>
@@ -93,6 +94,11 @@ class BadInput : public ::testing::Test {
     return {r.rc, slurp(out), slurp(err)};
   }
 
+  // `dpc31 CMD ARGS --json F` checks F before it runs anything: F a directory, F in a missing
+  // directory; then each of `bad` (whole argument lists) is refused; nothing is left behind.
+  void expect_json_checked_first(const std::string& cmd, const std::string& args,
+                                 std::initializer_list<const char*> bad);
+
   [[nodiscard]] std::vector<std::string> listing() const {
     std::vector<std::string> names;
     for (const auto& e : fs::directory_iterator(root_ / "work")) {
@@ -156,6 +162,21 @@ inline void expect_bad_prefix(const Outcome& r, const std::string& prefix,
   EXPECT_EQ(r.rc, 2) << what << "\n" << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << what << ": " << r.err;
   EXPECT_EQ(r.err.rfind(prefix, 0), 0u) << what << ": " << r.err;
+}
+
+inline void BadInput::expect_json_checked_first(const std::string& cmd, const std::string& args,
+                                                std::initializer_list<const char*> bad) {
+  fs::create_directory(path("taken"));
+  spit(path("old.json"), "old");
+  const auto before = listing();
+  const std::string who = "dpc31 " + cmd + ": ";
+  expect_bad(dpc31(cmd + " " + args + " --json taken"), who + "taken: cannot write: is a directory",
+             "json directory");
+  expect_bad_prefix(dpc31(cmd + " " + args + " --json no/such/x.json"),
+                    who + "no/such/x.json: cannot create the temporary file ", "json dir");
+  for (const char* a : bad) expect_bad_prefix(dpc31(a), who, a);
+  EXPECT_EQ(slurp(path("old.json")), "old");
+  EXPECT_EQ(listing(), before);
 }
 
 inline std::string fmt_line(const std::string& file, std::ptrdiff_t line, const std::string& what) {

@@ -21,12 +21,10 @@ Every wait is on an event (a log line, an answer), none on a wall time.
 
 import os
 import re
-import signal
 import socket
 import subprocess
 import sys
 import tempfile
-import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import bridge_test as bt  # noqa: E402
@@ -42,33 +40,17 @@ class TcpBridge(bt.Bridge):
     """The bridge as a child process on --tcp 0; the port read from the log's first line."""
 
     def __init__(self, tmp, *args):  # pylint: disable=super-init-not-called
-        self.path = None
-        self.log = os.path.join(tmp, "bridge.log")
-        self.proc = subprocess.Popen([bt.CLI, "bridge", "--tcp", "0", "--log", self.log] +
-                                     list(args), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-        deadline = time.monotonic() + 10 * SCALE
-        while True:
-            lines = self.log_lines()
-            found = re.search(r", tcp 127\.0\.0\.1:(\d+)$", lines[0]) if lines else None
-            if found:
-                self.url = f"socket://127.0.0.1:{found.group(1)}"
-                self.port = int(found.group(1))
-                return
-            if self.proc.poll() is not None:
-                raise Fail(f"bridge exited with {self.proc.returncode}: "
-                           f"{self.proc.stderr.read()!r}")
-            check(time.monotonic() < deadline, "the bridge named no TCP port within 10 s")
-            time.sleep(0.01)
+        self.path = None  # no symlink
+        self.start(tmp, ["--tcp", "0"], args, self.port_named,
+                   "the bridge named no TCP port within 10 s")
 
-    def stop(self, sig=signal.SIGTERM):
-        self.proc.send_signal(sig)
-        try:
-            _, err = self.proc.communicate(timeout=10 * SCALE)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            raise Fail(f"the bridge did not stop on signal {sig}") from None
-        check(self.proc.returncode == 0 and err == b"",
-              f"bridge exit code {self.proc.returncode}, stderr {err!r}")
+    def port_named(self):
+        lines = self.log_lines()
+        found = re.search(r", tcp 127\.0\.0\.1:(\d+)$", lines[0]) if lines else None
+        if found:
+            self.url = f"socket://127.0.0.1:{found.group(1)}"
+            self.port = int(found.group(1))
+        return found is not None
 
 
 def check_stations(lines):
@@ -273,13 +255,7 @@ def main(cases=None):
               file=sys.stderr)
         return 2
     bt.CLI, DISSECTOR = sys.argv[1], sys.argv[2]
-    try:
-        cases[sys.argv[3]]()
-    except Fail as e:
-        print(f"FAIL {sys.argv[3]}: {e}", file=sys.stderr)
-        return 1
-    print(f"ok {sys.argv[3]}")
-    return 0
+    return bt.run_case(cases, sys.argv[3])
 
 
 if __name__ == "__main__":

@@ -68,28 +68,36 @@ class Bridge:
 
     def __init__(self, tmp, *args, link="dp0"):
         self.path = os.path.join(tmp, link)
+        self.start(tmp, ["--pty", self.path], args,
+                   lambda: os.path.islink(self.path) and os.path.exists(self.path),
+                   "the bridge made no symlink within 10 s")
+
+    def start(self, tmp, line, args, ready, missing):
+        """Runs the bridge on `line` (its --pty or --tcp option) with its log in `tmp`, and waits
+        until `ready()` (or fails with `missing` after 10 s, or when the bridge exits)."""
         self.log = os.path.join(tmp, "bridge.log")
-        self.proc = subprocess.Popen([CLI, "bridge", "--pty", self.path, "--log", self.log] +
-                                     list(args), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        self.proc = subprocess.Popen([CLI, "bridge"] + line + ["--log", self.log] + list(args),
+                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         deadline = time.monotonic() + 10 * SCALE
-        while not os.path.islink(self.path) or not os.path.exists(self.path):
+        while not ready():
             if self.proc.poll() is not None:
                 raise Fail(f"bridge exited with {self.proc.returncode}: "
                            f"{self.proc.stderr.read()!r}")
-            check(time.monotonic() < deadline, "the bridge made no symlink within 10 s")
+            check(time.monotonic() < deadline, missing)
             time.sleep(0.01)
 
     def stop(self, sig=signal.SIGTERM):
         self.proc.send_signal(sig)
         try:
-            out, err = self.proc.communicate(timeout=10 * SCALE)
+            _, err = self.proc.communicate(timeout=10 * SCALE)
         except subprocess.TimeoutExpired:
             self.proc.kill()
-            raise Fail(f"the bridge did not stop on signal {sig}")
+            raise Fail(f"the bridge did not stop on signal {sig}") from None
         check(self.proc.returncode == 0,
               f"bridge exit code {self.proc.returncode} on signal {sig}, stderr {err!r}")
         check(err == b"", f"bridge wrote to stderr: {err!r}")
-        check(not os.path.lexists(self.path), "the symlink is still there after the bridge stopped")
+        check(self.path is None or not os.path.lexists(self.path),
+              "the symlink is still there after the bridge stopped")
 
     def kill(self):
         if self.proc.poll() is None:
@@ -716,19 +724,24 @@ CASES = {
 }
 
 
+def run_case(cases, name):
+    """Runs the case `name` of `cases`: exit code 0 when it holds, 1 with its failure."""
+    try:
+        cases[name]()
+    except Fail as e:
+        print(f"FAIL {name}: {e}", file=sys.stderr)
+        return 1
+    print(f"ok {name}")
+    return 0
+
+
 def main():
     global CLI
     if len(sys.argv) != 3 or sys.argv[2] not in CASES:
         print(f"usage: {sys.argv[0]} DPC31_CLI CASE ({', '.join(CASES)})", file=sys.stderr)
         return 2
     CLI = sys.argv[1]
-    try:
-        CASES[sys.argv[2]]()
-    except Fail as e:
-        print(f"FAIL {sys.argv[2]}: {e}", file=sys.stderr)
-        return 1
-    print(f"ok {sys.argv[2]}")
-    return 0
+    return run_case(CASES, sys.argv[2])
 
 
 if __name__ == "__main__":

@@ -39,6 +39,14 @@ Chip chip_with_pending_irq() {
 // Acknowledges DX_Out (Int_Ack_Reg high byte at 0x03 in Intel order): X/INT goes inactive.
 void acknowledge(BusPort& b) { b.write(0x03, static_cast<std::uint8_t>(irq::DX_Out >> 8)); }
 
+// An ISR that notes the cycle it is entered in, then acknowledges.
+Cpu::Isr recording_isr(std::vector<std::uint64_t>& entries) {
+  return [&entries](BusPort& b) {
+    entries.push_back(b.cycle());
+    acknowledge(b);
+  };
+}
+
 TEST(HostCpu, IsrInterleavesPerAccessAndResumesWhereItStopped) {
   Chip c = chip_with_pending_irq();
   ASSERT_EQ(c.cycle(), 2 * kAccess);
@@ -163,11 +171,7 @@ TEST(HostCpu, EnabledInterruptPreemptsTheMainLoopBetweenTwoAccesses) {
   Chip c = chip_with_pending_irq();  // X/INT active at 8
   std::vector<std::uint64_t> isr_entries;
   std::vector<std::uint64_t> main_reads;
-  Cpu cpu(c, Cpu::Program{[&](BusPort& b) {
-                            isr_entries.push_back(b.cycle());
-                            acknowledge(b);
-                          },
-                          [&](BusPort& b) {
+  Cpu cpu(c, Cpu::Program{recording_isr(isr_entries), [&](BusPort& b) {
                             b.read(kRam);
                             main_reads.push_back(b.cycle());
                           }});
@@ -184,10 +188,7 @@ TEST(HostCpu, MaskedInterruptLeavesAPollingLoopAloneUntilEnabled) {
   bool enabled = false;  // the board's interrupt input, as dpc31_board_int_enable sets it
   std::vector<std::uint64_t> isr_entries;
   int reads = 0;
-  Cpu cpu(c, Cpu::Program{[&](BusPort& b) {
-                            isr_entries.push_back(b.cycle());
-                            acknowledge(b);
-                          },
+  Cpu cpu(c, Cpu::Program{recording_isr(isr_entries),
                           [&](BusPort& b) {
                             b.read(kRam);
                             ++reads;
@@ -208,11 +209,7 @@ TEST(HostCpu, IdleWaitIsPreemptedAndStillTakesItsTime) {
   Chip c = chip_with_pending_irq();
   std::vector<std::uint64_t> isr_entries;
   std::vector<std::uint64_t> waits_done;
-  Cpu cpu(c, Cpu::Program{[&](BusPort& b) {
-                            isr_entries.push_back(b.cycle());
-                            acknowledge(b);
-                          },
-                          [&](BusPort& b) {
+  Cpu cpu(c, Cpu::Program{recording_isr(isr_entries), [&](BusPort& b) {
                             b.idle(100);
                             waits_done.push_back(b.cycle());
                           }});

@@ -1,32 +1,21 @@
 /* The C HAL from strict C99: every function once, with the cycle costs of docs/timing.md
  * (4 clocks per byte access). Exit 0 when all hold; each failure prints its line.
  *
- * Compiled the way a public SPC3/VPC3+ driver includes it: its platform.h #defines the address
- * types first (serial mode), and its own header declares the six access functions with them.
- * Both must compile next to the HAL's prototypes (the declarations agree). */
+ * Compiled with a public SPC3/VPC3+ driver's headers: the example driver's platform.h
+ * (examples/plugin/) #defines the address types (serial mode), and its vpc3.h declares the six
+ * access functions with them. Both must compile next to the HAL's prototypes (the declarations
+ * agree). */
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
 
-#define VPC3_ADR uint16_t
-#define VPC3_UNSIGNED8_PTR uint8_t*
-#define MEM_UNSIGNED8_PTR uint8_t*
-
 #include "dpc31/dpc31_hal.h"
 #include "dpc31/dpc31_regs.h"
-
-/* A driver header's declarations, as the drivers write them. */
-uint8_t Vpc3Read(VPC3_ADR wAddress);
-void Vpc3Write(VPC3_ADR wAddress, uint8_t bData);
-void CopyToVpc3(VPC3_UNSIGNED8_PTR pToVpc3Memory, MEM_UNSIGNED8_PTR pLocalMemory, uint16_t wLength);
-void CopyFromVpc3(MEM_UNSIGNED8_PTR pLocalMemory, VPC3_UNSIGNED8_PTR pToVpc3Memory,
-                  uint16_t wLength);
-void Vpc3MemSet(VPC3_ADR wAddress, uint8_t bValue, uint16_t wLength);
-uint8_t Vpc3MemCmp(VPC3_UNSIGNED8_PTR pToVpc3Memory1, VPC3_UNSIGNED8_PTR pToVpc3Memory2,
-                   uint16_t wLength);
+#include "platform.h"
+#include "vpc3.h"
 
 /* A chip address as the serial mode's chip pointer. */
-#define CHIP_PTR(a) ((VPC3_UNSIGNED8_PTR)(uintptr_t)(a))
+#define CHIP_PTR(a) VPC3_PTR(a)
 
 static int failures;
 #define CHECK(cond)                                              \

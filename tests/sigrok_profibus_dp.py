@@ -35,18 +35,13 @@ import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from waveform_sigrok_demo import pcapng_blocks, timescale_ns  # noqa: E402
+from waveform_sigrok_demo import fail, fail_if, pcapng_blocks, timescale_ns  # noqa: E402
 
 CLOCK_HZ = 48_000_000
 # The walk's fault tag -> the decoder's error text (emu/mac.cpp counts a shifted character
 # without its start bit as the parity error it samples; sigrok's uart decoder does the same).
 FAULTS = {"parity error": "parity error", "stop bit 0": "stop bit error",
           "bad FCS": "FCS", "no start bit": "parity error"}
-
-
-def fail(msg):
-    print(f"FAIL: {msg}")
-    sys.exit(1)
 
 
 def run(cmd, **kw):
@@ -217,8 +212,7 @@ def main():
         print(f"{case}: {len(good)} telegrams decoded, {len(good_truth)} in the truth, "
               f"{len(errors_at)} broken ({len(broken_truth)} in the walk), {checked} gaps "
               f"checked, {no_answer} requests without answer")
-        if problems:
-            fail("\n".join(problems[:20]))
+        fail_if(problems)
     print("ok")
 
 

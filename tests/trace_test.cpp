@@ -92,6 +92,20 @@ std::size_t find_line(const std::vector<std::string>& v, const std::string& pref
   return 0;
 }
 
+// Records "PROFILE\nLINE\nstartup\n" into `v` (its lines): LINE stands right after the profile's
+// line, the trace holds `mark`, and it replays. The profile line's index.
+std::size_t recorded_after_profile(const std::string& profile, const std::string& line,
+                                   const std::string& mark, std::vector<std::string>& v) {
+  const std::string text = record(profile + "\n" + line + "\nstartup\n");
+  v = lines_of(text);
+  const std::size_t p = find_line(v, profile);
+  EXPECT_EQ(p + 1 < v.size() ? v[p + 1] : "", line);
+  EXPECT_NE(text.find(mark), std::string::npos);
+  std::string msg;
+  EXPECT_EQ(replay_text(text, msg), 0) << msg;
+  return p;
+}
+
 const std::string& recorded() {
   static const std::string text = record(kScenario);
   return text;
@@ -268,14 +282,10 @@ TEST(TraceFile, AnUnexpectedEdgeBeforeTheEnd) {
 // state lines carry Status_Reg with the ASIC type Eh). Without the line the replay runs on a
 // VPC3+C and the first state line differs.
 TEST(TraceFile, TheVariantIsRecordedAndReplayed) {
-  const std::string text = record("profile vpc3plus\nvariant s\nstartup\n");
-  std::vector<std::string> v = lines_of(text);
-  const std::size_t p = find_line(v, "profile vpc3plus");
+  std::vector<std::string> v;
+  const std::size_t p = recorded_after_profile("profile vpc3plus", "variant s", " status=E", v);
   ASSERT_LT(p + 1, v.size());
-  EXPECT_EQ(v[p + 1], "variant s");
-  EXPECT_NE(text.find(" status=E"), std::string::npos);
   std::string msg;
-  EXPECT_EQ(replay_text(text, msg), 0) << msg;
   v.erase(v.begin() + static_cast<std::ptrdiff_t>(p + 1));
   EXPECT_EQ(replay_text(join(v), msg), 1);
   EXPECT_NE(msg.find("status"), std::string::npos) << msg;
@@ -288,14 +298,10 @@ TEST(TraceFile, TheVariantIsRecordedAndReplayed) {
 // A run on the C31's interrupt controller records `irq-controller c31` after the profile (its
 // xint lines are the C31's interrupt, docs/dpc31.md) and replays; the line belongs to the dpc31.
 TEST(TraceFile, TheIrqControllerIsRecordedAndReplayed) {
-  const std::string text = record("profile dpc31\nirq-controller c31\nstartup\n");
-  std::vector<std::string> v = lines_of(text);
-  const std::size_t p = find_line(v, "profile dpc31");
+  std::vector<std::string> v;
+  const std::size_t p = recorded_after_profile("profile dpc31", "irq-controller c31", "xint ", v);
   ASSERT_LT(p + 1, v.size());
-  EXPECT_EQ(v[p + 1], "irq-controller c31");
-  EXPECT_NE(text.find("xint "), std::string::npos);
   std::string msg;
-  EXPECT_EQ(replay_text(text, msg), 0) << msg;
   v[p] = "profile spc3";
   EXPECT_EQ(replay_text(join(v), msg), 2);
   EXPECT_EQ(msg,

@@ -312,6 +312,20 @@ TEST(UartRx, ConfigureRestartsAndZeroDisables) {
 
 // ---- faults ----
 
+namespace {
+// T = 4: 0x01 at 100, 0x10 at 144 with `fault`, then 0x22 at 268. The receiver reads 0x01 (25
+// idle bits before it), `second`, then 0x22 after `idle` idle bits.
+void expect_burst_with_fault(UartFault::Kind fault, const UartChar& second, std::uint32_t idle) {
+  const std::uint8_t burst[] = {0x01, 0x10};
+  const std::uint8_t next[] = {0x22};
+  Edges e;
+  uart_encode(burst, 100, 4, e, {1, fault});
+  uart_encode(next, 268, 4, e);
+  EXPECT_EQ(receive(e, 4, 1000),
+            (std::vector<UartChar>{good(0x01, 100, 4, 25), second, good(0x22, 268, 4, idle)}));
+}
+}  // namespace
+
 TEST(UartFault, ParityOnTheChosenCharOnly) {
   // T = 8 from 80: chars at 80, 168, 256, 344; idle 80 / 8 = 10 before the first.
   const std::uint8_t b[] = {0x11, 0x22, 0x33, 0x44};
@@ -335,31 +349,13 @@ TEST(UartFault, MissingStartBitShiftsTheFrame) {
   // (idle_bits (148 - 144) / 4 = 1) and reads bits 1..10 of the sent char plus the idle line:
   // d = 0 0 0 1 0 0 0 1 (d1..d7, parity) = 0x88, parity sample = stop (1): 3 ones, odd.
   // Stop sample 148 + 42 = 190 is idle (1). End 192; 0x22 at 268: (268 - 192) / 4 = 19 idle bits.
-  const std::uint8_t burst[] = {0x01, 0x10};
-  const std::uint8_t next[] = {0x22};
-  Edges e;
-  uart_encode(burst, 100, 4, e, {1, UartFault::Kind::start});
-  uart_encode(next, 268, 4, e);
-  const auto out = receive(e, 4, 1000);
-  ASSERT_EQ(out.size(), 3u);
-  EXPECT_EQ(out[0], good(0x01, 100, 4, 25));
-  EXPECT_EQ(out[1], (UartChar{0x88, true, false, true, 148, 192, 1}));
-  EXPECT_EQ(out[2], good(0x22, 268, 4, 19));
+  expect_burst_with_fault(UartFault::Kind::start, {0x88, true, false, true, 148, 192, 1}, 19);
 }
 
 TEST(UartFault, StopBitZeroIsAFramingError) {
   // T = 4: 0x01 at 100, 0x10 at 144 with stop low at 184..188, then 0x22 at 268 (idle
   // (268 - 188) / 4 = 20).
-  const std::uint8_t burst[] = {0x01, 0x10};
-  const std::uint8_t next[] = {0x22};
-  Edges e;
-  uart_encode(burst, 100, 4, e, {1, UartFault::Kind::stop});
-  uart_encode(next, 268, 4, e);
-  const auto out = receive(e, 4, 1000);
-  ASSERT_EQ(out.size(), 3u);
-  EXPECT_EQ(out[0], good(0x01, 100, 4, 25));
-  EXPECT_EQ(out[1], (UartChar{0x10, true, true, false, 144, 188, 0}));
-  EXPECT_EQ(out[2], good(0x22, 268, 4, 20));
+  expect_burst_with_fault(UartFault::Kind::stop, {0x10, true, true, false, 144, 188, 0}, 20);
 }
 
 TEST(UartFault, BreakThenNormalCharAfterTheLineRecovers) {

@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "synthetic_vcd.hpp"
@@ -184,6 +185,12 @@ inline Model counter(int edges, std::uint64_t period = 10,
 // B's cnt at edge 7 is 0xAA instead of 8; from edge 8 on it agrees again.
 inline std::uint64_t cnt_aa_at_7(int k) {
   return k == 7 ? 0xAA : static_cast<std::uint64_t>(k + 1);
+}
+
+// a.vcd: the 12-edge counter; b.vcd: the same with cnt AAh at edge 7 (75 to 85 ns). Their paths.
+inline std::pair<std::string, std::string> counters_aa_at_7(Dir& d) {
+  return {d.write("a.vcd", render(counter(12), {})),
+          d.write("b.vcd", render(counter(12, 10, cnt_aa_at_7), {}))};
 }
 
 inline Options opts(const std::string& a, const std::string& b) {

@@ -102,8 +102,7 @@ TEST(WavediffXz, StrictWildcardZero) {
 TEST(WavediffWindow, StartAndEndInTimeAndCycles) {
   Dir d;
   // cnt differs from 75 to 85 ns (edge 7 only).
-  const auto a = d.write("a.vcd", render(counter(12), {}));
-  const auto b = d.write("b.vcd", render(counter(12, 10, cnt_aa_at_7), {}));
+  const auto [a, b] = counters_aa_at_7(d);
   Options o = opts(a, b);
   std::string why;
   Bound bd;
@@ -154,8 +153,7 @@ TEST(WavediffWindow, StartAndEndInTimeAndCycles) {
 
 TEST(WavediffOutputs, DiffVcdParsesBack) {
   Dir d;
-  const auto a = d.write("a.vcd", render(counter(12), {}));
-  const auto b = d.write("b.vcd", render(counter(12, 10, cnt_aa_at_7), {}));
+  const auto [a, b] = counters_aa_at_7(d);
   Options o = opts(a, b);
   o.diff_vcd = d.file("diff.vcd");
   EXPECT_EQ(run_opts(o).rc, 1);
@@ -209,8 +207,7 @@ TEST(WavediffOutputs, DiffVcdParsesBack) {
 
 TEST(WavediffOutputs, WavedromAroundTheFirstDivergence) {
   Dir d;
-  const auto a = d.write("a.vcd", render(counter(12), {}));
-  const auto b = d.write("b.vcd", render(counter(12, 10, cnt_aa_at_7), {}));
+  const auto [a, b] = counters_aa_at_7(d);
   Options o = opts(a, b);
   o.wavedrom = d.file("w.json");
   o.wavedrom_window = 3;
@@ -372,8 +369,7 @@ TEST(WavediffData, HandWrittenPairWithStripMapAndSplitBits) {
 
 TEST(WavediffCli, ThroughTheDpc31Binary) {
   Dir d;
-  const auto a = d.write("a.vcd", render(counter(12), {}));
-  const auto b = d.write("b.vcd", render(counter(12, 10, cnt_aa_at_7), {}));
+  const auto [a, b] = counters_aa_at_7(d);
   const std::string cli = DPC31_CLI;
   EXPECT_EQ(spawn({cli, "wavediff", a, a}), 0);
   const auto out = d.file("out.txt");

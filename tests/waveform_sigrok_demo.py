@@ -28,6 +28,12 @@ def fail(msg):
     sys.exit(1)
 
 
+def fail_if(problems):
+    """Fails with the first 20 of `problems`, if there are any."""
+    if problems:
+        fail("\n".join(problems[:20]))
+
+
 def pcapng_blocks(path):
     """(start ns, direction 'rx'/'tx', bytes, opt_comment) of every Enhanced Packet Block."""
     data = Path(path).read_bytes()
@@ -157,8 +163,7 @@ def main():
                                   f"{g[0]:.0f} ns, log {e[1].hex(' ')} at {e[0]:.0f} ns")
             print(f"{pin}: {len(got)} telegrams decoded, {len(exp)} in the log, "
                   f"{sum(len(t[1]) for t in got)} bytes")
-        if errors:
-            fail("\n".join(errors[:20]))
+        fail_if(errors)
     print("ok")
 
 

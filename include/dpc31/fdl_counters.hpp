@@ -3,7 +3,9 @@
 // (emu/mac.cpp) and the DP services (emu/dp_sm.cpp).
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <string_view>
 
 namespace dpc31 {
 
@@ -30,5 +32,33 @@ struct FdlCounters {
   std::uint32_t requests = 0;              // error-free requests to us (or broadcast) processed
   bool operator==(const FdlCounters&) const = default;
 };
+
+// The counters by name, in declaration order (the snapshot's order, `expect counter`, JSON).
+struct CounterField {
+  std::string_view name;
+  std::uint32_t FdlCounters::*member;
+};
+inline constexpr std::array<CounterField, 20> kFdlCounterFields = {{
+    {"parity", &FdlCounters::parity},
+    {"start_bit", &FdlCounters::start_bit},
+    {"stop_bit", &FdlCounters::stop_bit},
+    {"bad_sd", &FdlCounters::bad_sd},
+    {"le_mismatch", &FdlCounters::le_mismatch},
+    {"bad_le", &FdlCounters::bad_le},
+    {"bad_fcs", &FdlCounters::bad_fcs},
+    {"wrong_ed", &FdlCounters::wrong_ed},
+    {"truncated", &FdlCounters::truncated},
+    {"oversize", &FdlCounters::oversize},
+    {"bad_sap", &FdlCounters::bad_sap},
+    {"no_sync", &FdlCounters::no_sync},
+    {"foreign_address", &FdlCounters::foreign_address},
+    {"unknown_sap", &FdlCounters::unknown_sap},
+    {"unsupported_function", &FdlCounters::unsupported_function},
+    {"not_allowed", &FdlCounters::not_allowed},
+    {"no_resource", &FdlCounters::no_resource},
+    {"offline", &FdlCounters::offline},
+    {"repeated", &FdlCounters::repeated},
+    {"requests", &FdlCounters::requests},
+}};
 
 }  // namespace dpc31

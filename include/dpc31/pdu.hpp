@@ -20,6 +20,13 @@ using View = std::span<const std::uint8_t>;
 
 // --- DP ---
 
+// Global_Control (SAP 58): Control_Command, then Group_Select. The Control_Command bits (DPC31 HW
+// description p.32, seed 003); bits 7, 6 and 0 are reserved.
+namespace control_command {
+inline constexpr std::uint8_t Sync = 0x20, Unsync = 0x10, Freeze = 0x08, Unfreeze = 0x04,
+                              Clear_Data = 0x02, Reserved = 0xC1;
+}  // namespace control_command
+
 // Set_Prm (SAP 61): seven standard bytes, then (DPV0) the Spec_User_Prm_Byte and User_Prm_Data,
 // or (DPV1_Enable in byte 7) DPV1_Status_1..3 and the User_Prm_Data from byte 10.
 struct SetPrm {

@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <utility>
 
-#include "vocabulary.hpp"  // state, service and response names
+#include "vocabulary.hpp"  // state, service, function and response names
 
 namespace dpc31::bridge {
 
@@ -14,32 +14,6 @@ namespace {
 
 // Port writes and ISR entries are kept this long by FirmwareHost before the bridge drops them.
 constexpr std::size_t kHistoryLimit = 4096;
-
-std::string_view function_name(fdl::Function f) {
-  switch (f) {
-    case fdl::Function::SDA_low:
-      return "SDA_low";
-    case fdl::Function::SDN_low:
-      return "SDN_low";
-    case fdl::Function::SDA_high:
-      return "SDA_high";
-    case fdl::Function::SDN_high:
-      return "SDN_high";
-    case fdl::Function::DDB:
-      return "DDB";
-    case fdl::Function::FDL_Status:
-      return "FDL_Status";
-    case fdl::Function::SRD_low:
-      return "SRD_low";
-    case fdl::Function::SRD_high:
-      return "SRD_high";
-    case fdl::Function::Ident:
-      return "Ident";
-    case fdl::Function::LSAP_Status:
-      return "LSAP_Status";
-  }
-  return "function?";
-}
 
 bool wants_answer(std::span<const std::uint8_t> bytes) {
   const fdl::Decoded d = fdl::decode(bytes);

@@ -8,9 +8,6 @@ using namespace conformance;  // the bench, the ISR that only acknowledges
 
 namespace {
 
-constexpr std::uint8_t kGC_Sync = 0x20;
-constexpr std::uint8_t kGC_Unsync = 0x10;
-constexpr std::uint8_t kGC_Clear_Data = 0x02;
 constexpr std::uint8_t kN_Cl = 0x80;                 // dpc31 Dout_Buffer_SM bit 7
 constexpr std::uint8_t kU_Buffer_Cleared = 0x08;     // Next_Dout_Buffer_Cmd bit 3
 constexpr std::uint8_t kState_U_Buffer = 0x04;       // Next_Dout_Buffer_Cmd bit 2

@@ -18,6 +18,13 @@ namespace conformance {
 
 using Bytes = std::vector<std::uint8_t>;
 
+// The telegram bits the tests send, typed here once from the standard and the manual (the oracle,
+// not the emulator's own constants): Set_Prm's Station_Status (EN 50170) and Global_Control's
+// Control_Command (DPC31 HW description p.32, seed 003).
+inline constexpr std::uint8_t kLock_Req = 0x80, kUnlock_Req = 0x40, kWD_On = 0x08;
+inline constexpr std::uint8_t kGC_Sync = 0x20, kGC_Unsync = 0x10, kGC_Freeze = 0x08,
+                              kGC_Unfreeze = 0x04, kGC_Clear_Data = 0x02;
+
 inline std::uint32_t T_of(std::uint32_t baud) {
   return static_cast<std::uint32_t>((48'000'000u + baud / 2) / baud);
 }

@@ -11,10 +11,6 @@ using namespace conformance;  // the bench, the ISR that only acknowledges
 
 namespace {
 
-constexpr std::uint8_t kLock_Req = 0x80;
-constexpr std::uint8_t kUnlock_Req = 0x40;
-constexpr std::uint8_t kWD_On = 0x08;
-
 class DpServices : public ::testing::TestWithParam<Profile> {
  protected:
   // TWD = 10 ms x 2 x 5 = 100 ms = 4 800 000 clocks at 48 MHz (seed 002: TWD = base x F1 x F2).

@@ -52,6 +52,18 @@ Observed run(IrqController served, bool int_pol) {
   return r;
 }
 
+// run() with each controller served: the user's interrupt has the edges `expect` both times;
+// X/INT at each edge is `ext_x_int` with the external one served, `c31_x_int` with the C31's.
+void expect_both(const Edges& expect, bool int_pol, const std::vector<bool>& ext_x_int,
+                 const std::vector<bool>& c31_x_int) {
+  const Observed ext = run(IrqController::external, int_pol);
+  EXPECT_EQ(ext.interrupt, expect);
+  EXPECT_EQ(ext.x_int, ext_x_int);
+  const Observed c31 = run(IrqController::c31, int_pol);
+  EXPECT_EQ(c31.interrupt, expect);
+  EXPECT_EQ(c31.x_int, c31_x_int);
+}
+
 }  // namespace
 
 // The bus reaches the chosen controller at the same addresses, with the same behaviour: the
@@ -59,26 +71,17 @@ Observed run(IrqController served, bool int_pol) {
 // read between), active again 48 clocks later. Only the external processor's drives X/INT: low
 // (active, INT_Pol = 0) while its interrupt is active.
 TEST(Dpc31IrqControllers, TheBusReachesTheChosenControllerAtTheSameAddresses) {
-  const Edges expect = {{16, true}, {32, false}, {80, true}};
-  const Observed ext = run(IrqController::external, false);
-  EXPECT_EQ(ext.interrupt, expect);
-  EXPECT_EQ(ext.x_int, (std::vector<bool>{false, true, false}));
-  const Observed c31 = run(IrqController::c31, false);
-  EXPECT_EQ(c31.interrupt, expect);
-  // The external controller is never unmasked: X/INT stays high, inactive at INT_Pol = 0.
-  EXPECT_EQ(c31.x_int, (std::vector<bool>{true, true, true}));
+  // With the C31's served, the external controller is never unmasked: X/INT stays high, inactive
+  // at INT_Pol = 0.
+  expect_both({{16, true}, {32, false}, {80, true}}, false, {false, true, false},
+              {true, true, true});
 }
 
 // INT_Pol (Mode_Reg0 bit 4) sets X/INT's polarity: with the C31's controller served, X/INT is
 // inactive at either polarity — low when high-active.
 TEST(Dpc31IrqControllers, XIntStaysInactiveAtEitherPolarityWhenTheC31sIsServed) {
-  const Edges expect = {{24, true}, {40, false}, {88, true}};
-  const Observed ext = run(IrqController::external, true);
-  EXPECT_EQ(ext.interrupt, expect);
-  EXPECT_EQ(ext.x_int, (std::vector<bool>{true, false, true}));
-  const Observed c31 = run(IrqController::c31, true);
-  EXPECT_EQ(c31.interrupt, expect);
-  EXPECT_EQ(c31.x_int, (std::vector<bool>{false, false, false}));
+  expect_both({{24, true}, {40, false}, {88, true}}, true, {true, false, true},
+              {false, false, false});
 }
 
 // SPC3 and VPC3+ have no C31 core, so no second controller.

@@ -72,6 +72,13 @@ struct Bare {
   Chip c{{Profile::dpc31}};
   Queues q;
   explicit Bare(std::uint8_t ind_len = 4) : q((c.set_log_sink(nullptr), c), 4, ind_len) {}
+
+  // R_User_WD_Value = `value`, then "DPS_User WD, Enable": the cycle the request was executed.
+  std::uint64_t enable_user_wd(std::uint8_t value) {
+    c.write(at(c, RegId::R_User_WD_Value), value);
+    return q.request(request::DPS_User_Wd, request::Wd_Enable);
+  }
+  std::uint8_t indications() { return c.peek(at(c, RegId::IndQ_Wr)); }
 };
 
 bool started(Chip& c) { return (rd(c, RegId::Status_Reg) & 0x01) != 0; }
@@ -182,28 +189,23 @@ TEST(Dpc31Requests, DataExchangeTelegramsDoNotCountTheUserWatchdog) {
 TEST(Dpc31Requests, DpsUserWdResetReloadsTheValue) {
   Bare bare;
   Chip& c = bare.c;
-  Queues& q = bare.q;
-  c.write(at(c, RegId::R_User_WD_Value), 2);
-  const std::uint64_t e = q.request(request::DPS_User_Wd, request::Wd_Enable);
+  const std::uint64_t e = bare.enable_user_wd(2);
   c.step(e + 15 * k10ms / 10 - c.cycle());
-  q.request(request::DPS_User_Wd, request::Wd_Reset);
+  bare.q.request(request::DPS_User_Wd, request::Wd_Reset);
   c.step(e + 3 * k10ms - 1 - c.cycle());
-  EXPECT_EQ(c.peek(at(c, RegId::IndQ_Wr)), 0);
+  EXPECT_EQ(bare.indications(), 0);
   c.step(1);
-  EXPECT_EQ(c.peek(at(c, RegId::IndQ_Wr)), 1);
+  EXPECT_EQ(bare.indications(), 1);
 }
 
 // "This timer can be enabled or disabled any time via the request interface": disabled, it
 // never expires.
 TEST(Dpc31Requests, DpsUserWdDisableStopsIt) {
   Bare bare;
-  Chip& c = bare.c;
-  Queues& q = bare.q;
-  c.write(at(c, RegId::R_User_WD_Value), 1);
-  q.request(request::DPS_User_Wd, request::Wd_Enable);
-  q.request(request::DPS_User_Wd, request::Wd_Disable);
-  c.step(10 * k10ms);
-  EXPECT_EQ(c.peek(at(c, RegId::IndQ_Wr)), 0);
+  bare.enable_user_wd(1);
+  bare.q.request(request::DPS_User_Wd, request::Wd_Disable);
+  bare.c.step(10 * k10ms);
+  EXPECT_EQ(bare.indications(), 0);
 }
 
 // "locks the DPS_User WD": after an expiry Enable does nothing until a Reset; Reset then Enable
@@ -212,17 +214,16 @@ TEST(Dpc31Requests, DpsUserWdIsLockedAfterExpiryUntilReset) {
   Bare bare;
   Chip& c = bare.c;
   Queues& q = bare.q;
-  c.write(at(c, RegId::R_User_WD_Value), 1);
-  q.request(request::DPS_User_Wd, request::Wd_Enable);
+  bare.enable_user_wd(1);
   c.step(k10ms);
-  ASSERT_EQ(c.peek(at(c, RegId::IndQ_Wr)), 1);
+  ASSERT_EQ(bare.indications(), 1);
   q.request(request::DPS_User_Wd, request::Wd_Enable);  // locked: ignored
   c.step(2 * k10ms);
-  EXPECT_EQ(c.peek(at(c, RegId::IndQ_Wr)), 1);
+  EXPECT_EQ(bare.indications(), 1);
   q.request(request::DPS_User_Wd, request::Wd_Reset);
   const std::uint64_t e = q.request(request::DPS_User_Wd, request::Wd_Enable);
   c.step(e + k10ms - c.cycle());
-  EXPECT_EQ(c.peek(at(c, RegId::IndQ_Wr)), 2);
+  EXPECT_EQ(bare.indications(), 2);
 }
 
 // An unknown request code is skipped (logged) and the MAC goes on with the next entry; a

@@ -10,7 +10,6 @@ using namespace conformance;  // the bench, the ISR that only acknowledges
 
 namespace {
 
-constexpr std::uint8_t kGC_Sync = 0x20;
 constexpr std::uint8_t kEnable_DX_Out_Port = 0x01;
 
 // An ISR that acknowledges DX_Out (and the rest) and notes the cycle its acknowledge completed.

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "../firmware_bench.hpp"
@@ -17,6 +18,10 @@ namespace conformance {
 
 // A slave parameterised as the module's GSD says (ident, Cfg, user parameters).
 using firmware_bench::gsd_slave;
+
+// A port write as (value, cycle).
+using ValueAt = std::pair<std::uint32_t, std::uint64_t>;
+using Writes = std::vector<ValueAt>;
 
 struct FirmwareBench {
   FirmwareBench(dpc31::Profile p, const dpc31_firmware& fw, dpc31::SlaveConfig slave,
@@ -36,6 +41,12 @@ struct FirmwareBench {
     for (const auto& w : host.port_writes()) {
       if (w.port == port && w.cycle > after) v.push_back(w);
     }
+    return v;
+  }
+  // The same as (value, cycle) pairs, for one EXPECT_EQ against the expected writes.
+  [[nodiscard]] std::vector<ValueAt> values_at(unsigned port, std::uint64_t after = 0) const {
+    std::vector<ValueAt> v;
+    for (const auto& w : writes(port, after)) v.emplace_back(w.value, w.cycle);
     return v;
   }
   [[nodiscard]] std::optional<dpc31::FirmwareHost::PortWrite> last(unsigned port) const {

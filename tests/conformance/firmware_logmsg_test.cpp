@@ -50,8 +50,8 @@ class Logmsg : public ::testing::TestWithParam<std::tuple<Profile, LogmsgHalf>> 
     const std::string name = (pwm() ? "pwm_event" : "event") + std::to_string(channel);
     ASSERT_EQ(b_->host.hw_input(name, bits), "");
   }
-  [[nodiscard]] std::vector<FirmwareHost::PortWrite> hold_writes() const {
-    return b_->writes(pwm() ? CNT2_PORT_PWM_HOLD1 : CNT2_PORT_HOLD1);
+  [[nodiscard]] Writes hold_writes() const {
+    return b_->values_at(pwm() ? CNT2_PORT_PWM_HOLD1 : CNT2_PORT_HOLD1);
   }
   std::unique_ptr<FirmwareBench> b_;
   Exchange last_;
@@ -82,10 +82,7 @@ TEST_P(Logmsg, LogmsgRising_AllMsgStatesHeld) {
   EXPECT_EQ(dx(true).first, 0x82);
   EXPECT_EQ(dx(true).first, 0x82);
   EXPECT_EQ(dx(true).first, 0x82);
-  const auto w = hold_writes();
-  ASSERT_EQ(w.size(), 1u);
-  EXPECT_EQ(w[0].value, 1u);
-  EXPECT_EQ(w[0].cycle, hold + kCnt2PortLatency);
+  EXPECT_EQ(hold_writes(), (Writes{{1, hold + kCnt2PortLatency}}));
 }
 
 // "If events which would cause messages would occur in the meantime, they would get lost. To
@@ -142,10 +139,9 @@ TEST_P(Logmsg, LogmsgFalling_ShadowCopiedToMsgBits) {
   EXPECT_EQ(dx(false).first, 0x83);
   const std::uint64_t release = b_->acted(last_);
   EXPECT_EQ(dx(false).first, 0x08);
-  const auto w = hold_writes();
+  const Writes w = hold_writes();
   ASSERT_EQ(w.size(), 2u);
-  EXPECT_EQ(w[1].value, 0u);
-  EXPECT_EQ(w[1].cycle, release + kCnt2PortLatency);
+  EXPECT_EQ(w[1], (ValueAt{0, release + kCnt2PortLatency}));
 }
 
 // "By means of this procedure, MSG bits of the Process input ... can be read out or respectively

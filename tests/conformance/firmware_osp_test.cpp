@@ -45,10 +45,7 @@ std::uint64_t run_then_interrupt(FirmwareBench& b, std::uint8_t value) {
 TEST_P(Osp, OspValueOutputAsSoonAsCommunicationInterrupted) {
   FirmwareBench b(GetParam(), do4_firmware, do4_slave(DO4_REPLACE, 0x9));
   const std::uint64_t expiry = run_then_interrupt(b, 0x5);
-  const auto w = b.writes(DO4_PORT_OUTPUTS, expiry - 1);
-  ASSERT_EQ(w.size(), 1u);
-  EXPECT_EQ(w[0].value, 0x9u);
-  EXPECT_EQ(w[0].cycle, expiry + kPortLatency);
+  EXPECT_EQ(b.values_at(DO4_PORT_OUTPUTS, expiry - 1), (Writes{{0x9, expiry + kPortLatency}}));
 }
 
 // "In the first case [Retain last valid value], the module retains the last value as validly
@@ -61,14 +58,9 @@ TEST_P(Osp, RetainLastValidValue_KeepsLastValidlyRecognisedOutputState) {
   const Exchange valid = b.master.data_exchange({0x6, 0x01});
   const Exchange osp = b.master.data_exchange({0x3, 0x00});
   b.master.idle(b.acted(osp) + kTwd + 100'000 - b.chip.cycle());
-  const auto t = b.writes(DO4_PORT_OUTPUTS);
-  ASSERT_EQ(t.size(), 1u);
-  EXPECT_EQ(t[0].value, 0x6u);
-  EXPECT_EQ(t[0].cycle, b.acted(valid) + kPortLatency);
-  const auto ok = b.writes(DO4_PORT_MODUL_OK, b.acted(valid) + kPortLatency);
-  ASSERT_EQ(ok.size(), 1u);
-  EXPECT_EQ(ok[0].value, 0u);
-  EXPECT_EQ(ok[0].cycle, b.acted(osp) + kPortLatency);
+  EXPECT_EQ(b.values_at(DO4_PORT_OUTPUTS), (Writes{{0x6, b.acted(valid) + kPortLatency}}));
+  EXPECT_EQ(b.values_at(DO4_PORT_MODUL_OK, b.acted(valid) + kPortLatency),
+            (Writes{{0, b.acted(osp) + kPortLatency}}));
 }
 
 // "When selecting the mode, 'Replace with static value' ... If an OSP event occurs, this value
@@ -111,14 +103,9 @@ TEST_P(Osp, OspValidBit0_0RequestsOsp_1RequestsNormalOperation) {
   const Exchange o = b.master.data_exchange({0x6, 0x00});
   const Exchange n = b.master.data_exchange({0x7, 0x01});
   b.master.idle(2000);
-  const auto t = b.writes(DO4_PORT_OUTPUTS, before);
-  ASSERT_EQ(t.size(), 3u);
-  EXPECT_EQ(t[0].value, 0x5u);
-  EXPECT_EQ(t[0].cycle, b.acted(a) + kPortLatency);
-  EXPECT_EQ(t[1].value, 0x9u);
-  EXPECT_EQ(t[1].cycle, b.acted(o) + kPortLatency);
-  EXPECT_EQ(t[2].value, 0x7u);
-  EXPECT_EQ(t[2].cycle, b.acted(n) + kPortLatency);
+  EXPECT_EQ(b.values_at(DO4_PORT_OUTPUTS, before), (Writes{{0x5, b.acted(a) + kPortLatency},
+                                                           {0x9, b.acted(o) + kPortLatency},
+                                                           {0x7, b.acted(n) + kPortLatency}}));
   const auto ok = b.writes(DO4_PORT_MODUL_OK, before);
   ASSERT_EQ(ok.size(), 3u);
   EXPECT_EQ(ok[0].value, 1u);
@@ -155,10 +142,7 @@ TEST_P(Osp, OspValidSet_BehavesAsStandardFunctionModel) {
 TEST_P(Osp, OspEvent_ResetsOspValidAndEntersOspMode) {
   FirmwareBench b(GetParam(), do4_firmware, do4_slave(DO4_REPLACE, 0x9));
   const std::uint64_t expiry = run_then_interrupt(b, 0x5);
-  const auto ok = b.writes(DO4_PORT_MODUL_OK, expiry - 1);
-  ASSERT_EQ(ok.size(), 1u);
-  EXPECT_EQ(ok[0].value, 0u);
-  EXPECT_EQ(ok[0].cycle, expiry + kPortLatency);
+  EXPECT_EQ(b.values_at(DO4_PORT_MODUL_OK, expiry - 1), (Writes{{0, expiry + kPortLatency}}));
   ASSERT_TRUE(b.master.restart(200, 3));
   b.master.data_exchange({0x5, 0x00});
   EXPECT_EQ(b.master.data_exchange({0x5, 0x00}).answer->du, (Bytes{0x90}));

@@ -12,7 +12,6 @@ using namespace conformance;
 namespace {
 
 const Bytes kA = {0xA1, 0xA2, 0xA3, 0xA4};
-constexpr std::uint8_t kFreeze = 0x08, kUnfreeze = 0x04;
 
 class GlobalControl : public ::testing::TestWithParam<Profile> {};
 
@@ -44,6 +43,16 @@ void no_gc_reserved_check(Chip& c) {
   testutil::user_start(c);
 }
 
+// Started, the inputs A1..A4 frozen by a Freeze, then the user hands B1..B4 over: the exchange
+// that lets the ISR hand B to N still answers A1..A4.
+void freeze_a_then_hand_over_b(Bench& b) {
+  ASSERT_TRUE(b.master.startup());
+  b.master.data_exchange({0, 0, 0, 0});
+  b.master.global_control(kGC_Freeze);
+  b.user.inputs = {0xB1, 0xB2, 0xB3, 0xB4};
+  EXPECT_EQ(b.master.data_exchange({0, 0, 0, 0}).answer->du, kA);
+}
+
 std::size_t gc_interrupts(const Responder& u) {
   std::size_t n = 0;
   for (const auto& [cycle, ir] : u.interrupts) n += (ir & irq::New_GC_Command) != 0 ? 1 : 0;
@@ -58,15 +67,11 @@ std::size_t gc_interrupts(const Responder& u) {
 // they answer B1..B4. The diag shows Freeze_Mode (St2 bit 4).
 TEST_P(GlobalControl, Freeze_InputsFetchedNToDAndFrozenUntilNextFreeze) {
   Bench b(GetParam(), 12'000'000);
-  ASSERT_TRUE(b.master.startup());
-  b.master.data_exchange({0, 0, 0, 0});
-  b.master.global_control(kFreeze);
-  b.user.inputs = {0xB1, 0xB2, 0xB3, 0xB4};
-  EXPECT_EQ(b.master.data_exchange({0, 0, 0, 0}).answer->du, kA);  // the ISR hands B to N
+  freeze_a_then_hand_over_b(b);
   EXPECT_EQ(b.master.data_exchange({0, 0, 0, 0}).answer->du, kA);
   EXPECT_EQ(b.master.read_inputs().answer->du, kA);
   EXPECT_EQ(diag(b.master).at(1) & 0x10, 0x10);
-  b.master.global_control(kFreeze);
+  b.master.global_control(kGC_Freeze);
   EXPECT_EQ(b.master.data_exchange({0, 0, 0, 0}).answer->du, (Bytes{0xB1, 0xB2, 0xB3, 0xB4}));
 }
 
@@ -76,12 +81,8 @@ TEST_P(GlobalControl, Freeze_InputsFetchedNToDAndFrozenUntilNextFreeze) {
 // after the user hands them over); Freeze_Mode off.
 TEST_P(GlobalControl, Unfreeze_CancelsFreezeAndFetchesNewInputsNToD) {
   Bench b(GetParam(), 12'000'000);
-  ASSERT_TRUE(b.master.startup());
-  b.master.data_exchange({0, 0, 0, 0});
-  b.master.global_control(kFreeze);
-  b.user.inputs = {0xB1, 0xB2, 0xB3, 0xB4};
-  EXPECT_EQ(b.master.data_exchange({0, 0, 0, 0}).answer->du, kA);
-  b.master.global_control(kUnfreeze);
+  freeze_a_then_hand_over_b(b);
+  b.master.global_control(kGC_Unfreeze);
   b.user.inputs = {0xC1, 0xC2, 0xC3, 0xC4};
   EXPECT_EQ(b.master.data_exchange({0, 0, 0, 0}).answer->du, (Bytes{0xB1, 0xB2, 0xB3, 0xB4}));
   EXPECT_EQ(b.master.data_exchange({0, 0, 0, 0}).answer->du, (Bytes{0xC1, 0xC2, 0xC3, 0xC4}));
@@ -139,7 +140,7 @@ TEST_P(GlobalControl, SyncOrFreezeNotSupported_ReactLikeAReservedBit) {
     (sync ? rc.sync_supported : rc.freeze_supported) = false;
     Bench b(GetParam(), 12'000'000, rc);
     ASSERT_TRUE(b.master.startup());
-    b.master.global_control(sync ? 0x20 : kFreeze);
+    b.master.global_control(sync ? 0x20 : kGC_Freeze);
     EXPECT_EQ(dp_bits(status(b.chip)), kWaitPrm) << sync;
     const Bytes d = diag(b.master);
     ASSERT_EQ(d.size(), 6u);
@@ -154,7 +155,7 @@ TEST_P(GlobalControl, SyncOrFreezeNotSupported_ReactLikeAReservedBit) {
 TEST_P(GlobalControl, EachValidGc_ControlCommandStoredInGcCommand) {
   Bench b(GetParam(), 12'000'000);
   ASSERT_TRUE(b.master.startup());
-  for (const std::uint8_t cmd : {kFreeze, kUnfreeze, std::uint8_t{0x00}, kFreeze}) {
+  for (const std::uint8_t cmd : {kGC_Freeze, kGC_Unfreeze, std::uint8_t{0x00}, kGC_Freeze}) {
     b.master.global_control(cmd);
     EXPECT_EQ(gc_command(b.chip), cmd);
   }
@@ -166,9 +167,9 @@ TEST_P(GlobalControl, EachValidGc_ControlCommandStoredInGcCommand) {
 TEST_P(GlobalControl, MoreThanTwoNetDataBytes_NotAccepted) {
   Bench b(GetParam(), 12'000'000);
   ASSERT_TRUE(b.master.startup());
-  b.master.global_control(kUnfreeze);
-  gc_raw(b.master, {kFreeze, 0x00, 0x00});
-  EXPECT_EQ(gc_command(b.chip), kUnfreeze);
+  b.master.global_control(kGC_Unfreeze);
+  gc_raw(b.master, {kGC_Freeze, 0x00, 0x00});
+  EXPECT_EQ(gc_command(b.chip), kGC_Unfreeze);
   b.user.inputs = {0xB1, 0xB2, 0xB3, 0xB4};
   b.master.data_exchange({0, 0, 0, 0});
   EXPECT_EQ(b.master.data_exchange({0, 0, 0, 0}).answer->du, (Bytes{0xB1, 0xB2, 0xB3, 0xB4}));
@@ -183,12 +184,12 @@ TEST_P(GlobalControl, GroupSelectAndGroupIdentNonZero_GroupSelect0AddressesAll) 
   rc.slave.group_ident = 0x05;
   Bench b(GetParam(), 12'000'000, rc);
   ASSERT_TRUE(b.master.startup());
-  b.master.global_control(kUnfreeze, 0x00);
-  EXPECT_EQ(gc_command(b.chip), kUnfreeze);
-  b.master.global_control(kFreeze, 0x02);
-  EXPECT_EQ(gc_command(b.chip), kUnfreeze);
-  b.master.global_control(kFreeze, 0x04);
-  EXPECT_EQ(gc_command(b.chip), kFreeze);
+  b.master.global_control(kGC_Unfreeze, 0x00);
+  EXPECT_EQ(gc_command(b.chip), kGC_Unfreeze);
+  b.master.global_control(kGC_Freeze, 0x02);
+  EXPECT_EQ(gc_command(b.chip), kGC_Unfreeze);
+  b.master.global_control(kGC_Freeze, 0x04);
+  EXPECT_EQ(gc_command(b.chip), kGC_Freeze);
   b.master.global_control(0x00, 0x00);
   EXPECT_EQ(gc_command(b.chip), 0x00);
 }
@@ -208,7 +209,7 @@ TEST(GlobalControlDpc31, NewGcIntMode0_InterruptOnlyOnAChangedCommandByte) {
   Bench b(Profile::dpc31, 12'000'000);
   ASSERT_TRUE(b.master.startup());
   std::vector<std::uint64_t> acted;
-  for (const std::uint8_t cmd : {kFreeze, kFreeze, kUnfreeze, kUnfreeze, kFreeze}) {
+  for (const std::uint8_t cmd : {kGC_Freeze, kGC_Freeze, kGC_Unfreeze, kGC_Unfreeze, kGC_Freeze}) {
     acted.push_back(b.acted(b.master.global_control(cmd)));
     b.master.idle(2000);
   }
@@ -227,7 +228,7 @@ TEST(GlobalControlDpc31, NewGcIntMode1_InterruptAfterEachGc) {
   b.chip.write(wr(b.chip, RegId::Param_Reg), 0x01);
   std::vector<std::uint64_t> acted;
   for (int i = 0; i < 3; ++i) {
-    acted.push_back(b.acted(b.master.global_control(kFreeze)));
+    acted.push_back(b.acted(b.master.global_control(kGC_Freeze)));
     b.master.idle(2000);
   }
   EXPECT_EQ(gc_interrupts(b.user), 3u);

@@ -455,33 +455,20 @@ namespace {
 
 enum class Col { read, write, name, kind, width, reset, fields, bytes, origin, source, desc };
 
-std::string_view col_title(Col c) {
-  switch (c) {
-    case Col::read:
-      return "Read";
-    case Col::write:
-      return "Write";
-    case Col::name:
-      return "Name";
-    case Col::kind:
-      return "Kind";
-    case Col::width:
-      return "Bits";
-    case Col::reset:
-      return "Reset";
-    case Col::fields:
-      return "Fields (msb..lsb)";
-    case Col::bytes:
-      return "Bytes Intel / Motorola";
-    case Col::origin:
-      return "Origin";
-    case Col::source:
-      return "Source";
-    case Col::desc:
-      return "Description";
-  }
-  return "?";
-}
+constexpr std::array<std::string_view, 11> kColTitles = {"Read",
+                                                         "Write",
+                                                         "Name",
+                                                         "Kind",
+                                                         "Bits",
+                                                         "Reset",
+                                                         "Fields (msb..lsb)",
+                                                         "Bytes Intel / Motorola",
+                                                         "Origin",
+                                                         "Source",
+                                                         "Description"};
+static_assert(kColTitles.size() == static_cast<std::size_t>(Col::desc) + 1, "a title a column");
+
+std::string_view col_title(Col c) { return kColTitles.at(static_cast<std::size_t>(c)); }
 
 std::string col_cell(Col c, const ProfileDesc& p, const RegDesc& r) {
   switch (c) {

@@ -54,15 +54,9 @@ std::string reg_id(std::span<const std::string> reg_names, RegId id) {
 }
 
 std::string profile_enum(Profile id) {
-  switch (id) {
-    case Profile::spc3:
-      return "Profile::spc3";
-    case Profile::vpc3plus:
-      return "Profile::vpc3plus";
-    case Profile::dpc31:
-      return "Profile::dpc31";
-  }
-  throw std::logic_error("bad profile id");
+  const std::string_view name = profile_name(id);
+  if (name == "?") throw std::logic_error("bad profile id");
+  return fmt::format("Profile::{}", name);
 }
 
 }  // namespace

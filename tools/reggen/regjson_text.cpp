@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <set>
 #include <vector>
@@ -14,28 +15,15 @@ namespace dpc31::regjson::detail {
 
 using Json = nlohmann::json;
 
+// Each policy's mask in a RegDesc, in the order of Access (RO .. UNIMP).
+constexpr std::array<std::uint16_t RegDesc::*, 9> kAccessMasks = {
+    &RegDesc::ro, &RegDesc::rw,  &RegDesc::w1c,  &RegDesc::w1s,  &RegDesc::cmd,
+    &RegDesc::wo, &RegDesc::ign, &RegDesc::rsvd, &RegDesc::unimp};
+static_assert(kAccessMasks.size() == static_cast<std::size_t>(Access::UNIMP) + 1,
+              "a mask for every access policy");
+
 std::uint16_t& access_mask(RegDesc& r, Access a) {
-  switch (a) {
-    case Access::RO:
-      return r.ro;
-    case Access::RW:
-      return r.rw;
-    case Access::W1C:
-      return r.w1c;
-    case Access::W1S:
-      return r.w1s;
-    case Access::CMD:
-      return r.cmd;
-    case Access::WO:
-      return r.wo;
-    case Access::IGN:
-      return r.ign;
-    case Access::RSVD:
-      return r.rsvd;
-    case Access::UNIMP:
-      return r.unimp;
-  }
-  return r.unimp;
+  return r.*kAccessMasks.at(static_cast<std::size_t>(a));
 }
 
 bool is_identifier(std::string_view s, bool leading_digit_ok) {
