@@ -29,7 +29,7 @@ import tempfile
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import bridge_test as bt  # noqa: E402
 from bridge_test import SCALE, dx_answer, exchange_do4, startup_do4  # noqa: E402
-from dp_master import Fail, Master, check  # noqa: E402
+from dp_master import Master, check  # noqa: E402
 
 DISSECTOR = None
 BAUD = 19200
