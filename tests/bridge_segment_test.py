@@ -88,6 +88,12 @@ def check_two_stations_log(lines, header_end):
                   f"answer from another station: {line}")
 
 
+def log_has(lines, *wants):
+    text = "\n".join(lines)
+    for want in wants:
+        check(want in text, f"log lacks '{want}'")
+
+
 def pty_two_slaves():
     with tempfile.TemporaryDirectory() as tmp:
         b = bt.Bridge(tmp, *STATIONS, "--baud", str(BAUD), "--pacing", "free",
@@ -98,12 +104,10 @@ def pty_two_slaves():
             b.stop(signal.SIGTERM)
             lines = b.log_lines()
             check_two_stations_log(lines, f"pty {b.path} -> " + lines[0].rsplit(" -> ", 1)[-1])
-            text = "\n".join(lines)
             # LE 7: DA, SA, FC and 4 bytes; FCS 02 + 06 + 08 + 11 + 22 + 33 + 44 = BAh.
-            for want in ("TxD   slave6   10 02 06 00 08 16  | OK 6->2",
-                         "TxD   slave6   68 07 07 68 02 06 08 11 22 33 44 BA 16  | DL 6->2",
-                         "PORT  slave5   DO4 outputs = 0x05"):
-                check(want in text, f"log lacks '{want}'")
+            log_has(lines, "TxD   slave6   10 02 06 00 08 16  | OK 6->2",
+                    "TxD   slave6   68 07 07 68 02 06 08 11 22 33 44 BA 16  | DL 6->2",
+                    "PORT  slave5   DO4 outputs = 0x05")
         finally:
             b.kill()
 
@@ -160,9 +164,8 @@ def pty_two_do4():
                 check(last == f"slave {a}: Data_Exchange {want}", f"slave {a}: {last}")
             b.wait_for_log("client closed the pty", 30 * SCALE)
             b.stop(signal.SIGTERM)
-            text = "\n".join(b.log_lines())
-            for want in ("PORT  slave5   DO4 outputs = 0x05", "PORT  slave7   DO4 outputs = 0x0A"):
-                check(want in text, f"log lacks '{want}'")
+            log_has(b.log_lines(), "PORT  slave5   DO4 outputs = 0x05",
+                    "PORT  slave7   DO4 outputs = 0x0A")
         finally:
             b.kill()
 

@@ -107,6 +107,32 @@ std::string timescale_error(const std::string& t) {
   return fmt::format("--timescale '{}': use 1, 10 or 100 with fs, ps, ns, us or ms, or 1s", t);
 }
 
+std::vector<wave::Options> wave_options(const RunOptions& opt) {
+  std::vector<wave::Options> out;
+  for (const auto& [path, fst, flat] :
+       {std::tuple{opt.vcd, false, opt.flat}, std::tuple{opt.fst, true, opt.flat},
+        std::tuple{opt.la_vcd, false, true}}) {
+    if (path.empty()) continue;
+    wave::Options w;
+    w.path = path;
+    w.fst = fst;
+    w.signals = opt.signals;
+    w.from = opt.from;
+    w.to = opt.to;
+    w.flat = flat;
+    // The save file opens --vcd, or --fst without it.
+    if (path == (opt.vcd.empty() ? opt.fst : opt.vcd)) w.gtkw = opt.gtkw;
+    // The logic-analyser form's default: 10 ns, the sample period of a 100 MHz analyser (sigrok
+    // makes one sample per unit; 8.3 per bit at 12 Mbaud). The full form's: 1 ps.
+    parse_timescale(!opt.timescale.empty() ? opt.timescale
+                    : flat                 ? "10ns"
+                                           : "1ps",
+                    w.timescale_exp);
+    out.push_back(w);
+  }
+  return out;
+}
+
 int run_parsed_scenario(const RunOptions& opt, const Scenario& s, const LineSink& walk,
                         const LineSink& errors, ScenarioOutcome& o, std::FILE* err) {
   std::unique_ptr<TraceRecorder> rec;
@@ -143,27 +169,8 @@ int run_parsed_scenario(const RunOptions& opt, const Scenario& s, const LineSink
     return 2;
   }
   std::vector<std::unique_ptr<wave::Recorder>> waves;
-  for (const auto& [path, fst, flat] :
-       {std::tuple{opt.vcd, false, opt.flat}, std::tuple{opt.fst, true, opt.flat},
-        std::tuple{opt.la_vcd, false, true}}) {
-    if (path.empty()) continue;
-    wave::Options w;
-    w.path = path;
-    w.fst = fst;
-    w.signals = opt.signals;
-    w.from = opt.from;
-    w.to = opt.to;
-    w.flat = flat;
-    // The save file opens --vcd, or --fst without it.
-    if (path == (opt.vcd.empty() ? opt.fst : opt.vcd) && !path.empty()) w.gtkw = opt.gtkw;
-    // The logic-analyser form's default: 10 ns, the sample period of a 100 MHz analyser (sigrok
-    // makes one sample per unit; 8.3 per bit at 12 Mbaud). The full form's: 1 ps.
-    parse_timescale(!opt.timescale.empty() ? opt.timescale
-                    : flat                 ? "10ns"
-                                           : "1ps",
-                    w.timescale_exp);
+  for (const wave::Options& w : wave_options(opt))
     waves.push_back(std::make_unique<wave::Recorder>(w));
-  }
   capture::PcapngWriter pcap;
   if (!opt.pcap.empty() && !pcap.open(opt.pcap)) {
     fmt::print(err, "dpc31 run: {}\n", pcap.error());

@@ -7,6 +7,7 @@
 
 #include "scenario.hpp"
 #include "scenario_segment.hpp"
+#include "waveform.hpp"
 
 namespace dpc31::cli {
 
@@ -33,6 +34,11 @@ struct RunOptions {
 bool parse_timescale(const std::string& t, int& exp);
 // The one line for a unit parse_timescale() refuses (without the command's name).
 std::string timescale_error(const std::string& t);
+
+// The waveforms `opt` asks for (--vcd, --fst, --la-vcd), each with its window, signals, form,
+// time unit and the GTKWave save file on the first of --vcd / --fst; the same for one chip and
+// for a segment. The time unit is checked before (parse_timescale).
+std::vector<wave::Options> wave_options(const RunOptions& opt);
 
 // `dpc31 run`: plays a scenario file (docs/scenario-format.md), printing the state walk to `out`
 // and failures to `err`. Returns the exit code: 0 every expect held, 1 one failed, 2 bad input.

@@ -187,22 +187,7 @@ class SegmentOutputs final : public SegmentObserver {
  private:
   // The waveforms asked for (--vcd, --fst, --la-vcd), as for one chip.
   void make_waves() {
-    for (const auto& [path, fst, flat] :
-         {std::tuple{opt_.vcd, false, opt_.flat}, std::tuple{opt_.fst, true, opt_.flat},
-          std::tuple{opt_.la_vcd, false, true}}) {
-      if (path.empty()) continue;
-      wave::Options w;
-      w.path = path;
-      w.fst = fst;
-      w.signals = opt_.signals;
-      w.from = opt_.from;
-      w.to = opt_.to;
-      w.flat = flat;
-      if (path == (opt_.vcd.empty() ? opt_.fst : opt_.vcd)) w.gtkw = opt_.gtkw;
-      parse_timescale(!opt_.timescale.empty() ? opt_.timescale
-                      : flat                  ? "10ns"
-                                              : "1ps",
-                      w.timescale_exp);
+    for (const wave::Options& w : wave_options(opt_)) {
       waves_.push_back(std::make_unique<wave::Recorder>(w));
     }
   }
