@@ -141,4 +141,19 @@ std::uint32_t gc_command(std::string_view s) {
   return c;
 }
 
+int name_index(const char* const* names, std::string_view name) {
+  for (int i = 0; names != nullptr && names[i] != nullptr; ++i) {
+    if (name == names[i]) return i;
+  }
+  return -1;
+}
+
+std::string name_list(const char* const* names) {
+  std::string all;
+  for (int i = 0; names != nullptr && names[i] != nullptr; ++i) {
+    all += (i == 0 ? "" : ", ") + std::string(names[i]);
+  }
+  return all.empty() ? "none" : all;
+}
+
 }  // namespace dpc31::scenario_lex

@@ -47,4 +47,9 @@ std::uint32_t gc_command(std::string_view s);
 // Bytes as the walk and the checks show them: "01 02 A3", or "-" for none.
 std::string bytes_text(std::span<const std::uint8_t> b);
 
+// Index of `name` in a NULL-terminated list of names, -1 if absent; the list as "a, b, c"
+// ("none" when empty).
+int name_index(const char* const* names, std::string_view name);
+std::string name_list(const char* const* names);
+
 }  // namespace dpc31::scenario_lex

@@ -44,22 +44,6 @@ std::string_view trim(std::string_view s) {
   return s;
 }
 
-// Index of `name` in a NULL-terminated list of names, -1 if absent.
-int name_index(const char* const* names, std::string_view name) {
-  for (int i = 0; names != nullptr && names[i] != nullptr; ++i) {
-    if (name == names[i]) return i;
-  }
-  return -1;
-}
-
-std::string name_list(const char* const* names) {
-  std::string all;
-  for (int i = 0; names != nullptr && names[i] != nullptr; ++i) {
-    all += (i == 0 ? "" : ", ") + std::string(names[i]);
-  }
-  return all.empty() ? "none" : all;
-}
-
 // Actions whose first telegram a fault can be injected into.
 bool sends_request(StepKind k) {
   return is_action(k) && k != StepKind::silence && k != StepKind::foreign_master &&

@@ -15,6 +15,7 @@
 #include <utility>
 
 #include "regfmt.hpp"
+#include "regjson_keys.hpp"
 #include "regjson_text.hpp"
 
 namespace dpc31::regjson {
@@ -30,37 +31,6 @@ using detail::plain_lanes;
 constexpr std::size_t kProfileCount = std::size(kAllProfiles);
 constexpr std::uint32_t kFirstCell = 0x16;
 constexpr std::uint32_t kLastCell = 0x3F;
-
-// The keys each kind of object may carry.
-constexpr std::string_view kTopKeys[] = {"format",   "title",     "clock_hz",
-                                         "profiles", "fieldsets", "registers"};
-constexpr std::string_view kProfileKeys[] = {"name",
-                                             "title",
-                                             "macro",
-                                             "address_bits",
-                                             "ram_begin",
-                                             "ram_size",
-                                             "ram_size_large",
-                                             "cells_base",
-                                             "user_base",
-                                             "segment_shift",
-                                             "segment_shift_large",
-                                             "violation_from",
-                                             "violation_subtract",
-                                             "release",
-                                             "bus_access_cycles",
-                                             "note",
-                                             "regions",
-                                             "layouts"};
-constexpr std::string_view kLayoutKeys[] = {"name", "size", "source", "desc", "bytes"};
-constexpr std::string_view kLayoutByteKeys[] = {"offset", "name", "desc", "bits", "values"};
-constexpr std::string_view kLayoutValueKeys[] = {"name", "mask", "value", "desc"};
-constexpr std::string_view kRegionKeys[] = {"name", "begin", "end", "ram", "reserved", "desc"};
-constexpr std::string_view kFieldKeys[] = {"bits", "name", "access", "pulse", "desc"};
-constexpr std::string_view kRegisterKeys[] = {
-    "name",     "kind",  "target",   "block",    "width",  "reset",    "read",
-    "write",    "cell",  "reserved", "fieldset", "access", "override", "fields",
-    "profiles", "bytes", "origin",   "source",   "note",   "desc",     "alias"};
 
 std::size_t index_of(Profile p) { return static_cast<std::size_t>(p); }
 
