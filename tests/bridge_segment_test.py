@@ -94,22 +94,28 @@ def log_has(lines, *wants):
         check(want in text, f"log lacks '{want}'")
 
 
-def pty_two_slaves():
+def pty_run(stations, master):
+    """The bridge on its pty with `stations`; master(path) runs the master program until it exits.
+    Returns what master returned, the pty's path and the bridge's log lines."""
     with tempfile.TemporaryDirectory() as tmp:
-        b = bt.Bridge(tmp, *STATIONS, "--baud", str(BAUD), "--pacing", "free",
+        b = bt.Bridge(tmp, *stations, "--baud", str(BAUD), "--pacing", "free",
                       "--log-level", "telegrams")
         try:
-            run_master(b.path)
+            out = master(b.path)
             b.wait_for_log("client closed the pty", 30 * SCALE)
             b.stop(signal.SIGTERM)
-            lines = b.log_lines()
-            check_two_stations_log(lines, f"pty {b.path} -> " + lines[0].rsplit(" -> ", 1)[-1])
-            # LE 7: DA, SA, FC and 4 bytes; FCS 02 + 06 + 08 + 11 + 22 + 33 + 44 = BAh.
-            log_has(lines, "TxD   slave6   10 02 06 00 08 16  | OK 6->2",
-                    "TxD   slave6   68 07 07 68 02 06 08 11 22 33 44 BA 16  | DL 6->2",
-                    "PORT  slave5   DO4 outputs = 0x05")
+            return out, b.path, b.log_lines()
         finally:
             b.kill()
+
+
+def pty_two_slaves():
+    _, path, lines = pty_run(STATIONS, run_master)
+    check_two_stations_log(lines, f"pty {path} -> " + lines[0].rsplit(" -> ", 1)[-1])
+    # LE 7: DA, SA, FC and 4 bytes; FCS 02 + 06 + 08 + 11 + 22 + 33 + 44 = BAh.
+    log_has(lines, "TxD   slave6   10 02 06 00 08 16  | OK 6->2",
+            "TxD   slave6   68 07 07 68 02 06 08 11 22 33 44 BA 16  | DL 6->2",
+            "PORT  slave5   DO4 outputs = 0x05")
 
 
 def tcp_two_slaves_pcap():
@@ -152,22 +158,14 @@ def tcp_two_slaves_pcap():
 
 
 def pty_two_do4():
-    with tempfile.TemporaryDirectory() as tmp:
-        b = bt.Bridge(tmp, "--slave", "5:DO4", "--slave", "7:DO4:spc3", "--baud", str(BAUD),
-                      "--pacing", "free", "--log-level", "telegrams")
-        try:
-            # DO4's input byte: the terminals read back in the high nibble, ModulOK in bit 0.
-            lines = run_master(b.path, ["--slave", "5:0x0D04:21,10:00,00,00,00:05,01",
-                                        "--slave", "7:0x0D04:21,10:00,00,00,00:0A,01"])
-            for a, want in ((5, "05 01: inputs 51"), (7, "0A 01: inputs A1")):
-                last = [x for x in lines if x.startswith(f"slave {a}: Data_Exchange ")][-1]
-                check(last == f"slave {a}: Data_Exchange {want}", f"slave {a}: {last}")
-            b.wait_for_log("client closed the pty", 30 * SCALE)
-            b.stop(signal.SIGTERM)
-            log_has(b.log_lines(), "PORT  slave5   DO4 outputs = 0x05",
-                    "PORT  slave7   DO4 outputs = 0x0A")
-        finally:
-            b.kill()
+    # DO4's input byte: the terminals read back in the high nibble, ModulOK in bit 0.
+    lines, _, log = pty_run(["--slave", "5:DO4", "--slave", "7:DO4:spc3"], lambda path: run_master(
+        path, ["--slave", "5:0x0D04:21,10:00,00,00,00:05,01",
+               "--slave", "7:0x0D04:21,10:00,00,00,00:0A,01"]))
+    for a, want in ((5, "05 01: inputs 51"), (7, "0A 01: inputs A1")):
+        last = [x for x in lines if x.startswith(f"slave {a}: Data_Exchange ")][-1]
+        check(last == f"slave {a}: Data_Exchange {want}", f"slave {a}: {last}")
+    log_has(log, "PORT  slave5   DO4 outputs = 0x05", "PORT  slave7   DO4 outputs = 0x0A")
 
 
 def bad_slave_arguments():
