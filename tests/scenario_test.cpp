@@ -75,9 +75,10 @@ std::vector<fs::path> shipped() {
   std::vector<fs::path> v;
   for (const auto& e : fs::directory_iterator(kTraces)) {
     if (e.path().extension() != ".scn") continue;
-    // DO4 and CNT2 on the 80C32 run as the build's copies, beside the images they name
-    // (firmware/).
-    v.push_back(e.path().stem().string().ends_with("_80c32")
+    // DO4 and CNT2 on the 80C32 and ECHO on the C31 run as the build's copies, beside the
+    // images they name (firmware/).
+    const std::string stem = e.path().stem().string();
+    v.push_back(stem.ends_with("_80c32") || stem.ends_with("_c31")
                     ? fs::path(FW51_DIR) / e.path().filename()
                     : e.path());
   }
