@@ -93,21 +93,17 @@ static void chk_cfg(void) {
 }
 
 /* DX_Out: acknowledged before the fetch, so that outputs arriving after it raise a new call; the
- * buffer N -> U (User_New_Dout_Cmd), its bytes are the echo. After a clear by the ASIC
- * (U_Buffer_Cleared) the user got the clear buffer C, and the old U is the new C: it must hold
- * the substitute values, zeros (seed 003). */
+ * buffer N -> U (User_New_Dout_Cmd), its bytes are the echo. U_Buffer_Cleared: the chip cleared
+ * them (Leave_Master, a DP watchdog expiry), or a Clear_Data handed the user the clear buffer C by
+ * exchanging the pointer cells of C and U; then the old U is the new C and must hold the
+ * substitute values, zeros, before the next clear (seed 003). */
 static void dx_out(void) {
   uint8_t r, k;
   volatile __xdata uint8_t* out;
   CELL(DPC31_Int_Ack_Reg_HI_INTEL) = HI(DPC31_Int_Req_Reg_DX_Out_Msk);
   r = CELL(DPC31_User_New_Dout_Cmd);
   if ((r & DPC31_User_New_Dout_Cmd_State_U_Buffer_Msk) == 0) return;
-  if (r & DPC31_User_New_Dout_Cmd_U_Buffer_Cleared_Msk) {
-    out = SEGMENT(CELL(DPC31_R_Dout_Buf_Ptr_C));
-  } else {
-    out =
-        SEGMENT(CELL(DPC31_R_Dout_Buf_Ptr1 - 1u + (r & DPC31_User_New_Dout_Cmd_Ind_U_Buffer_Msk)));
-  }
+  out = SEGMENT(CELL(DPC31_R_Dout_Buf_Ptr1 - 1u + (r & DPC31_User_New_Dout_Cmd_Ind_U_Buffer_Msk)));
   for (k = 0; k < ECHO_LEN; ++k) echo[k] = out[k];
   if (r & DPC31_User_New_Dout_Cmd_U_Buffer_Cleared_Msk)
     fill(CELL(DPC31_R_Dout_Buf_Ptr_C), ECHO_LEN);
