@@ -41,7 +41,11 @@ void read_map(const std::string& text, std::map<std::uint16_t, std::string>& out
 
 bool load_cpu51_image(const Cpu51Config& cfg, Cpu51Image& image, std::string& error) {
   std::string text;
-  if (!read_text_file(cfg.hex, kMaxHexBytes, "Intel HEX", text, error)) return false;
+  // The reader's reason names no file: the message is FILE: reason.
+  if (!read_text_file(cfg.hex, kMaxHexBytes, "Intel HEX", text, error)) {
+    error = fmt::format("{}: {}", cfg.hex, error);
+    return false;
+  }
   mcs51::HexImage hex;
   std::string why;
   if (!mcs51::parse_ihex(text, hex, why)) {
@@ -64,7 +68,10 @@ bool load_cpu51_image(const Cpu51Config& cfg, Cpu51Image& image, std::string& er
   std::error_code ec;
   if (std::filesystem::is_regular_file(map, ec)) {
     std::string mtext;
-    if (!read_text_file(map.string(), kMaxHexBytes, "SDCC map", mtext, error)) return false;
+    if (!read_text_file(map.string(), kMaxHexBytes, "SDCC map", mtext, error)) {
+      error = fmt::format("{}: {}", map.string(), error);
+      return false;
+    }
     read_map(mtext, image.symbols);
     image.map_file = map.string();
   }
@@ -132,7 +139,7 @@ std::string apply_cpu51_choice(const Cpu51Choice& choice, ChipOptions& chip, Cpu
   } else {
     if (!choice.code.empty()) return "--code is the C31's (--cpu c31)";
     // The latch bytes from 4000h on, named as the scenario's `ports=` names them.
-    const std::string_view ports = choice.ports.empty() ? "outputs,modul_ok" : choice.ports;
+    const std::string ports = choice.ports.empty() ? "outputs,modul_ok" : choice.ports;
     cfg.ports.clear();
     for (std::size_t at = 0, end = 0; end != std::string_view::npos; at = end + 1) {
       end = ports.find(',', at);
