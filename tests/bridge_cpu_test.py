@@ -6,7 +6,8 @@ c31_ack_trace: the DPC31's C31 runs tests/mcs51/board/c31_ack.asm (as the build 
 behind the pty, from the chip's RAM at --code 1000h; --trace-cpu has every step with its machine
 cycle, PC and opcode exactly as the program's listing gives them (the machine cycles in brackets
 in c31_ack.asm, the instruction set's cycle counts): the C31's interrupt, raised by its own MOVX
-to Int_Req_Reg in [12,14), is called in [15,17) and its routine starts at 004Eh in 19; the C31 at
+to Int_Req_Reg in [12,14), is called in [15,17), the vector's LJMP runs in [17,19) and the routine starts at 004Eh
+in 19; the C31 at
 24 MHz puts machine cycle m at chip cycle 24 m (docs/cpu.md).
 
 c31_bad_arguments: --cpu c31 on another profile, against --irq-controller external, a --code
@@ -29,14 +30,14 @@ from bridge_test import SCALE  # noqa: E402
 from dp_master import check  # noqa: E402
 
 # (machine cycle, PC, opcode) of every step: the listing of c31_ack.asm (.org 30h on). The
-# interrupt call is one step (LCALL in [15,17) and the vector's LJMP in [17,19)), traced with the
-# PC it interrupts (0040h, the return address).
+# interrupt call is a step of its own, the hardware LCALL in [15,17), traced with the PC it
+# interrupts (0040h, the return address); the vector's LJMP at 0003h follows in [17,19).
 STEPS = [(0, 0x0000, 0x02), (2, 0x0030, 0x90), (4, 0x0033, 0x74), (5, 0x0035, 0xF0),
          (7, 0x0036, 0x75), (9, 0x0039, 0x90), (11, 0x003C, 0x74), (12, 0x003E, 0xF0),
-         (14, 0x003F, 0x00), (15, 0x0040, 0x90), (19, 0x004E, 0x90), (21, 0x0051, 0x74),
-         (22, 0x0053, 0xF0), (24, 0x0054, 0x32), (26, 0x0040, 0x90), (28, 0x0043, 0x74),
-         (29, 0x0045, 0xF0), (31, 0x0046, 0x74), (32, 0x0048, 0x90), (34, 0x004B, 0xF0),
-         (36, 0x004C, 0x80), (38, 0x004C, 0x80)]
+         (14, 0x003F, 0x00), (15, 0x0040, 0x90), (17, 0x0003, 0x02), (19, 0x004E, 0x90),
+         (21, 0x0051, 0x74), (22, 0x0053, 0xF0), (24, 0x0054, 0x32), (26, 0x0040, 0x90),
+         (28, 0x0043, 0x74), (29, 0x0045, 0xF0), (31, 0x0046, 0x74), (32, 0x0048, 0x90),
+         (34, 0x004B, 0xF0), (36, 0x004C, 0x80), (38, 0x004C, 0x80)]
 
 
 def c31_ack():
