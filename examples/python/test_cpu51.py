@@ -7,10 +7,12 @@ the derivation in traces/do4_80c32.scn's comments (DO4's path from SDCC's listin
 
 import os
 import pathlib
+import subprocess
 
 import pytest
 
 import dpc31
+from dpc31.client import Client, ServeError
 
 FW51 = pathlib.Path(os.environ["DPC31_FW51"])
 BOARD = pathlib.Path(os.environ["DPC31_BOARD"])
@@ -73,3 +75,33 @@ def test_a_bad_image_names_its_file_and_line(tmp_path):
         board.load_hex(str(broken))
     with pytest.raises(ValueError):
         dpc31.Cpu51Board.c31(dpc31.Chip("spc3"))  # the C31 is the dpc31's
+
+
+def test_the_c31_behind_dpc31_serve_from_the_pure_python_client(cli, tmp_path):
+    # The same program behind the socket: the client is no bus master (ERR cpu), the CPU's
+    # registers and the interrupt edges at the same cycles.
+    sock = str(tmp_path / "chip.sock")
+    proc = subprocess.Popen([cli, "serve", "--unix", sock, "--profile", "dpc31", "--cpu", "c31",
+                             "--firmware", str(BOARD / "c31_ack.ihx")],
+                            stdout=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout.readline().split()[:2] == ["listening", "unix"]
+        with Client(unix=sock) as c:
+            assert c.info["cpu"] == "c31" and c.info["code"] == "0x1000"
+            edges = []
+            c.on_irq_change(lambda cycle, active: edges.append((cycle, active)))
+            with pytest.raises(ServeError) as refused:
+                c.read(0x08A0)
+            assert refused.value.code == "cpu"
+            c.step(1000)
+            assert edges == [(324, True), (564, False)]
+            regs = c.cpu()
+            assert regs["core"] == "c31" and regs["a"] == 0x77 and regs["in_service"] == 0
+            assert c.peek(0x08A0) == 0x77
+            assert c.cpu_port(1) == (0xFF, 0x05)  # the address switch: station 5
+            c.shutdown()
+        assert proc.wait(timeout=30) == 0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
