@@ -207,8 +207,7 @@ void bind_board(py::module_& m) {
           "Loads an Intel HEX image (SDCC's, Keil's) as program memory; InputError 'FILE:LINE: "
           "reason' for a bad record. Returns the bytes it gives.")
       .def(
-          "run_until",
-          [](PyBoard& b, U64 cycle) { b.chip.run([&] { b.run_until(cycle); }); },
+          "run_until", [](PyBoard& b, U64 cycle) { b.chip.run([&] { b.run_until(cycle); }); },
           py::arg("cycle"),
           "Runs CPU and chip together until the chip's cycle is at least `cycle` (the CPU's "
           "step in progress ends).")
@@ -232,15 +231,15 @@ void bind_board(py::module_& m) {
           "on_ram_write",
           [](PyBoard& b, py::function f) {
             b.board->on_ram_write = b.chip.observer<std::uint16_t, std::uint8_t, U64>(
-                std::move(f), [](py::object& fn, std::uint16_t a, std::uint8_t v, U64 c) {
-                  fn(a, v, c);
-                });
+                std::move(f),
+                [](py::object& fn, std::uint16_t a, std::uint8_t v, U64 c) { fn(a, v, c); });
           },
           py::arg("callback"),
           "callback(addr, value, cycle) for every write to the board's RAM (an output latch), "
           "with the chip cycle its strobe ends.")
       .def(
-          "chip_cycle_of", [](const PyBoard& b, U64 clock) { return b.board->chip_cycle_of(clock); },
+          "chip_cycle_of",
+          [](const PyBoard& b, U64 clock) { return b.board->chip_cycle_of(clock); },
           py::arg("cpu_clock"), "The chip cycle of a CPU oscillator clock counted from reset.")
       .def_property_readonly("pc", [](const PyBoard& b) { return b.board->cpu().pc(); })
       .def_property_readonly("a", [](const PyBoard& b) { return b.board->cpu().a(); })

@@ -156,9 +156,10 @@ std::string apply_cpu51_choice(const Cpu51Choice& choice, ChipOptions& chip, Cpu
       cfg.base = static_cast<std::uint16_t>(v);
     }
     if (cfg.latch_in_window()) {
-      return fmt::format("--board-address {:#06x}: the chip's window covers the output latch at "
-                         "{:#06x}",
-                         cfg.base, cfg.latch);
+      return fmt::format(
+          "--board-address {:#06x}: the chip's window covers the output latch at "
+          "{:#06x}",
+          cfg.base, cfg.latch);
     }
   }
   std::string why;

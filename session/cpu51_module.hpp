@@ -39,9 +39,9 @@ std::string code_name(const Cpu51Image& image, std::uint16_t pc);
 // binary"): --cpu 80c32[:HZ] or c31[:HZ], --firmware FILE.ihx, --code A (the C31's code area),
 // --board-address A (the chip's window in the 80C32's XDATA); the addresses decimal or 0x hex.
 struct Cpu51Choice {
-  std::string cpu;            // empty: no CPU
-  std::string firmware;       // the Intel HEX image
-  std::string code;           // empty: 1000h
+  std::string cpu;             // empty: no CPU
+  std::string firmware;        // the Intel HEX image
+  std::string code;            // empty: 1000h
   std::string board_address;   // empty: 8000h
   std::string ports;           // the 80C32 board's latch bytes by name; empty: DO4's
   std::string irq_controller;  // --irq-controller as given (empty: none)

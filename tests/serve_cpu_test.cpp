@@ -88,11 +88,11 @@ TEST(ServeCpu, Do4OnThe80c32ReachesDataExchangeAndWritesItsOutputsOnTime) {
             "OK protocol=2 profile=spc3 bus=intel clock_hz=48000000 bus_access_cycles=4 "
             "address_bits=11 cpu=80c32 cpu_hz=24000000 board_address=0x8000");
   // The client is no bus master now; the debugger's back door and the CPU's view stay.
-  for (const char* refused : {"read 0x16", "write 0x16 1", "readblock 0 2", "writeblock 0 01",
-                              "reset", "load x"}) {
+  for (const char* refused :
+       {"read 0x16", "write 0x16 1", "readblock 0 2", "writeblock 0 01", "reset", "load x"}) {
     EXPECT_TRUE(starts_with(client.command(refused), "ERR cpu ")) << refused;
   }
-  EXPECT_EQ(client.command("cycle"), "OK 0");  // nothing of that took time
+  EXPECT_EQ(client.command("cycle"), "OK 0");                          // nothing of that took time
   EXPECT_EQ(client.command("cpu_port 1"), "OK latch=0xff pins=0x07");  // the address switch
   EXPECT_TRUE(starts_with(client.command("cpu"), "OK core=80c32 hz=24000000 pc=0x0000 "));
 
@@ -161,8 +161,8 @@ TEST(ServeCpu, Do4OnThe80c32ReachesDataExchangeAndWritesItsOutputsOnTime) {
 TEST(ServeCpu, C31RunsFromTheChipsRamBehindTheSocket) {
   TempDir dir;
   const std::string sock = dir.file("chip.sock");
-  ServerProcess server(kCli, {"--unix", sock, "--profile", "dpc31", "--cpu", "c31",
-                              "--firmware", kC31Ack, "--code", "0x1000"});
+  ServerProcess server(kCli, {"--unix", sock, "--profile", "dpc31", "--cpu", "c31", "--firmware",
+                              kC31Ack, "--code", "0x1000"});
   LineClient client = LineClient::unix_socket(sock);
   EXPECT_EQ(client.command("info"),
             "OK protocol=2 profile=dpc31 irq_controller=c31 bus=intel clock_hz=48000000 "
@@ -212,7 +212,8 @@ TEST(ServeCpu, BadCpuOptionsExit2WithOneLine) {
       {{"--firmware", kDo4}, "--firmware needs --cpu"},
       {{"--cpu", "80c32", "--firmware", broken}, broken + ":2: "},
       {{"--cpu", "80c32", "--firmware", dir.file("none.ihx")}, dir.file("none.ihx")},
-      {{"--cpu", "c31", "--firmware", kC31Ack, "--profile", "spc3"}, "--cpu c31 is for --profile dpc31"},
+      {{"--cpu", "c31", "--firmware", kC31Ack, "--profile", "spc3"},
+       "--cpu c31 is for --profile dpc31"},
       {{"--cpu", "c31", "--firmware", kC31Ack, "--irq-controller", "external"},
        "--irq-controller external contradicts it"},
       {{"--cpu", "c31", "--firmware", kC31Ack, "--code", "0x800"}, "--code '0x800' must be"},

@@ -404,8 +404,8 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
         return ok(fmt::format("{}", chip_.cycle()));
       }
       // Level-triggered like firmware: an interrupt that is already active stops at once.
-      const bool hit = chip_.irq_active() || (cpu_ ? cpu_->run_until_irq(chip_.cycle() + n)
-                                                   : chip_.step_until_irq(n));
+      const bool hit = chip_.irq_active() ||
+                       (cpu_ ? cpu_->run_until_irq(chip_.cycle() + n) : chip_.step_until_irq(n));
       return ok(fmt::format("{} {}", hit ? "irq" : "timeout", chip_.cycle()));
     }
     if (cmd == "reset") {

@@ -102,7 +102,7 @@ class Session {
   std::size_t injected_bytes_ = 0;
   StateDir state_dir_;
   std::vector<std::string_view> tokens_;  // the words of the line being executed
-  std::unique_ptr<BoardCpu> cpu_;          // --cpu: the bus master
+  std::unique_ptr<BoardCpu> cpu_;         // --cpu: the bus master
 };
 
 }  // namespace dpc31::serve

@@ -181,7 +181,7 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
   std::uint64_t v = 0;
   if (!o.slaves.empty()) {
     // Each station's chip, address and user side come from its --slave.
-  } else if (!o.cpu.empty()) {  // --firmware is then its Intel HEX image
+  } else if (!o.cpu.empty()) {    // --firmware is then its Intel HEX image
     c.setup.cpu = Cpu51Config{};  // filled once the profile is known (below)
   } else {
     if (!o.trace_cpu.empty()) return bad("--trace-cpu needs --cpu");
@@ -538,9 +538,9 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
   b->allow_extras();
   b->callback([b, &o] {
     o.extra = b->remaining();
-    for (const char* name : {"--firmware", "--address", "--profile", "--variant",
-                             "--irq-controller", "--cpu", "--code", "--board-address",
-                             "--trace-cpu"}) {
+    for (const char* name :
+         {"--firmware", "--address", "--profile", "--variant", "--irq-controller", "--cpu",
+          "--code", "--board-address", "--trace-cpu"}) {
       if (b->get_option(name)->count() > 0) o.single.emplace_back(name);
     }
   });

@@ -69,7 +69,8 @@ CLI::App* add_serve_subcommand(CLI::App& app, ServeArgs& a) {
                   "80c32[:HZ]: run --firmware on an 80C32 beside the chip, the bus master; "
                   "c31[:HZ] (--profile dpc31): on the DPC31's own C31");
   cmd->add_option("--firmware", a.firmware, "with --cpu: the Intel HEX image (SDCC, Keil)");
-  cmd->add_option("--code", a.code, "with --cpu c31: the C31's code area in the chip's RAM (0x1000)");
+  cmd->add_option("--code", a.code,
+                  "with --cpu c31: the C31's code area in the chip's RAM (0x1000)");
   cmd->add_option("--board-address", a.board_address,
                   "with --cpu 80c32: the chip's 4 KB window in XDATA (0x8000)");
   cmd->add_option("--ports", a.ports,
