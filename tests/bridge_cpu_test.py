@@ -7,8 +7,8 @@ behind the pty, from the chip's RAM at --code 1000h; --trace-cpu has every step 
 cycle, PC and opcode exactly as the program's listing gives them (the machine cycles in brackets
 in c31_ack.asm, the instruction set's cycle counts): the C31's interrupt, raised by its own MOVX
 to Int_Req_Reg in [12,14), is called in [15,17), the vector's LJMP runs in [17,19) and the
-routine starts at 004Eh in 19; the C31 at
-24 MHz puts machine cycle m at chip cycle 24 m (docs/cpu.md).
+routine starts at 004Eh in 19; the C31 at 24 MHz puts machine cycle m at chip cycle 24 m
+(docs/cpu.md).
 
 c31_bad_arguments: --cpu c31 on another profile, against --irq-controller external, a --code
 outside the RAM's user area, --ports or --board-address (the 80C32 board's), --code on the
