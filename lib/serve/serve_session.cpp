@@ -389,7 +389,7 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
     }
     if (cmd == "step" || cmd == "run_until_irq") {
       arity(t, 1, 1, cmd, cmd == "step" ? "N" : "MAX");
-      const std::uint64_t n = number(t[1], kMaxStep, "cycles");
+      const std::uint64_t n = number(t[1], cpu_ ? kMaxStepCpu : kMaxStep, "cycles");
       if (n > std::numeric_limits<std::uint64_t>::max() - chip_.cycle()) {
         throw Fail{"range", "the cycle counter would overflow"};
       }
