@@ -55,8 +55,9 @@ class Cpu51Board final : public mcs51::XdataBus {
   // end: an output latch decoded there (Cpu51Module's ports).
   std::function<void(std::uint16_t addr, std::uint8_t value, std::uint64_t cycle)> on_ram_write;
 
-  // Before every step of the CPU (an instruction, or an interrupt call with the routine's first
-  // instruction): its PC and machine cycle (`dpc31 bridge --trace-cpu`). Empty: nothing.
+  // Before every step of the CPU (an instruction, an interrupt's hardware LCALL with the PC it
+  // interrupts, an idle machine cycle): its PC and machine cycle (`dpc31 bridge --trace-cpu`;
+  // BridgeCpu.c31_ack_trace). Empty: nothing.
   std::function<void(std::uint16_t pc, std::uint64_t cycle)> on_step;
 
   std::uint8_t read(std::uint16_t addr, std::uint64_t clock) override;
