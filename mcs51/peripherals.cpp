@@ -243,10 +243,7 @@ void Cpu::replan() {
   horizon_ = cycles_ - lag_ + h;
 }
 
-bool Cpu::pin(unsigned port, unsigned bit) const {
-  return ((sfr_latch(static_cast<std::uint8_t>(0x80 + 16 * port)) & port_in_[port]) >> bit & 1) !=
-         0;
-}
+bool Cpu::pin(unsigned port, unsigned bit) const { return (port_pins(port) >> bit & 1) != 0; }
 
 void Cpu::serial_receive(std::uint8_t data, bool bit8) {
   sync();

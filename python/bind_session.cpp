@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "bind.hpp"
+#include "cpu51_module.hpp"
 #include "dp_master.hpp"
 #include "dpv1_master.hpp"
 #include "firmware_host.hpp"
@@ -143,6 +144,116 @@ void bind_user_side(py::module_& m) {
       .def_readonly("cfg_rejected", &Responder::cfg_rejected);
 }
 
+// An 80C32 beside the chip, or the DPC31's C31 (session/cpu51_board.hpp, docs/cpu.md): it keeps
+// the chip alive.
+struct PyBoard {
+  PyBoard(py::object chip_obj, std::uint32_t hz, std::optional<std::uint16_t> address,
+          std::optional<std::uint16_t> code)
+      : chip_ref(std::move(chip_obj)), chip(chip_ref.cast<PyChip&>()) {
+    chip.enter(true);
+    try {
+      board = code ? std::make_unique<Cpu51Board>(chip.chip, hz, Cpu51Board::C31{*code})
+                   : std::make_unique<Cpu51Board>(chip.chip, hz, *address);
+    } catch (const std::invalid_argument& e) {
+      throw py::value_error(e.what());
+    }
+    cfg.hz = hz;
+    cfg.c31 = code.has_value();
+    if (code) cfg.code = *code;
+  }
+  py::object chip_ref;
+  PyChip& chip;
+  std::unique_ptr<Cpu51Board> board;
+  Cpu51Config cfg;  // what load_hex checks the image against
+
+  void run_until(std::uint64_t cycle) {
+    while (chip.chip.cycle() < cycle && !chip.chip.stop_requested()) board->run_until(cycle);
+  }
+};
+
+void bind_board(py::module_& m) {
+  py::class_<PyBoard>(m, "Cpu51Board",
+                      "An 80C32 beside the chip (its XDATA window at `address`, X/INT on INT0), "
+                      "or the DPC31's C31 (Cpu51Board.c31); docs/cpu.md.")
+      .def(py::init([](py::object chip, std::uint32_t hz, std::uint16_t address) {
+             return std::make_unique<PyBoard>(std::move(chip), hz, address, std::nullopt);
+           }),
+           py::arg("chip"), py::arg("hz") = 24'000'000, py::arg("address") = 0x8000)
+      .def_static(
+          "c31",
+          [](py::object chip, std::uint32_t hz, std::uint16_t code) {
+            return std::make_unique<PyBoard>(std::move(chip), hz, std::nullopt, code);
+          },
+          py::arg("chip"), py::arg("hz") = 24'000'000, py::arg("code") = 0x1000,
+          "The DPC31's C31: code from the chip's RAM at `code`, XDATA the chip's own space, INT0 "
+          "its interrupt controller (the chip made with irq_controller='c31'); docs/dpc31.md.")
+      .def(
+          "load_hex",
+          [](PyBoard& b, const std::string& path) {
+            b.chip.enter(true);
+            Cpu51Config cfg = b.cfg;
+            cfg.hex = path;
+            Cpu51Image image;
+            std::string why;
+            if (!load_cpu51_image(cfg, image, why)) raise(errors().input, why);
+            if (cfg.c31) {
+              b.board->load_c31_code(image.code, image.used);  // fits: checked by the load
+            } else {
+              b.board->cpu().load_code(0, image.code);
+            }
+            return image.size;
+          },
+          py::arg("path"),
+          "Loads an Intel HEX image (SDCC's, Keil's) as program memory; InputError 'FILE:LINE: "
+          "reason' for a bad record. Returns the bytes it gives.")
+      .def(
+          "run_until", [](PyBoard& b, U64 cycle) { b.chip.run([&] { b.run_until(cycle); }); },
+          py::arg("cycle"),
+          "Runs CPU and chip together until the chip's cycle is at least `cycle` (the CPU's "
+          "step in progress ends).")
+      .def(
+          "port", [](const PyBoard& b, unsigned n) { return b.board->cpu().port_latch(n); },
+          py::arg("n"), "Port n's latch (0..3: P0..P3).")
+      .def(
+          "pins", [](const PyBoard& b, unsigned n) { return b.board->cpu().port_pins(n); },
+          py::arg("n"), "Port n's pins: the latch AND what the outside drives.")
+      .def(
+          "set_port_input",
+          [](PyBoard& b, unsigned n, U8 value) {
+            b.chip.enter(true);
+            b.board->cpu().set_port_input(n, value);
+          },
+          py::arg("n"), py::arg("value"), "What the outside drives on port n (an address switch).")
+      .def(
+          "xdata", [](const PyBoard& b, std::uint16_t addr) { return b.board->ram(addr); },
+          py::arg("addr"), "A byte of the board's RAM (XDATA outside the chip's window).")
+      .def(
+          "on_ram_write",
+          [](PyBoard& b, py::function f) {
+            b.board->on_ram_write = b.chip.observer<std::uint16_t, std::uint8_t, U64>(
+                std::move(f),
+                [](py::object& fn, std::uint16_t a, std::uint8_t v, U64 c) { fn(a, v, c); });
+          },
+          py::arg("callback"),
+          "callback(addr, value, cycle) for every write to the board's RAM (an output latch), "
+          "with the chip cycle its strobe ends.")
+      .def(
+          "chip_cycle_of",
+          [](const PyBoard& b, U64 clock) { return b.board->chip_cycle_of(clock); },
+          py::arg("cpu_clock"), "The chip cycle of a CPU oscillator clock counted from reset.")
+      .def_property_readonly("pc", [](const PyBoard& b) { return b.board->cpu().pc(); })
+      .def_property_readonly("a", [](const PyBoard& b) { return b.board->cpu().a(); })
+      .def_property_readonly("b", [](const PyBoard& b) { return b.board->cpu().b(); })
+      .def_property_readonly("psw", [](const PyBoard& b) { return b.board->cpu().psw(); })
+      .def_property_readonly("sp", [](const PyBoard& b) { return b.board->cpu().sp(); })
+      .def_property_readonly("dptr", [](const PyBoard& b) { return b.board->cpu().dptr(); })
+      .def_property_readonly("machine_cycles",
+                             [](const PyBoard& b) { return b.board->cpu().cycles(); })
+      .def_property_readonly("in_service",
+                             [](const PyBoard& b) { return b.board->cpu().in_service(); })
+      .def_property_readonly("chip", [](const PyBoard& b) { return b.chip_ref; });
+}
+
 // The built-in DP master on one chip's wire. It keeps the chip (and the user side) alive.
 struct PyMaster {
   PyMaster(py::object chip_obj, const MasterConfig& mc, const SlaveConfig& sc)
@@ -156,6 +267,7 @@ struct PyMaster {
   std::unique_ptr<DpMaster> m;
   std::shared_ptr<FirmwareHost> firmware;
   std::shared_ptr<Responder> responder;
+  py::object board;  // run_board's Cpu51Board
   Dpv1Rules dpv1_rules;
   std::unique_ptr<Dpv1Master> dpv1_m;  // on `m`: made at the first DPV1 service
 
@@ -175,7 +287,7 @@ struct PyMaster {
   // its bus idle from then on, as in a scenario (session/scenario_run.cpp): it is made anew.
   template <typename Init>
   void start_user_side(const SlaveConfig& slave, Init&& init) {
-    if (firmware || responder || m->counters().requests != 0) {
+    if (firmware || responder || board || m->counters().requests != 0) {
       raise(errors().error,
             "the user side starts once, before the master's first request (docs/python.md)");
     }
@@ -333,6 +445,22 @@ void bind_master(py::module_& m) {
           py::arg("substitute") = py::bytes(), py::arg("user_watchdog") = false,
           py::arg("dx_out_port") = false,
           "Runs the built-in responder (session/responder.hpp) as the user side.")
+      .def(
+          "run_board",
+          [](PyMaster& pm, py::object board) {
+            PyBoard& b = board.cast<PyBoard&>();
+            if (&b.chip != &pm.chip) raise(errors().error, "the board is on another chip");
+            if (pm.firmware || pm.responder || pm.board) {
+              raise(errors().error, "the master's chip has a user side already");
+            }
+            // The board moves time while the master waits, as in a scenario's `cpu` header
+            // (session/scenario_run.cpp): its CPU is the user side, from reset.
+            pm.m->scheduler = [&b](U64 cycle) { b.run_until(cycle); };
+            pm.board = std::move(board);
+          },
+          py::arg("board"),
+          "The CPU of a Cpu51Board is the user side: its image runs while the master runs the "
+          "chip.")
       .def_property_readonly("firmware", [](const PyMaster& pm) { return pm.firmware; })
       .def_property_readonly("responder", [](const PyMaster& pm) { return pm.responder; })
       .def_property_readonly("chip", [](const PyMaster& pm) { return pm.chip_ref; })
@@ -632,6 +760,7 @@ void bind_wavediff(py::module_& m) {
 void bind_session(py::module_& m) {
   bind_frames(m);
   bind_user_side(m);
+  bind_board(m);
   bind_master(m);
   bind_scenarios(m);
   bind_wavediff(m);

@@ -102,9 +102,14 @@ void Cpu51Board::write(std::uint16_t addr, std::uint8_t value, std::uint64_t clo
   }
   access_at(clock);
   chip_.write(addr - base_, value);
-  // The C31 fetches its code from the chip's RAM: a write to the code area is its program.
-  if (c31_ && addr >= code_base_) cpu_.load_code(addr - code_base_, std::span(&value, 1));
+  poked(addr, value);
   cpu_.set_int0(int0_level());
+}
+
+// The C31 fetches its code from the chip's RAM: a write to the code area is its program.
+void Cpu51Board::poked(std::uint16_t addr, std::uint8_t value) {
+  if (c31_ && addr >= code_base_ && addr < window_)
+    cpu_.load_code(static_cast<std::uint16_t>(addr - code_base_), std::span(&value, 1));
 }
 
 }  // namespace dpc31

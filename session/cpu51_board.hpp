@@ -37,6 +37,12 @@ class Cpu51Board final : public mcs51::XdataBus {
   bool load_c31_code(const std::vector<std::uint8_t>& bytes, const std::vector<bool>& used);
 
   mcs51::Cpu& cpu() { return cpu_; }
+  [[nodiscard]] const mcs51::Cpu& cpu() const { return cpu_; }
+  // The board's plain RAM (XDATA outside the chip's window; an output latch decoded there).
+  [[nodiscard]] std::uint8_t ram(std::uint16_t addr) const { return ram_[addr]; }
+  // A debugger's poke into the chip at `addr` of its space (no bus time): on the C31 a byte of
+  // its code area is its program from the next fetch, as its own MOVX's is.
+  void poked(std::uint16_t addr, std::uint8_t value);
   // The chip cycle of an instant given in CPU oscillator clocks from reset: the first chip clock
   // edge at or after it, ceil(clock * chip_hz / cpu_hz) (docs/timing.md, "An 80C32 beside the
   // chip").
@@ -49,8 +55,9 @@ class Cpu51Board final : public mcs51::XdataBus {
   // end: an output latch decoded there (Cpu51Module's ports).
   std::function<void(std::uint16_t addr, std::uint8_t value, std::uint64_t cycle)> on_ram_write;
 
-  // Before every step of the CPU (an instruction, or an interrupt call with the routine's first
-  // instruction): its PC and machine cycle (`dpc31 bridge --trace-cpu`). Empty: nothing.
+  // Before every step of the CPU (an instruction, an interrupt's hardware LCALL with the PC it
+  // interrupts, an idle machine cycle): its PC and machine cycle (`dpc31 bridge --trace-cpu`;
+  // BridgeCpu.c31_ack_trace). Empty: nothing.
   std::function<void(std::uint16_t pc, std::uint64_t cycle)> on_step;
 
   std::uint8_t read(std::uint16_t addr, std::uint64_t clock) override;

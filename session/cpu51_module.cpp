@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <charconv>
 #include <filesystem>
 #include <sstream>
 
@@ -40,7 +41,11 @@ void read_map(const std::string& text, std::map<std::uint16_t, std::string>& out
 
 bool load_cpu51_image(const Cpu51Config& cfg, Cpu51Image& image, std::string& error) {
   std::string text;
-  if (!read_text_file(cfg.hex, kMaxHexBytes, "Intel HEX", text, error)) return false;
+  // The reader's reason names no file: the message is FILE: reason.
+  if (!read_text_file(cfg.hex, kMaxHexBytes, "Intel HEX", text, error)) {
+    error = fmt::format("{}: {}", cfg.hex, error);
+    return false;
+  }
   mcs51::HexImage hex;
   std::string why;
   if (!mcs51::parse_ihex(text, hex, why)) {
@@ -63,7 +68,10 @@ bool load_cpu51_image(const Cpu51Config& cfg, Cpu51Image& image, std::string& er
   std::error_code ec;
   if (std::filesystem::is_regular_file(map, ec)) {
     std::string mtext;
-    if (!read_text_file(map.string(), kMaxHexBytes, "SDCC map", mtext, error)) return false;
+    if (!read_text_file(map.string(), kMaxHexBytes, "SDCC map", mtext, error)) {
+      error = fmt::format("{}: {}", map.string(), error);
+      return false;
+    }
     read_map(mtext, image.symbols);
     image.map_file = map.string();
   }
@@ -75,6 +83,88 @@ std::string code_name(const Cpu51Image& image, std::uint16_t pc) {
   if (it == image.symbols.begin()) return fmt::format("{:04X}h", pc);
   --it;
   return pc == it->first ? it->second : fmt::format("{}+0x{:x}", it->second, pc - it->first);
+}
+
+namespace {
+
+// "4096" or "0x1000" within lo..hi.
+bool parse_address(std::string_view s, std::uint32_t lo, std::uint32_t hi, std::uint32_t& v) {
+  int base = 10;
+  if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
+    base = 16;
+    s.remove_prefix(2);
+  }
+  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v, base);
+  return !s.empty() && ec == std::errc() && p == s.data() + s.size() && v >= lo && v <= hi;
+}
+
+}  // namespace
+
+std::string apply_cpu51_choice(const Cpu51Choice& choice, ChipOptions& chip, Cpu51Config& cfg,
+                               Cpu51Image& image) {
+  const std::string_view spec = choice.cpu;
+  const std::size_t colon = spec.find(':');
+  const std::string_view core = spec.substr(0, colon);
+  std::uint32_t hz = 24'000'000;
+  if ((core != "80c32" && core != "c31") ||
+      (colon != std::string_view::npos &&
+       !parse_address(spec.substr(colon + 1), 1'000'000, 40'000'000, hz))) {
+    return fmt::format("--cpu '{}' must be 80c32[:HZ] or c31[:HZ] (HZ 1000000..40000000)", spec);
+  }
+  cfg.hz = hz;
+  cfg.hex = choice.firmware;
+  cfg.c31 = core == "c31";
+  std::uint32_t v = 0;
+  if (cfg.c31) {
+    if (chip.profile != Profile::dpc31) {
+      return "--cpu c31 is for --profile dpc31: only the DPC31 has a C31 core";
+    }
+    if (choice.irq_controller == "external") {
+      return "--cpu c31 serves the C31's interrupt controller: --irq-controller external "
+             "contradicts it";
+    }
+    if (!choice.board_address.empty()) {
+      return "--board-address is the 80C32 board's: the C31's XDATA is the chip's own space";
+    }
+    chip.irq_controller = IrqController::c31;
+    if (!choice.code.empty()) {
+      // The code area lies in the RAM's user area (docs/dpc31.md, "The C31").
+      if (!parse_address(choice.code, 0x08A0, 0x1FFF, v)) {
+        return fmt::format("--code '{}' must be an address 0x08A0..0x1FFF (decimal or 0x hex)",
+                           choice.code);
+      }
+      cfg.code = static_cast<std::uint16_t>(v);
+    }
+    if (!choice.ports.empty()) return "--ports is the 80C32 board's output latch: the C31 has none";
+  } else {
+    if (!choice.code.empty()) return "--code is the C31's (--cpu c31)";
+    // The latch bytes from 4000h on, named as the scenario's `ports=` names them.
+    const std::string ports = choice.ports.empty() ? "outputs,modul_ok" : choice.ports;
+    cfg.ports.clear();
+    for (std::size_t at = 0, end = 0; end != std::string_view::npos; at = end + 1) {
+      end = ports.find(',', at);
+      cfg.ports.emplace_back(ports.substr(at, end == std::string_view::npos ? end : end - at));
+      if (cfg.ports.back().empty()) return fmt::format("--ports '{}': an empty port name", ports);
+    }
+    if (!choice.board_address.empty()) {
+      if (!parse_address(choice.board_address, 0, 0x10000 - kCpu51Window, v)) {
+        return fmt::format(
+            "--board-address '{}' must be an address 0..0xF000 (decimal or 0x hex): the "
+            "chip's 4 KB window lies in XDATA",
+            choice.board_address);
+      }
+      cfg.base = static_cast<std::uint16_t>(v);
+    }
+    if (cfg.latch_in_window()) {
+      return fmt::format(
+          "--board-address {:#06x}: the chip's window covers the output latch at "
+          "{:#06x}",
+          cfg.base, cfg.latch);
+    }
+  }
+  std::string why;
+  if (!load_cpu51_image(cfg, image, why)) return why;
+  return {};
 }
 
 Cpu51Module::Cpu51Module(Chip& chip, const Cpu51Config& cfg, const Cpu51Image& image,

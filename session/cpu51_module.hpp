@@ -35,6 +35,24 @@ bool load_cpu51_image(const Cpu51Config& cfg, Cpu51Image& image, std::string& er
 // "dps_isr+0x1c" for a code address (hex alone without a symbol below it).
 std::string code_name(const Cpu51Image& image, std::uint16_t pc);
 
+// The CPU of the command lines (`dpc31 bridge`, `dpc31 serve`; docs/cpu.md, "Bring your own
+// binary"): --cpu 80c32[:HZ] or c31[:HZ], --firmware FILE.ihx, --code A (the C31's code area),
+// --board-address A (the chip's window in the 80C32's XDATA); the addresses decimal or 0x hex.
+struct Cpu51Choice {
+  std::string cpu;             // empty: no CPU
+  std::string firmware;        // the Intel HEX image
+  std::string code;            // empty: 1000h
+  std::string board_address;   // empty: 8000h
+  std::string ports;           // the 80C32 board's latch bytes by name; empty: DO4's
+  std::string irq_controller;  // --irq-controller as given (empty: none)
+};
+// Fills `cfg` and reads the image. `c31` needs the dpc31 and makes
+// `chip` serve the C31's interrupt controller, as the scenario header `cpu c31` does (an explicit
+// --irq-controller external contradicts it). "" or the one-line complaint (FILE:LINE: reason for
+// a bad HEX record).
+std::string apply_cpu51_choice(const Cpu51Choice& choice, ChipOptions& chip, Cpu51Config& cfg,
+                               Cpu51Image& image);
+
 class Cpu51Module {
  public:
   Cpu51Module(Chip& chip, const Cpu51Config& cfg, const Cpu51Image& image,

@@ -122,7 +122,9 @@ void compact(std::string& buf, std::size_t& off) {
 
 struct Server::Impl {
   explicit Impl(ServerOptions o)
-      : opt(std::move(o)), session(opt.chip, [this](const AsyncLine& l) { broadcast(l); }) {}
+      : opt(std::move(o)), session(opt.chip, [this](const AsyncLine& l) { broadcast(l); }) {
+    if (opt.cpu) session.attach_cpu(std::move(*opt.cpu));
+  }
   ~Impl();
 
   void open_wake_pipe();

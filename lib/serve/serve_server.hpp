@@ -16,6 +16,7 @@
 
 #include "auth.hpp"
 #include "dpc31/chip.hpp"
+#include "serve_cpu.hpp"
 
 namespace dpc31::serve {
 
@@ -32,6 +33,9 @@ inline constexpr double kMinTimeout = 0.1;
 // Limits and defaults: docs/protocol.md ("Limits") and docs/security.md.
 struct ServerOptions {
   ChipOptions chip;
+  // --cpu: an 80C32 beside the chip or its C31, the bus master (docs/protocol.md, "A CPU on the
+  // bus").
+  std::optional<CpuSetup> cpu;
   // "PORT" (binds 127.0.0.1) or "ADDR:PORT" ("[::1]:PORT" for IPv6); port 0 picks a free one.
   std::optional<std::string> tcp;
   std::optional<std::string> unix_path;  // the socket is created mode 0600

@@ -208,6 +208,12 @@ Session::Session(ChipOptions opt, std::function<void(const AsyncLine&)> sink)
   });
 }
 
+void Session::attach_cpu(CpuSetup setup) {
+  cpu_ = std::make_unique<BoardCpu>(chip_, std::move(setup), [this](std::string line) {
+    emit(AsyncLine::Kind::port, std::move(line));
+  });
+}
+
 void Session::emit(AsyncLine::Kind kind, std::string text, LogLevel level) {
   if (emit_) emit_(AsyncLine{kind, level, std::move(text)});
 }
@@ -250,14 +256,14 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
       arity(t, 0, 0, "info");
       const ProfileDesc& p = chip_.profile();
       return ok(fmt::format(
-          "protocol={} profile={}{}{} bus={} clock_hz={} bus_access_cycles={} address_bits={}",
+          "protocol={} profile={}{}{} bus={} clock_hz={} bus_access_cycles={} address_bits={}{}",
           kProtocolVersion, p.name,
           chip_.vpc3_variant()
               ? fmt::format(" variant={}", vpc3_variant_name(*chip_.vpc3_variant()))
               : std::string(),
           chip_.irq_controller() == IrqController::c31 ? " irq_controller=c31" : "",
           chip_.bus_mode() == BusMode::intel ? "intel" : "motorola", chip_.clock_hz(),
-          chip_.bus_access_cycles(), p.address_bits));
+          chip_.bus_access_cycles(), p.address_bits, cpu_ ? " " + cpu_->describe() : ""));
     }
     if (cmd == "ping") {
       arity(t, 0, 0, "ping");
@@ -281,6 +287,31 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
           baud, chip_.x_int_pin() ? 1 : 0, chip_.irq_active() ? 1 : 0, chip_.station_address(),
           chip_.txd_pin() ? 1 : 0));
     }
+    if (cpu_ && (cmd == "read" || cmd == "write" || cmd == "readblock" || cmd == "writeblock")) {
+      // The CPU is the bus master (docs/decisions.md): a client's access would take bus cycles
+      // from under it. peek/poke are the debugger's and take none.
+      return err("cpu", fmt::format("{}: the CPU is the chip's bus master (--cpu); peek and poke "
+                                    "look without a bus cycle",
+                                    cmd));
+    }
+    if (cpu_ && (cmd == "reset" || cmd == "load")) {
+      return err("cpu", fmt::format("{}: the CPU's state is not the chip's: it would run on "
+                                    "against another chip (restart the server)",
+                                    cmd));
+    }
+    if (cmd == "cpu" || cmd == "cpu_port" || cmd == "latch") {
+      if (cmd == "cpu_port") {
+        arity(t, 1, 1, cmd, "N");
+      } else {
+        arity(t, 0, 0, cmd);
+      }
+      if (!cpu_) return err("no_cpu", fmt::format("{}: the server runs no CPU (--cpu)", cmd));
+      if (cmd == "cpu") return ok(cpu_->registers());
+      if (cmd == "cpu_port") return ok(cpu_->port(static_cast<unsigned>(number(t[1], 3, "port"))));
+      const std::string latch = cpu_->latch();
+      if (latch.empty()) return err("no_cpu", "latch: the C31 has no output latch");
+      return ok(latch);
+    }
     if (cmd == "read" || cmd == "peek") {
       arity(t, 1, 1, cmd, "ADDR");
       const auto a = static_cast<std::uint32_t>(number(t[1], amax, "address"));
@@ -295,6 +326,8 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
         chip_.write(a, v);
       } else if (!chip_.poke(a, v)) {
         return err("no_storage", fmt::format("nothing to poke at {:#06x}", a));
+      } else if (cpu_) {
+        cpu_->poked(a, v);
       }
       return ok();
     }
@@ -328,6 +361,8 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
           return err(
               "no_storage",
               fmt::format("nothing to poke at {:#06x} ({} bytes before it poked)", a + i, i));
+        } else if (cpu_) {
+          cpu_->poked(a + i, bytes[i]);
         }
       }
       return ok();
@@ -354,16 +389,23 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
     }
     if (cmd == "step" || cmd == "run_until_irq") {
       arity(t, 1, 1, cmd, cmd == "step" ? "N" : "MAX");
-      const std::uint64_t n = number(t[1], kMaxStep, "cycles");
+      const std::uint64_t n = number(t[1], cpu_ ? kMaxStepCpu : kMaxStep, "cycles");
       if (n > std::numeric_limits<std::uint64_t>::max() - chip_.cycle()) {
         throw Fail{"range", "the cycle counter would overflow"};
       }
+      // With a CPU it runs with the chip, and its step in progress ends: the chip may stop up
+      // to one step of the CPU beyond (the reply says where).
       if (cmd == "step") {
-        chip_.step(n);
+        if (cpu_) {
+          cpu_->run_until(chip_.cycle() + n);
+        } else {
+          chip_.step(n);
+        }
         return ok(fmt::format("{}", chip_.cycle()));
       }
       // Level-triggered like firmware: an interrupt that is already active stops at once.
-      const bool hit = chip_.irq_active() || chip_.step_until_irq(n);
+      const bool hit = chip_.irq_active() ||
+                       (cpu_ ? cpu_->run_until_irq(chip_.cycle() + n) : chip_.step_until_irq(n));
       return ok(fmt::format("{} {}", hit ? "irq" : "timeout", chip_.cycle()));
     }
     if (cmd == "reset") {

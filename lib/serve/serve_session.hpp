@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -13,6 +14,7 @@
 
 #include "dpc31/chip.hpp"
 #include "dpc31/log.hpp"
+#include "serve_cpu.hpp"
 #include "state_dir.hpp"
 
 namespace dpc31::serve {
@@ -24,6 +26,9 @@ inline constexpr int kProtocolVersion = 2;
 
 // Limits of single commands (docs/protocol.md, "Limits").
 inline constexpr std::uint64_t kMaxStep = std::uint64_t{1} << 40;  // cycles per step/run_until_irq
+// With --cpu the CPU runs too, about 4 times real time where the chip alone runs some 20 000
+// (an idle 80C32 at 24 MHz): 2^30 cycles, 22 s of chip time, is some 5 s of the server's time.
+inline constexpr std::uint64_t kMaxStepCpu = std::uint64_t{1} << 30;
 inline constexpr std::size_t kMaxBlock = 4096;                     // bytes per *block command
 inline constexpr std::size_t kMaxInject = 1024;                    // bytes per inject
 inline constexpr std::uint32_t kMaxIdleBits = 1'000'000;           // inject idle=
@@ -37,13 +42,13 @@ inline constexpr std::size_t kMaxInjectQueue = 256;
 inline constexpr std::string_view kCommandNames =
     "help info ping cycle status read write peek poke readblock writeblock peekblock pokeblock "
     "addr peek_reg poke_reg step run_until_irq reset inject inject_fdl counters log save load "
-    "auth quit shutdown";
+    "auth quit shutdown cpu cpu_port latch";
 // Whether `word` is one of kCommandNames.
 bool is_command(std::string_view word);
 
 // A line that is not the reply to a command ("! ..."), as the chip produced it.
 struct AsyncLine {
-  enum class Kind : std::uint8_t { irq, telegram, log } kind;
+  enum class Kind : std::uint8_t { irq, telegram, log, port } kind;
   LogLevel level;    // kind log only
   std::string text;  // without the newline
 };
@@ -69,6 +74,10 @@ class Session {
   Result execute(std::string_view line, ClientState& client);
 
   Chip& chip() { return chip_; }
+
+  // `dpc31 serve --cpu`: the CPU runs the image as the chip's bus master from now on (before the
+  // first command: the chip is still at cycle 0); `! port` lines tell of its latch writes.
+  void attach_cpu(CpuSetup setup);
 
   // Where `save` and `load` may go; without one they are refused (`ERR denied`).
   void set_state_dir(StateDir dir) { state_dir_ = std::move(dir); }
@@ -96,6 +105,7 @@ class Session {
   std::size_t injected_bytes_ = 0;
   StateDir state_dir_;
   std::vector<std::string_view> tokens_;  // the words of the line being executed
+  std::unique_ptr<BoardCpu> cpu_;         // --cpu: the bus master
 };
 
 }  // namespace dpc31::serve

@@ -11,8 +11,9 @@ methods have the names of ``dpc31.Chip``'s; what the protocol gives is what they
 
 A reply ``ERR code message`` raises ``ServeError`` (``.code``, ``.message``); a connection that
 ends or a line that is not the protocol's raises ``ConnectionError``. Asynchronous lines (``! irq``,
-``! telegram``, ``! log``) reach the observers given with ``on_irq_change``, ``on_telegram`` and
-``on_log`` while a command waits for its reply.
+``! telegram``, ``! log``, ``! port``) reach the observers given with ``on_irq_change``,
+``on_telegram``, ``on_log`` and ``on_port`` while a command waits for its reply. A server with
+``--cpu`` adds the CPU's view: ``cpu()``, ``cpu_port(n)``, ``latch()``.
 """
 
 from __future__ import annotations
@@ -60,6 +61,7 @@ class Client:
         self._irq: List[Callable[[int, bool], None]] = []
         self._telegram: List[Callable[[Telegram], None]] = []
         self._log: List[Callable[[int, str, str], None]] = []
+        self._port: List[Callable[[int, str, int], None]] = []
         if secret is not None:
             self._call(f"auth {secret}")
         self.info: Dict[str, str] = dict(
@@ -108,6 +110,9 @@ class Client:
         elif len(words) >= 4 and words[1] == "log":
             for cb in self._log:
                 cb(int(words[2]), words[3], " ".join(words[4:]))
+        elif len(words) == 5 and words[1] == "port":
+            for cb in self._port:
+                cb(int(words[2]), words[3], int(words[4], 16))
         elif len(words) >= 2 and words[1] == "bye":
             raise ConnectionError(f"dpc31 serve ended the connection: {' '.join(words[2:])}")
 
@@ -122,6 +127,10 @@ class Client:
                level: str = "info") -> None:
         self._observe(self._log, callback)
         self._call(f"log {level if self._log else 'off'}")
+
+    def on_port(self, callback: Optional[Callable[[int, str, int], None]]) -> None:
+        """``--cpu 80c32``: (cycle, name, value) for each write of the board's output latch."""
+        self._observe(self._port, callback)
 
     @staticmethod
     def _observe(lst: list, callback: Optional[Callable]) -> None:
@@ -217,6 +226,22 @@ class Client:
     def fdl_counters(self) -> Dict[str, int]:
         return {k: int(v) for k, v in
                 (kv.split("=", 1) for kv in self._call("counters").split())}
+
+    # --- the CPU (a server with --cpu; docs/protocol.md, "A CPU on the bus") ---
+    def cpu(self) -> Dict[str, object]:
+        """The CPU's registers: ``core`` a name, every other key a number."""
+        regs = dict(kv.split("=", 1) for kv in self._call("cpu").split())
+        return {k: v if k == "core" else int(v, 0) for k, v in regs.items()}
+
+    def cpu_port(self, n: int) -> Tuple[int, int]:
+        """Port n's latch and pins."""
+        kv = dict(kv.split("=", 1) for kv in self._call(f"cpu_port {n}").split())
+        return int(kv["latch"], 16), int(kv["pins"], 16)
+
+    def latch(self) -> Dict[str, int]:
+        """The 80C32 board's output latch bytes by name."""
+        return {k: int(v, 16) for k, v in
+                (kv.split("=", 1) for kv in self._call("latch").split())}
 
     # --- the serial side ---
     def inject(self, data: bytes, baud: Optional[int] = None, idle: Optional[int] = None,

@@ -181,26 +181,14 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
   std::uint64_t v = 0;
   if (!o.slaves.empty()) {
     // Each station's chip, address and user side come from its --slave.
-  } else if (!o.cpu.empty()) {  // 80c32 or 80c32:HZ; --firmware is then its Intel HEX image
-    const std::string hz = o.cpu.size() > 6 && o.cpu[5] == ':' ? o.cpu.substr(6) : "24000000";
-    if (!o.cpu.starts_with("80c32") || (o.cpu.size() > 5 && o.cpu[5] != ':') ||
-        !parse_uint(hz, 40'000'000, v) || v < 1'000'000) {
-      return bad(fmt::format("--cpu '{}' must be 80c32 or 80c32:HZ (1000000..40000000)", o.cpu));
-    }
-    c.setup.cpu = Cpu51Config{.hz = static_cast<std::uint32_t>(v), .hex = o.firmware};
-    // The latch bytes from 4000h on, named as the scenario's `ports=` names them (docs/bridge.md).
-    const std::string ports = o.ports.empty() ? "outputs,modul_ok" : o.ports;
-    for (std::size_t at = 0, end = 0; end != std::string::npos; at = end + 1) {
-      end = ports.find(',', at);
-      c.setup.cpu->ports.push_back(ports.substr(at, end == std::string::npos ? end : end - at));
-      if (c.setup.cpu->ports.back().empty())
-        return bad(fmt::format("--ports '{}': an empty port name", ports));
-    }
-    std::string why;
-    if (!load_cpu51_image(*c.setup.cpu, c.setup.cpu_image, why)) return bad(why);
+  } else if (!o.cpu.empty()) {    // --firmware is then its Intel HEX image
+    c.setup.cpu = Cpu51Config{};  // filled once the profile is known (below)
   } else {
-    if (!o.trace_cpu.empty()) return bad("--trace-cpu needs --cpu 80c32");
+    if (!o.trace_cpu.empty()) return bad("--trace-cpu needs --cpu");
     if (!o.ports.empty()) return bad("--ports needs --cpu 80c32");
+    if (!o.code.empty() || !o.board_address.empty()) {
+      return bad(fmt::format("{} needs --cpu", o.code.empty() ? "--board-address" : "--code"));
+    }
     try {
       c.setup.firmware = &find_firmware(o.firmware);
     } catch (const FirmwareError& e) {
@@ -219,6 +207,20 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
   }
   if (const std::string why = apply_chip_choice(o.chip, c.setup.chip); !why.empty())
     return bad(why);
+  // The CPU's choice needs the profile (the C31 is the dpc31's) and may set the controller.
+  if (c.setup.cpu) {
+    const Cpu51Choice choice{.cpu = o.cpu,
+                             .firmware = o.firmware,
+                             .code = o.code,
+                             .board_address = o.board_address,
+                             .ports = o.ports,
+                             .irq_controller = o.chip.irq_controller};
+    if (const std::string why =
+            apply_cpu51_choice(choice, c.setup.chip, *c.setup.cpu, c.setup.cpu_image);
+        !why.empty()) {
+      return bad(why);
+    }
+  }
   if (!parse_uint(o.address, 125, v)) {
     return bad(fmt::format("--address '{}' must be a station address 0..125", o.address));
   }
@@ -279,7 +281,8 @@ std::string header(const Checked& c, const BridgeOptions& o, const std::string& 
       "dpc31 bridge: pacing {}, baud {}, profile {}, firmware {}, {}, slot {} bit times, "
       "log level {}, {}",
       c.realtime ? "realtime" : "free", c.setup.baud, profile,
-      c.setup.cpu ? fmt::format("{} on an 80C32 at {} Hz", o.firmware, c.setup.cpu->hz)
+      c.setup.cpu ? fmt::format("{} on {} at {} Hz", o.firmware,
+                                c.setup.cpu->c31 ? "the C31" : "an 80C32", c.setup.cpu->hz)
                   : std::string(c.setup.firmware->name),
       c.setup.cpu ? fmt::format("address switch {} (port 1)", c.setup.address)
                   : fmt::format("address {}", chip_after_init.station_address()),
@@ -506,8 +509,12 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
   b->add_option("--firmware", o.firmware,
                 "firmware: " + builtin_firmware_names() + ", or a plug-in ./libmine.so (required)");
   b->add_option("--cpu", o.cpu,
-                "80c32[:HZ]: run --firmware, an Intel HEX image, on an 80C32 beside the chip");
-  b->add_option("--trace-cpu", o.trace_cpu, "write every 80C32 instruction with its cycle here");
+                "80c32[:HZ]: run --firmware, an Intel HEX image, on an 80C32 beside the chip; "
+                "c31[:HZ] (--profile dpc31): on the DPC31's own C31");
+  b->add_option("--code", o.code, "with --cpu c31: the C31's code area in the chip's RAM (0x1000)");
+  b->add_option("--board-address", o.board_address,
+                "with --cpu 80c32: the chip's 4 KB window in XDATA (0x8000)");
+  b->add_option("--trace-cpu", o.trace_cpu, "write every CPU instruction with its cycle here");
   b->add_option("--ports", o.ports,
                 "N1,N2...: the 80C32 board's output latch bytes (XDATA 4000h on) by name; "
                 "default DO4's: outputs,modul_ok");
@@ -531,8 +538,9 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
   b->allow_extras();
   b->callback([b, &o] {
     o.extra = b->remaining();
-    for (const char* name : {"--firmware", "--address", "--profile", "--variant",
-                             "--irq-controller", "--cpu", "--trace-cpu"}) {
+    for (const char* name :
+         {"--firmware", "--address", "--profile", "--variant", "--irq-controller", "--cpu",
+          "--code", "--board-address", "--trace-cpu"}) {
       if (b->get_option(name)->count() > 0) o.single.emplace_back(name);
     }
   });

@@ -26,8 +26,11 @@ struct BridgeOptions {
   std::string log;  // "" = stdout
   std::string log_level = "events";
   std::string slot = "100";
-  std::string cpu;        // "80c32[:HZ]": --firmware is an Intel HEX image for it (docs/cpu.md)
-  std::string trace_cpu;  // every 80C32 instruction with its cycle, to this file
+  std::string
+      cpu;  // "80c32[:HZ]" or "c31[:HZ]": --firmware is an Intel HEX image for it (docs/cpu.md)
+  std::string code;           // --code A: the C31's code area (c31 only)
+  std::string board_address;  // --board-address A: the chip's window in the 80C32's XDATA
+  std::string trace_cpu;      // every 80C32 / C31 instruction with its cycle, to this file
   // --slave ADDR:FIRMWARE[:PROFILE[:VARIANT]], repeated: stations on one line (docs/bridge.md,
   // "Several slaves")
   std::vector<std::string> slaves;

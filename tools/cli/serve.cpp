@@ -20,6 +20,32 @@ extern "C" void on_stop_signal(int /*sig*/) {
   if (serve::Server* s = g_server.load()) s->stop();
 }
 
+// --cpu and the options that only go with it; "" or the one-line complaint.
+std::string cpu_choice(const ServeArgs& a, serve::ServerOptions& opt) {
+  if (a.cpu.empty()) {
+    for (const auto& [name, given] :
+         {std::pair{"--firmware", &a.firmware}, std::pair{"--code", &a.code},
+          std::pair{"--board-address", &a.board_address}, std::pair{"--ports", &a.ports},
+          std::pair{"--address", &a.address}}) {
+      if (!given->empty()) return fmt::format("{} needs --cpu (docs/protocol.md)", name);
+    }
+    return {};
+  }
+  if (a.firmware.empty()) return "--cpu needs --firmware FILE.ihx, the CPU's Intel HEX image";
+  serve::CpuSetup setup;
+  const Cpu51Choice choice{.cpu = a.cpu,
+                           .firmware = a.firmware,
+                           .code = a.code,
+                           .board_address = a.board_address,
+                           .ports = a.ports,
+                           .irq_controller = a.chip.irq_controller};
+  if (std::string why = apply_cpu51_choice(choice, opt.chip, setup.cfg, setup.image); !why.empty())
+    return why;
+  if (!a.address.empty()) setup.address = static_cast<std::uint8_t>(std::stoul(a.address));
+  opt.cpu = std::move(setup);
+  return {};
+}
+
 }  // namespace
 
 CLI::App* add_serve_subcommand(CLI::App& app, ServeArgs& a) {
@@ -39,6 +65,20 @@ CLI::App* add_serve_subcommand(CLI::App& app, ServeArgs& a) {
       ->check(CLI::IsMember({"spc3", "vpc3plus", "dpc31"}));
   cmd->add_option("--bus", a.bus, "bus byte order")->check(CLI::IsMember({"intel", "motorola"}));
   add_chip_options(cmd, a.chip);
+  cmd->add_option("--cpu", a.cpu,
+                  "80c32[:HZ]: run --firmware on an 80C32 beside the chip, the bus master; "
+                  "c31[:HZ] (--profile dpc31): on the DPC31's own C31");
+  cmd->add_option("--firmware", a.firmware, "with --cpu: the Intel HEX image (SDCC, Keil)");
+  cmd->add_option("--code", a.code,
+                  "with --cpu c31: the C31's code area in the chip's RAM (0x1000)");
+  cmd->add_option("--board-address", a.board_address,
+                  "with --cpu 80c32: the chip's 4 KB window in XDATA (0x8000)");
+  cmd->add_option("--ports", a.ports,
+                  "with --cpu 80c32: the board's output latch bytes (XDATA 4000h on) by name "
+                  "(outputs,modul_ok)");
+  cmd->add_option("--address", a.address,
+                  "with --cpu: the station address on the address switch, port 1 (5)")
+      ->check(numbers::whole(0, 125));
   cmd->add_option("--max-clients", a.max_clients,
                   "connections served at once; more get 'ERR busy' and are closed")
       ->check(numbers::whole(1, 100000))
@@ -55,6 +95,10 @@ int run_serve(const ServeArgs& a, std::FILE* out, std::FILE* err) {
   parse_profile(a.profile, opt.chip.profile);  // CLI11's check already refused unknown names
   opt.chip.bus = a.bus == "intel" ? BusMode::intel : BusMode::motorola;
   if (const std::string why = apply_chip_choice(a.chip, opt.chip); !why.empty()) {
+    fmt::print(err, "dpc31 serve: {}\n", why);
+    return 2;
+  }
+  if (const std::string why = cpu_choice(a, opt); !why.empty()) {
     fmt::print(err, "dpc31 serve: {}\n", why);
     return 2;
   }

@@ -18,6 +18,9 @@ struct ServeArgs {
   ChipChoice chip;          // --variant, --irq-controller
   std::string state_dir;    // "" = save/load refused
   std::string secret_file;  // "" = no auth on TCP
+  // --cpu 80c32[:HZ] | c31[:HZ] with --firmware FILE.ihx (docs/protocol.md, "A CPU on the bus")
+  std::string cpu, firmware, code, board_address, ports;
+  std::string address;  // the address switch on port 1 (empty: 5)
   std::size_t max_clients = 16;
   double idle_timeout = 300;  // seconds, 0 = never
 };

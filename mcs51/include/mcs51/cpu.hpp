@@ -101,6 +101,14 @@ class Cpu {
   void set_iram(std::uint8_t addr, std::uint8_t v) { iram_[addr] = v; }
   // The SFR latch as stored (ports: the latch, SBUF: the receive buffer).
   std::uint8_t sfr_latch(std::uint8_t addr) const { return sfr_[addr - 0x80]; }
+  // Port n (0..3, P0 at 80h, P1 at 90h, ...): its latch, and its pins (the latch AND what the
+  // outside drives).
+  std::uint8_t port_latch(unsigned n) const {
+    return sfr_latch(static_cast<std::uint8_t>(sfr::P0 + 0x10 * (n & 3)));
+  }
+  std::uint8_t port_pins(unsigned n) const {
+    return static_cast<std::uint8_t>(port_latch(n) & port_in_[n & 3]);
+  }
   bool idle() const { return (sfr_latch(sfr::PCON) & 1) != 0; }
   bool powered_down() const { return (sfr_latch(sfr::PCON) & 2) != 0; }
   // An interrupt call is the next step (the last instruction's poll chose a source).

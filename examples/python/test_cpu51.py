@@ -1,0 +1,107 @@
+"""Your binary on the board's CPU from Python (docs/python.md, docs/cpu.md): DO4 built by SDCC
+for the 80C32 reaches Data_Exchange with the module's master, its port write at the cycle derived
+by hand; the DPC31's C31 runs tests/mcs51/board/c31_ack.asm from the chip's RAM.
+
+Expected cycles: docs/timing.md (the line), docs/cpu.md ("MOVX timing", "INT0 from X/INT") and
+the derivation in traces/do4_80c32.scn's comments (DO4's path from SDCC's listing)."""
+
+import os
+import pathlib
+import subprocess
+
+import pytest
+
+import dpc31
+from dpc31.client import Client, ServeError
+
+FW51 = pathlib.Path(os.environ["DPC31_FW51"])
+BOARD = pathlib.Path(os.environ["DPC31_BOARD"])
+T = 256  # 187.5 kbaud at 48 MHz: round(48e6 / 187500) clocks per bit (docs/timing.md)
+
+
+def test_do4_on_the_80c32_reaches_data_exchange_and_drives_its_outputs_on_time():
+    chip = dpc31.Chip("spc3")
+    board = dpc31.Cpu51Board(chip, hz=24_000_000, address=0x8000)
+    assert board.load_hex(str(FW51 / "do4_80c32.ihx")) > 0
+    board.set_port_input(1, 7)  # the address switch DO4's main() reads
+    latch = []  # the module's outputs: XDATA 4000h + port (docs/cpu.md, "DO4 on the 80C32")
+    board.on_ram_write(lambda addr, value, cycle: latch.append((addr, value, cycle)))
+    slave = dpc31.SlaveConfig(address=7, ident=0x0D04, cfg=b"\x21\x10", in_len=1, out_len=2,
+                              wd_fact1=2, wd_fact2=5, user_prm=b"\x00\x01\x05\x00")
+    master = dpc31.Master(chip, address=2, baud=187_500, slave=slave)
+    master.run_board(board)
+    assert master.startup()
+    assert chip.dp_state == dpc31.DpState.Data_Exchange
+    master.idle(5 * 48_000)  # DO4's ISR of the start-up's exchange ends
+    latch.clear()
+    ex = master.data_exchange(b"\x0A\x01")
+    master.idle(5 * 48_000)
+    # Outputs 0A 01, SD2 of 11 characters: DX_Out and X/INT at the last stop sample,
+    # E = X + (11 x 11 - 1) T + T/2; INT0 sampled at S5P2 of machine cycle m (chip cycle
+    # 24m + 20), the first m with 24m + 20 >= E; the idle 80C32 polls in m + 1, calls in m + 2
+    # and m + 3, the vector in m + 4; 1 034 machine cycles from it to the MOVX of `outputs`
+    # (4000h), 22 more to `modul_ok` (4001h); WR ends at 24M + 36.
+    e = ex.request_start + (11 * 11 - 1) * T + T // 2
+    m = (e - 20 + 23) // 24
+    movx = m + 4 + 1034
+    assert (0x4000, 0x0A, 24 * movx + 36) in latch
+    assert (0x4001, 0x01, 24 * (movx + 22) + 36) in latch
+    assert board.xdata(0x4000) == 0x0A and board.xdata(0x4001) == 0x01
+    assert board.in_service == 0
+
+
+def test_the_c31_runs_from_the_chips_ram():
+    # MOVX strobes at clocks 78, 162, 282, 366, 426 = chip cycles 156, 324, 564, 732, 852 at
+    # 24 MHz (c31_ack.asm's machine cycles [5,7), [12,14), [22,24), [29,31), [34,36); WR ends
+    # 18 clocks into a MOVX): the C31's interrupt raised at 324, acknowledged at 564.
+    chip = dpc31.Chip("dpc31", irq_controller="c31")
+    edges = []
+    chip.on_irq_change(lambda cycle, active: edges.append((cycle, active)))
+    board = dpc31.Cpu51Board.c31(chip, hz=24_000_000, code=0x1000)
+    board.load_hex(str(BOARD / "c31_ack.ihx"))
+    assert chip.peek(0x1000) == 0x02  # LJMP start, in the code area
+    board.run_until(1000)
+    assert edges == [(324, True), (564, False)]
+    assert board.a == 0x77  # fetched from the C31's own rewrite of its code in the chip's RAM
+    assert chip.peek(0x08A0) == 0x77
+    assert board.in_service == 0
+
+
+def test_a_bad_image_names_its_file_and_line(tmp_path):
+    broken = tmp_path / "broken.ihx"
+    broken.write_text(":0100000000FF\n:0300000002003\n")  # line 2: odd length
+    board = dpc31.Cpu51Board(dpc31.Chip("spc3"))
+    with pytest.raises(dpc31.InputError, match=f"^{broken}:2: "):
+        board.load_hex(str(broken))
+    with pytest.raises(ValueError):
+        dpc31.Cpu51Board.c31(dpc31.Chip("spc3"))  # the C31 is the dpc31's
+
+
+def test_the_c31_behind_dpc31_serve_from_the_pure_python_client(cli, tmp_path):
+    # The same program behind the socket: the client is no bus master (ERR cpu), the CPU's
+    # registers and the interrupt edges at the same cycles.
+    sock = str(tmp_path / "chip.sock")
+    proc = subprocess.Popen([cli, "serve", "--unix", sock, "--profile", "dpc31", "--cpu", "c31",
+                             "--firmware", str(BOARD / "c31_ack.ihx")],
+                            stdout=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout.readline().split()[:2] == ["listening", "unix"]
+        with Client(unix=sock) as c:
+            assert c.info["cpu"] == "c31" and c.info["code"] == "0x1000"
+            edges = []
+            c.on_irq_change(lambda cycle, active: edges.append((cycle, active)))
+            with pytest.raises(ServeError) as refused:
+                c.read(0x08A0)
+            assert refused.value.code == "cpu"
+            c.step(1000)
+            assert edges == [(324, True), (564, False)]
+            regs = c.cpu()
+            assert regs["core"] == "c31" and regs["a"] == 0x77 and regs["in_service"] == 0
+            assert c.peek(0x08A0) == 0x77
+            assert c.cpu_port(1) == (0xFF, 0x05)  # the address switch: station 5
+            c.shutdown()
+        assert proc.wait(timeout=30) == 0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
