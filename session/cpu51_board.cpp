@@ -15,6 +15,8 @@ Cpu51Board::Cpu51Board(Chip& chip, std::uint32_t cpu_hz, std::uint16_t base)
 }
 
 namespace {
+constexpr unsigned cycle_clocks = mcs51::clocks_per_cycle;
+constexpr unsigned s5p2 = 10;  // INT0's sample: the end of oscillator clock 10 of 12
 // The DPC31's address space and its RAM's user area (manual p.12, docs/dpc31.md "The map").
 constexpr std::uint32_t c31_space = 0x2000;
 constexpr std::uint16_t c31_user_area = 0x08A0;
@@ -83,6 +85,19 @@ bool Cpu51Board::reach(std::uint64_t clock) {
   return true;
 }
 
+// The last machine cycle + 1 that the steps run without the board may end in: before the first
+// cycle whose S5P2 sample reaches the chip's next event, and so that each step's last sample lies
+// before the end of the run (the walk then goes on after it); none once the chip reached the end
+// or asked to stop.
+std::uint64_t Cpu51Board::run_end() const {
+  if (chip_at_ >= chip_end_ || chip_.stop_requested()) return 0;
+  const std::uint64_t event =
+      event_clock_ > s5p2 ? (event_clock_ - s5p2 - 1) / cycle_clocks + 1 : 0;
+  const std::uint64_t end =
+      end_clock_ >= cycle_clocks - 1 ? (end_clock_ - (cycle_clocks - 1)) / cycle_clocks + 1 : 0;
+  return std::min(event, end);
+}
+
 // The walk of the manual's sampling (docs/cpu.md, "INT0 from X/INT"): before each step the chip
 // is due at the step's start, then at the S5P2 sample of each of the step's machine cycles (the
 // end of oscillator clock 10 of 12) until X/INT changes; INT0 changes from the first cycle whose
@@ -90,20 +105,29 @@ bool Cpu51Board::reach(std::uint64_t clock) {
 // chip's events and bus accesses, so the chip is stepped only where an instant reaches its next
 // event, at the accesses and at the end: the chip sees every access, every event and every X/INT
 // sample at the same cycle as when it is stepped to each instant (docs/performance.md, row m).
+// Steps that reach no event run in one go (Cpu::run_within), an access lowering their end.
 void Cpu51Board::run_until(std::uint64_t chip_cycle) {
-  constexpr unsigned s5p2 = 10;
   note_chip();
   event_clock_ = 0;  // the first step reads X/INT whatever happened to the chip before
   due_ = 0;
-  const std::uint64_t end = clock_reaching(chip_cycle);
-  while (chip_at_ < chip_cycle && due_ < end && !chip_.stop_requested()) {
+  chip_end_ = chip_cycle;
+  end_clock_ = clock_reaching(chip_cycle);
+  in_run_ = !on_step;
+  while (chip_at_ < chip_cycle && due_ < end_clock_ && !chip_.stop_requested()) {
     const std::uint64_t start = cpu_.clocks();
+    if (in_run_ && cpu_.run_within(run_end()) != 0) {
+      // The walk's last instant: the last step's last sample, or a MOVX's start.
+      const std::uint64_t now = cpu_.clocks();
+      const std::uint64_t movx = 2 * cycle_clocks;
+      due_ = now >= movx && last_movx_ == now - movx ? last_movx_ : now - (cycle_clocks - s5p2);
+      continue;
+    }
     if (reach(start)) cpu_.set_int0(level_);
     if (!cpu_.next_is_movx()) {
       const unsigned n = cpu_.next_step_cycles();
       for (unsigned j = 0; j < n; ++j) {
         const bool level = level_;
-        if (reach(start + j * mcs51::clocks_per_cycle + s5p2) && level_ != level) {
+        if (reach(start + j * cycle_clocks + s5p2) && level_ != level) {
           cpu_.schedule_int0(cpu_.cycles() + j, level_);
           break;
         }
@@ -115,30 +139,41 @@ void Cpu51Board::run_until(std::uint64_t chip_cycle) {
     }
     cpu_.step();
   }
+  in_run_ = false;
   chip_to(chip_cycle_of(due_));
 }
 
+// The MOVX started at clock - 18, where the walk had the chip.
 void Cpu51Board::access_at(std::uint64_t clock) {
   const std::uint64_t start = chip_cycle_of(clock) - chip_.bus_access_cycles();
-  chip_to(std::max(chip_cycle_of(due_), start));
+  chip_to(std::max(chip_cycle_of(clock - mcs51::movx_strobe_end), start));
+}
+
+void Cpu51Board::after_access() {
+  note_chip();
+  cpu_.set_int0(level_);  // a command read, an acknowledge or an EOI may end the interrupt
+  if (in_run_) cpu_.set_run_end(run_end());
 }
 
 std::uint8_t Cpu51Board::read(std::uint16_t addr, std::uint64_t clock) {
+  last_movx_ = clock - mcs51::movx_strobe_end;
   if (!in_window(addr)) return c31_ ? 0xFF : ram_[addr];  // the C31: nothing above 1FFFh
   access_at(clock);
   const std::uint8_t v = chip_.read(addr - base_);
-  note_chip();
-  cpu_.set_int0(level_);  // a command read may end the interrupt
+  after_access();
   return v;
 }
 
 void Cpu51Board::write(std::uint16_t addr, std::uint8_t value, std::uint64_t clock) {
+  last_movx_ = clock - mcs51::movx_strobe_end;
   if (c31_ && !in_window(addr)) return;
   if (!in_window(addr)) {
     ram_[addr] = value;
     if (on_ram_write) {
-      chip_to(chip_cycle_of(due_));  // where the walk has it: the latch's user sees that chip
+      // The chip where the walk has it for the latch's user, who may look at it.
+      chip_to(chip_cycle_of(last_movx_));
       on_ram_write(addr, value, chip_cycle_of(clock));
+      if (in_run_) cpu_.set_run_end(run_end());
     }
     return;
   }
@@ -146,8 +181,7 @@ void Cpu51Board::write(std::uint16_t addr, std::uint8_t value, std::uint64_t clo
   chip_.write(addr - base_, value);
   // The C31 fetches its code from the chip's RAM: a write to the code area is its program.
   if (c31_ && addr >= code_base_) cpu_.load_code(addr - code_base_, std::span(&value, 1));
-  note_chip();
-  cpu_.set_int0(level_);
+  after_access();
 }
 
 }  // namespace dpc31

@@ -67,6 +67,8 @@ class Cpu51Board final : public mcs51::XdataBus {
   void note_chip();
   // Steps the chip so that an access starting now completes at the strobe's end.
   void access_at(std::uint64_t clock);
+  void after_access();
+  [[nodiscard]] std::uint64_t run_end() const;
   // INT0's level: X/INT for the 80C32, the C31's interrupt (low-active) for the C31.
   [[nodiscard]] bool int0_level() const;
   [[nodiscard]] bool in_window(std::uint16_t addr) const {
@@ -88,6 +90,12 @@ class Cpu51Board final : public mcs51::XdataBus {
   std::uint64_t chip_at_ = 0;
   std::uint64_t event_clock_ = 0;
   bool level_ = true;
+  // The run's end (chip cycle and the first CPU clock reaching it); the last MOVX's first clock;
+  // whether run_until lets the CPU run steps in one go.
+  std::uint64_t chip_end_ = 0;
+  std::uint64_t end_clock_ = 0;
+  std::uint64_t last_movx_ = 0;
+  bool in_run_ = false;
 };
 
 }  // namespace dpc31
