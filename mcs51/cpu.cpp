@@ -2,6 +2,7 @@
 // the machine cycles of each opcode). Peripherals and interrupts are in peripherals.cpp.
 #include "mcs51/cpu.hpp"
 
+#include <algorithm>
 #include <bit>
 
 namespace mcs51 {
@@ -63,8 +64,8 @@ void Cpu::reset() {
   tx_bits_ = -2;
   rx_ticks_ = -1;
   lag_ = 0;
-  irq_dirty_ = stale_ = true;
-  horizon_ = 0;
+  irq_dirty_ = true;
+  unplan();
 }
 
 void Cpu::load_code(std::uint16_t addr, std::span<const std::uint8_t> bytes) {
@@ -629,6 +630,30 @@ std::uint64_t Cpu::run(std::uint64_t cycles) {
   while (done < cycles) done += advance().cycles;
   sync();
   return done;
+}
+
+unsigned Cpu::next_step_cycles() const {
+  if (powered_down() || idle()) return 1;
+  if (next_irq_ >= 0) return 2;
+  return cycle_table[code_[pc_]];
+}
+
+std::uint64_t Cpu::run_within(std::uint64_t end) {
+  run_end_ = end;
+  const std::uint64_t from = cycles_;
+  for (;;) {
+    if (cycles_ < idle_until_) {  // quiet idle cycles (replan): counted at once
+      const std::uint64_t to = std::min(idle_until_, run_end_);
+      if (to <= cycles_) break;
+      lag_ += to - cycles_;
+      cycles_ = to;
+      continue;
+    }
+    if (cycles_ + next_step_cycles() > run_end_) break;
+    advance();
+  }
+  sync();
+  return cycles_ - from;
 }
 
 }  // namespace mcs51

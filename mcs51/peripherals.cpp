@@ -44,6 +44,11 @@ bool count(std::uint8_t& tl, std::uint8_t& th, unsigned mode) {
 
 // An instruction, call or idle cycle that cannot be deferred: the peripherals tick every cycle.
 StepResult Cpu::slow_step() {
+  if (cycles_ < idle_until_) {  // idle and quiet (replan): the cycle is only counted
+    ++cycles_;
+    ++lag_;
+    return {StepKind::idle, 1};
+  }
   const std::uint8_t op = code_[pc_];
   const unsigned n = cycle_table[op];
   sync();
@@ -66,9 +71,11 @@ StepResult Cpu::slow_step() {
   raised_ = 0;
   if (idle()) {  // the CPU stops, the peripherals run; an accepted interrupt ends idle
     tick(1);
-    next_irq_ = choose(before & requests());
+    const std::uint8_t after = requests();
+    next_irq_ = choose(before & after);
     if (next_irq_ >= 0) sf(sfr::PCON) &= static_cast<std::uint8_t>(~idl);
-    irq_dirty_ = true;
+    // Clean when nothing was called and no request came: the next idle cycle polls the same.
+    irq_dirty_ = next_irq_ >= 0 || after != before;
     replan();
     return {StepKind::idle, 1};
   }
@@ -117,12 +124,6 @@ void Cpu::sync() {
     tick(n);
   }
 }
-unsigned Cpu::next_step_cycles() const {
-  if (powered_down() || idle()) return 1;
-  if (next_irq_ >= 0) return 2;
-  return cycle_table[code_[pc_]];
-}
-
 bool Cpu::next_is_movx() const {
   return !powered_down() && !idle() && next_irq_ < 0 && is_movx(code_[pc_]);
 }
@@ -188,8 +189,8 @@ void Cpu::set_port_input(unsigned port, std::uint8_t value) {
   if (port_in_[port & 3] == value) return;  // the same pins: nothing to sample again
   sync();                                   // the cycles so far ran with the old pins
   port_in_[port & 3] = value;
-  pins_dirty_ = stale_ = true;
-  horizon_ = 0;
+  pins_dirty_ = true;
+  unplan();
 }
 
 void Cpu::set_pin(unsigned port, unsigned bit, bool high) {
@@ -200,26 +201,33 @@ void Cpu::set_pin(unsigned port, unsigned bit, bool high) {
 void Cpu::schedule_int0(std::uint64_t at, bool high) {
   sync();
   int0_change_ = {at, high, true};
-  stale_ = true;
-  horizon_ = 0;
+  unplan();
 }
 
-// The machine cycle up to which the peripherals may lag: while no level-triggered input is
-// low (or its flag set), timer 2 and serial modes 0 and 2 stop, no character is on its way and
-// timers 0 and 1 are not in mode 3, a running timer's next overflow is the only new request it
-// can raise; one that would only raise a flag already set (mode 2) sets no bound.
+void Cpu::unplan() {
+  stale_ = true;
+  horizon_ = idle_until_ = 0;
+}
+
+// The machine cycle up to which the peripherals may lag: while each level-triggered input's flag
+// already follows its pin (set while it is low, clear while high), timer 2 stops, the serial port
+// is quiet (serial_quiet), no character is on its way and timers 0 and 1 are not in mode 3, a
+// running timer's next overflow is the only new request it can raise; one that would only raise a
+// flag already set (mode 2) sets no bound. In
+// idle the same bound holds for the idle cycles, whose poll cannot change before it
+// (`idle_until_`; instructions are not run then).
 void Cpu::replan() {
   stale_ = false;
   horizon_ = cycles_;
+  idle_until_ = 0;
   if (irq_dirty_ || next_irq_ >= 0 || pins_dirty_ || int0_change_.pending) return;
   const std::uint8_t tcon = sfr_latch(sfr::TCON), tmod = sfr_latch(sfr::TMOD);
   const std::uint8_t pins = last_pins_;
-  if ((sfr_latch(sfr::PCON) & 3) != 0) return;  // idle or power-down: one cycle per step
-  if (!(tcon & it0) && (!(pins & p_int0) || (tcon & ie0))) return;
-  if (!(tcon & it1) && (!(pins & p_int1) || (tcon & ie1))) return;
+  if (powered_down()) return;  // the oscillator stopped: one cycle per step
+  if (!(tcon & it0) && ((pins & p_int0) == 0) != ((tcon & ie0) != 0)) return;
+  if (!(tcon & it1) && ((pins & p_int1) == 0) != ((tcon & ie1) != 0)) return;
   if ((sfr_latch(sfr::T2CON) & (tr2 | exen2)) != 0) return;
-  const unsigned mode = sfr_latch(sfr::SCON) >> 6;
-  if (mode == 0 || mode == 2 || tx_bits_ != -2 || rx_ticks_ >= 0) return;
+  if (!serial_quiet() || tx_bits_ != -2 || rx_ticks_ >= 0) return;
   if ((tmod & 3) == 3 || (tmod & 0x30) == 0x30) return;
   std::uint64_t h = max_horizon;
   for (unsigned t = 0; t < 2; ++t) {
@@ -241,14 +249,32 @@ void Cpu::replan() {
     }
   }
   horizon_ = cycles_ - lag_ + h;
+  if (idle()) {
+    idle_until_ = horizon_;
+    horizon_ = cycles_;
+  }
+}
+
+// Nothing in the serial port changes by itself: modes 1 and 3 move only with timer 1's or timer
+// 2's overflows; mode 0 with nothing to shift out and no reception to start (REN clear or RI
+// set). Mode 2's divider counts every machine cycle.
+bool Cpu::serial_quiet() const {
+  const std::uint8_t scon = sfr_latch(sfr::SCON);
+  switch (scon >> 6) {
+    case 0:
+      return tx_bits_ == -2 && rx_ticks_ < 0 && ((scon & ren) == 0 || (scon & ri) != 0);
+    case 2:
+      return false;
+    default:
+      return true;
+  }
 }
 
 bool Cpu::pin(unsigned port, unsigned bit) const { return (port_pins(port) >> bit & 1) != 0; }
 
 void Cpu::serial_receive(std::uint8_t data, bool bit8) {
   sync();
-  stale_ = true;
-  horizon_ = 0;
+  unplan();
   std::uint8_t scon = sfr_latch(sfr::SCON);
   if ((scon & ren) == 0 || (scon >> 6) == 0) return;  // receiver off, or mode 0 (no start bit)
   // The stop bit is sampled at 9.5 bit times (mode 1), the ninth data bit's stop at 10.5.
@@ -302,7 +328,7 @@ void Cpu::tick(unsigned cycles) {
   const bool t01 = (tcon & (tr0 | tr1)) != 0 || (sfr_latch(sfr::TMOD) & 3) == 3;
   const bool t2 = (sfr_latch(sfr::T2CON) & (tr2 | exen2)) != 0;
   const unsigned mode = sfr_latch(sfr::SCON) >> 6;
-  if (!t2 && mode != 0 && mode != 2 && (!t01 || timers01_bulk(cycles, fall, pins))) {
+  if (!t2 && serial_quiet() && (!t01 || timers01_bulk(cycles, fall, pins))) {
     cycles_ += cycles;
     return;
   }

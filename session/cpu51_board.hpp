@@ -65,8 +65,17 @@ class Cpu51Board final : public mcs51::XdataBus {
 
  private:
   void chip_to(std::uint64_t cycle);
+  // The first CPU clock whose chip cycle (chip_cycle_of) is at least `cycle`.
+  [[nodiscard]] std::uint64_t clock_reaching(std::uint64_t cycle) const;
+  // The lazy walk (run_until): the board brings the chip to chip_cycle_of(clock) for the INT0
+  // samples only where the chip has an event; true when it did and X/INT was read again.
+  bool reach(std::uint64_t clock);
+  // The chip's cycle, next event and X/INT after the chip was stepped or accessed.
+  void note_chip();
   // Steps the chip so that an access starting now completes at the strobe's end.
   void access_at(std::uint64_t clock);
+  void after_access();
+  [[nodiscard]] std::uint64_t run_end() const;
   // INT0's level: X/INT for the 80C32, the C31's interrupt (low-active) for the C31.
   [[nodiscard]] bool int0_level() const;
   [[nodiscard]] bool in_window(std::uint16_t addr) const {
@@ -81,6 +90,19 @@ class Cpu51Board final : public mcs51::XdataBus {
   bool c31_ = false;
   std::uint16_t code_base_ = 0;
   std::vector<std::uint8_t> ram_ = std::vector<std::uint8_t>(0x10000, 0);
+  // The lazy walk's state: the CPU clock the chip is due at (its chip cycle is where a board
+  // stepping the chip to every sample would have it); the chip's own cycle, X/INT and the first
+  // CPU clock that reaches its next event, as of the last time it was stepped or accessed.
+  std::uint64_t due_ = 0;
+  std::uint64_t chip_at_ = 0;
+  std::uint64_t event_clock_ = 0;
+  bool level_ = true;
+  // The run's end (chip cycle and the first CPU clock reaching it); the last MOVX's first clock;
+  // whether run_until lets the CPU run steps in one go.
+  std::uint64_t chip_end_ = 0;
+  std::uint64_t end_clock_ = 0;
+  std::uint64_t last_movx_ = 0;
+  bool in_run_ = false;
 };
 
 }  // namespace dpc31

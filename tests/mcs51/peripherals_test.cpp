@@ -304,5 +304,35 @@ TEST(Mcs51PowerSaving, ACallAcceptedAfterTheInstructionThatSetsIdleEndsIdle) {
   EXPECT_EQ(cpu.pc(), 0x0036);
 }
 
+TEST(Mcs51PowerSaving, RunWithinGivesWhatStepByStepGives) {
+  // Cpu::run_within (the 80C32 board's run between chip events) defers idle cycles, serial mode 0
+  // with nothing to shift and a level-triggered INT0 whose flag follows its low pin: the state
+  // after it must be the state step() gives at the same cycle. Timer 0 mode 1 reloaded to F000h
+  // by its routine (INC R7; MOV TH0,#F0h; RETI), the CPU idling in between; INT0 held low with
+  // EX0 off (IE0 set, never called).
+  auto make = [] {
+    Cpu cpu = with_code(
+        {0x75, 0x89, 0x01, 0x75, 0xA8, 0x82, 0xD2, 0x8C, 0x43, 0x87, 0x01, 0x80, 0xFB}, 0x30);
+    cpu.load_code(0x000B, std::vector<std::uint8_t>{0x0F, 0x75, 0x8C, 0xF0, 0x32});
+    cpu.set_int0(false);
+    return cpu;
+  };
+  Cpu bulk = make();
+  Cpu one = make();
+  for (std::uint64_t end : {3u, 100u, 4'000u, 20'000u, 70'001u}) {
+    bulk.run_within(end);
+    EXPECT_LE(bulk.cycles(), end);
+    while (one.cycles() < bulk.cycles()) one.step();
+    ASSERT_EQ(one.cycles(), bulk.cycles());
+    EXPECT_EQ(one.pc(), bulk.pc());
+    EXPECT_EQ(one.reg(7), bulk.reg(7));
+    EXPECT_EQ(one.idle(), bulk.idle());
+    for (std::uint8_t r : {sfr::TL0, sfr::TH0, sfr::TCON, sfr::SP})
+      EXPECT_EQ(one.sfr_latch(r), bulk.sfr_latch(r)) << int{r} << " at " << end;
+  }
+  // Counting from cycle 5 (after SETB TR0): overflows near 65 541 and 69 637, the next past 70 001.
+  EXPECT_EQ(bulk.reg(7), 2);
+}
+
 }  // namespace
 }  // namespace mcs51::test

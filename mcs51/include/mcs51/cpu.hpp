@@ -68,6 +68,11 @@ class Cpu {
   StepResult step();
   // Steps until at least `cycles` more machine cycles have passed; returns the cycles run.
   std::uint64_t run(std::uint64_t cycles);
+  // Steps while the next step ends by machine cycle `end` (a step that would end later is left
+  // to the caller); an XDATA access may lower the end for the steps after it (set_run_end).
+  // Returns the cycles run.
+  std::uint64_t run_within(std::uint64_t end);
+  void set_run_end(std::uint64_t end) { run_end_ = end; }
   std::uint64_t cycles() const { return cycles_; }
   std::uint64_t clocks() const { return cycles_ * clocks_per_cycle; }
 
@@ -166,6 +171,8 @@ class Cpu {
   // go by sync() before anything reads or writes their SFRs, a pin changes, or a step returns.
   void sync();
   void replan();
+  void unplan();  // something outside changed: plan again before the next step
+  [[nodiscard]] bool serial_quiet() const;
 
   // Peripherals (peripherals.cpp).
   void set_pin(unsigned port, unsigned bit, bool high);
@@ -205,7 +212,9 @@ class Cpu {
   // the peripherals' next possible new request, or `cycles_` when every cycle must be ticked.
   std::uint64_t lag_ = 0;
   std::uint64_t horizon_ = 0;
-  bool stale_ = true;  // the peripherals' set-up changed: replan() before the next step
+  bool stale_ = true;             // the peripherals' set-up changed: replan() before the next step
+  std::uint64_t idle_until_ = 0;  // in idle: the machine cycle up to which idle cycles are counted
+  std::uint64_t run_end_ = 0;     // run_within's end
 
   // Pin samples of the previous machine cycle (edge detection): INT0, INT1, T0, T1, T2, T2EX.
   std::uint8_t last_pins_ = 0x3F;
