@@ -50,6 +50,7 @@ std::size_t Segment::add_chip(std::string name, ChipOptions opt) {
   });
   look_at(*s);
   stations_.push_back(std::move(s));
+  everyone_.push_back(stations_.size() - 1);
   return stations_.size() - 1;
 }
 
@@ -57,6 +58,8 @@ std::size_t Segment::add_sender(std::string name) {
   auto s = std::make_unique<Station>();
   s->name = std::move(name);
   stations_.push_back(std::move(s));
+  everyone_.push_back(stations_.size() - 1);
+  senders_.push_back(stations_.size() - 1);
   return stations_.size() - 1;
 }
 
@@ -183,11 +186,12 @@ void Segment::hear(std::size_t from, std::uint64_t cycle, bool level) {
         level ? "high" : "low", cycle));
   }
   if (had) ++f.relayed_next;
-  for (std::size_t k = 0; k < stations_.size(); ++k) {
+  // The chips have the answer's edges already: only the senders hear them now.
+  const std::vector<std::size_t>& to = had ? senders_ : everyone_;
+  for (const std::size_t k : to) {
     if (k == from) continue;
     Station& s = *stations_[k];
     if (s.chip) {
-      if (had) continue;
       if (cycle < s.chip->cycle()) {
         throw std::logic_error(fmt::format(
             "segment: the edge of {} at cycle {} reached {} at cycle {} (line order broken)",

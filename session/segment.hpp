@@ -124,6 +124,8 @@ class Segment {
   bool reference_ = false;
   std::uint64_t now_ = 0;
   std::vector<std::unique_ptr<Station>> stations_;
+  std::vector<std::size_t> everyone_;  // every station's index
+  std::vector<std::size_t> senders_;   // the stations without a chip
   std::vector<Collision> collisions_;
   // The line: who drives it until when (a falling edge holds it one character time).
   std::optional<std::size_t> owner_;
