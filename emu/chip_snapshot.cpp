@@ -216,6 +216,10 @@ void core_fields(Ar& ar, C& c) {
   };
   if constexpr (requires { ar.fail(""); }) {
     ar.sequence(mac.rxd_pending, snap::kMaxFileSize, edge);
+    for (const auto& e : mac.rxd_pending) {
+      if (e.first <= c.clock.now)
+        ar.fail("an RxD edge driven ahead at or before the snapshot's cycle");
+    }
     mac.heard.active = false;
   } else {
     // The edges still to come: those up to now are heard already, whenever the queue drops them.

@@ -204,9 +204,9 @@ class Chip {
   // last stop bit.
   std::uint64_t drive_rxd_chars(std::span<const std::uint8_t> bytes, std::uint64_t start,
                                 std::uint32_t bit_cycles, UartFault fault = {});
-  // The same characters as drive_rxd_chars (no fault), heard as one telegram (the built-in
-  // master, the bridge, a segment's stations: docs/engine.md "Telegrams heard whole"): where the
-  // receiver is idle at their rate and
+  // The same characters as drive_rxd_chars (no fault), heard as one telegram of a shared line
+  // (a segment's stations, docs/engine.md "Telegrams heard whole"): where the receiver is idle at
+  // their rate and
   // the MAC between telegrams (event engine, not in Baud_Search), the chip has no event inside
   // the telegram but where it shows something (a count, the frame's verdict at its last stop
   // sample); its state, counters, timing, pins and observers are those of drive_rxd_chars at
