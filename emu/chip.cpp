@@ -76,6 +76,13 @@ std::uint64_t Chip::drive_rxd_chars(std::span<const std::uint8_t> bytes, std::ui
   }
   return start + bytes.size() * frame;
 }
+std::uint64_t Chip::hear_telegram(std::span<const std::uint8_t> bytes, std::uint64_t start,
+                                  std::uint32_t bit_cycles) {
+  if (!core_->mac.hear_telegram(bytes, start, bit_cycles)) {
+    return drive_rxd_chars(bytes, start, bit_cycles);
+  }
+  return start + bytes.size() * std::uint64_t{kUartCharBits} * bit_cycles;
+}
 void Chip::on_rxd(std::function<void(std::uint64_t, bool)> cb) {
   core_->signals.rxd.add(std::move(cb));
 }

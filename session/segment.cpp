@@ -14,6 +14,14 @@ struct Segment::Station {
   Edges txd;    // the chip's TxD edges not yet relayed
   Edges heard;  // a sender's: the line as it hears it, not yet taken (sorted by cycle)
   std::uint64_t colliding_until = 0;  // a collision of this station is reported once per burst
+  // Telegram level (docs/segment.md): the chip's next event and whether its firmware runs, as the
+  // rounds last looked; the answer it armed (Chip::on_telegram), given to the other chips whole at
+  // its first start bit, and those edges, against which its TxD is checked as it goes out.
+  std::uint64_t next = 0;
+  bool busy = false;
+  std::optional<LineTelegram> answer;
+  Edges relayed;
+  std::size_t relayed_next = 0;
 };
 
 Segment::Segment(std::uint32_t baud, std::uint32_t clock_hz)
@@ -37,7 +45,12 @@ std::size_t Segment::add_chip(std::string name, ChipOptions opt) {
   // Every TxD edge an event of the chip (Chip::on_txd): next_deadline() then bounds the next one,
   // which the rounds of run_until rely on. (on_txd_edges hands edges over late, in batches.)
   s->chip->on_txd([raw](std::uint64_t cycle, bool level) { raw->txd.emplace_back(cycle, level); });
+  s->chip->on_telegram([raw](const Telegram& t) {
+    if (t.from_chip) raw->answer = LineTelegram{0, t.start, t.end, t.bytes};
+  });
+  look_at(*s);
   stations_.push_back(std::move(s));
+  everyone_.push_back(stations_.size() - 1);
   return stations_.size() - 1;
 }
 
@@ -45,15 +58,24 @@ std::size_t Segment::add_sender(std::string name) {
   auto s = std::make_unique<Station>();
   s->name = std::move(name);
   stations_.push_back(std::move(s));
+  everyone_.push_back(stations_.size() - 1);
+  senders_.push_back(stations_.size() - 1);
   return stations_.size() - 1;
 }
 
 void Segment::set_firmware(std::size_t i, Cpu::Isr isr) {
   stations_.at(i)->cpu = std::make_unique<Cpu>(chip(i), std::move(isr));
+  look_at(*stations_[i]);
 }
 
 void Segment::set_firmware(std::size_t i, Cpu::Program program) {
   stations_.at(i)->cpu = std::make_unique<Cpu>(chip(i), std::move(program));
+  look_at(*stations_[i]);
+}
+
+void Segment::look_at(Station& s) {
+  s.next = s.chip->next_deadline();
+  s.busy = s.cpu && s.cpu->busy();
 }
 
 const std::string& Segment::name(std::size_t i) const { return stations_.at(i)->name; }
@@ -62,13 +84,19 @@ bool Segment::is_chip(std::size_t i) const { return stations_.at(i)->chip != nul
 Chip& Segment::chip(std::size_t i) {
   Station& s = *stations_.at(i);
   if (!s.chip) throw std::invalid_argument("segment: station " + s.name + " has no chip");
+  // Left alone by the line, it has no event before now_ and its firmware sleeps: stepping it here
+  // changes nothing but its cycle.
+  if (s.chip->cycle() < now_) {
+    step_station(s, now_);
+    look_at(s);
+  }
   return *s.chip;
 }
 
 const Chip& Segment::chip(std::size_t i) const {
-  const Station& s = *stations_.at(i);
-  if (!s.chip) throw std::invalid_argument("segment: station " + s.name + " has no chip");
-  return *s.chip;
+  // Bringing a station to the line's time changes nothing a user of the segment sees but its
+  // cycle (chip() above): a const look may do it.
+  return const_cast<Segment*>(this)->chip(i);
 }
 
 std::uint64_t Segment::cycle() const {
@@ -81,8 +109,11 @@ std::uint64_t Segment::cycle() const {
 
 void Segment::catch_up() {
   const std::uint64_t front = cycle();
-  if (front == now_) return;
-  for (const auto& s : stations_) step_station(*s, front);
+  for (const auto& s : stations_) {
+    if (!s->chip) continue;
+    if (front > now_) step_station(*s, front);
+    look_at(*s);  // a user side may also have armed something with a bus access or a poke
+  }
   now_ = front;
 }
 
@@ -124,13 +155,40 @@ void Segment::relay(std::size_t i, const Edges& edges) {
       if (free && wake_for_ && *wake_for_ != i) woken_ = true;
       owner_ = i;
       owned_until_ = std::max(owned_until_, cycle + std::uint64_t{kUartCharBits} * t_);
+      if (free) relay_answer(i, cycle);
     }
     hear(i, cycle, level);
   }
 }
 
+void Segment::relay_answer(std::size_t i, std::uint64_t cycle) {
+  Station& a = *stations_[i];
+  if (reference_ || !a.answer || a.answer->start != cycle || a.chip->bit_cycles() != t_) return;
+  for (const auto& s : stations_) {
+    if (!s->chip || s.get() == &a) continue;
+    s->chip->hear_telegram(a.answer->bytes, cycle, t_);
+    look_at(*s);
+  }
+  a.relayed.clear();
+  a.relayed_next = 0;
+  uart_encode(a.answer->bytes, cycle, t_, a.relayed);
+  a.answer.reset();
+}
+
 void Segment::hear(std::size_t from, std::uint64_t cycle, bool level) {
-  for (std::size_t k = 0; k < stations_.size(); ++k) {
+  Station& f = *stations_[from];
+  // An edge of an answer the chips already have whole: only checked (an answer Go_Offline or a
+  // reset cut short would have reached them wrong).
+  const bool had = f.relayed_next < f.relayed.size();
+  if (had && f.relayed[f.relayed_next] != std::pair{cycle, level}) {
+    throw std::logic_error(fmt::format(
+        "segment: {} drove TxD {} at cycle {}, not the answer its chip armed (cut short?)", f.name,
+        level ? "high" : "low", cycle));
+  }
+  if (had) ++f.relayed_next;
+  // The chips have the answer's edges already: only the senders hear them now.
+  const std::vector<std::size_t>& to = had ? senders_ : everyone_;
+  for (const std::size_t k : to) {
     if (k == from) continue;
     Station& s = *stations_[k];
     if (s.chip) {
@@ -140,6 +198,7 @@ void Segment::hear(std::size_t from, std::uint64_t cycle, bool level) {
             stations_[from]->name, cycle, s.name, s.chip->cycle()));
       }
       s.chip->drive_rxd(cycle, level);
+      look_at(s);
     } else {
       const auto at = std::upper_bound(
           s.heard.begin(), s.heard.end(), cycle,
@@ -206,7 +265,12 @@ std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> byte
       throw std::logic_error(fmt::format("segment: {} sends at cycle {}, {} is at cycle {}",
                                          stations_[from]->name, start, s.name, s.chip->cycle()));
     }
-    s.chip->drive_rxd_chars(bytes, start, t_, fault);
+    if (reference_ || fault.kind != UartFault::Kind::none) {
+      s.chip->drive_rxd_chars(bytes, start, t_, fault);
+    } else {
+      s.chip->hear_telegram(bytes, start, t_);
+    }
+    look_at(s);
   }
   for (const auto& [cycle, level] : edges) {
     for (std::size_t k = 0; k < stations_.size(); ++k) {
@@ -238,11 +302,23 @@ void Segment::run_until(std::uint64_t cycle, std::optional<std::size_t> wake_for
     // No chip's TxD changes before its next deadline: every station may run to the earliest,
     // and what a chip drives there reaches the others at that very cycle.
     std::uint64_t bound = cycle;
+    bool busy = false;
     for (const auto& s : stations_) {
-      if (s->chip) bound = std::min(bound, s->chip->next_deadline());
+      if (!s->chip) continue;
+      bound = std::min(bound, reference_ ? s->chip->next_deadline() : s->next);
+      busy = busy || s->busy;
     }
+    // A running firmware's accesses depend on where rounds end (kCpuSlack): the stop samples of
+    // characters heard whole stay ends of rounds, as their events made them on the reference line.
+    if (busy && !reference_) bound = std::min(bound, line_rx_.next_deadline());
     bound = std::max(bound, now_ + 1);
-    for (const auto& s : stations_) step_station(*s, bound);
+    // Telegram level: a chip without an event by `bound` whose firmware sleeps is left where it
+    // is (it is given the line's characters ahead of time, as a master gives them).
+    for (const auto& s : stations_) {
+      if (!s->chip || (!reference_ && s->next > bound && !s->busy)) continue;
+      step_station(*s, bound);
+      look_at(*s);
+    }
     now_ = bound;
     // What the chips drove, in the order of its cycles (ties: station order).
     round.clear();

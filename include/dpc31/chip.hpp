@@ -204,6 +204,15 @@ class Chip {
   // last stop bit.
   std::uint64_t drive_rxd_chars(std::span<const std::uint8_t> bytes, std::uint64_t start,
                                 std::uint32_t bit_cycles, UartFault fault = {});
+  // The same characters as drive_rxd_chars (no fault), heard as one telegram of a shared line
+  // (a segment's stations, docs/engine.md "Telegrams heard whole"): where the receiver is idle at
+  // their rate and
+  // the MAC between telegrams (event engine, not in Baud_Search), the chip has no event inside
+  // the telegram but where it shows something (a count, the frame's verdict at its last stop
+  // sample); its state, counters, timing, pins and observers are those of drive_rxd_chars at
+  // every cycle, and a snapshot is the same. Returns the end of the last stop bit.
+  std::uint64_t hear_telegram(std::span<const std::uint8_t> bytes, std::uint64_t start,
+                              std::uint32_t bit_cycles);
   // Observers are lists: each on_* call adds one; an empty function removes all of that kind.
   // TxD edges, reported when time reaches them: each edge is an event of the chip.
   void on_txd(std::function<void(std::uint64_t, bool)> cb);
