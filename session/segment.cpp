@@ -8,6 +8,7 @@
 namespace dpc31 {
 
 struct Segment::Station {
+  std::size_t index = 0;
   std::string name;
   std::unique_ptr<Chip> chip;  // null: a sender
   std::unique_ptr<Cpu> cpu;
@@ -17,7 +18,7 @@ struct Segment::Station {
   // Telegram level (docs/segment.md): the chip's next event and whether its firmware runs, as the
   // rounds last looked; the answer it armed (Chip::on_telegram), given to the other chips whole at
   // its first start bit, and those edges, against which its TxD is checked as it goes out.
-  std::uint64_t next = 0;
+  std::uint64_t next = UINT64_MAX;
   bool busy = false;
   std::optional<LineTelegram> answer;
   Edges relayed;
@@ -33,6 +34,7 @@ Segment::~Segment() = default;
 
 std::size_t Segment::add_chip(std::string name, ChipOptions opt) {
   auto s = std::make_unique<Station>();
+  s->index = stations_.size();
   s->name = std::move(name);
   s->chip = std::make_unique<Chip>(opt);
   if (s->chip->clock_hz() != clock_hz_) {
@@ -44,10 +46,14 @@ std::size_t Segment::add_chip(std::string name, ChipOptions opt) {
   Station* raw = s.get();
   // Every TxD edge an event of the chip (Chip::on_txd): next_deadline() then bounds the next one,
   // which the rounds of run_until rely on. (on_txd_edges hands edges over late, in batches.)
-  s->chip->on_txd([raw](std::uint64_t cycle, bool level) { raw->txd.emplace_back(cycle, level); });
-  s->chip->on_telegram([raw](const Telegram& t) {
-    if (t.from_chip) raw->answer = LineTelegram{0, t.start, t.end, t.bytes};
+  s->chip->on_txd([this, raw](std::uint64_t cycle, bool level) {
+    if (raw->txd.empty()) drove_.push_back(raw->index);
+    raw->txd.emplace_back(cycle, level);
   });
+  s->chip->on_answer([raw](const Telegram& t) {
+    raw->answer = LineTelegram{0, t.start, t.end, t.bytes};
+  });
+  by_next_.emplace(s->next, s->index);
   look_at(*s);
   stations_.push_back(std::move(s));
   everyone_.push_back(stations_.size() - 1);
@@ -74,8 +80,21 @@ void Segment::set_firmware(std::size_t i, Cpu::Program program) {
 }
 
 void Segment::look_at(Station& s) {
-  s.next = s.chip->next_deadline();
-  s.busy = s.cpu && s.cpu->busy();
+  const std::uint64_t next = s.chip->next_deadline();
+  if (next != s.next) {
+    by_next_.erase({s.next, s.index});
+    s.next = next;
+    by_next_.emplace(next, s.index);
+  }
+  const bool busy = s.cpu && s.cpu->busy();
+  if (busy != s.busy) {
+    s.busy = busy;
+    if (busy) {
+      busy_.insert(s.index);
+    } else {
+      busy_.erase(s.index);
+    }
+  }
 }
 
 const std::string& Segment::name(std::size_t i) const { return stations_.at(i)->name; }
@@ -117,6 +136,14 @@ void Segment::catch_up() {
   now_ = front;
 }
 
+// A chip the line left alone hears what the line brings standing at its cycle, as on the
+// reference line (its on_rxd observers see the cycle it is fed at: a trace's `fed=`); it has no
+// event before, so that costs one look at its deadlines.
+void Segment::align() {
+  catch_up();
+  for (const auto& s : stations_) step_station(*s, now_);
+}
+
 void Segment::step_station(Station& s, std::uint64_t to) {
   if (!s.chip || s.chip->cycle() >= to) return;
   // The host CPU never splits a bus access and may end one up to kCpuSlack clocks past its goal:
@@ -143,22 +170,20 @@ void Segment::collide(std::size_t first, std::size_t second, std::uint64_t cycle
 // The line is held by whoever drove the first start bit while it was free, for one character
 // time from each of its falling edges (a start bit or a data bit: at most ten bit times too
 // long, shorter than any legal gap). Another driver meanwhile collides and is not heard.
-void Segment::relay(std::size_t i, const Edges& edges) {
-  for (const auto& [cycle, level] : edges) {
-    const bool free = !owner_ || cycle >= owned_until_;
-    if (!free && *owner_ != i) {
-      if (!level) collide(*owner_, i, cycle);
-      continue;
-    }
-    if (free && level) continue;  // the end of a burst nobody else hears
-    if (!level) {
-      if (free && wake_for_ && *wake_for_ != i) woken_ = true;
-      owner_ = i;
-      owned_until_ = std::max(owned_until_, cycle + std::uint64_t{kUartCharBits} * t_);
-      if (free) relay_answer(i, cycle);
-    }
-    hear(i, cycle, level);
+void Segment::relay(std::size_t i, std::uint64_t cycle, bool level) {
+  const bool free = !owner_ || cycle >= owned_until_;
+  if (!free && *owner_ != i) {
+    if (!level) collide(*owner_, i, cycle);
+    return;
   }
+  if (free && level) return;  // the end of a burst nobody else hears
+  if (!level) {
+    if (free && wake_for_ && *wake_for_ != i) woken_ = true;
+    owner_ = i;
+    owned_until_ = std::max(owned_until_, cycle + std::uint64_t{kUartCharBits} * t_);
+    if (free) relay_answer(i, cycle);
+  }
+  hear(i, cycle, level);
 }
 
 void Segment::relay_answer(std::size_t i, std::uint64_t cycle) {
@@ -166,6 +191,7 @@ void Segment::relay_answer(std::size_t i, std::uint64_t cycle) {
   if (reference_ || !a.answer || a.answer->start != cycle || a.chip->bit_cycles() != t_) return;
   for (const auto& s : stations_) {
     if (!s->chip || s.get() == &a) continue;
+    step_station(*s, cycle);
     s->chip->hear_telegram(a.answer->bytes, cycle, t_);
     look_at(*s);
   }
@@ -197,6 +223,7 @@ void Segment::hear(std::size_t from, std::uint64_t cycle, bool level) {
             "segment: the edge of {} at cycle {} reached {} at cycle {} (line order broken)",
             stations_[from]->name, cycle, s.name, s.chip->cycle()));
       }
+      step_station(s, cycle);
       s.chip->drive_rxd(cycle, level);
       look_at(s);
     } else {
@@ -265,6 +292,7 @@ std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> byte
       throw std::logic_error(fmt::format("segment: {} sends at cycle {}, {} is at cycle {}",
                                          stations_[from]->name, start, s.name, s.chip->cycle()));
     }
+    step_station(s, start);
     if (reference_ || fault.kind != UartFault::Kind::none) {
       s.chip->drive_rxd_chars(bytes, start, t_, fault);
     } else {
@@ -297,44 +325,50 @@ void Segment::run_until(std::uint64_t cycle, std::optional<std::size_t> wake_for
   catch_up();
   wake_for_ = wake_for;
   woken_ = false;
-  Edges round;
   while (now_ < cycle && !woken_) {
     // No chip's TxD changes before its next deadline: every station may run to the earliest,
     // and what a chip drives there reaches the others at that very cycle.
     std::uint64_t bound = cycle;
-    bool busy = false;
-    for (const auto& s : stations_) {
-      if (!s->chip) continue;
-      bound = std::min(bound, reference_ ? s->chip->next_deadline() : s->next);
-      busy = busy || s->busy;
+    stepping_.clear();
+    if (reference_) {
+      for (const auto& s : stations_) {
+        if (!s->chip) continue;
+        bound = std::min(bound, s->chip->next_deadline());
+        stepping_.push_back(s->index);
+      }
+    } else if (!by_next_.empty()) {
+      bound = std::min(bound, by_next_.begin()->first);
     }
     // A running firmware's accesses depend on where rounds end (kCpuSlack): the stop samples of
     // characters heard whole stay ends of rounds, as their events made them on the reference line.
-    if (busy && !reference_) bound = std::min(bound, line_rx_.next_deadline());
+    if (!busy_.empty() && !reference_) bound = std::min(bound, line_rx_.next_deadline());
     bound = std::max(bound, now_ + 1);
     // Telegram level: a chip without an event by `bound` whose firmware sleeps is left where it
-    // is (it is given the line's characters ahead of time, as a master gives them).
-    for (const auto& s : stations_) {
-      if (!s->chip || (!reference_ && s->next > bound && !s->busy)) continue;
-      step_station(*s, bound);
-      look_at(*s);
+    // is (it is given the line's characters ahead of time, as a master gives them). The others
+    // step in station order.
+    if (!reference_) {
+      for (auto it = by_next_.begin(); it != by_next_.end() && it->first <= bound; ++it)
+        stepping_.push_back(it->second);
+      stepping_.insert(stepping_.end(), busy_.begin(), busy_.end());
+      std::sort(stepping_.begin(), stepping_.end());
+      stepping_.erase(std::unique(stepping_.begin(), stepping_.end()), stepping_.end());
+    }
+    for (const std::size_t i : stepping_) {
+      step_station(*stations_[i], bound);
+      look_at(*stations_[i]);
     }
     now_ = bound;
     // What the chips drove, in the order of its cycles (ties: station order).
-    round.clear();
-    std::vector<std::size_t> who;
-    for (std::size_t i = 0; i < stations_.size(); ++i) {
-      for (const auto& e : stations_[i]->txd) {
-        round.push_back(e);
-        who.push_back(i);
-      }
+    round_.clear();
+    std::sort(drove_.begin(), drove_.end());
+    for (const std::size_t i : drove_) {
+      for (const auto& [at, level] : stations_[i]->txd) round_.push_back({at, i, level});
       stations_[i]->txd.clear();
     }
-    std::vector<std::size_t> order(round.size());
-    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
-    std::stable_sort(order.begin(), order.end(),
-                     [&](std::size_t a, std::size_t b) { return round[a].first < round[b].first; });
-    for (const std::size_t k : order) relay(who[k], Edges{round[k]});
+    drove_.clear();
+    std::stable_sort(round_.begin(), round_.end(),
+                     [](const Driven& a, const Driven& b) { return a.cycle < b.cycle; });
+    for (const Driven& e : round_) relay(e.station, e.cycle, e.level);
     close_telegrams(now_);
     line_final_ = now_;
   }

@@ -10,6 +10,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <set>
 #include <span>
 #include <string>
 #include <utility>
@@ -66,6 +67,9 @@ class Segment {
   // happens on the line: a chip's user side may have run it ahead with bus accesses, its init for
   // one); chip(i) brings the others here when looked at.
   [[nodiscard]] std::uint64_t cycle() const;
+  // Every chip to cycle(), also those the line left alone: for whoever holds a station's Chip&
+  // (a trace recorder, an observer reading chip.cycle()) and looks at it between runs.
+  void align();
 
   // The reference line (on: as before issue 30 item 6): every station stepped in every round and
   // every character and edge given to every chip as it comes. Off (the default): telegram level,
@@ -111,13 +115,13 @@ class Segment {
   using Edges = std::vector<std::pair<std::uint64_t, bool>>;
   void step_station(Station& s, std::uint64_t to);
   // What the rounds know of a chip: its next event and whether its firmware runs.
-  static void look_at(Station& s);
+  void look_at(Station& s);
   // Station i's answer, armed and now starting on the line at `cycle`, to every other chip whole.
   void relay_answer(std::size_t i, std::uint64_t cycle);
   // Every chip to cycle(): what its user side did directly on its bus moved it alone.
   void catch_up();
-  // Edges station `i` drove (in order, up to its cycle): the line's owner's are heard by all.
-  void relay(std::size_t i, const Edges& edges);
+  // An edge station `i` drove (in order, up to its cycle): the line's owner's are heard by all.
+  void relay(std::size_t i, std::uint64_t cycle, bool level);
   void hear(std::size_t from, std::uint64_t cycle, bool level);
   // The character decoder of the line (for on_telegram), fed with what the owner drove.
   void decode(std::size_t from, std::uint64_t cycle, bool level);
@@ -143,6 +147,20 @@ class Segment {
   std::vector<UartChar> chars_;
   std::optional<LineTelegram> open_;
   std::vector<std::pair<std::uint64_t, std::size_t>> claims_;  // (first edge, driver) in order
+  // A round's TxD edges of every chip (run_until), kept to reuse its memory.
+  struct Driven {
+    std::uint64_t cycle;
+    std::size_t station;
+    bool level;
+  };
+  std::vector<Driven> round_;
+  // Telegram level: the chips by their next event as the rounds last looked, those whose firmware
+  // runs, and those with TxD edges not yet relayed, so that a round touches only the chips it
+  // steps (docs/segment.md).
+  std::set<std::pair<std::uint64_t, std::size_t>> by_next_;
+  std::set<std::size_t> busy_;
+  std::vector<std::size_t> drove_;
+  std::vector<std::size_t> stepping_;
 };
 
 }  // namespace dpc31
