@@ -103,6 +103,9 @@ void Chip::on_bus_access(std::function<void(std::uint64_t, const BusAccess&)> cb
 void Chip::on_telegram(std::function<void(const Telegram&)> cb) {
   core_->signals.telegram.add(std::move(cb));
 }
+void Chip::on_answer(std::function<void(const Telegram&)> cb) {
+  core_->signals.answer.add(std::move(cb));
+}
 ChipProbe Chip::probe() const {
   const ChipCore& c = *core_;
   return {c.dp.state(),

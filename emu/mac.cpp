@@ -361,7 +361,11 @@ void Mac::send(const fdl::Frame& f, std::uint64_t request_end) {
       kMinTsdrBits, dp_.min_tsdr() != 0 ? dp_.min_tsdr() : regs_.latch(RegId::MinTSDR_Val));
   const std::uint64_t start = request_end + std::uint64_t{tsdr} * t;
   const std::uint64_t end = start + bytes.size() * std::uint64_t{kUartCharBits} * t;
-  if (sig_.telegram) sig_.telegram(Telegram{true, bytes, start, end});
+  if (sig_.telegram || sig_.answer) {
+    const Telegram armed{true, bytes, start, end};
+    sig_.telegram(armed);
+    sig_.answer(armed);
+  }
   if (clock_.engine == Engine::per_cycle) {
     // Counted from the end of the request's stop bit, as the receiver sees it.
     s_.shifter.phase = TxShifter::Phase::wait_end;
