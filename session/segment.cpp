@@ -18,8 +18,8 @@ struct Segment::Station {
   // Telegram level (docs/segment.md): the chip's next event and whether its firmware runs, as the
   // rounds last looked; the answer it armed (Chip::on_telegram), given to the other chips whole at
   // its first start bit, and those edges, against which its TxD is checked as it goes out.
-  std::uint64_t next = UINT64_MAX;
   bool busy = false;
+  std::uint64_t looked = UINT64_MAX;  // the chip's cycle when the rounds last looked
   std::optional<LineTelegram> answer;
   Edges relayed;
   std::size_t relayed_next = 0;
@@ -53,7 +53,7 @@ std::size_t Segment::add_chip(std::string name, ChipOptions opt) {
   s->chip->on_answer([raw](const Telegram& t) {
     raw->answer = LineTelegram{0, t.start, t.end, t.bytes};
   });
-  by_next_.emplace(s->next, s->index);
+  next_.push_back(UINT64_MAX);
   look_at(*s);
   stations_.push_back(std::move(s));
   everyone_.push_back(stations_.size() - 1);
@@ -64,6 +64,7 @@ std::size_t Segment::add_sender(std::string name) {
   auto s = std::make_unique<Station>();
   s->name = std::move(name);
   stations_.push_back(std::move(s));
+  next_.push_back(UINT64_MAX);
   everyone_.push_back(stations_.size() - 1);
   senders_.push_back(stations_.size() - 1);
   return stations_.size() - 1;
@@ -80,20 +81,12 @@ void Segment::set_firmware(std::size_t i, Cpu::Program program) {
 }
 
 void Segment::look_at(Station& s) {
-  const std::uint64_t next = s.chip->next_deadline();
-  if (next != s.next) {
-    by_next_.erase({s.next, s.index});
-    s.next = next;
-    by_next_.emplace(next, s.index);
-  }
+  next_[s.index] = s.chip->next_deadline();
+  s.looked = s.chip->cycle();
   const bool busy = s.cpu && s.cpu->busy();
   if (busy != s.busy) {
     s.busy = busy;
-    if (busy) {
-      busy_.insert(s.index);
-    } else {
-      busy_.erase(s.index);
-    }
+    busy_ = busy ? busy_ + 1 : busy_ - 1;
   }
 }
 
@@ -105,10 +98,10 @@ Chip& Segment::chip(std::size_t i) {
   if (!s.chip) throw std::invalid_argument("segment: station " + s.name + " has no chip");
   // Left alone by the line, it has no event before now_ and its firmware sleeps: stepping it here
   // changes nothing but its cycle.
-  if (s.chip->cycle() < now_) {
-    step_station(s, now_);
-    look_at(s);
-  }
+  if (s.chip->cycle() < now_) step_station(s, now_);
+  // Whoever asks for it may arm something without time passing (an observer of TxD edges): the
+  // rounds look at it again.
+  s.looked = UINT64_MAX;
   return *s.chip;
 }
 
@@ -131,7 +124,8 @@ void Segment::catch_up() {
   for (const auto& s : stations_) {
     if (!s->chip) continue;
     if (front > now_) step_station(*s, front);
-    look_at(*s);  // a user side may also have armed something with a bus access or a poke
+    // A user side arms something only with a bus access (time passes) or through chip(i).
+    if (s->chip->cycle() != s->looked) look_at(*s);
   }
   now_ = front;
 }
@@ -146,6 +140,10 @@ void Segment::align() {
 
 void Segment::step_station(Station& s, std::uint64_t to) {
   if (!s.chip || s.chip->cycle() >= to) return;
+  if (!reference_ && !s.busy && next_[s.index] > to && s.looked == s.chip->cycle()) {
+    s.chip->step(to - s.chip->cycle());  // nothing happens in it before `to`: only time passes
+    return;
+  }
   // The host CPU never splits a bus access and may end one up to kCpuSlack clocks past its goal:
   // it runs to that much short of `to`, and the chip alone the rest (the CPU's next access starts
   // at `to`), so the chip stands exactly at `to` for what the line brings next.
@@ -300,12 +298,11 @@ std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> byte
     }
     look_at(s);
   }
-  for (const auto& [cycle, level] : edges) {
-    for (std::size_t k = 0; k < stations_.size(); ++k) {
-      if (k != from && !stations_[k]->chip) stations_[k]->heard.emplace_back(cycle, level);
-    }
-    decode(from, cycle, level);
+  for (const std::size_t k : senders_) {
+    if (k != from)
+      stations_[k]->heard.insert(stations_[k]->heard.end(), edges.begin(), edges.end());
   }
+  for (const auto& [cycle, level] : edges) decode(from, cycle, level);
   return end;
 }
 
@@ -329,33 +326,23 @@ void Segment::run_until(std::uint64_t cycle, std::optional<std::size_t> wake_for
     // No chip's TxD changes before its next deadline: every station may run to the earliest,
     // and what a chip drives there reaches the others at that very cycle.
     std::uint64_t bound = cycle;
-    stepping_.clear();
     if (reference_) {
       for (const auto& s : stations_) {
-        if (!s->chip) continue;
-        bound = std::min(bound, s->chip->next_deadline());
-        stepping_.push_back(s->index);
+        if (s->chip) bound = std::min(bound, s->chip->next_deadline());
       }
-    } else if (!by_next_.empty()) {
-      bound = std::min(bound, by_next_.begin()->first);
+    } else {
+      bound = std::min(bound, *std::min_element(next_.begin(), next_.end()));
     }
     // A running firmware's accesses depend on where rounds end (kCpuSlack): the stop samples of
     // characters heard whole stay ends of rounds, as their events made them on the reference line.
-    if (!busy_.empty() && !reference_) bound = std::min(bound, line_rx_.next_deadline());
+    if (busy_ != 0 && !reference_) bound = std::min(bound, line_rx_.next_deadline());
     bound = std::max(bound, now_ + 1);
     // Telegram level: a chip without an event by `bound` whose firmware sleeps is left where it
-    // is (it is given the line's characters ahead of time, as a master gives them). The others
-    // step in station order.
-    if (!reference_) {
-      for (auto it = by_next_.begin(); it != by_next_.end() && it->first <= bound; ++it)
-        stepping_.push_back(it->second);
-      stepping_.insert(stepping_.end(), busy_.begin(), busy_.end());
-      std::sort(stepping_.begin(), stepping_.end());
-      stepping_.erase(std::unique(stepping_.begin(), stepping_.end()), stepping_.end());
-    }
-    for (const std::size_t i : stepping_) {
-      step_station(*stations_[i], bound);
-      look_at(*stations_[i]);
+    // is (it is given the line's characters ahead of time, as a master gives them).
+    for (const auto& s : stations_) {
+      if (!s->chip || (!reference_ && next_[s->index] > bound && !s->busy)) continue;
+      step_station(*s, bound);
+      look_at(*s);
     }
     now_ = bound;
     // What the chips drove, in the order of its cycles (ties: station order).

@@ -10,7 +10,6 @@
 #include <functional>
 #include <memory>
 #include <optional>
-#include <set>
 #include <span>
 #include <string>
 #include <utility>
@@ -154,13 +153,12 @@ class Segment {
     bool level;
   };
   std::vector<Driven> round_;
-  // Telegram level: the chips by their next event as the rounds last looked, those whose firmware
-  // runs, and those with TxD edges not yet relayed, so that a round touches only the chips it
-  // steps (docs/segment.md).
-  std::set<std::pair<std::uint64_t, std::size_t>> by_next_;
-  std::set<std::size_t> busy_;
+  // Telegram level: each station's next event as the rounds last looked (UINT64_MAX: a sender),
+  // one flat array a round scans; how many chips' firmware runs; the stations with TxD edges not
+  // yet relayed (docs/segment.md).
+  std::vector<std::uint64_t> next_;
+  std::size_t busy_ = 0;
   std::vector<std::size_t> drove_;
-  std::vector<std::size_t> stepping_;
 };
 
 }  // namespace dpc31
