@@ -353,8 +353,10 @@ void Segment::run_until(std::uint64_t cycle, std::optional<std::size_t> wake_for
       stations_[i]->txd.clear();
     }
     drove_.clear();
-    std::stable_sort(round_.begin(), round_.end(),
-                     [](const Driven& a, const Driven& b) { return a.cycle < b.cycle; });
+    // Mostly one edge or none: sorted already, and stable_sort would allocate its buffer.
+    const auto earlier = [](const Driven& a, const Driven& b) { return a.cycle < b.cycle; };
+    if (!std::is_sorted(round_.begin(), round_.end(), earlier))
+      std::stable_sort(round_.begin(), round_.end(), earlier);
     for (const Driven& e : round_) relay(e.station, e.cycle, e.level);
     close_telegrams(now_);
     line_final_ = now_;
