@@ -11,8 +11,10 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -40,15 +42,20 @@ struct Action {
   std::uint8_t data = 0;
 };
 
-// What a user sees of the chip's state: probe() and the FDL counters.
-std::string observable_state(const Chip& c) {
+// What a user sees of the chip's state: probe() and the FDL counters (a checksum of them).
+using ShownState = std::array<std::uint32_t, 8>;
+ShownState observable_state(const Chip& c) {
   const ChipProbe p = c.probe();
   const FdlCounters& n = c.fdl_counters();
   static_assert(std::has_unique_object_representations_v<FdlCounters>);
-  return fmt::format("dp {} wd {} baud {} irr {:04x} sm {:02x} {:02x} {:02x} counters {:08x}",
-                     static_cast<int>(p.dp_state), static_cast<int>(p.wd_state), p.baud_code, p.irr,
-                     p.dout_buffer_sm, p.din_buffer_sm, p.diag_buffer_sm,
-                     snap::crc32({reinterpret_cast<const std::uint8_t*>(&n), sizeof n}));
+  return {static_cast<std::uint32_t>(p.dp_state),
+          static_cast<std::uint32_t>(p.wd_state),
+          p.baud_code,
+          p.irr,
+          p.dout_buffer_sm,
+          p.din_buffer_sm,
+          p.diag_buffer_sm,
+          snap::crc32({reinterpret_cast<const std::uint8_t*>(&n), sizeof n})};
 }
 
 // Everything observable, one line per observation; the state apart, as it changes.
@@ -58,15 +65,18 @@ struct Recorder {
   // from the last one recorded. How many calls the engine makes is its business, not the
   // contract (docs/decisions.md): a telegram heard whole has fewer events than its edges.
   std::vector<std::string> states;
-  std::string shown;  // the state `states` ends with (or the chip's when primed)
+  ShownState shown{};  // the state `states` ends with (or the chip's when primed)
   std::uint64_t pending_cycle = 0;
-  std::string pending;
+  std::optional<ShownState> pending;
   void settle() {
-    if (!pending.empty() && pending != shown) {
-      states.push_back(fmt::format("state {} {}", pending_cycle, pending));
-      shown = pending;
+    if (pending && *pending != shown) {
+      const ShownState& v = *pending;
+      states.push_back(fmt::format(
+          "state {} dp {} wd {} baud {} irr {:04x} sm {:02x} {:02x} {:02x} counters {:08x}",
+          pending_cycle, v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]));
+      shown = v;
     }
-    pending.clear();
+    pending.reset();
   }
   // The chip's state now is what was shown last (a fresh or a just loaded chip).
   void prime(const Chip& c) {
