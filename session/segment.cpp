@@ -331,7 +331,7 @@ void Segment::run_until(std::uint64_t cycle, std::optional<std::size_t> wake_for
         if (s->chip) bound = std::min(bound, s->chip->next_deadline());
       }
     } else {
-      bound = std::min(bound, *std::min_element(next_.begin(), next_.end()));
+      for (const std::uint64_t n : next_) bound = std::min(bound, n);  // senders: UINT64_MAX
     }
     // A running firmware's accesses depend on where rounds end (kCpuSlack): the stop samples of
     // characters heard whole stay ends of rounds, as their events made them on the reference line.
