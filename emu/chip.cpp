@@ -76,6 +76,13 @@ std::uint64_t Chip::drive_rxd_chars(std::span<const std::uint8_t> bytes, std::ui
   }
   return start + bytes.size() * frame;
 }
+std::uint64_t Chip::hear_telegram(std::span<const std::uint8_t> bytes, std::uint64_t start,
+                                  std::uint32_t bit_cycles) {
+  if (!core_->mac.hear_telegram(bytes, start, bit_cycles)) {
+    return drive_rxd_chars(bytes, start, bit_cycles);
+  }
+  return start + bytes.size() * std::uint64_t{kUartCharBits} * bit_cycles;
+}
 void Chip::on_rxd(std::function<void(std::uint64_t, bool)> cb) {
   core_->signals.rxd.add(std::move(cb));
 }
@@ -95,6 +102,9 @@ void Chip::on_bus_access(std::function<void(std::uint64_t, const BusAccess&)> cb
 }
 void Chip::on_telegram(std::function<void(const Telegram&)> cb) {
   core_->signals.telegram.add(std::move(cb));
+}
+void Chip::on_answer(std::function<void(const Telegram&)> cb) {
+  core_->signals.answer.add(std::move(cb));
 }
 ChipProbe Chip::probe() const {
   const ChipCore& c = *core_;

@@ -115,7 +115,8 @@ void bit_timer(Ar& ar, T& b) {
 // the CORE section (format version 2).
 template <typename Ar, typename S>
 void mac_fields(Ar& ar, S& s, std::uint64_t now) {
-  static_assert(snap::member_count<Mac::State>() == 19, "a new member: add it here");
+  // `heard` is not written: Chip::save_state turns it into characters first (Mac::materialize).
+  static_assert(snap::member_count<Mac::State>() == 20, "a new member: add it here");
   ar.block(s.rx);
   ar.block(s.frame);
   ar(s.in_frame);
@@ -191,10 +192,25 @@ void core_fields(Ar& ar, C& c) {
     if (engine != c.clock.engine)
       ar.fail("the snapshot is of the other engine (event / per_cycle)");
   }
-  ar.sequence(mac.rxd_pending, snap::kMaxFileSize, [](auto& a, auto& e) {
+  const auto edge = [](auto& a, auto& e) {
     a(e.first);
     a(e.second);
-  });
+  };
+  if constexpr (requires { ar.fail(""); }) {
+    ar.sequence(mac.rxd_pending, snap::kMaxFileSize, edge);
+    for (const auto& e : mac.rxd_pending) {
+      if (e.first <= c.clock.now)
+        ar.fail("an RxD edge driven ahead at or before the snapshot's cycle");
+    }
+    mac.heard.active = false;
+  } else {
+    // The edges still to come: those up to now are heard already, whenever the queue drops them.
+    Fifo<std::pair<std::uint64_t, bool>> ahead;
+    for (const auto& e : mac.rxd_pending) {
+      if (e.first > c.clock.now) ahead.emplace_back(e);
+    }
+    ar.sequence(ahead, snap::kMaxFileSize, edge);
+  }
   ar(mac.rxd_level);
   ar.section("LTCH");
   ar.array(regs.latch);
@@ -257,6 +273,7 @@ snap::Header header_of(const ChipCore& c) {
 }  // namespace
 
 std::vector<std::uint8_t> Chip::save_state() const {
+  core_->mac.materialize();  // a telegram heard whole is written as its characters
   snap::Writer w;
   core_fields(w, *core_);
   return snap::seal(header_of(*core_), w.bytes());

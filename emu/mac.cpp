@@ -56,6 +56,7 @@ void Mac::start_search() {
 }
 
 void Mac::listen(std::uint8_t code) {
+  materialize();  // a telegram heard whole is re-heard at the new rate as its edges would be
   s_.search_code = code;
   const std::uint32_t t = bit_cycles(clock_.hz, kBaudRates[code]);
   s_.rx.configure(t, clock_.now);
@@ -122,6 +123,7 @@ bool Mac::tx_busy() const {
 }
 
 void Mac::stop() {
+  materialize();  // the receiver goes on taking characters; only the MAC's framing stops
   tx_catch_up();  // what went out before the stop reaches the edge observers
   stop_search_window();
   s_.frame_timeout = kNever;
@@ -151,6 +153,7 @@ std::uint64_t Mac::deadline() const {
       if (fall < s_.tx_edges.size()) t = std::min(t, s_.tx_edges[fall].first);
     }
   }
+  if (s_.heard.active) t = std::min(t, s_.heard.due());
   return t;
 }
 
@@ -185,6 +188,7 @@ void Mac::tx_catch_up() {
 bool Mac::txd_level() const { return s_.txd_at(clock_.now).second; }
 
 void Mac::process() {
+  if (s_.heard.active && s_.heard.due() <= clock_.now) take_heard();
   s_.chars.clear();
   s_.rx.advance(clock_.now, s_.chars);
   for (const UartChar& c : s_.chars) on_char(c);
@@ -298,6 +302,10 @@ void Mac::on_char(const UartChar& c) {
   const fdl::Assembler::Status st = s_.frame.push(c.data);
   s_.frame_timeout = c.end + tsyn * s_.rx.bit_time();
   if (st == fdl::Assembler::Status::need_more) return;
+  frame_ended(st, c);
+}
+
+void Mac::frame_ended(fdl::Assembler::Status st, const UartChar& c) {
   s_.in_frame = false;
   s_.frame_timeout = kNever;
   if (st == fdl::Assembler::Status::error) {
@@ -353,7 +361,11 @@ void Mac::send(const fdl::Frame& f, std::uint64_t request_end) {
       kMinTsdrBits, dp_.min_tsdr() != 0 ? dp_.min_tsdr() : regs_.latch(RegId::MinTSDR_Val));
   const std::uint64_t start = request_end + std::uint64_t{tsdr} * t;
   const std::uint64_t end = start + bytes.size() * std::uint64_t{kUartCharBits} * t;
-  if (sig_.telegram) sig_.telegram(Telegram{true, bytes, start, end});
+  if (sig_.telegram || sig_.answer) {
+    const Telegram armed{true, bytes, start, end};
+    sig_.telegram(armed);
+    sig_.answer(armed);
+  }
   if (clock_.engine == Engine::per_cycle) {
     // Counted from the end of the request's stop bit, as the receiver sees it.
     s_.shifter.phase = TxShifter::Phase::wait_end;
@@ -392,6 +404,7 @@ void Mac::stop_search_window() {
 }
 
 void Mac::drive_rxd(std::uint64_t cycle, bool level) {
+  materialize();
   const std::uint64_t at = std::max(cycle, clock_.now);
   clock_.quiet_until = 0;
   if (clock_.engine == Engine::event) {
@@ -411,6 +424,7 @@ void Mac::drive_rxd(std::uint64_t cycle, bool level) {
 }
 
 void Mac::drive_rxd_char(std::uint64_t start, std::uint8_t data, std::uint32_t bit_cycles) {
+  materialize();
   // The character's edges, as uart_encode gives them after a high line.
   std::array<std::pair<std::uint64_t, bool>, kUartCharBits> edges{};
   bool line = true;
@@ -423,13 +437,118 @@ void Mac::drive_rxd_char(std::uint64_t start, std::uint8_t data, std::uint32_t b
   }
   // Taken whole: the rest of drive_rxd for each edge (a reconfigure hears the pending ones again).
   clock_.quiet_until = 0;
-  while (!s_.rxd_pending.empty() && s_.rxd_pending.front().first <= clock_.now) {
-    s_.rxd_pending.pop_front();
-  }
+  drop_heard_rxd(clock_.now);
   for (std::size_t i = 0; i < n; ++i) {
     if (edges[i].first > clock_.now) s_.rxd_pending.emplace_back(edges[i]);
     sig_.rxd(edges[i].first, edges[i].second);
   }
+}
+
+void Mac::drop_heard_rxd(std::uint64_t at) {
+  while (!s_.rxd_pending.empty() && s_.rxd_pending.front().first <= at) s_.rxd_pending.pop_front();
+}
+
+bool Mac::hear_telegram(std::span<const std::uint8_t> bytes, std::uint64_t start,
+                        std::uint32_t bit_cycles) {
+  // Between telegrams: nothing of the receiver's still to report, no frame open or timing out,
+  // no search window that would switch the rate inside it, no edge driven ahead.
+  if (clock_.engine != Engine::event || s_.heard.active || bytes.empty() || start < clock_.now ||
+      !s_.rx.idle_for(start, bit_cycles) || s_.in_frame || s_.frame_timeout != kNever ||
+      s_.search_deadline != kNever ||
+      (!s_.rxd_pending.empty() && (s_.rxd_pending.end() - 1)->first > clock_.now)) {
+    return false;
+  }
+  HeardTelegram& h = s_.heard;
+  h.bytes.assign(bytes.begin(), bytes.end());
+  h.start = start;
+  h.t = bit_cycles;
+  h.driven_at = clock_.now;
+  // on_char's first decision (docs/timing.md "Serial line"): TSYN before the first character.
+  if (s_.rx.idle_bits_at(start) >= kTsynBits) {
+    // A frame starts; nothing shows before the assembler's verdict (complete or an error).
+    h.kind = HeardTelegram::Kind::frame;
+    h.frame.reset();
+    std::size_t j = 0;
+    while (h.frame.push(bytes[j]) == fdl::Assembler::Status::need_more && j + 1 < bytes.size()) {
+      ++j;
+    }
+    h.effect_at = h.stop_sample(j);
+  } else if (!s_.skipping) {
+    h.kind = HeardTelegram::Kind::no_sync;  // counted at the first stop sample, the rest skipped
+    h.effect_at = h.stop_sample(0);
+  } else {
+    h.kind = HeardTelegram::Kind::skipped;
+    h.effect_at = kNever;
+  }
+  h.active = true;
+  if (sig_.rxd) {
+    bool line = true;
+    std::array<std::pair<std::uint64_t, bool>, kUartCharBits> edges{};
+    for (std::size_t i = 0; i < bytes.size(); ++i) {
+      const std::uint64_t at = start + i * std::uint64_t{kUartCharBits} * bit_cycles;
+      const std::size_t n =
+          uart_frame_edges(uart_frame(bytes[i]), at, bit_cycles, line, edges.data());
+      for (std::size_t k = 0; k < n; ++k) sig_.rxd(edges[k].first, edges[k].second);
+    }
+  }
+  clock_.quiet_until = 0;
+  return true;
+}
+
+void Mac::take_heard() {
+  HeardTelegram& h = s_.heard;
+  const std::uint64_t last = h.stop_sample(h.bytes.size() - 1);
+  if (h.kind == HeardTelegram::Kind::no_sync && h.effect_at != kNever) {
+    ++counters_.no_sync;  // on_char of the first character
+    s_.skipping = true;
+    h.effect_at = kNever;
+    if (clock_.now < last) return;
+  }
+  if (h.kind == HeardTelegram::Kind::frame &&
+      (h.effect_at < last || h.frame.status() == fdl::Assembler::Status::need_more)) {
+    // The frame ends before the telegram does, or runs into a frame timeout: character by
+    // character.
+    materialize();
+    return;
+  }
+  // The last stop sample: the receiver as the characters leave it, drive_rxd_char's queue.
+  const std::uint64_t frame_cycles = std::uint64_t{kUartCharBits} * h.t;
+  const std::uint64_t last_start = h.start + (h.bytes.size() - 1) * frame_cycles;
+  const std::uint64_t idle = h.bytes.size() == 1 ? s_.rx.idle_bits_at(h.start) : 0;
+  s_.rx.after_chars(last_start, h.bytes.back(), idle);
+  drop_heard_rxd(h.driven_at);
+  h.active = false;
+  if (h.kind != HeardTelegram::Kind::frame) return;
+  // on_char of each character: a frame after TSYN, complete or broken at the last one.
+  s_.skipping = false;
+  s_.discarding = false;
+  std::swap(s_.frame, h.frame);
+  frame_ended(s_.frame.status(), UartChar{h.bytes.back(), true, true, true, last_start,
+                                          last_start + frame_cycles, idle});
+}
+
+void Mac::materialize() {
+  HeardTelegram& h = s_.heard;
+  if (!h.active) return;
+  h.active = false;
+  // What drive_rxd_char did when the telegram was driven ...
+  drop_heard_rxd(h.driven_at);
+  std::array<std::pair<std::uint64_t, bool>, kUartCharBits> edges{};
+  bool line = true;
+  for (std::size_t i = 0; i < h.bytes.size(); ++i) {
+    const std::uint64_t at = h.start + i * std::uint64_t{kUartCharBits} * h.t;
+    const std::size_t n = uart_frame_edges(uart_frame(h.bytes[i]), at, h.t, line, edges.data());
+    s_.rx.whole_char(at, h.bytes[i], h.t);
+    for (std::size_t k = 0; k < n; ++k) {
+      if (edges[k].first > h.driven_at) s_.rxd_pending.emplace_back(edges[k]);
+    }
+  }
+  // ... and what the stop samples up to now did (nothing shown before the first effect; an
+  // effect shown already is not shown twice: a no_sync leaves `skipping` set).
+  std::vector<UartChar> chars;
+  s_.rx.advance(clock_.now, chars);
+  for (const UartChar& c : chars) on_char(c);
+  clock_.quiet_until = 0;
 }
 
 }  // namespace dpc31

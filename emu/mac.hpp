@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -58,6 +59,31 @@ struct TxShifter {
   std::uint32_t sub = 0;  // clocks into that bit
 };
 
+// A telegram heard whole (Mac::hear_telegram, docs/segment.md "Telegram level"): its characters
+// are not in the receiver. The MAC acts at the stop sample of the first character on_char would
+// show (`effect_at`), sets the receiver as the characters leave it at the last one's, and turns
+// the telegram back into characters (Mac::materialize) when anything else reaches the receiver
+// first: an edge, a reconfigure, Go_Offline, a snapshot.
+struct HeardTelegram {
+  // frame: TSYN before it, a frame starts; no_sync: a start without TSYN, counted, the rest
+  // skipped; skipped: without TSYN while the MAC skips already (nothing to show).
+  enum class Kind : std::uint8_t { frame, no_sync, skipped };
+  bool active = false;
+  Kind kind = Kind::skipped;
+  std::vector<std::uint8_t> bytes;
+  std::uint64_t start = 0;
+  std::uint32_t t = 0;
+  std::uint64_t driven_at = 0;       // the chip's cycle when it was driven
+  std::uint64_t effect_at = kNever;  // kNever: shown already, or nothing to show
+  fdl::Assembler frame;              // Kind::frame: the assembler up to the first effect
+  [[nodiscard]] std::uint64_t stop_sample(std::size_t i) const {
+    return start + (i * kUartCharBits + kUartCharBits - 1) * std::uint64_t{t} + t / 2;
+  }
+  [[nodiscard]] std::uint64_t due() const {
+    return effect_at != kNever ? effect_at : stop_sample(bytes.size() - 1);
+  }
+};
+
 class Mac {
  public:
   struct State {
@@ -84,6 +110,8 @@ class Mac {
     // receiver (re)configure (Baud_Search switching the rate, Start).
     Fifo<std::pair<std::uint64_t, bool>> rxd_pending;
     bool rxd_level = true;  // the RxD line (per-cycle engine)
+    // Event engine: a telegram heard whole; a snapshot writes it as its characters (materialize).
+    HeardTelegram heard;
 
     // TxD with the edges up to `now` taken, whether or not an event has taken them yet: the
     // first edge after `now`, and the line's level.
@@ -106,6 +134,14 @@ class Mac {
   // Chip::drive_rxd_chars: one good character from `start` (>= now), whole when the receiver can
   // take it so (UartRx::whole_char), else edge by edge; the same state and observers either way.
   void drive_rxd_char(std::uint64_t start, std::uint8_t data, std::uint32_t bit_cycles);
+  // Chip::hear_telegram: good back-to-back characters from `start` (>= now) taken as one
+  // telegram when the receiver is idle at their rate and the MAC between telegrams (event engine,
+  // not in Baud_Search); false, and nothing taken, otherwise.
+  bool hear_telegram(std::span<const std::uint8_t> bytes, std::uint64_t start,
+                     std::uint32_t bit_cycles);
+  // A telegram heard whole as the characters drive_rxd_char would have given the receiver, and
+  // what their stop samples up to now did: from here on the MAC is where characters leave it.
+  void materialize();
   void watch_txd(std::function<void(std::uint64_t, bool)> cb);  // Chip::on_txd
   // Chip::take_txd: the TxD edges up to now onto the pin, handed to the on_txd_edges observers.
   void tx_catch_up();
@@ -133,6 +169,10 @@ class Mac {
   void tx_done();
   [[nodiscard]] bool tx_busy() const;
   void on_char(const UartChar& c);
+  // on_char's end of a frame: the assembler's verdict after its last character `last`.
+  void frame_ended(fdl::Assembler::Status st, const UartChar& last);
+  void take_heard();                      // the heard telegram's effect or its end is due
+  void drop_heard_rxd(std::uint64_t at);  // the queue as drive_rxd_char left it at cycle `at`
   void on_frame(const fdl::Frame& f, const UartChar& last);
   void send(const fdl::Frame& f, std::uint64_t request_end);
 

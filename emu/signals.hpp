@@ -49,6 +49,7 @@ struct Signals {
   Observers<std::span<const std::pair<std::uint64_t, bool>>> txd_edges;
   Observers<std::uint64_t, bool> rxd;  // edges as they are driven (possibly ahead of time)
   Observers<const Telegram&> telegram;
+  Observers<const Telegram&> answer;  // the chip's own answers only, when armed
   Observers<std::uint64_t, const BlockEvent&> block;
   Observers<std::uint64_t, const BusAccess&> bus;
   Observers<std::uint64_t> state;              // after every event and every bus access
@@ -83,6 +84,7 @@ struct Signals {
     txd_edges = std::move(from.txd_edges);
     rxd = std::move(from.rxd);
     telegram = std::move(from.telegram);
+    answer = std::move(from.answer);
     block = std::move(from.block);
     bus = std::move(from.bus);
     state = std::move(from.state);

@@ -37,6 +37,12 @@ UartChar make_char(std::uint16_t bits, std::uint64_t start, std::uint32_t t,
   return c;
 }
 
+// The bit boundary of a good frame's last rise: after its last 0 bit (the stop bit is 1).
+std::uint32_t last_rise_bit(std::uint16_t frame) {
+  return static_cast<std::uint32_t>(
+      std::bit_width(static_cast<unsigned>(~frame & ((1u << kStopBit) - 1))));
+}
+
 }  // namespace
 
 std::uint32_t bit_cycles(std::uint32_t clock_hz, std::uint32_t baud) {
@@ -134,17 +140,33 @@ bool UartRx::whole_char(std::uint64_t start, std::uint8_t data, std::uint32_t bi
   if (receiving() || start < not_before_) return false;
   // The falling edge at `start` begins the character (edge() above).
   s_ = start;
-  idle_bits_ = std::min((start - std::max(not_before_, last_rise_)) / t_, kMaxIdleBits);
+  idle_bits_ = idle_bits_at(start);
   // The frame's last edge is the rise that ends its last 0 bit (the stop bit is 1), at bit
   // boundary b; that edge took the samples of bits 0 .. b-1 and left the line high. Samples b ..
   // 10 and finish() come later, from advance() or the next edge, as they would.
   const std::uint16_t frame = uart_frame(data);
-  const auto b = static_cast<std::uint32_t>(
-      std::bit_width(static_cast<unsigned>(~frame & ((1u << kStopBit) - 1))));
+  const std::uint32_t b = last_rise_bit(frame);
   k_ = b;
   bits_ = static_cast<std::uint16_t>(frame & ((1u << b) - 1));
   last_rise_ = start + std::uint64_t{b} * t_;
   return true;
+}
+
+std::uint64_t UartRx::idle_bits_at(std::uint64_t start) const {
+  return std::min((start - std::max(not_before_, last_rise_)) / t_, kMaxIdleBits);
+}
+
+void UartRx::after_chars(std::uint64_t start, std::uint8_t data, std::uint64_t idle_bits) {
+  // whole_char's state with the samples from the last rise on taken (all high: bits b .. 10 of
+  // the frame are ones) and the character reported: idle, the next start from its end on.
+  const std::uint16_t frame = uart_frame(data);
+  s_ = start;
+  idle_bits_ = idle_bits;
+  bits_ = frame;
+  k_ = kUartCharBits;
+  level_ = true;
+  last_rise_ = start + std::uint64_t{last_rise_bit(frame)} * t_;
+  not_before_ = start + std::uint64_t{kUartCharBits} * t_;
 }
 
 std::size_t UartRx::whole_run(std::span<const std::pair<std::uint64_t, bool>> e) {

@@ -310,6 +310,12 @@ void Cpu::idle(std::uint64_t cycles) {
   }
 }
 
+bool Cpu::busy() const {
+  if (halted_) return false;
+  if (in_isr_ || program_.main_step) return true;
+  return interrupts_enabled() && chip_.irq_active();
+}
+
 void Cpu::run_until(std::uint64_t cycle) {
   while (chip_.cycle() < cycle && !chip_.stop_requested()) {
     limit_ = cycle;

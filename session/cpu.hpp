@@ -66,6 +66,10 @@ class Cpu final : public BusPort {
   // Busy-waits `cycles` clocks; an enabled interrupt preempts the main loop meanwhile.
   void idle(std::uint64_t cycles) override;
   [[nodiscard]] const Chip& chip() const override { return chip_; }
+  // Whether run_until would run the firmware before the chip's next event (an ISR in progress or
+  // due, a main loop) rather than only step the chip: where its bus accesses fall depends on
+  // where a run ends (session/segment.cpp).
+  [[nodiscard]] bool busy() const;
 
  private:
   static void entry(unsigned hi, unsigned lo);  // the coroutine's first frame: runs body()

@@ -14,7 +14,9 @@ namespace dpc31 {
 
 std::uint64_t send_on_rxd(Chip& chip, std::span<const std::uint8_t> bytes, std::uint64_t start,
                           std::uint32_t bit_cycles, UartFault fault) {
-  return chip.drive_rxd_chars(bytes, start, bit_cycles, fault);
+  if (fault.kind != UartFault::Kind::none)
+    return chip.drive_rxd_chars(bytes, start, bit_cycles, fault);
+  return chip.hear_telegram(bytes, start, bit_cycles);
 }
 
 bool wants_answer(const fdl::Frame& f) {

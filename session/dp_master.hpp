@@ -83,9 +83,10 @@ struct Exchange {
   std::uint64_t answer_end = 0;
 };
 
-// Puts `bytes` on the chip's RxD as back-to-back UART characters from `start`
-// (Chip::drive_rxd_chars: whole characters where the receiver takes them so, else edges). The
-// whole request goes on the line ahead of time, so firmware running meanwhile cannot delay it.
+// Puts `bytes` on the chip's RxD as back-to-back UART characters from `start`: one telegram
+// heard whole where the chip takes it so (Chip::hear_telegram), else whole characters or edges
+// (Chip::drive_rxd_chars; a damaged telegram always). The whole request goes on the line ahead
+// of time, so firmware running meanwhile cannot delay it.
 // Returns the end of the last stop bit.
 std::uint64_t send_on_rxd(Chip& chip, std::span<const std::uint8_t> bytes, std::uint64_t start,
                           std::uint32_t bit_cycles, UartFault fault = {});

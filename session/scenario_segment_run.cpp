@@ -50,6 +50,7 @@ class SegmentRun {
     }
     seg_.flush();
     check_.flush();
+    seg_.align();  // the observers' chips at the line's time (docs/segment.md)
     observer_->run_ends(seg_, passed_, failed_);
     say(seg_.cycle(), fmt::format("{} expects passed, {} failed", passed_, failed_));
     return failed_ == 0 ? 0 : 1;
@@ -154,6 +155,7 @@ class SegmentRun {
 
   void settle() {
     seg_.run_until(seg_.cycle() + 1);
+    seg_.align();  // a station's trace checkpoints its chip at the line's time
     check_.idle_until(seg_.cycle());
   }
 

@@ -8,12 +8,21 @@
 namespace dpc31 {
 
 struct Segment::Station {
+  std::size_t index = 0;
   std::string name;
   std::unique_ptr<Chip> chip;  // null: a sender
   std::unique_ptr<Cpu> cpu;
   Edges txd;    // the chip's TxD edges not yet relayed
   Edges heard;  // a sender's: the line as it hears it, not yet taken (sorted by cycle)
   std::uint64_t colliding_until = 0;  // a collision of this station is reported once per burst
+  // Telegram level (docs/segment.md): the chip's next event and whether its firmware runs, as the
+  // rounds last looked; the answer it armed (Chip::on_telegram), given to the other chips whole at
+  // its first start bit, and those edges, against which its TxD is checked as it goes out.
+  bool busy = false;
+  std::uint64_t looked = UINT64_MAX;  // the chip's cycle when the rounds last looked
+  std::optional<LineTelegram> answer;
+  Edges relayed;
+  std::size_t relayed_next = 0;
 };
 
 Segment::Segment(std::uint32_t baud, std::uint32_t clock_hz)
@@ -25,6 +34,7 @@ Segment::~Segment() = default;
 
 std::size_t Segment::add_chip(std::string name, ChipOptions opt) {
   auto s = std::make_unique<Station>();
+  s->index = stations_.size();
   s->name = std::move(name);
   s->chip = std::make_unique<Chip>(opt);
   if (s->chip->clock_hz() != clock_hz_) {
@@ -36,8 +46,17 @@ std::size_t Segment::add_chip(std::string name, ChipOptions opt) {
   Station* raw = s.get();
   // Every TxD edge an event of the chip (Chip::on_txd): next_deadline() then bounds the next one,
   // which the rounds of run_until rely on. (on_txd_edges hands edges over late, in batches.)
-  s->chip->on_txd([raw](std::uint64_t cycle, bool level) { raw->txd.emplace_back(cycle, level); });
+  s->chip->on_txd([this, raw](std::uint64_t cycle, bool level) {
+    if (raw->txd.empty()) drove_.push_back(raw->index);
+    raw->txd.emplace_back(cycle, level);
+  });
+  s->chip->on_answer([raw](const Telegram& t) {
+    raw->answer = LineTelegram{0, t.start, t.end, t.bytes};
+  });
+  next_.push_back(UINT64_MAX);
+  look_at(*s);
   stations_.push_back(std::move(s));
+  everyone_.push_back(stations_.size() - 1);
   return stations_.size() - 1;
 }
 
@@ -45,15 +64,30 @@ std::size_t Segment::add_sender(std::string name) {
   auto s = std::make_unique<Station>();
   s->name = std::move(name);
   stations_.push_back(std::move(s));
+  next_.push_back(UINT64_MAX);
+  everyone_.push_back(stations_.size() - 1);
+  senders_.push_back(stations_.size() - 1);
   return stations_.size() - 1;
 }
 
 void Segment::set_firmware(std::size_t i, Cpu::Isr isr) {
   stations_.at(i)->cpu = std::make_unique<Cpu>(chip(i), std::move(isr));
+  look_at(*stations_[i]);
 }
 
 void Segment::set_firmware(std::size_t i, Cpu::Program program) {
   stations_.at(i)->cpu = std::make_unique<Cpu>(chip(i), std::move(program));
+  look_at(*stations_[i]);
+}
+
+void Segment::look_at(Station& s) {
+  next_[s.index] = s.chip->next_deadline();
+  s.looked = s.chip->cycle();
+  const bool busy = s.cpu && s.cpu->busy();
+  if (busy != s.busy) {
+    s.busy = busy;
+    busy_ = busy ? busy_ + 1 : busy_ - 1;
+  }
 }
 
 const std::string& Segment::name(std::size_t i) const { return stations_.at(i)->name; }
@@ -62,13 +96,19 @@ bool Segment::is_chip(std::size_t i) const { return stations_.at(i)->chip != nul
 Chip& Segment::chip(std::size_t i) {
   Station& s = *stations_.at(i);
   if (!s.chip) throw std::invalid_argument("segment: station " + s.name + " has no chip");
+  // Left alone by the line, it has no event before now_ and its firmware sleeps: stepping it here
+  // changes nothing but its cycle.
+  if (s.chip->cycle() < now_) step_station(s, now_);
+  // Whoever asks for it may arm something without time passing (an observer of TxD edges): the
+  // rounds look at it again.
+  s.looked = UINT64_MAX;
   return *s.chip;
 }
 
 const Chip& Segment::chip(std::size_t i) const {
-  const Station& s = *stations_.at(i);
-  if (!s.chip) throw std::invalid_argument("segment: station " + s.name + " has no chip");
-  return *s.chip;
+  // Bringing a station to the line's time changes nothing a user of the segment sees but its
+  // cycle (chip() above): a const look may do it.
+  return const_cast<Segment*>(this)->chip(i);
 }
 
 std::uint64_t Segment::cycle() const {
@@ -81,13 +121,29 @@ std::uint64_t Segment::cycle() const {
 
 void Segment::catch_up() {
   const std::uint64_t front = cycle();
-  if (front == now_) return;
-  for (const auto& s : stations_) step_station(*s, front);
+  for (const auto& s : stations_) {
+    if (!s->chip) continue;
+    if (front > now_) step_station(*s, front);
+    // A user side arms something only with a bus access (time passes) or through chip(i).
+    if (s->chip->cycle() != s->looked) look_at(*s);
+  }
   now_ = front;
+}
+
+// A chip the line left alone hears what the line brings standing at its cycle, as on the
+// reference line (its on_rxd observers see the cycle it is fed at: a trace's `fed=`); it has no
+// event before, so that costs one look at its deadlines.
+void Segment::align() {
+  catch_up();
+  for (const auto& s : stations_) step_station(*s, now_);
 }
 
 void Segment::step_station(Station& s, std::uint64_t to) {
   if (!s.chip || s.chip->cycle() >= to) return;
+  if (!reference_ && !s.busy && next_[s.index] > to && s.looked == s.chip->cycle()) {
+    s.chip->step(to - s.chip->cycle());  // nothing happens in it before `to`: only time passes
+    return;
+  }
   // The host CPU never splits a bus access and may end one up to kCpuSlack clocks past its goal:
   // it runs to that much short of `to`, and the chip alone the rest (the CPU's next access starts
   // at `to`), so the chip stands exactly at `to` for what the line brings next.
@@ -112,25 +168,51 @@ void Segment::collide(std::size_t first, std::size_t second, std::uint64_t cycle
 // The line is held by whoever drove the first start bit while it was free, for one character
 // time from each of its falling edges (a start bit or a data bit: at most ten bit times too
 // long, shorter than any legal gap). Another driver meanwhile collides and is not heard.
-void Segment::relay(std::size_t i, const Edges& edges) {
-  for (const auto& [cycle, level] : edges) {
-    const bool free = !owner_ || cycle >= owned_until_;
-    if (!free && *owner_ != i) {
-      if (!level) collide(*owner_, i, cycle);
-      continue;
-    }
-    if (free && level) continue;  // the end of a burst nobody else hears
-    if (!level) {
-      if (free && wake_for_ && *wake_for_ != i) woken_ = true;
-      owner_ = i;
-      owned_until_ = std::max(owned_until_, cycle + std::uint64_t{kUartCharBits} * t_);
-    }
-    hear(i, cycle, level);
+void Segment::relay(std::size_t i, std::uint64_t cycle, bool level) {
+  const bool free = !owner_ || cycle >= owned_until_;
+  if (!free && *owner_ != i) {
+    if (!level) collide(*owner_, i, cycle);
+    return;
   }
+  if (free && level) return;  // the end of a burst nobody else hears
+  if (!level) {
+    if (free && wake_for_ && *wake_for_ != i) woken_ = true;
+    owner_ = i;
+    owned_until_ = std::max(owned_until_, cycle + std::uint64_t{kUartCharBits} * t_);
+    if (free) relay_answer(i, cycle);
+  }
+  hear(i, cycle, level);
+}
+
+void Segment::relay_answer(std::size_t i, std::uint64_t cycle) {
+  Station& a = *stations_[i];
+  if (reference_ || !a.answer || a.answer->start != cycle || a.chip->bit_cycles() != t_) return;
+  for (const auto& s : stations_) {
+    if (!s->chip || s.get() == &a) continue;
+    step_station(*s, cycle);
+    s->chip->hear_telegram(a.answer->bytes, cycle, t_);
+    look_at(*s);
+  }
+  a.relayed.clear();
+  a.relayed_next = 0;
+  uart_encode(a.answer->bytes, cycle, t_, a.relayed);
+  a.answer.reset();
 }
 
 void Segment::hear(std::size_t from, std::uint64_t cycle, bool level) {
-  for (std::size_t k = 0; k < stations_.size(); ++k) {
+  Station& f = *stations_[from];
+  // An edge of an answer the chips already have whole: only checked (an answer Go_Offline or a
+  // reset cut short would have reached them wrong).
+  const bool had = f.relayed_next < f.relayed.size();
+  if (had && f.relayed[f.relayed_next] != std::pair{cycle, level}) {
+    throw std::logic_error(fmt::format(
+        "segment: {} drove TxD {} at cycle {}, not the answer its chip armed (cut short?)", f.name,
+        level ? "high" : "low", cycle));
+  }
+  if (had) ++f.relayed_next;
+  // The chips have the answer's edges already: only the senders hear them now.
+  const std::vector<std::size_t>& to = had ? senders_ : everyone_;
+  for (const std::size_t k : to) {
     if (k == from) continue;
     Station& s = *stations_[k];
     if (s.chip) {
@@ -139,7 +221,9 @@ void Segment::hear(std::size_t from, std::uint64_t cycle, bool level) {
             "segment: the edge of {} at cycle {} reached {} at cycle {} (line order broken)",
             stations_[from]->name, cycle, s.name, s.chip->cycle()));
       }
+      step_station(s, cycle);
       s.chip->drive_rxd(cycle, level);
+      look_at(s);
     } else {
       const auto at = std::upper_bound(
           s.heard.begin(), s.heard.end(), cycle,
@@ -206,14 +290,19 @@ std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> byte
       throw std::logic_error(fmt::format("segment: {} sends at cycle {}, {} is at cycle {}",
                                          stations_[from]->name, start, s.name, s.chip->cycle()));
     }
-    s.chip->drive_rxd_chars(bytes, start, t_, fault);
-  }
-  for (const auto& [cycle, level] : edges) {
-    for (std::size_t k = 0; k < stations_.size(); ++k) {
-      if (k != from && !stations_[k]->chip) stations_[k]->heard.emplace_back(cycle, level);
+    step_station(s, start);
+    if (reference_ || fault.kind != UartFault::Kind::none) {
+      s.chip->drive_rxd_chars(bytes, start, t_, fault);
+    } else {
+      s.chip->hear_telegram(bytes, start, t_);
     }
-    decode(from, cycle, level);
+    look_at(s);
   }
+  for (const std::size_t k : senders_) {
+    if (k != from)
+      stations_[k]->heard.insert(stations_[k]->heard.end(), edges.begin(), edges.end());
+  }
+  for (const auto& [cycle, level] : edges) decode(from, cycle, level);
   return end;
 }
 
@@ -233,32 +322,42 @@ void Segment::run_until(std::uint64_t cycle, std::optional<std::size_t> wake_for
   catch_up();
   wake_for_ = wake_for;
   woken_ = false;
-  Edges round;
   while (now_ < cycle && !woken_) {
     // No chip's TxD changes before its next deadline: every station may run to the earliest,
     // and what a chip drives there reaches the others at that very cycle.
     std::uint64_t bound = cycle;
-    for (const auto& s : stations_) {
-      if (s->chip) bound = std::min(bound, s->chip->next_deadline());
+    if (reference_) {
+      for (const auto& s : stations_) {
+        if (s->chip) bound = std::min(bound, s->chip->next_deadline());
+      }
+    } else {
+      for (const std::uint64_t n : next_) bound = std::min(bound, n);  // senders: UINT64_MAX
     }
+    // A running firmware's accesses depend on where rounds end (kCpuSlack): the stop samples of
+    // characters heard whole stay ends of rounds, as their events made them on the reference line.
+    if (busy_ != 0 && !reference_) bound = std::min(bound, line_rx_.next_deadline());
     bound = std::max(bound, now_ + 1);
-    for (const auto& s : stations_) step_station(*s, bound);
+    // Telegram level: a chip without an event by `bound` whose firmware sleeps is left where it
+    // is (it is given the line's characters ahead of time, as a master gives them).
+    for (const auto& s : stations_) {
+      if (!s->chip || (!reference_ && next_[s->index] > bound && !s->busy)) continue;
+      step_station(*s, bound);
+      look_at(*s);
+    }
     now_ = bound;
     // What the chips drove, in the order of its cycles (ties: station order).
-    round.clear();
-    std::vector<std::size_t> who;
-    for (std::size_t i = 0; i < stations_.size(); ++i) {
-      for (const auto& e : stations_[i]->txd) {
-        round.push_back(e);
-        who.push_back(i);
-      }
+    round_.clear();
+    std::sort(drove_.begin(), drove_.end());
+    for (const std::size_t i : drove_) {
+      for (const auto& [at, level] : stations_[i]->txd) round_.push_back({at, i, level});
       stations_[i]->txd.clear();
     }
-    std::vector<std::size_t> order(round.size());
-    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
-    std::stable_sort(order.begin(), order.end(),
-                     [&](std::size_t a, std::size_t b) { return round[a].first < round[b].first; });
-    for (const std::size_t k : order) relay(who[k], Edges{round[k]});
+    drove_.clear();
+    // Mostly one edge or none: sorted already, and stable_sort would allocate its buffer.
+    const auto earlier = [](const Driven& a, const Driven& b) { return a.cycle < b.cycle; };
+    if (!std::is_sorted(round_.begin(), round_.end(), earlier))
+      std::stable_sort(round_.begin(), round_.end(), earlier);
+    for (const Driven& e : round_) relay(e.station, e.cycle, e.level);
     close_telegrams(now_);
     line_final_ = now_;
   }

@@ -56,13 +56,24 @@ class Segment {
   [[nodiscard]] std::size_t size() const { return stations_.size(); }
   [[nodiscard]] const std::string& name(std::size_t i) const;
   [[nodiscard]] bool is_chip(std::size_t i) const;
+  // The chip of station i at the line's time: a station the line left alone (no event of its own,
+  // its firmware asleep) may stand earlier, and is brought to cycle() first (docs/segment.md).
   [[nodiscard]] Chip& chip(std::size_t i);
   [[nodiscard]] const Chip& chip(std::size_t i) const;
   [[nodiscard]] std::uint32_t bit_cycles() const { return t_; }
   [[nodiscard]] std::uint32_t clock_hz() const { return clock_hz_; }
-  // The line's time: every chip has run to here (or will, before anything else happens on the
-  // line: a chip's user side may have run it ahead with bus accesses, its init for one).
+  // The line's time: every chip the line needed has run to here (or will, before anything else
+  // happens on the line: a chip's user side may have run it ahead with bus accesses, its init for
+  // one); chip(i) brings the others here when looked at.
   [[nodiscard]] std::uint64_t cycle() const;
+  // Every chip to cycle(), also those the line left alone: for whoever holds a station's Chip&
+  // (a trace recorder, an observer reading chip.cycle()) and looks at it between runs.
+  void align();
+
+  // The reference line (on: as before issue 30 item 6): every station stepped in every round and
+  // every character and edge given to every chip as it comes. Off (the default): telegram level,
+  // docs/segment.md; the two are proven equal by tests/segment_speed_test.cpp.
+  void use_reference_line(bool on) { reference_ = on; }
 
   // `bytes` as back-to-back characters from `start` (>= cycle()) driven by station `from`
   // (`fault` damages one character, as uart_encode does). Every station runs to `start` first.
@@ -102,10 +113,14 @@ class Segment {
   struct Station;
   using Edges = std::vector<std::pair<std::uint64_t, bool>>;
   void step_station(Station& s, std::uint64_t to);
+  // What the rounds know of a chip: its next event and whether its firmware runs.
+  void look_at(Station& s);
+  // Station i's answer, armed and now starting on the line at `cycle`, to every other chip whole.
+  void relay_answer(std::size_t i, std::uint64_t cycle);
   // Every chip to cycle(): what its user side did directly on its bus moved it alone.
   void catch_up();
-  // Edges station `i` drove (in order, up to its cycle): the line's owner's are heard by all.
-  void relay(std::size_t i, const Edges& edges);
+  // An edge station `i` drove (in order, up to its cycle): the line's owner's are heard by all.
+  void relay(std::size_t i, std::uint64_t cycle, bool level);
   void hear(std::size_t from, std::uint64_t cycle, bool level);
   // The character decoder of the line (for on_telegram), fed with what the owner drove.
   void decode(std::size_t from, std::uint64_t cycle, bool level);
@@ -114,9 +129,12 @@ class Segment {
 
   std::uint32_t clock_hz_;
   std::uint32_t t_;
+  bool reference_ = false;
   std::uint64_t now_ = 0;
   std::uint64_t line_final_ = 0;
   std::vector<std::unique_ptr<Station>> stations_;
+  std::vector<std::size_t> everyone_;  // every station's index
+  std::vector<std::size_t> senders_;   // the stations without a chip
   std::vector<Collision> collisions_;
   // The line: who drives it until when (a falling edge holds it one character time).
   std::optional<std::size_t> owner_;
@@ -128,6 +146,19 @@ class Segment {
   std::vector<UartChar> chars_;
   std::optional<LineTelegram> open_;
   std::vector<std::pair<std::uint64_t, std::size_t>> claims_;  // (first edge, driver) in order
+  // A round's TxD edges of every chip (run_until), kept to reuse its memory.
+  struct Driven {
+    std::uint64_t cycle;
+    std::size_t station;
+    bool level;
+  };
+  std::vector<Driven> round_;
+  // Telegram level: each station's next event as the rounds last looked (UINT64_MAX: a sender),
+  // one flat array a round scans; how many chips' firmware runs; the stations with TxD edges not
+  // yet relayed (docs/segment.md).
+  std::vector<std::uint64_t> next_;
+  std::size_t busy_ = 0;
+  std::vector<std::size_t> drove_;
 };
 
 }  // namespace dpc31

@@ -232,6 +232,43 @@ TEST(TxdFastPath, UnwatchedAnswerCostsNoEventPerBitAndLooksTheSame) {
   EXPECT_EQ(unwatched.events, 1u);
 }
 
+// Chip::on_answer (what a segment learns its stations' answers from): each answer the chip arms,
+// when it arms it, as on_telegram reports it; none of the frames it hears.
+TEST(ChipAnswers, OnAnswerReportsTheArmedAnswerAndNoFrameHeard) {
+  Chip chip({Profile::dpc31, BusMode::intel, 0});
+  chip.set_log_sink(nullptr);
+  Responder user(ResponderConfig{});
+  DirectBus bus(chip);
+  user.init(bus);
+  std::vector<Telegram> answers, own;  // on_answer's, on_telegram's from the chip
+  std::size_t heard = 0;
+  std::uint64_t armed_at = 0;
+  chip.on_answer([&](const Telegram& t) {
+    answers.push_back(t);
+    armed_at = chip.cycle();
+  });
+  chip.on_telegram([&](const Telegram& t) { t.from_chip ? own.push_back(t) : void(++heard); });
+  const std::uint64_t t = 4;  // 12 Mbaud, the first Baud_Search window
+  // A request to another station (9): heard, counted foreign, not answered.
+  std::uint64_t end =
+      send_on_rxd(chip, Bytes{0x10, 0x09, 0x02, 0x49, 0x54, 0x16}, chip.cycle() + 33 * t, t);
+  chip.step(end + 100 * t - chip.cycle());
+  EXPECT_TRUE(answers.empty());
+  // FDL_Status 5 <- 2: armed at the stop sample of its last character (docs/timing.md), sent
+  // min TSDR = 11 bit times after its end, 6 characters of 11 bits.
+  end = send_on_rxd(chip, Bytes{0x10, 0x05, 0x02, 0x49, 0x50, 0x16}, chip.cycle() + 33 * t, t);
+  chip.step(end + 100 * t - chip.cycle());
+  EXPECT_EQ(heard, 2u);
+  ASSERT_EQ(answers.size(), 1u);
+  ASSERT_EQ(own.size(), 1u);
+  EXPECT_TRUE(answers[0].from_chip);
+  EXPECT_EQ(answers[0].bytes, own[0].bytes);
+  EXPECT_EQ(answers[0].bytes, (Bytes{0x10, 0x02, 0x05, 0x00, 0x07, 0x16}));
+  EXPECT_EQ(answers[0].start, end + 11 * t);
+  EXPECT_EQ(answers[0].end, end + 11 * t + 6 * 11 * t);
+  EXPECT_EQ(armed_at, end - t + t / 2);  // the middle of the last stop bit
+}
+
 class Protocol : public ::testing::TestWithParam<Profile> {
  protected:
   static ResponderConfig config() {

@@ -204,6 +204,15 @@ class Chip {
   // last stop bit.
   std::uint64_t drive_rxd_chars(std::span<const std::uint8_t> bytes, std::uint64_t start,
                                 std::uint32_t bit_cycles, UartFault fault = {});
+  // The same characters as drive_rxd_chars (no fault), heard as one telegram (the built-in
+  // master, the bridge, a segment's stations: docs/engine.md "Telegrams heard whole"): where the
+  // receiver is idle at their rate and the MAC between telegrams (event engine, not in
+  // Baud_Search), the chip has no event inside the telegram but where it shows something (a
+  // count, the frame's verdict at its last stop sample); its state, counters, timing, pins and
+  // observers are those of drive_rxd_chars at every cycle (fewer on_state_change calls), and a
+  // snapshot is the same. Returns the end of the last stop bit.
+  std::uint64_t hear_telegram(std::span<const std::uint8_t> bytes, std::uint64_t start,
+                              std::uint32_t bit_cycles);
   // Observers are lists: each on_* call adds one; an empty function removes all of that kind.
   // TxD edges, reported when time reaches them: each edge is an event of the chip.
   void on_txd(std::function<void(std::uint64_t, bool)> cb);
@@ -220,9 +229,17 @@ class Chip {
   // RxD edges as they are driven (may lie ahead of cycle()).
   void on_rxd(std::function<void(std::uint64_t, bool)> cb);
   // After every event the chip processes and every bus access: internal state may have changed.
+  // The promise is a call at every cycle where the state may have changed; how many calls there
+  // are is an engine detail, not contract (the engine fuses events, and a telegram heard whole
+  // has fewer than its edges: docs/engine.md, docs/decisions.md). Compare what the state shows,
+  // and at which cycles it changes, not the calls.
   void on_state_change(std::function<void(std::uint64_t)> cb);
   // Every error-free frame the chip receives and every answer it sends.
   void on_telegram(std::function<void(const Telegram&)> cb);
+  // Every answer the chip sends, as on_telegram reports it (when the chip arms it, with its
+  // start and end on the line), without the frames it hears: a segment learns its stations'
+  // answers so, at no cost per frame heard.
+  void on_answer(std::function<void(const Telegram&)> cb);
   // Every CPU bus access, with its cycle.
   void on_bus_access(std::function<void(std::uint64_t, const BusAccess&)> cb);
   [[nodiscard]] bool txd_pin() const;

@@ -85,6 +85,18 @@ class UartRx {
   // so: another bit time (the baud search listens elsewhere), a line that is low, or a character
   // still in progress at `start`; the caller then feeds the edges (Mac::drive_rxd_char).
   bool whole_char(std::uint64_t start, std::uint8_t data, std::uint32_t bit_cycles);
+  // Whether characters from `start` at `bit_cycles` per bit reach this receiver with nothing of
+  // its own before them still to sample or report: the rate it listens at, the line high, no
+  // character in progress or waiting for advance() (a telegram heard whole, Mac::hear_telegram).
+  [[nodiscard]] bool idle_for(std::uint64_t start, std::uint32_t bit_cycles) const {
+    return bit_cycles == t_ && t_ >= 2 && level_ && !receiving() && done_.empty() &&
+           start >= not_before_;
+  }
+  // UartChar::idle_bits of a character whose start bit falls at `start` (>= the last edge).
+  [[nodiscard]] std::uint64_t idle_bits_at(std::uint64_t start) const;
+  // The state good back-to-back characters leave once advance() has reported them all, the last
+  // one `data` from `start` with `idle_bits` before it: what whole_char and advance() would leave.
+  void after_chars(std::uint64_t start, std::uint8_t data, std::uint64_t idle_bits);
   // Edges in order, after those given before (Chip::on_txd_edges): the same as edge() for each,
   // but a run that reads as one good character at this receiver's bit time is taken whole
   // (whole_char). Returns the number of characters taken whole.

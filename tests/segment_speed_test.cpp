@@ -1,0 +1,208 @@
+// The telegram-level line against the reference line (docs/segment.md, "Telegram level"): one
+// segment built twice, one with Segment::use_reference_line (every station stepped in every
+// round, every character and edge given to every chip as it comes: the line before issue 30
+// item 6), one at telegram level, both driven by the same master and scripted station. What each
+// chip shows at its own cycles — its X/INT edges, TxD edges, bus accesses of its firmware, every
+// telegram it takes with its FDL counters, DP and watchdog state at that telegram's end — must be
+// the same list in both, and every chip's snapshot must be the same bytes wherever the test
+// stops the line: after every master transaction (the line idle, every telegram ended), and
+// inside foreign telegrams (a snapshot turns a telegram heard whole back into characters).
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "dp_master.hpp"
+#include "dpc31/bus_port.hpp"
+#include "dpc31/fdl.hpp"
+#include "responder.hpp"
+#include "segment.hpp"
+
+namespace dpc31 {
+namespace {
+
+std::string counters_text(const FdlCounters& n) {
+  return fmt::format(
+      "par {} sb {} stb {} sd {} lem {} le {} fcs {} ed {} tr {} ov {} sap {} "
+      "nosync {} foreign {} usap {} fn {} na {} nr {} off {} rep {} req {}",
+      n.parity, n.start_bit, n.stop_bit, n.bad_sd, n.le_mismatch, n.bad_le, n.bad_fcs, n.wrong_ed,
+      n.truncated, n.oversize, n.bad_sap, n.no_sync, n.foreign_address, n.unknown_sap,
+      n.unsupported_function, n.not_allowed, n.no_resource, n.offline, n.repeated, n.requests);
+}
+
+// Five slaves of the three profiles with the built-in user side (the last one also polls a
+// register in a main loop, so its firmware runs in every round), a master and a scripted station.
+struct Bed {
+  Bed(bool reference, std::uint32_t baud) : seg(baud) {
+    seg.use_reference_line(reference);
+    log.reserve(5);  // the observers below keep pointers into it
+    const Profile profiles[] = {Profile::spc3, Profile::vpc3plus, Profile::dpc31, Profile::spc3,
+                                Profile::vpc3plus};
+    for (std::size_t i = 0; i < 5; ++i) {
+      SlaveConfig sc;
+      sc.address = static_cast<std::uint8_t>(5 + i);
+      sc.wd_fact1 = 1;
+      sc.wd_fact2 = 1;
+      slaves.push_back(sc);
+      ResponderConfig rc;
+      rc.slave = sc;
+      users.push_back(std::make_unique<Responder>(rc));
+      users.back()->inputs = {static_cast<std::uint8_t>(i), 1, 2, 3};
+      const std::size_t k = seg.add_chip(fmt::format("slave {}", sc.address), {profiles[i]});
+      chips.push_back(k);
+      log.emplace_back();
+      Chip& chip = seg.chip(k);
+      DirectBus bus(chip);
+      users.back()->init(bus);
+      Responder* r = users.back().get();
+      if (i == 4) {
+        Cpu::Program p;
+        p.isr = [r](BusPort& b) { r->isr(b); };
+        p.main_step = [](BusPort& b) { (void)b.read(0x00); };
+        seg.set_firmware(k, std::move(p));
+      } else {
+        seg.set_firmware(k, [r](BusPort& b) { r->isr(b); });
+      }
+      std::vector<std::string>* out = &log.back();
+      Chip* c = &chip;
+      chip.on_irq_change(
+          [out](std::uint64_t cy, bool on) { out->push_back(fmt::format("{} irq {}", cy, on)); });
+      chip.on_txd(
+          [out](std::uint64_t cy, bool l) { out->push_back(fmt::format("{} txd {}", cy, l)); });
+      chip.on_bus_access([out](std::uint64_t cy, const BusAccess& a) {
+        out->push_back(
+            fmt::format("{} bus {} {:x} {:x}", cy, a.write, a.addr, a.write ? a.data : 0));
+      });
+      chip.on_telegram([out, c](const Telegram& t) {
+        out->push_back(
+            fmt::format("{} tel {} {}..{} {} | {} dp {} wd {}", c->cycle(), t.from_chip, t.start,
+                        t.end, fmt::join(t.bytes, " "), counters_text(c->fdl_counters()),
+                        static_cast<int>(c->dp_state()), static_cast<int>(c->wd_state())));
+      });
+    }
+    master_station = seg.add_sender("master 2");
+    other = seg.add_sender("station 30");
+    master = std::make_unique<DpMaster>(seg, master_station, MasterConfig{2, baud}, slaves);
+  }
+  Segment seg;
+  std::vector<SlaveConfig> slaves;
+  std::vector<std::unique_ptr<Responder>> users;
+  std::vector<std::size_t> chips;
+  std::vector<std::vector<std::string>> log;
+  std::size_t master_station = 0;
+  std::size_t other = 0;
+  std::unique_ptr<DpMaster> master;
+};
+
+// Both beds at the same cycle, every chip's snapshot and everything it showed so far the same.
+void expect_same(Bed& fast, Bed& ref, const std::string& where) {
+  ASSERT_EQ(fast.seg.cycle(), ref.seg.cycle()) << where;
+  for (std::size_t i = 0; i < fast.chips.size(); ++i) {
+    const std::vector<std::string>& a = fast.log[i];
+    const std::vector<std::string>& b = ref.log[i];
+    std::size_t k = 0;
+    while (k < a.size() && k < b.size() && a[k] == b[k]) ++k;
+    ASSERT_TRUE(k == a.size() && k == b.size())
+        << where << ", slave " << i << ", event " << k << ": telegram level '"
+        << (k < a.size() ? a[k] : "(none)") << "', reference '" << (k < b.size() ? b[k] : "(none)")
+        << "'";
+    const Chip& fc = fast.seg.chip(fast.chips[i]);
+    const Chip& rc = ref.seg.chip(ref.chips[i]);
+    ASSERT_EQ(fc.cycle(), rc.cycle()) << where << ", slave " << i;
+    const std::vector<std::uint8_t> sa = fc.save_state();
+    const std::vector<std::uint8_t> sb = rc.save_state();
+    std::size_t d = 0;
+    while (d < sa.size() && d < sb.size() && sa[d] == sb[d]) ++d;
+    ASSERT_TRUE(d == sa.size() && d == sb.size())
+        << where << ", slave " << i << ": the snapshots differ from byte " << d << " of "
+        << sa.size() << " / " << sb.size();
+  }
+}
+
+// A telegram of the scripted station from `start`, both beds stopped inside it and after it.
+void foreign(Bed& fast, Bed& ref, const std::vector<std::uint8_t>& bytes, std::uint64_t start,
+             const std::string& what, UartFault fault = {}) {
+  const std::uint64_t t = fast.seg.bit_cycles();
+  for (Bed* b : {&fast, &ref}) b->seg.send(b->other, bytes, start, fault);
+  const std::uint64_t end = start + bytes.size() * 11 * t;
+  // Inside it both lines gave every chip the whole telegram at its start; after it, once an
+  // answer to it is over too (a receiver given an answer's edges as they come, on the reference
+  // line, has sampled less of it than one given the answer whole: not a state a snapshot compares
+  // inside a character).
+  for (const std::uint64_t at :
+       {start + 5 * t, start + 10 * t + t / 2, end - t / 2, end + 400 * t}) {
+    for (Bed* b : {&fast, &ref}) b->seg.run_until(at);
+    ASSERT_NO_FATAL_FAILURE(
+        expect_same(fast, ref, fmt::format("{} from {} to {}, at {}", what, start, end, at)));
+  }
+}
+
+void run_both_ways(std::uint32_t baud) {
+  Bed fast(false, baud);
+  Bed ref(true, baud);
+  for (Bed* b : {&fast, &ref}) ASSERT_TRUE(b->master->startup_all());
+  ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "after the start-up"));
+  for (int round = 0; round < 2; ++round) {
+    for (std::size_t i = 0; i < 5; ++i) {
+      for (Bed* b : {&fast, &ref}) {
+        b->master->select(i);
+        b->master->data_exchange({static_cast<std::uint8_t>(round), 2, 3, 4});
+      }
+      ASSERT_NO_FATAL_FAILURE(
+          expect_same(fast, ref, fmt::format("round {}, Data_Exchange with slave {}", round, i)));
+    }
+  }
+  const std::uint64_t t = fast.seg.bit_cycles();
+  using fdl::Function;
+  const auto req = [](std::uint8_t da, Function f) {
+    return fdl::encode(fdl::make_frame(da, 30, fdl::make_request_fc(f, false, false)));
+  };
+  std::uint64_t at = fast.seg.cycle() + 40 * t;
+  // A token, a request to an absent station, one to slave 6 without TSYN before it, line noise
+  // that is no frame, a damaged telegram, a frame for another station after noise.
+  ASSERT_NO_FATAL_FAILURE(foreign(fast, ref, {fdl::SD4, 9, 30}, at, "token"));
+  at = fast.seg.cycle() + 40 * t;
+  ASSERT_NO_FATAL_FAILURE(
+      foreign(fast, ref, req(40, Function::FDL_Status), at, "request to station 40"));
+  // 20 bit times after a token: less than TSYN.
+  at = fast.seg.cycle() + 40 * t;
+  for (Bed* b : {&fast, &ref})
+    b->seg.send(b->other, std::vector<std::uint8_t>{fdl::SD4, 9, 30}, at);
+  at += 3 * 11 * t + 20 * t;
+  ASSERT_NO_FATAL_FAILURE(
+      foreign(fast, ref, req(6, Function::FDL_Status), at, "request without TSYN"));
+  at = fast.seg.cycle() + 40 * t;
+  ASSERT_NO_FATAL_FAILURE(foreign(fast, ref, {0x10, 0x33}, at, "noise"));
+  at = fast.seg.cycle() + 40 * t;
+  ASSERT_NO_FATAL_FAILURE(foreign(fast, ref, req(41, Function::FDL_Status), at, "parity fault",
+                                  {1, UartFault::Kind::parity}));
+  at = fast.seg.cycle() + 40 * t;
+  ASSERT_NO_FATAL_FAILURE(
+      foreign(fast, ref, req(42, Function::FDL_Status), at, "request to station 42"));
+  // A broadcast Global_Control, then slave 7 no longer polled until its DP watchdog expires.
+  for (Bed* b : {&fast, &ref}) b->master->global_control(0x08);
+  ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "Global_Control"));
+  for (int k = 0; k < 1000 && fast.seg.chip(fast.chips[2]).dp_state() == DpState::Data_Exchange;
+       ++k) {
+    for (Bed* b : {&fast, &ref}) {
+      b->master->select(0);
+      b->master->data_exchange({9, 9, 9, 9});
+    }
+    ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "slave 7 not polled"));
+  }
+  EXPECT_EQ(fast.seg.chip(fast.chips[2]).dp_state(), DpState::Wait_Prm);
+}
+
+TEST(SegmentSpeed, TheTelegramLevelLineShowsWhatTheReferenceLineShowsAt1M5) {
+  run_both_ways(1'500'000);
+}
+
+TEST(SegmentSpeed, TheTelegramLevelLineShowsWhatTheReferenceLineShowsAt12M) {
+  run_both_ways(12'000'000);
+}
+
+}  // namespace
+}  // namespace dpc31
