@@ -124,8 +124,12 @@ class SegmentRun {
         }
       }
       const std::size_t station = seg_.add_sender(fmt::format("master {}", m.address));
-      masters_.push_back(std::make_unique<DpMaster>(
-          seg_, station, MasterConfig{m.address, s_.baud, s_.slot_bits}, slaves));
+      MasterConfig mc{m.address, s_.baud, s_.slot_bits};
+      mc.ttr_bits = m.ttr_bits;
+      mc.gap_factor = m.gap_factor;
+      mc.hsa = m.hsa;
+      masters_.push_back(std::make_unique<DpMaster>(seg_, station, mc, slaves));
+      visits_.emplace_back();
     }
     observer_->stations_added(seg_);
     seg_.on_telegram = [this](const LineTelegram& t) {
@@ -143,7 +147,9 @@ class SegmentRun {
   void telegram(const LineTelegram& t) {
     const fdl::Decoded d = fdl::decode(t.bytes);
     say(t.start, fmt::format("{}: {}", seg_.name(t.from), scenario_lex::bytes_text(t.bytes)));
-    if (d.error == fdl::Error::none && d.frame.sd != fdl::SD4 && fdl::is_request(d.frame.fc)) {
+    if (d.error == fdl::Error::none && d.frame.sd == fdl::SD4) {
+      pending_.reset();  // a token after a request nobody answered is no answer
+    } else if (d.error == fdl::Error::none && fdl::is_request(d.frame.fc)) {
       last_request_[d.frame.da] = t.end;
       pending_ = wants_answer(d.frame) ? std::optional<std::uint64_t>(t.end) : std::nullopt;
     } else if (pending_) {
@@ -157,17 +163,17 @@ class SegmentRun {
     check_.idle_until(seg_.cycle());
   }
 
-  // Each master in turn, the token passed on after it (with several masters).
+  // Each master in turn, the token passed on after it (with several masters): `work(m, next)`
+  // does master m's part and returns whether it passed the token to `next` itself.
   template <typename Work>
   void rotation(Work work) {
+    const bool ring = masters_.size() > 1;
     for (std::size_t m = 0; m < masters_.size(); ++m) {
-      if (masters_.size() > 1 && m > 0) masters_[m]->wait_token(token_wait());
-      work(*masters_[m]);
-      if (masters_.size() > 1) {
-        masters_[m]->pass_token(masters_[(m + 1) % masters_.size()]->address());
-      }
+      if (ring && m > 0) masters_[m]->wait_token(token_wait());
+      const std::uint8_t next = masters_[(m + 1) % masters_.size()]->address();
+      if (!work(m, next) && ring) masters_[m]->pass_token(next);
     }
-    if (masters_.size() > 1) masters_[0]->wait_token(token_wait());
+    if (ring) masters_[0]->wait_token(token_wait());
   }
   std::uint64_t token_wait() const { return std::uint64_t{s_.slot_bits} * 300 * seg_.bit_cycles(); }
 
@@ -175,17 +181,26 @@ class SegmentRun {
     using K = SegmentStep::Kind;
     switch (st.kind) {
       case K::startup:
-        rotation([](DpMaster& m) { m.startup_all(); });
+        rotation([this](std::size_t m, std::uint8_t) {
+          masters_[m]->startup_all();
+          return false;
+        });
         break;
       case K::cycle:
         for (std::uint64_t n = 0; n < st.count; ++n) {
-          rotation([&st](DpMaster& m) {
-            for (std::size_t i = 0; i < m.slave_count(); ++i) {
-              m.select(i);
-              if (st.skip && m.slave().address == *st.skip) continue;
-              m.data_exchange(std::vector<std::uint8_t>(m.slave().out_len));
+          rotation([this, &st](std::size_t m, std::uint8_t next) {
+            if (s_.masters[m].obeys_token) {
+              visit(m, next);
+              return true;
             }
-            m.select(0);
+            DpMaster& dm = *masters_[m];
+            for (std::size_t i = 0; i < dm.slave_count(); ++i) {
+              dm.select(i);
+              if (st.skip && dm.slave().address == *st.skip) continue;
+              dm.data_exchange(std::vector<std::uint8_t>(dm.slave().out_len));
+            }
+            dm.select(0);
+            return false;
           });
         }
         break;
@@ -204,6 +219,49 @@ class SegmentRun {
       default:
         check(st);
     }
+  }
+
+  // One visit of the token to master m (DpMaster::use_token: TTR, the GAP update), then the token
+  // to `next` (its own address when it is alone: it passes the token to itself). The walk tells
+  // what it did.
+  void visit(std::size_t m, std::uint8_t next) {
+    DpMaster& dm = *masters_[m];
+    const TokenVisit v = dm.use_token(next);
+    const std::uint64_t t = seg_.bit_cycles();
+    std::string polled;
+    for (const std::size_t i : v.polled) {
+      polled += fmt::format("{}{}", polled.empty() ? "" : ",", s_.masters[m].slaves[i]);
+    }
+    say(v.arrived, fmt::format("master {}: the token: TRR {} bit times, TTH {}, polled {}{}",
+                               dm.address(), v.rotation / t, v.hold / t, polled,
+                               v.gap ? fmt::format(", GAP address {} asked ({})", *v.gap,
+                                                   v.gap_answered ? "answered" : "no answer")
+                                     : std::string()));
+    visits_[m] = v;
+  }
+
+  // `expect visit`: the fields given, against master `st.address`'s last visit.
+  [[nodiscard]] bool visit_matches(const SegmentStep& st, std::string& got) const {
+    std::size_t m = 0;
+    while (s_.masters[m].address != st.address) ++m;
+    if (!visits_[m]) {
+      got = "no visit yet";
+      return false;
+    }
+    const TokenVisit& v = *visits_[m];
+    const std::uint64_t t = seg_.bit_cycles();
+    std::vector<std::uint8_t> polled;
+    for (const std::size_t i : v.polled) polled.push_back(s_.masters[m].slaves[i]);
+    const SegmentStep::Visit& want = st.visit;
+    got = fmt::format("polled {}, rotation {} cycles, hold {} cycles, gap {}{}",
+                      scenario_lex::bytes_text(polled), v.rotation, v.hold,
+                      v.gap ? std::to_string(*v.gap) : "none",
+                      v.gap ? (v.gap_answered ? " (answered)" : " (no answer)") : "");
+    return (!want.polled || *want.polled == polled) &&
+           (!want.rotation_bits || *want.rotation_bits * t == v.rotation) &&
+           (!want.hold_bits || *want.hold_bits * t == v.hold) &&
+           (!want.gap || *want.gap == v.gap) &&
+           (!want.gap_answered || (v.gap && *want.gap_answered == v.gap_answered));
   }
 
   void check(const SegmentStep& st) {
@@ -245,6 +303,9 @@ class SegmentRun {
         ok = seg_.collisions().size() == st.count;
         got = std::to_string(seg_.collisions().size());
         break;
+      case K::expect_visit:
+        ok = visit_matches(st, got);
+        break;
       default:
         break;
     }
@@ -270,6 +331,7 @@ class SegmentRun {
   std::map<std::uint8_t, Station*> by_address_;
   std::map<std::string, std::size_t> senders_;
   std::vector<std::unique_ptr<DpMaster>> masters_;
+  std::vector<std::optional<TokenVisit>> visits_;  // each master's last visit of the token
   std::map<std::uint8_t, std::uint64_t> last_request_;
   std::optional<std::uint64_t> pending_;
   std::uint64_t tx_until_ = 0;  // the end of the last answer a chip decided to send
@@ -282,6 +344,15 @@ class SegmentRun {
 
 int run_segment_scenario(const SegmentScenario& s, const LineSink& walk, const LineSink& errors,
                          SegmentObserver* observer) {
+  if (!s.plugins_bound && !segment_plugins(s).empty()) {
+    SegmentScenario bound = s;
+    ScenarioError err;
+    if (!bind_segment_plugins(bound, err)) {
+      if (errors) errors(err.text());
+      return 2;
+    }
+    return run_segment_scenario(bound, walk, errors, observer);
+  }
   SegmentRun r(s, walk, errors, observer);
   return r.run();
 }
