@@ -260,6 +260,8 @@ class Parser {
         }
         if (!st.wd) fail(fmt::format("unknown watchdog state '{}'", *v));
       }
+      if (auto v = take("after_request"))
+        st.after_request = number(*v, "after_request", 0, UINT32_MAX);
     } else if (what == "tsdr") {
       st.kind = K::expect_tsdr;
       st.count = number(positional(1, "bit times"), "TSDR", 11, 255);

@@ -61,6 +61,8 @@ struct SegmentStep {
   std::vector<std::uint8_t> bytes;
   DpState dp = DpState::Wait_Prm;
   std::optional<WdState> wd;
+  // expect state … after_request=N: entered N cycles after the end of the last request to it.
+  std::optional<std::uint64_t> after_request;
   BusViolation violation = BusViolation::collision;
   // expect visit: what the last visit must show; an unset field is not checked.
   struct Visit {

@@ -63,6 +63,9 @@ class SegmentRun {
     DpState dp = DpState::Wait_Prm;
     WdState wd = WdState::Baud_Search;
     std::uint64_t left_dp_control = 0;  // the cycle DP_Control last ended
+    std::uint64_t request_end = 0;      // the end of the last request to it the chip took
+    std::uint64_t entered = 0;          // the cycle its DP state last changed
+    std::uint64_t entered_after = 0;    // ... and the end of the request before it
   };
 
   std::vector<std::uint8_t> masters() const {
@@ -102,12 +105,26 @@ class SegmentRun {
         if (dp == raw->dp && wd == raw->wd) return;
         if (raw->wd == WdState::DP_Control && wd != WdState::DP_Control)
           raw->left_dp_control = cycle;
+        if (dp != raw->dp) {
+          raw->entered = cycle;
+          raw->entered_after = raw->request_end;
+        }
         raw->dp = dp;
         raw->wd = wd;
         say(cycle, fmt::format("{}: {} / {}", name, dp_state_name(dp), wd_state_name(wd)));
       });
-      chip.on_telegram([this](const Telegram& t) {
-        if (t.from_chip) tx_until_ = std::max(tx_until_, t.end);
+      const std::uint8_t address = def.slave.address;
+      chip.on_telegram([this, raw, address](const Telegram& t) {
+        if (t.from_chip) {
+          tx_until_ = std::max(tx_until_, t.end);
+          return;
+        }
+        // A request to this station, taken at its last stop sample: before anything it causes.
+        const fdl::Decoded d = fdl::decode(t.bytes);
+        if (d.error == fdl::Error::none && d.frame.sd != fdl::SD4 && d.frame.da == address &&
+            fdl::is_request(d.frame.fc)) {
+          raw->request_end = t.end;
+        }
       });
       observer_->user_side_started(st->index, def.firmware.empty()
                                                   ? std::string_view("the built-in user side")
@@ -270,9 +287,16 @@ class SegmentRun {
     bool ok = false;
     switch (st.kind) {
       case K::expect_state: {
-        const Chip& c = seg_.chip(by_address_.at(st.station)->index);
+        const Station& sta = *by_address_.at(st.station);
+        const Chip& c = seg_.chip(sta.index);
         ok = c.dp_state() == st.dp && (!st.wd || c.wd_state() == *st.wd);
         got = fmt::format("{} / {}", dp_state_name(c.dp_state()), wd_state_name(c.wd_state()));
+        if (st.after_request) {
+          const std::uint64_t after = sta.entered - sta.entered_after;
+          ok = ok && sta.entered_after != 0 && after == *st.after_request;
+          got += fmt::format(", entered at cycle {}, {} cycles after the end of the request at {}",
+                             sta.entered, after, sta.entered_after);
+        }
         break;
       }
       case K::expect_tsdr: {
