@@ -1,6 +1,7 @@
 // Segment scenarios: the runner (scenario_segment.hpp). Every station is a chip with its user side
 // on its own host CPU, every master a DpMaster on the segment; the bus check sees every telegram.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <map>
@@ -271,7 +272,7 @@ class SegmentRun {
     for (const std::size_t i : v.polled) polled.push_back(s_.masters[m].slaves[i]);
     const SegmentStep::Visit& want = st.visit;
     got = fmt::format("polled {}, rotation {} cycles, hold {} cycles, gap {}{}",
-                      scenario_lex::bytes_text(polled), v.rotation, v.hold,
+                      fmt::join(polled, ","), v.rotation, v.hold,
                       v.gap ? std::to_string(*v.gap) : "none",
                       v.gap ? (v.gap_answered ? " (answered)" : " (no answer)") : "");
     return (!want.polled || *want.polled == polled) &&

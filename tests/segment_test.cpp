@@ -328,6 +328,30 @@ TEST(Segment, TheGapUpdateWaitsForTokenHoldTime) {
 namespace dpc31 {
 namespace {
 
+// `expect visit` from the scenario door (docs/scenario-format.md, "Segments"): a master alone
+// with ttr= claims the token at its first visit (TRR 0, TTH = TTR = 1000 bit times: both cycles,
+// at 33 and 363 T, start before it) and passes it to itself; a wrong field fails with what the
+// visit did.
+TEST(SegmentScenario, ExpectVisitChecksTheMastersLastVisit) {
+  const std::string head =
+      "segment\nstation 5 profile=spc3\nstation 6 profile=vpc3plus\n"
+      "master 2 slaves=5,6 ttr=1000\nstartup\ncycle 1\n";
+  const auto run = [](const std::string& text, std::vector<std::string>& errors) {
+    SegmentScenario s;
+    ScenarioError err;
+    EXPECT_TRUE(parse_segment_scenario(text, "v.scn", s, err)) << err.text();
+    return run_segment_scenario(s, {}, [&errors](const std::string& e) { errors.push_back(e); });
+  };
+  std::vector<std::string> errors;
+  EXPECT_EQ(run(head + "expect visit 2 polled=5,6 rotation=0 hold=1000 gap=none\n", errors), 0);
+  EXPECT_TRUE(errors.empty()) << errors.front();
+  EXPECT_EQ(run(head + "expect visit 2 polled=5 rotation=0\n", errors), 1);
+  ASSERT_EQ(errors.size(), 1U);
+  EXPECT_EQ(errors[0],
+            "v.scn:7: expected expect visit 2 polled=5 rotation=0, got polled 5,6, rotation 0 "
+            "cycles, hold 32000 cycles, gap none");
+}
+
 // Bad input in a segment scenario: one line, FILE:LINE, nothing run (docs/bad-input.md).
 TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
   const std::pair<const char*, const char*> cases[] = {
