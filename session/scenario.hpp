@@ -150,6 +150,12 @@ bool parse_scenario(std::string_view text, const std::string& file, Scenario& ou
 bool parse_scenario(std::string_view text, const std::string& file, const dpc31_firmware* plugin,
                     Scenario& out, ScenarioError& err);
 bool load_scenario(const std::string& path, Scenario& out, ScenarioError& err);
+// A scenario file's text (util/textfile, at most 16 MiB), and why another user could have changed
+// it ("" if none could), judged on the descriptor it is read from. False with `err.message`.
+bool read_scenario_file(const std::string& path, std::string& text, std::string& untrusted,
+                        ScenarioError& err);
+// The one line that refuses a plug-in an untrusted scenario names (`untrusted`: why it is).
+[[nodiscard]] std::string plugin_refused_untrusted(const std::string& untrusted);
 
 // A scenario naming a firmware plug-in runs that plug-in's code. Parsing never loads it: the
 // caller checks what it must (its outputs, docs/security.md), then bind_plugin() loads it

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <charconv>
+#include <filesystem>
 #include <utility>
 
 #include "dpc31/hex.hpp"
@@ -105,6 +106,15 @@ std::vector<std::uint8_t> bytes(std::string_view s, std::string_view what, std::
     if (out.size() > max) fail(fmt::format("{}: more than {} bytes", what, max));
   }
   return out;
+}
+
+std::string beside_file(const std::string& scenario_file, const std::string& path) {
+  if (path.empty() || path.front() == '/') return path;
+  std::error_code ec;
+  const std::filesystem::path real = std::filesystem::canonical(scenario_file, ec);
+  const std::filesystem::path dir =
+      (ec ? std::filesystem::path(scenario_file) : real).parent_path();
+  return (dir / path).lexically_normal().string();
 }
 
 std::string bytes_text(std::span<const std::uint8_t> b) {

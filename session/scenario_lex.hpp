@@ -44,6 +44,11 @@ std::uint64_t duration(std::string_view s, std::uint64_t clock_hz, std::uint64_t
 // commas, or a number 0..255.
 std::uint32_t gc_command(std::string_view s);
 
+// A path a scenario file names (a plug-in, an Intel HEX image): a relative one is relative to the
+// directory of `scenario_file`'s real file (links resolved), as an #include's is to its file's,
+// not to the directory of a link that leads to it.
+std::string beside_file(const std::string& scenario_file, const std::string& path);
+
 // Bytes as the walk and the checks show them: "01 02 A3", or "-" for none.
 std::string bytes_text(std::span<const std::uint8_t> b);
 

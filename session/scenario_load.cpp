@@ -19,23 +19,35 @@ constexpr std::size_t kMaxFileBytes = 16u << 20;
 
 }  // namespace
 
-bool load_scenario(const std::string& path, Scenario& out, ScenarioError& err) {
+bool read_scenario_file(const std::string& path, std::string& text, std::string& untrusted,
+                        ScenarioError& err) {
   err = ScenarioError{path, 0, {}};
   // Opened once: whether another user could have changed it is judged on what is read (it
   // matters when it names a plug-in: bind_plugin). A pipe is the piping user's own.
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  std::string untrusted;
+  untrusted.clear();
   struct stat st {};
   if (fd >= 0 && ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode)) untrusted = untrusted_code(fd, path);
-  std::string text;
   const bool read = read_text_file(fd >= 0 ? fmt::format("/proc/self/fd/{}", fd) : path,
                                    kMaxFileBytes, "scenario", text, err.message);
   if (fd >= 0) ::close(fd);
-  if (!read) return false;
+  return read;
+}
+
+bool load_scenario(const std::string& path, Scenario& out, ScenarioError& err) {
+  std::string text;
+  std::string untrusted;
+  if (!read_scenario_file(path, text, untrusted, err)) return false;
   if ((err.line = cut_off_line(text, err.message)) != 0) return false;
   if (!parse_scenario(text, path, out, err)) return false;
   out.untrusted = untrusted;
   return true;
+}
+
+std::string plugin_refused_untrusted(const std::string& untrusted) {
+  return "firmware plug-in refused: the scenario names it, and another user could have changed "
+         "the scenario: " +
+         untrusted;
 }
 
 bool plugin_pending(const Scenario& s) { return !s.firmware.empty() && s.firmware_desc == nullptr; }
@@ -43,10 +55,7 @@ bool plugin_pending(const Scenario& s) { return !s.firmware.empty() && s.firmwar
 bool bind_plugin(Scenario& s, ScenarioError& err) {
   if (!plugin_pending(s)) return true;
   if (!s.untrusted.empty()) {
-    err = ScenarioError{s.file, s.plugin_line,
-                        "firmware plug-in refused: the scenario names it, and another user could "
-                        "have changed the scenario: " +
-                            s.untrusted};
+    err = ScenarioError{s.file, s.plugin_line, plugin_refused_untrusted(s.untrusted)};
     return false;
   }
   const dpc31_firmware* fw = nullptr;

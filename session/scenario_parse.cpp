@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <charconv>
-#include <filesystem>
 #include <utility>
 
 #include "dpc31/dpv1.hpp"
@@ -226,11 +225,8 @@ class Parser {
     return true;
   }
 
-  // A relative path in the file is relative to the scenario file, as an #include's is.
-  // A path relative to the scenario file's real directory, as an #include's is to its file's:
-  // not to the directory of a link that leads to it.
   [[nodiscard]] std::string beside_scenario(const std::string& path) const {
-    return path.front() == '/' ? path : (scenario_dir() / path).lexically_normal().string();
+    return beside_file(s_.file, path);
   }
   // `cpu 80c32 clock=HZ firmware FILE.ihx [base=A] [latch=A] [ports=N1,N2...]`, or `cpu c31
   // clock=HZ firmware FILE.ihx [code=A]` on the dpc31 (the C31 serves its own interrupt
@@ -728,13 +724,6 @@ class Parser {
     std::string all;
     for (std::string_view name : n) all += (all.empty() ? "" : ", ") + std::string(name);
     fail(fmt::format("unknown state '{}' ({})", shown(s), all));
-  }
-
-  // The directory of the scenario file after every link is resolved ("" for text not from a file).
-  [[nodiscard]] std::filesystem::path scenario_dir() const {
-    std::error_code ec;
-    const std::filesystem::path real = std::filesystem::canonical(s_.file, ec);
-    return (ec ? std::filesystem::path(s_.file) : real).parent_path();
   }
 
   Scenario& s_;

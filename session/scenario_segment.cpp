@@ -38,6 +38,7 @@ class Parser {
   explicit Parser(SegmentScenario& s) : s_(s) {}
 
   void command(int line, const std::vector<std::string_view>& w) {
+    line_ = line;
     opts_.clear();
     pos_.clear();
     for (std::size_t k = 1; k < w.size(); ++k) {
@@ -74,6 +75,7 @@ class Parser {
       if (m.slaves.empty()) {
         for (const SegmentStation& st : s_.stations) m.slaves.push_back(st.slave.address);
       }
+      if (!ttr_given_ && m.ttr_bits != 0) s_.ttr_bits = m.ttr_bits;
     }
   }
 
@@ -99,6 +101,7 @@ class Parser {
     if (auto v = take("slot"))
       s_.slot_bits = static_cast<std::uint32_t>(number(*v, "slot", 37, 16383));
     if (auto v = take("ttr")) s_.ttr_bits = number(*v, "ttr", 256, 16'777'215);
+    ttr_given_ = s_.ttr_bits != 0;
   }
 
   void station() {
@@ -119,13 +122,16 @@ class Parser {
     }
     if (auto v = take("firmware")) {
       st.firmware = std::string(*v);
-      // Checked before anything is loaded: a plug-in's path rules are not applied to stations.
-      if (is_plugin_path(st.firmware)) fail("a segment station runs a built-in firmware");
-      try {
-        const dpc31_firmware& fw = find_firmware(st.firmware);
-        st.slave = with_gsd_defaults(fw, st.slave);
-      } catch (const FirmwareError& e) {
-        fail(e.what());
+      if (is_plugin_path(st.firmware)) {
+        // Never loaded while parsing: bind_segment_plugins() loads it before the run.
+        st.firmware = beside_file(s_.file, st.firmware);
+        st.plugin_line = line_;
+      } else {
+        try {
+          st.slave = with_gsd_defaults(find_firmware(st.firmware), st.slave);
+        } catch (const FirmwareError& e) {
+          fail(e.what());
+        }
       }
     }
     if (auto v = take("wd")) {
@@ -145,7 +151,34 @@ class Parser {
     m.address = static_cast<std::uint8_t>(
         number(positional(0, "master address"), "master address", 0, 126));
     if (auto v = take("slaves")) m.slaves = bytes_list(*v);
+    // The token rules of DpMaster::use_token (TTR, the GAP factor G, HSA: the ranges of the bus
+    // parameters in EN 50170 part 2).
+    if (auto v = take("ttr")) m.ttr_bits = number(*v, "ttr", 256, 16'777'215);
+    if (auto v = take("gap")) m.gap_factor = static_cast<std::uint8_t>(number(*v, "gap", 1, 100));
+    if (auto v = take("hsa")) {
+      m.hsa = static_cast<std::uint8_t>(number(*v, "hsa", 1, 126));
+      if (m.gap_factor == 0) fail("hsa= without gap=: the HSA bounds the GAP the master polls");
+      if (m.hsa < m.address)
+        fail(fmt::format("hsa={} below the master's address {}", m.hsa, m.address));
+    }
+    m.obeys_token = m.ttr_bits != 0 || m.gap_factor != 0;
+    // One TTR for the bus check: the segment line's, else the masters' (all the same).
+    for (const SegmentMaster& o : s_.masters) {
+      if (!ttr_given_ && m.ttr_bits != 0 && o.ttr_bits != 0 && o.ttr_bits != m.ttr_bits) {
+        fail(
+            fmt::format("ttr={} differs from master {}'s ttr={}: give the bus check's TTR on the "
+                        "segment line (segment ttr=BITS)",
+                        m.ttr_bits, o.address, o.ttr_bits));
+      }
+    }
     s_.masters.push_back(std::move(m));
+  }
+
+  const SegmentMaster* find_master(std::uint8_t a) const {
+    for (const SegmentMaster& m : s_.masters) {
+      if (m.address == a) return &m;
+    }
+    return nullptr;
   }
 
   static std::vector<std::uint8_t> bytes_list(std::string_view v) {
@@ -172,7 +205,18 @@ class Parser {
     } else if (c == "cycle") {
       st.kind = K::cycle;
       st.count = number(positional(0, "number of rotations"), "rotations", 1, 1'000'000);
-      if (auto v = take("skip")) st.skip = station_address(*v);
+      if (auto v = take("skip")) {
+        st.skip = station_address(*v);
+        // use_token polls every slave of the master in turn: it has no slave to leave out.
+        for (const SegmentMaster& m : s_.masters) {
+          if (m.obeys_token) {
+            fail(
+                fmt::format("cycle skip=: master {} obeys the token (ttr=, gap=) and polls all "
+                            "its slaves",
+                            m.address));
+          }
+        }
+      }
     } else if (c == "run") {
       st.kind = K::run;
       st.time = time(positional(0, "time"));
@@ -216,6 +260,8 @@ class Parser {
         }
         if (!st.wd) fail(fmt::format("unknown watchdog state '{}'", *v));
       }
+      if (auto v = take("after_request"))
+        st.after_request = number(*v, "after_request", 0, UINT32_MAX);
     } else if (what == "tsdr") {
       st.kind = K::expect_tsdr;
       st.count = number(positional(1, "bit times"), "TSDR", 11, 255);
@@ -229,6 +275,8 @@ class Parser {
         fail(fmt::format("unknown bus violation '{}'", pos_[1]));
       }
       st.count = number(positional(2, "count"), "count", 0, 1'000'000'000);
+    } else if (what == "visit") {
+      visit(st);
     } else if (what == "collisions") {
       st.kind = K::expect_collisions;
       st.count = number(positional(1, "count"), "count", 0, 1'000'000'000);
@@ -237,8 +285,34 @@ class Parser {
     }
   }
 
+  // `expect visit ADDR polled=A,B rotation=BITS hold=BITS gap=ADDR|none gap_answered=yes|no`
+  void visit(SegmentStep& st) {
+    st.kind = SegmentStep::Kind::expect_visit;
+    st.address = static_cast<std::uint8_t>(number(positional(1, "master"), "master", 0, 126));
+    const SegmentMaster* m = find_master(st.address);
+    if (m == nullptr) fail(fmt::format("no master {}", st.address));
+    if (!m->obeys_token) {
+      fail(fmt::format("master {} does not obey the token: give it ttr= or gap=", st.address));
+    }
+    SegmentStep::Visit& v = st.visit;
+    if (auto p = take("polled")) v.polled = bytes_list(*p);
+    if (auto r = take("rotation")) v.rotation_bits = number(*r, "rotation", 0, UINT32_MAX);
+    if (auto h = take("hold")) v.hold_bits = number(*h, "hold", 0, UINT32_MAX);
+    if (auto g = take("gap")) {
+      v.gap = *g == "none" ? std::optional<std::uint8_t>()
+                           : std::optional<std::uint8_t>(
+                                 static_cast<std::uint8_t>(number(*g, "gap address", 0, 126)));
+    }
+    if (auto a = take("gap_answered")) {
+      if (*a != "yes" && *a != "no") fail(fmt::format("gap_answered='{}': yes or no", *a));
+      v.gap_answered = *a == "yes";
+    }
+  }
+
   SegmentScenario& s_;
   bool first_ = true;
+  bool ttr_given_ = false;
+  int line_ = 0;
   std::map<std::string_view, std::string_view> opts_;
   std::vector<std::string_view> pos_;
 };
@@ -279,15 +353,43 @@ bool parse_segment_scenario(std::string_view text, const std::string& file, Segm
 
 SegmentLoad load_segment_scenario(const std::string& path, SegmentScenario& out,
                                   ScenarioError& err) {
-  constexpr std::size_t kMaxFileBytes = 16u << 20;
-  err = ScenarioError{path, 0, {}};
   std::string text;
-  if (!read_text_file(path, kMaxFileBytes, "scenario", text, err.message)) {
+  std::string untrusted;
+  if (!read_scenario_file(path, text, untrusted, err)) {
     return SegmentLoad::not_segment;  // the ordinary loader says why, in its words
   }
   if (!is_segment_scenario(text)) return SegmentLoad::not_segment;
   if ((err.line = cut_off_line(text, err.message)) != 0) return SegmentLoad::error;
-  return parse_segment_scenario(text, path, out, err) ? SegmentLoad::ok : SegmentLoad::error;
+  if (!parse_segment_scenario(text, path, out, err)) return SegmentLoad::error;
+  out.untrusted = untrusted;
+  return SegmentLoad::ok;
+}
+
+std::vector<std::string> segment_plugins(const SegmentScenario& s) {
+  std::vector<std::string> out;
+  for (const SegmentStation& st : s.stations) {
+    if (st.plugin_line != 0) out.push_back(st.firmware);
+  }
+  return out;
+}
+
+bool bind_segment_plugins(SegmentScenario& s, ScenarioError& err) {
+  if (s.plugins_bound) return true;
+  for (SegmentStation& st : s.stations) {
+    if (st.plugin_line == 0) continue;
+    if (!s.untrusted.empty()) {
+      err = ScenarioError{s.file, st.plugin_line, plugin_refused_untrusted(s.untrusted)};
+      return false;
+    }
+    try {
+      st.slave = with_gsd_defaults(find_firmware(st.firmware), st.slave);
+    } catch (const FirmwareError& e) {
+      err = ScenarioError{s.file, st.plugin_line, e.what()};
+      return false;
+    }
+  }
+  s.plugins_bound = true;
+  return true;
 }
 
 }  // namespace dpc31

@@ -17,13 +17,22 @@ namespace dpc31 {
 struct SegmentStation {
   std::string name;
   ChipOptions chip;
-  std::string firmware;  // "" (the built-in responder), or a built-in firmware's name
-  SlaveConfig slave;     // what its master parameterises (address, watchdog, GSD defaults)
+  // "" (the built-in responder), a built-in firmware's name, or a plug-in's path (relative ones
+  // made relative to the scenario's real directory).
+  std::string firmware;
+  SlaveConfig slave;    // what its master parameterises (address, watchdog, GSD defaults)
+  int plugin_line = 0;  // the line naming a plug-in; its GSD defaults wait for the binding
 };
 
 struct SegmentMaster {
   std::uint8_t address = 2;
   std::vector<std::uint8_t> slaves;  // station addresses, in polling order
+  // The token rules it obeys (`ttr=`, `gap=`, `hsa=`: DpMaster::use_token, docs/segment.md "A
+  // master that obeys TTR"); none given: one whole DP cycle a rotation.
+  std::uint64_t ttr_bits = 0;
+  std::uint8_t gap_factor = 0;
+  std::uint8_t hsa = 126;
+  bool obeys_token = false;
 };
 
 struct SegmentStep {
@@ -38,6 +47,7 @@ struct SegmentStep {
     expect_expired,     // `station` left DP_Control at its last restart + `time` (TWD)
     expect_violation,   // `violation` counted `count` times
     expect_collisions,  // `count` collisions
+    expect_visit,       // master `address`'s last token visit (`visit`)
   };
   Kind kind = Kind::run;
   int line = 0;
@@ -51,18 +61,34 @@ struct SegmentStep {
   std::vector<std::uint8_t> bytes;
   DpState dp = DpState::Wait_Prm;
   std::optional<WdState> wd;
+  // expect state … after_request=N: entered N cycles after the end of the last request to it.
+  std::optional<std::uint64_t> after_request;
   BusViolation violation = BusViolation::collision;
+  // expect visit: what the last visit must show; an unset field is not checked.
+  struct Visit {
+    std::optional<std::vector<std::uint8_t>> polled;  // slave addresses, in order
+    std::optional<std::uint64_t> rotation_bits;       // TRR
+    std::optional<std::uint64_t> hold_bits;           // TTH
+    std::optional<std::optional<std::uint8_t>> gap;   // the GAP address asked, or none
+    std::optional<bool> gap_answered;
+  } visit;
 };
 
 struct SegmentScenario {
   std::string file;
   std::uint32_t baud = 1'500'000;
   std::uint32_t slot_bits = 100;
-  std::uint64_t ttr_bits = 0;  // 0: no token checks (one master)
+  // The bus check's TTR (with two or more masters: the token checks); not given: the TTR its
+  // masters obey (`master ... ttr=`), 0 when none does.
+  std::uint64_t ttr_bits = 0;
   std::vector<SegmentStation> stations;
   std::vector<SegmentMaster> masters;
   std::vector<std::string> senders;
   std::vector<SegmentStep> steps;
+  // load_segment_scenario(): why another user could have changed the file ("" if none could); a
+  // scenario that names a plug-in is then refused (docs/security.md).
+  std::string untrusted;
+  bool plugins_bound = false;  // bind_segment_plugins() has loaded them
 };
 
 // The first command of `text` is `segment`.
@@ -73,6 +99,15 @@ bool parse_segment_scenario(std::string_view text, const std::string& file, Segm
 enum class SegmentLoad : std::uint8_t { not_segment, error, ok };
 SegmentLoad load_segment_scenario(const std::string& path, SegmentScenario& out,
                                   ScenarioError& err);
+// The plug-ins its stations name, as the single chip's scenario does (docs/security.md, "Code a
+// command runs"): parsing never loads one; the caller checks its outputs against
+// segment_plugins(), then bind_segment_plugins() loads each (find_firmware: refused when another
+// user could have changed it, or the scenario) and gives its station the plug-in's GSD defaults.
+// True at once when none waits; false with `err` (FILE:LINE). run_segment_scenario() binds a
+// copy itself when the caller did not.
+[[nodiscard]] std::vector<std::string> segment_plugins(const SegmentScenario& s);
+bool bind_segment_plugins(SegmentScenario& s, ScenarioError& err);
+
 class Segment;
 struct LineTelegram;
 

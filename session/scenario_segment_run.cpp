@@ -1,6 +1,7 @@
 // Segment scenarios: the runner (scenario_segment.hpp). Every station is a chip with its user side
 // on its own host CPU, every master a DpMaster on the segment; the bus check sees every telegram.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <map>
@@ -64,6 +65,9 @@ class SegmentRun {
     DpState dp = DpState::Wait_Prm;
     WdState wd = WdState::Baud_Search;
     std::uint64_t left_dp_control = 0;  // the cycle DP_Control last ended
+    std::uint64_t request_end = 0;      // the end of the last request to it the chip took
+    std::uint64_t entered = 0;          // the cycle its DP state last changed
+    std::uint64_t entered_after = 0;    // ... and the end of the request before it
   };
 
   std::vector<std::uint8_t> masters() const {
@@ -103,12 +107,26 @@ class SegmentRun {
         if (dp == raw->dp && wd == raw->wd) return;
         if (raw->wd == WdState::DP_Control && wd != WdState::DP_Control)
           raw->left_dp_control = cycle;
+        if (dp != raw->dp) {
+          raw->entered = cycle;
+          raw->entered_after = raw->request_end;
+        }
         raw->dp = dp;
         raw->wd = wd;
         say(cycle, fmt::format("{}: {} / {}", name, dp_state_name(dp), wd_state_name(wd)));
       });
-      chip.on_telegram([this](const Telegram& t) {
-        if (t.from_chip) tx_until_ = std::max(tx_until_, t.end);
+      const std::uint8_t address = def.slave.address;
+      chip.on_telegram([this, raw, address](const Telegram& t) {
+        if (t.from_chip) {
+          tx_until_ = std::max(tx_until_, t.end);
+          return;
+        }
+        // A request to this station, taken at its last stop sample: before anything it causes.
+        const fdl::Decoded d = fdl::decode(t.bytes);
+        if (d.error == fdl::Error::none && d.frame.sd != fdl::SD4 && d.frame.da == address &&
+            fdl::is_request(d.frame.fc)) {
+          raw->request_end = t.end;
+        }
       });
       observer_->user_side_started(st->index, def.firmware.empty()
                                                   ? std::string_view("the built-in user side")
@@ -125,8 +143,12 @@ class SegmentRun {
         }
       }
       const std::size_t station = seg_.add_sender(fmt::format("master {}", m.address));
-      masters_.push_back(std::make_unique<DpMaster>(
-          seg_, station, MasterConfig{m.address, s_.baud, s_.slot_bits}, slaves));
+      MasterConfig mc{m.address, s_.baud, s_.slot_bits};
+      mc.ttr_bits = m.ttr_bits;
+      mc.gap_factor = m.gap_factor;
+      mc.hsa = m.hsa;
+      masters_.push_back(std::make_unique<DpMaster>(seg_, station, mc, slaves));
+      visits_.emplace_back();
     }
     observer_->stations_added(seg_);
     seg_.on_telegram = [this](const LineTelegram& t) {
@@ -144,7 +166,9 @@ class SegmentRun {
   void telegram(const LineTelegram& t) {
     const fdl::Decoded d = fdl::decode(t.bytes);
     say(t.start, fmt::format("{}: {}", seg_.name(t.from), scenario_lex::bytes_text(t.bytes)));
-    if (d.error == fdl::Error::none && d.frame.sd != fdl::SD4 && fdl::is_request(d.frame.fc)) {
+    if (d.error == fdl::Error::none && d.frame.sd == fdl::SD4) {
+      pending_.reset();  // a token after a request nobody answered is no answer
+    } else if (d.error == fdl::Error::none && fdl::is_request(d.frame.fc)) {
       last_request_[d.frame.da] = t.end;
       pending_ = wants_answer(d.frame) ? std::optional<std::uint64_t>(t.end) : std::nullopt;
     } else if (pending_) {
@@ -159,17 +183,17 @@ class SegmentRun {
     check_.idle_until(seg_.cycle());
   }
 
-  // Each master in turn, the token passed on after it (with several masters).
+  // Each master in turn, the token passed on after it (with several masters): `work(m, next)`
+  // does master m's part and returns whether it passed the token to `next` itself.
   template <typename Work>
   void rotation(Work work) {
+    const bool ring = masters_.size() > 1;
     for (std::size_t m = 0; m < masters_.size(); ++m) {
-      if (masters_.size() > 1 && m > 0) masters_[m]->wait_token(token_wait());
-      work(*masters_[m]);
-      if (masters_.size() > 1) {
-        masters_[m]->pass_token(masters_[(m + 1) % masters_.size()]->address());
-      }
+      if (ring && m > 0) masters_[m]->wait_token(token_wait());
+      const std::uint8_t next = masters_[(m + 1) % masters_.size()]->address();
+      if (!work(m, next) && ring) masters_[m]->pass_token(next);
     }
-    if (masters_.size() > 1) masters_[0]->wait_token(token_wait());
+    if (ring) masters_[0]->wait_token(token_wait());
   }
   std::uint64_t token_wait() const { return std::uint64_t{s_.slot_bits} * 300 * seg_.bit_cycles(); }
 
@@ -177,17 +201,26 @@ class SegmentRun {
     using K = SegmentStep::Kind;
     switch (st.kind) {
       case K::startup:
-        rotation([](DpMaster& m) { m.startup_all(); });
+        rotation([this](std::size_t m, std::uint8_t) {
+          masters_[m]->startup_all();
+          return false;
+        });
         break;
       case K::cycle:
         for (std::uint64_t n = 0; n < st.count; ++n) {
-          rotation([&st](DpMaster& m) {
-            for (std::size_t i = 0; i < m.slave_count(); ++i) {
-              m.select(i);
-              if (st.skip && m.slave().address == *st.skip) continue;
-              m.data_exchange(std::vector<std::uint8_t>(m.slave().out_len));
+          rotation([this, &st](std::size_t m, std::uint8_t next) {
+            if (s_.masters[m].obeys_token) {
+              visit(m, next);
+              return true;
             }
-            m.select(0);
+            DpMaster& dm = *masters_[m];
+            for (std::size_t i = 0; i < dm.slave_count(); ++i) {
+              dm.select(i);
+              if (st.skip && dm.slave().address == *st.skip) continue;
+              dm.data_exchange(std::vector<std::uint8_t>(dm.slave().out_len));
+            }
+            dm.select(0);
+            return false;
           });
         }
         break;
@@ -208,15 +241,65 @@ class SegmentRun {
     }
   }
 
+  // One visit of the token to master m (DpMaster::use_token: TTR, the GAP update), then the token
+  // to `next` (its own address when it is alone: it passes the token to itself). The walk tells
+  // what it did.
+  void visit(std::size_t m, std::uint8_t next) {
+    DpMaster& dm = *masters_[m];
+    const TokenVisit v = dm.use_token(next);
+    const std::uint64_t t = seg_.bit_cycles();
+    std::string polled;
+    for (const std::size_t i : v.polled) {
+      polled += fmt::format("{}{}", polled.empty() ? "" : ",", s_.masters[m].slaves[i]);
+    }
+    say(v.arrived, fmt::format("master {}: the token: TRR {} bit times, TTH {}, polled {}{}",
+                               dm.address(), v.rotation / t, v.hold / t, polled,
+                               v.gap ? fmt::format(", GAP address {} asked ({})", *v.gap,
+                                                   v.gap_answered ? "answered" : "no answer")
+                                     : std::string()));
+    visits_[m] = v;
+  }
+
+  // `expect visit`: the fields given, against master `st.address`'s last visit.
+  [[nodiscard]] bool visit_matches(const SegmentStep& st, std::string& got) const {
+    std::size_t m = 0;
+    while (s_.masters[m].address != st.address) ++m;
+    if (!visits_[m]) {
+      got = "no visit yet";
+      return false;
+    }
+    const TokenVisit& v = *visits_[m];
+    const std::uint64_t t = seg_.bit_cycles();
+    std::vector<std::uint8_t> polled;
+    for (const std::size_t i : v.polled) polled.push_back(s_.masters[m].slaves[i]);
+    const SegmentStep::Visit& want = st.visit;
+    got = fmt::format("polled {}, rotation {} cycles, hold {} cycles, gap {}{}",
+                      fmt::join(polled, ","), v.rotation, v.hold,
+                      v.gap ? std::to_string(*v.gap) : "none",
+                      v.gap ? (v.gap_answered ? " (answered)" : " (no answer)") : "");
+    return (!want.polled || *want.polled == polled) &&
+           (!want.rotation_bits || *want.rotation_bits * t == v.rotation) &&
+           (!want.hold_bits || *want.hold_bits * t == v.hold) &&
+           (!want.gap || *want.gap == v.gap) &&
+           (!want.gap_answered || (v.gap && *want.gap_answered == v.gap_answered));
+  }
+
   void check(const SegmentStep& st) {
     using K = SegmentStep::Kind;
     std::string got;
     bool ok = false;
     switch (st.kind) {
       case K::expect_state: {
-        const Chip& c = seg_.chip(by_address_.at(st.station)->index);
+        const Station& sta = *by_address_.at(st.station);
+        const Chip& c = seg_.chip(sta.index);
         ok = c.dp_state() == st.dp && (!st.wd || c.wd_state() == *st.wd);
         got = fmt::format("{} / {}", dp_state_name(c.dp_state()), wd_state_name(c.wd_state()));
+        if (st.after_request) {
+          const std::uint64_t after = sta.entered - sta.entered_after;
+          ok = ok && sta.entered_after != 0 && after == *st.after_request;
+          got += fmt::format(", entered at cycle {}, {} cycles after the end of the request at {}",
+                             sta.entered, after, sta.entered_after);
+        }
         break;
       }
       case K::expect_tsdr: {
@@ -247,6 +330,9 @@ class SegmentRun {
         ok = seg_.collisions().size() == st.count;
         got = std::to_string(seg_.collisions().size());
         break;
+      case K::expect_visit:
+        ok = visit_matches(st, got);
+        break;
       default:
         break;
     }
@@ -272,6 +358,7 @@ class SegmentRun {
   std::map<std::uint8_t, Station*> by_address_;
   std::map<std::string, std::size_t> senders_;
   std::vector<std::unique_ptr<DpMaster>> masters_;
+  std::vector<std::optional<TokenVisit>> visits_;  // each master's last visit of the token
   std::map<std::uint8_t, std::uint64_t> last_request_;
   std::optional<std::uint64_t> pending_;
   std::uint64_t tx_until_ = 0;  // the end of the last answer a chip decided to send
@@ -284,6 +371,15 @@ class SegmentRun {
 
 int run_segment_scenario(const SegmentScenario& s, const LineSink& walk, const LineSink& errors,
                          SegmentObserver* observer) {
+  if (!s.plugins_bound && !segment_plugins(s).empty()) {
+    SegmentScenario bound = s;
+    ScenarioError err;
+    if (!bind_segment_plugins(bound, err)) {
+      if (errors) errors(err.text());
+      return 2;
+    }
+    return run_segment_scenario(bound, walk, errors, observer);
+  }
   SegmentRun r(s, walk, errors, observer);
   return r.run();
 }

@@ -134,6 +134,56 @@ TEST_F(CodeSecurity, PluginsAnotherUserCouldChangeAreRefused) {
   EXPECT_TRUE(loaded());
 }
 
+// Issue 30: a segment station's plug-in (`station 5 firmware=./x.so`) takes the single chip's
+// door: never loaded while parsing, refused when an output names it, when another user could have
+// changed it or the scenario, relative to the scenario's real file; and with nothing wrong it runs
+// beside a built-in firmware to Data_Exchange (`dpc31 run`).
+TEST_F(CodeSecurity, ASegmentStationsPluginTakesTheSameChecks) {
+  copy(BAD_PLUGIN_MARK, "mark.so");
+  const std::string head = "segment\nstation 5 profile=spc3 firmware=./mark.so\n";
+  file("bad.scn", head + "startup\nno_such_command\n");
+  expect_bad(marked("run bad.scn"), "bad.scn:4: unknown command 'no_such_command'", "syntax");
+  EXPECT_FALSE(loaded()) << "parsed a broken segment and loaded its plug-in";
+  file("ok.scn", head + "run 1ms\n");
+  expect_bad(marked("run ok.scn --pcap mark.so"),
+             "dpc31 run: --pcap mark.so: is the firmware plug-in " + path("mark.so") +
+                 ": an output must not replace an input",
+             "--pcap over the plug-in");
+  EXPECT_FALSE(loaded());
+  const std::string open = copy(BAD_PLUGIN_MARK, "open.so");
+  fs::permissions(open, fs::perms::all);
+  file("open.scn", "segment\nstation 4\nstation 5 firmware=./open.so\nrun 1ms\n");
+  expect_bad(marked("run open.scn"),
+             "open.scn:3: firmware plug-in refused: " + path("open.so") +
+                 " is writable by others (mode 0777) (a plug-in runs as your code: another user "
+                 "could have changed it)",
+             "0777 plug-in");
+  const std::string theirs = file("theirs.scn", head + "run 1ms\n");
+  chown_to(theirs, kNobody);
+  expect_bad(
+      marked("run theirs.scn"),
+      "theirs.scn:2: firmware plug-in refused: the scenario names it, and another user could "
+      "have changed the scenario: theirs.scn is owned by uid 65534, not by you (uid 0) or "
+      "root",
+      "their scenario");
+  EXPECT_FALSE(loaded());
+  marked("run ok.scn --quiet");
+  EXPECT_TRUE(loaded());
+  // DO4 as a plug-in on the SPC3 beside the built-in CNT2 on the VPC3+, through a link to the
+  // scenario (the plug-in is the one beside the real file).
+  fs::create_directory(path("real"));
+  copy(PLUGIN_DO4, "real/do4.so");
+  file("real/s.scn",
+       "segment\nstation 5 profile=spc3 firmware=./do4.so\n"
+       "station 6 profile=vpc3plus firmware=CNT2\nstartup\ncycle 2\n"
+       "expect state 5 Data_Exchange wd=DP_Control\nexpect state 6 Data_Exchange wd=DP_Control\n"
+       "expect tsdr 11\n");
+  fs::create_symlink("real/s.scn", path("s.scn"));
+  const Outcome r = marked("run s.scn");
+  EXPECT_EQ(r.rc, 0) << r.err << r.out;
+  EXPECT_NE(r.out.find("3 expects passed, 0 failed"), std::string::npos) << r.out;
+}
+
 // Finding 1: a scenario reached through a symlink loaded `./fw.so` from the link's directory (a
 // directory the link's maker chose). A relative plug-in path is now relative to the scenario's
 // real file.

@@ -148,5 +148,33 @@ TEST(SegmentFirmwareScenario, ShippedThreeSlavesScenarioPasses) {
   EXPECT_TRUE(errors.empty()) << errors.front();
 }
 
+// A plug-in on a segment station from the scenario door (docs/scenario-format.md, "Segments"):
+// parsing leaves it unloaded (the GSD defaults wait), run_segment_scenario binds it, and DO4 as a
+// plug-in on the SPC3 reaches Data_Exchange beside the built-in DO4 on the DPC31, each answer
+// MinTSDR = 11 T after its request (docs/timing.md; the driver writes MinTSDR_Val = 11).
+TEST(SegmentFirmwareScenario, APluginStationBesideABuiltInOneReachesDataExchange) {
+  const std::string text = std::string("segment\nstation 5 profile=spc3 firmware=") + PLUGIN_DO4 +
+                           "\nstation 7 profile=dpc31 firmware=DO4\nstartup\ncycle 2\n"
+                           "expect state 5 Data_Exchange wd=DP_Control\n"
+                           "expect state 7 Data_Exchange wd=DP_Control\nexpect tsdr 11\n";
+  SegmentScenario s;
+  ScenarioError err;
+  ASSERT_TRUE(parse_segment_scenario(text, "p.scn", s, err)) << err.text();
+  EXPECT_EQ(segment_plugins(s), std::vector<std::string>{PLUGIN_DO4});
+  EXPECT_EQ(s.stations[0].slave.ident, SlaveConfig{}.ident);  // not loaded: no GSD defaults yet
+  EXPECT_EQ(s.stations[1].slave.ident, 0x0D04);
+  std::vector<std::string> walk;
+  std::vector<std::string> errors;
+  EXPECT_EQ(run_segment_scenario(
+                s, [&walk](const std::string& l) { walk.push_back(l); },
+                [&errors](const std::string& e) { errors.push_back(e); }),
+            0);
+  EXPECT_TRUE(errors.empty()) << errors.front();
+  ASSERT_FALSE(walk.empty());
+  EXPECT_NE(walk.back().find("3 expects passed, 0 failed"), std::string::npos) << walk.back();
+  ASSERT_TRUE(bind_segment_plugins(s, err)) << err.text();
+  EXPECT_EQ(s.stations[0].slave.ident, 0x0D04);  // DO4's GSD (firmware/do4)
+}
+
 }  // namespace
 }  // namespace dpc31

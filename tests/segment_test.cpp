@@ -328,13 +328,53 @@ TEST(Segment, TheGapUpdateWaitsForTokenHoldTime) {
 namespace dpc31 {
 namespace {
 
+// `expect visit` from the scenario door (docs/scenario-format.md, "Segments"): a master alone
+// with ttr= claims the token at its first visit (TRR 0, TTH = TTR = 1000 bit times: both cycles,
+// at 33 and 363 T, start before it) and passes it to itself; a wrong field fails with what the
+// visit did.
+TEST(SegmentScenario, ExpectVisitChecksTheMastersLastVisit) {
+  const std::string head =
+      "segment\nstation 5 profile=spc3\nstation 6 profile=vpc3plus\n"
+      "master 2 slaves=5,6 ttr=1000\nstartup\ncycle 1\n";
+  const auto run = [](const std::string& text, std::vector<std::string>& errors) {
+    SegmentScenario s;
+    ScenarioError err;
+    EXPECT_TRUE(parse_segment_scenario(text, "v.scn", s, err)) << err.text();
+    return run_segment_scenario(s, {}, [&errors](const std::string& e) { errors.push_back(e); });
+  };
+  std::vector<std::string> errors;
+  EXPECT_EQ(run(head + "expect visit 2 polled=5,6 rotation=0 hold=1000 gap=none\n", errors), 0);
+  EXPECT_TRUE(errors.empty()) << errors.front();
+  EXPECT_EQ(run(head + "expect visit 2 polled=5 rotation=0\n", errors), 1);
+  ASSERT_EQ(errors.size(), 1U);
+  EXPECT_EQ(errors[0],
+            "v.scn:7: expected expect visit 2 polled=5 rotation=0, got polled 5,6, rotation 0 "
+            "cycles, hold 32000 cycles, gap none");
+}
+
 // Bad input in a segment scenario: one line, FILE:LINE, nothing run (docs/bad-input.md).
 TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
   const std::pair<const char*, const char*> cases[] = {
       {"segment\nstation 5\nbogus 3\n", "f.scn:3: unknown command 'bogus'"},
       {"station 5\n", "f.scn:1: a segment scenario begins with 'segment'"},
-      {"segment\nstation 5 firmware=DO4\nstation 6 firmware=./libmine.so\n",
-       "f.scn:3: a segment station runs a built-in firmware"},
+      {"segment\nstation 5 firmware=DO4\nstation 6 firmware=NOPE\n",
+       "f.scn:3: unknown firmware 'NOPE' (DO4, CNT2, or a plug-in path such as ./libmine.so)"},
+      // The token's options (docs/scenario-format.md, "Segments").
+      {"segment\nstation 5\nmaster 2 hsa=9\n",
+       "f.scn:3: hsa= without gap=: the HSA bounds the GAP the master polls"},
+      {"segment\nstation 5\nmaster 9 gap=1 hsa=8\n", "f.scn:3: hsa=8 below the master's address 9"},
+      {"segment\nstation 5\nmaster 2 ttr=1000\nmaster 3 ttr=2000\n",
+       "f.scn:4: ttr=2000 differs from master 2's ttr=1000: give the bus check's TTR on the "
+       "segment "
+       "line (segment ttr=BITS)"},
+      {"segment\nstation 5\nmaster 2 gap=0\n", "f.scn:3: gap 0 out of range (1..100)"},
+      {"segment\nstation 5\nmaster 2 ttr=1000\ncycle 1 skip=5\n",
+       "f.scn:4: cycle skip=: master 2 obeys the token (ttr=, gap=) and polls all its slaves"},
+      {"segment\nstation 5\nmaster 2\nexpect visit 2\n",
+       "f.scn:4: master 2 does not obey the token: give it ttr= or gap="},
+      {"segment\nstation 5\nmaster 2 gap=1\nexpect visit 3\n", "f.scn:4: no master 3"},
+      {"segment\nstation 5\nmaster 2 gap=1\nexpect visit 2 gap_answered=maybe\n",
+       "f.scn:4: gap_answered='maybe': yes or no"},
       {"segment\nstation 5\nexpect state 9 Data_Exchange\n", "f.scn:3: no station 9"},
       {"segment\nstation 5\nstartup\nstation 6\n", "f.scn:4: 'station' after the first action"},
   };
@@ -344,6 +384,16 @@ TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
     EXPECT_FALSE(parse_segment_scenario(text, "f.scn", s, err)) << text;
     EXPECT_EQ(err.text(), want);
   }
+  // With the segment line silent, the bus check takes the TTR its masters obey.
+  SegmentScenario s;
+  ScenarioError err;
+  ASSERT_TRUE(parse_segment_scenario(
+      "segment\nstation 5\nmaster 2 ttr=1200\nmaster 3 ttr=1200 gap=2 hsa=9\n", "f.scn", s, err))
+      << err.text();
+  EXPECT_EQ(s.ttr_bits, 1200U);
+  EXPECT_EQ(s.masters[1].gap_factor, 2U);
+  EXPECT_EQ(s.masters[1].hsa, 9U);
+  EXPECT_TRUE(s.masters[1].obeys_token);
   EXPECT_TRUE(is_segment_scenario("# a comment\n\nsegment baud=12000000\n"));
   EXPECT_FALSE(is_segment_scenario("profile spc3\n"));
 }

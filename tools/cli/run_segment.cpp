@@ -11,8 +11,10 @@
 #include <tuple>
 #include <vector>
 
+#include "board.hpp"
 #include "dp_master.hpp"
 #include "dpc31/fdl.hpp"
+#include "firmware_host.hpp"
 #include "outfile.hpp"
 #include "pcapng.hpp"
 #include "run.hpp"
@@ -287,15 +289,32 @@ int run_segment_command(const RunOptions& opt, const SegmentScenario& s, const L
   if (error.empty() && !opt.gtkw.empty() && opt.vcd.empty() && opt.fst.empty())
     error = fmt::format("--gtkw {}: a save file needs --vcd or --fst", opt.gtkw);
   SegmentOutputs out(opt, s);
-  if (error.empty()) error = outfile::distinct({{"the scenario", opt.scenario}}, out.outputs());
+  std::vector<outfile::Named> inputs = {{"the scenario", opt.scenario}};
+  for (const std::string& p : segment_plugins(s)) inputs.push_back({"the firmware plug-in", p});
+  if (error.empty()) error = outfile::distinct(inputs, out.outputs());
   if (error.empty()) out.open(error);
   if (!error.empty()) {
     fmt::print(err, "dpc31 run: {}\n", error);
     return 2;
   }
+  // The plug-ins the stations name are loaded now, after every other check (docs/security.md).
+  SegmentScenario bound = s;
+  ScenarioError berr;
+  if (!bind_segment_plugins(bound, berr)) {
+    errors(berr.text());
+    return 2;
+  }
+  // A firmware stuck in a loop without a bus access cannot be stopped from this thread: the guard
+  // ends the process with one line (naming the plug-ins: one of them hangs).
+  std::string plugins;
+  for (const std::string& p : segment_plugins(bound)) plugins += (plugins.empty() ? "" : ", ") + p;
+  if (!plugins.empty()) board::guard_hangs("dpc31 run", plugins);
   int rc = 0;
   try {
-    rc = run_segment_scenario(s, walk, errors, &out);
+    rc = run_segment_scenario(bound, walk, errors, &out);
+  } catch (const FirmwareError& e) {
+    fmt::print(err, "dpc31 run: {}: {}\n", s.file, e.what());
+    return 2;
   } catch (const OutputError& e) {
     fmt::print(err, "dpc31 run: {}\n", e.message);
     return 2;
