@@ -7,6 +7,25 @@
 
 namespace dpc31 {
 
+namespace {
+
+// `slot` holds `value` for a scope (left by an exception from a firmware too).
+class Scoped {
+ public:
+  Scoped(std::optional<std::uint64_t>& slot, std::uint64_t value) : slot_(slot), old_(slot) {
+    slot_ = value;
+  }
+  ~Scoped() { slot_ = old_; }
+  Scoped(const Scoped&) = delete;
+  Scoped& operator=(const Scoped&) = delete;
+
+ private:
+  std::optional<std::uint64_t>& slot_;
+  std::optional<std::uint64_t> old_;
+};
+
+}  // namespace
+
 struct Segment::Station {
   std::string name;
   std::unique_ptr<Chip> chip;  // null: a sender
@@ -22,6 +41,15 @@ struct Segment::Station {
   std::optional<LineTelegram> answer;
   Edges relayed;
   std::size_t relayed_next = 0;
+  // The TxD edges of its last armed answer (both line modes): what a firmware running past a
+  // round's end must not cross.
+  Edges drives_edges;
+  [[nodiscard]] bool drives(std::uint64_t from, std::uint64_t to) const {
+    const auto e = std::lower_bound(
+        drives_edges.begin(), drives_edges.end(), from,
+        [](const std::pair<std::uint64_t, bool>& x, std::uint64_t c) { return x.first < c; });
+    return e != drives_edges.end() && e->first <= to;
+  }
 };
 
 Segment::Segment(std::uint32_t baud, std::uint32_t clock_hz)
@@ -46,7 +74,10 @@ std::size_t Segment::add_chip(std::string name, ChipOptions opt) {
   // which the rounds of run_until rely on. (on_txd_edges hands edges over late, in batches.)
   s->chip->on_txd([raw](std::uint64_t cycle, bool level) { raw->txd.emplace_back(cycle, level); });
   s->chip->on_telegram([raw](const Telegram& t) {
-    if (t.from_chip) raw->answer = LineTelegram{0, t.start, t.end, t.bytes};
+    if (!t.from_chip) return;
+    raw->answer = LineTelegram{0, t.start, t.end, t.bytes};
+    raw->drives_edges.clear();
+    uart_encode(t.bytes, t.start, raw->chip->bit_cycles(), raw->drives_edges);
   });
   look_at(*s);
   stations_.push_back(std::move(s));
@@ -87,6 +118,7 @@ Chip& Segment::chip(std::size_t i) {
   // Left alone by the line, it has no event before now_ and its firmware sleeps: stepping it here
   // changes nothing but its cycle.
   if (s.chip->cycle() < now_) {
+    const Scoped at(hard_end_, now_);  // its firmware does not run past the line's time
     step_station(s, now_);
     look_at(s);
   }
@@ -109,6 +141,7 @@ std::uint64_t Segment::cycle() const {
 
 void Segment::catch_up() {
   const std::uint64_t front = cycle();
+  const Scoped at(hard_end_, front);
   for (const auto& s : stations_) {
     if (!s->chip) continue;
     if (front > now_) step_station(*s, front);
@@ -117,14 +150,40 @@ void Segment::catch_up() {
   now_ = front;
 }
 
+bool Segment::others_drive(const Station& s, std::uint64_t from, std::uint64_t to) const {
+  if (hard_end_ && *hard_end_ >= from && *hard_end_ <= to) return true;
+  return std::any_of(stations_.begin(), stations_.end(), [&](const auto& o) {
+    return o.get() != &s && o->chip && o->drives(from, to);
+  });
+}
+
+// The host CPU never splits a bus access: one started before `to` may end up to kCpuSlack clocks
+// past it. Its accesses must be those of the chip alone wherever the round ends (docs/segment.md,
+// "A firmware across a round's end"), so, in this order:
+// - nobody else drives the line from `to` to `to` + kCpuSlack (no other chip's armed answer, no
+//   sender's telegram starting there, no hard end of a run): the CPU runs to `to` as on one chip,
+//   the chip ends up to kCpuSlack past it (cycle() shows that, and run_until brings the line
+//   there before it returns), and whatever drives later reaches it ahead of time;
+// - else, its CPU runs to kCpuSlack short of `to` (an asleep one: the chip to `to` or to X/INT
+//   going active), and when its own TxD stays quiet up to `to` the chip waits where its next
+//   access (or its ISR) starts, in a later round (no edge of its own is missing from this one, and
+//   what the line brings meanwhile reaches it ahead of time);
+// - else (it drives too: a collision) the chip alone runs the rest, and the firmware's next access
+//   starts at `to`, up to kCpuSlack clocks late.
 void Segment::step_station(Station& s, std::uint64_t to) {
   if (!s.chip || s.chip->cycle() >= to) return;
-  // The host CPU never splits a bus access and may end one up to kCpuSlack clocks past its goal:
-  // it runs to that much short of `to`, and the chip alone the rest (the CPU's next access starts
-  // at `to`), so the chip stands exactly at `to` for what the line brings next.
-  if (s.cpu && to > kCpuSlack) {
+  if (s.cpu && !others_drive(s, to, to + kCpuSlack)) {
+    s.cpu->run_until(to);
+    s.chip->clear_stop();
+  } else if (s.cpu && to > kCpuSlack) {
     s.cpu->run_until(to - kCpuSlack);
     s.chip->clear_stop();
+    // An asleep CPU starts no access before X/INT: the chip runs on to `to` or until then.
+    while (!s.cpu->busy() && s.chip->cycle() < to) {
+      s.chip->step_until_irq(to - s.chip->cycle());
+      s.chip->clear_stop();
+    }
+    if (s.chip->cycle() < to && !s.drives(s.chip->cycle() + 1, to)) return;
   }
   if (s.chip->cycle() < to) s.chip->step(to - s.chip->cycle());
 }
@@ -248,7 +307,7 @@ void Segment::flush() { close_telegrams(UINT64_MAX); }
 
 std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> bytes,
                             std::uint64_t start, UartFault fault) {
-  run_until(start);
+  run_to_send(start);
   const std::uint64_t end = start + bytes.size() * std::uint64_t{kUartCharBits} * t_;
   if (owner_ && *owner_ != from && start < owned_until_) {
     collide(*owner_, from, start);
@@ -281,8 +340,13 @@ std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> byte
   return end;
 }
 
-void Segment::pulse(std::size_t from, std::uint64_t start, std::uint64_t low_cycles) {
+void Segment::run_to_send(std::uint64_t start) {
+  const Scoped at(hard_end_, start);
   run_until(start);
+}
+
+void Segment::pulse(std::size_t from, std::uint64_t start, std::uint64_t low_cycles) {
+  run_to_send(start);
   if (owner_ && *owner_ != from && start < owned_until_) {
     collide(*owner_, from, start);
     return;
@@ -297,48 +361,58 @@ void Segment::run_until(std::uint64_t cycle, std::optional<std::size_t> wake_for
   catch_up();
   wake_for_ = wake_for;
   woken_ = false;
-  Edges round;
-  while (now_ < cycle && !woken_) {
-    // No chip's TxD changes before its next deadline: every station may run to the earliest,
-    // and what a chip drives there reaches the others at that very cycle.
-    std::uint64_t bound = cycle;
-    bool busy = false;
-    for (const auto& s : stations_) {
-      if (!s->chip) continue;
-      bound = std::min(bound, reference_ ? s->chip->next_deadline() : s->next);
-      busy = busy || s->busy;
-    }
-    // A running firmware's accesses depend on where rounds end (kCpuSlack): the stop samples of
-    // characters heard whole stay ends of rounds, as their events made them on the reference line.
-    if (busy && !reference_) bound = std::min(bound, line_rx_.next_deadline());
-    bound = std::max(bound, now_ + 1);
-    // Telegram level: a chip without an event by `bound` whose firmware sleeps is left where it
-    // is (it is given the line's characters ahead of time, as a master gives them).
-    for (const auto& s : stations_) {
-      if (!s->chip || (!reference_ && s->next > bound && !s->busy)) continue;
-      step_station(*s, bound);
-      look_at(*s);
-    }
-    now_ = bound;
-    // What the chips drove, in the order of its cycles (ties: station order).
-    round.clear();
-    std::vector<std::size_t> who;
-    for (std::size_t i = 0; i < stations_.size(); ++i) {
-      for (const auto& e : stations_[i]->txd) {
-        round.push_back(e);
-        who.push_back(i);
-      }
-      stations_[i]->txd.clear();
-    }
-    std::vector<std::size_t> order(round.size());
-    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
-    std::stable_sort(order.begin(), order.end(),
-                     [&](std::size_t a, std::size_t b) { return round[a].first < round[b].first; });
-    for (const std::size_t k : order) relay(who[k], Edges{round[k]});
-    close_telegrams(now_);
-    line_final_ = now_;
+  while (now_ < cycle && !woken_) round(cycle);
+  // A firmware that ran past the last round's end (step_station) moved cycle(): the line and the
+  // other chips follow it there, where no firmware runs past it, so that the line has one time.
+  const std::uint64_t front = this->cycle();
+  if (front > now_) {
+    const Scoped at(hard_end_, front);
+    while (now_ < front) round(front);
   }
   wake_for_.reset();
+}
+
+void Segment::round(std::uint64_t cycle) {
+  Edges driven;
+  // No chip's TxD changes before its next deadline: every station may run to the earliest,
+  // and what a chip drives there reaches the others at that very cycle.
+  std::uint64_t bound = cycle;
+  bool busy = false;
+  for (const auto& s : stations_) {
+    if (!s->chip) continue;
+    bound = std::min(bound, reference_ ? s->chip->next_deadline() : s->next);
+    busy = busy || s->busy;
+  }
+  // Where a firmware may not run past a round's end (step_station), its accesses depend on where
+  // rounds end: the stop samples of characters heard whole stay ends of rounds, as their events
+  // made them on the reference line.
+  if (busy && !reference_) bound = std::min(bound, line_rx_.next_deadline());
+  bound = std::max(bound, now_ + 1);
+  // Telegram level: a chip without an event by `bound` whose firmware sleeps is left where it
+  // is (it is given the line's characters ahead of time, as a master gives them).
+  for (const auto& s : stations_) {
+    if (!s->chip || (!reference_ && s->next > bound && !s->busy)) continue;
+    step_station(*s, bound);
+    look_at(*s);
+  }
+  now_ = bound;
+  // What the chips drove, in the order of its cycles (ties: station order).
+  driven.clear();
+  std::vector<std::size_t> who;
+  for (std::size_t i = 0; i < stations_.size(); ++i) {
+    for (const auto& e : stations_[i]->txd) {
+      driven.push_back(e);
+      who.push_back(i);
+    }
+    stations_[i]->txd.clear();
+  }
+  std::vector<std::size_t> order(driven.size());
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return driven[a].first < driven[b].first; });
+  for (const std::size_t k : order) relay(who[k], Edges{driven[k]});
+  close_telegrams(now_);
+  line_final_ = now_;
 }
 
 void Segment::take_line(std::size_t listener, UartRx& rx) {

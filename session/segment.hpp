@@ -110,6 +110,13 @@ class Segment {
   struct Station;
   using Edges = std::vector<std::pair<std::uint64_t, bool>>;
   void step_station(Station& s, std::uint64_t to);
+  // Whether another station drives the line anywhere in [from, to] (another chip's armed answer)
+  // or a firmware may not run past a cycle there (hard_end_).
+  [[nodiscard]] bool others_drive(const Station& s, std::uint64_t from, std::uint64_t to) const;
+  // run_until(start) for a sender that drives from `start`: no firmware runs past it.
+  void run_to_send(std::uint64_t start);
+  // One round of run_until: every station that needs it to the earliest next event (<= cycle).
+  void round(std::uint64_t cycle);
   // What the rounds know of a chip: its next event and whether its firmware runs.
   static void look_at(Station& s);
   // Station i's answer, armed and now starting on the line at `cycle`, to every other chip whole.
@@ -138,6 +145,8 @@ class Segment {
   std::uint64_t owned_until_ = 0;
   bool woken_ = false;
   std::optional<std::size_t> wake_for_;
+  // No firmware runs past this cycle: a sender drives from it, or the line's time is brought there.
+  std::optional<std::uint64_t> hard_end_;
   // The telegram being decoded from the line.
   UartRx line_rx_;
   std::vector<UartChar> chars_;
