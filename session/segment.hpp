@@ -57,7 +57,8 @@ class Segment {
   [[nodiscard]] const std::string& name(std::size_t i) const;
   [[nodiscard]] bool is_chip(std::size_t i) const;
   // The chip of station i at the line's time: a station the line left alone (no event of its own,
-  // its firmware asleep) may stand earlier, and is brought to cycle() first (docs/segment.md).
+  // its firmware asleep) may stand earlier, and is brought to cycle() first (docs/segment.md); one
+  // whose firmware waits for its next access (up to kCpuSlack short) stays where that starts.
   [[nodiscard]] Chip& chip(std::size_t i);
   [[nodiscard]] const Chip& chip(std::size_t i) const;
   [[nodiscard]] std::uint32_t bit_cycles() const { return t_; }
@@ -103,7 +104,8 @@ class Segment {
   void flush();
 
   // A host CPU may end a firmware access this many clocks after the cycle it was asked to reach:
-  // it is run to that much short of a round's end, the chip alone the rest.
+  // past a round's end only where nobody else drives within them (docs/segment.md, "A firmware
+  // across a round's end").
   static constexpr std::uint64_t kCpuSlack = 3;
 
  private:
