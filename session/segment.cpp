@@ -172,18 +172,25 @@ bool Segment::others_drive(const Station& s, std::uint64_t from, std::uint64_t t
 //   starts at `to`, up to kCpuSlack clocks late.
 void Segment::step_station(Station& s, std::uint64_t to) {
   if (!s.chip || s.chip->cycle() >= to) return;
-  if (s.cpu && !others_drive(s, to, to + kCpuSlack)) {
-    s.cpu->run_until(to);
-    s.chip->clear_stop();
-  } else if (s.cpu && to > kCpuSlack) {
-    s.cpu->run_until(to - kCpuSlack);
-    s.chip->clear_stop();
+  if (s.cpu) {
     // An asleep CPU starts no access before X/INT: the chip runs on to `to` or until then.
-    while (!s.cpu->busy() && s.chip->cycle() < to) {
-      s.chip->step_until_irq(to - s.chip->cycle());
+    const auto asleep_to_end = [&] {
+      while (!s.cpu->busy() && s.chip->cycle() < to) {
+        s.chip->step_until_irq(to - s.chip->cycle());
+        s.chip->clear_stop();
+      }
+    };
+    asleep_to_end();
+    if (s.chip->cycle() >= to) return;
+    if (!others_drive(s, to, to + kCpuSlack)) {
+      s.cpu->run_until(to);
       s.chip->clear_stop();
+    } else if (to > kCpuSlack) {
+      s.cpu->run_until(to - kCpuSlack);
+      s.chip->clear_stop();
+      asleep_to_end();
+      if (s.chip->cycle() < to && !s.drives(s.chip->cycle() + 1, to)) return;
     }
-    if (s.chip->cycle() < to && !s.drives(s.chip->cycle() + 1, to)) return;
   }
   if (s.chip->cycle() < to) s.chip->step(to - s.chip->cycle());
 }
