@@ -138,7 +138,11 @@ class SegmentOutputs final : public SegmentObserver {
     for (auto& r : traces_) r->heading(std::string(text));
   }
   void step_ends(const SegmentStep&) override {
-    for (auto& r : traces_) r->checkpoint();
+    // A station the line left behind (telegram level) is brought to the line's time first.
+    for (std::size_t k = 0; k < traces_.size(); ++k) {
+      (void)seg_->chip(k);
+      traces_[k]->checkpoint();
+    }
   }
 
   void telegram(const LineTelegram& t) override {
@@ -155,7 +159,10 @@ class SegmentOutputs final : public SegmentObserver {
     if (held_) add(*held_);
     held_.reset();
     end_cycle_ = seg.cycle();
-    for (auto& r : traces_) r->finish();
+    for (std::size_t k = 0; k < traces_.size(); ++k) {
+      (void)seg.chip(k);
+      traces_[k]->finish();
+    }
     if (!opt_.json.empty()) json_text_ = summary(seg, passed, failed).dump(2) + '\n';
   }
 
