@@ -139,12 +139,14 @@ void expect_as_alone(std::uint32_t baud) {
     ASSERT_NE(first, nullptr);
     EXPECT_EQ(first->cycle, acted + 4);
     EXPECT_FALSE(first->a.write);
+    EXPECT_EQ(first->a.addr, 0x02);  // Int_Reg's low byte on the SPC3, dps_isr's first read
     // The watchdog restarted there expires TWD later, X/INT goes active (WD_DP_Control_Timeout)
     // and the ISR's first access completes 4 clocks after, whatever the master looked at.
     const Access* wd = first_from(seg, acted + kTwd);
     ASSERT_NE(wd, nullptr);
     EXPECT_EQ(wd->cycle, acted + kTwd + 4);
     EXPECT_FALSE(wd->a.write);
+    EXPECT_EQ(wd->a.addr, 0x02);
     // Every access of the firmware, init, start-up and Data_Exchange, at the chip alone's cycle.
     ASSERT_EQ(seg.accesses.size(), lone.accesses.size());
     std::size_t differ = 0;
