@@ -7,6 +7,25 @@
 
 namespace dpc31 {
 
+namespace {
+
+// `slot` holds `value` for a scope (left by an exception from a firmware too).
+class Scoped {
+ public:
+  Scoped(std::optional<std::uint64_t>& slot, std::uint64_t value) : slot_(slot), old_(slot) {
+    slot_ = value;
+  }
+  ~Scoped() { slot_ = old_; }
+  Scoped(const Scoped&) = delete;
+  Scoped& operator=(const Scoped&) = delete;
+
+ private:
+  std::optional<std::uint64_t>& slot_;
+  std::optional<std::uint64_t> old_;
+};
+
+}  // namespace
+
 struct Segment::Station {
   std::size_t index = 0;
   std::string name;
@@ -23,6 +42,15 @@ struct Segment::Station {
   std::optional<LineTelegram> answer;
   Edges relayed;
   std::size_t relayed_next = 0;
+  // The TxD edges of its last armed answer (both line modes): what a firmware running past a
+  // round's end must not cross.
+  Edges drives_edges;
+  [[nodiscard]] bool drives(std::uint64_t from, std::uint64_t to) const {
+    const auto e = std::lower_bound(
+        drives_edges.begin(), drives_edges.end(), from,
+        [](const std::pair<std::uint64_t, bool>& x, std::uint64_t c) { return x.first < c; });
+    return e != drives_edges.end() && e->first <= to;
+  }
 };
 
 Segment::Segment(std::uint32_t baud, std::uint32_t clock_hz)
@@ -52,6 +80,8 @@ std::size_t Segment::add_chip(std::string name, ChipOptions opt) {
   });
   s->chip->on_answer([raw](const Telegram& t) {
     raw->answer = LineTelegram{0, t.start, t.end, t.bytes};
+    raw->drives_edges.clear();
+    uart_encode(t.bytes, t.start, raw->chip->bit_cycles(), raw->drives_edges);
   });
   next_.push_back(UINT64_MAX);
   look_at(*s);
@@ -98,7 +128,10 @@ Chip& Segment::chip(std::size_t i) {
   if (!s.chip) throw std::invalid_argument("segment: station " + s.name + " has no chip");
   // Left alone by the line, it has no event before now_ and its firmware sleeps: stepping it here
   // changes nothing but its cycle.
-  if (s.chip->cycle() < now_) step_station(s, now_);
+  if (s.chip->cycle() < now_) {
+    const Scoped at(hard_end_, now_);  // its firmware does not run past the line's time
+    step_station(s, now_);
+  }
   // Whoever asks for it may arm something without time passing (an observer of TxD edges): the
   // rounds look at it again.
   s.looked = UINT64_MAX;
@@ -121,6 +154,7 @@ std::uint64_t Segment::cycle() const {
 
 void Segment::catch_up() {
   const std::uint64_t front = cycle();
+  const Scoped at(hard_end_, front);
   for (const auto& s : stations_) {
     if (!s->chip) continue;
     if (front > now_) step_station(*s, front);
@@ -135,21 +169,55 @@ void Segment::catch_up() {
 // event before, so that costs one look at its deadlines.
 void Segment::align() {
   catch_up();
+  const Scoped at(hard_end_, now_);  // no firmware runs past the line's time
   for (const auto& s : stations_) step_station(*s, now_);
 }
 
+bool Segment::others_drive(const Station& s, std::uint64_t from, std::uint64_t to) const {
+  if (hard_end_ && *hard_end_ >= from && *hard_end_ <= to) return true;
+  return std::any_of(stations_.begin(), stations_.end(), [&](const auto& o) {
+    return o.get() != &s && o->chip && o->drives(from, to);
+  });
+}
+
+// The host CPU never splits a bus access: one started before `to` may end up to kCpuSlack clocks
+// past it. Its accesses must be those of the chip alone wherever the round ends (docs/segment.md,
+// "A firmware across a round's end"), so, in this order:
+// - nobody else drives the line from `to` to `to` + kCpuSlack (no other chip's armed answer, no
+//   sender's telegram starting there, no hard end of a run): the CPU runs to `to` as on one chip,
+//   the chip ends up to kCpuSlack past it (cycle() shows that, and run_until brings the line
+//   there before it returns), and whatever drives later reaches it ahead of time;
+// - else, its CPU runs to kCpuSlack short of `to` (an asleep one: the chip to `to` or to X/INT
+//   going active), and when its own TxD stays quiet up to `to` the chip waits where its next
+//   access (or its ISR) starts, in a later round (no edge of its own is missing from this one, and
+//   what the line brings meanwhile reaches it ahead of time);
+// - else (it drives too: a collision) the chip alone runs the rest, and the firmware's next access
+//   starts at `to`, up to kCpuSlack clocks late.
 void Segment::step_station(Station& s, std::uint64_t to) {
   if (!s.chip || s.chip->cycle() >= to) return;
   if (!reference_ && !s.busy && next_[s.index] > to && s.looked == s.chip->cycle()) {
     s.chip->step(to - s.chip->cycle());  // nothing happens in it before `to`: only time passes
     return;
   }
-  // The host CPU never splits a bus access and may end one up to kCpuSlack clocks past its goal:
-  // it runs to that much short of `to`, and the chip alone the rest (the CPU's next access starts
-  // at `to`), so the chip stands exactly at `to` for what the line brings next.
-  if (s.cpu && to > kCpuSlack) {
-    s.cpu->run_until(to - kCpuSlack);
-    s.chip->clear_stop();
+  if (s.cpu) {
+    // An asleep CPU starts no access before X/INT: the chip runs on to `to` or until then.
+    const auto asleep_to_end = [&] {
+      while (!s.cpu->busy() && s.chip->cycle() < to) {
+        s.chip->step_until_irq(to - s.chip->cycle());
+        s.chip->clear_stop();
+      }
+    };
+    asleep_to_end();
+    if (s.chip->cycle() >= to) return;
+    if (!others_drive(s, to, to + kCpuSlack)) {
+      s.cpu->run_until(to);
+      s.chip->clear_stop();
+    } else if (to > kCpuSlack) {
+      s.cpu->run_until(to - kCpuSlack);
+      s.chip->clear_stop();
+      asleep_to_end();
+      if (s.chip->cycle() < to && !s.drives(s.chip->cycle() + 1, to)) return;
+    }
   }
   if (s.chip->cycle() < to) s.chip->step(to - s.chip->cycle());
 }
@@ -273,7 +341,7 @@ void Segment::flush() { close_telegrams(UINT64_MAX); }
 
 std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> bytes,
                             std::uint64_t start, UartFault fault) {
-  run_until(start);
+  run_to_send(start);
   const std::uint64_t end = start + bytes.size() * std::uint64_t{kUartCharBits} * t_;
   if (owner_ && *owner_ != from && start < owned_until_) {
     collide(*owner_, from, start);
@@ -306,8 +374,13 @@ std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> byte
   return end;
 }
 
-void Segment::pulse(std::size_t from, std::uint64_t start, std::uint64_t low_cycles) {
+void Segment::run_to_send(std::uint64_t start) {
+  const Scoped at(hard_end_, start);
   run_until(start);
+}
+
+void Segment::pulse(std::size_t from, std::uint64_t start, std::uint64_t low_cycles) {
+  run_to_send(start);
   if (owner_ && *owner_ != from && start < owned_until_) {
     collide(*owner_, from, start);
     return;
@@ -322,46 +395,56 @@ void Segment::run_until(std::uint64_t cycle, std::optional<std::size_t> wake_for
   catch_up();
   wake_for_ = wake_for;
   woken_ = false;
-  while (now_ < cycle && !woken_) {
-    // No chip's TxD changes before its next deadline: every station may run to the earliest,
-    // and what a chip drives there reaches the others at that very cycle.
-    std::uint64_t bound = cycle;
-    if (reference_) {
-      for (const auto& s : stations_) {
-        if (s->chip) bound = std::min(bound, s->chip->next_deadline());
-      }
-    } else {
-      for (const std::uint64_t n : next_) bound = std::min(bound, n);  // senders: UINT64_MAX
-    }
-    // A running firmware's accesses depend on where rounds end (kCpuSlack): the stop samples of
-    // characters heard whole stay ends of rounds, as their events made them on the reference line.
-    if (busy_ != 0 && !reference_) bound = std::min(bound, line_rx_.next_deadline());
-    bound = std::max(bound, now_ + 1);
-    // Telegram level: a chip without an event by `bound` whose firmware sleeps is left where it
-    // is (it is given the line's characters ahead of time, as a master gives them).
-    for (const auto& s : stations_) {
-      if (!s->chip || (!reference_ && next_[s->index] > bound && !s->busy)) continue;
-      step_station(*s, bound);
-      look_at(*s);
-    }
-    now_ = bound;
-    // What the chips drove, in the order of its cycles (ties: station order).
-    round_.clear();
-    std::sort(drove_.begin(), drove_.end());
-    for (const std::size_t i : drove_) {
-      for (const auto& [at, level] : stations_[i]->txd) round_.push_back({at, i, level});
-      stations_[i]->txd.clear();
-    }
-    drove_.clear();
-    // Mostly one edge or none: sorted already, and stable_sort would allocate its buffer.
-    const auto earlier = [](const Driven& a, const Driven& b) { return a.cycle < b.cycle; };
-    if (!std::is_sorted(round_.begin(), round_.end(), earlier))
-      std::stable_sort(round_.begin(), round_.end(), earlier);
-    for (const Driven& e : round_) relay(e.station, e.cycle, e.level);
-    close_telegrams(now_);
-    line_final_ = now_;
+  while (now_ < cycle && !woken_) round(cycle);
+  // A firmware that ran past the last round's end (step_station) moved cycle(): the line and the
+  // other chips follow it there, where no firmware runs past it, so that the line has one time.
+  const std::uint64_t front = this->cycle();
+  if (front > now_) {
+    const Scoped at(hard_end_, front);
+    while (now_ < front) round(front);
   }
   wake_for_.reset();
+}
+
+void Segment::round(std::uint64_t cycle) {
+  // No chip's TxD changes before its next deadline: every station may run to the earliest,
+  // and what a chip drives there reaches the others at that very cycle.
+  std::uint64_t bound = cycle;
+  if (reference_) {
+    for (const auto& s : stations_) {
+      if (s->chip) bound = std::min(bound, s->chip->next_deadline());
+    }
+  } else {
+    for (const std::uint64_t n : next_) bound = std::min(bound, n);  // senders: UINT64_MAX
+  }
+  // Where a firmware may not run past a round's end (step_station), its accesses depend on where
+  // rounds end: the stop samples of characters heard whole stay ends of rounds, as their events
+  // made them on the reference line.
+  if (busy_ != 0 && !reference_) bound = std::min(bound, line_rx_.next_deadline());
+  bound = std::max(bound, now_ + 1);
+  // Telegram level: a chip without an event by `bound` whose firmware sleeps is left where it
+  // is (it is given the line's characters ahead of time, as a master gives them).
+  for (const auto& s : stations_) {
+    if (!s->chip || (!reference_ && next_[s->index] > bound && !s->busy)) continue;
+    step_station(*s, bound);
+    look_at(*s);
+  }
+  now_ = bound;
+  // What the chips drove, in the order of its cycles (ties: station order).
+  round_.clear();
+  std::sort(drove_.begin(), drove_.end());
+  for (const std::size_t i : drove_) {
+    for (const auto& [at, level] : stations_[i]->txd) round_.push_back({at, i, level});
+    stations_[i]->txd.clear();
+  }
+  drove_.clear();
+  // Mostly one edge or none: sorted already, and stable_sort would allocate its buffer.
+  const auto earlier = [](const Driven& a, const Driven& b) { return a.cycle < b.cycle; };
+  if (!std::is_sorted(round_.begin(), round_.end(), earlier))
+    std::stable_sort(round_.begin(), round_.end(), earlier);
+  for (const Driven& e : round_) relay(e.station, e.cycle, e.level);
+  close_telegrams(now_);
+  line_final_ = now_;
 }
 
 void Segment::take_line(std::size_t listener, UartRx& rx) {

@@ -57,7 +57,8 @@ class Segment {
   [[nodiscard]] const std::string& name(std::size_t i) const;
   [[nodiscard]] bool is_chip(std::size_t i) const;
   // The chip of station i at the line's time: a station the line left alone (no event of its own,
-  // its firmware asleep) may stand earlier, and is brought to cycle() first (docs/segment.md).
+  // its firmware asleep) may stand earlier, and is brought to cycle() first (docs/segment.md); one
+  // whose firmware waits for its next access (up to kCpuSlack short) stays where that starts.
   [[nodiscard]] Chip& chip(std::size_t i);
   [[nodiscard]] const Chip& chip(std::size_t i) const;
   [[nodiscard]] std::uint32_t bit_cycles() const { return t_; }
@@ -106,13 +107,21 @@ class Segment {
   void flush();
 
   // A host CPU may end a firmware access this many clocks after the cycle it was asked to reach:
-  // it is run to that much short of a round's end, the chip alone the rest.
+  // past a round's end only where nobody else drives within them (docs/segment.md, "A firmware
+  // across a round's end").
   static constexpr std::uint64_t kCpuSlack = 3;
 
  private:
   struct Station;
   using Edges = std::vector<std::pair<std::uint64_t, bool>>;
   void step_station(Station& s, std::uint64_t to);
+  // Whether another station drives the line anywhere in [from, to] (another chip's armed answer)
+  // or a firmware may not run past a cycle there (hard_end_).
+  [[nodiscard]] bool others_drive(const Station& s, std::uint64_t from, std::uint64_t to) const;
+  // run_until(start) for a sender that drives from `start`: no firmware runs past it.
+  void run_to_send(std::uint64_t start);
+  // One round of run_until: every station that needs it to the earliest next event (<= cycle).
+  void round(std::uint64_t cycle);
   // What the rounds know of a chip: its next event and whether its firmware runs.
   void look_at(Station& s);
   // Station i's answer, armed and now starting on the line at `cycle`, to every other chip whole.
@@ -141,6 +150,8 @@ class Segment {
   std::uint64_t owned_until_ = 0;
   bool woken_ = false;
   std::optional<std::size_t> wake_for_;
+  // No firmware runs past this cycle: a sender drives from it, or the line's time is brought there.
+  std::optional<std::uint64_t> hard_end_;
   // The telegram being decoded from the line.
   UartRx line_rx_;
   std::vector<UartChar> chars_;
