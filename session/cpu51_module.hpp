@@ -46,6 +46,17 @@ struct Cpu51Choice {
   std::string ports;           // the 80C32 board's latch bytes by name; empty: DO4's
   std::string irq_controller;  // --irq-controller as given (empty: none)
 };
+// The choice of a command's options: `dpc31 bridge`'s and `dpc31 serve`'s have the same names
+// (cpu, firmware, code, board_address, ports, chip.irq_controller).
+template <class Options>
+Cpu51Choice cpu51_choice_of(const Options& o) {
+  return {.cpu = o.cpu,
+          .firmware = o.firmware,
+          .code = o.code,
+          .board_address = o.board_address,
+          .ports = o.ports,
+          .irq_controller = o.chip.irq_controller};
+}
 // Fills `cfg` and reads the image. `c31` needs the dpc31 and makes
 // `chip` serve the C31's interrupt controller, as the scenario header `cpu c31` does (an explicit
 // --irq-controller external contradicts it). "" or the one-line complaint (FILE:LINE: reason for

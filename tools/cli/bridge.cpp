@@ -209,14 +209,8 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
     return bad(why);
   // The CPU's choice needs the profile (the C31 is the dpc31's) and may set the controller.
   if (c.setup.cpu) {
-    const Cpu51Choice choice{.cpu = o.cpu,
-                             .firmware = o.firmware,
-                             .code = o.code,
-                             .board_address = o.board_address,
-                             .ports = o.ports,
-                             .irq_controller = o.chip.irq_controller};
     if (const std::string why =
-            apply_cpu51_choice(choice, c.setup.chip, *c.setup.cpu, c.setup.cpu_image);
+            apply_cpu51_choice(cpu51_choice_of(o), c.setup.chip, *c.setup.cpu, c.setup.cpu_image);
         !why.empty()) {
       return bad(why);
     }

@@ -33,13 +33,8 @@ std::string cpu_choice(const ServeArgs& a, serve::ServerOptions& opt) {
   }
   if (a.firmware.empty()) return "--cpu needs --firmware FILE.ihx, the CPU's Intel HEX image";
   serve::CpuSetup setup;
-  const Cpu51Choice choice{.cpu = a.cpu,
-                           .firmware = a.firmware,
-                           .code = a.code,
-                           .board_address = a.board_address,
-                           .ports = a.ports,
-                           .irq_controller = a.chip.irq_controller};
-  if (std::string why = apply_cpu51_choice(choice, opt.chip, setup.cfg, setup.image); !why.empty())
+  if (std::string why = apply_cpu51_choice(cpu51_choice_of(a), opt.chip, setup.cfg, setup.image);
+      !why.empty())
     return why;
   if (!a.address.empty()) setup.address = static_cast<std::uint8_t>(std::stoul(a.address));
   opt.cpu = std::move(setup);
