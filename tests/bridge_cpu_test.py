@@ -26,7 +26,7 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import bridge_line_test as blt  # noqa: E402
 import bridge_test as bt  # noqa: E402
-from bridge_test import SCALE  # noqa: E402
+from bridge_test import GUARD  # noqa: E402
 from dp_master import check  # noqa: E402
 
 # (machine cycle, PC, opcode) of every step: the listing of c31_ack.asm (.org 30h on). The
@@ -47,34 +47,48 @@ def c31_ack():
 
 def c31_ack_trace():
     # The program needs 40 machine cycles, 960 chip cycles (20 us of chip time); free pacing runs
-    # the chip with the wall clock while no client is connected. The log's last line says where
-    # chip time stood when SIGTERM came: a bridge that had not run that far yet (beside a CPU
-    # hog) is started again and given longer.
+    # the chip with the wall clock while no client is connected. SIGTERM comes after the event
+    # that shows chip time past them (not after a sleep, which beside a CPU hog could end before
+    # the bridge ran that far): a client's open of the pty, logged with the cycle at which the
+    # bridge saw it. A client that only opens and closes the pty changes nothing for the C31.
     need = 24 * (STEPS[-1][0] + 2)
-    for attempt in range(1, 11):
-        with tempfile.TemporaryDirectory() as tmp:
-            trace = os.path.join(tmp, "c31.trace")
-            b = bt.Bridge(tmp, "--cpu", "c31", "--firmware", c31_ack(), "--code", "0x1000",
-                          "--profile", "dpc31", "--pacing", "free", "--trace-cpu", trace)
-            try:
-                time.sleep(0.1 * attempt)
-                b.stop(signal.SIGTERM)
-                lines = b.log_lines()
-                check(lines[-1].endswith("stopping on SIGTERM"), f"last log line: {lines[-1]}")
-                if int(lines[-1].split()[0]) < need:
-                    continue
-                check("c31_ack.ihx on the C31 at 24000000 Hz" in lines[0],
-                      f"log line 1: {lines[0]}")
-                check("profile dpc31, irq-controller c31," in lines[0], f"log line 1: {lines[0]}")
-                with open(trace, encoding="utf-8") as f:
-                    steps = f.read().splitlines()
-                got = [line.split()[:4] for line in steps[:len(STEPS)]]
-                want = [[str(24 * m), str(m), f"{pc:04X}", f"{op:02X}"] for m, pc, op in STEPS]
-                check(got == want, f"the trace's first steps: {got}, expected {want}")
-                return
-            finally:
-                b.kill()
-    check(False, "the bridge never ran 960 chip cycles before SIGTERM")
+    with tempfile.TemporaryDirectory() as tmp:
+        trace = os.path.join(tmp, "c31.trace")
+        b = bt.Bridge(tmp, "--cpu", "c31", "--firmware", c31_ack(), "--code", "0x1000",
+                      "--profile", "dpc31", "--pacing", "free", "--trace-cpu", trace)
+        try:
+            deadline = time.monotonic() + GUARD
+            while True:
+                opened = [line for line in b.log_lines() if "client opened the pty" in line]
+                fd = os.open(b.path, os.O_RDWR | os.O_NOCTTY)
+                b.wait_for_log("client opened the pty", GUARD, len(opened) + 1)
+                b.close_and_wait(Pty(fd))
+                seen = [line for line in b.log_lines() if "client opened the pty" in line][-1]
+                if int(seen.split()[0]) >= need:
+                    break
+                check(time.monotonic() < deadline, f"chip time not at {need} after {GUARD:g} s")
+            b.stop(signal.SIGTERM)
+            lines = b.log_lines()
+            check(lines[-1].endswith("stopping on SIGTERM"), f"last log line: {lines[-1]}")
+            check("c31_ack.ihx on the C31 at 24000000 Hz" in lines[0], f"log line 1: {lines[0]}")
+            check("profile dpc31, irq-controller c31," in lines[0], f"log line 1: {lines[0]}")
+            with open(trace, encoding="utf-8") as f:
+                steps = f.read().splitlines()
+            got = [line.split()[:4] for line in steps[:len(STEPS)]]
+            want = [[str(24 * m), str(m), f"{pc:04X}", f"{op:02X}"] for m, pc, op in STEPS]
+            check(got == want, f"the trace's first steps: {got}, expected {want}")
+        finally:
+            b.kill()
+
+
+class Pty:
+    """A client of the pty that only opened it (for Bridge.close_and_wait)."""
+
+    def __init__(self, fd):
+        self.fd = fd
+
+    def close(self):
+        os.close(self.fd)
 
 
 def c31_bad_arguments():

@@ -28,7 +28,7 @@ import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import bridge_test as bt  # noqa: E402
-from bridge_test import SCALE, dx_answer, exchange_do4, startup_do4  # noqa: E402
+from bridge_test import GUARD, PacedMaster, dx_answer, exchange_do4, startup_do4  # noqa: E402
 from dp_master import Master, check  # noqa: E402
 
 DISSECTOR = None
@@ -42,7 +42,7 @@ class TcpBridge(bt.Bridge):
     def __init__(self, tmp, *args):  # pylint: disable=super-init-not-called
         self.path = None  # no symlink
         self.start(tmp, ["--tcp", "0"], args, self.port_named,
-                   "the bridge named no TCP port within 10 s")
+                   "the bridge named no TCP port")
 
     def port_named(self):
         lines = self.log_lines()
@@ -69,31 +69,31 @@ def tcp_two_clients_and_garbage():
         b = TcpBridge(tmp, "--firmware", "DO4", "--baud", str(BAUD), "--pacing", "free",
                       "--log-level", "telegrams")
         try:
-            m = Master(b.url, BAUD, 2.0 * SCALE)
-            b.wait_for_log("client connected from 127.0.0.1:", 10 * SCALE)
+            m = PacedMaster(b, BAUD, device=b.url)
+            b.wait_for_log("client connected from 127.0.0.1:", GUARD)
             startup_do4(m)
             exchange_do4(m)
             # One client at a time: the second connection is accepted and closed at once.
-            second = socket.create_connection(("127.0.0.1", b.port), timeout=10 * SCALE)
+            second = socket.create_connection(("127.0.0.1", b.port), timeout=GUARD)
             check(second.recv(16) == b"", "a second client was not closed")
             second.close()
-            b.wait_for_log("refused a second client from 127.0.0.1:", 10 * SCALE)
+            b.wait_for_log("refused a second client from 127.0.0.1:", GUARD)
             # Garbage as on the pty: the bytes go on RxD as they came (a broken telegram, no
             # answer); the next request is answered.
             os.write(m.fd, bytes([0x00, 0x01, 0x02, 0xFF]))
-            b.wait_for_log("| broken telegram", 10 * SCALE)
+            b.wait_for_log("| broken telegram", GUARD)
             m.expect("Data_Exchange after garbage", m.srd([0x05, 0x01]), dx_answer(0x08, [0x51]))
             # The first client goes; a second one exchanges data at once (DO4 is still in
             # Data_Exchange: its watchdog is 10 s).
             m.close()
-            b.wait_for_log("closed the connection: queues flushed", 10 * SCALE)
-            m2 = Master(b.url, BAUD, 2.0 * SCALE)
+            b.wait_for_log("closed the connection: queues flushed", GUARD)
+            m2 = PacedMaster(b, BAUD, device=b.url)
             try:  # FCV 0: a new master's first request is taken whatever the FCB
                 m2.expect("Data_Exchange, second client", m2.srd([0x05, 0x01]),
                           dx_answer(0x08, [0x51]))
             finally:
                 m2.close()
-            b.wait_for_log("closed the connection: queues flushed", 10 * SCALE, 2)
+            b.wait_for_log("closed the connection: queues flushed", GUARD, 2)
             b.stop()
             lines = b.log_lines()
             check(lines[0].endswith(f", tcp 127.0.0.1:{b.port}"), f"log line 1: {lines[0]}")
@@ -134,11 +134,12 @@ def pcap_tshark_fields():
         b = TcpBridge(tmp, "--firmware", "DO4", "--baud", str(BAUD), "--pacing", "free",
                       "--pcap", pcap)
         try:
-            m = Master(b.url, BAUD, 2.0 * SCALE)
+            # The events level has no line per request to wait on: the answer timeout is the guard.
+            m = Master(b.url, BAUD, GUARD, search=GUARD)
             startup_do4(m)
             exchange_do4(m)
             m.close()
-            b.wait_for_log("closed the connection", 10 * SCALE)
+            b.wait_for_log("closed the connection", GUARD)
             check(not os.path.exists(pcap), "the capture exists before the bridge stopped")
             b.stop()
         finally:
@@ -209,7 +210,7 @@ def expect_refused(args, want, *files):
     """`dpc31 bridge ARGS` refused: exit 2, one line on stderr holding `want`, none of `files`
     made (docs/bad-input.md)."""
     r = subprocess.run([bt.CLI, "bridge"] + args, capture_output=True, text=True,
-                       timeout=30 * SCALE, check=False)
+                       timeout=GUARD, check=False)
     lines = r.stderr.splitlines()
     check(r.returncode == 2 and len(lines) == 1 and want in lines[0],
           f"{args}: exit {r.returncode}, stderr {r.stderr!r}")

@@ -35,7 +35,7 @@ import tempfile
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import bridge_line_test as blt  # noqa: E402
 import bridge_test as bt  # noqa: E402
-from bridge_test import SCALE  # noqa: E402
+from bridge_test import GUARD  # noqa: E402
 from dp_master import Fail, check  # noqa: E402
 
 TOOL = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tools", "dp_master.py")
@@ -51,8 +51,9 @@ MASTER_SLAVES = ["--slave", "5:0x0D04:21,10:00,00,00,00:05,01",
 def run_master(device, slaves=None):
     """tools/dp_master.py with both slaves, 20 DP cycles; its exit is the event waited for."""
     r = subprocess.run([sys.executable, TOOL, device, "--baud", str(BAUD), "--cycles", "20",
-                        "--timeout", str(2.0 * SCALE)] + (slaves or MASTER_SLAVES),
-                       capture_output=True, text=True, timeout=120 * SCALE, check=False)
+                        "--timeout", str(GUARD), "--search", str(GUARD)]
+                       + (slaves or MASTER_SLAVES),
+                       capture_output=True, text=True, timeout=5 * GUARD, check=False)
     check(r.returncode == 0, f"dp_master exit {r.returncode}: {r.stdout} {r.stderr}")
     lines = r.stdout.splitlines()
     if slaves:
@@ -102,7 +103,7 @@ def pty_run(stations, master):
                       "--log-level", "telegrams")
         try:
             out = master(b.path)
-            b.wait_for_log("client closed the pty", 30 * SCALE)
+            b.wait_for_log("client closed the pty", GUARD)
             b.stop(signal.SIGTERM)
             return out, b.path, b.log_lines()
         finally:
@@ -125,7 +126,7 @@ def tcp_two_slaves_pcap():
                           "--pcap", pcap)
         try:
             run_master(b.url)
-            b.wait_for_log("closed the connection", 30 * SCALE)
+            b.wait_for_log("closed the connection", GUARD)
             b.stop()
             check_two_stations_log(b.log_lines(), f"tcp 127.0.0.1:{b.port}")
         finally:

@@ -29,6 +29,9 @@ CLI = None
 # Wall-clock limits are multiplied by this; only the sanitizer build (CMakePresets.json, asan)
 # sets it above 1 (docs/sanitizers.md).
 SCALE = float(os.environ.get("DPC31_TIMEOUT_SCALE", "1"))
+# The guard of every wait for what will come (an answer, a log line, the slave found in its baud
+# search: --timeout, --search, --c1-timeout): a hang ends it, a loaded host does not (issue 35).
+GUARD = 20 * SCALE
 MASTER = 2
 SLAVE = 5
 
@@ -70,26 +73,26 @@ class Bridge:
         self.path = os.path.join(tmp, link)
         self.start(tmp, ["--pty", self.path], args,
                    lambda: os.path.islink(self.path) and os.path.exists(self.path),
-                   "the bridge made no symlink within 10 s")
+                   "the bridge made no symlink")
 
     def start(self, tmp, line, args, ready, missing):
         """Runs the bridge on `line` (its --pty or --tcp option) with its log in `tmp`, and waits
-        until `ready()` (or fails with `missing` after 10 s, or when the bridge exits)."""
+        until `ready()` (or fails with `missing` after GUARD, or when the bridge exits)."""
         self.log = os.path.join(tmp, "bridge.log")
         self.proc = subprocess.Popen([CLI, "bridge"] + line + ["--log", self.log] + list(args),
                                      stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-        deadline = time.monotonic() + 10 * SCALE
+        deadline = time.monotonic() + GUARD
         while not ready():
             if self.proc.poll() is not None:
                 raise Fail(f"bridge exited with {self.proc.returncode}: "
                            f"{self.proc.stderr.read()!r}")
-            check(time.monotonic() < deadline, missing)
+            check(time.monotonic() < deadline, f"{missing} within {GUARD:g} s")
             time.sleep(0.01)
 
     def stop(self, sig=signal.SIGTERM):
         self.proc.send_signal(sig)
         try:
-            _, err = self.proc.communicate(timeout=10 * SCALE)
+            _, err = self.proc.communicate(timeout=GUARD)
         except subprocess.TimeoutExpired:
             self.proc.kill()
             raise Fail(f"the bridge did not stop on signal {sig}") from None
@@ -142,25 +145,27 @@ class Bridge:
         next client's tcsetattr finds it reset (a fixed 50 ms was too short beside a CPU hog)."""
         before = sum("slave side reset" in line for line in self.log_lines())
         m.close()
-        self.wait_for_log("slave side reset", 30 * SCALE, before + 1)
+        self.wait_for_log("slave side reset", GUARD, before + 1)
 
 
 class PacedMaster(Master):
-    """A master for a bridge in free pacing at the telegrams log level that waits on each
-    request's fate in the bridge's log (its answer, or "no answer within the slot time") instead
-    of a wall-clock timeout. A host slower than the chip's time (the 80C32 with --trace-cpu
-    beside a CPU hog ran at 1/17 of real time) otherwise fills the bridge's queue with the
-    FDL_Status requests of find_slave's retries faster than the chip works them off, and the
+    """A master for a bridge at the telegrams log level that waits on each request's fate in the
+    bridge's log (its answer, or "no answer within the slot time") instead of a wall-clock
+    timeout, in either pacing. In free pacing a host slower than the chip's time (the 80C32 with
+    --trace-cpu beside a CPU hog ran at 1/17 of real time) otherwise fills the bridge's queue with
+    the FDL_Status requests of find_slave's retries faster than the chip works them off, and the
     first Slave_Diag was answered, but behind 230 stale FDL_Status exchanges, long after the
-    master's 0.5 s (issue 35). `limit_s` only guards against a hang."""
+    master's 0.5 s (issue 35); an answer timeout that expires on a loaded host is a lost request
+    by chance. `limit_s` (the answer's and find_slave's) only guards against a hang; `device`: a
+    TcpBridge's URL."""
 
-    def __init__(self, bridge, baud, limit_s):
-        super().__init__(bridge.path, baud, limit_s)
+    def __init__(self, bridge, baud, limit_s=GUARD, slave=SLAVE, device=None):
+        super().__init__(device or bridge.path, baud, limit_s, MASTER, slave, search=limit_s)
         self.bridge = bridge
         self.fates = bridge.fates()
 
     def transact(self, req, timeout=None, searching=False):
-        termios.tcflush(self.fd, termios.TCIFLUSH)
+        self.flush_input()
         os.write(self.fd, req)
         self.fates += 1
         deadline = time.monotonic() + self.timeout
@@ -180,7 +185,7 @@ class PacedMaster(Master):
             check(left > 0, f"the answer to {hexs(req)} is in the log but not on the pty")
             r, _, _ = select.select([self.fd], [], [], left)
             if r:
-                buf += os.read(self.fd, 512)
+                buf += self.read()
 
 
 def startup_do4(m, wd=(0x64, 0x0A)):
@@ -281,7 +286,7 @@ def do4_80c32_free():
                    "--baud", "19200", "--pacing", "free", "--trace-cpu", trace,
                    "--log-level", "telegrams")
         try:
-            m = PacedMaster(b, 19200, 60 * SCALE)
+            m = PacedMaster(b, 19200, 3 * GUARD)
             startup_do4(m)
             exchange_do4(m)
             m.close()
@@ -306,12 +311,12 @@ def do4_80c32_free():
             b.kill()
 
 
-def do4_two_clients(pacing, baud=19200, timeout=0.5, firmware="DO4"):
+def do4_two_clients(pacing, baud=19200, firmware="DO4"):
     with tempfile.TemporaryDirectory() as tmp:
         b = Bridge(tmp, "--firmware", firmware, "--baud", str(baud), "--pacing", pacing,
                    "--log-level", "telegrams")
         try:
-            m = Master(b.path, baud, timeout * SCALE)
+            m = PacedMaster(b, baud)
             startup_do4(m)
             exchange_do4(m)
             # A second master program on the same pty, same speed: its 8E1 tcsetattr only works
@@ -319,7 +324,7 @@ def do4_two_clients(pacing, baud=19200, timeout=0.5, firmware="DO4"):
             # still parameterised by master 2 (watchdog 100 x 10 x 10 ms = 10 s), so FDL_Status
             # and one Slave_Diag find it ready and the outputs are still 05 01.
             b.close_and_wait(m)
-            m = Master(b.path, baud, timeout * SCALE)
+            m = PacedMaster(b, baud)
             a = None
             for _ in range(20):
                 a = m.fdl_status()
@@ -346,17 +351,17 @@ def do4_reparameterise_after_watchdog():
     Chip time follows the wall clock between exchanges, so the watchdogs are long enough for a
     loaded test machine (1 s while parameterised for the first time, 10 s after)."""
     with tempfile.TemporaryDirectory() as tmp:
-        b = Bridge(tmp, "--firmware", "DO4", "--pacing", "free")
+        b = Bridge(tmp, "--firmware", "DO4", "--pacing", "free", "--log-level", "telegrams")
         try:
-            m = Master(b.path, 19200, 0.5 * SCALE)
+            m = PacedMaster(b, 19200)
             startup_do4(m, wd=(0x0A, 0x0A))
             exchange_do4(m)
             m.close()
             # The DP watchdog (1 s of chip time) expires while no client is there: waited for in
             # the log, not for a wall time (chip time falls behind the wall clock on a loaded
             # machine; issue 35).
-            b.wait_for_log("DP watchdog expired", 30 * SCALE)
-            m = Master(b.path, 19200, 0.5 * SCALE)
+            b.wait_for_log("DP watchdog expired", GUARD)
+            m = PacedMaster(b, 19200)
             # Baud_Control expired too (the chip searches the rate again): FDL_Status until
             # answered.
             m.expect("FDL_Status", m.find_slave(), status_ok())
@@ -383,11 +388,11 @@ def cnt2_logmsg(firmware="CNT2", board=("--profile", "vpc3plus"), module="CNT2",
     the log's name of who wrote the ports, `first` part of log line 1."""
     with tempfile.TemporaryDirectory() as tmp:
         b = Bridge(tmp, "--firmware", firmware, "--baud", "500000", "--pacing", "free",
-                   *board, "--address", "9")
+                   *board, "--address", "9", "--log-level", "telegrams")
         global SLAVE
         SLAVE = 9
         try:
-            m = Master(b.path, 500000, 0.5 * SCALE, MASTER, SLAVE)
+            m = PacedMaster(b, 500000, slave=SLAVE)
             m.expect("FDL_Status", m.find_slave(), status_ok())
             m.expect("Slave_Diag", m.srd([], SAP_SLAVE_DIAG),
                      diag([0x02, 0x05, 0x00, 0xFF, 0x0C, 0x02]))
@@ -468,7 +473,7 @@ def bad_arguments():
              "--trace-cpu", os.path.join(tmp, "no", "t")],
         ]
         for args in cases:
-            p = subprocess.run([CLI] + args, capture_output=True, timeout=20 * SCALE, check=False)
+            p = subprocess.run([CLI] + args, capture_output=True, timeout=GUARD, check=False)
             check(p.returncode == 2, f"{args}: exit code {p.returncode}, expected 2")
             err = p.stderr.decode()
             check(err.count("\n") == 1 and err.endswith("\n"),
@@ -484,19 +489,19 @@ def stale_symlink_replaced():
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "dp0")
         os.symlink("/dev/pts/nonexistent-stale", path)
-        b = Bridge(tmp, "--firmware", "DO4", "--pacing", "free")
+        b = Bridge(tmp, "--firmware", "DO4", "--pacing", "free", "--log-level", "telegrams")
         try:
             check(os.readlink(path).startswith("/dev/pts/") and os.path.exists(path),
                   "the stale symlink was not replaced")
             # A client that only opens, configures and closes: the next one still gets a
             # working tcsetattr at the same speed.
-            b.close_and_wait(Master(b.path, 19200, 0.5 * SCALE))
-            m = Master(b.path, 19200, 0.5 * SCALE)
+            b.close_and_wait(Master(b.path, 19200, GUARD))
+            m = PacedMaster(b, 19200)
             m.expect("FDL_Status", m.find_slave(), status_ok())
             # A client at another speed: the pty carries no timing, the bytes go on the bus at
             # the bridge's rate, and the log says so.
             b.close_and_wait(m)
-            m = Master(b.path, 9600, 0.5 * SCALE)
+            m = PacedMaster(b, 9600)
             # Until answered: on a loaded host chip time can run past Baud_Control while no
             # client is there, and the slave searches the rate again (issue 35).
             m.expect("FDL_Status at 9600 on the pty", m.find_slave(), status_ok())
@@ -528,7 +533,9 @@ def profibus_rates_default_log():
         with tempfile.TemporaryDirectory() as tmp:
             b = Bridge(tmp, "--firmware", "DO4", "--baud", str(baud), "--pacing", "free")
             try:
-                m = Master(b.path, baud, 0.5 * SCALE)
+                # The events level has no line per request to wait on: the answer timeout is the
+                # guard (a request lost when chip time ran past Baud_Control costs it once).
+                m = Master(b.path, baud, GUARD, search=GUARD)
                 startup_do4(m)
                 exchange_do4(m)
                 for _ in range(50):
@@ -536,7 +543,7 @@ def profibus_rates_default_log():
                 b.close_and_wait(m)
                 # Another client at another rate: the bridge says which.
                 other = 12000000
-                m = Master(b.path, other, 0.5 * SCALE)
+                m = Master(b.path, other, GUARD, search=GUARD)
                 m.expect(f"FDL_Status at {other} on the pty", m.find_slave(), status_ok())
                 m.close()
                 b.stop(signal.SIGTERM)
@@ -585,13 +592,13 @@ def answer_dropped_without_client():
         b = Bridge(tmp, "--firmware", "DO4", "--baud", "9600", "--log-level", "telegrams")
         try:
             for attempt in range(20):
-                m = Master(b.path, 9600, 0.5 * SCALE)
+                m = PacedMaster(b, 9600)
                 m.expect("FDL_Status", m.find_slave(), status_ok())
                 req = m.srd_frame([], SAP_SLAVE_DIAG)
                 on_line = f"RxD   master   {hexs(req)}  |"
                 before = sum(on_line in line for line in b.log_lines())
                 os.write(m.fd, req)
-                b.wait_for_log(on_line, 30 * SCALE, before + 1)
+                b.wait_for_log(on_line, GUARD, before + 1)
                 b.proc.send_signal(signal.SIGSTOP)
                 lines = b.log_lines()
                 at = max(i for i, line in enumerate(lines) if on_line in line)
@@ -604,22 +611,22 @@ def answer_dropped_without_client():
                 # The next client's tcsetattr needs the slave side reset (close_and_wait), and
                 # comes after the Slave_Diag's fate (its answer, or none), so that no tail of it
                 # reaches the next client.
-                b.wait_for_log("slave side reset", 30 * SCALE, resets + 1)
-                deadline = time.monotonic() + 30 * SCALE
+                b.wait_for_log("slave side reset", GUARD, resets + 1)
+                deadline = time.monotonic() + GUARD
                 k = len(fate_tags(lines[:at]))
                 while (fates := b.fates(all_lines=True))[0] <= k:
-                    check(time.monotonic() < deadline, "the Slave_Diag met no fate in 30 s")
+                    check(time.monotonic() < deadline, f"the Slave_Diag met no fate in {GUARD:g} s")
                     time.sleep(0.01)
                 # No answer at all: Baud_Control expired after find_slave (a loaded host).
                 if fates[1][k] == "TxD" and not answered and struct.unpack("i", waiting)[0] == 0:
                     # At least the answer's tail is dropped (it takes 19.5 ms of chip time, the
                     # bridge's first turn after SIGCONT 5 ms at most); all 17 bytes unless that
                     # turn wrote its first characters to the closed pty.
-                    b.wait_for_log("no client:", 30 * SCALE, drops + 1)
+                    b.wait_for_log("no client:", GUARD, drops + 1)
                     if any("no client: 17 answer bytes dropped" in line for line in b.log_lines()):
                         break
                 print(f"answer_dropped_without_client: attempt {attempt} lost", file=sys.stderr)
-            m = Master(b.path, 9600, 0.5 * SCALE)
+            m = PacedMaster(b, 9600)
             m.expect("FDL_Status (next client)", m.find_slave(), status_ok())
             m.close()
             b.stop(signal.SIGTERM)
@@ -650,10 +657,10 @@ def dpv1_over_bridge(firmware, master_args, body):
             def run(*dpv1):
                 before = sum("slave side reset" in line for line in b.log_lines())
                 r = subprocess.run([sys.executable, tool, b.path] + master_args +
-                                   ["--cycles", "2", "--timeout", str(0.5 * SCALE),
-                                    "--c1-timeout", str(2 * SCALE)] + list(dpv1),
-                                   capture_output=True, text=True, timeout=60 * SCALE)
-                b.wait_for_log("slave side reset", 30 * SCALE, before + 1)
+                                   ["--cycles", "2", "--timeout", str(GUARD), "--search",
+                                    str(GUARD), "--c1-timeout", str(GUARD)] + list(dpv1),
+                                   capture_output=True, text=True, timeout=3 * GUARD)
+                b.wait_for_log("slave side reset", GUARD, before + 1)
                 return r
             body(run)
             b.stop(signal.SIGTERM)

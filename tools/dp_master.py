@@ -139,7 +139,7 @@ def answer_du(a, sap):
 class Master:
     """A DP master on the device: 8E1 raw, FCB/FCV per EN 50170, a timeout per answer."""
 
-    def __init__(self, path, baud, timeout, address=2, slave=5):
+    def __init__(self, path, baud, timeout, address=2, slave=5, search=20.0):
         self.sock = None
         if path.startswith("socket://"):
             self.sock = connect(path, 10)
@@ -155,6 +155,7 @@ class Master:
                 raise
         self.baud = baud
         self.timeout = timeout
+        self.search = search
         self.address = address
         self.slave = slave
         self.fcb = True
@@ -234,8 +235,9 @@ class Master:
             self.fcv = True
         return a
 
-    def find_slave(self, budget=20.0):
-        """FDL_Status until answered, for `budget` seconds at most. While the chip searches the
+    def find_slave(self, budget=None):
+        """FDL_Status until answered, for `budget` seconds at most (default: the master's
+        `search`, --search). While the chip searches the
         rate it listens max(4096 bit times, 20 ms) at each of the ten (12 Mbaud first; the round
         is 0.896 s of chip time, docs/timing.md "Baud_Search"): a request goes out every exchange
         time at this rate (request, TSYN, slot time, answer: under 300 bit times) plus 3 ms for
@@ -246,7 +248,7 @@ class Master:
         periods: not longer, or Baud_Control, a few hundred ms of a silent bus, sends the chip
         back to its search), so the next request gets its own answer."""
         period = 300.0 / self.baud + 0.003
-        deadline = time.monotonic() + budget
+        deadline = time.monotonic() + (self.search if budget is None else budget)
         while time.monotonic() < deadline:
             a = self.fdl_status(timeout=period, searching=True)
             if a is not None:
@@ -476,6 +478,9 @@ def main():
     p.add_argument("--outputs", type=byte_list, default=[], help="output bytes")
     p.add_argument("--cycles", type=int, default=10, help="Data_Exchange cycles")
     p.add_argument("--timeout", type=float, default=0.5, help="seconds to wait for an answer")
+    p.add_argument("--search", type=float, default=20.0, metavar="SECONDS",
+                   help="seconds to look for a slave with FDL_Status (while it searches the "
+                   "rate) before giving up (default 20; longer on a loaded host)")
     p.add_argument("--dpv1-read", type=byte_list, metavar="SLOT,INDEX,LENGTH",
                    help="then MSAC_C1 Read of this record (hex bytes)")
     p.add_argument("--dpv1-write", type=byte_list, metavar="SLOT,INDEX,DATA",
@@ -485,6 +490,8 @@ def main():
     p.add_argument("--wait", type=float, default=10.0,
                    help="seconds to wait for the device to appear")
     args = p.parse_args()
+    if not args.search > 0:
+        p.error("--search takes a positive number of seconds")
     if len(args.watchdog) != 2:
         p.error("--watchdog takes two bytes")
     if args.dpv1_read is not None and len(args.dpv1_read) != 3:
@@ -503,7 +510,8 @@ def main():
 
     try:
         wait_for(args.device, args.wait)
-        m = Master(args.device, args.baud, args.timeout, args.address, slaves[0].address)
+        m = Master(args.device, args.baud, args.timeout, args.address, slaves[0].address,
+                   args.search)
     except OSError as e:
         print(f"dp_master: {e}", file=sys.stderr)
         return 2

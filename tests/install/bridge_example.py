@@ -41,8 +41,9 @@ def dx(dpc31, master, plugin):
         try:
             m = subprocess.run([sys.executable, master, link, "--ident", "0x0E01", "--cfg", "20,10",
                                 "--user-prm", "00", "--outputs", "05", "--cycles", "5",
-                                # A loaded machine must not turn a slow answer into a repeat.
-                                "--timeout", str(2 * SCALE)],
+                                # Guards only (issue 35): a loaded machine must not turn a
+                                # slow answer into a repeat, or a slow search into a failure.
+                                "--timeout", str(20 * SCALE), "--search", str(20 * SCALE)],
                                capture_output=True, text=True, timeout=60 * SCALE, check=False)
             print(m.stdout, end="")
             if m.returncode != 0:
