@@ -29,7 +29,7 @@ import tempfile
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import bridge_test as bt  # noqa: E402
 from bridge_test import GUARD, PacedMaster, dx_answer, exchange_do4, startup_do4  # noqa: E402
-from dp_master import Master, check  # noqa: E402
+from dp_master import check  # noqa: E402
 
 DISSECTOR = None
 BAUD = 19200
@@ -132,10 +132,9 @@ def pcap_tshark_fields():
     with tempfile.TemporaryDirectory() as tmp:
         pcap = os.path.join(tmp, "line.pcapng")
         b = TcpBridge(tmp, "--firmware", "DO4", "--baud", str(BAUD), "--pacing", "free",
-                      "--pcap", pcap)
+                      "--pcap", pcap, "--log-level", "telegrams")
         try:
-            # The events level has no line per request to wait on: the answer timeout is the guard.
-            m = Master(b.url, BAUD, GUARD, search=GUARD)
+            m = PacedMaster(b, BAUD, device=b.url)
             startup_do4(m)
             exchange_do4(m)
             m.close()

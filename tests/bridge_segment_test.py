@@ -35,7 +35,7 @@ import tempfile
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import bridge_line_test as blt  # noqa: E402
 import bridge_test as bt  # noqa: E402
-from bridge_test import GUARD  # noqa: E402
+from bridge_test import GUARD, LOST  # noqa: E402
 from dp_master import Fail, check  # noqa: E402
 
 TOOL = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tools", "dp_master.py")
@@ -51,7 +51,7 @@ MASTER_SLAVES = ["--slave", "5:0x0D04:21,10:00,00,00,00:05,01",
 def run_master(device, slaves=None):
     """tools/dp_master.py with both slaves, 20 DP cycles; its exit is the event waited for."""
     r = subprocess.run([sys.executable, TOOL, device, "--baud", str(BAUD), "--cycles", "20",
-                        "--timeout", str(GUARD), "--search", str(GUARD)]
+                        "--timeout", str(LOST), "--search", str(GUARD)]
                        + (slaves or MASTER_SLAVES),
                        capture_output=True, text=True, timeout=5 * GUARD, check=False)
     check(r.returncode == 0, f"dp_master exit {r.returncode}: {r.stdout} {r.stderr}")
