@@ -118,11 +118,16 @@ ChipOptions chip_options(std::string_view profile, std::string_view bus, std::ui
                          std::string_view engine, const std::optional<std::string>& variant,
                          std::string_view irq_controller);
 RegId reg_id(const Chip& chip, std::string_view name);
+// A register field's value by names (ValueError for a name the profile lacks), a register's
+// address (None where the profile has none): Chip.peek_field / addr_of, and a segment's stations.
+std::uint16_t peek_field(const Chip& chip, std::string_view reg, std::string_view field);
+py::object addr_of(const Chip& chip, std::string_view name);
 py::bytes to_bytes(std::span<const std::uint8_t> b);
 std::vector<std::uint8_t> from_bytes(const py::bytes& b);
 py::dict counters_dict(const FdlCounters& c);
 
 void bind_chip(py::module_& m);
 void bind_session(py::module_& m);
+void bind_segment(py::module_& m);
 
 }  // namespace dpc31::py_bind
