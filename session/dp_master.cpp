@@ -172,9 +172,10 @@ TokenVisit DpMaster::use_token(std::uint8_t next,
     return cfg_.ttr_bits == 0 || start < v.arrived + v.hold;
   };
   const std::size_t keep = current_;
-  if (starting_up()) {
+  const bool startup = starting_up();
+  if (startup) {
     // The start-up's requests are the visit's high-priority cycles, in startup_all's order;
-    // a slave waiting out its Prm check ends the visit.
+    // a slave waiting out its Prm check ends the visit. The GAP update waits for its end.
     for (std::size_t i = 0; i < slaves_.size() && (v.startup.empty() || time_left());) {
       select(i);
       Startup& st = startups_[i];
@@ -196,7 +197,7 @@ TokenVisit DpMaster::use_token(std::uint8_t next,
     }
   }
   select(keep);
-  if (cfg_.gap_factor != 0) {
+  if (cfg_.gap_factor != 0 && !startup) {
     ++visits_since_gap_;
     if (visits_since_gap_ >= cfg_.gap_factor && time_left()) {
       const auto after = [&](std::uint8_t a) {

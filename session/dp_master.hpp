@@ -187,7 +187,8 @@ class DpMaster {
   // the visits of use_token spend their high-priority cycles on startup_all's requests, in its
   // order (slave by slave, request by request, each a message cycle by the same rule as a DP
   // cycle), until every slave reached Data_Exchange or used `tries`; a slave waiting out its Prm
-  // check ends a visit. Then the visits are DP cycles again.
+  // check ends a visit. Such a visit has no GAP poll and does not count towards G. Then the
+  // visits are DP cycles again.
   void begin_startup(int tries = kStartupTries);
   [[nodiscard]] bool starting_up() const;
   // Every slave's start-up (begin_startup) reached Data_Exchange.

@@ -299,8 +299,10 @@ class SegmentRun {
     std::vector<std::uint8_t> startup;
     for (const std::size_t i : v.startup) startup.push_back(s_.masters[m].slaves[i]);
     const SegmentStep::Visit& want = st.visit;
-    got = fmt::format("polled {}, start-up {}, rotation {} cycles, hold {} cycles, gap {}{}",
-                      fmt::join(polled, ","), fmt::join(startup, ","), v.rotation, v.hold,
+    got = fmt::format("polled {}{}, rotation {} cycles, hold {} cycles, gap {}{}",
+                      fmt::join(polled, ","),
+                      startup.empty() ? "" : fmt::format(", start-up {}", fmt::join(startup, ",")),
+                      v.rotation, v.hold,
                       v.gap ? std::to_string(*v.gap) : "none",
                       v.gap ? (v.gap_answered ? " (answered)" : " (no answer)") : "");
     return (!want.polled || *want.polled == polled) && (!want.startup || *want.startup == startup) &&
