@@ -35,6 +35,13 @@ Errors& errors();
 [[noreturn]] void raise(const py::object& type, const std::string& message,
                         std::initializer_list<std::pair<const char*, py::object>> attrs = {});
 
+// Runs `f` with the GIL released and returns what it returns (called with the GIL held).
+template <typename F>
+auto without_gil(F&& f) -> decltype(f()) {
+  py::gil_scoped_release nogil;
+  return f();
+}
+
 // One chip as Python holds it. The GIL is released while the chip runs; Python observers take it
 // again. An observer's exception stops the run (Chip::request_stop) and is raised when the call
 // that ran the chip returns. While the chip runs (`busy`), only the thread running it may look
@@ -51,16 +58,10 @@ class PyChip {
     enter(true);
     Busy busy(*this);
     if constexpr (std::is_void_v<decltype(f())>) {
-      {
-        py::gil_scoped_release nogil;
-        f();
-      }
+      without_gil(f);
       rethrow();
     } else {
-      auto r = [&] {
-        py::gil_scoped_release nogil;
-        return f();
-      }();
+      auto r = without_gil(f);
       rethrow();
       return r;
     }

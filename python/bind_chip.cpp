@@ -373,8 +373,7 @@ void bind_chip_class(py::module_& m) {
           },
           py::arg("register"), py::arg("field"))
       .def(
-          "addr_of",
-          [](const PyChip& c, std::string_view name) { return addr_of(c.chip, name); },
+          "addr_of", [](const PyChip& c, std::string_view name) { return addr_of(c.chip, name); },
           py::arg("name"))
       .def_property_readonly("registers",
                              [](const PyChip& c) { return registers_of(c.chip.profile()); })

@@ -2,6 +2,7 @@
 // (session/segment.hpp), the built-in masters on it with their token visits (DpMaster), scripted
 // senders, the bus check (session/bus_check.hpp) and segment scenarios, one call for one call.
 #include <memory>
+#include <variant>
 
 #include "bind.hpp"
 #include "bus_check.hpp"
@@ -49,32 +50,27 @@ class PySegment {
     };
   }
 
+  // Runs the line: the GIL released, then the bus check sees the idle line up to the line's time
+  // and an observer's exception is raised. A call without a result gives std::monostate.
   template <typename F>
-  auto run(F&& f) -> decltype(f()) {
+  auto run(F&& f) {
     enter();
     busy_ = true;
     struct Done {
       PySegment& s;
       ~Done() { s.busy_ = false; }
     } done{*this};
-    const auto after = [this] {
-      if (check) check->idle_until(seg.cycle());
-      if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
-    };
-    if constexpr (std::is_void_v<decltype(f())>) {
-      {
-        py::gil_scoped_release nogil;
+    auto r = without_gil([&] {
+      if constexpr (std::is_void_v<decltype(f())>) {
         f();
-      }
-      after();
-    } else {
-      auto r = [&] {
-        py::gil_scoped_release nogil;
+        return std::monostate{};
+      } else {
         return f();
-      }();
-      after();
-      return r;
-    }
+      }
+    });
+    if (check) check->idle_until(seg.cycle());
+    if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
+    return r;
   }
   void enter() const {
     if (busy_) raise(errors().error, "the segment is running (another thread, or an observer)");
@@ -328,8 +324,8 @@ void bind_segment_class(py::module_& m) {
                              [](py::object self) {
                                py::list l;
                                for (const auto& st : self.cast<P&>().stations) {
-                                 py::object o = py::cast(st.get(),
-                                                         py::return_value_policy::reference);
+                                 py::object o =
+                                     py::cast(st.get(), py::return_value_policy::reference);
                                  o.attr("_segment") = self;
                                  l.append(o);
                                }
@@ -360,7 +356,8 @@ void bind_segment_class(py::module_& m) {
           py::arg("idle_bits") = 33,
           "A built-in master polling `slaves` (station addresses or SlaveConfigs), obeying TTR "
           "`ttr` bit times (0: no limit) and the GAP update factor `gap` in use_token.")
-      .def("name", [](const P& s, std::size_t i) { return s.seg.name(i); }, py::arg("station"))
+      .def(
+          "name", [](const P& s, std::size_t i) { return s.seg.name(i); }, py::arg("station"))
       .def_property_readonly("size", [](const P& s) { return s.seg.size(); })
       .def_property_readonly("cycle", [](const P& s) { return s.seg.cycle(); })
       .def_property_readonly("bit_cycles", [](const P& s) { return s.seg.bit_cycles(); })
@@ -415,8 +412,8 @@ void bind_segment_class(py::module_& m) {
           [](P& s, U64 ttr, std::uint32_t slot_bits, std::uint32_t min_tsdr_bits,
              std::uint32_t tsyn_bits, const std::optional<std::vector<U8>>& masters) {
             s.enter();
-            BusTiming t{s.seg.bit_cycles(), min_tsdr_bits, slot_bits, tsyn_bits, ttr,
-                        masters.value_or(s.master_addresses)};
+            BusTiming t{s.seg.bit_cycles(), min_tsdr_bits, slot_bits,
+                        tsyn_bits,          ttr,           masters.value_or(s.master_addresses)};
             s.check_log.clear();
             s.check = std::make_unique<BusCheck>(t, [&s](const LogRecord& r) {
               s.check_log.push_back("[cycle " + std::to_string(r.cycle) + "] " + r.text);
@@ -435,6 +432,13 @@ void bind_segment_class(py::module_& m) {
         if (s.check) s.check->flush();
         return s.check_log;
       });
+}
+
+// A master's service that sends bytes (Data_Exchange's outputs, a raw telegram), without a fault.
+template <Exchange (DpMaster::*Service)(const std::vector<U8>&, UartFault)>
+Exchange bytes_service(PySegMaster& pm, const py::bytes& data) {
+  const std::vector<U8> v = from_bytes(data);
+  return pm.act([&] { return (*pm.m.*Service)(v, UartFault{}); });
 }
 
 void bind_seg_master(py::module_& m) {
@@ -457,8 +461,7 @@ void bind_seg_master(py::module_& m) {
           [](M& pm, int tries) { return pm.act([&] { return pm.m->startup_all(tries); }); },
           py::arg("tries") = kStartupTries)
       .def(
-          "startup",
-          [](M& pm, int tries) { return pm.act([&] { return pm.m->startup(tries); }); },
+          "startup", [](M& pm, int tries) { return pm.act([&] { return pm.m->startup(tries); }); },
           py::arg("tries") = kStartupTries)
       .def(
           "begin_startup",
@@ -491,13 +494,7 @@ void bind_seg_master(py::module_& m) {
           py::arg("outputs") = py::none(), py::arg("skip") = std::vector<U8>{},
           "Data_Exchange with every slave in order (outputs[i] to slave i; zeros where none), "
           "but the station addresses in `skip`.")
-      .def(
-          "data_exchange",
-          [](M& pm, const py::bytes& out) {
-            const std::vector<U8> v = from_bytes(out);
-            return pm.act([&] { return pm.m->data_exchange(v); });
-          },
-          py::arg("outputs"))
+      .def("data_exchange", &bytes_service<&DpMaster::data_exchange>, py::arg("outputs"))
       .def(
           "use_token",
           [](M& pm, U8 next, const std::optional<Outputs>& outputs) {
@@ -506,7 +503,8 @@ void bind_seg_master(py::module_& m) {
           py::arg("next"), py::arg("outputs") = py::none(),
           "One visit of the token (TTR, the GAP update), then the token to `next`.")
       .def(
-          "pass_token", [](M& pm, U8 next) { return pm.act([&] { return pm.m->pass_token(next); }); },
+          "pass_token",
+          [](M& pm, U8 next) { return pm.act([&] { return pm.m->pass_token(next); }); },
           py::arg("next"))
       .def(
           "wait_token",
@@ -525,16 +523,10 @@ void bind_seg_master(py::module_& m) {
           "transact",
           [](M& pm, const fdl::Frame& req) { return pm.act([&] { return pm.m->transact(req); }); },
           py::arg("request"))
+      .def("transact_raw", &bytes_service<&DpMaster::transact_raw>, py::arg("data"))
       .def(
-          "transact_raw",
-          [](M& pm, const py::bytes& raw) {
-            const std::vector<U8> v = from_bytes(raw);
-            return pm.act([&] { return pm.m->transact_raw(v); });
-          },
-          py::arg("data"))
-      .def(
-          "idle", [](M& pm, U64 cycles) { pm.act([&] { pm.m->idle(cycles); }); },
-          py::arg("cycles"), "Time passes with a silent line from this master.")
+          "idle", [](M& pm, U64 cycles) { pm.act([&] { pm.m->idle(cycles); }); }, py::arg("cycles"),
+          "Time passes with a silent line from this master.")
       .def_property_readonly("counters", [](const M& pm) { return pm.m->counters(); })
       .def_property_readonly("history", [](const M& pm) { return pm.m->history(); })
       .def("clear_history", [](M& pm) { pm.m->clear_history(); });

@@ -302,10 +302,10 @@ class SegmentRun {
     got = fmt::format("polled {}{}, rotation {} cycles, hold {} cycles, gap {}{}",
                       fmt::join(polled, ","),
                       startup.empty() ? "" : fmt::format(", start-up {}", fmt::join(startup, ",")),
-                      v.rotation, v.hold,
-                      v.gap ? std::to_string(*v.gap) : "none",
+                      v.rotation, v.hold, v.gap ? std::to_string(*v.gap) : "none",
                       v.gap ? (v.gap_answered ? " (answered)" : " (no answer)") : "");
-    return (!want.polled || *want.polled == polled) && (!want.startup || *want.startup == startup) &&
+    return (!want.polled || *want.polled == polled) &&
+           (!want.startup || *want.startup == startup) &&
            (!want.rotation_bits || *want.rotation_bits * t == v.rotation) &&
            (!want.hold_bits || *want.hold_bits * t == v.hold) &&
            (!want.gap || *want.gap == v.gap) &&

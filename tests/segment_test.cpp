@@ -343,11 +343,11 @@ TEST(Segment, TheGapUpdateWaitsForTokenHoldTime) {
 //   A = 89 866; the one before, 89 899, is early). Answered 11 T after its end: 90 175 to 90 241;
 //   the next would start at 90 274 >= A + 235: the token ends at 90 307 = A248.
 // - Then one request a visit, each too long for a second (Slave_Diag 11 characters, its answer 17
-//   (6 diag bytes); Set_Prm 19 (8 data bytes), Chk_Cfg 13, each answered SC (1 character); FDL_Status
-//   answered 6 + 6): visit 248 (TRR 441, TTH 59) Slave_Diag to 5 (Prm_Req), 249 (TRR 418, TTH 82)
-//   Set_Prm, 250 (TRR 330, TTH 170) Chk_Cfg, 251 (TRR 264, TTH 236) Slave_Diag: ready; 252 (TRR
-//   418) FDL_Status to 6, answered (its rate found with 5's); 253 (TRR 242, TTH 258) Slave_Diag,
-//   254 Set_Prm, 255 Chk_Cfg, 256 Slave_Diag: ready. Each request starts at its A + 33.
+//   (6 diag bytes); Set_Prm 19 (8 data bytes), Chk_Cfg 13, each answered SC (1 character);
+//   FDL_Status answered 6 + 6): visit 248 (TRR 441, TTH 59) Slave_Diag to 5 (Prm_Req), 249 (TRR
+//   418, TTH 82) Set_Prm, 250 (TRR 330, TTH 170) Chk_Cfg, 251 (TRR 264, TTH 236) Slave_Diag: ready;
+//   252 (TRR 418) FDL_Status to 6, answered (its rate found with 5's); 253 (TRR 242, TTH 258)
+//   Slave_Diag, 254 Set_Prm, 255 Chk_Cfg, 256 Slave_Diag: ready. Each request starts at its A + 33.
 TEST(Segment, AMasterUnderTtrSpreadsItsStartupOverItsVisits) {
   Line line(kBaud, {5, 6}, 100);
   MasterConfig cfg{2, kBaud};

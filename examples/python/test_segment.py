@@ -164,3 +164,29 @@ def test_the_example_of_docs_python_md_runs(traces):
     section = doc.split("## A segment", 1)[1]
     example = re.search(r"```python\n(.*?)```", section, re.S).group(1)
     exec(compile(example, "docs/python.md", "exec"), {})
+
+
+def test_bad_input_is_a_clear_error_and_an_observers_exception_arrives():
+    import pytest
+    seg = dpc31.Segment(1_500_000)
+    with pytest.raises(ValueError, match="profile"):
+        seg.add_station(5, "spc4")
+    seg.add_station(5, "spc3")
+    with pytest.raises(ValueError, match="no station at address 9"):
+        seg.add_master(2, [9])
+    master = seg.add_master(2, [5])
+    sender = seg.add_sender("rogue")
+    with pytest.raises(ValueError, match="fault"):
+        seg.send(sender, b"\x10", fault="smoke")
+    check = seg.check_bus()
+    with pytest.raises(ValueError, match="no violation 'late'"):
+        check.count("late")
+
+    def boom(t):
+        raise KeyError("observer")
+
+    seg.on_telegram(boom)
+    with pytest.raises(KeyError, match="observer"):
+        master.fdl_status()
+    with pytest.raises(ValueError, match="before the line's time"):
+        seg.send(sender, b"\x10", start=0)
