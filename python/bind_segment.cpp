@@ -301,8 +301,19 @@ void bind_segment_class(py::module_& m) {
   py::class_<P>(m, "Segment",
                 "A bus segment: chips, masters and scripted senders on one RS-485 line "
                 "(docs/segment.md).")
-      .def(py::init<std::uint32_t, std::uint32_t>(), py::arg("baud") = 1'500'000,
-           py::arg("clock_hz") = 0)
+      .def(py::init([](std::uint32_t baud, std::uint32_t clock_hz) {
+             // The rates of a segment scenario's `segment baud=`; a bit at least one clock.
+             if (baud < 9'600 || baud > 12'000'000) {
+               throw py::value_error("baud " + std::to_string(baud) + ": 9600 to 12000000");
+             }
+             auto s = std::make_unique<P>(baud, clock_hz);
+             if (s->seg.bit_cycles() == 0) {
+               throw py::value_error("clock_hz " + std::to_string(clock_hz) +
+                                     ": less than one clock a bit");
+             }
+             return s;
+           }),
+           py::arg("baud") = 1'500'000, py::arg("clock_hz") = 0)
       .def(
           "add_station",
           [](py::object self, U8 address, const std::string& profile,
