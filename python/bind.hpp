@@ -35,6 +35,13 @@ Errors& errors();
 [[noreturn]] void raise(const py::object& type, const std::string& message,
                         std::initializer_list<std::pair<const char*, py::object>> attrs = {});
 
+// Runs `f` with the GIL released and returns what it returns (called with the GIL held).
+template <typename F>
+auto without_gil(F&& f) -> decltype(f()) {
+  py::gil_scoped_release nogil;
+  return f();
+}
+
 // One chip as Python holds it. The GIL is released while the chip runs; Python observers take it
 // again. An observer's exception stops the run (Chip::request_stop) and is raised when the call
 // that ran the chip returns. While the chip runs (`busy`), only the thread running it may look
@@ -51,16 +58,10 @@ class PyChip {
     enter(true);
     Busy busy(*this);
     if constexpr (std::is_void_v<decltype(f())>) {
-      {
-        py::gil_scoped_release nogil;
-        f();
-      }
+      without_gil(f);
       rethrow();
     } else {
-      auto r = [&] {
-        py::gil_scoped_release nogil;
-        return f();
-      }();
+      auto r = without_gil(f);
       rethrow();
       return r;
     }
@@ -118,11 +119,16 @@ ChipOptions chip_options(std::string_view profile, std::string_view bus, std::ui
                          std::string_view engine, const std::optional<std::string>& variant,
                          std::string_view irq_controller);
 RegId reg_id(const Chip& chip, std::string_view name);
+// A register field's value by names (ValueError for a name the profile lacks), a register's
+// address (None where the profile has none): Chip.peek_field / addr_of, and a segment's stations.
+std::uint16_t peek_field(const Chip& chip, std::string_view reg, std::string_view field);
+py::object addr_of(const Chip& chip, std::string_view name);
 py::bytes to_bytes(std::span<const std::uint8_t> b);
 std::vector<std::uint8_t> from_bytes(const py::bytes& b);
 py::dict counters_dict(const FdlCounters& c);
 
 void bind_chip(py::module_& m);
 void bind_session(py::module_& m);
+void bind_segment(py::module_& m);
 
 }  // namespace dpc31::py_bind

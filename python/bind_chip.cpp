@@ -129,6 +129,20 @@ std::uint16_t field_mask(const FieldDesc& f) {
   return static_cast<std::uint16_t>(((1U << f.width) - 1U) << f.lsb);
 }
 
+}  // namespace
+
+std::uint16_t peek_field(const Chip& chip, std::string_view reg, std::string_view field) {
+  const RegDesc& r = *find_reg(chip.profile(), reg_id(chip, reg));
+  const FieldDesc& f = field_of(r, field);
+  return static_cast<std::uint16_t>((chip.peek_reg(r.id) & field_mask(f)) >> f.lsb);
+}
+
+py::object addr_of(const Chip& chip, std::string_view name) {
+  return opt_addr(chip.addr_of(reg_id(chip, name)));
+}
+
+namespace {
+
 py::list registers_of(const ProfileDesc& p) {
   py::list l;
   for (const RegDesc& r : p.regs) l.append(py::cast(&r, py::return_value_policy::reference));
@@ -355,16 +369,11 @@ void bind_chip_class(py::module_& m) {
           "peek_field",
           [](const PyChip& c, std::string_view reg, std::string_view field) {
             c.enter(false);
-            const RegDesc& r = *find_reg(c.chip.profile(), reg_id(c.chip, reg));
-            const FieldDesc& f = field_of(r, field);
-            return (c.chip.peek_reg(r.id) & field_mask(f)) >> f.lsb;
+            return peek_field(c.chip, reg, field);
           },
           py::arg("register"), py::arg("field"))
       .def(
-          "addr_of",
-          [](const PyChip& c, std::string_view name) {
-            return opt_addr(c.chip.addr_of(reg_id(c.chip, name)));
-          },
+          "addr_of", [](const PyChip& c, std::string_view name) { return addr_of(c.chip, name); },
           py::arg("name"))
       .def_property_readonly("registers",
                              [](const PyChip& c) { return registers_of(c.chip.profile()); })
@@ -549,4 +558,5 @@ PYBIND11_MODULE(_dpc31, m) {
   m.doc() = "dpc31emu: the SPC3 / VPC3+ / DPC31 PROFIBUS-DP slave ASICs, cycle-accurate";
   dpc31::py_bind::bind_chip(m);
   dpc31::py_bind::bind_session(m);
+  dpc31::py_bind::bind_segment(m);
 }

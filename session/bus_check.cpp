@@ -142,7 +142,10 @@ void BusCheck::telegram(const LineTelegram& t) {
         token_at_ = t.end;
         held_cycle_started_ = false;
       } else {
-        if (!holder_) holder_ = d.frame.sa;
+        if (!holder_) {  // a claimed token: held from the TSYN its first request waited
+          holder_ = d.frame.sa;
+          token_at_ = t.start - std::min(t.start, bits(timing_.tsyn_bits));
+        }
         held_cycle_started_ = true;
       }
     }

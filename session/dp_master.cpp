@@ -126,6 +126,24 @@ std::vector<Exchange> DpMaster::dp_cycle(const std::vector<std::vector<std::uint
   return out;
 }
 
+void DpMaster::begin_startup(int tries) {
+  Startup s;
+  s.tries = tries;
+  startups_.assign(slaves_.size(), s);
+}
+
+bool DpMaster::starting_up() const {
+  return std::any_of(startups_.begin(), startups_.end(), [](const Startup& s) {
+    return s.phase != Startup::Phase::ready && s.phase != Startup::Phase::failed;
+  });
+}
+
+bool DpMaster::started_up() const {
+  return !startups_.empty() &&
+         std::all_of(startups_.begin(), startups_.end(),
+                     [](const Startup& s) { return s.phase == Startup::Phase::ready; });
+}
+
 Exchange DpMaster::pass_token(std::uint8_t next) {
   const Exchange ex = transact(fdl::token(next, cfg_.address));
   holding_ = next == cfg_.address;
@@ -154,15 +172,32 @@ TokenVisit DpMaster::use_token(std::uint8_t next,
     return cfg_.ttr_bits == 0 || start < v.arrived + v.hold;
   };
   const std::size_t keep = current_;
-  for (std::size_t n = 0; n < slaves_.size() && (v.polled.empty() || time_left()); ++n) {
-    const std::size_t i = next_slave_;
-    select(i);
-    data_exchange(i < outputs.size() ? outputs[i] : std::vector<std::uint8_t>(slave_.out_len));
-    v.polled.push_back(i);
-    next_slave_ = (next_slave_ + 1) % slaves_.size();
+  const bool startup = starting_up();
+  if (startup) {
+    // The start-up's requests are the visit's high-priority cycles, in startup_all's order;
+    // a slave waiting out its Prm check ends the visit. The GAP update waits for its end.
+    for (std::size_t i = 0; i < slaves_.size() && (v.startup.empty() || time_left());) {
+      select(i);
+      Startup& st = startups_[i];
+      if (startup_request(st)) {
+        v.startup.push_back(i);
+      } else if (st.phase == Startup::Phase::ready || st.phase == Startup::Phase::failed) {
+        ++i;
+      } else {
+        break;  // it waits out its Prm check
+      }
+    }
+  } else {
+    for (std::size_t n = 0; n < slaves_.size() && (v.polled.empty() || time_left()); ++n) {
+      const std::size_t i = next_slave_;
+      select(i);
+      data_exchange(i < outputs.size() ? outputs[i] : std::vector<std::uint8_t>(slave_.out_len));
+      v.polled.push_back(i);
+      next_slave_ = (next_slave_ + 1) % slaves_.size();
+    }
   }
   select(keep);
-  if (cfg_.gap_factor != 0) {
+  if (cfg_.gap_factor != 0 && !startup) {
     ++visits_since_gap_;
     if (visits_since_gap_ >= cfg_.gap_factor && time_left()) {
       const auto after = [&](std::uint8_t a) {
@@ -457,42 +492,77 @@ bool DpMaster::diag_ready(const fdl::Frame& f) {
 }
 
 bool DpMaster::startup(int tries) {
-  int n = 0;
-  for (; n < tries; ++n) {
-    if (fdl_status().answer) break;
+  Startup s;
+  s.tries = tries;
+  while (startup_request(s)) {
+    if (s.wait_until > now()) idle(s.wait_until - now());
   }
-  if (n == tries) return false;
-  note(fmt::format("[cycle {:>10}] FDL_Status answered", now()));
+  return s.phase == Startup::Phase::ready;
+}
+
+bool DpMaster::startup_request(Startup& s) {
+  using P = Startup::Phase;
+  if (s.phase == P::ready || s.phase == P::failed) return false;
+  if (s.n >= s.tries) {
+    s.phase = P::failed;
+    return false;
+  }
   const std::uint64_t ms = (seg_ ? seg_->clock_hz() : chip_->clock_hz()) / 1000;
-  std::uint64_t check_until = 0;  // our accepted Set_Prm's start + kPrmCheckMs; 0: none yet
-  for (; n < tries; ++n) {
-    const Exchange diag = slave_diag();
-    if (!diag.answer) continue;
-    if (diag_ready(*diag.answer)) {
-      note(fmt::format("[cycle {:>10}] Slave_Diag: ready for Data_Exchange", now()));
+  switch (s.phase) {
+    case P::fdl_status:
+      if (fdl_status().answer) {
+        note(fmt::format("[cycle {:>10}] FDL_Status answered", now()));
+        s.phase = P::diag;
+      } else {
+        ++s.n;
+      }
+      return true;
+    case P::prm: {
+      const Exchange prm = set_prm();
+      s.check_until =
+          prm.answer && prm.answer->sd == fdl::SC ? prm.request_start + kPrmCheckMs * ms : 0;
+      s.phase = P::cfg;
       return true;
     }
-    using D = pdu::SlaveDiag;
-    const std::vector<std::uint8_t>& du = diag.answer->du;
-    const bool fault = !du.empty() && (du[0] & (D::St1_Cfg_Fault | D::St1_Prm_Fault)) != 0;
-    if ((du.size() >= 2 && (du[1] & D::St2_Prm_Req) != 0) || fault) {
-      // The slave holds our parameters (Master_Add is ours, no fault) and its user is still
-      // checking them: a new Set_Prm would only restart the check (Prm_Conflict). Poll every
-      // 1 ms for up to kPrmCheckMs after our Set_Prm before parameterising again
-      // (docs/decisions.md, "The built-in master waits for a slave's Prm check").
-      if (!fault && du.size() >= 4 && du[3] == cfg_.address && now() < check_until) {
-        idle(ms);
-        continue;
-      }
-      // Prm_Req (or a fault): parameterise and configure.
-      note(fmt::format("[cycle {:>10}] Slave_Diag: Prm_Req, sending Set_Prm and Chk_Cfg", now()));
-      const Exchange prm = set_prm();
-      check_until =
-          prm.answer && prm.answer->sd == fdl::SC ? prm.request_start + kPrmCheckMs * ms : 0;
+    case P::cfg:
       chk_cfg();
-    }
+      ++s.n;
+      s.phase = P::diag;
+      return true;
+    default:
+      break;
   }
-  return false;
+  if (now() < s.wait_until) return false;
+  const Exchange diag = slave_diag();
+  if (!diag.answer) {
+    ++s.n;
+    return true;
+  }
+  if (diag_ready(*diag.answer)) {
+    note(fmt::format("[cycle {:>10}] Slave_Diag: ready for Data_Exchange", now()));
+    s.phase = P::ready;
+    return true;
+  }
+  using D = pdu::SlaveDiag;
+  const std::vector<std::uint8_t>& du = diag.answer->du;
+  const bool fault = !du.empty() && (du[0] & (D::St1_Cfg_Fault | D::St1_Prm_Fault)) != 0;
+  if ((du.size() >= 2 && (du[1] & D::St2_Prm_Req) != 0) || fault) {
+    // The slave holds our parameters (Master_Add is ours, no fault) and its user is still
+    // checking them: a new Set_Prm would only restart the check (Prm_Conflict). Poll every
+    // 1 ms for up to kPrmCheckMs after our Set_Prm before parameterising again
+    // (docs/decisions.md, "The built-in master waits for a slave's Prm check").
+    if (!fault && du.size() >= 4 && du[3] == cfg_.address && now() < s.check_until) {
+      s.wait_until = now() + ms;
+      ++s.n;
+      return true;
+    }
+    // Prm_Req (or a fault): parameterise and configure.
+    note(fmt::format("[cycle {:>10}] Slave_Diag: Prm_Req, sending Set_Prm and Chk_Cfg", now()));
+    s.phase = P::prm;
+    return true;
+  }
+  ++s.n;
+  return true;
 }
 
 bool DpMaster::restart(std::uint64_t tries, std::uint32_t retries) {

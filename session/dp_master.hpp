@@ -70,6 +70,8 @@ struct TokenVisit {
   std::uint64_t rotation = 0;       // TRR: from the arrival before (0: the ring's first visit)
   std::uint64_t hold = 0;           // TTH = TTR - TRR in cycles (0: a late token)
   std::vector<std::size_t> polled;  // the slaves (indices) exchanged with, in order
+  // In a start-up (DpMaster::begin_startup): the slave (index) of each start-up request, in order.
+  std::vector<std::size_t> startup;
   std::optional<std::uint8_t> gap;  // the address the GAP update asked with FDL_Status
   bool gap_answered = false;
 };
@@ -181,6 +183,16 @@ class DpMaster {
   // then the token to `next`. `outputs[i]` go to slave i (zeros where none are given).
   TokenVisit use_token(std::uint8_t next,
                        const std::vector<std::vector<std::uint8_t>>& outputs = {});
+  // The start-up under the token's rules (docs/segment.md, "The start-up under TTR"): from now on
+  // the visits of use_token spend their high-priority cycles on startup_all's requests, in its
+  // order (slave by slave, request by request, each a message cycle by the same rule as a DP
+  // cycle), until every slave reached Data_Exchange or used `tries`; a slave waiting out its Prm
+  // check ends a visit. Such a visit has no GAP poll and does not count towards G. Then the
+  // visits are DP cycles again.
+  void begin_startup(int tries = kStartupTries);
+  [[nodiscard]] bool starting_up() const;
+  // Every slave's start-up (begin_startup) reached Data_Exchange.
+  [[nodiscard]] bool started_up() const;
   [[nodiscard]] std::uint8_t address() const { return cfg_.address; }
   // Sends one request after the idle time and waits for its answer. `fault` corrupts one
   // character on the wire (parity, start or stop bit).
@@ -272,6 +284,20 @@ class DpMaster {
   std::uint64_t put_on_line(std::span<const std::uint8_t> bytes, std::uint64_t start,
                             UartFault fault);
 
+  // One slave's start-up as a sequence of message cycles (startup(), begin_startup): where it
+  // stands and how many of its `tries` it has used.
+  struct Startup {
+    enum class Phase : std::uint8_t { fdl_status, diag, prm, cfg, ready, failed };
+    Phase phase = Phase::fdl_status;
+    int tries = kStartupTries;
+    int n = 0;
+    std::uint64_t check_until = 0;  // our accepted Set_Prm's start + kPrmCheckMs; 0: none yet
+    std::uint64_t wait_until = 0;   // a slave checking our Set_Prm is asked again from here
+  };
+  // The selected slave's next start-up request; false when none went out (it is over, or it
+  // waits until wait_until).
+  bool startup_request(Startup& s);
+
   struct SlaveState {
     SlaveConfig config;
     std::uint8_t target = 0;
@@ -290,6 +316,7 @@ class DpMaster {
   std::size_t next_slave_ = 0;  // where the next visit's cycles begin
   std::uint64_t visits_since_gap_ = 0;
   std::optional<std::uint8_t> gap_next_;  // the GAP address asked next (none: the first)
+  std::vector<Startup> startups_;         // each slave's start-up under the token
   MasterConfig cfg_;
   SlaveConfig slave_;
   std::uint32_t t_;

@@ -285,7 +285,8 @@ class Parser {
     }
   }
 
-  // `expect visit ADDR polled=A,B rotation=BITS hold=BITS gap=ADDR|none gap_answered=yes|no`
+  // `expect visit ADDR polled=A,B|none startup=A,A,B|none rotation=BITS hold=BITS
+  // gap=ADDR|none gap_answered=yes|no`
   void visit(SegmentStep& st) {
     st.kind = SegmentStep::Kind::expect_visit;
     st.address = static_cast<std::uint8_t>(number(positional(1, "master"), "master", 0, 126));
@@ -295,7 +296,11 @@ class Parser {
       fail(fmt::format("master {} does not obey the token: give it ttr= or gap=", st.address));
     }
     SegmentStep::Visit& v = st.visit;
-    if (auto p = take("polled")) v.polled = bytes_list(*p);
+    const auto addresses = [](std::string_view list) {
+      return list == "none" ? std::vector<std::uint8_t>() : bytes_list(list);
+    };
+    if (auto p = take("polled")) v.polled = addresses(*p);
+    if (auto p = take("startup")) v.startup = addresses(*p);
     if (auto r = take("rotation")) v.rotation_bits = number(*r, "rotation", 0, UINT32_MAX);
     if (auto h = take("hold")) v.hold_bits = number(*h, "hold", 0, UINT32_MAX);
     if (auto g = take("gap")) {

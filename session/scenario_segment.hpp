@@ -66,10 +66,11 @@ struct SegmentStep {
   BusViolation violation = BusViolation::collision;
   // expect visit: what the last visit must show; an unset field is not checked.
   struct Visit {
-    std::optional<std::vector<std::uint8_t>> polled;  // slave addresses, in order
-    std::optional<std::uint64_t> rotation_bits;       // TRR
-    std::optional<std::uint64_t> hold_bits;           // TTH
-    std::optional<std::optional<std::uint8_t>> gap;   // the GAP address asked, or none
+    std::optional<std::vector<std::uint8_t>> polled;   // slave addresses, in order
+    std::optional<std::vector<std::uint8_t>> startup;  // each start-up request's slave, in order
+    std::optional<std::uint64_t> rotation_bits;        // TRR
+    std::optional<std::uint64_t> hold_bits;            // TTH
+    std::optional<std::optional<std::uint8_t>> gap;    // the GAP address asked, or none
     std::optional<bool> gap_answered;
   } visit;
 };

@@ -201,10 +201,7 @@ class SegmentRun {
     using K = SegmentStep::Kind;
     switch (st.kind) {
       case K::startup:
-        rotation([this](std::size_t m, std::uint8_t) {
-          masters_[m]->startup_all();
-          return false;
-        });
+        startup();
         break;
       case K::cycle:
         for (std::uint64_t n = 0; n < st.count; ++n) {
@@ -241,6 +238,28 @@ class SegmentRun {
     }
   }
 
+  // Each master's start-up of its slaves. One that obeys the token spreads it over its visits
+  // (DpMaster::begin_startup), the rotations going on until every such start-up is over; another
+  // does its whole start-up in its first visit, as before.
+  void startup() {
+    bool first = true;
+    for (std::size_t m = 0; m < masters_.size(); ++m) {
+      if (s_.masters[m].obeys_token) masters_[m]->begin_startup();
+    }
+    do {
+      rotation([this, first](std::size_t m, std::uint8_t next) {
+        if (s_.masters[m].obeys_token) {
+          visit(m, next);
+          return true;
+        }
+        if (first) masters_[m]->startup_all();
+        return false;
+      });
+      first = false;
+    } while (std::any_of(masters_.begin(), masters_.end(),
+                         [](const auto& m) { return m->starting_up(); }));
+  }
+
   // One visit of the token to master m (DpMaster::use_token: TTR, the GAP update), then the token
   // to `next` (its own address when it is alone: it passes the token to itself). The walk tells
   // what it did.
@@ -252,6 +271,11 @@ class SegmentRun {
     for (const std::size_t i : v.polled) {
       polled += fmt::format("{}{}", polled.empty() ? "" : ",", s_.masters[m].slaves[i]);
     }
+    std::string startup;
+    for (const std::size_t i : v.startup) {
+      startup += fmt::format("{}{}", startup.empty() ? "" : ",", s_.masters[m].slaves[i]);
+    }
+    if (!startup.empty()) polled = fmt::format("none, start-up requests to {}", startup);
     say(v.arrived, fmt::format("master {}: the token: TRR {} bit times, TTH {}, polled {}{}",
                                dm.address(), v.rotation / t, v.hold / t, polled,
                                v.gap ? fmt::format(", GAP address {} asked ({})", *v.gap,
@@ -272,12 +296,16 @@ class SegmentRun {
     const std::uint64_t t = seg_.bit_cycles();
     std::vector<std::uint8_t> polled;
     for (const std::size_t i : v.polled) polled.push_back(s_.masters[m].slaves[i]);
+    std::vector<std::uint8_t> startup;
+    for (const std::size_t i : v.startup) startup.push_back(s_.masters[m].slaves[i]);
     const SegmentStep::Visit& want = st.visit;
-    got = fmt::format("polled {}, rotation {} cycles, hold {} cycles, gap {}{}",
-                      fmt::join(polled, ","), v.rotation, v.hold,
-                      v.gap ? std::to_string(*v.gap) : "none",
+    got = fmt::format("polled {}{}, rotation {} cycles, hold {} cycles, gap {}{}",
+                      fmt::join(polled, ","),
+                      startup.empty() ? "" : fmt::format(", start-up {}", fmt::join(startup, ",")),
+                      v.rotation, v.hold, v.gap ? std::to_string(*v.gap) : "none",
                       v.gap ? (v.gap_answered ? " (answered)" : " (no answer)") : "");
     return (!want.polled || *want.polled == polled) &&
+           (!want.startup || *want.startup == startup) &&
            (!want.rotation_bits || *want.rotation_bits * t == v.rotation) &&
            (!want.hold_bits || *want.hold_bits * t == v.hold) &&
            (!want.gap || *want.gap == v.gap) &&

@@ -11,6 +11,7 @@
 #include <optional>
 #include <vector>
 
+#include "bus_check.hpp"
 #include "dp_master.hpp"
 #include "dpc31/bus_port.hpp"
 #include "dpc31/fdl.hpp"
@@ -322,6 +323,99 @@ TEST(Segment, TheGapUpdateWaitsForTokenHoldTime) {
   EXPECT_EQ(ring.since(v3.arrived)[2].start, v3.arrived + 693 * t);
 }
 
+// The start-up under TTR (docs/segment.md, "The start-up under TTR"): a master alone at 2 with TTR
+// 500 bit times brings slaves 5 (SPC3) and 6 (VPC3+) up over its visits, startup_all's requests
+// in its order, each a message cycle by the rule of a DP cycle. By hand, at 1.5 Mbaud (T = 32
+// clocks), times in T from the claim A1 (the line's time when the master is made, after the
+// responders' inits):
+// - Baud_Search (docs/timing.md): the chips' 1.5 Mbaud windows open 3 x 20 ms = 90 000 T after
+//   their Start, which ends their init, at or before A1 and less than 6.25 T (200 clocks) before
+//   it; a request is heard there when it starts at least TSYN = 33 T after the opening: one that
+//   starts before 90 033 T is not, one that starts from 90 039 T on is.
+// - Until then every FDL_Status to 5 (6 characters, 66 T) goes unanswered: the slot time (100 T)
+//   and TSYN follow, so a visit's n-th request starts at A + 33 + 199 n and after k of them the
+//   token (33 T after the slot, 3 characters) ends at A + 199 k + 66. Visit 1 (TRR 0, TTH 500):
+//   33, 232, 431 (630 is not < 500): A2 = 663. Visit 2 (TRR 663: late): one request, A3 = 928.
+//   Visit 3 (TRR 265, TTH 235): 33 and 232: A4 = A3 + 464. Visit 4 (TRR 464, TTH 36): one:
+//   A5 = A4 + 265. From there on visits 3 + 2j arrive at 928 + 729 j (two requests) and 4 + 2j
+//   at 1392 + 729 j (one).
+// - The first request from 90 033 T on: 1160 + 729 x 122 = 90 098 (the second of visit 247,
+//   A = 89 866; the one before, 89 899, is early). Answered 11 T after its end: 90 175 to 90 241;
+//   the next would start at 90 274 >= A + 235: the token ends at 90 307 = A248.
+// - Then one request a visit, each too long for a second (Slave_Diag 11 characters, its answer 17
+//   (6 diag bytes); Set_Prm 19 (8 data bytes), Chk_Cfg 13, each answered SC (1 character);
+//   FDL_Status answered 6 + 6): visit 248 (TRR 441, TTH 59) Slave_Diag to 5 (Prm_Req), 249 (TRR
+//   418, TTH 82) Set_Prm, 250 (TRR 330, TTH 170) Chk_Cfg, 251 (TRR 264, TTH 236) Slave_Diag: ready;
+//   252 (TRR 418) FDL_Status to 6, answered (its rate found with 5's); 253 (TRR 242, TTH 258)
+//   Slave_Diag, 254 Set_Prm, 255 Chk_Cfg, 256 Slave_Diag: ready. Each request starts at its A + 33.
+TEST(Segment, AMasterUnderTtrSpreadsItsStartupOverItsVisits) {
+  Line line(kBaud, {5, 6}, 100);
+  MasterConfig cfg{2, kBaud};
+  cfg.ttr_bits = 500;
+  line.master = std::make_unique<DpMaster>(line.seg, line.master_station, cfg, line.slaves);
+  BusCheck check(BusTiming{line.seg.bit_cycles(), 11, 100, 33, 500, {2}});
+  std::vector<LineTelegram> sent;
+  line.seg.on_telegram = [&](const LineTelegram& tg) {
+    check.telegram(tg);
+    if (tg.from == line.master_station) sent.push_back(tg);
+  };
+  const std::uint64_t t = line.seg.bit_cycles();
+  const std::uint64_t a1 = line.seg.cycle();
+  ASSERT_LE(a1, 200U);
+  DpMaster& m = *line.master;
+  m.begin_startup();
+  std::vector<TokenVisit> visits;
+  while (m.starting_up()) visits.push_back(m.use_token(2));
+  line.seg.run_until(line.seg.cycle() + 200 * t);
+  line.seg.flush();
+  ASSERT_TRUE(m.started_up());
+  ASSERT_EQ(visits.size(), 256U);
+  // Each visit's arrival and TRR (k counted from 1), and its requests' slaves.
+  std::vector<std::uint64_t> arrived = {0, 663};
+  for (std::uint64_t j = 0; j < 123; ++j) {
+    arrived.push_back(928 + 729 * j);
+    if (j < 122) arrived.push_back(1392 + 729 * j);
+  }
+  for (const std::uint64_t a : {90307, 90725, 91055, 91319, 91737, 91979, 92397, 92727, 92991}) {
+    arrived.push_back(a);
+  }
+  ASSERT_EQ(arrived.size(), visits.size());
+  std::size_t next = 0;  // the master's telegrams, in order
+  for (std::size_t k = 0; k < visits.size(); ++k) {
+    const TokenVisit& v = visits[k];
+    const std::uint64_t a = arrived[k];
+    EXPECT_EQ(v.arrived, a1 + a * t) << k + 1;
+    EXPECT_EQ(v.rotation, k == 0 ? 0 : (a - arrived[k - 1]) * t) << k + 1;
+    EXPECT_EQ(v.hold, v.rotation < 500 * t ? 500 * t - v.rotation : 0) << k + 1;
+    const std::size_t requests = k == 0 ? 3 : (k >= 2 && k <= 246 && k % 2 == 0 ? 2 : 1);
+    ASSERT_EQ(v.startup.size(), requests) << k + 1;
+    EXPECT_TRUE(v.polled.empty()) << k + 1;
+    for (std::size_t n = 0; n < requests; ++n) {
+      EXPECT_EQ(v.startup[n], k < 251 ? 0U : 1U) << k + 1;
+      ASSERT_LT(next, sent.size());
+      EXPECT_EQ(sent[next++].start, a1 + (a + 33 + 199 * n) * t) << k + 1 << " " << n;
+    }
+    ASSERT_LT(next, sent.size());
+    EXPECT_EQ(sent[next++].bytes, (std::vector<std::uint8_t>{fdl::SD4, 2, 2})) << k + 1;
+  }
+  // The requests of the last ten visits: FDL_Status (SD1, 10h), Slave_Diag (SD2 LE 5),
+  // Set_Prm (LE 13), Chk_Cfg (LE 7), each to DA | 80h with its SAPs.
+  const std::vector<std::vector<std::uint8_t>> last = {
+      {fdl::SD1, 5}, {fdl::SD2, 5}, {fdl::SD2, 13}, {fdl::SD2, 7}, {fdl::SD2, 5},
+      {fdl::SD1, 6}, {fdl::SD2, 5}, {fdl::SD2, 13}, {fdl::SD2, 7}, {fdl::SD2, 5}};
+  for (std::size_t i = 0; i < last.size(); ++i) {
+    const LineTelegram& r = sent[sent.size() - 2 * (last.size() - i)];
+    EXPECT_EQ(r.bytes[0], last[i][0]) << i;
+    EXPECT_EQ(r.bytes[1], last[i][1]) << i;
+  }
+  EXPECT_EQ(sent[sent.size() - 20].start, a1 + 90098 * t);
+  for (const std::size_t c : line.chips) {
+    EXPECT_EQ(line.seg.chip(c).dp_state(), DpState::Data_Exchange);
+  }
+  EXPECT_EQ(check.count(BusViolation::token_hold), 0U);
+  EXPECT_EQ(check.total(), 0U);
+}
+
 }  // namespace
 }  // namespace dpc31
 
@@ -342,14 +436,17 @@ TEST(SegmentScenario, ExpectVisitChecksTheMastersLastVisit) {
     EXPECT_TRUE(parse_segment_scenario(text, "v.scn", s, err)) << err.text();
     return run_segment_scenario(s, {}, [&errors](const std::string& e) { errors.push_back(e); });
   };
+  // The start-up's last visit (docs/segment.md, "The start-up under TTR") is the Slave_Diag that
+  // finds 6 ready: TSYN 33 + request 121 (11 characters) + TSDR 11 + answer 187 (17) + TSYN 33 +
+  // the token 33 = 418 T, the next visit's TRR: TTH 582, cycles at 33 and 363 (T = 32 clocks).
   std::vector<std::string> errors;
-  EXPECT_EQ(run(head + "expect visit 2 polled=5,6 rotation=0 hold=1000 gap=none\n", errors), 0);
+  EXPECT_EQ(run(head + "expect visit 2 polled=5,6 rotation=418 hold=582 gap=none\n", errors), 0);
   EXPECT_TRUE(errors.empty()) << errors.front();
   EXPECT_EQ(run(head + "expect visit 2 polled=5 rotation=0\n", errors), 1);
   ASSERT_EQ(errors.size(), 1U);
   EXPECT_EQ(errors[0],
-            "v.scn:7: expected expect visit 2 polled=5 rotation=0, got polled 5,6, rotation 0 "
-            "cycles, hold 32000 cycles, gap none");
+            "v.scn:7: expected expect visit 2 polled=5 rotation=0, got polled 5,6, rotation 13376 "
+            "cycles, hold 18624 cycles, gap none");
 }
 
 // Bad input in a segment scenario: one line, FILE:LINE, nothing run (docs/bad-input.md).

@@ -14,7 +14,8 @@ __all__ = [
     "registers", "register", "regions", "profiles", "run_scenario", "wavediff", "WaveReport",
     "SignalDiff", "Divergence", "WavePoint", "Structural", "Error", "SnapshotError",
     "ScenarioError", "FirmwareError", "InputError", "Dpv1Answer", "Dpv1Outcome", "Dpv1Rules",
-    "Cpu51Board",
+    "Cpu51Board", "Segment", "Station", "SegmentMaster", "TokenVisit", "LineTelegram",
+    "Collision", "BusCheck", "SegmentScenario", "SegmentScenarioResult",
 ]
 
 

@@ -1,0 +1,196 @@
+"""A bus segment from Python (docs/python.md, "A segment"; docs/segment.md): three slaves of the
+three profiles, each its own firmware, polled by the built-in master; one slave left unpolled
+until its DP watchdog expires; a collision and a lost token counted by the bus check; the
+master's start-up spread over its token visits under TTR.
+
+Expected values come from docs/timing.md at 48 MHz, as traces/segment/three_slaves.scn derives
+them in its comments (the same line as a scenario): T = 48 MHz / 1.5 Mbaud = 32 clocks per bit.
+"""
+
+import pathlib
+import re
+
+import dpc31
+
+T = 32
+# "DP watchdog": TWD = ceil(10 ms x WD_Fact_1 x WD_Fact_2 x f) = 10 ms x 1 x 1 x 48 MHz.
+TWD = 480_000
+MASTER = "master 2"
+
+
+def three_slaves():
+    seg = dpc31.Segment(1_500_000)
+    stations = (seg.add_station(5, "spc3", firmware="DO4", name="spc3", wd=(1, 1)),
+                seg.add_station(6, "vpc3plus", firmware="CNT2", name="vpc3plus", wd=(1, 1)),
+                seg.add_station(7, "dpc31", firmware="DO4", name="dpc31", wd=(1, 1)))
+    master = seg.add_master(2, [5, 6, 7])
+    check = seg.check_bus()
+    line = []
+    seg.on_telegram(line.append)
+    return seg, stations, master, check, line
+
+
+def requests_to(seg, line, address):
+    """The master's requests to `address` on the line (SD1/SD3: DA is byte 1; SD2: byte 4)."""
+    out = []
+    for t in line:
+        if seg.name(t.sender) != MASTER or t.bytes[0] == 0xDC:
+            continue
+        da = t.bytes[4] if t.bytes[0] == 0x68 else t.bytes[1]
+        if da & 0x7F == address:
+            out.append(t)
+    return out
+
+
+def acted_on(t):
+    """A request is acted on at its last stop sample: end - T + floor(T/2) (docs/timing.md)."""
+    return t.end - T + T // 2
+
+
+def test_three_slaves_reach_data_exchange_each_at_its_cycle():
+    seg, stations, master, check, line = three_slaves()
+    assert master.startup_all()
+    exchanges = master.dp_cycle() + master.dp_cycle() + master.dp_cycle()
+    seg.flush()
+    for st in stations:
+        assert (st.dp_state, st.wd_state) == (dpc31.DpState.Data_Exchange,
+                                              dpc31.WdState.DP_Control)
+    # every answer MinTSDR = 11 T after its request's end (MinTSDR_Val 11, set by both firmwares)
+    answered = [ex for ex in master.history if ex.answer is not None]
+    assert answered and all(ex.answer_start - ex.request_end == 11 * T for ex in answered)
+    assert [ex.answer.sa for ex in exchanges] == [5, 6, 7] * 3
+    # Data_Exchange entered after the Chk_Cfg's end: the SPC3 at DO4's first New_Din_Buffer_Cmd
+    # (access 14 of the ISR entered at the acted-on cycle, end - 16: end + 40), the VPC3+ and the
+    # DPC31 at the User_Cfg_Data_Okay read (access 10: end + 24); three_slaves.scn derives them.
+    for st, after in zip(stations, (40, 24, 24)):
+        entered = next(c for c, dp, _ in st.changes if dp == dpc31.DpState.Data_Exchange)
+        last = [t for t in requests_to(seg, line, st.address) if acted_on(t) <= entered][-1]
+        assert last.bytes[8] == 0x3E  # Chk_Cfg: DSAP 62
+        assert entered - last.end == after, st.name
+    assert check.total == 0 and seg.collisions == []
+
+
+def test_an_unpolled_slave_expires_at_its_cycle_the_others_stay():
+    seg, stations, master, check, line = three_slaves()
+    spc3, vpc3plus, dpc31_st = stations
+    assert master.startup_all()
+    master.dp_cycle()
+    foreign = [st.fdl_counters["foreign_address"] for st in stations]
+    # 40 DP cycles over 5 and 6 only (about 0.45 ms each: more than TWD)
+    for _ in range(40):
+        master.dp_cycle(skip=[7])
+    seg.flush()
+    # The watchdog restarts at the acted-on cycle of the last request from Master_Add to 7 and
+    # expires TWD later: Baud_Control and Leave_Master (Wait_Prm) in that cycle.
+    restart = acted_on(requests_to(seg, line, 7)[-1])
+    expired = next(c for c, _, wd in dpc31_st.changes
+                   if wd != dpc31.WdState.DP_Control and c > restart)
+    assert expired == restart + TWD
+    assert (dpc31_st.dp_state, dpc31_st.wd_state) == (dpc31.DpState.Wait_Prm,
+                                                      dpc31.WdState.Baud_Control)
+    for st in (spc3, vpc3plus):
+        assert (st.dp_state, st.wd_state) == (dpc31.DpState.Data_Exchange,
+                                              dpc31.WdState.DP_Control)
+    # What each ignored: a request to another station is counted in foreign_address (the
+    # answers are not): per cycle, 7 heard the requests to 5 and 6, 5 the one to 6.
+    now = [st.fdl_counters["foreign_address"] for st in stations]
+    assert [b - a for a, b in zip(foreign, now)] == [40, 40, 80]
+    # each firmware set its own chip's station address (R_TS_Adr) at init
+    assert [st.peek_reg("R_TS_Adr") for st in stations] == [5, 6, 7]
+    assert check.total == 0
+
+
+def test_a_collision_and_a_lost_token_are_counted():
+    # 12 Mbaud (T = 4): the chips search 12 Mbaud first, so a request at 20 000, long after their
+    # Start plus TSYN, is heard at once (docs/timing.md, "Baud_Search").
+    t = 4
+    seg = dpc31.Segment(12_000_000)
+    seg.add_station(5, "spc3", name="spc3")
+    seg.add_station(5, "dpc31", name="twin")  # a second station at address 5
+    master = seg.add_sender(MASTER)
+    check = seg.check_bus(ttr=1000, masters=[2])
+    # FDL_Status 5 <- 2: SD1 DA SA FC FCS ED, FCS = 05 + 02 + 49 = 50h
+    end = seg.send(master, bytes([0x10, 5, 2, 0x49, 0x50, 0x16]), start=20_000)
+    seg.run_until(end + 400 * t)
+    # both answer at end + 11 T: the second driver collides there, the first keeps the line
+    [c] = seg.collisions
+    assert (c.cycle, seg.name(c.first), seg.name(c.second)) == (end + 11 * t, "spc3", "twin")
+    assert check.count("collision") == 1
+    assert any("twin drove the line while spc3 had it" in l for l in seg.bus_log)
+    # The token to master 3, which is not there: the line stays idle; TTO = TSL x (6 + 2 x 2),
+    # 2 the lowest master's address, = 1000 T.
+    token_end = seg.send(master, bytes([0xDC, 3, 2]))
+    seg.run_until(token_end + 1000 * t - 1)
+    assert check.count("token_lost") == 0
+    seg.run_until(token_end + 1000 * t)
+    assert check.count("token_lost") == 1
+    assert check.total == 2
+
+
+def test_a_startup_under_ttr_is_spread_over_the_visits():
+    # TTR 500 bit times, a master alone: tests/segment_test.cpp
+    # (Segment.AMasterUnderTtrSpreadsItsStartupOverItsVisits) derives every visit by hand.
+    seg = dpc31.Segment(1_500_000)
+    seg.add_station(5, "spc3", wd=(100, 100))
+    seg.add_station(6, "vpc3plus", wd=(100, 100))
+    master = seg.add_master(2, [5, 6], ttr=500)
+    check = seg.check_bus(ttr=500)
+    master.begin_startup()
+    visits = []
+    while master.starting_up:
+        visits.append(master.use_token(2))
+    assert master.started_up and len(visits) == 256
+    assert [len(v.startup) for v in visits[:6]] == [3, 1, 2, 1, 2, 1]
+    assert visits[246].rotation == 265 * T and len(visits[246].startup) == 2  # the first answer
+    assert [v.startup for v in visits[-5:]] == [[1]] * 5
+    assert check.count("token_hold") == 0 and check.total == 0
+    # startup_all under the same check: every request after TTR since the first is token_hold
+    seg2 = dpc31.Segment(1_500_000)
+    seg2.add_station(5, "spc3", wd=(100, 100))
+    m2 = seg2.add_master(2, [5], ttr=500)
+    check2 = seg2.check_bus(ttr=500)
+    assert m2.startup_all()
+    assert check2.count("token_hold") > 0
+
+
+def test_the_shipped_segment_scenarios_pass(traces):
+    for name in ("three_slaves.scn", "startup_ttr.scn"):
+        result = dpc31.SegmentScenario.load(str(traces / "segment" / name)).run()
+        assert result.ok, result.failures
+
+
+def test_the_example_of_docs_python_md_runs(traces):
+    doc = (pathlib.Path(traces).parent / "docs" / "python.md").read_text()
+    section = doc.split("## A segment", 1)[1]
+    example = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    exec(compile(example, "docs/python.md", "exec"), {})
+
+
+def test_bad_input_is_a_clear_error_and_an_observers_exception_arrives():
+    import pytest
+    with pytest.raises(ValueError, match="baud 0: 9600 to 12000000"):
+        dpc31.Segment(0)
+    with pytest.raises(ValueError, match="clock_hz 1"):
+        dpc31.Segment(1_500_000, clock_hz=1)
+    seg = dpc31.Segment(1_500_000)
+    with pytest.raises(ValueError, match="profile"):
+        seg.add_station(5, "spc4")
+    seg.add_station(5, "spc3")
+    with pytest.raises(ValueError, match="no station at address 9"):
+        seg.add_master(2, [9])
+    master = seg.add_master(2, [5])
+    sender = seg.add_sender("rogue")
+    with pytest.raises(ValueError, match="fault"):
+        seg.send(sender, b"\x10", fault="smoke")
+    check = seg.check_bus()
+    with pytest.raises(ValueError, match="no violation 'late'"):
+        check.count("late")
+
+    def boom(t):
+        raise KeyError("observer")
+
+    seg.on_telegram(boom)
+    with pytest.raises(KeyError, match="observer"):
+        master.fdl_status()
+    with pytest.raises(ValueError, match="before the line's time"):
+        seg.send(sender, b"\x10", start=0)

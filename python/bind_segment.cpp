@@ -1,0 +1,608 @@
+// dpc31.Segment in Python (docs/python.md, "A segment"): several chips on one line
+// (session/segment.hpp), the built-in masters on it with their token visits (DpMaster), scripted
+// senders, the bus check (session/bus_check.hpp) and segment scenarios, one call for one call.
+#include <memory>
+#include <variant>
+
+#include "bind.hpp"
+#include "bus_check.hpp"
+#include "dp_master.hpp"
+#include "dpc31/bus_port.hpp"
+#include "firmware_host.hpp"
+#include "responder.hpp"
+#include "scenario_segment.hpp"
+#include "segment.hpp"
+#include "vocabulary.hpp"
+
+namespace dpc31::py_bind {
+
+namespace {
+
+using U8 = std::uint8_t;
+using U64 = std::uint64_t;
+using Outputs = std::vector<std::vector<U8>>;
+
+// A chip station: the chip is the segment's, the user side is kept here. Its DP and watchdog
+// state changes are recorded as the chip makes them (cycle, DP state, WD state).
+struct PyStation {
+  std::size_t index = 0;
+  std::string name;
+  SlaveConfig slave;
+  std::shared_ptr<FirmwareHost> firmware;
+  std::shared_ptr<Responder> responder;
+  std::vector<std::tuple<U64, DpState, WdState>> changes;
+};
+
+// The segment as Python holds it. The GIL is released while the line runs; a Python observer
+// (on_telegram, on_collision) takes it again, and its exception is raised when the running call
+// returns (the call still runs to its end; the observers are not called again in it). One thread
+// at a time: a call while another runs it raises dpc31.Error.
+class PySegment {
+ public:
+  PySegment(std::uint32_t baud_, std::uint32_t clock_hz) : seg(baud_, clock_hz), baud(baud_) {
+    seg.on_telegram = [this](const LineTelegram& t) {
+      if (check) check->telegram(t);
+      call(telegram_cb, t);
+    };
+    seg.on_collision = [this](const Collision& c) {
+      if (check) check->collision(c, seg.name(c.first), seg.name(c.second));
+      call(collision_cb, c);
+    };
+  }
+
+  // Runs the line: the GIL released, then the bus check sees the idle line up to the line's time
+  // and an observer's exception is raised. A call without a result gives std::monostate.
+  template <typename F>
+  auto run(F&& f) {
+    enter();
+    busy_ = true;
+    struct Done {
+      PySegment& s;
+      ~Done() { s.busy_ = false; }
+    } done{*this};
+    auto r = without_gil([&] {
+      if constexpr (std::is_void_v<decltype(f())>) {
+        f();
+        return std::monostate{};
+      } else {
+        return f();
+      }
+    });
+    if (check) check->idle_until(seg.cycle());
+    if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
+    return r;
+  }
+  void enter() const {
+    if (busy_) raise(errors().error, "the segment is running (another thread, or an observer)");
+  }
+  Chip& chip(const PyStation& s) {
+    enter();
+    return seg.chip(s.index);
+  }
+
+  Segment seg;
+  std::uint32_t baud;
+  std::vector<std::unique_ptr<PyStation>> stations;
+  std::vector<U8> master_addresses;
+  std::unique_ptr<BusCheck> check;
+  std::vector<std::string> check_log;
+  std::shared_ptr<py::object> telegram_cb;
+  std::shared_ptr<py::object> collision_cb;
+
+ private:
+  template <typename T>
+  void call(const std::shared_ptr<py::object>& cb, const T& arg) {
+    if (!cb) return;
+    py::gil_scoped_acquire gil;
+    if (error_) return;
+    try {
+      (*cb)(arg);
+    } catch (py::error_already_set&) {
+      error_ = std::current_exception();
+    }
+  }
+  bool busy_ = false;
+  std::exception_ptr error_;
+};
+
+// A built-in master on the segment (a sender station of its own). It keeps the segment alive.
+struct PySegMaster {
+  PySegMaster(py::object seg_obj, const MasterConfig& mc, std::vector<SlaveConfig> slaves)
+      : seg_ref(std::move(seg_obj)), s(seg_ref.cast<PySegment&>()) {
+    s.enter();
+    const std::size_t station = s.seg.add_sender("master " + std::to_string(mc.address));
+    m = std::make_unique<DpMaster>(s.seg, station, mc, std::move(slaves));
+    s.master_addresses.push_back(mc.address);
+  }
+  template <typename F>
+  auto act(F&& f) {
+    return s.run(std::forward<F>(f));
+  }
+  py::object seg_ref;
+  PySegment& s;
+  std::unique_ptr<DpMaster> m;
+};
+
+// The slaves of a master: station addresses (their SlaveConfig as the station was added) or
+// SlaveConfigs as they are.
+std::vector<SlaveConfig> slaves_of(const PySegment& s, const py::list& slaves) {
+  std::vector<SlaveConfig> out;
+  for (const py::handle h : slaves) {
+    if (py::isinstance<SlaveConfig>(h)) {
+      out.push_back(h.cast<SlaveConfig>());
+      continue;
+    }
+    const U8 a = h.cast<U8>();
+    const auto it = std::find_if(s.stations.begin(), s.stations.end(),
+                                 [a](const auto& st) { return st->slave.address == a; });
+    if (it == s.stations.end()) throw py::value_error("no station at address " + std::to_string(a));
+    out.push_back((*it)->slave);
+  }
+  if (out.empty()) throw py::value_error("a master needs at least one slave");
+  return out;
+}
+
+void bind_line(py::module_& m) {
+  py::class_<LineTelegram>(m, "LineTelegram", "One telegram on a segment's line.")
+      .def_readonly("sender", &LineTelegram::from)
+      .def_readonly("start", &LineTelegram::start)
+      .def_readonly("end", &LineTelegram::end)
+      .def_property_readonly("bytes", [](const LineTelegram& t) { return to_bytes(t.bytes); })
+      .def("__repr__", [](const LineTelegram& t) {
+        return "<LineTelegram from " + std::to_string(t.from) + " at " + std::to_string(t.start) +
+               ", " + std::to_string(t.bytes.size()) + " bytes>";
+      });
+  py::class_<Collision>(m, "Collision", "Two stations driving the line at once.")
+      .def_readonly("cycle", &Collision::cycle)
+      .def_readonly("first", &Collision::first)
+      .def_readonly("second", &Collision::second);
+  py::class_<TokenVisit>(m, "TokenVisit", "What one visit of the token did (use_token).")
+      .def_readonly("arrived", &TokenVisit::arrived)
+      .def_readonly("rotation", &TokenVisit::rotation)
+      .def_readonly("hold", &TokenVisit::hold)
+      .def_readonly("polled", &TokenVisit::polled)
+      .def_readonly("startup", &TokenVisit::startup)
+      .def_readonly("gap", &TokenVisit::gap)
+      .def_readonly("gap_answered", &TokenVisit::gap_answered);
+  py::class_<BusCheck>(m, "BusCheck", "The bus check of a segment (docs/segment.md).")
+      .def(
+          "count",
+          [](const BusCheck& c, const std::string& kind) {
+            BusViolation v{};
+            if (!parse_bus_violation(kind, v)) throw py::value_error("no violation '" + kind + "'");
+            return c.count(v);
+          },
+          py::arg("kind"))
+      .def_property_readonly("counts",
+                             [](const BusCheck& c) {
+                               py::dict d;
+                               for (std::size_t i = 0; i < kBusViolationKinds; ++i) {
+                                 const auto v = static_cast<BusViolation>(i);
+                                 d[py::str(std::string(bus_violation_name(v)))] = c.count(v);
+                               }
+                               return d;
+                             })
+      .def_property_readonly("total", &BusCheck::total);
+}
+
+void bind_station(py::module_& m) {
+  using S = PyStation;
+  // A read of the station's chip at the line's time (Segment::chip).
+  const auto read = [](auto f) {
+    return [f](py::object self) {
+      S& st = self.cast<S&>();
+      PySegment& seg = py::cast<PySegment&>(self.attr("_segment"));
+      return f(seg.chip(st));
+    };
+  };
+  py::class_<S>(m, "Station", py::dynamic_attr(),
+                "A chip on a segment: its chip read at the line's time.")
+      .def_readonly("index", &S::index)
+      .def_readonly("name", &S::name)
+      .def_readonly("slave", &S::slave)
+      .def_property_readonly("address", [](const S& s) { return s.slave.address; })
+      .def_readonly("firmware", &S::firmware)
+      .def_readonly("responder", &S::responder)
+      .def_readonly("changes", &S::changes,
+                    "(cycle, DpState, WdState) at each change of either, as the chip made it")
+      .def_property_readonly("cycle", read([](Chip& c) { return c.cycle(); }))
+      .def_property_readonly("dp_state", read([](Chip& c) { return c.dp_state(); }))
+      .def_property_readonly("wd_state", read([](Chip& c) { return c.wd_state(); }))
+      .def_property_readonly("fdl_counters",
+                             read([](Chip& c) { return counters_dict(c.fdl_counters()); }))
+      .def_property_readonly("txd", read([](Chip& c) { return c.txd_pin(); }))
+      .def_property_readonly("x_int", read([](Chip& c) { return c.x_int_pin(); }))
+      .def_property_readonly("profile", read([](Chip& c) { return std::string(c.profile().name); }))
+      .def_property_readonly("watchdog_due", read([](Chip& c) { return c.watchdog_due(); }))
+      .def("probe", read([](Chip& c) { return c.probe(); }))
+      .def(
+          "peek",
+          [read](py::object self, std::uint32_t a) {
+            return read([a](Chip& c) { return c.peek(a); })(std::move(self));
+          },
+          py::arg("addr"))
+      .def(
+          "peek_reg",
+          [read](py::object self, const std::string& n) {
+            return read([&n](Chip& c) { return c.peek_reg(reg_id(c, n)); })(std::move(self));
+          },
+          py::arg("name"))
+      .def(
+          "peek_field",
+          [read](py::object self, const std::string& r, const std::string& f) {
+            return read([&](Chip& c) { return peek_field(c, r, f); })(std::move(self));
+          },
+          py::arg("register"), py::arg("field"))
+      .def(
+          "addr_of",
+          [read](py::object self, const std::string& n) {
+            return read([&n](Chip& c) { return addr_of(c, n); })(std::move(self));
+          },
+          py::arg("name"));
+}
+
+// A chip station with its user side: a firmware (built-in name or plug-in path) or the built-in
+// responder, set up on its chip now, as a segment scenario's `station` line does.
+PyStation& add_station(py::object self, U8 address, const std::string& profile,
+                       const std::optional<std::string>& variant,
+                       const std::optional<std::string>& firmware,
+                       const std::optional<std::string>& name, std::pair<U8, U8> wd,
+                       const std::optional<SlaveConfig>& slave) {
+  PySegment& s = self.cast<PySegment&>();
+  s.enter();
+  auto st = std::make_unique<PyStation>();
+  st->name = name.value_or("station " + std::to_string(address));
+  SlaveConfig sc = slave.value_or(SlaveConfig{});
+  sc.address = address;
+  if (!slave) {
+    sc.wd_fact1 = wd.first;
+    sc.wd_fact2 = wd.second;
+  }
+  const ChipOptions opt =
+      chip_options(profile, "intel", s.seg.clock_hz(), "event", variant, "external");
+  if (firmware) {
+    const dpc31_firmware& d = find_firmware(*firmware);
+    st->firmware = std::make_shared<FirmwareHost>(d);
+    if (!slave) sc = with_gsd_defaults(d, sc);
+  } else {
+    ResponderConfig rc;
+    rc.slave = sc;
+    st->responder = std::make_shared<Responder>(rc);
+  }
+  st->slave = sc;
+  PyStation& raw = *st;
+  s.run([&] {
+    st->index = s.seg.add_chip(st->name, opt);
+    Chip& chip = s.seg.chip(st->index);
+    chip.on_state_change([&raw, &chip](U64 cycle) {
+      const DpState dp = chip.dp_state();
+      const WdState wd = chip.wd_state();
+      if (raw.changes.empty() || std::get<1>(raw.changes.back()) != dp ||
+          std::get<2>(raw.changes.back()) != wd) {
+        raw.changes.emplace_back(cycle, dp, wd);
+      }
+    });
+    DirectBus bus(chip);
+    if (raw.firmware) {
+      raw.firmware->init(bus, address);
+      s.seg.set_firmware(raw.index, raw.firmware->program());
+    } else {
+      raw.responder->init(bus);
+      Responder* r = raw.responder.get();
+      s.seg.set_firmware(raw.index, [r](BusPort& b) { r->isr(b); });
+    }
+  });
+  s.stations.push_back(std::move(st));
+  return raw;
+}
+
+void bind_segment_class(py::module_& m) {
+  using P = PySegment;
+  py::class_<P>(m, "Segment",
+                "A bus segment: chips, masters and scripted senders on one RS-485 line "
+                "(docs/segment.md).")
+      .def(py::init([](std::uint32_t baud, std::uint32_t clock_hz) {
+             // The rates of a segment scenario's `segment baud=`; a bit at least one clock.
+             if (baud < 9'600 || baud > 12'000'000) {
+               throw py::value_error("baud " + std::to_string(baud) + ": 9600 to 12000000");
+             }
+             auto s = std::make_unique<P>(baud, clock_hz);
+             if (s->seg.bit_cycles() == 0) {
+               throw py::value_error("clock_hz " + std::to_string(clock_hz) +
+                                     ": less than one clock a bit");
+             }
+             return s;
+           }),
+           py::arg("baud") = 1'500'000, py::arg("clock_hz") = 0)
+      .def(
+          "add_station",
+          [](py::object self, U8 address, const std::string& profile,
+             const std::optional<std::string>& variant, const std::optional<std::string>& firmware,
+             const std::optional<std::string>& name, std::pair<U8, U8> wd,
+             const std::optional<SlaveConfig>& slave) {
+            PyStation& st = add_station(self, address, profile, variant, firmware, name, wd, slave);
+            py::object o = py::cast(&st, py::return_value_policy::reference);
+            o.attr("_segment") = self;  // a station keeps its segment alive
+            return o;
+          },
+          py::arg("address"), py::arg("profile") = "dpc31", py::arg("variant") = py::none(),
+          py::arg("firmware") = py::none(), py::arg("name") = py::none(),
+          py::arg("wd") = std::pair<U8, U8>{10, 10}, py::arg("slave") = py::none(),
+          "A chip at station `address` with a firmware (DO4, CNT2 or a plug-in path; the "
+          "master's slave takes its GSD defaults) or the built-in responder (firmware=None); "
+          "`wd` the watchdog factors its master sends; `slave` a SlaveConfig as it is instead.")
+      .def_property_readonly("stations",
+                             [](py::object self) {
+                               py::list l;
+                               for (const auto& st : self.cast<P&>().stations) {
+                                 py::object o =
+                                     py::cast(st.get(), py::return_value_policy::reference);
+                                 o.attr("_segment") = self;
+                                 l.append(o);
+                               }
+                               return l;
+                             })
+      .def(
+          "add_sender",
+          [](P& s, const std::string& name) {
+            s.enter();
+            return s.seg.add_sender(name);
+          },
+          py::arg("name"), "A station without a chip that drives the line with send(); its index.")
+      .def(
+          "add_master",
+          [](py::object self, U8 address, const py::list& slaves, U64 ttr, U8 gap, U8 hsa,
+             std::uint32_t slot_bits, std::uint32_t idle_bits) {
+            P& s = self.cast<P&>();
+            const MasterConfig mc{address, s.baud, slot_bits, idle_bits, ttr, gap, hsa};
+            std::vector<SlaveConfig> sl = slaves_of(s, slaves);
+            try {
+              return std::make_unique<PySegMaster>(std::move(self), mc, std::move(sl));
+            } catch (const std::invalid_argument& e) {
+              throw py::value_error(e.what());
+            }
+          },
+          py::arg("address"), py::arg("slaves"), py::kw_only(), py::arg("ttr") = 0,
+          py::arg("gap") = 0, py::arg("hsa") = 126, py::arg("slot_bits") = 100,
+          py::arg("idle_bits") = 33,
+          "A built-in master polling `slaves` (station addresses or SlaveConfigs), obeying TTR "
+          "`ttr` bit times (0: no limit) and the GAP update factor `gap` in use_token.")
+      .def(
+          "name", [](const P& s, std::size_t i) { return s.seg.name(i); }, py::arg("station"))
+      .def_property_readonly("size", [](const P& s) { return s.seg.size(); })
+      .def_property_readonly("cycle", [](const P& s) { return s.seg.cycle(); })
+      .def_property_readonly("bit_cycles", [](const P& s) { return s.seg.bit_cycles(); })
+      .def_property_readonly("clock_hz", [](const P& s) { return s.seg.clock_hz(); })
+      .def(
+          "run_until", [](P& s, U64 cycle) { s.run([&] { s.seg.run_until(cycle); }); },
+          py::arg("cycle"), "Runs every station to `cycle`.")
+      .def("align", [](P& s) { s.run([&] { s.seg.align(); }); })
+      .def(
+          "send",
+          [](P& s, std::size_t sender, const py::bytes& data, std::optional<U64> start,
+             const std::optional<std::string>& fault, int fault_char) {
+            const std::vector<U8> v = from_bytes(data);
+            UartFault f;
+            if (fault && !parse_fault_kind(*fault, f.kind)) {
+              throw py::value_error("fault '" + *fault + "': expected one of parity, start, stop");
+            }
+            f.char_index = fault_char;
+            const U64 at = start.value_or(s.seg.cycle() + 33 * U64{s.seg.bit_cycles()});
+            if (at < s.seg.cycle()) throw py::value_error("start is before the line's time");
+            return s.run([&] { return s.seg.send(sender, v, at, f); });
+          },
+          py::arg("sender"), py::arg("data"), py::arg("start") = py::none(),
+          py::arg("fault") = py::none(), py::arg("fault_char") = -1,
+          "Bytes as back-to-back characters from sender station `sender` at `start` (default: "
+          "TSYN, 33 bit times, from now); returns the end of the last stop bit.")
+      .def(
+          "pulse",
+          [](P& s, std::size_t sender, U64 start, U64 low) {
+            if (start < s.seg.cycle()) throw py::value_error("start is before the line's time");
+            s.run([&] { s.seg.pulse(sender, start, low); });
+          },
+          py::arg("sender"), py::arg("start"), py::arg("low_cycles"))
+      .def_property_readonly("collisions", [](const P& s) { return s.seg.collisions(); })
+      .def(
+          "on_telegram",
+          [](P& s, const std::optional<py::function>& f) {
+            s.enter();
+            s.telegram_cb = f ? hold(*f) : nullptr;
+          },
+          py::arg("callback"), "callback(LineTelegram) for every telegram on the line; None: none")
+      .def(
+          "on_collision",
+          [](P& s, const std::optional<py::function>& f) {
+            s.enter();
+            s.collision_cb = f ? hold(*f) : nullptr;
+          },
+          py::arg("callback"))
+      .def("flush", [](P& s) { s.run([&] { s.seg.flush(); }); })
+      .def(
+          "check_bus",
+          [](P& s, U64 ttr, std::uint32_t slot_bits, std::uint32_t min_tsdr_bits,
+             std::uint32_t tsyn_bits, const std::optional<std::vector<U8>>& masters) {
+            s.enter();
+            BusTiming t{s.seg.bit_cycles(), min_tsdr_bits, slot_bits,
+                        tsyn_bits,          ttr,           masters.value_or(s.master_addresses)};
+            s.check_log.clear();
+            s.check = std::make_unique<BusCheck>(t, [&s](const LogRecord& r) {
+              s.check_log.push_back("[cycle " + std::to_string(r.cycle) + "] " + r.text);
+            });
+            return s.check.get();
+          },
+          py::kw_only(), py::arg("ttr") = 0, py::arg("slot_bits") = 100,
+          py::arg("min_tsdr_bits") = 11, py::arg("tsyn_bits") = 33, py::arg("masters") = py::none(),
+          py::return_value_policy::reference_internal,
+          "The bus check on every telegram from now on (TTR 0: no token checks; masters: the "
+          "masters' addresses, for TTO; default those added).")
+      .def_property_readonly(
+          "bus_check", [](const P& s) { return s.check.get(); },
+          py::return_value_policy::reference_internal)
+      .def_property_readonly("bus_log", [](P& s) {
+        if (s.check) s.check->flush();
+        return s.check_log;
+      });
+}
+
+// A master's service that sends bytes (Data_Exchange's outputs, a raw telegram), without a fault.
+template <Exchange (DpMaster::*Service)(const std::vector<U8>&, UartFault)>
+Exchange bytes_service(PySegMaster& pm, const py::bytes& data) {
+  const std::vector<U8> v = from_bytes(data);
+  return pm.act([&] { return (*pm.m.*Service)(v, UartFault{}); });
+}
+
+void bind_seg_master(py::module_& m) {
+  using M = PySegMaster;
+  py::class_<M>(m, "SegmentMaster", "The built-in DP master on a segment (DpMaster).")
+      .def_property_readonly("address", [](const M& pm) { return pm.m->address(); })
+      .def_property_readonly("slave_count", [](const M& pm) { return pm.m->slave_count(); })
+      .def_property_readonly("selected", [](const M& pm) { return pm.m->selected(); })
+      .def_property_readonly("slave", [](const M& pm) { return pm.m->slave(); })
+      .def(
+          "select",
+          [](M& pm, std::size_t i) {
+            pm.s.enter();
+            if (i >= pm.m->slave_count()) throw py::index_error("no slave " + std::to_string(i));
+            pm.m->select(i);
+          },
+          py::arg("index"))
+      .def(
+          "startup_all",
+          [](M& pm, int tries) { return pm.act([&] { return pm.m->startup_all(tries); }); },
+          py::arg("tries") = kStartupTries)
+      .def(
+          "startup", [](M& pm, int tries) { return pm.act([&] { return pm.m->startup(tries); }); },
+          py::arg("tries") = kStartupTries)
+      .def(
+          "begin_startup",
+          [](M& pm, int tries) {
+            pm.s.enter();
+            pm.m->begin_startup(tries);
+          },
+          py::arg("tries") = kStartupTries,
+          "The start-up under the token: the next use_token visits spend their cycles on it.")
+      .def_property_readonly("starting_up", [](const M& pm) { return pm.m->starting_up(); })
+      .def_property_readonly("started_up", [](const M& pm) { return pm.m->started_up(); })
+      .def(
+          "dp_cycle",
+          [](M& pm, const std::optional<Outputs>& outputs, const std::vector<U8>& skip) {
+            return pm.act([&] {
+              DpMaster& dm = *pm.m;
+              if (skip.empty()) return dm.dp_cycle(outputs.value_or(Outputs{}));
+              std::vector<Exchange> out;  // the slaves not skipped, as a scenario's `cycle skip=`
+              for (std::size_t i = 0; i < dm.slave_count(); ++i) {
+                dm.select(i);
+                if (std::find(skip.begin(), skip.end(), dm.slave().address) != skip.end()) continue;
+                out.push_back(dm.data_exchange(outputs && i < outputs->size()
+                                                   ? (*outputs)[i]
+                                                   : std::vector<U8>(dm.slave().out_len)));
+              }
+              dm.select(0);
+              return out;
+            });
+          },
+          py::arg("outputs") = py::none(), py::arg("skip") = std::vector<U8>{},
+          "Data_Exchange with every slave in order (outputs[i] to slave i; zeros where none), "
+          "but the station addresses in `skip`.")
+      .def("data_exchange", &bytes_service<&DpMaster::data_exchange>, py::arg("outputs"))
+      .def(
+          "use_token",
+          [](M& pm, U8 next, const std::optional<Outputs>& outputs) {
+            return pm.act([&] { return pm.m->use_token(next, outputs.value_or(Outputs{})); });
+          },
+          py::arg("next"), py::arg("outputs") = py::none(),
+          "One visit of the token (TTR, the GAP update), then the token to `next`.")
+      .def(
+          "pass_token",
+          [](M& pm, U8 next) { return pm.act([&] { return pm.m->pass_token(next); }); },
+          py::arg("next"))
+      .def(
+          "wait_token",
+          [](M& pm, U64 timeout) { return pm.act([&] { return pm.m->wait_token(timeout); }); },
+          py::arg("timeout"))
+      .def_property_readonly("token_rotation", [](const M& pm) { return pm.m->token_rotation(); })
+      .def("fdl_status", [](M& pm) { return pm.act([&] { return pm.m->fdl_status(); }); })
+      .def("slave_diag", [](M& pm) { return pm.act([&] { return pm.m->slave_diag(); }); })
+      .def(
+          "global_control",
+          [](M& pm, U8 command, U8 groups) {
+            return pm.act([&] { return pm.m->global_control(command, groups); });
+          },
+          py::arg("command"), py::arg("groups") = 0)
+      .def(
+          "transact",
+          [](M& pm, const fdl::Frame& req) { return pm.act([&] { return pm.m->transact(req); }); },
+          py::arg("request"))
+      .def("transact_raw", &bytes_service<&DpMaster::transact_raw>, py::arg("data"))
+      .def(
+          "idle", [](M& pm, U64 cycles) { pm.act([&] { pm.m->idle(cycles); }); }, py::arg("cycles"),
+          "Time passes with a silent line from this master.")
+      .def_property_readonly("counters", [](const M& pm) { return pm.m->counters(); })
+      .def_property_readonly("history", [](const M& pm) { return pm.m->history(); })
+      .def("clear_history", [](M& pm) { pm.m->clear_history(); });
+}
+
+// A segment scenario (docs/scenario-format.md, "Segments") and what its run gave.
+struct SegmentRunResult {
+  int exit_code = 0;
+  std::vector<std::string> walk;
+  std::vector<std::string> failures;
+};
+
+void bind_segment_scenario(py::module_& m) {
+  py::class_<SegmentRunResult>(m, "SegmentScenarioResult", "What a segment scenario's run gave.")
+      .def_property_readonly("ok", [](const SegmentRunResult& r) { return r.exit_code == 0; })
+      .def_readonly("exit_code", &SegmentRunResult::exit_code)
+      .def_readonly("walk", &SegmentRunResult::walk)
+      .def_readonly("failures", &SegmentRunResult::failures);
+  const auto fail = [](const ScenarioError& e) {
+    raise(errors().scenario, e.text(),
+          {{"file", py::str(e.file)}, {"line", py::int_(e.line)}, {"reason", py::str(e.message)}});
+  };
+  py::class_<SegmentScenario>(m, "SegmentScenario", "A parsed segment scenario file.")
+      .def_static(
+          "load",
+          [fail](const std::string& path) {
+            SegmentScenario s;
+            ScenarioError err;
+            const SegmentLoad l = load_segment_scenario(path, s, err);
+            if (l == SegmentLoad::not_segment) {
+              raise(errors().scenario, path + ": not a segment scenario (use Scenario.load)");
+            }
+            if (l == SegmentLoad::error) fail(err);
+            return s;
+          },
+          py::arg("path"))
+      .def_static(
+          "parse",
+          [fail](std::string_view text, const std::string& file) {
+            SegmentScenario s;
+            ScenarioError err;
+            if (!parse_segment_scenario(text, file, s, err)) fail(err);
+            return s;
+          },
+          py::arg("text"), py::arg("file") = "<string>")
+      .def_readonly("file", &SegmentScenario::file)
+      .def_readonly("baud", &SegmentScenario::baud)
+      .def("run", [](const SegmentScenario& s) {
+        SegmentRunResult r;
+        py::gil_scoped_release nogil;
+        r.exit_code = run_segment_scenario(
+            s, [&](const std::string& l) { r.walk.push_back(l); },
+            [&](const std::string& l) { r.failures.push_back(l); });
+        return r;
+      });
+}
+
+}  // namespace
+
+void bind_segment(py::module_& m) {
+  bind_line(m);
+  bind_station(m);
+  bind_segment_class(m);
+  bind_seg_master(m);
+  bind_segment_scenario(m);
+}
+
+}  // namespace dpc31::py_bind
