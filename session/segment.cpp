@@ -479,10 +479,14 @@ void Segment::round(std::uint64_t cycle) {
   } else {
     // The chips due by `bound` and those whose firmware runs, in station order.
     due_by(bound);
-    stepped_.clear();
-    std::set_union(due_.begin(), due_.end(), busy_.begin(), busy_.end(),
-                   std::back_inserter(stepped_));
-    for (const std::size_t i : stepped_) {
+    const std::vector<std::size_t>* step = &due_;
+    if (!busy_.empty()) {
+      stepped_.clear();
+      std::set_union(due_.begin(), due_.end(), busy_.begin(), busy_.end(),
+                     std::back_inserter(stepped_));
+      step = &stepped_;
+    }
+    for (const std::size_t i : *step) {
       step_station(*stations_[i], bound);
       look_at(*stations_[i]);
     }
