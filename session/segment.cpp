@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <bit>
+#include <iterator>
 #include <stdexcept>
 
 namespace dpc31 {
@@ -62,7 +64,6 @@ Segment::~Segment() = default;
 
 std::size_t Segment::add_chip(std::string name, ChipOptions opt) {
   auto s = std::make_unique<Station>();
-  s->index = stations_.size();
   s->name = std::move(name);
   s->chip = std::make_unique<Chip>(opt);
   if (s->chip->clock_hz() != clock_hz_) {
@@ -83,19 +84,15 @@ std::size_t Segment::add_chip(std::string name, ChipOptions opt) {
     raw->drives_edges.clear();
     uart_encode(t.bytes, t.start, raw->chip->bit_cycles(), raw->drives_edges);
   });
-  next_.push_back(UINT64_MAX);
-  look_at(*s);
-  stations_.push_back(std::move(s));
-  everyone_.push_back(stations_.size() - 1);
-  return stations_.size() - 1;
+  add_station(std::move(s));
+  look_at(*raw);
+  return raw->index;
 }
 
 std::size_t Segment::add_sender(std::string name) {
   auto s = std::make_unique<Station>();
   s->name = std::move(name);
-  stations_.push_back(std::move(s));
-  next_.push_back(UINT64_MAX);
-  everyone_.push_back(stations_.size() - 1);
+  add_station(std::move(s));
   senders_.push_back(stations_.size() - 1);
   return stations_.size() - 1;
 }
@@ -111,13 +108,62 @@ void Segment::set_firmware(std::size_t i, Cpu::Program program) {
 }
 
 void Segment::look_at(Station& s) {
-  next_[s.index] = s.chip->next_deadline();
+  set_next(s.index, s.chip->next_deadline());
   s.looked = s.chip->cycle();
   const bool busy = s.cpu && s.cpu->busy();
   if (busy != s.busy) {
     s.busy = busy;
-    busy_ = busy ? busy_ + 1 : busy_ - 1;
+    const auto at = std::lower_bound(busy_.begin(), busy_.end(), s.index);
+    if (busy) {
+      busy_.insert(at, s.index);
+    } else {
+      busy_.erase(at);
+    }
   }
+}
+
+void Segment::set_next(std::size_t i, std::uint64_t next) {
+  next_[i] = next;
+  // The leaf and its ancestors up to the first whose minimum stays.
+  std::size_t k = leaves_ + i;
+  next_tree_[k] = next;
+  for (k /= 2; k >= 1; k /= 2) {
+    const std::uint64_t m = std::min(next_tree_[2 * k], next_tree_[2 * k + 1]);
+    if (next_tree_[k] == m) break;
+    next_tree_[k] = m;
+  }
+}
+
+void Segment::add_station(std::unique_ptr<Station> s) {
+  s->index = stations_.size();
+  stations_.push_back(std::move(s));
+  next_.push_back(UINT64_MAX);
+  everyone_.push_back(stations_.size() - 1);
+  if (stations_.size() > leaves_) {
+    leaves_ = std::bit_ceil(stations_.size());
+    next_tree_.assign(2 * leaves_, UINT64_MAX);
+    std::copy(next_.begin(), next_.end(),
+              next_tree_.begin() + static_cast<std::ptrdiff_t>(leaves_));
+    for (std::size_t k = leaves_ - 1; k >= 1; --k)
+      next_tree_[k] = std::min(next_tree_[2 * k], next_tree_[2 * k + 1]);
+  }
+}
+
+void Segment::due_by(std::uint64_t bound) {
+  due_.clear();
+  if (!next_tree_.empty()) due_under(1, bound);
+}
+
+// The leaves at or before `bound` under node k, in station order: a descent into the subtrees
+// whose minimum is due, O(log N) for each chip due.
+void Segment::due_under(std::size_t k, std::uint64_t bound) {
+  if (next_tree_[k] > bound) return;
+  if (k >= leaves_) {
+    due_.push_back(k - leaves_);
+    return;
+  }
+  due_under(2 * k, bound);
+  due_under(2 * k + 1, bound);
 }
 
 const std::string& Segment::name(std::size_t i) const { return stations_.at(i)->name; }
@@ -261,9 +307,9 @@ void Segment::relay_answer(std::size_t i, std::uint64_t cycle) {
     s->chip->hear_telegram(a.answer->bytes, cycle, t_);
     look_at(*s);
   }
-  a.relayed.clear();
+  // The edges on_answer encoded (the same bytes from the same start at the same bit time).
+  a.relayed = a.drives_edges;
   a.relayed_next = 0;
-  uart_encode(a.answer->bytes, cycle, t_, a.relayed);
   a.answer.reset();
 }
 
@@ -414,20 +460,36 @@ void Segment::round(std::uint64_t cycle) {
     for (const auto& s : stations_) {
       if (s->chip) bound = std::min(bound, s->chip->next_deadline());
     }
-  } else {
-    for (const std::uint64_t n : next_) bound = std::min(bound, n);  // senders: UINT64_MAX
+  } else if (!next_tree_.empty()) {
+    bound = std::min(bound, next_tree_[1]);  // senders: UINT64_MAX
   }
   // Where a firmware may not run past a round's end (step_station), its accesses depend on where
   // rounds end: the stop samples of characters heard whole stay ends of rounds, as their events
   // made them on the reference line.
-  if (busy_ != 0 && !reference_) bound = std::min(bound, line_rx_.next_deadline());
+  if (!busy_.empty() && !reference_) bound = std::min(bound, line_rx_.next_deadline());
   bound = std::max(bound, now_ + 1);
   // Telegram level: a chip without an event by `bound` whose firmware sleeps is left where it
   // is (it is given the line's characters ahead of time, as a master gives them).
-  for (const auto& s : stations_) {
-    if (!s->chip || (!reference_ && next_[s->index] > bound && !s->busy)) continue;
-    step_station(*s, bound);
-    look_at(*s);
+  if (reference_) {
+    for (const auto& s : stations_) {
+      if (!s->chip) continue;
+      step_station(*s, bound);
+      look_at(*s);
+    }
+  } else {
+    // The chips due by `bound` and those whose firmware runs, in station order.
+    due_by(bound);
+    const std::vector<std::size_t>* step = &due_;
+    if (!busy_.empty()) {
+      stepped_.clear();
+      std::set_union(due_.begin(), due_.end(), busy_.begin(), busy_.end(),
+                     std::back_inserter(stepped_));
+      step = &stepped_;
+    }
+    for (const std::size_t i : *step) {
+      step_station(*stations_[i], bound);
+      look_at(*stations_[i]);
+    }
   }
   now_ = bound;
   // What the chips drove, in the order of its cycles (ties: station order).

@@ -124,6 +124,11 @@ class Segment {
   void round(std::uint64_t cycle);
   // What the rounds know of a chip: its next event and whether its firmware runs.
   void look_at(Station& s);
+  void set_next(std::size_t i, std::uint64_t next);
+  void add_station(std::unique_ptr<Station> s);
+  // due_: the chips whose next event is at or before `bound`, in station order.
+  void due_by(std::uint64_t bound);
+  void due_under(std::size_t k, std::uint64_t bound);
   // Station i's answer, armed and now starting on the line at `cycle`, to every other chip whole.
   void relay_answer(std::size_t i, std::uint64_t cycle);
   // Every chip to cycle(): what its user side did directly on its bus moved it alone.
@@ -165,10 +170,17 @@ class Segment {
   };
   std::vector<Driven> round_;
   // Telegram level: each station's next event as the rounds last looked (UINT64_MAX: a sender),
-  // one flat array a round scans; how many chips' firmware runs; the stations with TxD edges not
-  // yet relayed (docs/segment.md).
+  // and the same as a tree of minima (next_tree_[1] the earliest, the leaves from leaves_ on, a
+  // node the smaller of its two children) so that a round finds its end and the chips due by it
+  // without looking at the others; the chips whose firmware runs, in station order; a round's
+  // chips due and chips to step (kept to reuse their memory); the stations
+  // with TxD edges not yet relayed (docs/segment.md).
   std::vector<std::uint64_t> next_;
-  std::size_t busy_ = 0;
+  std::vector<std::uint64_t> next_tree_;
+  std::size_t leaves_ = 0;
+  std::vector<std::size_t> busy_;
+  std::vector<std::size_t> due_;
+  std::vector<std::size_t> stepped_;
   std::vector<std::size_t> drove_;
 };
 

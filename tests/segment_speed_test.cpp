@@ -33,15 +33,15 @@ std::string counters_text(const FdlCounters& n) {
       n.unsupported_function, n.not_allowed, n.no_resource, n.offline, n.repeated, n.requests);
 }
 
-// Five slaves of the three profiles with the built-in user side (the last one also polls a
-// register in a main loop, so its firmware runs in every round), a master and a scripted station.
+// `n` (at least five) slaves of the three profiles with the built-in user side (the fifth one also
+// polls a register in a main loop, so its firmware runs in every round), a master and a scripted
+// station.
 struct Bed {
-  Bed(bool reference, std::uint32_t baud) : seg(baud) {
+  Bed(bool reference, std::uint32_t baud, std::size_t n) : seg(baud) {
     seg.use_reference_line(reference);
-    log.reserve(5);  // the observers below keep pointers into it
-    const Profile profiles[] = {Profile::spc3, Profile::vpc3plus, Profile::dpc31, Profile::spc3,
-                                Profile::vpc3plus};
-    for (std::size_t i = 0; i < 5; ++i) {
+    log.reserve(n);  // the observers below keep pointers into it
+    const Profile profiles[] = {Profile::spc3, Profile::vpc3plus, Profile::dpc31};
+    for (std::size_t i = 0; i < n; ++i) {
       SlaveConfig sc;
       sc.address = static_cast<std::uint8_t>(5 + i);
       sc.wd_fact1 = 1;
@@ -51,7 +51,7 @@ struct Bed {
       rc.slave = sc;
       users.push_back(std::make_unique<Responder>(rc));
       users.back()->inputs = {static_cast<std::uint8_t>(i), 1, 2, 3};
-      const std::size_t k = seg.add_chip(fmt::format("slave {}", sc.address), {profiles[i]});
+      const std::size_t k = seg.add_chip(fmt::format("slave {}", sc.address), {profiles[i % 3]});
       chips.push_back(k);
       log.emplace_back();
       Chip& chip = seg.chip(k);
@@ -140,13 +140,13 @@ void foreign(Bed& fast, Bed& ref, const std::vector<std::uint8_t>& bytes, std::u
   }
 }
 
-void run_both_ways(std::uint32_t baud) {
-  Bed fast(false, baud);
-  Bed ref(true, baud);
+void run_both_ways(std::uint32_t baud, std::size_t n = 5) {
+  Bed fast(false, baud, n);
+  Bed ref(true, baud, n);
   for (Bed* b : {&fast, &ref}) ASSERT_TRUE(b->master->startup_all());
   ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "after the start-up"));
   for (int round = 0; round < 2; ++round) {
-    for (std::size_t i = 0; i < 5; ++i) {
+    for (std::size_t i = 0; i < n; ++i) {
       for (Bed* b : {&fast, &ref}) {
         b->master->select(i);
         b->master->data_exchange({static_cast<std::uint8_t>(round), 2, 3, 4});
@@ -202,6 +202,12 @@ TEST(SegmentSpeed, TheTelegramLevelLineShowsWhatTheReferenceLineShowsAt1M5) {
 
 TEST(SegmentSpeed, TheTelegramLevelLineShowsWhatTheReferenceLineShowsAt12M) {
   run_both_ways(12'000'000);
+}
+
+// Seventeen slaves and two senders: the round's tree of next events (Segment::due_by) four
+// levels deep, chips due in both halves of it in one round.
+TEST(SegmentSpeed, SeventeenSlavesShowWhatTheReferenceLineShowsAt12M) {
+  run_both_ways(12'000'000, 17);
 }
 
 }  // namespace
