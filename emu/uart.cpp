@@ -3,6 +3,7 @@
 #include "dpc31/uart.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <limits>
 
@@ -212,6 +213,24 @@ std::size_t UartRx::edges(std::span<const std::pair<std::uint64_t, bool>> e) {
     }
   }
   return whole;
+}
+
+void UartRx::take(const TxdRun& run) {
+  if (!run.edges.empty()) {
+    edges(run.edges);
+    return;
+  }
+  const std::uint64_t frame_cycles = std::uint64_t{kUartCharBits} * run.bit_cycles;
+  for (std::size_t i = 0; i < run.bytes.size(); ++i) {
+    const std::uint64_t at = run.start + i * frame_cycles;
+    if (whole_char(at, run.bytes[i], run.bit_cycles)) continue;
+    // The line is high before a good character (the stop bit of the one before).
+    std::array<std::pair<std::uint64_t, bool>, kUartCharBits> e{};
+    bool line = true;
+    const std::size_t n =
+        uart_frame_edges(uart_frame(run.bytes[i]), at, run.bit_cycles, line, e.data());
+    for (std::size_t k = 0; k < n; ++k) edge(e[k].first, e[k].second);
+  }
 }
 
 void UartRx::advance(std::uint64_t now, std::vector<UartChar>& out) {
