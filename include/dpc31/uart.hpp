@@ -141,6 +141,8 @@ class UartRx {
   template <typename Ar, typename Self>
   static void fields(Ar& ar, Self& s);
   [[nodiscard]] std::uint64_t sample_at(std::uint32_t k) const;
+  // whole_char's state from the start bit of `data` at `start` on (idle_bits_ set before).
+  void begin_whole(std::uint64_t start, std::uint8_t data);
   // Takes the samples of the character in progress that fall at or before `last`.
   void sample_through(std::uint64_t last);
   void finish();
