@@ -104,7 +104,7 @@ bool Mac::set_txd(std::uint64_t cycle, bool level) {
 }
 
 void Mac::txd_edge(std::uint64_t cycle, bool level) {
-  if (!set_txd(cycle, level)) return;
+  if (!set_txd(cycle, level) || !edge_batches()) return;
   const std::pair<std::uint64_t, bool> e{cycle, level};
   hand_txd_edges(std::span(&e, 1));
 }
@@ -151,11 +151,7 @@ std::uint64_t Mac::deadline() const {
   // bit for a wake-up; otherwise the answer's edges are taken as the line is looked at
   // (txd_pin, take_txd) or at the next event, at the latest the end of the answer.
   const std::size_t next = s_.tx_next;
-  if (const TxChars& a = s_.tx_chars; a.active() && wake_) {
-    // Every start bit is a falling edge: the next one after what is taken.
-    const std::size_t i = a.taken < a.start ? 0 : a.char_at(a.taken) + 1;
-    if (i < a.bytes.size()) t = std::min(t, a.char_start(i));
-  } else if (next < s_.tx_edges.size()) {
+  if (next < s_.tx_edges.size()) {
     if (sig_.txd) {
       t = std::min(t, s_.tx_edges[next].first);
     } else if (wake_) {
@@ -163,6 +159,10 @@ std::uint64_t Mac::deadline() const {
       const std::size_t fall = s_.tx_edges[next].second ? next + 1 : next;
       if (fall < s_.tx_edges.size()) t = std::min(t, s_.tx_edges[fall].first);
     }
+  } else if (const TxChars& a = s_.tx_chars; wake_ && a.active()) {
+    // Every start bit is a falling edge: the next one after what is taken.
+    const std::size_t i = a.taken < a.start ? 0 : a.char_at(a.taken) + 1;
+    if (i < a.bytes.size()) t = std::min(t, a.char_start(i));
   }
   if (s_.heard.active) t = std::min(t, s_.heard.due());
   return t;
@@ -271,7 +271,9 @@ void Mac::tx_catch_up() {
   } else {
     std::tie(s_.tx_next, s_.txd) = s_.txd_at(clock_.now);  // nobody to tell edge by edge
   }
-  if (s_.tx_next > from) hand_txd_edges(std::span(s_.tx_edges).subspan(from, s_.tx_next - from));
+  if (s_.tx_next > from && edge_batches()) {
+    hand_txd_edges(std::span(s_.tx_edges).subspan(from, s_.tx_next - from));
+  }
 }
 
 bool Mac::txd_level() const {

@@ -203,6 +203,7 @@ class Mac {
   void tx_to_edges();  // the answer kept as characters becomes its edges (someone watches them)
   void tx_catch_up_chars();  // tx_catch_up of an answer kept as characters
   void hand_txd_edges(std::span<const std::pair<std::uint64_t, bool>> e);  // to the batch observers
+  [[nodiscard]] bool edge_batches() const { return sig_.txd_edges || sig_.txd_chars; }
   void tx_done();
   [[nodiscard]] bool tx_busy() const;
   void on_char(const UartChar& c);
