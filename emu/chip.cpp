@@ -93,7 +93,10 @@ void Chip::on_txd(std::function<void(std::uint64_t, bool)> cb) {
   core_->mac.watch_txd(std::move(cb));
 }
 void Chip::on_txd_edges(std::function<void(std::span<const std::pair<std::uint64_t, bool>>)> cb) {
-  core_->signals.txd_edges.add(std::move(cb));
+  core_->mac.watch_txd_edges(std::move(cb));
+}
+void Chip::on_txd_chars(std::function<void(const TxdRun&)> cb) {
+  core_->signals.txd_chars.add(std::move(cb));
 }
 void Chip::take_txd() { core_->mac.tx_catch_up(); }
 void Chip::wake_on_txd(bool on) { core_->mac.wake_on_txd(on); }

@@ -2,6 +2,7 @@
 // read in one place so that the format is one list. Each list is a template run with a Writer
 // (save) or a Reader (load), so save and load cannot drift apart; a static_assert on each
 // block's State makes a new member fail the build until it is listed here.
+#include <algorithm>
 #include <type_traits>
 
 #include "block_access.hpp"
@@ -116,7 +117,8 @@ void bit_timer(Ar& ar, T& b) {
 template <typename Ar, typename S>
 void mac_fields(Ar& ar, S& s, std::uint64_t now) {
   // `heard` is not written: Chip::save_state turns it into characters first (Mac::materialize).
-  static_assert(snap::member_count<Mac::State>() == 20, "a new member: add it here");
+  // `tx_chars` is written as the edges it stands for (below): the format does not change.
+  static_assert(snap::member_count<Mac::State>() == 21, "a new member: add it here");
   ar.block(s.rx);
   ar.block(s.frame);
   ar(s.in_frame);
@@ -125,17 +127,31 @@ void mac_fields(Ar& ar, S& s, std::uint64_t now) {
   ar(s.frame_timeout);
   ar.bounded(s.search_code, static_cast<std::uint8_t>(std::size(kBaudRates) - 1));
   ar(s.search_deadline);
-  ar.sequence(s.tx_edges, kMaxTxEdges, [](auto& a, auto& e) {
+  const auto edge = [](auto& a, auto& e) {
     a(e.first);
     a(e.second);
-  });
+  };
   if constexpr (requires { ar.fail(""); }) {
+    ar.sequence(s.tx_edges, kMaxTxEdges, edge);  // a loaded answer is edges (Mac::tx_to_edges)
     ar.size(s.tx_next, s.tx_edges.size());
     ar(s.tx_end);
     ar(s.txd);
+  } else if (s.tx_chars.active()) {
+    // The answer kept as characters, written as its edges with those up to now taken.
+    std::vector<std::pair<std::uint64_t, bool>> edges;
+    s.tx_chars.encode(edges);
+    const auto next = static_cast<std::size_t>(
+        std::partition_point(edges.begin(), edges.end(),
+                             [&](const auto& e) { return e.first <= now; }) -
+        edges.begin());
+    ar.sequence(edges, kMaxTxEdges, edge);
+    ar.size(next, edges.size());
+    ar(s.tx_end);
+    ar(s.tx_chars.level(now));
   } else {
     // The TxD edges up to now as taken: a snapshot does not depend on when the MAC takes them
     // (at its next event, or when a master looks: Chip::on_txd_edges).
+    ar.sequence(s.tx_edges, kMaxTxEdges, edge);
     const auto [next, txd] = s.txd_at(now);
     ar.size(next, s.tx_edges.size());
     ar(s.tx_end);

@@ -104,15 +104,21 @@ bool Mac::set_txd(std::uint64_t cycle, bool level) {
 }
 
 void Mac::txd_edge(std::uint64_t cycle, bool level) {
-  if (!set_txd(cycle, level) || !sig_.txd_edges) return;
+  if (!set_txd(cycle, level) || !edge_batches()) return;
   const std::pair<std::uint64_t, bool> e{cycle, level};
-  sig_.txd_edges(std::span(&e, 1));
+  hand_txd_edges(std::span(&e, 1));
+}
+
+void Mac::hand_txd_edges(std::span<const std::pair<std::uint64_t, bool>> e) {
+  if (sig_.txd_edges) sig_.txd_edges(e);
+  if (sig_.txd_chars) sig_.txd_chars(TxdRun{{}, 0, 0, e});
 }
 
 void Mac::tx_done() {
   s_.tx_end = kNever;
   s_.tx_edges.clear();
   s_.tx_next = 0;
+  s_.tx_chars.bytes.clear();
   s_.shifter = TxShifter{};
   dp_.response_sent();
 }
@@ -132,6 +138,7 @@ void Mac::stop() {
   s_.frame.reset();
   s_.tx_edges.clear();
   s_.tx_next = 0;
+  s_.tx_chars.bytes.clear();
   s_.tx_end = kNever;
   s_.shifter = TxShifter{};
   txd_edge(clock_.now, true);
@@ -152,6 +159,10 @@ std::uint64_t Mac::deadline() const {
       const std::size_t fall = s_.tx_edges[next].second ? next + 1 : next;
       if (fall < s_.tx_edges.size()) t = std::min(t, s_.tx_edges[fall].first);
     }
+  } else if (const TxChars& a = s_.tx_chars; wake_ && a.active()) {
+    // Every start bit is a falling edge: the next one after what is taken.
+    const std::size_t i = a.taken < a.start ? 0 : a.char_at(a.taken) + 1;
+    if (i < a.bytes.size()) t = std::min(t, a.char_start(i));
   }
   if (s_.heard.active) t = std::min(t, s_.heard.due());
   return t;
@@ -166,11 +177,91 @@ void Mac::wake_on_txd(bool on) {
 void Mac::watch_txd(std::function<void(std::uint64_t, bool)> cb) {
   // Edges before now happened unwatched; from now on each one is an event again.
   tx_catch_up();
+  tx_to_edges();
   sig_.txd.add(std::move(cb));
   clock_.note_deadline(deadline());
 }
 
+void Mac::watch_txd_edges(std::function<void(std::span<const std::pair<std::uint64_t, bool>>)> cb) {
+  // The new observer gets the edges not taken yet, as it would from an answer made of edges.
+  tx_to_edges();
+  sig_.txd_edges.add(std::move(cb));
+}
+
+std::size_t TxChars::edges(std::size_t i, std::uint64_t from, std::uint64_t to,
+                           std::pair<std::uint64_t, bool>* out) const {
+  std::array<std::pair<std::uint64_t, bool>, kUartCharBits> all{};
+  bool line = true;  // a good character follows a stop bit or the idle line
+  const std::size_t n = uart_frame_edges(uart_frame(bytes[i]), char_start(i), t, line, all.data());
+  std::size_t m = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (all[k].first > from && all[k].first <= to) out[m++] = all[k];
+  }
+  return m;
+}
+
+void TxChars::encode(std::vector<std::pair<std::uint64_t, bool>>& out) const {
+  uart_encode(bytes, start, t, out);
+}
+
+void Mac::tx_to_edges() {
+  TxChars& a = s_.tx_chars;
+  if (!a.active()) return;
+  s_.tx_edges.clear();
+  a.encode(s_.tx_edges);
+  // What was taken as characters is taken as edges; TxD (s_.txd) is the level it left.
+  s_.tx_next = static_cast<std::size_t>(
+      std::partition_point(s_.tx_edges.begin(), s_.tx_edges.end(),
+                           [&](const auto& e) { return e.first <= a.taken; }) -
+      s_.tx_edges.begin());
+  a.bytes.clear();
+}
+
+void Mac::tx_catch_up_chars() {
+  TxChars& a = s_.tx_chars;
+  const std::uint64_t from = a.taken;
+  const std::uint64_t now = clock_.now;
+  if (now <= from || now < a.start) return;
+  a.taken = now;
+  s_.txd = a.level(now);
+  // The first character whose start bit (a falling edge) lies after `from`, and the one whose
+  // frame holds `now`.
+  const std::size_t first = from < a.start ? 0 : a.char_at(from) + 1;
+  const std::size_t last = a.char_at(now);
+  if (wake_ && first <= last && first < a.bytes.size()) {
+    wake_ = false;
+    woke_ = true;
+  }
+  if (!sig_.txd_chars) return;
+  std::array<std::pair<std::uint64_t, bool>, kUartCharBits> e{};
+  const auto hand_edges = [&](std::size_t i) {
+    const std::size_t n = a.edges(i, from, now, e.data());
+    if (n > 0) sig_.txd_chars(TxdRun{{}, 0, 0, std::span(e.data(), n)});
+  };
+  // The rest of a character partly taken before, ...
+  if (first > 0 && first - 1 < a.bytes.size()) hand_edges(first - 1);
+  // ... the characters whose edges (up to the rise into the stop bit) are all on the line ...
+  const std::uint64_t last_edge = std::uint64_t{kUartCharBits - 1} * a.t;
+  std::size_t whole = first;
+  if (now >= a.start + last_edge) {
+    whole = std::max(
+        first, std::min<std::size_t>(
+                   a.bytes.size(),
+                   static_cast<std::size_t>((now - a.start - last_edge) / a.frame_cycles()) + 1));
+  }
+  if (whole > first) {
+    sig_.txd_chars(
+        TxdRun{std::span(a.bytes).subspan(first, whole - first), a.char_start(first), a.t, {}});
+  }
+  // ... and the edges so far of the one on the line now.
+  if (whole < a.bytes.size() && a.char_start(whole) <= now) hand_edges(whole);
+}
+
 void Mac::tx_catch_up() {
+  if (s_.tx_chars.active()) {
+    tx_catch_up_chars();
+    return;
+  }
   const std::size_t from = s_.tx_next;
   if (sig_.txd || wake_) {
     while (s_.tx_next < s_.tx_edges.size() && s_.tx_edges[s_.tx_next].first <= clock_.now) {
@@ -180,12 +271,14 @@ void Mac::tx_catch_up() {
   } else {
     std::tie(s_.tx_next, s_.txd) = s_.txd_at(clock_.now);  // nobody to tell edge by edge
   }
-  if (s_.tx_next > from && sig_.txd_edges) {
-    sig_.txd_edges(std::span(s_.tx_edges).subspan(from, s_.tx_next - from));
+  if (s_.tx_next > from && edge_batches()) {
+    hand_txd_edges(std::span(s_.tx_edges).subspan(from, s_.tx_next - from));
   }
 }
 
-bool Mac::txd_level() const { return s_.txd_at(clock_.now).second; }
+bool Mac::txd_level() const {
+  return s_.tx_chars.active() ? s_.tx_chars.level(clock_.now) : s_.txd_at(clock_.now).second;
+}
 
 void Mac::process() {
   if (s_.heard.active && s_.heard.due() <= clock_.now) take_heard();
@@ -375,7 +468,14 @@ void Mac::send(const fdl::Frame& f, std::uint64_t request_end) {
   }
   s_.tx_edges.clear();
   s_.tx_next = 0;
-  uart_encode(bytes, start, t, s_.tx_edges);
+  if (sig_.txd || sig_.txd_edges) {
+    uart_encode(bytes, start, t, s_.tx_edges);
+  } else {  // nobody watches the edges: the answer stays characters (TxChars)
+    s_.tx_chars.bytes = std::move(bytes);
+    s_.tx_chars.start = start;
+    s_.tx_chars.t = t;
+    s_.tx_chars.taken = clock_.now;
+  }
   s_.tx_end = end;
 }
 

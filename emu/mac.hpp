@@ -3,6 +3,7 @@
 // answer MinTSDR bit times after the request's last stop bit.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <span>
@@ -84,6 +85,36 @@ struct HeardTelegram {
   }
 };
 
+// Our answer as characters (docs/engine.md "Characters on TxD"): while nobody watches TxD edges
+// (no on_txd, no on_txd_edges observer) the transmitter keeps the answer as its bytes, back to
+// back from `start` at `t` clocks per bit, and makes edges only for whoever needs them
+// (Mac::tx_to_edges, a snapshot, a character only partly on the line when TxD is taken).
+struct TxChars {
+  std::vector<std::uint8_t> bytes;  // empty: no answer, or it is in State::tx_edges
+  std::uint64_t start = 0;
+  std::uint32_t t = 0;
+  std::uint64_t taken = 0;  // TxD is taken up to this cycle: its edges at or before it
+  [[nodiscard]] bool active() const { return !bytes.empty(); }
+  [[nodiscard]] std::uint64_t frame_cycles() const { return std::uint64_t{kUartCharBits} * t; }
+  [[nodiscard]] std::uint64_t char_start(std::size_t i) const { return start + i * frame_cycles(); }
+  // The character whose frame holds cycle `c` (>= start); bytes.size() past the last.
+  [[nodiscard]] std::size_t char_at(std::uint64_t c) const {
+    return static_cast<std::size_t>(
+        std::min<std::uint64_t>((c - start) / frame_cycles(), bytes.size()));
+  }
+  [[nodiscard]] bool level(std::uint64_t c) const {  // TxD at cycle c
+    if (c < start) return true;
+    const std::size_t i = char_at(c);
+    if (i == bytes.size()) return true;
+    return uart_bit(bytes[i], static_cast<std::uint32_t>((c - char_start(i)) / t));
+  }
+  // The edges of character i at or before `to` and after `from`, written to out (at most 11).
+  std::size_t edges(std::size_t i, std::uint64_t from, std::uint64_t to,
+                    std::pair<std::uint64_t, bool>* out) const;
+  // All edges, as uart_encode gives them (a snapshot, Mac::tx_to_edges).
+  void encode(std::vector<std::pair<std::uint64_t, bool>>& out) const;
+};
+
 class Mac {
  public:
   struct State {
@@ -101,6 +132,7 @@ class Mac {
     std::size_t tx_next = 0;
     std::uint64_t tx_end = kNever;
     bool txd = true;
+    TxChars tx_chars;  // or the answer as characters (then tx_edges is empty)
     // Per-cycle engine (docs/engine.md): its own receiver and counters; never the deadlines above.
     UartSampler sampler;
     BitTimer gap;     // idle inside a telegram, from the end of a character (TSYN ends it)
@@ -114,7 +146,7 @@ class Mac {
     HeardTelegram heard;
 
     // TxD with the edges up to `now` taken, whether or not an event has taken them yet: the
-    // first edge after `now`, and the line's level.
+    // first edge after `now`, and the line's level (the answer as edges).
     [[nodiscard]] std::pair<std::size_t, bool> txd_at(std::uint64_t now) const {
       std::size_t i = tx_next;
       bool level = txd;
@@ -143,6 +175,8 @@ class Mac {
   // what their stop samples up to now did: from here on the MAC is where characters leave it.
   void materialize();
   void watch_txd(std::function<void(std::uint64_t, bool)> cb);  // Chip::on_txd
+  // Chip::on_txd_edges: edge observers need the answer as edges.
+  void watch_txd_edges(std::function<void(std::span<const std::pair<std::uint64_t, bool>>)> cb);
   // Chip::take_txd: the TxD edges up to now onto the pin, handed to the on_txd_edges observers.
   void tx_catch_up();
   // Chip::wake_on_txd: while on, the next falling TxD edge is an event that fires the wake-up.
@@ -166,6 +200,10 @@ class Mac {
   void truncated();
   bool set_txd(std::uint64_t cycle, bool level);   // false: TxD had that level already
   void txd_edge(std::uint64_t cycle, bool level);  // one edge, to every kind of observer
+  void tx_to_edges();  // the answer kept as characters becomes its edges (someone watches them)
+  void tx_catch_up_chars();  // tx_catch_up of an answer kept as characters
+  void hand_txd_edges(std::span<const std::pair<std::uint64_t, bool>> e);  // to the batch observers
+  [[nodiscard]] bool edge_batches() const { return sig_.txd_edges || sig_.txd_chars; }
   void tx_done();
   [[nodiscard]] bool tx_busy() const;
   void on_char(const UartChar& c);

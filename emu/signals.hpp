@@ -47,6 +47,8 @@ struct Signals {
   Observers<std::uint64_t, bool> txd;  // one by one, each edge an event (Chip::on_txd)
   // In batches, when the MAC catches up (Chip::on_txd_edges).
   Observers<std::span<const std::pair<std::uint64_t, bool>>> txd_edges;
+  // In batches as characters where it can, else edges (Chip::on_txd_chars).
+  Observers<const TxdRun&> txd_chars;
   Observers<std::uint64_t, bool> rxd;  // edges as they are driven (possibly ahead of time)
   Observers<const Telegram&> telegram;
   Observers<const Telegram&> answer;  // the chip's own answers only, when armed
@@ -82,6 +84,7 @@ struct Signals {
     pb3 = std::move(from.pb3);
     txd = std::move(from.txd);
     txd_edges = std::move(from.txd_edges);
+    txd_chars = std::move(from.txd_chars);
     rxd = std::move(from.rxd);
     telegram = std::move(from.telegram);
     answer = std::move(from.answer);

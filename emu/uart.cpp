@@ -3,6 +3,7 @@
 #include "dpc31/uart.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <limits>
 
@@ -139,17 +140,21 @@ bool UartRx::whole_char(std::uint64_t start, std::uint8_t data, std::uint32_t bi
   if (start > 0) sample_through(start - 1);  // what the start bit's falling edge does first
   if (receiving() || start < not_before_) return false;
   // The falling edge at `start` begins the character (edge() above).
-  s_ = start;
   idle_bits_ = idle_bits_at(start);
+  begin_whole(start, data);
+  return true;
+}
+
+void UartRx::begin_whole(std::uint64_t start, std::uint8_t data) {
   // The frame's last edge is the rise that ends its last 0 bit (the stop bit is 1), at bit
   // boundary b; that edge took the samples of bits 0 .. b-1 and left the line high. Samples b ..
   // 10 and finish() come later, from advance() or the next edge, as they would.
   const std::uint16_t frame = uart_frame(data);
   const std::uint32_t b = last_rise_bit(frame);
+  s_ = start;
   k_ = b;
   bits_ = static_cast<std::uint16_t>(frame & ((1u << b) - 1));
   last_rise_ = start + std::uint64_t{b} * t_;
-  return true;
 }
 
 std::uint64_t UartRx::idle_bits_at(std::uint64_t start) const {
@@ -212,6 +217,37 @@ std::size_t UartRx::edges(std::span<const std::pair<std::uint64_t, bool>> e) {
     }
   }
   return whole;
+}
+
+void UartRx::take(const TxdRun& run) {
+  if (!run.edges.empty()) {
+    edges(run.edges);
+    return;
+  }
+  const std::uint64_t frame_cycles = std::uint64_t{kUartCharBits} * run.bit_cycles;
+  bool whole = false;  // the character before was taken whole
+  for (std::size_t i = 0; i < run.bytes.size(); ++i) {
+    const std::uint64_t at = run.start + i * frame_cycles;
+    if (whole) {
+      // What whole_char does at the next start bit right after a character it took: the samples
+      // left of that one read the high line (a good frame's bits from its last rise on are
+      // ones), so it is finished as the good character it is, and this one begins with no idle
+      // bit before it.
+      done_.emplace_back(UartChar{run.bytes[i - 1], true, true, true, s_, at, idle_bits_});
+      not_before_ = at;
+      idle_bits_ = 0;
+      begin_whole(at, run.bytes[i]);
+      continue;
+    }
+    whole = whole_char(at, run.bytes[i], run.bit_cycles);
+    if (whole) continue;
+    // The line is high before a good character (the stop bit of the one before).
+    std::array<std::pair<std::uint64_t, bool>, kUartCharBits> e{};
+    bool line = true;
+    const std::size_t n =
+        uart_frame_edges(uart_frame(run.bytes[i]), at, run.bit_cycles, line, e.data());
+    for (std::size_t k = 0; k < n; ++k) edge(e[k].first, e[k].second);
+  }
 }
 
 void UartRx::advance(std::uint64_t now, std::vector<UartChar>& out) {

@@ -59,8 +59,9 @@ DpMaster::DpMaster(Chip& chip, MasterConfig m, SlaveConfig s)
       target_(slave_.address),
       rx_(t_, chip.cycle()),
       bus_free_(chip.cycle()) {
-  // TxD in batches, taken when the master looks (take_txd): no event per bit.
-  chip_->on_txd_edges([this](std::span<const std::pair<std::uint64_t, bool>> e) { rx_.edges(e); });
+  // TxD in batches of characters, taken when the master looks (take_txd): no event per bit, and
+  // no edges where nobody else watches them.
+  chip_->on_txd_chars([this](const TxdRun& r) { rx_.take(r); });
   slaves_.push_back({slave_, target_, fcb_, fcv_started_});
 }
 

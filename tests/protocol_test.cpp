@@ -192,7 +192,8 @@ TEST(TxdFastPath, UnwatchedAnswerCostsNoEventPerBitAndLooksTheSame) {
     Chip chip{{Profile::dpc31, BusMode::intel, 0}};
     std::vector<std::pair<std::uint64_t, bool>> irq;
     std::vector<std::uint64_t> telegrams;
-    std::vector<bool> pin;  // TxD at every cycle of the answer
+    std::vector<bool> pin;                             // TxD at every cycle of the answer
+    std::vector<std::vector<std::uint8_t>> snapshots;  // at some cycles inside the answer
     std::size_t events = 0;
   };
   auto play = [](Run& r, bool watch_txd) {
@@ -213,6 +214,8 @@ TEST(TxdFastPath, UnwatchedAnswerCostsNoEventPerBitAndLooksTheSame) {
     const std::size_t before = r.events;
     for (std::uint64_t c = 0; c < 6 * 11 * t; ++c) {
       r.pin.push_back(r.chip.txd_pin());
+      // Unwatched, the answer is kept as characters: a snapshot writes the edges they stand for.
+      if (c % 17 == 3) r.snapshots.push_back(r.chip.save_state());
       r.chip.step(1);
     }
     r.events -= before;  // events inside the answer
@@ -222,6 +225,7 @@ TEST(TxdFastPath, UnwatchedAnswerCostsNoEventPerBitAndLooksTheSame) {
   play(watched, true);
   play(unwatched, false);
   EXPECT_EQ(unwatched.pin, watched.pin);
+  EXPECT_EQ(unwatched.snapshots, watched.snapshots);
   EXPECT_EQ(unwatched.irq, watched.irq);
   EXPECT_EQ(unwatched.telegrams, watched.telegrams);
   EXPECT_EQ(unwatched.chip.save_state(), watched.chip.save_state());

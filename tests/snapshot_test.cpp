@@ -322,6 +322,7 @@ bool receiving_with_edges_ahead(const Chip& c) {
 }
 bool transmitting(const Chip& c) {
   const Mac::State& m = BlockAccess::state(harness::core(c).mac);
+  if (m.tx_chars.active()) return m.tx_chars.taken >= m.tx_chars.start && c.cycle() < m.tx_end;
   return m.tx_next > 0 && m.tx_next < m.tx_edges.size();
 }
 bool searching(const Chip& c) { return c.wd_state() == WdState::Baud_Search && c.started(); }

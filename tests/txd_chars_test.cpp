@@ -1,12 +1,14 @@
-// Characters on TxD (Chip::on_txd_edges, issue 19 item 1, the sending half) against TxD edges as
-// events (Chip::on_txd), the path every earlier test and golden trace was made with. With an
-// on_txd observer attached every TxD edge is an event and reaches the master's receiver in a
-// batch of its own, as before; without one the edges reach it in batches when it looks, and whole
-// characters go in one step (UartRx::edges). Two chips of the same profile, each with the built-in
-// master and the minimal user side: the master's exchanges (every request's and answer's start
-// and end cycle, the answer's bytes), its counters, the chip's state (save_state) and TxD must be
-// the same after every exchange. Every profile, every PROFIBUS rate; and an answer cut by
-// Go_Offline while on the line.
+// Characters on TxD (Chip::on_txd_chars, issue 19 item 1 and issue 30 item 6) against TxD
+// edges as events (Chip::on_txd), the path every earlier test and golden trace was made with.
+// With an on_txd observer attached the chip makes its answer's edges and every TxD edge is an
+// event that reaches the master's receiver in a batch of its own, as before; without one the
+// chip keeps its answer as characters (no edge is made) and hands them to the master's receiver
+// when it looks, whole where all of a character's edges are on the line, else as edges
+// (UartRx::take). Two chips of the same profile, each with the built-in master and the minimal
+// user side: the master's exchanges (every request's and answer's start and end cycle, the
+// answer's bytes), its counters, the chip's state (save_state), TxD and every edge (made from the
+// characters) must be the same after every exchange. Every profile, every PROFIBUS rate; DPV1
+// Reads; and an answer cut by Go_Offline while on the line.
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -18,6 +20,7 @@
 #include "dp_master.hpp"
 #include "dpc31/bus_port.hpp"
 #include "dpc31/fdl.hpp"
+#include "dpv1_master.hpp"
 #include "responder.hpp"
 #include "snapshot.hpp"
 #include "test_util.hpp"
@@ -35,22 +38,22 @@ struct Side {
   Responder user;
   DpMaster master;
   Edges txd;
-  std::size_t whole = 0;  // characters a receiver beside the master took whole
-  UartRx probe;
+  std::size_t whole = 0;  // characters handed over whole (TxdRun::bytes)
 
-  Side(Profile p, std::uint32_t baud, bool watch_bits)
+  Side(Profile p, std::uint32_t baud, bool watch_bits, const ResponderConfig& rc = {},
+       const SlaveConfig& slave = {})
       : chip({p, BusMode::intel, 0}),
-        user(ResponderConfig{}),
-        master(init(chip, user), MasterConfig{2, baud, 100, 33}, SlaveConfig{}),
-        probe(bit_cycles(chip.clock_hz(), baud), chip.cycle()) {
+        user(rc),
+        master(init(chip, user), MasterConfig{2, baud, 100, 33}, slave) {
     master.set_firmware([this](BusPort& c) { user.isr(c); });
     if (watch_bits) {
       chip.on_txd([this](std::uint64_t c, bool l) { txd.emplace_back(c, l); });
     } else {
-      // Beside the master: gets the same batches, counts how many characters went whole.
-      chip.on_txd_edges([this](std::span<const std::pair<std::uint64_t, bool>> e) {
-        txd.insert(txd.end(), e.begin(), e.end());
-        whole += probe.edges(e);
+      // Beside the master: gets the same runs; their characters become the edges they stand for.
+      chip.on_txd_chars([this](const TxdRun& r) {
+        txd.insert(txd.end(), r.edges.begin(), r.edges.end());
+        uart_encode(r.bytes, r.start, r.bit_cycles, txd);
+        whole += r.bytes.size();
       });
     }
   }
@@ -139,6 +142,40 @@ TEST_P(TxdChars, TheMasterSeesWhatTheEdgesShowed) {
   EXPECT_GE(chars.whole, 20u) << "the whole path was rarely taken";
 }
 
+// DPV1 (docs/dpv1.md): MSAC_C1 Reads of a 240-byte record on a VPC3+, the long answers of row k
+// of dpc31 bench, and a Read whose request is damaged (no answer, the master retries).
+class TxdCharsDpv1 : public ::testing::TestWithParam<std::uint32_t> {};
+
+TEST_P(TxdCharsDpv1, ReadsLookTheSame) {
+  const std::uint32_t baud = GetParam();
+  ResponderConfig rc;
+  rc.slave.user_prm = {0xC0, 0x00, 0x00};  // DPV1_Enable, Fail_Safe
+  rc.dpv1.records = {{0, 1, std::vector<std::uint8_t>(240, 0xA5)}, {0, 2, {1, 2, 3, 0x7E}}};
+  Side bits(Profile::vpc3plus, baud, true, rc, rc.slave);
+  Side chars(Profile::vpc3plus, baud, false, rc, rc.slave);
+  Dpv1Master a(bits.chip, bits.master);
+  Dpv1Master b(chars.chip, chars.master);
+  ASSERT_TRUE(bits.master.startup());
+  ASSERT_TRUE(chars.master.startup());
+  expect_same(bits, chars, "start-up");
+  for (std::uint8_t index : {1, 2, 1}) {
+    const Dpv1Answer x = a.read(0, index, 240);
+    const Dpv1Answer y = b.read(0, index, 240);
+    ASSERT_EQ(x.outcome, Dpv1Answer::Outcome::positive);
+    ASSERT_EQ(x.outcome, y.outcome);
+    ASSERT_EQ(x.du, y.du);
+    expect_same(bits, chars, "Read");
+  }
+  bits.master.data_exchange({1, 2, 3, 4}, {5, UartFault::Kind::stop});
+  chars.master.data_exchange({1, 2, 3, 4}, {5, UartFault::Kind::stop});
+  expect_same(bits, chars, "Data_Exchange with a stop bit error");
+  // The two responses of 240 bytes (253 characters each) went as characters, but for a few.
+  EXPECT_GE(chars.whole, 500u) << "the whole path was rarely taken";
+}
+
+INSTANTIATE_TEST_SUITE_P(Rates, TxdCharsDpv1,
+                         ::testing::Values(9'600u, 187'500u, 1'500'000u, 12'000'000u));
+
 INSTANTIATE_TEST_SUITE_P(ProfilesAndRates, TxdChars,
                          ::testing::Combine(::testing::Values(Profile::spc3, Profile::vpc3plus,
                                                               Profile::dpc31),
@@ -160,7 +197,7 @@ TEST_P(TxdCut, AnAnswerCutByGoOfflineReachesBothReceiversAlike) {
   UartRx a(t, bits.chip.cycle());
   UartRx b(t, chars.chip.cycle());
   bits.chip.on_txd([&](std::uint64_t c, bool l) { a.edge(c, l); });
-  chars.chip.on_txd_edges([&](std::span<const std::pair<std::uint64_t, bool>> e) { b.edges(e); });
+  chars.chip.on_txd_chars([&](const TxdRun& r) { b.take(r); });
   // Get_Cfg by hand: its answer (SD2, 9 + 1 characters) starts MinTSDR = 11 bit times after the
   // request's end; cut it 3.5 characters in.
   const std::vector<std::uint8_t> req =

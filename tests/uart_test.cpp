@@ -611,6 +611,78 @@ TEST(UartRx, EdgesInBatchesLeaveTheStateTheEdgesOneByOneLeave) {
   }
 }
 
+// UartRx::take (the master's and the bridge's receiver on TxD, Chip::on_txd_chars) against the
+// same line fed edge by edge: telegrams of back-to-back good characters after random gaps (at the
+// receiver's bit time, sometimes at another, where take falls back to edges), sometimes after a
+// glitch, each handed over as the MAC hands them: runs of whole characters split at random
+// characters, and a character cut at a random cycle as its edges before and after the cut. After
+// every run both receivers hold the same state and have given the same characters.
+TEST(UartRx, RunsOfCharactersLeaveTheStateTheirEdgesLeave) {
+  std::mt19937 rng(31);
+  for (const std::uint32_t t : {2u, 3u, 4u, 8u, 32u, 256u, 1056u, 5000u}) {
+    SCOPED_TRACE(t);
+    const std::uint64_t tt = t;
+    UartRx a(t, 0);
+    UartRx b(t, 0);
+    std::vector<UartChar> out_a;
+    std::vector<UartChar> out_b;
+    std::uint64_t cursor = 100;
+    const auto both = [&](const TxdRun& r) {
+      Edges e(r.edges.begin(), r.edges.end());
+      uart_encode(r.bytes, r.start, r.bit_cycles, e);
+      for (const auto& [c, l] : e) a.edge(c, l);
+      b.take(r);
+      ASSERT_EQ(rx_state(a), rx_state(b));
+      ASSERT_EQ(a.receiving(), b.receiving());
+      ASSERT_EQ(a.next_deadline(), b.next_deadline());
+    };
+    for (int telegram = 0; telegram < 60; ++telegram) {
+      cursor += rng() % 3 == 0 ? rng() % 3 : 1 + rng() % (50 * tt);
+      if (rng() % 8 == 0) {  // a glitch the next telegram may start inside
+        const Edges g{{cursor, false}, {cursor + 1 + rng() % (2 * tt), true}};
+        ASSERT_NO_FATAL_FAILURE(both(TxdRun{{}, 0, 0, g}));
+        cursor += rng() % (12 * tt);
+      }
+      const std::uint32_t bt = rng() % 6 == 0 ? t + 1 : t;
+      std::vector<std::uint8_t> bytes(1 + rng() % 40);
+      for (auto& x : bytes) x = static_cast<std::uint8_t>(rng());
+      const std::uint64_t frame = std::uint64_t{kUartCharBits} * bt;
+      std::size_t i = 0;
+      while (i < bytes.size()) {
+        const std::size_t n = 1 + rng() % (bytes.size() - i);
+        const std::uint64_t at = cursor + i * frame;
+        if (rng() % 4 == 0) {  // the first character of this piece cut at a random cycle
+          Edges e;
+          uart_encode(std::span(bytes).subspan(i, 1), at, bt, e);
+          const std::size_t k = rng() % (e.size() + 1);
+          if (k > 0) {
+            ASSERT_NO_FATAL_FAILURE(both(TxdRun{{}, 0, 0, std::span(e).first(k)}));
+          }
+          if (k < e.size()) {
+            ASSERT_NO_FATAL_FAILURE(both(TxdRun{{}, 0, 0, std::span(e).subspan(k)}));
+          }
+          ++i;
+          continue;
+        }
+        ASSERT_NO_FATAL_FAILURE(both(TxdRun{std::span(bytes).subspan(i, n), at, bt, {}}));
+        i += n;
+        if (rng() % 2 == 0) {
+          const std::uint64_t now = cursor + i * frame - rng() % frame;
+          a.advance(now, out_a);
+          b.advance(now, out_b);
+          ASSERT_EQ(out_a, out_b);
+        }
+      }
+      cursor += bytes.size() * frame;
+    }
+    a.advance(cursor + 20 * tt, out_a);
+    b.advance(cursor + 20 * tt, out_b);
+    EXPECT_EQ(out_a, out_b);
+    EXPECT_EQ(rx_state(a), rx_state(b));
+    EXPECT_GE(out_a.size(), 600u);
+  }
+}
+
 // A batch may end inside a character (Chip::on_txd_edges hands over what is on the line when
 // somebody looks). 0xFE has no edge after its line bit 2, so its first two edges already read as
 // a good character and are taken whole; a later batch then brings an edge inside the frame (a low

@@ -221,7 +221,13 @@ class Chip {
   // every answer. They are no events: a run nobody else watches is not stepped bit by bit
   // (docs/engine.md, "Characters on TxD").
   void on_txd_edges(std::function<void(std::span<const std::pair<std::uint64_t, bool>>)> cb);
-  // Hands the TxD edges up to cycle() to the on_txd_edges observers.
+  // The same line for a receiver that takes characters (the built-in master, the bridge): handed
+  // over as on_txd_edges hands its edges, but a character whose edges are all on the line comes
+  // whole (TxdRun::bytes), the rest as edges. While only such observers (or none) watch TxD, the
+  // chip keeps its answer as characters and makes no edges for it (docs/engine.md, "Characters
+  // on TxD"); an on_txd or on_txd_edges observer makes it edges again.
+  void on_txd_chars(std::function<void(const TxdRun&)> cb);
+  // Hands the TxD edges up to cycle() to the on_txd_edges and on_txd_chars observers.
   void take_txd();
   // While on, the chip's next falling TxD edge (a start bit) is an event after which the step
   // stops as after request_stop(). Off clears a wake-up that fired but was not taken.

@@ -57,6 +57,18 @@ struct UartChar {
   bool operator==(const UartChar&) const = default;
 };
 
+// A stretch of TxD as the chip's transmitter hands it over (Chip::on_txd_chars): whole good
+// characters, `bytes` back to back from `start` at `bit_cycles` per bit (the edges uart_encode
+// gives for them), or `edges` in order where only part of a character is on the line yet, where
+// the line is cut (Go_Offline) or where the answer is kept as edges (someone watches them).
+// Exactly one of `bytes` and `edges` is non-empty.
+struct TxdRun {
+  std::span<const std::uint8_t> bytes;
+  std::uint64_t start = 0;
+  std::uint32_t bit_cycles = 0;
+  std::span<const std::pair<std::uint64_t, bool>> edges;
+};
+
 // Receiver fed with RxD level changes. A character starts at a falling edge (1 -> 0) seen while
 // idle, at or after the end of the previous character; bit k (0 start, 1..8 data, 9 parity,
 // 10 stop) is sampled at start + k*T + T/2 and reads the level set by the last edge at or before
@@ -101,6 +113,9 @@ class UartRx {
   // but a run that reads as one good character at this receiver's bit time is taken whole
   // (whole_char). Returns the number of characters taken whole.
   std::size_t edges(std::span<const std::pair<std::uint64_t, bool>> e);
+  // A run of TxD (Chip::on_txd_chars): the same as edges() with the run's edges, its characters
+  // taken whole where whole_char can, else edge by edge.
+  void take(const TxdRun& run);
   // Appends, in order, every character whose stop sample is at or before `now`. Edges may have
   // been fed beyond `now`; such characters wait for a later advance().
   void advance(std::uint64_t now, std::vector<UartChar>& out);
@@ -126,6 +141,8 @@ class UartRx {
   template <typename Ar, typename Self>
   static void fields(Ar& ar, Self& s);
   [[nodiscard]] std::uint64_t sample_at(std::uint32_t k) const;
+  // whole_char's state from the start bit of `data` at `start` on (idle_bits_ set before).
+  void begin_whole(std::uint64_t start, std::uint8_t data);
   // Takes the samples of the character in progress that fall at or before `last`.
   void sample_through(std::uint64_t last);
   void finish();

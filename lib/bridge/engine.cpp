@@ -102,8 +102,8 @@ Engine::Engine(const Setup& setup, LogSink log)
     add_slave(0, *solo_, setup_.firmware, setup_.address);
   }
   rx_.configure(t_, solo_->cycle());
-  // TxD in batches, taken when the bridge looks (collect): no event per bit.
-  solo_->on_txd_edges([this](std::span<const std::pair<std::uint64_t, bool>> e) { rx_.edges(e); });
+  // TxD in batches of characters, taken when the bridge looks (collect): no event per bit.
+  solo_->on_txd_chars([this](const TxdRun& r) { rx_.take(r); });
   if (!m51_) cpu_ = std::make_unique<Cpu>(*solo_, slaves_[0].user.program);
   bus_free_ = solo_->cycle();
 }
@@ -152,7 +152,7 @@ Engine::~Engine() {
   cpu_.reset();
   seg_.reset();
   if (solo_) {
-    solo_->on_txd_edges({});
+    solo_->on_txd_chars({});
     solo_->on_state_change({});
     solo_->set_log_sink({});
   }
