@@ -21,7 +21,6 @@ std::string station_scope(std::uint8_t address, std::string_view name) {
 SegmentOutputs::SegmentOutputs(SegmentOutputOptions opt) : opt_(std::move(opt)) {
   for (const wave::Options& w : opt_.waves) waves_.push_back(std::make_unique<wave::Recorder>(w));
 }
-SegmentOutputs::~SegmentOutputs() = default;
 
 bool SegmentOutputs::open(std::string& error) {
   for (auto& w : waves_) {

@@ -34,12 +34,10 @@ struct SegmentOutputError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Not copied nor moved (the segment's on_line holds it; the pcapng writer is neither).
 class SegmentOutputs {
  public:
   explicit SegmentOutputs(SegmentOutputOptions opt);
-  ~SegmentOutputs();
-  SegmentOutputs(const SegmentOutputs&) = delete;
-  SegmentOutputs& operator=(const SegmentOutputs&) = delete;
 
   // Opens every file (temporaries next to the targets): a bad path is found before the run. False
   // with a line.
