@@ -351,7 +351,7 @@ PyStation& add_station(py::object self, U8 address, const std::string& profile,
           s.seg.set_firmware(raw.index, [r](BusPort& b) { r->isr(b); });
         }
       },
-      true);
+      /*joins=*/true);
   check_output(out_error.empty(), out_error);
   s.stations.push_back(std::move(st));
   return raw;
