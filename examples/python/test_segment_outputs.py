@@ -95,6 +95,10 @@ def test_bad_paths_and_late_stations_are_clear_errors(traces, tmp_path):
     with pytest.raises(dpc31.Error, match="no signal matches 'nothing.*'"):
         scn.run(vcd=str(tmp_path / "two.vcd"), signals=["nothing.*"])
     assert not list(tmp_path.glob("two*"))  # nothing written, no temporary left
+    seg = dpc31.Segment(1_500_000, vcd=str(tmp_path / "glob.vcd"), signals=["nothing.*"])
+    seg.add_station(5, "spc3")
+    with pytest.raises(dpc31.Error, match="no signal matches 'nothing.*'"):
+        seg.run_until(1000)
 
     seg = dpc31.Segment(1_500_000, pcapng=str(tmp_path / "late.pcapng"))
     seg.add_station(5, "spc3")
