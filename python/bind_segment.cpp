@@ -1,6 +1,7 @@
 // dpc31.Segment in Python (docs/python.md, "A segment"): several chips on one line
 // (session/segment.hpp), the built-in masters on it with their token visits (DpMaster), scripted
-// senders, the bus check (session/bus_check.hpp) and segment scenarios, one call for one call.
+// senders, the bus check (session/bus_check.hpp), segment scenarios and the outputs of both
+// (lib/segment_outputs), one call for one call.
 #include <memory>
 #include <variant>
 
@@ -12,6 +13,7 @@
 #include "responder.hpp"
 #include "scenario_segment.hpp"
 #include "segment.hpp"
+#include "segment_outputs.hpp"
 #include "vocabulary.hpp"
 
 namespace dpc31::py_bind {
@@ -33,6 +35,31 @@ struct PyStation {
   std::vector<std::tuple<U64, DpState, WdState>> changes;
 };
 
+// The waveforms and the pcapng asked for (Segment(vcd=, fst=, pcapng=, signals=),
+// SegmentScenario.run): wave::Options as `dpc31 run --vcd` / `--fst` makes them (1 ps, every
+// cycle).
+SegmentOutputOptions output_options(const std::optional<std::string>& vcd,
+                                    const std::optional<std::string>& fst,
+                                    const std::optional<std::string>& pcapng,
+                                    const std::vector<std::string>& signals) {
+  SegmentOutputOptions o;
+  for (const auto& [path, is_fst] : {std::pair{vcd, false}, std::pair{fst, true}}) {
+    if (!path) continue;
+    wave::Options w;
+    w.path = *path;
+    w.fst = is_fst;
+    w.signals = signals;
+    o.waves.push_back(w);
+  }
+  o.pcap = pcapng.value_or("");
+  return o;
+}
+
+// A file that cannot be made or written: dpc31.Error with its one line.
+void check_output(bool ok, const std::string& error) {
+  if (!ok) raise(errors().error, error);
+}
+
 // The segment as Python holds it. The GIL is released while the line runs; a Python observer
 // (on_telegram, on_collision) takes it again, and its exception is raised when the running call
 // returns (the call still runs to its end; the observers are not called again in it). One thread
@@ -42,6 +69,7 @@ class PySegment {
   PySegment(std::uint32_t baud_, std::uint32_t clock_hz) : seg(baud_, clock_hz), baud(baud_) {
     seg.on_telegram = [this](const LineTelegram& t) {
       if (check) check->telegram(t);
+      if (outputs) outputs->telegram(t);
       call(telegram_cb, t);
     };
     seg.on_collision = [this](const Collision& c) {
@@ -51,10 +79,17 @@ class PySegment {
   }
 
   // Runs the line: the GIL released, then the bus check sees the idle line up to the line's time
-  // and an observer's exception is raised. A call without a result gives std::monostate.
+  // and an observer's exception is raised. A call without a result gives std::monostate. The
+  // outputs' line is attached at the first call that runs it (every station is on it then); a
+  // station's init (`joins`) does not run the line.
   template <typename F>
-  auto run(F&& f) {
+  auto run(F&& f, bool joins = false) {
     enter();
+    if (outputs && !joins && !line_attached) {
+      std::string e;
+      check_output(outputs->attach_line(seg, codes, e), e);
+      line_attached = true;
+    }
     busy_ = true;
     struct Done {
       PySegment& s;
@@ -75,6 +110,21 @@ class PySegment {
   void enter() const {
     if (busy_) raise(errors().error, "the segment is running (another thread, or an observer)");
   }
+  // A station may join: with outputs, only before the line first runs (the waveform's scopes are
+  // declared then). It joins with joined().
+  void may_join() const {
+    enter();
+    if (line_attached) {
+      raise(errors().error,
+            "a station joins before the line first runs when the segment writes "
+            "a waveform or a pcapng");
+    }
+  }
+  // Station `index` joined with its code in the waveform's line.driver.
+  std::size_t joined(std::size_t index, U8 code) {
+    codes.push_back(code);
+    return index;
+  }
   Chip& chip(const PyStation& s) {
     enter();
     return seg.chip(s.index);
@@ -88,6 +138,9 @@ class PySegment {
   std::vector<std::string> check_log;
   std::shared_ptr<py::object> telegram_cb;
   std::shared_ptr<py::object> collision_cb;
+  std::unique_ptr<SegmentOutputs> outputs;  // null: none asked, or close() wrote them
+  std::vector<U8> codes;                    // each station's code in line.driver
+  bool line_attached = false;
 
  private:
   template <typename T>
@@ -109,8 +162,9 @@ class PySegment {
 struct PySegMaster {
   PySegMaster(py::object seg_obj, const MasterConfig& mc, std::vector<SlaveConfig> slaves)
       : seg_ref(std::move(seg_obj)), s(seg_ref.cast<PySegment&>()) {
-    s.enter();
-    const std::size_t station = s.seg.add_sender("master " + std::to_string(mc.address));
+    s.may_join();
+    const std::size_t station =
+        s.joined(s.seg.add_sender("master " + std::to_string(mc.address)), mc.address);
     m = std::make_unique<DpMaster>(s.seg, station, mc, std::move(slaves));
     s.master_addresses.push_back(mc.address);
   }
@@ -249,7 +303,7 @@ PyStation& add_station(py::object self, U8 address, const std::string& profile,
                        const std::optional<std::string>& name, std::pair<U8, U8> wd,
                        const std::optional<SlaveConfig>& slave) {
   PySegment& s = self.cast<PySegment&>();
-  s.enter();
+  s.may_join();
   auto st = std::make_unique<PyStation>();
   st->name = name.value_or("station " + std::to_string(address));
   SlaveConfig sc = slave.value_or(SlaveConfig{});
@@ -271,27 +325,34 @@ PyStation& add_station(py::object self, U8 address, const std::string& profile,
   }
   st->slave = sc;
   PyStation& raw = *st;
-  s.run([&] {
-    st->index = s.seg.add_chip(st->name, opt);
-    Chip& chip = s.seg.chip(st->index);
-    chip.on_state_change([&raw, &chip](U64 cycle) {
-      const DpState dp = chip.dp_state();
-      const WdState wd = chip.wd_state();
-      if (raw.changes.empty() || std::get<1>(raw.changes.back()) != dp ||
-          std::get<2>(raw.changes.back()) != wd) {
-        raw.changes.emplace_back(cycle, dp, wd);
-      }
-    });
-    DirectBus bus(chip);
-    if (raw.firmware) {
-      raw.firmware->init(bus, address);
-      s.seg.set_firmware(raw.index, raw.firmware->program());
-    } else {
-      raw.responder->init(bus);
-      Responder* r = raw.responder.get();
-      s.seg.set_firmware(raw.index, [r](BusPort& b) { r->isr(b); });
-    }
-  });
+  std::string out_error;
+  s.run(
+      [&] {
+        st->index = s.joined(s.seg.add_chip(st->name, opt), address);
+        if (s.outputs &&
+            !s.outputs->add_station(s.seg, st->index, station_scope(address, st->name), out_error))
+          return;
+        Chip& chip = s.seg.chip(st->index);
+        chip.on_state_change([&raw, &chip](U64 cycle) {
+          const DpState dp = chip.dp_state();
+          const WdState wd = chip.wd_state();
+          if (raw.changes.empty() || std::get<1>(raw.changes.back()) != dp ||
+              std::get<2>(raw.changes.back()) != wd) {
+            raw.changes.emplace_back(cycle, dp, wd);
+          }
+        });
+        DirectBus bus(chip);
+        if (raw.firmware) {
+          raw.firmware->init(bus, address);
+          s.seg.set_firmware(raw.index, raw.firmware->program());
+        } else {
+          raw.responder->init(bus);
+          Responder* r = raw.responder.get();
+          s.seg.set_firmware(raw.index, [r](BusPort& b) { r->isr(b); });
+        }
+      },
+      /*joins=*/true);
+  check_output(out_error.empty(), out_error);
   s.stations.push_back(std::move(st));
   return raw;
 }
@@ -301,7 +362,10 @@ void bind_segment_class(py::module_& m) {
   py::class_<P>(m, "Segment",
                 "A bus segment: chips, masters and scripted senders on one RS-485 line "
                 "(docs/segment.md).")
-      .def(py::init([](std::uint32_t baud, std::uint32_t clock_hz) {
+      .def(py::init([](std::uint32_t baud, std::uint32_t clock_hz,
+                       const std::optional<std::string>& vcd, const std::optional<std::string>& fst,
+                       const std::optional<std::string>& pcapng,
+                       const std::vector<std::string>& signals) {
              // The rates of a segment scenario's `segment baud=`; a bit at least one clock.
              if (baud < 9'600 || baud > 12'000'000) {
                throw py::value_error("baud " + std::to_string(baud) + ": 9600 to 12000000");
@@ -311,9 +375,19 @@ void bind_segment_class(py::module_& m) {
                throw py::value_error("clock_hz " + std::to_string(clock_hz) +
                                      ": less than one clock a bit");
              }
+             if (vcd || fst || pcapng) {
+               s->outputs =
+                   std::make_unique<SegmentOutputs>(output_options(vcd, fst, pcapng, signals));
+               std::string e;
+               check_output(s->outputs->open(e), e);
+             }
              return s;
            }),
-           py::arg("baud") = 1'500'000, py::arg("clock_hz") = 0)
+           py::arg("baud") = 1'500'000, py::arg("clock_hz") = 0, py::kw_only(),
+           py::arg("vcd") = py::none(), py::arg("fst") = py::none(), py::arg("pcapng") = py::none(),
+           py::arg("signals") = std::vector<std::string>{},
+           "The line at `baud`; the waveforms (`vcd`, `fst`: the line and a scope per station, "
+           "`signals` globs) and the pcapng of the line asked for are written by close().")
       .def(
           "add_station",
           [](py::object self, U8 address, const std::string& profile,
@@ -345,8 +419,8 @@ void bind_segment_class(py::module_& m) {
       .def(
           "add_sender",
           [](P& s, const std::string& name) {
-            s.enter();
-            return s.seg.add_sender(name);
+            s.may_join();
+            return s.joined(s.seg.add_sender(name), wave::kDriverWithoutAddress);
           },
           py::arg("name"), "A station without a chip that drives the line with send(); its index.")
       .def(
@@ -418,6 +492,21 @@ void bind_segment_class(py::module_& m) {
           },
           py::arg("callback"))
       .def("flush", [](P& s) { s.run([&] { s.seg.flush(); }); })
+      .def(
+          "close",
+          [](P& s) {
+            s.run([&] {
+              s.seg.flush();
+              s.seg.align();
+            });
+            if (!s.outputs) return;
+            std::unique_ptr<SegmentOutputs> out = std::move(s.outputs);
+            out->end(s.seg);
+            std::string e;
+            check_output(out->write(e), e);
+          },
+          "Flushes the line and writes the waveforms and the pcapng asked for, up to the line's "
+          "time; the segment runs on without them.")
       .def(
           "check_bus",
           [](P& s, U64 ttr, std::uint32_t slot_bits, std::uint32_t min_tsdr_bits,
@@ -585,14 +674,31 @@ void bind_segment_scenario(py::module_& m) {
           py::arg("text"), py::arg("file") = "<string>")
       .def_readonly("file", &SegmentScenario::file)
       .def_readonly("baud", &SegmentScenario::baud)
-      .def("run", [](const SegmentScenario& s) {
-        SegmentRunResult r;
-        py::gil_scoped_release nogil;
-        r.exit_code = run_segment_scenario(
-            s, [&](const std::string& l) { r.walk.push_back(l); },
-            [&](const std::string& l) { r.failures.push_back(l); });
-        return r;
-      });
+      .def(
+          "run",
+          [](const SegmentScenario& s, const std::optional<std::string>& vcd,
+             const std::optional<std::string>& fst, const std::optional<std::string>& pcapng,
+             const std::vector<std::string>& signals) {
+            SegmentRunResult r;
+            SegmentScenarioOutputs out(s, output_options(vcd, fst, pcapng, signals));
+            std::string e;
+            check_output(out.open(e), e);
+            try {
+              py::gil_scoped_release nogil;
+              r.exit_code = run_segment_scenario(
+                  s, [&](const std::string& l) { r.walk.push_back(l); },
+                  [&](const std::string& l) { r.failures.push_back(l); }, &out);
+            } catch (const SegmentOutputError& x) {
+              raise(errors().error, x.what());
+            }
+            // Nothing is written unless the run ended (as `dpc31 run`).
+            if (out.ended()) check_output(out.write(e), e);
+            return r;
+          },
+          py::kw_only(), py::arg("vcd") = py::none(), py::arg("fst") = py::none(),
+          py::arg("pcapng") = py::none(), py::arg("signals") = std::vector<std::string>{},
+          "Plays it as `dpc31 run` does; `vcd`, `fst`, `pcapng` write its waveforms and the "
+          "pcapng of its line as `dpc31 run --vcd` / `--fst` / `--pcap` do.");
 }
 
 }  // namespace

@@ -570,6 +570,12 @@ class Parser {
       expect();
     } else if (scenario_bus::parse_action(cmd_, pos_, opts_, s_.chip.profile, step_, last_read_)) {
     } else if (scenario_dpv1::parse_action(cmd_, pos_, opts_, s_, step_)) {
+    } else if (cmd_ == "segment") {
+      // A segment's file has its own loader (scenario_segment.hpp).
+      fail(
+          "'segment' begins a segment scenario (docs/scenario-format.md, \"Segments\"): load it "
+          "with SegmentScenario (load_segment_scenario; dpc31.SegmentScenario in Python) or run "
+          "it with `dpc31 run`");
     } else {
       fail(fmt::format("unknown command '{}'", shown(cmd_)));
     }

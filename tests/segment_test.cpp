@@ -495,5 +495,17 @@ TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
   EXPECT_FALSE(is_segment_scenario("profile spc3\n"));
 }
 
+// The single chip's loader on a segment's file names the segment's loader, at the `segment` line.
+TEST(SegmentScenario, TheSingleChipLoaderNamesTheSegmentLoader) {
+  Scenario s;
+  ScenarioError err;
+  EXPECT_FALSE(
+      parse_scenario("# two stations\n\nsegment baud=1500000\nstation 5\n", "f.scn", s, err));
+  EXPECT_EQ(err.text(),
+            "f.scn:3: 'segment' begins a segment scenario (docs/scenario-format.md, \"Segments\"): "
+            "load it with SegmentScenario (load_segment_scenario; dpc31.SegmentScenario in Python) "
+            "or run it with `dpc31 run`");
+}
+
 }  // namespace
 }  // namespace dpc31

@@ -546,6 +546,8 @@ bool Recorder::Impl::attach_chip(Chip& chip, std::string scope, std::string& err
 Recorder::Recorder(const Options& o) : impl_(std::make_unique<Impl>()) { impl_->opt = o; }
 Recorder::~Recorder() = default;
 
+bool Recorder::open(std::string& error) { return impl_->open_outputs(error); }
+
 bool Recorder::attach(Chip& chip, std::string& error) {
   for (const std::string& p : impl_->opt.signals) {
     const bool any = std::any_of(kSignals.begin(), kSignals.end(),

@@ -47,6 +47,9 @@ class Recorder {
   Recorder(const Recorder&) = delete;
   Recorder& operator=(const Recorder&) = delete;
 
+  // Opens the files now (else the first attach does): a bad path is found before the run. False
+  // with a one-line error.
+  bool open(std::string& error);
   // False (with a one-line error) if a signal pattern matches nothing or the options are bad.
   bool attach(Chip& chip, std::string& error);
   // A segment (docs/segment.md, docs/waveforms.md "Segments"): under the top scope "segment",

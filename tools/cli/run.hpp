@@ -57,10 +57,8 @@ std::vector<std::string> leading_comments(const std::string& path);
 // "Outputs"). Returns 0, 1 or 2 like the command.
 int run_segment_command(const RunOptions& opt, const SegmentScenario& s, const LineSink& walk,
                         const LineSink& errors, std::FILE* err);
-// A station's scope in a segment's waveform, and the name of its trace: station5_spc3 (the
-// address, and the name when it is not the default "station 5"); FILE.trace ->
-// FILE.station5_spc3.trace.
-std::string station_scope(const SegmentStation& st);
+// The trace of a station of a segment whose scope is `scope` (station_scope,
+// lib/segment_outputs): FILE.trace -> FILE.station5_spc3.trace.
 std::string station_trace_path(const std::string& record, const std::string& scope);
 
 }  // namespace dpc31::cli

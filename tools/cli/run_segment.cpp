@@ -1,38 +1,24 @@
 // `dpc31 run` of a segment's scenario (docs/segment.md, "Outputs"): the waveforms with a scope per
-// station and the line at the top, one pcapng of the line, a golden trace per station, the JSON
-// summary. Nothing is written unless the run completes.
+// station and the line at the top and one pcapng of the line (lib/segment_outputs), a golden trace
+// per station, the JSON summary. Nothing is written unless the run completes.
 #include <fmt/core.h>
 
-#include <cctype>
 #include <cstdint>
 #include <memory>
 #include <nlohmann/json.hpp>
-#include <optional>
-#include <tuple>
 #include <vector>
 
 #include "board.hpp"
-#include "dp_master.hpp"
-#include "dpc31/fdl.hpp"
 #include "firmware_host.hpp"
 #include "outfile.hpp"
-#include "pcapng.hpp"
 #include "run.hpp"
 #include "scenario_segment.hpp"
 #include "segment.hpp"
+#include "segment_outputs.hpp"
 #include "trace.hpp"
 #include "vocabulary.hpp"
-#include "waveform.hpp"
 
 namespace dpc31::cli {
-
-std::string station_scope(const SegmentStation& st) {
-  std::string s = fmt::format("station{}", st.slave.address);
-  if (st.name == fmt::format("station {}", st.slave.address)) return s;
-  s += '_';
-  for (const char c : st.name) s += std::isalnum(static_cast<unsigned char>(c)) != 0 ? c : '_';
-  return s;
-}
 
 std::string station_trace_path(const std::string& record, const std::string& scope) {
   const std::string base =
@@ -42,23 +28,21 @@ std::string station_trace_path(const std::string& record, const std::string& sco
 
 namespace {
 
-// An output that cannot be made, found when the stations are on the line (before the run).
-struct OutputError {
-  std::string message;
-};
-
-class SegmentOutputs final : public SegmentObserver {
+// What `dpc31 run` writes of a segment's run beyond the library's waveforms and pcapng: a trace
+// per station, the JSON summary.
+class RunOutputs final : public SegmentScenarioOutputs {
  public:
-  SegmentOutputs(const RunOptions& opt, const SegmentScenario& s) : opt_(opt), s_(s) {
-    for (const SegmentStation& st : s.stations) scopes_.push_back(station_scope(st));
-  }
+  RunOutputs(const RunOptions& opt, const SegmentScenario& s)
+      : SegmentScenarioOutputs(s, SegmentOutputOptions{wave_options(opt), opt.pcap}),
+        opt_(opt),
+        s_(s) {}
 
   // Every file the run writes, for outfile::distinct.
   [[nodiscard]] std::vector<outfile::Named> outputs() const {
     std::vector<outfile::Named> out = {{"--json", opt_.json}, {"--vcd", opt_.vcd},
                                        {"--fst", opt_.fst},   {"--la-vcd", opt_.la_vcd},
                                        {"--pcap", opt_.pcap}, {"--gtkw", opt_.gtkw}};
-    for (const std::string& sc : scopes_) {
+    for (const std::string& sc : scopes()) {
       out.push_back({"--record", opt_.record.empty() ? "" : station_trace_path(opt_.record, sc)});
     }
     return out;
@@ -66,11 +50,8 @@ class SegmentOutputs final : public SegmentObserver {
 
   // Opens the files the run does not write as it goes; false with a line.
   bool open(std::string& error) {
-    if (!opt_.pcap.empty() && !pcap_.open(opt_.pcap)) {
-      error = pcap_.error();
-      return false;
-    }
-    for (const std::string& sc : scopes_) {
+    if (!SegmentScenarioOutputs::open(error)) return false;
+    for (const std::string& sc : scopes()) {
       if (opt_.record.empty()) break;
       auto& f = trace_files_.emplace_back(std::make_unique<outfile::OutFile>());
       if (!f->open(station_trace_path(opt_.record, sc))) {
@@ -87,12 +68,8 @@ class SegmentOutputs final : public SegmentObserver {
 
   // A chip station at cycle 0, before its init: its scope in every waveform, its trace.
   void station_added(Segment& seg, std::size_t index) override {
+    SegmentScenarioOutputs::station_added(seg, index);
     seg_ = &seg;
-    if (index == 0) make_waves();
-    std::string error;
-    for (auto& w : waves_) {
-      if (!w->attach_station(seg.chip(index), scopes_[index], error)) throw OutputError{error};
-    }
     if (opt_.record.empty()) return;
     std::vector<std::string> notes = leading_comments(opt_.scenario);
     if (!notes.empty()) notes.emplace_back();
@@ -104,26 +81,6 @@ class SegmentOutputs final : public SegmentObserver {
     r->hear_line(seg.bit_cycles());
     r->attach(seg.chip(index));
     heard_from_.push_back(SIZE_MAX);
-  }
-
-  // Every station on the line: each one's code in line.driver (a chip's and a master's address,
-  // FEh a sender), and the line's edges to the waveforms.
-  void stations_added(Segment& seg) override {
-    std::vector<std::uint8_t> codes;
-    for (const SegmentStation& st : s_.stations) codes.push_back(st.slave.address);
-    codes.resize(codes.size() + s_.senders.size(), wave::kDriverWithoutAddress);
-    for (const SegmentMaster& m : s_.masters) codes.push_back(m.address);
-    std::string error;
-    for (auto& w : waves_) {
-      if (!w->attach_line(
-              codes, seg.bit_cycles(), [&seg] { return seg.line_final(); }, error))
-        throw OutputError{error};
-    }
-    if (!waves_.empty()) {
-      seg.on_line = [this](std::size_t from, std::uint64_t cycle, bool level) {
-        for (auto& w : waves_) w->line_edge(from, cycle, level);
-      };
-    }
   }
 
   void user_side_started(std::size_t index, std::string_view text) override {
@@ -148,13 +105,11 @@ class SegmentOutputs final : public SegmentObserver {
       heard_from_[k] = t.from;
       traces_[k]->note_heard(t.start, fmt::format("from {}", seg_->name(t.from)));
     }
-    if (pcap_.is_open()) capture(t);
+    SegmentScenarioOutputs::telegram(t);
   }
 
   void run_ends(Segment& seg, std::uint32_t passed, std::uint32_t failed) override {
-    if (held_) add(*held_);
-    held_.reset();
-    end_cycle_ = seg.cycle();
+    SegmentScenarioOutputs::run_ends(seg, passed, failed);
     for (auto& r : traces_) r->finish();
     if (!opt_.json.empty()) json_text_ = summary(seg, passed, failed).dump(2) + '\n';
   }
@@ -172,13 +127,7 @@ class SegmentOutputs final : public SegmentObserver {
         return false;
       }
     }
-    for (auto& w : waves_) {
-      if (!w->finish(end_cycle_, error)) return false;
-    }
-    if (pcap_.is_open() && !pcap_.close()) {
-      error = pcap_.error();
-      return false;
-    }
+    if (!SegmentScenarioOutputs::write(error)) return false;
     if (json_.is_open() && !(json_.write(json_text_) && json_.commit())) {
       error = json_.error();
       return false;
@@ -187,48 +136,6 @@ class SegmentOutputs final : public SegmentObserver {
   }
 
  private:
-  // The waveforms asked for (--vcd, --fst, --la-vcd), as for one chip.
-  void make_waves() {
-    for (const wave::Options& w : wave_options(opt_)) {
-      waves_.push_back(std::make_unique<wave::Recorder>(w));
-    }
-  }
-
-  struct Held {
-    LineTelegram t;
-    std::string comment;
-  };
-
-  // The line's telegrams (docs/capture.md, "A segment's line"): each with its sender; a request
-  // that wants an answer is held until the next telegram says who answered it (a frame that
-  // decodes, from another station: what is left of a collision answers nothing).
-  void capture(const LineTelegram& t) {
-    const fdl::Decoded d = fdl::decode(t.bytes);
-    const bool ok = d.error == fdl::Error::none && d.frame.sd != fdl::SD4;
-    const bool request = ok && fdl::is_request(d.frame.fc);
-    Held h{t, fmt::format("cycles {}-{}, {}", t.start, t.end, seg_->name(t.from))};
-    if (held_) {
-      if (ok && !request && t.from != held_->t.from) {
-        held_->comment += fmt::format(", answered by {}", seg_->name(t.from));
-        h.comment += fmt::format(", answer to {}", seg_->name(held_->t.from));
-      }
-      add(*held_);
-      held_.reset();
-    }
-    if (request && wants_answer(d.frame)) {
-      held_ = std::move(h);
-    } else {
-      add(h);
-    }
-  }
-  void add(const Held& h) {
-    const std::optional<std::uint64_t> ns = capture::cycles_to_ns(h.t.start, seg_->clock_hz());
-    if (!ns) return;  // 584 years of line time
-    pcap_.add(capture::Packet{
-        *ns, seg_->is_chip(h.t.from) ? capture::Direction::outbound : capture::Direction::inbound,
-        h.t.bytes, h.comment});
-  }
-
   nlohmann::json summary(Segment& seg, std::uint32_t passed, std::uint32_t failed) const {
     nlohmann::json stations = nlohmann::json::array();
     for (std::size_t k = 0; k < s_.stations.size(); ++k) {
@@ -238,7 +145,7 @@ class SegmentOutputs final : public SegmentObserver {
         counters[std::string(f.name)] = c.fdl_counters().*(f.member);
       stations.push_back({{"name", s_.stations[k].name},
                           {"address", s_.stations[k].slave.address},
-                          {"scope", scopes_[k]},
+                          {"scope", scopes()[k]},
                           {"profile", std::string(profile_name(c.profile().id))},
                           {"dp_state", std::string(dp_state_name(c.dp_state()))},
                           {"wd_state", std::string(wd_state_name(c.wd_state()))},
@@ -255,17 +162,12 @@ class SegmentOutputs final : public SegmentObserver {
 
   const RunOptions& opt_;
   const SegmentScenario& s_;
-  std::vector<std::string> scopes_;
   Segment* seg_ = nullptr;
-  std::vector<std::unique_ptr<wave::Recorder>> waves_;
-  capture::PcapngWriter pcap_{capture::WriterOptions{"dpc31emu", "segment", true}};
-  std::optional<Held> held_;
   std::vector<std::unique_ptr<TraceRecorder>> traces_;
   std::vector<std::unique_ptr<outfile::OutFile>> trace_files_;
   std::vector<std::size_t> heard_from_;  // per trace: the sender of the last telegram noted
   outfile::OutFile json_;
   std::string json_text_;
-  std::uint64_t end_cycle_ = 0;
 };
 
 }  // namespace
@@ -288,7 +190,7 @@ int run_segment_command(const RunOptions& opt, const SegmentScenario& s, const L
   }
   if (error.empty() && !opt.gtkw.empty() && opt.vcd.empty() && opt.fst.empty())
     error = fmt::format("--gtkw {}: a save file needs --vcd or --fst", opt.gtkw);
-  SegmentOutputs out(opt, s);
+  RunOutputs out(opt, s);
   std::vector<outfile::Named> inputs = {{"the scenario", opt.scenario}};
   for (const std::string& p : segment_plugins(s)) inputs.push_back({"the firmware plug-in", p});
   if (error.empty()) error = outfile::distinct(inputs, out.outputs());
@@ -315,8 +217,8 @@ int run_segment_command(const RunOptions& opt, const SegmentScenario& s, const L
   } catch (const FirmwareError& e) {
     fmt::print(err, "dpc31 run: {}: {}\n", s.file, e.what());
     return 2;
-  } catch (const OutputError& e) {
-    fmt::print(err, "dpc31 run: {}\n", e.message);
+  } catch (const SegmentOutputError& e) {
+    fmt::print(err, "dpc31 run: {}\n", e.what());
     return 2;
   }
   if (!out.write(error)) {

@@ -1,0 +1,120 @@
+"""A segment's waveforms and the pcapng of its line from Python (docs/python.md, "A segment";
+docs/segment.md, "Outputs"): a segment scenario writes through SegmentScenario.run the same bytes
+as `dpc31 run` of it; a Segment built call by call writes its line as pcapng that tshark decodes
+with the shipped dissector (lib/capture/profibus_dl.lua), each telegram at its first start bit
+(docs/capture.md, "A segment's line": ns = round(cycle x 10^9 / 48 MHz)) with its sender and who
+answered it; bad paths are one clear dpc31.Error and leave nothing behind.
+"""
+
+import os
+import pathlib
+import subprocess
+
+import pytest
+
+import dpc31
+
+CLOCK_HZ = 48_000_000
+T = 32  # clocks a bit at 1.5 Mbaud (docs/timing.md)
+
+
+def tshark_fields(traces, pcap, tmp_path):
+    lua = pathlib.Path(traces).parent / "lib" / "capture" / "profibus_dl.lua"
+    env = dict(os.environ, HOME=str(tmp_path), XDG_CONFIG_HOME=str(tmp_path))
+    out = subprocess.run(
+        ["tshark", "-n", "-X", f"lua_script:{lua}", "-r", str(pcap), "-T", "fields",
+         "-E", "separator=|", "-e", "frame.time_epoch", "-e", "frame.comment",
+         "-e", "profibus.sd"],
+        env=env, capture_output=True, text=True, check=True).stdout
+    return [line.split("|") for line in out.splitlines()]
+
+
+@pytest.mark.parametrize("name", ["two_masters", "three_slaves"])
+def test_a_scenarios_outputs_are_those_of_dpc31_run(cli, traces, tmp_path, name):
+    scn = str(traces / "segment" / f"{name}.scn")
+    subprocess.run([cli, "run", scn, "--quiet", "--vcd", str(tmp_path / "cli.vcd"),
+                    "--fst", str(tmp_path / "cli.fst"), "--pcap", str(tmp_path / "cli.pcapng")],
+                   check=True)
+    result = dpc31.SegmentScenario.load(scn).run(vcd=str(tmp_path / "py.vcd"),
+                                                 fst=str(tmp_path / "py.fst"),
+                                                 pcapng=str(tmp_path / "py.pcapng"))
+    assert result.ok, result.failures
+    for ext in ("vcd", "pcapng"):
+        assert (tmp_path / f"py.{ext}").read_bytes() == (tmp_path / f"cli.{ext}").read_bytes(), ext
+    # An FST's header holds the time it was written: its changes are compared.
+    report = dpc31.wavediff(str(tmp_path / "cli.fst"), str(tmp_path / "py.fst"))
+    assert report.same and not report.only_a and not report.only_b, report.text()
+
+
+def test_a_segments_line_decodes_in_tshark(traces, tmp_path):
+    seg = dpc31.Segment(1_500_000, vcd=str(tmp_path / "seg.vcd"),
+                        pcapng=str(tmp_path / "seg.pcapng"))
+    seg.add_station(5, "spc3", firmware="DO4", name="spc3", wd=(1, 1))
+    seg.add_station(6, "dpc31", firmware="DO4", wd=(1, 1))
+    master = seg.add_master(2, [5, 6])
+    line = []
+    seg.on_telegram(line.append)
+    assert master.startup_all()
+    exchanges = master.dp_cycle()
+    assert not (tmp_path / "seg.pcapng").exists()  # nothing before close()
+    seg.close()
+    assert [ex.answer_start - ex.request_end for ex in exchanges] == [11 * T] * 2  # TSDR
+
+    rows = tshark_fields(traces, tmp_path / "seg.pcapng", tmp_path)
+    assert len(rows) == len(line) > 10
+    names = {5: "spc3", 6: "station 6"}
+    for i, (t, (epoch, comment, sd)) in enumerate(zip(line, rows)):
+        ns = (t.start * 10**9 + CLOCK_HZ // 2) // CLOCK_HZ
+        assert epoch == f"{ns // 10**9}.{ns % 10**9:09d}", i
+        want = f"cycles {t.start}-{t.end}, {seg.name(t.sender)}"
+        # A slave's telegram right after the master's is its answer (SD4 tokens: none here).
+        if seg.name(t.sender) != "master 2":
+            want += ", answer to master 2"
+        elif i + 1 < len(line) and seg.name(line[i + 1].sender) != "master 2":
+            want += f", answered by {seg.name(line[i + 1].sender)}"
+        assert comment == want, i
+        assert int(sd, 16) == t.bytes[0], i
+    assert set(seg.name(t.sender) for t in line) == {"master 2", *names.values()}
+
+    vcd = (tmp_path / "seg.vcd").read_text()
+    header = vcd.split("$enddefinitions", 1)[0]
+    for scope in ("segment", "line", "station5_spc3", "station6"):
+        assert f"$scope module {scope} $end" in header, scope
+    assert header.count("$var wire 1 ") > 2 and " level $end" in header and " driver $end" in header
+
+
+def test_bad_paths_and_late_stations_are_clear_errors(traces, tmp_path):
+    missing = tmp_path / "no" / "such"
+    with pytest.raises(dpc31.Error, match="no/such/seg.vcd"):
+        dpc31.Segment(1_500_000, vcd=str(missing / "seg.vcd"))
+    with pytest.raises(dpc31.Error, match="no/such/seg.pcapng"):
+        dpc31.Segment(1_500_000, pcapng=str(missing / "seg.pcapng"))
+    scn = dpc31.SegmentScenario.load(str(traces / "segment" / "two_masters.scn"))
+    with pytest.raises(dpc31.Error, match="no/such/two.fst"):
+        scn.run(vcd=str(tmp_path / "two.vcd"), fst=str(missing / "two.fst"))
+    with pytest.raises(dpc31.Error, match="no signal matches 'nothing.*'"):
+        scn.run(vcd=str(tmp_path / "two.vcd"), signals=["nothing.*"])
+    assert not list(tmp_path.glob("two*"))  # nothing written, no temporary left
+    seg = dpc31.Segment(1_500_000, vcd=str(tmp_path / "glob.vcd"), signals=["nothing.*"])
+    seg.add_station(5, "spc3")
+    with pytest.raises(dpc31.Error, match="no signal matches 'nothing.*'"):
+        seg.run_until(1000)
+
+    seg = dpc31.Segment(1_500_000, pcapng=str(tmp_path / "late.pcapng"))
+    seg.add_station(5, "spc3")
+    seg.run_until(1000)
+    with pytest.raises(dpc31.Error, match="joins before the line first runs"):
+        seg.add_station(6, "spc3")
+    with pytest.raises(dpc31.Error, match="joins before the line first runs"):
+        seg.add_sender("rogue")
+    seg.close()
+    assert (tmp_path / "late.pcapng").exists()
+
+
+def test_scenario_load_names_the_segment_loader(traces):
+    path = str(traces / "segment" / "three_slaves.scn")
+    with pytest.raises(dpc31.ScenarioError) as e:
+        dpc31.Scenario.load(path)
+    assert e.value.file == path and e.value.line == 33  # the `segment` line
+    assert "segment scenario" in e.value.reason
+    assert "SegmentScenario" in e.value.reason and "dpc31 run" in e.value.reason

@@ -1,0 +1,148 @@
+#include "segment_outputs.hpp"
+
+#include <fmt/core.h>
+
+#include <cctype>
+#include <utility>
+
+#include "dp_master.hpp"
+#include "dpc31/fdl.hpp"
+
+namespace dpc31 {
+
+std::string station_scope(std::uint8_t address, std::string_view name) {
+  std::string s = fmt::format("station{}", address);
+  if (name == fmt::format("station {}", address)) return s;
+  s += '_';
+  for (const char c : name) s += std::isalnum(static_cast<unsigned char>(c)) != 0 ? c : '_';
+  return s;
+}
+
+SegmentOutputs::SegmentOutputs(SegmentOutputOptions opt) : opt_(std::move(opt)) {
+  for (const wave::Options& w : opt_.waves) waves_.push_back(std::make_unique<wave::Recorder>(w));
+}
+
+bool SegmentOutputs::open(std::string& error) {
+  for (auto& w : waves_) {
+    if (!w->open(error)) return false;
+  }
+  if (!opt_.pcap.empty() && !pcap_.open(opt_.pcap)) {
+    error = pcap_.error();
+    return false;
+  }
+  return true;
+}
+
+bool SegmentOutputs::add_station(Segment& seg, std::size_t index, const std::string& scope,
+                                 std::string& error) {
+  seg_ = &seg;
+  for (auto& w : waves_) {
+    if (!w->attach_station(seg.chip(index), scope, error)) return false;
+  }
+  return true;
+}
+
+bool SegmentOutputs::attach_line(Segment& seg, std::vector<std::uint8_t> driver_codes,
+                                 std::string& error) {
+  seg_ = &seg;
+  for (auto& w : waves_) {
+    if (!w->attach_line(
+            driver_codes, seg.bit_cycles(), [&seg] { return seg.line_final(); }, error))
+      return false;
+  }
+  if (!waves_.empty()) {
+    seg.on_line = [this](std::size_t from, std::uint64_t cycle, bool level) {
+      for (auto& w : waves_) w->line_edge(from, cycle, level);
+    };
+  }
+  return true;
+}
+
+void SegmentOutputs::telegram(const LineTelegram& t) {
+  if (pcap_.is_open()) capture(t);
+}
+
+void SegmentOutputs::end(const Segment& seg) {
+  seg_ = &seg;
+  if (held_) add(*held_);
+  held_.reset();
+  end_cycle_ = seg.cycle();
+}
+
+bool SegmentOutputs::write(std::string& error) {
+  for (auto& w : waves_) {
+    if (!w->finish(end_cycle_, error)) return false;
+  }
+  if (pcap_.is_open() && !pcap_.close()) {
+    error = pcap_.error();
+    return false;
+  }
+  return true;
+}
+
+// The line's telegrams (docs/capture.md, "A segment's line"): each with its sender; a request that
+// wants an answer is held until the next telegram says who answered it (a frame that decodes,
+// from another station: what is left of a collision answers nothing).
+void SegmentOutputs::capture(const LineTelegram& t) {
+  const fdl::Decoded d = fdl::decode(t.bytes);
+  const bool ok = d.error == fdl::Error::none && d.frame.sd != fdl::SD4;
+  const bool request = ok && fdl::is_request(d.frame.fc);
+  Held h{t, fmt::format("cycles {}-{}, {}", t.start, t.end, seg_->name(t.from))};
+  if (held_) {
+    if (ok && !request && t.from != held_->t.from) {
+      held_->comment += fmt::format(", answered by {}", seg_->name(t.from));
+      h.comment += fmt::format(", answer to {}", seg_->name(held_->t.from));
+    }
+    add(*held_);
+    held_.reset();
+  }
+  if (request && wants_answer(d.frame)) {
+    held_ = std::move(h);
+  } else {
+    add(h);
+  }
+}
+
+void SegmentOutputs::add(const Held& h) {
+  const std::optional<std::uint64_t> ns = capture::cycles_to_ns(h.t.start, seg_->clock_hz());
+  if (!ns) return;  // 584 years of line time
+  pcap_.add(capture::Packet{
+      *ns, seg_->is_chip(h.t.from) ? capture::Direction::outbound : capture::Direction::inbound,
+      h.t.bytes, h.comment});
+}
+
+SegmentScenarioOutputs::SegmentScenarioOutputs(const SegmentScenario& s, SegmentOutputOptions opt)
+    : s_(s), out_(std::move(opt)) {
+  for (const SegmentStation& st : s.stations)
+    scopes_.push_back(station_scope(st.slave.address, st.name));
+}
+
+void SegmentScenarioOutputs::station_added(Segment& seg, std::size_t index) {
+  std::string error;
+  if (!out_.add_station(seg, index, scopes_[index], error)) throw SegmentOutputError(error);
+}
+
+// Each station's code in line.driver: a chip's and a master's address, FEh a sender.
+void SegmentScenarioOutputs::stations_added(Segment& seg) {
+  std::vector<std::uint8_t> codes;
+  for (const SegmentStation& st : s_.stations) codes.push_back(st.slave.address);
+  codes.resize(codes.size() + s_.senders.size(), wave::kDriverWithoutAddress);
+  for (const SegmentMaster& m : s_.masters) codes.push_back(m.address);
+  std::string error;
+  if (!out_.attach_line(seg, std::move(codes), error)) throw SegmentOutputError(error);
+}
+
+void SegmentScenarioOutputs::run_ends(Segment& seg, std::uint32_t, std::uint32_t) {
+  out_.end(seg);
+  ended_ = true;
+}
+
+bool SegmentScenarioOutputs::write(std::string& error) {
+  if (!ended_) {
+    error = fmt::format("{}: the run did not end: nothing written", s_.file);
+    return false;
+  }
+  return out_.write(error);
+}
+
+}  // namespace dpc31

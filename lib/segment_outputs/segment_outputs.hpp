@@ -1,0 +1,102 @@
+// What a segment writes of itself (docs/segment.md, "Outputs"): the waveforms (VCD, FST, the
+// logic-analyser form) with the line at the top and a scope per chip station, and one pcapng of
+// the line, every telegram with its sender and who answered a request. `dpc31 run` of a segment
+// scenario, dpc31.Segment and dpc31.SegmentScenario in Python write them through this one class.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "pcapng.hpp"
+#include "scenario_segment.hpp"
+#include "segment.hpp"
+#include "waveform.hpp"
+
+namespace dpc31 {
+
+// A station's scope in a segment's waveform: station5 (the address), station5_spc3 when its name
+// is not the default "station 5" (other characters than letters and digits made '_').
+[[nodiscard]] std::string station_scope(std::uint8_t address, std::string_view name);
+
+struct SegmentOutputOptions {
+  std::vector<wave::Options> waves;  // each a VCD or an FST (wave::Options)
+  std::string pcap;                  // the line as pcapng ("" none)
+};
+
+// An output that cannot be made, found when a station joins (its scope, the signals asked).
+struct SegmentOutputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// Not copied nor moved (the segment's on_line holds it; the pcapng writer is neither).
+class SegmentOutputs {
+ public:
+  explicit SegmentOutputs(SegmentOutputOptions opt);
+
+  // Opens every file (temporaries next to the targets): a bad path is found before the run. False
+  // with a line.
+  bool open(std::string& error);
+  // Chip station `index` of `seg` joins, before its user side's init: its scope in every
+  // waveform. False with a line.
+  bool add_station(Segment& seg, std::size_t index, const std::string& scope, std::string& error);
+  // Every station is on the line: `driver_codes` each one's code in line.driver, in the segment's
+  // order (wave::Recorder::attach_line); the line's edges go to the waveforms from now on
+  // (Segment::on_line). False with a line.
+  bool attach_line(Segment& seg, std::vector<std::uint8_t> driver_codes, std::string& error);
+  // A telegram of the line (Segment::on_telegram).
+  void telegram(const LineTelegram& t);
+  // After the line's flush: nothing more comes; the files are written up to seg.cycle().
+  void end(const Segment& seg);
+  // Writes every file (temporaries renamed over the targets). False with a line; nothing is
+  // written unless this is called (a run that did not complete leaves every target alone).
+  bool write(std::string& error);
+
+ private:
+  struct Held {
+    LineTelegram t;
+    std::string comment;
+  };
+  void capture(const LineTelegram& t);
+  void add(const Held& h);
+
+  SegmentOutputOptions opt_;
+  const Segment* seg_ = nullptr;
+  std::vector<std::unique_ptr<wave::Recorder>> waves_;
+  capture::PcapngWriter pcap_{capture::WriterOptions{"dpc31emu", "segment", true}};
+  std::optional<Held> held_;
+  std::uint64_t end_cycle_ = 0;
+};
+
+// The outputs of a segment scenario's run (run_segment_scenario's observer): a scope per station
+// of the scenario (station_scope), the line's driver codes from its stations, senders and
+// masters. station_added() and stations_added() throw SegmentOutputError.
+class SegmentScenarioOutputs : public SegmentObserver {
+ public:
+  SegmentScenarioOutputs(const SegmentScenario& s, SegmentOutputOptions opt);
+
+  [[nodiscard]] const std::vector<std::string>& scopes() const { return scopes_; }
+  [[nodiscard]] bool open(std::string& error) { return out_.open(error); }
+  // The run ended (run_ends): write() may put the files in place.
+  [[nodiscard]] bool ended() const { return ended_; }
+  // Writes every file of a run that ended; false with a line.
+  bool write(std::string& error);
+
+  void station_added(Segment& seg, std::size_t index) override;
+  void stations_added(Segment& seg) override;
+  void telegram(const LineTelegram& t) override { out_.telegram(t); }
+  void run_ends(Segment& seg, std::uint32_t passed, std::uint32_t failed) override;
+
+ private:
+  const SegmentScenario& s_;
+  std::vector<std::string> scopes_;
+  SegmentOutputs out_;
+  bool ended_ = false;
+};
+
+}  // namespace dpc31
