@@ -4,6 +4,7 @@
 // The address extension (DSAP, then SSAP) lives at the start of the DU, so SD1 cannot carry it.
 #include "dpc31/fdl.hpp"
 
+#include <algorithm>
 #include <numeric>
 #include <utility>
 
@@ -204,6 +205,23 @@ Assembler::Status Assembler::push(std::uint8_t byte) {
   }
   if (expected_ != 0 && size_ == expected_) status_ = Status::complete;
   return status_;
+}
+
+std::size_t Assembler::push_block(std::span<const std::uint8_t> bytes) {
+  std::size_t i = 0;
+  while (i < bytes.size() && status_ == Status::need_more) {
+    // Past the SD (and for SD2 past the repeated SD) push() checks nothing but the length.
+    if (expected_ != 0 && (buf_[0] != SD2 || size_ >= 4)) {
+      const std::size_t n = std::min(bytes.size() - i, expected_ - size_);
+      std::copy_n(bytes.begin() + static_cast<std::ptrdiff_t>(i), n, buf_.begin() + size_);
+      size_ += n;
+      i += n;
+      if (size_ == expected_) status_ = Status::complete;
+    } else {
+      push(bytes[i++]);
+    }
+  }
+  return i;
 }
 
 void Assembler::reset() {
