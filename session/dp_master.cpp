@@ -414,14 +414,31 @@ fdl::Frame DpMaster::request(std::optional<std::uint8_t> dsap, std::vector<std::
   return fdl::make_frame(target_, cfg_.address, fc, std::move(du), dsap, ssap);
 }
 
+namespace {
+
+// SDN and the token (SD4) want no answer.
+bool sdn(const fdl::Frame& f) {
+  const fdl::Function fn = fdl::request_function(f.fc);
+  return f.sd == fdl::SD4 || fn == fdl::Function::SDN_high || fn == fdl::Function::SDN_low;
+}
+
+}  // namespace
+
 Exchange DpMaster::transact(const fdl::Frame& req, UartFault fault) {
-  Exchange ex = transact_raw(fdl::encode(req), fault);
+  const std::vector<std::uint8_t> bytes = fdl::encode(req);
+  // decode(encode(req)) == req whenever encode gives bytes: the request needs no decoding.
+  Exchange ex = send(bytes, fault, !bytes.empty() && sdn(req));
   ex.request = req;
   history_.back().request = req;
   return ex;
 }
 
 Exchange DpMaster::transact_raw(const std::vector<std::uint8_t>& bytes, UartFault fault) {
+  const fdl::Decoded d = fdl::decode(bytes);
+  return send(bytes, fault, d.error == fdl::Error::none && sdn(d.frame));
+}
+
+Exchange DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bool no_answer) {
   Exchange ex;
   // What the line carried before (another master's traffic, for instance) is no answer to us.
   look();
@@ -429,14 +446,8 @@ Exchange DpMaster::transact_raw(const std::vector<std::uint8_t>& bytes, UartFaul
   if (on_send) on_send(ex.request_start, bytes, fault);
   ex.request_end = put_on_line(bytes, ex.request_start, fault);
   run_until(ex.request_end);
-  const fdl::Decoded d = fdl::decode(bytes);
-  // SDN and the token (SD4) want no answer.
-  const bool sdn =
-      d.error == fdl::Error::none &&
-      (d.frame.sd == fdl::SD4 || fdl::request_function(d.frame.fc) == fdl::Function::SDN_high ||
-       fdl::request_function(d.frame.fc) == fdl::Function::SDN_low);
   ++counters_.requests;
-  if (sdn) {
+  if (no_answer) {
     bus_free_ = ex.request_end;  // send-data-no-acknowledge: nothing to wait for
   } else {
     ex = wait_answer(ex);

@@ -331,6 +331,8 @@ class DpMaster {
   fdl::Frame request(std::optional<std::uint8_t> dsap, std::vector<std::uint8_t> du,
                      bool srd = true);
   void run_until(std::uint64_t cycle);
+  // transact / transact_raw: `bytes` on the line, then the answer awaited unless `no_answer`.
+  Exchange send(std::span<const std::uint8_t> bytes, UartFault fault, bool no_answer);
   Exchange wait_answer(Exchange ex);
   // The characters on TxD whose stop sample is due by now: chars_, then rx_.due().
   void look();
