@@ -568,11 +568,7 @@ bool Mac::hear_telegram(std::span<const std::uint8_t> bytes, std::uint64_t start
     // A frame starts; nothing shows before the assembler's verdict (complete or an error).
     h.kind = HeardTelegram::Kind::frame;
     h.frame.reset();
-    std::size_t j = 0;
-    while (h.frame.push(bytes[j]) == fdl::Assembler::Status::need_more && j + 1 < bytes.size()) {
-      ++j;
-    }
-    h.effect_at = h.stop_sample(j);
+    h.effect_at = h.stop_sample(h.frame.push_block(bytes) - 1);
   } else if (!s_.skipping) {
     h.kind = HeardTelegram::Kind::no_sync;  // counted at the first stop sample, the rest skipped
     h.effect_at = h.stop_sample(0);

@@ -44,11 +44,102 @@ void AnswerCollector::push(const UartChar& c) {
   if (bad_ || frame_.push(c.data) == fdl::Assembler::Status::error) bad_ = true;
 }
 
+void AnswerCollector::push_block(std::span<const std::uint8_t> bytes, std::uint64_t start,
+                                 std::uint32_t bit_cycles) {
+  if (bytes.empty()) return;
+  if (!started_) start_ = start;
+  started_ = true;
+  end_ = start + bytes.size() * kUartCharBits * std::uint64_t{bit_cycles};
+  const std::size_t room =
+      fdl::kMaxFrameLength + 1 - std::min(bytes_.size(), fdl::kMaxFrameLength + 1);
+  bytes_.insert(bytes_.end(), bytes.begin(),
+                bytes.begin() + static_cast<std::ptrdiff_t>(std::min(room, bytes.size())));
+  if (bad_) return;
+  // A byte after the verdict is pushed as push() would: oversize after complete.
+  const std::size_t n = frame_.push_block(bytes);
+  if (n < bytes.size()) frame_.push(bytes[n]);
+  bad_ = frame_.status() == fdl::Assembler::Status::error;
+}
+
 std::optional<fdl::Frame> AnswerCollector::frame() const {
   if (bad_ || frame_.status() != fdl::Assembler::Status::complete) return std::nullopt;
   fdl::Decoded d = fdl::decode(frame_.bytes());
   if (d.error != fdl::Error::none) return std::nullopt;
   return std::move(d.frame);
+}
+
+void TxdReceiver::take(const TxdRun& r) {
+  const std::uint32_t t = rx_.bit_time();
+  if (r.bytes.empty() || r.bit_cycles != t) {
+    settle();
+    rx_.take(r);
+    return;
+  }
+  if (!run_.empty() && r.start == run_start_ + run_.size() * frame_cycles()) {
+    run_.insert(run_.end(), r.bytes.begin(), r.bytes.end());
+    return;
+  }
+  settle();
+  // What the run's first start bit does to the receiver first: the samples before it (a character
+  // begun before, finished by edges); the characters they end wait in early_.
+  if (r.start > 0) rx_.advance(r.start - 1, early_);
+  if (!rx_.idle_for(r.start, t)) {
+    rx_.take(r);
+    return;
+  }
+  run_.assign(r.bytes.begin(), r.bytes.end());
+  run_start_ = r.start;
+}
+
+void TxdReceiver::settle() {
+  if (run_.empty()) return;
+  // Something after the run: all its characters are sampled by then.
+  const std::size_t first = early_.size();
+  due_.swap(run_);
+  due_start_ = run_start_;
+  due_idle_bits_ = rx_.idle_bits_at(run_start_);
+  due_chars(early_);
+  rx_.after_chars(early_.back().start, due_.back(),
+                  early_.size() - first == 1 ? due_idle_bits_ : 0);
+  due_.clear();
+  run_.clear();
+}
+
+void TxdReceiver::advance(std::uint64_t now, std::vector<UartChar>& out) {
+  // early_: every character in it ended before something taken since, so before now.
+  out.insert(out.end(), early_.begin(), early_.end());
+  early_.clear();
+  rx_.advance(now, out);
+  due_.clear();
+  if (run_.empty()) return;
+  // Character i's stop sample: run_start_ + (11 i + 10) T + T/2.
+  const std::uint32_t t = rx_.bit_time();
+  const std::uint64_t first_stop = run_start_ + (kUartCharBits - 1) * std::uint64_t{t} + t / 2;
+  const std::size_t k = now < first_stop
+                            ? 0
+                            : static_cast<std::size_t>(std::min<std::uint64_t>(
+                                  run_.size(), (now - first_stop) / frame_cycles() + 1));
+  if (k > 0) {
+    due_start_ = run_start_;
+    due_idle_bits_ = rx_.idle_bits_at(run_start_);
+    // The receiver as take() and advance() leave it once these characters are reported.
+    rx_.after_chars(run_start_ + (k - 1) * frame_cycles(), run_[k - 1],
+                    k == 1 ? due_idle_bits_ : 0);
+    due_.assign(run_.begin(), run_.begin() + static_cast<std::ptrdiff_t>(k));
+  }
+  // The last one may not be due yet: the receiver takes it as it would have.
+  if (k < run_.size()) {
+    rx_.take(TxdRun{std::span(run_).subspan(k), run_start_ + k * frame_cycles(), t, {}});
+  }
+  run_.clear();
+}
+
+void TxdReceiver::due_chars(std::vector<UartChar>& out) const {
+  for (std::size_t i = 0; i < due_.size(); ++i) {
+    const std::uint64_t at = due_start_ + i * frame_cycles();
+    out.push_back(
+        {due_[i], true, true, true, at, at + frame_cycles(), i == 0 ? due_idle_bits_ : 0});
+  }
 }
 
 DpMaster::DpMaster(Chip& chip, MasterConfig m, SlaveConfig s)
@@ -225,8 +316,8 @@ bool DpMaster::wait_token(std::uint64_t timeout) {
   const std::uint64_t until = now() + timeout;
   AnswerCollector heard;
   for (;;) {
-    chars_.clear();
-    look(chars_);
+    look();
+    rx_.due_chars(chars_);  // a token's few characters one by one
     for (const UartChar& c : chars_) {
       if (heard.finished()) heard.reset();
       heard.push(c);
@@ -246,13 +337,14 @@ bool DpMaster::wait_token(std::uint64_t timeout) {
   }
 }
 
-void DpMaster::look(std::vector<UartChar>& out) {
+void DpMaster::look() {
   if (seg_) {
-    seg_->take_line(station_, rx_);
+    seg_->take_line(station_, rx_.rx());
   } else {
     chip_->take_txd();
   }
-  rx_.advance(now(), out);
+  chars_.clear();
+  rx_.advance(now(), chars_);
 }
 
 void DpMaster::note(const std::string& s) {
@@ -322,30 +414,40 @@ fdl::Frame DpMaster::request(std::optional<std::uint8_t> dsap, std::vector<std::
   return fdl::make_frame(target_, cfg_.address, fc, std::move(du), dsap, ssap);
 }
 
+namespace {
+
+// SDN and the token (SD4) want no answer.
+bool sdn(const fdl::Frame& f) {
+  const fdl::Function fn = fdl::request_function(f.fc);
+  return f.sd == fdl::SD4 || fn == fdl::Function::SDN_high || fn == fdl::Function::SDN_low;
+}
+
+}  // namespace
+
 Exchange DpMaster::transact(const fdl::Frame& req, UartFault fault) {
-  Exchange ex = transact_raw(fdl::encode(req), fault);
+  const std::vector<std::uint8_t> bytes = fdl::encode(req);
+  // decode(encode(req)) == req whenever encode gives bytes: the request needs no decoding.
+  Exchange ex = send(bytes, fault, !bytes.empty() && sdn(req));
   ex.request = req;
   history_.back().request = req;
   return ex;
 }
 
 Exchange DpMaster::transact_raw(const std::vector<std::uint8_t>& bytes, UartFault fault) {
+  const fdl::Decoded d = fdl::decode(bytes);
+  return send(bytes, fault, d.error == fdl::Error::none && sdn(d.frame));
+}
+
+Exchange DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bool no_answer) {
   Exchange ex;
   // What the line carried before (another master's traffic, for instance) is no answer to us.
-  chars_.clear();
-  look(chars_);
+  look();
   ex.request_start = std::max(now(), bus_free_ + std::uint64_t{cfg_.idle_bits} * t_);
   if (on_send) on_send(ex.request_start, bytes, fault);
   ex.request_end = put_on_line(bytes, ex.request_start, fault);
   run_until(ex.request_end);
-  const fdl::Decoded d = fdl::decode(bytes);
-  // SDN and the token (SD4) want no answer.
-  const bool sdn =
-      d.error == fdl::Error::none &&
-      (d.frame.sd == fdl::SD4 || fdl::request_function(d.frame.fc) == fdl::Function::SDN_high ||
-       fdl::request_function(d.frame.fc) == fdl::Function::SDN_low);
   ++counters_.requests;
-  if (sdn) {
+  if (no_answer) {
     bus_free_ = ex.request_end;  // send-data-no-acknowledge: nothing to wait for
   } else {
     ex = wait_answer(ex);
@@ -365,9 +467,9 @@ Exchange DpMaster::wait_answer(Exchange ex) {
   const std::uint64_t slot_end = ex.request_end + std::uint64_t{cfg_.slot_bits} * t_;
   answer_.reset();
   for (;;) {
-    chars_.clear();
-    look(chars_);
+    look();
     for (const UartChar& c : chars_) answer_.push(c);
+    answer_.push_block(rx_.due(), rx_.due_start(), t_);
     if (answer_.finished() && !rx_.receiving()) break;
     if (!answer_.started() && !rx_.receiving() && now() >= slot_end) {
       bus_free_ = now();

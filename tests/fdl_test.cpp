@@ -438,3 +438,64 @@ TEST(FdlAssembler, RandomBytesWithoutReset) {
     EXPECT_EQ(a.status(), Assembler::Status::error);
   }
 }
+
+// push_block is push() byte by byte up to the verdict: the same status, length, bytes and error,
+// and it stops after the byte that gave the verdict. Good frames of every SD (SD2 at every LE),
+// and the same with bytes damaged at random, pushed in blocks split at random.
+TEST(FdlAssembler, PushBlockIsPushByteByByte) {
+  std::mt19937 rng(7);
+  std::vector<Bytes> frames = {{SC},
+                               {SD4, 5, 2},
+                               encode(make_frame(5, 2, 0x49)),
+                               encode(make_frame(5, 2, 0x5D, counting(6), 60, 62))};
+  frames.back()[0] = SD3;  // SD3: 8 data bytes with the SAPs
+  frames.back().erase(frames.back().begin() + 1, frames.back().begin() + 4);
+  for (std::size_t n = 1; n <= 246; ++n)
+    frames.push_back(encode(make_frame(5, 2, 0x7D, counting(n))));
+  std::size_t damaged = 0;
+  for (int round = 0; round < 3; ++round) {
+    for (Bytes f : frames) {
+      if (round > 0) {  // a byte damaged, and bytes after the frame
+        f[rng() % std::min<std::size_t>(f.size(), 6)] ^= static_cast<std::uint8_t>(1 + rng() % 255);
+        f.push_back(static_cast<std::uint8_t>(rng()));
+        ++damaged;
+      }
+      Assembler a;
+      std::size_t taken = 0;
+      for (std::size_t i = 0; i < f.size(); ++i) {
+        if (a.push(f[i]) != Assembler::Status::need_more) {
+          taken = i + 1;
+          break;
+        }
+        taken = i + 1;
+      }
+      Assembler b;
+      std::size_t got = 0;
+      for (std::span<const std::uint8_t> rest(f); !rest.empty() && got < f.size();) {
+        const std::size_t cut = 1 + rng() % rest.size();
+        const std::size_t k = b.push_block(rest.first(cut));
+        got += k;
+        if (k < cut) break;
+        rest = rest.subspan(cut);
+      }
+      ASSERT_EQ(got, taken) << f.size();
+      ASSERT_EQ(b.status(), a.status());
+      ASSERT_EQ(b.error(), a.error());
+      ASSERT_EQ(b.expected_length(), a.expected_length());
+      ASSERT_TRUE(std::ranges::equal(b.bytes(), a.bytes()));
+    }
+  }
+  EXPECT_GT(damaged, 400U);
+}
+
+// The FCS is the sum mod 256 of the bytes, whatever their number (fcs sums eight at a time).
+TEST(FdlFcs, IsTheSumOfTheBytesMod256) {
+  std::mt19937 rng(3);
+  for (std::size_t n = 0; n < 2100; n += 1 + n / 16) {
+    Bytes b(n);
+    for (auto& x : b) x = static_cast<std::uint8_t>(rng() | 0xF0);
+    unsigned sum = 0;
+    for (std::uint8_t x : b) sum += x;
+    ASSERT_EQ(fcs(b), static_cast<std::uint8_t>(sum)) << n;
+  }
+}

@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <tuple>
 #include <utility>
@@ -33,6 +34,11 @@ namespace {
 
 using Edges = std::vector<std::pair<std::uint64_t, bool>>;
 
+// How a side watches TxD besides its master: every edge an event (on_txd), the edges in batches
+// (on_txd_edges: the answer is made of edges too, and the master's receiver takes them so), or
+// characters (on_txd_chars: the answer stays characters).
+enum class Watch : std::uint8_t { bits, edges, chars };
+
 struct Side {
   Chip chip;
   Responder user;
@@ -40,14 +46,18 @@ struct Side {
   Edges txd;
   std::size_t whole = 0;  // characters handed over whole (TxdRun::bytes)
 
-  Side(Profile p, std::uint32_t baud, bool watch_bits, const ResponderConfig& rc = {},
+  Side(Profile p, std::uint32_t baud, Watch watch, const ResponderConfig& rc = {},
        const SlaveConfig& slave = {})
       : chip({p, BusMode::intel, 0}),
         user(rc),
         master(init(chip, user), MasterConfig{2, baud, 100, 33}, slave) {
     master.set_firmware([this](BusPort& c) { user.isr(c); });
-    if (watch_bits) {
+    if (watch == Watch::bits) {
       chip.on_txd([this](std::uint64_t c, bool l) { txd.emplace_back(c, l); });
+    } else if (watch == Watch::edges) {
+      chip.on_txd_edges([this](std::span<const std::pair<std::uint64_t, bool>> e) {
+        txd.insert(txd.end(), e.begin(), e.end());
+      });
     } else {
       // Beside the master: gets the same runs; their characters become the edges they stand for.
       chip.on_txd_chars([this](const TxdRun& r) {
@@ -103,12 +113,14 @@ void expect_same(Side& bits, Side& chars, const char* what) {
 
 class TxdChars : public ::testing::TestWithParam<std::tuple<Profile, std::uint32_t>> {};
 
+constexpr std::uint64_t kNeverCut = ~std::uint64_t{0};
+
 }  // namespace
 
 TEST_P(TxdChars, TheMasterSeesWhatTheEdgesShowed) {
   const auto [profile, baud] = GetParam();
-  Side bits(profile, baud, true);
-  Side chars(profile, baud, false);
+  Side bits(profile, baud, Watch::bits);
+  Side chars(profile, baud, Watch::chars);
   // The start-up: FDL_Status through the baud search, Slave_Diag, Set_Prm, Chk_Cfg, Slave_Diag.
   ASSERT_TRUE(bits.master.startup());
   ASSERT_TRUE(chars.master.startup());
@@ -151,8 +163,8 @@ TEST_P(TxdCharsDpv1, ReadsLookTheSame) {
   ResponderConfig rc;
   rc.slave.user_prm = {0xC0, 0x00, 0x00};  // DPV1_Enable, Fail_Safe
   rc.dpv1.records = {{0, 1, std::vector<std::uint8_t>(240, 0xA5)}, {0, 2, {1, 2, 3, 0x7E}}};
-  Side bits(Profile::vpc3plus, baud, true, rc, rc.slave);
-  Side chars(Profile::vpc3plus, baud, false, rc, rc.slave);
+  Side bits(Profile::vpc3plus, baud, Watch::bits, rc, rc.slave);
+  Side chars(Profile::vpc3plus, baud, Watch::chars, rc, rc.slave);
   Dpv1Master a(bits.chip, bits.master);
   Dpv1Master b(chars.chip, chars.master);
   ASSERT_TRUE(bits.master.startup());
@@ -189,8 +201,8 @@ class TxdCut : public ::testing::TestWithParam<Profile> {};
 
 TEST_P(TxdCut, AnAnswerCutByGoOfflineReachesBothReceiversAlike) {
   const Profile profile = GetParam();
-  Side bits(profile, 12'000'000, true);
-  Side chars(profile, 12'000'000, false);
+  Side bits(profile, 12'000'000, Watch::bits);
+  Side chars(profile, 12'000'000, Watch::chars);
   ASSERT_TRUE(bits.master.startup());
   ASSERT_TRUE(chars.master.startup());
   const std::uint32_t t = bits.master.bit_cycles();
@@ -238,5 +250,69 @@ INSTANTIATE_TEST_SUITE_P(Profiles, TxdCut,
                          [](const ::testing::TestParamInfo<Profile>& i) {
                            return testutil::pname(i.param);
                          });
+
+// Row b of dpc31 bench (Data_Exchange of 244 + 244 bytes, DPC31) at every PROFIBUS rate: the
+// answer kept as characters, which the master hands to its AnswerCollector whole once their stop
+// samples are due (DpMaster::take and look: no receiver queue), against the answer made of edges
+// (an on_txd_edges observer attached), which the master's receiver decodes edge run by edge run.
+// Every exchange's cycles and bytes, the counters, the chip's state and TxD must agree; then one
+// answer cut by Go_Offline 100.5 characters in (whole characters, the cut one as edges, then
+// nothing): a broken answer at the same cycles on both.
+class TxdDirect : public ::testing::TestWithParam<std::uint32_t> {};
+
+TEST_P(TxdDirect, LongAnswersAndACutOneLookTheSame) {
+  const std::uint32_t baud = GetParam();
+  ResponderConfig rc;
+  rc.slave.in_len = 244;
+  rc.slave.out_len = 244;
+  Side edges(Profile::dpc31, baud, Watch::edges, rc, rc.slave);
+  Side chars(Profile::dpc31, baud, Watch::chars, rc, rc.slave);
+  for (Side* s : {&edges, &chars}) {
+    s->user.inputs.resize(244);
+    for (std::size_t i = 0; i < 244; ++i) s->user.inputs[i] = static_cast<std::uint8_t>(i * 7);
+  }
+  ASSERT_TRUE(edges.master.startup());
+  ASSERT_TRUE(chars.master.startup());
+  expect_same(edges, chars, "start-up");
+  std::vector<std::uint8_t> out(244);
+  for (int n = 0; n < 3; ++n) {
+    for (std::size_t i = 0; i < out.size(); ++i) out[i] = static_cast<std::uint8_t>(i + n);
+    const Exchange a = edges.master.data_exchange(out);
+    chars.master.data_exchange(out);
+    ASSERT_TRUE(a.answer.has_value());
+    ASSERT_EQ(a.answer->du.size(), 244u);
+    expect_same(edges, chars, "Data_Exchange");
+  }
+  const Exchange& last = edges.master.history().back();
+  const std::uint64_t tsdr = last.answer_start - last.request_end;
+  // From here a firmware of the test's own runs the chip (the master's scheduler), so that it can
+  // take the chip offline at a cycle in the middle of the answer.
+  const std::uint32_t t = edges.master.bit_cycles();
+  for (Side* s : {&edges, &chars}) {
+    s->master.idle(100 * std::uint64_t{t});  // the master's firmware ends its ISR
+    auto cpu = std::make_shared<Cpu>(s->chip, [s](BusPort& c) { s->user.isr(c); });
+    auto cut = std::make_shared<std::uint64_t>(0);
+    s->master.scheduler = [s, cpu, cut, tsdr, t](std::uint64_t cycle) {
+      // The first run goes to the request's end: the answer starts TSDR later.
+      if (*cut == 0) *cut = cycle + tsdr + (100 * 11 + 5) * std::uint64_t{t} + 1;
+      if (*cut != kNeverCut && cycle > *cut) {
+        cpu->run_until(*cut);
+        if (s->chip.cycle() < *cut) return;  // stopped early: the master looks first
+        testutil::user_go_offline(s->chip);
+        *cut = kNeverCut;
+      }
+      cpu->run_until(cycle);
+    };
+  }
+  const Exchange a = edges.master.data_exchange(out);
+  chars.master.data_exchange(out);
+  EXPECT_FALSE(a.answer.has_value());
+  EXPECT_EQ(edges.master.counters().bad_answer, 1u);
+  EXPECT_GT(a.answer_end, a.answer_start + 100 * 11 * std::uint64_t{t});
+  expect_same(edges, chars, "an answer cut by Go_Offline");
+  EXPECT_GE(chars.whole, 3u * 240u) << "the whole path was rarely taken";
+}
+
+INSTANTIATE_TEST_SUITE_P(Rates, TxdDirect, ::testing::ValuesIn(kBaudRates));
 
 }  // namespace txd_chars

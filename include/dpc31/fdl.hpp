@@ -165,6 +165,10 @@ class Assembler {
   enum class Status : std::uint8_t { need_more, complete, error };
 
   Status push(std::uint8_t byte);
+  // push() of the bytes in order up to the verdict (complete or error), a telegram's characters
+  // taken at once: the framing checked where push() checks it, the bytes after that copied in one
+  // go. Returns how many bytes it took (all of them while the frame needs more).
+  std::size_t push_block(std::span<const std::uint8_t> bytes);
   // Total frame length in bytes; 0 until known (SD2: until a valid LEr has arrived).
   [[nodiscard]] std::size_t expected_length() const { return expected_; }
   [[nodiscard]] std::span<const std::uint8_t> bytes() const { return {buf_.data(), size_}; }

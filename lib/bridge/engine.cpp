@@ -83,7 +83,7 @@ Engine::Engine(const Setup& setup, LogSink log)
                fmt::format("collision: {} drove into the telegram of {}", seg_->name(c.second),
                            seg_->name(c.first)));
     };
-    rx_.configure(t_, seg_->cycle());
+    rx_ = TxdReceiver(t_, seg_->cycle());
     bus_free_ = seg_->cycle();
     return;
   }
@@ -101,7 +101,7 @@ Engine::Engine(const Setup& setup, LogSink log)
   } else {
     add_slave(0, *solo_, setup_.firmware, setup_.address);
   }
-  rx_.configure(t_, solo_->cycle());
+  rx_ = TxdReceiver(t_, solo_->cycle());
   // TxD in batches of characters, taken when the bridge looks (collect): no event per bit.
   solo_->on_txd_chars([this](const TxdRun& r) { rx_.take(r); });
   if (!m51_) cpu_ = std::make_unique<Cpu>(*solo_, slaves_[0].user.program);
@@ -361,7 +361,7 @@ void Engine::finish_answer(AnswerCollector& a, std::string_view how) {
 void Engine::collect() {
   chars_.clear();
   if (seg_) {
-    seg_->take_line(master_, rx_);
+    seg_->take_line(master_, rx_.rx());
   } else {
     solo_->take_txd();
   }
@@ -375,6 +375,12 @@ void Engine::collect() {
       stray_.push(c);
     }
   }
+  // The whole characters after those: all of the answer, or (one before its time, or a stray
+  // one before them) all late, as the rule above takes them one by one.
+  const std::span<const std::uint8_t> due = rx_.due();
+  out_.insert(out_.end(), due.begin(), due.end());
+  const bool answer = in_flight_ && rx_.due_start() >= request_end_ && !stray_.started();
+  (answer ? answer_ : stray_).push_block(due, rx_.due_start(), t_);
   if (stray_.finished() && !rx_.receiving()) finish_answer(stray_, "late");
   if (!in_flight_) return;
   if (answer_.finished() && !rx_.receiving()) {

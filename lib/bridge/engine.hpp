@@ -226,7 +226,7 @@ class Engine {
   std::uint64_t slot_end_ = 0;
   std::uint64_t unanswered_ = 0;  // requests in a row without an answer within the slot time
   std::uint64_t bus_free_ = 0;    // end of the last telegram on the bus
-  UartRx rx_;                     // the master's receiver on TxD
+  TxdReceiver rx_{0, 0};          // the master's receiver on TxD
   std::vector<UartChar> chars_;
   AnswerCollector answer_;  // of the request in flight
   AnswerCollector stray_;   // characters while no request is in flight (a late answer)
