@@ -262,6 +262,12 @@ void Segment::align() {
 
 bool Segment::others_drive(const Station& s, std::uint64_t from, std::uint64_t to) const {
   if (hard_end_ && *hard_end_ >= from && *hard_end_ <= to) return true;
+  if (!reference_) {
+    // The same facts: only the armed answers with edges after the line's time drive from `from`.
+    return std::any_of(armed_.begin(), armed_.end(), [&](std::size_t i) {
+      return i != s.index && stations_[i]->drives(from, to);
+    });
+  }
   return std::any_of(stations_.begin(), stations_.end(), [&](const auto& o) {
     return o.get() != &s && o->chip && o->drives(from, to);
   });
@@ -587,6 +593,7 @@ void Segment::round(std::uint64_t cycle) {
       look_at(*stations_[i]);
     }
   }
+  const std::uint64_t before = now_;
   now_ = bound;
   // What the chips drove, in the order of its cycles (ties: station order).
   round_.clear();
@@ -598,7 +605,7 @@ void Segment::round(std::uint64_t cycle) {
     }
     drove_.clear();
   } else {
-    relay_armed();
+    relay_armed(before);
   }
   // Mostly one edge or none: sorted already, and stable_sort would allocate its buffer.
   const auto earlier = [](const Driven& a, const Driven& b) { return a.cycle < b.cycle; };
@@ -614,7 +621,7 @@ void Segment::round(std::uint64_t cycle) {
 
 // The armed answers' edges up to now_ into round_. An answer whose first start bit finds its chip's
 // TxD high was withdrawn before it began (Go_Offline, a reset): it never reaches the line.
-void Segment::relay_armed() {
+void Segment::relay_armed(std::uint64_t before) {
   std::sort(armed_.begin(), armed_.end());
   for (const std::size_t i : armed_) {
     Station& s = *stations_[i];
@@ -627,10 +634,11 @@ void Segment::relay_armed() {
     for (; s.out_next < e.size() && e[s.out_next].first <= now_; ++s.out_next)
       round_.push_back({e[s.out_next].first, i, e[s.out_next].second});
   }
-  std::erase_if(armed_, [this](std::size_t i) {
+  // Every later question (others_drive, next_armed_edge) is about cycles after `before`.
+  std::erase_if(armed_, [this, before](std::size_t i) {
     const Station& s = *stations_[i];
     return s.out_next == s.drives_edges.size() &&
-           (s.drives_edges.empty() || s.drives_edges.back().first <= now_);
+           (s.drives_edges.empty() || s.drives_edges.back().first <= before);
   });
 }
 

@@ -135,8 +135,9 @@ class Segment {
   // False where it goes edge by edge (the reference line, another rate, no answer armed there).
   bool relay_answer(std::size_t i, std::uint64_t cycle);
   // Telegram level: the armed answers' edges up to now_ to the line (a chip's TxD edges are no
-  // events of it: the line takes them from the answer it armed, docs/segment.md).
-  void relay_armed();
+  // events of it: the line takes them from the answer it armed, docs/segment.md); `before`: the
+  // line's time before this round.
+  void relay_armed(std::uint64_t before);
   // The next edge of an armed answer after now_ (UINT64_MAX: none), a round's end while a
   // firmware runs, as the chip's TxD events made it on the reference line.
   [[nodiscard]] std::uint64_t next_armed_edge();
@@ -193,7 +194,8 @@ class Segment {
   std::vector<std::size_t> due_;
   std::vector<std::size_t> stepped_;
   std::vector<std::size_t> drove_;
-  // Telegram level: the stations whose armed answer has edges after now_ (a handful).
+  // Telegram level: the stations whose armed answer has edges after the line's time (a handful;
+  // those a firmware's access may run into: others_drive).
   std::vector<std::size_t> armed_;
   // The start bits of the answer relayed whole that find the line free again (wake_for).
   std::vector<std::uint64_t> wakes_;
