@@ -349,10 +349,11 @@ bool Segment::relay_answer(std::size_t i, std::uint64_t cycle) {
   Station& a = *stations_[i];
   if (reference_ || !a.answer || a.answer->start != cycle || a.chip->bit_cycles() != t_)
     return false;
+  const auto heard = HeardFrame::make(a.answer->bytes);  // decoded once for every chip
   for (const auto& s : stations_) {
     if (!s->chip || s.get() == &a) continue;
     step_station(*s, cycle);
-    s->chip->hear_telegram(a.answer->bytes, cycle, t_);
+    s->chip->hear_telegram(heard, cycle, t_);
     look_at(*s);
   }
   a.answer.reset();
@@ -496,6 +497,9 @@ std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> byte
   owned_until_ = end;
   Edges edges;
   uart_encode(bytes, start, t_, edges, fault);
+  // Decoded once for every chip that hears it whole.
+  const bool whole = !reference_ && fault.kind == UartFault::Kind::none;
+  const auto heard = whole ? HeardFrame::make(bytes) : nullptr;
   for (std::size_t k = 0; k < stations_.size(); ++k) {
     Station& s = *stations_[k];
     if (k == from || !s.chip) continue;
@@ -504,10 +508,10 @@ std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> byte
                                          stations_[from]->name, start, s.name, s.chip->cycle()));
     }
     step_station(s, start);
-    if (reference_ || fault.kind != UartFault::Kind::none) {
-      s.chip->drive_rxd_chars(bytes, start, t_, fault);
+    if (whole) {
+      s.chip->hear_telegram(heard, start, t_);
     } else {
-      s.chip->hear_telegram(bytes, start, t_);
+      s.chip->drive_rxd_chars(bytes, start, t_, fault);
     }
     look_at(s);
   }
