@@ -381,12 +381,11 @@ bool Segment::relay_answer(std::size_t i, std::uint64_t cycle) {
   wake_from_ = i;
   const std::uint64_t frame = std::uint64_t{kUartCharBits} * t_;
   for (const auto& [at, level] : rest) {
-    if (!level) {
-      if (at >= owned_until_) wakes_.push_back(at);
-      owned_until_ = std::max(owned_until_, at + frame);
-    }
-    decode(i, at, level);
+    if (level) continue;
+    if (at >= owned_until_) wakes_.push_back(at);
+    owned_until_ = std::max(owned_until_, at + frame);
   }
+  decode_chars(i, a.out_bytes, cycle, rest);
   a.out_next = a.drives_edges.size();
   return true;
 }
@@ -455,6 +454,18 @@ void Segment::decode(std::size_t from, std::uint64_t cycle, bool level) {
   if (on_line) on_line(from, cycle, level);
 }
 
+// A good telegram of station `from`: the line's decoder takes its characters whole where it can
+// (UartRx::take), the waveform's observer its edges.
+void Segment::decode_chars(std::size_t from, std::span<const std::uint8_t> bytes,
+                           std::uint64_t start,
+                           std::span<const std::pair<std::uint64_t, bool>> edges) {
+  if (claims_.empty() || claims_.back().second != from) claims_.emplace_back(start, from);
+  line_rx_.take(TxdRun{bytes, start, t_, {}});
+  if (on_line) {
+    for (const auto& [at, level] : edges) on_line(from, at, level);
+  }
+}
+
 // Characters whose stop sample is by `upto` join the open telegram (the driver of its first
 // character is its sender); it closes when the line stayed idle past its end (a character back
 // to back would have started at its end).
@@ -519,7 +530,11 @@ std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> byte
     if (k != from)
       stations_[k]->heard.insert(stations_[k]->heard.end(), edges.begin(), edges.end());
   }
-  for (const auto& [cycle, level] : edges) decode(from, cycle, level);
+  if (whole) {
+    decode_chars(from, bytes, start, edges);
+  } else {
+    for (const auto& [cycle, level] : edges) decode(from, cycle, level);
+  }
   return end;
 }
 

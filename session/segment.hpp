@@ -150,6 +150,9 @@ class Segment {
   void hear(std::size_t from, std::uint64_t cycle, bool level);
   // The character decoder of the line (for on_telegram), fed with what the owner drove.
   void decode(std::size_t from, std::uint64_t cycle, bool level);
+  // The same for a good telegram from `start` whose edges are `edges`: its characters whole.
+  void decode_chars(std::size_t from, std::span<const std::uint8_t> bytes, std::uint64_t start,
+                    std::span<const std::pair<std::uint64_t, bool>> edges);
   void close_telegrams(std::uint64_t upto);
   void collide(std::size_t first, std::size_t second, std::uint64_t cycle);
 
