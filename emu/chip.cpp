@@ -78,10 +78,26 @@ std::uint64_t Chip::drive_rxd_chars(std::span<const std::uint8_t> bytes, std::ui
 }
 std::uint64_t Chip::hear_telegram(std::span<const std::uint8_t> bytes, std::uint64_t start,
                                   std::uint32_t bit_cycles) {
-  if (!core_->mac.hear_telegram(bytes, start, bit_cycles)) {
+  if (!core_->mac.can_hear(bytes.size(), start, bit_cycles)) {
     return drive_rxd_chars(bytes, start, bit_cycles);
   }
-  return start + bytes.size() * std::uint64_t{kUartCharBits} * bit_cycles;
+  return hear_telegram(HeardFrame::make(bytes), start, bit_cycles);
+}
+std::uint64_t Chip::hear_telegram(const std::shared_ptr<const HeardFrame>& frame,
+                                  std::uint64_t start, std::uint32_t bit_cycles) {
+  if (!core_->mac.hear_telegram(frame, start, bit_cycles)) {
+    return drive_rxd_chars(frame->bytes, start, bit_cycles);
+  }
+  return start + frame->bytes.size() * std::uint64_t{kUartCharBits} * bit_cycles;
+}
+std::shared_ptr<const HeardFrame> HeardFrame::make(std::span<const std::uint8_t> bytes) {
+  auto h = std::make_shared<HeardFrame>();
+  h->bytes.assign(bytes.begin(), bytes.end());
+  if (bytes.empty()) return h;  // nobody hears it whole (Mac::can_hear)
+  h->verdict = h->frame.push_block(bytes) - 1;  // the byte of the assembler's verdict (or the last)
+  if (h->frame.status() == fdl::Assembler::Status::complete)
+    h->decoded = fdl::decode(h->frame.bytes());
+  return h;
 }
 void Chip::on_rxd(std::function<void(std::uint64_t, bool)> cb) {
   core_->signals.rxd.add(std::move(cb));

@@ -398,7 +398,7 @@ void Mac::on_char(const UartChar& c) {
   frame_ended(st, c);
 }
 
-void Mac::frame_ended(fdl::Assembler::Status st, const UartChar& c) {
+void Mac::frame_ended(fdl::Assembler::Status st, const UartChar& c, const fdl::Decoded* decoded) {
   s_.in_frame = false;
   s_.frame_timeout = kNever;
   if (st == fdl::Assembler::Status::error) {
@@ -412,7 +412,9 @@ void Mac::frame_ended(fdl::Assembler::Status st, const UartChar& c) {
     count(counters_, too_long ? fdl::Error::oversize : s_.frame.error());
     return;
   }
-  const fdl::Decoded d = fdl::decode(s_.frame.bytes());
+  fdl::Decoded own;
+  if (decoded == nullptr) own = fdl::decode(s_.frame.bytes());
+  const fdl::Decoded& d = decoded != nullptr ? *decoded : own;
   if (d.error != fdl::Error::none) {
     count(counters_, d.error);
     return;
@@ -548,18 +550,21 @@ void Mac::drop_heard_rxd(std::uint64_t at) {
   while (!s_.rxd_pending.empty() && s_.rxd_pending.front().first <= at) s_.rxd_pending.pop_front();
 }
 
-bool Mac::hear_telegram(std::span<const std::uint8_t> bytes, std::uint64_t start,
-                        std::uint32_t bit_cycles) {
+bool Mac::can_hear(std::size_t chars, std::uint64_t start, std::uint32_t bit_cycles) const {
   // Between telegrams: nothing of the receiver's still to report, no frame open or timing out,
   // no search window that would switch the rate inside it, no edge driven ahead.
-  if (clock_.engine != Engine::event || s_.heard.active || bytes.empty() || start < clock_.now ||
-      !s_.rx.idle_for(start, bit_cycles) || s_.in_frame || s_.frame_timeout != kNever ||
-      s_.search_deadline != kNever ||
-      (!s_.rxd_pending.empty() && (s_.rxd_pending.end() - 1)->first > clock_.now)) {
-    return false;
-  }
+  return clock_.engine == Engine::event && !s_.heard.active && chars > 0 && start >= clock_.now &&
+         s_.rx.idle_for(start, bit_cycles) && !s_.in_frame && s_.frame_timeout == kNever &&
+         s_.search_deadline == kNever &&
+         (s_.rxd_pending.empty() || (s_.rxd_pending.end() - 1)->first <= clock_.now);
+}
+
+bool Mac::hear_telegram(const std::shared_ptr<const HeardFrame>& tel, std::uint64_t start,
+                        std::uint32_t bit_cycles) {
+  if (!can_hear(tel->bytes.size(), start, bit_cycles)) return false;
+  const std::vector<std::uint8_t>& bytes = tel->bytes;
   HeardTelegram& h = s_.heard;
-  h.bytes.assign(bytes.begin(), bytes.end());
+  h.tel = tel;
   h.start = start;
   h.t = bit_cycles;
   h.driven_at = clock_.now;
@@ -567,8 +572,7 @@ bool Mac::hear_telegram(std::span<const std::uint8_t> bytes, std::uint64_t start
   if (s_.rx.idle_bits_at(start) >= kTsynBits) {
     // A frame starts; nothing shows before the assembler's verdict (complete or an error).
     h.kind = HeardTelegram::Kind::frame;
-    h.frame.reset();
-    h.effect_at = h.stop_sample(h.frame.push_block(bytes) - 1);
+    h.effect_at = h.stop_sample(tel->verdict);
   } else if (!s_.skipping) {
     h.kind = HeardTelegram::Kind::no_sync;  // counted at the first stop sample, the rest skipped
     h.effect_at = h.stop_sample(0);
@@ -593,7 +597,7 @@ bool Mac::hear_telegram(std::span<const std::uint8_t> bytes, std::uint64_t start
 
 void Mac::take_heard() {
   HeardTelegram& h = s_.heard;
-  const std::uint64_t last = h.stop_sample(h.bytes.size() - 1);
+  const std::uint64_t last = h.stop_sample(h.tel->bytes.size() - 1);
   if (h.kind == HeardTelegram::Kind::no_sync && h.effect_at != kNever) {
     ++counters_.no_sync;  // on_char of the first character
     s_.skipping = true;
@@ -601,7 +605,7 @@ void Mac::take_heard() {
     if (clock_.now < last) return;
   }
   if (h.kind == HeardTelegram::Kind::frame &&
-      (h.effect_at < last || h.frame.status() == fdl::Assembler::Status::need_more)) {
+      (h.effect_at < last || h.tel->frame.status() == fdl::Assembler::Status::need_more)) {
     // The frame ends before the telegram does, or runs into a frame timeout: character by
     // character.
     materialize();
@@ -609,18 +613,20 @@ void Mac::take_heard() {
   }
   // The last stop sample: the receiver as the characters leave it, drive_rxd_char's queue.
   const std::uint64_t frame_cycles = std::uint64_t{kUartCharBits} * h.t;
-  const std::uint64_t last_start = h.start + (h.bytes.size() - 1) * frame_cycles;
-  const std::uint64_t idle = h.bytes.size() == 1 ? s_.rx.idle_bits_at(h.start) : 0;
-  s_.rx.after_chars(last_start, h.bytes.back(), idle);
+  const std::uint64_t last_start = h.start + (h.tel->bytes.size() - 1) * frame_cycles;
+  const std::uint64_t idle = h.tel->bytes.size() == 1 ? s_.rx.idle_bits_at(h.start) : 0;
+  s_.rx.after_chars(last_start, h.tel->bytes.back(), idle);
   drop_heard_rxd(h.driven_at);
   h.active = false;
   if (h.kind != HeardTelegram::Kind::frame) return;
   // on_char of each character: a frame after TSYN, complete or broken at the last one.
   s_.skipping = false;
   s_.discarding = false;
-  std::swap(s_.frame, h.frame);
-  frame_ended(s_.frame.status(), UartChar{h.bytes.back(), true, true, true, last_start,
-                                          last_start + frame_cycles, idle});
+  s_.frame = h.tel->frame;
+  frame_ended(
+      s_.frame.status(),
+      UartChar{h.tel->bytes.back(), true, true, true, last_start, last_start + frame_cycles, idle},
+      &h.tel->decoded);
 }
 
 void Mac::materialize() {
@@ -631,10 +637,11 @@ void Mac::materialize() {
   drop_heard_rxd(h.driven_at);
   std::array<std::pair<std::uint64_t, bool>, kUartCharBits> edges{};
   bool line = true;
-  for (std::size_t i = 0; i < h.bytes.size(); ++i) {
+  for (std::size_t i = 0; i < h.tel->bytes.size(); ++i) {
     const std::uint64_t at = h.start + i * std::uint64_t{kUartCharBits} * h.t;
-    const std::size_t n = uart_frame_edges(uart_frame(h.bytes[i]), at, h.t, line, edges.data());
-    s_.rx.whole_char(at, h.bytes[i], h.t);
+    const std::size_t n =
+        uart_frame_edges(uart_frame(h.tel->bytes[i]), at, h.t, line, edges.data());
+    s_.rx.whole_char(at, h.tel->bytes[i], h.t);
     for (std::size_t k = 0; k < n; ++k) {
       if (edges[k].first > h.driven_at) s_.rxd_pending.emplace_back(edges[k]);
     }

@@ -6,11 +6,13 @@
 #include <algorithm>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <span>
 #include <utility>
 #include <vector>
 
 #include "dp_sm.hpp"
+#include "dpc31/chip.hpp"
 #include "dpc31/fdl.hpp"
 #include "dpc31/fdl_counters.hpp"
 #include "dpc31/fifo.hpp"
@@ -71,17 +73,18 @@ struct HeardTelegram {
   enum class Kind : std::uint8_t { frame, no_sync, skipped };
   bool active = false;
   Kind kind = Kind::skipped;
-  std::vector<std::uint8_t> bytes;
+  // The characters and the assembler's run over them up to its verdict (Kind::frame: the first
+  // effect), shared by every chip that hears the telegram.
+  std::shared_ptr<const HeardFrame> tel;
   std::uint64_t start = 0;
   std::uint32_t t = 0;
   std::uint64_t driven_at = 0;       // the chip's cycle when it was driven
   std::uint64_t effect_at = kNever;  // kNever: shown already, or nothing to show
-  fdl::Assembler frame;              // Kind::frame: the assembler up to the first effect
   [[nodiscard]] std::uint64_t stop_sample(std::size_t i) const {
     return start + (i * kUartCharBits + kUartCharBits - 1) * std::uint64_t{t} + t / 2;
   }
   [[nodiscard]] std::uint64_t due() const {
-    return effect_at != kNever ? effect_at : stop_sample(bytes.size() - 1);
+    return effect_at != kNever ? effect_at : stop_sample(tel->bytes.size() - 1);
   }
 };
 
@@ -169,8 +172,11 @@ class Mac {
   // Chip::hear_telegram: good back-to-back characters from `start` (>= now) taken as one
   // telegram when the receiver is idle at their rate and the MAC between telegrams (event engine,
   // not in Baud_Search); false, and nothing taken, otherwise.
-  bool hear_telegram(std::span<const std::uint8_t> bytes, std::uint64_t start,
+  bool hear_telegram(const std::shared_ptr<const HeardFrame>& tel, std::uint64_t start,
                      std::uint32_t bit_cycles);
+  // Whether hear_telegram would take `chars` characters from `start` now.
+  [[nodiscard]] bool can_hear(std::size_t chars, std::uint64_t start,
+                              std::uint32_t bit_cycles) const;
   // A telegram heard whole as the characters drive_rxd_char would have given the receiver, and
   // what their stop samples up to now did: from here on the MAC is where characters leave it.
   void materialize();
@@ -208,7 +214,9 @@ class Mac {
   [[nodiscard]] bool tx_busy() const;
   void on_char(const UartChar& c);
   // on_char's end of a frame: the assembler's verdict after its last character `last`.
-  void frame_ended(fdl::Assembler::Status st, const UartChar& last);
+  // `decoded`: fdl::decode of the complete frame, known already (a telegram heard whole).
+  void frame_ended(fdl::Assembler::Status st, const UartChar& last,
+                   const fdl::Decoded* decoded = nullptr);
   void take_heard();                      // the heard telegram's effect or its end is due
   void drop_heard_rxd(std::uint64_t at);  // the queue as drive_rxd_char left it at cycle `at`
   void on_frame(const fdl::Frame& f, const UartChar& last);

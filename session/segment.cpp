@@ -33,20 +33,27 @@ struct Segment::Station {
   std::string name;
   std::unique_ptr<Chip> chip;  // null: a sender
   std::unique_ptr<Cpu> cpu;
-  Edges txd;    // the chip's TxD edges not yet relayed
+  Edges txd;    // the reference line: the chip's TxD edges not yet relayed (Chip::on_txd)
   Edges heard;  // a sender's: the line as it hears it, not yet taken (sorted by cycle)
   std::uint64_t colliding_until = 0;  // a collision of this station is reported once per burst
   // Telegram level (docs/segment.md): the chip's next event and whether its firmware runs, as the
-  // rounds last looked; the answer it armed (Chip::on_telegram), given to the other chips whole at
-  // its first start bit, and those edges, against which its TxD is checked as it goes out.
+  // rounds last looked; the answer it armed (Chip::on_answer), given to the other chips whole at
+  // its first start bit.
   bool busy = false;
   std::uint64_t looked = UINT64_MAX;  // the chip's cycle when the rounds last looked
   std::optional<LineTelegram> answer;
-  Edges relayed;
-  std::size_t relayed_next = 0;
   // The TxD edges of its last armed answer (both line modes): what a firmware running past a
-  // round's end must not cross.
+  // round's end must not cross; at telegram level also what the line relays (from out_next on:
+  // not yet) and what its TxD is checked against (from confirmed on: not yet seen), its bytes and
+  // end.
   Edges drives_edges;
+  std::size_t out_next = 0;
+  std::size_t confirmed = 0;
+  std::size_t live_next = 0;  // the first edge after the line's time (next_armed_edge)
+  std::vector<std::uint8_t> out_bytes;
+  std::uint64_t out_start = 0;
+  std::uint64_t out_end = 0;
+  std::string broken;  // its TxD left the armed answer (cut short): thrown by look_at
   [[nodiscard]] bool drives(std::uint64_t from, std::uint64_t to) const {
     const auto e = std::lower_bound(
         drives_edges.begin(), drives_edges.end(), from,
@@ -62,6 +69,14 @@ Segment::Segment(std::uint32_t baud, std::uint32_t clock_hz)
 
 Segment::~Segment() = default;
 
+void Segment::use_reference_line(bool on) {
+  if (on != reference_ && std::any_of(stations_.begin(), stations_.end(),
+                                      [](const auto& s) { return s->chip != nullptr; })) {
+    throw std::logic_error("segment: use_reference_line before the first chip");
+  }
+  reference_ = on;
+}
+
 std::size_t Segment::add_chip(std::string name, ChipOptions opt) {
   auto s = std::make_unique<Station>();
   s->name = std::move(name);
@@ -73,16 +88,31 @@ std::size_t Segment::add_chip(std::string name, ChipOptions opt) {
   // A station joins the line at the line's time.
   if (now_ > 0) s->chip->step(now_);
   Station* raw = s.get();
-  // Every TxD edge an event of the chip (Chip::on_txd): next_deadline() then bounds the next one,
-  // which the rounds of run_until rely on. (on_txd_edges hands edges over late, in batches.)
-  s->chip->on_txd([this, raw](std::uint64_t cycle, bool level) {
-    if (raw->txd.empty()) drove_.push_back(raw->index);
-    raw->txd.emplace_back(cycle, level);
-  });
-  s->chip->on_answer([raw](const Telegram& t) {
+  if (reference_) {
+    // Every TxD edge an event of the chip (Chip::on_txd): next_deadline() then bounds the next
+    // one, which the rounds of the reference line rely on.
+    s->chip->on_txd([this, raw](std::uint64_t cycle, bool level) {
+      if (raw->txd.empty()) drove_.push_back(raw->index);
+      raw->txd.emplace_back(cycle, level);
+    });
+  } else {
+    // The answer stays characters in the chip (no edge events): the line relays the edges of
+    // the answer armed, and checks what the chip drives against them.
+    s->chip->on_txd_chars([this, raw](const TxdRun& run) { check_txd(*raw, run); });
+  }
+  s->chip->on_answer([this, raw](const Telegram& t) {
     raw->answer = LineTelegram{0, t.start, t.end, t.bytes};
     raw->drives_edges.clear();
     uart_encode(t.bytes, t.start, raw->chip->bit_cycles(), raw->drives_edges);
+    if (reference_) return;
+    raw->out_next = 0;
+    raw->confirmed = 0;
+    raw->live_next = 0;
+    raw->out_bytes = t.bytes;
+    raw->out_start = t.start;
+    raw->out_end = t.end;
+    if (std::find(armed_.begin(), armed_.end(), raw->index) == armed_.end())
+      armed_.push_back(raw->index);
   });
   add_station(std::move(s));
   look_at(*raw);
@@ -108,8 +138,19 @@ void Segment::set_firmware(std::size_t i, Cpu::Program program) {
 }
 
 void Segment::look_at(Station& s) {
-  set_next(s.index, s.chip->next_deadline());
+  std::uint64_t next = s.chip->next_deadline();
+  if (s.out_next < s.drives_edges.size()) next = std::min(next, s.drives_edges[s.out_next].first);
+  set_next(s.index, next);
   s.looked = s.chip->cycle();
+  // Past its answer's end the chip has handed over all of it (its end is an event).
+  if (s.broken.empty() && s.confirmed < s.out_next && s.looked > s.out_end) {
+    s.broken =
+        fmt::format("stopped driving TxD before cycle {}", s.drives_edges[s.confirmed].first);
+  }
+  if (!s.broken.empty()) {
+    throw std::logic_error(fmt::format("segment: {} {}, not the answer its chip armed (cut short?)",
+                                       s.name, s.broken));
+  }
   const bool busy = s.cpu && s.cpu->busy();
   if (busy != s.busy) {
     s.busy = busy;
@@ -221,6 +262,12 @@ void Segment::align() {
 
 bool Segment::others_drive(const Station& s, std::uint64_t from, std::uint64_t to) const {
   if (hard_end_ && *hard_end_ >= from && *hard_end_ <= to) return true;
+  if (!reference_) {
+    // The same facts: only the armed answers with edges after the line's time drive from `from`.
+    return std::any_of(armed_.begin(), armed_.end(), [&](std::size_t i) {
+      return i != s.index && stations_[i]->drives(from, to);
+    });
+  }
   return std::any_of(stations_.begin(), stations_.end(), [&](const auto& o) {
     return o.get() != &s && o->chip && o->drives(from, to);
   });
@@ -293,40 +340,92 @@ void Segment::relay(std::size_t i, std::uint64_t cycle, bool level) {
     if (free && wake_for_ && *wake_for_ != i) woken_ = true;
     owner_ = i;
     owned_until_ = std::max(owned_until_, cycle + std::uint64_t{kUartCharBits} * t_);
-    if (free) relay_answer(i, cycle);
+    if (free && relay_answer(i, cycle)) return;
   }
   hear(i, cycle, level);
 }
 
-void Segment::relay_answer(std::size_t i, std::uint64_t cycle) {
+bool Segment::relay_answer(std::size_t i, std::uint64_t cycle) {
   Station& a = *stations_[i];
-  if (reference_ || !a.answer || a.answer->start != cycle || a.chip->bit_cycles() != t_) return;
+  if (reference_ || !a.answer || a.answer->start != cycle || a.chip->bit_cycles() != t_)
+    return false;
+  const auto heard = HeardFrame::make(a.answer->bytes);  // decoded once for every chip
   for (const auto& s : stations_) {
     if (!s->chip || s.get() == &a) continue;
     step_station(*s, cycle);
-    s->chip->hear_telegram(a.answer->bytes, cycle, t_);
+    s->chip->hear_telegram(heard, cycle, t_);
     look_at(*s);
   }
-  // The edges on_answer encoded (the same bytes from the same start at the same bit time).
-  a.relayed = a.drives_edges;
-  a.relayed_next = 0;
   a.answer.reset();
+  // Its edges from this one on (relay_armed took it): the senders hear them and the line's
+  // decoder takes them now, ahead of time as a sender's telegram; the line is the answer's up to
+  // a character time after its last falling edge.
+  const auto rest = std::span(a.drives_edges).subspan(a.out_next - 1);
+  for (const std::size_t k : senders_) {
+    Edges& h = stations_[k]->heard;
+    if (h.empty() || h.back().first <= rest.front().first) {
+      h.insert(h.end(), rest.begin(), rest.end());
+      continue;
+    }
+    for (const auto& e : rest) {
+      const auto at = std::upper_bound(
+          h.begin(), h.end(), e.first,
+          [](std::uint64_t c, const std::pair<std::uint64_t, bool>& x) { return c < x.first; });
+      h.insert(at, e);
+    }
+  }
+  // A start bit a character time after the falling edge before it finds the line free again
+  // (relay): a waiting master wakes there (wakes_), as on the reference line.
+  wakes_.clear();
+  wake_next_ = 0;
+  wake_from_ = i;
+  const std::uint64_t frame = std::uint64_t{kUartCharBits} * t_;
+  for (const auto& [at, level] : rest) {
+    if (level) continue;
+    if (at >= owned_until_) wakes_.push_back(at);
+    owned_until_ = std::max(owned_until_, at + frame);
+  }
+  decode_chars(i, a.out_bytes, cycle, rest);
+  a.out_next = a.drives_edges.size();
+  return true;
+}
+
+// What the chip drives must be the answer the line relayed: whole characters at their places in
+// it, edges one by one. A Go_Offline or a reset cutting the answer short drives otherwise (or
+// stops: look_at); the other chips heard it whole, so that is thrown, never papered over.
+void Segment::check_txd(Station& s, const TxdRun& run) {
+  if (!s.broken.empty()) return;
+  const Edges& e = s.drives_edges;
+  const auto index_at = [&](std::uint64_t c) {
+    return static_cast<std::size_t>(
+        std::partition_point(e.begin(), e.end(), [c](const auto& x) { return x.first < c; }) -
+        e.begin());
+  };
+  if (!run.bytes.empty()) {
+    const std::uint64_t frame = std::uint64_t{kUartCharBits} * run.bit_cycles;
+    const std::uint64_t k = (run.start - s.out_start) / frame;
+    if (run.start >= s.out_start && s.out_start + k * frame == run.start &&
+        k + run.bytes.size() <= s.out_bytes.size() &&
+        std::equal(run.bytes.begin(), run.bytes.end(),
+                   s.out_bytes.begin() + static_cast<std::ptrdiff_t>(k)) &&
+        index_at(run.start) == s.confirmed) {
+      s.confirmed = index_at(run.start + run.bytes.size() * frame);
+      return;
+    }
+    s.broken = fmt::format("drove characters from cycle {}", run.start);
+    return;
+  }
+  for (const auto& edge : run.edges) {
+    if (s.confirmed >= e.size() || e[s.confirmed] != edge) {
+      s.broken = fmt::format("drove TxD {} at cycle {}", edge.second ? "high" : "low", edge.first);
+      return;
+    }
+    ++s.confirmed;
+  }
 }
 
 void Segment::hear(std::size_t from, std::uint64_t cycle, bool level) {
-  Station& f = *stations_[from];
-  // An edge of an answer the chips already have whole: only checked (an answer Go_Offline or a
-  // reset cut short would have reached them wrong).
-  const bool had = f.relayed_next < f.relayed.size();
-  if (had && f.relayed[f.relayed_next] != std::pair{cycle, level}) {
-    throw std::logic_error(fmt::format(
-        "segment: {} drove TxD {} at cycle {}, not the answer its chip armed (cut short?)", f.name,
-        level ? "high" : "low", cycle));
-  }
-  if (had) ++f.relayed_next;
-  // The chips have the answer's edges already: only the senders hear them now.
-  const std::vector<std::size_t>& to = had ? senders_ : everyone_;
-  for (const std::size_t k : to) {
+  for (const std::size_t k : everyone_) {
     if (k == from) continue;
     Station& s = *stations_[k];
     if (s.chip) {
@@ -353,6 +452,18 @@ void Segment::decode(std::size_t from, std::uint64_t cycle, bool level) {
     claims_.emplace_back(cycle, from);
   line_rx_.edge(cycle, level);
   if (on_line) on_line(from, cycle, level);
+}
+
+// A good telegram of station `from`: the line's decoder takes its characters whole where it can
+// (UartRx::take), the waveform's observer its edges.
+void Segment::decode_chars(std::size_t from, std::span<const std::uint8_t> bytes,
+                           std::uint64_t start,
+                           std::span<const std::pair<std::uint64_t, bool>> edges) {
+  if (claims_.empty() || claims_.back().second != from) claims_.emplace_back(start, from);
+  line_rx_.take(TxdRun{bytes, start, t_, {}});
+  if (on_line) {
+    for (const auto& [at, level] : edges) on_line(from, at, level);
+  }
 }
 
 // Characters whose stop sample is by `upto` join the open telegram (the driver of its first
@@ -397,6 +508,9 @@ std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> byte
   owned_until_ = end;
   Edges edges;
   uart_encode(bytes, start, t_, edges, fault);
+  // Decoded once for every chip that hears it whole.
+  const bool whole = !reference_ && fault.kind == UartFault::Kind::none;
+  const auto heard = whole ? HeardFrame::make(bytes) : nullptr;
   for (std::size_t k = 0; k < stations_.size(); ++k) {
     Station& s = *stations_[k];
     if (k == from || !s.chip) continue;
@@ -405,10 +519,10 @@ std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> byte
                                          stations_[from]->name, start, s.name, s.chip->cycle()));
     }
     step_station(s, start);
-    if (reference_ || fault.kind != UartFault::Kind::none) {
-      s.chip->drive_rxd_chars(bytes, start, t_, fault);
+    if (whole) {
+      s.chip->hear_telegram(heard, start, t_);
     } else {
-      s.chip->hear_telegram(bytes, start, t_);
+      s.chip->drive_rxd_chars(bytes, start, t_, fault);
     }
     look_at(s);
   }
@@ -416,7 +530,11 @@ std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> byte
     if (k != from)
       stations_[k]->heard.insert(stations_[k]->heard.end(), edges.begin(), edges.end());
   }
-  for (const auto& [cycle, level] : edges) decode(from, cycle, level);
+  if (whole) {
+    decode_chars(from, bytes, start, edges);
+  } else {
+    for (const auto& [cycle, level] : edges) decode(from, cycle, level);
+  }
   return end;
 }
 
@@ -466,7 +584,10 @@ void Segment::round(std::uint64_t cycle) {
   // Where a firmware may not run past a round's end (step_station), its accesses depend on where
   // rounds end: the stop samples of characters heard whole stay ends of rounds, as their events
   // made them on the reference line.
-  if (!busy_.empty() && !reference_) bound = std::min(bound, line_rx_.next_deadline());
+  // So do the edges of the armed answers, as the chips' TxD events made them.
+  if (!busy_.empty() && !reference_)
+    bound = std::min({bound, line_rx_.next_deadline(), next_armed_edge()});
+  if (wake_for_ && wake_next_ < wakes_.size()) bound = std::min(bound, wakes_[wake_next_]);
   bound = std::max(bound, now_ + 1);
   // Telegram level: a chip without an event by `bound` whose firmware sleeps is left where it
   // is (it is given the line's characters ahead of time, as a master gives them).
@@ -491,22 +612,64 @@ void Segment::round(std::uint64_t cycle) {
       look_at(*stations_[i]);
     }
   }
+  const std::uint64_t before = now_;
   now_ = bound;
   // What the chips drove, in the order of its cycles (ties: station order).
   round_.clear();
-  std::sort(drove_.begin(), drove_.end());
-  for (const std::size_t i : drove_) {
-    for (const auto& [at, level] : stations_[i]->txd) round_.push_back({at, i, level});
-    stations_[i]->txd.clear();
+  if (reference_) {
+    std::sort(drove_.begin(), drove_.end());
+    for (const std::size_t i : drove_) {
+      for (const auto& [at, level] : stations_[i]->txd) round_.push_back({at, i, level});
+      stations_[i]->txd.clear();
+    }
+    drove_.clear();
+  } else {
+    relay_armed(before);
   }
-  drove_.clear();
   // Mostly one edge or none: sorted already, and stable_sort would allocate its buffer.
   const auto earlier = [](const Driven& a, const Driven& b) { return a.cycle < b.cycle; };
   if (!std::is_sorted(round_.begin(), round_.end(), earlier))
     std::stable_sort(round_.begin(), round_.end(), earlier);
   for (const Driven& e : round_) relay(e.station, e.cycle, e.level);
+  for (; wake_next_ < wakes_.size() && wakes_[wake_next_] <= now_; ++wake_next_) {
+    if (wake_for_ && *wake_for_ != wake_from_) woken_ = true;
+  }
   close_telegrams(now_);
   line_final_ = now_;
+}
+
+// The armed answers' edges up to now_ into round_. An answer whose first start bit finds its chip's
+// TxD high was withdrawn before it began (Go_Offline, a reset): it never reaches the line.
+void Segment::relay_armed(std::uint64_t before) {
+  std::sort(armed_.begin(), armed_.end());
+  for (const std::size_t i : armed_) {
+    Station& s = *stations_[i];
+    const Edges& e = s.drives_edges;
+    if (s.out_next == 0 && !e.empty() && e[0].first <= now_ && s.chip->cycle() >= e[0].first &&
+        s.chip->cycle() < e[0].first + t_ && s.chip->txd_pin()) {
+      s.out_next = s.confirmed = s.live_next = e.size();
+      s.answer.reset();
+    }
+    for (; s.out_next < e.size() && e[s.out_next].first <= now_; ++s.out_next)
+      round_.push_back({e[s.out_next].first, i, e[s.out_next].second});
+  }
+  // Every later question (others_drive, next_armed_edge) is about cycles after `before`.
+  std::erase_if(armed_, [this, before](std::size_t i) {
+    const Station& s = *stations_[i];
+    return s.out_next == s.drives_edges.size() &&
+           (s.drives_edges.empty() || s.drives_edges.back().first <= before);
+  });
+}
+
+std::uint64_t Segment::next_armed_edge() {
+  std::uint64_t next = UINT64_MAX;
+  for (const std::size_t i : armed_) {
+    Station& s = *stations_[i];
+    const Edges& e = s.drives_edges;
+    while (s.live_next < e.size() && e[s.live_next].first <= now_) ++s.live_next;
+    if (s.live_next < e.size()) next = std::min(next, e[s.live_next].first);
+  }
+  return next;
 }
 
 void Segment::take_line(std::size_t listener, UartRx& rx) {

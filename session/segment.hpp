@@ -73,8 +73,9 @@ class Segment {
 
   // The reference line (on: as before issue 30 item 6): every station stepped in every round and
   // every character and edge given to every chip as it comes. Off (the default): telegram level,
-  // docs/segment.md; the two are proven equal by tests/segment_speed_test.cpp.
-  void use_reference_line(bool on) { reference_ = on; }
+  // docs/segment.md; the two are proven equal by tests/segment_speed_test.cpp. Before the first
+  // chip only (the line watches its chips' TxD differently): throws std::logic_error after.
+  void use_reference_line(bool on);
 
   // `bytes` as back-to-back characters from `start` (>= cycle()) driven by station `from`
   // (`fault` damages one character, as uart_encode does). Every station runs to `start` first.
@@ -129,8 +130,19 @@ class Segment {
   // due_: the chips whose next event is at or before `bound`, in station order.
   void due_by(std::uint64_t bound);
   void due_under(std::size_t k, std::uint64_t bound);
-  // Station i's answer, armed and now starting on the line at `cycle`, to every other chip whole.
-  void relay_answer(std::size_t i, std::uint64_t cycle);
+  // Station i's answer, armed and now starting on the line at `cycle`, to every other chip whole;
+  // the rest of its edges to the senders and the line's decoder at once.
+  // False where it goes edge by edge (the reference line, another rate, no answer armed there).
+  bool relay_answer(std::size_t i, std::uint64_t cycle);
+  // Telegram level: the armed answers' edges up to now_ to the line (a chip's TxD edges are no
+  // events of it: the line takes them from the answer it armed, docs/segment.md); `before`: the
+  // line's time before this round.
+  void relay_armed(std::uint64_t before);
+  // The next edge of an armed answer after now_ (UINT64_MAX: none), a round's end while a
+  // firmware runs, as the chip's TxD events made it on the reference line.
+  [[nodiscard]] std::uint64_t next_armed_edge();
+  // A run of station s's TxD (Chip::on_txd_chars) checked against the answer its chip armed.
+  void check_txd(Station& s, const TxdRun& run);
   // Every chip to cycle(): what its user side did directly on its bus moved it alone.
   void catch_up();
   // An edge station `i` drove (in order, up to its cycle): the line's owner's are heard by all.
@@ -138,6 +150,9 @@ class Segment {
   void hear(std::size_t from, std::uint64_t cycle, bool level);
   // The character decoder of the line (for on_telegram), fed with what the owner drove.
   void decode(std::size_t from, std::uint64_t cycle, bool level);
+  // The same for a good telegram from `start` whose edges are `edges`: its characters whole.
+  void decode_chars(std::size_t from, std::span<const std::uint8_t> bytes, std::uint64_t start,
+                    std::span<const std::pair<std::uint64_t, bool>> edges);
   void close_telegrams(std::uint64_t upto);
   void collide(std::size_t first, std::size_t second, std::uint64_t cycle);
 
@@ -182,6 +197,13 @@ class Segment {
   std::vector<std::size_t> due_;
   std::vector<std::size_t> stepped_;
   std::vector<std::size_t> drove_;
+  // Telegram level: the stations whose armed answer has edges after the line's time (a handful;
+  // those a firmware's access may run into: others_drive).
+  std::vector<std::size_t> armed_;
+  // The start bits of the answer relayed whole that find the line free again (wake_for).
+  std::vector<std::uint64_t> wakes_;
+  std::size_t wake_next_ = 0;
+  std::size_t wake_from_ = 0;
 };
 
 }  // namespace dpc31

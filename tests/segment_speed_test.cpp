@@ -35,10 +35,16 @@ std::string counters_text(const FdlCounters& n) {
 
 // `n` (at least five) slaves of the three profiles with the built-in user side (the fifth one also
 // polls a register in a main loop, so its firmware runs in every round), a master and a scripted
-// station.
+// station. With `watch_txd` each chip's TxD edges are logged (Chip::on_txd: every edge an event of
+// the chip); without, the chips keep their answers as characters on the telegram-level line, and
+// what they drove shows in the line's telegrams (logged in both) and the snapshots.
 struct Bed {
-  Bed(bool reference, std::uint32_t baud, std::size_t n) : seg(baud) {
+  Bed(bool reference, std::uint32_t baud, std::size_t n, bool watch_txd = true) : seg(baud) {
     seg.use_reference_line(reference);
+    seg.on_telegram = [this](const LineTelegram& t) {
+      line.push_back(
+          fmt::format("{} {}..{} {}", seg.name(t.from), t.start, t.end, fmt::join(t.bytes, " ")));
+    };
     log.reserve(n);  // the observers below keep pointers into it
     const Profile profiles[] = {Profile::spc3, Profile::vpc3plus, Profile::dpc31};
     for (std::size_t i = 0; i < n; ++i) {
@@ -70,8 +76,10 @@ struct Bed {
       Chip* c = &chip;
       chip.on_irq_change(
           [out](std::uint64_t cy, bool on) { out->push_back(fmt::format("{} irq {}", cy, on)); });
-      chip.on_txd(
-          [out](std::uint64_t cy, bool l) { out->push_back(fmt::format("{} txd {}", cy, l)); });
+      if (watch_txd) {
+        chip.on_txd(
+            [out](std::uint64_t cy, bool l) { out->push_back(fmt::format("{} txd {}", cy, l)); });
+      }
       chip.on_bus_access([out](std::uint64_t cy, const BusAccess& a) {
         out->push_back(
             fmt::format("{} bus {} {:x} {:x}", cy, a.write, a.addr, a.write ? a.data : 0));
@@ -92,6 +100,7 @@ struct Bed {
   std::vector<std::unique_ptr<Responder>> users;
   std::vector<std::size_t> chips;
   std::vector<std::vector<std::string>> log;
+  std::vector<std::string> line;
   std::size_t master_station = 0;
   std::size_t other = 0;
   std::unique_ptr<DpMaster> master;
@@ -99,6 +108,7 @@ struct Bed {
 
 // Both beds at the same cycle, every chip's snapshot and everything it showed so far the same.
 void expect_same(Bed& fast, Bed& ref, const std::string& where) {
+  ASSERT_EQ(fast.line, ref.line) << where << ": the line's telegrams";
   ASSERT_EQ(fast.seg.cycle(), ref.seg.cycle()) << where;
   for (std::size_t i = 0; i < fast.chips.size(); ++i) {
     const std::vector<std::string>& a = fast.log[i];
@@ -140,9 +150,9 @@ void foreign(Bed& fast, Bed& ref, const std::vector<std::uint8_t>& bytes, std::u
   }
 }
 
-void run_both_ways(std::uint32_t baud, std::size_t n = 5) {
-  Bed fast(false, baud, n);
-  Bed ref(true, baud, n);
+void run_both_ways(std::uint32_t baud, std::size_t n = 5, bool watch_txd = true) {
+  Bed fast(false, baud, n, watch_txd);
+  Bed ref(true, baud, n, watch_txd);
   for (Bed* b : {&fast, &ref}) ASSERT_TRUE(b->master->startup_all());
   ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "after the start-up"));
   for (int round = 0; round < 2; ++round) {
@@ -208,6 +218,16 @@ TEST(SegmentSpeed, TheTelegramLevelLineShowsWhatTheReferenceLineShowsAt12M) {
 // levels deep, chips due in both halves of it in one round.
 TEST(SegmentSpeed, SeventeenSlavesShowWhatTheReferenceLineShowsAt12M) {
   run_both_ways(12'000'000, 17);
+}
+
+// Nobody watching the chips' TxD: their answers stay characters, and the line relays them from the
+// answers the chips armed (Chip::on_answer), checked against Chip::on_txd_chars.
+TEST(SegmentSpeed, AnswersKeptAsCharactersShowWhatTheReferenceLineShowsAt1M5) {
+  run_both_ways(1'500'000, 5, false);
+}
+
+TEST(SegmentSpeed, AnswersKeptAsCharactersShowWhatTheReferenceLineShowsAt12M) {
+  run_both_ways(12'000'000, 5, false);
 }
 
 }  // namespace

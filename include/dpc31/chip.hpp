@@ -14,6 +14,7 @@
 #include <string_view>
 #include <vector>
 
+#include "dpc31/fdl.hpp"
 #include "dpc31/fdl_counters.hpp"
 #include "dpc31/log.hpp"
 #include "dpc31/reg_fields.hpp"
@@ -114,6 +115,17 @@ struct ChipProbe {
   std::uint8_t diag_buffer_sm;
 };
 
+// A telegram's characters and what a MAC's frame assembler makes of them from the first one on:
+// computed once (make) and heard by many chips (Chip::hear_telegram, a segment's stations).
+struct HeardFrame {
+  std::vector<std::uint8_t> bytes;
+  // The character of the assembler's verdict (complete, error), or the last one.
+  std::size_t verdict = 0;
+  fdl::Assembler frame;  // after bytes[0..verdict]
+  fdl::Decoded decoded;  // fdl::decode of the frame, when complete
+  static std::shared_ptr<const HeardFrame> make(std::span<const std::uint8_t> bytes);
+};
+
 struct ChipCore;
 struct ChipAccess;  // the emulator's harness interface (emu/harness.hpp), not part of the API
 
@@ -212,6 +224,10 @@ class Chip {
   // observers are those of drive_rxd_chars at every cycle (fewer on_state_change calls), and a
   // snapshot is the same. Returns the end of the last stop bit.
   std::uint64_t hear_telegram(std::span<const std::uint8_t> bytes, std::uint64_t start,
+                              std::uint32_t bit_cycles);
+  // The same for a telegram decoded once for many chips (HeardFrame::make, not empty): each chip
+  // keeps a reference and runs neither the assembler nor the decoder over it again.
+  std::uint64_t hear_telegram(const std::shared_ptr<const HeardFrame>& frame, std::uint64_t start,
                               std::uint32_t bit_cycles);
   // Observers are lists: each on_* call adds one; an empty function removes all of that kind.
   // TxD edges, reported when time reaches them: each edge is an event of the chip.
