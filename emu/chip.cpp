@@ -94,7 +94,8 @@ std::shared_ptr<const HeardFrame> HeardFrame::make(std::span<const std::uint8_t>
   auto h = std::make_shared<HeardFrame>();
   h->bytes.assign(bytes.begin(), bytes.end());
   if (bytes.empty()) return h;  // nobody hears it whole (Mac::can_hear)
-  h->verdict = h->frame.push_block(bytes) - 1;  // the byte of the assembler's verdict (or the last)
+  // The byte of the assembler's verdict, or the last one.
+  h->verdict = h->frame.push_block(bytes) - 1;
   if (h->frame.status() == fdl::Assembler::Status::complete)
     h->decoded = fdl::decode(h->frame.bytes());
   return h;
