@@ -198,11 +198,16 @@ class Master:
         """Writes one request, returns the answer telegram (bytes) or None after the timeout.
         `searching` (find_slave): bytes before a start delimiter are dropped, an answer begun by
         the timeout is awaited for the answer timeout, and bytes after the first whole telegram
-        (late answers to earlier requests) are left to find_slave's drain."""
+        (late answers to earlier requests) are left to find_slave's drain. Otherwise a late
+        FDL_Status answer (to a request of find_slave's still queued ahead of ours) is dropped and
+        the wait for ours starts anew (up to --search longer in all)."""
         self.flush_input()
         os.write(self.fd, req)
         buf = b""
-        deadline = time.monotonic() + (timeout or self.timeout)
+        wait = timeout or self.timeout
+        deadline = time.monotonic() + wait
+        # Late answers may extend the wait (below), up to the search's budget: a guard only.
+        limit = deadline + self.search
         extended = False
         while True:
             if searching:  # the tail of a late answer that the flush cut is not ours either
@@ -214,7 +219,11 @@ class Master:
                 if buf[0] == SD1 and buf[3] == 0x00 and not (req[0] == SD1 and req[3] == 0x49):
                     # An FDL_Status answer to a request that is none: a late answer to one of
                     # find_slave's, later than its drain on a loaded host. Not ours: dropped.
+                    # It shows the line still working off requests written before ours (a
+                    # bridge slower than the bus queues them), so ours waits anew from here:
+                    # its fate is known only after theirs (issue 35).
                     buf = buf[n:]
+                    deadline = min(limit, max(deadline, time.monotonic() + wait))
                     continue
                 check(len(buf) == n, f"answer {hexs(buf)}: {len(buf) - n} bytes too many")
                 return buf

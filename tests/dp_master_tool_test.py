@@ -1,0 +1,104 @@
+#!/usr/bin/env python3
+"""tools/dp_master.py's Master against a scripted slow line (issue 35), no bridge: a TCP peer on
+the loopback (the Master's socket:// door) that works off the requests one by one, in order, each
+`WORK` seconds after the one before, as a bridge slower than its bus does (the ASan build beside
+two CPU hogs: `Bridge.dpv1_plugin_read_write` lost station 5 three times, 178 FDL_Status requests
+of the search still queued at the end).
+
+Usage: dp_master_tool_test.py CASE. Exit 0 when the case holds, 1 with its failure."""
+
+import os
+import queue
+import socket
+import sys
+import threading
+import time
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tools"))
+from dp_master import SD1, SD2, Fail, Master, check, frame_length, hexs, sd1, sd2  # noqa: E402
+
+MASTER, SLAVE = 2, 5
+TIMEOUT = 1.0  # the master's answer timeout (--timeout)
+STALL = 1.5    # the first Data_Exchange's answer comes this late: the request is taken as lost
+WORK = 0.1     # then every request takes this long: 5 times the search's period at 19200 baud
+
+
+class SlowLine:
+    """Answers FDL_Status with FDL_Status OK (SD1, FC 00h) and a Data_Exchange (SRD, SD2) with
+    the inputs [n], n counting the Data_Exchanges; strictly in the order written."""
+
+    def __init__(self):
+        self.server = socket.create_server(("127.0.0.1", 0))
+        self.url = f"socket://127.0.0.1:{self.server.getsockname()[1]}"
+        self.requests = queue.Queue()
+        self.srd_fcs = []  # the FC of each Data_Exchange request, in order
+        self.status_requests = 0
+        self.conn = None
+        threading.Thread(target=self.read, daemon=True).start()
+        threading.Thread(target=self.work, daemon=True).start()
+
+    def read(self):
+        self.conn, _ = self.server.accept()
+        buf = b""
+        while chunk := self.conn.recv(512):
+            buf += chunk
+            while (n := frame_length(buf)) is not None and len(buf) >= n:
+                self.requests.put(buf[:n])
+                buf = buf[n:]
+        self.requests.put(None)
+
+    def work(self):
+        while (req := self.requests.get()) is not None:
+            if req[0] == SD1 and req[3] == 0x49:
+                time.sleep(WORK)
+                self.status_requests += 1
+                self.conn.sendall(sd1(MASTER, SLAVE, 0x00))
+            elif req[0] == SD2:
+                self.srd_fcs.append(req[6])
+                time.sleep(STALL if len(self.srd_fcs) == 1 else WORK)
+                self.conn.sendall(sd2(MASTER, SLAVE, 0x08, [len(self.srd_fcs)]))
+
+
+def slow_line_search_drained():
+    """A Data_Exchange unanswered within --timeout is lost: FDL_Status until answered, then the
+    request once more (tools/dp_master.py, Master.srd). The search writes FDL_Status every 300 bit
+    times + 3 ms (18.6 ms at 19200 baud) while the line works one off every 0.1 s, so the request
+    sent again waits behind about (STALL - TIMEOUT) / 18.6 ms = 27 of them, 2.7 s, longer than
+    --timeout. Each late FDL_Status answer shows the line working off what was written before:
+    the wait starts anew, and the answer that comes is the second Data_Exchange's, with one lost
+    request. Before the fix it was lost three times and srd gave None."""
+    line = SlowLine()
+    m = Master(line.url, 19200, TIMEOUT, MASTER, SLAVE, search=20.0)
+    try:
+        a = m.srd([0x05])
+        # The late answer to the first request ended the search; the second one's is ours.
+        check(a == sd2(MASTER, SLAVE, 0x08, [2]), f"answer {hexs(a) if a else None}, expected "
+              f"the second Data_Exchange's {hexs(sd2(MASTER, SLAVE, 0x08, [2]))}")
+        check(m.lost == 1, f"{m.lost} lost requests, expected 1")
+        # EN 50170 FCB/FCV: the first SRD of a new master has FCV 0 (FC 4Dh); the first after
+        # FDL_Status restarts the sequence with FCB 1, FCV 1 (FC 7Dh).
+        check(line.srd_fcs == [0x4D, 0x7D], f"Data_Exchange FCs {hexs(line.srd_fcs)}")
+        check(line.status_requests >= 10, f"{line.status_requests} FDL_Status requests: the "
+              "line was not slower than the search")
+    finally:
+        m.close()
+
+
+CASES = {"slow_line_search_drained": slow_line_search_drained}
+
+
+def main():
+    if len(sys.argv) != 2 or sys.argv[1] not in CASES:
+        print(f"usage: {sys.argv[0]} CASE ({', '.join(CASES)})", file=sys.stderr)
+        return 2
+    try:
+        CASES[sys.argv[1]]()
+    except Fail as e:
+        print(f"FAIL {sys.argv[1]}: {e}", file=sys.stderr)
+        return 1
+    print(f"ok {sys.argv[1]}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
