@@ -311,5 +311,38 @@ TEST(SegmentSpeed, QuietVerdictsOfSeventeenSlavesShowWhatTheReferenceLineShowsAt
   run_both_ways(12'000'000, 17, false, 0);
 }
 
+// Chip::line_deadline on a started slave at 1.5 Mbaud hearing telegrams whole: the verdict of a
+// frame is at the stop sample of its last character (docs/timing.md "Serial line": a request is
+// acted on at the stop-bit sample of its last character, T/2 into the stop bit, bit 10 of 11).
+// It is an event of the line only where it shows something: a request to the chip, or any frame
+// while an on_telegram observer watches.
+TEST(SegmentSpeed, AVerdictThatShowsNothingIsNoEventOfTheLine) {
+  Bed bed(false, 1'500'000, 5, false, 0);
+  ASSERT_TRUE(bed.master->startup_all());
+  const std::uint64_t t = bed.seg.bit_cycles();
+  ASSERT_EQ(t, 32u);  // 48 MHz / 1.5 Mbaud
+  using fdl::Function;
+  const auto verdict_of = [&](std::uint8_t da) {
+    const auto bytes = fdl::encode(
+        fdl::make_frame(da, 30, fdl::make_request_fc(Function::FDL_Status, false, false)));
+    const std::uint64_t start = bed.seg.cycle() + 40 * t;
+    bed.seg.send(bed.other, bytes, start);
+    const Chip& c = bed.seg.chip(bed.chips[0]);  // slave 5, at `start` now
+    EXPECT_EQ(c.cycle(), start);
+    const std::uint64_t verdict = start + (11 * (bytes.size() - 1) + 10) * t + t / 2;
+    EXPECT_EQ(c.next_deadline(), verdict);
+    const std::uint64_t line = c.line_deadline();
+    bed.seg.run_until(verdict + 400 * t);
+    return std::pair{verdict, line};
+  };
+  const auto [foreign_at, foreign_line] = verdict_of(40);
+  EXPECT_GT(foreign_line, foreign_at) << "a request to station 40 shows nothing in slave 5";
+  const auto [own_at, own_line] = verdict_of(5);
+  EXPECT_EQ(own_line, own_at) << "a request to slave 5 is served there";
+  bed.watch_telegrams(0);
+  const auto [watched_at, watched_line] = verdict_of(40);
+  EXPECT_EQ(watched_line, watched_at) << "its on_telegram observer is told of it there";
+}
+
 }  // namespace
 }  // namespace dpc31
