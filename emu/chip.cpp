@@ -137,6 +137,7 @@ ChipProbe Chip::probe() const {
           c.buffers.diag_sm()};
 }
 std::uint64_t Chip::next_deadline() const { return core_->next_event(); }
+std::uint64_t Chip::line_deadline() const { return core_->line_event(); }
 std::uint64_t Chip::watchdog_due() const { return core_->watchdog.due(); }
 std::uint64_t Chip::eoi_inactive_until() const { return core_->irq.inactive_until(); }
 

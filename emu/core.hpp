@@ -110,11 +110,13 @@ struct ChipCore {
   bool advance_to(std::uint64_t end, Stop stop_at);
   // Event engine: the earliest deadline (the per-cycle engine: the next clock).
   [[nodiscard]] std::uint64_t next_event() const;
+  // next_event() without a quiet verdict of a telegram heard whole (Chip::line_deadline).
+  [[nodiscard]] std::uint64_t line_event() const;
 
  private:
   bool advance_events(std::uint64_t end, Stop stop_at);
   bool advance_clocks(std::uint64_t end, Stop stop_at);
-  [[nodiscard]] std::uint64_t next_event_but_user_timer() const;
+  [[nodiscard]] std::uint64_t next_event_but_user_timer(bool for_line = false) const;
   void process_events();
   template <bool kPerCycle>
   void run_due();

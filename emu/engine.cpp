@@ -39,11 +39,16 @@ std::uint64_t ChipCore::next_event() const {
   return std::min(mode.user_timer_at(), next_event_but_user_timer());
 }
 
-std::uint64_t ChipCore::next_event_but_user_timer() const {
+std::uint64_t ChipCore::line_event() const {
+  if (clock.engine == Engine::per_cycle) return clock.now + 1;
+  return std::min(mode.user_timer_at(), next_event_but_user_timer(true));
+}
+
+std::uint64_t ChipCore::next_event_but_user_timer(bool for_line) const {
   // The end of the EOI inactive time is an event: X/INT may become active there.
   const std::uint64_t eoi_end = irq.inactive_until();
-  return std::min(
-      {watchdog.due(), eoi_end > clock.now ? eoi_end : kNever, mac.deadline(), requests.due()});
+  return std::min({watchdog.due(), eoi_end > clock.now ? eoi_end : kNever,
+                   for_line ? mac.line_deadline() : mac.deadline(), requests.due()});
 }
 
 // Everything due at `now`, in the order of docs/timing.md.

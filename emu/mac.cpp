@@ -145,6 +145,37 @@ void Mac::stop() {
 }
 
 std::uint64_t Mac::deadline() const {
+  const std::uint64_t t = deadline_but_heard();
+  return s_.heard.active ? std::min(t, s_.heard.due()) : t;
+}
+
+std::uint64_t Mac::line_deadline() const {
+  const std::uint64_t t = deadline_but_heard();
+  return s_.heard.active && !heard_quiet() ? std::min(t, s_.heard.due()) : t;
+}
+
+// take_heard's paths, decided ahead from what they read (on_frame's state of the DP state machine
+// and the watchdog: only an event changes it, and each event is before the due cycle or in the
+// deadline the line sees). Observers of telegrams and of the state would be called at the due
+// cycle; an answer on TxD is handed to its observers at every event.
+bool Mac::heard_quiet() const {
+  const HeardTelegram& h = s_.heard;
+  if (sig_.telegram || sig_.state || s_.tx_end != kNever) return false;
+  if (h.kind != HeardTelegram::Kind::frame) return true;  // no_sync counted; the receiver set
+  const std::uint64_t last = h.stop_sample(h.tel->bytes.size() - 1);
+  const fdl::Assembler::Status st = h.tel->frame.status();
+  if (h.effect_at != last || st == fdl::Assembler::Status::need_more) return false;  // characters
+  if (st == fdl::Assembler::Status::error || h.tel->decoded.error != fdl::Error::none) return true;
+  const fdl::Frame& f = h.tel->decoded.frame;
+  if (!dp_.started()) return true;  // counted offline
+  const bool carries_data = f.sd == fdl::SD1 || f.sd == fdl::SD2 || f.sd == fdl::SD3;
+  if (!carries_data) return true;                               // a token, a short ack
+  if (watchdog_.state() == WdState::Baud_Search) return false;  // the rate found
+  if (!fdl::is_request(f.fc)) return true;                      // an answer
+  return f.da != dp_.station() && f.da != fdl::kBroadcast;      // foreign_address counted
+}
+
+std::uint64_t Mac::deadline_but_heard() const {
   std::uint64_t t =
       std::min({s_.rx.next_deadline(), s_.frame_timeout, s_.search_deadline, s_.tx_end});
   // Single TxD bits are events only for someone watching them one by one, and the next start
@@ -164,7 +195,6 @@ std::uint64_t Mac::deadline() const {
     const std::size_t i = a.taken < a.start ? 0 : a.char_at(a.taken) + 1;
     if (i < a.bytes.size()) t = std::min(t, a.char_start(i));
   }
-  if (s_.heard.active) t = std::min(t, s_.heard.due());
   return t;
 }
 

@@ -196,6 +196,9 @@ class Mac {
   void process();
   void clock();
   [[nodiscard]] std::uint64_t deadline() const;  // event engine: the MAC's next deadline
+  // deadline() without the due cycle of a telegram heard whole that shows nothing outside the
+  // chip there (heard_quiet): Chip::line_deadline, docs/segment.md "Verdicts that show nothing".
+  [[nodiscard]] std::uint64_t line_deadline() const;
 
  private:
   friend struct BlockAccess;
@@ -217,7 +220,11 @@ class Mac {
   // `decoded`: fdl::decode of the complete frame, known already (a telegram heard whole).
   void frame_ended(fdl::Assembler::Status st, const UartChar& last,
                    const fdl::Decoded* decoded = nullptr);
-  void take_heard();                      // the heard telegram's effect or its end is due
+  void take_heard();  // the heard telegram's effect or its end is due
+  // Whether take_heard at the heard telegram's due cycle changes nothing but counters and the
+  // receiver's and the framing's state: no telegram, answer, interrupt, state or log line.
+  [[nodiscard]] bool heard_quiet() const;
+  [[nodiscard]] std::uint64_t deadline_but_heard() const;
   void drop_heard_rxd(std::uint64_t at);  // the queue as drive_rxd_char left it at cycle `at`
   void on_frame(const fdl::Frame& f, const UartChar& last);
   void send(const fdl::Frame& f, std::uint64_t request_end);

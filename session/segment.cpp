@@ -138,7 +138,11 @@ void Segment::set_firmware(std::size_t i, Cpu::Program program) {
 }
 
 void Segment::look_at(Station& s) {
-  std::uint64_t next = s.chip->next_deadline();
+  const bool busy = s.cpu && s.cpu->busy();
+  // A verdict that shows nothing outside the chip is no event of the line's (docs/segment.md,
+  // "Verdicts that show nothing"): the chip takes it inside its next step. A running firmware is
+  // stepped in every round anyway, to the same ends as on the reference line.
+  std::uint64_t next = reference_ || busy ? s.chip->next_deadline() : s.chip->line_deadline();
   if (s.out_next < s.drives_edges.size()) next = std::min(next, s.drives_edges[s.out_next].first);
   set_next(s.index, next);
   s.looked = s.chip->cycle();
@@ -151,7 +155,6 @@ void Segment::look_at(Station& s) {
     throw std::logic_error(fmt::format("segment: {} {}, not the answer its chip armed (cut short?)",
                                        s.name, s.broken));
   }
-  const bool busy = s.cpu && s.cpu->busy();
   if (busy != s.busy) {
     s.busy = busy;
     const auto at = std::lower_bound(busy_.begin(), busy_.end(), s.index);
@@ -213,8 +216,9 @@ bool Segment::is_chip(std::size_t i) const { return stations_.at(i)->chip != nul
 Chip& Segment::chip(std::size_t i) {
   Station& s = *stations_.at(i);
   if (!s.chip) throw std::invalid_argument("segment: station " + s.name + " has no chip");
-  // Left alone by the line, it has no event before now_ and its firmware sleeps: stepping it here
-  // changes nothing but its cycle.
+  // Left alone by the line, it has no event the line sees before now_ and its firmware sleeps:
+  // stepping it here changes nothing but its cycle and what the verdicts it takes on the way
+  // (Chip::line_deadline) count, as they would have by now on the reference line.
   if (s.chip->cycle() < now_) {
     const Scoped at(hard_end_, now_);  // its firmware does not run past the line's time
     step_station(s, now_);

@@ -38,8 +38,13 @@ std::string counters_text(const FdlCounters& n) {
 // station. With `watch_txd` each chip's TxD edges are logged (Chip::on_txd: every edge an event of
 // the chip); without, the chips keep their answers as characters on the telegram-level line, and
 // what they drove shows in the line's telegrams (logged in both) and the snapshots.
+// Only the first `watched` chips get the observers (the others show what they did in their
+// snapshots and counters only, so their verdicts that show nothing are no events of the line:
+// Chip::line_deadline).
 struct Bed {
-  Bed(bool reference, std::uint32_t baud, std::size_t n, bool watch_txd = true) : seg(baud) {
+  Bed(bool reference, std::uint32_t baud, std::size_t n, bool watch_txd = true,
+      std::size_t watched = SIZE_MAX)
+      : seg(baud) {
     seg.use_reference_line(reference);
     seg.on_telegram = [this](const LineTelegram& t) {
       line.push_back(
@@ -72,8 +77,8 @@ struct Bed {
       } else {
         seg.set_firmware(k, [r](BusPort& b) { r->isr(b); });
       }
+      if (i >= watched) continue;
       std::vector<std::string>* out = &log.back();
-      Chip* c = &chip;
       chip.on_irq_change(
           [out](std::uint64_t cy, bool on) { out->push_back(fmt::format("{} irq {}", cy, on)); });
       if (watch_txd) {
@@ -84,16 +89,22 @@ struct Bed {
         out->push_back(
             fmt::format("{} bus {} {:x} {:x}", cy, a.write, a.addr, a.write ? a.data : 0));
       });
-      chip.on_telegram([out, c](const Telegram& t) {
-        out->push_back(
-            fmt::format("{} tel {} {}..{} {} | {} dp {} wd {}", c->cycle(), t.from_chip, t.start,
-                        t.end, fmt::join(t.bytes, " "), counters_text(c->fdl_counters()),
-                        static_cast<int>(c->dp_state()), static_cast<int>(c->wd_state())));
-      });
+      watch_telegrams(i);
     }
     master_station = seg.add_sender("master 2");
     other = seg.add_sender("station 30");
     master = std::make_unique<DpMaster>(seg, master_station, MasterConfig{2, baud}, slaves);
+  }
+  // Every telegram chip i takes, with its counters and state then (added through chip(i)).
+  void watch_telegrams(std::size_t i) {
+    std::vector<std::string>* out = &log[i];
+    Chip* c = &seg.chip(chips[i]);
+    c->on_telegram([out, c](const Telegram& t) {
+      out->push_back(fmt::format("{} tel {} {}..{} {} | {} dp {} wd {}", c->cycle(), t.from_chip,
+                                 t.start, t.end, fmt::join(t.bytes, " "),
+                                 counters_text(c->fdl_counters()), static_cast<int>(c->dp_state()),
+                                 static_cast<int>(c->wd_state())));
+    });
   }
   Segment seg;
   std::vector<SlaveConfig> slaves;
@@ -122,6 +133,8 @@ void expect_same(Bed& fast, Bed& ref, const std::string& where) {
     const Chip& fc = fast.seg.chip(fast.chips[i]);
     const Chip& rc = ref.seg.chip(ref.chips[i]);
     ASSERT_EQ(fc.cycle(), rc.cycle()) << where << ", slave " << i;
+    ASSERT_EQ(counters_text(fc.fdl_counters()), counters_text(rc.fdl_counters()))
+        << where << ", slave " << i;
     const std::vector<std::uint8_t> sa = fc.save_state();
     const std::vector<std::uint8_t> sb = rc.save_state();
     std::size_t d = 0;
@@ -150,9 +163,61 @@ void foreign(Bed& fast, Bed& ref, const std::vector<std::uint8_t>& bytes, std::u
   }
 }
 
-void run_both_ways(std::uint32_t baud, std::size_t n = 5, bool watch_txd = true) {
-  Bed fast(false, baud, n, watch_txd);
-  Bed ref(true, baud, n, watch_txd);
+// A run of 24 foreign telegrams back to back after TSYN (requests to absent stations, tokens,
+// answers, short acknowledges, a bad FCS), the line looked at inside some of them; at the
+// twelfth chip 3 gets an on_telegram observer through chip(i); then slave 8 (chip 3) addressed.
+void foreign_run(Bed& fast, Bed& ref) {
+  const std::uint64_t t = fast.seg.bit_cycles();
+  using fdl::Function;
+  std::uint64_t at = fast.seg.cycle() + 40 * t;
+  for (std::size_t k = 0; k < 24; ++k) {
+    std::vector<std::uint8_t> bytes;
+    switch (k % 5) {
+      case 0:
+        bytes =
+            fdl::encode(fdl::make_frame(static_cast<std::uint8_t>(40 + k), 30,
+                                        fdl::make_request_fc(Function::FDL_Status, false, false)));
+        break;
+      case 1:
+        bytes = {fdl::SD4, 9, 30};
+        break;
+      case 2:
+        bytes = fdl::encode(
+            fdl::make_frame(30, 41, fdl::make_response_fc(fdl::Response::OK), {1, 2, 3}));
+        break;
+      case 3:
+        bytes = {fdl::SC};
+        break;
+      default:
+        bytes = fdl::encode(
+            fdl::make_frame(43, 30, fdl::make_request_fc(Function::SRD_high, true, true), {7, 7}));
+        bytes[bytes.size() - 2] ^= 1;  // a bad FCS
+        break;
+    }
+    std::uint64_t end = 0;
+    for (Bed* b : {&fast, &ref}) end = b->seg.send(b->other, bytes, at);
+    if (k % 7 == 3) {
+      for (Bed* b : {&fast, &ref}) b->seg.run_until(end - t / 2);
+      ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, fmt::format("foreign run, telegram {}", k)));
+    }
+    if (k == 12) {
+      for (Bed* b : {&fast, &ref}) b->watch_telegrams(3);
+    }
+    at = end + 40 * t;
+  }
+  for (Bed* b : {&fast, &ref}) b->seg.run_until(at);
+  ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "after the foreign run"));
+  for (Bed* b : {&fast, &ref}) {
+    b->master->select(3);
+    b->master->data_exchange({5, 6, 7, 8});
+  }
+  ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "slave 8 after the foreign run"));
+}
+
+void run_both_ways(std::uint32_t baud, std::size_t n = 5, bool watch_txd = true,
+                   std::size_t watched = SIZE_MAX) {
+  Bed fast(false, baud, n, watch_txd, watched);
+  Bed ref(true, baud, n, watch_txd, watched);
   for (Bed* b : {&fast, &ref}) ASSERT_TRUE(b->master->startup_all());
   ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "after the start-up"));
   for (int round = 0; round < 2; ++round) {
@@ -165,6 +230,7 @@ void run_both_ways(std::uint32_t baud, std::size_t n = 5, bool watch_txd = true)
           expect_same(fast, ref, fmt::format("round {}, Data_Exchange with slave {}", round, i)));
     }
   }
+  ASSERT_NO_FATAL_FAILURE(foreign_run(fast, ref));
   const std::uint64_t t = fast.seg.bit_cycles();
   using fdl::Function;
   const auto req = [](std::uint8_t da, Function f) {
@@ -228,6 +294,54 @@ TEST(SegmentSpeed, AnswersKeptAsCharactersShowWhatTheReferenceLineShowsAt1M5) {
 
 TEST(SegmentSpeed, AnswersKeptAsCharactersShowWhatTheReferenceLineShowsAt12M) {
   run_both_ways(12'000'000, 5, false);
+}
+
+// Only slaves 5 and 6 watched: the verdicts of the others that show nothing (foreign requests,
+// tokens, answers, a bad FCS) are no events of the line (Chip::line_deadline); slave 9's firmware
+// runs in every round.
+TEST(SegmentSpeed, QuietVerdictsShowWhatTheReferenceLineShowsAt1M5) {
+  run_both_ways(1'500'000, 5, false, 2);
+}
+
+TEST(SegmentSpeed, QuietVerdictsShowWhatTheReferenceLineShowsAt12M) {
+  run_both_ways(12'000'000, 5, false, 2);
+}
+
+TEST(SegmentSpeed, QuietVerdictsOfSeventeenSlavesShowWhatTheReferenceLineShowsAt12M) {
+  run_both_ways(12'000'000, 17, false, 0);
+}
+
+// Chip::line_deadline on a started slave at 1.5 Mbaud hearing telegrams whole: the verdict of a
+// frame is at the stop sample of its last character (docs/timing.md "Serial line": a request is
+// acted on at the stop-bit sample of its last character, T/2 into the stop bit, bit 10 of 11).
+// It is an event of the line only where it shows something: a request to the chip, or any frame
+// while an on_telegram observer watches.
+TEST(SegmentSpeed, AVerdictThatShowsNothingIsNoEventOfTheLine) {
+  Bed bed(false, 1'500'000, 5, false, 0);
+  ASSERT_TRUE(bed.master->startup_all());
+  const std::uint64_t t = bed.seg.bit_cycles();
+  ASSERT_EQ(t, 32u);  // 48 MHz / 1.5 Mbaud
+  using fdl::Function;
+  const auto verdict_of = [&](std::uint8_t da) {
+    const auto bytes = fdl::encode(
+        fdl::make_frame(da, 30, fdl::make_request_fc(Function::FDL_Status, false, false)));
+    const std::uint64_t start = bed.seg.cycle() + 40 * t;
+    bed.seg.send(bed.other, bytes, start);
+    const Chip& c = bed.seg.chip(bed.chips[0]);  // slave 5, at `start` now
+    EXPECT_EQ(c.cycle(), start);
+    const std::uint64_t verdict = start + (11 * (bytes.size() - 1) + 10) * t + t / 2;
+    EXPECT_EQ(c.next_deadline(), verdict);
+    const std::uint64_t line = c.line_deadline();
+    bed.seg.run_until(verdict + 400 * t);
+    return std::pair{verdict, line};
+  };
+  const auto [foreign_at, foreign_line] = verdict_of(40);
+  EXPECT_GT(foreign_line, foreign_at) << "a request to station 40 shows nothing in slave 5";
+  const auto [own_at, own_line] = verdict_of(5);
+  EXPECT_EQ(own_line, own_at) << "a request to slave 5 is served there";
+  bed.watch_telegrams(0);
+  const auto [watched_at, watched_line] = verdict_of(40);
+  EXPECT_EQ(watched_line, watched_at) << "its on_telegram observer is told of it there";
 }
 
 }  // namespace

@@ -314,6 +314,12 @@ class Chip {
   // The next cycle at which something may happen inside the chip without a bus access or a new
   // RxD edge: a timer, the serial receiver or transmitter (the per-cycle engine: the next clock).
   [[nodiscard]] std::uint64_t next_deadline() const;
+  // next_deadline() without the verdict of a telegram heard whole (hear_telegram) where it shows
+  // nothing outside the chip: a frame for another station, a token, an answer, a broken frame, a
+  // start without TSYN, counted only, while no on_telegram or on_state_change observer watches and
+  // no answer is on TxD (docs/segment.md, "Verdicts that show nothing"). The chip takes such a
+  // verdict inside its next step, at its own cycle: whoever steps it needs no stop there.
+  [[nodiscard]] std::uint64_t line_deadline() const;
   // The cycle the running watchdog (Baud_Control or DP_Control) expires; UINT64_MAX: none.
   [[nodiscard]] std::uint64_t watchdog_due() const;
   // The cycle the EOI inactive time ends (X/INT may become active again from then on); at or
