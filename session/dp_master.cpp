@@ -339,7 +339,7 @@ bool DpMaster::wait_token(std::uint64_t timeout) {
 
 void DpMaster::look() {
   if (seg_) {
-    seg_->take_line(station_, rx_.rx());
+    seg_->take_line(station_, [this](const TxdRun& r) { rx_.take(r); });
   } else {
     chip_->take_txd();
   }

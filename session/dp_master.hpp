@@ -155,9 +155,6 @@ class TxdReceiver {
     if (!early_.empty()) return early_.front().start;
     return run_.empty() ? rx_.busy_from() : run_start_;
   }
-  // The receiver itself, for a line that feeds it directly (Segment::take_line).
-  UartRx& rx() { return rx_; }
-  [[nodiscard]] const UartRx& rx() const { return rx_; }
 
  private:
   [[nodiscard]] std::uint64_t frame_cycles() const {
