@@ -476,8 +476,8 @@ void Segment::decode(std::size_t from, std::uint64_t cycle, bool level) {
   if (on_line) on_line(from, cycle, level);
 }
 
-// A good telegram of station `from`: the line's decoder takes its characters whole where it can
-// (UartRx::take), the waveform's observer its edges.
+// A good telegram of station `from`: the line's decoder keeps its characters whole until they are
+// due (TxdReceiver::take), the waveform's observer gets its edges.
 void Segment::decode_chars(std::size_t from, std::span<const std::uint8_t> bytes,
                            std::uint64_t start,
                            std::span<const std::pair<std::uint64_t, bool>> edges) {
@@ -494,26 +494,30 @@ void Segment::decode_chars(std::size_t from, std::span<const std::uint8_t> bytes
 void Segment::close_telegrams(std::uint64_t upto) {
   chars_.clear();
   line_rx_.advance(std::min(upto, now_), chars_);
-  for (const UartChar& c : chars_) {
-    if (open_ && c.start > open_->end) {
-      if (on_telegram) on_telegram(*open_);
-      open_.reset();
-    }
-    if (!open_) {
-      std::size_t from = 0;
-      for (const auto& [at, who] : claims_) {
-        if (at <= c.start) from = who;
-      }
-      while (claims_.size() > 1 && claims_[1].first <= c.start) claims_.erase(claims_.begin());
-      open_ = LineTelegram{from, c.start, c.start, {}};
-    }
-    open_->bytes.push_back(c.data);
-    open_->end = c.end;
-  }
+  for (const UartChar& c : chars_) line_chars(std::span(&c.data, 1), c.start);
+  // The whole characters after those, back to back: one block.
+  if (!line_rx_.due().empty()) line_chars(line_rx_.due(), line_rx_.due_start());
   if (open_ && (upto == UINT64_MAX || (upto > open_->end && line_rx_.busy_from() != open_->end))) {
     if (on_telegram) on_telegram(*open_);
     open_.reset();
   }
+}
+
+void Segment::line_chars(std::span<const std::uint8_t> data, std::uint64_t start) {
+  if (open_ && start > open_->end) {
+    if (on_telegram) on_telegram(*open_);
+    open_.reset();
+  }
+  if (!open_) {
+    std::size_t from = 0;
+    for (const auto& [at, who] : claims_) {
+      if (at <= start) from = who;
+    }
+    while (claims_.size() > 1 && claims_[1].first <= start) claims_.erase(claims_.begin());
+    open_ = LineTelegram{from, start, start, {}};
+  }
+  open_->bytes.insert(open_->bytes.end(), data.begin(), data.end());
+  open_->end = start + data.size() * std::uint64_t{kUartCharBits} * t_;
 }
 
 void Segment::flush() { close_telegrams(UINT64_MAX); }

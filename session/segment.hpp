@@ -18,6 +18,7 @@
 #include "cpu.hpp"
 #include "dpc31/chip.hpp"
 #include "dpc31/uart.hpp"
+#include "txd_receiver.hpp"
 
 namespace dpc31 {
 
@@ -161,6 +162,9 @@ class Segment {
   void senders_hear(std::size_t from, std::span<const std::pair<std::uint64_t, bool>> edges);
   void senders_hear(std::size_t from, std::span<const std::uint8_t> bytes, std::uint64_t start);
   void close_telegrams(std::uint64_t upto);
+  // Characters of the line back to back from `start`, at its bit time: the open telegram's, or
+  // the first of a new one.
+  void line_chars(std::span<const std::uint8_t> data, std::uint64_t start);
   void collide(std::size_t first, std::size_t second, std::uint64_t cycle);
 
   std::uint32_t clock_hz_;
@@ -179,8 +183,9 @@ class Segment {
   std::optional<std::size_t> wake_for_;
   // No firmware runs past this cycle: a sender drives from it, or the line's time is brought there.
   std::optional<std::uint64_t> hard_end_;
-  // The telegram being decoded from the line.
-  UartRx line_rx_;
+  // The telegram being decoded from the line: a good telegram taken whole (decode_chars) stays a
+  // run of characters until its stop samples are due.
+  TxdReceiver line_rx_;
   std::vector<UartChar> chars_;
   std::optional<LineTelegram> open_;
   std::vector<std::pair<std::uint64_t, std::size_t>> claims_;  // (first edge, driver) in order
