@@ -30,15 +30,6 @@ void TxdReceiver::edge(std::uint64_t cycle, bool level) {
   rx_.edge(cycle, level);
 }
 
-std::uint64_t TxdReceiver::next_deadline() const {
-  const std::uint32_t t = rx_.bit_time();
-  const auto stop = [t](std::uint64_t start) {
-    return start + (kUartCharBits - 1) * std::uint64_t{t} + t / 2;
-  };
-  if (!early_.empty()) return stop(early_.front().start);
-  return run_.empty() ? rx_.next_deadline() : stop(run_start_);
-}
-
 void TxdReceiver::settle() {
   if (run_.empty()) return;
   if (rest_) {
@@ -67,8 +58,7 @@ void TxdReceiver::advance(std::uint64_t now, std::vector<UartChar>& out) {
   due_.clear();
   if (run_.empty()) return;
   // Character i's stop sample: run_start_ + (11 i + 10) T + T/2.
-  const std::uint32_t t = rx_.bit_time();
-  const std::uint64_t first_stop = run_start_ + (kUartCharBits - 1) * std::uint64_t{t} + t / 2;
+  const std::uint64_t first_stop = stop_sample(run_start_);
   const std::size_t k = now < first_stop
                             ? 0
                             : static_cast<std::size_t>(std::min<std::uint64_t>(

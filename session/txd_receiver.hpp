@@ -39,7 +39,10 @@ class TxdReceiver {
   // Valid after advance(): a kept run is then the characters it has not reached.
   [[nodiscard]] bool receiving() const { return rx_.receiving() || !run_.empty(); }
   // UartRx::next_deadline, the characters kept counted.
-  [[nodiscard]] std::uint64_t next_deadline() const;
+  [[nodiscard]] std::uint64_t next_deadline() const {
+    if (!early_.empty()) return stop_sample(early_.front().start);
+    return run_.empty() ? rx_.next_deadline() : stop_sample(run_start_);
+  }
   // UartRx::busy_from, the characters kept counted (rx_ is idle under a kept run).
   [[nodiscard]] std::uint64_t busy_from() const {
     if (!early_.empty()) return early_.front().start;
@@ -49,6 +52,10 @@ class TxdReceiver {
  private:
   [[nodiscard]] std::uint64_t frame_cycles() const {
     return std::uint64_t{kUartCharBits} * rx_.bit_time();
+  }
+  // The stop sample of a character from `start`.
+  [[nodiscard]] std::uint64_t stop_sample(std::uint64_t start) const {
+    return start + (kUartCharBits - 1) * std::uint64_t{rx_.bit_time()} + rx_.bit_time() / 2;
   }
 
   // The kept run's characters as UartChar, now that something after them came (the receiver is
