@@ -69,12 +69,18 @@ void TxdReceiver::advance(std::uint64_t now, std::vector<UartChar>& out) {
     // The receiver as take() and advance() leave it once these characters are reported.
     rx_.after_chars(run_start_ + (k - 1) * frame_cycles(), run_[k - 1],
                     k == 1 ? due_idle_bits_ : 0);
-    due_.assign(run_.begin(), run_.begin() + static_cast<std::ptrdiff_t>(k));
+  }
+  if (k == run_.size()) {
+    due_.swap(run_);  // all of it due: no copy
+    run_.clear();
+    rest_ = false;
+    return;
   }
   // The rest is not due yet: kept, the receiver as those k leave it (settle() gives it over).
+  due_.assign(run_.begin(), run_.begin() + static_cast<std::ptrdiff_t>(k));
   run_.erase(run_.begin(), run_.begin() + static_cast<std::ptrdiff_t>(k));
   run_start_ += k * frame_cycles();
-  rest_ = !run_.empty();
+  rest_ = true;
 }
 
 void TxdReceiver::due_chars(std::vector<UartChar>& out) const {
