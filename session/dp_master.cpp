@@ -68,80 +68,6 @@ std::optional<fdl::Frame> AnswerCollector::frame() const {
   return std::move(d.frame);
 }
 
-void TxdReceiver::take(const TxdRun& r) {
-  const std::uint32_t t = rx_.bit_time();
-  if (r.bytes.empty() || r.bit_cycles != t) {
-    settle();
-    rx_.take(r);
-    return;
-  }
-  if (!run_.empty() && r.start == run_start_ + run_.size() * frame_cycles()) {
-    run_.insert(run_.end(), r.bytes.begin(), r.bytes.end());
-    return;
-  }
-  settle();
-  // What the run's first start bit does to the receiver first: the samples before it (a character
-  // begun before, finished by edges); the characters they end wait in early_.
-  if (r.start > 0) rx_.advance(r.start - 1, early_);
-  if (!rx_.idle_for(r.start, t)) {
-    rx_.take(r);
-    return;
-  }
-  run_.assign(r.bytes.begin(), r.bytes.end());
-  run_start_ = r.start;
-}
-
-void TxdReceiver::settle() {
-  if (run_.empty()) return;
-  // Something after the run: all its characters are sampled by then.
-  const std::size_t first = early_.size();
-  due_.swap(run_);
-  due_start_ = run_start_;
-  due_idle_bits_ = rx_.idle_bits_at(run_start_);
-  due_chars(early_);
-  rx_.after_chars(early_.back().start, due_.back(),
-                  early_.size() - first == 1 ? due_idle_bits_ : 0);
-  due_.clear();
-  run_.clear();
-}
-
-void TxdReceiver::advance(std::uint64_t now, std::vector<UartChar>& out) {
-  // early_: every character in it ended before something taken since, so before now.
-  out.insert(out.end(), early_.begin(), early_.end());
-  early_.clear();
-  rx_.advance(now, out);
-  due_.clear();
-  if (run_.empty()) return;
-  // Character i's stop sample: run_start_ + (11 i + 10) T + T/2.
-  const std::uint32_t t = rx_.bit_time();
-  const std::uint64_t first_stop = run_start_ + (kUartCharBits - 1) * std::uint64_t{t} + t / 2;
-  const std::size_t k = now < first_stop
-                            ? 0
-                            : static_cast<std::size_t>(std::min<std::uint64_t>(
-                                  run_.size(), (now - first_stop) / frame_cycles() + 1));
-  if (k > 0) {
-    due_start_ = run_start_;
-    due_idle_bits_ = rx_.idle_bits_at(run_start_);
-    // The receiver as take() and advance() leave it once these characters are reported.
-    rx_.after_chars(run_start_ + (k - 1) * frame_cycles(), run_[k - 1],
-                    k == 1 ? due_idle_bits_ : 0);
-    due_.assign(run_.begin(), run_.begin() + static_cast<std::ptrdiff_t>(k));
-  }
-  // The last one may not be due yet: the receiver takes it as it would have.
-  if (k < run_.size()) {
-    rx_.take(TxdRun{std::span(run_).subspan(k), run_start_ + k * frame_cycles(), t, {}});
-  }
-  run_.clear();
-}
-
-void TxdReceiver::due_chars(std::vector<UartChar>& out) const {
-  for (std::size_t i = 0; i < due_.size(); ++i) {
-    const std::uint64_t at = due_start_ + i * frame_cycles();
-    out.push_back(
-        {due_[i], true, true, true, at, at + frame_cycles(), i == 0 ? due_idle_bits_ : 0});
-  }
-}
-
 DpMaster::DpMaster(Chip& chip, MasterConfig m, SlaveConfig s)
     : chip_(&chip),
       cfg_(m),
@@ -339,7 +265,7 @@ bool DpMaster::wait_token(std::uint64_t timeout) {
 
 void DpMaster::look() {
   if (seg_) {
-    seg_->take_line(station_, rx_.rx());
+    seg_->take_line(station_, [this](const TxdRun& r) { rx_.take(r); });
   } else {
     chip_->take_txd();
   }

@@ -17,6 +17,7 @@
 #include "dpc31/chip.hpp"
 #include "dpc31/fdl.hpp"
 #include "dpc31/uart.hpp"
+#include "txd_receiver.hpp"
 
 namespace dpc31 {
 
@@ -125,57 +126,6 @@ class AnswerCollector {
   bool bad_ = false;
   std::uint64_t start_ = 0;
   std::uint64_t end_ = 0;
-};
-
-// A master's receiver on TxD (Chip::on_txd_chars), the UART receiver's rules kept: a run of whole
-// characters that finds the receiver with nothing of its own (UartRx::idle_for, once the samples
-// before its first start bit are taken) is kept as it comes, and advance() hands its characters
-// over whole once their stop samples are due, with no queue of UartChar and no step per
-// character. Anything after a kept run (edges: a character only partly on the line, an answer
-// cut by Go_Offline, an answer made of edges for a waveform; a run after a gap) turns the run
-// into UartChar (all its stop samples are past) and goes through the receiver (UartRx::take).
-// Used by DpMaster and the bridge (lib/bridge).
-class TxdReceiver {
- public:
-  TxdReceiver(std::uint32_t bit_cycles, std::uint64_t now) : rx_(bit_cycles, now) {}
-  void take(const TxdRun& r);
-  // Every character whose stop sample is at or before `now`, in order: those the receiver decoded
-  // appended to `out`, then due()'s whole ones.
-  void advance(std::uint64_t now, std::vector<UartChar>& out);
-  // The good characters of the last advance() after `out`'s, back to back from due_start().
-  [[nodiscard]] std::span<const std::uint8_t> due() const { return due_; }
-  [[nodiscard]] std::uint64_t due_start() const { return due_start_; }
-  // due() as the UartChar the receiver would have reported, appended to `out`.
-  void due_chars(std::vector<UartChar>& out) const;
-  // Valid after advance(): a kept run is then given over or inside the receiver.
-  [[nodiscard]] bool receiving() const { return rx_.receiving(); }
-  [[nodiscard]] std::uint64_t next_deadline() const { return rx_.next_deadline(); }
-  // UartRx::busy_from, the characters kept counted (rx_ is idle under a kept run).
-  [[nodiscard]] std::uint64_t busy_from() const {
-    if (!early_.empty()) return early_.front().start;
-    return run_.empty() ? rx_.busy_from() : run_start_;
-  }
-  // The receiver itself, for a line that feeds it directly (Segment::take_line).
-  UartRx& rx() { return rx_; }
-  [[nodiscard]] const UartRx& rx() const { return rx_; }
-
- private:
-  [[nodiscard]] std::uint64_t frame_cycles() const {
-    return std::uint64_t{kUartCharBits} * rx_.bit_time();
-  }
-
-  // The kept run's characters as UartChar, now that something after them came (the receiver is
-  // set as they leave it), and those the receiver ended before a run: reported first.
-  void settle();
-
-  UartRx rx_;
-  std::vector<UartChar> early_;  // ended before what was taken since: due at the next advance()
-  // Whole characters not yet given to rx_, which is as it was at run_start_.
-  std::vector<std::uint8_t> run_;
-  std::uint64_t run_start_ = 0;
-  std::vector<std::uint8_t> due_;
-  std::uint64_t due_start_ = 0;
-  std::uint64_t due_idle_bits_ = 0;  // UartChar::idle_bits of due_'s first character
 };
 
 // The request is SRD or FDL_Status to one station: the master waits for an answer.

@@ -26,6 +26,17 @@ class Scoped {
   std::optional<std::uint64_t> old_;
 };
 
+// What a sender hears of the line, in cycle order: an edge, or a good character whole (`at` its
+// start bit). A master's receiver takes the characters whole (Segment::take_line).
+struct Heard {
+  std::uint64_t at = 0;
+  bool whole = false;  // a character: `data`; else an edge to `level`
+  bool level = false;
+  std::uint8_t data = 0;
+};
+
+bool before(std::uint64_t c, const Heard& h) { return c < h.at; }
+
 }  // namespace
 
 struct Segment::Station {
@@ -33,8 +44,8 @@ struct Segment::Station {
   std::string name;
   std::unique_ptr<Chip> chip;  // null: a sender
   std::unique_ptr<Cpu> cpu;
-  Edges txd;    // the reference line: the chip's TxD edges not yet relayed (Chip::on_txd)
-  Edges heard;  // a sender's: the line as it hears it, not yet taken (sorted by cycle)
+  Edges txd;  // the reference line: the chip's TxD edges not yet relayed (Chip::on_txd)
+  std::vector<Heard> heard;           // a sender's: the line as it hears it, not yet taken
   std::uint64_t colliding_until = 0;  // a collision of this station is reported once per burst
   // Telegram level (docs/segment.md): the chip's next event and whether its firmware runs, as the
   // rounds last looked; the answer it armed (Chip::on_answer), given to the other chips whole at
@@ -361,23 +372,12 @@ bool Segment::relay_answer(std::size_t i, std::uint64_t cycle) {
     look_at(*s);
   }
   a.answer.reset();
-  // Its edges from this one on (relay_armed took it): the senders hear them and the line's
-  // decoder takes them now, ahead of time as a sender's telegram; the line is the answer's up to
-  // a character time after its last falling edge.
+  // Its edges from this one on (relay_armed took it; this one is its first start bit, so they
+  // are the whole answer): the senders hear its characters and the line's decoder takes them
+  // now, ahead of time as a sender's telegram; the line is the answer's up to a character time
+  // after its last falling edge.
   const auto rest = std::span(a.drives_edges).subspan(a.out_next - 1);
-  for (const std::size_t k : senders_) {
-    Edges& h = stations_[k]->heard;
-    if (h.empty() || h.back().first <= rest.front().first) {
-      h.insert(h.end(), rest.begin(), rest.end());
-      continue;
-    }
-    for (const auto& e : rest) {
-      const auto at = std::upper_bound(
-          h.begin(), h.end(), e.first,
-          [](std::uint64_t c, const std::pair<std::uint64_t, bool>& x) { return c < x.first; });
-      h.insert(at, e);
-    }
-  }
+  senders_hear(i, a.out_bytes, a.out_start);
   // A start bit a character time after the falling edge before it finds the line free again
   // (relay): a waiting master wakes there (wakes_), as on the reference line.
   wakes_.clear();
@@ -442,13 +442,35 @@ void Segment::hear(std::size_t from, std::uint64_t cycle, bool level) {
       s.chip->drive_rxd(cycle, level);
       look_at(s);
     } else {
-      const auto at = std::upper_bound(
-          s.heard.begin(), s.heard.end(), cycle,
-          [](std::uint64_t c, const std::pair<std::uint64_t, bool>& e) { return c < e.first; });
-      s.heard.insert(at, {cycle, level});
+      s.heard.insert(std::upper_bound(s.heard.begin(), s.heard.end(), cycle, before),
+                     Heard{cycle, false, level, 0});
     }
   }
   decode(from, cycle, level);
+}
+
+void Segment::senders_hear(std::size_t from,
+                           std::span<const std::pair<std::uint64_t, bool>> edges) {
+  for (const std::size_t k : senders_) {
+    if (k == from) continue;
+    std::vector<Heard>& h = stations_[k]->heard;
+    for (const auto& [at, level] : edges)
+      h.insert(std::upper_bound(h.begin(), h.end(), at, before), Heard{at, false, level, 0});
+  }
+}
+
+void Segment::senders_hear(std::size_t from, std::span<const std::uint8_t> bytes,
+                           std::uint64_t start) {
+  const std::uint64_t frame = std::uint64_t{kUartCharBits} * t_;
+  for (const std::size_t k : senders_) {
+    if (k == from) continue;
+    std::vector<Heard>& h = stations_[k]->heard;
+    auto at = std::upper_bound(h.begin(), h.end(), start, before);
+    for (std::size_t i = 0; i < bytes.size(); ++i) {
+      at = std::upper_bound(at, h.end(), start + i * frame, before);
+      at = std::next(h.insert(at, Heard{start + i * frame, true, false, bytes[i]}));
+    }
+  }
 }
 
 void Segment::decode(std::size_t from, std::uint64_t cycle, bool level) {
@@ -458,8 +480,8 @@ void Segment::decode(std::size_t from, std::uint64_t cycle, bool level) {
   if (on_line) on_line(from, cycle, level);
 }
 
-// A good telegram of station `from`: the line's decoder takes its characters whole where it can
-// (UartRx::take), the waveform's observer its edges.
+// A good telegram of station `from`: the line's decoder keeps its characters whole until they are
+// due (TxdReceiver::take), the waveform's observer gets its edges.
 void Segment::decode_chars(std::size_t from, std::span<const std::uint8_t> bytes,
                            std::uint64_t start,
                            std::span<const std::pair<std::uint64_t, bool>> edges) {
@@ -476,26 +498,30 @@ void Segment::decode_chars(std::size_t from, std::span<const std::uint8_t> bytes
 void Segment::close_telegrams(std::uint64_t upto) {
   chars_.clear();
   line_rx_.advance(std::min(upto, now_), chars_);
-  for (const UartChar& c : chars_) {
-    if (open_ && c.start > open_->end) {
-      if (on_telegram) on_telegram(*open_);
-      open_.reset();
-    }
-    if (!open_) {
-      std::size_t from = 0;
-      for (const auto& [at, who] : claims_) {
-        if (at <= c.start) from = who;
-      }
-      while (claims_.size() > 1 && claims_[1].first <= c.start) claims_.erase(claims_.begin());
-      open_ = LineTelegram{from, c.start, c.start, {}};
-    }
-    open_->bytes.push_back(c.data);
-    open_->end = c.end;
-  }
+  for (const UartChar& c : chars_) line_chars(std::span(&c.data, 1), c.start);
+  // The whole characters after those, back to back: one block.
+  if (!line_rx_.due().empty()) line_chars(line_rx_.due(), line_rx_.due_start());
   if (open_ && (upto == UINT64_MAX || (upto > open_->end && line_rx_.busy_from() != open_->end))) {
     if (on_telegram) on_telegram(*open_);
     open_.reset();
   }
+}
+
+void Segment::line_chars(std::span<const std::uint8_t> data, std::uint64_t start) {
+  if (open_ && start > open_->end) {
+    if (on_telegram) on_telegram(*open_);
+    open_.reset();
+  }
+  if (!open_) {
+    std::size_t from = 0;
+    for (const auto& [at, who] : claims_) {
+      if (at <= start) from = who;
+    }
+    while (claims_.size() > 1 && claims_[1].first <= start) claims_.erase(claims_.begin());
+    open_ = LineTelegram{from, start, start, {}};
+  }
+  open_->bytes.insert(open_->bytes.end(), data.begin(), data.end());
+  open_->end = start + data.size() * std::uint64_t{kUartCharBits} * t_;
 }
 
 void Segment::flush() { close_telegrams(UINT64_MAX); }
@@ -510,10 +536,11 @@ std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> byte
   }
   owner_ = from;
   owned_until_ = end;
-  Edges edges;
-  uart_encode(bytes, start, t_, edges, fault);
-  // Decoded once for every chip that hears it whole.
+  // Decoded once for every chip that hears it whole; its edges only for whom needs them (a
+  // damaged telegram, the reference line, an on_line observer).
   const bool whole = !reference_ && fault.kind == UartFault::Kind::none;
+  Edges edges;
+  if (!whole || on_line) uart_encode(bytes, start, t_, edges, fault);
   const auto heard = whole ? HeardFrame::make(bytes) : nullptr;
   for (std::size_t k = 0; k < stations_.size(); ++k) {
     Station& s = *stations_[k];
@@ -530,13 +557,11 @@ std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> byte
     }
     look_at(s);
   }
-  for (const std::size_t k : senders_) {
-    if (k != from)
-      stations_[k]->heard.insert(stations_[k]->heard.end(), edges.begin(), edges.end());
-  }
   if (whole) {
+    senders_hear(from, bytes, start);
     decode_chars(from, bytes, start, edges);
   } else {
+    senders_hear(from, edges);
     for (const auto& [cycle, level] : edges) decode(from, cycle, level);
   }
   return end;
@@ -676,12 +701,26 @@ std::uint64_t Segment::next_armed_edge() {
   return next;
 }
 
-void Segment::take_line(std::size_t listener, UartRx& rx) {
+// A character whose start bit is on the line is handed whole: the receiver is then as its edges up
+// to the line's time would leave it (UartRx::take), and what it reports by then is the same.
+void Segment::take_line(std::size_t listener, const std::function<void(const TxdRun&)>& take) {
   Station& s = *stations_.at(listener);
-  const auto end = std::upper_bound(
-      s.heard.begin(), s.heard.end(), now_,
-      [](std::uint64_t c, const std::pair<std::uint64_t, bool>& e) { return c < e.first; });
-  rx.edges(std::span<const std::pair<std::uint64_t, bool>>(s.heard.begin(), end));
+  const auto end = std::upper_bound(s.heard.begin(), s.heard.end(), now_, before);
+  const std::uint64_t frame = std::uint64_t{kUartCharBits} * t_;
+  for (auto h = s.heard.begin(); h != end;) {
+    if (h->whole) {
+      // A run of characters back to back.
+      const std::uint64_t start = h->at;
+      take_bytes_.clear();
+      for (; h != end && h->whole && h->at == start + take_bytes_.size() * frame; ++h)
+        take_bytes_.push_back(h->data);
+      take(TxdRun{take_bytes_, start, t_, {}});
+    } else {
+      take_edges_.clear();
+      for (; h != end && !h->whole; ++h) take_edges_.emplace_back(h->at, h->level);
+      take(TxdRun{{}, 0, t_, take_edges_});
+    }
+  }
   s.heard.erase(s.heard.begin(), end);
 }
 

@@ -18,6 +18,7 @@
 #include "cpu.hpp"
 #include "dpc31/chip.hpp"
 #include "dpc31/uart.hpp"
+#include "txd_receiver.hpp"
 
 namespace dpc31 {
 
@@ -90,8 +91,10 @@ class Segment {
   void run_until(std::uint64_t cycle, std::optional<std::size_t> wake_for = std::nullopt);
 
   // What station `listener` hears of the line (everything but its own driving) up to cycle(),
-  // fed to its receiver in order. A sender's receiver (a master) uses it.
-  void take_line(std::size_t listener, UartRx& rx);
+  // handed to `take` in order as runs of TxD: good characters whole from their start bits (a
+  // character whose start bit is on the line comes whole), the rest as edges up to the line's
+  // time (docs/segment.md). A sender's receiver (a master: TxdReceiver::take) uses it.
+  void take_line(std::size_t listener, const std::function<void(const TxdRun&)>& take);
 
   [[nodiscard]] const std::vector<Collision>& collisions() const { return collisions_; }
   // Every telegram on the line, in order of its start, as soon as its end is known (at the latest
@@ -151,9 +154,17 @@ class Segment {
   // The character decoder of the line (for on_telegram), fed with what the owner drove.
   void decode(std::size_t from, std::uint64_t cycle, bool level);
   // The same for a good telegram from `start` whose edges are `edges`: its characters whole.
+  // `edges` are needed only by on_line (empty without one).
   void decode_chars(std::size_t from, std::span<const std::uint8_t> bytes, std::uint64_t start,
                     std::span<const std::pair<std::uint64_t, bool>> edges);
+  // What the senders but `from` hear: edges (in cycle order, anywhere) and good characters whole
+  // from `start` (after everything they heard so far, or placed in order).
+  void senders_hear(std::size_t from, std::span<const std::pair<std::uint64_t, bool>> edges);
+  void senders_hear(std::size_t from, std::span<const std::uint8_t> bytes, std::uint64_t start);
   void close_telegrams(std::uint64_t upto);
+  // Characters of the line back to back from `start`, at its bit time: the open telegram's, or
+  // the first of a new one.
+  void line_chars(std::span<const std::uint8_t> data, std::uint64_t start);
   void collide(std::size_t first, std::size_t second, std::uint64_t cycle);
 
   std::uint32_t clock_hz_;
@@ -172,8 +183,9 @@ class Segment {
   std::optional<std::size_t> wake_for_;
   // No firmware runs past this cycle: a sender drives from it, or the line's time is brought there.
   std::optional<std::uint64_t> hard_end_;
-  // The telegram being decoded from the line.
-  UartRx line_rx_;
+  // The telegram being decoded from the line: a good telegram taken whole (decode_chars) stays a
+  // run of characters until its stop samples are due.
+  TxdReceiver line_rx_;
   std::vector<UartChar> chars_;
   std::optional<LineTelegram> open_;
   std::vector<std::pair<std::uint64_t, std::size_t>> claims_;  // (first edge, driver) in order
@@ -184,6 +196,9 @@ class Segment {
     bool level;
   };
   std::vector<Driven> round_;
+  // take_line's runs, kept to reuse their memory.
+  std::vector<std::uint8_t> take_bytes_;
+  Edges take_edges_;
   // Telegram level: each station's next event as the rounds last looked (UINT64_MAX: a sender),
   // and the same as a tree of minima (next_tree_[1] the earliest, the leaves from leaves_ on, a
   // node the smaller of its two children) so that a round finds its end and the chips due by it

@@ -6,7 +6,10 @@
 // telegram it takes with its FDL counters, DP and watchdog state at that telegram's end — must be
 // the same list in both, and every chip's snapshot must be the same bytes wherever the test
 // stops the line: after every master transaction (the line idle, every telegram ended), and
-// inside foreign telegrams (a snapshot turns a telegram heard whole back into characters).
+// inside foreign telegrams (a snapshot turns a telegram heard whole back into characters). The
+// master's receiver (Segment::take_line: characters whole on the telegram-level line, edges on
+// the reference line) must have seen the same answers at the same cycles, and an on_line
+// observer the same edges.
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <gtest/gtest.h>
@@ -40,12 +43,18 @@ std::string counters_text(const FdlCounters& n) {
 // what they drove shows in the line's telegrams (logged in both) and the snapshots.
 // Only the first `watched` chips get the observers (the others show what they did in their
 // snapshots and counters only, so their verdicts that show nothing are no events of the line:
-// Chip::line_deadline).
+// Chip::line_deadline). With `watch_line` every edge of the line is logged (Segment::on_line, as
+// a waveform takes it).
 struct Bed {
   Bed(bool reference, std::uint32_t baud, std::size_t n, bool watch_txd = true,
-      std::size_t watched = SIZE_MAX)
+      std::size_t watched = SIZE_MAX, bool watch_line = false)
       : seg(baud) {
     seg.use_reference_line(reference);
+    if (watch_line) {
+      seg.on_line = [this](std::size_t from, std::uint64_t cycle, bool level) {
+        wire.push_back(fmt::format("{} {} {}", from, cycle, level));
+      };
+    }
     seg.on_telegram = [this](const LineTelegram& t) {
       line.push_back(
           fmt::format("{} {}..{} {}", seg.name(t.from), t.start, t.end, fmt::join(t.bytes, " ")));
@@ -112,14 +121,31 @@ struct Bed {
   std::vector<std::size_t> chips;
   std::vector<std::vector<std::string>> log;
   std::vector<std::string> line;
+  std::vector<std::string> wire;
   std::size_t master_station = 0;
   std::size_t other = 0;
   std::unique_ptr<DpMaster> master;
 };
 
 // Both beds at the same cycle, every chip's snapshot and everything it showed so far the same.
+// What the master received: each exchange's cycles and answer.
+std::vector<std::string> received(const Bed& b) {
+  std::vector<std::string> out;
+  for (const Exchange& e : b.master->history()) {
+    out.push_back(fmt::format("{}..{} answer {}..{} {}", e.request_start, e.request_end,
+                              e.answer_start, e.answer_end,
+                              e.answer ? fmt::format("{}", fmt::join(fdl::encode(*e.answer), " "))
+                                       : std::string("none")));
+  }
+  return out;
+}
+
 void expect_same(Bed& fast, Bed& ref, const std::string& where) {
   ASSERT_EQ(fast.line, ref.line) << where << ": the line's telegrams";
+  ASSERT_EQ(fast.wire, ref.wire) << where << ": the line's edges (on_line)";
+  ASSERT_EQ(received(fast), received(ref)) << where << ": the master's exchanges";
+  ASSERT_EQ(fast.master->counters().answered, ref.master->counters().answered) << where;
+  ASSERT_EQ(fast.master->counters().bad_answer, ref.master->counters().bad_answer) << where;
   ASSERT_EQ(fast.seg.cycle(), ref.seg.cycle()) << where;
   for (std::size_t i = 0; i < fast.chips.size(); ++i) {
     const std::vector<std::string>& a = fast.log[i];
@@ -215,9 +241,9 @@ void foreign_run(Bed& fast, Bed& ref) {
 }
 
 void run_both_ways(std::uint32_t baud, std::size_t n = 5, bool watch_txd = true,
-                   std::size_t watched = SIZE_MAX) {
-  Bed fast(false, baud, n, watch_txd, watched);
-  Bed ref(true, baud, n, watch_txd, watched);
+                   std::size_t watched = SIZE_MAX, bool watch_line = false) {
+  Bed fast(false, baud, n, watch_txd, watched, watch_line);
+  Bed ref(true, baud, n, watch_txd, watched, watch_line);
   for (Bed* b : {&fast, &ref}) ASSERT_TRUE(b->master->startup_all());
   ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "after the start-up"));
   for (int round = 0; round < 2; ++round) {
@@ -258,6 +284,31 @@ void run_both_ways(std::uint32_t baud, std::size_t n = 5, bool watch_txd = true,
   at = fast.seg.cycle() + 40 * t;
   ASSERT_NO_FATAL_FAILURE(
       foreign(fast, ref, req(42, Function::FDL_Status), at, "request to station 42"));
+  // Slave 6 answers the scripted station, which drives into the answer (a collision: the answer
+  // keeps the line, the token is not heard); the master takes the answer's characters as strays.
+  at = fast.seg.cycle() + 40 * t;
+  std::uint64_t end = 0;
+  for (Bed* b : {&fast, &ref}) end = b->seg.send(b->other, req(6, Function::FDL_Status), at);
+  for (Bed* b : {&fast, &ref}) {
+    b->seg.send(b->other, std::vector<std::uint8_t>{fdl::SD4, 9, 30}, end + 40 * t);
+    b->seg.run_until(end + 400 * t);
+  }
+  ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "a collision with slave 6's answer"));
+  ASSERT_EQ(fast.seg.collisions().size(), ref.seg.collisions().size());
+  ASSERT_FALSE(fast.seg.collisions().empty());
+  EXPECT_EQ(fast.seg.collisions().back().cycle, ref.seg.collisions().back().cycle);
+  // The master's own faults: a damaged request (no answer), a glitch and line noise, then an
+  // exchange.
+  for (Bed* b : {&fast, &ref}) {
+    b->master->select(1);
+    b->master->transact(
+        fdl::make_frame(6, 2, fdl::make_request_fc(Function::FDL_Status, false, false)),
+        {2, UartFault::Kind::parity});
+    b->master->glitch(t / 3);
+    b->master->line_noise(std::vector<std::uint8_t>{0x55, 0x0f}, 33);
+    b->master->slave_diag();
+  }
+  ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "the master's faults"));
   // A broadcast Global_Control, then slave 7 no longer polled until its DP watchdog expires.
   for (Bed* b : {&fast, &ref}) b->master->global_control(0x08);
   ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "Global_Control"));
@@ -342,6 +393,16 @@ TEST(SegmentSpeed, AVerdictThatShowsNothingIsNoEventOfTheLine) {
   bed.watch_telegrams(0);
   const auto [watched_at, watched_line] = verdict_of(40);
   EXPECT_EQ(watched_line, watched_at) << "its on_telegram observer is told of it there";
+}
+
+// A waveform's observer of the line (Segment::on_line): the requests' and answers' edges are made
+// for it, the same as the reference line's.
+TEST(SegmentSpeed, TheLinesEdgesForAnObserverAreTheReferenceLinesAt1M5) {
+  run_both_ways(1'500'000, 5, false, SIZE_MAX, true);
+}
+
+TEST(SegmentSpeed, TheLinesEdgesForAnObserverAreTheReferenceLinesAt12M) {
+  run_both_ways(12'000'000, 5, false, SIZE_MAX, true);
 }
 
 }  // namespace

@@ -361,7 +361,7 @@ void Engine::finish_answer(AnswerCollector& a, std::string_view how) {
 void Engine::collect() {
   chars_.clear();
   if (seg_) {
-    seg_->take_line(master_, rx_.rx());
+    seg_->take_line(master_, [this](const TxdRun& r) { rx_.take(r); });
   } else {
     solo_->take_txd();
   }
