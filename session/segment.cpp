@@ -430,22 +430,19 @@ void Segment::check_txd(Station& s, const TxdRun& run) {
 
 void Segment::hear(std::size_t from, std::uint64_t cycle, bool level) {
   for (const std::size_t k : everyone_) {
-    if (k == from) continue;
     Station& s = *stations_[k];
-    if (s.chip) {
-      if (cycle < s.chip->cycle()) {
-        throw std::logic_error(fmt::format(
-            "segment: the edge of {} at cycle {} reached {} at cycle {} (line order broken)",
-            stations_[from]->name, cycle, s.name, s.chip->cycle()));
-      }
-      step_station(s, cycle);
-      s.chip->drive_rxd(cycle, level);
-      look_at(s);
-    } else {
-      s.heard.insert(std::upper_bound(s.heard.begin(), s.heard.end(), cycle, before),
-                     Heard{cycle, false, level, 0});
+    if (k == from || !s.chip) continue;
+    if (cycle < s.chip->cycle()) {
+      throw std::logic_error(fmt::format(
+          "segment: the edge of {} at cycle {} reached {} at cycle {} (line order broken)",
+          stations_[from]->name, cycle, s.name, s.chip->cycle()));
     }
+    step_station(s, cycle);
+    s.chip->drive_rxd(cycle, level);
+    look_at(s);
   }
+  const std::pair<std::uint64_t, bool> edge{cycle, level};
+  senders_hear(from, std::span(&edge, 1));
   decode(from, cycle, level);
 }
 
