@@ -130,6 +130,20 @@ def frame_length(buf):
     raise Fail(f"answer starts with {sd:02X}, no start delimiter")
 
 
+def not_ours(req, a):
+    """Whether the whole answer `a` cannot be the answer to `req`: an FDL_Status answer to a
+    request that is none, or an SD2 answer whose SAPs are not the request's mirrored (EN 50170:
+    the answer's DSAP is the request's SSAP and its SSAP the request's DSAP; a request without
+    SAPs gets an answer without)."""
+    if a[0] == SD1:
+        return a[3] == 0x00 and not (req[0] == SD1 and req[3] == 0x49)
+    if a[0] != SD2:
+        return False
+    req_saps = (req[7], req[8]) if req[0] == SD2 and req[4] & 0x80 else None
+    saps = (a[8], a[7]) if a[4] & 0x80 else None
+    return saps != req_saps
+
+
 def answer_du(a, sap):
     """The data unit of an SD2 answer (after DA, SA, FC and, with `sap`, DSAP/SSAP)."""
     check(a is not None and a[0] == SD2, f"expected an SD2 answer, got {hexs(a)}")
@@ -198,9 +212,11 @@ class Master:
         """Writes one request, returns the answer telegram (bytes) or None after the timeout.
         `searching` (find_slave): bytes before a start delimiter are dropped, an answer begun by
         the timeout is awaited for the answer timeout, and bytes after the first whole telegram
-        (late answers to earlier requests) are left to find_slave's drain. Otherwise a late
-        FDL_Status answer (to a request of find_slave's still queued ahead of ours) is dropped and
-        the wait for ours starts anew (up to --search longer in all)."""
+        (late answers to earlier requests) are left to find_slave's drain. Otherwise an answer
+        that cannot be ours is dropped and the wait for ours starts anew (up to --search longer in
+        all): a late FDL_Status answer (to a request of find_slave's still queued ahead of ours),
+        an answer with bytes after it (ours is the last request written, so its answer is the
+        last to come), and an SD2 answer whose SAPs do not mirror ours."""
         self.flush_input()
         os.write(self.fd, req)
         buf = b""
@@ -216,16 +232,14 @@ class Master:
             if n is not None and len(buf) >= n:
                 if searching:
                     return buf[:n]
-                if buf[0] == SD1 and buf[3] == 0x00 and not (req[0] == SD1 and req[3] == 0x49):
-                    # An FDL_Status answer to a request that is none: a late answer to one of
-                    # find_slave's, later than its drain on a loaded host. Not ours: dropped.
-                    # It shows the line still working off requests written before ours (a
-                    # bridge slower than the bus queues them), so ours waits anew from here:
-                    # its fate is known only after theirs (issue 35).
+                if not_ours(req, buf[:n]) or len(buf) > n:
+                    # A late answer to a request written before ours, on a loaded host later
+                    # than find_slave's drain: it shows the line still working off what came
+                    # before (a bridge slower than the bus queues the requests), so ours waits
+                    # anew from here: its fate is known only after theirs (issue 35).
                     buf = buf[n:]
                     deadline = min(limit, max(deadline, time.monotonic() + wait))
                     continue
-                check(len(buf) == n, f"answer {hexs(buf)}: {len(buf) - n} bytes too many")
                 return buf
             left = deadline - time.monotonic()
             if left <= 0 and searching and buf and not extended:
