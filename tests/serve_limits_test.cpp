@@ -156,7 +156,9 @@ TEST(ServeSecurity, WrongSecretsFromOnePeerAreSlowedDownAndLogged) {
 }
 
 // The finding: a live server's socket whose backlog is full made `serve --unix` hang in
-// connect() at its start. Now it is refused at once as in use.
+// connect() at its start. Now it is refused at once as in use: its probe connects without
+// blocking. A hang would end at `timeout 10` with exit code 124, so the exit code tells; no
+// wall-clock bound (1 s was not enough for the ASan binary's start beside two builds).
 TEST(ServeSecurity, AUnixSocketWithAFullBacklogIsRefusedAtOnce) {
   TempDir dir;
   const std::string path = dir.file("busy.sock");
@@ -177,14 +179,11 @@ TEST(ServeSecurity, AUnixSocketWithAFullBacklogIsRefusedAtOnce) {
     }
   }
   ASSERT_LT(waiting.size(), 64u) << "the backlog never filled";
-  const auto t0 = SteadyClock::now();
   const CommandResult r =
       run_command("timeout 10 " + kCli + " serve --unix '" + path + "' 2>&1 >/dev/null");
-  const double secs = std::chrono::duration<double>(SteadyClock::now() - t0).count();
   EXPECT_EQ(r.rc, 2);
   EXPECT_EQ(lines_of(r.out), std::vector<std::string>{"dpc31 serve: --unix " + path +
                                                       ": in use by a running server"});
-  EXPECT_LT(secs, 1.0);
   for (const int c : waiting) ::close(c);
   ::close(l);
 }
