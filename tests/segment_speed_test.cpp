@@ -189,37 +189,38 @@ void foreign(Bed& fast, Bed& ref, const std::vector<std::uint8_t>& bytes, std::u
   }
 }
 
+// Foreign telegram k of a run: a request to an absent station, a token, an answer, a short
+// acknowledge, a request with a bad FCS, in turn.
+std::vector<std::uint8_t> foreign_telegram(std::size_t k) {
+  using fdl::Function;
+  std::vector<std::uint8_t> bytes;
+  switch (k % 5) {
+    case 0:
+      return fdl::encode(fdl::make_frame(static_cast<std::uint8_t>(40 + k % 80), 30,
+                                         fdl::make_request_fc(Function::FDL_Status, false, false)));
+    case 1:
+      return {fdl::SD4, 9, 30};
+    case 2:
+      return fdl::encode(
+          fdl::make_frame(30, 41, fdl::make_response_fc(fdl::Response::OK), {1, 2, 3}));
+    case 3:
+      return {fdl::SC};
+    default:
+      bytes = fdl::encode(
+          fdl::make_frame(43, 30, fdl::make_request_fc(Function::SRD_high, true, true), {7, 7}));
+      bytes[bytes.size() - 2] ^= 1;  // a bad FCS
+      return bytes;
+  }
+}
+
 // A run of 24 foreign telegrams back to back after TSYN (requests to absent stations, tokens,
 // answers, short acknowledges, a bad FCS), the line looked at inside some of them; at the
 // twelfth chip 3 gets an on_telegram observer through chip(i); then slave 8 (chip 3) addressed.
 void foreign_run(Bed& fast, Bed& ref) {
   const std::uint64_t t = fast.seg.bit_cycles();
-  using fdl::Function;
   std::uint64_t at = fast.seg.cycle() + 40 * t;
   for (std::size_t k = 0; k < 24; ++k) {
-    std::vector<std::uint8_t> bytes;
-    switch (k % 5) {
-      case 0:
-        bytes =
-            fdl::encode(fdl::make_frame(static_cast<std::uint8_t>(40 + k), 30,
-                                        fdl::make_request_fc(Function::FDL_Status, false, false)));
-        break;
-      case 1:
-        bytes = {fdl::SD4, 9, 30};
-        break;
-      case 2:
-        bytes = fdl::encode(
-            fdl::make_frame(30, 41, fdl::make_response_fc(fdl::Response::OK), {1, 2, 3}));
-        break;
-      case 3:
-        bytes = {fdl::SC};
-        break;
-      default:
-        bytes = fdl::encode(
-            fdl::make_frame(43, 30, fdl::make_request_fc(Function::SRD_high, true, true), {7, 7}));
-        bytes[bytes.size() - 2] ^= 1;  // a bad FCS
-        break;
-    }
+    const std::vector<std::uint8_t> bytes = foreign_telegram(k);
     std::uint64_t end = 0;
     for (Bed* b : {&fast, &ref}) end = b->seg.send(b->other, bytes, at);
     if (k % 7 == 3) {
@@ -321,6 +322,68 @@ void run_both_ways(std::uint32_t baud, std::size_t n = 5, bool watch_txd = true,
     ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "slave 7 not polled"));
   }
   EXPECT_EQ(fast.seg.chip(fast.chips[2]).dp_state(), DpState::Wait_Prm);
+}
+
+// The telegram log (docs/segment.md, "The telegram log"): all slaves but the first unwatched, so
+// they take the 240 foreign telegrams back to back (more than the log keeps before it brings the
+// laggards up) at their next step; the line is looked at through chip(i) inside some of them
+// (counters, snapshots), slave 7 gets an on_telegram observer in the middle, the master sends a
+// Global_Control broadcast and a Data_Exchange to the last slave inside the run (slave 9's
+// firmware runs in every round), then slave 8 is addressed.
+void log_run(std::uint32_t baud, std::size_t n) {
+  Bed fast(false, baud, n, false, 1);
+  Bed ref(true, baud, n, false, 1);
+  for (Bed* b : {&fast, &ref}) ASSERT_TRUE(b->master->startup_all());
+  ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "after the start-up"));
+  const std::uint64_t t = fast.seg.bit_cycles();
+  std::uint64_t at = fast.seg.cycle() + 40 * t;
+  for (std::size_t k = 0; k < 240; ++k) {
+    std::uint64_t end = 0;
+    for (Bed* b : {&fast, &ref}) end = b->seg.send(b->other, foreign_telegram(k), at);
+    at = end + 40 * t;
+    if (k % 37 == 11) {
+      for (Bed* b : {&fast, &ref}) b->seg.run_until(end - t / 2);
+      ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, fmt::format("log run, telegram {}", k)));
+    }
+    if (k == 60) {
+      for (Bed* b : {&fast, &ref}) b->watch_telegrams(2);
+    }
+    if (k == 100 || k == 170) {
+      for (Bed* b : {&fast, &ref}) {
+        b->seg.run_until(at);
+        if (k == 100) {
+          b->master->global_control(0x08);
+        } else {
+          b->master->select(n - 1);
+          b->master->data_exchange({4, 3, 2, 1});
+        }
+      }
+      at = fast.seg.cycle() + 40 * t;
+    }
+  }
+  for (Bed* b : {&fast, &ref}) b->seg.run_until(at);
+  ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "after the log run"));
+  for (Bed* b : {&fast, &ref}) {
+    b->master->select(3);
+    b->master->data_exchange({5, 6, 7, 8});
+  }
+  ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "slave 8 after the log run"));
+}
+
+TEST(SegmentSpeed, TheTelegramLogOfFiveSlavesShowsWhatTheReferenceLineShowsAt1M5) {
+  log_run(1'500'000, 5);
+}
+
+TEST(SegmentSpeed, TheTelegramLogOfFiveSlavesShowsWhatTheReferenceLineShowsAt12M) {
+  log_run(12'000'000, 5);
+}
+
+TEST(SegmentSpeed, TheTelegramLogOfThirtyThreeSlavesShowsWhatTheReferenceLineShowsAt1M5) {
+  log_run(1'500'000, 33);
+}
+
+TEST(SegmentSpeed, TheTelegramLogOfThirtyThreeSlavesShowsWhatTheReferenceLineShowsAt12M) {
+  log_run(12'000'000, 33);
 }
 
 TEST(SegmentSpeed, TheTelegramLevelLineShowsWhatTheReferenceLineShowsAt1M5) {
