@@ -386,7 +386,7 @@ void Segment::hear_whole(std::size_t from, const std::shared_ptr<const HeardFram
     for (const auto& s : stations_) {
       if (s->chip) take_log(*s, UINT64_MAX);
     }
-    log_.drop_before(log_.end());
+    log_.clear();
   }
 }
 

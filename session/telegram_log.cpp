@@ -50,11 +50,4 @@ const std::vector<std::size_t>& TelegramLog::hear_now(const HeardFrame& f) {
   return hear_now_;
 }
 
-void TelegramLog::drop_before(std::uint64_t n) {
-  while (first_ < n && !entries_.empty()) {
-    entries_.pop_front();
-    ++first_;
-  }
-}
-
 }  // namespace dpc31

@@ -4,7 +4,6 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <deque>
 #include <memory>
 #include <vector>
 
@@ -44,12 +43,15 @@ class TelegramLog {
     return entries_[static_cast<std::size_t>(n - first_)];
   }
   void append(Entry e) { entries_.push_back(std::move(e)); }
-  // Every entry before n is taken by every chip.
-  void drop_before(std::uint64_t n);
+  // Every chip took every entry: the log starts empty at end() (its memory kept).
+  void clear() {
+    first_ = end();
+    entries_.clear();
+  }
 
  private:
   static void keep(std::vector<std::size_t>& list, std::size_t i, bool in);
-  std::deque<Entry> entries_;
+  std::vector<Entry> entries_;
   std::uint64_t first_ = 0;
   std::vector<std::size_t> chips_;
   std::vector<std::size_t> eager_;

@@ -213,6 +213,17 @@ std::vector<std::uint8_t> foreign_telegram(std::size_t k) {
   }
 }
 
+// The end of a run of foreign telegrams: both lines to `at`, then slave 8 (chip 3) addressed.
+void slave_8_after(Bed& fast, Bed& ref, std::uint64_t at, const std::string& run) {
+  for (Bed* b : {&fast, &ref}) b->seg.run_until(at);
+  ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "after the " + run));
+  for (Bed* b : {&fast, &ref}) {
+    b->master->select(3);
+    b->master->data_exchange({5, 6, 7, 8});
+  }
+  ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "slave 8 after the " + run));
+}
+
 // A run of 24 foreign telegrams back to back after TSYN (requests to absent stations, tokens,
 // answers, short acknowledges, a bad FCS), the line looked at inside some of them; at the
 // twelfth chip 3 gets an on_telegram observer through chip(i); then slave 8 (chip 3) addressed.
@@ -232,13 +243,7 @@ void foreign_run(Bed& fast, Bed& ref) {
     }
     at = end + 40 * t;
   }
-  for (Bed* b : {&fast, &ref}) b->seg.run_until(at);
-  ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "after the foreign run"));
-  for (Bed* b : {&fast, &ref}) {
-    b->master->select(3);
-    b->master->data_exchange({5, 6, 7, 8});
-  }
-  ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "slave 8 after the foreign run"));
+  ASSERT_NO_FATAL_FAILURE(slave_8_after(fast, ref, at, "foreign run"));
 }
 
 void run_both_ways(std::uint32_t baud, std::size_t n = 5, bool watch_txd = true,
@@ -361,13 +366,7 @@ void log_run(std::uint32_t baud, std::size_t n) {
       at = fast.seg.cycle() + 40 * t;
     }
   }
-  for (Bed* b : {&fast, &ref}) b->seg.run_until(at);
-  ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "after the log run"));
-  for (Bed* b : {&fast, &ref}) {
-    b->master->select(3);
-    b->master->data_exchange({5, 6, 7, 8});
-  }
-  ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "slave 8 after the log run"));
+  ASSERT_NO_FATAL_FAILURE(slave_8_after(fast, ref, at, "log run"));
 }
 
 TEST(SegmentSpeed, TheTelegramLogOfFiveSlavesShowsWhatTheReferenceLineShowsAt1M5) {
