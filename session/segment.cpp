@@ -376,6 +376,13 @@ void Segment::hear_whole(std::size_t from, const std::shared_ptr<const HeardFram
     s.chip->hear_telegram(heard, start, t_);
     look_at(s);
   }
+  // Every chip heard it at once (or sent it, with nothing left to take): no entry.
+  const Station& sender = *stations_[from];
+  const bool sender_in = sender.chip && std::binary_search(now.begin(), now.end(), from);
+  if (now.size() + (sender.chip && !sender_in ? 1 : 0) == log_.chips() &&
+      (!sender.chip || sender.taken == log_.end())) {
+    return;
+  }
   log_.append({heard, start, from});
   for (const std::size_t k : now) {
     if (k != from) stations_[k]->taken = log_.end();

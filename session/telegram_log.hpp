@@ -31,6 +31,7 @@ class TelegramLog {
   // The chips that hear a telegram at once: those that cannot wait (in station order) and those
   // at a request's destination address, kept as the segment looks at its chips.
   void add_chip(std::size_t i) { chips_.push_back(i); }
+  [[nodiscard]] std::size_t chips() const { return chips_.size(); }
   void set_eager(std::size_t i, bool on) { keep(eager_, i, on); }
   void set_address(std::size_t i, int from, int to);
   // The chips `f` concerns at once, in station order: a copy, valid until the next call.
