@@ -72,8 +72,9 @@ class Segment {
   // happens on the line: a chip's user side may have run it ahead with bus accesses, its init for
   // one); chip(i) brings the others here when looked at.
   [[nodiscard]] std::uint64_t cycle() const;
-  // Every chip to cycle(), also those the line left alone: for whoever holds a station's Chip&
-  // (a trace recorder, an observer reading chip.cycle()) and looks at it between runs.
+  // Every chip to cycle() and through the telegram log, also those the line left alone: for
+  // whoever holds a station's Chip& (a trace recorder, an observer reading chip.cycle()) and
+  // looks at it between runs.
   void align();
 
   // The reference line (on: as before issue 30 item 6): every station stepped in every round and
