@@ -385,6 +385,58 @@ TEST(SegmentSpeed, TheTelegramLogOfThirtyThreeSlavesShowsWhatTheReferenceLineSho
   log_run(12'000'000, 33);
 }
 
+// The segment of bench/bench_segment.cpp (8 + 8 bytes, the user side on each SPC3's host CPU,
+// nobody watching the chips): its DP cycles on both lines, the line's time and every chip's
+// counters and snapshot compared after each (most chips take their telegrams from the log).
+void bench_cycles(std::uint32_t baud, std::size_t n) {
+  std::vector<std::unique_ptr<Segment>> segs;
+  std::vector<std::unique_ptr<Responder>> users;
+  std::vector<std::unique_ptr<DpMaster>> masters;
+  for (const bool reference : {false, true}) {
+    segs.push_back(std::make_unique<Segment>(baud));
+    Segment& seg = *segs.back();
+    seg.use_reference_line(reference);
+    std::vector<SlaveConfig> slaves;
+    for (std::size_t i = 0; i < n; ++i) {
+      SlaveConfig sc;
+      sc.address = static_cast<std::uint8_t>(3 + i);
+      sc.cfg = {0x17, 0x27};  // 8 bytes in, 8 bytes out
+      sc.in_len = 8;
+      sc.out_len = 8;
+      slaves.push_back(sc);
+      ResponderConfig rc;
+      rc.slave = sc;
+      users.push_back(std::make_unique<Responder>(rc));
+      users.back()->inputs.assign(8, static_cast<std::uint8_t>(i));
+      const std::size_t k = seg.add_chip("slave", ChipOptions{Profile::spc3});
+      DirectBus bus(seg.chip(k));
+      users.back()->init(bus);
+      Responder* r = users.back().get();
+      seg.set_firmware(k, [r](BusPort& b) { r->isr(b); });
+    }
+    const std::size_t m = seg.add_sender("master");
+    masters.push_back(std::make_unique<DpMaster>(seg, m, MasterConfig{2, baud}, slaves));
+    ASSERT_TRUE(masters.back()->startup_all());
+  }
+  const std::vector<std::vector<std::uint8_t>> outputs(n, std::vector<std::uint8_t>(8, 0x55));
+  for (int cycle = 0; cycle < 12; ++cycle) {
+    for (auto& m : masters) m->dp_cycle(outputs);
+    ASSERT_EQ(segs[0]->cycle(), segs[1]->cycle()) << "DP cycle " << cycle;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Chip& a = segs[0]->chip(i);
+      const Chip& b = segs[1]->chip(i);
+      ASSERT_EQ(a.cycle(), b.cycle()) << "DP cycle " << cycle << ", slave " << i;
+      ASSERT_EQ(counters_text(a.fdl_counters()), counters_text(b.fdl_counters()))
+          << "DP cycle " << cycle << ", slave " << i;
+      ASSERT_EQ(a.save_state(), b.save_state()) << "DP cycle " << cycle << ", slave " << i;
+    }
+  }
+}
+
+TEST(SegmentSpeed, TheBenchsDpCyclesAreTheReferenceLinesAt1M5) { bench_cycles(1'500'000, 8); }
+
+TEST(SegmentSpeed, TheBenchsDpCyclesAreTheReferenceLinesAt12M) { bench_cycles(12'000'000, 8); }
+
 TEST(SegmentSpeed, TheTelegramLevelLineShowsWhatTheReferenceLineShowsAt1M5) {
   run_both_ways(1'500'000);
 }
