@@ -36,6 +36,14 @@ std::string counters_text(const FdlCounters& n) {
       n.unsupported_function, n.not_allowed, n.no_resource, n.offline, n.repeated, n.requests);
 }
 
+// The built-in user side of slave `sc`, kept in `users`.
+Responder& add_user(std::vector<std::unique_ptr<Responder>>& users, const SlaveConfig& sc) {
+  ResponderConfig rc;
+  rc.slave = sc;
+  users.push_back(std::make_unique<Responder>(rc));
+  return *users.back();
+}
+
 // `n` (at least five) slaves of the three profiles with the built-in user side (the fifth one also
 // polls a register in a main loop, so its firmware runs in every round), a master and a scripted
 // station. With `watch_txd` each chip's TxD edges are logged (Chip::on_txd: every edge an event of
@@ -67,10 +75,7 @@ struct Bed {
       sc.wd_fact1 = 1;
       sc.wd_fact2 = 1;
       slaves.push_back(sc);
-      ResponderConfig rc;
-      rc.slave = sc;
-      users.push_back(std::make_unique<Responder>(rc));
-      users.back()->inputs = {static_cast<std::uint8_t>(i), 1, 2, 3};
+      add_user(users, sc).inputs = {static_cast<std::uint8_t>(i), 1, 2, 3};
       const std::size_t k = seg.add_chip(fmt::format("slave {}", sc.address), {profiles[i % 3]});
       chips.push_back(k);
       log.emplace_back();
@@ -404,10 +409,7 @@ void bench_cycles(std::uint32_t baud, std::size_t n) {
       sc.in_len = 8;
       sc.out_len = 8;
       slaves.push_back(sc);
-      ResponderConfig rc;
-      rc.slave = sc;
-      users.push_back(std::make_unique<Responder>(rc));
-      users.back()->inputs.assign(8, static_cast<std::uint8_t>(i));
+      add_user(users, sc).inputs.assign(8, static_cast<std::uint8_t>(i));
       const std::size_t k = seg.add_chip("slave", ChipOptions{Profile::spc3});
       DirectBus bus(seg.chip(k));
       users.back()->init(bus);
