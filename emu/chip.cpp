@@ -138,6 +138,9 @@ ChipProbe Chip::probe() const {
 }
 std::uint64_t Chip::next_deadline() const { return core_->next_event(); }
 std::uint64_t Chip::line_deadline() const { return core_->line_event(); }
+bool Chip::may_hear_later(std::uint32_t bit_cycles) const {
+  return core_->mac.hears_later(bit_cycles);
+}
 std::uint64_t Chip::watchdog_due() const { return core_->watchdog.due(); }
 std::uint64_t Chip::eoi_inactive_until() const { return core_->irq.inactive_until(); }
 

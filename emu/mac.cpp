@@ -175,6 +175,23 @@ bool Mac::heard_quiet() const {
   return f.da != dp_.station() && f.da != fdl::kBroadcast;      // foreign_address counted
 }
 
+bool Mac::hears_later(std::uint32_t t) const {
+  // heard_quiet's conditions that do not depend on the frame; the frame's are the line's
+  // (TelegramLog::concerns: a request with data to this address or a broadcast is served).
+  if (clock_.engine != Engine::event || sig_.telegram || sig_.state || sig_.rxd ||
+      s_.tx_end != kNever || watchdog_.state() == WdState::Baud_Search ||
+      s_.search_deadline != kNever || s_.in_frame || s_.frame_timeout != kNever ||
+      (!s_.rxd_pending.empty() && (s_.rxd_pending.end() - 1)->first > clock_.now)) {
+    return false;
+  }
+  // can_hear from the next telegram on: the receiver idle at `t`, or so once the telegram it
+  // heard whole is taken (after_chars at the same rate), quietly.
+  const HeardTelegram& h = s_.heard;
+  if (h.active) return h.t == t && s_.rx.bit_time() == t && heard_quiet();
+  return s_.rx.bit_time() == t && t >= 2 && s_.rx.level() && !s_.rx.receiving() &&
+         s_.rx.next_deadline() == UartRx::kIdle;
+}
+
 std::uint64_t Mac::deadline_but_heard() const {
   std::uint64_t t =
       std::min({s_.rx.next_deadline(), s_.frame_timeout, s_.search_deadline, s_.tx_end});

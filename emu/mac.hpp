@@ -199,6 +199,10 @@ class Mac {
   // deadline() without the due cycle of a telegram heard whole that shows nothing outside the
   // chip there (heard_quiet): Chip::line_deadline, docs/segment.md "Verdicts that show nothing".
   [[nodiscard]] std::uint64_t line_deadline() const;
+  // Chip::may_hear_later: every telegram heard whole at `t` clocks per bit from the next one on
+  // whose frame is not served here would show nothing (heard_quiet) and be taken whole, until
+  // the next deadline (an event may change it) or a new observer.
+  [[nodiscard]] bool hears_later(std::uint32_t t) const;
 
  private:
   friend struct BlockAccess;

@@ -52,6 +52,11 @@ struct Segment::Station {
   // its first start bit.
   bool busy = false;
   std::uint64_t looked = UINT64_MAX;  // the chip's cycle when the rounds last looked
+  // The telegram log: the next entry it takes; whether it hears every telegram at once (eager_),
+  // and its station address as last looked (at_address_; -1: none yet).
+  std::uint64_t taken = 0;
+  bool eager = false;
+  int address = -1;
   std::optional<LineTelegram> answer;
   // The TxD edges of its last armed answer (both line modes): what a firmware running past a
   // round's end must not cross; at telegram level also what the line relays (from out_next on:
@@ -96,8 +101,10 @@ std::size_t Segment::add_chip(std::string name, ChipOptions opt) {
     throw std::invalid_argument(fmt::format("segment: station {} runs at {} Hz, the line at {} Hz",
                                             s->name, s->chip->clock_hz(), clock_hz_));
   }
-  // A station joins the line at the line's time.
+  // A station joins the line at the line's time, after the telegrams logged so far.
   if (now_ > 0) s->chip->step(now_);
+  s->taken = log_.end();
+  log_.add_chip(stations_.size());
   Station* raw = s.get();
   if (reference_) {
     // Every TxD edge an event of the chip (Chip::on_txd): next_deadline() then bounds the next
@@ -175,6 +182,18 @@ void Segment::look_at(Station& s) {
       busy_.erase(at);
     }
   }
+  // Until its next event (or a new observer: chip(i) has it looked at again) the telegrams heard
+  // whole that concern neither every chip nor its address may wait in the log.
+  const bool eager = reference_ || busy || !s.chip->may_hear_later(t_);
+  if (eager != s.eager) {
+    s.eager = eager;
+    log_.set_eager(s.index, eager);
+  }
+  const int address = s.chip->station_address();
+  if (address != s.address) {
+    log_.set_address(s.index, s.address, address);
+    s.address = address;
+  }
 }
 
 void Segment::set_next(std::size_t i, std::uint64_t next) {
@@ -230,7 +249,7 @@ Chip& Segment::chip(std::size_t i) {
   // Left alone by the line, it has no event the line sees before now_ and its firmware sleeps:
   // stepping it here changes nothing but its cycle and what the verdicts it takes on the way
   // (Chip::line_deadline) count, as they would have by now on the reference line.
-  if (s.chip->cycle() < now_) {
+  if (s.chip->cycle() < now_ || s.taken < log_.end()) {
     const Scoped at(hard_end_, now_);  // its firmware does not run past the line's time
     step_station(s, now_);
   }
@@ -302,7 +321,9 @@ bool Segment::others_drive(const Station& s, std::uint64_t from, std::uint64_t t
 // - else (it drives too: a collision) the chip alone runs the rest, and the firmware's next access
 //   starts at `to`, up to kCpuSlack clocks late.
 void Segment::step_station(Station& s, std::uint64_t to) {
-  if (!s.chip || s.chip->cycle() >= to) return;
+  if (!s.chip) return;
+  take_log(s, to);
+  if (s.chip->cycle() >= to) return;
   if (!reference_ && !s.busy && next_[s.index] > to && s.looked == s.chip->cycle()) {
     s.chip->step(to - s.chip->cycle());  // nothing happens in it before `to`: only time passes
     return;
@@ -328,6 +349,52 @@ void Segment::step_station(Station& s, std::uint64_t to) {
     }
   }
   if (s.chip->cycle() < to) s.chip->step(to - s.chip->cycle());
+}
+
+// A chip takes the log's entries as send() gave them before the log: stepped to each one's start,
+// where nothing happens in it but what the entries before show (they came after its last look,
+// before its next event), and heard whole. Their verdicts change nothing the rounds know of it.
+void Segment::take_log(Station& s, std::uint64_t to) {
+  if (s.taken == log_.end()) return;
+  const bool current = s.looked == s.chip->cycle();
+  for (; s.taken < log_.end() && log_.at(s.taken).start <= to; ++s.taken) {
+    const TelegramLog::Entry& e = log_.at(s.taken);
+    if (e.from == s.index) continue;  // its own answer
+    if (s.chip->cycle() < e.start) s.chip->step(e.start - s.chip->cycle());
+    s.chip->hear_telegram(e.frame, e.start, t_);
+  }
+  if (current) s.looked = s.chip->cycle();
+}
+
+void Segment::hear_whole(std::size_t from, const std::shared_ptr<const HeardFrame>& heard,
+                         std::uint64_t start) {
+  const std::vector<std::size_t>& now = log_.hear_now(*heard);
+  for (const std::size_t k : now) {
+    if (k == from) continue;
+    Station& s = *stations_[k];
+    step_station(s, start);
+    s.chip->hear_telegram(heard, start, t_);
+    look_at(s);
+  }
+  // Every chip heard it at once (or sent it, with nothing left to take): no entry.
+  const Station& sender = *stations_[from];
+  const bool sender_in = sender.chip && std::binary_search(now.begin(), now.end(), from);
+  if (now.size() + (sender.chip && !sender_in ? 1 : 0) == log_.chips() &&
+      (!sender.chip || sender.taken == log_.end())) {
+    return;
+  }
+  log_.append({heard, start, from});
+  for (const std::size_t k : now) {
+    if (k != from) stations_[k]->taken = log_.end();
+  }
+  // The log is trimmed by bringing the chips that lag most up to it (a chip takes every entry
+  // once, now or at its next step).
+  if (log_.end() - log_.first() > 64 + 4 * stations_.size()) {
+    for (const auto& s : stations_) {
+      if (s->chip) take_log(*s, UINT64_MAX);
+    }
+    log_.clear();
+  }
 }
 
 void Segment::collide(std::size_t first, std::size_t second, std::uint64_t cycle) {
@@ -364,13 +431,7 @@ bool Segment::relay_answer(std::size_t i, std::uint64_t cycle) {
   Station& a = *stations_[i];
   if (reference_ || !a.answer || a.answer->start != cycle || a.chip->bit_cycles() != t_)
     return false;
-  const auto heard = HeardFrame::make(a.answer->bytes);  // decoded once for every chip
-  for (const auto& s : stations_) {
-    if (!s->chip || s.get() == &a) continue;
-    step_station(*s, cycle);
-    s->chip->hear_telegram(heard, cycle, t_);
-    look_at(*s);
-  }
+  hear_whole(i, HeardFrame::make(a.answer->bytes), cycle);  // decoded once for every chip
   a.answer.reset();
   // Its edges from this one on (relay_armed took it; this one is its first start bit, so they
   // are the whole answer): the senders hear its characters and the line's decoder takes them
@@ -538,21 +599,24 @@ std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> byte
   const bool whole = !reference_ && fault.kind == UartFault::Kind::none;
   Edges edges;
   if (!whole || on_line) uart_encode(bytes, start, t_, edges, fault);
-  const auto heard = whole ? HeardFrame::make(bytes) : nullptr;
-  for (std::size_t k = 0; k < stations_.size(); ++k) {
-    Station& s = *stations_[k];
-    if (k == from || !s.chip) continue;
-    if (start < s.chip->cycle()) {
+  // run_to_send brought the line's time to the front of the chips (none stands past it).
+  for (std::size_t k = 0; start < now_ && k < stations_.size(); ++k) {
+    const Station& s = *stations_[k];
+    if (k != from && s.chip && start < s.chip->cycle()) {
       throw std::logic_error(fmt::format("segment: {} sends at cycle {}, {} is at cycle {}",
                                          stations_[from]->name, start, s.name, s.chip->cycle()));
     }
-    step_station(s, start);
-    if (whole) {
-      s.chip->hear_telegram(heard, start, t_);
-    } else {
+  }
+  if (whole) {
+    hear_whole(from, HeardFrame::make(bytes), start);
+  } else {
+    for (std::size_t k = 0; k < stations_.size(); ++k) {
+      Station& s = *stations_[k];
+      if (k == from || !s.chip) continue;
+      step_station(s, start);
       s.chip->drive_rxd_chars(bytes, start, t_, fault);
+      look_at(s);
     }
-    look_at(s);
   }
   if (whole) {
     senders_hear(from, bytes, start);

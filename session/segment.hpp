@@ -18,6 +18,7 @@
 #include "cpu.hpp"
 #include "dpc31/chip.hpp"
 #include "dpc31/uart.hpp"
+#include "telegram_log.hpp"
 #include "txd_receiver.hpp"
 
 namespace dpc31 {
@@ -60,6 +61,9 @@ class Segment {
   // The chip of station i at the line's time: a station the line left alone (no event of its own,
   // its firmware asleep) may stand earlier, and is brought to cycle() first (docs/segment.md); one
   // whose firmware waits for its next access (up to kCpuSlack short) stays where that starts.
+  // It also takes the telegrams the line logged for it (docs/segment.md, "The telegram log"): a
+  // Chip& kept past a run of the line shows them, and counts observers added through it, only
+  // after chip(i) (or align()) again.
   [[nodiscard]] Chip& chip(std::size_t i);
   [[nodiscard]] const Chip& chip(std::size_t i) const;
   [[nodiscard]] std::uint32_t bit_cycles() const { return t_; }
@@ -68,8 +72,9 @@ class Segment {
   // happens on the line: a chip's user side may have run it ahead with bus accesses, its init for
   // one); chip(i) brings the others here when looked at.
   [[nodiscard]] std::uint64_t cycle() const;
-  // Every chip to cycle(), also those the line left alone: for whoever holds a station's Chip&
-  // (a trace recorder, an observer reading chip.cycle()) and looks at it between runs.
+  // Every chip to cycle() and through the telegram log, also those the line left alone: for
+  // whoever holds a station's Chip& (a trace recorder, an observer reading chip.cycle()) and
+  // looks at it between runs.
   void align();
 
   // The reference line (on: as before issue 30 item 6): every station stepped in every round and
@@ -119,6 +124,12 @@ class Segment {
   struct Station;
   using Edges = std::vector<std::pair<std::uint64_t, bool>>;
   void step_station(Station& s, std::uint64_t to);
+  // The telegrams of the log station s has not taken and that start by `to`, each at its start.
+  void take_log(Station& s, std::uint64_t to);
+  // A telegram heard whole from `from` at `start`: to the chips it concerns at once (stepped to
+  // `start`, looked at again), into the log for the others.
+  void hear_whole(std::size_t from, const std::shared_ptr<const HeardFrame>& heard,
+                  std::uint64_t start);
   // Whether another station drives the line anywhere in [from, to] (another chip's armed answer)
   // or a firmware may not run past a cycle there (hard_end_).
   [[nodiscard]] bool others_drive(const Station& s, std::uint64_t from, std::uint64_t to) const;
@@ -209,6 +220,8 @@ class Segment {
   std::vector<std::uint64_t> next_tree_;
   std::size_t leaves_ = 0;
   std::vector<std::size_t> busy_;
+  // The telegram log (docs/segment.md) and who hears a telegram at once.
+  TelegramLog log_;
   std::vector<std::size_t> due_;
   std::vector<std::size_t> stepped_;
   std::vector<std::size_t> drove_;

@@ -36,6 +36,14 @@ std::string counters_text(const FdlCounters& n) {
       n.unsupported_function, n.not_allowed, n.no_resource, n.offline, n.repeated, n.requests);
 }
 
+// The built-in user side of slave `sc`, kept in `users`.
+Responder& add_user(std::vector<std::unique_ptr<Responder>>& users, const SlaveConfig& sc) {
+  ResponderConfig rc;
+  rc.slave = sc;
+  users.push_back(std::make_unique<Responder>(rc));
+  return *users.back();
+}
+
 // `n` (at least five) slaves of the three profiles with the built-in user side (the fifth one also
 // polls a register in a main loop, so its firmware runs in every round), a master and a scripted
 // station. With `watch_txd` each chip's TxD edges are logged (Chip::on_txd: every edge an event of
@@ -67,10 +75,7 @@ struct Bed {
       sc.wd_fact1 = 1;
       sc.wd_fact2 = 1;
       slaves.push_back(sc);
-      ResponderConfig rc;
-      rc.slave = sc;
-      users.push_back(std::make_unique<Responder>(rc));
-      users.back()->inputs = {static_cast<std::uint8_t>(i), 1, 2, 3};
+      add_user(users, sc).inputs = {static_cast<std::uint8_t>(i), 1, 2, 3};
       const std::size_t k = seg.add_chip(fmt::format("slave {}", sc.address), {profiles[i % 3]});
       chips.push_back(k);
       log.emplace_back();
@@ -189,37 +194,49 @@ void foreign(Bed& fast, Bed& ref, const std::vector<std::uint8_t>& bytes, std::u
   }
 }
 
+// Foreign telegram k of a run: a request to an absent station, a token, an answer, a short
+// acknowledge, a request with a bad FCS, in turn.
+std::vector<std::uint8_t> foreign_telegram(std::size_t k) {
+  using fdl::Function;
+  std::vector<std::uint8_t> bytes;
+  switch (k % 5) {
+    case 0:
+      return fdl::encode(fdl::make_frame(static_cast<std::uint8_t>(40 + k % 80), 30,
+                                         fdl::make_request_fc(Function::FDL_Status, false, false)));
+    case 1:
+      return {fdl::SD4, 9, 30};
+    case 2:
+      return fdl::encode(
+          fdl::make_frame(30, 41, fdl::make_response_fc(fdl::Response::OK), {1, 2, 3}));
+    case 3:
+      return {fdl::SC};
+    default:
+      bytes = fdl::encode(
+          fdl::make_frame(43, 30, fdl::make_request_fc(Function::SRD_high, true, true), {7, 7}));
+      bytes[bytes.size() - 2] ^= 1;  // a bad FCS
+      return bytes;
+  }
+}
+
+// The end of a run of foreign telegrams: both lines to `at`, then slave 8 (chip 3) addressed.
+void slave_8_after(Bed& fast, Bed& ref, std::uint64_t at, const std::string& run) {
+  for (Bed* b : {&fast, &ref}) b->seg.run_until(at);
+  ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "after the " + run));
+  for (Bed* b : {&fast, &ref}) {
+    b->master->select(3);
+    b->master->data_exchange({5, 6, 7, 8});
+  }
+  ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "slave 8 after the " + run));
+}
+
 // A run of 24 foreign telegrams back to back after TSYN (requests to absent stations, tokens,
 // answers, short acknowledges, a bad FCS), the line looked at inside some of them; at the
 // twelfth chip 3 gets an on_telegram observer through chip(i); then slave 8 (chip 3) addressed.
 void foreign_run(Bed& fast, Bed& ref) {
   const std::uint64_t t = fast.seg.bit_cycles();
-  using fdl::Function;
   std::uint64_t at = fast.seg.cycle() + 40 * t;
   for (std::size_t k = 0; k < 24; ++k) {
-    std::vector<std::uint8_t> bytes;
-    switch (k % 5) {
-      case 0:
-        bytes =
-            fdl::encode(fdl::make_frame(static_cast<std::uint8_t>(40 + k), 30,
-                                        fdl::make_request_fc(Function::FDL_Status, false, false)));
-        break;
-      case 1:
-        bytes = {fdl::SD4, 9, 30};
-        break;
-      case 2:
-        bytes = fdl::encode(
-            fdl::make_frame(30, 41, fdl::make_response_fc(fdl::Response::OK), {1, 2, 3}));
-        break;
-      case 3:
-        bytes = {fdl::SC};
-        break;
-      default:
-        bytes = fdl::encode(
-            fdl::make_frame(43, 30, fdl::make_request_fc(Function::SRD_high, true, true), {7, 7}));
-        bytes[bytes.size() - 2] ^= 1;  // a bad FCS
-        break;
-    }
+    const std::vector<std::uint8_t> bytes = foreign_telegram(k);
     std::uint64_t end = 0;
     for (Bed* b : {&fast, &ref}) end = b->seg.send(b->other, bytes, at);
     if (k % 7 == 3) {
@@ -231,13 +248,7 @@ void foreign_run(Bed& fast, Bed& ref) {
     }
     at = end + 40 * t;
   }
-  for (Bed* b : {&fast, &ref}) b->seg.run_until(at);
-  ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "after the foreign run"));
-  for (Bed* b : {&fast, &ref}) {
-    b->master->select(3);
-    b->master->data_exchange({5, 6, 7, 8});
-  }
-  ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "slave 8 after the foreign run"));
+  ASSERT_NO_FATAL_FAILURE(slave_8_after(fast, ref, at, "foreign run"));
 }
 
 void run_both_ways(std::uint32_t baud, std::size_t n = 5, bool watch_txd = true,
@@ -322,6 +333,111 @@ void run_both_ways(std::uint32_t baud, std::size_t n = 5, bool watch_txd = true,
   }
   EXPECT_EQ(fast.seg.chip(fast.chips[2]).dp_state(), DpState::Wait_Prm);
 }
+
+// The telegram log (docs/segment.md, "The telegram log"): all slaves but the first unwatched, so
+// they take the 240 foreign telegrams back to back (more than the log keeps before it brings the
+// laggards up) at their next step; the line is looked at through chip(i) inside some of them
+// (counters, snapshots), slave 7 gets an on_telegram observer in the middle, the master sends a
+// Global_Control broadcast and a Data_Exchange to the last slave inside the run (slave 9's
+// firmware runs in every round), then slave 8 is addressed.
+void log_run(std::uint32_t baud, std::size_t n) {
+  Bed fast(false, baud, n, false, 1);
+  Bed ref(true, baud, n, false, 1);
+  for (Bed* b : {&fast, &ref}) ASSERT_TRUE(b->master->startup_all());
+  ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "after the start-up"));
+  const std::uint64_t t = fast.seg.bit_cycles();
+  std::uint64_t at = fast.seg.cycle() + 40 * t;
+  for (std::size_t k = 0; k < 240; ++k) {
+    std::uint64_t end = 0;
+    for (Bed* b : {&fast, &ref}) end = b->seg.send(b->other, foreign_telegram(k), at);
+    at = end + 40 * t;
+    if (k % 37 == 11) {
+      for (Bed* b : {&fast, &ref}) b->seg.run_until(end - t / 2);
+      ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, fmt::format("log run, telegram {}", k)));
+    }
+    if (k == 60) {
+      for (Bed* b : {&fast, &ref}) b->watch_telegrams(2);
+    }
+    if (k == 100 || k == 170) {
+      for (Bed* b : {&fast, &ref}) {
+        b->seg.run_until(at);
+        if (k == 100) {
+          b->master->global_control(0x08);
+        } else {
+          b->master->select(n - 1);
+          b->master->data_exchange({4, 3, 2, 1});
+        }
+      }
+      at = fast.seg.cycle() + 40 * t;
+    }
+  }
+  ASSERT_NO_FATAL_FAILURE(slave_8_after(fast, ref, at, "log run"));
+}
+
+TEST(SegmentSpeed, TheTelegramLogOfFiveSlavesShowsWhatTheReferenceLineShowsAt1M5) {
+  log_run(1'500'000, 5);
+}
+
+TEST(SegmentSpeed, TheTelegramLogOfFiveSlavesShowsWhatTheReferenceLineShowsAt12M) {
+  log_run(12'000'000, 5);
+}
+
+TEST(SegmentSpeed, TheTelegramLogOfThirtyThreeSlavesShowsWhatTheReferenceLineShowsAt1M5) {
+  log_run(1'500'000, 33);
+}
+
+TEST(SegmentSpeed, TheTelegramLogOfThirtyThreeSlavesShowsWhatTheReferenceLineShowsAt12M) {
+  log_run(12'000'000, 33);
+}
+
+// The segment of bench/bench_segment.cpp (8 + 8 bytes, the user side on each SPC3's host CPU,
+// nobody watching the chips): its DP cycles on both lines, the line's time and every chip's
+// counters and snapshot compared after each (most chips take their telegrams from the log).
+void bench_cycles(std::uint32_t baud, std::size_t n) {
+  std::vector<std::unique_ptr<Segment>> segs;
+  std::vector<std::unique_ptr<Responder>> users;
+  std::vector<std::unique_ptr<DpMaster>> masters;
+  for (const bool reference : {false, true}) {
+    segs.push_back(std::make_unique<Segment>(baud));
+    Segment& seg = *segs.back();
+    seg.use_reference_line(reference);
+    std::vector<SlaveConfig> slaves;
+    for (std::size_t i = 0; i < n; ++i) {
+      SlaveConfig sc;
+      sc.address = static_cast<std::uint8_t>(3 + i);
+      sc.cfg = {0x17, 0x27};  // 8 bytes in, 8 bytes out
+      sc.in_len = 8;
+      sc.out_len = 8;
+      slaves.push_back(sc);
+      add_user(users, sc).inputs.assign(8, static_cast<std::uint8_t>(i));
+      const std::size_t k = seg.add_chip("slave", ChipOptions{Profile::spc3});
+      DirectBus bus(seg.chip(k));
+      users.back()->init(bus);
+      Responder* r = users.back().get();
+      seg.set_firmware(k, [r](BusPort& b) { r->isr(b); });
+    }
+    const std::size_t m = seg.add_sender("master");
+    masters.push_back(std::make_unique<DpMaster>(seg, m, MasterConfig{2, baud}, slaves));
+    ASSERT_TRUE(masters.back()->startup_all());
+  }
+  const std::vector<std::vector<std::uint8_t>> outputs(n, std::vector<std::uint8_t>(8, 0x55));
+  for (int cycle = 0; cycle < 12; ++cycle) {
+    for (auto& m : masters) m->dp_cycle(outputs);
+    ASSERT_EQ(segs[0]->cycle(), segs[1]->cycle()) << "DP cycle " << cycle;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Chip& a = segs[0]->chip(i);
+      const Chip& b = segs[1]->chip(i);
+      ASSERT_EQ(a.cycle(), b.cycle()) << "DP cycle " << cycle << ", slave " << i;
+      ASSERT_EQ(counters_text(a.fdl_counters()), counters_text(b.fdl_counters()))
+          << "DP cycle " << cycle << ", slave " << i;
+      ASSERT_EQ(a.save_state(), b.save_state()) << "DP cycle " << cycle << ", slave " << i;
+    }
+  }
+}
+
+TEST(SegmentSpeed, TheBenchsDpCyclesAreTheReferenceLinesAt1M5) { bench_cycles(1'500'000, 8); }
+
+TEST(SegmentSpeed, TheBenchsDpCyclesAreTheReferenceLinesAt12M) { bench_cycles(12'000'000, 8); }
 
 TEST(SegmentSpeed, TheTelegramLevelLineShowsWhatTheReferenceLineShowsAt1M5) {
   run_both_ways(1'500'000);

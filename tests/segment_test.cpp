@@ -9,6 +9,7 @@
 
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <vector>
 
 #include "bus_check.hpp"
@@ -75,6 +76,24 @@ TEST(Segment, EveryCharacterReachesEveryStationAtTheSameCycle) {
   uart_encode(bytes, start, seg.bit_cycles(), want);
   EXPECT_EQ(end, start + bytes.size() * 11 * seg.bit_cycles());
   for (const auto& h : heard) EXPECT_EQ(h, want);
+}
+
+// A sender's telegram before the cycle the chips stand at (a user side ran one ahead with its
+// own steps; the line brings the others there first) breaks the line's order: thrown with the
+// sender's name, the first chip's and both cycles, never heard late.
+TEST(Segment, ASendBeforeTheChipsCycleThrowsWithBothNames) {
+  Segment seg(kBaud);
+  (void)seg.add_chip("slave a", ChipOptions{});
+  const std::size_t b = seg.add_chip("slave b", ChipOptions{});
+  const std::size_t m = seg.add_sender("master");
+  seg.chip(b).step(5000);
+  const std::vector<std::uint8_t> token{fdl::SD4, 9, 2};
+  try {
+    seg.send(m, token, 1000);
+    ADD_FAILURE() << "no exception";
+  } catch (const std::logic_error& e) {
+    EXPECT_STREQ(e.what(), "segment: master sends at cycle 1000, slave a is at cycle 5000");
+  }
 }
 
 TEST(Segment, ThreeSlavesReachDataExchangeEachAnswerAtItsTsdr) {

@@ -320,6 +320,14 @@ class Chip {
   // no answer is on TxD (docs/segment.md, "Verdicts that show nothing"). The chip takes such a
   // verdict inside its next step, at its own cycle: whoever steps it needs no stop there.
   [[nodiscard]] std::uint64_t line_deadline() const;
+  // Whether a line may give this chip a telegram heard whole at `bit_cycles` per bit later, at
+  // its next step, instead of at the telegram's start: until line_deadline() (an event may change
+  // it) and while no observer is added, every such telegram that is not a request with data to
+  // this chip's address or a broadcast, and whose frame ends at its last character, would be taken
+  // whole and show nothing (no on_telegram, on_state_change or on_rxd observer, no answer on TxD,
+  // not in Baud_Search, the receiver idle at that rate between telegrams). A segment's telegram
+  // log (docs/segment.md).
+  [[nodiscard]] bool may_hear_later(std::uint32_t bit_cycles) const;
   // The cycle the running watchdog (Baud_Control or DP_Control) expires; UINT64_MAX: none.
   [[nodiscard]] std::uint64_t watchdog_due() const;
   // The cycle the EOI inactive time ends (X/INT may become active again from then on); at or
