@@ -114,9 +114,12 @@ std::uint64_t DpMaster::put_on_line(std::span<const std::uint8_t> bytes, std::ui
 }
 
 void DpMaster::select(std::size_t i) {
-  slaves_.at(current_) = {slave_, target_, fcb_, fcv_started_};
-  const SlaveState& s = slaves_.at(i);
-  slave_ = s.config;
+  SlaveState& s = slaves_.at(i);
+  // The selected slave's state lives in slave_ & co. (its entry is read only here): moved in and
+  // out, not copied (a DP cycle selects every slave).
+  if (i == current_) return;
+  slaves_[current_] = {std::move(slave_), target_, fcb_, fcv_started_};
+  slave_ = std::move(s.config);
   target_ = s.target;
   fcb_ = s.fcb;
   fcv_started_ = s.fcv_started;
@@ -135,6 +138,7 @@ bool DpMaster::startup_all(int tries) {
 
 std::vector<Exchange> DpMaster::dp_cycle(const std::vector<std::vector<std::uint8_t>>& outputs) {
   std::vector<Exchange> out;
+  out.reserve(slaves_.size());
   for (std::size_t i = 0; i < slaves_.size(); ++i) {
     select(i);
     out.push_back(
