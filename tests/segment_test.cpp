@@ -508,9 +508,6 @@ TEST(SegmentScenario, TheSingleChipLoaderNamesTheSegmentLoader) {
             "or run it with `dpc31 run`");
 }
 
-}  // namespace
-}  // namespace dpc31
-
 // A master's slaves keep what the user set through slave() while another is selected (select()
 // moves the selected one's configuration in and out, docs/decisions.md), and an index past them
 // is refused.
@@ -537,3 +534,6 @@ TEST(Segment, AMastersSlaveKeepsItsConfigurationAcrossSelects) {
   EXPECT_THROW(master.select(3), std::out_of_range);
   EXPECT_EQ(master.slave().address, 4);
 }
+
+}  // namespace
+}  // namespace dpc31
