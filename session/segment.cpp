@@ -112,7 +112,7 @@ std::size_t Segment::add_chip(std::string name, ChipOptions opt) {
     s->chip->on_txd_chars([this, raw](const TxdRun& run) { check_txd(*raw, run); });
   }
   s->chip->on_answer([this, raw](const Telegram& t) {
-    raw->answer = LineTelegram{0, t.start, t.end, {}};  // its bytes: out_bytes
+    raw->answer = LineTelegram{0, t.start, t.end, t.bytes};
     raw->drives_edges.clear();
     uart_encode(t.bytes, t.start, raw->chip->bit_cycles(), raw->drives_edges);
     if (reference_) return;
@@ -364,7 +364,7 @@ bool Segment::relay_answer(std::size_t i, std::uint64_t cycle) {
   Station& a = *stations_[i];
   if (reference_ || !a.answer || a.answer->start != cycle || a.chip->bit_cycles() != t_)
     return false;
-  const auto heard = HeardFrame::make(a.out_bytes);  // decoded once for every chip
+  const auto heard = HeardFrame::make(a.answer->bytes);  // decoded once for every chip
   for (const auto& s : stations_) {
     if (!s->chip || s.get() == &a) continue;
     step_station(*s, cycle);
