@@ -172,6 +172,7 @@ void Chip::on_irq_change(std::function<void(std::uint64_t, bool)> cb) {
 void Chip::set_log_sink(LogSink sink) {
   core_->signals.flush_log();  // what the old sink is still owed (a repeat count, lines left out)
   core_->signals.sink = std::move(sink);
+  core_->signals.shown = LogLevel::debug;
 }
 const ProfileDesc& Chip::profile() const { return core_->prof(); }
 BusMode Chip::bus_mode() const { return core_->regs.bus(); }

@@ -64,27 +64,32 @@ std::vector<std::uint8_t> encode(const Frame& f) {
   if ((f.dsap && (*f.dsap & kExtension)) || (f.ssap && (*f.ssap & kExtension))) return {};
 
   const std::size_t le = 3 + saps + f.du.size();
-  std::vector<std::uint8_t> out;
+  // The start of the frame (SD, or SD2 with LE, LEr), then the body in the same block (one
+  // allocation per telegram: every request and answer is encoded).
+  std::array<std::uint8_t, 4> head{};
+  std::size_t body = 1;
   switch (f.sd) {
     case SD1:
       if (!no_data) return {};
-      out = {SD1};
+      head[0] = SD1;
       break;
     case SD3:
       if (saps + f.du.size() != kSd3DataLength) return {};
-      out = {SD3};
+      head[0] = SD3;
       break;
     case SD2: {
       if (le < kMinLe || le > kMaxLe) return {};
       const auto l = static_cast<std::uint8_t>(le);
-      out = {SD2, l, l, SD2};
+      head = {SD2, l, l, SD2};
+      body = head.size();
       break;
     }
     default:
       return {};
   }
-  const std::size_t body = out.size();
+  std::vector<std::uint8_t> out;
   out.reserve(body + le + 2);
+  out.assign(head.begin(), head.begin() + static_cast<std::ptrdiff_t>(body));
   out.push_back(static_cast<std::uint8_t>(f.da | (f.dsap ? kExtension : 0)));
   out.push_back(static_cast<std::uint8_t>(f.sa | (f.ssap ? kExtension : 0)));
   out.push_back(f.fc);

@@ -504,9 +504,11 @@ void Mac::send(const fdl::Frame& f, std::uint64_t request_end) {
   const std::uint64_t start = request_end + std::uint64_t{tsdr} * t;
   const std::uint64_t end = start + bytes.size() * std::uint64_t{kUartCharBits} * t;
   if (sig_.telegram || sig_.answer) {
-    const Telegram armed{true, bytes, start, end};
+    // The observers see it by const reference: the bytes are lent to it, not copied.
+    Telegram armed{true, std::move(bytes), start, end};
     sig_.telegram(armed);
     sig_.answer(armed);
+    bytes = std::move(armed.bytes);
   }
   if (clock_.engine == Engine::per_cycle) {
     // Counted from the end of the request's stop bit, as the receiver sees it.

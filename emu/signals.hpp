@@ -42,6 +42,10 @@ struct Signals {
 
   const Clock* clock;
   LogSink sink;
+  // The sink shows no line below this level: warn for the default stderr sink, so that the
+  // debug and info lines it drops are not formatted (an EOI logs one per interrupt); debug for a
+  // sink of the user's.
+  LogLevel shown = LogLevel::warn;
   Observers<std::uint64_t, bool> irq;  // X/INT activity
   Observers<std::uint64_t, bool> pb3;  // dpc31 port PB3
   Observers<std::uint64_t, bool> txd;  // one by one, each edge an event (Chip::on_txd)
@@ -65,7 +69,7 @@ struct Signals {
   // flood of remarks never crowds out a warning.
   template <typename... Args>
   void log(LogLevel level, fmt::format_string<Args...> f, Args&&... args) const {
-    if (!sink) return;
+    if (!sink || level < shown) return;
     for (std::string& t : limiters[static_cast<std::size_t>(level)].add(
              clock->now, fmt::format(f, std::forward<Args>(args)...)))
       sink(LogRecord{clock->now, level, std::move(t)});
@@ -79,6 +83,7 @@ struct Signals {
   // Everything attached moves to another chip's Signals (a snapshot load); the clock stays.
   void take_attachments(Signals& from) noexcept {
     sink = std::move(from.sink);
+    shown = from.shown;
     limiters = std::move(from.limiters);
     irq = std::move(from.irq);
     pb3 = std::move(from.pb3);

@@ -69,15 +69,28 @@ std::uint16_t uart_frame(std::uint8_t data) {
                                     std::uint32_t{even_parity(data)} << 9 | 1u << kStopBit);
 }
 
+// The bits where the line changes (bit k against bit k - 1, bit 0 against `line`), each set bit
+// one edge: a loop per edge, not per bit (an answer's edges are made per armed answer).
+namespace {
+template <typename Put>
+void frame_changes(std::uint16_t frame, std::uint64_t start, std::uint32_t bit_cycles, bool& line,
+                   Put put) {
+  constexpr std::uint32_t kMask = (1u << kUartCharBits) - 1;
+  const std::uint32_t bits = frame & kMask;
+  for (std::uint32_t c = (bits ^ (bits << 1 | (line ? 1u : 0u))) & kMask; c != 0; c &= c - 1) {
+    const auto k = static_cast<std::uint32_t>(std::countr_zero(c));
+    put(start + std::uint64_t{k} * bit_cycles, (bits >> k & 1u) != 0);
+  }
+  line = (bits >> kStopBit & 1u) != 0;
+}
+}  // namespace
+
 std::size_t uart_frame_edges(std::uint16_t frame, std::uint64_t start, std::uint32_t bit_cycles,
                              bool& line, std::pair<std::uint64_t, bool>* out) {
   std::size_t n = 0;
-  std::uint64_t at = start;
-  for (std::uint32_t k = 0; k < kUartCharBits; ++k, at += bit_cycles) {
-    const bool level = (frame >> k & 1u) != 0;
-    if (level != line) out[n++] = {at, level};
-    line = level;
-  }
+  frame_changes(frame, start, bit_cycles, line, [&](std::uint64_t at, bool level) {
+    out[n++] = {at, level};
+  });
   return n;
 }
 
@@ -390,8 +403,8 @@ void UartSampler::load_state(snap::Reader& r) {
 void uart_encode(std::span<const std::uint8_t> bytes, std::uint64_t start, std::uint32_t bit_cycles,
                  std::vector<std::pair<std::uint64_t, bool>>& edges, UartFault fault) {
   const std::uint64_t frame_cycles = std::uint64_t{kUartCharBits} * bit_cycles;
-  std::size_t n = edges.size();
-  edges.resize(n + bytes.size() * kUartCharBits + 1);
+  edges.reserve(edges.size() + bytes.size() * kUartCharBits + 1);
+  const auto put = [&](std::uint64_t at, bool level) { edges.emplace_back(at, level); };
   bool line = true;
   for (std::size_t i = 0; i < bytes.size(); ++i) {
     std::uint16_t frame = uart_frame(bytes[i]);
@@ -404,10 +417,9 @@ void uart_encode(std::span<const std::uint8_t> bytes, std::uint64_t start, std::
                                                         : kUartCharBits;
       if (k < kUartCharBits) frame = static_cast<std::uint16_t>(frame ^ 1u << k);
     }
-    n += uart_frame_edges(frame, start + i * frame_cycles, bit_cycles, line, &edges[n]);
+    frame_changes(frame, start + i * frame_cycles, bit_cycles, line, put);
   }
-  if (!line) edges[n++] = {start + bytes.size() * frame_cycles, true};
-  edges.resize(n);
+  if (!line) put(start + bytes.size() * frame_cycles, true);
 }
 
 }  // namespace dpc31

@@ -114,9 +114,12 @@ std::uint64_t DpMaster::put_on_line(std::span<const std::uint8_t> bytes, std::ui
 }
 
 void DpMaster::select(std::size_t i) {
-  slaves_.at(current_) = {slave_, target_, fcb_, fcv_started_};
-  const SlaveState& s = slaves_.at(i);
-  slave_ = s.config;
+  SlaveState& s = slaves_.at(i);
+  // The selected slave's state lives in slave_ & co. (its entry is read only here): moved in and
+  // out, not copied (a DP cycle selects every slave).
+  if (i == current_) return;
+  slaves_[current_] = {std::move(slave_), target_, fcb_, fcv_started_};
+  slave_ = std::move(s.config);
   target_ = s.target;
   fcb_ = s.fcb;
   fcv_started_ = s.fcv_started;
@@ -135,6 +138,7 @@ bool DpMaster::startup_all(int tries) {
 
 std::vector<Exchange> DpMaster::dp_cycle(const std::vector<std::vector<std::uint8_t>>& outputs) {
   std::vector<Exchange> out;
+  out.reserve(slaves_.size());
   for (std::size_t i = 0; i < slaves_.size(); ++i) {
     select(i);
     out.push_back(
@@ -263,14 +267,16 @@ bool DpMaster::wait_token(std::uint64_t timeout) {
   }
 }
 
-void DpMaster::look() {
+std::uint64_t DpMaster::look() {
   if (seg_) {
     seg_->take_line(station_, [this](const TxdRun& r) { rx_.take(r); });
   } else {
     chip_->take_txd();
   }
   chars_.clear();
-  rx_.advance(now(), chars_);
+  const std::uint64_t at = now();
+  rx_.advance(at, chars_);
+  return at;
 }
 
 void DpMaster::note(const std::string& s) {
@@ -367,8 +373,7 @@ Exchange DpMaster::transact_raw(const std::vector<std::uint8_t>& bytes, UartFaul
 Exchange DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bool no_answer) {
   Exchange ex;
   // What the line carried before (another master's traffic, for instance) is no answer to us.
-  look();
-  ex.request_start = std::max(now(), bus_free_ + std::uint64_t{cfg_.idle_bits} * t_);
+  ex.request_start = std::max(look(), bus_free_ + std::uint64_t{cfg_.idle_bits} * t_);
   if (on_send) on_send(ex.request_start, bytes, fault);
   ex.request_end = put_on_line(bytes, ex.request_start, fault);
   run_until(ex.request_end);
@@ -393,18 +398,20 @@ Exchange DpMaster::wait_answer(Exchange ex) {
   const std::uint64_t slot_end = ex.request_end + std::uint64_t{cfg_.slot_bits} * t_;
   answer_.reset();
   for (;;) {
-    look();
+    // Nothing below moves time before run_until: the cycle looked at is now() (a segment's
+    // cycle() looks at every chip).
+    const std::uint64_t at = look();
     for (const UartChar& c : chars_) answer_.push(c);
     answer_.push_block(rx_.due(), rx_.due_start(), t_);
     if (answer_.finished() && !rx_.receiving()) break;
-    if (!answer_.started() && !rx_.receiving() && now() >= slot_end) {
-      bus_free_ = now();
+    if (!answer_.started() && !rx_.receiving() && at >= slot_end) {
+      bus_free_ = at;
       wake_on_txd_ = false;
       return ex;  // no answer within the slot time
     }
     // An answer that stops for a slot time between characters is broken.
     const std::uint64_t gap_end = answer_.end() + std::uint64_t{cfg_.slot_bits} * t_;
-    if (answer_.started() && !rx_.receiving() && now() >= gap_end) break;
+    if (answer_.started() && !rx_.receiving() && at >= gap_end) break;
     // Event-driven: sleep until a start bit (TxD falls) or the slot time ends; once the length
     // is known, until the stop sample of the answer's last character (sent back to back).
     const std::size_t len = answer_.expected_length();
@@ -414,7 +421,7 @@ Exchange DpMaster::wait_answer(Exchange ex) {
                       : answer_.start() + (len * kUartCharBits - 1) * std::uint64_t{t_} + t_ / 2;
     }
     wake_on_txd_ = len == 0 || !rx_.receiving();
-    run_until(std::max(next, now() + 1));
+    run_until(std::max(next, at + 1));
   }
   wake_on_txd_ = false;
   ex.answer_start = answer_.start();

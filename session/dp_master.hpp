@@ -285,7 +285,7 @@ class DpMaster {
   Exchange send(std::span<const std::uint8_t> bytes, UartFault fault, bool no_answer);
   Exchange wait_answer(Exchange ex);
   // The characters on TxD whose stop sample is due by now: chars_, then rx_.due().
-  void look();
+  std::uint64_t look();  // the line up to now(), which it returns
   void note(const std::string& s);
   [[nodiscard]] std::uint64_t now() const;
   std::uint64_t put_on_line(std::span<const std::uint8_t> bytes, std::uint64_t start,

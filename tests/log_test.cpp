@@ -109,3 +109,26 @@ TEST(LogLimiter, ChipLogIsBoundedPerLevel) {
                           10000 - LogLimiter::kBurst, LogLimiter::kBurst, LogLimiter::kWindow));
   }
 }
+
+// The default sink shows warnings and errors only, so the chip does not format the debug and
+// info lines it would drop (docs/decisions.md, "Logs that never flood"): they count against no
+// window, and a sink set later gets its first one, also after a snapshot is loaded (the sink and
+// what it shows are attachments, not state).
+TEST(LogLimiter, LinesTheDefaultSinkDropsAreNotCountedForALaterSink) {
+  Chip c({Profile::dpc31, BusMode::intel});
+  std::uint32_t remark = 0;  // RAM the user must not touch: read with an info line
+  for (const RegionDesc& g : c.profile().regions)
+    if (g.ram && g.reserved) remark = g.begin;
+  ASSERT_NE(remark, 0u);
+  // More info lines than a window lets through, none a repeat, under the default sink.
+  for (std::uint32_t i = 0; i < LogLimiter::kBurst + 10; ++i) c.read(remark + (i & 1));
+  testutil::LogCapture log;
+  log.attach(c);
+  c.read(remark);
+  ASSERT_EQ(log.records.size(), 1u);
+  EXPECT_EQ(log.records[0].level, LogLevel::info);
+  c.load_state(c.save_state());
+  c.read(remark + 1);
+  ASSERT_EQ(log.records.size(), 2u);
+  EXPECT_EQ(log.records[1].level, LogLevel::info);
+}

@@ -526,5 +526,32 @@ TEST(SegmentScenario, TheSingleChipLoaderNamesTheSegmentLoader) {
             "or run it with `dpc31 run`");
 }
 
+// A master's slaves keep what the user set through slave() while another is selected (select()
+// moves the selected one's configuration in and out, docs/decisions.md), and an index past them
+// is refused.
+TEST(Segment, AMastersSlaveKeepsItsConfigurationAcrossSelects) {
+  Segment seg(1'500'000);
+  const std::size_t m = seg.add_sender("master");
+  std::vector<SlaveConfig> slaves(3);
+  for (std::size_t i = 0; i < slaves.size(); ++i)
+    slaves[i].address = static_cast<std::uint8_t>(3 + i);
+  DpMaster master(seg, m, MasterConfig{2, 1'500'000}, slaves);
+  master.select(1);
+  master.slave().ident = 0x1234;
+  master.slave().user_prm = {1, 2, 3};
+  master.select(1);  // the slave selected: nothing moves
+  EXPECT_EQ(master.slave().ident, 0x1234);
+  master.select(2);
+  EXPECT_EQ(master.slave().address, 5);
+  master.select(0);
+  EXPECT_EQ(master.slave().address, 3);
+  master.select(1);
+  EXPECT_EQ(master.slave().address, 4);
+  EXPECT_EQ(master.slave().ident, 0x1234);
+  EXPECT_EQ(master.slave().user_prm, (std::vector<std::uint8_t>{1, 2, 3}));
+  EXPECT_THROW(master.select(3), std::out_of_range);
+  EXPECT_EQ(master.slave().address, 4);
+}
+
 }  // namespace
 }  // namespace dpc31

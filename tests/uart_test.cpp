@@ -131,6 +131,12 @@ TEST(UartEncode, Faults) {
   e.clear();
   uart_encode(b, 100, 4, e, {1, UartFault::Kind::stop});  // no char 1: no fault
   EXPECT_EQ(e, (Edges{{100, false}, {120, true}, {124, false}, {136, true}}));
+  e.clear();
+  // A stop bit sent low leaves the line low into the next character: its start bit is no edge
+  // (00h twice: low from 100 through the second frame's parity, its stop bit rises at 144 + 40).
+  const std::uint8_t zeros[] = {0x00, 0x00};
+  uart_encode(zeros, 100, 4, e, {0, UartFault::Kind::stop});
+  EXPECT_EQ(e, (Edges{{100, false}, {184, true}}));
 }
 
 // ---- receiver ----
