@@ -61,6 +61,24 @@ class SlowLine:
                 self.conn.sendall(sd2(MASTER, SLAVE, 0x08, [len(self.srd_fcs)]))
 
 
+def data_exchange_answered(url, n, srd_fcs):
+    """The Master's Data_Exchange on the line at `url` gets the n-th Data_Exchange's answer
+    (inputs [n]) after n - 1 lost requests; `srd_fcs()` gives the FCs of the Data_Exchange
+    requests the line read. EN 50170 FCB/FCV: the first SRD of a new master has FCV 0 (FC 4Dh);
+    the first after FDL_Status restarts the sequence with FCB 1, FCV 1 (FC 7Dh)."""
+    m = Master(url, 19200, TIMEOUT, MASTER, SLAVE, search=20.0)
+    try:
+        a = m.srd([0x05])
+        want = sd2(MASTER, SLAVE, 0x08, [n])
+        check(a == want, f"answer {hexs(a) if a else None}, expected Data_Exchange {n}'s "
+              f"{hexs(want)}")
+        check(m.lost == n - 1, f"{m.lost} lost requests, expected {n - 1}")
+        fcs = srd_fcs()
+        check(fcs == [0x4D] + [0x7D] * (n - 1), f"Data_Exchange FCs {hexs(fcs)}")
+    finally:
+        m.close()
+
+
 def slow_line_search_drained():
     """A Data_Exchange unanswered within --timeout is lost: FDL_Status until answered, then the
     request once more (tools/dp_master.py, Master.srd). The search writes FDL_Status every 300 bit
@@ -70,20 +88,10 @@ def slow_line_search_drained():
     the wait starts anew, and the answer that comes is the second Data_Exchange's, with one lost
     request. Before the fix it was lost three times and srd gave None."""
     line = SlowLine()
-    m = Master(line.url, 19200, TIMEOUT, MASTER, SLAVE, search=20.0)
-    try:
-        a = m.srd([0x05])
-        # The late answer to the first request ended the search; the second one's is ours.
-        check(a == sd2(MASTER, SLAVE, 0x08, [2]), f"answer {hexs(a) if a else None}, expected "
-              f"the second Data_Exchange's {hexs(sd2(MASTER, SLAVE, 0x08, [2]))}")
-        check(m.lost == 1, f"{m.lost} lost requests, expected 1")
-        # EN 50170 FCB/FCV: the first SRD of a new master has FCV 0 (FC 4Dh); the first after
-        # FDL_Status restarts the sequence with FCB 1, FCV 1 (FC 7Dh).
-        check(line.srd_fcs == [0x4D, 0x7D], f"Data_Exchange FCs {hexs(line.srd_fcs)}")
-        check(line.status_requests >= 10, f"{line.status_requests} FDL_Status requests: the "
-              "line was not slower than the search")
-    finally:
-        m.close()
+    # The late answer to the first request ended the search; the second one's is ours.
+    data_exchange_answered(line.url, 2, lambda: line.srd_fcs)
+    check(line.status_requests >= 10, f"{line.status_requests} FDL_Status requests: the "
+          "line was not slower than the search")
 
 
 class HeldLine:
@@ -141,16 +149,7 @@ def late_answer_before_the_search():
         status_since = len(reqs) - 1 - srds[-1]  # FDL_Status requests since the last SRD
         return 1 if status_since == 2 else 0
     line = HeldLine(release)
-    m = Master(line.url, 19200, TIMEOUT, MASTER, SLAVE, search=20.0)
-    try:
-        a = m.srd([0x05])
-        check(a == sd2(MASTER, SLAVE, 0x08, [3]), f"answer {hexs(a) if a else None}, expected "
-              f"the third Data_Exchange's {hexs(sd2(MASTER, SLAVE, 0x08, [3]))}")
-        check(m.lost == 2, f"{m.lost} lost requests, expected 2")
-        fcs = [r[6] for r in line.requests if r[0] == SD2]
-        check(fcs == [0x4D, 0x7D, 0x7D], f"Data_Exchange FCs {hexs(fcs)}")
-    finally:
-        m.close()
+    data_exchange_answered(line.url, 3, lambda: [r[6] for r in line.requests if r[0] == SD2])
 
 
 def foreign_saps_are_not_ours():
