@@ -86,21 +86,20 @@ void TelegramLog::append(std::shared_ptr<const HeardFrame> frame, std::uint64_t 
   const std::uint64_t n = end();
   // Mac::hear_telegram's kind and take_heard's effect, with the receiver after the entry before
   // (UartRx::after_chars: idle from the end of its last stop bit).
-  e.linked = line_end_ != kNone && start >= line_end_;
-  if (e.linked) e.idle = std::min((start - line_end_) / t, kUartMaxIdleBits);
-  e.tsyn = e.linked && e.idle >= kTsynBits;
-  if (e.tsyn) {
+  const bool linked = line_end_ != kNone && start >= line_end_;
+  if (linked) e.idle = std::min((start - line_end_) / t, kUartMaxIdleBits);
+  if (linked && e.idle >= kTsynBits) {
     count_verdict(f, e);
     e.skipping = f.frame.status() == fdl::Assembler::Status::error;
     synced_ = n;
   } else {
-    e.no_sync = e.linked && !line_skipping_;
+    e.no_sync = linked && !line_skipping_;
     e.started.no_sync = e.offline.no_sync = e.no_sync ? 1 : 0;
     e.skipping = true;
   }
   // Foldable: linked, and a verdict at its last character that shows nothing in a chip it does
   // not address (TelegramLog::concerns).
-  if (!e.linked || concerns(f) == kEveryone) unfolded_ = n;
+  if (!linked || concerns(f) == kEveryone) unfolded_ = n;
   e.unfolded = unfolded_;
   e.synced = synced_;
   if (!entries_.empty()) {

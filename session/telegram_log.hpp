@@ -23,13 +23,11 @@ class TelegramLog {
     std::uint64_t start = 0;
     std::size_t from = 0;  // the sender (a chip does not hear its own answer)
     // What it does in a chip that heard the entry before it whole (append; the fold,
-    // docs/segment.md): whether it follows that entry on the line with nothing between, the idle
-    // bit times before it, TSYN, whether the MAC skips after it, and its no_sync count.
-    bool linked = false;
-    bool tsyn = false;
-    bool skipping = false;
-    bool no_sync = false;
+    // docs/segment.md): the idle bit times before it on the line, whether it counts a no_sync
+    // and whether the MAC skips after it.
     std::uint64_t idle = 0;
+    bool no_sync = false;
+    bool skipping = false;
     // The last entry up to this one that cannot be folded (not linked, or a telegram that concerns
     // every chip), and the last one after TSYN (or kNone); both numbers from first() on.
     std::uint64_t unfolded = 0;

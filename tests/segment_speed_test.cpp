@@ -235,8 +235,8 @@ std::vector<std::uint8_t> mixed_telegram(std::size_t k) {
     case 8:
       return {0x33, 44, 30, 0x49};
     case 9:
-      bytes = fdl::encode(fdl::make_frame(
-          45, 30, fdl::make_request_fc(fdl::Function::FDL_Status, false, false)));
+      bytes = fdl::encode(
+          fdl::make_frame(45, 30, fdl::make_request_fc(fdl::Function::FDL_Status, false, false)));
       bytes.back() ^= 1;  // not ED
       return bytes;
     default:

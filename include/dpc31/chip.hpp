@@ -254,9 +254,9 @@ class Chip {
                               std::uint32_t bit_cycles);
   // A run of telegrams heard whole taken at once, the chip standing at the first one's start: its
   // state and counters then are those hear_telegram of each at its start (the chip stepped from
-  // one to the next) leaves once the last one's verdict is taken. False, and nothing taken, where the
-  // chip is not as the run assumes: an observer, an event or an answer pending, its receiver not
-  // where the line's telegram before the run left it (the caller then hears them one by one).
+  // one to the next) leaves once the last one's verdict is taken. False, and nothing taken, where
+  // the chip is not as the run assumes: an observer, an event or an answer pending, its receiver
+  // not where the line's telegram before the run left it (the caller then hears them one by one).
   bool hear_run(const HeardRun& run);
   // Observers are lists: each on_* call adds one; an empty function removes all of that kind.
   // TxD edges, reported when time reaches them: each edge is an event of the chip.
