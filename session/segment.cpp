@@ -353,12 +353,8 @@ void Segment::step_station(Station& s, std::uint64_t to) {
   if (s.chip->cycle() < to) s.chip->step(to - s.chip->cycle());
 }
 
-// A chip takes the log's entries as send() gave them before the log: stepped to each one's start,
-// where nothing happens in it but what the entries before show (they came after its last look,
-// before its next event), and heard whole. Their verdicts change nothing the rounds know of it.
-// The entries after one it heard that follow on the line, up to its own next answer and the last
-// by `to`, are folded into one update (Chip::hear_run), but the last: its verdict may be due
-// after `to` (docs/segment.md, "The fold").
+// Each entry at its start as send() gave it (nothing happens in the chip meanwhile but the verdicts
+// before: they change nothing the rounds know of it), or folded (docs/segment.md, "The fold").
 void Segment::take_log(Station& s, std::uint64_t to) {
   if (s.taken == log_.end()) return;
   const bool current = s.looked == s.chip->cycle();

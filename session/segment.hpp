@@ -125,7 +125,9 @@ class Segment {
   using Edges = std::vector<std::pair<std::uint64_t, bool>>;
   void step_station(Station& s, std::uint64_t to);
   // The telegrams of the log station s has not taken and that start by `to`, each at its start
-  // or folded into runs (Chip::hear_run).
+  // (stepped there: they came after its last look, before its next event, and heard whole); the
+  // entries after one it heard, up to its own next answer and the last by `to` (its verdict may
+  // be due after `to`), in one update (Chip::hear_run).
   void take_log(Station& s, std::uint64_t to);
   // A telegram heard whole from `from` at `start`: to the chips it concerns at once (stepped to
   // `start`, looked at again), into the log for the others.
