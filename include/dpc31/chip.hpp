@@ -346,8 +346,9 @@ class Chip {
   // next_deadline() without the verdict of a telegram heard whole (hear_telegram) where it shows
   // nothing outside the chip: a frame for another station, a token, an answer, a broken frame, a
   // start without TSYN, counted only, while no on_telegram or on_state_change observer watches and
-  // no answer is on TxD (docs/segment.md, "Verdicts that show nothing"). The chip takes such a
-  // verdict inside its next step, at its own cycle: whoever steps it needs no stop there.
+  // no answer is on TxD (docs/segment.md, "Verdicts that show nothing"), and without a
+  // User_Timer_Clock tick while its IRR bit is set. The chip takes such a verdict or tick inside
+  // its next step, at its own cycle: whoever steps it needs no stop there.
   [[nodiscard]] std::uint64_t line_deadline() const;
   // Whether a line may give this chip a telegram heard whole at `bit_cycles` per bit later, at
   // its next step, instead of at the telegram's start: until line_deadline() (an event may change
