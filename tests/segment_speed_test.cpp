@@ -600,5 +600,24 @@ TEST(SegmentSpeed, TheLinesEdgesForAnObserverAreTheReferenceLinesAt12M) {
   run_both_ways(12'000'000, 5, false, SIZE_MAX, true);
 }
 
+// A User_Timer_Clock tick (every 1 ms while the chip is started: SPC3 manual, Mode_Reg0
+// User_Time_Base) is an event of the line only while its IRR bit is clear: with the bit set it
+// changes nothing anyone sees until a bus access acknowledges it, and the chip takes it inside its
+// next step (Chip::line_deadline).
+TEST(SegmentSpeed, AUserTimerTickWhileItsBitIsSetIsNoEventOfTheLine) {
+  Chip chip({Profile::spc3});
+  std::vector<std::unique_ptr<Responder>> users;
+  DirectBus bus(chip);
+  add_user(users, SlaveConfig{}).init(bus);
+  const std::uint64_t ms = chip.clock_hz() / 1000;
+  const std::uint64_t tick = chip.next_deadline();
+  ASSERT_LE(tick, chip.cycle() + ms);
+  EXPECT_EQ(chip.line_deadline(), tick);  // the bit is clear: the tick raises it
+  chip.step(tick - chip.cycle());
+  ASSERT_NE(chip.probe().irr & irq::User_Timer_Clock, 0);
+  EXPECT_EQ(chip.next_deadline(), tick + ms);
+  EXPECT_GT(chip.line_deadline(), tick + ms);
+}
+
 }  // namespace
 }  // namespace dpc31
