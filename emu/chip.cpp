@@ -90,6 +90,12 @@ std::uint64_t Chip::hear_telegram(const std::shared_ptr<const HeardFrame>& frame
   }
   return start + frame->bytes.size() * std::uint64_t{kUartCharBits} * bit_cycles;
 }
+bool Chip::hear_run(const HeardRun& run) {
+  // No event of the chip's own inside the run that shows something (it would come between two of
+  // its verdicts; a quiet one changes nothing they count).
+  const std::uint64_t end = run.last_start + std::uint64_t{kUartCharBits} * run.bit_cycles;
+  return core_->line_event() > end && core_->mac.hear_run(run);
+}
 std::shared_ptr<const HeardFrame> HeardFrame::make(std::span<const std::uint8_t> bytes) {
   auto h = std::make_shared<HeardFrame>();
   h->bytes.assign(bytes.begin(), bytes.end());

@@ -41,7 +41,10 @@ std::uint64_t ChipCore::next_event() const {
 
 std::uint64_t ChipCore::line_event() const {
   if (clock.engine == Engine::per_cycle) return clock.now + 1;
-  return std::min(mode.user_timer_at(), next_event_but_user_timer(true));
+  // A User_Timer_Clock tick while its IRR bit is set shows nothing (skip_quiet_user_ticks) until a
+  // bus access acknowledges it: the chip takes it inside its next step.
+  const bool quiet_tick = (regs.latch(RegId::Int_Req_Reg) & irq::User_Timer_Clock) != 0;
+  return std::min(quiet_tick ? kNever : mode.user_timer_at(), next_event_but_user_timer(true));
 }
 
 std::uint64_t ChipCore::next_event_but_user_timer(bool for_line) const {

@@ -46,6 +46,17 @@ void count(FdlCounters& n, fdl::Error e) {
 
 }  // namespace
 
+void count_frame_error(FdlCounters& n, const fdl::Assembler& frame, fdl::Error decoded) {
+  if (frame.status() != fdl::Assembler::Status::error) {
+    count(n, decoded);
+    return;
+  }
+  const auto bytes = frame.bytes();
+  const bool too_long =
+      frame.error() == fdl::Error::bad_le && bytes.size() >= 2 && bytes[1] > fdl::kMaxLe;
+  count(n, too_long ? fdl::Error::oversize : frame.error());
+}
+
 void Mac::start_search() {
   listen(0);  // from the highest rate down
   s_.in_frame = false;
@@ -452,18 +463,14 @@ void Mac::frame_ended(fdl::Assembler::Status st, const UartChar& c, const fdl::D
     // The rest of the broken telegram is its tail, not an unsynchronised one: wait for TSYN.
     s_.discarding = true;
     s_.skipping = true;
-    // An LE beyond the longest telegram is an oversize frame, not a malformed one.
-    const auto bytes = s_.frame.bytes();
-    const bool too_long =
-        s_.frame.error() == fdl::Error::bad_le && bytes.size() >= 2 && bytes[1] > fdl::kMaxLe;
-    count(counters_, too_long ? fdl::Error::oversize : s_.frame.error());
+    count_frame_error(counters_, s_.frame, fdl::Error::none);
     return;
   }
   fdl::Decoded own;
   if (decoded == nullptr) own = fdl::decode(s_.frame.bytes());
   const fdl::Decoded& d = decoded != nullptr ? *decoded : own;
   if (d.error != fdl::Error::none) {
-    count(counters_, d.error);
+    count_frame_error(counters_, s_.frame, d.error);
     return;
   }
   const std::uint64_t frame_chars = s_.frame.bytes().size();
@@ -640,6 +647,31 @@ bool Mac::hear_telegram(const std::shared_ptr<const HeardFrame>& tel, std::uint6
       for (std::size_t k = 0; k < n; ++k) sig_.rxd(edges[k].first, edges[k].second);
     }
   }
+  clock_.quiet_until = 0;
+  return true;
+}
+
+bool Mac::hear_run(const HeardRun& r) {
+  // Every verdict of the run shows nothing (heard_quiet: no observer, no answer on TxD, not the
+  // rate found by Baud_Search), and the receiver is where the line's telegram before the run left
+  // it: the run's first TSYN is the line's.
+  if (sig_.telegram || sig_.state || sig_.rxd || s_.tx_end != kNever ||
+      (dp_.started() && watchdog_.state() == WdState::Baud_Search) ||
+      !can_hear(1, r.first_start, r.bit_cycles) ||
+      s_.rx.idle_bits_at(r.first_start) != r.first_idle) {
+    return false;
+  }
+  // take_heard of each: the first one's no_sync depends on the chip's framing before it.
+  if (r.first_idle < kTsynBits && !s_.skipping) ++counters_.no_sync;
+  const FdlCounters& add = dp_.started() ? r.started : r.offline;
+  for (const CounterField& f : kFdlCounterFields) counters_.*f.member += add.*f.member;
+  s_.skipping = r.skipping;
+  if (r.synced != nullptr) {
+    s_.frame = r.synced->frame;
+    s_.discarding = s_.frame.status() == fdl::Assembler::Status::error;
+  }
+  s_.rx.after_chars(r.last_start, r.last_byte, r.last_idle);
+  drop_heard_rxd(clock_.now);
   clock_.quiet_until = 0;
   return true;
 }

@@ -24,7 +24,6 @@
 
 namespace dpc31 {
 
-inline constexpr std::uint32_t kTsynBits = 33;  // idle before a request (synchronisation time)
 // Baud_Search listens at each rate for max(kBaudSearchBits bit times, kBaudSearchFloorUs) before
 // trying the next lower one (modelled, docs/timing.md "Baud_Search"): the floor in time lets a
 // master that repeats FDL_Status every 10 ms be heard at every rate within one round.
@@ -174,6 +173,9 @@ class Mac {
   // not in Baud_Search); false, and nothing taken, otherwise.
   bool hear_telegram(const std::shared_ptr<const HeardFrame>& tel, std::uint64_t start,
                      std::uint32_t bit_cycles);
+  // Chip::hear_run: a run of telegrams heard whole taken at once; false, and nothing taken,
+  // where the chip is not as the run assumes (then it hears them one by one).
+  bool hear_run(const HeardRun& run);
   // Whether hear_telegram would take `chars` characters from `start` now.
   [[nodiscard]] bool can_hear(std::size_t chars, std::uint64_t start,
                               std::uint32_t bit_cycles) const;

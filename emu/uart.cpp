@@ -14,7 +14,6 @@ namespace dpc31 {
 namespace {
 
 constexpr std::uint32_t kStopBit = 10;
-constexpr std::uint64_t kMaxIdleBits = 0xFFFF'FFFF;
 
 // Parity of the low 9 bits by folding (std::popcount is a library call without -mpopcnt).
 constexpr unsigned parity9(unsigned v) {
@@ -143,7 +142,7 @@ void UartRx::edge(std::uint64_t cycle, bool level) {
   bits_ = 0;
   // The last edge before a falling one is a rise, so the line was high since max(end, rise).
   const std::uint64_t high_since = std::max(not_before_, last_rise_);
-  idle_bits_ = std::min((cycle - high_since) / t_, kMaxIdleBits);
+  idle_bits_ = std::min((cycle - high_since) / t_, kUartMaxIdleBits);
 }
 
 bool UartRx::whole_char(std::uint64_t start, std::uint8_t data, std::uint32_t bit_cycles) {
@@ -171,7 +170,7 @@ void UartRx::begin_whole(std::uint64_t start, std::uint8_t data) {
 }
 
 std::uint64_t UartRx::idle_bits_at(std::uint64_t start) const {
-  return std::min((start - std::max(not_before_, last_rise_)) / t_, kMaxIdleBits);
+  return std::min((start - std::max(not_before_, last_rise_)) / t_, kUartMaxIdleBits);
 }
 
 void UartRx::after_chars(std::uint64_t start, std::uint8_t data, std::uint64_t idle_bits) {
@@ -342,7 +341,7 @@ bool UartSampler::detect(bool line, std::uint64_t now) {
   k_ = 0;
   next_pos_ = t_ / 2;
   bits_ = 0;
-  idle_bits_ = std::min(high_for_ / t_, kMaxIdleBits);
+  idle_bits_ = std::min(high_for_ / t_, kUartMaxIdleBits);
   return true;
 }
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <deque>
 #include <iterator>
 #include <stdexcept>
 
@@ -55,6 +56,7 @@ struct Segment::Station {
   // The telegram log: the next entry it takes; whether it hears every telegram at once (eager_),
   // and its station address as last looked (at_address_; -1: none yet).
   std::uint64_t taken = 0;
+  std::deque<std::uint64_t> own;  // the entries of its own answers from `taken` on (not heard)
   bool eager = false;
   int address = -1;
   std::optional<LineTelegram> answer;
@@ -351,17 +353,23 @@ void Segment::step_station(Station& s, std::uint64_t to) {
   if (s.chip->cycle() < to) s.chip->step(to - s.chip->cycle());
 }
 
-// A chip takes the log's entries as send() gave them before the log: stepped to each one's start,
-// where nothing happens in it but what the entries before show (they came after its last look,
-// before its next event), and heard whole. Their verdicts change nothing the rounds know of it.
+// Each entry at its start as send() gave it (nothing happens in the chip meanwhile but the verdicts
+// before: they change nothing the rounds know of it), or folded (docs/segment.md, "The fold").
 void Segment::take_log(Station& s, std::uint64_t to) {
   if (s.taken == log_.end()) return;
   const bool current = s.looked == s.chip->cycle();
-  for (; s.taken < log_.end() && log_.at(s.taken).start <= to; ++s.taken) {
-    const TelegramLog::Entry& e = log_.at(s.taken);
+  while (s.taken < log_.end() && log_.at(s.taken).start <= to) {
+    const TelegramLog::Entry& e = log_.at(s.taken++);
     if (e.from == s.index) continue;  // its own answer
     if (s.chip->cycle() < e.start) s.chip->step(e.start - s.chip->cycle());
     s.chip->hear_telegram(e.frame, e.start, t_);
+    while (!s.own.empty() && s.own.front() < s.taken) s.own.pop_front();
+    std::uint64_t until = log_.folds_until(s.taken, to);
+    if (!s.own.empty()) until = std::min(until, s.own.front());
+    if (until < s.taken + 3) continue;  // a fold of two entries at least
+    const TelegramLog::Entry& first = log_.at(s.taken);
+    if (s.chip->cycle() < first.start) s.chip->step(first.start - s.chip->cycle());
+    if (s.chip->hear_run(log_.run(s.taken, until - 1, t_))) s.taken = until - 1;
   }
   if (current) s.looked = s.chip->cycle();
 }
@@ -381,9 +389,11 @@ void Segment::hear_whole(std::size_t from, const std::shared_ptr<const HeardFram
   const bool sender_in = sender.chip && std::binary_search(now.begin(), now.end(), from);
   if (now.size() + (sender.chip && !sender_in ? 1 : 0) == log_.chips() &&
       (!sender.chip || sender.taken == log_.end())) {
+    log_.line_taken();
     return;
   }
-  log_.append({heard, start, from});
+  if (sender.chip) stations_[from]->own.push_back(log_.end());
+  log_.append(heard, start, from, t_);
   for (const std::size_t k : now) {
     if (k != from) stations_[k]->taken = log_.end();
   }
@@ -490,6 +500,7 @@ void Segment::check_txd(Station& s, const TxdRun& run) {
 }
 
 void Segment::hear(std::size_t from, std::uint64_t cycle, bool level) {
+  log_.line_taken();
   for (const std::size_t k : everyone_) {
     Station& s = *stations_[k];
     if (k == from || !s.chip) continue;
@@ -610,6 +621,7 @@ std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> byte
   if (whole) {
     hear_whole(from, HeardFrame::make(bytes), start);
   } else {
+    log_.line_taken();
     for (std::size_t k = 0; k < stations_.size(); ++k) {
       Station& s = *stations_[k];
       if (k == from || !s.chip) continue;

@@ -124,7 +124,10 @@ class Segment {
   struct Station;
   using Edges = std::vector<std::pair<std::uint64_t, bool>>;
   void step_station(Station& s, std::uint64_t to);
-  // The telegrams of the log station s has not taken and that start by `to`, each at its start.
+  // The telegrams of the log station s has not taken and that start by `to`, each at its start
+  // (stepped there: they came after its last look, before its next event, and heard whole); the
+  // entries after one it heard, up to its own next answer and the last by `to` (its verdict may
+  // be due after `to`), in one update (Chip::hear_run).
   void take_log(Station& s, std::uint64_t to);
   // A telegram heard whole from `from` at `start`: to the chips it concerns at once (stepped to
   // `start`, looked at again), into the log for the others.

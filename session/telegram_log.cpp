@@ -1,6 +1,7 @@
 #include "telegram_log.hpp"
 
 #include <algorithm>
+#include <functional>
 #include <iterator>
 
 #include "dpc31/fdl.hpp"
@@ -48,6 +49,102 @@ const std::vector<std::size_t>& TelegramLog::hear_now(const HeardFrame& f) {
                    std::back_inserter(hear_now_));
   }
   return hear_now_;
+}
+
+namespace {
+
+// What a telegram after TSYN counts in a chip it does not address (Mac::frame_ended, on_frame):
+// an error by class; a good frame offline, or a request with data for another station.
+void count_verdict(const HeardFrame& f, TelegramLog::Entry& e) {
+  const fdl::Assembler::Status st = f.frame.status();
+  if (st == fdl::Assembler::Status::error || f.decoded.error != fdl::Error::none) {
+    count_frame_error(e.started, f.frame, f.decoded.error);
+    count_frame_error(e.offline, f.frame, f.decoded.error);
+    return;
+  }
+  ++e.offline.offline;
+  const fdl::Frame& fr = f.decoded.frame;
+  const bool carries_data = fr.sd == fdl::SD1 || fr.sd == fdl::SD2 || fr.sd == fdl::SD3;
+  if (carries_data && fdl::is_request(fr.fc)) ++e.started.foreign_address;
+}
+
+// Counter by counter: to = op(to, from).
+template <typename Op>
+void combine(FdlCounters& to, const FdlCounters& from, Op op) {
+  for (const CounterField& c : kFdlCounterFields) to.*c.member = op(to.*c.member, from.*c.member);
+}
+
+}  // namespace
+
+void TelegramLog::append(std::shared_ptr<const HeardFrame> frame, std::uint64_t start,
+                         std::size_t from, std::uint32_t t) {
+  Entry e;
+  e.frame = std::move(frame);
+  e.start = start;
+  e.from = from;
+  const HeardFrame& f = *e.frame;
+  const std::uint64_t n = end();
+  // Mac::hear_telegram's kind and take_heard's effect, with the receiver after the entry before
+  // (UartRx::after_chars: idle from the end of its last stop bit).
+  const bool linked = line_end_ != kNone && start >= line_end_;
+  if (linked) e.idle = std::min((start - line_end_) / t, kUartMaxIdleBits);
+  if (linked && e.idle >= kTsynBits) {
+    count_verdict(f, e);
+    e.skipping = f.frame.status() == fdl::Assembler::Status::error;
+    synced_ = n;
+  } else {
+    e.no_sync = linked && !line_skipping_;
+    e.started.no_sync = e.offline.no_sync = e.no_sync ? 1 : 0;
+    e.skipping = true;
+  }
+  // Foldable: linked, and a verdict at its last character that shows nothing in a chip it does
+  // not address (TelegramLog::concerns).
+  if (!linked || concerns(f) == kEveryone) unfolded_ = n;
+  e.unfolded = unfolded_;
+  e.synced = synced_;
+  if (!entries_.empty()) {
+    combine(e.started, entries_.back().started, std::plus<std::uint32_t>{});
+    combine(e.offline, entries_.back().offline, std::plus<std::uint32_t>{});
+  }
+  line_end_ = start + f.bytes.size() * std::uint64_t{kUartCharBits} * t;
+  line_skipping_ = e.skipping;
+  entries_.push_back(std::move(e));
+}
+
+std::uint64_t TelegramLog::folds_until(std::uint64_t n, std::uint64_t to) const {
+  // Both grow along the log: the start, and the last entry that cannot be folded.
+  const auto from = entries_.begin() + static_cast<std::ptrdiff_t>(n - first_);
+  const auto it = std::partition_point(from, entries_.end(), [&](const Entry& e) {
+    return e.start <= to && (e.unfolded == kNone || e.unfolded < n);
+  });
+  return n + static_cast<std::uint64_t>(it - from);
+}
+
+HeardRun TelegramLog::run(std::uint64_t n, std::uint64_t m, std::uint32_t t) const {
+  const Entry& first = at(n);
+  const Entry& last = at(m - 1);
+  HeardRun r;
+  r.first_start = first.start;
+  r.first_idle = first.idle;
+  // The sums from n on; the first entry's no_sync is the chip's own.
+  r.started = last.started;
+  r.offline = last.offline;
+  if (n > first_) {
+    combine(r.started, at(n - 1).started, std::minus<std::uint32_t>{});
+    combine(r.offline, at(n - 1).offline, std::minus<std::uint32_t>{});
+  }
+  if (first.no_sync) {
+    --r.started.no_sync;
+    --r.offline.no_sync;
+  }
+  r.skipping = last.skipping;
+  if (last.synced != kNone && last.synced >= n) r.synced = at(last.synced).frame.get();
+  const std::vector<std::uint8_t>& bytes = last.frame->bytes;
+  r.last_start = last.start + (bytes.size() - 1) * std::uint64_t{kUartCharBits} * t;
+  r.last_byte = bytes.back();
+  r.last_idle = bytes.size() == 1 ? last.idle : 0;
+  r.bit_cycles = t;
+  return r;
 }
 
 }  // namespace dpc31

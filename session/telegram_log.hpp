@@ -22,7 +22,21 @@ class TelegramLog {
     std::shared_ptr<const HeardFrame> frame;
     std::uint64_t start = 0;
     std::size_t from = 0;  // the sender (a chip does not hear its own answer)
+    // What it does in a chip that heard the entry before it whole (append; the fold,
+    // docs/segment.md): the idle bit times before it on the line, whether it counts a no_sync
+    // and whether the MAC skips after it.
+    std::uint64_t idle = 0;
+    bool no_sync = false;
+    bool skipping = false;
+    // The last entry up to this one that cannot be folded (not linked, or a telegram that concerns
+    // every chip), and the last one after TSYN (or kNone); both numbers from first() on.
+    std::uint64_t unfolded = 0;
+    std::uint64_t synced = 0;
+    // The FDL counters from the log's first entry up to this one: a started chip, one offline.
+    FdlCounters started;
+    FdlCounters offline;
   };
+  static constexpr std::uint64_t kNone = UINT64_MAX;
   // The concern of a telegram heard whole, read as Mac::heard_quiet reads it: a frame whose
   // verdict is not at its last character (the rest as characters), a broadcast and a request
   // with data concern more than the chips that cannot wait.
@@ -43,17 +57,32 @@ class TelegramLog {
   [[nodiscard]] const Entry& at(std::uint64_t n) const {
     return entries_[static_cast<std::size_t>(n - first_)];
   }
-  void append(Entry e) { entries_.push_back(std::move(e)); }
+  // A telegram heard whole from `start` (>= the end of the one before) at `t` clocks per bit.
+  void append(std::shared_ptr<const HeardFrame> frame, std::uint64_t start, std::size_t from,
+              std::uint32_t t);
+  // Something reached the chips' receivers without an entry (edges, a damaged telegram, a
+  // telegram every chip heard at once): the next entry follows nothing the log knows.
+  void line_taken() { line_end_ = kNone; }
   // Every chip took every entry: the log starts empty at end() (its memory kept).
   void clear() {
     first_ = end();
     entries_.clear();
   }
+  // The first entry from `n` on that starts after `to` or cannot be folded into a run from `n`.
+  [[nodiscard]] std::uint64_t folds_until(std::uint64_t n, std::uint64_t to) const;
+  // The entries [n, m) (m > n, each linked and foldable: folds_until) as one run (Chip::hear_run).
+  [[nodiscard]] HeardRun run(std::uint64_t n, std::uint64_t m, std::uint32_t t) const;
 
  private:
   static void keep(std::vector<std::size_t>& list, std::size_t i, bool in);
   std::vector<Entry> entries_;
   std::uint64_t first_ = 0;
+  // The line after the last entry: the end of its last stop bit (kNone: unknown), whether the
+  // MAC skips after it, the last entry that cannot be folded and the last after TSYN.
+  std::uint64_t line_end_ = kNone;
+  bool line_skipping_ = false;
+  std::uint64_t unfolded_ = kNone;
+  std::uint64_t synced_ = kNone;
   std::vector<std::size_t> chips_;
   std::vector<std::size_t> eager_;
   std::vector<std::vector<std::size_t>> at_address_ = std::vector<std::vector<std::size_t>>(256);

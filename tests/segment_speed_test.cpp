@@ -23,6 +23,7 @@
 #include "dpc31/fdl.hpp"
 #include "responder.hpp"
 #include "segment.hpp"
+#include "telegram_log.hpp"
 
 namespace dpc31 {
 namespace {
@@ -218,6 +219,73 @@ std::vector<std::uint8_t> foreign_telegram(std::size_t k) {
   }
 }
 
+// Telegram k of a mixed run: foreign_telegram's five kinds; frames the assembler breaks at their
+// last character (LE beyond the longest telegram: oversize; LE and LEr differ: le_mismatch; an
+// unknown start delimiter alone: bad_sd), after which the MAC skips; an unknown start delimiter
+// followed by more characters (its verdict at the first: not folded); a wrong end delimiter.
+std::vector<std::uint8_t> mixed_telegram(std::size_t k) {
+  std::vector<std::uint8_t> bytes;
+  switch (k % 10) {
+    case 5:
+      return {fdl::SD2, 250, 250};
+    case 6:
+      return {fdl::SD2, 5, 6};
+    case 7:
+      return {0x33};
+    case 8:
+      return {0x33, 44, 30, 0x49};
+    case 9:
+      bytes = fdl::encode(
+          fdl::make_frame(45, 30, fdl::make_request_fc(fdl::Function::FDL_Status, false, false)));
+      bytes.back() ^= 1;  // not ED
+      return bytes;
+    default:
+      return foreign_telegram(k);
+  }
+}
+
+// The fold (docs/segment.md): 60 telegrams of mixed_telegram's kinds whose verdicts are at their
+// last character, with gaps of 0 to 100 bit times, heard by a chip offline one by one (each at its
+// start, stepped to the next) and by one that hears the first, takes the others but the last as
+// one run (TelegramLog::run) and hears the last: the same counters and snapshot at the end. A
+// chip that did not hear the telegram before the run takes nothing of it.
+TEST(SegmentSpeed, ARunFoldedIsItsTelegramsHeardOneByOne) {
+  Chip one;
+  Chip folded;
+  Chip stranger;
+  const std::uint32_t t = one.bit_cycles();
+  TelegramLog log;
+  const std::uint64_t gaps[] = {40, 20, 0, 33, 32, 100, 5};
+  std::uint64_t at = 100 * std::uint64_t{t};
+  for (std::size_t k = 0; log.end() < 60; ++k) {
+    if (k % 10 == 8) continue;  // its verdict is at its first character
+    const auto f = HeardFrame::make(mixed_telegram(k));
+    log.append(f, at, 0, t);
+    at += (f->bytes.size() * 11 + gaps[k % 7]) * t;
+  }
+  const auto hear = [&](Chip& c, std::uint64_t n) {
+    const TelegramLog::Entry& e = log.at(n);
+    c.step(e.start - c.cycle());
+    c.hear_telegram(e.frame, e.start, t);
+  };
+  for (std::uint64_t n = 0; n < log.end(); ++n) hear(one, n);
+  ASSERT_EQ(log.folds_until(1, UINT64_MAX), log.end());
+  hear(folded, 0);
+  folded.step(log.at(1).start - folded.cycle());
+  stranger.step(log.at(1).start);
+  const HeardRun run = log.run(1, log.end() - 1, t);
+  ASSERT_TRUE(folded.hear_run(run));
+  ASSERT_FALSE(stranger.hear_run(run));
+  hear(folded, log.end() - 1);
+  for (Chip* c : {&one, &folded, &stranger}) c->step(at - c->cycle());
+  EXPECT_EQ(counters_text(folded.fdl_counters()), counters_text(one.fdl_counters()));
+  EXPECT_GT(one.fdl_counters().no_sync, 3U);
+  EXPECT_GT(one.fdl_counters().offline, 3U);
+  EXPECT_GT(one.fdl_counters().oversize + one.fdl_counters().le_mismatch, 3U);
+  EXPECT_EQ(folded.save_state(), one.save_state());
+  EXPECT_EQ(stranger.fdl_counters(), FdlCounters{});
+}
+
 // The end of a run of foreign telegrams: both lines to `at`, then slave 8 (chip 3) addressed.
 void slave_8_after(Bed& fast, Bed& ref, std::uint64_t at, const std::string& run) {
   for (Bed* b : {&fast, &ref}) b->seg.run_until(at);
@@ -339,18 +407,21 @@ void run_both_ways(std::uint32_t baud, std::size_t n = 5, bool watch_txd = true,
 // laggards up) at their next step; the line is looked at through chip(i) inside some of them
 // (counters, snapshots), slave 7 gets an on_telegram observer in the middle, the master sends a
 // Global_Control broadcast and a Data_Exchange to the last slave inside the run (slave 9's
-// firmware runs in every round), then slave 8 is addressed.
-void log_run(std::uint32_t baud, std::size_t n) {
+// firmware runs in every round), then slave 8 is addressed. `mixed`: mixed_telegram's kinds, with
+// gaps of 0 to 100 bit times (TSYN or not: counted as no_sync, skipped; the fold, docs/segment.md).
+void log_run(std::uint32_t baud, std::size_t n, bool mixed = false) {
   Bed fast(false, baud, n, false, 1);
   Bed ref(true, baud, n, false, 1);
   for (Bed* b : {&fast, &ref}) ASSERT_TRUE(b->master->startup_all());
   ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "after the start-up"));
   const std::uint64_t t = fast.seg.bit_cycles();
   std::uint64_t at = fast.seg.cycle() + 40 * t;
+  const std::uint64_t gaps[] = {40, 20, 0, 33, 32, 100, 5};
   for (std::size_t k = 0; k < 240; ++k) {
     std::uint64_t end = 0;
-    for (Bed* b : {&fast, &ref}) end = b->seg.send(b->other, foreign_telegram(k), at);
-    at = end + 40 * t;
+    const std::vector<std::uint8_t> bytes = mixed ? mixed_telegram(k) : foreign_telegram(k);
+    for (Bed* b : {&fast, &ref}) end = b->seg.send(b->other, bytes, at);
+    at = end + (mixed ? gaps[k % 7] : 40) * t;
     if (k % 37 == 11) {
       for (Bed* b : {&fast, &ref}) b->seg.run_until(end - t / 2);
       ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, fmt::format("log run, telegram {}", k)));
@@ -388,6 +459,14 @@ TEST(SegmentSpeed, TheTelegramLogOfThirtyThreeSlavesShowsWhatTheReferenceLineSho
 
 TEST(SegmentSpeed, TheTelegramLogOfThirtyThreeSlavesShowsWhatTheReferenceLineShowsAt12M) {
   log_run(12'000'000, 33);
+}
+
+TEST(SegmentSpeed, AMixedTelegramLogOfFiveSlavesShowsWhatTheReferenceLineShowsAt1M5) {
+  log_run(1'500'000, 5, true);
+}
+
+TEST(SegmentSpeed, AMixedTelegramLogOfThirtyThreeSlavesShowsWhatTheReferenceLineShowsAt12M) {
+  log_run(12'000'000, 33, true);
 }
 
 // The segment of bench/bench_segment.cpp (8 + 8 bytes, the user side on each SPC3's host CPU,
@@ -519,6 +598,25 @@ TEST(SegmentSpeed, TheLinesEdgesForAnObserverAreTheReferenceLinesAt1M5) {
 
 TEST(SegmentSpeed, TheLinesEdgesForAnObserverAreTheReferenceLinesAt12M) {
   run_both_ways(12'000'000, 5, false, SIZE_MAX, true);
+}
+
+// A User_Timer_Clock tick (every 1 ms while the chip is started: SPC3 manual, Mode_Reg0
+// User_Time_Base) is an event of the line only while its IRR bit is clear: with the bit set it
+// changes nothing anyone sees until a bus access acknowledges it, and the chip takes it inside its
+// next step (Chip::line_deadline).
+TEST(SegmentSpeed, AUserTimerTickWhileItsBitIsSetIsNoEventOfTheLine) {
+  Chip chip({Profile::spc3});
+  std::vector<std::unique_ptr<Responder>> users;
+  DirectBus bus(chip);
+  add_user(users, SlaveConfig{}).init(bus);
+  const std::uint64_t ms = chip.clock_hz() / 1000;
+  const std::uint64_t tick = chip.next_deadline();
+  ASSERT_LE(tick, chip.cycle() + ms);
+  EXPECT_EQ(chip.line_deadline(), tick);  // the bit is clear: the tick raises it
+  chip.step(tick - chip.cycle());
+  ASSERT_NE(chip.probe().irr & irq::User_Timer_Clock, 0);
+  EXPECT_EQ(chip.next_deadline(), tick + ms);
+  EXPECT_GT(chip.line_deadline(), tick + ms);
 }
 
 }  // namespace

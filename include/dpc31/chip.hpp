@@ -126,6 +126,29 @@ struct HeardFrame {
   static std::shared_ptr<const HeardFrame> make(std::span<const std::uint8_t> bytes);
 };
 
+// A run of telegrams heard whole, each on the line right after the one before it, the first
+// right after one the chip heard whole and took: what their verdicts do in a chip none of them
+// addresses, while it shows none of them (may_hear_later), summed once by the line for every such
+// chip (a segment's telegram log, docs/segment.md "The fold"). Chip::hear_run takes it.
+struct HeardRun {
+  std::uint64_t first_start = 0;  // the first telegram's start bit ...
+  std::uint64_t first_idle = 0;   // ... and the idle bit times before it on the line
+  // What the verdicts count in a started chip and in one offline, but the first telegram's
+  // no_sync (counted unless the chip skips already: its own state).
+  FdlCounters started;
+  FdlCounters offline;
+  bool skipping = false;  // after the run: the MAC waits for TSYN
+  // The run's last telegram after TSYN (the framing after it: its assembler; discarding if that
+  // broke), or none.
+  const HeardFrame* synced = nullptr;
+  // The run's last character: its start, its byte and the idle bit times before it (a telegram
+  // of one character; 0 otherwise).
+  std::uint64_t last_start = 0;
+  std::uint8_t last_byte = 0;
+  std::uint64_t last_idle = 0;
+  std::uint32_t bit_cycles = 0;
+};
+
 struct ChipCore;
 struct ChipAccess;  // the emulator's harness interface (emu/harness.hpp), not part of the API
 
@@ -229,6 +252,12 @@ class Chip {
   // keeps a reference and runs neither the assembler nor the decoder over it again.
   std::uint64_t hear_telegram(const std::shared_ptr<const HeardFrame>& frame, std::uint64_t start,
                               std::uint32_t bit_cycles);
+  // A run of telegrams heard whole taken at once, the chip standing at the first one's start: its
+  // state and counters then are those hear_telegram of each at its start (the chip stepped from
+  // one to the next) leaves once the last one's verdict is taken. False, and nothing taken, where
+  // the chip is not as the run assumes: an observer, an event or an answer pending, its receiver
+  // not where the line's telegram before the run left it (the caller then hears them one by one).
+  bool hear_run(const HeardRun& run);
   // Observers are lists: each on_* call adds one; an empty function removes all of that kind.
   // TxD edges, reported when time reaches them: each edge is an event of the chip.
   void on_txd(std::function<void(std::uint64_t, bool)> cb);
@@ -317,8 +346,9 @@ class Chip {
   // next_deadline() without the verdict of a telegram heard whole (hear_telegram) where it shows
   // nothing outside the chip: a frame for another station, a token, an answer, a broken frame, a
   // start without TSYN, counted only, while no on_telegram or on_state_change observer watches and
-  // no answer is on TxD (docs/segment.md, "Verdicts that show nothing"). The chip takes such a
-  // verdict inside its next step, at its own cycle: whoever steps it needs no stop there.
+  // no answer is on TxD (docs/segment.md, "Verdicts that show nothing"), and without a
+  // User_Timer_Clock tick while its IRR bit is set. The chip takes such a verdict or tick inside
+  // its next step, at its own cycle: whoever steps it needs no stop there.
   [[nodiscard]] std::uint64_t line_deadline() const;
   // Whether a line may give this chip a telegram heard whole at `bit_cycles` per bit later, at
   // its next step, instead of at the telegram's start: until line_deadline() (an event may change

@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <string_view>
 
+#include "dpc31/fdl.hpp"
+
 namespace dpc31 {
 
 struct FdlCounters {
@@ -60,5 +62,9 @@ inline constexpr std::array<CounterField, 20> kFdlCounterFields = {{
     {"repeated", &FdlCounters::repeated},
     {"requests", &FdlCounters::requests},
 }};
+
+// What a MAC counts at a broken frame's verdict (emu/mac.cpp): the assembler's error by class (an
+// LE beyond the longest telegram as oversize), else `decoded` (fdl::decode's error) when not none.
+void count_frame_error(FdlCounters& n, const fdl::Assembler& frame, fdl::Error decoded);
 
 }  // namespace dpc31

@@ -26,6 +26,9 @@ inline constexpr std::uint32_t kBaudRates[10] = {12000000, 6000000, 3000000, 150
 
 // Bits per character on the wire (start + 8 data + parity + stop).
 inline constexpr std::uint32_t kUartCharBits = 11;
+// UartChar::idle_bits counts at most this many idle bit times (a line's log counts as a chip does).
+inline constexpr std::uint64_t kUartMaxIdleBits = 0xFFFF'FFFF;
+inline constexpr std::uint32_t kTsynBits = 33;  // idle before a request (synchronisation time)
 
 // Clock cycles per bit: clock_hz / baud rounded to the nearest integer, halves up (48 MHz at
 // 45.45 kbaud: 1056.1 -> 1056). 0 when baud is 0 or above 2 x clock_hz (the rate is unusable).

@@ -34,7 +34,6 @@
 
 namespace dpc31::bridge {
 
-inline constexpr std::uint32_t kTsynBits = 33;
 // More client bytes than this waiting for the bus are dropped: the client writes faster than
 // the line can carry them (a master never does: it waits for each answer).
 inline constexpr std::size_t kMaxQueuedBytes = 64 * 1024;
