@@ -67,7 +67,7 @@ TEST(Cli, RegsReproducesTheCheckedInOutputs) {
 
 TEST(Cli, DemoRunsOnEveryProfile) {
   for (const char* p : {"spc3", "vpc3plus", "dpc31"}) {
-    const std::string dir = ::testing::TempDir() + "demo-" + p;
+    const std::string dir = testutil::scratch() + "demo-" + p;
     const Result r = run(std::string("demo --profile ") + p + " --out-dir " + dir);
     EXPECT_EQ(r.rc, 0) << p;
     // DO4 through the pulled cable: OSP after the watchdog, normal again after recovery; the
@@ -104,7 +104,7 @@ TEST(Cli, DemoRunsOnEveryProfile) {
 // Data_Exchange; the table lists its port writes. A firmware that does not load: one line, exit
 // 2, and no output directory made.
 TEST(Cli, DemoRunsAFirmwarePlugin) {
-  const std::string dir = ::testing::TempDir() + "demo-plugin";
+  const std::string dir = testutil::scratch() + "demo-plugin";
   const Result r = run(std::string("demo --firmware ") + PLUGIN_DO4 + " --out-dir " + dir);
   EXPECT_EQ(r.rc, 0);
   EXPECT_NE(r.out.find(std::string("the slave runs the firmware ") + PLUGIN_DO4),
@@ -118,7 +118,7 @@ TEST(Cli, DemoRunsAFirmwarePlugin) {
   EXPECT_NE(r.out.find("expects passed 1, failed 0"), std::string::npos);
   EXPECT_FALSE(slurp(dir + "/dpc31-demo.vcd").empty());
 
-  const std::string none = ::testing::TempDir() + "demo-none";
+  const std::string none = testutil::scratch() + "demo-none";
   const Result bad = testutil::run_command(
       std::string(DPC31_CLI) + " demo --firmware ./nosuch.so --out-dir " + none + " 2>&1");
   EXPECT_EQ(bad.rc, 2);
@@ -129,7 +129,7 @@ TEST(Cli, DemoRunsAFirmwarePlugin) {
 }
 
 TEST(Cli, RunWritesWaveformsAndCapture) {
-  const std::string dir = ::testing::TempDir();
+  const std::string dir = testutil::scratch();
   const std::string scn = std::string(SOURCE_DIR) + "/traces/startup_dpc31_1m5.scn";
   const Result r = run("run " + scn + " --quiet --vcd " + dir + "r.vcd --fst " + dir +
                        "r.fst --pcap " + dir + "r.pcapng --signals 'pins.*,state.dp_state'");
@@ -151,7 +151,7 @@ TEST(Cli, RunWritesWaveformsAndCapture) {
 // The logic-analyser form (docs/waveforms.md): 1-bit signals in one scope, 10 ns unless
 // --timescale says otherwise, as a second file (--la-vcd) or as the --vcd itself (--flat).
 TEST(Cli, RunWritesTheLogicAnalyserForm) {
-  const std::string dir = ::testing::TempDir();
+  const std::string dir = testutil::scratch();
   const std::string scn = std::string(SOURCE_DIR) + "/traces/startup_dpc31_1m5.scn";
   ASSERT_EQ(run("run " + scn + " --quiet --vcd " + dir + "full.vcd --la-vcd " + dir + "la.vcd").rc,
             0);
@@ -173,7 +173,7 @@ TEST(Cli, RunWritesTheLogicAnalyserForm) {
 // `dpc31 bench --quick`: every row of the table is there and well-formed. The timings are not
 // checked (speed is measured by the benchmarks, not asserted by tests).
 TEST(CliBench, QuickPrintsEveryRowWellFormed) {
-  const std::string json_path = ::testing::TempDir() + "dpc31_bench_quick.json";
+  const std::string json_path = testutil::scratch() + "dpc31_bench_quick.json";
   const Result r = run("bench --quick --json " + json_path);
   ASSERT_EQ(r.rc, 0) << r.out;
   std::istringstream lines(r.out);
@@ -250,7 +250,7 @@ TEST(CliBench, QuickPrintsEveryRowWellFormed) {
 // `--items d,i`: only those rows are measured, every other one reads "not run: not in --items"
 // (also in the JSON), and that is exit 0.
 TEST(CliBench, ItemsRunsOnlyThose) {
-  const std::string json_path = ::testing::TempDir() + "dpc31_bench_items.json";
+  const std::string json_path = testutil::scratch() + "dpc31_bench_items.json";
   const Result r = run("bench --quick --items d,i --json " + json_path);
   ASSERT_EQ(r.rc, 0) << r.out;
   const auto j = nlohmann::json::parse(slurp(json_path));
@@ -279,7 +279,7 @@ TEST(CliBench, ItemsRunsOnlyThose) {
 // its last line, and exit 1 (bench.hpp). Stand-in setup.sh scripts, not a real 5-minute build.
 TEST(CliBench, BuildRowTimesSetupShOrReportsItsLastLine) {
   namespace fs = std::filesystem;
-  const fs::path src = fs::path(::testing::TempDir()) / "bench-build-src";
+  const fs::path src = fs::path(testutil::scratch()) / "bench-build-src";
   fs::remove_all(src);
   fs::create_directories(src);
   const auto script = [&](const std::string& body) {

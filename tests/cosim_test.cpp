@@ -17,6 +17,7 @@
 #include "lockstep.hpp"
 #include "responder.hpp"
 #include "session.hpp"
+#include "test_files.hpp"
 
 using namespace dpc31;
 using namespace dpc31::cosim;
@@ -485,7 +486,7 @@ TEST(Cosim, RandomStimulusIsReproducible) {
 
 TEST(Cosim, RtlInternalWaveformOnDemand) {
   const Stimulus s = random_stimulus({Profile::dpc31, 3, 2000});
-  const std::string path = ::testing::TempDir() + "cosim_rtl.fst";
+  const std::string path = testutil::scratch() + "cosim_rtl.fst";
   std::string error;
   ASSERT_TRUE(write_rtl_fst(s, {Profile::dpc31, BusMode::intel}, "", path, error)) << error;
   std::FILE* f = std::fopen(path.c_str(), "rb");

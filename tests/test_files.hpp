@@ -58,4 +58,12 @@ class TempDir {
   std::string path_;
 };
 
+// This test program's own directory, removed at its exit, as "PATH/": two test suites run at once
+// on one machine (two build types, two clones) never write the same file.
+inline const std::string& scratch() {
+  static const TempDir dir;
+  static const std::string path = dir.path() + "/";
+  return path;
+}
+
 }  // namespace testutil

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "run_command.hpp"
+#include "test_files.hpp"
 
 // emu/ is not on the tests' include path.
 #include "cpu.hpp"
@@ -388,7 +389,7 @@ Cli cli(const std::string& args) {
 }
 
 std::string tmp(const std::string& name) {
-  return ::testing::TempDir() + "dpc31_trace_test_" + name;
+  return testutil::scratch() + "dpc31_trace_test_" + name;
 }
 
 TEST(TraceCli, RecordThenReplay) {

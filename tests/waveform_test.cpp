@@ -27,7 +27,7 @@ using Cmd = testutil::CommandResult;
 
 Cmd sh(const std::string& cmd) { return testutil::run_command(cmd + " 2>&1"); }
 
-std::string tmp(const std::string& name) { return ::testing::TempDir() + name; }
+std::string tmp(const std::string& name) { return testutil::scratch() + name; }
 
 struct Line {
   std::string rx;  // every byte the master put on RxD (answered or not)
