@@ -88,6 +88,9 @@ std::size_t Segment::add_chip(std::string name, ChipOptions opt) {
       armed_.push_back(raw->index);
   });
   add_station(std::move(s));
+  raw->known = raw->chip->cycle();
+  front_ = std::max(front_, raw->known);
+  raw->chip->on_cycle([this, raw](std::uint64_t cycle) { cycle_moved(*raw, cycle); });
   look_at(*raw);
   return raw->index;
 }
@@ -211,6 +214,7 @@ Chip& Segment::chip(std::size_t i) {
   // Whoever asks for it may arm something without time passing (an observer of TxD edges): the
   // rounds look at it again.
   s.looked = UINT64_MAX;
+  mark(s);
   return *s.chip;
 }
 
@@ -221,21 +225,61 @@ const Chip& Segment::chip(std::size_t i) const {
 }
 
 std::uint64_t Segment::cycle() const {
-  std::uint64_t c = now_;
-  for (const auto& s : stations_) {
-    if (s->chip) c = std::max(c, s->chip->cycle());
+  if (front_stale_) {
+    // A chip went back (a reset, an earlier snapshot): the front is the latest of the others.
+    front_ = 0;
+    for (const auto& s : stations_) {
+      if (s->chip) front_ = std::max(front_, s->chip->cycle());
+    }
+    front_stale_ = false;
   }
-  return c;
+  return std::max(now_, front_);
+}
+
+// Every change of a chip's cycle passes here (Chip::on_cycle), the segment's own steps and a
+// user's through a kept Chip& alike: the line's front without a look at every chip, and the chips
+// catch_up must look at again.
+void Segment::cycle_moved(Station& s, std::uint64_t cycle) {
+  if (cycle < s.known) front_stale_ = true;
+  s.known = cycle;
+  front_ = std::max(front_, cycle);
+  mark(s);
+}
+
+void Segment::mark(Station& s) {
+  if (s.moved) return;
+  s.moved = true;
+  moved_.push_back(s.index);
 }
 
 void Segment::catch_up() {
   const std::uint64_t front = cycle();
   const Scoped at(hard_end_, front);
-  for (const auto& s : stations_) {
-    if (!s->chip) continue;
-    if (front > now_) step_station(*s, front);
+  // The chips moved or handed out since the last catch_up (the others stand where the rounds
+  // looked at them last); stepping them below marks them again.
+  catching_.swap(moved_);
+  moved_.clear();
+  for (const std::size_t i : catching_) stations_[i]->moved = false;
+  std::sort(catching_.begin(), catching_.end());
+  if (reference_) {
+    catching_ = everyone_;
+  } else if (front > now_) {
+    // Those with an event by `front` or a running firmware step there too; one without either
+    // only passes time, as a chip the rounds leave alone does (step_station).
+    due_by(front);
+    stepped_.clear();
+    std::set_union(catching_.begin(), catching_.end(), due_.begin(), due_.end(),
+                   std::back_inserter(stepped_));
+    catching_.clear();
+    std::set_union(stepped_.begin(), stepped_.end(), busy_.begin(), busy_.end(),
+                   std::back_inserter(catching_));
+  }
+  for (const std::size_t i : catching_) {
+    Station& s = *stations_[i];
+    if (!s.chip) continue;
+    if (front > now_) step_station(s, front);
     // A user side arms something only with a bus access (time passes) or through chip(i).
-    if (s->chip->cycle() != s->looked) look_at(*s);
+    if (s.chip->cycle() != s.looked) look_at(s);
   }
   now_ = front;
 }

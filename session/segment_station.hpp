@@ -37,6 +37,9 @@ struct Segment::Station {
   // its first start bit.
   bool busy = false;
   std::uint64_t looked = UINT64_MAX;  // the chip's cycle when the rounds last looked
+  // Its cycle as Chip::on_cycle last told, and whether catch_up is to look at it (moved_).
+  std::uint64_t known = 0;
+  bool moved = false;
   // The telegram log: the next entry it takes; whether it hears every telegram at once (eager_),
   // and its station address as last looked (at_address_; -1: none yet).
   std::uint64_t taken = 0;
