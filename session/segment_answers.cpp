@@ -14,7 +14,13 @@ bool Segment::relay_answer(std::size_t i, std::uint64_t cycle) {
   Station& a = *stations_[i];
   if (reference_ || !a.answer || a.answer->start != cycle || a.chip->bit_cycles() != t_)
     return false;
-  hear_whole(i, HeardFrame::make(a.answer->bytes), cycle);  // decoded once for every chip
+  // Decoded once for every other chip (at once or through the log); with none on the line and
+  // nothing in the log for it, nobody needs the frame: no entry, as hear_whole makes none.
+  if (log_.chips() == 1 && a.taken == log_.end()) {
+    log_.line_taken();
+  } else {
+    hear_whole(i, HeardFrame::make(a.answer->bytes), cycle);
+  }
   a.answer.reset();
   // Its edges from this one on (relay_armed took it; this one is its first start bit, so they
   // are the whole answer): the senders hear its characters and the line's decoder takes them
