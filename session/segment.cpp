@@ -356,25 +356,17 @@ void Segment::take_log(Station& s, std::uint64_t to) {
   if (s.taken == log_.end()) return;
   const bool current = s.looked == s.chip->cycle();
   while (s.taken < log_.end() && log_.at(s.taken).start <= to) {
-    const TelegramLog::Entry& e = log_.at(s.taken);
-    if (e.from == s.index) {  // its own answer
-      ++s.taken;
-      continue;
-    }
+    const TelegramLog::Entry& e = log_.at(s.taken++);
+    if (e.from == s.index) continue;  // its own answer
     if (s.chip->cycle() < e.start) s.chip->step(e.start - s.chip->cycle());
-    // From this entry on, up to the last by `to` (and before its own next answer) but that last
-    // one, in one update where the chip's receiver is where the line's entry before them left it
-    // (hear_run refuses otherwise: after its own answer, say); else this entry whole.
+    s.chip->hear_telegram(e.frame, e.start, t_);
     while (!s.own.empty() && s.own.front() < s.taken) s.own.pop_front();
     std::uint64_t until = log_.folds_until(s.taken, to);
     if (!s.own.empty()) until = std::min(until, s.own.front());
-    // A fold of two entries at least.
-    if (until >= s.taken + 3 && s.chip->hear_run(log_.run(s.taken, until - 1, t_))) {
-      s.taken = until - 1;
-      continue;
-    }
-    s.chip->hear_telegram(e.frame, e.start, t_);
-    ++s.taken;
+    if (until < s.taken + 3) continue;  // a fold of two entries at least
+    const TelegramLog::Entry& first = log_.at(s.taken);
+    if (s.chip->cycle() < first.start) s.chip->step(first.start - s.chip->cycle());
+    if (s.chip->hear_run(log_.run(s.taken, until - 1, t_))) s.taken = until - 1;
   }
   if (current) s.looked = s.chip->cycle();
 }
