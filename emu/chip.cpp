@@ -15,20 +15,35 @@ Chip::~Chip() = default;
 Chip::Chip(Chip&&) noexcept = default;
 Chip& Chip::operator=(Chip&&) noexcept = default;
 
-void Chip::reset() { core_->reset(); }
-std::uint8_t Chip::read(std::uint32_t addr) { return core_->bus_read(addr); }
-void Chip::write(std::uint32_t addr, std::uint8_t value) { core_->bus_write(addr, value); }
+void Chip::reset() {
+  core_->reset();
+  moved();
+}
+std::uint8_t Chip::read(std::uint32_t addr) {
+  const std::uint8_t v = core_->bus_read(addr);
+  moved();
+  return v;
+}
+void Chip::write(std::uint32_t addr, std::uint8_t value) {
+  core_->bus_write(addr, value);
+  moved();
+}
 void Chip::write_block(std::uint32_t addr, std::span<const std::uint8_t> bytes) {
   core_->bus_write_block(addr, bytes);
+  moved();
 }
 void Chip::read_block(std::uint32_t addr, std::span<std::uint8_t> out) {
   core_->bus_read_block(addr, out);
+  moved();
 }
 void Chip::fill(std::uint32_t addr, std::uint8_t value, std::size_t len) {
   core_->bus_fill(addr, value, len);
+  moved();
 }
 bool Chip::equal(std::uint32_t a, std::uint32_t b, std::size_t len) {
-  return core_->bus_equal(a, b, len);
+  const bool same = core_->bus_equal(a, b, len);
+  moved();
+  return same;
 }
 std::size_t Chip::quiet_ram_run(std::uint32_t addr, std::size_t len, bool write) const {
   return core_->quiet_ram_run(addr, len, write);
@@ -51,10 +66,15 @@ bool Chip::poke_reg(RegId id, std::uint16_t value) {
   return true;
 }
 
-void Chip::step(std::uint64_t cycles) { core_->advance(cycles); }
+void Chip::step(std::uint64_t cycles) {
+  core_->advance(cycles);
+  moved();
+}
 bool Chip::step_until_irq(std::uint64_t cycles) {
   if (core_->stop) return false;
-  return core_->advance(cycles, ChipCore::Stop::on_irq_or_request);
+  const bool irq = core_->advance(cycles, ChipCore::Stop::on_irq_or_request);
+  moved();
+  return irq;
 }
 void Chip::request_stop() { core_->stop = true; }
 bool Chip::stop_requested() const { return core_->stop; }
@@ -132,6 +152,7 @@ void Chip::on_telegram(std::function<void(const Telegram&)> cb) {
 void Chip::on_answer(std::function<void(const Telegram&)> cb) {
   core_->signals.answer.add(std::move(cb));
 }
+void Chip::on_cycle(std::function<void(std::uint64_t)> cb) { on_cycle_ = std::move(cb); }
 ChipProbe Chip::probe() const {
   const ChipCore& c = *core_;
   return {c.dp.state(),

@@ -310,6 +310,7 @@ void Chip::load_state(std::span<const std::uint8_t> bytes) {
   // them, not to the state.
   fresh->signals.take_attachments(c.signals);
   core_ = std::move(fresh);
+  moved();
 }
 
 void Chip::save_state_file(const std::string& path) const {

@@ -8,6 +8,8 @@
 #include <iterator>
 #include <stdexcept>
 
+#include "segment_station.hpp"
+
 namespace dpc31 {
 
 namespace {
@@ -27,58 +29,9 @@ class Scoped {
   std::optional<std::uint64_t> old_;
 };
 
-// What a sender hears of the line, in cycle order: an edge, or a good character whole (`at` its
-// start bit). A master's receiver takes the characters whole (Segment::take_line).
-struct Heard {
-  std::uint64_t at = 0;
-  bool whole = false;  // a character: `data`; else an edge to `level`
-  bool level = false;
-  std::uint8_t data = 0;
-};
-
 bool before(std::uint64_t c, const Heard& h) { return c < h.at; }
 
 }  // namespace
-
-struct Segment::Station {
-  std::size_t index = 0;
-  std::string name;
-  std::unique_ptr<Chip> chip;  // null: a sender
-  std::unique_ptr<Cpu> cpu;
-  Edges txd;  // the reference line: the chip's TxD edges not yet relayed (Chip::on_txd)
-  std::vector<Heard> heard;           // a sender's: the line as it hears it, not yet taken
-  std::uint64_t colliding_until = 0;  // a collision of this station is reported once per burst
-  // Telegram level (docs/segment.md): the chip's next event and whether its firmware runs, as the
-  // rounds last looked; the answer it armed (Chip::on_answer), given to the other chips whole at
-  // its first start bit.
-  bool busy = false;
-  std::uint64_t looked = UINT64_MAX;  // the chip's cycle when the rounds last looked
-  // The telegram log: the next entry it takes; whether it hears every telegram at once (eager_),
-  // and its station address as last looked (at_address_; -1: none yet).
-  std::uint64_t taken = 0;
-  std::deque<std::uint64_t> own;  // the entries of its own answers from `taken` on (not heard)
-  bool eager = false;
-  int address = -1;
-  std::optional<LineTelegram> answer;
-  // The TxD edges of its last armed answer (both line modes): what a firmware running past a
-  // round's end must not cross; at telegram level also what the line relays (from out_next on:
-  // not yet) and what its TxD is checked against (from confirmed on: not yet seen), its bytes and
-  // end.
-  Edges drives_edges;
-  std::size_t out_next = 0;
-  std::size_t confirmed = 0;
-  std::size_t live_next = 0;  // the first edge after the line's time (next_armed_edge)
-  std::vector<std::uint8_t> out_bytes;
-  std::uint64_t out_start = 0;
-  std::uint64_t out_end = 0;
-  std::string broken;  // its TxD left the armed answer (cut short): thrown by look_at
-  [[nodiscard]] bool drives(std::uint64_t from, std::uint64_t to) const {
-    const auto e = std::lower_bound(
-        drives_edges.begin(), drives_edges.end(), from,
-        [](const std::pair<std::uint64_t, bool>& x, std::uint64_t c) { return x.first < c; });
-    return e != drives_edges.end() && e->first <= to;
-  }
-};
 
 Segment::Segment(std::uint32_t baud, std::uint32_t clock_hz)
     : clock_hz_(clock_hz != 0 ? clock_hz : Chip().clock_hz()),
@@ -135,6 +88,9 @@ std::size_t Segment::add_chip(std::string name, ChipOptions opt) {
       armed_.push_back(raw->index);
   });
   add_station(std::move(s));
+  raw->known = raw->chip->cycle();
+  front_ = std::max(front_, raw->known);
+  raw->chip->on_cycle([this, raw](std::uint64_t cycle) { cycle_moved(*raw, cycle); });
   look_at(*raw);
   return raw->index;
 }
@@ -258,6 +214,7 @@ Chip& Segment::chip(std::size_t i) {
   // Whoever asks for it may arm something without time passing (an observer of TxD edges): the
   // rounds look at it again.
   s.looked = UINT64_MAX;
+  mark(s);
   return *s.chip;
 }
 
@@ -268,21 +225,61 @@ const Chip& Segment::chip(std::size_t i) const {
 }
 
 std::uint64_t Segment::cycle() const {
-  std::uint64_t c = now_;
-  for (const auto& s : stations_) {
-    if (s->chip) c = std::max(c, s->chip->cycle());
+  if (front_stale_) {
+    // A chip went back (a reset, an earlier snapshot): the front is the latest of the others.
+    front_ = 0;
+    for (const auto& s : stations_) {
+      if (s->chip) front_ = std::max(front_, s->chip->cycle());
+    }
+    front_stale_ = false;
   }
-  return c;
+  return std::max(now_, front_);
+}
+
+// Every change of a chip's cycle passes here (Chip::on_cycle), the segment's own steps and a
+// user's through a kept Chip& alike: the line's front without a look at every chip, and the chips
+// catch_up must look at again.
+void Segment::cycle_moved(Station& s, std::uint64_t cycle) {
+  if (cycle < s.known) front_stale_ = true;
+  s.known = cycle;
+  front_ = std::max(front_, cycle);
+  mark(s);
+}
+
+void Segment::mark(Station& s) {
+  if (s.moved) return;
+  s.moved = true;
+  moved_.push_back(s.index);
 }
 
 void Segment::catch_up() {
   const std::uint64_t front = cycle();
   const Scoped at(hard_end_, front);
-  for (const auto& s : stations_) {
-    if (!s->chip) continue;
-    if (front > now_) step_station(*s, front);
+  // The chips moved or handed out since the last catch_up (the others stand where the rounds
+  // looked at them last); stepping them below marks them again.
+  catching_.swap(moved_);
+  moved_.clear();
+  for (const std::size_t i : catching_) stations_[i]->moved = false;
+  std::sort(catching_.begin(), catching_.end());
+  if (reference_) {
+    catching_ = everyone_;
+  } else if (front > now_) {
+    // Those with an event by `front` or a running firmware step there too; one without either
+    // only passes time, as a chip the rounds leave alone does (step_station).
+    due_by(front);
+    stepped_.clear();
+    std::set_union(catching_.begin(), catching_.end(), due_.begin(), due_.end(),
+                   std::back_inserter(stepped_));
+    catching_.clear();
+    std::set_union(stepped_.begin(), stepped_.end(), busy_.begin(), busy_.end(),
+                   std::back_inserter(catching_));
+  }
+  for (const std::size_t i : catching_) {
+    Station& s = *stations_[i];
+    if (!s.chip) continue;
+    if (front > now_) step_station(s, front);
     // A user side arms something only with a bus access (time passes) or through chip(i).
-    if (s->chip->cycle() != s->looked) look_at(*s);
+    if (s.chip->cycle() != s.looked) look_at(s);
   }
   now_ = front;
 }
@@ -435,68 +432,6 @@ void Segment::relay(std::size_t i, std::uint64_t cycle, bool level) {
     if (free && relay_answer(i, cycle)) return;
   }
   hear(i, cycle, level);
-}
-
-bool Segment::relay_answer(std::size_t i, std::uint64_t cycle) {
-  Station& a = *stations_[i];
-  if (reference_ || !a.answer || a.answer->start != cycle || a.chip->bit_cycles() != t_)
-    return false;
-  hear_whole(i, HeardFrame::make(a.answer->bytes), cycle);  // decoded once for every chip
-  a.answer.reset();
-  // Its edges from this one on (relay_armed took it; this one is its first start bit, so they
-  // are the whole answer): the senders hear its characters and the line's decoder takes them
-  // now, ahead of time as a sender's telegram; the line is the answer's up to a character time
-  // after its last falling edge.
-  const auto rest = std::span(a.drives_edges).subspan(a.out_next - 1);
-  senders_hear(i, a.out_bytes, a.out_start);
-  // A start bit a character time after the falling edge before it finds the line free again
-  // (relay): a waiting master wakes there (wakes_), as on the reference line.
-  wakes_.clear();
-  wake_next_ = 0;
-  wake_from_ = i;
-  const std::uint64_t frame = std::uint64_t{kUartCharBits} * t_;
-  for (const auto& [at, level] : rest) {
-    if (level) continue;
-    if (at >= owned_until_) wakes_.push_back(at);
-    owned_until_ = std::max(owned_until_, at + frame);
-  }
-  decode_chars(i, a.out_bytes, cycle, rest);
-  a.out_next = a.drives_edges.size();
-  return true;
-}
-
-// What the chip drives must be the answer the line relayed: whole characters at their places in
-// it, edges one by one. A Go_Offline or a reset cutting the answer short drives otherwise (or
-// stops: look_at); the other chips heard it whole, so that is thrown, never papered over.
-void Segment::check_txd(Station& s, const TxdRun& run) {
-  if (!s.broken.empty()) return;
-  const Edges& e = s.drives_edges;
-  const auto index_at = [&](std::uint64_t c) {
-    return static_cast<std::size_t>(
-        std::partition_point(e.begin(), e.end(), [c](const auto& x) { return x.first < c; }) -
-        e.begin());
-  };
-  if (!run.bytes.empty()) {
-    const std::uint64_t frame = std::uint64_t{kUartCharBits} * run.bit_cycles;
-    const std::uint64_t k = (run.start - s.out_start) / frame;
-    if (run.start >= s.out_start && s.out_start + k * frame == run.start &&
-        k + run.bytes.size() <= s.out_bytes.size() &&
-        std::equal(run.bytes.begin(), run.bytes.end(),
-                   s.out_bytes.begin() + static_cast<std::ptrdiff_t>(k)) &&
-        index_at(run.start) == s.confirmed) {
-      s.confirmed = index_at(run.start + run.bytes.size() * frame);
-      return;
-    }
-    s.broken = fmt::format("drove characters from cycle {}", run.start);
-    return;
-  }
-  for (const auto& edge : run.edges) {
-    if (s.confirmed >= e.size() || e[s.confirmed] != edge) {
-      s.broken = fmt::format("drove TxD {} at cycle {}", edge.second ? "high" : "low", edge.first);
-      return;
-    }
-    ++s.confirmed;
-  }
 }
 
 void Segment::hear(std::size_t from, std::uint64_t cycle, bool level) {
@@ -738,40 +673,6 @@ void Segment::round(std::uint64_t cycle) {
   }
   close_telegrams(now_);
   line_final_ = now_;
-}
-
-// The armed answers' edges up to now_ into round_. An answer whose first start bit finds its chip's
-// TxD high was withdrawn before it began (Go_Offline, a reset): it never reaches the line.
-void Segment::relay_armed(std::uint64_t before) {
-  std::sort(armed_.begin(), armed_.end());
-  for (const std::size_t i : armed_) {
-    Station& s = *stations_[i];
-    const Edges& e = s.drives_edges;
-    if (s.out_next == 0 && !e.empty() && e[0].first <= now_ && s.chip->cycle() >= e[0].first &&
-        s.chip->cycle() < e[0].first + t_ && s.chip->txd_pin()) {
-      s.out_next = s.confirmed = s.live_next = e.size();
-      s.answer.reset();
-    }
-    for (; s.out_next < e.size() && e[s.out_next].first <= now_; ++s.out_next)
-      round_.push_back({e[s.out_next].first, i, e[s.out_next].second});
-  }
-  // Every later question (others_drive, next_armed_edge) is about cycles after `before`.
-  std::erase_if(armed_, [this, before](std::size_t i) {
-    const Station& s = *stations_[i];
-    return s.out_next == s.drives_edges.size() &&
-           (s.drives_edges.empty() || s.drives_edges.back().first <= before);
-  });
-}
-
-std::uint64_t Segment::next_armed_edge() {
-  std::uint64_t next = UINT64_MAX;
-  for (const std::size_t i : armed_) {
-    Station& s = *stations_[i];
-    const Edges& e = s.drives_edges;
-    while (s.live_next < e.size() && e[s.live_next].first <= now_) ++s.live_next;
-    if (s.live_next < e.size()) next = std::min(next, e[s.live_next].first);
-  }
-  return next;
 }
 
 // A character whose start bit is on the line is handed whole: the receiver is then as its edges up

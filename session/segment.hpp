@@ -162,6 +162,9 @@ class Segment {
   void check_txd(Station& s, const TxdRun& run);
   // Every chip to cycle(): what its user side did directly on its bus moved it alone.
   void catch_up();
+  // Chip::on_cycle of station s; a station for catch_up to look at again.
+  void cycle_moved(Station& s, std::uint64_t cycle);
+  void mark(Station& s);
   // An edge station `i` drove (in order, up to its cycle): the line's owner's are heard by all.
   void relay(std::size_t i, std::uint64_t cycle, bool level);
   void hear(std::size_t from, std::uint64_t cycle, bool level);
@@ -185,6 +188,12 @@ class Segment {
   std::uint32_t t_;
   bool reference_ = false;
   std::uint64_t now_ = 0;
+  // The latest cycle a chip was told at (Chip::on_cycle); stale after a chip went back. The
+  // stations moved or handed out (chip(i)) since the last catch_up, and catch_up's own list.
+  mutable std::uint64_t front_ = 0;
+  mutable bool front_stale_ = false;
+  std::vector<std::size_t> moved_;
+  std::vector<std::size_t> catching_;
   std::uint64_t line_final_ = 0;
   std::vector<std::unique_ptr<Station>> stations_;
   std::vector<std::size_t> everyone_;  // every station's index

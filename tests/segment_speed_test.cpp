@@ -619,5 +619,39 @@ TEST(SegmentSpeed, AUserTimerTickWhileItsBitIsSetIsNoEventOfTheLine) {
   EXPECT_GT(chip.line_deadline(), tick + ms);
 }
 
+// A user may step a chip through the Chip& chip(i) gave it, between runs (a DirectBus): the line's
+// time follows it (Segment::cycle, which looks at no chip: Chip::on_cycle tells it), back too where
+// a snapshot takes the chip back, and the line goes on from there as the reference line does.
+TEST(SegmentSpeed, AChipSteppedThroughItsChipReferenceMovesTheLinesTime) {
+  Bed fast(false, 1'500'000, 5, false, 0);
+  Bed ref(true, 1'500'000, 5, false, 0);
+  for (Bed* b : {&fast, &ref}) ASSERT_TRUE(b->master->startup_all());
+  const auto exchanges = [&](const std::string& where) {
+    for (std::size_t i = 0; i < 5; ++i) {
+      for (Bed* b : {&fast, &ref}) {
+        b->master->select(i);
+        b->master->data_exchange({1, 2, 3, 4});
+      }
+    }
+    ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, where));
+  };
+  ASSERT_NO_FATAL_FAILURE(exchanges("after the start-up"));
+  for (Bed* b : {&fast, &ref}) {
+    Chip& c = b->seg.chip(b->chips[1]);  // slave 6, at the line's time
+    const std::uint64_t now = b->seg.cycle();
+    ASSERT_EQ(c.cycle(), now);
+    const std::vector<std::uint8_t> before = c.save_state();
+    c.step(1000);
+    EXPECT_EQ(b->seg.cycle(), now + 1000) << "step";
+    (void)c.read(static_cast<std::uint32_t>(c.addr_of(RegId::Status_Reg)));
+    EXPECT_EQ(b->seg.cycle(), now + 1000 + c.bus_access_cycles()) << "a bus access";
+    c.load_state(before);
+    EXPECT_EQ(b->seg.cycle(), now) << "back to the snapshot";
+    c.step(777);
+    EXPECT_EQ(b->seg.cycle(), now + 777) << "step after the snapshot";
+  }
+  ASSERT_NO_FATAL_FAILURE(exchanges("after slave 6 was stepped alone"));
+}
+
 }  // namespace
 }  // namespace dpc31

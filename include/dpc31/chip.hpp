@@ -293,6 +293,11 @@ class Chip {
   void on_answer(std::function<void(const Telegram&)> cb);
   // Every CPU bus access, with its cycle.
   void on_bus_access(std::function<void(std::uint64_t, const BusAccess&)> cb);
+  // The chip's cycle after every call that may have changed it (the bus, step, step_until_irq,
+  // reset, load_state), even where it stayed: a segment keeps its line's front and the chips
+  // stepped through a kept Chip& without looking at each (docs/segment.md). One watcher: a
+  // second replaces the first, an empty function removes it.
+  void on_cycle(std::function<void(std::uint64_t)> cb);
   [[nodiscard]] bool txd_pin() const;
   [[nodiscard]] const FdlCounters& fdl_counters() const;
   [[nodiscard]] std::uint8_t station_address() const;
@@ -366,7 +371,11 @@ class Chip {
 
  private:
   friend struct ChipAccess;
+  void moved() const {
+    if (on_cycle_) on_cycle_(cycle());
+  }
   std::unique_ptr<ChipCore> core_;
+  std::function<void(std::uint64_t)> on_cycle_;
 };
 
 }  // namespace dpc31
