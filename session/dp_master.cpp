@@ -308,7 +308,7 @@ void DpMaster::idle(std::uint64_t cycles) { run_until(now() + cycles); }
 
 Exchange DpMaster::retry(Exchange ex, std::uint32_t retries) {
   for (std::uint32_t i = 0; i < retries && !ex.answer && wants_answer(ex.request); ++i) {
-    ex = transact(ex.request);
+    ex = transact(std::move(ex.request));
   }
   return ex;
 }
@@ -356,13 +356,10 @@ bool sdn(const fdl::Frame& f) {
 
 }  // namespace
 
-Exchange DpMaster::transact(const fdl::Frame& req, UartFault fault) {
-  const std::vector<std::uint8_t> bytes = fdl::encode(req);
+Exchange DpMaster::transact(fdl::Frame req, UartFault fault) {
   // decode(encode(req)) == req whenever encode gives bytes: the request needs no decoding.
-  Exchange ex = send(bytes, fault, !bytes.empty() && sdn(req));
-  ex.request = req;
-  history_.back().request = req;
-  return ex;
+  const bool no_answer = fdl::encode(req, tx_) && sdn(req);
+  return send(tx_, fault, no_answer, std::move(req));
 }
 
 Exchange DpMaster::transact_raw(const std::vector<std::uint8_t>& bytes, UartFault fault) {
@@ -370,8 +367,10 @@ Exchange DpMaster::transact_raw(const std::vector<std::uint8_t>& bytes, UartFaul
   return send(bytes, fault, d.error == fdl::Error::none && sdn(d.frame));
 }
 
-Exchange DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bool no_answer) {
+Exchange DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bool no_answer,
+                        fdl::Frame request) {
   Exchange ex;
+  ex.request = std::move(request);
   // What the line carried before (another master's traffic, for instance) is no answer to us.
   ex.request_start = std::max(look(), bus_free_ + std::uint64_t{cfg_.idle_bits} * t_);
   if (on_send) on_send(ex.request_start, bytes, fault);
@@ -381,7 +380,7 @@ Exchange DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bo
   if (no_answer) {
     bus_free_ = ex.request_end;  // send-data-no-acknowledge: nothing to wait for
   } else {
-    ex = wait_answer(ex);
+    wait_answer(ex);
     if (ex.answer) {
       ++counters_.answered;
     } else if (ex.answer_end == 0) {
@@ -394,7 +393,7 @@ Exchange DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bo
   return ex;
 }
 
-Exchange DpMaster::wait_answer(Exchange ex) {
+void DpMaster::wait_answer(Exchange& ex) {
   const std::uint64_t slot_end = ex.request_end + std::uint64_t{cfg_.slot_bits} * t_;
   answer_.reset();
   for (;;) {
@@ -407,7 +406,7 @@ Exchange DpMaster::wait_answer(Exchange ex) {
     if (!answer_.started() && !rx_.receiving() && at >= slot_end) {
       bus_free_ = at;
       wake_on_txd_ = false;
-      return ex;  // no answer within the slot time
+      return;  // no answer within the slot time
     }
     // An answer that stops for a slot time between characters is broken.
     const std::uint64_t gap_end = answer_.end() + std::uint64_t{cfg_.slot_bits} * t_;
@@ -428,7 +427,6 @@ Exchange DpMaster::wait_answer(Exchange ex) {
   ex.answer_end = answer_.end();
   bus_free_ = ex.answer_end;
   ex.answer = answer_.frame();
-  return ex;
 }
 
 Exchange DpMaster::fdl_status() {
