@@ -394,7 +394,7 @@ Exchange DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bo
 }
 
 void DpMaster::wait_answer(Exchange& ex) {
-  const std::uint64_t slot_end = ex.request_end + std::uint64_t{cfg_.slot_bits} * t_;
+  const std::uint64_t slot = std::uint64_t{cfg_.slot_bits} * t_;
   answer_.reset();
   for (;;) {
     // Nothing below moves time before run_until: the cycle looked at is now() (a segment's
@@ -402,19 +402,23 @@ void DpMaster::wait_answer(Exchange& ex) {
     const std::uint64_t at = look();
     for (const UartChar& c : chars_) answer_.push(c);
     answer_.push_block(rx_.due(), rx_.due_start(), t_);
-    if (answer_.finished() && !rx_.receiving()) break;
-    if (!answer_.started() && !rx_.receiving() && at >= slot_end) {
-      bus_free_ = at;
-      wake_on_txd_ = false;
-      return;  // no answer within the slot time
+    if (answer_.finished() && !rx_.receiving()) {
+      bus_free_ = answer_.end();
+      break;
     }
-    // An answer that stops for a slot time between characters is broken.
-    const std::uint64_t gap_end = answer_.end() + std::uint64_t{cfg_.slot_bits} * t_;
-    if (answer_.started() && !rx_.receiving() && at >= gap_end) break;
-    // Event-driven: sleep until a start bit (TxD falls) or the slot time ends; once the length
-    // is known, until the stop sample of the answer's last character (sent back to back).
+    // The one rule of the wait: a slot time after the last character on the line (the
+    // request's, then each of the answer's) for the next start bit. Past it the exchange is over
+    // (no answer, or a broken one) and the line is free from there: the next request follows
+    // TSYN later (docs/timing.md: unanswered requests every 66 + 100 + 33 bit times).
+    const std::uint64_t wait_end = (answer_.started() ? answer_.end() : ex.request_end) + slot;
+    if (!rx_.receiving() && at >= wait_end) {
+      bus_free_ = wait_end;
+      break;
+    }
+    // Event-driven: sleep until a start bit (TxD falls) or the wait ends; once the length is
+    // known, until the stop sample of the answer's last character (sent back to back).
     const std::size_t len = answer_.expected_length();
-    std::uint64_t next = answer_.started() ? gap_end : slot_end;
+    std::uint64_t next = wait_end;
     if (rx_.receiving()) {
       next = len == 0 ? rx_.next_deadline()
                       : answer_.start() + (len * kUartCharBits - 1) * std::uint64_t{t_} + t_ / 2;
@@ -423,9 +427,9 @@ void DpMaster::wait_answer(Exchange& ex) {
     run_until(std::max(next, at + 1));
   }
   wake_on_txd_ = false;
+  if (!answer_.started()) return;  // no answer within the slot time
   ex.answer_start = answer_.start();
   ex.answer_end = answer_.end();
-  bus_free_ = ex.answer_end;
   ex.answer = answer_.frame();
 }
 
