@@ -23,8 +23,8 @@ int main(int argc, char** argv) {
       "expect state 6 Data_Exchange\n";
   dpc31::SegmentScenario scenario;
   dpc31::ScenarioError err;
-  if (!dpc31::parse_segment_scenario(kScenario, "consumer.scn", scenario, err)) {
-    std::fprintf(stderr, "%s:%d: %s\n", err.file.c_str(), err.line, err.message.c_str());
+  if (!dpc31::parse_segment_scenario(kScenario, "segment.scn", scenario, err)) {
+    std::fprintf(stderr, "%s\n", err.text().c_str());
     return 2;
   }
   dpc31::SegmentOutputOptions opt;
