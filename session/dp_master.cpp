@@ -408,11 +408,13 @@ void DpMaster::wait_answer(Exchange& ex) {
     }
     // The one rule of the wait: a slot time after the last character on the line (the
     // request's, then each of the answer's) for the next start bit. Past it the exchange is over
-    // (no answer, or a broken one) and the line is free from there: the next request follows
-    // TSYN later (docs/timing.md: unanswered requests every 66 + 100 + 33 bit times).
+    // (no answer, or a broken one) and the line is free from where the master found that: the
+    // next request follows TSYN later (docs/timing.md: unanswered requests every 66 + 100 + 33
+    // bit times). That is the wait's end itself unless a firmware's instruction (an 80C32's)
+    // carried the run past it (docs/decisions.md, "The master's per-exchange cost").
     const std::uint64_t wait_end = (answer_.started() ? answer_.end() : ex.request_end) + slot;
     if (!rx_.receiving() && at >= wait_end) {
-      bus_free_ = wait_end;
+      bus_free_ = at;
       break;
     }
     // Event-driven: sleep until a start bit (TxD falls) or the wait ends; once the length is
