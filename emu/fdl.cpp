@@ -52,16 +52,27 @@ std::uint8_t fcs(std::span<const std::uint8_t> bytes) {
 }
 
 std::vector<std::uint8_t> encode(const Frame& f) {
+  std::vector<std::uint8_t> out;
+  encode(f, out);
+  return out;
+}
+
+bool encode(const Frame& f, std::vector<std::uint8_t>& out) {
+  out.clear();
   const std::size_t saps = (f.dsap ? 1U : 0U) + (f.ssap ? 1U : 0U);
   const bool no_data = saps == 0 && f.du.empty();
   // SC and SD4 carry no addresses beyond DA/SA and no data; refuse rather than drop data.
-  if (f.sd == SC) return no_data ? std::vector<std::uint8_t>{SC} : std::vector<std::uint8_t>{};
-  if (f.da > kAddressMask || f.sa > kAddressMask) return {};
+  if (f.sd == SC) {
+    if (no_data) out.push_back(SC);
+    return no_data;
+  }
+  if (f.da > kAddressMask || f.sa > kAddressMask) return false;
   if (f.sd == SD4) {
-    return no_data ? std::vector<std::uint8_t>{SD4, f.da, f.sa} : std::vector<std::uint8_t>{};
+    if (no_data) out.assign({SD4, f.da, f.sa});
+    return no_data;
   }
   // Further address extension is not supported, so a SAP byte must not claim it.
-  if ((f.dsap && (*f.dsap & kExtension)) || (f.ssap && (*f.ssap & kExtension))) return {};
+  if ((f.dsap && (*f.dsap & kExtension)) || (f.ssap && (*f.ssap & kExtension))) return false;
 
   const std::size_t le = 3 + saps + f.du.size();
   // The start of the frame (SD, or SD2 with LE, LEr), then the body in the same block (one
@@ -70,24 +81,23 @@ std::vector<std::uint8_t> encode(const Frame& f) {
   std::size_t body = 1;
   switch (f.sd) {
     case SD1:
-      if (!no_data) return {};
+      if (!no_data) return false;
       head[0] = SD1;
       break;
     case SD3:
-      if (saps + f.du.size() != kSd3DataLength) return {};
+      if (saps + f.du.size() != kSd3DataLength) return false;
       head[0] = SD3;
       break;
     case SD2: {
-      if (le < kMinLe || le > kMaxLe) return {};
+      if (le < kMinLe || le > kMaxLe) return false;
       const auto l = static_cast<std::uint8_t>(le);
       head = {SD2, l, l, SD2};
       body = head.size();
       break;
     }
     default:
-      return {};
+      return false;
   }
-  std::vector<std::uint8_t> out;
   out.reserve(body + le + 2);
   out.assign(head.begin(), head.begin() + static_cast<std::ptrdiff_t>(body));
   out.push_back(static_cast<std::uint8_t>(f.da | (f.dsap ? kExtension : 0)));
@@ -98,7 +108,7 @@ std::vector<std::uint8_t> encode(const Frame& f) {
   out.insert(out.end(), f.du.begin(), f.du.end());
   out.push_back(fcs(std::span(out).subspan(body)));
   out.push_back(ED);
-  return out;
+  return true;
 }
 
 constexpr std::array<std::string_view, 9> kErrorNames = {"none",        "bad_sd",   "truncated",

@@ -308,7 +308,7 @@ void DpMaster::idle(std::uint64_t cycles) { run_until(now() + cycles); }
 
 Exchange DpMaster::retry(Exchange ex, std::uint32_t retries) {
   for (std::uint32_t i = 0; i < retries && !ex.answer && wants_answer(ex.request); ++i) {
-    ex = transact(ex.request);
+    ex = transact(std::move(ex.request));
   }
   return ex;
 }
@@ -356,13 +356,10 @@ bool sdn(const fdl::Frame& f) {
 
 }  // namespace
 
-Exchange DpMaster::transact(const fdl::Frame& req, UartFault fault) {
-  const std::vector<std::uint8_t> bytes = fdl::encode(req);
+Exchange DpMaster::transact(fdl::Frame req, UartFault fault) {
   // decode(encode(req)) == req whenever encode gives bytes: the request needs no decoding.
-  Exchange ex = send(bytes, fault, !bytes.empty() && sdn(req));
-  ex.request = req;
-  history_.back().request = req;
-  return ex;
+  const bool no_answer = fdl::encode(req, tx_) && sdn(req);
+  return send(tx_, fault, no_answer, std::move(req));
 }
 
 Exchange DpMaster::transact_raw(const std::vector<std::uint8_t>& bytes, UartFault fault) {
@@ -370,8 +367,10 @@ Exchange DpMaster::transact_raw(const std::vector<std::uint8_t>& bytes, UartFaul
   return send(bytes, fault, d.error == fdl::Error::none && sdn(d.frame));
 }
 
-Exchange DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bool no_answer) {
+Exchange DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bool no_answer,
+                        fdl::Frame request) {
   Exchange ex;
+  ex.request = std::move(request);
   // What the line carried before (another master's traffic, for instance) is no answer to us.
   ex.request_start = std::max(look(), bus_free_ + std::uint64_t{cfg_.idle_bits} * t_);
   if (on_send) on_send(ex.request_start, bytes, fault);
@@ -381,7 +380,7 @@ Exchange DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bo
   if (no_answer) {
     bus_free_ = ex.request_end;  // send-data-no-acknowledge: nothing to wait for
   } else {
-    ex = wait_answer(ex);
+    wait_answer(ex);
     if (ex.answer) {
       ++counters_.answered;
     } else if (ex.answer_end == 0) {
@@ -394,8 +393,8 @@ Exchange DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bo
   return ex;
 }
 
-Exchange DpMaster::wait_answer(Exchange ex) {
-  const std::uint64_t slot_end = ex.request_end + std::uint64_t{cfg_.slot_bits} * t_;
+void DpMaster::wait_answer(Exchange& ex) {
+  const std::uint64_t slot = std::uint64_t{cfg_.slot_bits} * t_;
   answer_.reset();
   for (;;) {
     // Nothing below moves time before run_until: the cycle looked at is now() (a segment's
@@ -403,19 +402,25 @@ Exchange DpMaster::wait_answer(Exchange ex) {
     const std::uint64_t at = look();
     for (const UartChar& c : chars_) answer_.push(c);
     answer_.push_block(rx_.due(), rx_.due_start(), t_);
-    if (answer_.finished() && !rx_.receiving()) break;
-    if (!answer_.started() && !rx_.receiving() && at >= slot_end) {
-      bus_free_ = at;
-      wake_on_txd_ = false;
-      return ex;  // no answer within the slot time
+    if (answer_.finished() && !rx_.receiving()) {
+      bus_free_ = answer_.end();
+      break;
     }
-    // An answer that stops for a slot time between characters is broken.
-    const std::uint64_t gap_end = answer_.end() + std::uint64_t{cfg_.slot_bits} * t_;
-    if (answer_.started() && !rx_.receiving() && at >= gap_end) break;
-    // Event-driven: sleep until a start bit (TxD falls) or the slot time ends; once the length
-    // is known, until the stop sample of the answer's last character (sent back to back).
+    // The one rule of the wait: a slot time after the last character on the line (the
+    // request's, then each of the answer's) for the next start bit. Past it the exchange is over
+    // (no answer, or a broken one) and the line is free from where the master found that: the
+    // next request follows TSYN later (docs/timing.md: unanswered requests every 66 + 100 + 33
+    // bit times). That is the wait's end itself unless a firmware's instruction (an 80C32's)
+    // carried the run past it (docs/decisions.md, "The master's per-exchange cost").
+    const std::uint64_t wait_end = (answer_.started() ? answer_.end() : ex.request_end) + slot;
+    if (!rx_.receiving() && at >= wait_end) {
+      bus_free_ = at;
+      break;
+    }
+    // Event-driven: sleep until a start bit (TxD falls) or the wait ends; once the length is
+    // known, until the stop sample of the answer's last character (sent back to back).
     const std::size_t len = answer_.expected_length();
-    std::uint64_t next = answer_.started() ? gap_end : slot_end;
+    std::uint64_t next = wait_end;
     if (rx_.receiving()) {
       next = len == 0 ? rx_.next_deadline()
                       : answer_.start() + (len * kUartCharBits - 1) * std::uint64_t{t_} + t_ / 2;
@@ -424,11 +429,10 @@ Exchange DpMaster::wait_answer(Exchange ex) {
     run_until(std::max(next, at + 1));
   }
   wake_on_txd_ = false;
+  if (!answer_.started()) return;  // no answer within the slot time
   ex.answer_start = answer_.start();
   ex.answer_end = answer_.end();
-  bus_free_ = ex.answer_end;
   ex.answer = answer_.frame();
-  return ex;
 }
 
 Exchange DpMaster::fdl_status() {

@@ -200,7 +200,7 @@ class DpMaster {
   [[nodiscard]] std::uint8_t address() const { return cfg_.address; }
   // Sends one request after the idle time and waits for its answer. `fault` corrupts one
   // character on the wire (parity, start or stop bit).
-  Exchange transact(const fdl::Frame& req, UartFault fault = {});
+  Exchange transact(fdl::Frame req, UartFault fault = {});
   // Sends raw bytes as they are (malformed frames) and waits a slot time for an answer.
   Exchange transact_raw(const std::vector<std::uint8_t>& bytes, UartFault fault = {});
   // Lets time pass with a silent bus (cable pulled), running the firmware on interrupts.
@@ -281,9 +281,11 @@ class DpMaster {
   fdl::Frame request(std::optional<std::uint8_t> dsap, std::vector<std::uint8_t> du,
                      bool srd = true);
   void run_until(std::uint64_t cycle);
-  // transact / transact_raw: `bytes` on the line, then the answer awaited unless `no_answer`.
-  Exchange send(std::span<const std::uint8_t> bytes, UartFault fault, bool no_answer);
-  Exchange wait_answer(Exchange ex);
+  // transact / transact_raw: `bytes` on the line, then the answer awaited unless `no_answer`;
+  // `request` is the exchange's (and the history's) request.
+  Exchange send(std::span<const std::uint8_t> bytes, UartFault fault, bool no_answer,
+                fdl::Frame request = {});
+  void wait_answer(Exchange& ex);  // its answer, if any, into `ex`
   // The characters on TxD whose stop sample is due by now: chars_, then rx_.due().
   std::uint64_t look();  // the line up to now(), which it returns
   void note(const std::string& s);
@@ -338,6 +340,7 @@ class DpMaster {
   std::unique_ptr<Cpu> cpu_;
   std::vector<Exchange> history_;
   MasterCounters counters_;
+  std::vector<std::uint8_t> tx_;  // transact's request as sent (one buffer for every request)
 };
 
 }  // namespace dpc31

@@ -20,6 +20,9 @@ Decoded dec(const Bytes& b) { return decode(std::span<const std::uint8_t>(b)); }
 // Expects decode(bytes) to succeed with `frame` and encode(frame) to give `bytes` back.
 void expect_both_ways(const Frame& frame, const Bytes& bytes) {
   EXPECT_EQ(encode(frame), bytes);
+  Bytes into(300, 0xAA);  // what the buffer held is replaced
+  EXPECT_TRUE(encode(frame, into));
+  EXPECT_EQ(into, bytes);
   const Decoded d = dec(bytes);
   EXPECT_EQ(error_name(d.error), "none");
   EXPECT_EQ(d.frame, frame);
@@ -205,6 +208,30 @@ TEST(FdlEncode, RefusesWhatTheSdCannotCarry) {
   EXPECT_TRUE(encode(Frame{0x11, 5, 2, 0x49, std::nullopt, std::nullopt, {}}).empty());
   EXPECT_TRUE(encode(Frame{SD4, 5, 2, 0, std::nullopt, 62, {}}).empty());
   EXPECT_TRUE(encode(Frame{SC, 0, 0, 0, std::nullopt, std::nullopt, {1}}).empty());
+}
+
+// The buffer form (DpMaster encodes every request into one buffer): false and empty where the
+// value form is empty, the buffer's storage kept from one telegram to the next.
+TEST(FdlEncode, IntoABufferKeepsItsStorage) {
+  Bytes into;
+  ASSERT_TRUE(encode(make_frame(5, 2, 0x7D, counting(244)), into));
+  EXPECT_EQ(into.size(), 253U);  // SD2 with LE 247: SD LE LEr SD, 247, FCS, ED
+  const std::uint8_t* storage = into.data();
+  EXPECT_TRUE(encode(make_frame(5, 2, 0x49), into));
+  EXPECT_EQ(into, (Bytes{SD1, 5, 2, 0x49, 0x50, ED}));
+  EXPECT_EQ(into.data(), storage);
+  EXPECT_TRUE(encode(token(3, 2), into));
+  EXPECT_EQ(into, (Bytes{SD4, 3, 2}));
+  EXPECT_TRUE(encode(sc(), into));
+  EXPECT_EQ(into, (Bytes{SC}));
+  EXPECT_FALSE(encode(make_frame(5, 2, 0x7D, counting(247)), into));  // LE 250
+  EXPECT_TRUE(into.empty());
+  into = {1, 2, 3};
+  EXPECT_FALSE(encode(Frame{SC, 0, 0, 0, std::nullopt, std::nullopt, {1}}, into));
+  EXPECT_TRUE(into.empty());
+  into = {1, 2, 3};
+  EXPECT_FALSE(encode(token(5, 0x80), into));
+  EXPECT_TRUE(into.empty());
 }
 
 TEST(FdlMakeFrame, ChoosesSd1OrSd2) {

@@ -128,6 +128,9 @@ struct Frame {
 // for, SD3 not exactly 8 bytes incl. SAPs, SD2 LE outside 4..249, address > 127, SAP byte with
 // bit 7 set, unknown SD), so decode(encode(f)) == f for every non-empty result.
 [[nodiscard]] std::vector<std::uint8_t> encode(const Frame& frame);
+// The same into `out` (its old contents replaced, its capacity kept: a sender that encodes every
+// request reuses one buffer). False, with `out` empty, where encode() gives an empty vector.
+bool encode(const Frame& frame, std::vector<std::uint8_t>& out);
 
 enum class Error : std::uint8_t {
   none,

@@ -1,11 +1,12 @@
 # CTest Install.consumer (packaging/CMakeLists.txt): installs the build into a fresh prefix,
 # checks the installed files, runs the installed CLI, builds examples/consumer with only that
-# prefix on CMAKE_PREFIX_PATH and runs it, and builds and runs its C program through
-# pkg-config. Then examples/plugin the same way: its firmware plug-in in both configurations
-# (interrupt-driven, and polling with every interrupt masked) under its C host, and behind the
-# installed `dpc31 bridge` with the installed tools/dp_master.py as the master, to
-# Data_Exchange; the plug-in built with pkg-config's flags alone; the driver's fatal-error loop
-# stopped by the hang guard (bridge_example.py). Any failing step fails the test.
+# prefix on CMAKE_PREFIX_PATH and runs it (the segment consumer's VCD and pcapng checked), and
+# builds and runs its C program through pkg-config. Then examples/plugin the same way: its
+# firmware plug-in in both configurations (interrupt-driven, and polling with every interrupt
+# masked) under its C host, and behind the installed `dpc31 bridge` with the installed
+# tools/dp_master.py as the master, to Data_Exchange; the plug-in built with pkg-config's flags
+# alone; the driver's fatal-error loop stopped by the hang guard (bridge_example.py). Any failing
+# step fails the test.
 #   cmake -DBUILD_DIR=... -DWORK_DIR=... -DEXAMPLE_DIR=... -DPLUGIN_DIR=... -DBRIDGE_CHECK=...
 #         -DPYTHON=... -DLIBDIR=... -DC_COMPILER=... -DCXX_COMPILER=... -P check_install.cmake
 set(prefix ${WORK_DIR}/prefix)
@@ -20,6 +21,7 @@ run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix})
 foreach(f bin/dpc31 include/dpc31/chip.hpp include/dpc31/dpc31_hal.h include/dpc31/dpc31_regs.h
     include/dpc31/reg_ids.hpp include/dpc31/reg_fields.hpp include/dpc31/session/scenario.hpp
     include/dpc31/firmware/firmware.h include/dpc31/dpc31_firmware.h ${LIBDIR}/libdpc31emu.so
+    ${LIBDIR}/libdpc31emu_segment_outputs.so include/dpc31/segment_outputs/segment_outputs.hpp
     ${LIBDIR}/dpc31emu/libdpc31_fw_do4.so ${LIBDIR}/dpc31emu/libdpc31_fw_cnt2.so
     share/dpc31emu/tools/dp_master.py
     ${LIBDIR}/cmake/dpc31emu/dpc31emuConfig.cmake
@@ -46,6 +48,19 @@ run(${CMAKE_COMMAND} -S ${EXAMPLE_DIR} -B ${WORK_DIR}/build -DCMAKE_PREFIX_PATH=
   -DCMAKE_BUILD_TYPE=Release "-DCMAKE_C_FLAGS=${strict}" "-DCMAKE_CXX_FLAGS=${strict}")
 run(${CMAKE_COMMAND} --build ${WORK_DIR}/build)
 run(${WORK_DIR}/build/session_consumer)
+# dpc31emu::segment_outputs: a segment's VCD (a scope per station) and the pcapng of its line.
+run(${WORK_DIR}/build/segment_consumer ${WORK_DIR}/segment.vcd ${WORK_DIR}/segment.pcapng)
+file(READ ${WORK_DIR}/segment.vcd vcd)
+foreach(scope station5_spc3 station6_vpc3plus)
+  string(FIND "${vcd}" "$scope module ${scope} $end" at)
+  if(at EQUAL -1)
+    message(FATAL_ERROR "segment.vcd has no scope ${scope}")
+  endif()
+endforeach()
+file(READ ${WORK_DIR}/segment.pcapng shb LIMIT 4 HEX)
+if(NOT shb STREQUAL "0a0d0d0a")
+  message(FATAL_ERROR "segment.pcapng does not begin with a Section Header Block: ${shb}")
+endif()
 run(${WORK_DIR}/build/hal_consumer)
 
 # pkg-config: only the prefix's .pc files; a plain C compile and link.

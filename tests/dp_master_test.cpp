@@ -1,0 +1,73 @@
+// The built-in master's wait for an answer (DpMaster::wait_answer) is one rule: after the last
+// character on the line (its request's, then each of the answer's) it waits a slot time TSL for
+// the next start bit. When TSL passes without one, the exchange is over (no answer, or a broken
+// one) and the line counts as free from that cycle: the next request starts TSYN after it.
+// docs/timing.md: "unanswered FDL_Status requests repeat every 199 bit times (66 + slot 100 + 33)";
+// docs/decisions.md: TSYN 33 and TSL 100 bit times, the EN 50170 defaults. T = 32 cycles at
+// 1.5 Mbaud (48 MHz).
+#include "dp_master.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <vector>
+
+#include "segment.hpp"
+
+namespace {
+
+using namespace dpc31;
+
+constexpr std::uint64_t T = 32;
+constexpr std::uint64_t kTsl = 100 * T;
+constexpr std::uint64_t kTsyn = 33 * T;
+constexpr std::uint64_t kChar = 11 * T;
+
+// A master polling station 5 on a line where only a scripted sender answers (or nobody).
+struct Line {
+  Segment seg{1'500'000};
+  std::size_t rogue = seg.add_sender("rogue");
+  std::size_t m = seg.add_sender("master 2");
+  DpMaster master{seg, m, MasterConfig{}, {SlaveConfig{}}};
+};
+
+TEST(DpMaster, NoAnswerEndsTheWaitASlotTimeAfterTheRequestThenTsyn) {
+  Line l;
+  ASSERT_EQ(l.master.bit_cycles(), T);
+  const Exchange a = l.master.fdl_status();
+  EXPECT_FALSE(a.answer);
+  EXPECT_EQ(a.answer_start, 0u);
+  EXPECT_EQ(a.answer_end, 0u);
+  EXPECT_EQ(a.request_end, a.request_start + 6 * kChar);  // SD1: 6 characters
+  const Exchange b = l.master.fdl_status();
+  EXPECT_EQ(b.request_start, a.request_end + kTsl + kTsyn);  // 199 bit times start to start
+  EXPECT_EQ(l.master.counters().no_answer, 2u);
+}
+
+TEST(DpMaster, AnAnswerThatStopsEndsTheWaitASlotTimeAfterItsLastCharacterThenTsyn) {
+  Line l;
+  // The rogue starts an answer TSDR 11 after the request's end: SD2 with LE and LEr (7 data
+  // bytes announced), and falls silent after those 3 characters.
+  const std::vector<std::uint8_t> part = {fdl::SD2, 0x07, 0x07};
+  bool sent = false;
+  l.master.scheduler = [&](std::uint64_t cycle) {
+    if (!sent) {  // the first run goes to the request's end
+      sent = true;
+      l.seg.run_until(cycle);
+      l.seg.send(l.rogue, part, cycle + 11 * T);
+    }
+    l.seg.run_until(cycle);
+  };
+  const Exchange a = l.master.fdl_status();
+  EXPECT_FALSE(a.answer);
+  EXPECT_EQ(a.answer_start, a.request_end + 11 * T);
+  EXPECT_EQ(a.answer_end, a.answer_start + 3 * kChar);
+  EXPECT_EQ(l.master.counters().bad_answer, 1u);
+  const Exchange b = l.master.fdl_status();
+  EXPECT_EQ(b.request_start, a.answer_end + kTsl + kTsyn);
+  EXPECT_FALSE(b.answer);
+  const Exchange c = l.master.fdl_status();
+  EXPECT_EQ(c.request_start, b.request_end + kTsl + kTsyn);
+}
+
+}  // namespace
