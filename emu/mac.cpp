@@ -504,7 +504,9 @@ void Mac::on_frame(const fdl::Frame& f, const UartChar& last) {
 
 void Mac::send(const fdl::Frame& f, std::uint64_t request_end) {
   if (tx_busy()) return;  // half duplex: still sending the previous answer
-  std::vector<std::uint8_t> bytes = fdl::encode(f);
+  // Into the buffer of the answer before (idle, so empty): no allocation per answer.
+  std::vector<std::uint8_t> bytes = std::move(s_.tx_chars.bytes);
+  fdl::encode(f, bytes);
   const std::uint32_t t = s_.rx.bit_time();
   const std::uint32_t tsdr = std::max<std::uint32_t>(
       kMinTsdrBits, dp_.min_tsdr() != 0 ? dp_.min_tsdr() : regs_.latch(RegId::MinTSDR_Val));
@@ -528,7 +530,9 @@ void Mac::send(const fdl::Frame& f, std::uint64_t request_end) {
   s_.tx_next = 0;
   if (sig_.txd || sig_.txd_edges) {
     uart_encode(bytes, start, t, s_.tx_edges);
-  } else {  // nobody watches the edges: the answer stays characters (TxChars)
+    s_.tx_chars.bytes = std::move(bytes);
+    s_.tx_chars.bytes.clear();  // the answer is its edges; the buffer kept for the next one
+  } else {                      // nobody watches the edges: the answer stays characters (TxChars)
     s_.tx_chars.bytes = std::move(bytes);
     s_.tx_chars.start = start;
     s_.tx_chars.t = t;
