@@ -82,6 +82,28 @@ void frame_changes(std::uint16_t frame, std::uint64_t start, std::uint32_t bit_c
   }
   line = (bits >> kStopBit & 1u) != 0;
 }
+
+// The edges of a good character after a high line (a stop bit or the idle line), per data
+// byte: how many, and the bit boundary of each. The first is the start bit's fall and they
+// alternate, so the last is the rise into the stop bit and the line ends high.
+struct CharEdges {
+  std::uint8_t n = 0;
+  std::array<std::uint8_t, kUartCharBits> bit{};
+};
+constexpr std::array<CharEdges, 256> kCharEdges = [] {
+  std::array<CharEdges, 256> table{};
+  constexpr std::uint32_t kMask = (1u << kUartCharBits) - 1;
+  for (std::uint32_t d = 0; d < 256; ++d) {
+    const std::uint32_t bits = d << 1 | parity9(d) << 9 | 1u << kStopBit;
+    for (std::uint32_t c = (bits ^ (bits << 1 | 1u)) & kMask; c != 0; c &= c - 1) {
+      table[d].bit[table[d].n++] = static_cast<std::uint8_t>(std::countr_zero(c));
+    }
+  }
+  return table;
+}();
+static_assert(kCharEdges[0xFF].n == 4 && kCharEdges[0xFF].bit[2] == 9);  // parity 0, stop 1
+static_assert(kCharEdges[0x00].n == 2 && kCharEdges[0x00].bit[1] == 10);
+
 }  // namespace
 
 std::size_t uart_frame_edges(std::uint16_t frame, std::uint64_t start, std::uint32_t bit_cycles,
@@ -406,8 +428,16 @@ void uart_encode(std::span<const std::uint8_t> bytes, std::uint64_t start, std::
   const auto put = [&](std::uint64_t at, bool level) { edges.emplace_back(at, level); };
   bool line = true;
   for (std::size_t i = 0; i < bytes.size(); ++i) {
+    const bool faulty = fault.char_index >= 0 && static_cast<std::size_t>(fault.char_index) == i;
+    if (line && !faulty) {  // a good character after a high line: its edges from the table
+      const CharEdges& e = kCharEdges[bytes[i]];
+      const std::uint64_t at = start + i * frame_cycles;
+      for (std::uint32_t j = 0; j < e.n; ++j)
+        put(at + std::uint64_t{e.bit[j]} * bit_cycles, (j & 1) != 0);
+      continue;
+    }
     std::uint16_t frame = uart_frame(bytes[i]);
-    if (fault.char_index >= 0 && static_cast<std::size_t>(fault.char_index) == i) {
+    if (faulty) {
       // The faulty bit is sent inverted: the start bit (0 -> 1), parity, or the stop bit (1 -> 0).
       using K = UartFault::Kind;
       const std::uint32_t k = fault.kind == K::start    ? 0
