@@ -249,8 +249,8 @@ void Mac::watch_txd_edges(std::function<void(std::span<const std::pair<std::uint
 std::size_t TxChars::edges(std::size_t i, std::uint64_t from, std::uint64_t to,
                            std::pair<std::uint64_t, bool>* out) const {
   std::array<std::pair<std::uint64_t, bool>, kUartCharBits> all{};
-  bool line = true;  // a good character follows a stop bit or the idle line
-  const std::size_t n = uart_frame_edges(uart_frame(bytes[i]), char_start(i), t, line, all.data());
+  // A good character follows a stop bit or the idle line.
+  const std::size_t n = uart_char_edges(bytes[i], char_start(i), t, all.data());
   std::size_t m = 0;
   for (std::size_t k = 0; k < n; ++k) {
     if (all[k].first > from && all[k].first <= to) out[m++] = all[k];
@@ -504,7 +504,9 @@ void Mac::on_frame(const fdl::Frame& f, const UartChar& last) {
 
 void Mac::send(const fdl::Frame& f, std::uint64_t request_end) {
   if (tx_busy()) return;  // half duplex: still sending the previous answer
-  std::vector<std::uint8_t> bytes = fdl::encode(f);
+  // Into the buffer of the answer before (idle, so empty): no allocation per answer.
+  std::vector<std::uint8_t> bytes = std::move(s_.tx_chars.bytes);
+  fdl::encode(f, bytes);
   const std::uint32_t t = s_.rx.bit_time();
   const std::uint32_t tsdr = std::max<std::uint32_t>(
       kMinTsdrBits, dp_.min_tsdr() != 0 ? dp_.min_tsdr() : regs_.latch(RegId::MinTSDR_Val));
@@ -528,7 +530,9 @@ void Mac::send(const fdl::Frame& f, std::uint64_t request_end) {
   s_.tx_next = 0;
   if (sig_.txd || sig_.txd_edges) {
     uart_encode(bytes, start, t, s_.tx_edges);
-  } else {  // nobody watches the edges: the answer stays characters (TxChars)
+    s_.tx_chars.bytes = std::move(bytes);
+    s_.tx_chars.bytes.clear();  // the answer is its edges; the buffer kept for the next one
+  } else {                      // nobody watches the edges: the answer stays characters (TxChars)
     s_.tx_chars.bytes = std::move(bytes);
     s_.tx_chars.start = start;
     s_.tx_chars.t = t;
@@ -585,8 +589,7 @@ void Mac::drive_rxd_char(std::uint64_t start, std::uint8_t data, std::uint32_t b
   materialize();
   // The character's edges, as uart_encode gives them after a high line.
   std::array<std::pair<std::uint64_t, bool>, kUartCharBits> edges{};
-  bool line = true;
-  const std::size_t n = uart_frame_edges(uart_frame(data), start, bit_cycles, line, edges.data());
+  const std::size_t n = uart_char_edges(data, start, bit_cycles, edges.data());
   // The per-cycle engine is the reference: it always takes edges.
   if (clock_.engine != Engine::event || start < clock_.now ||
       !s_.rx.whole_char(start, data, bit_cycles)) {
@@ -638,12 +641,10 @@ bool Mac::hear_telegram(const std::shared_ptr<const HeardFrame>& tel, std::uint6
   }
   h.active = true;
   if (sig_.rxd) {
-    bool line = true;
     std::array<std::pair<std::uint64_t, bool>, kUartCharBits> edges{};
     for (std::size_t i = 0; i < bytes.size(); ++i) {
       const std::uint64_t at = start + i * std::uint64_t{kUartCharBits} * bit_cycles;
-      const std::size_t n =
-          uart_frame_edges(uart_frame(bytes[i]), at, bit_cycles, line, edges.data());
+      const std::size_t n = uart_char_edges(bytes[i], at, bit_cycles, edges.data());
       for (std::size_t k = 0; k < n; ++k) sig_.rxd(edges[k].first, edges[k].second);
     }
   }
@@ -717,11 +718,9 @@ void Mac::materialize() {
   // What drive_rxd_char did when the telegram was driven ...
   drop_heard_rxd(h.driven_at);
   std::array<std::pair<std::uint64_t, bool>, kUartCharBits> edges{};
-  bool line = true;
   for (std::size_t i = 0; i < h.tel->bytes.size(); ++i) {
     const std::uint64_t at = h.start + i * std::uint64_t{kUartCharBits} * h.t;
-    const std::size_t n =
-        uart_frame_edges(uart_frame(h.tel->bytes[i]), at, h.t, line, edges.data());
+    const std::size_t n = uart_char_edges(h.tel->bytes[i], at, h.t, edges.data());
     s_.rx.whole_char(at, h.tel->bytes[i], h.t);
     for (std::size_t k = 0; k < n; ++k) {
       if (edges[k].first > h.driven_at) s_.rxd_pending.emplace_back(edges[k]);

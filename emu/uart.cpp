@@ -69,7 +69,7 @@ std::uint16_t uart_frame(std::uint8_t data) {
 }
 
 // The bits where the line changes (bit k against bit k - 1, bit 0 against `line`), each set bit
-// one edge: a loop per edge, not per bit (an answer's edges are made per armed answer).
+// one edge: a character sent with a fault (uart_encode), or one after a stop bit sent low.
 namespace {
 template <typename Put>
 void frame_changes(std::uint16_t frame, std::uint64_t start, std::uint32_t bit_cycles, bool& line,
@@ -82,12 +82,42 @@ void frame_changes(std::uint16_t frame, std::uint64_t start, std::uint32_t bit_c
   }
   line = (bits >> kStopBit & 1u) != 0;
 }
+
+// The edges of a good character after a high line (a stop bit or the idle line), per data
+// byte: how many, and the bit boundary of each. The first is the start bit's fall and they
+// alternate, so the last is the rise into the stop bit and the line ends high.
+struct CharEdges {
+  std::uint8_t n = 0;
+  std::array<std::uint8_t, kUartCharBits> bit{};
+};
+constexpr std::array<CharEdges, 256> kCharEdges = [] {
+  std::array<CharEdges, 256> table{};
+  constexpr std::uint32_t kMask = (1u << kUartCharBits) - 1;
+  for (std::uint32_t d = 0; d < 256; ++d) {
+    const std::uint32_t bits = d << 1 | parity9(d) << 9 | 1u << kStopBit;
+    for (std::uint32_t c = (bits ^ (bits << 1 | 1u)) & kMask; c != 0; c &= c - 1) {
+      table[d].bit[table[d].n++] = static_cast<std::uint8_t>(std::countr_zero(c));
+    }
+  }
+  return table;
+}();
+static_assert(kCharEdges[0xFF].n == 4 && kCharEdges[0xFF].bit[2] == 9);  // parity 0, stop 1
+static_assert(kCharEdges[0x00].n == 2 && kCharEdges[0x00].bit[1] == 10);
+
+template <typename Put>
+void char_changes(std::uint8_t data, std::uint64_t start, std::uint32_t bit_cycles, Put put) {
+  const CharEdges& e = kCharEdges[data];
+  for (std::uint32_t j = 0; j < e.n; ++j) {
+    put(start + std::uint64_t{e.bit[j]} * bit_cycles, (j & 1) != 0);
+  }
+}
+
 }  // namespace
 
-std::size_t uart_frame_edges(std::uint16_t frame, std::uint64_t start, std::uint32_t bit_cycles,
-                             bool& line, std::pair<std::uint64_t, bool>* out) {
+std::size_t uart_char_edges(std::uint8_t data, std::uint64_t start, std::uint32_t bit_cycles,
+                            std::pair<std::uint64_t, bool>* out) {
   std::size_t n = 0;
-  frame_changes(frame, start, bit_cycles, line, [&](std::uint64_t at, bool level) {
+  char_changes(data, start, bit_cycles, [&](std::uint64_t at, bool level) {
     out[n++] = {at, level};
   });
   return n;
@@ -255,9 +285,7 @@ void UartRx::take(const TxdRun& run) {
     if (whole) continue;
     // The line is high before a good character (the stop bit of the one before).
     std::array<std::pair<std::uint64_t, bool>, kUartCharBits> e{};
-    bool line = true;
-    const std::size_t n =
-        uart_frame_edges(uart_frame(run.bytes[i]), at, run.bit_cycles, line, e.data());
+    const std::size_t n = uart_char_edges(run.bytes[i], at, run.bit_cycles, e.data());
     for (std::size_t k = 0; k < n; ++k) edge(e[k].first, e[k].second);
   }
 }
@@ -406,8 +434,13 @@ void uart_encode(std::span<const std::uint8_t> bytes, std::uint64_t start, std::
   const auto put = [&](std::uint64_t at, bool level) { edges.emplace_back(at, level); };
   bool line = true;
   for (std::size_t i = 0; i < bytes.size(); ++i) {
+    const bool faulty = fault.char_index >= 0 && static_cast<std::size_t>(fault.char_index) == i;
+    if (line && !faulty) {  // a good character after a high line: its edges from the table
+      char_changes(bytes[i], start + i * frame_cycles, bit_cycles, put);
+      continue;
+    }
     std::uint16_t frame = uart_frame(bytes[i]);
-    if (fault.char_index >= 0 && static_cast<std::size_t>(fault.char_index) == i) {
+    if (faulty) {
       // The faulty bit is sent inverted: the start bit (0 -> 1), parity, or the stop bit (1 -> 0).
       using K = UartFault::Kind;
       const std::uint32_t k = fault.kind == K::start    ? 0

@@ -25,6 +25,7 @@
 #include "responder.hpp"
 #include "snapshot.hpp"
 #include "test_util.hpp"
+#include "txd_receiver.hpp"
 
 using namespace dpc31;
 
@@ -314,5 +315,26 @@ TEST_P(TxdDirect, LongAnswersAndACutOneLookTheSame) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Rates, TxdDirect, ::testing::ValuesIn(kBaudRates));
+
+TEST(TxdReceiver, ACharacterEndedByItsRiseIsReportedAtTheNextLook) {
+  // docs/timing.md "Serial line (UART)": bit k sampled at start + k T + T/2. 00h with its stop
+  // bit sent low at T = 4 from cycle 100: low through the stop sample at 100 + 40 + 2 = 142. The
+  // rise at 150 takes that sample (the receiver is then idle, its character not yet handed on);
+  // the look at 160 hands it on: a stop bit error, 25 idle bits before it (100 / 4).
+  TxdReceiver rx(4, 0);
+  rx.edge(100, false);
+  rx.edge(150, true);
+  std::vector<UartChar> out;
+  rx.advance(160, out);
+  ASSERT_EQ(out.size(), 1U);
+  EXPECT_EQ(out[0].data, 0x00);
+  EXPECT_TRUE(out[0].start_ok);
+  EXPECT_TRUE(out[0].parity_ok);
+  EXPECT_FALSE(out[0].stop_ok);
+  EXPECT_EQ(out[0].start, 100U);
+  EXPECT_EQ(out[0].end, 144U);
+  EXPECT_EQ(out[0].idle_bits, 25U);
+  EXPECT_FALSE(rx.receiving());
+}
 
 }  // namespace txd_chars

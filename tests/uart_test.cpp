@@ -116,6 +116,30 @@ TEST(UartEncode, BackToBackAndFinalRise) {
   EXPECT_EQ(e, (Edges{{0, false}, {4, true}, {36, false}, {40, true}}));
 }
 
+TEST(UartEncode, EveryByteEdgeForEdgeFromItsBits) {
+  // docs/timing.md "Serial line (UART)": start bit 0, d0..d7 LSB first, even parity, stop bit 1,
+  // bit k from start + k T. An edge wherever a bit differs from the one before (the idle line
+  // before the first start bit is high); each byte back to back after 0x55, at T = 3.
+  for (unsigned d = 0; d < 256; ++d) {
+    const std::uint8_t b[] = {0x55, static_cast<std::uint8_t>(d)};
+    Edges want;
+    bool line = true;
+    for (std::uint64_t i = 0; i < 2; ++i) {
+      unsigned ones = 0;
+      for (unsigned k = 0; k < 11; ++k) {
+        const bool data_bit = k >= 1 && k <= 8 && ((b[i] >> (k - 1)) & 1u) != 0;
+        ones += data_bit ? 1u : 0u;
+        const bool bit = k == 0 ? false : k <= 8 ? data_bit : k == 9 ? (ones & 1u) != 0 : true;
+        if (bit != line) want.emplace_back(7 + (i * 11 + k) * 3, bit);
+        line = bit;
+      }
+    }
+    Edges e;
+    uart_encode(b, 7, 3, e);
+    EXPECT_EQ(e, want) << "byte " << d;
+  }
+}
+
 TEST(UartEncode, Faults) {
   const std::uint8_t b[] = {0x10};
   Edges e;

@@ -41,10 +41,10 @@ inline constexpr std::uint32_t kTsynBits = 33;  // idle before a request (synchr
 [[nodiscard]] bool uart_bit(std::uint8_t data, std::uint32_t k);
 // All eleven levels of character `data`: bit k of the result is uart_bit(data, k).
 [[nodiscard]] std::uint16_t uart_frame(std::uint8_t data);
-// The level changes of one frame (bit k of `frame` on the line from start + k * bit_cycles) on a
-// line now at `line`, written to out[0..n) (n <= 11, returned); `line` becomes the stop bit's.
-std::size_t uart_frame_edges(std::uint16_t frame, std::uint64_t start, std::uint32_t bit_cycles,
-                             bool& line, std::pair<std::uint64_t, bool>* out);
+// The level changes of the good character `data` (bit k on the line from start + k * bit_cycles)
+// on a high line, which it leaves high, written to out[0..n) (n <= 11, returned).
+std::size_t uart_char_edges(std::uint8_t data, std::uint64_t start, std::uint32_t bit_cycles,
+                            std::pair<std::uint64_t, bool>* out);
 
 struct UartChar {
   std::uint8_t data = 0;
