@@ -210,7 +210,9 @@ class Segment {
   // run of characters until its stop samples are due.
   TxdReceiver line_rx_;
   std::vector<UartChar> chars_;
-  std::optional<LineTelegram> open_;
+  // The telegram being decoded, while open_now_ (kept to reuse its memory).
+  LineTelegram open_;
+  bool open_now_ = false;
   std::vector<std::pair<std::uint64_t, std::size_t>> claims_;  // (first edge, driver) in order
   // A round's TxD edges of every chip (run_until), kept to reuse its memory.
   struct Driven {
