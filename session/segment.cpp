@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <deque>
 #include <iterator>
@@ -156,6 +157,7 @@ void Segment::look_at(Station& s) {
 }
 
 void Segment::set_next(std::size_t i, std::uint64_t next) {
+  if (next_[i] == next) return;  // the tree holds it already (most looks change nothing)
   next_[i] = next;
   // The leaf and its ancestors up to the first whose minimum stays.
   std::size_t k = leaves_ + i;
@@ -182,21 +184,24 @@ void Segment::add_station(std::unique_ptr<Station> s) {
   }
 }
 
+// The leaves at or before `bound`, in station order: a descent into the subtrees whose minimum is
+// due, O(log N) for each chip due; the right child waits on a stack while the left one is
+// looked at (at most one per level: 64 for any tree).
 void Segment::due_by(std::uint64_t bound) {
   due_.clear();
-  if (!next_tree_.empty()) due_under(1, bound);
-}
-
-// The leaves at or before `bound` under node k, in station order: a descent into the subtrees
-// whose minimum is due, O(log N) for each chip due.
-void Segment::due_under(std::size_t k, std::uint64_t bound) {
-  if (next_tree_[k] > bound) return;
-  if (k >= leaves_) {
-    due_.push_back(k - leaves_);
-    return;
+  if (next_tree_.empty() || next_tree_[1] > bound) return;
+  std::array<std::size_t, 64> stack;
+  std::size_t depth = 0;
+  stack[depth++] = 1;
+  while (depth > 0) {
+    const std::size_t k = stack[--depth];
+    if (k >= leaves_) {
+      due_.push_back(k - leaves_);
+      continue;
+    }
+    if (next_tree_[2 * k + 1] <= bound) stack[depth++] = 2 * k + 1;
+    if (next_tree_[2 * k] <= bound) stack[depth++] = 2 * k;
   }
-  due_under(2 * k, bound);
-  due_under(2 * k + 1, bound);
 }
 
 const std::string& Segment::name(std::size_t i) const { return stations_.at(i)->name; }
