@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <array>
 #include <bit>
 #include <deque>
 #include <iterator>
@@ -184,24 +183,21 @@ void Segment::add_station(std::unique_ptr<Station> s) {
   }
 }
 
-// The leaves at or before `bound`, in station order: a descent into the subtrees whose minimum is
-// due, O(log N) for each chip due; the right child waits on a stack while the left one is
-// looked at (at most one per level: 64 for any tree).
 void Segment::due_by(std::uint64_t bound) {
   due_.clear();
-  if (next_tree_.empty() || next_tree_[1] > bound) return;
-  std::array<std::size_t, 64> stack;
-  std::size_t depth = 0;
-  stack[depth++] = 1;
-  while (depth > 0) {
-    const std::size_t k = stack[--depth];
-    if (k >= leaves_) {
-      due_.push_back(k - leaves_);
-      continue;
-    }
-    if (next_tree_[2 * k + 1] <= bound) stack[depth++] = 2 * k + 1;
-    if (next_tree_[2 * k] <= bound) stack[depth++] = 2 * k;
+  if (!next_tree_.empty()) due_under(1, bound);
+}
+
+// The leaves at or before `bound` under node k, in station order: a descent into the subtrees
+// whose minimum is due, O(log N) for each chip due.
+void Segment::due_under(std::size_t k, std::uint64_t bound) {
+  if (next_tree_[k] > bound) return;
+  if (k >= leaves_) {
+    due_.push_back(k - leaves_);
+    return;
   }
+  due_under(2 * k, bound);
+  due_under(2 * k + 1, bound);
 }
 
 const std::string& Segment::name(std::size_t i) const { return stations_.at(i)->name; }
@@ -512,11 +508,16 @@ void Segment::decode_chars(std::size_t from, std::span<const std::uint8_t> bytes
 // character is its sender); it closes when the line stayed idle past its end (a character back
 // to back would have started at its end).
 void Segment::close_telegrams(std::uint64_t upto) {
-  chars_.clear();
-  line_rx_.advance(std::min(upto, now_), chars_);
-  for (const UartChar& c : chars_) line_chars(std::span(&c.data, 1), c.start);
-  // The whole characters after those, back to back: one block.
-  if (!line_rx_.due().empty()) line_chars(line_rx_.due(), line_rx_.due_start());
+  const std::uint64_t to = std::min(upto, now_);
+  // A decoder that receives nothing and holds no character due by `to` (most rounds: the line is
+  // idle) has nothing to hand over: advance() would only empty due().
+  if (line_rx_.receiving() || line_rx_.next_deadline() <= to) {
+    chars_.clear();
+    line_rx_.advance(to, chars_);
+    for (const UartChar& c : chars_) line_chars(std::span(&c.data, 1), c.start);
+    // The whole characters after those, back to back: one block.
+    if (!line_rx_.due().empty()) line_chars(line_rx_.due(), line_rx_.due_start());
+  }
   if (open_now_ &&
       (upto == UINT64_MAX || (upto > open_.end && line_rx_.busy_from() != open_.end))) {
     if (on_telegram) on_telegram(open_);
