@@ -18,13 +18,24 @@ constexpr std::uint16_t kDpv1Events = irq::FDL_Ind | irq::Poll_End_Ind | irq::Us
 
 }  // namespace
 
+const RegDesc& Responder::reg(const Chip& c, RegId id) const {
+  const ProfileDesc& p = c.profile();
+  if (regs_of_ != &p) {
+    regs_.fill(nullptr);
+    regs_of_ = &p;
+  }
+  const RegDesc*& r = regs_[static_cast<std::size_t>(id)];
+  if (r == nullptr) r = find_reg(p, id);
+  return *r;
+}
+
 std::uint32_t Responder::waddr(const Chip& c, RegId id) const {
-  const RegDesc* r = find_reg(c.profile(), id);
-  return static_cast<std::uint32_t>(r->write_addr >= 0 ? r->write_addr : r->read_addr);
+  const RegDesc& r = reg(c, id);
+  return static_cast<std::uint32_t>(r.write_addr >= 0 ? r.write_addr : r.read_addr);
 }
 
 std::uint32_t Responder::raddr(const Chip& c, RegId id) const {
-  return static_cast<std::uint32_t>(find_reg(c.profile(), id)->read_addr);
+  return static_cast<std::uint32_t>(reg(c, id).read_addr);
 }
 
 // 16-bit registers go over the 8-bit bus low byte first; the address of each byte depends on

@@ -4,6 +4,7 @@
 // real example firmware takes its place.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <initializer_list>
 #include <optional>
@@ -13,6 +14,7 @@
 #include "cpu.hpp"
 #include "dp_master.hpp"
 #include "dpc31/chip.hpp"
+#include "dpc31/reg_ids.hpp"
 #include "responder_dpv1.hpp"
 
 namespace dpc31 {
@@ -59,6 +61,9 @@ class Responder {
   [[nodiscard]] const std::optional<Dpv1User>& dpv1() const { return dpv1_; }
 
  private:
+  // The register's description, looked up once per id: the ISR reads the same few registers on
+  // every interrupt (a segment's slaves hundreds of times per DP cycle).
+  const RegDesc& reg(const Chip& c, RegId id) const;
   std::uint32_t waddr(const Chip& c, RegId id) const;
   std::uint32_t raddr(const Chip& c, RegId id) const;
   std::uint32_t cell_addr(const Chip& c, RegId id) const { return raddr(c, id); }
@@ -76,7 +81,9 @@ class Responder {
   std::optional<Dpv1User> dpv1_;
   std::uint16_t mask_ = 0xFFFF;  // Int_Mask_Reg as written
   std::uint32_t seg_shift_ = 3;
-  std::uint8_t instq_wr_ = 0;  // dpc31: the next free Instruction_Queue entry
+  std::uint8_t instq_wr_ = 0;                     // dpc31: the next free Instruction_Queue entry
+  mutable const ProfileDesc* regs_of_ = nullptr;  // the profile regs_ was filled from
+  mutable std::array<const RegDesc*, kRegIdCount> regs_{};
 };
 
 }  // namespace dpc31

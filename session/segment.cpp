@@ -80,7 +80,6 @@ std::size_t Segment::add_chip(std::string name, ChipOptions opt) {
     raw->answer = true;
     raw->out_next = 0;
     raw->confirmed = 0;
-    raw->live_next = 0;
     raw->out_bytes = t.bytes;
     raw->out_start = t.start;
     raw->out_end = t.end;
@@ -637,10 +636,10 @@ void Segment::round(std::uint64_t cycle) {
   }
   // Where a firmware may not run past a round's end (step_station), its accesses depend on where
   // rounds end: the stop samples of characters heard whole stay ends of rounds, as their events
-  // made them on the reference line.
-  // So do the edges of the armed answers, as the chips' TxD events made them.
-  if (!busy_.empty() && !reference_)
-    bound = std::min({bound, line_rx_.next_deadline(), next_armed_edge()});
+  // made them on the reference line. An armed answer's edge not yet relayed is its chip's
+  // deadline (look_at); once relayed whole, its later edges end no round: a firmware stepped
+  // across one makes the chip alone's accesses either way (step_station, case 1 or 2).
+  if (!busy_.empty() && !reference_) bound = std::min(bound, line_rx_.next_deadline());
   if (wake_for_ && wake_next_ < wakes_.size()) bound = std::min(bound, wakes_[wake_next_]);
   bound = std::max(bound, now_ + 1);
   // Telegram level: a chip without an event by `bound` whose firmware sleeps is left where it

@@ -155,9 +155,6 @@ class Segment {
   // events of it: the line takes them from the answer it armed, docs/segment.md); `before`: the
   // line's time before this round.
   void relay_armed(std::uint64_t before);
-  // The next edge of an armed answer after now_ (UINT64_MAX: none), a round's end while a
-  // firmware runs, as the chip's TxD events made it on the reference line.
-  [[nodiscard]] std::uint64_t next_armed_edge();
   // A run of station s's TxD (Chip::on_txd_chars) checked against the answer its chip armed.
   void check_txd(Station& s, const TxdRun& run);
   // Every chip to cycle(): what its user side did directly on its bus moved it alone.

@@ -85,29 +85,18 @@ void Segment::relay_armed(std::uint64_t before) {
     const Edges& e = s.drives_edges;
     if (s.out_next == 0 && !e.empty() && e[0].first <= now_ && s.chip->cycle() >= e[0].first &&
         s.chip->cycle() < e[0].first + t_ && s.chip->txd_pin()) {
-      s.out_next = s.confirmed = s.live_next = e.size();
+      s.out_next = s.confirmed = e.size();
       s.answer = false;
     }
     for (; s.out_next < e.size() && e[s.out_next].first <= now_; ++s.out_next)
       round_.push_back({e[s.out_next].first, i, e[s.out_next].second});
   }
-  // Every later question (others_drive, next_armed_edge) is about cycles after `before`.
+  // Every later question (others_drive) is about cycles after `before`.
   std::erase_if(armed_, [this, before](std::size_t i) {
     const Station& s = *stations_[i];
     return s.out_next == s.drives_edges.size() &&
            (s.drives_edges.empty() || s.drives_edges.back().first <= before);
   });
-}
-
-std::uint64_t Segment::next_armed_edge() {
-  std::uint64_t next = UINT64_MAX;
-  for (const std::size_t i : armed_) {
-    Station& s = *stations_[i];
-    const Edges& e = s.drives_edges;
-    while (s.live_next < e.size() && e[s.live_next].first <= now_) ++s.live_next;
-    if (s.live_next < e.size()) next = std::min(next, e[s.live_next].first);
-  }
-  return next;
 }
 
 }  // namespace dpc31

@@ -54,7 +54,6 @@ struct Segment::Station {
   Edges drives_edges;
   std::size_t out_next = 0;
   std::size_t confirmed = 0;
-  std::size_t live_next = 0;  // the first edge after the line's time (next_armed_edge)
   std::vector<std::uint8_t> out_bytes;
   std::uint64_t out_start = 0;
   std::uint64_t out_end = 0;
