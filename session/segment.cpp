@@ -74,17 +74,18 @@ std::size_t Segment::add_chip(std::string name, ChipOptions opt) {
     s->chip->on_txd_chars([this, raw](const TxdRun& run) { check_txd(*raw, run); });
   }
   s->chip->on_answer([this, raw](const Telegram& t) {
-    raw->answer = LineTelegram{0, t.start, t.end, t.bytes};
     raw->drives_edges.clear();
     uart_encode(t.bytes, t.start, raw->chip->bit_cycles(), raw->drives_edges);
     if (reference_) return;
+    raw->answer = true;
     raw->out_next = 0;
     raw->confirmed = 0;
     raw->out_bytes = t.bytes;
     raw->out_start = t.start;
     raw->out_end = t.end;
-    if (std::find(armed_.begin(), armed_.end(), raw->index) == armed_.end())
-      armed_.push_back(raw->index);
+    // In station order (relay_armed's ties).
+    const auto at = std::lower_bound(armed_.begin(), armed_.end(), raw->index);
+    if (at == armed_.end() || *at != raw->index) armed_.insert(at, raw->index);
   });
   add_station(std::move(s));
   raw->known = raw->chip->cycle();
@@ -154,6 +155,7 @@ void Segment::look_at(Station& s) {
 }
 
 void Segment::set_next(std::size_t i, std::uint64_t next) {
+  if (next_[i] == next) return;  // the tree holds it already (most looks change nothing)
   next_[i] = next;
   // The leaf and its ancestors up to the first whose minimum stays.
   std::size_t k = leaves_ + i;
@@ -468,6 +470,12 @@ void Segment::senders_hear(std::size_t from, std::span<const std::uint8_t> bytes
   for (const std::size_t k : senders_) {
     if (k == from) continue;
     std::vector<Heard>& h = stations_[k]->heard;
+    if (h.empty() || h.back().at <= start) {
+      // After everything it heard so far (the common case): appended in order.
+      for (std::size_t i = 0; i < bytes.size(); ++i)
+        h.push_back(Heard{start + i * frame, true, false, bytes[i]});
+      continue;
+    }
     auto at = std::upper_bound(h.begin(), h.end(), start, before);
     for (std::size_t i = 0; i < bytes.size(); ++i) {
       at = std::upper_bound(at, h.end(), start + i * frame, before);
@@ -499,32 +507,41 @@ void Segment::decode_chars(std::size_t from, std::span<const std::uint8_t> bytes
 // character is its sender); it closes when the line stayed idle past its end (a character back
 // to back would have started at its end).
 void Segment::close_telegrams(std::uint64_t upto) {
-  chars_.clear();
-  line_rx_.advance(std::min(upto, now_), chars_);
-  for (const UartChar& c : chars_) line_chars(std::span(&c.data, 1), c.start);
-  // The whole characters after those, back to back: one block.
-  if (!line_rx_.due().empty()) line_chars(line_rx_.due(), line_rx_.due_start());
-  if (open_ && (upto == UINT64_MAX || (upto > open_->end && line_rx_.busy_from() != open_->end))) {
-    if (on_telegram) on_telegram(*open_);
-    open_.reset();
+  const std::uint64_t to = std::min(upto, now_);
+  // A decoder that receives nothing and holds no character due by `to` (most rounds: the line is
+  // idle) has nothing to hand over: advance() would only empty due().
+  if (line_rx_.receiving() || line_rx_.next_deadline() <= to) {
+    chars_.clear();
+    line_rx_.advance(to, chars_);
+    for (const UartChar& c : chars_) line_chars(std::span(&c.data, 1), c.start);
+    // The whole characters after those, back to back: one block.
+    if (!line_rx_.due().empty()) line_chars(line_rx_.due(), line_rx_.due_start());
+  }
+  if (open_now_ &&
+      (upto == UINT64_MAX || (upto > open_.end && line_rx_.busy_from() != open_.end))) {
+    if (on_telegram) on_telegram(open_);
+    open_now_ = false;
   }
 }
 
 void Segment::line_chars(std::span<const std::uint8_t> data, std::uint64_t start) {
-  if (open_ && start > open_->end) {
-    if (on_telegram) on_telegram(*open_);
-    open_.reset();
+  if (open_now_ && start > open_.end) {
+    if (on_telegram) on_telegram(open_);
+    open_now_ = false;
   }
-  if (!open_) {
+  if (!open_now_) {
     std::size_t from = 0;
     for (const auto& [at, who] : claims_) {
       if (at <= start) from = who;
     }
     while (claims_.size() > 1 && claims_[1].first <= start) claims_.erase(claims_.begin());
-    open_ = LineTelegram{from, start, start, {}};
+    open_now_ = true;
+    open_.from = from;
+    open_.start = start;
+    open_.bytes.clear();  // its memory kept: no allocation per telegram
   }
-  open_->bytes.insert(open_->bytes.end(), data.begin(), data.end());
-  open_->end = start + data.size() * std::uint64_t{kUartCharBits} * t_;
+  open_.bytes.insert(open_.bytes.end(), data.begin(), data.end());
+  open_.end = start + data.size() * std::uint64_t{kUartCharBits} * t_;
 }
 
 void Segment::flush() { close_telegrams(UINT64_MAX); }

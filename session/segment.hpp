@@ -155,8 +155,6 @@ class Segment {
   // events of it: the line takes them from the answer it armed, docs/segment.md); `before`: the
   // line's time before this round.
   void relay_armed(std::uint64_t before);
-  // The next edge of an armed answer after now_ (UINT64_MAX: none), a round's end while a
-  // firmware runs, as the chip's TxD events made it on the reference line.
   // A run of station s's TxD (Chip::on_txd_chars) checked against the answer its chip armed.
   void check_txd(Station& s, const TxdRun& run);
   // Every chip to cycle(): what its user side did directly on its bus moved it alone.
@@ -209,7 +207,9 @@ class Segment {
   // run of characters until its stop samples are due.
   TxdReceiver line_rx_;
   std::vector<UartChar> chars_;
-  std::optional<LineTelegram> open_;
+  // The telegram being decoded, while open_now_ (kept to reuse its memory).
+  LineTelegram open_;
+  bool open_now_ = false;
   std::vector<std::pair<std::uint64_t, std::size_t>> claims_;  // (first edge, driver) in order
   // A round's TxD edges of every chip (run_until), kept to reuse its memory.
   struct Driven {

@@ -12,16 +12,15 @@ namespace dpc31 {
 
 bool Segment::relay_answer(std::size_t i, std::uint64_t cycle) {
   Station& a = *stations_[i];
-  if (reference_ || !a.answer || a.answer->start != cycle || a.chip->bit_cycles() != t_)
-    return false;
+  if (reference_ || !a.answer || a.out_start != cycle || a.chip->bit_cycles() != t_) return false;
   // Decoded once for every other chip (at once or through the log); with none on the line and
   // nothing in the log for it, nobody needs the frame: no entry, as hear_whole makes none.
   if (log_.chips() == 1 && a.taken == log_.end()) {
     log_.line_taken();
   } else {
-    hear_whole(i, HeardFrame::make(a.answer->bytes), cycle);
+    hear_whole(i, HeardFrame::make(a.out_bytes), cycle);
   }
-  a.answer.reset();
+  a.answer = false;
   // Its edges from this one on (relay_armed took it; this one is its first start bit, so they
   // are the whole answer): the senders hear its characters and the line's decoder takes them
   // now, ahead of time as a sender's telegram; the line is the answer's up to a character time
@@ -81,14 +80,13 @@ void Segment::check_txd(Station& s, const TxdRun& run) {
 // The armed answers' edges up to now_ into round_. An answer whose first start bit finds its chip's
 // TxD high was withdrawn before it began (Go_Offline, a reset): it never reaches the line.
 void Segment::relay_armed(std::uint64_t before) {
-  std::sort(armed_.begin(), armed_.end());
   for (const std::size_t i : armed_) {
     Station& s = *stations_[i];
     const Edges& e = s.drives_edges;
     if (s.out_next == 0 && !e.empty() && e[0].first <= now_ && s.chip->cycle() >= e[0].first &&
         s.chip->cycle() < e[0].first + t_ && s.chip->txd_pin()) {
       s.out_next = s.confirmed = e.size();
-      s.answer.reset();
+      s.answer = false;
     }
     for (; s.out_next < e.size() && e[s.out_next].first <= now_; ++s.out_next)
       round_.push_back({e[s.out_next].first, i, e[s.out_next].second});

@@ -33,8 +33,8 @@ struct Segment::Station {
   std::vector<Heard> heard;           // a sender's: the line as it hears it, not yet taken
   std::uint64_t colliding_until = 0;  // a collision of this station is reported once per burst
   // Telegram level (docs/segment.md): the chip's next event and whether its firmware runs, as the
-  // rounds last looked; the answer it armed (Chip::on_answer), given to the other chips whole at
-  // its first start bit.
+  // rounds last looked; whether the answer it armed (Chip::on_answer: out_bytes from out_start)
+  // is still to be given to the other chips whole at its first start bit.
   bool busy = false;
   std::uint64_t looked = UINT64_MAX;  // the chip's cycle when the rounds last looked
   // Its cycle as Chip::on_cycle last told, and whether catch_up is to look at it (moved_).
@@ -46,7 +46,7 @@ struct Segment::Station {
   std::deque<std::uint64_t> own;  // the entries of its own answers from `taken` on (not heard)
   bool eager = false;
   int address = -1;
-  std::optional<LineTelegram> answer;
+  bool answer = false;
   // The TxD edges of its last armed answer (both line modes): what a firmware running past a
   // round's end must not cross; at telegram level also what the line relays (from out_next on:
   // not yet) and what its TxD is checked against (from confirmed on: not yet seen), its bytes and

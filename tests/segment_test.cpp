@@ -81,6 +81,28 @@ TEST(Segment, EveryCharacterReachesEveryStationAtTheSameCycle) {
 // A sender's telegram before the cycle the chips stand at (a user side ran one ahead with its
 // own steps; the line brings the others there first) breaks the line's order: thrown with the
 // sender's name, the first chip's and both cycles, never heard late.
+// A low of 12 bit times from S (a break): the start bit and the eight data bits read low, parity
+// and stop bit too (a framing error). The line's telegram holds the character as its data bits
+// read (segment.hpp, LineTelegram: 0x00), from S for one character time (11 bit times). The
+// receiver ends it only at the rise (its stop sample lay before): the line's decoder must hand a
+// character it holds while it receives nothing more (Segment::close_telegrams).
+TEST(Segment, ABreakIsOneBrokenCharacterOnTheLine) {
+  Segment seg(1500000);
+  const std::size_t noise = seg.add_sender("noise");
+  std::vector<LineTelegram> got;
+  seg.on_telegram = [&got](const LineTelegram& tg) { got.push_back(tg); };
+  const std::uint64_t t = seg.bit_cycles();
+  const std::uint64_t s = 100 * t;
+  seg.pulse(noise, s, 12 * t);
+  seg.run_until(s + 40 * t);
+  seg.flush();
+  ASSERT_EQ(got.size(), 1U);
+  EXPECT_EQ(got[0].from, noise);
+  EXPECT_EQ(got[0].bytes, (std::vector<std::uint8_t>{0x00}));
+  EXPECT_EQ(got[0].start, s);
+  EXPECT_EQ(got[0].end, s + 11 * t);
+}
+
 TEST(Segment, ASendBeforeTheChipsCycleThrowsWithBothNames) {
   Segment seg(kBaud);
   (void)seg.add_chip("slave a", ChipOptions{});
