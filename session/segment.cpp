@@ -632,6 +632,16 @@ void Segment::round(std::uint64_t cycle) {
       if (s->chip) bound = std::min(bound, s->chip->next_deadline());
     }
   } else if (!next_tree_.empty()) {
+    // A chip whose event is at the line's time itself (an answer's first start bit: the round
+    // before ended there to relay it) takes it alone first: a round of one cycle for everyone
+    // would end where nobody else needs an end.
+    if (next_tree_[1] <= now_) {
+      due_by(now_);
+      for (const std::size_t i : due_) {
+        step_station(*stations_[i], now_ + 1);
+        look_at(*stations_[i]);
+      }
+    }
     bound = std::min(bound, next_tree_[1]);  // senders: UINT64_MAX
   }
   // Where a firmware may not run past a round's end (step_station), its accesses depend on where
