@@ -74,15 +74,9 @@ std::size_t Segment::add_chip(std::string name, ChipOptions opt) {
     s->chip->on_txd_chars([this, raw](const TxdRun& run) { check_txd(*raw, run); });
   }
   s->chip->on_answer([this, raw](const Telegram& t) {
-    raw->drives_edges.clear();
-    uart_encode(t.bytes, t.start, raw->chip->bit_cycles(), raw->drives_edges);
+    raw->out.arm(t, raw->chip->bit_cycles());
     if (reference_) return;
     raw->answer = true;
-    raw->out_next = 0;
-    raw->confirmed = 0;
-    raw->out_bytes = t.bytes;
-    raw->out_start = t.start;
-    raw->out_end = t.end;
     // In station order (relay_armed's ties).
     const auto at = std::lower_bound(armed_.begin(), armed_.end(), raw->index);
     if (at == armed_.end() || *at != raw->index) armed_.insert(at, raw->index);
@@ -119,13 +113,12 @@ void Segment::look_at(Station& s) {
   // "Verdicts that show nothing"): the chip takes it inside its next step. A running firmware is
   // stepped in every round anyway, to the same ends as on the reference line.
   std::uint64_t next = reference_ || busy ? s.chip->next_deadline() : s.chip->line_deadline();
-  if (s.out_next < s.drives_edges.size()) next = std::min(next, s.drives_edges[s.out_next].first);
+  next = std::min(next, s.out.next_edge());
   set_next(s.index, next);
   s.looked = s.chip->cycle();
   // Past its answer's end the chip has handed over all of it (its end is an event).
-  if (s.broken.empty() && s.confirmed < s.out_next && s.looked > s.out_end) {
-    s.broken =
-        fmt::format("stopped driving TxD before cycle {}", s.drives_edges[s.confirmed].first);
+  if (s.broken.empty() && s.looked > s.out.end && s.out.behind()) {
+    s.broken = fmt::format("stopped driving TxD before cycle {}", s.out.first_unconfirmed());
   }
   if (!s.broken.empty()) {
     throw std::logic_error(fmt::format("segment: {} {}, not the answer its chip armed (cut short?)",
@@ -299,11 +292,11 @@ bool Segment::others_drive(const Station& s, std::uint64_t from, std::uint64_t t
   if (!reference_) {
     // The same facts: only the armed answers with edges after the line's time drive from `from`.
     return std::any_of(armed_.begin(), armed_.end(), [&](std::size_t i) {
-      return i != s.index && stations_[i]->drives(from, to);
+      return i != s.index && stations_[i]->out.drives(from, to);
     });
   }
   return std::any_of(stations_.begin(), stations_.end(), [&](const auto& o) {
-    return o.get() != &s && o->chip && o->drives(from, to);
+    return o.get() != &s && o->chip && o->out.drives(from, to);
   });
 }
 
@@ -345,7 +338,7 @@ void Segment::step_station(Station& s, std::uint64_t to) {
       s.cpu->run_until(to - kCpuSlack);
       s.chip->clear_stop();
       asleep_to_end();
-      if (s.chip->cycle() < to && !s.drives(s.chip->cycle() + 1, to)) return;
+      if (s.chip->cycle() < to && !s.out.drives(s.chip->cycle() + 1, to)) return;
     }
   }
   if (s.chip->cycle() < to) s.chip->step(to - s.chip->cycle());

@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <span>
 
 #include "segment.hpp"
@@ -10,70 +12,191 @@
 
 namespace dpc31 {
 
+namespace {
+
+// Whether a good character's only falling edge is its start bit's (no data or parity bit falls).
+bool falls_once(std::uint8_t data) {
+  const std::uint32_t f = uart_frame(data);
+  constexpr std::uint32_t kMask = (1u << kUartCharBits) - 1;
+  return std::popcount((f ^ (f << 1 | 1u)) & kMask) == 2;
+}
+
+}  // namespace
+
+void ArmedAnswer::arm(const Telegram& tel, std::uint32_t bit_cycles) {
+  bytes = tel.bytes;
+  start = tel.start;
+  end = tel.end;
+  t = bit_cycles;
+  next = 0;
+  confirmed = 0;
+  part = 0;
+  made = false;
+  edges.clear();
+  last = 0;
+  if (!bytes.empty()) {
+    std::array<std::pair<std::uint64_t, bool>, kUartCharBits> e{};
+    const std::size_t n =
+        uart_char_edges(bytes.back(), start + (bytes.size() - 1) * frame(), t, e.data());
+    last = e[n - 1].first;
+  }
+}
+
+void ArmedAnswer::make() {
+  if (made) return;
+  uart_encode(bytes, start, t, edges);
+  made = true;
+  if (next == kWhole) next = edges.size();
+  // The edges of the characters seen whole so far, and those seen of the next one.
+  const std::uint64_t seen = start + confirmed * frame();
+  confirmed = static_cast<std::size_t>(
+                  std::partition_point(edges.begin(), edges.end(),
+                                       [seen](const auto& x) { return x.first < seen; }) -
+                  edges.begin()) +
+              part;
+  part = 0;
+}
+
+void ArmedAnswer::withdraw() {
+  if (made) {
+    next = confirmed = edges.size();
+  } else {
+    next = kWhole;
+    confirmed = bytes.size();
+    part = 0;
+  }
+}
+
+std::uint64_t ArmedAnswer::next_edge() const {
+  if (made) return next < edges.size() ? edges[next].first : UINT64_MAX;
+  // Not made: nothing relayed (its first start bit is next), or all of it.
+  return next == 0 && !bytes.empty() ? start : UINT64_MAX;
+}
+
+bool ArmedAnswer::behind() const {
+  if (made) return confirmed < next;
+  return next == 1 ? confirmed == 0 && part == 0 : next == kWhole && confirmed < bytes.size();
+}
+
+std::uint64_t ArmedAnswer::first_unconfirmed() const {
+  if (made) return edges[confirmed].first;
+  std::array<std::pair<std::uint64_t, bool>, kUartCharBits> e{};
+  uart_char_edges(bytes[confirmed], start + confirmed * frame(), t, e.data());
+  return e[part].first;
+}
+
+bool ArmedAnswer::see(std::pair<std::uint64_t, bool> edge) {
+  if (made) {
+    if (confirmed >= edges.size() || edges[confirmed] != edge) return false;
+    ++confirmed;
+    return true;
+  }
+  if (confirmed >= bytes.size()) return false;
+  std::array<std::pair<std::uint64_t, bool>, kUartCharBits> e{};
+  const std::size_t n = uart_char_edges(bytes[confirmed], start + confirmed * frame(), t, e.data());
+  if (e[part] != edge) return false;
+  if (++part == n) {
+    ++confirmed;
+    part = 0;
+  }
+  return true;
+}
+
+bool ArmedAnswer::see(std::span<const std::uint8_t> data, std::uint64_t at,
+                      std::uint32_t bit_cycles) {
+  const std::uint64_t frame = std::uint64_t{kUartCharBits} * bit_cycles;
+  const std::uint64_t k = (at - start) / frame;
+  if (at < start || start + k * frame != at || k + data.size() > bytes.size() ||
+      !std::equal(data.begin(), data.end(), bytes.begin() + static_cast<std::ptrdiff_t>(k))) {
+    return false;
+  }
+  if (!made) {
+    // Right after the characters seen: none of the next one seen edge by edge.
+    if (k != confirmed || part != 0) return false;
+    confirmed = k + data.size();
+    return true;
+  }
+  const auto index_at = [&](std::uint64_t c) {
+    return static_cast<std::size_t>(
+        std::partition_point(edges.begin(), edges.end(),
+                             [c](const auto& x) { return x.first < c; }) -
+        edges.begin());
+  };
+  if (index_at(at) != confirmed) return false;
+  confirmed = index_at(at + data.size() * frame);
+  return true;
+}
+
+bool ArmedAnswer::drives(std::uint64_t from, std::uint64_t to) const {
+  if (made) {
+    const auto e = std::partition_point(edges.begin(), edges.end(),
+                                        [from](const auto& x) { return x.first < from; });
+    return e != edges.end() && e->first <= to;
+  }
+  if (bytes.empty() || from > last || to < start) return false;
+  if (from <= start) return true;
+  // The first edge at or after `from`: in the character `from` falls in, or the next one's
+  // start bit.
+  const std::size_t k = (from - start) / frame();
+  std::array<std::pair<std::uint64_t, bool>, kUartCharBits> e{};
+  const std::size_t n = uart_char_edges(bytes[k], start + k * frame(), t, e.data());
+  for (std::size_t j = 0; j < n; ++j) {
+    if (e[j].first >= from) return e[j].first <= to;
+  }
+  return start + (k + 1) * frame() <= to;  // k + 1 exists: `from` is not past the last edge
+}
+
 bool Segment::relay_answer(std::size_t i, std::uint64_t cycle) {
   Station& a = *stations_[i];
-  if (reference_ || !a.answer || a.out_start != cycle || a.chip->bit_cycles() != t_) return false;
+  ArmedAnswer& o = a.out;
+  if (reference_ || !a.answer || o.start != cycle || a.chip->bit_cycles() != t_) return false;
   // Decoded once for every other chip (at once or through the log); with none on the line and
   // nothing in the log for it, nobody needs the frame: no entry, as hear_whole makes none.
   if (log_.chips() == 1 && a.taken == log_.end()) {
     log_.line_taken();
   } else {
-    hear_whole(i, HeardFrame::make(a.out_bytes), cycle);
+    hear_whole(i, HeardFrame::make(o.bytes), cycle);
   }
   a.answer = false;
-  // Its edges from this one on (relay_armed took it; this one is its first start bit, so they
-  // are the whole answer): the senders hear its characters and the line's decoder takes them
-  // now, ahead of time as a sender's telegram; the line is the answer's up to a character time
-  // after its last falling edge.
-  const auto rest = std::span(a.drives_edges).subspan(a.out_next - 1);
-  senders_hear(i, a.out_bytes, a.out_start);
+  // The whole answer (relay_armed took its first start bit, this one): the senders hear its
+  // characters and the line's decoder takes them now, ahead of time as a sender's telegram; the
+  // line is the answer's up to a character time after its last falling edge.
+  senders_hear(i, o.bytes, o.start);
   // A start bit a character time after the falling edge before it finds the line free again
-  // (relay): a waiting master wakes there (wakes_), as on the reference line.
+  // (relay): a waiting master wakes there (wakes_), as on the reference line. Within the answer
+  // that is a character's start bit after one whose only fall is its own start bit.
   wakes_.clear();
   wake_next_ = 0;
   wake_from_ = i;
-  const std::uint64_t frame = std::uint64_t{kUartCharBits} * t_;
-  for (const auto& [at, level] : rest) {
-    if (level) continue;
-    if (at >= owned_until_) wakes_.push_back(at);
-    owned_until_ = std::max(owned_until_, at + frame);
+  for (std::size_t k = 1; k < o.bytes.size(); ++k) {
+    if (falls_once(o.bytes[k - 1])) wakes_.push_back(o.start + k * o.frame());
   }
-  decode_chars(i, a.out_bytes, cycle, rest);
-  a.out_next = a.drives_edges.size();
+  std::array<std::pair<std::uint64_t, bool>, kUartCharBits> e{};
+  const std::size_t n =
+      uart_char_edges(o.bytes.back(), o.start + (o.bytes.size() - 1) * o.frame(), t_, e.data());
+  owned_until_ = std::max(owned_until_, e[n - 2].first + o.frame());  // its last fall
+  // The waveform's observer takes its edges (made for it).
+  if (on_line) o.make();
+  using Span = std::span<const std::pair<std::uint64_t, bool>>;
+  decode_chars(i, o.bytes, cycle, o.made ? Span(o.edges).subspan(o.next - 1) : Span{});
+  o.next = o.made ? o.edges.size() : ArmedAnswer::kWhole;
   return true;
 }
-
 // What the chip drives must be the answer the line relayed: whole characters at their places in
 // it, edges one by one. A Go_Offline or a reset cutting the answer short drives otherwise (or
 // stops: look_at); the other chips heard it whole, so that is thrown, never papered over.
 void Segment::check_txd(Station& s, const TxdRun& run) {
   if (!s.broken.empty()) return;
-  const Edges& e = s.drives_edges;
-  const auto index_at = [&](std::uint64_t c) {
-    return static_cast<std::size_t>(
-        std::partition_point(e.begin(), e.end(), [c](const auto& x) { return x.first < c; }) -
-        e.begin());
-  };
   if (!run.bytes.empty()) {
-    const std::uint64_t frame = std::uint64_t{kUartCharBits} * run.bit_cycles;
-    const std::uint64_t k = (run.start - s.out_start) / frame;
-    if (run.start >= s.out_start && s.out_start + k * frame == run.start &&
-        k + run.bytes.size() <= s.out_bytes.size() &&
-        std::equal(run.bytes.begin(), run.bytes.end(),
-                   s.out_bytes.begin() + static_cast<std::ptrdiff_t>(k)) &&
-        index_at(run.start) == s.confirmed) {
-      s.confirmed = index_at(run.start + run.bytes.size() * frame);
-      return;
-    }
-    s.broken = fmt::format("drove characters from cycle {}", run.start);
+    if (!s.out.see(run.bytes, run.start, run.bit_cycles))
+      s.broken = fmt::format("drove characters from cycle {}", run.start);
     return;
   }
   for (const auto& edge : run.edges) {
-    if (s.confirmed >= e.size() || e[s.confirmed] != edge) {
+    if (!s.out.see(edge)) {
       s.broken = fmt::format("drove TxD {} at cycle {}", edge.second ? "high" : "low", edge.first);
       return;
     }
-    ++s.confirmed;
   }
 }
 
@@ -82,20 +205,27 @@ void Segment::check_txd(Station& s, const TxdRun& run) {
 void Segment::relay_armed(std::uint64_t before) {
   for (const std::size_t i : armed_) {
     Station& s = *stations_[i];
-    const Edges& e = s.drives_edges;
-    if (s.out_next == 0 && !e.empty() && e[0].first <= now_ && s.chip->cycle() >= e[0].first &&
-        s.chip->cycle() < e[0].first + t_ && s.chip->txd_pin()) {
-      s.out_next = s.confirmed = e.size();
+    ArmedAnswer& o = s.out;
+    if (o.next == 0 && !o.bytes.empty() && o.start <= now_ && s.chip->cycle() >= o.start &&
+        s.chip->cycle() < o.start + t_ && s.chip->txd_pin()) {
+      o.withdraw();
       s.answer = false;
     }
-    for (; s.out_next < e.size() && e[s.out_next].first <= now_; ++s.out_next)
-      round_.push_back({e[s.out_next].first, i, e[s.out_next].second});
+    // Edge by edge where its first start bit was not relayed whole, or where the round reaches
+    // past it (the second edge is a bit time later at the earliest).
+    if (!o.made && (o.next == 1 || (o.next == 0 && now_ >= o.start + o.t))) o.make();
+    if (o.made) {
+      for (; o.next < o.edges.size() && o.edges[o.next].first <= now_; ++o.next)
+        round_.push_back({o.edges[o.next].first, i, o.edges[o.next].second});
+    } else if (o.next == 0 && !o.bytes.empty() && o.start <= now_) {
+      round_.push_back({o.start, i, false});  // its first start bit
+      o.next = 1;
+    }
   }
   // Every later question (others_drive) is about cycles after `before`.
   std::erase_if(armed_, [this, before](std::size_t i) {
-    const Station& s = *stations_[i];
-    return s.out_next == s.drives_edges.size() &&
-           (s.drives_edges.empty() || s.drives_edges.back().first <= before);
+    const ArmedAnswer& o = stations_[i]->out;
+    return o.all_relayed() && (o.bytes.empty() || o.last <= before);
   });
 }
 

@@ -7,6 +7,7 @@
 #include <deque>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -24,6 +25,46 @@ struct Heard {
   std::uint8_t data = 0;
 };
 
+// The answer a chip armed (Chip::on_answer): its characters from `start`, what the line relayed
+// of it (before `next`) and what the chip's TxD was seen to drive of it (before `confirmed`).
+// Its TxD edges are made only where something takes them one by one (make()): an answer relayed
+// whole at its first start bit and driven as whole characters, the common case, needs none.
+// Until made, `next` is 0 (nothing relayed), 1 (its first start bit handed to a round) or kWhole,
+// and `confirmed` counts whole characters seen, `part` the edges seen of the next one; once made,
+// `next` and `confirmed` index `edges`.
+struct ArmedAnswer {
+  static constexpr std::size_t kWhole = SIZE_MAX;
+  std::vector<std::uint8_t> bytes;
+  std::uint64_t start = 0;
+  std::uint64_t end = 0;
+  std::uint32_t t = 0;
+  std::uint64_t last = 0;  // its last edge (the rise into the last stop bit)
+  std::size_t next = 0;
+  std::size_t confirmed = 0;
+  std::size_t part = 0;
+  bool made = false;
+  std::vector<std::pair<std::uint64_t, bool>> edges;
+
+  void arm(const Telegram& tel, std::uint32_t bit_cycles);
+  // Its edges one by one from here on.
+  void make();
+  [[nodiscard]] std::uint64_t frame() const { return std::uint64_t{kUartCharBits} * t; }
+  [[nodiscard]] bool all_relayed() const { return made ? next == edges.size() : next == kWhole; }
+  // Withdrawn before it began: nothing left to relay, nothing to see.
+  void withdraw();
+  // The next edge the line has not relayed (UINT64_MAX: none).
+  [[nodiscard]] std::uint64_t next_edge() const;
+  // Whether the line relayed an edge its TxD has not driven yet, and the first such edge.
+  [[nodiscard]] bool behind() const;
+  [[nodiscard]] std::uint64_t first_unconfirmed() const;
+  // Whether it drives an edge anywhere in [from, to].
+  [[nodiscard]] bool drives(std::uint64_t from, std::uint64_t to) const;
+  // Checks TxD's next edge against it; false where it differs.
+  bool see(std::pair<std::uint64_t, bool> edge);
+  // Whole characters `data` from `at` on TxD: false where they are not its next ones.
+  bool see(std::span<const std::uint8_t> data, std::uint64_t at, std::uint32_t bit_cycles);
+};
+
 struct Segment::Station {
   std::size_t index = 0;
   std::string name;
@@ -33,7 +74,7 @@ struct Segment::Station {
   std::vector<Heard> heard;           // a sender's: the line as it hears it, not yet taken
   std::uint64_t colliding_until = 0;  // a collision of this station is reported once per burst
   // Telegram level (docs/segment.md): the chip's next event and whether its firmware runs, as the
-  // rounds last looked; whether the answer it armed (Chip::on_answer: out_bytes from out_start)
+  // rounds last looked; whether the answer it armed (Chip::on_answer: `out`)
   // is still to be given to the other chips whole at its first start bit.
   bool busy = false;
   std::uint64_t looked = UINT64_MAX;  // the chip's cycle when the rounds last looked
@@ -47,23 +88,10 @@ struct Segment::Station {
   bool eager = false;
   int address = -1;
   bool answer = false;
-  // The TxD edges of its last armed answer (both line modes): what a firmware running past a
-  // round's end must not cross; at telegram level also what the line relays (from out_next on:
-  // not yet) and what its TxD is checked against (from confirmed on: not yet seen), its bytes and
-  // end.
-  Edges drives_edges;
-  std::size_t out_next = 0;
-  std::size_t confirmed = 0;
-  std::vector<std::uint8_t> out_bytes;
-  std::uint64_t out_start = 0;
-  std::uint64_t out_end = 0;
+  // Its last armed answer (both line modes): what a firmware running past a round's end must not
+  // cross; at telegram level also what the line relays and what its TxD is checked against.
+  ArmedAnswer out;
   std::string broken;  // its TxD left the armed answer (cut short): thrown by look_at
-  [[nodiscard]] bool drives(std::uint64_t from, std::uint64_t to) const {
-    const auto e = std::lower_bound(
-        drives_edges.begin(), drives_edges.end(), from,
-        [](const std::pair<std::uint64_t, bool>& x, std::uint64_t c) { return x.first < c; });
-    return e != drives_edges.end() && e->first <= to;
-  }
 };
 
 }  // namespace dpc31
