@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <array>
-#include <bit>
 #include <span>
 
 #include "segment.hpp"
@@ -14,12 +13,26 @@ namespace dpc31 {
 
 namespace {
 
-// Whether a good character's only falling edge is its start bit's (no data or parity bit falls).
-bool falls_once(std::uint8_t data) {
-  const std::uint32_t f = uart_frame(data);
-  constexpr std::uint32_t kMask = (1u << kUartCharBits) - 1;
-  return std::popcount((f ^ (f << 1 | 1u)) & kMask) == 2;
-}
+// Per data byte: whether a good character's only falling edge is its start bit's (its data,
+// parity and stop bits, LSB first after the start bit, rise at most once and never fall).
+constexpr std::array<bool, 256> kFallsOnce = [] {
+  std::array<bool, 256> table{};
+  for (std::uint32_t d = 0; d < 256; ++d) {
+    std::uint32_t parity = 0;  // even parity
+    for (std::uint32_t b = d; b != 0; b >>= 1) parity ^= b & 1u;
+    const std::uint32_t bits = d | parity << 8 | 1u << 9;
+    bool risen = false;
+    bool falls = false;
+    for (std::uint32_t k = 0; k < 10; ++k) {
+      const bool high = (bits >> k & 1u) != 0;
+      falls = falls || (risen && !high);
+      risen = risen || high;
+    }
+    table[d] = !falls;
+  }
+  return table;
+}();
+static_assert(kFallsOnce[0x00] && kFallsOnce[0x80] && !kFallsOnce[0xC0] && !kFallsOnce[0xFF]);
 
 }  // namespace
 
@@ -169,7 +182,7 @@ bool Segment::relay_answer(std::size_t i, std::uint64_t cycle) {
   wake_next_ = 0;
   wake_from_ = i;
   for (std::size_t k = 1; k < o.bytes.size(); ++k) {
-    if (falls_once(o.bytes[k - 1])) wakes_.push_back(o.start + k * o.frame());
+    if (kFallsOnce[o.bytes[k - 1]]) wakes_.push_back(o.start + k * o.frame());
   }
   std::array<std::pair<std::uint64_t, bool>, kUartCharBits> e{};
   const std::size_t n =
