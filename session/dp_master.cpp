@@ -418,14 +418,28 @@ void DpMaster::wait_answer(Exchange& ex) {
       break;
     }
     // Event-driven: sleep until a start bit (TxD falls) or the wait ends; once the length is
-    // known, until the stop sample of the answer's last character (sent back to back).
-    const std::size_t len = answer_.expected_length();
+    // known, until the stop sample of the answer's last character (sent back to back). Between
+    // two characters of the answer, until the stop sample of one back to back: a start bit inside
+    // a telegram wakes nobody on a segment (the line is its sender's, docs/segment.md).
+    const bool receiving = rx_.receiving();
+    std::size_t len = answer_.expected_length();
     std::uint64_t next = wait_end;
-    if (rx_.receiving()) {
-      next = len == 0 ? rx_.next_deadline()
-                      : answer_.start() + (len * kUartCharBits - 1) * std::uint64_t{t_} + t_ / 2;
+    if (receiving || answer_.started()) {
+      const std::uint64_t first = answer_.started() ? answer_.start() : rx_.busy_from();
+      if (len == 0) len = length_known(first);
+      const auto stop_sample = [&](std::uint64_t start, std::size_t chars) {
+        return start + (chars * kUartCharBits - 1) * std::uint64_t{t_} + t_ / 2;
+      };
+      if (receiving) {
+        next = len != 0 ? stop_sample(first, len) : rx_.next_deadline();
+      } else {
+        // Between characters the slot time runs: an answer that stops ends the wait at its end.
+        next = std::min(wait_end, len != 0 && stop_sample(first, len) > at
+                                      ? stop_sample(first, len)
+                                      : stop_sample(answer_.end(), 1));
+      }
     }
-    wake_on_txd_ = len == 0 || !rx_.receiving();
+    wake_on_txd_ = len == 0 || !receiving;
     run_until(std::max(next, at + 1));
   }
   wake_on_txd_ = false;
@@ -433,6 +447,18 @@ void DpMaster::wait_answer(Exchange& ex) {
   ex.answer_start = answer_.start();
   ex.answer_end = answer_.end();
   ex.answer = answer_.frame();
+}
+
+// A telegram a segment relayed whole is known to its end at its first start bit: its length from
+// its first characters, where all of it is known (0: not known yet, the characters tell).
+std::size_t DpMaster::length_known(std::uint64_t first) const {
+  if (!seg_ || seg_->whole_start() != first) return 0;
+  const std::span<const std::uint8_t> bytes = seg_->whole_bytes();
+  fdl::Assembler a;
+  for (const std::uint8_t b : bytes) {
+    if (a.push(b) != fdl::Assembler::Status::need_more || a.expected_length() != 0) break;
+  }
+  return a.expected_length() <= bytes.size() ? a.expected_length() : 0;
 }
 
 Exchange DpMaster::fdl_status() {

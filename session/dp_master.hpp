@@ -286,6 +286,7 @@ class DpMaster {
   Exchange send(std::span<const std::uint8_t> bytes, UartFault fault, bool no_answer,
                 fdl::Frame request = {});
   void wait_answer(Exchange& ex);  // its answer, if any, into `ex`
+  [[nodiscard]] std::size_t length_known(std::uint64_t first) const;
   // The characters on TxD whose stop sample is due by now: chars_, then rx_.due().
   std::uint64_t look();  // the line up to now(), which it returns
   void note(const std::string& s);

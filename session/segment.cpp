@@ -460,6 +460,8 @@ void Segment::senders_hear(std::size_t from,
 void Segment::senders_hear(std::size_t from, std::span<const std::uint8_t> bytes,
                            std::uint64_t start) {
   const std::uint64_t frame = std::uint64_t{kUartCharBits} * t_;
+  whole_start_ = start;
+  whole_.assign(bytes.begin(), bytes.end());
   for (const std::size_t k : senders_) {
     if (k == from) continue;
     std::vector<Heard>& h = stations_[k]->heard;

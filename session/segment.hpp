@@ -101,6 +101,12 @@ class Segment {
   // time (docs/segment.md). A sender's receiver (a master: TxdReceiver::take) uses it.
   void take_line(std::size_t listener, const std::function<void(const TxdRun&)>& take);
 
+  // The last telegram the line relayed whole to the senders (a chip's answer at its first start
+  // bit, a sender's good telegram): its first start bit and its characters back to back, known to
+  // its end from that start bit on, before the line's time reaches them (docs/segment.md).
+  [[nodiscard]] std::uint64_t whole_start() const { return whole_start_; }
+  [[nodiscard]] std::span<const std::uint8_t> whole_bytes() const { return whole_; }
+
   [[nodiscard]] const std::vector<Collision>& collisions() const { return collisions_; }
   // Every telegram on the line, in order of its start, as soon as its end is known (at the latest
   // one character time after its last stop bit, or at flush()).
@@ -218,6 +224,9 @@ class Segment {
     bool level;
   };
   std::vector<Driven> round_;
+  // The last telegram relayed whole to the senders (whole_start()).
+  std::uint64_t whole_start_ = UINT64_MAX;
+  std::vector<std::uint8_t> whole_;
   // take_line's runs, kept to reuse their memory.
   std::vector<std::uint8_t> take_bytes_;
   Edges take_edges_;

@@ -27,8 +27,9 @@ constexpr std::uint32_t kBaud = 1'500'000;
 // Three chips of the three profiles, each with the minimal user side, and a master.
 struct Line {
   explicit Line(std::uint32_t baud = kBaud, std::vector<std::uint8_t> addresses = {5, 6, 7},
-                std::uint8_t wd_fact = 1)
+                std::uint8_t wd_fact = 1, bool reference_line = false)
       : seg(baud) {
+    seg.use_reference_line(reference_line);
     const Profile profiles[] = {Profile::spc3, Profile::vpc3plus, Profile::dpc31};
     const char* names[] = {"spc3", "vpc3plus", "dpc31"};
     for (std::size_t i = 0; i < addresses.size(); ++i) {
@@ -116,6 +117,40 @@ TEST(Segment, ASendBeforeTheChipsCycleThrowsWithBothNames) {
   } catch (const std::logic_error& e) {
     // The chip stepped past the start; slave a, without an event, stays where it stood.
     EXPECT_STREQ(e.what(), "segment: master sends at cycle 1000, slave b is at cycle 5000");
+  }
+}
+
+// The master's next request follows TSYN after the answer's last stop bit (docs/decisions.md:
+// TSYN, 33 bit times, before every request), whatever the answer's characters are: between two
+// characters of an answer the line is its sender's, and no start bit inside it wakes the master,
+// who must not sleep to the slot time's end there (it did where a firmware's main loop ran, its
+// rounds ending at the line's stop samples: after a one-character SD1 length, 12 bit times
+// late). At both line modes and both rates the bench runs.
+TEST(Segment, TheNextRequestFollowsTsynAfterTheAnswersEnd) {
+  for (const std::uint32_t baud : {kBaud, 12'000'000u}) {
+    for (const bool reference : {false, true}) {
+      Line line(baud, {5, 6, 7}, 1, reference);
+      // The third slave's firmware polls in its main loop: it runs in every round.
+      Cpu::Program p;
+      Responder* r = line.users[2].get();
+      p.isr = [r](BusPort& b) { r->isr(b); };
+      p.main_step = [](BusPort& b) { (void)b.read(0x00); };
+      line.seg.set_firmware(line.chips[2], std::move(p));
+      const std::uint64_t t = line.seg.bit_cycles();
+      ASSERT_TRUE(line.master->startup_all());
+      line.master->select(1);
+      const Exchange a = line.master->fdl_status();  // answered with SD1: 6 characters
+      ASSERT_TRUE(a.answer) << baud << " " << reference;
+      EXPECT_EQ(a.answer_end, a.answer_start + 6 * 11 * t);
+      const Exchange b = line.master->fdl_status();
+      EXPECT_EQ(b.request_start, a.answer_end + 33 * t) << baud << " " << reference;
+      const std::vector<Exchange> cycle = line.master->dp_cycle();
+      for (std::size_t i = 1; i < cycle.size(); ++i) {
+        ASSERT_TRUE(cycle[i - 1].answer);
+        EXPECT_EQ(cycle[i].request_start, cycle[i - 1].answer_end + 33 * t)
+            << baud << " " << reference << " " << i;
+      }
+    }
   }
 }
 
