@@ -137,7 +137,11 @@ void bind_user_side(py::module_& m) {
       m, "Responder", "The minimal built-in user side (session/responder.hpp).")
       .def_property("inputs", bytes_property(&Responder::inputs).first,
                     bytes_property(&Responder::inputs).second)
-      .def_readonly("outputs", &Responder::outputs)
+      .def_readonly("outputs", &Responder::outputs,
+                    "every fetch of new outputs since the last keep_last_output()")
+      .def("keep_last_output", &Responder::keep_last_output,
+           "Forgets every fetch in outputs but the last: a long loop calls it, so memory stays "
+           "flat.")
       .def_readonly("interrupts", &Responder::interrupts)
       .def_readonly("prm_accepted", &Responder::prm_accepted)
       .def_readonly("cfg_accepted", &Responder::cfg_accepted)

@@ -185,6 +185,12 @@ void Responder::give_inputs(BusPort& c, bool always) {
   c.read(raddr(c.chip(), RegId::New_Din_Buffer_Cmd));
 }
 
+void Responder::keep_last_output() {
+  if (outputs.size() < 2) return;
+  spare_ = std::move(outputs[outputs.size() - 2].data);
+  outputs.erase(outputs.begin(), outputs.end() - 1);
+}
+
 void Responder::isr(BusPort& c) {
   const std::uint16_t ir = read16(c, RegId::Int_Reg);
   interrupts.emplace_back(c.cycle(), ir);
@@ -216,11 +222,11 @@ void Responder::isr(BusPort& c) {
                                        RegId::R_Dout_Buf_Ptr3};
       const std::uint32_t base =
           buffer(c, kPtr[field_of(r, fields::Next_Dout_Buffer_Cmd::Ind_U_Buffer) - 1]);
-      Output o{c.cycle(), {}, (r & fields::Next_Dout_Buffer_Cmd::U_Buffer_Cleared) != 0};
+      Output& o = outputs.emplace_back(Output{
+          c.cycle(), std::move(spare_), (r & fields::Next_Dout_Buffer_Cmd::U_Buffer_Cleared) != 0});
       o.data.resize(cfg_.slave.out_len);
       c.read_block(base, o.data);
-      outputs.push_back(std::move(o));
-      if (outputs.back().cleared && c.chip().profile().id == Profile::dpc31) refill_substitute(c);
+      if (o.cleared && c.chip().profile().id == Profile::dpc31) refill_substitute(c);
     }
     give_inputs(c);
     if (cfg_.user_watchdog) {

@@ -52,11 +52,16 @@ class Responder {
     bool cleared;
   };
   std::vector<std::uint8_t> inputs;  // handed to the chip on every DX_Out
-  std::vector<Output> outputs;       // every fetch of new outputs
+  // Every fetch of new outputs since the owner last called keep_last_output().
+  std::vector<Output> outputs;
   std::vector<std::pair<std::uint64_t, std::uint16_t>> interrupts;  // cycle, IR at ISR entry
   std::uint32_t prm_accepted = 0;
   std::uint32_t cfg_accepted = 0;
   std::uint32_t cfg_rejected = 0;
+  // Forgets every fetch but the last (`expect outputs` and `cleared` read it): a driver that runs
+  // long calls it once it has read `outputs`, so memory stays flat. The forgotten fetch's buffer
+  // takes the next one: trimmed after every ISR, a fetch allocates nothing.
+  void keep_last_output();
   // The DPV1 part (records, Alarm_Acks taken), when the configuration has records.
   [[nodiscard]] const std::optional<Dpv1User>& dpv1() const { return dpv1_; }
 
@@ -81,7 +86,8 @@ class Responder {
   std::optional<Dpv1User> dpv1_;
   std::uint16_t mask_ = 0xFFFF;  // Int_Mask_Reg as written
   std::uint32_t seg_shift_ = 3;
-  std::uint8_t instq_wr_ = 0;                     // dpc31: the next free Instruction_Queue entry
+  std::vector<std::uint8_t> spare_;  // a forgotten fetch's data buffer, for the next fetch
+  std::uint8_t instq_wr_ = 0;        // dpc31: the next free Instruction_Queue entry
   mutable const ProfileDesc* regs_of_ = nullptr;  // the profile regs_ was filled from
   mutable std::array<const RegDesc*, kRegIdCount> regs_{};
 };

@@ -139,6 +139,7 @@ class Runner {
       if (modifier || (is_action(st.kind) && !fault_ && !bad_fcs_)) {
         base_counters_ = chip_.fdl_counters();
         base_irq_ = interrupts().size();
+        irr_isr_ = 0;
         base_pb3_ = pb3_rises_;
         base_cycle_ = chip_.cycle();
         irq_rises_.clear();  // `expect irq` looks at the last action only
@@ -151,6 +152,7 @@ class Runner {
       check_states();
       report_history();
       report_outputs();
+      fold_interrupts();
       flush();
       forget_reported();
     }
@@ -407,6 +409,8 @@ class Runner {
         for (std::uint64_t i = 0; i < st.count; ++i) {
           with_retries(master_->data_exchange(outputs_));
           report_history();  // as it goes: `exchange 1000000` keeps memory flat
+          report_outputs();
+          fold_interrupts();
           forget_reported();
         }
         break;
@@ -621,6 +625,7 @@ class Runner {
     reported_ = 1;
   }
 
+  // Reported fetches are forgotten but the last (the expects read it): memory stays flat.
   void report_outputs() {
     for (; outputs_seen_ < user_.outputs.size(); ++outputs_seen_) {
       const Responder::Output& o = user_.outputs[outputs_seen_];
@@ -631,10 +636,24 @@ class Runner {
            fmt::format("user: outputs {}{}", bytes_text(o.data), o.cleared ? " (cleared)" : ""));
       shown_output_ = std::make_pair(o.data, o.cleared);
     }
+    user_.keep_last_output();
+    outputs_seen_ = user_.outputs.size();
   }
 
   const std::vector<std::pair<std::uint64_t, std::uint16_t>>& interrupts() const {
     return m51_ ? m51_->interrupts : fw_ ? fw_->interrupts : user_.interrupts;
+  }
+
+  // What the ISR saw since the last action began goes into irr_isr_; the responder's record of
+  // it is then forgotten: memory stays flat.
+  void fold_interrupts() {
+    const auto& irqs = interrupts();
+    for (std::size_t i = base_irq_; i < irqs.size(); ++i) irr_isr_ |= irqs[i].second;
+    base_irq_ = irqs.size();
+    if (!m51_ && !fw_) {
+      user_.interrupts.clear();
+      base_irq_ = 0;
+    }
   }
 
   // Port values in hex and, for the bit patterns of digital outputs, binary.
@@ -646,11 +665,10 @@ class Runner {
   // --- checks ---
 
   void check(const ScenarioStep& st) {
-    std::uint16_t irr_seen = chip_.peek_reg(RegId::Int_Req_Reg);
     // The firmware acknowledges what it handles, so the register alone rarely shows an event:
     // what its ISR saw during the last action counts as well.
-    for (std::size_t i = base_irq_; i < interrupts().size(); ++i)
-      irr_seen |= interrupts()[i].second;
+    fold_interrupts();
+    const auto irr_seen = static_cast<std::uint16_t>(chip_.peek_reg(RegId::Int_Req_Reg) | irr_isr_);
     const scenario_expect::Seen seen{
         .chip = chip_,
         .outputs = user_.outputs,
@@ -731,7 +749,8 @@ class Runner {
   std::optional<std::vector<std::uint8_t>> last_inputs_;
   std::optional<std::vector<std::uint8_t>> last_diag_;
   FdlCounters base_counters_;
-  std::size_t base_irq_ = 0;
+  std::size_t base_irq_ = 0;   // interrupts() not yet in irr_isr_
+  std::uint16_t irr_isr_ = 0;  // Int_Reg at the ISR entries of the last action
   std::size_t pb3_rises_ = 0;  // PB3 rising edges so far (dpc31 DX_Out port)
   std::size_t base_pb3_ = 0;
   std::uint64_t base_cycle_ = 0;                     // when the last action began (`after N`)

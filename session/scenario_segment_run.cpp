@@ -93,7 +93,12 @@ class SegmentRun {
         st->responder = std::make_unique<Responder>(rc);
         st->responder->init(bus);
         Responder* r = st->responder.get();
-        seg_.set_firmware(st->index, [r](BusPort& b) { r->isr(b); });
+        // Nothing reads what the responder records: it is forgotten at once (memory stays flat).
+        seg_.set_firmware(st->index, [r](BusPort& b) {
+          r->isr(b);
+          r->keep_last_output();
+          r->interrupts.clear();
+        });
       } else {
         st->firmware = std::make_unique<FirmwareHost>(find_firmware(def.firmware));
         st->firmware->init(bus, def.slave.address);

@@ -25,6 +25,8 @@ def test_fail_safe_clear_through_the_master():
     master.data_exchange(b"\x11\x22\x33\x44")
     master.data_exchange(b"\x11\x22\x33\x44")
     assert (user.outputs[-1].data, user.outputs[-1].cleared) == (b"\x11\x22\x33\x44", False)
+    user.keep_last_output()  # what a long loop calls, so memory stays flat
+    assert [(o.data, o.cleared) for o in user.outputs] == [(b"\x11\x22\x33\x44", False)]
 
     gc = master.global_control(CLEAR_DATA, groups=0x01)
     assert gc.answer is None  # a broadcast SDN has no answer

@@ -250,6 +250,7 @@ class Responder:
     prm_accepted: int
     cfg_accepted: int
     cfg_rejected: int
+    def keep_last_output(self) -> None: ...
 
 class Dpv1Outcome(enum.Enum):
     positive = 0
