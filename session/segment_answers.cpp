@@ -18,7 +18,7 @@ bool Segment::relay_answer(std::size_t i, std::uint64_t cycle) {
   if (log_.chips() == 1 && a.taken == log_.end()) {
     log_.line_taken();
   } else {
-    hear_whole(i, HeardFrame::make(a.out_bytes), cycle);
+    hear_whole(i, frames_.make(a.out_bytes), cycle);
   }
   a.answer = false;
   // Its edges from this one on (relay_armed took it; this one is its first start bit, so they
