@@ -170,7 +170,7 @@ bool DpStateMachine::receive_via_aux(std::uint16_t sel, RegId target_ptr, RegId 
 
 // --- the services ---
 
-std::optional<fdl::Frame> DpStateMachine::service(const fdl::Frame& req) {
+bool DpStateMachine::service(const fdl::Frame& req) {
   ++counters_.requests;
   const bool broadcast = req.da == fdl::kBroadcast;
   const fdl::Function fn = fdl::request_function(req.fc);
@@ -186,11 +186,12 @@ std::optional<fdl::Frame> DpStateMachine::service(const fdl::Frame& req) {
     // DPC31 p.33 (Rd_Inp, U -> N -> D): these two answer from the buffers as they are now.
     if (req.dsap &&
         (fdl::sap_number(*req.dsap) == sap::Rd_Inp || fdl::sap_number(*req.dsap) == sap::Rd_Outp)) {
-      std::optional<Frame> fresh = read_io(req);
-      if (fresh) s_.last_response = fdl::encode(*fresh);
-      return fresh;
+      const std::optional<Frame> fresh = read_io(req);
+      if (!fresh) return false;
+      fdl::encode(*fresh, s_.last_response);
+      return true;
     }
-    return fdl::decode(s_.last_response).frame;
+    return true;  // the answer before, as it was sent
   }
   std::optional<Frame> answer;
   if (fn == fdl::Function::FDL_Status && !req.dsap) {
@@ -253,12 +254,12 @@ std::optional<fdl::Frame> DpStateMachine::service(const fdl::Frame& req) {
         break;
     }
   }
-  if (!wants_answer || !answer) return std::nullopt;
+  if (!wants_answer || !answer) return false;
   s_.fcb_valid = fdl::fcv(req.fc);
   s_.last_fcb = fdl::fcb(req.fc);
   s_.last_master = req.sa;
-  s_.last_response = fdl::encode(*answer);
-  return answer;
+  fdl::encode(*answer, s_.last_response);  // encoded once: sent and kept for a repetition
+  return true;
 }
 
 std::optional<fdl::Frame> DpStateMachine::set_prm(const fdl::Frame& req) {
