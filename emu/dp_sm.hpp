@@ -182,6 +182,9 @@ class DpStateMachine {
   FdlCounters& counters_;
   const Signals& sig_;
   State s_;
+  // The RAM's bytes for an answer's data unit (read_buffer): their memory goes out with the
+  // answer and comes back once it is encoded (service).
+  std::vector<std::uint8_t> du_;
 };
 
 }  // namespace dpc31
