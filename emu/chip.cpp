@@ -118,13 +118,38 @@ bool Chip::hear_run(const HeardRun& run) {
 }
 std::shared_ptr<const HeardFrame> HeardFrame::make(std::span<const std::uint8_t> bytes) {
   auto h = std::make_shared<HeardFrame>();
-  h->bytes.assign(bytes.begin(), bytes.end());
-  if (bytes.empty()) return h;  // nobody hears it whole (Mac::can_hear)
-  // The byte of the assembler's verdict, or the last one.
-  h->verdict = h->frame.push_block(bytes) - 1;
-  if (h->frame.status() == fdl::Assembler::Status::complete)
-    h->decoded = fdl::decode(h->frame.bytes());
+  h->fill(bytes);
   return h;
+}
+void HeardFrame::fill(std::span<const std::uint8_t> chars) {
+  bytes.assign(chars.begin(), chars.end());
+  verdict = 0;
+  frame.reset();
+  // As a new frame's until decoded (its DU's memory kept).
+  std::vector<std::uint8_t> du = std::move(decoded.frame.du);
+  decoded = {};
+  decoded.frame.du = std::move(du);
+  decoded.frame.du.clear();
+  if (chars.empty()) return;  // nobody hears it whole (Mac::can_hear)
+  // The byte of the assembler's verdict, or the last one.
+  verdict = frame.push_block(chars) - 1;
+  if (frame.status() == fdl::Assembler::Status::complete) fdl::decode(frame.bytes(), decoded);
+}
+std::shared_ptr<const HeardFrame> HeardFramePool::make(std::span<const std::uint8_t> bytes) {
+  for (std::size_t k = 0; k < frames_.size(); ++k) {
+    const std::size_t i = (next_ + k) % frames_.size();
+    if (frames_[i].use_count() == 1) {
+      frames_[i]->fill(bytes);
+      next_ = (i + 1) % frames_.size();
+      return frames_[i];
+    }
+  }
+  // All held: a new one, the youngest, just before the oldest.
+  const auto at = frames_.insert(frames_.begin() + static_cast<std::ptrdiff_t>(next_),
+                                 std::make_shared<HeardFrame>());
+  (*at)->fill(bytes);
+  next_ = (next_ + 1) % frames_.size();
+  return *at;
 }
 void Chip::on_rxd(std::function<void(std::uint64_t, bool)> cb) {
   core_->signals.rxd.add(std::move(cb));

@@ -170,7 +170,7 @@ bool DpStateMachine::receive_via_aux(std::uint16_t sel, RegId target_ptr, RegId 
 
 // --- the services ---
 
-std::optional<fdl::Frame> DpStateMachine::service(const fdl::Frame& req) {
+bool DpStateMachine::service(const fdl::Frame& req) {
   ++counters_.requests;
   const bool broadcast = req.da == fdl::kBroadcast;
   const fdl::Function fn = fdl::request_function(req.fc);
@@ -187,10 +187,12 @@ std::optional<fdl::Frame> DpStateMachine::service(const fdl::Frame& req) {
     if (req.dsap &&
         (fdl::sap_number(*req.dsap) == sap::Rd_Inp || fdl::sap_number(*req.dsap) == sap::Rd_Outp)) {
       std::optional<Frame> fresh = read_io(req);
-      if (fresh) s_.last_response = fdl::encode(*fresh);
-      return fresh;
+      if (!fresh) return false;
+      fdl::encode(*fresh, s_.last_response);
+      du_ = std::move(fresh->du);
+      return true;
     }
-    return fdl::decode(s_.last_response).frame;
+    return true;  // the answer before, as it was sent
   }
   std::optional<Frame> answer;
   if (fn == fdl::Function::FDL_Status && !req.dsap) {
@@ -229,9 +231,8 @@ std::optional<fdl::Frame> DpStateMachine::service(const fdl::Frame& req) {
           answer = short_answer(req, Response::RR);
           break;
         }
-        answer = sap_answer(
-            req, Response::DL,
-            regs_.read_buffer(RegId::R_Read_Cfg_Buf_Ptr, regs_.cell(RegId::R_Len_Read_Cfg_Data)));
+        regs_.read_buffer(RegId::R_Read_Cfg_Buf_Ptr, regs_.cell(RegId::R_Len_Read_Cfg_Data), du_);
+        answer = sap_answer(req, Response::DL, std::move(du_));
         break;
       case sap::Rd_Inp:
       case sap::Rd_Outp:
@@ -253,12 +254,13 @@ std::optional<fdl::Frame> DpStateMachine::service(const fdl::Frame& req) {
         break;
     }
   }
-  if (!wants_answer || !answer) return std::nullopt;
+  if (!wants_answer || !answer) return false;
   s_.fcb_valid = fdl::fcv(req.fc);
   s_.last_fcb = fdl::fcb(req.fc);
   s_.last_master = req.sa;
-  s_.last_response = fdl::encode(*answer);
-  return answer;
+  fdl::encode(*answer, s_.last_response);  // encoded once: sent and kept for a repetition
+  du_ = std::move(answer->du);
+  return true;
 }
 
 std::optional<fdl::Frame> DpStateMachine::set_prm(const fdl::Frame& req) {
@@ -436,27 +438,27 @@ std::optional<fdl::Frame> DpStateMachine::slave_diag(const fdl::Frame& req) {
   const int k = buffers_.sending_diag();
   const std::size_t len =
       std::clamp<std::size_t>(regs_.cell(kLen[k]), kStandardDiagBytes, kMaxBufferLength);
-  std::vector<std::uint8_t> du = regs_.read_buffer(kPtr[k], len);
-  const std::uint8_t user = du[0];
+  regs_.read_buffer(kPtr[k], len, du_);
+  const std::uint8_t user = du_[0];
   using D = pdu::SlaveDiag;
-  du[0] = static_cast<std::uint8_t>(
+  du_[0] = static_cast<std::uint8_t>(
       (s_.state != DpState::Data_Exchange ? D::St1_Station_Not_Ready : 0) |
       (s_.cfg_fault ? D::St1_Cfg_Fault : 0) | (user & kDiag_Ext_Diag ? D::St1_Ext_Diag : 0) |
       (s_.not_supported ? D::St1_Not_Supported : 0) | (s_.prm_fault ? D::St1_Prm_Fault : 0));
-  du[1] = static_cast<std::uint8_t>((s_.state == DpState::Wait_Prm ? D::St2_Prm_Req : 0) |
-                                    (user & kDiag_Stat_Diag ? D::St2_Stat_Diag : 0) |
-                                    D::St2_Always_1 | (watchdog_.dp_wd_on() ? D::St2_WD_On : 0) |
-                                    (s_.freeze_mode ? D::St2_Freeze_Mode : 0) |
-                                    (s_.sync_mode ? D::St2_Sync_Mode : 0));
-  du[2] = (user & kDiag_Ext_Diag_Overflow) != 0 ? D::St3_Ext_Diag_Overflow : 0x00;
-  du[3] = s_.master_add;
-  du[4] = regs_.cell(RegId::R_Ident_High);
-  du[5] = regs_.cell(RegId::R_Ident_Low);
+  du_[1] = static_cast<std::uint8_t>((s_.state == DpState::Wait_Prm ? D::St2_Prm_Req : 0) |
+                                     (user & kDiag_Stat_Diag ? D::St2_Stat_Diag : 0) |
+                                     D::St2_Always_1 | (watchdog_.dp_wd_on() ? D::St2_WD_On : 0) |
+                                     (s_.freeze_mode ? D::St2_Freeze_Mode : 0) |
+                                     (s_.sync_mode ? D::St2_Sync_Mode : 0));
+  du_[2] = (user & kDiag_Ext_Diag_Overflow) != 0 ? D::St3_Ext_Diag_Overflow : 0x00;
+  du_[3] = s_.master_add;
+  du_[4] = regs_.cell(RegId::R_Ident_High);
+  du_[5] = regs_.cell(RegId::R_Ident_Low);
   sig_.emit(BlockEvent::Kind::diag_begin);
   buffers_.diag_send_begin();
   s_.diag_in_flight = true;
   s_.diag_requester = req.sa;
-  return sap_answer(req, Response::DL, std::move(du));
+  return sap_answer(req, Response::DL, std::move(du_));
 }
 
 std::optional<fdl::Frame> DpStateMachine::read_io(const fdl::Frame& req) {
@@ -471,12 +473,12 @@ std::optional<fdl::Frame> DpStateMachine::read_io(const fdl::Frame& req) {
   if (fdl::sap_number(*req.dsap) == sap::Rd_Inp) {
     sig_.emit(BlockEvent::Kind::din);
     buffers_.inputs_due(s_.freeze_mode);
-    return sap_answer(req, Response::DL,
-                      regs_.read_buffer(buffers_.din_d_ptr(), regs_.cell(RegId::R_Len_Din_Buf)));
+    regs_.read_buffer(buffers_.din_d_ptr(), regs_.cell(RegId::R_Len_Din_Buf), du_);
+  } else {
+    // Read_Outputs is served from the user's U buffer.
+    regs_.read_buffer(buffers_.dout_u_ptr(), regs_.cell(RegId::R_Len_Dout_Buf), du_);
   }
-  // Read_Outputs is served from the user's U buffer.
-  return sap_answer(req, Response::DL,
-                    regs_.read_buffer(buffers_.dout_u_ptr(), regs_.cell(RegId::R_Len_Dout_Buf)));
+  return sap_answer(req, Response::DL, std::move(du_));
 }
 
 std::optional<fdl::Frame> DpStateMachine::set_slave_add(const fdl::Frame& req) {
@@ -554,8 +556,8 @@ std::optional<fdl::Frame> DpStateMachine::data_exchange(const fdl::Frame& req) {
   const std::size_t in_len = regs_.cell(RegId::R_Len_Din_Buf);
   const Response code = buffers_.diag_flag() ? Response::DH : Response::DL;
   if (in_len == 0) return code == Response::DL ? fdl::sc() : short_answer(req, code);
-  return fdl::make_frame(req.sa, s_.station, fdl::make_response_fc(code),
-                         regs_.read_buffer(buffers_.din_d_ptr(), in_len));
+  regs_.read_buffer(buffers_.din_d_ptr(), in_len, du_);
+  return fdl::make_frame(req.sa, s_.station, fdl::make_response_fc(code), std::move(du_));
 }
 
 // VPC3+ Mode_Reg2 DX_Int_Mode = 0 (the default): "DX Interrupt only generated, if DOUT length not
@@ -568,9 +570,8 @@ bool DpStateMachine::dx_out_wanted(std::span<const std::uint8_t> outputs) {
   if (outputs.empty() && (regs_.latch(RegId::Mode_Reg2) & fields::Mode_Reg2::DX_Int_Mode) == 0)
     return false;
   if ((regs_.latch(RegId::Mode_Reg3) & fields::Mode_Reg3::DX_Int_Mode_2) == 0) return true;
-  const std::vector<std::uint8_t> now =
-      regs_.read_buffer(buffers_.newest_dout_ptr(), outputs.size());
-  return !std::equal(outputs.begin(), outputs.end(), now.begin());
+  regs_.read_buffer(buffers_.newest_dout_ptr(), outputs.size(), du_);
+  return !std::equal(outputs.begin(), outputs.end(), du_.begin());
 }
 
 // Each Data_Exchange counts the user watchdog down; Res_User_WD reloads it. False: expired.

@@ -117,8 +117,10 @@ class DpStateMachine {
   void start();
   [[nodiscard]] bool started() const { return s_.started; }
 
-  // An error-free request for us (or broadcast) arrived now: act, and return the answer to send.
-  std::optional<fdl::Frame> service(const fdl::Frame& req);
+  // An error-free request for us (or broadcast) arrived now: act; true: send answer().
+  bool service(const fdl::Frame& req);
+  // The encoded answer of the last request service() answered (the FCB repetition's too).
+  [[nodiscard]] const std::vector<std::uint8_t>& answer() const { return s_.last_response; }
   void response_sent();  // our answer's last stop bit is out
   // Leave_Master: back to Wait_Prm, unlocked (User_Leave_Master, a fault, a watchdog expiry).
   void leave_master();
@@ -180,6 +182,9 @@ class DpStateMachine {
   FdlCounters& counters_;
   const Signals& sig_;
   State s_;
+  // The RAM's bytes for an answer's data unit (read_buffer): their memory goes out with the
+  // answer and comes back once it is encoded (service).
+  std::vector<std::uint8_t> du_;
 };
 
 }  // namespace dpc31

@@ -13,12 +13,6 @@
 
 namespace dpc31::fdl {
 
-namespace {
-
-Decoded fail(Error e, Frame f) { return {e, std::move(f)}; }
-
-}  // namespace
-
 Frame make_frame(std::uint8_t da, std::uint8_t sa, std::uint8_t fc, std::vector<std::uint8_t> du,
                  std::optional<std::uint8_t> dsap, std::optional<std::uint8_t> ssap) {
   const bool sd1 = du.empty() && !dsap && !ssap;
@@ -119,9 +113,24 @@ static_assert(kErrorNames.size() == static_cast<std::size_t>(Error::bad_sap) + 1
 
 std::string_view error_name(Error e) { return name_of(e, kErrorNames); }
 
-Decoded decode(std::span<const std::uint8_t> b) {
-  Frame f{};
-  if (b.empty()) return fail(Error::truncated, f);
+Decoded decode(std::span<const std::uint8_t> bytes) {
+  Decoded d;
+  decode(bytes, d);
+  return d;
+}
+
+void decode(std::span<const std::uint8_t> b, Decoded& out) {
+  Frame& f = out.frame;
+  f.sd = SD1;
+  f.da = 0;
+  f.sa = 0;
+  f.fc = 0;
+  f.dsap.reset();
+  f.ssap.reset();
+  f.du.clear();
+  out.error = Error::none;
+  const auto fail = [&out](Error e) { out.error = e; };
+  if (b.empty()) return fail(Error::truncated);
   f.sd = b[0];
 
   // 1. Framing, in the order the bytes arrive (as the Assembler sees it).
@@ -129,8 +138,8 @@ Decoded decode(std::span<const std::uint8_t> b) {
   std::size_t total = 0;  // whole frame length
   switch (b[0]) {
     case SC:
-      if (b.size() > 1) return fail(Error::oversize, f);
-      return {Error::none, sc()};
+      if (b.size() > 1) fail(Error::oversize);
+      return;  // sc(): the SD alone
     case SD4:
       total = 3;
       break;
@@ -141,21 +150,21 @@ Decoded decode(std::span<const std::uint8_t> b) {
       total = 4 + kSd3DataLength + 2;
       break;
     case SD2: {
-      if (b.size() < 3) return fail(Error::truncated, f);
+      if (b.size() < 3) return fail(Error::truncated);
       const std::size_t le = b[1];
-      if (le != b[2]) return fail(Error::le_mismatch, f);
-      if (le < kMinLe || le > kMaxLe) return fail(Error::bad_le, f);
-      if (b.size() < 4) return fail(Error::truncated, f);
-      if (b[3] != SD2) return fail(Error::bad_sd, f);
+      if (le != b[2]) return fail(Error::le_mismatch);
+      if (le < kMinLe || le > kMaxLe) return fail(Error::bad_le);
+      if (b.size() < 4) return fail(Error::truncated);
+      if (b[3] != SD2) return fail(Error::bad_sd);
       da_at = 4;
       total = le + 6;
       break;
     }
     default:
-      return fail(Error::bad_sd, f);
+      return fail(Error::bad_sd);
   }
-  if (b.size() < total) return fail(Error::truncated, f);
-  if (b.size() > total) return fail(Error::oversize, f);
+  if (b.size() < total) return fail(Error::truncated);
+  if (b.size() > total) return fail(Error::oversize);
 
   const bool dx = (b[da_at] & kExtension) != 0;
   const bool sx = (b[da_at + 1] & kExtension) != 0;
@@ -163,33 +172,32 @@ Decoded decode(std::span<const std::uint8_t> b) {
   f.sa = b[da_at + 1] & kAddressMask;
   if (f.sd == SD4) {
     // A token has no DU, so an extension bit can only be a corrupt address.
-    if (dx || sx) return fail(Error::bad_sap, f);
-    return {Error::none, f};
+    if (dx || sx) fail(Error::bad_sap);
+    return;
   }
   f.fc = b[da_at + 2];
 
   // 2. Integrity.
   const auto body = b.subspan(da_at, total - da_at - 2);  // DA..last DU byte
-  if (fcs(body) != b[total - 2]) return fail(Error::bad_fcs, f);
-  if (b[total - 1] != ED) return fail(Error::wrong_ed, f);
+  if (fcs(body) != b[total - 2]) return fail(Error::bad_fcs);
+  if (b[total - 1] != ED) return fail(Error::wrong_ed);
 
   // 3. Address extension: DSAP first, then SSAP, both at the start of the DU.
   const std::size_t saps = (dx ? 1U : 0U) + (sx ? 1U : 0U);
   std::size_t at = 3;
   if (saps > body.size() - at) {
     // SD2's LE was too short for the SAP bytes; SD1 has no DU at all (SD3 always has 8).
-    return fail(f.sd == SD2 ? Error::bad_le : Error::bad_sap, f);
+    return fail(f.sd == SD2 ? Error::bad_le : Error::bad_sap);
   }
   if (dx) {
-    if (body[at] & kExtension) return fail(Error::bad_sap, f);
+    if (body[at] & kExtension) return fail(Error::bad_sap);
     f.dsap = body[at++];
   }
   if (sx) {
-    if (body[at] & kExtension) return fail(Error::bad_sap, f);
+    if (body[at] & kExtension) return fail(Error::bad_sap);
     f.ssap = body[at++];
   }
   f.du.assign(body.begin() + static_cast<std::ptrdiff_t>(at), body.end());
-  return {Error::none, std::move(f)};
 }
 
 Assembler::Status Assembler::fail(Error e) {

@@ -498,15 +498,14 @@ void Mac::on_frame(const fdl::Frame& f, const UartChar& last) {
     return;
   }
   if (f.da == dp_.station()) watchdog_.retrigger(f.sa, dp_.master_add());
-  const std::optional<fdl::Frame> answer = dp_.service(f);
-  if (answer) send(*answer, last.end);
+  if (dp_.service(f)) send(dp_.answer(), last.end);
 }
 
-void Mac::send(const fdl::Frame& f, std::uint64_t request_end) {
+void Mac::send(std::span<const std::uint8_t> answer, std::uint64_t request_end) {
   if (tx_busy()) return;  // half duplex: still sending the previous answer
   // Into the buffer of the answer before (idle, so empty): no allocation per answer.
   std::vector<std::uint8_t> bytes = std::move(s_.tx_chars.bytes);
-  fdl::encode(f, bytes);
+  bytes.assign(answer.begin(), answer.end());
   const std::uint32_t t = s_.rx.bit_time();
   const std::uint32_t tsdr = std::max<std::uint32_t>(
       kMinTsdrBits, dp_.min_tsdr() != 0 ? dp_.min_tsdr() : regs_.latch(RegId::MinTSDR_Val));

@@ -233,7 +233,7 @@ class Mac {
   [[nodiscard]] std::uint64_t deadline_but_heard() const;
   void drop_heard_rxd(std::uint64_t at);  // the queue as drive_rxd_char left it at cycle `at`
   void on_frame(const fdl::Frame& f, const UartChar& last);
-  void send(const fdl::Frame& f, std::uint64_t request_end);
+  void send(std::span<const std::uint8_t> answer, std::uint64_t request_end);
 
   Clock& clock_;
   const RegisterFile& regs_;

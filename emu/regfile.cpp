@@ -110,11 +110,10 @@ void RegisterFile::write_buffer(RegId ptr_cell, std::span<const std::uint8_t> by
     ram_write(base + static_cast<std::uint32_t>(i), bytes[i]);
 }
 
-std::vector<std::uint8_t> RegisterFile::read_buffer(RegId ptr_cell, std::size_t len) {
+void RegisterFile::read_buffer(RegId ptr_cell, std::size_t len, std::vector<std::uint8_t>& out) {
   const std::uint32_t base = buffer_addr(ptr_cell);
-  std::vector<std::uint8_t> out(len);
+  out.resize(len);
   for (std::size_t i = 0; i < len; ++i) out[i] = ram_read(base + static_cast<std::uint32_t>(i));
-  return out;
 }
 
 void RegisterFile::note_violation(std::uint32_t addr, std::uint32_t mapped) {

@@ -64,7 +64,8 @@ class RegisterFile {
   void ram_write(std::uint32_t addr, std::uint8_t v);
   void clear_ram(std::uint32_t begin, std::uint32_t len);
   void write_buffer(RegId ptr_cell, std::span<const std::uint8_t> bytes);
-  std::vector<std::uint8_t> read_buffer(RegId ptr_cell, std::size_t len);
+  // `len` bytes into `out` (its old contents replaced, its capacity kept).
+  void read_buffer(RegId ptr_cell, std::size_t len, std::vector<std::uint8_t>& out);
 
   // Address decode: the address bus width and the RAM access violation (the access wraps).
   std::uint32_t decode(std::uint32_t addr, bool& violation) const {

@@ -565,7 +565,7 @@ std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> byte
     }
   }
   if (whole) {
-    hear_whole(from, HeardFrame::make(bytes), start);
+    hear_whole(from, frames_.make(bytes), start);
   } else {
     log_.line_taken();
     for (std::size_t k = 0; k < stations_.size(); ++k) {

@@ -242,6 +242,7 @@ class Segment {
   std::vector<std::size_t> busy_;
   // The telegram log (docs/segment.md) and who hears a telegram at once.
   TelegramLog log_;
+  HeardFramePool frames_;  // the telegrams heard whole, their memory used again
   std::vector<std::size_t> due_;
   std::vector<std::size_t> stepped_;
   std::vector<std::size_t> drove_;

@@ -168,7 +168,7 @@ bool Segment::relay_answer(std::size_t i, std::uint64_t cycle) {
   if (log_.chips() == 1 && a.taken == log_.end()) {
     log_.line_taken();
   } else {
-    hear_whole(i, HeardFrame::make(o.bytes), cycle);
+    hear_whole(i, frames_.make(o.bytes), cycle);
   }
   a.answer = false;
   // The whole answer (relay_armed took its first start bit, this one): the senders hear its

@@ -282,6 +282,33 @@ TEST(FdlDecode, Errors) {
   }
 }
 
+// The buffer form (a segment's HeardFramePool decodes every telegram into the frame it refills):
+// each result as the value form's, nothing left of the telegram before, the DU's storage kept.
+TEST(FdlDecode, IntoADecodedKeepsOnlyItsStorage) {
+  const Bytes big = encode(make_frame(5, 2, 0x7D, counting(244), 60, 62));
+  const Bytes inputs[] = {
+      big,
+      encode(make_frame(3, 2, 0x6D, {1, 2}, 61)),
+      encode(make_frame(5, 2, 0x49)),
+      {0x10, 0x85, 0x02, 0x49, 0xD0, 0x16},  // bad_sap after DA/SA/FC are parsed
+      encode(token(3, 2)),
+      {0xE5, 0xE5},
+      {},
+      encode(make_frame(7, 2, 0x5D, {9}, std::nullopt, 62)),
+  };
+  Decoded into;
+  for (const Bytes& in : inputs) {
+    decode(in, into);
+    const Decoded want = dec(in);
+    EXPECT_EQ(error_name(into.error), error_name(want.error)) << in.size() << " bytes";
+    EXPECT_EQ(into.frame, want.frame) << in.size() << " bytes";
+  }
+  decode(big, into);
+  const std::uint8_t* storage = into.frame.du.data();
+  decode(inputs[1], into);
+  EXPECT_EQ(into.frame.du.data(), storage);
+}
+
 TEST(FdlDecode, ErrorNames) {
   EXPECT_EQ(error_name(Error::none), "none");
   EXPECT_EQ(error_name(Error::le_mismatch), "le_mismatch");

@@ -244,6 +244,38 @@ std::vector<std::uint8_t> mixed_telegram(std::size_t k) {
   }
 }
 
+// A segment's telegrams heard whole come from a HeardFramePool: a frame someone holds (a chip, the
+// telegram log) is never handed out again; one nobody holds is, filled as HeardFrame::make fills a
+// new one, nothing left of the telegram it held before.
+TEST(SegmentSpeed, APoolHandsOutOnlyFramesNobodyHolds) {
+  const std::vector<std::uint8_t> first = fdl::encode(fdl::make_frame(5, 2, 0x7D, {1, 2, 3}));
+  const std::vector<std::uint8_t> second =
+      fdl::encode(fdl::make_frame(6, 2, 0x6D, {4, 5, 6, 7}, 61, 62));
+  // A broken telegram: the assembler's verdict at its fourth character (no SD2 there), nothing
+  // decoded.
+  const std::vector<std::uint8_t> third = {fdl::SD2, 7, 7, 0x10, 1, 2, 3};
+  HeardFramePool pool;
+  const auto a = pool.make(first);
+  auto b = pool.make(second);
+  EXPECT_NE(a.get(), b.get());
+  const HeardFrame* freed = b.get();
+  b.reset();
+  const auto c = pool.make(third);
+  EXPECT_EQ(c.get(), freed);
+  const auto want = HeardFrame::make(third);
+  EXPECT_EQ(c->bytes, want->bytes);
+  EXPECT_EQ(c->verdict, want->verdict);
+  EXPECT_EQ(c->frame.status(), want->frame.status());
+  EXPECT_EQ(c->frame.error(), want->frame.error());
+  EXPECT_EQ(fdl::error_name(c->decoded.error), fdl::error_name(want->decoded.error));
+  EXPECT_EQ(c->decoded.frame, want->decoded.frame);
+  const auto d = pool.make(second);  // all held: a new one
+  EXPECT_NE(d.get(), a.get());
+  EXPECT_NE(d.get(), c.get());
+  EXPECT_EQ(a->bytes, first);
+  EXPECT_EQ(a->decoded.frame, fdl::make_frame(5, 2, 0x7D, {1, 2, 3}));
+}
+
 // The fold (docs/segment.md): 60 telegrams of mixed_telegram's kinds whose verdicts are at their
 // last character, with gaps of 0 to 100 bit times, heard by a chip offline one by one (each at its
 // start, stepped to the next) and by one that hears the first, takes the others but the last as

@@ -124,6 +124,20 @@ struct HeardFrame {
   fdl::Assembler frame;  // after bytes[0..verdict]
   fdl::Decoded decoded;  // fdl::decode of the frame, when complete
   static std::shared_ptr<const HeardFrame> make(std::span<const std::uint8_t> bytes);
+  // make() in place: the vectors keep their capacity.
+  void fill(std::span<const std::uint8_t> chars);
+};
+
+// HeardFrame::make for a sender of many telegrams (a segment: every request and answer): a frame
+// nobody holds any more (its chips heard the next one, its log entry is gone) is filled again in
+// place, which spares its allocations; the oldest handed out is tried first.
+class HeardFramePool {
+ public:
+  std::shared_ptr<const HeardFrame> make(std::span<const std::uint8_t> bytes);
+
+ private:
+  std::vector<std::shared_ptr<HeardFrame>> frames_;  // in the order handed out, from next_ on
+  std::size_t next_ = 0;
 };
 
 // A run of telegrams heard whole, each on the line right after the one before it, the first

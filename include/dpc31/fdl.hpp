@@ -155,6 +155,8 @@ struct Decoded {
 // broken frame are never interpreted: framing in byte order (SD, LE/LEr, SD repeat, length),
 // then FCS, ED, then the address extension.
 [[nodiscard]] Decoded decode(std::span<const std::uint8_t> bytes);
+// The same into `out` (its old contents replaced, its DU's capacity kept).
+void decode(std::span<const std::uint8_t> bytes, Decoded& out);
 
 // Collects one frame character by character. The length is known from the SD (and LE for SD2),
 // so the receiver sees the end of a frame without waiting for idle. Framing errors are reported
