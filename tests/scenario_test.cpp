@@ -2,7 +2,6 @@
 // with its line, nothing runs when a file does not parse, and every shipped scenario passes.
 #include <fmt/core.h>
 #include <gtest/gtest.h>
-#include <malloc.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -16,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "heap_in_use.hpp"
 // emu/ is not on the tests' include path.
 #include "scenario.hpp"
 
@@ -612,27 +612,24 @@ TEST(ScenarioRun, LongRunKeepsTheResponderFlat) {
     dpc31::Scenario s;
     dpc31::ScenarioError err;
     EXPECT_TRUE(dpc31::parse_scenario(text, "t.scn", s, err)) << err.text();
-    const auto in_use = [] {
-      const struct mallinfo2 m = mallinfo2();
-      return m.uordblks + m.hblkhd;
-    };
     std::size_t at_start = 0;
     std::size_t grown = 0;
     dpc31::ScenarioHooks hooks;
-    hooks.at_start = [&](dpc31::Chip&) { at_start = in_use(); };
-    hooks.at_end = [&](dpc31::Chip&) { grown = in_use() - at_start; };
+    hooks.at_start = [&](dpc31::Chip&) { at_start = dpc31::test::heap_in_use(); };
+    hooks.at_end = [&](dpc31::Chip&) { grown = dpc31::test::heap_in_use() - at_start; };
     Lines errors;
     const dpc31::ScenarioOutcome o = dpc31::run_scenario(s, {}, errors.sink(), hooks);
     EXPECT_TRUE(o.ok()) << (errors.lines.empty() ? "" : errors.lines.front());
     EXPECT_EQ(o.passed, 3u);
     return grown;
   };
-  [[maybe_unused]] const std::size_t short_run = heap_at_end(20);
-  [[maybe_unused]] const std::size_t long_run = heap_at_end(200);
-#if !defined(__SANITIZE_ADDRESS__)
-  EXPECT_LE(long_run, short_run + 16 * 1024)
-      << "grown by " << short_run << " bytes over 2 000 exchanges, " << long_run << " over 20 000";
-#endif
+  const std::size_t short_run = heap_at_end(20);
+  const std::size_t long_run = heap_at_end(200);
+  if (dpc31::test::kHeapCounted) {
+    EXPECT_LE(long_run, short_run + 16 * 1024)
+        << "grown by " << short_run << " bytes over 2 000 exchanges, " << long_run
+        << " over 20 000";
+  }
 }
 
 }  // namespace
