@@ -47,11 +47,13 @@ void ArmedAnswer::arm(const Telegram& tel, std::uint32_t bit_cycles) {
   made = false;
   edges.clear();
   last = 0;
+  last_fall = 0;
   if (!bytes.empty()) {
     std::array<std::pair<std::uint64_t, bool>, kUartCharBits> e{};
     const std::size_t n =
         uart_char_edges(bytes.back(), start + (bytes.size() - 1) * frame(), t, e.data());
     last = e[n - 1].first;
+    last_fall = e[n - 2].first;  // the edges alternate from the start bit's fall: n is even
   }
 }
 
@@ -184,10 +186,7 @@ bool Segment::relay_answer(std::size_t i, std::uint64_t cycle) {
   for (std::size_t k = 1; k < o.bytes.size(); ++k) {
     if (kFallsOnce[o.bytes[k - 1]]) wakes_.push_back(o.start + k * o.frame());
   }
-  std::array<std::pair<std::uint64_t, bool>, kUartCharBits> e{};
-  const std::size_t n =
-      uart_char_edges(o.bytes.back(), o.start + (o.bytes.size() - 1) * o.frame(), t_, e.data());
-  owned_until_ = std::max(owned_until_, e[n - 2].first + o.frame());  // its last fall
+  owned_until_ = std::max(owned_until_, o.last_fall + o.frame());
   // The waveform's observer takes its edges (made for it).
   if (on_line) o.make();
   using Span = std::span<const std::pair<std::uint64_t, bool>>;

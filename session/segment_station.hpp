@@ -38,7 +38,8 @@ struct ArmedAnswer {
   std::uint64_t start = 0;
   std::uint64_t end = 0;
   std::uint32_t t = 0;
-  std::uint64_t last = 0;  // its last edge (the rise into the last stop bit)
+  std::uint64_t last = 0;       // its last edge (the rise into the last stop bit)
+  std::uint64_t last_fall = 0;  // its last falling edge
   std::size_t next = 0;
   std::size_t confirmed = 0;
   std::size_t part = 0;
