@@ -242,6 +242,12 @@ void core_fields(Ar& ar, C& c) {
   }
   ar.section("DPSM");
   dp_fields(ar, dp);
+  if constexpr (requires { ar.fail(""); }) {
+    // An FCB repetition sends these bytes again as they are (DpStateMachine::service): only a
+    // telegram the chip could have sent.
+    if (!dp.last_response.empty() && fdl::decode(dp.last_response).error != fdl::Error::none)
+      ar.fail("the answer kept for a repetition is not a valid telegram");
+  }
   // The order of format version 2: both timers' deadlines first, their per-cycle counts last.
   ar.section("TIMR");
   ar(mode.user.at);

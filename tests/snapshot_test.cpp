@@ -665,6 +665,39 @@ TEST(SnapshotFormat, CraftedPayloadsAreRefusedNotLoaded) {
   EXPECT_GT(refused, 0);
 }
 
+// The answer kept for an FCB repetition is sent again as it is (DpStateMachine::service), so a
+// snapshot whose kept answer is no valid telegram is refused: the chip would send it. Found by
+// Fuzz.snapshot_loader. The kept answer is the DPSM section's only length-prefixed valid frame.
+TEST(SnapshotFormat, AKeptAnswerThatIsNoTelegramIsRefused) {
+  for (const Profile p : kAllProfiles) {
+    SCOPED_TRACE(testutil::pname(p));
+    Chip target = mid_session(p);
+    const Bytes good = target.save_state();
+    const auto tag = [&](std::string_view t) {
+      return static_cast<std::size_t>(std::search(good.begin(), good.end(), t.begin(), t.end()) -
+                                      good.begin());
+    };
+    const std::size_t from = tag("DPSM"), to = tag("TIMR");
+    ASSERT_LT(from, to);
+    std::vector<std::pair<std::size_t, std::size_t>> kept;  // (first byte, length)
+    for (std::size_t i = from; i + 4 < to; ++i) {
+      const std::size_t n = good[i] | good[i + 1] << 8 | good[i + 2] << 16 | good[i + 3] << 24;
+      if (n == 0 || i + 4 + n > to) continue;
+      const std::span<const std::uint8_t> frame(good.data() + i + 4, n);
+      if (fdl::decode(frame).error == fdl::Error::none) kept.emplace_back(i + 4, n);
+    }
+    ASSERT_EQ(kept.size(), 1u) << "the kept answer is not found in the snapshot";
+    const auto [at, n] = kept.front();
+    Bytes b = good;
+    b[at + n - 1] ^= 0xFF;  // its last byte: the ED, or the short acknowledgement itself
+    reseal(b);
+    expect_refused(target, b, "the answer kept for a repetition is not a valid telegram");
+    Chip again({p, BusMode::intel, 0});
+    again.load_state(good);  // the one it really kept loads
+    EXPECT_EQ(again.save_state(), good);
+  }
+}
+
 class SnapshotFile : public ::testing::Test {
  protected:
   void SetUp() override {
