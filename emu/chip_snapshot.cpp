@@ -100,6 +100,21 @@ void dp_fields(Ar& ar, S& s) {
   ar(s.ext_prm);  // version 4
 }
 
+// Edges queued on a line are in time order; those before `next` are taken (at or before `now`),
+// the rest are still to come. Out of order, a line would run back in time (Chip::drive_rxd's
+// contract: non-decreasing cycles).
+template <typename Edges>
+bool edge_queue_valid(const Edges& edges, std::size_t next, std::uint64_t now) {
+  std::uint64_t last = 0;
+  std::size_t i = 0;
+  for (const auto& e : edges) {
+    if (e.first < last || (i < next) != (e.first <= now)) return false;
+    last = e.first;
+    ++i;
+  }
+  return true;
+}
+
 // The longest answer on the wire: every character toggling at every bit, plus the final rise.
 constexpr std::size_t kMaxTxEdges = fdl::kMaxFrameLength * kUartCharBits + 1;
 
@@ -134,6 +149,8 @@ void mac_fields(Ar& ar, S& s, std::uint64_t now) {
   if constexpr (requires { ar.fail(""); }) {
     ar.sequence(s.tx_edges, kMaxTxEdges, edge);  // a loaded answer is edges (Mac::tx_to_edges)
     ar.size(s.tx_next, s.tx_edges.size());
+    if (!edge_queue_valid(s.tx_edges, s.tx_next, now))
+      ar.fail("TxD edges out of time order, or taken and to come on the wrong side of now");
     ar(s.tx_end);
     ar(s.txd);
   } else if (s.tx_chars.active()) {
@@ -214,10 +231,8 @@ void core_fields(Ar& ar, C& c) {
   };
   if constexpr (requires { ar.fail(""); }) {
     ar.sequence(mac.rxd_pending, snap::kMaxFileSize, edge);
-    for (const auto& e : mac.rxd_pending) {
-      if (e.first <= c.clock.now)
-        ar.fail("an RxD edge driven ahead at or before the snapshot's cycle");
-    }
+    if (!edge_queue_valid(mac.rxd_pending, 0, c.clock.now))
+      ar.fail("RxD edges driven ahead out of time order, or at or before the snapshot's cycle");
     mac.heard.active = false;
   } else {
     // The edges still to come: those up to now are heard already, whenever the queue drops them.

@@ -461,15 +461,17 @@ TEST_P(Snapshot, ContinuesLikeTheOriginal) {
 INSTANTIATE_TEST_SUITE_P(AllChips, Snapshot, ::testing::ValuesIn(testutil::all_chip_params()),
                          testutil::param_name);
 
-// A chip in the middle of a session: a request on RxD, edges driven ahead of time.
-Chip mid_session(Profile p, BusMode bus = BusMode::intel, std::uint32_t clock_hz = 0) {
+// A chip in the middle of a session, halfway through the first telegram longer than 10 bytes
+// on RxD (a request, edges driven ahead of time) or, `answering`, on TxD (the chip's answer).
+Chip mid_session(Profile p, BusMode bus = BusMode::intel, std::uint32_t clock_hz = 0,
+                 bool answering = false) {
   const Live live = live_session({p, bus});
   Chip c({p, bus, clock_hz});
   c.set_log_sink(nullptr);
   Recorder rec;
   std::uint64_t at = live.end / 3;
   for (const Telegram& g : live.telegrams) {
-    if (!g.from_chip && g.bytes.size() > 10) {
+    if (g.from_chip == answering && g.bytes.size() > 10) {
       at = g.start + (g.end - g.start) / 2;
       break;
     }
@@ -696,6 +698,67 @@ TEST(SnapshotFormat, AKeptAnswerThatIsNoTelegramIsRefused) {
     again.load_state(good);  // the one it really kept loads
     EXPECT_EQ(again.save_state(), good);
   }
+}
+
+// Where a snapshot's queue of line edges begins: its 32-bit count, found back from the field
+// after it (`after` bytes before section `next`): count, then 9 bytes per edge (cycle, level).
+std::size_t edge_queue_at(const Bytes& b, std::string_view next, std::size_t after) {
+  const auto tag = std::search(b.begin(), b.end(), next.begin(), next.end());
+  const std::size_t end = static_cast<std::size_t>(tag - b.begin()) - after;
+  for (std::size_t n = 0; 9 * n + 4 <= end; ++n) {
+    const std::size_t at = end - 9 * n - 4;
+    if ((b[at] | b[at + 1] << 8 | b[at + 2] << 16 | std::size_t{b[at + 3]} << 24) == n) return at;
+  }
+  ADD_FAILURE() << "no edge queue before " << next;
+  return 0;
+}
+
+std::uint64_t edge_cycle(const Bytes& b, std::size_t queue, std::size_t k) {
+  std::uint64_t v = 0;
+  for (std::size_t i = 0; i < 8; ++i) v |= std::uint64_t{b[queue + 4 + 9 * k + i]} << (8 * i);
+  return v;
+}
+
+// Chip::drive_rxd takes edges at non-decreasing cycles, and the chip's answer goes out in time
+// order: a snapshot whose queued RxD or TxD edges run back in time is refused (found by
+// Fuzz.snapshot_loader: an RxD edge moved far ahead made the chip answer a request that the
+// line, in order, never carried). docs/snapshots.md lists the checks.
+TEST(SnapshotFormat, LineEdgesOutOfTimeOrderAreRefused) {
+  Chip target = mid_session(Profile::spc3);
+  Bytes good = target.save_state();
+  // CORE ends with the RxD queue and the line level (1 byte), then LTCH.
+  const std::size_t rx = edge_queue_at(good, "LTCH", 1);
+  ASSERT_GE(good[rx], 2u) << "the request on RxD has edges driven ahead";
+  Bytes b = good;
+  const std::uint64_t second = edge_cycle(good, rx, 1);
+  set_le(b, rx + 4, second + 1, 8);  // the first edge after the second
+  reseal(b);
+  expect_refused(target, b, "RxD edges driven ahead out of time order");
+  b = good;
+  set_le(b, rx + 4, 0, 8);  // the first edge before the snapshot's cycle
+  reseal(b);
+  expect_refused(target, b, "or at or before the snapshot's cycle");
+
+  Chip sending = mid_session(Profile::spc3, BusMode::intel, 0, true);
+  good = sending.save_state();
+  // The TxD queue: count, edges, then tx_next (4), tx_end (8), txd (1), then section USMP.
+  const std::size_t tx = edge_queue_at(good, "USMP", 13);
+  const std::size_t edges = good[tx] | good[tx + 1] << 8;
+  const std::size_t next_at = tx + 4 + 9 * edges;
+  const std::size_t next = good[next_at] | good[next_at + 1] << 8;
+  ASSERT_GT(next, 0u) << "half the answer is out";
+  ASSERT_LT(next + 1, edges) << "half the answer is still to come";
+  b = good;
+  set_le(b, tx + 4 + 9 * (next + 1), edge_cycle(good, tx, next) - 1, 8);  // before the one before
+  reseal(b);
+  expect_refused(sending, b, "TxD edges out of time order");
+  b = good;
+  set_le(b, next_at, 0, 4);  // the edges out already marked as still to come
+  reseal(b);
+  expect_refused(sending, b, "taken and to come on the wrong side of now");
+  Chip again({Profile::spc3, BusMode::intel, 0});
+  again.load_state(good);
+  EXPECT_EQ(again.save_state(), good);
 }
 
 class SnapshotFile : public ::testing::Test {
