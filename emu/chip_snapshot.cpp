@@ -2,6 +2,8 @@
 // read in one place so that the format is one list. Each list is a template run with a Writer
 // (save) or a Reader (load), so save and load cannot drift apart; a static_assert on each
 // block's State makes a new member fail the build until it is listed here.
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <type_traits>
 
@@ -245,6 +247,19 @@ void core_fields(Ar& ar, C& c) {
   ar(mac.rxd_level);
   ar.section("LTCH");
   ar.array(regs.latch);
+  if constexpr (requires { ar.fail(""); }) {
+    // A latch holds no more bits than its register has: an 8-bit MinTSDR_Val of 0xFFFF would
+    // delay every answer by 65 535 bit times. A RegId the profile lacks has no flip-flops.
+    for (std::size_t i = 0; i < regs.latch.size(); ++i) {
+      const RegDesc* r = c.regs.reg(static_cast<RegId>(i));
+      if (r == nullptr && regs.latch[i] != 0)
+        ar.fail(
+            fmt::format("latch {} is {:04X}h on a chip without that register", i, regs.latch[i]));
+      if (r != nullptr && (regs.latch[i] & ~r->mask()) != 0)
+        ar.fail(fmt::format("latch {} is {:04X}h: more than its {} bits", r->name, regs.latch[i],
+                            r->width));
+    }
+  }
   ar.section("MEM ");
   ar.fixed_bytes(regs.mem);
   ar.section("IRQC");

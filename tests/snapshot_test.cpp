@@ -668,8 +668,9 @@ TEST(SnapshotFormat, CraftedPayloadsAreRefusedNotLoaded) {
 }
 
 // The answer kept for an FCB repetition is sent again as it is (DpStateMachine::service), so a
-// snapshot whose kept answer is no valid telegram is refused: the chip would send it. Found by
-// Fuzz.snapshot_loader. The kept answer is the DPSM section's only length-prefixed valid frame.
+// snapshot whose kept answer is no valid telegram is refused: the chip would send it (found in
+// the review of Fuzz.snapshot_loader's finding 9, docs/robustness.md). The kept answer is the
+// DPSM section's only length-prefixed valid frame.
 TEST(SnapshotFormat, AKeptAnswerThatIsNoTelegramIsRefused) {
   for (const Profile p : kAllProfiles) {
     SCOPED_TRACE(testutil::pname(p));
@@ -720,9 +721,8 @@ std::uint64_t edge_cycle(const Bytes& b, std::size_t queue, std::size_t k) {
 }
 
 // Chip::drive_rxd takes edges at non-decreasing cycles, and the chip's answer goes out in time
-// order: a snapshot whose queued RxD or TxD edges run back in time is refused (found by
-// Fuzz.snapshot_loader: an RxD edge moved far ahead made the chip answer a request that the
-// line, in order, never carried). docs/snapshots.md lists the checks.
+// order: a snapshot whose queued RxD or TxD edges run back in time is refused (the loader
+// checked only that the RxD edges lie after the snapshot's cycle; found in the same review).
 TEST(SnapshotFormat, LineEdgesOutOfTimeOrderAreRefused) {
   Chip target = mid_session(Profile::spc3);
   Bytes good = target.save_state();
@@ -759,6 +759,35 @@ TEST(SnapshotFormat, LineEdgesOutOfTimeOrderAreRefused) {
   Chip again({Profile::spc3, BusMode::intel, 0});
   again.load_state(good);
   EXPECT_EQ(again.save_state(), good);
+}
+
+// Each latch is the register's flip-flops: no more bits than the register has (docs/registers.md
+// gives the widths), none for a register the profile lacks. Fuzz.snapshot_loader's finding 9
+// (docs/robustness.md): MinTSDR_Val (8 bits) loaded as FFFFh delayed the answer by 65 535 bit
+// times, past what any request could explain.
+TEST(SnapshotFormat, ALatchWiderThanItsRegisterIsRefused) {
+  Chip target = mid_session(Profile::spc3);
+  const Bytes good = target.save_state();
+  const auto ltch = static_cast<std::size_t>(
+      std::search(good.begin(), good.end(), std::begin("LTCH"), std::end("LTCH") - 1) -
+      good.begin());
+  const auto latch_at = [&](RegId id) { return ltch + 8 + 2 * static_cast<std::size_t>(id); };
+  Bytes b = good;
+  set_le(b, latch_at(RegId::MinTSDR_Val), 0xFFFF, 2);
+  reseal(b);
+  expect_refused(target, b, "latch MinTSDR_Val is FFFFh: more than its 8 bits");
+  b = good;
+  set_le(b, latch_at(RegId::MinTSDR_Val), 0x00FF, 2);  // the widest an 8-bit register holds
+  reseal(b);
+  Chip widest({Profile::spc3, BusMode::intel, 0});
+  widest.load_state(b);
+  EXPECT_EQ(widest.save_state(), b);
+  // The SPC3 has no DPC31 C31_Control.
+  ASSERT_EQ(find_reg(profile_desc(Profile::spc3), RegId::C31_Control), nullptr);
+  b = good;
+  set_le(b, latch_at(RegId::C31_Control), 0x0001, 2);
+  reseal(b);
+  expect_refused(target, b, "is 0001h on a chip without that register");
 }
 
 class SnapshotFile : public ::testing::Test {
