@@ -293,6 +293,11 @@ void core_fields(Ar& ar, C& c) {
     mac.chars.clear();
     // Only a telegram in progress has a timeout; a stale one would be due for ever.
     if (!mac.in_frame && mac.frame_timeout != kNever) ar.fail("frame timeout outside a telegram");
+    // The receivers listen at the rate of the search code (Mac::listen): a bit time of 0 would
+    // divide by zero, another one hear a rate the chip does not know.
+    const std::uint32_t t = bit_cycles(c.clock.hz, kBaudRates[mac.search_code]);
+    if (mac.rx.bit_time() != t || mac.sampler.bit_time() != t)
+      ar.fail(fmt::format("a receiver's bit time is not {} clocks, the one of its baud rate", t));
   }
   ar.section("CNTR");
   counter_fields(ar, c.counters);
@@ -304,6 +309,15 @@ void core_fields(Ar& ar, C& c) {
   ar(rq.wd.left);
   ar(rq.wd_left);
   ar(rq.wd_locked);
+  if constexpr (requires { ar.fail(""); }) {
+    // Only the DPC31 has the interface: elsewhere it stays as reset left it (its timer would
+    // reach for the DPC31's cells).
+    const RequestInterface::State rq_reset{};  // RequestInterface::reset
+    if (c.prof().id != Profile::dpc31 &&
+        (rq.wd.at != rq_reset.wd.at || rq.wd.left != rq_reset.wd.left ||
+         rq.wd_left != rq_reset.wd_left || rq.wd_locked != rq_reset.wd_locked))
+      ar.fail("the request interface is not idle on a chip without one (DPC31 only)");
+  }
   // Format version 4: the VPC3+'s SAP list (DPV1, docs/dpv1.md).
   auto& sl = A::state(c.sap_list);
   static_assert(snap::member_count<SapList::State>() == 4, "a new member: add it here");
@@ -315,6 +329,11 @@ void core_fields(Ar& ar, C& c) {
   if constexpr (requires { ar.fail(""); }) {
     const std::uint32_t end = 1u << c.prof().address_bits;
     if (sl.entry >= end || sl.response >= end) ar.fail("SAP list address beyond the address bus");
+    const SapList::State sl_reset{};  // SapList::reset
+    if (c.prof().id != Profile::vpc3plus &&
+        (sl.enabled != sl_reset.enabled || sl.sending != sl_reset.sending ||
+         sl.entry != sl_reset.entry || sl.response != sl_reset.response))
+      ar.fail("the SAP list is not off on a chip without one (VPC3+ only)");
   }
 }
 

@@ -667,6 +667,14 @@ TEST(SnapshotFormat, CraftedPayloadsAreRefusedNotLoaded) {
   EXPECT_GT(refused, 0);
 }
 
+// Where section `tag` begins in a snapshot (its first occurrence: the sections come before any
+// RAM bytes that could spell it only where the test looks after them).
+std::size_t section_at(const Bytes& b, std::string_view tag) {
+  const auto at = std::search(b.begin(), b.end(), tag.begin(), tag.end());
+  EXPECT_NE(at, b.end()) << "no section " << tag;
+  return static_cast<std::size_t>(at - b.begin());
+}
+
 // The answer kept for an FCB repetition is sent again as it is (DpStateMachine::service), so a
 // snapshot whose kept answer is no valid telegram is refused: the chip would send it (found in
 // the review of Fuzz.snapshot_loader's finding 9, docs/robustness.md). The kept answer is the
@@ -676,11 +684,7 @@ TEST(SnapshotFormat, AKeptAnswerThatIsNoTelegramIsRefused) {
     SCOPED_TRACE(testutil::pname(p));
     Chip target = mid_session(p);
     const Bytes good = target.save_state();
-    const auto tag = [&](std::string_view t) {
-      return static_cast<std::size_t>(std::search(good.begin(), good.end(), t.begin(), t.end()) -
-                                      good.begin());
-    };
-    const std::size_t from = tag("DPSM"), to = tag("TIMR");
+    const std::size_t from = section_at(good, "DPSM"), to = section_at(good, "TIMR");
     ASSERT_LT(from, to);
     std::vector<std::pair<std::size_t, std::size_t>> kept;  // (first byte, length)
     for (std::size_t i = from; i + 4 < to; ++i) {
@@ -704,8 +708,7 @@ TEST(SnapshotFormat, AKeptAnswerThatIsNoTelegramIsRefused) {
 // Where a snapshot's queue of line edges begins: its 32-bit count, found back from the field
 // after it (`after` bytes before section `next`): count, then 9 bytes per edge (cycle, level).
 std::size_t edge_queue_at(const Bytes& b, std::string_view next, std::size_t after) {
-  const auto tag = std::search(b.begin(), b.end(), next.begin(), next.end());
-  const std::size_t end = static_cast<std::size_t>(tag - b.begin()) - after;
+  const std::size_t end = section_at(b, next) - after;
   for (std::size_t n = 0; 9 * n + 4 <= end; ++n) {
     const std::size_t at = end - 9 * n - 4;
     if ((b[at] | b[at + 1] << 8 | b[at + 2] << 16 | std::size_t{b[at + 3]} << 24) == n) return at;
@@ -768,9 +771,7 @@ TEST(SnapshotFormat, LineEdgesOutOfTimeOrderAreRefused) {
 TEST(SnapshotFormat, ALatchWiderThanItsRegisterIsRefused) {
   Chip target = mid_session(Profile::spc3);
   const Bytes good = target.save_state();
-  const auto ltch = static_cast<std::size_t>(
-      std::search(good.begin(), good.end(), std::begin("LTCH"), std::end("LTCH") - 1) -
-      good.begin());
+  const std::size_t ltch = section_at(good, "LTCH");
   const auto latch_at = [&](RegId id) { return ltch + 8 + 2 * static_cast<std::size_t>(id); };
   Bytes b = good;
   set_le(b, latch_at(RegId::MinTSDR_Val), 0xFFFF, 2);
@@ -788,6 +789,34 @@ TEST(SnapshotFormat, ALatchWiderThanItsRegisterIsRefused) {
   set_le(b, latch_at(RegId::C31_Control), 0x0001, 2);
   reseal(b);
   expect_refused(target, b, "is 0001h on a chip without that register");
+}
+
+// A block the profile lacks stays as reset left it, and both receivers listen at the rate of the
+// search code (Mac::listen). Fuzz.snapshot_loader's finding 10 (docs/robustness.md): an SPC3
+// with the DPC31's DPS_User_Watchdog due read a cell the SPC3 does not have; a receiver bit time
+// of 0 divided by zero.
+TEST(SnapshotFormat, ABlockTheChipLacksOrABitTimeOfNoRateIsRefused) {
+  Chip target = mid_session(Profile::spc3);
+  const Bytes good = target.save_state();
+  Bytes b = good;
+  set_le(b, section_at(good, "RQIF") + 4, 0, 8);  // the DPS_User_Watchdog's timer due at cycle 0
+  reseal(b);
+  expect_refused(target, b, "the request interface is not idle on a chip without one");
+  b = good;
+  b[section_at(good, "SAPL") + 4] = 1;  // DPV1_Enable taken
+  reseal(b);
+  expect_refused(target, b, "the SAP list is not off on a chip without one");
+  const std::uint32_t t = target.bit_cycles();
+  const std::string wrong = fmt::format("a receiver's bit time is not {} clocks", t);
+  for (const std::string_view receiver : {"UART", "USMP"}) {  // the event and per-cycle ones
+    for (const std::uint32_t other : {0u, t + 1}) {
+      SCOPED_TRACE(fmt::format("{} {}", receiver, other));
+      b = good;
+      set_le(b, section_at(good, receiver) + 4, other, 4);
+      reseal(b);
+      expect_refused(target, b, wrong);
+    }
+  }
 }
 
 class SnapshotFile : public ::testing::Test {

@@ -182,6 +182,7 @@ class UartSampler {
   // An edge driven for the clock already evaluated (Chip::drive_rxd at the current cycle).
   bool late_edge(bool line, std::uint64_t now);
   [[nodiscard]] bool busy() const { return busy_; }
+  [[nodiscard]] std::uint32_t bit_time() const { return t_; }  // T in clocks
 
   void save_state(snap::Writer& w) const;
   void load_state(snap::Reader& r);
