@@ -37,9 +37,9 @@ struct ResponderConfig {
 };
 
 // Why an option of the built-in user side is refused, in the words of every door that takes one
-// (the single chip's `user` step, a segment's `station`, Python's Segment.add_station), `option`
-// spelled as that door spells it (docs/decisions.md, "No silent options"). Beside a firmware,
-// which sets up its own user side:
+// (the single chip's `user` step, a segment's `station`, Python's Segment.add_station, the
+// bridge's --slave), `option` spelled as that door spells it (docs/decisions.md, "No silent
+// options"). Beside a firmware, which sets up its own user side:
 [[nodiscard]] std::string refused_beside_firmware(std::string_view option);
 // `user_wd_value` on the dpc31 without `user_wd`: acts on nothing there.
 [[nodiscard]] std::string user_wd_value_needs_user_wd(std::string_view option);
