@@ -1,5 +1,7 @@
 #include "responder.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <span>
 
@@ -17,6 +19,20 @@ constexpr std::uint8_t kQueueLen = 4;  // dpc31: entries of each queue (one alwa
 constexpr std::uint16_t kDpv1Events = irq::FDL_Ind | irq::Poll_End_Ind | irq::User_Timer_Clock;
 
 }  // namespace
+
+std::string refused_beside_firmware(std::string_view option) {
+  return fmt::format("'{}' configures the built-in user side; a firmware configures itself",
+                     option);
+}
+
+std::string user_wd_value_needs_user_wd(std::string_view option) {
+  // The responder sends DPS_User_Wd requests only with user_wd=1; on the SPC3 and VPC3+ the value
+  // acts always (its Start carries Res_User_WD).
+  return fmt::format(
+      "{} needs user_wd=1 on profile dpc31: the DPS_User_Watchdog loads R_User_WD_Value only "
+      "through its requests",
+      option);
+}
 
 const RegDesc& Responder::reg(const Chip& c, RegId id) const {
   const ProfileDesc& p = c.profile();

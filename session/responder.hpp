@@ -8,6 +8,8 @@
 #include <cstdint>
 #include <initializer_list>
 #include <optional>
+#include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -33,6 +35,14 @@ struct ResponderConfig {
   bool dx_out_port = false;              // dpc31 C31_Control.Enable_DX_Out_Port (PB3)
   Dpv1UserConfig dpv1;                   // vpc3plus: records to serve over DPV1 (none: off)
 };
+
+// Why an option of the built-in user side is refused, in the words of every door that takes one
+// (the single chip's `user` step, a segment's `station`, Python's Segment.add_station, the
+// bridge's --slave), `option` spelled as that door spells it (docs/decisions.md, "No silent
+// options"). Beside a firmware, which sets up its own user side:
+[[nodiscard]] std::string refused_beside_firmware(std::string_view option);
+// `user_wd_value` on the dpc31 without `user_wd`: acts on nothing there.
+[[nodiscard]] std::string user_wd_value_needs_user_wd(std::string_view option);
 
 class Responder {
  public:

@@ -173,9 +173,7 @@ class Parser {
               "C31_Control.Enable_DX_Out_Port");
     }
     if (user_wd_value_line_ != 0 && p == Profile::dpc31 && !s_.user.user_watchdog) {
-      fail_at(user_wd_value_line_,
-              "user user_wd_value= needs user_wd=1 on profile dpc31: the DPS_User_Watchdog "
-              "loads R_User_WD_Value only through its requests");
+      fail_at(user_wd_value_line_, user_wd_value_needs_user_wd("user user_wd_value="));
     }
     if (wd_base_line_ != 0) wd_base_checked(s_.user.slave, wd_base_line_);
   }
@@ -381,8 +379,7 @@ class Parser {
       }
     } else if (cmd_ == "user") {
       positional(0, 0, "options only");
-      if (firmware_seen_ || s_.cpu)
-        fail("'user' configures the built-in user side; a firmware configures itself");
+      if (firmware_seen_ || s_.cpu) fail(refused_beside_firmware("user"));
       user_seen_ = true;
       ResponderConfig& u = s_.user;
       for (const auto& [k, v] : opts_) {

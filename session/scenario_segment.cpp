@@ -134,6 +134,7 @@ class Parser {
         }
       }
     }
+    user_side(st);
     if (auto v = take("wd")) {
       const std::vector<std::string_view> f = split(*v, ',');
       if (f.size() != 2) fail(fmt::format("wd='{}': two factors, as in wd=10,10", *v));
@@ -144,6 +145,21 @@ class Parser {
       if (o.name == st.name) fail(fmt::format("a second station named '{}'", st.name));
     }
     s_.stations.push_back(std::move(st));
+  }
+
+  // The single chip's `user` options that a station of its own may want, with its checks: the
+  // user watchdog served on every DX_Out, R_User_WD_Value (docs/timing.md: without the service
+  // an SPC3 or VPC3+ leaves Data_Exchange at its 512th Data_Exchange).
+  void user_side(SegmentStation& st) {
+    const std::optional<std::string_view> serve = take("user_wd");
+    const std::optional<std::string_view> value = take("user_wd_value");
+    if (serve) st.user_watchdog = flag(*serve, "user_wd");
+    if (value)
+      st.user_wd_value = static_cast<std::uint16_t>(number(*value, "user_wd_value", 0, 0xFFFF));
+    if (!st.firmware.empty() && (serve || value))
+      fail(refused_beside_firmware(serve ? "user_wd" : "user_wd_value"));
+    if (value && st.chip.profile == Profile::dpc31 && !st.user_watchdog)
+      fail(user_wd_value_needs_user_wd("user_wd_value="));
   }
 
   void master() {

@@ -20,7 +20,11 @@ struct SegmentStation {
   // "" (the built-in responder), a built-in firmware's name, or a plug-in's path (relative ones
   // made relative to the scenario's real directory).
   std::string firmware;
-  SlaveConfig slave;    // what its master parameterises (address, watchdog, GSD defaults)
+  SlaveConfig slave;  // what its master parameterises (address, watchdog, GSD defaults)
+  // The built-in user side's user watchdog (`user_wd=`, `user_wd_value=`: the single chip's
+  // `user` options); not served unless asked, as there.
+  bool user_watchdog = false;
+  std::uint16_t user_wd_value = ResponderConfig{}.user_wd_value;
   int plugin_line = 0;  // the line naming a plug-in; its GSD defaults wait for the binding
 };
 

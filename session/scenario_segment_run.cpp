@@ -90,6 +90,8 @@ class SegmentRun {
       if (def.firmware.empty()) {
         ResponderConfig rc;
         rc.slave = def.slave;
+        rc.user_watchdog = def.user_watchdog;
+        rc.user_wd_value = def.user_wd_value;
         st->responder = std::make_unique<Responder>(rc);
         st->responder->init(bus);
         Responder* r = st->responder.get();

@@ -63,6 +63,9 @@ class BridgeSegment : public ::testing::Test, protected testutil::EngineRecord {
     return exchange(frame(da, fc, std::move(du), dsap));
   }
 
+  // Both stations from their baud search to Data_Exchange, each answer checked.
+  void start_up();
+
   bool fcb_[2] = {true, true};
 };
 
@@ -76,6 +79,19 @@ const Bytes kCfg = {0x13, 0x23};  // 4 bytes in, 4 bytes out (byte consistency)
 Bytes diag_answer(std::uint8_t sa, Bytes du) {
   return dpc31::fdl::encode(
       dpc31::fdl::make_frame(2, sa, 0x08, std::move(du), std::uint8_t{62}, std::uint8_t{60}));
+}
+
+void BridgeSegment::start_up() {
+  find(5);
+  exchange(frame(6, 0x49));
+  for (std::uint8_t a : {5, 6}) {
+    // Not parameterised: Station_Not_Ready; Prm_Req and the fixed bit 2; no master (FFh).
+    EXPECT_EQ(srd(a, {}, 60), diag_answer(a, {0x02, 0x05, 0x00, 0xFF, 0x0C, 0x31}));
+    EXPECT_EQ(srd(a, kPrm, 61), Bytes{0xE5});
+    EXPECT_EQ(srd(a, kCfg, 62), Bytes{0xE5});
+    // Ready: WD_On and the fixed bit 2; master 2.
+    EXPECT_EQ(srd(a, {}, 60), diag_answer(a, {0x00, 0x0C, 0x00, 0x02, 0x0C, 0x31}));
+  }
 }
 
 TEST_F(BridgeSegment, EachStationAnswersItsOwnRequestsAtMinTsdr) {
@@ -115,16 +131,7 @@ TEST_F(BridgeSegment, EachStationAnswersItsOwnRequestsAtMinTsdr) {
 // n + 1 (New_Din_Buffer_Cmd), so exchange n + 2 answers them: the third answer carries the
 // first outputs.
 TEST_F(BridgeSegment, TwoStationsReachDataExchangeEachWithItsOwnData) {
-  find(5);
-  exchange(frame(6, 0x49));
-  for (std::uint8_t a : {5, 6}) {
-    // Not parameterised: Station_Not_Ready; Prm_Req and the fixed bit 2; no master (FFh).
-    EXPECT_EQ(srd(a, {}, 60), diag_answer(a, {0x02, 0x05, 0x00, 0xFF, 0x0C, 0x31}));
-    EXPECT_EQ(srd(a, kPrm, 61), Bytes{0xE5});
-    EXPECT_EQ(srd(a, kCfg, 62), Bytes{0xE5});
-    // Ready: WD_On and the fixed bit 2; master 2.
-    EXPECT_EQ(srd(a, {}, 60), diag_answer(a, {0x00, 0x0C, 0x00, 0x02, 0x0C, 0x31}));
-  }
+  start_up();
   const Bytes out5 = {0xA5, 0x05, 0x50, 0x55};
   const Bytes out6 = {0x11, 0x22, 0x33, 0x66};
   Bytes a5;
@@ -149,6 +156,43 @@ TEST_F(BridgeSegment, TwoStationsReachDataExchangeEachWithItsOwnData) {
   // The other station ignored every request to its neighbour: counted, not answered.
   EXPECT_GT(engine_->chip(0).fdl_counters().foreign_address, 0u);
   EXPECT_GT(engine_->chip(1).fdl_counters().foreign_address, 0u);
+}
+
+// --slave ...:user_wd_value=3 and ...:user_wd=1:user_wd_value=3 (docs/timing.md: the user
+// watchdog counts Data_Exchanges; the responder's Start loads R_User_WD_Value at the first, each
+// later one counts down, the one that reaches 0 is not answered): station 5, unserved, answers
+// Data_Exchanges 1..3 and not the 4th; station 6, served on every DX_Out, answers all six.
+class BridgeSegmentUserWd : public BridgeSegment {
+ protected:
+  void SetUp() override {
+    dpc31::bridge::Setup s;
+    SlaveSpec spc3{5, {dpc31::Profile::spc3}, nullptr};
+    spc3.user_wd_value = 3;
+    SlaveSpec vpc3{6, {dpc31::Profile::vpc3plus}, nullptr};
+    vpc3.user_watchdog = true;
+    vpc3.user_wd_value = 3;
+    s.slaves = {spc3, vpc3};
+    make(s);
+  }
+};
+
+TEST_F(BridgeSegmentUserWd, TheResponderServesItsUserWatchdogWhenAsked) {
+  start_up();
+  std::vector<bool> data5;
+  std::vector<bool> data6;
+  for (std::uint8_t n = 1; n <= 6; ++n) {
+    const Bytes out = {n, n, n, n};
+    const auto with_data = [](const Bytes& answer) {
+      const dpc31::fdl::Decoded d = dpc31::fdl::decode(answer);
+      return !answer.empty() && d.error == dpc31::fdl::Error::none && d.frame.du.size() == 4;
+    };
+    data5.push_back(with_data(srd(5, out)));
+    data6.push_back(with_data(srd(6, out)));
+  }
+  EXPECT_EQ(data5, (std::vector<bool>{true, true, true, false, false, false}));
+  EXPECT_EQ(data6, std::vector<bool>(6, true));
+  EXPECT_EQ(engine_->chip(0).dp_state(), dpc31::DpState::Wait_Prm);
+  EXPECT_EQ(engine_->chip(1).dp_state(), dpc31::DpState::Data_Exchange);
 }
 
 // An address nobody has: no answer within the slot time (100 bit times from the request's end),

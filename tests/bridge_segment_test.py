@@ -187,6 +187,19 @@ def bad_slave_arguments():
             (["--slave", "5:DO4", "--address", "5"], "--address is for the one slave"),
             (["--slave", "5:DO4", "--profile", "spc3"], "--profile is for the one slave"),
             (["--slave", "5:DO4", "--cpu", "80c32"], "--cpu is for the one slave"),
+            # the built-in user side's options, checked as a segment scenario's `station`
+            (["--slave", "5:DO4:spc3:user_wd=1"],
+             "'user_wd' configures the built-in user side; a firmware configures itself"),
+            (["--slave", "5:responder:dpc31:user_wd_value=5"],
+             "user_wd_value= needs user_wd=1 on profile dpc31"),
+            (["--slave", "5:responder:user_wd_value=5"],
+             "user_wd_value= needs user_wd=1 on profile dpc31"),
+            (["--slave", "5:responder:spc3:user_wd=2"], "bad value '2' for user_wd: 0 or 1"),
+            (["--slave", "5:responder:spc3:user_wd_value=65536"],
+             "user_wd_value '65536' must be 0..65535"),
+            (["--slave", "5:responder:spc3:user_wd=1:b"],
+             "must be ADDR:FIRMWARE[:PROFILE[:VARIANT]]"),
+            (["--slave", "5:responder:spc3:bogus=1"], "unknown option 'bogus'"),
         ]
         for args, want in cases:
             blt.expect_refused(["--tcp", "0", "--log", log] + args, want, log)

@@ -426,6 +426,29 @@ TEST(SegmentOutputs, BadInputIsOneLineAndNoFile) {
   EXPECT_EQ(slurp(scn), slurp(kScenario));
 }
 
+// A station's user watchdog options refused at their line (docs/scenario-format.md, "Segments"):
+// beside a firmware, and user_wd_value= on a dpc31 without user_wd=1. `dpc31 run` says the one
+// line `FILE:LINE: …` and exits 2 (docs/bad-input.md), writing nothing.
+TEST(SegmentOutputs, AStationsBadUserSideOptionIsExit2WithItsLine) {
+  const testutil::TempDir dir;
+  const std::string out = dir.file("uwd.json");
+  const std::pair<const char*, const char*> cases[] = {
+      {"segment\nstation 5 profile=spc3 user_wd=1 firmware=DO4\nstartup\n",
+       "uwd1.scn:2: 'user_wd' configures the built-in user side; a firmware configures itself"},
+      {"segment\nstation 5 profile=spc3\nstation 7 user_wd_value=100\nstartup\n",
+       "uwd2.scn:3: user_wd_value= needs user_wd=1 on profile dpc31: the DPS_User_Watchdog loads "
+       "R_User_WD_Value only through its requests"},
+  };
+  int n = 0;
+  for (const auto& [text, want] : cases) {
+    const std::string scn = dir.write(fmt::format("uwd{}.scn", ++n), text);
+    const auto r = sh(fmt::format("{} run --quiet {} --json {}", DPC31_CLI, scn, out));
+    EXPECT_EQ(r.rc, 2) << r.out;
+    EXPECT_EQ(r.out, fmt::format("{}/{}\n", dir.path(), want));
+    EXPECT_FALSE(fs::exists(out));
+  }
+}
+
 // The three-slave segment (a firmware, a VPC3+, a DPC31): every station's trace replays alone, the
 // VPC3+'s last answer of the run whole in it (the run ends once the line is quiet).
 TEST(SegmentOutputs, ThreeSlavesTracesReplay) {

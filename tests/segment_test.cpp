@@ -8,6 +8,8 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <map>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -20,6 +22,7 @@
 #include "heap_in_use.hpp"
 #include "responder.hpp"
 #include "scenario_segment.hpp"
+#include "vocabulary.hpp"
 
 namespace dpc31 {
 namespace {
@@ -571,6 +574,102 @@ TEST(SegmentScenario, ALongCycleStepKeepsTheMemoryFlat) {
   }
 }
 
+// The user watchdog of a station with the built-in user side (docs/timing.md: it counts
+// Data_Exchange telegrams; Res_User_WD, which the user side sets with Start_SPC3, loads
+// R_User_WD_Value at the next Data_Exchange, each later one counts down, and the one that reaches
+// 0 is not answered and makes Leave_Master). So with R_User_WD_Value = N and no service, the
+// station answers Data_Exchanges 1..N and not N + 1. What each station did with every
+// Data_Exchange request to it, in order: answered with its 4 input bytes, or not at all.
+struct DataExchanges : SegmentObserver {
+  enum class Answer : std::uint8_t { none, data, other };
+  explicit DataExchanges(const SegmentScenario& s) {
+    for (const SegmentStation& st : s.stations) address.push_back(st.slave.address);
+  }
+  void telegram(const LineTelegram& t) override {
+    const fdl::Decoded d = fdl::decode(t.bytes);
+    if (d.error != fdl::Error::none) return;
+    if (t.from >= address.size()) {  // a master: the request a chip's next telegram answers
+      asked.reset();
+      if (d.frame.sd != fdl::SD4 && fdl::is_request(d.frame.fc) &&
+          service_name(d.frame) == "Data_Exchange") {
+        asked = d.frame.da;
+        answers[d.frame.da].push_back(Answer::none);
+      }
+    } else if (asked && *asked == address[t.from]) {
+      answers[*asked].back() = d.frame.du.size() == 4 ? Answer::data : Answer::other;
+      asked.reset();
+    }
+  }
+  std::vector<std::uint8_t> address;  // each chip station's, by its index on the segment
+  std::optional<std::uint8_t> asked;
+  std::map<std::uint8_t, std::vector<Answer>> answers;
+};
+
+DataExchanges run_exchanges(const std::string& text) {
+  SegmentScenario s;
+  ScenarioError err;
+  EXPECT_TRUE(parse_segment_scenario(text, "uwd.scn", s, err)) << err.text();
+  DataExchanges dx(s);
+  std::vector<std::string> errors;
+  EXPECT_EQ(run_segment_scenario(
+                s, {}, [&errors](const std::string& e) { errors.push_back(e); }, &dx),
+            0);
+  EXPECT_TRUE(errors.empty()) << errors.front();
+  return dx;
+}
+
+// The default (R_User_WD_Value 0x1FF = 511, not served): Data_Exchanges 1..511 answered, the 512th
+// not, and none answered with data after it (the station is in Wait_Prm; the master does not
+// parameterise it again within `cycle`).
+TEST(SegmentScenario, AStationWithoutUserWdLeavesDataExchangeAtIts512thDataExchange) {
+  using A = DataExchanges::Answer;
+  const DataExchanges dx = run_exchanges(
+      "segment baud=12000000\nstation 5 profile=spc3\nstation 6 profile=vpc3plus\nstartup\n"
+      "cycle 511\nexpect state 5 Data_Exchange\nexpect state 6 Data_Exchange\ncycle 2\n"
+      "expect state 5 Wait_Prm\nexpect state 6 Wait_Prm\n");
+  for (const std::uint8_t a : {5, 6}) {
+    const std::vector<A>& got = dx.answers.at(a);
+    ASSERT_GE(got.size(), 513U) << "station " << int{a};
+    EXPECT_EQ(std::count(got.begin(), got.begin() + 511, A::data), 511) << "station " << int{a};
+    EXPECT_EQ(got[511], A::none) << "station " << int{a};
+    EXPECT_EQ(std::count(got.begin() + 512, got.end(), A::data), 0) << "station " << int{a};
+  }
+}
+
+// `user_wd=1`: the user side sets Res_User_WD on every DX_Out, so the count is loaded again at
+// every next Data_Exchange and never reaches 0: 1 500 DP cycles, every Data_Exchange answered
+// (the DPC31's DPS_User_Watchdog reset on every DX_Out as well).
+TEST(SegmentScenario, AStationThatServesItsUserWatchdogStaysInDataExchange) {
+  using A = DataExchanges::Answer;
+  const DataExchanges dx = run_exchanges(
+      "segment baud=12000000\nstation 5 profile=spc3 user_wd=1\n"
+      "station 6 profile=vpc3plus user_wd=1\nstation 7 profile=dpc31 user_wd=1\nstartup\n"
+      "cycle 1500\nexpect state 5 Data_Exchange\nexpect state 6 Data_Exchange\n"
+      "expect state 7 Data_Exchange\n");
+  for (const std::uint8_t a : {5, 6, 7}) {
+    const std::vector<A>& got = dx.answers.at(a);
+    EXPECT_EQ(got.size(), 1500U) << "station " << int{a};
+    EXPECT_EQ(std::count(got.begin(), got.end(), A::data), 1500) << "station " << int{a};
+  }
+}
+
+// `user_wd_value=3` without the service: Data_Exchanges 1..3 answered, the 4th not (the count
+// loaded at the first, 2 and 1 at the next two, 0 at the fourth). The station beside it keeps
+// the default.
+TEST(SegmentScenario, UserWdValueSetsTheDataExchangeThatIsNotAnswered) {
+  using A = DataExchanges::Answer;
+  const DataExchanges dx = run_exchanges(
+      "segment baud=12000000\nstation 5 profile=spc3 user_wd_value=3\nstation 6 profile=spc3\n"
+      "startup\ncycle 3\nexpect state 5 Data_Exchange\ncycle 2\nexpect state 5 Wait_Prm\n"
+      "expect state 6 Data_Exchange\n");
+  const std::vector<A>& got = dx.answers.at(5);
+  ASSERT_GE(got.size(), 5U);
+  EXPECT_EQ(std::vector<A>(got.begin(), got.begin() + 4),
+            (std::vector<A>{A::data, A::data, A::data, A::none}));
+  EXPECT_EQ(std::count(got.begin() + 4, got.end(), A::data), 0);
+  EXPECT_EQ(std::count(dx.answers.at(6).begin(), dx.answers.at(6).end(), A::data), 5);
+}
+
 // Bad input in a segment scenario: one line, FILE:LINE, nothing run (docs/bad-input.md).
 TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
   const std::pair<const char*, const char*> cases[] = {
@@ -596,6 +695,21 @@ TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
        "f.scn:4: gap_answered='maybe': yes or no"},
       {"segment\nstation 5\nexpect state 9 Data_Exchange\n", "f.scn:3: no station 9"},
       {"segment\nstation 5\nstartup\nstation 6\n", "f.scn:4: 'station' after the first action"},
+      // The built-in user side's options, checked as the single chip's `user` step checks them.
+      {"segment\nstation 5\nstation 6 profile=spc3 firmware=DO4 user_wd=1\n",
+       "f.scn:3: 'user_wd' configures the built-in user side; a firmware configures itself"},
+      {"segment\nstation 5 user_wd_value=9 firmware=CNT2 profile=vpc3plus\n",
+       "f.scn:2: 'user_wd_value' configures the built-in user side; a firmware configures itself"},
+      {"segment\nstation 5\nstation 6 profile=dpc31 user_wd_value=5\n",
+       "f.scn:3: user_wd_value= needs user_wd=1 on profile dpc31: the DPS_User_Watchdog loads "
+       "R_User_WD_Value only through its requests"},
+      {"segment\nstation 5 user_wd_value=5\n",
+       "f.scn:2: user_wd_value= needs user_wd=1 on profile dpc31: the DPS_User_Watchdog loads "
+       "R_User_WD_Value only through its requests"},
+      {"segment\nstation 5 profile=spc3 user_wd=yes\n",
+       "f.scn:2: bad value 'yes' for user_wd: 0 or 1"},
+      {"segment\nstation 5 profile=spc3 user_wd_value=65536\n",
+       "f.scn:2: user_wd_value 65536 out of range (0..65535)"},
   };
   for (const auto& [text, want] : cases) {
     SegmentScenario s;

@@ -153,6 +153,30 @@ def test_a_startup_under_ttr_is_spread_over_the_visits():
     assert check2.count("token_hold") > 0
 
 
+def test_the_built_in_user_side_serves_its_user_watchdog_when_asked():
+    """docs/timing.md: the user watchdog counts Data_Exchanges; the user side's Start loads
+    R_User_WD_Value at the first, each later one counts down, and the one that reaches 0 is not
+    answered. R_User_WD_Value = 3 unserved: Data_Exchanges 1..3 answered, the 4th not; served
+    (user_wd=True: Res_User_WD on every DX_Out): every one answered."""
+    import pytest
+    seg = dpc31.Segment(12_000_000)
+    unserved = seg.add_station(5, "spc3", user_wd_value=3)
+    served = seg.add_station(6, "vpc3plus", user_wd=True, user_wd_value=3)
+    master = seg.add_master(2, [5, 6])
+    assert master.startup_all()
+    with_data = [[ex.answer is not None and len(ex.answer.du) == 4 for ex in master.dp_cycle()]
+                 for _ in range(6)]
+    assert [c[0] for c in with_data] == [True, True, True, False, False, False]
+    assert all(c[1] for c in with_data)
+    assert unserved.dp_state == dpc31.DpState.Wait_Prm
+    assert served.dp_state == dpc31.DpState.Data_Exchange
+    # the checks of a scenario's `station`
+    with pytest.raises(ValueError, match="'user_wd' configures the built-in user side"):
+        seg.add_station(7, "spc3", firmware="DO4", user_wd=True)
+    with pytest.raises(ValueError, match="user_wd_value needs user_wd=1 on profile dpc31"):
+        seg.add_station(8, "dpc31", user_wd_value=5)
+
+
 def test_the_shipped_segment_scenarios_pass(traces):
     for name in ("three_slaves.scn", "startup_ttr.scn"):
         result = dpc31.SegmentScenario.load(str(traces / "segment" / name)).run()

@@ -71,7 +71,7 @@ Engine::Engine(const Setup& setup, LogSink log)
       stations_.push_back({fmt::format("slave{}", s.address), s.address});
       const std::size_t index = seg_->add_chip(stations_.back().name, s.chip);
       Chip& chip = seg_->chip(index);
-      add_slave(i, chip, s.firmware, s.address);
+      add_slave(i, chip, s);
       seg_->set_firmware(index, slaves_[i].user.program);
       // Who drove an answer: each chip tells of its own when it starts sending it.
       chip.on_telegram([this, i](const Telegram& t) {
@@ -99,7 +99,7 @@ Engine::Engine(const Setup& setup, LogSink log)
       port_written(0, cycle, "80C32", m51_->port_name(port), port, value);
     };
   } else {
-    add_slave(0, *solo_, setup_.firmware, setup_.address);
+    add_slave(0, *solo_, SlaveSpec{setup_.address, setup_.chip, setup_.firmware});
   }
   rx_ = TxdReceiver(t_, solo_->cycle());
   // TxD in batches of characters, taken when the bridge looks (collect): no event per bit.
@@ -119,12 +119,11 @@ void Engine::watch_slave(std::size_t i) {
   s.chip->on_state_change([this, i](std::uint64_t cycle) { check_states(i, cycle); });
 }
 
-void Engine::add_slave(std::size_t i, Chip& chip, const dpc31_firmware* firmware,
-                       std::uint8_t address) {
+void Engine::add_slave(std::size_t i, Chip& chip, const SlaveSpec& spec) {
   Slave& s = slaves_[i];
   s.chip = &chip;
   watch_slave(i);
-  s.user = make_user_side(chip, firmware, address);
+  s.user = make_user_side(chip, spec);
   if (FirmwareHost* fw = s.user.firmware.get()) {
     fw->on_port = [this, i, fw](std::uint64_t cycle, unsigned port, std::uint32_t value) {
       port_written(i, cycle, fw->firmware().name, fw->port_name(port), port, value);

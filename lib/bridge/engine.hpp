@@ -167,7 +167,7 @@ class Engine {
   void step_to(std::uint64_t cycle);
   std::uint64_t next_wake(std::uint64_t limit) const;
   // Station `i`'s chip, its user side, and the log's view of it.
-  void add_slave(std::size_t i, Chip& chip, const dpc31_firmware* firmware, std::uint8_t address);
+  void add_slave(std::size_t i, Chip& chip, const SlaveSpec& spec);
   void watch_slave(std::size_t i);
   void check_states(std::size_t i, std::uint64_t cycle);
   void port_written(std::size_t i, std::uint64_t cycle, const std::string& module,

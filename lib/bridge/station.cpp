@@ -12,17 +12,19 @@ std::string_view UserSide::name() const {
   return firmware ? std::string_view(firmware->firmware().name) : kResponderName;
 }
 
-UserSide make_user_side(Chip& chip, const dpc31_firmware* firmware, std::uint8_t address) {
+UserSide make_user_side(Chip& chip, const SlaveSpec& s) {
   UserSide u;
   DirectBus bus(chip);
-  if (firmware != nullptr) {
-    u.firmware = std::make_unique<FirmwareHost>(*firmware);
-    u.firmware->init(bus, address);
+  if (s.firmware != nullptr) {
+    u.firmware = std::make_unique<FirmwareHost>(*s.firmware);
+    u.firmware->init(bus, s.address);
     u.program = u.firmware->program();
     return u;
   }
   ResponderConfig rc;
-  rc.slave.address = address;
+  rc.slave.address = s.address;
+  rc.user_watchdog = s.user_watchdog;
+  rc.user_wd_value = s.user_wd_value;
   u.responder = std::make_unique<Responder>(rc);
   u.responder->init(bus);
   Responder* r = u.responder.get();

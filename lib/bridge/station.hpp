@@ -20,11 +20,15 @@ namespace dpc31::bridge {
 // The FIRMWARE of `--slave ADDR:responder`: the built-in user side instead of a firmware.
 inline constexpr std::string_view kResponderName = "responder";
 
-// One station of a segment (--slave ADDR:FIRMWARE[:PROFILE[:VARIANT]]).
+// One station of a segment (--slave ADDR:FIRMWARE[:PROFILE[:VARIANT]][:user_wd=1]...).
 struct SlaveSpec {
   std::uint8_t address = 5;
   ChipOptions chip;
   const dpc31_firmware* firmware = nullptr;  // nullptr: the built-in user side (responder)
+  // The built-in user side's user watchdog (`user_wd=1`, `user_wd_value=N`), as a segment
+  // scenario's `station` gives it; a firmware serves its own.
+  bool user_watchdog = false;
+  std::uint16_t user_wd_value = ResponderConfig{}.user_wd_value;
 };
 
 // A station's user side once made: a firmware on the host CPU, or the built-in user side
@@ -37,9 +41,9 @@ struct UserSide {
   [[nodiscard]] std::string_view name() const;
 };
 
-// Makes the user side of the chip at station `address` and runs its init (which configures and
-// starts the chip): the one place a station's firmware is made.
-UserSide make_user_side(Chip& chip, const dpc31_firmware* firmware, std::uint8_t address);
+// Makes the user side of the chip of station `s` and runs its init (which configures and starts
+// the chip): the one place a station's firmware is made.
+UserSide make_user_side(Chip& chip, const SlaveSpec& s);
 
 // Why these stations cannot share one line ("" when they can): two at one address. Any number
 // of stations may run firmware, the same or another: each FirmwareHost is an instance of its own

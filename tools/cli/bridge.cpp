@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <chrono>
@@ -13,6 +14,7 @@
 #include <cstring>
 #include <memory>
 #include <optional>
+#include <span>
 
 #include "../bridge/engine.hpp"
 #include "../bridge/pty.hpp"
@@ -71,8 +73,8 @@ struct Checked {
   std::optional<bridge::ListenAddress> tcp;  // --tcp: a TCP port instead of the pty
 };
 
-// One --slave ADDR:FIRMWARE[:PROFILE[:VARIANT]] (VARIANT: the VPC3+'s b|c|s, the DPC31's
-// interrupt controller external|c31). "" or why not.
+// One --slave ADDR:FIRMWARE[:PROFILE[:VARIANT]][:OPTION=V...] (VARIANT: the VPC3+'s b|c|s, the
+// DPC31's interrupt controller external|c31). "" or why not.
 std::vector<std::string> slave_fields(const std::string& spec) {
   std::vector<std::string> f;
   for (std::size_t from = 0;;) {
@@ -83,13 +85,55 @@ std::vector<std::string> slave_fields(const std::string& spec) {
   }
 }
 
+// The built-in user side's options after the positional fields of a --slave (user_wd=0|1,
+// user_wd_value=N), checked as a segment scenario's `station` checks them. "" or why not.
+std::string slave_options(const std::string& spec, std::span<const std::string> options,
+                          bridge::SlaveSpec& s) {
+  bool value_given = false;
+  for (const std::string& o : options) {
+    const std::size_t eq = o.find('=');
+    const std::string key = o.substr(0, eq);
+    const std::string value = o.substr(eq + 1);
+    std::uint64_t v = 0;
+    if (s.firmware != nullptr && (key == "user_wd" || key == "user_wd_value")) {
+      return fmt::format("--slave '{}': {}", spec, refused_beside_firmware(key));
+    }
+    if (key == "user_wd" && (value == "0" || value == "1")) {
+      s.user_watchdog = value == "1";
+    } else if (key == "user_wd") {
+      return fmt::format("--slave '{}': bad value '{}' for user_wd: 0 or 1", spec, value);
+    } else if (key == "user_wd_value" && parse_uint(value, 0xFFFF, v)) {
+      s.user_wd_value = static_cast<std::uint16_t>(v);
+      value_given = true;
+    } else if (key == "user_wd_value") {
+      return fmt::format("--slave '{}': user_wd_value '{}' must be 0..65535", spec, value);
+    } else {
+      return fmt::format("--slave '{}': unknown option '{}' (user_wd, user_wd_value)", spec, key);
+    }
+  }
+  if (value_given && s.chip.profile == Profile::dpc31 && !s.user_watchdog) {
+    return fmt::format("--slave '{}': {}", spec, user_wd_value_needs_user_wd("user_wd_value="));
+  }
+  return {};
+}
+
 std::string parse_slave(const std::string& spec, bridge::SlaveSpec& s) {
-  const std::vector<std::string> f = slave_fields(spec);
+  std::vector<std::string> f = slave_fields(spec);
+  // The fields with '=' after FIRMWARE (whose plug-in path may hold one) are options; they
+  // follow the positional ones.
+  const auto first_option =
+      std::find_if(f.begin() + static_cast<std::ptrdiff_t>(std::min<std::size_t>(f.size(), 2)),
+                   f.end(), [](const std::string& x) { return x.find('=') != std::string::npos; });
+  const std::vector<std::string> options(first_option, f.end());
+  f.erase(first_option, f.end());
   const std::string usage = fmt::format(
-      "--slave '{}' must be ADDR:FIRMWARE[:PROFILE[:VARIANT]] (FIRMWARE {}, {} or a plug-in "
-      "path; PROFILE spc3, vpc3plus, dpc31)",
+      "--slave '{}' must be ADDR:FIRMWARE[:PROFILE[:VARIANT]][:user_wd=0|1][:user_wd_value=N] "
+      "(FIRMWARE {}, {} or a plug-in path; PROFILE spc3, vpc3plus, dpc31)",
       spec, bridge::kResponderName, builtin_firmware_names());
-  if (f.size() < 2 || f.size() > 4 || f[1].empty()) return usage;
+  const bool positional_after_option =
+      std::any_of(options.begin(), options.end(),
+                  [](const std::string& x) { return x.find('=') == std::string::npos; });
+  if (f.size() < 2 || f.size() > 4 || f[1].empty() || positional_after_option) return usage;
   std::uint64_t v = 0;
   if (!parse_uint(f[0], 125, v)) {
     return fmt::format("--slave '{}': the address '{}' must be a station address 0..125", spec,
@@ -109,13 +153,14 @@ std::string parse_slave(const std::string& spec, bridge::SlaveSpec& s) {
       return fmt::format("--slave '{}': {}", spec, why);
     }
   }
-  if (f[1] == bridge::kResponderName) return {};
-  try {
-    s.firmware = &find_firmware(f[1]);
-  } catch (const FirmwareError& e) {
-    return fmt::format("--slave '{}': {}", spec, e.what());
+  if (f[1] != bridge::kResponderName) {
+    try {
+      s.firmware = &find_firmware(f[1]);
+    } catch (const FirmwareError& e) {
+      return fmt::format("--slave '{}': {}", spec, e.what());
+    }
   }
-  return {};
+  return slave_options(spec, options, s);
 }
 
 // One line on `err` and nullopt for a bad option.
@@ -514,9 +559,10 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
                 "default DO4's: outputs,modul_ok");
   b->add_option("--address", o.address, "station address 0..125")->capture_default_str();
   b->add_option("--slave", o.slaves,
-                "ADDR:FIRMWARE[:PROFILE[:VARIANT]], repeated: several stations on the one line "
-                "(FIRMWARE responder for the built-in user side; instead of --firmware, "
-                "--address, --profile)")
+                "ADDR:FIRMWARE[:PROFILE[:VARIANT]][:user_wd=0|1][:user_wd_value=N], repeated: "
+                "several stations on the one line (FIRMWARE responder for the built-in user "
+                "side, whose user watchdog user_wd=1 serves; instead of --firmware, --address, "
+                "--profile)")
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   b->add_option("--pacing", o.pacing,
