@@ -62,6 +62,13 @@ bool valid_ring(const BufferRing& b) {
   return b.d != 0 && b.u != 0 && n_nil != f_nil && b.d != b.u && third != b.d && third != b.u;
 }
 
+// The two diag buffers as BufferUnit moves them: never Nil, never both in one state (one with the
+// user and one with the ASIC, or one waiting while the other is sent).
+bool valid_diag(const DiagPair& d) {
+  const DiagState x = d.buf[0], y = d.buf[1];
+  return x != DiagState::Nil && y != DiagState::Nil && x != y;
+}
+
 template <typename Ar, typename S>
 void handshake_fields(Ar& ar, S& s) {
   static_assert(snap::member_count<Handshake>() == 2, "a new member: add it here");
@@ -269,6 +276,7 @@ void core_fields(Ar& ar, C& c) {
   if constexpr (requires { ar.fail(""); }) {
     const auto& b = A::state(c.buffers);
     if (!valid_ring(b.dout) || !valid_ring(b.din)) ar.fail("Dout or Din ring is not buffers 1..3");
+    if (!valid_diag(b.diag)) ar.fail("the diag buffers are both in one state, or one is Nil");
   }
   ar.section("DPSM");
   dp_fields(ar, dp);

@@ -819,6 +819,35 @@ TEST(SnapshotFormat, ABlockTheChipLacksOrABitTimeOfNoRateIsRefused) {
   }
 }
 
+// Diag_Buffer_SM's two buffers as the manuals move them: one with the user and one with the
+// ASIC, or one waiting with the ASIC while the other is sent; never Nil, never both in one state
+// (SPC3 manual, Diag_Buffer_SM; the fuzz checker's "both diag buffers with the user", finding 11
+// of docs/robustness.md).
+TEST(SnapshotFormat, TwoDiagBuffersInOneStateAreRefused) {
+  Chip target = mid_session(Profile::spc3);
+  const Bytes good = target.save_state();
+  const std::size_t diag = section_at(good, "BUFS") + 4 + 8;  // after Dout d n u f, Din d n u f
+  const auto with = [&](std::uint8_t first, std::uint8_t second) {
+    Bytes b = good;
+    b[diag] = first;
+    b[diag + 1] = second;
+    reseal(b);
+    return b;
+  };
+  constexpr std::uint8_t nil = 0, user = 1, asic = 2, send = 3;
+  for (const auto& [x, y] :
+       {std::pair{user, user}, {asic, asic}, {send, send}, {nil, user}, {asic, nil}}) {
+    SCOPED_TRACE(fmt::format("{} {}", x, y));
+    expect_refused(target, with(x, y), "the diag buffers are both in one state, or one is Nil");
+  }
+  for (const auto& [x, y] : {std::pair{user, asic}, {asic, user}, {user, send}, {send, asic}}) {
+    SCOPED_TRACE(fmt::format("{} {}", x, y));
+    Chip c({Profile::spc3, BusMode::intel, 0});
+    c.load_state(with(x, y));
+    EXPECT_EQ(c.peek_reg(RegId::Diag_Buffer_SM), y << 2 | x);
+  }
+}
+
 class SnapshotFile : public ::testing::Test {
  protected:
   void SetUp() override {
