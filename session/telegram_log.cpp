@@ -78,12 +78,19 @@ void combine(FdlCounters& to, const FdlCounters& from, Op op) {
 
 void TelegramLog::append(std::shared_ptr<const HeardFrame> frame, std::uint64_t start,
                          std::size_t from, std::uint32_t t) {
-  Entry e;
+  // Built in place, its sums from the entry before's (a verdict adds to one or two counters: no
+  // counter-by-counter sum, no copy of the entry).
+  Entry& e = entries_.emplace_back();
+  if (entries_.size() > 1) {
+    const Entry& before = entries_[entries_.size() - 2];
+    e.started = before.started;
+    e.offline = before.offline;
+  }
   e.frame = std::move(frame);
   e.start = start;
   e.from = from;
   const HeardFrame& f = *e.frame;
-  const std::uint64_t n = end();
+  const std::uint64_t n = end() - 1;
   // Mac::hear_telegram's kind and take_heard's effect, with the receiver after the entry before
   // (UartRx::after_chars: idle from the end of its last stop bit).
   const bool linked = line_end_ != kNone && start >= line_end_;
@@ -94,7 +101,10 @@ void TelegramLog::append(std::shared_ptr<const HeardFrame> frame, std::uint64_t 
     synced_ = n;
   } else {
     e.no_sync = linked && !line_skipping_;
-    e.started.no_sync = e.offline.no_sync = e.no_sync ? 1 : 0;
+    if (e.no_sync) {
+      ++e.started.no_sync;
+      ++e.offline.no_sync;
+    }
     e.skipping = true;
   }
   // Foldable: linked, and a verdict at its last character that shows nothing in a chip it does
@@ -102,13 +112,8 @@ void TelegramLog::append(std::shared_ptr<const HeardFrame> frame, std::uint64_t 
   if (!linked || concerns(f) == kEveryone) unfolded_ = n;
   e.unfolded = unfolded_;
   e.synced = synced_;
-  if (!entries_.empty()) {
-    combine(e.started, entries_.back().started, std::plus<std::uint32_t>{});
-    combine(e.offline, entries_.back().offline, std::plus<std::uint32_t>{});
-  }
   line_end_ = start + f.bytes.size() * std::uint64_t{kUartCharBits} * t;
   line_skipping_ = e.skipping;
-  entries_.push_back(std::move(e));
 }
 
 std::uint64_t TelegramLog::folds_until(std::uint64_t n, std::uint64_t to) const {
