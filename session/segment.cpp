@@ -388,13 +388,18 @@ void Segment::hear_whole(std::size_t from, const std::shared_ptr<const HeardFram
   for (const std::size_t k : now) {
     if (k != from) stations_[k]->taken = log_.end();
   }
-  // The log is trimmed by bringing the chips that lag most up to it (a chip takes every entry
-  // once, now or at its next step).
-  if (log_.end() - log_.first() > 64 + 4 * stations_.size()) {
+  // The log is trimmed past its bound: the chips that lag by more than half of it take their
+  // entries now (a chip takes every entry once, now or at its next step), and the entries every
+  // chip took are forgotten. A chip polled within the bound is not brought up early.
+  const std::uint64_t bound = 64 + 4 * stations_.size();
+  if (log_.end() - log_.first() > bound) {
+    std::uint64_t taken = log_.end();
     for (const auto& s : stations_) {
-      if (s->chip) take_log(*s, UINT64_MAX);
+      if (!s->chip) continue;
+      if (log_.end() - s->taken > bound / 2) take_log(*s, UINT64_MAX);
+      taken = std::min(taken, s->taken);
     }
-    log_.clear();
+    log_.forget(taken);
   }
 }
 

@@ -116,6 +116,12 @@ void TelegramLog::append(std::shared_ptr<const HeardFrame> frame, std::uint64_t 
   line_skipping_ = e.skipping;
 }
 
+void TelegramLog::forget(std::uint64_t n) {
+  if (n <= first_) return;
+  entries_.erase(entries_.begin(), entries_.begin() + static_cast<std::ptrdiff_t>(n - first_));
+  first_ = n;
+}
+
 std::uint64_t TelegramLog::folds_until(std::uint64_t n, std::uint64_t to) const {
   // Both grow along the log: the start, and the last entry that cannot be folded.
   const auto from = entries_.begin() + static_cast<std::ptrdiff_t>(n - first_);
@@ -134,10 +140,8 @@ HeardRun TelegramLog::run(std::uint64_t n, std::uint64_t m, std::uint32_t t) con
   // The sums from n on; the first entry's no_sync is the chip's own.
   r.started = last.started;
   r.offline = last.offline;
-  if (n > first_) {
-    combine(r.started, at(n - 1).started, std::minus<std::uint32_t>{});
-    combine(r.offline, at(n - 1).offline, std::minus<std::uint32_t>{});
-  }
+  combine(r.started, at(n - 1).started, std::minus<std::uint32_t>{});
+  combine(r.offline, at(n - 1).offline, std::minus<std::uint32_t>{});
   if (first.no_sync) {
     --r.started.no_sync;
     --r.offline.no_sync;
