@@ -175,21 +175,27 @@ void Segment::add_station(std::unique_ptr<Station> s) {
   }
 }
 
+// The leaves at or before `bound`, in station order: a walk that descends only into subtrees
+// whose minimum is due, O(log N) for each chip due, without recursion (a subtree is not entered
+// to find it has nothing due).
 void Segment::due_by(std::uint64_t bound) {
   due_.clear();
-  if (!next_tree_.empty()) due_under(1, bound);
-}
-
-// The leaves at or before `bound` under node k, in station order: a descent into the subtrees
-// whose minimum is due, O(log N) for each chip due.
-void Segment::due_under(std::size_t k, std::uint64_t bound) {
-  if (next_tree_[k] > bound) return;
-  if (k >= leaves_) {
+  if (next_tree_.empty() || next_tree_[1] > bound) return;
+  std::size_t k = 1;
+  for (;;) {
+    // A due subtree's first due leaf: where the left child has nothing due, the right one has.
+    while (k < leaves_) {
+      k *= 2;
+      if (next_tree_[k] > bound) ++k;
+    }
     due_.push_back(k - leaves_);
-    return;
+    // Up to the nearest left child whose right sibling is due, and into that sibling.
+    for (;; k /= 2) {
+      if (k == 1) return;
+      if (k % 2 == 0 && next_tree_[k + 1] <= bound) break;
+    }
+    ++k;
   }
-  due_under(2 * k, bound);
-  due_under(2 * k + 1, bound);
 }
 
 const std::string& Segment::name(std::size_t i) const { return stations_.at(i)->name; }
