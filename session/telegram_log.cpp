@@ -1,7 +1,8 @@
 #include "telegram_log.hpp"
 
 #include <algorithm>
-#include <functional>
+#include <array>
+#include <bit>
 #include <iterator>
 
 #include "dpc31/fdl.hpp"
@@ -68,10 +69,15 @@ void count_verdict(const HeardFrame& f, TelegramLog::Entry& e) {
   if (carries_data && fdl::is_request(fr.fc)) ++e.started.foreign_address;
 }
 
-// Counter by counter: to = op(to, from).
-template <typename Op>
-void combine(FdlCounters& to, const FdlCounters& from, Op op) {
-  for (const CounterField& c : kFdlCounterFields) to.*c.member = op(to.*c.member, from.*c.member);
+// Counter by counter: to -= from. Every counter is a std::uint32_t (kFdlCounterFields): as an
+// array, one loop the compiler vectorises instead of one member pointer per counter.
+void subtract(FdlCounters& to, const FdlCounters& from) {
+  using Counts = std::array<std::uint32_t, kFdlCounterFields.size()>;
+  static_assert(sizeof(Counts) == sizeof(FdlCounters));
+  auto a = std::bit_cast<Counts>(to);
+  const auto b = std::bit_cast<Counts>(from);
+  for (std::size_t i = 0; i < a.size(); ++i) a[i] -= b[i];
+  to = std::bit_cast<FdlCounters>(a);
 }
 
 }  // namespace
@@ -140,8 +146,8 @@ HeardRun TelegramLog::run(std::uint64_t n, std::uint64_t m, std::uint32_t t) con
   // The sums from n on; the first entry's no_sync is the chip's own.
   r.started = last.started;
   r.offline = last.offline;
-  combine(r.started, at(n - 1).started, std::minus<std::uint32_t>{});
-  combine(r.offline, at(n - 1).offline, std::minus<std::uint32_t>{});
+  subtract(r.started, at(n - 1).started);
+  subtract(r.offline, at(n - 1).offline);
   if (first.no_sync) {
     --r.started.no_sync;
     --r.offline.no_sync;
