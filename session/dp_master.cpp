@@ -389,7 +389,13 @@ Exchange DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bo
       ++counters_.bad_answer;
     }
   }
-  history_.push_back(ex);
+  if (spare_.empty()) {
+    history_.push_back(ex);
+  } else {
+    spare_.back() = ex;
+    history_.push_back(std::move(spare_.back()));
+    spare_.pop_back();
+  }
   return ex;
 }
 

@@ -11,6 +11,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cpu.hpp"
@@ -257,8 +258,11 @@ class DpMaster {
   void set_target(std::uint8_t a) { target_ = a; }
   const std::vector<Exchange>& history() const { return history_; }
   // Forgets history() (the counters stay): a long run (dpc31 soak) calls it so memory does not
-  // grow with time.
-  void clear_history() { history_.clear(); }
+  // grow with time. The exchanges forgotten lend their memory to the next ones (spare_).
+  void clear_history() {
+    std::swap(history_, spare_);
+    history_.clear();
+  }
   // Forgets all of history() but its last exchange: the scenario runner calls it once a step is
   // reported, so that the memory of `dpc31 run` does not grow with the run.
   void keep_last_exchange() {
@@ -340,6 +344,9 @@ class DpMaster {
   std::uint64_t bus_free_ = 0;  // end of the last telegram on the bus
   std::unique_ptr<Cpu> cpu_;
   std::vector<Exchange> history_;
+  // The exchanges clear_history() forgot last: history() takes each new exchange as a copy into
+  // one of them, whose frames' data units keep their capacity (no allocation once grown).
+  std::vector<Exchange> spare_;
   MasterCounters counters_;
   std::vector<std::uint8_t> tx_;  // transact's request as sent (one buffer for every request)
 };

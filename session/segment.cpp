@@ -175,21 +175,27 @@ void Segment::add_station(std::unique_ptr<Station> s) {
   }
 }
 
+// The leaves at or before `bound`, in station order: a walk that descends only into subtrees
+// whose minimum is due, O(log N) for each chip due, without recursion (a subtree is not entered
+// to find it has nothing due).
 void Segment::due_by(std::uint64_t bound) {
   due_.clear();
-  if (!next_tree_.empty()) due_under(1, bound);
-}
-
-// The leaves at or before `bound` under node k, in station order: a descent into the subtrees
-// whose minimum is due, O(log N) for each chip due.
-void Segment::due_under(std::size_t k, std::uint64_t bound) {
-  if (next_tree_[k] > bound) return;
-  if (k >= leaves_) {
+  if (next_tree_.empty() || next_tree_[1] > bound) return;
+  std::size_t k = 1;
+  for (;;) {
+    // A due subtree's first due leaf: where the left child has nothing due, the right one has.
+    while (k < leaves_) {
+      k *= 2;
+      if (next_tree_[k] > bound) ++k;
+    }
     due_.push_back(k - leaves_);
-    return;
+    // Up to the nearest left child whose right sibling is due, and into that sibling.
+    for (;; k /= 2) {
+      if (k == 1) return;
+      if (k % 2 == 0 && next_tree_[k + 1] <= bound) break;
+    }
+    ++k;
   }
-  due_under(2 * k, bound);
-  due_under(2 * k + 1, bound);
 }
 
 const std::string& Segment::name(std::size_t i) const { return stations_.at(i)->name; }
@@ -388,13 +394,18 @@ void Segment::hear_whole(std::size_t from, const std::shared_ptr<const HeardFram
   for (const std::size_t k : now) {
     if (k != from) stations_[k]->taken = log_.end();
   }
-  // The log is trimmed by bringing the chips that lag most up to it (a chip takes every entry
-  // once, now or at its next step).
-  if (log_.end() - log_.first() > 64 + 4 * stations_.size()) {
+  // The log is trimmed past its bound: the chips that lag by more than half of it take their
+  // entries now (a chip takes every entry once, now or at its next step), and the entries every
+  // chip took are forgotten. A chip polled within the bound is not brought up early.
+  const std::uint64_t bound = 64 + 4 * stations_.size();
+  if (log_.end() - log_.first() > bound) {
+    std::uint64_t taken = log_.end();
     for (const auto& s : stations_) {
-      if (s->chip) take_log(*s, UINT64_MAX);
+      if (!s->chip) continue;
+      if (log_.end() - s->taken > bound / 2) take_log(*s, UINT64_MAX);
+      taken = std::min(taken, s->taken);
     }
-    log_.clear();
+    log_.forget(taken);
   }
 }
 

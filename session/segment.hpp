@@ -152,7 +152,6 @@ class Segment {
   void add_station(std::unique_ptr<Station> s);
   // due_: the chips whose next event is at or before `bound`, in station order.
   void due_by(std::uint64_t bound);
-  void due_under(std::size_t k, std::uint64_t bound);
   // Station i's answer, armed and now starting on the line at `cycle`, to every other chip whole;
   // the rest of its edges to the senders and the line's decoder at once.
   // False where it goes edge by edge (the reference line, another rate, no answer armed there).

@@ -32,7 +32,8 @@ class TelegramLog {
     // every chip), and the last one after TSYN (or kNone); both numbers from first() on.
     std::uint64_t unfolded = 0;
     std::uint64_t synced = 0;
-    // The FDL counters from the log's first entry up to this one: a started chip, one offline.
+    // The FDL counters from the log's first entry ever up to this one: a started chip, one
+    // offline (modulo 2^32: a run's counts are differences).
     FdlCounters started;
     FdlCounters offline;
   };
@@ -63,14 +64,12 @@ class TelegramLog {
   // Something reached the chips' receivers without an entry (edges, a damaged telegram, a
   // telegram every chip heard at once): the next entry follows nothing the log knows.
   void line_taken() { line_end_ = kNone; }
-  // Every chip took every entry: the log starts empty at end() (its memory kept).
-  void clear() {
-    first_ = end();
-    entries_.clear();
-  }
+  // Every chip took the entries before `n`: the log starts at `n` (its memory kept).
+  void forget(std::uint64_t n);
   // The first entry from `n` on that starts after `to` or cannot be folded into a run from `n`.
   [[nodiscard]] std::uint64_t folds_until(std::uint64_t n, std::uint64_t to) const;
-  // The entries [n, m) (m > n, each linked and foldable: folds_until) as one run (Chip::hear_run).
+  // The entries [n, m) (m > n, each linked and foldable: folds_until) as one run (Chip::hear_run);
+  // n > first(): the entry before, which the chip heard one by one, is kept.
   [[nodiscard]] HeardRun run(std::uint64_t n, std::uint64_t m, std::uint32_t t) const;
 
  private:

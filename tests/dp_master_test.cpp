@@ -70,4 +70,37 @@ TEST(DpMaster, AnAnswerThatStopsEndsTheWaitASlotTimeAfterItsLastCharacterThenTsy
   EXPECT_EQ(c.request_start, b.request_end + kTsl + kTsyn);
 }
 
+// clear_history() lends the forgotten exchanges' memory to the next ones (DpMaster::spare_):
+// history() shows each new exchange as it was returned, an unanswered one after an answered one
+// too.
+TEST(DpMaster, AnExchangeAfterClearHistoryIsInTheHistoryAsReturned) {
+  Line l;
+  const std::vector<std::uint8_t> answer =
+      fdl::encode(fdl::make_frame(2, 5, fdl::make_response_fc(fdl::Response::OK), {1, 2, 3}));
+  bool sent = false;  // the rogue answers the first request only
+  l.master.scheduler = [&](std::uint64_t cycle) {
+    if (!sent) {
+      sent = true;
+      l.seg.run_until(cycle);
+      l.seg.send(l.rogue, answer, cycle + 11 * T);
+    }
+    l.seg.run_until(cycle);
+  };
+  const Exchange a = l.master.fdl_status();
+  ASSERT_TRUE(a.answer);
+  EXPECT_EQ(a.answer->du, (std::vector<std::uint8_t>{1, 2, 3}));
+  l.master.clear_history();
+  EXPECT_TRUE(l.master.history().empty());
+  const Exchange b = l.master.fdl_status();
+  ASSERT_FALSE(b.answer);
+  ASSERT_EQ(l.master.history().size(), 1u);
+  const Exchange& h = l.master.history()[0];
+  EXPECT_EQ(h.request, b.request);
+  EXPECT_FALSE(h.answer);
+  EXPECT_EQ(h.request_start, b.request_start);
+  EXPECT_EQ(h.request_end, b.request_end);
+  EXPECT_EQ(h.answer_start, 0u);
+  EXPECT_EQ(h.answer_end, 0u);
+}
+
 }  // namespace

@@ -500,6 +500,43 @@ TEST(SegmentSpeed, TheTelegramLogOfThirtyThreeSlavesShowsWhatTheReferenceLineSho
   log_run(12'000'000, 33);
 }
 
+// The log's trim (docs/segment.md, "The telegram log"): slaves 6, 7 and 8 (unwatched) polled in
+// turn with ten foreign telegrams after each exchange (the last a request to an absent station),
+// so that the log outgrows its bound (64 + 4 per station, 92 here) while none of them lags by half
+// of it: the entries all three took are forgotten and none is brought up early; each takes the
+// rest, folded, when next polled. Every chip's counters, snapshot and telegrams against the
+// reference line at the end.
+void polled_log_run(std::uint32_t baud) {
+  Bed fast(false, baud, 5, false, 1);
+  Bed ref(true, baud, 5, false, 1);
+  for (Bed* b : {&fast, &ref}) ASSERT_TRUE(b->master->startup_all());
+  ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "after the start-up"));
+  const std::uint64_t t = fast.seg.bit_cycles();
+  for (std::size_t k = 0; k < 60; ++k) {
+    for (Bed* b : {&fast, &ref}) {
+      b->master->select(1 + k % 3);
+      b->master->data_exchange({static_cast<std::uint8_t>(k), 1, 2, 3});
+    }
+    std::uint64_t at = fast.seg.cycle() + 40 * t;
+    for (std::size_t j = 0; j < 10; ++j) {
+      std::uint64_t end = 0;
+      for (Bed* b : {&fast, &ref}) end = b->seg.send(b->other, foreign_telegram(5 * k + j + 1), at);
+      at = end + 40 * t;
+    }
+    for (Bed* b : {&fast, &ref}) b->seg.run_until(at);
+  }
+  ASSERT_NO_FATAL_FAILURE(expect_same(fast, ref, "slaves polled in turn"));
+  EXPECT_GT(fast.seg.chip(fast.chips[1]).fdl_counters().foreign_address, 100U);
+}
+
+TEST(SegmentSpeed, TheTelegramLogOfSlavesPolledInTurnShowsWhatTheReferenceLineShowsAt1M5) {
+  polled_log_run(1'500'000);
+}
+
+TEST(SegmentSpeed, TheTelegramLogOfSlavesPolledInTurnShowsWhatTheReferenceLineShowsAt12M) {
+  polled_log_run(12'000'000);
+}
+
 TEST(SegmentSpeed, AMixedTelegramLogOfFiveSlavesShowsWhatTheReferenceLineShowsAt1M5) {
   log_run(1'500'000, 5, true);
 }
