@@ -612,8 +612,8 @@ TEST(ScenarioRun, LongRunKeepsTheResponderFlat) {
     dpc31::Scenario s;
     dpc31::ScenarioError err;
     EXPECT_TRUE(dpc31::parse_scenario(text, "t.scn", s, err)) << err.text();
-    std::size_t at_start = 0;
-    std::size_t grown = 0;
+    std::int64_t at_start = 0;
+    std::int64_t grown = 0;
     dpc31::ScenarioHooks hooks;
     hooks.at_start = [&](dpc31::Chip&) { at_start = dpc31::test::heap_in_use(); };
     hooks.at_end = [&](dpc31::Chip&) { grown = dpc31::test::heap_in_use() - at_start; };
@@ -623,8 +623,8 @@ TEST(ScenarioRun, LongRunKeepsTheResponderFlat) {
     EXPECT_EQ(o.passed, 3u);
     return grown;
   };
-  const std::size_t short_run = heap_at_end(20);
-  const std::size_t long_run = heap_at_end(200);
+  const std::int64_t short_run = heap_at_end(20);
+  const std::int64_t long_run = heap_at_end(200);
   if (dpc31::test::kHeapCounted) {
     EXPECT_LE(long_run, short_run + 16 * 1024)
         << "grown by " << short_run << " bytes over 2 000 exchanges, " << long_run

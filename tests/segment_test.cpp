@@ -544,8 +544,8 @@ TEST(SegmentScenario, ALongCycleStepKeepsTheMemoryFlat) {
     void step_ends(const SegmentStep& st) override {
       if (st.kind == SegmentStep::Kind::cycle) grown = test::heap_in_use() - at_start;
     }
-    std::size_t at_start = 0;
-    std::size_t grown = 0;
+    std::int64_t at_start = 0;
+    std::int64_t grown = 0;
   };
   const auto grown = [](int cycles) {
     SegmentScenario s;
@@ -566,8 +566,8 @@ TEST(SegmentScenario, ALongCycleStepKeepsTheMemoryFlat) {
     EXPECT_TRUE(errors.empty()) << errors.front();
     return heap.grown;
   };
-  const std::size_t short_run = grown(200);
-  const std::size_t long_run = grown(2000);
+  const std::int64_t short_run = grown(200);
+  const std::int64_t long_run = grown(2000);
   if (test::kHeapCounted) {
     EXPECT_LE(long_run, short_run + 16 * 1024)
         << "grown by " << short_run << " bytes over 200 DP cycles, " << long_run << " over 2 000";
