@@ -138,7 +138,7 @@ class Runner {
       const bool modifier = st.kind == StepKind::corrupt || st.kind == StepKind::bad_fcs;
       if (modifier || (is_action(st.kind) && !fault_ && !bad_fcs_)) {
         base_counters_ = chip_.fdl_counters();
-        base_irq_ = interrupts().size();
+        interrupts().clear();  // what the ISR saw before this action is not its
         irr_isr_ = 0;
         base_pb3_ = pb3_rises_;
         base_cycle_ = chip_.cycle();
@@ -640,20 +640,17 @@ class Runner {
     outputs_seen_ = user_.outputs.size();
   }
 
-  const std::vector<std::pair<std::uint64_t, std::uint16_t>>& interrupts() const {
+  // The ISR entries the user side recorded (cycle, IR) and not yet folded.
+  std::vector<std::pair<std::uint64_t, std::uint16_t>>& interrupts() {
     return m51_ ? m51_->interrupts : fw_ ? fw_->interrupts : user_.interrupts;
   }
 
-  // What the ISR saw since the last action began goes into irr_isr_; the responder's record of
+  // What the ISR saw since the last action began goes into irr_isr_; the user side's record of
   // it is then forgotten: memory stays flat.
   void fold_interrupts() {
-    const auto& irqs = interrupts();
-    for (std::size_t i = base_irq_; i < irqs.size(); ++i) irr_isr_ |= irqs[i].second;
-    base_irq_ = irqs.size();
-    if (!m51_ && !fw_) {
-      user_.interrupts.clear();
-      base_irq_ = 0;
-    }
+    auto& irqs = interrupts();
+    for (const auto& [cycle, ir] : irqs) irr_isr_ |= ir;
+    irqs.clear();
   }
 
   // Port values in hex and, for the bit patterns of digital outputs, binary.
@@ -749,7 +746,6 @@ class Runner {
   std::optional<std::vector<std::uint8_t>> last_inputs_;
   std::optional<std::vector<std::uint8_t>> last_diag_;
   FdlCounters base_counters_;
-  std::size_t base_irq_ = 0;   // interrupts() not yet in irr_isr_
   std::uint16_t irr_isr_ = 0;  // Int_Reg at the ISR entries of the last action
   std::size_t pb3_rises_ = 0;  // PB3 rising edges so far (dpc31 DX_Out port)
   std::size_t base_pb3_ = 0;
