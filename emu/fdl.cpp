@@ -248,6 +248,15 @@ Assembler::Status Assembler::push(std::uint8_t byte) {
 
 std::size_t Assembler::push_block(std::span<const std::uint8_t> bytes) {
   std::size_t i = 0;
+  // A good SD2 header whole (SD2, LE, LEr, SD2: what push() checks byte by byte, all passing) at
+  // once; anything else byte by byte, where push() gives each verdict.
+  if (size_ == 0 && status_ == Status::need_more && bytes.size() >= 4 && bytes[0] == SD2 &&
+      bytes[1] == bytes[2] && bytes[1] >= kMinLe && bytes[1] <= kMaxLe && bytes[3] == SD2) {
+    std::copy_n(bytes.begin(), 4, buf_.begin());
+    size_ = 4;
+    expected_ = std::size_t{bytes[1]} + 6;
+    i = 4;
+  }
   while (i < bytes.size() && status_ == Status::need_more) {
     // Past the SD (and for SD2 past the repeated SD) push() checks nothing but the length.
     if (expected_ != 0 && (buf_[0] != SD2 || size_ >= 4)) {

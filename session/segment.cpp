@@ -31,6 +31,32 @@ class Scoped {
 
 bool before(std::uint64_t c, const Heard& h) { return c < h.at; }
 
+// The start bit of the last character (or the edge) a sender heard.
+std::uint64_t last_heard(const std::vector<Heard>& h, std::uint64_t frame) {
+  return h.back().whole ? h.back().at + (h.back().count - 1) * frame : h.back().at;
+}
+
+// Its runs as one entry per character: what lands between two characters of a run (out of cycle
+// order, rare) is inserted between them as before. In place, from the back: the vector keeps its
+// memory.
+void one_by_one(std::vector<Heard>& h, std::uint64_t frame) {
+  std::size_t n = 0;
+  for (const Heard& e : h) n += e.whole ? e.count : 1;
+  std::size_t j = n;
+  std::size_t i = h.size();
+  if (n == i) return;
+  h.resize(n);
+  while (i > 0) {
+    const Heard e = h[--i];
+    if (!e.whole) {
+      h[--j] = e;
+      continue;
+    }
+    for (std::size_t c = e.count; c > 0; --c)
+      h[--j] = Heard{e.at + (c - 1) * frame, true, false, 1, e.first + c - 1};
+  }
+}
+
 }  // namespace
 
 Segment::Segment(std::uint32_t baud, std::uint32_t clock_hz)
@@ -460,11 +486,14 @@ void Segment::hear(std::size_t from, std::uint64_t cycle, bool level) {
 
 void Segment::senders_hear(std::size_t from,
                            std::span<const std::pair<std::uint64_t, bool>> edges) {
+  const std::uint64_t frame = std::uint64_t{kUartCharBits} * t_;
   for (const std::size_t k : senders_) {
     if (k == from) continue;
     std::vector<Heard>& h = stations_[k]->heard;
-    for (const auto& [at, level] : edges)
-      h.insert(std::upper_bound(h.begin(), h.end(), at, before), Heard{at, false, level, 0});
+    for (const auto& [at, level] : edges) {
+      if (!h.empty() && last_heard(h, frame) > at) one_by_one(h, frame);
+      h.insert(std::upper_bound(h.begin(), h.end(), at, before), Heard{at, false, level, 0, 0});
+    }
   }
 }
 
@@ -473,19 +502,23 @@ void Segment::senders_hear(std::size_t from, std::span<const std::uint8_t> bytes
   const std::uint64_t frame = std::uint64_t{kUartCharBits} * t_;
   whole_start_ = start;
   whole_.assign(bytes.begin(), bytes.end());
+  if (bytes.empty()) return;
   for (const std::size_t k : senders_) {
     if (k == from) continue;
     std::vector<Heard>& h = stations_[k]->heard;
-    if (h.empty() || h.back().at <= start) {
-      // After everything it heard so far (the common case): appended in order.
-      for (std::size_t i = 0; i < bytes.size(); ++i)
-        h.push_back(Heard{start + i * frame, true, false, bytes[i]});
+    std::vector<std::uint8_t>& b = stations_[k]->heard_bytes;
+    const std::size_t first = b.size();
+    b.insert(b.end(), bytes.begin(), bytes.end());
+    if (h.empty() || last_heard(h, frame) <= start) {
+      // After everything it heard so far (the common case): one run, appended.
+      h.push_back(Heard{start, true, false, bytes.size(), first});
       continue;
     }
+    one_by_one(h, frame);
     auto at = std::upper_bound(h.begin(), h.end(), start, before);
     for (std::size_t i = 0; i < bytes.size(); ++i) {
       at = std::upper_bound(at, h.end(), start + i * frame, before);
-      at = std::next(h.insert(at, Heard{start + i * frame, true, false, bytes[i]}));
+      at = std::next(h.insert(at, Heard{start + i * frame, true, false, 1, first + i}));
     }
   }
 }
@@ -713,13 +746,25 @@ void Segment::take_line(std::size_t listener, const std::function<void(const Txd
   Station& s = *stations_.at(listener);
   const auto end = std::upper_bound(s.heard.begin(), s.heard.end(), now_, before);
   const std::uint64_t frame = std::uint64_t{kUartCharBits} * t_;
-  for (auto h = s.heard.begin(); h != end;) {
+  auto h = s.heard.begin();
+  bool rest = false;  // a run's characters after the line's time stay for later
+  while (h != end && !rest) {
     if (h->whole) {
-      // A run of characters back to back.
+      // A run of characters back to back, up to the last whose start bit is on the line.
       const std::uint64_t start = h->at;
       take_bytes_.clear();
-      for (; h != end && h->whole && h->at == start + take_bytes_.size() * frame; ++h)
-        take_bytes_.push_back(h->data);
+      for (; h != end && h->whole && h->at == start + take_bytes_.size() * frame; ++h) {
+        const std::size_t k = std::min<std::size_t>(h->count, (now_ - h->at) / frame + 1);
+        const auto b = s.heard_bytes.begin() + static_cast<std::ptrdiff_t>(h->first);
+        take_bytes_.insert(take_bytes_.end(), b, b + static_cast<std::ptrdiff_t>(k));
+        if (k < h->count) {
+          h->at += k * frame;
+          h->first += k;
+          h->count -= k;
+          rest = true;
+          break;
+        }
+      }
       take(TxdRun{take_bytes_, start, t_, {}});
     } else {
       take_edges_.clear();
@@ -727,7 +772,17 @@ void Segment::take_line(std::size_t listener, const std::function<void(const Txd
       take(TxdRun{{}, 0, t_, take_edges_});
     }
   }
-  s.heard.erase(s.heard.begin(), end);
+  s.heard.erase(s.heard.begin(), h);
+  // The bytes of the runs taken are forgotten (their memory kept).
+  std::size_t kept = s.heard_bytes.size();
+  for (const Heard& e : s.heard) {
+    if (e.whole) kept = std::min(kept, e.first);
+  }
+  s.heard_bytes.erase(s.heard_bytes.begin(),
+                      s.heard_bytes.begin() + static_cast<std::ptrdiff_t>(kept));
+  for (Heard& e : s.heard) {
+    if (e.whole) e.first -= kept;
+  }
 }
 
 }  // namespace dpc31

@@ -16,13 +16,16 @@
 
 namespace dpc31 {
 
-// What a sender hears of the line, in cycle order: an edge, or a good character whole (`at` its
-// start bit). A master's receiver takes the characters whole (Segment::take_line).
+// What a sender hears of the line, in cycle order: an edge, or good characters whole, `count` of
+// them back to back from `at` (the first one's start bit), their bytes from `first` in the
+// station's `heard_bytes`. No entry lies inside such a run. A master's receiver takes the
+// characters whole (Segment::take_line).
 struct Heard {
   std::uint64_t at = 0;
-  bool whole = false;  // a character: `data`; else an edge to `level`
+  bool whole = false;  // characters; else an edge to `level`
   bool level = false;
-  std::uint8_t data = 0;
+  std::size_t count = 0;
+  std::size_t first = 0;
 };
 
 // The answer a chip armed (Chip::on_answer): its characters from `start`, what the line relayed
@@ -72,8 +75,9 @@ struct Segment::Station {
   std::unique_ptr<Chip> chip;  // null: a sender
   std::unique_ptr<Cpu> cpu;
   Edges txd;  // the reference line: the chip's TxD edges not yet relayed (Chip::on_txd)
-  std::vector<Heard> heard;           // a sender's: the line as it hears it, not yet taken
-  std::uint64_t colliding_until = 0;  // a collision of this station is reported once per burst
+  std::vector<Heard> heard;               // a sender's: the line as it hears it, not yet taken
+  std::vector<std::uint8_t> heard_bytes;  // the bytes of its runs of characters
+  std::uint64_t colliding_until = 0;      // a collision of this station is reported once per burst
   // Telegram level (docs/segment.md): the chip's next event and whether its firmware runs, as the
   // rounds last looked; whether the answer it armed (Chip::on_answer: `out`)
   // is still to be given to the other chips whole at its first start bit.

@@ -84,6 +84,67 @@ TEST(Segment, EveryCharacterReachesEveryStationAtTheSameCycle) {
   for (const auto& h : heard) EXPECT_EQ(h, want);
 }
 
+// What a sender hears of another's good telegram (Segment::take_line): its characters whole from
+// their start bits, as far as those are on the line, back to back, the rest at a later look; a
+// pulse of the telegram's sender inside it (no collision: the line is its own) between the two
+// characters around it, as edges.
+struct TakenRun {
+  std::vector<std::uint8_t> bytes;
+  std::uint64_t start = 0;
+  std::vector<std::pair<std::uint64_t, bool>> edges;
+  bool operator==(const TakenRun&) const = default;
+};
+
+std::vector<TakenRun> heard_by(Segment& seg, std::size_t listener) {
+  std::vector<TakenRun> got;
+  seg.take_line(listener, [&got](const TxdRun& r) {
+    got.push_back({{r.bytes.begin(), r.bytes.end()}, r.start, {r.edges.begin(), r.edges.end()}});
+  });
+  return got;
+}
+
+const std::vector<std::uint8_t> kDataExchange = fdl::encode(fdl::make_frame(
+    9, 2, fdl::make_request_fc(fdl::Function::SRD_high, true, true), {1, 2, 3, 4, 5, 6, 7, 8}));
+
+TEST(Segment, ASenderTakesACharacterOnceItsStartBitIsOnTheLine) {
+  Segment seg(kBaud);
+  const std::size_t a = seg.add_sender("a");
+  const std::size_t b = seg.add_sender("b");
+  const std::uint64_t t = seg.bit_cycles();
+  const std::uint64_t frame = 11 * t;
+  const std::uint64_t start = 1000;
+  const std::vector<std::uint8_t>& bytes = kDataExchange;
+  const std::uint64_t end = seg.send(a, bytes, start);
+  seg.run_until(start + 4 * frame);  // the fifth character's start bit
+  EXPECT_EQ(heard_by(seg, b),
+            (std::vector<TakenRun>{{{bytes.begin(), bytes.begin() + 5}, start, {}}}));
+  seg.run_until(start + 4 * frame + frame / 2);
+  EXPECT_TRUE(heard_by(seg, b).empty());
+  seg.pulse(a, end + 20 * t, 3 * t);
+  seg.run_until(end + 30 * t);
+  EXPECT_EQ(heard_by(seg, b),
+            (std::vector<TakenRun>{{{bytes.begin() + 5, bytes.end()}, start + 5 * frame, {}},
+                                   {{}, 0, {{end + 20 * t, false}, {end + 23 * t, true}}}}));
+}
+
+TEST(Segment, APulseInsideATelegramIsHeardBetweenItsCharacters) {
+  Segment seg(kBaud);
+  const std::size_t a = seg.add_sender("a");
+  const std::size_t b = seg.add_sender("b");
+  const std::uint64_t t = seg.bit_cycles();
+  const std::uint64_t frame = 11 * t;
+  const std::uint64_t start = 1000;
+  const std::vector<std::uint8_t>& bytes = kDataExchange;
+  const std::uint64_t end = seg.send(a, bytes, start);
+  const std::uint64_t pulse = start + 5 * frame + 3 * t;  // inside the sixth character
+  seg.pulse(a, pulse, 2 * t);
+  seg.run_until(end);
+  EXPECT_EQ(heard_by(seg, b),
+            (std::vector<TakenRun>{{{bytes.begin(), bytes.begin() + 6}, start, {}},
+                                   {{}, 0, {{pulse, false}, {pulse + 2 * t, true}}},
+                                   {{bytes.begin() + 6, bytes.end()}, start + 6 * frame, {}}}));
+}
+
 // A sender's telegram before the cycle the chips stand at (a user side ran one ahead with its
 // own steps; the line brings the others there first) breaks the line's order: thrown with the
 // sender's name, the first chip's and both cycles, never heard late.
