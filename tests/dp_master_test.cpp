@@ -29,6 +29,18 @@ struct Line {
   std::size_t rogue = seg.add_sender("rogue");
   std::size_t m = seg.add_sender("master 2");
   DpMaster master{seg, m, MasterConfig{}, {SlaveConfig{}}};
+  // The rogue sends `bytes` TSDR 11 after the end of the master's first request, and nothing
+  // after later ones.
+  void rogue_answers_the_first_request(std::vector<std::uint8_t> bytes) {
+    master.scheduler = [this, bytes = std::move(bytes), sent = false](std::uint64_t cycle) mutable {
+      if (!sent) {  // the first run goes to the request's end
+        sent = true;
+        seg.run_until(cycle);
+        seg.send(rogue, bytes, cycle + 11 * T);
+      }
+      seg.run_until(cycle);
+    };
+  }
 };
 
 TEST(DpMaster, NoAnswerEndsTheWaitASlotTimeAfterTheRequestThenTsyn) {
@@ -48,16 +60,7 @@ TEST(DpMaster, AnAnswerThatStopsEndsTheWaitASlotTimeAfterItsLastCharacterThenTsy
   Line l;
   // The rogue starts an answer TSDR 11 after the request's end: SD2 with LE and LEr (7 data
   // bytes announced), and falls silent after those 3 characters.
-  const std::vector<std::uint8_t> part = {fdl::SD2, 0x07, 0x07};
-  bool sent = false;
-  l.master.scheduler = [&](std::uint64_t cycle) {
-    if (!sent) {  // the first run goes to the request's end
-      sent = true;
-      l.seg.run_until(cycle);
-      l.seg.send(l.rogue, part, cycle + 11 * T);
-    }
-    l.seg.run_until(cycle);
-  };
+  l.rogue_answers_the_first_request({fdl::SD2, 0x07, 0x07});
   const Exchange a = l.master.fdl_status();
   EXPECT_FALSE(a.answer);
   EXPECT_EQ(a.answer_start, a.request_end + 11 * T);
@@ -75,17 +78,8 @@ TEST(DpMaster, AnAnswerThatStopsEndsTheWaitASlotTimeAfterItsLastCharacterThenTsy
 // too.
 TEST(DpMaster, AnExchangeAfterClearHistoryIsInTheHistoryAsReturned) {
   Line l;
-  const std::vector<std::uint8_t> answer =
-      fdl::encode(fdl::make_frame(2, 5, fdl::make_response_fc(fdl::Response::OK), {1, 2, 3}));
-  bool sent = false;  // the rogue answers the first request only
-  l.master.scheduler = [&](std::uint64_t cycle) {
-    if (!sent) {
-      sent = true;
-      l.seg.run_until(cycle);
-      l.seg.send(l.rogue, answer, cycle + 11 * T);
-    }
-    l.seg.run_until(cycle);
-  };
+  l.rogue_answers_the_first_request(
+      fdl::encode(fdl::make_frame(2, 5, fdl::make_response_fc(fdl::Response::OK), {1, 2, 3})));
   const Exchange a = l.master.fdl_status();
   ASSERT_TRUE(a.answer);
   EXPECT_EQ(a.answer->du, (std::vector<std::uint8_t>{1, 2, 3}));

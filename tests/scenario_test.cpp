@@ -619,6 +619,17 @@ std::int64_t heap_grown_over_steps(const std::string& head, const std::string& s
   return grown;
 }
 
+// The heap grows no more (within 16 KiB) over 200 steps of `step` than over 20 of them.
+void expect_flat_over_exchanges(const std::string& head, const std::string& step,
+                                const std::string& tail) {
+  const std::int64_t short_run = heap_grown_over_steps(head, step, 20, tail);
+  const std::int64_t long_run = heap_grown_over_steps(head, step, 200, tail);
+  if (dpc31::test::kHeapCounted) {
+    EXPECT_LE(long_run, short_run + 16 * 1024)
+        << "grown by " << short_run << " bytes over 20 steps, " << long_run << " over 200";
+  }
+}
+
 // Issue 30: the built-in responder kept every fetch of the outputs and every ISR entry for the
 // whole run (about 100 bytes an exchange). The heap's growth over 200 steps of `exchange 100` is
 // within 16 KiB of that over 20 of them; the leak made about 1.6 MB of these 18 000 more
@@ -631,13 +642,7 @@ TEST(ScenarioRun, LongRunKeepsTheResponderFlat) {
   const std::string step = "exchange 100 outputs={:02X},2,3,4\n";
   const std::string tail =
       "expect outputs {:02X},02,03,04\nexpect cleared 0\nexpect irr_bit DX_Out 1\n";
-  const std::int64_t short_run = heap_grown_over_steps(head, step, 20, tail);
-  const std::int64_t long_run = heap_grown_over_steps(head, step, 200, tail);
-  if (dpc31::test::kHeapCounted) {
-    EXPECT_LE(long_run, short_run + 16 * 1024)
-        << "grown by " << short_run << " bytes over 2 000 exchanges, " << long_run
-        << " over 20 000";
-  }
+  expect_flat_over_exchanges(head, step, tail);
 }
 
 // The same with a firmware instead of the built-in user side: its host recorded every ISR entry
@@ -648,13 +653,7 @@ TEST(ScenarioRun, LongRunKeepsTheFirmwareHostFlat) {
       "startup\n";
   const std::string step = "exchange 100 outputs={:02X},01\n";  // DO4: outputs, OSPValid
   const std::string tail = "expect dp_state Data_Exchange\nexpect irr_bit DX_Out 1\n";
-  const std::int64_t short_run = heap_grown_over_steps(head, step, 20, tail);
-  const std::int64_t long_run = heap_grown_over_steps(head, step, 200, tail);
-  if (dpc31::test::kHeapCounted) {
-    EXPECT_LE(long_run, short_run + 16 * 1024)
-        << "grown by " << short_run << " bytes over 2 000 exchanges, " << long_run
-        << " over 20 000";
-  }
+  expect_flat_over_exchanges(head, step, tail);
 }
 
 }  // namespace

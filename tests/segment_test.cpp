@@ -106,15 +106,21 @@ std::vector<TakenRun> heard_by(Segment& seg, std::size_t listener) {
 const std::vector<std::uint8_t> kDataExchange = fdl::encode(fdl::make_frame(
     9, 2, fdl::make_request_fc(fdl::Function::SRD_high, true, true), {1, 2, 3, 4, 5, 6, 7, 8}));
 
-TEST(Segment, ASenderTakesACharacterOnceItsStartBitIsOnTheLine) {
-  Segment seg(kBaud);
-  const std::size_t a = seg.add_sender("a");
-  const std::size_t b = seg.add_sender("b");
-  const std::uint64_t t = seg.bit_cycles();
-  const std::uint64_t frame = 11 * t;
-  const std::uint64_t start = 1000;
+// A Data_Exchange request sent by "a" from cycle 1000 on a segment where "b" listens.
+struct SentDataExchange {
+  Segment seg{kBaud};
+  std::size_t a = seg.add_sender("a");
+  std::size_t b = seg.add_sender("b");
+  std::uint64_t t = seg.bit_cycles();
+  std::uint64_t frame = 11 * t;
+  std::uint64_t start = 1000;
   const std::vector<std::uint8_t>& bytes = kDataExchange;
-  const std::uint64_t end = seg.send(a, bytes, start);
+  std::uint64_t end = seg.send(a, bytes, start);
+};
+
+TEST(Segment, ASenderTakesACharacterOnceItsStartBitIsOnTheLine) {
+  SentDataExchange x;
+  auto& [seg, a, b, t, frame, start, bytes, end] = x;
   seg.run_until(start + 4 * frame);  // the fifth character's start bit
   EXPECT_EQ(heard_by(seg, b),
             (std::vector<TakenRun>{{{bytes.begin(), bytes.begin() + 5}, start, {}}}));
@@ -128,14 +134,8 @@ TEST(Segment, ASenderTakesACharacterOnceItsStartBitIsOnTheLine) {
 }
 
 TEST(Segment, APulseInsideATelegramIsHeardBetweenItsCharacters) {
-  Segment seg(kBaud);
-  const std::size_t a = seg.add_sender("a");
-  const std::size_t b = seg.add_sender("b");
-  const std::uint64_t t = seg.bit_cycles();
-  const std::uint64_t frame = 11 * t;
-  const std::uint64_t start = 1000;
-  const std::vector<std::uint8_t>& bytes = kDataExchange;
-  const std::uint64_t end = seg.send(a, bytes, start);
+  SentDataExchange x;
+  auto& [seg, a, b, t, frame, start, bytes, end] = x;
   const std::uint64_t pulse = start + 5 * frame + 3 * t;  // inside the sixth character
   seg.pulse(a, pulse, 2 * t);
   seg.run_until(end);
