@@ -683,12 +683,11 @@ void Segment::round(std::uint64_t cycle) {
     }
     bound = std::min(bound, next_tree_[1]);  // senders: UINT64_MAX
   }
-  // Where a firmware may not run past a round's end (step_station), its accesses depend on where
-  // rounds end: the stop samples of characters heard whole stay ends of rounds, as their events
-  // made them on the reference line. An armed answer's edge not yet relayed is its chip's
-  // deadline (look_at); once relayed whole, its later edges end no round: a firmware stepped
-  // across one makes the chip alone's accesses either way (step_station, case 1 or 2).
-  if (!busy_.empty() && !reference_) bound = std::min(bound, line_rx_.next_deadline());
+  // A running firmware makes the chip alone's accesses wherever a round ends (step_station,
+  // cases 1 and 2); in case 3 (its chip drives into another's answer) the colliding edges end its
+  // rounds, as they are their chips' deadlines (an armed answer's edge not yet relayed: look_at).
+  // So neither the stop samples of the line's characters nor an answer's edges once relayed
+  // whole end a round (docs/segment.md, "A running firmware sees the same accesses").
   if (wake_for_ && wake_next_ < wakes_.size()) bound = std::min(bound, wakes_[wake_next_]);
   bound = std::max(bound, now_ + 1);
   // Telegram level: a chip without an event by `bound` whose firmware sleeps is left where it

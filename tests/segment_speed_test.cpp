@@ -135,9 +135,9 @@ struct Bed {
 
 // Both beds at the same cycle, every chip's snapshot and everything it showed so far the same.
 // What the master received: each exchange's cycles and answer.
-std::vector<std::string> received(const Bed& b) {
+std::vector<std::string> received_of(const DpMaster& m) {
   std::vector<std::string> out;
-  for (const Exchange& e : b.master->history()) {
+  for (const Exchange& e : m.history()) {
     out.push_back(fmt::format("{}..{} answer {}..{} {}", e.request_start, e.request_end,
                               e.answer_start, e.answer_end,
                               e.answer ? fmt::format("{}", fmt::join(fdl::encode(*e.answer), " "))
@@ -145,6 +145,8 @@ std::vector<std::string> received(const Bed& b) {
   }
   return out;
 }
+
+std::vector<std::string> received(const Bed& b) { return received_of(*b.master); }
 
 void expect_same(Bed& fast, Bed& ref, const std::string& where) {
   ASSERT_EQ(fast.line, ref.line) << where << ": the line's telegrams";
@@ -727,6 +729,66 @@ TEST(SegmentSpeed, AChipSteppedThroughItsChipReferenceMovesTheLinesTime) {
     EXPECT_EQ(b->seg.cycle(), now + 777) << "step after the snapshot";
   }
   ASSERT_NO_FATAL_FAILURE(exchanges("after slave 6 was stepped alone"));
+}
+
+// Two chips at one address, each with the built-in user side on its host CPU, answer every
+// request at once (docs/segment.md, "A firmware across a round's end", case 3): the second
+// driver's answer collides while both ISRs run. Every bus access of both firmwares, the
+// collisions and the snapshots are the reference line's (the rounds a collision ends are the
+// colliding edges, its chip's deadlines, on both lines).
+void twins(std::uint32_t baud) {
+  struct Twins {
+    Segment seg;
+    std::vector<std::unique_ptr<Responder>> users;
+    std::vector<std::vector<std::string>> log{2};
+    std::unique_ptr<DpMaster> master;
+    explicit Twins(std::uint32_t b) : seg(b) {}
+  };
+  SlaveConfig sc;
+  sc.address = 5;
+  std::vector<std::unique_ptr<Twins>> beds;
+  for (const bool reference : {false, true}) {
+    beds.push_back(std::make_unique<Twins>(baud));
+    Twins& b = *beds.back();
+    b.seg.use_reference_line(reference);
+    for (const Profile p : {Profile::spc3, Profile::dpc31}) {
+      add_user(b.users, sc).inputs = {static_cast<std::uint8_t>(p), 1, 2, 3};
+      const std::size_t k = b.seg.add_chip(fmt::format("twin {}", profile_name(p)), {p});
+      Chip& chip = b.seg.chip(k);
+      DirectBus bus(chip);
+      b.users.back()->init(bus);
+      Responder* r = b.users.back().get();
+      b.seg.set_firmware(k, [r](BusPort& bp) { r->isr(bp); });
+      std::vector<std::string>* out = &b.log[k];
+      chip.on_bus_access([out](std::uint64_t cy, const BusAccess& a) {
+        out->push_back(
+            fmt::format("{} bus {} {:x} {:x}", cy, a.write, a.addr, a.write ? a.data : 0));
+      });
+    }
+    b.master = std::make_unique<DpMaster>(b.seg, b.seg.add_sender("master"), MasterConfig{2, baud},
+                                          std::vector<SlaveConfig>{sc});
+    ASSERT_TRUE(b.master->startup_all());
+    for (std::uint8_t k = 0; k < 4; ++k) b.master->data_exchange({k, 2, 3, 4});
+  }
+  const Twins& fast = *beds[0];
+  const Twins& ref = *beds[1];
+  ASSERT_FALSE(fast.seg.collisions().empty());
+  ASSERT_EQ(fast.seg.collisions().size(), ref.seg.collisions().size());
+  for (std::size_t i = 0; i < fast.seg.collisions().size(); ++i)
+    EXPECT_EQ(fast.seg.collisions()[i].cycle, ref.seg.collisions()[i].cycle) << "collision " << i;
+  EXPECT_EQ(received_of(*fast.master), received_of(*ref.master));
+  for (std::size_t k = 0; k < 2; ++k) {
+    EXPECT_EQ(fast.log[k], ref.log[k]) << "twin " << k << "'s bus accesses";
+    EXPECT_EQ(fast.seg.chip(k).save_state(), ref.seg.chip(k).save_state()) << "twin " << k;
+  }
+}
+
+TEST(SegmentSpeed, TwinsWhoseFirmwaresRunThroughACollisionAreTheReferenceLinesAt12M) {
+  twins(12'000'000);
+}
+
+TEST(SegmentSpeed, TwinsWhoseFirmwaresRunThroughACollisionAreTheReferenceLinesAt1M5) {
+  twins(1'500'000);
 }
 
 }  // namespace
