@@ -171,8 +171,10 @@ def test_the_built_in_user_side_serves_its_user_watchdog_when_asked():
     assert unserved.dp_state == dpc31.DpState.Wait_Prm
     assert served.dp_state == dpc31.DpState.Data_Exchange
     # the checks of a scenario's `station`
-    with pytest.raises(ValueError, match="'user_wd' configures the built-in user side"):
-        seg.add_station(7, "spc3", firmware="DO4", user_wd=True)
+    # user_wd given at all beside a firmware, True or False, as user_wd=0 on a `station` line
+    for given in (True, False):
+        with pytest.raises(ValueError, match="'user_wd' configures the built-in user side"):
+            seg.add_station(7, "spc3", firmware="DO4", user_wd=given)
     with pytest.raises(ValueError, match="user_wd_value needs user_wd=1 on profile dpc31"):
         seg.add_station(8, "dpc31", user_wd_value=5)
 

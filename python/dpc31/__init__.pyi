@@ -485,7 +485,7 @@ class Segment:
     def add_station(self, address: int, profile: str = "dpc31", variant: Optional[str] = None,
                     firmware: Optional[str] = None, name: Optional[str] = None,
                     wd: Tuple[int, int] = (10, 10),
-                    slave: Optional[SlaveConfig] = None, user_wd: bool = False,
+                    slave: Optional[SlaveConfig] = None, user_wd: Optional[bool] = None,
                     user_wd_value: Optional[int] = None) -> Station: ...
     stations: List[Station]
     def add_sender(self, name: str) -> int: ...
