@@ -301,7 +301,7 @@ PyStation& add_station(py::object self, U8 address, const std::string& profile,
                        const std::optional<std::string>& variant,
                        const std::optional<std::string>& firmware,
                        const std::optional<std::string>& name, std::pair<U8, U8> wd,
-                       const std::optional<SlaveConfig>& slave, bool user_wd,
+                       const std::optional<SlaveConfig>& slave, const std::optional<bool>& user_wd,
                        const std::optional<std::uint16_t>& user_wd_value) {
   PySegment& s = self.cast<PySegment&>();
   s.may_join();
@@ -315,11 +315,13 @@ PyStation& add_station(py::object self, U8 address, const std::string& profile,
   }
   const ChipOptions opt =
       chip_options(profile, "intel", s.seg.clock_hz(), "event", variant, "external");
-  // The checks of a segment scenario's `station` (the single chip's `user` step).
-  if (firmware && (user_wd || user_wd_value)) {
-    throw py::value_error(refused_beside_firmware(user_wd ? "user_wd" : "user_wd_value"));
+  // The checks of a segment scenario's `station` (the single chip's `user` step). user_wd is
+  // None when not given: an explicit False beside a firmware is refused as user_wd=0 is there.
+  if (firmware && (user_wd.has_value() || user_wd_value.has_value())) {
+    throw py::value_error(
+        refused_beside_firmware(user_wd.has_value() ? "user_wd" : "user_wd_value"));
   }
-  if (user_wd_value && opt.profile == Profile::dpc31 && !user_wd)
+  if (user_wd_value && opt.profile == Profile::dpc31 && !user_wd.value_or(false))
     throw py::value_error(user_wd_value_needs_user_wd("user_wd_value"));
   if (firmware) {
     const dpc31_firmware& d = find_firmware(*firmware);
@@ -328,7 +330,7 @@ PyStation& add_station(py::object self, U8 address, const std::string& profile,
   } else {
     ResponderConfig rc;
     rc.slave = sc;
-    rc.user_watchdog = user_wd;
+    rc.user_watchdog = user_wd.value_or(false);
     rc.user_wd_value = user_wd_value.value_or(rc.user_wd_value);
     st->responder = std::make_shared<Responder>(rc);
   }
@@ -402,7 +404,7 @@ void bind_segment_class(py::module_& m) {
           [](py::object self, U8 address, const std::string& profile,
              const std::optional<std::string>& variant, const std::optional<std::string>& firmware,
              const std::optional<std::string>& name, std::pair<U8, U8> wd,
-             const std::optional<SlaveConfig>& slave, bool user_wd,
+             const std::optional<SlaveConfig>& slave, const std::optional<bool>& user_wd,
              const std::optional<std::uint16_t>& user_wd_value) {
             PyStation& st = add_station(self, address, profile, variant, firmware, name, wd, slave,
                                         user_wd, user_wd_value);
@@ -413,12 +415,14 @@ void bind_segment_class(py::module_& m) {
           py::arg("address"), py::arg("profile") = "dpc31", py::arg("variant") = py::none(),
           py::arg("firmware") = py::none(), py::arg("name") = py::none(),
           py::arg("wd") = std::pair<U8, U8>{10, 10}, py::arg("slave") = py::none(),
-          py::arg("user_wd") = false, py::arg("user_wd_value") = py::none(),
+          py::arg("user_wd") = py::none(), py::arg("user_wd_value") = py::none(),
           "A chip at station `address` with a firmware (DO4, CNT2 or a plug-in path; the "
           "master's slave takes its GSD defaults) or the built-in responder (firmware=None); "
           "`wd` the watchdog factors its master sends; `slave` a SlaveConfig as it is instead; "
-          "the responder's user watchdog served on every DX_Out (`user_wd`) and its "
-          "R_User_WD_Value (`user_wd_value`, 0x1FF unless given), as a scenario's `station`.")
+          "the responder's user watchdog served on every DX_Out (`user_wd`, unserved unless "
+          "given) and its R_User_WD_Value (`user_wd_value`, 0x1FF unless given), as a "
+          "scenario's `station`; either given beside `firmware` (even user_wd=False) is a "
+          "ValueError.")
       .def_property_readonly("stations",
                              [](py::object self) {
                                py::list l;

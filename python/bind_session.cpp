@@ -5,6 +5,8 @@
 #include <pybind11/operators.h>
 
 #include <memory>
+#include <utility>
+#include <vector>
 
 #include "bind.hpp"
 #include "cpu51_module.hpp"
@@ -104,6 +106,16 @@ void bind_frames(py::module_& m) {
                     bytes_property(&SlaveConfig::user_prm).second);
 }
 
+// A user side's interrupt records handed over and forgotten: `interrupts` grows for as long as
+// the user side runs, and each read of it converts every record.
+template <typename UserSide>
+std::vector<std::pair<U64, std::uint16_t>> take_interrupts(UserSide& u) {
+  return std::exchange(u.interrupts, {});
+}
+constexpr const char* kTakeInterruptsDoc =
+    "Returns interrupts (cycle, Int_Reg at each ISR entry) and forgets them: a long loop calls "
+    "it, so memory stays flat; interrupts then holds only the ISR entries since.";
+
 // The user side a master's chip runs: a firmware (built-in or plug-in) or the built-in responder.
 void bind_user_side(py::module_& m) {
   py::class_<FirmwareHost, std::shared_ptr<FirmwareHost>>(
@@ -122,6 +134,7 @@ void bind_user_side(py::module_& m) {
                                return l;
                              })
       .def_readonly("interrupts", &FirmwareHost::interrupts)
+      .def("take_interrupts", take_interrupts<FirmwareHost>, kTakeInterruptsDoc)
       .def(
           "hw_input",
           [](FirmwareHost& f, const std::string& name, std::uint32_t value) {
@@ -143,6 +156,7 @@ void bind_user_side(py::module_& m) {
            "Forgets every fetch in outputs but the last: a long loop calls it, so memory stays "
            "flat.")
       .def_readonly("interrupts", &Responder::interrupts)
+      .def("take_interrupts", take_interrupts<Responder>, kTakeInterruptsDoc)
       .def_readonly("prm_accepted", &Responder::prm_accepted)
       .def_readonly("cfg_accepted", &Responder::cfg_accepted)
       .def_readonly("cfg_rejected", &Responder::cfg_rejected);

@@ -200,6 +200,12 @@ def bad_slave_arguments():
             (["--slave", "5:responder:spc3:user_wd=1:b"],
              "must be ADDR:FIRMWARE[:PROFILE[:VARIANT]]"),
             (["--slave", "5:responder:spc3:bogus=1"], "unknown option 'bogus'"),
+            # an option given twice, whatever its values, as a segment scenario's `station` line
+            (["--slave", "5:responder:spc3:user_wd=1:user_wd=0"],
+             "--slave '5:responder:spc3:user_wd=1:user_wd=0': option 'user_wd' given twice"),
+            (["--slave", "5:responder:spc3:user_wd_value=7:user_wd=1:user_wd_value=7"],
+             "option 'user_wd_value' given twice"),
+            (["--slave", "5:DO4:user_wd=0:user_wd=0"], "option 'user_wd' given twice"),
         ]
         for args, want in cases:
             blt.expect_refused(["--tcp", "0", "--log", log] + args, want, log)

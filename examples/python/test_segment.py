@@ -171,10 +171,39 @@ def test_the_built_in_user_side_serves_its_user_watchdog_when_asked():
     assert unserved.dp_state == dpc31.DpState.Wait_Prm
     assert served.dp_state == dpc31.DpState.Data_Exchange
     # the checks of a scenario's `station`
-    with pytest.raises(ValueError, match="'user_wd' configures the built-in user side"):
-        seg.add_station(7, "spc3", firmware="DO4", user_wd=True)
+    # user_wd given at all beside a firmware, True or False, as user_wd=0 on a `station` line
+    for given in (True, False):
+        with pytest.raises(ValueError, match="'user_wd' configures the built-in user side"):
+            seg.add_station(7, "spc3", firmware="DO4", user_wd=given)
     with pytest.raises(ValueError, match="user_wd_value needs user_wd=1 on profile dpc31"):
         seg.add_station(8, "dpc31", user_wd_value=5)
+
+
+def test_a_long_run_takes_its_user_sides_interrupts_so_they_stay_short():
+    """interrupts grows for as long as a user side runs; take_interrupts() returns the records
+    and forgets them. Two identical segments, the first's taken after every DP cycle: nothing is
+    left after a take, and the takes in order are the twin's interrupts, none lost or repeated."""
+    def segment():
+        seg = dpc31.Segment(12_000_000)
+        stations = (seg.add_station(5, "spc3", user_wd=True),
+                    seg.add_station(6, "dpc31", firmware="DO4"))
+        master = seg.add_master(2, [5, 6])
+        assert master.startup_all()
+        return (stations[0].responder, stations[1].firmware), master
+    user_sides, master = segment()
+    twins, twin_master = segment()
+    taken = ([], [])
+    for _ in range(300):
+        master.dp_cycle()
+        twin_master.dp_cycle()
+        for side, into in zip(user_sides, taken):
+            into.extend(side.take_interrupts())
+            assert side.interrupts == []
+        master.clear_history()
+        twin_master.clear_history()
+    for side, into, twin in zip(user_sides, taken, twins):
+        assert len(twin.interrupts) > 300  # one ISR entry per Data_Exchange at least
+        assert into + side.interrupts == twin.interrupts
 
 
 def test_the_shipped_segment_scenarios_pass(traces):

@@ -205,6 +205,7 @@ class Firmware:
     @property
     def port_writes(self) -> List[Tuple[int, str, int]]: ...
     interrupts: List[Tuple[int, int]]
+    def take_interrupts(self) -> List[Tuple[int, int]]: ...
     def hw_input(self, name: str, value: int) -> None: ...
 
 class Cpu51Board:
@@ -251,6 +252,7 @@ class Responder:
     cfg_accepted: int
     cfg_rejected: int
     def keep_last_output(self) -> None: ...
+    def take_interrupts(self) -> List[Tuple[int, int]]: ...
 
 class Dpv1Outcome(enum.Enum):
     positive = 0
@@ -485,7 +487,7 @@ class Segment:
     def add_station(self, address: int, profile: str = "dpc31", variant: Optional[str] = None,
                     firmware: Optional[str] = None, name: Optional[str] = None,
                     wd: Tuple[int, int] = (10, 10),
-                    slave: Optional[SlaveConfig] = None, user_wd: bool = False,
+                    slave: Optional[SlaveConfig] = None, user_wd: Optional[bool] = None,
                     user_wd_value: Optional[int] = None) -> Station: ...
     stations: List[Station]
     def add_sender(self, name: str) -> int: ...

@@ -89,6 +89,14 @@ std::vector<std::string> slave_fields(const std::string& spec) {
 // user_wd_value=N), checked as a segment scenario's `station` checks them. "" or why not.
 std::string slave_options(const std::string& spec, std::span<const std::string> options,
                           bridge::SlaveSpec& s) {
+  const auto key_of = [](const std::string& o) { return o.substr(0, o.find('=')); };
+  // Before any other check, as the scenario's line: the last value would win silently.
+  for (auto it = options.begin(); it != options.end(); ++it) {
+    if (std::any_of(options.begin(), it,
+                    [&](const std::string& o) { return key_of(o) == key_of(*it); })) {
+      return fmt::format("--slave '{}': option '{}' given twice", spec, key_of(*it));
+    }
+  }
   bool value_given = false;
   for (const std::string& o : options) {
     const std::size_t eq = o.find('=');
