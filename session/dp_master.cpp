@@ -375,7 +375,9 @@ Exchange DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bo
   ex.request_start = std::max(look(), bus_free_ + std::uint64_t{cfg_.idle_bits} * t_);
   if (on_send) on_send(ex.request_start, bytes, fault);
   ex.request_end = put_on_line(bytes, ex.request_start, fault);
-  run_until(ex.request_end);
+  // On a segment the wait for an answer runs the line itself: a stop at the request's end would
+  // only cost a round (docs/segment.md, "Masters on it"). One chip's scheduler is asked for it.
+  if (no_answer || !seg_) run_until(ex.request_end);
   ++counters_.requests;
   if (no_answer) {
     bus_free_ = ex.request_end;  // send-data-no-acknowledge: nothing to wait for

@@ -545,8 +545,8 @@ void Segment::decode_chars(std::size_t from, std::span<const std::uint8_t> bytes
 // Characters whose stop sample is by `upto` join the open telegram (the driver of its first
 // character is its sender); it closes when the line stayed idle past its end (a character back
 // to back would have started at its end).
-void Segment::close_telegrams(std::uint64_t upto) {
-  const std::uint64_t to = std::min(upto, now_);
+void Segment::close_telegrams(std::uint64_t upto, std::uint64_t known) {
+  const std::uint64_t to = std::min(upto, known);
   // A decoder that receives nothing and holds no character due by `to` (most rounds: the line is
   // idle) has nothing to hand over: advance() would only empty due().
   if (line_rx_.receiving() || line_rx_.next_deadline() <= to) {
@@ -583,7 +583,7 @@ void Segment::line_chars(std::span<const std::uint8_t> data, std::uint64_t start
   open_.end = start + data.size() * std::uint64_t{kUartCharBits} * t_;
 }
 
-void Segment::flush() { close_telegrams(UINT64_MAX); }
+void Segment::flush() { close_telegrams(UINT64_MAX, now_); }
 
 std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> bytes,
                             std::uint64_t start, UartFault fault) {
@@ -690,6 +690,12 @@ void Segment::round(std::uint64_t cycle) {
   // whole end a round (docs/segment.md, "A running firmware sees the same accesses").
   if (wake_for_ && wake_next_ < wakes_.size()) bound = std::min(bound, wakes_[wake_next_]);
   bound = std::max(bound, now_ + 1);
+  // Telegram level: nobody drives before `bound` but what the line's decoder holds already (a
+  // chip's TxD edges are its events; the senders' telegrams were decoded when sent), so a telegram
+  // that ends before it closes now, before the chips step on: on_telegram comes before what they
+  // do later (a scenario's log stays in cycle order, also where the master does not stop at its
+  // request's end).
+  if (!reference_ && open_now_) close_telegrams(bound - 1, bound - 1);
   // Telegram level: a chip without an event by `bound` whose firmware sleeps is left where it
   // is (it is given the line's characters ahead of time, as a master gives them).
   if (reference_) {
@@ -735,7 +741,7 @@ void Segment::round(std::uint64_t cycle) {
   for (; wake_next_ < wakes_.size() && wakes_[wake_next_] <= now_; ++wake_next_) {
     if (wake_for_ && *wake_for_ != wake_from_) woken_ = true;
   }
-  close_telegrams(now_);
+  close_telegrams(now_, now_);
   line_final_ = now_;
 }
 

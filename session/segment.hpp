@@ -180,7 +180,9 @@ class Segment {
   // from `start` (after everything they heard so far, or placed in order).
   void senders_hear(std::size_t from, std::span<const std::pair<std::uint64_t, bool>> edges);
   void senders_hear(std::size_t from, std::span<const std::uint8_t> bytes, std::uint64_t start);
-  void close_telegrams(std::uint64_t upto);
+  // The line's decoder up to min(upto, known) (the line is known up to `known`: the line's time,
+  // or before a round's end where nobody drives before it).
+  void close_telegrams(std::uint64_t upto, std::uint64_t known);
   // Characters of the line back to back from `start`, at its bit time: the open telegram's, or
   // the first of a new one.
   void line_chars(std::span<const std::uint8_t> data, std::uint64_t start);

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "segment.hpp"
@@ -29,18 +30,23 @@ struct Line {
   std::size_t rogue = seg.add_sender("rogue");
   std::size_t m = seg.add_sender("master 2");
   DpMaster master{seg, m, MasterConfig{}, {SlaveConfig{}}};
-  // The rogue sends `bytes` TSDR 11 after the end of the master's first request, and nothing
-  // after later ones.
+  // The rogue sends `bytes` TSDR 11 after the end of the master's first request (its first
+  // start bit and its characters: on_send), and nothing after later ones.
   void rogue_answers_the_first_request(std::vector<std::uint8_t> bytes) {
+    master.on_send = [this](std::uint64_t start, std::span<const std::uint8_t> request,
+                            const UartFault&) {
+      if (first_end == 0) first_end = start + request.size() * kChar;
+    };
     master.scheduler = [this, bytes = std::move(bytes), sent = false](std::uint64_t cycle) mutable {
-      if (!sent) {  // the first run goes to the request's end
+      if (!sent) {
         sent = true;
-        seg.run_until(cycle);
-        seg.send(rogue, bytes, cycle + 11 * T);
+        seg.run_until(first_end);
+        seg.send(rogue, bytes, first_end + 11 * T);
       }
       seg.run_until(cycle);
     };
   }
+  std::uint64_t first_end = 0;
 };
 
 TEST(DpMaster, NoAnswerEndsTheWaitASlotTimeAfterTheRequestThenTsyn) {

@@ -8,7 +8,10 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
+#include <cinttypes>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <map>
 #include <sstream>
@@ -465,6 +468,42 @@ TEST(SegmentOutputs, ThreeSlavesTracesReplay) {
     EXPECT_EQ(r.rc, 0) << name << ": " << r.out;
   }
   EXPECT_EQ(traces, 3u);
+}
+
+// The log of a segment's run in cycle order (docs/segment.md, "The log"): a telegram of the line
+// ("[cycle S] station: bytes", stamped at its first start bit S) is told once the line stayed idle
+// past its end E = S + 11 T per character, before anything the chips did after E. Until the
+// seventeenth session a chip's state change up to a round later could come first.
+TEST(SegmentOutputs, ATelegramOfTheLineIsLoggedBeforeWhatComesAfterItsEnd) {
+  for (const auto& [scn, t] : {std::pair<std::string, std::uint64_t>{"three_slaves", kT},
+                               {"two_masters", kT},
+                               {"three_slaves_12m", 4}}) {
+    const auto r =
+        sh(fmt::format("cd {} && {} run traces/segment/{}.scn", SOURCE_DIR, DPC31_CLI, scn));
+    ASSERT_EQ(r.rc, 0) << r.out;
+    std::istringstream in(r.out);
+    std::uint64_t latest = 0;  // the latest stamp logged so far
+    std::size_t telegrams = 0;
+    for (std::string line; std::getline(in, line);) {
+      std::uint64_t cycle = 0;
+      char name[64] = {};
+      int used = 0;
+      if (std::sscanf(line.c_str(), "[cycle %" SCNu64 "] %63[^:]: %n", &cycle, name, &used) < 2)
+        continue;
+      const std::string rest = line.substr(static_cast<std::size_t>(used));
+      const bool bytes = !rest.empty() && rest.size() % 3 == 2 &&
+                         std::all_of(rest.begin(), rest.end(), [](char c) {
+                           return c == ' ' || std::isxdigit(static_cast<unsigned char>(c));
+                         });
+      if (bytes) {
+        ++telegrams;
+        const std::uint64_t end = cycle + (rest.size() + 1) / 3 * 11 * t;
+        EXPECT_LE(latest, end) << scn << ": '" << line << "' after a line stamped " << latest;
+      }
+      latest = std::max(latest, cycle);
+    }
+    EXPECT_GT(telegrams, 100u) << scn;
+  }
 }
 
 // sigrok-cli's UART decoder (8E1) reads the logic-analyser form of a window (the SPC3's start-up
