@@ -45,6 +45,7 @@ void ArmedAnswer::arm(const Telegram& tel, std::uint32_t bit_cycles) {
   confirmed = 0;
   part = 0;
   made = false;
+  seen_of = kWhole;
   edges.clear();
   last = 0;
   last_fall = 0;
@@ -107,10 +108,12 @@ bool ArmedAnswer::see(std::pair<std::uint64_t, bool> edge) {
     return true;
   }
   if (confirmed >= bytes.size()) return false;
-  std::array<std::pair<std::uint64_t, bool>, kUartCharBits> e{};
-  const std::size_t n = uart_char_edges(bytes[confirmed], start + confirmed * frame(), t, e.data());
-  if (e[part] != edge) return false;
-  if (++part == n) {
+  if (seen_of != confirmed) {
+    seen_n = uart_char_edges(bytes[confirmed], start + confirmed * frame(), t, seen.data());
+    seen_of = confirmed;
+  }
+  if (seen[part] != edge) return false;
+  if (++part == seen_n) {
     ++confirmed;
     part = 0;
   }

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <deque>
 #include <memory>
@@ -48,6 +49,11 @@ struct ArmedAnswer {
   std::size_t part = 0;
   bool made = false;
   std::vector<std::pair<std::uint64_t, bool>> edges;
+  // Not made: the edges of character `seen_of` (the one see() checks edge by edge, most of them
+  // one or two at a time while a firmware steps its chip), made once for all of them.
+  std::array<std::pair<std::uint64_t, bool>, kUartCharBits> seen{};
+  std::size_t seen_n = 0;
+  std::size_t seen_of = kWhole;
 
   void arm(const Telegram& tel, std::uint32_t bit_cycles);
   // Its edges one by one from here on.
