@@ -98,6 +98,7 @@ std::uint64_t Chip::drive_rxd_chars(std::span<const std::uint8_t> bytes, std::ui
 }
 std::uint64_t Chip::hear_telegram(std::span<const std::uint8_t> bytes, std::uint64_t start,
                                   std::uint32_t bit_cycles) {
+  // Asked before the frame is made (an allocation and a decode) that the MAC then asks again.
   if (!core_->mac.can_hear(bytes.size(), start, bit_cycles)) {
     return drive_rxd_chars(bytes, start, bit_cycles);
   }
@@ -125,11 +126,7 @@ void HeardFrame::fill(std::span<const std::uint8_t> chars) {
   bytes.assign(chars.begin(), chars.end());
   verdict = 0;
   frame.reset();
-  // As a new frame's until decoded (its DU's memory kept).
-  std::vector<std::uint8_t> du = std::move(decoded.frame.du);
-  decoded = {};
-  decoded.frame.du = std::move(du);
-  decoded.frame.du.clear();
+  decoded.clear();            // as a new frame's until decoded
   if (chars.empty()) return;  // nobody hears it whole (Mac::can_hear)
   // The byte of the assembler's verdict, or the last one.
   verdict = frame.push_block(chars) - 1;

@@ -119,16 +119,20 @@ Decoded decode(std::span<const std::uint8_t> bytes) {
   return d;
 }
 
+void Decoded::clear() {
+  error = Error::none;
+  frame.sd = SD1;
+  frame.da = 0;
+  frame.sa = 0;
+  frame.fc = 0;
+  frame.dsap.reset();
+  frame.ssap.reset();
+  frame.du.clear();
+}
+
 void decode(std::span<const std::uint8_t> b, Decoded& out) {
+  out.clear();
   Frame& f = out.frame;
-  f.sd = SD1;
-  f.da = 0;
-  f.sa = 0;
-  f.fc = 0;
-  f.dsap.reset();
-  f.ssap.reset();
-  f.du.clear();
-  out.error = Error::none;
   const auto fail = [&out](Error e) { out.error = e; };
   if (b.empty()) return fail(Error::truncated);
   f.sd = b[0];

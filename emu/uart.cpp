@@ -123,6 +123,8 @@ std::size_t uart_char_edges(std::uint8_t data, std::uint64_t start, std::uint32_
   return n;
 }
 
+std::size_t uart_char_edge_count(std::uint8_t data) { return kCharEdges[data].n; }
+
 // ---- receiver ----
 
 void UartRx::configure(std::uint32_t bit_cycles, std::uint64_t now) {

@@ -11,31 +11,6 @@
 
 namespace dpc31 {
 
-namespace {
-
-// Per data byte: whether a good character's only falling edge is its start bit's (its data,
-// parity and stop bits, LSB first after the start bit, rise at most once and never fall).
-constexpr std::array<bool, 256> kFallsOnce = [] {
-  std::array<bool, 256> table{};
-  for (std::uint32_t d = 0; d < 256; ++d) {
-    std::uint32_t parity = 0;  // even parity
-    for (std::uint32_t b = d; b != 0; b >>= 1) parity ^= b & 1u;
-    const std::uint32_t bits = d | parity << 8 | 1u << 9;
-    bool risen = false;
-    bool falls = false;
-    for (std::uint32_t k = 0; k < 10; ++k) {
-      const bool high = (bits >> k & 1u) != 0;
-      falls = falls || (risen && !high);
-      risen = risen || high;
-    }
-    table[d] = !falls;
-  }
-  return table;
-}();
-static_assert(kFallsOnce[0x00] && kFallsOnce[0x80] && !kFallsOnce[0xC0] && !kFallsOnce[0xFF]);
-
-}  // namespace
-
 void ArmedAnswer::arm(const Telegram& tel, std::uint32_t bit_cycles) {
   bytes = tel.bytes;
   start = tel.start;
@@ -187,7 +162,8 @@ bool Segment::relay_answer(std::size_t i, std::uint64_t cycle) {
   wake_next_ = 0;
   wake_from_ = i;
   for (std::size_t k = 1; k < o.bytes.size(); ++k) {
-    if (kFallsOnce[o.bytes[k - 1]]) wakes_.push_back(o.start + k * o.frame());
+    // Two edges: the start bit's fall and one rise.
+    if (uart_char_edge_count(o.bytes[k - 1]) == 2) wakes_.push_back(o.start + k * o.frame());
   }
   owned_until_ = std::max(owned_until_, o.last_fall + o.frame());
   // The waveform's observer takes its edges (made for it).

@@ -140,6 +140,23 @@ TEST(UartEncode, EveryByteEdgeForEdgeFromItsBits) {
   }
 }
 
+// uart_char_edge_count: a character's edges from its bits alone (docs/timing.md, as above): the
+// start bit's fall, then one change wherever a bit differs from the one before, counted by hand;
+// and always uart_char_edges's count.
+TEST(UartEncode, EdgeCountOfEveryByte) {
+  EXPECT_EQ(uart_char_edge_count(0x00), 2u);   // low through parity 0, the stop bit rises
+  EXPECT_EQ(uart_char_edge_count(0x80), 2u);   // d7 and parity 1 rise once at bit 8
+  EXPECT_EQ(uart_char_edge_count(0xC0), 4u);   // rise at d6, fall at parity 0, rise at stop
+  EXPECT_EQ(uart_char_edge_count(0xFF), 4u);   // rise at d0, fall at parity 0, rise at stop
+  EXPECT_EQ(uart_char_edge_count(0x55), 10u);  // 0 1 0 1 0 1 0 1 0 (parity 0) 1: every bit
+  for (unsigned d = 0; d < 256; ++d) {
+    std::pair<std::uint64_t, bool> e[11];
+    EXPECT_EQ(uart_char_edge_count(static_cast<std::uint8_t>(d)),
+              uart_char_edges(static_cast<std::uint8_t>(d), 0, 4, e))
+        << "byte " << d;
+  }
+}
+
 TEST(UartEncode, Faults) {
   const std::uint8_t b[] = {0x10};
   Edges e;

@@ -149,6 +149,8 @@ struct Decoded {
   Error error = Error::none;
   // Valid only for Error::none; otherwise holds what was parsed before the error (diagnostics).
   Frame frame;
+  // As a default Decoded, its DU's capacity kept.
+  void clear();
 };
 
 // bytes = exactly one (possibly broken) frame. Checks in this order, so that the contents of a

@@ -45,6 +45,8 @@ inline constexpr std::uint32_t kTsynBits = 33;  // idle before a request (synchr
 // on a high line, which it leaves high, written to out[0..n) (n <= 11, returned).
 std::size_t uart_char_edges(std::uint8_t data, std::uint64_t start, std::uint32_t bit_cycles,
                             std::pair<std::uint64_t, bool>* out);
+// How many edges uart_char_edges gives for `data` (even: they alternate from the start bit's fall).
+[[nodiscard]] std::size_t uart_char_edge_count(std::uint8_t data);
 
 struct UartChar {
   std::uint8_t data = 0;
