@@ -2,6 +2,8 @@
 // (session/segment.hpp), the built-in masters on it with their token visits (DpMaster), scripted
 // senders, the bus check (session/bus_check.hpp), segment scenarios and the outputs of both
 // (lib/segment_outputs), one call for one call.
+#include <fmt/format.h>
+
 #include <memory>
 #include <variant>
 
@@ -23,6 +25,31 @@ namespace {
 using U8 = std::uint8_t;
 using U64 = std::uint64_t;
 using Outputs = std::vector<std::vector<U8>>;
+
+// dp_cycle's and use_token's outputs=: one bytes-like per slave (bytes, bytearray, or a list of
+// ints), as data_exchange takes one and the stub says; None: zeros for every slave.
+Outputs outputs_of(const py::object& o) {
+  Outputs out;
+  if (o.is_none()) return out;
+  for (const py::handle item : o) {
+    if (py::isinstance<py::bytes>(item)) {
+      out.push_back(from_bytes(py::reinterpret_borrow<py::bytes>(item)));
+    } else if (py::isinstance<py::bytearray>(item)) {
+      const auto b = py::reinterpret_borrow<py::bytearray>(item);
+      const auto* p = reinterpret_cast<const U8*>(PyByteArray_AsString(b.ptr()));
+      out.emplace_back(p, p + PyByteArray_Size(b.ptr()));
+    } else {
+      try {
+        out.push_back(item.cast<std::vector<U8>>());
+      } catch (const py::cast_error&) {
+        throw py::type_error(
+            fmt::format("outputs[{}]: bytes expected, got {}", out.size(),
+                        py::str(py::type::of(item).attr("__name__")).cast<std::string>()));
+      }
+    }
+  }
+  return out;
+}
 
 // A chip station: the chip is the segment's, the user side is kept here. Its DP and watchdog
 // state changes are recorded as the chip makes them (cycle, DP state, WD state).
@@ -593,17 +620,17 @@ void bind_seg_master(py::module_& m) {
       .def_property_readonly("started_up", [](const M& pm) { return pm.m->started_up(); })
       .def(
           "dp_cycle",
-          [](M& pm, const std::optional<Outputs>& outputs, const std::vector<U8>& skip) {
+          [](M& pm, const py::object& outputs_arg, const std::vector<U8>& skip) {
+            const Outputs outputs = outputs_of(outputs_arg);
             return pm.act([&] {
               DpMaster& dm = *pm.m;
-              if (skip.empty()) return dm.dp_cycle(outputs.value_or(Outputs{}));
+              if (skip.empty()) return dm.dp_cycle(outputs);
               std::vector<Exchange> out;  // the slaves not skipped, as a scenario's `cycle skip=`
               for (std::size_t i = 0; i < dm.slave_count(); ++i) {
                 dm.select(i);
                 if (std::find(skip.begin(), skip.end(), dm.slave().address) != skip.end()) continue;
-                out.push_back(dm.data_exchange(outputs && i < outputs->size()
-                                                   ? (*outputs)[i]
-                                                   : std::vector<U8>(dm.slave().out_len)));
+                out.push_back(dm.data_exchange(
+                    i < outputs.size() ? outputs[i] : std::vector<U8>(dm.slave().out_len)));
               }
               dm.select(0);
               return out;
@@ -615,8 +642,9 @@ void bind_seg_master(py::module_& m) {
       .def("data_exchange", &bytes_service<&DpMaster::data_exchange>, py::arg("outputs"))
       .def(
           "use_token",
-          [](M& pm, U8 next, const std::optional<Outputs>& outputs) {
-            return pm.act([&] { return pm.m->use_token(next, outputs.value_or(Outputs{})); });
+          [](M& pm, U8 next, const py::object& outputs_arg) {
+            const Outputs outputs = outputs_of(outputs_arg);
+            return pm.act([&] { return pm.m->use_token(next, outputs); });
           },
           py::arg("next"), py::arg("outputs") = py::none(),
           "One visit of the token (TTR, the GAP update), then the token to `next`.")

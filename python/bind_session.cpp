@@ -116,6 +116,15 @@ constexpr const char* kTakeInterruptsDoc =
     "Returns interrupts (cycle, Int_Reg at each ISR entry) and forgets them: a long loop calls "
     "it, so memory stays flat; interrupts then holds only the ISR entries since.";
 
+// A firmware's port writes as Python sees them: (cycle, port name, value).
+py::list port_write_list(const FirmwareHost& f, const std::vector<FirmwareHost::PortWrite>& ws) {
+  py::list l;
+  for (const FirmwareHost::PortWrite& w : ws) {
+    l.append(py::make_tuple(w.cycle, f.port_name(w.port), w.value));
+  }
+  return l;
+}
+
 // The user side a master's chip runs: a firmware (built-in or plug-in) or the built-in responder.
 void bind_user_side(py::module_& m) {
   py::class_<FirmwareHost, std::shared_ptr<FirmwareHost>>(
@@ -125,14 +134,13 @@ void bind_user_side(py::module_& m) {
       .def(
           "port", [](const FirmwareHost& f, const std::string& name) { return f.port(name); },
           py::arg("name"), "A port's current value (0 before its first write); -1: no such port")
-      .def_property_readonly("port_writes",
-                             [](const FirmwareHost& f) {
-                               py::list l;
-                               for (const FirmwareHost::PortWrite& w : f.port_writes()) {
-                                 l.append(py::make_tuple(w.cycle, f.port_name(w.port), w.value));
-                               }
-                               return l;
-                             })
+      .def_property_readonly(
+          "port_writes", [](const FirmwareHost& f) { return port_write_list(f, f.port_writes()); })
+      .def(
+          "take_port_writes",
+          [](FirmwareHost& f) { return port_write_list(f, f.take_port_writes()); },
+          "Returns port_writes (cycle, port, value) and forgets them: a long loop calls it, so "
+          "memory stays flat; port_writes then holds only the writes since.")
       .def_readonly("interrupts", &FirmwareHost::interrupts)
       .def("take_interrupts", take_interrupts<FirmwareHost>, kTakeInterruptsDoc)
       .def(

@@ -78,6 +78,8 @@ class FirmwareHost final : private board::Hooks {
   // nullptr for a plug-in.
   [[nodiscard]] void* instance() const { return self_.get(); }
   [[nodiscard]] const std::vector<PortWrite>& port_writes() const { return writes_; }
+  // port_writes() handed over and forgotten (a long run's memory stays flat).
+  [[nodiscard]] std::vector<PortWrite> take_port_writes() { return std::exchange(writes_, {}); }
   // A port's current value (0 before the first write); -1 for an unknown name.
   [[nodiscard]] std::int64_t port(const std::string& name) const;
   [[nodiscard]] std::string port_name(unsigned port) const;

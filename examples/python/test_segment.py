@@ -206,6 +206,39 @@ def test_a_long_run_takes_its_user_sides_interrupts_so_they_stay_short():
         assert into + side.interrupts == twin.interrupts
 
 
+def test_a_long_run_takes_its_firmwares_port_writes_so_they_stay_short():
+    """port_writes grows by one write per port write of the firmware (DO4: each change of its
+    terminals, here on every Data_Exchange: terminals 1, 2, 1, ... with OSPValid set in the
+    second output byte, firmware/do4/do4.c); take_port_writes() returns them and forgets them,
+    none lost or repeated. dp_cycle takes each slave's outputs as bytes, a bytearray or a list of
+    ints."""
+    def segment():
+        seg = dpc31.Segment(12_000_000)
+        station = seg.add_station(6, "dpc31", firmware="DO4")
+        master = seg.add_master(2, [6])
+        assert master.startup_all()
+        return station.firmware, master
+    firmware, master = segment()
+    twin, twin_master = segment()
+    taken = []
+    for k in range(300):
+        master.dp_cycle([bytes([1 + k % 2, 0x01])])
+        twin_master.dp_cycle([[1 + k % 2, 0x01]] if k % 3 else [bytearray([1 + k % 2, 0x01])])
+        taken.extend(firmware.take_port_writes())
+        assert firmware.port_writes == []
+        master.clear_history()
+        twin_master.clear_history()
+    # do4.c's drive(): the first Data_Exchange sets the terminals (0 -> 1), then modul_ok (OSP
+    # left: 0 -> 1); every one after changes the terminals only.
+    assert len(twin.port_writes) == 301
+    assert [(port, value) for _, port, value in taken[:4]] == [
+        ("outputs", 1), ("modul_ok", 1), ("outputs", 2), ("outputs", 1)]
+    assert taken == twin.port_writes
+    import pytest
+    with pytest.raises(TypeError, match=r"outputs\[1\]: bytes expected, got str"):
+        master.dp_cycle([b"\x01\x01", "no"])
+
+
 def test_the_shipped_segment_scenarios_pass(traces):
     for name in ("three_slaves.scn", "startup_ttr.scn"):
         result = dpc31.SegmentScenario.load(str(traces / "segment" / name)).run()
