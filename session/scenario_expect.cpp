@@ -44,6 +44,8 @@ std::string rises_text(const Seen& seen, bool after) {
     s += fmt::format("{}{} {} ({})", s.empty() ? "" : ", ", after ? "after" : "at",
                      after ? cycle - seen.base_cycle : cycle, causes);
   }
+  if (seen.irq_count > seen.irq_rises.size())
+    s += fmt::format(", and {} more", seen.irq_count - seen.irq_rises.size());
   return s;
 }
 
@@ -185,7 +187,7 @@ scenario_bus::Check check(const ScenarioStep& st, const Seen& seen) {
       if (st.name == "count") {
         what = "irq count";
         want = std::to_string(st.value);
-        got = std::to_string(seen.irq_rises.size());
+        got = std::to_string(seen.irq_count);
         if (got != want) got += ": " + rises_text(seen, true);
         break;
       }

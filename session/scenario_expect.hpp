@@ -24,6 +24,8 @@ namespace dpc31::scenario_expect {
 
 // An X/INT activation: its cycle and Int_Reg at that cycle (the interrupt's causes).
 using IrqRise = std::pair<std::uint64_t, std::uint16_t>;
+// The X/INT activations of an action a failed `expect irq` lists (the rest counted).
+inline constexpr std::size_t kIrqRisesShown = 16;
 
 // What the run has seen when an expect is checked.
 struct Seen {
@@ -37,8 +39,11 @@ struct Seen {
   std::uint32_t baud;                     // the chip's baud rate (0: searching)
   bool pb3;                               // PB3 high now or risen during the last action
   std::function<std::uint32_t(const std::string&)> port;  // a firmware port's value
-  std::span<const IrqRise> irq_rises;                     // X/INT activations in the last action
-  std::uint64_t base_cycle = 0;                           // when the last action began
+  // X/INT activations in the last action: the first kIrqRisesShown and any an expect names, of
+  // irq_count in all.
+  std::span<const IrqRise> irq_rises;
+  std::size_t irq_count = 0;
+  std::uint64_t base_cycle = 0;  // when the last action began
 };
 
 // The bit of interrupt `name`: a one-bit Int_Req_Reg field of `profile` (throws

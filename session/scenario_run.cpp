@@ -114,7 +114,12 @@ class Runner {
     }
     chip_.on_telegram([this](const Telegram&) { check_states(); });
     chip_.on_irq_change([this](std::uint64_t cycle, bool active) {
-      if (active) irq_rises_.emplace_back(cycle, chip_.peek_reg(RegId::Int_Reg));
+      if (active) {
+        ++irq_count_;
+        if (irq_rises_.size() < scenario_expect::kIrqRisesShown ||
+            std::find(irq_asked_.begin(), irq_asked_.end(), cycle) != irq_asked_.end())
+          irq_rises_.emplace_back(cycle, chip_.peek_reg(RegId::Int_Reg));
+      }
       check_states();
     });
     chip_.on_pb3_change([this](std::uint64_t cycle, bool high) {
@@ -143,6 +148,8 @@ class Runner {
         base_pb3_ = pb3_rises_;
         base_cycle_ = chip_.cycle();
         irq_rises_.clear();  // `expect irq` looks at the last action only
+        irq_count_ = 0;
+        ask_irq_cycles(static_cast<std::size_t>(&st - s_.steps.data()));
       }
       note(chip_.cycle(), fmt::format("line {}: {}", st.line, st.text), Event::Kind::step, &st);
       // Requests counted, not history().size(): a long exchange step forgets history as it goes.
@@ -682,6 +689,7 @@ class Runner {
               return static_cast<std::uint32_t>(m51_ ? m51_->port(name) : fw_->port(name));
             },
         .irq_rises = irq_rises_,
+        .irq_count = irq_count_,
         .base_cycle = base_cycle_};
     scenario_bus::Check c = scenario_expect::is_bus(st.expect)
                                 ? scenario_bus::check(chip_, st, last_read_)
@@ -749,13 +757,32 @@ class Runner {
   std::uint16_t irr_isr_ = 0;  // Int_Reg at the ISR entries of the last action
   std::size_t pb3_rises_ = 0;  // PB3 rising edges so far (dpc31 DX_Out port)
   std::size_t base_pb3_ = 0;
-  std::uint64_t base_cycle_ = 0;                     // when the last action began (`after N`)
-  std::vector<scenario_expect::IrqRise> irq_rises_;  // X/INT activations since then
+  std::uint64_t base_cycle_ = 0;  // when the last action began (`after N`)
+  // X/INT activations since then: how many, and those `expect irq` may name (the first
+  // kIrqRisesShown, and those at the cycles the expects after the action ask for: irq_asked_), so
+  // that a long action keeps a few, not one per activation.
+  std::vector<scenario_expect::IrqRise> irq_rises_;
+  std::size_t irq_count_ = 0;
+  std::vector<std::uint64_t> irq_asked_;
   std::uint64_t dp_since_ = 0;  // when dp_ / wd_ were entered, as the walk shows it
   std::uint64_t wd_since_ = 0;
   // The cycle of each firmware port's last write (`expect port NAME V at|after N`); 0 before it.
   std::map<std::string, std::uint64_t> port_since_;
   scenario_bus::LastRead last_read_;  // what `expect read` compares
+
+  // The cycles the `expect irq NAME at|after` of the action that begins at step `i` name: the
+  // expects after it (after the action a fault step damages), base_cycle_ set.
+  void ask_irq_cycles(std::size_t i) {
+    irq_asked_.clear();
+    const std::vector<ScenarioStep>& steps = s_.steps;
+    while (i < steps.size() && steps[i].kind != StepKind::expect) ++i;  // the action itself
+    for (; i < steps.size() && steps[i].kind == StepKind::expect; ++i) {
+      const ScenarioStep& e = steps[i];
+      if (e.expect != ExpectKind::irq || e.name == "count") continue;
+      irq_asked_.push_back(e.when == ScenarioStep::When::after ? base_cycle_ + e.when_cycle
+                                                               : e.when_cycle);
+    }
+  }
 };
 
 }  // namespace

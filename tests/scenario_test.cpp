@@ -518,6 +518,34 @@ TEST(ScenarioRun, IrqActivationAtExactCycle) {
       << errors.lines[1];
 }
 
+// `expect irq` after a long action: every activation counted, the one an expect names found
+// however late, a failure listing the first 16 and how many more. SPC3 at 12 Mbaud, 4 + 4 bytes
+// (docs/timing.md): a Data_Exchange is 13 characters each way, so the master's requests follow
+// each other every 143 + TSDR 11 + 143 + TSYN 33 = 330 bit times = 1320 clocks; DX_Out goes active
+// at each request's last stop sample, (13 x 11 - 1) x 4 + 2 = 570 clocks after its start, the
+// first request starting as the action begins (the line idle since the start-up for longer than
+// TSYN).
+TEST(ScenarioRun, ALongActionCountsEveryIrqAndFindsTheOneAnExpectNames) {
+  const std::string text =
+      "profile spc3\nbaud 12000000\nslave address=5 cfg=13,23 in=4 out=4\nuser user_wd=1\n"
+      "startup\nexchange 3000 outputs=01,02,03,04\n"
+      "expect irq count 3000\n"
+      "expect irq DX_Out after 3959250  # the 3000th: 570 + 2999 x 1320\n"
+      "expect irq DX_Out after 3959251  # wrong on purpose\n";
+  dpc31::Scenario s;
+  dpc31::ScenarioError err;
+  ASSERT_TRUE(dpc31::parse_scenario(text, "t.scn", s, err)) << err.text();
+  Lines errors;
+  const dpc31::ScenarioOutcome o = dpc31::run_scenario(s, {}, errors.sink());
+  EXPECT_EQ(o.passed, 2u);
+  ASSERT_EQ(errors.lines.size(), 1u);
+  std::string listed;
+  for (int k = 0; k < 16; ++k) listed += fmt::format(", after {} (DX_Out)", 570 + k * 1320);
+  // The 3000th is kept too (an expect names its cycle): 17 listed, 2983 more.
+  listed += ", after 3959250 (DX_Out), and 2983 more";
+  EXPECT_EQ(errors.lines[0], "t.scn:9: expected irq DX_Out after 3959251, got " + listed.substr(2));
+}
+
 // A register read through the scenario is two bus accesses of 4 clocks each, in the bus mode's
 // byte placement (docs/timing.md "Bus accesses"; Motorola: the lower address holds bits 15..8,
 // docs/registers.md "hi,lo"), made when the step begins.
@@ -654,6 +682,24 @@ TEST(ScenarioRun, LongRunKeepsTheFirmwareHostFlat) {
   const std::string step = "exchange 100 outputs={:02X},01\n";  // DO4: outputs, OSPValid
   const std::string tail = "expect dp_state Data_Exchange\nexpect irr_bit DX_Out 1\n";
   expect_flat_over_exchanges(head, step, tail);
+}
+
+// One long action: the runner kept every X/INT activation of the action for `expect irq` (16
+// bytes each); it keeps the first 16 and those its expects name, and counts the rest. The heap
+// grows no more (within 16 KiB) over one `exchange 20000` than over one `exchange 2000`.
+TEST(ScenarioRun, ALongActionKeepsItsIrqRecordsFlat) {
+  const std::string head =
+      "profile spc3\nbaud 12000000\nslave address=5 cfg=13,23 in=4 out=4\nuser user_wd=1\n"
+      "startup\n";
+  const std::int64_t short_run = heap_grown_over_steps(head, "exchange 2000 outputs=01,02,03,04\n",
+                                                       1, "expect irq count 2000\n");
+  const std::int64_t long_run = heap_grown_over_steps(head, "exchange 20000 outputs=01,02,03,04\n",
+                                                      1, "expect irq count 20000\n");
+  if (dpc31::test::kHeapCounted) {
+    EXPECT_LE(long_run, short_run + 16 * 1024)
+        << "grown by " << short_run << " bytes over 2 000 exchanges, " << long_run
+        << " over 20 000";
+  }
 }
 
 }  // namespace
