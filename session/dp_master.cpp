@@ -410,7 +410,11 @@ void DpMaster::wait_answer(Exchange& ex) {
     const std::uint64_t at = look();
     for (const UartChar& c : chars_) answer_.push(c);
     answer_.push_block(rx_.due(), rx_.due_start(), t_);
-    if (answer_.finished() && !rx_.receiving()) {
+    // On a segment the wait begins at the request's start (DpMaster::send): before its end,
+    // what the master took (another station's characters still in its receiver) ends no wait, so
+    // that the wait never ends inside the master's own request.
+    const bool inside_request = at < ex.request_end;
+    if (!inside_request && answer_.finished() && !rx_.receiving()) {
       bus_free_ = answer_.end();
       break;
     }
@@ -421,6 +425,11 @@ void DpMaster::wait_answer(Exchange& ex) {
     // bit times). That is the wait's end itself unless a firmware's instruction (an 80C32's)
     // carried the run past it (docs/decisions.md, "The master's per-exchange cost").
     const std::uint64_t wait_end = (answer_.started() ? answer_.end() : ex.request_end) + slot;
+    if (inside_request && !rx_.receiving() && (answer_.finished() || at >= wait_end)) {
+      wake_on_txd_ = false;
+      run_until(ex.request_end);  // where the wait began before: it looks there first
+      continue;
+    }
     if (!rx_.receiving() && at >= wait_end) {
       bus_free_ = at;
       break;

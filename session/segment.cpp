@@ -684,10 +684,9 @@ void Segment::round(std::uint64_t cycle) {
     bound = std::min(bound, next_tree_[1]);  // senders: UINT64_MAX
   }
   // A running firmware makes the chip alone's accesses wherever a round ends (step_station,
-  // cases 1 and 2); in case 3 (its chip drives into another's answer) the colliding edges end its
-  // rounds, as they are their chips' deadlines (an armed answer's edge not yet relayed: look_at).
-  // So neither the stop samples of the line's characters nor an answer's edges once relayed
-  // whole end a round (docs/segment.md, "A running firmware sees the same accesses").
+  // cases 1 and 2); only in a collision (case 3) does its next access start at a round's end, up
+  // to kCpuSlack late (docs/segment.md, "A running firmware sees the same accesses"). So neither
+  // the stop samples of the line's characters nor an answer's edges once relayed whole end a round.
   if (wake_for_ && wake_next_ < wakes_.size()) bound = std::min(bound, wakes_[wake_next_]);
   bound = std::max(bound, now_ + 1);
   // Telegram level: nobody drives before `bound` but what the line's decoder holds already (a
@@ -695,7 +694,7 @@ void Segment::round(std::uint64_t cycle) {
   // that ends before it closes now, before the chips step on: on_telegram comes before what they
   // do later (a scenario's log stays in cycle order, also where the master does not stop at its
   // request's end).
-  if (!reference_ && open_now_) close_telegrams(bound - 1, bound - 1);
+  if (!reference_ && open_now_) close_telegrams(bound, bound - 1);
   // Telegram level: a chip without an event by `bound` whose firmware sleeps is left where it
   // is (it is given the line's characters ahead of time, as a master gives them).
   if (reference_) {

@@ -79,6 +79,32 @@ TEST(DpMaster, AnAnswerThatStopsEndsTheWaitASlotTimeAfterItsLastCharacterThenTsy
   EXPECT_EQ(c.request_start, b.request_end + kTsl + kTsyn);
 }
 
+// An answer later than the slot time is on the line between the wait's end and the next request
+// (docs/timing.md: that request starts TSYN after the wait's end): the master finds it in its
+// receiver when it waits for the next answer, whose wait begins at that request's start on a
+// segment (docs/segment.md, "Masters on it"). It ends no wait inside the master's own request:
+// every request starts after the one before it has ended, and the line sees no collision.
+TEST(DpMaster, ALateAnswerEndsNoWaitInsideTheNextRequest) {
+  Line l;
+  // The rogue's SC 105 bit times after the first request's end, put on the line as the master
+  // is about to send its second request (on_send: the line's time is the first wait's end).
+  std::uint64_t first_end = 0;
+  int sent = 0;
+  l.master.on_send = [&](std::uint64_t start, std::span<const std::uint8_t> request,
+                         const UartFault&) {
+    if (++sent == 1) first_end = start + request.size() * kChar;
+    if (sent == 2)
+      l.seg.send(l.rogue, std::vector<std::uint8_t>{fdl::SC}, first_end + kTsl + 5 * T);
+  };
+  const Exchange a = l.master.fdl_status();
+  EXPECT_FALSE(a.answer);
+  const Exchange b = l.master.fdl_status();
+  EXPECT_EQ(b.request_start, a.request_end + kTsl + kTsyn);
+  const Exchange c = l.master.fdl_status();
+  EXPECT_GE(c.request_start, b.request_end);
+  EXPECT_TRUE(l.seg.collisions().empty());
+}
+
 // clear_history() lends the forgotten exchanges' memory to the next ones (DpMaster::spare_):
 // history() shows each new exchange as it was returned, an unanswered one after an answered one
 // too.
