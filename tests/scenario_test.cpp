@@ -40,6 +40,14 @@ struct Lines {
   }
 };
 
+// `text` as "t.scn" parsed (a parse error fails the test) and run, its failures into `errors`.
+dpc31::ScenarioOutcome run_text(const std::string& text, Lines& errors) {
+  dpc31::Scenario s;
+  dpc31::ScenarioError err;
+  EXPECT_TRUE(dpc31::parse_scenario(text, "t.scn", s, err)) << err.text();
+  return dpc31::run_scenario(s, {}, errors.sink());
+}
+
 // The first parse error of `text` as "FILE:LINE: message"; "" if it parses.
 std::string parse_error(const std::string& text) {
   dpc31::Scenario s;
@@ -503,11 +511,8 @@ TEST(ScenarioRun, IrqActivationAtExactCycle) {
       "expect irq count 1\n"
       "expect irq Go_Leave_Data_Exchange after 5   # wrong on purpose\n"
       "expect irq count 2                          # wrong on purpose\n";
-  dpc31::Scenario s;
-  dpc31::ScenarioError err;
-  ASSERT_TRUE(dpc31::parse_scenario(text, "t.scn", s, err)) << err.text();
   Lines errors;
-  const dpc31::ScenarioOutcome o = dpc31::run_scenario(s, {}, errors.sink());
+  const dpc31::ScenarioOutcome o = run_text(text, errors);
   EXPECT_EQ(o.passed, 2u);
   ASSERT_EQ(errors.lines.size(), 2u);
   EXPECT_TRUE(errors.lines[0].starts_with(
@@ -532,11 +537,8 @@ TEST(ScenarioRun, ALongActionCountsEveryIrqAndFindsTheOneAnExpectNames) {
       "expect irq count 3000\n"
       "expect irq DX_Out after 3959250  # the 3000th: 570 + 2999 x 1320\n"
       "expect irq DX_Out after 3959251  # wrong on purpose\n";
-  dpc31::Scenario s;
-  dpc31::ScenarioError err;
-  ASSERT_TRUE(dpc31::parse_scenario(text, "t.scn", s, err)) << err.text();
   Lines errors;
-  const dpc31::ScenarioOutcome o = dpc31::run_scenario(s, {}, errors.sink());
+  const dpc31::ScenarioOutcome o = run_text(text, errors);
   EXPECT_EQ(o.passed, 2u);
   ASSERT_EQ(errors.lines.size(), 1u);
   std::string listed;
