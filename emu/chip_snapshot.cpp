@@ -271,6 +271,19 @@ void core_fields(Ar& ar, C& c) {
   ar.fixed_bytes(regs.mem);
   ar.section("IRQC");
   irq_fields(ar, irq);
+  if constexpr (requires { ar.fail(""); }) {
+    // X/INT as last shown is what IR and the EOI time make it: a chip tells on_irq_change only
+    // where the two differ, so a stale one would hide the next activation, or report a change
+    // that never was.
+    if (irq.line != c.irq.active())
+      ar.fail(fmt::format("X/INT shown {} where IRR, IMR and the EOI time make it {}",
+                          irq.line ? "active" : "inactive",
+                          c.irq.active() ? "active" : "inactive"));
+    // PB3 is the DPC31's, high from a DX_Out until the user acknowledges it.
+    if (irq.pb3 && (c.prof().id != Profile::dpc31 ||
+                    (regs.latch[static_cast<std::size_t>(RegId::Int_Req_Reg)] & irq::DX_Out) == 0))
+      ar.fail("PB3 high without a DX_Out pending on a DPC31");
+  }
   ar.section("BUFS");
   buffer_fields(ar, A::state(c.buffers));
   if constexpr (requires { ar.fail(""); }) {

@@ -413,7 +413,7 @@ void DpMaster::wait_answer(Exchange& ex) {
     // On a segment the wait begins at the request's start (DpMaster::send): before its end,
     // what the master took (another station's characters still in its receiver) ends no wait, so
     // that the wait never ends inside the master's own request.
-    const bool inside_request = at < ex.request_end;
+    const bool inside_request = seg_ != nullptr && at < ex.request_end;
     if (!inside_request && answer_.finished() && !rx_.receiving()) {
       bus_free_ = answer_.end();
       break;

@@ -88,10 +88,13 @@ enum class ExpectKind : std::uint8_t {
   irq,         // X/INT activations of the last action: one at a cycle, or their count
 };
 
+// The modifiers: a fault that damages the action after it (they count as one action).
+[[nodiscard]] constexpr bool is_fault(StepKind k) {
+  return k == StepKind::corrupt || k == StepKind::bad_fcs;
+}
 // Steps that let time pass (and may send requests), as opposed to modifiers, inputs and checks.
 [[nodiscard]] constexpr bool is_action(StepKind k) {
-  return k != StepKind::expect && k != StepKind::corrupt && k != StepKind::bad_fcs &&
-         k != StepKind::inputs && k != StepKind::hw;
+  return k != StepKind::expect && !is_fault(k) && k != StepKind::inputs && k != StepKind::hw;
 }
 
 // One line of the file. Only the fields its kind uses are meaningful.

@@ -109,7 +109,7 @@ class Parser {
     }
     const ScenarioStep* fault = nullptr;
     for (const ScenarioStep& st : s_.steps) {
-      if (st.kind == StepKind::corrupt || st.kind == StepKind::bad_fcs) {
+      if (is_fault(st.kind)) {
         if (fault != nullptr) {
           fail_at(st.line,
                   fmt::format("a second fault before the request of line {}", fault->line));

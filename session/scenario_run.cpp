@@ -140,7 +140,7 @@ class Runner {
         continue;
       }
       // A fault and the action it damages count as one action for "+N" and irr_bit.
-      const bool modifier = st.kind == StepKind::corrupt || st.kind == StepKind::bad_fcs;
+      const bool modifier = is_fault(st.kind);
       if (modifier || (is_action(st.kind) && !fault_ && !bad_fcs_)) {
         base_counters_ = chip_.fdl_counters();
         interrupts().clear();  // what the ISR saw before this action is not its
@@ -770,15 +770,21 @@ class Runner {
   std::map<std::string, std::uint64_t> port_since_;
   scenario_bus::LastRead last_read_;  // what `expect read` compares
 
-  // The cycles the `expect irq NAME at|after` of the action that begins at step `i` name: the
-  // expects after it (after the action a fault step damages), base_cycle_ set.
+  // The cycles the `expect irq NAME at|after` steps name that judge the action beginning at step
+  // `i` (base_cycle_ set): every one up to the step that begins the next (a fault step, or an
+  // action but the one a fault step at `i` damages), past `inputs` and `hw` steps and expects.
   void ask_irq_cycles(std::size_t i) {
     irq_asked_.clear();
     const std::vector<ScenarioStep>& steps = s_.steps;
-    while (i < steps.size() && steps[i].kind != StepKind::expect) ++i;  // the action itself
-    for (; i < steps.size() && steps[i].kind == StepKind::expect; ++i) {
+    bool damaged_action_to_come = is_fault(steps[i].kind);
+    for (++i; i < steps.size(); ++i) {
       const ScenarioStep& e = steps[i];
-      if (e.expect != ExpectKind::irq || e.name == "count") continue;
+      if (is_fault(e.kind)) break;
+      if (is_action(e.kind)) {
+        if (!std::exchange(damaged_action_to_come, false)) break;
+        continue;
+      }
+      if (e.kind != StepKind::expect || e.expect != ExpectKind::irq || e.name == "count") continue;
       irq_asked_.push_back(e.when == ScenarioStep::When::after ? base_cycle_ + e.when_cycle
                                                                : e.when_cycle);
     }

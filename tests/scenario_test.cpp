@@ -536,16 +536,19 @@ TEST(ScenarioRun, ALongActionCountsEveryIrqAndFindsTheOneAnExpectNames) {
       "startup\nexchange 3000 outputs=01,02,03,04\n"
       "expect irq count 3000\n"
       "expect irq DX_Out after 3959250  # the 3000th: 570 + 2999 x 1320\n"
+      "inputs 05,06,07,08               # no action: the expects after it judge the exchanges\n"
+      "expect irq DX_Out after 1320570  # the 1001st: 570 + 1000 x 1320\n"
       "expect irq DX_Out after 3959251  # wrong on purpose\n";
   Lines errors;
   const dpc31::ScenarioOutcome o = run_text(text, errors);
-  EXPECT_EQ(o.passed, 2u);
+  EXPECT_EQ(o.passed, 3u);
   ASSERT_EQ(errors.lines.size(), 1u);
   std::string listed;
   for (int k = 0; k < 16; ++k) listed += fmt::format(", after {} (DX_Out)", 570 + k * 1320);
-  // The 3000th is kept too (an expect names its cycle): 17 listed, 2983 more.
-  listed += ", after 3959250 (DX_Out), and 2983 more";
-  EXPECT_EQ(errors.lines[0], "t.scn:9: expected irq DX_Out after 3959251, got " + listed.substr(2));
+  // The 1001st and the 3000th are kept too (expects name their cycles): 18 listed, 2982 more.
+  listed += ", after 1320570 (DX_Out), after 3959250 (DX_Out), and 2982 more";
+  EXPECT_EQ(errors.lines[0],
+            "t.scn:11: expected irq DX_Out after 3959251, got " + listed.substr(2));
 }
 
 // A register read through the scenario is two bus accesses of 4 clocks each, in the bus mode's

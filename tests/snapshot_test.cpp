@@ -848,6 +848,28 @@ TEST(SnapshotFormat, TwoDiagBuffersInOneStateAreRefused) {
   }
 }
 
+// X/INT as last shown (CORE irq_line) must be what IRR, IMR and the EOI time make it: a chip tells
+// on_irq_change only where the two differ, so a stale one hid the next activation (CI's fuzz run,
+// docs/robustness.md). PB3 is the DPC31's, high only while DX_Out is pending.
+TEST(SnapshotFormat, XIntOrPb3OtherThanTheInterruptsMakeThemIsRefused) {
+  Chip target = mid_session(Profile::spc3);
+  const Bytes good = target.save_state();
+  const std::size_t line = section_at(good, "CORE") + 4 + 15;  // after now, 3 b, baud, u16, b
+  ASSERT_LE(good[line], 1);
+  const bool active = target.irq_active();
+  ASSERT_EQ(good[line], active ? 1 : 0);
+  Bytes b = good;
+  b[line] = active ? 0 : 1;
+  reseal(b);
+  expect_refused(target, b,
+                 fmt::format("X/INT shown {} where IRR, IMR and the EOI time make it {}",
+                             active ? "inactive" : "active", active ? "active" : "inactive"));
+  b = good;
+  b[line + 1] = 1;  // pb3 on an SPC3
+  reseal(b);
+  expect_refused(target, b, "PB3 high without a DX_Out pending on a DPC31");
+}
+
 class SnapshotFile : public ::testing::Test {
  protected:
   void SetUp() override {
