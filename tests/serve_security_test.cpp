@@ -690,11 +690,16 @@ TEST(ServeSecurity, AFloodDelaysACommandByAtMostTwoLinesPerOtherClient) {
 // count here also takes the lines of the stopped round that ran before the stop (their replies
 // were not sent yet): at most 64 + 1. A lone client's lines go fast: on a loaded machine the
 // test's own pauses can outlast its pipeline, so only the stops that found it still busy count,
-// and there must be enough of them.
+// and there must be enough of them: over up to three floods, each held to the bound (a run beside
+// a build once counted too few in one flood).
 TEST(ServeSecurity, ALonePipelineDelaysACommandByAtMost64Lines) {
-  const FloodWaits w = waits_behind_a_flood(1, 8000, 50);
-  EXPECT_GE(w.counted, 20u);
-  EXPECT_LE(w.worst, 65u);
+  std::size_t counted = 0;
+  for (int flood = 0; flood < 3 && counted < 20 && !HasFailure(); ++flood) {
+    const FloodWaits w = waits_behind_a_flood(1, 8000, 50);
+    EXPECT_LE(w.worst, 65u) << "flood " << flood;
+    counted += w.counted;
+  }
+  EXPECT_GE(counted, 20u);
 }
 
 // New connections on both listeners are taken a few at a time, alternating: 50 TCP connections
