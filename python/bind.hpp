@@ -42,6 +42,33 @@ auto without_gil(F&& f) -> decltype(f()) {
   return f();
 }
 
+// Who runs a chip or a segment now (and so the user sides on it): read and written with the GIL
+// held only.
+struct RunState {
+  bool busy = false;
+  std::thread::id runner;
+};
+// Marks `run` busy in this thread for as long as it lives.
+class Running {
+ public:
+  explicit Running(RunState& run) : run_(run) {
+    run_.busy = true;
+    run_.runner = std::this_thread::get_id();
+  }
+  ~Running() { run_.busy = false; }
+  Running(const Running&) = delete;
+  Running& operator=(const Running&) = delete;
+
+ private:
+  RunState& run_;
+};
+
+// A user side (a Firmware or a Responder) runs whenever the chip or segment it was given to runs.
+// While it runs, a call from another thread is refused, and from an observer (the running thread)
+// one that takes or changes what its ISR may be using (`changes`); an observer may look.
+void user_side_runs_with(const void* user_side, const std::shared_ptr<const RunState>& run);
+void enter_user_side(const void* user_side, bool changes);
+
 // One chip as Python holds it. The GIL is released while the chip runs; Python observers take it
 // again. An observer's exception stops the run (Chip::request_stop) and is raised when the call
 // that ran the chip returns. While the chip runs (`busy`), only the thread running it may look
@@ -56,7 +83,7 @@ class PyChip {
   template <typename F>
   auto run(F&& f) -> decltype(f()) {
     enter(true);
-    Busy busy(*this);
+    const Running running(*run_);
     if constexpr (std::is_void_v<decltype(f())>) {
       without_gil(f);
       rethrow();
@@ -76,19 +103,11 @@ class PyChip {
   // An observer raised: kept until the running call returns.
   std::exception_ptr error;
 
+  // Shared with the user sides given to this chip (user_side_runs_with).
+  [[nodiscard]] const std::shared_ptr<RunState>& run_state() const { return run_; }
+
  private:
-  struct Busy {
-    explicit Busy(PyChip& c) : c_(c) {
-      c_.busy_ = true;
-      c_.runner_ = std::this_thread::get_id();
-    }
-    ~Busy() { c_.busy_ = false; }
-    Busy(const Busy&) = delete;
-    Busy& operator=(const Busy&) = delete;
-    PyChip& c_;
-  };
-  bool busy_ = false;  // read and written with the GIL held only
-  std::thread::id runner_;
+  std::shared_ptr<RunState> run_ = std::make_shared<RunState>();
 };
 
 // A Python object kept by C++ code that may copy it without the GIL: the reference is dropped

@@ -27,8 +27,8 @@ void raise(const py::object& type, const std::string& message,
 }
 
 void PyChip::enter(bool mutating) const {
-  if (!busy_) return;
-  if (runner_ != std::this_thread::get_id()) {
+  if (!run_->busy) return;
+  if (run_->runner != std::this_thread::get_id()) {
     raise(errors().error, "the chip is running in another thread (one thread at a time)");
   }
   if (mutating) {

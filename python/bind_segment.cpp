@@ -117,11 +117,7 @@ class PySegment {
       check_output(outputs->attach_line(seg, codes, e), e);
       line_attached = true;
     }
-    busy_ = true;
-    struct Done {
-      PySegment& s;
-      ~Done() { s.busy_ = false; }
-    } done{*this};
+    const Running running(*run_);
     auto r = without_gil([&] {
       if constexpr (std::is_void_v<decltype(f())>) {
         f();
@@ -135,7 +131,9 @@ class PySegment {
     return r;
   }
   void enter() const {
-    if (busy_) raise(errors().error, "the segment is running (another thread, or an observer)");
+    if (run_->busy) {
+      raise(errors().error, "the segment is running (another thread, or an observer)");
+    }
   }
   // A station may join: with outputs, only before the line first runs (the waveform's scopes are
   // declared then). It joins with joined().
@@ -152,6 +150,8 @@ class PySegment {
     codes.push_back(code);
     return index;
   }
+  // Shared with the stations' user sides (user_side_runs_with).
+  [[nodiscard]] const std::shared_ptr<RunState>& run_state() const { return run_; }
   Chip& chip(const PyStation& s) {
     enter();
     return seg.chip(s.index);
@@ -181,7 +181,7 @@ class PySegment {
       error_ = std::current_exception();
     }
   }
-  bool busy_ = false;
+  std::shared_ptr<RunState> run_ = std::make_shared<RunState>();
   std::exception_ptr error_;
 };
 
@@ -388,6 +388,9 @@ PyStation& add_station(py::object self, U8 address, const std::string& profile,
           Responder* r = raw.responder.get();
           s.seg.set_firmware(raw.index, [r](BusPort& b) { r->isr(b); });
         }
+        user_side_runs_with(raw.firmware ? static_cast<const void*>(raw.firmware.get())
+                                         : static_cast<const void*>(raw.responder.get()),
+                            s.run_state());
       },
       /*joins=*/true);
   check_output(out_error.empty(), out_error);

@@ -5,6 +5,8 @@
 #include <pybind11/operators.h>
 
 #include <memory>
+#include <thread>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -106,10 +108,52 @@ void bind_frames(py::module_& m) {
                     bytes_property(&SlaveConfig::user_prm).second);
 }
 
-// A user side's interrupt records handed over and forgotten: `interrupts` grows for as long as
-// the user side runs, and each read of it converts every record.
+// The run each user side runs with, by its address: every Firmware and Responder is made by a
+// binding that gives it to a chip or segment at once. Read and written with the GIL held.
+std::unordered_map<const void*, std::weak_ptr<const RunState>>& user_side_runs() {
+  static std::unordered_map<const void*, std::weak_ptr<const RunState>> runs;
+  return runs;
+}
+
+}  // namespace
+
+void user_side_runs_with(const void* user_side, const std::shared_ptr<const RunState>& run) {
+  auto& runs = user_side_runs();
+  std::erase_if(runs, [](const auto& e) { return e.second.expired(); });
+  runs[user_side] = run;
+}
+
+void enter_user_side(const void* user_side, bool changes) {
+  const auto& runs = user_side_runs();
+  const auto it = runs.find(user_side);
+  if (it == runs.end()) return;
+  const std::shared_ptr<const RunState> run = it->second.lock();
+  if (!run || !run->busy) return;
+  if (run->runner != std::this_thread::get_id()) {
+    raise(errors().error, "the user side is running in another thread (one thread at a time)");
+  }
+  if (changes) {
+    raise(errors().error,
+          "the user side is running: an observer may look at it (outputs, interrupts, port, ...) "
+          "but not take or change what its ISR uses");
+  }
+}
+
+namespace {
+
+// A user side's records as Python sees them: copies (a list that referred into the user side's
+// own vector pointed into freed memory once the ISR appended or keep_last_output() forgot).
+template <typename UserSide>
+std::vector<std::pair<U64, std::uint16_t>> interrupt_list(const UserSide& u) {
+  enter_user_side(&u, false);
+  return u.interrupts;
+}
+
+// ... handed over and forgotten: `interrupts` grows for as long as the user side runs, and each
+// read of it converts every record.
 template <typename UserSide>
 std::vector<std::pair<U64, std::uint16_t>> take_interrupts(UserSide& u) {
+  enter_user_side(&u, true);
   return std::exchange(u.interrupts, {});
 }
 constexpr const char* kTakeInterruptsDoc =
@@ -125,6 +169,13 @@ py::list port_write_list(const FirmwareHost& f, const std::vector<FirmwareHost::
   return l;
 }
 
+// A Responder's counter, looked at.
+template <std::uint32_t Responder::*Counter>
+std::uint32_t counter(const Responder& r) {
+  enter_user_side(&r, false);
+  return r.*Counter;
+}
+
 // The user side a master's chip runs: a firmware (built-in or plug-in) or the built-in responder.
 void bind_user_side(py::module_& m) {
   py::class_<FirmwareHost, std::shared_ptr<FirmwareHost>>(
@@ -132,20 +183,33 @@ void bind_user_side(py::module_& m) {
       .def_property_readonly("name",
                              [](const FirmwareHost& f) { return std::string(f.firmware().name); })
       .def(
-          "port", [](const FirmwareHost& f, const std::string& name) { return f.port(name); },
+          "port",
+          [](const FirmwareHost& f, const std::string& name) {
+            enter_user_side(&f, false);
+            return f.port(name);
+          },
           py::arg("name"), "A port's current value (0 before its first write); -1: no such port")
-      .def_property_readonly(
-          "port_writes", [](const FirmwareHost& f) { return port_write_list(f, f.port_writes()); })
+      .def_property_readonly("port_writes",
+                             [](const FirmwareHost& f) {
+                               enter_user_side(&f, false);
+                               return port_write_list(f, f.port_writes());
+                             })
       .def(
           "take_port_writes",
-          [](FirmwareHost& f) { return port_write_list(f, f.take_port_writes()); },
+          [](FirmwareHost& f) {
+            enter_user_side(&f, true);
+            return port_write_list(f, f.take_port_writes());
+          },
           "Returns port_writes (cycle, port, value) and forgets them: a long loop calls it, so "
           "memory stays flat; port_writes then holds only the writes since.")
-      .def_readonly("interrupts", &FirmwareHost::interrupts)
+      .def_property_readonly("interrupts", interrupt_list<FirmwareHost>)
       .def("take_interrupts", take_interrupts<FirmwareHost>, kTakeInterruptsDoc)
       .def(
           "hw_input",
           [](FirmwareHost& f, const std::string& name, std::uint32_t value) {
+            // From an observer: an input pin that changes at that cycle, as the firmware's own
+            // hw_input takes it between two of its accesses.
+            enter_user_side(&f, false);
             const std::string why = f.hw_input(name, value);
             if (!why.empty()) throw py::value_error(why);
           },
@@ -156,18 +220,36 @@ void bind_user_side(py::module_& m) {
       .def_readonly("cleared", &Responder::Output::cleared);
   py::class_<Responder, std::shared_ptr<Responder>>(
       m, "Responder", "The minimal built-in user side (session/responder.hpp).")
-      .def_property("inputs", bytes_property(&Responder::inputs).first,
-                    bytes_property(&Responder::inputs).second)
-      .def_readonly("outputs", &Responder::outputs,
-                    "every fetch of new outputs since the last keep_last_output()")
-      .def("keep_last_output", &Responder::keep_last_output,
-           "Forgets every fetch in outputs but the last: a long loop calls it, so memory stays "
-           "flat.")
-      .def_readonly("interrupts", &Responder::interrupts)
+      .def_property(
+          "inputs",
+          [](const Responder& r) {
+            enter_user_side(&r, false);
+            return to_bytes(r.inputs);
+          },
+          [](Responder& r, const py::bytes& b) {
+            enter_user_side(&r, true);
+            r.inputs = from_bytes(b);
+          })
+      .def_property_readonly(
+          "outputs",
+          [](const Responder& r) {
+            enter_user_side(&r, false);
+            return r.outputs;
+          },
+          "every fetch of new outputs since the last keep_last_output() (copies)")
+      .def(
+          "keep_last_output",
+          [](Responder& r) {
+            enter_user_side(&r, true);
+            r.keep_last_output();
+          },
+          "Forgets every fetch in outputs but the last: a long loop calls it, so memory stays "
+          "flat.")
+      .def_property_readonly("interrupts", interrupt_list<Responder>)
       .def("take_interrupts", take_interrupts<Responder>, kTakeInterruptsDoc)
-      .def_readonly("prm_accepted", &Responder::prm_accepted)
-      .def_readonly("cfg_accepted", &Responder::cfg_accepted)
-      .def_readonly("cfg_rejected", &Responder::cfg_rejected);
+      .def_property_readonly("prm_accepted", counter<&Responder::prm_accepted>)
+      .def_property_readonly("cfg_accepted", counter<&Responder::cfg_accepted>)
+      .def_property_readonly("cfg_rejected", counter<&Responder::cfg_rejected>);
 }
 
 // An 80C32 beside the chip, or the DPC31's C31 (session/cpu51_board.hpp, docs/cpu.md): it keeps
@@ -438,6 +520,7 @@ void bind_master(py::module_& m) {
             auto fw = std::make_shared<FirmwareHost>(d);
             pm.start_user_side(slave, [&](BusPort& bus) { fw->init(bus, slave.address); });
             pm.m->set_firmware(fw->program());
+            user_side_runs_with(fw.get(), pm.chip.run_state());
             pm.firmware = fw;
             return fw;
           },
@@ -463,6 +546,7 @@ void bind_master(py::module_& m) {
             r->inputs = from_bytes(inputs);
             pm.start_user_side(rc.slave, [&](BusPort& bus) { r->init(bus); });
             pm.m->set_firmware([r](BusPort& b) { r->isr(b); });
+            user_side_runs_with(r.get(), pm.chip.run_state());
             pm.responder = r;
             return r;
           },

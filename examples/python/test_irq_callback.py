@@ -105,3 +105,25 @@ def test_the_gil_is_released_while_the_chip_runs():
     runner.join()
     assert refused > 0  # the main thread ran Python while the other thread was inside step()
     assert chip.cycle == 4 + 40 * P  # one access of 4 clocks, then the step
+
+
+def test_a_masters_user_side_is_refused_to_another_thread_while_the_master_runs_its_chip():
+    """A user side given to a master's chip runs while the master runs that chip: another thread
+    is refused it (docs/python.md, "A user side runs with its chip or segment")."""
+    import threading
+
+    chip = dpc31.Chip("spc3", engine="per-cycle")
+    master = dpc31.Master(chip, slave=dpc31.SlaveConfig(address=3))
+    r = master.run_responder()
+    runner = threading.Thread(target=master.idle, args=(40 * P,))
+    refused = 0
+    runner.start()
+    while runner.is_alive():
+        try:
+            r.take_interrupts()
+        except dpc31.Error as e:
+            assert "running in another thread" in str(e)
+            refused += 1
+    runner.join()
+    assert refused > 0  # the main thread ran Python while the other thread was inside idle()
+    r.take_interrupts()  # between runs every call works

@@ -239,6 +239,77 @@ def test_a_long_run_takes_its_firmwares_port_writes_so_they_stay_short():
         master.dp_cycle([b"\x01\x01", "no"])
 
 
+def test_a_running_user_side_is_refused_to_another_thread_and_changes_to_an_observer():
+    """While the segment runs, its user sides run: another thread gets a clear error instead of a
+    data race, and an observer (the running thread, between two of the ISR's accesses) may look
+    at a user side but not take or change what its ISR uses. After the run every call works."""
+    import threading
+
+    import pytest
+
+    seg = dpc31.Segment(1_500_000)
+    st = seg.add_station(5, "spc3")
+    fw_st = seg.add_station(6, "dpc31", firmware="DO4")
+    master = seg.add_master(2, [5, 6])
+    assert master.startup_all()
+    r, fw = st.responder, fw_st.firmware
+    started, proceed = threading.Event(), threading.Event()
+    in_observer = {}
+
+    def observer(_):
+        if started.is_set():
+            return
+        in_observer["looked"] = (len(r.interrupts), len(r.outputs), fw.port("outputs"))
+        for name, call in (("take_interrupts", r.take_interrupts),
+                           ("keep_last_output", r.keep_last_output),
+                           ("take_port_writes", fw.take_port_writes),
+                           ("inputs", lambda: setattr(r, "inputs", b"\x01"))):
+            try:
+                call()
+            except dpc31.Error as e:
+                in_observer[name] = str(e)
+        started.set()
+        proceed.wait()  # the GIL released: the main thread calls now
+
+    seg.on_telegram(observer)
+    runner = threading.Thread(target=master.dp_cycle)
+    runner.start()
+    assert started.wait(60)
+    try:
+        for call in (r.take_interrupts, lambda: r.outputs, lambda: r.cfg_accepted,
+                     fw.take_port_writes, lambda: fw.port("outputs"),
+                     lambda: fw.hw_input("inputs", 1)):
+            with pytest.raises(dpc31.Error, match="running in another thread"):
+                call()
+    finally:
+        proceed.set()
+        runner.join()
+    assert len(in_observer["looked"]) == 3
+    for name in ("take_interrupts", "keep_last_output", "take_port_writes", "inputs"):
+        assert "an observer may look" in in_observer[name], name
+    assert len(r.take_interrupts()) > 0 and r.interrupts == []
+    r.keep_last_output()
+    fw.take_port_writes()
+
+
+def test_outputs_are_copies_that_stay_valid():
+    """Responder.outputs gives copies: a list taken earlier keeps its values after the ISR has
+    fetched more outputs and keep_last_output() forgot them (it pointed into freed memory)."""
+    seg = dpc31.Segment(1_500_000)
+    slave = dpc31.SlaveConfig(address=5, cfg=b"\x21", out_len=2)  # 2 bytes out (Cfg 0x21)
+    r = seg.add_station(5, "spc3", slave=slave).responder
+    master = seg.add_master(2, [slave])
+    assert master.startup_all()
+    master.dp_cycle([b"\xa5\x5a"])
+    before = r.outputs
+    kept = [(o.cycle, o.data, o.cleared) for o in before]
+    for i in range(100):
+        master.dp_cycle([bytes([i, 255 - i])])
+    r.keep_last_output()
+    assert [(o.cycle, o.data, o.cleared) for o in before] == kept
+    assert kept[-1][1] == b"\xa5\x5a" and r.outputs[-1].data == bytes([99, 156])
+
+
 def test_the_shipped_segment_scenarios_pass(traces):
     for name in ("three_slaves.scn", "startup_ttr.scn"):
         result = dpc31.SegmentScenario.load(str(traces / "segment" / name)).run()
