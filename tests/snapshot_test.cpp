@@ -533,6 +533,42 @@ TEST(SnapshotFormat, HeaderFields) {
             0xCBF43926u);
 }
 
+// Each section's size after reset, summed from docs/snapshots.md's table (counts are u32; cycles
+// u64; `b` and `u8` one byte): a field the code writes and the table lacks shows here.
+TEST(SnapshotFormat, AfterResetEachSectionHasTheSizeTheTableGives) {
+  const std::vector<std::pair<std::string, std::size_t>> kSections = {
+      {"CORE", 8 + 1 + 1 + 1 + 1 + 2 + 1 + 1 + 1 + 1 + 4 + 1},
+      {"LTCH", 4 + 2 * kRegIdCount},
+      {"MEM ", 0},  // 4 + 2^address_bits, below
+      {"IRQC", 8 + 8 + 8 + 2},
+      {"BUFS", 4 + 4 + 2 + 7},
+      {"DPSM", 1 + 2 + 2 + 4 + 1 + 1 + 3 + 1 + 2 + 2 + 1 + 1 + 3 + 2 + 2 + 1 + 4 + 1},
+      {"TIMR", 8 + 1 + 8 + 1 + 8 + 8 + 8},
+      {"MAC ", 0},  // its own fields lie between FDLA and USMP
+      {"UART", 4 + 1 + 8 + 8 + 4 + 8 + 2 + 8 + 4},
+      {"FDLA", (4 + 4 + 1 + 1) + (3 + 8 + 1 + 8 + 4 + 4 + 8 + 1)},  // then the MAC's fields
+      {"USMP", (4 + 3 + 4 + 8 + 8 + 2 + 8 + 8 + 8) + 3 * (1 + 4 + 4 + 4) + (1 + 4 + 4 + 4 + 4 + 4)},
+      {"CNTR", 20 * 4},
+      {"RQIF", 8 + 8 + 2 + 1},
+      {"SAPL", 1 + 1 + 4 + 4}};
+  for (const auto& [profile, mem, total] :
+       {std::tuple{Profile::spc3, 2048u, 2812u}, std::tuple{Profile::vpc3plus, 4096u, 4860u},
+        std::tuple{Profile::dpc31, 8192u, 8956u}}) {
+    const Bytes s = Chip(ChipOptions{profile}).save_state();
+    EXPECT_EQ(s.size(), total) << "docs/snapshots.md gives the size after reset";
+    std::size_t at = snap::kHeaderSize;
+    for (std::size_t i = 0; i < kSections.size(); ++i) {
+      const auto& [tag, size] = kSections[i];
+      ASSERT_LE(at + 4, s.size());
+      ASSERT_EQ(std::string(s.begin() + static_cast<std::ptrdiff_t>(at),
+                            s.begin() + static_cast<std::ptrdiff_t>(at + 4)),
+                tag);
+      at += 4 + (tag == "MEM " ? 4 + mem : size);
+    }
+    EXPECT_EQ(at, s.size()) << "the payload ends after SAPL";
+  }
+}
+
 // Loading `bytes` into `c` throws a SnapshotError whose message contains `expected`, and leaves
 // the chip as it was.
 void expect_refused(Chip& c, const Bytes& bytes, const std::string& expected) {
