@@ -38,7 +38,14 @@ bool load_scenario(const std::string& path, Scenario& out, ScenarioError& err) {
   std::string text;
   std::string untrusted;
   if (!read_scenario_file(path, text, untrusted, err)) return false;
-  if ((err.line = cut_off_line(text, err.message)) != 0) return false;
+  err.line = cut_or_earlier_error(text, err.message, [&](const std::string& whole, std::string& m) {
+    Scenario s;
+    ScenarioError e;
+    if (parse_scenario(whole, path, s, e)) return 0;
+    m = e.message;
+    return e.line;
+  });
+  if (err.line != 0) return false;
   if (!parse_scenario(text, path, out, err)) return false;
   out.untrusted = untrusted;
   return true;

@@ -450,7 +450,14 @@ bool load_trace(const std::string& path, Trace& out, TraceError& err) {
   err = TraceError{path, 0, {}};
   std::string text;
   if (!read_text_file(path, kMaxFileBytes, "trace", text, err.message)) return false;
-  if ((err.line = cut_off_line(text, err.message)) != 0) return false;
+  err.line = cut_or_earlier_error(text, err.message, [&](const std::string& whole, std::string& m) {
+    Trace t;
+    TraceError e;
+    if (parse_trace(whole, path, t, e)) return 0;
+    m = e.message;
+    return e.line;
+  });
+  if (err.line != 0) return false;
   return parse_trace(text, path, out, err);
 }
 

@@ -63,6 +63,12 @@ TEST_F(BadInput, RunScenarioFile) {
        path("garbage.scn") + ":1: unknown command '\\x7FELF\\x01\\x02\\x03'"},
       {"binary", file("nul.scn", std::string("startup\n\0\0\0\n", 12)),
        path("nul.scn") + ":2: unknown command '\\x00\\x00\\x00'"},
+      // A binary file seldom ends in a newline: its first line is what is wrong, not its end.
+      {"garbage cut",
+       file("garbage_cut.scn",
+            "\x7f"
+            "ELF\x01\x02\x03\n\xff\xfe"),
+       path("garbage_cut.scn") + ":1: unknown command '\\x7FELF\\x01\\x02\\x03'"},
   };
   fs::create_directory(path("dir"));
   spit(path("old.json"), "old");
@@ -203,6 +209,12 @@ TEST_F(BadInput, ReplayTraceFile) {
             "\x7f"
             "ELF\x01\x02\x03\n\xff\xfe\n"),
        path("garbage.trace") + ":1: not a dpc31 trace (the first line must be 'dpc31-trace 1')"},
+      {"garbage cut",
+       file("garbage_cut.trace",
+            "\x7f"
+            "ELF\x01\x02\x03\n\xff\xfe\nx"),
+       path("garbage_cut.trace") +
+           ":1: not a dpc31 trace (the first line must be 'dpc31-trace 1')"},
   };
   for (const FileCase& c : cases) {
     const Outcome r = dpc31("replay " + c.path);
@@ -392,6 +404,19 @@ TEST_F(BadWaves, VcdFiles) {
                  "tail.vcd:" + std::to_string(std::count(vcd_.begin(), vcd_.end(), '\n')) +
                      ": truncated: the last line has no end of line",
                  "cut in the last line");
+  // Cut inside the last time stamp: "#1234" cut to "#12" is a time going backwards, but the
+  // error is the cut (an outside user was told "time goes backwards").
+  const std::size_t last_time = vcd_.rfind("\n#") + 1;
+  ASSERT_GT(vcd_.find('\n', last_time), last_time + 3);
+  file("time.vcd", vcd_.substr(0, last_time + 3));
+  expect_refused(
+      "time.vcd",
+      "time.vcd:" +
+          std::to_string(std::count(vcd_.begin(),
+                                    vcd_.begin() + static_cast<std::ptrdiff_t>(last_time), '\n') +
+                         1) +
+          ": truncated: the last line has no end of line",
+      "cut in the last time stamp");
   file("garbage.vcd",
        "\x7f"
        "ELF\x01\x02\x03\n");

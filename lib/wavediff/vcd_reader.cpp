@@ -189,6 +189,7 @@ class VcdReader final : public WaveReader {
   bool eof_ = false;
   bool any_byte_ = false;
   char last_byte_ = '\n';
+  bool cut_ = false;  // the token next_token() gave last runs into the end of the file
   std::uint64_t line_ = 1;
   std::uint64_t tok_line_ = 1;
   IdTable ids_;
@@ -215,7 +216,9 @@ class VcdReader final : public WaveReader {
   std::size_t agreed_ = 0;
 
   [[noreturn]] void error(std::uint64_t line, const std::string& what) const {
-    fail(path_, line, what);
+    // The token in hand was cut with the file's last line: that is the error, not what the cut
+    // token would mean (a time "#125" of "#1255583333" going backwards, a keyword cut short).
+    fail(path_, line, cut_ ? "truncated: the last line has no end of line" : what);
   }
 
   // Reads more input after keeping buf_[keep_from, end_), or from the start of the current step
@@ -266,6 +269,7 @@ class VcdReader final : public WaveReader {
   // Next whitespace-separated token (a view into the buffer, valid until the next call).
   // Scans with local pointers: through the members, every byte would store pos_ and line_.
   bool next_token(std::string_view& tok) {
+    cut_ = false;
     for (;;) {
       const char* const b = buf_.data();
       const char* p = b + pos_;
@@ -296,7 +300,10 @@ class VcdReader final : public WaveReader {
     token_end:
       pos_ = static_cast<std::size_t>(p - b);
       if (p < e) break;
-      if (!refill(start)) break;  // moves the token (and start) down to the buffer's start
+      if (!refill(start)) {
+        cut_ = true;
+        break;
+      }
     }
     tok = std::string_view(buf_.data() + start, pos_ - start);
     return true;

@@ -16,6 +16,22 @@ bool read_text_file(const std::string& path, std::size_t max_bytes, std::string_
 // 0 if `text` is empty or ends with '\n', else the number of its last line, with `error` set.
 int cut_off_line(std::string_view text, std::string& error);
 
+// cut_off_line for a file whose format ignores blank lines, read line by line: the text with its
+// cut line blank is parsed first, and an error `parse` finds before that line is the file's (a
+// binary file is refused at its first line, not for a cut last line); one there or after it, or
+// of the file as a whole (a missing 'end' line, line 0), is the cut's. `parse(text, message)`
+// returns the line it failed at with `message` set, or 0. 0 if the last line is not cut.
+template <typename Parse>
+int cut_or_earlier_error(std::string_view text, std::string& error, Parse parse) {
+  const int cut = cut_off_line(text, error);
+  if (cut == 0) return 0;
+  std::string earlier;
+  const int at = parse(std::string(text.substr(0, text.rfind('\n') + 1)) + '\n', earlier);
+  if (at <= 0 || at >= cut) return cut;
+  error = std::move(earlier);
+  return at;
+}
+
 // A token as it may appear in a one-line message: printable (other bytes as \xHH), at most 40
 // characters and "...".
 std::string shown(std::string_view s);
