@@ -53,7 +53,11 @@ struct Fail {
 std::uint64_t dec(std::string_view s, std::string_view what) {
   std::uint64_t v = 0;
   const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v, 10);
-  if (s.empty() || ec != std::errc() || p != s.data() + s.size() || v > kMaxCycle) {
+  const bool digits = !s.empty() && p == s.data() + s.size();
+  if (digits && (ec == std::errc::result_out_of_range || v > kMaxCycle)) {
+    fail(fmt::format("{} '{}' out of range (at most {})", what, shown(s), kMaxCycle));
+  }
+  if (!digits || ec != std::errc()) {
     fail(fmt::format("bad {} '{}' (a decimal number)", what, shown(s)));
   }
   return v;
