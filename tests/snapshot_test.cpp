@@ -970,6 +970,17 @@ TEST_F(SnapshotFile, FailedSaveThrowsAndLeavesNoTemporaryFile) {
   } else {
     expect_throw("/proc/dpc31-snapshot-test.snap");
   }
+  // No name: refused before a temporary file ".PID.tmp" is made in the working directory.
+  const fs::path cwd = fs::current_path();
+  fs::current_path(dir_);
+  try {
+    a.save_state_file("");
+    ADD_FAILURE() << "saved to an empty name";
+  } catch (const SnapshotError& e) {
+    EXPECT_STREQ(e.what(), "an empty file name: nothing can be written there");
+  }
+  fs::current_path(cwd);
+  EXPECT_EQ(listing(dir_), (std::vector<std::string>{"read-only", "taken"}));
 }
 
 TEST_F(SnapshotFile, LoadErrorsNameThePath) {

@@ -25,6 +25,11 @@ std::string errno_text(int e) { return std::error_code(e, std::generic_category(
 
 std::string create_temp(const std::string& path,
                         const std::function<int(const std::string&)>& create, std::string& error) {
+  // "" would make ".PID.tmp" in the working directory and then fail to rename it over nothing.
+  if (path.empty()) {
+    error = "an empty file name: nothing can be written there";
+    return {};
+  }
   // The pid keeps two processes apart; the counter two temporaries of one process (or a leftover
   // of a killed run with a recycled pid).
   for (int attempt = 0; attempt < 100; ++attempt) {
