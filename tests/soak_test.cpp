@@ -138,6 +138,27 @@ TEST(SoakCli, ReportsTheTableAndExitCodes) {
   EXPECT_EQ(j.at("ok"), true);
   EXPECT_GE(j.at("cycles").get<std::uint64_t>(), 4'000'000u);
   EXPECT_EQ(j.at("counters").size(), 20u + 10u);  // every FdlCounters field, master, firmware, data
+  EXPECT_EQ(j.at("profile"), "dpc31");
+  EXPECT_EQ(j.at("irq_controller"), "external");
+  EXPECT_FALSE(j.contains("variant"));
+  std::filesystem::remove(json);
+
+  // The chip as run, defaults named (docs/soak.md): the VPC3+'s variant c, the C31 as controller.
+  const testutil::CommandResult v = testutil::run_command(
+      std::string(DPC31_CLI) +
+      " soak --profile vpc3plus --cycles 600000 --fault-period 400000 --json " + json + " 2>&1");
+  EXPECT_EQ(v.rc, 0) << v.out;
+  EXPECT_TRUE(v.out.starts_with("dpc31 soak: profile vpc3plus variant c, 1500000 baud")) << v.out;
+  const nlohmann::json jv = nlohmann::json::parse(std::ifstream(json));
+  EXPECT_EQ(jv.at("variant"), "c");
+  EXPECT_EQ(jv.at("irq_controller"), "external");
+  const testutil::CommandResult c = testutil::run_command(
+      std::string(DPC31_CLI) +
+      " soak --irq-controller c31 --cycles 600000 --fault-period 400000 --json " + json + " 2>&1");
+  EXPECT_EQ(c.rc, 0) << c.out;
+  EXPECT_TRUE(c.out.starts_with("dpc31 soak: profile dpc31, irq-controller c31, 1500000 baud"))
+      << c.out;
+  EXPECT_EQ(nlohmann::json::parse(std::ifstream(json)).at("irq_controller"), "c31");
   std::filesystem::remove(json);
 
   const testutil::CommandResult bad = testutil::run_command(cmd + " --unaccounted-fault stop 2>&1");

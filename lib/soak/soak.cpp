@@ -405,10 +405,16 @@ int run_cli(const Options& o, std::FILE* out, std::FILE* err) {
     fmt::print(err, "dpc31 soak: {}\n", e.what());
     return 2;
   }
-  fmt::print(
-      out, "dpc31 soak: profile {}{}, {} baud, TWD {} ms, a fault every {} cycles, seed {}{}\n",
-      o.profile, o.chip.irq_controller == "c31" ? ", irq-controller c31" : "", o.baud, r.twd_ms,
-      o.fault_period, o.seed, o.firmware.empty() ? "" : ", firmware " + o.firmware);
+  // The chip as run, defaults named: a report or JSON alone tells which chip it was.
+  const std::string variant =
+      o.profile != "vpc3plus" ? "" : (o.chip.variant.empty() ? "c" : o.chip.variant);
+  const std::string irq_controller =
+      o.chip.irq_controller.empty() ? "external" : o.chip.irq_controller;
+  fmt::print(out,
+             "dpc31 soak: profile {}{}{}, {} baud, TWD {} ms, a fault every {} cycles, seed {}{}\n",
+             o.profile, variant.empty() ? "" : " variant " + variant,
+             irq_controller == "c31" ? ", irq-controller c31" : "", o.baud, r.twd_ms,
+             o.fault_period, o.seed, o.firmware.empty() ? "" : ", firmware " + o.firmware);
   const double hz = r.clock_hz;
   fmt::print(out,
              "cycles {} ({:.3f} s of chip time), {} after the start-up; wall {:.2f} s ({:.1f}x "
@@ -438,6 +444,8 @@ int run_cli(const Options& o, std::FILE* out, std::FILE* err) {
   if (!o.json.empty()) {
     nlohmann::json j;
     j["profile"] = o.profile;
+    if (!variant.empty()) j["variant"] = variant;
+    j["irq_controller"] = irq_controller;
     j["baud"] = o.baud;
     j["seed"] = o.seed;
     if (!o.firmware.empty()) j["firmware"] = o.firmware;
