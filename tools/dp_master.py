@@ -10,9 +10,10 @@ then FDL telegrams (EN 50170: SD1/SD2, FCS, FCB/FCV) with a timeout per answer. 
         --user-prm 00,00,00,64 --outputs 05,01
 
 Several slaves (`dpc31 bridge --slave ...`, docs/bridge.md "Several slaves"): `--slave` once per
-station, ADDR or ADDR:IDENT:CFG[:USER_PRM[:OUTPUTS]] (hex bytes as for --cfg; what is left out comes
-from --ident, --cfg, --user-prm, --outputs). Each is started up in turn, then every DP cycle
-exchanges data with each in the order given; the lines of a station begin with "slave ADDR: ".
+station, ADDR or ADDR:IDENT:CFG[:USER_PRM[:OUTPUTS]] (hex bytes as for --cfg; what is left out
+comes from --ident, --cfg, --user-prm, --outputs, or the zeros its CFG gives). Each is started up
+in turn, then every DP cycle exchanges data with each in the order given; the lines of a station
+begin with "slave ADDR: ".
 
     python3 tools/dp_master.py socket://127.0.0.1:5000 --slave 5:0x0D04:21,10:00,00,00,64:05,01 \
         --slave 6:0x0C31:13,23:00:01,02,03,04
