@@ -239,7 +239,21 @@ def tcp_bad_arguments():
         busy.close()
 
 
+def doc_commands_tcp():
+    """docs/bridge.md, "Over TCP": the bridge on a TCP port and tools/dp_master.py as written
+    there (the port the kernel picks for 5000)."""
+    args, master = bt.doc_commands("build/bin/dpc31 bridge --tcp 5000 ")
+    with tempfile.TemporaryDirectory() as tmp:
+        b = TcpBridge(tmp, *args)
+        try:
+            bt.run_doc_master(master, b.url, "socket://127.0.0.1:5000")
+            b.stop()
+        finally:
+            b.kill()
+
+
 CASES = {
+    "doc_commands_tcp": doc_commands_tcp,
     "tcp_bad_arguments": tcp_bad_arguments,
     "tcp_two_clients_and_garbage": tcp_two_clients_and_garbage,
     "pcap_tshark_fields": pcap_tshark_fields,

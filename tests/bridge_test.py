@@ -13,6 +13,7 @@ Python 3 standard library only.
 import fcntl
 import os
 import select
+import shlex
 import signal
 import struct
 import subprocess
@@ -653,6 +654,48 @@ def answer_dropped_without_client():
             b.kill()
 
 
+SOURCE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
+
+
+def doc_commands(bridge_line):
+    """docs/bridge.md's bridge command that begins with `bridge_line` and the tools/dp_master.py
+    command after it, each as its words: the bridge's arguments after its line option (`--pty
+    PATH`, `--tcp PORT`; the `&` left out), the master's whole command line."""
+    with open(os.path.join(SOURCE, "docs", "bridge.md"), encoding="utf-8") as f:
+        lines = f.read().splitlines()
+    at = lines.index(next(line for line in lines
+                          if line.startswith(bridge_line) and line.endswith(" &")))
+    bridge = shlex.split(lines[at])
+    master = next(line for line in lines[at:] if line.startswith("python3 tools/dp_master.py"))
+    return bridge[4:-1], shlex.split(master)
+
+
+def run_doc_master(master, device, doc_device):
+    """The documented master command, run from the source tree with `device` for the doc's
+    `doc_device` (the only word changed): it reaches Data_Exchange with DO4 and sends zeros,
+    the outputs its Cfg 21 10 gives (it sent an SD2 with LE 3 that the chip counts as bad_le,
+    exit 1; the audit of 2026-12-05)."""
+    check(doc_device in master, f"the documented command has no {doc_device}: {master}")
+    argv = [sys.executable if w == "python3" else device if w == doc_device else w for w in master]
+    r = subprocess.run(argv, cwd=SOURCE, capture_output=True, text=True, timeout=3 * GUARD,
+                       check=False)
+    check(r.returncode == 0, f"{' '.join(master)}: exit {r.returncode}: {r.stdout} {r.stderr}")
+    check("Data_Exchange 00 00: inputs 00" in r.stdout, r.stdout)
+
+
+def doc_commands_pty():
+    """docs/bridge.md, "With a master program": the bridge on a pty and tools/dp_master.py as
+    written there (a temporary path for /tmp/dp0)."""
+    args, master = doc_commands("build/bin/dpc31 bridge --pty /tmp/dp0 ")
+    with tempfile.TemporaryDirectory() as tmp:
+        b = Bridge(tmp, *args)
+        try:
+            run_doc_master(master, b.path, "/tmp/dp0")
+            b.stop()
+        finally:
+            b.kill()
+
+
 def dpv1_over_bridge(firmware, master_args, body):
     """A VPC3+ with `firmware` behind the bridge (free pacing, 19200 baud); `body(run)` calls
     run(*dpv1_options) for each client: tools/dp_master.py with `master_args` and those options,
@@ -722,6 +765,7 @@ def do4_dpv1_read_write():
                              "C0,20,00,01,09,00", "--outputs", "05,01"], body)
 
 CASES = {
+    "doc_commands_pty": doc_commands_pty,
     "dpv1_plugin_read_write": dpv1_plugin_read_write,
     "do4_dpv1_read_write": do4_dpv1_read_write,
     "do4_realtime_two_clients": lambda: do4_two_clients("realtime"),

@@ -7,17 +7,28 @@ requests of the search still queued at the end), or held and let go in bursts (t
 ASan build beside two helpers' builds: the answer to the request lost the second time came in
 one read with the second search's FDL_Status answers, "186 bytes too many").
 
+Then its options and its errors (the audit of 2026-12-05): hex bytes, the outputs the Cfg gives,
+the range checks, and the program's exits on bad arguments, on a device that is not a serial
+device and when the device goes away during the run (a pty whose other side closes, a TCP
+connection reset), each one line on stderr.
+
 Usage: dp_master_tool_test.py CASE. Exit 0 when the case holds, 1 with its failure."""
 
+import argparse
 import os
 import queue
 import socket
+import struct
+import subprocess
 import sys
+import tempfile
 import threading
 import time
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tools"))
-from dp_master import SD1, SD2, Fail, Master, check, frame_length, hexs, sd1, sd2  # noqa: E402
+TOOL = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tools", "dp_master.py")
+sys.path.insert(0, os.path.dirname(TOOL))
+from dp_master import (IDENT, SD1, SD2, STATION, Fail, Master, Parser, byte_list,  # noqa: E402
+                       cfg_outputs, check, frame_length, hexs, sd1, sd2, slave_spec, slaves_of)
 
 MASTER, SLAVE = 2, 5
 TIMEOUT = 1.0  # the master's answer timeout (--timeout)
@@ -180,9 +191,188 @@ def foreign_saps_are_not_ours():
         m.close()
 
 
+def refused(convert, text, want):
+    """`convert(text)` is an argparse type error whose message holds `want`."""
+    try:
+        got = convert(text)
+    except argparse.ArgumentTypeError as e:
+        check(want in str(e), f"{text!r}: {e}")
+        return
+    raise Fail(f"{text!r} taken as {got!r}")
+
+
+def hex_bytes_and_ranges():
+    """byte_list: with commas every item is one byte of 1 or 2 hex digits, without commas pairs
+    (the audit: '5,1' was one byte 51h, '1,2,3,4' two bytes 12h 34h); the station address and
+    Ident_Number ranges; the output bytes a Cfg gives (EN 50170: general and special format)."""
+    for text, want in (("5,1", [0x05, 0x01]), ("1,2,3,4", [1, 2, 3, 4]), ("21,10", [0x21, 0x10]),
+                       ("2110", [0x21, 0x10]), ("a,Bc", [0x0A, 0xBC]), ("", [])):
+        check(byte_list(text) == want, f"byte_list({text!r}) = {byte_list(text)}")
+    for text, want in (("5,123", "'123' is not a byte"), ("5,,1", "'' is not a byte"),
+                       ("21,", "'' is not a byte"), ("5,x", "'x' is not a byte"),
+                       ("211", "an odd number of hex digits"), ("21 10", "not hex bytes")):
+        refused(byte_list, text, want)
+    check(STATION("0") == 0 and STATION("125") == 125 and IDENT("0xFFFF") == 0xFFFF, "ranges")
+    for convert, text in ((STATION, "126"), (STATION, "300"), (STATION, "-1"), (STATION, "x"),
+                          (IDENT, "0x1FFFF"), (IDENT, "-1"), (IDENT, "0xZZ")):
+        refused(convert, text, f"'{text}': not a")
+    # 21 10: 2 output bytes, 1 input; 63h: 4 output words; 00h an empty slot; 80h 01h: special,
+    # an output length byte (2 bytes); C0h 41h 03h: special, output then input length byte (2
+    # words out); 42h 05h AA BB: special, an input length byte, 2 bytes of manufacturer data.
+    for cfg, outputs in (([0x21, 0x10], 2), ([0x63], 8), ([0x00], 0), ([0x10], 0),
+                         ([0x80, 0x01], 2), ([0xC0, 0x41, 0x03], 4),
+                         ([0x42, 0x05, 0xAA, 0xBB, 0x20], 1)):
+        check(cfg_outputs(cfg) == outputs, f"Cfg {hexs(cfg)}: {cfg_outputs(cfg)} outputs")
+    for cfg in ([0x80], [0xC0, 0x01], [0x41, 0x00], [0x0F]):
+        try:
+            cfg_outputs(cfg)
+            raise Fail(f"Cfg {hexs(cfg)} sized")
+        except ValueError:
+            pass
+    # No outputs: the Data_Exchange is an SD1 request (an SD2 has LE 4 at least: DA, SA, FC and
+    # one byte; the chip counts LE 3 as bad_le).
+    m = Master.__new__(Master)
+    m.slave, m.address, m.fcb, m.fcv = SLAVE, MASTER, True, False
+    for du, want in (([], sd1(SLAVE, MASTER, 0x4D)), ([0, 0], sd2(SLAVE, MASTER, 0x6D, [0, 0]))):
+        got = m.srd_frame(du, None)
+        check(got == want, f"Data_Exchange {hexs(du)}: {hexs(got)}, expected {hexs(want)}")
+
+
+def outputs_from_the_cfg():
+    """Each station's settings (slaves_of): without --outputs the Data_Exchange carries as many
+    zeros as the Cfg gives output bytes (the audit: an empty one, an SD2 with LE 3, was never
+    answered); --outputs of another length, a Cfg that cannot be sized without --outputs and a
+    data unit over 244 bytes are refused with one line naming the station."""
+    def stations(*argv):
+        p = Parser()
+        for name, kind in (("--slave", slave_spec), ("--ident", IDENT), ("--cfg", byte_list),
+                           ("--user-prm", byte_list), ("--outputs", byte_list)):
+            p.add_argument(name, type=kind, **({"action": "append"} if name == "--slave" else {}))
+        args = p.parse_args(argv)
+        args.user_prm = args.user_prm or []
+        args.watchdog = [0x64, 0x0A]
+
+        def error(message):
+            raise Fail(message)
+        return slaves_of(args, error)
+    for argv, outputs in ((["--ident", "1", "--cfg", "21,10"], [[0, 0]]),
+                          (["--ident", "1", "--cfg", "10"], [[]]),
+                          (["--ident", "1", "--cfg", "80", "--outputs", "1,2,3"], [[1, 2, 3]]),
+                          (["--ident", "1", "--cfg", "21,10", "--slave", "5",
+                            "--slave", "6:2:13,23::1,2,3,4"], [[0, 0], [1, 2, 3, 4]])):
+        got = [s.outputs for s in stations(*argv)]
+        check(got == outputs, f"{argv}: outputs {got}")
+    many = ",".join(["01"] * 300)
+    for argv, want in (
+            (["--ident", "1", "--cfg", "21,10", "--outputs", "5,1,2"],
+             "station 5: 3 output bytes, its Chk_Cfg gives 2 (the slave would answer RS)"),
+            (["--ident", "1", "--cfg", "80"], "station 5: Chk_Cfg: the special identifier 80 "
+             "(byte 1) runs past the end; give its outputs (--outputs)"),
+            (["--ident", "1", "--cfg", "7F" * 8],
+             "station 5: a Data_Exchange of 256 bytes (at most 244)"),
+            (["--ident", "1", "--cfg", many, "--outputs", "01"],
+             "station 5: a Chk_Cfg of 300 bytes (at most 244)"),
+            (["--ident", "1", "--cfg", "10", "--user-prm", many],
+             "station 5: a Set_Prm of 307 bytes (at most 244)")):
+        try:
+            stations(*argv)
+            raise Fail(f"{argv} taken")
+        except Fail as e:
+            check(str(e) == want, f"{argv}: {e}")
+
+
+def run_tool(*args):
+    """tools/dp_master.py with `args`: (exit code, stdout, stderr's lines)."""
+    r = subprocess.run([sys.executable, TOOL] + list(args), capture_output=True, text=True,
+                       timeout=60, check=False)
+    return r.returncode, r.stdout, r.stderr.splitlines()
+
+
+def exits(want_code, want, *args):
+    """tools/dp_master.py with `args` exits `want_code` with one line on stderr holding `want`."""
+    code, _, err = run_tool(*args)
+    check(code == want_code and len(err) == 1 and want in err[0],
+          f"dp_master.py {' '.join(args)}: exit {code}, stderr {err}")
+
+
+DO4 = ["--ident", "0x0D04", "--cfg", "21,10"]
+
+
+def bad_arguments_exit_2():
+    """Usage errors, of each kind (an option's type, the stations' settings, a check after
+    parsing): exit 2, one line on stderr (no usage lines, no traceback), before the device is
+    opened. Each station's settings are checked in-process by outputs_from_the_cfg."""
+    many = ",".join(["01"] * 300)
+    for want, args in (
+            ("--address: '300': not a station address 0..125", ["--address", "300"] + DO4),
+            ("--ident: '0x1FFFF': not an Ident_Number 0..0xFFFF",
+             ["--ident", "0x1FFFF", "--cfg", "21,10"]),
+            ("--outputs: '5,123': '123' is not a byte", ["--outputs", "5,123"] + DO4),
+            ("station 5: 300 output bytes, its Chk_Cfg gives 2", ["--outputs", many] + DO4),
+            ("--dpv1-write: a DPV1 PDU of 245 bytes", ["--dpv1-write", many[:3 * 243 - 1]] + DO4)):
+        exits(2, want, "/nonexistent", *args)
+
+
+def not_a_serial_device_exit_2():
+    """A device that is no tty (/dev/null, a regular file): exit 2, one line (it was a
+    termios.error traceback)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        plain = os.path.join(tmp, "file")
+        with open(plain, "w", encoding="utf-8"):
+            pass
+        for device in ("/dev/null", plain):
+            exits(2, f"{device}: not a serial device (Inappropriate ioctl for device)", device,
+                  *DO4)
+
+
+def device_lost_pty():
+    """The pty's other side closes during the run (the bridge stopped): exit 3, one line, no
+    traceback (it was termios.error from tcflush)."""
+    master, slave = os.openpty()  # the slave side held until the program has it open
+    path = os.ttyname(slave)
+    p = subprocess.Popen([sys.executable, TOOL, path, "--ident", "0x0D04", "--cfg", "21,10"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        os.read(master, 6)  # its first FDL_Status: it has the device open
+        os.close(slave)
+        os.close(master)
+        _, err = p.communicate(timeout=60)
+    finally:
+        if p.poll() is None:
+            p.kill()
+    lines = err.splitlines()
+    check(p.returncode == 3 and len(lines) == 1 and "dp_master: the device went away" in lines[0],
+          f"exit {p.returncode}, stderr {lines}")
+
+
+def device_lost_tcp():
+    """The TCP connection is reset during the run (the bridge killed), and in another run closed:
+    exit 3, one line each (a reset was a ConnectionResetError traceback)."""
+    for reset, want in ((True, "the device went away (Connection reset by peer)"),
+                        (False, "the bridge closed the connection")):
+        server = socket.create_server(("127.0.0.1", 0))
+
+        def serve(server=server, reset=reset):
+            conn, _ = server.accept()
+            conn.recv(6)  # its first FDL_Status
+            if reset:
+                conn.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+            conn.close()
+        threading.Thread(target=serve, daemon=True).start()
+        exits(3, want, f"socket://127.0.0.1:{server.getsockname()[1]}", "--ident", "0x0D04",
+              "--cfg", "21,10")
+        server.close()
+
+
 CASES = {"slow_line_search_drained": slow_line_search_drained,
          "late_answer_before_the_search": late_answer_before_the_search,
-         "foreign_saps_are_not_ours": foreign_saps_are_not_ours}
+         "foreign_saps_are_not_ours": foreign_saps_are_not_ours,
+         "hex_bytes_and_ranges": hex_bytes_and_ranges,
+         "outputs_from_the_cfg": outputs_from_the_cfg,
+         "bad_arguments_exit_2": bad_arguments_exit_2,
+         "not_a_serial_device_exit_2": not_a_serial_device_exit_2,
+         "device_lost_pty": device_lost_pty,
+         "device_lost_tcp": device_lost_tcp}
 
 
 def main():

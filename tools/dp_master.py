@@ -10,9 +10,10 @@ then FDL telegrams (EN 50170: SD1/SD2, FCS, FCB/FCV) with a timeout per answer. 
         --user-prm 00,00,00,64 --outputs 05,01
 
 Several slaves (`dpc31 bridge --slave ...`, docs/bridge.md "Several slaves"): `--slave` once per
-station, ADDR or ADDR:IDENT:CFG[:USER_PRM[:OUTPUTS]] (hex bytes as for --cfg; what is left out comes
-from --ident, --cfg, --user-prm, --outputs). Each is started up in turn, then every DP cycle
-exchanges data with each in the order given; the lines of a station begin with "slave ADDR: ".
+station, ADDR or ADDR:IDENT:CFG[:USER_PRM[:OUTPUTS]] (hex bytes as for --cfg; what is left out
+comes from --ident, --cfg, --user-prm, --outputs, or the zeros its CFG gives). Each is started up
+in turn, then every DP cycle exchanges data with each in the order given; the lines of a station
+begin with "slave ADDR: ".
 
     python3 tools/dp_master.py socket://127.0.0.1:5000 --slave 5:0x0D04:21,10:00,00,00,64:05,01 \
         --slave 6:0x0C31:13,23:00:01,02,03,04
@@ -25,10 +26,11 @@ reads / writes a record with MSAC_C1 (SAP 51 to SAP 51; set DPV1_Enable in --use
 request, then polls while the slave answers SC, until the response or --c1-timeout
 (docs/dpv1.md, "The master's side").
 
-Prints one line per step and the inputs of the last Data_Exchange. Exit codes: 0 Data_Exchange
-reached with every slave (and every DPV1 service answered positively), 1 a slave did not come up, or a DPV1
-service failed (the line says where: a negative response with its error bytes, RS, the
-time-out), 2 bad arguments or device.
+Without --outputs a Data_Exchange carries zeros, as many as the Cfg bytes give output bytes
+(an SD1 request without a data unit when they give none); --outputs of another length is refused
+(the slave would answer RS).
+
+Prints one line per step and the inputs of the last Data_Exchange.
 Python 3 standard library only; tests/bridge_test.py uses the same Master class.
 """
 
@@ -46,6 +48,19 @@ SD1, SD2, SC, ED = 0x10, 0x68, 0xE5, 0x16
 SAP_SLAVE_DIAG, SAP_SET_PRM, SAP_CHK_CFG, SAP_MASTER = 60, 61, 62, 62
 # DPV1 (include/dpc31/pdu.hpp): MSAC_C1's SAP, Read and Write, the negative response's bit.
 SAP_MSAC_C1, DPV1_READ, DPV1_WRITE, DPV1_ERROR = 51, 0x5E, 0x5F, 0x80
+# The longest data unit of a DP telegram (Set_Prm, Chk_Cfg, Data_Exchange, a DPV1 PDU).
+MAX_DU = 244
+# --help's epilog (docs/bridge.md, "With a master program", says the same).
+EPILOG = """\
+hex bytes (--cfg, --user-prm, --outputs, --watchdog, --dpv1-read, --dpv1-write and the fields of
+--slave): with commas every item is one byte of 1 or 2 hex digits (5,1 is 05 01), without commas
+pairs of hex digits (0501); at most 244 bytes in one data unit.
+
+exit codes: 0 Data_Exchange reached with every slave (and every DPV1 service answered
+positively); 1 a slave did not come up, or a DPV1 service failed (the line says where: a negative
+response with its error bytes, RS, the time-out); 2 bad arguments or device (not there, not a
+serial device, no TCP connection); 3 the device or the connection went away during the run (the
+bridge stopped). Every error is one line on stderr."""
 # The ten PROFIBUS DP rates (EN 50170). Five have a termios constant; the others (45.45, 93.75,
 # 187.5 kbaud, 6 and 12 Mbaud) are set as Linux's "other" rate: struct termios2 with BOTHER and
 # the rate itself, through the TCSETS2 ioctl (as pyserial does for such rates).
@@ -85,6 +100,10 @@ def set_8e1(fd, baud):
 
 class Fail(Exception):
     pass
+
+
+class Lost(Fail):
+    """The device or the connection went away during the run (exit 3)."""
 
 
 def check(cond, what):
@@ -164,9 +183,9 @@ class Master:
             self.fd = os.open(path, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
             try:
                 set_8e1(self.fd, baud)
-            except OSError:
+            except (OSError, termios.error) as e:  # termios.error is no OSError
                 os.close(self.fd)
-                raise
+                raise OSError(f"{path}: not a serial device ({e.args[-1]})") from None
         self.baud = baud
         self.timeout = timeout
         self.search = search
@@ -195,7 +214,10 @@ class Master:
     def flush_input(self):
         """Drops what arrived before the request: tcflush on a tty; on a socket, what is there."""
         if self.sock is None:
-            termios.tcflush(self.fd, termios.TCIFLUSH)
+            try:
+                termios.tcflush(self.fd, termios.TCIFLUSH)
+            except termios.error as e:  # EIO: the pty's other side is gone
+                raise Lost(f"the device went away ({e.args[-1]})") from None
             return
         while select.select([self.fd], [], [], 0)[0]:
             self.read()
@@ -205,8 +227,17 @@ class Master:
             b = os.read(self.fd, 512)
         except BlockingIOError:
             return b""
-        check(b or self.sock is None, "the bridge closed the connection")
+        except OSError as e:  # EIO on a pty, ECONNRESET on a socket
+            raise Lost(f"the device went away ({e.strerror})") from None
+        if not b and self.sock is not None:
+            raise Lost("the bridge closed the connection")
         return b
+
+    def write(self, req):
+        try:
+            os.write(self.fd, req)
+        except OSError as e:
+            raise Lost(f"the device went away ({e.strerror})") from None
 
     def transact(self, req, timeout=None, searching=False):
         """Writes one request, returns the answer telegram (bytes) or None after the timeout.
@@ -218,7 +249,7 @@ class Master:
         an answer with bytes after it (ours is the last request written, so its answer is the
         last to come), and an SD2 answer whose SAPs do not mirror ours."""
         self.flush_input()
-        os.write(self.fd, req)
+        self.write(req)
         buf = b""
         wait = timeout or self.timeout
         deadline = time.monotonic() + wait
@@ -307,6 +338,8 @@ class Master:
     def srd_frame(self, du, dsap, ssap=SAP_MASTER):
         self.fcb = not self.fcb
         fc = 0x40 | (0x20 if self.fcb else 0) | (0x10 if self.fcv else 0) | 0x0D
+        if not du and dsap is None:  # no data unit: SD1 (an SD2 has LE 4 at least)
+            return sd1(self.slave, self.address, fc)
         return sd2(self.slave, self.address, fc, du, dsap=dsap,
                    ssap=ssap if dsap is not None else None)
 
@@ -339,14 +372,50 @@ class Master:
 
 
 def byte_list(text):
-    """'21,10' or '2110' or '' -> [0x21, 0x10]."""
-    digits = text.replace(",", "").replace(" ", "")
-    if len(digits) % 2:
-        raise argparse.ArgumentTypeError(f"'{text}': an odd number of hex digits")
-    try:
-        return list(bytes.fromhex(digits))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}': not hex bytes") from None
+    """Hex bytes: with commas each item one byte of 1 or 2 hex digits ('5,1' -> [0x05, 0x01]),
+    without commas pairs of digits ('2110' -> [0x21, 0x10]); '' -> []."""
+    hexdigits = "0123456789abcdefABCDEF"
+    if "," in text:
+        for item in text.split(","):
+            if not 1 <= len(item.strip()) <= 2 or not all(c in hexdigits for c in item.strip()):
+                raise argparse.ArgumentTypeError(
+                    f"'{text}': '{item}' is not a byte (1 or 2 hex digits between commas)")
+        return [int(item, 16) for item in text.split(",")]
+    if not all(c in hexdigits for c in text):
+        raise argparse.ArgumentTypeError(f"'{text}': not hex bytes")
+    if len(text) % 2:
+        raise argparse.ArgumentTypeError(f"'{text}': an odd number of hex digits (without "
+                                         "commas every byte is two)")
+    return list(bytes.fromhex(text))
+
+
+def cfg_outputs(cfg):
+    """The output bytes that the Chk_Cfg identifier bytes `cfg` give (EN 50170; the chip docs'
+    chip-facts.md). General format (bits 5..4 not 00): 01 input, 10 output, 11 both, bits 3..0
+    the length - 1, bit 6 words. Special format (bits 5..4 00): bits 7..6 01 an input length
+    byte follows, 10 an output one, 11 an output then an input one (each bits 5..0 the length -
+    1, bit 6 words), then bits 3..0 bytes of manufacturer data; 00h is an empty slot. ValueError
+    for what cannot be sized: length bytes or data missing, or the data length 15."""
+    outputs, i = 0, 0
+    while i < len(cfg):
+        ident = cfg[i]
+        if ident & 0x30:
+            if ident & 0x20:
+                outputs += ((ident & 0x0F) + 1) * (2 if ident & 0x40 else 1)
+            i += 1
+            continue
+        if ident & 0x0F == 0x0F:
+            raise ValueError(f"the special identifier {ident:02X} (byte {i + 1}) gives no "
+                             "manufacturer data length")
+        lengths = cfg[i + 1:i + 1 + bin(ident & 0xC0).count("1")]
+        end = i + 1 + len(lengths) + (ident & 0x0F)
+        if len(lengths) < bin(ident & 0xC0).count("1") or end > len(cfg):
+            raise ValueError(f"the special identifier {ident:02X} (byte {i + 1}) runs past the "
+                             "end")
+        if ident & 0x80:  # the output length byte comes first
+            outputs += ((lengths[0] & 0x3F) + 1) * (2 if lengths[0] & 0x40 else 1)
+        i = end
+    return outputs
 
 
 def start_up(m, args, say):
@@ -392,26 +461,37 @@ def exchange(m, slaves, cycles, say_for):
                 say(f"Slave_Diag (after DH): {hexs(m.slave_diag())}")
 
 
+def in_range(parse, low, high, what):
+    """An argparse type: `parse(text)` within low..high, else an error naming `what`."""
+    def convert(text):
+        try:
+            n = parse(text)
+        except ValueError:
+            n = None
+        if n is None or not low <= n <= high:
+            raise argparse.ArgumentTypeError(f"'{text}': not {what}")
+        return n
+    return convert
+
+
+STATION = in_range(int, 0, 125, "a station address 0..125")
+IDENT = in_range(lambda text: int(text, 0), 0, 0xFFFF, "an Ident_Number 0..0xFFFF")
+
+
 def slave_spec(text):
     """--slave ADDR[:IDENT:CFG[:USER_PRM[:OUTPUTS]]] -> its fields (None: from the options)."""
     f = text.split(":")
-    try:
-        address = int(f[0])
-        ident = int(f[1], 0) if len(f) > 1 else None
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}': not ADDR[:IDENT:CFG[:USER_PRM[:OUTPUTS]]]") \
-            from None
-    if not 0 <= address <= 125 or len(f) == 2 or len(f) > 5:
-        raise argparse.ArgumentTypeError(f"'{text}': not ADDR[:IDENT:CFG[:USER_PRM[:OUTPUTS]]] "
-                                         "with ADDR 0..125")
-    return argparse.Namespace(address=address, ident=ident,
+    if len(f) == 2 or len(f) > 5:
+        raise argparse.ArgumentTypeError(f"'{text}': not ADDR[:IDENT:CFG[:USER_PRM[:OUTPUTS]]]")
+    return argparse.Namespace(address=STATION(f[0]), ident=IDENT(f[1]) if len(f) > 1 else None,
                               cfg=byte_list(f[2]) if len(f) > 2 else None,
                               user_prm=byte_list(f[3]) if len(f) > 3 else None,
                               outputs=byte_list(f[4]) if len(f) > 4 else None)
 
 
 def slaves_of(args, error):
-    """The stations to poll, each with its start-up's settings; `error` for one that lacks one."""
+    """The stations to poll, each with its start-up's settings and its outputs (from the Cfg
+    when not given); `error` for one that lacks one or has one that does not fit."""
     out = []
     for s in args.slave or [slave_spec("5")]:
         for name in ("ident", "cfg", "user_prm", "outputs"):
@@ -422,6 +502,21 @@ def slaves_of(args, error):
                   "--slave ADDR:IDENT:CFG)")
         if s.address in [o.address for o in out]:
             error(f"--slave {s.address} twice")
+        try:
+            n = cfg_outputs(s.cfg)
+        except ValueError as e:  # --outputs is then taken as it is
+            if s.outputs is None:
+                error(f"station {s.address}: Chk_Cfg: {e}; give its outputs (--outputs)")
+            n = len(s.outputs)
+        for what, du in (("Set_Prm", 7 + len(s.user_prm)), ("Chk_Cfg", len(s.cfg)),
+                         ("Data_Exchange", n)):
+            if du > MAX_DU:
+                error(f"station {s.address}: a {what} of {du} bytes (at most {MAX_DU})")
+        if s.outputs is None:
+            s.outputs = [0] * n
+        if len(s.outputs) != n:
+            error(f"station {s.address}: {len(s.outputs)} output bytes, its Chk_Cfg gives {n} "
+                  "(the slave would answer RS)")
         s.watchdog = args.watchdog
         out.append(s)
     return out
@@ -482,24 +577,36 @@ def wait_for(path, seconds):
         time.sleep(0.02)
 
 
+class Parser(argparse.ArgumentParser):
+    """argparse with a usage error in one line on stderr (no usage lines), exit 2."""
+
+    def error(self, message):
+        self.exit(2, f"dp_master: {message}\n")
+
+
 def main():
-    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p = Parser(description=__doc__.split("\n")[0], epilog=EPILOG,
+               formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("device", help="serial device, e.g. the path given to dpc31 bridge --pty, or "
                    "socket://HOST:PORT (dpc31 bridge --tcp PORT)")
     p.add_argument("--baud", type=int, default=19200, choices=RATES,
                    help="the bus rate, one of the ten PROFIBUS rates (default 19200)")
-    p.add_argument("--address", type=int, default=2, help="the master's station address")
+    p.add_argument("--address", type=STATION, default=2,
+                   help="the master's station address, 0..125 (default 2)")
     p.add_argument("--slave", type=slave_spec, action="append",
                    metavar="ADDR[:IDENT:CFG[:USER_PRM[:OUTPUTS]]]",
                    help="a slave's station address (default 5), and what it is started with; "
                    "once per slave, polled in this order")
-    p.add_argument("--ident", type=lambda s: int(s, 0), help="Ident_Number")
-    p.add_argument("--cfg", type=byte_list, help="Chk_Cfg bytes, e.g. 21,10")
-    p.add_argument("--user-prm", type=byte_list, default=[], help="user parameter bytes")
+    p.add_argument("--ident", type=IDENT, help="Ident_Number, 0..0xFFFF")
+    p.add_argument("--cfg", type=byte_list, help="Chk_Cfg bytes, e.g. 21,10 (hex bytes)")
+    p.add_argument("--user-prm", type=byte_list, default=[],
+                   help="user parameter bytes (hex bytes)")
     p.add_argument("--watchdog", type=byte_list, default=[0x64, 0x0A],
                    help="WD_Fact_1,WD_Fact_2 (default 64,0A: 10 s)")
-    p.add_argument("--outputs", type=byte_list, default=[], help="output bytes")
-    p.add_argument("--cycles", type=int, default=10, help="Data_Exchange cycles")
+    p.add_argument("--outputs", type=byte_list,
+                   help="output bytes (hex bytes), as many as --cfg gives (default: zeros)")
+    p.add_argument("--cycles", type=in_range(int, 1, 1 << 31, "a number of cycles, 1 or more"),
+                   default=10, help="Data_Exchange cycles")
     p.add_argument("--timeout", type=float, default=0.5, help="seconds to wait for an answer")
     p.add_argument("--search", type=float, default=20.0, metavar="SECONDS",
                    help="seconds to look for a slave with FDL_Status (while it searches the "
@@ -513,14 +620,17 @@ def main():
     p.add_argument("--wait", type=float, default=10.0,
                    help="seconds to wait for the device to appear")
     args = p.parse_args()
-    if not args.search > 0:
-        p.error("--search takes a positive number of seconds")
+    for name in ("timeout", "search", "c1_timeout"):
+        if not getattr(args, name) > 0:
+            p.error(f"--{name.replace('_', '-')} takes a positive number of seconds")
     if len(args.watchdog) != 2:
         p.error("--watchdog takes two bytes")
     if args.dpv1_read is not None and len(args.dpv1_read) != 3:
         p.error("--dpv1-read takes three bytes: SLOT,INDEX,LENGTH")
     if args.dpv1_write is not None and len(args.dpv1_write) < 3:
         p.error("--dpv1-write takes SLOT,INDEX and at least one data byte")
+    if args.dpv1_write is not None and 2 + len(args.dpv1_write) > MAX_DU:
+        p.error(f"--dpv1-write: a DPV1 PDU of {2 + len(args.dpv1_write)} bytes (at most {MAX_DU})")
     slaves = slaves_of(args, p.error)
     if len(slaves) > 1 and (args.dpv1_read or args.dpv1_write):
         p.error("--dpv1-read and --dpv1-write are for one --slave")
@@ -544,6 +654,9 @@ def main():
             start_up(m, s, say_for(s))
         exchange(m, slaves, args.cycles, say_for)
         dpv1(m, args, say)
+    except Lost as e:
+        print(f"dp_master: {e}", file=sys.stderr)
+        return 3
     except Fail as e:
         print(f"dp_master: {e}", file=sys.stderr)
         return 1
