@@ -59,6 +59,20 @@ def test_errors_are_exceptions(server):
         assert remote.ping() == "pong"
 
 
+def test_an_argument_cannot_send_a_second_command(server):
+    """A line break inside an argument is refused before anything is sent: it would run a second
+    command on the server ("Int_Reg\nreset" reset the chip) and put the replies out of step."""
+    with Client(tcp=server) as remote:
+        remote.step(1000)
+        for call in (lambda: remote.peek_reg("Int_Reg\nreset"),
+                     lambda: remote.poke_reg("Int_Mask_Reg\rreset", 1),
+                     lambda: remote.addr_of("Int_Reg\0")):
+            with pytest.raises(ValueError, match="line break or NUL"):
+                call()
+        assert remote.cycle == 1000  # nothing reset the chip
+        assert remote.ping() == "pong"  # the replies are still in step
+
+
 def test_the_client_loads_no_native_code():
     code = ("import sys, dpc31.client; "
             "sys.exit(1 if any(m.startswith('dpc31._') for m in sys.modules) else 0)")

@@ -85,6 +85,10 @@ class Client:
         return raw.decode("ascii").rstrip("\r\n")
 
     def _call(self, command: str) -> str:
+        # One call is one line: a line break inside an argument (a register name, a secret)
+        # would send a second command, and the replies would no longer match the calls.
+        if any(c in command for c in "\r\n\0"):
+            raise ValueError(f"an argument holds a line break or NUL: {command!r}")
         self._sock.sendall(command.encode("ascii") + b"\n")
         while True:
             line = self._line()
