@@ -140,8 +140,10 @@ std::optional<Cfg> Cfg::parse(View du) {
       const std::uint16_t len = len_of(id, true);
       if ((id & kInput) != 0) m.inputs = len;
       if ((id & kOutput) != 0) m.outputs = len;
-    } else {  // special format: length bytes (output first), then manufacturer data
-      const bool out = (id & 0x40) != 0, in = (id & 0x80) != 0;
+    } else {
+      // Special format: bits 7..6 01 an input length byte, 10 an output one, 11 both (output
+      // first), then bits 3..0 bytes of manufacturer data (chip-facts.md section 8, EN 50170).
+      const bool out = (id & 0x80) != 0, in = (id & 0x40) != 0;
       const std::size_t lens = (out ? 1 : 0) + (in ? 1 : 0);
       n = 1 + lens + (id & kLength);
       if (i + n > du.size()) return std::nullopt;

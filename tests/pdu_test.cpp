@@ -66,14 +66,21 @@ TEST(Pdu, SlaveDiagWithAnAlarmBlockAndAnIdentifierBlock) {
 }
 
 TEST(Pdu, CfgGeneralAndSpecialFormat) {
-  // 13h: 4 input bytes; 23h: 4 output bytes (general format); 40h: special format with one
-  // output length byte and no manufacturer bytes, 41h: 2 words = 4 bytes.
-  const std::optional<Cfg> c = Cfg::parse(Bytes{0x13, 0x23, 0x40, 0x41});
+  // 13h: 4 input bytes; 23h: 4 output bytes (general format). Special format (chip-facts.md
+  // section 8: bits 7..6 01 an input length byte follows, 10 an output one, 11 output then
+  // input; bits 3..0 manufacturer bytes): 40h one input length byte, 41h: 2 words = 4 bytes;
+  // 81h one output length byte and one manufacturer byte, 02h: 3 bytes, then AAh.
+  const std::optional<Cfg> c = Cfg::parse(Bytes{0x13, 0x23, 0x40, 0x41, 0x81, 0x02, 0xAA});
   ASSERT_TRUE(c);
-  ASSERT_EQ(c->modules.size(), 3u);
-  EXPECT_EQ(c->input_bytes(), 4);
-  EXPECT_EQ(c->output_bytes(), 8);
-  EXPECT_EQ(c->build(), (Bytes{0x13, 0x23, 0x40, 0x41}));
+  ASSERT_EQ(c->modules.size(), 4u);
+  EXPECT_EQ(c->input_bytes(), 4 + 4);
+  EXPECT_EQ(c->output_bytes(), 4 + 3);
+  EXPECT_EQ(c->build(), (Bytes{0x13, 0x23, 0x40, 0x41, 0x81, 0x02, 0xAA}));
+  // C0h: an output length byte (00h: 1 byte), then an input one (45h: 6 words = 12 bytes).
+  const std::optional<Cfg> both = Cfg::parse(Bytes{0xC0, 0x00, 0x45});
+  ASSERT_TRUE(both);
+  EXPECT_EQ(both->output_bytes(), 1);
+  EXPECT_EQ(both->input_bytes(), 12);
   EXPECT_FALSE(Cfg::parse(Bytes{0xC0, 0x81}));  // special format: two length bytes, one sent
 }
 
