@@ -7,6 +7,7 @@
 #include <tlm_utils/simple_initiator_socket.h>
 #include <tlm_utils/tlm_quantumkeeper.h>
 
+#include <charconv>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -206,11 +207,23 @@ bool same(const char* what, const std::vector<std::uint64_t>& a,
   return false;
 }
 
+// `--bench N`: N from 1 to 10^9 accesses; anything else is a usage error (exit 2).
+bool parse_args(int argc, char* argv[], std::uint64_t& bench) {
+  if (argc == 1) return true;
+  if (argc != 3 || std::strcmp(argv[1], "--bench") != 0) return false;
+  const std::string_view n(argv[2]);
+  const auto [end, ec] = std::from_chars(n.data(), n.data() + n.size(), bench);
+  return ec == std::errc() && end == n.data() + n.size() && bench >= 1 && bench <= 1'000'000'000;
+}
+
 }  // namespace
 
 int sc_main(int argc, char* argv[]) {
   std::uint64_t bench = 0;
-  if (argc == 3 && std::strcmp(argv[1], "--bench") == 0) bench = std::stoull(argv[2]);
+  if (!parse_args(argc, argv, bench)) {
+    std::fprintf(stderr, "dpc31_vp_do4: usage: dpc31_vp_do4 [--bench N] (N accesses, 1 to 10^9)\n");
+    return 2;
+  }
   const Run ref = native();
   tlm_utils::tlm_quantumkeeper::set_global_quantum(sc_core::sc_time(1, sc_core::SC_US));
   Platform vp("vp", bench);
