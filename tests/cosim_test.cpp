@@ -98,9 +98,15 @@ TEST(Cosim, SapEventsRoundTripThroughATraceLine) {
   EXPECT_EQ(in.sap_len, 0x1d);
   EXPECT_EQ(in.describe(), a);
   // An entry beyond 13 bits, a length beyond a byte, the length missing.
-  for (const std::string bad : {"ev_sap_srd(2000)", "ev_sap_ind(0080,100)", "ev_sap_ind(0080)"}) {
-    EXPECT_FALSE(parse_trace("1 " + bad + "\nend 2\n", "bad.trace", s, e)) << bad;
-    EXPECT_EQ(e, "bad.trace:1: unknown stimulus '" + bad + "'");
+  // The event is named, its operand is wrong: the message says what it expects.
+  for (const auto& [bad, name, syntax] :
+       {std::tuple{"ev_sap_srd(2000)", "ev_sap_srd", "(ENTRY), hex 0..1fff"},
+        std::tuple{"ev_sap_ind(0080,100)", "ev_sap_ind",
+                   "(ENTRY,LEN), hex ENTRY 0..1fff, LEN 0..ff"},
+        std::tuple{"ev_sap_ind(0080)", "ev_sap_ind",
+                   "(ENTRY,LEN), hex ENTRY 0..1fff, LEN 0..ff"}}) {
+    EXPECT_FALSE(parse_trace(std::string("1 ") + bad + "\nend 2\n", "bad.trace", s, e)) << bad;
+    EXPECT_EQ(e, fmt::format("bad.trace:1: bad operand of '{}': {} expected", name, syntax));
   }
 }
 
@@ -205,7 +211,13 @@ TEST(Cosim, BrokenTracesAreRejectedWithFileAndLine) {
   EXPECT_FALSE(parse_trace("x1 ev_din\nend 3\n", "d.trace", s, e));
   EXPECT_EQ(e, "d.trace:1: 'x1' is not a cycle number");
   EXPECT_FALSE(parse_trace("1 wr 0008<-zz\nend 3\n", "e.trace", s, e));
-  EXPECT_EQ(e, "e.trace:1: unknown stimulus 'wr'");
+  EXPECT_EQ(e, "e.trace:1: bad operand of 'wr': ADDR<-DATA, hex ADDR 0..ffff, DATA 0..ff expected");
+  EXPECT_FALSE(parse_trace("1 wr 0845<-1ff\nend 3\n", "e.trace", s, e));  // a data byte of 9 bits
+  EXPECT_EQ(e, "e.trace:1: bad operand of 'wr': ADDR<-DATA, hex ADDR 0..ffff, DATA 0..ff expected");
+  EXPECT_FALSE(parse_trace("1 ev_dis(4)\nend 3\n", "e.trace", s, e));
+  EXPECT_EQ(e, "e.trace:1: bad operand of 'ev_dis': (BITS), 0..3 expected");
+  EXPECT_FALSE(parse_trace("1 ev_diag_end(stat=2)\nend 3\n", "e.trace", s, e));
+  EXPECT_EQ(e, "e.trace:1: bad operand of 'ev_diag_end': (stat=0) or (stat=1) expected");
   EXPECT_TRUE(parse_trace("# c\n2 wr 0008<-01 ev_gc(20)\nend 4\n", "f.trace", s, e)) << e;
   ASSERT_EQ(s.size(), 4u);
   EXPECT_TRUE(s[2].bus_wr && s[2].ev_gc && s[2].gc_cmd == 0x20 && s[2].bus_wdata == 0x01);

@@ -63,8 +63,9 @@ struct Inputs {
 };
 
 // The stimulus vocabulary (lib/cosim/stimulus.cpp, one table): one token of a trace line into
-// `in` (the bus accesses read their operand from `rest`); false if it is no stimulus.
-bool parse_input_token(const std::string& tok, std::istringstream& rest, Inputs& in);
+// `in` (the bus accesses read their operand from `rest`); "" or the one-line reason it is none
+// ("unknown stimulus 'x'", or a known event whose operand is not as Inputs::describe writes it).
+std::string parse_input_token(const std::string& tok, std::istringstream& rest, Inputs& in);
 // A block event of a chip session (emu/block_event.hpp) into the inputs of its cycle.
 void apply_block_event(Inputs& in, const BlockEvent& e);
 

@@ -539,8 +539,7 @@ bool parse_trace(const std::string& text, const std::string& file, Stimulus& out
     Inputs in;
     std::string tok;
     while (ls >> tok) {
-      if (!parse_input_token(tok, ls, in))
-        return fail(fmt::format("unknown stimulus '{}'", shown(tok)));
+      if (const std::string why = parse_input_token(tok, ls, in); !why.empty()) return fail(why);
     }
     if (in.idle()) return fail("a stimulus line without stimulus");
     out.set(cycle, in);

@@ -11,6 +11,7 @@
 
 #include "block_event.hpp"
 #include "dut.hpp"
+#include "textfile.hpp"
 
 namespace dpc31::cosim {
 
@@ -145,67 +146,93 @@ bool parse_hex(std::string_view t, std::uint32_t max, std::uint32_t& v) {
   return v <= max;
 }
 
+// How a trace line spells an event's operand, for the message when it does not (hex: lowercase).
+std::string_view operand_syntax(Arg a) {
+  switch (a) {
+    case Arg::none:
+      return "no operand";
+    case Arg::irq_mask:
+      return "(MASK), hex 1..ffff";
+    case Arg::gc_cmd:
+      return "(CMD), hex 0..ff";
+    case Arg::stat_diag:
+      return "(stat=0) or (stat=1)";
+    case Arg::dis_bits:
+      return "(BITS), 0..3";
+    case Arg::bus_read:
+      return "ADDR, hex 0..ffff";
+    case Arg::bus_write:
+      return "ADDR<-DATA, hex ADDR 0..ffff, DATA 0..ff";
+    case Arg::sap_ind:
+      return "(ENTRY,LEN), hex ENTRY 0..1fff, LEN 0..ff";
+    case Arg::sap_entry:
+      return "(ENTRY), hex 0..1fff";
+  }
+  return "";
+}
+
+enum class Parsed : std::uint8_t { other, ok, bad };  // other: not this event's name
+
 // `tok` as this event's token (the bus accesses take their operand from `rest`).
-bool parse(const EventInput& e, const std::string& tok, std::istringstream& rest, Inputs& in) {
+Parsed parse(const EventInput& e, const std::string& tok, std::istringstream& rest, Inputs& in) {
+  const std::string_view t(tok);
+  const bool bare = e.arg == Arg::none || e.arg == Arg::bus_read || e.arg == Arg::bus_write;
+  if (bare ? t != e.name
+           : t.size() <= e.name.size() || t.substr(0, e.name.size()) != e.name ||
+                 t[e.name.size()] != '(') {
+    return Parsed::other;
+  }
   std::uint32_t v = 0;
   std::uint32_t d = 0;
   // "name(hex)" with a value of at most `max`.
-  auto arg = [&](std::string_view prefix, std::uint32_t max) {
-    const std::string_view t(tok);
-    return t.size() > prefix.size() + 2 && t.substr(0, prefix.size()) == prefix &&
-           t[prefix.size()] == '(' && t.back() == ')' &&
-           parse_hex(t.substr(prefix.size() + 1, t.size() - prefix.size() - 2), max, v);
+  auto arg = [&](std::uint32_t max) {
+    return t.size() > e.name.size() + 2 && t.back() == ')' &&
+           parse_hex(t.substr(e.name.size() + 1, t.size() - e.name.size() - 2), max, v);
   };
+  bool good = true;
   switch (e.arg) {
     case Arg::none:
-      if (tok != e.name) return false;
       break;
     case Arg::irq_mask:
-      if (!arg(e.name, 0xFFFF) || v == 0) return false;
+      good = arg(0xFFFF) && v != 0;
       break;
     case Arg::gc_cmd:
-      if (!arg(e.name, 0xFF)) return false;
+      good = arg(0xFF);
       break;
     case Arg::stat_diag:
-      if (tok != fmt::format("{}(stat=0)", e.name) && tok != fmt::format("{}(stat=1)", e.name))
-        return false;
+      good = t.substr(e.name.size()) == "(stat=0)" || t.substr(e.name.size()) == "(stat=1)";
       v = tok[tok.size() - 2] == '1' ? 1 : 0;
       break;
     case Arg::dis_bits:
-      if (!arg(e.name, 3)) return false;
+      good = arg(3);
       break;
     case Arg::sap_ind: {  // name(EEEE,LL)
-      const std::string_view t(tok);
       const auto comma = t.find(',');
-      const std::string_view head = t.substr(0, comma == std::string_view::npos ? 0 : comma);
-      if (comma == std::string_view::npos || t.size() < comma + 3 || t.back() != ')' ||
-          head.substr(0, e.name.size() + 1) != fmt::format("{}(", e.name) ||
-          !parse_hex(head.substr(e.name.size() + 1), kSapEntryMax, v) ||
-          !parse_hex(t.substr(comma + 1, t.size() - comma - 2), 0xFF, d))
-        return false;
+      good = comma != std::string_view::npos && t.size() >= comma + 3 && t.back() == ')' &&
+             parse_hex(t.substr(e.name.size() + 1, comma - e.name.size() - 1), kSapEntryMax, v) &&
+             parse_hex(t.substr(comma + 1, t.size() - comma - 2), 0xFF, d);
       break;
     }
     case Arg::sap_entry:
-      if (!arg(e.name, kSapEntryMax)) return false;
+      good = arg(kSapEntryMax);
       break;
     case Arg::bus_read: {
       std::string a;
-      if (tok != e.name || !(rest >> a) || !parse_hex(a, 0xFFFF, v)) return false;
+      good = (rest >> a) && parse_hex(a, 0xFFFF, v);
       break;
     }
     case Arg::bus_write: {
       std::string a;
-      if (tok != e.name || !(rest >> a)) return false;
+      good = static_cast<bool>(rest >> a);
       const auto arrow = a.find("<-");
-      if (arrow == std::string::npos || !parse_hex(a.substr(0, arrow), 0xFFFF, v) ||
-          !parse_hex(a.substr(arrow + 2), 0xFF, d)) {
-        return false;
-      }
+      good = good && arrow != std::string::npos && parse_hex(a.substr(0, arrow), 0xFFFF, v) &&
+             parse_hex(a.substr(arrow + 2), 0xFF, d);
       break;
     }
   }
+  if (!good) return Parsed::bad;
   set(in, e, v, static_cast<std::uint8_t>(d));
-  return true;
+  return Parsed::ok;
 }
 
 }  // namespace
@@ -220,12 +247,22 @@ std::string Inputs::describe() const {
   return s;
 }
 
-bool parse_input_token(const std::string& tok, std::istringstream& rest, Inputs& in) {
-  if (tok == "rst") return in.rst = true;
-  for (const EventInput& e : kEventInputs) {
-    if (parse(e, tok, rest, in)) return true;
+std::string parse_input_token(const std::string& tok, std::istringstream& rest, Inputs& in) {
+  if (tok == "rst") {
+    in.rst = true;
+    return {};
   }
-  return false;
+  for (const EventInput& e : kEventInputs) {
+    switch (parse(e, tok, rest, in)) {
+      case Parsed::ok:
+        return {};
+      case Parsed::bad:
+        return fmt::format("bad operand of '{}': {} expected", e.name, operand_syntax(e.arg));
+      case Parsed::other:
+        break;
+    }
+  }
+  return fmt::format("unknown stimulus '{}'", shown(tok));
 }
 
 void apply_block_event(Inputs& in, const BlockEvent& ev) {
