@@ -250,7 +250,7 @@ TEST(Cosim, EveryEventInputRoundTripsThroughATraceLine) {
   EXPECT_TRUE(s[4].bus_wr && s[4].bus_addr == 0x0008 && s[4].bus_wdata == 0x02);
   EXPECT_EQ(s[4].describe(), b);
   EXPECT_FALSE(parse_trace("1 ev_dis(4)\nend 2\n", "dis.trace", s, e));  // two bits only
-  EXPECT_EQ(e, "dis.trace:1: unknown stimulus 'ev_dis(4)'");
+  EXPECT_EQ(e, "dis.trace:1: bad operand of 'ev_dis': (BITS), 0..3 expected");
 }
 
 // Every block event a chip session reports becomes an input of its cycle.
