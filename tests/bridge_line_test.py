@@ -18,7 +18,7 @@ least TSYN = 33 bit times after the telegram before; timestamps the start cycle 
 tcp_flood_and_sigterm: a client that writes random bytes without pause; chip time goes on (the
 drop lines), and SIGTERM ends the bridge promptly while the flood goes on.
 
-tcp_bad_arguments: bad options, a port in use: one line, exit 2, nothing made.
+tcp_bad_arguments: bad options, --pty beside --tcp, a port in use: one line, exit 2, nothing made.
 
 Usage: bridge_line_test.py DPC31_CLI DISSECTOR CASE. Python 3 standard library and tshark.
 Every wait is on an event (a log line, an answer), none on a wall time, except the bound
@@ -283,12 +283,12 @@ def tcp_bad_arguments():
         busy.listen(1)
         log, pcap = os.path.join(tmp, "log"), os.path.join(tmp, "x.pcapng")
         cases = [
-            (["--tcp", "0", "--pty", os.path.join(tmp, "dp0")], "one of --pty PATH"),
+            (["--tcp", "0", "--pty", os.path.join(tmp, "dp0")], "--pty excludes --tcp"),
             ([], "one of --pty PATH"),
             (["--tcp", "0.0.0.0:0"], "not a loopback address"),
             (["--tcp", "127.0.0.1:70000"], "has no port 0..65535"),
             (["--tcp", "localhost:5000"], "is no numeric IPv4 or IPv6 address"),
-            (["--tcp", "0", "--allow-remote", "--pty", "x"], "one of --pty PATH"),
+            (["--tcp", "0", "--allow-remote", "--pty", "x"], "--pty excludes --tcp"),
             (["--pty", os.path.join(tmp, "dp0"), "--allow-remote"], "--allow-remote needs --tcp"),
             (["--tcp", str(busy.getsockname()[1])], "Address already in use"),
             (["--tcp", "0", "--pcap", log], "--pcap"),
