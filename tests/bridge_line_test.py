@@ -15,21 +15,30 @@ exact answers of tests/bridge_test.py), with the line timing of docs/timing.md: 
 11 bit times a character, an answer MinTSDR = 11 bit times after its request, every request at
 least TSYN = 33 bit times after the telegram before; timestamps the start cycle in ns.
 
+tcp_flood_and_sigterm: a client that writes random bytes without pause; chip time goes on (the
+drop lines), and SIGTERM ends the bridge promptly while the flood goes on.
+
+tcp_bad_arguments: bad options, --pty beside --tcp, a port in use: one line, exit 2, nothing made.
+
 Usage: bridge_line_test.py DPC31_CLI DISSECTOR CASE. Python 3 standard library and tshark.
-Every wait is on an event (a log line, an answer), none on a wall time.
+Every wait is on an event (a log line, an answer), none on a wall time, except the bound
+tcp_flood_and_sigterm checks.
 """
 
 import os
 import re
+import signal
 import socket
 import subprocess
 import sys
 import tempfile
+import threading
+import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import bridge_test as bt  # noqa: E402
-from bridge_test import GUARD, PacedMaster, dx_answer, exchange_do4, startup_do4  # noqa: E402
-from dp_master import check  # noqa: E402
+from bridge_test import GUARD, SCALE, PacedMaster, dx_answer, exchange_do4, startup_do4  # noqa: E402
+from dp_master import Fail, check  # noqa: E402
 
 DISSECTOR = None
 BAUD = 19200
@@ -109,6 +118,56 @@ def tcp_two_clients_and_garbage():
                   "two clients connected")
         finally:
             b.kill()
+
+
+def tcp_flood_and_sigterm():
+    """A client that writes random bytes without pause, as fast as the loopback takes them, to a
+    bridge in realtime pacing: chip time goes on (the flood dropped in one line a second of chip
+    time, at rising cycles), and SIGTERM ends the bridge within 5 s while the flood goes on. Before, the bridge read the socket until it was empty, which it never was: no chip time,
+    no signal, until the client stopped (an outside report: 6.1 s after SIGTERM)."""
+    stop_limit = 5 * SCALE  # a turn of the bridge's loop is milliseconds, also on a loaded host
+    dropped = "bytes dropped in the last"
+    with tempfile.TemporaryDirectory() as tmp:
+        b = TcpBridge(tmp, "--firmware", "DO4")
+        done = threading.Event()
+
+        def flood():
+            block = os.urandom(65536)
+            try:
+                with socket.create_connection(("127.0.0.1", b.port), timeout=GUARD) as s:
+                    while not done.is_set():
+                        s.sendall(block)
+            except OSError:  # the bridge went, or held the flood back for GUARD
+                pass
+
+        writer = threading.Thread(target=flood, daemon=True)
+        writer.start()
+        try:
+            b.wait_for_log(dropped, GUARD, 2)
+            drops = [int(line.split()[0]) for line in b.log_lines() if dropped in line]
+            check(drops[1] - drops[0] >= 48_000_000,
+                  f"two drop lines within a second of chip time: cycles {drops[:2]}")
+            check(writer.is_alive(), "the flood ended before SIGTERM")
+            sent = time.monotonic()
+            b.proc.send_signal(signal.SIGTERM)
+            try:
+                b.proc.wait(timeout=stop_limit)
+            except subprocess.TimeoutExpired:
+                raise Fail(f"the bridge still ran {stop_limit:g} s after SIGTERM under the "
+                           "flood") from None
+            took = time.monotonic() - sent
+            err = b.proc.stderr.read()
+            check(b.proc.returncode == 0 and err == b"",
+                  f"exit {b.proc.returncode} after SIGTERM, stderr {err!r}")
+            lines = b.log_lines()
+            stopping = [line for line in lines if "NOTE  bridge   stopping on SIGTERM" in line]
+            check(len(stopping) == 1 and int(stopping[0].split()[0]) > drops[-1],
+                  f"no stop line after the drop lines: {stopping}")
+            print(f"stopped {took:.2f} s after SIGTERM, {len(drops)} drop lines")
+        finally:
+            done.set()
+            b.kill()
+            writer.join(GUARD)
 
 
 def tshark_fields(path, fields):
@@ -224,12 +283,12 @@ def tcp_bad_arguments():
         busy.listen(1)
         log, pcap = os.path.join(tmp, "log"), os.path.join(tmp, "x.pcapng")
         cases = [
-            (["--tcp", "0", "--pty", os.path.join(tmp, "dp0")], "one of --pty PATH"),
+            (["--tcp", "0", "--pty", os.path.join(tmp, "dp0")], "--pty excludes --tcp"),
             ([], "one of --pty PATH"),
             (["--tcp", "0.0.0.0:0"], "not a loopback address"),
             (["--tcp", "127.0.0.1:70000"], "has no port 0..65535"),
             (["--tcp", "localhost:5000"], "is no numeric IPv4 or IPv6 address"),
-            (["--tcp", "0", "--allow-remote", "--pty", "x"], "one of --pty PATH"),
+            (["--tcp", "0", "--allow-remote", "--pty", "x"], "--pty excludes --tcp"),
             (["--pty", os.path.join(tmp, "dp0"), "--allow-remote"], "--allow-remote needs --tcp"),
             (["--tcp", str(busy.getsockname()[1])], "Address already in use"),
             (["--tcp", "0", "--pcap", log], "--pcap"),
@@ -257,6 +316,7 @@ CASES = {
     "tcp_bad_arguments": tcp_bad_arguments,
     "tcp_two_clients_and_garbage": tcp_two_clients_and_garbage,
     "pcap_tshark_fields": pcap_tshark_fields,
+    "tcp_flood_and_sigterm": tcp_flood_and_sigterm,
 }
 
 

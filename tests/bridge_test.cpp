@@ -362,6 +362,30 @@ TEST_F(BridgeEngine, EventsLevelLogsStateChangesAndFaultsOnly) {
   EXPECT_EQ(rx[0].text, "FF  | broken telegram (bad_sd)");
 }
 
+// A run of unanswered requests is two lines at the events level also when it is one request long
+// (an outside report: the run of one was never closed, its "counted until an answer" left open).
+TEST_F(BridgeEngine, EventsLevelClosesEveryRunOfUnansweredRequests) {
+  make(dpc31::bridge::LogDetail::events);
+  find_slave();
+  const std::uint64_t from = engine_->cycle();
+  const Bytes absent = sd1(9, 2, 0x49);  // FDL_Status to a station nobody has
+  EXPECT_TRUE(exchange(absent).empty());
+  for (int i = 0; i < 20; ++i) EXPECT_EQ(exchange(kFdlStatus), kStatusOk);
+  EXPECT_TRUE(exchange(absent).empty());
+  EXPECT_TRUE(exchange(absent).empty());
+  EXPECT_EQ(exchange(kFdlStatus), kStatusOk);
+  engine_->flush_log();
+  std::vector<std::string> notes;
+  for (const Line& l : tagged("NOTE")) {
+    if (l.cycle >= from) notes.push_back(l.text);
+  }
+  const std::string opened =
+      "no answer within the slot time (the next ones are counted until an answer)";
+  EXPECT_EQ(notes, (std::vector<std::string>{
+                       opened, "answered again, after 1 request without an answer", opened,
+                       "answered again, after 2 requests without an answer"}));
+}
+
 // Garbage on the pty at the line's own speed (issue 29: 41.5 MB of log in 10 s): every broken
 // telegram differs from the one before, so only the log's bound holds it (docs/bridge.md, "The
 // log"): at most LogLimiter::kBurst lines per 48 000 000 cycles at the events level, and one LOG

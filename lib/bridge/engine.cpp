@@ -383,9 +383,12 @@ void Engine::collect() {
   if (stray_.finished() && !rx_.receiving()) finish_answer(stray_, "late");
   if (!in_flight_) return;
   if (answer_.finished() && !rx_.receiving()) {
-    if (unanswered_ > 1) {
+    // Closes every run of unanswered requests, also a run of one: the events level said at its
+    // start that it counts until an answer.
+    if (unanswered_ != 0) {
       add_line(answer_.start(), "NOTE", kBridgeName,
-               fmt::format("answered again, after {} requests without an answer", unanswered_));
+               fmt::format("answered again, after {} request{} without an answer", unanswered_,
+                           unanswered_ == 1 ? "" : "s"));
     }
     unanswered_ = 0;
     finish_answer(answer_, "");

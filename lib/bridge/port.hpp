@@ -5,6 +5,7 @@
 
 #include <poll.h>
 
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <span>
@@ -19,6 +20,28 @@ struct PortEvents {
   std::function<void()> gone;  // the client went away (before the port's note about it)
   std::function<void(const std::string&)> note;  // a NOTE line: opened, closed, refused, ...
 };
+
+// The client's bytes one look takes at most: the rest waits in the kernel (the pty's buffer, the
+// socket's and TCP's flow control) for the next turn of the bridge's loop, so a client that
+// writes without pause cannot keep the chip and the signals from their turn. Far more than the
+// fastest line carries in a loop period (12 Mbaud: 1.1 KB a millisecond).
+inline constexpr std::size_t kMaxReadPerLook = 16 * 1024;
+
+// Hands the client's bytes to ev.bytes, up to kMaxReadPerLook; false when the client went.
+// `read(buf, size)` returns the bytes it read (> 0), 0 when none are waiting, < 0 when the client
+// went.
+template <class Read>
+bool read_bounded(Read&& read, const PortEvents& ev) {
+  std::uint8_t buf[4096];
+  for (std::size_t taken = 0; taken < kMaxReadPerLook;) {
+    const long n = read(buf, sizeof buf);
+    if (n == 0) return true;
+    if (n < 0) return false;
+    ev.bytes({buf, static_cast<std::size_t>(n)});
+    taken += static_cast<std::size_t>(n);
+  }
+  return true;
+}
 
 class ClientPort {
  public:

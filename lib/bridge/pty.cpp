@@ -207,25 +207,21 @@ void PtyPort::service(std::span<const pollfd> fds, const PortEvents& ev) {
 }
 
 void PtyPort::read_client(const PortEvents& ev) {
-  unsigned char buf[4096];
-  for (;;) {
-    const long n = pty_.read(buf, sizeof buf);
-    if (n > 0) {
-      if (!speed_checked_) {
-        speed_checked_ = true;
-        const unsigned s = pty_.speed();
-        if (s != baud_) {
-          ev.note(fmt::format(
-              "the client set {} on the pty; the bridge carries its bytes at {} baud",
-              s == 0 ? std::string("a non-standard speed") : fmt::format("{} baud", s), baud_));
-        }
+  const auto read = [this, &ev](std::uint8_t* buf, std::size_t size) {
+    const long n = pty_.read(buf, size);
+    if (n > 0 && !speed_checked_) {
+      speed_checked_ = true;
+      const unsigned s = pty_.speed();
+      if (s != baud_) {
+        ev.note(fmt::format(
+            "the client set {} on the pty; the bridge carries its bytes at {} baud",
+            s == 0 ? std::string("a non-standard speed") : fmt::format("{} baud", s), baud_));
       }
-      ev.bytes({buf, static_cast<std::size_t>(n)});
-      continue;
     }
-    if (n == 0) return;  // all read, the client is still there
-    break;               // hang-up: no slave fd open any more
-  }
+    return n;
+  };
+  if (read_bounded(read, ev)) return;
+  // Hang-up: no slave fd open any more.
   present_ = false;
   // What it queued and the bus has not carried yet goes with it (a flood of its bytes must not
   // keep the next client waiting).

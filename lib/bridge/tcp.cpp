@@ -162,18 +162,18 @@ void TcpPort::accept_one(const PortEvents& ev) {
 }
 
 void TcpPort::read_client(const PortEvents& ev) {
-  unsigned char buf[4096];
-  for (;;) {
-    const ssize_t n = ::recv(client_, buf, sizeof buf, MSG_DONTWAIT);
-    if (n > 0) {
-      ev.bytes({buf, static_cast<std::size_t>(n)});
-      continue;
+  std::string why;
+  const auto read = [this, &why](std::uint8_t* buf, std::size_t size) -> long {
+    for (;;) {
+      const ssize_t n = ::recv(client_, buf, size, MSG_DONTWAIT);
+      if (n > 0) return n;
+      if (n < 0 && errno == EINTR) continue;
+      if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return 0;
+      why = n == 0 ? std::string("closed the connection") : errno_text("connection");
+      return -1;
     }
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return;
-    drop_client(ev, n == 0 ? std::string("closed the connection") : errno_text("connection"));
-    return;
-  }
+  };
+  if (!read_bounded(read, ev)) drop_client(ev, why);
 }
 
 void TcpPort::drop_client(const PortEvents& ev, const std::string& why) {

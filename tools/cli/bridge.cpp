@@ -179,7 +179,7 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
   };
   if (!o.extra.empty()) return bad(fmt::format("unexpected argument '{}'", o.extra.front()));
   Checked c;
-  if (o.pty.empty() == o.tcp.empty()) {
+  if (o.pty.empty() && o.tcp.empty()) {  // both given: CLI11 refused them (excludes)
     return bad(
         "one of --pty PATH (the symlink the master program opens) or --tcp [HOST:]PORT is "
         "required");
@@ -542,10 +542,11 @@ class Bridge {
 CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
   auto* b = app.add_subcommand(
       "bridge", "the slave's RS-485 side as a pseudo-terminal for a DP master program");
-  b->add_option("--pty", o.pty, "symlink to create to the pty's slave side (or --tcp)");
+  auto* pty = b->add_option("--pty", o.pty, "symlink to create to the pty's slave side (or --tcp)");
   b->add_option("--tcp", o.tcp,
                 "[HOST:]PORT: a raw TCP port instead of the pty (127.0.0.1 unless HOST; 0: any "
-                "free port, named in the log)");
+                "free port, named in the log)")
+      ->excludes(pty);
   b->add_flag("--allow-remote", o.allow_remote,
               "let --tcp listen on an address other hosts reach (no authentication!)");
   b->add_option("--pcap", o.pcap, "write every telegram on the line here as pcapng at the end");

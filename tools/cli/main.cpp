@@ -315,8 +315,9 @@ int main(int argc, char** argv) {
     return refuse(e.what());
   }
   // What went to the standard output is part of the result: a write that failed (a full disk,
-  // /dev/full) is exit 2, whatever the command found.
-  if (std::fflush(stdout) != 0 || std::ferror(stdout) != 0) {
+  // /dev/full) is exit 2, whatever the command found. A command that ended with exit 2 has said
+  // why in its one line (the bridge: its log on the standard output failed): none is added.
+  if ((std::fflush(stdout) != 0 || std::ferror(stdout) != 0) && rc != 2) {
     return refuse(fmt::format("cannot write the standard output: {}",
                               std::strerror(g_stdout_errno != 0 ? g_stdout_errno : EIO)));
   }
