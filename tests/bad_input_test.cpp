@@ -522,6 +522,11 @@ TEST_F(BadWaves, MapFileOptionsAndOutputs) {
 TEST_F(BadInput, RegsAndDemoOptions) {
   expect_bad(dpc31("regs --profile all --format text"),
              "dpc31 regs: --format text needs one profile, not all", "all text");
+  // A first word that is no subcommand is named, with the ones there are.
+  expect_bad(dpc31("frob --x"),
+             "dpc31: unknown subcommand 'frob' (demo, regs, run, replay, cosim, wavediff, serve, "
+             "bridge, bench, soak)",
+             "unknown subcommand");
   for (const char* args :
        {"regs --profile z80", "regs --format yaml", "regs extra", "demo --profile z80",
         "demo --bus sideways", "demo extra", "nosuch", ""}) {

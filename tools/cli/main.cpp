@@ -26,6 +26,7 @@
 #include "run.hpp"
 #include "serve.hpp"
 #include "soak.hpp"
+#include "textfile.hpp"
 #include "wavediff_cli.hpp"
 
 namespace {
@@ -240,7 +241,15 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help, --help-all
-    return refuse(e.what());                         // CLI11's own exit() would add a second line
+    // A first word that names no subcommand: CLI11 says only that one is required.
+    if (app.get_subcommands().empty() && argc > 1 && argv[1][0] != '-') {
+      std::string known;
+      for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) {
+        known += (known.empty() ? "" : ", ") + sub->get_name();
+      }
+      return refuse(fmt::format("unknown subcommand '{}' ({})", dpc31::shown(argv[1]), known));
+    }
+    return refuse(e.what());  // CLI11's own exit() would add a second line
   }
 
   const auto dispatch = [&]() -> int {
