@@ -36,7 +36,8 @@ bool has(View du, Function f) { return !du.empty() && du[0] == static_cast<std::
 
 // Chk_Cfg identifier bytes (EN 50170): general format bits 5..4 00 special, 01 input,
 // 10 output, 11 both; bits 3..0 length - 1; bit 6 words. Special format: bits 3..0 the
-// manufacturer bytes, bits 7..6 00 none, 01 an output, 10 an input, 11 both length bytes.
+// manufacturer bytes, bits 7..6 00 none, 01 an input, 10 an output, 11 both length bytes
+// (output first).
 constexpr std::uint8_t kDirection = 0x30, kInput = 0x10, kOutput = 0x20, kWords = 0x40,
                        kLength = 0x0F, kLengthByteWords = 0x40, kLengthByteLength = 0x3F;
 

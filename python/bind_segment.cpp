@@ -388,11 +388,12 @@ PyStation& add_station(py::object self, U8 address, const std::string& profile,
           Responder* r = raw.responder.get();
           s.seg.set_firmware(raw.index, [r](BusPort& b) { r->isr(b); });
         }
-        user_side_runs_with(raw.firmware ? static_cast<const void*>(raw.firmware.get())
-                                         : static_cast<const void*>(raw.responder.get()),
-                            s.run_state());
       },
       /*joins=*/true);
+  // With the GIL held again: the registry of user sides is Python's state.
+  user_side_runs_with(raw.firmware ? static_cast<const void*>(raw.firmware.get())
+                                   : static_cast<const void*>(raw.responder.get()),
+                      s.run_state());
   check_output(out_error.empty(), out_error);
   s.stations.push_back(std::move(st));
   return raw;

@@ -55,7 +55,9 @@ std::uint64_t dec(std::string_view s, std::string_view what) {
   const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v, 10);
   const bool digits = !s.empty() && p == s.data() + s.size();
   if (digits && (ec == std::errc::result_out_of_range || v > kMaxCycle)) {
-    fail(fmt::format("{} '{}' out of range (at most {})", what, shown(s), kMaxCycle));
+    // The bound of a cycle (2^62); the other numbers have smaller ones, checked where they are
+    // used.
+    fail(fmt::format("{} '{}' out of range", what, shown(s)));
   }
   if (!digits || ec != std::errc()) {
     fail(fmt::format("bad {} '{}' (a decimal number)", what, shown(s)));

@@ -44,6 +44,8 @@ struct FileCase {
 
 TEST_F(BadInput, RunScenarioFile) {
   const std::string good = copy(kTraces + "gc_clear_spc3.scn", "good.scn");
+  // The good scenario up to its first expect (its start-up and one exchange).
+  const std::string head = slurp(good).substr(0, slurp(good).find("expect"));
   const std::vector<FileCase> cases = {
       {"missing", path("missing.scn"), path("missing.scn") + ": no such file"},
       {"directory", path("dir"), path("dir") + ": is a directory, not a scenario file"},
@@ -63,6 +65,12 @@ TEST_F(BadInput, RunScenarioFile) {
        path("garbage.scn") + ":1: unknown command '\\x7FELF\\x01\\x02\\x03'"},
       {"binary", file("nul.scn", std::string("startup\n\0\0\0\n", 12)),
        path("nul.scn") + ":2: unknown command '\\x00\\x00\\x00'"},
+      // A fault whose request is the cut line: the file is cut, not "no request follows" at the
+      // fault's line (a check of the whole file names that line only because of the cut).
+      {"cut after a fault", file("cut_fault.scn", head + "bad_fcs\nexchange 1 outputs=0F"),
+       path("cut_fault.scn") + ":" +
+           std::to_string(std::count(head.begin(), head.end(), '\n') + 2) +
+           ": truncated: the last line has no end of line"},
       // A binary file seldom ends in a newline: its first line is what is wrong, not its end.
       {"garbage cut",
        file("garbage_cut.scn",

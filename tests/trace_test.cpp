@@ -263,7 +263,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{kHead + "end 8\nwr 12 0000 00\n", 7, "after the 'end' line"},
         BadInput{"dpc31-trace 1\nprofile dpc31\nwr 4 0000 00\nend 4\n", 3, "no 'bus' line"},
         BadInput{kHead + "wr 99999999999999999999 0000 00\nend 4\n", 6,
-                 "cycle '99999999999999999999' out of range (at most 4611686018427387904)"},
+                 "cycle '99999999999999999999' out of range"},
         BadInput{kHead + "end 18446744073709551615\n", 6,
                  "cycle '18446744073709551615' out of range"},
         BadInput{kHead + "wr 4x 0000 00\nend 4\n", 6, "bad cycle '4x' (a decimal number)"}));

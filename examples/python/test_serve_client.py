@@ -69,6 +69,9 @@ def test_an_argument_cannot_send_a_second_command(server):
                      lambda: remote.addr_of("Int_Reg\0")):
             with pytest.raises(ValueError, match="line break or NUL"):
                 call()
+        with pytest.raises(ValueError) as e:  # named by its command: the argument may be a secret
+            remote.peek_reg("s3cret\n")
+        assert "s3cret" not in str(e.value) and "'peek_reg'" in str(e.value)
         assert remote.cycle == 1000  # nothing reset the chip
         assert remote.ping() == "pong"  # the replies are still in step
 

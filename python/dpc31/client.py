@@ -88,7 +88,9 @@ class Client:
         # One call is one line: a line break inside an argument (a register name, a secret)
         # would send a second command, and the replies would no longer match the calls.
         if any(c in command for c in "\r\n\0"):
-            raise ValueError(f"an argument holds a line break or NUL: {command!r}")
+            # Named by its command only: the argument may be a secret.
+            raise ValueError(f"an argument of '{command.split(' ', 1)[0]}' holds a line break "
+                             "or NUL")
         self._sock.sendall(command.encode("ascii") + b"\n")
         while True:
             line = self._line()

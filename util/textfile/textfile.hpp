@@ -1,6 +1,7 @@
 // Reading an input file whole, with a size bound and a one-line reason when it cannot be read.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <string>
 #include <string_view>
@@ -16,15 +17,22 @@ bool read_text_file(const std::string& path, std::size_t max_bytes, std::string_
 // 0 if `text` is empty or ends with '\n', else the number of its last line, with `error` set.
 int cut_off_line(std::string_view text, std::string& error);
 
-// cut_off_line for a file whose format ignores blank lines, read line by line: the text with its
-// cut line blank is parsed first, and an error `parse` finds before that line is the file's (a
-// binary file is refused at its first line, not for a cut last line); one there or after it, or
-// of the file as a whole (a missing 'end' line, line 0), is the cut's. `parse(text, message)`
-// returns the line it failed at with `message` set, or 0. 0 if the last line is not cut.
+// cut_off_line for a file whose format ignores blank lines, read line by line. A binary file (a
+// control byte other than tab, CR, LF in it) seldom ends in a newline: it is parsed with its
+// cut line blank, and an error `parse` finds before that line is the file's (refused at its first
+// line, not for a cut end). A text file cut off is the cut's error whatever else: a check of the
+// whole file (a fault with no request after it, a missing 'end' line) may name an earlier line
+// only because the last one was cut. `parse(text, message)` returns the line it failed at with
+// `message` set, or 0. 0 if the last line is not cut.
 template <typename Parse>
 int cut_or_earlier_error(std::string_view text, std::string& error, Parse parse) {
   const int cut = cut_off_line(text, error);
   if (cut == 0) return 0;
+  const bool binary = std::any_of(text.begin(), text.end(), [](char c) {
+    const auto u = static_cast<unsigned char>(c);
+    return (u < 0x20 && c != '\t' && c != '\r' && c != '\n') || u == 0x7F;
+  });
+  if (!binary) return cut;
   std::string earlier;
   const int at = parse(std::string(text.substr(0, text.rfind('\n') + 1)) + '\n', earlier);
   if (at <= 0 || at >= cut) return cut;
