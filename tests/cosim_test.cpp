@@ -216,6 +216,10 @@ TEST(Cosim, BrokenTracesAreRejectedWithFileAndLine) {
   EXPECT_EQ(e, "e.trace:1: bad operand of 'wr': ADDR<-DATA, hex ADDR 0..ffff, DATA 0..ff expected");
   EXPECT_FALSE(parse_trace("1 ev_dis(4)\nend 3\n", "e.trace", s, e));
   EXPECT_EQ(e, "e.trace:1: bad operand of 'ev_dis': (BITS), 0..3 expected");
+  EXPECT_FALSE(parse_trace("1 ev_gc\nend 3\n", "e.trace", s, e));  // its operand missing
+  EXPECT_EQ(e, "e.trace:1: bad operand of 'ev_gc': (CMD), hex 0..ff expected");
+  EXPECT_FALSE(parse_trace("1 ev_dx(1)\nend 3\n", "e.trace", s, e));  // one it has not
+  EXPECT_EQ(e, "e.trace:1: bad operand of 'ev_dx': no operand expected");
   EXPECT_FALSE(parse_trace("1 ev_diag_end(stat=2)\nend 3\n", "e.trace", s, e));
   EXPECT_EQ(e, "e.trace:1: bad operand of 'ev_diag_end': (stat=0) or (stat=1) expected");
   EXPECT_TRUE(parse_trace("# c\n2 wr 0008<-01 ev_gc(20)\nend 4\n", "f.trace", s, e)) << e;

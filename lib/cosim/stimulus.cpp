@@ -176,12 +176,12 @@ enum class Parsed : std::uint8_t { other, ok, bad };  // other: not this event's
 // `tok` as this event's token (the bus accesses take their operand from `rest`).
 Parsed parse(const EventInput& e, const std::string& tok, std::istringstream& rest, Inputs& in) {
   const std::string_view t(tok);
-  const bool bare = e.arg == Arg::none || e.arg == Arg::bus_read || e.arg == Arg::bus_write;
-  if (bare ? t != e.name
-           : t.size() <= e.name.size() || t.substr(0, e.name.size()) != e.name ||
-                 t[e.name.size()] != '(') {
+  // The event's name alone or followed by "(": its operand, missing or not, is judged below.
+  if (!t.starts_with(e.name) || (t.size() > e.name.size() && t[e.name.size()] != '(')) {
     return Parsed::other;
   }
+  const bool bare = e.arg == Arg::none || e.arg == Arg::bus_read || e.arg == Arg::bus_write;
+  if (bare != (t.size() == e.name.size())) return Parsed::bad;
   std::uint32_t v = 0;
   std::uint32_t d = 0;
   // "name(hex)" with a value of at most `max`.
