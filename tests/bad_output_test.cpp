@@ -96,11 +96,14 @@ TEST_F(BadInput, FullFileSystemIsExit2AndKeepsTheOldFile) {
 }
 
 // The standard output is an output too: a write that fails is exit 2 with one line, whatever
-// the command found (finding 6).
+// the command found (finding 6). Also where the output outgrows the stdio buffer, so that a write
+// fails mid-way (the demo; a run with a walk of 12 KB): fmt's exception said "cannot write to
+// file".
 TEST_F(BadInput, AFailedWriteToTheStandardOutputIsExit2) {
-  for (const std::string& args :
-       std::vector<std::string>{"regs --profile dpc31", "regs --profile all --format c",
-                                "run " + kScn, "replay " + kTraces + "gc_clear_spc3.trace"}) {
+  for (const std::string& args : std::vector<std::string>{
+           "regs --profile dpc31", "regs --profile all --format c", "run " + kScn,
+           "replay " + kTraces + "gc_clear_spc3.trace", "demo --out-dir " + path("demo"),
+           "run " + kTraces + "do4_dpv1_c2_vpc3plus.scn"}) {
     const std::string err = (root_ / "io" / "err").string();
     const testutil::CommandResult r =
         testutil::run_command(kCli + " " + args + " >/dev/full 2>" + err);
@@ -111,6 +114,8 @@ TEST_F(BadInput, AFailedWriteToTheStandardOutputIsExit2) {
               std::string::npos)
         << args << ": " << line;
   }
+  // The demo stopped where its write failed: none of its files was left half-written.
+  EXPECT_TRUE(fs::is_empty(path("demo")));
 }
 
 // An output that names an input, or another output, is refused before any work: the scenario,

@@ -307,18 +307,22 @@ int main(int argc, char** argv) {
     }
     return 2;
   };
+  // What went to the standard output is part of the result: a write that failed (a full disk,
+  // /dev/full) is exit 2, whatever the command found.
+  const auto stdout_failed = [&refuse] {
+    return refuse(fmt::format("cannot write the standard output: {}",
+                              std::strerror(g_stdout_errno != 0 ? g_stdout_errno : EIO)));
+  };
   int rc = 2;
   try {
     rc = dispatch();
   } catch (const std::exception& e) {
-    // Nothing is meant to get here; if something does, it is one line, not std::terminate's.
+    // fmt::print throws when a write fails: once the buffer of a long output went to a full
+    // standard output, that is what failed, not "cannot write to file".
+    if (std::ferror(stdout) != 0) return stdout_failed();
+    // Nothing else is meant to get here; if something does, it is one line, not std::terminate's.
     return refuse(e.what());
   }
-  // What went to the standard output is part of the result: a write that failed (a full disk,
-  // /dev/full) is exit 2, whatever the command found.
-  if (std::fflush(stdout) != 0 || std::ferror(stdout) != 0) {
-    return refuse(fmt::format("cannot write the standard output: {}",
-                              std::strerror(g_stdout_errno != 0 ? g_stdout_errno : EIO)));
-  }
+  if (std::fflush(stdout) != 0 || std::ferror(stdout) != 0) return stdout_failed();
   return rc;
 }
