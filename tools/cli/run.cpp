@@ -140,7 +140,7 @@ std::vector<wave::Options> wave_options(const RunOptions& opt) {
 struct ChipRun::Impl {
   RunOptions opt;
   std::string command;
-  std::FILE* err;
+  std::FILE* err = nullptr;
   outfile::OutFile rec_out;
   outfile::OutFile json_out;
   std::vector<std::unique_ptr<wave::Recorder>> waves;
