@@ -7,7 +7,9 @@
 #include <gtest/gtest.h>
 
 #include <initializer_list>
+#include <iterator>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "dpc31/dpc31_firmware.h"
@@ -150,6 +152,34 @@ TEST_F(BadInput, RunOutputPaths) {
                "dpc31 run: taken: cannot write: is a directory", o + " among good outputs");
     EXPECT_EQ(listing(), before) << o;
   }
+}
+
+// The waveforms' files and --signals are checked before the run like the other outputs: without
+// --quiet, nothing of the state walk is printed before the one line (it printed the whole walk
+// first: the recorder opened its file and matched its globs as the chip started).
+TEST_F(BadInput, RunWaveformOutputsAreCheckedBeforeTheWalk) {
+  const std::string scn = kTraces + "startup_dpc31_1m5.scn";
+  fs::create_directory(path("taken"));
+  const auto before = listing();
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"--vcd no/such/x.vcd", "dpc31 run: no/such/x.vcd: cannot create the temporary file "},
+      {"--fst taken", "dpc31 run: taken: cannot write: is a directory"},
+      {"--la-vcd taken", "dpc31 run: taken: cannot write: is a directory"},
+      {"--vcd new.vcd --gtkw taken", "dpc31 run: taken: cannot write: is a directory"},
+      {"--vcd new.vcd --signals 'nomatch*'",
+       "dpc31 run: no signal matches 'nomatch*' (see docs/waveforms.md)"},
+  };
+  for (const auto& [args, line] : cases) {
+    const Outcome r = dpc31("run " + scn + " --pcap new.pcapng " + args);
+    expect_bad_prefix(r, line, args);
+    EXPECT_EQ(r.out, "") << args;  // nothing ran
+    EXPECT_TRUE(fs::is_empty(path("taken"))) << args;
+    EXPECT_EQ(listing(), before) << args;
+  }
+  // The same run with good outputs prints its walk.
+  const Outcome ok = dpc31("run " + scn + " --pcap new.pcapng --vcd new.vcd --signals 'pins.*'");
+  EXPECT_EQ(ok.rc, 0) << ok.err;
+  EXPECT_NE(ok.out, "");
 }
 
 // The good case of the same rule, so that the tests above can fail: every output is written
@@ -561,6 +591,29 @@ TEST_F(BadInput, RegsAndDemoOptions) {
   EXPECT_EQ(r.out, "");
   EXPECT_EQ(slurp(path("plain")), "old");
   EXPECT_EQ(listing(), before);
+}
+
+// Each of the demo's files that cannot be written (here a directory in its place) is one line
+// naming it, "dpc31 demo: ...", before anything is printed; nothing of the others is left.
+TEST_F(BadInput, DemoOutputsAreCheckedBeforeAnythingIsPrinted) {
+  for (const char* name :
+       {"dpc31-demo.vcd", "dpc31-demo-la.vcd", "dpc31-demo.gtkw", "dpc31-demo.pcapng"}) {
+    const std::string dir = std::string("out-") + name;
+    fs::create_directories(path(dir + "/" + name));
+    const Outcome r = dpc31("demo --out-dir " + dir);
+    expect_bad(r, "dpc31 demo: " + dir + "/" + name + ": cannot write: is a directory", name);
+    EXPECT_EQ(r.out, "") << name;
+    std::vector<std::string> left;
+    for (const auto& e : fs::directory_iterator(path(dir)))
+      left.push_back(e.path().filename().string());
+    EXPECT_EQ(left, std::vector<std::string>{name});
+    EXPECT_TRUE(fs::is_empty(path(dir + "/" + name))) << name;
+  }
+  // The good case: the demo prints its story and writes its four files.
+  const Outcome ok = dpc31("demo --out-dir good");
+  EXPECT_EQ(ok.rc, 0) << ok.err;
+  EXPECT_NE(ok.out, "");
+  EXPECT_EQ(std::distance(fs::directory_iterator(path("good")), fs::directory_iterator()), 4);
 }
 
 // --- serve, bridge, bench

@@ -98,7 +98,9 @@ TEST_F(BadInput, FullFileSystemIsExit2AndKeepsTheOldFile) {
 // The standard output is an output too: a write that fails is exit 2 with one line, whatever
 // the command found (finding 6; wavediff found differences, exit 1 before the write). The bridge
 // writes its log there and stops on the failed write with its own line, the only one (before,
-// main() added "cannot write the standard output" as a second).
+// main() added "cannot write the standard output" as a second). Also where the output outgrows the
+// stdio buffer, so that a write fails mid-way (the demo; a run with a walk of 12 KB): fmt's
+// exception said "cannot write to file".
 TEST_F(BadInput, AFailedWriteToTheStandardOutputIsExit2) {
   const std::string wave = std::string(SOURCE_DIR) + "/tests/data/wavediff/";
   const std::string full = ": cannot write the standard output: No space left on device";
@@ -109,6 +111,8 @@ TEST_F(BadInput, AFailedWriteToTheStandardOutputIsExit2) {
            {"replay " + kTraces + "gc_clear_spc3.trace", "dpc31 replay" + full},
            {"wavediff " + wave + "emu.vcd " + wave + "rtl.vcd", "dpc31 wavediff" + full},
            {"soak --cycles 2000000", "dpc31 soak" + full},
+           {"demo --out-dir " + path("demo"), "dpc31 demo" + full},
+           {"run " + kTraces + "do4_dpv1_c2_vpc3plus.scn", "dpc31 run" + full},
            {"bridge --tcp 0 --firmware DO4",
             "dpc31 bridge: cannot write the log to the standard output: No space left on "
             "device"}}) {
@@ -118,6 +122,8 @@ TEST_F(BadInput, AFailedWriteToTheStandardOutputIsExit2) {
     EXPECT_EQ(r.rc, 2) << args;
     EXPECT_EQ(slurp(err), want + "\n") << args;
   }
+  // The demo stopped where its write failed: none of its files was left half-written.
+  EXPECT_TRUE(fs::is_empty(path("demo")));
 }
 
 // An output that names an input, or another output, is refused before any work: the scenario,

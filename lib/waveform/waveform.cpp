@@ -548,7 +548,7 @@ Recorder::~Recorder() = default;
 
 bool Recorder::open(std::string& error) { return impl_->open_outputs(error); }
 
-bool Recorder::attach(Chip& chip, std::string& error) {
+bool Recorder::check_signals(std::string& error) const {
   for (const std::string& p : impl_->opt.signals) {
     const bool any = std::any_of(kSignals.begin(), kSignals.end(),
                                  [&](const SignalDef& d) { return glob(p, d.name); });
@@ -557,7 +557,11 @@ bool Recorder::attach(Chip& chip, std::string& error) {
       return false;
     }
   }
-  return impl_->attach_chip(chip, {}, error);
+  return true;
+}
+
+bool Recorder::attach(Chip& chip, std::string& error) {
+  return check_signals(error) && impl_->attach_chip(chip, {}, error);
 }
 
 bool Recorder::attach_station(Chip& chip, const std::string& scope, std::string& error) {

@@ -50,6 +50,9 @@ class Recorder {
   // Opens the files now (else the first attach does): a bad path is found before the run. False
   // with a one-line error.
   bool open(std::string& error);
+  // False (with a one-line error) if a signal pattern matches no signal of a chip: what attach()
+  // checks first, for a caller that finds bad input before the run (with open()).
+  bool check_signals(std::string& error) const;
   // False (with a one-line error) if a signal pattern matches nothing or the options are bad.
   bool attach(Chip& chip, std::string& error);
   // A segment (docs/segment.md, docs/waveforms.md "Segments"): under the top scope "segment",

@@ -164,10 +164,23 @@ expect dp_state Data_Exchange
                      opt.bus == BusMode::intel ? "intel" : "motorola", firmware, outputs, outputs);
 }
 
+// The files the demo writes, in `out_dir`.
+RunOptions demo_outputs(const std::string& out_dir, const std::string& timescale) {
+  RunOptions ro;
+  ro.scenario = "<demo>";
+  ro.vcd = (std::filesystem::path(out_dir) / "dpc31-demo.vcd").string();
+  ro.la_vcd = (std::filesystem::path(out_dir) / "dpc31-demo-la.vcd").string();
+  ro.gtkw = (std::filesystem::path(out_dir) / "dpc31-demo.gtkw").string();
+  ro.timescale = timescale;
+  ro.pcap = (std::filesystem::path(out_dir) / "dpc31-demo.pcapng").string();
+  return ro;
+}
+
 // The chip's main job: a DP master on the RS-485 side, a firmware (C99, over the C HAL) on the
-// other. Its outputs are what a bring-up is about: when did they change, and why.
-int run_dp_session(const ChipOptions& opt, const std::string& out_dir, const std::string& firmware,
-                   const std::string& timescale, std::FILE* out) {
+// other. Its outputs are what a bring-up is about: when did they change, and why. `run` was
+// opened with `ro`.
+int run_dp_session(const ChipOptions& opt, const RunOptions& ro, ChipRun& run,
+                   const std::string& firmware, std::FILE* out) {
   const std::string text =
       firmware.empty() ? do4_session(opt, out) : firmware_session(opt, firmware, out);
   Scenario sc;
@@ -176,17 +189,10 @@ int run_dp_session(const ChipOptions& opt, const std::string& out_dir, const std
     fmt::print(stderr, "{}\n", err.text());
     return 2;
   }
-  RunOptions ro;
-  ro.scenario = "<demo>";
-  ro.vcd = (std::filesystem::path(out_dir) / "dpc31-demo.vcd").string();
-  ro.la_vcd = (std::filesystem::path(out_dir) / "dpc31-demo-la.vcd").string();
-  ro.gtkw = (std::filesystem::path(out_dir) / "dpc31-demo.gtkw").string();
-  ro.timescale = timescale;
-  ro.pcap = (std::filesystem::path(out_dir) / "dpc31-demo.pcapng").string();
   ScenarioOutcome o;
-  const int rc = run_parsed_scenario(
-      ro, sc, [out](const std::string& line) { fmt::print(out, "{}\n", line); },
-      [](const std::string& line) { fmt::print(stderr, "{}\n", line); }, o, stderr);
+  const int rc = run.run(
+      sc, [out](const std::string& line) { fmt::print(out, "{}\n", line); },
+      [](const std::string& line) { fmt::print(stderr, "{}\n", line); }, o);
   if (rc == 2) return rc;
   const double hz = Chip(opt).clock_hz();
   if (firmware.empty()) {
@@ -252,6 +258,11 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option, const std::stri
       return 2;
     }
   }
+  // Its files are opened now, before the register session prints: one that cannot be made is
+  // one line, and nothing else.
+  const RunOptions ro = demo_outputs(out_dir, timescale);
+  ChipRun run(ro, "dpc31 demo", stderr);
+  if (run.open() != 0) return 2;
   Chip chip(opt);
   Narrator n(chip, out);
   const ProfileDesc& p = chip.profile();
@@ -335,7 +346,7 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option, const std::stri
   n.write(RegId::Mode_Reg1_S, m1::EOI);
   fmt::print(out, "\nregister session done at cycle {} ({:.3f} ms of chip time)\n", chip.cycle(),
              static_cast<double>(chip.cycle()) * 1e3 / chip.clock_hz());
-  return run_dp_session(opt, out_dir, firmware, timescale, out);
+  return run_dp_session(opt, ro, run, firmware, out);
 }
 
 }  // namespace dpc31::cli

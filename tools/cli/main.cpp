@@ -316,19 +316,24 @@ int main(int argc, char** argv) {
     }
     return 2;
   };
+  // What went to the standard output is part of the result: a write that failed (a full disk,
+  // /dev/full) is exit 2, whatever the command found.
+  const auto stdout_failed = [&refuse] {
+    return refuse(fmt::format("cannot write the standard output: {}",
+                              std::strerror(g_stdout_errno != 0 ? g_stdout_errno : EIO)));
+  };
   int rc = 2;
   try {
     rc = dispatch();
   } catch (const std::exception& e) {
-    // Nothing is meant to get here; if something does, it is one line, not std::terminate's.
+    // fmt::print throws when a write fails: once the buffer of a long output went to a full
+    // standard output, that is what failed, not "cannot write to file".
+    if (std::ferror(stdout) != 0) return stdout_failed();
+    // Nothing else is meant to get here; if something does, it is one line, not std::terminate's.
     return refuse(e.what());
   }
-  // What went to the standard output is part of the result: a write that failed (a full disk,
-  // /dev/full) is exit 2, whatever the command found. A command that ended with exit 2 has said
-  // why in its one line (the bridge: its log on the standard output failed): none is added.
-  if ((std::fflush(stdout) != 0 || std::ferror(stdout) != 0) && rc != 2) {
-    return refuse(fmt::format("cannot write the standard output: {}",
-                              std::strerror(g_stdout_errno != 0 ? g_stdout_errno : EIO)));
-  }
+  // A command that ended with exit 2 has said why in its one line (the bridge: its log on the
+  // standard output failed): none is added.
+  if ((std::fflush(stdout) != 0 || std::ferror(stdout) != 0) && rc != 2) return stdout_failed();
   return rc;
 }

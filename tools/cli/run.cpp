@@ -5,7 +5,9 @@
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <string>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include "board.hpp"
@@ -67,7 +69,9 @@ int run_with_outputs(const RunOptions& opt, const LineSink& walk, const LineSink
     return 2;
   }
   s.chip.engine = opt.engine;
-  return run_parsed_scenario(opt, s, walk, errors, o, err);
+  ChipRun run(opt, "dpc31 run", err);
+  if (const int rc = run.open(); rc != 0) return rc;
+  return run.run(s, walk, errors, o);
 }
 
 }  // namespace
@@ -133,18 +137,60 @@ std::vector<wave::Options> wave_options(const RunOptions& opt) {
   return out;
 }
 
-int run_parsed_scenario(const RunOptions& opt, const Scenario& s, const LineSink& walk,
-                        const LineSink& errors, ScenarioOutcome& o, std::FILE* err) {
-  std::unique_ptr<TraceRecorder> rec;
-  // Every output is opened now: a bad path is found before the run, before any is written.
+struct ChipRun::Impl {
+  RunOptions opt;
+  std::string command;
+  std::FILE* err = nullptr;
   outfile::OutFile rec_out;
   outfile::OutFile json_out;
-  for (auto [path, out] : {std::pair{&opt.record, &rec_out}, std::pair{&opt.json, &json_out}}) {
-    if (!path->empty() && !out->open(*path)) {
-      fmt::print(err, "dpc31 run: {}\n", out->error());
-      return 2;
-    }
+  std::vector<std::unique_ptr<wave::Recorder>> waves;
+  capture::PcapngWriter pcap;
+
+  int fail(const std::string& line) const {
+    fmt::print(err, "{}: {}\n", command, line);
+    return 2;
   }
+};
+
+ChipRun::ChipRun(const RunOptions& opt, std::string command, std::FILE* err)
+    : impl_(std::make_unique<Impl>()) {
+  impl_->opt = opt;
+  impl_->command = std::move(command);
+  impl_->err = err;
+}
+
+ChipRun::~ChipRun() = default;
+
+int ChipRun::open() {
+  Impl& m = *impl_;
+  const RunOptions& opt = m.opt;
+  // Every output is opened now: a bad path is found before the run, before any is written.
+  for (auto [path, out] : {std::pair{&opt.record, &m.rec_out}, std::pair{&opt.json, &m.json_out}}) {
+    if (!path->empty() && !out->open(*path)) return m.fail(out->error());
+  }
+  int unit_exp = 0;
+  if (!opt.timescale.empty() && !parse_timescale(opt.timescale, unit_exp))
+    return m.fail(timescale_error(opt.timescale));
+  if (opt.to <= opt.from) {
+    return m.fail(
+        fmt::format("--to {} is not after --from {}: an empty waveform window", opt.to, opt.from));
+  }
+  if (!opt.gtkw.empty() && opt.vcd.empty() && opt.fst.empty())
+    return m.fail(fmt::format("--gtkw {}: a save file needs --vcd or --fst", opt.gtkw));
+  std::string error;
+  for (const wave::Options& w : wave_options(opt)) {
+    auto& rec = m.waves.emplace_back(std::make_unique<wave::Recorder>(w));
+    if (!(rec->check_signals(error) && rec->open(error))) return m.fail(error);
+  }
+  if (!opt.pcap.empty() && !m.pcap.open(opt.pcap)) return m.fail(m.pcap.error());
+  return 0;
+}
+
+int ChipRun::run(const Scenario& s, const LineSink& walk, const LineSink& errors,
+                 ScenarioOutcome& o) {
+  Impl& m = *impl_;
+  const RunOptions& opt = m.opt;
+  std::unique_ptr<TraceRecorder> rec;
   ScenarioHooks hooks;
   if (!opt.record.empty()) {
     std::vector<std::string> notes = leading_comments(opt.scenario);
@@ -154,36 +200,14 @@ int run_parsed_scenario(const RunOptions& opt, const Scenario& s, const LineSink
     rec = std::make_unique<TraceRecorder>(s.master.baud, std::move(notes));
     hooks = rec->scenario_hooks();
   }
-  int unit_exp = 0;
-  if (!opt.timescale.empty() && !parse_timescale(opt.timescale, unit_exp)) {
-    fmt::print(err, "dpc31 run: {}\n", timescale_error(opt.timescale));
-    return 2;
-  }
-  if (opt.to <= opt.from) {
-    fmt::print(err, "dpc31 run: --to {} is not after --from {}: an empty waveform window\n", opt.to,
-               opt.from);
-    return 2;
-  }
-  if (!opt.gtkw.empty() && opt.vcd.empty() && opt.fst.empty()) {
-    fmt::print(err, "dpc31 run: --gtkw {}: a save file needs --vcd or --fst\n", opt.gtkw);
-    return 2;
-  }
-  std::vector<std::unique_ptr<wave::Recorder>> waves;
-  for (const wave::Options& w : wave_options(opt))
-    waves.push_back(std::make_unique<wave::Recorder>(w));
-  capture::PcapngWriter pcap;
-  if (!opt.pcap.empty() && !pcap.open(opt.pcap)) {
-    fmt::print(err, "dpc31 run: {}\n", pcap.error());
-    return 2;
-  }
   std::string attach_error;
   std::uint64_t end_cycle = 0;
   hooks.at_start = [&, inner = hooks.at_start](Chip& chip) {
     if (inner) inner(chip);
-    for (auto& w : waves) {
+    for (auto& w : m.waves) {
       if (attach_error.empty()) w->attach(chip, attach_error);
     }
-    if (pcap.is_open()) pcap.attach(chip);
+    if (m.pcap.is_open()) m.pcap.attach(chip);
   };
   hooks.at_end = [&, inner = hooks.at_end](Chip& chip) {
     if (inner) inner(chip);
@@ -199,40 +223,25 @@ int run_parsed_scenario(const RunOptions& opt, const Scenario& s, const LineSink
   try {
     // A firmware stuck in a loop without a bus access cannot be stopped from this thread: the
     // guard ends the process with one line.
-    if (bound.firmware_desc != nullptr) board::guard_hangs("dpc31 run", bound.firmware_desc->name);
+    if (bound.firmware_desc != nullptr) board::guard_hangs(m.command, bound.firmware_desc->name);
     o = run_scenario(bound, walk, errors, hooks);
   } catch (const FirmwareError& e) {
-    fmt::print(err, "dpc31 run: {}: {}\n", s.file, e.what());
-    return 2;
+    return m.fail(fmt::format("{}: {}", s.file, e.what()));
   }
-  if (!attach_error.empty()) {
-    fmt::print(err, "dpc31 run: {}\n", attach_error);
-    return 2;
-  }
+  if (!attach_error.empty()) return m.fail(attach_error);
   const int rc = o.ok() ? 0 : 1;
-  if (rec && !rec->error().empty()) {
-    fmt::print(err, "dpc31 run: cannot record {}: {}\n", opt.scenario, rec->error());
-    return 2;
-  }
-  if (rec && !(rec_out.write(rec->text()) && rec_out.commit())) {
-    fmt::print(err, "dpc31 run: {}\n", rec_out.error());
-    return 2;
-  }
+  if (rec && !rec->error().empty())
+    return m.fail(fmt::format("cannot record {}: {}", opt.scenario, rec->error()));
+  if (rec && !(m.rec_out.write(rec->text()) && m.rec_out.commit()))
+    return m.fail(m.rec_out.error());
   std::string error;
-  for (auto& w : waves) {
-    if (!w->finish(end_cycle, error)) {
-      fmt::print(err, "dpc31 run: {}\n", error);
-      return 2;
-    }
+  for (auto& w : m.waves) {
+    if (!w->finish(end_cycle, error)) return m.fail(error);
   }
-  if (pcap.is_open() && !pcap.close()) {
-    fmt::print(err, "dpc31 run: {}\n", pcap.error());
-    return 2;
-  }
-  if (json_out.is_open() && !(json_out.write(summary(s, o).dump(2) + '\n') && json_out.commit())) {
-    fmt::print(err, "dpc31 run: {}\n", json_out.error());
-    return 2;
-  }
+  if (m.pcap.is_open() && !m.pcap.close()) return m.fail(m.pcap.error());
+  if (m.json_out.is_open() &&
+      !(m.json_out.write(summary(s, o).dump(2) + '\n') && m.json_out.commit()))
+    return m.fail(m.json_out.error());
   return rc;
 }
 

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -45,10 +46,27 @@ std::vector<wave::Options> wave_options(const RunOptions& opt);
 // With `record`, the run is also written as a trace (for exit codes 0 and 1).
 int run_scenario_command(const RunOptions& opt, std::FILE* out, std::FILE* err);
 
-// A parsed scenario with the outputs `opt` asks for (waveforms, capture, trace; opt.scenario is
-// only used to name it). Returns 0, 1 or 2 like the command.
-int run_parsed_scenario(const RunOptions& opt, const Scenario& s, const LineSink& walk,
-                        const LineSink& errors, ScenarioOutcome& o, std::FILE* err);
+// A parsed scenario of one chip with the outputs `opt` asks for (waveforms, capture, trace, JSON;
+// opt.scenario only names it). open() checks the options, opens every file and matches the
+// waveforms' signals: bad input is found before anything is printed (`dpc31 demo` opens before
+// its register session). run() plays the scenario with them watching and writes them once it
+// completes. A failure is one line on `err`, "COMMAND: what" ("dpc31 run", "dpc31 demo").
+class ChipRun {
+ public:
+  ChipRun(const RunOptions& opt, std::string command, std::FILE* err);
+  ~ChipRun();  // what was opened and not written is removed
+  ChipRun(const ChipRun&) = delete;
+  ChipRun& operator=(const ChipRun&) = delete;
+
+  // 0, or 2 with its line written.
+  int open();
+  // After open(): 0, 1 or 2 like the command.
+  int run(const Scenario& s, const LineSink& walk, const LineSink& errors, ScenarioOutcome& o);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 // The comment block at the top of a scenario file: it heads the recorded traces.
 std::vector<std::string> leading_comments(const std::string& path);
