@@ -17,6 +17,7 @@
 #include <utility>
 
 #include "dpc31/chip.hpp"
+#include "vocabulary.hpp"
 
 namespace dpc31::py_bind {
 
@@ -145,6 +146,22 @@ py::object addr_of(const Chip& chip, std::string_view name);
 py::bytes to_bytes(std::span<const std::uint8_t> b);
 std::vector<std::uint8_t> from_bytes(const py::bytes& b);
 py::dict counters_dict(const FdlCounters& c);
+// `v` within `r` as the type the C++ takes, else a ValueError with the scenario parser's words
+// for it (vocabulary.hpp): both doors refuse a value alike.
+template <typename T>
+T in_range(const ValueRange& r, std::int64_t v) {
+  if (v < 0 || !r.holds(static_cast<std::uint64_t>(v)))
+    throw py::value_error(out_of_range(r, std::to_string(v)));
+  return static_cast<T>(v);
+}
+// A PROFIBUS rate, else a ValueError as the scenario's `baud` says it.
+std::uint32_t profibus_rate(std::uint32_t baud);
+// An address on the chip's bus with `n` bytes from it inside (`n` 0: the address alone), else a
+// ValueError in `dpc31 serve`'s words: the chip would take the upper bits off (and log it per
+// byte).
+std::uint32_t bus_addr(const Chip& chip, std::int64_t a, std::int64_t n = 0);
+// A byte `what` (0..255), else a ValueError.
+std::uint8_t byte_value(std::string_view what, std::int64_t v);
 
 void bind_chip(py::module_& m);
 void bind_session(py::module_& m);

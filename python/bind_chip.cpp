@@ -105,6 +105,32 @@ std::vector<std::uint8_t> from_bytes(const py::bytes& b) {
   return {s.begin(), s.end()};
 }
 
+std::uint32_t profibus_rate(std::uint32_t baud) {
+  if (const std::string e = not_a_profibus_rate(baud); !e.empty()) throw py::value_error(e);
+  return baud;
+}
+
+std::uint32_t bus_addr(const Chip& chip, std::int64_t a, std::int64_t n) {
+  const std::int64_t limit = std::int64_t{1} << chip.profile().address_bits;
+  if (a < 0 || a >= limit) {
+    throw py::value_error("addr " + std::to_string(a) + " is out of range (0.." +
+                          std::to_string(limit - 1) + ")");
+  }
+  if (n < 0 || n > limit - a) {
+    throw py::value_error("block " + std::to_string(a) + "+" + std::to_string(n) +
+                          " ends beyond the address space (0.." + std::to_string(limit - 1) + ")");
+  }
+  return static_cast<std::uint32_t>(a);
+}
+
+std::uint8_t byte_value(std::string_view what, std::int64_t v) {
+  if (v < 0 || v > 0xFF) {
+    throw py::value_error(std::string(what) + " " + std::to_string(v) +
+                          " is out of range (0..255)");
+  }
+  return static_cast<std::uint8_t>(v);
+}
+
 py::dict counters_dict(const FdlCounters& c) {
   py::dict d;
   for (const CounterField& f : fdl_counter_fields()) d[py::str(f.name)] = c.*f.member;
@@ -138,6 +164,11 @@ std::uint16_t peek_field(const Chip& chip, std::string_view reg, std::string_vie
 }
 
 py::object addr_of(const Chip& chip, std::string_view name) {
+  // Another profile's register: this profile lacks it (None); a name no profile has is refused.
+  const auto known = [name](Profile p) { return find_reg(profile_desc(p), name) != nullptr; };
+  if (!known(chip.profile().id) &&
+      std::any_of(std::begin(kAllProfiles), std::end(kAllProfiles), known))
+    return py::none();
   return opt_addr(chip.addr_of(reg_id(chip, name)));
 }
 
@@ -297,57 +328,78 @@ void bind_chip_class(py::module_& m) {
            })
       // the bus: each access takes bus_access_cycles clocks, the chip runs meanwhile
       .def(
-          "read", [](PyChip& c, U32 a) { return c.run([&] { return c.chip.read(a); }); },
+          "read",
+          [](PyChip& c, std::int64_t a) {
+            const U32 at = bus_addr(c.chip, a);
+            return c.run([&] { return c.chip.read(at); });
+          },
           py::arg("addr"))
       .def(
-          "write", [](PyChip& c, U32 a, U8 v) { c.run([&] { c.chip.write(a, v); }); },
+          "write",
+          [](PyChip& c, std::int64_t a, std::int64_t v) {
+            const U32 at = bus_addr(c.chip, a);
+            const U8 b = byte_value("value", v);
+            c.run([&] { c.chip.write(at, b); });
+          },
           py::arg("addr"), py::arg("value"))
       .def(
           "read_block",
-          [](PyChip& c, U32 a, std::size_t n) {
-            std::vector<U8> out(n);
-            c.run([&] { c.chip.read_block(a, out); });
+          [](PyChip& c, std::int64_t a, std::int64_t n) {
+            const U32 at = bus_addr(c.chip, a, n);
+            std::vector<U8> out(static_cast<std::size_t>(n));
+            c.run([&] { c.chip.read_block(at, out); });
             return to_bytes(out);
           },
           py::arg("addr"), py::arg("length"))
       .def(
           "write_block",
-          [](PyChip& c, U32 a, const py::bytes& b) {
+          [](PyChip& c, std::int64_t a, const py::bytes& b) {
             const std::vector<U8> v = from_bytes(b);
-            c.run([&] { c.chip.write_block(a, v); });
+            const U32 at = bus_addr(c.chip, a, static_cast<std::int64_t>(v.size()));
+            c.run([&] { c.chip.write_block(at, v); });
           },
           py::arg("addr"), py::arg("data"))
       .def(
           "fill",
-          [](PyChip& c, U32 a, U8 v, std::size_t n) { c.run([&] { c.chip.fill(a, v, n); }); },
+          [](PyChip& c, std::int64_t a, std::int64_t v, std::int64_t n) {
+            const U32 at = bus_addr(c.chip, a, n);
+            const U8 b = byte_value("value", v);
+            c.run([&] { c.chip.fill(at, b, static_cast<std::size_t>(n)); });
+          },
           py::arg("addr"), py::arg("value"), py::arg("length"))
       .def(
           "equal",
-          [](PyChip& c, U32 a, U32 b, std::size_t n) {
-            return c.run([&] { return c.chip.equal(a, b, n); });
+          [](PyChip& c, std::int64_t a, std::int64_t b, std::int64_t n) {
+            const U32 at = bus_addr(c.chip, a, n);
+            const U32 bt = bus_addr(c.chip, b, n);
+            return c.run([&] { return c.chip.equal(at, bt, static_cast<std::size_t>(n)); });
           },
           py::arg("a"), py::arg("b"), py::arg("length"))
       // the debugger: no time, no side effects
       .def(
           "peek",
-          [](const PyChip& c, U32 a) {
+          [](const PyChip& c, std::int64_t a) {
             c.enter(false);
-            return c.chip.peek(a);
+            return c.chip.peek(bus_addr(c.chip, a));
           },
           py::arg("addr"))
       .def(
           "poke",
-          [](PyChip& c, U32 a, U8 v) {
+          [](PyChip& c, std::int64_t a, std::int64_t v) {
+            const U32 at = bus_addr(c.chip, a);
+            const U8 b = byte_value("value", v);
             c.enter(true);
-            return c.chip.poke(a, v);
+            return c.chip.poke(at, b);
           },
           py::arg("addr"), py::arg("value"))
       .def(
           "peek_block",
-          [](const PyChip& c, U32 a, std::size_t n) {
+          [](const PyChip& c, std::int64_t a, std::int64_t n) {
+            const U32 at = bus_addr(c.chip, a, n);
             c.enter(false);
-            std::vector<U8> out(n);
-            for (std::size_t i = 0; i < n; ++i) out[i] = c.chip.peek(a + static_cast<U32>(i));
+            std::vector<U8> out(static_cast<std::size_t>(n));
+            for (std::size_t i = 0; i < out.size(); ++i)
+              out[i] = c.chip.peek(at + static_cast<U32>(i));
             return to_bytes(out);
           },
           py::arg("addr"), py::arg("length"))

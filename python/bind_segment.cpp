@@ -12,7 +12,9 @@
 #include "dp_master.hpp"
 #include "dpc31/bus_port.hpp"
 #include "firmware_host.hpp"
+#include "outfile.hpp"
 #include "responder.hpp"
+#include "scenario.hpp"
 #include "scenario_segment.hpp"
 #include "segment.hpp"
 #include "segment_outputs.hpp"
@@ -85,6 +87,17 @@ SegmentOutputOptions output_options(const std::optional<std::string>& vcd,
 // A file that cannot be made or written: dpc31.Error with its one line.
 void check_output(bool ok, const std::string& error) {
   if (!ok) raise(errors().error, error);
+}
+
+// An output that is an input or another output (`dpc31 run`'s check, outfile::distinct, and its
+// line): a ValueError before anything is opened.
+void check_distinct(const std::vector<outfile::Named>& inputs,
+                    const std::optional<std::string>& vcd, const std::optional<std::string>& fst,
+                    const std::optional<std::string>& pcapng) {
+  const std::string same = outfile::distinct(
+      inputs,
+      {{"vcd", vcd.value_or("")}, {"fst", fst.value_or("")}, {"pcapng", pcapng.value_or("")}});
+  if (!same.empty()) throw py::value_error(same);
 }
 
 // The segment as Python holds it. The GIL is released while the line runs; a Python observer
@@ -213,10 +226,17 @@ std::vector<SlaveConfig> slaves_of(const PySegment& s, const py::list& slaves) {
       out.push_back(h.cast<SlaveConfig>());
       continue;
     }
-    const U8 a = h.cast<U8>();
-    const auto it = std::find_if(s.stations.begin(), s.stations.end(),
-                                 [a](const auto& st) { return st->slave.address == a; });
-    if (it == s.stations.end()) throw py::value_error("no station at address " + std::to_string(a));
+    if (!py::isinstance<py::int_>(h)) {
+      throw py::type_error(
+          fmt::format("slaves[{}]: a station address or a SlaveConfig expected, got {}", out.size(),
+                      py::str(py::type::of(h).attr("__name__")).cast<std::string>()));
+    }
+    const auto a = h.cast<py::int_>();
+    const auto it = std::find_if(s.stations.begin(), s.stations.end(), [&a](const auto& st) {
+      return a.equal(py::int_(st->slave.address));
+    });
+    if (it == s.stations.end())
+      throw py::value_error("no station at address " + std::string(py::str(h)));
     out.push_back((*it)->slave);
   }
   if (out.empty()) throw py::value_error("a master needs at least one slave");
@@ -298,8 +318,8 @@ void bind_station(py::module_& m) {
       .def("probe", read([](Chip& c) { return c.probe(); }))
       .def(
           "peek",
-          [read](py::object self, std::uint32_t a) {
-            return read([a](Chip& c) { return c.peek(a); })(std::move(self));
+          [read](py::object self, std::int64_t a) {
+            return read([a](Chip& c) { return c.peek(bus_addr(c, a)); })(std::move(self));
           },
           py::arg("addr"))
       .def(
@@ -408,16 +428,15 @@ void bind_segment_class(py::module_& m) {
                        const std::optional<std::string>& vcd, const std::optional<std::string>& fst,
                        const std::optional<std::string>& pcapng,
                        const std::vector<std::string>& signals) {
-             // The rates of a segment scenario's `segment baud=`; a bit at least one clock.
-             if (baud < 9'600 || baud > 12'000'000) {
-               throw py::value_error("baud " + std::to_string(baud) + ": 9600 to 12000000");
-             }
-             auto s = std::make_unique<P>(baud, clock_hz);
+             // A rate the chips' baud search finds (a scenario's `baud`); a bit at least one
+             // clock.
+             auto s = std::make_unique<P>(profibus_rate(baud), clock_hz);
              if (s->seg.bit_cycles() == 0) {
                throw py::value_error("clock_hz " + std::to_string(clock_hz) +
                                      ": less than one clock a bit");
              }
              if (vcd || fst || pcapng) {
+               check_distinct({}, vcd, fst, pcapng);
                s->outputs =
                    std::make_unique<SegmentOutputs>(output_options(vcd, fst, pcapng, signals));
                std::string e;
@@ -432,21 +451,25 @@ void bind_segment_class(py::module_& m) {
            "`signals` globs) and the pcapng of the line asked for are written by close().")
       .def(
           "add_station",
-          [](py::object self, U8 address, const std::string& profile,
+          [](py::object self, std::int64_t address, const std::string& profile,
              const std::optional<std::string>& variant, const std::optional<std::string>& firmware,
-             const std::optional<std::string>& name, std::pair<U8, U8> wd,
+             const std::optional<std::string>& name, std::pair<std::int64_t, std::int64_t> wd,
              const std::optional<SlaveConfig>& slave, const std::optional<bool>& user_wd,
              const std::optional<std::uint16_t>& user_wd_value) {
-            PyStation& st = add_station(self, address, profile, variant, firmware, name, wd, slave,
-                                        user_wd, user_wd_value);
+            // The checks of a segment scenario's `station ADDRESS wd=F1,F2`.
+            PyStation& st = add_station(
+                self, in_range<U8>(kStationAddress, address), profile, variant, firmware, name,
+                {in_range<U8>(kWdFactor1, wd.first), in_range<U8>(kWdFactor2, wd.second)}, slave,
+                user_wd, user_wd_value);
             py::object o = py::cast(&st, py::return_value_policy::reference);
             o.attr("_segment") = self;  // a station keeps its segment alive
             return o;
           },
           py::arg("address"), py::arg("profile") = "dpc31", py::arg("variant") = py::none(),
           py::arg("firmware") = py::none(), py::arg("name") = py::none(),
-          py::arg("wd") = std::pair<U8, U8>{10, 10}, py::arg("slave") = py::none(),
-          py::arg("user_wd") = py::none(), py::arg("user_wd_value") = py::none(),
+          py::arg("wd") = std::pair<std::int64_t, std::int64_t>{10, 10},
+          py::arg("slave") = py::none(), py::arg("user_wd") = py::none(),
+          py::arg("user_wd_value") = py::none(),
           "A chip at station `address` with a firmware (DO4, CNT2 or a plug-in path; the "
           "master's slave takes its GSD defaults) or the built-in responder (firmware=None); "
           "`wd` the watchdog factors its master sends; `slave` a SlaveConfig as it is instead; "
@@ -474,10 +497,22 @@ void bind_segment_class(py::module_& m) {
           py::arg("name"), "A station without a chip that drives the line with send(); its index.")
       .def(
           "add_master",
-          [](py::object self, U8 address, const py::list& slaves, U64 ttr, U8 gap, U8 hsa,
-             std::uint32_t slot_bits, std::uint32_t idle_bits) {
+          [](py::object self, std::int64_t address, const py::list& slaves, std::int64_t ttr,
+             std::int64_t gap, const std::optional<std::int64_t>& hsa, std::int64_t slot_bits,
+             std::int64_t idle_bits) {
             P& s = self.cast<P&>();
-            const MasterConfig mc{address, s.baud, slot_bits, idle_bits, ttr, gap, hsa};
+            // The checks of a segment scenario's `master` line (0: no TTR, no GAP update).
+            MasterConfig mc{in_range<U8>(kMasterAddress, address),
+                            s.baud,
+                            in_range<std::uint32_t>(kSlotBits, slot_bits),
+                            in_range<std::uint32_t>(kIdleBits, idle_bits),
+                            ttr == 0 ? 0 : in_range<U64>(kTtrBits, ttr),
+                            gap == 0 ? U8{0} : in_range<U8>(kGapFactor, gap)};
+            if (hsa) {
+              mc.hsa = in_range<U8>(kHsa, *hsa);
+              const std::string e = hsa_refused(mc.hsa, mc.gap_factor, mc.address);
+              if (!e.empty()) throw py::value_error(e);
+            }
             std::vector<SlaveConfig> sl = slaves_of(s, slaves);
             try {
               return std::make_unique<PySegMaster>(std::move(self), mc, std::move(sl));
@@ -486,7 +521,7 @@ void bind_segment_class(py::module_& m) {
             }
           },
           py::arg("address"), py::arg("slaves"), py::kw_only(), py::arg("ttr") = 0,
-          py::arg("gap") = 0, py::arg("hsa") = 126, py::arg("slot_bits") = 100,
+          py::arg("gap") = 0, py::arg("hsa") = py::none(), py::arg("slot_bits") = 100,
           py::arg("idle_bits") = 33,
           "A built-in master polling `slaves` (station addresses or SlaveConfigs), obeying TTR "
           "`ttr` bit times (0: no limit) and the GAP update factor `gap` in use_token.")
@@ -707,6 +742,9 @@ void bind_segment_scenario(py::module_& m) {
             ScenarioError err;
             const SegmentLoad l = load_segment_scenario(path, s, err);
             if (l == SegmentLoad::not_segment) {
+              // A file that cannot be read or is no scenario at all: Scenario.load's words for it.
+              Scenario single;
+              if (!load_scenario(path, single, err)) fail(err);
               raise(errors().scenario, path + ": not a segment scenario (use Scenario.load)");
             }
             if (l == SegmentLoad::error) fail(err);
@@ -729,6 +767,10 @@ void bind_segment_scenario(py::module_& m) {
           [](const SegmentScenario& s, const std::optional<std::string>& vcd,
              const std::optional<std::string>& fst, const std::optional<std::string>& pcapng,
              const std::vector<std::string>& signals) {
+            std::vector<outfile::Named> inputs = {{"the scenario", s.file}};
+            for (const std::string& p : segment_plugins(s))
+              inputs.push_back({"the firmware plug-in", p});
+            check_distinct(inputs, vcd, fst, pcapng);
             SegmentRunResult r;
             SegmentScenarioOutputs out(s, output_options(vcd, fst, pcapng, signals));
             std::string e;

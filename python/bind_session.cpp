@@ -54,9 +54,14 @@ auto bytes_property(M T::*member) {
 
 void bind_frames(py::module_& m) {
   py::class_<fdl::Frame>(m, "Frame", "An FDL telegram (include/dpc31/fdl.hpp).")
-      .def(py::init([](U8 da, U8 sa, U8 fc, const py::bytes& du, std::optional<U8> dsap,
-                       std::optional<U8> ssap) {
-             return fdl::make_frame(da, sa, fc, from_bytes(du), dsap, ssap);
+      .def(py::init([](std::int64_t da, std::int64_t sa, std::int64_t fc, const py::bytes& du,
+                       std::optional<std::int64_t> dsap, std::optional<std::int64_t> ssap) {
+             const auto sap = [](const char* what, const std::optional<std::int64_t>& v) {
+               return v ? std::optional<U8>(byte_value(what, *v)) : std::nullopt;
+             };
+             return fdl::make_frame(byte_value("da", da), byte_value("sa", sa),
+                                    byte_value("fc", fc), from_bytes(du), sap("dsap", dsap),
+                                    sap("ssap", ssap));
            }),
            py::arg("da"), py::arg("sa"), py::arg("fc"), py::arg("du") = py::bytes(),
            py::arg("dsap") = py::none(), py::arg("ssap") = py::none())
@@ -68,7 +73,21 @@ void bind_frames(py::module_& m) {
       .def_readwrite("ssap", &fdl::Frame::ssap)
       .def_property("du", bytes_property(&fdl::Frame::du).first,
                     bytes_property(&fdl::Frame::du).second)
-      .def("encode", [](const fdl::Frame& f) { return to_bytes(fdl::encode(f)); })
+      .def("encode",
+           [](const fdl::Frame& f) {
+             std::vector<U8> out;
+             if (fdl::encode(f, out)) return to_bytes(out);
+             // fdl::encode's refusals (include/dpc31/fdl.hpp), the data unit's length by name.
+             const std::size_t n = f.du.size() + (f.dsap ? 1U : 0U) + (f.ssap ? 1U : 0U);
+             if (f.sd == fdl::SD2 && n > fdl::kMaxLe - 3) {
+               throw py::value_error(
+                   "du: " + std::to_string(n) + " bytes with its SAPs; an FDL telegram carries " +
+                   std::to_string(fdl::kMaxLe - 3) + " at most (LE 249: 244 beside both SAPs)");
+             }
+             throw py::value_error(
+                 "this frame cannot be sent as it stands: data or SAPs its SD has no room for, "
+                 "an address above 127, or a SAP with bit 7 set");
+           })
       .def_property_readonly("service", [](const fdl::Frame& f) { return service_name(f); })
       .def(py::self == py::self)
       .def("__repr__", [](const fdl::Frame& f) {
@@ -90,7 +109,9 @@ void bind_frames(py::module_& m) {
       .def_readonly("noise", &MasterCounters::noise);
   py::class_<SlaveConfig>(m, "SlaveConfig", "The slave as the master parameterises it.")
       .def(py::init(&with_kwargs<SlaveConfig>))
-      .def_readwrite("address", &SlaveConfig::address)
+      .def_property(
+          "address", [](const SlaveConfig& c) { return c.address; },
+          [](SlaveConfig& c, std::int64_t a) { c.address = in_range<U8>(kSlaveAddress, a); })
       .def_readwrite("ident", &SlaveConfig::ident)
       .def_property("cfg", bytes_property(&SlaveConfig::cfg).first,
                     bytes_property(&SlaveConfig::cfg).second)
@@ -502,12 +523,15 @@ void bind_master(py::module_& m) {
   py::class_<PyMaster> master(m, "Master",
                               "The built-in DP master (class 1) on a chip's RxD/TxD (DpMaster).");
   master
-      .def(py::init([](py::object chip, U8 address, std::uint32_t baud, std::uint32_t slot_bits,
-                       std::uint32_t idle_bits, const std::optional<SlaveConfig>& slave) {
+      .def(py::init([](py::object chip, std::int64_t address, std::uint32_t baud,
+                       std::int64_t slot_bits, std::int64_t idle_bits,
+                       const std::optional<SlaveConfig>& slave) {
+             // The checks of a scenario's `baud` and `master address= slot= idle=`.
+             const MasterConfig mc{in_range<U8>(kMasterAddress, address), profibus_rate(baud),
+                                   in_range<std::uint32_t>(kSlotBits, slot_bits),
+                                   in_range<std::uint32_t>(kIdleBits, idle_bits)};
              chip.cast<PyChip&>().enter(true);
-             return std::make_unique<PyMaster>(std::move(chip),
-                                               MasterConfig{address, baud, slot_bits, idle_bits},
-                                               slave.value_or(SlaveConfig{}));
+             return std::make_unique<PyMaster>(std::move(chip), mc, slave.value_or(SlaveConfig{}));
            }),
            py::arg("chip"), py::arg("address") = 2, py::arg("baud") = 1'500'000,
            py::arg("slot_bits") = 100, py::arg("idle_bits") = 33, py::arg("slave") = py::none())

@@ -41,7 +41,7 @@ std::uint64_t number(std::string_view s, std::string_view what, std::uint64_t mi
   std::uint64_t v = 0;
   if (!parse_u64(s, v)) fail(fmt::format("bad number '{}' for {}", shown(s), what));
   if (v < min || v > max) {
-    fail(fmt::format("{} {} out of range ({}..{})", what, shown(s), min, max));
+    fail(out_of_range(ValueRange{what, min, max}, shown(s)));
   }
   return v;
 }

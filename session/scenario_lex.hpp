@@ -10,6 +10,8 @@
 #include <string_view>
 #include <vector>
 
+#include "vocabulary.hpp"
+
 namespace dpc31::scenario_lex {
 
 // Simulated time one `silence` may take: bounds the run time of a typo like `silence 10000s`.
@@ -31,6 +33,10 @@ std::vector<std::string_view> split(std::string_view s, char sep);
 // A number in min..max, or ParseFail naming `what`.
 std::uint64_t number(std::string_view s, std::string_view what, std::uint64_t min,
                      std::uint64_t max);
+// The same for a value the Python module takes too (vocabulary.hpp).
+inline std::uint64_t number(std::string_view s, const ValueRange& r) {
+  return number(s, r.what, r.min, r.max);
+}
 bool flag(std::string_view s, std::string_view what);
 // Hex bytes "13,23" ("0x13" also accepted); "-" is the empty list.
 std::vector<std::uint8_t> bytes(std::string_view s, std::string_view what,

@@ -199,8 +199,8 @@ class Parser {
     } else if (k == "wd") {
       const std::vector<std::string_view> f = split(v, ',');
       if (f.size() != 2) fail(fmt::format("wd='{}': two factors, as in wd=10,10", shown(v)));
-      sl.wd_fact1 = static_cast<std::uint8_t>(number(f[0], "wd factor 1", 1, 255));
-      sl.wd_fact2 = static_cast<std::uint8_t>(number(f[1], "wd factor 2", 1, 255));
+      sl.wd_fact1 = static_cast<std::uint8_t>(number(f[0], kWdFactor1));
+      sl.wd_fact2 = static_cast<std::uint8_t>(number(f[1], kWdFactor2));
     } else if (k == "wd_on") {
       sl.wd_on = flag(v, "wd_on");
     } else if (k == "wd_base") {
@@ -305,22 +305,17 @@ class Parser {
       positional(1, 1, "a baud rate");
       no_options();
       const std::uint64_t b = number(pos_[0], "baud", 1, 12'000'000);
-      if (baud_code(static_cast<std::uint32_t>(b)) < 0) {
-        fail(
-            fmt::format("baud {} is not a PROFIBUS rate (9600, 19200, 45450, 93750, 187500, "
-                        "500000, 1500000, 3000000, 6000000, 12000000)",
-                        b));
-      }
+      if (const std::string e = not_a_profibus_rate(b); !e.empty()) fail(e);
       s_.master.baud = static_cast<std::uint32_t>(b);
     } else if (cmd_ == "master") {
       positional(0, 0, "options only");
       for (const auto& [k, v] : opts_) {
         if (k == "address") {
-          s_.master.address = static_cast<std::uint8_t>(number(v, "master address", 0, 126));
+          s_.master.address = static_cast<std::uint8_t>(number(v, kMasterAddress));
         } else if (k == "slot") {
-          s_.master.slot_bits = static_cast<std::uint32_t>(number(v, "slot", 1, 65535));
+          s_.master.slot_bits = static_cast<std::uint32_t>(number(v, kSlotBits));
         } else if (k == "idle") {
-          s_.master.idle_bits = static_cast<std::uint32_t>(number(v, "idle", 1, 65535));
+          s_.master.idle_bits = static_cast<std::uint32_t>(number(v, kIdleBits));
         } else if (k == "retries") {
           s_.retries = static_cast<std::uint32_t>(number(v, "retries", 0, 8));
         } else {
@@ -365,7 +360,7 @@ class Parser {
       for (const auto& [k, v] : opts_) {
         if (prm_option(sl, k, v)) continue;
         if (k == "address") {
-          sl.address = static_cast<std::uint8_t>(number(v, "slave address", 0, 125));
+          sl.address = static_cast<std::uint8_t>(number(v, kSlaveAddress));
         } else if (k == "cfg") {
           sl.cfg = bytes(v, "cfg");
           if (sl.cfg.empty()) fail("cfg: at least one byte");

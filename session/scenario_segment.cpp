@@ -106,8 +106,8 @@ class Parser {
 
   void station() {
     SegmentStation st;
-    st.slave.address = static_cast<std::uint8_t>(
-        number(positional(0, "station address"), "station address", 0, 125));
+    st.slave.address =
+        static_cast<std::uint8_t>(number(positional(0, "station address"), kStationAddress));
     st.name = fmt::format("station {}", st.slave.address);
     if (auto v = take("name")) st.name = std::string(*v);
     if (auto v = take("profile")) {
@@ -138,8 +138,8 @@ class Parser {
     if (auto v = take("wd")) {
       const std::vector<std::string_view> f = split(*v, ',');
       if (f.size() != 2) fail(fmt::format("wd='{}': two factors, as in wd=10,10", *v));
-      st.slave.wd_fact1 = static_cast<std::uint8_t>(number(f[0], "wd factor 1", 1, 255));
-      st.slave.wd_fact2 = static_cast<std::uint8_t>(number(f[1], "wd factor 2", 1, 255));
+      st.slave.wd_fact1 = static_cast<std::uint8_t>(number(f[0], kWdFactor1));
+      st.slave.wd_fact2 = static_cast<std::uint8_t>(number(f[1], kWdFactor2));
     }
     for (const SegmentStation& o : s_.stations) {
       if (o.name == st.name) fail(fmt::format("a second station named '{}'", st.name));
@@ -164,18 +164,14 @@ class Parser {
 
   void master() {
     SegmentMaster m;
-    m.address = static_cast<std::uint8_t>(
-        number(positional(0, "master address"), "master address", 0, 126));
+    m.address = static_cast<std::uint8_t>(number(positional(0, "master address"), kMasterAddress));
     if (auto v = take("slaves")) m.slaves = bytes_list(*v);
-    // The token rules of DpMaster::use_token (TTR, the GAP factor G, HSA: the ranges of the bus
-    // parameters in EN 50170 part 2).
-    if (auto v = take("ttr")) m.ttr_bits = number(*v, "ttr", 256, 16'777'215);
-    if (auto v = take("gap")) m.gap_factor = static_cast<std::uint8_t>(number(*v, "gap", 1, 100));
+    // The token rules of DpMaster::use_token (vocabulary.hpp).
+    if (auto v = take("ttr")) m.ttr_bits = number(*v, kTtrBits);
+    if (auto v = take("gap")) m.gap_factor = static_cast<std::uint8_t>(number(*v, kGapFactor));
     if (auto v = take("hsa")) {
-      m.hsa = static_cast<std::uint8_t>(number(*v, "hsa", 1, 126));
-      if (m.gap_factor == 0) fail("hsa= without gap=: the HSA bounds the GAP the master polls");
-      if (m.hsa < m.address)
-        fail(fmt::format("hsa={} below the master's address {}", m.hsa, m.address));
+      m.hsa = static_cast<std::uint8_t>(number(*v, kHsa));
+      if (const std::string e = hsa_refused(m.hsa, m.gap_factor, m.address); !e.empty()) fail(e);
     }
     m.obeys_token = m.ttr_bits != 0 || m.gap_factor != 0;
     // One TTR for the bus check: the segment line's, else the masters' (all the same).

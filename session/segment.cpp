@@ -124,12 +124,12 @@ std::size_t Segment::add_sender(std::string name) {
 }
 
 void Segment::set_firmware(std::size_t i, Cpu::Isr isr) {
-  stations_.at(i)->cpu = std::make_unique<Cpu>(chip(i), std::move(isr));
+  station(i).cpu = std::make_unique<Cpu>(chip(i), std::move(isr));
   look_at(*stations_[i]);
 }
 
 void Segment::set_firmware(std::size_t i, Cpu::Program program) {
-  stations_.at(i)->cpu = std::make_unique<Cpu>(chip(i), std::move(program));
+  station(i).cpu = std::make_unique<Cpu>(chip(i), std::move(program));
   look_at(*stations_[i]);
 }
 
@@ -224,11 +224,19 @@ void Segment::due_by(std::uint64_t bound) {
   }
 }
 
-const std::string& Segment::name(std::size_t i) const { return stations_.at(i)->name; }
-bool Segment::is_chip(std::size_t i) const { return stations_.at(i)->chip != nullptr; }
+Segment::Station& Segment::station(std::size_t i) const {
+  if (i >= stations_.size()) {
+    throw std::out_of_range(
+        fmt::format("station {}: the segment has {} stations", i, stations_.size()));
+  }
+  return *stations_[i];
+}
+
+const std::string& Segment::name(std::size_t i) const { return station(i).name; }
+bool Segment::is_chip(std::size_t i) const { return station(i).chip != nullptr; }
 
 Chip& Segment::chip(std::size_t i) {
-  Station& s = *stations_.at(i);
+  Station& s = station(i);
   if (!s.chip) throw std::invalid_argument("segment: station " + s.name + " has no chip");
   // Left alone by the line, it has no event the line sees before now_ and its firmware sleeps:
   // stepping it here changes nothing but its cycle and what the verdicts it takes on the way
@@ -585,10 +593,25 @@ void Segment::line_chars(std::span<const std::uint8_t> data, std::uint64_t start
 
 void Segment::flush() { close_telegrams(UINT64_MAX, now_); }
 
+void Segment::check_send(std::size_t from, std::uint64_t start, std::uint64_t cycles) const {
+  if (const Station& s = station(from); s.chip) {
+    throw std::invalid_argument(fmt::format(
+        "station {} ({}) is a chip: its chip drives the line, send from a sender (add_sender)",
+        from, s.name));
+  }
+  if (start >= UINT64_MAX - cycles) {
+    throw std::invalid_argument(
+        fmt::format("start {}: {} cycles from there end past the last cycle ({})", start, cycles,
+                    UINT64_MAX - 1));
+  }
+}
+
 std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> bytes,
                             std::uint64_t start, UartFault fault) {
+  const std::uint64_t cycles = bytes.size() * std::uint64_t{kUartCharBits} * t_;
+  check_send(from, start, cycles);
   run_to_send(start);
-  const std::uint64_t end = start + bytes.size() * std::uint64_t{kUartCharBits} * t_;
+  const std::uint64_t end = start + cycles;
   if (owner_ && *owner_ != from && start < owned_until_) {
     collide(*owner_, from, start);
     return end;
@@ -636,6 +659,7 @@ void Segment::run_to_send(std::uint64_t start) {
 }
 
 void Segment::pulse(std::size_t from, std::uint64_t start, std::uint64_t low_cycles) {
+  check_send(from, start, std::max(low_cycles, std::uint64_t{kUartCharBits} * t_));
   run_to_send(start);
   if (owner_ && *owner_ != from && start < owned_until_) {
     collide(*owner_, from, start);
@@ -747,7 +771,7 @@ void Segment::round(std::uint64_t cycle) {
 // A character whose start bit is on the line is handed whole: the receiver is then as its edges up
 // to the line's time would leave it (UartRx::take), and what it reports by then is the same.
 void Segment::take_line(std::size_t listener, const std::function<void(const TxdRun&)>& take) {
-  Station& s = *stations_.at(listener);
+  Station& s = station(listener);
   const auto end = std::upper_bound(s.heard.begin(), s.heard.end(), now_, before);
   const std::uint64_t frame = std::uint64_t{kUartCharBits} * t_;
   auto h = s.heard.begin();

@@ -85,10 +85,12 @@ class Segment {
 
   // `bytes` as back-to-back characters from `start` (>= cycle()) driven by station `from`
   // (`fault` damages one character, as uart_encode does). Every station runs to `start` first.
-  // Returns the end of the last stop bit.
+  // Returns the end of the last stop bit. `from` must be a sender (add_sender): std::out_of_range
+  // for no station, std::invalid_argument for a chip's or for a telegram that would end past the
+  // last cycle the line counts (UINT64_MAX is its "never").
   std::uint64_t send(std::size_t from, std::span<const std::uint8_t> bytes, std::uint64_t start,
                      UartFault fault = {});
-  // A low pulse from `from` of `low_cycles` at `start` (a glitch, line noise).
+  // A low pulse from `from` of `low_cycles` at `start` (a glitch, line noise); refused as send().
   void pulse(std::size_t from, std::uint64_t start, std::uint64_t low_cycles);
 
   // Runs every station to `cycle`. With `wake_for`, returns as soon as a start bit from another
@@ -178,6 +180,10 @@ class Segment {
                     std::span<const std::pair<std::uint64_t, bool>> edges);
   // What the senders but `from` hear: edges (in cycle order, anywhere) and good characters whole
   // from `start` (after everything they heard so far, or placed in order).
+  // Throws unless `from` is a sender whose `cycles` from `start` end before UINT64_MAX.
+  void check_send(std::size_t from, std::uint64_t start, std::uint64_t cycles) const;
+  // Station i; std::out_of_range naming it and how many there are.
+  [[nodiscard]] Station& station(std::size_t i) const;
   void senders_hear(std::size_t from, std::span<const std::pair<std::uint64_t, bool>> edges);
   void senders_hear(std::size_t from, std::span<const std::uint8_t> bytes, std::uint64_t start);
   // The line's decoder up to min(upto, known) (the line is known up to `known`: the line's time,

@@ -96,4 +96,22 @@ bool parse_fault_kind(std::string_view name, UartFault::Kind& kind) {
   return false;
 }
 
+std::string out_of_range(const ValueRange& r, std::string_view value) {
+  return fmt::format("{} {} out of range ({}..{})", r.what, value, r.min, r.max);
+}
+
+std::string not_a_profibus_rate(std::uint64_t baud) {
+  if (baud <= UINT32_MAX && baud_code(static_cast<std::uint32_t>(baud)) >= 0) return {};
+  return fmt::format(
+      "baud {} is not a PROFIBUS rate (9600, 19200, 45450, 93750, 187500, 500000, 1500000, "
+      "3000000, 6000000, 12000000)",
+      baud);
+}
+
+std::string hsa_refused(std::uint8_t hsa, std::uint8_t gap_factor, std::uint8_t address) {
+  if (gap_factor == 0) return "hsa= without gap=: the HSA bounds the GAP the master polls";
+  if (hsa < address) return fmt::format("hsa={} below the master's address {}", hsa, address);
+  return {};
+}
+
 }  // namespace dpc31

@@ -35,4 +35,33 @@ std::string_view fault_kind_name(UartFault::Kind k);
 // The kind named by fault_kind_name ("parity", "start", "stop"); false for any other name.
 bool parse_fault_kind(std::string_view name, UartFault::Kind& kind);
 
+// A number a scenario line and the Python module both take, with its range and its name in the
+// scenario parser's words (docs/scenario-format.md), so that both doors refuse it alike.
+struct ValueRange {
+  std::string_view what;
+  std::uint64_t min;
+  std::uint64_t max;
+  [[nodiscard]] constexpr bool holds(std::uint64_t v) const { return v >= min && v <= max; }
+};
+inline constexpr ValueRange kStationAddress{"station address", 0, 125};
+inline constexpr ValueRange kSlaveAddress{"slave address", 0, 125};
+inline constexpr ValueRange kMasterAddress{"master address", 0, 126};
+inline constexpr ValueRange kWdFactor1{"wd factor 1", 1, 255};
+inline constexpr ValueRange kWdFactor2{"wd factor 2", 1, 255};
+// The master's slot and idle times in bit times (a single chip's `master slot= idle=`).
+inline constexpr ValueRange kSlotBits{"slot", 1, 65535};
+inline constexpr ValueRange kIdleBits{"idle", 1, 65535};
+// The token rules of a segment's master (TTR, the GAP factor, HSA: the ranges of the bus
+// parameters in EN 50170 part 2).
+inline constexpr ValueRange kTtrBits{"ttr", 256, 16'777'215};
+inline constexpr ValueRange kGapFactor{"gap", 1, 100};
+inline constexpr ValueRange kHsa{"hsa", 1, 126};
+// "WHAT VALUE out of range (MIN..MAX)", VALUE as the user wrote it.
+[[nodiscard]] std::string out_of_range(const ValueRange& r, std::string_view value);
+// "" for one of the ten PROFIBUS rates the chips' baud search knows, else why not.
+[[nodiscard]] std::string not_a_profibus_rate(std::uint64_t baud);
+// "" for a master's hsa= it may take (beside a gap=, not below its own address), else why not.
+[[nodiscard]] std::string hsa_refused(std::uint8_t hsa, std::uint8_t gap_factor,
+                                      std::uint8_t address);
+
 }  // namespace dpc31

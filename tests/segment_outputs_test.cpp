@@ -3,6 +3,8 @@
 // gtkwave's fst2vcd), the pcapng of the line through tshark and the shipped dissector, a trace per
 // station that replays alone, and the bad input of a segment's run. Every expected cycle comes
 // from docs/timing.md at 1.5 Mbaud: T = 48 MHz / 1.5 Mbaud = 32 clocks, a character 11 T = 352.
+#include "segment_outputs.hpp"
+
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -18,7 +20,9 @@
 #include <string>
 #include <vector>
 
+#include "dpc31/fdl.hpp"
 #include "run_command.hpp"
+#include "segment.hpp"
 #include "test_files.hpp"
 
 namespace {
@@ -427,6 +431,41 @@ TEST(SegmentOutputs, BadInputIsOneLineAndNoFile) {
   EXPECT_EQ(r.rc, 2) << r.out;
   EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;
   EXPECT_EQ(slurp(scn), slurp(kScenario));
+}
+
+// The outputs finished and destroyed, the segment runs on (dpc31.Segment's close()): the
+// observers they put on the line and its chips do nothing any more, and the file holds the line
+// up to its time then.
+TEST(SegmentOutputs, TheSegmentRunsOnAfterItsOutputsAreGone) {
+  using namespace dpc31;
+  const std::string vcd = tmp("gone.vcd");
+  Segment seg(1'500'000);
+  wave::Options w;
+  w.path = vcd;
+  auto out = std::make_unique<SegmentOutputs>(SegmentOutputOptions{{w}, ""});
+  std::string e;
+  ASSERT_TRUE(out->open(e)) << e;
+  const std::size_t chip = seg.add_chip("station 5", ChipOptions{});
+  ASSERT_TRUE(out->add_station(seg, chip, "station5", e)) << e;
+  const std::size_t sender = seg.add_sender("x");
+  ASSERT_TRUE(out->attach_line(seg, {5, wave::kDriverWithoutAddress}, e)) << e;
+  const std::vector<std::uint8_t> req = fdl::encode(
+      fdl::make_frame(5, 2, fdl::make_request_fc(fdl::Function::FDL_Status, false, false)));
+  seg.send(sender, req, 1000);
+  seg.flush();
+  seg.align();
+  out->end(seg);
+  ASSERT_TRUE(out->write(e)) << e;
+  out.reset();
+  const std::string written = slurp(vcd);
+  for (int i = 0; i < 20; ++i) {
+    seg.send(sender, req, seg.cycle() + 100);
+    seg.chip(chip).write(0x04, 0xFF);
+  }
+  seg.run_until(seg.cycle() + 100'000);
+  seg.flush();
+  EXPECT_EQ(slurp(vcd), written);
+  EXPECT_FALSE(written.empty());
 }
 
 // A station's user watchdog options refused at their line (docs/scenario-format.md, "Segments"):

@@ -13,6 +13,7 @@
 #include <memory>
 #include <optional>
 #include <stdexcept>
+#include <typeinfo>
 #include <vector>
 
 #include "bus_check.hpp"
@@ -184,6 +185,38 @@ TEST(Segment, ASendBeforeTheChipsCycleThrowsWithBothNames) {
     // The chip stepped past the start; slave a, without an event, stays where it stood.
     EXPECT_STREQ(e.what(), "segment: master sends at cycle 1000, slave b is at cycle 5000");
   }
+}
+
+// Only a sender drives the line with send() and pulse(): no station, a chip's, and a telegram
+// that would end past the last cycle (its end wrapped) are refused with a line, the line untouched.
+TEST(Segment, ASendOrPulseNeedsASenderAndAnEndBeforeTheLastCycle) {
+  Segment seg(kBaud);
+  const std::size_t chip = seg.add_chip("slave a", ChipOptions{});
+  const std::size_t m = seg.add_sender("master");
+  const std::vector<std::uint8_t> token{fdl::SD4, 9, 2};
+  const auto message = [](auto f) {
+    try {
+      f();
+    } catch (const std::exception& e) {
+      return std::string(typeid(e) == typeid(std::out_of_range) ? "out_of_range: " : "") + e.what();
+    }
+    return std::string("no exception");
+  };
+  EXPECT_EQ(message([&] { seg.send(7, token, 1000); }),
+            "out_of_range: station 7: the segment has 2 stations");
+  EXPECT_EQ(message([&] { seg.pulse(7, 1000, 10); }),
+            "out_of_range: station 7: the segment has 2 stations");
+  EXPECT_EQ(message([&] { seg.send(chip, token, 1000); }),
+            "station 0 (slave a) is a chip: its chip drives the line, send from a sender "
+            "(add_sender)");
+  EXPECT_EQ(message([&] { seg.send(m, token, UINT64_MAX - 1); }),
+            "start 18446744073709551614: 1056 cycles from there end past the last cycle "
+            "(18446744073709551614)");
+  EXPECT_EQ(message([&] { seg.pulse(m, 1000, UINT64_MAX - 1000); }),
+            "start 1000: 18446744073709550615 cycles from there end past the last cycle "
+            "(18446744073709551614)");
+  EXPECT_EQ(seg.cycle(), 0u);
+  EXPECT_EQ(seg.send(m, token, 1000), 1000 + 3 * 11 * seg.bit_cycles());
 }
 
 // The master's next request follows TSYN after the answer's last stop bit (docs/decisions.md:

@@ -118,3 +118,39 @@ def test_scenario_load_names_the_segment_loader(traces):
     assert e.value.file == path and e.value.line == 33  # the `segment` line
     assert "segment scenario" in e.value.reason
     assert "SegmentScenario" in e.value.reason and "dpc31 run" in e.value.reason
+
+
+@pytest.mark.parametrize("kind", ["vcd", "fst", "pcapng"])
+def test_the_segment_runs_on_after_close(tmp_path, kind):
+    # close() writes the files and drops the writers; the observers they put on the line and the
+    # chips stay and do nothing, so the segment runs on (it crashed in them) and the file stays.
+    path = tmp_path / f"after.{kind}"
+    seg = dpc31.Segment(1_500_000, **{kind: str(path)})
+    seg.add_station(5, "spc3")
+    master = seg.add_master(2, [5])
+    seg.run_until(10_000)
+    seg.close()
+    written = path.read_bytes()
+    assert master.startup()
+    seg.run_until(seg.cycle + 2_000_000)
+    seg.close()
+    assert path.read_bytes() == written
+
+
+def test_an_output_that_is_an_input_or_another_output_is_refused(traces, tmp_path):
+    # `dpc31 run`'s check (outfile::distinct) and its line, before anything is opened or run.
+    same = str(tmp_path / "same.vcd")
+    with pytest.raises(ValueError, match=f"^vcd {same} and fst {same} are the same file: each "
+                                         "output needs its own$"):
+        dpc31.Segment(1_500_000, vcd=same, fst=same)
+    scn_path = tmp_path / "two.scn"
+    scn_path.write_bytes((traces / "segment" / "two_masters.scn").read_bytes())
+    before = scn_path.read_bytes()
+    scn = dpc31.SegmentScenario.load(str(scn_path))
+    with pytest.raises(ValueError, match=f"^vcd {scn_path}: is the scenario {scn_path}: an output "
+                                         "must not replace an input$"):
+        scn.run(vcd=str(scn_path))
+    with pytest.raises(ValueError, match="are the same file"):
+        scn.run(pcapng=same, fst=same)
+    assert scn_path.read_bytes() == before
+    assert not (tmp_path / "same.vcd").exists()

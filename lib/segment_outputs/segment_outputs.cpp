@@ -22,6 +22,8 @@ SegmentOutputs::SegmentOutputs(SegmentOutputOptions opt) : opt_(std::move(opt)) 
   for (const wave::Options& w : opt_.waves) waves_.push_back(std::make_unique<wave::Recorder>(w));
 }
 
+SegmentOutputs::~SegmentOutputs() { *live_ = false; }
+
 bool SegmentOutputs::open(std::string& error) {
   for (auto& w : waves_) {
     if (!w->open(error)) return false;
@@ -51,7 +53,9 @@ bool SegmentOutputs::attach_line(Segment& seg, std::vector<std::uint8_t> driver_
       return false;
   }
   if (!waves_.empty()) {
-    seg.on_line = [this](std::size_t from, std::uint64_t cycle, bool level) {
+    // The segment may run on after this is gone (dpc31.Segment's close()): then a no-op.
+    seg.on_line = [this, live = live_](std::size_t from, std::uint64_t cycle, bool level) {
+      if (!*live) return;
       for (auto& w : waves_) w->line_edge(from, cycle, level);
     };
   }

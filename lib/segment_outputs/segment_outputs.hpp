@@ -38,6 +38,10 @@ struct SegmentOutputError : std::runtime_error {
 class SegmentOutputs {
  public:
   explicit SegmentOutputs(SegmentOutputOptions opt);
+  // The observers it put on the segment and its chips stay there and do nothing from now on.
+  ~SegmentOutputs();
+  SegmentOutputs(const SegmentOutputs&) = delete;
+  SegmentOutputs& operator=(const SegmentOutputs&) = delete;
 
   // Opens every file (temporaries next to the targets): a bad path is found before the run. False
   // with a line.
@@ -71,6 +75,7 @@ class SegmentOutputs {
   capture::PcapngWriter pcap_{capture::WriterOptions{"dpc31emu", "segment", true}};
   std::optional<Held> held_;
   std::uint64_t end_cycle_ = 0;
+  std::shared_ptr<bool> live_ = std::make_shared<bool>(true);  // false once destroyed
 };
 
 // The outputs of a segment scenario's run (run_segment_scenario's observer): a scope per station

@@ -189,8 +189,20 @@ struct Recorder::Impl {
   void* fst = nullptr;
   std::vector<fstHandle> handle;
 
+  // The chips' observers outlive the recorder (a Chip's observers are removed only all of a
+  // kind at once): each holds this flag and does nothing once the recorder is gone.
+  std::shared_ptr<bool> live = std::make_shared<bool>(true);
+
   ~Impl() {
+    *live = false;
     if (fst != nullptr) fstWriterClose(fst);  // an unfinished recording: `out` discards it
+  }
+  // `f` as a chip observer that is a no-op once the recorder is destroyed.
+  template <typename F>
+  auto while_live(F f) const {
+    return [live = live, f = std::move(f)](auto&&... a) {
+      if (*live) f(std::forward<decltype(a)>(a)...);
+    };
   }
 
   [[nodiscard]] bool take(const std::string& local, const std::string& full, int width) const {
@@ -522,24 +534,24 @@ bool Recorder::Impl::attach_chip(Chip& chip, std::string scope, std::string& err
   push(s, chip.cycle(), kBusWr, 0);
   push(s, chip.cycle(), kService, 0xFF);  // no request yet
   sample(s, chip.cycle());
-  chip.on_rxd([this, src](std::uint64_t c, bool l) { push(*src, c, kRxd, l ? 1 : 0); });
-  chip.on_txd([this, src](std::uint64_t c, bool l) { push(*src, c, kTxd, l ? 1 : 0); });
-  chip.on_irq_change([this, src](std::uint64_t c, bool) { sample(*src, c); });
-  chip.on_state_change([this, src](std::uint64_t c) { sample(*src, c); });
+  chip.on_rxd(while_live([this, src](std::uint64_t c, bool l) { push(*src, c, kRxd, l ? 1 : 0); }));
+  chip.on_txd(while_live([this, src](std::uint64_t c, bool l) { push(*src, c, kTxd, l ? 1 : 0); }));
+  chip.on_irq_change(while_live([this, src](std::uint64_t c, bool) { sample(*src, c); }));
+  chip.on_state_change(while_live([this, src](std::uint64_t c) { sample(*src, c); }));
   if (s.var[kService] != kNoVar) {
     // Reported when the request is acted on (the stop sample of its last character).
-    chip.on_telegram([this, src](const Telegram& t) {
+    chip.on_telegram(while_live([this, src](const Telegram& t) {
       const int code = t.from_chip ? -1 : request_service(t.bytes);
       if (code >= 0) push(*src, src->chip->cycle(), kService, static_cast<std::uint32_t>(code));
-    });
+    }));
   }
-  chip.on_bus_access([this, src](std::uint64_t c, const BusAccess& e) {
+  chip.on_bus_access(while_live([this, src](std::uint64_t c, const BusAccess& e) {
     const Sig strobe = e.write ? kBusWr : kBusRd;
     push(*src, c, kBusAddr, e.addr);
     if (e.write) push(*src, c, kBusData, e.data);
     push(*src, c, strobe, 1);  // the strobe is high for the access's completion cycle
     push(*src, c + 1, strobe, 0);
-  });
+  }));
   return true;
 }
 

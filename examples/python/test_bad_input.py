@@ -1,0 +1,136 @@
+"""Bad input at the module's doors (docs/python.md, "Errors"): a bad value is a ValueError (an
+index an IndexError, a wrong type a TypeError) with the words the scenario parser or `dpc31
+serve` use for the same value, raised before anything runs; never a crash, never silence, never
+a flood of log lines.
+"""
+
+import re
+
+import pytest
+
+import dpc31
+
+
+def test_send_and_pulse_need_a_sender_and_an_end_before_the_last_cycle():
+    with pytest.raises(IndexError, match=r"^station 99: the segment has 0 stations$"):
+        dpc31.Segment().send(99, b"\x10")
+    seg = dpc31.Segment()
+    seg.add_station(5)
+    x = seg.add_sender("x")
+    now = seg.cycle  # after the station's init
+    with pytest.raises(ValueError, match=r"^station 0 \(station 5\) is a chip: its chip drives "
+                                         r"the line, send from a sender \(add_sender\)$"):
+        seg.send(0, b"\x10\x05\x02\x49\x50\x16")
+    with pytest.raises(ValueError, match=r"end past the last cycle"):
+        seg.send(x, b"\x10", start=2**64 - 1)
+    with pytest.raises(IndexError, match=r"^station 7: the segment has 2 stations$"):
+        seg.pulse(7, 10**6, 10)
+    with pytest.raises(ValueError, match=r"is a chip"):
+        seg.pulse(0, 10**6, 10)
+    assert seg.cycle == now  # nothing ran
+    assert seg.send(x, b"\x10\x05\x02\x49\x50\x16", start=1000) == 1000 + 6 * 11 * seg.bit_cycles
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: dpc31.Segment(12345), r"baud 12345 is not a PROFIBUS rate \(9600, 19200, 45450, "
+     r"93750, 187500, 500000, 1500000, 3000000, 6000000, 12000000\)"),
+    (lambda: dpc31.Master(dpc31.Chip("spc3"), baud=0), r"baud 0 is not a PROFIBUS rate"),
+    (lambda: dpc31.Master(dpc31.Chip("spc3"), address=200),
+     r"master address 200 out of range \(0..126\)"),
+    (lambda: dpc31.Master(dpc31.Chip("spc3"), slot_bits=0), r"slot 0 out of range \(1..65535\)"),
+    (lambda: dpc31.SlaveConfig(address=200), r"slave address 200 out of range \(0..125\)"),
+    (lambda: dpc31.Segment().add_station(127), r"station address 127 out of range \(0..125\)"),
+    (lambda: dpc31.Segment().add_station(200), r"station address 200 out of range \(0..125\)"),
+    (lambda: dpc31.Segment().add_station(300), r"station address 300 out of range \(0..125\)"),
+    (lambda: dpc31.Segment().add_station(5, wd=(0, 1)), r"wd factor 1 0 out of range \(1..255\)"),
+    (lambda: dpc31.Segment().add_station(5, wd=(1, 256)),
+     r"wd factor 2 256 out of range \(1..255\)"),
+])
+def test_values_the_scenario_parser_refuses_are_value_errors_in_its_words(call, message):
+    with pytest.raises(ValueError, match="^" + message):
+        call()
+
+
+def test_a_masters_token_rules_are_checked_as_on_a_master_line():
+    seg = dpc31.Segment()
+    seg.add_station(5)
+    for kwargs, message in [
+            (dict(ttr=1, gap=1), r"ttr 1 out of range \(256..16777215\)"),
+            (dict(ttr=1000, gap=101, hsa=1), r"gap 101 out of range \(1..100\)"),
+            (dict(hsa=1), r"hsa= without gap=: the HSA bounds the GAP the master polls"),
+            (dict(gap=1, hsa=1), r"hsa=1 below the master's address 2"),
+            (dict(gap=1, hsa=127), r"hsa 127 out of range \(1..126\)"),
+            (dict(slot_bits=0), r"slot 0 out of range \(1..65535\)")]:
+        with pytest.raises(ValueError, match=message):
+            seg.add_master(2, [5], **kwargs)
+    with pytest.raises(ValueError, match=r"^master address 127 out of range \(0..126\)$"):
+        seg.add_master(127, [5])
+    with pytest.raises(TypeError, match=r"^slaves\[1\]: a station address or a SlaveConfig "
+                                        r"expected, got str$"):
+        seg.add_master(2, [5, "x"])
+    with pytest.raises(ValueError, match=r"^no station at address 300$"):
+        seg.add_master(2, [300])
+    assert seg.add_master(2, [5], ttr=1000, gap=1, hsa=5).address == 2
+
+
+def test_misleading_errors_say_what_is_wrong(tmp_path):
+    with pytest.raises(dpc31.ScenarioError, match="no such file"):
+        dpc31.SegmentScenario.load(str(tmp_path / "missing.scn"))
+    with pytest.raises(dpc31.ScenarioError, match="is a directory"):
+        dpc31.SegmentScenario.load(str(tmp_path))
+    empty = tmp_path / "empty.scn"
+    empty.write_text("")
+    with pytest.raises(dpc31.ScenarioError) as e:
+        dpc31.SegmentScenario.load(str(empty))
+    assert "not a segment scenario" not in str(e.value)
+    assert str(e.value) == str(pytest.raises(dpc31.ScenarioError, dpc31.Scenario.load,
+                                             str(empty)).value)
+    with pytest.raises(IndexError, match=r"^station 3: the segment has 0 stations$"):
+        dpc31.Segment().name(3)
+    chip = dpc31.Chip("spc3")
+    with pytest.raises(ValueError, match=r"^value 256 is out of range \(0..255\)$"):
+        chip.write(4, 256)
+    with pytest.raises(ValueError, match=r"^value 300 is out of range \(0..255\)$"):
+        chip.poke(4, 300)
+    with pytest.raises(ValueError, match=r"^da 300 is out of range \(0..255\)$"):
+        dpc31.Frame(da=300, sa=2, fc=0x49)
+    assert chip.cycle == 0
+
+
+def test_addr_of_is_none_for_a_register_the_profile_lacks():
+    assert dpc31.Chip("dpc31").addr_of("InstQ_Base") is not None
+    assert dpc31.Chip("spc3").addr_of("InstQ_Base") is None
+    with pytest.raises(ValueError, match="no register 'Nothing' in profile spc3"):
+        dpc31.Chip("spc3").addr_of("Nothing")
+    seg = dpc31.Segment()
+    st = seg.add_station(5, "spc3")
+    assert st.addr_of("InstQ_Base") is None
+    assert st.addr_of("Int_Mask_Reg") == dpc31.Chip("spc3").addr_of("Int_Mask_Reg")
+
+
+def test_a_frame_too_long_to_send_is_a_value_error():
+    with pytest.raises(ValueError, match=r"^du: 247 bytes with its SAPs; an FDL telegram carries "
+                                         r"246 at most \(LE 249: 244 beside both SAPs\)$"):
+        dpc31.Frame(da=5, sa=2, fc=0x5D, du=bytes(247)).encode()
+    with pytest.raises(ValueError, match=r"^du: 247 bytes with its SAPs"):
+        dpc31.Frame(da=5, sa=2, fc=0x5D, du=bytes(245), dsap=51, ssap=62).encode()
+    assert len(dpc31.Frame(da=5, sa=2, fc=0x5D, du=bytes(244), dsap=51, ssap=62).encode()) == 255
+    assert len(dpc31.Frame(da=5, sa=2, fc=0x5D, du=bytes(246)).encode()) == 255
+
+
+def test_addresses_beyond_the_bus_are_refused_as_dpc31_serve_refuses_them(capfd):
+    chip = dpc31.Chip("spc3")  # an 11-bit bus: 0..2047
+    with pytest.raises(ValueError, match=r"^addr 2048 is out of range \(0..2047\)$"):
+        chip.read_block(0x800, 20000)
+    with pytest.raises(ValueError, match=r"^block 2000\+100 ends beyond the address space"):
+        chip.read_block(2000, 100)
+    before = chip.peek(0)
+    with pytest.raises(ValueError, match=r"^addr 65536 is out of range \(0..2047\)$"):
+        chip.poke(0x10000, before ^ 0xFF)
+    with pytest.raises(ValueError, match=r"^addr 2048 is out of range"):
+        chip.peek(2048)
+    assert chip.peek(0) == before  # the refused poke did not write address 0
+    assert len(chip.read_block(1000, 48)) == 48
+    assert chip.cycle == 48 * chip.bus_access_cycles
+    out, err = capfd.readouterr()
+    assert not re.search("beyond the", out + err)
