@@ -226,8 +226,8 @@ void Segment::due_by(std::uint64_t bound) {
 
 Segment::Station& Segment::station(std::size_t i) const {
   if (i >= stations_.size()) {
-    throw std::out_of_range(
-        fmt::format("station {}: the segment has {} stations", i, stations_.size()));
+    throw std::out_of_range(fmt::format("station {}: the segment has {} station{}", i,
+                                        stations_.size(), stations_.size() == 1 ? "" : "s"));
   }
   return *stations_[i];
 }
