@@ -9,6 +9,7 @@
 
 #include "dpc31/hex.hpp"
 #include "dpc31/pdu.hpp"
+#include "dpc31/uart.hpp"
 #include "textfile.hpp"
 
 namespace dpc31::scenario_lex {
@@ -44,6 +45,21 @@ std::uint64_t number(std::string_view s, std::string_view what, std::uint64_t mi
     fail(fmt::format("{} {} out of range ({}..{})", what, shown(s), min, max));
   }
   return v;
+}
+
+std::string_view without_bom(std::string_view text) {
+  return text.starts_with("\xEF\xBB\xBF") ? text.substr(3) : text;
+}
+
+std::uint32_t profibus_baud(std::string_view s) {
+  const auto b = static_cast<std::uint32_t>(number(s, "baud", 1, 12'000'000));
+  if (baud_code(b) < 0) {
+    fail(
+        fmt::format("baud {} is not a PROFIBUS rate (9600, 19200, 45450, 93750, 187500, 500000, "
+                    "1500000, 3000000, 6000000, 12000000)",
+                    b));
+  }
+  return b;
 }
 
 bool flag(std::string_view s, std::string_view what) {

@@ -304,14 +304,7 @@ class Parser {
     } else if (cmd_ == "baud") {
       positional(1, 1, "a baud rate");
       no_options();
-      const std::uint64_t b = number(pos_[0], "baud", 1, 12'000'000);
-      if (baud_code(static_cast<std::uint32_t>(b)) < 0) {
-        fail(
-            fmt::format("baud {} is not a PROFIBUS rate (9600, 19200, 45450, 93750, 187500, "
-                        "500000, 1500000, 3000000, 6000000, 12000000)",
-                        b));
-      }
-      s_.master.baud = static_cast<std::uint32_t>(b);
+      s_.master.baud = profibus_baud(pos_[0]);
     } else if (cmd_ == "master") {
       positional(0, 0, "options only");
       for (const auto& [k, v] : opts_) {
@@ -761,7 +754,7 @@ bool parse_scenario(std::string_view text, const std::string& file, const dpc31_
   s.file = file;
   Parser p(s, plugin);
   int no = 0;
-  if (text.starts_with("\xEF\xBB\xBF")) text.remove_prefix(3);  // a UTF-8 BOM from an editor
+  text = without_bom(text);
   try {
     for (std::string_view line : split(text, '\n')) p.line(++no, line);
     p.finish();
