@@ -136,7 +136,15 @@ bool DpMaster::startup_all(int tries) {
   return all;
 }
 
+void DpMaster::check_outputs(const std::vector<std::vector<std::uint8_t>>& outputs) const {
+  if (outputs.size() > slaves_.size()) {
+    throw std::invalid_argument(fmt::format("{} outputs for {} slaves: at most one per slave",
+                                            outputs.size(), slaves_.size()));
+  }
+}
+
 std::vector<Exchange> DpMaster::dp_cycle(const std::vector<std::vector<std::uint8_t>>& outputs) {
+  check_outputs(outputs);
   std::vector<Exchange> out;
   out.reserve(slaves_.size());
   for (std::size_t i = 0; i < slaves_.size(); ++i) {
@@ -178,6 +186,7 @@ Exchange DpMaster::pass_token(std::uint8_t next) {
 
 TokenVisit DpMaster::use_token(std::uint8_t next,
                                const std::vector<std::vector<std::uint8_t>>& outputs) {
+  check_outputs(outputs);
   if (!holding_) {  // claimed: no rotation before it
     token_at_ = now();
     trr_ = 0;
@@ -336,6 +345,12 @@ void DpMaster::glitch(std::uint32_t low_cycles) {
 
 fdl::Frame DpMaster::request(std::optional<std::uint8_t> dsap, std::vector<std::uint8_t> du,
                              bool srd) {
+  // Before the FCB toggles: a request refused leaves the master as it was.
+  if (du.size() > fdl::kMaxDpData) {
+    throw std::invalid_argument(
+        fmt::format("a request with {} data bytes: a DP telegram carries at most {}", du.size(),
+                    fdl::kMaxDpData));
+  }
   std::uint8_t fc = fdl::make_request_fc(fdl::Function::SDN_high, false, false);
   if (srd) {
     fcb_ = !fcb_;
@@ -358,8 +373,12 @@ bool sdn(const fdl::Frame& f) {
 
 Exchange DpMaster::transact(fdl::Frame req, UartFault fault) {
   // decode(encode(req)) == req whenever encode gives bytes: the request needs no decoding.
-  const bool no_answer = fdl::encode(req, tx_) && sdn(req);
-  return send(tx_, fault, no_answer, std::move(req));
+  if (!fdl::encode(req, tx_)) {
+    throw std::invalid_argument(
+        fmt::format("a frame fdl::encode cannot send: SD {:02X}h, DA {}, {} data bytes", req.sd,
+                    req.da, req.du.size()));
+  }
+  return send(tx_, fault, sdn(req), std::move(req));
 }
 
 Exchange DpMaster::transact_raw(const std::vector<std::uint8_t>& bytes, UartFault fault) {

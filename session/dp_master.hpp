@@ -170,7 +170,7 @@ class DpMaster {
   // startup() of every slave in turn; false if one did not reach Data_Exchange.
   bool startup_all(int tries = kStartupTries);
   // One DP cycle: Data_Exchange with every slave in order, `outputs[i]` to slave i (its out_len
-  // bytes of zeros where none are given).
+  // bytes of zeros where none are given); more outputs than slaves: std::invalid_argument.
   std::vector<Exchange> dp_cycle(const std::vector<std::vector<std::uint8_t>>& outputs = {});
   // Passes the token (SD4) to `next` (its own address: keeps it); nothing is waited for.
   Exchange pass_token(std::uint8_t next);
@@ -185,7 +185,8 @@ class DpMaster {
   // only while the rotation time since the token before is under TTR (the first cycle of a visit
   // always: a late token allows that one only); every G visits, while time remains, one address
   // of the GAP (this address + 1 up to `next` - 1, wrapping after HSA) asked with FDL_Status;
-  // then the token to `next`. `outputs[i]` go to slave i (zeros where none are given).
+  // then the token to `next`. `outputs[i]` go to slave i (zeros where none are given; more
+  // outputs than slaves: std::invalid_argument).
   TokenVisit use_token(std::uint8_t next,
                        const std::vector<std::vector<std::uint8_t>>& outputs = {});
   // The start-up under the token's rules (docs/segment.md, "The start-up under TTR"): from now on
@@ -200,7 +201,9 @@ class DpMaster {
   [[nodiscard]] bool started_up() const;
   [[nodiscard]] std::uint8_t address() const { return cfg_.address; }
   // Sends one request after the idle time and waits for its answer. `fault` corrupts one
-  // character on the wire (parity, start or stop bit).
+  // character on the wire (parity, start or stop bit). A frame fdl::encode refuses is
+  // std::invalid_argument, nothing sent; so is every service's data unit over the 244 bytes of
+  // DP (fdl::kMaxDpData), before its FCB changes.
   Exchange transact(fdl::Frame req, UartFault fault = {});
   // Sends raw bytes as they are (malformed frames) and waits a slot time for an answer.
   Exchange transact_raw(const std::vector<std::uint8_t>& bytes, UartFault fault = {});
@@ -282,6 +285,8 @@ class DpMaster {
       on_send;
 
  private:
+  // At most one output per slave (dp_cycle, use_token).
+  void check_outputs(const std::vector<std::vector<std::uint8_t>>& outputs) const;
   fdl::Frame request(std::optional<std::uint8_t> dsap, std::vector<std::uint8_t> du,
                      bool srd = true);
   void run_until(std::uint64_t cycle);

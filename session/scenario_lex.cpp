@@ -9,6 +9,7 @@
 
 #include "dpc31/hex.hpp"
 #include "dpc31/pdu.hpp"
+#include "dpc31/uart.hpp"
 #include "textfile.hpp"
 
 namespace dpc31::scenario_lex {
@@ -44,6 +45,16 @@ std::uint64_t number(std::string_view s, std::string_view what, std::uint64_t mi
     fail(out_of_range(ValueRange{what, min, max}, shown(s)));
   }
   return v;
+}
+
+std::string_view without_bom(std::string_view text) {
+  return text.starts_with("\xEF\xBB\xBF") ? text.substr(3) : text;
+}
+
+std::uint32_t profibus_baud(std::string_view s) {
+  const std::uint64_t b = number(s, "baud", 1, 12'000'000);
+  if (const std::string e = not_a_profibus_rate(b); !e.empty()) fail(e);
+  return static_cast<std::uint32_t>(b);
 }
 
 bool flag(std::string_view s, std::string_view what) {

@@ -10,6 +10,7 @@
 #include <string_view>
 #include <vector>
 
+#include "dpc31/fdl.hpp"
 #include "vocabulary.hpp"
 
 namespace dpc31::scenario_lex {
@@ -18,7 +19,7 @@ namespace dpc31::scenario_lex {
 inline constexpr std::uint64_t kMaxSeconds = 3600;
 
 // At most this many data bytes in one telegram's data unit (DP).
-inline constexpr std::size_t kMaxDu = 244;
+inline constexpr std::size_t kMaxDu = fdl::kMaxDpData;
 
 struct ParseFail {
   int line = 0;  // 0: the line being parsed
@@ -38,6 +39,10 @@ inline std::uint64_t number(std::string_view s, const ValueRange& r) {
   return number(s, r.what, r.min, r.max);
 }
 bool flag(std::string_view s, std::string_view what);
+// `text` without the UTF-8 BOM an editor may put before it.
+std::string_view without_bom(std::string_view text);
+// A baud rate: one of the 10 PROFIBUS rates, the only ones the chips' baud search finds.
+std::uint32_t profibus_baud(std::string_view s);
 // Hex bytes "13,23" ("0x13" also accepted); "-" is the empty list.
 std::vector<std::uint8_t> bytes(std::string_view s, std::string_view what,
                                 std::size_t max = kMaxDu);

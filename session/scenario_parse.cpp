@@ -304,9 +304,7 @@ class Parser {
     } else if (cmd_ == "baud") {
       positional(1, 1, "a baud rate");
       no_options();
-      const std::uint64_t b = number(pos_[0], "baud", 1, 12'000'000);
-      if (const std::string e = not_a_profibus_rate(b); !e.empty()) fail(e);
-      s_.master.baud = static_cast<std::uint32_t>(b);
+      s_.master.baud = profibus_baud(pos_[0]);
     } else if (cmd_ == "master") {
       positional(0, 0, "options only");
       for (const auto& [k, v] : opts_) {
@@ -756,7 +754,7 @@ bool parse_scenario(std::string_view text, const std::string& file, const dpc31_
   s.file = file;
   Parser p(s, plugin);
   int no = 0;
-  if (text.starts_with("\xEF\xBB\xBF")) text.remove_prefix(3);  // a UTF-8 BOM from an editor
+  text = without_bom(text);
   try {
     for (std::string_view line : split(text, '\n')) p.line(++no, line);
     p.finish();

@@ -68,9 +68,26 @@ class Parser {
     for (const auto& [k, v] : opts_) fail(fmt::format("unknown option '{}' for {}", k, c));
   }
 
+  // Checks that need the whole header: a master's slaves and a pass_token's master may be named
+  // before the station or master line that makes them.
   void finish() {
     if (s_.stations.empty()) fail("a segment needs at least one station");
+    if (s_.steps.empty()) fail("only header commands: nothing to run");
     if (s_.masters.empty()) s_.masters.push_back({2, {}});
+    for (std::size_t i = 0; i < s_.masters.size(); ++i) {
+      for (const std::uint8_t a : s_.masters[i].slaves) {
+        if (!is_station(a)) {
+          throw ParseFail{master_lines_[i],
+                          fmt::format("slaves={}: no station {}", master_slaves_[i], a)};
+        }
+      }
+    }
+    for (const SegmentStep& st : s_.steps) {
+      if (st.kind == SegmentStep::Kind::pass_token && find_master(st.address) == nullptr) {
+        throw ParseFail{st.line,
+                        fmt::format("pass_token from={}: no master of that address", st.address)};
+      }
+    }
     for (SegmentMaster& m : s_.masters) {
       if (m.slaves.empty()) {
         for (const SegmentStation& st : s_.stations) m.slaves.push_back(st.slave.address);
@@ -96,8 +113,7 @@ class Parser {
   std::uint64_t time(std::string_view v) const { return duration(v, clock_hz(), bit_cycles_()); }
 
   void segment() {
-    if (auto v = take("baud"))
-      s_.baud = static_cast<std::uint32_t>(number(*v, "baud", 9600, 12'000'000));
+    if (auto v = take("baud")) s_.baud = profibus_baud(*v);
     if (auto v = take("slot"))
       s_.slot_bits = static_cast<std::uint32_t>(number(*v, "slot", 37, 16383));
     if (auto v = take("ttr")) s_.ttr_bits = number(*v, "ttr", 256, 16'777'215);
@@ -165,7 +181,10 @@ class Parser {
   void master() {
     SegmentMaster m;
     m.address = static_cast<std::uint8_t>(number(positional(0, "master address"), kMasterAddress));
-    if (auto v = take("slaves")) m.slaves = bytes_list(*v);
+    const std::optional<std::string_view> slaves = take("slaves");
+    if (slaves) m.slaves = bytes_list(*slaves);
+    master_lines_.push_back(line_);
+    master_slaves_.push_back(slaves.value_or(""));
     // The token rules of DpMaster::use_token (vocabulary.hpp).
     if (auto v = take("ttr")) m.ttr_bits = number(*v, kTtrBits);
     if (auto v = take("gap")) m.gap_factor = static_cast<std::uint8_t>(number(*v, kGapFactor));
@@ -200,11 +219,14 @@ class Parser {
     return out;
   }
 
+  bool is_station(std::uint8_t a) const {
+    return std::any_of(s_.stations.begin(), s_.stations.end(),
+                       [a](const SegmentStation& s) { return s.slave.address == a; });
+  }
+
   std::uint8_t station_address(std::string_view v) const {
     const auto a = static_cast<std::uint8_t>(number(v, "station", 0, 126));
-    const bool known = std::any_of(s_.stations.begin(), s_.stations.end(),
-                                   [a](const SegmentStation& s) { return s.slave.address == a; });
-    if (!known) fail(fmt::format("no station {}", a));
+    if (!is_station(a)) fail(fmt::format("no station {}", a));
     return a;
   }
 
@@ -330,6 +352,8 @@ class Parser {
   bool first_ = true;
   bool ttr_given_ = false;
   int line_ = 0;
+  std::vector<int> master_lines_;                // each master's line, in s_.masters' order
+  std::vector<std::string_view> master_slaves_;  // ... and its slaves= as written
   std::map<std::string_view, std::string_view> opts_;
   std::vector<std::string_view> pos_;
 };
@@ -337,7 +361,7 @@ class Parser {
 }  // namespace
 
 bool is_segment_scenario(std::string_view text) {
-  for (std::string_view line : split(text, '\n')) {
+  for (std::string_view line : split(without_bom(text), '\n')) {
     const std::vector<std::string_view> w = words(line);
     if (!w.empty()) return w[0] == "segment";
   }
@@ -351,7 +375,7 @@ bool parse_segment_scenario(std::string_view text, const std::string& file, Segm
   Parser p(out);
   int line = 0;
   try {
-    for (std::string_view l : split(text, '\n')) {
+    for (std::string_view l : split(without_bom(text), '\n')) {
       ++line;
       const std::vector<std::string_view> w = words(l);
       if (!w.empty()) p.command(line, w);
@@ -362,7 +386,7 @@ bool parse_segment_scenario(std::string_view text, const std::string& file, Segm
     line = 0;
     p.finish();
   } catch (const ParseFail& f) {
-    err = ScenarioError{file, line, f.message};
+    err = ScenarioError{file, f.line != 0 ? f.line : line, f.message};
     return false;
   }
   return true;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <map>
 #include <memory>
+#include <stdexcept>
 
 #include "dp_master.hpp"
 #include "dpc31/bus_port.hpp"
@@ -143,11 +144,17 @@ class SegmentRun {
     }
     for (const std::string& name : s_.senders) senders_[name] = seg_.add_sender(name);
     for (const SegmentMaster& m : s_.masters) {
+      // Slave i of the DpMaster is m.slaves[i]: the walk and `expect visit` name a visit's
+      // slaves by these positions.
       std::vector<SlaveConfig> slaves;
       for (const std::uint8_t a : m.slaves) {
-        for (const SegmentStation& def : s_.stations) {
-          if (def.slave.address == a) slaves.push_back(def.slave);
+        const auto def =
+            std::find_if(s_.stations.begin(), s_.stations.end(),
+                         [a](const SegmentStation& d) { return d.slave.address == a; });
+        if (def == s_.stations.end()) {
+          throw std::invalid_argument(fmt::format("master {}: no station {}", m.address, a));
         }
+        slaves.push_back(def->slave);
       }
       const std::size_t station = seg_.add_sender(fmt::format("master {}", m.address));
       MasterConfig mc{m.address, s_.baud, s_.slot_bits};
@@ -240,14 +247,19 @@ class SegmentRun {
         seg_.run_until(seg_.cycle() + st.bytes.size() * 11 * seg_.bit_cycles());
         break;
       case K::pass_token:
-        for (auto& m : masters_) {
-          if (m->address() == st.address) m->pass_token(st.station);
-        }
+        master(st.address).pass_token(st.station);
         break;
       default:
         check(st);
     }
     forget();
+  }
+
+  DpMaster& master(std::uint8_t address) {
+    const auto m = std::find_if(masters_.begin(), masters_.end(),
+                                [address](const auto& dm) { return dm->address() == address; });
+    if (m == masters_.end()) throw std::invalid_argument(fmt::format("no master {}", address));
+    return **m;
   }
 
   // Nothing here reads the masters' histories nor what a firmware wrote to its ports or took as
@@ -390,7 +402,12 @@ class SegmentRun {
       return;
     }
     ++failed_;
-    const std::string e = fmt::format("{}:{}: expected {}, got {}", s_.file, st.line, st.text, got);
+    // "expected X, got Y" (docs/scenario-format.md): X the check's words after `expect`.
+    std::string_view want = st.text;
+    want.remove_prefix(want.find("expect") + 6);
+    want = want.substr(0, want.find_last_not_of(" \t\r") + 1);
+    want.remove_prefix(want.find_first_not_of(" \t"));
+    const std::string e = fmt::format("{}:{}: expected {}, got {}", s_.file, st.line, want, got);
     say(seg_.cycle(), "FAILED: " + e);
     if (errors_) errors_(e);
   }

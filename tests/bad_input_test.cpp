@@ -79,6 +79,12 @@ TEST_F(BadInput, RunScenarioFile) {
             "\x7f"
             "ELF\x01\x02\x03\n\xff\xfe"),
        path("garbage_cut.scn") + ":1: unknown command '\\x7FELF\\x01\\x02\\x03'"},
+      // A segment scenario's bad lines (docs/scenario-format.md, "Segments"): the same rules.
+      {"segment: a slave no station",
+       file("seg_slave.scn", "segment\nstation 5\nmaster 2 slaves=5,9\nstartup\n"),
+       path("seg_slave.scn") + ":3: slaves=5,9: no station 9"},
+      {"segment: only headers", file("seg_header.scn", "segment\nstation 5\n"),
+       path("seg_header.scn") + ": only header commands: nothing to run"},
   };
   fs::create_directory(path("dir"));
   spit(path("old.json"), "old");

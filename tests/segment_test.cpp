@@ -621,7 +621,7 @@ TEST(SegmentScenario, ExpectVisitChecksTheMastersLastVisit) {
   EXPECT_EQ(run(head + "expect visit 2 polled=5 rotation=0\n", errors), 1);
   ASSERT_EQ(errors.size(), 1U);
   EXPECT_EQ(errors[0],
-            "v.scn:7: expected expect visit 2 polled=5 rotation=0, got polled 5,6, rotation 13376 "
+            "v.scn:7: expected visit 2 polled=5 rotation=0, got polled 5,6, rotation 13376 "
             "cycles, hold 18624 cycles, gap none");
 }
 
@@ -804,6 +804,16 @@ TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
        "f.scn:2: bad value 'yes' for user_wd: 0 or 1"},
       {"segment\nstation 5 profile=spc3 user_wd_value=65536\n",
        "f.scn:2: user_wd_value 65536 out of range (0..65535)"},
+      // A master's slaves are stations of the segment, named before or after it.
+      {"segment\nstation 5\nmaster 2 slaves=9\nstartup\n", "f.scn:3: slaves=9: no station 9"},
+      {"segment\nmaster 2 slaves=5,9\nstation 5\nstartup\n", "f.scn:2: slaves=5,9: no station 9"},
+      {"segment\nstation 5\nmaster 2\nstartup\npass_token from=9 to=2\n",
+       "f.scn:5: pass_token from=9: no master of that address"},
+      {"segment\nstation 5\n", "f.scn: only header commands: nothing to run"},
+      // The only rates the chips' baud search finds, refused in the single chip's words.
+      {"segment baud=12345\nstation 5\nstartup\n",
+       "f.scn:1: baud 12345 is not a PROFIBUS rate (9600, 19200, 45450, 93750, 187500, 500000, "
+       "1500000, 3000000, 6000000, 12000000)"},
   };
   for (const auto& [text, want] : cases) {
     SegmentScenario s;
@@ -815,7 +825,8 @@ TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
   SegmentScenario s;
   ScenarioError err;
   ASSERT_TRUE(parse_segment_scenario(
-      "segment\nstation 5\nmaster 2 ttr=1200\nmaster 3 ttr=1200 gap=2 hsa=9\n", "f.scn", s, err))
+      "segment\nstation 5\nmaster 2 ttr=1200\nmaster 3 ttr=1200 gap=2 hsa=9\nstartup\n", "f.scn", s,
+      err))
       << err.text();
   EXPECT_EQ(s.ttr_bits, 1200U);
   EXPECT_EQ(s.masters[1].gap_factor, 2U);
@@ -823,6 +834,11 @@ TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
   EXPECT_TRUE(s.masters[1].obeys_token);
   EXPECT_TRUE(is_segment_scenario("# a comment\n\nsegment baud=12000000\n"));
   EXPECT_FALSE(is_segment_scenario("profile spc3\n"));
+  // A UTF-8 BOM from an editor is skipped, as the single chip's parser skips it.
+  EXPECT_TRUE(is_segment_scenario("\xEF\xBB\xBFsegment\nstation 5\nstartup\n"));
+  ASSERT_TRUE(parse_segment_scenario("\xEF\xBB\xBFsegment\nstation 5\nstartup\n", "f.scn", s, err))
+      << err.text();
+  EXPECT_EQ(s.stations.size(), 1U);
 }
 
 // The single chip's loader on a segment's file names the segment's loader, at the `segment` line.
@@ -865,4 +881,49 @@ TEST(Segment, AMastersSlaveKeepsItsConfigurationAcrossSelects) {
 }
 
 }  // namespace
+// What a master cannot send is refused before anything happens (std::invalid_argument, ValueError
+// in Python): a data unit over DP's 244 bytes (fdl::encode would give no bytes: nothing went on
+// the line and no answer was counted), a frame fdl::encode refuses, more outputs than slaves.
+// Nothing reaches the line and the FCB is as it was: the next request is a fresh master's first.
+TEST(Segment, AMasterRefusesWhatItCannotSend) {
+  const auto make = [](Segment& seg) {
+    std::vector<SlaveConfig> slaves(2);
+    slaves[0].address = 5;
+    slaves[1].address = 6;
+    return std::make_unique<DpMaster>(seg, seg.add_sender("master"), MasterConfig{2, 1'500'000},
+                                      slaves);
+  };
+  Segment seg(1'500'000);
+  std::size_t telegrams = 0;
+  seg.on_telegram = [&telegrams](const LineTelegram&) { ++telegrams; };
+  const std::unique_ptr<DpMaster> master = make(seg);
+  const auto refused = [](const auto& act) {
+    try {
+      act();
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("not refused");
+  };
+  EXPECT_EQ(refused([&] { master->data_exchange(std::vector<std::uint8_t>(247)); }),
+            "a request with 247 data bytes: a DP telegram carries at most 244");
+  EXPECT_EQ(refused([&] { master->data_exchange(std::vector<std::uint8_t>(245)); }),
+            "a request with 245 data bytes: a DP telegram carries at most 244");
+  EXPECT_EQ(refused([&] {
+              master->transact(fdl::make_frame(5, 2, 0x5D, std::vector<std::uint8_t>(250)));
+            }),
+            "a frame fdl::encode cannot send: SD 68h, DA 5, 250 data bytes");
+  const std::vector<std::vector<std::uint8_t>> three(3);
+  EXPECT_EQ(refused([&] { master->dp_cycle(three); }),
+            "3 outputs for 2 slaves: at most one per slave");
+  EXPECT_EQ(refused([&] { master->use_token(2, three); }),
+            "3 outputs for 2 slaves: at most one per slave");
+  EXPECT_EQ(telegrams, 0U);
+  EXPECT_EQ(master->selected(), 0U);
+  const Exchange ex = master->data_exchange(std::vector<std::uint8_t>(244));
+  EXPECT_EQ(telegrams, 1U);
+  Segment other(1'500'000);
+  EXPECT_EQ(ex.request, make(other)->data_exchange(std::vector<std::uint8_t>(244)).request);
+}
+
 }  // namespace dpc31

@@ -40,6 +40,9 @@ inline constexpr std::size_t kMaxLe = 249;
 // Longest frame: SD2 with LE = 249 plus SD LE LEr SD FCS ED.
 inline constexpr std::size_t kMaxFrameLength = kMaxLe + 6;
 inline constexpr std::size_t kSd3DataLength = 8;
+// DP's data in one telegram: the SD2's 246 DU bytes less the two SAP bytes (DP's services use
+// both; Data_Exchange's outputs and inputs keep the same limit).
+inline constexpr std::size_t kMaxDpData = 244;
 
 // FC bits 3..0 of a request (FC bit 6 = 1).
 enum class Function : std::uint8_t {
