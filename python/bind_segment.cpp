@@ -664,6 +664,7 @@ void bind_seg_master(py::module_& m) {
             return pm.act([&] {
               DpMaster& dm = *pm.m;
               if (skip.empty()) return dm.dp_cycle(outputs);
+              dm.check_outputs(outputs);
               std::vector<Exchange> out;  // the slaves not skipped, as a scenario's `cycle skip=`
               for (std::size_t i = 0; i < dm.slave_count(); ++i) {
                 dm.select(i);

@@ -138,8 +138,9 @@ bool DpMaster::startup_all(int tries) {
 
 void DpMaster::check_outputs(const std::vector<std::vector<std::uint8_t>>& outputs) const {
   if (outputs.size() > slaves_.size()) {
-    throw std::invalid_argument(fmt::format("{} outputs for {} slaves: at most one per slave",
-                                            outputs.size(), slaves_.size()));
+    throw std::invalid_argument(fmt::format("{} outputs for {} slave{}: at most one per slave",
+                                            outputs.size(), slaves_.size(),
+                                            slaves_.size() == 1 ? "" : "s"));
   }
 }
 

@@ -284,9 +284,11 @@ class DpMaster {
   std::function<void(std::uint64_t start, std::span<const std::uint8_t> bytes, UartFault fault)>
       on_send;
 
- private:
-  // At most one output per slave (dp_cycle, use_token).
+  // At most one output per slave (dp_cycle, use_token; a caller's own loop over the slaves):
+  // std::invalid_argument naming both counts.
   void check_outputs(const std::vector<std::vector<std::uint8_t>>& outputs) const;
+
+ private:
   fdl::Frame request(std::optional<std::uint8_t> dsap, std::vector<std::uint8_t> du,
                      bool srd = true);
   void run_until(std::uint64_t cycle);

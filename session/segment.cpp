@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "segment_station.hpp"
+#include "vocabulary.hpp"
 
 namespace dpc31 {
 
@@ -59,9 +60,15 @@ void one_by_one(std::vector<Heard>& h, std::uint64_t frame) {
 
 }  // namespace
 
+// The chips' baud search finds only the PROFIBUS rates: on another, nobody would ever answer.
+static std::uint32_t profibus_rate(std::uint32_t baud) {
+  if (const std::string e = not_a_profibus_rate(baud); !e.empty()) throw std::invalid_argument(e);
+  return baud;
+}
+
 Segment::Segment(std::uint32_t baud, std::uint32_t clock_hz)
     : clock_hz_(clock_hz != 0 ? clock_hz : Chip().clock_hz()),
-      t_(dpc31::bit_cycles(clock_hz_, baud)),
+      t_(dpc31::bit_cycles(clock_hz_, profibus_rate(baud))),
       line_rx_(t_, 0) {}
 
 Segment::~Segment() = default;

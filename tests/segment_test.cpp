@@ -187,6 +187,21 @@ TEST(Segment, ASendBeforeTheChipsCycleThrowsWithBothNames) {
   }
 }
 
+// The chips find only the PROFIBUS rates (docs/timing.md, "Baud_Search"): a segment at another
+// would have nobody answer; refused at every door (the scenario's `segment baud=`, Python's
+// Segment(baud), this constructor) with one message.
+TEST(Segment, ALineAtARateNoChipFindsIsRefused) {
+  try {
+    Segment seg(12345);
+    ADD_FAILURE() << "a segment at 12345 baud";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(),
+                 "baud 12345 is not a PROFIBUS rate (9600, 19200, 45450, 93750, 187500, 500000, "
+                 "1500000, 3000000, 6000000, 12000000)");
+  }
+  for (const std::uint32_t b : {9600u, 45450u, 12000000u}) EXPECT_NO_THROW(Segment{b}) << b;
+}
+
 // Only a sender drives the line with send() and pulse(): no station, a chip's, and a telegram
 // that would end past the last cycle (its end wrapped) are refused with a line, the line untouched.
 TEST(Segment, ASendOrPulseNeedsASenderAndAnEndBeforeTheLastCycle) {

@@ -134,3 +134,14 @@ def test_addresses_beyond_the_bus_are_refused_as_dpc31_serve_refuses_them(capfd)
     assert chip.cycle == 48 * chip.bus_access_cycles
     out, err = capfd.readouterr()
     assert not re.search("beyond the", out + err)
+
+
+def test_a_dp_cycle_with_skip_takes_no_more_outputs_than_slaves():
+    """dp_cycle(skip=) runs its own loop over the slaves: more outputs than slaves are refused
+    there too, before anything is sent (DpMaster::check_outputs)."""
+    seg = dpc31.Segment(1_500_000)
+    seg.add_station(5, "spc3")
+    master = seg.add_master(2, [5])
+    with pytest.raises(ValueError, match=r"^2 outputs for 1 slave: at most one per slave$"):
+        master.dp_cycle([b"\x00", b"\x00"], skip=[5])
+    assert master.history == []
