@@ -64,6 +64,12 @@ class Running {
   RunState& run_;
 };
 
+// Refuses a call while `run` is busy: from another thread always, from the running thread (an
+// observer) when it `changes` what the run uses. "the WHO is running: an observer may look at it
+// (LOOKS) but not NOT_CHANGES".
+void enter_run(const RunState& run, bool changes, std::string_view who, std::string_view looks,
+               std::string_view not_changes);
+
 // A user side (a Firmware or a Responder) runs whenever the chip or segment it was given to runs.
 // While it runs, a call from another thread is refused, and from an observer (the running thread)
 // one that takes or changes what its ISR may be using (`changes`); an observer may look.

@@ -1,6 +1,7 @@
 // dpc31.Chip and the register description in Python (docs/python.md): dpc31::Chip
 // (include/dpc31/chip.hpp) one call for one call, with the names of the CLI and scenario files.
 #include <dlfcn.h>
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <stdexcept>
@@ -26,16 +27,22 @@ void raise(const py::object& type, const std::string& message,
   throw py::error_already_set();
 }
 
-void PyChip::enter(bool mutating) const {
-  if (!run_->busy) return;
-  if (run_->runner != std::this_thread::get_id()) {
-    raise(errors().error, "the chip is running in another thread (one thread at a time)");
-  }
-  if (mutating) {
+void enter_run(const RunState& run, bool changes, std::string_view who, std::string_view looks,
+               std::string_view not_changes) {
+  if (!run.busy) return;
+  if (run.runner != std::this_thread::get_id()) {
     raise(errors().error,
-          "the chip is running: an observer may look at it (peek, cycle, probe, ...) but not "
-          "access or step it");
+          fmt::format("the {} is running in another thread (one thread at a time)", who));
   }
+  if (changes) {
+    raise(errors().error,
+          fmt::format("the {} is running: an observer may look at it ({}) but not {}", who, looks,
+                      not_changes));
+  }
+}
+
+void PyChip::enter(bool mutating) const {
+  enter_run(*run_, mutating, "chip", "peek, cycle, probe, ...", "access or step it");
 }
 
 void PyChip::rethrow() {

@@ -148,15 +148,9 @@ void enter_user_side(const void* user_side, bool changes) {
   const auto& runs = user_side_runs();
   const auto it = runs.find(user_side);
   if (it == runs.end()) return;
-  const std::shared_ptr<const RunState> run = it->second.lock();
-  if (!run || !run->busy) return;
-  if (run->runner != std::this_thread::get_id()) {
-    raise(errors().error, "the user side is running in another thread (one thread at a time)");
-  }
-  if (changes) {
-    raise(errors().error,
-          "the user side is running: an observer may look at it (outputs, interrupts, port, ...) "
-          "but not take or change what its ISR uses");
+  if (const std::shared_ptr<const RunState> run = it->second.lock()) {
+    enter_run(*run, changes, "user side", "outputs, interrupts, port, ...",
+              "take or change what its ISR uses");
   }
 }
 
