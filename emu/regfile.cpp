@@ -117,9 +117,14 @@ void RegisterFile::read_buffer(RegId ptr_cell, std::size_t len, std::vector<std:
 }
 
 void RegisterFile::note_violation(std::uint32_t addr, std::uint32_t mapped) {
-  sig_->log(LogLevel::warn,
-            "RAM access violation at {:#05x}: beyond the {} bytes of RAM, wraps to {:#05x}", addr,
-            s_.large_ram ? prof_->ram_size_large : prof_->ram_size, mapped);
+  // One line while Status bit 3 stands (until the next Start): a block past the RAM is one
+  // mistake, not a line per byte, and the first address is the one to look at.
+  if (!s_.ram_access_violation) {
+    sig_->log(LogLevel::warn,
+              "RAM access violation at {:#05x}: beyond the {} bytes of RAM, wraps to {:#05x} "
+              "(further ones are not logged until Start clears Status bit 3)",
+              addr, s_.large_ram ? prof_->ram_size_large : prof_->ram_size, mapped);
+  }
   s_.ram_access_violation = true;
   if (on_violation) on_violation();
 }

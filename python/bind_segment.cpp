@@ -203,6 +203,7 @@ struct PySegMaster {
   PySegMaster(py::object seg_obj, const MasterConfig& mc, std::vector<SlaveConfig> slaves)
       : seg_ref(std::move(seg_obj)), s(seg_ref.cast<PySegment&>()) {
     s.may_join();
+    DpMaster::checked_slaves(slaves);  // before the station joins: nothing half-made
     const std::size_t station =
         s.joined(s.seg.add_sender("master " + std::to_string(mc.address)), mc.address);
     m = std::make_unique<DpMaster>(s.seg, station, mc, std::move(slaves));

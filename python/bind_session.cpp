@@ -2,6 +2,7 @@
 // dpc31.wavediff in Python
 // (docs/python.md): the session layer (session/*.hpp, installed as <dpc31/session/...>) and
 // lib/wavediff's compare(), one call for one call.
+#include <fmt/format.h>
 #include <pybind11/operators.h>
 
 #include <memory>
@@ -17,6 +18,7 @@
 #include "firmware_host.hpp"
 #include "responder.hpp"
 #include "scenario.hpp"
+#include "scenario_lex.hpp"
 #include "vocabulary.hpp"
 #include "wavediff.hpp"
 
@@ -201,9 +203,17 @@ void bind_user_side(py::module_& m) {
           "port",
           [](const FirmwareHost& f, const std::string& name) {
             enter_user_side(&f, false);
-            return f.port(name);
+            const std::int64_t v = f.port(name);
+            // A scenario's `expect port` words; hw_input raises for an unknown name too.
+            if (v < 0) {
+              throw py::value_error(fmt::format("unknown port '{}' of {} ({})", name,
+                                                f.firmware().name,
+                                                scenario_lex::name_list(f.firmware().ports)));
+            }
+            return v;
           },
-          py::arg("name"), "A port's current value (0 before its first write); -1: no such port")
+          py::arg("name"),
+          "A port's current value (0 before its first write); ValueError for an unknown name")
       .def_property_readonly("port_writes",
                              [](const FirmwareHost& f) {
                                enter_user_side(&f, false);

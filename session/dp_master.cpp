@@ -87,7 +87,7 @@ DpMaster::DpMaster(Segment& seg, std::size_t station, MasterConfig m,
     : seg_(&seg),
       station_(station),
       cfg_(m),
-      slave_(slaves.at(0)),
+      slave_(checked_slaves(slaves)),
       t_(seg.bit_cycles()),
       target_(slave_.address),
       rx_(t_, seg.cycle()),
@@ -103,6 +103,18 @@ DpMaster::DpMaster(Segment& seg, std::size_t station, MasterConfig m,
   scheduler = [this](std::uint64_t cycle) {
     seg_->run_until(cycle, wake_on_txd_ ? std::optional<std::size_t>(station_) : std::nullopt);
   };
+}
+
+const SlaveConfig& DpMaster::checked_slaves(const std::vector<SlaveConfig>& slaves) {
+  if (slaves.empty()) throw std::invalid_argument("DpMaster: a master needs at least one slave");
+  for (auto it = slaves.begin(); it != slaves.end(); ++it) {
+    if (std::any_of(slaves.begin(), it,
+                    [&it](const SlaveConfig& s) { return s.address == it->address; })) {
+      throw std::invalid_argument(
+          fmt::format("DpMaster: slave {} is listed twice (a slave has one FCB)", it->address));
+    }
+  }
+  return slaves.front();
 }
 
 std::uint64_t DpMaster::now() const { return seg_ ? seg_->cycle() : chip_->cycle(); }

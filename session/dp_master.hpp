@@ -155,6 +155,9 @@ class DpMaster {
   // `slaves` (at least one), each with its own FCB state; the first is selected. The stations'
   // firmware is the segment's, not the master's.
   DpMaster(Segment& seg, std::size_t station, MasterConfig m, std::vector<SlaveConfig> slaves);
+  // The slaves such a master may poll: at least one, no address twice (each keeps one FCB state,
+  // which a second entry would break); else std::invalid_argument. Returns the first.
+  static const SlaveConfig& checked_slaves(const std::vector<SlaveConfig>& slaves);
 
   void set_firmware(Firmware isr) { cpu_ = std::make_unique<Cpu>(*chip_, std::move(isr)); }
   // A firmware with a main loop and the board's interrupt input (FirmwareHost::program).

@@ -75,10 +75,15 @@ class Parser {
     if (s_.steps.empty()) fail("only header commands: nothing to run");
     if (s_.masters.empty()) s_.masters.push_back({2, {}});
     for (std::size_t i = 0; i < s_.masters.size(); ++i) {
-      for (const std::uint8_t a : s_.masters[i].slaves) {
-        if (!is_station(a)) {
+      const std::vector<std::uint8_t>& slaves = s_.masters[i].slaves;
+      for (auto it = slaves.begin(); it != slaves.end(); ++it) {
+        if (!is_station(*it)) {
           throw ParseFail{master_lines_[i],
-                          fmt::format("slaves={}: no station {}", master_slaves_[i], a)};
+                          fmt::format("slaves={}: no station {}", master_slaves_[i], *it)};
+        }
+        if (std::find(slaves.begin(), it, *it) != it) {  // one FCB state per slave
+          throw ParseFail{master_lines_[i],
+                          fmt::format("slaves={}: station {} twice", master_slaves_[i], *it)};
         }
       }
     }

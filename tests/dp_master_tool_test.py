@@ -27,8 +27,9 @@ import time
 
 TOOL = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tools", "dp_master.py")
 sys.path.insert(0, os.path.dirname(TOOL))
-from dp_master import (IDENT, SD1, SD2, STATION, Fail, Master, Parser, byte_list,  # noqa: E402
-                       cfg_outputs, check, frame_length, hexs, sd1, sd2, slave_spec, slaves_of)
+from dp_master import (IDENT, SAP_MASTER, SAP_SLAVE_DIAG, SC, SD1, SD2, STATION,  # noqa: E402
+                       Fail, Master, Parser, byte_list, cfg_outputs, check, exchange, frame_length,
+                       hexs, sd1, sd2, slave_spec, slaves_of)
 
 MASTER, SLAVE = 2, 5
 TIMEOUT = 1.0  # the master's answer timeout (--timeout)
@@ -281,6 +282,45 @@ def outputs_from_the_cfg():
             check(str(e) == want, f"{argv}: {e}")
 
 
+def zero_inputs_sc_and_sd1_dh():
+    """A slave without inputs answers Data_Exchange with SC, or SD1 DH while a new diagnosis waits
+    (docs/decisions.md: "with R_Len_Din_Buf = 0 the answer is SC (or SD1 DH)"): exchange() takes
+    both as answers with no inputs, and DH is followed by a Slave_Diag. The line answers a
+    scripted sequence in order. Before, it failed "Data_Exchange with station 5: got E5"."""
+    diag = [0x08, 0x0C, 0x00, MASTER, 0x0C, 0x31]
+    server = socket.create_server(("127.0.0.1", 0))
+    requests = []
+
+    def serve():
+        answers = [bytes([SC]), sd1(MASTER, SLAVE, 0x0A),
+                   sd2(MASTER, SLAVE, 0x08, diag, dsap=SAP_MASTER, ssap=SAP_SLAVE_DIAG),
+                   bytes([SC])]
+        conn, _ = server.accept()
+        buf = b""
+        while answers and (chunk := conn.recv(512)):
+            buf += chunk
+            while (n := frame_length(buf)) is not None and len(buf) >= n:
+                requests.append(buf[:n])
+                buf = buf[n:]
+                conn.sendall(answers.pop(0))
+        conn.close()
+    line = threading.Thread(target=serve, daemon=True)
+    line.start()
+    m = Master(f"socket://127.0.0.1:{server.getsockname()[1]}", 19200, TIMEOUT, MASTER, SLAVE)
+    said = []
+    try:
+        exchange(m, [argparse.Namespace(address=SLAVE, outputs=[0x05])], 3,
+                 lambda s: said.append)
+    finally:
+        m.close()
+        line.join(5)
+    check(said == ["Data_Exchange 05: inputs -", "Slave_Diag (after DH): 08 0C 00 02 0C 31"],
+          f"said {said}")
+    # Data_Exchange (SD2, no SAPs), again, Slave_Diag (DSAP 60), Data_Exchange.
+    saps = [r[7] if r[0] == SD2 and r[4] & 0x80 else None for r in requests]
+    check(saps == [None, None, SAP_SLAVE_DIAG, None], f"requests {[hexs(r) for r in requests]}")
+
+
 def run_tool(*args):
     """tools/dp_master.py with `args`: (exit code, stdout, stderr's lines)."""
     r = subprocess.run([sys.executable, TOOL] + list(args), capture_output=True, text=True,
@@ -369,6 +409,7 @@ CASES = {"slow_line_search_drained": slow_line_search_drained,
          "foreign_saps_are_not_ours": foreign_saps_are_not_ours,
          "hex_bytes_and_ranges": hex_bytes_and_ranges,
          "outputs_from_the_cfg": outputs_from_the_cfg,
+         "zero_inputs_sc_and_sd1_dh": zero_inputs_sc_and_sd1_dh,
          "bad_arguments_exit_2": bad_arguments_exit_2,
          "not_a_serial_device_exit_2": not_a_serial_device_exit_2,
          "device_lost_pty": device_lost_pty,

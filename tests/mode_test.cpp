@@ -131,11 +131,18 @@ TEST_P(Mode, RamAccessViolation) {
   log_.clear();
   EXPECT_EQ(c.read(p.violation_from + 0x100), 0x77);  // the access lands at address - subtract
   EXPECT_EQ(log_.count_containing("RAM access violation"), 1u);
+  // A block past the RAM while Status bit 3 stands adds no line per byte (docs/decisions.md).
+  std::vector<std::uint8_t> block(0x40);
+  c.read_block(p.violation_from, block);
+  EXPECT_EQ(block[0x10], c.read(p.violation_from + 0x10 - p.violation_subtract));
+  EXPECT_EQ(log_.count_containing("RAM access violation"), 1u);
   EXPECT_NE(c.peek_reg(RegId::Status_Reg) & 0x08, 0);             // RAM_Access_Violation
   EXPECT_FALSE(c.started());                                      // forced Offline ...
   EXPECT_NE(c.peek_reg(RegId::Int_Req_Reg) & irq::MAC_Reset, 0);  // ... with MAC_Reset
   c.write(0x08, 0x01);                                            // Start clears the flag
   EXPECT_EQ(c.peek_reg(RegId::Status_Reg) & 0x08, 0);
+  c.read(p.violation_from);  // ... and the next violation is logged again
+  EXPECT_EQ(log_.count_containing("RAM access violation"), 2u);
 }
 
 TEST(Vpc3, FourKilobyteMode) {

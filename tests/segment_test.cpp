@@ -43,7 +43,10 @@ struct Line {
       sc.address = addresses[i];
       sc.wd_fact1 = wd_fact;
       sc.wd_fact2 = wd_fact;
-      slaves.push_back(sc);
+      // The master polls an address once; two chips on one address collide (a test below).
+      if (std::none_of(slaves.begin(), slaves.end(),
+                       [&sc](const SlaveConfig& s) { return s.address == sc.address; }))
+        slaves.push_back(sc);
       ResponderConfig rc;
       rc.slave = sc;
       users.push_back(std::make_unique<Responder>(rc));
@@ -232,6 +235,28 @@ TEST(Segment, ASendOrPulseNeedsASenderAndAnEndBeforeTheLastCycle) {
             "(18446744073709551614)");
   EXPECT_EQ(seg.cycle(), 0u);
   EXPECT_EQ(seg.send(m, token, 1000), 1000 + 3 * 11 * seg.bit_cycles());
+}
+
+// A segment's master keeps one FCB state per slave (EN 50170: the FCB alternates per station), so
+// it polls each at most once a cycle: an empty list or an address twice is refused.
+TEST(Segment, AMastersSlavesAreAtLeastOneAndEachOnce) {
+  Segment seg(kBaud);
+  const std::size_t m = seg.add_sender("master");
+  SlaveConfig a;
+  a.address = 5;
+  SlaveConfig b;
+  b.address = 6;
+  const auto message = [&](std::vector<SlaveConfig> slaves) {
+    try {
+      DpMaster master(seg, m, MasterConfig{2, kBaud}, std::move(slaves));
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no exception");
+  };
+  EXPECT_EQ(message({}), "DpMaster: a master needs at least one slave");
+  EXPECT_EQ(message({a, b, a}), "DpMaster: slave 5 is listed twice (a slave has one FCB)");
+  EXPECT_EQ(message({a, b}), "no exception");
 }
 
 // The master's next request follows TSYN after the answer's last stop bit (docs/decisions.md:
@@ -822,6 +847,9 @@ TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
       // A master's slaves are stations of the segment, named before or after it.
       {"segment\nstation 5\nmaster 2 slaves=9\nstartup\n", "f.scn:3: slaves=9: no station 9"},
       {"segment\nmaster 2 slaves=5,9\nstation 5\nstartup\n", "f.scn:2: slaves=5,9: no station 9"},
+      // One FCB state per slave (EN 50170): a slave listed twice would see its FCB repeated.
+      {"segment\nstation 5\nstation 6\nmaster 2 slaves=5,6,5\nstartup\n",
+       "f.scn:4: slaves=5,6,5: station 5 twice"},
       {"segment\nstation 5\nmaster 2\nstartup\npass_token from=9 to=2\n",
        "f.scn:5: pass_token from=9: no master of that address"},
       {"segment\nstation 5\n", "f.scn: only header commands: nothing to run"},

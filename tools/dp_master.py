@@ -441,6 +441,16 @@ def start_up(m, args, say):
     raise Fail(f"the slave never became ready; last Slave_Diag {hexs(du)}")
 
 
+def dx_response(a):
+    """The response code of a Data_Exchange answer: DL 08h or DH 0Ah (new diagnosis), from an SD2
+    with inputs, or for a slave without inputs an SD1 or the short acknowledge (SC: DL, docs/
+    decisions.md "with R_Len_Din_Buf = 0 the answer is SC (or SD1 DH)"); None for anything else."""
+    if a == bytes([SC]):
+        return 0x08
+    fc = {SD1: 3, SD2: 6}.get(a[0]) if a else None
+    return a[fc] if fc is not None and a[fc] in (0x08, 0x0A) else None
+
+
 def exchange(m, slaves, cycles, say_for):
     """`cycles` DP cycles, each a Data_Exchange with every slave in turn (its own outputs); a DH
     answer (new diagnosis) is followed by a Slave_Diag. Prints a slave's inputs whenever they
@@ -451,13 +461,13 @@ def exchange(m, slaves, cycles, say_for):
             m.select(s.address)
             say = say_for(s)
             a = m.srd(s.outputs)
-            check(a is not None and a[0] == SD2 and a[6] in (0x08, 0x0A),
-                  f"Data_Exchange with station {s.address}: got {hexs(a)}")
-            inputs = answer_du(a, False)
+            fc = dx_response(a)
+            check(fc is not None, f"Data_Exchange with station {s.address}: got {hexs(a)}")
+            inputs = answer_du(a, False) if a[0] == SD2 else b""
             if inputs != last.get(s.address):
-                say(f"Data_Exchange {hexs(s.outputs)}: inputs {hexs(inputs)}")
+                say(f"Data_Exchange {hexs(s.outputs) or '-'}: inputs {hexs(inputs) or '-'}")
                 last[s.address] = inputs
-            if a[6] == 0x0A:
+            if fc == 0x0A:
                 say(f"Slave_Diag (after DH): {hexs(m.slave_diag())}")
 
 

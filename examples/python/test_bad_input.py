@@ -145,3 +145,15 @@ def test_a_dp_cycle_with_skip_takes_no_more_outputs_than_slaves():
     with pytest.raises(ValueError, match=r"^2 outputs for 1 slave: at most one per slave$"):
         master.dp_cycle([b"\x00", b"\x00"], skip=[5])
     assert master.history == []
+
+
+def test_an_unknown_port_is_a_value_error_as_an_unknown_hardware_input_is():
+    # A scenario's `expect port nope` words; the port's value was -1 before, read as a value.
+    master = dpc31.Master(dpc31.Chip("dpc31"), address=2, baud=1_500_000,
+                          slave=dpc31.SlaveConfig(address=5))
+    fw = master.run_firmware("DO4")
+    assert fw.port("outputs") == 0
+    with pytest.raises(ValueError, match=r"^unknown port 'nope' of DO4 \(outputs, modul_ok\)$"):
+        fw.port("nope")
+    with pytest.raises(ValueError, match=r"^unknown hardware input 'nope' of DO4$"):
+        fw.hw_input("nope", 1)

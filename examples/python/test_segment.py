@@ -335,6 +335,10 @@ def test_bad_input_is_a_clear_error_and_an_observers_exception_arrives():
     seg.add_station(5, "spc3")
     with pytest.raises(ValueError, match="no station at address 9"):
         seg.add_master(2, [9])
+    stations = seg.size
+    with pytest.raises(ValueError, match=r"^DpMaster: slave 5 is listed twice \(a slave has one FCB\)$"):
+        seg.add_master(2, [5, 5])
+    assert seg.size == stations  # the refused master's station did not join
     master = seg.add_master(2, [5])
     sender = seg.add_sender("rogue")
     with pytest.raises(ValueError, match="fault"):
