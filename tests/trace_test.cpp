@@ -415,6 +415,25 @@ TEST(TraceCli, RecordThenReplay) {
   EXPECT_EQ(cli("replay --quiet " + trace).out, "");
 }
 
+// docs/trace-format.md's "Example" as a user copies it: an SPC3 started by Mode_Reg1_S (the
+// DPC31 ignores Start_SPC3 there: it starts through its Instruction_Queue) replays clean.
+TEST(TraceCli, TheDocsExampleReplays) {
+  std::ifstream doc(std::string(SOURCE_DIR) + "/docs/trace-format.md");
+  std::stringstream all;
+  all << doc.rdbuf();
+  const std::string text = all.str();
+  const std::size_t from = text.find("```\n", text.find("\n## Example\n")) + 4;
+  const std::size_t to = text.find("```", from);
+  ASSERT_NE(to, std::string::npos);
+  const std::string trace = tmp("doc_example.trace");
+  std::ofstream(trace) << text.substr(from, to - from);
+  const Cli r = cli("replay " + trace);
+  EXPECT_EQ(r.rc, 0) << r.out;
+  EXPECT_EQ(r.out, trace +
+                       ": ok up to cycle 1000: 0 telegrams in, 0 out, 3 writes, 1 reads, 1 "
+                       "X/INT edges, 1 states\n");
+}
+
 TEST(TraceCli, ExitCodes) {
   const std::string bad = tmp("bad.trace");
   std::ofstream(bad) << kHead << "wr 4 0000 00\n";
