@@ -35,6 +35,7 @@ namespace {
 [[gnu::tls_model("initial-exec")]] thread_local BusPort* t_bus = nullptr;
 [[gnu::tls_model("initial-exec")]] thread_local const PortSink* t_ports = nullptr;
 [[gnu::tls_model("initial-exec")]] thread_local ChipCore* t_core = nullptr;
+[[gnu::tls_model("initial-exec")]] thread_local const ErrorSink* t_errors = nullptr;
 
 void default_error(const char* message) {
   std::fprintf(stderr, "dpc31 HAL: %s\n", message);
@@ -43,9 +44,16 @@ void default_error(const char* message) {
 
 dpc31_error_fn g_error = default_error;
 
+// The selection's host (a firmware fault) or else the process's handler. Neither may return: a
+// handler that returns cannot make the access happen.
+[[noreturn, gnu::cold, gnu::noinline]] void misuse(const std::string& message) {
+  if (t_errors != nullptr && *t_errors) (*t_errors)(message.c_str());
+  g_error(message.c_str());
+  std::abort();
+}
+
 [[noreturn, gnu::cold, gnu::noinline]] void no_chip(const char* fn) {
-  g_error((std::string(fn) + " called with no chip selected (dpc31_select)").c_str());
-  std::abort();  // a handler that returns cannot make the access happen
+  misuse(std::string(fn) + " called with no chip selected (dpc31_select)");
 }
 
 // Inline, the error out of line: every Vpc3Read / Vpc3Write asks.
@@ -62,9 +70,8 @@ inline BusPort& bus(const char* fn) {
   bus("Vpc3Write").write(addr, value);
 }
 
-void null_buffer(const char* fn, uint16_t len) {
-  g_error((std::string(fn) + ": local buffer is NULL with length " + std::to_string(len)).c_str());
-  std::abort();  // a handler that returns cannot make the copy happen
+[[noreturn]] void null_buffer(const char* fn, uint16_t len) {
+  misuse(std::string(fn) + ": local buffer is NULL with length " + std::to_string(len));
 }
 
 // The drivers' chip addresses wrap at 16 bits: byte i of a block is at (uint16_t)(addr + i).
@@ -142,14 +149,16 @@ bool BusPort::equal(std::uint32_t a, std::uint32_t b, std::size_t len) {
 namespace dpc31::hal {
 
 Selection exchange_selection(Selection s) {
-  const Selection prev{t_bus, t_ports, t_core};
+  const Selection prev{t_bus, t_ports, t_core, t_errors};
   t_bus = s.bus;
   t_ports = s.ports;
   t_core = s.core;
+  t_errors = s.errors;
   return prev;
 }
 
-Scope::Scope(BusPort& b, const PortSink* ports) : prev_(exchange_selection({&b, ports})) {}
+Scope::Scope(BusPort& b, const PortSink* ports, const ErrorSink* errors)
+    : prev_(exchange_selection({&b, ports, nullptr, errors})) {}
 
 Scope::~Scope() { exchange_selection(prev_); }
 

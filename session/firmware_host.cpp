@@ -10,7 +10,7 @@ class FirmwareHost::Entered {
  public:
   Entered(FirmwareHost& h, BusPort& bus)
       : h_(h),
-        hal_(bus, &h.sink_),
+        hal_(bus, &h.sink_, &h.errors_),
         bus_(std::exchange(h.bus_, &bus)),
         hooks_(board::exchange(&h)) {}
   ~Entered() {
@@ -49,6 +49,11 @@ FirmwareHost::FirmwareHost(const dpc31_firmware& fw)
         if (port >= values_.size()) values_.resize(port + 1, 0);
         values_[port] = value;
         if (on_port) on_port(cycle, port, value);
+      }),
+      // Thrown through the firmware's C frames as the reset line's error is: the plug-in's unwind
+      // tables (gcc's and clang's default) carry it to the host (docs/decisions.md).
+      errors_([this](const char* message) {
+        throw FirmwareError(fmt::format("firmware {}: {}", fw_.name, message));
       }) {}
 
 void FirmwareHost::init(BusPort& bus, std::uint8_t station_address) {

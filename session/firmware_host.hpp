@@ -29,7 +29,8 @@ struct dpc31_builtin;  // firmware.h
 
 namespace dpc31 {
 
-// The firmware did something the emulator cannot go on with (a reset of a started chip).
+// The firmware did something the emulator cannot go on with (a reset of a started chip, a
+// misuse of the C HAL such as a NULL buffer).
 class FirmwareError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
@@ -106,6 +107,7 @@ class FirmwareHost final : private board::Hooks {
   std::unique_ptr<std::max_align_t[]> self_;   // the built-in's instance
   std::shared_ptr<const dpc31_firmware> run_;  // else the plug-in copy this station runs
   hal::PortSink sink_;
+  hal::ErrorSink errors_;  // a HAL misuse in the firmware's calls: FirmwareError
   std::vector<PortWrite> writes_;
   std::vector<std::uint32_t> values_;
   BusPort* bus_ = nullptr;   // the bus of the call into the firmware in progress

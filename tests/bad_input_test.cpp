@@ -748,6 +748,31 @@ TEST_F(BadInput, FirmwarePlugins) {
   EXPECT_EQ(ok.err, "");
 }
 
+// A firmware that misuses the C HAL (a NULL buffer) is a firmware fault at every door, as a reset
+// of the started chip is: the HAL's message in one line, exit 2, no output or temporary left, the
+// bridge's symlink removed; in init (the caller's stack) and in the ISR (the host CPU's).
+TEST_F(BadInput, FirmwareFaults) {
+  const std::vector<std::pair<std::string, std::string>> plugins = {
+      {BAD_PLUGIN_HAL_INIT, "firmware BAD: CopyToVpc3: local buffer is NULL with length 4"},
+      {BAD_PLUGIN_HAL_ISR, "firmware BAD: CopyFromVpc3: local buffer is NULL with length 2"},
+  };
+  fs::create_directory(path("o"));
+  for (const auto& [lib, line] : plugins) {
+    file("fault.scn", "profile vpc3plus\nfirmware " + lib + "\nstartup\n");
+    expect_bad(dpc31("run fault.scn --json o/out.json --record o/out.trace --vcd o/out.vcd"),
+               "dpc31 run: fault.scn: " + line, lib + " run");
+    expect_bad(dpc31("bridge --profile vpc3plus --pty " + path("dpn") + " --firmware " + lib),
+               "dpc31 bridge: " + line, lib + " bridge");
+    expect_bad(
+        dpc31("soak --profile vpc3plus --cycles 5e6 --firmware " + lib + " --json o/soak.json"),
+        "dpc31 soak: " + line, lib + " soak");
+    expect_bad(dpc31("demo --profile vpc3plus --firmware " + lib + " --out-dir o"),
+               "dpc31 demo: <demo>: " + line, lib + " demo");
+    EXPECT_EQ(listing(), (std::vector<std::string>{"fault.scn", "o"})) << lib;  // no symlink
+    EXPECT_TRUE(fs::is_empty(path("o"))) << lib;
+  }
+}
+
 TEST_F(BadInput, BridgeOptions) {
   spit(path("plain"), "old");
   expect_bad(

@@ -7,7 +7,10 @@
  *   SPIN         it loads, and its init spins in while(1) without a bus access (the hang guard)
  *   MARK         a valid plug-in whose loading alone (a constructor) creates the file named by
  *                DPC31_PLUGIN_MARK: shows whether a command ran its code
- * (tests/code_security_test.cpp) */
+ * (tests/code_security_test.cpp); and two that load and then misuse the HAL, a firmware fault
+ * (tests/bad_input_test.cpp, FirmwareFaults):
+ *   HAL_INIT     its init calls CopyToVpc3 with a NULL buffer
+ *   HAL_ISR      its init raises an interrupt; its ISR calls CopyFromVpc3 with a NULL buffer */
 #include "dpc31/dpc31_firmware.h"
 #include "dpc31/dpc31_hal.h"
 
@@ -36,7 +39,24 @@ static void init(const dpc31_board* board) {
   while (1) {
   }
 #endif
+#ifdef HAL_INIT
+  CopyToVpc3((uint8_t*)0x100, 0, 4);
+#endif
+#ifdef HAL_ISR
+  /* Int_Mask_Reg all open, Int_Req_Reg's MAC_Reset set (both bytes: either bus mode). */
+  Vpc3Write(0x004, 0x00);
+  Vpc3Write(0x005, 0x00);
+  Vpc3Write(0x000, 0x01);
+  Vpc3Write(0x001, 0x01);
+#endif
 }
+#endif
+
+#ifdef HAL_ISR
+static void isr(void) { CopyFromVpc3(0, (uint8_t*)0x40, 2); }
+#define ISR isr
+#else
+#define ISR 0
 #endif
 
 static void step(void) { (void)Vpc3Read(0); }
@@ -54,8 +74,8 @@ static const uint8_t kCfg[] = {0x10};
 #define INIT init
 #endif
 
-static const dpc31_firmware kBad = {ABI, "BAD",  0,    0,           INIT, 0, step, 0,
-                                    0,   0x0001, kCfg, sizeof kCfg, 1,    0, 0,    0};
+static const dpc31_firmware kBad = {ABI, "BAD",  0,    0,           INIT, ISR, step, 0,
+                                    0,   0x0001, kCfg, sizeof kCfg, 1,    0,   0,    0};
 
 #ifdef NO_EXPORT
 /* A firmware without its export: the descriptor is referenced so that it is not unused. */

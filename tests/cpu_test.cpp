@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "dpc31/dpc31_firmware.h"
@@ -283,6 +284,25 @@ TEST(BoardHooks, WaitResetAndInterruptInputActOnTheHost) {
               fmt::format("firmware HOOKS: reset line asserted at cycle {} after the chip was "
                           "started (a reset during operation is not modelled)",
                           s));
+  }
+}
+
+// The C host (dpc31_module_*): a firmware's misuse of the C HAL, in init (on the caller's stack)
+// or in its ISR (on the host CPU's), is the module's error with the HAL's message, not an abort.
+TEST(FirmwareModule, HalMisuseIsTheModulesError) {
+  const std::pair<const char*, const char*> plugins[] = {
+      {BAD_PLUGIN_HAL_INIT, "firmware BAD: CopyToVpc3: local buffer is NULL with length 4"},
+      {BAD_PLUGIN_HAL_ISR, "firmware BAD: CopyFromVpc3: local buffer is NULL with length 2"},
+  };
+  for (const auto& [lib, line] : plugins) {
+    char err[256] = "";
+    const dpc31_firmware* fw = dpc31_firmware_load(lib, err, sizeof err);
+    ASSERT_NE(fw, nullptr) << err;
+    dpc31_module* m = dpc31_module_create("vpc3plus", 0, fw, 5);
+    ASSERT_NE(m, nullptr);
+    EXPECT_EQ(dpc31_module_run(m, 48'000), -1) << lib;
+    EXPECT_STREQ(dpc31_module_error(m), line);
+    dpc31_module_destroy(m);
   }
 }
 

@@ -4,6 +4,7 @@ serve` use for the same value, raised before anything runs; never a crash, never
 a flood of log lines.
 """
 
+import os
 import re
 
 import pytest
@@ -157,3 +158,17 @@ def test_an_unknown_port_is_a_value_error_as_an_unknown_hardware_input_is():
         fw.port("nope")
     with pytest.raises(ValueError, match=r"^unknown hardware input 'nope' of DO4$"):
         fw.hw_input("nope", 1)
+
+
+@pytest.mark.parametrize("plugin, message", [
+    ("DPC31_BAD_PLUGIN_HAL_INIT", "CopyToVpc3: local buffer is NULL with length 4"),
+    ("DPC31_BAD_PLUGIN_HAL_ISR", "CopyFromVpc3: local buffer is NULL with length 2"),
+])
+def test_a_firmware_that_misuses_the_hal_is_a_firmware_error(plugin, message):
+    """A NULL buffer to the C HAL, in the plug-in's init (run_firmware) or in its ISR (the next
+    call that runs the chip): a FirmwareError with the HAL's message, not an abort of Python."""
+    master = dpc31.Master(dpc31.Chip("vpc3plus"), address=2, baud=1_500_000,
+                          slave=dpc31.SlaveConfig(address=5))
+    with pytest.raises(dpc31.FirmwareError, match=rf"^firmware BAD: {message}$"):
+        master.run_firmware(os.environ[plugin])
+        master.idle(1000)

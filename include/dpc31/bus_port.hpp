@@ -34,6 +34,9 @@ class BusPort {
 namespace hal {
 // A port write of the firmware: (cycle, port, value).
 using PortSink = std::function<void(std::uint64_t, unsigned, std::uint32_t)>;
+// A host's answer to a misuse of the C HAL by the firmware it runs (a NULL buffer, no chip):
+// it gets the message and throws (a firmware fault); if it returns, the process aborts.
+using ErrorSink = std::function<void(const char* message)>;
 // What the C HAL's access functions reach on the calling thread (hal.hpp, hal::Scope).
 struct Selection {
   BusPort* bus = nullptr;
@@ -41,6 +44,8 @@ struct Selection {
   // The chip core behind `bus` when `bus` is a C HAL handle's own DirectBus (dpc31_select):
   // Vpc3Read and Vpc3Write call it inline, the same access without the bus's calls.
   ChipCore* core = nullptr;
+  // Takes the place of the process's error handler (dpc31_set_error_handler); nullptr: none.
+  const ErrorSink* errors = nullptr;
 };
 // Installs `s` and returns the selection it replaces.
 Selection exchange_selection(Selection s);

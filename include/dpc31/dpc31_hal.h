@@ -88,8 +88,11 @@ void dpc31_port_write(unsigned port, uint32_t value);
 typedef void (*dpc31_port_fn)(void* user, uint64_t cycle, unsigned port, uint32_t value);
 void dpc31_set_port_callback(dpc31_chip* chip, dpc31_port_fn fn, void* user);
 
-/* Calling Vpc3Read & co. (or dpc31_port_write) with no chip selected is a programming error:
- * the handler gets a message; the default prints it to stderr and aborts. */
+/* Calling Vpc3Read & co. (or dpc31_port_write) with no chip selected, or a block function with a
+ * NULL local buffer and a non-zero length, is a programming error: the handler gets a message; the
+ * default prints it to stderr and aborts. A firmware run by a host of the emulator (the dpc31
+ * program, the Python module, dpc31_module_*) is a firmware fault instead: the host reports the
+ * message as its error (docs/bring-up.md). */
 typedef void (*dpc31_error_fn)(const char* message);
 void dpc31_set_error_handler(dpc31_error_fn fn);
 

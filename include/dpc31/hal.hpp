@@ -9,11 +9,12 @@
 
 namespace dpc31::hal {
 
-// While alive, Vpc3Read & co. on this thread access `bus` and port writes go to `ports`; the
-// previous selection comes back afterwards (scopes nest).
+// While alive, Vpc3Read & co. on this thread access `bus`, port writes go to `ports` and a
+// misuse of the HAL goes to `errors` (nullptr: the process's error handler); the previous
+// selection comes back afterwards (scopes nest).
 class Scope {
  public:
-  Scope(BusPort& bus, const PortSink* ports);
+  Scope(BusPort& bus, const PortSink* ports, const ErrorSink* errors = nullptr);
   ~Scope();
   Scope(const Scope&) = delete;
   Scope& operator=(const Scope&) = delete;

@@ -1,14 +1,16 @@
 # CTest Install.consumer (packaging/CMakeLists.txt): installs the build into a fresh prefix,
 # checks the installed files, runs the installed CLI, builds examples/consumer with only that
-# prefix on CMAKE_PREFIX_PATH and runs it (the segment consumer's VCD and pcapng checked), and
-# builds and runs its C program through pkg-config. Then examples/plugin the same way: its
+# prefix on CMAKE_PREFIX_PATH and runs it (the segment consumer's VCD and pcapng checked),
+# compiles every installed header alone and docs/cpu.md's 80C32 snippet (tests/install/headers),
+# and builds and runs its C program through pkg-config. Then examples/plugin the same way: its
 # firmware plug-in in both configurations (interrupt-driven, and polling with every interrupt
 # masked) under its C host, and behind the installed `dpc31 bridge` with the installed
 # tools/dp_master.py as the master, to Data_Exchange; the plug-in built with pkg-config's flags
 # alone; the driver's fatal-error loop stopped by the hang guard (bridge_example.py). Any failing
 # step fails the test.
 #   cmake -DBUILD_DIR=... -DWORK_DIR=... -DEXAMPLE_DIR=... -DPLUGIN_DIR=... -DBRIDGE_CHECK=...
-#         -DPYTHON=... -DLIBDIR=... -DC_COMPILER=... -DCXX_COMPILER=... -P check_install.cmake
+#         -DHEADERS_DIR=... -DCPU_DOC=... -DPYTHON=... -DLIBDIR=... -DC_COMPILER=...
+#         -DCXX_COMPILER=... -P check_install.cmake
 set(prefix ${WORK_DIR}/prefix)
 file(REMOVE_RECURSE ${WORK_DIR})
 
@@ -20,7 +22,8 @@ run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix})
 
 foreach(f bin/dpc31 include/dpc31/chip.hpp include/dpc31/dpc31_hal.h include/dpc31/dpc31_regs.h
     include/dpc31/reg_ids.hpp include/dpc31/reg_fields.hpp include/dpc31/session/scenario.hpp
-    include/dpc31/firmware/firmware.h include/dpc31/dpc31_firmware.h ${LIBDIR}/libdpc31emu.so
+    include/dpc31/firmware/firmware.h include/dpc31/dpc31_firmware.h include/mcs51/cpu.hpp
+    include/mcs51/ihex.hpp include/dpc31/session/cpu51_board.hpp ${LIBDIR}/libdpc31emu.so
     ${LIBDIR}/libdpc31emu_segment_outputs.so include/dpc31/segment_outputs/segment_outputs.hpp
     ${LIBDIR}/dpc31emu/libdpc31_fw_do4.so ${LIBDIR}/dpc31emu/libdpc31_fw_cnt2.so
     share/dpc31emu/tools/dp_master.py
@@ -62,6 +65,12 @@ if(NOT shb STREQUAL "0a0d0d0a")
   message(FATAL_ERROR "segment.pcapng does not begin with a Section Header Block: ${shb}")
 endif()
 run(${WORK_DIR}/build/hal_consumer)
+
+# Every installed header alone, and docs/cpu.md's 80C32 snippet as written (tests/install/headers).
+run(${CMAKE_COMMAND} -S ${HEADERS_DIR} -B ${WORK_DIR}/headers -DCMAKE_PREFIX_PATH=${prefix}
+  -DDPC31_PREFIX=${prefix} -DCPU_DOC=${CPU_DOC} -DCMAKE_C_COMPILER=${C_COMPILER}
+  -DCMAKE_CXX_COMPILER=${CXX_COMPILER} "-DCMAKE_C_FLAGS=${strict}" "-DCMAKE_CXX_FLAGS=${strict}")
+run(${CMAKE_COMMAND} --build ${WORK_DIR}/headers --parallel 2)
 
 # pkg-config: only the prefix's .pc files; a plain C compile and link.
 set(ENV{PKG_CONFIG_LIBDIR} ${prefix}/${LIBDIR}/pkgconfig)
