@@ -65,7 +65,9 @@ bool parse_ihex(std::string_view text, HexImage& image, std::string& error) {
     }
   }
   if (!ended) {
-    error = fmt::format("line {}: no end-of-file record", line_no);
+    // An empty file has no line to name.
+    error = line_no == 0 ? "empty file, not an Intel HEX image"
+                         : fmt::format("line {}: no end-of-file record", line_no);
     return false;
   }
   return true;

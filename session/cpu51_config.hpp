@@ -3,6 +3,7 @@
 // XDATA (docs/cpu.md, "DO4 on the 80C32"). Plain data: users of scenario.hpp need no MCS-51 core.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -24,6 +25,15 @@ struct Cpu51Config {
   std::uint16_t code = 0x1000;
   [[nodiscard]] bool latch_in_window() const {
     return latch + ports.size() > base && latch < base + kCpu51Window;
+  }
+  // "" or why `ports` cannot name the latch bytes: a name empty, or given twice (`expect port`
+  // would see only the first).
+  [[nodiscard]] std::string ports_problem() const {
+    for (auto n = ports.begin(); n != ports.end(); ++n) {
+      if (n->empty()) return "an empty port name";
+      if (std::find(ports.begin(), n, *n) != n) return "port '" + *n + "' named twice";
+    }
+    return {};
   }
 };
 

@@ -144,8 +144,9 @@ std::string apply_cpu51_choice(const Cpu51Choice& choice, ChipOptions& chip, Cpu
     for (std::size_t at = 0, end = 0; end != std::string_view::npos; at = end + 1) {
       end = ports.find(',', at);
       cfg.ports.emplace_back(ports.substr(at, end == std::string_view::npos ? end : end - at));
-      if (cfg.ports.back().empty()) return fmt::format("--ports '{}': an empty port name", ports);
     }
+    if (const std::string why = cfg.ports_problem(); !why.empty())
+      return fmt::format("--ports '{}': {}", ports, why);
     if (!choice.board_address.empty()) {
       if (!parse_address(choice.board_address, 0, 0x10000 - kCpu51Window, v)) {
         return fmt::format(

@@ -18,6 +18,7 @@
 #include "firmware.h"
 #include "firmware_host.hpp"
 #include "trust.hpp"
+#include "vocabulary.hpp"
 
 namespace dpc31 {
 
@@ -172,13 +173,6 @@ const dpc31_firmware& load_plugin(const std::string& spec) {
     throw FirmwareError("cannot load firmware plug-in: " + path + ": " +
                         std::error_code(errno, std::generic_category()).message());
   }
-  const std::string untrusted = untrusted_code(fd, path);
-  if (!untrusted.empty()) {
-    ::close(fd);
-    throw FirmwareError("firmware plug-in refused: " + untrusted +
-                        " (a plug-in runs as your code: another user could have changed it)");
-  }
-  const std::lock_guard<std::mutex> lock(g_loaded_mutex);
   struct stat st {};
   if (::fstat(fd, &st) != 0) {
     const int e = errno;
@@ -186,6 +180,19 @@ const dpc31_firmware& load_plugin(const std::string& spec) {
     throw FirmwareError("cannot load firmware plug-in: " + path + ": " +
                         std::error_code(e, std::generic_category()).message());
   }
+  // A directory in its place (an empty name is ./) is no library, whoever could change it.
+  if (!S_ISREG(st.st_mode)) {
+    ::close(fd);
+    throw FirmwareError("cannot load firmware plug-in: " + path +
+                        (S_ISDIR(st.st_mode) ? ": is a directory" : ": not a regular file"));
+  }
+  const std::string untrusted = untrusted_code(fd, path);
+  if (!untrusted.empty()) {
+    ::close(fd);
+    throw FirmwareError("firmware plug-in refused: " + untrusted +
+                        " (a plug-in runs as your code: another user could have changed it)");
+  }
+  const std::lock_guard<std::mutex> lock(g_loaded_mutex);
   for (const auto& known : g_loaded) {
     if (known->dev == st.st_dev && known->ino == st.st_ino) {
       ::close(fd);
@@ -258,6 +265,7 @@ dpc31_module* dpc31_module_create(const char* profile, int motorola, const dpc31
   dpc31::ChipOptions o;
   if (profile == nullptr || !dpc31::parse_profile(profile, o.profile)) return nullptr;
   if (!dpc31::descriptor_problem(fw).empty()) return nullptr;
+  if (!dpc31::kStationAddress.holds(station_address)) return nullptr;
   o.bus = motorola != 0 ? dpc31::BusMode::motorola : dpc31::BusMode::intel;
   auto m = std::make_unique<dpc31_module>(o, *fw);
   try {

@@ -169,6 +169,11 @@ bool read_scenario_file(const std::string& path, std::string& text, std::string&
 [[nodiscard]] bool plugin_pending(const Scenario& s);
 bool bind_plugin(Scenario& s, ScenarioError& err);
 
+// The 80C32 image a `cpu` header names, read and checked before anything runs or is written: false
+// with `error` (`FILE:LINE: reason`, or `FILE: reason`) for the caller's exit 2. True at once
+// without a `cpu` header. The run reads it again when it starts.
+bool check_cpu_image(const Scenario& s, std::string& error);
+
 struct ScenarioOutcome {
   std::uint64_t final_cycle = 0;
   DpState dp = DpState::Wait_Prm;

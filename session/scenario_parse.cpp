@@ -250,6 +250,7 @@ class Parser {
         (k == "base" ? c.base : c.latch) = static_cast<std::uint16_t>(number(v, k, 0, 0xF000));
       } else if (k == "ports") {
         for (std::string_view n : split(v, ',')) c.ports.emplace_back(n);
+        if (const std::string why = c.ports_problem(); !why.empty()) fail("ports=: " + why);
       } else {
         unknown_option(k);
       }

@@ -805,6 +805,11 @@ ScenarioOutcome run_scenario(const Scenario& s, const LineSink& walk, const Line
   return r.run();
 }
 
+bool check_cpu_image(const Scenario& s, std::string& error) {
+  Cpu51Image image;
+  return !s.cpu || load_cpu51_image(*s.cpu, image, error);
+}
+
 int run_scenario_file(const std::string& path, const LineSink& walk, const LineSink& errors,
                       Scenario* scenario, ScenarioOutcome* outcome) {
   Scenario s;
@@ -817,13 +822,9 @@ int run_scenario_file(const std::string& path, const LineSink& walk, const LineS
     if (errors) errors(err.text());
     return 2;
   }
-  if (s.cpu) {  // parsed whole first; then the image, before anything runs
-    Cpu51Image image;
-    std::string why;
-    if (!load_cpu51_image(*s.cpu, image, why)) {
-      if (errors) errors(why);
-      return 2;
-    }
+  if (std::string why; !check_cpu_image(s, why)) {  // parsed whole first; then the image
+    if (errors) errors(why);
+    return 2;
   }
   const ScenarioOutcome o = run_scenario(s, walk, errors);
   const int rc = o.ok() ? 0 : 1;

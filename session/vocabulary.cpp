@@ -96,8 +96,15 @@ bool parse_fault_kind(std::string_view name, UartFault::Kind& kind) {
   return false;
 }
 
+std::string range_text(std::uint64_t min, std::uint64_t max, std::string_view value) {
+  if (!value.starts_with("0x") && !value.starts_with("0X"))
+    return fmt::format("({}..{})", min, max);
+  const std::size_t digits = fmt::format("{:X}", max).size();
+  return fmt::format("(0x{:0{}X}..0x{:0{}X})", min, digits, max, digits);
+}
+
 std::string out_of_range(const ValueRange& r, std::string_view value) {
-  return fmt::format("{} {} out of range ({}..{})", r.what, value, r.min, r.max);
+  return fmt::format("{} {} out of range {}", r.what, value, range_text(r.min, r.max, value));
 }
 
 std::string not_a_profibus_rate(std::uint64_t baud) {

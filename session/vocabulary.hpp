@@ -56,7 +56,9 @@ inline constexpr ValueRange kIdleBits{"idle", 1, 65535};
 inline constexpr ValueRange kTtrBits{"ttr", 256, 16'777'215};
 inline constexpr ValueRange kGapFactor{"gap", 1, 100};
 inline constexpr ValueRange kHsa{"hsa", 1, 126};
-// "WHAT VALUE out of range (MIN..MAX)", VALUE as the user wrote it.
+// "(MIN..MAX)" in the base `value` is written in: 0x hex (as many digits as MAX has) or decimal.
+[[nodiscard]] std::string range_text(std::uint64_t min, std::uint64_t max, std::string_view value);
+// "WHAT VALUE out of range (MIN..MAX)", VALUE as the user wrote it, the range in its base.
 [[nodiscard]] std::string out_of_range(const ValueRange& r, std::string_view value);
 // "" for one of the ten PROFIBUS rates the chips' baud search knows, else why not.
 [[nodiscard]] std::string not_a_profibus_rate(std::uint64_t baud);

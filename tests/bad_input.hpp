@@ -86,11 +86,13 @@ class BadInput : public ::testing::Test {
     return file(name, text.substr(0, keep));
   }
 
-  Outcome dpc31(const std::string& args) const {
+  // `env`: NAME=VALUE settings for the command.
+  Outcome dpc31(const std::string& args, const std::string& env = {}) const {
     const std::string out = (root_ / "io" / "out").string();
     const std::string err = (root_ / "io" / "err").string();
-    const testutil::CommandResult r = testutil::run_command(
-        "cd " + (root_ / "work").string() + " && " + kCli + " " + args + " >" + out + " 2>" + err);
+    const testutil::CommandResult r =
+        testutil::run_command("cd " + (root_ / "work").string() + " && " + env + " " + kCli + " " +
+                              args + " >" + out + " 2>" + err);
     return {r.rc, slurp(out), slurp(err)};
   }
 

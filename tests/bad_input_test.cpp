@@ -102,6 +102,37 @@ TEST_F(BadInput, RunScenarioFile) {
   }
 }
 
+// A scenario's 80C32 or C31 image (docs/cpu.md) is read before the walk starts: a bad one is
+// the same one line and exit 2, with nothing printed and no output written.
+TEST_F(BadInput, RunCpuImage) {
+  file("bad.ihx", ":0300000002000BF1\n:00000001FF\n");
+  file("empty.ihx", "");
+  file("high.ihx", ":02000000A5A5B4\n:00000001FF\n");
+  fs::create_directory(path("dir.ihx"));
+  const std::vector<FileCase> cases = {
+      {"bad checksum", file("sum.scn", "cpu 80c32 firmware bad.ihx\nstartup\n"),
+       path("bad.ihx") + ":1: checksum"},
+      {"missing", file("missing.scn", "cpu 80c32 firmware none.ihx\nstartup\n"),
+       path("none.ihx") + ": no such file"},
+      {"directory", file("dir.scn", "cpu 80c32 firmware dir.ihx\nstartup\n"),
+       path("dir.ihx") + ": is a directory, not an Intel HEX file"},
+      {"empty", file("empty.scn", "cpu 80c32 firmware empty.ihx\nstartup\n"),
+       path("empty.ihx") + ": empty file, not an Intel HEX image"},
+      {"C31 past 1FFFh",
+       file("c31.scn", "profile dpc31\ncpu c31 firmware high.ihx code=0x1FFF\nstartup\n"),
+       path("high.ihx") + ": the image does not fit the C31's code area (1FFFh..1FFFh)"},
+  };
+  spit(path("old.json"), "old");
+  const auto before = listing();
+  for (const FileCase& c : cases) {
+    const Outcome r = dpc31("run " + c.path + " --json old.json --record new.trace");
+    expect_bad(r, c.line, c.name);
+    EXPECT_EQ(r.out, "") << c.name;  // nothing ran
+    EXPECT_EQ(slurp(path("old.json")), "old") << c.name;
+    EXPECT_EQ(listing(), before) << c.name;
+  }
+}
+
 TEST_F(BadInput, RunOptionValues) {
   const std::string scn = kTraces + "gc_clear_spc3.scn";
   spit(path("old.vcd"), "old");
@@ -321,6 +352,45 @@ TEST_F(BadInput, CosimReplayAndSessionFiles) {
   EXPECT_EQ(dpc31("cosim --replay " + good + " --quiet").rc, 0);  // the good stimulus runs
 }
 
+// A trace replays on the model its header names (docs/golden-model.md): its profile and mutant;
+// --profile or --mutant that contradicts the header is refused, and so are the options of random
+// seeds, which mean nothing to a replay. The summary names the trace, not a seed range.
+TEST_F(BadInput, CosimReplayTakesTheTraceHeader) {
+  const std::string body = "83 ev_irq(0080) ev_dout\n102 rd 000b\nend 103\n";
+  file("spc3.stim", "# dpc31 cosim stimulus trace\n# profile spc3\n# mutant -\n" + body);
+  file("z80.stim", "# profile z80\n" + body);
+  const Outcome r = dpc31("cosim --replay spc3.stim --quiet");
+  EXPECT_EQ(r.rc, 0) << r.err;
+  for (const char* key : {"\"profile\": \"spc3\"", "\"replay\": \"spc3.stim\"",
+                          "\"trace_cycles\": 103", "\"mutant\": \"\""})
+    EXPECT_NE(r.out.find(key), std::string::npos) << key << " in " << r.out;
+  for (const char* key : {"cycles_per_seed", "\"seeds\"", "\"shard\"", "keep_going"})
+    EXPECT_EQ(r.out.find(key), std::string::npos) << key << " in " << r.out;
+  EXPECT_EQ(dpc31("cosim --replay spc3.stim --profile spc3 --mutant '' --quiet").rc, 0);
+  spit(path("old.xml"), "old");
+  const auto before = listing();
+  expect_bad(dpc31("cosim --replay spc3.stim --profile vpc3plus --junit old.xml"),
+             "spc3.stim:2: recorded on profile spc3, not --profile vpc3plus", "other profile");
+  expect_bad(dpc31("cosim --replay spc3.stim --mutant SAP_NO_RR --junit old.xml"),
+             "spc3.stim:3: recorded with mutant -, not --mutant SAP_NO_RR", "other mutant");
+  expect_bad(dpc31("cosim --replay z80.stim --junit old.xml"),
+             "z80.stim:1: 'z80' is not a chip profile", "no profile");
+  for (const char* opt : {"--seeds 3", "--seed-base 2", "--cycles 10", "--shard 1/2",
+                          "--shard-base 0", "--keep-going"}) {
+    const std::string name = std::string(opt).substr(0, std::string(opt).find(' '));
+    // CLI11 names the option defined first first (--keep-going comes after --replay).
+    expect_bad(dpc31("cosim --replay spc3.stim --junit old.xml " + std::string(opt)),
+               name == "--keep-going" ? "dpc31 cosim: --replay excludes --keep-going"
+                                      : "dpc31 cosim: " + name + " excludes --replay",
+               opt);
+  }
+  EXPECT_EQ(slurp(path("old.xml")), "old");
+  EXPECT_EQ(listing(), before);
+  // The audit's case: a mutant's shrunk failure replays as a failure without its options.
+  ASSERT_EQ(dpc31("cosim --profile vpc3plus --mutant SAP_NO_RR --seeds 20 --out vp --quiet").rc, 1);
+  EXPECT_EQ(dpc31("cosim --replay vp/cosim-vpc3plus-seed1.trace --out vp --quiet").rc, 1);
+}
+
 TEST_F(BadInput, CosimOptionsAndOutputs) {
   fs::create_directory(path("taken"));
   spit(path("old.xml"), "old");
@@ -397,8 +467,39 @@ TEST_F(BadInput, CosimMerge) {
              "dpc31 cosim: --shard must be K/N with 0 <= K <= N - 1, not '2/2'", "0-based");
   expect_bad(dpc31("cosim --shard -1/2 --junit old.xml"),
              "dpc31 cosim: --shard must be K/N with 1 <= K <= N, not '-1/2'", "negative");
+  // A summary that does not add up (shard 1/2 of seeds 1..4 ran seeds 1 and 2): a result cut, a
+  // seed not its own, a count that is not its results'.
+  const std::string whole = slurp(path("s1.json"));
+  const auto edited = [&](const std::string& name, const std::string& from, const std::string& to) {
+    std::string t = whole;
+    const std::size_t at = t.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) t.replace(at, from.size(), to);
+    spit(path(name), t);
+  };
+  const std::size_t last = whole.rfind(",\n    {");
+  const std::size_t last_end = whole.find("\n    }", last);
+  ASSERT_NE(last_end, std::string::npos) << whole;
+  edited("cut_results.json", whole.substr(last, last_end + 6 - last), "");
+  edited("foreign_seed.json", "\"seed\": 1\n", "\"seed\": 999999\n");
+  edited("false_count.json", "\"divergent_seeds\": 0", "\"divergent_seeds\": 7");
+  const std::string incomplete = ": not the complete set of one run";
+  expect_bad(
+      dpc31(merge + "cut_results.json s2.json"),
+      "dpc31 cosim merge: cut_results.json: 1 results for its 2 seeds from 1 to 3" + incomplete,
+      "results cut");
+  expect_bad(dpc31(merge + "foreign_seed.json s2.json"),
+             "dpc31 cosim merge: foreign_seed.json: result 1 is seed 999999, not 1: not its seeds "
+             "from 1 to 3 in order" +
+                 incomplete,
+             "foreign seed");
+  expect_bad(dpc31(merge + "false_count.json s2.json"),
+             "dpc31 cosim merge: false_count.json: divergent_seeds 7 and seeds run 2, but 2 "
+             "results of which 0 diverged" +
+                 incomplete,
+             "false count");
   EXPECT_EQ(slurp(path("old.xml")), "old");
-  EXPECT_EQ(listing(), before);
+  EXPECT_EQ(listing().size(), before.size() + 3);
   // And the good set merges, in any order.
   EXPECT_EQ(dpc31("cosim merge s2.json s1.json").rc, 0);
 }
@@ -620,6 +721,13 @@ TEST_F(BadInput, DemoOutputsAreCheckedBeforeAnythingIsPrinted) {
   EXPECT_EQ(ok.rc, 0) << ok.err;
   EXPECT_NE(ok.out, "");
   EXPECT_EQ(std::distance(fs::directory_iterator(path("good")), fs::directory_iterator()), 4);
+  // Without --out-dir, a TMPDIR that is no directory is named (the library gives no path then).
+  const Outcome gone = dpc31("demo", "TMPDIR=" + path("none"));
+  expect_bad(gone,
+             "dpc31 demo: cannot create a directory in TMPDIR=" + path("none") +
+                 ": No such file or directory",
+             "TMPDIR");
+  EXPECT_EQ(gone.out, "");
 }
 
 // --- serve, bridge, bench
@@ -727,6 +835,10 @@ TEST_F(BadInput, FirmwarePlugins) {
   expect_bad_prefix(dpc31("bridge --pty p --firmware libdpc31_fw_do4.so"),
                     "dpc31 bridge: cannot load firmware plug-in: ./libdpc31_fw_do4.so", "./");
   EXPECT_EQ(listing(), (std::vector<std::string>{"garbage.so", "plugin.scn"}));
+  // A directory in its place is no library (not code another user could have changed).
+  expect_bad(dpc31("bridge --pty p --firmware " + path("")),
+             "dpc31 bridge: cannot load firmware plug-in: " + path("") + ": is a directory",
+             "directory");
   // A firmware that spins without a bus access: the hang guard stops the process after 2 s of
   // host time, with one line, and takes the bridge's symlink away.
   const std::string spin = BAD_PLUGIN_SPIN;

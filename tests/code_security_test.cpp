@@ -91,7 +91,7 @@ TEST_F(CodeSecurity, PluginsAnotherUserCouldChangeAreRefused) {
       return name + ": the directory " + path("their_dir") +
              " is owned by uid 65534, not by you (uid 0) or root";
     }
-    return name + ": the directory " + path("group_dir") + " is writable by others (mode 0775)";
+    return name + ": the directory " + path("group_dir") + " is writable by its group (mode 0775)";
   };
   for (const std::string rel :
        {"sticky/theirs.so", "open.so", "their_dir/fw.so", "group_dir/fw.so"}) {

@@ -112,7 +112,7 @@ TEST(ScenarioParse, ErrorsNameFileAndLine) {
             "t.scn:2: 'baud' is a header command: headers come before actions and expects");
   EXPECT_EQ(parse_error("slave adress=5\n"), "t.scn:1: unknown option 'adress' for slave");
   EXPECT_EQ(parse_error("slave address=0x80\n"),
-            "t.scn:1: slave address 0x80 out of range (0..125)");
+            "t.scn:1: slave address 0x80 out of range (0x00..0x7D)");
   EXPECT_EQ(parse_error("startup\nexchange outputs=01,2G\n"),
             "t.scn:2: bad byte '2G' in outputs (hex bytes separated by commas)");
   EXPECT_EQ(parse_error("startup\nsilence 10min\n"),
@@ -399,7 +399,7 @@ TEST(ScenarioParse, BusActionsRefuseWhatTheMapDoesNot) {
       {h + "write Status_Reg 1\n", "t.scn:2: Status_Reg has no write side in spc3"},
       {h + "read Int_Mask_Reg\n", "t.scn:2: Int_Mask_Reg has no read side in spc3"},
       {h + "write R_TS_Adr 256\n", "t.scn:2: value 256 out of range (0..255)"},
-      {h + "write 0x800 1\n", "t.scn:2: address 0x800 out of range (0..2047)"},
+      {h + "write 0x800 1\n", "t.scn:2: address 0x800 out of range (0x000..0x7FF)"},
       {h + "read 0x7FF count=2\n",
        "t.scn:2: 2 bytes from 0x7FF run past the end of the spc3 map (0x800 bytes)"},
       {h + "read R_TS_Adr count=2\n",
@@ -410,7 +410,7 @@ TEST(ScenarioParse, BusActionsRefuseWhatTheMapDoesNot) {
       {h + "read 0x10 count=2\nexpect read 123\n",
        "t.scn:3: bad byte '123' in read (hex bytes separated by commas)"},
       {h + "expect reg Status_Reg 0x10000\n",
-       "t.scn:2: register value 0x10000 out of range (0..65535)"},
+       "t.scn:2: register value 0x10000 out of range (0x0000..0xFFFF)"},
       {h + "expect baud 12000000 at 5\n",
        "t.scn:2: 'at' is for dp_state, wd_state, dpv1, irq and port: the cycle a state was "
        "entered, a response ended, X/INT went active or a port was written"},
@@ -614,6 +614,8 @@ TEST(ScenarioCpu51, HeaderIsCheckedAndTheImageReadWhenTheRunStarts) {
             "t.scn:1: the port latch lies in the chip's window");
   EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx ports=x\nstartup\nexpect port y 1\n"),
             "t.scn:3: unknown port 'y' of the 80C32 board (x)");
+  EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx ports=outputs,outputs\nstartup\n"),
+            "t.scn:1: ports=: port 'outputs' named twice");
   EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx\nstartup\n"), "");  // no file opened yet
   TempFile f("cpu 80c32 firmware bad.ihx\nstartup\n");
   std::ofstream(f.dir() / "bad.ihx") << ":0300000002000BF1\n:00000001FF\n";

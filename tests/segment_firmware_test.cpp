@@ -15,6 +15,7 @@
 
 #include "dp_master.hpp"
 #include "dpc31/bus_port.hpp"
+#include "dpc31/dpc31_firmware.h"
 #include "firmware_host.hpp"
 #include "scenario_segment.hpp"
 #include "segment.hpp"
@@ -134,6 +135,18 @@ TEST(SegmentFirmwarePlugin, TheSameFileIsOneDescriptorWithACopyPerHost) {
   two.reset();
   two = plugin_copy(a);
   EXPECT_EQ(two.get(), freed);  // a copy nobody holds is the next host's
+}
+
+// The C host API (dpc31/dpc31_firmware.h): a station address beyond PROFIBUS's 0..125 makes no
+// module (NULL), as an unknown profile does.
+TEST(FirmwareCHost, AStationAddressBeyond125IsNoModule) {
+  const dpc31_firmware& fw = find_firmware(PLUGIN_DO4);
+  EXPECT_EQ(dpc31_module_create("vpc3plus", 0, &fw, 200), nullptr);
+  EXPECT_EQ(dpc31_module_create("vpc3plus", 0, &fw, 126), nullptr);
+  dpc31_module* m = dpc31_module_create("vpc3plus", 0, &fw, 125);
+  ASSERT_NE(m, nullptr);
+  EXPECT_EQ(dpc31_module_run(m, 1000), 0);
+  dpc31_module_destroy(m);
 }
 
 TEST(SegmentFirmwareScenario, ShippedThreeSlavesScenarioPasses) {

@@ -226,6 +226,8 @@ TEST(ServeCpu, BadCpuOptionsExit2WithOneLine) {
       {{"--cpu", "80c32", "--firmware", kDo4, "--code", "0x1000"}, "--code is the C31's"},
       {{"--cpu", "80c32", "--firmware", kDo4, "--board-address", "0x3800"},
        "covers the output latch"},
+      {{"--cpu", "80c32", "--firmware", kDo4, "--ports", "a,a"},
+       "--ports 'a,a': port 'a' named twice"},
   };
   for (const auto& [args, want] : cases) {
     std::string line = kCli + " serve --unix " + sock;

@@ -47,6 +47,18 @@ TEST(ServeSession, InjectDefaultsTo12MbaudWhileSearching) {
                                                      "! telegram 528 792 rx 100502495016"}));
 }
 
+// A range error names the range the docs give (docs/protocol.md): a block of 1..4096 bytes, a
+// baud rate whose bit time is at least one clock (48 MHz: 1..48000000).
+TEST(ServeSession, RangeErrorsNameTheRange) {
+  LocalSession s;
+  EXPECT_EQ(s("peekblock 0 0"), "ERR range length 0 is out of range (1..4096)");
+  EXPECT_EQ(s("readblock 0 4097"), "ERR range length 4097 is out of range (1..4096)");
+  EXPECT_EQ(s("inject 10 baud=0"), "ERR range baud 0 is out of range (1..48000000)");
+  EXPECT_EQ(s("inject 10 baud=48000001"), "ERR range baud 48000001 is out of range (1..48000000)");
+  EXPECT_EQ(s("inject 10 baud=96000000"), "ERR range baud 96000000 is out of range (1..48000000)");
+  EXPECT_EQ(s("inject 10 baud=48000000"), "OK 33 44");  // one clock per bit
+}
+
 TEST(ServeSession, InjectUsesTheDetectedRate) {
   LocalSession s;
   dpc31::DirectBus bus(s.s.chip());

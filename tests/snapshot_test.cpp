@@ -645,6 +645,10 @@ TEST(SnapshotFormat, BadFilesAreRefusedAndLeaveTheChipUnchanged) {
   set_le(b, 20, 0x12345678, 4);
   reseal(b);
   expect_refused(target, b, "snapshot written with another register description");
+  // The engine is read with the payload, after the header's checks (docs/snapshots.md).
+  expect_refused(target, Chip({Profile::dpc31, BusMode::intel, 0, Engine::per_cycle}).save_state(),
+                 "malformed snapshot payload (section CORE, byte 22): the snapshot is of the other "
+                 "engine (event / per_cycle)");
 }
 
 TEST(SnapshotFormat, CraftedPayloadsAreRefusedNotLoaded) {

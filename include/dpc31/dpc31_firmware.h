@@ -106,7 +106,8 @@ void dpc31_board_wait_1ms(void);
 const dpc31_firmware* dpc31_firmware_load(const char* path, char* err, size_t err_size);
 
 /* A module: a chip (profile "spc3", "vpc3plus" or "dpc31", Intel or Motorola bus) with the
- * firmware on its host CPU. Create runs init(); NULL for an unknown profile. Every module is an
+ * firmware on its host CPU at a station address of 0..125. Create runs init(); NULL for an
+ * unknown profile, a descriptor that fails its checks or an address above 125. Every module is an
  * instance of its own: a plug-in that keeps its state in globals runs in a private copy of its
  * library per module (docs/firmware.md, "Instances"). */
 typedef struct dpc31_module dpc31_module;

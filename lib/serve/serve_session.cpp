@@ -63,8 +63,9 @@ void split(std::string_view line, Tokens& t) {
 }
 
 // "0x1F" (hex, either case) or "31" (decimal); nothing else. Throws Fail: syntax for malformed
-// text, range for a value above `max` (including anything beyond 64 bits).
-std::uint64_t number(std::string_view s, std::uint64_t max, std::string_view what) {
+// text, range for a value outside min..max (including anything beyond 64 bits).
+std::uint64_t number(std::string_view s, std::uint64_t max, std::string_view what,
+                     std::uint64_t min = 0) {
   int base = 10;
   std::string_view digits = s;
   if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
@@ -77,8 +78,8 @@ std::uint64_t number(std::string_view s, std::uint64_t max, std::string_view wha
       (ec != std::errc() && ec != std::errc::result_out_of_range)) {
     throw Fail{"syntax", fmt::format("{} '{}' is not a number (decimal or 0x hex)", what, s)};
   }
-  if (ec == std::errc::result_out_of_range || v > max) {
-    throw Fail{"range", fmt::format("{} {} is out of range (0..{})", what, s, max)};
+  if (ec == std::errc::result_out_of_range || v > max || v < min) {
+    throw Fail{"range", fmt::format("{} {} is out of range {}", what, s, range_text(min, max, s))};
   }
   return v;
 }
@@ -334,8 +335,7 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
     if (cmd == "readblock" || cmd == "peekblock") {
       arity(t, 2, 2, cmd, "ADDR LEN");
       const auto a = static_cast<std::uint32_t>(number(t[1], amax, "address"));
-      const auto n = static_cast<std::uint32_t>(number(t[2], kMaxBlock, "length"));
-      if (n == 0) throw Fail{"range", "length 0"};
+      const auto n = static_cast<std::uint32_t>(number(t[2], kMaxBlock, "length", 1));
       if (std::uint64_t{a} + n > amax + 1) {
         throw Fail{"range", fmt::format("block {:#06x}+{} ends beyond the address space", a, n)};
       }
@@ -465,9 +465,9 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
       }
       std::uint32_t t_bit = default_bit_cycles();
       if (const auto b = o.get("baud")) {
+        // A bit time of at least one clock: a faster rate would be sent at the clock's.
         t_bit = bit_cycles(chip_.clock_hz(),
-                           static_cast<std::uint32_t>(number(*b, 2u * chip_.clock_hz(), "baud")));
-        if (t_bit == 0) throw Fail{"range", fmt::format("baud {} is unusable", *b)};
+                           static_cast<std::uint32_t>(number(*b, chip_.clock_hz(), "baud", 1)));
       }
       std::uint32_t idle = 33;  // TSYN
       if (const auto v = o.get("idle")) {

@@ -144,7 +144,7 @@ TEST(C31, TheScenarioHeaderIsCheckedWhenParsed) {
   EXPECT_EQ(error("profile dpc31\ncpu c31 firmware a.ihx base=0x8000\n"),
             "t.scn:2: 'cpu c31' takes clock= and code= ('base=' is the 80C32 board's)");
   EXPECT_EQ(error("profile dpc31\ncpu c31 firmware a.ihx code=0x0800\n"),
-            "t.scn:2: code 0x0800 out of range (2208..8191)");
+            "t.scn:2: code 0x0800 out of range (0x08A0..0x1FFF)");
   EXPECT_EQ(error("profile dpc31\ncpu c31 firmware a.ihx code=0x1F00\nsilence 1ms\n"), "");
 }
 

@@ -31,6 +31,7 @@ TEST(Mcs51Hex, BadRecordsNameTheirLine) {
       {":0000000AF6\n", "line 1: record type 0A"},
       {":0100000000FF\n", "line 1: no end-of-file record"},
       {":00000001FF\n:0100000000FF\n", "line 2: record after the end-of-file record"},
+      {"", "empty file, not an Intel HEX image"},  // no line 0 to name
   };
   for (auto [text, why] : bad) {
     HexImage img;

@@ -309,15 +309,15 @@ json run_item(const BenchArgs& a, const std::string& bench, const std::vector<Ro
   return j;
 }
 
-// A new private directory (mkdtemp) in `parent` named `prefix`XXXXXX, registered to be removed
-// with everything in it if a signal ends the process; empty, with a line on `err`, if it cannot be
-// made.
-std::string scratch_dir(const fs::path& parent, const std::string& prefix,
+// A new private directory in `parent` (TMPDIR if empty) named `prefix`XXXXXX
+// (outfile::make_temp_dir), registered to be removed with everything in it if a signal ends the
+// process; empty, with a line on `err`, if it cannot be made.
+std::string scratch_dir(const std::string& parent, const std::string& prefix,
                         cleanup::Entry& registered, std::FILE* err) {
-  std::string dir = (parent / (prefix + "XXXXXX")).string();
-  if (::mkdtemp(dir.data()) == nullptr) {
-    fmt::print(err, "dpc31 bench: cannot create a directory in {}: {}\n", parent.string(),
-               std::strerror(errno));
+  std::string error;
+  std::string dir = outfile::make_temp_dir(prefix, error, parent);
+  if (dir.empty()) {
+    fmt::print(err, "dpc31 bench: {}\n", error);
     return {};
   }
   registered = cleanup::Entry::tree(dir);
@@ -374,8 +374,7 @@ json to_json(const BenchArgs& a, const std::string& bench, const std::vector<Row
 // log whose last line is the error.
 void time_build(const std::string& source, Row& row, std::FILE* err) {
   cleanup::Entry registered;
-  const std::string dir =
-      scratch_dir(fs::temp_directory_path(), "dpc31-bench-build-", registered, err);
+  const std::string dir = scratch_dir({}, "dpc31-bench-build-", registered, err);
   if (dir.empty()) {
     row.error = "cannot create the build directory";
     return;
@@ -485,7 +484,7 @@ int run_bench(const BenchArgs& args, std::FILE* out, std::FILE* err) {
   // link another user made), removed with all in it when the run ends, also by a signal; item f's
   // files in it too, or in one of --wavediff-dir.
   cleanup::Entry gone;
-  const std::string dir = scratch_dir(fs::temp_directory_path(), "dpc31-bench-", gone, err);
+  const std::string dir = scratch_dir({}, "dpc31-bench-", gone, err);
   if (dir.empty()) return 2;
   cleanup::Entry wavediff_gone;
   const std::string wavediff_dir =

@@ -23,9 +23,51 @@ namespace dpc31::cli {
 
 namespace {
 
+// The run a shrunk trace's header names (`# profile NAME`, `# mutant NAME` or `-`, written
+// below): taken into `o`, unless --profile or --mutant given says otherwise (refused: the trace
+// would replay clean on another model; docs/golden-model.md). A trace without them keeps `o`.
+bool take_trace_header(const std::string& path, const std::string& text, CosimOptions& o,
+                       std::string& error) {
+  std::istringstream is(text);
+  int n = 0;
+  for (std::string line; std::getline(is, line) && line.starts_with('#');) {
+    ++n;
+    std::istringstream ls(line.substr(1));
+    std::string key;
+    std::string value;
+    std::string more;
+    if (!(ls >> key >> value) || ls >> more) continue;
+    if (key == "profile") {
+      Profile p{};
+      if (!parse_profile(value, p)) {
+        error = fmt::format("{}:{}: '{}' is not a chip profile", path, n, shown(value));
+        return false;
+      }
+      if (o.profile_given && p != o.profile) {
+        error = fmt::format("{}:{}: recorded on profile {}, not --profile {}", path, n, value,
+                            o.profile_name);
+        return false;
+      }
+      o.profile = p;
+      o.profile_name = value;
+    } else if (key == "mutant") {
+      const std::string mutant = value == "-" ? "" : value;
+      if (o.mutant_given && mutant != o.mutant) {
+        error = fmt::format("{}:{}: recorded with mutant {}, not --mutant {}", path, n, value,
+                            o.mutant.empty() ? "''" : o.mutant);
+        return false;
+      }
+      o.mutant = mutant;
+    }
+  }
+  return true;
+}
+
 // A stimulus trace file (lockstep.hpp), read like the emulator's own text files: missing,
-// a directory, empty or cut off is one line "FILE: reason" / "FILE:LINE: reason".
-bool read_stimulus(const std::string& path, cosim::Stimulus& s, std::string& error) {
+// a directory, empty or cut off is one line "FILE: reason" / "FILE:LINE: reason"; its header
+// sets the profile and mutant in `o`.
+bool read_stimulus(const std::string& path, cosim::Stimulus& s, CosimOptions& o,
+                   std::string& error) {
   constexpr std::size_t kMaxBytes = 256u << 20;  // 100 M cycles of stimulus fit easily
   std::string text;
   std::string why;
@@ -41,7 +83,7 @@ bool read_stimulus(const std::string& path, cosim::Stimulus& s, std::string& err
     error = fmt::format("{}:{}: {}", path, line, why);
     return false;
   }
-  return cosim::parse_trace(text, path, s, error);
+  return cosim::parse_trace(text, path, s, error) && take_trace_header(path, text, o, error);
 }
 
 // True if `dir` is a directory or can be made one: the nearest part of it that exists is a
@@ -158,6 +200,53 @@ nlohmann::json parse_summary(const std::string& text, bool& too_deep) {
   }
 }
 
+// Why a shard's summary does not add up ("" if it does): its seeds are not its part of the run's
+// range, run in order from the first, all of them unless it stopped at its one divergence
+// (without --keep-going), or its counts are not those of its results.
+std::string shard_mismatch(const nlohmann::json& j) {
+  const nlohmann::json& of = j["shard"]["of"];
+  if (!of.is_object() || !of.value("from", nlohmann::json()).is_number_unsigned() ||
+      !of.value("to", nlohmann::json()).is_number_unsigned())
+    return "a shard without the seed range of its run";
+  const auto index = j["shard"]["index"].get<std::uint64_t>();
+  const auto count = j["shard"]["count"].get<std::uint64_t>();
+  const auto from = of["from"].get<std::uint64_t>();
+  const auto to = of["to"].get<std::uint64_t>();
+  // The bounds of --seeds and --shard keep the arithmetic below within 64 bits.
+  if (to < from || to - from > 100'000'000 || count == 0 || count > 0xFFFF'FFFF || index == 0 ||
+      index > count)
+    return fmt::format("shard {}/{} of seeds from {} to {} is no shard of a run", index, count,
+                       from, to);
+  const std::uint64_t lo = from + (to - from) * (index - 1) / count;
+  const std::uint64_t hi = from + (to - from) * index / count;
+  if (j["seeds"]["from"] != lo || j["seeds"]["to"] != hi)
+    return fmt::format("seeds from {} to {}, but shard {}/{} of seeds from {} to {} has {} to {}",
+                       j["seeds"]["from"].dump(), j["seeds"]["to"].dump(), index, count, from, to,
+                       lo, hi);
+  const nlohmann::json& results = j["results"];
+  std::uint64_t diverged = 0;
+  for (std::size_t k = 0; k < results.size(); ++k) {
+    const auto seed = results[k]["seed"].get<std::uint64_t>();
+    if (seed != lo + k)
+      return fmt::format("result {} is seed {}, not {}: not its seeds from {} to {} in order",
+                         k + 1, seed, lo + k, lo, hi);
+    if (results[k]["diverged"].get<bool>()) ++diverged;
+  }
+  const bool stopped =
+      j["keep_going"] != true && diverged == 1 && results.back()["diverged"].get<bool>();
+  if (results.size() != hi - lo && !stopped)
+    return fmt::format("{} results for its {} seeds from {} to {}", results.size(), hi - lo, lo,
+                       hi);
+  if (j["keep_going"] != true && diverged > 1)
+    return fmt::format("{} divergent results without keep_going", diverged);
+  if (j.value("divergent_seeds", nlohmann::json()) != diverged ||
+      j["seeds"].value("run", nlohmann::json()) != results.size())
+    return fmt::format("divergent_seeds {} and seeds run {}, but {} results of which {} diverged",
+                       j.value("divergent_seeds", nlohmann::json()).dump(),
+                       j["seeds"].value("run", nlohmann::json()).dump(), results.size(), diverged);
+  return "";
+}
+
 // The JSON summary of a random run, and of a merge of shards, which must equal it.
 nlohmann::json summary_json(nlohmann::json run, const nlohmann::json& shard, std::uint64_t from,
                             std::uint64_t to, std::uint64_t cycles, double secs,
@@ -211,8 +300,9 @@ int run_session_mode(const CosimOptions& o) {
 
 }  // namespace
 
-int run_cosim(const CosimOptions& o) {
+int run_cosim(const CosimOptions& given) {
   using namespace dpc31::cosim;
+  CosimOptions o = given;
   std::vector<outfile::Named> inputs = {
       {"--replay", o.replay}, {"--session", o.session}, {"--rtl-model", o.rtl_model}};
   for (const std::string& v : o.rtl_sources) inputs.push_back({"--rtl", v});
@@ -235,6 +325,17 @@ int run_cosim(const CosimOptions& o) {
       return 2;
     }
   }
+  // A replayed trace first: its header names the model to build.
+  std::vector<std::pair<std::uint64_t, Stimulus>> runs;
+  if (!o.replay.empty()) {
+    Stimulus s;
+    std::string error;
+    if (!read_stimulus(o.replay, s, o, error)) {
+      fmt::print(stderr, "{}\n", error);
+      return 2;
+    }
+    runs.emplace_back(0, std::move(s));
+  }
   DutOptions dut{o.profile, o.bus, o.variant};
   std::string rtl_id;
   if (!load_rtl(o, dut, rtl_id)) return 2;
@@ -253,16 +354,6 @@ int run_cosim(const CosimOptions& o) {
   // Seeds of this shard: a contiguous part of [seed_base, seed_base + seeds).
   const std::uint64_t lo = o.seed_base + o.seeds * (o.shard - 1) / o.shards;
   const std::uint64_t hi = o.seed_base + o.seeds * o.shard / o.shards;
-  std::vector<std::pair<std::uint64_t, Stimulus>> runs;
-  if (!o.replay.empty()) {
-    Stimulus s;
-    std::string error;
-    if (!read_stimulus(o.replay, s, error)) {
-      fmt::print(stderr, "{}\n", error);
-      return 2;
-    }
-    runs.emplace_back(0, std::move(s));
-  }
   const bool tty = isatty(STDOUT_FILENO) != 0 && !o.quiet;
   nlohmann::json results = nlohmann::json::array();
   std::uint64_t diverged = 0;
@@ -342,18 +433,30 @@ int run_cosim(const CosimOptions& o) {
     }
   }
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const nlohmann::json run = {
+  nlohmann::json run = {
       {"profile", o.profile_name},
       {"bus", o.bus == BusMode::motorola ? "motorola" : "intel"},
       {"variant", o.variant ? nlohmann::json(static_cast<int>(*o.variant)) : nlohmann::json()},
       {"mutant", o.mutant},
-      {"rtl", rtl_id},
-      {"cycles_per_seed", o.cycles},
-      {"keep_going", o.keep_going}};
-  const nlohmann::json shard = {{"index", o.shard},
-                                {"count", o.shards},
-                                {"of", {{"from", o.seed_base}, {"to", o.seed_base + o.seeds}}}};
-  const nlohmann::json summary = summary_json(run, shard, lo, hi, cycles, secs, results);
+      {"rtl", rtl_id}};
+  nlohmann::json summary;
+  if (!runs.empty()) {
+    // A replay is one trace, not a range of seeds: the summary names it and its length.
+    run["replay"] = o.replay;
+    run["trace_cycles"] = runs[0].second.size();
+    run["cycles"] = cycles;
+    run["seconds"] = secs;
+    run["divergent_seeds"] = diverged;
+    run["results"] = results;
+    summary = std::move(run);
+  } else {
+    run["cycles_per_seed"] = o.cycles;
+    run["keep_going"] = o.keep_going;
+    const nlohmann::json shard = {{"index", o.shard},
+                                  {"count", o.shards},
+                                  {"of", {{"from", o.seed_base}, {"to", o.seed_base + o.seeds}}}};
+    summary = summary_json(run, shard, lo, hi, cycles, secs, results);
+  }
   fmt::print("{}\n", summary.dump(2));
   if (!o.junit.empty() &&
       !(junit_out.write(junit(o.profile_name, results)) && junit_out.commit())) {
@@ -444,6 +547,8 @@ int run_cosim_merge(const MergeOptions& o) {
       return fail(index < i + 1 ? fmt::format("{}: shard {}/{} given twice", f, index, count)
                                 : fmt::format("shard {}/{} missing", i + 1, count));
     }
+    if (const std::string why = shard_mismatch(j); !why.empty())
+      return fail(fmt::format("{}: {}: not the complete set of one run", f, why));
     for (const auto& r : j["results"]) results.push_back(r);
     cycles += j["cycles"].get<std::uint64_t>();
     secs += j["seconds"].get<double>();

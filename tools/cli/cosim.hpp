@@ -13,6 +13,8 @@ namespace dpc31::cli {
 struct CosimOptions {
   Profile profile = Profile::dpc31;
   std::string profile_name = "dpc31";
+  bool profile_given = false;  // --profile and --mutant on the command line: a replayed trace's
+  bool mutant_given = false;   // header must not contradict them
   BusMode bus = BusMode::intel;
   std::optional<Vpc3Variant> variant = std::nullopt;  // --variant (vpc3plus)
   std::uint64_t seeds = 10;

@@ -11,6 +11,7 @@
 #include "dpc31/dp.hpp"
 #include "firmware_host.hpp"
 #include "harness.hpp"
+#include "outfile.hpp"
 #include "run.hpp"
 #include "scenario.hpp"
 
@@ -242,14 +243,12 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option, const std::stri
   std::string out_dir = out_dir_option;
   std::error_code ec;
   if (out_dir.empty()) {
-    const std::filesystem::path tmp = std::filesystem::temp_directory_path(ec);
-    std::string tmpl = (tmp / "dpc31-demo-XXXXXX").string();
-    if (ec || ::mkdtemp(tmpl.data()) == nullptr) {
-      fmt::print(stderr, "dpc31 demo: cannot create a directory in {}: {}\n", tmp.string(),
-                 ec ? ec.message() : std::strerror(errno));
+    std::string error;
+    out_dir = outfile::make_temp_dir("dpc31-demo-", error);
+    if (out_dir.empty()) {
+      fmt::print(stderr, "dpc31 demo: {}\n", error);
       return 2;
     }
-    out_dir = tmpl;
   } else {
     std::filesystem::create_directories(out_dir, ec);
     if (ec || !std::filesystem::is_directory(out_dir)) {

@@ -159,15 +159,19 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"intel", "motorola"}));
   std::string cos_variant;
   dpc31::cli::add_variant_option(cosim, cos_variant);
-  cosim->add_option("--seeds", cos.seeds, "number of random seeds")->check(whole(1, 100'000'000));
-  cosim->add_option("--seed-base", cos.seed_base, "first seed")->check(whole(0));
-  cosim->add_option("--cycles", cos.cycles, "cycles per seed")->check(whole(1, 100'000'000));
-  cosim->add_option("--shard", cos_shard,
-                    "K/N: run the K-th of N equal parts of the seed range (K from 1, or from 0 "
-                    "with --shard-base 0; docs/regression.md)");
+  // The options of random seeds, which mean nothing to a --replay (refused beside it).
+  const std::vector<CLI::Option*> cos_random = {
+      cosim->add_option("--seeds", cos.seeds, "number of random seeds")
+          ->check(whole(1, 100'000'000)),
+      cosim->add_option("--seed-base", cos.seed_base, "first seed")->check(whole(0)),
+      cosim->add_option("--cycles", cos.cycles, "cycles per seed")->check(whole(1, 100'000'000)),
+      cosim->add_option("--shard", cos_shard,
+                        "K/N: run the K-th of N equal parts of the seed range (K from 1, or from "
+                        "0 with --shard-base 0; docs/regression.md)")};
   unsigned cos_shard_base = 1;
-  cosim->add_option("--shard-base", cos_shard_base, "the first K of --shard: 1 (default) or 0")
-      ->check(CLI::IsMember({0, 1}));
+  auto* cos_shard_base_opt =
+      cosim->add_option("--shard-base", cos_shard_base, "the first K of --shard: 1 (default) or 0")
+          ->check(CLI::IsMember({0, 1}));
   cosim->add_option("--junit", cos.junit, "write JUnit XML results to this file");
   cosim->add_option("--vcd", cos.vcd_dir,
                     "on divergence, write emu.vcd and rtl.vcd around it here");
@@ -178,7 +182,12 @@ int main(int argc, char** argv) {
   cosim->add_option("--out", cos.out_dir, "where shrunk stimulus traces go (default .)");
   cosim->add_option("--dump", cos.dump_dir,
                     "write emu.vcd, rtl.vcd (ports) and rtl_internal.fst of the first run here");
-  cosim->add_option("--replay", cos.replay, "replay a stimulus trace instead of random seeds");
+  auto* cos_replay =
+      cosim->add_option("--replay", cos.replay,
+                        "replay a stimulus trace instead of random seeds (with the profile and "
+                        "mutant its header names)");
+  for (CLI::Option* opt : cos_random) cos_replay->excludes(opt);
+  cos_replay->excludes(cos_shard_base_opt);
   cosim->add_option("--mutant", cos.mutant,
                     "use an RTL mutant (to see the check fail); with --rtl: the value of the "
                     "model's mutant_sel input, by name or 1..15");
@@ -205,7 +214,8 @@ int main(int argc, char** argv) {
   cosim->add_option(
       "--session", cos.session,
       "chip-session mode: run this scenario on the full chip, drive the RTL with its block events");
-  cosim->add_flag("--keep-going", cos.keep_going, "do not stop at the first divergent seed");
+  cos_replay->excludes(
+      cosim->add_flag("--keep-going", cos.keep_going, "do not stop at the first divergent seed"));
   cosim->add_flag("--quiet", cos.quiet, "no report text, only the JSON summary");
 
   // dpc31 wavediff A B [options]: waveform comparison (docs/wavediff.md).
@@ -263,6 +273,8 @@ int main(int argc, char** argv) {
     if (merge->parsed()) return dpc31::cli::run_cosim_merge(merge_opt);
     if (cosim->parsed()) {
       dpc31::parse_profile(cos.profile_name, cos.profile);
+      cos.profile_given = cosim->count("--profile") > 0;
+      cos.mutant_given = cosim->count("--mutant") > 0;
       cos.bus = cos_bus == "intel" ? dpc31::BusMode::intel : dpc31::BusMode::motorola;
       dpc31::ChipOptions chip{cos.profile};
       if (std::string why = dpc31::cli::apply_variant(cos_variant, chip); !why.empty()) {

@@ -220,6 +220,11 @@ int ChipRun::run(const Scenario& s, const LineSink& walk, const LineSink& errors
     errors(berr.text());
     return 2;
   }
+  // The 80C32 image too: a bad one is exit 2 with nothing printed or written (docs/cpu.md).
+  if (std::string why; !check_cpu_image(bound, why)) {
+    errors(why);
+    return 2;
+  }
   try {
     // A firmware stuck in a loop without a bus access cannot be stopped from this thread: the
     // guard ends the process with one line.

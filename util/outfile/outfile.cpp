@@ -154,6 +154,27 @@ bool OutFile::open(const std::string& path) {
 
 std::FILE* OutFile::stream() { return f_; }
 
+std::string make_temp_dir(const std::string& prefix, std::string& error,
+                          const std::string& parent) {
+  std::error_code ec;
+  const std::filesystem::path tmp =
+      parent.empty() ? std::filesystem::temp_directory_path(ec) : std::filesystem::path(parent);
+  std::string dir = (tmp / (prefix + "XXXXXX")).string();
+  if (!ec && ::mkdtemp(dir.data()) != nullptr) return dir;
+  // On error the path is empty: the variable it came from is named instead (libstdc++ reads
+  // these in this order).
+  std::string where = tmp.string();
+  for (const char* name : {"TMPDIR", "TMP", "TEMP", "TEMPDIR"}) {
+    if (const char* v = std::getenv(name); ec && v != nullptr) {
+      where = fmt::format("{}={}", name, v);
+      break;
+    }
+  }
+  error = fmt::format("cannot create a directory in {}: {}", where,
+                      ec ? ec.message() : errno_text(errno));
+  return {};
+}
+
 std::string OutFile::library_path() {
   if (tmp_.empty()) {
     fail(fmt::format("{}: not open for writing", path_));
@@ -164,14 +185,12 @@ std::string OutFile::library_path() {
     return tmp_;
   }
   if (scratch_dir_.empty()) {
-    std::error_code ec;
-    std::string tmpl = (std::filesystem::temp_directory_path(ec) / "dpc31-out-XXXXXX").string();
-    if (ec || ::mkdtemp(tmpl.data()) == nullptr) {
-      fail(fmt::format("{}: cannot create a scratch directory in TMPDIR: {}", path_,
-                       ec ? ec.message() : errno_text(errno)));
+    std::string error;
+    scratch_dir_ = make_temp_dir("dpc31-out-", error);
+    if (scratch_dir_.empty()) {
+      fail(fmt::format("{}: {}", path_, error));
       return {};
     }
-    scratch_dir_ = tmpl;
     // Files first, then the directory (the handler removes in that order anyway).
     scratch_entries_.push_back(cleanup::Entry::path(scratch_dir_ + "/out"));
     scratch_entries_.push_back(cleanup::Entry::path(scratch_dir_ + "/out.hier"));

@@ -31,6 +31,13 @@ bool replace(const std::string& tmp, const std::string& path, std::string& error
 // write where they chose. "" or one line naming the link and its owner.
 std::string foreign_symlink(const std::string& path);
 
+// A new directory only this user can enter (mkdtemp, mode 0700) in `parent`, or without it in the
+// temporary directory (TMPDIR, as std::filesystem::temp_directory_path finds it), named
+// `prefix`XXXXXX: a fixed name there could be a link another user made. "" with a one-line
+// `error` that names the place.
+std::string make_temp_dir(const std::string& prefix, std::string& error,
+                          const std::string& parent = {});
+
 class OutFile {
  public:
   OutFile() = default;

@@ -10,6 +10,17 @@
 
 namespace dpc31 {
 
+namespace {
+
+// "an Intel HEX", "a trace": by the first letter.
+std::string_view article(std::string_view what) {
+  return !what.empty() && std::string_view("AEIOUaeiou").find(what[0]) != std::string_view::npos
+             ? "an"
+             : "a";
+}
+
+}  // namespace
+
 bool read_text_file(const std::string& path, std::size_t max_bytes, std::string_view what,
                     std::string& text, std::string& error) {
   // Opened once (a pipe can be read only once) and read in pieces: memory follows what the file
@@ -22,7 +33,7 @@ bool read_text_file(const std::string& path, std::size_t max_bytes, std::string_
   struct stat st {};
   if (::fstat(fd, &st) == 0 && S_ISDIR(st.st_mode)) {
     ::close(fd);
-    error = fmt::format("is a directory, not a {} file", what);
+    error = fmt::format("is a directory, not {} {} file", article(what), what);
     return false;
   }
   constexpr std::size_t kPiece = 64 * 1024;
@@ -46,7 +57,7 @@ bool read_text_file(const std::string& path, std::size_t max_bytes, std::string_
   }
   ::close(fd);
   if (text.size() > max_bytes) {
-    error = fmt::format("too large for a {} (more than {} bytes)", what, max_bytes);
+    error = fmt::format("too large for {} {} (more than {} bytes)", article(what), what, max_bytes);
     return false;
   }
   text.shrink_to_fit();

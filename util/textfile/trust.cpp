@@ -33,6 +33,10 @@ std::string owner_problem(const std::string& what, const struct stat& st) {
   return {};
 }
 
+// Who may write besides the owner, as the mode says: others (whatever the group may), or its
+// group alone.
+const char* writers(mode_t mode) { return (mode & S_IWOTH) != 0 ? "others" : "its group"; }
+
 // Every directory above `real` (an absolute path without links), the closest first: owned by us
 // or root, and writable by others only when sticky and the name below it is ours. `below` is the
 // status of what `real` names.
@@ -48,8 +52,8 @@ std::string chain_problem(const std::string& real, struct stat below) {
     }
     if (std::string p = owner_problem("the directory " + path, st); !p.empty()) return p;
     if ((st.st_mode & kOthersWrite) != 0 && !((st.st_mode & S_ISVTX) != 0 && ours(below.st_uid))) {
-      return fmt::format("the directory {} is writable by others (mode {:04o})", path,
-                         st.st_mode & 07777);
+      return fmt::format("the directory {} is writable by {} (mode {:04o})", path,
+                         writers(st.st_mode), st.st_mode & 07777);
     }
     below = st;
   }
@@ -67,7 +71,8 @@ std::string checked(int fd, const std::string& shown, bool directory) {
   }
   if (std::string p = owner_problem(shown, st); !p.empty()) return p;
   if ((st.st_mode & kOthersWrite) != 0) {
-    return fmt::format("{} is writable by others (mode {:04o})", shown, st.st_mode & 07777);
+    return fmt::format("{} is writable by {} (mode {:04o})", shown, writers(st.st_mode),
+                       st.st_mode & 07777);
   }
   const std::string real = real_path(fd);
   if (real.empty()) return fmt::format("{}: cannot find its real path in /proc/self/fd", shown);
