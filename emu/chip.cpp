@@ -160,9 +160,10 @@ void Chip::on_txd(std::function<void(std::uint64_t, bool)> cb) {
 void Chip::on_txd_edges(std::function<void(std::span<const std::pair<std::uint64_t, bool>>)> cb) {
   core_->mac.watch_txd_edges(std::move(cb));
 }
-void Chip::on_txd_chars(std::function<void(const TxdRun&)> cb) {
-  core_->signals.txd_chars.add(std::move(cb));
+ObserverId Chip::on_txd_chars(std::function<void(const TxdRun&)> cb) {
+  return core_->signals.txd_chars.add(std::move(cb));
 }
+void Chip::remove_txd_chars(ObserverId id) { core_->signals.txd_chars.remove(id); }
 void Chip::take_txd() { core_->mac.tx_catch_up(); }
 void Chip::wake_on_txd(bool on) { core_->mac.wake_on_txd(on); }
 void Chip::on_bus_access(std::function<void(std::uint64_t, const BusAccess&)> cb) {

@@ -21,18 +21,34 @@ namespace dpc31 {
 
 // Several parties watch the chip (the scenario runner, waveform and capture writers, the
 // built-in master): each observer is a list. Adding an empty function clears the list.
+// Each has an id (from 1), so that one party can take its own away (remove) and leave the rest.
 template <typename... A>
 struct Observers {
   std::vector<std::function<void(A...)>> fns;
+  std::vector<ObserverId> ids;  // fns[i]'s
+  ObserverId last = 0;
   explicit operator bool() const { return !fns.empty(); }
   void operator()(A... a) const {
     for (const auto& f : fns) f(a...);
   }
-  void add(std::function<void(A...)> f) {
-    if (f) {
-      fns.push_back(std::move(f));
-    } else {
+  // The new observer's id; 0 for an empty function.
+  ObserverId add(std::function<void(A...)> f) {
+    if (!f) {
       fns.clear();
+      ids.clear();
+      return 0;
+    }
+    fns.push_back(std::move(f));
+    ids.push_back(++last);
+    return last;
+  }
+  void remove(ObserverId id) {
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+      if (ids[i] == id) {
+        fns.erase(fns.begin() + static_cast<std::ptrdiff_t>(i));
+        ids.erase(ids.begin() + static_cast<std::ptrdiff_t>(i));
+        return;
+      }
     }
   }
 };

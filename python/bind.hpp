@@ -10,6 +10,7 @@
 
 #include <exception>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <thread>
@@ -159,6 +160,18 @@ T in_range(const ValueRange& r, std::int64_t v) {
   if (v < 0 || !r.holds(static_cast<std::uint64_t>(v)))
     throw py::value_error(out_of_range(r, std::to_string(v)));
   return static_cast<T>(v);
+}
+// A file name from Python as the C library will take it: a NUL byte would end it there (another
+// file), so a ValueError as Python's own open() raises. `what` is the argument's name.
+inline const std::string& path_arg(const std::string& path, std::string_view what) {
+  if (path.find('\0') != std::string::npos)
+    throw py::value_error(std::string(what) + ": embedded null byte");
+  return path;
+}
+inline const std::optional<std::string>& path_arg(const std::optional<std::string>& path,
+                                                  std::string_view what) {
+  if (path) path_arg(*path, what);
+  return path;
 }
 // A PROFIBUS rate, else a ValueError as the scenario's `baud` says it.
 std::uint32_t profibus_rate(std::uint32_t baud);

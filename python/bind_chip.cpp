@@ -547,14 +547,14 @@ void bind_chip_class(py::module_& m) {
           "save_state_file",
           [](const PyChip& c, const std::string& path) {
             c.enter(false);
-            c.chip.save_state_file(path);
+            c.chip.save_state_file(path_arg(path, "path"));
           },
           py::arg("path"))
       .def(
           "load_state_file",
           [](PyChip& c, const std::string& path) {
             c.enter(true);
-            c.chip.load_state_file(path);
+            c.chip.load_state_file(path_arg(path, "path"));
           },
           py::arg("path"));
 }

@@ -94,6 +94,9 @@ void check_output(bool ok, const std::string& error) {
 void check_distinct(const std::vector<outfile::Named>& inputs,
                     const std::optional<std::string>& vcd, const std::optional<std::string>& fst,
                     const std::optional<std::string>& pcapng) {
+  path_arg(vcd, "vcd");
+  path_arg(fst, "fst");
+  path_arg(pcapng, "pcapng");
   const std::string same = outfile::distinct(
       inputs,
       {{"vcd", vcd.value_or("")}, {"fst", fst.value_or("")}, {"pcapng", pcapng.value_or("")}});
@@ -372,7 +375,7 @@ PyStation& add_station(py::object self, U8 address, const std::string& profile,
   if (user_wd_value && opt.profile == Profile::dpc31 && !user_wd.value_or(false))
     throw py::value_error(user_wd_value_needs_user_wd("user_wd_value"));
   if (firmware) {
-    const dpc31_firmware& d = find_firmware(*firmware);
+    const dpc31_firmware& d = find_firmware(path_arg(*firmware, "firmware"));
     st->firmware = std::make_shared<FirmwareHost>(d);
     if (!slave) sc = with_gsd_defaults(d, sc);
   } else {
@@ -742,7 +745,7 @@ void bind_segment_scenario(py::module_& m) {
           [fail](const std::string& path) {
             SegmentScenario s;
             ScenarioError err;
-            const SegmentLoad l = load_segment_scenario(path, s, err);
+            const SegmentLoad l = load_segment_scenario(path_arg(path, "path"), s, err);
             if (l == SegmentLoad::not_segment) {
               // A file that cannot be read or is no scenario at all: Scenario.load's words for it.
               Scenario single;
@@ -758,7 +761,7 @@ void bind_segment_scenario(py::module_& m) {
           [fail](std::string_view text, const std::string& file) {
             SegmentScenario s;
             ScenarioError err;
-            if (!parse_segment_scenario(text, file, s, err)) fail(err);
+            if (!parse_segment_scenario(text, path_arg(file, "file"), s, err)) fail(err);
             return s;
           },
           py::arg("text"), py::arg("file") = "<string>")

@@ -304,12 +304,19 @@ struct PyBoard {
   }
 };
 
+// P0..P3: the core masks the number (port_latch), so a larger one would be another port's.
+unsigned port_index(unsigned n) {
+  if (n > 3) throw py::index_error(fmt::format("no port {} (0..3: P0..P3)", n));
+  return n;
+}
+
 void bind_board(py::module_& m) {
   py::class_<PyBoard>(m, "Cpu51Board",
                       "An 80C32 beside the chip (its XDATA window at `address`, X/INT on INT0), "
                       "or the DPC31's C31 (Cpu51Board.c31); docs/cpu.md.")
-      .def(py::init([](py::object chip, std::uint32_t hz, std::uint16_t address) {
-             return std::make_unique<PyBoard>(std::move(chip), hz, address, std::nullopt);
+      .def(py::init([](py::object chip, std::uint32_t hz, std::int64_t address) {
+             return std::make_unique<PyBoard>(
+                 std::move(chip), hz, in_range<std::uint16_t>(kBoardBase, address), std::nullopt);
            }),
            py::arg("chip"), py::arg("hz") = 24'000'000, py::arg("address") = 0x8000)
       .def_static(
@@ -325,7 +332,7 @@ void bind_board(py::module_& m) {
           [](PyBoard& b, const std::string& path) {
             b.chip.enter(true);
             Cpu51Config cfg = b.cfg;
-            cfg.hex = path;
+            cfg.hex = path_arg(path, "path");
             Cpu51Image image;
             std::string why;
             if (!load_cpu51_image(cfg, image, why)) raise(errors().input, why);
@@ -345,16 +352,18 @@ void bind_board(py::module_& m) {
           "Runs CPU and chip together until the chip's cycle is at least `cycle` (the CPU's "
           "step in progress ends).")
       .def(
-          "port", [](const PyBoard& b, unsigned n) { return b.board->cpu().port_latch(n); },
+          "port",
+          [](const PyBoard& b, unsigned n) { return b.board->cpu().port_latch(port_index(n)); },
           py::arg("n"), "Port n's latch (0..3: P0..P3).")
       .def(
-          "pins", [](const PyBoard& b, unsigned n) { return b.board->cpu().port_pins(n); },
+          "pins",
+          [](const PyBoard& b, unsigned n) { return b.board->cpu().port_pins(port_index(n)); },
           py::arg("n"), "Port n's pins: the latch AND what the outside drives.")
       .def(
           "set_port_input",
           [](PyBoard& b, unsigned n, U8 value) {
             b.chip.enter(true);
-            b.board->cpu().set_port_input(n, value);
+            b.board->cpu().set_port_input(port_index(n), value);
           },
           py::arg("n"), py::arg("value"), "What the outside drives on port n (an address switch).")
       .def(
@@ -428,21 +437,29 @@ struct PyMaster {
       DirectBus bus(chip.chip);
       init(bus);
     });
+    dpv1_m.reset();  // it holds the master
     m = std::make_unique<DpMaster>(chip.chip, config, slave);
-    dpv1_m.reset();
   }
 };
 
 // A Read (MSAC_C1 or on the connection) and a service with record data (Write, Data_Transport):
 // one binding per Dpv1Master member.
+// Slot, index, length and data in the scenario's ranges (vocabulary.hpp).
 template <Dpv1Answer (Dpv1Master::*Read)(U8, U8, U8)>
-Dpv1Answer read_record(PyMaster& pm, U8 slot, U8 index, U8 length) {
-  return pm.dpv1([&](Dpv1Master& d) { return (d.*Read)(slot, index, length); });
+Dpv1Answer read_record(PyMaster& pm, std::int64_t slot, std::int64_t index, std::int64_t length) {
+  const auto s = in_range<U8>(kRecordSlot, slot);
+  const auto i = in_range<U8>(kRecordIndex, index);
+  const auto n = in_range<U8>(kRecordLength, length);
+  return pm.dpv1([&](Dpv1Master& d) { return (d.*Read)(s, i, n); });
 }
 template <Dpv1Answer (Dpv1Master::*Send)(U8, U8, pdu::Bytes)>
-Dpv1Answer send_record(PyMaster& pm, U8 slot, U8 index, const py::bytes& data) {
+Dpv1Answer send_record(PyMaster& pm, std::int64_t slot, std::int64_t index, const py::bytes& data) {
+  const auto s = in_range<U8>(kRecordSlot, slot);
+  const auto i = in_range<U8>(kRecordIndex, index);
   pdu::Bytes v = from_bytes(data);
-  return pm.dpv1([&](Dpv1Master& d) { return (d.*Send)(slot, index, std::move(v)); });
+  if (v.size() > kRecordLength.max)
+    throw py::value_error(fmt::format("data: more than {} bytes", kRecordLength.max));
+  return pm.dpv1([&](Dpv1Master& d) { return (d.*Send)(s, i, std::move(v)); });
 }
 
 // The master's DPV1 services (docs/dpv1.md, "The master's side"), one call for one call of
@@ -458,9 +475,17 @@ void bind_dpv1(py::module_& m, py::class_<PyMaster>& master) {
       .value("malformed", O::malformed);
   py::class_<Dpv1Rules>(m, "Dpv1Rules", "The master's DPV1 rules (retries, time-out, C2 SAP).")
       .def(py::init(&with_kwargs<Dpv1Rules>))
-      .def_readwrite("retries", &Dpv1Rules::retries)
-      .def_readwrite("c1_response_timeout", &Dpv1Rules::c1_response_timeout)
-      .def_readwrite("c2_ssap", &Dpv1Rules::c2_ssap);
+      .def_property(
+          "retries", [](const Dpv1Rules& r) { return r.retries; },
+          [](Dpv1Rules& r, std::int64_t v) { r.retries = in_range<std::uint32_t>(kRetries, v); })
+      .def_property(
+          "c1_response_timeout", [](const Dpv1Rules& r) { return r.c1_response_timeout; },
+          [](Dpv1Rules& r, std::int64_t v) {
+            r.c1_response_timeout = in_range<std::uint16_t>(kC1Timeout, v);
+          })
+      .def_property(
+          "c2_ssap", [](const Dpv1Rules& r) { return r.c2_ssap; },
+          [](Dpv1Rules& r, std::int64_t v) { r.c2_ssap = in_range<U8>(kC2Ssap, v); });
   py::class_<Dpv1Answer>(m, "Dpv1Answer", "What a DPV1 service got (session/dpv1_master.hpp).")
       .def_readonly("outcome", &Dpv1Answer::outcome)
       .def_property_readonly("du", [](const Dpv1Answer& a) { return to_bytes(a.du); })
@@ -489,18 +514,18 @@ void bind_dpv1(py::module_& m, py::class_<PyMaster>& master) {
            py::arg("data"), "MSAC_C1 Write")
       .def(
           "alarm_ack",
-          [](PyMaster& pm, U8 slot, U8 alarm_type, U8 specifier) {
-            return pm.dpv1([&](Dpv1Master& d) {
-              return d.alarm_ack({slot, alarm_type, specifier});
-            });
+          [](PyMaster& pm, std::int64_t slot, std::int64_t alarm_type, U8 specifier) {
+            const pdu::AlarmAck ack{in_range<U8>(kRecordSlot, slot),
+                                    in_range<U8>(kAlarmType, alarm_type), specifier};
+            return pm.dpv1([&](Dpv1Master& d) { return d.alarm_ack(ack); });
           },
           py::arg("slot"), py::arg("alarm_type"), py::arg("specifier"),
           "MSAC_C1 Alarm_Ack (SAP 51 -> 50); specifier = Seq_Nr << 3 | Add_Ack << 2 | bits 1..0")
       .def(
           "c2_initiate",
-          [](PyMaster& pm, std::uint16_t send_timeout, std::uint16_t features_supported) {
+          [](PyMaster& pm, std::int64_t send_timeout, std::uint16_t features_supported) {
             pdu::Initiate req;
-            req.send_timeout = send_timeout;
+            req.send_timeout = in_range<std::uint16_t>(kSendTimeout, send_timeout);
             req.features_supported = features_supported;
             return pm.dpv1([&](Dpv1Master& d) { return d.initiate(req); });
           },
@@ -516,8 +541,10 @@ void bind_dpv1(py::module_& m, py::class_<PyMaster>& master) {
            [](PyMaster& pm) { return pm.dpv1([](Dpv1Master& d) { return d.c2_idle(); }); })
       .def(
           "c2_abort",
-          [](PyMaster& pm, U8 reason, U8 instance) {
-            return pm.dpv1([&](Dpv1Master& d) { return d.c2_abort({0, instance, reason, 0}); });
+          [](PyMaster& pm, std::int64_t reason, std::int64_t instance) {
+            const pdu::Abort a{0, in_range<U8>(kAbortInstance, instance),
+                               in_range<U8>(kAbortReason, reason), 0};
+            return pm.dpv1([&](Dpv1Master& d) { return d.c2_abort(a); });
           },
           py::arg("reason") = 0, py::arg("instance") = 2,
           "MSAC_C2 Abort on the open connection (Instance 2: the user)");
@@ -542,7 +569,7 @@ void bind_master(py::module_& m) {
       .def(
           "run_firmware",
           [](PyMaster& pm, const std::string& spec, bool gsd_defaults) {
-            const dpc31_firmware& d = find_firmware(spec);
+            const dpc31_firmware& d = find_firmware(path_arg(spec, "firmware"));
             const SlaveConfig slave =
                 gsd_defaults ? with_gsd_defaults(d, pm.m->slave()) : pm.m->slave();
             auto fw = std::make_shared<FirmwareHost>(d);
@@ -781,7 +808,7 @@ void bind_scenarios(py::module_& m) {
           [](const std::string& path) {
             Scenario s;
             ScenarioError err;
-            if (!load_scenario(path, s, err)) raise_scenario(err);
+            if (!load_scenario(path_arg(path, "path"), s, err)) raise_scenario(err);
             return s;
           },
           py::arg("path"))
@@ -790,7 +817,7 @@ void bind_scenarios(py::module_& m) {
           [](std::string_view text, const std::string& file) {
             Scenario s;
             ScenarioError err;
-            if (!parse_scenario(text, file, s, err)) raise_scenario(err);
+            if (!parse_scenario(text, path_arg(file, "file"), s, err)) raise_scenario(err);
             return s;
           },
           py::arg("text"), py::arg("file") = "<string>")
@@ -863,18 +890,18 @@ void bind_wavediff(py::module_& m) {
          std::vector<std::string> include, std::vector<std::string> exclude, bool ignore_missing,
          const std::string& xz, const std::string& diff_vcd) {
         Options o;
-        o.file_a = a;
-        o.file_b = b;
+        o.file_a = path_arg(a, "a");
+        o.file_b = path_arg(b, "b");
         o.clock_a = clock.value_or("");
         o.clock_b = clock_b.value_or("");
         o.strip_a = strip_a;
         o.strip_b = strip_b;
         o.strip_auto = strip_auto;
-        o.map_file = map_file;
+        o.map_file = path_arg(map_file, "map_file");
         o.include = std::move(include);
         o.exclude = std::move(exclude);
         o.ignore_missing = ignore_missing;
-        o.diff_vcd = diff_vcd;
+        o.diff_vcd = path_arg(diff_vcd, "diff_vcd");
         if (xz == "strict" || xz == "wildcard" || xz == "zero") {
           o.xz = xz == "strict" ? XzPolicy::strict
                                 : (xz == "wildcard" ? XzPolicy::wildcard : XzPolicy::zero);

@@ -78,8 +78,12 @@ DpMaster::DpMaster(Chip& chip, MasterConfig m, SlaveConfig s)
       bus_free_(chip.cycle()) {
   // TxD in batches of characters, taken when the master looks (take_txd): no event per bit, and
   // no edges where nobody else watches them.
-  chip_->on_txd_chars([this](const TxdRun& r) { rx_.take(r); });
+  txd_observer_ = chip_->on_txd_chars([this](const TxdRun& r) { rx_.take(r); });
   slaves_.push_back({slave_, target_, fcb_, fcv_started_});
+}
+
+DpMaster::~DpMaster() {
+  if (chip_) chip_->remove_txd_chars(txd_observer_);
 }
 
 DpMaster::DpMaster(Segment& seg, std::size_t station, MasterConfig m,

@@ -151,6 +151,11 @@ class DpMaster {
   using Firmware = Cpu::Isr;  // the ISR, run (on the host CPU) while X/INT is active
 
   DpMaster(Chip& chip, MasterConfig m, SlaveConfig s);
+  // Takes its TxD observer off the chip, which may run on (another master on it, a new one).
+  ~DpMaster();
+  // The chip's observer holds `this`.
+  DpMaster(const DpMaster&) = delete;
+  DpMaster& operator=(const DpMaster&) = delete;
   // A master on a segment (docs/segment.md): station `station` of `seg` (a sender), polling
   // `slaves` (at least one), each with its own FCB state; the first is selected. The stations'
   // firmware is the segment's, not the master's.
@@ -329,8 +334,9 @@ class DpMaster {
     bool fcv_started = false;
   };
 
-  Chip* chip_ = nullptr;    // the one chip (single-slave master)
-  Segment* seg_ = nullptr;  // or the segment and this master's station on it
+  Chip* chip_ = nullptr;         // the one chip (single-slave master)
+  ObserverId txd_observer_ = 0;  // on chip_
+  Segment* seg_ = nullptr;       // or the segment and this master's station on it
   std::size_t station_ = 0;
   std::vector<SlaveState> slaves_;  // the others' state while one is selected
   std::size_t current_ = 0;

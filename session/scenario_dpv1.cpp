@@ -17,7 +17,8 @@ using scenario_lex::number;
 
 namespace {
 
-constexpr std::uint8_t kMaxRecord = 240;  // a record's data (the PDU's 4-byte head + 240 = 244)
+// A record's data (the PDU's 4-byte head + 240 = 244).
+constexpr auto kMaxRecord = static_cast<std::size_t>(kRecordLength.max);
 // `sc`: positive without a data unit, the Abort's SC.
 constexpr std::string_view kOutcomes[] = {"refused", "timeout", "no_answer", "sc"};
 
@@ -31,13 +32,13 @@ void no_positional(std::span<const std::string_view> pos, std::string_view cmd) 
 
 // slot=N (0..254) into st.value, or `second`=N (min..max) into st.value2, each noted in its
 // flag; false for any other key.
-bool slot_or(std::string_view k, std::string_view v, std::string_view second, std::uint64_t min,
-             std::uint64_t max, ScenarioStep& st, bool& has_slot, bool& has_second) {
+bool slot_or(std::string_view k, std::string_view v, const ValueRange& second, ScenarioStep& st,
+             bool& has_slot, bool& has_second) {
   if (k == "slot") {
-    st.value = static_cast<std::uint32_t>(number(v, k, 0, 254));
+    st.value = static_cast<std::uint32_t>(number(v, kRecordSlot));
     has_slot = true;
-  } else if (k == second) {
-    st.value2 = static_cast<std::uint32_t>(number(v, k, min, max));
+  } else if (k == second.what) {
+    st.value2 = static_cast<std::uint32_t>(number(v, second));
     has_second = true;
   } else {
     return false;
@@ -50,9 +51,9 @@ void record_options(std::span<const Option> opts, std::string_view cmd, bool rea
                     ScenarioStep& st) {
   bool slot = false, index = false, third = false;
   for (const auto& [k, v] : opts) {
-    if (slot_or(k, v, "index", 0, 255, st, slot, index)) continue;
+    if (slot_or(k, v, kRecordIndex, st, slot, index)) continue;
     if (read && k == "length") {
-      st.count = number(v, k, 1, kMaxRecord);
+      st.count = number(v, kRecordLength);
       third = true;
     } else if (!read && k == "data") {
       st.bytes = bytes(v, k, kMaxRecord);
@@ -91,9 +92,9 @@ bool parse_header(std::string_view cmd, std::span<const std::string_view> pos,
     if (k == "work") {
       s.user.dpv1.work_cycles = number(v, k, 0, 48'000'000);
     } else if (k == "c1_timeout") {
-      s.dpv1.c1_response_timeout = static_cast<std::uint16_t>(number(v, k, 1, 0xFFFF));
+      s.dpv1.c1_response_timeout = static_cast<std::uint16_t>(number(v, kC1Timeout));
     } else if (k == "c2_ssap") {
-      s.dpv1.c2_ssap = static_cast<std::uint8_t>(number(v, k, 0, 62));
+      s.dpv1.c2_ssap = static_cast<std::uint8_t>(number(v, kC2Ssap));
     } else {
       unknown(k, cmd);
     }
@@ -122,12 +123,12 @@ bool parse_action(std::string_view cmd, std::span<const std::string_view> pos,
     std::uint32_t spec = 0;
     st.count = 0;
     for (const auto& [k, v] : opts) {
-      if (slot_or(k, v, "type", 1, 127, st, slot, type)) continue;
+      if (slot_or(k, v, kAlarmType, st, slot, type)) continue;
       if (k == "seq") {
         st.count |= number(v, k, 0, 31) << 3;
         seq = true;
       } else if (k == "spec") {
-        spec = static_cast<std::uint32_t>(number(v, k, 0, 3));
+        spec = static_cast<std::uint32_t>(number(v, kAbortInstance));
       } else if (k == "add_ack") {
         if (scenario_lex::flag(v, k)) st.count |= 0x04;
       } else {
@@ -140,15 +141,15 @@ bool parse_action(std::string_view cmd, std::span<const std::string_view> pos,
     st.count = 100;  // Send_Timeout 1 s unless given
     for (const auto& [k, v] : opts) {
       if (k != "send_timeout") unknown(k, cmd);
-      st.count = number(v, k, 1, 0xFFFF);
+      st.count = number(v, kSendTimeout);
     }
   } else if (cmd == "c2_abort") {
     st.value = 0x02;  // instance: the user (0 FDL, 1 MSAC_C2, 2 user)
     for (const auto& [k, v] : opts) {
       if (k == "reason") {
-        st.value2 = static_cast<std::uint32_t>(number(v, k, 0, 15));
+        st.value2 = static_cast<std::uint32_t>(number(v, kAbortReason));
       } else if (k == "instance") {
-        st.value = static_cast<std::uint32_t>(number(v, k, 0, 3));
+        st.value = static_cast<std::uint32_t>(number(v, kAbortInstance));
       } else {
         unknown(k, cmd);
       }

@@ -246,8 +246,9 @@ class Parser {
         c.code = static_cast<std::uint16_t>(number(v, "code", 0x08A0, 0x1FFF));
       } else if (c31) {
         fail(fmt::format("'cpu c31' takes clock= and code= ('{}=' is the 80C32 board's)", k));
-      } else if (k == "base" || k == "latch") {
-        (k == "base" ? c.base : c.latch) = static_cast<std::uint16_t>(number(v, k, 0, 0xF000));
+      } else if (k == "base" || k == "latch") {  // the latch an address in the same range
+        (k == "base" ? c.base : c.latch) =
+            static_cast<std::uint16_t>(number(v, k, kBoardBase.min, kBoardBase.max));
       } else if (k == "ports") {
         for (std::string_view n : split(v, ',')) c.ports.emplace_back(n);
         if (const std::string why = c.ports_problem(); !why.empty()) fail("ports=: " + why);
@@ -316,7 +317,7 @@ class Parser {
         } else if (k == "idle") {
           s_.master.idle_bits = static_cast<std::uint32_t>(number(v, kIdleBits));
         } else if (k == "retries") {
-          s_.retries = static_cast<std::uint32_t>(number(v, "retries", 0, 8));
+          s_.retries = static_cast<std::uint32_t>(number(v, kRetries));
         } else {
           unknown_option(k);
         }

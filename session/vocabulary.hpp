@@ -56,6 +56,20 @@ inline constexpr ValueRange kIdleBits{"idle", 1, 65535};
 inline constexpr ValueRange kTtrBits{"ttr", 256, 16'777'215};
 inline constexpr ValueRange kGapFactor{"gap", 1, 100};
 inline constexpr ValueRange kHsa{"hsa", 1, 126};
+// The built-in master's DPV1 rules (`dpv1 c1_timeout= c2_ssap=`, `master retries=`) and its
+// DPV1 services' numbers (docs/dpv1.md): C2_SSAP below the SAPs 63 (the default SAP) and up.
+inline constexpr ValueRange kRetries{"retries", 0, 8};
+inline constexpr ValueRange kC1Timeout{"c1_timeout", 1, 65535};
+inline constexpr ValueRange kC2Ssap{"c2_ssap", 0, 62};
+inline constexpr ValueRange kRecordSlot{"slot", 0, 254};
+inline constexpr ValueRange kRecordIndex{"index", 0, 255};
+inline constexpr ValueRange kRecordLength{"length", 1, 240};  // a record's data, at most 240
+inline constexpr ValueRange kAlarmType{"type", 1, 127};
+inline constexpr ValueRange kSendTimeout{"send_timeout", 1, 65535};
+inline constexpr ValueRange kAbortReason{"reason", 0, 15};
+inline constexpr ValueRange kAbortInstance{"instance", 0, 3};  // 0 FDL, 1 MSAC_C2, 2 user
+// An 80C32 board's XDATA window for the chip (`cpu base=`): its 4 KB below the top of XDATA.
+inline constexpr ValueRange kBoardBase{"base", 0, 0xF000};
 // "(MIN..MAX)" in the base `value` is written in: 0x hex (as many digits as MAX has) or decimal.
 [[nodiscard]] std::string range_text(std::uint64_t min, std::uint64_t max, std::string_view value);
 // "WHAT VALUE out of range (MIN..MAX)", VALUE as the user wrote it, the range in its base.

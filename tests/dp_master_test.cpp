@@ -9,10 +9,15 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cstddef>
 #include <cstdint>
+#include <new>
 #include <span>
 #include <vector>
 
+#include "dpc31/bus_port.hpp"
+#include "responder.hpp"
 #include "segment.hpp"
 
 namespace {
@@ -127,6 +132,33 @@ TEST(DpMaster, AnExchangeAfterClearHistoryIsInTheHistoryAsReturned) {
   EXPECT_EQ(h.request_end, b.request_end);
   EXPECT_EQ(h.answer_start, 0u);
   EXPECT_EQ(h.answer_end, 0u);
+}
+
+// A master destroyed while its chip runs on takes its TxD observer away (~DpMaster): the chip
+// no longer writes into the memory the master had (here the test's own) when the next master's
+// exchanges put characters on TxD.
+TEST(DpMaster, AMasterDestroyedLeavesNoObserverOnItsChip) {
+  Chip chip(ChipOptions{Profile::spc3});
+  ResponderConfig rc;
+  Responder user(rc);
+  user.inputs = {1, 2, 3, 4};
+  DirectBus bus(chip);
+  user.init(bus);
+  const auto isr = [&user](BusPort& b) { user.isr(b); };
+  alignas(DpMaster) std::array<std::byte, sizeof(DpMaster)> memory{};
+  auto* gone = new (memory.data()) DpMaster(chip, MasterConfig{2, 1'500'000}, rc.slave);
+  gone->set_firmware(isr);
+  ASSERT_TRUE(gone->startup());
+  gone->~DpMaster();
+  memory.fill(std::byte{0xA5});  // what an observer left behind would take for a receiver
+  const auto left = memory;
+  DpMaster m(chip, MasterConfig{2, 1'500'000}, rc.slave);
+  m.set_firmware(isr);
+  ASSERT_TRUE(m.startup());
+  const Exchange x = m.data_exchange({5, 6, 7, 8});
+  ASSERT_TRUE(x.answer);
+  EXPECT_EQ(x.answer->du, user.inputs);
+  EXPECT_EQ(memory, left) << "the chip wrote into a gone master";
 }
 
 }  // namespace

@@ -172,3 +172,75 @@ def test_a_firmware_that_misuses_the_hal_is_a_firmware_error(plugin, message):
     with pytest.raises(dpc31.FirmwareError, match=rf"^firmware BAD: {message}$"):
         master.run_firmware(os.environ[plugin])
         master.idle(1000)
+
+
+def _master():
+    return dpc31.Master(dpc31.Chip("vpc3plus"), address=2, baud=1_500_000,
+                        slave=dpc31.SlaveConfig(address=5))
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: dpc31.Dpv1Rules(c2_ssap=63), r"c2_ssap 63 out of range \(0..62\)"),
+    (lambda: dpc31.Dpv1Rules(c2_ssap=200), r"c2_ssap 200 out of range \(0..62\)"),
+    (lambda: dpc31.Dpv1Rules(c1_response_timeout=0), r"c1_timeout 0 out of range \(1..65535\)"),
+    (lambda: dpc31.Dpv1Rules(retries=9), r"retries 9 out of range \(0..8\)"),
+    (lambda: _master().dpv1_read(0, 1, 0), r"length 0 out of range \(1..240\)"),
+    (lambda: _master().dpv1_read(0, 1, 241), r"length 241 out of range \(1..240\)"),
+    (lambda: _master().c2_read(255, 1, 4), r"slot 255 out of range \(0..254\)"),
+    (lambda: _master().dpv1_write(0, 1, bytes(241)), r"data: more than 240 bytes"),
+    (lambda: _master().alarm_ack(0, 0, 0), r"type 0 out of range \(1..127\)"),
+    (lambda: _master().c2_initiate(send_timeout=0), r"send_timeout 0 out of range \(1..65535\)"),
+    (lambda: _master().c2_abort(reason=99), r"reason 99 out of range \(0..15\)"),
+    (lambda: _master().c2_abort(instance=9), r"instance 9 out of range \(0..3\)"),
+    (lambda: dpc31.Cpu51Board(dpc31.Chip("spc3"), address=0xF800),
+     r"base 63488 out of range \(0..61440\)"),
+])
+def test_dpv1_and_board_values_the_scenario_refuses_are_value_errors_in_its_words(call, message):
+    with pytest.raises(ValueError, match="^" + message + "$"):
+        call()
+
+
+def test_a_board_has_four_ports():
+    board = dpc31.Cpu51Board(dpc31.Chip("spc3"))
+    for call in (lambda: board.port(9), lambda: board.pins(4),
+                 lambda: board.set_port_input(9, 7)):
+        with pytest.raises(IndexError, match=r"^no port \d \(0..3: P0..P3\)$"):
+            call()
+    assert board.pins(1) == 0xFF  # P1 untouched by the refused set_port_input
+
+
+@pytest.mark.parametrize("call, what", [
+    (lambda a: dpc31.wavediff(a + "\0x", a), "a"),
+    (lambda a: dpc31.wavediff(a, a + "\0x"), "b"),
+    (lambda a: dpc31.wavediff(a, a, map_file=a + "\0x"), "map_file"),
+    (lambda a: dpc31.wavediff(a, a, diff_vcd=a + ".d\0.vcd"), "diff_vcd"),
+    (lambda a: dpc31.Segment(vcd=a + "\0y.vcd"), "vcd"),
+    (lambda a: dpc31.Segment(fst=a + "\0y.fst"), "fst"),
+    (lambda a: dpc31.Segment(pcapng=a + "\0y"), "pcapng"),
+    (lambda a: dpc31.Segment().add_station(5, firmware="DO4\0"), "firmware"),
+    (lambda a: dpc31.Scenario.load(a + "\0x"), "path"),
+    (lambda a: dpc31.Scenario.parse("profile spc3\n", file=a + "\0.scn"), "file"),
+    (lambda a: dpc31.SegmentScenario.load(a + "\0x"), "path"),
+    (lambda a: dpc31.SegmentScenario.parse("segment\n", file=a + "\0.scn"), "file"),
+    (lambda a: dpc31.Chip("spc3").save_state_file(a + ".s\0"), "path"),
+    (lambda a: dpc31.Chip("spc3").load_state_file(a + "\0x"), "path"),
+    (lambda a: dpc31.Cpu51Board(dpc31.Chip("spc3")).load_hex(a + "\0x"), "path"),
+    (lambda a: _master().run_firmware("DO4\0.so"), "firmware"),
+])
+def test_a_path_with_a_nul_byte_is_a_value_error_as_open_raises(tmp_path, call, what):
+    a = tmp_path / "a.vcd"
+    a.write_text("$enddefinitions $end\n")
+    with pytest.raises(ValueError, match=f"^{what}: embedded null byte$"):
+        call(str(a))
+    assert [p.name for p in tmp_path.iterdir()] == ["a.vcd"]  # nothing written
+
+
+def test_wavediff_refuses_to_write_over_an_input(tmp_path):
+    a, b = tmp_path / "a.vcd", tmp_path / "b.vcd"
+    a.write_text("A\n")
+    b.write_text("B\n")
+    with pytest.raises(dpc31.InputError,
+                       match=r"^--diff-vcd .*a\.vcd: is A .*: an output must not replace an "
+                             r"input$"):
+        dpc31.wavediff(str(a), str(b), diff_vcd=str(a))
+    assert a.read_text() == "A\n"

@@ -85,3 +85,20 @@ def test_startup_from_python_has_the_cycles_of_dpc31_run(cli, tmp_path):
     result = dpc31.run_scenario(str(scn))
     assert result.ok and result.final_cycle == chip.cycle
     assert [(e.line, e.ok) for e in result.expects] == [(8, True)]
+
+
+def test_a_master_gone_before_its_chip_leaves_it_nothing_to_run():
+    # run_responder makes the master anew, and a Master collected while its Chip lives goes
+    # too: their observers on the chip's TxD go with them (~DpMaster), so the master made next,
+    # often in the freed memory, hears every character once (docs/python.md, "Masters").
+    chip = dpc31.Chip("spc3")
+    for _ in range(3):
+        master = dpc31.Master(chip, address=2, baud=1_500_000,
+                              slave=dpc31.SlaveConfig(address=5))
+        master.run_responder(inputs=b"\x11\x22\x33\x44")
+        assert master.startup()
+        history = master.history
+        ex = master.data_exchange(b"\x00" * 4)
+        assert ex.answer is not None and ex.answer.du == b"\x11\x22\x33\x44"
+        assert len(master.history) == len(history) + 1
+        del master, history

@@ -163,6 +163,9 @@ struct HeardRun {
   std::uint32_t bit_cycles = 0;
 };
 
+// An observer of the chip as one of its on_* calls registered it (Chip::remove_txd_chars).
+using ObserverId = std::uint64_t;
+
 struct ChipCore;
 struct ChipAccess;  // the emulator's harness interface (emu/harness.hpp), not part of the API
 
@@ -285,7 +288,11 @@ class Chip {
   // whole (TxdRun::bytes), the rest as edges. While only such observers (or none) watch TxD, the
   // chip keeps its answer as characters and makes no edges for it (docs/engine.md, "Characters
   // on TxD"); an on_txd or on_txd_edges observer makes it edges again.
-  void on_txd_chars(std::function<void(const TxdRun&)> cb);
+  // Returns the observer's id for remove_txd_chars (0 for an empty function).
+  ObserverId on_txd_chars(std::function<void(const TxdRun&)> cb);
+  // Removes that one on_txd_chars observer, the others stay: a receiver that goes before the
+  // chip (a master destroyed) takes its own away. An unknown id removes nothing.
+  void remove_txd_chars(ObserverId id);
   // Hands the TxD edges up to cycle() to the on_txd_edges and on_txd_chars observers.
   void take_txd();
   // While on, the chip's next falling TxD edge (a start bit) is an event after which the step

@@ -254,14 +254,6 @@ std::string json_report(const Report& r) {
 
 int run(const Options& o, std::string& out, std::string& err) {
   try {
-    const std::string same = outfile::distinct(
-        {{"A", o.file_a}, {"B", o.file_b}, {"--map", o.map_file}},
-        {{"--json", o.json_file},
-         {"--diff-vcd", o.diff_vcd},
-         {"--wavedrom", o.wavedrom},
-         {"--merge", o.merge},
-         {"--merge's save file", o.merge.empty() ? std::string() : save_file_name(o.merge)}});
-    if (!same.empty()) throw InputError(same);
     // Opened first, so that a bad path is found before the comparison; renamed into place only
     // with a complete report (on bad input there is none, docs/bad-input.md).
     outfile::OutFile json;

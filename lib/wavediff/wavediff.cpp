@@ -599,6 +599,16 @@ const char* edge_name(Edge e) {
 }
 
 Report compare(const Options& o) {
+  // No output may replace an input, from every door (the CLI, Python): checked before any file
+  // is read or opened.
+  const std::string same = outfile::distinct(
+      {{"A", o.file_a}, {"B", o.file_b}, {"--map", o.map_file}},
+      {{"--json", o.json_file},
+       {"--diff-vcd", o.diff_vcd},
+       {"--wavedrom", o.wavedrom},
+       {"--merge", o.merge},
+       {"--merge's save file", o.merge.empty() ? std::string() : save_file_name(o.merge)}});
+  if (!same.empty()) throw InputError(same);
   Report rep;
   Engine e(o);
   e.setup(rep);

@@ -116,7 +116,8 @@ struct Report {
   }
 };
 
-// Runs the comparison and writes --diff-vcd and --wavedrom files. Throws InputError.
+// Runs the comparison and writes --diff-vcd and --wavedrom files. Throws InputError (also where
+// an output, --json's too, names an input).
 Report compare(const Options& o);
 
 // Text and JSON forms of a report.
