@@ -10,7 +10,7 @@
 
 namespace dpc31 {
 
-Chip::Chip(ChipOptions opt) : core_(std::make_unique<ChipCore>(opt)) {}
+Chip::Chip(ChipOptions opt) : core_(std::make_unique<ChipCore>(opt)), now_(&core_->clock.now) {}
 Chip::~Chip() = default;
 Chip::Chip(Chip&&) noexcept = default;
 Chip& Chip::operator=(Chip&&) noexcept = default;
@@ -198,7 +198,6 @@ bool Chip::txd_pin() const { return core_->mac.txd_level(); }
 const FdlCounters& Chip::fdl_counters() const { return core_->counters; }
 std::uint8_t Chip::station_address() const { return core_->dp.station(); }
 std::uint32_t Chip::bit_cycles() const { return core_->mac.bit_time(); }
-std::uint64_t Chip::cycle() const { return core_->clock.now; }
 std::uint32_t Chip::clock_hz() const { return core_->clock.hz; }
 std::uint32_t Chip::bus_access_cycles() const { return core_->prof().bus_access_cycles; }
 

@@ -386,6 +386,7 @@ void Chip::load_state(std::span<const std::uint8_t> bytes) {
   // them, not to the state.
   fresh->signals.take_attachments(c.signals);
   core_ = std::move(fresh);
+  now_ = &core_->clock.now;
   moved();
 }
 
