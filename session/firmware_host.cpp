@@ -110,6 +110,12 @@ Cpu::Program FirmwareHost::program(const Cpu::Isr& after) {
 }
 
 std::string FirmwareHost::hw_input(const std::string& name, std::uint32_t value) {
+  // A hardware input is the module's own pin, not a chip access: no bus is selected, and a HAL
+  // call from it is the firmware's fault (FirmwareError), as from init or the ISR.
+  struct ErrorsOnly {
+    hal::Selection prev;
+    ~ErrorsOnly() { hal::exchange_selection(prev); }
+  } const selected{hal::exchange_selection({nullptr, nullptr, nullptr, &errors_})};
   int r = -1;
   if (builtin_ != nullptr) {
     if (builtin_->hw_input != nullptr) r = builtin_->hw_input(self_.get(), name.c_str(), value);

@@ -128,7 +128,7 @@ bool parse_action(std::string_view cmd, std::span<const std::string_view> pos,
         st.count |= number(v, k, 0, 31) << 3;
         seq = true;
       } else if (k == "spec") {
-        spec = static_cast<std::uint32_t>(number(v, kAbortInstance));
+        spec = static_cast<std::uint32_t>(number(v, kAlarmSpec));
       } else if (k == "add_ack") {
         if (scenario_lex::flag(v, k)) st.count |= 0x04;
       } else {

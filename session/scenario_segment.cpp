@@ -95,7 +95,11 @@ class Parser {
     }
     for (SegmentMaster& m : s_.masters) {
       if (m.slaves.empty()) {
-        for (const SegmentStation& st : s_.stations) m.slaves.push_back(st.slave.address);
+        // Every address once: two stations on one address are polled as one (they collide).
+        for (const SegmentStation& st : s_.stations) {
+          if (std::find(m.slaves.begin(), m.slaves.end(), st.slave.address) == m.slaves.end())
+            m.slaves.push_back(st.slave.address);
+        }
       }
       if (!ttr_given_ && m.ttr_bits != 0) s_.ttr_bits = m.ttr_bits;
     }

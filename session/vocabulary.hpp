@@ -65,6 +65,7 @@ inline constexpr ValueRange kRecordSlot{"slot", 0, 254};
 inline constexpr ValueRange kRecordIndex{"index", 0, 255};
 inline constexpr ValueRange kRecordLength{"length", 1, 240};  // a record's data, at most 240
 inline constexpr ValueRange kAlarmType{"type", 1, 127};
+inline constexpr ValueRange kAlarmSpec{"spec", 0, 3};  // the Specifier's bits 1..0
 inline constexpr ValueRange kSendTimeout{"send_timeout", 1, 65535};
 inline constexpr ValueRange kAbortReason{"reason", 0, 15};
 inline constexpr ValueRange kAbortInstance{"instance", 0, 3};  // 0 FDL, 1 MSAC_C2, 2 user

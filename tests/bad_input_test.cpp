@@ -389,6 +389,30 @@ TEST_F(BadInput, CosimReplayTakesTheTraceHeader) {
   // The audit's case: a mutant's shrunk failure replays as a failure without its options.
   ASSERT_EQ(dpc31("cosim --profile vpc3plus --mutant SAP_NO_RR --seeds 20 --out vp --quiet").rc, 1);
   EXPECT_EQ(dpc31("cosim --replay vp/cosim-vpc3plus-seed1.trace --out vp --quiet").rc, 1);
+  // The bus and the variant are recorded too (the review's case): a motorola VPC3+C failure
+  // replays on that model, a --variant beside a vpc3plus header is taken, a contradiction refused.
+  ASSERT_EQ(
+      dpc31("cosim --profile vpc3plus --variant c --bus motorola --mutant SAP_NO_RR --seeds 20 "
+            "--out vc --quiet")
+          .rc,
+      1);
+  const std::string shrunk = slurp(path("vc/cosim-vpc3plus-seed1.trace"));
+  EXPECT_NE(shrunk.find("# profile vpc3plus\n# bus motorola\n# variant c\n"), std::string::npos)
+      << shrunk.substr(0, 200);
+  const Outcome v = dpc31("cosim --replay vc/cosim-vpc3plus-seed1.trace --out vc");
+  EXPECT_EQ(v.rc, 1) << v.err;
+  EXPECT_NE(v.out.find("\"bus\": \"motorola\""), std::string::npos) << v.out;
+  EXPECT_NE(v.out.find("\"variant\": 12"), std::string::npos) << v.out;  // Vpc3Variant::c, 0xC
+  EXPECT_EQ(dpc31("cosim --replay vc/cosim-vpc3plus-seed1.trace --variant c --out vc --quiet").rc,
+            1);
+  file("vp.stim", "# profile vpc3plus\n# mutant -\n" + body);
+  EXPECT_EQ(dpc31("cosim --replay vp.stim --variant c --quiet").rc, 0);
+  expect_bad(dpc31("cosim --replay vc/cosim-vpc3plus-seed1.trace --variant b --junit old.xml"),
+             "vc/cosim-vpc3plus-seed1.trace:4: recorded with variant c, not --variant b",
+             "other variant");
+  expect_bad(dpc31("cosim --replay vc/cosim-vpc3plus-seed1.trace --bus intel --junit old.xml"),
+             "vc/cosim-vpc3plus-seed1.trace:3: recorded on bus motorola, not --bus intel",
+             "other bus");
 }
 
 TEST_F(BadInput, CosimOptionsAndOutputs) {

@@ -10,7 +10,8 @@
  * (tests/code_security_test.cpp); and two that load and then misuse the HAL, a firmware fault
  * (tests/bad_input_test.cpp, FirmwareFaults):
  *   HAL_INIT     its init calls CopyToVpc3 with a NULL buffer
- *   HAL_ISR      its init raises an interrupt; its ISR calls CopyFromVpc3 with a NULL buffer */
+ *   HAL_ISR      its init raises an interrupt; its ISR calls CopyFromVpc3 with a NULL buffer;
+ *                its hardware input "kick" reads the chip, which no host selects for it */
 #include "dpc31/dpc31_firmware.h"
 #include "dpc31/dpc31_hal.h"
 
@@ -54,9 +55,19 @@ static void init(const dpc31_board* board) {
 
 #ifdef HAL_ISR
 static void isr(void) { CopyFromVpc3(0, (uint8_t*)0x40, 2); }
+static int kick(const char* name, uint32_t value) {
+  (void)name;
+  (void)value;
+  return Vpc3Read(0);
+}
+static const char* const kInputs[] = {"kick", 0};
 #define ISR isr
+#define HW_INPUT kick
+#define HW_INPUTS kInputs
 #else
 #define ISR 0
+#define HW_INPUT 0
+#define HW_INPUTS 0
 #endif
 
 static void step(void) { (void)Vpc3Read(0); }
@@ -74,8 +85,8 @@ static const uint8_t kCfg[] = {0x10};
 #define INIT init
 #endif
 
-static const dpc31_firmware kBad = {ABI, "BAD",  0,    0,           INIT, ISR, step, 0,
-                                    0,   0x0001, kCfg, sizeof kCfg, 1,    0,   0,    0};
+static const dpc31_firmware kBad = {ABI,       "BAD",  0,    0,           INIT, ISR, step, HW_INPUT,
+                                    HW_INPUTS, 0x0001, kCfg, sizeof kCfg, 1,    0,   0,    0};
 
 #ifdef NO_EXPORT
 /* A firmware without its export: the descriptor is referenced so that it is not unused. */

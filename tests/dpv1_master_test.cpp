@@ -179,6 +179,9 @@ TEST(Dpv1Scenario, ParseErrorsNameTheLine) {
        "t.scn:3: record slot=0 index=1 given twice"},
       {"profile vpc3plus\nalarm_ack slot=0 type=1\n",
        "t.scn:2: alarm_ack needs slot=N type=N seq=N"},
+      // The Specifier's bits 1..0 (docs/dpv1.md: Seq_Nr << 3 | Add_Ack << 2 | bits 1..0).
+      {"profile vpc3plus\nalarm_ack slot=0 type=1 seq=0 spec=5\n",
+       "t.scn:2: spec 5 out of range (0..3)"},
   };
   for (const auto& [text, want] : cases) {
     Scenario s;

@@ -665,6 +665,26 @@ TEST(SegmentScenario, ExpectVisitChecksTheMastersLastVisit) {
             "cycles, hold 18624 cycles, gap none");
 }
 
+// Two stations on one address and no `master` line: the default master polls every address once
+// (one FCB state per slave). Both answer each of the start-up's five requests (docs/segment.md:
+// FDL_Status, Slave_Diag, Set_Prm, Chk_Cfg, Slave_Diag) at the same MinTSDR: five collisions, the
+// first driver keeping the line, so the master hears one answer and the start-up completes.
+TEST(SegmentScenario, TwoStationsOnOneAddressArePolledOnceAndCollide) {
+  SegmentScenario s;
+  ScenarioError err;
+  ASSERT_TRUE(
+      parse_segment_scenario("segment\nstation 5\nstation 5 name=twin profile=vpc3plus\nstartup\n"
+                             "expect collisions 5\nexpect state 5 Data_Exchange\n",
+                             "c.scn", s, err))
+      << err.text();
+  ASSERT_EQ(s.masters.size(), 1U);
+  EXPECT_EQ(s.masters[0].slaves, (std::vector<std::uint8_t>{5}));
+  std::vector<std::string> errors;
+  EXPECT_EQ(run_segment_scenario(s, {}, [&errors](const std::string& e) { errors.push_back(e); }),
+            0);
+  EXPECT_TRUE(errors.empty()) << errors.front();
+}
+
 // A long `cycle N` keeps the run's memory flat (docs/decisions.md): the masters' histories are
 // not kept, nor the responders' output fetches. What the heap grew by over the `cycle` step
 // (from its start to its end) with 2 000 DP cycles of two slaves is within 16 KiB of that with

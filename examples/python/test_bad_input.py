@@ -174,6 +174,18 @@ def test_a_firmware_that_misuses_the_hal_is_a_firmware_error(plugin, message):
         master.idle(1000)
 
 
+def test_a_hardware_input_that_reads_the_chip_is_a_firmware_error():
+    """A hardware input is the module's pin: no chip is selected for it, so a HAL access from it
+    is the firmware's fault (FirmwareError), not the process's abort."""
+    master = dpc31.Master(dpc31.Chip("vpc3plus"), address=2, baud=1_500_000,
+                          slave=dpc31.SlaveConfig(address=5))
+    fw = master.run_firmware(os.environ["DPC31_BAD_PLUGIN_HAL_ISR"])
+    with pytest.raises(dpc31.FirmwareError,
+                       match=r"^firmware BAD: Vpc3Read called with no chip selected "
+                             r"\(dpc31_select\)$"):
+        fw.hw_input("kick", 1)
+
+
 def _master():
     return dpc31.Master(dpc31.Chip("vpc3plus"), address=2, baud=1_500_000,
                         slave=dpc31.SlaveConfig(address=5))

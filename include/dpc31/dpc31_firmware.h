@@ -56,7 +56,8 @@ typedef struct dpc31_firmware {
    * isr and main_step is required. */
   void (*main_step)(void);
   /* Hardware inputs of the module (counter pulses, events): 0 done, -1 unknown name, -2 value
-   * out of range. NULL: the module has none. */
+   * out of range. NULL: the module has none. It runs with no chip selected: it notes the input
+   * for the ISR or main loop (a chip access from it is a firmware fault). */
   int (*hw_input)(const char* name, uint32_t value);
   const char* const* hw_inputs; /* their names, NULL-terminated (NULL: none) */
   /* The GSD defaults a master is configured with: Ident_Number, the module's Cfg bytes

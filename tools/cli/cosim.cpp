@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "chip_choice.hpp"
 #include "lockstep.hpp"
 #include "outfile.hpp"
 #include "rtl_library.hpp"
@@ -23,9 +24,10 @@ namespace dpc31::cli {
 
 namespace {
 
-// The run a shrunk trace's header names (`# profile NAME`, `# mutant NAME` or `-`, written
-// below): taken into `o`, unless --profile or --mutant given says otherwise (refused: the trace
-// would replay clean on another model; docs/golden-model.md). A trace without them keeps `o`.
+// The run a shrunk trace's header names (`# profile NAME`, `# bus NAME`, `# variant NAME` or `-`,
+// `# mutant NAME` or `-`, written below): taken into `o`, unless --profile, --bus, --variant or
+// --mutant given says otherwise (refused: the trace would replay clean on another model;
+// docs/golden-model.md). A trace without them keeps `o`.
 bool take_trace_header(const std::string& path, const std::string& text, CosimOptions& o,
                        std::string& error) {
   std::istringstream is(text);
@@ -50,6 +52,27 @@ bool take_trace_header(const std::string& path, const std::string& text, CosimOp
       }
       o.profile = p;
       o.profile_name = value;
+    } else if (key == "bus") {
+      if (value != "intel" && value != "motorola") {
+        error =
+            fmt::format("{}:{}: '{}' is not a bus mode (intel, motorola)", path, n, shown(value));
+        return false;
+      }
+      const BusMode b = value == "intel" ? BusMode::intel : BusMode::motorola;
+      if (o.bus_given && b != o.bus) {
+        error = fmt::format("{}:{}: recorded on bus {}, not --bus {}", path, n, value,
+                            o.bus == BusMode::intel ? "intel" : "motorola");
+        return false;
+      }
+      o.bus = b;
+    } else if (key == "variant") {
+      const std::string variant = value == "-" ? "" : value;
+      if (!o.variant_name.empty() && variant != o.variant_name) {
+        error = fmt::format("{}:{}: recorded with variant {}, not --variant {}", path, n, value,
+                            o.variant_name);
+        return false;
+      }
+      o.variant_name = variant;
     } else if (key == "mutant") {
       const std::string mutant = value == "-" ? "" : value;
       if (o.mutant_given && mutant != o.mutant) {
@@ -334,6 +357,12 @@ int run_cosim(const CosimOptions& given) {
       fmt::print(stderr, "{}\n", error);
       return 2;
     }
+    ChipOptions chip{o.profile};
+    if (const std::string why = apply_variant(o.variant_name, chip); !why.empty()) {
+      fmt::print(stderr, "dpc31 cosim: {}\n", why);
+      return 2;
+    }
+    o.variant = chip.variant;
     runs.emplace_back(0, std::move(s));
   }
   DutOptions dut{o.profile, o.bus, o.variant};
@@ -384,9 +413,11 @@ int run_cosim(const CosimOptions& given) {
       Stimulus before = s;
       before.resize(static_cast<std::uint64_t>(r.divergence) + 1);
       const std::string header = fmt::format(
-          "profile {}\nseed {}\nmutant {}\nshrunk from {} to {} stimulus events ({} cycles)",
-          o.profile_name, seed, o.mutant.empty() ? "-" : o.mutant, events(before), events(small),
-          small.size());
+          "profile {}\nbus {}\nvariant {}\nseed {}\nmutant {}\nshrunk from {} to {} stimulus "
+          "events ({} cycles)",
+          o.profile_name, o.bus == BusMode::intel ? "intel" : "motorola",
+          o.variant_name.empty() ? "-" : o.variant_name, seed, o.mutant.empty() ? "-" : o.mutant,
+          events(before), events(small), small.size());
       if (outfile::write_file(trace, write_trace(small, header), error)) {
         entry["trace"] = trace;
         if (!o.quiet)

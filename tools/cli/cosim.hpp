@@ -14,9 +14,11 @@ struct CosimOptions {
   Profile profile = Profile::dpc31;
   std::string profile_name = "dpc31";
   bool profile_given = false;  // --profile and --mutant on the command line: a replayed trace's
-  bool mutant_given = false;   // header must not contradict them
+  bool mutant_given = false;   // header must not contradict them, nor --bus and --variant
+  bool bus_given = false;
   BusMode bus = BusMode::intel;
-  std::optional<Vpc3Variant> variant = std::nullopt;  // --variant (vpc3plus)
+  std::string variant_name;  // --variant as given ("" none): applied once the profile is known
+  std::optional<Vpc3Variant> variant = std::nullopt;  // ... as the chip takes it (vpc3plus)
   std::uint64_t seeds = 10;
   std::uint64_t seed_base = 1;
   std::uint64_t cycles = 20'000;

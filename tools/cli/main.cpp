@@ -275,12 +275,16 @@ int main(int argc, char** argv) {
       dpc31::parse_profile(cos.profile_name, cos.profile);
       cos.profile_given = cosim->count("--profile") > 0;
       cos.mutant_given = cosim->count("--mutant") > 0;
+      cos.bus_given = cosim->count("--bus") > 0;
       cos.bus = cos_bus == "intel" ? dpc31::BusMode::intel : dpc31::BusMode::motorola;
-      dpc31::ChipOptions chip{cos.profile};
-      if (std::string why = dpc31::cli::apply_variant(cos_variant, chip); !why.empty()) {
-        return refuse(why);
+      cos.variant_name = cos_variant;
+      if (cos.replay.empty()) {  // a replay's profile may come from its trace's header
+        dpc31::ChipOptions chip{cos.profile};
+        if (std::string why = dpc31::cli::apply_variant(cos_variant, chip); !why.empty()) {
+          return refuse(why);
+        }
+        cos.variant = chip.variant;
       }
-      cos.variant = chip.variant;
       unsigned k = 0;
       unsigned n = 0;
       char slash = 0;
