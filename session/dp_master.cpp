@@ -61,11 +61,27 @@ void AnswerCollector::push_block(std::span<const std::uint8_t> bytes, std::uint6
   bad_ = frame_.status() == fdl::Assembler::Status::error;
 }
 
+bool AnswerCollector::decodes(fdl::Decoded& d) const {
+  if (bad_ || frame_.status() != fdl::Assembler::Status::complete) return false;
+  fdl::decode(frame_.bytes(), d);
+  return d.error == fdl::Error::none;
+}
+
 std::optional<fdl::Frame> AnswerCollector::frame() const {
-  if (bad_ || frame_.status() != fdl::Assembler::Status::complete) return std::nullopt;
-  fdl::Decoded d = fdl::decode(frame_.bytes());
-  if (d.error != fdl::Error::none) return std::nullopt;
+  fdl::Decoded d;
+  if (!decodes(d)) return std::nullopt;
   return std::move(d.frame);
+}
+
+void AnswerCollector::frame(std::optional<fdl::Frame>& out) {
+  if (!decodes(decoded_)) {
+    out.reset();
+  } else if (out) {
+    // The frame of the last call goes back to decoded_: its DU's buffer serves the next decode.
+    std::swap(*out, decoded_.frame);
+  } else {
+    out = std::move(decoded_.frame);
+  }
 }
 
 DpMaster::DpMaster(Chip& chip, MasterConfig m, SlaveConfig s)
@@ -161,16 +177,28 @@ void DpMaster::check_outputs(const std::vector<std::vector<std::uint8_t>>& outpu
 }
 
 std::vector<Exchange> DpMaster::dp_cycle(const std::vector<std::vector<std::uint8_t>>& outputs) {
-  check_outputs(outputs);
   std::vector<Exchange> out;
-  out.reserve(slaves_.size());
+  dp_cycle(outputs, out);
+  return out;
+}
+
+void DpMaster::dp_cycle(const std::vector<std::vector<std::uint8_t>>& outputs,
+                        std::vector<Exchange>& out) {
+  check_outputs(outputs);
+  out.resize(slaves_.size());
   for (std::size_t i = 0; i < slaves_.size(); ++i) {
     select(i);
-    out.push_back(
-        data_exchange(i < outputs.size() ? outputs[i] : std::vector<std::uint8_t>(slave_.out_len)));
+    data_exchange(outputs_of(outputs, i), {}, out[i]);
   }
   select(0);
-  return out;
+}
+
+std::span<const std::uint8_t> DpMaster::outputs_of(
+    const std::vector<std::vector<std::uint8_t>>& outputs, std::size_t i) const {
+  // A span, not `i < size ? outputs[i] : std::vector(out_len)`: that would copy outputs[i].
+  static constexpr std::array<std::uint8_t, 256> kZeros{};
+  if (i < outputs.size()) return outputs[i];
+  return std::span(kZeros).first(slave_.out_len);
 }
 
 void DpMaster::begin_startup(int tries) {
@@ -239,7 +267,8 @@ TokenVisit DpMaster::use_token(std::uint8_t next,
     for (std::size_t n = 0; n < slaves_.size() && (v.polled.empty() || time_left()); ++n) {
       const std::size_t i = next_slave_;
       select(i);
-      data_exchange(i < outputs.size() ? outputs[i] : std::vector<std::uint8_t>(slave_.out_len));
+      Exchange ex;
+      data_exchange(outputs_of(outputs, i), {}, ex);
       v.polled.push_back(i);
       next_slave_ = (next_slave_ + 1) % slaves_.size();
     }
@@ -362,10 +391,17 @@ void DpMaster::glitch(std::uint32_t low_cycles) {
 
 fdl::Frame DpMaster::request(std::optional<std::uint8_t> dsap, std::vector<std::uint8_t> du,
                              bool srd) {
+  fdl::Frame f;
+  f.du = std::move(du);
+  make_request(f, dsap, srd);
+  return f;
+}
+
+void DpMaster::make_request(fdl::Frame& f, std::optional<std::uint8_t> dsap, bool srd) {
   // Before the FCB toggles: a request refused leaves the master as it was.
-  if (du.size() > fdl::kMaxDpData) {
+  if (f.du.size() > fdl::kMaxDpData) {
     throw std::invalid_argument(
-        fmt::format("a request with {} data bytes: a DP telegram carries at most {}", du.size(),
+        fmt::format("a request with {} data bytes: a DP telegram carries at most {}", f.du.size(),
                     fdl::kMaxDpData));
   }
   std::uint8_t fc = fdl::make_request_fc(fdl::Function::SDN_high, false, false);
@@ -375,7 +411,8 @@ fdl::Frame DpMaster::request(std::optional<std::uint8_t> dsap, std::vector<std::
   }
   const std::optional<std::uint8_t> ssap =
       dsap ? std::optional<std::uint8_t>(sap::Master) : std::nullopt;
-  return fdl::make_frame(target_, cfg_.address, fc, std::move(du), dsap, ssap);
+  // The data unit's buffer moves through make_frame and back: its capacity stays f's.
+  f = fdl::make_frame(target_, cfg_.address, fc, std::move(f.du), dsap, ssap);
 }
 
 namespace {
@@ -389,24 +426,32 @@ bool sdn(const fdl::Frame& f) {
 }  // namespace
 
 Exchange DpMaster::transact(fdl::Frame req, UartFault fault) {
+  Exchange ex;
+  ex.request = std::move(req);
+  transact(fault, ex);
+  return ex;
+}
+
+void DpMaster::transact(UartFault fault, Exchange& ex) {
+  const fdl::Frame& req = ex.request;
   // decode(encode(req)) == req whenever encode gives bytes: the request needs no decoding.
   if (!fdl::encode(req, tx_)) {
     throw std::invalid_argument(
         fmt::format("a frame fdl::encode cannot send: SD {:02X}h, DA {}, {} data bytes", req.sd,
                     req.da, req.du.size()));
   }
-  return send(tx_, fault, sdn(req), std::move(req));
+  send(tx_, fault, sdn(req), ex);
 }
 
 Exchange DpMaster::transact_raw(const std::vector<std::uint8_t>& bytes, UartFault fault) {
   const fdl::Decoded d = fdl::decode(bytes);
-  return send(bytes, fault, d.error == fdl::Error::none && sdn(d.frame));
+  Exchange ex;
+  send(bytes, fault, d.error == fdl::Error::none && sdn(d.frame), ex);
+  return ex;
 }
 
-Exchange DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bool no_answer,
-                        fdl::Frame request) {
-  Exchange ex;
-  ex.request = std::move(request);
+void DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bool no_answer,
+                    Exchange& ex) {
   // What the line carried before (another master's traffic, for instance) is no answer to us.
   ex.request_start = std::max(look(), bus_free_ + std::uint64_t{cfg_.idle_bits} * t_);
   if (on_send) on_send(ex.request_start, bytes, fault);
@@ -417,6 +462,10 @@ Exchange DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bo
   ++counters_.requests;
   if (no_answer) {
     bus_free_ = ex.request_end;  // send-data-no-acknowledge: nothing to wait for
+    // ex may hold an earlier exchange (dp_cycle's filling form): none of its answer stays.
+    ex.answer.reset();
+    ex.answer_start = 0;
+    ex.answer_end = 0;
   } else {
     wait_answer(ex);
     if (ex.answer) {
@@ -434,7 +483,6 @@ Exchange DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bo
     history_.push_back(std::move(spare_.back()));
     spare_.pop_back();
   }
-  return ex;
 }
 
 void DpMaster::wait_answer(Exchange& ex) {
@@ -496,10 +544,11 @@ void DpMaster::wait_answer(Exchange& ex) {
     run_until(std::max(next, at + 1));
   }
   wake_on_txd_ = false;
-  if (!answer_.started()) return;  // no answer within the slot time
+  // No answer within the slot time: 0, 0 and none. An earlier answer in ex (dp_cycle's filling
+  // form) lends its data unit's buffer to this one.
   ex.answer_start = answer_.start();
   ex.answer_end = answer_.end();
-  ex.answer = answer_.frame();
+  answer_.frame(ex.answer);
 }
 
 // A telegram a segment relayed whole is known to its end at its first start bit: its length from
@@ -573,7 +622,15 @@ Exchange DpMaster::set_prm_status(std::uint8_t status) {
 Exchange DpMaster::chk_cfg() { return transact(request(sap::Chk_Cfg, slave_.cfg)); }
 Exchange DpMaster::get_cfg() { return transact(request(sap::Get_Cfg, {})); }
 Exchange DpMaster::data_exchange(const std::vector<std::uint8_t>& outputs, UartFault fault) {
-  return transact(request(std::nullopt, outputs), fault);
+  Exchange ex;
+  data_exchange(outputs, fault, ex);
+  return ex;
+}
+
+void DpMaster::data_exchange(std::span<const std::uint8_t> outputs, UartFault fault, Exchange& ex) {
+  ex.request.du.assign(outputs.begin(), outputs.end());
+  make_request(ex.request, std::nullopt);
+  transact(fault, ex);
 }
 Exchange DpMaster::read_inputs() { return transact(request(sap::Rd_Inp, {})); }
 Exchange DpMaster::read_outputs() { return transact(request(sap::Rd_Outp, {})); }

@@ -117,11 +117,18 @@ class AnswerCollector {
   [[nodiscard]] std::uint64_t end() const { return end_; }  // end of the last stop bit
   // The answer, if it is complete and decodes without error.
   [[nodiscard]] std::optional<fdl::Frame> frame() const;
+  // The same into `out`, whose data unit's buffer (and the last call's) is reused: a master that
+  // decodes every answer allocates none once grown.
+  void frame(std::optional<fdl::Frame>& out);
   // Every character's data as received (also of a broken answer), at most kMaxFrameLength + 1.
   [[nodiscard]] const std::vector<std::uint8_t>& bytes() const { return bytes_; }
 
  private:
+  // Complete and decodes without error, into `d`.
+  bool decodes(fdl::Decoded& d) const;
+
   fdl::Assembler frame_;
+  fdl::Decoded decoded_;  // frame(out)'s decode, holding the buffer of the frame it replaced
   std::vector<std::uint8_t> bytes_;
   bool started_ = false;
   bool bad_ = false;
@@ -180,6 +187,10 @@ class DpMaster {
   // One DP cycle: Data_Exchange with every slave in order, `outputs[i]` to slave i (its out_len
   // bytes of zeros where none are given); more outputs than slaves: std::invalid_argument.
   std::vector<Exchange> dp_cycle(const std::vector<std::vector<std::uint8_t>>& outputs = {});
+  // The same into `out` (one Exchange per slave), whose exchanges' buffers are reused: a long
+  // run (the bench) that keeps one vector allocates nothing for its exchanges once grown. On an
+  // exception `out` holds the exchanges up to it.
+  void dp_cycle(const std::vector<std::vector<std::uint8_t>>& outputs, std::vector<Exchange>& out);
   // Passes the token (SD4) to `next` (its own address: keeps it); nothing is waited for.
   Exchange pass_token(std::uint8_t next);
   // Listens until an SD4 to this master arrives (true: the token is ours, token_rotation() is the
@@ -299,11 +310,19 @@ class DpMaster {
  private:
   fdl::Frame request(std::optional<std::uint8_t> dsap, std::vector<std::uint8_t> du,
                      bool srd = true);
+  // Makes `f`, its data unit given, the selected slave's request (its buffers kept).
+  void make_request(fdl::Frame& f, std::optional<std::uint8_t> dsap, bool srd = true);
+  // Slave i's outputs of a DP cycle (dp_cycle, use_token): outputs[i], or the selected slave's
+  // out_len zeros where none are given.
+  [[nodiscard]] std::span<const std::uint8_t> outputs_of(
+      const std::vector<std::vector<std::uint8_t>>& outputs, std::size_t i) const;
+  // data_exchange and transact into `ex` (its buffers reused): dp_cycle's filling form.
+  void data_exchange(std::span<const std::uint8_t> outputs, UartFault fault, Exchange& ex);
+  void transact(UartFault fault, Exchange& ex);  // ex.request sent
   void run_until(std::uint64_t cycle);
-  // transact / transact_raw: `bytes` on the line, then the answer awaited unless `no_answer`;
-  // `request` is the exchange's (and the history's) request.
-  Exchange send(std::span<const std::uint8_t> bytes, UartFault fault, bool no_answer,
-                fdl::Frame request = {});
+  // transact / transact_raw: `bytes` on the line, then the answer awaited unless `no_answer`,
+  // into `ex`, whose request is the exchange's (and the history's) request.
+  void send(std::span<const std::uint8_t> bytes, UartFault fault, bool no_answer, Exchange& ex);
   void wait_answer(Exchange& ex);  // its answer, if any, into `ex`
   [[nodiscard]] std::size_t length_known(std::uint64_t first) const;
   // The characters on TxD whose stop sample is due by now: chars_, then rx_.due().

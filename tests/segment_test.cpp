@@ -315,6 +315,43 @@ TEST(Segment, ThreeSlavesReachDataExchangeEachAnswerAtItsTsdr) {
   }
 }
 
+// dp_cycle(outputs, out) reuses out's exchanges (their data units, the answers' frames): what it
+// leaves there is what dp_cycle(outputs) returns, also where an answer follows none, none follows
+// one, or other inputs follow.
+TEST(Segment, ADpCycleIntoAKeptVectorIsTheReturnedOne) {
+  Line returned;
+  Line kept;
+  ASSERT_TRUE(returned.master->startup_all());
+  ASSERT_TRUE(kept.master->startup_all());
+  std::vector<Exchange> out;
+  for (int n = 0; n < 5; ++n) {
+    // Cycle 1 sends slave 6's requests to address 9 (no answer), cycle 2 back to 6; slave 7's
+    // user hands over other inputs from cycle 2 on (the answers carry them a cycle later).
+    for (Line* l : {&returned, &kept}) {
+      l->master->select(1);
+      l->master->set_target(n == 1 ? 9 : 6);
+      l->master->select(0);
+      if (n == 2) l->users[2]->inputs = {0x77, 7, 7, 7};
+    }
+    const auto b = static_cast<std::uint8_t>(n);
+    const std::vector<std::vector<std::uint8_t>> outputs = {{b, 0, 0, 0}, {0, b, 0, 0}};
+    const std::vector<Exchange> want = returned.master->dp_cycle(outputs);
+    kept.master->dp_cycle(outputs, out);
+    ASSERT_EQ(out.size(), want.size());
+    EXPECT_EQ(want[1].answer.has_value(), n != 1);
+    ASSERT_TRUE(want[2].answer);
+    EXPECT_EQ(want[2].answer->du.at(0), n < 3 ? 0x30 : 0x77) << n;
+    for (std::size_t i = 0; i < want.size(); ++i) {
+      EXPECT_EQ(out[i].request, want[i].request) << n << " " << i;
+      EXPECT_EQ(out[i].request_start, want[i].request_start) << n << " " << i;
+      EXPECT_EQ(out[i].request_end, want[i].request_end) << n << " " << i;
+      EXPECT_EQ(out[i].answer, want[i].answer) << n << " " << i;
+      EXPECT_EQ(out[i].answer_start, want[i].answer_start) << n << " " << i;
+      EXPECT_EQ(out[i].answer_end, want[i].answer_end) << n << " " << i;
+    }
+  }
+}
+
 TEST(Segment, AnUnpolledSlavesWatchdogExpiresAtItsCycleTheOthersStay) {
   Line line;
   ASSERT_TRUE(line.master->startup_all());
