@@ -85,6 +85,15 @@ std::string code_name(const Cpu51Image& image, std::uint16_t pc) {
   return pc == it->first ? it->second : fmt::format("{}+0x{:x}", it->second, pc - it->first);
 }
 
+std::string symbols_text(const Cpu51Image& image) {
+  if (image.map_file.empty()) return "";
+  if (image.symbols.empty()) {
+    return fmt::format(", no code symbols in {} (no SDCC 'C:' line): code addresses unnamed",
+                       image.map_file);
+  }
+  return fmt::format(", symbols from {}", image.map_file);
+}
+
 namespace {
 
 // "4096" or "0x1000" within lo..hi.

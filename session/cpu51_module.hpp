@@ -35,6 +35,11 @@ bool load_cpu51_image(const Cpu51Config& cfg, Cpu51Image& image, std::string& er
 // "dps_isr+0x1c" for a code address (hex alone without a symbol below it).
 std::string code_name(const Cpu51Image& image, std::uint16_t pc);
 
+// Where the names come from, for a run's first line: "" without a map, ", symbols from F.map",
+// or ", no code symbols in F.map ..." for a map that gives none (not SDCC's, or cut short): the
+// run goes on with addresses, and says why.
+std::string symbols_text(const Cpu51Image& image);
+
 // The CPU of the command lines (`dpc31 bridge`, `dpc31 serve`; docs/cpu.md, "Bring your own
 // binary"): --cpu 80c32[:HZ] or c31[:HZ], --firmware FILE.ihx, --code A (the C31's code area),
 // --board-address A (the chip's window in the 80C32's XDATA); the addresses decimal or 0x hex.

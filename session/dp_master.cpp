@@ -359,7 +359,7 @@ void DpMaster::run_until(std::uint64_t cycle) {
   chip_->clear_stop();
 }
 
-void DpMaster::idle(std::uint64_t cycles) { run_until(now() + cycles); }
+void DpMaster::idle(std::uint64_t cycles) { run_until(Chip::cycle_after(now(), cycles)); }
 
 Exchange DpMaster::retry(Exchange ex, std::uint32_t retries) {
   for (std::uint32_t i = 0; i < retries && !ex.answer && wants_answer(ex.request); ++i) {

@@ -580,7 +580,7 @@ class Runner {
       note(cycle, fmt::format("80C32 at {}: {} = {} at {}", code_name(image_, at),
                               m51_->port_name(port), port_text(value), time_text(cycle)));
     };
-    const std::string symbols = image_.map_file.empty() ? "" : ", symbols from " + image_.map_file;
+    const std::string symbols = symbols_text(image_);
     if (s_.cpu->c31) {
       note(0, fmt::format("C31 at {} Hz: {} ({} bytes{}), its code area from {:04X}h", s_.cpu->hz,
                           s_.cpu->hex, image_.size, symbols, s_.cpu->code));

@@ -359,6 +359,7 @@ TEST_F(BadInput, CosimReplayTakesTheTraceHeader) {
   const std::string body = "83 ev_irq(0080) ev_dout\n102 rd 000b\nend 103\n";
   file("spc3.stim", "# dpc31 cosim stimulus trace\n# profile spc3\n# mutant -\n" + body);
   file("z80.stim", "# profile z80\n" + body);
+  file("seed.stim", "# profile spc3\n# seed x1\n" + body);
   const Outcome r = dpc31("cosim --replay spc3.stim --quiet");
   EXPECT_EQ(r.rc, 0) << r.err;
   for (const char* key : {"\"profile\": \"spc3\"", "\"replay\": \"spc3.stim\"",
@@ -375,6 +376,8 @@ TEST_F(BadInput, CosimReplayTakesTheTraceHeader) {
              "spc3.stim:3: recorded with mutant -, not --mutant SAP_NO_RR", "other mutant");
   expect_bad(dpc31("cosim --replay z80.stim --junit old.xml"),
              "z80.stim:1: 'z80' is not a chip profile", "no profile");
+  expect_bad(dpc31("cosim --replay seed.stim --junit old.xml"), "seed.stim:2: 'x1' is not a seed",
+             "no seed");
   for (const char* opt : {"--seeds 3", "--seed-base 2", "--cycles 10", "--shard 1/2",
                           "--shard-base 0", "--keep-going"}) {
     const std::string name = std::string(opt).substr(0, std::string(opt).find(' '));
@@ -389,6 +392,17 @@ TEST_F(BadInput, CosimReplayTakesTheTraceHeader) {
   // The audit's case: a mutant's shrunk failure replays as a failure without its options.
   ASSERT_EQ(dpc31("cosim --profile vpc3plus --mutant SAP_NO_RR --seeds 20 --out vp --quiet").rc, 1);
   EXPECT_EQ(dpc31("cosim --replay vp/cosim-vpc3plus-seed1.trace --out vp --quiet").rc, 1);
+  // A replay runs as the header's seed (the report, the JSON, the JUnit name); the trace it
+  // replays stays as it is, and its own shrunk trace goes beside it.
+  const std::string seed1 = slurp(path("vp/cosim-vpc3plus-seed1.trace"));
+  const Outcome rp = dpc31("cosim --replay vp/cosim-vpc3plus-seed1.trace --out vp --junit vp.xml");
+  EXPECT_EQ(rp.rc, 1) << rp.err;
+  EXPECT_NE(rp.out.find("\"seed\": 1,"), std::string::npos) << rp.out;
+  EXPECT_TRUE(rp.err.starts_with("seed 1: divergence at cycle ")) << rp.err;
+  EXPECT_NE(slurp(path("vp.xml")).find("name=\"vpc3plus.seed1\""), std::string::npos);
+  EXPECT_EQ(slurp(path("vp/cosim-vpc3plus-seed1.trace")), seed1);
+  EXPECT_NE(rp.err.find("vp/cosim-vpc3plus-seed1-replay.trace"), std::string::npos) << rp.err;
+  EXPECT_TRUE(fs::exists(path("vp/cosim-vpc3plus-seed1-replay.trace")));
   // The bus and the variant are recorded too (the review's case): a motorola VPC3+C failure
   // replays on that model, a --variant beside a vpc3plus header is taken, a contradiction refused.
   ASSERT_EQ(

@@ -304,6 +304,9 @@ def do4_80c32_free():
             b.stop(signal.SIGTERM)
             check("on an 80C32 at 24000000 Hz" in b.log_lines()[0],
                   f"log line 1 lacks the 80C32: {b.log_lines()[0]}")
+            # The names of --trace-cpu come from the map beside the image (docs/cpu.md).
+            check(f"Hz, symbols from {ihx[:-4]}.map, " in b.log_lines()[0],
+                  f"log line 1 lacks the map: {b.log_lines()[0]}")
             # The 80C32 has not run when line 1 is written: the address is the switch's offer.
             check(", address switch 5 (port 1), " in b.log_lines()[0],
                   f"log line 1 lacks the address switch: {b.log_lines()[0]}")

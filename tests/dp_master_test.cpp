@@ -12,6 +12,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <new>
 #include <span>
 #include <vector>
@@ -137,6 +138,17 @@ TEST(DpMaster, AnExchangeAfterClearHistoryIsInTheHistoryAsReturned) {
 // A master destroyed while its chip runs on takes its TxD observer away (~DpMaster): the chip
 // no longer writes into the memory the master had (here the test's own) when the next master's
 // exchanges put characters on TxD.
+// An idle of any length ends at the chip's last cycle at the latest (include/dpc31/chip.hpp):
+// UINT64_MAX, a caller's "no limit", wrapped to a cycle already past and idled for nothing.
+TEST(DpMaster, AnIdleOfUint64MaxRunsTheChipToItsLastCycle) {
+  Chip chip(ChipOptions{Profile::spc3});
+  DpMaster master(chip, MasterConfig{}, SlaveConfig{});
+  master.idle(1000);
+  EXPECT_EQ(chip.cycle(), 1000u);
+  master.idle(std::numeric_limits<std::uint64_t>::max());
+  EXPECT_EQ(chip.cycle(), Chip::kLastCycle);
+}
+
 TEST(DpMaster, AMasterDestroyedLeavesNoObserverOnItsChip) {
   Chip chip(ChipOptions{Profile::spc3});
   ResponderConfig rc;

@@ -1,6 +1,8 @@
 // Mode_Reg0/1/2, Start / Go_Offline, Status_Reg, user timer, RAM access violation, profile layout.
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include "dpc31/reg_ids.hpp"
 #include "harness.hpp"
 #include "test_util.hpp"
@@ -63,6 +65,26 @@ TEST(ModeDpc31, ModeReg1StartStopBitsAreIgnored) {
   EXPECT_EQ(c.peek_reg(RegId::Int_Req_Reg) & irq::MAC_Reset, 0);
   c.write(0x08, 0x12);  // EOI and En_Change_Cfg_Buffer still act
   EXPECT_EQ(c.peek_reg(RegId::Mode_Reg1), 0x10);
+}
+
+// The chip's time ends at cycle 2^64 - 2 (include/dpc31/chip.hpp): a step past it stops there
+// instead of wrapping to 0 or reaching UINT64_MAX, where every timer that is off would fire (a
+// step of UINT64_MAX cycles, the "no limit" of a caller, crashed the chip's buffer requests).
+TEST_P(Mode, TimeEndsAtTheLastCycleAStepPastItStopsThere) {
+  constexpr std::uint64_t kLast = std::numeric_limits<std::uint64_t>::max() - 1;
+  static_assert(Chip::kLastCycle == kLast);
+  Chip c = make();
+  c.step(std::uint64_t{1} << 63);
+  c.step(std::uint64_t{1} << 63);
+  EXPECT_EQ(c.cycle(), kLast);
+  EXPECT_FALSE(c.step_until_irq(std::numeric_limits<std::uint64_t>::max()));
+  EXPECT_EQ(c.cycle(), kLast);
+  Chip d = make();
+  d.step(100);
+  EXPECT_FALSE(d.step_until_irq(std::numeric_limits<std::uint64_t>::max() - 100));
+  EXPECT_EQ(d.cycle(), kLast);
+  EXPECT_EQ(d.read(0x3F0 & ((1u << d.profile().address_bits) - 1)), 0x00);  // RAM, cleared
+  EXPECT_EQ(d.cycle(), kLast);
 }
 
 TEST_P(Mode, ModeReg0OnlyWhileOffline) {

@@ -630,6 +630,32 @@ TEST(ScenarioCpu51, HeaderIsCheckedAndTheImageReadWhenTheRunStarts) {
   EXPECT_TRUE(walk.empty());
 }
 
+// The image's FILE.map gives the walk its code names (docs/cpu.md); a map beside it that names
+// no code (not SDCC's, or cut short) is said on the walk's line of the board, and the run goes on.
+TEST(ScenarioCpu51, AMapWithoutCodeSymbolsIsSaid) {
+  TempFile f("cpu 80c32 firmware fw.ihx\nsilence 1ms\n");
+  std::ofstream(f.dir() / "fw.ihx") << ":0300000002000BF0\n:00000001FF\n";  // LJMP 000Bh
+  const auto board_line = [&] {
+    std::string board;
+    EXPECT_EQ(dpc31::run_scenario_file(
+                  f.path(),
+                  [&](const std::string& l) {
+                    if (l.find("80C32 at 24000000 Hz") != std::string::npos) board = l;
+                  },
+                  [](const std::string&) {}),
+              0);
+    return board;
+  };
+  const std::string map = (f.dir() / "fw.map").string();
+  std::ofstream(map) << "Area  Addr  Size\nC:   0000000B  _spin   fw\n";
+  EXPECT_NE(board_line().find("(3 bytes, symbols from " + map + ")"), std::string::npos);
+  std::ofstream(map) << "garbage\n\x01\x02 not a map\n";
+  EXPECT_NE(board_line().find("(3 bytes, no code symbols in " + map +
+                              " (no SDCC 'C:' line): code addresses unnamed)"),
+            std::string::npos)
+      << board_line();
+}
+
 // What the heap grew by from a run's start to its end (the hooks: the runner still holds what it
 // kept) with `head`, then `steps` steps `step` (formatted with the step's number), then `tail`
 // (formatted with the last one), whose expects must all pass.

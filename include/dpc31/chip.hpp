@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
@@ -211,6 +212,13 @@ class Chip {
   bool poke_reg(RegId id, std::uint16_t value);
 
   // --- time ---
+  // The chip's time ends at kLastCycle (UINT64_MAX marks a timer that is off): a step past it
+  // stops there, whatever `cycles` says.
+  static constexpr std::uint64_t kLastCycle = std::numeric_limits<std::uint64_t>::max() - 1;
+  // The cycle `cycles` after `from`, or kLastCycle where that lies beyond it.
+  static constexpr std::uint64_t cycle_after(std::uint64_t from, std::uint64_t cycles) {
+    return cycles < kLastCycle - from ? from + cycles : kLastCycle;
+  }
   void step(std::uint64_t cycles = 1);
   // Steps at most `cycles`, stopping right after the event that makes the interrupt active
   // (true) — where firmware would enter its ISR.

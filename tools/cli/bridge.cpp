@@ -328,8 +328,9 @@ std::string header(const Checked& c, const BridgeOptions& o, const std::string& 
       "dpc31 bridge: pacing {}, baud {}, profile {}, firmware {}, {}, slot {} bit times, "
       "log level {}, {}",
       c.realtime ? "realtime" : "free", c.setup.baud, profile,
-      c.setup.cpu ? fmt::format("{} on {} at {} Hz", o.firmware,
-                                c.setup.cpu->c31 ? "the C31" : "an 80C32", c.setup.cpu->hz)
+      c.setup.cpu ? fmt::format("{} on {} at {} Hz{}", o.firmware,
+                                c.setup.cpu->c31 ? "the C31" : "an 80C32", c.setup.cpu->hz,
+                                symbols_text(c.setup.cpu_image))
                   : std::string(c.setup.firmware->name),
       c.setup.cpu ? fmt::format("address switch {} (port 1)", c.setup.address)
                   : fmt::format("address {}", chip_after_init.station_address()),

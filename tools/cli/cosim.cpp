@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <charconv>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -29,7 +30,7 @@ namespace {
 // --mutant given says otherwise (refused: the trace would replay clean on another model;
 // docs/golden-model.md). A trace without them keeps `o`.
 bool take_trace_header(const std::string& path, const std::string& text, CosimOptions& o,
-                       std::string& error) {
+                       std::uint64_t& seed, std::string& error) {
   std::istringstream is(text);
   int n = 0;
   for (std::string line; std::getline(is, line) && line.starts_with('#');) {
@@ -81,6 +82,12 @@ bool take_trace_header(const std::string& path, const std::string& text, CosimOp
         return false;
       }
       o.mutant = mutant;
+    } else if (key == "seed") {
+      const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), seed);
+      if (ec != std::errc() || end != value.data() + value.size()) {
+        error = fmt::format("{}:{}: '{}' is not a seed", path, n, shown(value));
+        return false;
+      }
     }
   }
   return true;
@@ -88,9 +95,9 @@ bool take_trace_header(const std::string& path, const std::string& text, CosimOp
 
 // A stimulus trace file (lockstep.hpp), read like the emulator's own text files: missing,
 // a directory, empty or cut off is one line "FILE: reason" / "FILE:LINE: reason"; its header
-// sets the profile and mutant in `o`.
+// sets the profile, bus, variant and mutant in `o`, and `seed` (0 where it names none).
 bool read_stimulus(const std::string& path, cosim::Stimulus& s, CosimOptions& o,
-                   std::string& error) {
+                   std::uint64_t& seed, std::string& error) {
   constexpr std::size_t kMaxBytes = 256u << 20;  // 100 M cycles of stimulus fit easily
   std::string text;
   std::string why;
@@ -106,7 +113,7 @@ bool read_stimulus(const std::string& path, cosim::Stimulus& s, CosimOptions& o,
     error = fmt::format("{}:{}: {}", path, line, why);
     return false;
   }
-  return cosim::parse_trace(text, path, s, error) && take_trace_header(path, text, o, error);
+  return cosim::parse_trace(text, path, s, error) && take_trace_header(path, text, o, seed, error);
 }
 
 // True if `dir` is a directory or can be made one: the nearest part of it that exists is a
@@ -352,8 +359,9 @@ int run_cosim(const CosimOptions& given) {
   std::vector<std::pair<std::uint64_t, Stimulus>> runs;
   if (!o.replay.empty()) {
     Stimulus s;
+    std::uint64_t seed = 0;
     std::string error;
-    if (!read_stimulus(o.replay, s, o, error)) {
+    if (!read_stimulus(o.replay, s, o, seed, error)) {
       fmt::print(stderr, "{}\n", error);
       return 2;
     }
@@ -363,7 +371,7 @@ int run_cosim(const CosimOptions& given) {
       return 2;
     }
     o.variant = chip.variant;
-    runs.emplace_back(0, std::move(s));
+    runs.emplace_back(seed, std::move(s));
   }
   DutOptions dut{o.profile, o.bus, o.variant};
   std::string rtl_id;
@@ -390,7 +398,7 @@ int run_cosim(const CosimOptions& given) {
   const auto t0 = std::chrono::steady_clock::now();
   const std::uint64_t total = runs.empty() ? hi - lo : 1;
   for (std::uint64_t i = 0; i < total; ++i) {
-    const std::uint64_t seed = runs.empty() ? lo + i : 0;
+    const std::uint64_t seed = runs.empty() ? lo + i : runs[0].first;
     const Stimulus s = runs.empty() ? random_stimulus({o.profile, seed, o.cycles}) : runs[0].second;
     const RunResult r = run_lockstep(s, dut, o.mutant);
     cycles += r.divergence >= 0 ? static_cast<std::uint64_t>(r.divergence) + 1 : s.size();
@@ -407,7 +415,11 @@ int run_cosim(const CosimOptions& given) {
       const std::string dir = o.out_dir.empty() ? "." : o.out_dir;
       std::error_code ec;
       std::filesystem::create_directories(dir, ec);  // checked up front; a failure shows below
-      const std::string trace = fmt::format("{}/cosim-{}-seed{}.trace", dir, o.profile_name, seed);
+      std::string trace = fmt::format("{}/cosim-{}-seed{}.trace", dir, o.profile_name, seed);
+      // A replay shrinks its trace again; the trace it replays stays as it is.
+      if (!o.replay.empty() && std::filesystem::equivalent(trace, o.replay, ec)) {
+        trace = fmt::format("{}/cosim-{}-seed{}-replay.trace", dir, o.profile_name, seed);
+      }
       std::string error;
       const auto events = [](const Stimulus& x) { return x.event_count(); };
       Stimulus before = s;

@@ -626,7 +626,10 @@ std::string emit_markdown(Profiles profiles) {
       "Addresses are physical byte addresses of the profile; a 16-bit register occupies the "
       "address and the next one. _Bytes_ gives, for Intel and Motorola bus mode, which byte "
       "(lo = bits 7..0, hi = bits 15..8) sits at address + 0 and address + 1. Bits no field "
-      "covers are reserved (`rsvd`: read 0, a write that would change one is logged). _Origin_: "
+      "covers are reserved (`rsvd`: read 0; each keeps its bit of the reset value, so a write "
+      "that would change it, QEMU's guest error, is logged and ignored: Int_Mask_Reg's reserved "
+      "bits are 1, and its mask-all FFFFh or a driver's `~enabled` leave them, a 0 there is "
+      "logged). _Origin_: "
       "`documented` = "
       "taken from the manuals, `modelled` = our choice (see the notes below each table).\n\n";
   std::vector<Row> kinds{{"Kind", "Meaning"}};
