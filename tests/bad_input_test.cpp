@@ -920,8 +920,11 @@ TEST_F(BadInput, BridgeOptions) {
   // The log is opened last: the symlink made before it is removed again.
   expect_bad(dpc31("bridge --pty p --firmware DO4 --log no/such/log"),
              "dpc31 bridge: cannot write the log no/such/log: No such file or directory", "log");
-  for (const char* args : {"bridge --pty p --firmware DO4 --baud 12", "bridge --firmware DO4",
-                           "bridge --pty p --firmware DO4 --address 200",
+  expect_bad(dpc31("bridge --pty p --firmware DO4 --baud 12"),
+             "dpc31 bridge: --baud '12' is not a PROFIBUS rate (9600, 19200, 45450, 93750, 187500, "
+             "500000, 1500000, 3000000, 6000000, 12000000)",
+             "baud");
+  for (const char* args : {"bridge --firmware DO4", "bridge --pty p --firmware DO4 --address 200",
                            "bridge --pty p --firmware DO4 --pacing warp"}) {
     expect_bad_prefix(dpc31(args), "dpc31 bridge: ", args);
   }
