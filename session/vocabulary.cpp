@@ -3,8 +3,12 @@
 
 #include <fmt/format.h>
 
+#include <charconv>
+#include <iterator>
+
 #include "dpc31/dp.hpp"
 #include "dpc31/names.hpp"
+#include "textfile.hpp"
 
 namespace dpc31 {
 
@@ -107,12 +111,27 @@ std::string out_of_range(const ValueRange& r, std::string_view value) {
   return fmt::format("{} {} out of range {}", r.what, value, range_text(r.min, r.max, value));
 }
 
+std::string profibus_rates() {
+  std::string rates;
+  for (auto it = std::rbegin(kBaudRates); it != std::rend(kBaudRates); ++it) {
+    rates += fmt::format("{}{}", rates.empty() ? "" : ", ", *it);
+  }
+  return rates;
+}
+
 std::string not_a_profibus_rate(std::uint64_t baud) {
   if (baud <= UINT32_MAX && baud_code(static_cast<std::uint32_t>(baud)) >= 0) return {};
-  return fmt::format(
-      "baud {} is not a PROFIBUS rate (9600, 19200, 45450, 93750, 187500, 500000, 1500000, "
-      "3000000, 6000000, 12000000)",
-      baud);
+  return fmt::format("baud {} is not a PROFIBUS rate ({})", baud, profibus_rates());
+}
+
+std::string not_a_profibus_rate(std::string_view text, std::uint32_t& baud) {
+  std::uint64_t v = 0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (ec == std::errc() && end == text.data() + text.size() && not_a_profibus_rate(v).empty()) {
+    baud = static_cast<std::uint32_t>(v);
+    return {};
+  }
+  return fmt::format("'{}' is not a PROFIBUS rate ({})", shown(text), profibus_rates());
 }
 
 std::string hsa_refused(std::uint8_t hsa, std::uint8_t gap_factor, std::uint8_t address) {

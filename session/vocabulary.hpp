@@ -75,8 +75,13 @@ inline constexpr ValueRange kBoardBase{"base", 0, 0xF000};
 [[nodiscard]] std::string range_text(std::uint64_t min, std::uint64_t max, std::string_view value);
 // "WHAT VALUE out of range (MIN..MAX)", VALUE as the user wrote it, the range in its base.
 [[nodiscard]] std::string out_of_range(const ValueRange& r, std::string_view value);
-// "" for one of the ten PROFIBUS rates the chips' baud search knows, else why not.
+// The ten PROFIBUS rates the chips' baud search knows, slowest first: "9600, 19200, ..., 12000000".
+[[nodiscard]] std::string profibus_rates();
+// "" for one of them, else why not: "baud 12345 is not a PROFIBUS rate (9600, ...)".
 [[nodiscard]] std::string not_a_profibus_rate(std::uint64_t baud);
+// The same for a rate as an option gives it, decimal digits only: "" with its number in `baud`,
+// else why not, the text as written ("'1.5e6' is not a PROFIBUS rate (9600, ...)").
+[[nodiscard]] std::string not_a_profibus_rate(std::string_view text, std::uint32_t& baud);
 // "" for a master's hsa= it may take (beside a gap=, not below its own address), else why not.
 [[nodiscard]] std::string hsa_refused(std::uint8_t hsa, std::uint8_t gap_factor,
                                       std::uint8_t address);

@@ -148,7 +148,9 @@ void Dpc31Tlm::b_transport(tlm::tlm_generic_payload& tr, sc_core::sc_time& delay
     tr.set_response_status(tlm::TLM_COMMAND_ERROR_RESPONSE);
     return;
   }
-  if (addr + span > (std::uint64_t{1} << chip_.profile().address_bits)) {
+  // Compared without adding to `addr`: near 2^64 the sum would wrap round to a small address.
+  if (const std::uint64_t limit = std::uint64_t{1} << chip_.profile().address_bits;
+      addr >= limit || span > limit - addr) {
     tr.set_response_status(tlm::TLM_ADDRESS_ERROR_RESPONSE);
     return;
   }
@@ -196,6 +198,11 @@ void Dpc31Tlm::b_transport(tlm::tlm_generic_payload& tr, sc_core::sc_time& delay
 }
 
 unsigned int Dpc31Tlm::transport_dbg(tlm::tlm_generic_payload& tr) {
+  // TLM_IGNORE_COMMAND is neither a read nor a write: nothing is transferred.
+  if (!tr.is_read() && !tr.is_write()) {
+    tr.set_response_status(tlm::TLM_COMMAND_ERROR_RESPONSE);
+    return 0;
+  }
   const std::uint64_t addr = tr.get_address();
   const unsigned len = tr.get_data_length();
   unsigned char* data = tr.get_data_ptr();

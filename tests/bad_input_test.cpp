@@ -934,8 +934,11 @@ TEST_F(BadInput, BridgeOptions) {
   // The log is opened last: the symlink made before it is removed again.
   expect_bad(dpc31("bridge --pty p --firmware DO4 --log no/such/log"),
              "dpc31 bridge: cannot write the log no/such/log: No such file or directory", "log");
-  for (const char* args : {"bridge --pty p --firmware DO4 --baud 12", "bridge --firmware DO4",
-                           "bridge --pty p --firmware DO4 --address 200",
+  expect_bad(dpc31("bridge --pty p --firmware DO4 --baud 12"),
+             "dpc31 bridge: --baud '12' is not a PROFIBUS rate (9600, 19200, 45450, 93750, 187500, "
+             "500000, 1500000, 3000000, 6000000, 12000000)",
+             "baud");
+  for (const char* args : {"bridge --firmware DO4", "bridge --pty p --firmware DO4 --address 200",
                            "bridge --pty p --firmware DO4 --pacing warp"}) {
     expect_bad_prefix(dpc31(args), "dpc31 bridge: ", args);
   }
@@ -958,6 +961,23 @@ TEST_F(BadInput, SoakOptionsAndJson) {
   expect_json_checked_first("soak", "--cycles 1e9",
                             {"soak --cycles 0", "soak --cycles many", "soak --profile spc4",
                              "soak --baud 1234", "soak --seed -1", "soak extra"});
+  const auto before = listing();
+  // A rate as the bridge words it, the rates named; "" was taken as 0 and divided by (SIGFPE).
+  const std::string rates =
+      " is not a PROFIBUS rate (9600, 19200, 45450, 93750, 187500, 500000, 1500000, 3000000, "
+      "6000000, 12000000)";
+  for (const char* baud : {"", "abc", "1.5e6", "1234", "-1"}) {
+    expect_bad(dpc31(std::string("soak --baud '") + baud + "'"),
+               std::string("dpc31 soak: --baud: '") + baud + "'" + rates, baud);
+  }
+  // An empty name is refused by what would have used it, not taken as "not given" (a run that
+  // is not refused is short: it fails the check, it does not hang it).
+  expect_bad(dpc31("soak --cycles 2e6 --json ''"),
+             "dpc31 soak: an empty file name: nothing can be written there", "json ''");
+  expect_bad(dpc31("soak --cycles 2e6 --firmware ''"),
+             "dpc31 soak: unknown firmware '' (DO4, CNT2, or a plug-in path such as ./libmine.so)",
+             "firmware ''");
+  EXPECT_EQ(listing(), before);
 }
 
 }  // namespace

@@ -206,6 +206,27 @@ TEST_F(BadInput, ASignalDuringARunLeavesNoTemporary) {
   }
 }
 
+// The same for a soak (docs/soak.md): the JSON report's temporary goes, an old report stays as it
+// was, and nothing of the report was printed (it is printed at the end only).
+TEST_F(BadInput, ASignalDuringASoakLeavesNoReport) {
+  spit(path("old.json"), "old");
+  for (const int sig : {SIGINT, SIGTERM}) {
+    const pid_t pid =
+        spawn({"/bin/sh", "-c", "exec " + kCli + " soak --cycles 1e12 --json old.json >out"},
+              (root_ / "work").string());
+    ASSERT_GT(pid, 0);
+    EXPECT_TRUE(eventually([&] { return any_ending(root_ / "work", ".tmp"); })) << sig;
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    ASSERT_EQ(::kill(pid, sig), 0);
+    int status = 0;
+    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+    EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << sig << " status " << status;
+    EXPECT_EQ(listing(), (std::vector<std::string>{"old.json", "out"})) << sig;
+    EXPECT_EQ(slurp(path("old.json")), "old");
+    EXPECT_EQ(slurp(path("out")), "") << sig;
+  }
+}
+
 // --- demo (finding 4) ------------------------------------------------------------------------
 
 // A TMPDIR/dpc31-demo made beforehand by someone else (a directory, or a link to one) is not

@@ -2,6 +2,7 @@
 // and faults injected behind the check's back, which it must notice.
 #include "soak.hpp"
 
+#include <fmt/core.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -10,6 +11,7 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <stdexcept>
 #include <string>
 #include <tuple>
 
@@ -121,6 +123,22 @@ TEST(SoakCheck, NoticesAnUnaccountedDamagedRequest) {
                 {"chip.parity", 1}, {"chip.requests", -1}, {"master.no_answer", 1}}));
 }
 
+// A rate no chip finds is refused before the watchdog time is divided by it (0: SIGFPE).
+TEST(SoakCheck, RefusesARateThatIsNoProfibusRate) {
+  for (const std::uint32_t baud : {0u, 1234u}) {
+    Options o = small();
+    o.baud = baud;
+    try {
+      dpc31::soak::run(o);
+      ADD_FAILURE() << baud << " ran";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(e.what(), fmt::format("baud {} is not a PROFIBUS rate (9600, 19200, 45450, 93750, "
+                                      "187500, 500000, 1500000, 3000000, 6000000, 12000000)",
+                                      baud));
+    }
+  }
+}
+
 TEST(SoakCli, ReportsTheTableAndExitCodes) {
   const std::string json = (std::filesystem::temp_directory_path() /
                             ("dpc31-soak-test-" + std::to_string(getpid()) + ".json"))
@@ -208,7 +226,7 @@ class SoakMemory : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(SoakMemory, StaysFlat) {
   Options o;
-  o.firmware = GetParam();
+  if (!GetParam().empty()) o.firmware = GetParam();
   o.baud = 12'000'000;
   o.cycles = kRssMeaningful ? 25'000'000 : 2'000'000;
   o.seed = 3;

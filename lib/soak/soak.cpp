@@ -18,6 +18,7 @@
 #include "outfile.hpp"
 #include "responder.hpp"
 #include "scenario.hpp"
+#include "vocabulary.hpp"
 
 namespace dpc31::soak {
 
@@ -49,13 +50,13 @@ class Soak {
     mc.address = kMaster;
     mc.baud = o.baud;
     SlaveConfig slave = rc_.slave;
-    if (o.firmware.empty()) {
+    if (!o.firmware) {
       user_.inputs = kInputs;
       user_.init(bus);
       master_ = std::make_unique<DpMaster>(chip_, mc, slave);
       master_->set_firmware([this](BusPort& b) { user_.isr(b); });
     } else {
-      fw_ = std::make_unique<FirmwareHost>(find_firmware(o.firmware));
+      fw_ = std::make_unique<FirmwareHost>(find_firmware(*o.firmware));
       const dpc31_firmware& f = fw_->firmware();
       slave.ident = f.ident;
       slave.cfg.assign(f.cfg, f.cfg + f.cfg_len);
@@ -165,13 +166,16 @@ class Soak {
     if (const std::string why = cli::apply_chip_choice(o.chip, co); !why.empty()) {
       throw std::invalid_argument(why);
     }
-    if (baud_code(o.baud) < 0) throw std::invalid_argument("unsupported baud rate");
     return co;
   }
 
   // Not inlined: GCC 12 warns maybe-uninitialized about SlaveConfig's vector initialiser when it
   // is (a false positive).
   [[gnu::noinline]] static ResponderConfig responder_config(const Options& o) {
+    // Checked here, the first to use it: twd_ms() divides by it.
+    if (const std::string e = not_a_profibus_rate(o.baud); !e.empty()) {
+      throw std::invalid_argument(e);
+    }
     ResponderConfig rc;
     rc.slave.address = kSlave;
     rc.slave.wd_on = true;
@@ -359,10 +363,15 @@ CLI::App* add_subcommand(CLI::App& app, Options& o) {
       ->capture_default_str()
       ->check(CLI::IsMember({"spc3", "vpc3plus", "dpc31"}));
   cli::add_chip_options(s, o.chip);
-  s->add_option("--baud", o.baud, "bus baud rate")
+  // Checked on the text, before CLI11 converts it: it would take "" as 0.
+  s->add_option("--baud", o.baud, "bus baud rate: " + profibus_rates())
       ->capture_default_str()
-      ->check(
-          CLI::IsMember(std::vector<std::uint32_t>(std::begin(kBaudRates), std::end(kBaudRates))));
+      ->check(CLI::Validator(
+          [](std::string& text) {
+            std::uint32_t baud = 0;
+            return not_a_profibus_rate(text, baud);
+          },
+          "RATE"));
   cycles("--fault-period", o.fault_period,
          "cycles of undisturbed Data_Exchange between two injected faults");
   s->add_option("--seed", o.seed, "seed of the fault order and the noise bytes")
@@ -385,21 +394,21 @@ int run_cli(const Options& o, std::FILE* out, std::FILE* err) {
   // The JSON report appears whole or not at all, and a bad path fails before the run
   // (docs/bad-input.md). Never over the plug-in it runs (docs/security.md).
   if (const std::string same = outfile::distinct(
-          {{"--firmware", is_plugin_path(o.firmware) ? o.firmware : std::string()}},
-          {{"--json", o.json}});
+          {{"--firmware", o.firmware && is_plugin_path(*o.firmware) ? *o.firmware : std::string()}},
+          {{"--json", o.json.value_or("")}});
       !same.empty()) {
     fmt::print(err, "dpc31 soak: {}\n", same);
     return 2;
   }
   outfile::OutFile json_out;
-  if (!o.json.empty() && !json_out.open(o.json)) {
+  if (o.json && !json_out.open(*o.json)) {
     fmt::print(err, "dpc31 soak: {}\n", json_out.error());
     return 2;
   }
   Result r;
   try {
     // A firmware stuck in a loop without a bus access cannot be stopped from this thread.
-    if (!o.firmware.empty()) board::guard_hangs("dpc31 soak", find_firmware(o.firmware).name);
+    if (o.firmware) board::guard_hangs("dpc31 soak", find_firmware(*o.firmware).name);
     r = run(o);
   } catch (const std::exception& e) {
     fmt::print(err, "dpc31 soak: {}\n", e.what());
@@ -414,7 +423,7 @@ int run_cli(const Options& o, std::FILE* out, std::FILE* err) {
              "dpc31 soak: profile {}{}{}, {} baud, TWD {} ms, a fault every {} cycles, seed {}{}\n",
              o.profile, variant.empty() ? "" : " variant " + variant,
              irq_controller == "c31" ? ", irq-controller c31" : "", o.baud, r.twd_ms,
-             o.fault_period, o.seed, o.firmware.empty() ? "" : ", firmware " + o.firmware);
+             o.fault_period, o.seed, o.firmware ? ", firmware " + *o.firmware : "");
   const double hz = r.clock_hz;
   fmt::print(out,
              "cycles {} ({:.3f} s of chip time), {} after the start-up; wall {:.2f} s ({:.1f}x "
@@ -441,14 +450,14 @@ int run_cli(const Options& o, std::FILE* out, std::FILE* err) {
   } else {
     fmt::print(out, "\nresult: {} counter(s) do not match the injected faults\n", bad);
   }
-  if (!o.json.empty()) {
+  if (o.json) {
     nlohmann::json j;
     j["profile"] = o.profile;
     if (!variant.empty()) j["variant"] = variant;
     j["irq_controller"] = irq_controller;
     j["baud"] = o.baud;
     j["seed"] = o.seed;
-    if (!o.firmware.empty()) j["firmware"] = o.firmware;
+    if (o.firmware) j["firmware"] = *o.firmware;
     j["fault_period"] = o.fault_period;
     j["twd_ms"] = r.twd_ms;
     j["cycles"] = r.cycles;

@@ -8,6 +8,7 @@
 #include <array>
 #include <cstdint>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -35,11 +36,13 @@ struct Options {
   std::uint32_t baud = 1'500'000;
   std::uint64_t fault_period = 2'000'000;  // cycles of undisturbed exchange between two faults
   std::uint64_t seed = 1;
-  std::string json;  // write the result here ("" = no file)
+  // Not given and given empty differ: an empty name is refused (as a file or a firmware name
+  // no one can have meant), not taken as "none".
+  std::optional<std::string> json;  // write the result here (none: no file)
   // A firmware (built-in name or plug-in path) instead of the built-in responder: the master is
   // configured from its GSD defaults, and only the chip's and the master's counters are checked
-  // (its own bookkeeping and its data are the firmware's). "" = the responder.
-  std::string firmware;
+  // (its own bookkeeping and its data are the firmware's). None: the responder.
+  std::optional<std::string> firmware;
   // For the check's own test: one fault of this kind is injected without being accounted for,
   // so the counters must not match (empty: none).
   std::string unaccounted;

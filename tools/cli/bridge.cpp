@@ -19,9 +19,9 @@
 #include "../bridge/engine.hpp"
 #include "../bridge/pty.hpp"
 #include "../bridge/tcp.hpp"
-#include "dpc31/uart.hpp"
 #include "outfile.hpp"
 #include "pcapng.hpp"
+#include "vocabulary.hpp"
 
 namespace dpc31::cli {
 
@@ -248,13 +248,9 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
       return bad(e.what());
     }
   }
-  if (!parse_uint(o.baud, 12'000'000, v) || baud_code(static_cast<std::uint32_t>(v)) < 0) {
-    return bad(fmt::format(
-        "--baud '{}' is no PROFIBUS rate (9600, 19200, 45450, 93750, 187500, 500000, 1500000, "
-        "3000000, 6000000, 12000000)",
-        o.baud));
+  if (const std::string e = not_a_profibus_rate(o.baud, c.setup.baud); !e.empty()) {
+    return bad("--baud " + e);
   }
-  c.setup.baud = static_cast<std::uint32_t>(v);
   if (!parse_profile(o.profile, c.setup.chip.profile)) {
     return bad(fmt::format("unknown profile '{}' (spc3, vpc3plus, dpc31)", o.profile));
   }
