@@ -192,7 +192,7 @@ int run_dp_session(const ChipOptions& opt, const RunOptions& ro, ChipRun& run,
   }
   ScenarioOutcome o;
   const int rc = run.run(
-      sc, [out](const std::string& line) { fmt::print(out, "{}\n", line); },
+      sc, text, [out](const std::string& line) { fmt::print(out, "{}\n", line); },
       [](const std::string& line) { fmt::print(stderr, "{}\n", line); }, o);
   if (rc == 2) return rc;
   const double hz = Chip(opt).clock_hz();

@@ -2,10 +2,11 @@
 
 #include <fmt/core.h>
 
-#include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
+#include <string_view>
 #include <tuple>
 #include <utility>
 #include <vector>
@@ -44,21 +45,17 @@ nlohmann::json summary(const Scenario& s, const ScenarioOutcome& o) {
   };
 }
 
-// The run with everything asked for watching it: a trace recorder (--record), a waveform
-// (--vcd / --fst) and a telegram capture (--pcap). Nothing is written unless the run completes.
-int run_with_outputs(const RunOptions& opt, const LineSink& walk, const LineSink& errors,
-                     Scenario& s, ScenarioOutcome& o, std::FILE* err) {
+// The run of the parsed `s` with everything asked for watching it: a trace recorder (--record), a
+// waveform (--vcd / --fst) and a telegram capture (--pcap). Nothing is written unless the run
+// completes.
+int run_with_outputs(const RunOptions& opt, std::string_view text, const LineSink& walk,
+                     const LineSink& errors, Scenario& s, std::FILE* err) {
   const std::vector<outfile::Named> outputs = {
       {"--json", opt.json},     {"--record", opt.record}, {"--vcd", opt.vcd},  {"--fst", opt.fst},
       {"--la-vcd", opt.la_vcd}, {"--pcap", opt.pcap},     {"--gtkw", opt.gtkw}};
   const std::string same = outfile::distinct({{"the scenario", opt.scenario}}, outputs);
   if (!same.empty()) {
     fmt::print(err, "dpc31 run: {}\n", same);
-    return 2;
-  }
-  ScenarioError perr;
-  if (!load_scenario(opt.scenario, s, perr)) {
-    errors(perr.text());
     return 2;
   }
   if (const std::string plugin_same =
@@ -71,15 +68,16 @@ int run_with_outputs(const RunOptions& opt, const LineSink& walk, const LineSink
   s.chip.engine = opt.engine;
   ChipRun run(opt, "dpc31 run", err);
   if (const int rc = run.open(); rc != 0) return rc;
-  return run.run(s, walk, errors, o);
+  ScenarioOutcome o;
+  return run.run(s, text, walk, errors, o);
 }
 
 }  // namespace
 
 // Its description, and for golden traces what was checked by hand.
-std::vector<std::string> leading_comments(const std::string& path) {
+std::vector<std::string> leading_comments(std::string_view text) {
   std::vector<std::string> out;
-  std::ifstream f(path, std::ios::binary);
+  std::istringstream f{std::string(text)};
   std::string line;
   bool first = true;
   while (std::getline(f, line)) {
@@ -186,14 +184,14 @@ int ChipRun::open() {
   return 0;
 }
 
-int ChipRun::run(const Scenario& s, const LineSink& walk, const LineSink& errors,
-                 ScenarioOutcome& o) {
+int ChipRun::run(const Scenario& s, std::string_view text, const LineSink& walk,
+                 const LineSink& errors, ScenarioOutcome& o) {
   Impl& m = *impl_;
   const RunOptions& opt = m.opt;
   std::unique_ptr<TraceRecorder> rec;
   ScenarioHooks hooks;
   if (!opt.record.empty()) {
-    std::vector<std::string> notes = leading_comments(opt.scenario);
+    std::vector<std::string> notes = leading_comments(text);
     if (!notes.empty()) notes.emplace_back();
     notes.push_back(
         fmt::format("recorded by `dpc31 run --record` from {} (docs/trace-format.md)", s.file));
@@ -254,21 +252,27 @@ int run_scenario_command(const RunOptions& opt, std::FILE* out, std::FILE* err) 
   LineSink walk;
   if (!opt.quiet) walk = [out](const std::string& line) { fmt::print(out, "{}\n", line); };
   const LineSink errors = [err](const std::string& line) { fmt::print(err, "{}\n", line); };
-  // A segment's scenario (docs/segment.md) has a runner of its own (run_segment.cpp).
+  // Read once: a pipe or a FIFO gives its text only once, and the text heads a --record trace. A
+  // segment's scenario (docs/segment.md) has a runner of its own (run_segment.cpp).
+  std::string text;
+  std::string untrusted;
   SegmentScenario seg;
+  Scenario s;
   ScenarioError serr;
-  switch (load_segment_scenario(opt.scenario, seg, serr)) {
+  if (!read_scenario_file(opt.scenario, text, untrusted, serr)) {
+    errors(serr.text());
+    return 2;
+  }
+  switch (parse_segment_file(text, opt.scenario, untrusted, seg, s, serr)) {
     case SegmentLoad::error:
       errors(serr.text());
       return 2;
     case SegmentLoad::ok:
-      return run_segment_command(opt, seg, walk, errors, err);
+      return run_segment_command(opt, seg, text, walk, errors, err);
     case SegmentLoad::not_segment:
       break;
   }
-  Scenario s;
-  ScenarioOutcome o;
-  return run_with_outputs(opt, walk, errors, s, o, err);
+  return run_with_outputs(opt, text, walk, errors, s, err);
 }
 
 }  // namespace dpc31::cli

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "scenario.hpp"
@@ -60,21 +61,23 @@ class ChipRun {
 
   // 0, or 2 with its line written.
   int open();
-  // After open(): 0, 1 or 2 like the command.
-  int run(const Scenario& s, const LineSink& walk, const LineSink& errors, ScenarioOutcome& o);
+  // After open(): 0, 1 or 2 like the command. `text` is the scenario's (its leading comments head
+  // the --record trace).
+  int run(const Scenario& s, std::string_view text, const LineSink& walk, const LineSink& errors,
+          ScenarioOutcome& o);
 
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
 
-// The comment block at the top of a scenario file: it heads the recorded traces.
-std::vector<std::string> leading_comments(const std::string& path);
+// The comment block at the top of a scenario's text: it heads the recorded traces.
+std::vector<std::string> leading_comments(std::string_view text);
 
-// A segment's scenario with the outputs `opt` asks for (run_segment.cpp, docs/segment.md
-// "Outputs"). Returns 0, 1 or 2 like the command.
-int run_segment_command(const RunOptions& opt, const SegmentScenario& s, const LineSink& walk,
-                        const LineSink& errors, std::FILE* err);
+// A segment's scenario, parsed from `text`, with the outputs `opt` asks for (run_segment.cpp,
+// docs/segment.md "Outputs"). Returns 0, 1 or 2 like the command.
+int run_segment_command(const RunOptions& opt, const SegmentScenario& s, std::string_view text,
+                        const LineSink& walk, const LineSink& errors, std::FILE* err);
 // The trace of a station of a segment whose scope is `scope` (station_scope,
 // lib/segment_outputs): FILE.trace -> FILE.station5_spc3.trace.
 std::string station_trace_path(const std::string& record, const std::string& scope);
