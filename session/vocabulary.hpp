@@ -75,6 +75,10 @@ inline constexpr ValueRange kBoardBase{"base", 0, 0xF000};
 [[nodiscard]] std::string range_text(std::uint64_t min, std::uint64_t max, std::string_view value);
 // "WHAT VALUE out of range (MIN..MAX)", VALUE as the user wrote it, the range in its base.
 [[nodiscard]] std::string out_of_range(const ValueRange& r, std::string_view value);
+// "WHAT VALUE is out of range (MIN..MAX)": `dpc31 serve`'s words for a command's number (ERR
+// range), which the Python module's Chip gives for the same calls.
+[[nodiscard]] std::string range_error_text(std::string_view what, std::string_view value,
+                                           std::uint64_t min, std::uint64_t max);
 // "" for one of the ten PROFIBUS rates the chips' baud search knows, else why not.
 [[nodiscard]] std::string not_a_profibus_rate(std::uint64_t baud);
 // "" for a master's hsa= it may take (beside a gap=, not below its own address), else why not.
