@@ -122,8 +122,9 @@ TEST_F(BadInput, AFailedWriteToTheStandardOutputIsExit2) {
     EXPECT_EQ(r.rc, 2) << args;
     EXPECT_EQ(slurp(err), want + "\n") << args;
   }
-  // The demo stopped where its write failed: none of its files was left half-written.
-  EXPECT_TRUE(fs::is_empty(path("demo")));
+  // The demo stopped where its write failed: none of its files was left half-written, nor the
+  // directory it made for them.
+  EXPECT_FALSE(fs::exists(path("demo")));
 }
 
 // An output that names an input, or another output, is refused before any work: the scenario,

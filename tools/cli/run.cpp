@@ -109,6 +109,37 @@ std::string timescale_error(const std::string& t) {
   return fmt::format("--timescale '{}': use 1, 10 or 100 with fs, ps, ns, us or ms, or 1s", t);
 }
 
+std::string waveform_options_error(const RunOptions& opt) {
+  // --la-vcd takes the window, the signals and the unit too; it is always the flat form.
+  if (opt.vcd.empty() && opt.fst.empty()) {
+    const auto needs = [](const std::string& option, std::string_view waveforms) {
+      return fmt::format("{}: a waveform option needs {}", option, waveforms);
+    };
+    if (opt.flat) return needs("--flat", "--vcd or --fst");
+    if (!opt.gtkw.empty())
+      return fmt::format("--gtkw {}: a save file needs --vcd or --fst", opt.gtkw);
+    if (opt.la_vcd.empty()) {
+      constexpr std::string_view kAny = "--vcd, --fst or --la-vcd";
+      if (!opt.signals.empty()) {
+        std::string globs;
+        for (const std::string& g : opt.signals) globs += (globs.empty() ? "" : ",") + g;
+        return needs("--signals " + globs, kAny);
+      }
+      if (opt.from) return needs(fmt::format("--from {}", *opt.from), kAny);
+      if (opt.to) return needs(fmt::format("--to {}", *opt.to), kAny);
+      if (!opt.timescale.empty()) return needs("--timescale " + opt.timescale, kAny);
+    }
+  }
+  int unit_exp = 0;
+  if (!opt.timescale.empty() && !parse_timescale(opt.timescale, unit_exp))
+    return timescale_error(opt.timescale);
+  if (opt.to.value_or(UINT64_MAX) <= opt.from.value_or(0)) {
+    return fmt::format("--to {} is not after --from {}: an empty waveform window",
+                       opt.to.value_or(UINT64_MAX), opt.from.value_or(0));
+  }
+  return {};
+}
+
 std::vector<wave::Options> wave_options(const RunOptions& opt) {
   std::vector<wave::Options> out;
   for (const auto& [path, fst, flat] :
@@ -119,8 +150,8 @@ std::vector<wave::Options> wave_options(const RunOptions& opt) {
     w.path = path;
     w.fst = fst;
     w.signals = opt.signals;
-    w.from = opt.from;
-    w.to = opt.to;
+    w.from = opt.from.value_or(0);
+    w.to = opt.to.value_or(UINT64_MAX);
     w.flat = flat;
     // The save file opens --vcd, or --fst without it.
     if (path == (opt.vcd.empty() ? opt.fst : opt.vcd)) w.gtkw = opt.gtkw;
@@ -166,15 +197,7 @@ int ChipRun::open() {
   for (auto [path, out] : {std::pair{&opt.record, &m.rec_out}, std::pair{&opt.json, &m.json_out}}) {
     if (!path->empty() && !out->open(*path)) return m.fail(out->error());
   }
-  int unit_exp = 0;
-  if (!opt.timescale.empty() && !parse_timescale(opt.timescale, unit_exp))
-    return m.fail(timescale_error(opt.timescale));
-  if (opt.to <= opt.from) {
-    return m.fail(
-        fmt::format("--to {} is not after --from {}: an empty waveform window", opt.to, opt.from));
-  }
-  if (!opt.gtkw.empty() && opt.vcd.empty() && opt.fst.empty())
-    return m.fail(fmt::format("--gtkw {}: a save file needs --vcd or --fst", opt.gtkw));
+  if (const std::string e = waveform_options_error(opt); !e.empty()) return m.fail(e);
   std::string error;
   for (const wave::Options& w : wave_options(opt)) {
     auto& rec = m.waves.emplace_back(std::make_unique<wave::Recorder>(w));
@@ -229,7 +252,9 @@ int ChipRun::run(const Scenario& s, std::string_view text, const LineSink& walk,
     if (bound.firmware_desc != nullptr) board::guard_hangs(m.command, bound.firmware_desc->name);
     o = run_scenario(bound, walk, errors, hooks);
   } catch (const FirmwareError& e) {
-    return m.fail(fmt::format("{}: {}", s.file, e.what()));
+    // "SCENARIO: " for a scenario file; the demo's own session has none.
+    return m.fail(opt.scenario.empty() ? std::string(e.what())
+                                       : fmt::format("{}: {}", opt.scenario, e.what()));
   }
   if (!attach_error.empty()) return m.fail(attach_error);
   const int rc = o.ok() ? 0 : 1;

@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -14,16 +15,16 @@
 namespace dpc31::cli {
 
 struct RunOptions {
-  std::string scenario;  // path of the .scn file
+  std::string scenario;  // path of the .scn file ("" for the demo's own session)
   bool quiet = false;    // no state walk; failures are still reported
   std::string json;      // write a JSON summary here ("" = none)
   std::string record;    // write a golden trace of the run here ("" = none, docs/trace-format.md)
   std::string vcd;       // waveform of the run (docs/waveforms.md)
   std::string fst;
   std::string la_vcd;  // the logic-analyser form as a second VCD ("" = none): 1-bit, one scope
-  std::vector<std::string> signals;  // waveform signal globs ("" = all)
-  std::uint64_t from = 0;            // waveform window, cycles
-  std::uint64_t to = UINT64_MAX;
+  std::vector<std::string> signals;   // waveform signal globs ("" = all)
+  std::optional<std::uint64_t> from;  // waveform window, cycles (none: from 0)
+  std::optional<std::uint64_t> to;    // (none: to the end)
   std::string timescale;          // "" = 1ps, 10ns for the logic-analyser form (docs/waveforms.md)
   bool flat = false;              // --vcd / --fst in the logic-analyser form
   std::string gtkw;               // a GTKWave save file for --vcd (or else --fst)
@@ -36,6 +37,10 @@ struct RunOptions {
 bool parse_timescale(const std::string& t, int& exp);
 // The one line for a unit parse_timescale() refuses (without the command's name).
 std::string timescale_error(const std::string& t);
+// The waveform options' checks, one chip's and a segment's: each needs a waveform to act on (no
+// silent options), then the unit, the window, the save file. "" or the line (without the
+// command's name).
+std::string waveform_options_error(const RunOptions& opt);
 
 // The waveforms `opt` asks for (--vcd, --fst, --la-vcd), each with its window, signals, form,
 // time unit and the GTKWave save file on the first of --vcd / --fst; the same for one chip and

@@ -182,17 +182,7 @@ int run_segment_command(const RunOptions& opt, const SegmentScenario& s, std::st
                opt.scenario);
     return 2;
   }
-  std::string error;
-  if (!opt.timescale.empty()) {
-    int exp = 0;
-    if (!parse_timescale(opt.timescale, exp)) error = timescale_error(opt.timescale);
-  }
-  if (error.empty() && opt.to <= opt.from) {
-    error =
-        fmt::format("--to {} is not after --from {}: an empty waveform window", opt.to, opt.from);
-  }
-  if (error.empty() && !opt.gtkw.empty() && opt.vcd.empty() && opt.fst.empty())
-    error = fmt::format("--gtkw {}: a save file needs --vcd or --fst", opt.gtkw);
+  std::string error = waveform_options_error(opt);
   RunOutputs out(opt, s, text);
   std::vector<outfile::Named> inputs = {{"the scenario", opt.scenario}};
   for (const std::string& p : segment_plugins(s)) inputs.push_back({"the firmware plug-in", p});
