@@ -94,14 +94,16 @@ ChipOptions chip_options(std::string_view profile, std::string_view bus, std::ui
   return o;
 }
 
-RegId reg_id(const Chip& chip, std::string_view name) {
+const RegDesc& reg_desc(const Chip& chip, std::string_view name) {
   const RegDesc* r = find_reg(chip.profile(), name);
   if (r == nullptr) {
     throw py::value_error("no register '" + std::string(name) + "' in profile " +
                           std::string(chip.profile().name));
   }
-  return r->id;
+  return *r;
 }
+
+RegId reg_id(const Chip& chip, std::string_view name) { return reg_desc(chip, name).id; }
 
 py::bytes to_bytes(std::span<const std::uint8_t> b) {
   return {reinterpret_cast<const char*>(b.data()), b.size()};
@@ -120,8 +122,8 @@ std::uint32_t profibus_rate(std::uint32_t baud) {
 std::uint32_t bus_addr(const Chip& chip, std::int64_t a, std::int64_t n) {
   const std::int64_t limit = std::int64_t{1} << chip.profile().address_bits;
   if (a < 0 || a >= limit) {
-    throw py::value_error("addr " + std::to_string(a) + " is out of range (0.." +
-                          std::to_string(limit - 1) + ")");
+    throw py::value_error(
+        range_error_text("addr", std::to_string(a), 0, static_cast<std::uint64_t>(limit - 1)));
   }
   if (n < 0 || n > limit - a) {
     throw py::value_error("block " + std::to_string(a) + "+" + std::to_string(n) +
@@ -130,12 +132,18 @@ std::uint32_t bus_addr(const Chip& chip, std::int64_t a, std::int64_t n) {
   return static_cast<std::uint32_t>(a);
 }
 
+namespace {
+
+// A value of a register's bits (`mask`), in dpc31 serve's words when it is not one.
+std::uint16_t reg_value(std::string_view what, std::int64_t v, std::uint16_t mask) {
+  if (v < 0 || v > mask) throw py::value_error(range_error_text(what, std::to_string(v), 0, mask));
+  return static_cast<std::uint16_t>(v);
+}
+
+}  // namespace
+
 std::uint8_t byte_value(std::string_view what, std::int64_t v) {
-  if (v < 0 || v > 0xFF) {
-    throw py::value_error(std::string(what) + " " + std::to_string(v) +
-                          " is out of range (0..255)");
-  }
-  return static_cast<std::uint8_t>(v);
+  return static_cast<std::uint8_t>(reg_value(what, v, 0xFF));
 }
 
 py::dict counters_dict(const FdlCounters& c) {
@@ -419,9 +427,12 @@ void bind_chip_class(py::module_& m) {
           py::arg("name"))
       .def(
           "poke_reg",
-          [](PyChip& c, std::string_view name, std::uint16_t v) {
+          [](PyChip& c, std::string_view name, std::int64_t v) {
+            // Checked against the register's bits before any access, in dpc31 serve's words.
+            const RegDesc& r = reg_desc(c.chip, name);
+            const std::uint16_t value = reg_value("value", v, r.mask());
             c.enter(true);
-            return c.chip.poke_reg(reg_id(c.chip, name), v);
+            return c.chip.poke_reg(r.id, value);
           },
           py::arg("name"), py::arg("value"))
       .def(

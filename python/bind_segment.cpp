@@ -744,15 +744,14 @@ void bind_segment_scenario(py::module_& m) {
           "load",
           [fail](const std::string& path) {
             SegmentScenario s;
+            Scenario single;
             ScenarioError err;
-            const SegmentLoad l = load_segment_scenario(path_arg(path, "path"), s, err);
+            // A file that cannot be read or is no scenario at all: Scenario.load's words for it.
+            const SegmentLoad l = load_segment_scenario(path_arg(path, "path"), s, single, err);
+            if (l == SegmentLoad::error) fail(err);
             if (l == SegmentLoad::not_segment) {
-              // A file that cannot be read or is no scenario at all: Scenario.load's words for it.
-              Scenario single;
-              if (!load_scenario(path, single, err)) fail(err);
               raise(errors().scenario, path + ": not a segment scenario (use Scenario.load)");
             }
-            if (l == SegmentLoad::error) fail(err);
             return s;
           },
           py::arg("path"))

@@ -157,6 +157,10 @@ bool load_scenario(const std::string& path, Scenario& out, ScenarioError& err);
 // it ("" if none could), judged on the descriptor it is read from. False with `err.message`.
 bool read_scenario_file(const std::string& path, std::string& text, std::string& untrusted,
                         ScenarioError& err);
+// load_scenario() on what read_scenario_file() gave (a pipe gives its text only once): a cut last
+// line is refused, then the text is parsed and `untrusted` kept with it.
+bool parse_scenario_file(std::string_view text, const std::string& path,
+                         const std::string& untrusted, Scenario& out, ScenarioError& err);
 // The one line that refuses a plug-in an untrusted scenario names (`untrusted`: why it is).
 [[nodiscard]] std::string plugin_refused_untrusted(const std::string& untrusted);
 

@@ -28,8 +28,9 @@ bool read_scenario_file(const std::string& path, std::string& text, std::string&
   untrusted.clear();
   struct stat st {};
   if (fd >= 0 && ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode)) untrusted = untrusted_code(fd, path);
-  const bool read = read_text_file(fd >= 0 ? fmt::format("/proc/self/fd/{}", fd) : path,
-                                   kMaxFileBytes, "scenario", text, err.message);
+  // (When it cannot be opened, read_text_file() says why in its words.)
+  const bool read = fd >= 0 ? read_text_fd(fd, kMaxFileBytes, "scenario", text, err.message)
+                            : read_text_file(path, kMaxFileBytes, "scenario", text, err.message);
   if (fd >= 0) ::close(fd);
   return read;
 }
@@ -37,7 +38,13 @@ bool read_scenario_file(const std::string& path, std::string& text, std::string&
 bool load_scenario(const std::string& path, Scenario& out, ScenarioError& err) {
   std::string text;
   std::string untrusted;
-  if (!read_scenario_file(path, text, untrusted, err)) return false;
+  return read_scenario_file(path, text, untrusted, err) &&
+         parse_scenario_file(text, path, untrusted, out, err);
+}
+
+bool parse_scenario_file(std::string_view text, const std::string& path,
+                         const std::string& untrusted, Scenario& out, ScenarioError& err) {
+  err = ScenarioError{path, 0, {}};
   err.line = cut_or_earlier_error(text, err.message, [&](const std::string& whole, std::string& m) {
     Scenario s;
     ScenarioError e;

@@ -401,14 +401,22 @@ bool parse_segment_scenario(std::string_view text, const std::string& file, Segm
   return true;
 }
 
-SegmentLoad load_segment_scenario(const std::string& path, SegmentScenario& out,
+SegmentLoad load_segment_scenario(const std::string& path, SegmentScenario& out, Scenario& single,
                                   ScenarioError& err) {
   std::string text;
   std::string untrusted;
-  if (!read_scenario_file(path, text, untrusted, err)) {
-    return SegmentLoad::not_segment;  // the ordinary loader says why, in its words
+  if (!read_scenario_file(path, text, untrusted, err)) return SegmentLoad::error;
+  return parse_segment_file(text, path, untrusted, out, single, err);
+}
+
+SegmentLoad parse_segment_file(std::string_view text, const std::string& path,
+                               const std::string& untrusted, SegmentScenario& out, Scenario& single,
+                               ScenarioError& err) {
+  if (!is_segment_scenario(text)) {
+    return parse_scenario_file(text, path, untrusted, single, err) ? SegmentLoad::not_segment
+                                                                   : SegmentLoad::error;
   }
-  if (!is_segment_scenario(text)) return SegmentLoad::not_segment;
+  err = ScenarioError{path, 0, {}};
   if ((err.line = cut_off_line(text, err.message)) != 0) return SegmentLoad::error;
   if (!parse_segment_scenario(text, path, out, err)) return SegmentLoad::error;
   out.untrusted = untrusted;

@@ -100,9 +100,16 @@ struct SegmentScenario {
 [[nodiscard]] bool is_segment_scenario(std::string_view text);
 bool parse_segment_scenario(std::string_view text, const std::string& file, SegmentScenario& out,
                             ScenarioError& err);
-// A scenario file read (util/textfile, as load_scenario does) and parsed if it is a segment's.
+// A scenario file's text (read_scenario_file) parsed by its first command: a segment's into `out`
+// (ok), one chip's into `single` as parse_scenario_file() parses it (not_segment); error with
+// `err` when it does not parse.
 enum class SegmentLoad : std::uint8_t { not_segment, error, ok };
-SegmentLoad load_segment_scenario(const std::string& path, SegmentScenario& out,
+SegmentLoad parse_segment_file(std::string_view text, const std::string& path,
+                               const std::string& untrusted, SegmentScenario& out, Scenario& single,
+                               ScenarioError& err);
+// The same for the file at `path`, read once (a pipe gives its text only once); error with `err`
+// also when it cannot be read.
+SegmentLoad load_segment_scenario(const std::string& path, SegmentScenario& out, Scenario& single,
                                   ScenarioError& err);
 // The plug-ins its stations name, as the single chip's scenario does (docs/security.md, "Code a
 // command runs"): parsing never loads one; the caller checks its outputs against

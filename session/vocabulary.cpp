@@ -119,6 +119,11 @@ std::string profibus_rates() {
   return rates;
 }
 
+std::string range_error_text(std::string_view what, std::string_view value, std::uint64_t min,
+                             std::uint64_t max) {
+  return fmt::format("{} {} is out of range {}", what, value, range_text(min, max, value));
+}
+
 std::string not_a_profibus_rate(std::uint64_t baud) {
   if (baud <= UINT32_MAX && baud_code(static_cast<std::uint32_t>(baud)) >= 0) return {};
   return fmt::format("baud {} is not a PROFIBUS rate ({})", baud, profibus_rates());

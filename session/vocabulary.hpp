@@ -75,6 +75,10 @@ inline constexpr ValueRange kBoardBase{"base", 0, 0xF000};
 [[nodiscard]] std::string range_text(std::uint64_t min, std::uint64_t max, std::string_view value);
 // "WHAT VALUE out of range (MIN..MAX)", VALUE as the user wrote it, the range in its base.
 [[nodiscard]] std::string out_of_range(const ValueRange& r, std::string_view value);
+// "WHAT VALUE is out of range (MIN..MAX)": `dpc31 serve`'s words for a command's number (ERR
+// range), which the Python module's Chip gives for the same calls.
+[[nodiscard]] std::string range_error_text(std::string_view what, std::string_view value,
+                                           std::uint64_t min, std::uint64_t max);
 // The ten PROFIBUS rates the chips' baud search knows, slowest first: "9600, 19200, ..., 12000000".
 [[nodiscard]] std::string profibus_rates();
 // "" for one of them, else why not: "baud 12345 is not a PROFIBUS rate (9600, ...)".

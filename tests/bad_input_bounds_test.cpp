@@ -3,7 +3,9 @@
 // attack at the size it was found, under an address-space limit: exit 2 and one line.
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <string>
+#include <utility>
 
 #include "bad_input.hpp"
 
@@ -93,6 +95,26 @@ TEST_F(BadInput, WaveformDeclarationsAreBounded) {
   expect_bad(wavediff("long.fst"), "long.fst:0: a scope path longer than 16384 bytes",
              "long scopes, FST");
   expect_bad(wavediff("deep.fst"), "deep.fst:0: scopes nested deeper than 256", "deep scopes, FST");
+}
+
+// An FST from a pipe is copied into memory first (fstapi seeks): `wavediff /dev/zero a.vcd` (a
+// first byte 0 reads as FST) filled 9.5 GB in 8 s. At most 1 GiB is held: a pipe of exactly that
+// much is read whole (and is no FST), one byte more is refused. Bounded input, and a timeout.
+TEST_F(BadInput, AnFstFromAPipeIsBoundedInMemory) {
+  file("ok.vcd", vcd_deep_scopes(2));
+  const std::uint64_t cap = std::uint64_t{1} << 30;
+  for (const auto& [bytes, line] :
+       {std::pair{cap, std::string("/dev/stdin:0: not a readable FST file")},
+        std::pair{cap + 1, std::string("/dev/stdin:0: an FST from a pipe is held in memory, at "
+                                       "most 1 GiB: give a larger one as a file")}}) {
+    const std::string out = (root_ / "io" / "out").string();
+    const std::string err = (root_ / "io" / "err").string();
+    const testutil::CommandResult c = testutil::run_command(
+        "cd " + (root_ / "work").string() + " && head -c " + std::to_string(bytes) +
+        " /dev/zero | (" + bounded(kCli + " wavediff /dev/stdin ok.vcd >" + out + " 2>" + err) +
+        ")");
+    expect_bad(Outcome{c.rc, slurp(out), slurp(err)}, line, std::to_string(bytes) + " bytes");
+  }
 }
 
 // The findings, as reproduced: a shard's summary with 400 KB of nested arrays in a result made

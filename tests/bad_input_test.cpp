@@ -141,13 +141,36 @@ TEST_F(BadInput, RunOptionValues) {
   expect_bad(dpc31("run " + scn + " --vcd old.vcd --timescale 3ns"),
              "dpc31 run: --timescale '3ns': use 1, 10 or 100 with fs, ps, ns, us or ms, or 1s",
              "timescale");
-  // Above 1 s, and with no waveform asked for: refused all the same.
+  // Above 1 s: refused all the same.
   expect_bad(dpc31("run " + scn + " --la-vcd old.vcd --timescale 10s"),
              "dpc31 run: --timescale '10s': use 1, 10 or 100 with fs, ps, ns, us or ms, or 1s",
              "timescale above 1 s");
-  expect_bad(dpc31("run " + scn + " --timescale ps"),
-             "dpc31 run: --timescale 'ps': use 1, 10 or 100 with fs, ps, ns, us or ms, or 1s",
-             "timescale without a waveform");
+  // A waveform's option without a waveform acts on nothing: refused whatever its value ("No
+  // silent options"; a good --timescale, --signals, --from and --to were ignored), for one chip
+  // and for a segment.
+  const std::string any = ": a waveform option needs --vcd, --fst or --la-vcd";
+  for (const std::string& s : {scn, kTraces + "segment/two_masters.scn"}) {
+    for (const auto& [args, line] : std::vector<std::pair<std::string, std::string>>{
+             {"--timescale ps", "--timescale ps" + any},
+             {"--timescale 1ns", "--timescale 1ns" + any},
+             {"--signals nomatch", "--signals nomatch" + any},
+             {"--signals 'pins.*,state.*'", "--signals pins.*,state.*" + any},
+             {"--from 10 --to 20", "--from 10" + any},
+             {"--to 20", "--to 20" + any},
+             {"--from 0", "--from 0" + any},
+             {"--flat", "--flat: a waveform option needs --vcd or --fst"},
+             {"--flat --la-vcd new.vcd", "--flat: a waveform option needs --vcd or --fst"}}) {
+      const Outcome r = dpc31("run " + s + " " + args);
+      expect_bad(r, "dpc31 run: " + line, s + " " + args);
+      EXPECT_EQ(r.out, "") << args;  // nothing ran
+    }
+  }
+  // --la-vcd is a waveform: the options act on it.
+  const Outcome la = dpc31("run " + scn +
+                           " --quiet --la-vcd new.vcd --signals 'pins.*' --from 10 "
+                           "--to 100000 --timescale 1ns");
+  EXPECT_EQ(la.rc, 0) << la.err;
+  EXPECT_TRUE(fs::remove(path("new.vcd")));
   expect_bad(dpc31("run " + scn + " --quiet --vcd old.vcd --fst new.fst --signals nosuch"),
              "dpc31 run: no signal matches 'nosuch' (see docs/waveforms.md)", "signals");
   // CLI11's wording after our prefix.
@@ -605,6 +628,21 @@ TEST_F(BadWaves, VcdFiles) {
        "ELF\x01\x02\x03\n");
   // The reader splits words at control characters; the one quoted is shown escaped.
   expect_refused("garbage.vcd", "garbage.vcd:1: unexpected '\\x7FELF' in the header", "garbage");
+  // A token is quoted as the other parsers quote one (util/textfile's shown()): its first 40
+  // characters and "..." (a 20 MB token was a 20 MB line).
+  const std::string huge(std::size_t{1} << 21, 'q');
+  const std::string cut = std::string(40, 'q') + "...";
+  const std::string next_line = std::to_string(std::count(vcd_.begin(), vcd_.end(), '\n') + 1);
+  file("long_header.vcd", huge + "\n");
+  expect_refused("long_header.vcd", "long_header.vcd:1: unexpected '" + cut + "' in the header",
+                 "a long token in the header");
+  file("long_value.vcd", vcd_ + huge + "\n");
+  expect_refused("long_value.vcd", "long_value.vcd:" + next_line + ": unexpected '" + cut + "'",
+                 "a long token for a value");
+  file("long_id.vcd", vcd_ + "1" + huge + "\n");
+  expect_refused("long_id.vcd",
+                 "long_id.vcd:" + next_line + ": undeclared identifier '" + cut + "'",
+                 "a long identifier");
 }
 
 TEST_F(BadWaves, FstFiles) {
@@ -675,6 +713,11 @@ TEST_F(BadWaves, MapFileOptionsAndOutputs) {
   expect_refused("good.vcd --map missing.map",
                  "missing.map:0: cannot open: No such file or directory", "map missing");
   expect_refused("good.vcd --map dir", "dir:0: cannot open: is a directory", "map directory");
+  const std::string huge(std::size_t{1} << 21, 'n');
+  file("long.map", huge + " = a\n" + huge + " = b\n");
+  expect_refused("good.vcd --map long.map",
+                 "long.map:2: '" + std::string(40, 'n') + "...' is already mapped on line 1",
+                 "map: a long name twice");
   expect_refused("good.vcd --start 5",
                  "dpc31 wavediff: --start: '5' is not a time (a number and s, ms, us, ns, ps or "
                  "fs; e.g. 100ns)",
@@ -916,8 +959,14 @@ TEST_F(BadInput, FirmwareFaults) {
     expect_bad(
         dpc31("soak --profile vpc3plus --cycles 5e6 --firmware " + lib + " --json o/soak.json"),
         "dpc31 soak: " + line, lib + " soak");
+    // The demo has no scenario file to name; the directories it made for its files are gone
+    // (an empty TMPDIR/dpc31-demo-XXXXXX, an --out-dir and its parents were left).
     expect_bad(dpc31("demo --profile vpc3plus --firmware " + lib + " --out-dir o"),
-               "dpc31 demo: <demo>: " + line, lib + " demo");
+               "dpc31 demo: " + line, lib + " demo");
+    expect_bad(dpc31("demo --profile vpc3plus --firmware " + lib + " --out-dir made/new"),
+               "dpc31 demo: " + line, lib + " demo, a new --out-dir");
+    expect_bad(dpc31("demo --profile vpc3plus --firmware " + lib, "TMPDIR=" + path("o")),
+               "dpc31 demo: " + line, lib + " demo in TMPDIR");
     EXPECT_EQ(listing(), (std::vector<std::string>{"fault.scn", "o"})) << lib;  // no symlink
     EXPECT_TRUE(fs::is_empty(path("o"))) << lib;
   }

@@ -122,8 +122,9 @@ TEST_F(BadInput, AFailedWriteToTheStandardOutputIsExit2) {
     EXPECT_EQ(r.rc, 2) << args;
     EXPECT_EQ(slurp(err), want + "\n") << args;
   }
-  // The demo stopped where its write failed: none of its files was left half-written.
-  EXPECT_TRUE(fs::is_empty(path("demo")));
+  // The demo stopped where its write failed: none of its files was left half-written, nor the
+  // directory it made for them.
+  EXPECT_FALSE(fs::exists(path("demo")));
 }
 
 // An output that names an input, or another output, is refused before any work: the scenario,
@@ -335,6 +336,34 @@ TEST_F(BadInput, WavediffReadsAPipeLikeTheFile) {
   const testutil::CommandResult r =
       testutil::run_command("bash -c '" + kCli + " wavediff " + fst + " <(cat " + fst + ")' 2>&1");
   EXPECT_EQ(r.rc, 0) << r.out;
+}
+
+// `dpc31 run` reads its scenario once (docs/scenario-format.md): a pipe, /dev/stdin and a FIFO
+// play as the file does, a segment's scenario too, and --record heads its trace with the piped
+// text's comments. It opened the file again to parse it: "/dev/fd/63: no commands: nothing to
+// run", exit 2, and a FIFO waited for a second writer.
+TEST_F(BadInput, RunReadsAPipeOrAFifoLikeTheFile) {
+  ASSERT_EQ(dpc31("run " + kScn + " --quiet --record file.trace").rc, 0);
+  const std::string segment = kTraces + "segment/three_slaves.scn";
+  for (const std::string& cmd : std::vector<std::string>{
+           "bash -c '" + kCli + " run <(cat " + kScn + ") --quiet --record pipe.trace'",
+           "cat " + kScn + " | " + kCli + " run /dev/stdin --quiet",
+           "bash -c '" + kCli + " run <(cat " + segment + ") --quiet'",
+           "mkfifo fifo && { cat " + kScn + " > fifo & timeout 10 " + kCli +
+               " run fifo --quiet; rc=$?; wait; exit $rc; }"}) {
+    const testutil::CommandResult r =
+        testutil::run_command("cd " + (root_ / "work").string() + " && " + cmd + " 2>&1");
+    EXPECT_EQ(r.rc, 0) << cmd << "\n" << r.out;
+  }
+  // The piped file's trace is the file's, but for the name in its "recorded ... from" line.
+  const std::string file = slurp(path("file.trace"));
+  const std::string pipe = slurp(path("pipe.trace"));
+  const std::size_t f = file.find("# recorded by");
+  const std::size_t p = pipe.find("# recorded by");
+  ASSERT_NE(f, std::string::npos);
+  ASSERT_NE(p, std::string::npos);
+  EXPECT_EQ(pipe.substr(0, p), file.substr(0, f));
+  EXPECT_EQ(pipe.substr(pipe.find('\n', p)), file.substr(file.find('\n', f)));
 }
 
 }  // namespace

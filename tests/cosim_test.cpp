@@ -227,6 +227,32 @@ TEST(Cosim, BrokenTracesAreRejectedWithFileAndLine) {
   EXPECT_TRUE(s[2].bus_wr && s[2].ev_gc && s[2].gc_cmd == 0x20 && s[2].bus_wdata == 0x01);
 }
 
+// Hex in a stimulus line reads in either case (`1 rd 000A` was "bad operand of 'rd'"): a line
+// edited by hand means what the writer's lower case means, and is written back in lower case.
+// A sign, a prefix or a fifth digit is still refused.
+TEST(Cosim, UpperCaseHexInAStimulusLineReadsAsLowerCase) {
+  Stimulus upper;
+  Stimulus lower;
+  std::string e;
+  ASSERT_TRUE(
+      parse_trace("1 rd 000A\n2 wr 0A5F<-C3 ev_irq(FFFF) ev_gc(2A)\n"
+                  "3 ev_sap_ind(1ABC,Ff) ev_sap_srd(00Cd)\nend 4\n",
+                  "upper.trace", upper, e))
+      << e;
+  ASSERT_TRUE(
+      parse_trace("1 rd 000a\n2 wr 0a5f<-c3 ev_irq(ffff) ev_gc(2a)\n"
+                  "3 ev_sap_ind(1abc,ff) ev_sap_srd(00cd)\nend 4\n",
+                  "lower.trace", lower, e))
+      << e;
+  EXPECT_EQ(upper, lower);
+  EXPECT_EQ(upper[1].bus_addr, 0x000A);
+  EXPECT_EQ(upper[2].describe(), "wr 0a5f<-c3 ev_irq(ffff) ev_gc(2a)");
+  for (const char* bad : {"1 rd +00A", "1 rd -001", "1 rd 0x0A", "1 rd 0000A", "1 rd 00G0"}) {
+    EXPECT_FALSE(parse_trace(std::string(bad) + "\nend 2\n", "bad.trace", upper, e)) << bad;
+    EXPECT_EQ(e, "bad.trace:1: bad operand of 'rd': ADDR, hex 0..ffff expected") << bad;
+  }
+}
+
 // Issue 15 item 6: the stimulus vocabulary is one table. Every input of docs/golden-model.md's
 // event table has its trace token (docs/golden-model.md, "Stimulus traces"), ev_dx and
 // ev_prm_fault included, which the parser of the first round did not know; a line reads back as

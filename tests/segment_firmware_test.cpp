@@ -151,8 +151,9 @@ TEST(FirmwareCHost, AStationAddressBeyond125IsNoModule) {
 
 TEST(SegmentFirmwareScenario, ShippedThreeSlavesScenarioPasses) {
   SegmentScenario s;
+  Scenario single;
   ScenarioError err;
-  ASSERT_EQ(load_segment_scenario(SOURCE_DIR "/traces/segment/three_slaves.scn", s, err),
+  ASSERT_EQ(load_segment_scenario(SOURCE_DIR "/traces/segment/three_slaves.scn", s, single, err),
             SegmentLoad::ok)
       << err.message;
   std::vector<std::string> errors;

@@ -137,6 +137,20 @@ def test_addresses_beyond_the_bus_are_refused_as_dpc31_serve_refuses_them(capfd)
     assert not re.search("beyond the", out + err)
 
 
+def test_a_register_value_beyond_its_bits_is_refused_as_dpc31_serve_refuses_it():
+    # poke_reg('R_TS_Adr', 0x100) returned True and stored 0x00; 0x10000 and -1 were TypeErrors.
+    chip = dpc31.Chip("spc3")
+    before = chip.peek_reg("R_TS_Adr")
+    for value in (0x100, 0x1FF, 0x10000, -1):
+        with pytest.raises(ValueError, match=rf"^value {value} is out of range \(0..255\)$"):
+            chip.poke_reg("R_TS_Adr", value)
+    assert chip.peek_reg("R_TS_Adr") == before  # nothing stored
+    with pytest.raises(ValueError, match=r"^value 65536 is out of range \(0..65535\)$"):
+        chip.poke_reg("Int_Mask_Reg", 0x10000)
+    assert chip.poke_reg("R_TS_Adr", 0xFF) and chip.peek_reg("R_TS_Adr") == 0xFF
+    assert chip.cycle == 0
+
+
 def test_a_dp_cycle_with_skip_takes_no_more_outputs_than_slaves():
     """dp_cycle(skip=) runs its own loop over the slaves: more outputs than slaves are refused
     there too, before anything is sent (DpMaster::check_outputs)."""

@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <array>
+#include <charconv>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -135,18 +136,15 @@ void set(Inputs& in, const EventInput& e, std::uint32_t value, std::uint8_t data
 // sap_entry is a 13-bit port, as bus_addr.
 constexpr std::uint32_t kSapEntryMax = 0x1FFF;
 
+// Up to 4 hex digits, either case (the writer writes lower case; a hand-edited line may not).
 bool parse_hex(std::string_view t, std::uint32_t max, std::uint32_t& v) {
   if (t.empty() || t.size() > 4) return false;
-  v = 0;
-  for (char ch : t) {
-    const int d = ch >= '0' && ch <= '9' ? ch - '0' : ch >= 'a' && ch <= 'f' ? ch - 'a' + 10 : -1;
-    if (d < 0) return false;
-    v = v * 16 + static_cast<std::uint32_t>(d);
-  }
-  return v <= max;
+  const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), v, 16);
+  return ec == std::errc() && end == t.data() + t.size() && v <= max;
 }
 
-// How a trace line spells an event's operand, for the message when it does not (hex: lowercase).
+// How a trace line spells an event's operand, for the message when it does not (hex, written in
+// lower case).
 std::string_view operand_syntax(Arg a) {
   switch (a) {
     case Arg::none:

@@ -79,7 +79,7 @@ std::uint64_t number(std::string_view s, std::uint64_t max, std::string_view wha
     throw Fail{"syntax", fmt::format("{} '{}' is not a number (decimal or 0x hex)", what, s)};
   }
   if (ec == std::errc::result_out_of_range || v > max || v < min) {
-    throw Fail{"range", fmt::format("{} {} is out of range {}", what, s, range_text(min, max, s))};
+    throw Fail{"range", range_error_text(what, s, min, max)};
   }
   return v;
 }

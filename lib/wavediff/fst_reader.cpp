@@ -23,6 +23,7 @@
 #include "child.hpp"
 #include "fst_chain.hpp"
 #include "gtkwave/fstapi.h"
+#include "textfile.hpp"
 #include "wave_reader_impl.hpp"
 
 namespace dpc31::wavediff {
@@ -163,7 +164,7 @@ class FstReader final : public WaveReader {
           fail(path_, 0,
                fmt::format("not a readable FST file (corrupt: the variable '{}' has {} in the "
                            "hierarchy and {} in the geometry block)",
-                           std::string_view(hv.name, std::min<std::size_t>(hv.name_length, 60)),
+                           shown(std::string_view(hv.name, hv.name_length)),
                            real ? "a real" : fmt::format("{} bits", hv.length),
                            hv.handle > geometry_.size() ? "no entry"
                            : geom == 0                  ? "a real"

@@ -13,6 +13,7 @@
 #include <unordered_set>
 
 #include "engine.hpp"
+#include "textfile.hpp"
 
 namespace dpc31::wavediff {
 
@@ -94,10 +95,10 @@ std::vector<MapEntry> read_map(const std::string& path) {
     };
     if (blank(e.a) || blank(e.b)) fail(path, n, "expected 'nameA = nameB' (one name on each side)");
     if (auto it = seen_a.find(e.a); it != seen_a.end()) {
-      fail(path, n, fmt::format("'{}' is already mapped on line {}", e.a, it->second));
+      fail(path, n, fmt::format("'{}' is already mapped on line {}", shown(e.a), it->second));
     }
     if (auto it = seen_b.find(e.b); it != seen_b.end()) {
-      fail(path, n, fmt::format("'{}' is already mapped on line {}", e.b, it->second));
+      fail(path, n, fmt::format("'{}' is already mapped on line {}", shown(e.b), it->second));
     }
     seen_a.emplace(e.a, n);
     seen_b.emplace(e.b, n);

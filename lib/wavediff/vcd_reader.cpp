@@ -14,6 +14,7 @@
 #include <limits>
 #include <unordered_map>
 
+#include "textfile.hpp"
 #include "wave_reader_impl.hpp"
 
 namespace dpc31::wavediff {
@@ -340,7 +341,7 @@ class VcdReader final : public WaveReader {
   void at_eof();
   std::uint32_t lookup(std::string_view id, std::uint64_t line) const {
     const std::uint32_t s = ids_.find(id);
-    if (s == kNone) error(line, fmt::format("undeclared identifier '{}'", id));
+    if (s == kNone) error(line, fmt::format("undeclared identifier '{}'", shown(id)));
     return s;
   }
   std::uint64_t parse_time(std::string_view t) const {
@@ -360,7 +361,7 @@ class VcdReader final : public WaveReader {
     const char* e = t.data() + t.size();
     auto r = std::from_chars(b, e, v);
     if (b == e || r.ec != std::errc() || r.ptr != e) {
-      error(tok_line_, fmt::format("bad time '{}'", t));
+      error(tok_line_, fmt::format("bad time '{}'", shown(t)));
     }
     return v;
   }
@@ -385,7 +386,8 @@ void VcdReader::parse_header() {
       } while (tok_line_ == meta_line);
     }
     seen_any = true;
-    if (t.empty() || t[0] != '$') error(tok_line_, fmt::format("unexpected '{}' in the header", t));
+    if (t.empty() || t[0] != '$')
+      error(tok_line_, fmt::format("unexpected '{}' in the header", shown(t)));
     const std::string kw(t);
     const std::uint64_t kw_line = tok_line_;
     if (kw == "$enddefinitions") {
@@ -402,7 +404,8 @@ void VcdReader::parse_header() {
       std::string text;
       for (const auto& s : a) text += s;
       if (!parse_timescale(text, ts_pow_)) {
-        error(kw_line, fmt::format("bad timescale '{}' (1, 10 or 100 of s ms us ns ps fs)", text));
+        error(kw_line,
+              fmt::format("bad timescale '{}' (1, 10 or 100 of s ms us ns ps fs)", shown(text)));
       }
     } else if (kw == "$var") {
       if (a.size() < 4) error(kw_line, "bad $var (expected '$var type size id name $end')");
@@ -412,7 +415,7 @@ void VcdReader::parse_header() {
       auto r = std::from_chars(a[1].data(), a[1].data() + a[1].size(), width);
       if (r.ec != std::errc() || r.ptr != a[1].data() + a[1].size() || width == 0 ||
           width > (1u << 24)) {
-        error(kw_line, fmt::format("bad $var size '{}'", a[1]));
+        error(kw_line, fmt::format("bad $var size '{}'", shown(a[1])));
       }
       const bool real = is_real_type(a[0]);
       std::string ref;
@@ -437,7 +440,7 @@ void VcdReader::parse_header() {
         codes_ += fmt::format("{} {}\n", a[2], slot);
       } else if (slots_[slot].real != real || (!real && slots_[slot].width != width)) {
         error(kw_line,
-              fmt::format("identifier '{}' declared again with another type or size", a[2]));
+              fmt::format("identifier '{}' declared again with another type or size", shown(a[2])));
       }
       v.slot = slot;
       vars_.push_back(std::move(v));
@@ -458,7 +461,7 @@ void VcdReader::keyword(std::string_view t) {
   } else if (t == "$comment") {
     until_end("$comment");
   } else {
-    error(tok_line_, fmt::format("unexpected '{}' after $enddefinitions", t));
+    error(tok_line_, fmt::format("unexpected '{}' after $enddefinitions", shown(t)));
   }
 }
 
@@ -467,13 +470,13 @@ void VcdReader::apply(std::string_view t) {
   const std::uint64_t at = tok_line_;
   if (c == 'b' || c == 'B') {
     std::string_view val = t.substr(1);
-    if (val.empty()) error(at, fmt::format("bad value '{}'", t));
+    if (val.empty()) error(at, fmt::format("bad value '{}'", shown(t)));
     bool plain = true;  // only 0 1 x z: used as it is, without a copy
     std::size_t i0 = 0;
     while (val.size() - i0 >= 8 && all_binary(load8(val.data() + i0))) i0 += 8;
     for (const char ch : val.substr(i0)) {
       const char v = kValueChar[static_cast<unsigned char>(ch)];
-      if (v == 0) error(at, fmt::format("bad vector value '{}'", t));
+      if (v == 0) error(at, fmt::format("bad vector value '{}'", shown(t)));
       plain = plain && v == ch;
     }
     if (!plain) {
@@ -499,13 +502,14 @@ void VcdReader::apply(std::string_view t) {
     }
     const std::uint32_t si = lookup(id, at);
     Slot& s = slots_[si];
-    if (s.real) error(at, fmt::format("vector value for real variable '{}'", id));
+    if (s.real) error(at, fmt::format("vector value for real variable '{}'", shown(id)));
     const std::size_t n = val.size();
     if (n >= s.width) {
       const std::size_t extra = n - s.width;
       for (std::size_t i = 0; i < extra; ++i) {
         if (val[i] != '0') {
-          error(at, fmt::format("value of {} bits for '{}' declared with {}", n, id, s.width));
+          error(at,
+                fmt::format("value of {} bits for '{}' declared with {}", n, shown(id), s.width));
         }
       }
       std::memcpy(s.bits.data(), val.data() + extra, s.width);
@@ -524,24 +528,24 @@ void VcdReader::apply(std::string_view t) {
     const char* e = t.data() + t.size();
     auto r = std::from_chars(b, e, d);
     if (b == e || r.ec != std::errc() || r.ptr != e)
-      error(at, fmt::format("bad real value '{}'", t));
+      error(at, fmt::format("bad real value '{}'", shown(t)));
     std::string_view id;
     if (!next_token(id)) {
       error(at, "truncated: real value without identifier");
     }
     const std::uint32_t si = lookup(id, at);
     Slot& s = slots_[si];
-    if (!s.real) error(at, fmt::format("real value for non-real variable '{}'", id));
+    if (!s.real) error(at, fmt::format("real value for non-real variable '{}'", shown(id)));
     s.value = d;
     touch(si);
     return;
   }
   const char v = kValueChar[static_cast<unsigned char>(c)];
-  if (v == 0) error(at, fmt::format("unexpected '{}'", t));
-  if (t.size() < 2) error(at, fmt::format("value '{}' without identifier", t));
+  if (v == 0) error(at, fmt::format("unexpected '{}'", shown(t)));
+  if (t.size() < 2) error(at, fmt::format("value '{}' without identifier", shown(t)));
   const std::uint32_t si = lookup(t.substr(1), at);
   Slot& s = slots_[si];
-  if (s.real) error(at, fmt::format("scalar value for real variable '{}'", t.substr(1)));
+  if (s.real) error(at, fmt::format("scalar value for real variable '{}'", shown(t.substr(1))));
   if (s.width == 1) {
     s.bits[0] = v;
   } else {
@@ -613,7 +617,7 @@ const std::vector<std::uint32_t>& VcdReader::step() {
     if (c == '#') {
       const std::uint64_t nt = parse_time(t);
       if (nt < time_) {
-        error(tok_line_, fmt::format("time goes backwards ({} after {})", t, time_));
+        error(tok_line_, fmt::format("time goes backwards ({} after {})", shown(t), time_));
       }
       if (nt == time_) continue;
       pending_ = nt;

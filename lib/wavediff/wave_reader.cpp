@@ -207,13 +207,23 @@ std::unique_ptr<WaveReader> open_wave(const std::string& path) {
     const int fd = in.release();
     return open_fst(path, fd, fmt::format("/proc/self/fd/{}", fd));
   }
-  // fstapi seeks: what the pipe gives goes into an anonymous memory file first.
+  // fstapi seeks: what the pipe gives goes into an anonymous memory file first, up to a bound
+  // (it is memory; /dev/zero would fill it without end). A file is read in place, unbounded.
+  constexpr std::uint64_t kMaxPipedFst = std::uint64_t{1} << 30;
   FdGuard mem{::memfd_create("dpc31-wavediff", MFD_CLOEXEC)};
   if (mem.fd < 0) fail(path, 0, fmt::format("cannot buffer the pipe: {}", std::strerror(errno)));
   std::vector<char> buf(1 << 16);
   buf[0] = static_cast<char>(first);
   std::size_t have = 1;
+  std::uint64_t total = 0;
   for (;;) {
+    total += have;
+    if (total > kMaxPipedFst) {
+      fail(path, 0,
+           fmt::format("an FST from a pipe is held in memory, at most {} GiB: give a larger one "
+                       "as a file",
+                       kMaxPipedFst >> 30));
+    }
     if (::write(mem.fd, buf.data(), have) != static_cast<ssize_t>(have)) {
       fail(path, 0, fmt::format("cannot buffer the pipe: {}", std::strerror(errno)));
     }

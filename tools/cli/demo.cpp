@@ -1,13 +1,16 @@
 #include "demo.hpp"
 
 #include <fmt/core.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <string>
+#include <vector>
 
+#include "cleanup.hpp"
 #include "dpc31/dp.hpp"
 #include "firmware_host.hpp"
 #include "harness.hpp"
@@ -165,10 +168,34 @@ expect dp_state Data_Exchange
                      opt.bus == BusMode::intel ? "intel" : "motorola", firmware, outputs, outputs);
 }
 
-// The files the demo writes, in `out_dir`.
+// The directories the demo made for its files (mkdtemp's, or --out-dir and the parents it
+// created), deepest first: removed again unless its files are written, also by a signal or the
+// hang guard (cleanup.hpp), so that a demo that fails leaves nothing behind. Only empty ones go.
+class MadeDirs {
+ public:
+  MadeDirs() = default;
+  MadeDirs(const MadeDirs&) = delete;
+  MadeDirs& operator=(const MadeDirs&) = delete;
+  ~MadeDirs() {
+    for (const std::string& d : dirs_) ::rmdir(d.c_str());
+  }
+  void add(const std::string& dir) {
+    dirs_.push_back(dir);
+    entries_.push_back(cleanup::Entry::dir(dir));
+  }
+  void keep() {
+    dirs_.clear();
+    entries_.clear();
+  }
+
+ private:
+  std::vector<std::string> dirs_;
+  std::vector<cleanup::Entry> entries_;
+};
+
+// The files the demo writes, in `out_dir`. No scenario file: its failures name none.
 RunOptions demo_outputs(const std::string& out_dir, const std::string& timescale) {
   RunOptions ro;
-  ro.scenario = "<demo>";
   ro.vcd = (std::filesystem::path(out_dir) / "dpc31-demo.vcd").string();
   ro.la_vcd = (std::filesystem::path(out_dir) / "dpc31-demo-la.vcd").string();
   ro.gtkw = (std::filesystem::path(out_dir) / "dpc31-demo.gtkw").string();
@@ -192,7 +219,7 @@ int run_dp_session(const ChipOptions& opt, const RunOptions& ro, ChipRun& run,
   }
   ScenarioOutcome o;
   const int rc = run.run(
-      sc, [out](const std::string& line) { fmt::print(out, "{}\n", line); },
+      sc, text, [out](const std::string& line) { fmt::print(out, "{}\n", line); },
       [](const std::string& line) { fmt::print(stderr, "{}\n", line); }, o);
   if (rc == 2) return rc;
   const double hz = Chip(opt).clock_hz();
@@ -242,6 +269,7 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option, const std::stri
   // wherever that led.
   std::string out_dir = out_dir_option;
   std::error_code ec;
+  MadeDirs made;
   if (out_dir.empty()) {
     std::string error;
     out_dir = outfile::make_temp_dir("dpc31-demo-", error);
@@ -249,7 +277,12 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option, const std::stri
       fmt::print(stderr, "dpc31 demo: {}\n", error);
       return 2;
     }
+    made.add(out_dir);
   } else {
+    for (std::filesystem::path d = out_dir; !d.empty() && !std::filesystem::exists(d, ec);
+         d = d.parent_path()) {
+      made.add(d.string());
+    }
     std::filesystem::create_directories(out_dir, ec);
     if (ec || !std::filesystem::is_directory(out_dir)) {
       fmt::print(stderr, "dpc31 demo: {}: cannot create the output directory: {}\n", out_dir,
@@ -345,7 +378,9 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option, const std::stri
   n.write(RegId::Mode_Reg1_S, m1::EOI);
   fmt::print(out, "\nregister session done at cycle {} ({:.3f} ms of chip time)\n", chip.cycle(),
              static_cast<double>(chip.cycle()) * 1e3 / chip.clock_hz());
-  return run_dp_session(opt, ro, run, firmware, out);
+  const int rc = run_dp_session(opt, ro, run, firmware, out);
+  if (rc != 2) made.keep();
+  return rc;
 }
 
 }  // namespace dpc31::cli

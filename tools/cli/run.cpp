@@ -2,10 +2,11 @@
 
 #include <fmt/core.h>
 
-#include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
+#include <string_view>
 #include <tuple>
 #include <utility>
 #include <vector>
@@ -44,21 +45,17 @@ nlohmann::json summary(const Scenario& s, const ScenarioOutcome& o) {
   };
 }
 
-// The run with everything asked for watching it: a trace recorder (--record), a waveform
-// (--vcd / --fst) and a telegram capture (--pcap). Nothing is written unless the run completes.
-int run_with_outputs(const RunOptions& opt, const LineSink& walk, const LineSink& errors,
-                     Scenario& s, ScenarioOutcome& o, std::FILE* err) {
+// The run of the parsed `s` with everything asked for watching it: a trace recorder (--record), a
+// waveform (--vcd / --fst) and a telegram capture (--pcap). Nothing is written unless the run
+// completes.
+int run_with_outputs(const RunOptions& opt, std::string_view text, const LineSink& walk,
+                     const LineSink& errors, Scenario& s, std::FILE* err) {
   const std::vector<outfile::Named> outputs = {
       {"--json", opt.json},     {"--record", opt.record}, {"--vcd", opt.vcd},  {"--fst", opt.fst},
       {"--la-vcd", opt.la_vcd}, {"--pcap", opt.pcap},     {"--gtkw", opt.gtkw}};
   const std::string same = outfile::distinct({{"the scenario", opt.scenario}}, outputs);
   if (!same.empty()) {
     fmt::print(err, "dpc31 run: {}\n", same);
-    return 2;
-  }
-  ScenarioError perr;
-  if (!load_scenario(opt.scenario, s, perr)) {
-    errors(perr.text());
     return 2;
   }
   if (const std::string plugin_same =
@@ -71,15 +68,16 @@ int run_with_outputs(const RunOptions& opt, const LineSink& walk, const LineSink
   s.chip.engine = opt.engine;
   ChipRun run(opt, "dpc31 run", err);
   if (const int rc = run.open(); rc != 0) return rc;
-  return run.run(s, walk, errors, o);
+  ScenarioOutcome o;
+  return run.run(s, text, walk, errors, o);
 }
 
 }  // namespace
 
 // Its description, and for golden traces what was checked by hand.
-std::vector<std::string> leading_comments(const std::string& path) {
+std::vector<std::string> leading_comments(std::string_view text) {
   std::vector<std::string> out;
-  std::ifstream f(path, std::ios::binary);
+  std::istringstream f{std::string(text)};
   std::string line;
   bool first = true;
   while (std::getline(f, line)) {
@@ -111,6 +109,37 @@ std::string timescale_error(const std::string& t) {
   return fmt::format("--timescale '{}': use 1, 10 or 100 with fs, ps, ns, us or ms, or 1s", t);
 }
 
+std::string waveform_options_error(const RunOptions& opt) {
+  // --la-vcd takes the window, the signals and the unit too; it is always the flat form.
+  if (opt.vcd.empty() && opt.fst.empty()) {
+    const auto needs = [](const std::string& option, std::string_view waveforms) {
+      return fmt::format("{}: a waveform option needs {}", option, waveforms);
+    };
+    if (opt.flat) return needs("--flat", "--vcd or --fst");
+    if (!opt.gtkw.empty())
+      return fmt::format("--gtkw {}: a save file needs --vcd or --fst", opt.gtkw);
+    if (opt.la_vcd.empty()) {
+      constexpr std::string_view kAny = "--vcd, --fst or --la-vcd";
+      if (!opt.signals.empty()) {
+        std::string globs;
+        for (const std::string& g : opt.signals) globs += (globs.empty() ? "" : ",") + g;
+        return needs("--signals " + globs, kAny);
+      }
+      if (opt.from) return needs(fmt::format("--from {}", *opt.from), kAny);
+      if (opt.to) return needs(fmt::format("--to {}", *opt.to), kAny);
+      if (!opt.timescale.empty()) return needs("--timescale " + opt.timescale, kAny);
+    }
+  }
+  int unit_exp = 0;
+  if (!opt.timescale.empty() && !parse_timescale(opt.timescale, unit_exp))
+    return timescale_error(opt.timescale);
+  if (opt.to.value_or(UINT64_MAX) <= opt.from.value_or(0)) {
+    return fmt::format("--to {} is not after --from {}: an empty waveform window",
+                       opt.to.value_or(UINT64_MAX), opt.from.value_or(0));
+  }
+  return {};
+}
+
 std::vector<wave::Options> wave_options(const RunOptions& opt) {
   std::vector<wave::Options> out;
   for (const auto& [path, fst, flat] :
@@ -121,8 +150,8 @@ std::vector<wave::Options> wave_options(const RunOptions& opt) {
     w.path = path;
     w.fst = fst;
     w.signals = opt.signals;
-    w.from = opt.from;
-    w.to = opt.to;
+    w.from = opt.from.value_or(0);
+    w.to = opt.to.value_or(UINT64_MAX);
     w.flat = flat;
     // The save file opens --vcd, or --fst without it.
     if (path == (opt.vcd.empty() ? opt.fst : opt.vcd)) w.gtkw = opt.gtkw;
@@ -168,15 +197,7 @@ int ChipRun::open() {
   for (auto [path, out] : {std::pair{&opt.record, &m.rec_out}, std::pair{&opt.json, &m.json_out}}) {
     if (!path->empty() && !out->open(*path)) return m.fail(out->error());
   }
-  int unit_exp = 0;
-  if (!opt.timescale.empty() && !parse_timescale(opt.timescale, unit_exp))
-    return m.fail(timescale_error(opt.timescale));
-  if (opt.to <= opt.from) {
-    return m.fail(
-        fmt::format("--to {} is not after --from {}: an empty waveform window", opt.to, opt.from));
-  }
-  if (!opt.gtkw.empty() && opt.vcd.empty() && opt.fst.empty())
-    return m.fail(fmt::format("--gtkw {}: a save file needs --vcd or --fst", opt.gtkw));
+  if (const std::string e = waveform_options_error(opt); !e.empty()) return m.fail(e);
   std::string error;
   for (const wave::Options& w : wave_options(opt)) {
     auto& rec = m.waves.emplace_back(std::make_unique<wave::Recorder>(w));
@@ -186,14 +207,14 @@ int ChipRun::open() {
   return 0;
 }
 
-int ChipRun::run(const Scenario& s, const LineSink& walk, const LineSink& errors,
-                 ScenarioOutcome& o) {
+int ChipRun::run(const Scenario& s, std::string_view text, const LineSink& walk,
+                 const LineSink& errors, ScenarioOutcome& o) {
   Impl& m = *impl_;
   const RunOptions& opt = m.opt;
   std::unique_ptr<TraceRecorder> rec;
   ScenarioHooks hooks;
   if (!opt.record.empty()) {
-    std::vector<std::string> notes = leading_comments(opt.scenario);
+    std::vector<std::string> notes = leading_comments(text);
     if (!notes.empty()) notes.emplace_back();
     notes.push_back(
         fmt::format("recorded by `dpc31 run --record` from {} (docs/trace-format.md)", s.file));
@@ -231,7 +252,9 @@ int ChipRun::run(const Scenario& s, const LineSink& walk, const LineSink& errors
     if (bound.firmware_desc != nullptr) board::guard_hangs(m.command, bound.firmware_desc->name);
     o = run_scenario(bound, walk, errors, hooks);
   } catch (const FirmwareError& e) {
-    return m.fail(fmt::format("{}: {}", s.file, e.what()));
+    // "SCENARIO: " for a scenario file; the demo's own session has none.
+    return m.fail(opt.scenario.empty() ? std::string(e.what())
+                                       : fmt::format("{}: {}", opt.scenario, e.what()));
   }
   if (!attach_error.empty()) return m.fail(attach_error);
   const int rc = o.ok() ? 0 : 1;
@@ -254,21 +277,27 @@ int run_scenario_command(const RunOptions& opt, std::FILE* out, std::FILE* err) 
   LineSink walk;
   if (!opt.quiet) walk = [out](const std::string& line) { fmt::print(out, "{}\n", line); };
   const LineSink errors = [err](const std::string& line) { fmt::print(err, "{}\n", line); };
-  // A segment's scenario (docs/segment.md) has a runner of its own (run_segment.cpp).
+  // Read once: a pipe or a FIFO gives its text only once, and the text heads a --record trace. A
+  // segment's scenario (docs/segment.md) has a runner of its own (run_segment.cpp).
+  std::string text;
+  std::string untrusted;
   SegmentScenario seg;
+  Scenario s;
   ScenarioError serr;
-  switch (load_segment_scenario(opt.scenario, seg, serr)) {
+  if (!read_scenario_file(opt.scenario, text, untrusted, serr)) {
+    errors(serr.text());
+    return 2;
+  }
+  switch (parse_segment_file(text, opt.scenario, untrusted, seg, s, serr)) {
     case SegmentLoad::error:
       errors(serr.text());
       return 2;
     case SegmentLoad::ok:
-      return run_segment_command(opt, seg, walk, errors, err);
+      return run_segment_command(opt, seg, text, walk, errors, err);
     case SegmentLoad::not_segment:
       break;
   }
-  Scenario s;
-  ScenarioOutcome o;
-  return run_with_outputs(opt, walk, errors, s, o, err);
+  return run_with_outputs(opt, text, walk, errors, s, err);
 }
 
 }  // namespace dpc31::cli

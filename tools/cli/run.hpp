@@ -3,7 +3,9 @@
 #include <cstdint>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "scenario.hpp"
@@ -13,16 +15,16 @@
 namespace dpc31::cli {
 
 struct RunOptions {
-  std::string scenario;  // path of the .scn file
+  std::string scenario;  // path of the .scn file ("" for the demo's own session)
   bool quiet = false;    // no state walk; failures are still reported
   std::string json;      // write a JSON summary here ("" = none)
   std::string record;    // write a golden trace of the run here ("" = none, docs/trace-format.md)
   std::string vcd;       // waveform of the run (docs/waveforms.md)
   std::string fst;
   std::string la_vcd;  // the logic-analyser form as a second VCD ("" = none): 1-bit, one scope
-  std::vector<std::string> signals;  // waveform signal globs ("" = all)
-  std::uint64_t from = 0;            // waveform window, cycles
-  std::uint64_t to = UINT64_MAX;
+  std::vector<std::string> signals;   // waveform signal globs ("" = all)
+  std::optional<std::uint64_t> from;  // waveform window, cycles (none: from 0)
+  std::optional<std::uint64_t> to;    // (none: to the end)
   std::string timescale;          // "" = 1ps, 10ns for the logic-analyser form (docs/waveforms.md)
   bool flat = false;              // --vcd / --fst in the logic-analyser form
   std::string gtkw;               // a GTKWave save file for --vcd (or else --fst)
@@ -35,6 +37,10 @@ struct RunOptions {
 bool parse_timescale(const std::string& t, int& exp);
 // The one line for a unit parse_timescale() refuses (without the command's name).
 std::string timescale_error(const std::string& t);
+// The waveform options' checks, one chip's and a segment's: each needs a waveform to act on (no
+// silent options), then the unit, the window, the save file. "" or the line (without the
+// command's name).
+std::string waveform_options_error(const RunOptions& opt);
 
 // The waveforms `opt` asks for (--vcd, --fst, --la-vcd), each with its window, signals, form,
 // time unit and the GTKWave save file on the first of --vcd / --fst; the same for one chip and
@@ -60,21 +66,23 @@ class ChipRun {
 
   // 0, or 2 with its line written.
   int open();
-  // After open(): 0, 1 or 2 like the command.
-  int run(const Scenario& s, const LineSink& walk, const LineSink& errors, ScenarioOutcome& o);
+  // After open(): 0, 1 or 2 like the command. `text` is the scenario's (its leading comments head
+  // the --record trace).
+  int run(const Scenario& s, std::string_view text, const LineSink& walk, const LineSink& errors,
+          ScenarioOutcome& o);
 
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
 
-// The comment block at the top of a scenario file: it heads the recorded traces.
-std::vector<std::string> leading_comments(const std::string& path);
+// The comment block at the top of a scenario's text: it heads the recorded traces.
+std::vector<std::string> leading_comments(std::string_view text);
 
-// A segment's scenario with the outputs `opt` asks for (run_segment.cpp, docs/segment.md
-// "Outputs"). Returns 0, 1 or 2 like the command.
-int run_segment_command(const RunOptions& opt, const SegmentScenario& s, const LineSink& walk,
-                        const LineSink& errors, std::FILE* err);
+// A segment's scenario, parsed from `text`, with the outputs `opt` asks for (run_segment.cpp,
+// docs/segment.md "Outputs"). Returns 0, 1 or 2 like the command.
+int run_segment_command(const RunOptions& opt, const SegmentScenario& s, std::string_view text,
+                        const LineSink& walk, const LineSink& errors, std::FILE* err);
 // The trace of a station of a segment whose scope is `scope` (station_scope,
 // lib/segment_outputs): FILE.trace -> FILE.station5_spc3.trace.
 std::string station_trace_path(const std::string& record, const std::string& scope);

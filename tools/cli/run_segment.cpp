@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <string_view>
 #include <vector>
 
 #include "board.hpp"
@@ -32,10 +33,11 @@ namespace {
 // per station, the JSON summary.
 class RunOutputs final : public SegmentScenarioOutputs {
  public:
-  RunOutputs(const RunOptions& opt, const SegmentScenario& s)
+  RunOutputs(const RunOptions& opt, const SegmentScenario& s, std::string_view text)
       : SegmentScenarioOutputs(s, SegmentOutputOptions{wave_options(opt), opt.pcap}),
         opt_(opt),
-        s_(s) {}
+        s_(s),
+        comments_(leading_comments(text)) {}
 
   // Every file the run writes, for outfile::distinct.
   [[nodiscard]] std::vector<outfile::Named> outputs() const {
@@ -71,7 +73,7 @@ class RunOutputs final : public SegmentScenarioOutputs {
     SegmentScenarioOutputs::station_added(seg, index);
     seg_ = &seg;
     if (opt_.record.empty()) return;
-    std::vector<std::string> notes = leading_comments(opt_.scenario);
+    std::vector<std::string> notes = comments_;
     if (!notes.empty()) notes.emplace_back();
     notes.push_back(
         fmt::format("recorded by `dpc31 run --record` from {}, station {} ({}) of its segment "
@@ -162,6 +164,7 @@ class RunOutputs final : public SegmentScenarioOutputs {
 
   const RunOptions& opt_;
   const SegmentScenario& s_;
+  const std::vector<std::string> comments_;  // the scenario's leading comments
   Segment* seg_ = nullptr;
   std::vector<std::unique_ptr<TraceRecorder>> traces_;
   std::vector<std::unique_ptr<outfile::OutFile>> trace_files_;
@@ -172,25 +175,15 @@ class RunOutputs final : public SegmentScenarioOutputs {
 
 }  // namespace
 
-int run_segment_command(const RunOptions& opt, const SegmentScenario& s, const LineSink& walk,
-                        const LineSink& errors, std::FILE* err) {
+int run_segment_command(const RunOptions& opt, const SegmentScenario& s, std::string_view text,
+                        const LineSink& walk, const LineSink& errors, std::FILE* err) {
   if (opt.engine != Engine::event) {
     fmt::print(err, "dpc31 run: {}: --engine per-cycle: a segment runs on the event engine\n",
                opt.scenario);
     return 2;
   }
-  std::string error;
-  if (!opt.timescale.empty()) {
-    int exp = 0;
-    if (!parse_timescale(opt.timescale, exp)) error = timescale_error(opt.timescale);
-  }
-  if (error.empty() && opt.to <= opt.from) {
-    error =
-        fmt::format("--to {} is not after --from {}: an empty waveform window", opt.to, opt.from);
-  }
-  if (error.empty() && !opt.gtkw.empty() && opt.vcd.empty() && opt.fst.empty())
-    error = fmt::format("--gtkw {}: a save file needs --vcd or --fst", opt.gtkw);
-  RunOutputs out(opt, s);
+  std::string error = waveform_options_error(opt);
+  RunOutputs out(opt, s, text);
   std::vector<outfile::Named> inputs = {{"the scenario", opt.scenario}};
   for (const std::string& p : segment_plugins(s)) inputs.push_back({"the firmware plug-in", p});
   if (error.empty()) error = outfile::distinct(inputs, out.outputs());

@@ -30,9 +30,15 @@ bool read_text_file(const std::string& path, std::size_t max_bytes, std::string_
     error = errno == ENOENT ? "no such file" : "cannot open the file";
     return false;
   }
+  const bool read = read_text_fd(fd, max_bytes, what, text, error);
+  ::close(fd);
+  return read;
+}
+
+bool read_text_fd(int fd, std::size_t max_bytes, std::string_view what, std::string& text,
+                  std::string& error) {
   struct stat st {};
   if (::fstat(fd, &st) == 0 && S_ISDIR(st.st_mode)) {
-    ::close(fd);
     error = fmt::format("is a directory, not {} {} file", article(what), what);
     return false;
   }
@@ -49,13 +55,11 @@ bool read_text_file(const std::string& path, std::size_t max_bytes, std::string_
     }
     text.resize(have + static_cast<std::size_t>(std::max<ssize_t>(n, 0)));
     if (n < 0) {
-      ::close(fd);
       error = "cannot read the file";
       return false;
     }
     if (n == 0 || text.size() > max_bytes) break;
   }
-  ::close(fd);
   if (text.size() > max_bytes) {
     error = fmt::format("too large for {} {} (more than {} bytes)", article(what), what, max_bytes);
     return false;

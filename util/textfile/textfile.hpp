@@ -11,6 +11,10 @@ namespace dpc31 {
 // `what` names the kind of file in messages ("scenario", "trace"). False with `error` set.
 bool read_text_file(const std::string& path, std::size_t max_bytes, std::string_view what,
                     std::string& text, std::string& error);
+// The same from a descriptor the caller opened and closes (a FIFO opened a second time would wait
+// for another writer).
+bool read_text_fd(int fd, std::size_t max_bytes, std::string_view what, std::string& text,
+                  std::string& error);
 
 // A line-based file cut off mid-line may still parse ("end 10000" cut to "end 1000"); every
 // editor and writer ends the last line, so a file without that newline is taken as cut off.
