@@ -100,8 +100,8 @@ struct ChipCore {
   // Advances time; with Stop::on_irq it stops right after the event that makes the interrupt
   // active and returns true (also after Chip::request_stop with on_irq_or_request).
   bool advance(std::uint64_t cycles, Stop stop_at = Stop::never) {
-    // Time ends at Chip::kLastCycle: kNever is the deadline of a timer that is off, and a step
-    // to it would fire every such timer, past it wrap to 0.
+    // Time ends at Chip::kLastCycle, far below kNever, the deadline of a timer that is off: a step
+    // to kNever would fire every such timer, one past it wrap to 0.
     const std::uint64_t end = Chip::cycle_after(clock.now, cycles);
     if (end < clock.quiet_until) {  // the common bus access: no deadline inside it (event engine)
       clock.now = end;

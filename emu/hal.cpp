@@ -234,7 +234,7 @@ void dpc31_run(dpc31_chip* chip, uint64_t cycles) { chip->chip.step(cycles); }
 int dpc31_run_until_irq_change(dpc31_chip* chip, uint64_t max_cycles) {
   dpc31::Chip& c = chip->chip;
   const bool was = c.irq_active();
-  const uint64_t end = c.cycle() + max_cycles;
+  const uint64_t end = dpc31::Chip::cycle_after(c.cycle(), max_cycles);
   if (!was) return c.step_until_irq(max_cycles) ? 1 : 0;
   // Active: with no bus access the line can only fall at an event (the EOI inactive time, a
   // reset); go from event to event.

@@ -184,11 +184,17 @@ std::vector<Exchange> DpMaster::dp_cycle(const std::vector<std::vector<std::uint
 
 void DpMaster::dp_cycle(const std::vector<std::vector<std::uint8_t>>& outputs,
                         std::vector<Exchange>& out) {
-  check_outputs(outputs);
-  out.resize(slaves_.size());
-  for (std::size_t i = 0; i < slaves_.size(); ++i) {
-    select(i);
-    data_exchange(outputs_of(outputs, i), {}, out[i]);
+  std::size_t i = 0;
+  try {
+    check_outputs(outputs);
+    out.resize(slaves_.size());
+    for (; i < slaves_.size(); ++i) {
+      select(i);
+      data_exchange(outputs_of(outputs, i), {}, out[i]);
+    }
+  } catch (...) {
+    out.resize(i);  // the exchanges made before the one that threw, none of an earlier cycle
+    throw;
   }
   select(0);
 }
@@ -298,7 +304,7 @@ TokenVisit DpMaster::use_token(std::uint8_t next,
 }
 
 bool DpMaster::wait_token(std::uint64_t timeout) {
-  const std::uint64_t until = now() + timeout;
+  const std::uint64_t until = Chip::cycle_after(now(), timeout);
   AnswerCollector heard;
   for (;;) {
     look();

@@ -188,8 +188,9 @@ class DpMaster {
   // bytes of zeros where none are given); more outputs than slaves: std::invalid_argument.
   std::vector<Exchange> dp_cycle(const std::vector<std::vector<std::uint8_t>>& outputs = {});
   // The same into `out` (one Exchange per slave), whose exchanges' buffers are reused: a long
-  // run (the bench) that keeps one vector allocates nothing for its exchanges once grown. On an
-  // exception `out` holds the exchanges up to it.
+  // run (the bench) that keeps one vector and clears the history every cycle (clear_history:
+  // the history's copies reuse its spares) allocates nothing for its exchanges once grown. On
+  // an exception `out` holds the exchanges made before it, none of an earlier cycle.
   void dp_cycle(const std::vector<std::vector<std::uint8_t>>& outputs, std::vector<Exchange>& out);
   // Passes the token (SD4) to `next` (its own address: keeps it); nothing is waited for.
   Exchange pass_token(std::uint8_t next);

@@ -287,7 +287,7 @@ void dpc31_module_destroy(dpc31_module* module) {
 int dpc31_module_run(dpc31_module* module, uint64_t cycles) {
   if (!module->error.empty()) return -1;
   try {
-    module->cpu->run_until(module->chip.cycle() + cycles);
+    module->cpu->run_until(dpc31::Chip::cycle_after(module->chip.cycle(), cycles));
   } catch (const std::exception& e) {
     module->error = e.what();
     return -1;

@@ -416,8 +416,9 @@ TEST_F(BadInput, CosimReplayTakesTheTraceHeader) {
   ASSERT_EQ(dpc31("cosim --profile vpc3plus --mutant SAP_NO_RR --seeds 20 --out vp --quiet").rc, 1);
   EXPECT_EQ(dpc31("cosim --replay vp/cosim-vpc3plus-seed1.trace --out vp --quiet").rc, 1);
   // A replay runs as the header's seed (the report, the JSON, the JUnit name); the trace it
-  // replays stays as it is, and its own shrunk trace goes beside it.
+  // replays stays as it is, and its own shrunk trace goes beside it under a name of its own.
   const std::string seed1 = slurp(path("vp/cosim-vpc3plus-seed1.trace"));
+  fs::remove(path("vp/cosim-vpc3plus-seed1-replay.trace"));
   const Outcome rp = dpc31("cosim --replay vp/cosim-vpc3plus-seed1.trace --out vp --junit vp.xml");
   EXPECT_EQ(rp.rc, 1) << rp.err;
   EXPECT_NE(rp.out.find("\"seed\": 1,"), std::string::npos) << rp.out;
@@ -426,6 +427,18 @@ TEST_F(BadInput, CosimReplayTakesTheTraceHeader) {
   EXPECT_EQ(slurp(path("vp/cosim-vpc3plus-seed1.trace")), seed1);
   EXPECT_NE(rp.err.find("vp/cosim-vpc3plus-seed1-replay.trace"), std::string::npos) << rp.err;
   EXPECT_TRUE(fs::exists(path("vp/cosim-vpc3plus-seed1-replay.trace")));
+  // Replaying the replay's trace: the seed run's trace is not written over, nor the trace
+  // replayed (the review's case: it wrote cosim-vpc3plus-seed1.trace).
+  const std::string again = slurp(path("vp/cosim-vpc3plus-seed1-replay.trace"));
+  const Outcome ra = dpc31("cosim --replay vp/cosim-vpc3plus-seed1-replay.trace --out vp");
+  EXPECT_EQ(ra.rc, 1) << ra.err;
+  EXPECT_NE(
+      ra.err.find("not written over vp/cosim-vpc3plus-seed1-replay.trace, the trace replayed"),
+      std::string::npos)
+      << ra.err;
+  EXPECT_EQ(ra.out.find("\"trace\""), std::string::npos) << ra.out;
+  EXPECT_EQ(slurp(path("vp/cosim-vpc3plus-seed1.trace")), seed1);
+  EXPECT_EQ(slurp(path("vp/cosim-vpc3plus-seed1-replay.trace")), again);
   // The bus and the variant are recorded too (the review's case): a motorola VPC3+C failure
   // replays on that model, a --variant beside a vpc3plus header is taken, a contradiction refused.
   ASSERT_EQ(

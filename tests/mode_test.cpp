@@ -67,11 +67,14 @@ TEST(ModeDpc31, ModeReg1StartStopBitsAreIgnored) {
   EXPECT_EQ(c.peek_reg(RegId::Mode_Reg1), 0x10);
 }
 
-// The chip's time ends at cycle 2^64 - 2 (include/dpc31/chip.hpp): a step past it stops there
-// instead of wrapping to 0 or reaching UINT64_MAX, where every timer that is off would fire (a
-// step of UINT64_MAX cycles, the "no limit" of a caller, crashed the chip's buffer requests).
+// The chip's time ends at Chip::kLastCycle, 2^62 - 1 (include/dpc31/chip.hpp): a step past it
+// stops there instead of wrapping to 0 or reaching UINT64_MAX, where every timer that is off
+// would fire (a step of UINT64_MAX cycles, the "no limit" of a caller, crashed the chip's buffer
+// requests). A chip started there arms its timers beyond the end, and they do not wrap: its next
+// steps end (the review's case: armed at UINT64_MAX - 1 + N, they wrapped, fired, re-armed,
+// and a step of one cycle never ended).
 TEST_P(Mode, TimeEndsAtTheLastCycleAStepPastItStopsThere) {
-  constexpr std::uint64_t kLast = std::numeric_limits<std::uint64_t>::max() - 1;
+  constexpr std::uint64_t kLast = (std::uint64_t{1} << 62) - 1;
   static_assert(Chip::kLastCycle == kLast);
   Chip c = make();
   c.step(std::uint64_t{1} << 63);
@@ -84,6 +87,11 @@ TEST_P(Mode, TimeEndsAtTheLastCycleAStepPastItStopsThere) {
   EXPECT_FALSE(d.step_until_irq(std::numeric_limits<std::uint64_t>::max() - 100));
   EXPECT_EQ(d.cycle(), kLast);
   EXPECT_EQ(d.read(0x3F0 & ((1u << d.profile().address_bits) - 1)), 0x00);  // RAM, cleared
+  EXPECT_EQ(d.cycle(), kLast);
+  user_start(d);  // Start_SPC3 (dpc31: MAC_Start): the baud search's and the user timer's deadlines
+  d.write(0x08, 0x02);  // EOI: the inactive time
+  d.step(1000);
+  EXPECT_FALSE(d.step_until_irq(std::numeric_limits<std::uint64_t>::max()));
   EXPECT_EQ(d.cycle(), kLast);
 }
 

@@ -350,6 +350,17 @@ TEST(Segment, ADpCycleIntoAKeptVectorIsTheReturnedOne) {
       EXPECT_EQ(out[i].answer_end, want[i].answer_end) << n << " " << i;
     }
   }
+  // An exception midway (slave 6's outputs over DP's 244 bytes, refused before they go out):
+  // `out` holds this cycle's exchange with slave 5 alone, nothing of the cycle before.
+  const std::vector<std::vector<std::uint8_t>> too_long = {{9, 0, 0, 0},
+                                                           std::vector<std::uint8_t>(245)};
+  EXPECT_THROW(kept.master->dp_cycle(too_long, out), std::invalid_argument);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].request.du.at(0), 9);
+  // More outputs than slaves: refused before any exchange, so `out` holds none.
+  EXPECT_THROW(kept.master->dp_cycle(std::vector<std::vector<std::uint8_t>>(4), out),
+               std::invalid_argument);
+  EXPECT_TRUE(out.empty());
 }
 
 TEST(Segment, AnUnpolledSlavesWatchdogExpiresAtItsCycleTheOthersStay) {

@@ -212,9 +212,10 @@ class Chip {
   bool poke_reg(RegId id, std::uint16_t value);
 
   // --- time ---
-  // The chip's time ends at kLastCycle (UINT64_MAX marks a timer that is off): a step past it
-  // stops there, whatever `cycles` says.
-  static constexpr std::uint64_t kLastCycle = std::numeric_limits<std::uint64_t>::max() - 1;
+  // The chip's time ends at kLastCycle, 2^62 - 1 (about 3 000 years at 48 MHz): a step past it
+  // stops there, whatever `cycles` says. UINT64_MAX marks a timer that is off, and a timer armed
+  // at the last cycle (now + its period) must not wrap past it.
+  static constexpr std::uint64_t kLastCycle = (std::uint64_t{1} << 62) - 1;
   // The cycle `cycles` after `from`, or kLastCycle where that lies beyond it.
   static constexpr std::uint64_t cycle_after(std::uint64_t from, std::uint64_t cycles) {
     return cycles < kLastCycle - from ? from + cycles : kLastCycle;

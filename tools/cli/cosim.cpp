@@ -415,11 +415,11 @@ int run_cosim(const CosimOptions& given) {
       const std::string dir = o.out_dir.empty() ? "." : o.out_dir;
       std::error_code ec;
       std::filesystem::create_directories(dir, ec);  // checked up front; a failure shows below
-      std::string trace = fmt::format("{}/cosim-{}-seed{}.trace", dir, o.profile_name, seed);
-      // A replay shrinks its trace again; the trace it replays stays as it is.
-      if (!o.replay.empty() && std::filesystem::equivalent(trace, o.replay, ec)) {
-        trace = fmt::format("{}/cosim-{}-seed{}-replay.trace", dir, o.profile_name, seed);
-      }
+      // A replay shrinks its trace again under a name of its own: a seed run's trace, which the
+      // replayed one may be or come from, is never written over, nor the replayed trace itself.
+      const std::string trace = fmt::format("{}/cosim-{}-seed{}{}.trace", dir, o.profile_name, seed,
+                                            o.replay.empty() ? "" : "-replay");
+      const bool replayed = !o.replay.empty() && std::filesystem::equivalent(trace, o.replay, ec);
       std::string error;
       const auto events = [](const Stimulus& x) { return x.event_count(); };
       Stimulus before = s;
@@ -430,7 +430,14 @@ int run_cosim(const CosimOptions& given) {
           o.profile_name, o.bus == BusMode::intel ? "intel" : "motorola",
           o.variant_name.empty() ? "-" : o.variant_name, seed, o.mutant.empty() ? "-" : o.mutant,
           events(before), events(small), small.size());
-      if (outfile::write_file(trace, write_trace(small, header), error)) {
+      if (replayed) {
+        if (!o.quiet) {
+          fmt::print(stderr,
+                     "  shrunk to {} stimulus events: not written over {}, the trace "
+                     "replayed\n",
+                     events(small), trace);
+        }
+      } else if (outfile::write_file(trace, write_trace(small, header), error)) {
         entry["trace"] = trace;
         if (!o.quiet)
           fmt::print(stderr, "  shrunk to {} stimulus events: {}\n", events(small), trace);
