@@ -9,6 +9,7 @@
 #include "dpc31/dp.hpp"
 #include "dpc31/pdu.hpp"
 #include "segment.hpp"
+#include "vocabulary.hpp"
 
 namespace dpc31 {
 
@@ -405,6 +406,7 @@ Exchange DpMaster::transact_raw(const std::vector<std::uint8_t>& bytes, UartFaul
 
 Exchange DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bool no_answer,
                         fdl::Frame request) {
+  place_fault(fault, bytes.size());
   Exchange ex;
   ex.request = std::move(request);
   // What the line carried before (another master's traffic, for instance) is no answer to us.
