@@ -64,20 +64,20 @@ auto bytes_property(M T::*member) {
 }
 
 // A SlaveConfig field as a scenario's `slave` line takes it (vocabulary.hpp), else a ValueError
-// naming it: a number in its range, bytes of `min`..`max`.
+// naming it in the parser's words: a number in its range, up to `max` bytes (one at least).
 template <typename F>
 auto number_field(F SlaveConfig::*member, const ValueRange& r) {
   return std::make_pair(
       [member](const SlaveConfig& c) { return c.*member; },
       [member, &r](SlaveConfig& c, std::int64_t v) { c.*member = in_range<F>(r, v); });
 }
-auto bytes_field(std::vector<U8> SlaveConfig::*member, const char* what, std::size_t min,
+auto bytes_field(std::vector<U8> SlaveConfig::*member, const char* what, bool non_empty,
                  std::size_t max) {
   return std::make_pair([member](const SlaveConfig& c) { return to_bytes(c.*member); },
-                        [member, what, min, max](SlaveConfig& c, const py::bytes& b) {
+                        [member, what, non_empty, max](SlaveConfig& c, const py::bytes& b) {
                           std::vector<U8> v = from_bytes(b);
-                          if (v.size() < min)
-                            throw py::value_error(fmt::format("{}: at least {} byte", what, min));
+                          if (non_empty && v.empty())
+                            throw py::value_error(fmt::format("{}: at least one byte", what));
                           if (v.size() > max)
                             throw py::value_error(fmt::format("{}: more than {} bytes", what, max));
                           c.*member = std::move(v);
@@ -146,8 +146,8 @@ void bind_frames(py::module_& m) {
           [](SlaveConfig& c, std::int64_t a) { c.address = in_range<U8>(kSlaveAddress, a); })
       .def_property("ident", number_field(&SlaveConfig::ident, kIdent).first,
                     number_field(&SlaveConfig::ident, kIdent).second)
-      .def_property("cfg", bytes_field(&SlaveConfig::cfg, "cfg", 1, fdl::kMaxDpData).first,
-                    bytes_field(&SlaveConfig::cfg, "cfg", 1, fdl::kMaxDpData).second)
+      .def_property("cfg", bytes_field(&SlaveConfig::cfg, "cfg", true, fdl::kMaxDpData).first,
+                    bytes_field(&SlaveConfig::cfg, "cfg", true, fdl::kMaxDpData).second)
       .def_property("in_len", number_field(&SlaveConfig::in_len, kInLen).first,
                     number_field(&SlaveConfig::in_len, kInLen).second)
       .def_property("out_len", number_field(&SlaveConfig::out_len, kOutLen).first,
@@ -164,9 +164,10 @@ void bind_frames(py::module_& m) {
       .def_readwrite("freeze_req", &SlaveConfig::freeze_req)
       .def_property("min_tsdr", number_field(&SlaveConfig::min_tsdr, kMinTsdr).first,
                     number_field(&SlaveConfig::min_tsdr, kMinTsdr).second)
-      .def_property("user_prm",
-                    bytes_field(&SlaveConfig::user_prm, "user_prm", 0, fdl::kMaxDpData - 7).first,
-                    bytes_field(&SlaveConfig::user_prm, "user_prm", 0, fdl::kMaxDpData - 7).second);
+      .def_property(
+          "user_prm",
+          bytes_field(&SlaveConfig::user_prm, "user_prm", false, fdl::kMaxDpData - 7).first,
+          bytes_field(&SlaveConfig::user_prm, "user_prm", false, fdl::kMaxDpData - 7).second);
 }
 
 // The run each user side runs with, by its address: every Firmware and Responder is made by a

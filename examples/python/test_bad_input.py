@@ -63,7 +63,7 @@ def test_send_and_pulse_need_a_sender_and_an_end_before_the_last_cycle():
     (lambda: dpc31.SlaveConfig(group_ident=256), r"group 256 out of range \(0..255\)"),
     (lambda: dpc31.SlaveConfig(min_tsdr=256), r"min_tsdr 256 out of range \(0..255\)"),
     (lambda: dpc31.SlaveConfig(cfg=bytes(300)), r"cfg: more than 244 bytes"),
-    (lambda: dpc31.SlaveConfig(cfg=b""), r"cfg: at least 1 byte"),
+    (lambda: dpc31.SlaveConfig(cfg=b""), r"cfg: at least one byte"),
     (lambda: dpc31.SlaveConfig(user_prm=bytes(238)), r"user_prm: more than 237 bytes"),
     (lambda: _master().set_slave_address(200), r"new address 200 out of range \(0..126\)"),
     (lambda: dpc31.Cpu51Board(dpc31.Chip("spc3"), hz=1), r"clock 1 out of range "
