@@ -175,10 +175,15 @@ inline const std::optional<std::string>& path_arg(const std::optional<std::strin
 }
 // A PROFIBUS rate, else a ValueError as the scenario's `baud` says it.
 std::uint32_t profibus_rate(std::uint32_t baud);
+// A ValueError when a bit at `baud` is less than one clock of `clock_hz` (no bit time).
+void one_clock_a_bit(std::uint32_t clock_hz, std::uint32_t baud);
 // An address on the chip's bus with `n` bytes from it inside (`n` 0: the address alone), else a
 // ValueError in `dpc31 serve`'s words: the chip would take the upper bits off (and log it per
 // byte).
 std::uint32_t bus_addr(const Chip& chip, std::int64_t a, std::int64_t n = 0);
+// Python's fault= and fault_char= as a UartFault, else a ValueError; no fault_char: the last
+// character, as a scenario's `corrupt` (DpMaster and Segment place it: vocabulary.hpp).
+UartFault fault_of(const std::optional<std::string>& kind, std::optional<int> char_index);
 // A byte `what` (0..255), else a ValueError.
 std::uint8_t byte_value(std::string_view what, std::int64_t v);
 

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "bind.hpp"
+#include "cleanup.hpp"
 #include "dpc31/snapshot.hpp"
 #include "firmware_host.hpp"
 #include "vocabulary.hpp"
@@ -117,6 +118,13 @@ std::vector<std::uint8_t> from_bytes(const py::bytes& b) {
 std::uint32_t profibus_rate(std::uint32_t baud) {
   if (const std::string e = not_a_profibus_rate(baud); !e.empty()) throw py::value_error(e);
   return baud;
+}
+
+void one_clock_a_bit(std::uint32_t clock_hz, std::uint32_t baud) {
+  if (bit_cycles(clock_hz, baud) == 0) {
+    throw py::value_error(
+        fmt::format("clock_hz {}: less than one clock a bit at {} baud", clock_hz, baud));
+  }
 }
 
 std::uint32_t bus_addr(const Chip& chip, std::int64_t a, std::int64_t n) {
@@ -626,6 +634,11 @@ void bind_chip(py::module_& m) {
 
 PYBIND11_MODULE(_dpc31, m) {
   m.doc() = "dpc31emu: the SPC3 / VPC3+ / DPC31 PROFIBUS-DP slave ASICs, cycle-accurate";
+  // No output's temporary outlives the script: a SIGTERM or SIGHUP the script has no handler of
+  // its own for, and its exit, remove what is unfinished (Python need not destroy a Segment
+  // that an uncaught exception's traceback still holds).
+  dpc31::cleanup::install();
+  dpc31::cleanup::remove_at_exit();
   dpc31::py_bind::bind_chip(m);
   dpc31::py_bind::bind_session(m);
   dpc31::py_bind::bind_segment(m);

@@ -346,6 +346,17 @@ void bind_station(py::module_& m) {
           py::arg("name"));
 }
 
+// A name no station of the segment has yet, else a ValueError in a segment scenario's words: the
+// name is the station's scope in the waveforms and names it in the log and in collisions. (Two
+// stations at one address, named apart, stay possible: a collision's test.)
+const std::string& new_station_name(const Segment& seg, const std::string& name) {
+  for (std::size_t i = 0; i < seg.size(); ++i) {
+    if (seg.name(i) == name)
+      throw py::value_error(fmt::format("a second station named '{}'", name));
+  }
+  return name;
+}
+
 // A chip station with its user side: a firmware (built-in name or plug-in path) or the built-in
 // responder, set up on its chip now, as a segment scenario's `station` line does.
 PyStation& add_station(py::object self, U8 address, const std::string& profile,
@@ -357,7 +368,7 @@ PyStation& add_station(py::object self, U8 address, const std::string& profile,
   PySegment& s = self.cast<PySegment&>();
   s.may_join();
   auto st = std::make_unique<PyStation>();
-  st->name = name.value_or("station " + std::to_string(address));
+  st->name = new_station_name(s.seg, name.value_or("station " + std::to_string(address)));
   SlaveConfig sc = slave.value_or(SlaveConfig{});
   sc.address = address;
   if (!slave) {
@@ -432,13 +443,10 @@ void bind_segment_class(py::module_& m) {
                        const std::optional<std::string>& vcd, const std::optional<std::string>& fst,
                        const std::optional<std::string>& pcapng,
                        const std::vector<std::string>& signals) {
-             // A rate the chips' baud search finds (a scenario's `baud`); a bit at least one
+             // A rate the chips' baud search finds (a scenario's `baud`), a bit at least one
              // clock.
              auto s = std::make_unique<P>(profibus_rate(baud), clock_hz);
-             if (s->seg.bit_cycles() == 0) {
-               throw py::value_error("clock_hz " + std::to_string(clock_hz) +
-                                     ": less than one clock a bit");
-             }
+             one_clock_a_bit(s->seg.clock_hz(), baud);
              if (vcd || fst || pcapng) {
                check_distinct({}, vcd, fst, pcapng);
                s->outputs =
@@ -496,7 +504,8 @@ void bind_segment_class(py::module_& m) {
           "add_sender",
           [](P& s, const std::string& name) {
             s.may_join();
-            return s.joined(s.seg.add_sender(name), wave::kDriverWithoutAddress);
+            return s.joined(s.seg.add_sender(new_station_name(s.seg, name)),
+                            wave::kDriverWithoutAddress);
           },
           py::arg("name"), "A station without a chip that drives the line with send(); its index.")
       .def(
@@ -542,19 +551,15 @@ void bind_segment_class(py::module_& m) {
       .def(
           "send",
           [](P& s, std::size_t sender, const py::bytes& data, std::optional<U64> start,
-             const std::optional<std::string>& fault, int fault_char) {
+             const std::optional<std::string>& fault, std::optional<int> fault_char) {
             const std::vector<U8> v = from_bytes(data);
-            UartFault f;
-            if (fault && !parse_fault_kind(*fault, f.kind)) {
-              throw py::value_error("fault '" + *fault + "': expected one of parity, start, stop");
-            }
-            f.char_index = fault_char;
+            const UartFault f = fault_of(fault, fault_char);
             const U64 at = start.value_or(s.seg.cycle() + 33 * U64{s.seg.bit_cycles()});
             if (at < s.seg.cycle()) throw py::value_error("start is before the line's time");
             return s.run([&] { return s.seg.send(sender, v, at, f); });
           },
           py::arg("sender"), py::arg("data"), py::arg("start") = py::none(),
-          py::arg("fault") = py::none(), py::arg("fault_char") = -1,
+          py::arg("fault") = py::none(), py::arg("fault_char") = py::none(),
           "Bytes as back-to-back characters from sender station `sender` at `start` (default: "
           "TSYN, 33 bit times, from now); returns the end of the last stop bit.")
       .def(

@@ -24,6 +24,25 @@
 
 namespace dpc31::py_bind {
 
+UartFault fault_of(const std::optional<std::string>& kind, std::optional<int> char_index) {
+  UartFault f;
+  if (!kind) {
+    if (char_index) {
+      throw py::value_error("fault_char without fault: name the fault (parity, start, stop)");
+    }
+    return f;
+  }
+  if (!parse_fault_kind(*kind, f.kind)) {
+    throw py::value_error("fault '" + *kind + "': expected one of parity, start, stop");
+  }
+  if (char_index && *char_index < 0) {
+    throw py::value_error("fault_char=" + std::to_string(*char_index) +
+                          ": the telegram's characters count from 0 (the SD)");
+  }
+  f.char_index = char_index.value_or(-1);  // the last character (place_fault, vocabulary.hpp)
+  return f;
+}
+
 namespace {
 
 using U8 = std::uint8_t;
@@ -38,20 +57,31 @@ T with_kwargs(const py::kwargs& kw) {
   return o.cast<T>();
 }
 
-UartFault fault_of(const std::optional<std::string>& kind, int char_index) {
-  UartFault f;
-  if (!kind) return f;
-  if (!parse_fault_kind(*kind, f.kind)) {
-    throw py::value_error("fault '" + *kind + "': expected one of parity, start, stop");
-  }
-  f.char_index = char_index;
-  return f;
-}
-
 template <typename T, typename M>
 auto bytes_property(M T::*member) {
   return std::make_pair([member](const T& t) { return to_bytes(t.*member); },
                         [member](T& t, const py::bytes& b) { t.*member = from_bytes(b); });
+}
+
+// A SlaveConfig field as a scenario's `slave` line takes it (vocabulary.hpp), else a ValueError
+// naming it in the parser's words: a number in its range, up to `max` bytes (one at least).
+template <typename F>
+auto number_field(F SlaveConfig::*member, const ValueRange& r) {
+  return std::make_pair(
+      [member](const SlaveConfig& c) { return c.*member; },
+      [member, &r](SlaveConfig& c, std::int64_t v) { c.*member = in_range<F>(r, v); });
+}
+auto bytes_field(std::vector<U8> SlaveConfig::*member, const char* what, bool non_empty,
+                 std::size_t max) {
+  return std::make_pair([member](const SlaveConfig& c) { return to_bytes(c.*member); },
+                        [member, what, non_empty, max](SlaveConfig& c, const py::bytes& b) {
+                          std::vector<U8> v = from_bytes(b);
+                          if (non_empty && v.empty())
+                            throw py::value_error(fmt::format("{}: at least one byte", what));
+                          if (v.size() > max)
+                            throw py::value_error(fmt::format("{}: more than {} bytes", what, max));
+                          c.*member = std::move(v);
+                        });
 }
 
 void bind_frames(py::module_& m) {
@@ -114,21 +144,30 @@ void bind_frames(py::module_& m) {
       .def_property(
           "address", [](const SlaveConfig& c) { return c.address; },
           [](SlaveConfig& c, std::int64_t a) { c.address = in_range<U8>(kSlaveAddress, a); })
-      .def_readwrite("ident", &SlaveConfig::ident)
-      .def_property("cfg", bytes_property(&SlaveConfig::cfg).first,
-                    bytes_property(&SlaveConfig::cfg).second)
-      .def_readwrite("in_len", &SlaveConfig::in_len)
-      .def_readwrite("out_len", &SlaveConfig::out_len)
+      .def_property("ident", number_field(&SlaveConfig::ident, kIdent).first,
+                    number_field(&SlaveConfig::ident, kIdent).second)
+      .def_property("cfg", bytes_field(&SlaveConfig::cfg, "cfg", true, fdl::kMaxDpData).first,
+                    bytes_field(&SlaveConfig::cfg, "cfg", true, fdl::kMaxDpData).second)
+      .def_property("in_len", number_field(&SlaveConfig::in_len, kInLen).first,
+                    number_field(&SlaveConfig::in_len, kInLen).second)
+      .def_property("out_len", number_field(&SlaveConfig::out_len, kOutLen).first,
+                    number_field(&SlaveConfig::out_len, kOutLen).second)
       .def_readwrite("wd_on", &SlaveConfig::wd_on)
-      .def_readwrite("wd_fact1", &SlaveConfig::wd_fact1)
-      .def_readwrite("wd_fact2", &SlaveConfig::wd_fact2)
+      .def_property("wd_fact1", number_field(&SlaveConfig::wd_fact1, kWdFactor1).first,
+                    number_field(&SlaveConfig::wd_fact1, kWdFactor1).second)
+      .def_property("wd_fact2", number_field(&SlaveConfig::wd_fact2, kWdFactor2).first,
+                    number_field(&SlaveConfig::wd_fact2, kWdFactor2).second)
       .def_readwrite("wd_base_1ms", &SlaveConfig::wd_base_1ms)
-      .def_readwrite("group_ident", &SlaveConfig::group_ident)
+      .def_property("group_ident", number_field(&SlaveConfig::group_ident, kGroupIdent).first,
+                    number_field(&SlaveConfig::group_ident, kGroupIdent).second)
       .def_readwrite("sync_req", &SlaveConfig::sync_req)
       .def_readwrite("freeze_req", &SlaveConfig::freeze_req)
-      .def_readwrite("min_tsdr", &SlaveConfig::min_tsdr)
-      .def_property("user_prm", bytes_property(&SlaveConfig::user_prm).first,
-                    bytes_property(&SlaveConfig::user_prm).second);
+      .def_property("min_tsdr", number_field(&SlaveConfig::min_tsdr, kMinTsdr).first,
+                    number_field(&SlaveConfig::min_tsdr, kMinTsdr).second)
+      .def_property(
+          "user_prm",
+          bytes_field(&SlaveConfig::user_prm, "user_prm", false, fdl::kMaxDpData - 7).first,
+          bytes_field(&SlaveConfig::user_prm, "user_prm", false, fdl::kMaxDpData - 7).second);
 }
 
 // The run each user side runs with, by its address: every Firmware and Responder is made by a
@@ -280,9 +319,10 @@ void bind_user_side(py::module_& m) {
 // An 80C32 beside the chip, or the DPC31's C31 (session/cpu51_board.hpp, docs/cpu.md): it keeps
 // the chip alive.
 struct PyBoard {
-  PyBoard(py::object chip_obj, std::uint32_t hz, std::optional<std::uint16_t> address,
+  PyBoard(py::object chip_obj, std::int64_t clock_hz, std::optional<std::uint16_t> address,
           std::optional<std::uint16_t> code)
       : chip_ref(std::move(chip_obj)), chip(chip_ref.cast<PyChip&>()) {
+    const auto hz = in_range<std::uint32_t>(kCpuClock, clock_hz);  // a scenario's `cpu clock=`
     chip.enter(true);
     try {
       board = code ? std::make_unique<Cpu51Board>(chip.chip, hz, Cpu51Board::C31{*code})
@@ -314,14 +354,14 @@ void bind_board(py::module_& m) {
   py::class_<PyBoard>(m, "Cpu51Board",
                       "An 80C32 beside the chip (its XDATA window at `address`, X/INT on INT0), "
                       "or the DPC31's C31 (Cpu51Board.c31); docs/cpu.md.")
-      .def(py::init([](py::object chip, std::uint32_t hz, std::int64_t address) {
+      .def(py::init([](py::object chip, std::int64_t hz, std::int64_t address) {
              return std::make_unique<PyBoard>(
                  std::move(chip), hz, in_range<std::uint16_t>(kBoardBase, address), std::nullopt);
            }),
            py::arg("chip"), py::arg("hz") = 24'000'000, py::arg("address") = 0x8000)
       .def_static(
           "c31",
-          [](py::object chip, std::uint32_t hz, std::uint16_t code) {
+          [](py::object chip, std::int64_t hz, std::uint16_t code) {
             return std::make_unique<PyBoard>(std::move(chip), hz, std::nullopt, code);
           },
           py::arg("chip"), py::arg("hz") = 24'000'000, py::arg("code") = 0x1000,
@@ -557,8 +597,11 @@ void bind_master(py::module_& m) {
       .def(py::init([](py::object chip, std::int64_t address, std::uint32_t baud,
                        std::int64_t slot_bits, std::int64_t idle_bits,
                        const std::optional<SlaveConfig>& slave) {
-             // The checks of a scenario's `baud` and `master address= slot= idle=`.
-             const MasterConfig mc{in_range<U8>(kMasterAddress, address), profibus_rate(baud),
+             // The checks of a scenario's `baud` and `master address= slot= idle=`; a bit at
+             // least one clock of the chip (as a Segment's).
+             const std::uint32_t rate = profibus_rate(baud);
+             one_clock_a_bit(chip.cast<PyChip&>().chip.clock_hz(), rate);
+             const MasterConfig mc{in_range<U8>(kMasterAddress, address), rate,
                                    in_range<std::uint32_t>(kSlotBits, slot_bits),
                                    in_range<std::uint32_t>(kIdleBits, idle_bits)};
              chip.cast<PyChip&>().enter(true);
@@ -647,12 +690,12 @@ void bind_master(py::module_& m) {
       .def(
           "data_exchange",
           [](PyMaster& pm, const py::bytes& out, const std::optional<std::string>& fault,
-             int fault_char) {
+             std::optional<int> fault_char) {
             const std::vector<U8> v = from_bytes(out);
             const UartFault f = fault_of(fault, fault_char);
             return pm.act([&] { return pm.m->data_exchange(v, f); });
           },
-          py::arg("outputs"), py::arg("fault") = py::none(), py::arg("fault_char") = -1)
+          py::arg("outputs"), py::arg("fault") = py::none(), py::arg("fault_char") = py::none())
       .def(
           "global_control",
           [](PyMaster& pm, U8 command, U8 groups) {
@@ -672,27 +715,28 @@ void bind_master(py::module_& m) {
            [](PyMaster& pm) { return pm.act([&] { return pm.m->read_outputs(); }); })
       .def(
           "set_slave_address",
-          [](PyMaster& pm, U8 a, bool no_change) {
-            return pm.act([&] { return pm.m->set_slave_address(a, no_change); });
+          [](PyMaster& pm, std::int64_t a, bool no_change) {
+            const U8 new_address = in_range<U8>(kNewAddress, a);
+            return pm.act([&] { return pm.m->set_slave_address(new_address, no_change); });
           },
           py::arg("new_address"), py::arg("no_add_change") = false)
       .def(
           "transact",
           [](PyMaster& pm, const fdl::Frame& req, const std::optional<std::string>& fault,
-             int fault_char) {
+             std::optional<int> fault_char) {
             const UartFault f = fault_of(fault, fault_char);
             return pm.act([&] { return pm.m->transact(req, f); });
           },
-          py::arg("request"), py::arg("fault") = py::none(), py::arg("fault_char") = -1)
+          py::arg("request"), py::arg("fault") = py::none(), py::arg("fault_char") = py::none())
       .def(
           "transact_raw",
           [](PyMaster& pm, const py::bytes& raw, const std::optional<std::string>& fault,
-             int fault_char) {
+             std::optional<int> fault_char) {
             const std::vector<U8> v = from_bytes(raw);
             const UartFault f = fault_of(fault, fault_char);
             return pm.act([&] { return pm.m->transact_raw(v, f); });
           },
-          py::arg("data"), py::arg("fault") = py::none(), py::arg("fault_char") = -1)
+          py::arg("data"), py::arg("fault") = py::none(), py::arg("fault_char") = py::none())
       .def(
           "idle", [](PyMaster& pm, U64 cycles) { pm.act([&] { pm.m->idle(cycles); }); },
           py::arg("cycles"), "Time passes with a silent bus (cable pulled); the firmware runs.")

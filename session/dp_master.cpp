@@ -9,6 +9,7 @@
 #include "dpc31/dp.hpp"
 #include "dpc31/pdu.hpp"
 #include "segment.hpp"
+#include "vocabulary.hpp"
 
 namespace dpc31 {
 
@@ -458,6 +459,7 @@ Exchange DpMaster::transact_raw(const std::vector<std::uint8_t>& bytes, UartFaul
 
 void DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bool no_answer,
                     Exchange& ex) {
+  place_fault(fault, bytes.size());
   // What the line carried before (another master's traffic, for instance) is no answer to us.
   ex.request_start = std::max(look(), bus_free_ + std::uint64_t{cfg_.idle_bits} * t_);
   if (on_send) on_send(ex.request_start, bytes, fault);

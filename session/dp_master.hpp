@@ -221,9 +221,10 @@ class DpMaster {
   [[nodiscard]] bool started_up() const;
   [[nodiscard]] std::uint8_t address() const { return cfg_.address; }
   // Sends one request after the idle time and waits for its answer. `fault` corrupts one
-  // character on the wire (parity, start or stop bit). A frame fdl::encode refuses is
-  // std::invalid_argument, nothing sent; so is every service's data unit over the 244 bytes of
-  // DP (fdl::kMaxDpData), before its FCB changes.
+  // character on the wire (parity, start or stop bit; char_index -1 the last one, the ED:
+  // place_fault, vocabulary.hpp). A frame fdl::encode refuses, or a fault beyond the telegram,
+  // is std::invalid_argument, nothing sent; so is every service's data unit over the 244 bytes
+  // of DP (fdl::kMaxDpData), before its FCB changes.
   Exchange transact(fdl::Frame req, UartFault fault = {});
   // Sends raw bytes as they are (malformed frames) and waits a slot time for an answer.
   Exchange transact_raw(const std::vector<std::uint8_t>& bytes, UartFault fault = {});

@@ -195,7 +195,7 @@ class Parser {
   // Options of `slave` that also apply to `set_prm` (what Set_Prm carries).
   bool prm_option(SlaveConfig& sl, std::string_view k, std::string_view v) const {
     if (k == "ident") {
-      sl.ident = static_cast<std::uint16_t>(number(v, "ident", 0, 0xFFFF));
+      sl.ident = static_cast<std::uint16_t>(number(v, kIdent));
     } else if (k == "wd") {
       const std::vector<std::string_view> f = split(v, ',');
       if (f.size() != 2) fail(fmt::format("wd='{}': two factors, as in wd=10,10", shown(v)));
@@ -208,13 +208,13 @@ class Parser {
       sl.wd_base_1ms = v == "1ms";
       wd_base_line_ = step_.line;
     } else if (k == "group") {
-      sl.group_ident = static_cast<std::uint8_t>(number(v, "group", 0, 255));
+      sl.group_ident = static_cast<std::uint8_t>(number(v, kGroupIdent));
     } else if (k == "sync") {
       sl.sync_req = flag(v, "sync");
     } else if (k == "freeze") {
       sl.freeze_req = flag(v, "freeze");
     } else if (k == "min_tsdr") {
-      sl.min_tsdr = static_cast<std::uint8_t>(number(v, "min_tsdr", 0, 255));
+      sl.min_tsdr = static_cast<std::uint8_t>(number(v, kMinTsdr));
     } else if (k == "user_prm") {
       sl.user_prm = bytes(v, "user_prm", kMaxDu - 7);
     } else {
@@ -241,7 +241,7 @@ class Parser {
     Cpu51Config c{.hex = beside_scenario(std::string(pos_[2])), .c31 = c31};
     for (const auto& [k, v] : opts_) {
       if (k == "clock") {
-        c.hz = static_cast<std::uint32_t>(number(v, "clock", 1'000'000, 40'000'000));
+        c.hz = static_cast<std::uint32_t>(number(v, kCpuClock));
       } else if (c31 && k == "code") {  // the code area: in the RAM's user area (docs/dpc31.md)
         c.code = static_cast<std::uint16_t>(number(v, "code", 0x08A0, 0x1FFF));
       } else if (c31) {
@@ -365,9 +365,9 @@ class Parser {
           sl.cfg = bytes(v, "cfg");
           if (sl.cfg.empty()) fail("cfg: at least one byte");
         } else if (k == "in") {
-          sl.in_len = static_cast<std::uint8_t>(number(v, "in", 0, kMaxDu));
+          sl.in_len = static_cast<std::uint8_t>(number(v, kInLen));
         } else if (k == "out") {
-          sl.out_len = static_cast<std::uint8_t>(number(v, "out", 0, kMaxDu));
+          sl.out_len = static_cast<std::uint8_t>(number(v, kOutLen));
         } else {
           unknown_option(k);
         }
@@ -501,7 +501,7 @@ class Parser {
     } else if (cmd_ == "set_slave_address") {
       step_.kind = StepKind::set_slave_address;
       positional(1, 1, "the new address");
-      step_.value = static_cast<std::uint32_t>(number(pos_[0], "new address", 0, 126));
+      step_.value = static_cast<std::uint32_t>(number(pos_[0], kNewAddress));
       for (const auto& [k, v] : opts_) {
         if (k != "no_change") unknown_option(k);
         step_.value2 = flag(v, "no_change") ? 1 : 0;

@@ -335,11 +335,8 @@ class Runner {
     } else {
       UartFault fl = *fault_;
       fault_.reset();
-      if (fl.char_index < 0) fl.char_index = static_cast<int>(bytes.size()) - 1;
-      if (static_cast<std::size_t>(fl.char_index) >= bytes.size()) {
-        fail(fault_line_, fmt::format("corrupt char={}: the request has only {} characters, sent "
-                                      "undamaged",
-                                      fl.char_index, bytes.size()));
+      if (const std::string why = place_fault(fl, bytes.size(), "corrupt char"); !why.empty()) {
+        fail(fault_line_, why + ", sent undamaged");
         return true;
       }
       master_->transact(f, fl);

@@ -615,6 +615,7 @@ void Segment::check_send(std::size_t from, std::uint64_t start, std::uint64_t cy
 
 std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> bytes,
                             std::uint64_t start, UartFault fault) {
+  place_fault(fault, bytes.size());
   const std::uint64_t cycles = bytes.size() * std::uint64_t{kUartCharBits} * t_;
   check_send(from, start, cycles);
   run_to_send(start);

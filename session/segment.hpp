@@ -84,10 +84,11 @@ class Segment {
   void use_reference_line(bool on);
 
   // `bytes` as back-to-back characters from `start` (>= cycle()) driven by station `from`
-  // (`fault` damages one character, as uart_encode does). Every station runs to `start` first.
-  // Returns the end of the last stop bit. `from` must be a sender (add_sender): std::out_of_range
-  // for no station, std::invalid_argument for a chip's or for a telegram that would end past the
-  // last cycle the line counts (UINT64_MAX is its "never").
+  // (`fault` damages one character, as uart_encode does; char_index -1 the last one, as
+  // place_fault says). Every station runs to `start` first. Returns the end of the last stop
+  // bit. `from` must be a sender (add_sender): std::out_of_range for no station,
+  // std::invalid_argument for a chip's, for a fault beyond the telegram or for a telegram that
+  // would end past the last cycle the line counts (UINT64_MAX is its "never").
   std::uint64_t send(std::size_t from, std::span<const std::uint8_t> bytes, std::uint64_t start,
                      UartFault fault = {});
   // A low pulse from `from` of `low_cycles` at `start` (a glitch, line noise); refused as send().

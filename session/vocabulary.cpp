@@ -5,6 +5,7 @@
 
 #include <charconv>
 #include <iterator>
+#include <stdexcept>
 
 #include "dpc31/dp.hpp"
 #include "dpc31/names.hpp"
@@ -137,6 +138,19 @@ std::string not_a_profibus_rate(std::string_view text, std::uint32_t& baud) {
     return {};
   }
   return fmt::format("'{}' is not a PROFIBUS rate ({})", shown(text), profibus_rates());
+}
+
+std::string place_fault(UartFault& f, std::size_t chars, std::string_view what) {
+  if (f.kind == UartFault::Kind::none) return {};
+  if (chars == 0) return fmt::format("{}: an empty telegram has no character to damage", what);
+  if (f.char_index < 0) f.char_index = static_cast<int>(chars - 1);
+  if (static_cast<std::size_t>(f.char_index) < chars) return {};
+  return fmt::format("{}={}: the telegram has only {} characters", what, f.char_index, chars);
+}
+
+void place_fault(UartFault& f, std::size_t chars) {
+  if (std::string why = place_fault(f, chars, "fault_char"); !why.empty())
+    throw std::invalid_argument(std::move(why));
 }
 
 std::string hsa_refused(std::uint8_t hsa, std::uint8_t gap_factor, std::uint8_t address) {

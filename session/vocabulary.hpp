@@ -34,6 +34,12 @@ std::string_view fault_name(UartFault::Kind k);
 std::string_view fault_kind_name(UartFault::Kind k);
 // The kind named by fault_kind_name ("parity", "start", "stop"); false for any other name.
 bool parse_fault_kind(std::string_view name, UartFault::Kind& kind);
+// Puts a fault into a telegram of `chars` characters, as a scenario's `corrupt` and Python's
+// fault= mean it: no character named (char_index < 0) is the last one (the ED). "" when the
+// fault has its character (or there is no fault), else why not, the index named `what`.
+[[nodiscard]] std::string place_fault(UartFault& f, std::size_t chars, std::string_view what);
+// A master's or sender's telegram: place_fault's refusal as std::invalid_argument (nothing sent).
+void place_fault(UartFault& f, std::size_t chars);
 
 // A number a scenario line and the Python module both take, with its range and its name in the
 // scenario parser's words (docs/scenario-format.md), so that both doors refuse it alike.
@@ -48,6 +54,16 @@ inline constexpr ValueRange kSlaveAddress{"slave address", 0, 125};
 inline constexpr ValueRange kMasterAddress{"master address", 0, 126};
 inline constexpr ValueRange kWdFactor1{"wd factor 1", 1, 255};
 inline constexpr ValueRange kWdFactor2{"wd factor 2", 1, 255};
+// The slave's parameters beside them (`slave` and `set_prm` options, Python's SlaveConfig).
+inline constexpr ValueRange kIdent{"ident", 0, 0xFFFF};
+inline constexpr ValueRange kGroupIdent{"group", 0, 255};
+inline constexpr ValueRange kMinTsdr{"min_tsdr", 0, 255};
+inline constexpr ValueRange kInLen{"in", 0, fdl::kMaxDpData};
+inline constexpr ValueRange kOutLen{"out", 0, fdl::kMaxDpData};
+// Set_Slave_Add's new address (`set_slave_address`): 126 is the default of an unset slave.
+inline constexpr ValueRange kNewAddress{"new address", 0, 126};
+// An 80C32 board's (or the C31's) clock in Hz (`cpu ... clock=`).
+inline constexpr ValueRange kCpuClock{"clock", 1'000'000, 40'000'000};
 // The master's slot and idle times in bit times (a single chip's `master slot= idle=`).
 inline constexpr ValueRange kSlotBits{"slot", 1, 65535};
 inline constexpr ValueRange kIdleBits{"idle", 1, 65535};

@@ -1,18 +1,63 @@
-"""Shared fixtures of the pytest examples (docs/python.md). CTest runs each file with
-PYTHONPATH=build/python, DPC31_CLI=build/bin/dpc31 and DPC31_TRACES=traces/."""
+"""Shared fixtures of the pytest examples (docs/python.md, "The examples").
+
+CTest runs each file with PYTHONPATH=build/python and the variables below set. Run by hand
+(``PYTHONPATH=build/python python3 -m pytest examples/python/``), each one unset is found in the
+build tree the module comes from (or build/ of this repository); a test whose file is in neither
+place is skipped with the variable's name."""
 
 import os
 import pathlib
+from typing import Callable
 
 import pytest
+
+REPO = pathlib.Path(__file__).resolve().parents[2]
+
+
+def _build_dir() -> pathlib.Path:
+    try:
+        import dpc31
+    except ImportError:
+        return REPO / "build"
+    return pathlib.Path(dpc31.__file__).resolve().parents[2]  # BUILD/python/dpc31/__init__.py
+
+
+# Each variable and where the build puts what it names.
+DEFAULTS = {
+    "DPC31_CLI": "bin/dpc31",
+    "DPC31_FW51": "firmware/mcs51",
+    "DPC31_BOARD": "tests/mcs51/board",
+    "DPC31_BAD_PLUGIN_HAL_INIT": "tests/libdpc31_bad_plugin_hal_init.so",
+    "DPC31_BAD_PLUGIN_HAL_ISR": "tests/libdpc31_bad_plugin_hal_isr.so",
+}
+
+
+def built_path(var: str) -> pathlib.Path:
+    """The file or directory `var` names, else its place in the build tree; a skip if neither."""
+    if var in os.environ:
+        path = pathlib.Path(os.environ[var])
+        if not path.exists():
+            pytest.skip(f"{var}={path}: no such file")
+        return path
+    if var == "DPC31_TRACES":
+        return REPO / "traces"
+    path = _build_dir() / DEFAULTS[var]
+    if not path.exists():
+        pytest.skip(f"{var} not set, and the build has no {path} (build it, or set {var})")
+    return path
+
+
+@pytest.fixture
+def built() -> Callable[[str], pathlib.Path]:
+    return built_path
 
 
 @pytest.fixture
 def cli() -> str:
     """The dpc31 command line of the same build (the other door to the same chip)."""
-    return os.environ["DPC31_CLI"]
+    return str(built_path("DPC31_CLI"))
 
 
 @pytest.fixture
 def traces() -> pathlib.Path:
-    return pathlib.Path(os.environ["DPC31_TRACES"])
+    return built_path("DPC31_TRACES")

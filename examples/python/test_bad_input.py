@@ -5,11 +5,20 @@ a flood of log lines.
 """
 
 import os
+import pathlib
 import re
+import shutil
+import subprocess
+import sys
 
 import pytest
 
 import dpc31
+
+
+def _master():
+    return dpc31.Master(dpc31.Chip("vpc3plus"), address=2, baud=1_500_000,
+                        slave=dpc31.SlaveConfig(address=5))
 
 
 def test_send_and_pulse_need_a_sender_and_an_end_before_the_last_cycle():
@@ -46,6 +55,25 @@ def test_send_and_pulse_need_a_sender_and_an_end_before_the_last_cycle():
     (lambda: dpc31.Segment().add_station(5, wd=(0, 1)), r"wd factor 1 0 out of range \(1..255\)"),
     (lambda: dpc31.Segment().add_station(5, wd=(1, 256)),
      r"wd factor 2 256 out of range \(1..255\)"),
+    (lambda: dpc31.SlaveConfig(wd_on=True, wd_fact1=0), r"wd factor 1 0 out of range \(1..255\)"),
+    (lambda: dpc31.SlaveConfig(wd_fact2=256), r"wd factor 2 256 out of range \(1..255\)"),
+    (lambda: dpc31.SlaveConfig(in_len=250), r"in 250 out of range \(0..244\)"),
+    (lambda: dpc31.SlaveConfig(out_len=-1), r"out -1 out of range \(0..244\)"),
+    (lambda: dpc31.SlaveConfig(ident=70000), r"ident 70000 out of range \(0..65535\)"),
+    (lambda: dpc31.SlaveConfig(group_ident=256), r"group 256 out of range \(0..255\)"),
+    (lambda: dpc31.SlaveConfig(min_tsdr=256), r"min_tsdr 256 out of range \(0..255\)"),
+    (lambda: dpc31.SlaveConfig(cfg=bytes(300)), r"cfg: more than 244 bytes"),
+    (lambda: dpc31.SlaveConfig(cfg=b""), r"cfg: at least one byte"),
+    (lambda: dpc31.SlaveConfig(user_prm=bytes(238)), r"user_prm: more than 237 bytes"),
+    (lambda: _master().set_slave_address(200), r"new address 200 out of range \(0..126\)"),
+    (lambda: dpc31.Cpu51Board(dpc31.Chip("spc3"), hz=1), r"clock 1 out of range "
+     r"\(1000000..40000000\)"),
+    (lambda: dpc31.Cpu51Board.c31(dpc31.Chip("dpc31"), hz=100_000_000),
+     r"clock 100000000 out of range \(1000000..40000000\)"),
+    (lambda: dpc31.Master(dpc31.Chip("spc3", clock_hz=1_000_000), baud=12_000_000),
+     r"clock_hz 1000000: less than one clock a bit at 12000000 baud"),
+    (lambda: dpc31.Segment(12_000_000, clock_hz=1_000_000),
+     r"clock_hz 1000000: less than one clock a bit at 12000000 baud"),
 ])
 def test_values_the_scenario_parser_refuses_are_value_errors_in_its_words(call, message):
     with pytest.raises(ValueError, match="^" + message):
@@ -178,31 +206,28 @@ def test_an_unknown_port_is_a_value_error_as_an_unknown_hardware_input_is():
     ("DPC31_BAD_PLUGIN_HAL_INIT", "CopyToVpc3: local buffer is NULL with length 4"),
     ("DPC31_BAD_PLUGIN_HAL_ISR", "CopyFromVpc3: local buffer is NULL with length 2"),
 ])
-def test_a_firmware_that_misuses_the_hal_is_a_firmware_error(plugin, message):
+def test_a_firmware_that_misuses_the_hal_is_a_firmware_error(built, plugin, message):
     """A NULL buffer to the C HAL, in the plug-in's init (run_firmware) or in its ISR (the next
     call that runs the chip): a FirmwareError with the HAL's message, not an abort of Python."""
     master = dpc31.Master(dpc31.Chip("vpc3plus"), address=2, baud=1_500_000,
                           slave=dpc31.SlaveConfig(address=5))
     with pytest.raises(dpc31.FirmwareError, match=rf"^firmware BAD: {message}$"):
-        master.run_firmware(os.environ[plugin])
+        master.run_firmware(str(built(plugin)))
         master.idle(1000)
 
 
-def test_a_hardware_input_that_reads_the_chip_is_a_firmware_error():
+def test_a_hardware_input_that_reads_the_chip_is_a_firmware_error(built):
     """A hardware input is the module's pin: no chip is selected for it, so a HAL access from it
     is the firmware's fault (FirmwareError), not the process's abort."""
     master = dpc31.Master(dpc31.Chip("vpc3plus"), address=2, baud=1_500_000,
                           slave=dpc31.SlaveConfig(address=5))
-    fw = master.run_firmware(os.environ["DPC31_BAD_PLUGIN_HAL_ISR"])
+    fw = master.run_firmware(str(built("DPC31_BAD_PLUGIN_HAL_ISR")))
     with pytest.raises(dpc31.FirmwareError,
                        match=r"^firmware BAD: Vpc3Read called with no chip selected "
                              r"\(dpc31_select\)$"):
         fw.hw_input("kick", 1)
 
 
-def _master():
-    return dpc31.Master(dpc31.Chip("vpc3plus"), address=2, baud=1_500_000,
-                        slave=dpc31.SlaveConfig(address=5))
 
 
 @pytest.mark.parametrize("call, message", [
@@ -270,3 +295,62 @@ def test_wavediff_refuses_to_write_over_an_input(tmp_path):
                              r"input$"):
         dpc31.wavediff(str(a), str(b), diff_vcd=str(a))
     assert a.read_text() == "A\n"
+
+
+@pytest.mark.parametrize("kind", ["parity", "start", "stop"])
+def test_a_fault_without_fault_char_damages_the_last_character_as_corrupt_does(kind):
+    """fault= alone damages the telegram's ED, as a scenario's `corrupt` without char=: the chip
+    throws the request away (it went out undamaged before). A character beyond the telegram, or
+    fault_char without fault, is a ValueError naming it, nothing sent."""
+    chip = dpc31.Chip("spc3")
+    master = dpc31.Master(chip, slave=dpc31.SlaveConfig(address=5))
+    master.run_responder(inputs=bytes(4))
+    assert master.startup()
+    before = chip.fdl_counters
+    assert master.data_exchange(bytes(4), fault=kind).answer is None
+    assert chip.fdl_counters != before
+    sent = master.counters.requests
+    with pytest.raises(ValueError, match=r"^fault_char=500: the telegram has only 13 characters$"):
+        master.data_exchange(bytes(4), fault=kind, fault_char=500)
+    with pytest.raises(ValueError, match=r"^fault_char without fault"):
+        master.transact_raw(b"\xe5", fault_char=0)
+    assert master.counters.requests == sent
+    if kind == "parity":
+        assert chip.fdl_counters["parity"] == 1
+
+
+def test_a_senders_fault_without_fault_char_damages_the_last_character():
+    seg = dpc31.Segment()
+    station = seg.add_station(5, "spc3")
+    x = seg.add_sender("x")
+    assert seg.add_master(2, [5]).startup_all()  # the chip's baud found: it judges characters
+    fdl_status = b"\x10\x05\x03\x49\x51\x16"
+    with pytest.raises(ValueError, match=r"^fault_char=6: the telegram has only 6 characters$"):
+        seg.send(x, fdl_status, fault="parity", fault_char=6)
+    seg.run_until(seg.send(x, fdl_status, fault="parity") + 1000)
+    assert station.fdl_counters["parity"] == 1
+
+
+def test_a_second_station_of_one_name_is_refused_as_a_segment_scenario_refuses_it():
+    seg = dpc31.Segment()
+    seg.add_station(5)
+    with pytest.raises(ValueError, match=r"^a second station named 'station 5'$"):
+        seg.add_station(5)
+    with pytest.raises(ValueError, match=r"^a second station named 'station 5'$"):
+        seg.add_sender("station 5")
+    seg.add_station(5, name="twin")  # one address, two names: the collision case
+    assert seg.size == 2
+
+
+def test_a_module_built_for_another_python_names_that_python(tmp_path):
+    """Another interpreter does not look for _dpc31.cpython-311-...so: the ImportError says which
+    Python the module was built for, not just "cannot import name '_dpc31'"."""
+    package = tmp_path / "dpc31"
+    package.mkdir()
+    shutil.copy(pathlib.Path(dpc31.__file__), package / "__init__.py")
+    (package / "_dpc31.cpython-39-x86_64-linux-gnu.so").write_bytes(b"")
+    code = "import dpc31\ntry:\n    dpc31.Chip\nexcept ImportError as e:\n    print(e)\n"
+    out = subprocess.run([sys.executable, "-c", code], env=dict(os.environ, PYTHONPATH=str(tmp_path)),
+                         capture_output=True, text=True, check=True).stdout
+    assert "the module was built for Python 3.9 (_dpc31.cpython-39-x86_64-linux-gnu.so)" in out
+    assert f"this is Python {sys.version_info[0]}.{sys.version_info[1]}" in out

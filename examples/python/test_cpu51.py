@@ -5,8 +5,6 @@ by hand; the DPC31's C31 runs tests/mcs51/board/c31_ack.asm from the chip's RAM.
 Expected cycles: docs/timing.md (the line), docs/cpu.md ("MOVX timing", "INT0 from X/INT") and
 the derivation in traces/do4_80c32.scn's comments (DO4's path from SDCC's listing)."""
 
-import os
-import pathlib
 import subprocess
 
 import pytest
@@ -14,15 +12,25 @@ import pytest
 import dpc31
 from dpc31.client import Client, ServeError
 
-FW51 = pathlib.Path(os.environ["DPC31_FW51"])
-BOARD = pathlib.Path(os.environ["DPC31_BOARD"])
 T = 256  # 187.5 kbaud at 48 MHz: round(48e6 / 187500) clocks per bit (docs/timing.md)
 
 
-def test_do4_on_the_80c32_reaches_data_exchange_and_drives_its_outputs_on_time():
+@pytest.fixture
+def fw51(built):
+    """SDCC's builds of the firmware for the 80C32 (firmware/mcs51)."""
+    return built("DPC31_FW51")
+
+
+@pytest.fixture
+def board_programs(built):
+    """The board's test programs (tests/mcs51/board)."""
+    return built("DPC31_BOARD")
+
+
+def test_do4_on_the_80c32_reaches_data_exchange_and_drives_its_outputs_on_time(fw51):
     chip = dpc31.Chip("spc3")
     board = dpc31.Cpu51Board(chip, hz=24_000_000, address=0x8000)
-    assert board.load_hex(str(FW51 / "do4_80c32.ihx")) > 0
+    assert board.load_hex(str(fw51 / "do4_80c32.ihx")) > 0
     board.set_port_input(1, 7)  # the address switch DO4's main() reads
     latch = []  # the module's outputs: XDATA 4000h + port (docs/cpu.md, "DO4 on the 80C32")
     board.on_ram_write(lambda addr, value, cycle: latch.append((addr, value, cycle)))
@@ -50,7 +58,7 @@ def test_do4_on_the_80c32_reaches_data_exchange_and_drives_its_outputs_on_time()
     assert board.in_service == 0
 
 
-def test_the_c31_runs_from_the_chips_ram():
+def test_the_c31_runs_from_the_chips_ram(board_programs):
     # MOVX strobes at clocks 78, 162, 282, 366, 426 = chip cycles 156, 324, 564, 732, 852 at
     # 24 MHz (c31_ack.asm's machine cycles [5,7), [12,14), [22,24), [29,31), [34,36); WR ends
     # 18 clocks into a MOVX): the C31's interrupt raised at 324, acknowledged at 564.
@@ -58,7 +66,7 @@ def test_the_c31_runs_from_the_chips_ram():
     edges = []
     chip.on_irq_change(lambda cycle, active: edges.append((cycle, active)))
     board = dpc31.Cpu51Board.c31(chip, hz=24_000_000, code=0x1000)
-    board.load_hex(str(BOARD / "c31_ack.ihx"))
+    board.load_hex(str(board_programs / "c31_ack.ihx"))
     assert chip.peek(0x1000) == 0x02  # LJMP start, in the code area
     board.run_until(1000)
     assert edges == [(324, True), (564, False)]
@@ -77,12 +85,12 @@ def test_a_bad_image_names_its_file_and_line(tmp_path):
         dpc31.Cpu51Board.c31(dpc31.Chip("spc3"))  # the C31 is the dpc31's
 
 
-def test_the_c31_behind_dpc31_serve_from_the_pure_python_client(cli, tmp_path):
+def test_the_c31_behind_dpc31_serve_from_the_pure_python_client(cli, board_programs, tmp_path):
     # The same program behind the socket: the client is no bus master (ERR cpu), the CPU's
     # registers and the interrupt edges at the same cycles.
     sock = str(tmp_path / "chip.sock")
     proc = subprocess.Popen([cli, "serve", "--unix", sock, "--profile", "dpc31", "--cpu", "c31",
-                             "--firmware", str(BOARD / "c31_ack.ihx")],
+                             "--firmware", str(board_programs / "c31_ack.ihx")],
                             stdout=subprocess.PIPE, text=True)
     try:
         assert proc.stdout.readline().split()[:2] == ["listening", "unix"]

@@ -8,7 +8,9 @@ answered it; bad paths are one clear dpc31.Error and leave nothing behind.
 
 import os
 import pathlib
+import signal
 import subprocess
+import sys
 
 import pytest
 
@@ -154,3 +156,48 @@ def test_an_output_that_is_an_input_or_another_output_is_refused(traces, tmp_pat
         scn.run(pcapng=same, fst=same)
     assert scn_path.read_bytes() == before
     assert not (tmp_path / "same.vcd").exists()
+
+
+PACKAGE_DIR = str(pathlib.Path(dpc31.__file__).resolve().parents[1])  # PYTHONPATH from anywhere
+OPEN_SEGMENT = """
+import dpc31, sys
+mode = sys.argv[1]
+seg = dpc31.Segment(1_500_000, vcd="out.vcd", pcapng="out.pcapng")
+seg.add_station(5, "spc3")
+master = seg.add_master(2, [5])
+def observer(telegram):
+    if mode != "wait":
+        raise ValueError("a bug in the observer")
+seg.on_telegram(observer)
+if mode == "close_raises":
+    try:
+        master.startup_all()
+    except ValueError:
+        pass
+    seg.close()
+master.startup_all()
+print("ready", flush=True)
+sys.stdin.readline()
+"""
+
+
+@pytest.mark.parametrize("end", ["raise", "close_raises", "SIGTERM", "SIGHUP"])
+def test_an_unfinished_output_leaves_no_temporary(tmp_path, end):
+    """A script that ends with its Segment's outputs unfinished (an observer's uncaught
+    exception, a close() that raises, a SIGTERM or SIGHUP without a handler of the script's)
+    leaves neither the outputs nor their NAME.PID.tmp: Python need not destroy the Segment, so
+    the module removes them at exit and on those signals."""
+    proc = subprocess.Popen([sys.executable, "-c", OPEN_SEGMENT,
+                             "wait" if end.startswith("SIG") else end],
+                            cwd=tmp_path, env=dict(os.environ, PYTHONPATH=PACKAGE_DIR),
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    if end.startswith("SIG"):
+        assert proc.stdout.readline() == "ready\n"
+        assert sorted(p.suffix for p in tmp_path.iterdir()) == [".tmp", ".tmp"]
+        proc.send_signal(getattr(signal, end))
+        assert proc.wait(timeout=30) == -getattr(signal, end)
+    else:
+        _, err = proc.communicate(timeout=30)
+        assert proc.returncode == 1 and "a bug in the observer" in err
+    assert list(tmp_path.iterdir()) == []

@@ -80,3 +80,24 @@ def test_the_client_loads_no_native_code():
     code = ("import sys, dpc31.client; "
             "sys.exit(1 if any(m.startswith('dpc31._') for m in sys.modules) else 0)")
     assert subprocess.run([sys.executable, "-c", code]).returncode == 0
+
+
+def test_an_observer_exception_keeps_the_replies_in_step(server):
+    """An observer's exception is raised by the call that ran the chip, after that call's own
+    reply is read (as dpc31.Chip): the next call gets its own reply, not the one before."""
+    def broken(cycle, active):
+        raise RuntimeError("observer bug")
+
+    with Client(tcp=server) as remote:
+        remote.on_irq_change(broken)
+        imr = remote.addr_of("Int_Mask_Reg")
+        remote.write(imr, 0xEF)  # User_Timer_Clock unmasked
+        remote.write(imr + 1, 0xFF)
+        remote.write(remote.addr_of("Mode_Reg1_S"), 0x01)
+        start = remote.cycle
+        with pytest.raises(RuntimeError, match="observer bug"):
+            remote.step(100_000)
+        assert remote.ping() == "pong"  # not the reply of step
+        remote.on_irq_change(None)
+        assert remote.cycle == start + 100_000
+        assert remote.addr_of("Int_Mask_Reg") == imr

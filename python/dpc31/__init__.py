@@ -22,7 +22,10 @@ __all__ = [
 def __getattr__(name: str) -> Any:
     if name not in __all__:
         raise AttributeError(f"module 'dpc31' has no attribute '{name}'")
-    from . import _dpc31
+    try:
+        from . import _dpc31
+    except ImportError as e:
+        raise ImportError(_not_loaded(e)) from e
 
     if name == "run_scenario":
         value: Any = _run_scenario
@@ -32,12 +35,36 @@ def __getattr__(name: str) -> Any:
     return value
 
 
+def _not_loaded(error: ImportError) -> str:
+    """Why _dpc31 did not load, with a hint where it was built for another Python: the file's
+    name carries that interpreter's tag (cpython-311: 3.11), and no other one looks for it."""
+    import pathlib
+    import re
+    import sys
+    import sysconfig
+
+    built = sorted(p.name for p in pathlib.Path(__file__).parent.glob("_dpc31.*"))
+    suffix = sysconfig.get_config_var("EXT_SUFFIX") or ".so"
+    if not built or "_dpc31" + suffix in built:
+        return str(error)
+    tags = [re.match(r"_dpc31\.cpython-(\d)(\d+)", name) for name in built]
+    versions = ", ".join(f"Python {m[1]}.{m[2]}" if m else "another Python"
+                         for m in tags)
+    here = f"{sys.version_info[0]}.{sys.version_info[1]}"
+    return (f"{error}: the module was built for {versions} ({', '.join(built)}), this is "
+            f"Python {here} ({sys.executable}): run the python3 it was built for, or build it "
+            "with this one")
+
+
 def __dir__() -> list:
     return sorted(list(globals()) + __all__)
 
 
 def _run_scenario(path: str) -> Any:
     """Loads and runs a scenario file (``dpc31 run PATH``); raises ScenarioError on a bad file."""
-    from . import _dpc31
+    try:
+        from . import _dpc31
+    except ImportError as e:
+        raise ImportError(_not_loaded(e)) from e
 
     return _dpc31.Scenario.load(path).run()

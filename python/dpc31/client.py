@@ -62,6 +62,7 @@ class Client:
         self._telegram: List[Callable[[Telegram], None]] = []
         self._log: List[Callable[[int, str, str], None]] = []
         self._port: List[Callable[[int, str, int], None]] = []
+        self._observer_error: Optional[Exception] = None
         if secret is not None:
             self._call(f"auth {secret}")
         self.info: Dict[str, str] = dict(
@@ -97,6 +98,10 @@ class Client:
             if line.startswith("!"):
                 self._async(line)
                 continue
+            # An observer's exception once the reply is read: the next call gets its own reply.
+            error, self._observer_error = self._observer_error, None
+            if error is not None:
+                raise error
             if line == "OK" or line.startswith("OK "):
                 return line[3:]
             if line.startswith("ERR "):
@@ -107,20 +112,24 @@ class Client:
     def _async(self, line: str) -> None:
         words = line.split()
         if len(words) == 4 and words[1] == "irq":
-            for cb in self._irq:
-                cb(int(words[2]), words[3] == "1")
+            self._notify(self._irq, int(words[2]), words[3] == "1")
         elif len(words) == 6 and words[1] == "telegram":
             t = Telegram(words[4] == "tx", bytes.fromhex(words[5]), int(words[2]), int(words[3]))
-            for cb in self._telegram:
-                cb(t)
+            self._notify(self._telegram, t)
         elif len(words) >= 4 and words[1] == "log":
-            for cb in self._log:
-                cb(int(words[2]), words[3], " ".join(words[4:]))
+            self._notify(self._log, int(words[2]), words[3], " ".join(words[4:]))
         elif len(words) == 5 and words[1] == "port":
-            for cb in self._port:
-                cb(int(words[2]), words[3], int(words[4], 16))
+            self._notify(self._port, int(words[2]), words[3], int(words[4], 16))
         elif len(words) >= 2 and words[1] == "bye":
             raise ConnectionError(f"dpc31 serve ended the connection: {' '.join(words[2:])}")
+
+    def _notify(self, callbacks: list, *args: object) -> None:
+        for cb in callbacks:
+            try:
+                cb(*args)
+            except Exception as e:  # the first one is raised by _call, after its reply
+                if self._observer_error is None:
+                    self._observer_error = e
 
     # --- observers: a callable adds one, None removes all of that kind (as dpc31.Chip) ---
     def on_irq_change(self, callback: Optional[Callable[[int, bool], None]]) -> None:

@@ -9,6 +9,7 @@
 #include <atomic>
 #include <cerrno>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <mutex>
 
@@ -104,6 +105,17 @@ int take(int from, int to) {
 }  // namespace
 
 void remove_registered() { remove_all(SIGTERM); }
+
+void remove_at_exit() {
+  static std::once_flag once;
+  static pid_t owner = 0;
+  std::call_once(once, [] {
+    owner = ::getpid();
+    std::atexit([] {
+      if (::getpid() == owner) remove_all(SIGTERM);
+    });
+  });
+}
 
 void install() {
   static std::once_flag once;

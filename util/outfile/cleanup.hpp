@@ -17,6 +17,11 @@ namespace dpc31::cleanup {
 // calls it first.
 void install();
 
+// Also at the process's exit (std::atexit), does what remove_registered does with what is still
+// registered then: for a library in another program's process (the Python module), whose
+// objects need not be destroyed before it exits. Once; a forked child's exit leaves them alone.
+void remove_at_exit();
+
 // Removes every registered path and signals (SIGTERM) every registered child now, from any
 // thread, without ending the process: for a program that ends itself with _exit (the firmware
 // hang guard, session/board.hpp).
