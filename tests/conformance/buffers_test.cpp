@@ -61,10 +61,13 @@ TEST_P(BufferSm, DiagBufferSm_Codes00Nil01User10Asic11SendMode) {
   b.chip.step(end + 100 - b.chip.cycle());
   const std::uint8_t sending = user_buf == 1 ? 0x0D : 0x07;  // the ASIC's buffer 11
   EXPECT_EQ(b.chip.read(0x0C), sending);
-  b.chip.step(answer_end - 1 - 4 - b.chip.cycle());
-  EXPECT_EQ(b.chip.read(0x0C), sending);  // completes at answer_end - 1
-  b.chip.step(answer_end - 4 - b.chip.cycle());
-  EXPECT_EQ(b.chip.read(0x0C), idle);  // completes at answer_end
+  // A read ends at answer_end - 1: still sending; a look at answer_end (peek: no bus time, where
+  // a second read would end an access later): the ASIC's again.
+  b.chip.step(answer_end - 1 - b.chip.bus_access_cycles() - b.chip.cycle());
+  EXPECT_EQ(b.chip.read(0x0C), sending);
+  ASSERT_EQ(b.chip.cycle(), answer_end - 1);
+  b.chip.step(1);
+  EXPECT_EQ(b.chip.peek(0x0C), idle);
 }
 
 namespace {
