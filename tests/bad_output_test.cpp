@@ -184,24 +184,29 @@ bool any_ending(const fs::path& dir, const std::string& suffix) {
   return false;
 }
 
+// Runs `argv` in `work`, waits until an output's temporary is there (each is, from the start of
+// the run), sends `sig` 200 ms later, and expects the process to end by it.
+void expect_ended_by_signal(const std::vector<std::string>& argv, const fs::path& work, int sig) {
+  const pid_t pid = spawn(argv, work.string());
+  ASSERT_GT(pid, 0);
+  EXPECT_TRUE(eventually([&] { return any_ending(work, ".tmp"); })) << sig;
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  ASSERT_EQ(::kill(pid, sig), 0);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << sig << " status " << status;
+}
+
 // SIGINT, SIGTERM or SIGHUP in the middle of a run: the process still ends by the signal, and
 // no temporary of its outputs is left (finding 7).
 TEST_F(BadInput, ASignalDuringARunLeavesNoTemporary) {
   spit(path("long.scn"), long_scenario());
   spit(path("old.vcd"), "old");
   for (const int sig : {SIGINT, SIGTERM, SIGHUP}) {
-    const pid_t pid =
-        spawn({kCli, "run", "long.scn", "--quiet", "--json", "r.json", "--vcd", "old.vcd", "--fst",
-               "r.fst", "--pcap", "r.pcapng", "--record", "r.trace"},
-              (root_ / "work").string());
-    ASSERT_GT(pid, 0);
-    // Every output's temporary is there from the start of the run.
-    EXPECT_TRUE(eventually([&] { return any_ending(root_ / "work", ".tmp"); })) << sig;
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));
-    ASSERT_EQ(::kill(pid, sig), 0);
-    int status = 0;
-    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
-    EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << sig << " status " << status;
+    expect_ended_by_signal(
+        {kCli, "run", "long.scn", "--quiet", "--json", "r.json", "--vcd", "old.vcd", "--fst",
+         "r.fst", "--pcap", "r.pcapng", "--record", "r.trace"},
+        root_ / "work", sig);
     EXPECT_EQ(listing(), (std::vector<std::string>{"long.scn", "old.vcd"})) << sig;
     EXPECT_EQ(slurp(path("old.vcd")), "old");
   }
@@ -212,16 +217,9 @@ TEST_F(BadInput, ASignalDuringARunLeavesNoTemporary) {
 TEST_F(BadInput, ASignalDuringASoakLeavesNoReport) {
   spit(path("old.json"), "old");
   for (const int sig : {SIGINT, SIGTERM}) {
-    const pid_t pid =
-        spawn({"/bin/sh", "-c", "exec " + kCli + " soak --cycles 1e12 --json old.json >out"},
-              (root_ / "work").string());
-    ASSERT_GT(pid, 0);
-    EXPECT_TRUE(eventually([&] { return any_ending(root_ / "work", ".tmp"); })) << sig;
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));
-    ASSERT_EQ(::kill(pid, sig), 0);
-    int status = 0;
-    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
-    EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << sig << " status " << status;
+    expect_ended_by_signal(
+        {"/bin/sh", "-c", "exec " + kCli + " soak --cycles 1e12 --json old.json >out"},
+        root_ / "work", sig);
     EXPECT_EQ(listing(), (std::vector<std::string>{"old.json", "out"})) << sig;
     EXPECT_EQ(slurp(path("old.json")), "old");
     EXPECT_EQ(slurp(path("out")), "") << sig;
