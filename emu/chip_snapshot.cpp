@@ -218,7 +218,7 @@ void core_fields(Ar& ar, C& c) {
   static_assert(snap::member_count<Watchdog::State>() == 5, "a new member: add it here");
   static_assert(snap::member_count<ModeRegisters::State>() == 1, "a new member: add it here");
   ar.section("CORE");
-  ar(c.clock.now);
+  ar.bounded(c.clock.now, Chip::kLastCycle);  // past it a step would wrap (Chip::cycle_after)
   ar(dp.started);
   ar(regs.ram_access_violation);
   ar(regs.large_ram);

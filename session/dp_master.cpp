@@ -347,6 +347,7 @@ void DpMaster::note(const std::string& s) {
 
 // To `cycle`, or less when the chip's TxD wakes the master up (wake_on_txd_).
 void DpMaster::run_until(std::uint64_t cycle) {
+  cycle = std::min(cycle, Chip::kLastCycle);  // the chips' time ends there: so does a wait
   // A falling edge may be a start bit: look at the line again (the wait is event-driven).
   if (seg_) {
     scheduler(cycle);
@@ -510,6 +511,10 @@ void DpMaster::wait_answer(Exchange& ex) {
       bus_free_ = answer_.end();
       break;
     }
+    if (at >= Chip::kLastCycle) {  // the chips' time has ended: no character comes any more
+      bus_free_ = at;
+      break;
+    }
     // The one rule of the wait: a slot time after the last character on the line (the
     // request's, then each of the answer's) for the next start bit. Past it the exchange is over
     // (no answer, or a broken one) and the line is free from where the master found that: the
@@ -637,8 +642,14 @@ Exchange DpMaster::data_exchange(const std::vector<std::uint8_t>& outputs, UartF
 
 void DpMaster::data_exchange(std::span<const std::uint8_t> outputs, UartFault fault, Exchange& ex) {
   ex.request.du.assign(outputs.begin(), outputs.end());
+  const bool fcb = fcb_;
   make_request(ex.request, std::nullopt);
-  transact(fault, ex);
+  try {
+    transact(fault, ex);
+  } catch (const std::invalid_argument&) {
+    fcb_ = fcb;  // refused before it went out (a fault beyond the telegram): the FCB as it was
+    throw;
+  }
 }
 Exchange DpMaster::read_inputs() { return transact(request(sap::Rd_Inp, {})); }
 Exchange DpMaster::read_outputs() { return transact(request(sap::Rd_Outp, {})); }

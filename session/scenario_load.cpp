@@ -23,11 +23,11 @@ bool read_scenario_file(const std::string& path, std::string& text, std::string&
                         ScenarioError& err) {
   err = ScenarioError{path, 0, {}};
   // Opened once: whether another user could have changed it is judged on what is read (it
-  // matters when it names a plug-in: bind_plugin). A pipe is the piping user's own.
+  // matters when it names a plug-in: bind_plugin). An anonymous pipe is the piping user's own; a
+  // named FIFO is judged as a file is (another user's FIFO could feed any plug-in's name).
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   untrusted.clear();
-  struct stat st {};
-  if (fd >= 0 && ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode)) untrusted = untrusted_code(fd, path);
+  if (fd >= 0) untrusted = untrusted_input(fd, path);
   // (When it cannot be opened, read_text_file() says why in its words.)
   const bool read = fd >= 0 ? read_text_fd(fd, kMaxFileBytes, "scenario", text, err.message)
                             : read_text_file(path, kMaxFileBytes, "scenario", text, err.message);

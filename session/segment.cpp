@@ -606,10 +606,10 @@ void Segment::check_send(std::size_t from, std::uint64_t start, std::uint64_t cy
         "station {} ({}) is a chip: its chip drives the line, send from a sender (add_sender)",
         from, s.name));
   }
-  if (start >= UINT64_MAX - cycles) {
+  if (start >= Chip::kLastCycle - cycles) {
     throw std::invalid_argument(
         fmt::format("start {}: {} cycles from there end past the last cycle ({})", start, cycles,
-                    UINT64_MAX - 1));
+                    Chip::kLastCycle));
   }
 }
 
@@ -680,6 +680,7 @@ void Segment::pulse(std::size_t from, std::uint64_t start, std::uint64_t low_cyc
 }
 
 void Segment::run_until(std::uint64_t cycle, std::optional<std::size_t> wake_for) {
+  cycle = std::min(cycle, Chip::kLastCycle);  // where the chips' time ends
   catch_up();
   wake_for_ = wake_for;
   woken_ = false;

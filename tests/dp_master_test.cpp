@@ -147,6 +147,10 @@ TEST(DpMaster, AnIdleOfUint64MaxRunsTheChipToItsLastCycle) {
   EXPECT_EQ(chip.cycle(), 1000u);
   master.idle(std::numeric_limits<std::uint64_t>::max());
   EXPECT_EQ(chip.cycle(), Chip::kLastCycle);
+  // A request there ends its waits at the last cycle too (the review's case: the wait for the
+  // answer's slot time looped, the chip unable to move).
+  EXPECT_FALSE(master.fdl_status().answer);
+  EXPECT_EQ(chip.cycle(), Chip::kLastCycle);
 }
 
 TEST(DpMaster, AMasterDestroyedLeavesNoObserverOnItsChip) {

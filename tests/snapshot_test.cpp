@@ -671,6 +671,11 @@ TEST(SnapshotFormat, CraftedPayloadsAreRefusedNotLoaded) {
   expect_refused(target, b, "1 bytes after the last section");
 
   // Values no chip can hold. CORE: tag, now (8), started, violation, large_ram, baud_code.
+  // A cycle past the chip's last (Chip::kLastCycle, 2^62 - 1): the next step would wrap it.
+  b = good;
+  b[snap::kHeaderSize + 4 + 7] = 0x40;  // little-endian: bit 62 set
+  reseal(b);
+  expect_refused(target, b, "out of range (at most 4611686018427387903)");
   b = good;
   b[snap::kHeaderSize + 4 + 8 + 3] = 10;
   reseal(b);

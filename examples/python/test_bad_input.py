@@ -317,6 +317,14 @@ def test_a_fault_without_fault_char_damages_the_last_character_as_corrupt_does(k
     assert master.counters.requests == sent
     if kind == "parity":
         assert chip.fdl_counters["parity"] == 1
+    # A request refused before it went out leaves the FCB as it was (the review's case: it
+    # toggled, so the next request repeated the last FCB and the slave took it as a retry).
+    a = master.data_exchange(bytes([1, 0, 0, 0]))
+    with pytest.raises(ValueError, match=r"^fault_char=500: "):
+        master.data_exchange(bytes([2, 0, 0, 0]), fault=kind, fault_char=500)
+    b = master.data_exchange(bytes([3, 0, 0, 0]))
+    assert a.answer is not None and b.answer is not None
+    assert (a.request.fc ^ b.request.fc) & 0x20  # FCB, bit 5: toggled once from a to b
 
 
 def test_a_senders_fault_without_fault_char_damages_the_last_character():

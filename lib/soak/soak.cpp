@@ -259,7 +259,8 @@ class Soak {
       case Fault::stop: {
         UartFault u;
         u.kind = f == Fault::parity ? UartFault::Kind::parity : UartFault::Kind::stop;
-        u.char_index = static_cast<int>(below(9 + out_len_));  // SD2: 9 characters + the outputs
+        // SD2: 9 characters and the outputs; without outputs an SD1 of 6.
+        u.char_index = static_cast<int>(below(out_len_ == 0 ? 6 : 9 + out_len_));
         exchange(u);
         return;
       }

@@ -99,15 +99,17 @@ class Client:
                 self._async(line)
                 continue
             # An observer's exception once the reply is read: the next call gets its own reply.
+            # A failed command or a broken reply comes first (the observer's exception its
+            # cause): the caller must know the command did not run.
             error, self._observer_error = self._observer_error, None
-            if error is not None:
-                raise error
-            if line == "OK" or line.startswith("OK "):
-                return line[3:]
             if line.startswith("ERR "):
                 code, _, message = line[4:].partition(" ")
-                raise ServeError(code, message)
-            raise ConnectionError(f"not a dpc31 serve reply: {line!r}")
+                raise ServeError(code, message) from error
+            if line != "OK" and not line.startswith("OK "):
+                raise ConnectionError(f"not a dpc31 serve reply: {line!r}") from error
+            if error is not None:
+                raise error
+            return line[3:]
 
     def _async(self, line: str) -> None:
         words = line.split()

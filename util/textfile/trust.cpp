@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cerrno>
+#include <cstdint>
 #include <system_error>
 
 namespace dpc31 {
@@ -60,14 +61,19 @@ std::string chain_problem(const std::string& real, struct stat below) {
   return {};
 }
 
-std::string checked(int fd, const std::string& shown, bool directory) {
+enum class Kind : std::uint8_t { file, directory, input };
+
+std::string checked(int fd, const std::string& shown, Kind kind) {
   struct stat st {};
   if (::fstat(fd, &st) != 0) {
     return fmt::format("{}: cannot check it: {}", shown,
                        std::error_code(errno, std::generic_category()).message());
   }
-  if (directory ? !S_ISDIR(st.st_mode) : !S_ISREG(st.st_mode)) {
-    return fmt::format("{} is not a {}", shown, directory ? "directory" : "regular file");
+  if (kind == Kind::input) {
+    if (real_path(fd).empty()) return {};  // an anonymous pipe: "pipe:[N]", the piper's own
+  } else if (kind == Kind::directory ? !S_ISDIR(st.st_mode) : !S_ISREG(st.st_mode)) {
+    return fmt::format("{} is not a {}", shown,
+                       kind == Kind::directory ? "directory" : "regular file");
   }
   if (std::string p = owner_problem(shown, st); !p.empty()) return p;
   if ((st.st_mode & kOthersWrite) != 0) {
@@ -82,10 +88,16 @@ std::string checked(int fd, const std::string& shown, bool directory) {
 
 }  // namespace
 
-std::string untrusted_code(int fd, const std::string& shown) { return checked(fd, shown, false); }
+std::string untrusted_code(int fd, const std::string& shown) {
+  return checked(fd, shown, Kind::file);
+}
 
 std::string untrusted_directory(int fd, const std::string& shown) {
-  return checked(fd, shown, true);
+  return checked(fd, shown, Kind::directory);
+}
+
+std::string untrusted_input(int fd, const std::string& shown) {
+  return checked(fd, shown, Kind::input);
 }
 
 }  // namespace dpc31

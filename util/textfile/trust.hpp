@@ -21,4 +21,9 @@ std::string untrusted_code(int fd, const std::string& shown);
 // and every directory above it.
 std::string untrusted_directory(int fd, const std::string& shown);
 
+// The same for a scenario read from `fd`, which may name code to run: a regular file or a named
+// FIFO (or a device) judged as untrusted_code judges a file; an anonymous pipe (no path:
+// `run <(cat s.scn)`, `| run /dev/stdin`) is the piping user's own.
+std::string untrusted_input(int fd, const std::string& shown);
+
 }  // namespace dpc31
