@@ -606,7 +606,7 @@ void Segment::check_send(std::size_t from, std::uint64_t start, std::uint64_t cy
         "station {} ({}) is a chip: its chip drives the line, send from a sender (add_sender)",
         from, s.name));
   }
-  if (start >= Chip::kLastCycle - cycles) {
+  if (cycles > Chip::kLastCycle || start > Chip::kLastCycle - cycles) {
     throw std::invalid_argument(
         fmt::format("start {}: {} cycles from there end past the last cycle ({})", start, cycles,
                     Chip::kLastCycle));

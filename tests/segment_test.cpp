@@ -229,10 +229,10 @@ TEST(Segment, ASendOrPulseNeedsASenderAndAnEndBeforeTheLastCycle) {
             "(add_sender)");
   EXPECT_EQ(message([&] { seg.send(m, token, UINT64_MAX - 1); }),
             "start 18446744073709551614: 1056 cycles from there end past the last cycle "
-            "(18446744073709551614)");
+            "(4611686018427387903)");
   EXPECT_EQ(message([&] { seg.pulse(m, 1000, UINT64_MAX - 1000); }),
             "start 1000: 18446744073709550615 cycles from there end past the last cycle "
-            "(18446744073709551614)");
+            "(4611686018427387903)");
   EXPECT_EQ(seg.cycle(), 0u);
   EXPECT_EQ(seg.send(m, token, 1000), 1000 + 3 * 11 * seg.bit_cycles());
 }
