@@ -80,6 +80,24 @@ def test_values_the_scenario_parser_refuses_are_value_errors_in_its_words(call, 
         call()
 
 
+@pytest.mark.parametrize("call, message", [
+    (lambda: dpc31.Chip("spc3").step(2**70),
+     r"cycles 1180591620717411303424 out of range \(0..18446744073709551615\)"),
+    (lambda: dpc31.Chip("spc3").step(-1), r"cycles -1 out of range \(0..18446744073709551615\)"),
+    (lambda: dpc31.Segment(baud=2**70), r"baud 1180591620717411303424 out of range \(0..4294967295\)"),
+    (lambda: _master().idle(2**65), r"cycles 36893488147419103232 out of range "
+     r"\(0..18446744073709551615\)"),
+    (lambda: dpc31.SlaveConfig(ident=2**70), r"ident 1180591620717411303424 out of range "
+     r"\(-9223372036854775808..9223372036854775807\)"),
+    (lambda: dpc31.Segment().add_station(5, wd=(1, 2**70)), r"wd 1180591620717411303424 out of "
+     r"range"),
+])
+def test_an_int_its_argument_cannot_hold_is_a_value_error_naming_the_argument(call, message):
+    """pybind11 took it for a wrong type: a TypeError listing the signatures, naming nothing."""
+    with pytest.raises(ValueError, match="^" + message):
+        call()
+
+
 def test_a_masters_token_rules_are_checked_as_on_a_master_line():
     seg = dpc31.Segment()
     seg.add_station(5)
