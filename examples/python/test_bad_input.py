@@ -70,6 +70,12 @@ def test_send_and_pulse_need_a_sender_and_an_end_before_the_last_cycle():
      r"\(1000000..40000000\)"),
     (lambda: dpc31.Cpu51Board.c31(dpc31.Chip("dpc31"), hz=100_000_000),
      r"clock 100000000 out of range \(1000000..40000000\)"),
+    # Past the 8051's 64 KiB the code address was a TypeError, below the user area the board's
+    # own words.
+    (lambda: dpc31.Cpu51Board.c31(dpc31.Chip("dpc31", irq_controller="c31"), code=0x10000),
+     r"code 65536 out of range \(2208..8191\)"),
+    (lambda: dpc31.Cpu51Board.c31(dpc31.Chip("dpc31", irq_controller="c31"), code=0x500),
+     r"code 1280 out of range \(2208..8191\)"),
     (lambda: dpc31.Master(dpc31.Chip("spc3", clock_hz=1_000_000), baud=12_000_000),
      r"clock_hz 1000000: less than one clock a bit at 12000000 baud"),
     (lambda: dpc31.Segment(12_000_000, clock_hz=1_000_000),
