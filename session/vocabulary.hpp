@@ -107,5 +107,10 @@ inline constexpr ValueRange kC31Code{"code", 0x08A0, 0x1FFF};
 // "" for a master's hsa= it may take (beside a gap=, not below its own address), else why not.
 [[nodiscard]] std::string hsa_refused(std::uint8_t hsa, std::uint8_t gap_factor,
                                       std::uint8_t address);
+// A segment's station names (a chip's, a sender's, a master's) are its scopes in the waveforms
+// and name it in the log, in collisions and in `send from=`: each is one station's. A built-in
+// master's sender is "master ADDR"; a name taken is "a second station named 'NAME'".
+[[nodiscard]] std::string master_station_name(std::uint8_t address);
+[[nodiscard]] std::string second_station_named(std::string_view name);
 
 }  // namespace dpc31

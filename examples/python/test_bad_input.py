@@ -372,6 +372,16 @@ def test_a_second_station_of_one_name_is_refused_as_a_segment_scenario_refuses_i
         seg.add_sender("station 5")
     seg.add_station(5, name="twin")  # one address, two names: the collision case
     assert seg.size == 2
+    # A master's sender station is "master ADDR": named apart from the others as well.
+    seg.add_station(6, name="master 2")
+    with pytest.raises(ValueError, match=r"^a second station named 'master 2'$"):
+        seg.add_master(2, [5])
+    seg.add_master(3, [5])
+    with pytest.raises(ValueError, match=r"^a second station named 'master 3'$"):
+        seg.add_master(3, [5])
+    with pytest.raises(ValueError, match=r"^a second station named 'master 3'$"):
+        seg.add_sender("master 3")
+    assert seg.size == 4
 
 
 def test_a_module_built_for_another_python_names_that_python(tmp_path):
