@@ -9,6 +9,7 @@
 #include <pybind11/stl.h>
 
 #include <exception>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -23,6 +24,69 @@
 namespace dpc31::py_bind {
 
 namespace py = pybind11;
+
+// A Python int that an argument's C++ integer cannot hold: a ValueError in the module's range
+// words, named by the argument it was given for once it leaves the call (name_int_arguments).
+struct IntOutOfRange : py::value_error {
+  IntOutOfRange(PyObject* v, std::string r)
+      : py::value_error("value " + r), value(v), range(std::move(r)) {}
+  PyObject* value;    // the int as given (call.args holds it while the call runs)
+  std::string range;  // "V out of range (MIN..MAX)"
+};
+
+// Every function of the module (methods, properties, constructors) names the argument of an
+// IntOutOfRange it raises: its keyword name, else the property's or function's name.
+void name_int_arguments(const py::module_& m);
+
+}  // namespace dpc31::py_bind
+
+namespace pybind11::detail {
+
+// pybind11 takes an int that the argument's integer cannot hold (2**70 for a count, -1 for an
+// unsigned) as a reason to try the next overload, and without one raises a TypeError that names
+// no argument. The module has no overloads on integers: such an int is refused at once instead.
+template <typename T>
+class checked_int_caster {
+  using Wide = std::conditional_t<std::is_signed_v<T>, long long, unsigned long long>;
+
+ public:
+  PYBIND11_TYPE_CASTER(T, const_name("int"));
+  bool load(handle src, bool convert) {
+    type_caster<Wide> wide;
+    if (wide.load(src, convert) && std::in_range<T>(static_cast<Wide>(wide))) {
+      value = static_cast<T>(static_cast<Wide>(wide));
+      return true;
+    }
+    if (!PyLong_Check(src.ptr())) return false;  // not an int: pybind11's TypeError
+    throw dpc31::py_bind::IntOutOfRange(src.ptr(),
+                                        std::string(str(src)) + " out of range (" +
+                                            std::to_string(std::numeric_limits<T>::min()) + ".." +
+                                            std::to_string(std::numeric_limits<T>::max()) + ")");
+  }
+  static handle cast(T v, return_value_policy policy, handle parent) {
+    return type_caster<Wide>::cast(v, policy, parent);
+  }
+};
+template <>
+class type_caster<signed char> : public checked_int_caster<signed char> {};
+template <>
+class type_caster<unsigned char> : public checked_int_caster<unsigned char> {};
+template <>
+class type_caster<short> : public checked_int_caster<short> {};
+template <>
+class type_caster<unsigned short> : public checked_int_caster<unsigned short> {};
+template <>
+class type_caster<int> : public checked_int_caster<int> {};
+template <>
+class type_caster<unsigned> : public checked_int_caster<unsigned> {};
+template <>
+class type_caster<long> : public checked_int_caster<long> {};
+template <>
+class type_caster<unsigned long> : public checked_int_caster<unsigned long> {};
+
+}  // namespace pybind11::detail
+
+namespace dpc31::py_bind {
 
 // The exception classes (dpc31.Error and its subclasses), created by bind_chip.
 struct Errors {

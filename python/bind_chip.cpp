@@ -4,7 +4,9 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <set>
 #include <stdexcept>
+#include <unordered_map>
 
 #include "bind.hpp"
 #include "cleanup.hpp"
@@ -630,6 +632,88 @@ void bind_chip(py::module_& m) {
   export_hal_symbols();
 }
 
+namespace {
+
+using Impl = py::handle (*)(py::detail::function_call&);
+struct Wrapped {
+  Impl impl;
+  std::string name;  // for an argument without a keyword name: the property's or function's
+};
+std::unordered_map<const py::detail::function_record*, Wrapped>& wrapped() {
+  static auto* w = new std::unordered_map<const py::detail::function_record*, Wrapped>;
+  return *w;  // never destroyed: the functions outlive every static
+}
+
+py::handle naming_impl(py::detail::function_call& call) {
+  const Wrapped& w = wrapped().at(&call.func);
+  try {
+    return w.impl(call);
+  } catch (const IntOutOfRange& e) {
+    // The argument that is the int, or a tuple or list that holds it (wd=(1, 2**70)).
+    const auto holds = [&e](py::handle a) {
+      if (a.ptr() == e.value) return true;
+      if (!PyTuple_Check(a.ptr()) && !PyList_Check(a.ptr())) return false;
+      for (const py::handle x : a) {
+        if (x.ptr() == e.value) return true;
+      }
+      return false;
+    };
+    std::string name = w.name;
+    // A constructor's first is not an object but its value_and_holder.
+    for (std::size_t i = call.init_self ? 1 : 0; i < call.args.size() && i < call.func.args.size();
+         ++i) {
+      if (call.func.args[i].name != nullptr && holds(call.args[i])) {
+        name = call.func.args[i].name;
+        break;
+      }
+    }
+    throw py::value_error(name + " " + e.range);
+  }
+}
+
+// The records of a pybind11 function (a builtin whose self is its record capsule; a method is
+// one inside an instancemethod), overloads included.
+void wrap(py::handle f, const std::string& name) {
+  if (PyInstanceMethod_Check(f.ptr())) f = PyInstanceMethod_GET_FUNCTION(f.ptr());
+  if (!PyCFunction_Check(f.ptr())) return;
+  py::handle self = PyCFunction_GET_SELF(f.ptr());
+  if (!self || !py::isinstance<py::capsule>(self)) return;
+  const auto cap = py::reinterpret_borrow<py::capsule>(self);
+  if (!py::detail::is_function_record_capsule(cap)) return;
+  for (auto* r = cap.get_pointer<py::detail::function_record>(); r != nullptr; r = r->next) {
+    if (r->impl == naming_impl) continue;
+    wrapped().emplace(r, Wrapped{r->impl, name});
+    r->impl = naming_impl;
+  }
+}
+
+// The module's functions and its classes' (nested ones too, each once).
+void wrap_scope(py::handle scope, const std::string& module, std::set<PyObject*>& seen) {
+  seen.insert(scope.ptr());
+  for (const auto& item : scope.attr("__dict__").attr("items")()) {
+    const auto key = item[py::int_(0)].cast<std::string>();
+    const py::object v = item[py::int_(1)];
+    if (py::isinstance<py::type>(v)) {
+      if (py::str(v.attr("__module__")).cast<std::string>() == module && !seen.contains(v.ptr()))
+        wrap_scope(v, module, seen);
+    } else if (PyObject_TypeCheck(v.ptr(), &PyProperty_Type)) {
+      wrap(v.attr("fget"), key);
+      wrap(v.attr("fset"), key);
+    } else if (py::isinstance(v, py::module_::import("builtins").attr("staticmethod"))) {
+      wrap(v.attr("__func__"), key);
+    } else {
+      wrap(v, key);
+    }
+  }
+}
+
+}  // namespace
+
+void name_int_arguments(const py::module_& m) {
+  std::set<PyObject*> seen;
+  wrap_scope(m, py::str(m.attr("__name__")).cast<std::string>(), seen);
+}
+
 }  // namespace dpc31::py_bind
 
 PYBIND11_MODULE(_dpc31, m) {
@@ -642,4 +726,5 @@ PYBIND11_MODULE(_dpc31, m) {
   dpc31::py_bind::bind_chip(m);
   dpc31::py_bind::bind_session(m);
   dpc31::py_bind::bind_segment(m);
+  dpc31::py_bind::name_int_arguments(m);
 }

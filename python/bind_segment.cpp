@@ -201,14 +201,25 @@ class PySegment {
   std::exception_ptr error_;
 };
 
+// A name no station of the segment has yet (a chip's, a sender's, a master's), else a ValueError
+// in a segment scenario's words: the name is the station's scope in the waveforms and names it in
+// the log and in collisions. (Two stations at one address, named apart, stay possible: a
+// collision's test.)
+const std::string& new_station_name(const Segment& seg, const std::string& name) {
+  for (std::size_t i = 0; i < seg.size(); ++i) {
+    if (seg.name(i) == name) throw py::value_error(second_station_named(name));
+  }
+  return name;
+}
+
 // A built-in master on the segment (a sender station of its own). It keeps the segment alive.
 struct PySegMaster {
   PySegMaster(py::object seg_obj, const MasterConfig& mc, std::vector<SlaveConfig> slaves)
       : seg_ref(std::move(seg_obj)), s(seg_ref.cast<PySegment&>()) {
     s.may_join();
     DpMaster::checked_slaves(slaves);  // before the station joins: nothing half-made
-    const std::size_t station =
-        s.joined(s.seg.add_sender("master " + std::to_string(mc.address)), mc.address);
+    const std::size_t station = s.joined(
+        s.seg.add_sender(new_station_name(s.seg, master_station_name(mc.address))), mc.address);
     m = std::make_unique<DpMaster>(s.seg, station, mc, std::move(slaves));
     s.master_addresses.push_back(mc.address);
   }
@@ -344,17 +355,6 @@ void bind_station(py::module_& m) {
             return read([&n](Chip& c) { return addr_of(c, n); })(std::move(self));
           },
           py::arg("name"));
-}
-
-// A name no station of the segment has yet, else a ValueError in a segment scenario's words: the
-// name is the station's scope in the waveforms and names it in the log and in collisions. (Two
-// stations at one address, named apart, stay possible: a collision's test.)
-const std::string& new_station_name(const Segment& seg, const std::string& name) {
-  for (std::size_t i = 0; i < seg.size(); ++i) {
-    if (seg.name(i) == name)
-      throw py::value_error(fmt::format("a second station named '{}'", name));
-  }
-  return name;
 }
 
 // A chip station with its user side: a firmware (built-in name or plug-in path) or the built-in

@@ -361,8 +361,9 @@ void bind_board(py::module_& m) {
            py::arg("chip"), py::arg("hz") = 24'000'000, py::arg("address") = 0x8000)
       .def_static(
           "c31",
-          [](py::object chip, std::int64_t hz, std::uint16_t code) {
-            return std::make_unique<PyBoard>(std::move(chip), hz, std::nullopt, code);
+          [](py::object chip, std::int64_t hz, std::int64_t code) {
+            return std::make_unique<PyBoard>(std::move(chip), hz, std::nullopt,
+                                             in_range<std::uint16_t>(kC31Code, code));
           },
           py::arg("chip"), py::arg("hz") = 24'000'000, py::arg("code") = 0x1000,
           "The DPC31's C31: code from the chip's RAM at `code`, XDATA the chip's own space, INT0 "

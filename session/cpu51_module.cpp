@@ -10,6 +10,7 @@
 #include "dpc31/reg_ids.hpp"
 #include "mcs51/ihex.hpp"
 #include "textfile.hpp"
+#include "vocabulary.hpp"
 
 namespace dpc31 {
 
@@ -138,7 +139,7 @@ std::string apply_cpu51_choice(const Cpu51Choice& choice, ChipOptions& chip, Cpu
     chip.irq_controller = IrqController::c31;
     if (!choice.code.empty()) {
       // The code area lies in the RAM's user area (docs/dpc31.md, "The C31").
-      if (!parse_address(choice.code, 0x08A0, 0x1FFF, v)) {
+      if (!parse_address(choice.code, kC31Code.min, kC31Code.max, v)) {
         return fmt::format("--code '{}' must be an address 0x08A0..0x1FFF (decimal or 0x hex)",
                            choice.code);
       }

@@ -242,8 +242,8 @@ class Parser {
     for (const auto& [k, v] : opts_) {
       if (k == "clock") {
         c.hz = static_cast<std::uint32_t>(number(v, kCpuClock));
-      } else if (c31 && k == "code") {  // the code area: in the RAM's user area (docs/dpc31.md)
-        c.code = static_cast<std::uint16_t>(number(v, "code", 0x08A0, 0x1FFF));
+      } else if (c31 && k == "code") {
+        c.code = static_cast<std::uint16_t>(number(v, kC31Code));
       } else if (c31) {
         fail(fmt::format("'cpu c31' takes clock= and code= ('{}=' is the 80C32 board's)", k));
       } else if (k == "base" || k == "latch") {  // the latch an address in the same range

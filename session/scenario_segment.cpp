@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <map>
 #include <memory>
+#include <set>
 
 #include "dpc31/bus_port.hpp"
 #include "firmware_host.hpp"
@@ -61,7 +62,7 @@ class Parser {
     } else if (c == "master") {
       master();
     } else if (c == "sender") {
-      s_.senders.emplace_back(positional(0, "a sender's name"));
+      s_.senders.emplace_back(new_station_name(std::string(positional(0, "a sender's name"))));
     } else {
       step(line, c);
     }
@@ -166,9 +167,7 @@ class Parser {
       st.slave.wd_fact1 = static_cast<std::uint8_t>(number(f[0], kWdFactor1));
       st.slave.wd_fact2 = static_cast<std::uint8_t>(number(f[1], kWdFactor2));
     }
-    for (const SegmentStation& o : s_.stations) {
-      if (o.name == st.name) fail(fmt::format("a second station named '{}'", st.name));
-    }
+    new_station_name(st.name);
     s_.stations.push_back(std::move(st));
   }
 
@@ -190,6 +189,7 @@ class Parser {
   void master() {
     SegmentMaster m;
     m.address = static_cast<std::uint8_t>(number(positional(0, "master address"), kMasterAddress));
+    new_station_name(master_station_name(m.address));
     const std::optional<std::string_view> slaves = take("slaves");
     if (slaves) m.slaves = bytes_list(*slaves);
     master_lines_.push_back(line_);
@@ -212,6 +212,12 @@ class Parser {
       }
     }
     s_.masters.push_back(std::move(m));
+  }
+
+  // One name a station: the chips', the senders' and the masters' names apart.
+  const std::string& new_station_name(const std::string& name) {
+    if (!station_names_.insert(name).second) fail(second_station_named(name));
+    return name;
   }
 
   const SegmentMaster* find_master(std::uint8_t a) const {
@@ -363,6 +369,7 @@ class Parser {
   int line_ = 0;
   std::vector<int> master_lines_;                // each master's line, in s_.masters' order
   std::vector<std::string_view> master_slaves_;  // ... and its slaves= as written
+  std::set<std::string> station_names_;          // the chips', senders' and masters' so far
   std::map<std::string_view, std::string_view> opts_;
   std::vector<std::string_view> pos_;
 };

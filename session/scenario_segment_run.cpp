@@ -156,7 +156,7 @@ class SegmentRun {
         }
         slaves.push_back(def->slave);
       }
-      const std::size_t station = seg_.add_sender(fmt::format("master {}", m.address));
+      const std::size_t station = seg_.add_sender(master_station_name(m.address));
       MasterConfig mc{m.address, s_.baud, s_.slot_bits};
       mc.ttr_bits = m.ttr_bits;
       mc.gap_factor = m.gap_factor;

@@ -159,4 +159,10 @@ std::string hsa_refused(std::uint8_t hsa, std::uint8_t gap_factor, std::uint8_t 
   return {};
 }
 
+std::string master_station_name(std::uint8_t address) { return fmt::format("master {}", address); }
+
+std::string second_station_named(std::string_view name) {
+  return fmt::format("a second station named '{}'", name);
+}
+
 }  // namespace dpc31

@@ -87,6 +87,8 @@ inline constexpr ValueRange kAbortReason{"reason", 0, 15};
 inline constexpr ValueRange kAbortInstance{"instance", 0, 3};  // 0 FDL, 1 MSAC_C2, 2 user
 // An 80C32 board's XDATA window for the chip (`cpu base=`): its 4 KB below the top of XDATA.
 inline constexpr ValueRange kBoardBase{"base", 0, 0xF000};
+// The C31's code area (`cpu c31 code=`): in the DPC31's RAM, its user area (docs/dpc31.md).
+inline constexpr ValueRange kC31Code{"code", 0x08A0, 0x1FFF};
 // "(MIN..MAX)" in the base `value` is written in: 0x hex (as many digits as MAX has) or decimal.
 [[nodiscard]] std::string range_text(std::uint64_t min, std::uint64_t max, std::string_view value);
 // "WHAT VALUE out of range (MIN..MAX)", VALUE as the user wrote it, the range in its base.
@@ -105,5 +107,10 @@ inline constexpr ValueRange kBoardBase{"base", 0, 0xF000};
 // "" for a master's hsa= it may take (beside a gap=, not below its own address), else why not.
 [[nodiscard]] std::string hsa_refused(std::uint8_t hsa, std::uint8_t gap_factor,
                                       std::uint8_t address);
+// A segment's station names (a chip's, a sender's, a master's) are its scopes in the waveforms
+// and name it in the log, in collisions and in `send from=`: each is one station's. A built-in
+// master's sender is "master ADDR"; a name taken is "a second station named 'NAME'".
+[[nodiscard]] std::string master_station_name(std::uint8_t address);
+[[nodiscard]] std::string second_station_named(std::string_view name);
 
 }  // namespace dpc31

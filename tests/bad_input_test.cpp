@@ -1032,13 +1032,64 @@ TEST_F(BadInput, SoakOptionsAndJson) {
     expect_bad(dpc31(std::string("soak --baud '") + baud + "'"),
                std::string("dpc31 soak: --baud: '") + baud + "'" + rates, baud);
   }
-  // An empty name is refused by what would have used it, not taken as "not given" (a run that
-  // is not refused is short: it fails the check, it does not hang it).
-  expect_bad(dpc31("soak --cycles 2e6 --json ''"),
-             "dpc31 soak: an empty file name: nothing can be written there", "json ''");
-  expect_bad(dpc31("soak --cycles 2e6 --firmware ''"),
-             "dpc31 soak: unknown firmware '' (DO4, CNT2, or a plug-in path such as ./libmine.so)",
-             "firmware ''");
+  EXPECT_EQ(listing(), before);
+}
+
+// An empty path is not "not given" (it ran without the output, or with the default input,
+// silently): every option that names a file or a directory refuses it alike (path_option.hpp),
+// and a firmware option, a name or a path, as an unknown firmware. Each command has a second
+// mistake found only after its options are parsed (a missing scenario, a bad address): without
+// the check it fails there with another line instead of running (serve and bridge would listen).
+TEST_F(BadInput, EmptyPathOptions) {
+  const std::string vcd = std::string(SOURCE_DIR) + "/tests/data/wavediff/emu.vcd";
+  const std::string wavediff = "wavediff " + vcd + " " + vcd + " --start 5 --end 1";
+  struct Case {
+    std::string sub;   // the subcommand as the error names it
+    std::string args;  // everything but the empty option
+    std::vector<std::string> written, read;
+  };
+  const std::vector<Case> cases = {
+      {"run",
+       "run missing.scn",
+       {"--json", "--record", "--vcd", "--fst", "--la-vcd", "--gtkw", "--pcap"},
+       {}},
+      {"cosim",
+       "cosim --replay missing.trace --mutant NO_SUCH",
+       {"--junit", "--vcd", "--out", "--dump"},
+       {"--rtl-model", "--session"}},
+      {"cosim", "cosim --mutant NO_SUCH", {}, {"--replay", "--rtl"}},
+      {"cosim", "cosim merge missing.json", {"--junit"}, {}},
+      {"wavediff", wavediff, {"--json", "--diff-vcd", "--merge", "--wavedrom"}, {"--map"}},
+      {"demo", "demo --timescale 7ps", {"--out-dir"}, {}},
+      {"bench", "bench --bench /nonexistent", {"--json", "--wavediff-dir"}, {"--build"}},
+      {"bench", "bench", {}, {"--bench"}},  // refused there before, in other words
+      {"serve",
+       "serve --tcp 0 --code 1",
+       {"--unix", "--state-dir"},
+       {"--secret-file", "--firmware"}},
+      {"bridge", "bridge --firmware DO4 --address 200", {"--pty"}, {}},
+      {"bridge",
+       "bridge --tcp 0 --firmware DO4 --address 200",
+       {"--pcap", "--log", "--trace-cpu"},
+       {}},
+      {"soak", "soak", {"--json"}, {}},  // refused before without the option's name
+  };
+  const auto before = listing();
+  for (const Case& c : cases) {
+    for (const auto& [options, why] : {std::pair{&c.written, "nothing can be written there"},
+                                       std::pair{&c.read, "nothing can be read there"}}) {
+      for (const std::string& o : *options) {
+        expect_bad(dpc31(c.args + " " + o + " ''"),
+                   "dpc31 " + c.sub + ": " + o + ": an empty file name: " + why, c.args + " " + o);
+      }
+    }
+  }
+  const std::string unknown =
+      ": unknown firmware '' (DO4, CNT2, or a plug-in path such as ./libmine.so)";
+  for (const char* sub : {"demo", "bridge --tcp 0", "soak --cycles 2e6"}) {
+    const std::string name = std::string(sub).substr(0, std::string(sub).find(' '));
+    expect_bad(dpc31(std::string(sub) + " --firmware ''"), "dpc31 " + name + unknown, sub);
+  }
   EXPECT_EQ(listing(), before);
 }
 

@@ -184,6 +184,46 @@ TEST_F(CodeSecurity, ASegmentStationsPluginTakesTheSameChecks) {
   EXPECT_NE(r.out.find("3 expects passed, 0 failed"), std::string::npos) << r.out;
 }
 
+// A scenario read from a named FIFO is judged as a file is: another user's, or one others may
+// write to, could feed any plug-in's name. An anonymous pipe (`cat s.scn | run /dev/stdin`, `run
+// <(cat s.scn)`) has no path: it is the piping user's own.
+TEST_F(CodeSecurity, AScenarioFromANamedFifoIsJudgedAsAFile) {
+  copy(BAD_PLUGIN_MARK, "ours.so");
+  file("ok.scn", "firmware " + path("ours.so") + "\nstartup\n");
+  ASSERT_EQ(::mkfifo(path("s.fifo").c_str(), 0600), 0);
+  // `dpc31 run` reads the FIFO while a writer (ended after 20 s if nobody reads) feeds it.
+  const auto fed = [&](const std::string& feed, const std::string& scenario) {
+    fs::remove(mark_);
+    const std::string cmd = "cd " + (root_ / "work").string() + " && " + feed +
+                            " DPC31_PLUGIN_MARK=" + mark_ + " " + kCli + " run " + scenario +
+                            " --quiet >" + (root_ / "io" / "out").string() + " 2>" +
+                            (root_ / "io" / "err").string();
+    const int rc = testutil::run_command(cmd).rc;
+    return Outcome{rc, slurp((root_ / "io" / "out").string()),
+                   slurp((root_ / "io" / "err").string())};
+  };
+  const std::string writer = "(timeout 20 sh -c 'cat ok.scn > s.fifo' >/dev/null 2>&1 &) &&";
+  const Outcome ours = fed(writer, "s.fifo");
+  EXPECT_EQ(ours.rc, 0) << ours.err;
+  EXPECT_TRUE(loaded()) << "a FIFO of ours, mode 0600";
+  fs::permissions(path("s.fifo"), fs::perms::others_write, fs::perm_options::add);
+  expect_bad(fed(writer, "s.fifo"),
+             "s.fifo:1: firmware plug-in refused: the scenario names it, and another user could "
+             "have changed the scenario: s.fifo is writable by others (mode 0602)",
+             "a FIFO others may write to");
+  EXPECT_FALSE(loaded());
+  fs::permissions(path("s.fifo"), fs::perms::others_write, fs::perm_options::remove);
+  chown_to(path("s.fifo"), kNobody);
+  expect_bad(fed(writer, "s.fifo"),
+             "s.fifo:1: firmware plug-in refused: the scenario names it, and another user could "
+             "have changed the scenario: s.fifo is owned by uid 65534, not by you (uid 0) or root",
+             "another user's FIFO");
+  EXPECT_FALSE(loaded());
+  const Outcome piped = fed("cat ok.scn |", "/dev/stdin");
+  EXPECT_EQ(piped.rc, 0) << piped.err;
+  EXPECT_TRUE(loaded()) << "an anonymous pipe";
+}
+
 // Finding 1: a scenario reached through a symlink loaded `./fw.so` from the link's directory (a
 // directory the link's maker chose). A relative plug-in path is now relative to the scenario's
 // real file.

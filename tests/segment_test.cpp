@@ -918,6 +918,14 @@ TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
       // One FCB state per slave (EN 50170): a slave listed twice would see its FCB repeated.
       {"segment\nstation 5\nstation 6\nmaster 2 slaves=5,6,5\nstartup\n",
        "f.scn:4: slaves=5,6,5: station 5 twice"},
+      // One name a station, chips, senders and masters alike: it is the station's scope in the
+      // waveforms and names it in the log and in `send from=`.
+      {"segment\nstation 5 name=a\nstation 6 name=a\nstartup\n",
+       "f.scn:3: a second station named 'a'"},
+      {"segment\nstation 5 name=a\nsender a\nstartup\n", "f.scn:3: a second station named 'a'"},
+      {"segment\nsender x\nstation 5\nsender x\nstartup\n", "f.scn:4: a second station named 'x'"},
+      {"segment\nstation 5\nmaster 2 slaves=5\nmaster 2 slaves=5\nstartup\n",
+       "f.scn:4: a second station named 'master 2'"},
       {"segment\nstation 5\nmaster 2\nstartup\npass_token from=9 to=2\n",
        "f.scn:5: pass_token from=9: no master of that address"},
       {"segment\nstation 5\n", "f.scn: only header commands: nothing to run"},

@@ -211,6 +211,26 @@ TEST(SoakCli, RunsAFirmwarePlugin) {
   std::filesystem::remove(json);
 }
 
+// A firmware without outputs (tests/input_only_plugin.c): the master's Data_Exchange request is
+// an SD1 of 6 characters, so the parity and stop faults damage one of those six. Drawn from an
+// SD2's 9 + outputs, a character past the end was refused and the soak stopped at its first.
+TEST(SoakCli, AnInputOnlyPluginTakesParityAndStopFaults) {
+  const std::string json = (std::filesystem::temp_directory_path() /
+                            ("dpc31-soak-input-only-" + std::to_string(getpid()) + ".json"))
+                               .string();
+  const testutil::CommandResult r = testutil::run_command(
+      std::string(DPC31_CLI) + " soak --cycles 2e7 --fault-period 5e5 --seed 7 --firmware " +
+      PLUGIN_INPUT_ONLY + " --json " + json + " 2>&1");
+  ASSERT_EQ(r.rc, 0) << r.out;  // stopped: no JSON
+  std::ifstream in(json);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(j.at("ok"), true);
+  EXPECT_GE(j.at("injected").at("parity").get<int>(), 2);
+  EXPECT_GE(j.at("injected").at("stop").get<int>(), 2);
+  EXPECT_GE(j.at("cycles").get<std::uint64_t>(), 20'000'000u);
+  std::filesystem::remove(json);
+}
+
 // Issue 29: with a firmware the soak kept every output it sent (about 57 bytes an exchange:
 // 6.9 MB -> 601 MB in 60 s at 12 Mbaud, docs/soak.md). A short run at 12 Mbaud per user side,
 // the resident memory compared after the start-up and at the end (Result::rss_*): the leak made

@@ -70,12 +70,36 @@ def test_send_and_pulse_need_a_sender_and_an_end_before_the_last_cycle():
      r"\(1000000..40000000\)"),
     (lambda: dpc31.Cpu51Board.c31(dpc31.Chip("dpc31"), hz=100_000_000),
      r"clock 100000000 out of range \(1000000..40000000\)"),
+    # Past the 8051's 64 KiB the code address was a TypeError, below the user area the board's
+    # own words.
+    (lambda: dpc31.Cpu51Board.c31(dpc31.Chip("dpc31", irq_controller="c31"), code=0x10000),
+     r"code 65536 out of range \(2208..8191\)"),
+    (lambda: dpc31.Cpu51Board.c31(dpc31.Chip("dpc31", irq_controller="c31"), code=0x500),
+     r"code 1280 out of range \(2208..8191\)"),
     (lambda: dpc31.Master(dpc31.Chip("spc3", clock_hz=1_000_000), baud=12_000_000),
      r"clock_hz 1000000: less than one clock a bit at 12000000 baud"),
     (lambda: dpc31.Segment(12_000_000, clock_hz=1_000_000),
      r"clock_hz 1000000: less than one clock a bit at 12000000 baud"),
 ])
 def test_values_the_scenario_parser_refuses_are_value_errors_in_its_words(call, message):
+    with pytest.raises(ValueError, match="^" + message):
+        call()
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: dpc31.Chip("spc3").step(2**70),
+     r"cycles 1180591620717411303424 out of range \(0..18446744073709551615\)"),
+    (lambda: dpc31.Chip("spc3").step(-1), r"cycles -1 out of range \(0..18446744073709551615\)"),
+    (lambda: dpc31.Segment(baud=2**70), r"baud 1180591620717411303424 out of range \(0..4294967295\)"),
+    (lambda: _master().idle(2**65), r"cycles 36893488147419103232 out of range "
+     r"\(0..18446744073709551615\)"),
+    (lambda: dpc31.SlaveConfig(ident=2**70), r"ident 1180591620717411303424 out of range "
+     r"\(-9223372036854775808..9223372036854775807\)"),
+    (lambda: dpc31.Segment().add_station(5, wd=(1, 2**70)), r"wd 1180591620717411303424 out of "
+     r"range"),
+])
+def test_an_int_its_argument_cannot_hold_is_a_value_error_naming_the_argument(call, message):
+    """pybind11 took it for a wrong type: a TypeError listing the signatures, naming nothing."""
     with pytest.raises(ValueError, match="^" + message):
         call()
 
@@ -348,6 +372,16 @@ def test_a_second_station_of_one_name_is_refused_as_a_segment_scenario_refuses_i
         seg.add_sender("station 5")
     seg.add_station(5, name="twin")  # one address, two names: the collision case
     assert seg.size == 2
+    # A master's sender station is "master ADDR": named apart from the others as well.
+    seg.add_station(6, name="master 2")
+    with pytest.raises(ValueError, match=r"^a second station named 'master 2'$"):
+        seg.add_master(2, [5])
+    seg.add_master(3, [5])
+    with pytest.raises(ValueError, match=r"^a second station named 'master 3'$"):
+        seg.add_master(3, [5])
+    with pytest.raises(ValueError, match=r"^a second station named 'master 3'$"):
+        seg.add_sender("master 3")
+    assert seg.size == 4
 
 
 def test_a_module_built_for_another_python_names_that_python(tmp_path):

@@ -4,8 +4,10 @@ on both (docs/protocol.md; timing from docs/timing.md: 4 clocks per access, User
 Start + 48000).
 """
 
+import socket
 import subprocess
 import sys
+import threading
 
 import pytest
 
@@ -101,3 +103,41 @@ def test_an_observer_exception_keeps_the_replies_in_step(server):
         remote.on_irq_change(None)
         assert remote.cycle == start + 100_000
         assert remote.addr_of("Int_Mask_Reg") == imr
+
+
+def test_an_err_reply_is_raised_before_an_observers_error(tmp_path):
+    """A command that failed is said first, the observer's exception its __cause__: the caller
+    must know the command did not run. A scripted server: the call's reply is an irq line, whose
+    observer raises, then ERR."""
+    path = str(tmp_path / "serve.sock")
+    listener = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    listener.bind(path)
+    listener.listen(1)
+    listener.settimeout(30)
+
+    def serve():
+        conn, _ = listener.accept()
+        with conn, conn.makefile("rb") as f:
+            for reply in (b"OK profile=spc3\n",  # info
+                          b"! irq 12 1\nERR range cycles 0 is out of range (1..1000)\n",  # step
+                          b"OK pong\n"):  # ping
+                f.readline()
+                conn.sendall(reply)
+
+    def broken(cycle, active):
+        raise RuntimeError("observer bug")
+
+    thread = threading.Thread(target=serve)
+    thread.start()
+    try:
+        with Client(unix=path, timeout=30) as remote:
+            remote.on_irq_change(broken)
+            with pytest.raises(ServeError) as e:
+                remote.step(0)
+            assert e.value.code == "range"
+            assert isinstance(e.value.__cause__, RuntimeError)
+            assert str(e.value.__cause__) == "observer bug"
+            assert remote.ping() == "pong"  # the observer's exception was not kept for it
+    finally:
+        thread.join(30)
+        listener.close()

@@ -16,6 +16,7 @@
 #include "firmware_host.hpp"
 #include "numbers.hpp"
 #include "outfile.hpp"
+#include "path_option.hpp"
 #include "responder.hpp"
 #include "scenario.hpp"
 #include "vocabulary.hpp"
@@ -378,7 +379,8 @@ CLI::App* add_subcommand(CLI::App& app, Options& o) {
   s->add_option("--seed", o.seed, "seed of the fault order and the noise bytes")
       ->capture_default_str()
       ->check(numbers::whole(0));
-  s->add_option("--json", o.json, "write the result as JSON to this file");
+  s->add_option("--json", o.json, "write the result as JSON to this file")
+      ->check(outfile::named(outfile::Use::write));
   s->add_option("--firmware", o.firmware,
                 "the slave's firmware instead of the built-in responder: a built-in name or a "
                 "plug-in ./libmine.so (only the chip's and the master's counters are checked)");

@@ -20,6 +20,7 @@
 #include "../bridge/pty.hpp"
 #include "../bridge/tcp.hpp"
 #include "outfile.hpp"
+#include "path_option.hpp"
 #include "pcapng.hpp"
 #include "vocabulary.hpp"
 
@@ -200,7 +201,8 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
   } else if (o.allow_remote) {
     return bad("--allow-remote needs --tcp");
   }
-  if (o.firmware.empty() && o.slaves.empty()) {
+  // Given, even as '', it is the firmware's to refuse ("unknown firmware ''", as in soak and demo).
+  if (std::ranges::find(o.single, "--firmware") == o.single.end() && o.slaves.empty()) {
     return bad(
         fmt::format("--firmware (the one slave's: {} or a plug-in path) or --slave is required",
                     builtin_firmware_names()));
@@ -539,14 +541,16 @@ class Bridge {
 CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
   auto* b = app.add_subcommand(
       "bridge", "the slave's RS-485 side as a pseudo-terminal for a DP master program");
-  auto* pty = b->add_option("--pty", o.pty, "symlink to create to the pty's slave side (or --tcp)");
+  auto* pty = b->add_option("--pty", o.pty, "symlink to create to the pty's slave side (or --tcp)")
+                  ->check(outfile::named(outfile::Use::write));
   b->add_option("--tcp", o.tcp,
                 "[HOST:]PORT: a raw TCP port instead of the pty (127.0.0.1 unless HOST; 0: any "
                 "free port, named in the log)")
       ->excludes(pty);
   b->add_flag("--allow-remote", o.allow_remote,
               "let --tcp listen on an address other hosts reach (no authentication!)");
-  b->add_option("--pcap", o.pcap, "write every telegram on the line here as pcapng at the end");
+  b->add_option("--pcap", o.pcap, "write every telegram on the line here as pcapng at the end")
+      ->check(outfile::named(outfile::Use::write));
   b->add_option("--baud", o.baud, "baud rate of the bus (a PROFIBUS rate)")->capture_default_str();
   b->add_option("--profile", o.profile, "chip profile: spc3, vpc3plus, dpc31")
       ->capture_default_str();
@@ -559,7 +563,8 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
   b->add_option("--code", o.code, "with --cpu c31: the C31's code area in the chip's RAM (0x1000)");
   b->add_option("--board-address", o.board_address,
                 "with --cpu 80c32: the chip's 4 KB window in XDATA (0x8000)");
-  b->add_option("--trace-cpu", o.trace_cpu, "write every CPU instruction with its cycle here");
+  b->add_option("--trace-cpu", o.trace_cpu, "write every CPU instruction with its cycle here")
+      ->check(outfile::named(outfile::Use::write));
   b->add_option("--ports", o.ports,
                 "N1,N2...: the 80C32 board's output latch bytes (XDATA 4000h on) by name; "
                 "default DO4's: outputs,modul_ok");
@@ -577,7 +582,8 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
       ->capture_default_str();
   b->add_option("--slot", o.slot, "slot time in bit times: how long a request waits for an answer")
       ->capture_default_str();
-  b->add_option("--log", o.log, "write the log to this file instead of stdout");
+  b->add_option("--log", o.log, "write the log to this file instead of stdout")
+      ->check(outfile::named(outfile::Use::write));
   b->add_option("--log-level", o.log_level,
                 "events: state changes and faults; telegrams: also every telegram and port write")
       ->capture_default_str();

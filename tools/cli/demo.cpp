@@ -208,9 +208,8 @@ RunOptions demo_outputs(const std::string& out_dir, const std::string& timescale
 // other. Its outputs are what a bring-up is about: when did they change, and why. `run` was
 // opened with `ro`.
 int run_dp_session(const ChipOptions& opt, const RunOptions& ro, ChipRun& run,
-                   const std::string& firmware, std::FILE* out) {
-  const std::string text =
-      firmware.empty() ? do4_session(opt, out) : firmware_session(opt, firmware, out);
+                   const std::optional<std::string>& firmware, std::FILE* out) {
+  const std::string text = firmware ? firmware_session(opt, *firmware, out) : do4_session(opt, out);
   Scenario sc;
   ScenarioError err;
   if (!parse_scenario(text, "<demo>", sc, err)) {
@@ -223,7 +222,7 @@ int run_dp_session(const ChipOptions& opt, const RunOptions& ro, ChipRun& run,
       [](const std::string& line) { fmt::print(stderr, "{}\n", line); }, o);
   if (rc == 2) return rc;
   const double hz = Chip(opt).clock_hz();
-  if (firmware.empty()) {
+  if (!firmware) {
     fmt::print(out,
                "\n# What DO4's outputs did (terminals DO4..DO1; ModulOK 1 = normal, 0 = OSP)\n");
   } else {
@@ -232,7 +231,7 @@ int run_dp_session(const ChipOptions& opt, const RunOptions& ro, ChipRun& run,
   fmt::print(out, "{:>12} {:>14}  {}\n", "cycle", "time", "change");
   for (const ScenarioOutcome::PortWrite& w : o.port_writes) {
     std::string value = fmt::format("0x{:02X}", w.value);
-    if (firmware.empty()) {
+    if (!firmware) {
       value = w.port == "outputs" ? fmt::format("{:04b}", w.value) : std::to_string(w.value);
     }
     fmt::print(out, "{:>12} {:>11.3f} us  {} = {}\n", w.cycle,
@@ -248,16 +247,19 @@ int run_dp_session(const ChipOptions& opt, const RunOptions& ro, ChipRun& run,
 
 }  // namespace
 
-int run_demo(ChipOptions opt, const std::string& out_dir_option, const std::string& firmware,
-             const std::string& timescale, std::FILE* out) {
+int run_demo(ChipOptions opt, const std::string& out_dir_option,
+             const std::optional<std::string>& firmware, const std::string& timescale,
+             std::FILE* out) {
   int unit_exp = 0;
   if (!timescale.empty() && !parse_timescale(timescale, unit_exp)) {
     fmt::print(stderr, "dpc31 demo: {}\n", timescale_error(timescale));
     return 2;
   }
-  if (!firmware.empty()) {  // checked first: bad input is one line, and nothing is made
+  // Checked first: bad input is one line, and nothing is made. "" is an unknown firmware, as in
+  // soak, not the default.
+  if (firmware) {
     try {
-      board::guard_hangs("dpc31 demo", find_firmware(firmware).name);
+      board::guard_hangs("dpc31 demo", find_firmware(*firmware).name);
     } catch (const FirmwareError& e) {
       fmt::print(stderr, "dpc31 demo: {}\n", e.what());
       return 2;

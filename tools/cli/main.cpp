@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -21,6 +22,7 @@
 #include "demo.hpp"
 #include "dpc31/chip.hpp"
 #include "numbers.hpp"
+#include "path_option.hpp"
 #include "regfmt.hpp"
 #include "replay.hpp"
 #include "run.hpp"
@@ -71,6 +73,8 @@ int main(int argc, char** argv) {
   dpc31::cleanup::install();  // temporaries and children go when a signal ends the process
   check_stdout_writes();
   using dpc31::numbers::whole;
+  using dpc31::outfile::named;
+  using dpc31::outfile::Use;
   CLI::App app{"dpc31emu: cycle-accurate emulator of the Siemens DPC31, SPC3 and VPC3+"};
   app.require_subcommand(1);
   const std::vector<std::string> profiles = {"spc3", "vpc3plus", "dpc31"};
@@ -83,7 +87,8 @@ int main(int argc, char** argv) {
   std::string demo_out;  // "": a fresh private directory TMPDIR/dpc31-demo-XXXXXX (mkdtemp)
   demo->add_option("--out-dir", demo_out,
                    "where the DP session's waveform and capture go (default: a new directory "
-                   "TMPDIR/dpc31-demo-XXXXXX)");
+                   "TMPDIR/dpc31-demo-XXXXXX)")
+      ->check(named(Use::write));
   demo->add_option("--bus", demo_bus, "bus byte order")
       ->check(CLI::IsMember({"intel", "motorola"}));
   dpc31::cli::ChipChoice demo_chip;
@@ -92,7 +97,7 @@ int main(int argc, char** argv) {
   demo->add_option("--timescale", demo_timescale,
                    "time unit of both waveforms, 1ps ... 1s (default: 1ps for the full VCD, 10ns "
                    "for the logic analysers' VCD)");
-  std::string demo_firmware;  // "": DO4 with its OSP story
+  std::optional<std::string> demo_firmware;  // none: DO4 with its OSP story
   demo->add_option("--firmware", demo_firmware,
                    "the DP session's firmware instead of DO4: a built-in name or a plug-in "
                    "./libmine.so (docs/bring-up.md)");
@@ -113,11 +118,15 @@ int main(int argc, char** argv) {
   run->add_option("scenario", run_opt.scenario, "scenario file (docs/scenario-format.md)")
       ->required();
   run->add_flag("--quiet", run_opt.quiet, "print no state walk, only failures");
-  run->add_option("--json", run_opt.json, "write a JSON summary to this file");
+  run->add_option("--json", run_opt.json, "write a JSON summary to this file")
+      ->check(named(Use::write));
   run->add_option("--record", run_opt.record,
-                  "write a golden trace of the run to this file (docs/trace-format.md)");
-  run->add_option("--vcd", run_opt.vcd, "write the run as a VCD waveform (docs/waveforms.md)");
-  run->add_option("--fst", run_opt.fst, "write the run as an FST waveform");
+                  "write a golden trace of the run to this file (docs/trace-format.md)")
+      ->check(named(Use::write));
+  run->add_option("--vcd", run_opt.vcd, "write the run as a VCD waveform (docs/waveforms.md)")
+      ->check(named(Use::write));
+  run->add_option("--fst", run_opt.fst, "write the run as an FST waveform")
+      ->check(named(Use::write));
   run->add_option("--signals", run_opt.signals, "waveform signals (globs, e.g. pins.*)")
       ->delimiter(',');
   // Numbers: dpc31::numbers (no NaN, no "-1" taken as 2^64 - 1, nothing that does not fit).
@@ -125,14 +134,16 @@ int main(int argc, char** argv) {
   run->add_option("--to", run_opt.to, "waveform window: one past the last cycle")->check(whole(0));
   run->add_option("--la-vcd", run_opt.la_vcd,
                   "also write the run as a VCD for logic-analyser tools (sigrok, PulseView): "
-                  "1-bit signals, one scope");
+                  "1-bit signals, one scope")
+      ->check(named(Use::write));
   run->add_option("--timescale", run_opt.timescale,
                   "waveform time unit, 1ps ... 1s (default 1ps; 10ns with --flat and --la-vcd)");
   run->add_flag("--flat", run_opt.flat,
                 "--vcd / --fst for logic-analyser tools: 1-bit signals, one scope");
   run->add_option("--gtkw", run_opt.gtkw,
                   "also write a GTKWave save file for --vcd (or --fst): signals by block, states "
-                  "by name, markers at the state changes (docs/waveforms.md)");
+                  "by name, markers at the state changes (docs/waveforms.md)")
+      ->check(named(Use::write));
   run->add_option("--engine", run_opt.engine,
                   "how time advances: event (deadline to deadline) or per-cycle (every clock, "
                   "the reference; docs/engine.md)")
@@ -141,7 +152,8 @@ int main(int argc, char** argv) {
       ->transform(CLI::CheckedTransformer(
           std::map<std::string, std::string>{{"event", "0"}, {"per-cycle", "1"}}))
       ->default_str("event");
-  run->add_option("--pcap", run_opt.pcap, "write the telegrams as pcapng (docs/capture.md)");
+  run->add_option("--pcap", run_opt.pcap, "write the telegrams as pcapng (docs/capture.md)")
+      ->check(named(Use::write));
 
   dpc31::cli::ReplayOptions replay_opt;
   auto* replay = app.add_subcommand(
@@ -172,20 +184,26 @@ int main(int argc, char** argv) {
   auto* cos_shard_base_opt =
       cosim->add_option("--shard-base", cos_shard_base, "the first K of --shard: 1 (default) or 0")
           ->check(CLI::IsMember({0, 1}));
-  cosim->add_option("--junit", cos.junit, "write JUnit XML results to this file");
-  cosim->add_option("--vcd", cos.vcd_dir,
-                    "on divergence, write emu.vcd and rtl.vcd around it here");
+  cosim->add_option("--junit", cos.junit, "write JUnit XML results to this file")
+      ->check(named(Use::write));
+  cosim->add_option("--vcd", cos.vcd_dir, "on divergence, write emu.vcd and rtl.vcd around it here")
+      ->check(named(Use::write));
   cosim
       ->add_option("--window", cos.window,
                    "cycles before and after the divergence in the VCD window")
       ->check(whole(0, 100'000'000));
-  cosim->add_option("--out", cos.out_dir, "where shrunk stimulus traces go (default .)");
-  cosim->add_option("--dump", cos.dump_dir,
-                    "write emu.vcd, rtl.vcd (ports) and rtl_internal.fst of the first run here");
+  cosim->add_option("--out", cos.out_dir, "where shrunk stimulus traces go (default .)")
+      ->check(named(Use::write));
+  cosim
+      ->add_option("--dump", cos.dump_dir,
+                   "write emu.vcd, rtl.vcd (ports) and rtl_internal.fst of the first run here")
+      ->check(named(Use::write));
   auto* cos_replay =
-      cosim->add_option("--replay", cos.replay,
-                        "replay a stimulus trace instead of random seeds (with the profile and "
-                        "mutant its header names)");
+      cosim
+          ->add_option("--replay", cos.replay,
+                       "replay a stimulus trace instead of random seeds (with the profile and "
+                       "mutant its header names)")
+          ->check(named(Use::read));
   for (CLI::Option* opt : cos_random) cos_replay->excludes(opt);
   cos_replay->excludes(cos_shard_base_opt);
   cosim->add_option("--mutant", cos.mutant,
@@ -195,7 +213,8 @@ int main(int argc, char** argv) {
       ->add_option("--rtl", cos.rtl_sources,
                    "your Verilog sources in place of the built-in model: Verilated and built "
                    "into the cache on first use (docs/golden-model.md)")
-      ->expected(1, -1);
+      ->expected(1, -1)
+      ->check(named(Use::read));
   cosim->add_option("--top", cos.top, "with --rtl: the top module");
   cosim->add_option("--define", cos.defines, "with --rtl: a Verilog define NAME or NAME=VALUE")
       ->take_all();
@@ -203,17 +222,22 @@ int main(int argc, char** argv) {
                   "with --rtl: build sources that use $system, $c, `systemc_ or DPI imports, "
                   "which run shell commands and C/C++ inside dpc31 with your rights (refused "
                   "without it)");
-  cosim->add_option("--rtl-model", cos.rtl_model,
-                    "a model built by dpc31emu_verilate_model() (a .so) in place of the built-in");
+  cosim
+      ->add_option("--rtl-model", cos.rtl_model,
+                   "a model built by dpc31emu_verilate_model() (a .so) in place of the built-in")
+      ->check(named(Use::read));
   // dpc31 cosim merge: the shards' JSON summaries into the whole run's (docs/regression.md).
   dpc31::cli::MergeOptions merge_opt;
   auto* merge = cosim->add_subcommand(
       "merge", "merge the JSON summaries of the shards of one run into its summary and JUnit");
   merge->add_option("summaries", merge_opt.inputs, "the shards' JSON summaries")->required();
-  merge->add_option("--junit", merge_opt.junit, "write the whole run's JUnit XML to this file");
-  cosim->add_option(
-      "--session", cos.session,
-      "chip-session mode: run this scenario on the full chip, drive the RTL with its block events");
+  merge->add_option("--junit", merge_opt.junit, "write the whole run's JUnit XML to this file")
+      ->check(named(Use::write));
+  cosim
+      ->add_option("--session", cos.session,
+                   "chip-session mode: run this scenario on the full chip, drive the RTL with its "
+                   "block events")
+      ->check(named(Use::read));
   cos_replay->excludes(
       cosim->add_flag("--keep-going", cos.keep_going, "do not stop at the first divergent seed"));
   cosim->add_flag("--quiet", cos.quiet, "no report text, only the JSON summary");

@@ -8,6 +8,7 @@
 #include "chip_choice.hpp"
 #include "dpc31/regdesc.hpp"
 #include "numbers.hpp"
+#include "path_option.hpp"
 #include "serve_server.hpp"
 
 namespace dpc31::cli {
@@ -49,13 +50,16 @@ CLI::App* add_serve_subcommand(CLI::App& app, ServeArgs& a) {
   cmd->add_option("--tcp", a.tcp,
                   "listen on TCP: PORT (on 127.0.0.1) or ADDR:PORT; port 0 picks a free one");
   cmd->add_option("--unix", a.unix_path,
-                  "listen on a Unix socket at this path (created mode 0600: this user only)");
+                  "listen on a Unix socket at this path (created mode 0600: this user only)")
+      ->check(outfile::named(outfile::Use::write));
   cmd->add_option("--state-dir", a.state_dir,
                   "the directory save and load may use (names relative to it); without it they "
-                  "are refused");
+                  "are refused")
+      ->check(outfile::named(outfile::Use::write));
   cmd->add_option("--secret-file", a.secret_file,
                   "TCP clients must send 'auth SECRET' first; SECRET is this file's first line "
-                  "(16+ characters, file mode 600)");
+                  "(16+ characters, file mode 600)")
+      ->check(outfile::named(outfile::Use::read));
   cmd->add_option("--profile", a.profile, "chip profile")
       ->check(CLI::IsMember({"spc3", "vpc3plus", "dpc31"}));
   cmd->add_option("--bus", a.bus, "bus byte order")->check(CLI::IsMember({"intel", "motorola"}));
@@ -63,7 +67,8 @@ CLI::App* add_serve_subcommand(CLI::App& app, ServeArgs& a) {
   cmd->add_option("--cpu", a.cpu,
                   "80c32[:HZ]: run --firmware on an 80C32 beside the chip, the bus master; "
                   "c31[:HZ] (--profile dpc31): on the DPC31's own C31");
-  cmd->add_option("--firmware", a.firmware, "with --cpu: the Intel HEX image (SDCC, Keil)");
+  cmd->add_option("--firmware", a.firmware, "with --cpu: the Intel HEX image (SDCC, Keil)")
+      ->check(outfile::named(outfile::Use::read));
   cmd->add_option("--code", a.code,
                   "with --cpu c31: the C31's code area in the chip's RAM (0x1000)");
   cmd->add_option("--board-address", a.board_address,

@@ -27,7 +27,7 @@ std::string create_temp(const std::string& path,
                         const std::function<int(const std::string&)>& create, std::string& error) {
   // "" would make ".PID.tmp" in the working directory and then fail to rename it over nothing.
   if (path.empty()) {
-    error = "an empty file name: nothing can be written there";
+    error = kEmptyName;
     return {};
   }
   // The pid keeps two processes apart; the counter two temporaries of one process (or a leftover

@@ -15,6 +15,9 @@
 
 namespace dpc31::outfile {
 
+// Why an empty name is refused: OutFile's and every output option's words (path_option.hpp).
+inline constexpr std::string_view kEmptyName = "an empty file name: nothing can be written there";
+
 // A fresh temporary next to `path`, made by `create(name)`, which returns 0 or an errno value;
 // EEXIST tries the next name ("<path>.<pid>.tmp", "<path>.<pid>-1.tmp", ...). Returns its name,
 // or "" with a one-line `error`. For temporaries that are not plain files (bridge's symlink).

@@ -1,0 +1,56 @@
+/* input_only_plugin.c -- a firmware plug-in with inputs only (one byte, a counter of its
+ * Data_Exchanges; no outputs): the master's Data_Exchange request carries no data unit, an SD1 of
+ * 6 characters (soak's fault placement, tests/soak_test.cpp). On the shipped dps driver. */
+#include <string.h>
+
+#include "firmware.h"
+
+#define INPUT_ONLY_IDENT 0x0E10u
+
+typedef struct input_only {
+  dps drv; /* first: the driver's callbacks get it (DPS_MODULE_SELF) */
+  uint8_t count;
+} input_only;
+
+static const uint8_t kCfg[] = {0x10}; /* 1 input byte */
+
+static int check_prm(DPS_CB_P_ const uint8_t* prm, uint8_t len) DPS_REENTRANT {
+  (void)drv;
+  (void)prm;
+  return len == 0;
+}
+
+static void outputs(DPS_CB_P_ const uint8_t* out, int cleared) DPS_REENTRANT {
+  (void)drv;
+  (void)out;
+  (void)cleared;
+}
+
+static void inputs(DPS_CB_P_ uint8_t* in) {
+  DPS_MODULE_SELF(input_only);
+  in[0] = ++self->count;
+}
+
+static void comm_lost(DPS_CB_P_ int why) {
+  (void)drv;
+  (void)why;
+}
+
+static const dps_module kModule = {"INPUT-ONLY", INPUT_ONLY_IDENT, kCfg,   sizeof kCfg, 1, 0, 7 + 1,
+                                   check_prm,    outputs,          inputs, comm_lost,   0, 0};
+
+static input_only g_the;
+
+static void start(const dpc31_board* board) {
+  const dps_board b = dpc31_dps_board(board);
+  memset(&g_the, 0, sizeof g_the);
+  dps_init(&g_the.drv, &b, &kModule);
+}
+
+static void isr(void) { dps_isr(&g_the.drv); }
+
+static const uint8_t kPrm[] = {0x00}; /* Spec_User_Prm_Byte */
+static const dpc31_firmware kInputOnly = {
+    DPC31_FIRMWARE_ABI_VERSION, "INPUT-ONLY", 0,           0, start, isr,  0,          0, 0,
+    INPUT_ONLY_IDENT,           kCfg,         sizeof kCfg, 1, 0,     kPrm, sizeof kPrm};
+DPC31_FIRMWARE_EXPORT(kInputOnly);

@@ -1,0 +1,25 @@
+// The one check of every command-line option that names a file or a directory: given, it is
+// never empty. '' is not "not given": it would silently write nothing, or read the default
+// (docs/bad-input.md). A CLI11 validator, so the error is `dpc31 SUB: --opt: why`, exit 2.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <string>
+
+#include "outfile.hpp"
+
+namespace dpc31::outfile {
+
+enum class Use { read, write };
+
+inline CLI::Validator named(Use use) {
+  return CLI::Validator(
+      [use](std::string& path) -> std::string {
+        if (!path.empty()) return {};
+        return use == Use::write ? std::string(kEmptyName)
+                                 : "an empty file name: nothing can be read there";
+      },
+      "", "named");
+}
+
+}  // namespace dpc31::outfile
