@@ -38,7 +38,7 @@ class DpSession {
         master_(chip_, dpc31::MasterConfig{2, baud, 100, 33}, config_.slave),
         outputs_(len, 0x11) {
     chip_.set_log_sink(nullptr);
-    user_.inputs.assign(len, 0x5A);
+    user_.set_inputs(std::vector<std::uint8_t>(len, 0x5A));
     user_.init(bus_);
     master_.set_firmware([this, blocks](dpc31::BusPort& b) {
       if (blocks) {

@@ -33,7 +33,7 @@ void BM_SegmentDpCycle(benchmark::State& st) {
     // 512 DP cycles into the run without it.
     rc.user_watchdog = true;
     users.push_back(std::make_unique<dpc31::Responder>(rc));
-    users.back()->inputs.assign(8, static_cast<std::uint8_t>(i));
+    users.back()->set_inputs(std::vector<std::uint8_t>(8, static_cast<std::uint8_t>(i)));
     const std::size_t k = seg.add_chip("slave", dpc31::ChipOptions{dpc31::Profile::spc3});
     dpc31::DirectBus bus(seg.chip(k));
     users.back()->init(bus);

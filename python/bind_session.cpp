@@ -131,6 +131,7 @@ void bind_frames(py::module_& m) {
       .def_readonly("request_start", &Exchange::request_start)
       .def_readonly("request_end", &Exchange::request_end)
       .def_readonly("answer", &Exchange::answer)
+      .def_readonly("stray", &Exchange::stray)
       .def_readonly("answer_start", &Exchange::answer_start)
       .def_readonly("answer_end", &Exchange::answer_end);
   py::class_<MasterCounters>(m, "MasterCounters")
@@ -288,11 +289,11 @@ void bind_user_side(py::module_& m) {
           "inputs",
           [](const Responder& r) {
             enter_user_side(&r, false);
-            return to_bytes(r.inputs);
+            return to_bytes(r.inputs());
           },
           [](Responder& r, const py::bytes& b) {
             enter_user_side(&r, true);
-            r.inputs = from_bytes(b);
+            r.set_inputs(from_bytes(b));
           })
       .def_property_readonly(
           "outputs",
@@ -642,7 +643,7 @@ void bind_master(py::module_& m) {
             rc.user_watchdog = user_watchdog;
             rc.dx_out_port = dx_out_port;
             auto r = std::make_shared<Responder>(rc);
-            r->inputs = from_bytes(inputs);
+            r->set_inputs(from_bytes(inputs));
             pm.start_user_side(rc.slave, [&](BusPort& bus) { r->init(bus); });
             pm.m->set_firmware([r](BusPort& b) { r->isr(b); });
             user_side_runs_with(r.get(), pm.chip.run_state());

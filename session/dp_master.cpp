@@ -448,18 +448,19 @@ void DpMaster::transact(UartFault fault, Exchange& ex) {
         fmt::format("a frame fdl::encode cannot send: SD {:02X}h, DA {}, {} data bytes", req.sd,
                     req.da, req.du.size()));
   }
-  send(tx_, fault, sdn(req), ex);
+  send(tx_, fault, sdn(req), ex, &req);
 }
 
 Exchange DpMaster::transact_raw(const std::vector<std::uint8_t>& bytes, UartFault fault) {
   const fdl::Decoded d = fdl::decode(bytes);
   Exchange ex;
-  send(bytes, fault, d.error == fdl::Error::none && sdn(d.frame), ex);
+  const bool decodes = d.error == fdl::Error::none;
+  send(bytes, fault, decodes && sdn(d.frame), ex, decodes ? &d.frame : nullptr);
   return ex;
 }
 
 void DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bool no_answer,
-                    Exchange& ex) {
+                    Exchange& ex, const fdl::Frame* req) {
   place_fault(fault, bytes.size());
   // What the line carried before (another master's traffic, for instance) is no answer to us.
   ex.request_start = std::max(look(), bus_free_ + std::uint64_t{cfg_.idle_bits} * t_);
@@ -475,8 +476,9 @@ void DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bool n
     ex.answer.reset();
     ex.answer_start = 0;
     ex.answer_end = 0;
+    ex.stray.reset();
   } else {
-    wait_answer(ex);
+    wait_answer(ex, req);
     if (ex.answer) {
       ++counters_.answered;
     } else if (ex.answer_end == 0) {
@@ -494,20 +496,44 @@ void DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bool n
   }
 }
 
-void DpMaster::wait_answer(Exchange& ex) {
+void DpMaster::wait_answer(Exchange& ex, const fdl::Frame* req) {
   const std::uint64_t slot = std::uint64_t{cfg_.slot_bits} * t_;
+  // The slot time is the wait for an answer's first start bit: one later is no answer.
+  const std::uint64_t last_start = ex.request_end + slot;
   answer_.reset();
+  // What began before the request's end is no answer to it (a late answer to the request before,
+  // another station's telegram): a character that starts then, and each one back to back after
+  // it (less than a bit time of idle: the same telegram), is passed over.
+  std::uint64_t passed_end = 0;
+  const auto passed = [&](std::uint64_t start) {
+    return !answer_.started() &&
+           (start < ex.request_end || (passed_end != 0 && start < passed_end + t_));
+  };
+  bool late = false;  // a first start bit past the slot time came
+  // The character starting at `start` belongs to the answer (else it is passed over, or late).
+  const auto ours = [&](std::uint64_t start) {
+    if (passed(start)) {
+      passed_end = start + std::uint64_t{kUartCharBits} * t_;
+      return false;
+    }
+    late = late || (!answer_.started() && start > last_start);
+    return !late;
+  };
   for (;;) {
     // Nothing below moves time before run_until: the cycle looked at is now() (a segment's
     // cycle() looks at every chip).
     const std::uint64_t at = look();
-    for (const UartChar& c : chars_) answer_.push(c);
-    answer_.push_block(rx_.due(), rx_.due_start(), t_);
-    // On a segment the wait begins at the request's start (DpMaster::send): before its end,
-    // what the master took (another station's characters still in its receiver) ends no wait, so
-    // that the wait never ends inside the master's own request.
-    const bool inside_request = seg_ != nullptr && at < ex.request_end;
-    if (!inside_request && answer_.finished() && !rx_.receiving()) {
+    for (const UartChar& c : chars_) {
+      if (ours(c.start)) answer_.push(c);
+    }
+    std::span<const std::uint8_t> block = rx_.due();
+    std::uint64_t block_start = rx_.due_start();
+    while (!block.empty() && !ours(block_start)) {
+      block = block.subspan(1);
+      block_start += std::uint64_t{kUartCharBits} * t_;
+    }
+    answer_.push_block(block, block_start, t_);
+    if (answer_.finished() && !rx_.receiving()) {
       bus_free_ = answer_.end();
       break;
     }
@@ -520,14 +546,12 @@ void DpMaster::wait_answer(Exchange& ex) {
     // (no answer, or a broken one) and the line is free from where the master found that: the
     // next request follows TSYN later (docs/timing.md: unanswered requests every 66 + 100 + 33
     // bit times). That is the wait's end itself unless a firmware's instruction (an 80C32's)
-    // carried the run past it (docs/decisions.md, "The master's per-exchange cost").
+    // carried the run past it (docs/decisions.md, "The master's per-exchange cost"). A start bit
+    // found only then, past the slot time, is no answer either.
     const std::uint64_t wait_end = (answer_.started() ? answer_.end() : ex.request_end) + slot;
-    if (inside_request && !rx_.receiving() && (answer_.finished() || at >= wait_end)) {
-      wake_on_txd_ = false;
-      run_until(ex.request_end);  // where the wait began before: it looks there first
-      continue;
-    }
-    if (!rx_.receiving() && at >= wait_end) {
+    const bool late_start = !answer_.started() && rx_.receiving() && !passed(rx_.busy_from()) &&
+                            rx_.busy_from() > last_start;
+    if (late || late_start || (!rx_.receiving() && at >= wait_end)) {
       bus_free_ = at;
       break;
     }
@@ -562,6 +586,14 @@ void DpMaster::wait_answer(Exchange& ex) {
   ex.answer_start = answer_.start();
   ex.answer_end = answer_.end();
   answer_.frame(ex.answer);
+  ex.stray.reset();
+  // An answer mirrors its request's addresses (EN 50170: DA the requester, SA the responder);
+  // another telegram in its place is not its answer (an SC carries no addresses).
+  if (ex.answer && req != nullptr && ex.answer->sd != fdl::SC &&
+      (ex.answer->da != req->sa || ex.answer->sa != req->da)) {
+    ex.stray = std::move(ex.answer);
+    ex.answer.reset();
+  }
 }
 
 // A telegram a segment relayed whole is known to its end at its first start bit: its length from

@@ -85,6 +85,9 @@ struct Exchange {
   std::optional<fdl::Frame> answer;  // nullopt: no (valid) answer within the slot time
   std::uint64_t answer_start = 0;
   std::uint64_t answer_end = 0;
+  // A valid telegram in the answer's place whose DA and SA are not the request's SA and DA (an
+  // SC has none): not its answer, so `answer` is nullopt (docs/timing.md, "The master's wait").
+  std::optional<fdl::Frame> stray;
 };
 
 // Puts `bytes` on the chip's RxD as back-to-back UART characters from `start`: one telegram
@@ -141,11 +144,13 @@ class AnswerCollector {
 
 // What the master saw of its own requests (DpMaster::counters).
 struct MasterCounters {
-  std::uint64_t requests = 0;    // telegrams sent by transact / transact_raw
-  std::uint64_t answered = 0;    // a complete, valid answer came back
-  std::uint64_t no_answer = 0;   // an answer was due, nothing started within the slot time
-  std::uint64_t bad_answer = 0;  // an answer started but was broken (character or frame error)
-  std::uint64_t noise = 0;       // noise bursts and glitches put on the line (line_noise, glitch)
+  std::uint64_t requests = 0;   // telegrams sent by transact / transact_raw
+  std::uint64_t answered = 0;   // a complete, valid answer came back
+  std::uint64_t no_answer = 0;  // an answer was due, nothing started within the slot time
+  // An answer started but was broken (character or frame error), or was not addressed as the
+  // request's answer (Exchange::stray).
+  std::uint64_t bad_answer = 0;
+  std::uint64_t noise = 0;  // noise bursts and glitches put on the line (line_noise, glitch)
 };
 
 // Requests of a start-up by default: enough FDL_Status for the chip's baud search from Start at
@@ -324,8 +329,10 @@ class DpMaster {
   void run_until(std::uint64_t cycle);
   // transact / transact_raw: `bytes` on the line, then the answer awaited unless `no_answer`,
   // into `ex`, whose request is the exchange's (and the history's) request.
-  void send(std::span<const std::uint8_t> bytes, UartFault fault, bool no_answer, Exchange& ex);
-  void wait_answer(Exchange& ex);  // its answer, if any, into `ex`
+  // `req`: the request as it decodes (nullptr: it does not), whose answer is mirrored.
+  void send(std::span<const std::uint8_t> bytes, UartFault fault, bool no_answer, Exchange& ex,
+            const fdl::Frame* req);
+  void wait_answer(Exchange& ex, const fdl::Frame* req);  // its answer, if any, into `ex`
   [[nodiscard]] std::size_t length_known(std::uint64_t first) const;
   // The characters on TxD whose stop sample is due by now: chars_, then rx_.due().
   std::uint64_t look();  // the line up to now(), which it returns

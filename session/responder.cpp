@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <span>
+#include <stdexcept>
 
 #include "dpc31/dp.hpp"
 
@@ -23,6 +24,19 @@ constexpr std::uint16_t kDpv1Events = irq::FDL_Ind | irq::Poll_End_Ind | irq::Us
 std::string refused_beside_firmware(std::string_view option) {
   return fmt::format("'{}' configures the built-in user side; a firmware configures itself",
                      option);
+}
+
+std::string inputs_length_problem(std::size_t given, std::size_t in_len) {
+  if (given == 0 || given == in_len) return {};
+  return fmt::format("{} bytes for a slave with in={}: inputs are exactly in= bytes, or none",
+                     given, in_len);
+}
+
+void Responder::set_inputs(std::vector<std::uint8_t> in) {
+  if (const std::string why = inputs_length_problem(in.size(), cfg_.slave.in_len); !why.empty()) {
+    throw std::invalid_argument("inputs: " + why);
+  }
+  inputs_ = std::move(in);
 }
 
 std::string user_wd_value_needs_user_wd(std::string_view option) {
@@ -190,14 +204,12 @@ void Responder::refill_substitute(BusPort& c) {
 }
 
 void Responder::give_inputs(BusPort& c, bool always) {
-  if (inputs.empty() && !always) return;
+  if (inputs_.empty() && !always) return;
   const std::uint8_t u =
       static_cast<std::uint8_t>((c.read(raddr(c.chip(), RegId::Din_Buffer_SM)) >> 4) & 3);
   static constexpr RegId kPtr[] = {RegId::R_Din_Buf_Ptr1, RegId::R_Din_Buf_Ptr2,
                                    RegId::R_Din_Buf_Ptr3};
-  const std::span<const std::uint8_t> in(inputs);
-  c.write_block(buffer(c, kPtr[u - 1]),
-                in.first(std::min<std::size_t>(in.size(), cfg_.slave.in_len)));
+  c.write_block(buffer(c, kPtr[u - 1]), inputs_);
   c.read(raddr(c.chip(), RegId::New_Din_Buffer_Cmd));
 }
 

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <initializer_list>
 #include <optional>
@@ -43,6 +44,10 @@ struct ResponderConfig {
 [[nodiscard]] std::string refused_beside_firmware(std::string_view option);
 // `user_wd_value` on the dpc31 without `user_wd`: acts on nothing there.
 [[nodiscard]] std::string user_wd_value_needs_user_wd(std::string_view option);
+// Inputs of `given` bytes for a slave of `in_len` input bytes: "" when they fit (none, or exactly
+// in_len), else why not, in the words of every door that sets them (the single chip's `user
+// inputs=` and `inputs`, Responder::set_inputs, Python's Responder.inputs).
+[[nodiscard]] std::string inputs_length_problem(std::size_t given, std::size_t in_len);
 
 class Responder {
  public:
@@ -61,7 +66,12 @@ class Responder {
     std::vector<std::uint8_t> data;
     bool cleared;
   };
-  std::vector<std::uint8_t> inputs;  // handed to the chip on every DX_Out
+  // The inputs handed to the chip on every DX_Out: none (empty, the chip keeps what it has) or
+  // exactly the slave's in_len bytes. Another length is std::invalid_argument
+  // (inputs_length_problem), the inputs as they were: the chip would get them cut or padded
+  // with the buffer's stale bytes.
+  void set_inputs(std::vector<std::uint8_t> in);
+  [[nodiscard]] const std::vector<std::uint8_t>& inputs() const { return inputs_; }
   // Every fetch of new outputs since the owner last called keep_last_output().
   std::vector<Output> outputs;
   std::vector<std::pair<std::uint64_t, std::uint16_t>> interrupts;  // cycle, IR at ISR entry
@@ -93,6 +103,7 @@ class Responder {
   void request(BusPort& c, std::initializer_list<std::pair<std::uint8_t, std::uint8_t>> entries);
 
   ResponderConfig cfg_;
+  std::vector<std::uint8_t> inputs_;
   std::optional<Dpv1User> dpv1_;
   std::uint16_t mask_ = 0xFFFF;  // Int_Mask_Reg as written
   std::uint32_t seg_shift_ = 3;

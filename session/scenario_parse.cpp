@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <map>
 #include <utility>
 
 #include "dpc31/dpv1.hpp"
@@ -89,6 +90,12 @@ class Parser {
       if (body_) {
         fail(
             fmt::format("'{}' is a header command: headers come before actions and expects", cmd_));
+      }
+      // Given twice, a header's second line would silently replace the first (a `record` is one
+      // record each, checked for its slot and index).
+      if (cmd_ != "record") {
+        const auto [first, fresh] = header_lines_.try_emplace(std::string(cmd_), no);
+        if (!fresh) fail(fmt::format("'{}' given twice: first at line {}", cmd_, first->second));
       }
       return;
     }
@@ -176,6 +183,18 @@ class Parser {
       fail_at(user_wd_value_line_, user_wd_value_needs_user_wd("user user_wd_value="));
     }
     if (wd_base_line_ != 0) wd_base_checked(s_.user.slave, wd_base_line_);
+    const std::uint8_t slave = s_.user.slave.address;
+    if (slave == s_.master.address) {
+      // The later of the two lines that set them (one may be the other's default).
+      fail_at(std::max(master_address_line_, slave_address_line_),
+              fmt::format("the master and the slave both have address {}: each station needs "
+                          "its own",
+                          slave));
+    }
+    if (const std::string why = inputs_length_problem(s_.inputs.size(), s_.user.slave.in_len);
+        inputs_line_ != 0 && !why.empty()) {
+      fail_at(inputs_line_, "user inputs=: " + why);
+    }
   }
   // The VPC3+ takes WD_Base from Set_Prm's DPV1_Status_1 only with DPV1_Enable; without it
   // Mode_Reg0.WD_Base decides (VPC3+C p.53, docs/dpv1.md).
@@ -312,6 +331,7 @@ class Parser {
       for (const auto& [k, v] : opts_) {
         if (k == "address") {
           s_.master.address = static_cast<std::uint8_t>(number(v, kMasterAddress));
+          master_address_line_ = step_.line;
         } else if (k == "slot") {
           s_.master.slot_bits = static_cast<std::uint32_t>(number(v, kSlotBits));
         } else if (k == "idle") {
@@ -361,6 +381,7 @@ class Parser {
         if (prm_option(sl, k, v)) continue;
         if (k == "address") {
           sl.address = static_cast<std::uint8_t>(number(v, kSlaveAddress));
+          slave_address_line_ = step_.line;
         } else if (k == "cfg") {
           sl.cfg = bytes(v, "cfg");
           if (sl.cfg.empty()) fail("cfg: at least one byte");
@@ -380,6 +401,7 @@ class Parser {
       for (const auto& [k, v] : opts_) {
         if (k == "inputs") {
           s_.inputs = bytes(v, "inputs");
+          inputs_line_ = step_.line;
         } else if (k == "sync_supported") {
           u.sync_supported = flag(v, k);
         } else if (k == "freeze_supported") {
@@ -542,6 +564,10 @@ class Parser {
       positional(1, 1, "a byte list");
       no_options();
       step_.bytes = bytes(pos_[0], "inputs");
+      if (const std::string why = inputs_length_problem(step_.bytes.size(), s_.user.slave.in_len);
+          !why.empty()) {
+        fail("inputs: " + why);
+      }
     } else if (cmd_ == "corrupt") {
       step_.kind = StepKind::corrupt;
       positional(1, 1, "parity, start or stop");
@@ -695,6 +721,7 @@ class Parser {
       step_.value = static_cast<std::uint32_t>(number(pos_[2], "diag byte value", 0, 255));
     } else if (what == "pb3") {
       args(1, "0|1");
+      if (s_.chip.profile != Profile::dpc31) fail("'expect pb3' needs profile dpc31");
       step_.expect = ExpectKind::pb3;
       step_.value = flag(pos_[1], "pb3") ? 1 : 0;
     } else if (what == "baud") {
@@ -740,6 +767,11 @@ class Parser {
   int dx_out_port_line_ = 0;
   int user_wd_value_line_ = 0;
   mutable int wd_base_line_ = 0;
+  // The lines of the stations' addresses and of the user's inputs (0: the default).
+  int master_address_line_ = 0;
+  int slave_address_line_ = 0;
+  int inputs_line_ = 0;
+  std::map<std::string, int, std::less<>> header_lines_;  // each header command's line
   bool body_ = false;                  // an action or expect has been seen: no more headers
   scenario_bus::ReadShape last_read_;  // what `expect read` compares
   std::vector<std::string_view> words_;

@@ -71,7 +71,7 @@ class Runner {
     });
     if (hooks_.observer != nullptr) hooks_.observer->run_begins(chip_);
     if (hooks_.at_start) hooks_.at_start(chip_);
-    user_.inputs = s_.inputs;
+    user_.set_inputs(s_.inputs);
     DirectBus bus(chip_);
     if (s_.cpu && !start_cpu()) return out_;
     if (s_.cpu) {
@@ -482,7 +482,7 @@ class Runner {
         break;
       }
       case StepKind::inputs:
-        user_.inputs = st.bytes;
+        user_.set_inputs(st.bytes);
         break;
       case StepKind::hw:
         if (const std::string err = fw_->hw_input(st.name, st.value); !err.empty()) {
@@ -518,15 +518,22 @@ class Runner {
       } else if (!wants_answer(d.frame)) {
         return s;
       }
-      return s + " => " + answer_text(master_->history()[i].answer);
+      return s + " => " + outcome(master_->history()[i]);
     }
     const fdl::Frame& req = request_of(i);
     std::string s = fmt::format("{} -> {} {}", req.sa, req.da, service_name(req));
     if (!req.du.empty()) s += " " + hex_bytes(req.du, " ", 32);
     const auto it = notes_.find(i);
     if (it != notes_.end()) s += " [" + it->second + "]";
-    if (wants_answer(req)) s += " => " + answer_text(master_->history()[i].answer);
+    if (wants_answer(req)) s += " => " + outcome(master_->history()[i]);
     return s;
+  }
+
+  // The answer, or the telegram that came in its place addressed otherwise (Exchange::stray).
+  static std::string outcome(const Exchange& ex) {
+    if (!ex.stray) return answer_text(ex.answer);
+    return fmt::format("not its answer ({} from {} to {})", answer_text(ex.stray), ex.stray->sa,
+                       ex.stray->da);
   }
 
   // What the expects need from each transaction, and the master's FCB for predict().

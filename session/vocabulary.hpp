@@ -64,8 +64,9 @@ inline constexpr ValueRange kOutLen{"out", 0, fdl::kMaxDpData};
 inline constexpr ValueRange kNewAddress{"new address", 0, 126};
 // An 80C32 board's (or the C31's) clock in Hz (`cpu ... clock=`).
 inline constexpr ValueRange kCpuClock{"clock", 1'000'000, 40'000'000};
-// The master's slot and idle times in bit times (a single chip's `master slot= idle=`).
-inline constexpr ValueRange kSlotBits{"slot", 1, 65535};
+// The master's slot and idle times in bit times (a single chip's `master slot= idle=`). The slot
+// time has the range of a segment's `segment slot=`: the bus parameter TSL's in EN 50170 part 2.
+inline constexpr ValueRange kSlotBits{"slot", 37, 16383};
 inline constexpr ValueRange kIdleBits{"idle", 1, 65535};
 // The token rules of a segment's master (TTR, the GAP factor, HSA: the ranges of the bus
 // parameters in EN 50170 part 2).

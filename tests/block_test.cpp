@@ -248,7 +248,7 @@ struct Session {
         user(cfg),
         master(chip, {2, baud, 100, 33}, cfg.slave) {
     chip.set_log_sink(nullptr);
-    user.inputs = pattern(len, 0x40);
+    user.set_inputs(pattern(len, 0x40));
     DirectBus bus(chip);
     user.init(bus);
     master.set_firmware([this, blocks](BusPort& b) {

@@ -347,7 +347,7 @@ struct Startup {
 
   Startup() {
     chip.set_log_sink(nullptr);
-    user.inputs = {0xA1, 0xA2, 0xA3, 0xA4};
+    user.set_inputs({0xA1, 0xA2, 0xA3, 0xA4});
     DirectBus bus(chip);
     user.init(bus);
     master = std::make_unique<DpMaster>(chip, MasterConfig{2, 1'500'000, 100, 33}, SlaveConfig{});

@@ -391,7 +391,7 @@ TEST(CosimSession, Dpv1ExchangeReachesTheBlocks) {
   Chip& chip = rec.chip;
   Session& s = rec.s;
   Responder user(rc);
-  user.inputs = {0xA1, 0xA2, 0xA3, 0xA4};
+  user.set_inputs({0xA1, 0xA2, 0xA3, 0xA4});
   DirectBus bus(chip);
   user.init(bus);
   DpMaster master(chip, MasterConfig{2, 12'000'000, 100, 33}, rc.slave);

@@ -7,6 +7,7 @@
 // 1.5 Mbaud (48 MHz).
 #include "dp_master.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <array>
@@ -15,6 +16,8 @@
 #include <limits>
 #include <new>
 #include <span>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "dpc31/bus_port.hpp"
@@ -106,9 +109,60 @@ TEST(DpMaster, ALateAnswerEndsNoWaitInsideTheNextRequest) {
   EXPECT_FALSE(a.answer);
   const Exchange b = l.master.fdl_status();
   EXPECT_EQ(b.request_start, a.request_end + kTsl + kTsyn);
+  // Nor is it the answer of the request it came before: b waits its own slot time out.
+  EXPECT_FALSE(b.answer);
   const Exchange c = l.master.fdl_status();
-  EXPECT_GE(c.request_start, b.request_end);
+  EXPECT_EQ(c.request_start, b.request_end + kTsl + kTsyn);
   EXPECT_TRUE(l.seg.collisions().empty());
+}
+
+// The same on one chip (the audit's case, 12 Mbaud): with a slot time of 5 bit times every answer
+// of the chip (TSDR at least 11) is late. Each request waits its own slot time out, none takes the
+// answer to the request before it, and the next request starts TSYN after the slot time's end at
+// the earliest (a bus access of the firmware may carry the run a few cycles past it).
+TEST(DpMaster, OnOneChipALateAnswerIsNoLaterRequestsAnswer) {
+  constexpr std::uint64_t kT12 = 4;  // cycles a bit at 12 Mbaud
+  Chip chip(ChipOptions{Profile::spc3});
+  ResponderConfig rc;
+  Responder user(rc);
+  DirectBus bus(chip);
+  user.init(bus);
+  MasterConfig mc;
+  mc.baud = 12'000'000;  // the baud search's first rate
+  mc.slot_bits = 5;
+  DpMaster master(chip, mc, rc.slave);
+  master.set_firmware([&user](BusPort& b) { user.isr(b); });
+  bool answered_late = false;  // the chip answered at all (it found the rate)
+  std::uint64_t last_end = 0;
+  for (int i = 0; i < 300; ++i) {
+    const Exchange ex = i % 2 == 0 ? master.fdl_status() : master.slave_diag();
+    EXPECT_FALSE(ex.answer) << "request " << i;
+    EXPECT_FALSE(ex.stray) << "request " << i;
+    if (last_end != 0) {
+      EXPECT_GE(ex.request_start, last_end + (5 + 33) * kT12) << "request " << i;
+    }
+    last_end = ex.request_end;
+    answered_late = answered_late || chip.wd_state() != WdState::Baud_Search;
+  }
+  EXPECT_TRUE(answered_late) << "the chip never found the rate: nothing was late";
+  EXPECT_EQ(master.counters().no_answer, 300u);
+}
+
+// An answer mirrors its request's addresses: a telegram in its place from another station, or to
+// another, is not its answer (Exchange::stray, counted as a bad answer).
+TEST(DpMaster, ATelegramAddressedOtherwiseIsNotTheAnswer) {
+  for (const fdl::Frame& f : {fdl::make_frame(2, 7, fdl::make_response_fc(fdl::Response::OK)),
+                              fdl::make_frame(3, 5, fdl::make_response_fc(fdl::Response::OK))}) {
+    Line l;
+    l.rogue_answers_the_first_request(fdl::encode(f));
+    const Exchange a = l.master.fdl_status();
+    EXPECT_FALSE(a.answer);
+    ASSERT_TRUE(a.stray);
+    EXPECT_EQ(*a.stray, f);
+    EXPECT_EQ(l.master.counters().bad_answer, 1u);
+    const Exchange b = l.master.fdl_status();
+    EXPECT_EQ(b.request_start, a.answer_end + kTsyn);
+  }
 }
 
 // clear_history() lends the forgotten exchanges' memory to the next ones (DpMaster::spare_):
@@ -157,7 +211,7 @@ TEST(DpMaster, AMasterDestroyedLeavesNoObserverOnItsChip) {
   Chip chip(ChipOptions{Profile::spc3});
   ResponderConfig rc;
   Responder user(rc);
-  user.inputs = {1, 2, 3, 4};
+  user.set_inputs({1, 2, 3, 4});
   DirectBus bus(chip);
   user.init(bus);
   const auto isr = [&user](BusPort& b) { user.isr(b); };
@@ -173,8 +227,33 @@ TEST(DpMaster, AMasterDestroyedLeavesNoObserverOnItsChip) {
   ASSERT_TRUE(m.startup());
   const Exchange x = m.data_exchange({5, 6, 7, 8});
   ASSERT_TRUE(x.answer);
-  EXPECT_EQ(x.answer->du, user.inputs);
+  EXPECT_EQ(x.answer->du, user.inputs());
   EXPECT_EQ(memory, left) << "the chip wrote into a gone master";
+}
+
+// The built-in user side takes inputs of the slave's length or none: other lengths reached the
+// chip cut, or padded with the buffer's stale bytes (std::invalid_argument, in the scenario's
+// words; the inputs as they were).
+TEST(Responder, InputsOfAnotherLengthThanInAreRefused) {
+  ResponderConfig rc;
+  rc.slave.in_len = 2;
+  Responder user(rc);
+  user.set_inputs({1, 2});
+  for (const std::vector<std::uint8_t>& bad :
+       {std::vector<std::uint8_t>{9}, std::vector<std::uint8_t>{1, 2, 3, 4, 5, 6}}) {
+    try {
+      user.set_inputs(bad);
+      ADD_FAILURE() << bad.size() << " bytes taken";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()),
+                fmt::format("inputs: {} bytes for a slave with in=2: inputs are exactly in= "
+                            "bytes, or none",
+                            bad.size()));
+    }
+    EXPECT_EQ(user.inputs(), (std::vector<std::uint8_t>{1, 2}));
+  }
+  user.set_inputs({});
+  EXPECT_TRUE(user.inputs().empty());
 }
 
 }  // namespace

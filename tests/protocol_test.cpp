@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <numeric>
+#include <utility>
 
 #include "baud_search.hpp"
 #include "dp_master.hpp"
@@ -35,14 +36,17 @@ struct Bench {
   Bench(Profile p, std::uint32_t baud, ResponderConfig rc = {}, BusMode bus = BusMode::intel)
       : chip({p, bus, 0}),
         user(prepare(rc)),
-        master(init(chip, user), MasterConfig{2, baud, 100, 33}, rc.slave),
+        master(init(chip, user, rc.slave.in_len), MasterConfig{2, baud, 100, 33}, rc.slave),
         start(chip.cycle()) {
     master.set_firmware([this](BusPort& c) { user.isr(c); });
   }
   static ResponderConfig prepare(ResponderConfig rc) { return rc; }
-  static Chip& init(Chip& c, Responder& u) {
+  // The inputs A1, A2, ... of the slave's length (A1..A4 by default).
+  static Chip& init(Chip& c, Responder& u, std::size_t in_len) {
     c.set_log_sink(nullptr);
-    if (u.inputs.empty()) u.inputs = {0xA1, 0xA2, 0xA3, 0xA4};
+    Bytes in(in_len);
+    for (std::size_t i = 0; i < in_len; ++i) in[i] = static_cast<std::uint8_t>(0xA1 + i);
+    u.set_inputs(std::move(in));
     DirectBus bus(c);
     u.init(bus);
     return c;
@@ -301,10 +305,10 @@ TEST_P(Protocol, MaximumDataLengthsRoundTrip) {
     out[i] = static_cast<std::uint8_t>(255 - i);
   }
   Bench b(GetParam(), 12'000'000, rc);
-  b.user.inputs = in;
+  b.user.set_inputs(in);
   ASSERT_TRUE(b.master.startup());
   b.master.data_exchange(out);  // the first answer carries the inputs given at init
-  b.user.inputs = in;
+  b.user.set_inputs(in);
   const Exchange dx = b.master.data_exchange(out);
   ASSERT_TRUE(dx.answer);
   EXPECT_EQ(dx.answer->du, in);
@@ -345,7 +349,7 @@ TEST_P(Protocol, GlobalControlFreezeHoldsInputsUntilUnfreeze) {
   ASSERT_TRUE(b.master.startup());
   b.master.data_exchange({0, 0, 0, 0});
   b.master.global_control(0x08);  // Freeze: the newest inputs (A1..A4) are taken and frozen
-  b.user.inputs = {0xB1, 0xB2, 0xB3, 0xB4};
+  b.user.set_inputs({0xB1, 0xB2, 0xB3, 0xB4});
   b.master.data_exchange({0, 0, 0, 0});  // the user hands B1.. over on this DX_Out
   Exchange dx = b.master.data_exchange({0, 0, 0, 0});
   EXPECT_EQ(dx.answer->du, (Bytes{0xA1, 0xA2, 0xA3, 0xA4}));
@@ -549,7 +553,7 @@ TEST_P(Protocol, RepeatedFcbGetsThePreviousAnswerAgain) {
   const Exchange first = b.master.data_exchange({1, 1, 1, 1});
   b.master.idle(2000);
   const std::size_t fetched = b.user.outputs.size();
-  b.user.inputs = {0xC1, 0xC2, 0xC3, 0xC4};
+  b.user.set_inputs({0xC1, 0xC2, 0xC3, 0xC4});
   // The master lost the answer and repeats: same FC (FCV = 1, same FCB), other data.
   fdl::Frame again = first.request;
   again.du = {2, 2, 2, 2};
@@ -632,7 +636,7 @@ TEST_P(Protocol, DataExchangeInSd3) {
   rc.slave.out_len = 8;
   rc.slave.cfg = {0x17, 0x27};  // 8 in, 8 out
   Bench b(GetParam(), 12'000'000, rc);
-  b.user.inputs = {1, 2, 3, 4, 5, 6, 7, 8};
+  b.user.set_inputs({1, 2, 3, 4, 5, 6, 7, 8});
   ASSERT_TRUE(b.master.startup());
   fdl::Frame sd3 = fdl::make_frame(5, 2, 0x7D, {8, 7, 6, 5, 4, 3, 2, 1});  // FCB 1 (see above)
   sd3.sd = fdl::SD3;

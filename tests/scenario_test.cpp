@@ -771,3 +771,71 @@ TEST(ScenarioParse, OptionsWithoutEffectOnTheProfileAreRefused) {
     EXPECT_EQ(parse_error(ok + dpc31_only), "") << ok;
   }
 }
+
+// What a second line or another station would silently override is refused at its line: a
+// header command given twice (its first line named), the master at the slave's address, inputs
+// the chip would get cut or padded with stale bytes (both lengths named), a check of a pin the
+// profile has not, a slot time outside the segment's range.
+TEST(ScenarioParse, WhatWouldBeSilentlyOverriddenIsRefused) {
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {"profile spc3\nprofile dpc31\nstartup\n", "t.scn:2: 'profile' given twice: first at line 1"},
+      {"firmware DO4\n# again\nfirmware DO4\nstartup\n",
+       "t.scn:3: 'firmware' given twice: first at line 1"},
+      {"slave address=6\nslave address=7\nstartup\n",
+       "t.scn:2: 'slave' given twice: first at line 1"},
+      {"master address=5\nslave address=5\nstartup\n",
+       "t.scn:2: the master and the slave both have address 5: each station needs its own"},
+      {"slave address=9\nmaster address=9\nstartup\n",
+       "t.scn:2: the master and the slave both have address 9: each station needs its own"},
+      {"slave address=2\nstartup\n",
+       "t.scn:1: the master and the slave both have address 2: each station needs its own"},
+      {"user inputs=01,02,03,04,05,06\nstartup\n",
+       "t.scn:1: user inputs=: 6 bytes for a slave with in=4: inputs are exactly in= bytes, or "
+       "none"},
+      {"user inputs=01,02,03,04,05,06\nslave in=2\nstartup\n",
+       "t.scn:1: user inputs=: 6 bytes for a slave with in=2: inputs are exactly in= bytes, or "
+       "none"},
+      {"user inputs=A1,A2,A3,A4\nstartup\ninputs 01,02\n",
+       "t.scn:3: inputs: 2 bytes for a slave with in=4: inputs are exactly in= bytes, or none"},
+      {"profile spc3\nexpect pb3 0\n", "t.scn:2: 'expect pb3' needs profile dpc31"},
+      {"profile vpc3plus\nstartup\nexpect pb3 1\n", "t.scn:3: 'expect pb3' needs profile dpc31"},
+      {"master slot=36\nstartup\n", "t.scn:1: slot 36 out of range (37..16383)"},
+      {"master slot=16384\nstartup\n", "t.scn:1: slot 16384 out of range (37..16383)"},
+  };
+  for (const auto& [text, line] : refused) EXPECT_EQ(parse_error(text), line) << text;
+  for (const std::string ok :
+       {"master address=5\nslave address=6\n", "slave in=2\nuser inputs=01,02\ninputs -\n",
+        "user inputs=-\ninputs 01,02,03,04\n", "profile dpc31\nexpect pb3 0\n", "master slot=37\n",
+        "master slot=16383\n",
+        "profile vpc3plus\nrecord slot=1 index=1 data=01\nrecord slot=1 index=2 data=02\n"}) {
+    EXPECT_EQ(parse_error(ok + "startup\n"), "") << ok;
+  }
+}
+
+// The slot time is the wait for an answer's first character (docs/timing.md, "The master's
+// wait"): an answer later than it is no answer, and no later request takes it for its own. The
+// slave answers MinTSDR 120 bit times after each request, the master waits 100 (the audit's
+// case: without the rule the Get_Cfg took the late FDL_Status answer, the second FDL_Status the
+// late Get_Cfg answer).
+TEST(ScenarioRun, AnAnswerLaterThanTheSlotTimeIsNoLaterRequestsAnswer) {
+  Lines walk;
+  Lines errors;
+  const TempFile f(
+      "profile spc3\nbaud 12000000\nmaster slot=100 retries=0\nslave min_tsdr=120\n"
+      "startup tries=3\nfdl_status\nexpect answer none\nget_cfg\nexpect answer none\n"
+      "fdl_status\nexpect answer none\nexchange 2\nexpect answer none\n");
+  EXPECT_EQ(dpc31::run_scenario_file(f.path(), walk.sink(), errors.sink()), 0);
+  EXPECT_TRUE(errors.lines.empty()) << errors.lines.front();
+  // From the Set_Prm on (MinTSDR 120) every answer is late: none is taken.
+  const auto prm = std::find_if(walk.lines.begin(), walk.lines.end(), [](const std::string& l) {
+    return l.find("Set_Prm") != std::string::npos;
+  });
+  ASSERT_NE(prm, walk.lines.end());
+  int requests = 0;
+  for (auto l = prm; l != walk.lines.end(); ++l) {
+    if (l->find(" -> 5 ") == std::string::npos) continue;
+    ++requests;
+    EXPECT_NE(l->find("=> no answer"), std::string::npos) << *l;
+  }
+  EXPECT_GE(requests, 6);
+}

@@ -76,7 +76,7 @@ struct Bed {
       sc.wd_fact1 = 1;
       sc.wd_fact2 = 1;
       slaves.push_back(sc);
-      add_user(users, sc).inputs = {static_cast<std::uint8_t>(i), 1, 2, 3};
+      add_user(users, sc).set_inputs({static_cast<std::uint8_t>(i), 1, 2, 3});
       const std::size_t k = seg.add_chip(fmt::format("slave {}", sc.address), {profiles[i % 3]});
       chips.push_back(k);
       log.emplace_back();
@@ -566,7 +566,7 @@ void bench_cycles(std::uint32_t baud, std::size_t n) {
       sc.in_len = 8;
       sc.out_len = 8;
       slaves.push_back(sc);
-      add_user(users, sc).inputs.assign(8, static_cast<std::uint8_t>(i));
+      add_user(users, sc).set_inputs(std::vector<std::uint8_t>(8, static_cast<std::uint8_t>(i)));
       const std::size_t k = seg.add_chip("slave", ChipOptions{Profile::spc3});
       DirectBus bus(seg.chip(k));
       users.back()->init(bus);
@@ -752,7 +752,7 @@ void twins(std::uint32_t baud) {
     Twins& b = *beds.back();
     b.seg.use_reference_line(reference);
     for (const Profile p : {Profile::spc3, Profile::dpc31}) {
-      add_user(b.users, sc).inputs = {static_cast<std::uint8_t>(p), 1, 2, 3};
+      add_user(b.users, sc).set_inputs({static_cast<std::uint8_t>(p), 1, 2, 3});
       const std::size_t k = b.seg.add_chip(fmt::format("twin {}", profile_name(p)), {p});
       Chip& chip = b.seg.chip(k);
       DirectBus bus(chip);

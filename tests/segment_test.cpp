@@ -50,7 +50,7 @@ struct Line {
       ResponderConfig rc;
       rc.slave = sc;
       users.push_back(std::make_unique<Responder>(rc));
-      users.back()->inputs = {static_cast<std::uint8_t>(0x10 * (i + 1)), 1, 2, 3};
+      users.back()->set_inputs({static_cast<std::uint8_t>(0x10 * (i + 1)), 1, 2, 3});
       ChipOptions opt;
       opt.profile = profiles[i % 3];
       chips.push_back(seg.add_chip(names[i % 3], opt));
@@ -331,7 +331,7 @@ TEST(Segment, ADpCycleIntoAKeptVectorIsTheReturnedOne) {
       l->master->select(1);
       l->master->set_target(n == 1 ? 9 : 6);
       l->master->select(0);
-      if (n == 2) l->users[2]->inputs = {0x77, 7, 7, 7};
+      if (n == 2) l->users[2]->set_inputs({0x77, 7, 7, 7});
     }
     const auto b = static_cast<std::uint8_t>(n);
     const std::vector<std::vector<std::uint8_t>> outputs = {{b, 0, 0, 0}, {0, b, 0, 0}};

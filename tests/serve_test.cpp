@@ -223,7 +223,7 @@ TEST_P(ServeStartup, DpStartupToDataExchange) {
   const dpc31::ChipOptions opt{prm.profile, prm.bus, 0};
   SocketBus bus(chip, opt);
   dpc31::Responder init_code({});
-  init_code.inputs = {0xA1, 0xA2, 0xA3, 0xA4};
+  init_code.set_inputs({0xA1, 0xA2, 0xA3, 0xA4});
   init_code.init(bus);  // ends with Start_SPC3
   EXPECT_TRUE(starts_with(chip.ok("status"), "cycle="));
   EXPECT_NE(chip.ok("status").find("started=1 dp=Wait_Prm wd=Baud_Search baud=search"),

@@ -150,7 +150,7 @@ Live live_session(testutil::ChipParam p) {
 
   const ResponderConfig rc = responder_config();
   Responder user(rc);
-  user.inputs = {0xA1, 0xA2, 0xA3, 0xA4};
+  user.set_inputs({0xA1, 0xA2, 0xA3, 0xA4});
   DirectBus bus(chip);
   user.init(bus);
   {
@@ -167,13 +167,13 @@ Live live_session(testutil::ChipParam p) {
     fdl::Frame again = first.request;
     again.du = {2, 2, 2, 2};
     master.transact(again);
-    user.inputs = {0xB1, 0xB2, 0xB3, 0xB4};
+    user.set_inputs({0xB1, 0xB2, 0xB3, 0xB4});
     master.data_exchange({5, 6, 7, 8});
     master.global_control(0x20);  // Sync: outputs wait in D
     master.data_exchange({21, 22, 23, 24});
     master.global_control(0x10);  // Unsync
     master.global_control(0x08);  // Freeze: the inputs given from now on wait for Unfreeze
-    user.inputs = {0xC1, 0xC2, 0xC3, 0xC4};
+    user.set_inputs({0xC1, 0xC2, 0xC3, 0xC4});
     master.data_exchange({25, 26, 27, 28});
     master.data_exchange({29, 30, 31, 32});
     master.global_control(0x04);  // Unfreeze

@@ -493,7 +493,7 @@ ExtDiagSession ext_diag_session() {
   Chip chip({Profile::dpc31, BusMode::intel});
   rec.attach(chip);
   Responder user(cfg);
-  user.inputs = {0xA1, 0xA2, 0xA3, 0xA4};
+  user.set_inputs({0xA1, 0xA2, 0xA3, 0xA4});
   DirectBus bus(chip);
   user.init(bus);
   rec.heading("firmware init (the built-in user side): registers, buffers, Start_SPC3");

@@ -11,6 +11,7 @@
 // Reads; and an answer cut by Go_Offline while on the line.
 #include <gtest/gtest.h>
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -51,7 +52,7 @@ struct Side {
        const SlaveConfig& slave = {})
       : chip({p, BusMode::intel, 0}),
         user(rc),
-        master(init(chip, user), MasterConfig{2, baud, 100, 33}, slave) {
+        master(init(chip, user, rc.slave.in_len), MasterConfig{2, baud, 100, 33}, slave) {
     master.set_firmware([this](BusPort& c) { user.isr(c); });
     if (watch == Watch::bits) {
       chip.on_txd([this](std::uint64_t c, bool l) { txd.emplace_back(c, l); });
@@ -68,9 +69,12 @@ struct Side {
       });
     }
   }
-  static Chip& init(Chip& c, Responder& u) {
+  // The inputs A1, A2, ... of the slave's length (A1..A4 by default).
+  static Chip& init(Chip& c, Responder& u, std::size_t in_len) {
     c.set_log_sink(nullptr);
-    u.inputs = {0xA1, 0xA2, 0xA3, 0xA4};
+    std::vector<std::uint8_t> in(in_len);
+    for (std::size_t i = 0; i < in_len; ++i) in[i] = static_cast<std::uint8_t>(0xA1 + i);
+    u.set_inputs(std::move(in));
     DirectBus bus(c);
     u.init(bus);
     return c;
@@ -268,10 +272,9 @@ TEST_P(TxdDirect, LongAnswersAndACutOneLookTheSame) {
   rc.slave.out_len = 244;
   Side edges(Profile::dpc31, baud, Watch::edges, rc, rc.slave);
   Side chars(Profile::dpc31, baud, Watch::chars, rc, rc.slave);
-  for (Side* s : {&edges, &chars}) {
-    s->user.inputs.resize(244);
-    for (std::size_t i = 0; i < 244; ++i) s->user.inputs[i] = static_cast<std::uint8_t>(i * 7);
-  }
+  std::vector<std::uint8_t> in(244);
+  for (std::size_t i = 0; i < in.size(); ++i) in[i] = static_cast<std::uint8_t>(i * 7);
+  for (Side* s : {&edges, &chars}) s->user.set_inputs(in);
   ASSERT_TRUE(edges.master.startup());
   ASSERT_TRUE(chars.master.startup());
   expect_same(edges, chars, "start-up");

@@ -40,7 +40,7 @@ Line record_startup(const wave::Options& o) {
   chip.set_log_sink(nullptr);
   ResponderConfig rc;
   Responder user(rc);
-  user.inputs = {0xA1, 0xA2, 0xA3, 0xA4};
+  user.set_inputs({0xA1, 0xA2, 0xA3, 0xA4});
   DirectBus bus(chip);
   user.init(bus);
   wave::Recorder rec(o);

@@ -47,7 +47,7 @@ def test_send_and_pulse_need_a_sender_and_an_end_before_the_last_cycle():
     (lambda: dpc31.Master(dpc31.Chip("spc3"), baud=0), r"baud 0 is not a PROFIBUS rate"),
     (lambda: dpc31.Master(dpc31.Chip("spc3"), address=200),
      r"master address 200 out of range \(0..126\)"),
-    (lambda: dpc31.Master(dpc31.Chip("spc3"), slot_bits=0), r"slot 0 out of range \(1..65535\)"),
+    (lambda: dpc31.Master(dpc31.Chip("spc3"), slot_bits=0), r"slot 0 out of range \(37..16383\)"),
     (lambda: dpc31.SlaveConfig(address=200), r"slave address 200 out of range \(0..125\)"),
     (lambda: dpc31.Segment().add_station(127), r"station address 127 out of range \(0..125\)"),
     (lambda: dpc31.Segment().add_station(200), r"station address 200 out of range \(0..125\)"),
@@ -66,6 +66,8 @@ def test_send_and_pulse_need_a_sender_and_an_end_before_the_last_cycle():
     (lambda: dpc31.SlaveConfig(cfg=b""), r"cfg: at least one byte"),
     (lambda: dpc31.SlaveConfig(user_prm=bytes(238)), r"user_prm: more than 237 bytes"),
     (lambda: _master().set_slave_address(200), r"new address 200 out of range \(0..126\)"),
+    (lambda: _master().run_responder(inputs=b"\x01\x02"),
+     r"inputs: 2 bytes for a slave with in=4: inputs are exactly in= bytes, or none$"),
     (lambda: dpc31.Cpu51Board(dpc31.Chip("spc3"), hz=1), r"clock 1 out of range "
      r"\(1000000..40000000\)"),
     (lambda: dpc31.Cpu51Board.c31(dpc31.Chip("dpc31"), hz=100_000_000),
@@ -113,7 +115,7 @@ def test_a_masters_token_rules_are_checked_as_on_a_master_line():
             (dict(hsa=1), r"hsa= without gap=: the HSA bounds the GAP the master polls"),
             (dict(gap=1, hsa=1), r"hsa=1 below the master's address 2"),
             (dict(gap=1, hsa=127), r"hsa 127 out of range \(1..126\)"),
-            (dict(slot_bits=0), r"slot 0 out of range \(1..65535\)")]:
+            (dict(slot_bits=0), r"slot 0 out of range \(37..16383\)")]:
         with pytest.raises(ValueError, match=message):
             seg.add_master(2, [5], **kwargs)
     with pytest.raises(ValueError, match=r"^master address 127 out of range \(0..126\)$"):

@@ -32,7 +32,7 @@ UserSide make_user_side(Chip& chip, const SlaveSpec& s) {
   // the responder records is taken here, so a bridge running for days does not grow.
   u.program.isr = [r](BusPort& b) {
     r->isr(b);
-    if (!r->outputs.empty()) r->inputs = std::move(r->outputs.back().data);
+    if (!r->outputs.empty()) r->set_inputs(std::move(r->outputs.back().data));
     r->outputs.clear();
     r->interrupts.clear();
   };

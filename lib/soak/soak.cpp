@@ -52,7 +52,7 @@ class Soak {
     mc.baud = o.baud;
     SlaveConfig slave = rc_.slave;
     if (!o.firmware) {
-      user_.inputs = kInputs;
+      user_.set_inputs(kInputs);
       user_.init(bus);
       master_ = std::make_unique<DpMaster>(chip_, mc, slave);
       master_->set_firmware([this](BusPort& b) { user_.isr(b); });

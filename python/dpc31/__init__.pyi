@@ -171,6 +171,7 @@ class Exchange:
     request_start: int
     request_end: int
     answer: Optional[Frame]
+    stray: Optional[Frame]
     answer_start: int
     answer_end: int
 

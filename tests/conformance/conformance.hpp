@@ -4,7 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "dp_master.hpp"
@@ -39,14 +41,17 @@ struct Bench {
                  dpc31::BusMode bus = dpc31::BusMode::intel, std::uint8_t master_address = 2)
       : chip({p, bus, 0}),
         user(rc),
-        master(init(chip, user), dpc31::MasterConfig{master_address, baud, 100, 33},
-               user_slave(rc)) {
+        master(init(chip, user, rc.slave.in_len),
+               dpc31::MasterConfig{master_address, baud, 100, 33}, user_slave(rc)) {
     master.set_firmware([this](dpc31::BusPort& c) { user.isr(c); });
   }
   static dpc31::SlaveConfig user_slave(const dpc31::ResponderConfig& rc) { return rc.slave; }
-  static dpc31::Chip& init(dpc31::Chip& c, dpc31::Responder& u) {
+  // The inputs A1, A2, ... of the slave's length (A1..A4 by default).
+  static dpc31::Chip& init(dpc31::Chip& c, dpc31::Responder& u, std::size_t in_len) {
     c.set_log_sink(nullptr);
-    if (u.inputs.empty()) u.inputs = {0xA1, 0xA2, 0xA3, 0xA4};
+    std::vector<std::uint8_t> in(in_len);
+    for (std::size_t i = 0; i < in_len; ++i) in[i] = static_cast<std::uint8_t>(0xA1 + i);
+    u.set_inputs(std::move(in));
     dpc31::DirectBus bus(c);
     u.init(bus);
     return c;

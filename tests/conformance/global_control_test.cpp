@@ -49,7 +49,7 @@ void freeze_a_then_hand_over_b(Bench& b) {
   ASSERT_TRUE(b.master.startup());
   b.master.data_exchange({0, 0, 0, 0});
   b.master.global_control(kGC_Freeze);
-  b.user.inputs = {0xB1, 0xB2, 0xB3, 0xB4};
+  b.user.set_inputs({0xB1, 0xB2, 0xB3, 0xB4});
   EXPECT_EQ(b.master.data_exchange({0, 0, 0, 0}).answer->du, kA);
 }
 
@@ -83,7 +83,7 @@ TEST_P(GlobalControl, Unfreeze_CancelsFreezeAndFetchesNewInputsNToD) {
   Bench b(GetParam(), 12'000'000);
   freeze_a_then_hand_over_b(b);
   b.master.global_control(kGC_Unfreeze);
-  b.user.inputs = {0xC1, 0xC2, 0xC3, 0xC4};
+  b.user.set_inputs({0xC1, 0xC2, 0xC3, 0xC4});
   EXPECT_EQ(b.master.data_exchange({0, 0, 0, 0}).answer->du, (Bytes{0xB1, 0xB2, 0xB3, 0xB4}));
   EXPECT_EQ(b.master.data_exchange({0, 0, 0, 0}).answer->du, (Bytes{0xC1, 0xC2, 0xC3, 0xC4}));
   EXPECT_EQ(diag(b.master).at(1) & 0x10, 0x00);
@@ -122,7 +122,7 @@ TEST_P(GcReservedUnchecked, CheckNoGcReserved1_ReservedBitsNotChecked) {
   b.master.global_control(0xC9);
   EXPECT_EQ(dp_bits(status(b.chip)), kDataEx);
   EXPECT_EQ(gc_command(b.chip), 0xC9);
-  b.user.inputs = {0xB1, 0xB2, 0xB3, 0xB4};
+  b.user.set_inputs({0xB1, 0xB2, 0xB3, 0xB4});
   b.master.data_exchange({0, 0, 0, 0});
   EXPECT_EQ(b.master.data_exchange({0, 0, 0, 0}).answer->du, kA);  // frozen
   const Bytes d = diag(b.master);
@@ -170,7 +170,7 @@ TEST_P(GlobalControl, MoreThanTwoNetDataBytes_NotAccepted) {
   b.master.global_control(kGC_Unfreeze);
   gc_raw(b.master, {kGC_Freeze, 0x00, 0x00});
   EXPECT_EQ(gc_command(b.chip), kGC_Unfreeze);
-  b.user.inputs = {0xB1, 0xB2, 0xB3, 0xB4};
+  b.user.set_inputs({0xB1, 0xB2, 0xB3, 0xB4});
   b.master.data_exchange({0, 0, 0, 0});
   EXPECT_EQ(b.master.data_exchange({0, 0, 0, 0}).answer->du, (Bytes{0xB1, 0xB2, 0xB3, 0xB4}));
   EXPECT_EQ(dp_bits(status(b.chip)), kDataEx);

@@ -48,7 +48,8 @@ struct Bare {
   explicit Bare(dpc31::Profile p, std::uint32_t baud = 12'000'000, dpc31::ResponderConfig rc = {})
       : chip({p, dpc31::BusMode::intel, 0}),
         user(rc),
-        master(Bench::init(chip, user), dpc31::MasterConfig{2, baud, 100, 33}, rc.slave) {}
+        master(Bench::init(chip, user, rc.slave.in_len), dpc31::MasterConfig{2, baud, 100, 33},
+               rc.slave) {}
   [[nodiscard]] std::uint32_t T() const { return master.bit_cycles(); }
   [[nodiscard]] std::uint64_t acted(const dpc31::Exchange& ex) const {
     return ex.request_end - T() + T() / 2;

@@ -83,7 +83,7 @@ const Prefix& data_exchange_prefix(Profile p, BusMode bus) {
   Chip chip({p, bus});
   chip.set_log_sink(nullptr);
   auto user = std::make_unique<Responder>(user_config());
-  user->inputs = {0x11, 0x22, 0x33, 0x44};
+  user->set_inputs({0x11, 0x22, 0x33, 0x44});
   DirectBus direct(chip);
   user->init(direct);
   {
@@ -114,7 +114,7 @@ class Run {
       t_ = bit_time(1'500'000);
     } else {
       user_ = std::make_unique<Responder>(user_config());
-      user_->inputs = {0x11, 0x22, 0x33, 0x44};
+      user_->set_inputs({0x11, 0x22, 0x33, 0x44});
       checker_.attach(chip_, true);  // RxD idle since reset
       DirectBus direct(chip_);
       user_->init(direct);

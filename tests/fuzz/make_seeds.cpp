@@ -44,7 +44,7 @@ Recorded session(Profile p, std::uint32_t baud, const std::function<void(DpMaste
                  const std::function<void(DpMaster&)>& body, Bytes* snapshot = nullptr) {
   Chip chip({p, BusMode::intel});
   Responder user(user_config());
-  user.inputs = {0x11, 0x22, 0x33, 0x44};
+  user.set_inputs({0x11, 0x22, 0x33, 0x44});
   DirectBus direct(chip);
   user.init(direct);
   MasterConfig mc;
