@@ -90,13 +90,18 @@ void check_output(bool ok, const std::string& error) {
 }
 
 // An output that is an input or another output (`dpc31 run`'s check, outfile::distinct, and its
-// line): a ValueError before anything is opened.
+// line), or an empty name (OutFile's words): a ValueError before anything is opened.
 void check_distinct(const std::vector<outfile::Named>& inputs,
                     const std::optional<std::string>& vcd, const std::optional<std::string>& fst,
                     const std::optional<std::string>& pcapng) {
-  path_arg(vcd, "vcd");
-  path_arg(fst, "fst");
-  path_arg(pcapng, "pcapng");
+  for (const auto& [path, what] :
+       {std::pair{&vcd, "vcd"}, std::pair{&fst, "fst"}, std::pair{&pcapng, "pcapng"}}) {
+    // '' is no "not given": nothing would be written, silently.
+    if (path_arg(*path, what) && (*path)->empty()) {
+      throw py::value_error(std::string(what) +
+                            ": an empty file name: nothing can be written there");
+    }
+  }
   const std::string same = outfile::distinct(
       inputs,
       {{"vcd", vcd.value_or("")}, {"fst", fst.value_or("")}, {"pcapng", pcapng.value_or("")}});

@@ -64,19 +64,23 @@ bool load_cpu51_image(const Cpu51Config& cfg, Cpu51Image& image, std::string& er
                         cfg.code);
     return false;
   }
-  std::filesystem::path map(cfg.hex);
-  map.replace_extension(".map");
-  std::error_code ec;
-  if (std::filesystem::is_regular_file(map, ec)) {
+  if (const std::string map = cpu51_map_path(cfg.hex); !map.empty()) {
     std::string mtext;
-    if (!read_text_file(map.string(), kMaxHexBytes, "SDCC map", mtext, error)) {
-      error = fmt::format("{}: {}", map.string(), error);
+    if (!read_text_file(map, kMaxHexBytes, "SDCC map", mtext, error)) {
+      error = fmt::format("{}: {}", map, error);
       return false;
     }
     read_map(mtext, image.symbols);
-    image.map_file = map.string();
+    image.map_file = map;
   }
   return true;
+}
+
+std::string cpu51_map_path(const std::string& hex) {
+  std::filesystem::path map(hex);
+  map.replace_extension(".map");
+  std::error_code ec;
+  return std::filesystem::is_regular_file(map, ec) ? map.string() : std::string();
 }
 
 std::string code_name(const Cpu51Image& image, std::uint16_t pc) {

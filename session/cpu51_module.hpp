@@ -32,6 +32,10 @@ struct Cpu51Image {
 // "FILE:LINE: reason" for a bad record, "FILE: reason" when it cannot be read.
 bool load_cpu51_image(const Cpu51Config& cfg, Cpu51Image& image, std::string& error);
 
+// The SDCC map that load_cpu51_image reads beside the image `hex` (FILE.map), or "" if there is
+// none: an input of the command too.
+std::string cpu51_map_path(const std::string& hex);
+
 // "dps_isr+0x1c" for a code address (hex alone without a symbol below it).
 std::string code_name(const Cpu51Image& image, std::uint16_t pc);
 

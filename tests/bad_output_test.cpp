@@ -127,6 +127,72 @@ TEST_F(BadInput, AFailedWriteToTheStandardOutputIsExit2) {
   EXPECT_FALSE(fs::exists(path("demo")));
 }
 
+// A file-size limit (`ulimit -f`) ended the process with SIGXFSZ at the first write past it: no
+// line, exit 153, the temporaries and the bridge's pty symlink left behind (the audit of
+// 2026-12-05, run 21). dpc31 ignores the signal: the write fails with EFBIG and is reported as
+// every failed write is. Its standard error is the pipe, which has no size limit.
+TEST_F(BadInput, AFileSizeLimitIsAFailedWrite) {
+  const std::string wave = std::string(SOURCE_DIR) + "/tests/data/wavediff/";
+  const std::string too_large = ": File too large";
+  const std::string out = (root_ / "io" / "out").string();
+  struct Case {
+    std::string args;
+    std::string stdout_to;
+    std::string want;
+  };
+  for (const Case& c :
+       std::vector<Case>{{"run " + kScn + " --quiet --json o.json", "/dev/null",
+                          "dpc31 run: o.json: cannot write" + too_large},
+                         {"run " + kScn + " --quiet --vcd o.vcd", "/dev/null",
+                          "dpc31 run: o.vcd: cannot write" + too_large},
+                         {"run " + kScn + " --quiet --pcap o.pcapng", "/dev/null",
+                          "dpc31 run: o.pcapng: cannot write" + too_large},
+                         {"soak --cycles 2000000 --json o.json", "/dev/null",
+                          "dpc31 soak: o.json: cannot write" + too_large},
+                         {"wavediff " + wave + "emu.vcd " + wave + "rtl.vcd --json o.json",
+                          "/dev/null", "o.json: cannot write" + too_large},  // its style: no prefix
+                         {"regs --profile dpc31", out,
+                          "dpc31 regs: cannot write the standard output" + too_large},
+                         {"bridge --pty p --slave 5:DO4 --pacing free --log o.log --pcap o.pcapng",
+                          "/dev/null", "dpc31 bridge: cannot write the log o.log" + too_large}}) {
+    const testutil::CommandResult r =
+        testutil::run_command("cd " + path("") + " && ulimit -f 0 && timeout 60 " + kCli + " " +
+                              c.args + " 2>&1 >" + c.stdout_to);
+    EXPECT_EQ(r.rc, 2) << c.args;
+    EXPECT_EQ(r.out, c.want + "\n") << c.args;
+  }
+  // The bridge's log is live (docs/bridge.md), made before the run: the one file left, empty.
+  EXPECT_EQ(listing(), std::vector<std::string>{"o.log"});
+  EXPECT_EQ(slurp(path("o.log")), "");
+}
+
+// The running program is an input of every command: `bridge --pcap build/bin/dpc31` renamed its
+// capture over the program (the audit of 2026-12-05, run 21). A copy of it here, run as ./dpc31:
+// refused before anything runs by distinct(), and by OutFile::open() where a command has no
+// distinct() (bench --json).
+TEST_F(BadInput, TheRunningProgramIsNeverAnOutput) {
+  const std::string exe = copy(kCli, "dpc31");
+  const std::string bytes = slurp(exe);
+  const std::string is_it = ": is the running program " + fs::canonical(exe).string();
+  for (const auto& [args, want] : std::vector<std::pair<std::string, std::string>>{
+           {"bridge --tcp 0 --slave 5:DO4 --pcap dpc31",
+            "dpc31 bridge: --pcap dpc31" + is_it + ": an output must not replace an input"},
+           {"bridge --pty p --slave 5:DO4 --log ./dpc31",
+            "dpc31 bridge: --log ./dpc31" + is_it + ": an output must not replace an input"},
+           {"run " + kScn + " --quiet --json " + exe,
+            "dpc31 run: --json " + exe + is_it + ": an output must not replace an input"},
+           {"soak --cycles 1000 --json dpc31",
+            "dpc31 soak: --json dpc31" + is_it + ": an output must not replace an input"},
+           {"bench --bench /bin/true --json dpc31", "dpc31 bench: dpc31: cannot write" + is_it}}) {
+    const testutil::CommandResult r = testutil::run_command(
+        "cd " + path("") + " && timeout 60 ./dpc31 " + args + " 2>&1 >/dev/null");
+    EXPECT_EQ(r.rc, 2) << args;
+    EXPECT_EQ(r.out, want + "\n") << args;
+  }
+  EXPECT_EQ(slurp(exe), bytes);
+  EXPECT_EQ(listing(), std::vector<std::string>{"dpc31"});
+}
+
 // An output that names an input, or another output, is refused before any work: the scenario,
 // waveform B and the first output stay as they were (finding 6).
 TEST_F(BadInput, AnOutputThatNamesAnInputOrAnotherOutputIsRefused) {

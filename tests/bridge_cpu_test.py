@@ -12,12 +12,14 @@ routine starts at 004Eh in 19; the C31 at 24 MHz puts machine cycle m at chip cy
 
 c31_bad_arguments: --cpu c31 on another profile, against --irq-controller external, a --code
 outside the RAM's user area, --ports or --board-address (the 80C32 board's), --code on the
-80C32: one line on stderr, exit 2, no log made.
+80C32, --trace-cpu naming the SDCC map beside the image: one line on stderr, exit 2, no log
+made.
 
 Usage: bridge_cpu_test.py DPC31_CLI DISSECTOR CASE.
 """
 
 import os
+import shutil
 import signal
 import sys
 import tempfile
@@ -108,6 +110,16 @@ def c31_bad_arguments():
         ]
         for args, want in cases:
             blt.expect_refused(args, want, log)
+        # The SDCC map beside the image is an input too: --trace-cpu over it replaced it.
+        image, map_file = os.path.join(tmp, "ack.ihx"), os.path.join(tmp, "ack.map")
+        shutil.copy(c31_ack(), image)
+        with open(map_file, "w", encoding="utf-8") as f:
+            f.write("map\n")
+        blt.expect_refused(c31[:-1] + [image, "--trace-cpu", map_file],
+                           f"dpc31 bridge: --trace-cpu {map_file}: is the SDCC map {map_file}: "
+                           "an output must not replace an input", log)
+        with open(map_file, encoding="utf-8") as f:
+            check(f.read() == "map\n", "the map was replaced")
 
 
 CASES = {

@@ -7,6 +7,7 @@ picks the port, the log's first line names it); tools/dp_master.py's Master on s
 reaches Data_Exchange with DO4; a second connection while the first is there is closed at once;
 garbage is carried to the chip as on the pty (a broken telegram in the log, the next request
 answered); the first client's disconnect, then a second client that exchanges data at once.
+tools/dp_master.py as a second client while the first is connected: refused, exit 4, one line.
 
 pcap_tshark_fields: the same start-up with --pcap; tshark with the shipped dissector
 (lib/capture/profibus_dl.lua) decodes the capture, and every request and answer is checked field
@@ -87,6 +88,14 @@ def tcp_two_clients_and_garbage():
             check(second.recv(16) == b"", "a second client was not closed")
             second.close()
             b.wait_for_log("refused a second client from 127.0.0.1:", GUARD)
+            # tools/dp_master.py as the second client says it was refused, exit 4 (it said "the
+            # device went away", exit 3: the bridge's stop), and the first client goes on.
+            r = subprocess.run([sys.executable, os.path.join(bt.SOURCE, "tools", "dp_master.py"),
+                                b.url, "--ident", "0x0D04", "--cfg", "21,10"],
+                               capture_output=True, text=True, timeout=GUARD, check=False)
+            check(r.returncode == 4 and r.stderr == f"dp_master: {b.url}: the bridge refused the "
+                  "connection: another client is connected (one at a time)\n",
+                  f"a second dp_master.py: exit {r.returncode}, {r.stderr!r}")
             # Garbage as on the pty: the bytes go on RxD as they came (a broken telegram, no
             # answer); the next request is answered.
             os.write(m.fd, bytes([0x00, 0x01, 0x02, 0xFF]))
@@ -296,6 +305,10 @@ def tcp_bad_arguments():
             (["--pty", os.path.join(tmp, "dp0"), "--allow-remote"], "--allow-remote needs --tcp"),
             (["--tcp", str(busy.getsockname()[1])], "Address already in use"),
             (["--tcp", "0", "--pcap", log], "--pcap"),
+            # '' was taken as not given: the bridge ran and wrote no capture, silently.
+            (["--tcp", "0", "--pcap", ""],
+             "dpc31 bridge: --pcap: an empty file name: nothing can be written there"),
+            (["--tcp", "0", "--trace-cpu", ""], "--trace-cpu: an empty file name"),
         ]
         for args, want in cases:
             expect_refused(["--firmware", "DO4", "--log", log] + args, want, log, pcap)

@@ -21,6 +21,8 @@ pty_two_do4: DO4 on a DPC31 at 5 and DO4 on an SPC3 at 7, each its own instance 
 bad_slave_arguments: a bad --slave, a duplicate address, mixing --slave with
 the single slave's options: one line on stderr, exit 2, no log made.
 
+one_slave_log_line: log line 1 with one --slave says `1 slave:`.
+
 Usage: bridge_segment_test.py DPC31_CLI DISSECTOR CASE. Every wait is on an event (the master
 program's exit, a log line), none on a wall time.
 """
@@ -169,6 +171,20 @@ def pty_two_do4():
     log_has(log, "PORT  slave5   DO4 outputs = 0x05", "PORT  slave7   DO4 outputs = 0x0A")
 
 
+def one_slave_log_line():
+    """Log line 1 of a segment of one: `1 slave:` (it said `1 slaves:`)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        b = blt.TcpBridge(tmp, "--slave", "5:responder", "--pacing", "free")
+        try:
+            b.stop()
+            line = b.log_lines()[0]
+            check(line.startswith("dpc31 bridge: pacing free, baud 19200, 1 slave: slave5 (profile "
+                                  "dpc31, irq-controller external, firmware responder), slot "),
+                  f"log line 1: {line}")
+        finally:
+            b.kill()
+
+
 def bad_slave_arguments():
     with tempfile.TemporaryDirectory() as tmp:
         log = os.path.join(tmp, "log")
@@ -179,8 +195,11 @@ def bad_slave_arguments():
             (["--slave", "5:DO5"], "unknown firmware 'DO5'"),
             (["--slave", "5:responder:spc4"], "unknown profile 'spc4'"),
             (["--slave", "5:responder:spc3:b"], "the SPC3 has no variant"),
-            (["--slave", "5:responder:vpc3plus:x"], "must be b, c or s"),
-            (["--slave", "5:responder:dpc31:c32"], "must be external or c31"),
+            # VARIANT in the field's words, not --variant's or --irq-controller's
+            (["--slave", "5:responder:vpc3plus:x"],
+             "--slave '5:responder:vpc3plus:x': VARIANT 'x' of vpc3plus must be b, c or s"),
+            (["--slave", "5:responder:dpc31:b"], "--slave '5:responder:dpc31:b': VARIANT 'b' of "
+             "dpc31 must be external or c31 (its interrupt controller)"),
             (["--slave", "5:responder:spc3:b:x"], "must be ADDR:FIRMWARE[:PROFILE[:VARIANT]]"),
             (["--slave", "5:DO4", "--slave", "5:responder"], "a second station at address 5"),
             (["--slave", "5:DO4", "--firmware", "DO4"], "--firmware is for the one slave"),
@@ -216,6 +235,7 @@ CASES = {
     "tcp_two_slaves_pcap": tcp_two_slaves_pcap,
     "pty_two_do4": pty_two_do4,
     "bad_slave_arguments": bad_slave_arguments,
+    "one_slave_log_line": one_slave_log_line,
 }
 
 

@@ -9,8 +9,9 @@ one read with the second search's FDL_Status answers, "186 bytes too many").
 
 Then its options and its errors (the audit of 2026-12-05): hex bytes, the outputs the Cfg gives,
 the range checks, and the program's exits on bad arguments, on a device that is not a serial
-device and when the device goes away during the run (a pty whose other side closes, a TCP
-connection reset), each one line on stderr.
+device, a TCP port nobody listens on (the URL named, after --wait), when the device goes away
+during the run (a pty whose other side closes, a TCP connection reset), and a failure with
+several slaves (the station named), each one line on stderr.
 
 Usage: dp_master_tool_test.py CASE. Exit 0 when the case holds, 1 with its failure."""
 
@@ -349,8 +350,42 @@ def bad_arguments_exit_2():
              ["--ident", "0x1FFFF", "--cfg", "21,10"]),
             ("--outputs: '5,123': '123' is not a byte", ["--outputs", "5,123"] + DO4),
             ("station 5: 300 output bytes, its Chk_Cfg gives 2", ["--outputs", many] + DO4),
-            ("--dpv1-write: a DPV1 PDU of 245 bytes", ["--dpv1-write", many[:3 * 243 - 1]] + DO4)):
+            ("--dpv1-write: a DPV1 PDU of 245 bytes", ["--dpv1-write", many[:3 * 243 - 1]] + DO4),
+            # Sent before (the audit of 2026-12-05, run 21): a WD_Fact of 0 in Set_Prm, an empty
+            # Chk_Cfg, the master at a slave's address; a search without end, a wait below 0.
+            ("--watchdog takes two bytes, each 01..FF", ["--watchdog", "0,0"] + DO4),
+            ("station 5: no Ident_Number or Chk_Cfg", ["--ident", "0x0D04", "--cfg", ""]),
+            ("station 5: the master's own --address", ["--address", "5", "--slave",
+                                                       "5:0x0D04:21,10"]),
+            ("--search takes a positive number of seconds", ["--search", "inf"] + DO4),
+            ("--wait takes a number of seconds, 0 or more", ["--wait", "-3"] + DO4)):
         exits(2, want, "/nonexistent", *args)
+    # A port beyond 65535 was taken modulo 2^16 (99999: 34463).
+    exits(2, "dp_master: socket://127.0.0.1:99999: not socket://HOST:PORT (PORT 1..65535)",
+          "socket://127.0.0.1:99999", *DO4)
+
+
+def tcp_refused_names_the_url():
+    """Nobody on the port: the URL in the line, exit 2, after --wait (it was a fixed 10 s and
+    `[Errno 111] Connection refused` alone)."""
+    free = socket.create_server(("127.0.0.1", 0))
+    url = f"socket://127.0.0.1:{free.getsockname()[1]}"
+    free.close()
+    start = time.monotonic()
+    exits(2, f"dp_master: {url}: connection refused (waited 0.3 s)", url, "--wait", "0.3", *DO4)
+    check(time.monotonic() - start < 5, f"--wait 0.3 took {time.monotonic() - start:.1f} s")
+
+
+def failure_names_the_station():
+    """With several --slave, the failure's line names its station, as its stdout lines do: a
+    line that answers nothing."""
+    server = socket.create_server(("127.0.0.1", 0))
+    conns = []
+    threading.Thread(target=lambda: conns.append(server.accept()), daemon=True).start()
+    exits(1, "dp_master: slave 5: FDL_Status never answered",
+          f"socket://127.0.0.1:{server.getsockname()[1]}", "--slave", "5:0x0D04:21,10",
+          "--slave", "9:0x0C31:13,23", "--search", "0.5")
+    server.close()
 
 
 def not_a_serial_device_exit_2():
@@ -387,20 +422,30 @@ def device_lost_pty():
 
 def device_lost_tcp():
     """The TCP connection is reset during the run (the bridge killed), and in another run closed:
-    exit 3, one line each (a reset was a ConnectionResetError traceback)."""
+    exit 3, one line each (a reset was a ConnectionResetError traceback). The port closes with
+    it, as the bridge's does: a port that still listens would be a bridge refusing the client
+    (tests/bridge_line_test.py)."""
     for reset, want in ((True, "the device went away (Connection reset by peer)"),
                         (False, "the bridge closed the connection")):
         server = socket.create_server(("127.0.0.1", 0))
 
-        def serve(server=server, reset=reset):
+        held = []
+
+        def serve(server=server, reset=reset, held=held):
             conn, _ = server.accept()
             conn.recv(6)  # its first FDL_Status
+            server.close()
             if reset:
                 conn.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
-            conn.close()
+                conn.close()
+            else:  # the end of its bytes; a close would answer its next request with a reset
+                conn.shutdown(socket.SHUT_WR)
+                held.append(conn)
         threading.Thread(target=serve, daemon=True).start()
         exits(3, want, f"socket://127.0.0.1:{server.getsockname()[1]}", "--ident", "0x0D04",
               "--cfg", "21,10")
+        for conn in held:
+            conn.close()
         server.close()
 
 
@@ -413,7 +458,9 @@ CASES = {"slow_line_search_drained": slow_line_search_drained,
          "bad_arguments_exit_2": bad_arguments_exit_2,
          "not_a_serial_device_exit_2": not_a_serial_device_exit_2,
          "device_lost_pty": device_lost_pty,
-         "device_lost_tcp": device_lost_tcp}
+         "device_lost_tcp": device_lost_tcp,
+         "tcp_refused_names_the_url": tcp_refused_names_the_url,
+         "failure_names_the_station": failure_names_the_station}
 
 
 def main():

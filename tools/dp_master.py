@@ -36,6 +36,7 @@ Python 3 standard library only; tests/bridge_test.py uses the same Master class.
 
 import argparse
 import fcntl
+import math
 import os
 import select
 import socket
@@ -57,10 +58,12 @@ hex bytes (--cfg, --user-prm, --outputs, --watchdog, --dpv1-read, --dpv1-write a
 pairs of hex digits (0501); at most 244 bytes in one data unit.
 
 exit codes: 0 Data_Exchange reached with every slave (and every DPV1 service answered
-positively); 1 a slave did not come up, or a DPV1 service failed (the line says where: a negative
-response with its error bytes, RS, the time-out); 2 bad arguments or device (not there, not a
-serial device, no TCP connection); 3 the device or the connection went away during the run (the
-bridge stopped). Every error is one line on stderr."""
+positively); 1 a slave did not come up, or a DPV1 service failed (the line says where, and with
+several --slave which station: a negative response with its error bytes, RS, the time-out); 2 bad
+arguments or device (not there, not a serial device, no TCP connection within --wait); 3 the
+device or the connection went away during the run (the bridge stopped); 4 socket:// only: the
+bridge refused the connection, another client is connected (it takes one at a time). Every error
+is one line on stderr."""
 # The ten PROFIBUS DP rates (EN 50170). Five have a termios constant; the others (45.45, 93.75,
 # 187.5 kbaud, 6 and 12 Mbaud) are set as Linux's "other" rate: struct termios2 with BOTHER and
 # the rate itself, through the TCSETS2 ioctl (as pyserial does for such rates).
@@ -104,6 +107,11 @@ class Fail(Exception):
 
 class Lost(Fail):
     """The device or the connection went away during the run (exit 3)."""
+
+
+class Refused(Fail):
+    """socket://: the bridge closed the connection while it still takes others: it had another
+    client (exit 4)."""
 
 
 def check(cond, what):
@@ -172,10 +180,11 @@ def answer_du(a, sap):
 class Master:
     """A DP master on the device: 8E1 raw, FCB/FCV per EN 50170, a timeout per answer."""
 
-    def __init__(self, path, baud, timeout, address=2, slave=5, search=20.0):
+    def __init__(self, path, baud, timeout, address=2, slave=5, search=20.0, wait=10.0):
         self.sock = None
+        self.path = path
         if path.startswith("socket://"):
-            self.sock = connect(path, 10)
+            self.sock = connect(path, wait)
             self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
             self.sock.setblocking(False)
             self.fd = self.sock.fileno()
@@ -195,6 +204,7 @@ class Master:
         self.fcv = False
         self.others = {}  # the FCB state of the slaves not selected: address -> (fcb, fcv)
         self.lost = 0
+        self.answered = False  # a byte came from the device (socket://: the bridge took us)
 
     def select(self, slave):
         """Makes `slave` the station every request goes to, with its own FCB state (EN 50170: FCB
@@ -228,16 +238,32 @@ class Master:
         except BlockingIOError:
             return b""
         except OSError as e:  # EIO on a pty, ECONNRESET on a socket
-            raise Lost(f"the device went away ({e.strerror})") from None
+            self.gone(f"the device went away ({e.strerror})")
         if not b and self.sock is not None:
-            raise Lost("the bridge closed the connection")
+            self.gone("the bridge closed the connection")
+        self.answered = self.answered or bool(b)
         return b
+
+    def gone(self, why):
+        """Raises Lost, or Refused when on socket:// nothing ever came and the bridge still takes
+        connections: it closes a client itself only when it stops, or at once, unread and
+        unanswered, when another client is connected (docs/bridge.md, "Over TCP"). The probe is
+        closed at once."""
+        if self.sock is not None and not self.answered:
+            try:
+                socket.create_connection(socket_address(self.path), timeout=self.timeout).close()
+            except OSError:
+                pass  # not listening any more: it stopped
+            else:
+                raise Refused(f"{self.path}: the bridge refused the connection: another client "
+                              "is connected (one at a time)") from None
+        raise Lost(why) from None
 
     def write(self, req):
         try:
             os.write(self.fd, req)
         except OSError as e:
-            raise Lost(f"the device went away ({e.strerror})") from None
+            self.gone(f"the device went away ({e.strerror})")
 
     def transact(self, req, timeout=None, searching=False):
         """Writes one request, returns the answer telegram (bytes) or None after the timeout.
@@ -507,7 +533,7 @@ def slaves_of(args, error):
         for name in ("ident", "cfg", "user_prm", "outputs"):
             if getattr(s, name) is None:
                 setattr(s, name, getattr(args, name))
-        if s.ident is None or s.cfg is None:
+        if s.ident is None or not s.cfg:  # an empty Chk_Cfg configures no module
             error(f"station {s.address}: no Ident_Number or Chk_Cfg (--ident and --cfg, or "
                   "--slave ADDR:IDENT:CFG)")
         if s.address in [o.address for o in out]:
@@ -533,24 +559,28 @@ def slaves_of(args, error):
 
 
 def socket_address(url):
-    """socket://HOST:PORT (pyserial's URL; HOST may be [V6]) -> (host, port)."""
+    """socket://HOST:PORT (pyserial's URL; HOST may be [V6]; PORT 1..65535) -> (host, port)."""
     hostport = url[len("socket://"):].split("/", 1)[0]
     host, sep, port = hostport.rpartition(":")
-    if not sep or not port.isdigit():
-        raise OSError(f"{url}: not socket://HOST:PORT")
+    if not sep or not port.isdigit() or not 1 <= int(port) <= 65535:
+        raise OSError(f"{url}: not socket://HOST:PORT (PORT 1..65535)")
     return host.strip("[]") or "127.0.0.1", int(port)
 
 
 def connect(url, seconds):
-    """A connection to socket://HOST:PORT, retried while refused (the bridge is starting)."""
+    """A connection to socket://HOST:PORT, retried while refused for `seconds` (--wait: the
+    bridge is starting); one attempt waits for the host as long, at least 1 s."""
+    address = socket_address(url)
     deadline = time.monotonic() + seconds
     while True:
         try:
-            return socket.create_connection(socket_address(url), timeout=seconds)
+            return socket.create_connection(address, timeout=max(seconds, 1.0))
         except ConnectionRefusedError:
             if time.monotonic() > deadline:
-                raise
-            time.sleep(0.02)
+                raise OSError(f"{url}: connection refused (waited {seconds:g} s)") from None
+        except OSError as e:  # no route, a time-out, a host name that does not resolve
+            raise OSError(f"{url}: {e.strerror or e}") from None
+        time.sleep(0.02)
 def dpv1_record(m, function, slot, index, data, length, time_out):
     """MSAC_C1 Read (`length` bytes wanted) or Write (`data`) of slot / index: the positive
     response's data unit and the polls; a negative response fails with its three error bytes."""
@@ -628,13 +658,17 @@ def main():
     p.add_argument("--c1-timeout", type=float, default=1.0,
                    help="seconds a DPV1 service may take (C1_Response_Timeout, default 1)")
     p.add_argument("--wait", type=float, default=10.0,
-                   help="seconds to wait for the device to appear")
+                   help="seconds to wait for the device to appear, or on socket:// for the "
+                   "bridge to take the connection (default 10)")
     args = p.parse_args()
-    for name in ("timeout", "search", "c1_timeout"):
-        if not getattr(args, name) > 0:
+    for name in ("timeout", "search", "c1_timeout"):  # NaN and inf are no number of seconds
+        if not 0 < getattr(args, name) < math.inf:
             p.error(f"--{name.replace('_', '-')} takes a positive number of seconds")
-    if len(args.watchdog) != 2:
-        p.error("--watchdog takes two bytes")
+    if not 0 <= args.wait < math.inf:
+        p.error("--wait takes a number of seconds, 0 or more")
+    # DP's WD_Fact_1 and WD_Fact_2 are 1..255 (EN 50170); 0 the slave takes as a parameter fault.
+    if len(args.watchdog) != 2 or 0 in args.watchdog:
+        p.error("--watchdog takes two bytes, each 01..FF (WD_Fact_1,WD_Fact_2)")
     if args.dpv1_read is not None and len(args.dpv1_read) != 3:
         p.error("--dpv1-read takes three bytes: SLOT,INDEX,LENGTH")
     if args.dpv1_write is not None and len(args.dpv1_write) < 3:
@@ -642,6 +676,9 @@ def main():
     if args.dpv1_write is not None and 2 + len(args.dpv1_write) > MAX_DU:
         p.error(f"--dpv1-write: a DPV1 PDU of {2 + len(args.dpv1_write)} bytes (at most {MAX_DU})")
     slaves = slaves_of(args, p.error)
+    if args.address in [s.address for s in slaves]:
+        p.error(f"station {args.address}: the master's own --address (each station needs its "
+                "own)")
     if len(slaves) > 1 and (args.dpv1_read or args.dpv1_write):
         p.error("--dpv1-read and --dpv1-write are for one --slave")
 
@@ -654,7 +691,7 @@ def main():
     try:
         wait_for(args.device, args.wait)
         m = Master(args.device, args.baud, args.timeout, args.address, slaves[0].address,
-                   args.search)
+                   args.search, args.wait)
     except OSError as e:
         print(f"dp_master: {e}", file=sys.stderr)
         return 2
@@ -664,11 +701,15 @@ def main():
             start_up(m, s, say_for(s))
         exchange(m, slaves, args.cycles, say_for)
         dpv1(m, args, say)
+    except Refused as e:
+        print(f"dp_master: {e}", file=sys.stderr)
+        return 4
     except Lost as e:
         print(f"dp_master: {e}", file=sys.stderr)
         return 3
-    except Fail as e:
-        print(f"dp_master: {e}", file=sys.stderr)
+    except Fail as e:  # named as its station's lines are
+        station = f"slave {m.slave}: " if len(slaves) > 1 else ""
+        print(f"dp_master: {station}{e}", file=sys.stderr)
         return 1
     finally:
         m.close()

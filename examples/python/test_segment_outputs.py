@@ -158,6 +158,16 @@ def test_an_output_that_is_an_input_or_another_output_is_refused(traces, tmp_pat
     assert not (tmp_path / "same.vcd").exists()
 
 
+@pytest.mark.parametrize("what", ["vcd", "fst", "pcapng"])
+def test_an_empty_output_name_is_refused(traces, what):
+    # '' was taken as not given: the line ran and nothing was written, silently.
+    empty = f"^{what}: an empty file name: nothing can be written there$"
+    with pytest.raises(ValueError, match=empty):
+        dpc31.Segment(1_500_000, **{what: ""})
+    with pytest.raises(ValueError, match=empty):
+        dpc31.SegmentScenario.load(str(traces / "segment" / "two_masters.scn")).run(**{what: ""})
+
+
 PACKAGE_DIR = str(pathlib.Path(dpc31.__file__).resolve().parents[1])  # PYTHONPATH from anywhere
 OPEN_SEGMENT = """
 import dpc31, sys

@@ -153,13 +153,21 @@ std::string parse_slave(const std::string& spec, bridge::SlaveSpec& s) {
     return fmt::format("--slave '{}': unknown profile '{}' (spc3, vpc3plus, dpc31)", spec, f[2]);
   }
   if (f.size() > 3) {
-    ChipChoice choice;
-    (s.chip.profile == Profile::dpc31 ? choice.irq_controller : choice.variant) = f[3];
+    // The field's own words: the --variant / --irq-controller the user never gave are not named.
+    Vpc3Variant variant{};
+    IrqController irq{};
     if (s.chip.profile == Profile::spc3) {
       return fmt::format("--slave '{}': the SPC3 has no variant", spec);
     }
-    if (const std::string why = apply_chip_choice(choice, s.chip); !why.empty()) {
-      return fmt::format("--slave '{}': {}", spec, why);
+    if (s.chip.profile == Profile::vpc3plus && parse_vpc3_variant(f[3], variant)) {
+      s.chip.variant = variant;
+    } else if (s.chip.profile == Profile::dpc31 && parse_irq_controller(f[3], irq)) {
+      s.chip.irq_controller = irq;
+    } else {
+      return fmt::format(
+          "--slave '{}': VARIANT '{}' of {} must be {}", spec, f[3], profile_name(s.chip.profile),
+          s.chip.profile == Profile::vpc3plus ? "b, c or s"
+                                              : "external or c31 (its interrupt controller)");
     }
   }
   if (f[1] != bridge::kResponderName) {
@@ -179,6 +187,9 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
     return std::nullopt;
   };
   if (!o.extra.empty()) return bad(fmt::format("unexpected argument '{}'", o.extra.front()));
+  if (!o.empty_path.empty()) {
+    return bad(fmt::format("{}: an empty file name: nothing can be written there", o.empty_path));
+  }
   Checked c;
   if (o.pty.empty() && o.tcp.empty()) {  // both given: CLI11 refused them (excludes)
     return bad(
@@ -216,6 +227,7 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
   // Truncating the mapped plug-in would end the process with SIGBUS.
   std::vector<outfile::Named> inputs{
       {"--firmware", is_plugin_path(o.firmware) || !o.cpu.empty() ? o.firmware : std::string()},
+      {"the SDCC map", o.cpu.empty() ? std::string() : cpu51_map_path(o.firmware)},
       {"--pty", o.pty}};
   for (const std::string& spec : o.slaves) {
     bridge::SlaveSpec s;
@@ -316,9 +328,9 @@ std::string header(const Checked& c, const BridgeOptions& o, const std::string& 
           s.firmware != nullptr ? std::string_view(s.firmware->name) : bridge::kResponderName);
     }
     return fmt::format(
-        "dpc31 bridge: pacing {}, baud {}, {} slaves: {}, slot {} bit times, log level {}, {}",
-        c.realtime ? "realtime" : "free", c.setup.baud, c.setup.slaves.size(), stations,
-        c.setup.slot_bits, o.log_level, port);
+        "dpc31 bridge: pacing {}, baud {}, {} slave{}: {}, slot {} bit times, log level {}, {}",
+        c.realtime ? "realtime" : "free", c.setup.baud, c.setup.slaves.size(),
+        c.setup.slaves.size() == 1 ? "" : "s", stations, c.setup.slot_bits, o.log_level, port);
   }
   const Chip& chip_after_init = e.chip();
   const std::string profile = profile_text(c.setup.chip);
@@ -590,6 +602,11 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
   b->allow_extras();
   b->callback([b, &o] {
     o.extra = b->remaining();
+    // Given as '', a file option is no "not given": the bridge would write nothing, silently.
+    for (const char* name : {"--pty", "--log", "--pcap", "--trace-cpu"}) {
+      const CLI::Option* opt = b->get_option(name);
+      if (opt->count() > 0 && opt->as<std::string>().empty()) o.empty_path = name;
+    }
     for (const char* name :
          {"--firmware", "--address", "--profile", "--variant", "--irq-controller", "--cpu",
           "--code", "--board-address", "--trace-cpu"}) {
@@ -719,14 +736,16 @@ int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
     log.line(fmt::format("dpc31 bridge: {}", e.what()));
     return refuse(e.what());
   }
-  if (trace.is_open() && !trace.commit()) return refuse(trace.error());
-  if (pcap.is_open() && !pcap.close()) return refuse(pcap.error());
+  // The log's failure stopped the bridge: said first, and the outputs are not written (their
+  // temporaries go with them), as after any failed write.
   if (log.failed() != 0) {
     fmt::print(err, "dpc31 bridge: cannot write the log {}: {}\n",
                o.log.empty() ? std::string("to the standard output") : o.log,
                std::strerror(log.failed()));
     return 2;
   }
+  if (trace.is_open() && !trace.commit()) return refuse(trace.error());
+  if (pcap.is_open() && !pcap.close()) return refuse(pcap.error());
   if (rc != 0) fmt::print(err, "dpc31 bridge: stopped on an error (see the log)\n");
   return rc;
 }

@@ -21,6 +21,24 @@ constexpr std::size_t kBufferBytes = 64 * 1024;
 
 std::string errno_text(int e) { return std::error_code(e, std::generic_category()).message(); }
 
+// The program this process runs: an input of every command, so never an output (`bridge --pcap
+// build/bin/dpc31` renamed its capture over the program). By device and inode, as distinct().
+bool is_running_program(const struct stat& st) {
+  struct stat exe {};
+  return S_ISREG(st.st_mode) && ::stat("/proc/self/exe", &exe) == 0 && exe.st_dev == st.st_dev &&
+         exe.st_ino == st.st_ino;
+}
+
+std::string running_program() {
+  std::array<char, 4096> buf{};
+  const ssize_t n = ::readlink("/proc/self/exe", buf.data(), buf.size() - 1);
+  return n > 0 ? std::string(buf.data(), static_cast<std::size_t>(n)) : "/proc/self/exe";
+}
+
+std::string running_program_refused(const std::string& path) {
+  return fmt::format("{}: cannot write: is the running program {}", path, running_program());
+}
+
 }  // namespace
 
 std::string create_temp(const std::string& path,
@@ -113,6 +131,7 @@ bool OutFile::open(const std::string& path) {
   if (::stat(path.c_str(), &st) == 0) {
     // Found before any work is done, not at the rename after it.
     if (S_ISDIR(st.st_mode)) return fail(fmt::format("{}: cannot write: is a directory", path));
+    if (is_running_program(st)) return fail(running_program_refused(path));
     if (!S_ISREG(st.st_mode)) {
       // A device or a FIFO (/dev/stdout, /dev/null): there is no file to replace, and renaming
       // over it would put a plain file in its place. Written in place.
@@ -324,11 +343,13 @@ std::string distinct(const std::vector<Named>& inputs, const std::vector<Named>&
     if (a.exists && b.exists) return a.dev == b.dev && a.ino == b.ino;
     return a.abs == b.abs;
   };
+  std::vector<Named> all_inputs = inputs;
+  all_inputs.push_back({"the running program", running_program()});
   std::vector<Id> out_ids;
   for (const Named& o : outputs) out_ids.push_back(o.path.empty() ? Id{} : id_of(o.path));
   for (std::size_t k = 0; k < outputs.size(); ++k) {
     if (outputs[k].path.empty() || out_ids[k].special) continue;
-    for (const Named& in : inputs) {
+    for (const Named& in : all_inputs) {
       if (!in.path.empty() && same(out_ids[k], id_of(in.path))) {
         return fmt::format("{} {}: is {} {}: an output must not replace an input", outputs[k].what,
                            outputs[k].path, in.what, in.path);
@@ -347,7 +368,12 @@ std::string distinct(const std::vector<Named>& inputs, const std::vector<Named>&
 bool write_file_at(int dirfd, const std::string& name, std::string_view bytes,
                    const std::string& shown, std::string& error) {
   struct stat st {};
-  if (::fstatat(dirfd, name.c_str(), &st, AT_SYMLINK_NOFOLLOW) == 0 && !S_ISREG(st.st_mode)) {
+  const bool exists = ::fstatat(dirfd, name.c_str(), &st, AT_SYMLINK_NOFOLLOW) == 0;
+  if (exists && is_running_program(st)) {
+    error = running_program_refused(shown);
+    return false;
+  }
+  if (exists && !S_ISREG(st.st_mode)) {
     error = fmt::format("{}: cannot write: {}", shown,
                         S_ISLNK(st.st_mode)   ? "a symbolic link (not followed)"
                         : S_ISDIR(st.st_mode) ? "is a directory"

@@ -48,12 +48,13 @@ class OutFile {
   OutFile(const OutFile&) = delete;
   OutFile& operator=(const OutFile&) = delete;
 
-  // Creates the temporary. False with error() if `path` is a directory, a symbolic link to
-  // nothing, another user's link in a sticky directory (foreign_symlink), or the temporary
-  // cannot be created; nothing is touched then. A file still open is
-  // discarded first. A `path` that is a device or a FIFO (/dev/stdout, /dev/null) is written in
-  // place, never removed or replaced; a symlink to a file is followed: the link stays, the file it
-  // names is replaced. The temporary is removed if a signal ends the process (cleanup.hpp).
+  // Creates the temporary. False with error() if `path` is a directory, the running program
+  // (/proc/self/exe), a symbolic link to nothing, another user's link in a sticky directory
+  // (foreign_symlink), or the temporary cannot be created; nothing is touched then. A file still
+  // open is discarded first. A `path` that is a device or a FIFO (/dev/stdout, /dev/null) is
+  // written in place, never removed or replaced; a symlink to a file is followed: the link stays,
+  // the file it names is replaced. The temporary is removed if a signal ends the process
+  // (cleanup.hpp).
   bool open(const std::string& path);
   // Buffered stream on the temporary (fmt::print, fwrite); nullptr when not open.
   std::FILE* stream();
@@ -106,16 +107,18 @@ struct Named {
 
 // Refuses, before any work, an output that is one of the inputs or another output (the same
 // file by st_dev and st_ino when it exists, else the same absolute path once the directory part
-// is resolved): "" or one line. Devices and FIFOs may be named several times (--vcd /dev/null
-// --fst /dev/null). Empty paths (options not given) are skipped.
+// is resolved): "" or one line. The running program (/proc/self/exe) is always one of the inputs.
+// Devices and FIFOs may be named several times (--vcd /dev/null --fst /dev/null). Empty paths
+// (options not given) are skipped.
 std::string distinct(const std::vector<Named>& inputs, const std::vector<Named>& outputs);
 
 // The whole file `name` (one component, no '/') in the directory open as `dirfd`, relative to it
 // and without following symlinks: the temporary is made with openat(O_CREAT | O_EXCL |
 // O_NOFOLLOW), written, fsync'ed and renameat()'ed over `name`. An existing `name` that is not a
-// regular file (a symlink, a FIFO, a device, a directory) is refused and left alone. Messages
-// name `shown` (the name as the user gave it), never the directory. False with a one-line
-// `error`; the temporary is removed then. (`dpc31 serve`'s `save` in its --state-dir.)
+// regular file (a symlink, a FIFO, a device, a directory), or is the running program, is refused
+// and left alone. Messages name `shown` (the name as the user gave it), never the directory.
+// False with a one-line `error`; the temporary is removed then. (`dpc31 serve`'s `save` in its
+// --state-dir.)
 bool write_file_at(int dirfd, const std::string& name, std::string_view bytes,
                    const std::string& shown, std::string& error);
 
