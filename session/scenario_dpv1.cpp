@@ -66,6 +66,12 @@ void record_options(std::span<const Option> opts, std::string_view cmd, bool rea
     fail(fmt::format("{} needs slot=N index=N {}", cmd, read ? "length=N" : "data=BYTES"));
 }
 
+// A DPV1 action or check on another profile: a parse error, never a run that cannot pass.
+void needs_vpc3plus(std::string_view what, const Scenario& s) {
+  if (s.chip.profile != Profile::vpc3plus)
+    fail(fmt::format("'{}' needs 'profile vpc3plus': only the VPC3+ has DPV1", what));
+}
+
 }  // namespace
 
 bool parse_header(std::string_view cmd, std::span<const std::string_view> pos,
@@ -108,8 +114,7 @@ bool parse_action(std::string_view cmd, std::span<const std::string_view> pos,
                                                   "c2_initiate",  "c2_read",    "c2_write",
                                                   "c2_transport", "c2_idle",    "c2_abort"};
   if (std::find(std::begin(kActions), std::end(kActions), cmd) == std::end(kActions)) return false;
-  if (s.chip.profile != Profile::vpc3plus)
-    fail(fmt::format("'{}' needs 'profile vpc3plus': only the VPC3+ has DPV1", cmd));
+  needs_vpc3plus(cmd, s);
   no_positional(pos, cmd);
   st.kind = StepKind::dpv1;
   st.name = std::string(cmd);
@@ -160,7 +165,8 @@ bool parse_action(std::string_view cmd, std::span<const std::string_view> pos,
   return true;
 }
 
-void parse_expect(std::span<const std::string_view> pos, ScenarioStep& st) {
+void parse_expect(std::span<const std::string_view> pos, const Scenario& s, ScenarioStep& st) {
+  needs_vpc3plus("expect dpv1", s);
   st.expect = ExpectKind::dpv1;
   const auto form = [] {
     fail(

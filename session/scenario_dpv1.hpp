@@ -26,8 +26,9 @@ bool parse_header(std::string_view cmd, std::span<const std::string_view> pos,
 // The DPV1 actions into `st`; false if `cmd` is none of them.
 bool parse_action(std::string_view cmd, std::span<const std::string_view> pos,
                   std::span<const Option> opts, const Scenario& s, ScenarioStep& st);
-// `expect dpv1 BYTES|error D,C1,C2|polls N|refused|timeout|no_answer|sc` (pos[0] == "dpv1").
-void parse_expect(std::span<const std::string_view> pos, ScenarioStep& st);
+// `expect dpv1 BYTES|error D,C1,C2|polls N|refused|timeout|no_answer|sc` (pos[0] == "dpv1"):
+// only after `profile vpc3plus`, as the DPV1 actions.
+void parse_expect(std::span<const std::string_view> pos, const Scenario& s, ScenarioStep& st);
 
 // Performs the step on the master.
 Dpv1Answer act(Dpv1Master& m, const ScenarioStep& st);

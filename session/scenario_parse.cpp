@@ -235,6 +235,12 @@ class Parser {
     } else if (k == "min_tsdr") {
       sl.min_tsdr = static_cast<std::uint8_t>(number(v, kMinTsdr));
     } else if (k == "user_prm") {
+      // The master always sends byte 7 (DpMaster's prm_du): "none" would be a byte 7 of 00.
+      if (v == "-") {
+        fail(
+            "user_prm=-: the master always sends byte 7 (user_prm=00 is that byte as 00); a "
+            "Set_Prm of 7 bytes is 'set_prm bytes=BYTES'");
+      }
       sl.user_prm = bytes(v, "user_prm", kMaxDu - 7);
     } else {
       return false;
@@ -729,7 +735,7 @@ class Parser {
       step_.expect = ExpectKind::baud;
       step_.value = static_cast<std::uint32_t>(number(pos_[1], "baud", 1, 12'000'000));
     } else if (what == "dpv1") {
-      scenario_dpv1::parse_expect(pos_, step_);
+      scenario_dpv1::parse_expect(pos_, s_, step_);
     } else if (what == "irq") {
       scenario_expect::parse_irq(pos_, s_.chip.profile, step_);
     } else if (!scenario_bus::parse_expect(pos_, s_.chip.profile, last_read_, step_)) {

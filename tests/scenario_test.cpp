@@ -801,12 +801,25 @@ TEST(ScenarioParse, WhatWouldBeSilentlyOverriddenIsRefused) {
       {"profile vpc3plus\nstartup\nexpect pb3 1\n", "t.scn:3: 'expect pb3' needs profile dpc31"},
       {"master slot=36\nstartup\n", "t.scn:1: slot 36 out of range (37..16383)"},
       {"master slot=16384\nstartup\n", "t.scn:1: slot 16384 out of range (37..16383)"},
+      // The master always sends Set_Prm byte 7: '-' would silently be a byte 00 (a9 audit).
+      {"slave user_prm=-\nstartup\n",
+       "t.scn:1: user_prm=-: the master always sends byte 7 (user_prm=00 is that byte as 00); a "
+       "Set_Prm of 7 bytes is 'set_prm bytes=BYTES'"},
+      {"startup\nset_prm user_prm=-\n",
+       "t.scn:2: user_prm=-: the master always sends byte 7 (user_prm=00 is that byte as 00); a "
+       "Set_Prm of 7 bytes is 'set_prm bytes=BYTES'"},
+      // A DPV1 check on a chip without DPV1 is refused as the DPV1 actions are, not a run whose
+      // check cannot pass.
+      {"profile spc3\nstartup\nexpect dpv1 sc\n",
+       "t.scn:3: 'expect dpv1' needs 'profile vpc3plus': only the VPC3+ has DPV1"},
+      {"profile dpc31\nstartup\nexpect dpv1 polls 1\n",
+       "t.scn:3: 'expect dpv1' needs 'profile vpc3plus': only the VPC3+ has DPV1"},
   };
   for (const auto& [text, line] : refused) EXPECT_EQ(parse_error(text), line) << text;
   for (const std::string ok :
        {"master address=5\nslave address=6\n", "slave in=2\nuser inputs=01,02\ninputs -\n",
         "user inputs=-\ninputs 01,02,03,04\n", "profile dpc31\nexpect pb3 0\n", "master slot=37\n",
-        "master slot=16383\n",
+        "master slot=16383\n", "slave user_prm=00\n", "profile vpc3plus\nexpect dpv1 sc\n",
         "profile vpc3plus\nrecord slot=1 index=1 data=01\nrecord slot=1 index=2 data=02\n"}) {
     EXPECT_EQ(parse_error(ok + "startup\n"), "") << ok;
   }

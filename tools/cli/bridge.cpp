@@ -187,9 +187,6 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
     return std::nullopt;
   };
   if (!o.extra.empty()) return bad(fmt::format("unexpected argument '{}'", o.extra.front()));
-  if (!o.empty_path.empty()) {
-    return bad(fmt::format("{}: an empty file name: nothing can be written there", o.empty_path));
-  }
   Checked c;
   if (o.pty.empty() && o.tcp.empty()) {  // both given: CLI11 refused them (excludes)
     return bad(
@@ -602,11 +599,6 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
   b->allow_extras();
   b->callback([b, &o] {
     o.extra = b->remaining();
-    // Given as '', a file option is no "not given": the bridge would write nothing, silently.
-    for (const char* name : {"--pty", "--log", "--pcap", "--trace-cpu"}) {
-      const CLI::Option* opt = b->get_option(name);
-      if (opt->count() > 0 && opt->as<std::string>().empty()) o.empty_path = name;
-    }
     for (const char* name :
          {"--firmware", "--address", "--profile", "--variant", "--irq-controller", "--cpu",
           "--code", "--board-address", "--trace-cpu"}) {

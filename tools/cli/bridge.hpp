@@ -37,7 +37,6 @@ struct BridgeOptions {
   std::vector<std::string> single;  // the single-slave options given (refused beside --slave)
   std::string ports;                // the 80C32 latch bytes by name, as `ports=`; empty: DO4's
   std::vector<std::string> extra;   // unknown arguments, refused by run_bridge
-  std::string empty_path;           // a file option given as '' (refused by run_bridge)
 };
 
 CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o);
