@@ -1028,6 +1028,54 @@ TEST(SegmentScenario, TwoMastersWithoutTtrCheckTheToken) {
   EXPECT_EQ(r.cycle_of("bus: token_lost"), token + 1056 + 32000);
 }
 
+// Only actions move the line's time (docs/scenario-format.md, "Segments"): a master's action ends
+// on a quiet line, at the end of the last answer's stop bit; an expect moves no time; `run T`
+// lasts T; `send` counts its `after=` (33 bit times) from the quiet line and lasts to its
+// telegram's end. At 12 Mbaud, T = 4 clocks.
+TEST(SegmentScenario, OnlyActionsMoveTheLinesTime) {
+  const ScenarioRun r = run_scenario_text(
+      "segment baud=12000000\nstation 5 profile=spc3\nmaster 2 slaves=5\nsender a\nstartup\n"
+      "expect state 5 Data_Exchange\nexpect state 5 Data_Exchange\n"
+      "send from=a 10,05,02,49,50,16\nrun 1000\nexpect state 5 Data_Exchange\n"
+      "expect bus_violation short_tsyn 0\n");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_TRUE(r.errors.empty()) << r.errors.front();
+  // The start-up's last telegram, the Slave_Diag answer: 17 characters of 11 T from its start.
+  const std::uint64_t quiet = r.cycle_of("line 6: expect");
+  EXPECT_EQ(r.cycle_of("] station 5: 68 0B 0B 68 82 85 08") + 17 * 11 * 4, quiet);
+  EXPECT_EQ(r.cycle_of("line 7: expect"), quiet);
+  EXPECT_EQ(r.cycle_of("line 8: send"), quiet);
+  const std::uint64_t sent = r.cycle_of("] a: 10 05 02 49 50 16");
+  EXPECT_EQ(sent, quiet + 33 * 4);
+  EXPECT_EQ(r.cycle_of("line 9: run"), sent + 6 * 11 * 4);
+  EXPECT_EQ(r.cycle_of("line 10: expect"), sent + 6 * 11 * 4 + 1000);
+  EXPECT_EQ(r.cycle_of("line 11: expect"), sent + 6 * 11 * 4 + 1000);
+}
+
+// A short TSYN names the station that sent, not the SA its frame carries: sender `a` sends a
+// request in master 2's name 32 bit times after the start-up's last answer (the line told of a
+// telegram one character time after its end: the run lets it).
+TEST(SegmentScenario, AShortTsynNamesItsSender) {
+  const ScenarioRun r = run_scenario_text(
+      "segment baud=12000000\nstation 5 profile=spc3\nmaster 2 slaves=5\nsender a\nstartup\n"
+      "send from=a after=32bits 10,05,02,49,50,16\nrun 1000\nexpect bus_violation short_tsyn 1\n");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_TRUE(r.errors.empty()) << r.errors.front();
+  EXPECT_NE(r.cycle_of("bus: short_tsyn: a sent after 32 bit times of idle (TSYN 33)"), 0U);
+}
+
+// A station that never left DP_Control fails `expect watchdog_expired` saying so (not "left at
+// cycle 0"), with the cycle expected: the last request's end - T + T/2 + TWD.
+TEST(SegmentScenario, AWatchdogThatNeverExpiredSaysSo) {
+  const ScenarioRun r = run_scenario_text(
+      "segment baud=12000000\nstation 5 profile=spc3\nmaster 2 slaves=5\nstartup\n"
+      "expect watchdog_expired 5 twd=100\n");
+  EXPECT_EQ(r.code, 1);
+  ASSERT_EQ(r.errors.size(), 1U);
+  EXPECT_EQ(r.errors[0].substr(0, r.errors[0].find(" at cycle")),
+            "s.scn:5: expected watchdog_expired 5 twd=100, got never left DP_Control, expected it");
+}
+
 // The single chip's loader on a segment's file names the segment's loader, at the `segment` line.
 TEST(SegmentScenario, TheSingleChipLoaderNamesTheSegmentLoader) {
   Scenario s;
