@@ -197,8 +197,9 @@ class SegmentRun {
   // inside its stop bit, and the next step begins on a quiet line (a `send after=33bits` then
   // keeps TSYN).
   void quiet() {
+    const std::size_t n = seg_.whole_bytes().size();  // none yet: no telegram to finish
     const std::uint64_t whole_end =
-        seg_.whole_start() + seg_.whole_bytes().size() * kUartCharBits * seg_.bit_cycles();
+        n == 0 ? 0 : seg_.whole_start() + n * kUartCharBits * seg_.bit_cycles();
     const std::uint64_t end = std::max(tx_until_, whole_end);
     if (end > seg_.cycle()) seg_.run_until(end);
   }

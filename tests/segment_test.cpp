@@ -1052,6 +1052,16 @@ TEST(SegmentScenario, OnlyActionsMoveTheLinesTime) {
   EXPECT_EQ(r.cycle_of("line 11: expect"), sent + 6 * 11 * 4 + 1000);
 }
 
+// A run with no telegram on the line at all (the segment has relayed none whole: its whole_start
+// is "never") ends after its `run`s: nothing to finish at the end.
+TEST(SegmentScenario, ALineWithoutATelegramEndsAfterItsRuns) {
+  const ScenarioRun r =
+      run_scenario_text("segment\nstation 5 profile=spc3\nrun 1000\nexpect state 5 Wait_Prm\n");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_EQ(r.cycle_of("line 4: expect"), r.cycle_of("line 3: run") + 1000);
+  EXPECT_EQ(r.cycle_of("1 expects passed"), r.cycle_of("line 3: run") + 1000);
+}
+
 // A short TSYN names the station that sent, not the SA its frame carries: sender `a` sends a
 // request in master 2's name 32 bit times after the start-up's last answer (the line told of a
 // telegram one character time after its end: the run lets it).
