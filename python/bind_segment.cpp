@@ -116,7 +116,7 @@ class PySegment {
  public:
   PySegment(std::uint32_t baud_, std::uint32_t clock_hz) : seg(baud_, clock_hz), baud(baud_) {
     seg.on_telegram = [this](const LineTelegram& t) {
-      if (check) check->telegram(t);
+      if (check) check->telegram(t, seg.name(t.from));
       if (outputs) outputs->telegram(t);
       call(telegram_cb, t);
     };
@@ -621,8 +621,9 @@ void bind_segment_class(py::module_& m) {
           py::kw_only(), py::arg("ttr") = 0, py::arg("slot_bits") = 100,
           py::arg("min_tsdr_bits") = 11, py::arg("tsyn_bits") = 33, py::arg("masters") = py::none(),
           py::return_value_policy::reference_internal,
-          "The bus check on every telegram from now on (TTR 0: no token checks; masters: the "
-          "masters' addresses, for TTO; default those added).")
+          "The bus check on every telegram from now on (masters: the masters' addresses, for the "
+          "token checks and TTO; default those added, none: no token checks; TTR 0: no "
+          "token_hold).")
       .def_property_readonly(
           "bus_check", [](const P& s) { return s.check.get(); },
           py::return_value_policy::reference_internal)

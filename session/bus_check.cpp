@@ -32,7 +32,7 @@ BusCheck::BusCheck(BusTiming timing, LogSink sink)
     : timing_(std::move(timing)), sink_(std::move(sink)) {}
 
 void BusCheck::watch(Segment& seg) {
-  seg.on_telegram = [this](const LineTelegram& t) { telegram(t); };
+  seg.on_telegram = [this, &seg](const LineTelegram& t) { telegram(t, seg.name(t.from)); };
   seg.on_collision = [this, &seg](const Collision& c) {
     collision(c, seg.name(c.first), seg.name(c.second));
   };
@@ -67,7 +67,7 @@ std::uint64_t BusCheck::token_lost_timeout() const {
 }
 
 void BusCheck::idle_until(std::uint64_t now) {
-  if (timing_.ttr_bits == 0 || !last_end_ || token_lost_reported_) return;
+  if (timing_.masters.empty() || !last_end_ || token_lost_reported_) return;
   const std::uint64_t due = *last_end_ + token_lost_timeout();
   if (now < due) return;
   token_lost_reported_ = true;
@@ -82,7 +82,7 @@ void BusCheck::collision(const Collision& c, const std::string& first, const std
             fmt::format("{} drove the line while {} had it", second, first));
 }
 
-void BusCheck::telegram(const LineTelegram& t) {
+void BusCheck::telegram(const LineTelegram& t, const std::string& sender) {
   idle_until(t.start);
   token_lost_reported_ = false;
   const fdl::Decoded d = fdl::decode(t.bytes);
@@ -120,16 +120,19 @@ void BusCheck::telegram(const LineTelegram& t) {
   if (request) {
     pending_.reset();
     if (last_end_ && t.start < *last_end_ + bits(timing_.tsyn_bits)) {
+      // The sender, not the SA it wrote: a scripted station may send in another's name.
       violation(BusViolation::short_tsyn, t.start,
-                fmt::format("station {} sent after {} bit times of idle (TSYN {})", d.frame.sa,
+                fmt::format("{} sent after {} bit times of idle (TSYN {})",
+                            sender.empty() ? fmt::format("station {}", d.frame.sa) : sender,
                             (t.start - *last_end_) / timing_.bit_cycles, timing_.tsyn_bits));
     }
-    if (timing_.ttr_bits != 0) {
+    // Who holds the token needs only the masters; how long it may hold it, their TTR.
+    if (!timing_.masters.empty()) {
       if (holder_ && d.frame.sa != *holder_) {
         violation(
             BusViolation::duplicate_token, t.start,
             fmt::format("station {} sent while station {} holds the token", d.frame.sa, *holder_));
-      } else if (!is_token(d.frame) && held_cycle_started_ &&
+      } else if (timing_.ttr_bits != 0 && !is_token(d.frame) && held_cycle_started_ &&
                  t.start > token_at_ + bits(timing_.ttr_bits)) {
         violation(
             BusViolation::token_hold, t.start,

@@ -38,20 +38,22 @@ struct BusTiming {
   std::uint32_t min_tsdr_bits = 11;  // the smallest answer delay a slave may use
   std::uint32_t slot_bits = 100;     // TSL
   std::uint32_t tsyn_bits = 33;      // TSYN
-  // TTR in bit times; 0: no token on this line (a single master without SD4): no token checks.
+  // TTR in bit times, for token_hold; 0: none (token_hold is not checked).
   std::uint64_t ttr_bits = 0;
-  // The masters' addresses (for TTO = TSL x (6 + 2 x lowest address)).
+  // The masters' addresses (for TTO = TSL x (6 + 2 x lowest address)); none: no token on this
+  // line, no token checks (token_lost, duplicate_token, token_hold).
   std::vector<std::uint8_t> masters;
 };
 
 class BusCheck {
  public:
-  // `names`: the segment's station names, for the log (may be empty: station indices).
+  // `sink`: where each violation's log line goes (through the limiter).
   explicit BusCheck(BusTiming timing, LogSink sink = {});
 
   // Wires itself to the segment's telegrams and collisions.
   void watch(Segment& seg);
-  void telegram(const LineTelegram& t);
+  // `sender`: the sending station's name (Segment::name), for the log; none: its frame's SA.
+  void telegram(const LineTelegram& t, const std::string& sender = {});
   void collision(const Collision& c, const std::string& first, const std::string& second);
   // The line is idle up to `now` (a token lost is found once TTO has passed without a telegram).
   void idle_until(std::uint64_t now);

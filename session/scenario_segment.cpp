@@ -42,6 +42,7 @@ class Parser {
     line_ = line;
     opts_.clear();
     pos_.clear();
+    taken_.clear();
     for (std::size_t k = 1; k < w.size(); ++k) {
       const std::size_t eq = w[k].find('=');
       if (eq == std::string_view::npos) {
@@ -66,6 +67,7 @@ class Parser {
     } else {
       step(line, c);
     }
+    no_words_left(c);
     for (const auto& [k, v] : opts_) fail(fmt::format("unknown option '{}' for {}", k, c));
   }
 
@@ -74,7 +76,16 @@ class Parser {
   void finish() {
     if (s_.stations.empty()) fail("a segment needs at least one station");
     if (s_.steps.empty()) fail("only header commands: nothing to run");
-    if (s_.masters.empty()) s_.masters.push_back({2, {}});
+    if (s_.masters.empty()) {
+      s_.masters.push_back({2, {}});
+      for (std::size_t i = 0; i < s_.stations.size(); ++i) {
+        if (s_.stations[i].slave.address == 2) {
+          throw ParseFail{station_lines_[i],
+                          "station 2 at the address of master 2, the default master: give a "
+                          "'master' line"};
+        }
+      }
+    }
     for (std::size_t i = 0; i < s_.masters.size(); ++i) {
       const std::vector<std::uint8_t>& slaves = s_.masters[i].slaves;
       for (auto it = slaves.begin(); it != slaves.end(); ++it) {
@@ -107,10 +118,28 @@ class Parser {
   }
 
  private:
-  std::string_view positional(std::size_t i, std::string_view what) const {
+  std::string_view positional(std::size_t i, std::string_view what) {
     if (i >= pos_.size()) fail(fmt::format("missing {}", what));
+    if (taken_.size() <= i) taken_.resize(i + 1);
+    taken_[i] = what;
     return pos_[i];
   }
+
+  // A word no command took is a mistyped option (`after_request 9`: the `=` missing), never
+  // ignored: refused in the single chip's words, for every command at once.
+  void no_words_left(std::string_view c) const {
+    if (pos_.size() <= taken_.size()) return;
+    const std::size_t first = c == "expect" ? 1 : 0;  // `expect KIND` names the command
+    std::string takes;
+    for (std::size_t i = first; i < taken_.size(); ++i) {
+      if (i > first) takes += i + 1 == taken_.size() ? " and " : ", ";
+      takes += taken_[i];
+    }
+    fail(fmt::format("'{}' takes {}; unexpected '{}'",
+                     first == 0 ? std::string(c) : fmt::format("{} {}", c, pos_[0]),
+                     takes.empty() ? "no arguments" : takes, shown(pos_[taken_.size()])));
+  }
+
   std::optional<std::string_view> take(std::string_view key) {
     const auto it = opts_.find(key);
     if (it == opts_.end()) return std::nullopt;
@@ -133,9 +162,16 @@ class Parser {
   void station() {
     SegmentStation st;
     st.slave.address =
-        static_cast<std::uint8_t>(number(positional(0, "station address"), kStationAddress));
+        static_cast<std::uint8_t>(number(positional(0, "a station address"), kStationAddress));
+    // A master is a station too: none shares its address (two chips may: they collide).
+    if (find_master(st.slave.address) != nullptr)
+      fail(fmt::format("station {} at the address of master {}", st.slave.address,
+                       st.slave.address));
     st.name = fmt::format("station {}", st.slave.address);
-    if (auto v = take("name")) st.name = std::string(*v);
+    if (auto v = take("name")) {
+      if (v->empty()) fail(fmt::format("empty name for station {}", st.slave.address));
+      st.name = std::string(*v);
+    }
     if (auto v = take("profile")) {
       if (!parse_profile(*v, st.chip.profile)) fail(fmt::format("unknown profile '{}'", *v));
     }
@@ -169,6 +205,7 @@ class Parser {
     }
     new_station_name(st.name);
     s_.stations.push_back(std::move(st));
+    station_lines_.push_back(line_);
   }
 
   // The single chip's `user` options that a station of its own may want, with its checks: the
@@ -188,7 +225,11 @@ class Parser {
 
   void master() {
     SegmentMaster m;
-    m.address = static_cast<std::uint8_t>(number(positional(0, "master address"), kMasterAddress));
+    m.address =
+        static_cast<std::uint8_t>(number(positional(0, "a master address"), kMasterAddress));
+    if (find_master(m.address) != nullptr) fail(fmt::format("a second master {}", m.address));
+    if (is_station(m.address))
+      fail(fmt::format("master {} at the address of station {}", m.address, m.address));
     new_station_name(master_station_name(m.address));
     const std::optional<std::string_view> slaves = take("slaves");
     if (slaves) m.slaves = bytes_list(*slaves);
@@ -253,7 +294,7 @@ class Parser {
       st.kind = K::startup;
     } else if (c == "cycle") {
       st.kind = K::cycle;
-      st.count = number(positional(0, "number of rotations"), "rotations", 1, 1'000'000);
+      st.count = number(positional(0, "the number of rotations"), "rotations", 1, 1'000'000);
       if (auto v = take("skip")) {
         st.skip = station_address(*v);
         // use_token polls every slave of the master in turn: it has no slave to leave out.
@@ -268,7 +309,7 @@ class Parser {
       }
     } else if (c == "run") {
       st.kind = K::run;
-      st.time = time(positional(0, "time"));
+      st.time = time(positional(0, "a time"));
     } else if (c == "send") {
       st.kind = K::send;
       st.name = std::string(take("from").value_or(""));
@@ -276,7 +317,7 @@ class Parser {
         fail(fmt::format("send from='{}': no sender of that name", st.name));
       }
       st.time = time(take("after").value_or("33bits"));
-      st.bytes = bytes(positional(0, "bytes"), "telegram", 255);
+      st.bytes = bytes(positional(0, "the bytes"), "telegram", 255);
     } else if (c == "pass_token") {
       st.kind = K::pass_token;
       st.address = static_cast<std::uint8_t>(number(take("from").value_or(""), "from", 0, 126));
@@ -293,8 +334,8 @@ class Parser {
     using K = SegmentStep::Kind;
     if (what == "state") {
       st.kind = K::expect_state;
-      st.station = station_address(positional(1, "station"));
-      const std::string_view dp = positional(2, "DP state");
+      st.station = station_address(positional(1, "a station"));
+      const std::string_view dp = positional(2, "a DP state");
       bool ok = false;
       for (const DpState d : {DpState::Wait_Prm, DpState::Wait_Cfg, DpState::Data_Exchange}) {
         if (dp_state_name(d) == dp) {
@@ -313,22 +354,31 @@ class Parser {
         st.after_request = number(*v, "after_request", 0, UINT32_MAX);
     } else if (what == "tsdr") {
       st.kind = K::expect_tsdr;
-      st.count = number(positional(1, "bit times"), "TSDR", 11, 255);
+      st.count = number(positional(1, "the bit times"), "TSDR", 11, 255);
     } else if (what == "watchdog_expired") {
       st.kind = K::expect_expired;
-      st.station = station_address(positional(1, "station"));
+      st.station = station_address(positional(1, "a station"));
       st.time = time(take("twd").value_or(""));
     } else if (what == "bus_violation") {
       st.kind = K::expect_violation;
-      if (!parse_bus_violation(positional(1, "violation kind"), st.violation)) {
+      if (!parse_bus_violation(positional(1, "a violation kind"), st.violation)) {
         fail(fmt::format("unknown bus violation '{}'", pos_[1]));
       }
-      st.count = number(positional(2, "count"), "count", 0, 1'000'000'000);
+      st.count = number(positional(2, "a count"), "count", 0, 1'000'000'000);
+      // The header is complete here: the bus check's TTR is known (SegmentRun's BusTiming).
+      const bool ttr =
+          ttr_given_ || std::any_of(s_.masters.begin(), s_.masters.end(),
+                                    [](const SegmentMaster& m) { return m.ttr_bits != 0; });
+      if (st.violation == BusViolation::token_hold && (s_.masters.size() < 2 || !ttr)) {
+        fail(
+            "token_hold is checked on a line with two or more masters and a TTR (segment "
+            "ttr=BITS or master ... ttr=BITS): without them it would always count 0");
+      }
     } else if (what == "visit") {
       visit(st);
     } else if (what == "collisions") {
       st.kind = K::expect_collisions;
-      st.count = number(positional(1, "count"), "count", 0, 1'000'000'000);
+      st.count = number(positional(1, "a count"), "count", 0, 1'000'000'000);
     } else {
       fail(fmt::format("unknown expect '{}'", what));
     }
@@ -338,7 +388,7 @@ class Parser {
   // gap=ADDR|none gap_answered=yes|no`
   void visit(SegmentStep& st) {
     st.kind = SegmentStep::Kind::expect_visit;
-    st.address = static_cast<std::uint8_t>(number(positional(1, "master"), "master", 0, 126));
+    st.address = static_cast<std::uint8_t>(number(positional(1, "a master"), "master", 0, 126));
     const SegmentMaster* m = find_master(st.address);
     if (m == nullptr) fail(fmt::format("no master {}", st.address));
     if (!m->obeys_token) {
@@ -367,11 +417,13 @@ class Parser {
   bool first_ = true;
   bool ttr_given_ = false;
   int line_ = 0;
+  std::vector<int> station_lines_;               // each station's line, in s_.stations' order
   std::vector<int> master_lines_;                // each master's line, in s_.masters' order
   std::vector<std::string_view> master_slaves_;  // ... and its slaves= as written
   std::set<std::string> station_names_;          // the chips', senders' and masters' so far
   std::map<std::string_view, std::string_view> opts_;
   std::vector<std::string_view> pos_;
+  std::vector<std::string_view> taken_;  // what each positional word the command took is
 };
 
 }  // namespace

@@ -46,10 +46,8 @@ class SegmentRun {
     }
     // The run ends on a quiet line: an answer a chip is still sending is finished first, so that
     // every output holds it whole (a station's trace ends after its last `tx`).
-    if (tx_until_ > seg_.cycle()) {
-      seg_.run_until(tx_until_);
-      settle();
-    }
+    quiet();
+    settle();
     seg_.flush();
     check_.flush();
     seg_.align();  // the observers' chips at the line's time (docs/segment.md)
@@ -65,10 +63,10 @@ class SegmentRun {
     std::unique_ptr<FirmwareHost> firmware;
     DpState dp = DpState::Wait_Prm;
     WdState wd = WdState::Baud_Search;
-    std::uint64_t left_dp_control = 0;  // the cycle DP_Control last ended
-    std::uint64_t request_end = 0;      // the end of the last request to it the chip took
-    std::uint64_t entered = 0;          // the cycle its DP state last changed
-    std::uint64_t entered_after = 0;    // ... and the end of the request before it
+    std::optional<std::uint64_t> left_dp_control;  // the cycle DP_Control last ended
+    std::uint64_t request_end = 0;    // the end of the last request to it the chip took
+    std::uint64_t entered = 0;        // the cycle its DP state last changed
+    std::uint64_t entered_after = 0;  // ... and the end of the request before it
   };
 
   std::vector<std::uint8_t> masters() const {
@@ -166,7 +164,7 @@ class SegmentRun {
     }
     observer_->stations_added(seg_);
     seg_.on_telegram = [this](const LineTelegram& t) {
-      check_.telegram(t);
+      check_.telegram(t, seg_.name(t.from));
       telegram(t);
       observer_->telegram(t);
     };
@@ -194,8 +192,20 @@ class SegmentRun {
     }
   }
 
+  // The line to the end of the telegram on it (the last one relayed whole, or an answer a chip
+  // still sends): a master returns at the last stop sample of the answer or token it took,
+  // inside its stop bit, and the next step begins on a quiet line (a `send after=33bits` then
+  // keeps TSYN).
+  void quiet() {
+    const std::size_t n = seg_.whole_bytes().size();  // none yet: no telegram to finish
+    const std::uint64_t whole_end =
+        n == 0 ? 0 : seg_.whole_start() + n * kUartCharBits * seg_.bit_cycles();
+    const std::uint64_t end = std::max(tx_until_, whole_end);
+    if (end > seg_.cycle()) seg_.run_until(end);
+  }
+
+  // Moves no time (an expect is checked at the step's cycle, `run T` lasts T).
   void settle() {
-    seg_.run_until(seg_.cycle() + 1);
     seg_.align();  // a station's trace checkpoints its chip at the line's time
     check_.idle_until(seg_.cycle());
   }
@@ -219,6 +229,7 @@ class SegmentRun {
     switch (st.kind) {
       case K::startup:
         startup();
+        quiet();
         break;
       case K::cycle:
         for (std::uint64_t n = 0; n < st.count; ++n) {
@@ -238,6 +249,7 @@ class SegmentRun {
           });
           forget();
         }
+        quiet();
         break;
       case K::run:
         seg_.run_until(seg_.cycle() + st.time);
@@ -248,6 +260,7 @@ class SegmentRun {
         break;
       case K::pass_token:
         master(st.address).pass_token(st.station);
+        quiet();
         break;
       default:
         check(st);
@@ -377,9 +390,10 @@ class SegmentRun {
         const std::uint64_t t = seg_.bit_cycles();
         const auto it = last_request_.find(st.station);
         const std::uint64_t want = it == last_request_.end() ? 0 : it->second - t + t / 2 + st.time;
-        const std::uint64_t left = by_address_.at(st.station)->left_dp_control;
+        const std::optional<std::uint64_t> left = by_address_.at(st.station)->left_dp_control;
         ok = it != last_request_.end() && left == want;
-        got = fmt::format("left DP_Control at cycle {}, expected {}", left, want);
+        got = left ? fmt::format("left DP_Control at cycle {}, expected {}", *left, want)
+                   : fmt::format("never left DP_Control, expected it at cycle {}", want);
         break;
       }
       case K::expect_violation:

@@ -288,10 +288,9 @@ TEST(SegmentOutputs, WaveformServiceAtTheStopSample) {
 }
 
 // The collision of two_masters.scn: the rogue's FDL_Status to 5 (10 05 02 49 50 16), then its
-// second telegram, to 7, 2 T after the step that sent the first (the runner's steps begin one
-// cycle after the previous one ended). The SPC3's answer is due 11 T after the first's end: its
-// TxD falls there, while the line stays the rogue's (the first driver keeps it) and station 6
-// hears only the rogue.
+// second telegram, to 7, 2 T after the first's end (the step that sent the first ends there). The
+// SPC3's answer is due 11 T after the first's end: its TxD falls there, while the line stays the
+// rogue's (the first driver keeps it) and station 6 hears only the rogue.
 TEST(SegmentOutputs, WaveformCollision) {
   const Vcd v(slurp(outputs().vcd));
   const std::vector<OnLine> runs = line_runs(v);
@@ -305,7 +304,7 @@ TEST(SegmentOutputs, WaveformCollision) {
   const OnLine& second = *(it + 1);
   EXPECT_EQ(first.end, first.start + 6 * kChar);
   EXPECT_EQ(second.driver, kRogue);
-  EXPECT_EQ(second.start, first.end + 1 + 2 * kT);
+  EXPECT_EQ(second.start, first.end + 2 * kT);
   EXPECT_EQ(second.bytes, (std::vector<std::uint8_t>{0x10, 0x07, 0x02, 0x49, 0x52, 0x16}));
   const std::uint64_t due = first.end + kTsdr;
   EXPECT_EQ(v.at("segment.station5_spc3.pins.txd", due), 0u);

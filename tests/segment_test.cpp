@@ -929,6 +929,41 @@ TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
       {"segment\nstation 5\nmaster 2\nstartup\npass_token from=9 to=2\n",
        "f.scn:5: pass_token from=9: no master of that address"},
       {"segment\nstation 5\n", "f.scn: only header commands: nothing to run"},
+      // A word no command takes (a mistyped option: its `=` missing) is refused, never ignored,
+      // in the single chip's words.
+      {"segment\nstation 5\nstartup\nexpect state 5 Data_Exchange after_request 999999\n",
+       "f.scn:4: 'expect state' takes a station and a DP state; unexpected 'after_request'"},
+      {"segment\nstation 5\nstartup\nexpect state 5 Data_Exchange wd DP_Control\n",
+       "f.scn:4: 'expect state' takes a station and a DP state; unexpected 'wd'"},
+      {"segment\nstation 5\nstartup\nexpect tsdr 11 foo\n",
+       "f.scn:4: 'expect tsdr' takes the bit times; unexpected 'foo'"},
+      {"segment\nstation 5\nstartup\nexpect bus_violation collision 0 extra\n",
+       "f.scn:4: 'expect bus_violation' takes a violation kind and a count; unexpected 'extra'"},
+      {"segment baud=12000000 extra\n",
+       "f.scn:1: 'segment' takes no arguments; unexpected 'extra'"},
+      {"segment\nstation 5 6\n", "f.scn:2: 'station' takes a station address; unexpected '6'"},
+      {"segment\nstation 5\nstartup foo\n",
+       "f.scn:3: 'startup' takes no arguments; unexpected 'foo'"},
+      {"segment\nstation 5\ncycle 2 3\n",
+       "f.scn:3: 'cycle' takes the number of rotations; unexpected '3'"},
+      {"segment\nstation 5\nrun 1ms 2ms\n", "f.scn:3: 'run' takes a time; unexpected '2ms'"},
+      // Every station is one: a name, and a master's address, once.
+      {"segment\nsender a\nsender a\n", "f.scn:3: a second station named 'a'"},
+      {"segment\nstation 5 name=a\nsender a\n", "f.scn:3: a second station named 'a'"},
+      {"segment\nstation 5 name=\n", "f.scn:2: empty name for station 5"},
+      {"segment\nstation 5\nmaster 2\nmaster 2\n", "f.scn:4: a second master 2"},
+      {"segment\nstation 5\nmaster 5\n", "f.scn:3: master 5 at the address of station 5"},
+      {"segment\nmaster 5\nstation 5\n", "f.scn:3: station 5 at the address of master 5"},
+      {"segment\nstation 5\nstation 2\nstartup\n",
+       "f.scn:3: station 2 at the address of master 2, the default master: give a 'master' line"},
+      // token_hold needs a TTR and a token passed between masters: else it could only count 0.
+      {"segment\nstation 5\nstation 6\nmaster 2 slaves=5\nmaster 3 slaves=6\nstartup\n"
+       "expect bus_violation token_hold 0\n",
+       "f.scn:7: token_hold is checked on a line with two or more masters and a TTR (segment "
+       "ttr=BITS or master ... ttr=BITS): without them it would always count 0"},
+      {"segment ttr=1000\nstation 5\nstartup\nexpect bus_violation token_hold 0\n",
+       "f.scn:4: token_hold is checked on a line with two or more masters and a TTR (segment "
+       "ttr=BITS or master ... ttr=BITS): without them it would always count 0"},
       // The only rates the chips' baud search finds, refused in the single chip's words.
       {"segment baud=12345\nstation 5\nstartup\n",
        "f.scn:1: baud 12345 is not a PROFIBUS rate (9600, 19200, 45450, 93750, 187500, 500000, "
@@ -958,6 +993,105 @@ TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
   ASSERT_TRUE(parse_segment_scenario("\xEF\xBB\xBFsegment\nstation 5\nstartup\n", "f.scn", s, err))
       << err.text();
   EXPECT_EQ(s.stations.size(), 1U);
+}
+
+// A segment scenario's text run: its exit code, the walk and the failed checks.
+struct ScenarioRun {
+  int code = 0;
+  std::vector<std::string> walk;
+  std::vector<std::string> errors;
+  // The cycle of the walk's last line that contains `text` (0 when none does).
+  [[nodiscard]] std::uint64_t cycle_of(std::string_view text) const {
+    for (auto l = walk.rbegin(); l != walk.rend(); ++l) {
+      if (l->find(text) != std::string::npos) return std::stoull(l->substr(l->find("cycle") + 5));
+    }
+    ADD_FAILURE() << "no walk line with " << text;
+    return 0;
+  }
+};
+
+ScenarioRun run_scenario_text(const std::string& text) {
+  SegmentScenario s;
+  ScenarioError err;
+  EXPECT_TRUE(parse_segment_scenario(text, "s.scn", s, err)) << err.text();
+  ScenarioRun r;
+  r.code = run_segment_scenario(
+      s, [&r](const std::string& l) { r.walk.push_back(l); },
+      [&r](const std::string& e) { r.errors.push_back(e); });
+  return r;
+}
+
+// Two masters without a TTR still pass a token, so a lost one is found (docs/segment.md, "Bus
+// checks": TTO = TSL x (6 + 2 x 2) = 1000 bit times needs no TTR): the token to nobody (DC 09 02,
+// 3 characters: its end 33 T = 1056 clocks after its start at 1.5 Mbaud) leaves the line idle,
+// counted once at that end + 1000 T (32 000 clocks).
+TEST(SegmentScenario, TwoMastersWithoutTtrCheckTheToken) {
+  const ScenarioRun r = run_scenario_text(
+      "segment\nstation 5 profile=spc3\nstation 6 profile=dpc31\nmaster 2 slaves=5\n"
+      "master 3 slaves=6\nstartup\ncycle 2\npass_token from=2 to=9\nrun 2ms\n"
+      "expect bus_violation token_lost 1\nexpect bus_violation duplicate_token 0\n");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_TRUE(r.errors.empty()) << r.errors.front();
+  const std::uint64_t token = r.cycle_of("master 2: DC 09 02");
+  EXPECT_EQ(r.cycle_of("bus: token_lost"), token + 1056 + 32000);
+}
+
+// Only actions move the line's time (docs/scenario-format.md, "Segments"): a master's action ends
+// on a quiet line, at the end of the last answer's stop bit; an expect moves no time; `run T`
+// lasts T; `send` counts its `after=` (33 bit times) from the quiet line and lasts to its
+// telegram's end. At 12 Mbaud, T = 4 clocks.
+TEST(SegmentScenario, OnlyActionsMoveTheLinesTime) {
+  const ScenarioRun r = run_scenario_text(
+      "segment baud=12000000\nstation 5 profile=spc3\nmaster 2 slaves=5\nsender a\nstartup\n"
+      "expect state 5 Data_Exchange\nexpect state 5 Data_Exchange\n"
+      "send from=a 10,05,02,49,50,16\nrun 1000\nexpect state 5 Data_Exchange\n"
+      "expect bus_violation short_tsyn 0\n");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_TRUE(r.errors.empty()) << r.errors.front();
+  // The start-up's last telegram, the Slave_Diag answer: 17 characters of 11 T from its start.
+  const std::uint64_t quiet = r.cycle_of("line 6: expect");
+  EXPECT_EQ(r.cycle_of("] station 5: 68 0B 0B 68 82 85 08") + 17 * 11 * 4, quiet);
+  EXPECT_EQ(r.cycle_of("line 7: expect"), quiet);
+  EXPECT_EQ(r.cycle_of("line 8: send"), quiet);
+  const std::uint64_t sent = r.cycle_of("] a: 10 05 02 49 50 16");
+  EXPECT_EQ(sent, quiet + 33 * 4);
+  EXPECT_EQ(r.cycle_of("line 9: run"), sent + 6 * 11 * 4);
+  EXPECT_EQ(r.cycle_of("line 10: expect"), sent + 6 * 11 * 4 + 1000);
+  EXPECT_EQ(r.cycle_of("line 11: expect"), sent + 6 * 11 * 4 + 1000);
+}
+
+// A run with no telegram on the line at all (the segment has relayed none whole: its whole_start
+// is "never") ends after its `run`s: nothing to finish at the end.
+TEST(SegmentScenario, ALineWithoutATelegramEndsAfterItsRuns) {
+  const ScenarioRun r =
+      run_scenario_text("segment\nstation 5 profile=spc3\nrun 1000\nexpect state 5 Wait_Prm\n");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_EQ(r.cycle_of("line 4: expect"), r.cycle_of("line 3: run") + 1000);
+  EXPECT_EQ(r.cycle_of("1 expects passed"), r.cycle_of("line 3: run") + 1000);
+}
+
+// A short TSYN names the station that sent, not the SA its frame carries: sender `a` sends a
+// request in master 2's name 32 bit times after the start-up's last answer (the line told of a
+// telegram one character time after its end: the run lets it).
+TEST(SegmentScenario, AShortTsynNamesItsSender) {
+  const ScenarioRun r = run_scenario_text(
+      "segment baud=12000000\nstation 5 profile=spc3\nmaster 2 slaves=5\nsender a\nstartup\n"
+      "send from=a after=32bits 10,05,02,49,50,16\nrun 1000\nexpect bus_violation short_tsyn 1\n");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_TRUE(r.errors.empty()) << r.errors.front();
+  EXPECT_NE(r.cycle_of("bus: short_tsyn: a sent after 32 bit times of idle (TSYN 33)"), 0U);
+}
+
+// A station that never left DP_Control fails `expect watchdog_expired` saying so (not "left at
+// cycle 0"), with the cycle expected: the last request's end - T + T/2 + TWD.
+TEST(SegmentScenario, AWatchdogThatNeverExpiredSaysSo) {
+  const ScenarioRun r = run_scenario_text(
+      "segment baud=12000000\nstation 5 profile=spc3\nmaster 2 slaves=5\nstartup\n"
+      "expect watchdog_expired 5 twd=100\n");
+  EXPECT_EQ(r.code, 1);
+  ASSERT_EQ(r.errors.size(), 1U);
+  EXPECT_EQ(r.errors[0].substr(0, r.errors[0].find(" at cycle")),
+            "s.scn:5: expected watchdog_expired 5 twd=100, got never left DP_Control, expected it");
 }
 
 // The single chip's loader on a segment's file names the segment's loader, at the `segment` line.

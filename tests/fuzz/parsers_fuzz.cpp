@@ -16,6 +16,7 @@
 #include "fuzz_targets.hpp"
 #include "invariants.hpp"
 #include "scenario.hpp"
+#include "scenario_segment.hpp"
 #include "serve_session.hpp"
 #include "trace.hpp"
 
@@ -53,12 +54,27 @@ int trace_parser(const std::uint8_t* data, std::size_t size) {
   return 0;
 }
 
+namespace {
+
+// What `dpc31 run` parses a scenario file with, by its first command: a segment's parser or one
+// chip's. False with `err` when it does not parse.
+bool parse_any_scenario(std::string_view in, const std::string& file, ScenarioError& err) {
+  if (is_segment_scenario(in)) {
+    SegmentScenario seg;
+    Scenario single;
+    return parse_segment_file(in, file, "", seg, single, err) == SegmentLoad::ok;
+  }
+  Scenario s;
+  return parse_scenario(in, file, s, err);
+}
+
+}  // namespace
+
 // `dpc31 run FILE`, the parsing half (running needs the built-in master and a CPU thread).
 int scenario_parser(const std::uint8_t* data, std::size_t size) {
-  Scenario s;
   ScenarioError err;
-  if (!parse_scenario(text(data, size), "fuzz.scn", s, err) && err.message.empty()) {
-    bug("parse_scenario failed without a message");
+  if (!parse_any_scenario(text(data, size), "fuzz.scn", err) && err.message.empty()) {
+    bug("the scenario parser failed without a message");
   }
   return 0;
 }
@@ -152,9 +168,8 @@ std::string trace_parser_check(const std::uint8_t* data, std::size_t size) {
 }
 
 std::string scenario_parser_check(const std::uint8_t* data, std::size_t size) {
-  Scenario s;
   ScenarioError err;
-  return parse_scenario(text(data, size), "seed.scn", s, err) ? "" : err.message;
+  return parse_any_scenario(text(data, size), "seed.scn", err) ? "" : err.message;
 }
 
 // What the server asks of a connection's first line: a command word.
