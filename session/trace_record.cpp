@@ -152,6 +152,22 @@ void TraceRecorder::note_heard(std::uint64_t start, std::string text) {
   if (finished_) return;
   // Its batch is complete once the segment reports the telegram: closed now, its line comes first.
   if (!rxd_.empty() && rxd_.front().first == start) close_rxd();
+  // The segment reports a telegram once the line stayed idle past its end, which can be after the
+  // step that heard it ended: its line is then written already, and the note follows it there,
+  // not the next step's heading (where it would name the sender of the telegram after it).
+  const std::string rx = fmt::format("rx {} ", start);
+  const bool open = std::any_of(seg_.begin(), seg_.end(), [&](const Entry& e) {
+    return e.key == start && e.text.starts_with(rx);
+  });
+  if (!open) {
+    constexpr std::size_t kLook = 64;  // a step's lines after its telegram: a few state lines
+    for (std::size_t i = body_.size(); i > 0 && body_.size() - i < kLook; --i) {
+      if (body_[i - 1].starts_with(rx)) {
+        body_.insert(body_.begin() + static_cast<std::ptrdiff_t>(i), "# " + std::move(text));
+        return;
+      }
+    }
+  }
   note(start, std::move(text));
 }
 
