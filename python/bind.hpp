@@ -38,6 +38,11 @@ struct IntOutOfRange : py::value_error {
 // IntOutOfRange it raises: its keyword name, else the property's or function's name.
 void name_int_arguments(const py::module_& m);
 
+// An int taken by an argument's caster (in the order pybind11 loads them): CPython shares one
+// object for equal small ints, so the argument that refused one is told apart from earlier
+// arguments that took the same object by how many took it.
+void int_taken(PyObject* v);
+
 }  // namespace dpc31::py_bind
 
 namespace pybind11::detail {
@@ -55,6 +60,7 @@ class checked_int_caster {
     type_caster<Wide> wide;
     if (wide.load(src, convert) && std::in_range<T>(static_cast<Wide>(wide))) {
       value = static_cast<T>(static_cast<Wide>(wide));
+      dpc31::py_bind::int_taken(src.ptr());
       return true;
     }
     if (!PyLong_Check(src.ptr())) return false;  // not an int: pybind11's TypeError

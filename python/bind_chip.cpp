@@ -644,32 +644,60 @@ std::unordered_map<const py::detail::function_record*, Wrapped>& wrapped() {
   return *w;  // never destroyed: the functions outlive every static
 }
 
+// The ints the running call's casters took (int_taken); a nested call keeps its own. Only the
+// first ones matter (its arguments load first): a body that casts ints for long records no more.
+thread_local std::vector<PyObject*> t_taken;
+thread_local int t_calls = 0;
+constexpr std::size_t kTakenKept = 4096;
+
 py::handle naming_impl(py::detail::function_call& call) {
   const Wrapped& w = wrapped().at(&call.func);
+  std::vector<PyObject*> outer;
+  outer.swap(t_taken);
+  struct Restore {
+    std::vector<PyObject*>& outer;
+    ~Restore() { t_taken.swap(outer); }
+  } restore{outer};
+  ++t_calls;
+  struct Leave {
+    ~Leave() { --t_calls; }
+  } leave;
   try {
     return w.impl(call);
   } catch (const IntOutOfRange& e) {
-    // The argument that is the int, or a tuple or list that holds it (wd=(1, 2**70)).
-    const auto holds = [&e](py::handle a) {
-      if (a.ptr() == e.value) return true;
-      if (!PyTuple_Check(a.ptr()) && !PyList_Check(a.ptr())) return false;
-      for (const py::handle x : a) {
-        if (x.ptr() == e.value) return true;
-      }
-      return false;
-    };
+    // pybind11 loads the arguments in order and stops at the one that refuses: it is the
+    // occurrence of the int (an argument, or an item of a tuple or list: wd=(1, 2**70)) after
+    // those that took the very same object.
+    std::size_t before =
+        static_cast<std::size_t>(std::count(t_taken.begin(), t_taken.end(), e.value));
     std::string name = w.name;
+    const auto is_it = [&](py::handle x) { return x.ptr() == e.value && before-- == 0; };
     // A constructor's first is not an object but its value_and_holder.
-    for (std::size_t i = call.init_self ? 1 : 0; i < call.args.size() && i < call.func.args.size();
-         ++i) {
-      if (call.func.args[i].name != nullptr && holds(call.args[i])) {
-        name = call.func.args[i].name;
+    for (std::size_t i = call.init_self ? 1 : 0; i < call.args.size(); ++i) {
+      const py::handle a = call.args[i];
+      bool found = is_it(a);
+      if (!found && (PyTuple_Check(a.ptr()) || PyList_Check(a.ptr()))) {
+        for (const py::handle x : a) {
+          if ((found = is_it(x))) break;
+        }
+      }
+      if (found) {
+        if (i < call.func.args.size() && call.func.args[i].name != nullptr)
+          name = call.func.args[i].name;
         break;
       }
     }
     throw py::value_error(name + " " + e.range);
   }
 }
+
+}  // namespace
+
+void int_taken(PyObject* v) {
+  if (t_calls > 0 && t_taken.size() < kTakenKept) t_taken.push_back(v);
+}
+
+namespace {
 
 // The records of a pybind11 function (a builtin whose self is its record capsule; a method is
 // one inside an instancemethod), overloads included.

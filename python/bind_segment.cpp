@@ -43,6 +43,8 @@ Outputs outputs_of(const py::object& o) {
     } else {
       try {
         out.push_back(item.cast<std::vector<U8>>());
+      } catch (const IntOutOfRange& e) {
+        throw py::value_error(fmt::format("outputs[{}]: {}", out.size(), e.range));
       } catch (const py::cast_error&) {
         throw py::type_error(
             fmt::format("outputs[{}]: bytes expected, got {}", out.size(),

@@ -587,10 +587,12 @@ void DpMaster::wait_answer(Exchange& ex, const fdl::Frame* req) {
   ex.answer_end = answer_.end();
   answer_.frame(ex.answer);
   ex.stray.reset();
-  // An answer mirrors its request's addresses (EN 50170: DA the requester, SA the responder);
-  // another telegram in its place is not its answer (an SC carries no addresses).
+  // An answer mirrors its request's addresses (EN 50170: DA the requester, SA the responder)
+  // and is a response (FC bit 6 clear; a token is none); another telegram in its place is not
+  // its answer (an SC carries no addresses).
   if (ex.answer && req != nullptr && ex.answer->sd != fdl::SC &&
-      (ex.answer->da != req->sa || ex.answer->sa != req->da)) {
+      (ex.answer->sd == fdl::SD4 || fdl::is_request(ex.answer->fc) || ex.answer->da != req->sa ||
+       ex.answer->sa != req->da)) {
     ex.stray = std::move(ex.answer);
     ex.answer.reset();
   }

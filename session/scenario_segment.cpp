@@ -227,10 +227,10 @@ class Parser {
     SegmentMaster m;
     m.address =
         static_cast<std::uint8_t>(number(positional(0, "a master address"), kMasterAddress));
-    if (find_master(m.address) != nullptr) fail(fmt::format("a second master {}", m.address));
+    // A second master at an address is a second station named 'master ADDR' (Python's words).
+    new_station_name(master_station_name(m.address));
     if (is_station(m.address))
       fail(fmt::format("master {} at the address of station {}", m.address, m.address));
-    new_station_name(master_station_name(m.address));
     const std::optional<std::string_view> slaves = take("slaves");
     if (slaves) m.slaves = bytes_list(*slaves);
     master_lines_.push_back(line_);

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <charconv>
 #include <iterator>
 
 #include "dpc31/hex.hpp"
@@ -160,12 +161,17 @@ void TraceRecorder::note_heard(std::uint64_t start, std::string text) {
     return e.key == start && e.text.starts_with(rx);
   });
   if (!open) {
-    constexpr std::size_t kLook = 64;  // a step's lines after its telegram: a few state lines
-    for (std::size_t i = body_.size(); i > 0 && body_.size() - i < kLook; --i) {
-      if (body_[i - 1].starts_with(rx)) {
+    // Back to its line: the rx lines before it are earlier (the trace is in cycle order).
+    for (std::size_t i = body_.size(); i > 0; --i) {
+      const std::string& line = body_[i - 1];
+      if (!line.starts_with("rx ")) continue;
+      if (line.starts_with(rx)) {
         body_.insert(body_.begin() + static_cast<std::ptrdiff_t>(i), "# " + std::move(text));
         return;
       }
+      std::uint64_t at = 0;
+      std::from_chars(line.data() + 3, line.data() + line.size(), at);
+      if (at < start) break;
     }
   }
   note(start, std::move(text));

@@ -107,6 +107,10 @@ def c31_bad_arguments():
               "--code", "0x1000"], "--code is the C31's"),
             (["--tcp", "0", "--log", log, "--firmware", "DO4", "--code", "0x1000"],
              "--code needs --cpu"),
+            # An image named '' is no file (it said ": no such file", naming nothing).
+            (["--tcp", "0", "--log", log, "--cpu", "80c32", "--firmware", ""],
+             "--firmware: an empty file name: nothing can be read there"),
+            (c31[:-1] + [""], "--firmware: an empty file name: nothing can be read there"),
         ]
         for args, want in cases:
             blt.expect_refused(args, want, log)

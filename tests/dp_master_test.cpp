@@ -151,8 +151,14 @@ TEST(DpMaster, OnOneChipALateAnswerIsNoLaterRequestsAnswer) {
 // An answer mirrors its request's addresses: a telegram in its place from another station, or to
 // another, is not its answer (Exchange::stray, counted as a bad answer).
 TEST(DpMaster, ATelegramAddressedOtherwiseIsNotTheAnswer) {
-  for (const fdl::Frame& f : {fdl::make_frame(2, 7, fdl::make_response_fc(fdl::Response::OK)),
-                              fdl::make_frame(3, 5, fdl::make_response_fc(fdl::Response::OK))}) {
+  // Addressed otherwise, or addressed as an answer but a request or a token (the review: a
+  // response has FC bit 6 clear, EN 50170).
+  for (const fdl::Frame& f :
+       {fdl::make_frame(2, 7, fdl::make_response_fc(fdl::Response::OK)),
+        fdl::make_frame(3, 5, fdl::make_response_fc(fdl::Response::OK)),
+        fdl::make_frame(2, 5, fdl::make_request_fc(fdl::Function::FDL_Status, false, false)),
+        fdl::token(2, 5)}) {
+    SCOPED_TRACE(testing::PrintToString(fdl::encode(f)));
     Line l;
     l.rogue_answers_the_first_request(fdl::encode(f));
     const Exchange a = l.master.fdl_status();
@@ -161,7 +167,11 @@ TEST(DpMaster, ATelegramAddressedOtherwiseIsNotTheAnswer) {
     EXPECT_EQ(*a.stray, f);
     EXPECT_EQ(l.master.counters().bad_answer, 1u);
     const Exchange b = l.master.fdl_status();
-    EXPECT_EQ(b.request_start, a.answer_end + kTsyn);
+    // A token to the master is the token's business (its next request is timed by the token's
+    // rules, not checked here); after the others the master waits TSYN from the stray's end.
+    if (f.sd != fdl::SD4) {
+      EXPECT_EQ(b.request_start, a.answer_end + kTsyn);
+    }
   }
 }
 

@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <sstream>
 #include <string>
@@ -377,6 +378,32 @@ TEST(SegmentOutputs, PcapOfTheLineInTshark) {
           << lines[i];
     }
   }
+}
+
+// A `# from NAME` note follows the rx line of the telegram it names (docs/trace-format.md), also
+// when the segment reports the telegram only after many steps that move no time (expects): the
+// review's case of 70 expects after the rogue's telegram put its note after the next step's
+// heading, where it named the sender of nothing.
+TEST(SegmentOutputs, AFromNoteFollowsItsTelegramAfterManySteps) {
+  std::string scn =
+      "segment baud=1500000\nstation 5 name=spc3 profile=spc3\nmaster 2 slaves=5\n"
+      "sender rogue\nstartup\nsend from=rogue after=33bits 10,07,02,49,52,16\n";
+  for (int i = 0; i < 70; ++i) scn += "expect state 5 Data_Exchange\n";
+  scn += "run 1ms\n";
+  const std::string file = tmp("many.scn");
+  { std::ofstream(file) << scn; }
+  const auto r =
+      sh(fmt::format("{} run --quiet {} --record {}", DPC31_CLI, file, tmp("many.trace")));
+  ASSERT_EQ(r.rc, 0) << r.out;
+  std::istringstream in(slurp(tmp("many.station5_spc3.trace")));
+  std::string prev;
+  int notes = 0;
+  for (std::string l; std::getline(in, l); prev = l) {
+    if (l != "# from rogue") continue;
+    ++notes;
+    EXPECT_TRUE(prev.starts_with("rx ") && prev.ends_with(" 10 07 02 49 52 16")) << prev;
+  }
+  EXPECT_EQ(notes, 1);
 }
 
 // A trace per station; each replays alone on a single chip, and is the shipped golden trace (its

@@ -951,7 +951,7 @@ TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
       {"segment\nsender a\nsender a\n", "f.scn:3: a second station named 'a'"},
       {"segment\nstation 5 name=a\nsender a\n", "f.scn:3: a second station named 'a'"},
       {"segment\nstation 5 name=\n", "f.scn:2: empty name for station 5"},
-      {"segment\nstation 5\nmaster 2\nmaster 2\n", "f.scn:4: a second master 2"},
+      {"segment\nstation 5\nmaster 2\nmaster 2\n", "f.scn:4: a second station named 'master 2'"},
       {"segment\nstation 5\nmaster 5\n", "f.scn:3: master 5 at the address of station 5"},
       {"segment\nmaster 5\nstation 5\n", "f.scn:3: station 5 at the address of master 5"},
       {"segment\nstation 5\nstation 2\nstartup\n",

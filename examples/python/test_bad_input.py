@@ -21,6 +21,12 @@ def _master():
                         slave=dpc31.SlaveConfig(address=5))
 
 
+def _segment_with_station():
+    seg = dpc31.Segment()
+    seg.add_station(5)
+    return seg
+
+
 def test_send_and_pulse_need_a_sender_and_an_end_before_the_last_cycle():
     with pytest.raises(IndexError, match=r"^station 99: the segment has 0 stations$"):
         dpc31.Segment().send(99, b"\x10")
@@ -99,6 +105,14 @@ def test_values_the_scenario_parser_refuses_are_value_errors_in_its_words(call, 
      r"\(-9223372036854775808..9223372036854775807\)"),
     (lambda: dpc31.Segment().add_station(5, wd=(1, 2**70)), r"wd 1180591620717411303424 out of "
      r"range"),
+    # CPython shares one object for equal small ints: the argument that took 256 first is not
+    # the one that refused it (the review's case).
+    (lambda: dpc31.Cpu51Board(dpc31.Chip("vpc3plus")).set_port_input(256, 256),
+     r"value 256 out of range \(0..255\)$"),
+    (lambda: _segment_with_station().check_bus(ttr=300, masters=[300]),
+     r"masters 300 out of range \(0..255\)$"),
+    (lambda: _segment_with_station().add_master(2, [5]).dp_cycle([[1, 300]]),
+     r"outputs\[0\]: 300 out of range \(0..255\)$"),
 ])
 def test_an_int_its_argument_cannot_hold_is_a_value_error_naming_the_argument(call, message):
     """pybind11 took it for a wrong type: a TypeError listing the signatures, naming nothing."""

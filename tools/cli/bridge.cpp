@@ -245,7 +245,8 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
   std::uint64_t v = 0;
   if (!o.slaves.empty()) {
     // Each station's chip, address and user side come from its --slave.
-  } else if (!o.cpu.empty()) {    // --firmware is then its Intel HEX image
+  } else if (!o.cpu.empty()) {  // --firmware is then its Intel HEX image
+    if (o.firmware.empty()) return bad("--firmware: an empty file name: nothing can be read there");
     c.setup.cpu = Cpu51Config{};  // filled once the profile is known (below)
   } else {
     if (!o.trace_cpu.empty()) return bad("--trace-cpu needs --cpu");
