@@ -8,9 +8,21 @@ namespace dpc31 {
 namespace cc = pdu::control_command;
 
 void DpStateMachine::global_control(const fdl::Frame& req) {
-  if (s_.state != DpState::Data_Exchange || req.sa != s_.master_add || req.du.size() != 2) {
+  // Ignored for any of three reasons; the log names the first that holds.
+  if (s_.state != DpState::Data_Exchange) {
     ++counters_.not_allowed;
-    sig_.log(LogLevel::info, "Global_Control from {}: not accepted in this state", req.sa);
+    sig_.log(LogLevel::info, "Global_Control from {}: not in Data_Exchange: ignored", req.sa);
+    return;
+  }
+  if (req.sa != s_.master_add) {
+    ++counters_.not_allowed;
+    sig_.log(LogLevel::info, "Global_Control from {}: not the locking master: ignored", req.sa);
+    return;
+  }
+  if (req.du.size() != 2) {
+    ++counters_.not_allowed;
+    sig_.log(LogLevel::info, "Global_Control from {}: {} data bytes, not 2: ignored", req.sa,
+             req.du.size());
     return;
   }
   const std::uint8_t groups = req.du[1];

@@ -43,6 +43,8 @@ std::vector<std::string> LogLimiter::add(std::uint64_t cycle, std::string_view t
     left_out_ = 0;
   }
   if (!last_.empty() && text == last_) {
+    if (repeats_ == 0) first_repeat_ = cycle;
+    last_repeat_ = cycle;
     ++repeats_;
     // 10, 100, 1000, ...: a run that never ends still says how long it is.
     std::uint64_t p = 10;
@@ -53,7 +55,7 @@ std::vector<std::string> LogLimiter::add(std::uint64_t cycle, std::string_view t
     }
     return out;
   }
-  if (repeats_ > repeats_reported_) pass(out, fmt::format("last line repeated {} times", repeats_));
+  if (repeats_ > repeats_reported_) pass(out, repeated());
   repeats_ = 0;
   repeats_reported_ = 0;
   last_.assign(text);
@@ -61,10 +63,16 @@ std::vector<std::string> LogLimiter::add(std::uint64_t cycle, std::string_view t
   return out;
 }
 
+// Written when the next line comes (or at the end), so it names the repeats' own cycles.
+std::string LogLimiter::repeated() const {
+  if (repeats_ == 1) return fmt::format("last line repeated 1 times, at cycle {}", first_repeat_);
+  return fmt::format("last line repeated {} times, cycles {} to {}", repeats_, first_repeat_,
+                     last_repeat_);
+}
+
 std::vector<std::string> LogLimiter::flush() {
   std::vector<std::string> out;
-  if (repeats_ > repeats_reported_)
-    out.push_back(fmt::format("last line repeated {} times", repeats_));
+  if (repeats_ > repeats_reported_) out.push_back(repeated());
   if (left_out_ != 0)
     out.push_back(
         fmt::format("{} log lines left out (at most {} in {} cycles)", left_out_, burst_, window_));

@@ -33,8 +33,11 @@ std::uint32_t Dpv1User::init(BusPort& c, std::uint32_t next, std::uint32_t seg_s
     next += (hd::kBytes + kMaxLen[s] + seg - 1) / seg;
     // The connection's SAP stays off (Ind_Buf_Ptr0 00h) until an Initiate opens it.
     const std::uint8_t ind = s == connection ? 0 : sl.segment;
-    const std::uint8_t e[en::kBytes] = {sl.sap, en::kAll, en::kAll,  dpv1::service::All,
-                                        ind,    0x00,     sl.segment};
+    // MSAC_C1 is the class-1 master's only: a stray request from another station would take
+    // the one buffer, and the C1 buffer has no time-out that frees it.
+    const std::uint8_t sa = s == c1 || s == alarm ? cfg_.c1_master : en::kAll;
+    const std::uint8_t e[en::kBytes] = {sl.sap, sa,   en::kAll,  dpv1::service::All,
+                                        ind,    0x00, sl.segment};
     c.write_block(sl.entry, e);
     c.write(sl.buffer + hd::Control, 0x00);
     c.write(sl.buffer + hd::Max_Length, kMaxLen[s]);

@@ -26,6 +26,9 @@ struct Dpv1UserConfig {
   // response (Control = USER + RESP), as a busy wait of the ISR.
   std::uint64_t work_cycles = 0;
   std::uint8_t c2_sap = 40;  // the SAP of the one MSAC_C2 connection (modelled)
+  // The class-1 master's station address (MasterConfig's default 2 unless told): Request_SA of
+  // SAPs 51 and 50, so that MSAC_C1 from any other station gets RS (docs/dpv1.md).
+  std::uint8_t c1_master = 2;
 };
 
 class Dpv1User {
@@ -36,8 +39,9 @@ class Dpv1User {
 
   explicit Dpv1User(Dpv1UserConfig cfg) : cfg_(std::move(cfg)) {}
 
-  // The SAP list (SAPs 51, 50, 49, and the connection's SAP switched off) and its buffers from
-  // segment `next` on; writes R_FDL_SAP_List_Ptr. Returns the next free segment.
+  // The SAP list (SAPs 51 and 50 for the class-1 master only, 49 for anybody, and the
+  // connection's SAP switched off) and its buffers from segment `next` on; writes
+  // R_FDL_SAP_List_Ptr. Returns the next free segment.
   std::uint32_t init(BusPort& c, std::uint32_t next, std::uint32_t seg_shift);
   // From the ISR with the Int_Reg it read.
   void serve(BusPort& c, std::uint16_t ir);

@@ -7,7 +7,9 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <string>
 #include <utility>
+#include <vector>
 
 #include "cpu51_module.hpp"
 #include "dpc31/dp.hpp"
@@ -45,11 +47,18 @@ PlainRequest plain_request(StepKind k) {
       ->second;
 }
 
+// The built-in user side serves MSAC_C1 to the scenario's master only.
+ResponderConfig user_config(const Scenario& s) {
+  ResponderConfig c = s.user;
+  c.dpv1.c1_master = s.master.address;
+  return c;
+}
+
 class Runner {
  public:
   Runner(const Scenario& s, const LineSink& walk, const LineSink& errors,
          const ScenarioHooks& hooks = {})
-      : s_(s), walk_(walk), errors_(errors), hooks_(hooks), chip_(s.chip), user_(s.user) {}
+      : s_(s), walk_(walk), errors_(errors), hooks_(hooks), chip_(s.chip), user_(user_config(s)) {}
   Runner(const Runner&) = delete;
   Runner& operator=(const Runner&) = delete;
 
@@ -229,15 +238,65 @@ class Runner {
   }
 
   // Events are collected during an action and printed in cycle order: a transaction's line is
-  // only known once its answer is in, after the state changes it caused.
+  // only known once its answer is in, after the state changes it caused. The walk folds what
+  // repeats (an observer is told every event).
   void flush() {
     std::stable_sort(events_.begin(), events_.end(),
                      [](const Event& a, const Event& b) { return a.cycle < b.cycle; });
-    for (const Event& e : events_) {
-      if (walk_) walk_(fmt::format("[cycle {:>10}] {}", e.cycle, e.text));
+    const std::vector<Fold> folds = walk_ ? fold_plan() : std::vector<Fold>{};
+    std::optional<std::size_t> group;  // the first line of the group being written
+    std::size_t skip_to = 0;           // the lines before it are folded
+    for (std::size_t i = 0; i < events_.size(); ++i) {
+      const Event& e = events_[i];
+      if (walk_ && i >= skip_to) {
+        walk_(fmt::format("[cycle {:>10}] {}", e.cycle, e.text));
+        if (folds[i].repeats != 0) group = i;
+        if (group && i + 1 == *group + folds[*group].lines) {
+          const Fold& f = folds[*group];
+          skip_to = *group + (f.repeats + 1) * f.lines;
+          walk_(fmt::format("[cycle {:>10}] {} repeated (x{}, last at cycle {})",
+                            events_[i + 1].cycle,
+                            f.lines == 1 ? std::string("the line above")
+                                         : fmt::format("the {} lines above", f.lines),
+                            f.repeats, events_[skip_to - 1].cycle));
+          group.reset();
+        }
+      }
       if (hooks_.observer != nullptr) tell(*hooks_.observer, e);
     }
     events_.clear();
+  }
+
+  // A run of a group of up to kFoldLines lines that comes again and again (a start-up that
+  // cannot succeed: Set_Prm, Chk_Cfg, Slave_Diag and the chip's remarks, a thousand times; an
+  // exchange that changes nothing) is its first occurrence and one line with the count and the
+  // cycles of the repeats. At each line the group that folds the most lines is taken, if it
+  // comes at least three times.
+  static constexpr std::size_t kFoldLines = 8;
+  struct Fold {
+    std::size_t lines = 0;    // in the group that starts at this line
+    std::size_t repeats = 0;  // how often it comes again right after its first occurrence
+  };
+  std::vector<Fold> fold_plan() const {
+    const std::size_t n = events_.size();
+    std::vector<Fold> plan(n);
+    const auto same = [&](std::size_t a, std::size_t b, std::size_t k) {
+      for (std::size_t x = 0; x < k; ++x) {
+        if (events_[a + x].text != events_[b + x].text) return false;
+      }
+      return true;
+    };
+    for (std::size_t i = 0; i < n;) {
+      Fold best;
+      for (std::size_t k = 1; k <= kFoldLines && i + 2 * k <= n; ++k) {
+        std::size_t r = 0;
+        while (i + (r + 2) * k <= n && same(i, i + (r + 1) * k, k)) ++r;
+        if (r >= 2 && r * k > best.repeats * best.lines) best = {k, r};
+      }
+      plan[i] = best;
+      i += best.repeats == 0 ? 1 : (best.repeats + 1) * best.lines;
+    }
+    return plan;
   }
 
   void fail(int line, const std::string& msg) {

@@ -22,17 +22,20 @@ std::vector<std::string> feed(LogLimiter& l, std::uint64_t cycle, const std::str
 
 }  // namespace
 
+// The count said when another line comes (or at the end) names the repeats' own cycles, not
+// the cycle of the line that ends them.
 TEST(LogLimiter, RepeatsAreFoldedAndCountedAtPowersOfTen) {
   LogLimiter l;
   EXPECT_EQ(feed(l, 0, "a"), std::vector<std::string>{"a"});
-  for (int i = 1; i < 10; ++i) EXPECT_TRUE(feed(l, 0, "a").empty()) << i;
-  EXPECT_EQ(feed(l, 0, "a"), std::vector<std::string>{"last line repeated 10 times so far"});
-  for (int i = 11; i < 13; ++i) EXPECT_TRUE(feed(l, 0, "a").empty());
+  for (int i = 1; i < 10; ++i) EXPECT_TRUE(feed(l, i, "a").empty()) << i;
+  EXPECT_EQ(feed(l, 10, "a"), std::vector<std::string>{"last line repeated 10 times so far"});
+  for (int i = 11; i < 13; ++i) EXPECT_TRUE(feed(l, i, "a").empty());
   // Another line: the repeats not yet said, then the line.
-  EXPECT_EQ(feed(l, 0, "b"), (std::vector<std::string>{"last line repeated 12 times", "b"}));
-  EXPECT_EQ(feed(l, 0, "a"), std::vector<std::string>{"a"});
-  EXPECT_TRUE(feed(l, 0, "a").empty());
-  EXPECT_EQ(l.flush(), std::vector<std::string>{"last line repeated 1 times"});
+  EXPECT_EQ(feed(l, 500, "b"),
+            (std::vector<std::string>{"last line repeated 12 times, cycles 1 to 12", "b"}));
+  EXPECT_EQ(feed(l, 600, "a"), std::vector<std::string>{"a"});
+  EXPECT_TRUE(feed(l, 700, "a").empty());
+  EXPECT_EQ(l.flush(), std::vector<std::string>{"last line repeated 1 times, at cycle 700"});
   EXPECT_TRUE(l.flush().empty());
 }
 

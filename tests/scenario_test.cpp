@@ -7,12 +7,16 @@
 
 #include <algorithm>
 #include <array>
+#include <cinttypes>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include "heap_in_use.hpp"
@@ -851,4 +855,98 @@ TEST(ScenarioRun, AnAnswerLaterThanTheSlotTimeIsNoLaterRequestsAnswer) {
     EXPECT_NE(l->find("=> no answer"), std::string::npos) << *l;
   }
   EXPECT_GE(requests, 6);
+}
+
+namespace {
+
+// Every event of a run as the observer is told it: (cycle, text), in the walk's order.
+struct EveryEvent : dpc31::ScenarioObserver {
+  std::vector<std::pair<std::uint64_t, std::string>> events;
+  void user_side_started(std::uint64_t cycle, std::string_view text) override {
+    events.emplace_back(cycle, text);
+  }
+  void step_begins(std::uint64_t cycle, const dpc31::ScenarioStep&,
+                   std::string_view text) override {
+    events.emplace_back(cycle, text);
+  }
+  void expect_checked(std::uint64_t cycle, const dpc31::ScenarioStep&, bool,
+                      std::string_view text) override {
+    events.emplace_back(cycle, text);
+  }
+  void walk_note(std::uint64_t cycle, std::string_view text) override {
+    events.emplace_back(cycle, text);
+  }
+};
+
+// `text` run with its walk in `walk`; the walk's folds undone must give the observer's events,
+// each fold line at the cycle of the first line it folds and naming the cycle of the last.
+// Returns the number of fold lines.
+std::size_t run_folded(const std::string& text, Lines& walk) {
+  dpc31::Scenario s;
+  dpc31::ScenarioError err;
+  EXPECT_TRUE(dpc31::parse_scenario(text, "t.scn", s, err)) << err.text();
+  EveryEvent all;
+  dpc31::run_scenario(s, walk.sink(), {}, dpc31::ScenarioHooks{{}, {}, &all});
+  std::vector<std::pair<std::uint64_t, std::string>> unfolded;
+  std::size_t folds = 0;
+  // The first line is the header, the last the end (neither is told to an observer).
+  for (std::size_t i = 1; i + 1 < walk.lines.size(); ++i) {
+    const std::string& l = walk.lines[i];
+    const std::uint64_t cycle = std::stoull(l.substr(7));
+    const std::string body = l.substr(l.find("] ") + 2);
+    std::size_t k = 0, repeats = 0;
+    std::uint64_t last = 0;
+    int used = 0;
+    if (std::sscanf(body.c_str(), "the line above repeated (x%zu, last at cycle %" SCNu64 ")%n",
+                    &repeats, &last, &used) == 2 &&
+        static_cast<std::size_t>(used) == body.size()) {
+      k = 1;
+    } else if (std::sscanf(body.c_str(),
+                           "the %zu lines above repeated (x%zu, last at cycle %" SCNu64 ")%n", &k,
+                           &repeats, &last, &used) != 3 ||
+               static_cast<std::size_t>(used) != body.size()) {
+      unfolded.emplace_back(cycle, body);
+      continue;
+    }
+    ++folds;
+    const std::size_t from = unfolded.size();
+    for (std::size_t r = 0; r < repeats * k; ++r) {
+      if (from + r >= all.events.size() || from < k) break;
+      EXPECT_EQ(all.events[from + r].second, unfolded[from - k + r % k].second) << l;
+      unfolded.push_back(all.events[from + r]);
+    }
+    EXPECT_EQ(unfolded.at(from).first, cycle) << l;
+    EXPECT_EQ(unfolded.back().first, last) << l;
+  }
+  EXPECT_EQ(unfolded, all.events);
+  return folds;
+}
+
+}  // namespace
+
+// A start-up that cannot succeed (a wrong Ident_Number) sends Set_Prm, Chk_Cfg and Slave_Diag
+// up to `tries` (1000) times, with the chip's remarks on each; a restart against a wrong cfg
+// polls Slave_Diag 1000 times. Each run is its first occurrence and one line with the count and
+// the repeats' cycles: 35 and 33 lines where they were 4021 and 1031, the counts exact.
+TEST(ScenarioWalk, RepeatedRunsAreFoldedWithExactCounts) {
+  Lines prm;
+  EXPECT_EQ(run_folded("profile spc3\nbaud 12000000\nslave address=5\nstartup\n"
+                       "set_prm ident=0x1234\nstartup\n",
+                       prm),
+            2u);
+  EXPECT_LE(prm.lines.size(), 40u);
+  // 332 rounds while the chip's log still remarks (its 1000 lines), 668 after.
+  EXPECT_TRUE(prm.has("] the 6 lines above repeated (x331, last at cycle "));
+  EXPECT_TRUE(prm.has("] the 3 lines above repeated (x667, last at cycle "));
+  Lines cfg;
+  EXPECT_EQ(run_folded("profile spc3\nbaud 12000000\nslave address=5 in=4 out=4\nstartup\n"
+                       "chk_cfg cfg=13,22\nrestart\n",
+                       cfg),
+            1u);
+  EXPECT_LE(cfg.lines.size(), 40u);
+  EXPECT_TRUE(cfg.has("2 -> 5 Slave_Diag => DL 06 0D 00 FF 0C 31"));
+  EXPECT_TRUE(cfg.has("] the line above repeated (x999, last at cycle "));
+  // A run that comes only twice is written as it is.
+  Lines two;
+  EXPECT_EQ(run_folded("profile spc3\nbaud 12000000\nstartup\nexchange 2\n", two), 0u);
 }

@@ -28,10 +28,10 @@ LogSink stderr_sink(LogLevel min_level = LogLevel::warn);
 // A log that never floods (docs/decisions.md, "Logs that never flood"). Every log of ours (the
 // chip's, the bridge's) passes its lines through one: a line equal to the one before it is
 // counted instead of written, and the count is written when it reaches 10, 100, 1000, ... and
-// when another line comes; and no more than `burst` lines are written in one window of `window`
-// cycles: the rest are counted and one line says how many were left out when the next window
-// opens (or at flush). Time is the chip's cycle, so what a log keeps does not depend on the
-// machine's speed.
+// when another line comes (with the cycles of the first and the last repeat); and no more than
+// `burst` lines are written in one window of `window` cycles: the rest are counted and one line
+// says how many were left out when the next window opens (or at flush). Time is the chip's
+// cycle, so what a log keeps does not depend on the machine's speed.
 class LogLimiter {
  public:
   static constexpr std::uint32_t kBurst = 1000;
@@ -50,6 +50,7 @@ class LogLimiter {
 
  private:
   void pass(std::vector<std::string>& out, std::string line);
+  [[nodiscard]] std::string repeated() const;  // "last line repeated N times" and their cycles
 
   std::uint32_t burst_;
   std::uint64_t window_;
@@ -60,6 +61,8 @@ class LogLimiter {
   std::string last_;
   std::uint64_t repeats_ = 0;           // of last_, since it was written
   std::uint64_t repeats_reported_ = 0;  // of those, already said in a "so far" line
+  std::uint64_t first_repeat_ = 0;      // the cycles of the first and the last repeat
+  std::uint64_t last_repeat_ = 0;
 };
 
 }  // namespace dpc31

@@ -3,6 +3,9 @@
 // Unfreeze, reserved bits and Check_No_GC_Reserved, Sync_Supported = 0 / Freeze_Supported = 0,
 // New_GC_Int mode, the GC_Command cell, Group_Select and the data length. (Clear_Data, Sync,
 // Unsync, the fail-safe and the GC_Command presets are tested with their fixes, issue 13.)
+#include <algorithm>
+#include <string>
+
 #include "conformance.hpp"
 #include "user_side.hpp"
 
@@ -23,9 +26,9 @@ Bytes diag(DpMaster& m) {
   return d.answer ? d.answer->du : Bytes{};
 }
 
-// A Global_Control with `du` as its data (any length), SDN to 127 from master 2.
-Exchange gc_raw(DpMaster& m, Bytes du) {
-  return m.transact(fdl::make_frame(fdl::kBroadcast, 2,
+// A Global_Control with `du` as its data (any length), SDN to 127 from master `sa`.
+Exchange gc_raw(DpMaster& m, Bytes du, std::uint8_t sa = 2) {
+  return m.transact(fdl::make_frame(fdl::kBroadcast, sa,
                                     fdl::make_request_fc(fdl::Function::SDN_high, false, false),
                                     std::move(du), dsap::Global_Control, dsap::Master));
 }
@@ -174,6 +177,27 @@ TEST_P(GlobalControl, MoreThanTwoNetDataBytes_NotAccepted) {
   b.master.data_exchange({0, 0, 0, 0});
   EXPECT_EQ(b.master.data_exchange({0, 0, 0, 0}).answer->du, (Bytes{0xB1, 0xB2, 0xB3, 0xB4}));
   EXPECT_EQ(dp_bits(status(b.chip)), kDataEx);
+}
+
+// A Global_Control the chip ignores is logged with its reason: another master's (the locking
+// master is 2), one with 3 data bytes, and one outside Data_Exchange (after a reserved bit made
+// the slave leave the master) each have their own words.
+TEST_P(GlobalControl, IgnoredGc_LogNamesTheReason) {
+  Bench b(GetParam(), 12'000'000);
+  std::vector<std::string> log;
+  b.chip.set_log_sink([&](const LogRecord& r) { log.push_back(r.text); });
+  ASSERT_TRUE(b.master.startup());
+  const auto logged = [&](const std::string& text) {
+    return std::find(log.begin(), log.end(), text) != log.end();
+  };
+  gc_raw(b.master, {kGC_Freeze, 0x00}, 7);
+  EXPECT_TRUE(logged("Global_Control from 7: not the locking master: ignored"));
+  gc_raw(b.master, {kGC_Freeze, 0x00, 0x00});
+  EXPECT_TRUE(logged("Global_Control from 2: 3 data bytes, not 2: ignored"));
+  b.master.global_control(0x01);  // a reserved bit: Leave_Master
+  ASSERT_EQ(dp_bits(status(b.chip)), kWaitPrm);
+  b.master.global_control(kGC_Freeze);
+  EXPECT_TRUE(logged("Global_Control from 2: not in Data_Exchange: ignored"));
 }
 
 // manual-quotes.md Confirmed (DPC31 p.31): the command is for us if Group_Select AND Group_Ident
