@@ -1084,6 +1084,15 @@ TEST_F(BadInput, EmptyPathOptions) {
       }
     }
   }
+  // A file argument given as '' names itself, as an option does (it said ": no such file").
+  for (const auto& [args, line] : std::vector<std::pair<std::string, std::string>>{
+           {"run ''", "dpc31 run: scenario"},
+           {"replay ''", "dpc31 replay: trace"},
+           {"wavediff '' " + vcd, "dpc31 wavediff: A"},
+           {"wavediff " + vcd + " ''", "dpc31 wavediff: B"},
+           {"cosim merge ''", "dpc31 cosim: summaries"}}) {
+    expect_bad(dpc31(args), line + ": an empty file name: nothing can be read there", args);
+  }
   const std::string unknown =
       ": unknown firmware '' (DO4, CNT2, or a plug-in path such as ./libmine.so)";
   for (const char* sub : {"demo", "bridge --tcp 0", "soak --cycles 2e6"}) {

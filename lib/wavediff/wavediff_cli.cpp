@@ -13,8 +13,12 @@ CLI::App* add_subcommand(CLI::App& app, CliArgs& a) {
   Options& o = a.opt;
   auto* c = app.add_subcommand(
       "wavediff", "compare two waveforms (VCD or FST) by signal name; exit 0 same, 1 different");
-  c->add_option("A", o.file_a, "first waveform (VCD or FST)")->required();
-  c->add_option("B", o.file_b, "second waveform (VCD or FST)")->required();
+  c->add_option("A", o.file_a, "first waveform (VCD or FST)")
+      ->required()
+      ->check(outfile::named(outfile::Use::read));
+  c->add_option("B", o.file_b, "second waveform (VCD or FST)")
+      ->required()
+      ->check(outfile::named(outfile::Use::read));
   c->add_option("--strip-a", o.strip_a, "remove this top scope from A's names (e.g. TOP.tb)");
   c->add_option("--strip-b", o.strip_b, "remove this top scope from B's names");
   c->add_option("--strip", a.strip, "auto: strip the common top scopes that match most names")

@@ -120,7 +120,8 @@ int main(int argc, char** argv) {
   dpc31::cli::RunOptions run_opt;
   auto* run = app.add_subcommand("run", "play a scenario file and print the state walk");
   run->add_option("scenario", run_opt.scenario, "scenario file (docs/scenario-format.md)")
-      ->required();
+      ->required()
+      ->check(named(Use::read));
   run->add_flag("--quiet", run_opt.quiet, "print no state walk, only failures");
   run->add_option("--json", run_opt.json, "write a JSON summary to this file")
       ->check(named(Use::write));
@@ -162,7 +163,9 @@ int main(int argc, char** argv) {
   dpc31::cli::ReplayOptions replay_opt;
   auto* replay = app.add_subcommand(
       "replay", "replay a golden trace on a fresh chip and check every expected value");
-  replay->add_option("trace", replay_opt.trace, "trace file (docs/trace-format.md)")->required();
+  replay->add_option("trace", replay_opt.trace, "trace file (docs/trace-format.md)")
+      ->required()
+      ->check(named(Use::read));
   replay->add_flag("--quiet", replay_opt.quiet, "print nothing on success");
 
   dpc31::cli::CosimOptions cos;
@@ -234,7 +237,9 @@ int main(int argc, char** argv) {
   dpc31::cli::MergeOptions merge_opt;
   auto* merge = cosim->add_subcommand(
       "merge", "merge the JSON summaries of the shards of one run into its summary and JUnit");
-  merge->add_option("summaries", merge_opt.inputs, "the shards' JSON summaries")->required();
+  merge->add_option("summaries", merge_opt.inputs, "the shards' JSON summaries")
+      ->required()
+      ->check(named(Use::read));
   merge->add_option("--junit", merge_opt.junit, "write the whole run's JUnit XML to this file")
       ->check(named(Use::write));
   cosim
