@@ -188,12 +188,13 @@ class Runner {
         out_.port_writes.push_back({w.cycle, m51_->port_name(w.port), w.value});
       }
     }
+    // What the chip's log still owes (a repeat count, lines left out) comes before the end line.
+    chip_.set_log_sink({});
     note(chip_.cycle(),
          fmt::format("end: dp_state {}, wd_state {}; expects passed {}, failed {}",
                      dp_state_name(out_.dp), wd_state_name(out_.wd), out_.passed, out_.failed),
          Event::Kind::end);
     flush();
-    chip_.set_log_sink({});
     chip_.on_telegram({});
     chip_.on_irq_change({});
     chip_.on_pb3_change({});

@@ -950,3 +950,36 @@ TEST(ScenarioWalk, RepeatedRunsAreFoldedWithExactCounts) {
   Lines two;
   EXPECT_EQ(run_folded("profile spc3\nbaud 12000000\nstartup\nexchange 2\n", two), 0u);
 }
+
+// What the chip's log limiter still owes when the run ends (docs/decisions.md, "Logs that never
+// flood": a repeat is counted and said when another line comes, or at the end) is in the walk,
+// before its end line: three foreign Set_Prms in a row are one remark and its two repeats, at the
+// second and third request's spacing. The flood's lines past the window's 1000 are said too.
+TEST(ScenarioWalk, TheChipsOwedLogLinesComeBeforeTheEnd) {
+  Lines walk;
+  run_folded(
+      "profile dpc31\nbaud 1500000\nmaster address=2\nslave address=5\nstartup\n"
+      "foreign_master address=3\nforeign_master address=3\nforeign_master address=3\n",
+      walk);
+  const auto cycle_of = [&](const std::string& text) -> std::uint64_t {
+    for (const std::string& l : walk.lines)
+      if (l.find(text) != std::string::npos) return std::stoull(l.substr(7));
+    ADD_FAILURE() << "no line with " << text;
+    return 0;
+  };
+  const std::uint64_t remark = cycle_of("] chip: Set_Prm from master 3 while locked by 2: ignored");
+  const std::uint64_t spacing = cycle_of("] line 7: ") - cycle_of("] line 6: ");
+  ASSERT_GE(walk.lines.size(), 2u);
+  const std::string& owed = walk.lines[walk.lines.size() - 2];
+  EXPECT_EQ(owed.substr(owed.find("] ") + 2),
+            fmt::format("chip: last line repeated 2 times, cycles {} to {}", remark + spacing,
+                        remark + 2 * spacing));
+  EXPECT_EQ(std::stoull(owed.substr(7)), std::stoull(walk.lines.back().substr(7)));
+  EXPECT_NE(walk.lines.back().find("] end: "), std::string::npos);
+
+  Lines prm;
+  run_folded(
+      "profile spc3\nbaud 12000000\nslave address=5\nstartup\nset_prm ident=0x1234\nstartup\n",
+      prm);
+  EXPECT_TRUE(prm.has(" log lines left out (at most 1000 in 48000000 cycles)"));
+}
