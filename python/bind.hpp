@@ -231,11 +231,42 @@ T in_range(const ValueRange& r, std::int64_t v) {
     throw py::value_error(out_of_range(r, std::to_string(v)));
   return static_cast<T>(v);
 }
+// The same for an argument taken as any Python int: 2**70 is refused in `r`'s range too, where
+// a C++ integer's caster would name its own.
+template <typename T>
+T in_range(const ValueRange& r, const py::int_& v) {
+  int overflow = 0;
+  const long long x = PyLong_AsLongLongAndOverflow(v.ptr(), &overflow);
+  if (overflow != 0 || x < 0 || !r.holds(static_cast<std::uint64_t>(x)))
+    throw py::value_error(out_of_range(r, py::str(py::handle(v)).cast<std::string>()));
+  return static_cast<T>(x);
+}
+// `r` under the Python argument's name where it differs from the scenario's word: the message
+// names what the caller wrote.
+constexpr ValueRange named(const ValueRange& r, std::string_view python_name) {
+  return {python_name, r.min, r.max};
+}
+// An argument that must be the module's class T: a TypeError naming the argument and the type
+// given (pybind11's cast error, a RuntimeError, named neither).
+template <typename T>
+T& class_arg(py::handle o, std::string_view what, std::string_view expected) {
+  if (!py::isinstance<T>(o)) {
+    throw py::type_error(std::string(what) + ": " + std::string(expected) + " expected, got " +
+                         py::str(py::type::of(o).attr("__name__")).cast<std::string>());
+  }
+  return o.cast<T&>();
+}
 // A file name from Python as the C library will take it: a NUL byte would end it there (another
 // file), so a ValueError as Python's own open() raises. `what` is the argument's name.
 inline const std::string& path_arg(const std::string& path, std::string_view what) {
   if (path.find('\0') != std::string::npos)
     throw py::value_error(std::string(what) + ": embedded null byte");
+  return path;
+}
+// A file to read: '' is no file (the CLI's words for `--opt ''`), a ValueError as path_arg's.
+inline const std::string& read_path_arg(const std::string& path, std::string_view what) {
+  if (path_arg(path, what).empty())
+    throw py::value_error(std::string(what) + ": an empty file name: nothing can be read there");
   return path;
 }
 inline const std::optional<std::string>& path_arg(const std::optional<std::string>& path,

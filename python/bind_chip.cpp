@@ -575,7 +575,7 @@ void bind_chip_class(py::module_& m) {
           "load_state_file",
           [](PyChip& c, const std::string& path) {
             c.enter(true);
-            c.chip.load_state_file(path_arg(path, "path"));
+            c.chip.load_state_file(read_path_arg(path, "path"));
           },
           py::arg("path"));
 }

@@ -760,7 +760,8 @@ void bind_segment_scenario(py::module_& m) {
             Scenario single;
             ScenarioError err;
             // A file that cannot be read or is no scenario at all: Scenario.load's words for it.
-            const SegmentLoad l = load_segment_scenario(path_arg(path, "path"), s, single, err);
+            const SegmentLoad l =
+                load_segment_scenario(read_path_arg(path, "path"), s, single, err);
             if (l == SegmentLoad::error) fail(err);
             if (l == SegmentLoad::not_segment) {
               raise(errors().scenario, path + ": not a segment scenario (use Scenario.load)");

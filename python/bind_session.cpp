@@ -7,6 +7,7 @@
 
 #include <memory>
 #include <thread>
+#include <tuple>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -317,13 +318,51 @@ void bind_user_side(py::module_& m) {
       .def_property_readonly("cfg_rejected", counter<&Responder::cfg_rejected>);
 }
 
+// Only the VPC3+ has DPV1 (a scenario refuses `record`, `dpv1` and the DPV1 actions on another
+// profile at its parse): a ValueError naming the chip's, before anything is sent.
+void no_dpv1_but_on_vpc3plus(const Chip& chip, std::string_view what) {
+  if (chip.profile().id != Profile::vpc3plus) {
+    throw py::value_error(fmt::format("{} need a vpc3plus: the {} has no DPV1", what,
+                                      profile_name(chip.profile().id)));
+  }
+}
+
+// A scenario's `dpv1 work=` range (session/scenario_dpv1.cpp), in clocks.
+constexpr ValueRange kWorkCycles{"work_cycles", 0, 48'000'000};
+
+using RecordArg = std::tuple<py::int_, py::int_, py::bytes>;
+
+// run_responder's records=: (slot, index, data) each, as a scenario's `record` lines take them;
+// a ValueError in their words, after the record's place in the list.
+std::vector<Dpv1Record> dpv1_records(const std::vector<RecordArg>& given) {
+  std::vector<Dpv1Record> out;
+  for (const auto& [slot, index, data] : given) {
+    const std::string at = fmt::format("records[{}]: ", out.size());
+    try {
+      Dpv1Record r{in_range<U8>(kRecordSlot, slot), in_range<U8>(kRecordIndex, index),
+                   from_bytes(data)};
+      if (r.data.size() > kRecordLength.max)
+        throw py::value_error(fmt::format("data: more than {} bytes", kRecordLength.max));
+      for (const Dpv1Record& o : out) {
+        if (o.slot == r.slot && o.index == r.index)
+          throw py::value_error(fmt::format("slot={} index={} given twice", r.slot, r.index));
+      }
+      out.push_back(std::move(r));
+    } catch (const py::value_error& e) {
+      throw py::value_error(at + e.what());
+    }
+  }
+  return out;
+}
+
 // An 80C32 beside the chip, or the DPC31's C31 (session/cpu51_board.hpp, docs/cpu.md): it keeps
 // the chip alive.
 struct PyBoard {
-  PyBoard(py::object chip_obj, std::int64_t clock_hz, std::optional<std::uint16_t> address,
+  PyBoard(py::object chip_obj, const py::int_& clock_hz, std::optional<std::uint16_t> address,
           std::optional<std::uint16_t> code)
-      : chip_ref(std::move(chip_obj)), chip(chip_ref.cast<PyChip&>()) {
-    const auto hz = in_range<std::uint32_t>(kCpuClock, clock_hz);  // a scenario's `cpu clock=`
+      : chip_ref(std::move(chip_obj)), chip(class_arg<PyChip>(chip_ref, "chip", "a dpc31.Chip")) {
+    // A scenario's `cpu clock=` range.
+    const auto hz = in_range<std::uint32_t>(named(kCpuClock, "hz"), clock_hz);
     chip.enter(true);
     try {
       board = code ? std::make_unique<Cpu51Board>(chip.chip, hz, Cpu51Board::C31{*code})
@@ -345,28 +384,30 @@ struct PyBoard {
   }
 };
 
-// P0..P3: the core masks the number (port_latch), so a larger one would be another port's.
-unsigned port_index(unsigned n) {
-  if (n > 3) throw py::index_error(fmt::format("no port {} (0..3: P0..P3)", n));
-  return n;
+// P0..P3: the core masks the number (port_latch), so a larger one would be another port's; a
+// negative one is no port either.
+unsigned port_index(std::int64_t n) {
+  if (n < 0 || n > 3) throw py::index_error(fmt::format("no port {} (0..3: P0..P3)", n));
+  return static_cast<unsigned>(n);
 }
 
 void bind_board(py::module_& m) {
   py::class_<PyBoard>(m, "Cpu51Board",
                       "An 80C32 beside the chip (its XDATA window at `address`, X/INT on INT0), "
                       "or the DPC31's C31 (Cpu51Board.c31); docs/cpu.md.")
-      .def(py::init([](py::object chip, std::int64_t hz, std::int64_t address) {
+      .def(py::init([](py::object chip, const py::int_& hz, const py::int_& address) {
              return std::make_unique<PyBoard>(
-                 std::move(chip), hz, in_range<std::uint16_t>(kBoardBase, address), std::nullopt);
+                 std::move(chip), hz,
+                 in_range<std::uint16_t>(named(kBoardBase, "address"), address), std::nullopt);
            }),
-           py::arg("chip"), py::arg("hz") = 24'000'000, py::arg("address") = 0x8000)
+           py::arg("chip").none(true), py::arg("hz") = 24'000'000, py::arg("address") = 0x8000)
       .def_static(
           "c31",
-          [](py::object chip, std::int64_t hz, std::int64_t code) {
+          [](py::object chip, const py::int_& hz, const py::int_& code) {
             return std::make_unique<PyBoard>(std::move(chip), hz, std::nullopt,
                                              in_range<std::uint16_t>(kC31Code, code));
           },
-          py::arg("chip"), py::arg("hz") = 24'000'000, py::arg("code") = 0x1000,
+          py::arg("chip").none(true), py::arg("hz") = 24'000'000, py::arg("code") = 0x1000,
           "The DPC31's C31: code from the chip's RAM at `code`, XDATA the chip's own space, INT0 "
           "its interrupt controller (the chip made with irq_controller='c31'); docs/dpc31.md.")
       .def(
@@ -374,7 +415,7 @@ void bind_board(py::module_& m) {
           [](PyBoard& b, const std::string& path) {
             b.chip.enter(true);
             Cpu51Config cfg = b.cfg;
-            cfg.hex = path_arg(path, "path");
+            cfg.hex = read_path_arg(path, "path");
             Cpu51Image image;
             std::string why;
             if (!load_cpu51_image(cfg, image, why)) raise(errors().input, why);
@@ -395,15 +436,15 @@ void bind_board(py::module_& m) {
           "step in progress ends).")
       .def(
           "port",
-          [](const PyBoard& b, unsigned n) { return b.board->cpu().port_latch(port_index(n)); },
+          [](const PyBoard& b, std::int64_t n) { return b.board->cpu().port_latch(port_index(n)); },
           py::arg("n"), "Port n's latch (0..3: P0..P3).")
       .def(
           "pins",
-          [](const PyBoard& b, unsigned n) { return b.board->cpu().port_pins(port_index(n)); },
+          [](const PyBoard& b, std::int64_t n) { return b.board->cpu().port_pins(port_index(n)); },
           py::arg("n"), "Port n's pins: the latch AND what the outside drives.")
       .def(
           "set_port_input",
-          [](PyBoard& b, unsigned n, U8 value) {
+          [](PyBoard& b, std::int64_t n, U8 value) {
             b.chip.enter(true);
             b.board->cpu().set_port_input(port_index(n), value);
           },
@@ -458,6 +499,7 @@ struct PyMaster {
   // A DPV1 service of the master (session/dpv1_master.hpp), with the rules as Python set them.
   template <typename F>
   Dpv1Answer dpv1(F&& f) {
+    no_dpv1_but_on_vpc3plus(chip.chip, "DPV1 services");
     if (!dpv1_m) dpv1_m = std::make_unique<Dpv1Master>(chip.chip, *m, dpv1_rules);
     dpv1_m->rules() = dpv1_rules;
     return act([&] { return f(*dpv1_m); });
@@ -519,15 +561,17 @@ void bind_dpv1(py::module_& m, py::class_<PyMaster>& master) {
       .def(py::init(&with_kwargs<Dpv1Rules>))
       .def_property(
           "retries", [](const Dpv1Rules& r) { return r.retries; },
-          [](Dpv1Rules& r, std::int64_t v) { r.retries = in_range<std::uint32_t>(kRetries, v); })
+          [](Dpv1Rules& r, const py::int_& v) { r.retries = in_range<std::uint32_t>(kRetries, v); })
       .def_property(
           "c1_response_timeout", [](const Dpv1Rules& r) { return r.c1_response_timeout; },
-          [](Dpv1Rules& r, std::int64_t v) {
-            r.c1_response_timeout = in_range<std::uint16_t>(kC1Timeout, v);
+          [](Dpv1Rules& r, const py::int_& v) {
+            // The scenario's `dpv1 c1_timeout=` range, under the property's name.
+            r.c1_response_timeout =
+                in_range<std::uint16_t>(named(kC1Timeout, "c1_response_timeout"), v);
           })
       .def_property(
           "c2_ssap", [](const Dpv1Rules& r) { return r.c2_ssap; },
-          [](Dpv1Rules& r, std::int64_t v) { r.c2_ssap = in_range<U8>(kC2Ssap, v); });
+          [](Dpv1Rules& r, const py::int_& v) { r.c2_ssap = in_range<U8>(kC2Ssap, v); });
   py::class_<Dpv1Answer>(m, "Dpv1Answer", "What a DPV1 service got (session/dpv1_master.hpp).")
       .def_readonly("outcome", &Dpv1Answer::outcome)
       .def_property_readonly("du", [](const Dpv1Answer& a) { return to_bytes(a.du); })
@@ -601,15 +645,16 @@ void bind_master(py::module_& m) {
                        const std::optional<SlaveConfig>& slave) {
              // The checks of a scenario's `baud` and `master address= slot= idle=`; a bit at
              // least one clock of the chip (as a Segment's).
+             PyChip& c = class_arg<PyChip>(chip, "chip", "a dpc31.Chip");
              const std::uint32_t rate = profibus_rate(baud);
-             one_clock_a_bit(chip.cast<PyChip&>().chip.clock_hz(), rate);
+             one_clock_a_bit(c.chip.clock_hz(), rate);
              const MasterConfig mc{in_range<U8>(kMasterAddress, address), rate,
                                    in_range<std::uint32_t>(kSlotBits, slot_bits),
                                    in_range<std::uint32_t>(kIdleBits, idle_bits)};
-             chip.cast<PyChip&>().enter(true);
+             c.enter(true);
              return std::make_unique<PyMaster>(std::move(chip), mc, slave.value_or(SlaveConfig{}));
            }),
-           py::arg("chip"), py::arg("address") = 2, py::arg("baud") = 1'500'000,
+           py::arg("chip").none(true), py::arg("address") = 2, py::arg("baud") = 1'500'000,
            py::arg("slot_bits") = 100, py::arg("idle_bits") = 33, py::arg("slave") = py::none())
       .def(
           "run_firmware",
@@ -633,8 +678,19 @@ void bind_master(py::module_& m) {
           "run_responder",
           [](PyMaster& pm, const py::bytes& inputs, bool sync_supported, bool freeze_supported,
              bool spec_clear_mode, const py::bytes& substitute, bool user_watchdog,
-             bool dx_out_port) {
+             bool dx_out_port, const std::vector<RecordArg>& records,
+             const std::optional<py::int_>& work_cycles) {
             ResponderConfig rc;
+            // A scenario's `record` and `dpv1 work=` lines: the VPC3+'s only, and the time
+            // spent on a record only where there is one (no silent options).
+            if (!records.empty()) no_dpv1_but_on_vpc3plus(pm.chip.chip, "records");
+            rc.dpv1.records = dpv1_records(records);
+            if (work_cycles) {
+              rc.dpv1.work_cycles = in_range<std::uint64_t>(kWorkCycles, *work_cycles);
+              if (records.empty())
+                throw py::value_error("work_cycles: no records to work on (records=)");
+            }
+            rc.dpv1.c1_master = pm.config.address;  // as a scenario's (scenario_run.cpp)
             rc.slave = pm.m->slave();
             rc.sync_supported = sync_supported;
             rc.freeze_supported = freeze_supported;
@@ -653,12 +709,15 @@ void bind_master(py::module_& m) {
           py::arg("inputs") = py::bytes(), py::arg("sync_supported") = true,
           py::arg("freeze_supported") = true, py::arg("spec_clear_mode") = true,
           py::arg("substitute") = py::bytes(), py::arg("user_watchdog") = false,
-          py::arg("dx_out_port") = false,
-          "Runs the built-in responder (session/responder.hpp) as the user side.")
+          py::arg("dx_out_port") = false, py::arg("records") = std::vector<RecordArg>{},
+          py::arg("work_cycles") = py::none(),
+          "Runs the built-in responder (session/responder.hpp) as the user side; on a vpc3plus "
+          "it serves `records` [(slot, index, data)] over DPV1, `work_cycles` clocks per request "
+          "(a scenario's `record` and `dpv1 work=` lines).")
       .def(
           "run_board",
           [](PyMaster& pm, py::object board) {
-            PyBoard& b = board.cast<PyBoard&>();
+            PyBoard& b = class_arg<PyBoard>(board, "board", "a dpc31.Cpu51Board");
             if (&b.chip != &pm.chip) raise(errors().error, "the board is on another chip");
             if (pm.firmware || pm.responder || pm.board) {
               raise(errors().error, "the master's chip has a user side already");
@@ -668,7 +727,7 @@ void bind_master(py::module_& m) {
             pm.m->scheduler = [&b](U64 cycle) { b.run_until(cycle); };
             pm.board = std::move(board);
           },
-          py::arg("board"),
+          py::arg("board").none(true),
           "The CPU of a Cpu51Board is the user side: its image runs while the master runs the "
           "chip.")
       .def_property_readonly("firmware", [](const PyMaster& pm) { return pm.firmware; })
@@ -854,7 +913,7 @@ void bind_scenarios(py::module_& m) {
           [](const std::string& path) {
             Scenario s;
             ScenarioError err;
-            if (!load_scenario(path_arg(path, "path"), s, err)) raise_scenario(err);
+            if (!load_scenario(read_path_arg(path, "path"), s, err)) raise_scenario(err);
             return s;
           },
           py::arg("path"))
@@ -936,8 +995,8 @@ void bind_wavediff(py::module_& m) {
          std::vector<std::string> include, std::vector<std::string> exclude, bool ignore_missing,
          const std::string& xz, const std::string& diff_vcd) {
         Options o;
-        o.file_a = path_arg(a, "a");
-        o.file_b = path_arg(b, "b");
+        o.file_a = read_path_arg(a, "a");
+        o.file_b = read_path_arg(b, "b");
         o.clock_a = clock.value_or("");
         o.clock_b = clock_b.value_or("");
         o.strip_a = strip_a;

@@ -1,17 +1,42 @@
 #include "cpu51_board.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cstdint>
+#include <mutex>
+#include <set>
 #include <span>
 #include <stdexcept>
 
 namespace dpc31 {
 
+namespace {
+// The chips that have a board: a second one would never run (the first one's run takes the
+// chip's time), and its accesses would interleave with the first one's.
+std::mutex boarded_mutex;
+std::set<const Chip*> boarded;
+}  // namespace
+
 Cpu51Board::Cpu51Board(Chip& chip, std::uint32_t cpu_hz, std::uint16_t base)
     : chip_(chip), cpu_hz_(cpu_hz), base_(base) {
   if (cpu_hz == 0 || chip_cycle_of(mcs51::movx_strobe_end) < chip.bus_access_cycles())
     throw std::invalid_argument("CPU clock out of range for the chip's bus");
+  // The CPU's clock 0 is the chip's cycle 0 (chip_cycle_of): on a chip that has run, every
+  // instant would be off by the chip's cycle.
+  if (chip.cycle() != 0) {
+    throw std::invalid_argument(fmt::format(
+        "the chip has run (cycle {}): a board starts with a chip at cycle 0", chip.cycle()));
+  }
+  const std::scoped_lock lock(boarded_mutex);
+  if (!boarded.insert(&chip).second)
+    throw std::invalid_argument("the chip has a board already: one CPU drives a chip's bus");
   cpu_.set_xdata(this);
+}
+
+Cpu51Board::~Cpu51Board() {
+  const std::scoped_lock lock(boarded_mutex);
+  boarded.erase(&chip_);
 }
 
 namespace {
@@ -49,10 +74,18 @@ bool Cpu51Board::load_c31_code(const std::vector<std::uint8_t>& bytes,
 bool Cpu51Board::int0_level() const { return c31_ ? !chip_.irq_active() : chip_.x_int_pin(); }
 
 std::uint64_t Cpu51Board::chip_cycle_of(std::uint64_t cpu_clock) const {
-  // Exact in 64 bits: whole CPU seconds, then the remainder (< cpu_hz) times chip_hz (< 2^64).
+  // Exact in 64 bits: whole CPU seconds, then the remainder (< cpu_hz) times chip_hz (< 2^64);
+  // the seconds are checked first, so that their product cannot wrap.
   const std::uint64_t chip_hz = chip_.clock_hz();
+  const std::uint64_t seconds = cpu_clock / cpu_hz_;
   const std::uint64_t rem = cpu_clock % cpu_hz_ * chip_hz;
-  return cpu_clock / cpu_hz_ * chip_hz + (rem + cpu_hz_ - 1) / cpu_hz_;
+  if (seconds > Chip::kLastCycle / chip_hz ||
+      seconds * chip_hz + (rem + cpu_hz_ - 1) / cpu_hz_ > Chip::kLastCycle) {
+    throw std::invalid_argument(
+        fmt::format("cpu_clock {} out of range (0..{}): past the chip's last cycle", cpu_clock,
+                    clock_reaching(Chip::kLastCycle + 1) - 1));
+  }
+  return seconds * chip_hz + (rem + cpu_hz_ - 1) / cpu_hz_;
 }
 
 std::uint64_t Cpu51Board::clock_reaching(std::uint64_t cycle) const {

@@ -19,8 +19,13 @@ class Cpu51Board final : public mcs51::XdataBus {
   static constexpr std::uint32_t window = kCpu51Window;
 
   // Throws std::invalid_argument for a CPU clock of 0 or one so fast that a MOVX strobe would
-  // end less than one bus access after its instruction starts.
+  // end less than one bus access after its instruction starts, for a chip that has run (its
+  // cycle is not 0: the CPU's clock counts from the chip's cycle 0) and for a chip that has a
+  // board already (the second would never run).
   Cpu51Board(Chip& chip, std::uint32_t cpu_hz, std::uint16_t base);
+  ~Cpu51Board() override;
+  Cpu51Board(const Cpu51Board&) = delete;
+  Cpu51Board& operator=(const Cpu51Board&) = delete;
 
   // The DPC31's internal C31 instead (docs/dpc31.md, "The C31"): XDATA 0000h..1FFFh is the
   // chip's own address space (the manual: "the interface is identical in both cases"), nothing
@@ -45,7 +50,8 @@ class Cpu51Board final : public mcs51::XdataBus {
   void poked(std::uint16_t addr, std::uint8_t value);
   // The chip cycle of an instant given in CPU oscillator clocks from reset: the first chip clock
   // edge at or after it, ceil(clock * chip_hz / cpu_hz) (docs/timing.md, "An 80C32 beside the
-  // chip").
+  // chip"). Throws std::invalid_argument for a clock whose chip cycle lies past
+  // Chip::kLastCycle, where the chip's time ends (it would not fit in 64 bits either).
   std::uint64_t chip_cycle_of(std::uint64_t cpu_clock) const;
   // Runs CPU and chip together until the chip's cycle is at least `chip_cycle`, or until the
   // instruction during which the chip asked to stop (Chip::request_stop, wake_on_txd) ends.

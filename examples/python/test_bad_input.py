@@ -74,10 +74,11 @@ def test_send_and_pulse_need_a_sender_and_an_end_before_the_last_cycle():
     (lambda: _master().set_slave_address(200), r"new address 200 out of range \(0..126\)"),
     (lambda: _master().run_responder(inputs=b"\x01\x02"),
      r"inputs: 2 bytes for a slave with in=4: inputs are exactly in= bytes, or none$"),
-    (lambda: dpc31.Cpu51Board(dpc31.Chip("spc3"), hz=1), r"clock 1 out of range "
+    # A `cpu` line's clock= range, under the Python argument's name.
+    (lambda: dpc31.Cpu51Board(dpc31.Chip("spc3"), hz=1), r"hz 1 out of range "
      r"\(1000000..40000000\)"),
     (lambda: dpc31.Cpu51Board.c31(dpc31.Chip("dpc31"), hz=100_000_000),
-     r"clock 100000000 out of range \(1000000..40000000\)"),
+     r"hz 100000000 out of range \(1000000..40000000\)"),
     # Past the 8051's 64 KiB the code address was a TypeError, below the user area the board's
     # own words.
     (lambda: dpc31.Cpu51Board.c31(dpc31.Chip("dpc31", irq_controller="c31"), code=0x10000),
@@ -273,7 +274,9 @@ def test_a_hardware_input_that_reads_the_chip_is_a_firmware_error(built):
 @pytest.mark.parametrize("call, message", [
     (lambda: dpc31.Dpv1Rules(c2_ssap=63), r"c2_ssap 63 out of range \(0..62\)"),
     (lambda: dpc31.Dpv1Rules(c2_ssap=200), r"c2_ssap 200 out of range \(0..62\)"),
-    (lambda: dpc31.Dpv1Rules(c1_response_timeout=0), r"c1_timeout 0 out of range \(1..65535\)"),
+    # The scenario's c1_timeout= range, under the Python argument's name.
+    (lambda: dpc31.Dpv1Rules(c1_response_timeout=0),
+     r"c1_response_timeout 0 out of range \(1..65535\)"),
     (lambda: dpc31.Dpv1Rules(retries=9), r"retries 9 out of range \(0..8\)"),
     (lambda: _master().dpv1_read(0, 1, 0), r"length 0 out of range \(1..240\)"),
     (lambda: _master().dpv1_read(0, 1, 241), r"length 241 out of range \(1..240\)"),
@@ -284,7 +287,31 @@ def test_a_hardware_input_that_reads_the_chip_is_a_firmware_error(built):
     (lambda: _master().c2_abort(reason=99), r"reason 99 out of range \(0..15\)"),
     (lambda: _master().c2_abort(instance=9), r"instance 9 out of range \(0..3\)"),
     (lambda: dpc31.Cpu51Board(dpc31.Chip("spc3"), address=0xF800),
-     r"base 63488 out of range \(0..61440\)"),
+     r"address 63488 out of range \(0..61440\)"),
+    # Beyond 64 bits: the documented range, not the C++ integer's.
+    (lambda: dpc31.Cpu51Board(dpc31.Chip("spc3"), hz=2**70),
+     r"hz 1180591620717411303424 out of range \(1000000..40000000\)"),
+    (lambda: dpc31.Cpu51Board(dpc31.Chip("spc3"), address=2**70),
+     r"address 1180591620717411303424 out of range \(0..61440\)"),
+    (lambda: dpc31.Cpu51Board.c31(dpc31.Chip("dpc31", irq_controller="c31"), code=2**70),
+     r"code 1180591620717411303424 out of range \(2208..8191\)"),
+    (lambda: dpc31.Dpv1Rules(c1_response_timeout=2**70),
+     r"c1_response_timeout 1180591620717411303424 out of range \(1..65535\)"),
+    (lambda: dpc31.Dpv1Rules(retries=-2**70), r"retries -1180591620717411303424 out of range "
+     r"\(0..8\)"),
+    # The scenario's `record` and `dpv1 work=` lines.
+    (lambda: _master().run_responder(records=[(255, 1, b"\x01")]),
+     r"records\[0\]: slot 255 out of range \(0..254\)"),
+    (lambda: _master().run_responder(records=[(0, 1, b"\x01"), (0, 256, b"")]),
+     r"records\[1\]: index 256 out of range \(0..255\)"),
+    (lambda: _master().run_responder(records=[(0, 1, bytes(241))]),
+     r"records\[0\]: data: more than 240 bytes"),
+    (lambda: _master().run_responder(records=[(0, 1, b"\x01"), (0, 1, b"\x02")]),
+     r"records\[1\]: slot=0 index=1 given twice"),
+    (lambda: _master().run_responder(records=[(0, 1, b"\x01")], work_cycles=48_000_001),
+     r"work_cycles 48000001 out of range \(0..48000000\)"),
+    (lambda: _master().run_responder(work_cycles=1440),
+     r"work_cycles: no records to work on \(records=\)"),
 ])
 def test_dpv1_and_board_values_the_scenario_refuses_are_value_errors_in_its_words(call, message):
     with pytest.raises(ValueError, match="^" + message + "$"):
@@ -294,8 +321,9 @@ def test_dpv1_and_board_values_the_scenario_refuses_are_value_errors_in_its_word
 def test_a_board_has_four_ports():
     board = dpc31.Cpu51Board(dpc31.Chip("spc3"))
     for call in (lambda: board.port(9), lambda: board.pins(4),
-                 lambda: board.set_port_input(9, 7)):
-        with pytest.raises(IndexError, match=r"^no port \d \(0..3: P0..P3\)$"):
+                 lambda: board.set_port_input(9, 7), lambda: board.port(-1),
+                 lambda: board.pins(-1), lambda: board.set_port_input(-1, 7)):
+        with pytest.raises(IndexError, match=r"^no port -?\d \(0..3: P0..P3\)$"):
             call()
     assert board.pins(1) == 0xFF  # P1 untouched by the refused set_port_input
 
@@ -412,3 +440,51 @@ def test_a_module_built_for_another_python_names_that_python(tmp_path):
                          capture_output=True, text=True, check=True).stdout
     assert "the module was built for Python 3.9 (_dpc31.cpython-39-x86_64-linux-gnu.so)" in out
     assert f"this is Python {sys.version_info[0]}.{sys.version_info[1]}" in out
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: dpc31.Cpu51Board("spc3"), "chip: a dpc31.Chip expected, got str"),
+    (lambda: dpc31.Cpu51Board(None), "chip: a dpc31.Chip expected, got NoneType"),
+    (lambda: dpc31.Cpu51Board.c31(5), "chip: a dpc31.Chip expected, got int"),
+    (lambda: dpc31.Master("vpc3plus"), "chip: a dpc31.Chip expected, got str"),
+    (lambda: _master().run_board(5), "board: a dpc31.Cpu51Board expected, got int"),
+    (lambda: _master().run_board(None), "board: a dpc31.Cpu51Board expected, got NoneType"),
+])
+def test_an_object_of_the_wrong_class_is_a_type_error_naming_the_argument(call, message):
+    """pybind11's cast of it was a RuntimeError, 'Unable to cast Python instance...'."""
+    with pytest.raises(TypeError, match="^" + re.escape(message) + "$"):
+        call()
+
+
+@pytest.mark.parametrize("call, what", [
+    (lambda: dpc31.Cpu51Board(dpc31.Chip("spc3")).load_hex(""), "path"),
+    (lambda: dpc31.Scenario.load(""), "path"),
+    (lambda: dpc31.SegmentScenario.load(""), "path"),
+    (lambda: dpc31.Chip("spc3").load_state_file(""), "path"),
+    (lambda: dpc31.wavediff("", "b.vcd"), "a"),
+    (lambda: dpc31.wavediff("a.vcd", ""), "b"),
+])
+def test_an_empty_file_name_to_read_is_a_value_error_in_the_clis_words(call, what):
+    """It was ': no such file', naming nothing, as the CLI's --opt '' was."""
+    with pytest.raises(ValueError, match=f"^{what}: an empty file name: nothing can be read there$"):
+        call()
+
+
+@pytest.mark.parametrize("profile", ["spc3", "dpc31"])
+def test_dpv1_on_a_chip_without_it_is_refused_naming_the_profile(profile):
+    """The scenario refuses DPV1 on these at its parse; the master sent the request and got RS."""
+    master = dpc31.Master(dpc31.Chip(profile), address=2, baud=12_000_000,
+                          slave=dpc31.SlaveConfig(address=5))
+    with pytest.raises(ValueError, match=f"^records need a vpc3plus: the {profile} has no DPV1$"):
+        master.run_responder(records=[(0, 1, b"\x11")])
+    assert master.responder is None  # nothing started
+    master.run_responder()
+    assert master.startup()
+    sent = master.counters.requests
+    for call in (lambda: master.dpv1_read(0, 1, 4), lambda: master.dpv1_write(0, 1, b"\x01"),
+                 lambda: master.alarm_ack(0, 1, 0), lambda: master.c2_initiate(),
+                 lambda: master.c2_idle(), lambda: master.c2_abort()):
+        with pytest.raises(ValueError,
+                           match=f"^DPV1 services need a vpc3plus: the {profile} has no DPV1$"):
+            call()
+    assert master.counters.requests == sent  # nothing sent

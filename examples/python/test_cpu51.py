@@ -113,3 +113,35 @@ def test_the_c31_behind_dpc31_serve_from_the_pure_python_client(cli, board_progr
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+
+
+def test_a_board_needs_a_chip_at_cycle_0_and_of_its_own():
+    """docs/cpu.md, "The board": the CPU's clock counts from the chip's cycle 0, and one CPU
+    drives the chip's bus. On a chip that had run, the board's times were off by its cycle; a
+    second board on one chip never ran (the first one's run took the chip's time)."""
+    ran = dpc31.Chip("spc3")
+    ran.step(1_000_000)
+    with pytest.raises(ValueError, match=r"^the chip has run \(cycle 1000000\): a board starts "
+                                         r"with a chip at cycle 0$"):
+        dpc31.Cpu51Board(ran)
+    chip = dpc31.Chip("spc3")
+    first = dpc31.Cpu51Board(chip)
+    with pytest.raises(ValueError,
+                       match=r"^the chip has a board already: one CPU drives a chip's bus$"):
+        dpc31.Cpu51Board(chip)
+    with pytest.raises(ValueError, match=r"^the chip has a board already"):
+        dpc31.Cpu51Board.c31(chip)
+    del first  # its chip is free again
+    assert dpc31.Cpu51Board(chip).chip is chip
+
+
+def test_a_cpu_clock_past_the_chips_last_cycle_is_refused_not_wrapped():
+    """At 24 MHz beside a 48 MHz chip, clock 2**63 is chip cycle 2**64: it came back as 0. The
+    chip's time ends at 2**62 - 1 (Chip::kLastCycle), the cycle of clock 2**61 - 1."""
+    board = dpc31.Cpu51Board(dpc31.Chip("spc3"), hz=24_000_000)
+    assert board.chip_cycle_of(2**61 - 1) == 2**62 - 2
+    for clock in (2**61, 2**63, 2**64 - 1):
+        with pytest.raises(ValueError, match=rf"^cpu_clock {clock} out of range "
+                                             r"\(0..2305843009213693951\): past the chip's last "
+                                             r"cycle$"):
+            board.chip_cycle_of(clock)

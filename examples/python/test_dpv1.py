@@ -74,3 +74,20 @@ def test_class2_connection():
     assert abort.last.encode() == b"\xE5"  # SC
     assert master.c2_sap is None
     assert master.c2_read(0, 1, 2).outcome == dpc31.Dpv1Outcome.refused  # nothing sent
+
+
+def test_the_built_in_user_side_serves_the_records_a_scenario_gives_it():
+    """run_responder takes a scenario's `record` and `dpv1 work=` lines: the first steps of
+    traces/dpv1_c1_vpc3plus.scn, one call for one line, with its cycles derived by hand there."""
+    chip = dpc31.Chip("vpc3plus")
+    master = dpc31.Master(chip, address=2, baud=12_000_000,
+                          slave=dpc31.SlaveConfig(address=5, user_prm=b"\xC0\x00\x00"))
+    master.run_responder(records=[(0, 1, b"\x11\x22\x33\x44")], work_cycles=1440)
+    assert master.startup()
+    a = master.dpv1_read(0, 1, 4)
+    assert a.du == bytes([0x5E, 0x00, 0x01, 0x04, 0x11, 0x22, 0x33, 0x44])
+    assert (a.end - a.start, a.polls) == (3652, 2)
+    w = master.dpv1_write(0, 1, b"\xA1\xA2\xA3\xA4")
+    assert (w.du, w.end - w.start, w.polls) == (bytes([0x5F, 0x00, 0x01, 0x04]), 3652, 2)
+    assert master.dpv1_read(0, 1, 4).du == bytes([0x5E, 0x00, 0x01, 0x04, 0xA1, 0xA2, 0xA3, 0xA4])
+    assert master.dpv1_read(0, 7, 4).error == (0x80, 0xB0, 0x00)  # no index 7: Invalid_Index

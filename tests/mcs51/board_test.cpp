@@ -3,8 +3,12 @@
 // docs/cpu.md ("MOVX timing": RD/WR rises 18 oscillator clocks after the MOVX starts; the chip
 // cycle is ceil(clock * 48 MHz / f_cpu)) and docs/timing.md (an access completes 4 clocks after
 // it starts; X/INT follows the request in the same cycle).
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <cstdint>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "board_image.hpp"
@@ -93,6 +97,52 @@ TEST(Cpu51Board, TheTimeBaseIsExact) {
   EXPECT_EQ(b40.chip_cycle_of(3'600ULL * 40'000'000), 3'600ULL * 48'000'000);  // one hour
   EXPECT_THROW(Cpu51Board(chip, 0, 0), std::invalid_argument);
   EXPECT_THROW(Cpu51Board(chip, 400'000'000, 0), std::invalid_argument);
+}
+
+// The refusal's one sentence (std::invalid_argument), or "" when it was made.
+template <typename F>
+std::string refusal(F&& make) {
+  try {
+    make();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// The CPU's clock counts from the chip's cycle 0 and one CPU drives the chip's bus: a board on a
+// chip that has run had every instant off by the chip's cycle, a second board on one chip never
+// ran (the first one's run took the chip's time). Both are refused where the board is made.
+TEST(Cpu51Board, AChipThatHasRunOrHasABoardIsRefused) {
+  Chip ran({Profile::spc3, BusMode::intel});
+  ran.step(1000);
+  EXPECT_EQ(refusal([&] { Cpu51Board b(ran, 24'000'000, 0x8000); }),
+            "the chip has run (cycle 1000): a board starts with a chip at cycle 0");
+  Chip chip({Profile::spc3, BusMode::intel});
+  {
+    Cpu51Board first(chip, 24'000'000, 0x8000);
+    EXPECT_EQ(refusal([&] { Cpu51Board b(chip, 24'000'000, 0x8000); }),
+              "the chip has a board already: one CPU drives a chip's bus");
+  }
+  EXPECT_EQ(refusal([&] { Cpu51Board b(chip, 24'000'000, 0x8000); }), "");  // the first is gone
+  // A C31 refused after its chip was taken gives it back (c31_test makes one after).
+  Chip dpc31({.profile = Profile::dpc31, .irq_controller = IrqController::c31});
+  EXPECT_NE(refusal([&] { Cpu51Board b(dpc31, 24'000'000, Cpu51Board::C31{0x0800}); }), "");
+  EXPECT_EQ(refusal([&] { Cpu51Board b(dpc31, 24'000'000, Cpu51Board::C31{0x1000}); }), "");
+}
+
+// 2^63 CPU clocks at 24 MHz are 2^64 chip cycles at 48 MHz: it wrapped to 0. The chip's time ends
+// at Chip::kLastCycle = 2^62 - 1, the chip cycle of clock 2^61 - 1; later clocks are refused.
+TEST(Cpu51Board, AClockPastTheChipsLastCycleIsRefusedNotWrapped) {
+  Chip chip({Profile::spc3, BusMode::intel});
+  Cpu51Board b(chip, 24'000'000, 0);
+  EXPECT_EQ(b.chip_cycle_of((std::uint64_t{1} << 61) - 1), Chip::kLastCycle - 1);
+  for (const std::uint64_t clock : {std::uint64_t{1} << 61, std::uint64_t{1} << 63, UINT64_MAX}) {
+    EXPECT_EQ(refusal([&] { (void)b.chip_cycle_of(clock); }),
+              fmt::format("cpu_clock {} out of range (0..2305843009213693951): past the chip's "
+                          "last cycle",
+                          clock));
+  }
 }
 
 }  // namespace
