@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <limits>
 
 #include "dpc31/fdl.hpp"
 #include "dpc31/hex.hpp"
@@ -24,10 +25,16 @@ struct Mismatch {
 class Replayer {
  public:
   explicit Replayer(const Trace& t) : t_(t), chip_(t.chip) {
-    chip_.on_irq_change(
-        [this](std::uint64_t cycle, bool active) { irq_.emplace_back(cycle, active); });
+    // Each event the chip makes ends the step in progress, to be checked before time goes on.
+    chip_.on_irq_change([this](std::uint64_t cycle, bool active) {
+      irq_.emplace_back(cycle, active);
+      chip_.request_stop();
+    });
     chip_.on_telegram([this](const Telegram& tg) {
-      if (tg.from_chip) tx_.push_back(tg);
+      if (tg.from_chip) {
+        tx_.push_back(tg);
+        chip_.request_stop();
+      }
     });
     t_bit_ = bit_cycles(chip_.clock_hz(), t.baud);
     access_ = chip_.bus_access_cycles();
@@ -38,9 +45,10 @@ class Replayer {
   ReplayOutcome run() {
     ReplayOutcome o;
     try {
-      for (const TraceLine& l : t_.lines) {
+      for (std::size_t i = 0; i < t_.lines.size(); ++i) {
+        const TraceLine& l = t_.lines[i];
         check_due(o, l.cycle, &l);
-        act(l, o);
+        act(l, i + 1 < t_.lines.size() ? &t_.lines[i + 1] : nullptr, o);
       }
       o.ok = true;
     } catch (const Mismatch& m) {
@@ -55,13 +63,22 @@ class Replayer {
     throw Mismatch{line, std::move(msg)};
   }
 
-  void step_to(const TraceLine& l, std::uint64_t c) {
+  // Steps to cycle `c`, checking each event of the chip as it comes with the check that follows
+  // the step (`horizon`, `next`: check_due's): a wrong trace fails at its first mismatch, not
+  // after the rest of its time (an 'end' near 2^62 ran for hours before it said so).
+  void step_to(const TraceLine& l, std::uint64_t c, ReplayOutcome& o, std::uint64_t horizon,
+               const TraceLine* next) {
     if (chip_.cycle() > c) {
       // The parser rules this out; kept as a guard against a model that moves time by itself.
       mismatch(l.line,
                fmt::format("expected the chip at cycle {}, got cycle {}", c, chip_.cycle()));
     }
-    chip_.step(c - chip_.cycle());
+    const std::uint64_t to = std::min(c, Chip::kLastCycle);  // where the chip's time ends
+    while (chip_.cycle() < to) {
+      chip_.clear_stop();  // one an access requested, too
+      chip_.step_until_irq(to - chip_.cycle());  // step() does not end at a request
+      if (!irq_.empty() || !tx_.empty()) check_due(o, horizon, next);
+    }
   }
 
   static std::string xint_text(std::uint64_t c, bool level) {
@@ -147,26 +164,30 @@ class Replayer {
     }
   }
 
-  void act(const TraceLine& l, ReplayOutcome& o) {
+  // Plays line `l`; `after` is the line after it (nullptr after the end), whose check of the
+  // expectations due follows the steps of `l`.
+  void act(const TraceLine& l, const TraceLine* after, ReplayOutcome& o) {
+    constexpr std::uint64_t kForever = std::numeric_limits<std::uint64_t>::max();
+    const std::uint64_t horizon = after != nullptr ? after->cycle : kForever;
     switch (l.kind) {
       case TraceKind::rx: {
-        step_to(l, l.cycle);
+        step_to(l, l.cycle, o, horizon, after);
         chip_.drive_rxd_chars(l.bytes, l.start, t_bit_, l.fault);
         ++o.telegrams_in;
         break;
       }
       case TraceKind::rxd:
-        step_to(l, l.cycle);
+        step_to(l, l.cycle, o, horizon, after);
         for (const auto& [c, lv] : l.edges) chip_.drive_rxd(c, lv);
         ++o.telegrams_in;
         break;
       case TraceKind::wr:
-        step_to(l, l.cycle - access_);
+        step_to(l, l.cycle - access_, o, horizon, after);
         chip_.write(l.addr, l.data);
         ++o.writes;
         break;
       case TraceKind::rd: {
-        step_to(l, l.cycle - access_);
+        step_to(l, l.cycle - access_, o, horizon, after);
         const std::uint8_t v = chip_.read(l.addr);
         if (v != l.data) {
           mismatch(l.line, fmt::format("expected rd {:04X} = {:02X} at cycle {}, got {:02X}",
@@ -182,7 +203,7 @@ class Replayer {
         pend_tx_.push_back(&l);
         return;
       case TraceKind::state: {
-        step_to(l, l.cycle);
+        step_to(l, l.cycle, o, l.cycle + 1, &l);
         check_due(o, l.cycle + 1, &l);  // a state line follows the expectations of its cycle
         const std::vector<TraceStateKey> now = trace_state(chip_);
         for (const TraceStateKey& want : l.state) {
@@ -197,8 +218,8 @@ class Replayer {
         return;
       }
       case TraceKind::end:
-        step_to(l, l.cycle);
-        check_due(o, std::numeric_limits<std::uint64_t>::max(), nullptr);
+        step_to(l, l.cycle, o, kForever, nullptr);
+        check_due(o, kForever, nullptr);
         if (!pend_irq_.empty() || !pend_tx_.empty()) {
           // The parser keeps expectations before the end; a guard all the same.
           mismatch(l.line, "expected every expectation due by the end");

@@ -502,6 +502,20 @@ TEST(Serve, BinaryJunkGetsErrorsOnly) {
   EXPECT_EQ(c.command("cycle"), "OK 0");
 }
 
+// A last line without its newline is cut off ("step 1000" cut to "step 10" would run), also at a
+// half-close, where the client still reads: one ERR for it, nothing run (docs/protocol.md).
+TEST(Serve, ACutLastLineIsNotRunAtAHalfClose) {
+  ServerProcess server(kCli, {"--tcp", "0"});
+  LineClient c = LineClient::tcp(server.port());
+  c.send("ping\nstep 100");
+  ASSERT_EQ(::shutdown(c.fd(), SHUT_WR), 0);
+  EXPECT_EQ(c.read_until_closed(),
+            (std::vector<std::string>{
+                "OK pong", "ERR syntax the last line has no newline: cut off, not executed"}));
+  LineClient other = LineClient::tcp(server.port());
+  EXPECT_EQ(other.command("cycle"), "OK 0");
+}
+
 // While one client floods the server without reading, another gets every answer right.
 TEST(Serve, FloodDoesNotStarveAWellBehavedClient) {
   ServerProcess server(kCli, {"--tcp", "0"});

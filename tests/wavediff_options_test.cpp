@@ -388,7 +388,7 @@ TEST(WavediffCli, ThroughTheDpc31Binary) {
   EXPECT_EQ(spawn({cli, "wavediff", a, b, "--xz", "maybe"}), 2);
   EXPECT_EQ(spawn({cli, "wavediff", a}), 2);
   EXPECT_EQ(spawn({cli, "wavediff", a, b, "--start", "c3"}, nullptr, out), 2);
-  EXPECT_EQ(slurp(out), "wavediff: cycle bounds (c123) need --clock\n");
+  EXPECT_EQ(slurp(out), "dpc31 wavediff: cycle bounds (c123) need --clock\n");
   EXPECT_EQ(spawn({cli, "wavediff", a, d.file("nope.vcd")}, nullptr, out), 2);
   EXPECT_EQ(slurp(out), d.file("nope.vcd") + ":0: cannot open: No such file or directory\n");
   // The same parser in-process.

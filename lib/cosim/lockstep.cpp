@@ -8,6 +8,7 @@
 #include <fstream>
 #include <random>
 #include <sstream>
+#include <system_error>
 
 #include "dpc31/dpv1.hpp"
 #include "dpc31/reg_ids.hpp"
@@ -624,21 +625,29 @@ bool write_window(const Stimulus& s, const DutOptions& o, std::string_view mutan
       return false;
     }
     f[k] = out[k].stream();
-    vcd_header(f[k], names[k]);
   }
-  Outputs last[2];
-  Stimulus::Iterator in = s.begin();
-  for (std::uint64_t c = 0; c < std::min<std::uint64_t>(to, s.size()); ++c, ++in) {
-    for (int k = 0; k < 2; ++k) {
-      sides[k]->step(*in);
-      if (c < from) continue;
-      const Outputs now = sides[k]->outputs();
-      fmt::print(f[k], "#{}\n0c\n#{}\n1c\n", 2 * c, 2 * c + 1);
-      for (std::size_t i = 0; i < Outputs::kCount; ++i) {
-        if (c == from || now.v[i] != last[k].v[i]) vcd_value(f[k], i, now.v[i]);
+  try {
+    for (int k = 0; k < 2; ++k) vcd_header(f[k], names[k]);
+    Outputs last[2];
+    Stimulus::Iterator in = s.begin();
+    for (std::uint64_t c = 0; c < std::min<std::uint64_t>(to, s.size()); ++c, ++in) {
+      for (int k = 0; k < 2; ++k) {
+        sides[k]->step(*in);
+        if (c < from) continue;
+        const Outputs now = sides[k]->outputs();
+        fmt::print(f[k], "#{}\n0c\n#{}\n1c\n", 2 * c, 2 * c + 1);
+        for (std::size_t i = 0; i < Outputs::kCount; ++i) {
+          if (c == from || now.v[i] != last[k].v[i]) vcd_value(f[k], i, now.v[i]);
+        }
+        last[k] = now;
       }
-      last[k] = now;
     }
+  } catch (const std::system_error& e) {
+    // fmt::print throws where a write fails (a full disk, ulimit -f): the file whose stream
+    // failed, as OutFile names one; the temporaries go with `out`.
+    const int k = std::ferror(f[0]) != 0 ? 0 : 1;
+    error = fmt::format("{}: cannot write: {}", out[k].path(), e.code().message());
+    return false;
   }
   for (auto& o_k : out) {
     if (!o_k.commit()) {

@@ -103,7 +103,7 @@ struct Client {
   [[nodiscard]] std::string_view input() const { return {in.data() + in_off, pending_in()}; }
 };
 
-enum class Got : std::uint8_t { none, line, too_long };
+enum class Got : std::uint8_t { none, line, too_long, cut };
 
 // A buffer read from the front up to `off`: emptied (its storage freed when it grew large), or
 // its consumed front dropped once that is more than a chunk.
@@ -463,10 +463,9 @@ Got Server::Impl::next_line(Client& c, std::string_view& line) const {
         c.in_off += std::min(in.size(), opt.max_line + 2);  // no newline in there
         return Got::too_long;
       }
-      if (c.eof && !in.empty()) {  // an unterminated last line
-        line = in;
+      if (c.eof && !in.empty()) {  // a last line without its newline: cut off, not run
         c.in_off = c.in.size();
-        return Got::line;
+        return Got::cut;
       }
       return Got::none;
     }
@@ -492,6 +491,11 @@ void Server::Impl::begin_close(Client& c, Clock::duration grace) {
 }
 
 void Server::Impl::handle(Client& c, Got got, std::string_view line) {
+  if (got == Got::cut) {
+    // "step 1000" cut to "step 10" would run (docs/protocol.md, "Lines").
+    queue(c, "ERR syntax the last line has no newline: cut off, not executed");
+    return;
+  }
   if (got == Got::too_long) {
     queue(c, fmt::format("ERR line_too_long a line has at most {} bytes; the rest up to the next "
                          "newline is discarded",

@@ -22,7 +22,10 @@ namespace dpc31::wavediff {
 namespace {
 
 constexpr std::size_t kBufSize = std::size_t{1} << 20;
-constexpr std::size_t kMaxToken = std::size_t{1} << 30;
+// The longest valid token is a value of the widest $var (2^24 bits): 16 Mi characters. The
+// buffer doubles from kBufSize, so 32 MiB holds it; a longer token is no VCD, refused before it
+// costs more memory.
+constexpr std::size_t kMaxToken = std::size_t{1} << 25;
 constexpr std::uint32_t kNone = UINT32_MAX;
 constexpr std::size_t kNoStep = SIZE_MAX;
 
@@ -243,7 +246,9 @@ class VcdReader final : public WaveReader {
     const std::size_t keep = end_ - from;
     if (from > 0 && keep > 0) std::memmove(buf_.data(), buf_.data() + from, keep);
     if (keep == buf_.size()) {
-      if (buf_.size() >= kMaxToken) error(line_, "token longer than 1 GiB");
+      if (buf_.size() >= kMaxToken)
+        error(line_,
+              "a token longer than 32 MiB (the widest value, 2^24 bits, has 16 Mi characters)");
       buf_.resize(buf_.size() * 2);
     }
     end_ = keep;
@@ -408,7 +413,16 @@ void VcdReader::parse_header() {
               fmt::format("bad timescale '{}' (1, 10 or 100 of s ms us ns ps fs)", shown(text)));
       }
     } else if (kw == "$var") {
-      if (a.size() < 4) error(kw_line, "bad $var (expected '$var type size id name $end')");
+      // `$var TYPE SIZE ID NAME [RANGE] $end`: another word is a declaration a missing $end let
+      // in, or a name with blanks, which no VCD has (they were joined into one name).
+      constexpr const char* kVarForm = "(expected '$var type size id name [range] $end')";
+      if (a.size() < 4) error(kw_line, fmt::format("bad $var {}", kVarForm));
+      const bool range = a.size() == 5 && a[4].starts_with('[');
+      if (a.size() > 4 && !range) {
+        const std::string& extra = a[a[4].starts_with('[') ? 5 : 4];
+        error(kw_line,
+              fmt::format("bad $var: unexpected '{}' before its $end {}", shown(extra), kVarForm));
+      }
       if (a[0] == "port") error(kw_line, "extended VCD ($var port) is not supported");
       if (a[0] == "string") error(kw_line, "string variables are not supported");
       unsigned width = 0;
@@ -418,8 +432,7 @@ void VcdReader::parse_header() {
         error(kw_line, fmt::format("bad $var size '{}'", shown(a[1])));
       }
       const bool real = is_real_type(a[0]);
-      std::string ref;
-      for (std::size_t i = 3; i < a.size(); ++i) ref += a[i];
+      const std::string ref = range ? a[3] + a[4] : a[3];
       Var v;
       split_reference(ref, v.name, v.msb, v.lsb);
       v.name = decl.name(v.name, kw_line);

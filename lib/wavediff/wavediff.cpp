@@ -31,6 +31,29 @@ namespace detail {
 
 namespace {
 
+// Warnings of one kind: the first kMaxWarnings, then one line with the count of the rest (50 000
+// signals named twice were 100 000 lines on stderr).
+class Warnings {
+ public:
+  static constexpr std::size_t kMaxWarnings = 10;
+  // `more` is the last line's text after its count: "{where}: warning: N {more}".
+  Warnings(std::vector<std::string>& out, std::string where, std::string more)
+      : out_(out), where_(std::move(where)), more_(std::move(more)) {}
+  void add(std::string warning) {
+    if (n_++ < kMaxWarnings) out_.push_back(std::move(warning));
+  }
+  void finish() {
+    if (n_ > kMaxWarnings)
+      out_.push_back(fmt::format("{}: warning: {} more {}", where_, n_ - kMaxWarnings, more_));
+  }
+
+ private:
+  std::vector<std::string>& out_;
+  std::string where_;
+  std::string more_;
+  std::size_t n_ = 0;
+};
+
 bool bits_equal(std::string_view a, std::string_view b, XzPolicy p) {
   if (a.size() == b.size() && a == b) return true;
   if (p == XzPolicy::strict && a.size() == b.size()) return false;
@@ -93,13 +116,14 @@ void Engine::setup(Report& rep) {
 
   if (clock_mode()) {
     if (o_.tolerance_fs != 0)
-      throw InputError("wavediff: --tolerance is for event mode; use --tolerance-cycles");
+      throw InputError("dpc31 wavediff: --tolerance is for event mode; use --tolerance-cycles");
   } else {
-    if (o_.tolerance_cycles != 0) throw InputError("wavediff: --tolerance-cycles needs --clock");
+    if (o_.tolerance_cycles != 0)
+      throw InputError("dpc31 wavediff: --tolerance-cycles needs --clock");
     if ((o_.start && o_.start->cycles) || (o_.end && o_.end->cycles)) {
-      throw InputError("wavediff: cycle bounds (c123) need --clock");
+      throw InputError("dpc31 wavediff: cycle bounds (c123) need --clock");
     }
-    if (!o_.clock_b.empty()) throw InputError("wavediff: --clock-b needs --clock");
+    if (!o_.clock_b.empty()) throw InputError("dpc31 wavediff: --clock-b needs --clock");
   }
   tol_ = clock_mode() ? o_.tolerance_cycles : to_common(o_.tolerance_fs, false);
   if (!clock_mode() && o_.end) {  // an FST reader may skip the blocks after the window
@@ -154,16 +178,18 @@ void Engine::setup(Report& rep) {
   if (!map.empty()) {
     std::unordered_set<std::string> an;
     for (const LSig& l : A.sigs) an.insert(l.name);
+    Warnings not_a(rep.warnings, o_.map_file, "names of the map not in A");
+    Warnings not_b(rep.warnings, o_.map_file, "names of the map not in B");
     for (MapEntry& e : map) {
       if (an.count(e.a) == 0) {
-        rep.warnings.push_back(
-            fmt::format("{}:{}: warning: no signal '{}' in A", o_.map_file, e.line, e.a));
+        not_a.add(fmt::format("{}:{}: warning: no signal '{}' in A", o_.map_file, e.line, e.a));
       }
       if (!e.used_b) {
-        rep.warnings.push_back(
-            fmt::format("{}:{}: warning: no signal '{}' in B", o_.map_file, e.line, e.b));
+        not_b.add(fmt::format("{}:{}: warning: no signal '{}' in B", o_.map_file, e.line, e.b));
       }
     }
+    not_a.finish();
+    not_b.finish();
   }
 
   if (clock_mode()) {
@@ -187,14 +213,16 @@ void Engine::setup(Report& rep) {
   };
   auto index = [&](Side& s, std::uint32_t clock) {
     std::map<std::string, std::uint32_t> m;
+    Warnings twice(rep.warnings, s.r->path(), "signals named twice, the second ignored");
     for (std::uint32_t i = 0; i < s.sigs.size(); ++i) {
       const LSig& l = s.sigs[i];
       if (l.joined_member || i == clock || !wanted(l.name)) continue;
       if (!m.emplace(l.name, i).second) {
-        rep.warnings.push_back(fmt::format(
-            "{}: warning: two signals named '{}', the second ignored", s.r->path(), l.name));
+        twice.add(fmt::format("{}: warning: two signals named '{}', the second ignored",
+                              s.r->path(), l.name));
       }
     }
+    twice.finish();
     return m;
   };
   const auto ia = index(A, clock_a);
@@ -230,7 +258,8 @@ void Engine::setup(Report& rep) {
   }
   rep.compared = pairs.size();
   if (pairs.empty() && rep.only_a.empty() && rep.only_b.empty() && rep.structural.empty()) {
-    throw InputError("wavediff: no signals to compare (check --include/--exclude and --strip)");
+    throw InputError(
+        "dpc31 wavediff: no signals to compare (check --include/--exclude and --strip)");
   }
 
   // Which pairs each slot feeds.

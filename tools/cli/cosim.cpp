@@ -11,8 +11,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <tuple>
 
 #include "chip_choice.hpp"
 #include "lockstep.hpp"
@@ -132,6 +134,19 @@ bool can_be_directory(const std::filesystem::path& dir, std::string& why) {
   return true;  // a relative path below the working directory
 }
 
+// The files a waveform window (--vcd, --dump) writes into its directory.
+const char* const kWindowFiles[] = {"emu.vcd", "rtl.vcd", "rtl_internal.fst"};
+
+// "" if each of the window's files in `dir` can be written (opened, then discarded), else the
+// one-line reason: checked before the seeds run, not found after them.
+std::string window_unwritable(const std::string& dir) {
+  for (const char* name : kWindowFiles) {
+    outfile::OutFile out;
+    if (!out.open(fmt::format("{}/{}", dir, name))) return out.error();
+  }
+  return "";
+}
+
 std::string junit(const std::string& profile, const nlohmann::json& results) {
   std::string cases;
   int failures = 0;
@@ -206,6 +221,27 @@ bool load_rtl(const CosimOptions& o, cosim::DutOptions& dut, std::string& id) {
 // checks that these are the same in every shard (docs/regression.md).
 const char* const kRunKeys[] = {"profile",         "bus",       "variant", "mutant", "rtl",
                                 "cycles_per_seed", "keep_going"};
+
+// "" if the run keys of a shard's summary have the types a run writes, else what is wrong with
+// the first that has not ("FIELD: VALUE is not …"): equal in every shard is not enough.
+std::string run_key_mistyped(const nlohmann::json& j) {
+  for (const char* k : kRunKeys) {
+    const nlohmann::json& v = j[k];
+    const std::string_view key = k;
+    const char* want = nullptr;
+    if (key == "variant") {
+      if (!v.is_null() && !v.is_number_unsigned()) want = "null or a variant number";
+    } else if (key == "cycles_per_seed") {
+      if (!v.is_number_unsigned()) want = "a number of cycles";
+    } else if (key == "keep_going") {
+      if (!v.is_boolean()) want = "true or false";
+    } else if (!v.is_string()) {
+      want = "a string";
+    }
+    if (want != nullptr) return fmt::format("{}: {} is not {}", k, shown(v.dump()), want);
+  }
+  return "";
+}
 
 // A shard's summary nests 3 levels (the object, results, a result): deeper input is refused
 // while it is parsed, before it is built (a 400 KB file of '[' crashed the merge, a 40 KB one
@@ -341,6 +377,15 @@ int run_cosim(const CosimOptions& given) {
     return 2;
   }
   if (!o.session.empty()) return run_session_mode(o);
+  // The run's seeds, base + seeds (one past the last) included, are 64-bit numbers: a range that
+  // wrapped past 2^64 - 1 to 0 ran seeds of another run and summed to a summary merge refuses.
+  if (o.replay.empty() && o.seeds > std::numeric_limits<std::uint64_t>::max() - o.seed_base) {
+    fmt::print(stderr,
+               "dpc31 cosim: --seed-base {} with --seeds {}: the seeds run past {}, the last "
+               "64-bit number\n",
+               o.seed_base, o.seeds, std::numeric_limits<std::uint64_t>::max());
+    return 2;
+  }
   // Opened before the seeds run: a bad path is one line up front, not after minutes.
   outfile::OutFile junit_out;
   if (!o.junit.empty() && !junit_out.open(o.junit)) {
@@ -388,6 +433,33 @@ int run_cosim(const CosimOptions& given) {
     }
     return 2;
   }
+  // The waveform windows' files, checked before the seeds run: one that cannot be written was
+  // found only after them. --dump always writes its directory, made now; --vcd's is made at a
+  // divergence, its files are checked now if it is there.
+  for (const auto& [opt, dir, make] :
+       {std::tuple{"--dump", o.dump_dir, true}, std::tuple{"--vcd", o.vcd_dir, false}}) {
+    if (dir.empty()) continue;
+    std::error_code ec;
+    if (make) std::filesystem::create_directories(dir, ec);
+    if (ec) {
+      fmt::print(stderr, "dpc31 cosim: {} {}: cannot create the directory: {}\n", opt, dir,
+                 ec.message());
+      return 2;
+    }
+    if (!std::filesystem::is_directory(dir, ec)) continue;
+    if (const std::string why = window_unwritable(dir); !why.empty()) {
+      fmt::print(stderr, "{}\n", why);
+      return 2;
+    }
+  }
+  // A model built without tracing (the built-in mutants') writes no rtl_internal.fst: a note.
+  // Any other output that fails in the run is exit 2, after the summary and the JUnit, which
+  // record the seeds that ran; the first failure is the one line.
+  const bool traced = dut.rtl != nullptr || !rtl_mutant_profile(o.mutant);
+  std::string failed_output;
+  const auto output_failed = [&failed_output](const std::string& error) {
+    if (failed_output.empty()) failed_output = error;
+  };
   // Seeds of this shard: a contiguous part of [seed_base, seed_base + seeds).
   const std::uint64_t lo = o.seed_base + o.seeds * (o.shard - 1) / o.shards;
   const std::uint64_t hi = o.seed_base + o.seeds * o.shard / o.shards;
@@ -442,7 +514,7 @@ int run_cosim(const CosimOptions& given) {
         if (!o.quiet)
           fmt::print(stderr, "  shrunk to {} stimulus events: {}\n", events(small), trace);
       } else {
-        fmt::print(stderr, "{}\n", error);
+        output_failed(error);
       }
       if (!o.vcd_dir.empty()) {
         const std::uint64_t d = small.size() - 1;
@@ -450,10 +522,12 @@ int run_cosim(const CosimOptions& given) {
         if (write_window(small, dut, o.mutant, from, d + o.window + 1, o.vcd_dir, error)) {
           entry["vcd"] = {o.vcd_dir + "/emu.vcd", o.vcd_dir + "/rtl.vcd"};
         } else {
-          fmt::print(stderr, "{}\n", error);
+          output_failed(error);
         }
         if (write_rtl_fst(small, dut, o.mutant, o.vcd_dir + "/rtl_internal.fst", error)) {
           entry["fst"] = o.vcd_dir + "/rtl_internal.fst";
+        } else if (traced) {
+          output_failed(error);
         } else if (!o.quiet) {
           fmt::print(stderr, "  {}\n", error);
         }
@@ -474,12 +548,13 @@ int run_cosim(const CosimOptions& given) {
     // The whole run of the first stimulus, both sides, for wavediff or GTKWave.
     const Stimulus s = runs.empty() ? random_stimulus({o.profile, lo, o.cycles}) : runs[0].second;
     std::string error;
-    if (!write_window(s, dut, o.mutant, 0, s.size(), o.dump_dir, error)) {
-      fmt::print(stderr, "{}\n", error);
-      return 2;
-    }
-    if (!write_rtl_fst(s, dut, o.mutant, o.dump_dir + "/rtl_internal.fst", error) && !o.quiet) {
-      fmt::print(stderr, "{}\n", error);
+    if (!write_window(s, dut, o.mutant, 0, s.size(), o.dump_dir, error)) output_failed(error);
+    if (!write_rtl_fst(s, dut, o.mutant, o.dump_dir + "/rtl_internal.fst", error)) {
+      if (traced) {
+        output_failed(error);
+      } else if (!o.quiet) {
+        fmt::print(stderr, "{}\n", error);
+      }
     }
   }
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -511,6 +586,10 @@ int run_cosim(const CosimOptions& given) {
   if (!o.junit.empty() &&
       !(junit_out.write(junit(o.profile_name, results)) && junit_out.commit())) {
     fmt::print(stderr, "{}\n", junit_out.error());
+    return 2;
+  }
+  if (!failed_output.empty()) {
+    fmt::print(stderr, "{}\n", failed_output);
     return 2;
   }
   return diverged == 0 ? 0 : 1;
@@ -568,6 +647,8 @@ int run_cosim_merge(const MergeOptions& o) {
           !r.value("cycle", nlohmann::json()).is_number_integer())
         return fail(fmt::format("{}: a result without seed, diverged and cycle", f));
     }
+    if (const std::string why = run_key_mistyped(j); !why.empty())
+      return fail(fmt::format("{}: {}", f, why));
     parts.push_back({f, std::move(j)});
   }
   if (parts.empty()) return fail("no summaries to merge");

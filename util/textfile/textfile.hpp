@@ -24,10 +24,10 @@ int cut_off_line(std::string_view text, std::string& error);
 // cut_off_line for a file whose format ignores blank lines, read line by line. A binary file (a
 // control byte other than tab, CR, LF in it) seldom ends in a newline: it is parsed with its
 // cut line blank, and an error `parse` finds before that line is the file's (refused at its first
-// line, not for a cut end). A text file cut off is the cut's error whatever else: a check of the
-// whole file (a fault with no request after it, a missing 'end' line) may name an earlier line
-// only because the last one was cut. `parse(text, message)` returns the line it failed at with
-// `message` set, or 0. 0 if the last line is not cut.
+// line, not for a cut end); one without any newline is parsed whole. A text file cut off is the
+// cut's error whatever else: a check of the whole file (a fault with no request after it, a missing
+// 'end' line) may name an earlier line only because the last one was cut. `parse(text, message)`
+// returns the line it failed at with `message` set, or 0. 0 if the last line is not cut.
 template <typename Parse>
 int cut_or_earlier_error(std::string_view text, std::string& error, Parse parse) {
   const int cut = cut_off_line(text, error);
@@ -37,9 +37,12 @@ int cut_or_earlier_error(std::string_view text, std::string& error, Parse parse)
     return (u < 0x20 && c != '\t' && c != '\r' && c != '\n') || u == 0x7F;
   });
   if (!binary) return cut;
+  // A file without a newline at all is one line, the first: its error is the file's, as a
+  // garbage first line with one would be (not a cut: nothing before it was whole).
+  const std::size_t kept = cut == 1 ? text.size() : text.rfind('\n') + 1;
   std::string earlier;
-  const int at = parse(std::string(text.substr(0, text.rfind('\n') + 1)) + '\n', earlier);
-  if (at <= 0 || at >= cut) return cut;
+  const int at = parse(std::string(text.substr(0, kept)) + '\n', earlier);
+  if (at <= 0 || at > cut || (at == cut && cut != 1)) return cut;
   error = std::move(earlier);
   return at;
 }
