@@ -101,9 +101,8 @@ Dpv1Answer Dpv1Master::write(std::uint8_t slot, std::uint8_t index, pdu::Bytes d
   return a;
 }
 
-Dpv1Answer Dpv1Master::alarm_ack(const pdu::AlarmAck& ack) {
-  Dpv1Answer a = transfer(sap::MSAC_C1_Alarm, sap::MSAC_C1, ack.build(),
-                          cycles_10ms(rules_.c1_response_timeout));
+Dpv1Answer Dpv1Master::alarm_ack(const pdu::AlarmAck& ack, std::uint8_t dsap) {
+  Dpv1Answer a = transfer(dsap, sap::MSAC_C1, ack.build(), cycles_10ms(rules_.c1_response_timeout));
   classify(a, Function::Alarm_Ack, pdu::AlarmAck::parse(a.du) == ack);
   return a;
 }
@@ -170,13 +169,13 @@ Dpv1Answer Dpv1Master::c2_abort(const pdu::Abort& abort) {
     return a;
   }
   const Exchange ex = m_.retry(m_.acyclic(*c2_sap_, rules_.c2_ssap, abort.build()), rules_.retries);
-  c2_sap_.reset();
   a.start = ex.request_start;
   a.last = ex.answer;
   a.end = ex.answer ? ex.answer_end : ex.request_end;
   a.outcome = !ex.answer                 ? Dpv1Answer::Outcome::no_answer
               : ex.answer->sd == fdl::SC ? Dpv1Answer::Outcome::positive
                                          : Dpv1Answer::Outcome::refused;
+  if (a.outcome == Dpv1Answer::Outcome::positive) c2_sap_.reset();
   return a;
 }
 

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "dp_master.hpp"
+#include "dpc31/dp.hpp"
 #include "dpc31/pdu.hpp"
 
 namespace dpc31 {
@@ -53,10 +54,11 @@ class Dpv1Master {
  public:
   Dpv1Master(const Chip& chip, DpMaster& m, Dpv1Rules r = {}) : chip_(chip), m_(m), rules_(r) {}
 
-  // MSAC_C1: Read / Write from SAP 51 to SAP 51, Alarm_Ack from SAP 51 to SAP 50.
+  // MSAC_C1: Read / Write from SAP 51 to SAP 51, Alarm_Ack from SAP 51 to the slave's SAP 50 or
+  // 51 (`dsap`; the standard allows both).
   Dpv1Answer read(std::uint8_t slot, std::uint8_t index, std::uint8_t length);
   Dpv1Answer write(std::uint8_t slot, std::uint8_t index, pdu::Bytes data);
-  Dpv1Answer alarm_ack(const pdu::AlarmAck& ack);
+  Dpv1Answer alarm_ack(const pdu::AlarmAck& ack, std::uint8_t dsap = sap::MSAC_C1_Alarm);
 
   // MSAC_C2. initiate sends the Initiate request to SAP 49 and polls it until the resource
   // manager's immediate response (56h: the connection's SAP), then polls the connection's SAP
@@ -67,7 +69,9 @@ class Dpv1Master {
   Dpv1Answer c2_write(std::uint8_t slot, std::uint8_t index, pdu::Bytes data);
   Dpv1Answer c2_transport(std::uint8_t slot, std::uint8_t index, pdu::Bytes data);
   Dpv1Answer c2_idle();
-  // Abort: one SRD, answered SC; the connection is closed on our side whatever the answer.
+  // Abort: one SRD, answered SC; only then is the connection closed on our side. Refused (RS,
+  // RR) or unanswered, the slave may still hold it: it stays known, and the Abort may be sent
+  // again.
   Dpv1Answer c2_abort(const pdu::Abort& a);
   [[nodiscard]] std::optional<std::uint8_t> c2_sap() const { return c2_sap_; }
 

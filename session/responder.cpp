@@ -265,6 +265,14 @@ void Responder::isr(BusPort& c) {
       }
     }
   }
+  // MSAC_C1 belongs to the class-1 master's Data_Exchange: a new parameterisation (as DO4's
+  // driver does) and leaving Data_Exchange stop it, entering it starts it (docs/dpv1.md).
+  if (dpv1_ && (ir & irq::New_Prm_Data) != 0) dpv1_->data_exchange(c, false);
+  if (dpv1_ && (ir & irq::Go_Leave_Data_Exchange) != 0) {
+    const auto dp =
+        static_cast<DpState>(field_of(read16(c, RegId::Status_Reg), fields::Status_Reg::DP_State));
+    dpv1_->data_exchange(c, dp == DpState::Data_Exchange);
+  }
   if (dpv1_ && (ir & kDpv1Events) != 0) {
     // Acknowledged before the buffers are looked at: an indication stored meanwhile raises the
     // event again instead of being lost.

@@ -31,8 +31,9 @@ std::uint32_t Dpv1User::init(BusPort& c, std::uint32_t next, std::uint32_t seg_s
     sl.segment = static_cast<std::uint8_t>(next);
     sl.buffer = next << seg_shift;
     next += (hd::kBytes + kMaxLen[s] + seg - 1) / seg;
-    // The connection's SAP stays off (Ind_Buf_Ptr0 00h) until an Initiate opens it.
-    const std::uint8_t ind = s == connection ? 0 : sl.segment;
+    // The connection's SAP stays off (Ind_Buf_Ptr0 00h) until an Initiate opens it, MSAC_C1's
+    // until Data_Exchange.
+    const std::uint8_t ind = s == rm ? sl.segment : 0;
     // MSAC_C1 is the class-1 master's only: a stray request from another station would take
     // the one buffer, and the C1 buffer has no time-out that frees it.
     const std::uint8_t sa = s == c1 || s == alarm ? cfg_.c1_master : en::kAll;
@@ -47,6 +48,14 @@ std::uint32_t Dpv1User::init(BusPort& c, std::uint32_t next, std::uint32_t seg_s
               find_reg(c.chip().profile(), RegId::R_FDL_SAP_List_Ptr)->read_addr),
           static_cast<std::uint8_t>(list));
   return next;
+}
+
+void Dpv1User::data_exchange(BusPort& c, bool in) {
+  for (const Sap s : {c1, alarm}) {
+    const Slot& sl = slots_[s];
+    c.write(sl.entry + en::Ind_Buf_Ptr0, in ? sl.segment : 0x00);
+    if (!in) c.write(sl.buffer + hd::Control, 0x00);
+  }
 }
 
 void Dpv1User::close(BusPort& c) {
@@ -94,7 +103,8 @@ std::optional<pdu::Bytes> Dpv1User::answer(BusPort& c, Sap s, const pdu::Bytes& 
   const std::optional<Function> f = pdu::function_of(req);
   if (!f) return std::nullopt;
   switch (s) {
-    case c1:
+    case c1:  // Alarm_Ack comes on SAP 50 or 51 (manual-quotes.md, "DPV1")
+      if (*f == Function::Alarm_Ack) return answer(c, alarm, req);
       if (*f != Function::Read && *f != Function::Write) return std::nullopt;
       return record(*f, req);
     case alarm: {
@@ -106,6 +116,7 @@ std::optional<pdu::Bytes> Dpv1User::answer(BusPort& c, Sap s, const pdu::Bytes& 
     case rm: {
       const std::optional<pdu::Initiate> i = pdu::Initiate::parse(req, false);
       if (!i) return std::nullopt;
+      rm_timeout_ = i->send_timeout;
       if (open_) {
         return pdu::ErrorResponse{Function::Initiate, pdu::Error_Decode_DPV1,
                                   pdu::error::Resource_Busy, 0}
@@ -165,6 +176,10 @@ void Dpv1User::serve(BusPort& c, std::uint16_t ir) {
       c.write(sl.buffer + hd::Length, static_cast<std::uint8_t>(res->size()));
       c.write(sl.buffer + hd::Function_Code, kFcResponse);
       c.write(sl.buffer + hd::Control, hd::USER | hd::RESP);
+      if (s == rm) {
+        rm_waits_ = true;
+        rm_since_ = c.cycle();
+      }
     }
   }
   if ((ir & irq::Poll_End_Ind) != 0) {
@@ -173,14 +188,26 @@ void Dpv1User::serve(BusPort& c, std::uint16_t ir) {
       if ((b0 & en::Response_Sent) == 0) continue;
       c.write(slots_[s].entry + en::Sap, static_cast<std::uint8_t>(b0 & ~en::Response_Sent));
       if (s == connection) activity_ = c.cycle();
+      if (s == rm) rm_waits_ = false;
     }
   }
+  if ((ir & irq::User_Timer_Clock) == 0) return;
+  const auto elapsed = [&](std::uint64_t since, std::uint16_t timeout) {
+    return c.cycle() - since >= std::uint64_t{timeout} * c.chip().clock_hz() / 100;
+  };
   // The slave's side of the connection time-out: no request stored and no response sent for
   // Send_Timeout closes it (the master's next request there gets RS).
-  if ((ir & irq::User_Timer_Clock) != 0 && open_ &&
-      c.cycle() - activity_ >= std::uint64_t{send_timeout_} * c.chip().clock_hz() / 100) {
+  if (open_ && elapsed(activity_, send_timeout_)) {
     close(c);
     ++timeouts;
+  }
+  // The resource manager has one buffer, and the chip answers every Initiate RR while its
+  // response waits there: a response its master never polls for is withdrawn after that
+  // Initiate's Send_Timeout, the time the master itself waits for it.
+  if (rm_waits_ && elapsed(rm_since_, rm_timeout_)) {
+    c.write(slots_[rm].buffer + hd::Control, 0x00);
+    rm_waits_ = false;
+    ++rm_withdrawn;
   }
 }
 

@@ -39,18 +39,23 @@ class Dpv1User {
 
   explicit Dpv1User(Dpv1UserConfig cfg) : cfg_(std::move(cfg)) {}
 
-  // The SAP list (SAPs 51 and 50 for the class-1 master only, 49 for anybody, and the
-  // connection's SAP switched off) and its buffers from segment `next` on; writes
-  // R_FDL_SAP_List_Ptr. Returns the next free segment.
+  // The SAP list (SAPs 51 and 50 for the class-1 master only and switched off until Data_Exchange,
+  // 49 for anybody, and the connection's SAP switched off) and its buffers from segment `next`
+  // on; writes R_FDL_SAP_List_Ptr. Returns the next free segment.
   std::uint32_t init(BusPort& c, std::uint32_t next, std::uint32_t seg_shift);
+  // From the ISR on Go/Leave_Data_Exchange: MSAC_C1 (SAPs 51 and 50) is served in Data_Exchange
+  // only; leaving it switches them off and frees their buffers (a response not collected too).
+  void data_exchange(BusPort& c, bool in);
   // From the ISR with the Int_Reg it read.
   void serve(BusPort& c, std::uint16_t ir);
-  // User_Timer_Clock is wanted while a connection is open (its time-out).
-  [[nodiscard]] bool timer_wanted() const { return open_; }
+  // User_Timer_Clock is wanted while a connection is open or the resource manager's response
+  // waits (their time-outs).
+  [[nodiscard]] bool timer_wanted() const { return open_ || rm_waits_; }
 
   [[nodiscard]] const std::vector<Dpv1Record>& records() const { return cfg_.records; }
   std::vector<pdu::AlarmAck> alarm_acks;  // every Alarm_Ack taken
   std::uint32_t timeouts = 0;             // connections closed by their Send_Timeout
+  std::uint32_t rm_withdrawn = 0;         // resource manager responses nobody collected
 
  private:
   enum Sap : std::uint8_t { c1, alarm, rm, connection, kSaps };
@@ -71,6 +76,11 @@ class Dpv1User {
   bool open_ = false;
   std::uint16_t send_timeout_ = 0;  // 10 ms
   std::uint64_t activity_ = 0;      // the connection's last request stored or response sent
+  // The resource manager's response waits for its poll since `rm_since_`, at most the Initiate's
+  // Send_Timeout `rm_timeout_` (10 ms): then it is withdrawn and SAP 49 takes Initiates again.
+  bool rm_waits_ = false;
+  std::uint16_t rm_timeout_ = 0;
+  std::uint64_t rm_since_ = 0;
 };
 
 }  // namespace dpc31

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 
+#include "dpc31/dp.hpp"
 #include "scenario_lex.hpp"
 #include "textfile.hpp"
 
@@ -136,6 +137,8 @@ bool parse_action(std::string_view cmd, std::span<const std::string_view> pos,
         spec = static_cast<std::uint32_t>(number(v, kAlarmSpec));
       } else if (k == "add_ack") {
         if (scenario_lex::flag(v, k)) st.count |= 0x04;
+      } else if (k == "sap") {  // the slave's SAP: 50 or 51 (manual-quotes.md, "DPV1")
+        st.dsap = static_cast<std::uint8_t>(number(v, k, sap::MSAC_C1_Alarm, sap::MSAC_C1));
       } else {
         unknown(k, cmd);
       }
@@ -204,7 +207,8 @@ Dpv1Answer act(Dpv1Master& m, const ScenarioStep& st) {
   const std::string_view c = st.name;
   if (c == "dpv1_read") return m.read(slot, index, length);
   if (c == "dpv1_write") return m.write(slot, index, st.bytes);
-  if (c == "alarm_ack") return m.alarm_ack({slot, index, length});
+  if (c == "alarm_ack")
+    return m.alarm_ack({slot, index, length}, st.dsap.value_or(sap::MSAC_C1_Alarm));
   if (c == "c2_initiate") {
     pdu::Initiate req;
     req.send_timeout = static_cast<std::uint16_t>(st.count);
@@ -219,30 +223,29 @@ Dpv1Answer act(Dpv1Master& m, const ScenarioStep& st) {
       {0, static_cast<std::uint8_t>(st.value), static_cast<std::uint8_t>(st.value2), 0});
 }
 
+// "expected WHAT WANT, got GOT" as every expect's line: WHAT names the check once (`dpv1
+// response`, `dpv1 error`, `dpv1 polls`, `dpv1` for an outcome), WANT the line's value.
 Check check(const ScenarioStep& st, const std::optional<Dpv1Answer>& last) {
-  Check c{"dpv1 " + (st.name == "data" ? std::string("response") : st.name), "", ""};
+  const bool outcome = st.name != "data" && st.name != "error" && st.name != "polls";
+  Check c{outcome ? std::string("dpv1") : "dpv1 " + (st.name == "data" ? "response" : st.name), "",
+          ""};
+  c.want = outcome ? st.name : st.name == "polls" ? std::to_string(st.value) : bytes_text(st.bytes);
   if (!last) {
-    c.want = st.name == "polls" ? std::to_string(st.value) : bytes_text(st.bytes);
     c.got = "no DPV1 exchange yet";
     return c;
   }
   const std::string got = answer_summary(*last);
   if (st.name == "polls") {
-    c.want = std::to_string(st.value);
     c.got = std::to_string(last->polls);
   } else if (st.name == "data") {
-    c.want = bytes_text(st.bytes);
     c.got = last->outcome == Dpv1Answer::Outcome::positive ? bytes_text(last->du) : got;
   } else if (st.name == "error") {
-    c.want = "negative " + bytes_text(st.bytes);
-    c.got = last->error ? fmt::format("negative {:02X} {:02X} {:02X}", last->error->error_decode,
+    c.got = last->error ? fmt::format("{:02X} {:02X} {:02X}", last->error->error_decode,
                                       last->error->error_code_1, last->error->error_code_2)
                         : got;
   } else if (st.name == "sc") {
-    c.want = "sc";
     c.got = last->outcome == Dpv1Answer::Outcome::positive && last->du.empty() ? "sc" : got;
   } else {
-    c.want = st.name;
     const std::string o = outcome_name(last->outcome);
     c.got = (o == "no answer" ? "no_answer" : o) == st.name ? st.name : got;
   }

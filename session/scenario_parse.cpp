@@ -183,6 +183,19 @@ class Parser {
       fail_at(user_wd_value_line_, user_wd_value_needs_user_wd("user user_wd_value="));
     }
     if (wd_base_line_ != 0) wd_base_checked(s_.user.slave, wd_base_line_);
+    // The built-in user side's DPV1 part answers only what the chip hands it: without
+    // DPV1_Enable the SAP list stays off (every request RS), without a record there is none.
+    const std::vector<std::uint8_t>& prm = s_.user.slave.user_prm;
+    if (record_line_ != 0 && (prm.empty() || (prm[0] & dpv1::status1::DPV1_Enable) == 0)) {
+      fail_at(record_line_,
+              "record needs DPV1_Enable (slave user_prm= byte 0 bit 7): without it the VPC3+ "
+              "keeps the SAP list off and answers every DPV1 request RS");
+    }
+    if (work_line_ != 0 && record_line_ == 0) {
+      fail_at(work_line_,
+              "dpv1 work= is the built-in user side's DPV1 time and needs a record: without one "
+              "it serves no DPV1");
+    }
     const std::uint8_t slave = s_.user.slave.address;
     if (slave == s_.master.address) {
       // The later of the two lines that set them (one may be the other's default).
@@ -433,6 +446,12 @@ class Parser {
       }
     } else if (!scenario_dpv1::parse_header(cmd_, pos_, opts_, s_)) {
       return false;
+    } else if (cmd_ == "record" && record_line_ == 0) {
+      record_line_ = step_.line;
+    } else if (cmd_ == "dpv1") {
+      for (const auto& o : opts_) {
+        if (o.first == "work") work_line_ = step_.line;
+      }
     }
     return true;
   }
@@ -772,6 +791,8 @@ class Parser {
   int substitute_line_ = 0;
   int dx_out_port_line_ = 0;
   int user_wd_value_line_ = 0;
+  int record_line_ = 0;  // the first `record`
+  int work_line_ = 0;    // `dpv1 work=`
   mutable int wd_base_line_ = 0;
   // The lines of the stations' addresses and of the user's inputs (0: the default).
   int master_address_line_ = 0;

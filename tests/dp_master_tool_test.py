@@ -358,7 +358,15 @@ def bad_arguments_exit_2():
             ("station 5: the master's own --address", ["--address", "5", "--slave",
                                                        "5:0x0D04:21,10"]),
             ("--search takes a positive number of seconds", ["--search", "inf"] + DO4),
-            ("--wait takes a number of seconds, 0 or more", ["--wait", "-3"] + DO4)):
+            ("--wait takes a number of seconds, 0 or more", ["--wait", "-3"] + DO4),
+            # DPV1 values the scenario refuses were sent (the audit a11 of 2026-12-06, finding 9):
+            # a Read of 0 or 241 bytes, slot 255, an option given twice (the last one won).
+            ("--dpv1-read: length 0 out of range (1..240)", ["--dpv1-read", "0,1,0"] + DO4),
+            ("--dpv1-read: length 241 out of range (1..240)", ["--dpv1-read", "0,1,F1"] + DO4),
+            ("--dpv1-read: slot 255 out of range (0..254)", ["--dpv1-read", "FF,1,1"] + DO4),
+            ("--dpv1-write: slot 255 out of range (0..254)", ["--dpv1-write", "FF,1,1"] + DO4),
+            ("--dpv1-read given twice", ["--dpv1-read", "0,1,1", "--dpv1-read", "0,1,2"] + DO4),
+            ("--c1-timeout given twice", ["--c1-timeout", "1", "--c1-timeout", "2"] + DO4)):
         exits(2, want, "/nonexistent", *args)
     # A port beyond 65535 was taken modulo 2^16 (99999: 34463).
     exits(2, "dp_master: socket://127.0.0.1:99999: not socket://HOST:PORT (PORT 1..65535)",

@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "dpc31/dp.hpp"
 #include "responder.hpp"
 #include "scenario.hpp"
@@ -159,8 +161,150 @@ TEST(Dpv1Scenario, AbortIsCheckedAsSc) {
       run_scenario(s, {}, [&](const std::string& line) { errors.push_back(line); });
   EXPECT_EQ(o.passed, 1u);
   ASSERT_EQ(errors.size(), 2u);
-  EXPECT_TRUE(errors[0].starts_with("t.scn:6: expected dpv1 sc sc, got 57 ")) << errors[0];
-  EXPECT_EQ(errors[1], "t.scn:9: expected dpv1 refused refused, got SC after 0 polls");
+  EXPECT_TRUE(errors[0].starts_with("t.scn:6: expected dpv1 sc, got 57 ")) << errors[0];
+  EXPECT_EQ(errors[1], "t.scn:9: expected dpv1 refused, got SC after 0 polls");
+}
+
+// A failed `expect dpv1` reads as every expect's line, "expected WHAT WANT, got GOT", the word
+// once (the audit a11 of 2026-12-06: "expected dpv1 sc sc", "expected dpv1 error negative ...",
+// and "expected dpv1 sc -" before any exchange).
+TEST(Dpv1Scenario, FailedChecksNameTheirValueOnce) {
+  const char* text =
+      "profile vpc3plus\nbaud 12000000\nslave user_prm=C0,00,00\nrecord slot=0 index=1 data=01\n"
+      "startup\nexpect dpv1 sc\nexpect dpv1 polls 2\ndpv1_read slot=0 index=2 length=1\n"
+      "expect dpv1 timeout\nexpect dpv1 error 80,B2,00\nexpect dpv1 5E,00,02,01\n"
+      "expect dpv1 polls 1\nexpect dpv1 error 80,B0,00\n";
+  Scenario s;
+  ScenarioError err;
+  ASSERT_TRUE(parse_scenario(text, "t.scn", s, err)) << err.text();
+  std::vector<std::string> errors;
+  const ScenarioOutcome o =
+      run_scenario(s, {}, [&](const std::string& line) { errors.push_back(line); });
+  EXPECT_EQ(o.passed, 1u);
+  EXPECT_EQ(errors, (std::vector<std::string>{
+                        "t.scn:6: expected dpv1 sc, got no DPV1 exchange yet",
+                        "t.scn:7: expected dpv1 polls 2, got no DPV1 exchange yet",
+                        "t.scn:9: expected dpv1 timeout, got negative DE 80 B0 00 after 0 polls",
+                        "t.scn:10: expected dpv1 error 80 B2 00, got 80 B0 00",
+                        "t.scn:11: expected dpv1 response 5E 00 02 01, got negative DE 80 B0 00 "
+                        "after 0 polls",
+                        "t.scn:12: expected dpv1 polls 1, got 0",
+                    }));
+}
+
+// Runs a scenario's text as `dpc31 run` does and returns its failed expects' lines (every expect
+// held: none) and, in `walk`, its walk.
+std::vector<std::string> failed_expects(const std::string& text,
+                                        std::vector<std::string>* walk = nullptr) {
+  Scenario s;
+  ScenarioError err;
+  EXPECT_TRUE(parse_scenario(text, "t.scn", s, err)) << err.text();
+  std::vector<std::string> errors;
+  const ScenarioOutcome o = run_scenario(
+      s,
+      [&](const std::string& line) {
+        if (walk != nullptr) walk->push_back(line);
+      },
+      [&](const std::string& line) { errors.push_back(line); });
+  EXPECT_GT(o.passed, 0u);
+  return errors;
+}
+
+bool has_line(const std::vector<std::string>& walk, std::string_view part) {
+  return std::any_of(walk.begin(), walk.end(),
+                     [&](const std::string& l) { return l.find(part) != std::string::npos; });
+}
+
+constexpr const char* kHead =
+    "profile vpc3plus\nbaud 12000000\nslave address=5 user_prm=C0,00,00\n"
+    "record slot=0 index=1 data=11,22,33,44\n";
+
+// The resource manager's one buffer (audit a11, finding 1): master 9's Initiate (Send_Timeout 1 =
+// 10 ms) is taken and answered, but master 9 never polls for the answer. While its response
+// waits there, the chip answers every Initiate RR ("no free buffer", VPC3+C p.56); the user side
+// withdraws it at the first tick at least that Send_Timeout after it was handed over (master 9's
+// connection, silent as long, is closed at the same tick), so our Initiate 25 ms later is taken:
+// the Initiate response after 2 polls, as in dpv1_c2_vpc3plus.scn. Before, SAP 49 answered RR
+// for ever.
+TEST(Dpv1Scenario, AnUncollectedResourceManagerResponseIsWithdrawnAfterItsSendTimeout) {
+  const std::string text = std::string(kHead) +
+                           "dpv1 work=1440\nstartup\n"
+                           "send from=9 fc=0x6D dsap=49 ssap=48 "
+                           "du=57,00,00,00,00,01,00,01,00,00,00,00,00,00,00,00\n"
+                           "expect answer sc\nsilence 5ms\n"
+                           "c2_initiate send_timeout=100\nexpect dpv1 refused\nexpect answer rr\n"
+                           "silence 20ms\n"
+                           "c2_initiate send_timeout=100\n"
+                           "expect dpv1 57,F0,00,01,00,00,00,00,00,00,00,00\nexpect dpv1 polls 2\n";
+  EXPECT_EQ(failed_expects(text), std::vector<std::string>{});
+}
+
+// MSAC_C1 after a response time-out (finding 4): the user side's response comes 15 ms after the
+// request, the master gave up at 10 ms (681 polls, Dpv1Master.ResponseTimeOut), so it waits in
+// SAP 51's one buffer for a poll that never comes: the next Read gets RR. The class-1 master then
+// parameterises the slave again (the standard's answer to a C1 time-out): the new Set_Prm frees
+// the buffer, and the Read is taken again (and times out again: the same work). Before, the
+// slave answered RR for ever, restart included.
+TEST(Dpv1Scenario, AMsacC1ResponseNobodyCollectedIsFreedByTheNextSetPrm) {
+  const std::string text = std::string(kHead) +
+                           "dpv1 work=720000 c1_timeout=1\nstartup\n"
+                           "dpv1_read slot=0 index=1 length=4\nexpect dpv1 timeout\n"
+                           "silence 20ms\n"
+                           "dpv1_read slot=0 index=1 length=4\nexpect dpv1 refused\n"
+                           "expect answer rr\nsilence 20ms\n"
+                           "restart\nexpect dp_state Data_Exchange\n"
+                           "dpv1_read slot=0 index=1 length=4\nexpect dpv1 timeout\n"
+                           "expect dpv1 polls 681\n";
+  EXPECT_EQ(failed_expects(text), std::vector<std::string>{});
+}
+
+// MSAC_C1 is the locking class-1 master's (manual-quotes.md, "DPV1"; finding 6): after the DP
+// watchdog (10 x 10 x 10 ms) sent the slave back to Wait_Prm (Leave_Master) nobody locks it, and
+// SAP 51 answers RS (its entry switched off, VPC3+C p.55); the class-2 connection does not depend
+// on the class-1 master and still answers.
+TEST(Dpv1Scenario, MsacC1IsServedInDataExchangeOnly) {
+  const std::string text =
+      std::string(kHead) +
+      "startup\nc2_initiate send_timeout=300\nsilence 1100ms\n"
+      "expect dp_state Wait_Prm\nc2_idle\nexpect dpv1 48,00\n"
+      "dpv1_read slot=0 index=1 length=1\nexpect dpv1 refused\n"
+      "expect answer rs\n"
+      "startup\ndpv1_read slot=0 index=1 length=1\nexpect dpv1 5E,00,01,01,11\n";
+  EXPECT_EQ(failed_expects(text), std::vector<std::string>{});
+}
+
+// Alarm_Ack on SAP 50 or 51 (manual-quotes.md, "DPV1"; finding 7): `alarm_ack sap=51` sends it
+// from SAP 51 to SAP 51, and the built-in user side answers it there as on SAP 50: the 4 bytes
+// echoed. Before, the master could not send it there and the user side never answered it (the
+// master timed out).
+TEST(Dpv1Scenario, AlarmAckOnSap51) {
+  const std::string text = std::string(kHead) +
+                           "dpv1 c1_timeout=1\nstartup\n"
+                           "alarm_ack slot=0 type=1 seq=3 sap=51\nexpect dpv1 5C,00,01,18\n"
+                           "alarm_ack slot=0 type=1 seq=4\nexpect dpv1 5C,00,01,20\n";
+  std::vector<std::string> walk;
+  EXPECT_EQ(failed_expects(text, &walk), std::vector<std::string>{});
+  EXPECT_TRUE(has_line(walk, "2 -> 5 SAP 51 5C 00 01 18 => SC"));
+  EXPECT_TRUE(has_line(walk, "2 -> 5 SAP 50 5C 00 01 20 => SC"));
+}
+
+// A refused Abort leaves the connection known (finding 5): a Read on the connection that nobody
+// polls leaves its response in the connection's one buffer, so the Abort gets RR (VPC3+C p.56).
+// The master keeps the connection; once the response is fetched the Abort is sent again and
+// taken (SC). Before, the master forgot the connection at the RR and the second Abort was
+// refused without being sent.
+TEST(Dpv1Scenario, ARefusedAbortLeavesTheConnectionKnown) {
+  const std::string text = std::string(kHead) +
+                           "dpv1 work=1440\nstartup\nc2_initiate send_timeout=100\n"
+                           "expect dpv1 polls 2\n"
+                           "send from=2 fc=0x4D dsap=40 ssap=48 du=5E,00,01,04\n"
+                           "expect answer sc\nsilence 1ms\n"
+                           "c2_abort reason=1\nexpect dpv1 refused\nexpect answer rr\n"
+                           "send from=2 fc=0x4D dsap=40 ssap=48\nexpect answer data\n"
+                           "c2_abort reason=1\nexpect dpv1 sc\n";
+  std::vector<std::string> walk;
+  EXPECT_EQ(failed_expects(text, &walk), std::vector<std::string>{});
+  EXPECT_TRUE(has_line(walk, "2 -> 5 SAP 40 58 00 21 00 => SC"));
 }
 
 // Bad DPV1 lines are parse errors with their line (docs/scenario-format.md, "DPV1"): nothing
@@ -182,6 +326,19 @@ TEST(Dpv1Scenario, ParseErrorsNameTheLine) {
       // The Specifier's bits 1..0 (docs/dpv1.md: Seq_Nr << 3 | Add_Ack << 2 | bits 1..0).
       {"profile vpc3plus\nalarm_ack slot=0 type=1 seq=0 spec=5\n",
        "t.scn:2: spec 5 out of range (0..3)"},
+      {"profile vpc3plus\nalarm_ack slot=0 type=1 seq=0 sap=49\n",
+       "t.scn:2: sap 49 out of range (50..51)"},
+      // Options that acted on nothing (finding 8): records the chip never hands over (no
+      // DPV1_Enable: the SAP list stays off), a work time with no record to work on.
+      {"profile vpc3plus\nrecord slot=0 index=1 data=01\nstartup\n",
+       "t.scn:2: record needs DPV1_Enable (slave user_prm= byte 0 bit 7): without it the VPC3+ "
+       "keeps the SAP list off and answers every DPV1 request RS"},
+      {"profile vpc3plus\nslave user_prm=40,00,00\nrecord slot=0 index=1 data=01\nstartup\n",
+       "t.scn:3: record needs DPV1_Enable (slave user_prm= byte 0 bit 7): without it the VPC3+ "
+       "keeps the SAP list off and answers every DPV1 request RS"},
+      {"profile vpc3plus\nslave user_prm=C0,00,00\ndpv1 work=1440\nstartup\n",
+       "t.scn:3: dpv1 work= is the built-in user side's DPV1 time and needs a record: without "
+       "one it serves no DPV1"},
   };
   for (const auto& [text, want] : cases) {
     Scenario s;

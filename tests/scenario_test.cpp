@@ -824,7 +824,8 @@ TEST(ScenarioParse, WhatWouldBeSilentlyOverriddenIsRefused) {
        {"master address=5\nslave address=6\n", "slave in=2\nuser inputs=01,02\ninputs -\n",
         "user inputs=-\ninputs 01,02,03,04\n", "profile dpc31\nexpect pb3 0\n", "master slot=37\n",
         "master slot=16383\n", "slave user_prm=00\n", "profile vpc3plus\nexpect dpv1 sc\n",
-        "profile vpc3plus\nrecord slot=1 index=1 data=01\nrecord slot=1 index=2 data=02\n"}) {
+        "profile vpc3plus\nslave user_prm=C0,00,00\nrecord slot=1 index=1 data=01\n"
+        "record slot=1 index=2 data=02\n"}) {
     EXPECT_EQ(parse_error(ok + "startup\n"), "") << ok;
   }
 }

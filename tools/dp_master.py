@@ -617,6 +617,17 @@ def wait_for(path, seconds):
         time.sleep(0.02)
 
 
+class Once(argparse.Action):
+    """An option that may be given once: a second one would silently replace the first."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        given = vars(namespace).setdefault("given_once", set())
+        if self.dest in given:
+            parser.error(f"{option_string} given twice")
+        given.add(self.dest)
+        setattr(namespace, self.dest, values)
+
+
 class Parser(argparse.ArgumentParser):
     """argparse with a usage error in one line on stderr (no usage lines), exit 2."""
 
@@ -651,11 +662,11 @@ def main():
     p.add_argument("--search", type=float, default=20.0, metavar="SECONDS",
                    help="seconds to look for a slave with FDL_Status (while it searches the "
                    "rate) before giving up (default 20; longer on a loaded host)")
-    p.add_argument("--dpv1-read", type=byte_list, metavar="SLOT,INDEX,LENGTH",
+    p.add_argument("--dpv1-read", type=byte_list, action=Once, metavar="SLOT,INDEX,LENGTH",
                    help="then MSAC_C1 Read of this record (hex bytes)")
-    p.add_argument("--dpv1-write", type=byte_list, metavar="SLOT,INDEX,DATA",
+    p.add_argument("--dpv1-write", type=byte_list, action=Once, metavar="SLOT,INDEX,DATA",
                    help="then MSAC_C1 Write of these data bytes to this record (hex bytes)")
-    p.add_argument("--c1-timeout", type=float, default=1.0,
+    p.add_argument("--c1-timeout", type=float, default=1.0, action=Once,
                    help="seconds a DPV1 service may take (C1_Response_Timeout, default 1)")
     p.add_argument("--wait", type=float, default=10.0,
                    help="seconds to wait for the device to appear, or on socket:// for the "
@@ -675,6 +686,13 @@ def main():
         p.error("--dpv1-write takes SLOT,INDEX and at least one data byte")
     if args.dpv1_write is not None and 2 + len(args.dpv1_write) > MAX_DU:
         p.error(f"--dpv1-write: a DPV1 PDU of {2 + len(args.dpv1_write)} bytes (at most {MAX_DU})")
+    # The ranges of the scenario's dpv1_read / dpv1_write (docs/scenario-format.md, "DPV1"):
+    # slot 255 is no slot, a Read of 0 bytes or of more than a PDU carries is no Read.
+    for name, values in (("read", args.dpv1_read), ("write", args.dpv1_write)):
+        if values is not None and values[0] > 254:
+            p.error(f"--dpv1-{name}: slot {values[0]} out of range (0..254)")
+    if args.dpv1_read is not None and not 1 <= args.dpv1_read[2] <= MAX_DU - 4:
+        p.error(f"--dpv1-read: length {args.dpv1_read[2]} out of range (1..{MAX_DU - 4})")
     slaves = slaves_of(args, p.error)
     if args.address in [s.address for s in slaves]:
         p.error(f"station {args.address}: the master's own --address (each station needs its "
