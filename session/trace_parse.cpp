@@ -332,7 +332,13 @@ class TraceParser {
             fail(fmt::format("bad fault '{}' (parity, start or stop, then :CHAR)", shown(v)));
           }
           if (colon == std::string_view::npos) fail("fault= needs the character: KIND:CHAR");
-          l.fault.char_index = static_cast<int>(dec(v.substr(colon + 1), "fault character"));
+          // Bounded before it is an int (4294967296 was character 0): a telegram's length.
+          const std::uint64_t ch = dec(v.substr(colon + 1), "fault character");
+          if (ch >= fdl::kMaxFrameLength) {
+            fail(fmt::format("fault in character {}: a telegram has at most {} characters", ch,
+                             fdl::kMaxFrameLength));
+          }
+          l.fault.char_index = static_cast<int>(ch);
         } else {
           fail(fmt::format("unknown or repeated option '{}' (fault=, fed=)", shown(key)));
         }

@@ -465,6 +465,47 @@ TEST_F(BadInput, CosimReplayTakesTheTraceHeader) {
              "other bus");
 }
 
+// The audit's cases: a header names its run's mutant and RTL where it is read (TRACE:LINE), and
+// the RTL as --rtl: its files must be there and the options must not contradict it. A replay with
+// its RTL is CosimRtl.replay_names_its_rtl.
+TEST_F(BadInput, CosimReplayHeaderNamesItsModel) {
+  const std::string body = "83 ev_irq(0080) ev_dout\n102 rd 000b\nend 103\n";
+  file("nope.stim", "# profile dpc31\n# mutant NOPE\n" + body);
+  const std::string a = file("a.v", "module blocks; endmodule\n");
+  file("b.v", "module blocks; endmodule\n");
+  file("gone.stim",
+       "# profile dpc31\n# mutant -\n# rtl " + path("gone.v") + "\n# top blocks\n" + body);
+  file("a.stim", "# profile dpc31\n# mutant -\n# rtl " + a + "\n# top blocks\n" + body);
+  spit(path("old.xml"), "old");
+  const auto before = listing();
+  expect_bad(dpc31("cosim --replay nope.stim --junit old.xml"),
+             "nope.stim:2: 'NOPE' is not a mutant", "mutant");
+  expect_bad(dpc31("cosim --replay gone.stim --junit old.xml"),
+             "gone.stim:3: recorded with --rtl " + path("gone.v") + ": no such file", "gone");
+  expect_bad(dpc31("cosim --replay a.stim --rtl b.v --top blocks --junit old.xml"),
+             "a.stim:3: recorded with --rtl " + a + ", not --rtl b.v", "other rtl");
+  expect_bad(dpc31("cosim --replay a.stim --rtl-model b.v --junit old.xml"),
+             "a.stim:3: recorded with --rtl " + a + ", not --rtl-model b.v", "a model");
+  // The same file by another name is the same RTL: the --top beside it is what differs.
+  expect_bad(dpc31("cosim --replay a.stim --rtl ./a.v --top other --junit old.xml"),
+             "a.stim:4: recorded with --top blocks, not --top other", "other top");
+  expect_bad(dpc31("cosim --replay a.stim --define X --junit old.xml"),
+             "a.stim:3: recorded with no --define, not --define X", "a define");
+  expect_bad(
+      dpc31("cosim --replay a.stim --junit a.v"),
+      "dpc31 cosim: --junit a.v: is the trace's rtl " + a + ": an output must not replace an input",
+      "junit over the rtl");
+  EXPECT_EQ(slurp(a), "module blocks; endmodule\n");
+  EXPECT_EQ(slurp(path("old.xml")), "old");
+  EXPECT_EQ(listing(), before);
+  // `--vcd win/` names win/emu.vcd (win//emu.vcd before), in the JSON and on stderr.
+  const Outcome r = dpc31("cosim --mutant NO_C_SWAP --seeds 20 --vcd win/ --out win/");
+  EXPECT_EQ(r.rc, 1) << r.err;
+  EXPECT_NE(r.out.find("\"win/emu.vcd\""), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("win/rtl_internal.fst"), std::string::npos) << r.err;
+  EXPECT_EQ((r.out + r.err).find("win//"), std::string::npos) << r.out << r.err;
+}
+
 TEST_F(BadInput, CosimOptionsAndOutputs) {
   fs::create_directory(path("taken"));
   spit(path("old.xml"), "old");

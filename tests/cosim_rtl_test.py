@@ -124,11 +124,40 @@ def mutants_same_report():
                 check(r.returncode == 1, f"{m} {side}: exit {r.returncode}: {r.stderr[-500:]}")
                 s = summary(r)
                 trace = os.path.join(d, s["results"][-1]["trace"])
-                out[side] = (r.stderr, s["results"], s["divergent_seeds"], open(trace).read())
+                # The header of the --rtl side names its RTL (replay_names_its_rtl): the rest
+                # is the same.
+                text = re.sub(r"^# (rtl|top|define) .*\n", "", open(trace).read(), flags=re.M)
+                out[side] = (r.stderr, s["results"], s["divergent_seeds"], text)
             check(out["builtin"][0] == out["rtl"][0], f"{m}: the reports differ")
             check(out["builtin"][1:] == out["rtl"][1:], f"{m}: results or shrunk traces differ")
             print(f"{m}: caught at seed {out['rtl'][1][-1]['seed']}, cycle "
                   f"{out['rtl'][1][-1]['cycle']}, same report as --mutant")
+
+
+def replay_names_its_rtl():
+    # The audit's case: a shrunk failure of --rtl replays on that RTL without the options (it
+    # replayed clean on the built-in model), from any directory; an option that contradicts the
+    # header is refused.
+    with tempfile.TemporaryDirectory() as work:
+        run_dir = os.path.join(work, "run")
+        os.makedirs(run_dir)
+        r = run(OWN + ["--define", "MUTANTS", "--mutant", "NO_C_SWAP", "--seeds", "20", "--out",
+                       "out", "--quiet"], cwd=run_dir)
+        check(r.returncode == 1, f"exit {r.returncode}: {r.stderr}")
+        s = summary(r)
+        trace = os.path.join(run_dir, s["results"][-1]["trace"])
+        text = open(trace).read()
+        names = f"# mutant NO_C_SWAP\n# rtl {os.path.realpath(BLOCKS)}\n# top dpc31_blocks\n" \
+                "# define MUTANTS\n"
+        check(names in text, f"the header names no RTL:\n{text[:400]}")
+        again = run(["--replay", trace, "--quiet"], cwd=work)
+        check(again.returncode == 1, f"replay: exit {again.returncode}: {again.stderr}")
+        got = summary(again)
+        check(got["rtl"] == s["rtl"], f"replayed on rtl {got['rtl']!r}, not {s['rtl']!r}")
+        one_line_exit_2(run(["--replay", trace, "--top", "other"], cwd=work),
+                        f"{trace}:8: recorded with --top dpc31_blocks, not --top other",
+                        CACHE + "/none")
+    print(f"seed {s['results'][-1]['seed']}: replayed on the model {s['rtl']} from its header")
 
 
 def session_clean():
@@ -311,6 +340,7 @@ CASES = {
     "mutant_model_unselected_clean": mutant_model_unselected_clean,
     "mutants_same_report": mutants_same_report,
     "session_clean": session_clean,
+    "replay_names_its_rtl": replay_names_its_rtl,
     "waveforms_and_number": waveforms_and_number,
     "missing_port": lambda: bad(["--rtl", "@stub.v", "--top", "stub"],
                                 "Vstub: port irr missing (a 16-bit output",

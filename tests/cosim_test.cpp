@@ -211,9 +211,9 @@ TEST(Cosim, BrokenTracesAreRejectedWithFileAndLine) {
   EXPECT_FALSE(parse_trace("x1 ev_din\nend 3\n", "d.trace", s, e));
   EXPECT_EQ(e, "d.trace:1: 'x1' is not a cycle number");
   EXPECT_FALSE(parse_trace("1 wr 0008<-zz\nend 3\n", "e.trace", s, e));
-  EXPECT_EQ(e, "e.trace:1: bad operand of 'wr': ADDR<-DATA, hex ADDR 0..ffff, DATA 0..ff expected");
+  EXPECT_EQ(e, "e.trace:1: bad operand of 'wr': ADDR<-DATA, hex ADDR 0..1fff, DATA 0..ff expected");
   EXPECT_FALSE(parse_trace("1 wr 0845<-1ff\nend 3\n", "e.trace", s, e));  // a data byte of 9 bits
-  EXPECT_EQ(e, "e.trace:1: bad operand of 'wr': ADDR<-DATA, hex ADDR 0..ffff, DATA 0..ff expected");
+  EXPECT_EQ(e, "e.trace:1: bad operand of 'wr': ADDR<-DATA, hex ADDR 0..1fff, DATA 0..ff expected");
   EXPECT_FALSE(parse_trace("1 ev_dis(4)\nend 3\n", "e.trace", s, e));
   EXPECT_EQ(e, "e.trace:1: bad operand of 'ev_dis': (BITS), 0..3 expected");
   EXPECT_FALSE(parse_trace("1 ev_gc\nend 3\n", "e.trace", s, e));  // its operand missing
@@ -222,6 +222,33 @@ TEST(Cosim, BrokenTracesAreRejectedWithFileAndLine) {
   EXPECT_EQ(e, "e.trace:1: bad operand of 'ev_dx': no operand expected");
   EXPECT_FALSE(parse_trace("1 ev_diag_end(stat=2)\nend 3\n", "e.trace", s, e));
   EXPECT_EQ(e, "e.trace:1: bad operand of 'ev_diag_end': (stat=0) or (stat=1) expected");
+  // One access per cycle, each event once (the second token overwrote the first's operand), on
+  // the 13-bit bus_addr; a count beyond 64 bits is out of range, not too small (the audit's cases).
+  EXPECT_FALSE(parse_trace("1 ev_din\n10 wr 0004<-00 rd 0000\nend 40\n", "g.trace", s, e));
+  EXPECT_EQ(e, "g.trace:2: a second bus access 'rd' in one cycle (at most one: rd or wr)");
+  EXPECT_FALSE(parse_trace("10 rd 0000 rd 0001\nend 40\n", "g.trace", s, e));
+  EXPECT_EQ(e, "g.trace:1: a second bus access 'rd' in one cycle (at most one: rd or wr)");
+  EXPECT_FALSE(parse_trace("20 wr 0004<-00 wr 0005<-00\nend 40\n", "g.trace", s, e));
+  EXPECT_EQ(e, "g.trace:1: a second bus access 'wr' in one cycle (at most one: rd or wr)");
+  EXPECT_FALSE(parse_trace("1784 rd 0004 ev_failsafe ev_failsafe\nend 1785\n", "g.trace", s, e));
+  EXPECT_EQ(e, "g.trace:1: 'ev_failsafe' twice in one cycle");
+  EXPECT_FALSE(parse_trace("3 ev_irq(0001) ev_irq(0002)\nend 4\n", "g.trace", s, e));
+  EXPECT_EQ(e, "g.trace:1: 'ev_irq' twice in one cycle");
+  EXPECT_FALSE(parse_trace("3 rst rst\nend 4\n", "g.trace", s, e));
+  EXPECT_EQ(e, "g.trace:1: 'rst' twice in one cycle");
+  EXPECT_FALSE(parse_trace("1 rd 2000\nend 3\n", "h.trace", s, e));
+  EXPECT_EQ(e, "h.trace:1: bad operand of 'rd': ADDR, hex 0..1fff expected");
+  EXPECT_FALSE(parse_trace("1 wr ffff<-00\nend 3\n", "h.trace", s, e));
+  EXPECT_EQ(e, "h.trace:1: bad operand of 'wr': ADDR<-DATA, hex ADDR 0..1fff, DATA 0..ff expected");
+  EXPECT_TRUE(parse_trace("1 rd 1fff\nend 3\n", "h.trace", s, e)) << e;
+  EXPECT_FALSE(parse_trace("1 ev_din\nend 99999999999999999999\n", "i.trace", s, e));
+  EXPECT_EQ(e, "i.trace:2: 'end' beyond 100000000 cycles");
+  EXPECT_FALSE(parse_trace("1 ev_din\nend 100000001\n", "i.trace", s, e));
+  EXPECT_EQ(e, "i.trace:2: 'end' beyond 100000000 cycles");
+  EXPECT_FALSE(parse_trace("5 ev_din\nend 5\n", "i.trace", s, e));
+  EXPECT_EQ(e, "i.trace:2: 'end' needs the cycle count, at least the last cycle + 1");
+  EXPECT_FALSE(parse_trace("5 ev_din\nend x\n", "i.trace", s, e));
+  EXPECT_EQ(e, "i.trace:2: 'end' needs the cycle count, at least the last cycle + 1");
   EXPECT_TRUE(parse_trace("# c\n2 wr 0008<-01 ev_gc(20)\nend 4\n", "f.trace", s, e)) << e;
   ASSERT_EQ(s.size(), 4u);
   EXPECT_TRUE(s[2].bus_wr && s[2].ev_gc && s[2].gc_cmd == 0x20 && s[2].bus_wdata == 0x01);
@@ -249,7 +276,7 @@ TEST(Cosim, UpperCaseHexInAStimulusLineReadsAsLowerCase) {
   EXPECT_EQ(upper[2].describe(), "wr 0a5f<-c3 ev_irq(ffff) ev_gc(2a)");
   for (const char* bad : {"1 rd +00A", "1 rd -001", "1 rd 0x0A", "1 rd 0000A", "1 rd 00G0"}) {
     EXPECT_FALSE(parse_trace(std::string(bad) + "\nend 2\n", "bad.trace", upper, e)) << bad;
-    EXPECT_EQ(e, "bad.trace:1: bad operand of 'rd': ADDR, hex 0..ffff expected") << bad;
+    EXPECT_EQ(e, "bad.trace:1: bad operand of 'rd': ADDR, hex 0..1fff expected") << bad;
   }
 }
 

@@ -259,6 +259,11 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{kHead + "state 4 fdl=parity:1,parity:2\nend 4\n", 6, "each counter once"},
         BadInput{kHead + "rx 100 10 05 02 49 50 16 fed=200\nend 300\n", 6, "fed= after"},
         BadInput{kHead + "rx 100 10 05 fault=parity:7\nend 300\n", 6, "fault in character 7"},
+        // Bounded before it becomes an int: 2^32 was character 0, 2^31 character -2147483648.
+        BadInput{kHead + "rx 100 10 05 fault=parity:4294967296\nend 300\n", 6,
+                 "fault in character 4294967296: a telegram has at most"},
+        BadInput{kHead + "rx 100 10 05 fault=parity:2147483648\nend 300\n", 6,
+                 "fault in character 2147483648: a telegram has at most"},
         BadInput{kHead + "xint 100 1\nend 50\n", 7, "cycle order"},
         BadInput{kHead + "end 8\nwr 12 0000 00\n", 7, "after the 'end' line"},
         BadInput{"dpc31-trace 1\nprofile dpc31\nwr 4 0000 00\nend 4\n", 3, "no 'bus' line"},

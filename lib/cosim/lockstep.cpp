@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -516,12 +517,17 @@ bool parse_trace(const std::string& text, const std::string& file, Stimulus& out
     std::string first;
     ls >> first;
     if (first == "end") {
+      std::string count;
+      ls >> count;
       std::uint64_t total = 0;
-      if (!(ls >> total) || total < last)
-        return fail("'end' needs the cycle count, at least the last cycle + 1");
+      const auto [p, ec] = std::from_chars(count.data(), count.data() + count.size(), total);
+      const bool digits = !count.empty() && p == count.data() + count.size();
       // The bound of the cycle lines and of --cycles (the run time, not memory: the stimulus
-      // keeps only the lines given).
-      if (total > kMaxCycles) return fail(fmt::format("'end' beyond {} cycles", kMaxCycles));
+      // keeps only the lines given); a count beyond 64 bits is beyond it too.
+      if (digits && (ec == std::errc::result_out_of_range || total > kMaxCycles))
+        return fail(fmt::format("'end' beyond {} cycles", kMaxCycles));
+      if (!digits || ec != std::errc() || total < last)
+        return fail("'end' needs the cycle count, at least the last cycle + 1");
       out.resize(total);
       ended = true;
       continue;
@@ -620,7 +626,8 @@ bool write_window(const Stimulus& s, const DutOptions& o, std::string_view mutan
   outfile::OutFile out[2];
   std::FILE* f[2] = {nullptr, nullptr};
   for (int k = 0; k < 2; ++k) {
-    if (!out[k].open(fmt::format("{}/{}.vcd", dir, names[k]))) {
+    // Joined as paths, so that its messages name win/emu.vcd for `win/`.
+    if (!out[k].open((std::filesystem::path(dir) / fmt::format("{}.vcd", names[k])).string())) {
       error = out[k].error();
       return false;
     }

@@ -133,8 +133,9 @@ void set(Inputs& in, const EventInput& e, std::uint32_t value, std::uint8_t data
   }
 }
 
-// sap_entry is a 13-bit port, as bus_addr.
-constexpr std::uint32_t kSapEntryMax = 0x1FFF;
+// bus_addr and sap_entry are 13-bit ports: a wider address would reach the C++ side whole and
+// the RTL cut to 13 bits.
+constexpr std::uint32_t kAddrMax = 0x1FFF;
 
 // Up to 4 hex digits, either case (the writer writes lower case; a hand-edited line may not).
 bool parse_hex(std::string_view t, std::uint32_t max, std::uint32_t& v) {
@@ -158,9 +159,9 @@ std::string_view operand_syntax(Arg a) {
     case Arg::dis_bits:
       return "(BITS), 0..3";
     case Arg::bus_read:
-      return "ADDR, hex 0..ffff";
+      return "ADDR, hex 0..1fff";
     case Arg::bus_write:
-      return "ADDR<-DATA, hex ADDR 0..ffff, DATA 0..ff";
+      return "ADDR<-DATA, hex ADDR 0..1fff, DATA 0..ff";
     case Arg::sap_ind:
       return "(ENTRY,LEN), hex ENTRY 0..1fff, LEN 0..ff";
     case Arg::sap_entry:
@@ -169,7 +170,8 @@ std::string_view operand_syntax(Arg a) {
   return "";
 }
 
-enum class Parsed : std::uint8_t { other, ok, bad };  // other: not this event's name
+// other: not this event's name; again: an event the line has already, or a second bus access
+enum class Parsed : std::uint8_t { other, ok, bad, again };
 
 // `tok` as this event's token (the bus accesses take their operand from `rest`).
 Parsed parse(const EventInput& e, const std::string& tok, std::istringstream& rest, Inputs& in) {
@@ -207,28 +209,32 @@ Parsed parse(const EventInput& e, const std::string& tok, std::istringstream& re
     case Arg::sap_ind: {  // name(EEEE,LL)
       const auto comma = t.find(',');
       good = comma != std::string_view::npos && t.size() >= comma + 3 && t.back() == ')' &&
-             parse_hex(t.substr(e.name.size() + 1, comma - e.name.size() - 1), kSapEntryMax, v) &&
+             parse_hex(t.substr(e.name.size() + 1, comma - e.name.size() - 1), kAddrMax, v) &&
              parse_hex(t.substr(comma + 1, t.size() - comma - 2), 0xFF, d);
       break;
     }
     case Arg::sap_entry:
-      good = arg(kSapEntryMax);
+      good = arg(kAddrMax);
       break;
     case Arg::bus_read: {
       std::string a;
-      good = (rest >> a) && parse_hex(a, 0xFFFF, v);
+      good = (rest >> a) && parse_hex(a, kAddrMax, v);
       break;
     }
     case Arg::bus_write: {
       std::string a;
       good = static_cast<bool>(rest >> a);
       const auto arrow = a.find("<-");
-      good = good && arrow != std::string::npos && parse_hex(a.substr(0, arrow), 0xFFFF, v) &&
+      good = good && arrow != std::string::npos && parse_hex(a.substr(0, arrow), kAddrMax, v) &&
              parse_hex(a.substr(arrow + 2), 0xFF, d);
       break;
     }
   }
   if (!good) return Parsed::bad;
+  // One cycle has one value per input: a second token would overwrite the first one's operand
+  // (the bus address, the command) without a word.
+  const bool bus = e.arg == Arg::bus_read || e.arg == Arg::bus_write;
+  if (active(in, e) || (bus && (in.bus_rd || in.bus_wr))) return Parsed::again;
   set(in, e, v, static_cast<std::uint8_t>(d));
   return Parsed::ok;
 }
@@ -247,6 +253,7 @@ std::string Inputs::describe() const {
 
 std::string parse_input_token(const std::string& tok, std::istringstream& rest, Inputs& in) {
   if (tok == "rst") {
+    if (in.rst) return "'rst' twice in one cycle";
     in.rst = true;
     return {};
   }
@@ -256,6 +263,11 @@ std::string parse_input_token(const std::string& tok, std::istringstream& rest, 
         return {};
       case Parsed::bad:
         return fmt::format("bad operand of '{}': {} expected", e.name, operand_syntax(e.arg));
+      case Parsed::again:
+        return e.arg == Arg::bus_read || e.arg == Arg::bus_write
+                   ? fmt::format("a second bus access '{}' in one cycle (at most one: rd or wr)",
+                                 e.name)
+                   : fmt::format("'{}' twice in one cycle", e.name);
       case Parsed::other:
         break;
     }

@@ -27,21 +27,66 @@ namespace dpc31::cli {
 
 namespace {
 
+// The same files, by their real paths, in the same order (a path may name a file that is gone).
+bool same_files(const std::vector<std::string>& a, const std::vector<std::string>& b) {
+  const auto real = [](const std::string& f) {
+    std::error_code ec;
+    return std::filesystem::weakly_canonical(std::filesystem::absolute(f, ec), ec);
+  };
+  return a.size() == b.size() &&
+         std::equal(a.begin(), a.end(), b.begin(),
+                    [&](const std::string& x, const std::string& y) { return real(x) == real(y); });
+}
+
+std::string joined(const std::vector<std::string>& v) {
+  std::string out;
+  for (const std::string& s : v) out += (out.empty() ? "" : " ") + s;
+  return out;
+}
+
 // The run a shrunk trace's header names (`# profile NAME`, `# bus NAME`, `# variant NAME` or `-`,
-// `# mutant NAME` or `-`, written below): taken into `o`, unless --profile, --bus, --variant or
-// --mutant given says otherwise (refused: the trace would replay clean on another model;
-// docs/golden-model.md). A trace without them keeps `o`.
+// `# mutant NAME` or `-`, and for your RTL `# rtl PATH` per source, `# top NAME`, `# define D`
+// per define or `# rtl-model PATH`, written below): taken into `o`, unless --profile, --bus,
+// --variant, --mutant, --rtl, --rtl-model, --top or --define given says otherwise (refused: the
+// trace would replay clean on another model; docs/golden-model.md). A trace without them keeps `o`.
 bool take_trace_header(const std::string& path, const std::string& text, CosimOptions& o,
                        std::uint64_t& seed, std::string& error) {
   std::istringstream is(text);
   int n = 0;
+  std::vector<std::string> rtl;
+  std::string rtl_model;
+  std::string top;
+  std::vector<std::string> defines;
+  int rtl_line = 0;
+  int top_line = 0;
+  int define_line = 0;
   for (std::string line; std::getline(is, line) && line.starts_with('#');) {
     ++n;
     std::istringstream ls(line.substr(1));
     std::string key;
+    std::string rest;  // a path may hold spaces: the rest of the line
+    ls >> key;
+    std::getline(ls >> std::ws, rest);
+    if (key == "rtl" || key == "rtl-model") {
+      std::error_code ec;
+      if (!std::filesystem::is_regular_file(rest, ec)) {
+        error =
+            fmt::format("{}:{}: recorded with --{} {}: no such file", path, n, key, shown(rest));
+        return false;
+      }
+      rtl_line = rtl_line == 0 ? n : rtl_line;
+      (key == "rtl" ? rtl.emplace_back() : rtl_model) = rest;
+      continue;
+    }
+    if (key == "define") {
+      define_line = define_line == 0 ? n : define_line;
+      defines.push_back(rest);
+      continue;
+    }
+    std::istringstream vs(rest);
     std::string value;
     std::string more;
-    if (!(ls >> key >> value) || ls >> more) continue;
+    if (!(vs >> value) || vs >> more) continue;
     if (key == "profile") {
       Profile p{};
       if (!parse_profile(value, p)) {
@@ -83,7 +128,16 @@ bool take_trace_header(const std::string& path, const std::string& text, CosimOp
                             o.mutant.empty() ? "''" : o.mutant);
         return false;
       }
+      // Checked here, where the line is known (the model is loaded later): a name of ours or,
+      // with your RTL, a mutant_sel number.
+      if (!mutant.empty() && !cosim::mutant_sel(mutant)) {
+        error = fmt::format("{}:{}: '{}' is not a mutant", path, n, shown(value));
+        return false;
+      }
       o.mutant = mutant;
+    } else if (key == "top") {
+      top_line = n;
+      top = value;
     } else if (key == "seed") {
       const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), seed);
       if (ec != std::errc() || end != value.data() + value.size()) {
@@ -92,12 +146,55 @@ bool take_trace_header(const std::string& path, const std::string& text, CosimOp
       }
     }
   }
+  if (rtl.empty() && rtl_model.empty()) return true;
+  // Your RTL: the run's model, as it was built (sources, top, defines) or loaded.
+  const std::string recorded = rtl.empty() ? "--rtl-model " + rtl_model : "--rtl " + joined(rtl);
+  if ((!o.rtl_sources.empty() || !o.rtl_model.empty()) &&
+      !(same_files(o.rtl_sources, rtl) && same_files({o.rtl_model}, {rtl_model}))) {
+    error = fmt::format(
+        "{}:{}: recorded with {}, not {}", path, rtl_line, recorded,
+        o.rtl_sources.empty() ? "--rtl-model " + o.rtl_model : "--rtl " + joined(o.rtl_sources));
+    return false;
+  }
+  if (!rtl.empty() && !o.top.empty() && o.top != top) {
+    error = fmt::format("{}:{}: recorded with --top {}, not --top {}", path,
+                        top_line != 0 ? top_line : rtl_line, top.empty() ? "''" : top, o.top);
+    return false;
+  }
+  if (!rtl.empty() && !o.defines.empty() && o.defines != defines) {
+    error = fmt::format(
+        "{}:{}: recorded with {}, not --define {}", path, define_line != 0 ? define_line : rtl_line,
+        defines.empty() ? "no --define" : "--define " + joined(defines), joined(o.defines));
+    return false;
+  }
+  o.rtl_sources = rtl;
+  o.rtl_model = rtl_model;
+  if (!rtl.empty()) {
+    o.top = top;
+    o.defines = defines;
+  }
   return true;
+}
+
+// The header lines that name your RTL (none for the built-in models), as take_trace_header reads
+// them: the real paths, so the trace replays from any directory.
+std::string rtl_header(const CosimOptions& o) {
+  const auto real = [](const std::string& f) {
+    std::error_code ec;
+    const std::filesystem::path p = std::filesystem::canonical(f, ec);
+    return ec ? std::filesystem::absolute(f, ec).string() : p.string();
+  };
+  std::string out;
+  for (const std::string& f : o.rtl_sources) out += fmt::format("rtl {}\n", real(f));
+  if (!o.rtl_sources.empty()) out += fmt::format("top {}\n", o.top);
+  for (const std::string& d : o.defines) out += fmt::format("define {}\n", d);
+  if (!o.rtl_model.empty()) out += fmt::format("rtl-model {}\n", real(o.rtl_model));
+  return out;
 }
 
 // A stimulus trace file (lockstep.hpp), read like the emulator's own text files: missing,
 // a directory, empty or cut off is one line "FILE: reason" / "FILE:LINE: reason"; its header
-// sets the profile, bus, variant and mutant in `o`, and `seed` (0 where it names none).
+// sets the profile, bus, variant, mutant and RTL in `o`, and `seed` (0 where it names none).
 bool read_stimulus(const std::string& path, cosim::Stimulus& s, CosimOptions& o,
                    std::uint64_t& seed, std::string& error) {
   constexpr std::size_t kMaxBytes = 256u << 20;  // 100 M cycles of stimulus fit easily
@@ -142,7 +239,7 @@ const char* const kWindowFiles[] = {"emu.vcd", "rtl.vcd", "rtl_internal.fst"};
 std::string window_unwritable(const std::string& dir) {
   for (const char* name : kWindowFiles) {
     outfile::OutFile out;
-    if (!out.open(fmt::format("{}/{}", dir, name))) return out.error();
+    if (!out.open((std::filesystem::path(dir) / name).string())) return out.error();
   }
   return "";
 }
@@ -410,6 +507,14 @@ int run_cosim(const CosimOptions& given) {
       fmt::print(stderr, "{}\n", error);
       return 2;
     }
+    // The RTL the header names is an input as --rtl is: --junit must not replace it.
+    std::vector<outfile::Named> named;
+    for (const std::string& v : o.rtl_sources) named.push_back({"the trace's rtl", v});
+    if (!o.rtl_model.empty()) named.push_back({"the trace's rtl-model", o.rtl_model});
+    if (const std::string same = outfile::distinct(named, {{"--junit", o.junit}}); !same.empty()) {
+      fmt::print(stderr, "dpc31 cosim: {}\n", same);
+      return 2;
+    }
     ChipOptions chip{o.profile};
     if (const std::string why = apply_variant(o.variant_name, chip); !why.empty()) {
       fmt::print(stderr, "dpc31 cosim: {}\n", why);
@@ -489,19 +594,21 @@ int run_cosim(const CosimOptions& given) {
       std::filesystem::create_directories(dir, ec);  // checked up front; a failure shows below
       // A replay shrinks its trace again under a name of its own: a seed run's trace, which the
       // replayed one may be or come from, is never written over, nor the replayed trace itself.
-      const std::string trace = fmt::format("{}/cosim-{}-seed{}{}.trace", dir, o.profile_name, seed,
-                                            o.replay.empty() ? "" : "-replay");
+      const std::string trace =
+          (std::filesystem::path(dir) / fmt::format("cosim-{}-seed{}{}.trace", o.profile_name, seed,
+                                                    o.replay.empty() ? "" : "-replay"))
+              .string();
       const bool replayed = !o.replay.empty() && std::filesystem::equivalent(trace, o.replay, ec);
       std::string error;
       const auto events = [](const Stimulus& x) { return x.event_count(); };
       Stimulus before = s;
       before.resize(static_cast<std::uint64_t>(r.divergence) + 1);
       const std::string header = fmt::format(
-          "profile {}\nbus {}\nvariant {}\nseed {}\nmutant {}\nshrunk from {} to {} stimulus "
+          "profile {}\nbus {}\nvariant {}\nseed {}\nmutant {}\n{}shrunk from {} to {} stimulus "
           "events ({} cycles)",
           o.profile_name, o.bus == BusMode::intel ? "intel" : "motorola",
           o.variant_name.empty() ? "-" : o.variant_name, seed, o.mutant.empty() ? "-" : o.mutant,
-          events(before), events(small), small.size());
+          rtl_header(o), events(before), events(small), small.size());
       if (replayed) {
         if (!o.quiet) {
           fmt::print(stderr,
@@ -519,13 +626,17 @@ int run_cosim(const CosimOptions& given) {
       if (!o.vcd_dir.empty()) {
         const std::uint64_t d = small.size() - 1;
         const std::uint64_t from = d > o.window ? d - o.window : 0;
+        // Joined as paths: `--vcd win/` names win/emu.vcd, not win//emu.vcd.
+        const auto in_vcd = [&](const char* name) {
+          return (std::filesystem::path(o.vcd_dir) / name).string();
+        };
         if (write_window(small, dut, o.mutant, from, d + o.window + 1, o.vcd_dir, error)) {
-          entry["vcd"] = {o.vcd_dir + "/emu.vcd", o.vcd_dir + "/rtl.vcd"};
+          entry["vcd"] = {in_vcd("emu.vcd"), in_vcd("rtl.vcd")};
         } else {
           output_failed(error);
         }
-        if (write_rtl_fst(small, dut, o.mutant, o.vcd_dir + "/rtl_internal.fst", error)) {
-          entry["fst"] = o.vcd_dir + "/rtl_internal.fst";
+        if (write_rtl_fst(small, dut, o.mutant, in_vcd("rtl_internal.fst"), error)) {
+          entry["fst"] = in_vcd("rtl_internal.fst");
         } else if (traced) {
           output_failed(error);
         } else if (!o.quiet) {
@@ -549,7 +660,8 @@ int run_cosim(const CosimOptions& given) {
     const Stimulus s = runs.empty() ? random_stimulus({o.profile, lo, o.cycles}) : runs[0].second;
     std::string error;
     if (!write_window(s, dut, o.mutant, 0, s.size(), o.dump_dir, error)) output_failed(error);
-    if (!write_rtl_fst(s, dut, o.mutant, o.dump_dir + "/rtl_internal.fst", error)) {
+    if (!write_rtl_fst(s, dut, o.mutant,
+                       (std::filesystem::path(o.dump_dir) / "rtl_internal.fst").string(), error)) {
       if (traced) {
         output_failed(error);
       } else if (!o.quiet) {
