@@ -4,6 +4,7 @@
 #include "dp_sm.hpp"
 
 #include <algorithm>
+#include <array>
 #include <utility>
 
 #include "dpc31/dpv1.hpp"
@@ -25,6 +26,7 @@ constexpr std::size_t kMaxBufferLength = 244;
 constexpr std::uint8_t kDiag_Ext_Diag = 0x01;
 constexpr std::uint8_t kDiag_Stat_Diag = 0x02;
 constexpr std::uint8_t kDiag_Ext_Diag_Overflow = 0x04;
+constexpr std::uint8_t kDiag_User_Bits = kDiag_Ext_Diag | kDiag_Stat_Diag | kDiag_Ext_Diag_Overflow;
 constexpr std::size_t kStandardDiagBytes = pdu::SlaveDiag::kStandard;
 
 }  // namespace
@@ -454,6 +456,16 @@ std::optional<fdl::Frame> DpStateMachine::slave_diag(const fdl::Frame& req) {
   du_[3] = s_.master_add;
   du_[4] = regs_.cell(RegId::R_Ident_High);
   du_[5] = regs_.cell(RegId::R_Ident_Low);
+  // The standard bytes also fill the buffer's space holders, where a driver reads Master_Add
+  // (byte 3: the Profichip driver's VPC3_GetMasterAddress). SPC3 p.33: "The first 6 bytes are
+  // space holders, except for the three least significant bit positions in the first byte. ...
+  // When sending, SPC3 pre-processes the first six bytes corresponding to the standard." VPC3+S
+  // p.52: "The Ext_Diag_Data must be entered into the buffers after the VPC3+S internal diagnosis
+  // data." The user's three bits stay: a buffer sent again takes them from there.
+  std::array<std::uint8_t, kStandardDiagBytes> held{};
+  std::copy_n(du_.begin(), kStandardDiagBytes, held.begin());
+  held[0] = static_cast<std::uint8_t>((du_[0] & ~kDiag_User_Bits) | (user & kDiag_User_Bits));
+  regs_.write_buffer(kPtr[k], held);
   sig_.emit(BlockEvent::Kind::diag_begin);
   buffers_.diag_send_begin();
   s_.diag_in_flight = true;

@@ -156,6 +156,34 @@ TEST(Do4Dpv1, NegativeResponses) {
             (pdu::Bytes{0xDF, 0x80, 0xB5, 0x00}));
 }
 
+// MSAC_C1 is the class-1 master's, the one that locked the slave (manual-quotes.md, "DPV1"): in
+// Data_Exchange SAPs 51 and 50 name master 2 as Request_SA, which firmware/dps reads where the
+// chip writes Master_Add, byte 3 of the diag buffer it sent. A Read (SAP 51) or an Alarm_Ack
+// (SAP 50) from station 7 is answered RS ("At differences ... 'no service activated'", VPC3+C
+// p.55) and stores nothing: no FDL_Ind, the single C1 buffer stays free, so master 2's Read after
+// it is taken and answered with the record (with 7Fh there the stray took the buffer, which no
+// time-out frees, and master 2 got RR from then on).
+TEST(Do4Dpv1, StrayMsac1RequestsFromAnotherStationGetRsAndStoreNothing) {
+  Dpv1Bench b(0x20);
+  ASSERT_TRUE(b.master.startup());
+  b.master.data_exchange({0x05, 0x01});
+  const auto stray = [&b](std::uint8_t dsap, const pdu::Bytes& du) {
+    const Exchange ex = b.master.transact(fdl::make_frame(
+        b.master.target(), 7, fdl::make_request_fc(fdl::Function::SRD_high, false, false), du, dsap,
+        kC1));
+    EXPECT_TRUE(ex.answer);
+    return ex.answer ? ex.answer->fc & fdl::kFcCodeMask : -1;
+  };
+  const std::uint64_t requests_before = firmware_bench::stats_of(b.host)->dpv1_requests;
+  EXPECT_EQ(stray(kC1, pdu::read_request(0, 1, 2).build()), 0x03);
+  EXPECT_EQ(stray(kAlarm, pdu::AlarmAck{0x00, 0x01, 0x01}.build()), 0x03);
+  b.master.idle(100'000);  // two 1 ms ticks: nothing to answer
+  EXPECT_EQ(firmware_bench::stats_of(b.host)->dpv1_requests, requests_before);
+  EXPECT_EQ(b.request(pdu::read_request(0, 1, 2).build()).du,
+            (pdu::Bytes{0x5E, 0x00, 0x01, 0x02, 0x01, 0x09}));
+  EXPECT_EQ(firmware_bench::stats_of(b.host)->dpv1_requests, requests_before + 1);
+}
+
 // Without DPV1_Enable in Set_Prm (the GSD defaults) the SAP list is off: a request to SAP 51 is
 // refused RS as for any SAP the chip does not serve, and DO4 is the DP-only module it was.
 TEST(Do4Dpv1, WithoutDpv1EnableSap51IsRefused) {

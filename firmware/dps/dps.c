@@ -84,6 +84,7 @@ enum { Prm_Conflict = 0x01u };                             /* handshake read res
 enum { State_U_Buffer = 0x04u, U_Buffer_Cleared = 0x08u }; /* Next_Dout_Buffer_Cmd */
 enum { DP_Mode = 0x0100u, Spec_Clear_Mode = 0x2000u };     /* Mode_Reg0 */
 enum { Ext_Diag = 0x01u };                                 /* diag byte 0 */
+enum { kDiagMasterAdd = 3u, kNoMaster = 0xFFu };           /* diag byte 3: Master_Add */
 enum { kStdPrm = 7u, kStdDiag = 6u };
 
 /* The instance every function works on (dps.h, "One instance"): passed on as ME / ME_. On the
@@ -100,7 +101,8 @@ static dps dps_the;
  * the chip answers RS there) and the MSAC_C2 resource manager (49), each with one buffer that is
  * indication and response buffer at once, as the Profichip driver has it for its MSAC_C1 SAPs.
  * The ISR takes a request on FDL_Ind; the 1 ms task answers it (the master's polls get SC
- * meanwhile); Poll_End_Ind frees the buffer. */
+ * meanwhile); Poll_End_Ind frees the buffer. MSAC_C1 is the locking master's: SAPs 51 and 50
+ * take only its address (Request_SA), from Data_Exchange on. */
 /* The connection before the resource manager: an Abort and a new Initiate taken in the same tick
  * close first, then open. */
 enum { kDpv1Saps = DPS_DPV1_SAPS, kC1Saps = 2u, kConn = 2u, kRm = 3u };
@@ -169,6 +171,7 @@ static void allocate_buffers(DPS_P(dps)) {
   if (self->sap_list) {
     /* While Offline (VPC3+C p.54): the list, FFh after its last entry, the buffer headers. */
     const VPC3_ADR list = (VPC3_ADR)(next << self->map->segment_shift);
+    self->c1_waiting = 0;
     DPS_ALLOC(VPC3_R_FDL_SAP_List_Ptr, kDpv1Saps * VPC3_SAP_Entry_SIZE + 1u);
     for (k = 0; k < kDpv1Saps; ++k) {
       const VPC3_ADR e = (VPC3_ADR)(list + k * VPC3_SAP_Entry_SIZE);
@@ -315,11 +318,37 @@ uint8_t dps_dpv1_status(DPS_P_(dps) uint8_t k) {
   return k >= 1u && k <= 3u ? self->dpv1_status[k - 1u] : 0u;
 }
 
+/* Request_SA of both MSAC_C1 SAPs. */
+static void c1_request_sa(DPS_P_(dps) uint8_t sa) DPS_REENTRANT {
+  uint8_t k;
+  for (k = 0; k < kC1Saps; ++k) Vpc3Write(self->sap_entry[k] + VPC3_SAP_Entry_Request_SA, sa);
+}
+
+/* The C1 SAPs opened to the locking master once in Data_Exchange. The chip writes Master_Add into
+ * byte 3 of the diag buffer it sends (SPC3 p.33; the Profichip driver's VPC3_GetMasterAddress
+ * reads it there), and a master checks the slave with Slave_Diag after Chk_Cfg, before its
+ * Data_Exchange. The buffer the chip holds is the one it sent last unless the user gave it a new
+ * one since (Diag_Flag: not yet fetched); then a later call reads it. */
+static void c1_open_to_master(DPS_P(dps)) DPS_REENTRANT {
+  const uint16_t status = read16(ME_ self->map->status);
+  uint8_t k, master;
+  if ((status & VPC3_Status_Reg_Diag_Flag_Msk) != 0 || ((status >> 4) & 3u) != 2u) return;
+  /* The chip's buffer is in state 10 or 11 (Diag_Buffer_SM), the user's in 01. */
+  k = (Vpc3Read(self->map->diag_sm) & VPC3_Diag_Buffer_SM_Diag_Buf1_State_Msk) >= 2u ? 0u : 1u;
+  master = Vpc3Read((VPC3_ADR)(buffer(ME_ self->map->diag_ptr[k]) + kDiagMasterAdd));
+  if (master == kNoMaster) return;
+  c1_request_sa(ME_ master);
+  self->c1_waiting = 0;
+}
+
 /* The user's diag buffer is the one in state 01 (User); both may be with the ASIC. */
 static void publish_diag(DPS_P(dps)) {
-  const uint8_t sm = Vpc3Read(self->map->diag_sm);
+  uint8_t sm;
   int k;
   VPC3_ADR base;
+  /* Before the chip gets a buffer it has not sent. */
+  if (self->sap_list && self->c1_waiting) c1_open_to_master(ME);
+  sm = Vpc3Read(self->map->diag_sm);
   if ((sm & 3u) == 1u) {
     k = 0;
   } else if (((sm >> 2) & 3u) == 1u) {
@@ -345,10 +374,15 @@ void dps_set_diag(DPS_P_(dps) const uint8_t* bytes, uint8_t len, int ext_diag) {
 }
 
 /* A Set_Prm with DPV1_Enable starts MSAC_C1 afresh: its status bytes kept for the module, both
- * buffers free, no request pending. The class-1 master's Set_Prm leaves a class-2 master's
- * connection alone (docs/decisions.md). */
+ * buffers free, no request pending, the C1 SAPs closed until Data_Exchange names the master
+ * (another one, maybe). The class-1 master's Set_Prm leaves a class-2 master's connection alone
+ * (docs/decisions.md). */
 static void dpv1_restart(DPS_P_(dps) const uint8_t* status) {
   uint8_t k;
+  /* Closed first (our own address: nobody sends to itself, as the Profichip driver locks its
+   * SAPs), so freeing the buffers also drops what came before. */
+  c1_request_sa(ME_ self->stats.station_address);
+  self->c1_waiting = 1;
   memcpy(self->dpv1_status, status, sizeof self->dpv1_status);
   self->dpv1_pending = (uint8_t)(self->dpv1_pending & ~((1u << kC1Saps) - 1u));
   for (k = 0; k < kC1Saps; ++k) Vpc3Write(self->dpv1_buf[k] + VPC3_DPV1_Buf_Control, 0x00);
@@ -377,6 +411,12 @@ static void dpv1_take_indications(DPS_P(dps)) {
     write16(ME_ self->map->int_ack, User_Timer_Clock);
     set_mask(ME_(uint16_t)(self->mask | User_Timer_Clock));
   }
+}
+
+/* DPV1 events: Data_Exchange may open the C1 SAPs; FDL_Ind brings requests. */
+static void dpv1_isr(DPS_P_(dps) uint16_t ir) DPS_REENTRANT {
+  if ((ir & DX_Out) && self->c1_waiting) c1_open_to_master(ME);
+  if (ir & FDL_Ind) dpv1_take_indications(ME);
 }
 
 /* A response into buffer k: the data unit, Length, Function_Code, RESP with USER last. */
@@ -435,7 +475,7 @@ static uint8_t c2_initiate(DPS_P_(dps) const uint8_t* req, uint8_t len, uint8_t*
   Vpc3Write(self->sap_entry[kConn] + VPC3_SAP_Entry_Ind_Buf_Ptr0,
             (uint8_t)(self->dpv1_buf[kConn] >> self->map->segment_shift));
   self->c2_open = 1;
-  self->c2_limit_ms = (uint32_t)((uint16_t)req[4] << 8 | req[5]) * 10u;
+  self->c2_timeout = (uint16_t)((uint16_t)req[4] << 8 | req[5]);
   self->c2_quiet_ms = 0;
   ++self->stats.c2_opened;
   resp[0] = kRmResponse;
@@ -487,7 +527,7 @@ static void dpv1_answer(DPS_P(dps)) {
  * finds it quiet longer than Send_Timeout, the (10 x Send_Timeout + 1)-th tick after its last
  * request taken or response sent, so never before Send_Timeout has run out (docs/firmware.md). */
 static void c2_tick(DPS_P(dps)) {
-  if (++self->c2_quiet_ms <= self->c2_limit_ms) return;
+  if (++self->c2_quiet_ms <= (uint32_t)self->c2_timeout * 10u) return;
   c2_close(ME);
   ++self->stats.c2_timeouts;
   if (!self->timer_module && !self->dpv1_pending)
@@ -631,7 +671,7 @@ void dps_isr(DPS_P(dps)) {
   }
   if (ir & New_SSA_Data) handle_ssa(ME);
   if ((ir & Diag_Buffer_Changed) && self->diag_pending) publish_diag(ME);
-  if (self->sap_list && (ir & FDL_Ind)) dpv1_take_indications(ME);
+  if (self->sap_list && (ir & (DX_Out | FDL_Ind))) dpv1_isr(ME_ ir);
   if (self->sap_list && (ir & Poll_End_Ind)) dpv1_response_sent(ME);
   /* The tick first: the one that answers an Initiate does not count for its connection. */
   if ((ir & User_Timer_Clock) && self->c2_open) c2_tick(ME);

@@ -153,7 +153,10 @@ struct dps {
   uint8_t dpv1_len[DPS_DPV1_SAPS];
   uint8_t dpv1_pending; /* bit k: the request of SAP k waits for the 1 ms task */
   int c2_open;          /* the MSAC_C2 connection is open */
-  uint32_t c2_limit_ms; /* its Send_Timeout in ms (Initiate: 10 ms units) */
+  /* DPV1 parameterised: the C1 SAPs wait for the master's address. (With the Send_Timeout in its
+   * 16 bits the instance keeps its size: the 80C32 traces count the cycles of its clearing.) */
+  int c1_waiting;
+  uint16_t c2_timeout;  /* its Send_Timeout (Initiate: 10 ms units) */
   uint32_t c2_quiet_ms; /* 1 ms ticks since its last request taken or response sent */
 };
 

@@ -5,6 +5,7 @@
 // State machine fields: F 7:6 (dpc31: N_Cl in bit 7), U 5:4, N 3:2, D 1:0; 01/10/11 = buffer
 // 1/2/3, 00 Nil.
 #include "conformance.hpp"
+#include "dpc31/pdu.hpp"
 #include "user_side.hpp"
 
 using namespace dpc31;
@@ -124,6 +125,37 @@ TEST_P(BufferSm, DiagFlag_SetOnExchange_ClearedWhenFetched_KeptWithStatDiag) {
   EXPECT_EQ(status(b.chip) & 0x04, 0x04);
   ASSERT_TRUE(b.master.slave_diag().answer);
   EXPECT_EQ(status(b.chip) & 0x04, 0x04);
+}
+
+// SPC3 p.33: "The first 6 bytes are space holders, except for the three least significant bit
+// positions in the first byte. ... When sending, SPC3 pre-processes the first six bytes
+// corresponding to the standard." The sent buffer holds them where the user reads them through
+// the bus: byte 3 Master_Add (FFh before the lock, 2 after master 2's Set_Prm; a driver learns
+// the locking master there, as the Profichip driver's VPC3_GetMasterAddress does), bytes 1, 2, 4,
+// 5 as sent, byte 0 the sent Station_Status_1 in bits 7..3 with the user's three bits kept
+// (Ext_Diag, Ext_Diag_Overflow here), so a second Slave_Diag of the same buffer says the same.
+TEST_P(BufferSm, DiagSpaceHolders_HoldTheSentStandardBytes_MasterAddInByte3) {
+  Bare b(GetParam());
+  const auto asic_buffer = [&b] {
+    const bool first = (b.chip.read(0x0C) & 0x03) >= 0x02;  // 10 or 11: the ASIC's
+    return static_cast<std::uint32_t>(
+               b.chip.read(rd(b.chip, first ? RegId::R_Diag_Buf_Ptr1 : RegId::R_Diag_Buf_Ptr2)))
+           << b.chip.profile().segment_shift;
+  };
+  ASSERT_TRUE(b.master.fdl_status().answer);
+  ASSERT_TRUE(b.master.slave_diag().answer);
+  EXPECT_EQ(b.chip.read(asic_buffer() + 3), 0xFF);
+  locked_with_new_diag(b, 0x05);
+  const Exchange d = b.master.slave_diag();
+  ASSERT_TRUE(d.answer);
+  const Bytes& du = d.answer->du;
+  ASSERT_EQ(du.size(), 7u);
+  const Bytes held = read_bytes(b.chip, asic_buffer(), 7);
+  EXPECT_EQ(held[3], 0x02);
+  EXPECT_EQ(held, (Bytes{static_cast<std::uint8_t>((du[0] & 0xF8) | 0x05), du[1], du[2], du[3],
+                         du[4], du[5], 0x42}));
+  EXPECT_EQ(du[0] & pdu::SlaveDiag::St1_Ext_Diag, pdu::SlaveDiag::St1_Ext_Diag);
+  EXPECT_EQ(b.master.slave_diag().answer->du, du);
 }
 
 // The same sentence, "cleared when 'the relevant master' fetched": a fetch by master 7, which
