@@ -183,6 +183,10 @@ class Parser {
       fail_at(user_wd_value_line_, user_wd_value_needs_user_wd("user user_wd_value="));
     }
     if (wd_base_line_ != 0) wd_base_checked(s_.user.slave, wd_base_line_);
+    if (s_.cpu) {  // `bus` and `irq-controller` may come after `cpu`
+      if (const std::string why = s_.cpu->chip_problem(s_.chip); !why.empty())
+        fail_at(cpu_line_, why);
+    }
     const std::uint8_t slave = s_.user.slave.address;
     if (slave == s_.master.address) {
       // The later of the two lines that set them (one may be the other's default).
@@ -263,6 +267,7 @@ class Parser {
       fail("'cpu c31' needs 'profile dpc31' before it: only the DPC31 has a C31 core");
     if (firmware_seen_ || user_seen_ || slave_seen_ || !s_.user.dpv1.records.empty())
       fail("'cpu' comes before 'slave', without 'firmware', 'user' and 'record'");
+    cpu_line_ = step_.line;
     Cpu51Config c{.hex = beside_scenario(std::string(pos_[2])), .c31 = c31};
     for (const auto& [k, v] : opts_) {
       if (k == "clock") {
@@ -769,6 +774,7 @@ class Parser {
   bool user_seen_ = false;
   // The lines of options only some profiles act on (profile_options_checked); 0: not given.
   int irq_controller_line_ = 0;
+  int cpu_line_ = 0;
   int substitute_line_ = 0;
   int dx_out_port_line_ = 0;
   int user_wd_value_line_ = 0;
