@@ -45,17 +45,32 @@ bool parse_ihex(std::string_view text, HexImage& image, std::string& error) {
       case 0x00:
         if (addr + rec[0] > 0x10000) return fail("data past 64 KB");
         for (unsigned i = 0; i < rec[0]; ++i) {
+          // Two values for one address: which one the linker meant is unknown.
+          if (image.used[addr + i]) {
+            return fail(fmt::format("data at {:04X}h overlaps an earlier record", addr + i));
+          }
           image.bytes[addr + i] = rec[4 + i];
           image.used[addr + i] = true;
         }
         image.size += rec[0];
         break;
       case 0x01:
+        // An image that gives no byte runs nothing but the FFh of empty program memory.
+        if (image.size == 0)
+          return fail("no data bytes before the end-of-file record: an empty image");
         ended = true;
         break;
       case 0x02:
       case 0x04:
-        if (rec[0] != 2 || rec[4] != 0 || rec[5] != 0) return fail("address above 64 KB");
+        if (rec[0] != 2) return fail(fmt::format("a type {:02X} record has 2 data bytes", rec[3]));
+        if (rec[4] != 0 || rec[5] != 0) {
+          // A segment base (x 16) may still be inside 64 KB: refused as what it is.
+          return fail(
+              rec[3] == 0x02
+                  ? fmt::format("a non-zero segment base {:02X}{:02X}h (only 0000h is taken)",
+                                rec[4], rec[5])
+                  : "address above 64 KB");
+        }
         break;
       case 0x03:
       case 0x05:

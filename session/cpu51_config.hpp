@@ -1,12 +1,14 @@
 // What a board with an 80C32 beside the chip is (the scenario header `cpu 80c32`, `dpc31 bridge
 // --cpu`): its clock, the firmware image and where the chip and the module's output latch sit in
-// XDATA (docs/cpu.md, "DO4 on the 80C32"). Plain data: users of scenario.hpp need no MCS-51 core.
+// XDATA (docs/cpu.md, "DO4 on the 80C32"). Plain data: users of scenario.hpp need no MCS-51 core
+// (its checks are in cpu51_module.cpp).
 #pragma once
 
-#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <vector>
+
+#include "dpc31/chip.hpp"
 
 namespace dpc31 {
 
@@ -26,15 +28,15 @@ struct Cpu51Config {
   [[nodiscard]] bool latch_in_window() const {
     return latch + ports.size() > base && latch < base + kCpu51Window;
   }
-  // "" or why `ports` cannot name the latch bytes: a name empty, or given twice (`expect port`
-  // would see only the first).
-  [[nodiscard]] std::string ports_problem() const {
-    for (auto n = ports.begin(); n != ports.end(); ++n) {
-      if (n->empty()) return "an empty port name";
-      if (std::find(ports.begin(), n, *n) != n) return "port '" + *n + "' named twice";
-    }
-    return {};
-  }
+  // "" or why `ports` cannot name the latch bytes: a name empty, not a word
+  // ([A-Za-z_][A-Za-z0-9_]*: `serve`'s protocol lines and `latch` replies carry it between blanks),
+  // or given twice
+  // (`expect port` would see only the first). The one check of every door.
+  [[nodiscard]] std::string ports_problem() const;
+  // "" or why the chip `chip` makes cannot be on this board: the 80C32 drives the chip's Intel
+  // mode and takes X/INT on INT0, which the C31's interrupt controller leaves inactive; the C31
+  // serves that controller (docs/cpu.md).
+  [[nodiscard]] std::string chip_problem(const ChipOptions& chip) const;
 };
 
 }  // namespace dpc31

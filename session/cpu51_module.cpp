@@ -17,6 +17,9 @@ namespace dpc31 {
 namespace {
 
 constexpr std::size_t kMaxHexBytes = 4u << 20;  // 64 KB of code is about 180 KB of HEX
+// A map only names places: one larger than this is not read, and the run says so (its addresses
+// unnamed) instead of stopping.
+constexpr std::uintmax_t kMaxMapBytes = 4u << 20;
 
 // SDCC's map: the code symbols are the lines "C:   0000203C  _do4_init   do4".
 void read_map(const std::string& text, std::map<std::uint16_t, std::string>& out) {
@@ -39,6 +42,45 @@ void read_map(const std::string& text, std::map<std::uint16_t, std::string>& out
 }
 
 }  // namespace
+
+std::string Cpu51Config::ports_problem() const {
+  const auto word = [](const std::string& n) {
+    const auto letter = [](char c) {
+      return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || c == '_';
+    };
+    return !n.empty() && letter(n[0]) && std::all_of(n.begin(), n.end(), [&](char c) {
+      return letter(c) || (c >= '0' && c <= '9');
+    });
+  };
+  for (auto n = ports.begin(); n != ports.end(); ++n) {
+    if (n->empty()) return "an empty port name";
+    if (!word(*n)) {
+      return fmt::format(
+          "port '{}': a port name is letters, digits and '_', not starting with a digit",
+          shown(*n));
+    }
+    if (std::find(ports.begin(), n, *n) != n) return "port '" + *n + "' named twice";
+  }
+  return {};
+}
+
+std::string Cpu51Config::chip_problem(const ChipOptions& chip) const {
+  if (c31) {
+    return chip.irq_controller == IrqController::c31
+               ? ""
+               : "the C31 serves its own interrupt controller: irq-controller external contradicts "
+                 "it";
+  }
+  if (chip.bus != BusMode::intel) {
+    return "the 80C32 drives the chip in Intel mode (its multiplexed bus): not on the Motorola "
+           "bus";
+  }
+  if (chip.irq_controller == IrqController::c31) {
+    return "the 80C32 takes X/INT on INT0, which the C31's interrupt controller leaves inactive: "
+           "its firmware would never be interrupted";
+  }
+  return {};
+}
 
 bool load_cpu51_image(const Cpu51Config& cfg, Cpu51Image& image, std::string& error) {
   std::string text;
@@ -65,13 +107,18 @@ bool load_cpu51_image(const Cpu51Config& cfg, Cpu51Image& image, std::string& er
     return false;
   }
   if (const std::string map = cpu51_map_path(cfg.hex); !map.empty()) {
+    image.map_file = map;
+    std::error_code ec;
+    if (const std::uintmax_t n = std::filesystem::file_size(map, ec); !ec && n > kMaxMapBytes) {
+      image.map_too_large = true;
+      return true;
+    }
     std::string mtext;
-    if (!read_text_file(map, kMaxHexBytes, "SDCC map", mtext, error)) {
+    if (!read_text_file(map, kMaxMapBytes, "SDCC map", mtext, error)) {
       error = fmt::format("{}: {}", map, error);
       return false;
     }
     read_map(mtext, image.symbols);
-    image.map_file = map;
   }
   return true;
 }
@@ -92,6 +139,10 @@ std::string code_name(const Cpu51Image& image, std::uint16_t pc) {
 
 std::string symbols_text(const Cpu51Image& image) {
   if (image.map_file.empty()) return "";
+  if (image.map_too_large) {
+    return fmt::format(", {} not read (more than {} bytes): code addresses unnamed", image.map_file,
+                       kMaxMapBytes);
+  }
   if (image.symbols.empty()) {
     return fmt::format(", no code symbols in {} (no SDCC 'C:' line): code addresses unnamed",
                        image.map_file);
@@ -160,7 +211,7 @@ std::string apply_cpu51_choice(const Cpu51Choice& choice, ChipOptions& chip, Cpu
       cfg.ports.emplace_back(ports.substr(at, end == std::string_view::npos ? end : end - at));
     }
     if (const std::string why = cfg.ports_problem(); !why.empty())
-      return fmt::format("--ports '{}': {}", ports, why);
+      return fmt::format("--ports '{}': {}", shown(ports), why);
     if (!choice.board_address.empty()) {
       if (!parse_address(choice.board_address, 0, 0x10000 - kCpu51Window, v)) {
         return fmt::format(
@@ -176,6 +227,9 @@ std::string apply_cpu51_choice(const Cpu51Choice& choice, ChipOptions& chip, Cpu
           "{:#06x}",
           cfg.base, cfg.latch);
     }
+  }
+  if (const std::string why = cfg.chip_problem(chip); !why.empty()) {
+    return fmt::format("--cpu {}: {}", core, why);
   }
   std::string why;
   if (!load_cpu51_image(cfg, image, why)) return why;

@@ -25,11 +25,13 @@ struct Cpu51Image {
   std::vector<bool> used;  // the addresses the image gives
   std::uint32_t size = 0;
   std::map<std::uint16_t, std::string> symbols;
-  std::string map_file;  // empty: no map beside the HEX file
+  std::string map_file;        // empty: no map beside the HEX file
+  bool map_too_large = false;  // map_file not read (symbols_text says so)
 };
 
 // Reads cfg.hex (and FILE.map beside it, if there is one). False with one line in `error`:
-// "FILE:LINE: reason" for a bad record, "FILE: reason" when it cannot be read.
+// "FILE:LINE: reason" for a bad record, "FILE: reason" when it (or the map) cannot be read; a map
+// over 4 MiB is skipped (map_too_large), not refused.
 bool load_cpu51_image(const Cpu51Config& cfg, Cpu51Image& image, std::string& error);
 
 // The SDCC map that load_cpu51_image reads beside the image `hex` (FILE.map), or "" if there is
@@ -40,8 +42,8 @@ std::string cpu51_map_path(const std::string& hex);
 std::string code_name(const Cpu51Image& image, std::uint16_t pc);
 
 // Where the names come from, for a run's first line: "" without a map, ", symbols from F.map",
-// or ", no code symbols in F.map ..." for a map that gives none (not SDCC's, or cut short): the
-// run goes on with addresses, and says why.
+// ", no code symbols in F.map ..." for a map that gives none (not SDCC's, or cut short), or ",
+// F.map not read (more than N bytes) ...": the run goes on with addresses, and says why.
 std::string symbols_text(const Cpu51Image& image);
 
 // The CPU of the command lines (`dpc31 bridge`, `dpc31 serve`; docs/cpu.md, "Bring your own

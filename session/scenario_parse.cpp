@@ -196,6 +196,10 @@ class Parser {
               "dpv1 work= is the built-in user side's DPV1 time and needs a record: without one "
               "it serves no DPV1");
     }
+    if (s_.cpu) {  // `bus` and `irq-controller` may come after `cpu`
+      if (const std::string why = s_.cpu->chip_problem(s_.chip); !why.empty())
+        fail_at(cpu_line_, why);
+    }
     const std::uint8_t slave = s_.user.slave.address;
     if (slave == s_.master.address) {
       // The later of the two lines that set them (one may be the other's default).
@@ -276,6 +280,7 @@ class Parser {
       fail("'cpu c31' needs 'profile dpc31' before it: only the DPC31 has a C31 core");
     if (firmware_seen_ || user_seen_ || slave_seen_ || !s_.user.dpv1.records.empty())
       fail("'cpu' comes before 'slave', without 'firmware', 'user' and 'record'");
+    cpu_line_ = step_.line;
     Cpu51Config c{.hex = beside_scenario(std::string(pos_[2])), .c31 = c31};
     for (const auto& [k, v] : opts_) {
       if (k == "clock") {
@@ -788,6 +793,7 @@ class Parser {
   bool user_seen_ = false;
   // The lines of options only some profiles act on (profile_options_checked); 0: not given.
   int irq_controller_line_ = 0;
+  int cpu_line_ = 0;
   int substitute_line_ = 0;
   int dx_out_port_line_ = 0;
   int user_wd_value_line_ = 0;

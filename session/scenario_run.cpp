@@ -187,6 +187,7 @@ class Runner {
       for (const Cpu51Module::PortWrite& w : m51_->port_writes()) {
         out_.port_writes.push_back({w.cycle, m51_->port_name(w.port), w.value});
       }
+      for (std::string& l : port_lines_.flush()) port_note(chip_.cycle(), false, l);
     }
     // What the chip's log still owes (a repeat count, lines left out) comes before the end line.
     chip_.set_log_sink({});
@@ -216,6 +217,11 @@ class Runner {
     if (walk_ || hooks_.observer != nullptr) {
       events_.push_back(Event{cycle, std::move(text), kind, step});
     }
+  }
+
+  // A port write's own line, or what the limiter says of those it left out.
+  void port_note(std::uint64_t cycle, bool own, std::string& line) {
+    note(cycle, own ? std::move(line) : "80C32 port writes: " + line);
   }
 
   void tell(ScenarioObserver& o, const Event& e) {
@@ -641,8 +647,10 @@ class Runner {
       // The MOVX (one byte) has been fetched: it is the byte before the PC.
       const auto at = static_cast<std::uint16_t>(m51_->board().cpu().pc() - 1);
       port_since_[m51_->port_name(port)] = cycle;
-      note(cycle, fmt::format("80C32 at {}: {} = {} at {}", code_name(image_, at),
-                              m51_->port_name(port), port_text(value), time_text(cycle)));
+      const std::string line = fmt::format("80C32 at {}: {} = {} at {}", code_name(image_, at),
+                                           m51_->port_name(port), port_text(value),
+                                           time_text(cycle));
+      for (std::string& l : port_lines_.add(cycle, line)) port_note(cycle, l == line, l);
     };
     const std::string symbols = symbols_text(image_);
     if (s_.cpu->c31) {
@@ -791,6 +799,9 @@ class Runner {
   std::unique_ptr<FirmwareHost> fw_;  // instead of user_ when the scenario names a firmware
   Cpu51Image image_;
   std::unique_ptr<Cpu51Module> m51_;  // instead of both on `cpu 80c32`
+  // The walk's lines of the 80C32's port writes, bounded as the chip's log: a firmware writing its
+  // latch in a loop is no flood (--json's port_writes has every write).
+  LogLimiter port_lines_;
   std::unique_ptr<DpMaster> master_;
   std::unique_ptr<Dpv1Master> dpv1_;
   std::optional<Dpv1Answer> dpv1_last_;  // what `expect dpv1` compares

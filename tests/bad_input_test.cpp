@@ -109,6 +109,9 @@ TEST_F(BadInput, RunCpuImage) {
   file("empty.ihx", "");
   file("high.ihx", ":02000000A5A5B4\n:00000001FF\n");
   fs::create_directory(path("dir.ihx"));
+  file("eof.ihx", ":00000001FF\n");
+  file("overlap.ihx", ":020000000000FE\n:0100010000FE\n:00000001FF\n");
+  file("seg.ihx", ":020000020100FB\n:0200000080FE80\n:00000001FF\n");
   const std::vector<FileCase> cases = {
       {"bad checksum", file("sum.scn", "cpu 80c32 firmware bad.ihx\nstartup\n"),
        path("bad.ihx") + ":1: checksum"},
@@ -121,6 +124,12 @@ TEST_F(BadInput, RunCpuImage) {
       {"C31 past 1FFFh",
        file("c31.scn", "profile dpc31\ncpu c31 firmware high.ihx code=0x1FFF\nstartup\n"),
        path("high.ihx") + ": the image does not fit the C31's code area (1FFFh..1FFFh)"},
+      {"only the end record", file("eof.scn", "cpu 80c32 firmware eof.ihx\nstartup\n"),
+       path("eof.ihx") + ":1: no data bytes before the end-of-file record: an empty image"},
+      {"overlapping records", file("overlap.scn", "cpu 80c32 firmware overlap.ihx\nstartup\n"),
+       path("overlap.ihx") + ":2: data at 0001h overlaps an earlier record"},
+      {"a segment base", file("seg.scn", "cpu 80c32 firmware seg.ihx\nstartup\n"),
+       path("seg.ihx") + ":1: a non-zero segment base 0100h (only 0000h is taken)"},
   };
   spit(path("old.json"), "old");
   const auto before = listing();
@@ -131,6 +140,124 @@ TEST_F(BadInput, RunCpuImage) {
     EXPECT_EQ(slurp(path("old.json")), "old") << c.name;
     EXPECT_EQ(listing(), before) << c.name;
   }
+}
+
+// An image whose program is SJMP $ (80 FE), for the doors that need one that loads.
+constexpr const char* kHalt = ":0200000080FE80\n:00000001FF\n";
+
+// The board set-ups that cannot work are refused at every door, by one check (Cpu51Config::
+// chip_problem): the 80C32 drives the chip's Intel mode and takes X/INT on INT0, which the C31's
+// interrupt controller leaves inactive; the C31 serves that controller.
+TEST_F(BadInput, CpuBoardSetUpsThatCannotWork) {
+  file("halt.ihx", kHalt);
+  const std::string motorola =
+      "the 80C32 drives the chip in Intel mode (its multiplexed bus): not on the Motorola bus";
+  const std::string c31_irq =
+      "the 80C32 takes X/INT on INT0, which the C31's interrupt controller leaves inactive: its "
+      "firmware would never be interrupted";
+  const std::vector<FileCase> cases = {
+      {"motorola after cpu", file("m1.scn", "cpu 80c32 firmware halt.ihx\nbus motorola\nstartup\n"),
+       path("m1.scn") + ":1: " + motorola},
+      {"motorola before cpu",
+       file("m2.scn", "bus motorola\ncpu 80c32 firmware halt.ihx\nstartup\n"),
+       path("m2.scn") + ":2: " + motorola},
+      {"the C31's controller",
+       file("i1.scn", "profile dpc31\nirq-controller c31\ncpu 80c32 firmware halt.ihx\nstartup\n"),
+       path("i1.scn") + ":3: " + c31_irq},
+      {"the C31 without its controller",
+       file("i2.scn",
+            "profile dpc31\ncpu c31 firmware halt.ihx\nirq-controller external\nstartup\n"),
+       path("i2.scn") + ":2: the C31 serves its own interrupt controller: irq-controller external "
+                        "contradicts it"},
+  };
+  for (const FileCase& c : cases) {
+    const Outcome r = dpc31("run " + c.path);
+    expect_bad(r, c.line, c.name);
+    EXPECT_EQ(r.out, "") << c.name;
+  }
+  expect_bad(dpc31("bridge --tcp 0 --profile dpc31 --irq-controller c31 --cpu 80c32 --firmware "
+                   "halt.ihx"),
+             "dpc31 bridge: --cpu 80c32: " + c31_irq, "bridge");
+  expect_bad(dpc31("serve --unix s --profile dpc31 --irq-controller c31 --cpu 80c32 --firmware "
+                   "halt.ihx"),
+             "dpc31 serve: --cpu 80c32: " + c31_irq, "serve, the C31's controller");
+  expect_bad(dpc31("serve --unix s --bus motorola --cpu 80c32 --firmware halt.ihx"),
+             "dpc31 serve: --cpu 80c32: " + motorola, "serve, motorola");
+  EXPECT_FALSE(fs::exists(path("s")));
+}
+
+// Port names travel in protocol lines (`serve`'s `latch` replies, blank-separated) and in
+// `expect port`: only words are names, at every door (Cpu51Config::ports_problem).
+TEST_F(BadInput, CpuPortNamesAreWords) {
+  file("halt.ihx", kHalt);
+  const std::string word = "a port name is letters, digits and '_', not starting with a digit";
+  expect_bad(dpc31("run " + file("p.scn", "cpu 80c32 firmware halt.ihx ports=a=b,c\nstartup\n")),
+             path("p.scn") + ":1: ports=: port 'a=b': " + word, "scenario");
+  expect_bad(dpc31("run " + file("d.scn", "cpu 80c32 firmware halt.ihx ports=out,2nd\nstartup\n")),
+             path("d.scn") + ":1: ports=: port '2nd': " + word, "scenario, a digit first");
+  expect_bad(dpc31("bridge --tcp 0 --cpu 80c32 --firmware halt.ihx --ports 'a b,c'"),
+             "dpc31 bridge: --ports 'a b,c': port 'a b': " + word, "bridge");
+  // A newline would forge a protocol line: shown, not written.
+  expect_bad(
+      dpc31("serve --unix s --cpu 80c32 --firmware halt.ihx --ports \"$(printf 'x\\nOK y')\""),
+      "dpc31 serve: --ports 'x\\x0AOK y': port 'x\\x0AOK y': " + word, "serve");
+  EXPECT_FALSE(fs::exists(path("s")));
+}
+
+// '' is not "not given" for an option that is not a file either (the same CLI11 check's wording).
+TEST_F(BadInput, EmptyOptionValues) {
+  const auto before = listing();
+  for (const std::string sub : {"bridge", "serve"}) {
+    for (const char* o : {"--cpu", "--ports", "--board-address", "--code", "--tcp"}) {
+      expect_bad(dpc31(sub + " " + o + " ''"),
+                 "dpc31 " + sub + ": " + o + ": an empty value: give one, or leave the option out",
+                 sub + " " + o);
+    }
+  }
+  EXPECT_EQ(listing(), before);
+}
+
+// A map only names places: one over 4 MiB is not read, and the run says so in its board line
+// and goes on with addresses (it stopped every door).
+TEST_F(BadInput, ATooLargeMapIsSkippedWithANote) {
+  file("halt.ihx", kHalt);
+  file("halt.map", "");
+  fs::resize_file(path("halt.map"), (4u << 20) + 1);
+  const Outcome r = dpc31("run " + file("m.scn", "cpu 80c32 firmware halt.ihx\nstartup\n"));
+  EXPECT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.out.find("halt.ihx (2 bytes, " + path("halt.map") +
+                       " not read (more than 4194304 bytes): code addresses unnamed)"),
+            std::string::npos)
+      << r.out;
+}
+
+// A firmware writing its latch in a loop: the walk's port-write lines are bounded as the chip's
+// log is (1 000 in 48 000 000 cycles, then one line with the count left out); `expect port` and
+// the outcome's port_writes still see every write.
+TEST_F(BadInput, ALatchWrittenInALoopDoesNotFloodTheWalk) {
+  // MOV DPTR,#4000h; loop: MOVX @DPTR,A; INC A; SJMP loop (5 machine cycles, 2.5 us at 24 MHz).
+  file("flood.ihx", ":07000000904000F00480FCB9\n:00000001FF\n");
+  const std::string scn = file("f.scn",
+                               "cpu 80c32 clock=24000000 firmware flood.ihx ports=p0\n"
+                               "slave address=7\nsilence 20ms\n");
+  const Outcome r = dpc31("run " + scn);
+  EXPECT_EQ(r.rc, 0) << r.err;
+  std::istringstream walk(r.out);
+  std::size_t shown = 0;
+  std::uint64_t left = 0;
+  const std::string said = "80C32 port writes: ";
+  for (std::string l; std::getline(walk, l);) {
+    shown += l.find(": p0 = ") != std::string::npos ? 1 : 0;
+    if (const auto at = l.find(said); at != std::string::npos) {
+      EXPECT_EQ(left, 0u) << "a second count: " << l;
+      left = std::stoull(l.substr(at + said.size()));
+      EXPECT_NE(l.find(" log lines left out (at most 1000 in 48000000 cycles)"), std::string::npos)
+          << l;
+    }
+  }
+  EXPECT_EQ(shown, 1000u);
+  EXPECT_GT(shown + left, 7000u);  // 20 ms / 2.5 us, less the start-up
+  EXPECT_LT(r.out.size(), 200'000u);
 }
 
 TEST_F(BadInput, RunOptionValues) {

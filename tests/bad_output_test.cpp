@@ -166,6 +166,58 @@ TEST_F(BadInput, AFileSizeLimitIsAFailedWrite) {
   EXPECT_EQ(slurp(path("o.log")), "");
 }
 
+// A standard output whose reader has gone (`| head -1`): SIGPIPE ended the process silently, the
+// bridge leaving its pty symlink and the capture's temporary (audit a13, finding 2). dpc31 ignores
+// the signal: the write fails with EPIPE and takes the path of every failed write. The pipe's read
+// end is closed before the command starts, so its first write fails, whatever the timing.
+TEST_F(BadInput, AClosedPipeIsAFailedWrite) {
+  const std::string broken = ": Broken pipe";
+  for (const auto& [args, want] : std::vector<std::pair<std::string, std::string>>{
+           {"bridge --pty p --firmware DO4 --pacing free --pcap o.pcapng",
+            "dpc31 bridge: cannot write the log to the standard output" + broken},
+           {"serve --unix s", "dpc31 serve: cannot write the standard output" + broken},
+           {"run " + kScn, "dpc31 run: cannot write the standard output" + broken},
+           {"regs --profile dpc31", "dpc31 regs: cannot write the standard output" + broken},
+           {"replay " + kTraces + "gc_clear_spc3.trace",
+            "dpc31 replay: cannot write the standard output" + broken}}) {
+    int fds[2];
+    ASSERT_EQ(::pipe(fds), 0);
+    ::close(fds[0]);
+    std::vector<std::string> argv = {kCli};
+    std::istringstream words(args);
+    for (std::string w; words >> w;) argv.push_back(w);
+    std::vector<char*> cargv;
+    for (std::string& a : argv) cargv.push_back(a.data());
+    cargv.push_back(nullptr);
+    const std::string err = (root_ / "io" / "err").string();
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_adddup2(&fa, fds[1], 1);
+    posix_spawn_file_actions_addopen(&fa, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addchdir_np(&fa, path("").c_str());
+    // The default action of SIGPIPE, as a shell gives a pipeline's command.
+    posix_spawnattr_t attr;
+    posix_spawnattr_init(&attr);
+    sigset_t pipe_signal;
+    sigemptyset(&pipe_signal);
+    sigaddset(&pipe_signal, SIGPIPE);
+    posix_spawnattr_setsigdefault(&attr, &pipe_signal);
+    posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGDEF);
+    pid_t pid = -1;
+    ASSERT_EQ(::posix_spawn(&pid, cargv[0], &fa, &attr, cargv.data(), environ), 0);
+    posix_spawnattr_destroy(&attr);
+    posix_spawn_file_actions_destroy(&fa);
+    ::close(fds[1]);
+    int status = 0;
+    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+    ASSERT_TRUE(WIFEXITED(status)) << args << ": ended by signal " << WTERMSIG(status);
+    EXPECT_EQ(WEXITSTATUS(status), 2) << args;
+    EXPECT_EQ(slurp(err), want + "\n") << args;
+    // No pty symlink, no capture or its temporary, no socket.
+    EXPECT_EQ(listing(), std::vector<std::string>{}) << args;
+  }
+}
+
 // The running program is an input of every command: `bridge --pcap build/bin/dpc31` renamed its
 // capture over the program (the audit of 2026-12-05, run 21). A copy of it here, run as ./dpc31:
 // refused before anything runs by distinct(), and by OutFile::open() where a command has no

@@ -16,6 +16,13 @@ TEST(Mcs51Hex, DataRecordsLandAtTheirAddresses) {
   EXPECT_EQ(img.bytes[11], 0xFE);
   EXPECT_TRUE(img.used[11]);
   EXPECT_FALSE(img.used[12]);
+  // Records that meet without overlapping: each byte counted once, a zero base taken.
+  HexImage two;
+  ASSERT_TRUE(
+      parse_ihex(":020000020000FC\n:020000000000FE\n:0200020080FE7E\n:00000001FF\n", two, err))
+      << err;
+  EXPECT_EQ(two.size, 4u);
+  EXPECT_EQ(two.bytes[3], 0xFE);
 }
 
 TEST(Mcs51Hex, BadRecordsNameTheirLine) {
@@ -28,9 +35,21 @@ TEST(Mcs51Hex, BadRecordsNameTheirLine) {
       {":03000000741275\n", "line 1: length does not match the byte count"},
       {":02FFFF00000000\n:00000001FF\n", "line 1: data past 64 KB"},
       {":020000040001F9\n", "line 1: address above 64 KB"},
+      // A segment base is x 16: 0100h would be 1000h, inside 64 KB, but it is no address.
+      {":020000020100FB\n:0200000080FE80\n:00000001FF\n",
+       "line 1: a non-zero segment base 0100h (only 0000h is taken)"},
+      {":03000002000000FB\n", "line 1: a type 02 record has 2 data bytes"},
+      // No data bytes: an image that runs nothing.
+      {":00000001FF\n", "line 1: no data bytes before the end-of-file record: an empty image"},
+      {":0000000000\n:00000001FF\n",
+       "line 2: no data bytes before the end-of-file record: an empty image"},
+      // Address 0001h given twice: which byte the linker meant is unknown.
+      {":020000000000FE\n:0100010000FE\n:00000001FF\n",
+       "line 2: data at 0001h overlaps an earlier record"},
       {":0000000AF6\n", "line 1: record type 0A"},
       {":0100000000FF\n", "line 1: no end-of-file record"},
-      {":00000001FF\n:0100000000FF\n", "line 2: record after the end-of-file record"},
+      {":0100000000FF\n:00000001FF\n:0100010000FE\n",
+       "line 3: record after the end-of-file record"},
       {"", "empty file, not an Intel HEX image"},  // no line 0 to name
   };
   for (auto [text, why] : bad) {

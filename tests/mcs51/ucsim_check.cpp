@@ -1,26 +1,40 @@
 // The ucsim cross-check (docs/cpu.md): one Intel HEX program on our 80C32 and on SDCC's s51 (run
 // as a separate program), compared instruction by instruction: PC, A, B, PSW, SP, DPTR, R0..R7 of
 // the current bank and the oscillator clocks of each step. The first difference is printed with
-// both states; exit 0 equal, 1 different, 2 bad input.
+// both states; exit 0 equal, 1 different, 2 bad input or an s51 that failed (its exit code or
+// signal, no answer within --timeout seconds, no trace): never reported as a difference.
 //
 // s51 0.6.4 differs from the Intel manual in its interrupt call, and the comparison allows for
 // exactly that (docs/cpu.md, "The ucsim cross-check"): its step that ends in an interrupt call
 // also runs the routine's first instruction and counts the call as one machine cycle, not two.
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <poll.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <bit>
-#include <cstdio>
+#include <cerrno>
+#include <charconv>
+#include <chrono>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include "mcs51/cpu.hpp"
 #include "mcs51/ihex.hpp"
+
+extern char** environ;
 
 namespace {
 
@@ -70,48 +84,123 @@ unsigned hex_after(const std::string& line, const std::string& key) {
   return static_cast<unsigned>(std::strtoul(line.c_str() + p + key.size(), nullptr, 16));
 }
 
-// s51 with a script of `steps` steps, started at once so that several run side by side.
-struct Run {
-  FILE* pipe = nullptr;
-  std::string script;
+// s51 with a script of `steps` steps on its standard input, started at once so that several run
+// side by side. The script is unlinked as soon as s51 has it open, and a run still going when it
+// is dropped (a failure elsewhere in the batch) is killed: nothing is left behind on any way out.
+class Run {
+ public:
+  Run() = default;
+  Run(const Run&) = delete;
+  Run& operator=(const Run&) = delete;
+  Run(Run&& o) noexcept { *this = std::move(o); }
+  Run& operator=(Run&& o) noexcept {
+    std::swap(pid_, o.pid_);
+    std::swap(out_, o.out_);
+    std::swap(deadline_, o.deadline_);
+    return *this;
+  }
+  ~Run() {
+    if (out_ >= 0) ::close(out_);
+    if (pid_ > 0) {
+      ::kill(-pid_, SIGKILL);
+      int status = 0;
+      ::waitpid(pid_, &status, 0);
+    }
+  }
+
+  // "" or why s51 could not be started.
+  std::string start(const std::string& s51, const std::string& hex, std::size_t steps,
+                    std::chrono::seconds timeout) {
+    const char* tmp = std::getenv("TMPDIR");
+    std::string script =
+        fmt::format("{}/mcs51_ucsim_XXXXXX", tmp != nullptr && *tmp != 0 ? tmp : "/tmp");
+    const int in = ::mkstemp(script.data());
+    if (in < 0)
+      return fmt::format("cannot create the s51 script {}: {}", script, std::strerror(errno));
+    ::unlink(script.c_str());  // open as s51's standard input: gone with the last descriptor
+    std::string text = "fill iram 0 0xff 0\nfill xram 0 0xffff 0\n";
+    for (std::size_t i = 0; i < steps; ++i) text += "step\n";
+    text += "quit\n";
+    const bool written = ::write(in, text.data(), text.size()) == static_cast<ssize_t>(text.size());
+    if (!written || ::lseek(in, 0, SEEK_SET) != 0) {
+      ::close(in);
+      return fmt::format("cannot write the s51 script: {}", std::strerror(errno));
+    }
+    int pipe_fds[2];
+    if (::pipe2(pipe_fds, O_CLOEXEC) != 0) {
+      ::close(in);
+      return fmt::format("cannot make a pipe: {}", std::strerror(errno));
+    }
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_adddup2(&fa, in, 0);
+    posix_spawn_file_actions_adddup2(&fa, pipe_fds[1], 1);
+    posix_spawn_file_actions_adddup2(&fa, pipe_fds[1], 2);
+    std::vector<std::string> args = {s51, "-t", "80C32", "-b", "-q", hex};
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    // A group of its own: a kill reaches whatever it started too.
+    posix_spawnattr_t attr;
+    posix_spawnattr_init(&attr);
+    posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETPGROUP);
+    posix_spawnattr_setpgroup(&attr, 0);
+    const int rc = ::posix_spawn(&pid_, s51.c_str(), &fa, &attr, argv.data(), environ);
+    posix_spawnattr_destroy(&attr);
+    posix_spawn_file_actions_destroy(&fa);
+    ::close(in);
+    ::close(pipe_fds[1]);
+    out_ = pipe_fds[0];
+    if (rc != 0) {
+      pid_ = 0;
+      return fmt::format("cannot start s51 {}: {}", s51, std::strerror(rc));
+    }
+    deadline_ = std::chrono::steady_clock::now() + timeout;
+    return {};
+  }
+
+  // Everything s51 wrote, until it ends; "" in `error` only when it ended with exit code 0.
+  std::string output(std::chrono::seconds timeout, std::string& error) {
+    std::string text;
+    char buf[65536];
+    for (;;) {
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+          deadline_ - std::chrono::steady_clock::now());
+      pollfd p{out_, POLLIN, 0};
+      if (left.count() <= 0 || ::poll(&p, 1, static_cast<int>(left.count())) == 0) {
+        error = fmt::format("s51 gave no end within {} s: killed", timeout.count());
+        return text;  // the destructor kills it
+      }
+      const ssize_t n = ::read(out_, buf, sizeof buf);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) break;
+      text.append(buf, static_cast<std::size_t>(n));
+    }
+    int status = 0;
+    while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
+    }
+    pid_ = 0;
+    if (WIFSIGNALED(status)) {
+      error = fmt::format("s51 was ended by signal {} ({})", WTERMSIG(status),
+                          ::strsignal(WTERMSIG(status)));
+    } else if (WEXITSTATUS(status) != 0) {
+      error = fmt::format("s51 ended with exit code {}{}", WEXITSTATUS(status),
+                          WEXITSTATUS(status) == 127 ? " (not a program that runs?)" : "");
+    }
+    return text;
+  }
+
+ private:
+  pid_t pid_ = 0;
+  int out_ = -1;
+  std::chrono::steady_clock::time_point deadline_{};
 };
 
-Run start_s51(const std::string& hex, std::size_t steps, std::string& error) {
-  char script[] = "/tmp/mcs51_ucsim_XXXXXX";
-  int fd = mkstemp(script);
-  if (fd < 0) {
-    error = "cannot create the s51 script";
-    return {};
-  }
-  std::ostringstream cmds;
-  cmds << "fill iram 0 0xff 0\nfill xram 0 0xffff 0\n";
-  for (std::size_t i = 0; i < steps; ++i) cmds << "step\n";
-  cmds << "quit\n";
-  std::string text = cmds.str();
-  bool ok = write(fd, text.data(), text.size()) == static_cast<ssize_t>(text.size());
-  close(fd);
-  if (!ok) {
-    error = "cannot write the s51 script";
-    unlink(script);
-    return {};
-  }
-  std::string cmd = fmt::format("{} -t 80C32 -b -q '{}' < '{}' 2>&1", S51_PROGRAM, hex, script);
-  Run run{popen(cmd.c_str(), "r"), script};
-  if (run.pipe == nullptr) error = "cannot start s51";
-  return run;
-}
-
 // s51's answer to `step`: "Stop at 0x000002: (109) stepped 12 ticks", then the register block.
-std::vector<State> collect(Run& run, std::string& error) {
+std::vector<State> parse_trace(const std::string& text) {
   std::vector<std::string> lines;
-  char buf[512];
-  while (std::fgets(buf, sizeof buf, run.pipe) != nullptr) lines.emplace_back(buf);
-  int rc = pclose(run.pipe);
-  unlink(run.script.c_str());
-  if (rc != 0) {
-    error = fmt::format("s51 ended with status {}", rc);
-    return {};
-  }
+  std::istringstream in(text);
+  for (std::string l; std::getline(in, l);) lines.push_back(l);
   std::vector<State> out;
   for (std::size_t i = 0; i + 6 < lines.size(); ++i) {
     if (lines[i].rfind("Stop at 0x", 0) != 0) continue;
@@ -133,6 +222,14 @@ std::vector<State> collect(Run& run, std::string& error) {
   return out;
 }
 
+// A whole number lo..hi, or nullopt.
+std::optional<std::size_t> whole(std::string_view s, std::size_t lo, std::size_t hi) {
+  std::size_t v = 0;
+  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (s.empty() || ec != std::errc() || p != s.data() + s.size() || v < lo || v > hi) return {};
+  return v;
+}
+
 struct Program {
   std::string path;
   std::vector<std::uint16_t> at;
@@ -140,17 +237,38 @@ struct Program {
   Run run;
 };
 
+int usage(const std::string& why) {
+  std::cerr << "mcs51_ucsim_check: " << why
+            << " (usage: mcs51_ucsim_check [--limit N] [--timeout S] [--s51 PATH] [--coverage] "
+               "PROGRAM.ihx...)\n";
+  return 2;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   std::size_t limit = 3000;
+  std::chrono::seconds timeout{60};  // per s51 run; the slowest program takes about 2 s
+  std::string s51 = S51_PROGRAM;
   std::vector<Program> programs;
   std::set<unsigned> executed;  // opcodes run by any program
   bool coverage = false;
   for (int i = 1; i < argc; ++i) {
-    std::string arg = argv[i];
-    if (arg == "--limit" && i + 1 < argc) {
-      limit = std::strtoul(argv[++i], nullptr, 10);
+    const std::string arg = argv[i];
+    if (arg == "--limit" || arg == "--timeout" || arg == "--s51") {
+      if (i + 1 == argc) return usage(arg + " needs a value");
+      const std::string v = argv[++i];
+      if (arg == "--s51") {
+        s51 = v;
+        continue;
+      }
+      const std::optional<std::size_t> n = whole(v, 1, 100'000'000);
+      if (!n) return usage(fmt::format("{} '{}' must be a whole number 1..100000000", arg, v));
+      if (arg == "--limit") {
+        limit = *n;
+      } else {
+        timeout = std::chrono::seconds(*n);
+      }
       continue;
     }
     if (arg == "--coverage") {  // every opcode but the reserved A5h must have run
@@ -173,22 +291,30 @@ int main(int argc, char** argv) {
     for (std::uint16_t pc : p.at) executed.insert(cpu.code(pc));
     programs.push_back(std::move(p));
   }
-  if (programs.empty()) {
-    std::cerr << "usage: mcs51_ucsim_check [--limit N] [--coverage] PROGRAM.ihx...\n";
-    return 2;
-  }
+  if (programs.empty()) return usage("no program");
   int failed = 0;
   constexpr std::size_t batch = 8;  // s51 mostly waits: run several at once
   for (std::size_t first = 0; first < programs.size(); first += batch) {
-    std::size_t end = std::min(programs.size(), first + batch);
-    std::string error;
-    for (std::size_t i = first; i < end && error.empty(); ++i)
-      programs[i].run = start_s51(programs[i].path, programs[i].ours.size(), error);
+    const std::size_t end = std::min(programs.size(), first + batch);
+    for (std::size_t i = first; i < end; ++i) {
+      // On a failure the runs already started are killed by their destructors.
+      if (std::string why =
+              programs[i].run.start(s51, programs[i].path, programs[i].ours.size(), timeout);
+          !why.empty()) {
+        std::cerr << programs[i].path << ": " << why << "\n";
+        return 2;
+      }
+    }
     for (std::size_t i = first; i < end; ++i) {
       Program& p = programs[i];
-      std::vector<State> b = p.run.pipe ? collect(p.run, error) : std::vector<State>{};
+      std::string error;
+      const std::string text = p.run.output(timeout, error);
+      const std::vector<State> b = parse_trace(text);
+      // s51 said nothing we can compare: its failure, not a difference of our core.
+      if (error.empty() && b.empty()) error = "s51 gave no trace (no 'Stop at' line)";
       if (!error.empty()) {
-        std::cerr << p.path << ": " << error << "\n";
+        const std::string said = text.substr(0, text.find('\n'));
+        std::cerr << p.path << ": " << error << (said.empty() ? "" : ": " + said) << "\n";
         return 2;
       }
       const std::vector<State>& a = p.ours;

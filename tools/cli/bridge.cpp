@@ -556,6 +556,7 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
   b->add_option("--tcp", o.tcp,
                 "[HOST:]PORT: a raw TCP port instead of the pty (127.0.0.1 unless HOST; 0: any "
                 "free port, named in the log)")
+      ->check(outfile::given())
       ->excludes(pty);
   b->add_flag("--allow-remote", o.allow_remote,
               "let --tcp listen on an address other hosts reach (no authentication!)");
@@ -569,15 +570,19 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
                 "firmware: " + builtin_firmware_names() + ", or a plug-in ./libmine.so (required)");
   b->add_option("--cpu", o.cpu,
                 "80c32[:HZ]: run --firmware, an Intel HEX image, on an 80C32 beside the chip; "
-                "c31[:HZ] (--profile dpc31): on the DPC31's own C31");
-  b->add_option("--code", o.code, "with --cpu c31: the C31's code area in the chip's RAM (0x1000)");
+                "c31[:HZ] (--profile dpc31): on the DPC31's own C31")
+      ->check(outfile::given());
+  b->add_option("--code", o.code, "with --cpu c31: the C31's code area in the chip's RAM (0x1000)")
+      ->check(outfile::given());
   b->add_option("--board-address", o.board_address,
-                "with --cpu 80c32: the chip's 4 KB window in XDATA (0x8000)");
+                "with --cpu 80c32: the chip's 4 KB window in XDATA (0x8000)")
+      ->check(outfile::given());
   b->add_option("--trace-cpu", o.trace_cpu, "write every CPU instruction with its cycle here")
       ->check(outfile::named(outfile::Use::write));
   b->add_option("--ports", o.ports,
                 "N1,N2...: the 80C32 board's output latch bytes (XDATA 4000h on) by name; "
-                "default DO4's: outputs,modul_ok");
+                "default DO4's: outputs,modul_ok")
+      ->check(outfile::given());
   b->add_option("--address", o.address, "station address 0..125")->capture_default_str();
   b->add_option("--slave", o.slaves,
                 "ADDR:FIRMWARE[:PROFILE[:VARIANT]][:user_wd=0|1][:user_wd_value=N], repeated: "

@@ -72,9 +72,11 @@ dpc31::Profile to_profile(const std::string& s) {
 
 int main(int argc, char** argv) {
   dpc31::cleanup::install();  // temporaries and children go when a signal ends the process
-  // A file-size limit (ulimit -f) then fails the write with EFBIG, which every output reports
-  // with its one line, exit 2, and its temporaries removed; SIGXFSZ ended the process silently.
+  // A file-size limit (ulimit -f) then fails the write with EFBIG, and a pipe whose reader left
+  // (`| head -1`) with EPIPE, which every output reports with its one line, exit 2, and its
+  // temporaries removed; SIGXFSZ and SIGPIPE ended the process silently.
   std::signal(SIGXFSZ, SIG_IGN);
+  std::signal(SIGPIPE, SIG_IGN);
   check_stdout_writes();
   using dpc31::numbers::whole;
   using dpc31::outfile::named;

@@ -3,7 +3,9 @@
 #include <fmt/core.h>
 
 #include <atomic>
+#include <cerrno>
 #include <csignal>
+#include <cstring>
 
 #include "chip_choice.hpp"
 #include "dpc31/regdesc.hpp"
@@ -48,7 +50,8 @@ CLI::App* add_serve_subcommand(CLI::App& app, ServeArgs& a) {
   auto* cmd = app.add_subcommand(
       "serve", "serve one chip over a line-based socket protocol (docs/protocol.md)");
   cmd->add_option("--tcp", a.tcp,
-                  "listen on TCP: PORT (on 127.0.0.1) or ADDR:PORT; port 0 picks a free one");
+                  "listen on TCP: PORT (on 127.0.0.1) or ADDR:PORT; port 0 picks a free one")
+      ->check(outfile::given());
   cmd->add_option("--unix", a.unix_path,
                   "listen on a Unix socket at this path (created mode 0600: this user only)")
       ->check(outfile::named(outfile::Use::write));
@@ -66,16 +69,20 @@ CLI::App* add_serve_subcommand(CLI::App& app, ServeArgs& a) {
   add_chip_options(cmd, a.chip);
   cmd->add_option("--cpu", a.cpu,
                   "80c32[:HZ]: run --firmware on an 80C32 beside the chip, the bus master; "
-                  "c31[:HZ] (--profile dpc31): on the DPC31's own C31");
+                  "c31[:HZ] (--profile dpc31): on the DPC31's own C31")
+      ->check(outfile::given());
   cmd->add_option("--firmware", a.firmware, "with --cpu: the Intel HEX image (SDCC, Keil)")
       ->check(outfile::named(outfile::Use::read));
   cmd->add_option("--code", a.code,
-                  "with --cpu c31: the C31's code area in the chip's RAM (0x1000)");
+                  "with --cpu c31: the C31's code area in the chip's RAM (0x1000)")
+      ->check(outfile::given());
   cmd->add_option("--board-address", a.board_address,
-                  "with --cpu 80c32: the chip's 4 KB window in XDATA (0x8000)");
+                  "with --cpu 80c32: the chip's 4 KB window in XDATA (0x8000)")
+      ->check(outfile::given());
   cmd->add_option("--ports", a.ports,
                   "with --cpu 80c32: the board's output latch bytes (XDATA 4000h on) by name "
-                  "(outputs,modul_ok)");
+                  "(outputs,modul_ok)")
+      ->check(outfile::given());
   cmd->add_option("--address", a.address,
                   "with --cpu: the station address on the address switch, port 1 (5)")
       ->check(numbers::whole(0, 125));
@@ -112,14 +119,19 @@ int run_serve(const ServeArgs& a, std::FILE* out, std::FILE* err) {
     if (!a.secret_file.empty()) opt.secret = serve::read_secret_file(a.secret_file);
     serve::Server server(opt);
     for (const std::string& l : server.listening()) fmt::print(out, "{}\n", l);
-    std::fflush(out);
+    // Where it listens is what a client needs (port 0 picks one): unsaid, nobody can connect.
+    errno = 0;
+    if (std::fflush(out) != 0 || std::ferror(out) != 0) {
+      fmt::print(err, "dpc31 serve: cannot write the standard output: {}\n",
+                 std::strerror(errno != 0 ? errno : EIO));
+      return 2;
+    }
     g_server.store(&server);
     struct sigaction sa {};
     sa.sa_handler = on_stop_signal;
     sigemptyset(&sa.sa_mask);
     sigaction(SIGINT, &sa, nullptr);
     sigaction(SIGTERM, &sa, nullptr);
-    std::signal(SIGPIPE, SIG_IGN);
     const int rc = server.run();
     g_server.store(nullptr);
     return rc;

@@ -22,4 +22,14 @@ inline CLI::Validator named(Use use) {
       "", "named");
 }
 
+// The same for an option whose value is not a file (--cpu, --ports, --board-address, --tcp...):
+// '' is refused, never taken as "not given" and silently the default.
+inline CLI::Validator given() {
+  return CLI::Validator(
+      [](std::string& value) -> std::string {
+        return value.empty() ? "an empty value: give one, or leave the option out" : "";
+      },
+      "", "given");
+}
+
 }  // namespace dpc31::outfile
