@@ -82,10 +82,10 @@ def walk_requests(log, baud):
     return out
 
 
-def decode(vcd, baud, srcdir):
+def decode(vcd, baud, srcdir, downsample):
     """The decoder's bytes, timing and error annotations: [(ss, es, class-row, text)]."""
     env = dict(os.environ, SIGROKDECODE_DIR=f"{srcdir}/lib/sigrok")
-    out = run(["sigrok-cli", "-I", "vcd", "-i", vcd, "-P",
+    out = run(["sigrok-cli", "-I", f"vcd:downsample={downsample}", "-i", vcd, "-P",
                f"uart:rx=rxd:tx=txd:baudrate={baud}:parity=even,profibus_dp",
                "-A", "profibus_dp=bytes:idle:tsdr:error:warning:telegram",
                "--protocol-decoder-samplenum"], env=env)
@@ -99,30 +99,30 @@ def decode(vcd, baud, srcdir):
 
 
 def produce(dpc31, srcdir, case, d):
-    """Runs the case: (log, baud, la vcd, pcapng)."""
+    """Runs the case: (log, la vcd, pcapng, sigrok's downsampling factor)."""
     if case == "demo":
         log = run([dpc31, "demo", "--out-dir", d])
-        return log, f"{d}/dpc31-demo-la.vcd", f"{d}/dpc31-demo.pcapng"
+        return log, f"{d}/dpc31-demo-la.vcd", f"{d}/dpc31-demo.pcapng", 1
     scn = f"{srcdir}/traces/{case}.scn"
     text = Path(scn).read_text(encoding="utf-8")
     baud = int(re.search(r"^baud (\d+)", text, re.M).group(1))
     # 10 ns samples from 187.5 kbaud up; 1 us (104 samples a bit) at 9.6 kbaud, where 10 ns
-    # would be 10^4 samples a bit for the uart decoder to walk.
-    ts = ["--timescale", "1us"] if baud < 100_000 else []
-    log = run([dpc31, "run", scn, "--la-vcd", f"{d}/la.vcd", "--pcap", f"{d}/run.pcapng", *ts])
-    return log, f"{d}/la.vcd", f"{d}/run.pcapng"
+    # would be 10^4 samples a bit for the uart decoder to walk: sigrok downsamples the 10 ns file
+    # (a unit longer than a clock cycle is refused when it is written).
+    log = run([dpc31, "run", scn, "--la-vcd", f"{d}/la.vcd", "--pcap", f"{d}/run.pcapng"])
+    return log, f"{d}/la.vcd", f"{d}/run.pcapng", 100 if baud < 100_000 else 1
 
 
 def main():
     dpc31, srcdir, case = sys.argv[1:4]
     with tempfile.TemporaryDirectory() as d:
-        log, vcd, pcap = produce(dpc31, srcdir, case, d)
+        log, vcd, pcap, downsample = produce(dpc31, srcdir, case, d)
         m = re.search(r"master \d+ -> slave \d+ at (\d+) baud", log)
         if not m:
             fail("the log states no baud rate")
         baud = int(m.group(1))
         cyc_bit = CLOCK_HZ / baud           # cycles per bit
-        unit_cyc = timescale_ns(vcd) * CLOCK_HZ / 1e9  # cycles per sample
+        unit_cyc = timescale_ns(vcd) * downsample * CLOCK_HZ / 1e9  # cycles per sample
         truth = []  # (start, end or None, bytes or None, fault, (lo, hi) start range)
         for _, _, payload, comment in pcapng_blocks(pcap):
             c = re.fullmatch(r"cycles (\d+)-(\d+)", comment or "")
@@ -140,7 +140,7 @@ def main():
                 truth.append((start, None, None, fault, (start, start)))
         truth.sort(key=lambda t: t[4][0])
 
-        anns = decode(vcd, baud, srcdir)
+        anns = decode(vcd, baud, srcdir, downsample)
         got = []  # (start cycle, end cycle, bytes, [errors], gap text or None)
         errors_at, warnings = [], []
         for ss, es, text in anns:

@@ -359,7 +359,7 @@ TEST(WavediffData, HandWrittenPairWithStripMapAndSplitBits) {
   o.file_b = dir + "/rtl_late_irq.vcd";
   const Outcome late = run_opts(o);
   EXPECT_EQ(late.rc, 1);
-  EXPECT_NE(late.out.find("first divergence: x_int at cycle 3 (A 70000ps, #70; B 70000ps, "
+  EXPECT_NE(late.out.find("first divergence: x_int at cycle 3 (A 70ns, #70; B 70ns, "
                           "#70000): A=0 B=1, last common 1"),
             std::string::npos)
       << late.out;

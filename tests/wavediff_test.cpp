@@ -96,16 +96,34 @@ TEST(WavediffTimescale, PsAndNsOfTheSameRunAreTheSame) {
   EXPECT_EQ(run_opts(opts(ns, p)).rc, 0);
   EXPECT_EQ(run_opts(opts(p, ns)).rc, 0);
   EXPECT_EQ(run_opts(opts(h, ns)).rc, 0);
-  // A difference is reported in the finer unit and in each file's own units.
+  // A difference is reported in the coarser unit and in each file's own units.
   const auto pd = d.write("ps_diff.vcd", render(counter(12, 10, cnt_aa_at_7), ps));
   const Report r = compare(opts(ns, pd));
   ASSERT_EQ(r.diffs.size(), 1u);
-  EXPECT_EQ(r.pow, 3);                          // 1 ps
-  EXPECT_EQ(r.diffs[0].first.at.time, 75000u);  // 75 ns
-  EXPECT_EQ(time_text(75000, r.pow), "75000ps");
-  EXPECT_EQ(file_time(75000, r.pow, r.pow_a), "75");
-  EXPECT_EQ(file_time(75000, r.pow, r.pow_b), "75000");
+  EXPECT_EQ(r.pow, 6);                       // 1 ns
+  EXPECT_EQ(r.diffs[0].first.at.time, 75u);  // 75 ns
+  EXPECT_EQ(time_text(75, r.pow), "75ns");
+  EXPECT_EQ(file_time(75, r.pow, r.pow_a), "75");
+  EXPECT_EQ(file_time(75, r.pow, r.pow_b), "75000");
   EXPECT_EQ(file_time(1500, 3, 6), "1.5");
+}
+
+// The finer file's changes that round to one time of the coarser unit are applied together: B's a
+// at 10 ns and b at 10.4 ns are both at #10 of A; the diff VCD got #10 twice, with b differing
+// between them.
+TEST(WavediffTimescale, ChangesAtOneCommonTimeAreOnePoint) {
+  Dir d;
+  const std::string head =
+      "$timescale {} $end\n$scope module top $end\n$var wire 1 ! a $end\n$var wire 1 \" b "
+      "$end\n$upscope $end\n$enddefinitions $end\n#0\n0!\n0\"\n";
+  const auto a = d.write("a.vcd", fmt::format(fmt::runtime(head), "1ns") + "#10\n1!\n1\"\n#20\n");
+  const auto b = d.write(
+      "b.vcd", fmt::format(fmt::runtime(head), "1ps") + "#10000\n1!\n#10400\n1\"\n#20000\n");
+  Options o = opts(a, b);
+  o.diff_vcd = d.file("diff.vcd");
+  EXPECT_TRUE(compare(o).same());
+  const std::string v = slurp(o.diff_vcd);
+  EXPECT_EQ(v.find("#10\n"), v.rfind("#10\n")) << v;
 }
 
 namespace {
@@ -144,8 +162,8 @@ TEST(WavediffClock, DifferenceAtEdgeSevenIsCycleSeven) {
   const Outcome r = run_opts(o);
   EXPECT_EQ(r.rc, 1) << r.out;
   // Edge 7 (counting from 0): A at 10*7+5 = 75 ns, B at 20*7+10 = 150 ns = 150000 ps. The values
-  // sampled after the edge: A 8, B 0xAA; before it both had 7.
-  EXPECT_NE(r.out.find("first divergence: top.cnt at cycle 7 (A 75000ps, #75; B 150000ps, "
+  // sampled after the edge: A 8, B 0xAA; before it both had 7. Times in the coarser unit, ns.
+  EXPECT_NE(r.out.find("first divergence: top.cnt at cycle 7 (A 75ns, #75; B 150ns, "
                        "#150000): A=00001000 (0x08) B=10101010 (0xaa), last common 00000111"),
             std::string::npos)
       << r.out;

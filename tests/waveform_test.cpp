@@ -1,6 +1,7 @@
 // Waveforms of chip runs: the exact VCD of a known bus write, the signal/window selection, and
 // the real outside tools: sigrok-cli decodes our RxD/TxD as 8E1 UART into exactly the telegram
-// bytes, gtkwave's vcd2fst and fst2vcd accept our VCD and FST.
+// bytes, gtkwave's vcd2fst and fst2vcd accept our VCD and FST. Bad windows, patterns and units
+// are refused; times grow, one value per signal and time; wavediff finds two units of a run equal.
 #include "waveform.hpp"
 
 #include <fmt/format.h>
@@ -9,13 +10,16 @@
 #include <array>
 #include <cstdio>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include "cpu.hpp"
 #include "dp_master.hpp"
 #include "responder.hpp"
 #include "run_command.hpp"
+#include "scenario.hpp"
 #include "test_files.hpp"
+#include "wavediff.hpp"
 
 using namespace dpc31;
 
@@ -148,4 +152,158 @@ TEST(Waveform, GtkwaveConvertersAcceptOurFiles) {
   }
   const Cmd c = sh(fmt::format("fst2vcd {}", tmp("conv.fst")));
   EXPECT_EQ(c.rc, 0) << c.out;
+}
+
+namespace {
+
+// The first thing in a VCD that a viewer would show wrongly: a time that does not grow, or a
+// variable given two values at one time (GTKWave shows the last only). "" if none.
+std::string vcd_time_problem(const std::string& vcd) {
+  std::istringstream in(vcd.substr(vcd.find("$enddefinitions")));
+  std::string line;
+  long long last = -1;
+  std::set<std::string> ids;
+  while (std::getline(in, line)) {
+    if (line.starts_with("#")) {
+      const long long t = std::stoll(line.substr(1));
+      if (t <= last) return fmt::format("#{} after #{}", t, last);
+      last = t;
+      ids.clear();
+    } else if (!line.empty() && line[0] != '$') {
+      const std::string id = line.substr(line[0] == 'b' ? line.find(' ') + 1 : 1);
+      if (!ids.insert(id).second) return fmt::format("'{}' twice at #{}", id, last);
+    }
+  }
+  return "";
+}
+
+}  // namespace
+
+// A window that opens after the run's end: the values in force then, at the window's start, and
+// no time before it after that (the end of the run was written after the dump, going backwards).
+TEST(Waveform, AWindowAfterTheRunsEnd) {
+  for (const bool fst : {false, true}) {
+    wave::Options o;
+    o.path = tmp(fst ? "late.fst" : "late.vcd");
+    o.fst = fst;
+    o.from = 99'999'999;  // 2.083 s; the start-up ends before 0.1 s
+    record_startup(o);
+    const Cmd v = sh("fst2vcd " + o.path);
+    const std::string vcd = fst ? v.out : slurp(o.path);
+    EXPECT_EQ(vcd_time_problem(vcd), "") << fst;
+    EXPECT_NE(vcd.find("#2083333312500\n$dumpvars"), std::string::npos) << fst;
+  }
+}
+
+// A time that does not fit in the 64 bits of a VCD or FST time is refused, not wrapped.
+TEST(Waveform, ATimePast64BitsIsRefused) {
+  Chip chip({Profile::spc3, BusMode::intel, 0});
+  wave::Options o;
+  o.path = tmp("wrap.vcd");
+  o.from = 18'446'744'073'709'551'000u;
+  wave::Recorder rec(o);
+  std::string error;
+  EXPECT_FALSE(rec.attach(chip, error));
+  EXPECT_EQ(error, o.path +
+                       ": cycle 18446744073709551000 is past the last time a waveform in units "
+                       "of 1ps can hold");
+  o.from = 885'000'000'000'000u;  // 2^64 ps is cycle 885 443 715 538 058
+  wave::Recorder fits(o);
+  EXPECT_TRUE(fits.attach(chip, error)) << error;
+  o.from = 885'443'715'538'059u;
+  wave::Recorder past(o);
+  EXPECT_FALSE(past.attach(chip, error));
+}
+
+// pins.pb3 is a DPC31 port: on an SPC3 the pattern matches nothing (it gave an empty VCD, and an
+// FST "on a full file system"); a waveform left without a variable is refused too.
+TEST(Waveform, APatternMatchesTheChipsOwnSignals) {
+  for (const bool fst : {false, true}) {
+    wave::Options o;
+    o.path = tmp(fst ? "pb3.fst" : "pb3.vcd");
+    o.fst = fst;
+    o.signals = {"pins.pb3"};
+    std::string error;
+    Chip spc3({Profile::spc3, BusMode::intel, 0});
+    wave::Recorder rec(o);
+    EXPECT_TRUE(rec.check_signals(error)) << error;  // a DPC31's: no chip known yet
+    EXPECT_FALSE(rec.attach(spc3, error));
+    EXPECT_EQ(error, "no signal of the spc3 matches 'pins.pb3' (see docs/waveforms.md)");
+    Chip dpc31({Profile::dpc31, BusMode::intel, 0});
+    wave::Recorder ok(o);
+    ASSERT_TRUE(ok.attach(dpc31, error)) << error;
+    EXPECT_TRUE(ok.finish(dpc31.cycle(), error)) << error;
+    o.signals = {"bus.addr"};
+    o.flat = true;
+    wave::Recorder flat(o);
+    EXPECT_FALSE(flat.attach(dpc31, error));
+    EXPECT_EQ(error, o.path +
+                         ": no 1-bit signal matches --signals: the logic-analyser form has only "
+                         "those");
+  }
+}
+
+// A unit longer than a clock cycle (20.8 ns at 48 MHz) would give neighbouring cycles one time.
+TEST(Waveform, ATimescaleCoarserThanACycleIsRefused) {
+  Chip chip({Profile::spc3, BusMode::intel, 0});
+  wave::Options o;
+  o.path = tmp("coarse.vcd");
+  o.timescale_exp = -7;  // 100 ns
+  std::string error;
+  for (const bool flat : {false, true}) {
+    o.flat = flat;
+    wave::Recorder rec(o);
+    EXPECT_FALSE(rec.attach(chip, error));
+    EXPECT_EQ(error, o.path +
+                         ": timescale 100ns is longer than a clock cycle (20.8 ns at 48 MHz): use "
+                         "10ns or finer");
+  }
+  o.timescale_exp = -8;
+  wave::Recorder fine(o);
+  EXPECT_TRUE(fine.attach(chip, error)) << error;
+}
+
+// irr changes twice in some cycles (an event's bit, then in the same cycle the next one's): one
+// value per time, the last (bus_access_spc3 at 120 us, cycle 5760: 0002h then 2002h).
+TEST(Waveform, OneValuePerSignalAndTime) {
+  Scenario s;
+  ScenarioError err;
+  ASSERT_TRUE(load_scenario(std::string(SOURCE_DIR) + "/traces/bus_access_spc3.scn", s, err))
+      << err.text();
+  wave::Options o;
+  o.path = tmp("irr.vcd");
+  o.signals = {"blocks.irr"};
+  wave::Recorder rec(o);
+  std::string error;
+  std::uint64_t end = 0;
+  ScenarioHooks hooks;
+  hooks.at_start = [&](Chip& chip) { EXPECT_TRUE(rec.attach(chip, error)) << error; };
+  hooks.at_end = [&](Chip& chip) { end = chip.cycle(); };
+  run_scenario(
+      s, [](const std::string&) {}, [](const std::string&) {}, hooks);
+  ASSERT_TRUE(rec.finish(end, error)) << error;
+  const std::string v = slurp(o.path);
+  EXPECT_EQ(vcd_time_problem(v), "");
+  EXPECT_NE(v.find("#120000000\nb0010000000000010 +\n#"), std::string::npos) << v;
+}
+
+// Dumps of one run at two units compare equal (docs/wavediff.md): each file's times are brought
+// to the coarser unit as the writer rounds them.
+TEST(Waveform, OneRunAtTwoUnitsComparesEqual) {
+  wave::Options ps;
+  ps.path = tmp("run_ps.vcd");
+  record_startup(ps);
+  for (const int exp : {-9, -8, -10}) {
+    wave::Options other = ps;
+    other.path = tmp(fmt::format("run_{}.vcd", exp));
+    other.timescale_exp = exp;
+    record_startup(other);
+    wavediff::Options w;
+    w.file_a = other.path;
+    w.file_b = ps.path;
+    const wavediff::Report r = wavediff::compare(w);
+    EXPECT_TRUE(r.same()) << exp << ": " << wavediff::text_report(r, 5);
+    std::swap(w.file_a, w.file_b);
+    EXPECT_TRUE(wavediff::compare(w).same()) << exp;
+  }
 }

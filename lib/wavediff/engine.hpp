@@ -51,7 +51,7 @@ struct LSig {
 struct Side {
   std::unique_ptr<WaveReader> r;
   const char* label = "A";
-  std::uint64_t ratio = 1;  // common units per file unit
+  std::uint64_t div = 1;  // file units per common unit
   std::vector<LSig> sigs;
   std::vector<std::uint32_t> slot_begin;  // slot -> pairs watching it (CSR)
   std::vector<std::uint32_t> slot_pairs;
@@ -72,12 +72,17 @@ struct Side {
   [[nodiscard]] std::string text(const LSig& l) const {
     return l.real ? fmt_real(real(l)) : std::string(bits(l));
   }
-  std::uint64_t norm(std::uint64_t t) const {
+  // A time in the common unit, the coarser file's: rounded as the writers round a cycle's
+  // time, halves up (docs/waveforms.md), so that dumps of one run at two units agree.
+  [[nodiscard]] std::uint64_t norm(std::uint64_t t) const {
+    return div == 1 ? t : t / div + (t % div >= div / 2 ? 1 : 0);
+  }
+  // The last file time that norm() brings to common time `t` or before.
+  [[nodiscard]] std::uint64_t last_of(std::uint64_t t) const {
+    if (div == 1) return t;
     std::uint64_t v = 0;
-    if (__builtin_mul_overflow(t, ratio, &v)) {
-      fail(r->path(), r->line(), "time too large to bring to the common unit");
-    }
-    return v;
+    return __builtin_mul_overflow(t, div, &v) || v > UINT64_MAX - div / 2 ? UINT64_MAX
+                                                                          : v + div / 2 - 1;
   }
 };
 
@@ -164,6 +169,8 @@ class Engine {
   void join_bits(Side& s, const Side& other);
   std::uint32_t find_clock(const Side& s, const std::string& name) const;
   void mark(Side& s, bool is_a);
+  // Every step of `s` at common time t (several when its unit is the finer one).
+  void mark_time(Side& s, bool is_a, std::uint64_t t);
   void mark_changed(Side& s, const std::vector<std::uint32_t>& changed, bool is_a);
   [[nodiscard]] bool can_follow() const;
   void try_follow();

@@ -97,6 +97,8 @@ std::string time_text(std::uint64_t t, int pow) {
 }
 
 std::string file_time(std::uint64_t t, int pow, int file_pow) {
+  // The finer file: the common time in its units (its own times were rounded to the common unit).
+  if (pow > file_pow) return t == 0 ? "0" : std::to_string(t) + std::string(pow - file_pow, '0');
   std::uint64_t r = 1;
   for (int i = pow; i < file_pow; ++i) r *= 10;
   std::string s = std::to_string(t / r);

@@ -99,9 +99,9 @@ void Engine::setup(Report& rep) {
   B.r = open_wave(o_.file_b);
   A.label = "A";
   B.label = "B";
-  pow = std::min(A.r->timescale_pow(), B.r->timescale_pow());
-  A.ratio = pow10(A.r->timescale_pow() - pow);
-  B.ratio = pow10(B.r->timescale_pow() - pow);
+  pow = std::max(A.r->timescale_pow(), B.r->timescale_pow());
+  A.div = pow10(pow - A.r->timescale_pow());
+  B.div = pow10(pow - B.r->timescale_pow());
 
   rep.clock_mode = clock_mode();
   rep.file_a = o_.file_a;
@@ -128,8 +128,8 @@ void Engine::setup(Report& rep) {
   tol_ = clock_mode() ? o_.tolerance_cycles : to_common(o_.tolerance_fs, false);
   if (!clock_mode() && o_.end) {  // an FST reader may skip the blocks after the window
     const std::uint64_t e = to_common(o_.end->value, false);
-    A.r->set_limit_end(e / A.ratio);
-    B.r->set_limit_end(e / B.ratio);
+    A.r->set_limit_end(A.last_of(e));
+    B.r->set_limit_end(B.last_of(e));
   }
 
   std::vector<MapEntry> map;
@@ -286,7 +286,7 @@ void Engine::setup(Report& rep) {
 // same slots), and every pair watches the same slots on both sides, so that the same changes
 // mark the same pairs and leave them equal.
 bool Engine::can_follow() const {
-  if (!B.r->can_follow(*A.r) || A.ratio != B.ratio) return false;
+  if (!B.r->can_follow(*A.r) || A.div != B.div) return false;
   if (A.slot_begin != B.slot_begin || A.slot_pairs != B.slot_pairs) return false;
   return std::all_of(pairs.begin(), pairs.end(), [this](const Pair& p) {
     const LSig& la = A.sigs[p.a];
@@ -374,6 +374,12 @@ void Engine::keep_common(Pair& p, std::string_view bits, double real) {
 }
 
 void Engine::mark(Side& s, bool is_a) { mark_changed(s, s.r->step(), is_a); }
+
+void Engine::mark_time(Side& s, bool is_a, std::uint64_t t) {
+  do {
+    mark(s, is_a);
+  } while (s.div != 1 && s.r->has_next() && s.norm(s.r->next_time()) == t);
+}
 
 void Engine::mark_changed(Side& s, const std::vector<std::uint32_t>& changed, bool is_a) {
   for (const std::uint32_t slot : changed) {
@@ -515,8 +521,8 @@ void Engine::run_events(const Hook& hook) {
         stop_following();
       }
     }
-    if (ta == t && !a_marked) mark(A, true);
-    if (tb == t || a_marked) mark(B, false);
+    if (ta == t && !a_marked) mark_time(A, true, t);
+    if (tb == t || a_marked) mark_time(B, false, t);
     any = true;
     if (t < start) {
       clear_dirty();

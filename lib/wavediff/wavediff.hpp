@@ -94,7 +94,7 @@ struct Report {
   std::string format_b;
   int pow_a = 0;  // timescales, powers of ten of femtoseconds
   int pow_b = 0;
-  int pow = 0;  // the common unit (the finer of the two)
+  int pow = 0;  // the common unit (the coarser of the two)
   std::string clock_a;
   std::string clock_b;
   Edge edge = Edge::rising;

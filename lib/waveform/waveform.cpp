@@ -11,6 +11,7 @@
 #include <string_view>
 
 #include "dpc31/reg_ids.hpp"
+#include "dpc31/regdesc.hpp"
 #include "gtkw.hpp"
 #include "gtkwave/fstapi.h"
 #include "outfile.hpp"
@@ -129,6 +130,18 @@ bool glob(const std::string& pattern, const std::string& name) {
   return fnmatch(pattern.c_str(), name.c_str(), 0) == 0;
 }
 
+// Whether a chip has the signal: PB3 is a DPC31 port.
+bool chip_has(const Chip& chip, std::size_t sig) {
+  return sig != kPb3 || chip.profile().id == Profile::dpc31;
+}
+
+// The time unit 10^exp s as $timescale writes it: "1ps", "10ns", "100us".
+std::string unit_text(int exp) {
+  static constexpr const char* kUnit[] = {"s", "ms", "us", "ns", "ps", "fs"};
+  const int e = -exp;
+  return fmt::format("{}{}", e % 3 == 0 ? 1 : e % 3 == 1 ? 100 : 10, kUnit[(e + 2) / 3]);
+}
+
 }  // namespace
 
 const std::vector<SignalDef>& signal_list() {
@@ -182,8 +195,15 @@ struct Recorder::Impl {
   // What has been written: the values in force, and the window's start once dumped.
   std::vector<std::uint32_t> cur;
   bool opened = false;
-  std::uint64_t last_cycle = 0;
   std::uint64_t last_t = 0;
+  // The changes of one time are gathered and written when time moves on: one value per variable
+  // and time, the last, as a viewer shows only that (irr changes twice in the cycle the
+  // watchdog expires).
+  std::uint64_t step_cycle = 0;
+  std::uint64_t step_t = 0;
+  std::vector<std::uint32_t> step_vars;  // the variables changed at step_t, in order
+  std::vector<std::uint32_t> next;       // each variable's value at step_t
+  std::vector<bool> in_step;
   std::vector<std::string> id;
   std::unique_ptr<VcdBody> body;
   void* fst = nullptr;
@@ -312,18 +332,36 @@ struct Recorder::Impl {
   std::uint64_t num = 1;
   std::uint64_t den = 1;
   std::uint64_t half = 0;
-  void set_units(std::uint32_t f) {
+  // False if a unit is longer than a clock cycle: changes of neighbouring cycles would share a
+  // time, a one-cycle strobe would vanish and sigrok would decode a 12 Mbaud line as noise.
+  bool set_units(std::uint32_t f, std::string& err) {
     std::uint64_t scale = 1;
     for (int e = opt.timescale_exp; e < 0; ++e) scale *= 10;
+    if (scale < f) {
+      int finest = 0;
+      for (std::uint64_t s = 1; s < f; s *= 10) --finest;
+      err = fmt::format(
+          "{}: timescale {} is longer than a clock cycle ({:.1f} ns at {} MHz): use {} or finer",
+          opt.path, unit_text(opt.timescale_exp), 1e9 / f, f / 1'000'000, unit_text(finest));
+      return false;
+    }
     const std::uint64_t g = std::gcd(scale, std::uint64_t{f});
     num = scale / g;
     den = f / g;
     half = f / 2 / g;
+    return true;
   }
-  [[nodiscard]] std::uint64_t units(std::uint64_t cycle) const {
+  // A time past 2^64 units is refused (the first failure): VCD and FST times are 64 bits.
+  std::uint64_t units(std::uint64_t cycle) {
     if (cycle <= (UINT64_MAX - half) / num) return (cycle * num + half) / den;
     __extension__ using u128 = unsigned __int128;
-    return static_cast<std::uint64_t>((static_cast<u128>(cycle) * num + half) / den);
+    const u128 t = (static_cast<u128>(cycle) * num + half) / den;
+    if (t <= UINT64_MAX) return static_cast<std::uint64_t>(t);
+    if (error.empty()) {
+      error = fmt::format("{}: cycle {} is past the last time a waveform in units of {} can hold",
+                          opt.path, cycle, unit_text(opt.timescale_exp));
+    }
+    return UINT64_MAX;
   }
 
   // Takes every change before `upto` out of the streams, merged in (cycle, seq) order: up to the
@@ -367,8 +405,8 @@ struct Recorder::Impl {
   // The header and the values in force at the window's start.
   void open() {
     opened = true;
-    last_cycle = opt.from;
-    last_t = units(opt.from);
+    step_cycle = opt.from;
+    last_t = step_t = units(opt.from);
     if (opt.fst) {
       open_fst();
     } else {
@@ -438,15 +476,8 @@ struct Recorder::Impl {
 
   void open_vcd() {
     std::FILE* f = out.stream();
-    static constexpr const char* kUnit[] = {"s", "ms", "us", "ns", "ps", "fs"};
-    const int e = -opt.timescale_exp;
-    fmt::print(f,
-               "$date dpc31emu $end\n$version dpc31emu {} MHz clock $end\n$timescale {}{} $end\n",
-               clock_hz / 1'000'000,
-               e % 3 == 0   ? 1
-               : e % 3 == 1 ? 100
-                            : 10,
-               kUnit[(e + 2) / 3]);
+    fmt::print(f, "$date dpc31emu $end\n$version dpc31emu {} MHz clock $end\n$timescale {} $end\n",
+               clock_hz / 1'000'000, unit_text(opt.timescale_exp));
     fmt::print(f, "$scope module {} $end\n", top);
     // One chip: a signal's identifier is its place in the list, whatever was selected (files of
     // older runs keep theirs); a segment numbers its variables.
@@ -465,35 +496,52 @@ struct Recorder::Impl {
   }
 
   void write(const Event& e) {
-    if (cur[e.var] == e.value) return;
-    cur[e.var] = e.value;
-    const Var& v = vars[e.var];
-    const Source& s = *sources[v.source];
-    if (s.chip != nullptr && (v.sig == kDpState || v.sig == kWdState) && markers.size() < 26) {
-      const std::string m = v.sig == kDpState
-                                ? fmt::format("dp_state={}", dp_state_name(DpState(e.value)))
-                                : fmt::format("wd_state={}", wd_state_name(WdState(e.value)));
-      markers.emplace_back(units(e.cycle), s.scope.empty() ? m : s.scope + " " + m);
-    }
-    if (opt.fst) {
-      if (fst == nullptr) return;
-      fstWriterEmitTimeChange(fst, units(e.cycle));
-      fstWriterEmitValueChange(fst, handle[e.var], bits(e.value, v.width).c_str());
-      return;
-    }
-    if (e.cycle != last_cycle) {
-      last_cycle = e.cycle;
+    if (e.cycle != step_cycle) {
+      step_cycle = e.cycle;
       const std::uint64_t t = units(e.cycle);
-      if (t != last_t) body->time(t);
-      last_t = t;
+      if (t != step_t) write_step();
+      step_t = t;
     }
-    body->value(id[e.var], v.width, e.value);
+    if (!in_step[e.var]) {
+      in_step[e.var] = true;
+      step_vars.push_back(e.var);
+    }
+    next[e.var] = e.value;
+  }
+
+  // The values of step_t that differ from those written before it.
+  void write_step() {
+    for (const std::uint32_t i : step_vars) {
+      in_step[i] = false;
+      if (next[i] == cur[i]) continue;
+      cur[i] = next[i];
+      const Var& v = vars[i];
+      const Source& s = *sources[v.source];
+      if (s.chip != nullptr && (v.sig == kDpState || v.sig == kWdState) && markers.size() < 26) {
+        const std::string m = v.sig == kDpState
+                                  ? fmt::format("dp_state={}", dp_state_name(DpState(cur[i])))
+                                  : fmt::format("wd_state={}", wd_state_name(WdState(cur[i])));
+        markers.emplace_back(step_t, s.scope.empty() ? m : s.scope + " " + m);
+      }
+      if (opt.fst) {
+        if (fst == nullptr) continue;
+        if (step_t != last_t) fstWriterEmitTimeChange(fst, step_t);
+        fstWriterEmitValueChange(fst, handle[i], bits(cur[i], v.width).c_str());
+      } else {
+        if (step_t != last_t) body->time(step_t);
+        body->value(id[i], v.width, cur[i]);
+      }
+      last_t = step_t;
+    }
+    step_vars.clear();
   }
 
   void add_var(Source& s, std::uint8_t sig, const SignalDef& d) {
     s.var[sig] = static_cast<std::uint32_t>(vars.size());
     vars.push_back({full_name(s, d.name), d.width, sources.size() - 1, sig});
     cur.push_back(0);
+    next.push_back(0);
+    in_step.push_back(false);
     id.emplace_back();
     handle.push_back(0);
   }
@@ -507,25 +555,38 @@ bool Recorder::Impl::attach_chip(Chip& chip, std::string scope, std::string& err
     err = fmt::format("{}: too many signals for one waveform", opt.path);
     return false;
   }
+  clock_hz = chip.clock_hz();
+  if (!set_units(clock_hz, err)) return false;
+  // The window's start is written as a time even after the run's end: it must fit.
+  units(opt.from);
+  if (!error.empty()) {
+    err = error;
+    return false;
+  }
   sources.push_back(std::make_unique<Source>());
   Source& s = *sources.back();
   s.chip = &chip;
   s.scope = std::move(scope);
   s.var.fill(kNoVar);
   s.sampled.fill(0xFFFFFFFF);
-  clock_hz = chip.clock_hz();
-  set_units(clock_hz);
   // Declared scope by scope: PB3 (the newest signal, last in the list) beside the other pins.
   const auto add = [&](std::size_t i) {
     const std::string full = full_name(s, kSignals[i].name);
-    if (i == kPb3 && chip.profile().id != Profile::dpc31) return;  // a DPC31 port
-    if (take(kSignals[i].name, full, kSignals[i].width))
+    if (chip_has(chip, i) && take(kSignals[i].name, full, kSignals[i].width))
       add_var(s, static_cast<std::uint8_t>(i), kSignals[i]);
   };
   for (std::size_t i = 0; i < kCount; ++i) {
     if (i != kPb3 && i != kService) add(i);
     if (i == kXInt) add(kPb3);
     if (i == kBaud) add(kService);
+  }
+  // One chip (a segment's line has its own): a file without a variable helps nobody, and fstapi
+  // writes no FST at all for it.
+  if (line == nullptr && vars.empty()) {
+    err = fmt::format(
+        "{}: no 1-bit signal matches --signals: the logic-analyser form has only those", opt.path);
+    sources.pop_back();
+    return false;
   }
   Source* src = &s;
   push(s, chip.cycle(), kRxd, 1);
@@ -573,7 +634,19 @@ bool Recorder::check_signals(std::string& error) const {
 }
 
 bool Recorder::attach(Chip& chip, std::string& error) {
-  return check_signals(error) && impl_->attach_chip(chip, {}, error);
+  if (!check_signals(error)) return false;
+  // check_signals() knows no chip: pins.pb3 matches there, and is a DPC31's only.
+  for (const std::string& p : impl_->opt.signals) {
+    bool any = false;
+    for (std::size_t i = 0; i < kCount; ++i)
+      any = any || (chip_has(chip, i) && glob(p, kSignals[i].name));
+    if (!any) {
+      error = fmt::format("no signal of the {} matches '{}' (see docs/waveforms.md)",
+                          profile_name(chip.profile().id), p);
+      return false;
+    }
+  }
+  return impl_->attach_chip(chip, {}, error);
 }
 
 bool Recorder::attach_station(Chip& chip, const std::string& scope, std::string& error) {
@@ -636,13 +709,16 @@ bool Recorder::finish(std::uint64_t end_cycle, std::string& error) {
     m.drain(m.opt.from);  // a window that opens after the run's end: the values in force then
     m.open();
   }
+  if (m.error.empty()) m.write_step();
+  // The window's end; one that opened after the run's end ends where it opened.
+  const std::uint64_t end_t = std::max(m.units(to), m.last_t);
   if (m.error.empty()) {
     if (m.opt.fst) {
-      fstWriterEmitTimeChange(m.fst, m.units(to));
+      fstWriterEmitTimeChange(m.fst, end_t);
       fstWriterClose(m.fst);
       m.fst = nullptr;
     } else {
-      if (m.units(to) != m.last_t) m.body->time(m.units(to));
+      if (end_t != m.last_t) m.body->time(end_t);
       m.body.reset();  // flushed
     }
   }
@@ -656,7 +732,7 @@ bool Recorder::finish(std::uint64_t end_cycle, std::string& error) {
     return false;
   }
   if (m.gtkw.is_open()) {
-    SaveFile f{m.opt.path, {}, {}, m.opt.flat, m.units(to), m.markers, filter_dir()};
+    SaveFile f{m.opt.path, {}, {}, m.opt.flat, end_t, m.markers, filter_dir()};
     f.top = m.top;
     for (const Var& v : m.vars) {
       // The logic-analyser form: grouped by the first scope, the leaf as declared.
