@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <array>
 #include <iterator>
-#include <stdexcept>
 #include <type_traits>
 
 #include "core.hpp"
@@ -84,7 +83,6 @@ void Chip::clear_stop() { core_->stop = false; }
 void Chip::drive_rxd(std::uint64_t cycle, bool level) { core_->mac.drive_rxd(cycle, level); }
 std::uint64_t Chip::drive_rxd_chars(std::span<const std::uint8_t> bytes, std::uint64_t start,
                                     std::uint32_t bit_cycles, UartFault fault) {
-  if (bit_cycles == 0) throw std::invalid_argument("drive_rxd_chars: bit_cycles is 0");
   const std::uint64_t frame = std::uint64_t{kUartCharBits} * bit_cycles;
   if (fault.kind != UartFault::Kind::none) {
     // A damaged character changes the framing of the ones after it: edges for all of them.

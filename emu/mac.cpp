@@ -5,11 +5,8 @@
 // first start bit goes out MinTSDR bit times after the end of that character's stop bit.
 #include "mac.hpp"
 
-#include <fmt/format.h>
-
 #include <algorithm>
 #include <array>
-#include <stdexcept>
 #include <tuple>
 
 namespace dpc31 {
@@ -567,24 +564,9 @@ void Mac::stop_search_window() {
   s_.search.on = false;
 }
 
-// Chip::drive_rxd's precondition: an edge in the past cannot be heard where it was (it would be
-// a phantom edge now), and one before an edge given ahead would reorder the line.
-void Mac::check_rxd_edge(const char* fn, std::uint64_t cycle) const {
-  if (cycle < clock_.now) {
-    throw std::invalid_argument(
-        fmt::format("{}: cycle {} is before the chip's cycle {}", fn, cycle, clock_.now));
-  }
-  const std::uint64_t ahead = s_.rxd_pending.empty() ? 0 : (s_.rxd_pending.end() - 1)->first;
-  if (cycle < ahead) {
-    throw std::invalid_argument(
-        fmt::format("{}: cycle {} is before the edge given at cycle {}", fn, cycle, ahead));
-  }
-}
-
 void Mac::drive_rxd(std::uint64_t cycle, bool level) {
-  check_rxd_edge("drive_rxd", cycle);
   materialize();
-  const std::uint64_t at = cycle;
+  const std::uint64_t at = std::max(cycle, clock_.now);
   clock_.quiet_until = 0;
   if (clock_.engine == Engine::event) {
     // The receiver samples edges as they are given; the queue only serves a later reconfigure.
@@ -603,13 +585,13 @@ void Mac::drive_rxd(std::uint64_t cycle, bool level) {
 }
 
 void Mac::drive_rxd_char(std::uint64_t start, std::uint8_t data, std::uint32_t bit_cycles) {
-  check_rxd_edge("drive_rxd_chars", start);
   materialize();
   // The character's edges, as uart_encode gives them after a high line.
   std::array<std::pair<std::uint64_t, bool>, kUartCharBits> edges{};
   const std::size_t n = uart_char_edges(data, start, bit_cycles, edges.data());
   // The per-cycle engine is the reference: it always takes edges.
-  if (clock_.engine != Engine::event || !s_.rx.whole_char(start, data, bit_cycles)) {
+  if (clock_.engine != Engine::event || start < clock_.now ||
+      !s_.rx.whole_char(start, data, bit_cycles)) {
     for (std::size_t i = 0; i < n; ++i) drive_rxd(edges[i].first, edges[i].second);
     return;
   }

@@ -164,7 +164,6 @@ class Mac {
 
   void start_search();  // Baud_Search from the highest rate down (Start, Baud_Control expiry)
   void stop();          // Go_Offline: no search, no telegram, no answer; TxD idle
-  // Chip::drive_rxd; std::invalid_argument for an edge before now or before one given ahead.
   void drive_rxd(std::uint64_t cycle, bool level);
   // Chip::drive_rxd_chars: one good character from `start` (>= now), whole when the receiver can
   // take it so (UartRx::whole_char), else edge by edge; the same state and observers either way.
@@ -208,7 +207,6 @@ class Mac {
   [[nodiscard]] bool hears_later(std::uint32_t t) const;
 
  private:
-  void check_rxd_edge(const char* fn, std::uint64_t cycle) const;
   friend struct BlockAccess;
   void listen(std::uint8_t code);  // receive at kBaudRates[code] from now on
   void arm_search_window();

@@ -254,12 +254,12 @@ class Chip {
   void on_irq_change(std::function<void(std::uint64_t, bool)> cb);
 
   // --- the serial side (RS-485) ---
-  // RxD changes to `level` at `cycle` (>= cycle(), non-decreasing; else std::invalid_argument,
-  // nothing driven); whole frames may be given ahead of time.
+  // RxD changes to `level` at `cycle` (>= cycle(), non-decreasing); whole frames may be given
+  // ahead of time. Not checked: an earlier cycle is taken as cycle(), which the segment's lines
+  // rely on (a chip a few clocks ahead of the line), so a late edge is a glitch now, unreported.
   void drive_rxd(std::uint64_t cycle, bool level);
-  // `bytes` as back-to-back UART characters on RxD from `start` (>= cycle()), `bit_cycles` (>= 1)
-  // per bit: the edges uart_encode gives, with `fault` (std::invalid_argument when `start` or
-  // `bit_cycles` breaks the rule). Characters, not edges, reach the receiver
+  // `bytes` as back-to-back UART characters on RxD from `start` (>= cycle()), `bit_cycles` per
+  // bit: the edges uart_encode gives, with `fault`. Characters, not edges, reach the receiver
   // where it takes them whole (event engine, the rate it listens at, the line idle, no fault in
   // the telegram); the chip's state, its timing and the on_rxd observers are the same as with
   // the edges given one by one (docs/engine.md, "Characters on RxD"). Returns the end of the
