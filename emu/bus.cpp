@@ -263,10 +263,8 @@ std::uint16_t ChipCore::reg_value(RegId id) const {
 }
 
 std::uint32_t ChipCore::begin_access(std::uint32_t addr, std::string_view what) {
-  if ((addr >> prof().address_bits) != 0) [[unlikely]] {
-    signals.log(LogLevel::warn, "{} at {:#x}: beyond the {}-bit address bus, upper bits ignored",
-                what, addr, prof().address_bits);
-  }
+  if ((addr >> prof().address_bits) != 0) [[unlikely]]
+    note_beyond_bus(addr, what);
   bool violation = false;
   const std::uint32_t a = regs.decode(addr, violation);
   if (violation) [[unlikely]]
@@ -311,36 +309,74 @@ std::string other_profiles_at(Profile self, std::uint32_t a, bool write) {
 
 }  // namespace
 
-// Unmapped accesses never flood the log (docs/decisions.md, "Logs that never flood"): the first
-// names the likely cause, the first kUnmappedLines addresses get a line each, and after that a
-// count at 10, 100, 1000, ... accesses.
+// Unmapped accesses and those beyond the address bus never flood the log (docs/decisions.md,
+// "Logs that never flood"): a driver's polling loop is millions of them.
+ChipCore::FoldedLog::Line ChipCore::FoldedLog::note(std::uint32_t a) {
+  constexpr std::size_t kAddressLines = 16;
+  ++count;
+  if (count == 1) {
+    logged.push_back(a);
+    return Line::first;
+  }
+  if (logged.size() < kAddressLines && std::find(logged.begin(), logged.end(), a) == logged.end()) {
+    logged.push_back(a);
+    return Line::address;
+  }
+  std::uint64_t p = 10;
+  while (p < count) p *= 10;
+  return p == count ? Line::count : Line::none;
+}
+
 void ChipCore::note_unmapped(std::uint32_t a, std::string_view access) {
-  constexpr std::size_t kUnmappedLines = 16;
-  ++unmapped_count;
+  const FoldedLog::Line line = unmapped.note(a);
+  if (line == FoldedLog::Line::none) return;
   const std::uint16_t region = regs.region_index(a);
   const std::string_view where =
       region != kNoReg ? prof().regions[region].name : std::string_view("no region");
   const bool write = access.starts_with("write");
   const std::string_view result = write ? "ignored" : "reads 00h";
-  if (unmapped_count == 1) {
-    signals.log(LogLevel::warn,
-                "{} unmapped address {:#06x} ({}): {}{}; a firmware written for another chip? "
-                "(--profile, --variant); further unmapped accesses are counted",
-                access, a, where, result, other_profiles_at(prof().id, a, write));
-    unmapped_logged.push_back(a);
-    return;
+  switch (line) {
+    case FoldedLog::Line::first:
+      signals.log(LogLevel::warn,
+                  "{} unmapped address {:#06x} ({}): {}{}; a firmware written for another chip? "
+                  "(--profile, --variant); further unmapped accesses are counted",
+                  access, a, where, result, other_profiles_at(prof().id, a, write));
+      break;
+    case FoldedLog::Line::address:
+      signals.log(LogLevel::warn, "{} unmapped address {:#06x} ({}): {}", access, a, where, result);
+      break;
+    case FoldedLog::Line::count:
+      signals.log(LogLevel::warn,
+                  "{} accesses to unmapped addresses so far (the latest: {} {:#06x})",
+                  unmapped.count, access, a);
+      break;
+    case FoldedLog::Line::none:
+      break;
   }
-  if (unmapped_logged.size() < kUnmappedLines &&
-      std::find(unmapped_logged.begin(), unmapped_logged.end(), a) == unmapped_logged.end()) {
-    unmapped_logged.push_back(a);
-    signals.log(LogLevel::warn, "{} unmapped address {:#06x} ({}): {}", access, a, where, result);
-    return;
+}
+
+void ChipCore::note_beyond_bus(std::uint32_t addr, std::string_view what) {
+  const unsigned bits = prof().address_bits;
+  switch (beyond_bus.note(addr)) {
+    case FoldedLog::Line::first:
+      signals.log(LogLevel::warn,
+                  "{} at {:#x}: beyond the {}-bit address bus, upper bits ignored; a firmware "
+                  "written for another chip? (--profile, --variant); further accesses beyond the "
+                  "bus are counted",
+                  what, addr, bits);
+      break;
+    case FoldedLog::Line::address:
+      signals.log(LogLevel::warn, "{} at {:#x}: beyond the {}-bit address bus, upper bits ignored",
+                  what, addr, bits);
+      break;
+    case FoldedLog::Line::count:
+      signals.log(LogLevel::warn,
+                  "{} accesses beyond the {}-bit address bus so far (the latest: {} at {:#x})",
+                  beyond_bus.count, bits, what, addr);
+      break;
+    case FoldedLog::Line::none:
+      break;
   }
-  std::uint64_t p = 10;
-  while (p < unmapped_count) p *= 10;
-  if (p == unmapped_count)
-    signals.log(LogLevel::warn, "{} accesses to unmapped addresses so far (the latest: {} {:#06x})",
-                unmapped_count, access, a);
 }
 
 std::uint8_t ChipCore::read_now(std::uint32_t addr) {

@@ -58,9 +58,17 @@ struct ChipCore {
   HookTable hooks{};
   bool stop = false;               // Chip::request_stop
   std::uint16_t written_bits = 0;  // the lane-aligned value of the write the hooks are serving
-  // Accesses to unmapped addresses (bus.cpp, note_unmapped): a log, not chip state.
-  std::uint64_t unmapped_count = 0;
-  std::vector<std::uint32_t> unmapped_logged;  // the first few addresses, one line each
+  // Accesses a driver for another chip makes over and over (bus.cpp): a log, not chip state.
+  struct FoldedLog {
+    enum class Line { first, address, count, none };
+    // The line one more access at `a` gets: the first names the cause, the first few addresses
+    // one each, then a count at 10, 100, 1000, ... accesses in all (docs/decisions.md).
+    Line note(std::uint32_t a);
+    std::uint64_t count = 0;
+    std::vector<std::uint32_t> logged;  // the first few addresses, one line each
+  };
+  FoldedLog unmapped;
+  FoldedLog beyond_bus;  // addresses with bits above the profile's address bus
 
   [[nodiscard]] const ProfileDesc& prof() const { return regs.profile(); }
   void reset();  // the hardware reset: cycle 0, every block in its reset state
@@ -81,6 +89,7 @@ struct ChipCore {
   std::uint8_t read_now(std::uint32_t addr);
   void write_now(std::uint32_t addr, std::uint8_t value);
   void note_unmapped(std::uint32_t a, std::string_view access);
+  void note_beyond_bus(std::uint32_t addr, std::string_view what);
   [[nodiscard]] std::uint8_t peek(std::uint32_t addr) const;
   bool poke(std::uint32_t addr, std::uint8_t value);
   [[nodiscard]] std::uint16_t reg_value(RegId id) const;  // storage or derived (no side effect)

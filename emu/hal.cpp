@@ -3,11 +3,11 @@
 #include "dpc31/hal.hpp"
 
 #include <algorithm>
+#include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
 #include <span>
-#include <string>
 
 #include "dpc31/dpc31_hal.h"
 #include "harness.hpp"
@@ -45,15 +45,28 @@ void default_error(const char* message) {
 dpc31_error_fn g_error = default_error;
 
 // The selection's host (a firmware fault) or else the process's handler. Neither may return: a
-// handler that returns cannot make the access happen.
-[[noreturn, gnu::cold, gnu::noinline]] void misuse(const std::string& message) {
-  if (t_errors != nullptr && *t_errors) (*t_errors)(message.c_str());
-  g_error(message.c_str());
+// handler that returns cannot make the access happen. The message is in a buffer of the thread,
+// and no frame between the access function and the handler owns anything to destroy, so a C
+// handler may longjmp out (dpc31_hal.h).
+[[noreturn, gnu::cold, gnu::noinline, gnu::format(printf, 1, 2)]] void misuse(const char* format,
+                                                                              ...) {
+  thread_local char message[256];
+  va_list args;
+  va_start(args, format);
+  std::vsnprintf(message, sizeof message, format, args);
+  va_end(args);
+  if (t_errors != nullptr && *t_errors) (*t_errors)(message);
+  g_error(message);
+  std::fprintf(stderr,
+               "dpc31 HAL: the error handler returned from \"%s\"; it must not (exit, longjmp): "
+               "aborting\n",
+               message);
   std::abort();
 }
 
+// A firmware run by a host cannot select a chip: the hint is for a program that can.
 [[noreturn, gnu::cold, gnu::noinline]] void no_chip(const char* fn) {
-  misuse(std::string(fn) + " called with no chip selected (dpc31_select)");
+  misuse("%s called with no chip selected%s", fn, t_errors != nullptr ? "" : " (dpc31_select)");
 }
 
 // Inline, the error out of line: every Vpc3Read / Vpc3Write asks.
@@ -71,7 +84,11 @@ inline BusPort& bus(const char* fn) {
 }
 
 [[noreturn]] void null_buffer(const char* fn, uint16_t len) {
-  misuse(std::string(fn) + ": local buffer is NULL with length " + std::to_string(len));
+  misuse("%s: local buffer is NULL with length %u", fn, static_cast<unsigned>(len));
+}
+
+[[noreturn, gnu::cold, gnu::noinline]] void null_handle(const char* fn) {
+  misuse("%s called with a NULL chip handle", fn);
 }
 
 // The drivers' chip addresses wrap at 16 bits: byte i of a block is at (uint16_t)(addr + i).
@@ -167,6 +184,13 @@ Scope::~Scope() { exchange_selection(prev_); }
 using dpc31::hal::bus;
 
 namespace {
+// A handle the caller passed: NULL is a misuse (the error handler's message), not a crash.
+template <typename C>
+C& handle(C* chip, const char* fn) {
+  if (chip == nullptr) [[unlikely]]
+    dpc31::hal::null_handle(fn);
+  return *chip;
+}
 // A chip "pointer" of the drivers' serial mode (VPC3_UNSIGNED8_PTR, uint8_t *) holds the chip
 // address in its value: its low 16 bits are the address.
 std::uint16_t chip_address(const std::uint8_t* p) {
@@ -198,6 +222,7 @@ dpc31_chip* dpc31_create_variant(const char* profile, const char* variant, int m
 }
 
 void dpc31_destroy(dpc31_chip* chip) {
+  if (chip == nullptr) return;  // as free(NULL): the clean-up path of a failed create
   if (dpc31::hal::t_bus == &chip->bus) dpc31_select(nullptr);
   delete chip;
 }
@@ -205,34 +230,36 @@ void dpc31_destroy(dpc31_chip* chip) {
 // flatten: the core's plain path inline here too (GCC inlines it into Chip::write, not always
 // into these).
 [[gnu::flatten]] uint8_t dpc31_read(dpc31_chip* chip, uint16_t addr) {
-  return chip->core.bus_read(addr);
+  return handle(chip, "dpc31_read").core.bus_read(addr);
 }
 [[gnu::flatten]] void dpc31_write(dpc31_chip* chip, uint16_t addr, uint8_t value) {
-  chip->core.bus_write(addr, value);
+  handle(chip, "dpc31_write").core.bus_write(addr, value);
 }
 
 void dpc31_copy_to(dpc31_chip* chip, uint16_t dst, const uint8_t* src, uint16_t len) {
-  dpc31::hal::copy_to(chip->bus, dst, src, len, "dpc31_copy_to");
+  dpc31::hal::copy_to(handle(chip, "dpc31_copy_to").bus, dst, src, len, "dpc31_copy_to");
 }
 
 void dpc31_copy_from(dpc31_chip* chip, uint8_t* dst, uint16_t src, uint16_t len) {
-  dpc31::hal::copy_from(chip->bus, dst, src, len, "dpc31_copy_from");
+  dpc31::hal::copy_from(handle(chip, "dpc31_copy_from").bus, dst, src, len, "dpc31_copy_from");
 }
 
 void dpc31_memset(dpc31_chip* chip, uint16_t addr, uint8_t value, uint16_t len) {
-  dpc31::hal::mem_set(chip->bus, addr, value, len);
+  dpc31::hal::mem_set(handle(chip, "dpc31_memset").bus, addr, value, len);
 }
 
 uint8_t dpc31_memcmp(dpc31_chip* chip, uint16_t a, uint16_t b, uint16_t len) {
-  return dpc31::hal::mem_cmp(chip->bus, a, b, len);
+  return dpc31::hal::mem_cmp(handle(chip, "dpc31_memcmp").bus, a, b, len);
 }
 
-uint8_t dpc31_peek(const dpc31_chip* chip, uint16_t addr) { return chip->chip.peek(addr); }
+uint8_t dpc31_peek(const dpc31_chip* chip, uint16_t addr) {
+  return handle(chip, "dpc31_peek").chip.peek(addr);
+}
 
-void dpc31_run(dpc31_chip* chip, uint64_t cycles) { chip->chip.step(cycles); }
+void dpc31_run(dpc31_chip* chip, uint64_t cycles) { handle(chip, "dpc31_run").chip.step(cycles); }
 
 int dpc31_run_until_irq_change(dpc31_chip* chip, uint64_t max_cycles) {
-  dpc31::Chip& c = chip->chip;
+  dpc31::Chip& c = handle(chip, "dpc31_run_until_irq_change").chip;
   const bool was = c.irq_active();
   const uint64_t end = dpc31::Chip::cycle_after(c.cycle(), max_cycles);
   if (!was) return c.step_until_irq(max_cycles) ? 1 : 0;
@@ -246,20 +273,26 @@ int dpc31_run_until_irq_change(dpc31_chip* chip, uint64_t max_cycles) {
   return 0;
 }
 
-uint64_t dpc31_cycle(const dpc31_chip* chip) { return chip->chip.cycle(); }
-uint32_t dpc31_clock_hz(const dpc31_chip* chip) { return chip->chip.clock_hz(); }
-int dpc31_irq_active(const dpc31_chip* chip) { return chip->chip.irq_active() ? 1 : 0; }
-
-void dpc31_set_irq_callback(dpc31_chip* chip, dpc31_irq_fn fn, void* user) {
-  chip->chip.on_irq_change({});
-  if (fn != nullptr) chip->chip.on_irq_change(pin_observer(fn, user));
+uint64_t dpc31_cycle(const dpc31_chip* chip) { return handle(chip, "dpc31_cycle").chip.cycle(); }
+uint32_t dpc31_clock_hz(const dpc31_chip* chip) {
+  return handle(chip, "dpc31_clock_hz").chip.clock_hz();
+}
+int dpc31_irq_active(const dpc31_chip* chip) {
+  return handle(chip, "dpc31_irq_active").chip.irq_active() ? 1 : 0;
 }
 
-int dpc31_pb3(const dpc31_chip* chip) { return chip->chip.pb3_pin() ? 1 : 0; }
+void dpc31_set_irq_callback(dpc31_chip* chip, dpc31_irq_fn fn, void* user) {
+  dpc31_chip& h = handle(chip, "dpc31_set_irq_callback");
+  h.chip.on_irq_change({});
+  if (fn != nullptr) h.chip.on_irq_change(pin_observer(fn, user));
+}
+
+int dpc31_pb3(const dpc31_chip* chip) { return handle(chip, "dpc31_pb3").chip.pb3_pin() ? 1 : 0; }
 
 void dpc31_set_pb3_callback(dpc31_chip* chip, dpc31_irq_fn fn, void* user) {
-  chip->chip.on_pb3_change({});
-  if (fn != nullptr) chip->chip.on_pb3_change(pin_observer(fn, user));
+  dpc31_chip& h = handle(chip, "dpc31_set_pb3_callback");
+  h.chip.on_pb3_change({});
+  if (fn != nullptr) h.chip.on_pb3_change(pin_observer(fn, user));
 }
 
 void dpc31_select(dpc31_chip* chip) {
@@ -312,9 +345,10 @@ void dpc31_port_write(unsigned port, uint32_t value) {
 }
 
 void dpc31_set_port_callback(dpc31_chip* chip, dpc31_port_fn fn, void* user) {
-  chip->ports = nullptr;
+  dpc31_chip& h = handle(chip, "dpc31_set_port_callback");
+  h.ports = nullptr;
   if (fn != nullptr) {
-    chip->ports = [fn, user](std::uint64_t cycle, unsigned port, std::uint32_t value) {
+    h.ports = [fn, user](std::uint64_t cycle, unsigned port, std::uint32_t value) {
       fn(user, cycle, port, value);
     };
   }

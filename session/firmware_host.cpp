@@ -2,6 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <span>
+
 #include "firmware.h"
 
 namespace dpc31 {
@@ -25,6 +28,73 @@ class FirmwareHost::Entered {
   hal::Scope hal_;
   BusPort* bus_;
   board::Hooks* hooks_;
+};
+
+// init runs on the caller's stack and bus, not on the host CPU (cpu.hpp), so this bus gives it
+// what the host CPU gives the ISR and the main loop: each access is progress for the hang guard
+// (a loop polling the chip runs on), and a wait serves an enabled interrupt as Cpu::idle does.
+class FirmwareHost::InitBus final : public BusPort {
+ public:
+  InitBus(FirmwareHost& h, BusPort& bus) : h_(h), bus_(bus) {}
+  std::uint8_t read(std::uint32_t addr) override {
+    access();
+    return bus_.read(addr);
+  }
+  void write(std::uint32_t addr, std::uint8_t value) override {
+    access();
+    bus_.write(addr, value);
+  }
+  void write_block(std::uint32_t addr, std::span<const std::uint8_t> bytes) override {
+    access();
+    bus_.write_block(addr, bytes);
+  }
+  void read_block(std::uint32_t addr, std::span<std::uint8_t> out) override {
+    access();
+    bus_.read_block(addr, out);
+  }
+  void fill(std::uint32_t addr, std::uint8_t value, std::size_t len) override {
+    access();
+    bus_.fill(addr, value, len);
+  }
+  bool equal(std::uint32_t a, std::uint32_t b, std::size_t len) override {
+    access();
+    return bus_.equal(a, b, len);
+  }
+  void idle(std::uint64_t cycles) override {
+    access();
+    const std::uint64_t end = Chip::cycle_after(cycle(), cycles);
+    while (cycle() < end) {
+      const bool serves = !in_isr_ && h_.fw_.isr != nullptr && h_.int_enabled_;
+      if (serves && chip().irq_active()) {
+        serve();  // X/INT is level-triggered: the ISR runs until it is gone or masked
+        continue;
+      }
+      // With no bus access, X/INT changes only at an event of the chip.
+      const std::uint64_t to =
+          serves ? std::min(std::max(chip().next_deadline(), cycle() + 1), end) : end;
+      bus_.idle(to - cycle());
+    }
+  }
+  [[nodiscard]] const Chip& chip() const override { return bus_.chip(); }
+
+ private:
+  void access() {
+    board::progress();
+    ++accesses_;
+  }
+  // As Cpu::serve: an ISR without a bus access costs one access time, so time advances.
+  void serve() {
+    in_isr_ = true;
+    const std::uint64_t before = accesses_;
+    h_.isr(*this);
+    if (accesses_ == before) bus_.idle(Cpu::kNoAccessCycles);
+    in_isr_ = false;
+  }
+
+  FirmwareHost& h_;
+  BusPort& bus_;
+  std::uint64_t accesses_ = 0;
+  bool in_isr_ = false;  // the ISR's own waits do not enter it again
 };
 
 namespace {
@@ -54,13 +124,20 @@ FirmwareHost::FirmwareHost(const dpc31_firmware& fw)
       // tables (gcc's and clang's default) carry it to the host (docs/decisions.md).
       errors_([this](const char* message) {
         throw FirmwareError(fmt::format("firmware {}: {}", fw_.name, message));
+      }),
+      input_errors_([this](const char* message) {
+        throw FirmwareError(fmt::format(
+            "firmware {}: {} (hw_input runs with no chip selected: it notes the input for the "
+            "ISR or the main loop)",
+            fw_.name, message));
       }) {}
 
 void FirmwareHost::init(BusPort& bus, std::uint8_t station_address) {
   const Chip& c = bus.chip();
   const dpc31_board board{static_cast<int>(c.profile().id),
                           c.bus_mode() == BusMode::motorola ? 1 : 0, station_address};
-  Entered e(*this, bus);
+  InitBus init_bus(*this, bus);
+  Entered e(*this, init_bus);
   // init runs on the caller's stack (the host CPU's hand-overs count the rest for the guard).
   board::firmware_entered();
   try {
@@ -93,14 +170,16 @@ void FirmwareHost::main_step(BusPort& bus) {
 
 Cpu::Program FirmwareHost::program(const Cpu::Isr& after) {
   Cpu::Program p;
+  // The plug-in copy stays loaded while the host CPU may still unwind the firmware's frames (its
+  // destructor), whichever of the two goes first.
   if (fw_.isr != nullptr) {
-    p.isr = [this, after](BusPort& b) {
+    p.isr = [this, after, copy = run_](BusPort& b) {
       isr(b);
       if (after) after(b);
     };
   }
   if (builtin_ == nullptr && run_->main_step != nullptr) {
-    p.main_step = [this, after](BusPort& b) {
+    p.main_step = [this, after, copy = run_](BusPort& b) {
       main_step(b);
       if (after) after(b);
     };
@@ -115,7 +194,7 @@ std::string FirmwareHost::hw_input(const std::string& name, std::uint32_t value)
   struct ErrorsOnly {
     hal::Selection prev;
     ~ErrorsOnly() { hal::exchange_selection(prev); }
-  } const selected{hal::exchange_selection({nullptr, nullptr, nullptr, &errors_})};
+  } const selected{hal::exchange_selection({nullptr, nullptr, nullptr, &input_errors_})};
   int r = -1;
   if (builtin_ != nullptr) {
     if (builtin_->hw_input != nullptr) r = builtin_->hw_input(self_.get(), name.c_str(), value);

@@ -98,6 +98,7 @@ class FirmwareHost final : private board::Hooks {
 
  private:
   class Entered;  // the HAL, the board hooks and the bus of one call into the firmware
+  class InitBus;  // init's bus: progress for the hang guard, interrupts served in its waits
   void reset_line(bool asserted) override;
   void int_enable(bool enabled) override;
   void wait_1ms() override;
@@ -107,7 +108,8 @@ class FirmwareHost final : private board::Hooks {
   std::unique_ptr<std::max_align_t[]> self_;   // the built-in's instance
   std::shared_ptr<const dpc31_firmware> run_;  // else the plug-in copy this station runs
   hal::PortSink sink_;
-  hal::ErrorSink errors_;  // a HAL misuse in the firmware's calls: FirmwareError
+  hal::ErrorSink errors_;        // a HAL misuse in the firmware's calls: FirmwareError
+  hal::ErrorSink input_errors_;  // the same in hw_input, which runs with no chip selected
   std::vector<PortWrite> writes_;
   std::vector<std::uint32_t> values_;
   BusPort* bus_ = nullptr;   // the bus of the call into the firmware in progress

@@ -74,39 +74,41 @@ std::string file_path(const std::string& spec) {
   return spec.find('/') == std::string::npos ? "./" + spec : spec;
 }
 
-// A plug-in as loaded, with the private copies of its library (plugin_copy). Every file a library
-// was loaded from stays open for as long as the process runs, as the library stays loaded: the
-// copies are made from what was checked, and dlopen takes a name it has loaded before
-// ("/proc/self/fd/N") for that library, so no later file may get the same descriptor number. The
-// same file named again (dev, inode) is the library loaded before, without a dlopen.
+// A plug-in as loaded (load_plugin). Its file stays open for as long as the process runs, as the
+// library stays loaded: the copies (plugin_copy) are made from what was checked, and dlopen takes
+// a name it has loaded before ("/proc/self/fd/N") for that library, so no later file may get the
+// same descriptor number. The same file named again (dev, inode) is the library loaded before,
+// without a dlopen.
 struct Loaded {
   int fd = -1;
   dev_t dev = 0;
   ino_t ino = 0;
   std::string path;
-  struct Copy {
-    const dpc31_firmware* fw;
-    bool held;
-  };
-  std::vector<Copy> copies;  // [0]: the library load_plugin loaded
+  const dpc31_firmware* fw = nullptr;  // the library load_plugin loaded
+  bool run = false;                    // a host has run it: its globals are no longer fresh
 };
 std::mutex g_loaded_mutex;
-std::vector<std::unique_ptr<Loaded>> g_loaded;  // never freed: the libraries are never closed
+std::vector<std::unique_ptr<Loaded>> g_loaded;  // never freed: those libraries are never closed
 
 Loaded* family_of(const dpc31_firmware* fw) {
   for (const auto& l : g_loaded) {
-    for (const Loaded::Copy& c : l->copies) {
-      if (c.fw == fw) return l.get();
-    }
+    if (l->fw == fw) return l.get();
   }
   return nullptr;
 }
 
-// The descriptor of the library open at `fd` (dlopen through /proc/self/fd/N); `path` names it
+struct Library {
+  void* handle;
+  const dpc31_firmware* fw;
+  int fd;  // the file it was loaded from
+};
+
+// The library open at `fd` (dlopen through /proc/self/fd/N) and its descriptor; `path` names it
 // in messages. `fd` is closed when dlopen fails, else it stays open with the library.
-const dpc31_firmware& open_library(int fd, const std::string& path) {
+Library open_library(int fd, const std::string& path) {
   // RTLD_NOW: an undefined symbol fails here, not in the middle of a run. RTLD_LOCAL: two
-  // plug-ins may use the same names. Never closed: the descriptor points into the library.
+  // plug-ins may use the same names. The library load_plugin loads is never closed (its
+  // descriptor is the firmware's for the process); a copy is closed with its last host.
   const std::string by_fd = "/proc/self/fd/" + std::to_string(fd);
   void* const lib = ::dlopen(by_fd.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (lib == nullptr) {
@@ -127,12 +129,13 @@ const dpc31_firmware& open_library(int fd, const std::string& path) {
   const dpc31_firmware* const fw = *static_cast<const dpc31_firmware* const*>(sym);
   const std::string problem = descriptor_problem(fw);
   if (!problem.empty()) throw FirmwareError("firmware plug-in " + path + ": " + problem);
-  return *fw;
+  return {lib, fw, fd};
 }
 
 // Another copy of a loaded plug-in: its file's bytes in a new anonymous file (a new inode, so
-// dlopen loads the library anew, with globals of its own).
-const dpc31_firmware& load_copy(const Loaded& l) {
+// dlopen loads the library anew: its constructors run, its globals start as the file gives them).
+// The anonymous file stays open with the copy (close_copy).
+Library load_copy(const Loaded& l) {
   const auto fail = [&l](const std::string& what) {
     return FirmwareError("cannot load another copy of firmware plug-in " + l.path + ": " + what +
                          ": " + std::error_code(errno, std::generic_category()).message());
@@ -196,18 +199,31 @@ const dpc31_firmware& load_plugin(const std::string& spec) {
   for (const auto& known : g_loaded) {
     if (known->dev == st.st_dev && known->ino == st.st_ino) {
       ::close(fd);
-      return *known->copies.front().fw;
+      return *known->fw;
     }
   }
-  const dpc31_firmware& fw = open_library(fd, path);
+  const dpc31_firmware& fw = *open_library(fd, path).fw;
   auto l = std::make_unique<Loaded>();
   l->fd = fd;
   l->dev = st.st_dev;
   l->ino = st.st_ino;
   l->path = path;
-  l->copies.push_back({&fw, false});
+  l->fw = &fw;
   g_loaded.push_back(std::move(l));
   return fw;
+}
+
+// A copy no host holds any more: unloaded, and its anonymous file closed. A library that stays
+// loaded all the same (one marked NODELETE, e.g. by a C++ unique symbol) keeps its name
+// "/proc/self/fd/N", so its file stays open too: a later copy opened as N would be taken for it.
+void close_copy(const Library& copy) {
+  ::dlclose(copy.handle);
+  const std::string by_fd = "/proc/self/fd/" + std::to_string(copy.fd);
+  if (void* const still = ::dlopen(by_fd.c_str(), RTLD_NOW | RTLD_LOCAL | RTLD_NOLOAD)) {
+    ::dlclose(still);
+    return;
+  }
+  ::close(copy.fd);
 }
 
 }  // namespace
@@ -216,14 +232,13 @@ std::shared_ptr<const dpc31_firmware> plugin_copy(const dpc31_firmware& fw) {
   const std::lock_guard<std::mutex> lock(g_loaded_mutex);
   Loaded* const l = family_of(&fw);
   if (l == nullptr) return {&fw, [](const dpc31_firmware*) {}};
-  std::size_t i = 0;
-  while (i < l->copies.size() && l->copies[i].held) ++i;
-  if (i == l->copies.size()) l->copies.push_back({&load_copy(*l), false});
-  l->copies[i].held = true;
-  return {l->copies[i].fw, [l, i](const dpc31_firmware*) {
-            const std::lock_guard<std::mutex> relock(g_loaded_mutex);
-            l->copies[i].held = false;
-          }};
+  // The library load_plugin loaded runs once: its globals are fresh only until a host ran it.
+  if (!l->run) {
+    l->run = true;
+    return {l->fw, [](const dpc31_firmware*) {}};
+  }
+  const Library copy = load_copy(*l);
+  return {copy.fw, [copy](const dpc31_firmware*) { close_copy(copy); }};
 }
 
 const dpc31_firmware& find_firmware(const std::string& spec) {

@@ -11,7 +11,9 @@
  * (tests/bad_input_test.cpp, FirmwareFaults):
  *   HAL_INIT     its init calls CopyToVpc3 with a NULL buffer
  *   HAL_ISR      its init raises an interrupt; its ISR calls CopyFromVpc3 with a NULL buffer;
- *                its hardware input "kick" reads the chip, which no host selects for it */
+ *                its hardware input "kick" reads the chip, which no host selects for it
+ * and one that shows whether a module starts with fresh globals (tests/cpu_test.cpp):
+ *   GLOBALS      its init counts its runs in a global and writes the count to its port "boots" */
 #include "dpc31/dpc31_firmware.h"
 #include "dpc31/dpc31_hal.h"
 
@@ -30,9 +32,20 @@ __attribute__((constructor)) static void mark(void) {
 void no_such_board_function(void);
 #endif
 
+#ifdef GLOBALS
+static unsigned g_boots;
+static const char* const kPorts[] = {"boots", 0};
+#define PORTS kPorts
+#else
+#define PORTS 0
+#endif
+
 #ifndef NO_INIT
 static void init(const dpc31_board* board) {
   (void)board;
+#ifdef GLOBALS
+  dpc31_port_write(0, ++g_boots);
+#endif
 #ifdef UNDEFINED
   no_such_board_function();
 #endif
@@ -85,7 +98,7 @@ static const uint8_t kCfg[] = {0x10};
 #define INIT init
 #endif
 
-static const dpc31_firmware kBad = {ABI,       "BAD",  0,    0,           INIT, ISR, step, HW_INPUT,
+static const dpc31_firmware kBad = {ABI,       "BAD",  0,    PORTS,       INIT, ISR, step, HW_INPUT,
                                     HW_INPUTS, 0x0001, kCfg, sizeof kCfg, 1,    0,   0,    0};
 
 #ifdef NO_EXPORT

@@ -6,6 +6,7 @@
 //   CopyToVpc3 & co. against the same accesses made byte by byte (docs/timing.md, "Block
 //   transfers"): each access 4 clocks, in order, whatever the block crosses.
 #include <gtest/gtest.h>
+#include <setjmp.h>
 
 #include <cstdint>
 #include <string>
@@ -17,6 +18,7 @@
 #include "dpc31/chip.hpp"
 #include "dpc31/dpc31_hal.h"
 #include "dpc31/reg_fields.hpp"
+#include "heap_in_use.hpp"
 #include "responder.hpp"
 
 namespace {
@@ -431,4 +433,60 @@ TEST(HalSelection, AccessWithNoChipSelectedIsAnError) {
   Vpc3Write(0x04, 0xE5);
   EXPECT_EQ(dpc31_cycle(d), cycle);  // one access, 4 clocks on each chip
   dpc31_destroy(d);
+}
+
+// A NULL handle is a misuse the handler hears of, not a crash; dpc31_destroy(NULL) does nothing,
+// as free(NULL) and dpc31_module_destroy(NULL) (the clean-up path after a failed create).
+TEST(HalSelection, ANullHandleIsAnErrorAndDestroyingNullDoesNothing) {
+  dpc31_destroy(nullptr);
+  EXPECT_DEATH((void)dpc31_read(nullptr, 0),
+               "dpc31 HAL: dpc31_read called with a NULL chip handle");
+  struct HalError {
+    std::string what;
+  };
+  dpc31_set_error_handler([](const char* message) { throw HalError{message}; });
+  const auto error = [](auto&& f) {
+    try {
+      f();
+    } catch (const HalError& e) {
+      return e.what;
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(error([] { (void)dpc31_cycle(nullptr); }),
+            "dpc31_cycle called with a NULL chip handle");
+  EXPECT_EQ(error([] { dpc31_run(nullptr, 1); }), "dpc31_run called with a NULL chip handle");
+  EXPECT_EQ(error([] { dpc31_write(nullptr, 0, 0); }),
+            "dpc31_write called with a NULL chip handle");
+  EXPECT_EQ(error([] { dpc31_set_irq_callback(nullptr, nullptr, nullptr); }),
+            "dpc31_set_irq_callback called with a NULL chip handle");
+  dpc31_set_error_handler(nullptr);
+}
+
+// dpc31_hal.h: the handler must not return; one that does gets a line saying so, then the abort.
+TEST(HalSelection, AHandlerThatReturnsAbortsWithALineSayingSo) {
+  EXPECT_DEATH(
+      {
+        dpc31_set_error_handler([](const char*) {});
+        (void)Vpc3Read(0);
+      },
+      "dpc31 HAL: the error handler returned from .Vpc3Read called with no chip selected "
+      "\\(dpc31_select\\).; it must not \\(exit, longjmp\\): aborting");
+}
+
+// A C handler may longjmp out: nothing between the access function and the handler owns memory
+// that the jump would leak (the message is the thread's buffer).
+jmp_buf g_hal_jump;
+TEST(HalSelection, LongjmpOutOfTheHandlerLeaksNothing) {
+  if (!test::kHeapCounted) GTEST_SKIP() << "ASan's allocator is not malloc's";
+  dpc31_set_error_handler([](const char*) { longjmp(g_hal_jump, 1); });
+  std::int64_t before = 0;
+  for (int i = 0; i < 1001; ++i) {
+    if (i == 1) before = test::heap_in_use();  // after the first error's lazy set-up, if any
+    // The message is longer than any short-string buffer.
+    if (setjmp(g_hal_jump) == 0) (void)Vpc3Read(0);
+  }
+  const std::int64_t grown = test::heap_in_use() - before;
+  dpc31_set_error_handler(nullptr);
+  EXPECT_LE(grown, 0);
 }

@@ -9,12 +9,15 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <cstdlib>
 #include <stdexcept>
 #include <utility>
 #include <vector>
 
 #include "dpc31/dpc31_firmware.h"
 #include "dpc31/dpc31_hal.h"
+#include "dpc31/dpc31_regs.h"
 #include "dpc31/hal.hpp"
 #include "firmware_host.hpp"
 #include "harness.hpp"
@@ -304,6 +307,112 @@ TEST(FirmwareModule, HalMisuseIsTheModulesError) {
     EXPECT_STREQ(dpc31_module_error(m), line);
     dpc31_module_destroy(m);
   }
+}
+
+// A fresh start per module: a plug-in's globals are what its file gives them in every module,
+// one after the other and side by side (the library copy of a module before was reused, globals
+// and all: boots 1, 2, 3).
+TEST(FirmwareModule, EveryModuleStartsWithTheGlobalsOfTheFile) {
+  char err[256] = "";
+  const dpc31_firmware* fw = dpc31_firmware_load(BAD_PLUGIN_GLOBALS, err, sizeof err);
+  ASSERT_NE(fw, nullptr) << err;
+  for (int i = 0; i < 3; ++i) {
+    dpc31_module* m = dpc31_module_create("vpc3plus", 0, fw, 5);
+    ASSERT_NE(m, nullptr);
+    EXPECT_EQ(dpc31_module_port(m, "boots"), 1) << "module " << i;
+    dpc31_module_destroy(m);
+  }
+  dpc31_module* a = dpc31_module_create("vpc3plus", 0, fw, 5);
+  dpc31_module* b = dpc31_module_create("vpc3plus", 0, fw, 6);
+  EXPECT_EQ(dpc31_module_port(a, "boots"), 1);
+  EXPECT_EQ(dpc31_module_port(b, "boots"), 1);
+  dpc31_module_destroy(a);
+  dpc31_module_destroy(b);
+}
+
+// A hardware input runs with no chip selected: a chip access from it is a firmware fault whose
+// message says so in a plug-in's terms (a plug-in does not call dpc31_select).
+TEST(FirmwareModule, AChipAccessFromAHardwareInputSaysItRunsWithNoChip) {
+  FirmwareHost host(find_firmware(BAD_PLUGIN_HAL_ISR));
+  try {
+    (void)host.hw_input("kick", 1);
+    FAIL() << "no error";
+  } catch (const FirmwareError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "firmware BAD: Vpc3Read called with no chip selected (hw_input runs with no chip "
+              "selected: it notes the input for the ISR or the main loop)");
+  }
+}
+
+namespace init_fw {
+// init polls the chip for 600 ms of host time (a driver waiting for a register): each access is
+// progress, so the hang guard leaves it alone.
+void poll(const dpc31_board*) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(600);
+  while (std::chrono::steady_clock::now() < end) (void)Vpc3Read(SPC3_Int_Reg);
+}
+// init waits 5 ms with User_Timer_Clock (1 ms) unmasked on a started chip: its ISR is served in
+// the waits, as on the host CPU (Vpc3Wait_1ms).
+unsigned g_isrs = 0;
+void isr() {
+  Vpc3Write(SPC3_Int_Ack_Reg, Vpc3Read(SPC3_Int_Reg));
+  Vpc3Write(SPC3_Mode_Reg1_S, 0x02);  // EOI
+  ++g_isrs;
+}
+void wait(const dpc31_board*) {
+  Vpc3Write(SPC3_Int_Mask_Reg, static_cast<std::uint8_t>(~SPC3_Int_Req_Reg_User_Timer_Clock_Msk));
+  Vpc3Write(SPC3_Int_Mask_Reg + 1, 0xFF);
+  Vpc3Write(SPC3_Mode_Reg1_S, 0x01);  // Start
+  for (int i = 0; i < 5; ++i) dpc31_board_wait_1ms();
+  dpc31_port_write(0, g_isrs);
+}
+void step() {}
+const std::uint8_t kCfg[] = {0x10};
+const char* const kPorts[] = {"isrs", nullptr};
+constexpr dpc31_firmware descriptor(const char* name, void (*init)(const dpc31_board*)) {
+  return {DPC31_FIRMWARE_ABI_VERSION,
+          name,
+          nullptr,
+          kPorts,
+          init,
+          isr,
+          step,
+          nullptr,
+          nullptr,
+          0x0001,
+          kCfg,
+          1,
+          0,
+          1,
+          nullptr,
+          0};
+}
+const dpc31_firmware kPoll = descriptor("POLL", poll);
+const dpc31_firmware kWait = descriptor("WAIT", wait);
+}  // namespace init_fw
+
+TEST(FirmwareInit, AnInitPollingTheChipIsNoHang) {
+  EXPECT_EXIT(
+      {
+        board::guard_hangs("test", "POLL", {}, std::chrono::milliseconds(100));
+        Chip c({Profile::spc3, BusMode::intel, 0});
+        DirectBus bus(c);
+        FirmwareHost host(init_fw::kPoll);
+        host.init(bus, 5);
+        std::exit(0);
+      },
+      ::testing::ExitedWithCode(0), "");
+}
+
+TEST(FirmwareInit, WaitsInInitServeTheEnabledInterrupt) {
+  Chip c({Profile::spc3, BusMode::intel, 0});
+  DirectBus bus(c);
+  FirmwareHost host(init_fw::kWait);
+  host.init(bus, 5);
+  // One per User_Timer_Clock tick inside the 5 ms, none merged into one latched bit (it was 0):
+  // the ticks 1 ... 4 ms after Start; the fifth comes after the last wait has ended.
+  EXPECT_EQ(host.port("isrs"), 4);
+  EXPECT_EQ(host.interrupts.size(), 4u);
 }
 
 }  // namespace

@@ -78,6 +78,30 @@ TEST(LogLimiter, UnmappedPollingGivesOneHintAndThenCounts) {
   EXPECT_EQ(log.records[0].cycle, 4u);  // the first access's 4 clocks (docs/timing.md)
 }
 
+// An address beyond the bus (a VPC3+ driver's 16-bit register at 0x802 polled on the SPC3, whose
+// bus has 11 bits) folds as unmapped ones do: the hint, a line per address for the first few,
+// then a count at 10, 100, 1000, ... accesses (it was a line per access, 1000 a second).
+TEST(LogLimiter, BeyondTheAddressBusGivesOneHintAndThenCounts) {
+  Chip c({Profile::spc3, BusMode::intel});
+  testutil::LogCapture log;
+  log.attach(c);
+  for (int i = 0; i < 50'000; ++i) {
+    c.read(0x802);
+    c.read(0x803);
+  }
+  ASSERT_EQ(log.records.size(), 7u);  // the hint, 0x803; 10, 100, 1 000, 10 000 and 100 000
+  EXPECT_EQ(log.records[0].text,
+            "read at 0x802: beyond the 11-bit address bus, upper bits ignored; a firmware written "
+            "for another chip? (--profile, --variant); further accesses beyond the bus are "
+            "counted");
+  EXPECT_EQ(log.records[1].text,
+            "read at 0x803: beyond the 11-bit address bus, upper bits ignored");
+  EXPECT_EQ(log.records[2].text,
+            "10 accesses beyond the 11-bit address bus so far (the latest: read at 0x803)");
+  EXPECT_EQ(log.records[6].text,
+            "100000 accesses beyond the 11-bit address bus so far (the latest: read at 0x803)");
+}
+
 // Remarks at one level never crowd out another's lines: each level has its own bound. On the
 // dpc31 (its internal work cells are RAM the user must not touch: an info line per access).
 TEST(LogLimiter, ChipLogIsBoundedPerLevel) {

@@ -255,7 +255,8 @@ class Chip {
 
   // --- the serial side (RS-485) ---
   // RxD changes to `level` at `cycle` (>= cycle(), non-decreasing); whole frames may be given
-  // ahead of time.
+  // ahead of time. Not checked: an earlier cycle is taken as cycle(), which the segment's lines
+  // rely on (a chip a few clocks ahead of the line), so a late edge is a glitch now, unreported.
   void drive_rxd(std::uint64_t cycle, bool level);
   // `bytes` as back-to-back UART characters on RxD from `start` (>= cycle()), `bit_cycles` per
   // bit: the edges uart_encode gives, with `fault`. Characters, not edges, reach the receiver

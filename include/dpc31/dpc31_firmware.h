@@ -97,7 +97,7 @@ void dpc31_board_reset(int asserted);
  * when the firmware starts. */
 void dpc31_board_int_enable(int enabled);
 /* Vpc3Wait_1ms: 1 ms of chip time passes (clock / 1000 clocks) with no bus access; an enabled
- * interrupt is served meanwhile. */
+ * interrupt is served meanwhile, in init too. */
 void dpc31_board_wait_1ms(void);
 
 /* --- a C host: load a plug-in and run it on a chip --- */
@@ -110,7 +110,8 @@ const dpc31_firmware* dpc31_firmware_load(const char* path, char* err, size_t er
  * firmware on its host CPU at a station address of 0..125. Create runs init(); NULL for an
  * unknown profile, a descriptor that fails its checks or an address above 125. Every module is an
  * instance of its own: a plug-in that keeps its state in globals runs in a private copy of its
- * library per module (docs/firmware.md, "Instances"). */
+ * library per module, loaded afresh for it (its constructors run, its globals start as the file
+ * gives them) and unloaded with it (docs/firmware.md, "Instances"). */
 typedef struct dpc31_module dpc31_module;
 dpc31_module* dpc31_module_create(const char* profile, int motorola, const dpc31_firmware* fw,
                                   uint8_t station_address);

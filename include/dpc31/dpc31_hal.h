@@ -38,7 +38,14 @@ dpc31_chip* dpc31_create(const char* profile, int motorola);
  * the ASIC type the Profichip drivers check); NULL = "c". Returns NULL for an unknown profile
  * or variant, or a variant with a profile other than "vpc3plus". */
 dpc31_chip* dpc31_create_variant(const char* profile, const char* variant, int motorola);
+/* Frees the chip; NULL does nothing (as free). It deselects the chip on the calling thread only:
+ * a thread that selected it must deselect it (dpc31_select(NULL)) before it is destroyed, or its
+ * next Vpc3Read & co. use freed memory, unnoticed. A handle destroyed twice, or used after its
+ * destroy, is freed memory too: neither can be detected. */
 void dpc31_destroy(dpc31_chip* chip);
+
+/* A NULL handle to any of the functions below (and dpc31_set_*_callback) is a programming error:
+ * the error handler gets "FN called with a NULL chip handle" (dpc31_set_error_handler). */
 
 uint8_t dpc31_read(dpc31_chip* chip, uint16_t addr);
 void dpc31_write(dpc31_chip* chip, uint16_t addr, uint8_t value);
@@ -70,7 +77,8 @@ void dpc31_set_pb3_callback(dpc31_chip* chip, dpc31_irq_fn fn, void* user);
 
 /* --- the driver-shaped access functions --- */
 
-/* The chip Vpc3Read & co. act on for the calling thread (NULL: none). */
+/* The chip Vpc3Read & co. act on for the calling thread (NULL: none). Each thread has its own
+ * selection; see dpc31_destroy for a chip selected on another thread. */
 void dpc31_select(dpc31_chip* chip);
 
 uint8_t Vpc3Read(uint16_t wAddress);
@@ -90,9 +98,12 @@ void dpc31_set_port_callback(dpc31_chip* chip, dpc31_port_fn fn, void* user);
 
 /* Calling Vpc3Read & co. (or dpc31_port_write) with no chip selected, or a block function with a
  * NULL local buffer and a non-zero length, is a programming error: the handler gets a message; the
- * default prints it to stderr and aborts. A firmware run by a host of the emulator (the dpc31
- * program, the Python module, dpc31_module_*) is a firmware fault instead: the host reports the
- * message as its error (docs/bring-up.md). */
+ * default prints it to stderr and aborts. The handler must not return (the access cannot be
+ * made): exit or longjmp out of it; one that returns gets a line on stderr saying so and the
+ * process aborts. A longjmp out of it leaks nothing (the message is in a buffer of the calling
+ * thread, valid until its next error). NULL restores the default. A firmware run by a host of the
+ * emulator (the dpc31 program, the Python module, dpc31_module_*) is a firmware fault instead: the
+ * host reports the message as its error (docs/bring-up.md). */
 typedef void (*dpc31_error_fn)(const char* message);
 void dpc31_set_error_handler(dpc31_error_fn fn);
 
