@@ -19,7 +19,7 @@
 extern "C" {
 #endif
 
-/* By name, case-insensitive ("do4", "CNT2"); NULL if there is none. */
+/* By name, case-insensitive ("do4", "CNT2"); NULL if there is none (a NULL name too). */
 const dpc31_firmware* dpc31_find_firmware(const char* name);
 /* All of them, NULL-terminated. */
 extern const dpc31_firmware* const dpc31_firmwares[];

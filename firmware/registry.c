@@ -17,6 +17,7 @@ static int same_name(const char* a, const char* b) {
 
 const dpc31_firmware* dpc31_find_firmware(const char* name) {
   int i;
+  if (name == 0) return 0; /* no name names none (an audit's NULL crashed same_name) */
   for (i = 0; dpc31_firmwares[i] != 0; ++i) {
     if (same_name(dpc31_firmwares[i]->name, name)) return dpc31_firmwares[i];
   }

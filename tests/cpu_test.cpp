@@ -19,6 +19,7 @@
 #include "dpc31/dpc31_hal.h"
 #include "dpc31/dpc31_regs.h"
 #include "dpc31/hal.hpp"
+#include "firmware.h"
 #include "firmware_host.hpp"
 #include "harness.hpp"
 #include "test_util.hpp"
@@ -416,3 +417,11 @@ TEST(FirmwareInit, WaitsInInitServeTheEnabledInterrupt) {
 }
 
 }  // namespace
+
+// firmware.h: "NULL if there is none": a NULL name finds none, as an unknown one (it crashed).
+TEST(FirmwareRegistry, ANullOrUnknownNameFindsNone) {
+  EXPECT_EQ(dpc31_find_firmware(nullptr), nullptr);
+  EXPECT_EQ(dpc31_find_firmware("no such firmware"), nullptr);
+  ASSERT_NE(dpc31_find_firmware("do4"), nullptr);
+  EXPECT_EQ(dpc31_find_firmware("do4"), dpc31_find_firmware("DO4"));
+}
