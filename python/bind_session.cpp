@@ -363,6 +363,16 @@ struct PyBoard {
       : chip_ref(std::move(chip_obj)), chip(class_arg<PyChip>(chip_ref, "chip", "a dpc31.Chip")) {
     // A scenario's `cpu clock=` range.
     const auto hz = in_range<std::uint32_t>(named(kCpuClock, "hz"), clock_hz);
+    cfg.hz = hz;
+    cfg.c31 = code.has_value();
+    if (code) cfg.code = *code;
+    // An 80C32's set-ups that cannot work (the Motorola bus, behind the C31's controller): the
+    // scenario's, bridge's and serve's one check. The C31's board checks its own chip.
+    ChipOptions on;
+    on.bus = chip.chip.bus_mode();
+    on.irq_controller = chip.chip.irq_controller();
+    if (const std::string why = cfg.chip_problem(on); !code && !why.empty())
+      throw py::value_error(why);
     chip.enter(true);
     try {
       board = code ? std::make_unique<Cpu51Board>(chip.chip, hz, Cpu51Board::C31{*code})
@@ -370,9 +380,6 @@ struct PyBoard {
     } catch (const std::invalid_argument& e) {
       throw py::value_error(e.what());
     }
-    cfg.hz = hz;
-    cfg.c31 = code.has_value();
-    if (code) cfg.code = *code;
   }
   py::object chip_ref;
   PyChip& chip;

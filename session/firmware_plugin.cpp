@@ -282,7 +282,14 @@ dpc31_module* dpc31_module_create(const char* profile, int motorola, const dpc31
   if (!dpc31::descriptor_problem(fw).empty()) return nullptr;
   if (!dpc31::kStationAddress.holds(station_address)) return nullptr;
   o.bus = motorola != 0 ? dpc31::BusMode::motorola : dpc31::BusMode::intel;
-  auto m = std::make_unique<dpc31_module>(o, *fw);
+  std::unique_ptr<dpc31_module> m;
+  try {
+    // A plug-in's private copy may fail to load (no file descriptor, memfd_create): NULL, as the
+    // header says, never an exception out of a C function.
+    m = std::make_unique<dpc31_module>(o, *fw);
+  } catch (const std::exception&) {
+    return nullptr;
+  }
   try {
     dpc31::DirectBus bus(m->chip);
     m->host.init(bus, station_address);

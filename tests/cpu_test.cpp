@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 
 #include <chrono>
 #include <cstdlib>
@@ -329,6 +330,27 @@ TEST(FirmwareModule, EveryModuleStartsWithTheGlobalsOfTheFile) {
   EXPECT_EQ(dpc31_module_port(b, "boots"), 1);
   dpc31_module_destroy(a);
   dpc31_module_destroy(b);
+}
+
+// A copy that cannot be loaded (here: no file descriptor left for its anonymous file) makes
+// dpc31_module_create return NULL, as dpc31_firmware.h says; it ended the process (std::terminate
+// out of the C function: the review's `ulimit -n 6`).
+TEST(FirmwareModule, ACopyThatCannotBeLoadedIsNull) {
+  char err[256] = "";
+  const dpc31_firmware* fw = dpc31_firmware_load(BAD_PLUGIN_GLOBALS, err, sizeof err);
+  ASSERT_NE(fw, nullptr) << err;
+  dpc31_module* a = dpc31_module_create("vpc3plus", 0, fw, 5);  // the library as loaded
+  ASSERT_NE(a, nullptr);
+  rlimit was{};
+  ASSERT_EQ(::getrlimit(RLIMIT_NOFILE, &was), 0);
+  rlimit none = was;
+  none.rlim_cur = 0;  // no new descriptor: memfd_create fails with EMFILE
+  ASSERT_EQ(::setrlimit(RLIMIT_NOFILE, &none), 0);
+  dpc31_module* b = dpc31_module_create("vpc3plus", 0, fw, 6);
+  ASSERT_EQ(::setrlimit(RLIMIT_NOFILE, &was), 0);
+  EXPECT_EQ(b, nullptr);
+  dpc31_module_destroy(b);
+  dpc31_module_destroy(a);
 }
 
 // A hardware input runs with no chip selected: a chip access from it is a firmware fault whose

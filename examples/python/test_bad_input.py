@@ -289,6 +289,12 @@ def test_a_hardware_input_that_reads_the_chip_is_a_firmware_error(built):
     (lambda: _master().c2_abort(instance=9), r"instance 9 out of range \(0..3\)"),
     (lambda: dpc31.Cpu51Board(dpc31.Chip("spc3"), address=0xF800),
      r"address 63488 out of range \(0..61440\)"),
+    # The board set-ups a scenario, the bridge and serve refuse (session/cpu51_module.cpp).
+    (lambda: dpc31.Cpu51Board(dpc31.Chip("spc3", bus="motorola")),
+     r"the 80C32 drives the chip in Intel mode \(its multiplexed bus\): not on the Motorola bus"),
+    (lambda: dpc31.Cpu51Board(dpc31.Chip("dpc31", irq_controller="c31")),
+     r"the 80C32 takes X/INT on INT0, which the C31's interrupt controller leaves inactive: its "
+     r"firmware would never be interrupted"),
     # Beyond 64 bits: the documented range, not the C++ integer's.
     (lambda: dpc31.Cpu51Board(dpc31.Chip("spc3"), hz=2**70),
      r"hz 1180591620717411303424 out of range \(1000000..40000000\)"),

@@ -111,7 +111,9 @@ const dpc31_firmware* dpc31_firmware_load(const char* path, char* err, size_t er
  * unknown profile, a descriptor that fails its checks or an address above 125. Every module is an
  * instance of its own: a plug-in that keeps its state in globals runs in a private copy of its
  * library per module, loaded afresh for it (its constructors run, its globals start as the file
- * gives them) and unloaded with it (docs/firmware.md, "Instances"). */
+ * gives them) and unloaded with it (docs/firmware.md, "Instances": a C++ plug-in's template or
+ * inline statics are shared by every copy). NULL also when that copy cannot be loaded (no file
+ * descriptor left, for one). */
 typedef struct dpc31_module dpc31_module;
 dpc31_module* dpc31_module_create(const char* profile, int motorola, const dpc31_firmware* fw,
                                   uint8_t station_address);

@@ -540,9 +540,10 @@ int run_cosim(const CosimOptions& given) {
   }
   // The waveform windows' files, checked before the seeds run: one that cannot be written was
   // found only after them. --dump always writes its directory, made now; --vcd's is made at a
-  // divergence, its files are checked now if it is there.
+  // divergence, its files are checked now if it is there: first, so that a refusal leaves no
+  // --dump directory behind.
   for (const auto& [opt, dir, make] :
-       {std::tuple{"--dump", o.dump_dir, true}, std::tuple{"--vcd", o.vcd_dir, false}}) {
+       {std::tuple{"--vcd", o.vcd_dir, false}, std::tuple{"--dump", o.dump_dir, true}}) {
     if (dir.empty()) continue;
     std::error_code ec;
     if (make) std::filesystem::create_directories(dir, ec);

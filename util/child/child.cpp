@@ -58,10 +58,15 @@ class Held {
   Held& operator=(const Held&) = delete;
   [[nodiscard]] int fd() const { return fd_; }
   // In the child, first thing after the fork: its own process group (so that a signal passed on
-  // reaches what it starts too), the parent's signal mask, no signalfd.
+  // reaches what it starts too), the parent's signal mask, no signalfd, and SIGPIPE and SIGXFSZ
+  // back to their defaults: the CLI ignores them for its own writes, and an ignored disposition
+  // would pass through exec to the tools it runs (make, the compiler, Verilator), whose pipes
+  // rely on SIGPIPE.
   void in_child() const {
     ::setpgid(0, 0);
     if (fd_ >= 0) ::close(fd_);
+    ::signal(SIGPIPE, SIG_DFL);
+    ::signal(SIGXFSZ, SIG_DFL);
     ::pthread_sigmask(SIG_SETMASK, &old_, nullptr);
   }
   // The signal read, or 0.
