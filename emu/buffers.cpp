@@ -201,15 +201,17 @@ bool BufferUnit::sent_diag_has_stat_diag() const {
   return false;
 }
 
-// Diag_Flag stays set while the sent buffer says Stat_Diag.
+// Diag_Flag stays set while the sent buffer says Stat_Diag, and when the user handed a newer
+// buffer over meanwhile: the master fetched the old one, not the current one (SPC3 p.32: cleared
+// when "the relevant master" fetched).
 void BufferUnit::diag_send_end(bool stat_diag) {
   for (int k = 0; k < 2; ++k) {
     if (s_.diag.buf[k] != DiagState::Asic_Send_Mode) continue;
-    s_.diag_flag = stat_diag;
     if (s_.diag.buf[1 - k] == DiagState::Asic) {  // the user handed a newer one meanwhile
       s_.diag.buf[k] = DiagState::User;
       irq_.raise(irq::Diag_Buffer_Changed);
     } else {
+      s_.diag_flag = stat_diag;
       s_.diag.buf[k] = DiagState::Asic;
     }
     return;

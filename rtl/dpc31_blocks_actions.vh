@@ -399,26 +399,27 @@
     end
   endtask
 
-  // ev_diag_end: the buffer in Send_Mode: Diag_Flag = stat_diag; if the other buffer is SPC3,
-  // the sent one goes to User and Diag_Buffer_Changed, else it goes back to SPC3.
+  // ev_diag_end: the buffer in Send_Mode: if the other buffer is SPC3 (the user handed a newer
+  // one over meanwhile), the sent one goes to User and Diag_Buffer_Changed, Diag_Flag stays (the
+  // newer one is not fetched: SPC3 p.32); else it goes back to SPC3 and Diag_Flag = stat_diag.
   // CHOICE: with no buffer in Send_Mode nothing happens (Diag_Flag unchanged); with both in
   // Send_Mode (two begins without an end) buffer 1 is the one that ends.
   task diag_end(input stat);
     begin
       if (nx_diag1 == DIAG_SEND) begin
-        diag_flag_after_send(stat);
         if (nx_diag2 == DIAG_SPC3) begin
           nx_diag1 = DIAG_USER;
           raise(IRQ_DIAG_CHANGED);
         end else begin
+          diag_flag_after_send(stat);
           nx_diag1 = DIAG_SPC3;
         end
       end else if (nx_diag2 == DIAG_SEND) begin
-        diag_flag_after_send(stat);
         if (nx_diag1 == DIAG_SPC3) begin
           nx_diag2 = DIAG_USER;
           raise(IRQ_DIAG_CHANGED);
         end else begin
+          diag_flag_after_send(stat);
           nx_diag2 = DIAG_SPC3;
         end
       end

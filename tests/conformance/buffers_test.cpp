@@ -158,6 +158,34 @@ TEST_P(BufferSm, DiagSpaceHolders_HoldTheSentStandardBytes_MasterAddInByte3) {
   EXPECT_EQ(b.master.slave_diag().answer->du, du);
 }
 
+// The same sentence: the master's fetch clears the flag for the buffer it fetched. While master 2
+// fetches one buffer the user hands the other over (New_Diag_Buffer_Cmd 00h: Diag_Flag 1): the
+// fetched buffer is not the current one, so the flag stays 1 after the answer (a DH for the next
+// Data_Exchange), and master 2's next Slave_Diag, of the newer buffer, clears it. Fixed (the
+// twenty-second session's review): the end of the send took the old buffer's verdict.
+TEST_P(BufferSm, DiagFlag_StaysSetForABufferHandedOverWhileTheOtherIsSent) {
+  Bare b(GetParam());
+  locked_with_new_diag(b, 0x00);
+  ASSERT_TRUE(b.master.slave_diag().answer);
+  ASSERT_EQ(status(b.chip) & 0x04, 0x00);
+  // master 2's Slave_Diag (FCV 0), driven by hand so that the user can act during its answer
+  const Bytes req = {0x68, 0x05, 0x05, 0x68, 0x85, 0x82, 0x4D, 0x3C, 0x3E, 0xCE, 0x16};
+  const std::uint64_t end = send_on_rxd(b.chip, req, b.chip.cycle() + 40 * 4, 4);
+  // TSDR 11 bits, then 18 characters (9 of frame, 2 SAPs, 7 diag bytes) at 4 cycles a bit
+  const std::uint64_t answer_end = end + 11 * 4 + 18 * 11 * 4;
+  b.chip.step(end + 100 - b.chip.cycle());
+  write_user_diag(b.chip, {0x00, 0, 0, 0, 0, 0, 0x43});
+  EXPECT_EQ(b.chip.read(0x0D), 0x00);  // both with the ASIC, one of them being sent
+  EXPECT_EQ(status(b.chip) & 0x04, 0x04);
+  b.chip.step(answer_end + 4 - b.chip.cycle());
+  EXPECT_NE(irr(b.chip) & irq::Diag_Buffer_Changed, 0);
+  EXPECT_EQ(status(b.chip) & 0x04, 0x04);
+  const Exchange d = b.master.slave_diag();
+  ASSERT_TRUE(d.answer);
+  EXPECT_EQ(d.answer->du.back(), 0x43);
+  EXPECT_EQ(status(b.chip) & 0x04, 0x00);
+}
+
 // The same sentence, "cleared when 'the relevant master' fetched": a fetch by master 7, which
 // the slave is not locked to, leaves Diag_Flag set; master 2's fetch clears it.
 // Fixed (issue 13); before: the model clears it on any master's fetch.
