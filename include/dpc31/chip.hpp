@@ -224,8 +224,9 @@ class Chip {
   // Steps at most `cycles`, stopping right after the event that makes the interrupt active
   // (true) — where firmware would enter its ISR.
   bool step_until_irq(std::uint64_t cycles);
-  // Ends the step() / step_until_irq() in progress after the current event (an observer's way
-  // to hand control back to whoever steps the chip). Bus accesses always take their full time.
+  // Ends the step_until_irq() in progress after the current event (an observer's way to hand
+  // control back to whoever steps the chip); step() runs its whole count regardless. Bus accesses
+  // always take their full time.
   void request_stop();
   [[nodiscard]] bool stop_requested() const;
   void clear_stop();
