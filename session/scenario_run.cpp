@@ -647,9 +647,9 @@ class Runner {
       // The MOVX (one byte) has been fetched: it is the byte before the PC.
       const auto at = static_cast<std::uint16_t>(m51_->board().cpu().pc() - 1);
       port_since_[m51_->port_name(port)] = cycle;
-      const std::string line = fmt::format("80C32 at {}: {} = {} at {}", code_name(image_, at),
-                                           m51_->port_name(port), port_text(value),
-                                           time_text(cycle));
+      const std::string line =
+          fmt::format("80C32 at {}: {} = {} at {}", code_name(image_, at), m51_->port_name(port),
+                      port_text(value), time_text(cycle));
       for (std::string& l : port_lines_.add(cycle, line)) port_note(cycle, l == line, l);
     };
     const std::string symbols = symbols_text(image_);

@@ -75,7 +75,7 @@ class Replayer {
     }
     const std::uint64_t to = std::min(c, Chip::kLastCycle);  // where the chip's time ends
     while (chip_.cycle() < to) {
-      chip_.clear_stop();  // one an access requested, too
+      chip_.clear_stop();                        // one an access requested, too
       chip_.step_until_irq(to - chip_.cycle());  // step() does not end at a request
       if (!irq_.empty() || !tx_.empty()) check_due(o, horizon, next);
     }
