@@ -309,6 +309,9 @@ TEST_F(BadInput, RunOptionValues) {
                       "dpc31 run: ", args);
   }
   expect_bad(dpc31("run"), "dpc31 run: scenario is required", "no scenario");
+  // The engine's names only (README.md, docs/engine.md): not the enum's numbers.
+  expect_bad(dpc31("run " + scn + " --engine 1"), "dpc31 run: --engine: 1 not in {event,per-cycle}",
+             "engine number");
   EXPECT_EQ(slurp(path("old.vcd")), "old");
   EXPECT_EQ(listing(), before);
 }

@@ -450,6 +450,10 @@ TEST(ScenarioParse, BusActionsRefuseWhatTheMapDoesNot) {
       {"gc sync data=20,00\n", "t.scn:1: 'gc' takes no arguments; unexpected 'sync'"},
       {"master address=2\nchk_cfg from=2\n", "t.scn:2: from=2 is our own master: leave from= out"},
       {"send from=7\n", "t.scn:1: send with fields needs from=SA and fc=N"},
+      // The walk's form of a sent telegram (spaces) copied back (audit a16).
+      {"send 10 05 02 49 50 16\n",
+       "t.scn:1: send: the bytes are separated by commas (10,05,...); unexpected '05'"},
+      {"send\n", "t.scn:1: expected 'send BYTES' or 'send from=SA fc=N ...'"},
   };
   for (const auto& [text, line] : cases) EXPECT_EQ(parse_error(text), line) << text;
 }

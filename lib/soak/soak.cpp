@@ -429,7 +429,7 @@ int run_cli(const Options& o, std::FILE* out, std::FILE* err) {
              o.fault_period, o.seed, o.firmware ? ", firmware " + *o.firmware : "");
   const double hz = r.clock_hz;
   fmt::print(out,
-             "cycles {} ({:.3f} s of chip time), {} after the start-up; wall {:.2f} s ({:.1f}x "
+             "cycles {} ({:.3f} s of chip time), {} after the start-up; wall {:.3g} s ({:.1f}x "
              "real time)\n",
              r.cycles, static_cast<double>(r.cycles) / hz, r.cycles - r.first_cycle, r.wall_s,
              static_cast<double>(r.cycles - r.first_cycle) / hz / std::max(r.wall_s, 1e-9));

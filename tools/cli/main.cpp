@@ -151,13 +151,15 @@ int main(int argc, char** argv) {
                   "also write a GTKWave save file for --vcd (or --fst): signals by block, states "
                   "by name, markers at the state changes (docs/waveforms.md)")
       ->check(named(Use::write));
-  run->add_option("--engine", run_opt.engine,
-                  "how time advances: event (deadline to deadline) or per-cycle (every clock, "
-                  "the reference; docs/engine.md)")
-      // Mapped to the enum's number as text: Engine is a uint8_t, which CLI11 would print (in
-      // --help and in its error message) as a raw byte, a NUL that cuts the line short.
-      ->transform(CLI::CheckedTransformer(
-          std::map<std::string, std::string>{{"event", "0"}, {"per-cycle", "1"}}))
+  run->add_option_function<std::string>(
+         "--engine",
+         [&run_opt](const std::string& name) {
+           run_opt.engine = name == "event" ? dpc31::Engine::event : dpc31::Engine::per_cycle;
+         },
+         "how time advances: event (deadline to deadline) or per-cycle (every clock, the "
+         "reference; docs/engine.md)")
+      // The names only: a mapped enum also took its numbers (--engine 1) and showed them.
+      ->check(CLI::IsMember({"event", "per-cycle"}))
       ->default_str("event");
   run->add_option("--pcap", run_opt.pcap, "write the telegrams as pcapng (docs/capture.md)")
       ->check(named(Use::write));
