@@ -124,7 +124,10 @@ class SegmentRun {
       const std::uint8_t address = def.slave.address;
       chip.on_telegram([this, raw, address](const Telegram& t) {
         if (t.from_chip) {
-          tx_until_ = std::max(tx_until_, t.end);
+          if (t.end >= tx_until_) {
+            tx_from_ = t.start;
+            tx_until_ = t.end;
+          }
           return;
         }
         // A request to this station, taken at its last stop sample: before anything it causes.
@@ -197,15 +200,25 @@ class SegmentRun {
   // inside its stop bit, and the next step begins on a quiet line (a `send after=33bits` then
   // keeps TSYN).
   void quiet() {
-    const std::size_t n = seg_.whole_bytes().size();  // none yet: no telegram to finish
-    const std::uint64_t whole_end =
-        n == 0 ? 0 : seg_.whole_start() + n * kUartCharBits * seg_.bit_cycles();
-    const std::uint64_t end = std::max(tx_until_, whole_end);
+    const std::uint64_t end = std::max(tx_until_, whole_end());
     if (end > seg_.cycle()) seg_.run_until(end);
   }
+  // The end of the last stop bit of the telegram last relayed whole (0: none yet).
+  std::uint64_t whole_end() const {
+    const std::size_t n = seg_.whole_bytes().size();
+    return n == 0 ? 0 : seg_.whole_start() + n * kUartCharBits * seg_.bit_cycles();
+  }
 
-  // Moves no time (an expect is checked at the step's cycle, `run T` lasts T).
+  // Moves no time (an expect is checked at the step's cycle, `run T` lasts T). A telegram that
+  // ended by now is over at the step's end unless one goes on at once (a character back to back
+  // would join it): the segment would tell of it only a character time later, after the next
+  // step's lines; told now, the walk prints it before them and the checks see it
+  // (docs/decisions.md, the twenty-third session).
   void settle() {
+    const std::uint64_t now = seg_.cycle();
+    const bool whole_on = seg_.whole_start() <= now && now < whole_end();
+    const bool answer_on = tx_from_ <= now && now < tx_until_;
+    if (!whole_on && !answer_on) seg_.flush();
     seg_.align();  // a station's trace checkpoints its chip at the line's time
     check_.idle_until(seg_.cycle());
   }
@@ -440,7 +453,9 @@ class SegmentRun {
   std::vector<std::optional<TokenVisit>> visits_;  // each master's last visit of the token
   std::map<std::uint8_t, std::uint64_t> last_request_;
   std::optional<std::uint64_t> pending_;
-  std::uint64_t tx_until_ = 0;  // the end of the last answer a chip decided to send
+  // The first start bit and the end of the last answer a chip decided to send.
+  std::uint64_t tx_from_ = 0;
+  std::uint64_t tx_until_ = 0;
   // The answers' delays after their requests so far (expect tsdr): how many, the least and the
   // greatest (kept as these three, not one by one: a long run's memory stays flat).
   struct {

@@ -19,6 +19,7 @@
 #include <map>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "dpc31/fdl.hpp"
@@ -568,6 +569,38 @@ TEST(SegmentOutputs, ATelegramOfTheLineIsLoggedBeforeWhatComesAfterItsEnd) {
       latest = std::max(latest, cycle);
     }
     EXPECT_GT(telegrams, 100u) << scn;
+  }
+}
+
+// The case a user found (the twenty-third session): three_slaves.scn's `cycle 40 skip=7` ends at
+// the end of its last answer's stop bit, the VPC3+'s (17 characters: E = its start + 17 x 11 T,
+// docs/timing.md, T = 32 clocks at 1.5 Mbaud), and line 48's expect looks there
+// (docs/scenario-format.md: `cycle` ends on a quiet line, a check moves no time). The answer's line
+// comes right before line 48's; until then it came after line 57's `ok`. The same at `cycle 3`'s
+// end: the DPC31's answer (10 characters) right before line 41. The answers are SD2 DL telegrams
+// to master 2 (FC 08h) with each GSD's inputs, all 0: DO4's one byte (Cfg 10h), CNT2's eight (Cfg
+// 17h), FCS = 02h + SA + 08h.
+TEST(SegmentOutputs, AStepsLastAnswerComesBeforeItsExpects) {
+  const auto r =
+      sh(fmt::format("cd {} && {} run traces/segment/three_slaves.scn", SOURCE_DIR, DPC31_CLI));
+  ASSERT_EQ(r.rc, 0) << r.out;
+  std::vector<std::string> lines;
+  std::istringstream in(r.out);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  for (const auto& [expect, answer, chars] :
+       {std::tuple<std::string, std::string, std::uint64_t>{
+            "line 41: expect state 5", "dpc31: 68 04 04 68 02 07 08 00 11 16", 10},
+        {"line 48: expect watchdog_expired",
+         "vpc3plus: 68 0B 0B 68 02 06 08 00 00 00 00 00 00 00 00 10 16", 17}}) {
+    const auto at = std::find_if(lines.begin(), lines.end(), [&expect](const std::string& l) {
+      return l.find(expect) != std::string::npos;
+    });
+    ASSERT_NE(at, lines.end()) << expect;
+    ASSERT_NE(at, lines.begin()) << expect;
+    const std::string& before = *(at - 1);
+    ASSERT_EQ(before.substr(19), answer) << expect;
+    const std::uint64_t start = std::stoull(before.substr(7, 10));
+    EXPECT_EQ(std::stoull(at->substr(7, 10)), start + chars * 11 * kT) << *at;
   }
 }
 

@@ -1071,8 +1071,7 @@ TEST(SegmentScenario, ALineWithoutATelegramEndsAfterItsRuns) {
 }
 
 // A short TSYN names the station that sent, not the SA its frame carries: sender `a` sends a
-// request in master 2's name 32 bit times after the start-up's last answer (the line told of a
-// telegram one character time after its end: the run lets it).
+// request in master 2's name 32 bit times after the start-up's last answer.
 TEST(SegmentScenario, AShortTsynNamesItsSender) {
   const ScenarioRun r = run_scenario_text(
       "segment baud=12000000\nstation 5 profile=spc3\nmaster 2 slaves=5\nsender a\nstartup\n"
@@ -1080,6 +1079,40 @@ TEST(SegmentScenario, AShortTsynNamesItsSender) {
   EXPECT_EQ(r.code, 0);
   EXPECT_TRUE(r.errors.empty()) << r.errors.front();
   EXPECT_NE(r.cycle_of("bus: short_tsyn: a sent after 32 bit times of idle (TSYN 33)"), 0U);
+}
+
+// A telegram that ends at a step's end (its last stop bit) is over there: the walk prints it, and
+// the bus check counts it, before the next step's lines at that cycle (docs/decisions.md, the
+// twenty-third session; a chip's event at an expect's cycle comes before the expect in the single
+// chip's walk too). Until then the segment told of it one character time later, after them. At
+// 12 Mbaud T = 4 clocks: `send` starts 32 T after the start-up's quiet end (line 6's cycle) and
+// ends 6 characters of 11 T later, where line 8's expect looks (docs/scenario-format.md,
+// "Segments": `send` ends at its telegram's end, a check moves no time); the short TSYN is
+// stamped at the telegram's start, where the idle ended too soon (the bus check is told of each
+// telegram just before the log prints it).
+TEST(SegmentScenario, ATelegramEndingAtAStepsEndComesBeforeItsExpects) {
+  const ScenarioRun r = run_scenario_text(
+      "segment baud=12000000\nstation 5 profile=spc3\nmaster 2 slaves=5\nsender a\nstartup\n"
+      "expect state 5 Data_Exchange\nsend from=a after=32bits 10,05,02,49,50,16\n"
+      "expect bus_violation short_tsyn 1\n");
+  EXPECT_EQ(r.errors, std::vector<std::string>{});  // the short TSYN counted: exit 0
+  const std::uint64_t quiet = r.cycle_of("line 6: expect");
+  const std::uint64_t sent = quiet + 32 * 4;
+  const std::uint64_t end = sent + 6 * 11 * 4;
+  const auto at = [](std::uint64_t cycle, std::string_view text) {
+    return fmt::format("[cycle {:>10}] {}", cycle, text);
+  };
+  const std::vector<std::string> want = {
+      at(quiet, "line 7: send from=a after=32bits 10,05,02,49,50,16"),
+      at(sent, "bus: short_tsyn: a sent after 32 bit times of idle (TSYN 33)"),
+      at(sent, "a: 10 05 02 49 50 16"), at(end, "line 8: expect bus_violation short_tsyn 1"),
+      at(end, "ok")};
+  const auto from = std::find(r.walk.begin(), r.walk.end(), want.front());
+  ASSERT_NE(from, r.walk.end());
+  EXPECT_EQ(std::vector<std::string>(
+                from, from + std::min<std::ptrdiff_t>(r.walk.end() - from, want.size())),
+            want);
+  EXPECT_EQ(r.code, 0);
 }
 
 // A station that never left DP_Control fails `expect watchdog_expired` saying so (not "left at
