@@ -1,9 +1,12 @@
 // The public Chip: a thin wrapper over ChipCore. How time advances is in engine.cpp.
 #include "dpc31/chip.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <array>
 #include <iterator>
+#include <stdexcept>
 #include <type_traits>
 
 #include "core.hpp"
@@ -80,34 +83,72 @@ void Chip::request_stop() { core_->stop = true; }
 bool Chip::stop_requested() const { return core_->stop; }
 void Chip::clear_stop() { core_->stop = false; }
 
-void Chip::drive_rxd(std::uint64_t cycle, bool level) { core_->mac.drive_rxd(cycle, level); }
+namespace {
+
+// The public serial calls' refusals (chip.hpp): a time in the chip's past, a bit of no time.
+void check_line(const char* call, const char* what, std::uint64_t at, std::uint64_t now) {
+  if (at < now) {
+    throw std::invalid_argument(
+        fmt::format("{}: {} {} is before the chip's cycle {}", call, what, at, now));
+  }
+}
+void check_chars(const char* call, std::uint64_t start, std::uint32_t bit_cycles,
+                 std::uint64_t now) {
+  check_line(call, "start", start, now);
+  if (bit_cycles == 0) {
+    throw std::invalid_argument(fmt::format("{}: bit_cycles 0: a bit lasts 1 clock or more", call));
+  }
+}
+
+}  // namespace
+
+void Chip::drive_rxd(std::uint64_t cycle, bool level) {
+  check_line("drive_rxd", "cycle", cycle, this->cycle());
+  LineAccess::drive_rxd(*this, cycle, level);
+}
 std::uint64_t Chip::drive_rxd_chars(std::span<const std::uint8_t> bytes, std::uint64_t start,
                                     std::uint32_t bit_cycles, UartFault fault) {
+  check_chars("drive_rxd_chars", start, bit_cycles, cycle());
+  return LineAccess::drive_rxd_chars(*this, bytes, start, bit_cycles, fault);
+}
+std::uint64_t Chip::hear_telegram(std::span<const std::uint8_t> bytes, std::uint64_t start,
+                                  std::uint32_t bit_cycles) {
+  check_chars("hear_telegram", start, bit_cycles, cycle());
+  // Asked before the frame is made (an allocation and a decode) that the MAC then asks again.
+  if (!core_->mac.can_hear(bytes.size(), start, bit_cycles)) {
+    return LineAccess::drive_rxd_chars(*this, bytes, start, bit_cycles, {});
+  }
+  return LineAccess::hear_telegram(*this, HeardFrame::make(bytes), start, bit_cycles);
+}
+std::uint64_t Chip::hear_telegram(const std::shared_ptr<const HeardFrame>& frame,
+                                  std::uint64_t start, std::uint32_t bit_cycles) {
+  check_chars("hear_telegram", start, bit_cycles, cycle());
+  return LineAccess::hear_telegram(*this, frame, start, bit_cycles);
+}
+void LineAccess::drive_rxd(Chip& c, std::uint64_t cycle, bool level) {
+  c.core_->mac.drive_rxd(cycle, level);
+}
+std::uint64_t LineAccess::drive_rxd_chars(Chip& c, std::span<const std::uint8_t> bytes,
+                                          std::uint64_t start, std::uint32_t bit_cycles,
+                                          UartFault fault) {
   const std::uint64_t frame = std::uint64_t{kUartCharBits} * bit_cycles;
+  Mac& mac = c.core_->mac;
   if (fault.kind != UartFault::Kind::none) {
     // A damaged character changes the framing of the ones after it: edges for all of them.
     std::vector<std::pair<std::uint64_t, bool>> edges;
     uart_encode(bytes, start, bit_cycles, edges, fault);
-    for (const auto& [cycle, level] : edges) drive_rxd(cycle, level);
+    for (const auto& [cycle, level] : edges) mac.drive_rxd(cycle, level);
   } else {
     for (std::size_t i = 0; i < bytes.size(); ++i) {
-      core_->mac.drive_rxd_char(start + i * frame, bytes[i], bit_cycles);
+      mac.drive_rxd_char(start + i * frame, bytes[i], bit_cycles);
     }
   }
   return start + bytes.size() * frame;
 }
-std::uint64_t Chip::hear_telegram(std::span<const std::uint8_t> bytes, std::uint64_t start,
-                                  std::uint32_t bit_cycles) {
-  // Asked before the frame is made (an allocation and a decode) that the MAC then asks again.
-  if (!core_->mac.can_hear(bytes.size(), start, bit_cycles)) {
-    return drive_rxd_chars(bytes, start, bit_cycles);
-  }
-  return hear_telegram(HeardFrame::make(bytes), start, bit_cycles);
-}
-std::uint64_t Chip::hear_telegram(const std::shared_ptr<const HeardFrame>& frame,
-                                  std::uint64_t start, std::uint32_t bit_cycles) {
-  if (!core_->mac.hear_telegram(frame, start, bit_cycles)) {
-    return drive_rxd_chars(frame->bytes, start, bit_cycles);
+std::uint64_t LineAccess::hear_telegram(Chip& c, const std::shared_ptr<const HeardFrame>& frame,
+                                        std::uint64_t start, std::uint32_t bit_cycles) {
+  if (!c.core_->mac.hear_telegram(frame, start, bit_cycles)) {
+    return drive_rxd_chars(c, frame->bytes, start, bit_cycles, {});
   }
   return start + frame->bytes.size() * std::uint64_t{kUartCharBits} * bit_cycles;
 }

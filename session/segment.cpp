@@ -400,7 +400,7 @@ void Segment::take_log(Station& s, std::uint64_t to) {
     const TelegramLog::Entry& e = log_.at(s.taken++);
     if (e.from == s.index) continue;  // its own answer
     if (s.chip->cycle() < e.start) s.chip->step(e.start - s.chip->cycle());
-    s.chip->hear_telegram(e.frame, e.start, t_);
+    LineAccess::hear_telegram(*s.chip, e.frame, e.start, t_);
     while (!s.own.empty() && s.own.front() < s.taken) s.own.pop_front();
     std::uint64_t until = log_.folds_until(s.taken, to);
     if (!s.own.empty()) until = std::min(until, s.own.front());
@@ -419,7 +419,7 @@ void Segment::hear_whole(std::size_t from, const std::shared_ptr<const HeardFram
     if (k == from) continue;
     Station& s = *stations_[k];
     step_station(s, start);
-    s.chip->hear_telegram(heard, start, t_);
+    LineAccess::hear_telegram(*s.chip, heard, start, t_);
     look_at(s);
   }
   // Every chip heard it at once (or sent it, with nothing left to take): no entry.
@@ -491,7 +491,7 @@ void Segment::hear(std::size_t from, std::uint64_t cycle, bool level) {
           stations_[from]->name, cycle, s.name, s.chip->cycle()));
     }
     step_station(s, cycle);
-    s.chip->drive_rxd(cycle, level);
+    LineAccess::drive_rxd(*s.chip, cycle, level);
     look_at(s);
   }
   const std::pair<std::uint64_t, bool> edge{cycle, level};
@@ -647,7 +647,7 @@ std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> byte
       Station& s = *stations_[k];
       if (k == from || !s.chip) continue;
       step_station(s, start);
-      s.chip->drive_rxd_chars(bytes, start, t_, fault);
+      LineAccess::drive_rxd_chars(*s.chip, bytes, start, t_, fault);
       look_at(s);
     }
   }

@@ -9,6 +9,8 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <stdexcept>
+#include <string>
 #include <tuple>
 #include <utility>
 #include <vector>
@@ -113,3 +115,52 @@ INSTANTIATE_TEST_SUITE_P(ProfilesAndRates, RxdChars,
                                                               Profile::dpc31),
                                             ::testing::ValuesIn(kBaudRates)),
                          testutil::profile_rate_name);
+
+// The serial calls refuse what a user's line cannot do (include/dpc31/chip.hpp, "the serial
+// side"): an edge or a start before the chip's cycle() (it would be a glitch now, in the chip's
+// past) and a bit of 0 clocks, each with std::invalid_argument naming the call, nothing driven:
+// the chip's state, every byte of it, as before, and no on_rxd edge. The range's edges are taken.
+TEST(ChipRxdRefusals, ATimeInTheChipsPastOrABitOfNoClocksIsRefusedAndDrivesNothing) {
+  Chip chip;
+  chip.set_log_sink(nullptr);
+  chip.step(1000);
+  Edges seen;
+  chip.on_rxd([&](std::uint64_t c, bool l) { seen.emplace_back(c, l); });
+  const std::vector<std::uint8_t> before = chip.save_state();
+  const std::vector<std::uint8_t> status = {0x10, 0x05, 0x02, 0x49, 0x50, 0x16};
+  const auto message = [&](auto call) {
+    try {
+      call();
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(message([&] { chip.drive_rxd(999, false); }),
+            "drive_rxd: cycle 999 is before the chip's cycle 1000");
+  EXPECT_EQ(message([&] { chip.drive_rxd_chars(status, 999, 4); }),
+            "drive_rxd_chars: start 999 is before the chip's cycle 1000");
+  EXPECT_EQ(message([&] {
+              chip.drive_rxd_chars(status, 999, 4, {2, UartFault::Kind::parity});
+            }),
+            "drive_rxd_chars: start 999 is before the chip's cycle 1000");
+  EXPECT_EQ(message([&] { chip.drive_rxd_chars(status, 1000, 0); }),
+            "drive_rxd_chars: bit_cycles 0: a bit lasts 1 clock or more");
+  EXPECT_EQ(message([&] { chip.hear_telegram(status, 0, 4); }),
+            "hear_telegram: start 0 is before the chip's cycle 1000");
+  EXPECT_EQ(message([&] { chip.hear_telegram(status, 2000, 0); }),
+            "hear_telegram: bit_cycles 0: a bit lasts 1 clock or more");
+  EXPECT_EQ(message([&] { chip.hear_telegram(HeardFrame::make(status), 999, 4); }),
+            "hear_telegram: start 999 is before the chip's cycle 1000");
+  EXPECT_EQ(message([&] { chip.hear_telegram(HeardFrame::make(status), 2000, 0); }),
+            "hear_telegram: bit_cycles 0: a bit lasts 1 clock or more");
+  EXPECT_EQ(chip.save_state(), before);
+  EXPECT_TRUE(seen.empty());
+  // The edges of the range are taken: a cycle or a start at cycle(), 1 clock per bit. The
+  // character 00h (chip-facts.md, "UART char: 11 bits = start, 8 data (LSB first), even parity,
+  // 1 stop") is low from its start bit through its parity bit and rises for the stop bit, bit
+  // 10; its last stop bit ends 11 clocks after the start.
+  chip.drive_rxd(1000, true);
+  EXPECT_EQ(chip.drive_rxd_chars(std::vector<std::uint8_t>{0x00}, 1000, 1), 1011u);
+  EXPECT_EQ(seen, (Edges{{1000, true}, {1000, false}, {1010, true}}));
+}

@@ -256,11 +256,13 @@ class Chip {
 
   // --- the serial side (RS-485) ---
   // RxD changes to `level` at `cycle` (>= cycle(), non-decreasing); whole frames may be given
-  // ahead of time. Not checked: an earlier cycle is taken as cycle(), which the segment's lines
-  // rely on (a chip a few clocks ahead of the line), so a late edge is a glitch now, unreported.
+  // ahead of time. A cycle before cycle() throws std::invalid_argument and drives nothing: an
+  // edge in the chip's past would be a glitch now.
   void drive_rxd(std::uint64_t cycle, bool level);
-  // `bytes` as back-to-back UART characters on RxD from `start` (>= cycle()), `bit_cycles` per
-  // bit: the edges uart_encode gives, with `fault`. Characters, not edges, reach the receiver
+  // `bytes` as back-to-back UART characters on RxD from `start`, `bit_cycles` per bit: the edges
+  // uart_encode gives, with `fault`. `start` >= cycle() and `bit_cycles` from 1 to 2^32 - 1 (as
+  // for hear_telegram): else std::invalid_argument, nothing driven. Characters, not edges, reach
+  // the receiver
   // where it takes them whole (event engine, the rate it listens at, the line idle, no fault in
   // the telegram); the chip's state, its timing and the on_rxd observers are the same as with
   // the edges given one by one (docs/engine.md, "Characters on RxD"). Returns the end of the
@@ -411,6 +413,21 @@ class Chip {
   // segment, and inline it costs no call. Set wherever core_ is.
   const std::uint64_t* now_;
   std::function<void(std::uint64_t)> on_cycle_;
+  friend struct LineAccess;
+};
+
+// A segment's way onto its chips' RxD (session/segment.cpp), not the user's: the serial calls
+// without their checks. The line drives each chip at the line's time, and a chip whose firmware's
+// last bus access ran past the line's round stands a few clocks ahead of it: an edge before the
+// chip's cycle() counts at cycle(), characters from such a start are given edge by edge, each
+// at its own cycle or at cycle() where that is later.
+struct LineAccess {
+  static void drive_rxd(Chip& c, std::uint64_t cycle, bool level);
+  static std::uint64_t drive_rxd_chars(Chip& c, std::span<const std::uint8_t> bytes,
+                                       std::uint64_t start, std::uint32_t bit_cycles,
+                                       UartFault fault);
+  static std::uint64_t hear_telegram(Chip& c, const std::shared_ptr<const HeardFrame>& frame,
+                                     std::uint64_t start, std::uint32_t bit_cycles);
 };
 
 }  // namespace dpc31
