@@ -327,9 +327,6 @@ void no_dpv1_but_on_vpc3plus(const Chip& chip, std::string_view what) {
   }
 }
 
-// A scenario's `dpv1 work=` range (session/scenario_dpv1.cpp), in clocks.
-constexpr ValueRange kWorkCycles{"work_cycles", 0, 48'000'000};
-
 using RecordArg = std::tuple<py::int_, py::int_, py::bytes>;
 
 // run_responder's records=: (slot, index, data) each, as a scenario's `record` lines take them;
@@ -607,13 +604,17 @@ void bind_dpv1(py::module_& m, py::class_<PyMaster>& master) {
            py::arg("data"), "MSAC_C1 Write")
       .def(
           "alarm_ack",
-          [](PyMaster& pm, std::int64_t slot, std::int64_t alarm_type, U8 specifier) {
+          [](PyMaster& pm, std::int64_t slot, std::int64_t alarm_type, U8 specifier,
+             std::int64_t sap) {
             const pdu::AlarmAck ack{in_range<U8>(kRecordSlot, slot),
                                     in_range<U8>(kAlarmType, alarm_type), specifier};
-            return pm.dpv1([&](Dpv1Master& d) { return d.alarm_ack(ack); });
+            const auto dsap = in_range<U8>(kAlarmSap, sap);
+            return pm.dpv1([&](Dpv1Master& d) { return d.alarm_ack(ack, dsap); });
           },
           py::arg("slot"), py::arg("alarm_type"), py::arg("specifier"),
-          "MSAC_C1 Alarm_Ack (SAP 51 -> 50); specifier = Seq_Nr << 3 | Add_Ack << 2 | bits 1..0")
+          py::arg("sap") = sap::MSAC_C1_Alarm,
+          "MSAC_C1 Alarm_Ack (SAP 51 -> 50, or -> 51 with sap=51: the slave's SAP 50 or 51); "
+          "specifier = Seq_Nr << 3 | Add_Ack << 2 | bits 1..0")
       .def(
           "c2_initiate",
           [](PyMaster& pm, std::int64_t send_timeout, std::uint16_t features_supported) {
@@ -693,7 +694,8 @@ void bind_master(py::module_& m) {
             if (!records.empty()) no_dpv1_but_on_vpc3plus(pm.chip.chip, "records");
             rc.dpv1.records = dpv1_records(records);
             if (work_cycles) {
-              rc.dpv1.work_cycles = in_range<std::uint64_t>(kWorkCycles, *work_cycles);
+              rc.dpv1.work_cycles =
+                  in_range<std::uint64_t>(named(kWorkCycles, "work_cycles"), *work_cycles);
               if (records.empty())
                 throw py::value_error("work_cycles: no records to work on (records=)");
             }

@@ -97,7 +97,7 @@ bool parse_header(std::string_view cmd, std::span<const std::string_view> pos,
   }
   for (const auto& [k, v] : opts) {
     if (k == "work") {
-      s.user.dpv1.work_cycles = number(v, k, 0, 48'000'000);
+      s.user.dpv1.work_cycles = number(v, kWorkCycles);
     } else if (k == "c1_timeout") {
       s.dpv1.c1_response_timeout = static_cast<std::uint16_t>(number(v, kC1Timeout));
     } else if (k == "c2_ssap") {
@@ -137,8 +137,8 @@ bool parse_action(std::string_view cmd, std::span<const std::string_view> pos,
         spec = static_cast<std::uint32_t>(number(v, kAlarmSpec));
       } else if (k == "add_ack") {
         if (scenario_lex::flag(v, k)) st.count |= 0x04;
-      } else if (k == "sap") {  // the slave's SAP: 50 or 51 (manual-quotes.md, "DPV1")
-        st.dsap = static_cast<std::uint8_t>(number(v, k, sap::MSAC_C1_Alarm, sap::MSAC_C1));
+      } else if (k == "sap") {
+        st.dsap = static_cast<std::uint8_t>(number(v, kAlarmSap));
       } else {
         unknown(k, cmd);
       }

@@ -9,6 +9,7 @@
 #include <string_view>
 
 #include "dpc31/chip.hpp"
+#include "dpc31/dp.hpp"
 #include "dpc31/fdl.hpp"
 #include "dpc31/fdl_counters.hpp"
 #include "dpc31/uart.hpp"
@@ -83,6 +84,11 @@ inline constexpr ValueRange kRecordIndex{"index", 0, 255};
 inline constexpr ValueRange kRecordLength{"length", 1, 240};  // a record's data, at most 240
 inline constexpr ValueRange kAlarmType{"type", 1, 127};
 inline constexpr ValueRange kAlarmSpec{"spec", 0, 3};  // the Specifier's bits 1..0
+// Alarm_Ack's SAP at the slave: "SAP 50 or 51" (manual-quotes.md, "DPV1"), `alarm_ack sap=`.
+inline constexpr ValueRange kAlarmSap{"sap", sap::MSAC_C1_Alarm, sap::MSAC_C1};
+// The built-in user side's work per DPV1 request in clocks (`dpv1 work=`, Python's
+// run_responder(work_cycles=)), one range for both doors: at most 1 s at 48 MHz.
+inline constexpr ValueRange kWorkCycles{"work", 0, 48'000'000};
 inline constexpr ValueRange kSendTimeout{"send_timeout", 1, 65535};
 inline constexpr ValueRange kAbortReason{"reason", 0, 15};
 inline constexpr ValueRange kAbortInstance{"instance", 0, 3};  // 0 FDL, 1 MSAC_C2, 2 user

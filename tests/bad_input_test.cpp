@@ -708,6 +708,11 @@ TEST_F(BadInput, CosimMerge) {
              "dpc31 cosim merge: session.json: not the JSON summary of a `dpc31 cosim --shard` run",
              "session summary");
   expect_bad_prefix(dpc31(merge + "nosuch.json"), "dpc31 cosim merge: nosuch.json: ", "no file");
+  // Its command line's own mistakes name the subcommand typed too (they said `dpc31 cosim:`).
+  expect_bad(dpc31("cosim merge"), "dpc31 cosim merge: summaries is required", "no summaries");
+  expect_bad(dpc31(merge + "s1.json --bogus"),
+             "dpc31 cosim merge: The following argument was not expected: --bogus",
+             "unknown option");
   expect_bad(dpc31("cosim --shard-base 0 --shard 2/2 --junit old.xml"),
              "dpc31 cosim: --shard must be K/N with 0 <= K <= N - 1, not '2/2'", "0-based");
   expect_bad(dpc31("cosim --shard -1/2 --junit old.xml"),
@@ -1229,7 +1234,7 @@ TEST_F(BadInput, EmptyPathOptions) {
        {"--junit", "--vcd", "--out", "--dump"},
        {"--rtl-model", "--session"}},
       {"cosim", "cosim --mutant NO_SUCH", {}, {"--replay", "--rtl"}},
-      {"cosim", "cosim merge missing.json", {"--junit"}, {}},
+      {"cosim merge", "cosim merge missing.json", {"--junit"}, {}},
       {"wavediff", wavediff, {"--json", "--diff-vcd", "--merge", "--wavedrom"}, {"--map"}},
       {"demo", "demo --timescale 7ps", {"--out-dir"}, {}},
       {"bench", "bench --bench /nonexistent", {"--json", "--wavediff-dir"}, {"--build"}},
@@ -1261,7 +1266,7 @@ TEST_F(BadInput, EmptyPathOptions) {
            {"replay ''", "dpc31 replay: trace"},
            {"wavediff '' " + vcd, "dpc31 wavediff: A"},
            {"wavediff " + vcd + " ''", "dpc31 wavediff: B"},
-           {"cosim merge ''", "dpc31 cosim: summaries"}}) {
+           {"cosim merge ''", "dpc31 cosim merge: summaries"}}) {
     expect_bad(dpc31(args), line + ": an empty file name: nothing can be read there", args);
   }
   const std::string unknown =

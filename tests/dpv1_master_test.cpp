@@ -339,6 +339,11 @@ TEST(Dpv1Scenario, ParseErrorsNameTheLine) {
       {"profile vpc3plus\nslave user_prm=C0,00,00\ndpv1 work=1440\nstartup\n",
        "t.scn:3: dpv1 work= is the built-in user side's DPV1 time and needs a record: without "
        "one it serves no DPV1"},
+      // The first work time past kWorkCycles (docs/scenario-format.md: 0-48000000 clocks), the
+      // range Python's run_responder(work_cycles=) refuses too (Python.bad_input).
+      {"profile vpc3plus\nslave user_prm=C0,00,00\nrecord slot=0 index=1 data=01\n"
+       "dpv1 work=48000001\n",
+       "t.scn:4: work 48000001 out of range (0..48000000)"},
   };
   for (const auto& [text, want] : cases) {
     Scenario s;
@@ -346,9 +351,17 @@ TEST(Dpv1Scenario, ParseErrorsNameTheLine) {
     EXPECT_FALSE(parse_scenario(text, "t.scn", s, err)) << text;
     EXPECT_EQ(err.text(), want);
   }
-  // A Reason_Code beyond its 4 bits.
   Scenario s;
   ScenarioError err;
+  // The range's last value is taken.
+  EXPECT_TRUE(
+      parse_scenario("profile vpc3plus\nslave user_prm=C0,00,00\nrecord slot=0 index=1 data=01\n"
+                     "dpv1 work=48000000\nstartup\n",
+                     "t.scn", s, err))
+      << err.text();
+  EXPECT_EQ(s.user.dpv1.work_cycles, 48'000'000u);
+  // A Reason_Code beyond its 4 bits.
+  s = Scenario{};
   EXPECT_FALSE(parse_scenario("profile vpc3plus\nc2_abort reason=16\n", "t.scn", s, err));
   EXPECT_EQ(err.line, 2);
 }

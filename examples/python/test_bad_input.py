@@ -284,6 +284,9 @@ def test_a_hardware_input_that_reads_the_chip_is_a_firmware_error(built):
     (lambda: _master().c2_read(255, 1, 4), r"slot 255 out of range \(0..254\)"),
     (lambda: _master().dpv1_write(0, 1, bytes(241)), r"data: more than 240 bytes"),
     (lambda: _master().alarm_ack(0, 0, 0), r"type 0 out of range \(1..127\)"),
+    # The slave's SAP 50 or 51 (manual-quotes.md, "DPV1"), the scenario's `alarm_ack sap=`.
+    (lambda: _master().alarm_ack(0, 1, 0, sap=49), r"sap 49 out of range \(50..51\)"),
+    (lambda: _master().alarm_ack(0, 1, 0, sap=52), r"sap 52 out of range \(50..51\)"),
     (lambda: _master().c2_initiate(send_timeout=0), r"send_timeout 0 out of range \(1..65535\)"),
     (lambda: _master().c2_abort(reason=99), r"reason 99 out of range \(0..15\)"),
     (lambda: _master().c2_abort(instance=9), r"instance 9 out of range \(0..3\)"),

@@ -91,3 +91,30 @@ def test_the_built_in_user_side_serves_the_records_a_scenario_gives_it():
     assert (w.du, w.end - w.start, w.polls) == (bytes([0x5F, 0x00, 0x01, 0x04]), 3652, 2)
     assert master.dpv1_read(0, 1, 4).du == bytes([0x5E, 0x00, 0x01, 0x04, 0xA1, 0xA2, 0xA3, 0xA4])
     assert master.dpv1_read(0, 7, 4).error == (0x80, 0xB0, 0x00)  # no index 7: Invalid_Index
+
+
+def test_alarm_ack_to_sap_51_is_answered_on_sap_51():
+    """Alarm_Ack goes to the slave's "SAP 50 or 51" (manual-quotes.md, "DPV1"): sap=51 as a
+    scenario's `alarm_ack sap=51` (Dpv1Scenario.AlarmAckOnSap51, the same slave and master). The
+    built-in user side echoes the 4 bytes (docs/dpv1.md, "The master's side") from the SAP the
+    request came to, to the master's SSAP 51: the response telegram 68 09 09 68, DA 82h, SA 85h
+    (address extension: SAPs follow), FC 08h (DL), DSAP 33h, SSAP 33h or 32h, the data unit, FCS
+    (the sum of DA..DU modulo 256), 16h."""
+    chip = dpc31.Chip("vpc3plus")
+    master = dpc31.Master(chip, address=2, baud=12_000_000,
+                          slave=dpc31.SlaveConfig(address=5, user_prm=b"\xC0\x00\x00"))
+    master.run_responder(records=[(0, 1, b"\x11\x22\x33\x44")])
+    assert master.startup()
+    # Specifier: Seq_Nr 3 << 3 = 18h (Add_Ack 0, bits 1..0 0).
+    a = master.alarm_ack(0, 1, 3 << 3, sap=51)
+    assert a.outcome == dpc31.Dpv1Outcome.positive
+    assert a.du == bytes([0x5C, 0x00, 0x01, 0x18])
+    assert (a.last.dsap, a.last.ssap) == (51, 51)
+    # FCS: 82h + 85h + 08h + 33h + 33h + 5Ch + 00h + 01h + 18h = 1EAh -> EAh.
+    assert a.last.encode() == bytes([0x68, 0x09, 0x09, 0x68, 0x82, 0x85, 0x08, 0x33, 0x33, 0x5C,
+                                     0x00, 0x01, 0x18, 0xEA, 0x16])
+    # Without sap= it goes to SAP 50, as before: FCS 82h + ... + 32h + ... + 20h = 1F1h -> F1h.
+    b = master.alarm_ack(0, 1, 4 << 3)
+    assert (b.du, b.last.dsap, b.last.ssap) == (bytes([0x5C, 0x00, 0x01, 0x20]), 51, 50)
+    assert b.last.encode() == bytes([0x68, 0x09, 0x09, 0x68, 0x82, 0x85, 0x08, 0x33, 0x32, 0x5C,
+                                     0x00, 0x01, 0x20, 0xF1, 0x16])

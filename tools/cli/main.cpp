@@ -274,10 +274,14 @@ int main(int argc, char** argv) {
   dpc31::soak::Options soak_opt;
   auto* soak = dpc31::soak::add_subcommand(app, soak_opt);
 
-  // Bad input is one line, "dpc31 SUBCOMMAND: what", and exit 2 (docs/bad-input.md).
+  // Bad input is one line, "dpc31 SUBCOMMAND: what", and exit 2 (docs/bad-input.md). The
+  // subcommand as typed, nested ones included: `dpc31 cosim merge: ...`.
   const auto refuse = [&app](std::string what) {
     std::string where = "dpc31";
-    for (const CLI::App* sub : app.get_subcommands()) where += " " + sub->get_name();
+    for (const CLI::App* at = &app; !at->get_subcommands().empty();) {
+      at = at->get_subcommands().front();
+      where += " " + at->get_name();
+    }
     std::replace(what.begin(), what.end(), '\n', ' ');
     while (!what.empty() && what.back() == ' ') what.pop_back();
     fmt::print(stderr, "{}: {}\n", where, what);
