@@ -560,8 +560,9 @@ struct WdRace {
     std::uint64_t request = 0;
     std::uint64_t left = 0;
   };
-  [[nodiscard]] Run run(std::uint64_t into, dpc31::Engine engine,
-                        const std::string& expects) const {
+  // Every expect holds (`passed` of them) and the request starts where it was placed.
+  [[nodiscard]] Run run(std::uint64_t into, dpc31::Engine engine, const std::string& expects,
+                        unsigned passed) const {
     dpc31::Scenario s;
     dpc31::ScenarioError err;
     EXPECT_TRUE(
@@ -581,6 +582,9 @@ struct WdRace {
     };
     r.outcome = dpc31::run_scenario(s, r.walk.sink(), r.errors.sink(), h);
     if (!line.starts.empty()) r.request = line.starts.back();
+    EXPECT_EQ(r.request, expiry - into);
+    EXPECT_EQ(r.outcome.failed, 0u) << (r.errors.lines.empty() ? "" : r.errors.lines[0]);
+    EXPECT_EQ(r.outcome.passed, passed);
     return r;
   }
 };
@@ -603,10 +607,7 @@ TEST(ScenarioRun, DpWatchdogExpiryDuringARequestAtItsCycle) {
     for (const std::uint64_t into : {1u, 2u, 5u, 20u, 250u, 569u}) {
       SCOPED_TRACE(
           fmt::format("{} engine, expiry {} clocks into the request", engine_name(engine), into));
-      const WdRace::Run r = race.run(into, engine, expects);
-      EXPECT_EQ(r.request, e - into);
-      EXPECT_EQ(r.outcome.failed, 0u) << (r.errors.lines.empty() ? "" : r.errors.lines[0]);
-      EXPECT_EQ(r.outcome.passed, 3u);
+      const WdRace::Run r = race.run(into, engine, expects, 3);
       EXPECT_TRUE(r.walk.has(fmt::format("[cycle {:>10}] dp_state Data_Exchange -> Wait_Prm", e)));
       EXPECT_EQ(r.left, e);
     }
@@ -626,10 +627,7 @@ TEST(ScenarioRun, DpWatchdogExpiryAgainstARequestInOneCycle) {
       WdRace::kTwd, e + WdRace::kTwd, e + WdRace::kTwd);
   for (const dpc31::Engine engine : {dpc31::Engine::event, dpc31::Engine::per_cycle}) {
     SCOPED_TRACE(fmt::format("{} engine", engine_name(engine)));
-    const WdRace::Run r = race.run(WdRace::kActedOn, engine, expects);
-    EXPECT_EQ(r.request, e - WdRace::kActedOn);
-    EXPECT_EQ(r.outcome.failed, 0u) << (r.errors.lines.empty() ? "" : r.errors.lines[0]);
-    EXPECT_EQ(r.outcome.passed, 5u);
+    const WdRace::Run r = race.run(WdRace::kActedOn, engine, expects, 5);
     const auto expired_at = [&r](std::uint64_t c) {
       return r.walk.has(fmt::format("[cycle {:>10}] chip: DP watchdog expired", c));
     };
