@@ -36,7 +36,10 @@ class InterruptController {
   void install_hooks(HookTable& h);
 
   void raise(std::uint16_t bits);  // IRR |= bits, noted as this cycle's events
-  void end_of_interrupt();         // EOI (Mode_Reg1): the inactive time starts
+  // The same without looking at X/INT: the caller's cycle goes on, and a later raise or
+  // update_line shows the line with the state that cycle leaves.
+  void latch(std::uint16_t bits);
+  void end_of_interrupt();  // EOI (Mode_Reg1): the inactive time starts
   [[nodiscard]] bool active() const {
     return !clock_.running(s_.eoi) &&
            (regs_.latch(RegId::Int_Req_Reg) & ~regs_.latch(RegId::Int_Mask_Reg)) != 0;

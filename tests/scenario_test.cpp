@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <span>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -505,6 +506,139 @@ TEST(ScenarioRun, StateEnteredAtAndAfterExactCycles) {
   EXPECT_EQ(errors2.lines[0], fmt::format("t.scn:7: expected dp_state Wait_Prm at {}, got "
                                           "Wait_Prm at {}",
                                           done - 1, done));
+}
+
+// The DP watchdog against a request (audit a17, findings 1 and 6). SPC3 at 12 Mbaud, wd=1,1
+// with the 1 ms base: TWD = 1 x 1 x 1 ms = 48 000 clocks, "expiry at last restart + TWD:
+// WD_DP_Control_Timeout, Baud_Control, Leave_Master, all in that cycle" (docs/timing.md, "DP
+// watchdog"; docs/scenario-format.md, "Exact cycles"). A Data_Exchange of 4 + 4 bytes is 13
+// characters; it restarts the watchdog when it is acted on, at its last stop sample:
+// (13 x 11 - 1) x 4 + 2 = 570 clocks after it starts (4 clocks per bit). The last restart is
+// read off the line (the request's start); the next request is then placed `into` clocks before
+// the expiry (the silence before it set to match).
+struct WdRace {
+  static constexpr std::uint64_t kActedOn = (13 * 11 - 1) * 4 + 2;
+  static constexpr std::uint64_t kTwd = 48'000;
+  struct Line : dpc31::ScenarioObserver {
+    std::vector<std::uint64_t> starts;  // requests on RxD
+    std::uint64_t silence = 0;          // where the silence step begins
+    void telegram_sent(std::uint64_t c, std::span<const std::uint8_t>, dpc31::UartFault) override {
+      starts.push_back(c);
+    }
+    void step_begins(std::uint64_t c, const dpc31::ScenarioStep& st, std::string_view) override {
+      if (st.kind == dpc31::StepKind::silence) silence = c;
+    }
+  };
+  std::uint64_t silence_begins = 0;
+  std::uint64_t expiry = 0;  // with no request after the silence
+
+  static std::string text(std::uint64_t silence, const std::string& expects) {
+    return fmt::format(
+        "profile spc3\nbaud 12000000\nmaster address=2\n"
+        "slave address=5 ident=0x0C31 cfg=13,23 in=4 out=4 wd=1,1 wd_on=1 wd_base=1ms\n"
+        "user inputs=A1,A2,A3,A4\nstartup\nexchange outputs=01,02,03,04\nsilence {}\n"
+        "exchange outputs=01,02,03,04\n{}",
+        silence, expects);
+  }
+  WdRace() {
+    dpc31::Scenario s;
+    dpc31::ScenarioError err;
+    EXPECT_TRUE(dpc31::parse_scenario(text(47'000, ""), "t.scn", s, err)) << err.text();
+    Line probe;
+    dpc31::ScenarioHooks hooks;
+    hooks.observer = &probe;
+    dpc31::run_scenario(s, {}, {}, hooks);
+    std::uint64_t last = 0;  // the exchange step's request, the last before the silence
+    for (std::uint64_t c : probe.starts)
+      if (c < probe.silence) last = c;
+    EXPECT_GT(last, 0u);
+    silence_begins = probe.silence;
+    expiry = last + kActedOn + kTwd;
+  }
+  // Runs `expects` after a request starting `into` clocks before the expiry on `engine`: the
+  // walk into `walk`, the first cycle an on_state_change observer shows Data_Exchange left.
+  struct Run {
+    dpc31::ScenarioOutcome outcome;
+    Lines walk;
+    Lines errors;
+    std::uint64_t request = 0;
+    std::uint64_t left = 0;
+  };
+  // Every expect holds (`passed` of them) and the request starts where it was placed.
+  [[nodiscard]] Run run(std::uint64_t into, dpc31::Engine engine, const std::string& expects,
+                        unsigned passed) const {
+    dpc31::Scenario s;
+    dpc31::ScenarioError err;
+    EXPECT_TRUE(
+        dpc31::parse_scenario(text(expiry - into - silence_begins, expects), "t.scn", s, err))
+        << err.text();
+    s.chip.engine = engine;
+    Run r;
+    Line line;
+    dpc31::ScenarioHooks h;
+    h.observer = &line;
+    h.at_start = [&r](dpc31::Chip& chip) {
+      chip.on_state_change([&r, &chip, dx = false](std::uint64_t c) mutable {
+        const bool now = chip.dp_state() == dpc31::DpState::Data_Exchange;
+        if (dx && !now && r.left == 0) r.left = c;
+        dx = now;
+      });
+    };
+    r.outcome = dpc31::run_scenario(s, r.walk.sink(), r.errors.sink(), h);
+    if (!line.starts.empty()) r.request = line.starts.back();
+    EXPECT_EQ(r.request, expiry - into);
+    EXPECT_EQ(r.outcome.failed, 0u) << (r.errors.lines.empty() ? "" : r.errors.lines[0]);
+    EXPECT_EQ(r.outcome.passed, passed);
+    return r;
+  }
+};
+
+const char* engine_name(dpc31::Engine e) {
+  return e == dpc31::Engine::event ? "event" : "per_cycle";
+}
+
+// Finding 1: the expiry falls 1 .. 569 clocks into the next request (on the line, acted on
+// after it). The walk, `expect dp_state ... at` and an on_state_change observer all give the
+// expiry's cycle, on both engines.
+TEST(ScenarioRun, DpWatchdogExpiryDuringARequestAtItsCycle) {
+  const WdRace race;
+  const std::uint64_t e = race.expiry;
+  const std::string expects = fmt::format(
+      "expect irq WD_DP_Control_Timeout at {}\nexpect wd_state Baud_Control at {}\n"
+      "expect dp_state Wait_Prm at {}\n",
+      e, e, e);
+  for (const dpc31::Engine engine : {dpc31::Engine::event, dpc31::Engine::per_cycle}) {
+    for (const std::uint64_t into : {1u, 2u, 5u, 20u, 250u, 569u}) {
+      SCOPED_TRACE(
+          fmt::format("{} engine, expiry {} clocks into the request", engine_name(engine), into));
+      const WdRace::Run r = race.run(into, engine, expects, 3);
+      EXPECT_TRUE(r.walk.has(fmt::format("[cycle {:>10}] dp_state Data_Exchange -> Wait_Prm", e)));
+      EXPECT_EQ(r.left, e);
+    }
+  }
+}
+
+// Finding 6 (docs/timing.md, "Order within one cycle"): a request acted on in the expiry's own
+// cycle restarts the watchdog before the deadline is looked at, so the slave stays in
+// Data_Exchange, answers with its inputs, and the next expiry is TWD after that request; one
+// acted on a cycle later (DpWatchdogExpiryDuringARequestAtItsCycle, into = 569) is too late.
+TEST(ScenarioRun, DpWatchdogExpiryAgainstARequestInOneCycle) {
+  const WdRace race;
+  const std::uint64_t e = race.expiry;
+  const std::string expects = fmt::format(
+      "expect dp_state Data_Exchange\nexpect wd_state DP_Control\nexpect inputs A1,A2,A3,A4\n"
+      "silence {}\nexpect dp_state Wait_Prm at {}\nexpect wd_state Baud_Control at {}\n",
+      WdRace::kTwd, e + WdRace::kTwd, e + WdRace::kTwd);
+  for (const dpc31::Engine engine : {dpc31::Engine::event, dpc31::Engine::per_cycle}) {
+    SCOPED_TRACE(fmt::format("{} engine", engine_name(engine)));
+    const WdRace::Run r = race.run(WdRace::kActedOn, engine, expects, 5);
+    const auto expired_at = [&r](std::uint64_t c) {
+      return r.walk.has(fmt::format("[cycle {:>10}] chip: DP watchdog expired", c));
+    };
+    EXPECT_FALSE(expired_at(e));
+    EXPECT_TRUE(expired_at(e + WdRace::kTwd));
+    EXPECT_EQ(r.left, e + WdRace::kTwd);
+  }
 }
 
 // `expect irq` (docs/scenario-format.md): X/INT goes active in the cycle the event is latched
