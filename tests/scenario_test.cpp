@@ -624,20 +624,21 @@ TEST(ScenarioRun, DpWatchdogExpiryDuringARequestAtItsCycle) {
 // acted on a cycle later (DpWatchdogExpiryDuringARequestAtItsCycle, into = 569) is too late.
 TEST(ScenarioRun, DpWatchdogExpiryAgainstARequestInOneCycle) {
   const WdRace race;
-  const std::uint64_t e = race.expiry;
-  const std::string expects = fmt::format(
-      "expect dp_state Data_Exchange\nexpect wd_state DP_Control\nexpect inputs A1,A2,A3,A4\n"
-      "silence {}\nexpect dp_state Wait_Prm at {}\nexpect wd_state Baud_Control at {}\n",
-      WdRace::kTwd, e + WdRace::kTwd, e + WdRace::kTwd);
+  const std::uint64_t next = race.expiry + WdRace::kTwd;  // restarted in the expiry's cycle
+  const std::string expects =
+      "expect dp_state Data_Exchange\nexpect wd_state DP_Control\nexpect inputs A1,A2,A3,A4\n" +
+      fmt::format(
+          "silence {}\nexpect dp_state Wait_Prm at {}\nexpect wd_state Baud_Control at {}\n",
+          WdRace::kTwd, next, next);
   for (const dpc31::Engine engine : {dpc31::Engine::event, dpc31::Engine::per_cycle}) {
     SCOPED_TRACE(fmt::format("{} engine", engine_name(engine)));
     const WdRace::Run r = race.run(WdRace::kActedOn, engine, expects, 5);
     const auto expired_at = [&r](std::uint64_t c) {
       return r.walk.has(fmt::format("[cycle {:>10}] chip: DP watchdog expired", c));
     };
-    EXPECT_FALSE(expired_at(e));
-    EXPECT_TRUE(expired_at(e + WdRace::kTwd));
-    EXPECT_EQ(r.left, e + WdRace::kTwd);
+    EXPECT_FALSE(expired_at(race.expiry));
+    EXPECT_TRUE(expired_at(next));
+    EXPECT_EQ(r.left, next);
   }
 }
 
