@@ -144,6 +144,9 @@ void DpStateMachine::install_hooks(HookTable& h) {
     dp.ssa_buffer_free();
     return dp.regs_.id() == Profile::dpc31 && !pending ? kSsaNotAllowed : 0;
   };
+  at(RegId::MinTSDR_Val).post_write = [](void* b, std::uint16_t, std::uint16_t, std::uint16_t) {
+    self<DpStateMachine>(b).user_min_tsdr_set();
+  };
   // The user hands the inputs over: the buffers' exchange, then the state machine's step.
   at(RegId::New_Din_Buffer_Cmd).read = [](const void* b) {
     return self<DpStateMachine>(b).buffers_.new_din_preview();

@@ -70,7 +70,8 @@ class DpStateMachine {
     bool no_add_change = false;      // Real_No_Add_Change adopted from Set_Slave_Add
     std::uint8_t master_add = 0xFF;  // the master that locked us (FFh: not parameterised)
     std::uint8_t group_ident = 0;
-    std::uint8_t min_tsdr = 0;  // from Set_Prm byte 3; 0 = MinTSDR_Val
+    // The last Set_Prm's byte 3 when it is newer than the user's MinTSDR_Val; 0 = MinTSDR_Val.
+    std::uint8_t min_tsdr = 0;
     // The watchdog parameters of the Set_Prm the user is checking: DP_Control starts with them at
     // User_Prm_Data_Okay, not when the telegram arrives.
     bool prm_wd_on = false;
@@ -148,6 +149,9 @@ class DpStateMachine {
   [[nodiscard]] std::uint8_t station() const { return s_.station; }
   [[nodiscard]] std::uint8_t master_add() const { return s_.master_add; }
   [[nodiscard]] std::uint8_t min_tsdr() const { return s_.min_tsdr; }
+  // The user set MinTSDR_Val (a write, MAC_New_TRDY): the newest value, it wins over the last
+  // Set_Prm's until the next Set_Prm with byte 3 not 0 (docs/timing.md).
+  void user_min_tsdr_set() { s_.min_tsdr = 0; }
   [[nodiscard]] bool ssa_free() const { return s_.ssa_free; }
 
  private:

@@ -74,8 +74,8 @@ void DpStateMachine::apply_global_control(std::uint8_t command) {
   }
   // "the interrupt 'DX_OUT' can directly be applied to the port PB3 if a global control message
   // is received with 'Sync', provided 'Enable DX_OUT_Port=1' was parameterized in the C31_Control
-  // register beforehand" (seed 003, p.32).
-  if ((command & cc::Sync) != 0 && regs_.id() == Profile::dpc31 &&
+  // register beforehand" (seed 003, p.32). Sync with Unsync is an Unsync: no PB3.
+  if ((command & (cc::Sync | cc::Unsync)) == cc::Sync && regs_.id() == Profile::dpc31 &&
       (regs_.latch(RegId::C31_Control) & fields::C31_Control::Enable_DX_Out_Port) != 0 &&
       (regs_.latch(RegId::Int_Req_Reg) & irq::DX_Out) != 0) {
     irq_.set_pb3(true);

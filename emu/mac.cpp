@@ -507,6 +507,7 @@ void Mac::send(std::span<const std::uint8_t> answer, std::uint64_t request_end) 
   std::vector<std::uint8_t> bytes = std::move(s_.tx_chars.bytes);
   bytes.assign(answer.begin(), answer.end());
   const std::uint32_t t = s_.rx.bit_time();
+  // The newest of Set_Prm byte 3 (not 0), a MinTSDR_Val write and MAC_New_TRDY (dp_sm.hpp).
   const std::uint32_t tsdr = std::max<std::uint32_t>(
       kMinTsdrBits, dp_.min_tsdr() != 0 ? dp_.min_tsdr() : regs_.latch(RegId::MinTSDR_Val));
   const std::uint64_t start = request_end + std::uint64_t{tsdr} * t;

@@ -71,6 +71,7 @@ void RequestInterface::execute(std::uint8_t code, std::uint8_t param) {
     case request::MAC_New_TRDY:  // "Transfer of TRDY": the parameter is the new MinTSDR
       sig_.log(LogLevel::info, "request MAC_New_TRDY: MinTSDR {} bit times", param);
       regs_.latch(RegId::MinTSDR_Val) = param;
+      dp_.user_min_tsdr_set();
       return;
     case request::User_Leave_Master:
       sig_.log(LogLevel::info, "request User_Leave_Master");

@@ -997,6 +997,45 @@ TEST(ScenarioRun, AnAnswerLaterThanTheSlotTimeIsNoLaterRequestsAnswer) {
   EXPECT_GE(requests, 6);
 }
 
+// The answer delay is the MinTSDR set last: Set_Prm byte 3 when not 0 (0 keeps it), a
+// MinTSDR_Val write, the DPC31's MAC_New_TRDY (docs/timing.md "answer"; the audit's tsdr1.scn). At
+// 12 Mbaud T = 4 clocks; a Data_Exchange of 4 bytes and its DL answer are 13 characters, 572
+// clocks each, so one exchange step is 572 + TSDR x 4 + 572 + 33 x 4 (TSYN): 1356 at TSDR 20,
+// 1436 at TSDR 40 (docs/timing.md's answer and master's idle rows).
+TEST(ScenarioRun, MinTsdrIsTheOneSetLast) {
+  const auto run = [](const std::string& profile, const std::string& set_40) {
+    Lines walk;
+    Lines errors;
+    const TempFile f("profile " + profile +
+                     "\nbaud 12000000\nmaster address=2\n"
+                     "slave address=5 ident=0x0C31 cfg=13,23 in=4 out=4 min_tsdr=20\n"
+                     "user inputs=A1,A2,A3,A4\nstartup\n"
+                     "exchange outputs=01,02,03,04\nexchange outputs=01,02,03,04\n" +
+                     set_40 +
+                     "\nexchange outputs=01,02,03,04\nexchange outputs=01,02,03,04\n"
+                     "set_prm min_tsdr=0\nchk_cfg\n"
+                     "exchange outputs=01,02,03,04\nexchange outputs=01,02,03,04\n"
+                     "set_prm min_tsdr=20\nchk_cfg\n"
+                     "exchange outputs=01,02,03,04\nexchange outputs=01,02,03,04\n");
+    EXPECT_EQ(dpc31::run_scenario_file(f.path(), walk.sink(), errors.sink()), 0);
+    std::vector<std::uint64_t> starts;
+    for (const std::string& l : walk.lines) {
+      if (l.find("2 -> 5 Data_Exchange") != std::string::npos)
+        starts.push_back(std::stoull(l.substr(7)));
+    }
+    std::vector<std::uint64_t> steps;
+    for (std::size_t i = 0; i + 1 < starts.size(); i += 2)
+      steps.push_back(starts[i + 1] - starts[i]);
+    return steps;
+  };
+  // Byte 3 = 20; the user's 40 wins over it; byte 3 = 0 keeps 40; byte 3 = 20 wins again.
+  const std::vector<std::uint64_t> want = {1356, 1436, 1436, 1356};
+  for (const char* p : {"spc3", "vpc3plus", "dpc31"}) {
+    EXPECT_EQ(run(p, "write MinTSDR_Val 40"), want) << p;
+  }
+  EXPECT_EQ(run("dpc31", "request MAC_New_TRDY 40"), want);
+}
+
 namespace {
 
 // Every event of a run as the observer is told it: (cycle, text), in the walk's order.

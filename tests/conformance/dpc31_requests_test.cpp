@@ -277,6 +277,29 @@ TEST(Dpc31Requests, MacNewTrdyTransfersTheReadyTime) {
   EXPECT_EQ(st.answer_start, st.request_end + 30u * b.T());
 }
 
+// "Transfer of TRDY" also after a master's Set_Prm that carried a min TSDR (byte 3, 20): the
+// request is newer and wins (docs/timing.md, answer: the MinTSDR set last). A later Set_Prm with
+// byte 3 = 0 keeps it ("0 = no change", chip-facts §8), one with 25 wins again, from its own SC on.
+TEST(Dpc31Requests, MacNewTrdyWinsOverAnEarlierSetPrmMinTsdr) {
+  ResponderConfig rc;
+  rc.slave.min_tsdr = 20;
+  Bench b(Profile::dpc31, 1'500'000, rc);
+  Queues q(b.chip);
+  ASSERT_TRUE(b.master.startup());
+  const Exchange before = b.master.data_exchange({0x01, 0x02, 0x03, 0x04});
+  EXPECT_EQ(before.answer_start, before.request_end + 20u * b.T());
+  q.request(request::MAC_New_TRDY, 40);
+  const Exchange after = b.master.data_exchange({0x01, 0x02, 0x03, 0x04});
+  ASSERT_TRUE(after.answer);
+  EXPECT_EQ(after.answer_start, after.request_end + 40u * b.T());
+  b.master.slave().min_tsdr = 0;
+  const Exchange keep = b.master.set_prm();
+  EXPECT_EQ(keep.answer_start, keep.request_end + 40u * b.T());
+  b.master.slave().min_tsdr = 25;
+  const Exchange again = b.master.set_prm();
+  EXPECT_EQ(again.answer_start, again.request_end + 25u * b.T());
+}
+
 // DPC31 p.26 §5.2.2: "the message has to have at least a length of >= 7 bytes; otherwise, it is
 // ignored": acknowledged, no Prm_Fault in the diagnosis, no New_Prm_Data, still Wait_Prm.
 TEST(Dpc31Requests, SetPrmShorterThanSevenBytesIsIgnored) {

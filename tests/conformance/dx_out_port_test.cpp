@@ -33,14 +33,19 @@ struct Edges {
   std::vector<std::pair<std::uint64_t, bool>> seen;
 };
 
-TEST(Dpc31DxOutPort, SyncDrivesPb3UntilDxOutIsAcknowledged) {
-  Bench b(Profile::dpc31);
+// Started, Enable_DX_Out_Port set, `user` as the ISR, PB3's edges into `e`.
+void enable_port(Bench& b, AckDxOut& user, Edges& e) {
   ASSERT_TRUE(b.master.startup());
   b.chip.write(addr(b.chip, RegId::C31_Control), kEnable_DX_Out_Port);
-  AckDxOut user;
   b.master.set_firmware([&user](BusPort& c) { user.isr(c); });
-  Edges e;
   b.chip.on_pb3_change([&e](std::uint64_t c, bool level) { e.seen.emplace_back(c, level); });
+}
+
+TEST(Dpc31DxOutPort, SyncDrivesPb3UntilDxOutIsAcknowledged) {
+  Bench b(Profile::dpc31);
+  AckDxOut user;
+  Edges e;
+  ASSERT_NO_FATAL_FAILURE(enable_port(b, user, e));
   const Exchange gc = b.master.global_control(kGC_Sync);
   b.master.idle(4'800);
   ASSERT_EQ(e.seen.size(), 2u);
@@ -66,6 +71,21 @@ TEST(Dpc31DxOutPort, OnlySyncAndOnlyWhenEnabled) {
   b.master.data_exchange({0x01, 0x02, 0x03, 0x04});  // DX_Out, but no Sync
   b.master.idle(4'800);
   EXPECT_TRUE(e.seen.empty());
+}
+
+// Sync and Unsync in one Global_Control: "Function will be inactive" (manual-quotes.md,
+// Global_Control), Unsync wins (docs/decisions.md). The user still gets DX_Out, but it is the
+// DX_Out of an Unsync, which does not drive PB3.
+TEST(Dpc31DxOutPort, SyncWithUnsyncDoesNotDrivePb3) {
+  Bench b(Profile::dpc31);
+  AckDxOut user;
+  Edges e;
+  ASSERT_NO_FATAL_FAILURE(enable_port(b, user, e));
+  const Exchange gc = b.master.global_control(kGC_Sync | kGC_Unsync);
+  b.master.idle(4'800);
+  EXPECT_GT(user.ack_done, b.acted(gc));  // the DX_Out came and was acknowledged
+  EXPECT_TRUE(e.seen.empty());
+  EXPECT_FALSE(b.chip.pb3_pin());
 }
 
 }  // namespace

@@ -242,5 +242,24 @@ TEST_P(Services, SetPrmMinTsdr_DelaysTheAnswers) {
   EXPECT_EQ(after.answer_start, after.request_end + 40 * 4);
 }
 
+// MinTSDR_Val "in bit times, 11..255" (chip-facts §1.3) written by the user after a Set_Prm whose
+// byte 3 was 20 is the newer value and wins (docs/timing.md, answer: the MinTSDR set last); a
+// Set_Prm with byte 3 = 0 keeps it ("0 = no change", chip-facts §8), at 1.5 Mbaud T = 32 clocks.
+TEST_P(Services, MinTsdrValWrittenAfterSetPrmWins) {
+  ResponderConfig rc;
+  rc.slave.min_tsdr = 20;
+  Bench b(GetParam(), 1'500'000, rc);
+  ASSERT_TRUE(b.master.startup());
+  const Exchange prm = b.master.data_exchange({0x01, 0x02, 0x03, 0x04});
+  EXPECT_EQ(prm.answer_start, prm.request_end + 20 * 32);
+  b.chip.write(addr(b.chip, RegId::MinTSDR_Val), 40);
+  const Exchange user = b.master.data_exchange({0x01, 0x02, 0x03, 0x04});
+  ASSERT_TRUE(user.answer);
+  EXPECT_EQ(user.answer_start, user.request_end + 40 * 32);
+  b.master.slave().min_tsdr = 0;
+  const Exchange keep = b.master.set_prm();
+  EXPECT_EQ(keep.answer_start, keep.request_end + 40 * 32);
+}
+
 INSTANTIATE_TEST_SUITE_P(Profiles, Services, ::testing::ValuesIn(kAllProfiles),
                          [](const auto& i) { return testutil::pname(i.param); });
