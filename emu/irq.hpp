@@ -61,7 +61,8 @@ class InterruptController {
   Timer& eoi_timer() { return s_.eoi; }  // the engine counts it
 
   // dpc31 port PB3 with Enable_DX_Out_Port (C31_Control bit 0): high from the DX_Out of a
-  // Global_Control with Sync until the user acknowledges DX_Out (seed 003, p.32).
+  // Global_Control with Sync (without Unsync: that is an Unsync) until the user acknowledges
+  // DX_Out (seed 003, p.32).
   void set_pb3(bool level);
   [[nodiscard]] bool pb3() const { return s_.pb3; }
 

@@ -55,7 +55,8 @@ class Dpv1Master {
   Dpv1Master(const Chip& chip, DpMaster& m, Dpv1Rules r = {}) : chip_(chip), m_(m), rules_(r) {}
 
   // MSAC_C1: Read / Write from SAP 51 to SAP 51, Alarm_Ack from SAP 51 to the slave's SAP 50 or
-  // 51 (`dsap`; the standard allows both).
+  // 51 (`dsap`; the standard allows both). Another `dsap` is sent as given, for a bench that
+  // tests a wrong SAP (the scenario and Python refuse it: kAlarmSap).
   Dpv1Answer read(std::uint8_t slot, std::uint8_t index, std::uint8_t length);
   Dpv1Answer write(std::uint8_t slot, std::uint8_t index, pdu::Bytes data);
   Dpv1Answer alarm_ack(const pdu::AlarmAck& ack, std::uint8_t dsap = sap::MSAC_C1_Alarm);

@@ -101,6 +101,11 @@ std::uint64_t duration(std::string_view s, std::uint64_t f, std::uint64_t t) {
                    shown(s)));
 }
 
+void spaced_bytes(std::string_view command, std::string_view second) {
+  fail(fmt::format("{}: the bytes are separated by commas (10,05,...); unexpected '{}'", command,
+                   shown(second)));
+}
+
 std::vector<std::uint8_t> bytes(std::string_view s, std::string_view what, std::size_t max) {
   std::vector<std::uint8_t> out;
   if (s == "-") return out;

@@ -46,6 +46,9 @@ std::uint32_t profibus_baud(std::string_view s);
 // Hex bytes "13,23" ("0x13" also accepted); "-" is the empty list.
 std::vector<std::uint8_t> bytes(std::string_view s, std::string_view what,
                                 std::size_t max = kMaxDu);
+// A `send` whose bytes came as words (the walk prints a telegram with spaces): refused, naming
+// the commas and the second word.
+[[noreturn]] void spaced_bytes(std::string_view command, std::string_view second);
 
 // Cycles (a plain number, decimal or 0x hex), or a decimal number with a unit: us, ms, s, or bits
 // (of `bit_cycles` clocks); rounded up to whole cycles like every minimum time (docs/timing.md).

@@ -317,6 +317,7 @@ class Parser {
         fail(fmt::format("send from='{}': no sender of that name", st.name));
       }
       st.time = time(take("after").value_or("33bits"));
+      if (pos_.size() > 1) spaced_bytes("send", pos_[1]);
       st.bytes = bytes(positional(0, "the bytes"), "telegram", 255);
     } else if (c == "pass_token") {
       st.kind = K::pass_token;

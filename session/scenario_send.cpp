@@ -19,11 +19,7 @@ using scenario_lex::number;
 void parse(std::span<const std::string_view> pos, std::span<const Option> opts, ScenarioStep& st) {
   st.kind = StepKind::send;
   if (opts.empty()) {
-    if (pos.size() > 1) {
-      // The walk prints a telegram with spaces; a scenario's byte list takes commas.
-      fail(fmt::format("send: the bytes are separated by commas (10,05,...); unexpected '{}'",
-                       shown(pos[1])));
-    }
+    if (pos.size() > 1) scenario_lex::spaced_bytes("send", pos[1]);
     if (pos.empty()) fail("expected 'send BYTES' or 'send from=SA fc=N ...'");
     st.bytes = scenario_lex::bytes(pos[0], "telegram", fdl::kMaxFrameLength);
     if (st.bytes.empty()) fail("send: at least one byte");

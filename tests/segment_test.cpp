@@ -947,6 +947,9 @@ TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
       {"segment\nstation 5\ncycle 2 3\n",
        "f.scn:3: 'cycle' takes the number of rotations; unexpected '3'"},
       {"segment\nstation 5\nrun 1ms 2ms\n", "f.scn:3: 'run' takes a time; unexpected '2ms'"},
+      // The walk's form of a telegram (spaces) copied back, as the single chip's `send` says it.
+      {"segment\nsender a\nsend from=a 10 05 02 49 50 16\n",
+       "f.scn:3: send: the bytes are separated by commas (10,05,...); unexpected '05'"},
       // Every station is one: a name, and a master's address, once.
       {"segment\nsender a\nsender a\n", "f.scn:3: a second station named 'a'"},
       {"segment\nstation 5 name=a\nsender a\n", "f.scn:3: a second station named 'a'"},

@@ -247,8 +247,8 @@ class Chip {
   [[nodiscard]] WdState wd_state() const;
 
   // dpc31 port PB3 (seed 003): with C31_Control.Enable_DX_Out_Port = 1 it goes high in the
-  // cycle a Global_Control with Sync latches DX_Out and low when DX_Out is acknowledged
-  // (docs/timing.md). Always low on the other profiles.
+  // cycle a Global_Control with Sync (without Unsync) latches DX_Out and low when DX_Out is
+  // acknowledged (docs/timing.md). Always low on the other profiles.
   [[nodiscard]] bool pb3_pin() const;
   void on_pb3_change(std::function<void(std::uint64_t, bool)> cb);
   // Called whenever the interrupt becomes active or inactive: (cycle, active).
@@ -260,13 +260,12 @@ class Chip {
   // edge in the chip's past would be a glitch now.
   void drive_rxd(std::uint64_t cycle, bool level);
   // `bytes` as back-to-back UART characters on RxD from `start`, `bit_cycles` per bit: the edges
-  // uart_encode gives, with `fault`. `start` >= cycle() and `bit_cycles` from 1 to 2^32 - 1 (as
-  // for hear_telegram): else std::invalid_argument, nothing driven. Characters, not edges, reach
-  // the receiver
-  // where it takes them whole (event engine, the rate it listens at, the line idle, no fault in
-  // the telegram); the chip's state, its timing and the on_rxd observers are the same as with
-  // the edges given one by one (docs/engine.md, "Characters on RxD"). Returns the end of the
-  // last stop bit.
+  // uart_encode gives, with `fault`. `start` >= cycle() and `bit_cycles` from 1 to 2^32 - 1 (the
+  // same for hear_telegram): else std::invalid_argument, nothing driven. Characters, not edges,
+  // reach the receiver where it takes them whole (event engine, the rate it listens at, the line
+  // idle, no fault in the telegram); the chip's state, its timing and the on_rxd observers are the
+  // same as with the edges given one by one (docs/engine.md, "Characters on RxD"). Returns the end
+  // of the last stop bit.
   std::uint64_t drive_rxd_chars(std::span<const std::uint8_t> bytes, std::uint64_t start,
                                 std::uint32_t bit_cycles, UartFault fault = {});
   // The same characters as drive_rxd_chars (no fault), heard as one telegram (the built-in
@@ -416,11 +415,11 @@ class Chip {
   friend struct LineAccess;
 };
 
-// A segment's way onto its chips' RxD (session/segment.cpp), not the user's: the serial calls
-// without their checks. The line drives each chip at the line's time, and a chip whose firmware's
-// last bus access ran past the line's round stands a few clocks ahead of it: an edge before the
-// chip's cycle() counts at cycle(), characters from such a start are given edge by edge, each
-// at its own cycle or at cycle() where that is later.
+// Internal: a segment's way onto its chips' RxD (session/segment.cpp), not the user's (use the
+// checked calls of Chip): the serial calls without their checks. The line drives each chip at the
+// line's time, and a chip whose firmware's last bus access ran past the line's round stands a few
+// clocks ahead of it: an edge before the chip's cycle() counts at cycle(), characters from such a
+// start are given edge by edge, each at its own cycle or at cycle() where that is later.
 struct LineAccess {
   static void drive_rxd(Chip& c, std::uint64_t cycle, bool level);
   static std::uint64_t drive_rxd_chars(Chip& c, std::span<const std::uint8_t> bytes,

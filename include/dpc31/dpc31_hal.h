@@ -70,7 +70,8 @@ int dpc31_irq_active(const dpc31_chip* chip);
 /* Called on every change of the interrupt line, with the cycle of the change. */
 typedef void (*dpc31_irq_fn)(void* user, uint64_t cycle, int active);
 void dpc31_set_irq_callback(dpc31_chip* chip, dpc31_irq_fn fn, void* user);
-/* dpc31 port PB3 (C31_Control.Enable_DX_Out_Port: DX_Out of a Global_Control with Sync), 1 high;
+/* dpc31 port PB3 (C31_Control.Enable_DX_Out_Port: DX_Out of a Global_Control with Sync and
+ * without Unsync), 1 high;
  * the callback gets (user, cycle, level) on every change. */
 int dpc31_pb3(const dpc31_chip* chip);
 void dpc31_set_pb3_callback(dpc31_chip* chip, dpc31_irq_fn fn, void* user);

@@ -428,10 +428,13 @@ int run_cli(const Options& o, std::FILE* out, std::FILE* err) {
              irq_controller == "c31" ? ", irq-controller c31" : "", o.baud, r.twd_ms,
              o.fault_period, o.seed, o.firmware ? ", firmware " + *o.firmware : "");
   const double hz = r.clock_hz;
+  // Fixed-point, with the digits a short run needs to show more than 0.00 (never 1e+03).
+  const int wall_digits = r.wall_s >= 0.1 ? 2 : r.wall_s >= 0.001 ? 4 : 6;
   fmt::print(out,
-             "cycles {} ({:.3f} s of chip time), {} after the start-up; wall {:.3g} s ({:.1f}x "
+             "cycles {} ({:.3f} s of chip time), {} after the start-up; wall {:.{}f} s ({:.1f}x "
              "real time)\n",
              r.cycles, static_cast<double>(r.cycles) / hz, r.cycles - r.first_cycle, r.wall_s,
+             wall_digits,
              static_cast<double>(r.cycles - r.first_cycle) / hz / std::max(r.wall_s, 1e-9));
   fmt::print(out, "Data_Exchange answered with data: {}\n", r.exchanges);
   fmt::print(out, "VmRSS: {} KiB after the start-up, {} KiB at the end\n", r.rss_start_kib,
