@@ -35,6 +35,10 @@
 # holds the last value only, and its line comes first among that time's changes. The window file
 # at 10 ns, as a unit longer than a cycle (its 100 us) is refused now: its value lines are line for
 # line the old ones, in 1581 time stamps instead of 25.
+# do4_osp_replace.vcd once more when the DP watchdog's expiry stopped looking at X/INT before
+# Leave_Master (s23-wd, docs/timing.md "Order within one cycle"): diffed by hand, the only change
+# is at the expiry's time #169855166667, where dp_state's line (b00, Wait_Prm) now comes first,
+# before wd_state (b01), irr and x_int, instead of after x_int: the same values at the same time.
 # Usage: waveform_golden.sh path/to/dpc31 source-dir
 set -eu
 dpc31=$1
