@@ -592,8 +592,9 @@ TEST(SegmentOutputs, AStepsLastAnswerComesBeforeItsExpects) {
             "line 41: expect state 5", "dpc31: 68 04 04 68 02 07 08 00 11 16", 10},
         {"line 48: expect watchdog_expired",
          "vpc3plus: 68 0B 0B 68 02 06 08 00 00 00 00 00 00 00 00 10 16", 17}}) {
-    const auto at = std::find_if(lines.begin(), lines.end(), [&expect](const std::string& l) {
-      return l.find(expect) != std::string::npos;
+    // A copy: clang before 16 cannot capture a structured binding.
+    const auto at = std::find_if(lines.begin(), lines.end(), [want = expect](const std::string& l) {
+      return l.find(want) != std::string::npos;
     });
     ASSERT_NE(at, lines.end()) << expect;
     ASSERT_NE(at, lines.begin()) << expect;
