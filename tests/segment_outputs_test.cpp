@@ -7,7 +7,6 @@
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
@@ -43,10 +42,10 @@ const std::string kScenario = std::string(SOURCE_DIR) + "/traces/segment/two_mas
 testutil::CommandResult sh(const std::string& cmd) { return testutil::run_command(cmd + " 2>&1"); }
 
 std::string tmp(const std::string& name) {
-  // One directory per process: CTest runs each test in a process of its own, in parallel.
-  const std::string d = fmt::format("{}segment_outputs.{}/", ::testing::TempDir(), getpid());
-  fs::create_directories(d);
-  return d + name;
+  // One private directory per process (CTest runs each test in a process of its own, in
+  // parallel), removed with the process's static objects at its exit.
+  static const testutil::TempDir dir;
+  return dir.file(name);
 }
 
 // A VCD read back: every variable by its full name, its changes as (cycle, value). Times are
