@@ -172,7 +172,7 @@ class Mac {
   // Go_Offline (or a RAM access violation) on a started chip: true when a request is in
   // progress, then `offline_due` takes the chip Offline at its end; false: Offline now.
   bool defer_offline();
-  std::function<void()> offline_due;  // wired by the chip to ModeRegisters::offline
+  std::function<void()> offline_due;  // ModeRegisters::offline (set by its constructor)
   void drive_rxd(std::uint64_t cycle, bool level);
   // Chip::drive_rxd_chars: one good character from `start` (>= now), whole when the receiver can
   // take it so (UartRx::whole_char), else edge by edge; the same state and observers either way.
