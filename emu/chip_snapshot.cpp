@@ -1,4 +1,4 @@
-// The chip's snapshot (docs/snapshots.md, format version 4): every block's state, written and
+// The chip's snapshot (docs/snapshots.md, format version 5): every block's state, written and
 // read in one place so that the format is one list. Each list is a template run with a Writer
 // (save) or a Reader (load), so save and load cannot drift apart; a static_assert on each
 // block's State makes a new member fail the build until it is listed here.
@@ -142,7 +142,7 @@ template <typename Ar, typename S>
 void mac_fields(Ar& ar, S& s, std::uint64_t now) {
   // `heard` is not written: Chip::save_state turns it into characters first (Mac::materialize).
   // `tx_chars` is written as the edges it stands for (below): the format does not change.
-  static_assert(snap::member_count<Mac::State>() == 21, "a new member: add it here");
+  static_assert(snap::member_count<Mac::State>() == 22, "a new member: add it here");
   ar.block(s.rx);
   ar.block(s.frame);
   ar(s.in_frame);
@@ -193,6 +193,7 @@ void mac_fields(Ar& ar, S& s, std::uint64_t now) {
   ar.size(s.shifter.index, s.shifter.bytes.size());
   ar.bounded(s.shifter.bit, kUartCharBits - 1);
   ar(s.shifter.sub);
+  ar.bounded(s.offline_pending, Mac::State::OfflinePending::answer);  // version 5
 }
 
 template <typename Ar, typename S>
@@ -314,6 +315,13 @@ void core_fields(Ar& ar, C& c) {
     mac.chars.clear();
     // Only a telegram in progress has a timeout; a stale one would be due for ever.
     if (!mac.in_frame && mac.frame_timeout != kNever) ar.fail("frame timeout outside a telegram");
+    // An Offline waits for a request in progress of a started chip: its telegram, or its answer.
+    using Pending = Mac::State::OfflinePending;
+    const bool answering = mac.tx_end != kNever || mac.shifter.phase != TxShifter::Phase::idle;
+    if ((mac.offline_pending != Pending::none && !dp.started) ||
+        (mac.offline_pending == Pending::request && !mac.in_frame) ||
+        (mac.offline_pending == Pending::answer && !answering))
+      ar.fail("an Offline pending without the request it waits for");
     // The receivers listen at the rate of the search code (Mac::listen): a bit time of 0 would
     // divide by zero, another one hear a rate the chip does not know.
     const std::uint32_t t = bit_cycles(c.clock.hz, kBaudRates[mac.search_code]);

@@ -64,6 +64,7 @@ void Mac::start_search() {
   s_.frame.reset();
   s_.frame_timeout = kNever;
   arm_search_window();
+  request_ended();  // a Baud_Control expiry drops a telegram in progress
 }
 
 void Mac::listen(std::uint8_t code) {
@@ -92,6 +93,7 @@ void Mac::search_next() {
   s_.frame_timeout = kNever;
   s_.skipping = false;
   arm_search_window();
+  request_ended();
 }
 
 void Mac::truncated() {
@@ -101,6 +103,7 @@ void Mac::truncated() {
   s_.in_frame = false;
   s_.frame.reset();
   s_.frame_timeout = kNever;
+  request_ended();
 }
 
 bool Mac::set_txd(std::uint64_t cycle, bool level) {
@@ -132,6 +135,36 @@ void Mac::tx_done() {
   s_.tx_chars.bytes.clear();
   s_.shifter = TxShifter{};
   dp_.response_sent();
+  if (s_.offline_pending == State::OfflinePending::answer) {
+    s_.offline_pending = State::OfflinePending::none;
+    offline_due();
+  }
+}
+
+void Mac::request_ended() {
+  if (s_.offline_pending != State::OfflinePending::request) return;
+  if (tx_busy()) {
+    s_.offline_pending = State::OfflinePending::answer;
+    return;
+  }
+  s_.offline_pending = State::OfflinePending::none;
+  offline_due();
+}
+
+bool Mac::defer_offline() {
+  if (s_.offline_pending != State::OfflinePending::none) return true;
+  materialize();  // a telegram heard whole: is it in progress now?
+  // An answer armed or on the line is the current request's; a telegram being received after
+  // TSYN (from its first character's stop sample on) is one.
+  if (tx_busy()) {
+    s_.offline_pending = State::OfflinePending::answer;
+  } else if (s_.in_frame) {
+    s_.offline_pending = State::OfflinePending::request;
+  } else {
+    return false;
+  }
+  sig_.log(LogLevel::info, "Go_Offline: Offline after the current request");
+  return true;
 }
 
 bool Mac::tx_busy() const {
@@ -152,6 +185,7 @@ void Mac::stop() {
   s_.tx_chars.bytes.clear();
   s_.tx_end = kNever;
   s_.shifter = TxShifter{};
+  s_.offline_pending = State::OfflinePending::none;
   txd_edge(clock_.now, true);
 }
 
@@ -431,6 +465,7 @@ void Mac::on_char(const UartChar& c) {
     s_.frame.reset();
     s_.frame_timeout = kNever;
     s_.skipping = true;
+    request_ended();
     return;
   }
   const std::uint64_t tsyn = std::uint64_t{kTsynBits};
@@ -438,6 +473,7 @@ void Mac::on_char(const UartChar& c) {
     ++counters_.truncated;  // a new telegram began before the old one was complete
     s_.in_frame = false;
     s_.frame.reset();
+    request_ended();
   }
   if (!s_.in_frame) {
     if (c.idle_bits < tsyn) {
@@ -454,6 +490,7 @@ void Mac::on_char(const UartChar& c) {
   s_.frame_timeout = c.end + tsyn * s_.rx.bit_time();
   if (st == fdl::Assembler::Status::need_more) return;
   frame_ended(st, c);
+  request_ended();
 }
 
 void Mac::frame_ended(fdl::Assembler::Status st, const UartChar& c, const fdl::Decoded* decoded) {
@@ -483,7 +520,8 @@ void Mac::frame_ended(fdl::Assembler::Status st, const UartChar& c, const fdl::D
 }
 
 void Mac::on_frame(const fdl::Frame& f, const UartChar& last) {
-  if (!dp_.started()) {
+  // A telegram that ends while the chip waits to go Offline after its answer is not a request.
+  if (!dp_.started() || s_.offline_pending == State::OfflinePending::answer) {
     ++counters_.offline;
     return;
   }

@@ -146,6 +146,11 @@ class Mac {
     bool rxd_level = true;  // the RxD line (per-cycle engine)
     // Event engine: a telegram heard whole; a snapshot writes it as its characters (materialize).
     HeardTelegram heard;
+    // Go_Offline or a RAM access violation while a request was in progress (docs/timing.md,
+    // "Go_Offline"): Offline when the request being received (`request`) or the answer armed or
+    // on the line (`answer`) ends.
+    enum class OfflinePending : std::uint8_t { none, request, answer };
+    OfflinePending offline_pending = OfflinePending::none;
 
     // TxD with the edges up to `now` taken, whether or not an event has taken them yet: the
     // first edge after `now`, and the line's level (the answer as edges).
@@ -164,6 +169,10 @@ class Mac {
 
   void start_search();  // Baud_Search from the highest rate down (Start, Baud_Control expiry)
   void stop();          // Go_Offline: no search, no telegram, no answer; TxD idle
+  // Go_Offline (or a RAM access violation) on a started chip: true when a request is in
+  // progress, then `offline_due` takes the chip Offline at its end; false: Offline now.
+  bool defer_offline();
+  std::function<void()> offline_due;  // ModeRegisters::offline (set by its constructor)
   void drive_rxd(std::uint64_t cycle, bool level);
   // Chip::drive_rxd_chars: one good character from `start` (>= now), whole when the receiver can
   // take it so (UartRx::whole_char), else edge by edge; the same state and observers either way.
@@ -220,6 +229,9 @@ class Mac {
   void hand_txd_edges(std::span<const std::pair<std::uint64_t, bool>> e);  // to the batch observers
   [[nodiscard]] bool edge_batches() const { return sig_.txd_edges || sig_.txd_chars; }
   void tx_done();
+  // A telegram of the request the Offline waits for ended (whole, broken or dropped): Offline
+  // now, or at the end of the answer it armed.
+  void request_ended();
   [[nodiscard]] bool tx_busy() const;
   void on_char(const UartChar& c);
   // on_char's end of a frame: the assembler's verdict after its last character `last`.

@@ -62,7 +62,14 @@ void ModeRegisters::start() {
   buffers_.dout_clear();
 }
 
+// "go Offline after the current request" (SPC3 Mode_Reg1 bit 2; MAC_Reset "after finishing the
+// current request"): with a request in progress the MAC calls offline() at its end.
 void ModeRegisters::go_offline() {
+  if (!dp_.started() || mac_.defer_offline()) return;
+  offline();
+}
+
+void ModeRegisters::offline() {
   if (!dp_.started()) return;
   regs_.latch(RegId::Mode_Reg1) &= static_cast<std::uint16_t>(~fields::Mode_Reg1::Start_SPC3);
   // The MAC reset puts the DP and watchdog state machines back into their reset states.

@@ -35,15 +35,19 @@ class ModeRegisters {
         watchdog_(watchdog),
         mac_(mac),
         sig_(sig),
-        release_(release) {}
+        release_(release) {
+    mac_.offline_due = [this] { offline(); };
+  }
   void reset() { s_ = State{}; }
   // Binds the hooks of the registers this block owns (reg_hooks.hpp).
   void install_hooks(HookTable& h);
 
   // Mode_Reg1_S written: the actions of the bits written as 1.
   void command(std::uint16_t written);
-  void start();       // Start_SPC3: Offline -> Passive_Idle
-  void go_offline();  // Go_Offline (and a RAM access violation): the MAC reset
+  void start();  // Start_SPC3: Offline -> Passive_Idle
+  // Go_Offline (and a RAM access violation): the MAC reset after the current request.
+  void go_offline();
+  void offline();  // the MAC reset now (MAC_Stop; the end of the request go_offline waited for)
   [[nodiscard]] std::uint16_t status() const;  // Status_Reg
 
   void user_timer_tick();  // its timer is reached

@@ -65,7 +65,7 @@ void RequestInterface::execute(std::uint8_t code, std::uint8_t param) {
     case request::MAC_Stop:  // "MAC enters Offline", confirmed in the Indication_Queue
       sig_.log(LogLevel::info, "request MAC_Stop");
       sig_.emit(BlockEvent::Kind::mac_stop);
-      mode_.go_offline();
+      mode_.offline();  // at once: the DPC31 has no "after the current request" (decisions.md)
       indicate(request::MAC_Stop, request::Stop_Confirmed);
       return;
     case request::MAC_New_TRDY:  // "Transfer of TRDY": the parameter is the new MinTSDR

@@ -8,7 +8,8 @@
 // user side: the master's exchanges (every request's and answer's start and end cycle, the
 // answer's bytes), its counters, the chip's state (save_state), TxD and every edge (made from the
 // characters) must be the same after every exchange. Every profile, every PROFIBUS rate; DPV1
-// Reads; and an answer cut by Go_Offline while on the line.
+// Reads; and an answer on the line when the user takes the chip Offline (cut by the DPC31's
+// MAC_Stop, sent whole before Go_Offline acts on the SPC3 and the VPC3+).
 #include <gtest/gtest.h>
 
 #include <cstddef>
@@ -199,12 +200,14 @@ INSTANTIATE_TEST_SUITE_P(ProfilesAndRates, TxdChars,
                                             ::testing::ValuesIn(kBaudRates)),
                          testutil::profile_rate_name);
 
-// Go_Offline while the answer is on the line (docs/timing.md: TxD returns to idle at the
-// completion cycle): the edges before the cut reach a batch receiver as they reached a receiver
-// fed edge by edge, the cut included, and the snapshots agree in the middle of the answer.
+// The user's stop while the answer is on the line (docs/timing.md "Go_Offline"): the DPC31's
+// MAC_Stop acts at once (TxD back to idle at the completion cycle), the SPC3's and the VPC3+'s
+// Go_Offline after the current request, so at the end of the answer's last stop bit. The edges
+// reach a batch receiver as they reached a receiver fed edge by edge, a cut included, and the
+// snapshots agree in the middle of the answer.
 class TxdCut : public ::testing::TestWithParam<Profile> {};
 
-TEST_P(TxdCut, AnAnswerCutByGoOfflineReachesBothReceiversAlike) {
+TEST_P(TxdCut, AnAnswerOnTheLineAtTheStopReachesBothReceiversAlike) {
   const Profile profile = GetParam();
   Side bits(profile, 12'000'000, Watch::bits);
   Side chars(profile, 12'000'000, Watch::chars);
@@ -215,20 +218,32 @@ TEST_P(TxdCut, AnAnswerCutByGoOfflineReachesBothReceiversAlike) {
   UartRx b(t, chars.chip.cycle());
   bits.chip.on_txd([&](std::uint64_t c, bool l) { a.edge(c, l); });
   chars.chip.on_txd_chars([&](const TxdRun& r) { b.take(r); });
-  // Get_Cfg by hand: its answer (SD2, 9 + 1 characters) starts MinTSDR = 11 bit times after the
-  // request's end; cut it 3.5 characters in.
+  // Get_Cfg by hand, FCV = 1 and FCB = 0 as in the start-up's last request (Slave_Diag): a
+  // repetition (EN 50170 FCB), so the answer is the last one again, the ready Slave_Diag of 17
+  // characters (docs/timing.md worked example). It starts MinTSDR = 11 bit times after the
+  // request's end and ends 17 x 11 bit times later; the stop lands 3.5 characters in.
   const std::vector<std::uint8_t> req =
       fdl::encode(fdl::make_frame(5, 2, fdl::make_request_fc(fdl::Function::SRD_high, false, true),
                                   {}, sap::Get_Cfg, sap::Master));
   const std::uint64_t start = bits.chip.cycle() + 40 * std::uint64_t{t};
   const std::uint64_t end = bits.chip.drive_rxd_chars(req, start, t);
   ASSERT_EQ(chars.chip.drive_rxd_chars(req, start, t), end);
+  const std::uint64_t answer_end = end + 11 * std::uint64_t{t} + 17 * 11 * std::uint64_t{t};
   const std::uint64_t cut = end + 11 * std::uint64_t{t} + (3 * 11 + 5) * std::uint64_t{t} + 1;
   bits.chip.step(cut - bits.chip.cycle());
   chars.chip.step(cut - chars.chip.cycle());
   ASSERT_TRUE(testutil::same_state(bits.chip, chars.chip)) << "in the middle of the answer";
   testutil::user_go_offline(bits.chip);
   testutil::user_go_offline(chars.chip);
+  const bool dpc31 = profile == Profile::dpc31;
+  EXPECT_EQ(bits.chip.started(), !dpc31);
+  if (!dpc31) {
+    bits.chip.step(answer_end - 1 - bits.chip.cycle());
+    EXPECT_TRUE(bits.chip.started());
+    bits.chip.step(1);
+    EXPECT_FALSE(bits.chip.started());
+    EXPECT_NE(bits.chip.peek_reg(RegId::Int_Req_Reg) & irq::MAC_Reset, 0);
+  }
   const std::uint64_t later = bits.chip.cycle() + 30 * 11 * std::uint64_t{t};
   bits.chip.step(later - bits.chip.cycle());
   chars.chip.step(later - chars.chip.cycle());
@@ -240,9 +255,13 @@ TEST_P(TxdCut, AnAnswerCutByGoOfflineReachesBothReceiversAlike) {
   a.advance(later, x);
   b.advance(later, y);
   EXPECT_EQ(x, y);
-  // Three whole characters and the fourth cut: its remaining bits read high.
-  ASSERT_EQ(x.size(), 4u);
+  // DPC31: three whole characters and the fourth cut, its remaining bits read high; else the
+  // seventeen characters whole.
+  ASSERT_EQ(x.size(), dpc31 ? 4u : 17u);
   EXPECT_TRUE(x[2].ok());
+  if (!dpc31) {
+    for (const UartChar& ch : x) EXPECT_TRUE(ch.ok());
+  }
   snap::Writer wa;
   a.save_state(wa);
   snap::Writer wb;
@@ -261,8 +280,8 @@ INSTANTIATE_TEST_SUITE_P(Profiles, TxdCut,
 // samples are due (DpMaster::take and look: no receiver queue), against the answer made of edges
 // (an on_txd_edges observer attached), which the master's receiver decodes edge run by edge run.
 // Every exchange's cycles and bytes, the counters, the chip's state and TxD must agree; then one
-// answer cut by Go_Offline 100.5 characters in (whole characters, the cut one as edges, then
-// nothing): a broken answer at the same cycles on both.
+// answer cut by MAC_Stop (the DPC31's Go_Offline, at once) 100.5 characters in (whole characters,
+// the cut one as edges, then nothing): a broken answer at the same cycles on both.
 class TxdDirect : public ::testing::TestWithParam<std::uint32_t> {};
 
 TEST_P(TxdDirect, LongAnswersAndACutOneLookTheSame) {

@@ -1,0 +1,234 @@
+// Go_Offline and a RAM access violation "after the current request" (chip-facts.md: Mode_Reg1
+// bit 2 "go Offline after the current request; MAC_Reset interrupt"; IRR bit 0 MAC_Reset "ASIC
+// reached Offline after finishing the current request (Go_Offline or RAM access violation)"),
+// with the current request as docs/timing.md "Go_Offline" defines it, in both engines.
+//
+// Every cycle is derived by hand from docs/timing.md at 48 MHz and 12 Mbaud (T = 4 clocks, 11
+// bit times per character): Start_SPC3 completes at s; the master's FDL_Status to station 5
+// (10 05 02 49 50 16, FCS 05 + 02 + 49 = 50h) starts at s + 132 (TSYN after Start), its first
+// character's stop sample is s + 132 + 10 T + T/2 = s + 174 (the request in progress from here),
+// it ends at s + 132 + 6 x 11 T = s + 396; the answer 10 02 05 00 07 16 (worked example
+// "Startup.ReachesDataExchangeAtExactCycles") starts MinTSDR = 11 T later at s + 440 and ends at
+// s + 440 + 6 x 11 T = s + 704: the current request ends there.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "dpc31/chip.hpp"
+#include "dpc31/uart.hpp"
+#include "test_util.hpp"
+
+using namespace dpc31;
+
+// Its own namespace: the names below may meet other tests' in a unity build.
+namespace offline_test {
+namespace {
+
+using Edges = std::vector<std::pair<std::uint64_t, bool>>;
+
+constexpr std::uint32_t kT = 4;
+constexpr std::uint64_t kRequestAt = 132;  // from s
+constexpr std::uint64_t kAnswerAt = 440;
+constexpr std::uint64_t kAnswerEnd = 704;
+const std::vector<std::uint8_t> kRequest = {0x10, 0x05, 0x02, 0x49, 0x50, 0x16};
+const std::vector<std::uint8_t> kAnswer = {0x10, 0x02, 0x05, 0x00, 0x07, 0x16};
+
+// How the user takes the chip Offline: Go_Offline (Mode_Reg1_S bit 2), or a read of the first
+// address past the RAM (SPC3 600h, VPC3+ 800h: the RAM access violation).
+enum class How : std::uint8_t { go_offline, violation };
+
+struct Line {
+  Chip chip;
+  Edges txd;
+  std::uint64_t s = 0;  // the cycle Start_SPC3 completed
+
+  // min_tsdr: a MinTSDR_Val written before Start (0: the reset value, 11).
+  Line(Profile p, Engine e, std::uint8_t min_tsdr = 0)
+      : chip(ChipOptions{p, BusMode::intel, 0, e}) {
+    chip.set_log_sink(nullptr);
+    chip.on_txd([this](std::uint64_t c, bool l) { txd.emplace_back(c, l); });
+    chip.write(static_cast<std::uint32_t>(chip.addr_of(RegId::R_TS_Adr)), 5);
+    if (min_tsdr != 0)
+      chip.write(static_cast<std::uint32_t>(chip.addr_of(RegId::MinTSDR_Val)), min_tsdr);
+    s = testutil::user_start(chip);
+    chip.drive_rxd_chars(kRequest, s + kRequestAt, kT);
+  }
+  // The access that takes the chip Offline, completing at s + at (a bus access takes 4 clocks).
+  void offline_at(std::uint64_t at, How how) {
+    chip.step(s + at - 4 - chip.cycle());
+    if (how == How::go_offline) {
+      chip.write(0x08, 0x04);
+    } else {
+      (void)chip.read(chip.profile().violation_from);
+    }
+    ASSERT_EQ(chip.cycle(), s + at);
+  }
+  void step_to(std::uint64_t at) { chip.step(s + at - chip.cycle()); }
+  [[nodiscard]] bool mac_reset() const {
+    return (chip.peek_reg(RegId::Int_Req_Reg) & irq::MAC_Reset) != 0;
+  }
+  [[nodiscard]] Edges answer_edges() const {
+    Edges e;
+    uart_encode(kAnswer, s + kAnswerAt, kT, e);
+    return e;
+  }
+};
+
+struct Param {
+  Profile profile;
+  Engine engine;
+  How how;
+};
+
+class OfflineAfterRequest : public ::testing::TestWithParam<Param> {
+ protected:
+  Line line() const { return Line(GetParam().profile, GetParam().engine); }
+  How how() const { return GetParam().how; }
+};
+
+// Still started until s + kAnswerEnd, then Offline with MAC_Reset in that cycle.
+void expect_offline_at_answer_end(Line& l) {
+  l.step_to(kAnswerEnd - 1);
+  EXPECT_TRUE(l.chip.started());
+  EXPECT_FALSE(l.mac_reset());
+  l.step_to(kAnswerEnd);
+  EXPECT_FALSE(l.chip.started());
+  EXPECT_TRUE(l.mac_reset());
+  EXPECT_EQ(l.chip.dp_state(), DpState::Wait_Prm);
+  EXPECT_EQ(l.chip.peek_reg(RegId::Status_Reg) & 0xC1, 0);  // Offline, WD state Baud_Search
+  l.step_to(2000);
+  EXPECT_EQ(l.txd, l.answer_edges());  // the answer whole, at its cycles, and nothing after
+}
+
+}  // namespace
+
+TEST_P(OfflineAfterRequest, WhileTheRequestIsReceivedTheAnswerIsSentWhole) {
+  Line l = line();
+  l.offline_at(204, how());  // after the first character's stop sample (s + 174)
+  EXPECT_TRUE(l.chip.started());
+  EXPECT_FALSE(l.mac_reset());
+  // Status bit 0 still Passive_Idle; Go_Offline reads 1 while it waits (SPC3 has no read-back).
+  EXPECT_EQ(l.chip.read(0x04) & 0x01, 0x01);
+  if (how() == How::go_offline) {
+    EXPECT_EQ(l.chip.peek_reg(RegId::Mode_Reg1) & 0x04, 0x04);
+  }
+  // A Start written meanwhile finds the chip started: no effect, the Offline stays due.
+  l.chip.write(0x08, 0x01);
+  expect_offline_at_answer_end(l);
+}
+
+TEST_P(OfflineAfterRequest, WhileTheAnswerIsSentItIsNotCut) {
+  Line l = line();
+  l.offline_at(500, how());  // 60 clocks (15 bit times) into the answer
+  EXPECT_TRUE(l.chip.started());
+  expect_offline_at_answer_end(l);
+}
+
+TEST_P(OfflineAfterRequest, WhileTheAnswerIsArmedItIsSent) {
+  Line l = line();
+  l.offline_at(420, how());  // the request acted on at s + 394, the answer starts at s + 440
+  expect_offline_at_answer_end(l);
+}
+
+TEST_P(OfflineAfterRequest, WhileIdleAtOnce) {
+  for (const std::uint64_t at : {std::uint64_t{100}, std::uint64_t{800}}) {
+    SCOPED_TRACE(at);
+    Line l = line();
+    l.offline_at(at, how());
+    EXPECT_FALSE(l.chip.started());
+    EXPECT_TRUE(l.mac_reset());
+    l.step_to(2000);
+    // Before the request: it is heard Offline (counted), not answered; after the answer: whole.
+    EXPECT_EQ(l.txd, at == 100 ? Edges{} : l.answer_edges());
+    EXPECT_EQ(l.chip.fdl_counters().offline, at == 100 ? 1u : 0u);
+  }
+}
+
+// Inside the first character, before its stop sample (s + 174), no request is in progress yet
+// (docs/timing.md): Offline at once, the telegram is heard Offline.
+TEST_P(OfflineAfterRequest, BeforeTheFirstStopSampleAtOnce) {
+  Line l = line();
+  l.offline_at(172, how());
+  EXPECT_FALSE(l.chip.started());
+  EXPECT_TRUE(l.mac_reset());
+  l.step_to(2000);
+  EXPECT_EQ(l.txd, Edges{});
+  EXPECT_EQ(l.chip.fdl_counters().offline, 1u);
+}
+
+// A telegram whose first character's stop sample comes after the write is not a new request
+// (docs/timing.md "Go_Offline"). MinTSDR_Val = 255 (written before Start) holds the answer back:
+// it starts 255 T after the request's end, at s + 396 + 1020 = s + 1416, and ends at s + 1416 +
+// 264 = s + 1680. A second FDL_Status TSYN after the first one's end (s + 396 + 33 T = s + 528,
+// ending at s + 792) is heard while the Offline waits for the answer: counted offline, not
+// served (no second answer, the answer armed is sent at its cycles), Offline at s + 1680.
+TEST_P(OfflineAfterRequest, ATelegramAfterTheWriteIsNotANewRequest) {
+  Line l(GetParam().profile, GetParam().engine, 255);
+  l.offline_at(420, how());  // the answer armed, not yet on the line
+  l.chip.drive_rxd_chars(kRequest, l.s + 528, kT);
+  l.step_to(1679);
+  EXPECT_TRUE(l.chip.started());
+  EXPECT_EQ(l.chip.fdl_counters().offline, 1u);
+  l.step_to(1680);
+  EXPECT_FALSE(l.chip.started());
+  EXPECT_TRUE(l.mac_reset());
+  l.step_to(3000);
+  Edges e;
+  uart_encode(kAnswer, l.s + 1416, kT, e);
+  EXPECT_EQ(l.txd, e);
+}
+
+// A snapshot taken while the Offline waits carries it (format version 5): the restored chip goes
+// Offline at the same cycle.
+TEST_P(OfflineAfterRequest, ThePendingOfflineSurvivesASnapshot) {
+  Line l = line();
+  l.offline_at(500, how());
+  Line m = line();
+  m.chip.load_state(l.chip.save_state());
+  m.txd = l.txd;
+  EXPECT_TRUE(m.chip.started());
+  expect_offline_at_answer_end(m);
+}
+
+namespace {
+
+std::vector<Param> params() {
+  std::vector<Param> v;
+  for (Profile p : {Profile::spc3, Profile::vpc3plus}) {
+    for (Engine e : {Engine::event, Engine::per_cycle}) {
+      for (How h : {How::go_offline, How::violation}) v.push_back({p, e, h});
+    }
+  }
+  return v;
+}
+
+}  // namespace
+
+INSTANTIATE_TEST_SUITE_P(Chips, OfflineAfterRequest, ::testing::ValuesIn(params()),
+                         [](const ::testing::TestParamInfo<Param>& i) {
+                           return testutil::pname(i.param.profile) +
+                                  (i.param.engine == Engine::event ? "_event" : "_per_cycle") +
+                                  (i.param.how == How::go_offline ? "_go_offline" : "_violation");
+                         });
+
+// The DPC31's MAC_Stop has no "after the current request" (Table 5.1-3: "MAC enters Offline"),
+// and its confirmation 11h / 00h is in the Indication_Queue at once: Offline at the completion
+// cycle of the InstQ_Wr write even while a request is received (docs/decisions.md).
+TEST(OfflineDpc31, MacStopActsAtOnceDuringARequest) {
+  for (Engine e : {Engine::event, Engine::per_cycle}) {
+    SCOPED_TRACE(static_cast<int>(e));
+    Chip c(ChipOptions{Profile::dpc31, BusMode::intel, 0, e});
+    c.set_log_sink(nullptr);
+    const std::uint64_t s = testutil::user_start(c);
+    c.drive_rxd_chars(kRequest, s + kRequestAt, kT);
+    c.step(s + 300 - c.cycle());  // inside the request (first stop sample at s + 174)
+    const std::uint64_t done = testutil::user_go_offline(c);
+    EXPECT_FALSE(c.started());
+    EXPECT_NE(c.peek_reg(RegId::Int_Req_Reg) & irq::MAC_Reset, 0);
+    EXPECT_LT(done, s + 396);
+  }
+}
+
+}  // namespace offline_test
