@@ -144,6 +144,12 @@ void in_slices(std::uint64_t cycles, Now now, Run run_for) {
   }
 }
 
+// A master's `idle(cycles)` so (Master.idle, SegmentMaster.idle): `now()` is its line's time.
+template <typename PM, typename Now>
+void idle_in_slices(PM& pm, std::uint64_t cycles, Now now) {
+  pm.act([&] { in_slices(cycles, now, [&](std::uint64_t k) { pm.m->idle(k); }); });
+}
+
 // Who runs a chip or a segment now (and so the user sides on it): read and written with the GIL
 // held only.
 struct RunState {

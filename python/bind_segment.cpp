@@ -729,12 +729,7 @@ void bind_seg_master(py::module_& m) {
       .def("transact_raw", &bytes_service<&DpMaster::transact_raw>, py::arg("data"))
       .def(
           "idle",
-          [](M& pm, U64 cycles) {
-            pm.act([&] {
-              in_slices(
-                  cycles, [&] { return pm.s.seg.cycle(); }, [&](U64 k) { pm.m->idle(k); });
-            });
-          },
+          [](M& pm, U64 cycles) { idle_in_slices(pm, cycles, [&] { return pm.s.seg.cycle(); }); },
           py::arg("cycles"), "Time passes with a silent line from this master.")
       .def_property_readonly("counters", [](const M& pm) { return pm.m->counters(); })
       .def_property_readonly("history", [](const M& pm) { return pm.m->history(); })

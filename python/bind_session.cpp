@@ -810,10 +810,7 @@ void bind_master(py::module_& m) {
       .def(
           "idle",
           [](PyMaster& pm, U64 cycles) {
-            pm.act([&] {
-              in_slices(
-                  cycles, [&] { return pm.chip.chip.cycle(); }, [&](U64 k) { pm.m->idle(k); });
-            });
+            idle_in_slices(pm, cycles, [&] { return pm.chip.chip.cycle(); });
           },
           py::arg("cycles"), "Time passes with a silent bus (cable pulled); the firmware runs.")
       .def(

@@ -32,6 +32,17 @@ void expect(bool ok, const std::string& what) {
   ++failures;
 }
 
+// `f()` throws an E with exactly `message`.
+template <typename E, typename F>
+void expect_throw(const std::string& what, F f, const std::string& message) {
+  try {
+    f();
+    expect(false, what + ": nothing thrown");
+  } catch (const E& e) {
+    expect(e.what() == message, what + ": " + e.what());
+  }
+}
+
 constexpr std::uint64_t kLast = 885'443'715'538'058;  // floor((2^64 - 1) * 48e6 / 1e12)
 
 // The model with its socket and pins bound (rxd is left to the bench).
@@ -57,15 +68,10 @@ struct Far : Platform {
     expect(chip.last_cycle() == kLast, "last_cycle " + std::to_string(chip.last_cycle()));
     // ceil(kLast * 1e12 / 48e6) ps = 18 446 744 073 709 541 667 ps: on the line.
     expect(chip.time_of(kLast).value() == 18'446'744'073'709'541'667ULL, "time_of(last)");
-    try {
-      (void)chip.time_of(kLast + 1);
-      expect(false, "time_of(last + 1) returned");
-    } catch (const std::out_of_range& e) {
-      expect(std::string(e.what()) ==
-                 "Dpc31Tlm::time_of: cycle 885443715538059 is beyond SystemC's time line (its "
-                 "last cycle is 885443715538058)",
-             std::string("time_of(last + 1): ") + e.what());
-    }
+    expect_throw<std::out_of_range>(
+        "time_of(last + 1)", [this] { (void)chip.time_of(kLast + 1); },
+        "Dpc31Tlm::time_of: cycle 885443715538059 is beyond SystemC's time line (its last cycle "
+        "is 885443715538058)");
     dpc31::SlaveConfig slave;
     slave.address = 5;
     dpc31::DpMaster m(chip.chip(), {}, slave);
@@ -79,15 +85,13 @@ struct Far : Platform {
 
 void coarse() {
   sc_core::sc_set_time_resolution(100, sc_core::SC_NS);
-  try {
-    const dpc31::systemc::Dpc31Tlm chip{"dpc31", dpc31::ChipOptions{}};
-    expect(false, "a resolution of 100 ns was taken");
-  } catch (const std::invalid_argument& e) {
-    expect(std::string(e.what()) ==
-               "Dpc31Tlm: the time resolution 100 ns is coarser than one clock of the chip at "
-               "48000000 Hz: set sc_set_time_resolution to one clock or finer",
-           std::string("coarse: ") + e.what());
-  }
+  expect_throw<std::invalid_argument>(
+      "a resolution of 100 ns",
+      [] {
+        dpc31::systemc::Dpc31Tlm{"dpc31", dpc31::ChipOptions{}};
+      },
+      "Dpc31Tlm: the time resolution 100 ns is coarser than one clock of the chip at 48000000 Hz: "
+      "set sc_set_time_resolution to one clock or finer");
 }
 
 std::vector<std::string> warnings;
