@@ -8,6 +8,9 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
+#include <chrono>
+#include <cstdint>
 #include <exception>
 #include <limits>
 #include <memory>
@@ -112,6 +115,39 @@ template <typename F>
 auto without_gil(F&& f) -> decltype(f()) {
   py::gil_scoped_release nogil;
   return f();
+}
+
+// A long run in slices, called without the GIL: between two slices the GIL is taken and Python's
+// signal handlers run, so Ctrl-C raises KeyboardInterrupt at a slice's end, a cycle boundary
+// (docs/python.md, "Ctrl-C"). `now()` is the run's time, `run_for(n)` runs n cycles of it; one
+// that stops early (an observer's error, a wake-up) ends the call there, as the whole call would
+// have. A slice doubles while it takes under 20 ms, so a "no limit" on a chip without events is a
+// few dozen slices, not 2^62 / slice.
+template <typename Now, typename Run>
+void in_slices(std::uint64_t cycles, Now now, Run run_for) {
+  std::uint64_t t = now();
+  const std::uint64_t end = Chip::cycle_after(t, cycles);
+  for (std::uint64_t slice = std::uint64_t{1} << 16;;) {
+    const std::uint64_t n = std::min(end - t, slice);
+    const auto started = std::chrono::steady_clock::now();
+    run_for(n);
+    const std::uint64_t reached = now();
+    if (reached >= end || reached < t + n) return;
+    if (std::chrono::steady_clock::now() - started < std::chrono::milliseconds(20)) {
+      slice = std::min(slice * 2, Chip::kLastCycle);
+    } else {
+      slice = std::max<std::uint64_t>(slice / 2, 1024);
+    }
+    const py::gil_scoped_acquire gil;
+    if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+    t = reached;
+  }
+}
+
+// A master's `idle(cycles)` so (Master.idle, SegmentMaster.idle): `now()` is its line's time.
+template <typename PM, typename Now>
+void idle_in_slices(PM& pm, std::uint64_t cycles, Now now) {
+  pm.act([&] { in_slices(cycles, now, [&](std::uint64_t k) { pm.m->idle(k); }); });
 }
 
 // Who runs a chip or a segment now (and so the user sides on it): read and written with the GIL

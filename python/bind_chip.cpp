@@ -459,7 +459,14 @@ void bind_chip_class(py::module_& m) {
                              [](const PyChip& c) { return registers_of(c.chip.profile()); })
       // time
       .def(
-          "step", [](PyChip& c, U64 n) { c.run([&] { c.chip.step(n); }); }, py::arg("cycles") = 1)
+          "step",
+          [](PyChip& c, U64 n) {
+            c.run([&] {
+              in_slices(
+                  n, [&] { return c.chip.cycle(); }, [&](U64 k) { c.chip.step(k); });
+            });
+          },
+          py::arg("cycles") = 1)
       .def(
           "step_until_irq",
           [](PyChip& c, U64 n) { return c.run([&] { return c.chip.step_until_irq(n); }); },
@@ -547,10 +554,12 @@ void bind_chip_class(py::module_& m) {
             observe<U64, const BusAccess&>(
                 c, f, [&](auto cb) { c.chip.on_bus_access(std::move(cb)); },
                 [](const py::object& fn, U64 cy, const BusAccess& a) {
-                  fn(cy, a.write, a.addr, a.data);
+                  // The C++ side has the byte of a write only (BusAccess::data): None for a read.
+                  fn(cy, a.write, a.addr, a.write ? py::object(py::int_(a.data)) : py::none());
                 });
           },
-          py::arg("callback"), "callback(cycle, write, addr, data) for every CPU bus access")
+          py::arg("callback"),
+          "callback(cycle, write, addr, data) for every CPU bus access (data None for a read)")
       // snapshots
       .def("save_state",
            [](const PyChip& c) {

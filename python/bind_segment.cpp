@@ -728,8 +728,9 @@ void bind_seg_master(py::module_& m) {
           py::arg("request"))
       .def("transact_raw", &bytes_service<&DpMaster::transact_raw>, py::arg("data"))
       .def(
-          "idle", [](M& pm, U64 cycles) { pm.act([&] { pm.m->idle(cycles); }); }, py::arg("cycles"),
-          "Time passes with a silent line from this master.")
+          "idle",
+          [](M& pm, U64 cycles) { idle_in_slices(pm, cycles, [&] { return pm.s.seg.cycle(); }); },
+          py::arg("cycles"), "Time passes with a silent line from this master.")
       .def_property_readonly("counters", [](const M& pm) { return pm.m->counters(); })
       .def_property_readonly("history", [](const M& pm) { return pm.m->history(); })
       .def("clear_history", [](M& pm) { pm.m->clear_history(); });

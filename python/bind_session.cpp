@@ -808,7 +808,10 @@ void bind_master(py::module_& m) {
           },
           py::arg("data"), py::arg("fault") = py::none(), py::arg("fault_char") = py::none())
       .def(
-          "idle", [](PyMaster& pm, U64 cycles) { pm.act([&] { pm.m->idle(cycles); }); },
+          "idle",
+          [](PyMaster& pm, U64 cycles) {
+            idle_in_slices(pm, cycles, [&] { return pm.chip.chip.cycle(); });
+          },
           py::arg("cycles"), "Time passes with a silent bus (cable pulled); the firmware runs.")
       .def(
           "line_noise",

@@ -10,6 +10,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 namespace dpc31::systemc {
 
@@ -32,6 +34,13 @@ Dpc31Tlm::Dpc31Tlm(const sc_core::sc_module_name& name, const ChipOptions& optio
       chip_(options),
       ticks_per_second_(static_cast<std::uint64_t>(
           std::llround(1.0 / sc_core::sc_get_time_resolution().to_seconds()))) {
+  // Coarser, two cycles share a time: accesses are no longer back to back, events move.
+  if (ticks_per_second_ < chip_.clock_hz()) {
+    throw std::invalid_argument(
+        "Dpc31Tlm: the time resolution " + sc_core::sc_get_time_resolution().to_string() +
+        " is coarser than one clock of the chip at " + std::to_string(chip_.clock_hz()) +
+        " Hz: set sc_set_time_resolution to one clock or finer");
+  }
   bus.register_b_transport(this, &Dpc31Tlm::b_transport);
   bus.register_transport_dbg(this, &Dpc31Tlm::transport_dbg);
   bus.register_get_direct_mem_ptr(this, &Dpc31Tlm::get_direct_mem_ptr);
@@ -53,6 +62,11 @@ Dpc31Tlm::Dpc31Tlm(const sc_core::sc_module_name& name, const ChipOptions& optio
 }
 
 sc_core::sc_time Dpc31Tlm::time_of(std::uint64_t cycle) const {
+  if (cycle > last_cycle()) {
+    throw std::out_of_range("Dpc31Tlm::time_of: cycle " + std::to_string(cycle) +
+                            " is beyond SystemC's time line (its last cycle is " +
+                            std::to_string(last_cycle()) + ")");
+  }
   const u128 f = chip_.clock_hz();
   return sc_core::sc_time::from_value(
       static_cast<std::uint64_t>((u128{cycle} * ticks_per_second_ + f - 1) / f));
@@ -60,6 +74,10 @@ sc_core::sc_time Dpc31Tlm::time_of(std::uint64_t cycle) const {
 
 std::uint64_t Dpc31Tlm::cycle_at(const sc_core::sc_time& t) const {
   return static_cast<std::uint64_t>(u128{t.value()} * chip_.clock_hz() / ticks_per_second_);
+}
+
+std::uint64_t Dpc31Tlm::last_cycle() const {
+  return std::min(Chip::kLastCycle, cycle_at(sc_core::sc_max_time()));
 }
 
 void Dpc31Tlm::schedule(std::uint64_t cycle, int pin, bool level) {
@@ -102,7 +120,7 @@ void Dpc31Tlm::run() {
   for (;;) {
     step_to(cycle_at(sc_core::sc_time_stamp()));
     const std::uint64_t next = chip_.next_deadline();
-    if (next == kNone) {
+    if (next == kNone || std::max(next, chip_.cycle() + 1) > last_cycle()) {
       wait(changed_);
       continue;
     }
@@ -114,6 +132,14 @@ void Dpc31Tlm::run() {
 
 void Dpc31Tlm::watch_rxd() {
   if (rxd.size() == 0) return;
+  // A signal declared without a value starts low: the chip's line follows it (a falling edge that
+  // never comes would be lost without a word), and the user is told once.
+  if (!rxd->read()) {
+    chip_.drive_rxd(chip_.cycle(), false);
+    SC_REPORT_WARNING("/dpc31/Dpc31Tlm/rxd",
+                      "rxd is low at time 0: the chip's RxD is held low until it rises (a PROFIBUS "
+                      "line idles high: initialise the signal to true)");
+  }
   for (;;) {
     wait(rxd->value_changed_event());
     const sc_core::sc_time now = sc_core::sc_time_stamp();
@@ -125,6 +151,7 @@ void Dpc31Tlm::watch_rxd() {
 }
 
 void Dpc31Tlm::run_until(std::uint64_t cycle) {
+  cycle = std::min(cycle, last_cycle());  // where the time line ends, so does a wait
   horizon_ = cycle;
   scheduler_moved_.notify();
   changed_.notify(sc_core::SC_ZERO_TIME);  // the caller may have driven RxD

@@ -28,26 +28,35 @@ class Dpc31Tlm : public sc_core::sc_module {
   sc_core::sc_out<bool> irq;    // the interrupt is active (independent of the polarity)
   sc_core::sc_out<bool> pb3;    // dpc31 port PB3 (low on the other profiles)
   sc_core::sc_out<bool> txd;    // the serial output, each edge at its cycle's time
-  // The serial input for a UART model (optional): each change drives RxD at the first clock at or
-  // after its time. Unbound: drive it through chip().drive_rxd / drive_rxd_chars.
+  // The serial input for a UART model (optional): its value at time 0 and each change drive RxD at
+  // the first clock at or after their time (a low start is warned of: PROFIBUS idles high).
+  // Unbound: drive it through chip().drive_rxd / drive_rxd_chars.
   sc_core::sc_port<sc_core::sc_signal_in_if<bool>, 1, sc_core::SC_ZERO_OR_MORE_BOUND> rxd;
 
   SC_HAS_PROCESS(Dpc31Tlm);
+  // A time resolution coarser than one clock of the chip is std::invalid_argument: two cycles
+  // would share a time, and the chip's timing would move.
   Dpc31Tlm(const sc_core::sc_module_name& name, const ChipOptions& options);
 
   // The chip: its serial input (drive_rxd, drive_rxd_chars) and what a testbench looks at. Use
   // it from SystemC processes only; time moves through the model, not through Chip::step.
   Chip& chip() { return chip_; }
   // The time base: cycle c is at ceil(c / clock_hz) seconds on the SystemC time line (the time
-  // resolution decides the rounding); cycle_at is its inverse.
+  // resolution decides the rounding); cycle_at is its inverse. The time line ends at
+  // sc_max_time(): a cycle after last_cycle() has no time (time_of: std::out_of_range).
   [[nodiscard]] sc_core::sc_time time_of(std::uint64_t cycle) const;
   [[nodiscard]] std::uint64_t cycle_at(const sc_core::sc_time& t) const;
+  // The last cycle with a time: Chip::kLastCycle, or cycle_at(sc_max_time()) where that is sooner
+  // (885 443 715 538 058 at 48 MHz and 1 ps, about 213 days).
+  [[nodiscard]] std::uint64_t last_cycle() const;
   // Notified when the interrupt becomes active, at that cycle's time.
   [[nodiscard]] const sc_core::sc_event& irq_rise() const { return irq_rise_; }
   // For a process that moves time through the chip's serial side (the built-in DP master's
   // DpMaster::scheduler): waits until the chip reached `cycle` or one of its steps stopped
-  // (Chip::request_stop, wake_on_txd). Accesses that would start at or after `cycle` wait until
-  // this process has acted, as the host CPU of the native run gives the bus side its turn.
+  // (Chip::request_stop, wake_on_txd); a cycle after last_cycle() waits until last_cycle(), where
+  // the time line ends (a "no limit" wait returns there). Accesses that would start at or after
+  // `cycle` wait until this process has acted, as the host CPU of the native run gives the bus side
+  // its turn.
   void run_until(std::uint64_t cycle);
   // RxD edges were driven ahead of time: the chip's next event may be sooner.
   void rxd_driven() { changed_.notify(sc_core::SC_ZERO_TIME); }

@@ -86,6 +86,18 @@ def test_observers_may_look_but_not_touch():
     assert seen == [(4, True, 0x16, 0x33, 4)]
 
 
+def test_on_bus_access_gives_the_byte_of_a_write_and_none_for_a_read():
+    """The C++ observer has the byte of a write only (BusAccess::data, "writes only"): a read is
+    reported with None, not a 0 that looks like a value read. Each access takes 4 clocks
+    (docs/timing.md, "Bus accesses")."""
+    chip = dpc31.Chip("spc3")
+    seen = []
+    chip.on_bus_access(lambda *a: seen.append(a))
+    chip.write(0x100, 0x12)
+    assert chip.read(0x100) == 0x12
+    assert seen == [(4, True, 0x100, 0x12), (8, False, 0x100, None)]
+
+
 def test_the_gil_is_released_while_the_chip_runs():
     """Another Python thread runs while one chip steps (per-cycle engine: every clock evaluated,
     a long native run), and finds that chip busy instead of racing it."""

@@ -1,0 +1,61 @@
+"""Ctrl-C in a long run (docs/python.md, "Ctrl-C"): the documented "no limit", step(2**64 - 1) or
+Master.idle(2**64 - 1), on a started chip has a User_Timer event every 48 000 cycles
+(docs/timing.md, "User_Timer": 10^14 events before Chip::kLastCycle, about a day); SIGINT raises
+KeyboardInterrupt at a cycle boundary within a fraction of a second, and the chip goes on from
+there. It waited for the whole call."""
+import os
+import signal
+import threading
+import time
+
+import dpc31
+import pytest
+
+LAST = 2**62 - 1  # Chip::kLastCycle (docs/python.md)
+
+
+def interrupted(run):
+    """`run()` with SIGINT sent to this process 0.3 s after it started: how long it took."""
+    timer = threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGINT))
+    started = time.monotonic()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            run()
+    finally:
+        timer.cancel()
+    return time.monotonic() - started
+
+
+def started_spc3():
+    chip = dpc31.Chip("spc3")
+    chip.write(chip.addr_of("Mode_Reg1_S"), 0x01)  # Start: the User_Timer runs
+    return chip
+
+
+def test_ctrl_c_ends_a_no_limit_step():
+    chip = started_spc3()
+    assert interrupted(lambda: chip.step(2**64 - 1)) < 5
+    stopped = chip.cycle
+    assert 4 < stopped < LAST
+    chip.step(4)  # a cycle boundary: the chip goes on
+    assert chip.cycle == stopped + 4
+    chip.write(0x100, 0x5A)
+    assert chip.read(0x100) == 0x5A
+    assert chip.cycle == stopped + 12  # two bus accesses of 4 clocks (docs/timing.md, "Bus accesses")
+
+
+def test_ctrl_c_ends_a_no_limit_idle():
+    chip = started_spc3()
+    m = dpc31.Master(chip, address=2, slave=dpc31.SlaveConfig(address=5))
+    assert interrupted(lambda: m.idle(2**64 - 1)) < 5
+    stopped = chip.cycle
+    assert 4 < stopped < LAST
+    m.idle(100)
+    assert chip.cycle == stopped + 100
+
+
+def test_a_no_limit_step_on_a_chip_without_events_still_ends_at_the_last_cycle():
+    chip = dpc31.Chip("spc3")  # not started: no event before kLastCycle
+    chip.step(2**64 - 1)
+    assert chip.cycle == LAST
