@@ -25,9 +25,10 @@ struct Cpu51Config {
   // chip's own space, its code the chip's RAM from `code` up to 1FFFh; no board RAM, no latch.
   bool c31 = false;
   std::uint16_t code = 0x1000;
-  [[nodiscard]] bool latch_in_window() const {
-    return latch + ports.size() > base && latch < base + kCpu51Window;
-  }
+  // "" or "the chip's window covers the output latch at 0x4000": the latch's first byte is there
+  // even when no port names it (DO4-style firmware writes 4000h + port whatever `ports` says), and
+  // a write there would go into the chip. The one check of the scenario header and the bridge.
+  [[nodiscard]] std::string latch_problem() const;
   // "" or why `ports` cannot name the latch bytes: a name empty, not a word
   // ([A-Za-z_][A-Za-z0-9_]*: `serve`'s protocol lines and `latch` replies carry it between blanks),
   // or given twice

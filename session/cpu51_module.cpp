@@ -64,6 +64,12 @@ std::string Cpu51Config::ports_problem() const {
   return {};
 }
 
+std::string Cpu51Config::latch_problem() const {
+  const std::size_t bytes = std::max<std::size_t>(ports.size(), 1);
+  if (latch + bytes <= base || latch >= base + kCpu51Window) return {};
+  return fmt::format("the chip's window covers the output latch at {:#06x}", latch);
+}
+
 std::string Cpu51Config::chip_problem(const ChipOptions& chip) const {
   if (c31) {
     return chip.irq_controller == IrqController::c31
@@ -115,6 +121,9 @@ bool load_cpu51_image(const Cpu51Config& cfg, Cpu51Image& image, std::string& er
     }
     std::string mtext;
     if (!read_text_file(map, kMaxMapBytes, "SDCC map", mtext, error)) {
+      // A dangling link: "no such file" would contradict the listing that shows it.
+      if (std::filesystem::is_symlink(map, ec) && !std::filesystem::exists(map, ec))
+        error = "a symbolic link to a missing file";
       error = fmt::format("{}: {}", map, error);
       return false;
     }
@@ -126,8 +135,12 @@ bool load_cpu51_image(const Cpu51Config& cfg, Cpu51Image& image, std::string& er
 std::string cpu51_map_path(const std::string& hex) {
   std::filesystem::path map(hex);
   map.replace_extension(".map");
+  // Anything there is the map (a directory, a dangling link): its reader says why it cannot be
+  // read, where skipping it would hide that the names are gone.
   std::error_code ec;
-  return std::filesystem::is_regular_file(map, ec) ? map.string() : std::string();
+  return std::filesystem::symlink_status(map, ec).type() == std::filesystem::file_type::not_found
+             ? std::string()
+             : map.string();
 }
 
 std::string code_name(const Cpu51Image& image, std::uint16_t pc) {
@@ -221,11 +234,8 @@ std::string apply_cpu51_choice(const Cpu51Choice& choice, ChipOptions& chip, Cpu
       }
       cfg.base = static_cast<std::uint16_t>(v);
     }
-    if (cfg.latch_in_window()) {
-      return fmt::format(
-          "--board-address {:#06x}: the chip's window covers the output latch at "
-          "{:#06x}",
-          cfg.base, cfg.latch);
+    if (const std::string why = cfg.latch_problem(); !why.empty()) {
+      return fmt::format("--board-address {:#06x}: {}", cfg.base, why);
     }
   }
   if (const std::string why = cfg.chip_problem(chip); !why.empty()) {

@@ -299,7 +299,7 @@ class Parser {
         unknown_option(k);
       }
     }
-    if (!c31 && c.latch_in_window()) fail("the port latch lies in the chip's window");
+    if (const std::string why = c31 ? "" : c.latch_problem(); !why.empty()) fail(why);
     if (c31) s_.chip.irq_controller = IrqController::c31;
     s_.cpu = std::move(c);
     for (const std::string& n : s_.cpu->ports) ports_.insert(ports_.end() - 1, n.c_str());
@@ -682,7 +682,9 @@ class Parser {
       }
       step_.expect = ExpectKind::port;
       step_.name = std::string(pos_[1]);
-      step_.value = static_cast<std::uint32_t>(number(pos_[2], "port value", 0, 0xFFFF'FFFF));
+      // An 80C32 board's port is a byte of its latch; a host firmware's port value is 32 bits.
+      step_.value =
+          static_cast<std::uint32_t>(number(pos_[2], "port value", 0, s_.cpu ? 0xFF : 0xFFFF'FFFF));
     } else if (what == "outputs" || what == "inputs") {
       args(1, "BYTES");
       if (what == "outputs" && (firmware_seen_ || s_.cpu)) {

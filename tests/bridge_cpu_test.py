@@ -6,9 +6,13 @@ c31_ack_trace: the DPC31's C31 runs tests/mcs51/board/c31_ack.asm (as the build 
 behind the pty, from the chip's RAM at --code 1000h; --trace-cpu has every step with its machine
 cycle, PC and opcode exactly as the program's listing gives them (the machine cycles in brackets
 in c31_ack.asm, the instruction set's cycle counts): the C31's interrupt, raised by its own MOVX
-to Int_Req_Reg in [12,14), is called in [15,17), the vector's LJMP runs in [17,19) and the
-routine starts at 004Eh in 19; the C31 at 24 MHz puts machine cycle m at chip cycle 24 m
-(docs/cpu.md).
+to Int_Req_Reg in [12,14), is called in [15,17) (its own line, naming ie0 and the vector 0003h),
+the vector's LJMP runs in [17,19) and the routine starts at 004Eh in 19; the C31 at 24 MHz puts
+machine cycle m at chip cycle 24 m (docs/cpu.md).
+
+idle_timer_trace: the 80C32 at 24 MHz runs tests/mcs51/board/idle_timer.asm: each idle stretch
+is one line with its cycles, each timer 0 call one line naming tf0 and 000Bh (docs/cpu.md, "The
+CPU trace"); the cycles from the listing's brackets.
 
 c31_bad_arguments: --cpu c31 on another profile, against --irq-controller external, a --code
 outside the RAM's user area, --ports or --board-address (the 80C32 board's), --code on the
@@ -31,33 +35,57 @@ import bridge_test as bt  # noqa: E402
 from bridge_test import GUARD  # noqa: E402
 from dp_master import check  # noqa: E402
 
-# (machine cycle, PC, opcode) of every step: the listing of c31_ack.asm (.org 30h on). The
-# interrupt call is a step of its own, the hardware LCALL in [15,17), traced with the PC it
-# interrupts (0040h, the return address); the vector's LJMP at 0003h follows in [17,19).
-STEPS = [(0, 0x0000, 0x02), (2, 0x0030, 0x90), (4, 0x0033, 0x74), (5, 0x0035, 0xF0),
-         (7, 0x0036, 0x75), (9, 0x0039, 0x90), (11, 0x003C, 0x74), (12, 0x003E, 0xF0),
-         (14, 0x003F, 0x00), (15, 0x0040, 0x90), (17, 0x0003, 0x02), (19, 0x004E, 0x90),
-         (21, 0x0051, 0x74), (22, 0x0053, 0xF0), (24, 0x0054, 0x32), (26, 0x0040, 0x90),
-         (28, 0x0043, 0x74), (29, 0x0045, 0xF0), (31, 0x0046, 0x74), (32, 0x0048, 0x90),
-         (34, 0x004B, 0xF0), (36, 0x004C, 0x80), (38, 0x004C, 0x80)]
+# Every line of the trace: the listing of c31_ack.asm (.org 30h on). The interrupt call, the
+# hardware LCALL in [15,17), is a line of its own with the PC it interrupts (0040h, the return
+# address); the vector's LJMP at 0003h follows in [17,19). Without a map a place is its address.
+def step(m, pc, op):
+    return f"{24 * m} {m} {pc:04X} {op:02X} {pc:04X}h"
+
+
+C31_STEPS = [step(0, 0x0000, 0x02), step(2, 0x0030, 0x90), step(4, 0x0033, 0x74),
+             step(5, 0x0035, 0xF0), step(7, 0x0036, 0x75), step(9, 0x0039, 0x90),
+             step(11, 0x003C, 0x74), step(12, 0x003E, 0xF0), step(14, 0x003F, 0x00),
+             "360 15 interrupt ie0 0003 from 0040 0040h", step(17, 0x0003, 0x02),
+             step(19, 0x004E, 0x90), step(21, 0x0051, 0x74), step(22, 0x0053, 0xF0),
+             step(24, 0x0054, 0x32), step(26, 0x0040, 0x90), step(28, 0x0043, 0x74),
+             step(29, 0x0045, 0xF0), step(31, 0x0046, 0x74), step(32, 0x0048, 0x90),
+             step(34, 0x004B, 0xF0), step(36, 0x004C, 0x80), step(38, 0x004C, 0x80)]
+
+# idle_timer.asm: TL0 counts F7h..FFh in 11..19 and overflows in 20; idle begins after the ORL
+# (13). An idle cycle polls the flags sampled in the one before: TF0, raised in 20, is polled in
+# 21, which ends idle; the call is [22,24), the RETI [24,26) (its hold-off lets the SJMP run),
+# the SJMP [26,28), the ORL [28,30); the reload counted F7h in 21, so TF0 rises again in 30 and
+# the second idle stretch is [30,32).
+IDLE_STEPS = [step(0, 0x0000, 0x02), step(2, 0x0030, 0x75), step(4, 0x0033, 0x75),
+              step(6, 0x0036, 0x75), step(8, 0x0039, 0x75), step(10, 0x003C, 0xD2),
+              step(11, 0x003E, 0x43), "312 13 idle 9 machine cycles to 528 22",
+              "528 22 interrupt tf0 000B from 0041 0041h", step(24, 0x000B, 0x32),
+              step(26, 0x0041, 0x80), step(28, 0x003E, 0x43),
+              "720 30 idle 2 machine cycles to 768 32",
+              "768 32 interrupt tf0 000B from 0041 0041h", step(34, 0x000B, 0x32)]
+
+
+def board_program(name):
+    return os.path.join(os.path.dirname(os.path.abspath(bt.CLI)), "..", "tests", "mcs51", "board",
+                        name + ".ihx")
 
 
 def c31_ack():
-    return os.path.join(os.path.dirname(os.path.abspath(bt.CLI)), "..", "tests", "mcs51", "board",
-                        "c31_ack.ihx")
+    return board_program("c31_ack")
 
 
-def c31_ack_trace():
-    # The program needs 40 machine cycles, 960 chip cycles (20 us of chip time); free pacing runs
-    # the chip with the wall clock while no client is connected. SIGTERM comes after the event
-    # that shows chip time past them (not after a sleep, which beside a CPU hog could end before
-    # the bridge ran that far): a client's open of the pty, logged with the cycle at which the
-    # bridge saw it. A client that only opens and closes the pty changes nothing for the C31.
-    need = 24 * (STEPS[-1][0] + 2)
+def traced(want, *args):
+    """Runs the bridge with `args` and --trace-cpu past the last machine cycle of `want` (its
+    lines), then checks that the trace begins with them."""
+    # Free pacing runs the chip with the wall clock while no client is connected. SIGTERM comes
+    # after the event that shows chip time past them (not after a sleep, which beside a CPU hog
+    # could end before the bridge ran that far): a client's open of the pty, logged with the
+    # cycle at which the bridge saw it. A client that only opens and closes the pty changes
+    # nothing for the CPU.
+    need = int(want[-1].split()[0]) + 24 * 4
     with tempfile.TemporaryDirectory() as tmp:
-        trace = os.path.join(tmp, "c31.trace")
-        b = bt.Bridge(tmp, "--cpu", "c31", "--firmware", c31_ack(), "--code", "0x1000",
-                      "--profile", "dpc31", "--pacing", "free", "--trace-cpu", trace)
+        trace = os.path.join(tmp, "cpu.trace")
+        b = bt.Bridge(tmp, *args, "--pacing", "free", "--trace-cpu", trace)
         try:
             deadline = time.monotonic() + GUARD
             while True:
@@ -72,15 +100,24 @@ def c31_ack_trace():
             b.stop(signal.SIGTERM)
             lines = b.log_lines()
             check(lines[-1].endswith("stopping on SIGTERM"), f"last log line: {lines[-1]}")
-            check("c31_ack.ihx on the C31 at 24000000 Hz" in lines[0], f"log line 1: {lines[0]}")
-            check("profile dpc31, irq-controller c31," in lines[0], f"log line 1: {lines[0]}")
             with open(trace, encoding="utf-8") as f:
-                steps = f.read().splitlines()
-            got = [line.split()[:4] for line in steps[:len(STEPS)]]
-            want = [[str(24 * m), str(m), f"{pc:04X}", f"{op:02X}"] for m, pc, op in STEPS]
-            check(got == want, f"the trace's first steps: {got}, expected {want}")
+                got = f.read().splitlines()[:len(want)]
+            check(got == want, f"the trace's first lines: {got}, expected {want}")
+            return lines
         finally:
             b.kill()
+
+
+def c31_ack_trace():
+    lines = traced(C31_STEPS, "--cpu", "c31", "--firmware", c31_ack(), "--code", "0x1000",
+                   "--profile", "dpc31")
+    check("c31_ack.ihx on the C31 at 24000000 Hz" in lines[0], f"log line 1: {lines[0]}")
+    check("profile dpc31, irq-controller c31," in lines[0], f"log line 1: {lines[0]}")
+
+
+def idle_timer_trace():
+    traced(IDLE_STEPS, "--cpu", "80c32", "--firmware", board_program("idle_timer"),
+           "--profile", "spc3")
 
 
 class Pty:
@@ -128,6 +165,7 @@ def c31_bad_arguments():
 
 CASES = {
     "c31_ack_trace": c31_ack_trace,
+    "idle_timer_trace": idle_timer_trace,
     "c31_bad_arguments": c31_bad_arguments,
 }
 

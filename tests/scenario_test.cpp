@@ -746,6 +746,20 @@ TEST(ScenarioRun, RegisterAccessesAreBusAccessesInByteOrder) {
 
 namespace {
 
+// A scenario file's run: its exit code, error lines and walk.
+struct FileRun {
+  int code = 0;
+  std::vector<std::string> errors;
+  std::vector<std::string> walk;
+};
+FileRun run_file(const std::string& path) {
+  FileRun r;
+  r.code = dpc31::run_scenario_file(
+      path, [&](const std::string& l) { r.walk.push_back(l); },
+      [&](const std::string& l) { r.errors.push_back(l); });
+  return r;
+}
+
 // `cpu 80c32` (docs/cpu.md): the header is checked when parsing, the image is read only when the
 // run starts, relative to the scenario file; a bad record is FILE:LINE, exit 2, nothing run.
 TEST(ScenarioCpu51, HeaderIsCheckedAndTheImageReadWhenTheRunStarts) {
@@ -754,7 +768,23 @@ TEST(ScenarioCpu51, HeaderIsCheckedAndTheImageReadWhenTheRunStarts) {
   EXPECT_EQ(parse_error("cpu 80c32 clock=50000000 firmware a.ihx\nstartup\n"),
             "t.scn:1: clock 50000000 out of range (1000000..40000000)");
   EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx latch=0x8000 ports=x\nstartup\n"),
-            "t.scn:1: the port latch lies in the chip's window");
+            "t.scn:1: the chip's window covers the output latch at 0x8000");
+  // Without ports= the latch's first byte is still there (docs/cpu.md: the shipped firmware
+  // writes 4000h + port), as `dpc31 bridge --board-address 0x4000` refuses it.
+  EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx base=0x4000 latch=0x4000\nstartup\n"),
+            "t.scn:1: the chip's window covers the output latch at 0x4000");
+  EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx base=0x4000\nstartup\n"),
+            "t.scn:1: the chip's window covers the output latch at 0x4000");
+  EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx base=0x3001\nstartup\n"),
+            "t.scn:1: the chip's window covers the output latch at 0x4000");
+  EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx base=0x3000\nstartup\n"), "");
+  EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx base=0x4001\nstartup\n"), "");
+  // A port of the 80C32 board is a byte of its latch (docs/cpu.md, "DO4 on the 80C32").
+  EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx ports=a\nstartup\nexpect port a 256\n"),
+            "t.scn:3: port value 256 out of range (0..255)");
+  EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx ports=a\nstartup\nexpect port a 0xFFFF\n"),
+            "t.scn:3: port value 0xFFFF out of range (0x00..0xFF)");
+  EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx ports=a\nstartup\nexpect port a 0xFF\n"), "");
   EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx ports=x\nstartup\nexpect port y 1\n"),
             "t.scn:3: unknown port 'y' of the 80C32 board (x)");
   EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx ports=outputs,outputs\nstartup\n"),
@@ -762,15 +792,11 @@ TEST(ScenarioCpu51, HeaderIsCheckedAndTheImageReadWhenTheRunStarts) {
   EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx\nstartup\n"), "");  // no file opened yet
   TempFile f("cpu 80c32 firmware bad.ihx\nstartup\n");
   std::ofstream(f.dir() / "bad.ihx") << ":0300000002000BF1\n:00000001FF\n";
-  std::vector<std::string> errors;
-  std::vector<std::string> walk;
-  EXPECT_EQ(dpc31::run_scenario_file(
-                f.path(), [&](const std::string& l) { walk.push_back(l); },
-                [&](const std::string& l) { errors.push_back(l); }),
-            2);
-  ASSERT_EQ(errors.size(), 1u);
-  EXPECT_TRUE(errors[0].starts_with((f.dir() / "bad.ihx").string() + ":1: ")) << errors[0];
-  EXPECT_TRUE(walk.empty());
+  const FileRun r = run_file(f.path());
+  EXPECT_EQ(r.code, 2);
+  ASSERT_EQ(r.errors.size(), 1u);
+  EXPECT_TRUE(r.errors[0].starts_with((f.dir() / "bad.ihx").string() + ":1: ")) << r.errors[0];
+  EXPECT_TRUE(r.walk.empty());
 }
 
 // The image's FILE.map gives the walk its code names (docs/cpu.md); a map beside it that names
@@ -797,6 +823,25 @@ TEST(ScenarioCpu51, AMapWithoutCodeSymbolsIsSaid) {
                               " (no SDCC 'C:' line): code addresses unnamed)"),
             std::string::npos)
       << board_line();
+}
+
+// A FILE.map that is there but cannot be read (a directory, a dangling link) is the run's one
+// error, FILE: reason, exit 2, as an unreadable image is (docs/cpu.md): it was skipped in
+// silence, the code names gone without a word.
+TEST(ScenarioCpu51, AMapThatCannotBeReadIsRefused) {
+  TempFile f("cpu 80c32 firmware fw.ihx\nsilence 1ms\n");
+  std::ofstream(f.dir() / "fw.ihx") << ":0300000002000BF0\n:00000001FF\n";  // LJMP 000Bh
+  const auto refused = [&](const std::string& why) {
+    const FileRun r = run_file(f.path());
+    EXPECT_EQ(r.code, 2);
+    EXPECT_EQ(r.errors, std::vector<std::string>{(f.dir() / "fw.map").string() + ": " + why});
+    EXPECT_TRUE(r.walk.empty());
+  };
+  std::filesystem::create_directory(f.dir() / "fw.map");
+  refused("is a directory, not a SDCC map file");
+  std::filesystem::remove(f.dir() / "fw.map");
+  std::filesystem::create_symlink(f.dir() / "gone.map", f.dir() / "fw.map");
+  refused("a symbolic link to a missing file");
 }
 
 // What the heap grew by from a run's start to its end (the hooks: the runner still holds what it

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <charconv>
 #include <chrono>
@@ -399,15 +400,66 @@ class SignalGuard {
   struct sigaction old_hup_ {};
 };
 
-// --trace-cpu: one line per step of the 80C32, "CHIP_CYCLE MACHINE_CYCLE PC OPCODE SYMBOL" (the
-// chip cycle its first clock falls in; the map's name of the place).
-void trace_cpu(bridge::Engine& e, const Cpu51Image& image, std::FILE* f) {
-  Cpu51Board& board = e.cpu51()->board();
-  board.on_step = [&board, &image, f](std::uint16_t pc, std::uint64_t cycle) {
-    fmt::print(f, "{} {} {:04X} {:02X} {}\n", board.chip_cycle_of(cycle * mcs51::clocks_per_cycle),
-               cycle, pc, board.cpu().code(pc), code_name(image, pc));
-  };
-}
+// --trace-cpu (docs/cpu.md, "The CPU trace"): each line starts with the chip cycle of the step's
+// first clock and its machine cycle; an instruction is "PC OPCODE NAME", the hardware LCALL of
+// an interrupt "interrupt SOURCE VECTOR from PC NAME", and a stretch of idle (or power-down)
+// machine cycles one line "idle N machine cycles to CHIP_CYCLE MACHINE_CYCLE" (the first after
+// it): one line per idle cycle flooded the file with steps of the instruction at PC.
+class CpuTrace {
+ public:
+  CpuTrace(Cpu51Board& board, const Cpu51Image& image, std::FILE* f)
+      : board_(board), image_(image), f_(f) {
+    board.on_step = [this](std::uint16_t pc, std::uint64_t cycle) { step(pc, cycle); };
+  }
+  CpuTrace(const CpuTrace&) = delete;
+  CpuTrace& operator=(const CpuTrace&) = delete;
+  ~CpuTrace() { board_.on_step = nullptr; }
+
+  // The stretch the CPU is in when the bridge stops.
+  void finish() { end_stretch(board_.cpu().cycles()); }
+
+ private:
+  enum class Waiting : std::uint8_t { none, idle, power_down };
+
+  [[nodiscard]] std::uint64_t chip_cycle(std::uint64_t machine_cycle) const {
+    return board_.chip_cycle_of(machine_cycle * mcs51::clocks_per_cycle);
+  }
+  void step(std::uint16_t pc, std::uint64_t cycle) {
+    const mcs51::Cpu& cpu = board_.cpu();
+    // The step's kind as Cpu::step will take it: power-down, then a due call, then idle.
+    const Waiting w = cpu.powered_down()                   ? Waiting::power_down
+                      : !cpu.interrupt_due() && cpu.idle() ? Waiting::idle
+                                                           : Waiting::none;
+    if (w == waiting_ && w != Waiting::none) return;
+    end_stretch(cycle);
+    waiting_ = w;
+    since_ = cycle;
+    if (w != Waiting::none) return;
+    if (cpu.interrupt_due()) {
+      static constexpr std::array<const char*, 6> kSource{"ie0", "tf0",    "ie1",
+                                                          "tf1", "serial", "timer2"};
+      const auto source = static_cast<unsigned>(cpu.due_source());
+      fmt::print(f_, "{} {} interrupt {} {:04X} from {:04X} {}\n", chip_cycle(cycle), cycle,
+                 kSource.at(source), 3 + 8 * source, pc, code_name(image_, pc));
+      return;
+    }
+    fmt::print(f_, "{} {} {:04X} {:02X} {}\n", chip_cycle(cycle), cycle, pc, cpu.code(pc),
+               code_name(image_, pc));
+  }
+  void end_stretch(std::uint64_t cycle) {
+    if (waiting_ == Waiting::none) return;
+    fmt::print(f_, "{} {} {} {} machine cycles to {} {}\n", chip_cycle(since_), since_,
+               waiting_ == Waiting::idle ? "idle" : "power-down", cycle - since_, chip_cycle(cycle),
+               cycle);
+    waiting_ = Waiting::none;
+  }
+
+  Cpu51Board& board_;
+  const Cpu51Image& image_;
+  std::FILE* f_;
+  Waiting waiting_ = Waiting::none;
+  std::uint64_t since_ = 0;  // the stretch's first machine cycle
+};
 
 class Bridge {
  public:
@@ -727,9 +779,12 @@ int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
   try {
     Bridge b(*c, *door.port, log);
     log.line(header(*c, o, door.port->describe(), b.engine()));
-    if (trace.is_open()) trace_cpu(b.engine(), c->setup.cpu_image, trace.stream());
+    std::optional<CpuTrace> cpu_trace;
+    if (trace.is_open())
+      cpu_trace.emplace(b.engine().cpu51()->board(), c->setup.cpu_image, trace.stream());
     if (pcap.is_open()) capture_line(b.engine(), pcap);
     rc = b.run();
+    if (cpu_trace) cpu_trace->finish();
   } catch (const FirmwareError& e) {
     log.line(fmt::format("dpc31 bridge: {}", e.what()));
     return refuse(e.what());

@@ -118,6 +118,9 @@ class Cpu {
   bool powered_down() const { return (sfr_latch(sfr::PCON) & 2) != 0; }
   // An interrupt call is the next step (the last instruction's poll chose a source).
   bool interrupt_due() const { return next_irq_ >= 0; }
+  // The source whose call is the next step (valid while interrupt_due()): its vector is
+  // 3 + 8 * index (`dpc31 bridge --trace-cpu` names it).
+  Source due_source() const { return static_cast<Source>(next_irq_); }
   // Interrupt levels in service: bit 0 low priority, bit 1 high priority.
   std::uint8_t in_service() const { return in_service_; }
 
