@@ -84,12 +84,16 @@ class Runner {
     DirectBus bus(chip_);
     if (s_.cpu && !start_cpu()) return out_;
     // The chip tells of every cycle where its state may have changed (bus accesses, its events):
-    // each change is noted at its own cycle, whoever made it (docs/scenario-format.md).
+    // each change is noted at its own cycle, whoever made it (docs/scenario-format.md). A run
+    // nobody reads the walk of and without a state's `at`/`after` needs none (an observer takes
+    // the chip's plain bus path away: `dpc31 bench`).
     dp_ = chip_.dp_state();
     wd_ = chip_.wd_state();
     started_ = chip_started();
     dp_since_ = wd_since_ = chip_.cycle();
-    chip_.on_state_change([this](std::uint64_t cycle) { check_states(cycle); });
+    if (walk_ || hooks_.observer != nullptr || states_timed()) {
+      chip_.on_state_change([this](std::uint64_t cycle) { check_states(cycle); });
+    }
     if (s_.cpu) {
     } else if (!s_.firmware.empty()) {
       fw_ = std::make_unique<FirmwareHost>(*s_.firmware_desc);
@@ -315,6 +319,12 @@ class Runner {
     return code < std::size(kBaudRates) ? kBaudRates[code] : 0;
   }
 
+  [[nodiscard]] bool states_timed() const {
+    return std::any_of(s_.steps.begin(), s_.steps.end(), [](const ScenarioStep& st) {
+      return st.kind == StepKind::expect && st.when != ScenarioStep::When::any &&
+             (st.expect == ExpectKind::dp_state || st.expect == ExpectKind::wd_state);
+    });
+  }
   [[nodiscard]] bool chip_started() const {
     return field_of(chip_.peek_reg(RegId::Status_Reg), fields::Status_Reg::Offline_Passive_Idle) !=
            0;
@@ -334,6 +344,10 @@ class Runner {
   void check_states(std::uint64_t cycle) {
     const DpState dp = chip_.dp_state();
     const WdState wd = chip_.wd_state();
+    // A start or stop leaves (or finds) both states at their reset values: only then, or with a
+    // change, is Status read (the call comes at every bus access).
+    const bool reset = dp == DpState::Wait_Prm && wd == WdState::Baud_Search;
+    if (dp == dp_ && wd == wd_ && !reset) return;
     if (const bool on = chip_started(); on != started_) {
       started_ = on;
       dp_ = dp;
