@@ -83,6 +83,17 @@ class Runner {
     user_.set_inputs(s_.inputs);
     DirectBus bus(chip_);
     if (s_.cpu && !start_cpu()) return out_;
+    // The chip tells of every cycle where its state may have changed (bus accesses, its events):
+    // each change is noted at its own cycle, whoever made it (docs/scenario-format.md). A run
+    // nobody reads the walk of and without a state's `at`/`after` needs none (an observer takes
+    // the chip's plain bus path away: `dpc31 bench`).
+    dp_ = chip_.dp_state();
+    wd_ = chip_.wd_state();
+    started_ = chip_started();
+    dp_since_ = wd_since_ = chip_.cycle();
+    if (walk_ || hooks_.observer != nullptr || states_timed()) {
+      chip_.on_state_change([this](std::uint64_t cycle) { check_states(cycle); });
+    }
     if (s_.cpu) {
     } else if (!s_.firmware.empty()) {
       fw_ = std::make_unique<FirmwareHost>(*s_.firmware_desc);
@@ -104,9 +115,6 @@ class Runner {
         hooks_.observer->telegram_sent(start, bytes, fault);
       };
     }
-    // State changes are looked for wherever they can happen: after the firmware's ISR (its
-    // Prm/Cfg verdicts), at every telegram, at every X/INT edge, after every transaction.
-    // (A firmware's main loop likewise after each pass.)
     if (m51_) {
       // The 80C32 board moves time itself (DpMaster::scheduler): it brings CPU and chip to the
       // cycle, or stops early when a step of the chip asked to.
@@ -114,14 +122,10 @@ class Runner {
         while (chip_.cycle() < cycle && !chip_.stop_requested()) m51_->run_until(cycle);
       };
     } else if (fw_) {
-      master_->set_firmware(fw_->program([this](BusPort&) { check_states(); }));
+      master_->set_firmware(fw_->program());
     } else {
-      master_->set_firmware([this](BusPort& b) {
-        user_.isr(b);
-        check_states();
-      });
+      master_->set_firmware([this](BusPort& b) { user_.isr(b); });
     }
-    chip_.on_telegram([this](const Telegram&) { check_states(); });
     chip_.on_irq_change([this](std::uint64_t cycle, bool active) {
       if (active) {
         ++irq_count_;
@@ -129,19 +133,18 @@ class Runner {
             std::find(irq_asked_.begin(), irq_asked_.end(), cycle) != irq_asked_.end())
           irq_rises_.emplace_back(cycle, chip_.peek_reg(RegId::Int_Reg));
       }
-      check_states();
     });
     chip_.on_pb3_change([this](std::uint64_t cycle, bool high) {
       pb3_rises_ += high ? 1 : 0;
       note(cycle, fmt::format("PB3 {}", high ? "high (DX_Out of a Sync)" : "low"));
     });
-    dp_ = chip_.dp_state();
-    wd_ = chip_.wd_state();
-    dp_since_ = wd_since_ = chip_.cycle();
     outputs_.assign(s_.user.slave.out_len, 0);
-    note(chip_.cycle(),
-         fmt::format("started: dp_state {}, wd_state {}", dp_state_name(dp_), wd_state_name(wd_)),
+    // A host user side has started the chip in its init (the line at its Start_SPC3); a `cpu`
+    // firmware starts it later, and that start is a line of its own (check_states).
+    note(started_ ? dp_since_ : chip_.cycle(),
+         started_ ? states_text("started") : states_text("not started") + not_started_why(),
          Event::Kind::started);
+    walk_begun_ = true;
     flush();
     for (const ScenarioStep& st : s_.steps) {
       if (st.kind == StepKind::expect) {
@@ -165,7 +168,6 @@ class Runner {
       const std::uint64_t sent = master_->counters().requests;
       act(st);
       if (master_->counters().requests != sent) settle();
-      check_states();
       report_history();
       report_outputs();
       fold_interrupts();
@@ -196,7 +198,7 @@ class Runner {
                      dp_state_name(out_.dp), wd_state_name(out_.wd), out_.passed, out_.failed),
          Event::Kind::end);
     flush();
-    chip_.on_telegram({});
+    chip_.on_state_change({});
     chip_.on_irq_change({});
     chip_.on_pb3_change({});
     return out_;
@@ -317,21 +319,55 @@ class Runner {
     return code < std::size(kBaudRates) ? kBaudRates[code] : 0;
   }
 
-  void check_states() {
+  [[nodiscard]] bool states_timed() const {
+    return std::any_of(s_.steps.begin(), s_.steps.end(), [](const ScenarioStep& st) {
+      return st.kind == StepKind::expect && st.when != ScenarioStep::When::any &&
+             (st.expect == ExpectKind::dp_state || st.expect == ExpectKind::wd_state);
+    });
+  }
+  [[nodiscard]] bool chip_started() const {
+    return field_of(chip_.peek_reg(RegId::Status_Reg), fields::Status_Reg::Offline_Passive_Idle) !=
+           0;
+  }
+  [[nodiscard]] std::string states_text(std::string_view what) const {
+    return fmt::format("{}: dp_state {}, wd_state {}", what, dp_state_name(dp_),
+                       wd_state_name(wd_));
+  }
+  [[nodiscard]] std::string not_started_why() const {
+    const char* start = chip_.profile().id == Profile::dpc31 ? "MAC_Start" : "Start_SPC3";
+    return s_.cpu ? fmt::format(", the chip Offline until the firmware's {}", start)
+                  : fmt::format(", the chip Offline (the user side gave no {})", start);
+  }
+
+  // The chip's observer: at each cycle where its state may have changed. Start_SPC3 (MAC_Start)
+  // and Go_Offline put both states at that cycle (docs/timing.md, "Mode and state changes").
+  void check_states(std::uint64_t cycle) {
     const DpState dp = chip_.dp_state();
     const WdState wd = chip_.wd_state();
-    if (dp != dp_) {
-      note(chip_.cycle(), fmt::format("dp_state {} -> {}", dp_state_name(dp_), dp_state_name(dp)));
+    // A start or stop leaves (or finds) both states at their reset values: only then, or with a
+    // change, is Status read (the call comes at every bus access).
+    const bool reset = dp == DpState::Wait_Prm && wd == WdState::Baud_Search;
+    if (dp == dp_ && wd == wd_ && !reset) return;
+    if (const bool on = chip_started(); on != started_) {
+      started_ = on;
       dp_ = dp;
-      dp_since_ = chip_.cycle();
+      wd_ = wd;
+      dp_since_ = wd_since_ = cycle;
+      // Before the walk's first line the host user side's start is that line.
+      if (walk_begun_) note(cycle, states_text(on ? "started" : "offline"));
+      return;
+    }
+    if (dp != dp_) {
+      note(cycle, fmt::format("dp_state {} -> {}", dp_state_name(dp_), dp_state_name(dp)));
+      dp_ = dp;
+      dp_since_ = cycle;
     }
     if (wd != wd_) {
       std::string found;
       if (wd_ == WdState::Baud_Search) found = fmt::format(" ({} baud)", chip_baud());
-      note(chip_.cycle(),
-           fmt::format("wd_state {} -> {}{}", wd_state_name(wd_), wd_state_name(wd), found));
+      note(cycle, fmt::format("wd_state {} -> {}{}", wd_state_name(wd_), wd_state_name(wd), found));
       wd_ = wd;
-      wd_since_ = chip_.cycle();
+      wd_since_ = cycle;
     }
   }
 
@@ -445,18 +481,6 @@ class Runner {
     if (next > chip_.cycle()) master_->idle(next - chip_.cycle());
   }
 
-  void silence(std::uint64_t cycles) {
-    // Stop at each watchdog deadline so a state change without an interrupt (Baud_Control ->
-    // Baud_Search) is reported at its own cycle.
-    const std::uint64_t end = chip_.cycle() + cycles;
-    while (chip_.cycle() < end) {
-      std::uint64_t next = std::min(end, chip_.watchdog_due());
-      if (next <= chip_.cycle()) next = end;
-      master_->idle(next - chip_.cycle());
-      check_states();
-    }
-  }
-
   void act(const ScenarioStep& st) {
     switch (st.kind) {
       case StepKind::startup: {
@@ -531,7 +555,7 @@ class Runner {
         foreign_master(static_cast<std::uint8_t>(st.value));
         break;
       case StepKind::silence:
-        silence(st.cycles);
+        master_->idle(st.cycles);
         break;
       case StepKind::write:
       case StepKind::read:
@@ -841,6 +865,8 @@ class Runner {
   std::vector<std::uint64_t> irq_asked_;
   std::uint64_t dp_since_ = 0;  // when dp_ / wd_ were entered, as the walk shows it
   std::uint64_t wd_since_ = 0;
+  bool started_ = false;     // the chip's Status bit 0 (Passive_Idle) as the walk last saw it
+  bool walk_begun_ = false;  // the walk's first line is out
   // The cycle of each firmware port's last write (`expect port NAME V at|after N`); 0 before it.
   std::map<std::string, std::uint64_t> port_since_;
   scenario_bus::LastRead last_read_;  // what `expect read` compares

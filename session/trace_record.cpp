@@ -264,6 +264,12 @@ void TraceRecorder::mark(std::string heading) {
 }
 
 void TraceRecorder::user_side_started(std::uint64_t, std::string_view text) {
+  // A `cpu` firmware runs from cycle 0 and starts the chip later (the walk says when).
+  if (chip_ != nullptr &&
+      field_of(chip_->peek_reg(RegId::Status_Reg), fields::Status_Reg::Offline_Passive_Idle) == 0) {
+    mark(fmt::format("no built-in user side; {}", text));
+    return;
+  }
   // The DPC31 starts through its Instruction_Queue (MAC_Start), the others through Mode_Reg1.
   const bool dpc31 = chip_ != nullptr && chip_->profile().id == Profile::dpc31;
   mark(fmt::format("firmware init (the built-in user side): registers, buffers, {}; {}",
