@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <iterator>
 #include <span>
 #include <string>
@@ -532,6 +533,12 @@ struct WdRace {
   std::uint64_t silence_begins = 0;
   std::uint64_t expiry = 0;  // with no request after the silence
 
+  // "expect WHAT at CYCLE" for each of `what`.
+  static std::string expects_at(std::uint64_t cycle, std::initializer_list<std::string_view> what) {
+    std::string out;
+    for (const std::string_view w : what) out += fmt::format("expect {} at {}\n", w, cycle);
+    return out;
+  }
   // `next`: the request after the silence.
   static std::string text(std::uint64_t silence, const std::string& expects, bool next = true) {
     return fmt::format(
@@ -603,10 +610,8 @@ const char* engine_name(dpc31::Engine e) {
 TEST(ScenarioRun, DpWatchdogExpiryDuringARequestAtItsCycle) {
   const WdRace race;
   const std::uint64_t e = race.expiry;
-  const std::string expects = fmt::format(
-      "expect irq WD_DP_Control_Timeout at {}\nexpect wd_state Baud_Control at {}\n"
-      "expect dp_state Wait_Prm at {}\n",
-      e, e, e);
+  const std::string expects = WdRace::expects_at(
+      e, {"irq WD_DP_Control_Timeout", "wd_state Baud_Control", "dp_state Wait_Prm"});
   for (const dpc31::Engine engine : {dpc31::Engine::event, dpc31::Engine::per_cycle}) {
     for (const std::uint64_t into : {1u, 2u, 5u, 20u, 250u, 569u}) {
       SCOPED_TRACE(
@@ -650,11 +655,9 @@ TEST(ScenarioRun, DpWatchdogExpiryAgainstARequestInOneCycle) {
 // each of the three among the causes of the edge at the expiry, on both engines.
 TEST(ScenarioRun, DpWatchdogExpiryShowsEveryEventAtItsEdge) {
   const WdRace race;
-  const std::uint64_t e = race.expiry;
-  const std::string expects = fmt::format(
-      "expect irq WD_DP_Control_Timeout at {}\nexpect irq Go_Leave_Data_Exchange at {}\n"
-      "expect irq DX_Out at {}\nexpect dp_state Wait_Prm at {}\n",
-      e, e, e, e);
+  const std::string expects =
+      WdRace::expects_at(race.expiry, {"irq WD_DP_Control_Timeout", "irq Go_Leave_Data_Exchange",
+                                       "irq DX_Out", "dp_state Wait_Prm"});
   for (const dpc31::Engine engine : {dpc31::Engine::event, dpc31::Engine::per_cycle}) {
     SCOPED_TRACE(fmt::format("{} engine", engine_name(engine)));
     dpc31::Scenario s;
