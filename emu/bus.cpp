@@ -267,8 +267,12 @@ std::uint32_t ChipCore::begin_access(std::uint32_t addr, std::string_view what) 
     note_beyond_bus(addr, what);
   bool violation = false;
   const std::uint32_t a = regs.decode(addr, violation);
-  if (violation) [[unlikely]]
+  if (violation) [[unlikely]] {
     regs.note_violation(addr, a);
+    // Its MAC_Reset shows on X/INT at the access's completion: a RAM access has no hook after
+    // which the line would be looked at (docs/timing.md, "Order within one cycle", step 6).
+    irq.update_line();
+  }
   return a;
 }
 

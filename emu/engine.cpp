@@ -70,6 +70,7 @@ void ChipCore::run_due() {
   if (mac.take_txd_wake()) stop = true;
   if (clock.reached(watchdog.timer())) watchdog_expired();
   if (clock.reached(requests.timer())) requests.wd_tick();
+  // The events above only latched IRR: X/INT once, with all of them (docs/timing.md, step 6).
   irq.update_line();
   signals.state(clock.now);
 }

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <utility>
 
 #include "block_access.hpp"
 #include "core.hpp"
@@ -31,19 +32,43 @@ inline void on_block_event(Chip& c, std::function<void(std::uint64_t, const Bloc
 }
 
 // The protocol side's entry points (what the DP engine does inside the chip), each taking
-// effect at the current cycle: for the tests of one block.
-inline void asic_raise(Chip& c, std::uint16_t irq_bits) { core(c).irq.raise(irq_bits); }  // IRR
-inline void asic_dout_received(Chip& c) { core(c).buffers.dout_received(); }  // D -> N, DX_Out
-inline void asic_dout_clear(Chip& c) { core(c).buffers.dout_clear(); }  // clear D, D -> N, DX_Out
-// N -> D if new; returns the D buffer index.
-inline std::uint8_t asic_din_fetch(Chip& c) { return core(c).buffers.din_fetch(); }
-inline void asic_diag_send_begin(Chip& c) { core(c).buffers.diag_send_begin(); }
-inline void asic_diag_send_end(Chip& c) {
-  core(c).buffers.diag_send_end(core(c).buffers.sent_diag_has_stat_diag());
+// effect at the current cycle as all of that cycle's protocol-side events: X/INT is looked at
+// after it (docs/timing.md, "Order within one cycle", step 6). For the tests of one block.
+template <class Event>
+void asic(Chip& c, Event&& event) {
+  std::forward<Event>(event)(core(c));
+  core(c).irq.update_line();
 }
-inline void asic_prm_received(Chip& c) { core(c).dp.prm_accepted(); }  // New_Prm_Data
-inline void asic_cfg_received(Chip& c) { core(c).dp.cfg_accepted(); }  // New_Cfg_Data
-inline void asic_ssa_received(Chip& c) { core(c).dp.ssa_accepted(); }  // New_SSA_Data
+inline void asic_raise(Chip& c, std::uint16_t irq_bits) {  // IRR
+  asic(c, [=](ChipCore& k) { k.irq.raise(irq_bits); });
+}
+inline void asic_dout_received(Chip& c) {  // D -> N, DX_Out
+  asic(c, [](ChipCore& k) { k.buffers.dout_received(); });
+}
+inline void asic_dout_clear(Chip& c) {  // clear D, D -> N, DX_Out
+  asic(c, [](ChipCore& k) { k.buffers.dout_clear(); });
+}
+// N -> D if new; returns the D buffer index.
+inline std::uint8_t asic_din_fetch(Chip& c) {
+  std::uint8_t d = 0;
+  asic(c, [&](ChipCore& k) { d = k.buffers.din_fetch(); });
+  return d;
+}
+inline void asic_diag_send_begin(Chip& c) {
+  asic(c, [](ChipCore& k) { k.buffers.diag_send_begin(); });
+}
+inline void asic_diag_send_end(Chip& c) {
+  asic(c, [](ChipCore& k) { k.buffers.diag_send_end(k.buffers.sent_diag_has_stat_diag()); });
+}
+inline void asic_prm_received(Chip& c) {  // New_Prm_Data
+  asic(c, [](ChipCore& k) { k.dp.prm_accepted(); });
+}
+inline void asic_cfg_received(Chip& c) {  // New_Cfg_Data
+  asic(c, [](ChipCore& k) { k.dp.cfg_accepted(); });
+}
+inline void asic_ssa_received(Chip& c) {  // New_SSA_Data
+  asic(c, [](ChipCore& k) { k.dp.ssa_accepted(); });
+}
 
 }  // namespace harness
 

@@ -40,11 +40,6 @@ std::uint16_t InterruptController::events_now() const {
 }
 
 void InterruptController::raise(std::uint16_t bits) {
-  latch(bits);
-  update_line();
-}
-
-void InterruptController::latch(std::uint16_t bits) {
   bits = static_cast<std::uint16_t>(bits & ~regs_.reg(RegId::Int_Req_Reg)->rsvd);
   regs_.latch(RegId::Int_Req_Reg) |= bits;
   note_events(bits, clock_.now);

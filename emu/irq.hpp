@@ -35,16 +35,17 @@ class InterruptController {
   // Binds the hooks of the registers this block owns (reg_hooks.hpp).
   void install_hooks(HookTable& h);
 
-  void raise(std::uint16_t bits);  // IRR |= bits, noted as this cycle's events
-  // The same without looking at X/INT: the caller's cycle goes on, and a later raise or
-  // update_line shows the line with the state that cycle leaves.
-  void latch(std::uint16_t bits);
+  // IRR |= bits, noted as this cycle's events. X/INT is not looked at here: whoever ends the
+  // cycle's events (the engine's step, a bus access's completion, the harness) calls update_line
+  // once, so an observer sees IRR with all of that cycle's events (docs/timing.md, step 6).
+  void raise(std::uint16_t bits);
   void end_of_interrupt();  // EOI (Mode_Reg1): the inactive time starts
   [[nodiscard]] bool active() const {
     return !clock_.running(s_.eoi) &&
            (regs_.latch(RegId::Int_Req_Reg) & ~regs_.latch(RegId::Int_Mask_Reg)) != 0;
   }
-  // X/INT from IR and the inactive time; tells on_irq_change. Inline: every IMR write asks.
+  // X/INT from IR and the inactive time; tells on_irq_change. Inline: every step and every IMR
+  // write asks.
   void update_line() {
     if (s_.pb3 && (regs_.latch(RegId::Int_Req_Reg) & irq::DX_Out) == 0) set_pb3(false);
     if (const bool now_active = active(); now_active != s_.line) line_changed(now_active);

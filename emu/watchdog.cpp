@@ -64,9 +64,7 @@ Watchdog::Expiry Watchdog::expire() {
   if (s_.wd == WdState::DP_Control) {
     sig_.log(LogLevel::info, "DP watchdog expired: WD_DP_Control_Timeout, DP state machine reset");
     enter_baud_control();
-    // Latched, X/INT not looked at yet: an observer of its rise sees the Leave_Master that
-    // follows in this cycle (engine.cpp; the block event: wd_expired).
-    irq_.latch(irq::WD_DP_Control_Timeout);
+    irq_.raise(irq::WD_DP_Control_Timeout);
     s_.dp_wd_on = false;
     return Expiry::dp_control;
   }

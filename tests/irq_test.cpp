@@ -177,3 +177,31 @@ TEST_P(Irq, PolarityFollowsIntPol) {
 
 INSTANTIATE_TEST_SUITE_P(Chips, Irq, ::testing::ValuesIn(testutil::all_chip_params()),
                          testutil::param_name);
+
+// X/INT is looked at once after a cycle's events (docs/timing.md, "Order within one cycle",
+// step 6), so an edge caused by several events in one cycle shows IRR with all of them. The
+// DPC31's MAC_Stop (Table 5.1-3: "MAC enters Offline", confirmed by an entry in the
+// Indication_Queue, p.22 §5.1.3) latches MAC_Reset and then, with its indication 11h/00h,
+// Indication (bit 5), both at the completion of the InstQ_Wr write (docs/timing.md, "Mode and
+// state changes"; docs/dpc31.md, "The queues"). Both engines.
+TEST(IrqDpc31, AnEdgeOfSeveralEventsShowsThemAll) {
+  for (const Engine engine : {Engine::event, Engine::per_cycle}) {
+    SCOPED_TRACE(engine == Engine::event ? "event engine" : "per-cycle engine");
+    Chip c({.profile = Profile::dpc31, .engine = engine});
+    const auto cell = [&c](RegId id) { return static_cast<std::uint32_t>(c.addr_of(id)); };
+    c.write(cell(RegId::IndQ_Base), 0xF9);  // the ring at 1F20h, beside the requests' at 1F00h
+    c.write(cell(RegId::IndQ_Len), 4);
+    bus_write16(c, c.addr_of(RegId::Int_Mask_Reg), 16, 0x0000);  // every event unmasked
+    testutil::user_start(c);                                     // DX_Out: X/INT active
+    bus_write16(c, c.addr_of(RegId::Int_Ack_Reg), 16, 0xFFFF);   // acknowledged: inactive
+    ASSERT_FALSE(c.irq_active());
+    std::vector<std::pair<std::uint64_t, std::uint16_t>> rises;  // cycle, IRR seen
+    c.on_irq_change([&c, &rises](std::uint64_t cyc, bool active) {
+      if (active) rises.emplace_back(cyc, c.peek_reg(RegId::Int_Req_Reg));
+    });
+    const std::uint64_t stop = testutil::user_go_offline(c);
+    ASSERT_EQ(rises.size(), 1u);
+    EXPECT_EQ(rises[0].first, stop);
+    EXPECT_EQ(rises[0].second, irq::MAC_Reset | irq::Indication);
+  }
+}

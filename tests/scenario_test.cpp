@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <iterator>
 #include <span>
 #include <string>
@@ -532,13 +533,19 @@ struct WdRace {
   std::uint64_t silence_begins = 0;
   std::uint64_t expiry = 0;  // with no request after the silence
 
-  static std::string text(std::uint64_t silence, const std::string& expects) {
+  // "expect WHAT at CYCLE" for each of `what`.
+  static std::string expects_at(std::uint64_t cycle, std::initializer_list<std::string_view> what) {
+    std::string out;
+    for (const std::string_view w : what) out += fmt::format("expect {} at {}\n", w, cycle);
+    return out;
+  }
+  // `next`: the request after the silence.
+  static std::string text(std::uint64_t silence, const std::string& expects, bool next = true) {
     return fmt::format(
         "profile spc3\nbaud 12000000\nmaster address=2\n"
         "slave address=5 ident=0x0C31 cfg=13,23 in=4 out=4 wd=1,1 wd_on=1 wd_base=1ms\n"
-        "user inputs=A1,A2,A3,A4\nstartup\nexchange outputs=01,02,03,04\nsilence {}\n"
-        "exchange outputs=01,02,03,04\n{}",
-        silence, expects);
+        "user inputs=A1,A2,A3,A4\nstartup\nexchange outputs=01,02,03,04\nsilence {}\n{}{}",
+        silence, next ? "exchange outputs=01,02,03,04\n" : "", expects);
   }
   WdRace() {
     dpc31::Scenario s;
@@ -603,10 +610,8 @@ const char* engine_name(dpc31::Engine e) {
 TEST(ScenarioRun, DpWatchdogExpiryDuringARequestAtItsCycle) {
   const WdRace race;
   const std::uint64_t e = race.expiry;
-  const std::string expects = fmt::format(
-      "expect irq WD_DP_Control_Timeout at {}\nexpect wd_state Baud_Control at {}\n"
-      "expect dp_state Wait_Prm at {}\n",
-      e, e, e);
+  const std::string expects = WdRace::expects_at(
+      e, {"irq WD_DP_Control_Timeout", "wd_state Baud_Control", "dp_state Wait_Prm"});
   for (const dpc31::Engine engine : {dpc31::Engine::event, dpc31::Engine::per_cycle}) {
     for (const std::uint64_t into : {1u, 2u, 5u, 20u, 250u, 569u}) {
       SCOPED_TRACE(
@@ -639,6 +644,33 @@ TEST(ScenarioRun, DpWatchdogExpiryAgainstARequestInOneCycle) {
     EXPECT_FALSE(expired_at(race.expiry));
     EXPECT_TRUE(expired_at(next));
     EXPECT_EQ(r.left, next);
+  }
+}
+
+// The expiry with the line silent: "expiry at last restart + TWD: WD_DP_Control_Timeout,
+// Baud_Control, Leave_Master, all in that cycle" (docs/timing.md, "DP watchdog"), and the
+// Leave_Master from Data_Exchange is Go_Leave_Data_Exchange and the outputs cleared with DX_Out
+// (docs/timing.md, User_Leave_Master; chip-facts §5.1). X/INT is looked at once after all of
+// them (docs/timing.md, "Order within one cycle", steps 3 and 6), so `expect irq ... at` finds
+// each of the three among the causes of the edge at the expiry, on both engines.
+TEST(ScenarioRun, DpWatchdogExpiryShowsEveryEventAtItsEdge) {
+  const WdRace race;
+  const std::string expects =
+      WdRace::expects_at(race.expiry, {"irq WD_DP_Control_Timeout", "irq Go_Leave_Data_Exchange",
+                                       "irq DX_Out", "dp_state Wait_Prm"});
+  for (const dpc31::Engine engine : {dpc31::Engine::event, dpc31::Engine::per_cycle}) {
+    SCOPED_TRACE(fmt::format("{} engine", engine_name(engine)));
+    dpc31::Scenario s;
+    dpc31::ScenarioError err;
+    // The silence reaches past the expiry: no request after the last restart.
+    ASSERT_TRUE(
+        dpc31::parse_scenario(WdRace::text(2 * WdRace::kTwd, expects, false), "t.scn", s, err))
+        << err.text();
+    s.chip.engine = engine;
+    Lines errors;
+    const dpc31::ScenarioOutcome o = dpc31::run_scenario(s, {}, errors.sink());
+    EXPECT_EQ(o.failed, 0u) << (errors.lines.empty() ? "" : errors.lines[0]);
+    EXPECT_EQ(o.passed, 4u);
   }
 }
 

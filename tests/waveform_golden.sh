@@ -39,6 +39,13 @@
 # Leave_Master (s23-wd, docs/timing.md "Order within one cycle"): diffed by hand, the only change
 # is at the expiry's time #169855166667, where dp_state's line (b00, Wait_Prm) now comes first,
 # before wd_state (b01), irr and x_int, instead of after x_int: the same values at the same time.
+# Both do4_osp_replace files once more when X/INT came to be looked at once after a cycle's
+# events (s24-xint, docs/timing.md "Order within one cycle", step 6): diffed by hand (per time
+# stamp, the same set of lines; the same header and times), the only changes are the order of
+# lines at 14 times of the full file and 1 of the la file: x_int's line now comes after the
+# din_sm (11 times) or dout_sm (2, the DP watchdog expiry at #169855166667 among them) line of
+# the buffer change latched with its event in that cycle, and at #61004833333 txd's line comes
+# first, not last (in the la file: txd before x_int there).
 # Usage: waveform_golden.sh path/to/dpc31 source-dir
 set -eu
 dpc31=$1
