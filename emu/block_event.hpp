@@ -31,7 +31,10 @@ struct BlockEvent {
     sap_srd,    // vpc3plus: an SRD for a SAP-list entry passed its checks: response or SC
     sap_sent,   // vpc3plus: the last stop bit of a response from a SAP-list buffer is out
     read,
-    write
+    write,
+    // Not an input of the golden model (it has no MAC): Go_Offline or a RAM access violation
+    // during a request, the Offline waits for its end. The cosim recorder refuses such a session.
+    offline_deferred
   };
   Kind kind;
   // irq bits, gc command, stat_diag, dis bits, bus address, SAP-list entry address

@@ -40,7 +40,7 @@ ChipCore::ChipCore(const ChipOptions& opt)
   // learns it from the same block event (it does not decode addresses beyond the RAM).
   regs.on_violation = [this] {
     signals.emit(BlockEvent::Kind::mac_stop);
-    mode.go_offline();
+    mode.go_offline("RAM access violation");
   };
   irq.install_hooks(hooks);
   mode.install_hooks(hooks);

@@ -151,19 +151,20 @@ void Mac::request_ended() {
   offline_due();
 }
 
-bool Mac::defer_offline() {
+bool Mac::defer_offline(std::string_view cause) {
   if (s_.offline_pending != State::OfflinePending::none) return true;
   materialize();  // a telegram heard whole: is it in progress now?
   // An answer armed or on the line is the current request's; a telegram being received after
   // TSYN (from its first character's stop sample on) is one.
   if (tx_busy()) {
     s_.offline_pending = State::OfflinePending::answer;
-  } else if (s_.in_frame) {
+  } else if (s_.in_frame || serving_) {
     s_.offline_pending = State::OfflinePending::request;
   } else {
     return false;
   }
-  sig_.log(LogLevel::info, "Go_Offline: Offline after the current request");
+  sig_.log(LogLevel::info, "{}: Offline after the current request", cause);
+  sig_.emit(BlockEvent::Kind::offline_deferred);
   return true;
 }
 
@@ -536,7 +537,9 @@ void Mac::on_frame(const fdl::Frame& f, const UartChar& last) {
     return;
   }
   if (f.da == dp_.station()) watchdog_.retrigger(f.sa, dp_.master_add());
+  serving_ = true;
   if (dp_.service(f)) send(dp_.answer(), last.end);
+  serving_ = false;
 }
 
 void Mac::send(std::span<const std::uint8_t> answer, std::uint64_t request_end) {
@@ -747,6 +750,7 @@ void Mac::take_heard() {
       s_.frame.status(),
       UartChar{h.tel->bytes.back(), true, true, true, last_start, last_start + frame_cycles, idle},
       &h.tel->decoded);
+  request_ended();
 }
 
 void Mac::materialize() {

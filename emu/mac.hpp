@@ -8,6 +8,7 @@
 #include <functional>
 #include <memory>
 #include <span>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -171,7 +172,8 @@ class Mac {
   void stop();          // Go_Offline: no search, no telegram, no answer; TxD idle
   // Go_Offline (or a RAM access violation) on a started chip: true when a request is in
   // progress, then `offline_due` takes the chip Offline at its end; false: Offline now.
-  bool defer_offline();
+  // `cause` names it in the log line.
+  bool defer_offline(std::string_view cause);
   std::function<void()> offline_due;  // ModeRegisters::offline (set by its constructor)
   void drive_rxd(std::uint64_t cycle, bool level);
   // Chip::drive_rxd_chars: one good character from `start` (>= now), whole when the receiver can
@@ -257,6 +259,9 @@ class Mac {
   // Not state (a snapshot leaves them): the wake-up a master asked for, and whether it fired.
   bool wake_ = false;
   bool woke_ = false;
+  // Inside on_frame's service and send: the chip's own buffer access is part of the request, so
+  // a RAM access violation there waits for its end (never set between two cycles).
+  bool serving_ = false;
 };
 
 }  // namespace dpc31

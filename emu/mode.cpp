@@ -38,7 +38,7 @@ void ModeRegisters::command(std::uint16_t written) {
   if ((written & fields::Mode_Reg1::Start_SPC3) != 0) start();
   if ((written & fields::Mode_Reg1::EOI) != 0) irq_.end_of_interrupt();
   if ((written & fields::Mode_Reg1::User_Leave_Master) != 0) dp_.leave_master();
-  if ((written & fields::Mode_Reg1::Go_Offline) != 0) go_offline();
+  if ((written & fields::Mode_Reg1::Go_Offline) != 0) go_offline("Go_Offline");
 }
 
 void ModeRegisters::start() {
@@ -64,8 +64,8 @@ void ModeRegisters::start() {
 
 // "go Offline after the current request" (SPC3 Mode_Reg1 bit 2; MAC_Reset "after finishing the
 // current request"): with a request in progress the MAC calls offline() at its end.
-void ModeRegisters::go_offline() {
-  if (!dp_.started() || mac_.defer_offline()) return;
+void ModeRegisters::go_offline(std::string_view cause) {
+  if (!dp_.started() || mac_.defer_offline(cause)) return;
   offline();
 }
 

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string_view>
 
 #include "buffers.hpp"
 #include "dp_sm.hpp"
@@ -45,8 +46,9 @@ class ModeRegisters {
   // Mode_Reg1_S written: the actions of the bits written as 1.
   void command(std::uint16_t written);
   void start();  // Start_SPC3: Offline -> Passive_Idle
-  // Go_Offline (and a RAM access violation): the MAC reset after the current request.
-  void go_offline();
+  // Go_Offline (and a RAM access violation): the MAC reset after the current request; `cause`
+  // names which in the log line.
+  void go_offline(std::string_view cause);
   void offline();  // the MAC reset now (MAC_Stop; the end of the request go_offline waited for)
   [[nodiscard]] std::uint16_t status() const;  // Status_Reg
 

@@ -340,7 +340,8 @@ class Runner {
   }
 
   // The chip's observer: at each cycle where its state may have changed. Start_SPC3 (MAC_Start)
-  // and Go_Offline put both states at that cycle (docs/timing.md, "Mode and state changes").
+  // puts both states at that cycle, Go_Offline and a RAM access violation at that cycle or at the
+  // end of the current request (docs/timing.md, "Mode and state changes").
   void check_states(std::uint64_t cycle) {
     const DpState dp = chip_.dp_state();
     const WdState wd = chip_.wd_state();

@@ -174,7 +174,7 @@ bool Segment::relay_answer(std::size_t i, std::uint64_t cycle) {
   return true;
 }
 // What the chip drives must be the answer the line relayed: whole characters at their places in
-// it, edges one by one. A Go_Offline or a reset cutting the answer short drives otherwise (or
+// it, edges one by one. A MAC_Stop (DPC31) or a reset cutting the answer short drives otherwise (or
 // stops: look_at); the other chips heard it whole, so that is thrown, never papered over.
 void Segment::check_txd(Station& s, const TxdRun& run) {
   if (!s.broken.empty()) return;
@@ -192,7 +192,7 @@ void Segment::check_txd(Station& s, const TxdRun& run) {
 }
 
 // The armed answers' edges up to now_ into round_. An answer whose first start bit finds its chip's
-// TxD high was withdrawn before it began (Go_Offline, a reset): it never reaches the line.
+// TxD high was withdrawn before it began (MAC_Stop (DPC31), a reset): it never reaches the line.
 void Segment::relay_armed(std::uint64_t before) {
   for (const std::size_t i : armed_) {
     Station& s = *stations_[i];

@@ -15,8 +15,9 @@ namespace dpc31 {
 // before its first start bit are taken) is kept as it comes, and advance() hands its characters
 // over whole once their stop samples are due, with no queue of UartChar and no step per
 // character. Anything after a kept run (edges: a character only partly on the line, an answer
-// cut by Go_Offline, an answer made of edges for a waveform; a run after a gap) turns the run
-// into UartChar (all its stop samples are past) and goes through the receiver (UartRx::take).
+// cut by MAC_Stop (DPC31) or a reset, an answer made of edges for a waveform; a run after a gap)
+// turns the run into UartChar (all its stop samples are past) and goes through the receiver
+// (UartRx::take).
 // A run handed ahead of time (a segment's line: a telegram whole at its first start bit) keeps
 // the characters advance() has not reached; what comes after them then gives those to the
 // receiver as they are (UartRx::take), as if advance() had. Everything taken lies at or before

@@ -18,6 +18,7 @@
 #include "responder.hpp"
 #include "session.hpp"
 #include "test_files.hpp"
+#include "test_util.hpp"
 
 using namespace dpc31;
 using namespace dpc31::cosim;
@@ -398,6 +399,32 @@ TEST(CosimSession, RequestsInAnOrderTheInputsCannotCarryAreNamed) {
   EXPECT_EQ(s.unreplayable,
             fmt::format("cycle {}: requests of one InstQ_Wr write in an order the block events "
                         "cannot replay (they act as User_Leave_Master, MAC_Stop, MAC_Start)",
+                        cycle));
+}
+
+// Go_Offline during a request: the chip goes Offline at the request's end (docs/timing.md
+// "Go_Offline"), the golden model, which has no MAC, would at the write. The recording says so
+// (exit 2 at the CLI) instead of reporting a divergence. The FDL_Status to station 5 (10 05 02
+// 49 50 16) starts TSYN = 33 T after Start; 200 clocks later its first stop sample (10 T + T/2
+// in) is past and the write lands inside it.
+TEST(CosimSession, AnOfflineThatWaitsForTheRequestIsNamed) {
+  Recording rec(Profile::spc3);
+  Chip& chip = rec.chip;
+  chip.write(static_cast<std::uint32_t>(chip.addr_of(RegId::R_TS_Adr)), 5);
+  const std::uint64_t s = testutil::user_start(chip);
+  constexpr std::uint32_t kT = 4;  // 12 Mbaud at 48 MHz
+  chip.drive_rxd_chars(std::vector<std::uint8_t>{0x10, 0x05, 0x02, 0x49, 0x50, 0x16}, s + 33 * kT,
+                       kT);
+  chip.step(s + 200 - chip.cycle());
+  const std::uint64_t cycle = testutil::user_go_offline(chip);
+  EXPECT_TRUE(chip.started());
+  chip.step(2000);
+  end_recording(chip, rec.s);
+  EXPECT_FALSE(chip.started());
+  EXPECT_EQ(rec.s.unreplayable,
+            fmt::format("cycle {}: Go_Offline or a RAM access violation during a request (the chip "
+                        "goes Offline at the request's end; the golden model has no MAC and cannot "
+                        "wait for it)",
                         cycle));
 }
 

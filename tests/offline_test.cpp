@@ -44,8 +44,10 @@ struct Line {
   Edges txd;
   std::uint64_t s = 0;  // the cycle Start_SPC3 completed
 
-  // min_tsdr: a MinTSDR_Val written before Start (0: the reset value, 11).
-  Line(Profile p, Engine e, std::uint8_t min_tsdr = 0)
+  // min_tsdr: a MinTSDR_Val written before Start (0: the reset value, 11). `request`: the
+  // master's telegram at s + kRequestAt, with `fault` in one of its characters.
+  Line(Profile p, Engine e, std::uint8_t min_tsdr = 0,
+       const std::vector<std::uint8_t>& request = kRequest, UartFault fault = {})
       : chip(ChipOptions{p, BusMode::intel, 0, e}) {
     chip.set_log_sink(nullptr);
     chip.on_txd([this](std::uint64_t c, bool l) { txd.emplace_back(c, l); });
@@ -53,7 +55,13 @@ struct Line {
     if (min_tsdr != 0)
       chip.write(static_cast<std::uint32_t>(chip.addr_of(RegId::MinTSDR_Val)), min_tsdr);
     s = testutil::user_start(chip);
-    chip.drive_rxd_chars(kRequest, s + kRequestAt, kT);
+    if (fault.kind == UartFault::Kind::none) {
+      chip.drive_rxd_chars(request, s + kRequestAt, kT);
+      return;
+    }
+    Edges edges;
+    uart_encode(request, s + kRequestAt, kT, edges, fault);
+    for (const auto& [cycle, level] : edges) chip.drive_rxd(cycle, level);
   }
   // The access that takes the chip Offline, completing at s + at (a bus access takes 4 clocks).
   void offline_at(std::uint64_t at, How how) {
@@ -147,15 +155,92 @@ TEST_P(OfflineAfterRequest, WhileIdleAtOnce) {
 }
 
 // Inside the first character, before its stop sample (s + 174), no request is in progress yet
-// (docs/timing.md): Offline at once, the telegram is heard Offline.
+// (docs/timing.md): Offline at once, the telegram is heard Offline. The cycle before it is the
+// last one so.
 TEST_P(OfflineAfterRequest, BeforeTheFirstStopSampleAtOnce) {
+  for (const std::uint64_t at : {std::uint64_t{172}, std::uint64_t{173}}) {
+    SCOPED_TRACE(at);
+    Line l = line();
+    l.offline_at(at, how());
+    EXPECT_FALSE(l.chip.started());
+    EXPECT_TRUE(l.mac_reset());
+    l.step_to(2000);
+    EXPECT_EQ(l.txd, Edges{});
+    EXPECT_EQ(l.chip.fdl_counters().offline, 1u);
+  }
+}
+
+// From the first character's stop sample (s + 174) on, the request is in progress: the Offline
+// waits for the answer's end.
+TEST_P(OfflineAfterRequest, AtTheFirstStopSampleItWaits) {
   Line l = line();
-  l.offline_at(172, how());
+  l.offline_at(174, how());
+  EXPECT_TRUE(l.chip.started());
+  EXPECT_FALSE(l.mac_reset());
+  expect_offline_at_answer_end(l);
+  EXPECT_EQ(l.chip.fdl_counters().offline, 0u);
+}
+
+namespace {
+
+// A request that ends without an answer, the Offline due since s + 204 (after the first stop
+// sample, s + 174): still started at s + at - 1, Offline with MAC_Reset at s + at, the cycle the
+// MAC drops the telegram (docs/timing.md "Go_Offline"). The FDL_Status to station 5 driven at
+// s + 1000 (TSYN after any of them) is then heard Offline: counted, never answered.
+void expect_offline_when_dropped(Line& l, How how, std::uint64_t at) {
+  l.offline_at(204, how);
+  l.step_to(at - 1);
+  EXPECT_TRUE(l.chip.started());
+  EXPECT_FALSE(l.mac_reset());
+  l.step_to(at);
   EXPECT_FALSE(l.chip.started());
   EXPECT_TRUE(l.mac_reset());
+  EXPECT_EQ(l.chip.dp_state(), DpState::Wait_Prm);
+  l.chip.drive_rxd_chars(kRequest, l.s + 1000, kT);
   l.step_to(2000);
   EXPECT_EQ(l.txd, Edges{});
   EXPECT_EQ(l.chip.fdl_counters().offline, 1u);
+}
+
+// The last stop sample of `chars` characters from s + kRequestAt: the last one's start + 10 T +
+// T/2 (docs/timing.md).
+constexpr std::uint64_t last_stop_sample(std::uint64_t chars) {
+  return kRequestAt + (chars - 1) * 11 * kT + 10 * kT + kT / 2;
+}
+
+}  // namespace
+
+// Global_Control (SDN, DSAP 58 = 3Ah, SSAP 62 = 3Eh) to the broadcast address 127 (DA FFh with
+// the address extension), Control_Command and Group_Select 00h: FCS = FF + 82 + 44 + 3A + 3E =
+// 3Dh (mod 100h). No answer is due: Offline at its last stop sample, s + 132 + 12 x 44 + 42.
+TEST_P(OfflineAfterRequest, ABroadcastEndsAtItsLastStopSample) {
+  const std::vector<std::uint8_t> gc = {0x68, 0x07, 0x07, 0x68, 0xFF, 0x82, 0x44,
+                                        0x3A, 0x3E, 0x00, 0x00, 0x3D, 0x16};
+  Line l(GetParam().profile, GetParam().engine, 0, gc);
+  expect_offline_when_dropped(l, how(), last_stop_sample(13));
+}
+
+// An FDL_Status to station 6 (FCS 06 + 02 + 49 = 51h): a foreign address, no answer: Offline at
+// its last stop sample, s + 394.
+TEST_P(OfflineAfterRequest, AForeignAddressEndsAtItsLastStopSample) {
+  Line l(GetParam().profile, GetParam().engine, 0, {0x10, 0x06, 0x02, 0x49, 0x51, 0x16});
+  expect_offline_when_dropped(l, how(), last_stop_sample(6));
+}
+
+// The FDL_Status cut after 5 of its 6 characters: the 5th ends at s + 132 + 5 x 44 = s + 352,
+// the line idle for TSYN (33 T) drops it as truncated at s + 484 (docs/timing.md "inside a
+// telegram").
+TEST_P(OfflineAfterRequest, ATruncatedTelegramEndsAtTheTsynTimeout) {
+  const std::vector<std::uint8_t> cut(kRequest.begin(), kRequest.end() - 1);
+  Line l(GetParam().profile, GetParam().engine, 0, cut);
+  expect_offline_when_dropped(l, how(), kRequestAt + 5 * 11 * kT + 33 * kT);
+}
+
+// A parity error in the 3rd character (index 2): dropped at that character's stop sample,
+// s + 132 + 2 x 44 + 42 = s + 262.
+TEST_P(OfflineAfterRequest, ABadCharacterEndsAtItsStopSample) {
+  Line l(GetParam().profile, GetParam().engine, 0, kRequest, UartFault{2, UartFault::Kind::parity});
+  expect_offline_when_dropped(l, how(), last_stop_sample(3));
 }
 
 // A telegram whose first character's stop sample comes after the write is not a new request
@@ -228,6 +313,50 @@ TEST(OfflineDpc31, MacStopActsAtOnceDuringARequest) {
     EXPECT_FALSE(c.started());
     EXPECT_NE(c.peek_reg(RegId::Int_Req_Reg) & irq::MAC_Reset, 0);
     EXPECT_LT(done, s + 396);
+  }
+}
+
+// The chip's own RAM access violation while it serves a request waits for that request's end
+// like the user's (IRR MAC_Reset "after finishing the current request (Go_Offline or RAM access
+// violation)"). SPC3: R_Read_Cfg_Buf_Ptr C0h puts the Read_Cfg buffer at C0h x 8 = 600h, the
+// first address past the 1.5 kB RAM, read back at 600h - 400h = 200h (chip-facts.md), where the
+// test wrote 11h 22h; R_Len_Read_Cfg_Data 2. Get_Cfg to station 5 (SRD_high 4Dh, DSAP 59 = 3Bh,
+// SSAP 62 = 3Eh): 68 05 05 68 85 82 4D 3B 3E CD 16, FCS 85 + 82 + 4D + 3B + 3E = CDh, 11
+// characters from s + 132: acted on at its last stop sample s + 132 + 10 x 44 + 42 = s + 614
+// (the violation then), ended at s + 616. The answer DL from station 5, 68 07 07 68 82 85 08 3E
+// 3B 11 22 BB 16 (FCS 82 + 85 + 08 + 3E + 3B + 11 + 22 = BBh), starts MinTSDR = 11 T later at
+// s + 660 and ends 13 x 44 later at s + 1232: Offline there, the answer whole.
+TEST(OfflineAsicViolation, WaitsForTheAnswer) {
+  for (Engine e : {Engine::event, Engine::per_cycle}) {
+    SCOPED_TRACE(static_cast<int>(e));
+    Chip c(ChipOptions{Profile::spc3, BusMode::intel, 0, e});
+    c.set_log_sink(nullptr);
+    Edges txd;
+    c.on_txd([&txd](std::uint64_t cycle, bool l) { txd.emplace_back(cycle, l); });
+    c.write(0x07, 0x01);  // Mode_Reg0 bit 8 DP_Mode: the DP SAPs (Get_Cfg) set up
+    c.write(static_cast<std::uint32_t>(c.addr_of(RegId::R_TS_Adr)), 5);
+    const std::uint64_t s = testutil::user_start(c);
+    c.write(static_cast<std::uint32_t>(c.addr_of(RegId::R_Read_Cfg_Buf_Ptr)), 0xC0);
+    c.write(static_cast<std::uint32_t>(c.addr_of(RegId::R_Len_Read_Cfg_Data)), 2);
+    c.write(0x200, 0x11);
+    c.write(0x201, 0x22);
+    c.drive_rxd_chars(
+        std::vector<std::uint8_t>{0x68, 0x05, 0x05, 0x68, 0x85, 0x82, 0x4D, 0x3B, 0x3E, 0xCD, 0x16},
+        s + kRequestAt, kT);
+    c.step(s + 614 - c.cycle());
+    EXPECT_NE(c.read(0x04) & 0x08, 0);  // Status bit 3: the violation happened
+    c.step(s + 1231 - c.cycle());
+    EXPECT_TRUE(c.started());
+    EXPECT_EQ(c.peek_reg(RegId::Int_Req_Reg) & irq::MAC_Reset, 0);
+    c.step(1);
+    EXPECT_FALSE(c.started());
+    EXPECT_NE(c.peek_reg(RegId::Int_Req_Reg) & irq::MAC_Reset, 0);
+    c.step(2000);
+    Edges want;
+    uart_encode(std::vector<std::uint8_t>{0x68, 0x07, 0x07, 0x68, 0x82, 0x85, 0x08, 0x3E, 0x3B,
+                                          0x11, 0x22, 0xBB, 0x16},
+                s + 660, kT, want);
+    EXPECT_EQ(txd, want);
   }
 }
 

@@ -99,7 +99,7 @@ class CppDut final : public Dut {
       core_.sap_list.indicate(in.sap_entry, req);
     }
     if (in.ev_sap_srd) core_.sap_list.answer(in.sap_entry);
-    if (in.ev_mac_stop) core_.mode.go_offline();
+    if (in.ev_mac_stop) core_.mode.offline();  // as MAC_Stop (requests.cpp): at once
     if (in.ev_mac_start) core_.mode.start();
     if (in.bus_rd) rdata_ = core_.read_now(in.bus_addr);
     if (in.bus_wr) core_.write_now(in.bus_addr, in.bus_wdata);

@@ -34,6 +34,16 @@ int request_rank(BlockEvent::Kind k) {
 void begin_recording(Chip& chip, Session& out) {
   harness::on_block_event(
       chip, [&out, rank = -1](std::uint64_t cycle, const BlockEvent& e) mutable {
+        if (e.kind == BlockEvent::Kind::offline_deferred) {
+          // The golden model has no MAC: it would go Offline at the access, not at the end.
+          if (out.unreplayable.empty()) {
+            out.unreplayable = fmt::format(
+                "cycle {}: Go_Offline or a RAM access violation during a request (the chip goes "
+                "Offline at the request's end; the golden model has no MAC and cannot wait for it)",
+                cycle);
+          }
+          return;
+        }
         const std::uint64_t index = cycle - 1;  // the C++ Dut reaches cycle i + 1 in step i
         if (out.events.empty() || out.events.back().first != index) {
           out.events.emplace_back(index, Inputs{});
