@@ -318,46 +318,66 @@ TEST(OfflineDpc31, MacStopActsAtOnceDuringARequest) {
 
 // The chip's own RAM access violation while it serves a request waits for that request's end
 // like the user's (IRR MAC_Reset "after finishing the current request (Go_Offline or RAM access
-// violation)"). SPC3: R_Read_Cfg_Buf_Ptr C0h puts the Read_Cfg buffer at C0h x 8 = 600h, the
-// first address past the 1.5 kB RAM, read back at 600h - 400h = 200h (chip-facts.md), where the
-// test wrote 11h 22h; R_Len_Read_Cfg_Data 2. Get_Cfg to station 5 (SRD_high 4Dh, DSAP 59 = 3Bh,
-// SSAP 62 = 3Eh): 68 05 05 68 85 82 4D 3B 3E CD 16, FCS 85 + 82 + 4D + 3B + 3E = CDh, 11
-// characters from s + 132: acted on at its last stop sample s + 132 + 10 x 44 + 42 = s + 614
-// (the violation then), ended at s + 616. The answer DL from station 5, 68 07 07 68 82 85 08 3E
-// 3B 11 22 BB 16 (FCS 82 + 85 + 08 + 3E + 3B + 11 + 22 = BBh), starts MinTSDR = 11 T later at
-// s + 660 and ends 13 x 44 later at s + 1232: Offline there, the answer whole.
+// violation)"). SPC3 with DP_Mode: R_Read_Cfg_Buf_Ptr C0h puts the Read_Cfg buffer at C0h x 8 =
+// 600h, the first address past the 1.5 kB RAM, read back at 600h - 400h = 200h (chip-facts.md),
+// where the test wrote 11h 22h; R_Len_Read_Cfg_Data 2. Get_Cfg to station 5 (SRD_high 4Dh, DSAP
+// 59 = 3Bh, SSAP 62 = 3Eh): 68 05 05 68 85 82 4D 3B 3E CD 16, FCS 85 + 82 + 4D + 3B + 3E = CDh,
+// 11 characters from r: acted on at its last stop sample r + 10 x 44 + 42 = r + 482 (the
+// violation then), ended at r + 484. The answer DL from station 5, 68 07 07 68 82 85 08 3E 3B 11
+// 22 BB 16 (FCS 82 + 85 + 08 + 3E + 3B + 11 + 22 = BBh), starts MinTSDR = 11 T later at r + 528
+// and ends 13 x 44 later at r + 1100: Offline there, the answer whole.
+// `heard`: the event engine's telegram heard whole (Chip::hear_telegram, outside Baud_Search: the
+// FDL_Status of the file's header ends it first, answered by s + 704), at r = s + 1000; else
+// driven as characters at r = s + 132.
+void expect_asic_violation_waits(Engine e, bool heard) {
+  Chip c(ChipOptions{Profile::spc3, BusMode::intel, 0, e});
+  c.set_log_sink(nullptr);
+  Edges txd;
+  c.on_txd([&txd](std::uint64_t cycle, bool l) { txd.emplace_back(cycle, l); });
+  c.write(0x07, 0x01);  // Mode_Reg0 bit 8 DP_Mode: the DP SAPs (Get_Cfg) set up
+  c.write(static_cast<std::uint32_t>(c.addr_of(RegId::R_TS_Adr)), 5);
+  const std::uint64_t s = testutil::user_start(c);
+  c.write(static_cast<std::uint32_t>(c.addr_of(RegId::R_Read_Cfg_Buf_Ptr)), 0xC0);
+  c.write(static_cast<std::uint32_t>(c.addr_of(RegId::R_Len_Read_Cfg_Data)), 2);
+  c.write(0x200, 0x11);
+  c.write(0x201, 0x22);
+  const std::vector<std::uint8_t> get_cfg = {0x68, 0x05, 0x05, 0x68, 0x85, 0x82,
+                                             0x4D, 0x3B, 0x3E, 0xCD, 0x16};
+  std::uint64_t r = s + kRequestAt;
+  if (heard) {
+    c.drive_rxd_chars(kRequest, r, kT);
+    r = s + 1000;
+    c.step(r - c.cycle());
+    txd.clear();
+    c.hear_telegram(get_cfg, r, kT);
+  } else {
+    c.drive_rxd_chars(get_cfg, r, kT);
+  }
+  c.step(r + 482 - c.cycle());
+  EXPECT_NE(c.read(0x04) & 0x08, 0);  // Status bit 3: the violation happened
+  c.step(r + 1099 - c.cycle());
+  EXPECT_TRUE(c.started());
+  EXPECT_EQ(c.peek_reg(RegId::Int_Req_Reg) & irq::MAC_Reset, 0);
+  c.step(1);
+  EXPECT_FALSE(c.started());
+  EXPECT_NE(c.peek_reg(RegId::Int_Req_Reg) & irq::MAC_Reset, 0);
+  c.step(2000);
+  Edges want;
+  uart_encode(std::vector<std::uint8_t>{0x68, 0x07, 0x07, 0x68, 0x82, 0x85, 0x08, 0x3E, 0x3B, 0x11,
+                                        0x22, 0xBB, 0x16},
+              r + 528, kT, want);
+  EXPECT_EQ(txd, want);
+}
+
 TEST(OfflineAsicViolation, WaitsForTheAnswer) {
   for (Engine e : {Engine::event, Engine::per_cycle}) {
     SCOPED_TRACE(static_cast<int>(e));
-    Chip c(ChipOptions{Profile::spc3, BusMode::intel, 0, e});
-    c.set_log_sink(nullptr);
-    Edges txd;
-    c.on_txd([&txd](std::uint64_t cycle, bool l) { txd.emplace_back(cycle, l); });
-    c.write(0x07, 0x01);  // Mode_Reg0 bit 8 DP_Mode: the DP SAPs (Get_Cfg) set up
-    c.write(static_cast<std::uint32_t>(c.addr_of(RegId::R_TS_Adr)), 5);
-    const std::uint64_t s = testutil::user_start(c);
-    c.write(static_cast<std::uint32_t>(c.addr_of(RegId::R_Read_Cfg_Buf_Ptr)), 0xC0);
-    c.write(static_cast<std::uint32_t>(c.addr_of(RegId::R_Len_Read_Cfg_Data)), 2);
-    c.write(0x200, 0x11);
-    c.write(0x201, 0x22);
-    c.drive_rxd_chars(
-        std::vector<std::uint8_t>{0x68, 0x05, 0x05, 0x68, 0x85, 0x82, 0x4D, 0x3B, 0x3E, 0xCD, 0x16},
-        s + kRequestAt, kT);
-    c.step(s + 614 - c.cycle());
-    EXPECT_NE(c.read(0x04) & 0x08, 0);  // Status bit 3: the violation happened
-    c.step(s + 1231 - c.cycle());
-    EXPECT_TRUE(c.started());
-    EXPECT_EQ(c.peek_reg(RegId::Int_Req_Reg) & irq::MAC_Reset, 0);
-    c.step(1);
-    EXPECT_FALSE(c.started());
-    EXPECT_NE(c.peek_reg(RegId::Int_Req_Reg) & irq::MAC_Reset, 0);
-    c.step(2000);
-    Edges want;
-    uart_encode(std::vector<std::uint8_t>{0x68, 0x07, 0x07, 0x68, 0x82, 0x85, 0x08, 0x3E, 0x3B,
-                                          0x11, 0x22, 0xBB, 0x16},
-                s + 660, kT, want);
-    EXPECT_EQ(txd, want);
+    expect_asic_violation_waits(e, false);
   }
+}
+
+TEST(OfflineAsicViolation, WaitsForTheAnswerToATelegramHeardWhole) {
+  expect_asic_violation_waits(Engine::event, true);
 }
 
 }  // namespace offline_test
