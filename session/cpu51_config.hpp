@@ -4,10 +4,8 @@
 // (its checks are in cpu51_module.cpp).
 #pragma once
 
-#include <array>
 #include <cstdint>
 #include <string>
-#include <string_view>
 #include <vector>
 
 #include "dpc31/chip.hpp"
@@ -18,9 +16,6 @@ namespace dpc31 {
 inline constexpr std::uint32_t kCpu51Window = 0x1000;
 
 struct Cpu51Config {
-  // The shipped firmware's latch bytes (DO4: 4000h outputs, 4001h modul_ok): the bridge's and
-  // serve's ports without --ports, and the bytes the latch rule keeps free without `ports=`.
-  static constexpr std::array<std::string_view, 2> kDefaultPorts{"outputs", "modul_ok"};
   std::uint32_t hz = 24'000'000;
   std::string hex{};  // the Intel HEX file (a scenario's relative path already resolved)
   std::uint16_t base = 0x8000;
@@ -30,9 +25,9 @@ struct Cpu51Config {
   // chip's own space, its code the chip's RAM from `code` up to 1FFFh; no board RAM, no latch.
   bool c31 = false;
   std::uint16_t code = 0x1000;
-  // "" or "the chip's window covers the output latch at 0x4000": the latch's bytes are
-  // kDefaultPorts' even when no port names them (DO4-style firmware writes 4000h + port whatever
-  // `ports` says), and a write there would go into the chip. The one check of every door.
+  // "" or "the chip's window covers the output latch at 0x4000": the latch's first byte is there
+  // even when no port names it (DO4-style firmware writes 4000h + port whatever `ports` says), and
+  // a write there would go into the chip. The one check of the scenario header and the bridge.
   [[nodiscard]] std::string latch_problem() const;
   // "" or why `ports` cannot name the latch bytes: a name empty, not a word
   // ([A-Za-z_][A-Za-z0-9_]*: `serve`'s protocol lines and `latch` replies carry it between blanks),

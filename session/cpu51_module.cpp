@@ -65,7 +65,7 @@ std::string Cpu51Config::ports_problem() const {
 }
 
 std::string Cpu51Config::latch_problem() const {
-  const std::size_t bytes = ports.empty() ? kDefaultPorts.size() : ports.size();
+  const std::size_t bytes = std::max<std::size_t>(ports.size(), 1);
   if (latch + bytes <= base || latch >= base + kCpu51Window) return {};
   return fmt::format("the chip's window covers the output latch at {:#06x}", latch);
 }
@@ -226,12 +226,9 @@ std::string apply_cpu51_choice(const Cpu51Choice& choice, ChipOptions& chip, Cpu
   } else {
     if (!choice.code.empty()) return "--code is the C31's (--cpu c31)";
     // The latch bytes from 4000h on, named as the scenario's `ports=` names them.
-    const std::string& ports = choice.ports;
+    const std::string ports = choice.ports.empty() ? "outputs,modul_ok" : choice.ports;
     cfg.ports.clear();
-    if (ports.empty())
-      cfg.ports.assign(Cpu51Config::kDefaultPorts.begin(), Cpu51Config::kDefaultPorts.end());
-    for (std::size_t at = 0, end = 0; !ports.empty() && end != std::string_view::npos;
-         at = end + 1) {
+    for (std::size_t at = 0, end = 0; end != std::string_view::npos; at = end + 1) {
       end = ports.find(',', at);
       cfg.ports.emplace_back(ports.substr(at, end == std::string_view::npos ? end : end - at));
     }
