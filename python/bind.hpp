@@ -120,11 +120,12 @@ auto without_gil(F&& f) -> decltype(f()) {
 // A long run in slices, called without the GIL: between two slices the GIL is taken and Python's
 // signal handlers run, so Ctrl-C raises KeyboardInterrupt at a slice's end, a cycle boundary
 // (docs/python.md, "Ctrl-C"). `now()` is the run's time, `run_for(n)` runs n cycles of it; one
-// that stops early (an observer's error, a wake-up) ends the call there, as the whole call would
-// have. A slice doubles while it takes under 20 ms, so a "no limit" on a chip without events is a
-// few dozen slices, not 2^62 / slice.
-template <typename Now, typename Run>
-void in_slices(std::uint64_t cycles, Now now, Run run_for) {
+// that stops early (a wake-up) or after which `stopped()` holds (an observer's error, even in the
+// slice's last cycle, where the run reached its target) ends the call there, as the whole call
+// would have. A slice doubles while it takes under 20 ms, so a "no limit" on a chip without events
+// is a few dozen slices, not 2^62 / slice.
+template <typename Now, typename Run, typename Stopped>
+void in_slices(std::uint64_t cycles, Now now, Run run_for, Stopped stopped) {
   std::uint64_t t = now();
   const std::uint64_t end = Chip::cycle_after(t, cycles);
   for (std::uint64_t slice = std::uint64_t{1} << 16;;) {
@@ -132,7 +133,7 @@ void in_slices(std::uint64_t cycles, Now now, Run run_for) {
     const auto started = std::chrono::steady_clock::now();
     run_for(n);
     const std::uint64_t reached = now();
-    if (reached >= end || reached < t + n) return;
+    if (reached >= end || reached < t + n || stopped()) return;
     if (std::chrono::steady_clock::now() - started < std::chrono::milliseconds(20)) {
       slice = std::min(slice * 2, Chip::kLastCycle);
     } else {
@@ -145,10 +146,17 @@ void in_slices(std::uint64_t cycles, Now now, Run run_for) {
 }
 
 // A master's `idle(cycles)` so (Master.idle, SegmentMaster.idle): `now()` is its line's time.
-template <typename PM, typename Now>
-void idle_in_slices(PM& pm, std::uint64_t cycles, Now now) {
-  pm.act([&] { in_slices(cycles, now, [&](std::uint64_t k) { pm.m->idle(k); }); });
+template <typename PM, typename Now, typename Stopped>
+void idle_in_slices(PM& pm, std::uint64_t cycles, Now now, Stopped stopped) {
+  pm.act([&] {
+    in_slices(
+        cycles, now, [&](std::uint64_t k) { pm.m->idle(k); }, stopped);
+  });
 }
+
+// A KeyboardInterrupt `interrupt` raised while an observer's error `pending` was kept: that error
+// becomes the interrupt's __context__ (not lost, not raised by the next call).
+void keep_as_context(const py::error_already_set& interrupt, std::exception_ptr pending);
 
 // Who runs a chip or a segment now (and so the user sides on it): read and written with the GIL
 // held only.
@@ -198,13 +206,20 @@ class PyChip {
   auto run(F&& f) -> decltype(f()) {
     enter(true);
     const Running running(*run_);
-    if constexpr (std::is_void_v<decltype(f())>) {
-      without_gil(f);
-      rethrow();
-    } else {
-      auto r = without_gil(f);
-      rethrow();
-      return r;
+    try {
+      if constexpr (std::is_void_v<decltype(f())>) {
+        without_gil(f);
+        rethrow();
+      } else {
+        auto r = without_gil(f);
+        rethrow();
+        return r;
+      }
+    } catch (py::error_already_set& interrupt) {
+      // Ctrl-C between two slices: the next call starts clean.
+      keep_as_context(interrupt, std::exchange(error, nullptr));
+      chip.clear_stop();
+      throw;
     }
   }
   // Checks that the caller may touch the chip now (mutating: it would change it).

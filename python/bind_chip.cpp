@@ -48,6 +48,15 @@ void PyChip::enter(bool mutating) const {
   enter_run(*run_, mutating, "chip", "peek, cycle, probe, ...", "access or step it");
 }
 
+void keep_as_context(const py::error_already_set& interrupt, std::exception_ptr pending) {
+  if (!pending) return;
+  try {
+    std::rethrow_exception(pending);
+  } catch (py::error_already_set& e) {
+    PyException_SetContext(interrupt.value().ptr(), e.value().inc_ref().ptr());
+  }
+}
+
 void PyChip::rethrow() {
   if (!error) return;
   std::exception_ptr e = std::exchange(error, nullptr);
@@ -463,7 +472,8 @@ void bind_chip_class(py::module_& m) {
           [](PyChip& c, U64 n) {
             c.run([&] {
               in_slices(
-                  n, [&] { return c.chip.cycle(); }, [&](U64 k) { c.chip.step(k); });
+                  n, [&] { return c.chip.cycle(); }, [&](U64 k) { c.chip.step(k); },
+                  [&] { return c.error != nullptr; });
             });
           },
           py::arg("cycles") = 1)

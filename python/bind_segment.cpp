@@ -141,14 +141,24 @@ class PySegment {
       line_attached = true;
     }
     const Running running(*run_);
-    auto r = without_gil([&] {
-      if constexpr (std::is_void_v<decltype(f())>) {
-        f();
-        return std::monostate{};
-      } else {
-        return f();
+    auto r = [&] {
+      try {
+        return without_gil([&] {
+          if constexpr (std::is_void_v<decltype(f())>) {
+            f();
+            return std::monostate{};
+          } else {
+            return f();
+          }
+        });
+      } catch (py::error_already_set& interrupt) {
+        // Ctrl-C between two slices: the check sees the line up to there, the next call starts
+        // clean.
+        if (check) check->idle_until(seg.cycle());
+        keep_as_context(interrupt, std::exchange(error_, nullptr));
+        throw;
       }
-    });
+    }();
     if (check) check->idle_until(seg.cycle());
     if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
     return r;
@@ -729,7 +739,11 @@ void bind_seg_master(py::module_& m) {
       .def("transact_raw", &bytes_service<&DpMaster::transact_raw>, py::arg("data"))
       .def(
           "idle",
-          [](M& pm, U64 cycles) { idle_in_slices(pm, cycles, [&] { return pm.s.seg.cycle(); }); },
+          [](M& pm, U64 cycles) {
+            // An observer's error does not end a segment's call: no slice stops for it.
+            idle_in_slices(
+                pm, cycles, [&] { return pm.s.seg.cycle(); }, [] { return false; });
+          },
           py::arg("cycles"), "Time passes with a silent line from this master.")
       .def_property_readonly("counters", [](const M& pm) { return pm.m->counters(); })
       .def_property_readonly("history", [](const M& pm) { return pm.m->history(); })

@@ -810,7 +810,9 @@ void bind_master(py::module_& m) {
       .def(
           "idle",
           [](PyMaster& pm, U64 cycles) {
-            idle_in_slices(pm, cycles, [&] { return pm.chip.chip.cycle(); });
+            idle_in_slices(
+                pm, cycles, [&] { return pm.chip.chip.cycle(); },
+                [&] { return pm.chip.error != nullptr; });
           },
           py::arg("cycles"), "Time passes with a silent bus (cable pulled); the firmware runs.")
       .def(

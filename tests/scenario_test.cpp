@@ -2,6 +2,7 @@
 // with its line, nothing runs when a file does not parse, and every shipped scenario passes.
 #include <fmt/core.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -874,6 +875,13 @@ TEST(ScenarioCpu51, AMapThatCannotBeReadIsRefused) {
   std::filesystem::remove(f.dir() / "fw.map");
   std::filesystem::create_symlink(f.dir() / "gone.map", f.dir() / "fw.map");
   refused("a symbolic link to a missing file");
+  // A FIFO (opening it would wait for a writer) and a link to a device are refused unopened.
+  std::filesystem::remove(f.dir() / "fw.map");
+  ASSERT_EQ(::mkfifo((f.dir() / "fw.map").c_str(), 0600), 0);
+  refused("not a regular file, not a SDCC map file");
+  std::filesystem::remove(f.dir() / "fw.map");
+  std::filesystem::create_symlink("/dev/zero", f.dir() / "fw.map");
+  refused("not a regular file, not a SDCC map file");
 }
 
 // What the heap grew by from a run's start to its end (the hooks: the runner still holds what it

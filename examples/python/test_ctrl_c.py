@@ -59,3 +59,38 @@ def test_a_no_limit_step_on_a_chip_without_events_still_ends_at_the_last_cycle()
     chip = dpc31.Chip("spc3")  # not started: no event before kLastCycle
     chip.step(2**64 - 1)
     assert chip.cycle == LAST
+
+
+def test_an_observer_error_in_a_slice_s_last_cycle_ends_the_call_there():
+    """An observer's exception ends the call at its cycle (docs/python.md, "Observers"), also when
+    that cycle is the last of a slice: the first slice is 65 536 cycles (docs/python.md, "Ctrl-C").
+    The call went on to its end there."""
+    # An FDL_Status request to station 5 (SD1: DA, SA, FC 0x49, FCS, ED), on the line at 100 000.
+    request = bytes([0x10, 0x05, 0x02, 0x49, (0x05 + 0x02 + 0x49) & 0xFF, 0x16])
+
+    def ready(at):
+        chip = started_spc3()
+        m = dpc31.Master(chip, address=2, slave=dpc31.SlaveConfig(address=5))
+        if at > chip.cycle:
+            chip.step(at - chip.cycle)
+        chip.drive_rxd_chars(request, 100_000, 4)
+        return chip, m
+
+    chip, m = ready(0)
+    seen = []
+    chip.on_telegram(lambda t: seen.append(chip.cycle))
+    m.idle(300_000)
+    told = seen[0]  # the cycle the chip tells the request
+
+    for start in (told - 65_536 + 1, told - 65_536):  # within the first slice; its last cycle
+        chip, m = ready(start)
+
+        def boom(t):
+            raise RuntimeError("observer")
+
+        chip.on_telegram(boom)
+        with pytest.raises(RuntimeError, match="observer"):
+            m.idle(10**8)
+        assert chip.cycle == told
+        m.idle(100)  # the next call starts clean
+        assert chip.cycle == told + 100
