@@ -94,6 +94,18 @@ class OfflineAfterRequest : public ::testing::TestWithParam<Param> {
  protected:
   Line line() const { return Line(GetParam().profile, GetParam().engine); }
   How how() const { return GetParam().how; }
+  // No request in progress at `at`: Offline with MAC_Reset at once; by cycle 2000 the line
+  // carries `txd` and `heard_offline` telegrams were heard Offline (counted, not answered).
+  void expect_offline_at_once(std::uint64_t at, const Edges& txd, unsigned heard_offline) const {
+    SCOPED_TRACE(at);
+    Line l = line();
+    l.offline_at(at, how());
+    EXPECT_FALSE(l.chip.started());
+    EXPECT_TRUE(l.mac_reset());
+    l.step_to(2000);
+    EXPECT_EQ(l.txd, txd);
+    EXPECT_EQ(l.chip.fdl_counters().offline, heard_offline);
+  }
 };
 
 // Still started until s + kAnswerEnd, then Offline with MAC_Reset in that cycle.
@@ -141,33 +153,17 @@ TEST_P(OfflineAfterRequest, WhileTheAnswerIsArmedItIsSent) {
 }
 
 TEST_P(OfflineAfterRequest, WhileIdleAtOnce) {
-  for (const std::uint64_t at : {std::uint64_t{100}, std::uint64_t{800}}) {
-    SCOPED_TRACE(at);
-    Line l = line();
-    l.offline_at(at, how());
-    EXPECT_FALSE(l.chip.started());
-    EXPECT_TRUE(l.mac_reset());
-    l.step_to(2000);
-    // Before the request: it is heard Offline (counted), not answered; after the answer: whole.
-    EXPECT_EQ(l.txd, at == 100 ? Edges{} : l.answer_edges());
-    EXPECT_EQ(l.chip.fdl_counters().offline, at == 100 ? 1u : 0u);
-  }
+  // Before the request: it is heard Offline (counted), not answered; after the answer: whole.
+  expect_offline_at_once(100, Edges{}, 1);
+  expect_offline_at_once(800, line().answer_edges(), 0);
 }
 
 // Inside the first character, before its stop sample (s + 174), no request is in progress yet
 // (docs/timing.md): Offline at once, the telegram is heard Offline. The cycle before it is the
 // last one so.
 TEST_P(OfflineAfterRequest, BeforeTheFirstStopSampleAtOnce) {
-  for (const std::uint64_t at : {std::uint64_t{172}, std::uint64_t{173}}) {
-    SCOPED_TRACE(at);
-    Line l = line();
-    l.offline_at(at, how());
-    EXPECT_FALSE(l.chip.started());
-    EXPECT_TRUE(l.mac_reset());
-    l.step_to(2000);
-    EXPECT_EQ(l.txd, Edges{});
-    EXPECT_EQ(l.chip.fdl_counters().offline, 1u);
-  }
+  expect_offline_at_once(172, Edges{}, 1);
+  expect_offline_at_once(173, Edges{}, 1);
 }
 
 // From the first character's stop sample (s + 174) on, the request is in progress: the Offline
