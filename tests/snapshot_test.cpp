@@ -547,7 +547,8 @@ TEST(SnapshotFormat, AfterResetEachSectionHasTheSizeTheTableGives) {
       {"MAC ", 0},  // its own fields lie between FDLA and USMP
       {"UART", 4 + 1 + 8 + 8 + 4 + 8 + 2 + 8 + 4},
       {"FDLA", (4 + 4 + 1 + 1) + (3 + 8 + 1 + 8 + 4 + 4 + 8 + 1)},  // then the MAC's fields
-      {"USMP", (4 + 3 + 4 + 8 + 8 + 2 + 8 + 8 + 8) + 3 * (1 + 4 + 4 + 4) + (1 + 4 + 4 + 4 + 4 + 4) + 1},
+      {"USMP",
+       (4 + 3 + 4 + 8 + 8 + 2 + 8 + 8 + 8) + 3 * (1 + 4 + 4 + 4) + (1 + 4 + 4 + 4 + 4 + 4) + 1},
       {"CNTR", 20 * 4},
       {"RQIF", 8 + 8 + 2 + 1},
       {"SAPL", 1 + 1 + 4 + 4}};
