@@ -3,21 +3,31 @@
  * at 4000h). Written from docs/cpu.md and include/dpc31/dpc31_regs.h. */
 #include <8052.h>
 #include <stdint.h>
+
 #include "dpc31/dpc31_regs.h"
 
 #define BASE 0x8000u
 #define CELL(a) (*(volatile __xdata uint8_t*)(uint16_t)(BASE + (a)))
-#define SEGP(seg) ((volatile __xdata uint8_t*)(uint16_t)(BASE + ((uint16_t)(seg) << SPC3_SEGMENT_SHIFT)))
+#define SEGP(seg) \
+  ((volatile __xdata uint8_t*)(uint16_t)(BASE + ((uint16_t)(seg) << SPC3_SEGMENT_SHIFT)))
 #define LATCH(p) (*(volatile __xdata uint8_t*)(uint16_t)(0x4000u + (p)))
 #define HI(m) ((uint8_t)((m) >> 8))
 #define LEN 2u
 #define IDENT 0x0E51u
 
-enum { SEG_DOUT = SPC3_USER_BASE >> SPC3_SEGMENT_SHIFT, SEG_DIN = SEG_DOUT + 3,
-       SEG_DIAG = SEG_DIN + 3, SEG_AUX = SEG_DIAG + 2, SEG_CFG = SEG_AUX + 8,
-       SEG_RCFG = SEG_CFG + 4, SEG_PRM = SEG_RCFG + 1 };
+enum {
+  SEG_DOUT = SPC3_USER_BASE >> SPC3_SEGMENT_SHIFT,
+  SEG_DIN = SEG_DOUT + 3,
+  SEG_DIAG = SEG_DIN + 3,
+  SEG_AUX = SEG_DIAG + 2,
+  SEG_CFG = SEG_AUX + 8,
+  SEG_RCFG = SEG_CFG + 4,
+  SEG_PRM = SEG_RCFG + 1
+};
 
-#define SERVED (SPC3_Int_Req_Reg_New_Prm_Data_Msk | SPC3_Int_Req_Reg_New_Cfg_Data_Msk | SPC3_Int_Req_Reg_DX_Out_Msk)
+#define SERVED                                                             \
+  (SPC3_Int_Req_Reg_New_Prm_Data_Msk | SPC3_Int_Req_Reg_New_Cfg_Data_Msk | \
+   SPC3_Int_Req_Reg_DX_Out_Msk)
 
 static uint8_t echo[LEN];
 volatile uint16_t dx_count;
@@ -35,10 +45,12 @@ void isr(void) __interrupt(0) {
   uint8_t ir = CELL(SPC3_Int_Reg_HI_INTEL), r, k;
   volatile __xdata uint8_t* out;
   if (ir & HI(SPC3_Int_Req_Reg_New_Prm_Data_Msk)) {
-    while ((CELL(SPC3_User_Prm_Data_Okay) & 3u) == 1u) {}
+    while ((CELL(SPC3_User_Prm_Data_Okay) & 3u) == 1u) {
+    }
   }
   if (ir & HI(SPC3_Int_Req_Reg_New_Cfg_Data_Msk)) {
-    do r = CELL(SPC3_User_Cfg_Data_Okay) & 3u; while (r == 1u);
+    do r = CELL(SPC3_User_Cfg_Data_Okay) & 3u;
+    while (r == 1u);
     if (r == 0) hand_over();
   }
   if (ir & HI(SPC3_Int_Req_Reg_DX_Out_Msk)) {
