@@ -20,8 +20,10 @@
 #include <thread>
 #include <type_traits>
 #include <utility>
+#include <vector>
 
 #include "dpc31/chip.hpp"
+#include "dpc31/fdl.hpp"
 #include "vocabulary.hpp"
 
 namespace dpc31::py_bind {
@@ -338,6 +340,9 @@ std::uint32_t bus_addr(const Chip& chip, std::int64_t a, std::int64_t n = 0);
 UartFault fault_of(const std::optional<std::string>& kind, std::optional<int> char_index);
 // A byte `what` (0..255), else a ValueError.
 std::uint8_t byte_value(std::string_view what, std::int64_t v);
+// The bytes of a frame, else a ValueError naming its first field fdl::encode refuses and that
+// field's range (Frame.encode, and the masters' transact before they send).
+std::vector<std::uint8_t> sendable(const fdl::Frame& f);
 
 void bind_chip(py::module_& m);
 void bind_session(py::module_& m);

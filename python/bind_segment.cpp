@@ -734,7 +734,10 @@ void bind_seg_master(py::module_& m) {
           py::arg("command"), py::arg("groups") = 0)
       .def(
           "transact",
-          [](M& pm, const fdl::Frame& req) { return pm.act([&] { return pm.m->transact(req); }); },
+          [](M& pm, const fdl::Frame& req) {
+            static_cast<void>(sendable(req));
+            return pm.act([&] { return pm.m->transact(req); });
+          },
           py::arg("request"))
       .def("transact_raw", &bytes_service<&DpMaster::transact_raw>, py::arg("data"))
       .def(

@@ -46,6 +46,44 @@ UartFault fault_of(const std::optional<std::string>& kind, std::optional<int> ch
 
 namespace {
 
+// Why fdl::encode refuses `f` (include/dpc31/fdl.hpp), its first bad field by name with the
+// field's range, in the frame's order: SD, DA, SA, the SAPs, the data unit.
+std::string refusal(const fdl::Frame& f) {
+  const std::size_t saps = (f.dsap ? 1U : 0U) + (f.ssap ? 1U : 0U);
+  const auto du = [&](std::string_view sd, std::string_view carries) {
+    return fmt::format("du and SAPs: {} + {} bytes; an {} carries {}", f.du.size(), saps, sd,
+                       carries);
+  };
+  if (f.sd == fdl::SC) return du("SC (0xE5)", "none");
+  if (f.sd != fdl::SD1 && f.sd != fdl::SD2 && f.sd != fdl::SD3 && f.sd != fdl::SD4) {
+    return fmt::format(
+        "sd 0x{:02X} is no start delimiter (SD1 0x10, SD2 0x68, SD3 0xA2, SD4 0xDC, SC 0xE5)",
+        f.sd);
+  }
+  if (f.da > fdl::kAddressMask) return range_error_text("da", std::to_string(f.da), 0, 127);
+  if (f.sa > fdl::kAddressMask) return range_error_text("sa", std::to_string(f.sa), 0, 127);
+  if (f.sd == fdl::SD4) return du("SD4 (0xDC, the token)", "none");
+  if (f.dsap && (*f.dsap & fdl::kExtension)) {
+    return range_error_text("dsap", std::to_string(*f.dsap), 0, 127);
+  }
+  if (f.ssap && (*f.ssap & fdl::kExtension)) {
+    return range_error_text("ssap", std::to_string(*f.ssap), 0, 127);
+  }
+  if (f.sd == fdl::SD1) return du("SD1 (0x10)", "none (an SD2 carries them)");
+  if (f.sd == fdl::SD3) return du("SD3 (0xA2)", "exactly 8 together");
+  return du("SD2 (0x68)", "1..246 together (244 of du beside both SAPs)");
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> sendable(const fdl::Frame& f) {
+  std::vector<std::uint8_t> out;
+  if (!fdl::encode(f, out)) throw py::value_error(refusal(f));
+  return out;
+}
+
+namespace {
+
 using U8 = std::uint8_t;
 using U64 = std::uint64_t;
 
@@ -106,21 +144,7 @@ void bind_frames(py::module_& m) {
       .def_readwrite("ssap", &fdl::Frame::ssap)
       .def_property("du", bytes_property(&fdl::Frame::du).first,
                     bytes_property(&fdl::Frame::du).second)
-      .def("encode",
-           [](const fdl::Frame& f) {
-             std::vector<U8> out;
-             if (fdl::encode(f, out)) return to_bytes(out);
-             // fdl::encode's refusals (include/dpc31/fdl.hpp), the data unit's length by name.
-             const std::size_t n = f.du.size() + (f.dsap ? 1U : 0U) + (f.ssap ? 1U : 0U);
-             if (f.sd == fdl::SD2 && n > fdl::kMaxLe - 3) {
-               throw py::value_error(
-                   "du: " + std::to_string(n) + " bytes with its SAPs; an FDL telegram carries " +
-                   std::to_string(fdl::kMaxLe - 3) + " at most (LE 249: 244 beside both SAPs)");
-             }
-             throw py::value_error(
-                 "this frame cannot be sent as it stands: data or SAPs its SD has no room for, "
-                 "an address above 127, or a SAP with bit 7 set");
-           })
+      .def("encode", [](const fdl::Frame& f) { return to_bytes(sendable(f)); })
       .def_property_readonly("service", [](const fdl::Frame& f) { return service_name(f); })
       .def(py::self == py::self)
       .def("__repr__", [](const fdl::Frame& f) {
@@ -794,6 +818,7 @@ void bind_master(py::module_& m) {
           "transact",
           [](PyMaster& pm, const fdl::Frame& req, const std::optional<std::string>& fault,
              std::optional<int> fault_char) {
+            static_cast<void>(sendable(req));
             const UartFault f = fault_of(fault, fault_char);
             return pm.act([&] { return pm.m->transact(req, f); });
           },

@@ -178,14 +178,70 @@ def test_addr_of_is_none_for_a_register_the_profile_lacks():
     assert st.addr_of("Int_Mask_Reg") == dpc31.Chip("spc3").addr_of("Int_Mask_Reg")
 
 
-def test_a_frame_too_long_to_send_is_a_value_error():
-    with pytest.raises(ValueError, match=r"^du: 247 bytes with its SAPs; an FDL telegram carries "
-                                         r"246 at most \(LE 249: 244 beside both SAPs\)$"):
-        dpc31.Frame(da=5, sa=2, fc=0x5D, du=bytes(247)).encode()
-    with pytest.raises(ValueError, match=r"^du: 247 bytes with its SAPs"):
-        dpc31.Frame(da=5, sa=2, fc=0x5D, du=bytes(245), dsap=51, ssap=62).encode()
-    assert len(dpc31.Frame(da=5, sa=2, fc=0x5D, du=bytes(244), dsap=51, ssap=62).encode()) == 255
-    assert len(dpc31.Frame(da=5, sa=2, fc=0x5D, du=bytes(246)).encode()) == 255
+def _frame(sd, du=b"", **saps):
+    """An FDL_Status-like frame 2 -> 5 with its SD set by hand (make_frame picks SD1 or SD2)."""
+    f = dpc31.Frame(5, 2, 0x5D, du, **saps)
+    f.sd = sd
+    return f
+
+
+SD2_ROOM = "an SD2 (0x68) carries 1..246 together (244 of du beside both SAPs)"
+
+
+# chip-facts.md §8: SD1 10h no data; SD2 68h with LE = DA..DU, at most 246 DU bytes with the SAP
+# bytes; SD3 A2h exactly 8; SD4 DCh the token `DC DA SA`; SC E5h alone; addresses 7 bits (bit 7
+# the extension bit), a SAP byte's bit 7 a further extension (include/dpc31/fdl.hpp).
+@pytest.mark.parametrize("frame, message", [
+    (lambda: dpc31.Frame(128, 2, 0x49), "da 128 is out of range (0..127)"),
+    (lambda: dpc31.Frame(5, 200, 0x49), "sa 200 is out of range (0..127)"),
+    (lambda: dpc31.Frame(5, 2, 0x5D, dsap=128, ssap=62), "dsap 128 is out of range (0..127)"),
+    (lambda: dpc31.Frame(5, 2, 0x5D, dsap=61, ssap=255), "ssap 255 is out of range (0..127)"),
+    (lambda: dpc31.Frame(5, 2, 0x5D, bytes(247)), "du and SAPs: 247 + 0 bytes; " + SD2_ROOM),
+    (lambda: dpc31.Frame(5, 2, 0x5D, bytes(245), dsap=51, ssap=62),
+     "du and SAPs: 245 + 2 bytes; " + SD2_ROOM),
+    (lambda: _frame(0x68), "du and SAPs: 0 + 0 bytes; " + SD2_ROOM),
+    (lambda: _frame(0x10, b"\x01"),
+     "du and SAPs: 1 + 0 bytes; an SD1 (0x10) carries none (an SD2 carries them)"),
+    (lambda: _frame(0xA2, bytes(6), dsap=61),
+     "du and SAPs: 6 + 1 bytes; an SD3 (0xA2) carries exactly 8 together"),
+    (lambda: _frame(0xDC, b"\x01"), "du and SAPs: 1 + 0 bytes; an SD4 (0xDC, the token) carries none"),
+    (lambda: _frame(0xE5, ssap=62), "du and SAPs: 0 + 1 bytes; an SC (0xE5) carries none"),
+    (lambda: _frame(0x42),
+     "sd 0x42 is no start delimiter (SD1 0x10, SD2 0x68, SD3 0xA2, SD4 0xDC, SC 0xE5)"),
+    (lambda: _frame(0x42, bytes(300)),  # the first bad field in the frame's order
+     "sd 0x42 is no start delimiter (SD1 0x10, SD2 0x68, SD3 0xA2, SD4 0xDC, SC 0xE5)"),
+    (lambda: dpc31.Frame(200, 130, 0x49), "da 200 is out of range (0..127)"),
+])
+def test_a_frame_that_cannot_be_sent_names_its_field_and_range(frame, message):
+    """Frame.encode() and both masters' transact say it alike, nothing sent (docs/python.md,
+    "Errors"); it said "this frame cannot be sent as it stands: ... or ..." for all of them."""
+    exact = "^" + re.escape(message) + "$"
+    with pytest.raises(ValueError, match=exact):
+        frame().encode()
+    master = _master()
+    with pytest.raises(ValueError, match=exact):
+        master.transact(frame())
+    assert master.history == []
+    seg = _segment_with_station()
+    seg_master = seg.add_master(2, [5])
+    now = seg.cycle
+    with pytest.raises(ValueError, match=exact):
+        seg_master.transact(frame())
+    assert seg.cycle == now and seg_master.history == []
+
+
+def test_frames_at_the_edges_encode():
+    """The largest SD2s (LE 249: 255 bytes), an SD3 of 8 and the highest addresses and SAPs."""
+    assert len(dpc31.Frame(5, 2, 0x5D, bytes(244), dsap=51, ssap=62).encode()) == 255
+    assert len(dpc31.Frame(5, 2, 0x5D, bytes(246)).encode()) == 255
+    assert len(_frame(0xA2, bytes(6), dsap=61, ssap=62).encode()) == 14
+    assert dpc31.Frame(127, 127, 0x49).encode() == bytes([0x10, 127, 127, 0x49, 0x47, 0x16])
+    assert dpc31.Frame(5, 2, 0x5D, dsap=127, ssap=127).encode()[7:9] == bytes([127, 127])
+
+
+def test_a_frame_field_is_a_byte_when_the_frame_is_made():
+    with pytest.raises(ValueError, match=r"^fc 256 is out of range \(0..255\)$"):
+        dpc31.Frame(5, 2, 256)
 
 
 def test_addresses_beyond_the_bus_are_refused_as_dpc31_serve_refuses_them(capfd):
@@ -438,18 +494,51 @@ def test_a_second_station_of_one_name_is_refused_as_a_segment_scenario_refuses_i
     assert seg.size == 4
 
 
-def test_a_module_built_for_another_python_names_that_python(tmp_path):
-    """Another interpreter does not look for _dpc31.cpython-311-...so: the ImportError says which
-    Python the module was built for, not just "cannot import name '_dpc31'"."""
+def built_for_python_3_9(tmp_path, code):
+    """Runs `code` with a copy of the package whose native module is built for Python 3.9 (an
+    empty file of that name: no other Python looks for it); returns what it printed."""
     package = tmp_path / "dpc31"
     package.mkdir()
     shutil.copy(pathlib.Path(dpc31.__file__), package / "__init__.py")
     (package / "_dpc31.cpython-39-x86_64-linux-gnu.so").write_bytes(b"")
+    return subprocess.run([sys.executable, "-c", code], env=dict(os.environ, PYTHONPATH=str(tmp_path)),
+                          capture_output=True, text=True, check=True).stdout
+
+
+def test_a_module_built_for_another_python_names_that_python(tmp_path):
+    """Another interpreter does not look for _dpc31.cpython-311-...so: the ImportError says which
+    Python the module was built for, not just "cannot import name '_dpc31'"."""
     code = "import dpc31\ntry:\n    dpc31.Chip\nexcept ImportError as e:\n    print(e)\n"
-    out = subprocess.run([sys.executable, "-c", code], env=dict(os.environ, PYTHONPATH=str(tmp_path)),
-                         capture_output=True, text=True, check=True).stdout
+    out = built_for_python_3_9(tmp_path, code)
     assert "the module was built for Python 3.9 (_dpc31.cpython-39-x86_64-linux-gnu.so)" in out
     assert f"this is Python {sys.version_info[0]}.{sys.version_info[1]}" in out
+
+
+# Python before 3.7 as this interpreter plays it: sys.version_info says 3.6 (the modules the
+# package imports are loaded first, with the true one).
+AS_PYTHON_3_6 = ("import pathlib, re, sys, sysconfig, typing\n"
+                 "sys.version_info = (3, 6, 15, 'final', 0)\n")
+
+
+def test_python_3_6_gets_the_import_error_that_names_the_python_at_import(tmp_path):
+    """docs/python.md, "Install": before 3.7 a module has no __getattr__, so `dpc31.Chip` was an
+    AttributeError ('module dpc31 has no attribute Chip'); `import dpc31` raises the ImportError."""
+    code = AS_PYTHON_3_6 + ("try:\n    import dpc31\nexcept ImportError as e:\n"
+                            "    print(type(e).__name__, e)\n")
+    out = built_for_python_3_9(tmp_path, code)
+    assert out.startswith("ImportError cannot import name '_dpc31'")
+    assert out.endswith(": the module was built for Python 3.9 (_dpc31.cpython-39-x86_64-linux-gnu"
+                        f".so), this is Python 3.6 ({sys.executable}): run the python3 it was "
+                        "built for, or build it with this one\n")
+
+
+def test_python_3_6_has_every_name_once_imported():
+    """A module built for the Python that imports it loads at `import dpc31` before 3.7."""
+    code = AS_PYTHON_3_6 + "import dpc31\nprint(sorted(set(dpc31.__all__) - set(vars(dpc31))))\n"
+    build = str(pathlib.Path(dpc31.__file__).parent.parent)
+    out = subprocess.run([sys.executable, "-c", code], env=dict(os.environ, PYTHONPATH=build),
+                         capture_output=True, text=True, check=True).stdout
+    assert out == "[]\n"
 
 
 @pytest.mark.parametrize("call, message", [

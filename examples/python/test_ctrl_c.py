@@ -15,16 +15,17 @@ LAST = 2**62 - 1  # Chip::kLastCycle (docs/python.md)
 
 
 def interrupted(run):
-    """`run()` with SIGINT sent to this process 0.3 s after it started: how long it took."""
+    """`run()` with SIGINT sent to this process 0.3 s after it started: how long it took, and the
+    KeyboardInterrupt."""
     timer = threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGINT))
     started = time.monotonic()
     timer.start()
     try:
-        with pytest.raises(KeyboardInterrupt):
+        with pytest.raises(KeyboardInterrupt) as info:
             run()
     finally:
         timer.cancel()
-    return time.monotonic() - started
+    return time.monotonic() - started, info.value
 
 
 def started_spc3():
@@ -35,7 +36,7 @@ def started_spc3():
 
 def test_ctrl_c_ends_a_no_limit_step():
     chip = started_spc3()
-    assert interrupted(lambda: chip.step(2**64 - 1)) < 5
+    assert interrupted(lambda: chip.step(2**64 - 1))[0] < 5
     stopped = chip.cycle
     assert 4 < stopped < LAST
     chip.step(4)  # a cycle boundary: the chip goes on
@@ -48,11 +49,42 @@ def test_ctrl_c_ends_a_no_limit_step():
 def test_ctrl_c_ends_a_no_limit_idle():
     chip = started_spc3()
     m = dpc31.Master(chip, address=2, slave=dpc31.SlaveConfig(address=5))
-    assert interrupted(lambda: m.idle(2**64 - 1)) < 5
+    assert interrupted(lambda: m.idle(2**64 - 1))[0] < 5
     stopped = chip.cycle
     assert 4 < stopped < LAST
     m.idle(100)
     assert chip.cycle == stopped + 100
+
+
+def test_ctrl_c_ends_a_segment_s_idle_with_the_observer_s_error_as_its_context():
+    """On a segment an observer's exception does not end the call (docs/python.md, "Ctrl-C"):
+    it is kept, and a Ctrl-C in that call raises KeyboardInterrupt with it as __context__; the
+    segment stays at the cycle the slice ended and runs on, the error not raised again."""
+    seg = dpc31.Segment(1_500_000)
+    station = seg.add_station(5, "spc3", wd=(1, 1))  # the built-in responder starts it: User_Timer
+    master = seg.add_master(2, [5])
+    babbler = seg.add_sender("babbler")
+    # An FDL_Status to station 9, which is not there (SD1: DA, SA, FC 0x49, FCS, ED): on the line
+    # at cycle 1000, long before the signal.
+    seg.send(babbler, bytes([0x10, 9, 3, 0x49, (9 + 3 + 0x49) & 0xFF, 0x16]), start=1000)
+    seen = []
+
+    def boom(t):
+        seen.append(t.start)
+        raise RuntimeError("observer")
+
+    seg.on_telegram(boom)
+    took, interrupt = interrupted(lambda: master.idle(2**64 - 1))
+    assert took < 5
+    assert seen == [1000]  # called once: not again after its exception
+    assert isinstance(interrupt.__context__, RuntimeError)
+    assert str(interrupt.__context__) == "observer"
+    stopped = seg.cycle
+    assert 1000 < stopped < LAST
+    assert station.cycle == stopped  # the chip is at the line's time
+    master.idle(100)  # the kept error is not raised by the next call
+    assert seg.cycle == stopped + 100
+    assert station.cycle == stopped + 100
 
 
 def test_a_no_limit_step_on_a_chip_without_events_still_ends_at_the_last_cycle():

@@ -4,6 +4,8 @@ on both (docs/protocol.md; timing from docs/timing.md: 4 clocks per access, User
 Start + 48000).
 """
 
+import contextlib
+import re
 import socket
 import subprocess
 import sys
@@ -61,6 +63,49 @@ def test_errors_are_exceptions(server):
         assert remote.ping() == "pong"
 
 
+# A register of the SPC3 (chip-facts.md §1.1, the register map: 08h write side Mode_Reg1_S), one
+# it has at no address (Mode_Reg1: set at 08h, reset at 09h, its read-back at 15h the VPC3+'s
+# only), one of another profile (manual-quotes.md, DPC31 p.22: InstQ_Base, the Instruction_Queue's
+# base), a name no profile has: Chip.addr_of gives the address, None, None, a ValueError.
+@pytest.mark.parametrize("name, address",
+                         [("Mode_Reg1_S", 0x08), ("Mode_Reg1", None), ("InstQ_Base", None)])
+def test_addr_of_gives_the_same_on_both_doors(server, name, address):
+    import dpc31
+
+    assert dpc31.Chip("spc3").addr_of(name) == address
+    with Client(tcp=server) as remote:
+        assert remote.addr_of(name) == address
+
+
+def test_addr_of_a_name_no_profile_has_is_the_same_value_error_on_both_doors(server):
+    import dpc31
+
+    message = "^" + re.escape("no register 'No_Such_Reg' in profile spc3") + "$"
+    with pytest.raises(ValueError, match=message):
+        dpc31.Chip("spc3").addr_of("No_Such_Reg")
+    with Client(tcp=server) as remote:
+        with pytest.raises(ValueError, match=message):
+            remote.addr_of("No_Such_Reg")
+        assert remote.ping() == "pong"
+
+
+def test_serve_tells_another_profiles_register_from_an_unknown_name(server):
+    """docs/protocol.md, "Errors": no_address and unknown_register, one line each; peek_reg
+    knows no other profile's register (unknown_register, as before), nor did addr: 'OK -0x001'."""
+    with socket.create_connection(server, timeout=30) as s, s.makefile("rw") as f:
+        for command, reply in [
+                ("addr InstQ_Base",
+                 "ERR no_address no register 'InstQ_Base' in profile spc3: another profile's "
+                 "register"),
+                ("addr Mode_Reg1", "ERR no_address Mode_Reg1 has no address in profile spc3"),
+                ("peek_reg InstQ_Base", "ERR unknown_register no register 'InstQ_Base' in profile spc3"),
+                ("addr No_Such_Reg", "ERR unknown_register no register 'No_Such_Reg' in profile spc3"),
+                ("addr Mode_Reg1_S", "OK 0x0008")]:
+            f.write(command + "\n")
+            f.flush()
+            assert f.readline() == reply + "\n"
+
+
 def test_an_argument_cannot_send_a_second_command(server):
     """A line break inside an argument is refused before anything is sent: it would run a second
     command on the server ("Int_Reg\nreset" reset the chip) and put the replies out of step."""
@@ -87,9 +132,6 @@ def test_the_client_loads_no_native_code():
 def test_an_observer_exception_keeps_the_replies_in_step(server):
     """An observer's exception is raised by the call that ran the chip, after that call's own
     reply is read (as dpc31.Chip): the next call gets its own reply, not the one before."""
-    def broken(cycle, active):
-        raise RuntimeError("observer bug")
-
     with Client(tcp=server) as remote:
         remote.on_irq_change(broken)
         imr = remote.addr_of("Int_Mask_Reg")
@@ -105,10 +147,9 @@ def test_an_observer_exception_keeps_the_replies_in_step(server):
         assert remote.addr_of("Int_Mask_Reg") == imr
 
 
-def test_an_err_reply_is_raised_before_an_observers_error(tmp_path):
-    """A command that failed is said first, the observer's exception its __cause__: the caller
-    must know the command did not run. A scripted server: the call's reply is an irq line, whose
-    observer raises, then ERR."""
+@contextlib.contextmanager
+def scripted_server(tmp_path, replies):
+    """A Unix socket path where one connection gets `replies`, one for each line it sends."""
     path = str(tmp_path / "serve.sock")
     listener = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
     listener.bind(path)
@@ -118,18 +159,31 @@ def test_an_err_reply_is_raised_before_an_observers_error(tmp_path):
     def serve():
         conn, _ = listener.accept()
         with conn, conn.makefile("rb") as f:
-            for reply in (b"OK profile=spc3\n",  # info
-                          b"! irq 12 1\nERR range cycles 0 is out of range (1..1000)\n",  # step
-                          b"OK pong\n"):  # ping
+            for reply in replies:
                 f.readline()
                 conn.sendall(reply)
-
-    def broken(cycle, active):
-        raise RuntimeError("observer bug")
 
     thread = threading.Thread(target=serve)
     thread.start()
     try:
+        yield path
+    finally:
+        thread.join(30)
+        listener.close()
+
+
+def broken(cycle, active):
+    raise RuntimeError("observer bug")
+
+
+def test_an_err_reply_is_raised_before_an_observers_error(tmp_path):
+    """A command that failed is said first, the observer's exception its __cause__: the caller
+    must know the command did not run. A scripted server: the call's reply is an irq line, whose
+    observer raises, then ERR."""
+    with scripted_server(tmp_path, (
+            b"OK profile=spc3\n",  # info
+            b"! irq 12 1\nERR range cycles 0 is out of range (1..1000)\n",  # step
+            b"OK pong\n")) as path:  # ping
         with Client(unix=path, timeout=30) as remote:
             remote.on_irq_change(broken)
             with pytest.raises(ServeError) as e:
@@ -138,6 +192,16 @@ def test_an_err_reply_is_raised_before_an_observers_error(tmp_path):
             assert isinstance(e.value.__cause__, RuntimeError)
             assert str(e.value.__cause__) == "observer bug"
             assert remote.ping() == "pong"  # the observer's exception was not kept for it
-    finally:
-        thread.join(30)
-        listener.close()
+
+
+def test_an_observers_exception_is_raised_by_an_addr_of_that_gives_none(tmp_path):
+    """None is an answer, as an OK reply is: the observer's exception that came with the reply is
+    raised (docs/python.md, "The dpc31 serve client"), not lost."""
+    absent = b"ERR no_address no register 'InstQ_Base' in profile spc3: another profile's\n"
+    with scripted_server(tmp_path, (b"OK profile=spc3\n", b"! irq 12 1\n" + absent,
+                                    absent)) as path:
+        with Client(unix=path, timeout=30) as remote:
+            remote.on_irq_change(broken)
+            with pytest.raises(RuntimeError, match="observer bug"):
+                remote.addr_of("InstQ_Base")
+            assert remote.addr_of("InstQ_Base") is None  # not kept for the next call

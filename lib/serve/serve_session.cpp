@@ -375,10 +375,24 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
       }
       const RegDesc* r = find_reg(chip_.profile(), t[1]);
       if (r == nullptr) {
+        // Another profile's register is no typo: it has no address here (Chip.addr_of: None).
+        const auto has = [&t](Profile p) { return find_reg(profile_desc(p), t[1]) != nullptr; };
+        if (cmd == "addr" && std::any_of(std::begin(kAllProfiles), std::end(kAllProfiles), has)) {
+          return err("no_address",
+                     fmt::format("no register '{}' in profile {}: another profile's register", t[1],
+                                 chip_.profile().name));
+        }
         return err("unknown_register",
-                   fmt::format("no register '{}' in {}", t[1], chip_.profile().name));
+                   fmt::format("no register '{}' in profile {}", t[1], chip_.profile().name));
       }
-      if (cmd == "addr") return ok(fmt::format("{:#06x}", chip_.addr_of(r->id)));
+      if (cmd == "addr") {
+        const std::int32_t a = chip_.addr_of(r->id);
+        if (a < 0) {  // neither read nor written at an address (the SPC3's Mode_Reg1)
+          return err("no_address",
+                     fmt::format("{} has no address in profile {}", r->name, chip_.profile().name));
+        }
+        return ok(fmt::format("{:#06x}", a));
+      }
       if (cmd == "peek_reg") return ok(fmt::format("{:#06x}", chip_.peek_reg(r->id)));
       const auto v = static_cast<std::uint16_t>(number(t[2], r->mask(), "value"));
       if (!chip_.poke_reg(r->id, v)) {

@@ -5,6 +5,7 @@ extension module ``dpc31._dpc31``, loaded at the first use of one of its names, 
 ``import dpc31.client`` (the pure-Python ``dpc31 serve`` client) never loads native code.
 """
 
+import sys
 from typing import Any
 
 __all__ = [
@@ -22,17 +23,21 @@ __all__ = [
 def __getattr__(name: str) -> Any:
     if name not in __all__:
         raise AttributeError(f"module 'dpc31' has no attribute '{name}'")
+    if name == "run_scenario":
+        value: Any = _run_scenario
+    else:
+        value = getattr(_native(), name)
+    globals()[name] = value
+    return value
+
+
+def _native() -> Any:
+    """The extension module, else the ImportError that says why it did not load."""
     try:
         from . import _dpc31
     except ImportError as e:
         raise ImportError(_not_loaded(e)) from e
-
-    if name == "run_scenario":
-        value: Any = _run_scenario
-    else:
-        value = getattr(_dpc31, name)
-    globals()[name] = value
-    return value
+    return _dpc31
 
 
 def _not_loaded(error: ImportError) -> str:
@@ -40,7 +45,6 @@ def _not_loaded(error: ImportError) -> str:
     name carries that interpreter's tag (cpython-311: 3.11), and no other one looks for it."""
     import pathlib
     import re
-    import sys
     import sysconfig
 
     built = sorted(p.name for p in pathlib.Path(__file__).parent.glob("_dpc31.*"))
@@ -62,9 +66,12 @@ def __dir__() -> list:
 
 def _run_scenario(path: str) -> Any:
     """Loads and runs a scenario file (``dpc31 run PATH``); raises ScenarioError on a bad file."""
-    try:
-        from . import _dpc31
-    except ImportError as e:
-        raise ImportError(_not_loaded(e)) from e
+    return _native().Scenario.load(path).run()
 
-    return _dpc31.Scenario.load(path).run()
+
+if sys.version_info < (3, 7):
+    # Before 3.7 a module has no __getattr__ (PEP 562): dpc31.Chip would be an AttributeError.
+    # The names are loaded now, so `import dpc31` raises the ImportError that says why.
+    for _name in __all__:
+        __getattr__(_name)
+    del _name

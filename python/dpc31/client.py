@@ -194,8 +194,20 @@ class Client:
     def poke_reg(self, name: str, value: int) -> bool:
         return self._store(f"poke_reg {name} {value}")
 
-    def addr_of(self, name: str) -> int:
-        return int(self._call(f"addr {name}"), 16)
+    def addr_of(self, name: str) -> Optional[int]:
+        """As ``dpc31.Chip.addr_of``: None for a register without an address on the served chip
+        (``ERR no_address``: another profile's, or the SPC3's Mode_Reg1), a ValueError for a name
+        no profile has."""
+        try:
+            return int(self._call(f"addr {name}"), 16)
+        except ServeError as e:
+            if e.code == "no_address":
+                if e.__cause__ is not None:  # an observer's exception, as after an OK reply
+                    raise e.__cause__
+                return None
+            if e.code == "unknown_register":
+                raise ValueError(e.message) from e
+            raise
 
     # --- time ---
     def step(self, cycles: int = 1) -> None:
