@@ -2,7 +2,8 @@
 
 The native part (the chip, the DP master, firmware, scenarios, wavediff; docs/python.md) is the
 extension module ``dpc31._dpc31``, loaded at the first use of one of its names, so that
-``import dpc31.client`` (the pure-Python ``dpc31 serve`` client) never loads native code.
+``import dpc31.client`` (the pure-Python ``dpc31 serve`` client) never loads native code. Python
+3.7 or later: before it (no module ``__getattr__``) ``import dpc31`` loads it at once.
 """
 
 import sys
