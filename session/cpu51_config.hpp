@@ -20,14 +20,19 @@ struct Cpu51Config {
   std::string hex{};  // the Intel HEX file (a scenario's relative path already resolved)
   std::uint16_t base = 0x8000;
   std::uint16_t latch = 0x4000;
-  std::vector<std::string> ports{};  // latch bytes by name, from `latch` on
+  std::vector<std::string> ports{};  // latch bytes by name, from `latch` on; none: default_ports()
   // `cpu c31`: the DPC31's internal C31 instead (docs/dpc31.md, "The C31"): its XDATA is the
   // chip's own space, its code the chip's RAM from `code` up to 1FFFh; no board RAM, no latch.
   bool c31 = false;
   std::uint16_t code = 0x1000;
-  // "" or "the chip's window covers the output latch at 0x4000": the latch's first byte is there
-  // even when no port names it (DO4-style firmware writes 4000h + port whatever `ports` says), and
-  // a write there would go into the chip. The one check of the scenario header and the bridge.
+  // DO4's latch bytes, `outputs` and `modul_ok` (docs/cpu.md, "DO4 on the 80C32": the shipped
+  // firmware writes 4000h + port): the latch of a board whose `ports` names none, at every door.
+  static const std::vector<std::string>& default_ports();
+  // The latch bytes by name from `latch` on: `ports`, default_ports() when it names none, none on
+  // the C31 (it has no latch). What every door names, checks and records.
+  [[nodiscard]] const std::vector<std::string>& latch_ports() const;
+  // "" or "the chip's window covers the output latch at 0x4000": a byte of latch_ports() inside
+  // the window would go into the chip. The one check of the scenario header, the bridge and serve.
   [[nodiscard]] std::string latch_problem() const;
   // "" or why `ports` cannot name the latch bytes: a name empty, not a word
   // ([A-Za-z_][A-Za-z0-9_]*: `serve`'s protocol lines and `latch` replies carry it between blanks),

@@ -64,9 +64,18 @@ std::string Cpu51Config::ports_problem() const {
   return {};
 }
 
+const std::vector<std::string>& Cpu51Config::default_ports() {
+  static const std::vector<std::string> names{"outputs", "modul_ok"};
+  return names;
+}
+
+const std::vector<std::string>& Cpu51Config::latch_ports() const {
+  static const std::vector<std::string> none;
+  return c31 ? none : ports.empty() ? default_ports() : ports;
+}
+
 std::string Cpu51Config::latch_problem() const {
-  const std::size_t bytes = std::max<std::size_t>(ports.size(), 1);
-  if (latch + bytes <= base || latch >= base + kCpu51Window) return {};
+  if (latch + latch_ports().size() <= base || latch >= base + kCpu51Window) return {};
   return fmt::format("the chip's window covers the output latch at {:#06x}", latch);
 }
 
@@ -225,10 +234,12 @@ std::string apply_cpu51_choice(const Cpu51Choice& choice, ChipOptions& chip, Cpu
     if (!choice.ports.empty()) return "--ports is the 80C32 board's output latch: the C31 has none";
   } else {
     if (!choice.code.empty()) return "--code is the C31's (--cpu c31)";
-    // The latch bytes from 4000h on, named as the scenario's `ports=` names them.
-    const std::string ports = choice.ports.empty() ? "outputs,modul_ok" : choice.ports;
+    // The latch bytes from 4000h on, named as the scenario's `ports=` names them; none given:
+    // Cpu51Config::default_ports(), as the scenario's.
+    const std::string& ports = choice.ports;
     cfg.ports.clear();
-    for (std::size_t at = 0, end = 0; end != std::string_view::npos; at = end + 1) {
+    for (std::size_t at = 0, end = 0; !ports.empty() && end != std::string_view::npos;
+         at = end + 1) {
       end = ports.find(',', at);
       cfg.ports.emplace_back(ports.substr(at, end == std::string_view::npos ? end : end - at));
     }
@@ -260,7 +271,7 @@ Cpu51Module::Cpu51Module(Chip& chip, const Cpu51Config& cfg, const Cpu51Image& i
     : cfg_(cfg),
       board_(cfg.c31 ? std::make_unique<Cpu51Board>(chip, cfg.hz, Cpu51Board::C31{cfg.code})
                      : std::make_unique<Cpu51Board>(chip, cfg.hz, cfg.base)),
-      values_(cfg.ports.size(), 0) {
+      values_(cfg.latch_ports().size(), 0) {
   if (cfg.c31)
     board_->load_c31_code(image.code, image.used);  // fits: load_cpu51_image checked it
   else
@@ -279,14 +290,16 @@ Cpu51Module::Cpu51Module(Chip& chip, const Cpu51Config& cfg, const Cpu51Image& i
 }
 
 std::int64_t Cpu51Module::port(const std::string& name) const {
-  for (std::size_t i = 0; i < cfg_.ports.size(); ++i) {
-    if (cfg_.ports[i] == name) return values_[i];
+  const std::vector<std::string>& names = cfg_.latch_ports();
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (names[i] == name) return values_[i];
   }
   return -1;
 }
 
 std::string Cpu51Module::port_name(unsigned port) const {
-  return port < cfg_.ports.size() ? cfg_.ports[port] : fmt::format("latch{}", port);
+  const std::vector<std::string>& names = cfg_.latch_ports();
+  return port < names.size() ? names[port] : fmt::format("latch{}", port);
 }
 
 }  // namespace dpc31

@@ -206,8 +206,12 @@ class ScenarioObserver {
   virtual ~ScenarioObserver() = default;
   // At cycle 0, before the user side's init and before ScenarioHooks::at_start.
   virtual void run_begins(Chip& /*chip*/) {}
-  // The user side (the built-in responder or the firmware) has set up and started the chip.
-  virtual void user_side_started(std::uint64_t /*cycle*/, std::string_view /*text*/) {}
+  // The user side `who` ("the built-in user side", "the host firmware DO4", "the 80C32 firmware
+  // F.ihx", "the C31 firmware F.ihx") has set up the chip; `text` is the walk's `started:` line,
+  // or its `not started:` line for a CPU's firmware (it starts the chip later) and a host user
+  // side that gave no Start_SPC3.
+  virtual void user_side_started(std::uint64_t /*cycle*/, std::string_view /*who*/,
+                                 std::string_view /*text*/) {}
   // Step `st` begins at `cycle` ("line K: TEXT").
   virtual void step_begins(std::uint64_t /*cycle*/, const ScenarioStep& /*st*/,
                            std::string_view /*text*/) {}

@@ -302,7 +302,7 @@ class Parser {
     if (const std::string why = c31 ? "" : c.latch_problem(); !why.empty()) fail(why);
     if (c31) s_.chip.irq_controller = IrqController::c31;
     s_.cpu = std::move(c);
-    for (const std::string& n : s_.cpu->ports) ports_.insert(ports_.end() - 1, n.c_str());
+    for (const std::string& n : s_.cpu->latch_ports()) ports_.insert(ports_.end() - 1, n.c_str());
   }
 
   bool header() {

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <iterator>
 #include <map>
 #include <memory>
@@ -232,7 +233,7 @@ class Runner {
         o.walk_note(e.cycle, e.text);
         break;
       case Event::Kind::started:
-        o.user_side_started(e.cycle, e.text);
+        o.user_side_started(e.cycle, user_side_name(), e.text);
         break;
       case Event::Kind::step:
         o.step_begins(e.cycle, *e.step, e.text);
@@ -332,6 +333,15 @@ class Runner {
   [[nodiscard]] std::string states_text(std::string_view what) const {
     return fmt::format("{}: dp_state {}, wd_state {}", what, dp_state_name(dp_),
                        wd_state_name(wd_));
+  }
+  // What drives the chip, as the trace's heading names it (docs/trace-format.md).
+  [[nodiscard]] std::string user_side_name() const {
+    if (s_.cpu) {
+      return fmt::format("the {} firmware {}", s_.cpu->c31 ? "C31" : "80C32",
+                         std::filesystem::path(s_.cpu->hex).filename().string());
+    }
+    return s_.firmware_desc != nullptr ? fmt::format("the host firmware {}", s_.firmware_desc->name)
+                                       : "the built-in user side";
   }
   [[nodiscard]] std::string not_started_why() const {
     const char* start = chip_.profile().id == Profile::dpc31 ? "MAC_Start" : "Start_SPC3";

@@ -75,7 +75,7 @@ class TraceRecorder final : public ScenarioObserver {
   // must outlive the run.
   ScenarioHooks scenario_hooks();
   void run_begins(Chip& chip) override;
-  void user_side_started(std::uint64_t cycle, std::string_view text) override;
+  void user_side_started(std::uint64_t cycle, std::string_view who, std::string_view text) override;
   void step_begins(std::uint64_t cycle, const ScenarioStep& st, std::string_view text) override;
   void expect_checked(std::uint64_t cycle, const ScenarioStep& st, bool ok,
                       std::string_view text) override;

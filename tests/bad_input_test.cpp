@@ -186,6 +186,34 @@ TEST_F(BadInput, CpuBoardSetUpsThatCannotWork) {
   EXPECT_FALSE(fs::exists(path("s")));
 }
 
+// A board whose ports nobody names has DO4's latch, N = 2 bytes (docs/cpu.md, "DO4 on the
+// 80C32": the module's outputs go to 4000h + port, DO4's `outputs` and `modul_ok`; docs/bridge.md,
+// `--ports`' default): a window from 4000h + N - 1 covers its last byte, one from 4000h + N does
+// not. Every door gives the same verdict with the same words (Cpu51Config::latch_ports): the
+// scenario accepted 4001h and the bridge and serve refused it. An accepted board goes on to read
+// its image, here one with a bad checksum, so each door stops at the image instead.
+TEST_F(BadInput, EveryDoorTakesTheSameDefaultLatch) {
+  file("bad.ihx", ":0300000002000BF1\n:00000001FF\n");
+  const std::string covered = "the chip's window covers the output latch at 0x4000";
+  const auto scenario = [&](const std::string& base) {
+    return dpc31("run " + file("b" + base + ".scn",
+                               "cpu 80c32 firmware bad.ihx base=" + base + "\nstartup\n"));
+  };
+  const auto door = [&](const std::string& command, const std::string& base) {
+    return dpc31(command + " --cpu 80c32 --firmware bad.ihx --board-address " + base);
+  };
+  expect_bad(scenario("0x4001"), path("b0x4001.scn") + ":1: " + covered, "scenario, 4001h");
+  expect_bad(door("bridge --tcp 0", "0x4001"), "dpc31 bridge: --board-address 0x4001: " + covered,
+             "bridge, 4001h");
+  expect_bad(door("serve --unix s", "0x4001"), "dpc31 serve: --board-address 0x4001: " + covered,
+             "serve, 4001h");
+  expect_bad(scenario("0x4002"), path("bad.ihx") + ":1: checksum", "scenario, 4002h");
+  expect_bad(door("bridge --tcp 0", "0x4002"), "dpc31 bridge: bad.ihx:1: checksum",
+             "bridge, 4002h");
+  expect_bad(door("serve --unix s", "0x4002"), "dpc31 serve: bad.ihx:1: checksum", "serve, 4002h");
+  EXPECT_FALSE(fs::exists(path("s")));
+}
+
 // Port names travel in protocol lines (`serve`'s `latch` replies, blank-separated) and in
 // `expect port`: only words are names, at every door (Cpu51Config::ports_problem).
 TEST_F(BadInput, CpuPortNamesAreWords) {

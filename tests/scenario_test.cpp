@@ -802,8 +802,9 @@ TEST(ScenarioCpu51, HeaderIsCheckedAndTheImageReadWhenTheRunStarts) {
             "t.scn:1: clock 50000000 out of range (1000000..40000000)");
   EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx latch=0x8000 ports=x\nstartup\n"),
             "t.scn:1: the chip's window covers the output latch at 0x8000");
-  // Without ports= the latch's first byte is still there (docs/cpu.md: the shipped firmware
-  // writes 4000h + port), as `dpc31 bridge --board-address 0x4000` refuses it.
+  // Without ports= the latch is DO4's two bytes (docs/cpu.md: the shipped firmware writes 4000h +
+  // port), as `dpc31 bridge --board-address 0x4001` refuses it (BadInput.
+  // EveryDoorTakesTheSameDefaultLatch).
   EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx base=0x4000 latch=0x4000\nstartup\n"),
             "t.scn:1: the chip's window covers the output latch at 0x4000");
   EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx base=0x4000\nstartup\n"),
@@ -811,7 +812,10 @@ TEST(ScenarioCpu51, HeaderIsCheckedAndTheImageReadWhenTheRunStarts) {
   EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx base=0x3001\nstartup\n"),
             "t.scn:1: the chip's window covers the output latch at 0x4000");
   EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx base=0x3000\nstartup\n"), "");
-  EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx base=0x4001\nstartup\n"), "");
+  EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx base=0x4001\nstartup\n"),
+            "t.scn:1: the chip's window covers the output latch at 0x4000");
+  EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx base=0x4002\nstartup\n"), "");
+  EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx base=0x4001 ports=a\nstartup\n"), "");
   // A port of the 80C32 board is a byte of its latch (docs/cpu.md, "DO4 on the 80C32").
   EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx ports=a\nstartup\nexpect port a 256\n"),
             "t.scn:3: port value 256 out of range (0..255)");
@@ -1126,7 +1130,7 @@ namespace {
 // Every event of a run as the observer is told it: (cycle, text), in the walk's order.
 struct EveryEvent : dpc31::ScenarioObserver {
   std::vector<std::pair<std::uint64_t, std::string>> events;
-  void user_side_started(std::uint64_t cycle, std::string_view text) override {
+  void user_side_started(std::uint64_t cycle, std::string_view, std::string_view text) override {
     events.emplace_back(cycle, text);
   }
   void step_begins(std::uint64_t cycle, const dpc31::ScenarioStep&,

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -61,6 +62,7 @@ Walk run(const std::string& text, const fs::path& path, dpc31::Engine engine,
   dpc31::Scenario s;
   dpc31::ScenarioError err;
   EXPECT_TRUE(dpc31::parse_scenario(text, path.string(), s, err)) << err.text();
+  EXPECT_TRUE(dpc31::bind_plugin(s, err)) << err.text();  // a plug-in's `firmware` line
   s.chip.engine = engine;
   Walk w;
   dpc31::ScenarioHooks h;
@@ -76,30 +78,92 @@ Walk run(const std::string& text, const fs::path& path, dpc31::Engine engine,
   return w;
 }
 
+// A directory of its own for the images a test writes (removed with it).
+struct ImageDir {
+  fs::path dir;
+  ImageDir() {
+    std::string name = (fs::temp_directory_path() / "walk_test_XXXXXX").string();
+    dir = ::mkdtemp(name.data());
+  }
+  ~ImageDir() {
+    std::error_code ec;
+    fs::remove_all(dir, ec);
+  }
+  ImageDir(const ImageDir&) = delete;
+  ImageDir& operator=(const ImageDir&) = delete;
+  void put(const std::string& name, const std::string& text) const {
+    std::ofstream(dir / name) << text;
+  }
+};
+
+// The heading lines of a recorded trace (`# ...`) that say who set the chip up.
+std::string user_side_heading(const std::string& trace) {
+  std::istringstream in(trace);
+  for (std::string l; std::getline(in, l);) {
+    if (l.starts_with("# firmware init (") || l.starts_with("# user side: ")) return l;
+  }
+  return "";
+}
+
 const char* engine_name(dpc31::Engine e) {
   return e == dpc31::Engine::event ? "event" : "per_cycle";
+}
+
+// The completion cycle of the first `rd` of `addr` after a `rd` of `after` in a recorded trace
+// (docs/trace-format.md: `rd CYCLE ADDR = DATA`, a read that completes at CYCLE); 0: none.
+std::uint64_t trace_read_after(const std::string& trace, unsigned after, unsigned addr) {
+  std::istringstream in(trace);
+  bool seen = false;
+  for (std::string l; std::getline(in, l);) {
+    std::istringstream f(l);
+    std::string kind;
+    std::uint64_t cycle = 0;
+    unsigned a = 0;
+    if (!(f >> kind >> cycle >> std::hex >> a) || kind != "rd") continue;
+    if (seen && a == addr) return cycle;
+    seen = seen || a == after;
+  }
+  return 0;
+}
+
+// The cycle of the walk's line `[cycle N] TEXT`; 0: no such line.
+std::uint64_t walk_cycle(const Walk& w, const std::string& text) {
+  for (const std::string& l : w.lines) {
+    if (l.size() > 19 && l.starts_with("[cycle ") && l.substr(19) == text) {
+      return std::stoull(l.substr(7, 10));
+    }
+  }
+  return 0;
 }
 
 // a19 finding 1: ECHO51 (tests/data/walk/echo51.c, an SPC3 firmware with only New_Prm_Data,
 // New_Cfg_Data and DX_Out unmasked) accepts the Chk_Cfg and hands its first inputs over with
 // New_Din_Buffer_Cmd; "the SPC3 waiting after Cfg OK enters Data_Exchange" at that read
 // (docs/decisions.md, Cfg OK; docs/timing.md: an access acts at its completion cycle, the `rd`
-// line's cycle of a recorded trace). That read is at 2 945 076 (the audit's --record:
-// `rd 2945076 0009 = 02`; its VCD: state.dp_state -> 2 there). X/INT does not move there, and the
-// next telegram ends 2 288 cycles later, where the walk used to see it.
+// line's cycle of a recorded trace). The walk's line and `expect ... at` take that read's cycle,
+// found in the run's own recorded trace (not X/INT, and not the next telegram's end).
 TEST(ScenarioWalk, FirmwareMadeDataExchangeAtItsBusAccess) {
   const fs::path dir = fs::path(SOURCE_DIR) / "tests" / "data" / "walk";
   const std::string text =
       "profile spc3\nbaud 1500000\ncpu 80c32 clock=24000000 firmware echo51.ihx ports=out0\n"
       "slave address=9 ident=0x0E51 cfg=31 in=2 out=2 wd=2,5 user_prm=00\n"
-      "startup\nexpect dp_state Data_Exchange at 2945076\n";
+      "startup\nexpect dp_state Data_Exchange\n";
   for (const dpc31::Engine engine : {dpc31::Engine::event, dpc31::Engine::per_cycle}) {
     SCOPED_TRACE(engine_name(engine));
-    const Walk w = run(text, dir / "t.scn", engine);
-    EXPECT_EQ(w.read_after(SPC3_User_Cfg_Data_Okay, SPC3_New_Din_Buffer_Cmd), 2'945'076u);
-    EXPECT_TRUE(w.has("[cycle    2945076] dp_state Wait_Cfg -> Data_Exchange"));
+    dpc31::TraceRecorder rec(1'500'000);
+    const Walk w = run(text, dir / "t.scn", engine, &rec);
+    const std::uint64_t read =
+        trace_read_after(rec.text(), SPC3_User_Cfg_Data_Okay, SPC3_New_Din_Buffer_Cmd);
+    ASSERT_NE(read, 0u);
+    EXPECT_EQ(w.read_after(SPC3_User_Cfg_Data_Okay, SPC3_New_Din_Buffer_Cmd), read);
+    EXPECT_EQ(walk_cycle(w, "dp_state Wait_Cfg -> Data_Exchange"), read);
     EXPECT_EQ(w.outcome.failed, 0u) << (w.errors.empty() ? "" : w.errors.front());
     EXPECT_EQ(w.outcome.passed, 1u);
+    // `expect ... at` takes the same cycle.
+    const Walk at = run(text + fmt::format("expect dp_state Data_Exchange at {}\n", read),
+                        dir / "t.scn", engine);
+    EXPECT_EQ(at.outcome.failed, 0u) << (at.errors.empty() ? "" : at.errors.front());
+    EXPECT_EQ(at.outcome.passed, 2u);
   }
 }
 
@@ -148,9 +212,87 @@ TEST(ScenarioWalk, CpuFirmwareStartsTheChipAtItsStartSpc3) {
     EXPECT_EQ(w.outcome.passed, 2u);
     const std::string trace = rec.text();
     EXPECT_EQ(trace.find("built-in user side)"), std::string::npos);
-    EXPECT_NE(trace.find("# no built-in user side; not started: dp_state Wait_Prm, wd_state "
-                         "Baud_Search, the chip Offline until the firmware's Start_SPC3\n"),
-              std::string::npos);
+    EXPECT_EQ(user_side_heading(trace),
+              "# user side: the 80C32 firmware do4_80c32.ihx; not started: dp_state Wait_Prm, "
+              "wd_state Baud_Search, the chip Offline until the firmware's Start_SPC3");
+  }
+}
+
+// `--record`'s heading names what set the chip up (docs/trace-format.md): the built-in user side,
+// a host C firmware by its name, a CPU's image by its file. The heading said "the built-in user
+// side" for a host firmware (DO4's init, which starts the chip itself). Started at the init, the
+// states are Start_SPC3's (docs/timing.md, "Mode and state changes": Wait_Prm, Baud_Search).
+TEST(ScenarioWalk, TraceHeadingNamesWhatSetTheChipUp) {
+  const ImageDir d;
+  d.put("halt.ihx", ":0200000080FE80\n:00000001FF\n");  // SJMP $
+  const auto heading = [&](const std::string& text) {
+    dpc31::TraceRecorder rec(1'500'000);
+    const Walk w = run(text, d.dir / "t.scn", dpc31::Engine::event, &rec);
+    EXPECT_TRUE(w.errors.empty()) << (w.errors.empty() ? "" : w.errors.front());
+    return user_side_heading(rec.text());
+  };
+  const std::string started = "started: dp_state Wait_Prm, wd_state Baud_Search";
+  EXPECT_EQ(heading("profile spc3\nbaud 1500000\nsilence 1ms\n"),
+            "# firmware init (the built-in user side): registers, buffers, Start_SPC3; " + started);
+  EXPECT_EQ(heading("profile spc3\nbaud 1500000\nfirmware DO4\nsilence 1ms\n"),
+            "# firmware init (the host firmware DO4): registers, buffers, Start_SPC3; " + started);
+  EXPECT_EQ(heading("profile dpc31\nbaud 1500000\nsilence 1ms\n"),
+            "# firmware init (the built-in user side): registers, buffers, MAC_Start; " + started);
+  EXPECT_EQ(heading("profile spc3\nbaud 1500000\ncpu 80c32 firmware halt.ihx\nsilence 1ms\n"),
+            "# user side: the 80C32 firmware halt.ihx; not started: dp_state Wait_Prm, wd_state "
+            "Baud_Search, the chip Offline until the firmware's Start_SPC3");
+  EXPECT_EQ(heading("profile dpc31\nbaud 1500000\ncpu c31 firmware halt.ihx\nsilence 1ms\n"),
+            "# user side: the C31 firmware halt.ihx; not started: dp_state Wait_Prm, wd_state "
+            "Baud_Search, the chip Offline until the firmware's MAC_Start");
+}
+
+// A firmware's Go_Offline with no request in progress: "go Offline after the current request",
+// with none at the write's completion cycle, both states back to Wait_Prm and Baud_Search
+// (docs/timing.md, "Mode and state changes"); the walk's `offline:` line is at that cycle
+// (docs/scenario-format.md, "The walk"). The image, hand-assembled (Intel's MCS-51 manual for the
+// machine cycles; the chip's Mode_Reg1_S at 08h, its window at 8000h):
+//   M0-1 MOV DPTR,#8008h   M2 MOV A,#01h   M3-4 MOVX @DPTR,A (Start_SPC3)
+//   M5 MOV A,#04h          M6-7 MOVX @DPTR,A (Go_Offline)        M8- SJMP $
+// A MOVX starting in machine cycle M completes at chip cycle 24 M + 36 at 24 MHz beside the
+// 48 MHz chip (docs/cpu.md, "MOVX timing": 18 oscillator clocks, ceil(clock x 48/24)): Start_SPC3
+// at 24 x 3 + 36 = 108, Go_Offline at 24 x 6 + 36 = 180. No master sends during `silence`.
+TEST(ScenarioWalk, FirmwareGoOfflineIsTheWalksOfflineLineAtItsWrite) {
+  const ImageDir d;
+  d.put("off.ihx", ":0B0000009080087401F07404F080FE92\n:00000001FF\n");
+  const std::string text =
+      "profile spc3\nbaud 1500000\ncpu 80c32 clock=24000000 firmware off.ihx\nsilence 1ms\n"
+      "expect dp_state Wait_Prm at 180\nexpect wd_state Baud_Search at 180\n";
+  for (const dpc31::Engine engine : {dpc31::Engine::event, dpc31::Engine::per_cycle}) {
+    SCOPED_TRACE(engine_name(engine));
+    const Walk w = run(text, d.dir / "t.scn", engine);
+    EXPECT_EQ(walk_cycle(w, "started: dp_state Wait_Prm, wd_state Baud_Search"), 108u);
+    EXPECT_EQ(walk_cycle(w, "offline: dp_state Wait_Prm, wd_state Baud_Search"), 180u);
+    EXPECT_EQ(w.outcome.failed, 0u) << (w.errors.empty() ? "" : w.errors.front());
+    EXPECT_EQ(w.outcome.passed, 2u);
+  }
+}
+
+// A host user side that never starts the chip (the GLOBALS plug-in of tests/bad_plugin.c: its
+// init only writes its port): the chip stays Offline in its reset states, Wait_Prm and
+// Baud_Search (docs/timing.md), and the walk says so at cycle 0, where the init made no bus access
+// (docs/scenario-format.md, "The walk"), and never `started:`; the trace's heading names it.
+TEST(ScenarioWalk, AHostUserSideThatNeverStartsTheChipIsSaid) {
+  const std::string text =
+      fmt::format("profile spc3\nbaud 1500000\nfirmware {}\nsilence 1ms\n", BAD_PLUGIN_GLOBALS);
+  const std::string not_started =
+      "not started: dp_state Wait_Prm, wd_state Baud_Search, the chip Offline (the user side gave "
+      "no Start_SPC3)";
+  for (const dpc31::Engine engine : {dpc31::Engine::event, dpc31::Engine::per_cycle}) {
+    SCOPED_TRACE(engine_name(engine));
+    dpc31::TraceRecorder rec(1'500'000);
+    const Walk w = run(text, fs::path(SOURCE_DIR) / "t.scn", engine, &rec);
+    EXPECT_TRUE(w.errors.empty()) << (w.errors.empty() ? "" : w.errors.front());
+    EXPECT_TRUE(w.has("[cycle          0] " + not_started));
+    for (const std::string& l : w.lines) {
+      EXPECT_EQ(l.find("] started:"), std::string::npos) << l;
+      EXPECT_EQ(l.find("] offline:"), std::string::npos) << l;
+    }
+    EXPECT_EQ(user_side_heading(rec.text()), "# user side: the host firmware BAD; " + not_started);
   }
 }
 

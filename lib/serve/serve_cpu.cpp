@@ -57,7 +57,7 @@ std::string BoardCpu::port(unsigned n) const {
 
 std::string BoardCpu::latch() const {
   std::string out;
-  for (const std::string& name : s_.cfg.ports) {
+  for (const std::string& name : s_.cfg.latch_ports()) {
     out += fmt::format("{}{}={:#04x}", out.empty() ? "" : " ", name, module_->port(name));
   }
   return out;
