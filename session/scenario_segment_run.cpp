@@ -137,9 +137,10 @@ class SegmentRun {
           raw->request_end = t.end;
         }
       });
+      // The words of the single chip's trace heading (trace_record.cpp's callers).
       observer_->user_side_started(st->index, def.firmware.empty()
-                                                  ? std::string_view("the built-in user side")
-                                                  : std::string_view(def.firmware));
+                                                  ? std::string("the built-in user side")
+                                                  : "the host firmware " + def.firmware);
       by_address_[def.slave.address] = st.get();
       stations_.push_back(std::move(st));
     }

@@ -533,6 +533,17 @@ TEST(SegmentOutputs, ThreeSlavesTracesReplay) {
     EXPECT_EQ(r.rc, 0) << name << ": " << r.out;
   }
   EXPECT_EQ(traces, 3u);
+  // Each heading names the station's firmware as a single chip's does (docs/trace-format.md: "#
+  // firmware init (WHO): registers, buffers, Start_SPC3"; MAC_Start on the DPC31).
+  for (const auto& [st, who, start] : {std::tuple{"station5_spc3", "DO4", "Start_SPC3"},
+                                       {"station6_vpc3plus", "CNT2", "Start_SPC3"},
+                                       {"station7_dpc31", "DO4", "MAC_Start"}}) {
+    const std::string want =
+        fmt::format("# firmware init (the host firmware {}): registers, buffers, {}", who, start);
+    EXPECT_NE(slurp(tmp(fmt::format("three.{}.trace", st))).find("\n" + want + "\n"),
+              std::string::npos)
+        << st << ": no line " << want;
+  }
 }
 
 // The log of a segment's run in cycle order (docs/segment.md, "The log"): a telegram of the line
