@@ -345,3 +345,216 @@ TEST(Cli, RegsShowsTheDpc31QueuesWithTheirOrigin) {
   }
   EXPECT_EQ(r.out.find("0x0004  -       Status_Reg"), std::string::npos);
 }
+
+namespace {
+
+// The lines of `out` from the demo section whose title starts with `title` to the next section.
+std::string demo_section(const std::string& out, const std::string& title) {
+  const std::size_t at = out.find("\n# " + title);
+  if (at == std::string::npos) return {};
+  const std::size_t end = out.find("\n\n#", at + 1);
+  return out.substr(at + 1, end == std::string::npos ? std::string::npos : end - at);
+}
+
+// The demo prints every bus access it makes, back to back from cycle 0.
+std::uint64_t accesses(const std::string& text) {
+  std::uint64_t n = 0;
+  for (std::size_t at = text.find("] "); at != std::string::npos; at = text.find("] ", at + 1)) {
+    n += text.compare(at, 8, "] write ") == 0 || text.compare(at, 8, "] read  ") == 0;
+  }
+  return n;
+}
+
+// A demo line as the demo prints it: "[cycle      NNN] TEXT".
+std::string at_cycle(std::uint64_t cycle, const std::string& text) {
+  std::string c = std::to_string(cycle);
+  return "[cycle " + std::string(c.size() < 8 ? 8 - c.size() : 0, ' ') + c + "] " + text + "\n";
+}
+
+// docs/timing.md, "Bus accesses": 4 clocks each, one after the other; "Timers": the first
+// User_Timer_Clock at the start's cycle s + P, P = ceil(1 ms x 48 MHz).
+constexpr std::uint64_t kAccess = 4;
+constexpr std::uint64_t kUserTimerPeriod = 48'000;
+
+}  // namespace
+
+// a22 finding 2: the demo waits for the real first User_Timer_Clock (start + 1 ms, not 1 ms after
+// cycle 0), shows X/INT going active at its cycle, reads IR in the ISR, acknowledges and EOIs.
+// Register addresses, IR's bit 4 and the EOI write (02h to 08h): chip-facts.md; Motorola swaps
+// the byte lanes (docs/timing.md "Bus accesses"); X/INT low-active with INT_Pol 0, active in the
+// cycle the event latches, inactive when the acknowledge completes (docs/timing.md "Interrupt
+// line").
+TEST(CliDemo, WaitsForTheFirstUserTimerTickAndAcknowledgesIt) {
+  struct Case {
+    const char* args;
+    const char* ir_low;  // the address of Int_Reg / Int_Ack_Reg bits 7..0, then 15..8
+    const char* ir_high;
+  };
+  for (const Case& c : {Case{"--profile dpc31", "0x0002", "0x0003"},
+                        Case{"--profile spc3 --bus motorola", "0x0003", "0x0002"}}) {
+    const std::string dir = testutil::scratch() + "demo-utc";
+    const Result r = run(std::string("demo ") + c.args + " --out-dir " + dir);
+    ASSERT_EQ(r.rc, 0) << c.args;
+    // The start is the last access of the first section; the ISR of DX_Out follows.
+    const std::string init = demo_section(r.out, "Initialise as a driver does");
+    const std::string isr = demo_section(r.out, "ISR: read IR, fetch the (cleared) outputs");
+    ASSERT_FALSE(init.empty() || isr.empty()) << r.out;
+    const std::uint64_t start = kAccess * accesses(init);
+    const std::uint64_t waits = start + kAccess * accesses(isr);
+    const std::uint64_t tick = start + kUserTimerPeriod;
+    const std::string want =
+        "# Wait for the 1 ms User_Timer_Clock (first tick at the start's cycle " +
+        std::to_string(start) + " + 48000); ISR: read IR, acknowledge it, EOI\n" +
+        at_cycle(waits, "step  " + std::to_string(tick - waits) +
+                            " cycles: until the first user timer tick") +
+        at_cycle(tick, "  X/INT -> low (active)") +
+        at_cycle(tick + 4, std::string("read  ") + c.ir_low + " -> 10h  Int_Reg bits 7..0") +
+        at_cycle(tick + 8, std::string("read  ") + c.ir_high + " -> 00h  Int_Reg bits 15..8") +
+        "                   IR = 0010h (User_Timer_Clock = bit 4)\n" +
+        at_cycle(tick + 12, "  X/INT -> high (inactive)") +
+        at_cycle(tick + 12, std::string("write ") + c.ir_low + " <- 10h  Int_Ack_Reg bits 7..0") +
+        at_cycle(tick + 16, std::string("write ") + c.ir_high + " <- 00h  Int_Ack_Reg bits 15..8") +
+        at_cycle(tick + 20, "write 0x0008 <- 02h  Mode_Reg1_S");
+    EXPECT_EQ(demo_section(r.out, "Wait for the 1 ms User_Timer_Clock"), want) << c.args;
+  }
+}
+
+// a22 finding 4: with the C31's controller served, the demo's edges are the C31 interrupt's and
+// X/INT stays inactive (docs/dpc31.md, "Two interrupt controllers"); the start's DX_Out at its
+// completion cycle s, the user timer's tick at s + P (docs/timing.md).
+TEST(CliDemo, TheC31ControllerIsNamedNotXInt) {
+  const std::string dir = testutil::scratch() + "demo-c31";
+  const Result r = run("demo --irq-controller c31 --out-dir " + dir);
+  ASSERT_EQ(r.rc, 0) << r.out;
+  EXPECT_NE(r.out.find("\nThe bus reaches the C31's interrupt controller (--irq-controller c31): "
+                       "the lines below are the C31 interrupt; X/INT, the external "
+                       "controller's, stays inactive\n"),
+            std::string::npos)
+      << r.out;
+  EXPECT_EQ(r.out.find("X/INT ->"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("X/INT goes active"), std::string::npos) << r.out;
+  const std::uint64_t start = kAccess * accesses(demo_section(r.out, "Initialise as a driver"));
+  EXPECT_NE(r.out.find(at_cycle(start, "  C31 interrupt -> active")), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(at_cycle(start + kUserTimerPeriod, "  C31 interrupt -> active")),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("# Unmask it again: the C31 interrupt goes active as soon as the mask "
+                       "write completes\n"),
+            std::string::npos)
+      << r.out;
+  // The DP session runs the chip the options made, its controller too.
+  EXPECT_NE(r.out.find("\nscenario <demo>: profile dpc31, the C31's interrupt controller, bus "
+                       "intel, master 2 -> slave 5 at 1500000 baud\n"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("expects passed 5, failed 0"), std::string::npos) << r.out;
+}
+
+// The VPC3+ variant too: VPC3+B reads Bh in Status_Reg bits 15..12 (docs/scenario-format.md,
+// `variant`), in the register session and in the DP session's chip.
+TEST(CliDemo, TheDpSessionRunsTheChosenVariant) {
+  const std::string dir = testutil::scratch() + "demo-variant";
+  const Result r = run("demo --profile vpc3plus --variant b --out-dir " + dir);
+  ASSERT_EQ(r.rc, 0) << r.out;
+  EXPECT_NE(r.out.find("Status_Reg = B000h"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\nscenario <demo>: profile vpc3plus, variant b, bus intel, master 2 -> "
+                       "slave 5 at 1500000 baud\n"),
+            std::string::npos)
+      << r.out;
+}
+
+// a22 finding 7: a firmware that never starts the chip (BAD_PLUGIN_GLOBALS' init only writes its
+// port) leaves the DP state at its reset value Wait_Prm (docs/timing.md "Mode and state
+// changes"): the demo's last expect fails, exit 1, and its one line names the step and the walk's
+// line where it shows, not the built-in script's pseudo-file.
+TEST(CliDemo, AFailedDpSessionNamesItsStep) {
+  const std::string dir = testutil::scratch() + "demo-fails";
+  const std::string err = testutil::scratch() + "demo-fails.err";
+  const Result r = testutil::run_command(std::string(DPC31_CLI) + " demo --firmware " +
+                                         BAD_PLUGIN_GLOBALS + " --out-dir " + dir + " 2>" + err);
+  EXPECT_EQ(r.rc, 1);
+  const std::string failed = ": expect dp_state Data_Exchange: FAILED, got Wait_Prm\n";
+  const std::size_t at = r.out.find(failed);
+  ASSERT_NE(at, std::string::npos) << r.out;
+  const std::size_t line = r.out.rfind("line ", at);
+  const std::string walk_line = r.out.substr(line + 5, at - line - 5);
+  EXPECT_EQ(slurp(err),
+            "dpc31 demo: the DP session's `expect dp_state Data_Exchange` (the walk's "
+            "line " +
+                walk_line + "): expected dp_state Data_Exchange, got Wait_Prm\n");
+}
+
+// A plug-in whose path a scenario line cannot hold (a space, a '#') runs the demo's DP session
+// too: the session names the loaded plug-in, not its path.
+TEST(CliDemo, APluginPathWithASpaceAndAHashRuns) {
+  namespace fs = std::filesystem;
+  const fs::path plugin = fs::path(testutil::scratch()) / "with space" / "lib#do4 =1.so";
+  fs::create_directories(plugin.parent_path());
+  fs::permissions(plugin.parent_path(), fs::perms::owner_all | fs::perms::group_read |
+                                            fs::perms::group_exec | fs::perms::others_read |
+                                            fs::perms::others_exec);
+  fs::copy_file(PLUGIN_DO4, plugin, fs::copy_options::overwrite_existing);
+  const std::string dir = testutil::scratch() + "demo-space";
+  const Result r = run("demo --firmware '" + plugin.string() + "' --out-dir " + dir);
+  EXPECT_EQ(r.rc, 0) << r.out;
+  EXPECT_NE(r.out.find("the slave runs the firmware " + plugin.string()), std::string::npos);
+  EXPECT_NE(r.out.find("expects passed 1, failed 0"), std::string::npos) << r.out;
+}
+
+// a22 finding 8: each claim of a --help text, and that it holds.
+TEST(CliHelp, TheDemoIsARegisterAndADpSession) {
+  const Result r = run("--help");
+  EXPECT_NE(r.out.find("demo                        a register-level session (start, interrupts, "
+                       "EOI), then a DP session: the built-in master and DO4 (or --firmware), the "
+                       "cable pulled past the DP watchdog; waveforms and pcapng\n"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("bridge                      the RS-485 line of one slave (or of several, "
+                       "--slave) as a pseudo-terminal or a loopback TCP port for a DP master "
+                       "program\n"),
+            std::string::npos)
+      << r.out;
+}
+
+// The bridge's --firmware: required without --slave, refused beside it (docs/bridge.md), both
+// before anything starts (exit 2, one line).
+TEST(CliHelp, TheBridgesFirmwareIsRequiredOnlyWithoutSlave) {
+  EXPECT_NE(run("bridge --help")
+                .out.find("--firmware TEXT             firmware: DO4, CNT2, or a "
+                          "plug-in ./libmine.so (required without --slave, "
+                          "refused with it: each --slave names its station's)\n"),
+            std::string::npos);
+  const std::string pty = testutil::scratch() + "help-pty";
+  for (const std::string& args : {"bridge --pty " + pty, "bridge --pty " + pty +
+                                                             " --slave 5:DO4 --slave 6:DO4 "
+                                                             "--firmware DO4"}) {
+    const Result r = testutil::run_command(std::string(DPC31_CLI) + " " + args + " 2>&1");
+    EXPECT_EQ(r.rc, 2) << args;
+    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << args << ": " << r.out;
+  }
+}
+
+// --timescale: the units the help names are accepted, 1fs and 10ns included, and the next one up,
+// 100ns, is refused (docs/waveforms.md: longer than a 48 MHz clock cycle).
+TEST(CliHelp, TheTimescaleRangeIsWhatIsAccepted) {
+  const std::string range =
+      "1, 10 or 100 fs, ps or ns, 1fs to 10ns (a unit longer than a 48 MHz clock cycle, 20.8 ns, "
+      "is refused)";
+  EXPECT_NE(run("run --help")
+                .out.find("--timescale TEXT            waveform time unit: " + range +
+                          "; default 1ps, 10ns with --flat and --la-vcd\n"),
+            std::string::npos);
+  EXPECT_NE(run("demo --help")
+                .out.find("--timescale TEXT            time unit of both "
+                          "waveforms: " +
+                          range +
+                          "; default 1ps for the full VCD, 10ns for the logic "
+                          "analysers' VCD\n"),
+            std::string::npos);
+  const std::string scn = std::string(SOURCE_DIR) + "/traces/gc_unfreeze_dpc31.scn";
+  const std::string vcd = testutil::scratch() + "help-unit.vcd";
+  for (const char* unit : {"1fs", "10fs", "100fs", "1ps", "10ps", "100ps", "1ns", "10ns"}) {
+    EXPECT_EQ(run("run " + scn + " --quiet --vcd " + vcd + " --timescale " + unit).rc, 0) << unit;
+  }
+  EXPECT_EQ(run("run " + scn + " --quiet --vcd " + vcd + " --timescale 100ns").rc, 2);
+}

@@ -601,8 +601,9 @@ class Bridge {
 }  // namespace
 
 CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
-  auto* b = app.add_subcommand(
-      "bridge", "the slave's RS-485 side as a pseudo-terminal for a DP master program");
+  auto* b = app.add_subcommand("bridge",
+                               "the RS-485 line of one slave (or of several, --slave) as a "
+                               "pseudo-terminal or a loopback TCP port for a DP master program");
   auto* pty = b->add_option("--pty", o.pty, "symlink to create to the pty's slave side (or --tcp)")
                   ->check(outfile::named(outfile::Use::write));
   b->add_option("--tcp", o.tcp,
@@ -619,7 +620,9 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
       ->capture_default_str();
   add_chip_options(b, o.chip);
   b->add_option("--firmware", o.firmware,
-                "firmware: " + builtin_firmware_names() + ", or a plug-in ./libmine.so (required)");
+                "firmware: " + builtin_firmware_names() +
+                    ", or a plug-in ./libmine.so (required without --slave, refused with it: "
+                    "each --slave names its station's)");
   b->add_option("--cpu", o.cpu,
                 "80c32[:HZ]: run --firmware, an Intel HEX image, on an 80C32 beside the chip; "
                 "c31[:HZ] (--profile dpc31): on the DPC31's own C31")

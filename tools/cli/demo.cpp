@@ -3,11 +3,14 @@
 #include <fmt/core.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <charconv>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "cleanup.hpp"
@@ -29,9 +32,16 @@ namespace m1 = fields::Mode_Reg1_S;
 class Narrator {
  public:
   Narrator(Chip& chip, std::FILE* out) : chip_(chip), out_(out) {
+    // The served controller's output: X/INT, or with c31 the C31 core's interrupt, while X/INT
+    // stays inactive (docs/dpc31.md, "Two interrupt controllers").
     chip_.on_irq_change([this](std::uint64_t cycle, bool active) {
-      fmt::print(out_, "[cycle {:>8}]   X/INT -> {} ({})\n", cycle,
-                 chip_.x_int_pin() ? "high" : "low", active ? "active" : "inactive");
+      if (c31_served()) {
+        fmt::print(out_, "[cycle {:>8}]   C31 interrupt -> {}\n", cycle,
+                   active ? "active" : "inactive");
+      } else {
+        fmt::print(out_, "[cycle {:>8}]   X/INT -> {} ({})\n", cycle,
+                   chip_.x_int_pin() ? "high" : "low", active ? "active" : "inactive");
+      }
     });
     chip_.set_log_sink([this](const LogRecord& r) {
       if (r.level >= LogLevel::info)
@@ -66,17 +76,19 @@ class Narrator {
   }
   // The user's start and stop: Mode_Reg1_S on the SPC3 and the VPC3+; on the DPC31, whose
   // Mode_Reg1 has no such bits, a request through the Instruction_Queue (docs/dpc31.md): the
-  // entry (code, parameter) in RAM, then InstQ_Wr moved on, which executes it.
-  void user_command(std::uint8_t mode_reg1_bit, std::uint8_t request, const char* name) {
+  // entry (code, parameter) in RAM, then InstQ_Wr moved on, which executes it. Returns the
+  // cycle it takes effect: the completion of that write (docs/timing.md).
+  std::uint64_t user_command(std::uint8_t mode_reg1_bit, std::uint8_t request, const char* name) {
     if (chip_.profile().id != Profile::dpc31) {
       write(RegId::Mode_Reg1_S, mode_reg1_bit);
-      return;
+      return chip_.cycle();
     }
     const Chip::RequestSlot slot = *chip_.next_request_slot();  // the demo set the queue up
     write_ram(slot.entry, request,
               fmt::format("Instruction_Queue entry at {:#06x}: {}", slot.entry, name));
     write_ram(slot.entry + 1, 0x00, "  its parameter");
     write(RegId::InstQ_Wr, slot.next_wr);
+    return chip_.cycle();
   }
   void write_ram(std::uint32_t a, std::uint8_t v, const std::string& what) {
     chip_.write(a, v);
@@ -87,6 +99,9 @@ class Narrator {
     chip_.step(n);
   }
   void say(const std::string& s) { fmt::print(out_, "\n# {}\n", s); }
+  [[nodiscard]] bool c31_served() const { return chip_.irq_controller() == IrqController::c31; }
+  // The interrupt the bus's controller drives, for the section titles.
+  [[nodiscard]] const char* irq() const { return c31_served() ? "the C31 interrupt" : "X/INT"; }
 
  private:
   std::int32_t write_addr(RegId id) const {
@@ -108,18 +123,34 @@ class Narrator {
   std::FILE* out_;
 };
 
+// The DP session: what the demo prints before it, its script (a scenario,
+// docs/scenario-format.md) and the plug-in its `firmware` line stands for.
+struct DpSession {
+  std::string intro;
+  std::string script;
+  const dpc31_firmware* plugin = nullptr;
+  Scenario scenario;
+};
+
+// The script's chip: the register session's, variant and interrupt controller included.
+std::string chip_header(const ChipOptions& opt) {
+  std::string h = fmt::format("profile {}\n", profile_desc(opt.profile).name);
+  if (opt.variant) h += fmt::format("variant {}\n", vpc3_variant_name(*opt.variant));
+  if (opt.irq_controller != IrqController::external)
+    h += fmt::format("irq-controller {}\n", irq_controller_name(opt.irq_controller));
+  return h + fmt::format("bus {}\n", opt.bus == BusMode::intel ? "intel" : "motorola");
+}
+
 // The DP session with DO4, and what its outputs did.
-std::string do4_session(const ChipOptions& opt, std::FILE* out) {
-  fmt::print(
-      out,
+DpSession do4_session(const ChipOptions& opt) {
+  DpSession s;
+  s.intro =
       "\n# DP session: master 2 finds slave 5 at 1.5 Mbaud (after the chip's baud search); the\n"
       "# slave runs the example firmware DO4 (firmware/do4, 4 digital outputs with the OSP\n"
       "# function model: OSPMode 'replace with static value' 1001, refresh monitor off). The\n"
       "# master sends OSPValid 0 (OSP), then sets it; the cable is pulled for 1.1 s (the DP\n"
-      "# watchdog, 10 x 10 x 10 ms, expires: OSP), the master starts over (recovery).\n");
-  return fmt::format(R"(profile {}
-bus {}
-baud 1500000
+      "# watchdog, 10 x 10 x 10 ms, expires: OSP), the master starts over (recovery).\n";
+  s.script = chip_header(opt) + R"(baud 1500000
 firmware DO4
 slave address=5 wd=10,10 wd_on=1 user_prm=00,01,09,00
 startup
@@ -134,27 +165,28 @@ exchange 2 outputs=0A,01
 expect dp_state Data_Exchange
 expect port outputs 0xA
 expect port modul_ok 1
-)",
-                     profile_desc(opt.profile).name,
-                     opt.bus == BusMode::intel ? "intel" : "motorola");
+)";
+  return s;
 }
 
 // The same story with any firmware (a built-in name or a plug-in): configured from its GSD
 // defaults, 05h in every output byte, the cable pulled past the DP watchdog, the master starts
-// over.
-std::string firmware_session(const ChipOptions& opt, const std::string& firmware, std::FILE* out) {
-  fmt::print(out,
-             "\n# DP session: master 2 finds slave 5 at 1.5 Mbaud; the slave runs the firmware {}\n"
-             "# (configured from its GSD defaults). Data_Exchange with 05h in every output byte,\n"
-             "# then the cable is pulled for 1.1 s (the DP watchdog, 10 x 10 x 10 ms, expires),\n"
-             "# the master starts over.\n",
-             firmware);
+// over. A plug-in is loaded already (`fw`): the script's line only stands for it, since a path
+// may hold what a scenario line cannot (a space, '#', '=').
+DpSession firmware_session(const ChipOptions& opt, const dpc31_firmware& fw,
+                           const std::string& firmware) {
+  DpSession s;
+  if (is_plugin_path(firmware)) s.plugin = &fw;
+  s.intro = fmt::format(
+      "\n# DP session: master 2 finds slave 5 at 1.5 Mbaud; the slave runs the firmware {}\n"
+      "# (configured from its GSD defaults). Data_Exchange with 05h in every output byte,\n"
+      "# then the cable is pulled for 1.1 s (the DP watchdog, 10 x 10 x 10 ms, expires),\n"
+      "# the master starts over.\n",
+      firmware);
   std::string outputs;
-  for (unsigned i = 0; i < find_firmware(firmware).out_len; ++i) outputs += i == 0 ? "05" : ",05";
+  for (unsigned i = 0; i < fw.out_len; ++i) outputs += i == 0 ? "05" : ",05";
   if (!outputs.empty()) outputs = " outputs=" + outputs;
-  return fmt::format(R"(profile {}
-bus {}
-baud 1500000
+  s.script = chip_header(opt) + fmt::format(R"(baud 1500000
 firmware {}
 slave address=5 wd=10,10 wd_on=1
 startup
@@ -164,8 +196,9 @@ startup
 exchange 4{}
 expect dp_state Data_Exchange
 )",
-                     profile_desc(opt.profile).name,
-                     opt.bus == BusMode::intel ? "intel" : "motorola", firmware, outputs, outputs);
+                                            s.plugin != nullptr ? "./plugin.so" : fw.name, outputs,
+                                            outputs);
+  return s;
 }
 
 // The directories the demo made for its files (mkdtemp's, or --out-dir and the parents it
@@ -204,22 +237,45 @@ RunOptions demo_outputs(const std::string& out_dir, const std::string& timescale
   return ro;
 }
 
+// The demo's script has no file the user could open: a failure ("<demo>:LINE: what") names the
+// line's command instead, and for a step the walk's "line LINE", where its run shows.
+constexpr std::string_view kScriptName = "<demo>";
+
+std::string session_error(const DpSession& s, std::string_view line) {
+  const std::string_view prefix = line.substr(0, kScriptName.size() + 1);
+  std::string_view rest = line.substr(prefix.size());
+  int at = 0;
+  const auto [end, ec] = std::from_chars(rest.data(), rest.data() + rest.size(), at);
+  if (prefix != fmt::format("{}:", kScriptName) || ec != std::errc() ||
+      !std::string_view(end, rest.data() + rest.size()).starts_with(": ")) {
+    return fmt::format("dpc31 demo: the DP session: {}", line);
+  }
+  rest = std::string_view(end + 2, rest.data() + rest.size());
+  std::string_view command = s.script;
+  for (int i = 1; i < at && command.find('\n') != std::string_view::npos; ++i)
+    command.remove_prefix(command.find('\n') + 1);
+  command = command.substr(0, command.find('\n'));
+  const bool step =
+      std::ranges::any_of(s.scenario.steps, [at](const ScenarioStep& st) { return st.line == at; });
+  return fmt::format("dpc31 demo: the DP session's `{}`{}: {}", command,
+                     step ? fmt::format(" (the walk's line {})", at) : std::string(), rest);
+}
+
 // The chip's main job: a DP master on the RS-485 side, a firmware (C99, over the C HAL) on the
 // other. Its outputs are what a bring-up is about: when did they change, and why. `run` was
 // opened with `ro`.
 int run_dp_session(const ChipOptions& opt, const RunOptions& ro, ChipRun& run,
-                   const std::optional<std::string>& firmware, std::FILE* out) {
-  const std::string text = firmware ? firmware_session(opt, *firmware, out) : do4_session(opt, out);
-  Scenario sc;
-  ScenarioError err;
-  if (!parse_scenario(text, "<demo>", sc, err)) {
-    fmt::print(stderr, "{}\n", err.text());
-    return 2;
-  }
+                   const std::optional<std::string>& firmware, const DpSession& session,
+                   std::FILE* out) {
+  fmt::print(out, "{}", session.intro);
   ScenarioOutcome o;
   const int rc = run.run(
-      sc, text, [out](const std::string& line) { fmt::print(out, "{}\n", line); },
-      [](const std::string& line) { fmt::print(stderr, "{}\n", line); }, o);
+      session.scenario, session.script,
+      [out](const std::string& line) { fmt::print(out, "{}\n", line); },
+      [&session](const std::string& line) {
+        fmt::print(stderr, "{}\n", session_error(session, line));
+      },
+      o);
   if (rc == 2) return rc;
   const double hz = Chip(opt).clock_hz();
   if (!firmware) {
@@ -257,13 +313,21 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option,
   }
   // Checked first: bad input is one line, and nothing is made. "" is an unknown firmware, as in
   // soak, not the default.
+  DpSession session = do4_session(opt);
   if (firmware) {
     try {
-      board::guard_hangs("dpc31 demo", find_firmware(*firmware).name);
+      const dpc31_firmware& fw = find_firmware(*firmware);
+      board::guard_hangs("dpc31 demo", fw.name);
+      session = firmware_session(opt, fw, *firmware);
     } catch (const FirmwareError& e) {
       fmt::print(stderr, "dpc31 demo: {}\n", e.what());
       return 2;
     }
+  }
+  if (ScenarioError err; !parse_scenario(session.script, std::string(kScriptName), session.plugin,
+                                         session.scenario, err)) {
+    fmt::print(stderr, "{}\n", session_error(session, err.text()));
+    return 2;
   }
   // The output directory is made before anything is printed: bad input is one line. Without
   // --out-dir it is a new one only this user can enter (mkdtemp, mode 0700): a fixed name in a
@@ -305,6 +369,11 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option,
              chip.clock_hz(), chip.bus_access_cycles());
   fmt::print(out, "X/INT is low-active after reset; the pin is {} at cycle 0\n",
              chip.x_int_pin() ? "high (inactive)" : "low");
+  if (n.c31_served()) {
+    fmt::print(out,
+               "The bus reaches the C31's interrupt controller (--irq-controller c31): the lines "
+               "below are the C31 interrupt; X/INT, the external controller's, stays inactive\n");
+  }
 
   n.say(p.id == Profile::dpc31
             ? "Initialise as a driver does: clear IRR, acknowledge all, mode, unmask four "
@@ -327,7 +396,7 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option,
     n.write(RegId::IndQ_Len, 4);
   }
   // The start: the power-on clear of the outputs raises DX_Out.
-  n.user_command(m1::Start_SPC3, request::MAC_Start, "MAC_Start");
+  const std::uint64_t start = n.user_command(m1::Start_SPC3, request::MAC_Start, "MAC_Start");
 
   n.say("ISR: read IR, fetch the (cleared) outputs, acknowledge DX_Out, EOI");
   const std::uint16_t ir = n.read16(RegId::Int_Reg);
@@ -339,24 +408,31 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option,
   n.write16(RegId::Int_Ack_Reg, irq::DX_Out);
   n.write(RegId::Mode_Reg1_S, m1::EOI);
 
-  n.say("Wait for the 1 ms User_Timer_Clock; acknowledge it and EOI");
-  n.step(chip.clock_hz() / 1000 - chip.cycle(),
-         "until the first user timer tick (1 ms after Start)");
-  n.step(8, "a little more");
+  // The user timer's period P = ceil(1 ms x f) (User_Time_Base 0); its first tick is at the
+  // Start's cycle + P (docs/timing.md, "Timers").
+  const std::uint64_t period = (chip.clock_hz() + 999) / 1000;
+  n.say(
+      fmt::format("Wait for the 1 ms User_Timer_Clock (first tick at the start's cycle {} + {}); "
+                  "ISR: read IR, acknowledge it, EOI",
+                  start, period));
+  n.step(start + period - chip.cycle(), "until the first user timer tick");
+  fmt::print(out, "                   IR = {:04X}h (User_Timer_Clock = bit 4)\n",
+             n.read16(RegId::Int_Reg));
   n.write16(RegId::Int_Ack_Reg, irq::User_Timer_Clock);
   n.write(RegId::Mode_Reg1_S, m1::EOI);
 
-  n.say("Mask the user timer: IRR latches the event, X/INT stays inactive");
+  n.say(fmt::format("Mask the user timer: IRR latches the event, {} stays inactive", n.irq()));
   n.write16(RegId::Int_Mask_Reg, static_cast<std::uint16_t>(~(enabled & ~irq::User_Timer_Clock)));
   n.step(chip.clock_hz() / 1000, "one more millisecond");
   fmt::print(out, "                   IRR = {:04X}h, IR = {:04X}h\n",
              chip.peek_reg(RegId::Int_Req_Reg), chip.peek_reg(RegId::Int_Reg));
-  n.say("Unmask it again: X/INT goes active as soon as the mask write completes");
+  n.say(
+      fmt::format("Unmask it again: {} goes active as soon as the mask write completes", n.irq()));
   n.write16(RegId::Int_Mask_Reg, static_cast<std::uint16_t>(~enabled));
 
-  n.say(
-      "Two events pending, acknowledge one, EOI: X/INT drops and returns after the 1 us inactive "
-      "time");
+  n.say(fmt::format(
+      "Two events pending, acknowledge one, EOI: {} drops and returns after the 1 us inactive time",
+      n.irq()));
   harness::asic_prm_received(chip);
   fmt::print(out, "[cycle {:>8}] (bus side) Set_Prm arrives: New_Prm_Data\n", chip.cycle());
   n.write16(RegId::Int_Ack_Reg, irq::User_Timer_Clock);
@@ -380,7 +456,7 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option,
   n.write(RegId::Mode_Reg1_S, m1::EOI);
   fmt::print(out, "\nregister session done at cycle {} ({:.3f} ms of chip time)\n", chip.cycle(),
              static_cast<double>(chip.cycle()) * 1e3 / chip.clock_hz());
-  const int rc = run_dp_session(opt, ro, run, firmware, out);
+  const int rc = run_dp_session(opt, ro, run, firmware, session, out);
   if (rc != 2) made.keep();
   return rc;
 }

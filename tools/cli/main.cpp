@@ -61,6 +61,13 @@ void check_stdout_writes() {
   stdout = f;
 }
 
+// The units a waveform of `run` and `demo` takes: parse_timescale() reads 1, 10 or 100 of fs ...
+// ms and 1s, and the recorder refuses a unit longer than a clock cycle (docs/waveforms.md), at
+// the 48 MHz every scenario and the demo run at.
+constexpr const char* kTimescales =
+    "1, 10 or 100 fs, ps or ns, 1fs to 10ns (a unit longer than a 48 MHz clock cycle, 20.8 ns, is "
+    "refused)";
+
 dpc31::Profile to_profile(const std::string& s) {
   dpc31::Profile p{};
   dpc31::parse_profile(s, p);  // CLI11's check already refused unknown names
@@ -86,8 +93,10 @@ int main(int argc, char** argv) {
 
   std::string demo_profile = "dpc31";
   std::string demo_bus = "intel";
-  auto* demo =
-      app.add_subcommand("demo", "scripted register-level session: start, interrupts, EOI");
+  auto* demo = app.add_subcommand(
+      "demo",
+      "a register-level session (start, interrupts, EOI), then a DP session: the built-in master "
+      "and DO4 (or --firmware), the cable pulled past the DP watchdog; waveforms and pcapng");
   demo->add_option("--profile", demo_profile, "chip profile")->check(CLI::IsMember(profiles));
   std::string demo_out;  // "": a fresh private directory TMPDIR/dpc31-demo-XXXXXX (mkdtemp)
   demo->add_option("--out-dir", demo_out,
@@ -100,8 +109,8 @@ int main(int argc, char** argv) {
   dpc31::cli::add_chip_options(demo, demo_chip);
   std::string demo_timescale;
   demo->add_option("--timescale", demo_timescale,
-                   "time unit of both waveforms, 1ps ... 1s (default: 1ps for the full VCD, 10ns "
-                   "for the logic analysers' VCD)");
+                   std::string("time unit of both waveforms: ") + kTimescales +
+                       "; default 1ps for the full VCD, 10ns for the logic analysers' VCD");
   std::optional<std::string> demo_firmware;  // none: DO4 with its OSP story
   demo->add_option("--firmware", demo_firmware,
                    "the DP session's firmware instead of DO4: a built-in name or a plug-in "
@@ -143,7 +152,8 @@ int main(int argc, char** argv) {
                   "1-bit signals, one scope")
       ->check(named(Use::write));
   run->add_option("--timescale", run_opt.timescale,
-                  "waveform time unit, 1ps ... 1s (default 1ps; 10ns with --flat and --la-vcd)");
+                  std::string("waveform time unit: ") + kTimescales +
+                      "; default 1ps, 10ns with --flat and --la-vcd");
   run->add_flag("--flat", run_opt.flat,
                 "--vcd / --fst for logic-analyser tools: 1-bit signals, one scope");
   run->add_option("--gtkw", run_opt.gtkw,
