@@ -664,6 +664,93 @@ TEST_F(BadInput, CosimReplayHeaderNamesItsModel) {
   EXPECT_EQ((r.out + r.err).find("win//"), std::string::npos) << r.out << r.err;
 }
 
+// The audit's cases (s25 a21, findings 5 and 6): every error of a trace's header is at the line
+// to edit (docs/bad-input.md: `FILE:LINE: message`), and its advice works for a trace: not "give
+// --profile vpc3plus", which the header's `# profile dpc31` refuses in turn. What only one profile
+// has: a variant only the VPC3+ (VPC3+C manual, Status_Reg 15..12; docs/golden-model.md), the SAP
+// mutants only the vpc3plus model (docs/golden-model.md, "Mutants"). A header line names one
+// thing: two `# profile` lines name none; `# top` and `# define` belong to `# rtl` sources.
+TEST_F(BadInput, CosimReplayHeaderLinesAgree) {
+  const std::string body = "83 ev_irq(0080) ev_dout\n102 rd 000b\nend 103\n";
+  const std::string a = file("a.v", "module blocks; endmodule\n");
+  struct Case {
+    const char* name;
+    std::string header;
+    const char* options;
+    std::string line;
+  };
+  const std::vector<Case> cases = {
+      {"mutant of another profile", "# profile dpc31\n# mutant SAP_NO_RR\n", "",
+       "2: mutant SAP_NO_RR is for profile vpc3plus, not the profile dpc31 of line 1: edit one of "
+       "the two lines"},
+      {"mutant, the default profile", "# mutant SAP_NO_RR\n", "",
+       "1: mutant SAP_NO_RR is for profile vpc3plus, not the default profile dpc31: give "
+       "--profile vpc3plus or edit this line"},
+      {"mutant, --profile", "# mutant SAP_NO_RR\n", "--profile spc3",
+       "1: mutant SAP_NO_RR is for profile vpc3plus, not --profile spc3: give --profile vpc3plus "
+       "or edit this line"},
+      {"--mutant on the header's profile", "# profile dpc31\n", "--mutant SAP_NO_RR",
+       "1: recorded on profile dpc31, and --mutant SAP_NO_RR is for profile vpc3plus: edit this "
+       "line or drop --mutant"},
+      {"a mutant_sel number without RTL", "# profile dpc31\n# mutant 3\n", "",
+       "2: mutant 3 is a mutant_sel number, for a run on your RTL: give --rtl or --rtl-model, or "
+       "edit this line"},
+      {"variant of another profile", "# profile spc3\n# variant b\n", "",
+       "2: variant b is for profile vpc3plus, not the profile spc3 of line 1: edit one of the two "
+       "lines"},
+      {"variant, the default profile", "# variant b\n", "",
+       "1: variant b is for profile vpc3plus, not the default profile dpc31: give --profile "
+       "vpc3plus or edit this line"},
+      {"--variant on the header's profile", "# profile spc3\n", "--variant c",
+       "1: recorded on profile spc3, and --variant c is for profile vpc3plus: edit this line or "
+       "drop --variant"},
+      {"no variant", "# profile vpc3plus\n# variant x\n", "",
+       "2: 'x' is not a variant (b, c, s; - for none)"},
+      {"two profiles", "# profile dpc31\n# profile spc3\n# top foo\n", "",
+       "2: '# profile' given twice, first at line 1"},
+      {"the same profile twice", "# profile spc3\n# mutant -\n# profile spc3\n", "",
+       "3: '# profile' given twice, first at line 1"},
+      {"two buses", "# bus intel\n# bus motorola\n", "", "2: '# bus' given twice, first at line 1"},
+      {"two variants", "# profile vpc3plus\n# variant c\n# variant b\n", "",
+       "3: '# variant' given twice, first at line 2"},
+      {"two mutants", "# mutant -\n# mutant -\n", "", "2: '# mutant' given twice, first at line 1"},
+      {"two seeds", "# seed 1\n# seed 2\n", "", "2: '# seed' given twice, first at line 1"},
+      {"two tops", "# rtl " + a + "\n# top blocks\n# top other\n", "",
+       "3: '# top' given twice, first at line 2"},
+      {"two models", "# rtl-model " + a + "\n# rtl-model " + a + "\n", "",
+       "2: '# rtl-model' given twice, first at line 1"},
+      {"top without rtl", "# profile dpc31\n# top foo\n", "",
+       "2: '# top' without '# rtl': it belongs to the RTL sources the trace was run on (add them, "
+       "or delete this line)"},
+      {"define without rtl", "# profile dpc31\n# define X=1\n", "--rtl a.v",
+       "2: '# define' without '# rtl': it belongs to the RTL sources the trace was run on (add "
+       "them, or delete this line)"},
+      {"top beside a model", "# profile dpc31\n# rtl-model " + a + "\n# top blocks\n", "",
+       "3: '# top' beside the '# rtl-model' of line 2: a built model takes no top or define "
+       "(delete this line)"},
+      {"rtl and a model", "# rtl " + a + "\n# rtl-model " + a + "\n", "",
+       "2: '# rtl-model' beside the '# rtl' of line 1: one model at a time"},
+  };
+  spit(path("old.xml"), "old");
+  int i = 0;
+  for (const Case& c : cases) {
+    const std::string name = "h" + std::to_string(i++) + ".stim";
+    file(name, c.header + body);
+    const auto before = listing();
+    const Outcome r = dpc31("cosim --replay " + name + " --junit old.xml --out o --dump d " +
+                            std::string(c.options));
+    expect_bad(r, name + ":" + c.line, c.name);
+    EXPECT_EQ(r.out, "") << c.name;
+    EXPECT_EQ(listing(), before) << c.name;
+  }
+  EXPECT_EQ(slurp(path("old.xml")), "old");
+  // The advice works: a header without a profile takes the one the line asks for.
+  file("mutant.stim", "# mutant SAP_NO_RR\n" + body);
+  file("variant.stim", "# variant b\n" + body);
+  EXPECT_EQ(dpc31("cosim --replay mutant.stim --profile vpc3plus --quiet").rc, 0);
+  EXPECT_EQ(dpc31("cosim --replay variant.stim --profile vpc3plus --quiet").rc, 0);
+}
+
 TEST_F(BadInput, CosimOptionsAndOutputs) {
   fs::create_directory(path("taken"));
   spit(path("old.xml"), "old");

@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <tuple>
@@ -44,22 +45,46 @@ std::string joined(const std::vector<std::string>& v) {
   return out;
 }
 
+// The one line for what only profile `want` has (a variant, a built-in mutant: `key` `value`)
+// beside a run on another: at the header line to edit, with what else would do
+// (docs/golden-model.md). `line` is the header line of `key` (0: the option --key gave it),
+// `profile_line` that of `# profile` (0: none).
+std::string not_for_profile(const std::string& path, const CosimOptions& o, int profile_line,
+                            const char* key, const std::string& value, int line, Profile want) {
+  const std::string_view p = profile_name(want);
+  if (line == 0) {
+    return fmt::format(
+        "{}:{}: recorded on profile {}, and --{} {} is for profile {}: edit this line or drop --{}",
+        path, profile_line, o.profile_name, key, value, p, key);
+  }
+  if (profile_line != 0) {
+    return fmt::format(
+        "{}:{}: {} {} is for profile {}, not the profile {} of line {}: edit one of the two lines",
+        path, line, key, value, p, o.profile_name, profile_line);
+  }
+  return fmt::format(
+      "{}:{}: {} {} is for profile {}, not {} {}: give --profile {} or edit this line", path, line,
+      key, value, p, o.profile_given ? "--profile" : "the default profile", o.profile_name, p);
+}
+
 // The run a shrunk trace's header names (`# profile NAME`, `# bus NAME`, `# variant NAME` or `-`,
 // `# mutant NAME` or `-`, and for your RTL `# rtl PATH` per source, `# top NAME`, `# define D`
 // per define or `# rtl-model PATH`, written below): taken into `o`, unless --profile, --bus,
 // --variant, --mutant, --rtl, --rtl-model, --top or --define given says otherwise (refused: the
 // trace would replay clean on another model; docs/golden-model.md). A trace without them keeps `o`.
+// Each names one thing: given twice, it names none, and a `# top` or `# define` belongs to the
+// `# rtl` sources. Every refusal is at the header line to edit.
 bool take_trace_header(const std::string& path, const std::string& text, CosimOptions& o,
                        std::uint64_t& seed, std::string& error) {
+  static constexpr std::string_view kOnce[] = {"profile", "bus", "variant",  "mutant",
+                                               "seed",    "top", "rtl-model"};
   std::istringstream is(text);
   int n = 0;
   std::vector<std::string> rtl;
   std::string rtl_model;
   std::string top;
   std::vector<std::string> defines;
-  int rtl_line = 0;
-  int top_line = 0;
-  int define_line = 0;
+  std::map<std::string, int> first_line;  // of each key the header has
   for (std::string line; std::getline(is, line) && line.starts_with('#');) {
     ++n;
     std::istringstream ls(line.substr(1));
@@ -67,6 +92,17 @@ bool take_trace_header(const std::string& path, const std::string& text, CosimOp
     std::string rest;  // a path may hold spaces: the rest of the line
     ls >> key;
     std::getline(ls >> std::ws, rest);
+    const bool whole_rest = key == "rtl" || key == "rtl-model" || key == "define";
+    std::istringstream vs(rest);
+    std::string value;
+    std::string more;
+    if (!whole_rest && (!(vs >> value) || vs >> more)) continue;  // a comment
+    const auto [first, is_first] = first_line.try_emplace(key, n);
+    if (!is_first && std::find(std::begin(kOnce), std::end(kOnce), key) != std::end(kOnce)) {
+      error =
+          fmt::format("{}:{}: '# {}' given twice, first at line {}", path, n, key, first->second);
+      return false;
+    }
     if (key == "rtl" || key == "rtl-model") {
       std::error_code ec;
       if (!std::filesystem::is_regular_file(rest, ec)) {
@@ -74,20 +110,10 @@ bool take_trace_header(const std::string& path, const std::string& text, CosimOp
             fmt::format("{}:{}: recorded with --{} {}: no such file", path, n, key, shown(rest));
         return false;
       }
-      rtl_line = rtl_line == 0 ? n : rtl_line;
       (key == "rtl" ? rtl.emplace_back() : rtl_model) = rest;
-      continue;
-    }
-    if (key == "define") {
-      define_line = define_line == 0 ? n : define_line;
+    } else if (key == "define") {
       defines.push_back(rest);
-      continue;
-    }
-    std::istringstream vs(rest);
-    std::string value;
-    std::string more;
-    if (!(vs >> value) || vs >> more) continue;
-    if (key == "profile") {
+    } else if (key == "profile") {
       Profile p{};
       if (!parse_profile(value, p)) {
         error = fmt::format("{}:{}: '{}' is not a chip profile", path, n, shown(value));
@@ -115,6 +141,11 @@ bool take_trace_header(const std::string& path, const std::string& text, CosimOp
       o.bus = b;
     } else if (key == "variant") {
       const std::string variant = value == "-" ? "" : value;
+      if (Vpc3Variant v{}; !variant.empty() && !parse_vpc3_variant(variant, v)) {
+        error = fmt::format("{}:{}: '{}' is not a variant (b, c, s; - for none)", path, n,
+                            shown(value));
+        return false;
+      }
       if (!o.variant_name.empty() && variant != o.variant_name) {
         error = fmt::format("{}:{}: recorded with variant {}, not --variant {}", path, n, value,
                             o.variant_name);
@@ -136,7 +167,6 @@ bool take_trace_header(const std::string& path, const std::string& text, CosimOp
       }
       o.mutant = mutant;
     } else if (key == "top") {
-      top_line = n;
       top = value;
     } else if (key == "seed") {
       const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), seed);
@@ -146,7 +176,54 @@ bool take_trace_header(const std::string& path, const std::string& text, CosimOp
       }
     }
   }
+  const auto at = [&first_line](const char* key) {
+    const auto it = first_line.find(key);
+    return it == first_line.end() ? 0 : it->second;
+  };
+  if (!rtl.empty() && !rtl_model.empty()) {
+    error = fmt::format("{}:{}: '# rtl-model' beside the '# rtl' of line {}: one model at a time",
+                        path, at("rtl-model"), at("rtl"));
+    return false;
+  }
+  for (const char* key : {"top", "define"}) {
+    if (rtl.empty() && at(key) != 0) {
+      error = rtl_model.empty()
+                  ? fmt::format(
+                        "{}:{}: '# {}' without '# rtl': it belongs to the RTL sources "
+                        "the trace was run on (add them, or delete this line)",
+                        path, at(key), key)
+                  : fmt::format(
+                        "{}:{}: '# {}' beside the '# rtl-model' of line {}: a built "
+                        "model takes no top or define (delete this line)",
+                        path, at(key), key, at("rtl-model"));
+      return false;
+    }
+  }
+  // What only one profile has, beside another: refused at the header line, not later as if an
+  // option had said it (the hint to give --profile was then refused in turn).
+  const int profile_line = at("profile");
+  if (!o.variant_name.empty() && o.profile != Profile::vpc3plus &&
+      (at("variant") != 0 || profile_line != 0)) {
+    error = not_for_profile(path, o, profile_line, "variant", o.variant_name, at("variant"),
+                            Profile::vpc3plus);
+    return false;
+  }
+  const bool any_rtl =
+      !rtl.empty() || !rtl_model.empty() || !o.rtl_sources.empty() || !o.rtl_model.empty();
+  if (!any_rtl && !o.mutant.empty() && at("mutant") != 0 && !cosim::rtl_mutant_profile(o.mutant)) {
+    error = fmt::format(
+        "{}:{}: mutant {} is a mutant_sel number, for a run on your RTL: give --rtl or "
+        "--rtl-model, or edit this line",
+        path, at("mutant"), o.mutant);
+    return false;
+  }
+  if (const auto p = cosim::rtl_mutant_profile(o.mutant);
+      !any_rtl && p && *p != o.profile && (at("mutant") != 0 || profile_line != 0)) {
+    error = not_for_profile(path, o, profile_line, "mutant", o.mutant, at("mutant"), *p);
+    return false;
+  }
   if (rtl.empty() && rtl_model.empty()) return true;
+  const int rtl_line = rtl.empty() ? at("rtl-model") : at("rtl");
   // Your RTL: the run's model, as it was built (sources, top, defines) or loaded.
   const std::string recorded = rtl.empty() ? "--rtl-model " + rtl_model : "--rtl " + joined(rtl);
   if ((!o.rtl_sources.empty() || !o.rtl_model.empty()) &&
@@ -158,13 +235,14 @@ bool take_trace_header(const std::string& path, const std::string& text, CosimOp
   }
   if (!rtl.empty() && !o.top.empty() && o.top != top) {
     error = fmt::format("{}:{}: recorded with --top {}, not --top {}", path,
-                        top_line != 0 ? top_line : rtl_line, top.empty() ? "''" : top, o.top);
+                        at("top") != 0 ? at("top") : rtl_line, top.empty() ? "''" : top, o.top);
     return false;
   }
   if (!rtl.empty() && !o.defines.empty() && o.defines != defines) {
-    error = fmt::format(
-        "{}:{}: recorded with {}, not --define {}", path, define_line != 0 ? define_line : rtl_line,
-        defines.empty() ? "no --define" : "--define " + joined(defines), joined(o.defines));
+    error = fmt::format("{}:{}: recorded with {}, not --define {}", path,
+                        at("define") != 0 ? at("define") : rtl_line,
+                        defines.empty() ? "no --define" : "--define " + joined(defines),
+                        joined(o.defines));
     return false;
   }
   o.rtl_sources = rtl;
