@@ -86,6 +86,8 @@ class SegmentRun {
       observer_->station_added(seg_, st->index);
       Chip& chip = seg_.chip(st->index);
       DirectBus bus(chip);
+      // The words of the single chip's trace heading (scenario_run.cpp's user_side_name).
+      std::string who = "the built-in user side";
       if (def.firmware.empty()) {
         ResponderConfig rc;
         rc.slave = def.slave;
@@ -101,7 +103,9 @@ class SegmentRun {
           r->interrupts.clear();
         });
       } else {
-        st->firmware = std::make_unique<FirmwareHost>(find_firmware(def.firmware));
+        const dpc31_firmware& fw = find_firmware(def.firmware);
+        who = fmt::format("the host firmware {}", fw.name);
+        st->firmware = std::make_unique<FirmwareHost>(fw);
         st->firmware->init(bus, def.slave.address);
         seg_.set_firmware(st->index, st->firmware->program());
       }
@@ -137,10 +141,7 @@ class SegmentRun {
           raw->request_end = t.end;
         }
       });
-      // The words of the single chip's trace heading (trace_record.cpp's callers).
-      observer_->user_side_started(st->index, def.firmware.empty()
-                                                  ? std::string("the built-in user side")
-                                                  : "the host firmware " + def.firmware);
+      observer_->user_side_started(st->index, who);
       by_address_[def.slave.address] = st.get();
       stations_.push_back(std::move(st));
     }

@@ -76,6 +76,9 @@ class TraceRecorder final : public ScenarioObserver {
   ScenarioHooks scenario_hooks();
   void run_begins(Chip& chip) override;
   void user_side_started(std::uint64_t cycle, std::string_view who, std::string_view text) override;
+  // The init's heading without the walk's line (docs/trace-format.md): `firmware init (WHO): …`
+  // once the chip is started, `user side: WHO` while it is not. A segment's station takes it alone.
+  [[nodiscard]] std::string user_side_heading(std::string_view who) const;
   void step_begins(std::uint64_t cycle, const ScenarioStep& st, std::string_view text) override;
   void expect_checked(std::uint64_t cycle, const ScenarioStep& st, bool ok,
                       std::string_view text) override;

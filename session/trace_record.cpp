@@ -263,18 +263,21 @@ void TraceRecorder::mark(std::string heading) {
   closing_ = true;
 }
 
-void TraceRecorder::user_side_started(std::uint64_t, std::string_view who, std::string_view text) {
+std::string TraceRecorder::user_side_heading(std::string_view who) const {
   // A `cpu` firmware runs from cycle 0 and starts the chip later (the walk says when); a host user
   // side that gave no Start_SPC3 never does.
   if (chip_ != nullptr &&
       field_of(chip_->peek_reg(RegId::Status_Reg), fields::Status_Reg::Offline_Passive_Idle) == 0) {
-    mark(fmt::format("user side: {}; {}", who, text));
-    return;
+    return fmt::format("user side: {}", who);
   }
   // The DPC31 starts through its Instruction_Queue (MAC_Start), the others through Mode_Reg1.
   const bool dpc31 = chip_ != nullptr && chip_->profile().id == Profile::dpc31;
-  mark(fmt::format("firmware init ({}): registers, buffers, {}; {}", who,
-                   dpc31 ? "MAC_Start" : "Start_SPC3", text));
+  return fmt::format("firmware init ({}): registers, buffers, {}", who,
+                     dpc31 ? "MAC_Start" : "Start_SPC3");
+}
+
+void TraceRecorder::user_side_started(std::uint64_t, std::string_view who, std::string_view text) {
+  mark(fmt::format("{}; {}", user_side_heading(who), text));
 }
 
 void TraceRecorder::step_begins(std::uint64_t, const ScenarioStep&, std::string_view text) {

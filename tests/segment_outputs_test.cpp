@@ -546,6 +546,36 @@ TEST(SegmentOutputs, ThreeSlavesTracesReplay) {
   }
 }
 
+// A station's heading names its firmware by the descriptor's name, as a single chip's trace does,
+// whatever the scenario's word (a plug-in's path, another case), and says `user side: …` for one
+// that never started its chip (docs/trace-format.md: "the chip not started yet: `# user side:
+// WHO; …`"; bad_plugin.c GLOBALS, named BAD: an init that only writes a port).
+TEST(SegmentOutputs, StationHeadingsNameTheFirmwareAndWhetherItStarted) {
+  const std::string scn = tmp("heads.scn");
+  {
+    std::ofstream out(scn);
+    out << "segment baud=1500000\n"
+        << "station 5 name=a profile=spc3 firmware=" << PLUGIN_DO4 << "\n"
+        << "station 6 name=b profile=spc3 firmware=do4\n"
+        << "station 7 name=c profile=spc3 firmware=" << BAD_PLUGIN_GLOBALS << "\n"
+        << "master 2 slaves=5,6\n\nstartup\n";
+  }
+  const auto r =
+      sh(fmt::format("{} run --quiet {} --record {}", DPC31_CLI, scn, tmp("heads.trace")));
+  ASSERT_EQ(r.rc, 0) << r.out;
+  for (const auto& [st, want] :
+       {std::pair{"station5_a",
+                  "# firmware init (the host firmware DO4): registers, buffers, "
+                  "Start_SPC3"},
+        {"station6_b", "# firmware init (the host firmware DO4): registers, buffers, Start_SPC3"},
+        {"station7_c", "# user side: the host firmware BAD"}}) {
+    const std::string trace = slurp(tmp(fmt::format("heads.{}.trace", st)));
+    EXPECT_NE(trace.find(fmt::format("\n{}\n", want)), std::string::npos)
+        << st << ": no line " << want << "\n"
+        << trace.substr(0, 600);
+  }
+}
+
 // The log of a segment's run in cycle order (docs/segment.md, "The log"): a telegram of the line
 // ("[cycle S] station: bytes", stamped at its first start bit S) is told once the line stayed idle
 // past its end E = S + 11 T per character, before anything the chips did after E. Until the

@@ -87,9 +87,7 @@ class RunOutputs final : public SegmentScenarioOutputs {
 
   void user_side_started(std::size_t index, std::string_view text) override {
     if (index >= traces_.size()) return;
-    const bool dpc31 = seg_->chip(index).profile().id == Profile::dpc31;
-    traces_[index]->heading(fmt::format("firmware init ({}): registers, buffers, {}", text,
-                                        dpc31 ? "MAC_Start" : "Start_SPC3"));
+    traces_[index]->heading(traces_[index]->user_side_heading(text));
     traces_[index]->checkpoint();
   }
 
