@@ -102,6 +102,7 @@ class SegmentRun {
         });
       } else {
         st->firmware = std::make_unique<FirmwareHost>(find_firmware(def.firmware));
+        st->firmware->name_station(def.slave.address);
         st->firmware->init(bus, def.slave.address);
         seg_.set_firmware(st->index, st->firmware->program());
       }
