@@ -1,7 +1,9 @@
 #include "board.hpp"
 
+#include <sys/uio.h>
 #include <unistd.h>
 
+#include <array>
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
@@ -21,6 +23,8 @@ thread_local Hooks* t_hooks = nullptr;
 // (no read-modify-write), so an access costs no locked instruction.
 std::atomic<std::uint64_t> g_progress{0};
 std::atomic<int> g_depth{0};
+// The Hooks installed on that thread: the guard names the firmware that spins.
+std::atomic<const Hooks*> g_running{nullptr};
 
 void bump(std::atomic<int>& a, int by) {
   a.store(a.load(std::memory_order_relaxed) + by, std::memory_order_relaxed);
@@ -40,6 +44,7 @@ Hooks& hooks(const char* fn) {
 Hooks* exchange(Hooks* h) {
   Hooks* const prev = t_hooks;
   t_hooks = h;
+  g_running.store(h, std::memory_order_release);
   return prev;
 }
 
@@ -54,13 +59,15 @@ void guard_hangs(const std::string& program, const std::string& firmware, const 
                  std::chrono::milliseconds limit) {
   static std::atomic<bool> started{false};
   if (started.exchange(true)) return;
-  // The line is made here: the watcher only write(2)s it and _exits, touching nothing the
-  // spinning thread might hold.
-  const std::string line = program + ": firmware " + firmware + " hangs: it ran " +
-                           std::to_string(limit.count()) +
+  // The line is made here but for the spinning firmware's name, which its host made before it
+  // ran: the watcher only writev(2)s them and _exits, touching nothing the spinning thread might
+  // hold.
+  const std::string head = program + ": ";
+  const std::string fallback = "firmware " + firmware;
+  const std::string tail = " hangs: it ran " + std::to_string(limit.count()) +
                            " ms of host time without a bus access or a board hook call (a "
                            "while(1) loop, e.g. its fatal-error handler?); stopped\n";
-  std::thread([line, remove, limit] {
+  std::thread([head, fallback, tail, remove, limit] {
     const auto tick = std::chrono::milliseconds(50);
     std::uint64_t seen = g_progress.load(std::memory_order_relaxed);
     std::chrono::milliseconds still{0};
@@ -77,7 +84,12 @@ void guard_hangs(const std::string& program, const std::string& firmware, const 
         // The other thread cannot be stopped where it spins: end the process from here.
         if (!remove.empty()) ::unlink(remove.c_str());
         cleanup::remove_registered();  // the temporaries of output files: nothing half-written
-        [[maybe_unused]] const ssize_t n = ::write(2, line.data(), line.size());
+        const Hooks* const h = g_running.load(std::memory_order_acquire);
+        const std::string& who = h != nullptr ? h->hang_name() : fallback;
+        std::array<iovec, 3> parts{{{const_cast<char*>(head.data()), head.size()},
+                                    {const_cast<char*>(who.data()), who.size()},
+                                    {const_cast<char*>(tail.data()), tail.size()}}};
+        [[maybe_unused]] const ssize_t n = ::writev(2, parts.data(), parts.size());
         ::_exit(2);
       }
     }

@@ -19,6 +19,9 @@ class Hooks {
   virtual void reset_line(bool asserted) = 0;
   virtual void int_enable(bool enabled) = 0;
   virtual void wait_1ms() = 0;
+  // How the hang guard names the firmware ("firmware DO4", "station 5: firmware DO4"): read by the
+  // guard's thread while the firmware spins, so it must not change while the firmware runs.
+  [[nodiscard]] virtual const std::string& hang_name() const = 0;
 
  protected:
   ~Hooks() = default;
@@ -38,7 +41,8 @@ inline constexpr std::chrono::milliseconds kHangLimit{2000};
 
 // Starts the watcher (once per process): when firmware code has run for `limit` of host time
 // without progress, it removes `remove` (a file the program made, e.g. the bridge's symlink; empty:
-// none), prints "PROGRAM: firmware NAME hangs: ..." on stderr and exits with 2.
+// none), prints "PROGRAM: WHO hangs: ..." on stderr and exits with 2. WHO is the spinning
+// firmware's Hooks::hang_name, or "firmware FIRMWARE" when no Hooks are installed.
 void guard_hangs(const std::string& program, const std::string& firmware,
                  const std::string& remove = {}, std::chrono::milliseconds limit = kHangLimit);
 

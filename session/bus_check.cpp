@@ -82,6 +82,43 @@ void BusCheck::collision(const Collision& c, const std::string& first, const std
             fmt::format("{} drove the line while {} had it", second, first));
 }
 
+void BusCheck::unsolicited(const LineTelegram& t, const fdl::Frame& f) {
+  violation(BusViolation::unsolicited, t.start,
+            fmt::format("an answer from station {} nobody asked for", f.sa));
+}
+
+// The telegram after a request that wants an answer (docs/timing.md, "The master's wait"): the
+// answer window ends at the slot time TSL after the request's end. A telegram starting later is
+// no answer: the asked station's, before the asker may send again (TSL + TSYN), is its late
+// answer; any other stands on its own.
+void BusCheck::answer(const LineTelegram& t, const fdl::Frame& f, bool ok) {
+  const Pending p = *pending_;
+  pending_.reset();
+  const std::uint64_t delay = t.start - p.end;
+  const std::uint64_t tbits = delay / timing_.bit_cycles;
+  const bool mirrors = f.sd == fdl::SC || (f.sa == p.request.da && f.da == p.request.sa);
+  if (delay > bits(timing_.slot_bits)) {
+    if (ok && mirrors && delay < bits(std::uint64_t{timing_.slot_bits} + timing_.tsyn_bits)) {
+      violation(BusViolation::late_answer, t.start,
+                fmt::format("answer to station {} {} bit times after the request (slot time {})",
+                            p.request.da, tbits, timing_.slot_bits));
+    } else if (ok) {
+      unsolicited(t, f);
+    }
+    return;
+  }
+  if (delay < bits(timing_.min_tsdr_bits)) {
+    violation(BusViolation::early_answer, t.start,
+              fmt::format("answer to station {} {} bit times after the request (min TSDR {})",
+                          p.request.da, tbits, timing_.min_tsdr_bits));
+  }
+  if (ok && !mirrors) {
+    violation(BusViolation::wrong_responder, t.start,
+              fmt::format("station {} answered to {}, asked: {} by {}", f.sa, f.da, p.request.da,
+                          p.request.sa));
+  }
+}
+
 void BusCheck::telegram(const LineTelegram& t, const std::string& sender) {
   idle_until(t.start);
   token_lost_reported_ = false;
@@ -94,28 +131,9 @@ void BusCheck::telegram(const LineTelegram& t, const std::string& sender) {
                           fdl::error_name(d.error)));
   }
   if (pending_ && !request) {
-    // The answer to the pending request: its delay, its sender.
-    const std::uint64_t delay = t.start - pending_->end;
-    const std::uint64_t tbits = delay / timing_.bit_cycles;
-    if (delay < bits(timing_.min_tsdr_bits)) {
-      violation(BusViolation::early_answer, t.start,
-                fmt::format("answer to station {} {} bit times after the request (min TSDR {})",
-                            pending_->request.da, tbits, timing_.min_tsdr_bits));
-    } else if (delay > bits(timing_.slot_bits)) {
-      violation(BusViolation::late_answer, t.start,
-                fmt::format("answer to station {} {} bit times after the request (slot time {})",
-                            pending_->request.da, tbits, timing_.slot_bits));
-    }
-    if (ok && d.frame.sd != fdl::SC &&
-        (d.frame.sa != pending_->request.da || d.frame.da != pending_->request.sa)) {
-      violation(BusViolation::wrong_responder, t.start,
-                fmt::format("station {} answered to {}, asked: {} by {}", d.frame.sa, d.frame.da,
-                            pending_->request.da, pending_->request.sa));
-    }
-    pending_.reset();
+    answer(t, d.frame, ok);
   } else if (!request && ok) {
-    violation(BusViolation::unsolicited, t.start,
-              fmt::format("an answer from station {} nobody asked for", d.frame.sa));
+    unsolicited(t, d.frame);
   }
   if (request) {
     pending_.reset();

@@ -19,14 +19,14 @@ namespace dpc31 {
 
 enum class BusViolation : std::uint8_t {
   early_answer,     // an answer sooner than min TSDR after the request's end
-  late_answer,      // an answer later than the slot time after the request's end
+  late_answer,      // the asked station's answer after the slot time (before TSL + TSYN)
   short_tsyn,       // a request or token with less than TSYN idle before it
   wrong_responder,  // an answer from another station than the one asked, or to another
   bad_frame,        // a telegram that does not decode (FCS, ED, length, truncated)
-  unsolicited,      // an answer nobody asked for (a babbling station)
+  unsolicited,      // an answer nobody asked for, or no longer (a babbling station)
   collision,        // two stations driving at once (Segment::collisions)
   token_lost,       // the line idle longer than the token-lost timeout TTO
-  duplicate_token,  // a request or token from a master that does not hold the token
+  duplicate_token,  // a request or token from a station that does not hold the token
   token_hold,       // a new message cycle after the holder's TTR ran out
 };
 inline constexpr std::size_t kBusViolationKinds = 10;
@@ -67,6 +67,8 @@ class BusCheck {
 
  private:
   void violation(BusViolation v, std::uint64_t cycle, const std::string& text);
+  void answer(const LineTelegram& t, const fdl::Frame& f, bool ok);
+  void unsolicited(const LineTelegram& t, const fdl::Frame& f);
   [[nodiscard]] std::uint64_t bits(std::uint64_t n) const { return n * timing_.bit_cycles; }
   [[nodiscard]] std::uint64_t token_lost_timeout() const;
 

@@ -111,6 +111,7 @@ std::unique_ptr<std::max_align_t[]> new_instance(const dpc31_builtin* b) {
 
 FirmwareHost::FirmwareHost(const dpc31_firmware& fw)
     : fw_(fw),
+      hang_name_(fmt::format("firmware {}", fw.name)),
       builtin_(dpc31_builtin_of(&fw)),
       self_(new_instance(builtin_)),
       run_(builtin_ != nullptr ? nullptr : plugin_copy(fw)),
@@ -131,6 +132,10 @@ FirmwareHost::FirmwareHost(const dpc31_firmware& fw)
             "ISR or the main loop)",
             fw_.name, message));
       }) {}
+
+void FirmwareHost::name_station(std::uint8_t address) {
+  hang_name_ = fmt::format("station {}: firmware {}", address, fw_.name);
+}
 
 void FirmwareHost::init(BusPort& bus, std::uint8_t station_address) {
   const Chip& c = bus.chip();

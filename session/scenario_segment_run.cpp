@@ -106,6 +106,7 @@ class SegmentRun {
         const dpc31_firmware& fw = find_firmware(def.firmware);
         who = fmt::format("the host firmware {}", fw.name);
         st->firmware = std::make_unique<FirmwareHost>(fw);
+        st->firmware->name_station(def.slave.address);
         st->firmware->init(bus, def.slave.address);
         seg_.set_firmware(st->index, st->firmware->program());
       }

@@ -1235,7 +1235,16 @@ TEST_F(BadInput, FirmwarePlugins) {
   file("spin.scn", "firmware " + spin + "\nstartup\n");
   expect_bad(dpc31("run spin.scn --json spin.json"), "dpc31 run: firmware BAD" + hangs,
              "spin in run");
-  EXPECT_EQ(listing(), (std::vector<std::string>{"garbage.so", "plugin.scn", "spin.scn"}));
+  // On a segment several stations may run one firmware: the line names the station that spins
+  // (docs/bring-up.md, section 4).
+  const std::string stations = "segment\nstation 5 profile=spc3 firmware=DO4\n";
+  file("segspin.scn", stations + "station 6 profile=spc3 firmware=" + spin + "\nstartup\n");
+  expect_bad(dpc31("run segspin.scn"), "dpc31 run: station 6: firmware BAD" + hangs,
+             "spin on a segment");
+  expect_bad(dpc31("bridge --pty p --slave 5:DO4 --slave 7:" + spin),
+             "dpc31 bridge: station 7: firmware BAD" + hangs, "spin among --slaves");
+  EXPECT_EQ(listing(),
+            (std::vector<std::string>{"garbage.so", "plugin.scn", "segspin.scn", "spin.scn"}));
   // A relative path in a scenario is relative to the scenario file: this one runs from work/.
   fs::create_directory(path("sub"));
   copy(PLUGIN_DO4, "sub/libdo4.so");

@@ -6,6 +6,7 @@
 // frame's FCS is the sum of DA..DU; the token-lost timeout is TTO = TSL x (6 + 2 x n) for the
 // master of address n; only the token holder sends, and after its TTR it starts no new message
 // cycle; two drivers at once are a collision.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <memory>
@@ -117,6 +118,58 @@ TEST(SegmentFaults, AnAnswerAtTheSlotTimeIsInTime) {
   Faults f;
   f.ask_and_answer(status_answer(2, 20), kSlot);
   EXPECT_EQ(f.check.total(), 0U);
+}
+
+// The answer window ends at the slot time (docs/timing.md, "The master's wait"): a telegram
+// starting later is no answer to the request. The request (6 characters of 11 bit times) starts
+// at 100 bit times and ends at 166; `delay` counts from there.
+constexpr std::uint64_t kRequestEnd = 100 + 6 * 11;
+
+// The asked station's own answer is late until the asker may send again, TSYN after the slot time
+// (docs/segment.md, `late_answer`): at TSL + TSYN - 1 = 132 bit times, still late.
+TEST(SegmentFaults, TheAskedStationsAnswerIsLateUntilTheAskerMaySendAgain) {
+  Faults f;
+  f.ask_and_answer(status_answer(2, 20), kSlot + kTsyn - 1);
+  f.expect_only(BusViolation::late_answer, 1);
+  ASSERT_EQ(f.log.size(), 1U);
+  EXPECT_EQ(f.log[0].cycle, f.bits(kRequestEnd + kSlot + kTsyn - 1));
+  EXPECT_EQ(f.log[0].text,
+            "bus: late_answer: answer to station 20 132 bit times after the request (slot time "
+            "100)");
+}
+
+// From TSL + TSYN on it is an answer nobody asked for.
+TEST(SegmentFaults, TheAskedStationsAnswerFromTheSlotTimePlusTsynIsUnsolicited) {
+  Faults f;
+  f.ask_and_answer(status_answer(2, 20), kSlot + kTsyn);
+  f.expect_only(BusViolation::unsolicited, 1);
+  ASSERT_EQ(f.log.size(), 1U);
+  EXPECT_EQ(f.log[0].cycle, f.bits(kRequestEnd + kSlot + kTsyn));
+  EXPECT_EQ(f.log[0].text, "bus: unsolicited: an answer from station 20 nobody asked for");
+}
+
+// Another station's telegram after the slot time is not the request's wrong answer: unsolicited.
+TEST(SegmentFaults, AnotherStationsAnswerAfterTheSlotTimeIsUnsolicited) {
+  Faults f;
+  f.ask_and_answer(status_answer(2, 21), kSlot + 1);
+  f.expect_only(BusViolation::unsolicited, 1);
+  ASSERT_EQ(f.log.size(), 1U);
+  EXPECT_EQ(f.log[0].cycle, f.bits(kRequestEnd + kSlot + 1));
+  EXPECT_EQ(f.log[0].text, "bus: unsolicited: an answer from station 21 nobody asked for");
+}
+
+// A telegram that does not decode after the slot time is one bad frame, no late answer.
+TEST(SegmentFaults, ABrokenTelegramAfterTheSlotTimeIsOneBadFrame) {
+  Faults f;
+  std::vector<std::uint8_t> request = fdl_status(9, 2);
+  ++request[request.size() - 2];  // SD1: SD DA SA FC FCS ED
+  f.ask_and_answer(request, kSlot + 1);
+  f.expect_only(BusViolation::bad_frame, 1);
+  ASSERT_EQ(f.log.size(), 1U);
+  const std::uint64_t at = f.bits(kRequestEnd + kSlot + 1);
+  EXPECT_EQ(f.log[0].cycle, at);
+  EXPECT_EQ(f.log[0].text, fmt::format("bus: bad_frame: 6 bytes from cycle {} do not decode ({})",
+                                       at, fdl::error_name(fdl::Error::bad_fcs)));
 }
 
 TEST(SegmentFaults, AStationThatAnswersEarly) {
@@ -251,6 +304,22 @@ TEST(SegmentFaults, ADuplicateToken) {
              end + f.bits(kTsyn));
   f.settle(end + f.bits(400));
   f.expect_only(BusViolation::duplicate_token, 1);
+}
+
+// A request or token from a station that does not hold the token is a second token on the line,
+// whether or not the station is one of the masters named (EN 50170: a station that sends a token
+// or a request acts as a master; docs/segment.md, `duplicate_token`). Master 2 passes the token
+// to 3 (3 characters: 33 bit times from 100); 9, no master named, sends a request TSYN later.
+TEST(SegmentFaults, ARequestFromAStationThatIsNoMasterIsADuplicateToken) {
+  Faults f(false, kTtr);
+  const std::uint64_t end = f.seg.send(f.master, bytes_of(fdl::token(3, 2)), f.bits(100));
+  ASSERT_EQ(end, f.bits(100 + 33));
+  f.seg.send(f.rogue, fdl_status(40, 9), end + f.bits(kTsyn));
+  f.settle(end + f.bits(kTsyn + 66 + 50));
+  f.expect_only(BusViolation::duplicate_token, 1);
+  ASSERT_EQ(f.log.size(), 1U);
+  EXPECT_EQ(f.log[0].cycle, end + f.bits(kTsyn));
+  EXPECT_EQ(f.log[0].text, "bus: duplicate_token: station 9 sent while station 3 holds the token");
 }
 
 }  // namespace

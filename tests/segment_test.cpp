@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <iterator>
 #include <map>
 #include <memory>
 #include <optional>
@@ -1082,6 +1083,48 @@ TEST(SegmentScenario, AShortTsynNamesItsSender) {
   EXPECT_EQ(r.code, 0);
   EXPECT_TRUE(r.errors.empty()) << r.errors.front();
   EXPECT_NE(r.cycle_of("bus: short_tsyn: a sent after 32 bit times of idle (TSYN 33)"), 0U);
+}
+
+// An unanswered request waits for its answer only up to its slot time (docs/timing.md, "The
+// master's wait"; docs/segment.md, "Bus checks"): each telegram long after it stands on its own.
+// At 12 Mbaud T = 4 clocks, a 6-character telegram lasts 66 T = 264 clocks, `send` starts 33 T
+// after the quiet line and ends at its telegram's end, `run 1ms` lasts 48 000 clocks, and the
+// line idle for TTO = 100 x (6 + 2 x 2) = 1000 T = 4000 clocks after a telegram's end is one
+// token_lost (master 2 alone). The rogue asks station 9 (nobody) in master 2's name; after a lost
+// token a babbler's answer is unsolicited (no late answer, no wrong responder), and a request
+// with a corrupted FCS (49 + 09 + 02 = 54, sent as 55) is one bad frame.
+TEST(SegmentScenario, AnUnansweredRequestWaitsNoLongerThanItsSlotTime) {
+  const ScenarioRun r = run_scenario_text(
+      "segment baud=12000000\nstation 5 profile=spc3\nmaster 2 slaves=5\nsender rogue\n"
+      "sender babbler\nstartup\nexpect state 5 Data_Exchange\n"
+      "send from=rogue after=33bits 10,09,02,49,54,16\nrun 1ms\n"
+      "send from=babbler after=33bits 10,02,07,00,09,16\n"
+      "send from=rogue after=33bits 10,09,02,49,54,16\nrun 1ms\n"
+      "send from=rogue after=33bits 10,09,02,49,55,16\nrun 1000\n"
+      "expect bus_violation unsolicited 1\nexpect bus_violation bad_frame 1\n"
+      "expect bus_violation late_answer 0\nexpect bus_violation wrong_responder 0\n"
+      "expect bus_violation token_lost 2\n");
+  EXPECT_EQ(r.errors, std::vector<std::string>{});
+  EXPECT_EQ(r.code, 0);
+  const std::uint64_t quiet = r.cycle_of("line 7: expect");
+  const std::uint64_t end1 = quiet + 132 + 264;         // the first request to 9
+  const std::uint64_t babble = end1 + 48000 + 132;      // the babbler's answer
+  const std::uint64_t end3 = babble + 264 + 132 + 264;  // the second request to 9
+  const std::uint64_t broken = end3 + 48000 + 132;      // the corrupted request
+  const auto at = [](std::uint64_t cycle, std::string_view text) {
+    return fmt::format("[cycle {:>10}] bus: {}", cycle, text);
+  };
+  const std::vector<std::string> want = {
+      at(end1 + 4000,
+         fmt::format("token_lost: the line idle for TTO (1000 bit times) since cycle {}", end1)),
+      at(babble, "unsolicited: an answer from station 7 nobody asked for"),
+      at(end3 + 4000,
+         fmt::format("token_lost: the line idle for TTO (1000 bit times) since cycle {}", end3)),
+      at(broken, fmt::format("bad_frame: 6 bytes from cycle {} do not decode (bad_fcs)", broken))};
+  std::vector<std::string> bus;
+  std::copy_if(r.walk.begin(), r.walk.end(), std::back_inserter(bus),
+               [](const std::string& l) { return l.find("] bus: ") != std::string::npos; });
+  EXPECT_EQ(bus, want);
 }
 
 // A telegram that ends at a step's end (its last stop bit) is over there: the walk prints it, and

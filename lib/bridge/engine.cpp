@@ -123,7 +123,7 @@ void Engine::add_slave(std::size_t i, Chip& chip, const SlaveSpec& spec) {
   Slave& s = slaves_[i];
   s.chip = &chip;
   watch_slave(i);
-  s.user = make_user_side(chip, spec);
+  s.user = make_user_side(chip, spec, seg_ != nullptr);
   if (FirmwareHost* fw = s.user.firmware.get()) {
     fw->on_port = [this, i, fw](std::uint64_t cycle, unsigned port, std::uint32_t value) {
       port_written(i, cycle, fw->firmware().name, fw->port_name(port), port, value);

@@ -12,11 +12,12 @@ std::string_view UserSide::name() const {
   return firmware ? std::string_view(firmware->firmware().name) : kResponderName;
 }
 
-UserSide make_user_side(Chip& chip, const SlaveSpec& s) {
+UserSide make_user_side(Chip& chip, const SlaveSpec& s, bool on_segment) {
   UserSide u;
   DirectBus bus(chip);
   if (s.firmware != nullptr) {
     u.firmware = std::make_unique<FirmwareHost>(*s.firmware);
+    if (on_segment) u.firmware->name_station(s.address);
     u.firmware->init(bus, s.address);
     u.program = u.firmware->program();
     return u;

@@ -42,8 +42,9 @@ struct UserSide {
 };
 
 // Makes the user side of the chip of station `s` and runs its init (which configures and starts
-// the chip): the one place a station's firmware is made.
-UserSide make_user_side(Chip& chip, const SlaveSpec& s);
+// the chip): the one place a station's firmware is made. `on_segment`: one of the `--slave`s (the
+// hang guard names its station).
+UserSide make_user_side(Chip& chip, const SlaveSpec& s, bool on_segment);
 
 // Why these stations cannot share one line ("" when they can): two at one address. Any number
 // of stations may run firmware, the same or another: each FirmwareHost is an instance of its own

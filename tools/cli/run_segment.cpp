@@ -198,7 +198,7 @@ int run_segment_command(const RunOptions& opt, const SegmentScenario& s, std::st
     return 2;
   }
   // A firmware stuck in a loop without a bus access cannot be stopped from this thread: the guard
-  // ends the process with one line (naming the plug-ins: one of them hangs).
+  // ends the process with one line, naming the station that spins (its FirmwareHost's name).
   std::string plugins;
   for (const std::string& p : segment_plugins(bound)) plugins += (plugins.empty() ? "" : ", ") + p;
   if (!plugins.empty()) board::guard_hangs("dpc31 run", plugins);
