@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "do4/do4.h"
 #include "dp_master.hpp"
@@ -19,6 +20,7 @@
 #include "dpc31/dpv1.hpp"
 #include "dpc31/pdu.hpp"
 #include "firmware_bench.hpp"
+#include "scenario.hpp"
 
 namespace {
 
@@ -248,6 +250,46 @@ TEST(Do4Dpv1, DiagnosticAlarmOnEnteringOspAcknowledgedByTheMaster) {
   EXPECT_EQ(d.blocks[0].bytes, (pdu::Bytes{0x05, 0x01, 0x00, 0x09, 0x01}));
   // An Alarm_Ack with another Specifier than the outstanding alarm's: B8h invalid parameter.
   EXPECT_EQ(b.request(ack, nullptr, kAlarm).du, (pdu::Bytes{0xDC, 0x80, 0xB8, 0x00}));
+}
+
+// The same alarm through a scenario with `firmware DO4` (audit a20, finding 3). Alarm_Ack is taken
+// on SAP 50 or 51 ("Alarm_Ack on SAP 50 or 51", manual-quotes.md, DPV1): the answer's DSAP is
+// the master's SSAP 51 (33h), its SSAP the slave's SAP. A slot DO4 does not have is "Error_Code_1
+// B2h = invalid slot" (manual-quotes.md), checked before the alarm's state, as a record's slot
+// is. Each answer telegram is SD2 68h, LE = LEr = 9 (DA, SA, FC, DSAP, SSAP and 4 bytes), DA 82h
+// (master 2 | SAP extension), SA 85h, FC 08h, then the FCS (the sum of DA..DU mod 256), 16h:
+//   33 33 DC 80 B2 00: 82+85+08+33+33+DC+80+B2+00 = 383h -> 83h
+//   33 33 5C 00 01 01: ... +5C+00+01+01 = 1D3h -> D3h
+//   33 32 DC 80 B2 00: one less: 82h;  33 32 5C 00 01 09: 1D3h - 1 + 8 = 1DAh -> DAh
+// The second OSP entry's alarm carries Seq_Nr 1: Specifier 09h (docs/firmware.md).
+TEST(Do4Dpv1, AlarmAckOnSap50Or51AndAWrongSlotThroughAScenario) {
+  const std::string text =
+      "profile vpc3plus\nbaud 1500000\nfirmware DO4\n"
+      "slave address=5 wd=2,5 user_prm=C0,20,00,01,09,00\nstartup\n"
+      "exchange outputs=05,01\nexchange outputs=05,00\n"
+      "diag\nexpect diag_byte 0 0x08\nexpect diag_byte 9 0x01\n"
+      "alarm_ack slot=1 type=1 seq=0 spec=1 sap=51\n"
+      "expect dpv1 error 80,B2,00\n"
+      "expect answer 68,09,09,68,82,85,08,33,33,DC,80,B2,00,83,16\n"
+      "alarm_ack slot=0 type=1 seq=0 spec=1 sap=51\n"
+      "expect dpv1 5C,00,01,01\n"
+      "expect answer 68,09,09,68,82,85,08,33,33,5C,00,01,01,D3,16\n"
+      "diag\nexpect diag_byte 0 0x00\nexpect diag_byte 7 0x81\n"
+      "alarm_ack slot=0 type=1 seq=0 spec=1 sap=51\n"
+      "expect dpv1 error 80,B5,00\n"
+      "exchange outputs=05,01\nexchange outputs=05,00\n"
+      "alarm_ack slot=1 type=1 seq=1 spec=1\n"
+      "expect dpv1 error 80,B2,00\n"
+      "expect answer 68,09,09,68,82,85,08,33,32,DC,80,B2,00,82,16\n"
+      "alarm_ack slot=0 type=1 seq=1 spec=1\n"
+      "expect dpv1 5C,00,01,09\n"
+      "expect answer 68,09,09,68,82,85,08,33,32,5C,00,01,09,DA,16\n";
+  Scenario s;
+  ScenarioError err;
+  ASSERT_TRUE(parse_scenario(text, "t.scn", s, err)) << err.text();
+  const ScenarioOutcome o = run_scenario(s, {}, {});
+  EXPECT_EQ(o.failures, std::vector<std::string>{});
+  EXPECT_EQ(o.passed, 13u);
 }
 
 // Without Enable_Diagnostic_Alarm the OSP mode is only a status block: no Ext_Diag, and an

@@ -124,10 +124,12 @@ static uint8_t dpv1_record(DPS_P_(do4) const uint8_t* req, uint8_t len, uint8_t*
 }
 
 /* Alarm_Ack (5Ch, Slot_Number, Alarm_Type, Specifier): the outstanding alarm acknowledged, the
- * positive response echoes the request; the diag no longer holds the alarm. */
+ * positive response echoes the request; the diag no longer holds the alarm. A slot the module
+ * does not have is B2h as for a record (the slot is checked first there too). */
 static uint8_t dpv1_alarm_ack(DPS_P_(do4) const uint8_t* req, uint8_t* resp) {
+  if (req[1] != kOspSlot) return dpv1_error(resp, kAlarmAck, kInvalidSlot);
   if (!self->alarm_spec) return dpv1_error(resp, kAlarmAck, kStateConflict);
-  if (req[1] != kOspSlot || req[2] != kDiagAlarm || req[3] != self->alarm_spec)
+  if (req[2] != kDiagAlarm || req[3] != self->alarm_spec)
     return dpv1_error(resp, kAlarmAck, kInvalidParameter);
   self->alarm_spec = 0;
   publish_diag(ME);
@@ -139,7 +141,9 @@ static uint8_t dpv1_request(DPS_CB_P_ uint8_t sap, const uint8_t* req, uint8_t l
                             uint8_t* resp) DPS_REENTRANT {
   DPS_MODULE_SELF(do4);
   const uint8_t fn = req[0];
-  if (sap == DPS_SAP_ALARM && len == 4u && fn == kAlarmAck) return dpv1_alarm_ack(ME_ req, resp);
+  /* Alarm_Ack is MSAC_C1's on SAP 50 or 51 (manual-quotes.md, DPV1). */
+  if ((sap == DPS_SAP_ALARM || sap == DPS_SAP_C1) && len == 4u && fn == kAlarmAck)
+    return dpv1_alarm_ack(ME_ req, resp);
   /* MSAC_C1 and the MSAC_C2 connection: the same record, the same answers. */
   if ((sap == DPS_SAP_C1 || sap == DPS_SAP_C2) && len >= 4u && (fn == kRead || fn == kWrite))
     return dpv1_record(ME_ req, len, resp);

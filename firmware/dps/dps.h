@@ -83,8 +83,8 @@ enum dps_comm_loss {
 /* DPV1 (VPC3+): the longest MSAC_C1 data unit a module takes or answers, the 4 bytes of function
  * number, slot, index and length included (GSD C1_Max_Data_Len = DPS_DPV1_MAX_PDU - 4). */
 #define DPS_DPV1_MAX_PDU 20u
-#define DPS_SAP_C1 51u    /* MSAC_C1 Read / Write */
-#define DPS_SAP_ALARM 50u /* MSAC_C1 Alarm_Ack */
+#define DPS_SAP_C1 51u    /* MSAC_C1 Read / Write, and Alarm_Ack */
+#define DPS_SAP_ALARM 50u /* MSAC_C1 Alarm_Ack (the extra alarm SAP) */
 #define DPS_SAP_C2_RM 49u /* MSAC_C2 resource manager: Initiate (the driver answers it) */
 #define DPS_SAP_C2 40u    /* the one MSAC_C2 connection, open from Initiate to Abort / time-out */
 
