@@ -87,6 +87,8 @@ namespace {
 using U8 = std::uint8_t;
 using U64 = std::uint64_t;
 
+struct MasterSlave : SlaveConfig {};  // Master.slave's read-only copy (bind_configs)
+
 // A class bound without a keyword constructor gets one: T() with each keyword set as an
 // attribute (an unknown keyword is an AttributeError).
 template <typename T>
@@ -194,6 +196,17 @@ void bind_frames(py::module_& m) {
           "user_prm",
           bytes_field(&SlaveConfig::user_prm, "user_prm", false, fdl::kMaxDpData - 7).first,
           bytes_field(&SlaveConfig::user_prm, "user_prm", false, fdl::kMaxDpData - 7).second);
+  // Master.slave's value: a copy (the master is made anew when its user side starts, so a
+  // reference into it would not live). A field set on it would change nothing the master sends:
+  // it raises instead of doing nothing.
+  py::class_<MasterSlave, SlaveConfig>(
+      m, "MasterSlave", "A copy of the slave a Master parameterises (Master.slave): read-only.")
+      .def("__setattr__", [](const MasterSlave&, const std::string& name, const py::object&) {
+        throw py::attribute_error(fmt::format(
+            "Master.slave is a read-only copy: setting its {} would change nothing the master "
+            "sends; give the slave as Master(slave=SlaveConfig(...))",
+            name));
+      });
 }
 
 // The run each user side runs with, by its address: every Firmware and Responder is made by a
@@ -342,12 +355,12 @@ void bind_user_side(py::module_& m) {
       .def_property_readonly("cfg_rejected", counter<&Responder::cfg_rejected>);
 }
 
-// Only the VPC3+ has DPV1 (a scenario refuses `record`, `dpv1` and the DPV1 actions on another
-// profile at its parse): a ValueError naming the chip's, before anything is sent.
+// DPV1 is modelled on the VPC3+ only (a scenario refuses `record`, `dpv1` and the DPV1 actions
+// on another profile at its parse): a ValueError naming the chip's, before anything is sent.
 void no_dpv1_but_on_vpc3plus(const Chip& chip, std::string_view what) {
   if (chip.profile().id != Profile::vpc3plus) {
-    throw py::value_error(fmt::format("{} need a vpc3plus: the {} has no DPV1", what,
-                                      profile_name(chip.profile().id)));
+    throw py::value_error(fmt::format("{} need a vpc3plus, not a {}: {}", what,
+                                      profile_name(chip.profile().id), kDpv1OnVpc3plusOnly));
   }
 }
 
@@ -584,7 +597,8 @@ void bind_dpv1(py::module_& m, py::class_<PyMaster>& master) {
       .value("refused", O::refused)
       .value("no_answer", O::no_answer)
       .value("timeout", O::timeout)
-      .value("malformed", O::malformed);
+      .value("malformed", O::malformed)
+      .value("no_connection", O::no_connection);
   py::class_<Dpv1Rules>(m, "Dpv1Rules", "The master's DPV1 rules (retries, time-out, C2 SAP).")
       .def(py::init(&with_kwargs<Dpv1Rules>))
       .def_property(
@@ -617,7 +631,9 @@ void bind_dpv1(py::module_& m, py::class_<PyMaster>& master) {
            [](const Dpv1Answer& a) { return "<Dpv1Answer " + answer_summary(a) + ">"; });
   master
       .def_property(
-          "dpv1_rules", [](const PyMaster& pm) { return pm.dpv1_rules; },
+          // The master's own rules (def_property: reference_internal, the master kept alive):
+          // `master.dpv1_rules.c1_response_timeout = 1` reaches the next service.
+          "dpv1_rules", [](PyMaster& pm) -> Dpv1Rules& { return pm.dpv1_rules; },
           [](PyMaster& pm, const Dpv1Rules& r) { pm.dpv1_rules = r; })
       .def_property_readonly(
           "c2_sap",
@@ -766,7 +782,7 @@ void bind_master(py::module_& m) {
       .def_property_readonly("firmware", [](const PyMaster& pm) { return pm.firmware; })
       .def_property_readonly("responder", [](const PyMaster& pm) { return pm.responder; })
       .def_property_readonly("chip", [](const PyMaster& pm) { return pm.chip_ref; })
-      .def_property_readonly("slave", [](const PyMaster& pm) { return pm.m->slave(); })
+      .def_property_readonly("slave", [](const PyMaster& pm) { return MasterSlave{pm.m->slave()}; })
       .def_property_readonly("bit_cycles", [](const PyMaster& pm) { return pm.m->bit_cycles(); })
       .def_property_readonly("counters", [](const PyMaster& pm) { return pm.m->counters(); })
       .def_property_readonly("history", [](const PyMaster& pm) { return pm.m->history(); })

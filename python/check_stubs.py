@@ -14,6 +14,25 @@ from dpc31 import _dpc31
 stubs = ast.parse(open(sys.argv[1]).read())
 problems = []
 stub_names = set()
+stub_classes = {node.name: node for node in stubs.body if isinstance(node, ast.ClassDef)}
+
+
+def stub_members(node):
+    """The members a stub class gives, with those of its stub base classes (MasterSlave's)."""
+    members = set()
+    for base in node.bases:
+        if isinstance(base, ast.Name) and base.id in stub_classes:
+            members |= stub_members(stub_classes[base.id])
+    for item in node.body:
+        if isinstance(item, (ast.FunctionDef,)):
+            members.add(item.name)
+        elif isinstance(item, ast.AnnAssign):
+            members.add(item.target.id)
+        elif isinstance(item, ast.Assign):
+            members.update(t.id for t in item.targets)
+    return members
+
+
 for node in stubs.body:
     if isinstance(node, ast.ClassDef):
         stub_names.add(node.name)
@@ -23,14 +42,7 @@ for node in stubs.body:
             continue
         if issubclass(native, BaseException):
             continue  # their attributes (ScenarioError.file, ...) are set on each instance
-        members = set()
-        for item in node.body:
-            if isinstance(item, (ast.FunctionDef,)):
-                members.add(item.name)
-            elif isinstance(item, ast.AnnAssign):
-                members.add(item.target.id)
-            elif isinstance(item, ast.Assign):
-                members.update(t.id for t in item.targets)
+        members = stub_members(node)
         for m in members:
             if not hasattr(native, m):
                 problems.append(f"{node.name}.{m}: not in the module")

@@ -497,7 +497,7 @@ void DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bool n
 }
 
 void DpMaster::wait_answer(Exchange& ex, const fdl::Frame* req) {
-  const std::uint64_t slot = std::uint64_t{cfg_.slot_bits} * t_;
+  const std::uint64_t slot = slot_cycles();
   // The slot time is the wait for an answer's first start bit: one later is no answer.
   const std::uint64_t last_start = ex.request_end + slot;
   answer_.reset();

@@ -281,6 +281,8 @@ class DpMaster {
   static bool diag_ready(const fdl::Frame& diag_answer);
 
   std::uint32_t bit_cycles() const { return t_; }
+  // TSL in clocks: the wait after a request's last stop bit for its answer's first start bit.
+  std::uint64_t slot_cycles() const { return std::uint64_t{cfg_.slot_bits} * t_; }
   const SlaveConfig& slave() const { return slave_; }
   SlaveConfig& slave() { return slave_; }
   std::uint8_t target() const { return target_; }

@@ -13,9 +13,10 @@ namespace {
 using pdu::Function;
 }  // namespace
 
-constexpr std::array<std::string_view, 6> kOutcomeNames = {"positive",  "negative", "refused",
-                                                           "no answer", "timeout",  "malformed"};
-static_assert(kOutcomeNames.size() == static_cast<std::size_t>(Dpv1Answer::Outcome::malformed) + 1,
+constexpr std::array<std::string_view, 7> kOutcomeNames = {
+    "positive", "negative", "refused", "no answer", "timeout", "malformed", "no connection"};
+static_assert(kOutcomeNames.size() ==
+                  static_cast<std::size_t>(Dpv1Answer::Outcome::no_connection) + 1,
               "a new value: name it here");
 
 std::string outcome_name(Dpv1Answer::Outcome o) { return std::string(name_of(o, kOutcomeNames)); }
@@ -31,6 +32,8 @@ std::string answer_summary(const Dpv1Answer& a) {
                          hex_bytes(a.du, " ", 16), polls);
     case Dpv1Answer::Outcome::negative:
       return fmt::format("negative {} {}", hex_bytes(a.du, " ", 4), polls);
+    case Dpv1Answer::Outcome::no_connection:
+      return "no connection, nothing sent";
     default:
       return fmt::format("{} {}", outcome_name(a.outcome), polls);
   }
@@ -40,25 +43,36 @@ std::uint64_t Dpv1Master::cycles_10ms(std::uint32_t units) const {
   return std::uint64_t{units} * chip_.clock_hz() / 100;
 }
 
+void Dpv1Master::take(Dpv1Answer& a, const Exchange& ex) const {
+  a.last = ex.answer;
+  if (!ex.answer) {
+    // The master gives up at the slot time's end (docs/timing.md, "The master's wait").
+    a.end = ex.request_end + m_.slot_cycles();
+    a.outcome = Dpv1Answer::Outcome::no_answer;
+    return;
+  }
+  a.end = ex.answer_end;
+  a.outcome = ex.answer->du.empty() && ex.answer->sd != fdl::SC ? Dpv1Answer::Outcome::refused
+                                                                : Dpv1Answer::Outcome::positive;
+}
+
+Dpv1Answer Dpv1Master::no_connection() const {
+  Dpv1Answer a;
+  a.outcome = Dpv1Answer::Outcome::no_connection;
+  a.start = a.end = chip_.cycle();
+  return a;
+}
+
 Dpv1Answer Dpv1Master::transfer(std::uint8_t dsap, std::uint8_t ssap, pdu::Bytes req,
                                 std::uint64_t timeout) {
   Dpv1Answer a;
   Exchange ex = m_.retry(m_.acyclic(dsap, ssap, std::move(req)), rules_.retries);
   a.start = ex.request_start;
   for (;;) {
-    a.last = ex.answer;
-    a.end = ex.answer ? ex.answer_end : ex.request_end;
-    if (!ex.answer) {
-      a.outcome = Dpv1Answer::Outcome::no_answer;
-      return a;
-    }
+    take(a, ex);
+    if (a.outcome != Dpv1Answer::Outcome::positive) return a;
     if (!ex.answer->du.empty()) {  // the response (classified by the caller)
       a.du = ex.answer->du;
-      a.outcome = Dpv1Answer::Outcome::positive;
-      return a;
-    }
-    if (ex.answer->sd != fdl::SC) {
-      a.outcome = Dpv1Answer::Outcome::refused;
       return a;
     }
     // SC: the slave is still working. Past the time-out the master gives up instead of polling
@@ -127,11 +141,7 @@ Dpv1Answer Dpv1Master::initiate(const pdu::Initiate& req) {
 }
 
 Dpv1Answer Dpv1Master::on_connection(Function f, pdu::Bytes req, bool with_data) {
-  if (!c2_sap_) {
-    Dpv1Answer a;
-    a.outcome = Dpv1Answer::Outcome::refused;
-    return a;
-  }
+  if (!c2_sap_) return no_connection();
   const pdu::Bytes sent = req;
   Dpv1Answer a = transfer(*c2_sap_, rules_.c2_ssap, std::move(req), cycles_10ms(c2_timeout_));
   bool ok = false;
@@ -163,18 +173,14 @@ Dpv1Answer Dpv1Master::c2_idle() {
 }
 
 Dpv1Answer Dpv1Master::c2_abort(const pdu::Abort& abort) {
+  if (!c2_sap_) return no_connection();
   Dpv1Answer a;
-  if (!c2_sap_) {
-    a.outcome = Dpv1Answer::Outcome::refused;
-    return a;
-  }
   const Exchange ex = m_.retry(m_.acyclic(*c2_sap_, rules_.c2_ssap, abort.build()), rules_.retries);
   a.start = ex.request_start;
-  a.last = ex.answer;
-  a.end = ex.answer ? ex.answer_end : ex.request_end;
-  a.outcome = !ex.answer                 ? Dpv1Answer::Outcome::no_answer
-              : ex.answer->sd == fdl::SC ? Dpv1Answer::Outcome::positive
-                                         : Dpv1Answer::Outcome::refused;
+  take(a, ex);
+  // The Abort has no response: only SC is its acknowledgement.
+  if (a.outcome == Dpv1Answer::Outcome::positive && ex.answer->sd != fdl::SC)
+    a.outcome = Dpv1Answer::Outcome::refused;
   if (a.outcome == Dpv1Answer::Outcome::positive) c2_sap_.reset();
   return a;
 }

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "dp_master.hpp"
 #include "dpc31/dp.hpp"
@@ -36,15 +37,24 @@ struct Dpv1Answer {
     no_answer,  // a request or poll stayed unanswered after its retries
     timeout,    // still SC when the response time-out ran out
     malformed,  // data that is neither the positive nor the negative response
+    // MSAC_C2 without an open connection: nothing sent (the master has no SAP to send it to)
+    no_connection,
   };
   Outcome outcome = Outcome::no_answer;
   pdu::Bytes du;                            // the response's data unit as received
   std::optional<pdu::ErrorResponse> error;  // negative
   std::optional<fdl::Frame> last;           // the last answer on the wire
   std::uint32_t polls = 0;                  // polls answered SC before the response
-  std::uint64_t start = 0;                  // the request's first start bit
-  std::uint64_t end = 0;  // the last answer's last stop bit (or the last request's end)
+  // The request's first start bit, and the outcome's cycle (docs/dpv1.md, "The outcome's
+  // cycle"): the last answer's last stop bit; no_answer: the end of the slot time after the last
+  // try; no_connection: both the cycle the service was asked for.
+  std::uint64_t start = 0;
+  std::uint64_t end = 0;
 };
+
+// The DPV1 services' refusal on a chip without DPV1 (the scenario parser's and Python's words).
+inline constexpr std::string_view kDpv1OnVpc3plusOnly =
+    "DPV1 is modelled on the VPC3+ only (the DPC31's is not modelled; the SPC3 has none)";
 
 [[nodiscard]] std::string outcome_name(Dpv1Answer::Outcome o);
 // "5E 00 01 04 11 22 33 44 after 2 polls", "negative 80 B0 00", "timeout after 40 polls" ...
@@ -85,6 +95,11 @@ class Dpv1Master {
   // The positive response is of `f` and parses as `ok` says, or the negative one of `f`.
   static void classify(Dpv1Answer& a, pdu::Function f, bool positive_ok);
   Dpv1Answer on_connection(pdu::Function f, pdu::Bytes req, bool with_data);
+  // MSAC_C2 without an open connection: at the current cycle, nothing sent.
+  [[nodiscard]] Dpv1Answer no_connection() const;
+  // Fills the answer's last answer, end and outcome from one exchange: no_answer, refused (not
+  // SC and no data), else positive (the caller looks further).
+  void take(Dpv1Answer& a, const Exchange& ex) const;
   [[nodiscard]] std::uint64_t cycles_10ms(std::uint32_t units) const;
 
   const Chip& chip_;

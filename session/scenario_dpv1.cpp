@@ -21,7 +21,7 @@ namespace {
 // A record's data (the PDU's 4-byte head + 240 = 244).
 constexpr auto kMaxRecord = static_cast<std::size_t>(kRecordLength.max);
 // `sc`: positive without a data unit, the Abort's SC.
-constexpr std::string_view kOutcomes[] = {"refused", "timeout", "no_answer", "sc"};
+constexpr std::string_view kOutcomes[] = {"refused", "timeout", "no_answer", "no_connection", "sc"};
 
 [[noreturn]] void unknown(std::string_view k, std::string_view cmd) {
   fail(fmt::format("unknown option '{}' for {}", shown(k), cmd));
@@ -70,21 +70,31 @@ void record_options(std::span<const Option> opts, std::string_view cmd, bool rea
 // A DPV1 action or check on another profile: a parse error, never a run that cannot pass.
 void needs_vpc3plus(std::string_view what, const Scenario& s) {
   if (s.chip.profile != Profile::vpc3plus)
-    fail(fmt::format("'{}' needs 'profile vpc3plus': only the VPC3+ has DPV1", what));
+    fail(fmt::format("'{}' needs 'profile vpc3plus': {}", what, kDpv1OnVpc3plusOnly));
 }
 
 }  // namespace
+
+std::string user_side_only(std::string_view what) {
+  return fmt::format(
+      "'{}' is the built-in user side's; a firmware answers DPV1 itself (the master's 'dpv1 "
+      "c1_timeout=' and 'c2_ssap=' are allowed)",
+      what);
+}
 
 bool parse_header(std::string_view cmd, std::span<const std::string_view> pos,
                   std::span<const Option> opts, Scenario& s) {
   if (cmd != "record" && cmd != "dpv1") return false;
   no_positional(pos, cmd);
   if (s.chip.profile != Profile::vpc3plus)
-    fail(fmt::format("'{}' needs 'profile vpc3plus' before it: only the VPC3+ has DPV1", cmd));
-  if (!s.firmware.empty() || s.cpu)
-    fail(
-        fmt::format("'{}' configures the built-in user side; a firmware answers DPV1 itself", cmd));
+    fail(fmt::format("'{}' needs 'profile vpc3plus' before it: {}", cmd, kDpv1OnVpc3plusOnly));
+  // `record` and `dpv1 work=` are the built-in user side's; `c1_timeout=` and `c2_ssap=` the
+  // master's, which talks to a firmware as well.
+  const auto users = [&](std::string_view what) {
+    if (!s.firmware.empty() || s.cpu) fail(user_side_only(what));
+  };
   if (cmd == "record") {
+    users(cmd);
     ScenarioStep st;
     record_options(opts, cmd, false, st);
     for (const Dpv1Record& r : s.user.dpv1.records) {
@@ -97,6 +107,7 @@ bool parse_header(std::string_view cmd, std::span<const std::string_view> pos,
   }
   for (const auto& [k, v] : opts) {
     if (k == "work") {
+      users("dpv1 work=");
       s.user.dpv1.work_cycles = number(v, kWorkCycles);
     } else if (k == "c1_timeout") {
       s.dpv1.c1_response_timeout = static_cast<std::uint16_t>(number(v, kC1Timeout));
@@ -174,7 +185,7 @@ void parse_expect(std::span<const std::string_view> pos, const Scenario& s, Scen
   const auto form = [] {
     fail(
         "expected 'expect dpv1 BYTES', 'expect dpv1 error DECODE,CODE1,CODE2', 'expect dpv1 "
-        "polls N' or 'expect dpv1 refused|timeout|no_answer|sc'");
+        "polls N' or 'expect dpv1 refused|timeout|no_answer|no_connection|sc'");
   };
   if (pos.size() == 2) {
     if (std::find(std::begin(kOutcomes), std::end(kOutcomes), pos[1]) != std::end(kOutcomes)) {
@@ -246,8 +257,9 @@ Check check(const ScenarioStep& st, const std::optional<Dpv1Answer>& last) {
   } else if (st.name == "sc") {
     c.got = last->outcome == Dpv1Answer::Outcome::positive && last->du.empty() ? "sc" : got;
   } else {
-    const std::string o = outcome_name(last->outcome);
-    c.got = (o == "no answer" ? "no_answer" : o) == st.name ? st.name : got;
+    std::string o = outcome_name(last->outcome);  // "no answer": the line's word is no_answer
+    std::replace(o.begin(), o.end(), ' ', '_');
+    c.got = o == st.name ? st.name : got;
   }
   return c;
 }

@@ -23,11 +23,13 @@ using Option = std::pair<std::string_view, std::string_view>;
 // `cmd` is neither (throws scenario_lex::ParseFail).
 bool parse_header(std::string_view cmd, std::span<const std::string_view> pos,
                   std::span<const Option> opts, Scenario& s);
+// The refusal of `what` (`record`, `dpv1 work=`) in a scenario with a firmware or a CPU.
+std::string user_side_only(std::string_view what);
 // The DPV1 actions into `st`; false if `cmd` is none of them.
 bool parse_action(std::string_view cmd, std::span<const std::string_view> pos,
                   std::span<const Option> opts, const Scenario& s, ScenarioStep& st);
-// `expect dpv1 BYTES|error D,C1,C2|polls N|refused|timeout|no_answer|sc` (pos[0] == "dpv1"):
-// only after `profile vpc3plus`, as the DPV1 actions.
+// `expect dpv1 BYTES|error D,C1,C2|polls N|refused|timeout|no_answer|no_connection|sc` (pos[0] ==
+// "dpv1"): only after `profile vpc3plus`, as the DPV1 actions.
 void parse_expect(std::span<const std::string_view> pos, const Scenario& s, ScenarioStep& st);
 
 // Performs the step on the master.

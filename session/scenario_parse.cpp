@@ -191,6 +191,9 @@ class Parser {
               "record needs DPV1_Enable (slave user_prm= byte 0 bit 7): without it the VPC3+ "
               "keeps the SAP list off and answers every DPV1 request RS");
     }
+    if (work_line_ != 0 && (firmware_seen_ || s_.cpu)) {
+      fail_at(work_line_, scenario_dpv1::user_side_only("dpv1 work="));
+    }
     if (work_line_ != 0 && record_line_ == 0) {
       fail_at(work_line_,
               "dpv1 work= is the built-in user side's DPV1 time and needs a record: without one "

@@ -579,7 +579,8 @@ class Runner {
       }
       case StepKind::dpv1: {
         dpv1_last_ = scenario_dpv1::act(*dpv1_, st);
-        note(chip_.cycle(), fmt::format("{}: {}", st.name, answer_summary(*dpv1_last_)));
+        // At the outcome's cycle, the one `expect dpv1 ... at / after` checks (docs/dpv1.md).
+        note(dpv1_last_->end, fmt::format("{}: {}", st.name, answer_summary(*dpv1_last_)));
         break;
       }
       case StepKind::inputs:

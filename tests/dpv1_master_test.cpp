@@ -106,6 +106,9 @@ TEST(Dpv1Master, NoAnswerAfterRetries) {
   const Dpv1Answer a = r.dpv1.write(0, 1, {1, 2, 3, 4});
   EXPECT_EQ(a.outcome, Dpv1Answer::Outcome::no_answer);
   ASSERT_EQ(r.master.history().size() - before, 3u);
+  // The outcome's cycle: the slot time's end after the last try (docs/timing.md, "The master's
+  // wait": TSL = 100 T = 400 clocks after its last stop bit).
+  EXPECT_EQ(a.end, r.master.history().back().request_end + 400);
   for (std::size_t i = before; i < r.master.history().size(); ++i) {
     EXPECT_EQ(r.master.history()[i].request, r.master.history()[before].request);
   }
@@ -144,6 +147,31 @@ TEST(Dpv1Master, ClassTwoConnection) {
   EXPECT_EQ(r.user.dpv1()->timeouts, 1u);
   a = r.dpv1.c2_idle();
   EXPECT_EQ(a.outcome, Dpv1Answer::Outcome::refused);
+}
+
+// MSAC_C2 without an open connection (audit a20, finding 7): the master has no SAP to send it
+// to, so nothing goes on the line and the outcome is no_connection (not refused: no slave
+// answered RS or RR), at the cycle the service was asked for. Before: refused at cycle 0.
+TEST(Dpv1Master, NoConnectionSendsNothing) {
+  Rig r;
+  r.start();
+  const std::size_t sent = r.master.history().size();
+  const std::uint64_t requests = r.master.counters().requests;
+  const std::uint64_t now = r.chip.cycle();
+  for (const Dpv1Answer& a :
+       {r.dpv1.c2_read(0, 1, 4), r.dpv1.c2_write(0, 1, {1}), r.dpv1.c2_transport(0, 1, {1}),
+        r.dpv1.c2_idle(), r.dpv1.c2_abort({0, 2, 0, 0})}) {
+    EXPECT_EQ(a.outcome, Dpv1Answer::Outcome::no_connection);
+    EXPECT_EQ(a.start, now);
+    EXPECT_EQ(a.end, now);
+    EXPECT_EQ(a.polls, 0u);
+    EXPECT_FALSE(a.last);
+    EXPECT_EQ(answer_summary(a), "no connection, nothing sent");
+  }
+  EXPECT_EQ(r.chip.cycle(), now);
+  EXPECT_EQ(r.master.history().size(), sent);
+  EXPECT_EQ(r.master.counters().requests, requests);
+  EXPECT_TRUE(r.irq_on.empty());
 }
 
 // `expect dpv1 sc` (docs/scenario-format.md, "DPV1"): the Abort gets SC and no response; a check
@@ -307,12 +335,88 @@ TEST(Dpv1Scenario, ARefusedAbortLeavesTheConnectionKnown) {
   EXPECT_TRUE(has_line(walk, "2 -> 5 SAP 40 58 00 21 00 => SC"));
 }
 
+// The cycle of a DPV1 outcome (audit a20, finding 8; docs/dpv1.md, "The outcome's cycle"): the
+// walk's result line, `expect dpv1 ... after` and Dpv1Answer::end are one cycle. A Read answered
+// on poll 3 (dpv1_c1_vpc3plus.scn): the response's last stop bit at t0+3652. A Read to a slave
+// gone Offline (Mode_Reg1 Go_Offline, bit 2) with retries=2: three tries of 15 characters (660
+// clocks), each waiting TSL = 100 T = 400 clocks, TSYN = 132 before the next: the last from
+// t0+2384 to t0+3044, the master gives up at its slot time's end, t0+3444. And MSAC_C2 without a
+// connection: no_connection at t0 itself. Before, the walk printed the response 2 clocks early
+// (the stop sample) and `after` checked no_answer at the last request's end (t0+3044).
+TEST(Dpv1Scenario, TheWalkAndTheCheckShareTheOutcomesCycle) {
+  const std::string text = std::string(kHead) +
+                           "master retries=2\ndpv1 work=1440\nstartup\n"
+                           "dpv1_read slot=0 index=1 length=4\n"
+                           "expect dpv1 5E,00,01,04,11,22,33,44 after 3652\n"
+                           "c2_read slot=0 index=1 length=4\n"
+                           "expect dpv1 no_connection after 0\nexpect dpv1 polls 0\n"
+                           "write Mode_Reg1_S 0x04\n"
+                           "dpv1_read slot=0 index=1 length=4\n"
+                           "expect dpv1 no_answer after 3444\n";
+  std::vector<std::string> walk;
+  EXPECT_EQ(failed_expects(text, &walk), std::vector<std::string>{});
+  // "[cycle N] line L: TEXT" where the step begins, "[cycle N] NAME: OUTCOME" at its outcome.
+  const auto cycle_of = [&](std::string_view part) -> std::uint64_t {
+    const auto it = std::find_if(walk.begin(), walk.end(), [&](const std::string& l) {
+      return l.find(part) != std::string::npos;
+    });
+    if (it == walk.end()) {
+      ADD_FAILURE() << "no walk line with " << part;
+      return 0;
+    }
+    return std::stoull(it->substr(7, 10));
+  };
+  EXPECT_EQ(cycle_of("] dpv1_read: 5E 00 01 04 11 22 33 44 after 2 polls") -
+                cycle_of("line 8: dpv1_read"),
+            3652u);
+  EXPECT_EQ(cycle_of("] c2_read: no connection, nothing sent") - cycle_of("line 10: c2_read"), 0u);
+  EXPECT_EQ(cycle_of("] dpv1_read: no answer after 0 polls") - cycle_of("line 14: dpv1_read"),
+            3444u);
+}
+
+// DO4 (a firmware) with the master's `dpv1 c1_timeout=1` (audit a20, finding 2: refused before):
+// the master gives up at the first SC at or past 10 ms = 480 000 clocks from the request's start.
+// DO4's interrupts are masked (Int_Mask_Reg FFFFh), so its ISR never takes the request and every
+// poll gets SC. At 1.5 Mbaud (T = 32, a character 352 clocks, TSYN 1056, an answer 11 T = 352
+// after the request, docs/timing.md): the Read request (15 characters) ends at t0+5280, its SC
+// ends at t0+5984; poll k (11 characters, 3872) starts 1056 after the last SC and its SC ends
+// 3872+704 after its start: at t0+5984+5632k. The first at or past 480 000: k = 85 (t0+484 704;
+// k = 84 ends at t0+479 072). The slave and the first Data_Exchange (after which DO4 opens SAP
+// 51 to its master) as traces/do4_dpv1_vpc3plus.scn has them.
+TEST(Dpv1Scenario, Do4ResponseTimeOut) {
+  const std::string text =
+      "profile vpc3plus\nbaud 1500000\nfirmware DO4\n"
+      "slave address=5 wd=2,5 user_prm=C0,20,00,01,09,00\ndpv1 c1_timeout=1\n"
+      "startup\nexpect dp_state Data_Exchange\nexchange outputs=05,01\n"
+      "write Int_Mask_Reg 0xFFFF\n"
+      "dpv1_read slot=0 index=1 length=2\nexpect dpv1 timeout after 484704\n"
+      "expect dpv1 polls 85\n";
+  EXPECT_EQ(failed_expects(text), std::vector<std::string>{});
+}
+
 // Bad DPV1 lines are parse errors with their line (docs/scenario-format.md, "DPV1"): nothing
 // runs.
 TEST(Dpv1Scenario, ParseErrorsNameTheLine) {
   const std::pair<const char*, const char*> cases[] = {
       {"profile spc3\nrecord slot=0 index=1 data=01\n",
-       "t.scn:2: 'record' needs 'profile vpc3plus' before it: only the VPC3+ has DPV1"},
+       "t.scn:2: 'record' needs 'profile vpc3plus' before it: DPV1 is modelled on the VPC3+ only "
+       "(the DPC31's is not modelled; the SPC3 has none)"},
+      // docs/dpv1.md: the DPC31 has DPV1 in silicon, its interface not modelled.
+      {"profile dpc31\ndpv1_read slot=0 index=1 length=1\n",
+       "t.scn:2: 'dpv1_read' needs 'profile vpc3plus': DPV1 is modelled on the VPC3+ only (the "
+       "DPC31's is not modelled; the SPC3 has none)"},
+      // The built-in user side's lines with a firmware (it answers DPV1 itself); the master's
+      // c1_timeout= and c2_ssap= are taken (Dpv1Scenario.Do4ResponseTimeOut).
+      {"profile vpc3plus\nfirmware DO4\nrecord slot=0 index=1 data=01\n",
+       "t.scn:3: 'record' is the built-in user side's; a firmware answers DPV1 itself (the "
+       "master's "
+       "'dpv1 c1_timeout=' and 'c2_ssap=' are allowed)"},
+      {"profile vpc3plus\nfirmware DO4\ndpv1 c1_timeout=1 work=10\n",
+       "t.scn:3: 'dpv1 work=' is the built-in user side's; a firmware answers DPV1 itself (the "
+       "master's 'dpv1 c1_timeout=' and 'c2_ssap=' are allowed)"},
+      {"profile vpc3plus\ndpv1 work=10\nfirmware DO4\nstartup\n",
+       "t.scn:2: 'dpv1 work=' is the built-in user side's; a firmware answers DPV1 itself (the "
+       "master's 'dpv1 c1_timeout=' and 'c2_ssap=' are allowed)"},
       {"profile vpc3plus\nstartup\ndpv1_read slot=0 index=1\n",
        "t.scn:3: dpv1_read needs slot=N index=N length=N"},
       {"profile vpc3plus\nstartup\nexpect dpv1 error 80,B0\n",

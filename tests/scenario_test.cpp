@@ -1043,9 +1043,11 @@ TEST(ScenarioParse, WhatWouldBeSilentlyOverriddenIsRefused) {
       // A DPV1 check on a chip without DPV1 is refused as the DPV1 actions are, not a run whose
       // check cannot pass.
       {"profile spc3\nstartup\nexpect dpv1 sc\n",
-       "t.scn:3: 'expect dpv1' needs 'profile vpc3plus': only the VPC3+ has DPV1"},
+       "t.scn:3: 'expect dpv1' needs 'profile vpc3plus': DPV1 is modelled on the VPC3+ only (the "
+       "DPC31's is not modelled; the SPC3 has none)"},
       {"profile dpc31\nstartup\nexpect dpv1 polls 1\n",
-       "t.scn:3: 'expect dpv1' needs 'profile vpc3plus': only the VPC3+ has DPV1"},
+       "t.scn:3: 'expect dpv1' needs 'profile vpc3plus': DPV1 is modelled on the VPC3+ only (the "
+       "DPC31's is not modelled; the SPC3 has none)"},
   };
   for (const auto& [text, line] : refused) EXPECT_EQ(parse_error(text), line) << text;
   for (const std::string ok :

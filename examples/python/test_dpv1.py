@@ -6,6 +6,8 @@ responses") give it; the cycles are derived by hand in traces/do4_dpv1_vpc3plus.
 slave, master and firmware: one call is one call, so the Read starts where the scenario's does).
 """
 
+import pytest
+
 import dpc31
 
 T = 32  # clocks per bit at 1.5 Mbaud (docs/timing.md, "Serial line")
@@ -73,7 +75,52 @@ def test_class2_connection():
     assert abort.outcome == dpc31.Dpv1Outcome.positive and abort.du == b""
     assert abort.last.encode() == b"\xE5"  # SC
     assert master.c2_sap is None
-    assert master.c2_read(0, 1, 2).outcome == dpc31.Dpv1Outcome.refused  # nothing sent
+    # Without a connection: no_connection at the cycle asked, nothing sent (docs/dpv1.md).
+    sent, now = master.counters.requests, master.chip.cycle
+    none = master.c2_read(0, 1, 2)
+    assert none.outcome == dpc31.Dpv1Outcome.no_connection
+    assert (none.start, none.end, none.polls, none.last) == (now, now, 0, None)
+    assert (master.counters.requests, master.chip.cycle) == (sent, now)
+
+
+def test_the_rules_and_the_slave_as_attributes():
+    """`master.dpv1_rules.FIELD = v` reaches the master's next service (audit a20, finding 1:
+    the getter returned a copy and the write was lost). At 12 Mbaud (T = 4) with a user side that
+    works 1 s, C1_Response_Timeout 1 = 10 ms = 480 000 clocks (docs/dpv1.md): the Read's SC ends
+    at start + 748 (15 characters of 44 clocks, then SC 11 T later), poll n's SC 704 n later
+    (TSYN 132, 11 characters, 11 T, SC); the master gives up at the first at or past 480 000:
+    n = 681, as Dpv1Master.ResponseTimeOut."""
+    chip = dpc31.Chip("vpc3plus")
+    master = dpc31.Master(chip, address=2, baud=12_000_000,
+                          slave=dpc31.SlaveConfig(address=5, user_prm=b"\xC0\x00\x00"))
+    master.run_responder(records=[(0, 1, b"\x11\x22\x33\x44")], work_cycles=48_000_000)
+    assert master.startup()
+    master.dpv1_rules.c1_response_timeout = 1
+    assert master.dpv1_rules.c1_response_timeout == 1
+    a = master.dpv1_read(0, 1, 4)
+    assert (a.outcome, a.polls) == (dpc31.Dpv1Outcome.timeout, 681)
+    assert a.end - a.start == 748 + 704 * 681
+    # The class-2 master's SAP: every MSAC_C2 request from it, the slave's answers to it (a
+    # user side that answers at once: the one above still works on the Read).
+    chip = dpc31.Chip("vpc3plus")
+    master = dpc31.Master(chip, address=2, baud=12_000_000,
+                          slave=dpc31.SlaveConfig(address=5, user_prm=b"\xC0\x00\x00"))
+    master.run_responder(records=[(0, 1, b"\x11\x22\x33\x44")])
+    assert master.startup()
+    master.dpv1_rules.c2_ssap = 20
+    first = len(master.history)
+    init = master.c2_initiate(send_timeout=100)
+    assert init.last.dsap == 20
+    assert {e.request.ssap for e in master.history[first:]} == {20}
+    # The slave is a copy (the master is made anew when a user side starts): a field set on it
+    # would change nothing, so it raises; reading it works.
+    assert master.slave.user_prm == b"\xC0\x00\x00"
+    assert isinstance(master.slave, dpc31.SlaveConfig)
+    with pytest.raises(AttributeError) as e:
+        master.slave.user_prm = b"\x00\x00\x00"
+    assert str(e.value) == ("Master.slave is a read-only copy: setting its user_prm would change "
+                            "nothing the master sends; give the slave as "
+                            "Master(slave=SlaveConfig(...))")
 
 
 def test_the_built_in_user_side_serves_the_records_a_scenario_gives_it():

@@ -199,6 +199,8 @@ class SlaveConfig:
     user_prm: bytes
     def __init__(self, **kwargs: object) -> None: ...
 
+class MasterSlave(SlaveConfig): ...
+
 class Firmware:
     @property
     def name(self) -> str: ...
@@ -263,6 +265,7 @@ class Dpv1Outcome(enum.Enum):
     no_answer = 3
     timeout = 4
     malformed = 5
+    no_connection = 6
 
 class Dpv1Rules:
     retries: int
@@ -297,7 +300,7 @@ class Master:
     @property
     def chip(self) -> Chip: ...
     @property
-    def slave(self) -> SlaveConfig: ...
+    def slave(self) -> MasterSlave: ...
     @property
     def bit_cycles(self) -> int: ...
     @property
