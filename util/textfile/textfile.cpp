@@ -37,7 +37,7 @@ bool anonymous_pipe(const struct stat& st) {
 bool read_text_file(const std::string& path, std::size_t max_bytes, std::string_view what,
                     std::string& text, std::string& error) {
   // A named FIFO or a device is refused unopened: opening a FIFO waits for a writer (the run
-  // hung), a device is no file of ours. A pipe is read as a file is.
+  // hung), a device is no input file (/dev/zero fills the cap). A pipe is read as a file is.
   struct stat st {};
   if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode) &&
       !anonymous_pipe(st)) {
