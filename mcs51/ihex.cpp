@@ -29,14 +29,28 @@ bool parse_ihex(std::string_view text, HexImage& image, std::string& error) {
     };
     if (ended) return fail("record after the end-of-file record");
     if (line[0] != ':') return fail("a record starts with ':'");
-    if (line.size() < 11 || (line.size() - 1) % 2 != 0) return fail("short record");
+    // ':', the byte count, the address (4), the type (2), 2 a data byte, the checksum (2).
+    if (line.size() < 11) return fail("short record");
+    const int count_hi = hex_digit(line[1]), count_lo = hex_digit(line[2]);
+    if (count_hi < 0 || count_lo < 0) return fail("not a hex digit");
+    const std::size_t count = static_cast<std::size_t>(count_hi << 4 | count_lo);
+    const std::size_t length = 11 + 2 * count;
+    if (line.size() < length) {
+      return fail(
+          fmt::format("short record: byte count {:02X}h needs {} characters, the record has {}",
+                      count, length, line.size()));
+    }
+    if (line.size() > length) {
+      const std::size_t extra = line.size() - length;
+      return fail(fmt::format("{} character{} after the checksum (byte count {:02X}h)", extra,
+                              extra == 1 ? "" : "s", count));
+    }
     std::vector<std::uint8_t> rec;
     for (std::size_t i = 1; i < line.size(); i += 2) {
       int hi = hex_digit(line[i]), lo = hex_digit(line[i + 1]);
       if (hi < 0 || lo < 0) return fail("not a hex digit");
       rec.push_back(static_cast<std::uint8_t>(hi << 4 | lo));
     }
-    if (rec.size() != rec[0] + 5u) return fail("length does not match the byte count");
     std::uint8_t sum = 0;
     for (std::uint8_t b : rec) sum = static_cast<std::uint8_t>(sum + b);
     if (sum != 0) return fail("checksum");
@@ -55,6 +69,9 @@ bool parse_ihex(std::string_view text, HexImage& image, std::string& error) {
         image.size += rec[0];
         break;
       case 0x01:
+        if (rec[0] != 0) {
+          return fail(fmt::format("an end-of-file record has byte count 00h, not {:02X}h", rec[0]));
+        }
         // An image that gives no byte runs nothing but the FFh of empty program memory.
         if (image.size == 0)
           return fail("no data bytes before the end-of-file record: an empty image");

@@ -167,27 +167,36 @@ Library load_copy(const Loaded& l) {
   return open_library(copy, l.path);
 }
 
+// A directory in its place (an empty name is ./), a FIFO or a device is no library, whoever could
+// change it.
+void not_a_library(const std::string& path, const struct stat& st) {
+  if (S_ISREG(st.st_mode)) return;
+  throw FirmwareError("cannot load firmware plug-in: " + path +
+                      (S_ISDIR(st.st_mode) ? ": is a directory" : ": not a regular file"));
+}
+
 const dpc31_firmware& load_plugin(const std::string& spec) {
   const std::string path = file_path(spec);
   // Checked and loaded through one descriptor: what was checked is what runs, whatever is renamed
   // or swapped in at the path meanwhile (docs/security.md, "Code a command runs").
+  // A FIFO or a device is refused unopened: opening a FIFO waits for a writer (the run hung). The
+  // descriptor's own check below still judges what was opened.
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0) not_a_library(path, st);
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) {
     throw FirmwareError("cannot load firmware plug-in: " + path + ": " +
                         std::error_code(errno, std::generic_category()).message());
   }
-  struct stat st {};
   if (::fstat(fd, &st) != 0) {
     const int e = errno;
     ::close(fd);
     throw FirmwareError("cannot load firmware plug-in: " + path + ": " +
                         std::error_code(e, std::generic_category()).message());
   }
-  // A directory in its place (an empty name is ./) is no library, whoever could change it.
   if (!S_ISREG(st.st_mode)) {
     ::close(fd);
-    throw FirmwareError("cannot load firmware plug-in: " + path +
-                        (S_ISDIR(st.st_mode) ? ": is a directory" : ": not a regular file"));
+    not_a_library(path, st);
   }
   const std::string untrusted = untrusted_code(fd, path);
   if (!untrusted.empty()) {

@@ -117,6 +117,34 @@ TEST_F(BadInput, AnFstFromAPipeIsBoundedInMemory) {
   }
 }
 
+// A --map is read as the other text inputs are, up to its cap of 16 MiB (docs/security.md,
+// "Inputs: sizes"): `--map /dev/zero` grew without bound, and under a memory limit the read
+// failed and the map was taken as read so far, silently (exit 0, "same" where the map's
+// renames made "different"). A pipe of exactly the cap is read whole; one byte more is refused;
+// a read that fails (/proc/self/mem at address 0: EIO) is an error at its line.
+TEST_F(BadInput, AWavediffMapIsBoundedAndItsReadChecked) {
+  file("ok.vcd", vcd_deep_scopes(2));
+  const std::string out = (root_ / "io" / "out").string();
+  const std::string err = (root_ / "io" / "err").string();
+  const std::string cd = "cd " + (root_ / "work").string() + " && ";
+  auto wavediff = [&](const std::string& feed, const std::string& map) {
+    const testutil::CommandResult c = testutil::run_command(
+        cd + feed + "(" +
+        bounded(kCli + " wavediff ok.vcd ok.vcd --map " + map + " >" + out + " 2>" + err) + ")");
+    return Outcome{c.rc, slurp(out), slurp(err)};
+  };
+  expect_bad(wavediff("", "/dev/zero"),
+             "/dev/zero:0: too large for a wavediff map (more than 16777216 bytes)", "/dev/zero");
+  const std::uint64_t cap = std::uint64_t{16} << 20;
+  const std::string comments = "yes '# a comment' | head -c ";
+  const Outcome whole = wavediff(comments + std::to_string(cap) + " | ", "/dev/stdin");
+  EXPECT_EQ(whole.rc, 0) << whole.err;
+  expect_bad(wavediff(comments + std::to_string(cap + 1) + " | ", "/dev/stdin"),
+             "/dev/stdin:0: too large for a wavediff map (more than 16777216 bytes)", "cap + 1");
+  expect_bad(wavediff("", "/proc/self/mem"), "/proc/self/mem:1: cannot read the file",
+             "a read that fails");
+}
+
 // The findings, as reproduced: a shard's summary with 400 KB of nested arrays in a result made
 // `cosim merge` crash (SIGSEGV, the recursion of comparing and printing), with 40 KB it printed
 // 800 MB. JSON deeper than 16 levels is refused while it is parsed, nothing printed.

@@ -929,9 +929,37 @@ TEST_F(BadWaves, VcdFiles) {
       "cut in the last time stamp");
   file("garbage.vcd",
        "\x7f"
-       "ELF\x01\x02\x03\n");
-  // The reader splits words at control characters; the one quoted is shown escaped.
+       "ELF\n");
+  // A token quoted is shown escaped.
   expect_refused("garbage.vcd", "garbage.vcd:1: unexpected '\\x7FELF' in the header", "garbage");
+  // Only white space separates tokens (IEEE 1364-2005 18.2, 3.2: blanks, tabs, newlines, form
+  // feeds; and CR): a control byte is a damaged or binary file, not a blank (a NUL-damaged file
+  // compared "same", a NUL inside a time gave "time goes backwards").
+  file("binary.vcd",
+       "\x7f"
+       "ELF\x01\x02\x03\n");
+  expect_refused("binary.vcd", "binary.vcd:1: a control byte \\x01: not a text file", "binary");
+  const std::size_t body = vcd_.find("\n#", vcd_.find("$enddefinitions"));
+  std::size_t time = body + 1;
+  while (vcd_.find('\n', time) < time + 4) time = vcd_.find("\n#", time) + 1;  // 3 digits at least
+  const std::size_t time_end = vcd_.find('\n', time);
+  const std::string time_line = std::to_string(
+      std::count(vcd_.begin(), vcd_.begin() + static_cast<std::ptrdiff_t>(time), '\n') + 1);
+  file("nul_line.vcd", vcd_.substr(0, time_end) + std::string(4, '\0') + vcd_.substr(time_end));
+  expect_refused("nul_line.vcd", "nul_line.vcd:" + time_line + ": a NUL byte: not a text file",
+                 "NUL bytes after a time");
+  file("nul_time.vcd", vcd_.substr(0, time + 2) + '\0' + vcd_.substr(time + 2));
+  expect_refused("nul_time.vcd", "nul_time.vcd:" + time_line + ": a NUL byte: not a text file",
+                 "a NUL inside a time");
+  file("esc.vcd", vcd_.substr(0, time_end) + "\x1b" + vcd_.substr(time_end));
+  expect_refused("esc.vcd", "esc.vcd:" + time_line + ": a control byte \\x1B: not a text file",
+                 "ESC");
+  file("vt.vcd", vcd_.substr(0, time_end) + "\v" + vcd_.substr(time_end));
+  expect_refused("vt.vcd", "vt.vcd:" + time_line + ": a control byte \\x0B: not a text file",
+                 "vertical tab");
+  // A form feed and CR are white space: the same waveform.
+  file("ff.vcd", vcd_.substr(0, time_end) + "\f\r" + vcd_.substr(time_end));
+  EXPECT_EQ(dpc31("wavediff good.vcd ff.vcd").rc, 0);
   // A token is quoted as the other parsers quote one (util/textfile's shown()): its first 40
   // characters and "..." (a 20 MB token was a 20 MB line).
   const std::string huge(std::size_t{1} << 21, 'q');
@@ -1017,11 +1045,30 @@ TEST_F(BadWaves, MapFileOptionsAndOutputs) {
   expect_refused("good.vcd --map missing.map",
                  "missing.map:0: cannot open: No such file or directory", "map missing");
   expect_refused("good.vcd --map dir", "dir:0: cannot open: is a directory", "map directory");
-  const std::string huge(std::size_t{1} << 21, 'n');
-  file("long.map", huge + " = a\n" + huge + " = b\n");
+  const std::string name(100, 'n');
+  file("long.map", name + " = a\n" + name + " = b\n");
   expect_refused("good.vcd --map long.map",
                  "long.map:2: '" + std::string(40, 'n') + "...' is already mapped on line 1",
                  "map: a long name twice");
+  // A line holds two names (a full name has at most 16 KiB): 64 KiB at most.
+  file("edge.map", std::string(65536, '#') + "\n");
+  EXPECT_EQ(dpc31("wavediff good.vcd good.vcd --map edge.map").rc, 0);
+  file("longline.map", "# renames\n#" + std::string(65536, ' ') + "\n");
+  expect_refused("good.vcd --map longline.map", "longline.map:2: line longer than 65536 bytes",
+                 "map: a line over the bound");
+  // A control byte in a line: no signal name holds one (a NUL cut the name where it was printed,
+  // and a self-comparison said "different").
+  file("nul.map", std::string("dpc31.pins.rxd\0junk = dpc31.pins.rxd\n", 37));
+  expect_refused("good.vcd --map nul.map", "nul.map:1: a NUL byte: not a text file", "map NUL");
+  file("esc.map", "# colours\nx = y\x1b[31m\n");
+  expect_refused("good.vcd --map esc.map", "esc.map:2: a control byte \\x1B: not a text file",
+                 "map ESC");
+  // A name quoted in a warning is shown as in an error: other bytes as \xHH.
+  file("high.map", "x\xff = y\xfe\n");
+  const Outcome high = dpc31("wavediff good.vcd good.vcd --map high.map");
+  EXPECT_EQ(high.err,
+            "high.map:1: warning: no signal 'x\\xFF' in A\n"
+            "high.map:1: warning: no signal 'y\\xFE' in B\n");
   expect_refused("good.vcd --start 5",
                  "dpc31 wavediff: --start: '5' is not a time (a number and s, ms, us, ns, ps or "
                  "fs; e.g. 100ns)",
@@ -1252,6 +1299,33 @@ TEST_F(BadInput, FirmwarePlugins) {
   const Outcome ok = dpc31("run sub/do4.scn --quiet");
   EXPECT_EQ(ok.rc, 0) << ok.err;
   EXPECT_EQ(ok.err, "");
+}
+
+// A FIFO is neither a plug-in nor an Intel HEX image: opening one waits for a writer (run, soak,
+// bridge, demo and serve hung there for ever). Refused unopened, in the words of the FILE.map
+// beside an image (docs/decisions.md); each command under a timeout, so that a hang fails the
+// test instead of stalling it.
+TEST_F(BadInput, AFifoIsNoPluginAndNoImage) {
+  ASSERT_EQ(::mkfifo(path("fw.so").c_str(), 0600), 0);
+  ASSERT_EQ(::mkfifo(path("fw.ihx").c_str(), 0600), 0);
+  file("plugin.scn", "firmware ./fw.so\nstartup\n");
+  file("image.scn", "cpu 80c32 firmware fw.ihx\nstartup\n");
+  const std::string plugin = "cannot load firmware plug-in: ./fw.so: not a regular file";
+  const std::string image = "fw.ihx: not a regular file, not an Intel HEX file";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"run plugin.scn --quiet",
+       "plugin.scn:1: cannot load firmware plug-in: " + path("fw.so") + ": not a regular file"},
+      {"soak --firmware ./fw.so --cycles 1000", "dpc31 soak: " + plugin},
+      {"bridge --tcp 0 --firmware ./fw.so", "dpc31 bridge: " + plugin},
+      {"demo --firmware ./fw.so --out-dir d", "dpc31 demo: " + plugin},
+      {"run image.scn --quiet", path("fw.ihx") + ": not a regular file, not an Intel HEX file"},
+      {"serve --tcp 0 --cpu 80c32 --firmware fw.ihx", "dpc31 serve: " + image},
+  };
+  const auto before = listing();
+  for (const auto& [args, line] : cases) {
+    expect_bad(dpc31(args, "timeout 20"), line, args);  // 124: the timeout ended a hang
+    EXPECT_EQ(listing(), before) << args;
+  }
 }
 
 // A firmware that misuses the C HAL (a NULL buffer) is a firmware fault at every door, as a reset

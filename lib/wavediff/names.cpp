@@ -1,7 +1,9 @@
 // Signal names to pairs: the common scope stripped (--strip), the map file (--map), vectors split
 // into bits where the other side has single bits, and the filters' glob (the comparison itself:
 // wavediff.cpp).
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -64,32 +66,61 @@ std::vector<std::string> prefixes(const std::vector<std::string>& scopes) {
 }
 
 std::vector<MapEntry> read_map(const std::string& path) {
-  // An ifstream opens a directory and reads nothing from it: that would be an empty map.
+  // Read whole up to a cap, as the other text inputs are (docs/security.md, "Inputs: sizes"): a
+  // map without a newline (/dev/zero) grew without bound, and a read that failed ended the map
+  // there unnoticed.
+  constexpr std::size_t kMaxMapBytes = std::size_t{16} << 20;
+  constexpr std::size_t kMaxLineBytes = std::size_t{64} << 10;
+  // An ifstream opened a directory and read nothing from it: that would be an empty map.
   if (std::filesystem::is_directory(path)) fail(path, 0, "cannot open: is a directory");
-  std::ifstream f(path);
-  if (!f) fail(path, 0, fmt::format("cannot open: {}", std::strerror(errno)));
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) fail(path, 0, fmt::format("cannot open: {}", std::strerror(errno)));
+  std::string text;
+  std::string why;
+  const bool read = read_text_fd(fd, kMaxMapBytes, "wavediff map", text, why);
+  ::close(fd);
+  if (!read) {
+    // A failed read names the line it stopped in; the cap is the file's.
+    const auto at = static_cast<std::uint64_t>(std::count(text.begin(), text.end(), '\n')) + 1;
+    fail(path, text.size() > kMaxMapBytes ? 0 : at, why);
+  }
   std::vector<MapEntry> out;
   std::unordered_map<std::string, std::uint64_t> seen_a;
   std::unordered_map<std::string, std::uint64_t> seen_b;
-  std::string line;
   std::uint64_t n = 0;
-  auto trim = [](std::string s) {
+  auto trim = [](std::string_view s) {
     const auto b = s.find_first_not_of(" \t\r");
-    if (b == std::string::npos) return std::string();
+    if (b == std::string_view::npos) return std::string();
     const auto e = s.find_last_not_of(" \t\r");
-    return s.substr(b, e - b + 1);
+    return std::string(s.substr(b, e - b + 1));
   };
-  while (std::getline(f, line)) {
+  for (std::string_view rest = text; !rest.empty();) {
+    const auto nl = rest.find('\n');
+    std::string_view line = rest.substr(0, nl);
+    rest.remove_prefix(nl == std::string_view::npos ? rest.size() : nl + 1);
     ++n;
-    const auto hash = line.find('#');
-    if (hash != std::string::npos) line.resize(hash);
-    line = trim(line);
-    if (line.empty()) continue;
-    const auto eq = line.find('=');
-    if (eq == std::string::npos || line.find('=', eq + 1) != std::string::npos) {
+    if (line.size() > kMaxLineBytes) {
+      fail(path, n, fmt::format("line longer than {} bytes", kMaxLineBytes));
+    }
+    // A NUL cut the name where it was printed; no signal name holds a control byte.
+    if (const auto bad = std::find_if(line.begin(), line.end(),
+                                      [](char c) {
+                                        const auto u = static_cast<unsigned char>(c);
+                                        return (u < 0x20 && c != '\t' && c != '\r') || u == 0x7F;
+                                      });
+        bad != line.end()) {
+      fail(path, n, not_text(static_cast<unsigned char>(*bad)));
+    }
+    if (const auto hash = line.find('#'); hash != std::string_view::npos)
+      line = line.substr(0, hash);
+    const std::string entry = trim(line);
+    if (entry.empty()) continue;
+    const auto eq = entry.find('=');
+    if (eq == std::string::npos || entry.find('=', eq + 1) != std::string::npos) {
       fail(path, n, "expected 'nameA = nameB'");
     }
-    MapEntry e{trim(line.substr(0, eq)), trim(line.substr(eq + 1)), n};
+    const std::string_view whole = entry;
+    MapEntry e{trim(whole.substr(0, eq)), trim(whole.substr(eq + 1)), n};
     auto blank = [](const std::string& s) {
       return s.empty() || s.find_first_of(" \t") != std::string::npos;
     };

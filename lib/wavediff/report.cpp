@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "outfile.hpp"
+#include "textfile.hpp"
 #include "wavediff.hpp"
 
 namespace dpc31::wavediff {
@@ -131,13 +132,13 @@ bool parse_duration(std::string_view text, std::uint64_t& fs, std::string& error
       dot == std::string_view::npos ? std::string_view() : num.substr(dot + 1);
   if (u == nullptr || ip.empty() || (dot != std::string_view::npos && fp.empty()) ||
       fp.find('.') != std::string_view::npos) {
-    error =
-        fmt::format("'{}' is not a time (a number and s, ms, us, ns, ps or fs; e.g. 100ns)", text);
+    error = fmt::format("'{}' is not a time (a number and s, ms, us, ns, ps or fs; e.g. 100ns)",
+                        shown(text));
     return false;
   }
   if (static_cast<int>(fp.size()) > u->pow &&
       fp.find_first_not_of('0', static_cast<std::size_t>(u->pow)) != std::string_view::npos) {
-    error = fmt::format("'{}' is finer than 1 fs", text);
+    error = fmt::format("'{}' is finer than 1 fs", shown(text));
     return false;
   }
   U128 v = 0;
@@ -151,7 +152,7 @@ bool parse_duration(std::string_view text, std::uint64_t& fs, std::string& error
   }
   v += f;
   if (v > UINT64_MAX || ip.size() > 30) {
-    error = fmt::format("'{}' is too large (at most about 18000 s)", text);
+    error = fmt::format("'{}' is too large (at most about 18000 s)", shown(text));
     return false;
   }
   fs = static_cast<std::uint64_t>(v);
@@ -165,7 +166,7 @@ bool parse_bound(std::string_view text, Bound& out, std::string& error) {
     const char* e = text.data() + text.size();
     auto r = std::from_chars(b, e, n);
     if (b == e || r.ec != std::errc() || r.ptr != e) {
-      error = fmt::format("'{}' is not a cycle number (c123)", text);
+      error = fmt::format("'{}' is not a cycle number (c123)", shown(text));
       return false;
     }
     out = {true, n};

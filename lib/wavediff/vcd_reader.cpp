@@ -143,6 +143,13 @@ unsigned first_blank(std::uint64_t x) {
   const std::uint64_t m = (x - kOnes * 0x21) & ~x & (kOnes * 0x80);
   return m == 0 ? 8 : static_cast<unsigned>(std::countr_zero(m)) / 8;
 }
+// White space between VCD tokens (IEEE 1364-2005 18.2: tokens are separated by white space, which
+// 3.2 names as blanks, tabs, newlines and form feeds) and CR (Windows line ends). Every other byte
+// at or below ' ' (NUL, ESC, VT) marks a damaged or binary file: it split tokens as a blank would.
+// For c <= ' ' only: one shift on the hot path.
+constexpr std::uint64_t kBlanks =
+    1ULL << ' ' | 1ULL << '\n' | 1ULL << '\t' | 1ULL << '\r' | 1ULL << '\f';
+constexpr bool vcd_blank(unsigned char c) { return ((kBlanks >> c) & 1U) != 0; }
 // All eight bytes are '0' or '1' (0x30, 0x31).
 bool all_binary(std::uint64_t x) { return (x | kOnes) == kOnes * 0x31; }
 
@@ -225,6 +232,11 @@ class VcdReader final : public WaveReader {
     fail(path_, line, cut_ ? "truncated: the last line has no end of line" : what);
   }
 
+  // Out of the token loops' way.
+  [[noreturn, gnu::cold, gnu::noinline]] void bad_byte(char c, std::uint64_t line) const {
+    error(line, not_text(static_cast<unsigned char>(c)));
+  }
+
   // Reads more input after keeping buf_[keep_from, end_), or from the start of the current step
   // while that is at most half the buffer (follow() reads it; a longer step is not followed).
   // What is kept moves to the start: pos_, keep_from and step_begin_ move down with it. Called
@@ -282,6 +294,9 @@ class VcdReader final : public WaveReader {
       const char* const e = b + end_;
       std::uint64_t lines = 0;
       while (p < e && static_cast<unsigned char>(*p) <= ' ') {
+        if (!vcd_blank(static_cast<unsigned char>(*p))) [[unlikely]] {
+          bad_byte(*p, line_ + lines);
+        }
         lines += *p == '\n' ? 1 : 0;
         ++p;
       }
@@ -305,7 +320,13 @@ class VcdReader final : public WaveReader {
       while (p<e&& static_cast<unsigned char>(*p)> ' ') ++p;
     token_end:
       pos_ = static_cast<std::size_t>(p - b);
-      if (p < e) break;
+      if (p < e) {
+        // A control byte inside a token ("#40\x0083333") is the file's error, before the piece
+        // before it is taken for a token.
+        if (!vcd_blank(static_cast<unsigned char>(*p))) [[unlikely]]
+          bad_byte(*p, line_);
+        break;
+      }
       if (!refill(start)) {
         cut_ = true;
         break;

@@ -24,6 +24,7 @@
 
 #include "engine.hpp"
 #include "outfile.hpp"
+#include "textfile.hpp"
 
 namespace dpc31::wavediff {
 
@@ -91,7 +92,7 @@ std::uint32_t Engine::find_clock(const Side& s, const std::string& name) const {
       if (n == name) return i;
     }
   }
-  fail(s.r->path(), 0, fmt::format("no clock signal '{}'", name));
+  fail(s.r->path(), 0, fmt::format("no clock signal '{}'", shown(name)));
 }
 
 void Engine::setup(Report& rep) {
@@ -143,7 +144,7 @@ void Engine::setup(Report& rep) {
     for (const Var& v : s.r->vars()) {
       if (strip_name(v.name, p) != v.name) return;
     }
-    fail(s.r->path(), 0, fmt::format("no signal under scope '{}'", p));
+    fail(s.r->path(), 0, fmt::format("no signal under scope '{}'", shown(p)));
   };
   check_strip(A, sa);
   check_strip(B, sb);
@@ -182,10 +183,12 @@ void Engine::setup(Report& rep) {
     Warnings not_b(rep.warnings, o_.map_file, "names of the map not in B");
     for (MapEntry& e : map) {
       if (an.count(e.a) == 0) {
-        not_a.add(fmt::format("{}:{}: warning: no signal '{}' in A", o_.map_file, e.line, e.a));
+        not_a.add(
+            fmt::format("{}:{}: warning: no signal '{}' in A", o_.map_file, e.line, shown(e.a)));
       }
       if (!e.used_b) {
-        not_b.add(fmt::format("{}:{}: warning: no signal '{}' in B", o_.map_file, e.line, e.b));
+        not_b.add(
+            fmt::format("{}:{}: warning: no signal '{}' in B", o_.map_file, e.line, shown(e.b)));
       }
     }
     not_a.finish();
@@ -197,7 +200,8 @@ void Engine::setup(Report& rep) {
     clock_b = find_clock(B, o_.clock_b.empty() ? A.sigs[clock_a].name : o_.clock_b);
     for (auto [s, c] : {std::pair{&A, clock_a}, std::pair{&B, clock_b}}) {
       if (s->sigs[c].real || s->sigs[c].width != 1) {
-        fail(s->r->path(), 0, fmt::format("clock '{}' is not a 1-bit signal", s->sigs[c].name));
+        fail(s->r->path(), 0,
+             fmt::format("clock '{}' is not a 1-bit signal", shown(s->sigs[c].name)));
       }
     }
     rep.clock_a = A.sigs[clock_a].name;

@@ -29,10 +29,23 @@ TEST(Mcs51Hex, BadRecordsNameTheirLine) {
   const std::pair<const char*, const char*> bad[] = {
       {":0C000000741275F003A47830F6A380FEA4\n", "line 1: checksum"},
       {"\n0C000000\n", "line 2: a record starts with ':'"},
-      {":0200000074\n", "line 1: length does not match the byte count"},
-      {":02000000741\n", "line 1: short record"},
-      {":0100000G00\n", "line 1: not a hex digit"},
-      {":03000000741275\n", "line 1: length does not match the byte count"},
+      // A record is ':', the byte count (2 digits), the address (4), the type (2), 2 digits a
+      // data byte and the checksum (2): 11 + 2 x count characters.
+      {":0200000074\n",
+       "line 1: short record: byte count 02h needs 15 characters, the record has 11"},
+      {":02000000741\n",
+       "line 1: short record: byte count 02h needs 15 characters, the record has 12"},
+      {":0100000G0000\n", "line 1: not a hex digit"},
+      {":0G00000000\n", "line 1: not a hex digit"},
+      {":03000000741275\n",
+       "line 1: short record: byte count 03h needs 17 characters, the record has 15"},
+      // Longer than its byte count: a blank after the checksum is no short record.
+      {":0100000000FF \n:00000001FF\n", "line 1: 1 character after the checksum (byte count 01h)"},
+      {":0100000000FF00\n:00000001FF\n",
+       "line 1: 2 characters after the checksum (byte count 01h)"},
+      // The end-of-file record (type 01) has byte count 00 by the specification: no data byte.
+      {":0100000000FF\n:0100000100FE\n",
+       "line 2: an end-of-file record has byte count 00h, not 01h"},
       {":02FFFF00000000\n:00000001FF\n", "line 1: data past 64 KB"},
       {":020000040001F9\n", "line 1: address above 64 KB"},
       // A segment base is x 16: 0100h would be 1000h, inside 64 KB, but it is no address.

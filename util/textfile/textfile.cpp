@@ -19,10 +19,31 @@ std::string_view article(std::string_view what) {
              : "a";
 }
 
+// A pipe (bash's <(...), `| ... /dev/stdin`) lives on the kernel's pipe file system, a named FIFO
+// in a directory: only the FIFO's open() waits for a writer.
+bool anonymous_pipe(const struct stat& st) {
+  if (!S_ISFIFO(st.st_mode)) return false;
+  int ends[2];
+  if (::pipe2(ends, O_CLOEXEC) != 0) return false;
+  struct stat ours {};
+  const bool same = ::fstat(ends[0], &ours) == 0 && ours.st_dev == st.st_dev;
+  ::close(ends[0]);
+  ::close(ends[1]);
+  return same;
+}
+
 }  // namespace
 
 bool read_text_file(const std::string& path, std::size_t max_bytes, std::string_view what,
                     std::string& text, std::string& error) {
+  // A named FIFO or a device is refused unopened: opening a FIFO waits for a writer (the run
+  // hung), a device is no input file (/dev/zero fills the cap). A pipe is read as a file is.
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode) &&
+      !anonymous_pipe(st)) {
+    error = fmt::format("not a regular file, not {} {} file", article(what), what);
+    return false;
+  }
   // Opened once (a pipe can be read only once) and read in pieces: memory follows what the file
   // holds, not the cap (a cap of 256 MiB is not allocated for /dev/null).
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
@@ -72,6 +93,11 @@ int cut_off_line(std::string_view text, std::string& error) {
   if (text.empty() || text.back() == '\n') return 0;
   error = "truncated: the last line has no end of line";
   return static_cast<int>(std::count(text.begin(), text.end(), '\n')) + 1;
+}
+
+std::string not_text(unsigned char c) {
+  return c == 0 ? "a NUL byte: not a text file"
+                : fmt::format("a control byte \\x{:02X}: not a text file", c);
 }
 
 std::string shown(std::string_view s) {

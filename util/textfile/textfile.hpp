@@ -8,7 +8,9 @@
 
 namespace dpc31 {
 
-// `what` names the kind of file in messages ("scenario", "trace"). False with `error` set.
+// `what` names the kind of file in messages ("scenario", "trace"). False with `error` set. A named
+// FIFO, a device or a socket is refused unopened ("not a regular file, not a trace file"); a pipe
+// (`<(...)`, `/dev/stdin` from `|`) is read.
 bool read_text_file(const std::string& path, std::size_t max_bytes, std::string_view what,
                     std::string& text, std::string& error);
 // The same from a descriptor the caller opened and closes (a FIFO opened a second time would wait
@@ -46,6 +48,10 @@ int cut_or_earlier_error(std::string_view text, std::string& error, Parse parse)
   error = std::move(earlier);
   return at;
 }
+
+// The reason a text file holding the byte `c` (a control byte: not tab, CR, LF) is refused, for
+// FILE:LINE: "a NUL byte: not a text file", "a control byte \x1B: not a text file".
+std::string not_text(unsigned char c);
 
 // A token as it may appear in a one-line message: printable (other bytes as \xHH), at most 40
 // characters and "...".
