@@ -332,7 +332,12 @@ void bind_station(py::module_& m) {
                 "A chip on a segment: its chip read at the line's time.")
       .def_readonly("index", &S::index)
       .def_readonly("name", &S::name)
-      .def_readonly("slave", &S::slave)
+      .def_property_readonly("slave",
+                             [](const S& s) {
+                               return MasterSlave{
+                                   s.slave, "Station.slave",
+                                   "Segment.add_station(..., slave=SlaveConfig(...))"};
+                             })
       .def_property_readonly("address", [](const S& s) { return s.slave.address; })
       .def_readonly("firmware", &S::firmware)
       .def_readonly("responder", &S::responder)
@@ -658,7 +663,12 @@ void bind_seg_master(py::module_& m) {
       .def_property_readonly("address", [](const M& pm) { return pm.m->address(); })
       .def_property_readonly("slave_count", [](const M& pm) { return pm.m->slave_count(); })
       .def_property_readonly("selected", [](const M& pm) { return pm.m->selected(); })
-      .def_property_readonly("slave", [](const M& pm) { return pm.m->slave(); })
+      .def_property_readonly("slave",
+                             [](const M& pm) {
+                               return MasterSlave{
+                                   pm.m->slave(), "SegmentMaster.slave",
+                                   "Segment.add_station(..., slave=SlaveConfig(...))"};
+                             })
       .def(
           "select",
           [](M& pm, std::size_t i) {

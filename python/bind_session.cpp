@@ -87,8 +87,6 @@ namespace {
 using U8 = std::uint8_t;
 using U64 = std::uint64_t;
 
-struct MasterSlave : SlaveConfig {};  // Master.slave's read-only copy (bind_configs)
-
 // A class bound without a keyword constructor gets one: T() with each keyword set as an
 // attribute (an unknown keyword is an AttributeError).
 template <typename T>
@@ -196,16 +194,14 @@ void bind_frames(py::module_& m) {
           "user_prm",
           bytes_field(&SlaveConfig::user_prm, "user_prm", false, fdl::kMaxDpData - 7).first,
           bytes_field(&SlaveConfig::user_prm, "user_prm", false, fdl::kMaxDpData - 7).second);
-  // Master.slave's value: a copy (the master is made anew when its user side starts, so a
-  // reference into it would not live). A field set on it would change nothing the master sends:
-  // it raises instead of doing nothing.
-  py::class_<MasterSlave, SlaveConfig>(
-      m, "MasterSlave", "A copy of the slave a Master parameterises (Master.slave): read-only.")
-      .def("__setattr__", [](const MasterSlave&, const std::string& name, const py::object&) {
+  py::class_<MasterSlave, SlaveConfig>(m, "MasterSlave",
+                                       "A copy of the slave a master parameterises (Master.slave, "
+                                       "SegmentMaster.slave, Station.slave): read-only.")
+      .def("__setattr__", [](const MasterSlave& s, const std::string& name, const py::object&) {
         throw py::attribute_error(fmt::format(
-            "Master.slave is a read-only copy: setting its {} would change nothing the master "
-            "sends; give the slave as Master(slave=SlaveConfig(...))",
-            name));
+            "{} is a read-only copy: setting its {} would change nothing the master sends; give "
+            "the slave as {}",
+            s.owner, name, s.given));
       });
 }
 
@@ -782,7 +778,11 @@ void bind_master(py::module_& m) {
       .def_property_readonly("firmware", [](const PyMaster& pm) { return pm.firmware; })
       .def_property_readonly("responder", [](const PyMaster& pm) { return pm.responder; })
       .def_property_readonly("chip", [](const PyMaster& pm) { return pm.chip_ref; })
-      .def_property_readonly("slave", [](const PyMaster& pm) { return MasterSlave{pm.m->slave()}; })
+      .def_property_readonly(
+          "slave",
+          [](const PyMaster& pm) {
+            return MasterSlave{pm.m->slave(), "Master.slave", "Master(slave=SlaveConfig(...))"};
+          })
       .def_property_readonly("bit_cycles", [](const PyMaster& pm) { return pm.m->bit_cycles(); })
       .def_property_readonly("counters", [](const PyMaster& pm) { return pm.m->counters(); })
       .def_property_readonly("history", [](const PyMaster& pm) { return pm.m->history(); })

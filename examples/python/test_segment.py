@@ -355,3 +355,23 @@ def test_bad_input_is_a_clear_error_and_an_observers_exception_arrives():
         master.fdl_status()
     with pytest.raises(ValueError, match="before the line's time"):
         seg.send(sender, b"\x10", start=0)
+
+
+def test_a_slave_read_back_is_a_read_only_copy():
+    # docs/python.md: Station.slave and SegmentMaster.slave are copies of the slave the master
+    # sends (given at add_station); a field set on one raises instead of changing nothing.
+    seg = dpc31.Segment(1_500_000)
+    st = seg.add_station(5, "spc3", name="spc3", wd=(3, 4))
+    master = seg.add_master(2, [5])
+    for obj, owner in ((st, "Station.slave"), (master, "SegmentMaster.slave")):
+        slave = obj.slave
+        assert isinstance(slave, dpc31.MasterSlave) and isinstance(slave, dpc31.SlaveConfig)
+        assert (slave.address, slave.wd_fact1, slave.wd_fact2) == (5, 3, 4)
+        try:
+            slave.user_prm = b"\x01"
+        except AttributeError as e:
+            assert str(e) == (f"{owner} is a read-only copy: setting its user_prm would change "
+                              "nothing the master sends; give the slave as "
+                              "Segment.add_station(..., slave=SlaveConfig(...))")
+        else:
+            raise AssertionError(f"{owner}: a field set on the copy was taken in silence")

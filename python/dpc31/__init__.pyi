@@ -442,7 +442,7 @@ class Station:
     index: int
     name: str
     address: int
-    slave: SlaveConfig
+    slave: MasterSlave
     firmware: Optional[Firmware]
     responder: Optional[Responder]
     changes: List[Tuple[int, DpState, WdState]]
@@ -464,7 +464,7 @@ class SegmentMaster:
     address: int
     slave_count: int
     selected: int
-    slave: SlaveConfig
+    slave: MasterSlave
     starting_up: bool
     started_up: bool
     token_rotation: int
