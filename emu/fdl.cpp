@@ -4,6 +4,8 @@
 // The address extension (DSAP, then SSAP) lives at the start of the DU, so SD1 cannot carry it.
 #include "dpc31/fdl.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cstring>
 #include <utility>
@@ -103,6 +105,33 @@ bool encode(const Frame& f, std::vector<std::uint8_t>& out) {
   out.push_back(fcs(std::span(out).subspan(body)));
   out.push_back(ED);
   return true;
+}
+
+std::string encode_refusal(const Frame& f) {
+  std::vector<std::uint8_t> sent;
+  if (encode(f, sent)) return {};
+  const std::size_t saps = (f.dsap ? 1U : 0U) + (f.ssap ? 1U : 0U);
+  const auto du = [&](std::string_view sd, std::string_view carries) {
+    return fmt::format("du and SAPs: {} + {} bytes; an {} carries {}", f.du.size(), saps, sd,
+                       carries);
+  };
+  const auto address = [](std::string_view what, unsigned v) {
+    return fmt::format("{} {} is out of range (0..127)", what, v);
+  };
+  if (f.sd == SC) return du("SC (0xE5)", "none");
+  if (f.sd != SD1 && f.sd != SD2 && f.sd != SD3 && f.sd != SD4) {
+    return fmt::format(
+        "sd 0x{:02X} is no start delimiter (SD1 0x10, SD2 0x68, SD3 0xA2, SD4 0xDC, SC 0xE5)",
+        f.sd);
+  }
+  if (f.da > kAddressMask) return address("da", f.da);
+  if (f.sa > kAddressMask) return address("sa", f.sa);
+  if (f.sd == SD4) return du("SD4 (0xDC, the token)", "none");
+  if (f.dsap && (*f.dsap & kExtension)) return address("dsap", *f.dsap);
+  if (f.ssap && (*f.ssap & kExtension)) return address("ssap", *f.ssap);
+  if (f.sd == SD1) return du("SD1 (0x10)", "none (an SD2 carries them)");
+  if (f.sd == SD3) return du("SD3 (0xA2)", "exactly 8 together");
+  return du("SD2 (0x68)", "1..246 together (244 of du beside both SAPs)");
 }
 
 constexpr std::array<std::string_view, 9> kErrorNames = {"none",        "bad_sd",   "truncated",

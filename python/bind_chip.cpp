@@ -199,10 +199,7 @@ std::uint16_t peek_field(const Chip& chip, std::string_view reg, std::string_vie
 
 py::object addr_of(const Chip& chip, std::string_view name) {
   // Another profile's register: this profile lacks it (None); a name no profile has is refused.
-  const auto known = [name](Profile p) { return find_reg(profile_desc(p), name) != nullptr; };
-  if (!known(chip.profile().id) &&
-      std::any_of(std::begin(kAllProfiles), std::end(kAllProfiles), known))
-    return py::none();
+  if (find_reg(chip.profile(), name) == nullptr && any_profile_has(name)) return py::none();
   return opt_addr(chip.addr_of(reg_id(chip, name)));
 }
 

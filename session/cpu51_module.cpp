@@ -298,8 +298,7 @@ std::int64_t Cpu51Module::port(const std::string& name) const {
 }
 
 std::string Cpu51Module::port_name(unsigned port) const {
-  const std::vector<std::string>& names = cfg_.latch_ports();
-  return port < names.size() ? names[port] : fmt::format("latch{}", port);
+  return cfg_.latch_ports()[port];  // on_ram_write records the named bytes only
 }
 
 }  // namespace dpc31

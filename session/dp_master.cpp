@@ -443,11 +443,7 @@ Exchange DpMaster::transact(fdl::Frame req, UartFault fault) {
 void DpMaster::transact(UartFault fault, Exchange& ex) {
   const fdl::Frame& req = ex.request;
   // decode(encode(req)) == req whenever encode gives bytes: the request needs no decoding.
-  if (!fdl::encode(req, tx_)) {
-    throw std::invalid_argument(
-        fmt::format("a frame fdl::encode cannot send: SD {:02X}h, DA {}, {} data bytes", req.sd,
-                    req.da, req.du.size()));
-  }
+  if (!fdl::encode(req, tx_)) throw std::invalid_argument(fdl::encode_refusal(req));
   send(tx_, fault, sdn(req), ex, &req);
 }
 

@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <charconv>
 #include <iterator>
 #include <stdexcept>
@@ -110,6 +111,12 @@ std::string range_text(std::uint64_t min, std::uint64_t max, std::string_view va
 
 std::string out_of_range(const ValueRange& r, std::string_view value) {
   return fmt::format("{} {} out of range {}", r.what, value, range_text(r.min, r.max, value));
+}
+
+bool any_profile_has(std::string_view register_name) {
+  return std::any_of(std::begin(kAllProfiles), std::end(kAllProfiles), [&](Profile p) {
+    return find_reg(profile_desc(p), register_name) != nullptr;
+  });
 }
 
 std::string profibus_rates() {

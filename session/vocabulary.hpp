@@ -104,6 +104,9 @@ inline constexpr ValueRange kC31Code{"code", 0x08A0, 0x1FFF};
 // range), which the Python module's Chip gives for the same calls.
 [[nodiscard]] std::string range_error_text(std::string_view what, std::string_view value,
                                            std::uint64_t min, std::uint64_t max);
+// A register some profile has (by name or alias): another profile's register is no typo but has
+// no address on this chip (serve's `addr`: ERR no_address; Python's Chip.addr_of: None).
+[[nodiscard]] bool any_profile_has(std::string_view register_name);
 // The ten PROFIBUS rates the chips' baud search knows, slowest first: "9600, 19200, ..., 12000000".
 [[nodiscard]] std::string profibus_rates();
 // "" for one of them, else why not: "baud 12345 is not a PROFIBUS rate (9600, ...)".

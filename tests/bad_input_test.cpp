@@ -749,6 +749,9 @@ TEST_F(BadInput, CosimReplayHeaderLinesAgree) {
   file("variant.stim", "# variant b\n" + body);
   EXPECT_EQ(dpc31("cosim --replay mutant.stim --profile vpc3plus --quiet").rc, 0);
   EXPECT_EQ(dpc31("cosim --replay variant.stim --profile vpc3plus --quiet").rc, 0);
+  // A key with no value is a comment, the path keys' too (docs/decisions.md, s25-trace).
+  file("bare.stim", "# rtl\n# define\n# rtl-model \n" + body);
+  EXPECT_EQ(dpc31("cosim --replay bare.stim --quiet").rc, 0);
 }
 
 TEST_F(BadInput, CosimOptionsAndOutputs) {

@@ -538,8 +538,8 @@ TEST(CliHelp, TheBridgesFirmwareIsRequiredOnlyWithoutSlave) {
 // 100ns, is refused (docs/waveforms.md: longer than a 48 MHz clock cycle).
 TEST(CliHelp, TheTimescaleRangeIsWhatIsAccepted) {
   const std::string range =
-      "1, 10 or 100 fs, ps or ns, 1fs to 10ns (a unit longer than a 48 MHz clock cycle, 20.8 ns, "
-      "is refused)";
+      "1, 10 or 100 fs or ps, or 1 or 10 ns (a unit longer than a 48 MHz clock cycle, 20.8 ns, is "
+      "refused)";
   EXPECT_NE(run("run --help")
                 .out.find("--timescale TEXT            waveform time unit: " + range +
                           "; default 1ps, 10ns with --flat and --la-vcd\n"),

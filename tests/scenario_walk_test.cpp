@@ -272,6 +272,38 @@ TEST(ScenarioWalk, FirmwareGoOfflineIsTheWalksOfflineLineAtItsWrite) {
   }
 }
 
+// The latch is the bytes `ports=` names from `latch` on (DO4's two, `outputs` and `modul_ok`,
+// without it: docs/cpu.md, "The scenario header"); any other XDATA write outside the chip's window
+// is the board's RAM, not a port, even next to the latch. The image, hand-assembled as above:
+//   M0-1 MOV DPTR,#4002h   M2 MOV A,#07h   M3-4 MOVX @DPTR,A (past DO4's two bytes)
+//   M5-6 MOV DPTR,#4000h   M7-8 MOVX @DPTR,A (outputs)             M9- SJMP $
+// The second MOVX completes at chip cycle 24 x 7 + 36 = 204 (docs/cpu.md, "MOVX timing").
+TEST(ScenarioWalk, OnlyTheNamedLatchBytesArePorts) {
+  const ImageDir d;
+  d.put("latch.ihx", ":0C0000009040027407F0904000F080FE79\n:00000001FF\n");
+  const std::string text =
+      "profile spc3\nbaud 1500000\ncpu 80c32 clock=24000000 firmware latch.ihx\nsilence 1ms\n"
+      "expect port outputs 7\n";
+  for (const dpc31::Engine engine : {dpc31::Engine::event, dpc31::Engine::per_cycle}) {
+    SCOPED_TRACE(engine_name(engine));
+    const Walk w = run(text, d.dir / "t.scn", engine);
+    EXPECT_TRUE(w.errors.empty()) << (w.errors.empty() ? "" : w.errors.front());
+    ASSERT_EQ(w.outcome.port_writes.size(), 1u);
+    EXPECT_EQ(w.outcome.port_writes[0].port, "outputs");
+    EXPECT_EQ(w.outcome.port_writes[0].cycle, 204u);
+    EXPECT_EQ(w.outcome.port_writes[0].value, 7u);
+    std::size_t port_lines = 0;
+    for (const std::string& l : w.lines) {
+      if (l.find("80C32 at ") != std::string::npos && l.find(" = ") != std::string::npos) {
+        ++port_lines;
+        EXPECT_NE(l.find(": outputs = "), std::string::npos) << l;
+      }
+    }
+    EXPECT_EQ(port_lines, 1u);
+    EXPECT_EQ(w.outcome.passed, 1u);
+  }
+}
+
 // A host user side that never starts the chip (the GLOBALS plug-in of tests/bad_plugin.c: its
 // init only writes its port): the chip stays Offline in its reset states, Wait_Prm and
 // Baud_Search (docs/timing.md), and the walk says so at cycle 0, where the init made no bus access

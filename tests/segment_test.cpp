@@ -1244,7 +1244,10 @@ TEST(Segment, AMasterRefusesWhatItCannotSend) {
   EXPECT_EQ(refused([&] {
               master->transact(fdl::make_frame(5, 2, 0x5D, std::vector<std::uint8_t>(250)));
             }),
-            "a frame fdl::encode cannot send: SD 68h, DA 5, 250 data bytes");
+            // chip-facts §8: an SD2 carries at most 246 DU bytes incl. SAP bytes; the refusal
+            // names that field and its range, not a function.
+            "du and SAPs: 250 + 0 bytes; an SD2 (0x68) carries 1..246 together (244 of du "
+            "beside both SAPs)");
   const std::vector<std::vector<std::uint8_t>> three(3);
   EXPECT_EQ(refused([&] { master->dp_cycle(three); }),
             "3 outputs for 2 slaves: at most one per slave");

@@ -463,6 +463,17 @@ TEST(Serve, MalformedLinesGetOneErrorEach) {
   EXPECT_TRUE(c.async.empty());
 }
 
+TEST(Serve, AFrameNoTelegramCarriesIsRefusedByItsField) {
+  // chip-facts §8: an SD2 carries at most 246 DU bytes incl. SAP bytes. The refusal names that
+  // field and its range, in the words of Python's Frame.encode and the C++ DpMaster.
+  ServerProcess server(kCli, {"--tcp", "0"});
+  LineClient c = LineClient::tcp(server.port());
+  EXPECT_EQ(c.command("inject_fdl 5 2 0x5D dsap=0x3E ssap=0x3E data=" + std::string(2 * 245, '0')),
+            "ERR range du and SAPs: 245 + 2 bytes; an SD2 (0x68) carries 1..246 together (244 of "
+            "du beside both SAPs)");
+  EXPECT_EQ(c.command("cycle"), "OK 0");  // nothing was sent
+}
+
 TEST(Serve, OverlongLinesAreRefusedAndTheConnectionKept) {
   ServerProcess server(kCli, {"--tcp", "0"});
   LineClient c = LineClient::tcp(server.port());

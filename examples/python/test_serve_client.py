@@ -202,6 +202,7 @@ def test_an_observers_exception_is_raised_by_an_addr_of_that_gives_none(tmp_path
                                     absent)) as path:
         with Client(unix=path, timeout=30) as remote:
             remote.on_irq_change(broken)
-            with pytest.raises(RuntimeError, match="observer bug"):
+            with pytest.raises(RuntimeError, match="observer bug") as raised:
                 remote.addr_of("InstQ_Base")
+            assert raised.value.__context__ is None  # not raised while the ServeError was handled
             assert remote.addr_of("InstQ_Base") is None  # not kept for the next call

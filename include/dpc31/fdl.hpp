@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -134,6 +135,10 @@ struct Frame {
 // The same into `out` (its old contents replaced, its capacity kept: a sender that encodes every
 // request reuses one buffer). False, with `out` empty, where encode() gives an empty vector.
 bool encode(const Frame& frame, std::vector<std::uint8_t>& out);
+// Why encode() refuses `frame`: its first bad field by name with that field's range, in the
+// frame's order (SD, DA, SA, the SAPs, the data unit). The one wording of every door (Python
+// Frame.encode, serve inject_fdl, DpMaster); empty where encode() takes the frame.
+[[nodiscard]] std::string encode_refusal(const Frame& frame);
 
 enum class Error : std::uint8_t {
   none,

@@ -376,8 +376,7 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
       const RegDesc* r = find_reg(chip_.profile(), t[1]);
       if (r == nullptr) {
         // Another profile's register is no typo: it has no address here (Chip.addr_of: None).
-        const auto has = [&t](Profile p) { return find_reg(profile_desc(p), t[1]) != nullptr; };
-        if (cmd == "addr" && std::any_of(std::begin(kAllProfiles), std::end(kAllProfiles), has)) {
+        if (cmd == "addr" && any_profile_has(t[1])) {
           return err("no_address",
                      fmt::format("no register '{}' in profile {}: another profile's register", t[1],
                                  chip_.profile().name));
@@ -472,10 +471,8 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
           ssap = static_cast<std::uint8_t>(number(*v, 0x7F, "ssap"));
         std::vector<std::uint8_t> du;
         if (const auto v = o.get("data")) hex_bytes(*v, du, fdl::kMaxLe);
-        bytes = fdl::encode(fdl::make_frame(da, sa, fc, std::move(du), dsap, ssap));
-        if (bytes.empty()) {
-          throw Fail{"range", "no such frame (too much data for SD2, or a bad SAP byte)"};
-        }
+        const fdl::Frame frame = fdl::make_frame(da, sa, fc, std::move(du), dsap, ssap);
+        if (!fdl::encode(frame, bytes)) throw Fail{"range", fdl::encode_refusal(frame)};
       }
       std::uint32_t t_bit = default_bit_cycles();
       if (const auto b = o.get("baud")) {

@@ -201,13 +201,16 @@ class Client:
         try:
             return int(self._call(f"addr {name}"), 16)
         except ServeError as e:
-            if e.code == "no_address":
-                if e.__cause__ is not None:  # an observer's exception, as after an OK reply
-                    raise e.__cause__
-                return None
             if e.code == "unknown_register":
                 raise ValueError(e.message) from e
-            raise
+            if e.code != "no_address":
+                raise
+            pending = e.__cause__
+        # An observer's exception is raised here, outside the handler, as after an OK reply:
+        # raised inside it, it would carry the ServeError as its __context__.
+        if pending is not None:
+            raise pending
+        return None
 
     # --- time ---
     def step(self, cycles: int = 1) -> None:

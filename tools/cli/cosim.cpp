@@ -96,7 +96,7 @@ bool take_trace_header(const std::string& path, const std::string& text, CosimOp
     std::istringstream vs(rest);
     std::string value;
     std::string more;
-    if (!whole_rest && (!(vs >> value) || vs >> more)) continue;  // a comment
+    if (whole_rest ? rest.empty() : !(vs >> value) || vs >> more) continue;  // a comment
     const auto [first, is_first] = first_line.try_emplace(key, n);
     if (!is_first && std::find(std::begin(kOnce), std::end(kOnce), key) != std::end(kOnce)) {
       error =

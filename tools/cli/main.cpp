@@ -65,7 +65,7 @@ void check_stdout_writes() {
 // ms and 1s, and the recorder refuses a unit longer than a clock cycle (docs/waveforms.md), at
 // the 48 MHz every scenario and the demo run at.
 constexpr const char* kTimescales =
-    "1, 10 or 100 fs, ps or ns, 1fs to 10ns (a unit longer than a 48 MHz clock cycle, 20.8 ns, is "
+    "1, 10 or 100 fs or ps, or 1 or 10 ns (a unit longer than a 48 MHz clock cycle, 20.8 ns, is "
     "refused)";
 
 dpc31::Profile to_profile(const std::string& s) {
