@@ -44,41 +44,9 @@ UartFault fault_of(const std::optional<std::string>& kind, std::optional<int> ch
   return f;
 }
 
-namespace {
-
-// Why fdl::encode refuses `f` (include/dpc31/fdl.hpp), its first bad field by name with the
-// field's range, in the frame's order: SD, DA, SA, the SAPs, the data unit.
-std::string refusal(const fdl::Frame& f) {
-  const std::size_t saps = (f.dsap ? 1U : 0U) + (f.ssap ? 1U : 0U);
-  const auto du = [&](std::string_view sd, std::string_view carries) {
-    return fmt::format("du and SAPs: {} + {} bytes; an {} carries {}", f.du.size(), saps, sd,
-                       carries);
-  };
-  if (f.sd == fdl::SC) return du("SC (0xE5)", "none");
-  if (f.sd != fdl::SD1 && f.sd != fdl::SD2 && f.sd != fdl::SD3 && f.sd != fdl::SD4) {
-    return fmt::format(
-        "sd 0x{:02X} is no start delimiter (SD1 0x10, SD2 0x68, SD3 0xA2, SD4 0xDC, SC 0xE5)",
-        f.sd);
-  }
-  if (f.da > fdl::kAddressMask) return range_error_text("da", std::to_string(f.da), 0, 127);
-  if (f.sa > fdl::kAddressMask) return range_error_text("sa", std::to_string(f.sa), 0, 127);
-  if (f.sd == fdl::SD4) return du("SD4 (0xDC, the token)", "none");
-  if (f.dsap && (*f.dsap & fdl::kExtension)) {
-    return range_error_text("dsap", std::to_string(*f.dsap), 0, 127);
-  }
-  if (f.ssap && (*f.ssap & fdl::kExtension)) {
-    return range_error_text("ssap", std::to_string(*f.ssap), 0, 127);
-  }
-  if (f.sd == fdl::SD1) return du("SD1 (0x10)", "none (an SD2 carries them)");
-  if (f.sd == fdl::SD3) return du("SD3 (0xA2)", "exactly 8 together");
-  return du("SD2 (0x68)", "1..246 together (244 of du beside both SAPs)");
-}
-
-}  // namespace
-
 std::vector<std::uint8_t> sendable(const fdl::Frame& f) {
   std::vector<std::uint8_t> out;
-  if (!fdl::encode(f, out)) throw py::value_error(refusal(f));
+  if (!fdl::encode(f, out)) throw py::value_error(fdl::encode_refusal(f));
   return out;
 }
 
