@@ -22,6 +22,7 @@
 #include <utility>
 #include <vector>
 
+#include "dp_master.hpp"
 #include "dpc31/chip.hpp"
 #include "dpc31/fdl.hpp"
 #include "vocabulary.hpp"
@@ -30,8 +31,6 @@ namespace dpc31::py_bind {
 
 namespace py = pybind11;
 
-// A Python int that an argument's C++ integer cannot hold: a ValueError in the module's range
-// words, named by the argument it was given for once it leaves the call (name_int_arguments).
 // A slave read back (Master.slave, SegmentMaster.slave, Station.slave): a copy, since the master is
 // made anew when its user side starts. A field set on it would change nothing the master sends, so
 // it raises instead (bind_configs); `owner` and `given` name the attribute and where the slave is
@@ -41,6 +40,8 @@ struct MasterSlave : SlaveConfig {
   const char* given;
 };
 
+// A Python int that an argument's C++ integer cannot hold: a ValueError in the module's range
+// words, named by the argument it was given for once it leaves the call (name_int_arguments).
 struct IntOutOfRange : py::value_error {
   IntOutOfRange(PyObject* v, std::string r)
       : py::value_error("value " + r), value(v), range(std::move(r)) {}
