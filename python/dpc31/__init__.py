@@ -10,8 +10,8 @@ import sys
 from typing import Any
 
 __all__ = [
-    "Chip", "Master", "SlaveConfig", "Frame", "Exchange", "MasterCounters", "Firmware",
-    "Responder", "Output", "Scenario", "ScenarioResult", "ExpectResult", "StepRecord", "Step",
+    "Chip", "Master", "SlaveConfig", "MasterSlave", "Frame", "Exchange", "MasterCounters",
+    "Firmware", "Responder", "Output", "Scenario", "ScenarioResult", "ExpectResult", "StepRecord", "Step",
     "StepKind", "DpState", "WdState", "Telegram", "Probe", "Register", "Field", "Region",
     "registers", "register", "regions", "profiles", "run_scenario", "wavediff", "WaveReport",
     "SignalDiff", "Divergence", "WavePoint", "Structural", "Error", "SnapshotError",
