@@ -22,6 +22,7 @@
 #include <utility>
 #include <vector>
 
+#include "dp_master.hpp"  // SlaveConfig, which MasterSlave extends
 #include "dpc31/chip.hpp"
 #include "dpc31/fdl.hpp"
 #include "vocabulary.hpp"

@@ -10,14 +10,14 @@ import sys
 from typing import Any
 
 __all__ = [
-    "Chip", "Master", "SlaveConfig", "Frame", "Exchange", "MasterCounters", "Firmware",
-    "Responder", "Output", "Scenario", "ScenarioResult", "ExpectResult", "StepRecord", "Step",
-    "StepKind", "DpState", "WdState", "Telegram", "Probe", "Register", "Field", "Region",
+    "Chip", "Master", "SlaveConfig", "MasterSlave", "Frame", "Exchange", "MasterCounters",
+    "Firmware", "Responder", "Output", "Scenario", "ScenarioResult", "ExpectResult", "StepRecord",
+    "Step", "StepKind", "DpState", "WdState", "Telegram", "Probe", "Register", "Field", "Region",
     "registers", "register", "regions", "profiles", "run_scenario", "wavediff", "WaveReport",
     "SignalDiff", "Divergence", "WavePoint", "Structural", "Error", "SnapshotError",
     "ScenarioError", "FirmwareError", "InputError", "Dpv1Answer", "Dpv1Outcome", "Dpv1Rules",
-    "Cpu51Board", "Segment", "Station", "SegmentMaster", "TokenVisit", "LineTelegram",
-    "Collision", "BusCheck", "SegmentScenario", "SegmentScenarioResult",
+    "Cpu51Board", "Segment", "Station", "SegmentMaster", "TokenVisit", "LineTelegram", "Collision",
+    "BusCheck", "SegmentScenario", "SegmentScenarioResult",
 ]
 
 
