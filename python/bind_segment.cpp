@@ -194,6 +194,7 @@ class PySegment {
   std::uint32_t baud;
   std::vector<std::unique_ptr<PyStation>> stations;
   std::vector<U8> master_addresses;
+  std::uint32_t master_slot_bits = 100;  // the largest TSL of the masters added (100: none yet)
   std::unique_ptr<BusCheck> check;
   std::vector<std::string> check_log;
   std::shared_ptr<py::object> telegram_cb;
@@ -238,6 +239,8 @@ struct PySegMaster {
     const std::size_t station = s.joined(
         s.seg.add_sender(new_station_name(s.seg, master_station_name(mc.address))), mc.address);
     m = std::make_unique<DpMaster>(s.seg, station, mc, std::move(slaves));
+    s.master_slot_bits =
+        s.master_addresses.empty() ? mc.slot_bits : std::max(s.master_slot_bits, mc.slot_bits);
     s.master_addresses.push_back(mc.address);
   }
   template <typename F>
@@ -624,10 +627,12 @@ void bind_segment_class(py::module_& m) {
           "time; the segment runs on without them.")
       .def(
           "check_bus",
-          [](P& s, U64 ttr, std::uint32_t slot_bits, std::uint32_t min_tsdr_bits,
+          [](P& s, U64 ttr, std::optional<std::uint32_t> slot_bits, std::uint32_t min_tsdr_bits,
              std::uint32_t tsyn_bits, const std::optional<std::vector<U8>>& masters) {
             s.enter();
-            BusTiming t{s.seg.bit_cycles(), min_tsdr_bits, slot_bits,
+            // The masters' own slot time by default: an answer a master waits for and takes is
+            // neither late nor unsolicited (a segment scenario shares `s.slot_bits` so).
+            BusTiming t{s.seg.bit_cycles(), min_tsdr_bits, slot_bits.value_or(s.master_slot_bits),
                         tsyn_bits,          ttr,           masters.value_or(s.master_addresses)};
             s.check_log.clear();
             s.check = std::make_unique<BusCheck>(t, [&s](const LogRecord& r) {
@@ -635,12 +640,12 @@ void bind_segment_class(py::module_& m) {
             });
             return s.check.get();
           },
-          py::kw_only(), py::arg("ttr") = 0, py::arg("slot_bits") = 100,
+          py::kw_only(), py::arg("ttr") = 0, py::arg("slot_bits") = py::none(),
           py::arg("min_tsdr_bits") = 11, py::arg("tsyn_bits") = 33, py::arg("masters") = py::none(),
           py::return_value_policy::reference_internal,
           "The bus check on every telegram from now on (masters: the masters' addresses, for the "
-          "token checks and TTO; default those added, none: no token checks; TTR 0: no "
-          "token_hold).")
+          "token checks and TTO; default those added, none: no token checks; slot_bits: TSL, "
+          "default the largest of the masters added, 100 without one; TTR 0: no token_hold).")
       .def_property_readonly(
           "bus_check", [](const P& s) { return s.check.get(); },
           py::return_value_policy::reference_internal)

@@ -82,16 +82,21 @@ void BusCheck::collision(const Collision& c, const std::string& first, const std
             fmt::format("{} drove the line while {} had it", second, first));
 }
 
-void BusCheck::unsolicited(const LineTelegram& t, const fdl::Frame& f) {
+// An SC carries no address: its sender is named, as short_tsyn names it.
+void BusCheck::unsolicited(const LineTelegram& t, const fdl::Frame& f, const std::string& sender) {
+  const std::string from = f.sd != fdl::SC  ? fmt::format(" from station {}", f.sa)
+                           : sender.empty() ? std::string()
+                                            : " from " + sender;
   violation(BusViolation::unsolicited, t.start,
-            fmt::format("an answer from station {} nobody asked for", f.sa));
+            fmt::format("{}{} nobody asked for", f.sd == fdl::SC ? "an SC" : "an answer", from));
 }
 
 // The telegram after a request that wants an answer (docs/timing.md, "The master's wait"): the
 // answer window ends at the slot time TSL after the request's end. A telegram starting later is
 // no answer: the asked station's, before the asker may send again (TSL + TSYN), is its late
 // answer; any other stands on its own.
-void BusCheck::answer(const LineTelegram& t, const fdl::Frame& f, bool ok) {
+void BusCheck::answer(const LineTelegram& t, const fdl::Frame& f, bool ok,
+                      const std::string& sender) {
   const Pending p = *pending_;
   pending_.reset();
   const std::uint64_t delay = t.start - p.end;
@@ -103,7 +108,7 @@ void BusCheck::answer(const LineTelegram& t, const fdl::Frame& f, bool ok) {
                 fmt::format("answer to station {} {} bit times after the request (slot time {})",
                             p.request.da, tbits, timing_.slot_bits));
     } else if (ok) {
-      unsolicited(t, f);
+      unsolicited(t, f, sender);
     }
     return;
   }
@@ -131,9 +136,9 @@ void BusCheck::telegram(const LineTelegram& t, const std::string& sender) {
                           fdl::error_name(d.error)));
   }
   if (pending_ && !request) {
-    answer(t, d.frame, ok);
+    answer(t, d.frame, ok, sender);
   } else if (!request && ok) {
-    unsolicited(t, d.frame);
+    unsolicited(t, d.frame, sender);
   }
   if (request) {
     pending_.reset();

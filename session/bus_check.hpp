@@ -67,8 +67,8 @@ class BusCheck {
 
  private:
   void violation(BusViolation v, std::uint64_t cycle, const std::string& text);
-  void answer(const LineTelegram& t, const fdl::Frame& f, bool ok);
-  void unsolicited(const LineTelegram& t, const fdl::Frame& f);
+  void answer(const LineTelegram& t, const fdl::Frame& f, bool ok, const std::string& sender);
+  void unsolicited(const LineTelegram& t, const fdl::Frame& f, const std::string& sender);
   [[nodiscard]] std::uint64_t bits(std::uint64_t n) const { return n * timing_.bit_cycles; }
   [[nodiscard]] std::uint64_t token_lost_timeout() const;
 

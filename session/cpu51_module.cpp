@@ -124,15 +124,7 @@ bool load_cpu51_image(const Cpu51Config& cfg, Cpu51Image& image, std::string& er
   if (const std::string map = cpu51_map_path(cfg.hex); !map.empty()) {
     image.map_file = map;
     std::error_code ec;
-    // A FIFO or a device is refused unopened: opening a FIFO waits for a writer, /dev/zero never
-    // ends.
-    if (const auto type = std::filesystem::status(map, ec).type();
-        type != std::filesystem::file_type::regular &&
-        type != std::filesystem::file_type::directory &&
-        type != std::filesystem::file_type::not_found) {
-      error = fmt::format("{}: not a regular file, not a SDCC map file", map);
-      return false;
-    }
+    // A FIFO or a device (no size) is read_text_file's to refuse, with the descriptor it opens.
     if (const std::uintmax_t n = std::filesystem::file_size(map, ec); !ec && n > kMaxMapBytes) {
       image.map_too_large = true;
       return true;

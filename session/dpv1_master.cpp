@@ -46,8 +46,11 @@ std::uint64_t Dpv1Master::cycles_10ms(std::uint32_t units) const {
 void Dpv1Master::take(Dpv1Answer& a, const Exchange& ex) const {
   a.last = ex.answer;
   if (!ex.answer) {
-    // The master gives up at the slot time's end (docs/timing.md, "The master's wait").
-    a.end = ex.request_end + m_.slot_cycles();
+    // The master's wait (docs/timing.md): a telegram addressed otherwise frees the line at its
+    // end; else it ends a slot time after the last character, the request's or a cut-short
+    // answer's.
+    a.end = ex.stray ? ex.answer_end
+                     : (ex.answer_end != 0 ? ex.answer_end : ex.request_end) + m_.slot_cycles();
     a.outcome = Dpv1Answer::Outcome::no_answer;
     return;
   }
@@ -66,8 +69,9 @@ Dpv1Answer Dpv1Master::no_connection() const {
 Dpv1Answer Dpv1Master::transfer(std::uint8_t dsap, std::uint8_t ssap, pdu::Bytes req,
                                 std::uint64_t timeout) {
   Dpv1Answer a;
-  Exchange ex = m_.retry(m_.acyclic(dsap, ssap, std::move(req)), rules_.retries);
-  a.start = ex.request_start;
+  Exchange ex = m_.acyclic(dsap, ssap, std::move(req));
+  a.start = ex.request_start;  // the first try's: the time-out counts from it
+  ex = m_.retry(std::move(ex), rules_.retries);
   for (;;) {
     take(a, ex);
     if (a.outcome != Dpv1Answer::Outcome::positive) return a;
@@ -175,8 +179,9 @@ Dpv1Answer Dpv1Master::c2_idle() {
 Dpv1Answer Dpv1Master::c2_abort(const pdu::Abort& abort) {
   if (!c2_sap_) return no_connection();
   Dpv1Answer a;
-  const Exchange ex = m_.retry(m_.acyclic(*c2_sap_, rules_.c2_ssap, abort.build()), rules_.retries);
-  a.start = ex.request_start;
+  Exchange ex = m_.acyclic(*c2_sap_, rules_.c2_ssap, abort.build());
+  a.start = ex.request_start;  // the first try's
+  ex = m_.retry(std::move(ex), rules_.retries);
   take(a, ex);
   // The Abort has no response: only SC is its acknowledgement.
   if (a.outcome == Dpv1Answer::Outcome::positive && ex.answer->sd != fdl::SC)

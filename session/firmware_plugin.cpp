@@ -179,16 +179,15 @@ const dpc31_firmware& load_plugin(const std::string& spec) {
   const std::string path = file_path(spec);
   // Checked and loaded through one descriptor: what was checked is what runs, whatever is renamed
   // or swapped in at the path meanwhile (docs/security.md, "Code a command runs").
-  // A FIFO or a device is refused unopened: opening a FIFO waits for a writer (the run hung). The
-  // descriptor's own check below still judges what was opened.
+  // Opened without waiting (a FIFO's open() waits for a writer: the run hung); the descriptor's
+  // check below refuses a FIFO or a device.
   struct stat st {};
-  if (::stat(path.c_str(), &st) == 0) not_a_library(path, st);
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
   if (fd < 0) {
     throw FirmwareError("cannot load firmware plug-in: " + path + ": " +
                         std::error_code(errno, std::generic_category()).message());
   }
-  if (::fstat(fd, &st) != 0) {
+  if (::fstat(fd, &st) != 0 || ::fcntl(fd, F_SETFL, O_RDONLY) != 0) {
     const int e = errno;
     ::close(fd);
     throw FirmwareError("cannot load firmware plug-in: " + path + ": " +

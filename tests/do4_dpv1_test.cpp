@@ -256,8 +256,9 @@ TEST(Do4Dpv1, DiagnosticAlarmOnEnteringOspAcknowledgedByTheMaster) {
 // on SAP 50 or 51 ("Alarm_Ack on SAP 50 or 51", manual-quotes.md, DPV1): the answer's DSAP is
 // the master's SSAP 51 (33h), its SSAP the slave's SAP. A slot DO4 does not have is "Error_Code_1
 // B2h = invalid slot" (manual-quotes.md), checked before the alarm's state, as a record's slot
-// is. Each answer telegram is SD2 68h, LE = LEr = 9 (DA, SA, FC, DSAP, SSAP and 4 bytes), DA 82h
-// (master 2 | SAP extension), SA 85h, FC 08h, then the FCS (the sum of DA..DU mod 256), 16h:
+// is: with no alarm outstanding too (else B5h, none outstanding; review B, finding 3). Each answer
+// telegram is SD2 68h, LE = LEr = 9 (DA, SA, FC, DSAP, SSAP and 4 bytes), DA 82h (master 2 | SAP
+// extension), SA 85h, FC 08h, then the FCS (the sum of DA..DU mod 256), 16h:
 //   33 33 DC 80 B2 00: 82+85+08+33+33+DC+80+B2+00 = 383h -> 83h
 //   33 33 5C 00 01 01: ... +5C+00+01+01 = 1D3h -> D3h
 //   33 32 DC 80 B2 00: one less: 82h;  33 32 5C 00 01 09: 1D3h - 1 + 8 = 1DAh -> DAh
@@ -277,6 +278,8 @@ TEST(Do4Dpv1, AlarmAckOnSap50Or51AndAWrongSlotThroughAScenario) {
       "diag\nexpect diag_byte 0 0x00\nexpect diag_byte 7 0x81\n"
       "alarm_ack slot=0 type=1 seq=0 spec=1 sap=51\n"
       "expect dpv1 error 80,B5,00\n"
+      "alarm_ack slot=1 type=1 seq=0 spec=1 sap=51\n"
+      "expect dpv1 error 80,B2,00\n"
       "exchange outputs=05,01\nexchange outputs=05,00\n"
       "alarm_ack slot=1 type=1 seq=1 spec=1\n"
       "expect dpv1 error 80,B2,00\n"
@@ -289,7 +292,7 @@ TEST(Do4Dpv1, AlarmAckOnSap50Or51AndAWrongSlotThroughAScenario) {
   ASSERT_TRUE(parse_scenario(text, "t.scn", s, err)) << err.text();
   const ScenarioOutcome o = run_scenario(s, {}, {});
   EXPECT_EQ(o.failures, std::vector<std::string>{});
-  EXPECT_EQ(o.passed, 13u);
+  EXPECT_EQ(o.passed, 14u);
 }
 
 // Without Enable_Diagnostic_Alarm the OSP mode is only a status block: no Ext_Diag, and an

@@ -12,6 +12,7 @@
 #include "dpc31/dp.hpp"
 #include "responder.hpp"
 #include "scenario.hpp"
+#include "segment.hpp"
 
 using namespace dpc31;
 
@@ -112,6 +113,85 @@ TEST(Dpv1Master, NoAnswerAfterRetries) {
   for (std::size_t i = before; i < r.master.history().size(); ++i) {
     EXPECT_EQ(r.master.history()[i].request, r.master.history()[before].request);
   }
+}
+
+// A master asking station 5 on a 1.5 Mbaud line (T = 32 clocks, a character 11 T) where only a
+// scripted sender answers: `bytes` TSDR 11 T after the end of request number `nth` (from 1), and
+// nothing to the others. The clock's chip only gives Dpv1Master its 48 MHz.
+struct ScriptedLine {
+  static constexpr std::uint64_t T = 32;
+  Chip clock;
+  Segment seg{1'500'000};
+  std::size_t rogue = seg.add_sender("rogue");
+  std::size_t m = seg.add_sender("master 2");
+  DpMaster master{seg, m, MasterConfig{}, {SlaveConfig{}}};
+  Dpv1Master dpv1;
+  std::vector<std::uint64_t> request_end;
+
+  ScriptedLine(std::size_t nth, std::vector<std::uint8_t> bytes, Dpv1Rules rules)
+      : dpv1(clock, master, rules) {
+    master.on_send = [this](std::uint64_t start, std::span<const std::uint8_t> request,
+                            const UartFault&) {
+      request_end.push_back(start + request.size() * 11 * T);
+    };
+    master.scheduler = [this, nth, bytes = std::move(bytes)](std::uint64_t cycle) {
+      if (request_end.size() == nth && !sent_) {
+        sent_ = true;
+        seg.run_until(request_end.back());
+        seg.send(rogue, bytes, request_end.back() + 11 * T);
+        return;
+      }
+      seg.run_until(cycle);
+    };
+  }
+
+ private:
+  bool sent_ = false;
+};
+
+// The no_answer cycle after a broken answer (review B, finding 1; docs/timing.md, "The master's
+// wait"): the wait ends a slot time (TSL = 100 T) after the answer's last character, not after
+// the request's. A Read answered by the first 6 characters of an SD2 response (68 07 07 68 02
+// 05): they end 11 T + 6 x 11 T = 77 T after the request, the master gives up at 177 T. A valid
+// telegram addressed otherwise (SD1 from 7, 6 characters) frees the line at its end, 77 T.
+// Before, both were request's end + 100 T.
+TEST(Dpv1Master, NoAnswerAfterABrokenAnswerEndsASlotTimeAfterIt) {
+  Dpv1Rules rules;
+  rules.retries = 0;
+  {
+    ScriptedLine l(1, {0x68, 0x07, 0x07, 0x68, 0x02, 0x05}, rules);
+    const Dpv1Answer a = l.dpv1.read(0, 1, 4);
+    EXPECT_EQ(a.outcome, Dpv1Answer::Outcome::no_answer);
+    ASSERT_EQ(l.request_end.size(), 1u);
+    EXPECT_EQ(a.end, l.request_end[0] + 177 * ScriptedLine::T);
+  }
+  {
+    ScriptedLine l(1, fdl::encode(fdl::make_frame(2, 7, fdl::make_response_fc(fdl::Response::OK))),
+                   rules);
+    const Dpv1Answer a = l.dpv1.read(0, 1, 4);
+    EXPECT_EQ(a.outcome, Dpv1Answer::Outcome::no_answer);
+    ASSERT_EQ(l.request_end.size(), 1u);
+    EXPECT_EQ(a.end, l.request_end[0] + 77 * ScriptedLine::T);
+  }
+}
+
+// `start` is the request's first start bit, the first try's (review B, finding 9; docs/dpv1.md,
+// "The outcome's cycle"), and the C1 time-out counts from it. The first try of a Read (15
+// characters) is lost, the retry gets SC (E5), its poll and the poll's retry nobody answers. The
+// retry starts TSL + TSYN = 133 T after the first try's end; the first try began 15 x 11 T before
+// that end. Before, `start` was the retry's.
+TEST(Dpv1Master, StartIsTheFirstTrysStartBit) {
+  Dpv1Rules rules;
+  rules.retries = 1;
+  ScriptedLine l(2, {0xE5}, rules);
+  const std::size_t before = l.master.history().size();
+  const Dpv1Answer a = l.dpv1.read(0, 1, 4);
+  EXPECT_EQ(a.outcome, Dpv1Answer::Outcome::no_answer);
+  ASSERT_EQ(l.master.history().size() - before, 4u);  // the Read twice, the poll twice
+  const Exchange& second = l.master.history()[before + 1];
+  ASSERT_TRUE(second.answer);
+  EXPECT_EQ(a.start, second.request_start - 133 * ScriptedLine::T - 15 * 11 * ScriptedLine::T);
+  EXPECT_EQ(a.start, l.master.history()[before].request_start);
 }
 
 // The negative response is parsed as such: a Write of the wrong length.

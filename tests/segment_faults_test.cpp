@@ -158,6 +158,18 @@ TEST(SegmentFaults, AnotherStationsAnswerAfterTheSlotTimeIsUnsolicited) {
   EXPECT_EQ(f.log[0].text, "bus: unsolicited: an answer from station 21 nobody asked for");
 }
 
+// An SC from TSL + TSYN on is unsolicited too: it carries no address (EN 50170: the single
+// character E5h), so its sender is named, as short_tsyn names it (review B, finding 6). Before, the
+// line said "an answer from station 0".
+TEST(SegmentFaults, AnUnsolicitedScNamesItsSender) {
+  Faults f;
+  f.ask_and_answer({fdl::SC}, kSlot + kTsyn);
+  f.expect_only(BusViolation::unsolicited, 1);
+  ASSERT_EQ(f.log.size(), 1U);
+  EXPECT_EQ(f.log[0].cycle, f.bits(kRequestEnd + kSlot + kTsyn));
+  EXPECT_EQ(f.log[0].text, "bus: unsolicited: an SC from rogue nobody asked for");
+}
+
 // A telegram that does not decode after the slot time is one bad frame, no late answer.
 TEST(SegmentFaults, ABrokenTelegramAfterTheSlotTimeIsOneBadFrame) {
   Faults f;

@@ -473,6 +473,16 @@ TEST(WavediffMap, ErrorsNameFileAndLine) {
   EXPECT_EQ(r.rc, 0);
   EXPECT_EQ(r.err, o.map_file + ":1: warning: no signal 'top.nothere' in A\n" + o.map_file +
                        ":1: warning: no signal 'top.neither' in B\n");
+  // Whole names, however long (review B, finding 8): two of 44 characters that share their first
+  // 40 are two warnings that tell them apart. Before, both were cut to the same 40 and "...".
+  const std::string stem = "tb.dut.u_dpc31_core.u_fdl.u_uart.rx_stat";  // 40 characters
+  o.map_file = d.write("long.map", stem + "e_q = top.x1\n" + stem + "e_d = top.x2\n");
+  r = run_opts(o);
+  EXPECT_EQ(r.rc, 0);
+  EXPECT_EQ(r.err, o.map_file + ":1: warning: no signal '" + stem + "e_q' in A\n" + o.map_file +
+                       ":1: warning: no signal 'top.x1' in B\n" + o.map_file +
+                       ":2: warning: no signal '" + stem + "e_d' in A\n" + o.map_file +
+                       ":2: warning: no signal 'top.x2' in B\n");
 }
 
 TEST(WavediffStrip, ExplicitAndAutomaticTopScopes) {

@@ -323,6 +323,24 @@ def test_the_example_of_docs_python_md_runs(traces):
     exec(compile(example, "docs/python.md", "exec"), {})
 
 
+def test_the_bus_check_takes_the_masters_slot_time():
+    # docs/python.md, "The bus check": slot_bits defaults to the largest TSL of the masters added.
+    # Set_Prm's MinTSDR 200 places every answer 200 T after its request's end (docs/timing.md,
+    # "answer": max(11, MinTSDR) T; the Set_Prm's own SC too). Master 2's TSL is 300 bit times, so
+    # it takes each answer (review B, finding 2): neither late (past TSL) nor unsolicited (past
+    # TSL + TSYN = 133 with the old default of 100).
+    seg = dpc31.Segment(1_500_000)
+    seg.add_station(5, "spc3", slave=dpc31.SlaveConfig(address=5, min_tsdr=200))
+    master = seg.add_master(2, [5], slot_bits=300)
+    check = seg.check_bus()
+    assert master.startup_all()
+    seg.flush()
+    late = [ex for ex in master.history
+            if ex.answer is not None and ex.answer_start - ex.request_end == 200 * T]
+    assert late, "no answer at MinTSDR 200"
+    assert (check.count("late_answer"), check.count("unsolicited")) == (0, 0), seg.bus_log
+
+
 def test_bad_input_is_a_clear_error_and_an_observers_exception_arrives():
     import pytest
     with pytest.raises(ValueError, match="baud 0 is not a PROFIBUS rate"):

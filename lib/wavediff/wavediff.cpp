@@ -181,14 +181,15 @@ void Engine::setup(Report& rep) {
     for (const LSig& l : A.sigs) an.insert(l.name);
     Warnings not_a(rep.warnings, o_.map_file, "names of the map not in A");
     Warnings not_b(rep.warnings, o_.map_file, "names of the map not in B");
+    // Whole names (Reader::kMaxName bounds them): hierarchical ones often share 40 characters.
     for (MapEntry& e : map) {
       if (an.count(e.a) == 0) {
-        not_a.add(
-            fmt::format("{}:{}: warning: no signal '{}' in A", o_.map_file, e.line, shown(e.a)));
+        not_a.add(fmt::format("{}:{}: warning: no signal '{}' in A", o_.map_file, e.line,
+                              shown(e.a, kWhole)));
       }
       if (!e.used_b) {
-        not_b.add(
-            fmt::format("{}:{}: warning: no signal '{}' in B", o_.map_file, e.line, shown(e.b)));
+        not_b.add(fmt::format("{}:{}: warning: no signal '{}' in B", o_.map_file, e.line,
+                              shown(e.b, kWhole)));
       }
     }
     not_a.finish();

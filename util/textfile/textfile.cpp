@@ -36,21 +36,28 @@ bool anonymous_pipe(const struct stat& st) {
 
 bool read_text_file(const std::string& path, std::size_t max_bytes, std::string_view what,
                     std::string& text, std::string& error) {
-  // A named FIFO or a device is refused unopened: opening a FIFO waits for a writer (the run
-  // hung), a device is no input file (/dev/zero fills the cap). A pipe is read as a file is.
-  struct stat st {};
-  if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode) &&
-      !anonymous_pipe(st)) {
-    error = fmt::format("not a regular file, not {} {} file", article(what), what);
-    return false;
-  }
-  // Opened once (a pipe can be read only once) and read in pieces: memory follows what the file
-  // holds, not the cap (a cap of 256 MiB is not allocated for /dev/null).
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  // Opened once (a pipe can be read only once), without waiting: a named FIFO's open() would
+  // wait for a writer (the run hung). What was opened is judged by its descriptor, so nothing
+  // renamed in at the path meanwhile gets past: a FIFO or a device (/dev/zero fills the cap) is
+  // refused, a pipe is read as a file is, then in blocking reads.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
   if (fd < 0) {
     error = errno == ENOENT ? "no such file" : "cannot open the file";
     return false;
   }
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || ::fcntl(fd, F_SETFL, O_RDONLY) != 0) {
+    ::close(fd);
+    error = "cannot open the file";
+    return false;
+  }
+  if (!S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode) && !anonymous_pipe(st)) {
+    ::close(fd);
+    error = fmt::format("not a regular file, not {} {} file", article(what), what);
+    return false;
+  }
+  // Read in pieces: memory follows what the file holds, not the cap (a cap of 256 MiB is not
+  // allocated for /dev/null).
   const bool read = read_text_fd(fd, max_bytes, what, text, error);
   ::close(fd);
   return read;
@@ -100,9 +107,9 @@ std::string not_text(unsigned char c) {
                 : fmt::format("a control byte \\x{:02X}: not a text file", c);
 }
 
-std::string shown(std::string_view s) {
+std::string shown(std::string_view s, std::size_t max_chars) {
   std::string out;
-  for (std::size_t i = 0; i < s.size() && i < 40; ++i) {
+  for (std::size_t i = 0; i < s.size() && i < max_chars; ++i) {
     const auto c = static_cast<unsigned char>(s[i]);
     if (c >= 0x20 && c < 0x7F) {
       out += static_cast<char>(c);
@@ -110,7 +117,7 @@ std::string shown(std::string_view s) {
       out += fmt::format("\\x{:02X}", c);
     }
   }
-  if (s.size() > 40) out += "...";
+  if (s.size() > max_chars) out += "...";
   return out;
 }
 

@@ -53,8 +53,9 @@ int cut_or_earlier_error(std::string_view text, std::string& error, Parse parse)
 // FILE:LINE: "a NUL byte: not a text file", "a control byte \x1B: not a text file".
 std::string not_text(unsigned char c);
 
-// A token as it may appear in a one-line message: printable (other bytes as \xHH), at most 40
-// characters and "...".
-std::string shown(std::string_view s);
+// A token as it may appear in a one-line message: printable (other bytes as \xHH), at most
+// `max_chars` characters and "..." (a name its reader bounds already: kWhole, never cut).
+inline constexpr std::size_t kWhole = std::string_view::npos;
+std::string shown(std::string_view s, std::size_t max_chars = 40);
 
 }  // namespace dpc31
