@@ -17,6 +17,7 @@
 #include "dpc31/chip.hpp"
 #include "dpc31/dpc31_regs.h"
 #include "scenario.hpp"
+#include "test_files.hpp"
 #include "trace.hpp"
 
 // A namespace of its own: the file shares a unity source with scenario_test.cpp.
@@ -80,17 +81,8 @@ Walk run(const std::string& text, const fs::path& path, dpc31::Engine engine,
 
 // A directory of its own for the images a test writes (removed with it).
 struct ImageDir {
-  fs::path dir;
-  ImageDir() {
-    std::string name = (fs::temp_directory_path() / "walk_test_XXXXXX").string();
-    dir = ::mkdtemp(name.data());
-  }
-  ~ImageDir() {
-    std::error_code ec;
-    fs::remove_all(dir, ec);
-  }
-  ImageDir(const ImageDir&) = delete;
-  ImageDir& operator=(const ImageDir&) = delete;
+  testutil::TempDir tmp;
+  fs::path dir{tmp.path()};
   void put(const std::string& name, const std::string& text) const {
     std::ofstream(dir / name) << text;
   }
