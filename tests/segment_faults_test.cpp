@@ -138,36 +138,36 @@ TEST(SegmentFaults, TheAskedStationsAnswerIsLateUntilTheAskerMaySendAgain) {
             "100)");
 }
 
-// From TSL + TSYN on it is an answer nobody asked for.
-TEST(SegmentFaults, TheAskedStationsAnswerFromTheSlotTimePlusTsynIsUnsolicited) {
+// An answer `after` bit times past the request's end that the check counts as one unsolicited
+// telegram, with its one log line at the answer's start.
+void expect_one_unsolicited(const std::vector<std::uint8_t>& answer, std::uint64_t after,
+                            const std::string& line) {
   Faults f;
-  f.ask_and_answer(status_answer(2, 20), kSlot + kTsyn);
+  f.ask_and_answer(answer, after);
   f.expect_only(BusViolation::unsolicited, 1);
   ASSERT_EQ(f.log.size(), 1U);
-  EXPECT_EQ(f.log[0].cycle, f.bits(kRequestEnd + kSlot + kTsyn));
-  EXPECT_EQ(f.log[0].text, "bus: unsolicited: an answer from station 20 nobody asked for");
+  EXPECT_EQ(f.log[0].cycle, f.bits(kRequestEnd + after));
+  EXPECT_EQ(f.log[0].text, line);
+}
+
+// From TSL + TSYN on it is an answer nobody asked for.
+TEST(SegmentFaults, TheAskedStationsAnswerFromTheSlotTimePlusTsynIsUnsolicited) {
+  expect_one_unsolicited(status_answer(2, 20), kSlot + kTsyn,
+                         "bus: unsolicited: an answer from station 20 nobody asked for");
 }
 
 // Another station's telegram after the slot time is not the request's wrong answer: unsolicited.
 TEST(SegmentFaults, AnotherStationsAnswerAfterTheSlotTimeIsUnsolicited) {
-  Faults f;
-  f.ask_and_answer(status_answer(2, 21), kSlot + 1);
-  f.expect_only(BusViolation::unsolicited, 1);
-  ASSERT_EQ(f.log.size(), 1U);
-  EXPECT_EQ(f.log[0].cycle, f.bits(kRequestEnd + kSlot + 1));
-  EXPECT_EQ(f.log[0].text, "bus: unsolicited: an answer from station 21 nobody asked for");
+  expect_one_unsolicited(status_answer(2, 21), kSlot + 1,
+                         "bus: unsolicited: an answer from station 21 nobody asked for");
 }
 
 // An SC from TSL + TSYN on is unsolicited too: it carries no address (EN 50170: the single
 // character E5h), so its sender is named, as short_tsyn names it (review B, finding 6). Before, the
 // line said "an answer from station 0".
 TEST(SegmentFaults, AnUnsolicitedScNamesItsSender) {
-  Faults f;
-  f.ask_and_answer({fdl::SC}, kSlot + kTsyn);
-  f.expect_only(BusViolation::unsolicited, 1);
-  ASSERT_EQ(f.log.size(), 1U);
-  EXPECT_EQ(f.log[0].cycle, f.bits(kRequestEnd + kSlot + kTsyn));
-  EXPECT_EQ(f.log[0].text, "bus: unsolicited: an SC from rogue nobody asked for");
+  expect_one_unsolicited({fdl::SC}, kSlot + kTsyn,
+                         "bus: unsolicited: an SC from rogue nobody asked for");
 }
 
 // A telegram that does not decode after the slot time is one bad frame, no late answer.
