@@ -126,7 +126,8 @@ void bind_frames(py::module_& m) {
       .def_readonly("answer", &Exchange::answer)
       .def_readonly("stray", &Exchange::stray)
       .def_readonly("answer_start", &Exchange::answer_start)
-      .def_readonly("answer_end", &Exchange::answer_end);
+      .def_readonly("answer_end", &Exchange::answer_end)
+      .def_readonly("wait_end", &Exchange::wait_end);
   py::class_<MasterCounters>(m, "MasterCounters")
       .def_readonly("requests", &MasterCounters::requests)
       .def_readonly("answered", &MasterCounters::answered)

@@ -473,6 +473,7 @@ void DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bool n
     ex.answer_start = 0;
     ex.answer_end = 0;
     ex.stray.reset();
+    ex.wait_end = 0;
   } else {
     wait_answer(ex, req);
     if (ex.answer) {
@@ -530,11 +531,11 @@ void DpMaster::wait_answer(Exchange& ex, const fdl::Frame* req) {
     }
     answer_.push_block(block, block_start, t_);
     if (answer_.finished() && !rx_.receiving()) {
-      bus_free_ = answer_.end();
+      bus_free_ = ex.wait_end = answer_.end();
       break;
     }
     if (at >= Chip::kLastCycle) {  // the chips' time has ended: no character comes any more
-      bus_free_ = at;
+      bus_free_ = ex.wait_end = at;
       break;
     }
     // The one rule of the wait: a slot time after the last character on the line (the
@@ -548,7 +549,9 @@ void DpMaster::wait_answer(Exchange& ex, const fdl::Frame* req) {
     const bool late_start = !answer_.started() && rx_.receiving() && !passed(rx_.busy_from()) &&
                             rx_.busy_from() > last_start;
     if (late || late_start || (!rx_.receiving() && at >= wait_end)) {
+      // The wait ended at wait_end; a late start bit is found only at or past it.
       bus_free_ = at;
+      ex.wait_end = wait_end;
       break;
     }
     // Event-driven: sleep until a start bit (TxD falls) or the wait ends; once the length is

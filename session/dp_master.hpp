@@ -88,6 +88,11 @@ struct Exchange {
   // A valid telegram in the answer's place whose DA and SA are not the request's SA and DA (an
   // SC has none): not its answer, so `answer` is nullopt (docs/timing.md, "The master's wait").
   std::optional<fdl::Frame> stray;
+  // Where the master's wait ended (docs/timing.md, "The master's wait"): a slot time after the
+  // last character on the line when none came or the answer stopped short; the end of a telegram
+  // that ended it complete (decoded or not, a bad FCS) or broken by a bad character. 0: no wait
+  // (send-data-no-acknowledge).
+  std::uint64_t wait_end = 0;
 };
 
 // Puts `bytes` on the chip's RxD as back-to-back UART characters from `start`: one telegram

@@ -46,11 +46,7 @@ std::uint64_t Dpv1Master::cycles_10ms(std::uint32_t units) const {
 void Dpv1Master::take(Dpv1Answer& a, const Exchange& ex) const {
   a.last = ex.answer;
   if (!ex.answer) {
-    // The master's wait (docs/timing.md): a telegram addressed otherwise frees the line at its
-    // end; else it ends a slot time after the last character, the request's or a cut-short
-    // answer's.
-    a.end = ex.stray ? ex.answer_end
-                     : (ex.answer_end != 0 ? ex.answer_end : ex.request_end) + m_.slot_cycles();
+    a.end = ex.wait_end;  // docs/timing.md, "The master's wait"
     a.outcome = Dpv1Answer::Outcome::no_answer;
     return;
   }

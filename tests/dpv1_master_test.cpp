@@ -175,6 +175,27 @@ TEST(Dpv1Master, NoAnswerAfterABrokenAnswerEndsASlotTimeAfterIt) {
   }
 }
 
+// A complete answer with a bad FCS (a collision can make one; docs/timing.md, "The master's
+// wait"): the master's receiver knows it complete at its last character (SD1: 6 characters),
+// so the wait ends at its end, and so does no_answer, as a telegram addressed otherwise frees
+// the line there. SD1 DA 2 SA 5 FC 08h, FCS 00h (the right one is 02h + 05h + 08h = 0Fh), ED
+// 16h: 11 T after the request's end, 6 x 11 T long, it ends 77 T after the request. Before, the
+// outcome's cycle was a slot time later, 177 T, as after an answer cut short.
+TEST(Dpv1Master, NoAnswerAfterACompleteAnswerWithABadFcsEndsAtItsEnd) {
+  Dpv1Rules rules;
+  rules.retries = 0;
+  ScriptedLine l(1, {0x10, 0x02, 0x05, 0x08, 0x00, 0x16}, rules);
+  const Dpv1Answer a = l.dpv1.read(0, 1, 4);
+  EXPECT_EQ(a.outcome, Dpv1Answer::Outcome::no_answer);
+  ASSERT_EQ(l.request_end.size(), 1u);
+  EXPECT_EQ(a.end, l.request_end[0] + 77 * ScriptedLine::T);
+  const Exchange& ex = l.master.history().back();
+  EXPECT_FALSE(ex.answer);
+  EXPECT_FALSE(ex.stray);
+  EXPECT_EQ(ex.answer_end, l.request_end[0] + 77 * ScriptedLine::T);
+  EXPECT_EQ(ex.wait_end, ex.answer_end);
+}
+
 // `start` is the request's first start bit, the first try's (review B, finding 9; docs/dpv1.md,
 // "The outcome's cycle"), and the C1 time-out counts from it. The first try of a Read (15
 // characters) is lost, the retry gets SC (E5), its poll and the poll's retry nobody answers. The

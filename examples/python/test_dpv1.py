@@ -165,3 +165,20 @@ def test_alarm_ack_to_sap_51_is_answered_on_sap_51():
     assert (b.du, b.last.dsap, b.last.ssap) == (bytes([0x5C, 0x00, 0x01, 0x20]), 51, 50)
     assert b.last.encode() == bytes([0x68, 0x09, 0x09, 0x68, 0x82, 0x85, 0x08, 0x33, 0x32, 0x5C,
                                      0x00, 0x01, 0x20, 0xF1, 0x16])
+
+
+def test_no_answer_is_reported_where_the_masters_wait_ends():
+    """`Exchange.wait_end` is where the master's wait ended, and a DPV1 no_answer's cycle
+    (docs/timing.md, "The master's wait"; docs/dpv1.md, "The outcome's cycle"). A chip nobody
+    started answers nothing: each try's wait ends TSL = 100 bit times (T = 4 at 12 Mbaud) after
+    its request's last stop bit."""
+    chip = dpc31.Chip("vpc3plus")
+    master = dpc31.Master(chip, address=2, baud=12_000_000,
+                          slave=dpc31.SlaveConfig(address=5, user_prm=b"\xC0\x00\x00"))
+    master.dpv1_rules.retries = 1
+    a = master.dpv1_read(0, 1, 4)
+    assert a.outcome == dpc31.Dpv1Outcome.no_answer
+    tries = master.history[-2:]
+    assert [e.answer_end for e in tries] == [0, 0]
+    assert [e.wait_end - e.request_end for e in tries] == [400, 400]
+    assert a.end == tries[-1].wait_end

@@ -174,6 +174,7 @@ class Exchange:
     stray: Optional[Frame]
     answer_start: int
     answer_end: int
+    wait_end: int
 
 class MasterCounters:
     requests: int
