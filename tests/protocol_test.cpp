@@ -450,6 +450,53 @@ TEST_P(Protocol, DpWatchdogExpiresAtTheExactCycle) {
   EXPECT_EQ(b.user.outputs.back().data, (Bytes{0, 0, 0, 0}));
 }
 
+// A write to WD_Baud_Control_Val in the cycle the watchdog starts Baud_Control (docs/timing.md,
+// "Order within one cycle": the protocol side and the watchdog's deadline, steps 2 and 3, come
+// before a bus access completing in that cycle, step 5; "Baud_Control": WD_Baud_Control_Val x 10
+// ms, x 2 on the VPC3+, taken at each (re)start). The responder wrote 10h (160 ms); the test
+// writes 01h completing at the DP watchdog's expiry, 02h completing at the cycle the baud search
+// finds the rate again. Each start takes the value from before that cycle's write; the next one
+// takes the written value: 160, 10, then 20 ms (x 2 on the VPC3+).
+TEST_P(Protocol, WdBaudControlWriteInTheCycleOfItsStartActsFromTheNextStart) {
+  Bench b(GetParam(), 12'000'000, config());  // WD 10 x 10 x 10 ms = 1 s
+  const std::uint64_t ms = (GetParam() == Profile::vpc3plus ? 2u : 1u) * 48'000u;
+  // A write-only register: its write side (Chip::addr_of).
+  const auto addr = static_cast<std::uint32_t>(b.chip.addr_of(RegId::WD_Baud_Control_Val));
+  DirectBus bus(b.chip);
+  // A bus write of `v` that completes at cycle `c` (an access takes 4 clocks, docs/timing.md).
+  const auto write_at = [&](std::uint64_t c, std::uint8_t v) {
+    b.chip.step(c - 4 - b.chip.cycle());
+    bus.write(addr, v);
+    ASSERT_EQ(b.chip.cycle(), c);
+  };
+  // Baud_Control runs from `from` for exactly `len` clocks, then Baud_Search.
+  const auto baud_control = [&](std::uint64_t from, std::uint64_t len) {
+    EXPECT_EQ(b.chip.wd_state(), WdState::Baud_Control);
+    b.chip.step(from + len - 1 - b.chip.cycle());
+    EXPECT_EQ(b.chip.wd_state(), WdState::Baud_Control);
+    b.chip.step(1);
+    EXPECT_EQ(b.chip.wd_state(), WdState::Baud_Search);
+  };
+  // FDL_Status 5 <- 2 TSYN into the 12 Mbaud window that opens at `window` (T = 4): acted on at
+  // its last stop sample, end - 2, where the rate is found and Baud_Control starts.
+  const auto find_rate = [&](std::uint64_t window) {
+    const Bytes req = {0x10, 0x05, 0x02, 0x49, 0x50, 0x16};
+    return send_on_rxd(b.chip, req, window + 33 * 4, 4) - 2;
+  };
+  ASSERT_TRUE(b.master.startup());
+  const Exchange dx = b.master.data_exchange({6, 6, 6, 6});
+  const std::uint64_t expiry = b.acted(dx) + 48'000'000;
+  b.master.idle(expiry - 4 - b.chip.cycle());
+  write_at(expiry, 0x01);
+  baud_control(expiry, 160 * ms);
+  const std::uint64_t found = find_rate(expiry + 160 * ms);
+  write_at(found, 0x02);
+  baud_control(found, 10 * ms);
+  const std::uint64_t again = find_rate(found + 10 * ms);
+  b.chip.step(again - b.chip.cycle());
+  baud_control(again, 20 * ms);
+}
+
 TEST_P(Protocol, DpWatchdogWith1msBase) {
   ResponderConfig rc = config();
   rc.slave.wd_base_1ms = true;
