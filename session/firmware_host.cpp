@@ -111,7 +111,7 @@ std::unique_ptr<std::max_align_t[]> new_instance(const dpc31_builtin* b) {
 
 FirmwareHost::FirmwareHost(const dpc31_firmware& fw)
     : fw_(fw),
-      hang_name_(fmt::format("firmware {}", fw.name)),
+      name_(fmt::format("firmware {}", fw.name)),
       builtin_(dpc31_builtin_of(&fw)),
       self_(new_instance(builtin_)),
       run_(builtin_ != nullptr ? nullptr : plugin_copy(fw)),
@@ -124,17 +124,17 @@ FirmwareHost::FirmwareHost(const dpc31_firmware& fw)
       // Thrown through the firmware's C frames as the reset line's error is: the plug-in's unwind
       // tables (gcc's and clang's default) carry it to the host (docs/decisions.md).
       errors_([this](const char* message) {
-        throw FirmwareError(fmt::format("firmware {}: {}", fw_.name, message));
+        throw FirmwareError(fmt::format("{}: {}", name_, message));
       }),
       input_errors_([this](const char* message) {
         throw FirmwareError(fmt::format(
-            "firmware {}: {} (hw_input runs with no chip selected: it notes the input for the "
-            "ISR or the main loop)",
-            fw_.name, message));
+            "{}: {} (hw_input runs with no chip selected: it notes the input for the ISR or the "
+            "main loop)",
+            name_, message));
       }) {}
 
 void FirmwareHost::name_station(std::uint8_t address) {
-  hang_name_ = fmt::format("station {}: firmware {}", address, fw_.name);
+  name_ = fmt::format("station {}: firmware {}", address, fw_.name);
 }
 
 void FirmwareHost::init(BusPort& bus, std::uint8_t station_address) {
@@ -230,9 +230,9 @@ std::string FirmwareHost::port_name(unsigned port) const {
 void FirmwareHost::reset_line(bool asserted) {
   if (asserted && bus_->chip().started()) {
     throw FirmwareError(fmt::format(
-        "firmware {}: reset line asserted at cycle {} after the chip was started (a reset "
-        "during operation is not modelled)",
-        fw_.name, bus_->cycle()));
+        "{}: reset line asserted at cycle {} after the chip was started (a reset during "
+        "operation is not modelled)",
+        name_, bus_->cycle()));
   }
 }
 

@@ -58,8 +58,8 @@ class FirmwareHost final : private board::Hooks {
  public:
   explicit FirmwareHost(const dpc31_firmware& fw);
 
-  // The hang guard names the station too ("station 5: firmware DO4", as on a segment, where
-  // several stations may run one firmware); before init.
+  // The firmware's fault lines and the hang guard's name the station too ("station 5: firmware
+  // DO4: ...", as on a segment, where several stations may run one firmware); before init.
   void name_station(std::uint8_t address);
   // main()'s set-up: the firmware configures and starts the chip.
   void init(BusPort& bus, std::uint8_t station_address);
@@ -105,10 +105,11 @@ class FirmwareHost final : private board::Hooks {
   void reset_line(bool asserted) override;
   void int_enable(bool enabled) override;
   void wait_1ms() override;
-  [[nodiscard]] const std::string& hang_name() const override { return hang_name_; }
+  [[nodiscard]] const std::string& hang_name() const override { return name_; }
 
   const dpc31_firmware& fw_;
-  std::string hang_name_;
+  // "firmware NAME", or "station N: firmware NAME": what its fault and hang lines begin with.
+  std::string name_;
   const dpc31_builtin* builtin_;               // a built-in: its entry points on self_
   std::unique_ptr<std::max_align_t[]> self_;   // the built-in's instance
   std::shared_ptr<const dpc31_firmware> run_;  // else the plug-in copy this station runs

@@ -134,8 +134,8 @@ struct Scenario {
   // The firmware's descriptor: a built-in's from the parse, a plug-in's once bind_plugin() has
   // loaded it (nullptr before: parsing never loads code).
   const dpc31_firmware* firmware_desc = nullptr;
-  int plugin_line = 0;  // the 'firmware' line naming a plug-in
-  std::string text;     // the scenario's text while a plug-in waits for bind_plugin()
+  int firmware_line = 0;  // the 'firmware' line (0: none), a plug-in's or a built-in's
+  std::string text;       // the scenario's text while a plug-in waits for bind_plugin()
   // load_scenario(): why another user could have changed the file ("" if none could); a
   // scenario that names a plug-in is then refused (docs/security.md).
   std::string untrusted;

@@ -69,14 +69,14 @@ bool plugin_pending(const Scenario& s) { return !s.firmware.empty() && s.firmwar
 bool bind_plugin(Scenario& s, ScenarioError& err) {
   if (!plugin_pending(s)) return true;
   if (!s.untrusted.empty()) {
-    err = ScenarioError{s.file, s.plugin_line, plugin_refused_untrusted(s.untrusted)};
+    err = ScenarioError{s.file, s.firmware_line, plugin_refused_untrusted(s.untrusted)};
     return false;
   }
   const dpc31_firmware* fw = nullptr;
   try {
     fw = &find_firmware(s.firmware);
   } catch (const FirmwareError& e) {
-    err = ScenarioError{s.file, s.plugin_line, e.what()};
+    err = ScenarioError{s.file, s.firmware_line, e.what()};
     return false;
   }
   Scenario bound;

@@ -377,13 +377,13 @@ class Parser {
         fail("'firmware' excludes 'user' and 'record' (the built-in user side's)");
       if (s_.cpu) fail("'firmware' and 'cpu' exclude each other");
       firmware_seen_ = true;
+      s_.firmware_line = step_.line;
       std::string spec(pos_[0]);
       if (is_plugin_path(spec)) {
         spec = beside_scenario(spec);
         // Never loaded while parsing: bind_plugin() loads it before the run, once the whole file
         // has parsed (and the command has checked everything else), then parses again with it.
         s_.firmware = spec;
-        s_.plugin_line = step_.line;
         fw_ = bound_;
       } else {
         try {

@@ -292,13 +292,14 @@ TEST_F(BadInput, RunOptionValues) {
   const std::string scn = kTraces + "gc_clear_spc3.scn";
   spit(path("old.vcd"), "old");
   const auto before = listing();
-  // Ours: checked after the scenario parsed, before anything is written.
+  // Ours: checked after the scenario parsed, before anything is written. The line names what is
+  // accepted (docs/waveforms.md: 1fs .. 10ns at 48 MHz), not us, ms or 1s: each is longer than a
+  // clock cycle and refused too.
   expect_bad(dpc31("run " + scn + " --vcd old.vcd --timescale 3ns"),
-             "dpc31 run: --timescale '3ns': use 1, 10 or 100 with fs, ps, ns, us or ms, or 1s",
-             "timescale");
+             "dpc31 run: --timescale '3ns': use 1, 10 or 100 fs or ps, or 1 or 10 ns", "timescale");
   // Above 1 s: refused all the same.
   expect_bad(dpc31("run " + scn + " --la-vcd old.vcd --timescale 10s"),
-             "dpc31 run: --timescale '10s': use 1, 10 or 100 with fs, ps, ns, us or ms, or 1s",
+             "dpc31 run: --timescale '10s': use 1, 10 or 100 fs or ps, or 1 or 10 ns",
              "timescale above 1 s");
   // A waveform's option without a waveform acts on nothing: refused whatever its value ("No
   // silent options"; a good --timescale, --signals, --from and --to were ignored), for one chip
@@ -730,6 +731,11 @@ TEST_F(BadInput, CosimReplayHeaderLinesAgree) {
        "(delete this line)"},
       {"rtl and a model", "# rtl " + a + "\n# rtl-model " + a + "\n", "",
        "2: '# rtl-model' beside the '# rtl' of line 1: one model at a time"},
+      // A header key with several words names no one thing: refused, not a silent comment.
+      {"a profile of two words", "# dpc31 cosim stimulus trace\n# profile dpc31 spc3\n", "",
+       "2: '# profile' takes one value, not 'dpc31 spc3': a header line names one thing"},
+      {"a seed of two words", "# seed 1 2\n", "",
+       "1: '# seed' takes one value, not '1 2': a header line names one thing"},
   };
   spit(path("old.xml"), "old");
   int i = 0;
@@ -749,8 +755,12 @@ TEST_F(BadInput, CosimReplayHeaderLinesAgree) {
   file("variant.stim", "# variant b\n" + body);
   EXPECT_EQ(dpc31("cosim --replay mutant.stim --profile vpc3plus --quiet").rc, 0);
   EXPECT_EQ(dpc31("cosim --replay variant.stim --profile vpc3plus --quiet").rc, 0);
-  // A key with no value is a comment, the path keys' too (docs/decisions.md, s25-trace).
-  file("bare.stim", "# rtl\n# define\n# rtl-model \n" + body);
+  // A key with no value is a comment, the path keys' too (docs/decisions.md, s25-trace), and so
+  // is a line whose first word is no key (the writer's own first line).
+  file("bare.stim",
+       "# dpc31 cosim stimulus trace\n# rtl\n# define\n# rtl-model \n# profile\n# note: profile "
+       "dpc31 spc3\n" +
+           body);
   EXPECT_EQ(dpc31("cosim --replay bare.stim --quiet").rc, 0);
 }
 
@@ -1123,7 +1133,7 @@ TEST_F(BadInput, RegsAndDemoOptions) {
   EXPECT_EQ(r.out, "");
   // A bad --timescale: one line before the output directory is made or anything printed.
   r = dpc31("demo --out-dir fresh --timescale 1min");
-  expect_bad(r, "dpc31 demo: --timescale '1min': use 1, 10 or 100 with fs, ps, ns, us or ms, or 1s",
+  expect_bad(r, "dpc31 demo: --timescale '1min': use 1, 10 or 100 fs or ps, or 1 or 10 ns",
              "demo timescale");
   EXPECT_EQ(r.out, "");
   EXPECT_FALSE(fs::exists(path("fresh")));
@@ -1282,8 +1292,9 @@ TEST_F(BadInput, FirmwarePlugins) {
       "loop, e.g. its fatal-error handler?); stopped";
   expect_bad(dpc31("bridge --pty p --firmware " + spin), "dpc31 bridge: firmware BAD" + hangs,
              "spin");
-  file("spin.scn", "firmware " + spin + "\nstartup\n");
-  expect_bad(dpc31("run spin.scn --json spin.json"), "dpc31 run: firmware BAD" + hangs,
+  // A scenario's line names its file and the `firmware` line (docs/bring-up.md, section 4).
+  file("spin.scn", "# spins\nfirmware " + spin + "\nstartup\n");
+  expect_bad(dpc31("run spin.scn --json spin.json"), "dpc31 run: spin.scn:2: firmware BAD" + hangs,
              "spin in run");
   // On a segment several stations may run one firmware: the line names the station that spins
   // (docs/bring-up.md, section 4).
@@ -1333,7 +1344,9 @@ TEST_F(BadInput, AFifoIsNoPluginAndNoImage) {
 
 // A firmware that misuses the C HAL (a NULL buffer) is a firmware fault at every door, as a reset
 // of the started chip is: the HAL's message in one line, exit 2, no output or temporary left, the
-// bridge's symlink removed; in init (the caller's stack) and in the ISR (the host CPU's).
+// bridge's symlink removed; in init (the caller's stack) and in the ISR (the host CPU's). The line
+// names where the firmware runs (docs/bring-up.md, section 4): a scenario's file and `firmware`
+// line; on a segment, and among the bridge's --slave stations, the station.
 TEST_F(BadInput, FirmwareFaults) {
   const std::vector<std::pair<std::string, std::string>> plugins = {
       {BAD_PLUGIN_HAL_INIT, "firmware BAD: CopyToVpc3: local buffer is NULL with length 4"},
@@ -1343,7 +1356,16 @@ TEST_F(BadInput, FirmwareFaults) {
   for (const auto& [lib, line] : plugins) {
     file("fault.scn", "profile vpc3plus\nfirmware " + lib + "\nstartup\n");
     expect_bad(dpc31("run fault.scn --json o/out.json --record o/out.trace --vcd o/out.vcd"),
-               "dpc31 run: fault.scn: " + line, lib + " run");
+               "dpc31 run: fault.scn:2: " + line, lib + " run");
+    file("segfault.scn",
+         "segment\nstation 5 profile=spc3 firmware=DO4\nstation 6 "
+         "profile=vpc3plus firmware=" +
+             lib + "\nstartup\n");
+    expect_bad(dpc31("run segfault.scn --json o/out.json"),
+               "dpc31 run: segfault.scn: station 6: " + line, lib + " segment");
+    expect_bad(
+        dpc31("bridge --pty " + path("dpn") + " --slave 5:DO4 --slave 7:" + lib + ":vpc3plus"),
+        "dpc31 bridge: station 7: " + line, lib + " --slave");
     expect_bad(dpc31("bridge --profile vpc3plus --pty " + path("dpn") + " --firmware " + lib),
                "dpc31 bridge: " + line, lib + " bridge");
     expect_bad(
@@ -1357,7 +1379,8 @@ TEST_F(BadInput, FirmwareFaults) {
                "dpc31 demo: " + line, lib + " demo, a new --out-dir");
     expect_bad(dpc31("demo --profile vpc3plus --firmware " + lib, "TMPDIR=" + path("o")),
                "dpc31 demo: " + line, lib + " demo in TMPDIR");
-    EXPECT_EQ(listing(), (std::vector<std::string>{"fault.scn", "o"})) << lib;  // no symlink
+    EXPECT_EQ(listing(), (std::vector<std::string>{"fault.scn", "o", "segfault.scn"}))
+        << lib;  // no symlink
     EXPECT_TRUE(fs::is_empty(path("o"))) << lib;
   }
 }

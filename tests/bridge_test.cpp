@@ -261,6 +261,32 @@ TEST_F(BridgeEngine, AGarbageFloodIsLoggedInAFewLinesAndDiscardedWithItsClient) 
   EXPECT_LE(engine_->cycle() - closed, (dpc31::bridge::kMaxGarbageRun * 11 + 100) * kT);
 }
 
+// The drop line says what is true (docs/bridge.md, "One request at a time": one line a second of
+// chip time at most, "N bytes dropped in the last T ms"): one byte is "1 byte"; T runs from the
+// first byte it counts, rounded up, so a drop reported in its own cycle is "in the last 1 ms" (it
+// said "1 bytes ... in the last 0 ms"), and one 1001.5 ms ago (48 072 000 clocks at 48 MHz,
+// docs/timing.md) "in the last 1002 ms" (it said 1001).
+TEST_F(BridgeEngine, TheDropLineCountsItsBytesAndTheTimeTheyTook) {
+  engine_->run_until(48'000'000);  // a second since the start: the first drop is reported at once
+  lines_.clear();
+  // Nothing carried yet: the queue holds kMaxQueuedBytes, the next byte is dropped.
+  engine_->feed(Bytes(dpc31::bridge::kMaxQueuedBytes, 0xFF));
+  const std::uint64_t first = engine_->cycle();
+  engine_->feed(Bytes{0xFF});
+  engine_->feed(Bytes{0xFF, 0xFF});  // within a second of that report: counted for the next one
+  engine_->run_until(first + 48'072'000);
+  engine_->flush_log();
+  std::vector<std::pair<std::uint64_t, std::string>> drops;
+  for (const Line& l : tagged("NOTE")) {
+    if (l.text.find(" dropped in the last ") != std::string::npos)
+      drops.emplace_back(l.cycle, l.text);
+  }
+  const std::string why = " ms: the client writes faster than the bus carries";
+  EXPECT_EQ(drops, (std::vector<std::pair<std::uint64_t, std::string>>{
+                       {first, "1 byte dropped in the last 1" + why},
+                       {first + 48'072'000, "2 bytes dropped in the last 1002" + why}}));
+}
+
 // The next master after such a flood is answered within one round of the baud search (the
 // flood fixed no rate, so Baud_Control has expired): docs/timing.md, Baud_Search: max(4096 bit
 // times, 20 ms) at each of the 10 rates, 12 M first (tests/baud_search.hpp). Plus one unanswered

@@ -409,7 +409,7 @@ TEST(ServeSecurity, IdleTimeoutIsOnByDefault) {
 
 // Connections that never send a first line are closed after the first-line timeout, and give way
 // to a newcomer when the server is full: they cannot lock the others out, even with the idle
-// timeout off.
+// timeout off. Each is told why before it is closed (docs/protocol.md, "Asynchronous lines").
 TEST(ServeSecurity, SilentConnectionsCannotLockOthersOut) {
   {
     ServerProcess server(kCli, {"--tcp", "0", "--max-clients", "3", "--idle-timeout", "0"});
@@ -423,7 +423,9 @@ TEST(ServeSecurity, SilentConnectionsCannotLockOthersOut) {
     LineClient b = LineClient::tcp(server.port());
     EXPECT_EQ(b.command("ping"), "OK pong");
     EXPECT_TRUE(s1.read_until_closed().empty());  // the oldest silent ones gave way
+    EXPECT_EQ(s1.async, std::vector<std::string>{"! bye max_clients"});
     EXPECT_TRUE(s2.read_until_closed().empty());
+    EXPECT_EQ(s2.async, std::vector<std::string>{"! bye max_clients"});
     LineClient c = LineClient::tcp(server.port());  // three established: busy, as before
     const std::vector<std::string> lines = c.read_until_closed();
     ASSERT_EQ(lines.size(), 1u);

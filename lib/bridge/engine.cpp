@@ -277,10 +277,15 @@ void Engine::drop(std::size_t bytes) {
 
 void Engine::report_dropped() {
   if (dropped_ == 0) return;
+  // The time since the first of them, rounded up and at least 1 ms, so that the line is true
+  // (rounded down, a drop reported in its own cycle was "in the last 0 ms").
+  const std::uint64_t hz = chip().clock_hz();
+  const std::uint64_t ms =
+      std::max<std::uint64_t>(1, ((cycle() - dropped_since_) * 1000 + hz - 1) / hz);
   note(
-      fmt::format("{} bytes dropped in the last {} ms: the client writes faster than the bus "
+      fmt::format("{} byte{} dropped in the last {} ms: the client writes faster than the bus "
                   "carries",
-                  dropped_, (cycle() - dropped_since_) * 1000 / chip().clock_hz()));
+                  dropped_, dropped_ == 1 ? "" : "s", ms));
   dropped_ = 0;
   last_drop_report_ = cycle();
 }

@@ -244,7 +244,8 @@ void Server::Impl::accept_some(int lfd, bool tcp) {
     bool refuse = shutting_down;
     if (!refuse && active_clients() >= opt.max_clients) {
       // Full. A connection that has not sent its first line yet gives way to the newcomer (the
-      // oldest one): silent or unauthenticated connections cannot lock the others out.
+      // oldest one): silent or unauthenticated connections cannot lock the others out. It is
+      // told why, as a first line too late is (docs/protocol.md).
       Client* oldest = nullptr;
       for (auto& o : clients) {
         if (!o->established && !o->dead && !o->closing &&
@@ -253,7 +254,7 @@ void Server::Impl::accept_some(int lfd, bool tcp) {
         }
       }
       if (oldest != nullptr) {
-        oldest->dead = true;
+        reject(*oldest, "! bye max_clients");
       } else {
         refuse = true;
       }

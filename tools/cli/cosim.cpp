@@ -96,9 +96,17 @@ bool take_trace_header(const std::string& path, const std::string& text, CosimOp
     std::istringstream vs(rest);
     std::string value;
     std::string more;
-    if (whole_rest ? rest.empty() : !(vs >> value) || vs >> more) continue;  // a comment
+    if (whole_rest ? rest.empty() : !(vs >> value)) continue;  // a comment
+    const bool once = std::find(std::begin(kOnce), std::end(kOnce), key) != std::end(kOnce);
+    if (!whole_rest && vs >> more) {
+      // `# profile dpc31 spc3` names no one model: refused, not read as a comment and dropped.
+      if (!once) continue;
+      error = fmt::format("{}:{}: '# {}' takes one value, not '{}': a header line names one thing",
+                          path, n, key, shown(rest));
+      return false;
+    }
     const auto [first, is_first] = first_line.try_emplace(key, n);
-    if (!is_first && std::find(std::begin(kOnce), std::end(kOnce), key) != std::end(kOnce)) {
+    if (!is_first && once) {
       error =
           fmt::format("{}:{}: '# {}' given twice, first at line {}", path, n, key, first->second);
       return false;

@@ -61,12 +61,9 @@ void check_stdout_writes() {
   stdout = f;
 }
 
-// The units a waveform of `run` and `demo` takes: parse_timescale() reads 1, 10 or 100 of fs ...
-// ms and 1s, and the recorder refuses a unit longer than a clock cycle (docs/waveforms.md), at
-// the 48 MHz every scenario and the demo run at.
-constexpr const char* kTimescales =
-    "1, 10 or 100 fs or ps, or 1 or 10 ns (a unit longer than a 48 MHz clock cycle, 20.8 ns, is "
-    "refused)";
+// The units a waveform of `run` and `demo` takes, and why the coarser ones are refused.
+const std::string kTimescales = std::string(dpc31::cli::kTimescaleUnits) +
+                                " (a unit longer than a 48 MHz clock cycle, 20.8 ns, is refused)";
 
 dpc31::Profile to_profile(const std::string& s) {
   dpc31::Profile p{};
@@ -109,7 +106,7 @@ int main(int argc, char** argv) {
   dpc31::cli::add_chip_options(demo, demo_chip);
   std::string demo_timescale;
   demo->add_option("--timescale", demo_timescale,
-                   std::string("time unit of both waveforms: ") + kTimescales +
+                   "time unit of both waveforms: " + kTimescales +
                        "; default 1ps for the full VCD, 10ns for the logic analysers' VCD");
   std::optional<std::string> demo_firmware;  // none: DO4 with its OSP story
   demo->add_option("--firmware", demo_firmware,
@@ -151,9 +148,9 @@ int main(int argc, char** argv) {
                   "also write the run as a VCD for logic-analyser tools (sigrok, PulseView): "
                   "1-bit signals, one scope")
       ->check(named(Use::write));
-  run->add_option("--timescale", run_opt.timescale,
-                  std::string("waveform time unit: ") + kTimescales +
-                      "; default 1ps, 10ns with --flat and --la-vcd");
+  run->add_option(
+      "--timescale", run_opt.timescale,
+      "waveform time unit: " + kTimescales + "; default 1ps, 10ns with --flat and --la-vcd");
   run->add_flag("--flat", run_opt.flat,
                 "--vcd / --fst for logic-analyser tools: 1-bit signals, one scope");
   run->add_option("--gtkw", run_opt.gtkw,

@@ -106,7 +106,7 @@ bool parse_timescale(const std::string& t, int& exp) {
 }
 
 std::string timescale_error(const std::string& t) {
-  return fmt::format("--timescale '{}': use 1, 10 or 100 with fs, ps, ns, us or ms, or 1s", t);
+  return fmt::format("--timescale '{}': use {}", t, kTimescaleUnits);
 }
 
 std::string waveform_options_error(const RunOptions& opt) {
@@ -246,15 +246,20 @@ int ChipRun::run(const Scenario& s, std::string_view text, const LineSink& walk,
     errors(why);
     return 2;
   }
+  // A firmware's fault is at the scenario's `firmware` line, "SCENARIO:LINE" (a segment's names
+  // the station); the demo's own session has no file.
+  const std::string where =
+      opt.scenario.empty() ? "" : fmt::format("{}:{}", s.file, s.firmware_line);
   try {
     // A firmware stuck in a loop without a bus access cannot be stopped from this thread: the
     // guard ends the process with one line.
-    if (bound.firmware_desc != nullptr) board::guard_hangs(m.command, bound.firmware_desc->name);
+    if (bound.firmware_desc != nullptr) {
+      board::guard_hangs(where.empty() ? m.command : m.command + ": " + where,
+                         bound.firmware_desc->name);
+    }
     o = run_scenario(bound, walk, errors, hooks);
   } catch (const FirmwareError& e) {
-    // "SCENARIO: " for a scenario file; the demo's own session has none.
-    return m.fail(opt.scenario.empty() ? std::string(e.what())
-                                       : fmt::format("{}: {}", opt.scenario, e.what()));
+    return m.fail(where.empty() ? std::string(e.what()) : where + ": " + e.what());
   }
   if (!attach_error.empty()) return m.fail(attach_error);
   const int rc = o.ok() ? 0 : 1;

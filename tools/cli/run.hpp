@@ -35,6 +35,10 @@ struct RunOptions {
 // A waveform time unit, "1ps", "10ns", "100us", ... up to "1s", as an exponent of 10 (-12, -8,
 // ...).
 bool parse_timescale(const std::string& t, int& exp);
+// The units a waveform of `run` and `demo` takes: parse_timescale() reads 1, 10 or 100 of fs ...
+// ms and 1s, and the recorder refuses a unit longer than a clock cycle (docs/waveforms.md), at
+// the 48 MHz every scenario and the demo run at. The help and the error name these, no others.
+inline constexpr std::string_view kTimescaleUnits = "1, 10 or 100 fs or ps, or 1 or 10 ns";
 // The one line for a unit parse_timescale() refuses (without the command's name).
 std::string timescale_error(const std::string& t);
 // The waveform options' checks, one chip's and a segment's: each needs a waveform to act on (no

@@ -87,7 +87,8 @@ CLI::App* add_serve_subcommand(CLI::App& app, ServeArgs& a) {
                   "with --cpu: the station address on the address switch, port 1 (5)")
       ->check(numbers::whole(0, 125));
   cmd->add_option("--max-clients", a.max_clients,
-                  "connections served at once; more get 'ERR busy' and are closed")
+                  "connections at once; when full, the oldest one without its first line gives "
+                  "way ('! bye max_clients'), else the newcomer gets 'ERR busy'")
       ->check(numbers::whole(1, 100000))
       ->capture_default_str();
   cmd->add_option("--idle-timeout", a.idle_timeout,
