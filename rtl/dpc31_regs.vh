@@ -99,6 +99,8 @@
 `define SPC3_Status_Reg_RESET                           16'h0000
 `define SPC3_Status_Reg_Offline_Passive_Idle_POS        0
 `define SPC3_Status_Reg_Offline_Passive_Idle_W          1
+`define SPC3_Status_Reg_FDL_IND_ST_POS                  1
+`define SPC3_Status_Reg_FDL_IND_ST_W                    1
 `define SPC3_Status_Reg_Diag_Flag_POS                   2
 `define SPC3_Status_Reg_Diag_Flag_W                     1
 `define SPC3_Status_Reg_RAM_Access_Violation_POS        3

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "dpc31/chip.hpp"
@@ -44,5 +45,11 @@ struct Cpu51Config {
   // serves that controller (docs/cpu.md).
   [[nodiscard]] std::string chip_problem(const ChipOptions& chip) const;
 };
+
+// "" or why `names` cannot name ports (what = "port") or a module's inputs ("input"): one empty,
+// not a word, or named twice, in the words of Cpu51Config::ports_problem, which uses it, as does
+// a plug-in's descriptor at load (firmware_plugin.cpp).
+[[nodiscard]] std::string names_problem(const std::vector<std::string>& names,
+                                        std::string_view what);
 
 }  // namespace dpc31

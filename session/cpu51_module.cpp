@@ -43,7 +43,7 @@ void read_map(const std::string& text, std::map<std::uint16_t, std::string>& out
 
 }  // namespace
 
-std::string Cpu51Config::ports_problem() const {
+std::string names_problem(const std::vector<std::string>& names, std::string_view what) {
   const auto word = [](const std::string& n) {
     const auto letter = [](char c) {
       return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || c == '_';
@@ -52,17 +52,20 @@ std::string Cpu51Config::ports_problem() const {
       return letter(c) || (c >= '0' && c <= '9');
     });
   };
-  for (auto n = ports.begin(); n != ports.end(); ++n) {
-    if (n->empty()) return "an empty port name";
+  const std::string_view article = what.starts_with('i') ? "an" : "a";
+  for (auto n = names.begin(); n != names.end(); ++n) {
+    if (n->empty()) return fmt::format("an empty {} name", what);
     if (!word(*n)) {
       return fmt::format(
-          "port '{}': a port name is letters, digits and '_', not starting with a digit",
-          shown(*n));
+          "{} '{}': {} {} name is letters, digits and '_', not starting with a digit", what,
+          shown(*n), article, what);
     }
-    if (std::find(ports.begin(), n, *n) != n) return "port '" + *n + "' named twice";
+    if (std::find(names.begin(), n, *n) != n) return fmt::format("{} '{}' named twice", what, *n);
   }
   return {};
 }
+
+std::string Cpu51Config::ports_problem() const { return names_problem(ports, "port"); }
 
 const std::vector<std::string>& Cpu51Config::default_ports() {
   static const std::vector<std::string> names{"outputs", "modul_ok"};

@@ -15,6 +15,7 @@
 #include <system_error>
 #include <vector>
 
+#include "cpu51_config.hpp"
 #include "firmware.h"
 #include "firmware_host.hpp"
 #include "trust.hpp"
@@ -63,6 +64,14 @@ std::string descriptor_problem(const dpc31_firmware* fw) {
   }
   if ((fw->hw_input == nullptr) != (fw->hw_inputs == nullptr)) {
     return "the descriptor has hw_input without hw_inputs or the other way round";
+  }
+  // The names a scenario's `expect port` and `hw` take: words, each once (as `ports=`).
+  for (const auto& [list, what] : {std::pair{fw->ports, "port"}, {fw->hw_inputs, "input"}}) {
+    std::vector<std::string> names;
+    for (const char* const* n = list; n != nullptr && *n != nullptr; ++n) names.emplace_back(*n);
+    if (std::string why = names_problem(names, what); !why.empty()) {
+      return "the descriptor's " + std::string(what) + "s: " + why;
+    }
   }
   return {};
 }

@@ -1249,6 +1249,8 @@ TEST_F(BadInput, ServeOptions) {
 TEST_F(BadInput, FirmwarePlugins) {
   const std::string abi = BAD_PLUGIN_BAD_ABI;
   const std::string no_init = BAD_PLUGIN_NO_INIT;
+  const std::string bad_port = BAD_PLUGIN_BAD_PORT;
+  const std::string twice_input = BAD_PLUGIN_TWICE_INPUT;
   const std::string no_export = BAD_PLUGIN_NO_EXPORT;
   const std::string undefined = BAD_PLUGIN_UNDEFINED;
   const std::string version = std::to_string(DPC31_FIRMWARE_ABI_VERSION);
@@ -1257,6 +1259,12 @@ TEST_F(BadInput, FirmwarePlugins) {
                 std::to_string(DPC31_FIRMWARE_ABI_VERSION + 1) + ", this host takes " + version +
                 " (rebuild it against this dpc31emu)"},
       {no_init, "firmware plug-in " + no_init + ": the descriptor has no init"},
+      // The names `expect port` and `hw` take, checked in the words of `cpu 80c32 ports=`.
+      {bad_port, "firmware plug-in " + bad_port +
+                     ": the descriptor's ports: port 'out puts': a port name is letters, digits "
+                     "and '_', not starting with a digit"},
+      {twice_input,
+       "firmware plug-in " + twice_input + ": the descriptor's inputs: input 'kick' named twice"},
       {no_export, "firmware plug-in " + no_export +
                       " exports no dpc31_firmware_descriptor (DPC31_FIRMWARE_EXPORT, "
                       "dpc31/dpc31_firmware.h)"},

@@ -2,6 +2,8 @@
  * per defect, selected by a macro (tests/CMakeLists.txt):
  *   BAD_ABI      the descriptor's abi_version is not DPC31_FIRMWARE_ABI_VERSION
  *   NO_INIT      a required field (init) is NULL
+ *   BAD_PORT     a port name that is not a word ("out puts")
+ *   TWICE_INPUT  a hardware input named twice
  *   NO_EXPORT    no DPC31_FIRMWARE_EXPORT: the well-known symbol is missing
  *   UNDEFINED    it calls a function no host provides: dlopen (RTLD_NOW) fails
  *   SPIN         it loads, and its init spins in while(1) without a bus access (the hang guard)
@@ -35,6 +37,9 @@ void no_such_board_function(void);
 #ifdef GLOBALS
 static unsigned g_boots;
 static const char* const kPorts[] = {"boots", 0};
+#define PORTS kPorts
+#elif defined(BAD_PORT)
+static const char* const kPorts[] = {"outputs", "out puts", 0};
 #define PORTS kPorts
 #else
 #define PORTS 0
@@ -75,6 +80,16 @@ static int kick(const char* name, uint32_t value) {
 }
 static const char* const kInputs[] = {"kick", 0};
 #define ISR isr
+#define HW_INPUT kick
+#define HW_INPUTS kInputs
+#elif defined(TWICE_INPUT)
+static int kick(const char* name, uint32_t value) {
+  (void)name;
+  (void)value;
+  return 0;
+}
+static const char* const kInputs[] = {"kick", "event", "kick", 0};
+#define ISR 0
 #define HW_INPUT kick
 #define HW_INPUTS kInputs
 #else

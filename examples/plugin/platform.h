@@ -18,11 +18,18 @@
 #define VPC3_ADR uint16_t
 #define VPC3_UNSIGNED8_PTR uint8_t*
 #define MEM_UNSIGNED8_PTR uint8_t*
-#define VPC3_PTR(adr) ((VPC3_UNSIGNED8_PTR)(uintptr_t)(adr))
 
 /* The six access functions (Vpc3Read & co.) and the board hooks: from the emulator. */
 #include "dpc31/dpc31_firmware.h"
 #include "dpc31/dpc31_hal.h"
+
+/* A chip address as a chip pointer. The 80C32's HAL header (firmware/mcs51, docs/cpu.md) has its
+ * own, through an __xdata pointer: SDCC warns when an integer becomes a generic pointer. */
+#ifdef CHIP_PTR
+#define VPC3_PTR(adr) CHIP_PTR(adr)
+#else
+#define VPC3_PTR(adr) ((VPC3_UNSIGNED8_PTR)(uintptr_t)(adr))
+#endif
 
 #define VPC3_RESET() dpc31_board_reset(1)
 #define VPC3_CLEAR_RESET() dpc31_board_reset(0)

@@ -1,8 +1,15 @@
-/* hal51.c -- the HAL's block functions on the 80C32: loops of MOVX to the chip's window
- * (dpc31/dpc31_hal.h of this folder). */
+/* hal51.c -- the HAL's access functions on the 80C32: MOVX to the chip's window, the block
+ * functions loops of them (dpc31/dpc31_hal.h of this folder). With DPC31_HAL_MOVX the byte
+ * accesses are that header's macros instead. */
 #include "dpc31/dpc31_hal.h"
 
 #define CHIP_ADR(p) ((uint16_t)(uintptr_t)(p))
+
+#ifndef DPC31_HAL_MOVX
+uint8_t Vpc3Read(uint16_t wAddress) { return DPC31_XBYTE(wAddress); }
+
+void Vpc3Write(uint16_t wAddress, uint8_t bData) { DPC31_XBYTE(wAddress) = bData; }
+#endif
 
 void CopyToVpc3(uint8_t* pToVpc3Memory, uint8_t* pLocalMemory, uint16_t wLength) {
   volatile __xdata uint8_t* dst = &DPC31_XBYTE(CHIP_ADR(pToVpc3Memory));

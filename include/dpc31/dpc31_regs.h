@@ -127,6 +127,8 @@ enum dpc31_profile {
 #define SPC3_Status_Reg_RESET                           0x0000u
 #define SPC3_Status_Reg_Offline_Passive_Idle_Pos        0u
 #define SPC3_Status_Reg_Offline_Passive_Idle_Msk        0x0001u /* 0 RO: 0 = Offline, 1 = Passive_Idle (started) */
+#define SPC3_Status_Reg_FDL_IND_ST_Pos                  1u
+#define SPC3_Status_Reg_FDL_IND_ST_Msk                  0x0002u /* 1 RO: named by the SPC3 status text (manual-quotes.md, Confirmed); not modelled: reads 0 */
 #define SPC3_Status_Reg_Diag_Flag_Pos                   2u
 #define SPC3_Status_Reg_Diag_Flag_Msk                   0x0004u /* 2 RO: the master has not yet fetched the current diag buffer */
 #define SPC3_Status_Reg_RAM_Access_Violation_Pos        3u
@@ -138,7 +140,7 @@ enum dpc31_profile {
 #define SPC3_Status_Reg_Baudrate_Pos                    8u
 #define SPC3_Status_Reg_Baudrate_Msk                    0x0F00u /* 11:8 RO: 0 12M, 1 6M, 2 3M, 3 1.5M, 4 500k, 5 187.5k, 6 93.75k, 7 45.45k, 8 19.2k, 9 9.6k */
 #define SPC3_Status_Reg_Release_Pos                     12u
-#define SPC3_Status_Reg_Release_Msk                     0xF000u /* 15:12 RO: SPC3 0; VPC3+ ASIC type: Bh VPC3+B, Ch VPC3+C, Eh VPC3+S (the chosen variant) */
+#define SPC3_Status_Reg_Release_Msk                     0xF000u /* 15:12 RO: 0000 = release 0 */
 
 /* Int_Mask_Reg: latch, 16 bit -- Interrupt mask: 1 = masked */
 #define SPC3_Int_Mask_Reg                               0x004u /* write */
@@ -704,7 +706,7 @@ enum dpc31_profile {
 #define VPC3_Status_Reg_Baudrate_Pos                    8u
 #define VPC3_Status_Reg_Baudrate_Msk                    0x0F00u /* 11:8 RO: 0 12M, 1 6M, 2 3M, 3 1.5M, 4 500k, 5 187.5k, 6 93.75k, 7 45.45k, 8 19.2k, 9 9.6k */
 #define VPC3_Status_Reg_Release_Pos                     12u
-#define VPC3_Status_Reg_Release_Msk                     0xF000u /* 15:12 RO: SPC3 0; VPC3+ ASIC type: Bh VPC3+B, Ch VPC3+C, Eh VPC3+S (the chosen variant) */
+#define VPC3_Status_Reg_Release_Msk                     0xF000u /* 15:12 RO: the ASIC type: Bh VPC3+B, Ch VPC3+C, Eh VPC3+S (the chosen variant) */
 
 /* Int_Mask_Reg: latch, 16 bit -- Interrupt mask: 1 = masked */
 #define VPC3_Int_Mask_Reg                               0x004u /* write */
@@ -870,9 +872,9 @@ enum dpc31_profile {
 #define VPC3_Diag_Buffer_SM                             0x00Cu /* read */
 #define VPC3_Diag_Buffer_SM_RESET                       0x09u
 #define VPC3_Diag_Buffer_SM_Diag_Buf1_State_Pos         0u
-#define VPC3_Diag_Buffer_SM_Diag_Buf1_State_Msk         0x03u /* 1:0 RO: 00 Nil, 01 User, 10 SPC3, 11 SPC3_Send_Mode */
+#define VPC3_Diag_Buffer_SM_Diag_Buf1_State_Msk         0x03u /* 1:0 RO: 00 Nil, 01 User, 10 VPC3+, 11 VPC3_Send_Mode */
 #define VPC3_Diag_Buffer_SM_Diag_Buf2_State_Pos         2u
-#define VPC3_Diag_Buffer_SM_Diag_Buf2_State_Msk         0x0Cu /* 3:2 RO: 00 Nil, 01 User, 10 SPC3, 11 SPC3_Send_Mode */
+#define VPC3_Diag_Buffer_SM_Diag_Buf2_State_Msk         0x0Cu /* 3:2 RO: 00 Nil, 01 User, 10 VPC3+, 11 VPC3_Send_Mode */
 
 /* Mode_Reg2: latch, 8 bit -- VPC3+ Mode register 2 */
 #define VPC3_Mode_Reg2                                  0x00Cu /* write */
@@ -1302,7 +1304,7 @@ enum dpc31_profile {
 #define DPC31_Status_Reg_Baudrate_Pos                   8u
 #define DPC31_Status_Reg_Baudrate_Msk                   0x0F00u /* 11:8 RO: 0 12M, 1 6M, 2 3M, 3 1.5M, 4 500k, 5 187.5k, 6 93.75k, 7 45.45k, 8 19.2k, 9 9.6k */
 #define DPC31_Status_Reg_Release_Pos                    12u
-#define DPC31_Status_Reg_Release_Msk                    0xF000u /* 15:12 RO: SPC3 0; VPC3+ ASIC type: Bh VPC3+B, Ch VPC3+C, Eh VPC3+S (the chosen variant) */
+#define DPC31_Status_Reg_Release_Msk                    0xF000u /* 15:12 RO: 0 (modelled: the DPC31 manual gives the status display no release code) */
 
 /* Int_Mask_Reg: latch, 16 bit -- Interrupt mask: 1 = masked */
 #define DPC31_Int_Mask_Reg                              0x0004u /* write */
@@ -1462,9 +1464,9 @@ enum dpc31_profile {
 #define DPC31_Diag_Buffer_SM                            0x000Cu /* read */
 #define DPC31_Diag_Buffer_SM_RESET                      0x09u
 #define DPC31_Diag_Buffer_SM_Diag_Buf1_State_Pos        0u
-#define DPC31_Diag_Buffer_SM_Diag_Buf1_State_Msk        0x03u /* 1:0 RO: 00 Nil, 01 User, 10 SPC3, 11 SPC3_Send_Mode */
+#define DPC31_Diag_Buffer_SM_Diag_Buf1_State_Msk        0x03u /* 1:0 RO: 00 Nil, 01 User, 10 DPC31, 11 DPC31_Send_Mode */
 #define DPC31_Diag_Buffer_SM_Diag_Buf2_State_Pos        2u
-#define DPC31_Diag_Buffer_SM_Diag_Buf2_State_Msk        0x0Cu /* 3:2 RO: 00 Nil, 01 User, 10 SPC3, 11 SPC3_Send_Mode */
+#define DPC31_Diag_Buffer_SM_Diag_Buf2_State_Msk        0x0Cu /* 3:2 RO: 00 Nil, 01 User, 10 DPC31, 11 DPC31_Send_Mode */
 
 /* Reserved_0Ch_W: reserved, 8 bit -- reserved write side (VPC3+: Mode_Reg2) */
 #define DPC31_Reserved_0Ch_W                            0x000Cu /* write */

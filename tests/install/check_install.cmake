@@ -21,6 +21,7 @@ endfunction()
 run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix})
 
 foreach(f bin/dpc31 include/dpc31/chip.hpp include/dpc31/dpc31_hal.h include/dpc31/dpc31_regs.h
+    include/dpc31/dpc31_pdu.h
     include/dpc31/reg_ids.hpp include/dpc31/reg_fields.hpp include/dpc31/session/scenario.hpp
     include/dpc31/firmware/firmware.h include/dpc31/dpc31_firmware.h include/mcs51/cpu.hpp
     include/mcs51/ihex.hpp include/dpc31/session/cpu51_board.hpp ${LIBDIR}/libdpc31emu.so

@@ -1,12 +1,17 @@
 /*
  * dpc31_hal.h for the 80C32 (SDCC): the HAL's access functions as a real 8051 driver has them.
  * The chip sits in XDATA at DPC31_XDATA_BASE (the board's chip select, 4 KB window; Intel mode
- * on the 80C32's multiplexed bus), so Vpc3Read / Vpc3Write are single MOVX accesses through an
- * __xdata pointer, and the block functions loop over them (hal51.c). The firmware's module
- * outputs (dpc31_port_write) go to an output latch in XDATA at DPC31_PORT_LATCH + port, outside
- * the chip's window. This header stands ahead of include/dpc31/dpc31_hal.h on the target's
- * include path (firmware/CMakeLists.txt); the firmware sources are the host's, unchanged.
- * docs/cpu.md, "DO4 on the 80C32".
+ * on the 80C32's multiplexed bus); every access is one MOVX through an __xdata pointer, and the
+ * block functions loop over them (hal51.c). The firmware's module outputs (dpc31_port_write) go
+ * to an output latch in XDATA at DPC31_PORT_LATCH + port, outside the chip's window. This header
+ * stands ahead of include/dpc31/dpc31_hal.h on the target's include path (firmware/CMakeLists.txt);
+ * the firmware sources are the host's, unchanged. docs/cpu.md, "The HAL on the 80C32".
+ *
+ * Vpc3Read and Vpc3Write are real functions (hal51.c), with the host's prototypes, so a driver's
+ * own declarations of the six compile next to them (docs/bring-up.md). A firmware that declares
+ * neither of the two may define DPC31_HAL_MOVX (DO4 and CNT2 do): then they are macros, the MOVX
+ * in place: a read at a constant address 4 machine cycles instead of 36, a write 5 instead of 44
+ * (docs/cpu.md).
  */
 #ifndef DPC31_HAL_H
 #define DPC31_HAL_H
@@ -22,8 +27,13 @@
 
 #define DPC31_XBYTE(a) (*(volatile __xdata uint8_t*)(uint16_t)(DPC31_XDATA_BASE + (uint16_t)(a)))
 
+#ifdef DPC31_HAL_MOVX
 #define Vpc3Read(wAddress) DPC31_XBYTE(wAddress)
 #define Vpc3Write(wAddress, bData) (DPC31_XBYTE(wAddress) = (bData))
+#else
+uint8_t Vpc3Read(uint16_t wAddress);
+void Vpc3Write(uint16_t wAddress, uint8_t bData);
+#endif
 #define dpc31_port_write(port, value) \
   (*(volatile __xdata uint8_t*)(uint16_t)(DPC31_PORT_LATCH + (port)) = (uint8_t)(value))
 
