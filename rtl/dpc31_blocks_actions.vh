@@ -186,6 +186,7 @@
       nx_n_cl = 1'b0;
       nx_in_clear = 1'b0;
       nx_ut_cnt = user_period(nx_mode_reg0);  // first tick P cycles after this cycle
+      if (`DPC31B_MUT(MUT_USER_TIMER_LATE)) nx_ut_cnt = nx_ut_cnt + 19'd1;
       // R_GC_Command preset at every start of the DP slave: FFh dpc31, 00h spc3 (the cell's reset
       // value); the VPC3+ leaves the cell alone.
       if (!IS_VPC3) nx_gc_command = GC_COMMAND_RESET;

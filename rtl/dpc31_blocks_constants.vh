@@ -376,6 +376,8 @@
   localparam [3:0] MUT_NO_CONFLICT = 4'd9;
   // ev_diag_end leaves Diag_Flag at 1 when stat_diag is 0
   localparam [3:0] MUT_DIAG_FLAG_STICKY = 4'd10;
+  // the first User_Timer_Clock after a start one cycle late (P + 1)
+  localparam [3:0] MUT_USER_TIMER_LATE = 4'd15;
   // The SAP-buffer header machine (vpc3plus, DPV1): the mutants below are built into the
   // vpc3plus mutants' model (rtl/CMakeLists.txt reads the trailing "vpc3plus").
   // an indication is handed over with USER alone: IND is not set

@@ -534,6 +534,28 @@ TEST_F(BadInput, CosimReplayAndSessionFiles) {
   EXPECT_EQ(dpc31("cosim --replay " + good + " --quiet").rc, 0);  // the good stimulus runs
 }
 
+// An input the trace's profile has not (docs/golden-model.md, "Event inputs": ev_mac_start is
+// the dpc31's MAC_Start request) is refused at its line, as other bad lines are: exit 2, one
+// line, nothing written; the profile is the header's or --profile's.
+TEST_F(BadInput, CosimReplayRefusesInputsOfAnotherProfile) {
+  const std::string body = "100 ev_mac_start\n200 ev_sap_ind(0080,05) ev_sap_srd(0080)\nend 300\n";
+  file("spc3.stim", "# profile spc3\n" + body);
+  file("any.stim", body);
+  spit(path("old.xml"), "old");
+  const auto before = listing();
+  const std::string args = " --junit old.xml --out shrunk --vcd window --dump dump";
+  expect_bad(dpc31("cosim --replay spc3.stim" + args),
+             "spc3.stim:2: 'ev_mac_start' is an input of profile dpc31 only, not of spc3", "spc3");
+  expect_bad(dpc31("cosim --replay any.stim --profile vpc3plus" + args),
+             "any.stim:1: 'ev_mac_start' is an input of profile dpc31 only, not of vpc3plus",
+             "--profile vpc3plus");
+  expect_bad(dpc31("cosim --replay any.stim" + args),  // the default profile, dpc31
+             "any.stim:2: 'ev_sap_ind' is an input of profile vpc3plus only, not of dpc31",
+             "dpc31");
+  EXPECT_EQ(slurp(path("old.xml")), "old");
+  EXPECT_EQ(listing(), before);
+}
+
 // A trace replays on the model its header names (docs/golden-model.md): its profile and mutant;
 // --profile or --mutant that contradicts the header is refused, and so are the options of random
 // seeds, which mean nothing to a replay. The summary names the trace, not a seed range.

@@ -66,6 +66,9 @@ struct Inputs {
 // `in` (the bus accesses read their operand from `rest`); "" or the one-line reason it is none
 // ("unknown stimulus 'x'", or a known event whose operand is not as Inputs::describe writes it).
 std::string parse_input_token(const std::string& tok, std::istringstream& rest, Inputs& in);
+// "" or why `in` has an input the chip of profile `p` does not have ("'ev_mac_start' is an input
+// of profile dpc31 only, not of spc3").
+std::string input_not_on(const Inputs& in, Profile p);
 // A block event of a chip session (emu/block_event.hpp) into the inputs of its cycle.
 void apply_block_event(Inputs& in, const BlockEvent& e);
 

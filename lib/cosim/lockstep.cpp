@@ -422,15 +422,28 @@ Stimulus random_stimulus(const RandomConfig& c) {
   if (dpv1) sap = sap_layout(g);
   // Bursts of activity and quiet stretches, so timers (EOI, user timer) run out too.
   double activity = 0.3;
+  // The user timer needs P = 48 000 started cycles (docs/golden-model.md), and resets, Go_Offline
+  // and MAC_Stop come far more often. So a stimulus that can hold one gets, in half the seeds,
+  // one stretch of kQuiet cycles that begins with a reset and has none of the three: a start
+  // early in it is followed by User_Timer_Clock. Drawn apart from `g`: shorter stimuli, the
+  // default runs', stay as they were.
+  constexpr std::uint64_t kQuiet = 56'000;
+  std::uint64_t quiet_from = c.cycles;  // none
+  if (c.cycles >= kQuiet) {
+    std::mt19937_64 q(c.seed * 0xC2B2AE3D27D4EB4Full + static_cast<unsigned>(c.profile));
+    if (q() % 2 == 0) quiet_from = q() % (c.cycles - kQuiet + 1);
+  }
+  const std::uint16_t mode_reg1_s = g.waddr(RegId::Mode_Reg1_S);
   for (std::uint64_t i = 0; i < c.cycles; ++i) {
     if (i % 256 == 0)
       activity = g.chance(0.25) ? 0.01 : 0.1 + 0.5 * std::uniform_real_distribution<>(0, 1)(g.rng);
+    const bool quiet = i >= quiet_from && i - quiet_from < kQuiet;
     Inputs in;
-    if (setup < sap.setup.size()) {
-      in = sap.setup[setup++];
-    } else if (g.chance(0.00005)) {
+    if (i == quiet_from || (setup >= sap.setup.size() && !quiet && g.chance(0.00005))) {
       in.rst = true;
       setup = 0;
+    } else if (setup < sap.setup.size()) {
+      in = sap.setup[setup++];
     } else if (g.chance(activity)) {
       if (dpv1 && g.chance(0.3)) {
         dpv1_action(g, sap, in);
@@ -440,6 +453,11 @@ Stimulus random_stimulus(const RandomConfig& c) {
         if (what >= 4) random_event(g, in);  // 4: an event and an access in the same cycle
         if (what == 9) random_event(g, in);  // two events in one cycle
       }
+      if (quiet) {
+        in.ev_mac_stop = false;
+        if (in.bus_wr && in.bus_addr == mode_reg1_s)
+          in.bus_wdata = static_cast<std::uint8_t>(in.bus_wdata & ~fields::Mode_Reg1_S::Go_Offline);
+      }
     }
     s.set(i, in);
   }
@@ -448,12 +466,15 @@ Stimulus random_stimulus(const RandomConfig& c) {
 
 // --- shrinking ---
 
-Stimulus shrink(const Stimulus& s, const DutOptions& o, std::string_view mutant, int max_runs) {
+Stimulus shrink(const Stimulus& s, const DutOptions& o, std::string_view mutant, int max_runs,
+                int* runs_taken) {
+  int own = 0;
+  int& runs = runs_taken != nullptr ? *runs_taken : own;
+  runs = 1;
   RunResult r = run_lockstep(s, o, mutant);
   if (r.divergence < 0) return s;
   Stimulus best = s;
   best.resize(static_cast<std::uint64_t>(r.divergence) + 1);
-  int runs = 1;
   auto fails = [&](const Stimulus& t) {
     ++runs;
     const RunResult x = run_lockstep(t, o, mutant);
@@ -465,9 +486,11 @@ Stimulus shrink(const Stimulus& s, const DutOptions& o, std::string_view mutant,
     while (progress && runs < max_runs) {
       progress = false;
       for (std::uint64_t start = 0; start < best.size() && runs < max_runs; start += chunk) {
-        // Chunks without inputs change nothing: go straight to the next one that has some.
-        start = best.next_event(start) / chunk * chunk;
-        if (start >= best.size()) break;
+        // Chunks without inputs change nothing: go straight to the next one that has some. None
+        // left ends the pass; a chunk without inputs that "still fails" is no progress.
+        const std::uint64_t next = best.next_event(start);
+        if (next >= best.size()) break;
+        start = next / chunk * chunk;
         Stimulus t = best;
         t.clear(start, std::min(best.size(), start + chunk));
         const std::int64_t d = fails(t);
@@ -494,10 +517,8 @@ std::string write_trace(const Stimulus& s, const std::string& header) {
   return out;
 }
 
-namespace {}  // namespace
-
 bool parse_trace(const std::string& text, const std::string& file, Stimulus& out,
-                 std::string& error) {
+                 std::string& error, std::optional<Profile> profile) {
   constexpr std::uint64_t kMaxCycles = 100'000'000;
   out = Stimulus{};
   std::istringstream is(text);
@@ -549,6 +570,9 @@ bool parse_trace(const std::string& text, const std::string& file, Stimulus& out
       if (const std::string why = parse_input_token(tok, ls, in); !why.empty()) return fail(why);
     }
     if (in.idle()) return fail("a stimulus line without stimulus");
+    if (profile) {
+      if (const std::string why = input_not_on(in, *profile); !why.empty()) return fail(why);
+    }
     out.set(cycle, in);
     last = cycle + 1;
   }

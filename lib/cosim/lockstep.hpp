@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <deque>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -113,14 +114,16 @@ using DutFactory = std::unique_ptr<Dut> (*)(const DutOptions&, std::string_view)
 RunResult run_lockstep(const Stimulus& s, const DutOptions& o, std::string_view mutant = "");
 
 // Shrinks a failing stimulus to a short one that still diverges (cycles made idle, the tail cut).
+// `runs_taken`, if given, receives the number of lockstep runs it took (at most max_runs).
 Stimulus shrink(const Stimulus& s, const DutOptions& o, std::string_view mutant,
-                int max_runs = 3000);
+                int max_runs = 3000, int* runs_taken = nullptr);
 
 // Trace files: one line per non-idle cycle, "<cycle> <describe()>", '#' comments; the last cycle
-// is given by a line "end <cycle>". Parse errors: "file:line: message".
+// is given by a line "end <cycle>". Parse errors: "file:line: message". With `profile`, an input
+// that profile's chip does not have is one too (input_not_on).
 std::string write_trace(const Stimulus& s, const std::string& header);
 bool parse_trace(const std::string& text, const std::string& file, Stimulus& out,
-                 std::string& error);
+                 std::string& error, std::optional<Profile> profile = std::nullopt);
 
 // The RTL's internal waveform (FST, Verilator tracing) over a whole stimulus. False (with a
 // reason) for models built without tracing (the mutants).

@@ -598,6 +598,10 @@ dpc31emu_verilate_model(TARGET model TOP "${DPC31_RTL_TOP}" PROFILE "${DPC31_RTL
   // model.so appears whole or not at all: it marks a finished build. Mode 0700 whatever the umask.
   if (!copy_private(built, model_path, error)) return false;
   fs::remove_all(dir + "/build", ec);  // the objects are in ccache, if anywhere
+  // The logs are for a failed build: verilate() passes Verilator's output on only when it fails
+  // (-Wall makes a warning one), and a build that succeeded has no errors to show.
+  fs::remove(configure_log, ec);
+  fs::remove(build_log, ec);
   return true;
 }
 

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <charconv>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -38,6 +39,9 @@ struct EventInput {
   K kind;
   bool Inputs::*strobe;  // nullptr: ev_irq
   Arg arg;
+  // The one profile whose chip has this input (the dpc31's request interface, the vpc3plus's
+  // SAP list), or none: every profile's.
+  std::optional<Profile> only = std::nullopt;
 };
 
 // In the order a trace line names them (Inputs::describe).
@@ -59,12 +63,12 @@ constexpr std::array<EventInput, 23> kEventInputs = {{
     {"ev_cfg", K::cfg, &Inputs::ev_cfg, Arg::none},
     {"ev_ssa", K::ssa, &Inputs::ev_ssa, Arg::none},
     {"ev_dis", K::dis, &Inputs::ev_dis, Arg::dis_bits},
-    {"ev_mac_stop", K::mac_stop, &Inputs::ev_mac_stop, Arg::none},
-    {"ev_mac_start", K::mac_start, &Inputs::ev_mac_start, Arg::none},
-    {"ev_ext_prm", K::ext_prm, &Inputs::ev_ext_prm, Arg::none},
-    {"ev_sap_sent", K::sap_sent, &Inputs::ev_sap_sent, Arg::none},
-    {"ev_sap_ind", K::sap_ind, &Inputs::ev_sap_ind, Arg::sap_ind},
-    {"ev_sap_srd", K::sap_srd, &Inputs::ev_sap_srd, Arg::sap_entry},
+    {"ev_mac_stop", K::mac_stop, &Inputs::ev_mac_stop, Arg::none, Profile::dpc31},
+    {"ev_mac_start", K::mac_start, &Inputs::ev_mac_start, Arg::none, Profile::dpc31},
+    {"ev_ext_prm", K::ext_prm, &Inputs::ev_ext_prm, Arg::none, Profile::vpc3plus},
+    {"ev_sap_sent", K::sap_sent, &Inputs::ev_sap_sent, Arg::none, Profile::vpc3plus},
+    {"ev_sap_ind", K::sap_ind, &Inputs::ev_sap_ind, Arg::sap_ind, Profile::vpc3plus},
+    {"ev_sap_srd", K::sap_srd, &Inputs::ev_sap_srd, Arg::sap_entry, Profile::vpc3plus},
 }};
 static_assert(kEventInputs.size() == static_cast<std::size_t>(K::write) + 1,
               "a new BlockEvent::Kind: add its input here");
@@ -273,6 +277,16 @@ std::string parse_input_token(const std::string& tok, std::istringstream& rest, 
     }
   }
   return fmt::format("unknown stimulus '{}'", shown(tok));
+}
+
+std::string input_not_on(const Inputs& in, Profile p) {
+  for (const EventInput& e : kEventInputs) {
+    if (e.only && *e.only != p && active(in, e)) {
+      return fmt::format("'{}' is an input of profile {} only, not of {}", e.name,
+                         profile_desc(*e.only).name, profile_desc(p).name);
+    }
+  }
+  return {};
 }
 
 void apply_block_event(Inputs& in, const BlockEvent& ev) {

@@ -298,7 +298,9 @@ bool read_stimulus(const std::string& path, cosim::Stimulus& s, CosimOptions& o,
     error = fmt::format("{}:{}: {}", path, line, why);
     return false;
   }
-  return cosim::parse_trace(text, path, s, error) && take_trace_header(path, text, o, seed, error);
+  // The header first: it names the profile, whose inputs the lines may use.
+  return take_trace_header(path, text, o, seed, error) &&
+         cosim::parse_trace(text, path, s, error, o.profile);
 }
 
 // True if `dir` is a directory or can be made one: the nearest part of it that exists is a
@@ -711,18 +713,22 @@ int run_cosim(const CosimOptions& given) {
         output_failed(error);
       }
       if (!o.vcd_dir.empty()) {
-        const std::uint64_t d = small.size() - 1;
+        // Drawn over the run that failed, not the shrunk stimulus cut at the divergence: the
+        // --window cycles after it too, idle where the stimulus has ended.
+        const auto d = static_cast<std::uint64_t>(r.divergence);
         const std::uint64_t from = d > o.window ? d - o.window : 0;
+        Stimulus around = s;
+        around.resize(d + o.window + 1);
         // Joined as paths: `--vcd win/` names win/emu.vcd, not win//emu.vcd.
         const auto in_vcd = [&](const char* name) {
           return (std::filesystem::path(o.vcd_dir) / name).string();
         };
-        if (write_window(small, dut, o.mutant, from, d + o.window + 1, o.vcd_dir, error)) {
+        if (write_window(around, dut, o.mutant, from, around.size(), o.vcd_dir, error)) {
           entry["vcd"] = {in_vcd("emu.vcd"), in_vcd("rtl.vcd")};
         } else {
           output_failed(error);
         }
-        if (write_rtl_fst(small, dut, o.mutant, in_vcd("rtl_internal.fst"), error)) {
+        if (write_rtl_fst(around, dut, o.mutant, in_vcd("rtl_internal.fst"), error)) {
           entry["fst"] = in_vcd("rtl_internal.fst");
         } else if (traced) {
           output_failed(error);
