@@ -140,6 +140,7 @@ struct Scenario {
   // scenario that names a plug-in is then refused (docs/security.md).
   std::string untrusted;
   std::optional<Cpu51Config> cpu;    // `cpu 80c32`: a firmware image on an 80C32 instead
+  int cpu_line = 0;                  // the `cpu` line, named by check_cpu_image()'s message
   std::vector<std::uint8_t> inputs;  // the user's inputs from the start
   std::uint32_t retries = 1;         // repeats of a request that got no answer (max_retry_limit)
   Dpv1Rules dpv1;                    // the master's DPV1 rules (header `dpv1`)
@@ -174,8 +175,9 @@ bool parse_scenario_file(std::string_view text, const std::string& path,
 bool bind_plugin(Scenario& s, ScenarioError& err);
 
 // The 80C32 image a `cpu` header names, read and checked before anything runs or is written: false
-// with `error` (`FILE:LINE: reason`, or `FILE: reason`) for the caller's exit 2. True at once
-// without a `cpu` header. The run reads it again when it starts.
+// with `error` (`SCENARIO:LINE: IMAGE: reason`, or `SCENARIO:LINE: IMAGE:LINE: reason`, the `cpu`
+// line first) for the caller's exit 2. True at once without a `cpu` header. The run reads it
+// again when it starts.
 bool check_cpu_image(const Scenario& s, std::string& error);
 
 struct ScenarioOutcome {

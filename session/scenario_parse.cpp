@@ -305,6 +305,7 @@ class Parser {
     if (const std::string why = c31 ? "" : c.latch_problem(); !why.empty()) fail(why);
     if (c31) s_.chip.irq_controller = IrqController::c31;
     s_.cpu = std::move(c);
+    s_.cpu_line = step_.line;
     for (const std::string& n : s_.cpu->latch_ports()) ports_.insert(ports_.end() - 1, n.c_str());
   }
 

@@ -920,7 +920,10 @@ ScenarioOutcome run_scenario(const Scenario& s, const LineSink& walk, const Line
 
 bool check_cpu_image(const Scenario& s, std::string& error) {
   Cpu51Image image;
-  return !s.cpu || load_cpu51_image(*s.cpu, image, error);
+  if (!s.cpu || load_cpu51_image(*s.cpu, image, error)) return true;
+  // The file run is the scenario, as for a plug-in: its line first, then the image's own words.
+  error = fmt::format("{}:{}: {}", s.file, s.cpu_line, error);
+  return false;
 }
 
 int run_scenario_file(const std::string& path, const LineSink& walk, const LineSink& errors,

@@ -11,6 +11,7 @@
 #include "dpc31/dp.hpp"
 #include "dpc31/names.hpp"
 #include "textfile.hpp"
+#include "whole_number.hpp"
 
 namespace dpc31 {
 
@@ -139,8 +140,7 @@ std::string not_a_profibus_rate(std::uint64_t baud) {
 
 std::string not_a_profibus_rate(std::string_view text, std::uint32_t& baud) {
   std::uint64_t v = 0;
-  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
-  if (ec == std::errc() && end == text.data() + text.size() && not_a_profibus_rate(v).empty()) {
+  if (numbers::parse_whole(text, v) == std::errc{} && not_a_profibus_rate(v).empty()) {
     baud = static_cast<std::uint32_t>(v);
     return {};
   }

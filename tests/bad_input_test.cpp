@@ -114,22 +114,26 @@ TEST_F(BadInput, RunCpuImage) {
   file("seg.ihx", ":020000020100FB\n:0200000080FE80\n:00000001FF\n");
   const std::vector<FileCase> cases = {
       {"bad checksum", file("sum.scn", "cpu 80c32 firmware bad.ihx\nstartup\n"),
-       path("bad.ihx") + ":1: checksum"},
+       path("sum.scn") + ":1: " + path("bad.ihx") + ":1: checksum"},
       {"missing", file("missing.scn", "cpu 80c32 firmware none.ihx\nstartup\n"),
-       path("none.ihx") + ": no such file"},
+       path("missing.scn") + ":1: " + path("none.ihx") + ": no such file"},
       {"directory", file("dir.scn", "cpu 80c32 firmware dir.ihx\nstartup\n"),
-       path("dir.ihx") + ": is a directory, not an Intel HEX file"},
+       path("dir.scn") + ":1: " + path("dir.ihx") + ": is a directory, not an Intel HEX file"},
       {"empty", file("empty.scn", "cpu 80c32 firmware empty.ihx\nstartup\n"),
-       path("empty.ihx") + ": empty file, not an Intel HEX image"},
+       path("empty.scn") + ":1: " + path("empty.ihx") + ": empty file, not an Intel HEX image"},
       {"C31 past 1FFFh",
        file("c31.scn", "profile dpc31\ncpu c31 firmware high.ihx code=0x1FFF\nstartup\n"),
-       path("high.ihx") + ": the image does not fit the C31's code area (1FFFh..1FFFh)"},
+       path("c31.scn") + ":2: " + path("high.ihx") +
+           ": the image does not fit the C31's code area (1FFFh..1FFFh)"},
       {"only the end record", file("eof.scn", "cpu 80c32 firmware eof.ihx\nstartup\n"),
-       path("eof.ihx") + ":1: no data bytes before the end-of-file record: an empty image"},
+       path("eof.scn") + ":1: " + path("eof.ihx") +
+           ":1: no data bytes before the end-of-file record: an empty image"},
       {"overlapping records", file("overlap.scn", "cpu 80c32 firmware overlap.ihx\nstartup\n"),
-       path("overlap.ihx") + ":2: data at 0001h overlaps an earlier record"},
+       path("overlap.scn") + ":1: " + path("overlap.ihx") +
+           ":2: data at 0001h overlaps an earlier record"},
       {"a segment base", file("seg.scn", "cpu 80c32 firmware seg.ihx\nstartup\n"),
-       path("seg.ihx") + ":1: a non-zero segment base 0100h (only 0000h is taken)"},
+       path("seg.scn") + ":1: " + path("seg.ihx") +
+           ":1: a non-zero segment base 0100h (only 0000h is taken)"},
   };
   spit(path("old.json"), "old");
   const auto before = listing();
@@ -207,7 +211,8 @@ TEST_F(BadInput, EveryDoorTakesTheSameDefaultLatch) {
              "bridge, 4001h");
   expect_bad(door("serve --unix s", "0x4001"), "dpc31 serve: --board-address 0x4001: " + covered,
              "serve, 4001h");
-  expect_bad(scenario("0x4002"), path("bad.ihx") + ":1: checksum", "scenario, 4002h");
+  expect_bad(scenario("0x4002"), path("b0x4002.scn") + ":1: " + path("bad.ihx") + ":1: checksum",
+             "scenario, 4002h");
   expect_bad(door("bridge --tcp 0", "0x4002"), "dpc31 bridge: bad.ihx:1: checksum",
              "bridge, 4002h");
   expect_bad(door("serve --unix s", "0x4002"), "dpc31 serve: bad.ihx:1: checksum", "serve, 4002h");
@@ -585,10 +590,12 @@ TEST_F(BadInput, CosimReplayTakesTheTraceHeader) {
   for (const char* opt : {"--seeds 3", "--seed-base 2", "--cycles 10", "--shard 1/2",
                           "--shard-base 0", "--keep-going"}) {
     const std::string name = std::string(opt).substr(0, std::string(opt).find(' '));
-    // CLI11 names the option defined first first (--keep-going comes after --replay).
+    // CLI11 names the option defined first first (--keep-going comes after --replay); alone,
+    // --shard-base is refused first for the --shard it needs.
     expect_bad(dpc31("cosim --replay spc3.stim --junit old.xml " + std::string(opt)),
-               name == "--keep-going" ? "dpc31 cosim: --replay excludes --keep-going"
-                                      : "dpc31 cosim: " + name + " excludes --replay",
+               name == "--keep-going"   ? "dpc31 cosim: --replay excludes --keep-going"
+               : name == "--shard-base" ? "dpc31 cosim: --shard-base requires --shard"
+                                        : "dpc31 cosim: " + name + " excludes --replay",
                opt);
   }
   EXPECT_EQ(slurp(path("old.xml")), "old");
@@ -1362,7 +1369,8 @@ TEST_F(BadInput, AFifoIsNoPluginAndNoImage) {
       {"soak --firmware ./fw.so --cycles 1000", "dpc31 soak: " + plugin},
       {"bridge --tcp 0 --firmware ./fw.so", "dpc31 bridge: " + plugin},
       {"demo --firmware ./fw.so --out-dir d", "dpc31 demo: " + plugin},
-      {"run image.scn --quiet", path("fw.ihx") + ": not a regular file, not an Intel HEX file"},
+      {"run image.scn --quiet",
+       "image.scn:1: " + path("fw.ihx") + ": not a regular file, not an Intel HEX file"},
       {"serve --tcp 0 --cpu 80c32 --firmware fw.ihx", "dpc31 serve: " + image},
   };
   const auto before = listing();

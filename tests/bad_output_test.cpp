@@ -275,9 +275,10 @@ TEST_F(BadInput, AnOutputThatNamesAnInputOrAnotherOutputIsRefused) {
   copy(kTraces + "../tests/data/wavediff/rtl.vcd", "b.vcd");
   const std::string b_text = slurp(path("b.vcd"));
   expect_bad(dpc31("wavediff a.vcd b.vcd --diff-vcd b.vcd"),
-             "--diff-vcd b.vcd: is B b.vcd: an output must not replace an input", "diff-vcd = B");
+             "dpc31 wavediff: --diff-vcd b.vcd: is B b.vcd: an output must not replace an input",
+             "diff-vcd = B");
   expect_bad(dpc31("wavediff a.vcd b.vcd --json r.json --wavedrom r.json"),
-             "--json r.json and --wavedrom r.json are the same file: each output "
+             "dpc31 wavediff: --json r.json and --wavedrom r.json are the same file: each output "
              "needs its own",
              "json = wavedrom");
   EXPECT_EQ(slurp(path("b.vcd")), b_text);

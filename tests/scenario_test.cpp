@@ -832,7 +832,9 @@ TEST(ScenarioCpu51, HeaderIsCheckedAndTheImageReadWhenTheRunStarts) {
   const FileRun r = run_file(f.path());
   EXPECT_EQ(r.code, 2);
   ASSERT_EQ(r.errors.size(), 1u);
-  EXPECT_TRUE(r.errors[0].starts_with((f.dir() / "bad.ihx").string() + ":1: ")) << r.errors[0];
+  // The scenario's `cpu` line first, then the image's own line.
+  EXPECT_TRUE(r.errors[0].starts_with(f.path() + ":1: " + (f.dir() / "bad.ihx").string() + ":1: "))
+      << r.errors[0];
   EXPECT_TRUE(r.walk.empty());
 }
 
@@ -863,15 +865,16 @@ TEST(ScenarioCpu51, AMapWithoutCodeSymbolsIsSaid) {
 }
 
 // A FILE.map that is there but cannot be read (a directory, a dangling link) is the run's one
-// error, FILE: reason, exit 2, as an unreadable image is (docs/cpu.md): it was skipped in
-// silence, the code names gone without a word.
+// error, SCENARIO:LINE: FILE: reason, exit 2, as an unreadable image is (docs/cpu.md): it was
+// skipped in silence, the code names gone without a word.
 TEST(ScenarioCpu51, AMapThatCannotBeReadIsRefused) {
   TempFile f("cpu 80c32 firmware fw.ihx\nsilence 1ms\n");
   std::ofstream(f.dir() / "fw.ihx") << ":0300000002000BF0\n:00000001FF\n";  // LJMP 000Bh
   const auto refused = [&](const std::string& why) {
     const FileRun r = run_file(f.path());
     EXPECT_EQ(r.code, 2);
-    EXPECT_EQ(r.errors, std::vector<std::string>{(f.dir() / "fw.map").string() + ": " + why});
+    EXPECT_EQ(r.errors, std::vector<std::string>{f.path() + ":1: " + (f.dir() / "fw.map").string() +
+                                                 ": " + why});
     EXPECT_TRUE(r.walk.empty());
   };
   std::filesystem::create_directory(f.dir() / "fw.map");

@@ -59,6 +59,15 @@ TEST(ServeSession, RangeErrorsNameTheRange) {
   EXPECT_EQ(s("inject 10 baud=48000000"), "OK 33 44");  // one clock per bit
 }
 
+// The protocol reads numbers as every door does (docs/protocol.md "Numbers", docs/security.md):
+// a leading zero is decimal, never octal; 0x is hex.
+TEST(ServeSession, ALeadingZeroIsDecimal) {
+  LocalSession s;
+  EXPECT_EQ(s("step 010"), "OK 10");
+  EXPECT_EQ(s("step 0x0A"), "OK 20");
+  EXPECT_EQ(s("step 09"), "OK 29");
+}
+
 TEST(ServeSession, InjectUsesTheDetectedRate) {
   LocalSession s;
   dpc31::DirectBus bus(s.s.chip());

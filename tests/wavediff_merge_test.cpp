@@ -87,7 +87,8 @@ TEST(WavediffMerge, BadNamesAreRefusedBeforeAnyWork) {
   o.merge = d.file("m.txt");
   Outcome r = run_opts(o);
   EXPECT_EQ(r.rc, 2);
-  EXPECT_EQ(r.err, fmt::format("--merge {}: the name must end in .vcd or .fst\n", o.merge));
+  EXPECT_EQ(r.err, fmt::format("dpc31 wavediff: --merge {}: the name must end in .vcd or .fst\n",
+                               o.merge));
   EXPECT_FALSE(std::filesystem::exists(o.merge));
   EXPECT_FALSE(std::filesystem::exists(d.file("m.gtkw")));
   // The save file may not be an input or another output.

@@ -59,8 +59,8 @@ struct Result {
   std::uint64_t first_cycle = 0;  // after the first start-up: the counters' baseline
   std::uint64_t cycles = 0;       // the chip's cycle counter at the end
   std::uint32_t clock_hz = 0;
-  std::uint32_t twd_ms = 0;  // the DP watchdog time the master parameterised
-  double wall_s = 0;
+  std::uint32_t twd_ms = 0;         // the DP watchdog time the master parameterised
+  double wall_s = 0;                // the whole run, the start-up included
   std::uint64_t rss_start_kib = 0;  // VmRSS after the first start-up
   std::uint64_t rss_end_kib = 0;
   std::uint64_t exchanges = 0;  // Data_Exchange requests answered with data

@@ -128,7 +128,7 @@ std::unique_ptr<WaveSink> fst_sink(const std::string& path, int pow) {
 std::shared_ptr<MergedWave> open_merge(const std::string& path, Engine& e) {
   const bool fst = ends_with(path, ".fst");
   if (!fst && !ends_with(path, ".vcd")) {
-    throw InputError(fmt::format("--merge {}: the name must end in .vcd or .fst", path));
+    throw OptionError(fmt::format("--merge {}: the name must end in .vcd or .fst", path));
   }
   auto m = std::make_shared<MergedWave>(fst ? fst_sink(path, e.pow) : vcd_sink(path, e.pow), e);
   const std::string save = save_file_name(path);

@@ -270,6 +270,9 @@ int run(const Options& o, std::string& out, std::string& err) {
     err += warnings;
     out += text_report(r, o.max_signals);
     return r.same() ? 0 : 1;
+  } catch (const OptionError& e) {
+    err += "dpc31 wavediff: " + std::string(e.what()) + "\n";
+    return 2;
   } catch (const InputError& e) {
     err += std::string(e.what()) + "\n";
     return 2;

@@ -18,6 +18,12 @@ class InputError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
+// An option's value the comparison cannot take (an output over an input, --merge's extension):
+// the command line's report prefixes `dpc31 wavediff: ` (docs/bad-input.md), Python's does not.
+class OptionError : public InputError {
+ public:
+  using InputError::InputError;
+};
 
 [[noreturn]] void fail(const std::string& file, std::uint64_t line, const std::string& what);
 

@@ -648,7 +648,7 @@ Report compare(const Options& o) {
        {"--wavedrom", o.wavedrom},
        {"--merge", o.merge},
        {"--merge's save file", o.merge.empty() ? std::string() : save_file_name(o.merge)}});
-  if (!same.empty()) throw InputError(same);
+  if (!same.empty()) throw OptionError(same);
   Report rep;
   Engine e(o);
   e.setup(rep);

@@ -25,11 +25,13 @@ CLI::App* add_subcommand(CLI::App& app, CliArgs& a) {
       ->check(CLI::IsMember({"auto"}));
   c->add_option("--map", o.map_file, "renames: lines 'nameA = nameB', '#' comments")
       ->check(outfile::named(outfile::Use::read));
-  c->add_option("--clock", o.clock_a, "clock-sampled mode: sample at the edges of this A signal");
+  auto* clock = c->add_option("--clock", o.clock_a,
+                              "clock-sampled mode: sample at the edges of this A signal");
   c->add_option("--clock-b", o.clock_b,
                 "the clock in B (default: the B signal matched to --clock)");
   c->add_option("--edge", a.edge, "clock edges sampled")
-      ->check(CLI::IsMember({"rising", "falling", "both"}));
+      ->check(CLI::IsMember({"rising", "falling", "both"}))
+      ->needs(clock);  // event mode has no edges: it was an event-mode run without a word
   c->add_option("--start", a.start, "compare from this time (100ns, 2us) or cycle (c123)");
   c->add_option("--end", a.end, "compare up to this time or cycle (inclusive)");
   c->add_option("--tolerance", a.tolerance,
@@ -37,13 +39,16 @@ CLI::App* add_subcommand(CLI::App& app, CliArgs& a) {
   // NonNegativeNumber: CLI11 would read "-1" into an unsigned as 2^64 - 1.
   c->add_option("--tolerance-cycles", o.tolerance_cycles,
                 "clock mode: ignore differences that last at most N cycles")
-      ->check(numbers::whole(0));
+      ->transform(numbers::whole(0));
   c->add_option("--xz", a.xz,
                 "X/Z policy: strict (must match), wildcard (matches anything), "
                 "zero (read as 0)")
       ->check(CLI::IsMember({"strict", "wildcard", "zero"}));
-  c->add_option("--include", o.include, "compare only names matching this glob (* ?); repeatable");
-  c->add_option("--exclude", o.exclude, "do not compare names matching this glob; repeatable");
+  // One glob a time: more took A and B after it (repeat the option instead).
+  c->add_option("--include", o.include, "compare only names matching this glob (* ?); repeatable")
+      ->allow_extra_args(false);
+  c->add_option("--exclude", o.exclude, "do not compare names matching this glob; repeatable")
+      ->allow_extra_args(false);
   c->add_flag("--ignore-missing", o.ignore_missing,
               "signals on one side only are listed but are not a difference");
   c->add_option("--json", o.json_file, "write the report as JSON to this file")
@@ -55,14 +60,15 @@ CLI::App* add_subcommand(CLI::App& app, CliArgs& a) {
                 "write A's and B's signals (scopes a, b) with a diff signal for each, as one "
                 "VCD or FST (by the extension) and a GTKWave save file beside it (.gtkw)")
       ->check(outfile::named(outfile::Use::write));
-  c->add_option("--wavedrom", o.wavedrom,
-                "write WaveJSON of the window around the first divergence")
-      ->check(outfile::named(outfile::Use::write));
+  auto* wavedrom = c->add_option("--wavedrom", o.wavedrom,
+                                 "write WaveJSON of the window around the first divergence")
+                       ->check(outfile::named(outfile::Use::write));
   c->add_option("--wavedrom-window", o.wavedrom_window,
-                "events or cycles shown before and after the first divergence")
-      ->check(numbers::whole(1, 1000));
-  c->add_option("--max-signals", o.max_signals, "signals listed in the text report")
-      ->check(numbers::whole(0, std::numeric_limits<unsigned>::max()));
+                "events or cycles shown before and after the first divergence (default 8)")
+      ->transform(numbers::whole(1, 1000))
+      ->needs(wavedrom);
+  c->add_option("--max-signals", o.max_signals, "signals listed in the text report (default 20)")
+      ->transform(numbers::whole(0, std::numeric_limits<unsigned>::max()));
   return c;
 }
 

@@ -416,11 +416,11 @@ CLI::App* add_bench_subcommand(CLI::App& app, BenchArgs& a) {
       ->excludes(quick);
   cmd->add_option("--wavediff-mb", a.wavediff_mb,
                   "MB of each of item f's two generated VCD files (default 1000)")
-      ->check(numbers::whole(1, 1'000'000))
+      ->transform(numbers::whole(1, 1'000'000))
       ->excludes(quick);
   cmd->add_option("--repetitions", a.repetitions,
                   "runs of each benchmark; the table shows the median (default 3)")
-      ->check(numbers::whole(1, 100))
+      ->transform(numbers::whole(1, 100))
       ->excludes(quick);
   cmd->add_option("--wavediff-dir", a.wavediff_dir,
                   "where item f's files go (default: TMPDIR; needs twice --wavediff-mb)")
@@ -455,6 +455,17 @@ CLI::App* add_bench_subcommand(CLI::App& app, BenchArgs& a) {
                   "the dpc31_bench program (default: next to this dpc31)")
       ->check(outfile::named(outfile::Use::read))
       ->check(CLI::ExistingFile);
+  // An item's options beside an --items that leaves it out act on nothing: refused, not dropped.
+  cmd->callback([cmd, &a] {
+    for (const auto& [name, item] : {std::pair{"--wavediff-mb", "f"},
+                                     std::pair{"--wavediff-dir", "f"}, std::pair{"--build", "h"}}) {
+      if (cmd->count(name) > 0 && !a.items.empty() &&
+          std::find(a.items.begin(), a.items.end(), item) == a.items.end()) {
+        throw CLI::ValidationError(
+            fmt::format("{} is for item {}, which --items leaves out", name, item));
+      }
+    }
+  });
   return cmd;
 }
 

@@ -24,6 +24,7 @@
 #include "path_option.hpp"
 #include "pcapng.hpp"
 #include "vocabulary.hpp"
+#include "whole_number.hpp"
 
 namespace dpc31::cli {
 
@@ -56,9 +57,7 @@ extern "C" void on_signal(int sig) {
 }
 
 bool parse_uint(const std::string& s, std::uint64_t max, std::uint64_t& v) {
-  if (s.empty()) return false;
-  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v, 10);
-  return ec == std::errc() && p == s.data() + s.size() && v <= max;
+  return numbers::parse_whole(s, v) == std::errc{} && v <= max;
 }
 
 // Chip cycles in a wall-clock duration (no overflow for years).

@@ -518,6 +518,31 @@ nlohmann::json summary_json(nlohmann::json run, const nlohmann::json& shard, std
 
 namespace {
 
+// The scenario names the chip it runs on: a --profile, --bus or --variant that says otherwise
+// would be dropped without a word. "" or why not.
+std::string session_chip_mismatch(const CosimOptions& o, const dpc31::cosim::DutOptions& d) {
+  const auto bus_name = [](BusMode b) { return b == BusMode::intel ? "intel" : "motorola"; };
+  const std::string_view profile = profile_desc(d.profile).name;
+  // The VPC3+'s variant is its ASIC type (C where the scenario names none); the others have none.
+  const std::string variant =
+      d.profile == Profile::vpc3plus
+          ? std::string(vpc3_variant_name(static_cast<Vpc3Variant>(d.asic_type())))
+          : "";
+  if (o.profile_given && o.profile != d.profile) {
+    return fmt::format("{}: the scenario runs profile {}, not --profile {}", o.session, profile,
+                       o.profile_name);
+  }
+  if (o.bus_given && o.bus != d.bus) {
+    return fmt::format("{}: the scenario runs bus {}, not --bus {}", o.session, bus_name(d.bus),
+                       bus_name(o.bus));
+  }
+  if (!o.variant_name.empty() && o.variant_name != variant) {
+    return fmt::format("{}: the scenario runs profile {}{}, not --variant {}", o.session, profile,
+                       variant.empty() ? " (no variant)" : " variant " + variant, o.variant_name);
+  }
+  return {};
+}
+
 int run_session_mode(const CosimOptions& o) {
   using namespace dpc31::cosim;
   Session s;
@@ -527,6 +552,10 @@ int run_session_mode(const CosimOptions& o) {
     fmt::print(stderr, "{}\n", error);
     return 2;
   }
+  if (const std::string why = session_chip_mismatch(o, s.options); !why.empty()) {
+    fmt::print(stderr, "dpc31 cosim: {}\n", why);
+    return 2;
+  }
   std::string rtl_id;
   if (!load_rtl(o, s.options, rtl_id)) return 2;
   const RunResult r = run_session(s, o.mutant);  // s.options carries a --rtl model
@@ -534,17 +563,21 @@ int run_session_mode(const CosimOptions& o) {
   if (!o.quiet) {
     for (const std::string& line : r.report) fmt::print(stderr, "{}\n", line);
   }
-  const nlohmann::json summary = {{"session", o.session},
-                                  {"profile", std::string(profile_desc(s.options.profile).name)},
-                                  {"mutant", o.mutant},
-                                  {"rtl", rtl_id},
-                                  {"cycles", s.cycles},
-                                  {"block_events", s.events.size()},
-                                  {"scenario_expects_passed", s.scenario_passed},
-                                  {"diverged", r.divergence >= 0},
-                                  {"cycle", r.divergence},
-                                  {"signals", r.signals},
-                                  {"seconds", secs}};
+  const nlohmann::json summary = {
+      {"session", o.session},
+      {"profile", std::string(profile_desc(s.options.profile).name)},
+      {"bus", s.options.bus == BusMode::intel ? "intel" : "motorola"},
+      {"variant",
+       s.options.variant ? nlohmann::json(static_cast<int>(*s.options.variant)) : nlohmann::json()},
+      {"mutant", o.mutant},
+      {"rtl", rtl_id},
+      {"cycles", s.cycles},
+      {"block_events", s.events.size()},
+      {"scenario_expects_passed", s.scenario_passed},
+      {"diverged", r.divergence >= 0},
+      {"cycle", r.divergence},
+      {"signals", r.signals},
+      {"seconds", secs}};
   fmt::print("{}\n", summary.dump(2));
   return r.divergence >= 0 ? 1 : 0;
 }

@@ -9,8 +9,8 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -86,6 +86,7 @@ int main(int argc, char** argv) {
   using dpc31::outfile::Use;
   CLI::App app{"dpc31emu: cycle-accurate emulator of the Siemens DPC31, SPC3 and VPC3+"};
   app.require_subcommand(1);
+  app.set_version_flag("--version", "dpc31 " DPC31_VERSION, "print the version and exit");
   const std::vector<std::string> profiles = {"spc3", "vpc3plus", "dpc31"};
 
   std::string demo_profile = "dpc31";
@@ -139,11 +140,14 @@ int main(int argc, char** argv) {
       ->check(named(Use::write));
   run->add_option("--fst", run_opt.fst, "write the run as an FST waveform")
       ->check(named(Use::write));
+  // One value a time (GLOB,GLOB or the option again): more took the scenario after it.
   run->add_option("--signals", run_opt.signals, "waveform signals (globs, e.g. pins.*)")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->allow_extra_args(false);
   // Numbers: dpc31::numbers (no NaN, no "-1" taken as 2^64 - 1, nothing that does not fit).
-  run->add_option("--from", run_opt.from, "waveform window: first cycle")->check(whole(0));
-  run->add_option("--to", run_opt.to, "waveform window: one past the last cycle")->check(whole(0));
+  run->add_option("--from", run_opt.from, "waveform window: first cycle")->transform(whole(0));
+  run->add_option("--to", run_opt.to, "waveform window: one past the last cycle")
+      ->transform(whole(0));
   run->add_option("--la-vcd", run_opt.la_vcd,
                   "also write the run as a VCD for logic-analyser tools (sigrok, PulseView): "
                   "1-bit signals, one scope")
@@ -191,9 +195,10 @@ int main(int argc, char** argv) {
   // The options of random seeds, which mean nothing to a --replay (refused beside it).
   const std::vector<CLI::Option*> cos_random = {
       cosim->add_option("--seeds", cos.seeds, "number of random seeds")
-          ->check(whole(1, 100'000'000)),
-      cosim->add_option("--seed-base", cos.seed_base, "first seed")->check(whole(0)),
-      cosim->add_option("--cycles", cos.cycles, "cycles per seed")->check(whole(1, 100'000'000)),
+          ->transform(whole(1, 100'000'000)),
+      cosim->add_option("--seed-base", cos.seed_base, "first seed")->transform(whole(0)),
+      cosim->add_option("--cycles", cos.cycles, "cycles per seed")
+          ->transform(whole(1, 100'000'000)),
       cosim->add_option("--shard", cos_shard,
                         "K/N: run the K-th of N equal parts of the seed range (K from 1, or from "
                         "0 with --shard-base 0; docs/regression.md)")};
@@ -201,20 +206,25 @@ int main(int argc, char** argv) {
   auto* cos_shard_base_opt =
       cosim->add_option("--shard-base", cos_shard_base, "the first K of --shard: 1 (default) or 0")
           ->check(CLI::IsMember({0, 1}));
-  cosim->add_option("--junit", cos.junit, "write JUnit XML results to this file")
-      ->check(named(Use::write));
-  cosim->add_option("--vcd", cos.vcd_dir, "on divergence, write emu.vcd and rtl.vcd around it here")
-      ->check(named(Use::write));
-  cosim
-      ->add_option("--window", cos.window,
-                   "cycles before and after the divergence in the VCD window")
-      ->check(whole(0, 100'000'000));
-  cosim->add_option("--out", cos.out_dir, "where shrunk stimulus traces go (default .)")
-      ->check(named(Use::write));
-  cosim
-      ->add_option("--dump", cos.dump_dir,
-                   "write emu.vcd, rtl.vcd (ports) and rtl_internal.fst of the first run here")
-      ->check(named(Use::write));
+  cos_shard_base_opt->needs(cos_random.back());  // alone it blamed a --shard 1/1 never given
+  // What a --session run never writes or reads (refused beside it, with cos_random).
+  std::vector<CLI::Option*> cos_not_session = {
+      cosim->add_option("--junit", cos.junit, "write JUnit XML results to this file")
+          ->check(named(Use::write)),
+      cosim
+          ->add_option("--vcd", cos.vcd_dir,
+                       "on divergence, write emu.vcd and rtl.vcd around it here")
+          ->check(named(Use::write)),
+      cosim
+          ->add_option("--window", cos.window,
+                       "cycles before and after the divergence in the VCD window")
+          ->transform(whole(0, 100'000'000)),
+      cosim->add_option("--out", cos.out_dir, "where shrunk stimulus traces go (default .)")
+          ->check(named(Use::write)),
+      cosim
+          ->add_option("--dump", cos.dump_dir,
+                       "write emu.vcd, rtl.vcd (ports) and rtl_internal.fst of the first run here")
+          ->check(named(Use::write))};
   auto* cos_replay =
       cosim
           ->add_option("--replay", cos.replay,
@@ -223,6 +233,8 @@ int main(int argc, char** argv) {
           ->check(named(Use::read));
   for (CLI::Option* opt : cos_random) cos_replay->excludes(opt);
   cos_replay->excludes(cos_shard_base_opt);
+  cos_not_session.insert(cos_not_session.end(), cos_random.begin(), cos_random.end());
+  cos_not_session.insert(cos_not_session.end(), {cos_shard_base_opt, cos_replay});
   cosim->add_option("--mutant", cos.mutant,
                     "use an RTL mutant (to see the check fail); with --rtl: the value of the "
                     "model's mutant_sel input, by name or 1..15");
@@ -252,13 +264,20 @@ int main(int argc, char** argv) {
       ->check(named(Use::read));
   merge->add_option("--junit", merge_opt.junit, "write the whole run's JUnit XML to this file")
       ->check(named(Use::write));
-  cosim
-      ->add_option("--session", cos.session,
-                   "chip-session mode: run this scenario on the full chip, drive the RTL with its "
-                   "block events")
-      ->check(named(Use::read));
-  cos_replay->excludes(
+  auto* cos_session =
+      cosim
+          ->add_option(
+              "--session", cos.session,
+              "chip-session mode: run this scenario on the full chip, drive the RTL with its "
+              "block events")
+          ->check(named(Use::read));
+  cos_not_session.push_back(
       cosim->add_flag("--keep-going", cos.keep_going, "do not stop at the first divergent seed"));
+  cos_replay->excludes(cos_not_session.back());
+  // The scenario is one run of its own chip: the options of seeds and their outputs act on
+  // nothing (docs/decisions.md, "No silent options"); --profile, --bus, --variant are checked
+  // against the scenario's chip (cosim.cpp).
+  for (CLI::Option* opt : cos_not_session) cos_session->excludes(opt);
   cosim->add_flag("--quiet", cos.quiet, "no report text, only the JSON summary");
 
   // dpc31 wavediff A B [options]: waveform comparison (docs/wavediff.md).
@@ -325,20 +344,25 @@ int main(int argc, char** argv) {
       cos.bus_given = cosim->count("--bus") > 0;
       cos.bus = cos_bus == "intel" ? dpc31::BusMode::intel : dpc31::BusMode::motorola;
       cos.variant_name = cos_variant;
-      if (cos.replay.empty()) {  // a replay's profile may come from its trace's header
+      // A replay's profile may come from its trace's header, a session's from its scenario.
+      if (cos.replay.empty() && cos.session.empty()) {
         dpc31::ChipOptions chip{cos.profile};
         if (std::string why = dpc31::cli::apply_variant(cos_variant, chip); !why.empty()) {
           return refuse(why);
         }
         cos.variant = chip.variant;
       }
-      unsigned k = 0;
-      unsigned n = 0;
-      char slash = 0;
-      std::istringstream sh(cos_shard);
-      if (!(sh >> k >> slash >> n) || slash != '/' || n == 0 || k < cos_shard_base ||
-          k - cos_shard_base >= n || !sh.eof() ||
-          cos_shard.find_first_of("+-") != std::string::npos) {
+      // K and N as every number of the CLI (dpc31::numbers::parse_whole).
+      std::uint64_t k = 0;
+      std::uint64_t n = 0;
+      const std::size_t slash = cos_shard.find('/');
+      if (slash == std::string::npos ||
+          dpc31::numbers::parse_whole(std::string_view(cos_shard).substr(0, slash), k) !=
+              std::errc{} ||
+          dpc31::numbers::parse_whole(std::string_view(cos_shard).substr(slash + 1), n) !=
+              std::errc{} ||
+          n == 0 || n > std::numeric_limits<unsigned>::max() || k < cos_shard_base ||
+          k - cos_shard_base >= n) {
         fmt::print(stderr, "dpc31 cosim: --shard must be K/N with {} <= K <= N{}, not '{}'\n",
                    cos_shard_base, cos_shard_base == 0 ? " - 1" : "", cos_shard);
         return 2;

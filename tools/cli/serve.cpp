@@ -85,11 +85,11 @@ CLI::App* add_serve_subcommand(CLI::App& app, ServeArgs& a) {
       ->check(outfile::given());
   cmd->add_option("--address", a.address,
                   "with --cpu: the station address on the address switch, port 1 (5)")
-      ->check(numbers::whole(0, 125));
+      ->transform(numbers::whole(0, 125));
   cmd->add_option("--max-clients", a.max_clients,
                   "connections at once; when full, the oldest one without its first line gives "
                   "way ('! bye max_clients'), else the newcomer gets 'ERR busy'")
-      ->check(numbers::whole(1, 100000))
+      ->transform(numbers::whole(1, 100000))
       ->capture_default_str();
   cmd->add_option("--idle-timeout", a.idle_timeout,
                   "close a client after this many seconds without input (0 = never)")

@@ -1,0 +1,206 @@
+// Every command's promises against its --help and the docs (the twenty-sixth session's audit
+// a26): one reading of a number at every door, no option that acts on nothing taken silently,
+// and messages that say what happened (docs/security.md "Numbers on the command line",
+// docs/decisions.md "No silent options", docs/bad-input.md).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <regex>
+
+#include "bad_input.hpp"
+
+namespace badinput {
+namespace {
+
+const std::string kScn = kTraces + "gc_clear_spc3.scn";
+const std::string kVcd = std::string(SOURCE_DIR) + "/tests/data/wavediff/emu.vcd";
+
+// The line of `text` that starts with `key`, or "".
+std::string line_with(const std::string& text, const std::string& key) {
+  const std::size_t at = text.find(key);
+  return at == std::string::npos ? "" : text.substr(at, text.find('\n', at) - at);
+}
+
+// A leading zero is decimal at every door (docs/security.md): CLI11 alone read "010" as octal
+// eight, so these ran another seed, window or count than the one written.
+TEST_F(BadInput, LeadingZerosAreDecimalAtEveryDoor) {
+  // soak --seed: the first line names the seed run.
+  const Outcome soak = dpc31("soak --cycles 1e6 --seed 010");
+  EXPECT_EQ(soak.rc, 0) << soak.err;
+  EXPECT_EQ(line_with(soak.out, "dpc31 soak:"),
+            "dpc31 soak: profile dpc31, 1500000 baud, TWD 20 ms, a fault every 2000000 cycles, "
+            "seed 10");
+  // soak --baud: 012000000 is the rate 12000000 (it was refused as 2621440).
+  EXPECT_EQ(line_with(dpc31("soak --cycles 1e6 --baud 012000000").out, "dpc31 soak:"),
+            "dpc31 soak: profile dpc31, 12000000 baud, TWD 20 ms, a fault every 2000000 cycles, "
+            "seed 1");
+  // The same rule takes 0x hex: seed 0x0A is seed 10.
+  EXPECT_EQ(line_with(dpc31("soak --cycles 1e6 --seed 0x0A").out, "dpc31 soak:"),
+            line_with(soak.out, "dpc31 soak:"));
+  // run --from/--to: the window of 010..020 is the window of 10..20, byte for byte.
+  const std::string scn = copy(kScn, "s.scn");
+  ASSERT_EQ(dpc31("run s.scn --quiet --vcd zero.vcd --from 010 --to 020").rc, 0);
+  ASSERT_EQ(dpc31("run s.scn --quiet --vcd plain.vcd --from 10 --to 20").rc, 0);
+  EXPECT_EQ(slurp(path("zero.vcd")), slurp(path("plain.vcd")));
+  // 08 and 09 are numbers (CLI11: "Could not convert").
+  EXPECT_EQ(dpc31("run s.scn --quiet --vcd nine.vcd --from 09 --to 010").rc, 0);
+  // wavediff --max-signals 01: one signal named in the text report, as with 1.
+  const std::string vcd_a = copy(kVcd, "a.vcd");
+  const Outcome one = dpc31("wavediff a.vcd zero.vcd --max-signals 1");
+  const Outcome zero_one = dpc31("wavediff a.vcd zero.vcd --max-signals 01");
+  EXPECT_EQ(one.rc, 1);
+  EXPECT_EQ(zero_one.out, one.out);
+  const Outcome octal = dpc31("wavediff a.vcd zero.vcd --max-signals 010");
+  EXPECT_EQ(octal.out, dpc31("wavediff a.vcd zero.vcd --max-signals 10").out);
+  // A scenario reads the same: baud 09600 is 9600, 0x2580 too (docs/scenario-format.md).
+  file("b1.scn", "baud 09600\nstartup\nexpect dp_state Data_Exchange\n");
+  file("b2.scn", "baud 0x2580\nstartup\nexpect dp_state Data_Exchange\n");
+  EXPECT_EQ(dpc31("run b1.scn --quiet").rc, 0);
+  EXPECT_EQ(dpc31("run b2.scn --quiet").rc, 0);
+  // A mistake is still one line: not a number at all, or beyond the option's range.
+  expect_bad(dpc31("soak --seed 0x"),
+             "dpc31 soak: --seed: '0x' is not a whole number (decimal or 0x hex)", "0x");
+  expect_bad(dpc31("soak --seed 08.5"),
+             "dpc31 soak: --seed: '08.5' is not a whole number (decimal or 0x hex)", "08.5");
+  expect_bad(dpc31("serve --tcp 0 --max-clients 0100001"),
+             "dpc31 serve: --max-clients: '0100001' is outside 1..100000", "0100001");
+}
+
+// The bridge's own numbers: a --slave's user_wd_value takes 0x hex as the segment's `station`
+// line does (docs/bridge.md); it was "'0x01FF' must be 0..65535". The bridge runs, so it is
+// ended by SIGTERM after its first line.
+TEST_F(BadInput, BridgeSlaveFieldsReadNumbersAsEveryDoor) {
+  const testutil::CommandResult r = testutil::run_command(
+      "cd " + path("") + " && timeout -s TERM 2 " + kCli +
+      " bridge --tcp 0 --pacing free --slave 0x05:responder:spc3:user_wd=1:user_wd_value=0x01FF "
+      "--slave 06:responder:spc3 2>&1");
+  const std::string first = line_with(r.out, "dpc31 bridge:");
+  EXPECT_NE(first.find("2 slaves: slave5 (profile spc3, firmware responder), slave6 (profile "
+                       "spc3, firmware responder)"),
+            std::string::npos)
+      << r.out;
+  expect_bad(dpc31("bridge --tcp 0 --slave 5:responder:spc3:user_wd=1:user_wd_value=0x10000"),
+             "dpc31 bridge: --slave '5:responder:spc3:user_wd=1:user_wd_value=0x10000': "
+             "user_wd_value '0x10000' must be 0..65535",
+             "0x10000");
+}
+
+// cosim --session runs the scenario's chip, once: the options of seeds and their outputs, and a
+// chip the scenario is not, were dropped without a word (exit 0 on another chip than asked for).
+TEST_F(BadInput, CosimSessionRefusesWhatItWouldIgnore) {
+  const std::string scn = copy(kTraces + "startup_vpc3plus_1m5.scn", "s.scn");
+  for (const std::string opt :
+       {"--seeds 50", "--seed-base 3", "--cycles 7", "--shard 2/3", "--junit j.xml", "--vcd v",
+        "--window 5", "--out o", "--dump d", "--replay s.scn", "--keep-going"}) {
+    const std::string name = opt.substr(0, opt.find(' '));
+    // CLI11 names the option defined first first (--keep-going comes after --session).
+    expect_bad(dpc31("cosim --session s.scn " + opt + " --quiet"),
+               name == "--keep-going" ? "dpc31 cosim: --session excludes --keep-going"
+                                      : "dpc31 cosim: " + name + " excludes --session",
+               opt);
+  }
+  expect_bad(dpc31("cosim --session s.scn --profile dpc31 --quiet"),
+             "dpc31 cosim: s.scn: the scenario runs profile vpc3plus, not --profile dpc31",
+             "profile");
+  expect_bad(dpc31("cosim --session s.scn --bus intel --quiet"),
+             "dpc31 cosim: s.scn: the scenario runs bus motorola, not --bus intel", "bus");
+  // The VPC3+ without a `variant` line is the VPC3+C (docs/scenario-format.md).
+  expect_bad(dpc31("cosim --session s.scn --variant b --quiet"),
+             "dpc31 cosim: s.scn: the scenario runs profile vpc3plus variant c, not --variant b",
+             "variant");
+  // What agrees with the scenario is taken, and the summary names the chip as run.
+  const Outcome ok = dpc31(
+      "cosim --session s.scn --profile vpc3plus --bus motorola --variant c "
+      "--quiet");
+  EXPECT_EQ(ok.rc, 0) << ok.err;
+  EXPECT_NE(ok.out.find("\"bus\": \"motorola\""), std::string::npos) << ok.out;
+  EXPECT_NE(ok.out.find("\"profile\": \"vpc3plus\""), std::string::npos) << ok.out;
+  // --shard-base alone blamed a --shard '1/1' nobody gave.
+  expect_bad(dpc31("cosim --seeds 2 --cycles 10 --shard-base 0 --quiet"),
+             "dpc31 cosim: --shard-base requires --shard", "shard-base");
+}
+
+// Options of a mode that does not run are refused, as --clock-b and --tolerance-cycles were.
+TEST_F(BadInput, WavediffAndBenchRefuseOptionsOfAModeNotRun) {
+  copy(kVcd, "a.vcd");
+  copy(kVcd, "b.vcd");
+  expect_bad(dpc31("wavediff a.vcd b.vcd --edge falling"),
+             "dpc31 wavediff: --edge requires --clock", "edge");
+  expect_bad(dpc31("wavediff a.vcd b.vcd --wavedrom-window 5"),
+             "dpc31 wavediff: --wavedrom-window requires --wavedrom", "wavedrom-window");
+  expect_bad(dpc31("bench --items a --wavediff-mb 5"),
+             "dpc31 bench: --wavediff-mb is for item f, which --items leaves out", "mb");
+  expect_bad(dpc31("bench --items a,g --wavediff-dir ."),
+             "dpc31 bench: --wavediff-dir is for item f, which --items leaves out", "dir");
+  EXPECT_EQ(listing(), (std::vector<std::string>{"a.vcd", "b.vcd"}));
+}
+
+// An option of several values took the scenario (or A and B) after it, and the error then said
+// the scenario was missing: each takes one value (a comma list, or the option again).
+TEST_F(BadInput, AListOptionDoesNotTakeThePositionalAfterIt) {
+  copy(kScn, "s.scn");
+  const Outcome run = dpc31("run --quiet --signals 'pins.*' s.scn --vcd x.vcd");
+  EXPECT_EQ(run.rc, 0) << run.err;
+  EXPECT_TRUE(fs::is_regular_file(path("x.vcd")));
+  copy(kVcd, "a.vcd");
+  const Outcome wd = dpc31("wavediff --include '*dp_state*' a.vcd a.vcd --exclude x a.vcd");
+  // A third positional is what it is: an extra argument, named.
+  EXPECT_EQ(wd.rc, 2);
+  EXPECT_EQ(wd.err, "dpc31 wavediff: The following argument was not expected: a.vcd\n");
+  EXPECT_EQ(dpc31("wavediff --include '*dp_state*' a.vcd a.vcd").rc, 0);
+}
+
+// The report's first line and the JSON name an --unaccounted-fault (docs/soak.md): without it
+// the failing run read as a real counting failure.
+TEST_F(BadInput, SoakNamesTheUnaccountedFault) {
+  const Outcome r =
+      dpc31("soak --cycles 1e7 --fault-period 5e5 --unaccounted-fault glitch --json ug.json");
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_EQ(line_with(r.out, "dpc31 soak:"),
+            "dpc31 soak: profile dpc31, 1500000 baud, TWD 20 ms, a fault every 500000 cycles, "
+            "seed 1, one unaccounted glitch fault");
+  EXPECT_NE(slurp(path("ug.json")).find("\"unaccounted_fault\": \"glitch\""), std::string::npos);
+}
+
+// The wall time is the whole run's, start-up included: at 9600 baud the baud search is 0.6 s of
+// chip time, and "x real time" divided the chip time after it by the wall time after it (a
+// 0.2 s run reported 3210x). The factor is the report's chip time over its wall time.
+TEST_F(BadInput, SoakWallTimeCoversTheStartUp) {
+  const Outcome r = dpc31("soak --cycles 1e6 --baud 9600");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const std::regex line(R"(cycles \d+ \(([0-9.]+) s of chip time\), \d+ after the start-up; )"
+                        R"(wall ([0-9.]+) s \(([0-9.]+)x real time\))");
+  std::smatch m;
+  const std::string text = line_with(r.out, "cycles ");
+  ASSERT_TRUE(std::regex_match(text, m, line)) << text;
+  const double chip_s = std::stod(m[1]);
+  const double wall_s = std::stod(m[2]);
+  const double factor = std::stod(m[3]);
+  ASSERT_GT(wall_s, 0.0) << text;
+  // The printed wall time is rounded to 4 digits at least: 10 % covers it.
+  EXPECT_NEAR(factor, chip_s / wall_s, 0.1 * chip_s / wall_s) << text;
+}
+
+// A firmware that never starts the chip (the GLOBALS plug-in: its init counts its runs only): the
+// line says how far the start-up got (docs/soak.md). A chip never started answers nothing; after
+// reset it is in Wait_Prm (chip-facts.md, Status_Reg DP_State: 00 Wait_Prm, the reset value).
+TEST_F(BadInput, SoakSaysWhereTheStartUpStopped) {
+  expect_bad(dpc31(std::string("soak --cycles 1e6 --firmware ") + BAD_PLUGIN_GLOBALS),
+             "dpc31 soak: the first start-up did not reach Data_Exchange: after 1000 tries the "
+             "slave is in Wait_Prm; no request was answered, not even FDL_Status",
+             "never started");
+}
+
+// `dpc31 --version` prints the project's version, the one of CMakeLists.txt's project().
+TEST_F(BadInput, VersionIsTheProjectVersion) {
+  const std::string cmake = slurp(std::string(SOURCE_DIR) + "/CMakeLists.txt");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(cmake, m, std::regex(R"(project\(dpc31emu VERSION ([0-9.]+))")));
+  const Outcome r = dpc31("--version");
+  EXPECT_EQ(r.rc, 0);
+  EXPECT_EQ(r.out, "dpc31 " + m[1].str() + "\n");
+  EXPECT_EQ(r.err, "");
+}
+
+}  // namespace
+}  // namespace badinput
