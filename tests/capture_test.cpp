@@ -478,7 +478,6 @@ TEST(Capture, AttachRecordsEveryTelegram) {
 TEST(Capture, ALateAnswerIsWrittenAfterTheRequestThatStartedBeforeIt) {
   ASSERT_TRUE(have_tshark()) << kNoTshark;
   TempDir dir;
-  const std::string path = dir.file("late.pcapng");
   Scenario sc;
   ScenarioError err;
   ASSERT_TRUE(
@@ -487,7 +486,7 @@ TEST(Capture, ALateAnswerIsWrittenAfterTheRequestThatStartedBeforeIt) {
                      "late.scn", sc, err))
       << err.text();
   PcapngWriter w;
-  ASSERT_TRUE(w.open(path)) << w.error();
+  ASSERT_TRUE(w.open(dir.file("late.pcapng"))) << w.error();
   ScenarioHooks hooks;
   hooks.at_start = [&w](Chip& chip) { w.attach(chip); };
   run_scenario(sc, {}, {}, hooks);
@@ -497,8 +496,8 @@ TEST(Capture, ALateAnswerIsWrittenAfterTheRequestThatStartedBeforeIt) {
     std::uint64_t start, end, len;
   };
   std::vector<Frame> frames;
-  for (const std::string& l :
-       lines(tshark(dir, "-r " + quote(path) + " -T fields -e frame.len -e frame.comment"))) {
+  for (const std::string& l : lines(tshark(dir, "-r " + quote(dir.file("late.pcapng")) +
+                                                    " -T fields -e frame.len -e frame.comment"))) {
     Frame f{};
     ASSERT_EQ(std::sscanf(l.c_str(), "%lu\tcycles %lu-%lu", &f.len, &f.start, &f.end), 3) << l;
     if (!frames.empty()) {

@@ -16,6 +16,9 @@ import re
 import sys
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from waveform_sigrok_demo import fail_if  # noqa: E402
+
 WANT = {49: "MSAC_C2_Initiate", 50: "MSAC_C1_Alarm", 51: "MSAC_C1", 53: "Set_Ext_Prm",
         55: "Set_Slave_Add", 56: "Rd_Inp", 57: "Rd_Outp", 58: "Global_Control", 59: "Get_Cfg",
         60: "Slave_Diag", 61: "Set_Prm", 62: "Chk_Cfg"}
@@ -37,15 +40,11 @@ def main():
         "GTKWave": {int(h, 16): n for h, n in re.findall(r"^([0-9A-F]{2}) (.+)$", gtk, re.M)
                     if int(h, 16) in WANT},
     }
-    problems = [f"{who}: SAP {sap} is {names.get(sap)!r}, not {name!r}"
-                for who, names in have.items() for sap, name in WANT.items()
-                if names.get(sap) != name]
-    if problems:
-        print("FAIL:\n" + "\n".join(problems))
-        return 1
+    fail_if([f"{who}: SAP {sap} is {names.get(sap)!r}, not {name!r}"
+             for who, names in have.items() for sap, name in WANT.items()
+             if names.get(sap) != name])
     print(f"ok: {len(WANT)} SAPs named alike in {', '.join(have)}")
-    return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    main()
