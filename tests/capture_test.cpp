@@ -21,6 +21,7 @@
 #include "dp_master.hpp"
 #include "pcapng.hpp"
 #include "responder.hpp"
+#include "scenario.hpp"
 #include "test_files.hpp"
 
 using namespace dpc31;
@@ -468,6 +469,55 @@ TEST(Capture, AttachRecordsEveryTelegram) {
   EXPECT_EQ(dir.tree(), std::vector<std::string>{"startup.pcapng"});
 }
 
+// A late answer (docs/capture.md "Order"): the slave's MinTSDR 150 bit times is above the master's
+// slot time 100, at 12 Mbaud (T = 4 clocks, docs/timing.md). The Set_Prm (19 characters, 209 T =
+// 836 clocks) ends at E; its SC starts at E + 150 T = E + 600 and lasts 11 T = 44 clocks (the
+// "answer" row); the master gave up at E + 100 T and starts the Chk_Cfg (13 characters, 572
+// clocks) TSYN later, at E + 133 T = E + 532 ("The master's wait"): before the SC, which the
+// chip decided first. The capture is in start order all the same.
+TEST(Capture, ALateAnswerIsWrittenAfterTheRequestThatStartedBeforeIt) {
+  ASSERT_TRUE(have_tshark()) << kNoTshark;
+  TempDir dir;
+  Scenario sc;
+  ScenarioError err;
+  ASSERT_TRUE(
+      parse_scenario("profile spc3\nbaud 12000000\nmaster address=2 slot=100\n"
+                     "slave address=5 min_tsdr=150\nstartup tries=6\n",
+                     "late.scn", sc, err))
+      << err.text();
+  PcapngWriter w;
+  ASSERT_TRUE(w.open(dir.file("late.pcapng"))) << w.error();
+  ScenarioHooks hooks;
+  hooks.at_start = [&w](Chip& chip) { w.attach(chip); };
+  run_scenario(sc, {}, {}, hooks);
+  ASSERT_TRUE(w.close()) << w.error();
+
+  struct Frame {
+    std::uint64_t start, end, len;
+  };
+  std::vector<Frame> frames;
+  for (const std::string& l : lines(tshark(dir, "-r " + quote(dir.file("late.pcapng")) +
+                                                    " -T fields -e frame.len -e frame.comment"))) {
+    Frame f{};
+    ASSERT_EQ(std::sscanf(l.c_str(), "%lu\tcycles %lu-%lu", &f.len, &f.start, &f.end), 3) << l;
+    if (!frames.empty()) {
+      EXPECT_GE(f.start, frames.back().start) << l;
+    }
+    frames.push_back(f);
+  }
+  const auto set_prm =
+      std::find_if(frames.begin(), frames.end(), [](const Frame& f) { return f.len == 19; });
+  ASSERT_GE(std::distance(set_prm, frames.end()), 3);
+  const std::uint64_t e = set_prm->end;
+  EXPECT_EQ(set_prm->end - set_prm->start, 836u);
+  EXPECT_EQ(set_prm[1].len, 13u);  // the Chk_Cfg
+  EXPECT_EQ(set_prm[1].start, e + 532);
+  EXPECT_EQ(set_prm[1].end, e + 532 + 572);
+  EXPECT_EQ(set_prm[2].len, 1u);  // the Set_Prm's SC
+  EXPECT_EQ(set_prm[2].start, e + 600);
+  EXPECT_EQ(set_prm[2].end, e + 644);
+}
+
 // The whole path. Expected fields by hand from the telegrams (FCB/FCV per EN 50170: the first SRD
 // after FDL_Status carries FCB 1, FCV 1, then FCB alternates):
 //   FDL_Status     10 05 02 49 50 16           FC 49h = request, FDL_Status (9)
@@ -561,6 +611,31 @@ TEST(Capture, TsharkDecodesADpStartup) {
                                           " -Y '!profibus.fcs_ok' -T fields "
                                           "-e frame.number");
   EXPECT_EQ(lines(bad), (std::vector<std::string>{"6", "8"}));  // SCs have no FCS
+}
+
+// An SC answers the request just before it (docs/capture.md, profibus.service: "a response's from
+// the request it answers"): after an FDL_Status 2 -> 5 (10 05 02 49 50 16) an SC is its answer;
+// after the same request, a token 2 -> 5 (DC 05 02) and then an SC, the SC answers no request.
+TEST(Capture, TsharkGivesAnScOnlyTheServiceOfTheRequestJustBeforeIt) {
+  ASSERT_TRUE(have_tshark()) << kNoTshark;
+  TempDir dir;
+  const std::string path = dir.file("sc.pcapng");
+  const std::vector<Bytes> packets = {
+      kFdlStatusReq, {0xE5}, kFdlStatusReq, {0xDC, 0x05, 0x02}, {0xE5}};
+  PcapngWriter w(WriterOptions{"", "", false});
+  ASSERT_TRUE(w.open(path)) << w.error();
+  for (const Bytes& p : packets) ASSERT_TRUE(w.add(Packet{0, Direction::inbound, p, ""}));
+  ASSERT_TRUE(w.close()) << w.error();
+  const std::string out = tshark(
+      dir, "-r " + quote(path) + " -T fields -E separator=, -e profibus.service -e _ws.col.Info");
+  EXPECT_EQ(lines(out), (std::vector<std::string>{
+                            "FDL_Status request,FDL_Status request 2 → 5  FDL_Status",
+                            "FDL_Status response,SC short acknowledge (FDL_Status)",
+                            "FDL_Status request,FDL_Status request 2 → 5  FDL_Status",
+                            "Token,SD4 token 2 → 5",
+                            ",SC short acknowledge",
+                        }))
+      << out;
 }
 
 // Malformed telegrams: an expert info each, never a Lua error.

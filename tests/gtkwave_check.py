@@ -224,7 +224,7 @@ def case_demo(dpc31, d, screenshot):
         fail(f"a signal has two values at #0: {ids}")
     markers = [ln.split(" ", 1)[1] for ln in Path(save).read_text().splitlines()
                if ln.startswith("[markername] ")]
-    tcl = TRACES_TCL
+    tcl = TRACES_TCL + 'puts "window [gtkwave::getWindowStartTime] [gtkwave::getWindowEndTime]"\n'
     for m in markers:
         letter = m[0]
         tcl += (f'puts "marker {letter} [gtkwave::getNamedMarker {letter}]|'
@@ -243,6 +243,11 @@ def case_demo(dpc31, d, screenshot):
     got_groups = groups(traces(out))
     if got_groups != want_groups:
         problems.append(f"groups shown {got_groups}, want {want_groups}")
+    # It opens on the whole run (docs/waveforms.md): from 0 to at least the VCD's last time.
+    end = int(text.rsplit("\n#", 1)[1].split()[0])
+    window = re.search(r"^window (\d+) (\d+)$", out, re.M)
+    if not window or int(window.group(1)) != 0 or int(window.group(2)) < end:
+        problems.append(f"GTKWave opens on {window and window.groups()}, the run is 0..{end}")
     # A marker at each change of the state signals in the VCD, named by the state the walk
     # names for that change (the walk polls the states, so its cycles may come a little later:
     # never earlier).

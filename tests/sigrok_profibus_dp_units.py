@@ -89,6 +89,14 @@ BUS = [
     ("rxd", 100, [0x10, 5, 2]),
     ("rxd", 100, [0x00]),
     ("rxd", 100, sd1(5, 2, 0x49)),
+    # The poll on SAP 49 after an Initiate, and the resource manager's answer 56h: connection
+    # SAP 40, Send_Timeout 0064h = 100 (the layout lib/capture/profibus_dl.lua decodes).
+    ("rxd", 33, sd2(SL, MS, 0x5D, [49, 50])),
+    ("txd", 11, sd2(MS, SL, 0x08, [50, 49, 0x56, 40, 0x00, 0x64])),
+    # An FDL_Status, a token instead of its answer, then an SC: the answer of no request.
+    ("rxd", 33, sd1(5, 2, 0x49)),
+    ("rxd", 100, [0xDC, 5, 2]),
+    ("rxd", 33, [0xE5]),
 ]
 
 # (index of the telegram in BUS, expected annotation text) — the telegram's start sample is
@@ -139,6 +147,11 @@ EXPECT = [
     (25, "Broken telegram: truncated after 3 bytes: SD1 telegram"),
     (26, "Broken telegram: not a start delimiter: 00h: Noise 00h"),
     (27, "Request FDL_Status 2 -> 5"),
+    (29, "Response DL 5 -> 2: MSAC_C2_Initiate"),
+    (29, "Resource_Manager response: Connection SAP 40, Send_Timeout 100 x 10 ms"),
+    (31, "No answer: the next telegram came after 100.0 bit times"),
+    (32, "SC short acknowledge"),
+    (32, "Idle 33.0 bit times"),
 ]
 
 

@@ -498,6 +498,25 @@ TEST(WavediffStrip, ExplicitAndAutomaticTopScopes) {
   EXPECT_EQ(none.compared, 0u);
   EXPECT_EQ(none.only_a.size(), 3u);
   EXPECT_EQ(run_opts(o).rc, 1);
+  // No pair with --ignore-missing is no comparison at all: an error naming both files, not
+  // "same" (docs/wavediff.md, "Matching signals" 6); the CLI binary says the same, exit 2.
+  const std::string nothing = "dpc31 wavediff: no signals to compare: no signal of " + a +
+                              " matched one of " + b +
+                              " (check --strip, --map and --include/--exclude)\n";
+  o.ignore_missing = true;
+  const Outcome ignored = run_opts(o);
+  EXPECT_EQ(ignored.rc, 2);
+  EXPECT_EQ(ignored.out, "");
+  EXPECT_EQ(ignored.err, nothing);
+  EXPECT_THROW(compare(o), InputError);
+  const auto out = d.file("out.txt");
+  EXPECT_EQ(spawn({DPC31_CLI, "wavediff", a, b, "--ignore-missing"}, nullptr, out), 2);
+  EXPECT_EQ(slurp(out), nothing);
+  EXPECT_EQ(spawn({DPC31_CLI, "wavediff", b, b, "--exclude", "*"}, nullptr, out), 2);
+  EXPECT_EQ(slurp(out), "dpc31 wavediff: no signals to compare: no signal of " + b +
+                            " matched one of " + b +
+                            " (check --strip, --map and --include/--exclude)\n");
+  o.ignore_missing = false;
   o.strip_a = "tb.dut";
   o.strip_b = "TOP";
   EXPECT_EQ(run_opts(o).rc, 0);

@@ -9,6 +9,8 @@ round(cycle x 10^12 / 48 MHz) ps (docs/waveforms.md).
 
 import subprocess
 
+import pytest
+
 import dpc31
 
 T = 32
@@ -64,3 +66,17 @@ def test_one_input_bit_differs_on_txd_in_its_data_bit(cli, tmp_path):
     data = next(d for d in report.diffs if d.name.endswith("data"))
     assert data.first.at.time < txd.first.at.time
     assert report.diffs[0].name == data.name
+
+
+def test_no_signal_in_common_is_an_error_not_same(cli, tmp_path):
+    # a run against a dump whose names match none of it: with ignore_missing nothing is compared,
+    # which is no verdict (docs/wavediff.md, "Matching signals" 6): InputError, as the CLI's exit 2
+    run = record(cli, tmp_path, "run", 0xDE)
+    other = tmp_path / "other.vcd"
+    other.write_text("$timescale 1ns $end\n$scope module rtl $end\n$var wire 1 ! clk $end\n"
+                     "$upscope $end\n$enddefinitions $end\n#0\n0!\n#10\n1!\n")
+    with pytest.raises(dpc31.InputError) as e:
+        dpc31.wavediff(run, str(other), ignore_missing=True)
+    assert str(e.value) == (f"dpc31 wavediff: no signals to compare: no signal of {run} matched "
+                            f"one of {other} (check --strip, --map and --include/--exclude)")
+    assert not dpc31.wavediff(run, str(other)).same  # one-sided names: different

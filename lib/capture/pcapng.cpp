@@ -4,6 +4,7 @@
 
 #include <cstdio>
 #include <limits>
+#include <utility>
 
 #include "outfile.hpp"
 
@@ -140,6 +141,8 @@ struct PcapngWriter::State {
   outfile::OutFile out;
   std::string error;
   std::uint64_t packets = 0;
+  // The chip's answers not yet written, with the chip's clock: attach() writes in start order.
+  std::vector<std::pair<Telegram, std::uint32_t>> held;
 
   bool fail(std::string msg) {
     if (error.empty()) error = std::move(msg);
@@ -167,6 +170,24 @@ struct PcapngWriter::State {
     }
     return add(*p);
   }
+  // The chip reports an answer when it decides it, before its first start bit, and a received
+  // telegram at its end. So a received one never starts before any telegram reported after it,
+  // while a request that started after the answer was decided (the master gave up at its slot
+  // time) can start before that answer: answers wait for a received telegram that starts later,
+  // or for close().
+  void report(const Telegram& t, std::uint32_t clock_hz) {
+    if (t.from_chip) {
+      held.emplace_back(t, clock_hz);
+      return;
+    }
+    flush_held(t.start);
+    add(t, clock_hz);
+  }
+  void flush_held(std::uint64_t up_to) {
+    auto it = held.begin();
+    for (; it != held.end() && it->first.start <= up_to; ++it) add(it->first, it->second);
+    held.erase(held.begin(), it);
+  }
 };
 
 PcapngWriter::PcapngWriter(WriterOptions opt) : state_(std::make_shared<State>()) {
@@ -180,6 +201,7 @@ bool PcapngWriter::open(const std::string& path) {
   s.out.discard();
   s.error.clear();
   s.packets = 0;
+  s.held.clear();
   if (!s.out.open(path)) return s.fail(s.out.error());
   return s.put(section_header_block(s.opt)) && s.put(interface_description_block(s.opt));
 }
@@ -196,13 +218,14 @@ void PcapngWriter::attach(Chip& chip) {
   chip.on_telegram([weak, hz](const Telegram& t) {
     const std::shared_ptr<State> s = weak.lock();
     if (!s || !s->out.is_open()) return;  // writer gone or closed
-    s->add(t, hz);
+    s->report(t, hz);
   });
 }
 
 bool PcapngWriter::close() {
   State& s = *state_;
   if (!s.out.is_open()) return s.fail("no capture file is open");
+  s.flush_held(std::numeric_limits<std::uint64_t>::max());
   if (!s.error.empty()) {
     s.out.discard();
     return false;
@@ -210,7 +233,10 @@ bool PcapngWriter::close() {
   return s.out.commit() || s.fail(s.out.error());
 }
 
-void PcapngWriter::discard() { state_->out.discard(); }
+void PcapngWriter::discard() {
+  state_->out.discard();
+  state_->held.clear();
+}
 
 bool PcapngWriter::is_open() const { return state_->out.is_open(); }
 const std::string& PcapngWriter::error() const { return state_->error; }

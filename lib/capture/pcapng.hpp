@@ -70,9 +70,10 @@ class PcapngWriter {
   // False with error() set (not open, an earlier error, a write failure).
   bool add(const Packet& p);
   bool add(const Telegram& t, std::uint32_t clock_hz);
-  // Records every telegram of `chip` from now on (Chip::on_telegram, at the chip's clock). Safe
-  // when the writer goes first: the observer then does nothing; telegrams after close() are
-  // ignored. Errors are kept for close().
+  // Records every telegram of `chip` from now on (Chip::on_telegram, at the chip's clock), in the
+  // order of their first start bits: the chip's answers are held until a received telegram that
+  // starts later, or close(). Safe when the writer goes first: the observer then does nothing;
+  // telegrams after close() are ignored. Errors are kept for close().
   void attach(Chip& chip);
   // Flushes, syncs and renames the temporary over the target. False with error() set if anything
   // failed since open(); the temporary is then removed and the target left as it was.

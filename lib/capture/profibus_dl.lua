@@ -74,7 +74,7 @@ local station_types = {
 }
 -- DP services by the slave's SAP (the DSAP of a request, the SSAP of its response).
 local dp_saps = {
-  [49] = "MSAC_C2_Initiate", [50] = "Alarm_Ack", [51] = "MSAC_C1", [53] = "Ext_User_Prm",
+  [49] = "MSAC_C2_Initiate", [50] = "MSAC_C1_Alarm", [51] = "MSAC_C1", [53] = "Set_Ext_Prm",
   [55] = "Set_Slave_Add", [56] = "Rd_Inp", [57] = "Rd_Outp", [58] = "Global_Control",
   [59] = "Get_Cfg", [60] = "Slave_Diag", [61] = "Set_Prm", [62] = "Chk_Cfg",
 }
@@ -342,7 +342,10 @@ local function parse(tvb, pinfo, tree)
   if sd == SC then
     trailing(1)
     local svc = pinfo.visited and response_service[pinfo.number] or last_any
-    if not pinfo.visited and svc then response_service[pinfo.number] = svc end
+    if not pinfo.visited then
+      if svc then response_service[pinfo.number] = svc end
+      last_any = nil -- one SC answers the request just before it, once
+    end
     if svc then tree:add(f.service, svc .. " response"):set_generated() end
     return "SC short acknowledge" .. (svc and (" (" .. svc .. ")") or "")
   end
@@ -399,6 +402,7 @@ local function parse(tvb, pinfo, tree)
       da_item:add_proto_expert_info(e.reserved, "Address extension bit in a token")
     end
     trailing(3)
+    if not pinfo.visited then last_any = nil end -- an SC after a token answers no request
     tree:add(f.service, "Token"):set_generated()
     return "SD4 token " .. route
   end

@@ -262,9 +262,14 @@ void Engine::setup(Report& rep) {
     if (ia.count(name) == 0) rep.only_b.push_back(B.sigs[i].orig);
   }
   rep.compared = pairs.size();
-  if (pairs.empty() && rep.only_a.empty() && rep.only_b.empty() && rep.structural.empty()) {
-    throw InputError(
-        "dpc31 wavediff: no signals to compare (check --include/--exclude and --strip)");
+  // Nothing compared is no verdict: with --ignore-missing it would pass as "same" (an RTL whose
+  // top scope was renamed, a --strip gone wrong).
+  if (pairs.empty() && rep.structural.empty() &&
+      (o_.ignore_missing || (rep.only_a.empty() && rep.only_b.empty()))) {
+    throw InputError(fmt::format(
+        "dpc31 wavediff: no signals to compare: no signal of {} matched one of {} (check "
+        "--strip, --map and --include/--exclude)",
+        o_.file_a, o_.file_b));
   }
 
   // Which pairs each slot feeds.

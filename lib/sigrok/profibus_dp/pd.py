@@ -52,7 +52,7 @@ DP_SAPS = {49: 'MSAC_C2_Initiate', 50: 'MSAC_C1_Alarm', 51: 'MSAC_C1',
            60: 'Slave_Diag', 61: 'Set_Prm', 62: 'Chk_Cfg'}
 DPV1_FUNCS = {0x5E: 'Read', 0x5F: 'Write', 0x5C: 'Alarm_Ack',
               0x57: 'Initiate', 0x58: 'Abort', 0x51: 'Data_Transport',
-              0x48: 'Idle'}
+              0x48: 'Idle', 0x56: 'Resource_Manager'}
 ERROR_CLASS = {0xA: 'application', 0xB: 'access', 0xC: 'resource'}
 ERROR_CODE_1 = {0xA0: 'read error', 0xA1: 'write error',
                 0xA2: 'module failure', 0xA8: 'version conflict',
@@ -150,6 +150,8 @@ class Decoder(srd.Decoder):
         self.bit = None             # samples per bit
         self.tg = None              # the telegram being received
         self.last_end = None        # end of the last character on the bus
+        self.line_end = [None, None]  # ... on rx and on tx
+        self.collided = None        # (line, end) of the last colliding char
         self.char_error = [None, None]
         self.request = None         # the last request that wants an answer
         self.answered = True
@@ -216,6 +218,13 @@ class Decoder(srd.Decoder):
         self.finish()
 
     def char(self, c):
+        end = c.ss + BITS_PER_CHAR * self.bit
+        other_end = self.line_end[1 - c.rxtx]
+        self.line_end[c.rxtx] = end
+        if self.collides(c, other_end):
+            self.collided = (c.rxtx, end)
+            self.last_end = max(self.last_end, end)
+            return
         gap = None
         if self.last_end is not None:
             gap = self.bits(c.ss - self.last_end)
@@ -223,7 +232,7 @@ class Decoder(srd.Decoder):
         if tg is not None and (gap >= TSYN_BITS or c.rxtx != tg.chars[0].rxtx):
             self.cut(c.ss)
             tg = None
-        self.last_end = c.ss + BITS_PER_CHAR * self.bit
+        self.last_end = end
         if tg is None:
             if gap is None:
                 idle = (0, c.ss, self.bits(c.ss), False)
@@ -247,6 +256,27 @@ class Decoder(srd.Decoder):
             tg.need = b[1] + 6
         if tg.need is not None and n >= tg.need:
             self.finish()
+
+    def collides(self, c, other_end):
+        '''A character that starts while the other line's last one is still
+        on (a late answer inside the next request: one bus cannot carry both),
+        and the characters back to back after it, are annotated and dropped;
+        the telegram already on the bus goes on uncut.'''
+        if self.tg is not None and self.tg.chars[0].rxtx == c.rxtx:
+            return False
+        lines = ('RxD', 'TxD')
+        if other_end is not None and c.ss < other_end:
+            text = 'Collision: %s on %s while %s is sending' % (
+                hx(c.value), lines[c.rxtx], lines[1 - c.rxtx])
+        elif self.collided is not None and self.collided[0] == c.rxtx and \
+                self.bits(c.ss - self.collided[1]) < TSYN_BITS:
+            text = 'Collision: %s on %s, the rest of a collided telegram' % (
+                hx(c.value), lines[c.rxtx])
+        else:
+            return False
+        self.putx(c.ss, c.ss + BITS_PER_CHAR * self.bit, A_ERROR,
+                  [text, 'Collision'])
+        return True
 
     # --- one whole telegram ------------------------------------------------
 
@@ -277,9 +307,11 @@ class Decoder(srd.Decoder):
         '''Annotates the fields; returns (kind, summary, service, wants an
         answer, DA, SA).'''
         sd = b[0]
+        # An answer's service is its request's, while that request waits for
+        # one (not after another telegram: a token, the next request).
+        req = None if self.answered else self.request
         if sd == SC:
             field(0, 0, A_SD, ['SC (short acknowledge)', 'SC'])
-            req = self.request
             service = req[2] if req else ''
             return ('response', 'SC short acknowledge' +
                     (' (%s)' % service if service else ''), service, False,
@@ -372,7 +404,6 @@ class Decoder(srd.Decoder):
         if request:
             service = self.request_service(code, sap, da7, b[du:du_end])
         else:
-            req = self.request
             service = req[2] if req and req[0] == sa7 and req[1] == da7 \
                 else ''
         if sap is not None and (sap <= 51) and du < du_end:
@@ -441,6 +472,11 @@ class Decoder(srd.Decoder):
             text += ': Max_Len_Data_Unit %d, Features %02X%02X, ' \
                     'Profile_Ident %02X%02X' % (pdu[1], pdu[2], pdu[3],
                                                 pdu[6], pdu[7])
+        elif f == 0x56 and len(pdu) >= 4:
+            # The resource manager's answer on SAP 49: the connection's SAP
+            # and its Send_Timeout (docs/capture.md, profibus.dpv1.sap).
+            text += ': Connection SAP %d, Send_Timeout %d x 10 ms' % (
+                pdu[1], (pdu[2] << 8) | pdu[3])
         elif f == 0x58 and len(pdu) >= 3:
             text += ': Subnet %d, Instance %d, Reason_Code %d' % (
                 pdu[1], (pdu[2] >> 4) & 3, pdu[2] & 0xF)
