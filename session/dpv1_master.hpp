@@ -46,8 +46,9 @@ struct Dpv1Answer {
   std::optional<fdl::Frame> last;           // the last answer on the wire
   std::uint32_t polls = 0;                  // polls answered SC before the response
   // The request's first start bit, and the outcome's cycle (docs/dpv1.md, "The outcome's
-  // cycle"): the last answer's last stop bit; no_answer: the end of the slot time after the last
-  // try; no_connection: both the cycle the service was asked for.
+  // cycle"): the last answer's last stop bit; no_answer: where the master's wait ended after the
+  // last try (Exchange::wait_end, docs/timing.md "The master's wait"); no_connection: both the
+  // cycle the service was asked for.
   std::uint64_t start = 0;
   std::uint64_t end = 0;
 };

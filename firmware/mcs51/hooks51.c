@@ -18,10 +18,15 @@ void dpc31_board_reset(int asserted) { (void)asserted; }
 /* X/INT is on INT0. */
 void dpc31_board_int_enable(int enabled) { EX0 = enabled ? 1 : 0; }
 
+/* Waits in progress: an ISR's wait may run inside the main loop's. */
+static volatile __data uint8_t waits;
+
 /* At least 1 ms: timer 0 in mode 1 (16 bit) runs WAIT_1MS_CYCLES machine cycles, plus the call's
  * own; an enabled interrupt is served meanwhile. Timer 0 is the hook's: the firmware must not
- * use it. */
+ * use it. A wait inside another (an ISR's) restarts the timer and, when it returns, leaves it
+ * running with TF0 set, so the outer wait ends too: it has lasted the inner one's 1 ms. */
 void dpc31_board_wait_1ms(void) {
+  waits++;
   TR0 = 0;
   TMOD = (uint8_t)((TMOD & 0xF0u) | 0x01u);
   TH0 = (uint8_t)((65536UL - WAIT_1MS_CYCLES) >> 8);
@@ -30,6 +35,8 @@ void dpc31_board_wait_1ms(void) {
   TR0 = 1;
   while (!TF0) {
   }
-  TR0 = 0;
-  TF0 = 0;
+  if (--waits == 0) {
+    TR0 = 0;
+    TF0 = 0;
+  }
 }

@@ -3,7 +3,8 @@
  * chip in XDATA, X/INT on INT0 (level-triggered) with the interrupt input enabled when the
  * firmware starts, the station address from the address switch on port 1. main() calls the
  * descriptor's init, then its main_step in a loop, or idles until the next interrupt without one;
- * INT0 calls its isr. The board hooks are hooks51.c's. */
+ * INT0 calls its isr, at any instruction: the HAL's functions (hal51.c) are not reentrant, so isr
+ * and init/main_step must not both call them. The board hooks are hooks51.c's. */
 #include <8052.h>
 
 #include "dpc31/dpc31_firmware.h"
@@ -12,8 +13,6 @@
 #ifndef DPC31_BOARD_PROFILE
 #define DPC31_BOARD_PROFILE DPC31_PROFILE_VPC3PLUS
 #endif
-
-extern const dpc31_firmware* const dpc31_firmware_descriptor;
 
 /* A polling firmware has no ISR: X/INT is its main loop's, and INT0, level-triggered, would call
  * again at once, so it is masked. */

@@ -26,7 +26,7 @@
 #define DPC31_DIAG_STANDARD 6u /* Ext_Diag_Data from here */
 #define DPC31_DIAG_NO_MASTER 0xFFu
 
-/* Station_Status_1..3 in a Slave_Diag answer (chip-facts.md §8). */
+/* Station_Status_1..3 in a Slave_Diag answer (chip-facts.md §6). */
 #define DPC31_ST1_STATION_NON_EXISTENT 0x01u
 #define DPC31_ST1_STATION_NOT_READY 0x02u
 #define DPC31_ST1_CFG_FAULT 0x04u
