@@ -128,17 +128,18 @@ struct ScriptedLine {
   Dpv1Master dpv1;
   std::vector<std::uint64_t> request_end;
 
-  ScriptedLine(std::size_t nth, std::vector<std::uint8_t> bytes, Dpv1Rules rules)
+  ScriptedLine(std::size_t nth, std::vector<std::uint8_t> bytes, Dpv1Rules rules,
+               UartFault fault = {})
       : dpv1(clock, master, rules) {
     master.on_send = [this](std::uint64_t start, std::span<const std::uint8_t> request,
                             const UartFault&) {
       request_end.push_back(start + request.size() * 11 * T);
     };
-    master.scheduler = [this, nth, bytes = std::move(bytes)](std::uint64_t cycle) {
+    master.scheduler = [this, nth, bytes = std::move(bytes), fault](std::uint64_t cycle) {
       if (request_end.size() == nth && !sent_) {
         sent_ = true;
         seg.run_until(request_end.back());
-        seg.send(rogue, bytes, request_end.back() + 11 * T);
+        seg.send(rogue, bytes, request_end.back() + 11 * T, fault);
         return;
       }
       seg.run_until(cycle);
@@ -149,13 +150,13 @@ struct ScriptedLine {
   bool sent_ = false;
 };
 
-// The no_answer cycle after a broken answer (review B, finding 1; docs/timing.md, "The master's
+// The no_answer cycle after an answer cut short (review B, finding 1; docs/timing.md, "The master's
 // wait"): the wait ends a slot time (TSL = 100 T) after the answer's last character, not after
 // the request's. A Read answered by the first 6 characters of an SD2 response (68 07 07 68 02
 // 05): they end 11 T + 6 x 11 T = 77 T after the request, the master gives up at 177 T. A valid
 // telegram addressed otherwise (SD1 from 7, 6 characters) frees the line at its end, 77 T.
 // Before, both were request's end + 100 T.
-TEST(Dpv1Master, NoAnswerAfterABrokenAnswerEndsASlotTimeAfterIt) {
+TEST(Dpv1Master, NoAnswerAfterACutShortAnswerEndsASlotTimeAfterIt) {
   Dpv1Rules rules;
   rules.retries = 0;
   {
@@ -194,6 +195,26 @@ TEST(Dpv1Master, NoAnswerAfterACompleteAnswerWithABadFcsEndsAtItsEnd) {
   EXPECT_FALSE(ex.stray);
   EXPECT_EQ(ex.answer_end, l.request_end[0] + 77 * ScriptedLine::T);
   EXPECT_EQ(ex.wait_end, ex.answer_end);
+}
+
+// An answer broken by a bad character (review A, finding 9; docs/timing.md, "The master's wait":
+// "one broken by a bad character ends it at the last character the master took"): the SD1
+// answer of the test above with the right FCS (0Fh), its third character (SA) sent with a wrong
+// parity bit. The answer starts 11 T after the request's end; the bad character is its third,
+// so the wait ends at its end, 11 T + 3 x 11 T = 44 T after the request, not at the telegram's
+// end (77 T) nor a slot time after it.
+TEST(Dpv1Master, NoAnswerAfterABadCharacterEndsAtThatCharacter) {
+  Dpv1Rules rules;
+  rules.retries = 0;
+  ScriptedLine l(1, {0x10, 0x02, 0x05, 0x08, 0x0F, 0x16}, rules,
+                 UartFault{2, UartFault::Kind::parity});
+  const Dpv1Answer a = l.dpv1.read(0, 1, 4);
+  EXPECT_EQ(a.outcome, Dpv1Answer::Outcome::no_answer);
+  ASSERT_EQ(l.request_end.size(), 1u);
+  const Exchange& ex = l.master.history().back();
+  EXPECT_FALSE(ex.answer);
+  EXPECT_EQ(ex.wait_end, l.request_end[0] + 44 * ScriptedLine::T);
+  EXPECT_EQ(a.end, ex.wait_end);
 }
 
 // `start` is the request's first start bit, the first try's (review B, finding 9; docs/dpv1.md,
