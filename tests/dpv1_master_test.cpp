@@ -200,10 +200,10 @@ TEST(Dpv1Master, NoAnswerAfterACompleteAnswerWithABadFcsEndsAtItsEnd) {
 // An answer broken by a bad character (review A, finding 9; docs/timing.md, "The master's wait":
 // "one broken by a bad character ends it at the last character the master took"): the SD1
 // answer of the test above with the right FCS (0Fh), its third character (SA) sent with a wrong
-// parity bit. The answer starts 11 T after the request's end; the bad character is its third,
-// so the wait ends at its end, 11 T + 3 x 11 T = 44 T after the request, not at the telegram's
-// end (77 T) nor a slot time after it.
-TEST(Dpv1Master, NoAnswerAfterABadCharacterEndsAtThatCharacter) {
+// parity bit. The master's receiver takes every character on the line, the three after the bad
+// one too (back to back, each within a slot time of the last), so the last it took is the sixth:
+// the wait ends 11 T + 6 x 11 T = 77 T after the request, not a slot time after it (177 T).
+TEST(Dpv1Master, NoAnswerAfterABadCharacterEndsAtTheLastCharacterTaken) {
   Dpv1Rules rules;
   rules.retries = 0;
   ScriptedLine l(1, {0x10, 0x02, 0x05, 0x08, 0x0F, 0x16}, rules,
@@ -213,7 +213,7 @@ TEST(Dpv1Master, NoAnswerAfterABadCharacterEndsAtThatCharacter) {
   ASSERT_EQ(l.request_end.size(), 1u);
   const Exchange& ex = l.master.history().back();
   EXPECT_FALSE(ex.answer);
-  EXPECT_EQ(ex.wait_end, l.request_end[0] + 44 * ScriptedLine::T);
+  EXPECT_EQ(ex.wait_end, l.request_end[0] + 77 * ScriptedLine::T);
   EXPECT_EQ(a.end, ex.wait_end);
 }
 
