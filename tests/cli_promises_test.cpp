@@ -85,13 +85,48 @@ TEST_F(BadInput, BridgeSlaveFieldsReadNumbersAsEveryDoor) {
              "0x10000");
 }
 
-// cosim --session runs the scenario's chip, once: the options of seeds and their outputs, and a
-// chip the scenario is not, were dropped without a word (exit 0 on another chip than asked for).
+// cosim --session writes a run's outputs (docs/golden-model.md, "Chip-session mode"): --out,
+// --vcd, --window, --dump and --junit were dropped without a word (audit a23, finding 2).
+TEST_F(BadInput, CosimSessionWritesItsOutputs) {
+  // A clean session: the JUnit case is the scenario's, the dump both sides' whole run.
+  copy(kScn, "clean.scn");
+  const Outcome clean = dpc31("cosim --session clean.scn --dump d --junit j.xml --quiet");
+  EXPECT_EQ(clean.rc, 0) << clean.err;
+  EXPECT_EQ(slurp(path("j.xml")),
+            "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuite name=\"dpc31-cosim\" "
+            "tests=\"1\" failures=\"0\">\n  <testcase classname=\"cosim\" "
+            "name=\"spc3.session.clean\"/>\n</testsuite>\n");
+  for (const char* f : {"d/emu.vcd", "d/rtl.vcd"}) EXPECT_TRUE(fs::is_regular_file(path(f))) << f;
+  // A divergence (the mutant the session suite catches): its shrunk trace names the scenario's
+  // chip and replays to the same divergence; without the mutant (the fixed RTL) it is clean.
+  copy(kTraces + "gc_clear_failsafe_dpc31.scn", "m.scn");
+  const Outcome bad = dpc31(
+      "cosim --session m.scn --mutant NO_C_SWAP --out o --vcd w --window 5 --junit m.xml --quiet");
+  EXPECT_EQ(bad.rc, 1) << bad.err;
+  const std::string cycle = line_with(bad.out, "\"cycle\":");
+  ASSERT_NE(cycle, "") << bad.out;
+  const std::string trace = slurp(path("o/cosim-dpc31-session-m.trace"));
+  EXPECT_EQ(trace.substr(0, trace.find("# shrunk")),
+            "# dpc31 cosim stimulus trace\n# profile dpc31\n# bus intel\n# variant -\n# session " +
+                path("m.scn") + "\n# mutant NO_C_SWAP\n");
+  for (const char* f : {"w/emu.vcd", "w/rtl.vcd"}) EXPECT_TRUE(fs::is_regular_file(path(f))) << f;
+  EXPECT_NE(slurp(path("m.xml"))
+                .find("name=\"dpc31.session.m\"><failure message=\"divergence at "
+                      "cycle "),
+            std::string::npos);
+  const Outcome again = dpc31("cosim --replay o/cosim-dpc31-session-m.trace --out r --quiet");
+  EXPECT_EQ(again.rc, 1) << again.err;
+  EXPECT_EQ(line_with(again.out, "\"cycle\":"), cycle) << again.out;
+  file("fixed.trace", std::regex_replace(trace, std::regex("# mutant NO_C_SWAP"), "# mutant -"));
+  EXPECT_EQ(dpc31("cosim --replay fixed.trace --quiet").rc, 0);
+}
+
+// cosim --session runs the scenario's chip, once: the options of seeds, and a chip the scenario
+// is not, were dropped without a word (exit 0 on another chip than asked for).
 TEST_F(BadInput, CosimSessionRefusesWhatItWouldIgnore) {
   const std::string scn = copy(kTraces + "startup_vpc3plus_1m5.scn", "s.scn");
-  for (const std::string opt :
-       {"--seeds 50", "--seed-base 3", "--cycles 7", "--shard 2/3", "--junit j.xml", "--vcd v",
-        "--window 5", "--out o", "--dump d", "--replay s.scn", "--keep-going"}) {
+  for (const std::string opt : {"--seeds 50", "--seed-base 3", "--cycles 7", "--shard 2/3",
+                                "--replay s.scn", "--keep-going"}) {
     const std::string name = opt.substr(0, opt.find(' '));
     // CLI11 names the option defined first first (--keep-going comes after --session).
     expect_bad(dpc31("cosim --session s.scn " + opt + " --quiet"),

@@ -176,6 +176,23 @@ def session_clean():
     print("session mode on the loaded model: no divergence")
 
 
+def session_scenario_profile():
+    # The RTL is built for the scenario's chip, not --profile's default dpc31: our own RTL on a
+    # vpc3plus and an spc3 scenario is clean (it "diverged" at cycle 0: audit a23, finding 3), and
+    # a --profile the scenario is not is refused before anything is built.
+    for name, profile in (("gc_freeze_vpc3plus", "vpc3plus"), ("gc_clear_spc3", "spc3")):
+        scn = os.path.join(SRC, "traces", name + ".scn")
+        r = run(OWN + ["--session", scn, "--quiet"])
+        check(r.returncode == 0 and not summary(r)["diverged"],
+              f"{name}: exit {r.returncode}: {r.stderr}")
+        check(summary(r)["profile"] == profile, f"{name}: ran profile {summary(r)['profile']}")
+        one_line_exit_2(run(OWN + ["--session", scn, "--profile", "dpc31", "--quiet"]),
+                        f"dpc31 cosim: {scn}: the scenario runs profile {profile}, "
+                        "not --profile dpc31",
+                        CACHE + "/none")
+    print("session mode builds the RTL for the scenario's profile")
+
+
 def waveforms_and_number():
     # The waveform window of a divergence, with Verilator's internal FST of the loaded model
     # (built with tracing, unlike the built-in mutants), and --mutant as mutant_sel's number.
@@ -375,6 +392,7 @@ CASES = {
     "mutant_model_unselected_clean": mutant_model_unselected_clean,
     "mutants_same_report": mutants_same_report,
     "session_clean": session_clean,
+    "session_scenario_profile": session_scenario_profile,
     "replay_names_its_rtl": replay_names_its_rtl,
     "waveforms_and_number": waveforms_and_number,
     "window_after_divergence": window_after_divergence,

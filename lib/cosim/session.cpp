@@ -92,6 +92,12 @@ bool record_session(const std::string& scenario_path, Session& out, std::string&
   return true;
 }
 
+Stimulus session_stimulus(const Session& s) {
+  Stimulus out(s.cycles);
+  for (const auto& [cycle, in] : s.events) out.set(cycle, in);
+  return out;
+}
+
 RunResult run_session(const Session& s, std::string_view mutant) {
   RunResult r;
   std::unique_ptr<Dut> rtl = make_rtl_dut(s.options, mutant);

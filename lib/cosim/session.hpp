@@ -31,6 +31,10 @@ void end_recording(Chip& chip, Session& out);
 // Loads and plays the scenario. False (with a one-line error) if it does not load.
 bool record_session(const std::string& scenario_path, Session& out, std::string& error);
 
+// The recorded block events and bus accesses as a stimulus of the session's length: run_lockstep
+// over it meets the divergence run_session meets first, and shrink and the trace files take it.
+Stimulus session_stimulus(const Session& s);
+
 // Lockstep of C++ blocks and RTL over the recorded session, then the replay against the chip.
 RunResult run_session(const Session& s, std::string_view mutant = "");
 

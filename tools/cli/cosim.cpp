@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -332,11 +333,125 @@ std::string window_unwritable(const std::string& dir) {
   return "";
 }
 
+// The shrinker's budgets: a seed's stimulus is thousands of cycles, a session's millions, and
+// each run replays it up to the divergence (a session stops shrinking sooner; what it has is
+// still a trace that fails).
+constexpr int kSeedShrinkRuns = 3000;
+constexpr int kSessionShrinkRuns = 50;
+
+// What a divergence of `s` leaves: its stimulus shrunk (in at most `max_runs` lockstep runs) into
+// --out as `name` (the header names the run's model and `origin`, a seed or a session) and the
+// waveform window in --vcd; `entry` gets their paths, a file not written goes to `output_failed`.
+void write_divergence(const CosimOptions& o, const cosim::Stimulus& s, const cosim::RunResult& r,
+                      const cosim::DutOptions& dut, const std::string& name,
+                      const std::string& origin, int max_runs, bool traced, nlohmann::json& entry,
+                      const std::function<void(const std::string&)>& output_failed) {
+  using namespace dpc31::cosim;
+  entry["signals"] = r.signals;
+  const Stimulus small = shrink(s, dut, o.mutant, max_runs);
+  const std::string dir = o.out_dir.empty() ? "." : o.out_dir;
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);  // checked up front; a failure shows below
+  // A replay shrinks its trace again under a name of its own: a seed run's trace, which the
+  // replayed one may be or come from, is never written over, nor the replayed trace itself.
+  const std::string trace = (std::filesystem::path(dir) / name).string();
+  const bool replayed = !o.replay.empty() && std::filesystem::equivalent(trace, o.replay, ec);
+  std::string error;
+  const auto events = [](const Stimulus& x) { return x.event_count(); };
+  Stimulus before = s;
+  before.resize(static_cast<std::uint64_t>(r.divergence) + 1);
+  const std::string header = fmt::format(
+      "profile {}\nbus {}\nvariant {}\n{}\nmutant {}\n{}shrunk from {} to {} stimulus "
+      "events ({} cycles)",
+      o.profile_name, o.bus == BusMode::intel ? "intel" : "motorola",
+      o.variant_name.empty() ? "-" : o.variant_name, origin, o.mutant.empty() ? "-" : o.mutant,
+      rtl_header(o), events(before), events(small), small.size());
+  if (replayed) {
+    if (!o.quiet) {
+      fmt::print(stderr,
+                 "  shrunk to {} stimulus events: not written over {}, the trace "
+                 "replayed\n",
+                 events(small), trace);
+    }
+  } else if (outfile::write_file(trace, write_trace(small, header), error)) {
+    entry["trace"] = trace;
+    if (!o.quiet) fmt::print(stderr, "  shrunk to {} stimulus events: {}\n", events(small), trace);
+  } else {
+    output_failed(error);
+  }
+  if (!o.vcd_dir.empty()) {
+    // Drawn over the run that failed, not the shrunk stimulus cut at the divergence: the
+    // --window cycles after it too, idle where the stimulus has ended.
+    const auto d = static_cast<std::uint64_t>(r.divergence);
+    const std::uint64_t from = d > o.window ? d - o.window : 0;
+    Stimulus around = s;
+    around.resize(d + o.window + 1);
+    // Joined as paths: `--vcd win/` names win/emu.vcd, not win//emu.vcd.
+    const auto in_vcd = [&](const char* name) {
+      return (std::filesystem::path(o.vcd_dir) / name).string();
+    };
+    if (write_window(around, dut, o.mutant, from, around.size(), o.vcd_dir, error)) {
+      entry["vcd"] = {in_vcd("emu.vcd"), in_vcd("rtl.vcd")};
+    } else {
+      output_failed(error);
+    }
+    if (write_rtl_fst(around, dut, o.mutant, in_vcd("rtl_internal.fst"), error)) {
+      entry["fst"] = in_vcd("rtl_internal.fst");
+    } else if (traced) {
+      output_failed(error);
+    } else if (!o.quiet) {
+      fmt::print(stderr, "  {}\n", error);
+    }
+  }
+}
+
+// --dump: the whole run of `s`, both sides, for wavediff or GTKWave.
+void write_dump(const CosimOptions& o, const cosim::Stimulus& s, const cosim::DutOptions& dut,
+                bool traced, const std::function<void(const std::string&)>& output_failed) {
+  std::string error;
+  if (!write_window(s, dut, o.mutant, 0, s.size(), o.dump_dir, error)) output_failed(error);
+  if (!write_rtl_fst(s, dut, o.mutant,
+                     (std::filesystem::path(o.dump_dir) / "rtl_internal.fst").string(), error)) {
+    if (traced) {
+      output_failed(error);
+    } else if (!o.quiet) {
+      fmt::print(stderr, "{}\n", error);
+    }
+  }
+}
+
+// The waveform windows' files, checked before the run (false: the line printed, exit 2).
+bool windows_ready(const CosimOptions& o) {
+  // One that cannot be written was found only after the run. --dump always writes its directory,
+  // made now; --vcd's is made at a divergence, its files are checked now if it is there: first,
+  // so that a refusal leaves no --dump directory behind.
+  for (const auto& [opt, dir, make] :
+       {std::tuple{"--vcd", o.vcd_dir, false}, std::tuple{"--dump", o.dump_dir, true}}) {
+    if (dir.empty()) continue;
+    std::error_code ec;
+    if (make) std::filesystem::create_directories(dir, ec);
+    if (ec) {
+      fmt::print(stderr, "dpc31 cosim: {} {}: cannot create the directory: {}\n", opt, dir,
+                 ec.message());
+      return false;
+    }
+    if (!std::filesystem::is_directory(dir, ec)) continue;
+    if (const std::string why = window_unwritable(dir); !why.empty()) {
+      fmt::print(stderr, "{}\n", why);
+      return false;
+    }
+  }
+  return true;
+}
+
 std::string junit(const std::string& profile, const nlohmann::json& results) {
   std::string cases;
   int failures = 0;
   for (const auto& r : results) {
-    const std::string name = fmt::format("{}.seed{}", profile, r["seed"].get<std::uint64_t>());
+    // A seed's case, or a session's (named by its scenario).
+    const std::string name =
+        r.contains("seed") ? fmt::format("{}.seed{}", profile, r["seed"].get<std::uint64_t>())
+                           : fmt::format("{}.session.{}", profile, r["session"].get<std::string>());
     if (r["diverged"].get<bool>()) {
       ++failures;
       cases += fmt::format(
@@ -351,6 +466,26 @@ std::string junit(const std::string& profile, const nlohmann::json& results) {
       "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuite name=\"dpc31-cosim\" tests=\"{}\" "
       "failures=\"{}\">\n{}</testsuite>\n",
       results.size(), failures, cases);
+}
+
+// The end of a run: the JSON summary, the JUnit of its `results`, then the first output that
+// failed. Exit 0 clean, 1 a divergence, 2 an output not written.
+int finish(const CosimOptions& o, const nlohmann::json& summary, const nlohmann::json& results,
+           outfile::OutFile& junit_out, const std::string& failed_output) {
+  fmt::print("{}\n", summary.dump(2));
+  if (!o.junit.empty() &&
+      !(junit_out.write(junit(o.profile_name, results)) && junit_out.commit())) {
+    fmt::print(stderr, "{}\n", junit_out.error());
+    return 2;
+  }
+  if (!failed_output.empty()) {
+    fmt::print(stderr, "{}\n", failed_output);
+    return 2;
+  }
+  const bool diverged = std::any_of(results.begin(), results.end(), [](const nlohmann::json& r) {
+    return r["diverged"].get<bool>();
+  });
+  return diverged ? 1 : 0;
 }
 
 // The model the run uses in place of the built-in ones: --rtl (built into the cache, or taken
@@ -543,29 +678,55 @@ std::string session_chip_mismatch(const CosimOptions& o, const dpc31::cosim::Dut
   return {};
 }
 
-int run_session_mode(const CosimOptions& o) {
+int run_session_mode(const CosimOptions& given, outfile::OutFile& junit_out) {
   using namespace dpc31::cosim;
   Session s;
   std::string error;
   const auto t0 = std::chrono::steady_clock::now();
-  if (!record_session(o.session, s, error)) {
+  if (!record_session(given.session, s, error)) {
     fmt::print(stderr, "{}\n", error);
     return 2;
   }
-  if (const std::string why = session_chip_mismatch(o, s.options); !why.empty()) {
+  if (const std::string why = session_chip_mismatch(given, s.options); !why.empty()) {
     fmt::print(stderr, "dpc31 cosim: {}\n", why);
     return 2;
   }
+  // The scenario's chip is the run's: the RTL is built for its profile, and a trace's header
+  // names it.
+  CosimOptions o = given;
+  o.profile = s.options.profile;
+  o.profile_name = profile_desc(s.options.profile).name;
+  o.bus = s.options.bus;
+  o.variant_name = s.options.variant ? vpc3_variant_name(*s.options.variant) : "";
   std::string rtl_id;
-  if (!load_rtl(o, s.options, rtl_id)) return 2;
+  if (!load_rtl(o, s.options, rtl_id) || !windows_ready(o)) return 2;
   const RunResult r = run_session(s, o.mutant);  // s.options carries a --rtl model
-  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!o.quiet) {
     for (const std::string& line : r.report) fmt::print(stderr, "{}\n", line);
   }
-  const nlohmann::json summary = {
+  const bool traced = s.options.rtl != nullptr || !rtl_mutant_profile(o.mutant);
+  std::string failed_output;
+  const auto output_failed = [&failed_output](const std::string& why) {
+    if (failed_output.empty()) failed_output = why;
+  };
+  const std::string stem = std::filesystem::path(o.session).stem().string();
+  nlohmann::json entry = {
+      {"session", stem}, {"diverged", r.divergence >= 0}, {"cycle", r.divergence}};
+  const Stimulus stimulus = session_stimulus(s);
+  if (r.divergence >= 0 && static_cast<std::uint64_t>(r.divergence) < s.cycles) {
+    write_divergence(o, stimulus, r, s.options,
+                     fmt::format("cosim-{}-session-{}.trace", o.profile_name, stem),
+                     "session " + std::filesystem::absolute(o.session).string(), kSessionShrinkRuns,
+                     traced, entry, output_failed);
+  } else if (r.divergence >= 0 && !o.quiet) {
+    // Only the live chip saw the other end: a trace replays the blocks, not the chip.
+    fmt::print(stderr, "  no trace or waveform window: a replay has no live chip to differ from\n");
+  }
+  if (!o.dump_dir.empty()) write_dump(o, stimulus, s.options, traced, output_failed);
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  nlohmann::json summary = {
       {"session", o.session},
-      {"profile", std::string(profile_desc(s.options.profile).name)},
+      {"profile", o.profile_name},
       {"bus", s.options.bus == BusMode::intel ? "intel" : "motorola"},
       {"variant",
        s.options.variant ? nlohmann::json(static_cast<int>(*s.options.variant)) : nlohmann::json()},
@@ -578,8 +739,10 @@ int run_session_mode(const CosimOptions& o) {
       {"cycle", r.divergence},
       {"signals", r.signals},
       {"seconds", secs}};
-  fmt::print("{}\n", summary.dump(2));
-  return r.divergence >= 0 ? 1 : 0;
+  for (const char* k : {"trace", "vcd", "fst"}) {
+    if (entry.contains(k)) summary[k] = entry[k];
+  }
+  return finish(o, summary, nlohmann::json::array({entry}), junit_out, failed_output);
 }
 
 }  // namespace
@@ -594,7 +757,6 @@ int run_cosim(const CosimOptions& given) {
     fmt::print(stderr, "dpc31 cosim: {}\n", same);
     return 2;
   }
-  if (!o.session.empty()) return run_session_mode(o);
   // The run's seeds, base + seeds (one past the last) included, are 64-bit numbers: a range that
   // wrapped past 2^64 - 1 to 0 ran seeds of another run and summed to a summary merge refuses.
   if (o.replay.empty() && o.seeds > std::numeric_limits<std::uint64_t>::max() - o.seed_base) {
@@ -618,6 +780,7 @@ int run_cosim(const CosimOptions& given) {
       return 2;
     }
   }
+  if (!o.session.empty()) return run_session_mode(o, junit_out);
   // A replayed trace first: its header names the model to build.
   std::vector<std::pair<std::uint64_t, Stimulus>> runs;
   if (!o.replay.empty()) {
@@ -659,26 +822,7 @@ int run_cosim(const CosimOptions& given) {
     }
     return 2;
   }
-  // The waveform windows' files, checked before the seeds run: one that cannot be written was
-  // found only after them. --dump always writes its directory, made now; --vcd's is made at a
-  // divergence, its files are checked now if it is there: first, so that a refusal leaves no
-  // --dump directory behind.
-  for (const auto& [opt, dir, make] :
-       {std::tuple{"--vcd", o.vcd_dir, false}, std::tuple{"--dump", o.dump_dir, true}}) {
-    if (dir.empty()) continue;
-    std::error_code ec;
-    if (make) std::filesystem::create_directories(dir, ec);
-    if (ec) {
-      fmt::print(stderr, "dpc31 cosim: {} {}: cannot create the directory: {}\n", opt, dir,
-                 ec.message());
-      return 2;
-    }
-    if (!std::filesystem::is_directory(dir, ec)) continue;
-    if (const std::string why = window_unwritable(dir); !why.empty()) {
-      fmt::print(stderr, "{}\n", why);
-      return 2;
-    }
-  }
+  if (!windows_ready(o)) return 2;
   // A model built without tracing (the built-in mutants') writes no rtl_internal.fst: a note.
   // Any other output that fails in the run is exit 2, after the summary and the JUnit, which
   // record the seeds that ran; the first failure is the one line.
@@ -709,66 +853,10 @@ int run_cosim(const CosimOptions& given) {
         fmt::print(stderr, "{}seed {}: ", tty ? "\n" : "", seed);
         for (const std::string& line : r.report) fmt::print(stderr, "{}\n", line);
       }
-      entry["signals"] = r.signals;
-      const Stimulus small = shrink(s, dut, o.mutant);
-      const std::string dir = o.out_dir.empty() ? "." : o.out_dir;
-      std::error_code ec;
-      std::filesystem::create_directories(dir, ec);  // checked up front; a failure shows below
-      // A replay shrinks its trace again under a name of its own: a seed run's trace, which the
-      // replayed one may be or come from, is never written over, nor the replayed trace itself.
-      const std::string trace =
-          (std::filesystem::path(dir) / fmt::format("cosim-{}-seed{}{}.trace", o.profile_name, seed,
-                                                    o.replay.empty() ? "" : "-replay"))
-              .string();
-      const bool replayed = !o.replay.empty() && std::filesystem::equivalent(trace, o.replay, ec);
-      std::string error;
-      const auto events = [](const Stimulus& x) { return x.event_count(); };
-      Stimulus before = s;
-      before.resize(static_cast<std::uint64_t>(r.divergence) + 1);
-      const std::string header = fmt::format(
-          "profile {}\nbus {}\nvariant {}\nseed {}\nmutant {}\n{}shrunk from {} to {} stimulus "
-          "events ({} cycles)",
-          o.profile_name, o.bus == BusMode::intel ? "intel" : "motorola",
-          o.variant_name.empty() ? "-" : o.variant_name, seed, o.mutant.empty() ? "-" : o.mutant,
-          rtl_header(o), events(before), events(small), small.size());
-      if (replayed) {
-        if (!o.quiet) {
-          fmt::print(stderr,
-                     "  shrunk to {} stimulus events: not written over {}, the trace "
-                     "replayed\n",
-                     events(small), trace);
-        }
-      } else if (outfile::write_file(trace, write_trace(small, header), error)) {
-        entry["trace"] = trace;
-        if (!o.quiet)
-          fmt::print(stderr, "  shrunk to {} stimulus events: {}\n", events(small), trace);
-      } else {
-        output_failed(error);
-      }
-      if (!o.vcd_dir.empty()) {
-        // Drawn over the run that failed, not the shrunk stimulus cut at the divergence: the
-        // --window cycles after it too, idle where the stimulus has ended.
-        const auto d = static_cast<std::uint64_t>(r.divergence);
-        const std::uint64_t from = d > o.window ? d - o.window : 0;
-        Stimulus around = s;
-        around.resize(d + o.window + 1);
-        // Joined as paths: `--vcd win/` names win/emu.vcd, not win//emu.vcd.
-        const auto in_vcd = [&](const char* name) {
-          return (std::filesystem::path(o.vcd_dir) / name).string();
-        };
-        if (write_window(around, dut, o.mutant, from, around.size(), o.vcd_dir, error)) {
-          entry["vcd"] = {in_vcd("emu.vcd"), in_vcd("rtl.vcd")};
-        } else {
-          output_failed(error);
-        }
-        if (write_rtl_fst(around, dut, o.mutant, in_vcd("rtl_internal.fst"), error)) {
-          entry["fst"] = in_vcd("rtl_internal.fst");
-        } else if (traced) {
-          output_failed(error);
-        } else if (!o.quiet) {
-          fmt::print(stderr, "  {}\n", error);
-        }
-      }
+      write_divergence(o, s, r, dut,
+                       fmt::format("cosim-{}-seed{}{}.trace", o.profile_name, seed,
+                                   o.replay.empty() ? "" : "-replay"),
+                       fmt::format("seed {}", seed), kSeedShrinkRuns, traced, entry, output_failed);
     }
     results.push_back(entry);
     if (tty) {
@@ -782,18 +870,9 @@ int run_cosim(const CosimOptions& given) {
   }
   if (tty) fmt::print("\n");
   if (!o.dump_dir.empty()) {
-    // The whole run of the first stimulus, both sides, for wavediff or GTKWave.
-    const Stimulus s = runs.empty() ? random_stimulus({o.profile, lo, o.cycles}) : runs[0].second;
-    std::string error;
-    if (!write_window(s, dut, o.mutant, 0, s.size(), o.dump_dir, error)) output_failed(error);
-    if (!write_rtl_fst(s, dut, o.mutant,
-                       (std::filesystem::path(o.dump_dir) / "rtl_internal.fst").string(), error)) {
-      if (traced) {
-        output_failed(error);
-      } else if (!o.quiet) {
-        fmt::print(stderr, "{}\n", error);
-      }
-    }
+    // The whole run of the first stimulus.
+    write_dump(o, runs.empty() ? random_stimulus({o.profile, lo, o.cycles}) : runs[0].second, dut,
+               traced, output_failed);
   }
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   nlohmann::json run = {
@@ -820,17 +899,7 @@ int run_cosim(const CosimOptions& given) {
                                   {"of", {{"from", o.seed_base}, {"to", o.seed_base + o.seeds}}}};
     summary = summary_json(run, shard, lo, hi, cycles, secs, results);
   }
-  fmt::print("{}\n", summary.dump(2));
-  if (!o.junit.empty() &&
-      !(junit_out.write(junit(o.profile_name, results)) && junit_out.commit())) {
-    fmt::print(stderr, "{}\n", junit_out.error());
-    return 2;
-  }
-  if (!failed_output.empty()) {
-    fmt::print(stderr, "{}\n", failed_output);
-    return 2;
-  }
-  return diverged == 0 ? 0 : 1;
+  return finish(o, summary, results, junit_out, failed_output);
 }
 
 int run_cosim_merge(const MergeOptions& o) {

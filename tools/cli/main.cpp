@@ -207,24 +207,24 @@ int main(int argc, char** argv) {
       cosim->add_option("--shard-base", cos_shard_base, "the first K of --shard: 1 (default) or 0")
           ->check(CLI::IsMember({0, 1}));
   cos_shard_base_opt->needs(cos_random.back());  // alone it blamed a --shard 1/1 never given
-  // What a --session run never writes or reads (refused beside it, with cos_random).
-  std::vector<CLI::Option*> cos_not_session = {
-      cosim->add_option("--junit", cos.junit, "write JUnit XML results to this file")
-          ->check(named(Use::write)),
-      cosim
-          ->add_option("--vcd", cos.vcd_dir,
-                       "on divergence, write emu.vcd and rtl.vcd around it here")
-          ->check(named(Use::write)),
-      cosim
-          ->add_option("--window", cos.window,
-                       "cycles before and after the divergence in the VCD window")
-          ->transform(whole(0, 100'000'000)),
-      cosim->add_option("--out", cos.out_dir, "where shrunk stimulus traces go (default .)")
-          ->check(named(Use::write)),
-      cosim
-          ->add_option("--dump", cos.dump_dir,
-                       "write emu.vcd, rtl.vcd (ports) and rtl_internal.fst of the first run here")
-          ->check(named(Use::write))};
+  // A run's outputs: a session writes them too (its divergence's trace and window, its dump).
+  cosim->add_option("--junit", cos.junit, "write JUnit XML results to this file")
+      ->check(named(Use::write));
+  cosim->add_option("--vcd", cos.vcd_dir, "on divergence, write emu.vcd and rtl.vcd around it here")
+      ->check(named(Use::write));
+  cosim
+      ->add_option("--window", cos.window,
+                   "cycles before and after the divergence in the VCD window")
+      ->transform(whole(0, 100'000'000));
+  cosim->add_option("--out", cos.out_dir, "where shrunk stimulus traces go (default .)")
+      ->check(named(Use::write));
+  cosim
+      ->add_option("--dump", cos.dump_dir,
+                   "write emu.vcd, rtl.vcd (ports) and rtl_internal.fst of the first run (or the "
+                   "session) here")
+      ->check(named(Use::write));
+  // What a --session run never reads (refused beside it, with cos_random).
+  std::vector<CLI::Option*> cos_not_session;
   auto* cos_replay =
       cosim
           ->add_option("--replay", cos.replay,
