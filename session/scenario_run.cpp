@@ -169,12 +169,7 @@ class Runner {
       if (hooks_.at_step) hooks_.at_step(st);
       // Requests counted, not history().size(): a long exchange step forgets history as it goes.
       const std::uint64_t sent = master_->counters().requests;
-      try {
-        act(st);
-      } catch (const FirmwareError&) {
-        flush();  // the walk up to the firmware's fault is kept
-        throw;
-      }
+      act(st);
       if (master_->counters().requests != sent) settle();
       report_history();
       report_outputs();
