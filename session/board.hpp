@@ -39,10 +39,25 @@ void progress();
 // How long firmware code may run without progress before the guard stops the process.
 inline constexpr std::chrono::milliseconds kHangLimit{2000};
 
+// Where the program called the firmware from, "x.scn:10: dpv1_read" (nullptr or empty: it says
+// nothing): read by the guard's thread as Hooks::hang_name is, so the caller changes it only while
+// no firmware code runs.
+void set_hang_place(const std::string* place);
+
+// set_hang_place(&place) for its life.
+class HangPlace {
+ public:
+  explicit HangPlace(const std::string& place) { set_hang_place(&place); }
+  ~HangPlace() { set_hang_place(nullptr); }
+  HangPlace(const HangPlace&) = delete;
+  HangPlace& operator=(const HangPlace&) = delete;
+};
+
 // Starts the watcher (once per process): when firmware code has run for `limit` of host time
 // without progress, it removes `remove` (a file the program made, e.g. the bridge's symlink; empty:
-// none), prints "PROGRAM: WHO hangs: ..." on stderr and exits with 2. WHO is the spinning
-// firmware's Hooks::hang_name, or "firmware FIRMWARE" when no Hooks are installed.
+// none), writes out what standard output holds (the walk up to the hang), prints "PROGRAM: PLACE:
+// WHO hangs: ..." on stderr and exits with 2. PLACE is set_hang_place's (left out when none); WHO
+// is the spinning firmware's Hooks::hang_name, or "firmware FIRMWARE" when no Hooks are installed.
 void guard_hangs(const std::string& program, const std::string& firmware,
                  const std::string& remove = {}, std::chrono::milliseconds limit = kHangLimit);
 

@@ -236,6 +236,9 @@ struct ScenarioHooks {
   std::function<void(Chip&)> at_start;
   std::function<void(Chip&)> at_end;
   ScenarioObserver* observer = nullptr;
+  // Step `st` (an action, or the fault that damages the next) begins: its walk line is out, the
+  // firmware has not run in it yet (`dpc31 run` names it in the firmware's hang and fault lines).
+  std::function<void(const ScenarioStep&)> at_step;
 };
 
 // Plays a parsed scenario: the walk goes to `walk`, failed expects to `errors` (and the walk).

@@ -165,6 +165,8 @@ class Runner {
         ask_irq_cycles(static_cast<std::size_t>(&st - s_.steps.data()));
       }
       note(chip_.cycle(), fmt::format("line {}: {}", st.line, st.text), Event::Kind::step, &st);
+      if (walk_) walk_now(events_.back());
+      if (hooks_.at_step) hooks_.at_step(st);
       // Requests counted, not history().size(): a long exchange step forgets history as it goes.
       const std::uint64_t sent = master_->counters().requests;
       act(st);
@@ -212,7 +214,16 @@ class Runner {
     std::string text;
     Kind kind = Kind::note;
     const ScenarioStep* step = nullptr;  // step / passed / failed
+    bool walked = false;                 // printed already (walk_now); the observer is told later
   };
+
+  // A step's line is printed when the step begins, before the firmware runs in it: when that
+  // firmware hangs (the guard ends the process) or faults, the walk shows the step it was in.
+  // The observer is told in flush(), in cycle order with the step's other events.
+  void walk_now(Event& e) {
+    walk_(fmt::format("[cycle {:>10}] {}", e.cycle, e.text));
+    e.walked = true;
+  }
 
   void note(std::uint64_t cycle, std::string text, Event::Kind kind = Event::Kind::note,
             const ScenarioStep* step = nullptr) {
@@ -259,7 +270,7 @@ class Runner {
     for (std::size_t i = 0; i < events_.size(); ++i) {
       const Event& e = events_[i];
       if (walk_ && i >= skip_to) {
-        walk_(fmt::format("[cycle {:>10}] {}", e.cycle, e.text));
+        if (!e.walked) walk_(fmt::format("[cycle {:>10}] {}", e.cycle, e.text));
         if (folds[i].repeats != 0) group = i;
         if (group && i + 1 == *group + folds[*group].lines) {
           const Fold& f = folds[*group];

@@ -1333,11 +1333,11 @@ TEST_F(BadInput, FirmwarePlugins) {
   file("spin.scn", "# spins\nfirmware " + spin + "\nstartup\n");
   expect_bad(dpc31("run spin.scn --json spin.json"), "dpc31 run: spin.scn:2: firmware BAD" + hangs,
              "spin in run");
-  // On a segment several stations may run one firmware: the line names the station that spins
-  // (docs/bring-up.md, section 4).
+  // On a segment several stations may run one firmware: the line names the scenario, as the fault
+  // line does, and the station that spins (docs/bring-up.md, section 4).
   const std::string stations = "segment\nstation 5 profile=spc3 firmware=DO4\n";
   file("segspin.scn", stations + "station 6 profile=spc3 firmware=" + spin + "\nstartup\n");
-  expect_bad(dpc31("run segspin.scn"), "dpc31 run: station 6: firmware BAD" + hangs,
+  expect_bad(dpc31("run segspin.scn"), "dpc31 run: segspin.scn: station 6: firmware BAD" + hangs,
              "spin on a segment");
   expect_bad(dpc31("bridge --pty p --slave 5:DO4 --slave 7:" + spin),
              "dpc31 bridge: station 7: firmware BAD" + hangs, "spin among --slaves");
@@ -1350,6 +1350,39 @@ TEST_F(BadInput, FirmwarePlugins) {
   const Outcome ok = dpc31("run sub/do4.scn --quiet");
   EXPECT_EQ(ok.rc, 0) << ok.err;
   EXPECT_EQ(ok.err, "");
+}
+
+// A firmware that hangs in a step (its ISR spins in `startup`): the guard's line names the step,
+// "FILE:LINE: KEYWORD" (docs/bring-up.md, section 4), and the walk printed before the hang is kept
+// on stdout, a file here, up to the step's own line, printed as the step begins
+// (docs/scenario-format.md, "The walk"). The expected walk is the documented one: master 2 and
+// slave 5 by default, the plug-in's init (four writes, docs/timing.md: 4 clocks each) ends at
+// cycle 16 without Start_SPC3, the expect and the step take no time before the firmware runs.
+TEST_F(BadInput, AFirmwareThatHangsInAStepKeepsTheWalk) {
+  const std::string spin = BAD_PLUGIN_SPIN_ISR;
+  const std::string hangs =
+      " hangs: it ran 2000 ms of host time without a bus access or a board hook call (a while(1) "
+      "loop, e.g. its fatal-error handler?); stopped";
+  file("isr.scn", "# its ISR spins\nprofile vpc3plus\nfirmware " + spin +
+                      "\nexpect dp_state Wait_Prm\nstartup\n");
+  const Outcome r = dpc31("run isr.scn --json isr.json");
+  expect_bad(r, "dpc31 run: isr.scn:5: startup: firmware BAD" + hangs, "spin in a step");
+  EXPECT_EQ(r.out,
+            "scenario isr.scn: profile vpc3plus, bus intel, master 2 -> slave 5 at 1500000 baud\n"
+            "[cycle         16] not started: dp_state Wait_Prm, wd_state Baud_Search, the chip "
+            "Offline (the user side gave no Start_SPC3)\n"
+            "[cycle         16] line 4: expect dp_state Wait_Prm: ok\n"
+            "[cycle         16] line 5: startup\n");
+  // A segment's station: the step before the station, and the segment's walk up to the step.
+  file("segisr.scn",
+       "segment\nstation 5 profile=spc3 firmware=DO4\nstation 6 profile=vpc3plus "
+       "firmware=" +
+           spin + "\nstartup\n");
+  const Outcome seg = dpc31("run segisr.scn");
+  expect_bad(seg, "dpc31 run: segisr.scn:4: startup: station 6: firmware BAD" + hangs,
+             "spin in a segment's step");
+  EXPECT_TRUE(seg.out.ends_with("] line 4: startup\n")) << seg.out;
+  EXPECT_EQ(listing(), (std::vector<std::string>{"isr.scn", "segisr.scn"}));
 }
 
 // A FIFO is neither a plug-in nor an Intel HEX image: opening one waits for a writer (run, soak,
@@ -1384,23 +1417,40 @@ TEST_F(BadInput, AFifoIsNoPluginAndNoImage) {
 // of the started chip is: the HAL's message in one line, exit 2, no output or temporary left, the
 // bridge's symlink removed; in init (the caller's stack) and in the ISR (the host CPU's). The line
 // names where the firmware runs (docs/bring-up.md, section 4): a scenario's file and `firmware`
-// line; on a segment, and among the bridge's --slave stations, the station.
+// line in init, the step's line and keyword in a step (the ISR's first run: `startup`); on a
+// segment, and among the bridge's --slave stations, the station. The walk up to the fault is kept
+// on stdout, the step's line last.
 TEST_F(BadInput, FirmwareFaults) {
-  const std::vector<std::pair<std::string, std::string>> plugins = {
-      {BAD_PLUGIN_HAL_INIT, "firmware BAD: CopyToVpc3: local buffer is NULL with length 4"},
-      {BAD_PLUGIN_HAL_ISR, "firmware BAD: CopyFromVpc3: local buffer is NULL with length 2"},
+  struct Plugin {
+    std::string lib, line, run_at, seg_at, walk_end;
+  };
+  const std::string started =
+      "[cycle         16] not started: dp_state Wait_Prm, wd_state Baud_Search, the chip Offline "
+      "(the user side gave no Start_SPC3)\n";
+  const std::vector<Plugin> plugins = {
+      {BAD_PLUGIN_HAL_INIT, "firmware BAD: CopyToVpc3: local buffer is NULL with length 4",
+       "fault.scn:2", "segfault.scn", ""},  // init: the walk's heading only
+      {BAD_PLUGIN_HAL_ISR, "firmware BAD: CopyFromVpc3: local buffer is NULL with length 2",
+       "fault.scn:3: startup", "segfault.scn:4: startup",
+       started + "[cycle         16] line 3: startup\n"},
   };
   fs::create_directory(path("o"));
-  for (const auto& [lib, line] : plugins) {
+  for (const auto& [lib, line, run_at, seg_at, walk_end] : plugins) {
     file("fault.scn", "profile vpc3plus\nfirmware " + lib + "\nstartup\n");
-    expect_bad(dpc31("run fault.scn --json o/out.json --record o/out.trace --vcd o/out.vcd"),
-               "dpc31 run: fault.scn:2: " + line, lib + " run");
+    const Outcome run =
+        dpc31("run fault.scn --json o/out.json --record o/out.trace --vcd o/out.vcd");
+    expect_bad(run, "dpc31 run: " + run_at + ": " + line, lib + " run");
+    EXPECT_EQ(run.out,
+              "scenario fault.scn: profile vpc3plus, bus intel, master 2 -> slave 5 at 1500000 "
+              "baud\n" +
+                  walk_end)
+        << lib;
     file("segfault.scn",
          "segment\nstation 5 profile=spc3 firmware=DO4\nstation 6 "
          "profile=vpc3plus firmware=" +
              lib + "\nstartup\n");
     expect_bad(dpc31("run segfault.scn --json o/out.json"),
-               "dpc31 run: segfault.scn: station 6: " + line, lib + " segment");
+               "dpc31 run: " + seg_at + ": station 6: " + line, lib + " segment");
     expect_bad(
         dpc31("bridge --pty " + path("dpn") + " --slave 5:DO4 --slave 7:" + lib + ":vpc3plus"),
         "dpc31 bridge: station 7: " + line, lib + " --slave");

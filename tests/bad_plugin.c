@@ -14,6 +14,8 @@
  *   HAL_INIT     its init calls CopyToVpc3 with a NULL buffer
  *   HAL_ISR      its init raises an interrupt; its ISR calls CopyFromVpc3 with a NULL buffer;
  *                its hardware input "kick" reads the chip, which no host selects for it
+ * and one whose ISR hangs, so that the guard stops it inside a scenario's step (FirmwarePlugins):
+ *   SPIN_ISR     its init raises an interrupt as HAL_ISR's does; its ISR spins in while(1)
  * and one that shows whether a module starts with fresh globals (tests/cpu_test.cpp):
  *   GLOBALS      its init counts its runs in a global and writes the count to its port "boots" */
 #include "dpc31/dpc31_firmware.h"
@@ -61,7 +63,7 @@ static void init(const dpc31_board* board) {
 #ifdef HAL_INIT
   CopyToVpc3((uint8_t*)0x100, 0, 4);
 #endif
-#ifdef HAL_ISR
+#if defined(HAL_ISR) || defined(SPIN_ISR)
   /* Int_Mask_Reg all open, Int_Req_Reg's MAC_Reset set (both bytes: either bus mode). */
   Vpc3Write(0x004, 0x00);
   Vpc3Write(0x005, 0x00);
@@ -89,13 +91,21 @@ static int kick(const char* name, uint32_t value) {
   return 0;
 }
 static const char* const kInputs[] = {"kick", "event", "kick", 0};
-#define ISR 0
 #define HW_INPUT kick
 #define HW_INPUTS kInputs
-#else
-#define ISR 0
+#elif defined(SPIN_ISR)
+static void isr(void) {
+  while (1) {
+  }
+}
+#define ISR isr
+#endif
+#if !defined(HAL_ISR) && !defined(TWICE_INPUT)
 #define HW_INPUT 0
 #define HW_INPUTS 0
+#endif
+#ifndef ISR
+#define ISR 0
 #endif
 
 static void step(void) { (void)Vpc3Read(0); }

@@ -1159,7 +1159,7 @@ std::size_t run_folded(const std::string& text, Lines& walk) {
   dpc31::ScenarioError err;
   EXPECT_TRUE(dpc31::parse_scenario(text, "t.scn", s, err)) << err.text();
   EveryEvent all;
-  dpc31::run_scenario(s, walk.sink(), {}, dpc31::ScenarioHooks{{}, {}, &all});
+  dpc31::run_scenario(s, walk.sink(), {}, dpc31::ScenarioHooks{{}, {}, &all, {}});
   std::vector<std::pair<std::uint64_t, std::string>> unfolded;
   std::size_t folds = 0;
   // The first line is the header, the last the end (neither is told to an observer).

@@ -91,6 +91,10 @@ std::vector<std::string> leading_comments(std::string_view text) {
   return out;
 }
 
+std::string step_place(const std::string& file, int line, std::string_view text) {
+  return fmt::format("{}:{}: {}", file, line, text.substr(0, text.find(' ')));
+}
+
 bool parse_timescale(const std::string& t, int& exp) {
   static const std::pair<const char*, int> kUnits[] = {{"fs", -15}, {"ps", -12}, {"ns", -9},
                                                        {"us", -6},  {"ms", -3},  {"s", 0}};
@@ -246,17 +250,20 @@ int ChipRun::run(const Scenario& s, std::string_view text, const LineSink& walk,
     errors(why);
     return 2;
   }
-  // A firmware's fault is at the scenario's `firmware` line, "SCENARIO:LINE" (a segment's names
-  // the station); the demo's own session has no file.
-  const std::string where =
-      opt.scenario.empty() ? "" : fmt::format("{}:{}", s.file, s.firmware_line);
+  // A firmware's fault or hang is at the scenario's `firmware` line, "SCENARIO:LINE", while its
+  // init runs, then at the step it runs in, "SCENARIO:LINE: KEYWORD"; the demo's own session has
+  // no file.
+  std::string where = opt.scenario.empty() ? "" : fmt::format("{}:{}", s.file, s.firmware_line);
+  if (!opt.scenario.empty()) {
+    hooks.at_step = [&where, &s](const ScenarioStep& st) {
+      where = step_place(s.file, st.line, st.text);
+    };
+  }
   try {
     // A firmware stuck in a loop without a bus access cannot be stopped from this thread: the
     // guard ends the process with one line.
-    if (bound.firmware_desc != nullptr) {
-      board::guard_hangs(where.empty() ? m.command : m.command + ": " + where,
-                         bound.firmware_desc->name);
-    }
+    if (bound.firmware_desc != nullptr) board::guard_hangs(m.command, bound.firmware_desc->name);
+    const board::HangPlace place(where);
     o = run_scenario(bound, walk, errors, hooks);
   } catch (const FirmwareError& e) {
     return m.fail(where.empty() ? std::string(e.what()) : where + ": " + e.what());

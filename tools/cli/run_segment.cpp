@@ -37,7 +37,12 @@ class RunOutputs final : public SegmentScenarioOutputs {
       : SegmentScenarioOutputs(s, SegmentOutputOptions{wave_options(opt), opt.pcap}),
         opt_(opt),
         s_(s),
-        comments_(leading_comments(text)) {}
+        comments_(leading_comments(text)),
+        place_(s.file) {}
+
+  // Where the stations' firmware runs now, for its hang and fault lines: the scenario while the
+  // stations start, then "FILE:LINE: KEYWORD" of the step.
+  [[nodiscard]] const std::string& place() const { return place_; }
 
   // Every file the run writes, for outfile::distinct.
   [[nodiscard]] std::vector<outfile::Named> outputs() const {
@@ -91,8 +96,9 @@ class RunOutputs final : public SegmentScenarioOutputs {
     traces_[index]->checkpoint();
   }
 
-  void step_begins(const SegmentStep&, std::string_view text) override {
+  void step_begins(const SegmentStep& st, std::string_view text) override {
     for (auto& r : traces_) r->heading(std::string(text));
+    place_ = step_place(s_.file, st.line, st.text);
   }
   void step_ends(const SegmentStep&) override {
     for (auto& r : traces_) r->checkpoint();
@@ -169,6 +175,7 @@ class RunOutputs final : public SegmentScenarioOutputs {
   std::vector<std::size_t> heard_from_;  // per trace: the sender of the last telegram noted
   outfile::OutFile json_;
   std::string json_text_;
+  std::string place_;
 };
 
 }  // namespace
@@ -198,15 +205,17 @@ int run_segment_command(const RunOptions& opt, const SegmentScenario& s, std::st
     return 2;
   }
   // A firmware stuck in a loop without a bus access cannot be stopped from this thread: the guard
-  // ends the process with one line, naming the station that spins (its FirmwareHost's name).
+  // ends the process with one line, naming the place and the station that spins (its
+  // FirmwareHost's name), as the fault line below does.
   std::string plugins;
   for (const std::string& p : segment_plugins(bound)) plugins += (plugins.empty() ? "" : ", ") + p;
   if (!plugins.empty()) board::guard_hangs("dpc31 run", plugins);
   int rc = 0;
   try {
+    const board::HangPlace place(out.place());
     rc = run_segment_scenario(bound, walk, errors, &out);
   } catch (const FirmwareError& e) {
-    fmt::print(err, "dpc31 run: {}: {}\n", s.file, e.what());
+    fmt::print(err, "dpc31 run: {}: {}\n", out.place(), e.what());
     return 2;
   } catch (const SegmentOutputError& e) {
     fmt::print(err, "dpc31 run: {}\n", e.what());
