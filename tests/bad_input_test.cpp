@@ -561,7 +561,7 @@ TEST_F(BadInput, CosimReplayRefusesInputsOfAnotherProfile) {
   EXPECT_EQ(listing(), before);
   // ev_mac_stop is every profile's: a RAM access violation emits it on the spc3 (docs/timing.md,
   // "RAM access violation"), so an spc3 trace with it replays.
-  file("stop.stim", "# profile spc3\n100 wr 0008 01\n200 ev_mac_stop\nend 300\n");
+  file("stop.stim", "# profile spc3\n100 wr 0008<-01\n200 ev_mac_stop\nend 300\n");
   EXPECT_EQ(dpc31("cosim --replay stop.stim --quiet").rc, 0);
 }
 
