@@ -309,14 +309,16 @@ TEST(Cosim, BrokenTracesAreRejectedWithFileAndLine) {
   EXPECT_EQ(e, "d.trace:1: 'x1' is not a cycle number");
   // A cycle number is a whole number as every door reads one (docs/security.md, "Numbers"): no
   // sign, so -1 does not wrap into a cycle beyond the bound and +5 is not cycle 5.
-  EXPECT_FALSE(parse_trace("-1 ev_din\nend 3\n", "d.trace", s, e));
-  EXPECT_EQ(e, "d.trace:1: '-1' is not a cycle number");
-  EXPECT_FALSE(parse_trace("+5 ev_din\nend 9\n", "d.trace", s, e));
-  EXPECT_EQ(e, "d.trace:1: '+5' is not a cycle number");
-  EXPECT_FALSE(parse_trace("99999999999999999999 ev_din\nend 3\n", "d.trace", s, e));
-  EXPECT_EQ(e, "d.trace:1: cycle beyond 100000000");
-  EXPECT_FALSE(parse_trace("1 ev_din\nend -1\n", "d.trace", s, e));
-  EXPECT_EQ(e, "d.trace:2: 'end' needs the cycle count, at least the last cycle + 1");
+  const std::pair<const char*, const char*> signs[] = {
+      {"-1 ev_din\nend 3\n", "d.trace:1: '-1' is not a cycle number"},
+      {"+5 ev_din\nend 9\n", "d.trace:1: '+5' is not a cycle number"},
+      {"99999999999999999999 ev_din\nend 3\n", "d.trace:1: cycle beyond 100000000"},
+      {"1 ev_din\nend -1\n",
+       "d.trace:2: 'end' needs the cycle count, at least the last cycle + 1"}};
+  for (const auto& [text, want] : signs) {
+    EXPECT_FALSE(parse_trace(text, "d.trace", s, e)) << text;
+    EXPECT_EQ(e, want);
+  }
   EXPECT_TRUE(parse_trace("0x10 ev_din\nend 0x12\n", "d.trace", s, e)) << e;
   EXPECT_EQ(s.size(), 18u);
   EXPECT_FALSE(parse_trace("1 wr 0008<-zz\nend 3\n", "e.trace", s, e));
