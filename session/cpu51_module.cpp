@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <charconv>
 #include <filesystem>
 #include <sstream>
 
@@ -11,6 +10,7 @@
 #include "mcs51/ihex.hpp"
 #include "textfile.hpp"
 #include "vocabulary.hpp"
+#include "whole_number.hpp"
 
 namespace dpc31 {
 
@@ -180,13 +180,10 @@ namespace {
 
 // "4096" or "0x1000" within lo..hi.
 bool parse_address(std::string_view s, std::uint32_t lo, std::uint32_t hi, std::uint32_t& v) {
-  int base = 10;
-  if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
-    base = 16;
-    s.remove_prefix(2);
-  }
-  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v, base);
-  return !s.empty() && ec == std::errc() && p == s.data() + s.size() && v >= lo && v <= hi;
+  std::uint64_t n = 0;
+  if (numbers::parse_whole(s, n) != std::errc{} || n < lo || n > hi) return false;
+  v = static_cast<std::uint32_t>(n);
+  return true;
 }
 
 }  // namespace

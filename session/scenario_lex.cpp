@@ -11,20 +11,14 @@
 #include "dpc31/pdu.hpp"
 #include "dpc31/uart.hpp"
 #include "textfile.hpp"
+#include "whole_number.hpp"
 
 namespace dpc31::scenario_lex {
 
 void fail(std::string msg) { throw ParseFail{0, std::move(msg)}; }
 
 bool parse_u64(std::string_view s, std::uint64_t& v) {
-  int base = 10;
-  if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
-    base = 16;
-    s.remove_prefix(2);
-  }
-  if (s.empty()) return false;
-  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v, base);
-  return ec == std::errc() && p == s.data() + s.size();
+  return numbers::parse_whole(s, v) == std::errc{};
 }
 
 std::vector<std::string_view> split(std::string_view s, char sep) {

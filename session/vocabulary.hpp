@@ -111,8 +111,9 @@ inline constexpr ValueRange kC31Code{"code", 0x08A0, 0x1FFF};
 [[nodiscard]] std::string profibus_rates();
 // "" for one of them, else why not: "baud 12345 is not a PROFIBUS rate (9600, ...)".
 [[nodiscard]] std::string not_a_profibus_rate(std::uint64_t baud);
-// The same for a rate as an option gives it, decimal digits only: "" with its number in `baud`,
-// else why not, the text as written ("'1.5e6' is not a PROFIBUS rate (9600, ...)").
+// The same for a rate as an option gives it, read as every door reads a whole number (decimal,
+// or 0x hex): "" with its number in `baud`, else why not, the text as written ("'1.5e6' is not a
+// PROFIBUS rate (9600, ...)").
 [[nodiscard]] std::string not_a_profibus_rate(std::string_view text, std::uint32_t& baud);
 // "" for a master's hsa= it may take (beside a gap=, not below its own address), else why not.
 [[nodiscard]] std::string hsa_refused(std::uint8_t hsa, std::uint8_t gap_factor,

@@ -559,6 +559,10 @@ TEST_F(BadInput, CosimReplayRefusesInputsOfAnotherProfile) {
              "dpc31");
   EXPECT_EQ(slurp(path("old.xml")), "old");
   EXPECT_EQ(listing(), before);
+  // ev_mac_stop is every profile's: a RAM access violation emits it on the spc3 (docs/timing.md,
+  // "RAM access violation"), so an spc3 trace with it replays.
+  file("stop.stim", "# profile spc3\n100 wr 0008<-01\n200 ev_mac_stop\nend 300\n");
+  EXPECT_EQ(dpc31("cosim --replay stop.stim --quiet").rc, 0);
 }
 
 // A trace replays on the model its header names (docs/golden-model.md): its profile and mutant;
@@ -610,6 +614,15 @@ TEST_F(BadInput, CosimReplayTakesTheTraceHeader) {
   const Outcome rp = dpc31("cosim --replay vp/cosim-vpc3plus-seed1.trace --out vp --junit vp.xml");
   EXPECT_EQ(rp.rc, 1) << rp.err;
   EXPECT_NE(rp.out.find("\"seed\": 1,"), std::string::npos) << rp.out;
+  // The header's seed is read as every door reads a whole number (docs/security.md): 0x hex too.
+  std::string hex = seed1;
+  const std::size_t at = hex.find("# seed 1\n");
+  ASSERT_NE(at, std::string::npos) << hex;
+  hex.replace(at, 9, "# seed 0x10\n");
+  file("hex.trace", hex);
+  const Outcome rh = dpc31("cosim --replay hex.trace --quiet");
+  EXPECT_EQ(rh.rc, 1) << rh.err;
+  EXPECT_NE(rh.out.find("\"seed\": 16,"), std::string::npos) << rh.out;
   EXPECT_TRUE(rp.err.starts_with("seed 1: divergence at cycle ")) << rp.err;
   EXPECT_NE(slurp(path("vp.xml")).find("name=\"vpc3plus.seed1\""), std::string::npos);
   EXPECT_EQ(slurp(path("vp/cosim-vpc3plus-seed1.trace")), seed1);

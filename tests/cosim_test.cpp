@@ -259,15 +259,15 @@ TEST(Cosim, ShrinkKeepsOnlyTheEventsNeeded) {
   }
 }
 
-// ev_mac_stop / ev_mac_start are the dpc31's requests, the four DPV1 inputs the vpc3plus's SAP
-// list (docs/golden-model.md, "Event inputs"): a trace for another profile that has one is
-// refused at its line; for the profile that has it, it is taken.
+// ev_mac_start is the dpc31's request, the four DPV1 inputs the vpc3plus's SAP list
+// (docs/golden-model.md, "Event inputs"): a trace for another profile that has one is refused at
+// its line; for the profile that has it, it is taken. ev_mac_stop is every profile's: on the spc3
+// and vpc3plus a RAM access violation emits it (docs/timing.md, "RAM access violation").
 TEST(Cosim, TraceInputsOfAnotherProfileAreRefused) {
   const struct {
     const char* line;
     Profile only;
-  } cases[] = {{"ev_mac_stop", Profile::dpc31},
-               {"ev_mac_start", Profile::dpc31},
+  } cases[] = {{"ev_mac_start", Profile::dpc31},
                {"ev_ext_prm", Profile::vpc3plus},
                {"ev_sap_sent", Profile::vpc3plus},
                {"ev_sap_ind(0080,05)", Profile::vpc3plus},
@@ -288,6 +288,12 @@ TEST(Cosim, TraceInputsOfAnotherProfileAreRefused) {
                                profile_name(c.only), profile_name(p)));
     }
   }
+  for (const Profile p : {Profile::spc3, Profile::vpc3plus, Profile::dpc31}) {
+    Stimulus s;
+    std::string e;
+    EXPECT_TRUE(parse_trace("100 rd 0002\n200 ev_mac_stop\nend 300\n", "t.trace", s, e, p))
+        << profile_name(p) << ": " << e;
+  }
 }
 
 TEST(Cosim, BrokenTracesAreRejectedWithFileAndLine) {
@@ -301,6 +307,20 @@ TEST(Cosim, BrokenTracesAreRejectedWithFileAndLine) {
   EXPECT_EQ(e, "c.trace:2: cycles must increase");
   EXPECT_FALSE(parse_trace("x1 ev_din\nend 3\n", "d.trace", s, e));
   EXPECT_EQ(e, "d.trace:1: 'x1' is not a cycle number");
+  // A cycle number is a whole number as every door reads one (docs/security.md, "Numbers"): no
+  // sign, so -1 does not wrap into a cycle beyond the bound and +5 is not cycle 5.
+  const std::pair<const char*, const char*> signs[] = {
+      {"-1 ev_din\nend 3\n", "d.trace:1: '-1' is not a cycle number"},
+      {"+5 ev_din\nend 9\n", "d.trace:1: '+5' is not a cycle number"},
+      {"99999999999999999999 ev_din\nend 3\n", "d.trace:1: cycle beyond 100000000"},
+      {"1 ev_din\nend -1\n",
+       "d.trace:2: 'end' needs the cycle count, at least the last cycle + 1"}};
+  for (const auto& [text, want] : signs) {
+    EXPECT_FALSE(parse_trace(text, "d.trace", s, e)) << text;
+    EXPECT_EQ(e, want);
+  }
+  EXPECT_TRUE(parse_trace("0x10 ev_din\nend 0x12\n", "d.trace", s, e)) << e;
+  EXPECT_EQ(s.size(), 18u);
   EXPECT_FALSE(parse_trace("1 wr 0008<-zz\nend 3\n", "e.trace", s, e));
   EXPECT_EQ(e, "e.trace:1: bad operand of 'wr': ADDR<-DATA, hex ADDR 0..1fff, DATA 0..ff expected");
   EXPECT_FALSE(parse_trace("1 wr 0845<-1ff\nend 3\n", "e.trace", s, e));  // a data byte of 9 bits

@@ -58,6 +58,32 @@ TEST(WavediffTolerance, ShiftedEdgesInTimeAndCycles) {
   // Tolerance of the wrong kind for the mode: bad input.
   oc.tolerance_fs = 1000;
   EXPECT_EQ(run_opts(oc).rc, 2);
+  // An option of clock mode without --clock: the library's message is bare (Python raises it as
+  // it is), its report prefixes the command's name once (docs/bad-input.md).
+  for (const bool clock_b : {true, false}) {
+    Options e = opts(oc.file_a, oc.file_b);
+    if (clock_b) e.clock_b = "top.clk";
+    if (!clock_b) e.tolerance_cycles = 1;
+    const std::string what =
+        clock_b ? "--clock-b needs --clock" : "--tolerance-cycles needs --clock";
+    try {
+      (void)compare(e);
+      ADD_FAILURE() << what;
+    } catch (const OptionError& x) {
+      EXPECT_EQ(std::string(x.what()), what);
+    }
+    const Outcome r = run_opts(e);
+    EXPECT_EQ(r.rc, 2);
+    EXPECT_EQ(r.err, "dpc31 wavediff: " + what + "\n");
+  }
+  // A --json that cannot be written is an option's value too: prefixed, nothing compared.
+  Options j = opts(oc.file_a, oc.file_b);
+  j.json_file = d.file("no/such/dir/r.json");
+  const Outcome rj = run_opts(j);
+  EXPECT_EQ(rj.rc, 2);
+  EXPECT_EQ(rj.out, "");
+  EXPECT_TRUE(rj.err.starts_with("dpc31 wavediff: " + j.json_file + ": ")) << rj.err;
+  EXPECT_EQ(rj.err.find("dpc31 wavediff: ", 1), std::string::npos) << rj.err;
 }
 
 TEST(WavediffXz, StrictWildcardZero) {

@@ -77,6 +77,11 @@ def test_no_signal_in_common_is_an_error_not_same(cli, tmp_path):
                      "$upscope $end\n$enddefinitions $end\n#0\n0!\n#10\n1!\n")
     with pytest.raises(dpc31.InputError) as e:
         dpc31.wavediff(run, str(other), ignore_missing=True)
-    assert str(e.value) == (f"dpc31 wavediff: no signals to compare: no signal of {run} matched "
+    # the message bare: the CLI adds "dpc31 wavediff: ", Python does not (docs/wavediff.md)
+    assert str(e.value) == (f"no signals to compare: no signal of {run} matched "
                             f"one of {other} (check --strip, --map and --include/--exclude)")
+    # an option of clock mode without the clock, in the same words (docs/bad-input.md)
+    with pytest.raises(dpc31.InputError) as e:
+        dpc31.wavediff(run, run, clock_b="clk")
+    assert str(e.value) == "--clock-b needs --clock"
     assert not dpc31.wavediff(run, str(other)).same  # one-sided names: different

@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <charconv>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -15,6 +14,7 @@
 #include "dpc31/reg_ids.hpp"
 #include "outfile.hpp"
 #include "textfile.hpp"
+#include "whole_number.hpp"
 
 namespace dpc31::cosim {
 
@@ -541,29 +541,27 @@ bool parse_trace(const std::string& text, const std::string& file, Stimulus& out
       std::string count;
       ls >> count;
       std::uint64_t total = 0;
-      const auto [p, ec] = std::from_chars(count.data(), count.data() + count.size(), total);
-      const bool digits = !count.empty() && p == count.data() + count.size();
+      const std::errc ec = numbers::parse_whole(count, total);
       // The bound of the cycle lines and of --cycles (the run time, not memory: the stimulus
       // keeps only the lines given); a count beyond 64 bits is beyond it too.
-      if (digits && (ec == std::errc::result_out_of_range || total > kMaxCycles))
+      if (ec == std::errc::result_out_of_range || (ec == std::errc{} && total > kMaxCycles))
         return fail(fmt::format("'end' beyond {} cycles", kMaxCycles));
-      if (!digits || ec != std::errc() || total < last)
+      if (ec != std::errc{} || total < last)
         return fail("'end' needs the cycle count, at least the last cycle + 1");
       out.resize(total);
       ended = true;
       continue;
     }
+    // Read as every door reads a whole number: no sign ("-1", "+5"), a number beyond 64 bits is
+    // beyond the bound.
     std::uint64_t cycle = 0;
-    try {
-      std::size_t used = 0;
-      cycle = std::stoull(first, &used);
-      if (used != first.size())
-        return fail(fmt::format("'{}' is not a cycle number", shown(first)));
-    } catch (const std::exception&) {
+    const std::errc cycle_ec = numbers::parse_whole(first, cycle);
+    if (cycle_ec == std::errc::invalid_argument)
       return fail(fmt::format("'{}' is not a cycle number", shown(first)));
-    }
-    if (cycle < last && !(cycle == 0 && out.empty())) return fail("cycles must increase");
-    if (cycle > kMaxCycles) return fail(fmt::format("cycle beyond {}", kMaxCycles));
+    if (cycle_ec == std::errc{} && cycle < last && !(cycle == 0 && out.empty()))
+      return fail("cycles must increase");
+    if (cycle_ec == std::errc::result_out_of_range || cycle > kMaxCycles)
+      return fail(fmt::format("cycle beyond {}", kMaxCycles));
     Inputs in;
     std::string tok;
     while (ls >> tok) {

@@ -63,7 +63,7 @@ constexpr std::array<EventInput, 23> kEventInputs = {{
     {"ev_cfg", K::cfg, &Inputs::ev_cfg, Arg::none},
     {"ev_ssa", K::ssa, &Inputs::ev_ssa, Arg::none},
     {"ev_dis", K::dis, &Inputs::ev_dis, Arg::dis_bits},
-    {"ev_mac_stop", K::mac_stop, &Inputs::ev_mac_stop, Arg::none, Profile::dpc31},
+    {"ev_mac_stop", K::mac_stop, &Inputs::ev_mac_stop, Arg::none},
     {"ev_mac_start", K::mac_start, &Inputs::ev_mac_start, Arg::none, Profile::dpc31},
     {"ev_ext_prm", K::ext_prm, &Inputs::ev_ext_prm, Arg::none, Profile::vpc3plus},
     {"ev_sap_sent", K::sap_sent, &Inputs::ev_sap_sent, Arg::none, Profile::vpc3plus},

@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <array>
-#include <charconv>
 #include <exception>
 #include <limits>
 #include <span>
@@ -18,6 +17,7 @@
 #include "dpc31/snapshot.hpp"
 #include "dpc31/uart.hpp"
 #include "vocabulary.hpp"  // state names
+#include "whole_number.hpp"
 
 namespace dpc31::serve {
 
@@ -66,16 +66,9 @@ void split(std::string_view line, Tokens& t) {
 // text, range for a value outside min..max (including anything beyond 64 bits).
 std::uint64_t number(std::string_view s, std::uint64_t max, std::string_view what,
                      std::uint64_t min = 0) {
-  int base = 10;
-  std::string_view digits = s;
-  if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
-    base = 16;
-    digits = s.substr(2);
-  }
   std::uint64_t v = 0;
-  const auto [p, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), v, base);
-  if (digits.empty() || p != digits.data() + digits.size() ||
-      (ec != std::errc() && ec != std::errc::result_out_of_range)) {
+  const std::errc ec = numbers::parse_whole(s, v);
+  if (ec == std::errc::invalid_argument) {
     throw Fail{"syntax", fmt::format("{} '{}' is not a number (decimal or 0x hex)", what, s)};
   }
   if (ec == std::errc::result_out_of_range || v > max || v < min) {

@@ -18,8 +18,10 @@ class InputError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
-// An option's value the comparison cannot take (an output over an input, --merge's extension):
-// the command line's report prefixes `dpc31 wavediff: ` (docs/bad-input.md), Python's does not.
+// An option's value the comparison cannot take (an output over an input, --merge's extension, an
+// option of the mode not run, options that leave nothing to compare, an output that cannot be
+// written): the message is bare; the command line's report prefixes `dpc31 wavediff: ` once
+// (docs/bad-input.md), Python's does not.
 class OptionError : public InputError {
  public:
   using InputError::InputError;

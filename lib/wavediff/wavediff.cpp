@@ -117,14 +117,13 @@ void Engine::setup(Report& rep) {
 
   if (clock_mode()) {
     if (o_.tolerance_fs != 0)
-      throw InputError("dpc31 wavediff: --tolerance is for event mode; use --tolerance-cycles");
+      throw OptionError("--tolerance is for event mode; use --tolerance-cycles");
   } else {
-    if (o_.tolerance_cycles != 0)
-      throw InputError("dpc31 wavediff: --tolerance-cycles needs --clock");
+    if (o_.tolerance_cycles != 0) throw OptionError("--tolerance-cycles needs --clock");
     if ((o_.start && o_.start->cycles) || (o_.end && o_.end->cycles)) {
-      throw InputError("dpc31 wavediff: cycle bounds (c123) need --clock");
+      throw OptionError("cycle bounds (c123) need --clock");
     }
-    if (!o_.clock_b.empty()) throw InputError("dpc31 wavediff: --clock-b needs --clock");
+    if (!o_.clock_b.empty()) throw OptionError("--clock-b needs --clock");
   }
   tol_ = clock_mode() ? o_.tolerance_cycles : to_common(o_.tolerance_fs, false);
   if (!clock_mode() && o_.end) {  // an FST reader may skip the blocks after the window
@@ -266,10 +265,10 @@ void Engine::setup(Report& rep) {
   // top scope was renamed, a --strip gone wrong).
   if (pairs.empty() && rep.structural.empty() &&
       (o_.ignore_missing || (rep.only_a.empty() && rep.only_b.empty()))) {
-    throw InputError(fmt::format(
-        "dpc31 wavediff: no signals to compare: no signal of {} matched one of {} (check "
-        "--strip, --map and --include/--exclude)",
-        o_.file_a, o_.file_b));
+    throw OptionError(
+        fmt::format("no signals to compare: no signal of {} matched one of {} (check "
+                    "--strip, --map and --include/--exclude)",
+                    o_.file_a, o_.file_b));
   }
 
   // Which pairs each slot feeds.

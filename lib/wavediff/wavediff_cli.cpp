@@ -27,8 +27,8 @@ CLI::App* add_subcommand(CLI::App& app, CliArgs& a) {
       ->check(outfile::named(outfile::Use::read));
   auto* clock = c->add_option("--clock", o.clock_a,
                               "clock-sampled mode: sample at the edges of this A signal");
-  c->add_option("--clock-b", o.clock_b,
-                "the clock in B (default: the B signal matched to --clock)");
+  c->add_option("--clock-b", o.clock_b, "the clock in B (default: the B signal matched to --clock)")
+      ->needs(clock);
   c->add_option("--edge", a.edge, "clock edges sampled")
       ->check(CLI::IsMember({"rising", "falling", "both"}))
       ->needs(clock);  // event mode has no edges: it was an event-mode run without a word
@@ -39,7 +39,8 @@ CLI::App* add_subcommand(CLI::App& app, CliArgs& a) {
   // NonNegativeNumber: CLI11 would read "-1" into an unsigned as 2^64 - 1.
   c->add_option("--tolerance-cycles", o.tolerance_cycles,
                 "clock mode: ignore differences that last at most N cycles")
-      ->transform(numbers::whole(0));
+      ->transform(numbers::whole(0))
+      ->needs(clock);
   c->add_option("--xz", a.xz,
                 "X/Z policy: strict (must match), wildcard (matches anything), "
                 "zero (read as 0)")

@@ -24,6 +24,7 @@
 #include "rtl_library.hpp"
 #include "session.hpp"
 #include "textfile.hpp"
+#include "whole_number.hpp"
 
 namespace dpc31::cli {
 
@@ -178,8 +179,7 @@ bool take_trace_header(const std::string& path, const std::string& text, CosimOp
     } else if (key == "top") {
       top = value;
     } else if (key == "seed") {
-      const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), seed);
-      if (ec != std::errc() || end != value.data() + value.size()) {
+      if (numbers::parse_whole(value, seed) != std::errc{}) {
         error = fmt::format("{}:{}: '{}' is not a seed", path, n, shown(value));
         return false;
       }
