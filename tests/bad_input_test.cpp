@@ -1346,6 +1346,8 @@ TEST_F(BadInput, FirmwarePlugins) {
   file("spin.scn", "# spins\nfirmware " + spin + "\nstartup\n");
   expect_bad(dpc31("run spin.scn --json spin.json"), "dpc31 run: spin.scn:2: firmware BAD" + hangs,
              "spin in run");
+  expect_bad(dpc31("cosim --session spin.scn"), "dpc31 cosim: spin.scn:2: firmware BAD" + hangs,
+             "spin in cosim --session");
   // On a segment several stations may run one firmware: the line names the scenario, as the fault
   // line does, and the station that spins (docs/bring-up.md, section 4).
   const std::string stations = "segment\nstation 5 profile=spc3 firmware=DO4\n";
@@ -1453,6 +1455,9 @@ TEST_F(BadInput, FirmwareFaults) {
     const Outcome run =
         dpc31("run fault.scn --json o/out.json --record o/out.trace --vcd o/out.vcd");
     expect_bad(run, "dpc31 run: " + run_at + ": " + line, lib + " run");
+    // A session names the `firmware` line whichever step the fault comes in (golden-model.md).
+    expect_bad(dpc31("cosim --session fault.scn"), "dpc31 cosim: fault.scn:2: " + line,
+               lib + " cosim --session");
     EXPECT_EQ(run.out,
               "scenario fault.scn: profile vpc3plus, bus intel, master 2 -> slave 5 at 1500000 "
               "baud\n" +

@@ -4,7 +4,9 @@
 
 #include <algorithm>
 
+#include "board.hpp"
 #include "cpp_dut.hpp"
+#include "firmware_host.hpp"
 #include "harness.hpp"
 #include "scenario.hpp"
 
@@ -83,7 +85,19 @@ bool record_session(const std::string& scenario_path, Session& out, std::string&
   ScenarioHooks hooks;
   hooks.at_start = [&out](Chip& chip) { begin_recording(chip, out); };
   hooks.at_end = [&out](Chip& chip) { end_recording(chip, out); };
-  const ScenarioOutcome o = run_scenario(sc, nullptr, nullptr, hooks);
+  // A firmware's fault or hang is at the scenario's `firmware` line, as in `dpc31 run`'s init
+  // (docs/bring-up.md, section 4); a firmware stuck without a bus access cannot be stopped from
+  // this thread: the guard ends the process with one line.
+  const std::string where = fmt::format("{}:{}", scenario_path, sc.firmware_line);
+  if (sc.firmware_desc != nullptr) board::guard_hangs("dpc31 cosim", sc.firmware_desc->name);
+  const board::HangPlace place(where);
+  ScenarioOutcome o;
+  try {
+    o = run_scenario(sc, nullptr, nullptr, hooks);
+  } catch (const FirmwareError& e) {
+    error = "dpc31 cosim: " + where + ": " + e.what();
+    return false;
+  }
   out.scenario_passed = o.ok();
   if (!out.unreplayable.empty()) {
     error = scenario_path + ": " + out.unreplayable;
