@@ -47,7 +47,8 @@ inline const std::vector<Row>& rows() {
       {S, "Int_Ack_Reg", -1, 0x02, 16, 0x0000, "--cciicc---ccccc"},
       {D, "Int_Ack_Reg", -1, 0x02, 16, 0x0000, "--cciicc--cccccc"},
       {V, "Int_Ack_Reg", -1, 0x02, 16, 0x0000, "cccciicccicccccc"},
-      {S, "Status_Reg", 0x04, -1, 16, 0x0000, "rrrrrrrrrrrrrr-r"},
+      // Bit 1 is FDL_IND_ST (manual-quotes.md, Confirmed: "SPC3 status bit 1 FDL_IND_ST").
+      {S, "Status_Reg", 0x04, -1, 16, 0x0000, "rrrrrrrrrrrrrrrr"},
       // DPC31 p.12: "status displays are stored (status register, ...)" in the parameter cells,
       // as is the "Param Register" (below); both places modelled (docs/dpc31.md).
       {D, "Status_Reg", 0x0874, -1, 16, 0x0000, "rrrrrrrrrrrrrr-r"},

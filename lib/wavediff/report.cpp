@@ -260,12 +260,12 @@ int run(const Options& o, std::string& out, std::string& err) {
     // Opened first, so that a bad path is found before the comparison; renamed into place only
     // with a complete report (on bad input there is none, docs/bad-input.md).
     outfile::OutFile json;
-    if (!o.json_file.empty() && !json.open(o.json_file)) throw OptionError(json.error());
+    if (!o.json_file.empty() && !json.open(o.json_file)) throw InputError(json.error());
     const Report r = compare(o);
     std::string warnings;
     for (const auto& w : r.warnings) warnings += w + "\n";
     if (!o.json_file.empty() && !(json.write(json_report(r)) && json.commit())) {
-      throw OptionError(json.error());
+      throw InputError(json.error());
     }
     err += warnings;
     out += text_report(r, o.max_signals);

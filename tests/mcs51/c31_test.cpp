@@ -162,7 +162,8 @@ TEST(C31, AnImagePastTheCodeAreaIsRefusedWhenTheRunStarts) {
                         [&](const std::string& l) { errors.push_back(l); }),
       2);
   ASSERT_EQ(errors.size(), 1u);
-  EXPECT_EQ(errors[0], (dir / "big.ihx").string() +
+  // The image's errors begin with the scenario's `cpu` line (docs/bad-input.md).
+  EXPECT_EQ(errors[0], (dir / "s.scn").string() + ":2: " + (dir / "big.ihx").string() +
                            ": the image does not fit the C31's code area (1F00h..1FFFh)");
   EXPECT_TRUE(walk.empty());
   std::filesystem::remove_all(dir);
