@@ -165,10 +165,9 @@ TEST_F(BadInput, WavediffAndBenchRefuseOptionsOfAModeNotRun) {
              "dpc31 wavediff: --clock-b requires --clock", "clock-b");
   expect_bad(dpc31("wavediff a.vcd b.vcd --tolerance-cycles 2"),
              "dpc31 wavediff: --tolerance-cycles requires --clock", "tolerance-cycles");
-  // An output that cannot be written is prefixed as the other option errors are.
+  // An output that cannot be written: the file's own style, no prefix (docs/decisions.md).
   expect_bad_prefix(dpc31("wavediff a.vcd b.vcd --json no/such/dir/r.json"),
-                    "dpc31 wavediff: no/such/dir/r.json: cannot create the temporary file ",
-                    "json");
+                    "no/such/dir/r.json: cannot create the temporary file ", "json");
   expect_bad(dpc31("wavediff a.vcd b.vcd --wavedrom-window 5"),
              "dpc31 wavediff: --wavedrom-window requires --wavedrom", "wavedrom-window");
   expect_bad(dpc31("bench --items a --wavediff-mb 5"),
