@@ -21,7 +21,7 @@ inline std::errc parse_whole(std::string_view s, std::uint64_t& v) {
   const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v, base);
   if (ec == std::errc::result_out_of_range) return ec;
   return s.empty() || ec != std::errc{} || p != s.data() + s.size() ? std::errc::invalid_argument
-                                                                     : std::errc{};
+                                                                    : std::errc{};
 }
 
 }  // namespace dpc31::numbers
