@@ -99,7 +99,7 @@ TEST_F(BadInput, CosimSessionWritesItsOutputs) {
   for (const char* f : {"d/emu.vcd", "d/rtl.vcd"}) EXPECT_TRUE(fs::is_regular_file(path(f))) << f;
   // A divergence (the mutant the session suite catches): its shrunk trace names the scenario's
   // chip and replays to the same divergence; without the mutant (the fixed RTL) it is clean.
-  copy(kTraces + "gc_clear_failsafe_dpc31.scn", "m.scn");
+  copy(kTraces + "gc_command_dpc31.scn", "m.scn");
   const Outcome bad = dpc31(
       "cosim --session m.scn --mutant NO_C_SWAP --out o --vcd w --window 5 --junit m.xml --quiet");
   EXPECT_EQ(bad.rc, 1) << bad.err;
