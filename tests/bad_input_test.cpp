@@ -1382,6 +1382,9 @@ TEST_F(BadInput, AFirmwareThatHangsInAStepKeepsTheWalk) {
                       "\nexpect dp_state Wait_Prm\nstartup\n");
   const Outcome r = dpc31("run isr.scn --json isr.json");
   expect_bad(r, "dpc31 run: isr.scn:5: startup: firmware BAD" + hangs, "spin in a step");
+  // A session names the step alike (docs/golden-model.md, "Session mode").
+  expect_bad(dpc31("cosim --session isr.scn"),
+             "dpc31 cosim: isr.scn:5: startup: firmware BAD" + hangs, "spin in a session's step");
   EXPECT_EQ(r.out,
             "scenario isr.scn: profile vpc3plus, bus intel, master 2 -> slave 5 at 1500000 baud\n"
             "[cycle         16] not started: dp_state Wait_Prm, wd_state Baud_Search, the chip "
@@ -1455,8 +1458,8 @@ TEST_F(BadInput, FirmwareFaults) {
     const Outcome run =
         dpc31("run fault.scn --json o/out.json --record o/out.trace --vcd o/out.vcd");
     expect_bad(run, "dpc31 run: " + run_at + ": " + line, lib + " run");
-    // A session names the `firmware` line whichever step the fault comes in (golden-model.md).
-    expect_bad(dpc31("cosim --session fault.scn"), "dpc31 cosim: fault.scn:2: " + line,
+    // A session names the place as `dpc31 run` does (golden-model.md).
+    expect_bad(dpc31("cosim --session fault.scn"), "dpc31 cosim: " + run_at + ": " + line,
                lib + " cosim --session");
     EXPECT_EQ(run.out,
               "scenario fault.scn: profile vpc3plus, bus intel, master 2 -> slave 5 at 1500000 "

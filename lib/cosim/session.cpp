@@ -69,7 +69,8 @@ void end_recording(Chip& chip, Session& out) {
   harness::on_block_event(chip, nullptr);
 }
 
-bool record_session(const std::string& scenario_path, Session& out, std::string& error) {
+bool record_session(const std::string& scenario_path, Session& out, std::string& error,
+                    const StepPlace& step_place) {
   Scenario sc;
   ScenarioError err;
   if (!load_scenario(scenario_path, sc, err)) {
@@ -85,10 +86,13 @@ bool record_session(const std::string& scenario_path, Session& out, std::string&
   ScenarioHooks hooks;
   hooks.at_start = [&out](Chip& chip) { begin_recording(chip, out); };
   hooks.at_end = [&out](Chip& chip) { end_recording(chip, out); };
-  // A firmware's fault or hang is at the scenario's `firmware` line, as in `dpc31 run`'s init
-  // (docs/bring-up.md, section 4); a firmware stuck without a bus access cannot be stopped from
-  // this thread: the guard ends the process with one line.
-  const std::string where = fmt::format("{}:{}", scenario_path, sc.firmware_line);
+  // A firmware's fault or hang is at the scenario's `firmware` line in its init, then at the step
+  // it runs in, as in `dpc31 run` (docs/bring-up.md, section 4); a firmware stuck without a bus
+  // access cannot be stopped from this thread: the guard ends the process with one line.
+  std::string where = fmt::format("{}:{}", scenario_path, sc.firmware_line);
+  hooks.at_step = [&where, &scenario_path, &step_place](const ScenarioStep& st) {
+    where = step_place(scenario_path, st.line, st.text);
+  };
   if (sc.firmware_desc != nullptr) board::guard_hangs("dpc31 cosim", sc.firmware_desc->name);
   const board::HangPlace place(where);
   ScenarioOutcome o;

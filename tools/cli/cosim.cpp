@@ -6,7 +6,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <charconv>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -22,6 +21,7 @@
 #include "lockstep.hpp"
 #include "outfile.hpp"
 #include "rtl_library.hpp"
+#include "run.hpp"
 #include "session.hpp"
 #include "textfile.hpp"
 #include "whole_number.hpp"
@@ -45,6 +45,25 @@ std::string joined(const std::vector<std::string>& v) {
   std::string out;
   for (const std::string& s : v) out += (out.empty() ? "" : " ") + s;
   return out;
+}
+
+// The variant the run's chip has: the VPC3+'s is its ASIC type, VPC3+C where none was given
+// (docs/golden-model.md); the other profiles have none.
+std::optional<Vpc3Variant> variant_run(const cosim::DutOptions& d) {
+  if (d.profile != Profile::vpc3plus) return std::nullopt;
+  return static_cast<Vpc3Variant>(d.asic_type());
+}
+
+// Its name (b, c, s; "" for none), as --variant and a trace's `# variant` give it.
+std::string variant_run_name(const cosim::DutOptions& d) {
+  const std::optional<Vpc3Variant> v = variant_run(d);
+  return v ? std::string(vpc3_variant_name(*v)) : "";
+}
+
+// The summary's `variant`: the ASIC type as a number (12 for C), null for none.
+nlohmann::json variant_json(const cosim::DutOptions& d) {
+  const std::optional<Vpc3Variant> v = variant_run(d);
+  return v ? nlohmann::json(static_cast<int>(*v)) : nlohmann::json();
 }
 
 // The one line for what only profile `want` has (a variant, a built-in mutant: `key` `value`)
@@ -658,11 +677,7 @@ namespace {
 std::string session_chip_mismatch(const CosimOptions& o, const dpc31::cosim::DutOptions& d) {
   const auto bus_name = [](BusMode b) { return b == BusMode::intel ? "intel" : "motorola"; };
   const std::string_view profile = profile_desc(d.profile).name;
-  // The VPC3+'s variant is its ASIC type (C where the scenario names none); the others have none.
-  const std::string variant =
-      d.profile == Profile::vpc3plus
-          ? std::string(vpc3_variant_name(static_cast<Vpc3Variant>(d.asic_type())))
-          : "";
+  const std::string variant = variant_run_name(d);
   if (o.profile_given && o.profile != d.profile) {
     return fmt::format("{}: the scenario runs profile {}, not --profile {}", o.session, profile,
                        o.profile_name);
@@ -683,7 +698,7 @@ int run_session_mode(const CosimOptions& given, outfile::OutFile& junit_out) {
   Session s;
   std::string error;
   const auto t0 = std::chrono::steady_clock::now();
-  if (!record_session(given.session, s, error)) {
+  if (!record_session(given.session, s, error, step_place)) {
     fmt::print(stderr, "{}\n", error);
     return 2;
   }
@@ -697,7 +712,7 @@ int run_session_mode(const CosimOptions& given, outfile::OutFile& junit_out) {
   o.profile = s.options.profile;
   o.profile_name = profile_desc(s.options.profile).name;
   o.bus = s.options.bus;
-  o.variant_name = s.options.variant ? vpc3_variant_name(*s.options.variant) : "";
+  o.variant_name = variant_run_name(s.options);
   std::string rtl_id;
   if (!load_rtl(o, s.options, rtl_id) || !windows_ready(o)) return 2;
   const RunResult r = run_session(s, o.mutant);  // s.options carries a --rtl model
@@ -724,21 +739,19 @@ int run_session_mode(const CosimOptions& given, outfile::OutFile& junit_out) {
   }
   if (!o.dump_dir.empty()) write_dump(o, stimulus, s.options, traced, output_failed);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  nlohmann::json summary = {
-      {"session", o.session},
-      {"profile", o.profile_name},
-      {"bus", s.options.bus == BusMode::intel ? "intel" : "motorola"},
-      {"variant",
-       s.options.variant ? nlohmann::json(static_cast<int>(*s.options.variant)) : nlohmann::json()},
-      {"mutant", o.mutant},
-      {"rtl", rtl_id},
-      {"cycles", s.cycles},
-      {"block_events", s.events.size()},
-      {"scenario_expects_passed", s.scenario_passed},
-      {"diverged", r.divergence >= 0},
-      {"cycle", r.divergence},
-      {"signals", r.signals},
-      {"seconds", secs}};
+  nlohmann::json summary = {{"session", o.session},
+                            {"profile", o.profile_name},
+                            {"bus", s.options.bus == BusMode::intel ? "intel" : "motorola"},
+                            {"variant", variant_json(s.options)},
+                            {"mutant", o.mutant},
+                            {"rtl", rtl_id},
+                            {"cycles", s.cycles},
+                            {"block_events", s.events.size()},
+                            {"scenario_expects_passed", s.scenario_passed},
+                            {"diverged", r.divergence >= 0},
+                            {"cycle", r.divergence},
+                            {"signals", r.signals},
+                            {"seconds", secs}};
   for (const char* k : {"trace", "vcd", "fst"}) {
     if (entry.contains(k)) summary[k] = entry[k];
   }
@@ -875,12 +888,11 @@ int run_cosim(const CosimOptions& given) {
                traced, output_failed);
   }
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  nlohmann::json run = {
-      {"profile", o.profile_name},
-      {"bus", o.bus == BusMode::motorola ? "motorola" : "intel"},
-      {"variant", o.variant ? nlohmann::json(static_cast<int>(*o.variant)) : nlohmann::json()},
-      {"mutant", o.mutant},
-      {"rtl", rtl_id}};
+  nlohmann::json run = {{"profile", o.profile_name},
+                        {"bus", o.bus == BusMode::motorola ? "motorola" : "intel"},
+                        {"variant", variant_json(dut)},
+                        {"mutant", o.mutant},
+                        {"rtl", rtl_id}};
   nlohmann::json summary;
   if (!runs.empty()) {
     // A replay is one trace, not a range of seeds: the summary names it and its length.
