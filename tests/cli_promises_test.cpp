@@ -159,6 +159,10 @@ TEST_F(BadInput, CosimSessionRefusesWhatItWouldIgnore) {
   EXPECT_EQ(line_with(ok.out, "\"profile\":"), "\"profile\": \"vpc3plus\",") << ok.out;
   EXPECT_EQ(line_with(ok.out, "\"bus\":"), "\"bus\": \"motorola\",") << ok.out;
   EXPECT_EQ(line_with(ok.out, "\"variant\":"), "\"variant\": 12") << ok.out;
+  // The same without the options: the scenario alone names the C.
+  const Outcome bare = dpc31("cosim --session s.scn --quiet");
+  EXPECT_EQ(bare.rc, 0) << bare.err;
+  EXPECT_EQ(line_with(bare.out, "\"variant\":"), "\"variant\": 12") << bare.out;
   // --shard-base alone blamed a --shard '1/1' nobody gave.
   expect_bad(dpc31("cosim --seeds 2 --cycles 10 --shard-base 0 --quiet"),
              "dpc31 cosim: --shard-base requires --shard", "shard-base");
