@@ -610,6 +610,9 @@ TEST_F(BadInput, CosimReplayTakesTheTraceHeader) {
   // A replay runs as the header's seed (the report, the JSON, the JUnit name); the trace it
   // replays stays as it is, and its own shrunk trace goes beside it under a name of its own.
   const std::string seed1 = slurp(path("vp/cosim-vpc3plus-seed1.trace"));
+  // Its header names the variant that ran: the VPC3+C, the default (docs/golden-model.md).
+  EXPECT_NE(seed1.find("# profile vpc3plus\n# bus intel\n# variant c\n"), std::string::npos)
+      << seed1.substr(0, 200);
   fs::remove(path("vp/cosim-vpc3plus-seed1-replay.trace"));
   const Outcome rp = dpc31("cosim --replay vp/cosim-vpc3plus-seed1.trace --out vp --junit vp.xml");
   EXPECT_EQ(rp.rc, 1) << rp.err;

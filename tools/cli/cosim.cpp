@@ -379,12 +379,13 @@ void write_divergence(const CosimOptions& o, const cosim::Stimulus& s, const cos
   const auto events = [](const Stimulus& x) { return x.event_count(); };
   Stimulus before = s;
   before.resize(static_cast<std::uint64_t>(r.divergence) + 1);
+  const std::string variant = variant_run_name(dut);  // the VPC3+'s default C named too
   const std::string header = fmt::format(
       "profile {}\nbus {}\nvariant {}\n{}\nmutant {}\n{}shrunk from {} to {} stimulus "
       "events ({} cycles)",
       o.profile_name, o.bus == BusMode::intel ? "intel" : "motorola",
-      o.variant_name.empty() ? "-" : o.variant_name, origin, o.mutant.empty() ? "-" : o.mutant,
-      rtl_header(o), events(before), events(small), small.size());
+      variant.empty() ? "-" : variant, origin, o.mutant.empty() ? "-" : o.mutant, rtl_header(o),
+      events(before), events(small), small.size());
   if (replayed) {
     if (!o.quiet) {
       fmt::print(stderr,
@@ -712,7 +713,6 @@ int run_session_mode(const CosimOptions& given, outfile::OutFile& junit_out) {
   o.profile = s.options.profile;
   o.profile_name = profile_desc(s.options.profile).name;
   o.bus = s.options.bus;
-  o.variant_name = variant_run_name(s.options);
   std::string rtl_id;
   if (!load_rtl(o, s.options, rtl_id) || !windows_ready(o)) return 2;
   const RunResult r = run_session(s, o.mutant);  // s.options carries a --rtl model
