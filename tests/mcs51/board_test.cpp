@@ -145,5 +145,49 @@ TEST(Cpu51Board, AClockPastTheChipsLastCycleIsRefusedNotWrapped) {
   }
 }
 
+// dpc31_board_wait_1ms (firmware/mcs51/hooks51.c) inside itself: timer 1's ISR waits while main()'s
+// wait runs, and both end (docs/cpu.md, "The HAL on the 80C32": the inner wait restarts timer 0
+// and leaves it running with TF0 set, so the outer one ends with it). board/nested_wait.c marks
+// main()'s call and each wait's end with a write to the chip's RAM at 40h. Machine cycles by hand
+// from the manual's opcode map (the listings' [N] column, 12 clocks a cycle) and docs/cpu.md
+// (an instruction acts at the end of its last cycle; a timer counts from the cycle after SETB TRx;
+// a flag raised before an instruction's last cycle is served after it, the call 2 cycles):
+// - crt0: LJMP 2, MOV SP 2, LCALL 2 + _sdcc_external_startup 4, MOV A,DPL 1, JZ 2, XINIT's test 5,
+//   RAMCLEAR 2 + 255 x 3, PSEG's and XSEG's tests 5 + 5, LJMP 2, LJMP _main 2: main() at 799.
+// - main(): MOV TMOD/TH1/TL1 3 x 2, SETB ET1, EA, TR1 [807,808): timer 1 counts from 808, FE0Ch
+//   overflows at its 500th count, in cycle 1307. MOV DPTR 2, CLR A 1, MOVX [811,813): mark 0.
+//   LCALL [813,815).
+// - The outer wait: 14 cycles to SETB TR0 [828,829), timer 0 from F830h (2 000 counts) from 829;
+//   JNB TF0 in [829 + 2k, 831 + 2k). TF1 in 1307, the first cycle of the JNB [1307,1309): the
+//   call [1309,1311), LJMP 2, 14 PUSHes 28, MOV PSW 2, LCALL [1343,1345).
+// - The inner wait: SETB TR0 [1358,1359), timer 0 restarted from F830h: its 2 000th count, in
+//   cycle 3358, is the last cycle of the JNB [3357,3359), which sees it. MOV A, DEC, MOV R7 1
+//   each, MOV _waits,R7 2, JNZ 2 (waits is 1: taken), RET [3366,3368): the inner wait ends at
+//   3368. MOV DPTR 2, MOV A 1, MOVX [3371,3373): mark 1. 14 POPs 28, RETI [3401,3403).
+// - The outer wait's JNB [3403,3405) sees TF0 still set (timer 0 left running): MOV A, DEC, MOV R7,
+//   MOV _waits,R7 2, JNZ 2 (not taken), CLR TR0, CLR TF0, RET [3414,3416): ends at 3416, after
+//   2 603 cycles (at least the 2 000 of 1 ms). MOV DPTR, MOV A, MOVX [3419,3421): mark 2.
+// A MOVX starting in machine cycle M completes at chip cycle 2 x (12 M + 18) = 24 M + 36 (24 MHz).
+// With the hook before the fix (the inner wait stopped timer 0 and cleared TF0) main() never ends
+// its wait: no mark 2.
+TEST(Cpu51Board, NestedWaitsEndTogether) {
+  const mcs51::HexImage img = board_image("nested_wait");
+  ASSERT_GT(img.size, 0u);
+  Chip chip({Profile::spc3, BusMode::intel});
+  std::vector<Seen> writes;
+  chip.on_bus_access([&](std::uint64_t c, const BusAccess& a) {
+    writes.push_back({c, a.write, a.addr, a.data});
+  });
+  Cpu51Board board(chip, 24'000'000, 0x8000);
+  board.cpu().load_code(0, img.bytes);
+  board.run_until(24 * 4000);  // machine cycle 4 000: 579 after the last mark
+  auto mark = [](std::uint64_t machine_cycle, std::uint8_t n) {
+    return Seen{24 * machine_cycle + 36, true, 0x040, n};
+  };
+  const std::vector<Seen> want = {mark(811, 0), mark(3371, 1), mark(3419, 2)};
+  EXPECT_EQ(writes, want);
+  EXPECT_EQ(board.cpu().in_service(), 0);
+}
+
 }  // namespace
 }  // namespace dpc31
