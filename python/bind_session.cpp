@@ -968,9 +968,35 @@ void bind_scenarios(py::module_& m) {
         Recorder rec(r);
         ScenarioHooks hooks;
         hooks.observer = &rec;
-        py::gil_scoped_release nogil;
-        r.outcome = run_scenario(
-            s, [&](const std::string& l) { r.walk.push_back(l); }, LineSink{}, hooks);
+        // A firmware's fault names its place as `dpc31 run`'s line does: the `firmware` line
+        // (its load, its init), then the step it runs in ("x.scn:10: dpv1_read").
+        const auto fail = [&s](const std::string& place, int line, const std::string& step,
+                               const std::string& reason) {
+          raise(errors().firmware, place + ": " + reason,
+                {{"file", py::str(s.file)},
+                 {"line", py::int_(line)},
+                 {"step", step.empty() ? py::object(py::none()) : py::str(step)},
+                 {"reason", py::str(reason)}});
+        };
+        std::string place = fmt::format("{}:{}", s.file, s.firmware_line);
+        int line = s.firmware_line;
+        std::string step;
+        Scenario bound = s;
+        if (ScenarioError err; !bind_plugin(bound, err)) {
+          fail(fmt::format("{}:{}", err.file, err.line), err.line, step, err.message);
+        }
+        hooks.at_step = [&](const ScenarioStep& st) {
+          place = step_place(s.file, st.line, st.text);
+          line = st.line;
+          step = st.text.substr(0, st.text.find(' '));
+        };
+        try {
+          py::gil_scoped_release nogil;
+          r.outcome = run_scenario(
+              bound, [&](const std::string& l) { r.walk.push_back(l); }, LineSink{}, hooks);
+        } catch (const FirmwareError& e) {
+          fail(place, line, step, e.what());
+        }
         return r;
       });
 }

@@ -99,6 +99,16 @@ class FirmwareHost::InitBus final : public BusPort {
 
 namespace {
 
+// A call into the firmware on the caller's stack (init, a hardware input): firmware code runs for
+// the hang guard until it returns or throws (the host CPU counts its own hand-overs).
+class FirmwareCode {
+ public:
+  FirmwareCode() { board::firmware_entered(); }
+  ~FirmwareCode() { board::firmware_left(); }
+  FirmwareCode(const FirmwareCode&) = delete;
+  FirmwareCode& operator=(const FirmwareCode&) = delete;
+};
+
 // A built-in's instance: zeroed, aligned for any type.
 std::unique_ptr<std::max_align_t[]> new_instance(const dpc31_builtin* b) {
   if (b == nullptr) return nullptr;
@@ -143,19 +153,12 @@ void FirmwareHost::init(BusPort& bus, std::uint8_t station_address) {
                           c.bus_mode() == BusMode::motorola ? 1 : 0, station_address};
   InitBus init_bus(*this, bus);
   Entered e(*this, init_bus);
-  // init runs on the caller's stack (the host CPU's hand-overs count the rest for the guard).
-  board::firmware_entered();
-  try {
-    if (builtin_ != nullptr) {
-      builtin_->init(self_.get(), &board);
-    } else {
-      run_->init(&board);
-    }
-  } catch (...) {
-    board::firmware_left();
-    throw;
+  const FirmwareCode running;
+  if (builtin_ != nullptr) {
+    builtin_->init(self_.get(), &board);
+  } else {
+    run_->init(&board);
   }
-  board::firmware_left();
 }
 
 void FirmwareHost::isr(BusPort& bus) {
@@ -195,11 +198,21 @@ Cpu::Program FirmwareHost::program(const Cpu::Isr& after) {
 
 std::string FirmwareHost::hw_input(const std::string& name, std::uint32_t value) {
   // A hardware input is the module's own pin, not a chip access: no bus is selected, and a HAL
-  // call from it is the firmware's fault (FirmwareError), as from init or the ISR.
-  struct ErrorsOnly {
+  // call or a board hook that needs the chip (reset_line, wait_1ms) from it is the firmware's
+  // fault (FirmwareError), as from init or the ISR. Its hooks are this host's, so that the hang
+  // guard names this station when it spins.
+  struct Input {
+    FirmwareHost& h;
     hal::Selection prev;
-    ~ErrorsOnly() { hal::exchange_selection(prev); }
-  } const selected{hal::exchange_selection({nullptr, nullptr, nullptr, &input_errors_})};
+    BusPort* bus = std::exchange(h.bus_, nullptr);
+    board::Hooks* hooks = board::exchange(&h);
+    ~Input() {
+      board::exchange(hooks);
+      h.bus_ = bus;
+      hal::exchange_selection(prev);
+    }
+  } const input{*this, hal::exchange_selection({nullptr, nullptr, nullptr, &input_errors_})};
+  const FirmwareCode running;
   int r = -1;
   if (builtin_ != nullptr) {
     if (builtin_->hw_input != nullptr) r = builtin_->hw_input(self_.get(), name.c_str(), value);
@@ -228,6 +241,7 @@ std::string FirmwareHost::port_name(unsigned port) const {
 // The chip starts in its reset state: a pulse before the firmware started it has nothing to do.
 // A reset of a running chip would restart its clock under the bus side: not modelled.
 void FirmwareHost::reset_line(bool asserted) {
+  if (bus_ == nullptr) input_errors_("dpc31_board_reset called with no chip selected");
   if (asserted && bus_->chip().started()) {
     throw FirmwareError(fmt::format(
         "{}: reset line asserted at cycle {} after the chip was started (a reset during "
@@ -238,6 +252,9 @@ void FirmwareHost::reset_line(bool asserted) {
 
 void FirmwareHost::int_enable(bool enabled) { int_enabled_ = enabled; }
 
-void FirmwareHost::wait_1ms() { bus_->idle(bus_->chip().clock_hz() / 1000); }
+void FirmwareHost::wait_1ms() {
+  if (bus_ == nullptr) input_errors_("dpc31_board_wait_1ms called with no chip selected");
+  bus_->idle(bus_->chip().clock_hz() / 1000);
+}
 
 }  // namespace dpc31

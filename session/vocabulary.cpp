@@ -41,12 +41,29 @@ std::string counters_text(const FdlCounters& c) {
   return s.empty() ? "-" : s;
 }
 
-// The DP services' SAPs, 55 (Set_Slave_Add) to 62 (Chk_Cfg), in order (include/dpc31/dp.hpp).
-constexpr std::array<std::string_view, 8> kDpServiceNames = {
-    "Set_Slave_Add", "Rd_Inp",     "Rd_Outp", "Global_Control",
-    "Get_Cfg",       "Slave_Diag", "Set_Prm", "Chk_Cfg"};
-static_assert(sap::Set_Slave_Add + kDpServiceNames.size() == sap::Chk_Cfg + 1u,
-              "the DP services' SAPs are 55..62");
+// The SAPs with a DP or DPV1 service, 49 to 62, in order (include/dpc31/dp.hpp): the names every
+// decoder gives them (tests/decoder_sap_names.py); 52 and 54 have none.
+constexpr std::array<std::string_view, 14> kSapNames = {
+    "MSAC_C2_Initiate",  // 49: the class-2 resource manager
+    "MSAC_C1_Alarm",     // 50
+    "MSAC_C1",           // 51
+    "",                  // 52
+    "Set_Ext_Prm",       // 53
+    "",                  // 54
+    "Set_Slave_Add",     // 55
+    "Rd_Inp",
+    "Rd_Outp",
+    "Global_Control",
+    "Get_Cfg",
+    "Slave_Diag",
+    "Set_Prm",
+    "Chk_Cfg",  // 62
+};
+static_assert(sap::MSAC_C2_RM + kSapNames.size() == sap::Chk_Cfg + 1u &&
+                  kSapNames[sap::MSAC_C1_Alarm - sap::MSAC_C2_RM] == "MSAC_C1_Alarm" &&
+                  kSapNames[sap::Set_Ext_Prm - sap::MSAC_C2_RM] == "Set_Ext_Prm" &&
+                  kSapNames[sap::Set_Slave_Add - sap::MSAC_C2_RM] == "Set_Slave_Add",
+              "the named SAPs are 49..62");
 
 std::string service_name(const fdl::Frame& f) {
   const fdl::Function fn = fdl::request_function(f.fc);
@@ -56,8 +73,14 @@ std::string service_name(const fdl::Frame& f) {
                                                                          : "no SAP";
   }
   const std::uint8_t sap = fdl::sap_number(*f.dsap);
-  if (sap < sap::Set_Slave_Add || sap > sap::Chk_Cfg) return fmt::format("SAP {}", sap);
-  return std::string(kDpServiceNames[sap - sap::Set_Slave_Add]);
+  if (sap < sap::MSAC_C2_RM || sap > sap::Chk_Cfg || kSapNames[sap - sap::MSAC_C2_RM].empty()) {
+    return fmt::format("SAP {}", sap);
+  }
+  return std::string(kSapNames[sap - sap::MSAC_C2_RM]);
+}
+
+std::string step_place(const std::string& file, int line, std::string_view text) {
+  return fmt::format("{}:{}: {}", file, line, text.substr(0, text.find(' ')));
 }
 
 // Indexed by the 4-bit code (EN 50170): the request function codes and the response codes.

@@ -24,8 +24,12 @@ std::span<const CounterField> fdl_counter_fields();
 // The counters that are not 0, "name:N,name:N", or "-" (a trace's `state ... fdl=`).
 std::string counters_text(const FdlCounters& c);
 
-// The DP service a request asks for ("Set_Prm", "Data_Exchange", "SAP 12", ...).
+// The DP service a request asks for ("Set_Prm", "Data_Exchange", "MSAC_C1", "SAP 12", ...): a
+// SAP of include/dpc31/dp.hpp by the name every decoder gives it (tests/decoder_sap_names.py).
 std::string service_name(const fdl::Frame& request);
+// Where a firmware's hang or fault happened in a step: "FILE:LINE: KEYWORD" (the step's first
+// word, "x.scn:10: dpv1_read"), the single chip's and the segment's, `dpc31 run`'s and Python's.
+std::string step_place(const std::string& file, int line, std::string_view text);
 // An FDL request function: "SRD_high", "SDN_low", "FDL_Status", ...
 std::string_view function_name(fdl::Function f);
 // An FDL response code: "OK", "DL", "RS", ...

@@ -1406,6 +1406,33 @@ TEST_F(BadInput, AFirmwareThatHangsInAStepKeepsTheWalk) {
   EXPECT_EQ(listing(), (std::vector<std::string>{"isr.scn", "segisr.scn"}));
 }
 
+// A firmware that hangs in its hardware input (a `hw` step): hw_input is firmware code as its ISR
+// and init are, so the guard stops it with the same line, naming the step (docs/bring-up.md,
+// section 4), exit 2. The plug-in's init makes no bus access: the walk's `not started:` line is
+// at cycle 0, its end (docs/scenario-format.md, "The walk"); a `hw` step takes no time.
+TEST_F(BadInput, AFirmwareThatHangsInAHardwareInputIsStopped) {
+  const std::string spin = BAD_PLUGIN_SPIN_INPUT;
+  file("in.scn", "profile vpc3plus\nfirmware " + spin + "\nhw spin 1\n");
+  const Outcome r = dpc31("run in.scn");
+  expect_bad(r,
+             "dpc31 run: in.scn:3: hw: firmware BAD hangs: it ran 2000 ms of host time without a "
+             "bus access or a board hook call (a while(1) loop, e.g. its fatal-error handler?); "
+             "stopped",
+             "spin in hw_input");
+  EXPECT_EQ(r.out,
+            "scenario in.scn: profile vpc3plus, bus intel, master 2 -> slave 5 at 1500000 baud\n"
+            "[cycle          0] not started: dp_state Wait_Prm, wd_state Baud_Search, the chip "
+            "Offline (the user side gave no Start_SPC3)\n"
+            "[cycle          0] line 3: hw spin 1\n");
+  // A board hook that needs the chip is the firmware's fault there, as a HAL access is.
+  file("wait.scn", "profile vpc3plus\nfirmware " + spin + "\nhw wait 1\n");
+  expect_bad(dpc31("run wait.scn --quiet"),
+             "dpc31 run: wait.scn:3: hw: firmware BAD: dpc31_board_wait_1ms called with no chip "
+             "selected (hw_input runs with no chip selected: it notes the input for the ISR or the "
+             "main loop)",
+             "a board wait in hw_input");
+}
+
 // A FIFO is neither a plug-in nor an Intel HEX image: opening one waits for a writer (run, soak,
 // bridge, demo and serve hung there for ever). Refused unopened, in the words of the FILE.map
 // beside an image (docs/decisions.md); each command under a timeout, so that a hang fails the

@@ -16,6 +16,9 @@
  *                its hardware input "kick" reads the chip, which no host selects for it
  * and one whose ISR hangs, so that the guard stops it inside a scenario's step (FirmwarePlugins):
  *   SPIN_ISR     its init raises an interrupt as HAL_ISR's does; its ISR spins in while(1)
+ * and one whose hardware input "spin" hangs, which the guard stops inside a scenario's `hw` step as
+ * in its ISR, and whose input "wait" calls a board hook that needs the chip (FirmwarePlugins):
+ *   SPIN_INPUT   its hw_input spins in while(1) for "spin", calls dpc31_board_wait_1ms for "wait"
  * and one that shows whether a module starts with fresh globals (tests/cpu_test.cpp):
  *   GLOBALS      its init counts its runs in a global and writes the count to its port "boots" */
 #include "dpc31/dpc31_firmware.h"
@@ -99,8 +102,21 @@ static void isr(void) {
   }
 }
 #define ISR isr
+#elif defined(SPIN_INPUT)
+static int spin(const char* name, uint32_t value) {
+  (void)value;
+  if (name[0] == 'w') {
+    dpc31_board_wait_1ms();
+    return 0;
+  }
+  while (1) {
+  }
+}
+static const char* const kInputs[] = {"spin", "wait", 0};
+#define HW_INPUT spin
+#define HW_INPUTS kInputs
 #endif
-#if !defined(HAL_ISR) && !defined(TWICE_INPUT)
+#if !defined(HAL_ISR) && !defined(TWICE_INPUT) && !defined(SPIN_INPUT)
 #define HW_INPUT 0
 #define HW_INPUTS 0
 #endif

@@ -434,8 +434,8 @@ TEST(Dpv1Scenario, AlarmAckOnSap51) {
                            "alarm_ack slot=0 type=1 seq=4\nexpect dpv1 5C,00,01,20\n";
   std::vector<std::string> walk;
   EXPECT_EQ(failed_expects(text, &walk), std::vector<std::string>{});
-  EXPECT_TRUE(has_line(walk, "2 -> 5 SAP 51 5C 00 01 18 => SC"));
-  EXPECT_TRUE(has_line(walk, "2 -> 5 SAP 50 5C 00 01 20 => SC"));
+  EXPECT_TRUE(has_line(walk, "2 -> 5 MSAC_C1 5C 00 01 18 => SC"));
+  EXPECT_TRUE(has_line(walk, "2 -> 5 MSAC_C1_Alarm 5C 00 01 20 => SC"));
 }
 
 // A refused Abort leaves the connection known (finding 5): a Read on the connection that nobody

@@ -29,6 +29,7 @@ DEFAULTS = {
     "DPC31_BOARD": "tests/mcs51/board",
     "DPC31_BAD_PLUGIN_HAL_INIT": "tests/libdpc31_bad_plugin_hal_init.so",
     "DPC31_BAD_PLUGIN_HAL_ISR": "tests/libdpc31_bad_plugin_hal_isr.so",
+    "DPC31_BAD_PLUGIN_SPIN_INPUT": "tests/libdpc31_bad_plugin_spin_input.so",
 }
 
 

@@ -326,6 +326,41 @@ def test_a_hardware_input_that_reads_the_chip_is_a_firmware_error(built):
         fw.hw_input("kick", 1)
 
 
+def test_a_board_hook_from_a_hardware_input_is_a_firmware_error(built):
+    """A board hook that needs the chip (Vpc3Wait_1ms) from a hardware input: the firmware's fault,
+    in the HAL's words, where the board hooks reached no host (an abort of Python)."""
+    master = dpc31.Master(dpc31.Chip("vpc3plus"), address=2, baud=1_500_000,
+                          slave=dpc31.SlaveConfig(address=5))
+    fw = master.run_firmware(str(built("DPC31_BAD_PLUGIN_SPIN_INPUT")))
+    with pytest.raises(dpc31.FirmwareError) as e:
+        fw.hw_input("wait", 1)
+    assert str(e.value) == ("firmware BAD: dpc31_board_wait_1ms called with no chip selected "
+                            "(hw_input runs with no chip selected: it notes the input for the ISR "
+                            "or the main loop)")
+
+
+@pytest.mark.parametrize("plugin, steps, line, step, reason", [
+    # Its init's fault: at the `firmware` line, as `dpc31 run` says it (docs/bring-up.md, 4).
+    ("DPC31_BAD_PLUGIN_HAL_INIT", "startup\n", 2, None,
+     "firmware BAD: CopyToVpc3: local buffer is NULL with length 4"),
+    # Its ISR's, in the step that runs it (the interrupt its init raised): "FILE:LINE: KEYWORD".
+    ("DPC31_BAD_PLUGIN_HAL_ISR", "expect dp_state Wait_Prm\nstartup\n", 4, "startup",
+     "firmware BAD: CopyFromVpc3: local buffer is NULL with length 2"),
+])
+def test_a_firmware_fault_in_a_scenario_names_its_line_and_step(built, tmp_path, plugin, steps,
+                                                                 line, step, reason):
+    """A FirmwareError of a scenario's run names the place as `dpc31 run`'s line does, with the
+    file, line, step keyword (None in the init) and the firmware's own message as attributes."""
+    scn = tmp_path / "x.scn"
+    scn.write_text(f"profile vpc3plus\nfirmware {built(plugin)}\n{steps}")
+    with pytest.raises(dpc31.FirmwareError) as e:
+        dpc31.run_scenario(str(scn))
+    where = f"{scn}:{line}" + (f": {step}" if step else "")
+    assert str(e.value) == f"{where}: {reason}"
+    assert (e.value.file, e.value.line, e.value.step, e.value.reason) == (str(scn), line, step,
+                                                                          reason)
+
+
 
 
 @pytest.mark.parametrize("call, message", [

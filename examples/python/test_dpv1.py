@@ -182,3 +182,16 @@ def test_no_answer_is_reported_where_the_masters_wait_ends():
     assert [e.answer_end for e in tries] == [0, 0]
     assert [e.wait_end - e.request_end for e in tries] == [400, 400]
     assert a.end == tries[-1].wait_end
+
+
+@pytest.mark.parametrize("dsap, name", [
+    (48, "SAP 48"), (49, "MSAC_C2_Initiate"), (50, "MSAC_C1_Alarm"), (51, "MSAC_C1"),
+    (52, "SAP 52"), (53, "Set_Ext_Prm"), (54, "SAP 54"), (55, "Set_Slave_Add"), (62, "Chk_Cfg"),
+])
+def test_a_request_names_its_sap_as_the_decoders_do(dsap, name):
+    """`Frame.service` (and the run's log, one naming) calls a SAP what the Wireshark, sigrok and
+    GTKWave decoders call it (tests/decoder_sap_names.py): 49 MSAC_C2 Initiate, 50 and 51
+    MSAC_C1 (manual-quotes.md, "DPV1"), 53 Set_Ext_Prm (VPC3+C p.53), 55..62 the DP services
+    (chip-facts.md, "DP SAPs"); a SAP without a service by its number."""
+    frame = dpc31.Frame(5, 2, 0x6D, b"\x5E\x00\x01\x04", dsap=dsap, ssap=51)  # SRD_high
+    assert frame.service == name

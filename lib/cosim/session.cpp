@@ -9,6 +9,7 @@
 #include "firmware_host.hpp"
 #include "harness.hpp"
 #include "scenario.hpp"
+#include "vocabulary.hpp"
 
 namespace dpc31::cosim {
 
@@ -69,8 +70,7 @@ void end_recording(Chip& chip, Session& out) {
   harness::on_block_event(chip, nullptr);
 }
 
-bool record_session(const std::string& scenario_path, Session& out, std::string& error,
-                    const StepPlace& step_place) {
+bool record_session(const std::string& scenario_path, Session& out, std::string& error) {
   Scenario sc;
   ScenarioError err;
   if (!load_scenario(scenario_path, sc, err)) {
@@ -90,7 +90,7 @@ bool record_session(const std::string& scenario_path, Session& out, std::string&
   // it runs in, as in `dpc31 run` (docs/bring-up.md, section 4); a firmware stuck without a bus
   // access cannot be stopped from this thread: the guard ends the process with one line.
   std::string where = fmt::format("{}:{}", scenario_path, sc.firmware_line);
-  hooks.at_step = [&where, &scenario_path, &step_place](const ScenarioStep& st) {
+  hooks.at_step = [&where, &scenario_path](const ScenarioStep& st) {
     where = step_place(scenario_path, st.line, st.text);
   };
   if (sc.firmware_desc != nullptr) board::guard_hangs("dpc31 cosim", sc.firmware_desc->name);

@@ -4,7 +4,6 @@
 // chip's own.
 #pragma once
 
-#include <functional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -30,16 +29,10 @@ struct Session {
 void begin_recording(Chip& chip, Session& out);
 void end_recording(Chip& chip, Session& out);
 
-// Where a firmware's hang or fault happened in the step at `line` of the scenario `file`, whose
-// text is `text`: the CLI's "FILE:LINE: KEYWORD", as `dpc31 run` names it.
-using StepPlace =
-    std::function<std::string(const std::string& file, int line, std::string_view text)>;
-
 // Loads and plays the scenario. False (with a one-line error) if it does not load, or if its
-// firmware faults or hangs: at the scenario's `firmware` line in its init, then at `step_place`
-// of the step it runs in.
-bool record_session(const std::string& scenario_path, Session& out, std::string& error,
-                    const StepPlace& step_place);
+// firmware faults or hangs: at the scenario's `firmware` line in its init, then at the step it
+// runs in ("FILE:LINE: KEYWORD", as `dpc31 run` names it).
+bool record_session(const std::string& scenario_path, Session& out, std::string& error);
 
 // The recorded block events and bus accesses as a stimulus of the session's length: run_lockstep
 // over it meets the divergence run_session meets first, and shrink and the trace files take it.

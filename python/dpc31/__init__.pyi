@@ -9,7 +9,11 @@ class ScenarioError(Error):
     file: str
     line: int
     reason: str
-class FirmwareError(Error): ...
+class FirmwareError(Error):
+    file: Optional[str]
+    line: Optional[int]
+    step: Optional[str]
+    reason: Optional[str]
 class InputError(Error): ...
 
 class DpState(enum.Enum):

@@ -21,7 +21,6 @@
 #include "lockstep.hpp"
 #include "outfile.hpp"
 #include "rtl_library.hpp"
-#include "run.hpp"
 #include "session.hpp"
 #include "textfile.hpp"
 #include "whole_number.hpp"
@@ -699,7 +698,7 @@ int run_session_mode(const CosimOptions& given, outfile::OutFile& junit_out) {
   Session s;
   std::string error;
   const auto t0 = std::chrono::steady_clock::now();
-  if (!record_session(given.session, s, error, step_place)) {
+  if (!record_session(given.session, s, error)) {
     fmt::print(stderr, "{}\n", error);
     return 2;
   }

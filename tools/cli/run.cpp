@@ -20,6 +20,7 @@
 // The scenario runner lives with the emulator (emu/ is not on this target's include path).
 #include "scenario.hpp"
 #include "trace.hpp"
+#include "vocabulary.hpp"
 
 namespace dpc31::cli {
 
@@ -89,10 +90,6 @@ std::vector<std::string> leading_comments(std::string_view text) {
     out.push_back(line);
   }
   return out;
-}
-
-std::string step_place(const std::string& file, int line, std::string_view text) {
-  return fmt::format("{}:{}: {}", file, line, text.substr(0, text.find(' ')));
 }
 
 bool parse_timescale(const std::string& t, int& exp) {

@@ -83,10 +83,6 @@ class ChipRun {
 // The comment block at the top of a scenario's text: it heads the recorded traces.
 std::vector<std::string> leading_comments(std::string_view text);
 
-// Where a firmware's hang or fault happened in a step: "FILE:LINE: KEYWORD" (the step's first
-// word, "x.scn:10: dpv1_read"), the single chip's and the segment's alike.
-std::string step_place(const std::string& file, int line, std::string_view text);
-
 // A segment's scenario, parsed from `text`, with the outputs `opt` asks for (run_segment.cpp,
 // docs/segment.md "Outputs"). Returns 0, 1 or 2 like the command.
 int run_segment_command(const RunOptions& opt, const SegmentScenario& s, std::string_view text,
