@@ -983,12 +983,17 @@ void bind_scenarios(py::module_& m) {
         std::string step;
         Scenario bound = s;
         if (ScenarioError err; !bind_plugin(bound, err)) {
+          // The plug-in's load fails at the `firmware` line; a step naming a port or an input the
+          // plug-in has not is the scenario's error, as `dpc31 run` reports it.
+          if (err.line != s.firmware_line) raise_scenario(err);
           fail(fmt::format("{}:{}", err.file, err.line), err.line, step, err.message);
         }
+        // A bad 80C32 image is an InputError before anything runs (docs/cpu.md), as in `run`.
+        if (std::string why; !check_cpu_image(bound, why)) raise(errors().input, why);
         hooks.at_step = [&](const ScenarioStep& st) {
           place = step_place(s.file, st.line, st.text);
           line = st.line;
-          step = st.text.substr(0, st.text.find(' '));
+          step = step_keyword(st.text);
         };
         try {
           py::gil_scoped_release nogil;

@@ -241,8 +241,9 @@ std::string FirmwareHost::port_name(unsigned port) const {
 // The chip starts in its reset state: a pulse before the firmware started it has nothing to do.
 // A reset of a running chip would restart its clock under the bus side: not modelled.
 void FirmwareHost::reset_line(bool asserted) {
+  if (!asserted) return;  // a release needs no chip: hw_input may release the line
   if (bus_ == nullptr) input_errors_("dpc31_board_reset called with no chip selected");
-  if (asserted && bus_->chip().started()) {
+  if (bus_->chip().started()) {
     throw FirmwareError(fmt::format(
         "{}: reset line asserted at cycle {} after the chip was started (a reset during "
         "operation is not modelled)",

@@ -79,8 +79,10 @@ std::string service_name(const fdl::Frame& f) {
   return std::string(kSapNames[sap - sap::MSAC_C2_RM]);
 }
 
+std::string_view step_keyword(std::string_view text) { return text.substr(0, text.find(' ')); }
+
 std::string step_place(const std::string& file, int line, std::string_view text) {
-  return fmt::format("{}:{}: {}", file, line, text.substr(0, text.find(' ')));
+  return fmt::format("{}:{}: {}", file, line, step_keyword(text));
 }
 
 // Indexed by the 4-bit code (EN 50170): the request function codes and the response codes.

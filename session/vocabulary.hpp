@@ -30,6 +30,8 @@ std::string service_name(const fdl::Frame& request);
 // Where a firmware's hang or fault happened in a step: "FILE:LINE: KEYWORD" (the step's first
 // word, "x.scn:10: dpv1_read"), the single chip's and the segment's, `dpc31 run`'s and Python's.
 std::string step_place(const std::string& file, int line, std::string_view text);
+// That keyword: a step's text up to its first space.
+std::string_view step_keyword(std::string_view text);
 // An FDL request function: "SRD_high", "SDN_low", "FDL_Status", ...
 std::string_view function_name(fdl::Function f);
 // An FDL response code: "OK", "DL", "RS", ...

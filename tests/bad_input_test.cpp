@@ -1431,6 +1431,12 @@ TEST_F(BadInput, AFirmwareThatHangsInAHardwareInputIsStopped) {
              "selected (hw_input runs with no chip selected: it notes the input for the ISR or the "
              "main loop)",
              "a board wait in hw_input");
+  // A release of the reset line does nothing (docs/firmware.md: a pulse before the start has
+  // nothing to do), so it needs no chip: the run goes on.
+  file("release.scn", "profile vpc3plus\nfirmware " + spin + "\nhw release 0\n");
+  const Outcome released = dpc31("run release.scn --quiet");
+  EXPECT_EQ(released.rc, 0) << released.err;
+  EXPECT_EQ(released.err, "");
 }
 
 // A FIFO is neither a plug-in nor an Intel HEX image: opening one waits for a writer (run, soak,

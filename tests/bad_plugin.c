@@ -18,7 +18,8 @@
  *   SPIN_ISR     its init raises an interrupt as HAL_ISR's does; its ISR spins in while(1)
  * and one whose hardware input "spin" hangs, which the guard stops inside a scenario's `hw` step as
  * in its ISR, and whose input "wait" calls a board hook that needs the chip (FirmwarePlugins):
- *   SPIN_INPUT   its hw_input spins in while(1) for "spin", calls dpc31_board_wait_1ms for "wait"
+ *   SPIN_INPUT   its hw_input spins in while(1) for "spin", calls dpc31_board_wait_1ms for "wait",
+ *                releases the reset line (dpc31_board_reset(0)) for "release"
  * and one that shows whether a module starts with fresh globals (tests/cpu_test.cpp):
  *   GLOBALS      its init counts its runs in a global and writes the count to its port "boots" */
 #include "dpc31/dpc31_firmware.h"
@@ -109,10 +110,14 @@ static int spin(const char* name, uint32_t value) {
     dpc31_board_wait_1ms();
     return 0;
   }
+  if (name[0] == 'r') {  /* a released reset line needs no chip */
+    dpc31_board_reset(0);
+    return 0;
+  }
   while (1) {
   }
 }
-static const char* const kInputs[] = {"spin", "wait", 0};
+static const char* const kInputs[] = {"spin", "wait", "release", 0};
 #define HW_INPUT spin
 #define HW_INPUTS kInputs
 #endif

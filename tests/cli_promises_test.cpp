@@ -126,6 +126,15 @@ TEST_F(BadInput, CosimSessionWritesItsOutputs) {
   EXPECT_EQ(dpc31("cosim --replay fixed.trace --quiet").rc, 0);
 }
 
+// A `cpu` image that cannot be read is refused at its line before the session runs, as `dpc31 run`
+// refuses it (exit 2, docs/cpu.md): the session ran and "diverged" at cycle 0 (review, s27).
+TEST_F(BadInput, CosimSessionRefusesABadCpuImage) {
+  file("img.scn", "cpu 80c32 firmware nosuch.ihx\nstartup\n");
+  const Outcome r = dpc31("cosim --session img.scn --quiet");
+  expect_bad(r, "img.scn:1: " + path("nosuch.ihx") + ": no such file", "a missing cpu image");
+  EXPECT_EQ(r.out, "");
+}
+
 // cosim --session runs the scenario's chip, once: the options of seeds, and a chip the scenario
 // is not, were dropped without a word (exit 0 on another chip than asked for).
 TEST_F(BadInput, CosimSessionRefusesWhatItWouldIgnore) {
@@ -234,7 +243,7 @@ std::string json_number(const std::string& json, const std::string& key) {
 // at 500 k, 187.5 k, 93.75 k, 45.45 k, 19.2 kbaud, 48 MHz): 5 x 960 000 + 4096 x (256 + 512 +
 // 1056 + 2500) = 22 511 104 cycles, so after the start-up there is only the last exchange, and
 // the old factor was that exchange's alone.
-TEST_F(BadInput, SoakWallTimeCoversTheStartUp) {
+TEST_F(BadInput, SoakRealTimeIsTheWholeRunsChipTime) {
   const Outcome r = dpc31("soak --cycles 1e6 --baud 9600 --json s.json");
   ASSERT_EQ(r.rc, 0) << r.err;
   const std::string text = line_with(r.out, "cycles ");

@@ -361,6 +361,27 @@ def test_a_firmware_fault_in_a_scenario_names_its_line_and_step(built, tmp_path,
                                                                           reason)
 
 
+def test_a_scenario_error_of_its_plugin_and_a_bad_cpu_image_are_not_firmware_faults(built,
+                                                                                   tmp_path):
+    """What `dpc31 run` refuses before it runs (exit 2, docs/python.md "Errors"): a step naming an
+    input the plug-in has not is the scenario's error (a ScenarioError at its line, not a
+    FirmwareError), a `cpu` image that cannot be read an InputError (the session ran and
+    failed)."""
+    scn = tmp_path / "hw.scn"
+    scn.write_text(f"profile vpc3plus\nfirmware {built('DPC31_BAD_PLUGIN_SPIN_INPUT')}\n"
+                   "startup\nhw nosuch 1\n")
+    with pytest.raises(dpc31.ScenarioError) as e:
+        dpc31.run_scenario(str(scn))
+    reason = "unknown hardware input 'nosuch' of BAD (spin, wait, release)"
+    assert str(e.value) == f"{scn}:4: {reason}"
+    assert (e.value.file, e.value.line, e.value.reason) == (str(scn), 4, reason)
+    img = tmp_path / "img.scn"
+    img.write_text("cpu 80c32 firmware nosuch.ihx\nstartup\n")
+    with pytest.raises(dpc31.InputError) as e:
+        dpc31.run_scenario(str(img))
+    assert str(e.value) == f"{img}:1: {tmp_path / 'nosuch.ihx'}: no such file"
+
+
 
 
 @pytest.mark.parametrize("call, message", [

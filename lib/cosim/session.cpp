@@ -81,6 +81,7 @@ bool record_session(const std::string& scenario_path, Session& out, std::string&
     error = err.text();
     return false;
   }
+  if (!check_cpu_image(sc, error)) return false;  // a bad 80C32 image: its line, as in `run`
   out = Session{};
   out.options = {sc.chip.profile, sc.chip.bus, sc.chip.variant};
   ScenarioHooks hooks;
