@@ -110,7 +110,7 @@ static int spin(const char* name, uint32_t value) {
     dpc31_board_wait_1ms();
     return 0;
   }
-  if (name[0] == 'r') {  /* a released reset line needs no chip */
+  if (name[0] == 'r') { /* a released reset line needs no chip */
     dpc31_board_reset(0);
     return 0;
   }

@@ -7,7 +7,7 @@
 
 #include "dpc31/dpc31_firmware.h"
 
-#define MARK (*(volatile __xdata uint8_t *)0x8040)
+#define MARK (*(volatile __xdata uint8_t*)0x8040)
 
 void timer1_isr(void) __interrupt(3) {
   dpc31_board_wait_1ms();
