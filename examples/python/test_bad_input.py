@@ -361,6 +361,29 @@ def test_a_firmware_fault_in_a_scenario_names_its_line_and_step(built, tmp_path,
                                                                           reason)
 
 
+@pytest.mark.parametrize("plugin, line, step, reason", [
+    # Its init's fault while the stations start: the scenario, no line (`dpc31 run`'s place).
+    ("DPC31_BAD_PLUGIN_HAL_INIT", None, None,
+     "station 6: firmware BAD: CopyToVpc3: local buffer is NULL with length 4"),
+    # Its ISR's, in the step that runs it: "FILE:LINE: KEYWORD".
+    ("DPC31_BAD_PLUGIN_HAL_ISR", 4, "startup",
+     "station 6: firmware BAD: CopyFromVpc3: local buffer is NULL with length 2"),
+])
+def test_a_firmware_fault_in_a_segment_names_its_place(built, tmp_path, plugin, line, step,
+                                                       reason):
+    """SegmentScenario.run's FirmwareError names the place as `dpc31 run`'s line does
+    (docs/bring-up.md, section 4), with the station in the firmware's own line."""
+    scn = tmp_path / "seg.scn"
+    scn.write_text("segment\nstation 5 profile=spc3 firmware=DO4\n"
+                   f"station 6 profile=vpc3plus firmware={built(plugin)}\nstartup\n")
+    with pytest.raises(dpc31.FirmwareError) as e:
+        dpc31.SegmentScenario.load(str(scn)).run()
+    where = f"{scn}" + (f":{line}: {step}" if line else "")
+    assert str(e.value) == f"{where}: {reason}"
+    assert (e.value.file, e.value.line, e.value.step, e.value.reason) == (str(scn), line, step,
+                                                                          reason)
+
+
 def test_a_scenario_error_of_its_plugin_and_a_bad_cpu_image_are_not_firmware_faults(built,
                                                                                    tmp_path):
     """What `dpc31 run` refuses before it runs (exit 2, docs/python.md "Errors"): a step naming an

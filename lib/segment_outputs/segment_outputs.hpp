@@ -92,8 +92,17 @@ class SegmentScenarioOutputs : public SegmentObserver {
   // Writes every file of a run that ended; false with a line.
   bool write(std::string& error);
 
+  // Where the stations' firmware runs now, for its hang and fault lines: the scenario while the
+  // stations start, then "FILE:LINE: KEYWORD" of the step (`dpc31 run`'s and Python's); that
+  // step's line and keyword (0 and "" before the first step). Copies: the run's steps are gone
+  // when a fault has unwound it.
+  [[nodiscard]] const std::string& place() const { return place_; }
+  [[nodiscard]] int step_line() const { return step_line_; }
+  [[nodiscard]] const std::string& step_word() const { return step_word_; }
+
   void station_added(Segment& seg, std::size_t index) override;
   void stations_added(Segment& seg) override;
+  void step_begins(const SegmentStep& st, std::string_view text) override;
   void telegram(const LineTelegram& t) override { out_.telegram(t); }
   void run_ends(Segment& seg, std::uint32_t passed, std::uint32_t failed) override;
 
@@ -102,6 +111,9 @@ class SegmentScenarioOutputs : public SegmentObserver {
   std::vector<std::string> scopes_;
   SegmentOutputs out_;
   bool ended_ = false;
+  std::string place_;
+  int step_line_ = 0;
+  std::string step_word_;
 };
 
 }  // namespace dpc31

@@ -37,12 +37,7 @@ class RunOutputs final : public SegmentScenarioOutputs {
       : SegmentScenarioOutputs(s, SegmentOutputOptions{wave_options(opt), opt.pcap}),
         opt_(opt),
         s_(s),
-        comments_(leading_comments(text)),
-        place_(s.file) {}
-
-  // Where the stations' firmware runs now, for its hang and fault lines: the scenario while the
-  // stations start, then "FILE:LINE: KEYWORD" of the step.
-  [[nodiscard]] const std::string& place() const { return place_; }
+        comments_(leading_comments(text)) {}
 
   // Every file the run writes, for outfile::distinct.
   [[nodiscard]] std::vector<outfile::Named> outputs() const {
@@ -97,8 +92,8 @@ class RunOutputs final : public SegmentScenarioOutputs {
   }
 
   void step_begins(const SegmentStep& st, std::string_view text) override {
+    SegmentScenarioOutputs::step_begins(st, text);
     for (auto& r : traces_) r->heading(std::string(text));
-    place_ = step_place(s_.file, st.line, st.text);
   }
   void step_ends(const SegmentStep&) override {
     for (auto& r : traces_) r->checkpoint();
@@ -175,7 +170,6 @@ class RunOutputs final : public SegmentScenarioOutputs {
   std::vector<std::size_t> heard_from_;  // per trace: the sender of the last telegram noted
   outfile::OutFile json_;
   std::string json_text_;
-  std::string place_;
 };
 
 }  // namespace
