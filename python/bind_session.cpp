@@ -970,37 +970,30 @@ void bind_scenarios(py::module_& m) {
         hooks.observer = &rec;
         // A firmware's fault names its place as `dpc31 run`'s line does: the `firmware` line
         // (its load, its init), then the step it runs in ("x.scn:10: dpv1_read").
-        const auto fail = [&s](const std::string& place, int line, const std::string& step,
-                               const std::string& reason) {
-          raise(errors().firmware, place + ": " + reason,
-                {{"file", py::str(s.file)},
-                 {"line", py::int_(line)},
-                 {"step", step.empty() ? py::object(py::none()) : py::str(step)},
+        FirmwarePlace place(s.file, s.firmware_line);
+        const auto fail = [&place](const std::string& reason) {
+          raise(errors().firmware, place.message(reason),
+                {{"file", py::str(place.file())},
+                 {"line", py::int_(place.line())},
+                 {"step", place.step().empty() ? py::object(py::none()) : py::str(place.step())},
                  {"reason", py::str(reason)}});
         };
-        std::string place = fmt::format("{}:{}", s.file, s.firmware_line);
-        int line = s.firmware_line;
-        std::string step;
         Scenario bound = s;
         if (ScenarioError err; !bind_plugin(bound, err)) {
           // The plug-in's load fails at the `firmware` line; a step naming a port or an input the
           // plug-in has not is the scenario's error, as `dpc31 run` reports it.
           if (err.line != s.firmware_line) raise_scenario(err);
-          fail(fmt::format("{}:{}", err.file, err.line), err.line, step, err.message);
+          fail(err.message);
         }
         // A bad 80C32 image is an InputError before anything runs (docs/cpu.md), as in `run`.
         if (std::string why; !check_cpu_image(bound, why)) raise(errors().input, why);
-        hooks.at_step = [&](const ScenarioStep& st) {
-          place = step_place(s.file, st.line, st.text);
-          line = st.line;
-          step = step_keyword(st.text);
-        };
+        hooks.at_step = [&place](const ScenarioStep& st) { place.enter(st.line, st.text); };
         try {
           py::gil_scoped_release nogil;
           r.outcome = run_scenario(
               bound, [&](const std::string& l) { r.walk.push_back(l); }, LineSink{}, hooks);
         } catch (const FirmwareError& e) {
-          fail(place, line, step, e.what());
+          fail(e.what());
         }
         return r;
       });

@@ -7,6 +7,7 @@
 #include <charconv>
 #include <iterator>
 #include <stdexcept>
+#include <utility>
 
 #include "dpc31/dp.hpp"
 #include "dpc31/names.hpp"
@@ -79,10 +80,19 @@ std::string service_name(const fdl::Frame& f) {
   return std::string(kSapNames[sap - sap::MSAC_C2_RM]);
 }
 
-std::string_view step_keyword(std::string_view text) { return text.substr(0, text.find(' ')); }
+FirmwarePlace::FirmwarePlace(std::string file, int line)
+    : file_(std::move(file)),
+      line_(line),
+      text_(line == 0 ? file_ : fmt::format("{}:{}", file_, line)) {}
 
-std::string step_place(const std::string& file, int line, std::string_view text) {
-  return fmt::format("{}:{}: {}", file, line, step_keyword(text));
+void FirmwarePlace::enter(int line, std::string_view step_text) {
+  line_ = line;
+  step_ = step_text.substr(0, step_text.find(' '));  // the step's keyword
+  text_ = fmt::format("{}:{}: {}", file_, line_, step_);
+}
+
+std::string FirmwarePlace::message(std::string_view what) const {
+  return text_.empty() ? std::string(what) : fmt::format("{}: {}", text_, what);
 }
 
 // Indexed by the 4-bit code (EN 50170): the request function codes and the response codes.

@@ -27,11 +27,33 @@ std::string counters_text(const FdlCounters& c);
 // The DP service a request asks for ("Set_Prm", "Data_Exchange", "MSAC_C1", "SAP 12", ...): a
 // SAP of include/dpc31/dp.hpp by the name every decoder gives it (tests/decoder_sap_names.py).
 std::string service_name(const fdl::Frame& request);
-// Where a firmware's hang or fault happened in a step: "FILE:LINE: KEYWORD" (the step's first
-// word, "x.scn:10: dpv1_read"), the single chip's and the segment's, `dpc31 run`'s and Python's.
-std::string step_place(const std::string& file, int line, std::string_view text);
-// That keyword: a step's text up to its first space.
-std::string_view step_keyword(std::string_view text);
+// Where a scenario's firmware runs, for the lines of its fault and its hang (`dpc31 run`, `dpc31
+// cosim --session`, Python's FirmwareError): "FILE:LINE" at the `firmware` line while a single
+// chip's init runs, "FILE" (line 0) while a segment's stations start, then "FILE:LINE: KEYWORD"
+// of the step it runs in (the step's first word: "x.scn:10: dpv1_read"); the default one is
+// nowhere (the demo's own session has no file). The runner calls enter() as each step begins.
+// It holds copies, not pointers into the scenario: the steps are gone once a fault has unwound
+// the run (a pointer version crashed Python).
+class FirmwarePlace {
+ public:
+  FirmwarePlace() = default;
+  FirmwarePlace(std::string file, int line);
+  void enter(int line, std::string_view step_text);
+
+  // The place's text ("" nowhere): board::HangPlace keeps its address while the firmware runs.
+  [[nodiscard]] const std::string& text() const { return text_; }
+  [[nodiscard]] const std::string& file() const { return file_; }
+  [[nodiscard]] int line() const { return line_; }                 // 0: none
+  [[nodiscard]] const std::string& step() const { return step_; }  // "": before the first step
+  // The fault's line: "PLACE: WHAT", WHAT alone where the place is nowhere.
+  [[nodiscard]] std::string message(std::string_view what) const;
+
+ private:
+  std::string file_;
+  int line_ = 0;
+  std::string step_;
+  std::string text_;
+};
 // An FDL request function: "SRD_high", "SDN_low", "FDL_Status", ...
 std::string_view function_name(fdl::Function f);
 // An FDL response code: "OK", "DL", "RS", ...

@@ -90,17 +90,15 @@ bool record_session(const std::string& scenario_path, Session& out, std::string&
   // A firmware's fault or hang is at the scenario's `firmware` line in its init, then at the step
   // it runs in, as in `dpc31 run` (docs/bring-up.md, section 4); a firmware stuck without a bus
   // access cannot be stopped from this thread: the guard ends the process with one line.
-  std::string where = fmt::format("{}:{}", scenario_path, sc.firmware_line);
-  hooks.at_step = [&where, &scenario_path](const ScenarioStep& st) {
-    where = step_place(scenario_path, st.line, st.text);
-  };
+  FirmwarePlace where(scenario_path, sc.firmware_line);
+  hooks.at_step = [&where](const ScenarioStep& st) { where.enter(st.line, st.text); };
   if (sc.firmware_desc != nullptr) board::guard_hangs("dpc31 cosim", sc.firmware_desc->name);
-  const board::HangPlace place(where);
+  const board::HangPlace place(where.text());
   ScenarioOutcome o;
   try {
     o = run_scenario(sc, nullptr, nullptr, hooks);
   } catch (const FirmwareError& e) {
-    error = "dpc31 cosim: " + where + ": " + e.what();
+    error = "dpc31 cosim: " + where.message(e.what());
     return false;
   }
   out.scenario_passed = o.ok();

@@ -7,7 +7,6 @@
 
 #include "dp_master.hpp"
 #include "dpc31/fdl.hpp"
-#include "vocabulary.hpp"
 
 namespace dpc31 {
 
@@ -117,15 +116,13 @@ void SegmentOutputs::add(const Held& h) {
 }
 
 SegmentScenarioOutputs::SegmentScenarioOutputs(const SegmentScenario& s, SegmentOutputOptions opt)
-    : s_(s), out_(std::move(opt)), place_(s.file) {
+    : s_(s), out_(std::move(opt)), place_(s.file, 0) {
   for (const SegmentStation& st : s.stations)
     scopes_.push_back(station_scope(st.slave.address, st.name));
 }
 
 void SegmentScenarioOutputs::step_begins(const SegmentStep& st, std::string_view /*text*/) {
-  place_ = step_place(s_.file, st.line, st.text);
-  step_line_ = st.line;
-  step_word_ = step_keyword(st.text);
+  place_.enter(st.line, st.text);
 }
 
 void SegmentScenarioOutputs::station_added(Segment& seg, std::size_t index) {

@@ -16,6 +16,7 @@
 #include "pcapng.hpp"
 #include "scenario_segment.hpp"
 #include "segment.hpp"
+#include "vocabulary.hpp"
 #include "waveform.hpp"
 
 namespace dpc31 {
@@ -92,13 +93,12 @@ class SegmentScenarioOutputs : public SegmentObserver {
   // Writes every file of a run that ended; false with a line.
   bool write(std::string& error);
 
-  // Where the stations' firmware runs now, for its hang and fault lines: the scenario while the
-  // stations start, then "FILE:LINE: KEYWORD" of the step (`dpc31 run`'s and Python's); that
-  // step's line and keyword (0 and "" before the first step). Copies: the run's steps are gone
-  // when a fault has unwound it.
-  [[nodiscard]] const std::string& place() const { return place_; }
-  [[nodiscard]] int step_line() const { return step_line_; }
-  [[nodiscard]] const std::string& step_word() const { return step_word_; }
+  // Where the stations' firmware runs now, for its hang and fault lines (FirmwarePlace): the
+  // scenario while the stations start, then "FILE:LINE: KEYWORD" of the step (`dpc31 run`'s and
+  // Python's); that step's line and keyword (0 and "" before the first step).
+  [[nodiscard]] const std::string& place() const { return place_.text(); }
+  [[nodiscard]] int step_line() const { return place_.line(); }
+  [[nodiscard]] const std::string& step_word() const { return place_.step(); }
 
   void station_added(Segment& seg, std::size_t index) override;
   void stations_added(Segment& seg) override;
@@ -111,9 +111,7 @@ class SegmentScenarioOutputs : public SegmentObserver {
   std::vector<std::string> scopes_;
   SegmentOutputs out_;
   bool ended_ = false;
-  std::string place_;
-  int step_line_ = 0;
-  std::string step_word_;
+  FirmwarePlace place_;
 };
 
 }  // namespace dpc31

@@ -247,23 +247,21 @@ int ChipRun::run(const Scenario& s, std::string_view text, const LineSink& walk,
     errors(why);
     return 2;
   }
-  // A firmware's fault or hang is at the scenario's `firmware` line, "SCENARIO:LINE", while its
-  // init runs, then at the step it runs in, "SCENARIO:LINE: KEYWORD"; the demo's own session has
-  // no file.
-  std::string where = opt.scenario.empty() ? "" : fmt::format("{}:{}", s.file, s.firmware_line);
+  // A firmware's fault or hang is at the scenario's `firmware` line while its init runs, then at
+  // the step it runs in; the demo's own session has no file.
+  FirmwarePlace where;
   if (!opt.scenario.empty()) {
-    hooks.at_step = [&where, &s](const ScenarioStep& st) {
-      where = step_place(s.file, st.line, st.text);
-    };
+    where = FirmwarePlace(s.file, s.firmware_line);
+    hooks.at_step = [&where](const ScenarioStep& st) { where.enter(st.line, st.text); };
   }
   try {
     // A firmware stuck in a loop without a bus access cannot be stopped from this thread: the
     // guard ends the process with one line.
     if (bound.firmware_desc != nullptr) board::guard_hangs(m.command, bound.firmware_desc->name);
-    const board::HangPlace place(where);
+    const board::HangPlace place(where.text());
     o = run_scenario(bound, walk, errors, hooks);
   } catch (const FirmwareError& e) {
-    return m.fail(where.empty() ? std::string(e.what()) : where + ": " + e.what());
+    return m.fail(where.message(e.what()));
   }
   if (!attach_error.empty()) return m.fail(attach_error);
   const int rc = o.ok() ? 0 : 1;
