@@ -732,7 +732,7 @@ bool Recorder::finish(std::uint64_t end_cycle, std::string& error) {
     return false;
   }
   if (m.gtkw.is_open()) {
-    SaveFile f{m.opt.path, {}, {}, m.opt.flat, end_t, m.markers, filter_dir()};
+    SaveFile f{m.opt.path, {}, {}, m.opt.flat, m.units(m.opt.from), end_t, m.markers, filter_dir()};
     f.top = m.top;
     for (const Var& v : m.vars) {
       // The logic-analyser form: grouped by the first scope, the leaf as declared.
