@@ -51,9 +51,13 @@ bool parse_ihex(std::string_view text, HexImage& image, std::string& error) {
       if (hi < 0 || lo < 0) return fail("not a hex digit");
       rec.push_back(static_cast<std::uint8_t>(hi << 4 | lo));
     }
+    // The checksum is the two's complement of the sum of the record's other bytes.
     std::uint8_t sum = 0;
-    for (std::uint8_t b : rec) sum = static_cast<std::uint8_t>(sum + b);
-    if (sum != 0) return fail("checksum");
+    for (std::size_t i = 0; i + 1 < rec.size(); ++i) sum = static_cast<std::uint8_t>(sum + rec[i]);
+    const auto expected = static_cast<std::uint8_t>(-sum);
+    if (rec.back() != expected) {
+      return fail(fmt::format("checksum {:02X}h, expected {:02X}h", rec.back(), expected));
+    }
     const unsigned addr = rec[1] << 8 | rec[2];
     switch (rec[3]) {
       case 0x00:

@@ -163,9 +163,6 @@ class TraceParser {
                                        {"baud", have_baud_}}) {
         if (!seen) fail(fmt::format("the header has no '{}' line", name));
       }
-      if (bit_cycles(clock(), t_.baud) == 0) {
-        fail(fmt::format("baud {} is unusable at clock {}", t_.baud, clock()));
-      }
       body_ = true;
     }
     TraceLine l;
@@ -248,6 +245,11 @@ class TraceParser {
       t_.baud = static_cast<std::uint32_t>(b);
     } else {
       return false;
+    }
+    // At the later of the two lines, the one that makes the pair unusable.
+    if ((k == "clock" || k == "baud") && have_clock_ && have_baud_ &&
+        bit_cycles(clock(), t_.baud) == 0) {
+      fail(fmt::format("baud {} is unusable at clock {}", t_.baud, clock()));
     }
     return true;
   }

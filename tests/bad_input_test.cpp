@@ -105,6 +105,7 @@ TEST_F(BadInput, RunScenarioFile) {
 // A scenario's 80C32 or C31 image (docs/cpu.md) is read before the walk starts: a bad one is
 // the same one line and exit 2, with nothing printed and no output written.
 TEST_F(BadInput, RunCpuImage) {
+  // 03h + 02h + 0Bh = 10h: the checksum is F0h (two's complement, Intel's specification), not F1h.
   file("bad.ihx", ":0300000002000BF1\n:00000001FF\n");
   file("empty.ihx", "");
   file("high.ihx", ":02000000A5A5B4\n:00000001FF\n");
@@ -114,7 +115,7 @@ TEST_F(BadInput, RunCpuImage) {
   file("seg.ihx", ":020000020100FB\n:0200000080FE80\n:00000001FF\n");
   const std::vector<FileCase> cases = {
       {"bad checksum", file("sum.scn", "cpu 80c32 firmware bad.ihx\nstartup\n"),
-       path("sum.scn") + ":1: " + path("bad.ihx") + ":1: checksum"},
+       path("sum.scn") + ":1: " + path("bad.ihx") + ":1: checksum F1h, expected F0h"},
       {"missing", file("missing.scn", "cpu 80c32 firmware none.ihx\nstartup\n"),
        path("missing.scn") + ":1: " + path("none.ihx") + ": no such file"},
       {"directory", file("dir.scn", "cpu 80c32 firmware dir.ihx\nstartup\n"),
@@ -211,11 +212,13 @@ TEST_F(BadInput, EveryDoorTakesTheSameDefaultLatch) {
              "bridge, 4001h");
   expect_bad(door("serve --unix s", "0x4001"), "dpc31 serve: --board-address 0x4001: " + covered,
              "serve, 4001h");
-  expect_bad(scenario("0x4002"), path("b0x4002.scn") + ":1: " + path("bad.ihx") + ":1: checksum",
+  expect_bad(scenario("0x4002"),
+             path("b0x4002.scn") + ":1: " + path("bad.ihx") + ":1: checksum F1h, expected F0h",
              "scenario, 4002h");
-  expect_bad(door("bridge --tcp 0", "0x4002"), "dpc31 bridge: bad.ihx:1: checksum",
-             "bridge, 4002h");
-  expect_bad(door("serve --unix s", "0x4002"), "dpc31 serve: bad.ihx:1: checksum", "serve, 4002h");
+  expect_bad(door("bridge --tcp 0", "0x4002"),
+             "dpc31 bridge: bad.ihx:1: checksum F1h, expected F0h", "bridge, 4002h");
+  expect_bad(door("serve --unix s", "0x4002"), "dpc31 serve: bad.ihx:1: checksum F1h, expected F0h",
+             "serve, 4002h");
   EXPECT_FALSE(fs::exists(path("s")));
 }
 

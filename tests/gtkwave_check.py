@@ -8,6 +8,9 @@ CASE demo: `dpc31 demo`; its full VCD has every signal once at #0; GTKWave opens
   marker at each DP and watchdog state change of the demo's state walk, at its time (cycle x
   10^12 / 48 MHz ps, rounded); at each marker the state trace named by the marker shows that
   state's name, and the buffer and diag traces show their filter's text.
+CASE window: a window late in a run (--from 2885996 --to 2888108, Baud_Control at 60 ms inside
+  it); GTKWave opens its save file on the window (docs/waveforms.md): the view begins at the
+  window's first time, holds its last within 2 x its length, and every named marker is in it.
 CASE merge_two_runs: two runs of startup_dpc31_1m5 whose slave inputs differ in one bit
   (B4h / B5h), `dpc31 wavediff --merge ab.fst`; fst2vcd reads it back: every diff.X is 1 exactly
   where the two runs' own VCDs give X different values (walked here, independently); GTKWave
@@ -288,6 +291,33 @@ def case_demo(dpc31, d, screenshot):
     return problems
 
 
+def case_window(dpc31, d):
+    start_c, end_c = 2_885_996, 2_888_108
+    save = f"{d}/win.gtkw"
+    run([dpc31, "run", "--quiet", f"{SRC}/traces/startup_dpc31_1m5.scn", "--vcd", f"{d}/win.vcd",
+         "--from", str(start_c), "--to", str(end_c), "--gtkw", save])
+    markers = [ln.split(" ", 1)[1][0] for ln in Path(save).read_text().splitlines()
+               if ln.startswith("[markername] ")]
+    tcl = 'puts "window [gtkwave::getWindowStartTime] [gtkwave::getWindowEndTime]"\n' + "".join(
+        f'puts "marker {m} [gtkwave::getNamedMarker {m}]"\n' for m in markers)
+    out = gtkwave(save, tcl, d)
+    problems = []
+    # --to is one past the last cycle written: the file's last time is end_c's.
+    start, end = ps(start_c), ps(end_c)
+    window = re.search(r"^window (\d+) (\d+)$", out, re.M)
+    shown = (int(window.group(1)), int(window.group(2))) if window else None
+    if not shown or shown[0] != start or not end <= shown[1] <= start + 2 * (end - start):
+        problems.append(f"GTKWave opens on {shown}, the window is {start}..{end}")
+    at = {m.group(1): int(m.group(2)) for m in re.finditer(r"^marker (\w) (-?\d+)$", out, re.M)}
+    if not markers or len(at) != len(markers):
+        problems.append(f"markers {markers}, GTKWave shows {at}")
+    for m, t in sorted(at.items()):
+        if shown and not shown[0] <= t <= shown[1]:
+            problems.append(f"marker {m} at {t} is out of the view {shown}")
+    print(f"window: GTKWave shows {shown}, the window {start}..{end}, {len(at)} markers in it")
+    return problems
+
+
 def case_merge(dpc31, src, d):
     scn = Path(f"{src}/traces/startup_dpc31_1m5.scn").read_text(encoding="utf-8")
     if "inputs B1,B2,B3,B4" not in scn:
@@ -387,7 +417,8 @@ def main():
     shot = sys.argv[5] if len(sys.argv) > 5 and sys.argv[4] == "--screenshot" else None
     with tempfile.TemporaryDirectory() as d:
         problems = (case_demo(dpc31, d, shot) if case == "demo" else
-                    case_segment(dpc31, d) if case == "segment" else case_merge(dpc31, src, d))
+                    case_segment(dpc31, d) if case == "segment" else
+                    case_window(dpc31, d) if case == "window" else case_merge(dpc31, src, d))
     if problems:
         fail("\n".join(problems[:20]))
     print("ok")

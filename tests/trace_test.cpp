@@ -453,6 +453,20 @@ TEST(TraceCli, ExitCodes) {
   EXPECT_EQ(r.rc, 1);
   EXPECT_EQ(r.out, wrong + ":12: expected xint 1 at cycle 25, got xint 1 at cycle 24\n");
 
+  // A bit time of round(clock / baud) = 0 clocks (docs/trace-format.md) is refused at the later
+  // of the two header lines, whichever comes first, not at the first body line.
+  const std::string fast = tmp("fast.trace");
+  std::ofstream(fast)
+      << "dpc31-trace 1\nbaud 1500000\nclock 1000\nprofile spc3\nbus intel\nend 10\n";
+  r = cli("replay " + fast);
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_EQ(r.out, fast + ":3: baud 1500000 is unusable at clock 1000\n");
+  std::ofstream(fast) << "dpc31-trace 1\nprofile spc3\nbus intel\nclock 1000\nbaud 1500000\n\n"
+                         "# a comment\nwr 4 0004 E0\nend 10\n";
+  r = cli("replay " + fast);
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_EQ(r.out, fast + ":5: baud 1500000 is unusable at clock 1000\n");
+
   r = cli("replay " + tmp("missing.trace"));
   EXPECT_EQ(r.rc, 2);
   EXPECT_EQ(r.out, tmp("missing.trace") + ": no such file\n");

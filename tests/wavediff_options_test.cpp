@@ -1,6 +1,7 @@
 // dpc31 wavediff (docs/wavediff.md), its options and outputs: tolerance, X/Z policies, windows,
 // the diff VCD and WaveDrom outputs, malformed input, FST, the hand-written data pair, the command
 // line and streaming. Every expected time, cycle and value is worked out by hand next to it.
+#include "run_command.hpp"
 #include "wavediff_model.hpp"
 
 using namespace wavediff_test;
@@ -392,6 +393,25 @@ TEST(WavediffData, HandWrittenPairWithStripMapAndSplitBits) {
       << late.out;
   o.tolerance_cycles = 1;
   EXPECT_EQ(run_opts(o).rc, 0);
+}
+
+// docs/wavediff.md, "Report": its command, run in tests/data/wavediff as it says, prints exactly
+// the report it shows, exit 1 (different; the divergence worked out in the test above).
+TEST(WavediffCli, TheReportExampleOfTheDocs) {
+  const std::string doc = slurp(std::string(WAVEDIFF_DATA) + "/../../../docs/wavediff.md");
+  const std::size_t report = doc.find("\n## Report\n");
+  const std::size_t cmd = doc.find("```sh\ndpc31 ", report) + 6;
+  const std::size_t cmd_end = doc.find('\n', cmd);
+  const std::size_t out = doc.find("```\n", cmd_end) + 4;
+  const std::size_t out_from = doc.find("```\n", out) + 4;
+  const std::size_t out_to = doc.find("```", out_from);
+  ASSERT_NE(report, std::string::npos);
+  ASSERT_NE(out_to, std::string::npos);
+  const std::string command = doc.substr(cmd, cmd_end - cmd);
+  const auto r = testutil::run_command(fmt::format("cd {} && {} {} 2>&1", WAVEDIFF_DATA, DPC31_CLI,
+                                                   command.substr(command.find(' ') + 1)));
+  EXPECT_EQ(r.rc, 1) << command;
+  EXPECT_EQ(r.out, doc.substr(out_from, out_to - out_from)) << command;
 }
 
 TEST(WavediffCli, ThroughTheDpc31Binary) {

@@ -65,22 +65,29 @@ Line record_startup(const wave::Options& o) {
   return line;
 }
 
+// The waveform of an SPC3 at CLOCK_HZ (0: 48 MHz) that writes IMR's low byte, which completes at
+// cycle 4, with the signals `pattern` matches.
+std::string vcd_of_a_bus_write(std::uint32_t clock_hz, const std::string& file,
+                               const std::string& pattern) {
+  Chip chip({Profile::spc3, BusMode::intel, clock_hz});
+  chip.set_log_sink(nullptr);
+  wave::Options o;
+  o.path = tmp(file);
+  o.signals = {pattern};
+  wave::Recorder rec(o);
+  std::string error;
+  EXPECT_TRUE(rec.attach(chip, error)) << error;
+  chip.write(0x04, 0xEF);
+  EXPECT_TRUE(rec.finish(chip.cycle(), error)) << error;
+  return slurp(o.path);
+}
+
 }  // namespace
 
 TEST(Waveform, ExactVcdOfABusWrite) {
-  Chip chip({Profile::spc3, BusMode::intel, 0});
-  chip.set_log_sink(nullptr);
-  wave::Options o;
-  o.path = tmp("write.vcd");
-  o.signals = {"bus.*"};
-  wave::Recorder rec(o);
-  std::string error;
-  ASSERT_TRUE(rec.attach(chip, error)) << error;
-  chip.write(0x04, 0xEF);  // IMR low byte: completes at cycle 4
-  ASSERT_TRUE(rec.finish(chip.cycle(), error)) << error;
   // cycle 4 at 48 MHz = 83 333.3 ps -> 83333; the dump ends one cycle after the run (cycle 5,
   // 104 166.7 -> 104167), before the strobe falls.
-  EXPECT_EQ(slurp(o.path),
+  EXPECT_EQ(vcd_of_a_bus_write(0, "write.vcd", "bus.*"),
             "$date dpc31emu $end\n$version dpc31emu 48 MHz clock $end\n$timescale 1ps $end\n"
             "$scope module dpc31 $end\n$scope module bus $end\n"
             "$var wire 1 $ rd $end\n$var wire 1 % wr $end\n$var wire 13 & addr $end\n$var wire 8 ' "
@@ -88,6 +95,27 @@ TEST(Waveform, ExactVcdOfABusWrite) {
             "$upscope $end\n$upscope $end\n$enddefinitions "
             "$end\n#0\n$dumpvars\n0$\n0%\nb0000000000000 &\n"
             "b00000000 '\n$end\n#83333\nb0000000000100 &\nb11101111 '\n1%\n#104167\n");
+}
+
+// A clock of no whole MHz is named exactly in the header; the times are round(cycle x 10^12 /
+// 14 745 600) ps (docs/waveforms.md, --timescale): cycle 4 is 271 267.4 -> #271267, cycle 5
+// 339 084.2 -> #339084. A unit coarser than its cycle (67.8 ns) names the same clock.
+TEST(Waveform, AClockOfNoWholeMHzIsNamedExactly) {
+  EXPECT_EQ(vcd_of_a_bus_write(14'745'600, "clock147456.vcd", "bus.wr"),
+            "$date dpc31emu $end\n$version dpc31emu 14.7456 MHz clock $end\n$timescale 1ps "
+            "$end\n$scope module dpc31 $end\n$scope module bus $end\n$var wire 1 % wr $end\n"
+            "$upscope $end\n$upscope $end\n$enddefinitions $end\n#0\n$dumpvars\n0%\n$end\n"
+            "#271267\n1%\n#339084\n");
+  Chip chip({Profile::spc3, BusMode::intel, 14'745'600});
+  wave::Options o;
+  o.path = tmp("coarse147456.vcd");
+  std::string error;
+  o.timescale_exp = -7;  // 100 ns
+  wave::Recorder coarse(o);
+  EXPECT_FALSE(coarse.attach(chip, error));
+  EXPECT_EQ(error, o.path +
+                       ": timescale 100ns is longer than a clock cycle (67.8 ns at 14.7456 MHz): "
+                       "use 10ns or finer");
 }
 
 TEST(Waveform, OnlyTheSignalsAndWindowAskedFor) {
@@ -112,6 +140,27 @@ TEST(Waveform, OnlyTheSignalsAndWindowAskedFor) {
   EXPECT_EQ(error, "no signal matches 'nosuch.*' (see docs/waveforms.md)");
 }
 
+// The save file of a window opens GTKWave on the window (docs/waveforms.md, "GTKWave"):
+// [timestart] is --from's time, round(100 000 x 10^12 / 48 MHz) = 2 083 333 333 ps, and the zoom
+// -log2((END - START) / 2) from the window's length: END is --to's time, 2 500 000 000 ps, so
+// -log2(416 666 667 / 2) = -27.634318; no marker (no state change in the window), 26 times -1.
+TEST(Waveform, TheSaveFileOfAWindowOpensOnTheWindow) {
+  wave::Options o;
+  o.path = tmp("window_gtkw.vcd");
+  o.from = 100'000;
+  o.to = 120'000;
+  o.gtkw = tmp("window.gtkw");
+  record_startup(o);
+  std::istringstream in(slurp(o.gtkw));
+  std::vector<std::string> lines;
+  for (std::string l; std::getline(in, l) && lines.size() < 5;) lines.push_back(l);
+  ASSERT_EQ(lines.size(), 5u);
+  EXPECT_EQ(lines[2], "[timestart] 2083333333");
+  std::string none;
+  for (int i = 0; i < 26; ++i) none += " -1";
+  EXPECT_EQ(lines[3], "*-27.634318 -1" + none);
+}
+
 TEST(Waveform, SigrokDecodesTheTelegramBytes) {
   wave::Options o;
   o.path = tmp("uart.vcd");
@@ -132,6 +181,45 @@ TEST(Waveform, SigrokDecodesTheTelegramBytes) {
   // sigrok prints one byte per line: the master's telegrams on RxD, the chip's on TxD.
   EXPECT_EQ(rx.out, want.rx);
   EXPECT_EQ(tx.out, want.tx);
+}
+
+// sigrok numbers samples from the file's first time (docs/waveforms.md): 0 for a whole run,
+// --from's time in a window (cycle 1000: round(1000 x 10^8 / 48 MHz) = 2083 units of 10 ns), or
+// from 0 with `-I vcd:skip=0`. uart's rx-data span starts one bit time after the start bit's
+// falling edge (at 1.5 Mbaud 66.7 samples, 67 as sigrok places it: the first data bit).
+TEST(Waveform, SigrokSampleNumbersCountFromTheFilesFirstTime) {
+  wave::Options o;
+  o.path = tmp("samples.vcd");
+  o.signals = {"pins.txd"};
+  o.flat = true;
+  o.timescale_exp = -8;
+  record_startup(o);
+  wave::Options w = o;
+  w.path = tmp("samples_window.vcd");
+  w.from = 1000;
+  record_startup(w);
+  const auto first_span = [](const std::string& path, const char* input) {
+    const Cmd r = sh(fmt::format(
+        "sigrok-cli -I {} -i {} -P uart:rx=txd:baudrate=1500000:parity=even -A uart=rx-data "
+        "--protocol-decoder-samplenum 2>/dev/null | head -1",
+        input, path));
+    EXPECT_EQ(r.rc, 0) << r.out;
+    return std::stoull(r.out.substr(0, r.out.find('-')));
+  };
+  // The first 1 -> 0 of TxD in the whole file: the start bit of the chip's first answer.
+  const std::string v = slurp(o.path);
+  std::istringstream in(v.substr(v.find("$end\n#") + 5));
+  std::uint64_t t = 0;
+  std::uint64_t fall = 0;
+  for (std::string line; fall == 0 && std::getline(in, line);) {
+    if (line.starts_with("#")) t = std::stoull(line.substr(1));
+    if (t > 0 && line.starts_with("0")) fall = t;
+  }
+  ASSERT_GT(fall, 0u);
+  const std::uint64_t whole = first_span(o.path, "vcd");
+  EXPECT_EQ(whole, fall + 67);
+  EXPECT_EQ(first_span(w.path, "vcd"), whole - 2083);
+  EXPECT_EQ(first_span(w.path, "vcd:skip=0"), whole);
 }
 
 TEST(Waveform, GtkwaveConvertersAcceptOurFiles) {

@@ -15,8 +15,9 @@ struct SaveFile {
   std::string dump;                  // the waveform the save file opens
   std::vector<std::string> signals;  // the names written, below `top`, in declaration order
   std::vector<int> widths;
-  bool flat = false;      // the logic-analyser form: the leaves directly under "dpc31"
-  std::uint64_t end = 0;  // the last time, in the file's units (for the zoom)
+  bool flat = false;        // the logic-analyser form: the leaves directly under "dpc31"
+  std::uint64_t start = 0;  // the first time, in the file's units: the window's (--from)
+  std::uint64_t end = 0;    // the last time (start and end give the view GTKWave opens on)
   // Named markers (GTKWave has 26, A to Z): time in the file's units and the name.
   std::vector<std::pair<std::uint64_t, std::string>> markers;
   std::string filter_dir;     // "" = no translate filters (values as numbers)

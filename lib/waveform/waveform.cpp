@@ -142,6 +142,14 @@ std::string unit_text(int exp) {
   return fmt::format("{}{}", e % 3 == 0 ? 1 : e % 3 == 1 ? 100 : 10, kUnit[(e + 2) / 3]);
 }
 
+// A clock in MHz, exact: "48", "14.7456" (a truncated 14 would be another clock's cycle times).
+std::string mhz_text(std::uint32_t hz) {
+  std::string s = fmt::format("{}.{:06}", hz / 1'000'000, hz % 1'000'000);
+  s.erase(s.find_last_not_of('0') + 1);
+  if (s.back() == '.') s.pop_back();
+  return s;
+}
+
 }  // namespace
 
 const std::vector<SignalDef>& signal_list() {
@@ -342,7 +350,7 @@ struct Recorder::Impl {
       for (std::uint64_t s = 1; s < f; s *= 10) --finest;
       err = fmt::format(
           "{}: timescale {} is longer than a clock cycle ({:.1f} ns at {} MHz): use {} or finer",
-          opt.path, unit_text(opt.timescale_exp), 1e9 / f, f / 1'000'000, unit_text(finest));
+          opt.path, unit_text(opt.timescale_exp), 1e9 / f, mhz_text(f), unit_text(finest));
       return false;
     }
     const std::uint64_t g = std::gcd(scale, std::uint64_t{f});
@@ -477,7 +485,7 @@ struct Recorder::Impl {
   void open_vcd() {
     std::FILE* f = out.stream();
     fmt::print(f, "$date dpc31emu $end\n$version dpc31emu {} MHz clock $end\n$timescale {} $end\n",
-               clock_hz / 1'000'000, unit_text(opt.timescale_exp));
+               mhz_text(clock_hz), unit_text(opt.timescale_exp));
     fmt::print(f, "$scope module {} $end\n", top);
     // One chip: a signal's identifier is its place in the list, whatever was selected (files of
     // older runs keep theirs); a segment numbers its variables.
@@ -732,7 +740,7 @@ bool Recorder::finish(std::uint64_t end_cycle, std::string& error) {
     return false;
   }
   if (m.gtkw.is_open()) {
-    SaveFile f{m.opt.path, {}, {}, m.opt.flat, end_t, m.markers, filter_dir()};
+    SaveFile f{m.opt.path, {}, {}, m.opt.flat, m.units(m.opt.from), end_t, m.markers, filter_dir()};
     f.top = m.top;
     for (const Var& v : m.vars) {
       // The logic-analyser form: grouped by the first scope, the leaf as declared.

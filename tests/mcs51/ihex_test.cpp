@@ -27,7 +27,8 @@ TEST(Mcs51Hex, DataRecordsLandAtTheirAddresses) {
 
 TEST(Mcs51Hex, BadRecordsNameTheirLine) {
   const std::pair<const char*, const char*> bad[] = {
-      {":0C000000741275F003A47830F6A380FEA4\n", "line 1: checksum"},
+      // The checksum is the two's complement of the other bytes' sum (the specification): A3h.
+      {":0C000000741275F003A47830F6A380FEA4\n", "line 1: checksum A4h, expected A3h"},
       {"\n0C000000\n", "line 2: a record starts with ':'"},
       // A record is ':', the byte count (2 digits), the address (4), the type (2), 2 digits a
       // data byte and the checksum (2): 11 + 2 x count characters.
