@@ -121,6 +121,9 @@ Errors& errors();
 // Raises `type(message)` with the attributes given (as a Python exception through C++).
 [[noreturn]] void raise(const py::object& type, const std::string& message,
                         std::initializer_list<std::pair<const char*, py::object>> attrs = {});
+// Raises FirmwareError with `dpc31 run`'s line (place.message(reason)) and its .file, .line,
+// .step (None before a line or a step: a segment's stations starting) and .reason.
+[[noreturn]] void raise_firmware(const FirmwarePlace& place, const std::string& reason);
 
 // Runs `f` with the GIL released and returns what it returns (called with the GIL held).
 template <typename F>

@@ -30,6 +30,15 @@ void raise(const py::object& type, const std::string& message,
   throw py::error_already_set();
 }
 
+void raise_firmware(const FirmwarePlace& place, const std::string& reason) {
+  const auto or_none = [](bool none, py::object v) { return none ? py::object(py::none()) : v; };
+  raise(errors().firmware, place.message(reason),
+        {{"file", py::str(place.file())},
+         {"line", or_none(place.line() == 0, py::int_(place.line()))},
+         {"step", or_none(place.step().empty(), py::str(place.step()))},
+         {"reason", py::str(reason)}});
+}
+
 void enter_run(const RunState& run, bool changes, std::string_view who, std::string_view looks,
                std::string_view not_changes) {
   if (!run.busy) return;

@@ -836,12 +836,7 @@ void bind_segment_scenario(py::module_& m) {
             } catch (const FirmwareError& x) {
               // The place `dpc31 run` names: the scenario while the stations start, then the
               // step ("x.scn:4: startup: station 6: firmware BAD: …"), as Scenario.run's.
-              const bool in_step = out.step_line() != 0;
-              raise(errors().firmware, out.place() + ": " + x.what(),
-                    {{"file", py::str(s.file)},
-                     {"line", in_step ? py::object(py::int_(out.step_line())) : py::none()},
-                     {"step", in_step ? py::object(py::str(out.step_word())) : py::none()},
-                     {"reason", py::str(x.what())}});
+              raise_firmware(out.firmware_place(), x.what());
             }
             // Nothing is written unless the run ended (as `dpc31 run`).
             if (out.ended()) check_output(out.write(e), e);

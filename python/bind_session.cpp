@@ -971,19 +971,12 @@ void bind_scenarios(py::module_& m) {
         // A firmware's fault names its place as `dpc31 run`'s line does: the `firmware` line
         // (its load, its init), then the step it runs in ("x.scn:10: dpv1_read").
         FirmwarePlace place(s.file, s.firmware_line);
-        const auto fail = [&place](const std::string& reason) {
-          raise(errors().firmware, place.message(reason),
-                {{"file", py::str(place.file())},
-                 {"line", py::int_(place.line())},
-                 {"step", place.step().empty() ? py::object(py::none()) : py::str(place.step())},
-                 {"reason", py::str(reason)}});
-        };
         Scenario bound = s;
         if (ScenarioError err; !bind_plugin(bound, err)) {
           // The plug-in's load fails at the `firmware` line; a step naming a port or an input the
           // plug-in has not is the scenario's error, as `dpc31 run` reports it.
           if (err.line != s.firmware_line) raise_scenario(err);
-          fail(err.message);
+          raise_firmware(place, err.message);
         }
         // A bad 80C32 image is an InputError before anything runs (docs/cpu.md), as in `run`.
         if (std::string why; !check_cpu_image(bound, why)) raise(errors().input, why);
@@ -993,7 +986,7 @@ void bind_scenarios(py::module_& m) {
           r.outcome = run_scenario(
               bound, [&](const std::string& l) { r.walk.push_back(l); }, LineSink{}, hooks);
         } catch (const FirmwareError& e) {
-          fail(e.what());
+          raise_firmware(place, e.what());
         }
         return r;
       });

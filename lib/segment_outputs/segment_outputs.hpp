@@ -93,12 +93,9 @@ class SegmentScenarioOutputs : public SegmentObserver {
   // Writes every file of a run that ended; false with a line.
   bool write(std::string& error);
 
-  // Where the stations' firmware runs now, for its hang and fault lines (FirmwarePlace): the
-  // scenario while the stations start, then "FILE:LINE: KEYWORD" of the step (`dpc31 run`'s and
-  // Python's); that step's line and keyword (0 and "" before the first step).
-  [[nodiscard]] const std::string& place() const { return place_.text(); }
-  [[nodiscard]] int step_line() const { return place_.line(); }
-  [[nodiscard]] const std::string& step_word() const { return place_.step(); }
+  // Where the stations' firmware runs now, for its hang and fault lines: the scenario while the
+  // stations start (line 0), then the step (`dpc31 run`'s and Python's).
+  [[nodiscard]] const FirmwarePlace& firmware_place() const { return place_; }
 
   void station_added(Segment& seg, std::size_t index) override;
   void stations_added(Segment& seg) override;

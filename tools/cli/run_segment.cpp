@@ -206,10 +206,10 @@ int run_segment_command(const RunOptions& opt, const SegmentScenario& s, std::st
   if (!plugins.empty()) board::guard_hangs("dpc31 run", plugins);
   int rc = 0;
   try {
-    const board::HangPlace place(out.place());
+    const board::HangPlace place(out.firmware_place().text());
     rc = run_segment_scenario(bound, walk, errors, &out);
   } catch (const FirmwareError& e) {
-    fmt::print(err, "dpc31 run: {}: {}\n", out.place(), e.what());
+    fmt::print(err, "dpc31 run: {}\n", out.firmware_place().message(e.what()));
     return 2;
   } catch (const SegmentOutputError& e) {
     fmt::print(err, "dpc31 run: {}\n", e.what());
