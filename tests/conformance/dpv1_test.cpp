@@ -84,6 +84,13 @@ struct Dpv1 : Bare {
     set_up(entries, max_len);
     start_by_hand(*this);
   }
+  // Mode_Reg0.Set_Ext_Prm_Supported (with DP_Mode) set while Offline, then Start.
+  void set_ext_prm_supported() {
+    testutil::user_go_offline(chip);
+    chip.write(addr(chip, RegId::Mode_Reg0) + 1, 0x09);
+    testutil::user_start(chip);
+    found_again();
+  }
   // After a Start the chip searches the baud rate again: FDL_Status until it answers.
   void found_again() {
     for (int i = 0; i < 20 && !master.fdl_status().answer; ++i) {
@@ -215,10 +222,7 @@ TEST(Dpv1SetPrm, WdBaseFromDpv1Status1) {
 // User_Prm_Data_Okay read answers it (00h, New_Ext_Prm_Data cleared), the state stays Wait_Cfg.
 TEST(Dpv1SetExtPrm, TakenInWaitCfgWithSetExtPrmSupported) {
   Dpv1 b;
-  testutil::user_go_offline(b.chip);
-  b.chip.write(addr(b.chip, RegId::Mode_Reg0) + 1, 0x09);  // DP_Mode, Set_Ext_Prm_Supported
-  testutil::user_start(b.chip);
-  b.found_again();
+  b.set_ext_prm_supported();
   ASSERT_TRUE(b.master.fdl_status().answer);
   EXPECT_EQ(wire(b.master.set_ext_prm({0x07, 0x81}).answer), short_fc(kFcRS));  // Wait_Prm
   b.master.set_prm();
@@ -255,10 +259,7 @@ TEST(Dpv1SetExtPrm, WithoutSetExtPrmSupportedRs) {
 // logged as "not between Set_Prm and Chk_Cfg", the empty one was not logged).
 TEST(Dpv1SetExtPrm, AnotherMasterIsIgnoredAndEveryRefusalLogsItsReason) {
   Dpv1 b;
-  testutil::user_go_offline(b.chip);
-  b.chip.write(addr(b.chip, RegId::Mode_Reg0) + 1, 0x09);  // DP_Mode, Set_Ext_Prm_Supported
-  testutil::user_start(b.chip);
-  b.found_again();
+  b.set_ext_prm_supported();
   ASSERT_TRUE(b.master.fdl_status().answer);
   b.master.set_prm();
   ASSERT_EQ(b.chip.read(0x0E), 0x00);  // User_Prm_Data_Okay: Wait_Cfg
