@@ -207,7 +207,8 @@ bool DpStateMachine::service(const fdl::Frame& req) {
     // DP_SAPs." Without it no DP SAP (nor Data_Exchange's default SAP) exists: the chip is a
     // plain FDL station that answers FDL_Status and refuses the rest with RS (modelled).
     ++counters_.unknown_sap;
-    sig_.log(LogLevel::info, "request from {} with DP_Mode = 0: no DP SAP set up (RS)", req.sa);
+    sig_.log(LogLevel::info, "request from {} with DP_Mode = 0: no DP SAP set up ({})", req.sa,
+             refusal_on_line(req, "RS"));
     if (fn == fdl::Function::SRD_low || fn == fdl::Function::SRD_high)
       answer = short_answer(req, Response::RS);
   } else if (fn != fdl::Function::SRD_low && fn != fdl::Function::SRD_high &&

@@ -3,6 +3,10 @@
 // Decisions where the manual is silent: docs/decisions.md ("DPV1").
 #include "dpc31/dpv1.hpp"
 
+#include <fmt/format.h>
+
+#include <string_view>
+
 #include "dp_sm.hpp"
 
 namespace dpc31 {
@@ -34,27 +38,43 @@ const char* DpStateMachine::dpv1_prm_fault(const pdu::SetPrm& prm) const {
 
 // Set_Ext_Prm (SAP 53): with Set_Ext_Prm_Supported, from the locking master, in Wait_Cfg before a
 // Chk_Cfg; into the Prm buffer through the Aux buffer as Set_Prm, then New_Ext_Prm_Data, which
-// the User_Prm_Data_(Not_)Okay reads answer.
+// the User_Prm_Data_(Not_)Okay reads answer. Another master is ignored in every state, as its
+// Set_Prm and Chk_Cfg are (DPC31 p.28), before the state is looked at (docs/decisions.md).
 std::optional<Frame> DpStateMachine::set_ext_prm(const Frame& req) {
+  const auto refuse = [&](std::string_view why, Response code) {
+    sig_.log(LogLevel::info, "Set_Ext_Prm from {}: {} ({})", req.sa, why,
+             refusal_on_line(req, code == Response::RS ? "RS" : "RR"));
+    return short_answer(req, code);
+  };
   if (regs_.id() != Profile::vpc3plus || !regs_.mode0(fields::Mode_Reg0::Set_Ext_Prm_Supported)) {
     ++counters_.unknown_sap;
-    sig_.log(LogLevel::info, "Set_Ext_Prm from {}: SAP 53 not supported (RS)", req.sa);
-    return short_answer(req, Response::RS);
+    return refuse("SAP 53 not supported", Response::RS);
   }
-  if (s_.state != DpState::Wait_Cfg || s_.cfg.pending || s_.prm.pending) {
-    ++counters_.not_allowed;
-    sig_.log(LogLevel::info, "Set_Ext_Prm from {}: not between Set_Prm and Chk_Cfg (RS)", req.sa);
-    return short_answer(req, Response::RS);
-  }
-  if (req.sa != s_.master_add) {
+  if (s_.master_add != 0xFF && req.sa != s_.master_add) {
     ++counters_.not_allowed;
     sig_.log(LogLevel::info, "Set_Ext_Prm from {}: not the locking master: ignored", req.sa);
     return fdl::sc();
   }
-  if (req.du.empty() || !receive_via_aux(fields::R_Aux_Buf_Sel::Set_Prm, RegId::R_Prm_Buf_Ptr,
-                                         RegId::R_Len_Prm_Data, req.du)) {
+  const char* not_now = nullptr;
+  if (s_.state != DpState::Wait_Cfg || s_.cfg.pending) {
+    not_now = "not between Set_Prm and Chk_Cfg";
+  } else if (s_.prm.pending) {  // in Wait_Cfg only a Set_Ext_Prm's (a Set_Prm leaves it)
+    not_now = "an earlier Set_Ext_Prm waits for its verdict";
+  }
+  if (not_now != nullptr) {
+    ++counters_.not_allowed;
+    return refuse(not_now, Response::RS);
+  }
+  // An empty one is refused as a data unit of the wrong length is (Get_Cfg with data, Rd_Inp:
+  // "no resource", DPC31 p.33), and as an empty Chk_Cfg.
+  if (req.du.empty()) {
     ++counters_.no_resource;
-    return short_answer(req, Response::RR);
+    return refuse("no data", Response::RR);
+  }
+  if (!receive_via_aux(fields::R_Aux_Buf_Sel::Set_Prm, RegId::R_Prm_Buf_Ptr, RegId::R_Len_Prm_Data,
+                       req.du)) {
+    ++counters_.no_resource;
+    return refuse(fmt::format("{} bytes, longer than the Aux buffer", req.du.size()), Response::RR);
   }
   sig_.emit(BlockEvent::Kind::ext_prm);
   ext_prm_accepted();
@@ -75,8 +95,8 @@ Frame DpStateMachine::sap_list_answer(const Frame& req, const SapListAnswer& a) 
   switch (a.kind) {
     case Kind::unknown:
       ++counters_.unknown_sap;
-      sig_.log(LogLevel::info, "DSAP {} from {}: not served (RS)", fdl::sap_number(*req.dsap),
-               req.sa);
+      sig_.log(LogLevel::info, "DSAP {} from {}: not served ({})", fdl::sap_number(*req.dsap),
+               req.sa, refusal_on_line(req, "RS"));
       return short_answer(req, Response::RS);
     case Kind::refused:
       ++counters_.not_allowed;

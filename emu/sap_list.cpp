@@ -3,7 +3,10 @@
 // longer than Max_Length get RR, the response needs RESP and USER, its FC is the header's.
 #include "sap_list.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
+#include <string>
 
 #include "dpc31/chip.hpp"
 #include "dpc31/dpv1.hpp"
@@ -52,6 +55,20 @@ bool matches(std::uint8_t wanted, std::uint8_t got) {
 
 }  // namespace
 
+std::string_view refusal_on_line(const fdl::Frame& req, std::string_view code) {
+  if (req.da == fdl::kBroadcast) return "broadcast: no answer";
+  switch (fdl::request_function(req.fc)) {
+    case fdl::Function::SRD_low:
+    case fdl::Function::SRD_high:
+      return code;
+    case fdl::Function::SDN_low:
+    case fdl::Function::SDN_high:
+      return "SDN: no answer";
+    default:  // a function the DP slave does not serve (the DP_Mode = 0 refusal)
+      return "no answer";
+  }
+}
+
 std::uint32_t SapList::find(std::uint8_t sap) {
   const std::uint8_t ptr = regs_.cell(RegId::R_FDL_SAP_List_Ptr);
   if (ptr == 0) return 0;  // no list (modelled, as R_SSA_Buf_Ptr = 00h switches SAP55 off)
@@ -81,7 +98,8 @@ SapListAnswer SapList::request(const fdl::Frame& req) {
   const std::uint8_t ind0 = regs_.ram_read(entry + e::Ind_Buf_Ptr0);
   if (ind0 == 0) refused = "Ind_Buf_Ptr[0] = 00h: SAP not activated";
   if (refused != nullptr) {
-    sig_.log(LogLevel::info, "SAP {} from {}: {} (RS)", sap, req.sa, refused);
+    sig_.log(LogLevel::info, "SAP {} from {}: {} ({})", sap, req.sa, refused,
+             refusal_on_line(req, "RS"));
     return {Kind::refused, 0, {}};
   }
   const bool srd = fn == fdl::Function::SRD_low || fn == fdl::Function::SRD_high;
@@ -90,8 +108,14 @@ SapListAnswer SapList::request(const fdl::Frame& req) {
     sig_.emit(BlockEvent::Kind::sap_ind, static_cast<std::uint16_t>(entry),
               static_cast<std::uint8_t>(req.du.size()));
     if (!indicate(entry, req)) {
-      sig_.log(LogLevel::info, "SAP {} from {}: no free indication buffer for {} bytes (RR)", sap,
-               req.sa, req.du.size());
+      // The two causes of p.56's RR: no buffer free, or the data longer than the free one.
+      const std::uint32_t buf = free_buffer(entry);
+      const std::string why =
+          buf == 0 ? fmt::format("no free indication buffer for {} bytes", req.du.size())
+                   : fmt::format("{} bytes, more than Max_Length {}", req.du.size(),
+                                 regs_.ram_read(buf + h::Max_Length));
+      sig_.log(LogLevel::info, "SAP {} from {}: {} ({})", sap, req.sa, why,
+               refusal_on_line(req, "RR"));
       return {Kind::no_buffer, 0, {}};
     }
   }
@@ -100,21 +124,25 @@ SapListAnswer SapList::request(const fdl::Frame& req) {
   return answer(entry);
 }
 
-bool SapList::indicate(std::uint32_t entry, const fdl::Frame& req) {
+std::uint32_t SapList::free_buffer(std::uint32_t entry) {
   const std::uint8_t ind0 = regs_.ram_read(entry + e::Ind_Buf_Ptr0);
   const std::uint8_t ind1 = regs_.ram_read(entry + e::Ind_Buf_Ptr1);
   // Ind_Buf_Ptr[1] = 00h or the same buffer (the Profichip driver's MSAC_C1 SAPs): one buffer.
   for (const std::uint8_t p : {ind0, ind1 != ind0 ? ind1 : std::uint8_t{0}}) {
     if (p == 0) continue;
     const std::uint32_t buf = segment(p);
-    if ((regs_.ram_read(buf + h::Control) & (h::USER | h::IND | h::RESP | h::INUSE)) != 0)
-      continue;  // not free
-    // The first free buffer takes it, or nothing does.
-    if (!store(buf, req)) return false;
-    irq_.raise(irq::FDL_Ind);
-    return true;
+    if ((regs_.ram_read(buf + h::Control) & (h::USER | h::IND | h::RESP | h::INUSE)) == 0)
+      return buf;
   }
-  return false;
+  return 0;
+}
+
+bool SapList::indicate(std::uint32_t entry, const fdl::Frame& req) {
+  // The first free buffer takes it, or nothing does.
+  const std::uint32_t buf = free_buffer(entry);
+  if (buf == 0 || !store(buf, req)) return false;
+  irq_.raise(irq::FDL_Ind);
+  return true;
 }
 
 // The telegram into a free buffer: INUSE while the chip fills it, then USER + IND.

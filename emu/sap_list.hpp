@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string_view>
 #include <vector>
 
 #include "dpc31/fdl.hpp"
@@ -30,6 +31,10 @@ struct SapListAnswer {
   std::uint8_t fc = 0;  // response: the FC the user wrote into the header
   std::vector<std::uint8_t> du;
 };
+
+// A refusal as it goes on the line, for the log: `code` (RS, RR) answers an SRD to us; an SDN, a
+// broadcast or another function gets no answer (docs/dpv1.md: "SDN requests are not answered").
+[[nodiscard]] std::string_view refusal_on_line(const fdl::Frame& req, std::string_view code);
 
 class SapList {
  public:
@@ -61,6 +66,8 @@ class SapList {
   std::uint32_t segment(std::uint8_t ptr) const {
     return std::uint32_t{ptr} << regs_.segment_shift();
   }
+  // The entry's first indication buffer with none of USER, IND, RESP, INUSE; 0: none.
+  [[nodiscard]] std::uint32_t free_buffer(std::uint32_t entry);
   bool store(std::uint32_t buf, const fdl::Frame& req);
 
   RegisterFile& regs_;

@@ -38,7 +38,9 @@ struct SlaveConfig {
   bool wd_on = true;
   std::uint8_t wd_fact1 = 10;
   std::uint8_t wd_fact2 = 10;
-  bool wd_base_1ms = false;  // Set_Prm byte 7 bit 2 (SPC3 / DPC31)
+  // Set_Prm byte 7 bit 2 (SPC3 / DPC31), ORed with user_prm byte 0 bit 2: either sets the 1 ms
+  // base (false is also "not given", so user_prm's bit decides then).
+  bool wd_base_1ms = false;
   std::uint8_t group_ident = 0;
   bool sync_req = false;
   bool freeze_req = false;

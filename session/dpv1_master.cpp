@@ -63,10 +63,10 @@ Dpv1Answer Dpv1Master::no_connection() const {
 }
 
 Dpv1Answer Dpv1Master::transfer(std::uint8_t dsap, std::uint8_t ssap, pdu::Bytes req,
-                                std::uint64_t timeout) {
+                                std::uint64_t timeout, std::optional<std::uint64_t> since) {
   Dpv1Answer a;
   Exchange ex = m_.acyclic(dsap, ssap, std::move(req));
-  a.start = ex.request_start;  // the first try's: the time-out counts from it
+  a.start = since.value_or(ex.request_start);  // the first try's: the time-out counts from it
   ex = m_.retry(std::move(ex), rules_.retries);
   for (;;) {
     take(a, ex);
@@ -128,9 +128,8 @@ Dpv1Answer Dpv1Master::initiate(const pdu::Initiate& req) {
   classify(rm, Function::Initiate, immediate.has_value());
   if (rm.outcome != Dpv1Answer::Outcome::positive) return rm;
   // The resource manager's immediate response names the connection's SAP: the Initiate response
-  // is polled for there.
-  Dpv1Answer a = transfer(immediate->sap, rules_.c2_ssap, {}, timeout);
-  a.start = rm.start;
+  // is polled for there, within the same Send_Timeout from the Initiate's first start bit.
+  Dpv1Answer a = transfer(immediate->sap, rules_.c2_ssap, {}, timeout, rm.start);
   a.polls += rm.polls;
   classify(a, Function::Initiate, pdu::Initiate::parse(a.du, true).has_value());
   if (a.outcome == Dpv1Answer::Outcome::positive) {  // else an open connection stays open

@@ -91,8 +91,10 @@ class Dpv1Master {
   Dpv1Rules& rules() { return rules_; }
 
  private:
-  // Sends `req` from `ssap` to `dsap`, polls while SC until `timeout` cycles after its start.
-  Dpv1Answer transfer(std::uint8_t dsap, std::uint8_t ssap, pdu::Bytes req, std::uint64_t timeout);
+  // Sends `req` from `ssap` to `dsap`, polls while SC until `timeout` cycles after `since` (the
+  // cycle the service began; unset: this request's first start bit).
+  Dpv1Answer transfer(std::uint8_t dsap, std::uint8_t ssap, pdu::Bytes req, std::uint64_t timeout,
+                      std::optional<std::uint64_t> since = std::nullopt);
   // The positive response is of `f` and parses as `ok` says, or the negative one of `f`.
   static void classify(Dpv1Answer& a, pdu::Function f, bool positive_ok);
   Dpv1Answer on_connection(pdu::Function f, pdu::Bytes req, bool with_data);

@@ -37,7 +37,9 @@ std::uint32_t Dpv1User::init(BusPort& c, std::uint32_t next, std::uint32_t seg_s
     // MSAC_C1 is the class-1 master's only: a stray request from another station would take
     // the one buffer, and the C1 buffer has no time-out that frees it.
     const std::uint8_t sa = s == c1 || s == alarm ? cfg_.c1_master : en::kAll;
-    const std::uint8_t e[en::kBytes] = {sl.sap, sa,   en::kAll,  dpv1::service::All,
+    // MSAC_C1 and MSAC_C2 are SRD services: an SDN would take the one buffer with a request
+    // whose response nobody polls for, so the chip refuses it (Service_Supported SRD low / high).
+    const std::uint8_t e[en::kBytes] = {sl.sap, sa,   en::kAll,  dpv1::service::SRD_LH,
                                         ind,    0x00, sl.segment};
     c.write_block(sl.entry, e);
     c.write(sl.buffer + hd::Control, 0x00);

@@ -2,8 +2,11 @@
 #include "scenario_dpv1.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
+#include <string>
+#include <vector>
 
 #include "dpc31/dp.hpp"
 #include "scenario_lex.hpp"
@@ -20,8 +23,22 @@ namespace {
 
 // A record's data (the PDU's 4-byte head + 240 = 244).
 constexpr auto kMaxRecord = static_cast<std::size_t>(kRecordLength.max);
-// `sc`: positive without a data unit, the Abort's SC.
-constexpr std::string_view kOutcomes[] = {"refused", "timeout", "no_answer", "no_connection", "sc"};
+// An outcome as a scenario word: its name (docs/dpv1.md) with '_' for ' '.
+std::string outcome_word(Dpv1Answer::Outcome o) {
+  std::string w = outcome_name(o);
+  std::replace(w.begin(), w.end(), ' ', '_');
+  return w;
+}
+
+// Every outcome's word, and `sc`: positive without a data unit, the Abort's SC.
+std::vector<std::string> outcome_words() {
+  std::vector<std::string> w;
+  for (auto o = std::uint8_t{0}; o <= static_cast<std::uint8_t>(Dpv1Answer::Outcome::no_connection);
+       ++o)
+    w.push_back(outcome_word(static_cast<Dpv1Answer::Outcome>(o)));
+  w.emplace_back("sc");
+  return w;
+}
 
 [[noreturn]] void unknown(std::string_view k, std::string_view cmd) {
   fail(fmt::format("unknown option '{}' for {}", shown(k), cmd));
@@ -182,15 +199,24 @@ bool parse_action(std::string_view cmd, std::span<const std::string_view> pos,
 void parse_expect(std::span<const std::string_view> pos, const Scenario& s, ScenarioStep& st) {
   needs_vpc3plus("expect dpv1", s);
   st.expect = ExpectKind::dpv1;
-  const auto form = [] {
-    fail(
+  const std::vector<std::string> words = outcome_words();
+  const std::string listed = fmt::format("{}", fmt::join(words, "|"));
+  const auto form = [&] {
+    fail(fmt::format(
         "expected 'expect dpv1 BYTES', 'expect dpv1 error DECODE,CODE1,CODE2', 'expect dpv1 "
-        "polls N' or 'expect dpv1 refused|timeout|no_answer|no_connection|sc'");
+        "polls N' or 'expect dpv1 {}'",
+        listed));
   };
   if (pos.size() == 2) {
-    if (std::find(std::begin(kOutcomes), std::end(kOutcomes), pos[1]) != std::end(kOutcomes)) {
+    if (std::find(words.begin(), words.end(), pos[1]) != words.end()) {
       st.name = std::string(pos[1]);
       return;
+    }
+    if (pos[1] == "error" || pos[1] == "polls") form();  // without its value
+    // A byte list has hex digits, 0x, commas and '-' only: any other word is a misspelt outcome.
+    if (pos[1].find_first_not_of("0123456789abcdefABCDEFxX,-") != std::string_view::npos) {
+      fail(fmt::format("unknown DPV1 outcome '{}': {}, or the response's hex bytes", shown(pos[1]),
+                       listed));
     }
     st.name = "data";
     st.bytes = bytes(pos[1], "dpv1 response", scenario_lex::kMaxDu);
@@ -257,9 +283,7 @@ Check check(const ScenarioStep& st, const std::optional<Dpv1Answer>& last) {
   } else if (st.name == "sc") {
     c.got = last->outcome == Dpv1Answer::Outcome::positive && last->du.empty() ? "sc" : got;
   } else {
-    std::string o = outcome_name(last->outcome);  // "no answer": the line's word is no_answer
-    std::replace(o.begin(), o.end(), ' ', '_');
-    c.got = o == st.name ? st.name : got;
+    c.got = outcome_word(last->outcome) == st.name ? st.name : got;  // "no answer": no_answer
   }
   return c;
 }

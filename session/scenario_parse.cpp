@@ -102,6 +102,7 @@ class Parser {
     if (!body_) {
       profile_options_checked();
       view_ = s_.user.slave;
+      view_wd_base_10ms_ = wd_base_line_ != 0 && wd_base_10ms_;
     }
     body_ = true;
     body();
@@ -182,7 +183,10 @@ class Parser {
     if (user_wd_value_line_ != 0 && p == Profile::dpc31 && !s_.user.user_watchdog) {
       fail_at(user_wd_value_line_, user_wd_value_needs_user_wd("user user_wd_value="));
     }
-    if (wd_base_line_ != 0) wd_base_checked(s_.user.slave, wd_base_line_);
+    if (wd_base_line_ != 0) {
+      wd_base_checked(s_.user.slave, wd_base_line_);
+      wd_base_agrees(s_.user.slave, wd_base_10ms_, wd_base_line_);
+    }
     // The built-in user side's DPV1 part answers only what the chip hands it: without
     // DPV1_Enable the SAP list stays off (every request RS), without a record there is none.
     const std::vector<std::uint8_t>& prm = s_.user.slave.user_prm;
@@ -226,6 +230,16 @@ class Parser {
             "DPV1 the VPC3+ takes WD_Base from Mode_Reg0, not from Set_Prm");
   }
 
+  // wd_base=10ms and user_prm byte 0 bit 2 (1 ms) both give Set_Prm byte 7 bit 2: the master
+  // would send the 1 ms base, so the contradiction is refused (No silent options).
+  void wd_base_agrees(const SlaveConfig& sl, bool wd_base_10ms, int line) const {
+    if (!wd_base_10ms || sl.user_prm.empty() || (sl.user_prm[0] & dpv1::status1::WD_Base) == 0)
+      return;
+    fail_at(line,
+            "wd_base=10ms contradicts user_prm byte 0 bit 2 (WD_Base: the 1 ms base): both are "
+            "Set_Prm byte 7 bit 2; give one of them");
+  }
+
   // Cycles, or a time with a unit; rounded up like every minimum time (docs/timing.md).
   std::uint64_t duration(std::string_view s) const {
     return scenario_lex::duration(s, clock(), bit_cycles(clock(), s_.master.baud));
@@ -245,6 +259,7 @@ class Parser {
     } else if (k == "wd_base") {
       if (v != "1ms" && v != "10ms") fail(fmt::format("wd_base '{}': 1ms or 10ms", shown(v)));
       sl.wd_base_1ms = v == "1ms";
+      wd_base_10ms_ = !sl.wd_base_1ms;
       wd_base_line_ = step_.line;
     } else if (k == "group") {
       sl.group_ident = static_cast<std::uint8_t>(number(v, kGroupIdent));
@@ -539,8 +554,15 @@ class Parser {
       if (step_.has_bytes && opts_.size() > (step_.from ? 2u : 1u)) {
         fail("set_prm: bytes= is the whole data unit; no other parameter options with it");
       }
-      if (wd_base_line_ == step_.line) wd_base_checked(*step_.slave, step_.line);
-      if (!step_.from && !step_.has_bytes) view_ = step_.slave;
+      // wd_base= on this line, else the one the master's view of the slave carries.
+      const bool here = wd_base_line_ == step_.line;
+      const bool wd_base_10ms = here ? wd_base_10ms_ : view_wd_base_10ms_;
+      if (here) wd_base_checked(*step_.slave, step_.line);
+      wd_base_agrees(*step_.slave, wd_base_10ms, step_.line);
+      if (!step_.from && !step_.has_bytes) {
+        view_ = step_.slave;
+        view_wd_base_10ms_ = wd_base_10ms;
+      }
     } else if (cmd_ == "chk_cfg") {
       step_.kind = StepKind::chk_cfg;
       positional(0, 0, "options only");
@@ -806,6 +828,8 @@ class Parser {
   int record_line_ = 0;  // the first `record`
   int work_line_ = 0;    // `dpv1 work=`
   mutable int wd_base_line_ = 0;
+  mutable bool wd_base_10ms_ = false;  // that line's wd_base= was 10ms
+  bool view_wd_base_10ms_ = false;     // view_ has wd_base=10ms given (by the slave or a set_prm)
   // The lines of the stations' addresses and of the user's inputs (0: the default).
   int master_address_line_ = 0;
   int slave_address_line_ = 0;

@@ -369,6 +369,26 @@ constexpr const char* kHead =
     "profile vpc3plus\nbaud 12000000\nslave address=5 user_prm=C0,00,00\n"
     "record slot=0 index=1 data=11,22,33,44\n";
 
+// The Initiate's response time-out (audit s28 aud1, finding 1; docs/dpv1.md, "Outcomes": the
+// connection's Send_Timeout, from the request's first start bit, checked at each SC). A SAP list
+// laid out by hand (VPC3+C p.55, 8-byte segments): SAP 49 with the resource manager's response
+// 56 28 00 01 ready (USER + RESP), SAP 40 that never answers. At 12 Mbaud (T = 4 clocks,
+// docs/timing.md) from t0: the Initiate (16 bytes, 27 characters = 297 T), TSDR 11 T, the
+// response (15 characters = 165 T), 33 T idle: the first poll on SAP 40 at t0 + 506 T = 2024;
+// its SC ends 121 + 11 + 11 T later, poll k's at t0 + 2596 + 704k. Send_Timeout 1 = 480 000
+// clocks: the first SC at or past it is k = 679 (t0 + 480 612), after 680 polls. Before, the
+// time-out ran again from the first poll on SAP 40: 683 polls, t0 + 482 724.
+TEST(Dpv1Scenario, TheInitiatesTimeOutRunsFromItsFirstStartBit) {
+  const std::string text =
+      "profile vpc3plus\nbaud 12000000\nslave address=5 user_prm=C0,00,00\nstartup\n"
+      "write 0x700 bytes=31,7F,7F,00,E2,00,E8,28,7F,7F,00,F0,00,F8,FF\n"
+      "write 0x710 bytes=00,20,00,00\nwrite 0x740 bytes=A0,20,04,08,56,28,00,01\n"
+      "write 0x780 bytes=00,20,00,00\nwrite 0x7C0 bytes=00,20,00,00\n"
+      "write R_FDL_SAP_List_Ptr 0xE0\n"
+      "c2_initiate send_timeout=1\nexpect dpv1 timeout after 480612\nexpect dpv1 polls 680\n";
+  EXPECT_EQ(failed_expects(text), std::vector<std::string>{});
+}
+
 // The resource manager's one buffer (audit a11, finding 1): master 9's Initiate (Send_Timeout 1 =
 // 10 ms) is taken and answered, but master 9 never polls for the answer. While its response
 // waits there, the chip answers every Initiate RR ("no free buffer", VPC3+C p.56); the user side
@@ -421,6 +441,23 @@ TEST(Dpv1Scenario, MsacC1IsServedInDataExchangeOnly) {
       "expect answer rs\n"
       "startup\ndpv1_read slot=0 index=1 length=1\nexpect dpv1 5E,00,01,01,11\n";
   EXPECT_EQ(failed_expects(text), std::vector<std::string>{});
+}
+
+// An SDN to SAP 51 from the class-1 master (audit s28 aud1, finding 2): MSAC_C1 and MSAC_C2 are
+// SRD services, so the built-in user side lists its SAPs with Service_Supported 0Bh (SRD low and
+// high; docs/dpv1.md "Service_Supported codes"), and the chip refuses the SDN at the check (RS,
+// which an SDN does not answer, VPC3+C p.55): nothing stored, no FDL_Ind, and the class-1
+// master's Reads are served. Before, the SDN was stored, the user side put a Read response into
+// the one C1 buffer that no SDN polls for, and every MSAC_C1 request got RR until a new Set_Prm.
+TEST(Dpv1Scenario, AnSdnToTheC1SapDoesNotBlockMsacC1) {
+  // The SDN (FC 46h: SDN high) gets no answer and raises nothing; both Reads are answered.
+  const std::string sdn = "send from=2 fc=0x46 dsap=51 ssap=51 du=5E,00,01,04\n";
+  EXPECT_EQ(
+      failed_expects(std::string(kHead) + "startup\n" + sdn +
+                     "expect answer none\nexpect irq count 0\n"
+                     "dpv1_read slot=0 index=1 length=4\nexpect dpv1 5E,00,01,04,11,22,33,44\n"
+                     "dpv1_read slot=0 index=1 length=2\nexpect dpv1 5E,00,01,02,11,22\n"),
+      std::vector<std::string>{});
 }
 
 // Alarm_Ack on SAP 50 or 51 (manual-quotes.md, "DPV1"; finding 7): `alarm_ack sap=51` sends it
@@ -516,6 +553,24 @@ TEST(Dpv1Scenario, Do4ResponseTimeOut) {
   EXPECT_EQ(failed_expects(text), std::vector<std::string>{});
 }
 
+// Every outcome docs/dpv1.md lists is a word of `expect dpv1` (audit s28 aud1, finding 7):
+// positive and negative from the built-in user side; malformed from a SAP list laid out by hand
+// (VPC3+C p.55) whose SAP 51 has the response 01 02 ready (USER + RESP): the Read's request is
+// stored in buffer 0710h and answered with it, neither a Read response nor a negative one.
+// Before, each of these words was "bad byte ... in dpv1 response".
+TEST(Dpv1Scenario, EveryOutcomeTheDocsListCanBeExpected) {
+  EXPECT_EQ(failed_expects(std::string(kHead) +
+                           "startup\ndpv1_read slot=0 index=1 length=4\nexpect dpv1 positive\n"
+                           "dpv1_read slot=0 index=2 length=4\nexpect dpv1 negative\n"),
+            std::vector<std::string>{});
+  EXPECT_EQ(failed_expects("profile vpc3plus\nbaud 12000000\nslave address=5 user_prm=C0,00,00\n"
+                           "startup\nwrite 0x700 bytes=33,7F,7F,00,E2,00,E8,FF\n"
+                           "write 0x710 bytes=00,20,00,00\nwrite 0x740 bytes=A0,20,02,08,01,02\n"
+                           "write R_FDL_SAP_List_Ptr 0xE0\n"
+                           "dpv1_read slot=0 index=1 length=4\nexpect dpv1 malformed\n"),
+            std::vector<std::string>{});
+}
+
 // Bad DPV1 lines are parse errors with their line (docs/scenario-format.md, "DPV1"): nothing
 // runs.
 TEST(Dpv1Scenario, ParseErrorsNameTheLine) {
@@ -541,6 +596,18 @@ TEST(Dpv1Scenario, ParseErrorsNameTheLine) {
        "master's 'dpv1 c1_timeout=' and 'c2_ssap=' are allowed)"},
       {"profile vpc3plus\nstartup\ndpv1_read slot=0 index=1\n",
        "t.scn:3: dpv1_read needs slot=N index=N length=N"},
+      // A misspelt outcome word gets the list of words (audit s28 aud1, finding 7), a bad byte
+      // in a byte list the byte's error.
+      {"profile vpc3plus\nstartup\nexpect dpv1 no-answer\n",
+       "t.scn:3: unknown DPV1 outcome 'no-answer': "
+       "positive|negative|refused|no_answer|timeout|malformed|no_connection|sc, or the response's "
+       "hex bytes"},
+      {"profile vpc3plus\nstartup\nexpect dpv1 5E,0x100\n",
+       "t.scn:3: bad byte '0x100' in dpv1 response (hex bytes separated by commas)"},
+      {"profile vpc3plus\nstartup\nexpect dpv1 polls\n",
+       "t.scn:3: expected 'expect dpv1 BYTES', 'expect dpv1 error DECODE,CODE1,CODE2', 'expect "
+       "dpv1 polls N' or 'expect dpv1 "
+       "positive|negative|refused|no_answer|timeout|malformed|no_connection|sc'"},
       {"profile vpc3plus\nstartup\nexpect dpv1 error 80,B0\n",
        "t.scn:3: expect dpv1 error: three bytes, Error_Decode,Error_Code_1,Error_Code_2"},
       {"profile vpc3plus\ncorrupt parity\ndpv1_read slot=0 index=1 length=4\n",

@@ -8,6 +8,9 @@
 // the test says "modelled" and names the row of docs/decisions.md ("DPV1").
 #include "dpc31/dpv1.hpp"
 
+#include <algorithm>
+#include <string>
+
 #include "user_side.hpp"
 
 using namespace dpc31;
@@ -45,12 +48,17 @@ ResponderConfig with_prm(Bytes user_prm) {
 
 struct Dpv1 : Bare {
   std::vector<std::uint64_t> irq_on;  // X/INT rising edges
+  std::vector<std::string> log;       // the chip's log lines
 
   explicit Dpv1(Bytes user_prm = {0x80, 0x00, 0x00}, Profile p = Profile::vpc3plus)
       : Bare(p, 12'000'000, with_prm(std::move(user_prm))) {
     chip.on_irq_change([this](std::uint64_t c, bool active) {
       if (active) irq_on.push_back(c);
     });
+    chip.set_log_sink([this](const LogRecord& r) { log.push_back(r.text); });
+  }
+  [[nodiscard]] bool logged(const std::string& text) const {
+    return std::find(log.begin(), log.end(), text) != log.end();
   }
   // "The SAP-List is set up by the user while Offline" (p.54): Go_Offline, the list at 17h, the
   // buffer headers (Max_Length), FDL_Ind and Poll_End_Ind unmasked, Start.
@@ -75,6 +83,13 @@ struct Dpv1 : Bare {
   void online(const std::vector<Entry>& entries, std::uint8_t max_len = 240) {
     set_up(entries, max_len);
     start_by_hand(*this);
+  }
+  // Mode_Reg0.Set_Ext_Prm_Supported (with DP_Mode) set while Offline, then Start.
+  void set_ext_prm_supported() {
+    testutil::user_go_offline(chip);
+    chip.write(addr(chip, RegId::Mode_Reg0) + 1, 0x09);
+    testutil::user_start(chip);
+    found_again();
   }
   // After a Start the chip searches the baud rate again: FDL_Status until it answers.
   void found_again() {
@@ -207,10 +222,7 @@ TEST(Dpv1SetPrm, WdBaseFromDpv1Status1) {
 // User_Prm_Data_Okay read answers it (00h, New_Ext_Prm_Data cleared), the state stays Wait_Cfg.
 TEST(Dpv1SetExtPrm, TakenInWaitCfgWithSetExtPrmSupported) {
   Dpv1 b;
-  testutil::user_go_offline(b.chip);
-  b.chip.write(addr(b.chip, RegId::Mode_Reg0) + 1, 0x09);  // DP_Mode, Set_Ext_Prm_Supported
-  testutil::user_start(b.chip);
-  b.found_again();
+  b.set_ext_prm_supported();
   ASSERT_TRUE(b.master.fdl_status().answer);
   EXPECT_EQ(wire(b.master.set_ext_prm({0x07, 0x81}).answer), short_fc(kFcRS));  // Wait_Prm
   b.master.set_prm();
@@ -235,6 +247,41 @@ TEST(Dpv1SetExtPrm, WithoutSetExtPrmSupportedRs) {
   ASSERT_EQ(b.chip.read(0x0E), 0x00);
   EXPECT_EQ(wire(b.master.set_ext_prm({0x07, 0x81}).answer), short_fc(kFcRS));
   EXPECT_EQ(irr(b.chip) & irq::New_Ext_Prm_Data, 0);
+}
+
+// Set_Ext_Prm from a master that does not lock the slave is ignored (SC) in every state, as its
+// Set_Prm and Chk_Cfg are ("If the Check_Config message does not come from 'Master_Add' ...
+// DPS ignores this message", DPC31 p.28): before the state is looked at (modelled,
+// docs/decisions.md "The twenty-eighth session"). The locking master's is refused with RS outside
+// "Wait_Cfg after a Set_Prm and before Chk_Cfg" (p.54) and while its earlier one waits for its
+// verdict, each with its reason in the log; an empty one gets RR, as an empty Chk_Cfg (modelled),
+// and a log line (audit s28 aud1, findings 4 and 5: station 7 got RS, the pending verdict was
+// logged as "not between Set_Prm and Chk_Cfg", the empty one was not logged).
+TEST(Dpv1SetExtPrm, AnotherMasterIsIgnoredAndEveryRefusalLogsItsReason) {
+  Dpv1 b;
+  b.set_ext_prm_supported();
+  ASSERT_TRUE(b.master.fdl_status().answer);
+  b.master.set_prm();
+  ASSERT_EQ(b.chip.read(0x0E), 0x00);  // User_Prm_Data_Okay: Wait_Cfg
+  const auto ext = [&](std::uint8_t from, Bytes du) {
+    return wire(b.srd(sap::Set_Ext_Prm, std::move(du), 62,
+                      fdl::make_request_fc(fdl::Function::SRD_high, false, false), from)
+                    .answer);
+  };
+  EXPECT_EQ(ext(kMaster, {}), short_fc(kFcRR));
+  EXPECT_TRUE(b.logged("Set_Ext_Prm from 2: no data (RR)"));
+  EXPECT_EQ(ext(kMaster, {0x07, 0x81}), sc());  // its verdict pending
+  EXPECT_EQ(ext(kMaster, {0x07, 0x82}), short_fc(kFcRS));
+  EXPECT_TRUE(b.logged("Set_Ext_Prm from 2: an earlier Set_Ext_Prm waits for its verdict (RS)"));
+  EXPECT_EQ(ext(7, {0x04, 0x05}), sc());
+  EXPECT_TRUE(b.logged("Set_Ext_Prm from 7: not the locking master: ignored"));
+  EXPECT_EQ(b.chip.read(0x0E), 0x00);  // the verdict
+  b.master.chk_cfg();
+  EXPECT_EQ(ext(9, {0x04, 0x05}), sc());  // a Chk_Cfg came: past Wait_Cfg's window
+  EXPECT_TRUE(b.logged("Set_Ext_Prm from 9: not the locking master: ignored"));
+  EXPECT_EQ(ext(kMaster, {0x07, 0x81}), short_fc(kFcRS));
+  EXPECT_TRUE(b.logged("Set_Ext_Prm from 2: not between Set_Prm and Chk_Cfg (RS)"));
+  EXPECT_EQ(read_ram(b.chip, buffer_base(b.chip, RegId::R_Prm_Buf_Ptr), 2), (Bytes{0x07, 0x81}));
 }
 
 // --- 7.2 the SAP list ---
@@ -330,6 +377,7 @@ TEST(Dpv1Processing, NoFreeIndicationBufferRr) {
   EXPECT_EQ(wire(b.srd(kC1, {0x5E, 0x00, 0x02, 0x04}).answer), sc());
   EXPECT_EQ(read_ram(b.chip, kInd1, 6), (Bytes{hd::USER | hd::IND, 240, 4, 0x4D, 0x5E, 0x00}));
   EXPECT_EQ(wire(b.srd(kC1, kRead).answer), short_fc(kFcRR));
+  EXPECT_TRUE(b.logged("SAP 51 from 2: no free indication buffer for 4 bytes (RR)"));
 }
 
 // A buffer the chip holds (INUSE) is not free either: RR.
@@ -407,13 +455,32 @@ TEST(Dpv1Processing, ResponseLongerThanMaxLengthIsCut) {
   EXPECT_EQ(b.srd(kC1, {}).answer->du, (Bytes{0x5E, 0x00, 0x01, 0x04}));
 }
 
-// Modelled: request data longer than the buffer's Max_Length get RR and no indication.
+// Modelled: request data longer than the buffer's Max_Length get RR and no indication. The log
+// names that cause, not p.56's other one (audit s28 aud1, finding 6: it said "no free indication
+// buffer" with both buffers free).
 TEST(Dpv1Processing, RequestLongerThanMaxLengthRr) {
   Dpv1 b;
   b.online({Entry{}}, 3);
   b.ack_all();
   EXPECT_EQ(wire(b.srd(kC1, kRead).answer), short_fc(kFcRR));
   EXPECT_EQ(irr(b.chip), 0);
+  EXPECT_TRUE(b.logged("SAP 51 from 2: 4 bytes, more than Max_Length 3 (RR)"));
+}
+
+// docs/dpv1.md: "SDN requests are not answered", nor is a broadcast (the SAP list serves none):
+// their refusals are logged as what the line carries, no answer, not as an RS or RR never sent
+// (audit s28 aud1, finding 8). Both buffers taken: an SDN finds none free; a broadcast SDN.
+TEST(Dpv1Processing, RefusedSdnAndBroadcastAreLoggedWithoutAnAnswer) {
+  Dpv1 b;
+  b.online({Entry{}});
+  b.srd(kC1, kRead);
+  b.srd(kC1, kRead);
+  const std::uint8_t sdn = fdl::make_request_fc(fdl::Function::SDN_high, false, false);
+  EXPECT_FALSE(b.srd(kC1, kRead, kC1, sdn).answer);
+  EXPECT_TRUE(b.logged("SAP 51 from 2: no free indication buffer for 4 bytes (SDN: no answer)"));
+  EXPECT_FALSE(
+      b.master.transact(fdl::make_frame(fdl::kBroadcast, kMaster, sdn, kRead, kC1, kC1)).answer);
+  EXPECT_TRUE(b.logged("DSAP 51 from 2: not served (broadcast: no answer)"));
 }
 
 // Modelled: Ind_Buf_Ptr[0] = 00h is a SAP not activated (the Profichip driver switches its SAP 49
