@@ -1064,6 +1064,14 @@ ScenarioRun run_scenario_text(const std::string& text) {
   return r;
 }
 
+// The same for a run whose every check passes: exit 0, no failure.
+ScenarioRun run_passing(const std::string& text) {
+  ScenarioRun r = run_scenario_text(text);
+  EXPECT_EQ(r.errors, std::vector<std::string>{});
+  EXPECT_EQ(r.code, 0);
+  return r;
+}
+
 // Two masters without a TTR still pass a token, so a lost one is found (docs/segment.md, "Bus
 // checks": TTO = TSL x (6 + 2 x 2) = 1000 bit times needs no TTR): the token to nobody (DC 09 02,
 // 3 characters: its end 33 T = 1056 clocks after its start at 1.5 Mbaud) leaves the line idle,
@@ -1132,12 +1140,10 @@ TEST(SegmentScenario, AShortTsynNamesItsSender) {
 // after its first start bit; master 2's Data_Exchange (4 output bytes: SD2 with 13 characters)
 // starts TSYN = 132 clocks later, and station 5 answers it (13 characters) 11 T after its end.
 TEST(SegmentScenario, TheMasterKeepsTsynAfterAnotherStationsTelegram) {
-  const ScenarioRun r = run_scenario_text(
+  const ScenarioRun r = run_passing(
       "segment baud=12000000\nstation 5 profile=spc3\nmaster 2 slaves=5\nsender r\nstartup\n"
       "cycle 1\nsend from=r after=200bits DC,02,02\ncycle 1\nexpect bus_violation short_tsyn 0\n"
       "expect state 5 Data_Exchange\n");
-  EXPECT_EQ(r.errors, std::vector<std::string>{});
-  EXPECT_EQ(r.code, 0);
   const std::uint64_t token = r.cycle_of("] r: DC 02 02");
   const std::uint64_t request = r.cycle_of("] master 2: 68 07 07 68 05 02");
   EXPECT_EQ(request, token + 33 * 4 + 33 * 4);
@@ -1147,11 +1153,9 @@ TEST(SegmentScenario, TheMasterKeepsTsynAfterAnotherStationsTelegram) {
 // The same after another master's token: master 3, given the token by master 2, passes it back
 // TSYN after master 2's token ends (each DC xx yy: 33 T), not at once (the audit's f1b).
 TEST(SegmentScenario, AMasterPassesTheTokenTsynAfterTheTokenItGot) {
-  const ScenarioRun r = run_scenario_text(
+  const ScenarioRun r = run_passing(
       "segment baud=12000000\nstation 5 profile=spc3\nmaster 2 slaves=5\nmaster 3 slaves=5\n"
       "pass_token from=2 to=3\npass_token from=3 to=2\nexpect bus_violation short_tsyn 0\n");
-  EXPECT_EQ(r.errors, std::vector<std::string>{});
-  EXPECT_EQ(r.code, 0);
   EXPECT_EQ(r.cycle_of("] master 3: DC 02 03"), r.cycle_of("] master 2: DC 03 02") + 66 * 4);
 }
 
@@ -1162,11 +1166,9 @@ TEST(SegmentScenario, AMasterPassesTheTokenTsynAfterTheTokenItGot) {
 // answer `00 0C 00 02 0C 31` is 17 characters; the master stops at its last stop sample, end - T
 // + T/2, where the walk says it.
 TEST(SegmentScenario, AMasterLeavesASlaveLockedByAnotherMasterAlone) {
-  const ScenarioRun r = run_scenario_text(
+  const ScenarioRun r = run_passing(
       "segment\nstation 5 profile=spc3\nstation 6 profile=vpc3plus\nmaster 2 slaves=5,6\n"
       "master 3 slaves=5\nstartup\nexpect state 5 Data_Exchange\n");
-  EXPECT_EQ(r.errors, std::vector<std::string>{});
-  EXPECT_EQ(r.code, 0);
   const std::uint64_t diag =
       r.cycle_of("] station 5: 68 0B 0B 68 83 85 08 3E 3C 00 0C 00 02 0C 31");
   EXPECT_EQ(r.cycle_of("master 3: station 5 is locked by master 2 (its Slave_Diag's Master_Add): "
@@ -1189,11 +1191,9 @@ TEST(SegmentScenario, AMasterLeavesASlaveLockedByAnotherMasterAlone) {
 // note came 40 lines later). The chips' state lines are in cycle order (docs/segment.md, "The
 // log"; finding 9: the two twins' Data_Exchange lines came in station order).
 TEST(SegmentScenario, EachCollisionIsALineAndStateLinesAreInCycleOrder) {
-  const ScenarioRun r = run_scenario_text(
+  const ScenarioRun r = run_passing(
       "segment\nstation 5 name=a profile=spc3\nstation 5 name=b profile=vpc3plus\n"
       "station 6 profile=dpc31\nstartup\ncycle 3\nexpect collisions 8\n");
-  EXPECT_EQ(r.errors, std::vector<std::string>{});
-  EXPECT_EQ(r.code, 0);
   std::vector<std::uint64_t> states;
   std::size_t collisions = 0;
   for (const std::string& l : r.walk) {
