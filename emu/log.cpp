@@ -70,6 +70,14 @@ std::string LogLimiter::repeated() const {
                      last_repeat_);
 }
 
+std::vector<std::string> LogLimiter::end_repeats() {
+  std::vector<std::string> out;
+  if (repeats_ > repeats_reported_) pass(out, repeated());
+  repeats_ = repeats_reported_ = 0;
+  last_.clear();
+  return out;
+}
+
 std::vector<std::string> LogLimiter::flush() {
   std::vector<std::string> out;
   if (repeats_ > repeats_reported_) out.push_back(repeated());

@@ -29,7 +29,9 @@ bool parse_bus_violation(std::string_view s, BusViolation& out) {
 }
 
 BusCheck::BusCheck(BusTiming timing, LogSink sink)
-    : timing_(std::move(timing)), sink_(std::move(sink)) {}
+    : timing_(std::move(timing)), sink_(std::move(sink)) {
+  arrived_.fill(kNever);
+}
 
 void BusCheck::watch(Segment& seg) {
   seg.on_telegram = [this, &seg](const LineTelegram& t) { telegram(t, seg.name(t.from)); };
@@ -46,6 +48,7 @@ std::uint64_t BusCheck::total() const {
 
 void BusCheck::violation(BusViolation v, std::uint64_t cycle, const std::string& text) {
   ++counts_[static_cast<std::size_t>(v)];
+  last_violation_ = cycle;
   for (std::string& line :
        limiter_.add(cycle, fmt::format("bus: {}: {}", bus_violation_name(v), text))) {
     if (sink_) sink_(LogRecord{cycle, LogLevel::warn, std::move(line)});
@@ -55,6 +58,12 @@ void BusCheck::violation(BusViolation v, std::uint64_t cycle, const std::string&
 void BusCheck::flush() {
   for (std::string& line : limiter_.flush()) {
     if (sink_) sink_(LogRecord{last_end_.value_or(0), LogLevel::warn, std::move(line)});
+  }
+}
+
+void BusCheck::end_repeats() {
+  for (std::string& line : limiter_.end_repeats()) {
+    if (sink_) sink_(LogRecord{last_violation_, LogLevel::warn, std::move(line)});
   }
 }
 
@@ -124,6 +133,19 @@ void BusCheck::answer(const LineTelegram& t, const fdl::Frame& f, bool ok,
   }
 }
 
+// TTH = TTR - TRR, TRR the time since the same master's arrival before (docs/segment.md, "The
+// token"); a late token (TRR >= TTR) allows the visit's first cycle only.
+void BusCheck::arrive(std::uint8_t holder, std::uint64_t at, bool rotated) {
+  std::uint64_t& before = arrived_[holder];
+  trr_ = rotated && before != kNever ? at - before : 0;
+  const std::uint64_t ttr = bits(timing_.ttr_bits);
+  hold_ = trr_ < ttr ? ttr - trr_ : 0;
+  before = at;
+  holder_ = holder;
+  token_at_ = at;
+  held_cycle_started_ = false;
+}
+
 void BusCheck::telegram(const LineTelegram& t, const std::string& sender) {
   idle_until(t.start);
   token_lost_reported_ = false;
@@ -156,22 +178,20 @@ void BusCheck::telegram(const LineTelegram& t, const std::string& sender) {
             BusViolation::duplicate_token, t.start,
             fmt::format("station {} sent while station {} holds the token", d.frame.sa, *holder_));
       } else if (timing_.ttr_bits != 0 && !is_token(d.frame) && held_cycle_started_ &&
-                 t.start > token_at_ + bits(timing_.ttr_bits)) {
+                 t.start >= token_at_ + hold_) {
         violation(
             BusViolation::token_hold, t.start,
             fmt::format("station {} started a message cycle {} bit times after it got the "
-                        "token (TTR {})",
-                        d.frame.sa, (t.start - token_at_) / timing_.bit_cycles, timing_.ttr_bits));
+                        "token (TTH {} = TTR {} - TRR {})",
+                        d.frame.sa, (t.start - token_at_) / timing_.bit_cycles,
+                        hold_ / timing_.bit_cycles, timing_.ttr_bits, trr_ / timing_.bit_cycles));
       }
       if (is_token(d.frame)) {
-        holder_ = d.frame.da;
-        token_at_ = t.end;
-        held_cycle_started_ = false;
+        arrive(d.frame.da, t.end, true);
       } else {
-        if (!holder_) {  // a claimed token: held from the TSYN its first request waited
-          holder_ = d.frame.sa;
-          token_at_ = t.start - std::min(t.start, bits(timing_.tsyn_bits));
-        }
+        // A claimed token: held from the TSYN its first request waited, with no rotation before.
+        if (!holder_)
+          arrive(d.frame.sa, t.start - std::min(t.start, bits(timing_.tsyn_bits)), false);
         held_cycle_started_ = true;
       }
     }

@@ -59,6 +59,9 @@ class BusCheck {
   void idle_until(std::uint64_t now);
   // Hands the sink what the limiter still owes.
   void flush();
+  // A line of another source goes into the same log now (the limiter's end_repeats): the note of
+  // the violations repeated before it is handed to the sink first, at the last one's cycle.
+  void end_repeats();
 
   [[nodiscard]] std::uint64_t count(BusViolation v) const {
     return counts_[static_cast<std::size_t>(v)];
@@ -77,15 +80,23 @@ class BusCheck {
   LogLimiter limiter_;
   std::array<std::uint64_t, kBusViolationKinds> counts_{};
   std::optional<std::uint64_t> last_end_;  // end of the last telegram on the line
+  std::uint64_t last_violation_ = 0;       // the cycle of the last violation
   bool token_lost_reported_ = false;
   struct Pending {
     fdl::Frame request;
     std::uint64_t end;
   };
-  std::optional<Pending> pending_;      // a request waiting for its answer
-  std::optional<std::uint8_t> holder_;  // who holds the token
-  std::uint64_t token_at_ = 0;          // when the holder got it
-  bool held_cycle_started_ = false;     // the holder started a message cycle since then
+  std::optional<Pending> pending_;  // a request waiting for its answer
+  // The token to `holder` at `at` (`rotated`: by an SD4; else claimed, no rotation before).
+  void arrive(std::uint8_t holder, std::uint64_t at, bool rotated);
+
+  static constexpr std::uint64_t kNever = UINT64_MAX;
+  std::optional<std::uint8_t> holder_;        // who holds the token
+  std::uint64_t token_at_ = 0;                // when the holder got it
+  std::uint64_t trr_ = 0;                     // its TRR then, in cycles
+  std::uint64_t hold_ = 0;                    // its TTH = TTR - TRR (0: a late token), in cycles
+  bool held_cycle_started_ = false;           // the holder started a message cycle since then
+  std::array<std::uint64_t, 256> arrived_{};  // each master's last arrival (kNever: none)
 };
 
 }  // namespace dpc31

@@ -251,8 +251,7 @@ TokenVisit DpMaster::use_token(std::uint8_t next,
   v.hold = trr_ < ttr ? ttr - trr_ : 0;
   // A message cycle starts with its request's first start bit: after the idle time.
   const auto time_left = [&] {
-    const std::uint64_t start = std::max(now(), bus_free_ + std::uint64_t{cfg_.idle_bits} * t_);
-    return cfg_.ttr_bits == 0 || start < v.arrived + v.hold;
+    return cfg_.ttr_bits == 0 || send_time(now(), cfg_.idle_bits) < v.arrived + v.hold;
   };
   const std::size_t keep = current_;
   const bool startup = starting_up();
@@ -338,6 +337,12 @@ std::uint64_t DpMaster::look() {
   chars_.clear();
   const std::uint64_t at = now();
   rx_.advance(at, chars_);
+  // Every station counts its idle time from the last character on the line, whoever sent it.
+  if (!rx_.due().empty()) {
+    line_end_ = rx_.due_start() + rx_.due().size() * std::uint64_t{kUartCharBits} * t_;
+  } else if (!chars_.empty()) {
+    line_end_ = chars_.back().end;
+  }
   return at;
 }
 
@@ -376,8 +381,12 @@ Exchange DpMaster::retry(Exchange ex, std::uint32_t retries) {
   return ex;
 }
 
+std::uint64_t DpMaster::send_time(std::uint64_t at, std::uint32_t idle_bits) const {
+  return std::max(at, std::max(bus_free_, line_end_) + std::uint64_t{idle_bits} * t_);
+}
+
 void DpMaster::line_noise(std::span<const std::uint8_t> bytes, std::uint32_t idle_bits) {
-  const std::uint64_t start = std::max(now(), bus_free_ + std::uint64_t{idle_bits} * t_);
+  const std::uint64_t start = send_time(look(), idle_bits);
   if (on_send) on_send(start, bytes, {});
   bus_free_ = put_on_line(bytes, start, {});
   ++counters_.noise;
@@ -385,7 +394,7 @@ void DpMaster::line_noise(std::span<const std::uint8_t> bytes, std::uint32_t idl
 }
 
 void DpMaster::glitch(std::uint32_t low_cycles) {
-  const std::uint64_t start = std::max(now(), bus_free_ + std::uint64_t{cfg_.idle_bits} * t_);
+  const std::uint64_t start = send_time(look(), cfg_.idle_bits);
   if (seg_) {
     seg_->pulse(station_, start, low_cycles);
   } else {
@@ -425,6 +434,8 @@ void DpMaster::make_request(fdl::Frame& f, std::optional<std::uint8_t> dsap, boo
 
 namespace {
 
+constexpr std::uint8_t kNoMaster = 0xFF;  // Master_Add of a slave no master parameterised
+
 // SDN and the token (SD4) want no answer.
 bool sdn(const fdl::Frame& f) {
   const fdl::Function fn = fdl::request_function(f.fc);
@@ -459,7 +470,7 @@ void DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bool n
                     Exchange& ex, const fdl::Frame* req) {
   place_fault(fault, bytes.size());
   // What the line carried before (another master's traffic, for instance) is no answer to us.
-  ex.request_start = std::max(look(), bus_free_ + std::uint64_t{cfg_.idle_bits} * t_);
+  ex.request_start = send_time(look(), cfg_.idle_bits);
   if (on_send) on_send(ex.request_start, bytes, fault);
   ex.request_end = put_on_line(bytes, ex.request_start, fault);
   // On a segment the wait for an answer runs the line itself: a stop at the request's end would
@@ -766,12 +777,24 @@ bool DpMaster::startup_request(Startup& s) {
     ++s.n;
     return true;
   }
+  using D = pdu::SlaveDiag;
+  const std::optional<D> d = D::parse(diag.answer->du);
+  if (d && d->master_add != kNoMaster && d->master_add != cfg_.address) {
+    // Master_Lock: another master parameterised the slave and holds it (chip-facts.md, Slave_Diag
+    // byte 3); it is not ours to parameterise (docs/decisions.md, the twenty-eighth session).
+    note(
+        fmt::format("[cycle {:>10}] Slave_Diag: locked by master {} (Master_Add), not "
+                    "parameterised: its start-up ends here",
+                    now(), d->master_add));
+    if (on_locked) on_locked(slave_.address, d->master_add);
+    s.phase = P::failed;
+    return true;
+  }
   if (diag_ready(*diag.answer)) {
     note(fmt::format("[cycle {:>10}] Slave_Diag: ready for Data_Exchange", now()));
     s.phase = P::ready;
     return true;
   }
-  using D = pdu::SlaveDiag;
   const std::vector<std::uint8_t>& du = diag.answer->du;
   const bool fault = !du.empty() && (du[0] & (D::St1_Cfg_Fault | D::St1_Prm_Fault)) != 0;
   if ((du.size() >= 2 && (du[1] & D::St2_Prm_Req) != 0) || fault) {

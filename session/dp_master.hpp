@@ -275,7 +275,8 @@ class DpMaster {
   Exchange service(std::uint8_t dsap, std::vector<std::uint8_t> du, bool srd = true);
 
   // The standard start-up: FDL_Status until answered, Slave_Diag, Set_Prm, Chk_Cfg, Slave_Diag
-  // until the slave is ready. Returns false if it did not reach Data_Exchange within `tries`.
+  // until the slave is ready. Returns false if it did not reach Data_Exchange within `tries`, or
+  // at once when a Slave_Diag names another master in Master_Add (on_locked).
   // A slave still checking our accepted Set_Prm (Prm_Req, Master_Add ours, no fault) is polled
   // every 1 ms for up to kPrmCheckMs before it is parameterised again.
   bool startup(int tries = kStartupTries);
@@ -314,6 +315,9 @@ class DpMaster {
   std::function<void(std::uint64_t cycle)> scheduler;
   // Narration of what happened (`dpc31 run` prints it).
   std::function<void(const std::string&)> narrate;
+  // A start-up found `slave` locked by master `by` (its Slave_Diag's Master_Add): the master
+  // leaves it alone, as a DP master does, and that slave's start-up ends without Data_Exchange.
+  std::function<void(std::uint8_t slave, std::uint8_t by)> on_locked;
   // Told of every telegram just before it goes on RxD (requests, line noise): its first start
   // bit, its bytes and the fault it carries. A trace recorder writes the batch from it.
   std::function<void(std::uint64_t start, std::span<const std::uint8_t> bytes, UartFault fault)>
@@ -345,6 +349,9 @@ class DpMaster {
   [[nodiscard]] std::size_t length_known(std::uint64_t first) const;
   // The characters on TxD whose stop sample is due by now: chars_, then rx_.due().
   std::uint64_t look();  // the line up to now(), which it returns
+  // The first start bit a telegram of ours may have at `at` or later: `idle_bits` after the end
+  // of the last telegram on the line, ours or another station's (as far as look() heard it).
+  [[nodiscard]] std::uint64_t send_time(std::uint64_t at, std::uint32_t idle_bits) const;
   void note(const std::string& s);
   [[nodiscard]] std::uint64_t now() const;
   std::uint64_t put_on_line(std::span<const std::uint8_t> bytes, std::uint64_t start,
@@ -394,7 +401,8 @@ class DpMaster {
   bool fcb_ = true;  // toggled before every SRD with FCV
   bool fcv_started_ = false;
   bool wake_on_txd_ = false;    // waiting for an answer whose length is not known yet
-  std::uint64_t bus_free_ = 0;  // end of the last telegram on the bus
+  std::uint64_t bus_free_ = 0;  // where our own last exchange left the line free
+  std::uint64_t line_end_ = 0;  // end of the last character another station drove (look())
   std::unique_ptr<Cpu> cpu_;
   std::vector<Exchange> history_;
   // The exchanges clear_history() forgot last: history() takes each new exchange as a copy into

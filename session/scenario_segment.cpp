@@ -7,6 +7,7 @@
 #include <map>
 #include <memory>
 #include <set>
+#include <utility>
 
 #include "dpc31/bus_port.hpp"
 #include "firmware_host.hpp"
@@ -53,10 +54,13 @@ class Parser {
     }
     const std::string_view c = w[0];
     if (first_ && c != "segment") fail("a segment scenario begins with 'segment'");
-    first_ = false;
+    const bool first = std::exchange(first_, false);
     const bool header = c == "segment" || c == "station" || c == "master" || c == "sender";
     if (header && !s_.steps.empty()) fail(fmt::format("'{}' after the first action", c));
     if (c == "segment") {
+      // A second one would silently replace the first's settings (docs/scenario-format.md).
+      if (!first) fail(fmt::format("'segment' given twice: first at line {}", segment_line_));
+      segment_line_ = line;
       segment();
     } else if (c == "station") {
       station();
@@ -153,8 +157,7 @@ class Parser {
 
   void segment() {
     if (auto v = take("baud")) s_.baud = profibus_baud(*v);
-    if (auto v = take("slot"))
-      s_.slot_bits = static_cast<std::uint32_t>(number(*v, "slot", 37, 16383));
+    if (auto v = take("slot")) s_.slot_bits = static_cast<std::uint32_t>(number(*v, kSlotBits));
     if (auto v = take("ttr")) s_.ttr_bits = number(*v, "ttr", 256, 16'777'215);
     ttr_given_ = s_.ttr_bits != 0;
   }
@@ -416,6 +419,7 @@ class Parser {
 
   SegmentScenario& s_;
   bool first_ = true;
+  int segment_line_ = 0;  // the `segment` line
   bool ttr_given_ = false;
   int line_ = 0;
   std::vector<int> station_lines_;               // each station's line, in s_.stations' order

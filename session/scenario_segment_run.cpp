@@ -7,6 +7,9 @@
 #include <map>
 #include <memory>
 #include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "dp_master.hpp"
 #include "dpc31/bus_port.hpp"
@@ -21,6 +24,13 @@ namespace dpc31 {
 
 namespace {
 
+// `cycles` in bit times of `t` clocks, as the checks that take bit times are written: `11`, or
+// `11 3/32` where it is no whole number of them.
+std::string bit_times(std::uint64_t cycles, std::uint64_t t) {
+  const std::uint64_t rest = cycles % t;
+  return rest == 0 ? fmt::format("{}", cycles / t) : fmt::format("{} {}/{}", cycles / t, rest, t);
+}
+
 class SegmentRun {
  public:
   SegmentRun(const SegmentScenario& s, const LineSink& walk, const LineSink& errors,
@@ -32,7 +42,7 @@ class SegmentRun {
         seg_(s.baud),
         check_(BusTiming{seg_.bit_cycles(), 11, s.slot_bits, 33,
                          s.masters.size() > 1 ? s.ttr_bits : 0, masters()},
-               [this](const LogRecord& r) { say(r.cycle, r.text); }) {}
+               [this](const LogRecord& r) { print(r.cycle, r.text); }) {}
 
   int run() {
     build();
@@ -49,6 +59,7 @@ class SegmentRun {
     quiet();
     settle();
     seg_.flush();
+    states_in_order();
     check_.flush();
     seg_.align();  // the observers' chips at the line's time (docs/segment.md)
     observer_->run_ends(seg_, passed_, failed_);
@@ -75,8 +86,26 @@ class SegmentRun {
     return out;
   }
 
+  // A line of the walk. The bus check's own lines (print) fold a violation repeated back to back;
+  // any other line ends such a run, its note right after it (docs/segment.md, "Bus checks").
   void say(std::uint64_t cycle, const std::string& text) {
+    states_in_order();
+    check_.end_repeats();
+    print(cycle, text);
+  }
+  void print(std::uint64_t cycle, const std::string& text) {
     if (walk_) walk_(fmt::format("[cycle {:>10}] {}", cycle, text));
+  }
+  // The chips' state changes, held until the next other line: in one round of the line each chip
+  // runs on its own, so two chips' changes come in station order, not in cycle order.
+  void states_in_order() {
+    std::stable_sort(states_.begin(), states_.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (const auto& [cycle, text] : states_) {
+      check_.end_repeats();
+      print(cycle, text);
+    }
+    states_.clear();
   }
 
   void build() {
@@ -124,7 +153,8 @@ class SegmentRun {
         }
         raw->dp = dp;
         raw->wd = wd;
-        say(cycle, fmt::format("{}: {} / {}", name, dp_state_name(dp), wd_state_name(wd)));
+        states_.emplace_back(
+            cycle, fmt::format("{}: {} / {}", name, dp_state_name(dp), wd_state_name(wd)));
       });
       const std::uint8_t address = def.slave.address;
       chip.on_telegram([this, raw, address](const Telegram& t) {
@@ -166,15 +196,23 @@ class SegmentRun {
       mc.gap_factor = m.gap_factor;
       mc.hsa = m.hsa;
       masters_.push_back(std::make_unique<DpMaster>(seg_, station, mc, slaves));
+      masters_.back()->on_locked = [this, a = m.address](std::uint8_t slave, std::uint8_t by) {
+        say(seg_.cycle(), fmt::format("master {}: station {} is locked by master {} (its "
+                                      "Slave_Diag's Master_Add): not parameterised, its start-up "
+                                      "ends",
+                                      a, slave, by));
+      };
       visits_.emplace_back();
     }
     observer_->stations_added(seg_);
     seg_.on_telegram = [this](const LineTelegram& t) {
+      states_in_order();
       check_.telegram(t, seg_.name(t.from));
       telegram(t);
       observer_->telegram(t);
     };
     seg_.on_collision = [this](const Collision& c) {
+      states_in_order();
       check_.collision(c, seg_.name(c.first), seg_.name(c.second));
     };
   }
@@ -223,6 +261,7 @@ class SegmentRun {
     const bool answer_on = tx_from_ <= now && now < tx_until_;
     if (!whole_on && !answer_on) seg_.flush();
     seg_.align();  // a station's trace checkpoints its chip at the line's time
+    states_in_order();
     check_.idle_until(seg_.cycle());
   }
 
@@ -361,10 +400,11 @@ class SegmentRun {
     std::vector<std::uint8_t> startup;
     for (const std::size_t i : v.startup) startup.push_back(s_.masters[m].slaves[i]);
     const SegmentStep::Visit& want = st.visit;
-    got = fmt::format("polled {}{}, rotation {} cycles, hold {} cycles, gap {}{}",
-                      fmt::join(polled, ","),
+    got = fmt::format("polled {}{}, rotation {} bit times, hold {} bit times, gap {}{}",
+                      polled.empty() ? "none" : fmt::format("{}", fmt::join(polled, ",")),
                       startup.empty() ? "" : fmt::format(", start-up {}", fmt::join(startup, ",")),
-                      v.rotation, v.hold, v.gap ? std::to_string(*v.gap) : "none",
+                      bit_times(v.rotation, t), bit_times(v.hold, t),
+                      v.gap ? std::to_string(*v.gap) : "none",
                       v.gap ? (v.gap_answered ? " (answered)" : " (no answer)") : "");
     return (!want.polled || *want.polled == polled) &&
            (!want.startup || *want.startup == startup) &&
@@ -396,8 +436,9 @@ class SegmentRun {
         // Every answer's delay is the one expected: the least and the greatest are.
         const std::uint64_t want = st.count * seg_.bit_cycles();
         ok = delays_.count != 0 && delays_.min == want && delays_.max == want;
-        got = fmt::format("{} answers, delays {}..{} cycles", delays_.count,
-                          delays_.count != 0 ? delays_.min : 0, delays_.max);
+        got = fmt::format("{} answers, delays {}..{} bit times", delays_.count,
+                          bit_times(delays_.count != 0 ? delays_.min : 0, seg_.bit_cycles()),
+                          bit_times(delays_.max, seg_.bit_cycles()));
         break;
       }
       case K::expect_expired: {
@@ -459,6 +500,7 @@ class SegmentRun {
   // The first start bit and the end of the last answer a chip decided to send.
   std::uint64_t tx_from_ = 0;
   std::uint64_t tx_until_ = 0;
+  std::vector<std::pair<std::uint64_t, std::string>> states_;  // states_in_order's lines
   // The answers' delays after their requests so far (expect tsdr): how many, the least and the
   // greatest (kept as these three, not one by one: a long run's memory stays flat).
   struct {

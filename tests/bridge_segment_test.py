@@ -206,6 +206,15 @@ def bad_slave_arguments():
             (["--slave", "5:DO4", "--address", "5"], "--address is for the one slave"),
             (["--slave", "5:DO4", "--profile", "spc3"], "--profile is for the one slave"),
             (["--slave", "5:DO4", "--cpu", "80c32"], "--cpu is for the one slave"),
+            # --ports is the 80C32's, refused beside --slave as without --cpu (the audit s28
+            # aud2, finding 5: taken silently, even names given twice).
+            (["--slave", "5:DO4", "--ports", "1a,1a"], "--ports is for the one slave"),
+            (["--slave", "5:DO4", "--ports", "p1"], "--ports is for the one slave"),
+            # One slot range at every door (a segment scenario's 37..16383; finding 10).
+            (["--slave", "5:responder", "--slot", "36"],
+             "--slot '36' must be 37..16383 bit times"),
+            (["--slave", "5:responder", "--slot", "16384"],
+             "--slot '16384' must be 37..16383 bit times"),
             # the built-in user side's options, checked as a segment scenario's `station`
             (["--slave", "5:DO4:spc3:user_wd=1"],
              "'user_wd' configures the built-in user side; a firmware configures itself"),

@@ -354,7 +354,12 @@ def bad_arguments_exit_2():
             # Sent before (the audit of 2026-12-05, run 21): a WD_Fact of 0 in Set_Prm, an empty
             # Chk_Cfg, the master at a slave's address; a search without end, a wait below 0.
             ("--watchdog takes two bytes, each 01..FF", ["--watchdog", "0,0"] + DO4),
-            ("station 5: no Ident_Number or Chk_Cfg", ["--ident", "0x0D04", "--cfg", ""]),
+            # The ident given, the empty Chk_Cfg named (the audit s28 aud2, finding 11); each
+            # missing one named alone.
+            ("station 5: an empty Chk_Cfg configures no module", ["--ident", "0x0D04", "--cfg", ""]),
+            ("station 5: no Ident_Number (--ident and --cfg", ["--cfg", "21,10"]),
+            ("station 5: no Chk_Cfg (--ident and --cfg", ["--ident", "0x0D04"]),
+            ("station 5: no Ident_Number or Chk_Cfg (--ident", []),
             ("station 5: the master's own --address", ["--address", "5", "--slave",
                                                        "5:0x0D04:21,10"]),
             ("--search takes a positive number of seconds", ["--search", "inf"] + DO4),

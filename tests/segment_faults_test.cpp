@@ -269,6 +269,34 @@ TEST(SegmentFaults, AForeignMasterThatNeverPassesTheToken) {
   f.expect_only(BusViolation::token_hold, late);
 }
 
+// TTH = TTR - TRR (docs/segment.md, "The token"): at its second visit the rogue master 3 got the
+// token 900 bit times after its first (TRR 900), so it may start cycles only within TTH = 2000 -
+// 900 = 1100 bit times of the token's end. Its unanswered FDL_Status requests (6 characters, 66
+// T, then the slot time 100 and TSYN 33: one every 199 bit times) start 33, 232, ..., 1028, 1227
+// and 1426 bit times after it: the last two are late (the audit s28 aud2, finding 2: the check
+// allowed a whole TTR from the arrival, and counted none here).
+TEST(SegmentFaults, AMasterThatHoldsTheTokenPastTthAfterAShortRotation) {
+  Faults f(false, kTtr);
+  const std::uint64_t first = f.seg.send(f.master, bytes_of(fdl::token(3, 2)), f.bits(100));
+  const std::uint64_t polled = f.seg.send(f.rogue, fdl_status(40, 3), first + f.bits(kTsyn));
+  f.seg.send(f.rogue, bytes_of(fdl::token(2, 3)), polled + f.bits(kSlot + kTsyn));
+  // Master 2's token to 3 again, ending 900 bit times after the first one's end.
+  const std::uint64_t second =
+      f.seg.send(f.master, bytes_of(fdl::token(3, 2)), first + f.bits(900 - 33));
+  ASSERT_EQ(second, first + f.bits(900));
+  std::uint64_t at = second + f.bits(kTsyn);
+  for (int i = 0; i < 8; ++i) {
+    const std::uint64_t end = f.seg.send(f.rogue, fdl_status(40, 3), at);
+    at = end + f.bits(kSlot + kTsyn);
+  }
+  f.settle(at);
+  f.expect_only(BusViolation::token_hold, 2);
+  EXPECT_EQ(f.log.front().cycle, second + f.bits(1227));
+  EXPECT_EQ(f.log.front().text,
+            "bus: token_hold: station 3 started a message cycle 1227 bit times after it got the "
+            "token (TTH 1100 = TTR 2000 - TRR 900)");
+}
+
 TEST(SegmentFaults, AShortTsyn) {
   Faults f(true);
   f.find_rate();

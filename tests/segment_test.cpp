@@ -710,8 +710,38 @@ TEST(SegmentScenario, ExpectVisitChecksTheMastersLastVisit) {
   EXPECT_EQ(run(head + "expect visit 2 polled=5 rotation=0\n", errors), 1);
   ASSERT_EQ(errors.size(), 1U);
   EXPECT_EQ(errors[0],
-            "v.scn:7: expected visit 2 polled=5 rotation=0, got polled 5,6, rotation 13376 "
-            "cycles, hold 18624 cycles, gap none");
+            "v.scn:7: expected visit 2 polled=5 rotation=0, got polled 5,6, rotation 418 bit "
+            "times, hold 582 bit times, gap none");
+  // After the start-up alone the last visit polled no one (`none`, not an empty list: the audit
+  // s28 aud2, finding 7): it carried the Slave_Diag to 6. The visit before it carried 6's Chk_Cfg
+  // (13 characters), so its TRR is TSYN 33 + 143 + TSDR 11 + the SC 11 + TSYN 33 + the token 33 =
+  // 264 bit times, TTH 736.
+  errors.clear();
+  EXPECT_EQ(run("segment\nstation 5 profile=spc3\nstation 6 profile=vpc3plus\n"
+                "master 2 slaves=5,6 ttr=1000\nstartup\nexpect visit 2 polled=5\n",
+                errors),
+            1);
+  EXPECT_EQ(errors, std::vector<std::string>{
+                        "v.scn:6: expected visit 2 polled=5, got polled none, start-up 6, rotation "
+                        "264 bit times, hold 736 bit times, gap none"});
+}
+
+// A failed `expect tsdr` says the delays in bit times, as the check is written (docs/scenario-
+// format.md: "expected X, got Y" in the check's own terms; the audit s28 aud2, finding 7). The
+// start-up's five answers (FDL_Status, Slave_Diag, Set_Prm's SC, Chk_Cfg's SC, Slave_Diag) each
+// start 11 T after their request's end (docs/timing.md: max(11, MinTSDR) with MinTSDR 11 after
+// Start and no Set_Prm byte 3).
+TEST(SegmentScenario, ExpectTsdrSaysTheDelaysInBitTimes) {
+  SegmentScenario s;
+  ScenarioError err;
+  ASSERT_TRUE(parse_segment_scenario("segment\nstation 5 profile=spc3\nstartup\nexpect tsdr 12\n",
+                                     "t.scn", s, err))
+      << err.text();
+  std::vector<std::string> errors;
+  EXPECT_EQ(run_segment_scenario(s, {}, [&errors](const std::string& e) { errors.push_back(e); }),
+            1);
+  EXPECT_EQ(errors, std::vector<std::string>{
+                        "t.scn:4: expected tsdr 12, got 5 answers, delays 11..11 bit times"});
 }
 
 // Two stations on one address and no `master` line: the default master polls every address once
@@ -968,6 +998,15 @@ TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
       {"segment ttr=1000\nstation 5\nstartup\nexpect bus_violation token_hold 0\n",
        "f.scn:4: token_hold is checked on a line with two or more masters and a TTR (segment "
        "ttr=BITS or master ... ttr=BITS): without them it would always count 0"},
+      // A second `segment` line would replace the first's settings (docs/scenario-format.md: a
+      // repeated header command is a parse error naming the first's line; the audit s28 aud2,
+      // finding 6: the run was silently at the second's rate).
+      {"# the line\nsegment baud=1500000\nsegment slot=200\nstation 5\nstartup\n",
+       "f.scn:3: 'segment' given twice: first at line 2"},
+      {"segment\nsegment baud=1500000\nstation 5\nstartup\n",
+       "f.scn:2: 'segment' given twice: first at line 1"},
+      // One slot range at every door (vocabulary.hpp kSlotBits).
+      {"segment slot=36\nstation 5\nstartup\n", "f.scn:1: slot 36 out of range (37..16383)"},
       // The only rates the chips' baud search finds, refused in the single chip's words.
       {"segment baud=12345\nstation 5\nstartup\n",
        "f.scn:1: baud 12345 is not a PROFIBUS rate (9600, 19200, 45450, 93750, 187500, 500000, "
@@ -1022,6 +1061,14 @@ ScenarioRun run_scenario_text(const std::string& text) {
   r.code = run_segment_scenario(
       s, [&r](const std::string& l) { r.walk.push_back(l); },
       [&r](const std::string& e) { r.errors.push_back(e); });
+  return r;
+}
+
+// The same for a run whose every check passes: exit 0, no failure.
+ScenarioRun run_passing(const std::string& text) {
+  ScenarioRun r = run_scenario_text(text);
+  EXPECT_EQ(r.errors, std::vector<std::string>{});
+  EXPECT_EQ(r.code, 0);
   return r;
 }
 
@@ -1083,6 +1130,81 @@ TEST(SegmentScenario, AShortTsynNamesItsSender) {
   EXPECT_EQ(r.code, 0);
   EXPECT_TRUE(r.errors.empty()) << r.errors.front();
   EXPECT_NE(r.cycle_of("bus: short_tsyn: a sent after 32 bit times of idle (TSYN 33)"), 0U);
+}
+
+// The built-in master keeps TSYN after every telegram on the line, not only its own
+// (docs/timing.md: a telegram after fewer than 33 idle bit times is ignored and counted `no_sync`;
+// docs/scenario- format.md `idle=`: after the end of the line's last telegram; the audit s28 aud2,
+// finding 1: it counted from its own traffic and started on the last bit of another station's
+// token). At 12 Mbaud T = 4 clocks. A sender's token (DC 02 02, 3 characters: 33 T) ends 132 clocks
+// after its first start bit; master 2's Data_Exchange (4 output bytes: SD2 with 13 characters)
+// starts TSYN = 132 clocks later, and station 5 answers it (13 characters) 11 T after its end.
+TEST(SegmentScenario, TheMasterKeepsTsynAfterAnotherStationsTelegram) {
+  const ScenarioRun r = run_passing(
+      "segment baud=12000000\nstation 5 profile=spc3\nmaster 2 slaves=5\nsender r\nstartup\n"
+      "cycle 1\nsend from=r after=200bits DC,02,02\ncycle 1\nexpect bus_violation short_tsyn 0\n"
+      "expect state 5 Data_Exchange\n");
+  const std::uint64_t token = r.cycle_of("] r: DC 02 02");
+  const std::uint64_t request = r.cycle_of("] master 2: 68 07 07 68 05 02");
+  EXPECT_EQ(request, token + 33 * 4 + 33 * 4);
+  EXPECT_EQ(r.cycle_of("] station 5: 68 07 07 68 02 05"), request + 13 * 11 * 4 + 11 * 4);
+}
+
+// The same after another master's token: master 3, given the token by master 2, passes it back
+// TSYN after master 2's token ends (each DC xx yy: 33 T), not at once (the audit's f1b).
+TEST(SegmentScenario, AMasterPassesTheTokenTsynAfterTheTokenItGot) {
+  const ScenarioRun r = run_passing(
+      "segment baud=12000000\nstation 5 profile=spc3\nmaster 2 slaves=5\nmaster 3 slaves=5\n"
+      "pass_token from=2 to=3\npass_token from=3 to=2\nexpect bus_violation short_tsyn 0\n");
+  EXPECT_EQ(r.cycle_of("] master 3: DC 02 03"), r.cycle_of("] master 2: DC 03 02") + 66 * 4);
+}
+
+// A master that finds a slave locked by another (its Slave_Diag's Master_Add, byte 3, neither FFh
+// nor its own address: chip-facts.md, "Slave_Diag"; Master_Lock is the master's own bit) does not
+// parameterise it, and its walk says so (the audit s28 aud2, finding 4: master 3 took the slave
+// for ready and sent it Data_Exchange silently). At 1.5 Mbaud T = 32 clocks: master 3's Slave_Diag
+// answer `00 0C 00 02 0C 31` is 17 characters; the master stops at its last stop sample, end - T
+// + T/2, where the walk says it.
+TEST(SegmentScenario, AMasterLeavesASlaveLockedByAnotherMasterAlone) {
+  const ScenarioRun r = run_passing(
+      "segment\nstation 5 profile=spc3\nstation 6 profile=vpc3plus\nmaster 2 slaves=5,6\n"
+      "master 3 slaves=5\nstartup\nexpect state 5 Data_Exchange\n");
+  const std::uint64_t diag =
+      r.cycle_of("] station 5: 68 0B 0B 68 83 85 08 3E 3C 00 0C 00 02 0C 31");
+  EXPECT_EQ(r.cycle_of("master 3: station 5 is locked by master 2 (its Slave_Diag's Master_Add): "
+                       "not parameterised, its start-up ends"),
+            diag + 17 * 11 * 32 - 32 + 16);
+  // No Set_Prm (DSAP 3D) nor Chk_Cfg (3E) from master 3.
+  EXPECT_EQ(std::count_if(r.walk.begin(), r.walk.end(),
+                          [](const std::string& l) {
+                            return l.find("] master 3: 68") != std::string::npos &&
+                                   (l.find(" 3D 3E ") != std::string::npos ||
+                                    l.find(" 3E 3E ") != std::string::npos);
+                          }),
+            0);
+}
+
+// Two stations at one address answer each of the start-up's five requests and the three
+// Data_Exchanges together: eight collisions, each its own line in the walk (docs/segment.md, "Bus
+// checks": one log line a violation; a run of equal lines folds only where nothing comes between,
+// and then its note comes right after it: the audit s28 aud2, finding 8: one line showed and the
+// note came 40 lines later). The chips' state lines are in cycle order (docs/segment.md, "The
+// log"; finding 9: the two twins' Data_Exchange lines came in station order).
+TEST(SegmentScenario, EachCollisionIsALineAndStateLinesAreInCycleOrder) {
+  const ScenarioRun r = run_passing(
+      "segment\nstation 5 name=a profile=spc3\nstation 5 name=b profile=vpc3plus\n"
+      "station 6 profile=dpc31\nstartup\ncycle 3\nexpect collisions 8\n");
+  std::vector<std::uint64_t> states;
+  std::size_t collisions = 0;
+  for (const std::string& l : r.walk) {
+    EXPECT_EQ(l.find("repeated"), std::string::npos) << l;
+    if (l.find("] bus: collision: b drove the line while a had it") != std::string::npos)
+      ++collisions;
+    if (l.find(" / ") != std::string::npos) states.push_back(std::stoull(l.substr(7)));
+  }
+  EXPECT_EQ(collisions, 8U);
+  EXPECT_TRUE(std::is_sorted(states.begin(), states.end()));
+  EXPECT_GE(states.size(), 6U);  // each of the three through Wait_Cfg into Data_Exchange at least
 }
 
 // An unanswered request waits for its answer only up to its slot time (docs/timing.md, "The

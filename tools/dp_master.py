@@ -533,9 +533,13 @@ def slaves_of(args, error):
         for name in ("ident", "cfg", "user_prm", "outputs"):
             if getattr(s, name) is None:
                 setattr(s, name, getattr(args, name))
-        if s.ident is None or not s.cfg:  # an empty Chk_Cfg configures no module
-            error(f"station {s.address}: no Ident_Number or Chk_Cfg (--ident and --cfg, or "
+        missing = [n for n, v in (("Ident_Number", s.ident), ("Chk_Cfg", s.cfg)) if v is None]
+        if missing:
+            error(f"station {s.address}: no {' or '.join(missing)} (--ident and --cfg, or "
                   "--slave ADDR:IDENT:CFG)")
+        if not s.cfg:
+            error(f"station {s.address}: an empty Chk_Cfg configures no module (give at least "
+                  "one Cfg byte)")
         if s.address in [o.address for o in out]:
             error(f"--slave {s.address} twice")
         try:

@@ -45,6 +45,9 @@ class LogLimiter {
   [[nodiscard]] std::vector<std::string> add(std::uint64_t cycle, std::string_view text);
   // What is still owed at the end of a log (a repeat count, a count of lines left out).
   [[nodiscard]] std::vector<std::string> flush();
+  // Another line of the same log comes between: the repeats owed are told now (their note right
+  // after them) and the next line, even one equal to the last, is no repeat.
+  [[nodiscard]] std::vector<std::string> end_repeats();
 
   [[nodiscard]] std::uint64_t left_out() const { return left_out_total_; }
 

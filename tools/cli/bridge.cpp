@@ -284,8 +284,10 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
     return bad(fmt::format("--pacing '{}' must be realtime or free", o.pacing));
   }
   c.realtime = o.pacing == "realtime";
-  if (!parse_uint(o.slot, 16383, v) || v < 1) {
-    return bad(fmt::format("--slot '{}' must be 1..16383 bit times", o.slot));
+  // A segment's range at every door (kSlotBits): under 37 no answer could come in time.
+  if (!parse_uint(o.slot, kSlotBits.max, v) || !kSlotBits.holds(v)) {
+    return bad(
+        fmt::format("--slot '{}' must be {}..{} bit times", o.slot, kSlotBits.min, kSlotBits.max));
   }
   c.setup.slot_bits = static_cast<std::uint32_t>(v);
   if (o.log_level != "events" && o.log_level != "telegrams") {
@@ -661,7 +663,7 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
     o.extra = b->remaining();
     for (const char* name :
          {"--firmware", "--address", "--profile", "--variant", "--irq-controller", "--cpu",
-          "--code", "--board-address", "--trace-cpu"}) {
+          "--code", "--board-address", "--trace-cpu", "--ports"}) {
       if (b->get_option(name)->count() > 0) o.single.emplace_back(name);
     }
   });
