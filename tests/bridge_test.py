@@ -46,11 +46,14 @@ LOST = 2.0
 # A master with one slave (dpv1_over_bridge, profibus_rates_default_log) has no other slave's
 # watchdog to keep within, and a slow build runs each exchange SCALE times as long on the host:
 # its answer timeout is LOST x SCALE (Bridge.dpv1_plugin_read_write lost station 5 at 2 s in the
-# ASan build at load 8). At most 8 s, within the slave's own DP watchdog (dp_master.py's default
-# --watchdog 64,0A: 100 x 10 x 10 ms = 10 s, chip-facts.md section 7), so that a request really
-# lost is still found lost, and the master's search and the request sent again find the slave
-# still in Data_Exchange.
-LOST_ALONE = min(LOST * SCALE, 8.0)
+# ASan build at load 8). At most 4 s, within the tightest watchdog of such a slave: DO4 on the
+# DPC31 (profibus_rates_default_log; dpc31 is the bridge's default profile) enables its
+# DPS_User_Watchdog in Data_Exchange at 01FFh (firmware/dps/dps.c) and resets it at each DX_Out;
+# "decremented every 10 msec" (DPC31 p.31), it makes the slave leave the master 511 x 10 ms =
+# 5.11 s of chip time after the last exchange. So a request really lost is still found lost, and
+# the master's search and the request sent again find the slave still in Data_Exchange
+# (dpc31_request_lost_in_data_exchange).
+LOST_ALONE = min(LOST * SCALE, 4.0)
 MASTER = 2
 SLAVE = 5
 
@@ -249,6 +252,41 @@ def exchange_do4(m, before=0x00):
         if a == dx_answer(0x08, [0x51]):
             return
     raise Fail("the input byte never became 51h")
+
+
+class LosingMaster(Master):
+    """A master whose next request after `lose_next` is set goes out with its FCS broken: the
+    slave drops it, the request is lost."""
+
+    lose_next = False
+
+    def srd_frame(self, du, dsap, ssap=SAP_MASTER):
+        f = super().srd_frame(du, dsap, ssap)
+        if self.lose_next:
+            self.lose_next = False
+            f = f[:-2] + bytes([f[-2] ^ 0xFF]) + f[-1:]
+        return f
+
+
+def dpc31_request_lost_in_data_exchange():
+    """DO4 on the DPC31 in Data_Exchange (free pacing: chip time runs with the wall clock while
+    the master waits): a Data_Exchange lost on the way is found lost after LOST_ALONE, the slave
+    is searched and the request sent again, which finds the slave still in Data_Exchange, its
+    DPS_User_Watchdog (5.11 s, LOST_ALONE's comment) not run out: the same answer, DL 51h."""
+    with tempfile.TemporaryDirectory() as tmp:
+        b = Bridge(tmp, "--firmware", "DO4", "--baud", "19200", "--pacing", "free")
+        try:
+            m = LosingMaster(b.path, 19200, LOST_ALONE, search=GUARD)
+            startup_do4(m)
+            exchange_do4(m)
+            m.lose_next = True
+            m.expect("Data_Exchange sent again after a loss", m.srd([0x05, 0x01]),
+                     dx_answer(0x08, [0x51]))
+            check(m.lost == 1, f"{m.lost} requests lost, one was broken")
+            b.close_and_wait(m)
+            b.stop(signal.SIGTERM)
+        finally:
+            b.kill()
 
 
 def check_order(lines):
@@ -791,6 +829,7 @@ CASES = {
     "cnt2_80c32_free": cnt2_80c32_free,
     "stale_symlink_and_silent_client": stale_symlink_replaced,
     "profibus_rates_default_log": profibus_rates_default_log,
+    "dpc31_request_lost_in_data_exchange": dpc31_request_lost_in_data_exchange,
     "answer_dropped_without_client": answer_dropped_without_client,
 }
 

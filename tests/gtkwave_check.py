@@ -8,13 +8,18 @@ CASE demo: `dpc31 demo`; its full VCD has every signal once at #0; GTKWave opens
   marker at each DP and watchdog state change of the demo's state walk, at its time (cycle x
   10^12 / 48 MHz ps, rounded); at each marker the state trace named by the marker shows that
   state's name, and the buffer and diag traces show their filter's text.
-CASE window: a window late in a run (--from 2885996 --to 2888108, Baud_Control at 60 ms inside
-  it); GTKWave opens its save file on the window (docs/waveforms.md): the view begins at the
-  window's first time, holds its last within 2 x its length, and every named marker is in it.
+CASE window, window_10ns: a window late in a run (--from 2885996 --to 2888108, Baud_Control at
+  60 ms inside it) in units of 1 ps, or of 10 ns; GTKWave opens its save file on the window
+  (docs/waveforms.md): the view begins at the window's first time, holds its last within 2 x its
+  length, and every named marker is in it. GTKWave counts a 10 ns file in ns (its time x 10):
+  its last time is --to's x 10, and so are the view and the markers.
+CASE flat: a whole run in the logic-analyser form (--flat, 10 ns units by default); GTKWave's
+  last time is the VCD's x 10, and the view opens on 0 and holds it within 2 x.
 CASE merge_two_runs: two runs of startup_dpc31_1m5 whose slave inputs differ in one bit
   (B4h / B5h), `dpc31 wavediff --merge ab.fst`; fst2vcd reads it back: every diff.X is 1 exactly
   where the two runs' own VCDs give X different values (walked here, independently); GTKWave
-  opens ab.gtkw: one group per signal with a.X, b.X, diff.X, and at the first difference of TxD
+  opens ab.gtkw on the whole merged file (from its first time, holding its last within 2 x) with
+  one group per signal with a.X, b.X, diff.X; the first difference of TxD is in view, and there
   it shows diff 1, just before it 0.
   (demo, too: at the markers of Wait_Cfg the telegram service shows Set_Prm.)
 GTKWave's Tcl interface (gtkwave -S) reports what it shows: the traces with their flags
@@ -130,9 +135,28 @@ def groups(tr):
     return out
 
 
+def units(cycle, per_second):
+    # A cycle's time at 48 MHz: round(cycle x per_second / 48e6), halves up (docs/waveforms.md).
+    return (cycle * per_second * 2 + CLOCK_HZ) // (2 * CLOCK_HZ)
+
+
 def ps(cycle):
-    # 1 ps units at 48 MHz: round(cycle x 10^12 / 48e6), halves up (docs/waveforms.md).
-    return (cycle * 10**12 * 2 + CLOCK_HZ) // (2 * CLOCK_HZ)
+    return units(cycle, 10**12)
+
+
+VIEW_TCL = ('puts "window [gtkwave::getWindowStartTime] [gtkwave::getWindowEndTime] '
+            '[gtkwave::getMaxTime]"\n')
+
+
+def last_time(vcd):
+    """The last time step of a VCD."""
+    return int(Path(vcd).read_text(encoding="ascii").rsplit("\n#", 1)[1].split()[0])
+
+
+def view(out):
+    """(start, end, last time) of the view GTKWave opened on, or None."""
+    m = re.search(r"^window (\d+) (\d+) (\d+)$", out, re.M)
+    return tuple(int(x) for x in m.groups()) if m else None
 
 
 def vcd_changes(path):
@@ -227,7 +251,7 @@ def case_demo(dpc31, d, screenshot):
         fail(f"a signal has two values at #0: {ids}")
     markers = [ln.split(" ", 1)[1] for ln in Path(save).read_text().splitlines()
                if ln.startswith("[markername] ")]
-    tcl = TRACES_TCL + 'puts "window [gtkwave::getWindowStartTime] [gtkwave::getWindowEndTime]"\n'
+    tcl = TRACES_TCL + VIEW_TCL
     for m in markers:
         letter = m[0]
         tcl += (f'puts "marker {letter} [gtkwave::getNamedMarker {letter}]|'
@@ -247,10 +271,10 @@ def case_demo(dpc31, d, screenshot):
     if got_groups != want_groups:
         problems.append(f"groups shown {got_groups}, want {want_groups}")
     # It opens on the whole run (docs/waveforms.md): from 0 to at least the VCD's last time.
-    end = int(text.rsplit("\n#", 1)[1].split()[0])
-    window = re.search(r"^window (\d+) (\d+)$", out, re.M)
-    if not window or int(window.group(1)) != 0 or int(window.group(2)) < end:
-        problems.append(f"GTKWave opens on {window and window.groups()}, the run is 0..{end}")
+    end = last_time(f"{d}/dpc31-demo.vcd")
+    shown = view(out)
+    if not shown or shown[0] != 0 or shown[1] < end:
+        problems.append(f"GTKWave opens on {shown}, the run is 0..{end}")
     # A marker at each change of the state signals in the VCD, named by the state the walk
     # names for that change (the walk polls the states, so its cycles may come a little later:
     # never earlier).
@@ -291,21 +315,24 @@ def case_demo(dpc31, d, screenshot):
     return problems
 
 
-def case_window(dpc31, d):
+def case_window(dpc31, d, unit):
     start_c, end_c = 2_885_996, 2_888_108
+    # The unit, its units a second, and GTKWave's factor (it counts a 10 ns file in ns).
+    per_second, scale = {"1ps": (10**12, 1), "10ns": (10**8, 10)}[unit]
     save = f"{d}/win.gtkw"
     run([dpc31, "run", "--quiet", f"{SRC}/traces/startup_dpc31_1m5.scn", "--vcd", f"{d}/win.vcd",
-         "--from", str(start_c), "--to", str(end_c), "--gtkw", save])
+         "--timescale", unit, "--from", str(start_c), "--to", str(end_c), "--gtkw", save])
     markers = [ln.split(" ", 1)[1][0] for ln in Path(save).read_text().splitlines()
                if ln.startswith("[markername] ")]
-    tcl = 'puts "window [gtkwave::getWindowStartTime] [gtkwave::getWindowEndTime]"\n' + "".join(
-        f'puts "marker {m} [gtkwave::getNamedMarker {m}]"\n' for m in markers)
+    tcl = VIEW_TCL + "".join(f'puts "marker {m} [gtkwave::getNamedMarker {m}]"\n'
+                             for m in markers)
     out = gtkwave(save, tcl, d)
     problems = []
     # --to is one past the last cycle written: the file's last time is end_c's.
-    start, end = ps(start_c), ps(end_c)
-    window = re.search(r"^window (\d+) (\d+)$", out, re.M)
-    shown = (int(window.group(1)), int(window.group(2))) if window else None
+    start, end = units(start_c, per_second) * scale, units(end_c, per_second) * scale
+    shown = view(out)
+    if not shown or shown[2] != end:
+        problems.append(f"GTKWave's last time is {shown and shown[2]}, want {end}")
     if not shown or shown[0] != start or not end <= shown[1] <= start + 2 * (end - start):
         problems.append(f"GTKWave opens on {shown}, the window is {start}..{end}")
     at = {m.group(1): int(m.group(2)) for m in re.finditer(r"^marker (\w) (-?\d+)$", out, re.M)}
@@ -314,7 +341,23 @@ def case_window(dpc31, d):
     for m, t in sorted(at.items()):
         if shown and not shown[0] <= t <= shown[1]:
             problems.append(f"marker {m} at {t} is out of the view {shown}")
-    print(f"window: GTKWave shows {shown}, the window {start}..{end}, {len(at)} markers in it")
+    print(f"window at {unit}: GTKWave shows {shown}, the window {start}..{end}, {len(at)} markers "
+          f"in it")
+    return problems
+
+
+def case_flat(dpc31, d):
+    save = f"{d}/flat.gtkw"
+    run([dpc31, "run", "--quiet", f"{SRC}/traces/startup_dpc31_1m5.scn", "--vcd", f"{d}/flat.vcd",
+         "--flat", "--gtkw", save])
+    problems = []
+    if "$timescale 10ns $end" not in Path(f"{d}/flat.vcd").read_text(encoding="ascii"):
+        problems.append("the logic-analyser form is not in 10 ns units")
+    end = last_time(f"{d}/flat.vcd") * 10
+    shown = view(gtkwave(save, VIEW_TCL, d))
+    if not shown or shown[2] != end or shown[0] != 0 or not end <= shown[1] <= 2 * end:
+        problems.append(f"GTKWave opens on {shown} (start, end, last time), the run is 0..{end}")
+    print(f"flat: GTKWave shows {shown}, the run 0..{end}")
     return problems
 
 
@@ -345,11 +388,17 @@ def case_merge(dpc31, src, d):
         problems.append("the two runs' TxD do not differ")
         return problems
     save = f"{d}/ab.gtkw"
-    tcl = TRACES_TCL + "".join(
+    tcl = VIEW_TCL + TRACES_TCL + "".join(
         f'gtkwave::setMarker {t}\nputs "at {t} '
         f'[gtkwave::getTraceValueAtMarkerFromName diff.dpc31.pins.txd]"\n'
         for t in (first_txd - 1, first_txd))
     out = gtkwave(save, tcl, d)
+    shown = view(out)
+    merged_end = last_time(f"{d}/ab.vcd")
+    if not shown or shown[2] != merged_end or shown[0] != 0 or \
+            not merged_end <= shown[1] <= 2 * merged_end or not shown[0] <= first_txd <= shown[1]:
+        problems.append(f"GTKWave opens on {shown} (start, end, last time), the merged file is "
+                        f"0..{merged_end}, TxD differs first at {first_txd}")
     g = groups(traces(out))
     for name in a:
         leaf = name.split(".", 1)[1]
@@ -418,7 +467,9 @@ def main():
     with tempfile.TemporaryDirectory() as d:
         problems = (case_demo(dpc31, d, shot) if case == "demo" else
                     case_segment(dpc31, d) if case == "segment" else
-                    case_window(dpc31, d) if case == "window" else case_merge(dpc31, src, d))
+                    case_window(dpc31, d, "1ps") if case == "window" else
+                    case_window(dpc31, d, "10ns") if case == "window_10ns" else
+                    case_flat(dpc31, d) if case == "flat" else case_merge(dpc31, src, d))
     if problems:
         fail("\n".join(problems[:20]))
     print("ok")

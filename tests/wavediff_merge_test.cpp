@@ -81,6 +81,35 @@ TEST(WavediffMerge, DiffIsHighExactlyWhereOneBitDiffersInVcdAndFst) {
   }
 }
 
+// The save file opens GTKWave on the whole merged file (docs/wavediff.md, "One file for a
+// comparison"): [timestart] its first time, the zoom -log2((LAST - FIRST) / 2), no marker (26
+// times -1), times as GTKWave counts them, the file's x 10 in 10 ns units. merge_wave runs from
+// #0 to #150 in 1 ns: -log2(75) = -6.228819. From #20 to #170 in 10 ns: GTKWave's 200 to 1700,
+// -log2(1500 / 2) = -9.550747.
+TEST(WavediffMerge, TheSaveFileOpensOnTheWholeMergedFile) {
+  Dir d;
+  std::string none;
+  for (int i = 0; i < 26; ++i) none += " -1";
+  const auto view = [&d](const Options& o) {
+    EXPECT_EQ(run_opts(o).rc, 1);
+    std::istringstream in(merge_read(d.file("m.gtkw")));
+    std::vector<std::string> lines;
+    for (std::string l; std::getline(in, l) && lines.size() < 5;) lines.push_back(l);
+    return lines.size() == 5 ? lines[3] + "\n" + lines[4] : std::string();
+  };
+  Options o = opts(d.write("a.vcd", merge_wave(false)), d.write("b.vcd", merge_wave(true)));
+  o.merge = d.file("m.vcd");
+  EXPECT_EQ(view(o), "[timestart] 0\n*-6.228819 -1" + none);
+  const std::string head =
+      "$timescale 10ns $end\n$scope module top $end\n$var wire 1 ! d $end\n$upscope $end\n"
+      "$enddefinitions $end\n#20\n0!\n#70\n";
+  o = opts(d.write("a10.vcd", head + "1!\n#170\n"), d.write("b10.vcd", head + "0!\n#170\n"));
+  for (const char* ext : {"vcd", "fst"}) {
+    o.merge = d.file(fmt::format("m.{}", ext));
+    EXPECT_EQ(view(o), "[timestart] 200\n*-9.550747 -1" + none) << ext;
+  }
+}
+
 TEST(WavediffMerge, BadNamesAreRefusedBeforeAnyWork) {
   Dir d;
   Options o = opts(d.write("a.vcd", merge_wave(false)), d.write("b.vcd", merge_wave(true)));

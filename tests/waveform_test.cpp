@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <set>
@@ -36,6 +37,9 @@ std::string tmp(const std::string& name) { return testutil::scratch() + name; }
 struct Line {
   std::string rx;  // every byte the master put on RxD (answered or not)
   std::string tx;  // every byte the chip put on TxD
+  // The end of the last stop bit of the request the chip answered first (a cycle): the first
+  // error-free telegram, which fixes the rate (docs/timing.md, Baud_Search).
+  std::uint64_t first_answered_end = 0;
 };
 
 // A start-up at 1.5 Mbaud with a recorder attached; returns the bytes on the line, one per line.
@@ -51,8 +55,11 @@ Line record_startup(const wave::Options& o) {
   std::string error;
   EXPECT_TRUE(rec.attach(chip, error)) << error;
   Line line;
+  std::uint64_t request_end = 0;
   chip.on_telegram([&](const Telegram& t) {
     for (std::uint8_t b : t.bytes) line.tx += t.from_chip ? fmt::format("{:02X}\n", b) : "";
+    if (!t.from_chip) request_end = t.end;
+    if (t.from_chip && line.first_answered_end == 0) line.first_answered_end = request_end;
   });
   DpMaster master(chip, MasterConfig{2, 1'500'000, 100, 33}, rc.slave);
   master.set_firmware([&](BusPort& b) { user.isr(b); });
@@ -159,6 +166,39 @@ TEST(Waveform, TheSaveFileOfAWindowOpensOnTheWindow) {
   std::string none;
   for (int i = 0; i < 26; ++i) none += " -1";
   EXPECT_EQ(lines[3], "*-27.634318 -1" + none);
+}
+
+// GTKWave 3.3 counts a file's times in the unit's prefix: a 10 ns file's #1 is 10 (its ns), and
+// a save file's times are read in those (docs/waveforms.md, "GTKWave"). A window of 10 ns units
+// that ends where the baud search finds 1.5 Mbaud: the first error-free telegram, acted on at
+// the stop sample of its last character, end - T + floor(T/2) with T = 48 MHz / 1.5 Mbaud = 32
+// cycles, takes the watchdog to Baud_Control (docs/timing.md, Baud_Search and "acted on"): the
+// one marker. A cycle's time is round(cycle x 10^8 / 48 MHz) units of 10 ns (docs/waveforms.md,
+// --timescale); START and END are --from's and --to's, the zoom -log2((END - START) / 2).
+TEST(Waveform, TheSaveFilesTimesAreGtkwavesAtTenNanoseconds) {
+  wave::Options o;
+  o.path = tmp("window_10ns.vcd");
+  o.timescale_exp = -8;
+  const std::uint64_t acted = record_startup(o).first_answered_end - 32 + 16;
+  ASSERT_GT(acted, 1000u);
+  o.from = acted - 1000;
+  o.to = acted + 1;
+  o.gtkw = tmp("window_10ns.gtkw");
+  record_startup(o);
+  const auto ns = [](std::uint64_t cycle) {
+    return (cycle * 100'000'000 + 24'000'000) / 48'000'000 * 10;
+  };
+  std::istringstream in(slurp(o.gtkw));
+  std::vector<std::string> lines;
+  for (std::string l; std::getline(in, l) && lines.size() < 5;) lines.push_back(l);
+  ASSERT_EQ(lines.size(), 5u);
+  EXPECT_EQ(lines[2], fmt::format("[timestart] {}", ns(o.from)));
+  std::string rest;
+  for (int i = 0; i < 25; ++i) rest += " -1";
+  EXPECT_EQ(lines[3], fmt::format("*{:.6f} -1 {}{}",
+                                  -std::log2(static_cast<double>(ns(o.to) - ns(o.from)) / 2.0),
+                                  ns(acted), rest));
+  EXPECT_EQ(lines[4], "[markername] Awd_state=Baud_Control");
 }
 
 TEST(Waveform, SigrokDecodesTheTelegramBytes) {

@@ -142,6 +142,9 @@ MergedWave::MergedWave(std::unique_ptr<WaveSink> sink, Engine& e) : sink_(std::m
 
 void MergedWave::point(Engine& e, const Point& pt, bool full) {
   WaveSink& w = *sink_;
+  if (!written_) first_ = pt.time;
+  written_ = true;
+  last_ = pt.time;
   w.time(pt.time);
   if (e.clock_mode()) w.bits(cycle_var_, fmt::format("{:b}", pt.cycle));
   auto value = [&w](std::size_t var, const Side& side, const LSig& l) {

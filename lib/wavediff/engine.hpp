@@ -201,7 +201,7 @@ class MergedWave;
 std::shared_ptr<MergedWave> open_diff_vcd(const std::string& path, Engine& e);
 std::shared_ptr<MergedWave> open_merge(const std::string& path, Engine& e);
 void merged_point(MergedWave& m, Engine& e, const Point& pt, bool full);
-void commit_merged(MergedWave& m);
+void commit_merged(MergedWave& m, const Engine& e);
 
 // The WaveDrom excerpt around the first divergence (wavedrom.cpp): a second pass.
 std::string wavedrom_text(const Options& o, const Report& rep);

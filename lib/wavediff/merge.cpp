@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "gtkw_view.hpp"
 #include "gtkwave/fstapi.h"
 #include "outfile.hpp"
 
@@ -86,16 +87,21 @@ class FstSink final : public WaveSink {
 };
 
 // The save file: GTKWave 3.3's format (what its File > Write Save File writes): the dump file,
-// then traces with their display flags; a group is a blank trace with the group-begin flag
-// (@800200) and one with the group-end flag (@1000200) around its members.
-std::string save_text(const std::string& dump, const Engine& e) {
+// the view (gtkw_view.hpp), then traces with their display flags; a group is a blank trace with
+// the group-begin flag (@800200) and one with the group-end flag (@1000200) around its members.
+// Its head is written before the walk, the rest once the walk has given the first and last times.
+std::string save_head(const std::string& dump) {
   std::error_code ec;
   const std::filesystem::path abs = std::filesystem::absolute(dump, ec);
-  std::string s = fmt::format(
+  return fmt::format(
       "[*] dpc31 wavediff --merge: each compared signal as a group of a.NAME, b.NAME and "
-      "diff.NAME (1 = they differ)\n[dumpfile] \"{}\"\n[savefile] \"{}\"\n[timestart] 0\n",
+      "diff.NAME (1 = they differ)\n[dumpfile] \"{}\"\n[savefile] \"{}\"\n",
       ec ? dump : abs.string(),
       ec ? save_file_name(dump) : std::filesystem::path(abs).replace_extension(".gtkw").string());
+}
+
+std::string save_traces(const Engine& e) {
+  std::string s;
   std::vector<std::size_t> order(e.pairs.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::sort(order.begin(), order.end(),
@@ -132,14 +138,22 @@ std::shared_ptr<MergedWave> open_merge(const std::string& path, Engine& e) {
   }
   auto m = std::make_shared<MergedWave>(fst ? fst_sink(path, e.pow) : vcd_sink(path, e.pow), e);
   const std::string save = save_file_name(path);
-  if (!m->save_file.open(save) || !m->save_file.write(save_text(path, e))) {
+  if (!m->save_file.open(save) || !m->save_file.write(save_head(path))) {
     throw InputError(m->save_file.error());
   }
   return m;
 }
 
 void merged_point(MergedWave& m, Engine& e, const Point& pt, bool full) { m.point(e, pt, full); }
-void commit_merged(MergedWave& m) { m.commit(); }
+
+void commit_merged(MergedWave& m, const Engine& e) {
+  if (m.save_file.is_open() &&
+      !m.save_file.write(gtkw::view_lines(m.first_time(), m.last_time(), e.pow, {}) +
+                         save_traces(e))) {
+    throw InputError(m.save_file.error());
+  }
+  m.commit();
+}
 
 }  // namespace detail
 }  // namespace dpc31::wavediff

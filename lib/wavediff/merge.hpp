@@ -46,11 +46,18 @@ class MergedWave {
   void point(Engine& e, const Point& pt, bool full);
   // The file, then the save file if any (both were opened before the walk).
   void commit();
-  // --merge's GTKWave save file, written before the walk, committed after the waveform.
+  // --merge's GTKWave save file, opened before the walk, written after it (it opens GTKWave on
+  // the merged file's first..last time) and committed after the waveform.
   outfile::OutFile save_file;
+  // The times of the first and the last point written (0 before any).
+  [[nodiscard]] std::uint64_t first_time() const { return first_; }
+  [[nodiscard]] std::uint64_t last_time() const { return last_; }
 
  private:
   std::unique_ptr<WaveSink> sink_;
+  bool written_ = false;
+  std::uint64_t first_ = 0;
+  std::uint64_t last_ = 0;
   std::vector<std::size_t> var_;  // pair * 3 + side -> the sink's variable
   std::size_t cycle_var_ = 0;
   std::vector<signed char> flag_;

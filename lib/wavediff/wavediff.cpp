@@ -679,7 +679,7 @@ Report compare(const Options& o) {
                                  : detail::wavedrom_text(o, rep);
     if (!drom.write(text)) throw InputError(drom.error());
   }
-  for (const auto& m : merged) detail::commit_merged(*m);
+  for (const auto& m : merged) detail::commit_merged(*m, e);
   if (drom.is_open() && !drom.commit()) throw InputError(drom.error());
   return rep;
 }

@@ -2,9 +2,10 @@
 
 #include <fmt/format.h>
 
-#include <cmath>
 #include <filesystem>
 #include <map>
+
+#include "gtkw_view.hpp"
 
 namespace dpc31::wave {
 
@@ -47,20 +48,11 @@ std::string filter_dir() {
 std::string save_file_text(const SaveFile& f) {
   std::string s = fmt::format(
       "[*] dpc31emu: the run's signals by block, states by name (docs/waveforms.md)\n"
-      "[dumpfile] \"{}\"\n[timestart] {}\n",
-      absolute(f.dump), f.start);
-  // The zoom GTKWave starts with, then the primary marker (none) and the named ones, A..Z.
-  // GTKWave 3.3 shows 2^-zoom time units per 200 pixels of its wave pane (measured: 2.79 x
-  // 2^-zoom in its default 1000-pixel window, whose pane is 558 pixels): from [timestart],
-  // -log2(span / 2) opens on the whole window, every marker in view, in any pane of 400 pixels
-  // or more (a window from a late --from is far from time 0).
-  const std::uint64_t span = f.end > f.start ? f.end - f.start : 0;
-  const double zoom = span > 2 ? -std::log2(static_cast<double>(span) / 2.0) : 0.0;
-  s += fmt::format("*{:.6f} -1", zoom);
-  for (std::size_t i = 0; i < 26; ++i) {
-    s += i < f.markers.size() ? fmt::format(" {}", f.markers[i].first) : std::string(" -1");
-  }
-  s += '\n';
+      "[dumpfile] \"{}\"\n",
+      absolute(f.dump));
+  std::vector<std::uint64_t> at;
+  for (const auto& m : f.markers) at.push_back(m.first);
+  s += gtkw::view_lines(f.start, f.end, f.timescale_exp + 15, at);
   for (std::size_t i = 0; i < f.markers.size() && i < 26; ++i) {
     s += fmt::format("[markername] {}{}\n", static_cast<char>('A' + i), f.markers[i].second);
   }

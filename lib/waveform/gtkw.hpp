@@ -22,6 +22,7 @@ struct SaveFile {
   std::vector<std::pair<std::uint64_t, std::string>> markers;
   std::string filter_dir;     // "" = no translate filters (values as numbers)
   std::string top = "dpc31";  // the top scope ("segment" for a segment's waveform)
+  int timescale_exp = -12;    // the file's unit, 10^exp seconds
 };
 
 // Where the translate filters are: share/dpc31emu/gtkwave beside the program (installed, or the

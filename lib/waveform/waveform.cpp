@@ -742,6 +742,7 @@ bool Recorder::finish(std::uint64_t end_cycle, std::string& error) {
   if (m.gtkw.is_open()) {
     SaveFile f{m.opt.path, {}, {}, m.opt.flat, m.units(m.opt.from), end_t, m.markers, filter_dir()};
     f.top = m.top;
+    f.timescale_exp = m.opt.timescale_exp;
     for (const Var& v : m.vars) {
       // The logic-analyser form: grouped by the first scope, the leaf as declared.
       f.signals.push_back(m.opt.flat ? v.name.substr(0, v.name.find('.')) + "." + m.path(v).second
