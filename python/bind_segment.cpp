@@ -242,6 +242,7 @@ struct PySegMaster {
     s.master_slot_bits =
         s.master_addresses.empty() ? mc.slot_bits : std::max(s.master_slot_bits, mc.slot_bits);
     s.master_addresses.push_back(mc.address);
+    if (s.outputs) s.outputs->pair_within(s.master_slot_bits);
   }
   template <typename F>
   auto act(F&& f) {

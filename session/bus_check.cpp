@@ -19,6 +19,15 @@ bool is_request(const fdl::Frame& f) {
 }
 }  // namespace
 
+bool mirrors(const fdl::Frame& answer, std::uint8_t request_sa, std::uint8_t request_da) {
+  return answer.sd == fdl::SC || (answer.sa == request_da && answer.da == request_sa);
+}
+
+bool answers_request(const BusTiming& t, std::uint64_t delay, bool ok, bool mirroring) {
+  return delay <= std::uint64_t{t.slot_bits} * t.bit_cycles ||
+         (ok && mirroring && delay < (std::uint64_t{t.slot_bits} + t.tsyn_bits) * t.bit_cycles);
+}
+
 std::string_view bus_violation_name(BusViolation v) { return kNames[static_cast<std::size_t>(v)]; }
 
 bool parse_bus_violation(std::string_view s, BusViolation& out) {
@@ -110,9 +119,9 @@ void BusCheck::answer(const LineTelegram& t, const fdl::Frame& f, bool ok,
   pending_.reset();
   const std::uint64_t delay = t.start - p.end;
   const std::uint64_t tbits = delay / timing_.bit_cycles;
-  const bool mirrors = f.sd == fdl::SC || (f.sa == p.request.da && f.da == p.request.sa);
+  const bool mirroring = mirrors(f, p.request.sa, p.request.da);
   if (delay > bits(timing_.slot_bits)) {
-    if (ok && mirrors && delay < bits(std::uint64_t{timing_.slot_bits} + timing_.tsyn_bits)) {
+    if (answers_request(timing_, delay, ok, mirroring)) {
       violation(BusViolation::late_answer, t.start,
                 fmt::format("answer to station {} {} bit times after the request (slot time {})",
                             p.request.da, tbits, timing_.slot_bits));
@@ -126,7 +135,7 @@ void BusCheck::answer(const LineTelegram& t, const fdl::Frame& f, bool ok,
               fmt::format("answer to station {} {} bit times after the request (min TSDR {})",
                           p.request.da, tbits, timing_.min_tsdr_bits));
   }
-  if (ok && !mirrors) {
+  if (ok && !mirroring) {
     violation(BusViolation::wrong_responder, t.start,
               fmt::format("station {} answered to {}, asked: {} by {}", f.sa, f.da, p.request.da,
                           p.request.sa));

@@ -45,6 +45,17 @@ struct BusTiming {
   std::vector<std::uint8_t> masters;
 };
 
+// Whether the frame `answer` is the asked station's answer to a request from `request_sa` to
+// `request_da`: an SC, or the request's SA and DA mirrored.
+[[nodiscard]] bool mirrors(const fdl::Frame& answer, std::uint8_t request_sa,
+                           std::uint8_t request_da);
+// Whether a frame that decodes (`ok`), starting `delay` clock cycles after a request's end, is
+// that request's answer as the bus check pairs them: within the slot time, or the asked
+// station's (`mirroring`) late answer before TSL + TSYN; anything later is unsolicited
+// (docs/segment.md). The capture pairs its telegrams by it too (docs/capture.md).
+[[nodiscard]] bool answers_request(const BusTiming& t, std::uint64_t delay, bool ok,
+                                   bool mirroring);
+
 class BusCheck {
  public:
   // `sink`: where each violation's log line goes (through the limiter).

@@ -380,6 +380,52 @@ TEST(SegmentOutputs, PcapOfTheLineInTshark) {
   }
 }
 
+// The pcapng pairs a request and its answer as the bus check does (docs/capture.md, docs/segment.md
+// "Bus checks"): an answer within TSL (100 bit times, the header's default) after the request's
+// end, or the asked station's late answer before TSL + TSYN (133), is "answered by"; at TSL + TSYN,
+// or a late one from another station, it is unsolicited and stands alone. 1.5 Mbaud at 48 MHz: a
+// bit 32 cycles, an SD1 telegram of 6 characters 66 bits = 2112 cycles, a sender's default gap
+// TSYN 33 bits = 1056.
+TEST(SegmentOutputs, ThePcapPairsAsTheBusCheckDoes) {
+  const std::string file = tmp("pair.scn");
+  const std::string req = "send from=a 10,09,01,49,53,16\n";  // 1 -> 9, SRD low: wants an answer
+  const std::string ans = "10,01,09,00,0A,16\n";              // 9 -> 1: mirrors it
+  {
+    std::ofstream(file) << "segment baud=1500000\nstation 5 profile=spc3\nsender a\nsender b\n"
+                        << req << "send from=b after=100bits " << ans << req
+                        << "send from=b after=120bits " << ans << req
+                        << "send from=b after=133bits " << ans << req
+                        << "send from=b after=120bits 10,01,07,00,08,16\n"  // station 7: not asked
+                        << "run 100bits\nexpect bus_violation late_answer 1\n"
+                        << "expect bus_violation unsolicited 2\n";
+  }
+  const auto r =
+      sh(fmt::format("{} run --quiet {} --pcap {}", DPC31_CLI, file, tmp("pair.pcapng")));
+  ASSERT_EQ(r.rc, 0) << r.out;
+  // The comments, in the file's order (pcapng keeps an option's text as it is, padded to 4 bytes
+  // with zeros: the text ends at the first).
+  const std::string pcap = slurp(tmp("pair.pcapng"));
+  std::vector<std::string> got;
+  for (std::size_t at = pcap.find("cycles "); at != std::string::npos;
+       at = pcap.find("cycles ", at + 1)) {
+    const std::size_t end = pcap.find('\0', at);
+    got.push_back(pcap.substr(at, end - at));
+  }
+  ASSERT_EQ(got.size(), 8u);
+  std::uint64_t t = std::stoull(got[0].substr(7));  // the first request's start
+  const std::uint64_t bit = 32;
+  const std::uint64_t tel = 66 * bit;
+  std::vector<std::string> want;
+  for (const auto& [gap, paired] :
+       {std::pair{100, true}, {120, true}, {133, false}, {120, false}}) {
+    want.push_back(fmt::format("cycles {}-{}, a{}", t, t + tel, paired ? ", answered by b" : ""));
+    t += tel + gap * bit;
+    want.push_back(fmt::format("cycles {}-{}, b{}", t, t + tel, paired ? ", answer to a" : ""));
+    t += tel + 33 * bit;
+  }
+  EXPECT_EQ(got, want);
+}
+
 // A `# from NAME` note follows the rx line of the telegram it names (docs/trace-format.md), also
 // when the segment reports the telegram only after many steps that move no time (expects): the
 // review's case of 70 expects after the rogue's telegram put its note after the next step's

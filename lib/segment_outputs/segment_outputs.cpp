@@ -5,6 +5,7 @@
 #include <cctype>
 #include <utility>
 
+#include "bus_check.hpp"
 #include "dp_master.hpp"
 #include "dpc31/fdl.hpp"
 
@@ -86,14 +87,19 @@ bool SegmentOutputs::write(std::string& error) {
 
 // The line's telegrams (docs/capture.md, "A segment's line"): each with its sender; a request that
 // wants an answer is held until the next telegram says who answered it (a frame that decodes,
-// from another station: what is left of a collision answers nothing).
+// from another station: what is left of a collision answers nothing; a telegram the bus check
+// calls unsolicited answers nothing either).
 void SegmentOutputs::capture(const LineTelegram& t) {
   const fdl::Decoded d = fdl::decode(t.bytes);
   const bool ok = d.error == fdl::Error::none && d.frame.sd != fdl::SD4;
   const bool request = ok && fdl::is_request(d.frame.fc);
-  Held h{t, fmt::format("cycles {}-{}, {}", t.start, t.end, seg_->name(t.from))};
+  Held h{t, fmt::format("cycles {}-{}, {}", t.start, t.end, seg_->name(t.from)), d.frame.sa,
+         d.frame.da};
   if (held_) {
-    if (ok && !request && t.from != held_->t.from) {
+    const BusTiming timing{seg_->bit_cycles(), 11, opt_.slot_bits, 33, 0, {}};
+    if (ok && !request && t.from != held_->t.from &&
+        answers_request(timing, t.start - held_->t.end, ok,
+                        mirrors(d.frame, held_->sa, held_->da))) {
       held_->comment += fmt::format(", answered by {}", seg_->name(t.from));
       h.comment += fmt::format(", answer to {}", seg_->name(held_->t.from));
     }
@@ -117,6 +123,7 @@ void SegmentOutputs::add(const Held& h) {
 
 SegmentScenarioOutputs::SegmentScenarioOutputs(const SegmentScenario& s, SegmentOutputOptions opt)
     : s_(s), out_(std::move(opt)), place_(s.file, 0) {
+  out_.pair_within(s.slot_bits);
   for (const SegmentStation& st : s.stations)
     scopes_.push_back(station_scope(st.slave.address, st.name));
 }

@@ -28,6 +28,9 @@ namespace dpc31 {
 struct SegmentOutputOptions {
   std::vector<wave::Options> waves;  // each a VCD or an FST (wave::Options)
   std::string pcap;                  // the line as pcapng ("" none)
+  // TSL in bit times: the pcapng pairs a request and its answer as the bus check does with it
+  // (an answer after TSL, or after TSL + TSYN from the asked station, stands alone).
+  std::uint32_t slot_bits = 100;
 };
 
 // An output that cannot be made, found when a station joins (its scope, the signals asked).
@@ -47,6 +50,8 @@ class SegmentOutputs {
   // Opens every file (temporaries next to the targets): a bad path is found before the run. False
   // with a line.
   bool open(std::string& error);
+  // The line's TSL from now on (SegmentOutputOptions::slot_bits), as its masters join.
+  void pair_within(std::uint32_t slot_bits) { opt_.slot_bits = slot_bits; }
   // Chip station `index` of `seg` joins, before its user side's init: its scope in every
   // waveform. False with a line.
   bool add_station(Segment& seg, std::size_t index, const std::string& scope, std::string& error);
@@ -66,6 +71,8 @@ class SegmentOutputs {
   struct Held {
     LineTelegram t;
     std::string comment;
+    std::uint8_t sa = 0;  // the request's, for the answer's mirror
+    std::uint8_t da = 0;
   };
   void capture(const LineTelegram& t);
   void add(const Held& h);
