@@ -239,8 +239,8 @@ Exchange DpMaster::pass_token(std::uint8_t next) {
 TokenVisit DpMaster::use_token(std::uint8_t next,
                                const std::vector<std::vector<std::uint8_t>>& outputs) {
   check_outputs(outputs);
-  if (!holding_) {  // claimed: no rotation before it
-    token_at_ = now();
+  if (!holding_) {  // claimed: no rotation before it; held from TSYN before its first request
+    token_at_ = send_time(now(), cfg_.idle_bits) - std::uint64_t{cfg_.idle_bits} * t_;
     trr_ = 0;
     holding_ = true;
   }
@@ -337,11 +337,15 @@ std::uint64_t DpMaster::look() {
   chars_.clear();
   const std::uint64_t at = now();
   rx_.advance(at, chars_);
-  // Every station counts its idle time from the last character on the line, whoever sent it.
-  if (!rx_.due().empty()) {
-    line_end_ = rx_.due_start() + rx_.due().size() * std::uint64_t{kUartCharBits} * t_;
-  } else if (!chars_.empty()) {
-    line_end_ = chars_.back().end;
+  // On a segment every station counts its idle time from the last character on the line,
+  // whoever sent it; a telegram still arriving is not waited for (docs/timing.md, "The master's
+  // wait"), and a single chip's answers are the master's own exchanges.
+  if (seg_ && !rx_.receiving()) {
+    if (!rx_.due().empty()) {
+      line_end_ = rx_.due_start() + rx_.due().size() * std::uint64_t{kUartCharBits} * t_;
+    } else if (!chars_.empty()) {
+      line_end_ = chars_.back().end;
+    }
   }
   return at;
 }

@@ -110,6 +110,7 @@ class Runner {
     master_ = std::make_unique<DpMaster>(chip_, s_.master, s_.user.slave);
     dpv1_ = std::make_unique<Dpv1Master>(chip_, *master_, s_.dpv1);
     dpv1_->rules().retries = s_.retries;
+    master_->on_locked = [this](std::uint8_t, std::uint8_t by) { locked_by_ = by; };
     if (hooks_.observer != nullptr) {
       master_->on_send = [this](std::uint64_t start, std::span<const std::uint8_t> bytes,
                                 UartFault fault) {
@@ -507,9 +508,14 @@ class Runner {
     switch (st.kind) {
       case StepKind::startup: {
         damage(st);
+        locked_by_.reset();
         const bool ok = master_->startup(static_cast<int>(st.count));
-        note(chip_.cycle(), ok ? std::string("startup: slave ready for Data_Exchange")
-                               : fmt::format("startup: slave not ready after {} tries", st.count));
+        note(chip_.cycle(),
+             ok           ? std::string("startup: slave ready for Data_Exchange")
+             : locked_by_ ? fmt::format("startup: slave locked by master {} (its Slave_Diag's "
+                                        "Master_Add): not parameterised",
+                                        *locked_by_)
+                          : fmt::format("startup: slave not ready after {} tries", st.count));
         break;
       }
       case StepKind::restart: {
@@ -850,6 +856,7 @@ class Runner {
   // latch in a loop is no flood (--json's port_writes has every write).
   LogLimiter port_lines_;
   std::unique_ptr<DpMaster> master_;
+  std::optional<std::uint8_t> locked_by_;  // the master a `startup` found holding the slave
   std::unique_ptr<Dpv1Master> dpv1_;
   std::optional<Dpv1Answer> dpv1_last_;  // what `expect dpv1` compares
   ScenarioOutcome out_;

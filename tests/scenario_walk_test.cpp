@@ -296,6 +296,53 @@ TEST(ScenarioWalk, OnlyTheNamedLatchBytesArePorts) {
   }
 }
 
+// A slave locked by another master (Slave_Diag byte 3, Master_Add, neither FFh nor ours:
+// chip-facts.md "Slave_Diag") is not parameterised; the walk says so (docs/scenario-format.md,
+// `startup`), not "not ready after N tries" (the review s28 rev2 finding 3). The watchdog's 600 ms
+// of silence (TWD 5 x 10 x 10 ms = 500 ms) returns the slave to Wait_Prm; master 3 takes it.
+TEST(ScenarioWalk, AStartupOfASlaveLockedByAnotherMasterSaysSo) {
+  const Walk w =
+      run("profile dpc31\nbaud 1500000\nmaster address=2\nslave address=5 wd=5,10 wd_on=1 "
+          "wd_base=10ms\nstartup\nsilence 600ms\nforeign_master address=3\nstartup\n"
+          "expect dp_state Wait_Cfg\n",
+          "lock.scn", dpc31::Engine::event);
+  EXPECT_TRUE(w.errors.empty()) << w.errors.front();
+  std::size_t at = 0;
+  while (at < w.lines.size() && w.lines[at].find("] line 8: startup") == std::string::npos) ++at;
+  ASSERT_LT(at, w.lines.size());
+  int said = 0;
+  for (std::size_t i = at; i < w.lines.size(); ++i) {
+    EXPECT_EQ(w.lines[i].find("Set_Prm"), std::string::npos) << w.lines[i];
+    said += w.lines[i].ends_with(
+        "] startup: slave locked by master 3 (its Slave_Diag's Master_Add): not parameterised");
+  }
+  EXPECT_EQ(said, 1);
+}
+
+// On one chip the master's idle time counts from its own exchanges: a late answer still on the
+// line when a step's request is due is not waited for (docs/timing.md, "The master's wait"; the
+// review s28 rev2 finding 2: a version that counted every character it had heard started the
+// request TSYN after the late answer's 4th character). MinTSDR 60 bit times is past the slot time
+// 37, so every answer is late; after `silence 40bits` (more than TSYN 33 since the last wait's
+// end) the request starts as its step does, into the late answer.
+TEST(ScenarioWalk, OnOneChipALateAnswerOnTheLineIsNotWaitedFor) {
+  const Walk w =
+      run("profile spc3\nbaud 1500000\nmaster address=2 slot=37\nslave address=5 min_tsdr=60\n"
+          "startup\nexchange 1\nsilence 40bits\nexchange 1\n",
+          "late.scn", dpc31::Engine::event);
+  const auto cycle_of = [&w](std::string_view text, std::size_t from) {
+    for (std::size_t i = from; i < w.lines.size(); ++i) {
+      if (w.lines[i].find(text) != std::string::npos)
+        return std::pair{
+            std::uint64_t{std::stoull(w.lines[i].substr(w.lines[i].find("cycle") + 5))}, i};
+    }
+    ADD_FAILURE() << "no walk line with " << text;
+    return std::pair{std::uint64_t{0}, w.lines.size()};
+  };
+  const auto [step, at] = cycle_of("] line 8: exchange 1", 0);
+  EXPECT_EQ(cycle_of("] 2 -> 5 Data_Exchange", at).first, step);
+}
+
 // A host user side that never starts the chip (the GLOBALS plug-in of tests/bad_plugin.c: its
 // init only writes its port): the chip stays Offline in its reset states, Wait_Prm and
 // Baud_Search (docs/timing.md), and the walk says so at cycle 0, where the init made no bus access

@@ -1150,6 +1150,21 @@ TEST(SegmentScenario, TheMasterKeepsTsynAfterAnotherStationsTelegram) {
   EXPECT_EQ(r.cycle_of("] station 5: 68 07 07 68 02 05"), request + 13 * 11 * 4 + 11 * 4);
 }
 
+// A token claimed without an SD4 is held from TSYN before the claiming master's first request
+// (docs/segment.md, "The token"): the master's own TTH counts from there as the bus check's does
+// (the review s28 rev2 finding 1: it counted from the claim's step, 33 bit times earlier for the
+// check, and the check charged it token_hold at TTR 331..340).
+TEST(SegmentScenario, AClaimedTokensHoldIsTheBusChecks) {
+  for (const int ttr : {331, 335, 340}) {
+    run_passing(
+        fmt::format("segment baud=12000000\nstation 5 name=spc3 profile=spc3\n"
+                    "station 6 name=vpc3plus profile=vpc3plus\nstation 7 name=dpc31 profile=dpc31\n"
+                    "master 2 slaves=5,6 ttr={0}\nmaster 3 slaves=7 ttr={0}\nstartup\ncycle 2\n"
+                    "pass_token from=2 to=9\nrun 2ms\ncycle 3\nexpect bus_violation token_hold 0\n",
+                    ttr));
+  }
+}
+
 // The same after another master's token: master 3, given the token by master 2, passes it back
 // TSYN after master 2's token ends (each DC xx yy: 33 T), not at once (the audit's f1b).
 TEST(SegmentScenario, AMasterPassesTheTokenTsynAfterTheTokenItGot) {
