@@ -287,7 +287,7 @@ std::optional<fdl::Frame> DpStateMachine::set_prm(const fdl::Frame& req) {
   const std::uint8_t status = prm.station_status;
   // Byte 7: the Spec_User_Prm_Byte, or DPV1_Status_1 (its bits included, VPC3+C p.53).
   const std::uint8_t spec = prm.status(1);
-  if (s_.master_add != 0xFF && s_.master_add != req.sa) {
+  if (locked_by_another(req.sa)) {
     // Locked by another master (its diag shows Master_Add): whatever the lock bits say, this
     // master never re-parameterises, unlocks or changes min TSDR.
     ++counters_.not_allowed;
@@ -342,7 +342,7 @@ std::optional<fdl::Frame> DpStateMachine::set_prm(const fdl::Frame& req) {
       sig_.emit(BlockEvent::Kind::leave_master);
       leave_master();
     }
-    s_.master_add = 0xFF;
+    s_.master_add = pdu::SlaveDiag::kNoMaster;
     watchdog_.release();
     return fdl::sc();
   }
@@ -621,7 +621,8 @@ void DpStateMachine::response_sent() {
   s_.diag_in_flight = false;
   // Diag_Flag is cleared when "the relevant master" fetched (SPC3 p.32): the locking master, or
   // any master while none holds the lock. Another master's fetch leaves it as it is.
-  const bool relevant = s_.master_add == 0xFF || s_.diag_requester == s_.master_add;
+  const bool relevant =
+      s_.master_add == pdu::SlaveDiag::kNoMaster || s_.diag_requester == s_.master_add;
   const bool flag = relevant ? buffers_.sent_diag_has_stat_diag() : buffers_.diag_flag();
   sig_.emit(BlockEvent::Kind::diag_end, flag ? 1 : 0);
   buffers_.diag_send_end(flag);
@@ -647,7 +648,7 @@ void DpStateMachine::leave_master() {
   s_.prm = Handshake{};
   s_.cfg = Handshake{};
   s_.ext_prm = false;
-  s_.master_add = 0xFF;  // unlocked: any master may parameterise us again
+  s_.master_add = pdu::SlaveDiag::kNoMaster;  // unlocked: any master may parameterise us again
   s_.sync_mode = false;
   s_.freeze_mode = false;
   s_.user_wd_armed = false;

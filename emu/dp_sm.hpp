@@ -62,13 +62,13 @@ class DpStateMachine {
     DpState state = DpState::Wait_Prm;
     Handshake prm;
     Handshake cfg;
-    bool ssa_free = true;            // SAP55 enabled (SSA buffer free)
-    bool prm_fault = false;          // diag St1 Prm_Fault
-    bool cfg_fault = false;          // diag St1 Cfg_Fault
-    bool not_supported = false;      // diag St1 Not_Supported (reserved Global_Control bits, ...)
-    std::uint8_t station = 0;        // own address: R_TS_Adr at Start, changed by Set_Slave_Add
-    bool no_add_change = false;      // Real_No_Add_Change adopted from Set_Slave_Add
-    std::uint8_t master_add = 0xFF;  // the master that locked us (FFh: not parameterised)
+    bool ssa_free = true;        // SAP55 enabled (SSA buffer free)
+    bool prm_fault = false;      // diag St1 Prm_Fault
+    bool cfg_fault = false;      // diag St1 Cfg_Fault
+    bool not_supported = false;  // diag St1 Not_Supported (reserved Global_Control bits, ...)
+    std::uint8_t station = 0;    // own address: R_TS_Adr at Start, changed by Set_Slave_Add
+    bool no_add_change = false;  // Real_No_Add_Change adopted from Set_Slave_Add
+    std::uint8_t master_add = pdu::SlaveDiag::kNoMaster;  // the master that locked us
     std::uint8_t group_ident = 0;
     // The last Set_Prm's byte 3 when it is newer than the user's MinTSDR_Val; 0 = MinTSDR_Val.
     std::uint8_t min_tsdr = 0;
@@ -163,6 +163,11 @@ class DpStateMachine {
   std::optional<fdl::Frame> set_slave_add(const fdl::Frame& req);
   std::optional<fdl::Frame> set_ext_prm(const fdl::Frame& req);
   [[nodiscard]] const char* dpv1_prm_fault(const pdu::SetPrm& prm) const;
+  // Locked by a master other than `sa` (the Master_Add its diag shows), which every service of
+  // the parameterisation from `sa` leaves alone (DPC31 p.28).
+  [[nodiscard]] bool locked_by_another(std::uint8_t sa) const {
+    return s_.master_add != pdu::SlaveDiag::kNoMaster && s_.master_add != sa;
+  }
   fdl::Frame sap_list_answer(const fdl::Frame& req, const SapListAnswer& a);
   std::optional<fdl::Frame> data_exchange(const fdl::Frame& req);
   void global_control(const fdl::Frame& req);

@@ -50,7 +50,7 @@ std::optional<Frame> DpStateMachine::set_ext_prm(const Frame& req) {
     ++counters_.unknown_sap;
     return refuse("SAP 53 not supported", Response::RS);
   }
-  if (s_.master_add != 0xFF && req.sa != s_.master_add) {
+  if (locked_by_another(req.sa)) {
     ++counters_.not_allowed;
     sig_.log(LogLevel::info, "Set_Ext_Prm from {}: not the locking master: ignored", req.sa);
     return fdl::sc();

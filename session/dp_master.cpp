@@ -438,8 +438,6 @@ void DpMaster::make_request(fdl::Frame& f, std::optional<std::uint8_t> dsap, boo
 
 namespace {
 
-constexpr std::uint8_t kNoMaster = 0xFF;  // Master_Add of a slave no master parameterised
-
 // SDN and the token (SD4) want no answer.
 bool sdn(const fdl::Frame& f) {
   const fdl::Function fn = fdl::request_function(f.fc);
@@ -783,7 +781,7 @@ bool DpMaster::startup_request(Startup& s) {
   }
   using D = pdu::SlaveDiag;
   const std::optional<D> d = D::parse(diag.answer->du);
-  if (d && d->master_add != kNoMaster && d->master_add != cfg_.address) {
+  if (d && d->master_add != D::kNoMaster && d->master_add != cfg_.address) {
     // Master_Lock: another master parameterised the slave and holds it (chip-facts.md, Slave_Diag
     // byte 3); it is not ours to parameterise (docs/decisions.md, the twenty-eighth session).
     note(

@@ -84,7 +84,8 @@ struct SlaveDiag {
   std::uint8_t station_status_1 = 0;
   std::uint8_t station_status_2 = St2_Always_1;
   std::uint8_t station_status_3 = 0;
-  std::uint8_t master_add = 0xFF;
+  static constexpr std::uint8_t kNoMaster = 0xFF;  // Master_Add: no master parameterised it
+  std::uint8_t master_add = kNoMaster;
   std::uint16_t ident = 0;
   std::vector<Block> blocks;
 
