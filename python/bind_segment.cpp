@@ -766,6 +766,10 @@ void bind_seg_master(py::module_& m) {
           py::arg("cycles"), "Time passes with a silent line from this master.")
       .def_property_readonly("counters", [](const M& pm) { return pm.m->counters(); })
       .def_property_readonly("history", [](const M& pm) { return pm.m->history(); })
+      .def_property_readonly(
+          "locks", [](const M& pm) { return pm.m->locks(); },
+          "{slave address: master address}: the slaves a start-up found locked by another master "
+          "(Slave_Diag's Master_Add), which it left alone")
       .def("clear_history", [](M& pm) { pm.m->clear_history(); });
 }
 

@@ -755,6 +755,10 @@ void bind_master(py::module_& m) {
       .def_property_readonly("bit_cycles", [](const PyMaster& pm) { return pm.m->bit_cycles(); })
       .def_property_readonly("counters", [](const PyMaster& pm) { return pm.m->counters(); })
       .def_property_readonly("history", [](const PyMaster& pm) { return pm.m->history(); })
+      .def_property_readonly(
+          "locks", [](const PyMaster& pm) { return pm.m->locks(); },
+          "{slave address: master address}: a start-up that returned False because its slave is "
+          "locked by another master (Slave_Diag's Master_Add) names it here")
       .def("clear_history", [](PyMaster& pm) { pm.m->clear_history(); })
       .def(
           "startup",

@@ -781,13 +781,16 @@ bool DpMaster::startup_request(Startup& s) {
   }
   using D = pdu::SlaveDiag;
   const std::optional<D> d = D::parse(diag.answer->du);
-  if (d && d->master_add != D::kNoMaster && d->master_add != cfg_.address) {
+  const bool locked = d && d->master_add != D::kNoMaster && d->master_add != cfg_.address;
+  if (!locked) locks_.erase(slave_.address);
+  if (locked) {
     // Master_Lock: another master parameterised the slave and holds it (chip-facts.md, Slave_Diag
     // byte 3); it is not ours to parameterise (docs/decisions.md, the twenty-eighth session).
     note(
         fmt::format("[cycle {:>10}] Slave_Diag: locked by master {} (Master_Add), not "
                     "parameterised: its start-up ends here",
                     now(), d->master_add));
+    locks_[slave_.address] = d->master_add;
     if (on_locked) on_locked(slave_.address, d->master_add);
     s.phase = P::failed;
     return true;

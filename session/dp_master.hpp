@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <span>
@@ -318,6 +319,10 @@ class DpMaster {
   // A start-up found `slave` locked by master `by` (its Slave_Diag's Master_Add): the master
   // leaves it alone, as a DP master does, and that slave's start-up ends without Data_Exchange.
   std::function<void(std::uint8_t slave, std::uint8_t by)> on_locked;
+  // The slaves the last start-up of each found locked (slave -> the master its Slave_Diag's
+  // Master_Add names): the doors without on_locked (Python's startup() returns a bare bool) read
+  // why a start-up failed here. A later start-up's Slave_Diag without a lock takes the slave off.
+  [[nodiscard]] const std::map<std::uint8_t, std::uint8_t>& locks() const { return locks_; }
   // Told of every telegram just before it goes on RxD (requests, line noise): its first start
   // bit, its bytes and the fault it carries. A trace recorder writes the batch from it.
   std::function<void(std::uint64_t start, std::span<const std::uint8_t> bytes, UartFault fault)>
@@ -389,8 +394,9 @@ class DpMaster {
   bool holding_ = false;        // the token is ours (received or claimed, not passed on)
   std::size_t next_slave_ = 0;  // where the next visit's cycles begin
   std::uint64_t visits_since_gap_ = 0;
-  std::optional<std::uint8_t> gap_next_;  // the GAP address asked next (none: the first)
-  std::vector<Startup> startups_;         // each slave's start-up under the token
+  std::optional<std::uint8_t> gap_next_;        // the GAP address asked next (none: the first)
+  std::vector<Startup> startups_;               // each slave's start-up under the token
+  std::map<std::uint8_t, std::uint8_t> locks_;  // locks(): slave -> the master that holds it
   MasterConfig cfg_;
   SlaveConfig slave_;
   std::uint32_t t_;

@@ -401,6 +401,38 @@ def failure_names_the_station():
     server.close()
 
 
+def a_locked_slave_is_left_alone():
+    """A slave whose Slave_Diag names another master in Master_Add (byte 3) is locked by it: the
+    tool leaves it alone, as a DP master does (EN 50170's Master_Lock; the built-in master's
+    `startup: slave locked by master N ...`, docs/decisions.md): exit 1 naming the lock, and no
+    Set_Prm (DSAP 61) on the line. Before, it sent Set_Prm and Chk_Cfg and failed with "the slave
+    never became ready" after 20 more Slave_Diags."""
+    # Station_Status_1 00h, _2 0Ch (bit 2 always 1, WD_On), _3 00h, Master_Add 3, Ident 0D04h.
+    diag = sd2(MASTER, SLAVE, 0x08, [0x00, 0x0C, 0x00, 0x03, 0x0D, 0x04], dsap=SAP_MASTER,
+               ssap=SAP_SLAVE_DIAG)
+    server = socket.create_server(("127.0.0.1", 0))
+    requests = []
+
+    def serve():
+        conn, _ = server.accept()
+        buf = b""
+        while chunk := conn.recv(512):
+            buf += chunk
+            while (n := frame_length(buf)) is not None and len(buf) >= n:
+                req, buf = buf[:n], buf[n:]
+                requests.append(req)
+                conn.sendall(sd1(MASTER, SLAVE, 0x00) if req[0] == SD1 else diag)
+        conn.close()
+    line = threading.Thread(target=serve, daemon=True)
+    line.start()
+    exits(1, "dp_master: locked by master 3 (its Slave_Diag's Master_Add): not parameterised",
+          f"socket://127.0.0.1:{server.getsockname()[1]}", *DO4)
+    server.close()
+    line.join(5)
+    dsaps = [r[7] for r in requests if r[0] == SD2 and r[4] & 0x80]
+    check(dsaps == [SAP_SLAVE_DIAG], f"requests {[hexs(r) for r in requests]}")
+
+
 def not_a_serial_device_exit_2():
     """A device that is no tty (/dev/null, a regular file): exit 2, one line (it was a
     termios.error traceback)."""
@@ -473,7 +505,8 @@ CASES = {"slow_line_search_drained": slow_line_search_drained,
          "device_lost_pty": device_lost_pty,
          "device_lost_tcp": device_lost_tcp,
          "tcp_refused_names_the_url": tcp_refused_names_the_url,
-         "failure_names_the_station": failure_names_the_station}
+         "failure_names_the_station": failure_names_the_station,
+         "a_locked_slave_is_left_alone": a_locked_slave_is_left_alone}
 
 
 def main():

@@ -448,7 +448,13 @@ def start_up(m, args, say):
     """Slave_Diag, Set_Prm, Chk_Cfg, Slave_Diag until the slave is ready (Station_Not_Ready and
     Prm_Req clear)."""
     say(f"FDL_Status: {hexs(m.find_slave())}")
-    say(f"Slave_Diag: {hexs(m.slave_diag())}")
+    du = m.slave_diag()
+    say(f"Slave_Diag: {hexs(du)}")
+    # Master_Add (Slave_Diag byte 3) naming another master: the slave is locked by it, and a DP
+    # master leaves it alone (EN 50170's Master_Lock; docs/decisions.md, the twenty-eighth
+    # session), as the built-in master does (`startup: slave locked by master N ...`).
+    if len(du) >= 4 and du[3] not in (0xFF, m.address):
+        raise Fail(f"locked by master {du[3]} (its Slave_Diag's Master_Add): not parameterised")
     # Lock_Req + WD_On, watchdog factors, MinTSDR 0, ident, group 0, then the user parameters.
     prm = [0x88, args.watchdog[0], args.watchdog[1], 0x00, args.ident >> 8, args.ident & 0xFF,
            0x00] + args.user_prm

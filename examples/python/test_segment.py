@@ -153,6 +153,22 @@ def test_a_startup_under_ttr_is_spread_over_the_visits():
     assert check2.count("token_hold") > 0
 
 
+def test_a_slave_locked_by_another_master_is_named_in_locks():
+    # Master 3 parameterises station 5 (Lock_Req); master 2's start-up finds master 3 in its
+    # Slave_Diag's Master_Add and leaves it alone (docs/segment.md, the scenario's `startup`),
+    # takes station 6, and names the lock where startup_all's False cannot (docs/python.md).
+    seg = dpc31.Segment(1_500_000)
+    seg.add_station(5, "spc3", wd=(100, 100))
+    seg.add_station(6, "vpc3plus", wd=(100, 100))
+    m3 = seg.add_master(3, [5])
+    m2 = seg.add_master(2, [5, 6])
+    assert m3.startup_all() and m3.locks == {}
+    assert not m2.startup_all()
+    assert m2.locks == {5: 3}
+    sent_to_5 = [ex.request.service for ex in m2.history if ex.request.da == 5]
+    assert "Set_Prm" not in sent_to_5 and sent_to_5[-1] == "Slave_Diag"
+
+
 def test_the_built_in_user_side_serves_its_user_watchdog_when_asked():
     """docs/timing.md: the user watchdog counts Data_Exchanges; the user side's Start loads
     R_User_WD_Value at the first, each later one counts down, and the one that reaches 0 is not

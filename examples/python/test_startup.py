@@ -102,3 +102,30 @@ def test_a_master_gone_before_its_chip_leaves_it_nothing_to_run():
         assert ex.answer is not None and ex.answer.du == b"\x11\x22\x33\x44"
         assert len(master.history) == len(history) + 1
         del master, history
+
+
+def test_a_slave_locked_by_another_master_is_named_in_locks():
+    # Slave_Diag byte 3, Master_Add, naming another master (neither FFh nor ours) means the slave
+    # is locked by it (chip-facts.md "Slave_Diag"); the master leaves it alone, as a scenario's
+    # `startup` does ("slave locked by master 3", docs/scenario-format.md), and startup()'s bare
+    # False gets its reason in Master.locks (docs/python.md).
+    chip = dpc31.Chip("spc3")
+    slave = dict(address=5, wd_fact1=5, wd_fact2=10, wd_on=True, wd_base_1ms=False)
+    first = dpc31.Master(chip, address=3, baud=1_500_000, slave=dpc31.SlaveConfig(**slave))
+    first.run_responder(inputs=b"\x11\x22\x33\x44")
+    assert first.startup() and first.locks == {}
+    second = dpc31.Master(chip, address=2, baud=1_500_000, slave=dpc31.SlaveConfig(**slave))
+    assert not second.startup()
+    assert second.locks == {5: 3}
+    # FDL_Status, then the Slave_Diag that names master 3: no Set_Prm, no Chk_Cfg
+    assert [ex.request.service for ex in second.history] == ["FDL_Status", "Slave_Diag"]
+    assert second.history[-1].answer.du[3] == 3
+    # TWD = 10 ms x 5 x 10 = 500 ms without master 3 (docs/timing.md, "DP watchdog"): the slave
+    # is back in Wait_Prm, its Master_Add FFh, and the next start-up takes it off locks.
+    second.idle(48_000_000 * 6 // 10)
+    assert chip.dp_state == dpc31.DpState.Wait_Prm
+    before = len(second.history)
+    second.startup(tries=3)  # no user side of its own: the slave stays in Wait_Prm
+    diags = [ex for ex in second.history[before:] if ex.request.service == "Slave_Diag"]
+    assert diags[0].answer.du[3] == 0xFF
+    assert second.locks == {}
