@@ -654,6 +654,7 @@ void DpStateMachine::leave_master() {
   s_.user_wd_armed = false;
   s_.fcb_valid = false;
   s_.dx_on_new_din = false;
+  watchdog_.master_left();
   buffers_.end_clear();
   sig_.log(LogLevel::info, "Leave_Master: DP state -> Wait_Prm");
   if (was == DpState::Data_Exchange) irq_.raise(irq::Go_Leave_Data_Exchange);

@@ -18,12 +18,13 @@ void InterruptController::install_hooks(HookTable& h) {
   bind_hooks(h, RegId::Int_Ack_Reg, *this).pre_write = keep_events;
 }
 
-// After the register file's reset (X/INT follows the reset IRR and IMR). PB3 keeps its level,
-// as before the blocks were classes: what a hardware reset does to it no manual says.
+// After the register file's reset (X/INT follows the reset IRR and IMR). The reset clears DX_Out
+// and C31_Control, so PB3 falls in the reset's cycle, its observer told (docs/timing.md).
 void InterruptController::reset() {
   const bool pb3 = s_.pb3;
   s_ = State{};
   s_.pb3 = pb3;
+  set_pb3(false);
   s_.line = active();
 }
 

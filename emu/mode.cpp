@@ -38,7 +38,12 @@ void ModeRegisters::command(std::uint16_t written) {
   if ((written & fields::Mode_Reg1::Start_SPC3) != 0) start();
   if ((written & fields::Mode_Reg1::EOI) != 0) irq_.end_of_interrupt();
   if ((written & fields::Mode_Reg1::User_Leave_Master) != 0) dp_.leave_master();
-  if ((written & fields::Mode_Reg1::Go_Offline) != 0) go_offline("Go_Offline");
+  if ((written & fields::Mode_Reg1::Go_Offline) != 0) {
+    // Written with Start_SPC3: Start first, then Go_Offline, which stays 1 as after its own
+    // write (docs/timing.md), though the Start cleared it.
+    regs_.latch(RegId::Mode_Reg1) |= fields::Mode_Reg1::Go_Offline;
+    go_offline("Go_Offline");
+  }
 }
 
 void ModeRegisters::start() {

@@ -27,7 +27,7 @@ void Watchdog::enter_baud_control() {
 void Watchdog::baud_found(std::uint8_t code) {
   s_.baud_code = code;
   sig_.log(LogLevel::info, "baud rate found: {} baud (code {})", kBaudRates[code], code);
-  enter_baud_control();
+  enter_monitoring();
   sig_.emit(BlockEvent::Kind::irq, irq::Baudrate_Detect);
   irq_.raise(irq::Baudrate_Detect);
 }
@@ -35,13 +35,26 @@ void Watchdog::baud_found(std::uint8_t code) {
 void Watchdog::parameterise(bool wd_on, std::uint8_t f1, std::uint8_t f2, bool base_1ms) {
   s_.dp_wd_on = wd_on;
   s_.dp_wd_cycles = clock_.cycles_for_us(std::uint64_t{base_1ms ? 1000u : 10'000u} * f1 * f2);
-  if (s_.wd == WdState::Baud_Search) return;
-  if (wd_on && regs_.mode0(fields::Mode_Reg0::DP_Mode)) {
+  // In Baud_Search the rate found enters the state these parameters ask for (baud_found).
+  if (s_.wd != WdState::Baud_Search) enter_monitoring();
+}
+
+// Seed 002: "the watchdog is used for the 'DP_Control' state, after a 'Set_Param telegram' was
+// received with ... WD_On = 1" (and DP_Mode = 1); otherwise Baud_Control, where the DP state is
+// never reset.
+void Watchdog::enter_monitoring() {
+  if (s_.dp_wd_on && regs_.mode0(fields::Mode_Reg0::DP_Mode)) {
     s_.wd = WdState::DP_Control;
     clock_.arm(s_.timer, s_.dp_wd_cycles);
   } else {
-    enter_baud_control();  // WD_On = 0: stays in Baud_Control, the DP state is never reset
+    enter_baud_control();
   }
+}
+
+// Parameters accepted in Baud_Search wait for the rate; a Leave_Master before it leaves no master
+// for DP_Control to monitor.
+void Watchdog::master_left() {
+  if (s_.wd == WdState::Baud_Search) s_.dp_wd_on = false;
 }
 
 void Watchdog::retrigger(std::uint8_t master, std::uint8_t master_add) {

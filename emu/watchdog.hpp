@@ -31,15 +31,19 @@ class Watchdog {
   void reset();     // the MAC reset: Baud_Search, nothing monitored (the baud code stays)
   void power_on();  // a hardware reset: also the baud code
 
-  void baud_found(std::uint8_t code);  // Baud_Search heard a telegram at kBaudRates[code]
-  // The parameters a Set_Prm brought take effect (User_Prm_Data_Okay).
+  // Baud_Search heard a telegram at kBaudRates[code]: DP_Control (TWD from now) when parameters
+  // with WD_On = 1 were accepted in Baud_Search, else Baud_Control.
+  void baud_found(std::uint8_t code);
+  // The parameters a Set_Prm brought take effect (User_Prm_Data_Okay); in Baud_Search they wait
+  // for the rate found.
   void parameterise(bool wd_on, std::uint8_t f1, std::uint8_t f2, bool base_1ms);
   // An error-free telegram from `master` to our address: Baud_Control restarts for any station,
   // DP_Control only for the locking master (`master_add`).
   void retrigger(std::uint8_t master, std::uint8_t master_add);
   // Unlocked (Set_Prm Unlock_Req): no master to monitor, DP_Control -> Baud_Control.
   void release();
-  Expiry expire();  // its timer is reached
+  void master_left();  // the DP state machine's Leave_Master
+  Expiry expire();     // its timer is reached
 
   [[nodiscard]] WdState state() const { return s_.wd; }
   [[nodiscard]] bool dp_wd_on() const { return s_.dp_wd_on; }
@@ -50,6 +54,7 @@ class Watchdog {
  private:
   friend struct BlockAccess;
   void enter_baud_control();
+  void enter_monitoring();  // DP_Control or Baud_Control, as the accepted parameters ask
   Clock& clock_;
   const RegisterFile& regs_;
   InterruptController& irq_;

@@ -692,8 +692,18 @@ void bind_master(py::module_& m) {
           [](PyMaster& pm, const py::bytes& inputs, bool sync_supported, bool freeze_supported,
              bool spec_clear_mode, const py::bytes& substitute, bool user_watchdog,
              bool dx_out_port, const std::vector<RecordArg>& records,
-             const std::optional<py::int_>& work_cycles) {
+             const std::optional<py::int_>& work_cycles,
+             const std::optional<py::int_>& wd_baud_control,
+             const std::optional<py::int_>& user_wd_value) {
             ResponderConfig rc;
+            // The `user` step's checks (scenario_parse.cpp): its ranges and words.
+            if (wd_baud_control)
+              rc.wd_baud_control = in_range<U8>(kWdBaudControl, *wd_baud_control);
+            if (user_wd_value) {
+              rc.user_wd_value = in_range<std::uint16_t>(kUserWdValue, *user_wd_value);
+              if (pm.chip.chip.profile().id == Profile::dpc31 && !user_watchdog)
+                throw py::value_error(user_wd_value_needs_user_wd("user_wd_value"));
+            }
             // A scenario's `record` and `dpv1 work=` lines: the VPC3+'s only, and the time
             // spent on a record only where there is one (no silent options).
             if (!records.empty()) no_dpv1_but_on_vpc3plus(pm.chip.chip, "records");
@@ -724,10 +734,13 @@ void bind_master(py::module_& m) {
           py::arg("freeze_supported") = true, py::arg("spec_clear_mode") = true,
           py::arg("substitute") = py::bytes(), py::arg("user_watchdog") = false,
           py::arg("dx_out_port") = false, py::arg("records") = std::vector<RecordArg>{},
-          py::arg("work_cycles") = py::none(),
+          py::arg("work_cycles") = py::none(), py::arg("wd_baud_control") = py::none(),
+          py::arg("user_wd_value") = py::none(),
           "Runs the built-in responder (session/responder.hpp) as the user side; on a vpc3plus "
           "it serves `records` [(slot, index, data)] over DPV1, `work_cycles` clocks per request "
-          "(a scenario's `record` and `dpv1 work=` lines).")
+          "(a scenario's `record` and `dpv1 work=` lines). wd_baud_control: WD_Baud_Control_Val "
+          "(x 10 ms, 0x10 unless given); user_wd_value: R_User_WD_Value (0x1FF unless given; on "
+          "a dpc31 only with user_watchdog), as a scenario's `user` line.")
       .def(
           "run_board",
           [](PyMaster& pm, py::object board) {

@@ -108,10 +108,19 @@ void Responder::init(BusPort& c) {
   if (cfg_.freeze_supported) mode0 |= m0::Freeze_Supported;
   if (cfg_.spec_clear_mode) mode0 |= m0::Spec_Clear_Mode;
   write16(c, RegId::Mode_Reg0, mode0);
-  // Large buffers need the VPC3+'s 4 KB mode (16-byte segments).
+  // VPC3+ Mode_Reg2: large buffers need the 4 KB mode (16-byte segments; this write leaves
+  // GC_Int_Mode 0). An input-only slave raises DX_Out only with DX_Int_Mode = 1 ("0 - DX Interrupt
+  // only generated, if DOUT length not 0", Profichip DpCfg.h), and the user watchdog is served on
+  // DX_Out: the user side sets it then, as an input-only slave's firmware does.
   const bool large =
       p.ram_size_large != 0 && 3u * (s.in_len + s.out_len) + 1024 > p.ram_size - p.user_base;
-  if (large) c.write(waddr(c.chip(), RegId::Mode_Reg2), fields::Mode_Reg2::_4kB_Mode);
+  if (p.id == Profile::vpc3plus) {
+    const auto reset = static_cast<std::uint16_t>(find_reg(p, RegId::Mode_Reg2)->reset);
+    std::uint16_t mode2 = large ? fields::Mode_Reg2::_4kB_Mode : reset;
+    if (cfg_.user_watchdog && s.out_len == 0) mode2 |= fields::Mode_Reg2::DX_Int_Mode;
+    if (mode2 != reset)
+      c.write(waddr(c.chip(), RegId::Mode_Reg2), static_cast<std::uint8_t>(mode2));
+  }
   seg_shift_ = large ? p.segment_shift_large : p.segment_shift;
   const std::uint16_t enabled = irq::MAC_Reset | irq::Go_Leave_Data_Exchange |
                                 irq::Baudrate_Detect | irq::WD_DP_Control_Timeout |

@@ -455,9 +455,9 @@ class Parser {
           u.user_watchdog = flag(v, k);
         } else if (k == "user_wd_value") {
           user_wd_value_line_ = step_.line;
-          u.user_wd_value = static_cast<std::uint16_t>(number(v, k, 0, 0xFFFF));
+          u.user_wd_value = static_cast<std::uint16_t>(number(v, kUserWdValue));
         } else if (k == "wd_baud_control") {
-          u.wd_baud_control = static_cast<std::uint8_t>(number(v, k, 0, 255));
+          u.wd_baud_control = static_cast<std::uint8_t>(number(v, kWdBaudControl));
         } else if (k == "substitute") {
           substitute_line_ = step_.line;
           u.substitute = bytes(v, k);

@@ -218,8 +218,7 @@ class Parser {
     const std::optional<std::string_view> serve = take("user_wd");
     const std::optional<std::string_view> value = take("user_wd_value");
     if (serve) st.user_watchdog = flag(*serve, "user_wd");
-    if (value)
-      st.user_wd_value = static_cast<std::uint16_t>(number(*value, "user_wd_value", 0, 0xFFFF));
+    if (value) st.user_wd_value = static_cast<std::uint16_t>(number(*value, kUserWdValue));
     if (!st.firmware.empty() && (serve || value))
       fail(refused_beside_firmware(serve ? "user_wd" : "user_wd_value"));
     if (value && st.chip.profile == Profile::dpc31 && !st.user_watchdog)

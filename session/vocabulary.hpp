@@ -117,6 +117,11 @@ inline constexpr ValueRange kAlarmSap{"sap", sap::MSAC_C1_Alarm, sap::MSAC_C1};
 // The built-in user side's work per DPV1 request in clocks (`dpv1 work=`, Python's
 // run_responder(work_cycles=)), one range for both doors: at most 1 s at 48 MHz.
 inline constexpr ValueRange kWorkCycles{"work", 0, 48'000'000};
+// The built-in user side's R_User_WD_Value and WD_Baud_Control_Val (x 10 ms): the `user` step's
+// `user_wd_value=` and `wd_baud_control=`, a segment `station`'s `user_wd_value=`, Python's
+// run_responder(user_wd_value=, wd_baud_control=).
+inline constexpr ValueRange kUserWdValue{"user_wd_value", 0, 0xFFFF};
+inline constexpr ValueRange kWdBaudControl{"wd_baud_control", 0, 255};
 inline constexpr ValueRange kSendTimeout{"send_timeout", 1, 65535};
 inline constexpr ValueRange kAbortReason{"reason", 0, 15};
 inline constexpr ValueRange kAbortInstance{"instance", 0, 3};  // 0 FDL, 1 MSAC_C2, 2 user

@@ -45,6 +45,24 @@ TEST_P(Mode, StartAndGoOffline) {
   EXPECT_TRUE(c.started());
 }
 
+// Start_SPC3 and Go_Offline in one Mode_Reg1_S write (docs/timing.md, "Start and Go_Offline in
+// one write": Start first, then Go_Offline; Go_Offline "stays 1 until the next Start"): the chip
+// Offline with MAC_Reset, and Mode_Reg1 as after a Start then a Go_Offline, 04h (the VPC3+ reads
+// it back at 15h).
+TEST_P(Mode, StartAndGoOfflineInOneWriteEndsAsStartThenGoOffline) {
+  if (GetParam().profile == Profile::dpc31) return;  // requests, not Mode_Reg1 bits (below)
+  Chip c = make();
+  c.write(static_cast<std::uint32_t>(c.addr_of(RegId::Mode_Reg1_S)), 0x05);
+  EXPECT_FALSE(c.started());
+  EXPECT_NE(c.peek_reg(RegId::Int_Req_Reg) & irq::MAC_Reset, 0);
+  EXPECT_EQ(c.peek_reg(RegId::Mode_Reg1), 0x04);
+  if (GetParam().profile == Profile::vpc3plus) {
+    EXPECT_EQ(c.read(0x15), 0x04);
+  }
+  user_start(c);  // the next Start clears it
+  EXPECT_EQ(c.peek_reg(RegId::Mode_Reg1), 0x01);
+}
+
 // The DPC31 starts, stops and leaves the master through its Instruction_Queue (DPC31 p.22,
 // Table 5.1-3; docs/dpc31.md): the SPC3's Start_SPC3, Go_Offline, User_Leave_Master and
 // Res_User_WD bits of Mode_Reg1_S do nothing there, and a written 1 is logged at debug level.

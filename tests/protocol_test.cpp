@@ -450,6 +450,52 @@ TEST_P(Protocol, DpWatchdogExpiresAtTheExactCycle) {
   EXPECT_EQ(b.user.outputs.back().data, (Bytes{0, 0, 0, 0}));
 }
 
+// A user that gives User_Prm_Data_Okay only after Baud_Control ran out (docs/decisions.md, "The
+// twenty-ninth session: s29-chip"; seed 002: "the watchdog is used for the 'DP_Control' state,
+// after a 'Set_Param telegram' was received with ... WD_On = 1"): the request that finds the rate
+// again enters DP_Control and restarts it, so a pulled cable makes Wait_Prm exactly TWD (10 x 10 x
+// 10 ms = 48 000 000 clocks) after that request is acted on (docs/timing.md, "DP watchdog"). First
+// the same Okay followed by the user's Leave_Master before the rate is found: no master is left
+// to monitor, so that rate found enters Baud_Control.
+TEST_P(Protocol, PrmOkayInBaudSearchArmsTheDpWatchdogWhenTheRateIsFound) {
+  ResponderConfig rc = config();
+  rc.wd_baud_control = 1;  // 10 ms (20 ms on the VPC3+)
+  Bench b(GetParam(), 12'000'000, rc);
+  const int mask = b.chip.addr_of(RegId::Int_Mask_Reg);
+  const std::uint16_t user_mask = testutil::bus_read16(b.chip, mask, 16);
+  // The master parameterises the slave while the user is busy (no interrupt served); Baud_Control
+  // runs out before the user accepts.
+  const auto okay_in_baud_search = [&] {
+    testutil::bus_write16(b.chip, mask, 16, 0xFFFF);
+    EXPECT_FALSE(b.master.startup(6));
+    EXPECT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
+    b.master.idle(20 * 48'000);
+    ASSERT_EQ(b.chip.wd_state(), WdState::Baud_Search);
+    testutil::bus_write16(b.chip, mask, 16, user_mask);  // Prm OK, Cfg OK now
+    b.master.idle(48'000);
+    ASSERT_EQ(b.chip.dp_state(), DpState::Data_Exchange);
+    ASSERT_EQ(b.chip.wd_state(), WdState::Baud_Search);
+  };
+  ASSERT_NO_FATAL_FAILURE(okay_in_baud_search());
+  testutil::user_leave_master(b.chip);
+  b.master.idle(48'000);
+  EXPECT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
+  EXPECT_TRUE(b.master.slave_diag().answer);  // finds the rate
+  EXPECT_EQ(b.chip.wd_state(), WdState::Baud_Control);
+
+  ASSERT_NO_FATAL_FAILURE(okay_in_baud_search());
+  const Exchange dx = b.master.data_exchange({1, 2, 3, 4});
+  ASSERT_TRUE(dx.answer);
+  EXPECT_EQ(b.chip.wd_state(), WdState::DP_Control);
+  const std::uint64_t expiry = b.acted(dx) + 48'000'000;
+  b.master.idle(expiry - 1 - b.chip.cycle());  // cable pulled
+  EXPECT_EQ(b.chip.dp_state(), DpState::Data_Exchange);
+  b.chip.step(1);
+  EXPECT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
+  EXPECT_EQ(b.chip.wd_state(), WdState::Baud_Control);
+  EXPECT_NE(b.chip.peek_reg(RegId::Int_Req_Reg) & irq::WD_DP_Control_Timeout, 0u);
+}
+
 // A write to WD_Baud_Control_Val in the cycle the watchdog starts Baud_Control (docs/timing.md,
 // "Order within one cycle": the protocol side and the watchdog's deadline, steps 2 and 3, come
 // before a bus access completing in that cycle, step 5; "Baud_Control": WD_Baud_Control_Val x 10
@@ -548,6 +594,57 @@ TEST_P(ProtocolSpcVpc, UserWatchdogExpires) {
   const Exchange last = b.master.data_exchange({1, 1, 1, 1});  // 0: expired
   EXPECT_FALSE(last.answer);
   EXPECT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
+}
+
+// R_User_WD_Value = 0 acts as 1 (docs/timing.md, "user watchdog"; docs/decisions.md, "The
+// twenty-ninth session: s29-chip"): the Data_Exchange after the reload counts down from 0, stays
+// at 0 and is not answered, as the one that counts 1 down to 0: the station leaves at the 2nd.
+TEST_P(ProtocolSpcVpc, UserWatchdogValueZeroActsAsOne) {
+  for (const std::uint16_t value : {0, 1}) {
+    SCOPED_TRACE(value);
+    ResponderConfig rc = config();
+    rc.user_wd_value = value;
+    Bench b(GetParam(), 12'000'000, rc);
+    ASSERT_TRUE(b.master.startup());
+    EXPECT_TRUE(b.master.data_exchange({1, 1, 1, 1}).answer);   // loads the value
+    EXPECT_FALSE(b.master.data_exchange({1, 1, 1, 1}).answer);  // 0: expired
+    EXPECT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
+  }
+}
+
+// A Set_Prm with WD_Fact_1 = 0 and WD_On = 1 (a raw telegram: every door of ours refuses factor
+// 0): the chip does not check it (seed 002: "The circuit does not check this setting"), the user
+// accepts it, and TWD = 0 x 10 x 10 ms = 0 clocks, so the DP watchdog expires in the very cycle the
+// User_Prm_Data_Okay read completes: WD_DP_Control_Timeout, Baud_Control, Leave_Master (Wait_Prm)
+// all in that cycle (docs/timing.md, "DP watchdog").
+TEST_P(Protocol, WdFactorZeroExpiresAtTheOkay) {
+  Bench b(GetParam(), 12'000'000, config());
+  ASSERT_TRUE(b.master.startup());
+  b.master.set_firmware([](BusPort&) {});  // the test is the user side from here
+  b.master.slave().wd_fact1 = 0;
+  const Exchange prm = b.master.set_prm();
+  EXPECT_EQ(wire(prm.answer), Bytes{0xE5});
+  b.master.idle(1000);
+  ASSERT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
+  ASSERT_EQ(b.chip.wd_state(), WdState::DP_Control);  // the old TWD still runs
+  const int irr = b.chip.addr_of(RegId::Int_Req_Reg);
+  testutil::bus_write16(b.chip, irr, 16, 0x0000);  // the user clears what it saw
+  ASSERT_EQ(b.chip.peek_reg(RegId::Int_Req_Reg) & irq::WD_DP_Control_Timeout, 0u);
+  testutil::LogCapture log;
+  log.attach(b.chip);
+  DirectBus bus(b.chip);
+  EXPECT_EQ(bus.read(static_cast<std::uint32_t>(b.chip.addr_of(RegId::User_Prm_Data_Okay))),
+            0x00);  // accepted: Wait_Cfg, DP_Control with TWD 0, due now
+  const std::uint64_t okay = b.chip.cycle();
+  b.chip.step(1);
+  EXPECT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
+  EXPECT_EQ(b.chip.wd_state(), WdState::Baud_Control);
+  EXPECT_NE(b.chip.peek_reg(RegId::Int_Req_Reg) & irq::WD_DP_Control_Timeout, 0u);
+  std::vector<std::uint64_t> expiries;
+  for (const LogRecord& r : log.records) {
+    if (r.text.starts_with("DP watchdog expired")) expiries.push_back(r.cycle);
+  }
+  EXPECT_EQ(expiries, std::vector<std::uint64_t>{okay});
 }
 
 TEST_P(Protocol, SecondMasterCannotParameteriseALockedSlave) {

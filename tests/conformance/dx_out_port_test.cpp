@@ -88,4 +88,25 @@ TEST(Dpc31DxOutPort, SyncWithUnsyncDoesNotDrivePb3) {
   EXPECT_FALSE(b.chip.pb3_pin());
 }
 
+// A hardware reset (Chip::reset) clears Int_Req_Reg, DX_Out with it, and C31_Control: PB3 goes
+// low in the reset's cycle, the first of the new time line (docs/timing.md, "dpc31 PB3";
+// docs/decisions.md, "The twenty-ninth session: s29-chip"), and the observer sees that edge.
+TEST(Dpc31DxOutPort, HardwareResetTakesPb3Low) {
+  Bench b(Profile::dpc31);
+  AckDxOut user;
+  Edges e;
+  ASSERT_NO_FATAL_FAILURE(enable_port(b, user, e));
+  const std::uint32_t mask = addr(b.chip, RegId::Int_Mask_Reg);
+  b.chip.write(mask, 0xFF);  // the user serves no interrupt: DX_Out stays
+  b.chip.write(mask + 1, 0xFF);
+  const Exchange gc = b.master.global_control(kGC_Sync);
+  b.master.idle(4'800);
+  ASSERT_TRUE(b.chip.pb3_pin());
+  b.chip.reset();
+  EXPECT_FALSE(b.chip.pb3_pin());
+  ASSERT_EQ(e.seen.size(), 2u);
+  EXPECT_EQ(e.seen[0], std::make_pair(b.acted(gc), true));
+  EXPECT_EQ(e.seen[1], std::make_pair(std::uint64_t{0}, false));
+}
+
 }  // namespace
