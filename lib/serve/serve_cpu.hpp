@@ -27,8 +27,8 @@ class BoardCpu {
   BoardCpu(const BoardCpu&) = delete;
   BoardCpu& operator=(const BoardCpu&) = delete;
 
-  // CPU and chip together until the chip reaches `cycle` (Cpu51Board::run_until: the CPU's step
-  // in progress ends, so the chip may stop up to one step of the CPU beyond it).
+  // CPU and chip together until the chip reaches `cycle` (Cpu51Board::run_until: exactly, but
+  // for a MOVX to the chip whose access starts before it).
   void run_until(std::uint64_t cycle);
   // The same, ending after the CPU's step in which the interrupt became active (true).
   bool run_until_irq(std::uint64_t cycle);
