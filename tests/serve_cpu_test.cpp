@@ -151,6 +151,36 @@ TEST(ServeCpu, Do4OnThe80c32ReachesDataExchangeAndWritesItsOutputsOnTime) {
   EXPECT_EQ(server.wait_exit(5000), 0);
 }
 
+// A firmware refreshing its outputs in a loop (MOV DPTR,#4000h [0,2); MOVX @DPTR,A [2 + 5k,
+// 4 + 5k), INC A 1, SJMP 2) writes the latch every 5 machine cycles, 120 chip cycles at 24 MHz:
+// the k-th write's WR ends at 24 x (2 + 5k) + 36 = 84 + 120k (docs/cpu.md, "MOVX timing"). One
+// `step` of one second, 48 000 000 cycles, holds k = 0..399 999: the `! port` lines are bounded
+// as the walk's and the bridge's (1 000 in 48 000 000 cycles, docs/decisions.md "Logs that never
+// flood"), and one `! port_log` line says how many were left out. Unbounded, the 400 000 lines
+// (some 10 MB) got the client dropped, replies and all, though it read all along.
+TEST(ServeCpu, PortLinesAreBoundedAndTheClientKept) {
+  TempDir dir;
+  const std::string sock = dir.file("chip.sock");
+  const std::string flood = dir.file("flood.ihx");
+  std::ofstream(flood) << ":07000000904000F00480FCB9\n:00000001FF\n";
+  ServerProcess server(
+      kCli, {"--unix", sock, "--profile", "spc3", "--cpu", "80c32:24000000", "--firmware", flood});
+  LineClient client = LineClient::unix_socket(sock);
+  EXPECT_EQ(client.command("step 48000000"), "OK 48000000");
+  std::vector<std::string> ports;
+  for (const std::string& l : client.async) {
+    if (l.starts_with("! port")) ports.push_back(l);
+  }
+  ASSERT_EQ(ports.size(), 1001u);
+  EXPECT_EQ(ports[0], "! port 84 outputs 0x00");
+  EXPECT_EQ(ports[999], "! port 119964 outputs 0xe7");  // k = 999
+  EXPECT_EQ(ports[1000],
+            "! port_log 48000000 399000 log lines left out (at most 1000 in 48000000 cycles)");
+  EXPECT_EQ(client.command("ping"), "OK pong");
+  EXPECT_EQ(client.command("shutdown"), "OK shutdown");
+  EXPECT_EQ(server.wait_exit(5000), 0);
+}
+
 // The DPC31's C31 running tests/mcs51/board/c31_ack.asm (24 MHz, code area 1000h): its MOVX
 // strobes end at chip cycles 156, 324, 564, 732, 852 (clocks 78, 162, 282, 366, 426, docs/cpu.md);
 // the C31's interrupt is raised at the second and acknowledged at the third, `! irq` lines of

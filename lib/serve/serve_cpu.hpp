@@ -10,6 +10,7 @@
 
 #include "cpu51_module.hpp"
 #include "dpc31/chip.hpp"
+#include "dpc31/log.hpp"
 
 namespace dpc31::serve {
 
@@ -22,7 +23,9 @@ struct CpuSetup {
 
 class BoardCpu {
  public:
-  // `port_line` receives "! port CYCLE NAME 0xVV" for every write of the board's output latch.
+  // `port_line` receives "! port CYCLE NAME 0xVV" for the writes of the board's output latch,
+  // at most LogLimiter::kBurst in each LogLimiter::kWindow chip cycles, and "! port_log CYCLE
+  // TEXT" for how many it left out (the walk's bound, docs/decisions.md "Logs that never flood").
   BoardCpu(Chip& chip, CpuSetup setup, std::function<void(std::string)> port_line);
   BoardCpu(const BoardCpu&) = delete;
   BoardCpu& operator=(const BoardCpu&) = delete;
@@ -48,6 +51,8 @@ class BoardCpu {
  private:
   Chip& chip_;
   CpuSetup s_;
+  std::function<void(std::string)> line_;
+  LogLimiter port_lines_;
   std::unique_ptr<Cpu51Module> module_;
   bool watch_irq_ = false;  // run_until_irq in progress
   bool irq_seen_ = false;
