@@ -9,6 +9,8 @@
 #include <span>
 #include <stdexcept>
 
+#include "vocabulary.hpp"
+
 namespace dpc31 {
 
 namespace {
@@ -20,8 +22,19 @@ std::set<const Chip*> boarded;
 
 Cpu51Board::Cpu51Board(Chip& chip, std::uint32_t cpu_hz, std::uint16_t base)
     : chip_(chip), cpu_hz_(cpu_hz), base_(base) {
-  if (cpu_hz == 0 || chip_cycle_of(mcs51::movx_strobe_end) < chip.bus_access_cycles())
-    throw std::invalid_argument("CPU clock out of range for the chip's bus");
+  // The range every door checks (kCpuClock); the strobe must end at least one bus access after
+  // the MOVX starts (18 clocks, exactly, not rounded up to a chip clock).
+  if (!kCpuClock.holds(cpu_hz)) {
+    throw std::invalid_argument(
+        fmt::format("CPU clock {} Hz out of range ({}..{})", cpu_hz, kCpuClock.min, kCpuClock.max));
+  }
+  if (std::uint64_t{mcs51::movx_strobe_end} * chip.clock_hz() <
+      std::uint64_t{chip.bus_access_cycles()} * cpu_hz) {
+    throw std::invalid_argument(fmt::format(
+        "CPU clock {} Hz: a MOVX strobe of 18 clocks is shorter than the chip's bus access of {} "
+        "clocks at {} Hz",
+        cpu_hz, chip.bus_access_cycles(), chip.clock_hz()));
+  }
   // The CPU's clock 0 is the chip's cycle 0 (chip_cycle_of): on a chip that has run, every
   // instant would be off by the chip's cycle.
   if (chip.cycle() != 0) {
@@ -56,6 +69,11 @@ Cpu51Board::Cpu51Board(Chip& chip, std::uint32_t cpu_hz, C31 c31)
   window_ = c31_space;
   c31_ = true;
   code_base_ = c31.code_base;
+  // Code address c is RAM address code_base + c: the RAM as it is, and FFh past 1FFFh, where
+  // nothing answers (docs/dpc31.md, "The C31").
+  std::vector<std::uint8_t> code(0x10000, 0xFF);
+  for (std::uint32_t a = 0; a < c31_space - code_base_; ++a) code[a] = chip.peek(code_base_ + a);
+  cpu_.load_code(0, code);
 }
 
 bool Cpu51Board::load_c31_code(const std::vector<std::uint8_t>& bytes,

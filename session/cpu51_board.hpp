@@ -18,8 +18,9 @@ class Cpu51Board final : public mcs51::XdataBus {
   // The chip's window: [base, base + window) of XDATA; the rest is the board's plain RAM.
   static constexpr std::uint32_t window = kCpu51Window;
 
-  // Throws std::invalid_argument for a CPU clock of 0 or one so fast that a MOVX strobe would
-  // end less than one bus access after its instruction starts, for a chip that has run (its
+  // Throws std::invalid_argument for a CPU clock outside 1..40 MHz (kCpuClock, every door's range)
+  // or so fast that a MOVX strobe would end less than one bus access after its instruction
+  // starts, for a chip that has run (its
   // cycle is not 0: the CPU's clock counts from the chip's cycle 0) and for a chip that has a
   // board already (the second would never run).
   Cpu51Board(Chip& chip, std::uint32_t cpu_hz, std::uint16_t base);

@@ -196,8 +196,10 @@ std::string apply_cpu51_choice(const Cpu51Choice& choice, ChipOptions& chip, Cpu
   std::uint32_t hz = 24'000'000;
   if ((core != "80c32" && core != "c31") ||
       (colon != std::string_view::npos &&
-       !parse_address(spec.substr(colon + 1), 1'000'000, 40'000'000, hz))) {
-    return fmt::format("--cpu '{}' must be 80c32[:HZ] or c31[:HZ] (HZ 1000000..40000000)", spec);
+       !parse_address(spec.substr(colon + 1), static_cast<std::uint32_t>(kCpuClock.min),
+                      static_cast<std::uint32_t>(kCpuClock.max), hz))) {
+    return fmt::format("--cpu '{}' must be 80c32[:HZ] or c31[:HZ] (HZ {}..{})", spec, kCpuClock.min,
+                       kCpuClock.max);
   }
   cfg.hz = hz;
   cfg.hex = choice.firmware;
