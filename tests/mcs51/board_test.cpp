@@ -71,6 +71,20 @@ TEST(Cpu51Board, MovxLandsAtTheStrobesEndAt11_0592MHz) {
   EXPECT_EQ(run.irq, irq);
 }
 
+// The X/INT changes (chip cycle, active) of `code` on an 80C32 at 24 MHz beside an SPC3 at XDATA
+// 8000h, run to each of `ends` in turn.
+std::vector<std::pair<std::uint64_t, bool>> irq_changes(const std::vector<std::uint8_t>& code,
+                                                        const std::vector<std::uint64_t>& ends) {
+  Chip chip({Profile::spc3, BusMode::intel});
+  std::vector<std::pair<std::uint64_t, bool>> irq;
+  chip.on_irq_change([&](std::uint64_t c, bool active) { irq.emplace_back(c, active); });
+  Cpu51Board board(chip, 24'000'000, 0x8000);
+  board.cpu().load_code(0, code);
+  for (const std::uint64_t end : ends) board.run_until(end);
+  EXPECT_EQ(chip.cycle(), ends.back());
+  return irq;
+}
+
 TEST(Cpu51Board, AnX_IntChangeIsSampledInTheCycleWhoseS5p2SeesIt) {
   // 24 MHz (chip cycle = 2 x clock). Start_SPC3 completes at s = 2 x (144 + 18) = 324; the first
   // User_Timer_Clock at s + 48 000 = 48 324 (docs/timing.md, Timers) drives X/INT active. CPU
@@ -80,14 +94,8 @@ TEST(Cpu51Board, AnX_IntChangeIsSampledInTheCycleWhoseS5p2SeesIt) {
   // acknowledge MOVX [2023, 2025): strobe at clock 24 276 + 18 = 24 294, chip cycle 48 588.
   const mcs51::HexImage img = board_image("user_timer");
   ASSERT_GT(img.size, 0u);
-  Chip chip({Profile::spc3, BusMode::intel});
-  std::vector<std::pair<std::uint64_t, bool>> irq;
-  chip.on_irq_change([&](std::uint64_t c, bool active) { irq.emplace_back(c, active); });
-  Cpu51Board board(chip, 24'000'000, 0x8000);
-  board.cpu().load_code(0, img.bytes);
-  board.run_until(50'000);
-  std::vector<std::pair<std::uint64_t, bool>> want = {{48'324, true}, {48'588, false}};
-  EXPECT_EQ(irq, want);
+  const std::vector<std::pair<std::uint64_t, bool>> want = {{48'324, true}, {48'588, false}};
+  EXPECT_EQ(irq_changes(img.bytes, {50'000}), want);
 }
 
 // The refusal's one sentence (std::invalid_argument), or "" when it was made.
@@ -250,14 +258,8 @@ TEST(Cpu51Board, AnX_IntChangeInAMovxsFirstCycleIsCalledAfterTheMovx) {
     put(0x46, {0x90, static_cast<std::uint8_t>(addr >> 8), static_cast<std::uint8_t>(addr), 0xE0,
                0xA4, 0x80, 0xF9});
     put(0x50, {0x90, 0x80, 0x02, 0x74, 0x10, 0xF0, 0xC2, 0xAF, 0x32});  // ack, CLR EA, RETI
-    Chip chip({Profile::spc3, BusMode::intel});
-    std::vector<std::pair<std::uint64_t, bool>> irq;
-    chip.on_irq_change([&](std::uint64_t c, bool active) { irq.emplace_back(c, active); });
-    Cpu51Board board(chip, 24'000'000, 0x8000);
-    board.cpu().load_code(0, code);
-    board.run_until(50'000);
     const std::vector<std::pair<std::uint64_t, bool>> want = {{48'324, true}, {48'564, false}};
-    EXPECT_EQ(irq, want) << fmt::format("MOVX from {:04X}h", addr);
+    EXPECT_EQ(irq_changes(code, {50'000}), want) << fmt::format("MOVX from {:04X}h", addr);
   }
 }
 
@@ -268,18 +270,12 @@ TEST(Cpu51Board, AnX_IntChangeInAMovxsFirstCycleIsCalledAfterTheMovx) {
 TEST(Cpu51Board, ARunInPiecesSamplesAsARunInOne) {
   const mcs51::HexImage img = board_image("user_timer");
   ASSERT_GT(img.size, 0u);
-  Chip chip({Profile::spc3, BusMode::intel});
-  std::vector<std::pair<std::uint64_t, bool>> irq;
-  chip.on_irq_change([&](std::uint64_t c, bool active) { irq.emplace_back(c, active); });
-  Cpu51Board board(chip, 24'000'000, 0x8000);
-  board.cpu().load_code(0, img.bytes);
-  for (std::uint64_t t = 997; t < 48'324; t += 997) board.run_until(t);
-  board.run_until(48'324);
-  for (std::uint64_t t = 48'325; t < 50'000; t += 7) board.run_until(t);
-  board.run_until(50'000);
+  std::vector<std::uint64_t> ends;
+  for (std::uint64_t t = 997; t < 48'324; t += 997) ends.push_back(t);
+  for (std::uint64_t t = 48'324; t < 50'000; t += 7) ends.push_back(t);
+  ends.push_back(50'000);
   const std::vector<std::pair<std::uint64_t, bool>> want = {{48'324, true}, {48'588, false}};
-  EXPECT_EQ(irq, want);
-  EXPECT_EQ(chip.cycle(), 50'000u);
+  EXPECT_EQ(irq_changes(img.bytes, ends), want);
 }
 
 }  // namespace
