@@ -281,6 +281,10 @@ Cpu51Module::Cpu51Module(Chip& chip, const Cpu51Config& cfg, const Cpu51Image& i
   chip.on_irq_change([this, &chip](std::uint64_t cycle, bool active) {
     if (active) interrupts.emplace_back(cycle, chip.peek_reg(RegId::Int_Req_Reg));
   });
+  // TI is set in machine cycle m (the core's cycle count after it): its end, in chip cycles.
+  board_->cpu().on_serial_tx = [this](std::uint8_t data, bool, std::uint64_t machine_cycle) {
+    if (on_serial) on_serial(board_->chip_cycle_of(machine_cycle * mcs51::clocks_per_cycle), data);
+  };
 }
 
 std::int64_t Cpu51Module::port(const std::string& name) const {

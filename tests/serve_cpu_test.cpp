@@ -32,6 +32,32 @@ bool has(const std::vector<std::string>& lines, const std::string& line) {
   return std::find(lines.begin(), lines.end(), line) != lines.end();
 }
 
+// `dpc31 serve --cpu 80c32:24000000` on an SPC3 running an Intel HEX image (its text), with one
+// client; shut down cleanly at the end.
+class ImageServer {
+  TempDir dir_;
+  std::string sock_ = dir_.file("chip.sock");
+  std::string image_ = dir_.file("fw.ihx");
+  bool written_;
+
+ public:
+  explicit ImageServer(const std::string& image)
+      : written_(static_cast<bool>(std::ofstream(image_) << image)),
+        server(kCli, {"--unix", sock_, "--profile", "spc3", "--cpu", "80c32:24000000", "--firmware",
+                      image_}),
+        client(LineClient::unix_socket(sock_)) {
+    EXPECT_TRUE(written_);
+  }
+  ImageServer(const ImageServer&) = delete;
+  ImageServer& operator=(const ImageServer&) = delete;
+  ~ImageServer() {
+    EXPECT_EQ(client.command("shutdown"), "OK shutdown");
+    EXPECT_EQ(server.wait_exit(5000), 0);
+  }
+  ServerProcess server;
+  LineClient client;
+};
+
 // The client as DP master: requests with inject_fdl, time with step, answers from the
 // `! telegram ... tx` lines.
 class LineMaster {
@@ -159,13 +185,8 @@ TEST(ServeCpu, Do4OnThe80c32ReachesDataExchangeAndWritesItsOutputsOnTime) {
 // flood"), and one `! port_log` line says how many were left out. Unbounded, the 400 000 lines
 // (some 10 MB) got the client dropped, replies and all, though it read all along.
 TEST(ServeCpu, PortLinesAreBoundedAndTheClientKept) {
-  TempDir dir;
-  const std::string sock = dir.file("chip.sock");
-  const std::string flood = dir.file("flood.ihx");
-  std::ofstream(flood) << ":07000000904000F00480FCB9\n:00000001FF\n";
-  ServerProcess server(
-      kCli, {"--unix", sock, "--profile", "spc3", "--cpu", "80c32:24000000", "--firmware", flood});
-  LineClient client = LineClient::unix_socket(sock);
+  ImageServer s(":07000000904000F00480FCB9\n:00000001FF\n");
+  LineClient& client = s.client;
   EXPECT_EQ(client.command("step 48000000"), "OK 48000000");
   std::vector<std::string> ports;
   for (const std::string& l : client.async) {
@@ -177,8 +198,15 @@ TEST(ServeCpu, PortLinesAreBoundedAndTheClientKept) {
   EXPECT_EQ(ports[1000],
             "! port_log 48000000 399000 log lines left out (at most 1000 in 48000000 cycles)");
   EXPECT_EQ(client.command("ping"), "OK pong");
-  EXPECT_EQ(client.command("shutdown"), "OK shutdown");
-  EXPECT_EQ(server.wait_exit(5000), 0);
+}
+
+// The serial port's characters reach the client (docs/protocol.md, `! serial`): MOV SBUF,#41h
+// in mode 0 sets TI at the end of machine cycle 10, chip cycle 264 at 24 MHz
+// (ScenarioCpu51.TheSerialPortsCharactersReachTheWalk derives it from the manual).
+TEST(ServeCpu, SerialCharactersReachTheClient) {
+  ImageServer s(":0500000075994180FE2E\n:00000001FF\n");
+  EXPECT_EQ(s.client.command("step 1000"), "OK 1000");
+  EXPECT_TRUE(has(s.client.async, "! serial 264 0x41"));
 }
 
 // The DPC31's C31 running tests/mcs51/board/c31_ack.asm (24 MHz, code area 1000h): its MOVX

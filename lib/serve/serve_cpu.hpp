@@ -7,6 +7,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <string_view>
 
 #include "cpu51_module.hpp"
 #include "dpc31/chip.hpp"
@@ -25,7 +26,9 @@ class BoardCpu {
  public:
   // `port_line` receives "! port CYCLE NAME 0xVV" for the writes of the board's output latch,
   // at most LogLimiter::kBurst in each LogLimiter::kWindow chip cycles, and "! port_log CYCLE
-  // TEXT" for how many it left out (the walk's bound, docs/decisions.md "Logs that never flood").
+  // TEXT" for how many it left out (the walk's bound, docs/decisions.md "Logs that never flood");
+  // "! serial CYCLE 0xVV" for each character the CPU's serial port sent, bounded the same way
+  // ("! serial_log CYCLE TEXT").
   BoardCpu(Chip& chip, CpuSetup setup, std::function<void(std::string)> port_line);
   BoardCpu(const BoardCpu&) = delete;
   BoardCpu& operator=(const BoardCpu&) = delete;
@@ -51,8 +54,12 @@ class BoardCpu {
  private:
   Chip& chip_;
   CpuSetup s_;
+  void bounded(LogLimiter& limit, std::uint64_t cycle, const std::string& text,
+               std::string_view kind);
+
   std::function<void(std::string)> line_;
   LogLimiter port_lines_;
+  LogLimiter serial_lines_;
   std::unique_ptr<Cpu51Module> module_;
   bool watch_irq_ = false;  // run_until_irq in progress
   bool irq_seen_ = false;
