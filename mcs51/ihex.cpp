@@ -83,7 +83,10 @@ bool parse_ihex(std::string_view text, HexImage& image, std::string& error) {
         break;
       case 0x02:
       case 0x04:
-        if (rec[0] != 2) return fail(fmt::format("a type {:02X} record has 2 data bytes", rec[3]));
+        if (rec[0] != 2) {
+          return fail(
+              fmt::format("a type {:02X} record has byte count 02h, not {:02X}h", rec[3], rec[0]));
+        }
         if (rec[4] != 0 || rec[5] != 0) {
           // A segment base (x 16) may still be inside 64 KB: refused as what it is.
           return fail(
@@ -94,7 +97,11 @@ bool parse_ihex(std::string_view text, HexImage& image, std::string& error) {
         }
         break;
       case 0x03:
-      case 0x05:
+      case 0x05:  // a start address (CS:IP, EIP): 4 bytes, of no use to a reset that starts at 0
+        if (rec[0] != 4) {
+          return fail(
+              fmt::format("a type {:02X} record has byte count 04h, not {:02X}h", rec[3], rec[0]));
+        }
         break;
       default:
         return fail(fmt::format("record type {:02X}", rec[3]));

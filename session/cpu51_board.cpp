@@ -9,6 +9,8 @@
 #include <span>
 #include <stdexcept>
 
+#include "vocabulary.hpp"
+
 namespace dpc31 {
 
 namespace {
@@ -20,8 +22,19 @@ std::set<const Chip*> boarded;
 
 Cpu51Board::Cpu51Board(Chip& chip, std::uint32_t cpu_hz, std::uint16_t base)
     : chip_(chip), cpu_hz_(cpu_hz), base_(base) {
-  if (cpu_hz == 0 || chip_cycle_of(mcs51::movx_strobe_end) < chip.bus_access_cycles())
-    throw std::invalid_argument("CPU clock out of range for the chip's bus");
+  // The range every door checks (kCpuClock); the strobe must end at least one bus access after
+  // the MOVX starts (18 clocks, exactly, not rounded up to a chip clock).
+  if (!kCpuClock.holds(cpu_hz)) {
+    throw std::invalid_argument(
+        fmt::format("CPU clock {} Hz out of range ({}..{})", cpu_hz, kCpuClock.min, kCpuClock.max));
+  }
+  if (std::uint64_t{mcs51::movx_strobe_end} * chip.clock_hz() <
+      std::uint64_t{chip.bus_access_cycles()} * cpu_hz) {
+    throw std::invalid_argument(fmt::format(
+        "CPU clock {} Hz: a MOVX strobe of 18 clocks is shorter than the chip's bus access of {} "
+        "clocks at {} Hz",
+        cpu_hz, chip.bus_access_cycles(), chip.clock_hz()));
+  }
   // The CPU's clock 0 is the chip's cycle 0 (chip_cycle_of): on a chip that has run, every
   // instant would be off by the chip's cycle.
   if (chip.cycle() != 0) {
@@ -56,6 +69,11 @@ Cpu51Board::Cpu51Board(Chip& chip, std::uint32_t cpu_hz, C31 c31)
   window_ = c31_space;
   c31_ = true;
   code_base_ = c31.code_base;
+  // Code address c is RAM address code_base + c: the RAM as it is, and FFh past 1FFFh, where
+  // nothing answers (docs/dpc31.md, "The C31").
+  std::vector<std::uint8_t> code(0x10000, 0xFF);
+  for (std::uint32_t a = 0; a < c31_space - code_base_; ++a) code[a] = chip.peek(code_base_ + a);
+  cpu_.load_code(0, code);
 }
 
 bool Cpu51Board::load_c31_code(const std::vector<std::uint8_t>& bytes,
@@ -134,38 +152,32 @@ std::uint64_t Cpu51Board::run_end() const {
 // The walk of the manual's sampling (docs/cpu.md, "INT0 from X/INT"): before each step the chip
 // is due at the step's start, then at the S5P2 sample of each of the step's machine cycles (the
 // end of oscillator clock 10 of 12) until X/INT changes; INT0 changes from the first cycle whose
-// sample sees it. A MOVX's own access brings the chip to its strobe. X/INT changes only at the
+// sample sees it. A MOVX's first sample is walked before it, its access brings the chip to its
+// strobe and its second sample follows the access (movx_sample). X/INT changes only at the
 // chip's events and bus accesses, so the chip is stepped only where an instant reaches its next
 // event, at the accesses and at the end: the chip sees every access, every event and every X/INT
 // sample at the same cycle as when it is stepped to each instant (docs/performance.md, row m).
 // Steps that reach no event run in one go (Cpu::run_within), an access lowering their end.
+//
+// The run ends with the chip at `chip_cycle` exactly (docs/timing.md, "An 80C32 beside the
+// chip"): a step whose last sample lies at or after it waits for the next run, its instants
+// before it walked now (walked_), so that what happens at the end (the master's next request)
+// is seen by the samples after it; only a MOVX whose access to the chip starts before the end
+// runs across it (the access keeps its cycle).
 void Cpu51Board::run_until(std::uint64_t chip_cycle) {
   note_chip();
-  event_clock_ = 0;  // the first step reads X/INT whatever happened to the chip before
+  event_clock_ = 0;  // the first instant walked reads X/INT whatever happened to the chip before
   due_ = 0;
   chip_end_ = chip_cycle;
   end_clock_ = clock_reaching(chip_cycle);
   in_run_ = !on_step;
-  while (chip_at_ < chip_cycle && due_ < end_clock_ && !chip_.stop_requested()) {
-    const std::uint64_t start = cpu_.clocks();
+  while (chip_at_ < chip_cycle && !chip_.stop_requested()) {
     if (in_run_ && cpu_.run_within(run_end()) != 0) {
-      // The walk's last instant: the last step's last sample, or a MOVX's start.
-      const std::uint64_t now = cpu_.clocks();
-      const std::uint64_t movx = 2 * cycle_clocks;
-      due_ = now >= movx && last_movx_ == now - movx ? last_movx_ : now - (cycle_clocks - s5p2);
+      due_ = cpu_.clocks() - (cycle_clocks - s5p2);  // the last step's last sample
       continue;
     }
-    if (reach(start)) cpu_.set_int0(level_);
-    if (!cpu_.next_is_movx()) {
-      const unsigned n = cpu_.next_step_cycles();
-      for (unsigned j = 0; j < n; ++j) {
-        const bool level = level_;
-        if (reach(start + j * cycle_clocks + s5p2) && level_ != level) {
-          cpu_.schedule_int0(cpu_.cycles() + j, level_);
-          break;
-        }
-      }
-    }
+    walk(end_clock_);
+    if (!step_fits()) break;
     if (on_step) {
       chip_to(chip_cycle_of(due_));
       on_step(cpu_.pc(), cpu_.cycles());
@@ -173,7 +185,61 @@ void Cpu51Board::run_until(std::uint64_t chip_cycle) {
     cpu_.step();
   }
   in_run_ = false;
-  chip_to(chip_cycle_of(due_));
+  chip_to(chip_.stop_requested() ? chip_cycle_of(due_) : chip_cycle);
+}
+
+// The instants of the step starting at clock `start`: 0 its start, 1 + j the sample of its cycle
+// j (a MOVX's second sample is movx_sample's, after its access).
+void Cpu51Board::walk(std::uint64_t limit) {
+  const std::uint64_t start = cpu_.clocks();
+  if (walked_.start != start) walked_ = {start, 0, false, level_};
+  const bool movx = cpu_.next_is_movx();
+  // A MOVX's first sample, unless the CPU is so fast that it falls inside the access.
+  const unsigned instants = !movx ? 1 + cpu_.next_step_cycles()
+                            : chip_cycle_of(start + s5p2) + chip_.bus_access_cycles() <=
+                                    chip_cycle_of(start + mcs51::movx_strobe_end)
+                                ? 2
+                                : 1;
+  while (walked_.done < instants && !walked_.changed) {
+    const std::uint64_t at =
+        walked_.done == 0 ? start : start + (walked_.done - 1) * cycle_clocks + s5p2;
+    if (at >= limit) return;
+    if (walked_.done == 0) {
+      if (reach(at)) cpu_.set_int0(level_);
+      walked_.level = level_;
+    } else if (reach(at) && level_ != walked_.level) {
+      cpu_.schedule_int0(cpu_.cycles() + walked_.done - 1, level_);
+      walked_.changed = true;
+    }
+    ++walked_.done;
+  }
+  walked_.done = instants;  // complete: the step may run
+}
+
+// Whether the next step runs in this run: its instants all lie before the end, or it is a MOVX
+// whose access to the chip starts before the end (its second sample at its access).
+bool Cpu51Board::step_fits() const {
+  const std::uint64_t start = cpu_.clocks();
+  if (walked_.start != start) return false;
+  if (!cpu_.next_is_movx()) return walked_.changed || walked_.done == 1 + cpu_.next_step_cycles();
+  if (start + cycle_clocks + s5p2 < end_clock_) return true;
+  const std::uint64_t strobe = chip_cycle_of(start + mcs51::movx_strobe_end);
+  return in_window(next_movx_address()) && strobe - chip_.bus_access_cycles() < chip_end_;
+}
+
+// The address of the MOVX that is the next step: DPTR, or P2 and R0 / R1.
+std::uint16_t Cpu51Board::next_movx_address() const {
+  const std::uint8_t op = cpu_.code(cpu_.pc());
+  if ((op & 0x02) == 0) return cpu_.dptr();
+  return static_cast<std::uint16_t>(cpu_.sfr_latch(mcs51::sfr::P2) << 8 | cpu_.reg(op & 1));
+}
+
+// A MOVX's second sample (S5P2 of its second cycle, 4 clocks after the strobe's end at `clock`):
+// it sees what the access did and the chip's events up to it.
+void Cpu51Board::movx_sample(std::uint64_t clock) {
+  reach(clock + cycle_clocks + s5p2 - mcs51::movx_strobe_end);
+  cpu_.set_int0(level_);
+  if (in_run_) cpu_.set_run_end(run_end());
 }
 
 // The MOVX started at clock - 18, where the walk had the chip.
@@ -182,38 +248,34 @@ void Cpu51Board::access_at(std::uint64_t clock) {
   chip_to(std::max(chip_cycle_of(clock - mcs51::movx_strobe_end), start));
 }
 
-void Cpu51Board::after_access() {
-  note_chip();
-  cpu_.set_int0(level_);  // a command read, an acknowledge or an EOI may end the interrupt
-  if (in_run_) cpu_.set_run_end(run_end());
-}
-
 std::uint8_t Cpu51Board::read(std::uint16_t addr, std::uint64_t clock) {
-  last_movx_ = clock - mcs51::movx_strobe_end;
-  if (!in_window(addr)) return c31_ ? 0xFF : ram_[addr];  // the C31: nothing above 1FFFh
-  access_at(clock);
-  const std::uint8_t v = chip_.read(addr - base_);
-  after_access();
+  std::uint8_t v = 0xFF;  // the C31: nothing above 1FFFh
+  if (in_window(addr)) {
+    access_at(clock);
+    v = chip_.read(addr - base_);
+    note_chip();
+  } else if (!c31_) {
+    v = ram_[addr];
+  }
+  movx_sample(clock);
   return v;
 }
 
 void Cpu51Board::write(std::uint16_t addr, std::uint8_t value, std::uint64_t clock) {
-  last_movx_ = clock - mcs51::movx_strobe_end;
-  if (c31_ && !in_window(addr)) return;
-  if (!in_window(addr)) {
+  if (in_window(addr)) {
+    access_at(clock);
+    chip_.write(addr - base_, value);
+    poked(addr, value);
+    note_chip();
+  } else if (!c31_) {
     ram_[addr] = value;
+    // The chip where the walk has it for the latch's user, who may look at it.
     if (on_ram_write) {
-      // The chip where the walk has it for the latch's user, who may look at it.
-      chip_to(chip_cycle_of(last_movx_));
+      chip_to(chip_cycle_of(clock - mcs51::movx_strobe_end));
       on_ram_write(addr, value, chip_cycle_of(clock));
-      if (in_run_) cpu_.set_run_end(run_end());
     }
-    return;
   }
-  access_at(clock);
-  chip_.write(addr - base_, value);
-  poked(addr, value);
-  after_access();
+  movx_sample(clock);
 }
 
 // The C31 fetches its code from the chip's RAM: a write to the code area is its program.

@@ -18,8 +18,9 @@ class Cpu51Board final : public mcs51::XdataBus {
   // The chip's window: [base, base + window) of XDATA; the rest is the board's plain RAM.
   static constexpr std::uint32_t window = kCpu51Window;
 
-  // Throws std::invalid_argument for a CPU clock of 0 or one so fast that a MOVX strobe would
-  // end less than one bus access after its instruction starts, for a chip that has run (its
+  // Throws std::invalid_argument for a CPU clock outside 1..40 MHz (kCpuClock, every door's range)
+  // or so fast that a MOVX strobe would end less than one bus access after its instruction
+  // starts, for a chip that has run (its
   // cycle is not 0: the CPU's clock counts from the chip's cycle 0) and for a chip that has a
   // board already (the second would never run).
   Cpu51Board(Chip& chip, std::uint32_t cpu_hz, std::uint16_t base);
@@ -53,8 +54,9 @@ class Cpu51Board final : public mcs51::XdataBus {
   // chip"). Throws std::invalid_argument for a clock whose chip cycle lies past
   // Chip::kLastCycle, where the chip's time ends (it would not fit in 64 bits either).
   std::uint64_t chip_cycle_of(std::uint64_t cpu_clock) const;
-  // Runs CPU and chip together until the chip's cycle is at least `chip_cycle`, or until the
-  // instruction during which the chip asked to stop (Chip::request_stop, wake_on_txd) ends.
+  // Runs CPU and chip together until the chip's cycle is `chip_cycle` (the CPU at the last step
+  // boundary before it; past it only by a MOVX to the chip whose access starts before it), or
+  // until the chip asked to stop (Chip::request_stop, wake_on_txd) at the step's end.
   void run_until(std::uint64_t chip_cycle);
 
   // A write to the board's RAM (outside the chip's window), with the chip cycle of its strobe's
@@ -80,7 +82,12 @@ class Cpu51Board final : public mcs51::XdataBus {
   void note_chip();
   // Steps the chip so that an access starting now completes at the strobe's end.
   void access_at(std::uint64_t clock);
-  void after_access();
+  // The walk of the next step's instants before clock `limit` (run_until); whether the step
+  // may run now; the address of the MOVX that is the next step; a MOVX's second sample.
+  void walk(std::uint64_t limit);
+  [[nodiscard]] bool step_fits() const;
+  [[nodiscard]] std::uint16_t next_movx_address() const;
+  void movx_sample(std::uint64_t clock);
   [[nodiscard]] std::uint64_t run_end() const;
   // INT0's level: X/INT for the 80C32, the C31's interrupt (low-active) for the C31.
   [[nodiscard]] bool int0_level() const;
@@ -103,12 +110,20 @@ class Cpu51Board final : public mcs51::XdataBus {
   std::uint64_t chip_at_ = 0;
   std::uint64_t event_clock_ = 0;
   bool level_ = true;
-  // The run's end (chip cycle and the first CPU clock reaching it); the last MOVX's first clock;
-  // whether run_until lets the CPU run steps in one go.
+  // The run's end (chip cycle and the first CPU clock reaching it); whether run_until lets the
+  // CPU run steps in one go.
   std::uint64_t chip_end_ = 0;
   std::uint64_t end_clock_ = 0;
-  std::uint64_t last_movx_ = 0;
   bool in_run_ = false;
+  // The next step's instants walked so far (walk): its first clock, how many, whether X/INT
+  // changed at one (placed in its cycle), the level at the last one. A run that ends inside the
+  // step leaves the rest to the next run.
+  struct Walked {
+    std::uint64_t start;
+    unsigned done;
+    bool changed;
+    bool level;
+  } walked_{0, 0, false, true};
 };
 
 }  // namespace dpc31

@@ -196,8 +196,10 @@ std::string apply_cpu51_choice(const Cpu51Choice& choice, ChipOptions& chip, Cpu
   std::uint32_t hz = 24'000'000;
   if ((core != "80c32" && core != "c31") ||
       (colon != std::string_view::npos &&
-       !parse_address(spec.substr(colon + 1), 1'000'000, 40'000'000, hz))) {
-    return fmt::format("--cpu '{}' must be 80c32[:HZ] or c31[:HZ] (HZ 1000000..40000000)", spec);
+       !parse_address(spec.substr(colon + 1), static_cast<std::uint32_t>(kCpuClock.min),
+                      static_cast<std::uint32_t>(kCpuClock.max), hz))) {
+    return fmt::format("--cpu '{}' must be 80c32[:HZ] or c31[:HZ] (HZ {}..{})", spec, kCpuClock.min,
+                       kCpuClock.max);
   }
   cfg.hz = hz;
   cfg.hex = choice.firmware;
@@ -279,6 +281,10 @@ Cpu51Module::Cpu51Module(Chip& chip, const Cpu51Config& cfg, const Cpu51Image& i
   chip.on_irq_change([this, &chip](std::uint64_t cycle, bool active) {
     if (active) interrupts.emplace_back(cycle, chip.peek_reg(RegId::Int_Req_Reg));
   });
+  // TI is set in machine cycle m (the core's cycle count after it): its end, in chip cycles.
+  board_->cpu().on_serial_tx = [this](std::uint8_t data, bool, std::uint64_t machine_cycle) {
+    if (on_serial) on_serial(board_->chip_cycle_of(machine_cycle * mcs51::clocks_per_cycle), data);
+  };
 }
 
 std::int64_t Cpu51Module::port(const std::string& name) const {

@@ -95,6 +95,8 @@ class Cpu51Module {
   // Int_Req_Reg whenever X/INT goes active (peeked: no bus time), for `expect irr_bit`.
   std::vector<std::pair<std::uint64_t, std::uint16_t>> interrupts;
   std::function<void(std::uint64_t cycle, unsigned port, std::uint32_t value)> on_port;
+  // A character the serial port sent (SBUF, its TI set at `cycle`; docs/cpu.md, "Serial port").
+  std::function<void(std::uint64_t cycle, std::uint8_t data)> on_serial;
   // Forgets port_writes() and interrupts (the port values stay), as FirmwareHost's.
   void clear_history() {
     writes_.clear();

@@ -121,11 +121,17 @@ Library open_library(int fd, const std::string& path) {
   const std::string by_fd = "/proc/self/fd/" + std::to_string(fd);
   void* const lib = ::dlopen(by_fd.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (lib == nullptr) {
-    ::close(fd);
     // dlerror() names the descriptor's path: said with the user's.
     const char* const e = ::dlerror();
     std::string why = e != nullptr ? e : by_fd + ": cannot be loaded";
     if (why.starts_with(by_fd)) why.replace(0, by_fd.size(), path);
+    // An Intel HEX record starts with ':': the user meant a CPU's program, not a plug-in.
+    char first = 0;
+    if (::pread(fd, &first, 1, 0) == 1 && first == ':')
+      why +=
+          "; it is an Intel HEX image, a CPU's program: add --cpu 80c32 (in a scenario: cpu "
+          "80c32 firmware FILE)";
+    ::close(fd);
     throw FirmwareError("cannot load firmware plug-in: " + why);
   }
   ::dlerror();

@@ -193,7 +193,10 @@ class Runner {
       for (const Cpu51Module::PortWrite& w : m51_->port_writes()) {
         out_.port_writes.push_back({w.cycle, m51_->port_name(w.port), w.value});
       }
-      for (std::string& l : port_lines_.flush()) port_note(chip_.cycle(), false, l);
+      for (std::string& l : port_lines_.flush())
+        limited_note(chip_.cycle(), false, l, "80C32 port writes");
+      for (std::string& l : serial_lines_.flush())
+        limited_note(chip_.cycle(), false, l, "serial port");
     }
     // What the chip's log still owes (a repeat count, lines left out) comes before the end line.
     chip_.set_log_sink({});
@@ -234,9 +237,10 @@ class Runner {
     }
   }
 
-  // A port write's own line, or what the limiter says of those it left out.
-  void port_note(std::uint64_t cycle, bool own, std::string& line) {
-    note(cycle, own ? std::move(line) : "80C32 port writes: " + line);
+  // A port write's (or a sent character's) own line, or what the limiter says of those it left
+  // out, after `what`.
+  void limited_note(std::uint64_t cycle, bool own, std::string& line, std::string_view what) {
+    note(cycle, own ? std::move(line) : fmt::format("{}: {}", what, line));
   }
 
   void tell(ScenarioObserver& o, const Event& e) {
@@ -703,7 +707,18 @@ class Runner {
       const std::string line =
           fmt::format("80C32 at {}: {} = {} at {}", code_name(image_, at), m51_->port_name(port),
                       port_text(value), time_text(cycle));
-      for (std::string& l : port_lines_.add(cycle, line)) port_note(cycle, l == line, l);
+      for (std::string& l : port_lines_.add(cycle, line))
+        limited_note(cycle, l == line, l, "80C32 port writes");
+    };
+    // What the firmware sends on its UART (a debug printf), bounded as the port writes.
+    m51_->on_serial = [this](std::uint64_t cycle, std::uint8_t data) {
+      const std::string line =
+          fmt::format("{} serial port: sent {:#04x}{} at {}", s_.cpu->c31 ? "C31" : "80C32", data,
+                      data >= 0x20 && data < 0x7F ? fmt::format(" '{}'", static_cast<char>(data))
+                                                  : std::string(),
+                      time_text(cycle));
+      for (std::string& l : serial_lines_.add(cycle, line))
+        limited_note(cycle, l == line, l, "serial port");
     };
     const std::string symbols = symbols_text(image_);
     if (s_.cpu->c31) {
@@ -855,6 +870,7 @@ class Runner {
   // The walk's lines of the 80C32's port writes, bounded as the chip's log: a firmware writing its
   // latch in a loop is no flood (--json's port_writes has every write).
   LogLimiter port_lines_;
+  LogLimiter serial_lines_;
   std::unique_ptr<DpMaster> master_;
   std::optional<std::uint8_t> locked_by_;  // the master a `startup` found holding the slave
   std::unique_ptr<Dpv1Master> dpv1_;

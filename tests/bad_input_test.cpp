@@ -1332,6 +1332,21 @@ TEST_F(BadInput, FirmwarePlugins) {
                     "dpc31 bridge: cannot load firmware plug-in: " + undefined +
                         ": undefined symbol: no_such_board_function",
                     "undefined symbol named");
+  // An Intel HEX image where a plug-in is named (--cpu forgotten, `firmware` for `cpu`): a hint.
+  const std::string ihx = file("fw.ihx",
+                               ":1000000000000000000000000000000000000000F0\n"
+                               ":1000100000000000000000000000000000000000E0\n:00000001FF\n");
+  const std::string hint =
+      "; it is an Intel HEX image, a CPU's program: add --cpu 80c32 (in a scenario: cpu 80c32 "
+      "firmware FILE)\n";
+  file("plugin.scn", "firmware ./fw.ihx\nstartup\n");
+  for (const auto& [r, prefix] :
+       {std::pair{dpc31("bridge --pty p --firmware " + ihx), std::string("dpc31 bridge: ")},
+        std::pair{dpc31("run plugin.scn"), std::string("plugin.scn:1: ")}}) {
+    expect_bad_prefix(r, prefix + "cannot load firmware plug-in: " + ihx + ": ", prefix);
+    EXPECT_TRUE(r.err.ends_with(hint)) << r.err;
+  }
+  std::filesystem::remove(ihx);
   // A bare file name ending in .so is a file in the current directory, not a library-path name.
   expect_bad_prefix(dpc31("bridge --pty p --firmware libdpc31_fw_do4.so"),
                     "dpc31 bridge: cannot load firmware plug-in: ./libdpc31_fw_do4.so", "./");

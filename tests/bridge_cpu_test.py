@@ -10,6 +10,10 @@ to Int_Req_Reg in [12,14), is called in [15,17) (its own line, naming ie0 and th
 the vector's LJMP runs in [17,19) and the routine starts at 004Eh in 19; the C31 at 24 MHz puts
 machine cycle m at chip cycle 24 m (docs/cpu.md).
 
+idle_timer_window: --trace-cpu-from / --trace-cpu-to keep only the lines in the window.
+
+trace_write_fails: a trace on a full device names the file, exit 2; an empty window is refused.
+
 idle_timer_trace: the 80C32 at 24 MHz runs tests/mcs51/board/idle_timer.asm: each idle stretch
 is one line with its cycles, each timer 0 call one line naming tf0 and 000Bh (docs/cpu.md, "The
 CPU trace"); the cycles from the listing's brackets.
@@ -74,9 +78,9 @@ def c31_ack():
     return board_program("c31_ack")
 
 
-def traced(want, *args):
+def traced(want, *args, whole=False):
     """Runs the bridge with `args` and --trace-cpu past the last machine cycle of `want` (its
-    lines), then checks that the trace begins with them."""
+    lines), then checks that the trace begins with them (is them, `whole`)."""
     # Free pacing runs the chip with the wall clock while no client is connected. SIGTERM comes
     # after the event that shows chip time past them (not after a sleep, which beside a CPU hog
     # could end before the bridge ran that far): a client's open of the pty, logged with the
@@ -101,7 +105,8 @@ def traced(want, *args):
             lines = b.log_lines()
             check(lines[-1].endswith("stopping on SIGTERM"), f"last log line: {lines[-1]}")
             with open(trace, encoding="utf-8") as f:
-                got = f.read().splitlines()[:len(want)]
+                got = f.read().splitlines()
+            got = got if whole else got[:len(want)]
             check(got == want, f"the trace's first lines: {got}, expected {want}")
             return lines
         finally:
@@ -118,6 +123,31 @@ def c31_ack_trace():
 def idle_timer_trace():
     traced(IDLE_STEPS, "--cpu", "80c32", "--firmware", board_program("idle_timer"),
            "--profile", "spc3")
+
+
+def idle_timer_window():
+    """--trace-cpu-from 528 --trace-cpu-to 720: the lines whose first chip cycle lies in
+    [528, 720) and nothing else (the idle stretch from 312 and the one from 720 left out)."""
+    traced(IDLE_STEPS[8:12], "--cpu", "80c32", "--firmware", board_program("idle_timer"),
+           "--profile", "spc3", "--trace-cpu-from", "528", "--trace-cpu-to", "720", whole=True)
+
+
+def trace_write_fails():
+    """A trace that cannot be written (a full device) stops the bridge naming the file, as every
+    output does (docs/bad-input.md, "Output files"), exit 2; an empty window and a window without
+    --trace-cpu are refused before anything runs."""
+    with tempfile.TemporaryDirectory() as tmp:
+        log = os.path.join(tmp, "log")
+        run = ["--pty", os.path.join(tmp, "dp0"), "--pacing", "free", "--log", log, "--cpu",
+               "80c32", "--firmware", board_program("idle_timer"), "--profile", "spc3"]
+        blt.expect_refused(run + ["--trace-cpu", "/dev/full"],
+                           "dpc31 bridge: /dev/full: cannot write: No space left on device")
+        trace = os.path.join(tmp, "t")
+        blt.expect_refused(run + ["--trace-cpu", trace, "--trace-cpu-from", "5",
+                                  "--trace-cpu-to", "5"],
+                           "--trace-cpu-from 5 must lie before --trace-cpu-to 5: an empty window",
+                           trace)
+        blt.expect_refused(run + ["--trace-cpu-to", "5"], "--trace-cpu-to needs --trace-cpu")
 
 
 class Pty:
@@ -167,6 +197,8 @@ CASES = {
     "c31_ack_trace": c31_ack_trace,
     "idle_timer_trace": idle_timer_trace,
     "c31_bad_arguments": c31_bad_arguments,
+    "idle_timer_window": idle_timer_window,
+    "trace_write_fails": trace_write_fails,
 }
 
 

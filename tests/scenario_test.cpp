@@ -838,6 +838,52 @@ TEST(ScenarioCpu51, HeaderIsCheckedAndTheImageReadWhenTheRunStarts) {
   EXPECT_TRUE(r.walk.empty());
 }
 
+// The master's line does not depend on the slave's CPU (docs/timing.md, "The master's wait" and
+// "An 80C32 beside the chip"): at 1.5 Mbaud (T = 32) an unanswered FDL_Status starts at TSYN =
+// 33 T = 1 056, its 6 characters take 66 T, the slot time 100 T, the retry follows TSYN later:
+// 1 056 + 199 T = 7 424, with an 80C32 at 1 MHz or 24 MHz in a DIV loop (84h DIV AB, 80h FDh
+// SJMP) that never starts the chip. `silence 1` lasts one chip cycle, `silence 100us` 4 800 (docs/
+// scenario-format.md: "the bus stays idle for TIME"). The runs ended where the CPU's step did
+// (7 872 at 1 MHz; a `silence 1` of up to 2 304 cycles).
+TEST(ScenarioCpu51, TheMastersTimesDoNotDependOnTheCpu) {
+  for (const char* const cpu : {"cpu 80c32 clock=1000000 firmware fw.ihx\n",
+                                "cpu 80c32 clock=24000000 firmware fw.ihx\n"}) {
+    TempFile f(std::string("profile spc3\n") + cpu +
+               "slave address=7\nfdl_status\nsilence 1\nsilence 100us\nsilence 1\n");
+    std::ofstream(f.dir() / "fw.ihx") << ":030000008480FDFC\n:00000001FF\n";
+    const FileRun r = run_file(f.path());
+    EXPECT_EQ(r.code, 0) << cpu;
+    const auto has = [&](const std::string& line) {
+      return std::find(r.walk.begin(), r.walk.end(), line) != r.walk.end();
+    };
+    EXPECT_TRUE(has("[cycle       1056] 2 -> 7 FDL_Status => no answer (x2, last at cycle 7424)"))
+        << cpu;
+    // The lines after it start where the one before ends: S, S + 1, S + 4 801.
+    std::uint64_t s = 0;
+    for (const std::string& l : r.walk) {
+      if (l.ends_with("line 5: silence 1")) s = std::stoull(l.substr(7, 10));
+    }
+    ASSERT_NE(s, 0u) << cpu;
+    EXPECT_TRUE(has(fmt::format("[cycle {:>10}] line 6: silence 100us", s + 1))) << cpu;
+    EXPECT_TRUE(has(fmt::format("[cycle {:>10}] line 7: silence 1", s + 4801))) << cpu;
+  }
+}
+
+// What the firmware sends on its UART reaches the walk (docs/cpu.md, "Serial port"). MOV SBUF,#41h
+// (75h 99h 41h) in machine cycles [0,2) writes SBUF at the end of cycle 1 in mode 0 (SCON = 00h
+// after reset); the manual: one full machine cycle between "write to SBUF" and SEND, then the 8
+// bits one per machine cycle, TI as the last one ends: cycles 2..10, TI at the end of cycle 10,
+// clock 132, chip cycle 264 at 24 MHz (5.5 us). Before, the character was lost.
+TEST(ScenarioCpu51, TheSerialPortsCharactersReachTheWalk) {
+  TempFile f("cpu 80c32 clock=24000000 firmware fw.ihx\nsilence 1ms\n");
+  std::ofstream(f.dir() / "fw.ihx") << ":0500000075994180FE2E\n:00000001FF\n";  // + SJMP $
+  const FileRun r = run_file(f.path());
+  EXPECT_EQ(r.code, 0);
+  EXPECT_NE(std::find(r.walk.begin(), r.walk.end(),
+                      "[cycle        264] 80C32 serial port: sent 0x41 'A' at 5.500 us"),
+            r.walk.end());
+}
+
 // The image's FILE.map gives the walk its code names (docs/cpu.md); a map beside it that names
 // no code (not SDCC's, or cut short) is said on the walk's line of the board, and the run goes on.
 TEST(ScenarioCpu51, AMapWithoutCodeSymbolsIsSaid) {

@@ -160,22 +160,22 @@ TEST(ScenarioWalk, FirmwareMadeDataExchangeAtItsBusAccess) {
 }
 
 // The shipped DO4 scenario on the 80C32: its comment derives the User_Prm_Data_Okay read at
-// M = 233 635, chip cycle 5 607 276, where the chip enters Wait_Cfg and the DP watchdog DP_Control
+// M = 233 590, chip cycle 5 606 196, where the chip enters Wait_Cfg and the DP watchdog DP_Control
 // (docs/timing.md, "DP watchdog": started at the completion cycle of that read). The EOI that
-// used to be the walk's cycle comes 7 056 cycles later, at 5 614 332.
+// used to be the walk's cycle comes 7 056 cycles later, at 5 613 252.
 TEST(ScenarioWalk, Do4WatchdogDpControlAtTheUserPrmDataOkayRead) {
   const fs::path path = fs::path(FW51_DIR) / "do4_80c32.scn";
   std::string text = file_text(path);
-  const std::string at = "\nexpect dp_state Data_Exchange at 5656596\n";
+  const std::string at = "\nexpect dp_state Data_Exchange at 5655516\n";
   const std::size_t i = text.find(at);
   ASSERT_NE(i, std::string::npos);
-  text.insert(i + at.size(), "expect wd_state DP_Control at 5607276\n");
+  text.insert(i + at.size(), "expect wd_state DP_Control at 5606196\n");
   for (const dpc31::Engine engine : {dpc31::Engine::event, dpc31::Engine::per_cycle}) {
     SCOPED_TRACE(engine_name(engine));
     const Walk w = run(text, path, engine);
-    EXPECT_EQ(w.read_after(SPC3_User_Prm_Data_Okay, SPC3_User_Prm_Data_Okay), 5'607'276u);
-    EXPECT_TRUE(w.has("[cycle    5607276] dp_state Wait_Prm -> Wait_Cfg"));
-    EXPECT_TRUE(w.has("[cycle    5607276] wd_state Baud_Control -> DP_Control"));
+    EXPECT_EQ(w.read_after(SPC3_User_Prm_Data_Okay, SPC3_User_Prm_Data_Okay), 5'606'196u);
+    EXPECT_TRUE(w.has("[cycle    5606196] dp_state Wait_Prm -> Wait_Cfg"));
+    EXPECT_TRUE(w.has("[cycle    5606196] wd_state Baud_Control -> DP_Control"));
     EXPECT_EQ(w.outcome.failed, 0u) << (w.errors.empty() ? "" : w.errors.front());
   }
 }

@@ -32,6 +32,32 @@ bool has(const std::vector<std::string>& lines, const std::string& line) {
   return std::find(lines.begin(), lines.end(), line) != lines.end();
 }
 
+// `dpc31 serve --cpu 80c32:24000000` on an SPC3 running an Intel HEX image (its text), with one
+// client; shut down cleanly at the end.
+class ImageServer {
+  TempDir dir_;
+  std::string sock_ = dir_.file("chip.sock");
+  std::string image_ = dir_.file("fw.ihx");
+  bool written_;
+
+ public:
+  explicit ImageServer(const std::string& image)
+      : written_(static_cast<bool>(std::ofstream(image_) << image)),
+        server(kCli, {"--unix", sock_, "--profile", "spc3", "--cpu", "80c32:24000000", "--firmware",
+                      image_}),
+        client(LineClient::unix_socket(sock_)) {
+    EXPECT_TRUE(written_);
+  }
+  ImageServer(const ImageServer&) = delete;
+  ImageServer& operator=(const ImageServer&) = delete;
+  ~ImageServer() {
+    EXPECT_EQ(client.command("shutdown"), "OK shutdown");
+    EXPECT_EQ(server.wait_exit(5000), 0);
+  }
+  ServerProcess server;
+  LineClient client;
+};
+
 // The client as DP master: requests with inject_fdl, time with step, answers from the
 // `! telegram ... tx` lines.
 class LineMaster {
@@ -149,6 +175,38 @@ TEST(ServeCpu, Do4OnThe80c32ReachesDataExchangeAndWritesItsOutputsOnTime) {
   EXPECT_NE(cpu.find(" in_service=0 idle=1 "), std::string::npos) << cpu;
   EXPECT_EQ(client.command("shutdown"), "OK shutdown");
   EXPECT_EQ(server.wait_exit(5000), 0);
+}
+
+// A firmware refreshing its outputs in a loop (MOV DPTR,#4000h [0,2); MOVX @DPTR,A [2 + 5k,
+// 4 + 5k), INC A 1, SJMP 2) writes the latch every 5 machine cycles, 120 chip cycles at 24 MHz:
+// the k-th write's WR ends at 24 x (2 + 5k) + 36 = 84 + 120k (docs/cpu.md, "MOVX timing"). One
+// `step` of one second, 48 000 000 cycles, holds k = 0..399 999: the `! port` lines are bounded
+// as the walk's and the bridge's (1 000 in 48 000 000 cycles, docs/decisions.md "Logs that never
+// flood"), and one `! port_log` line says how many were left out. Unbounded, the 400 000 lines
+// (some 10 MB) got the client dropped, replies and all, though it read all along.
+TEST(ServeCpu, PortLinesAreBoundedAndTheClientKept) {
+  ImageServer s(":07000000904000F00480FCB9\n:00000001FF\n");
+  LineClient& client = s.client;
+  EXPECT_EQ(client.command("step 48000000"), "OK 48000000");
+  std::vector<std::string> ports;
+  for (const std::string& l : client.async) {
+    if (l.starts_with("! port")) ports.push_back(l);
+  }
+  ASSERT_EQ(ports.size(), 1001u);
+  EXPECT_EQ(ports[0], "! port 84 outputs 0x00");
+  EXPECT_EQ(ports[999], "! port 119964 outputs 0xe7");  // k = 999
+  EXPECT_EQ(ports[1000],
+            "! port_log 48000000 399000 log lines left out (at most 1000 in 48000000 cycles)");
+  EXPECT_EQ(client.command("ping"), "OK pong");
+}
+
+// The serial port's characters reach the client (docs/protocol.md, `! serial`): MOV SBUF,#41h
+// in mode 0 sets TI at the end of machine cycle 10, chip cycle 264 at 24 MHz
+// (ScenarioCpu51.TheSerialPortsCharactersReachTheWalk derives it from the manual).
+TEST(ServeCpu, SerialCharactersReachTheClient) {
+  ImageServer s(":0500000075994180FE2E\n:00000001FF\n");
+  EXPECT_EQ(s.client.command("step 1000"), "OK 1000");
+  EXPECT_TRUE(has(s.client.async, "! serial 264 0x41"));
 }
 
 // The DPC31's C31 running tests/mcs51/board/c31_ack.asm (24 MHz, code area 1000h): its MOVX

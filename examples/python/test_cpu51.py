@@ -145,3 +145,22 @@ def test_a_cpu_clock_past_the_chips_last_cycle_is_refused_not_wrapped():
                                              r"\(0..2305843009213693951\): past the chip's last "
                                              r"cycle$"):
             board.chip_cycle_of(clock)
+
+
+def test_the_masters_retry_does_not_depend_on_the_slaves_cpu(tmp_path):
+    # docs/timing.md, "The master's wait": at 1.5 Mbaud (T = 32) the first FDL_Status starts at
+    # TSYN = 33 T = 1 056; unanswered (the DIV loop, 84h DIV AB and 80h FDh SJMP, never starts
+    # the chip), its 6 characters (66 T) and the slot time (100 T) end the wait, and the next
+    # request starts TSYN later: 1 056 + 199 T = 7 424, whatever CPU the slave has. With an
+    # 80C32 beside the chip it started where the board's step ended (7 436 at 24 MHz, 7 872 at
+    # 1 MHz).
+    image = tmp_path / "div.ihx"
+    image.write_text(":030000008480FDFC\n:00000001FF\n")
+    for hz in (1_000_000, 24_000_000):
+        chip = dpc31.Chip("spc3")
+        board = dpc31.Cpu51Board(chip, hz=hz)
+        assert board.load_hex(str(image)) == 3
+        master = dpc31.Master(chip, address=2, baud=1_500_000, slave=dpc31.SlaveConfig(address=7))
+        master.run_board(board)
+        first, second = master.fdl_status(), master.fdl_status()
+        assert (first.request_start, second.request_start) == (1056, 7424), hz

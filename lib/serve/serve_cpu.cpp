@@ -7,11 +7,14 @@
 namespace dpc31::serve {
 
 BoardCpu::BoardCpu(Chip& chip, CpuSetup setup, std::function<void(std::string)> port_line)
-    : chip_(chip), s_(std::move(setup)) {
+    : chip_(chip), s_(std::move(setup)), line_(std::move(port_line)) {
   module_ = std::make_unique<Cpu51Module>(chip_, s_.cfg, s_.image, s_.address);
-  module_->on_port = [this, line = std::move(port_line)](std::uint64_t cycle, unsigned port,
-                                                         std::uint32_t value) {
-    line(fmt::format("! port {} {} {:#04x}", cycle, module_->port_name(port), value));
+  module_->on_port = [this](std::uint64_t cycle, unsigned port, std::uint32_t value) {
+    bounded(port_lines_, cycle,
+            fmt::format("{} {} {:#04x}", cycle, module_->port_name(port), value), "port");
+  };
+  module_->on_serial = [this](std::uint64_t cycle, std::uint8_t data) {
+    bounded(serial_lines_, cycle, fmt::format("{} {:#04x}", cycle, data), "serial");
   };
   chip_.on_irq_change([this](std::uint64_t, bool active) {
     if (!active || !watch_irq_) return;
@@ -26,8 +29,21 @@ void BoardCpu::run_until(std::uint64_t cycle) {
     chip_.clear_stop();
     if (watch_irq_ && irq_seen_) break;
   }
-  // Nothing reads the module's history here: the `! port` lines have told it.
+  // Nothing reads the module's history here: the `! port` lines have told it; what their bound
+  // left out is told before the reply.
   module_->clear_history();
+  for (const std::string& l : port_lines_.flush())
+    line_(fmt::format("! port_log {} {}", chip_.cycle(), l));
+  for (const std::string& l : serial_lines_.flush())
+    line_(fmt::format("! serial_log {} {}", chip_.cycle(), l));
+}
+
+// "! KIND TEXT" through `limit`, and what it left out as "! KIND_log CYCLE ...".
+void BoardCpu::bounded(LogLimiter& limit, std::uint64_t cycle, const std::string& text,
+                       std::string_view kind) {
+  for (const std::string& l : limit.add(cycle, text))
+    line_(l == text ? fmt::format("! {} {}", kind, l)
+                    : fmt::format("! {}_log {} {}", kind, cycle, l));
 }
 
 bool BoardCpu::run_until_irq(std::uint64_t cycle) {

@@ -7,9 +7,11 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <string_view>
 
 #include "cpu51_module.hpp"
 #include "dpc31/chip.hpp"
+#include "dpc31/log.hpp"
 
 namespace dpc31::serve {
 
@@ -22,13 +24,17 @@ struct CpuSetup {
 
 class BoardCpu {
  public:
-  // `port_line` receives "! port CYCLE NAME 0xVV" for every write of the board's output latch.
+  // `port_line` receives "! port CYCLE NAME 0xVV" for the writes of the board's output latch,
+  // at most LogLimiter::kBurst in each LogLimiter::kWindow chip cycles, and "! port_log CYCLE
+  // TEXT" for how many it left out (the walk's bound, docs/decisions.md "Logs that never flood");
+  // "! serial CYCLE 0xVV" for each character the CPU's serial port sent, bounded the same way
+  // ("! serial_log CYCLE TEXT").
   BoardCpu(Chip& chip, CpuSetup setup, std::function<void(std::string)> port_line);
   BoardCpu(const BoardCpu&) = delete;
   BoardCpu& operator=(const BoardCpu&) = delete;
 
-  // CPU and chip together until the chip reaches `cycle` (Cpu51Board::run_until: the CPU's step
-  // in progress ends, so the chip may stop up to one step of the CPU beyond it).
+  // CPU and chip together until the chip reaches `cycle` (Cpu51Board::run_until: exactly, but
+  // for a MOVX to the chip whose access starts before it).
   void run_until(std::uint64_t cycle);
   // The same, ending after the CPU's step in which the interrupt became active (true).
   bool run_until_irq(std::uint64_t cycle);
@@ -48,6 +54,12 @@ class BoardCpu {
  private:
   Chip& chip_;
   CpuSetup s_;
+  void bounded(LogLimiter& limit, std::uint64_t cycle, const std::string& text,
+               std::string_view kind);
+
+  std::function<void(std::string)> line_;
+  LogLimiter port_lines_;
+  LogLimiter serial_lines_;
   std::unique_ptr<Cpu51Module> module_;
   bool watch_irq_ = false;  // run_until_irq in progress
   bool irq_seen_ = false;

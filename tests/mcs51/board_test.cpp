@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -70,6 +71,20 @@ TEST(Cpu51Board, MovxLandsAtTheStrobesEndAt11_0592MHz) {
   EXPECT_EQ(run.irq, irq);
 }
 
+// The X/INT changes (chip cycle, active) of `code` on an 80C32 at 24 MHz beside an SPC3 at XDATA
+// 8000h, run to each of `ends` in turn.
+std::vector<std::pair<std::uint64_t, bool>> irq_changes(const std::vector<std::uint8_t>& code,
+                                                        const std::vector<std::uint64_t>& ends) {
+  Chip chip({Profile::spc3, BusMode::intel});
+  std::vector<std::pair<std::uint64_t, bool>> irq;
+  chip.on_irq_change([&](std::uint64_t c, bool active) { irq.emplace_back(c, active); });
+  Cpu51Board board(chip, 24'000'000, 0x8000);
+  board.cpu().load_code(0, code);
+  for (const std::uint64_t end : ends) board.run_until(end);
+  EXPECT_EQ(chip.cycle(), ends.back());
+  return irq;
+}
+
 TEST(Cpu51Board, AnX_IntChangeIsSampledInTheCycleWhoseS5p2SeesIt) {
   // 24 MHz (chip cycle = 2 x clock). Start_SPC3 completes at s = 2 x (144 + 18) = 324; the first
   // User_Timer_Clock at s + 48 000 = 48 324 (docs/timing.md, Timers) drives X/INT active. CPU
@@ -79,24 +94,8 @@ TEST(Cpu51Board, AnX_IntChangeIsSampledInTheCycleWhoseS5p2SeesIt) {
   // acknowledge MOVX [2023, 2025): strobe at clock 24 276 + 18 = 24 294, chip cycle 48 588.
   const mcs51::HexImage img = board_image("user_timer");
   ASSERT_GT(img.size, 0u);
-  Chip chip({Profile::spc3, BusMode::intel});
-  std::vector<std::pair<std::uint64_t, bool>> irq;
-  chip.on_irq_change([&](std::uint64_t c, bool active) { irq.emplace_back(c, active); });
-  Cpu51Board board(chip, 24'000'000, 0x8000);
-  board.cpu().load_code(0, img.bytes);
-  board.run_until(50'000);
-  std::vector<std::pair<std::uint64_t, bool>> want = {{48'324, true}, {48'588, false}};
-  EXPECT_EQ(irq, want);
-}
-
-TEST(Cpu51Board, TheTimeBaseIsExact) {
-  Chip chip({Profile::spc3, BusMode::intel});
-  Cpu51Board b40(chip, 40'000'000, 0);
-  EXPECT_EQ(b40.chip_cycle_of(5), 6u);                                         // 5 * 1.2
-  EXPECT_EQ(b40.chip_cycle_of(10), 12u);                                       // exact, no rounding
-  EXPECT_EQ(b40.chip_cycle_of(3'600ULL * 40'000'000), 3'600ULL * 48'000'000);  // one hour
-  EXPECT_THROW(Cpu51Board(chip, 0, 0), std::invalid_argument);
-  EXPECT_THROW(Cpu51Board(chip, 400'000'000, 0), std::invalid_argument);
+  const std::vector<std::pair<std::uint64_t, bool>> want = {{48'324, true}, {48'588, false}};
+  EXPECT_EQ(irq_changes(img.bytes, {50'000}), want);
 }
 
 // The refusal's one sentence (std::invalid_argument), or "" when it was made.
@@ -108,6 +107,26 @@ std::string refusal(F&& make) {
     return e.what();
   }
   return "";
+}
+
+TEST(Cpu51Board, TheTimeBaseIsExact) {
+  Chip chip({Profile::spc3, BusMode::intel});
+  Cpu51Board b40(chip, 40'000'000, 0);
+  EXPECT_EQ(b40.chip_cycle_of(5), 6u);                                         // 5 * 1.2
+  EXPECT_EQ(b40.chip_cycle_of(10), 12u);                                       // exact, no rounding
+  EXPECT_EQ(b40.chip_cycle_of(3'600ULL * 40'000'000), 3'600ULL * 48'000'000);  // one hour
+}
+
+// One CPU clock range at every door (the scenario's `clock=`, --cpu 80c32:HZ, Python's hz=):
+// 1..40 MHz, said in the refusal. The C++ board took up to 287.99 MHz with no range, past even
+// its own bus limit (18 clocks at least one 4-clock access: 216 MHz at 48 MHz).
+TEST(Cpu51Board, TheCpuClockRangeIsEveryDoorsAndSaid) {
+  Chip chip({Profile::spc3, BusMode::intel});
+  for (const std::uint32_t hz : {0u, 999'999u, 40'000'001u, 216'000'000u, 287'999'999u}) {
+    EXPECT_EQ(refusal([&] { Cpu51Board b(chip, hz, 0); }),
+              fmt::format("CPU clock {} Hz out of range (1000000..40000000)", hz));
+  }
+  EXPECT_EQ(refusal([&] { Cpu51Board b(chip, 40'000'000, 0); }), "");
 }
 
 // The CPU's clock counts from the chip's cycle 0 and one CPU drives the chip's bus: a board on a
@@ -187,6 +206,76 @@ TEST(Cpu51Board, NestedWaitsEndTogether) {
   const std::vector<Seen> want = {mark(811, 0), mark(3371, 1), mark(3419, 2)};
   EXPECT_EQ(writes, want);
   EXPECT_EQ(board.cpu().in_service(), 0);
+}
+
+// run_until(T) leaves the chip at T exactly, whatever the CPU runs (docs/timing.md, "An 80C32
+// beside the chip"): the built-in master sends its next request at now() and a scenario's
+// `silence` lasts its time, so an overshoot moved the line with the CPU's clock (the chip at 7436
+// or 7872 where the master's retry was due at 7424). A DIV loop (84h DIV AB 4 cycles, 80h FDh
+// SJMP 2) at 1 MHz has steps of up to 4 x 12 x 48 = 2304 chip cycles; each end here lies inside
+// one. With a step hook (`--trace-cpu`) the walk goes step by step: the same ends.
+TEST(Cpu51Board, RunUntilEndsAtTheCycleAskedWhateverTheCpuRuns) {
+  for (const bool hooked : {false, true}) {
+    for (const std::uint32_t hz : {1'000'000u, 24'000'000u}) {
+      Chip chip({Profile::spc3, BusMode::intel});
+      Cpu51Board board(chip, hz, 0x8000);
+      const std::vector<std::uint8_t> div_loop = {0x84, 0x80, 0xFD};
+      board.cpu().load_code(0, div_loop);
+      if (hooked) board.on_step = [](std::uint16_t, std::uint64_t) {};
+      for (const std::uint64_t t : {1u, 7u, 1056u, 2208u, 3360u, 7424u, 7425u, 100'001u}) {
+        board.run_until(t);
+        EXPECT_EQ(chip.cycle(), t) << hz << " Hz, hooked " << hooked;
+        // The CPU's last step sampled before T and ended 2 clocks after its last sample.
+        EXPECT_LE(board.chip_cycle_of(board.cpu().clocks()), t + board.chip_cycle_of(2));
+      }
+    }
+  }
+}
+
+// An X/INT change whose S5P2 sample falls in a MOVX's first cycle is polled in its second (the
+// manual: flags "sampled at S5P2 of every machine cycle; the samples are polled during the
+// following machine cycle"), so the call follows the MOVX, whether it reads the chip or the
+// board's RAM (docs/cpu.md, "INT0 from X/INT"). The program (bytes below, machine cycles in
+// brackets, 24 MHz: chip cycle = 24 x cycle + 2 x clock-in-cycle): LJMP [0,2); MOV DPTR,#8004h
+// [2,4), MOV A,#EFh [4,5), MOVX [5,7) unmasks User_Timer_Clock; MOV IE,#81h [7,9); MOV DPTR,#8008h
+// [9,11), MOV A,#01h [11,12), MOVX [12,14) Start_SPC3, done at 2 x (144 + 18) = 324; seven NOPs
+// [14,21); the loop MOV DPTR,#addr [21 + 10k, 23 + 10k), MOVX A,@DPTR [23 + 10k, 25 + 10k), MUL AB
+// 4, SJMP 2. The first User_Timer_Clock at 324 + 48 000 = 48 324 (docs/timing.md, Timers): cycle
+// j samples at chip cycle 24 j + 20 >= 48 324 first for j = 2013 = 23 + 10 x 199, the MOVX's
+// first cycle. Polled in 2014, its last: the call [2015,2017), LJMP [2017,2019), MOV DPTR 2, MOV A
+// 1, the acknowledge MOVX [2022,2024): X/INT inactive at 24 x 2022 + 36 = 48 564. (Seen only in
+// the MOVX's second cycle, the call waited for the MUL: 4 cycles, 96 chip cycles, later.)
+TEST(Cpu51Board, AnX_IntChangeInAMovxsFirstCycleIsCalledAfterTheMovx) {
+  for (const std::uint16_t addr : {0x8016, 0x1000}) {
+    std::vector<std::uint8_t> code(0x60, 0);
+    const auto put = [&](std::size_t at, std::vector<std::uint8_t> bytes) {
+      std::copy(bytes.begin(), bytes.end(), code.begin() + static_cast<std::ptrdiff_t>(at));
+    };
+    put(0x00, {0x02, 0x00, 0x30});  // LJMP start
+    put(0x03, {0x02, 0x00, 0x50});  // LJMP isr
+    put(0x30, {0x90, 0x80, 0x04, 0x74, 0xEF, 0xF0, 0x75, 0xA8, 0x81, 0x90, 0x80, 0x08, 0x74, 0x01,
+               0xF0});  // the seven NOPs follow at 3Fh
+    put(0x46, {0x90, static_cast<std::uint8_t>(addr >> 8), static_cast<std::uint8_t>(addr), 0xE0,
+               0xA4, 0x80, 0xF9});
+    put(0x50, {0x90, 0x80, 0x02, 0x74, 0x10, 0xF0, 0xC2, 0xAF, 0x32});  // ack, CLR EA, RETI
+    const std::vector<std::pair<std::uint64_t, bool>> want = {{48'324, true}, {48'564, false}};
+    EXPECT_EQ(irq_changes(code, {50'000}), want) << fmt::format("MOVX from {:04X}h", addr);
+  }
+}
+
+// A run cut anywhere gives the run in one piece: the samples of the step that waits for the next
+// run are walked up to the cut, the rest after it (AnX_IntChangeIsSampledInTheCycleWhoseS5p2SeesIt
+// in pieces of 997 chip cycles, the cut at 48 324 too: the MUL's sample in cycle 2013 lies
+// after it).
+TEST(Cpu51Board, ARunInPiecesSamplesAsARunInOne) {
+  const mcs51::HexImage img = board_image("user_timer");
+  ASSERT_GT(img.size, 0u);
+  std::vector<std::uint64_t> ends;
+  for (std::uint64_t t = 997; t < 48'324; t += 997) ends.push_back(t);
+  for (std::uint64_t t = 48'324; t < 50'000; t += 7) ends.push_back(t);
+  ends.push_back(50'000);
+  const std::vector<std::pair<std::uint64_t, bool>> want = {{48'324, true}, {48'588, false}};
+  EXPECT_EQ(irq_changes(img.bytes, ends), want);
 }
 
 }  // namespace

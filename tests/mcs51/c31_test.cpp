@@ -90,6 +90,24 @@ TEST(C31, NothingAnswersAbove1FFFh) {
   EXPECT_EQ(board.cpu().a(), 0xFF);
 }
 
+// Code address c is RAM address code + c (docs/dpc31.md, "The C31"): past the code area, above
+// 1FFFh, nothing answers and a fetch reads FFh (MOV R7,A), as the 80C32's empty program memory
+// does (docs/cpu.md); inside it the chip's RAM, whatever the image left there. The program:
+// MOV A,#5Ah [0,1), LJMP F000h [1,3), then FFh from F000h, one cycle each: at 24 MHz the run to
+// chip cycle 2 400 takes the steps whose sample 24m + 20 lies before it, m = 3..99, 97 of them:
+// PC F061h, R7 = A = 5Ah (00h, a NOP, left R7 at 0 and slid on to FFFFh and round to 0000h).
+TEST(C31, EmptyCodeReadsFFhPastTheCodeArea) {
+  Chip chip(c31_chip());
+  chip.poke(0x1F10, 0xA5);  // the RAM inside the code area, past the image
+  Cpu51Board board(chip, 24'000'000, Cpu51Board::C31{0x1F00});
+  ASSERT_TRUE(load(board, {0x74, 0x5A, 0x02, 0xF0, 0x00}));
+  EXPECT_EQ(board.cpu().code(0x0010), 0xA5);
+  EXPECT_EQ(board.cpu().code(0x0100), 0xFF);  // RAM address 2000h: nothing
+  board.run_until(2400);
+  EXPECT_EQ(board.cpu().pc(), 0xF061);
+  EXPECT_EQ(board.cpu().reg(7), 0x5A);
+}
+
 TEST(C31, OnlyTheDpc31sC31WithItsControllerAndACodeAreaInItsRam) {
   Chip spc3({.profile = Profile::spc3});
   EXPECT_THROW(Cpu51Board(spc3, 24'000'000, Cpu51Board::C31{0x1000}), std::invalid_argument);

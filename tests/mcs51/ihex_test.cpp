@@ -52,7 +52,13 @@ TEST(Mcs51Hex, BadRecordsNameTheirLine) {
       // A segment base is x 16: 0100h would be 1000h, inside 64 KB, but it is no address.
       {":020000020100FB\n:0200000080FE80\n:00000001FF\n",
        "line 1: a non-zero segment base 0100h (only 0000h is taken)"},
-      {":03000002000000FB\n", "line 1: a type 02 record has 2 data bytes"},
+      {":03000002000000FB\n", "line 1: a type 02 record has byte count 02h, not 03h"},
+      // Start-address records (03 CS:IP, 05 EIP) have 4 data bytes by the format, as 02 / 04
+      // have 2.
+      {":0100000300FC\n:0100000000FF\n:00000001FF\n",
+       "line 1: a type 03 record has byte count 04h, not 01h"},
+      {":00000005FB\n:0100000000FF\n:00000001FF\n",
+       "line 1: a type 05 record has byte count 04h, not 00h"},
       // No data bytes: an image that runs nothing.
       {":00000001FF\n", "line 1: no data bytes before the end-of-file record: an empty image"},
       {":0000000000\n:00000001FF\n",

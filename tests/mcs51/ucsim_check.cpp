@@ -332,16 +332,18 @@ int main(int argc, char** argv) {
       std::cout << "  s51     " << (k < b.size() ? show(b[k]) : "(ended)") << "\n";
     }
   }
+  std::cout << fmt::format("{} of {} programs equal\n",
+                           programs.size() - static_cast<std::size_t>(failed), programs.size());
+  // Coverage is a verdict of its own: a gap is no program that differs.
+  bool gap = false;
   if (coverage) {
     std::string missing;
     for (unsigned op = 0; op < 256; ++op)
       if (op != 0xA5 && !executed.contains(op)) missing += fmt::format(" {:02X}", op);
-    if (!missing.empty()) {
-      std::cout << "opcodes no program ran:" << missing << "\n";
-      ++failed;
-    }
+    gap = !missing.empty();
+    std::cout << (gap ? "coverage: opcodes no program ran:" + missing
+                      : std::string("coverage: every opcode but A5h ran"))
+              << "\n";
   }
-  std::cout << fmt::format("{} of {} programs equal\n",
-                           programs.size() - static_cast<std::size_t>(failed), programs.size());
-  return failed == 0 ? 0 : 1;
+  return failed == 0 && !gap ? 0 : 1;
 }

@@ -1,6 +1,7 @@
 #!/bin/sh
 # Mcs51.UcsimCheckFailures: an s51 that fails (a signal, no trace, no end in time, not there) and
-# a bad --limit are exit 2 with one line that says so, never "differs"; nothing is left behind:
+# a bad --limit are exit 2 with one line that says so, never "differs"; a coverage gap is exit 1
+# beside "1 of 1 programs equal"; nothing is left behind:
 # no script in TMPDIR, no s51 (or what it started) running. Usage: ucsim_failures.sh CHECK PROGRAM
 set -u
 check=$1
@@ -33,6 +34,14 @@ expect "$prog: s51 gave no end within 1 s: killed" --s51 "$dir/slow" --timeout 1
 usage="(usage: mcs51_ucsim_check [--limit N] [--timeout S] [--s51 PATH] [--coverage] PROGRAM.ihx...)"
 expect "mcs51_ucsim_check: --limit 'abc' must be a whole number 1..100000000 $usage" --limit abc
 expect "mcs51_ucsim_check: --timeout '0' must be a whole number 1..100000000 $usage" --timeout 0
+# --coverage on one program that is equal but runs a few opcodes: the program counts as equal,
+# the gap is a verdict of its own (exit 1), not an unequal program.
+out=$("$check" --coverage "$prog")
+rc=$?
+[ $rc -eq 1 ] || { echo "--coverage: exit $rc, not 1"; fail=1; }
+printf '%s\n' "$out" | grep -qx "1 of 1 programs equal" || { echo "--coverage: $out"; fail=1; }
+printf '%s\n' "$out" | tail -n 1 | grep -q "^coverage: opcodes no program ran: " ||
+  { echo "--coverage, last line: $out"; fail=1; }
 # Both slow runs (the one that timed out, the other of its batch) and their sleeps are gone.
 [ "$(wc -l <"$dir/pids")" -eq 4 ] || { echo "the slow s51 did not start twice"; fail=1; }
 for pid in $(cat "$dir/pids"); do

@@ -12,14 +12,17 @@
 #include <charconv>
 #include <chrono>
 #include <csignal>
+#include <cstdio>
 #include <cstring>
 #include <memory>
 #include <optional>
 #include <span>
+#include <system_error>
 
 #include "../bridge/engine.hpp"
 #include "../bridge/pty.hpp"
 #include "../bridge/tcp.hpp"
+#include "numbers.hpp"
 #include "outfile.hpp"
 #include "path_option.hpp"
 #include "pcapng.hpp"
@@ -242,6 +245,14 @@ std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
   if (const std::string why = bridge::stations_problem(c.setup.slaves); !why.empty()) {
     return bad(why);
   }
+  if ((o.trace_cpu_from || o.trace_cpu_to) && o.trace_cpu.empty()) {
+    return bad(fmt::format("{} needs --trace-cpu",
+                           o.trace_cpu_from ? "--trace-cpu-from" : "--trace-cpu-to"));
+  }
+  if (o.trace_cpu_from && o.trace_cpu_to && *o.trace_cpu_from >= *o.trace_cpu_to) {
+    return bad(fmt::format("--trace-cpu-from {} must lie before --trace-cpu-to {}: an empty window",
+                           *o.trace_cpu_from, *o.trace_cpu_to));
+  }
   std::uint64_t v = 0;
   if (!o.slaves.empty()) {
     // Each station's chip, address and user side come from its --slave.
@@ -405,11 +416,13 @@ class SignalGuard {
 // first clock and its machine cycle; an instruction is "PC OPCODE NAME", the hardware LCALL of
 // an interrupt "interrupt SOURCE VECTOR from PC NAME", and a stretch of idle (or power-down)
 // machine cycles one line "idle N machine cycles to CHIP_CYCLE MACHINE_CYCLE" (the first after
-// it): one line per idle cycle flooded the file with steps of the instruction at PC.
+// it): one line per idle cycle flooded the file with steps of the instruction at PC. Only the lines
+// whose first chip cycle lies in [from, to) are written (--trace-cpu-from, --trace-cpu-to).
 class CpuTrace {
  public:
-  CpuTrace(Cpu51Board& board, const Cpu51Image& image, std::FILE* f)
-      : board_(board), image_(image), f_(f) {
+  CpuTrace(Cpu51Board& board, const Cpu51Image& image, std::FILE* f, std::uint64_t from,
+           std::uint64_t to)
+      : board_(board), image_(image), f_(f), from_(from), to_(to) {
     board.on_step = [this](std::uint16_t pc, std::uint64_t cycle) { step(pc, cycle); };
   }
   CpuTrace(const CpuTrace&) = delete;
@@ -425,6 +438,10 @@ class CpuTrace {
   [[nodiscard]] std::uint64_t chip_cycle(std::uint64_t machine_cycle) const {
     return board_.chip_cycle_of(machine_cycle * mcs51::clocks_per_cycle);
   }
+  [[nodiscard]] bool shown(std::uint64_t machine_cycle) const {
+    const std::uint64_t c = chip_cycle(machine_cycle);
+    return c >= from_ && c < to_;
+  }
   void step(std::uint16_t pc, std::uint64_t cycle) {
     const mcs51::Cpu& cpu = board_.cpu();
     // The step's kind as Cpu::step will take it: power-down, then a due call, then idle.
@@ -435,7 +452,7 @@ class CpuTrace {
     end_stretch(cycle);
     waiting_ = w;
     since_ = cycle;
-    if (w != Waiting::none) return;
+    if (w != Waiting::none || !shown(cycle)) return;
     if (cpu.interrupt_due()) {
       static constexpr std::array<const char*, 6> kSource{"ie0", "tf0",    "ie1",
                                                           "tf1", "serial", "timer2"};
@@ -449,15 +466,17 @@ class CpuTrace {
   }
   void end_stretch(std::uint64_t cycle) {
     if (waiting_ == Waiting::none) return;
-    fmt::print(f_, "{} {} {} {} machine cycles to {} {}\n", chip_cycle(since_), since_,
-               waiting_ == Waiting::idle ? "idle" : "power-down", cycle - since_, chip_cycle(cycle),
-               cycle);
+    if (shown(since_))
+      fmt::print(f_, "{} {} {} {} machine cycles to {} {}\n", chip_cycle(since_), since_,
+                 waiting_ == Waiting::idle ? "idle" : "power-down", cycle - since_,
+                 chip_cycle(cycle), cycle);
     waiting_ = Waiting::none;
   }
 
   Cpu51Board& board_;
   const Cpu51Image& image_;
   std::FILE* f_;
+  std::uint64_t from_, to_;
   Waiting waiting_ = Waiting::none;
   std::uint64_t since_ = 0;  // the stretch's first machine cycle
 };
@@ -635,6 +654,12 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
       ->check(outfile::given());
   b->add_option("--trace-cpu", o.trace_cpu, "write every CPU instruction with its cycle here")
       ->check(outfile::named(outfile::Use::write));
+  b->add_option("--trace-cpu-from", o.trace_cpu_from,
+                "with --trace-cpu: only the steps from this chip cycle on")
+      ->transform(numbers::whole(0));
+  b->add_option("--trace-cpu-to", o.trace_cpu_to,
+                "with --trace-cpu: only the steps before this chip cycle")
+      ->transform(numbers::whole(0));
   b->add_option("--ports", o.ports,
                 "N1,N2...: the 80C32 board's output latch bytes (XDATA 4000h on) by name; "
                 "default DO4's: outputs,modul_ok")
@@ -661,9 +686,9 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
   b->allow_extras();
   b->callback([b, &o] {
     o.extra = b->remaining();
-    for (const char* name :
-         {"--firmware", "--address", "--profile", "--variant", "--irq-controller", "--cpu",
-          "--code", "--board-address", "--trace-cpu", "--ports"}) {
+    for (const char* name : {"--firmware", "--address", "--profile", "--variant",
+                             "--irq-controller", "--cpu", "--code", "--board-address",
+                             "--trace-cpu", "--trace-cpu-from", "--trace-cpu-to", "--ports"}) {
       if (b->get_option(name)->count() > 0) o.single.emplace_back(name);
     }
   });
@@ -784,14 +809,21 @@ int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
     Bridge b(*c, *door.port, log);
     log.line(header(*c, o, door.port->describe(), b.engine()));
     std::optional<CpuTrace> cpu_trace;
-    if (trace.is_open())
-      cpu_trace.emplace(b.engine().cpu51()->board(), c->setup.cpu_image, trace.stream());
+    if (trace.is_open()) {
+      cpu_trace.emplace(b.engine().cpu51()->board(), c->setup.cpu_image, trace.stream(),
+                        o.trace_cpu_from.value_or(0), o.trace_cpu_to.value_or(UINT64_MAX));
+    }
     if (pcap.is_open()) capture_line(b.engine(), pcap);
     rc = b.run();
     if (cpu_trace) cpu_trace->finish();
   } catch (const FirmwareError& e) {
     log.line(fmt::format("dpc31 bridge: {}", e.what()));
     return refuse(e.what());
+  } catch (const std::system_error& e) {
+    // fmt::print throws where the trace's write fails (a full disk, ulimit -f): the file named,
+    // as every output's (docs/bad-input.md, "Output files"); its temporary goes with `trace`.
+    if (!trace.is_open() || std::ferror(trace.stream()) == 0) throw;
+    return refuse(fmt::format("{}: cannot write: {}", o.trace_cpu, e.code().message()));
   }
   // The log's failure stopped the bridge: said first, and the outputs are not written (their
   // temporaries go with them), as after any failed write.

@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,8 @@ struct BridgeOptions {
   std::string code;           // --code A: the C31's code area (c31 only)
   std::string board_address;  // --board-address A: the chip's window in the 80C32's XDATA
   std::string trace_cpu;      // every 80C32 / C31 instruction with its cycle, to this file
+  // --trace-cpu-from / --trace-cpu-to C: only the steps whose first chip cycle lies in [from, to)
+  std::optional<std::uint64_t> trace_cpu_from, trace_cpu_to;
   // --slave ADDR:FIRMWARE[:PROFILE[:VARIANT]], repeated: stations on one line (docs/bridge.md,
   // "Several slaves")
   std::vector<std::string> slaves;
