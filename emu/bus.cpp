@@ -420,10 +420,18 @@ std::uint8_t ChipCore::read_now(std::uint32_t addr) {
     v = h.read != nullptr ? h.read(h.block) : regs.latch(r.id);  // reg_value for these kinds
   }
   v = static_cast<std::uint16_t>(v & r.mask() & ~r.rsvd);
-  if (r.unimp != 0)
+  if (unimp_news(r, v))
     signals.log(LogLevel::info, "read of {}: behaviour not modelled, reads the stored value",
                 r.name);
   return static_cast<std::uint8_t>(v >> (8 * r.placement(regs.bus())[offset]));
+}
+
+// UNIMP bits (docs/registers.md) are news in a register of nothing else, at every access, and
+// elsewhere when an access carries a 1 in one (`ones`: the bits read, or written as 1): a
+// driver's Mode_Reg0 write that leaves MinTSDR, Early_Rdy and Spec_Prm_Buf_Mode 0 is not.
+bool ChipCore::unimp_news(const RegDesc& r, std::uint16_t ones) const {
+  const bool only_unimp = r.unimp != 0 && (r.mask() & ~r.rsvd & ~r.unimp) == 0;
+  return only_unimp || (ones & regs.reg(r.target)->unimp) != 0;
 }
 
 void ChipCore::write_now(std::uint32_t addr, std::uint8_t value) {
@@ -496,11 +504,17 @@ void ChipCore::write_reg(const RegDesc& r, std::uint32_t offset, std::uint8_t va
     signals.log(LogLevel::debug, "{}: {} not changed by this register (bits {:#06x})", r.name,
                 field_names(r, w & r.ign), w & r.ign);
   }
-  if ((r.unimp & lane) != 0)
-    signals.log(LogLevel::info, "{}: stored, behaviour not modelled", r.name);
   const RegHooks& h = hooks[RegisterFile::idx(r.id)];
   written_bits = w;
   if (h.pre_write != nullptr) next = h.pre_write(h.block, old, next);
+  // The UNIMP bits the write leaves 1 or changes; a port's are its target's (VPC3+ Mode_Reg1_S /
+  // _R: En_Chk_SSAP).
+  const auto unimp =
+      static_cast<std::uint16_t>((next | (next ^ old)) & lane & regs.reg(r.target)->unimp);
+  if (unimp_news(r, unimp)) {
+    signals.log(LogLevel::info, "{}: {} stored, behaviour not modelled", r.name,
+                field_names(r, unimp != 0 ? unimp : static_cast<std::uint16_t>(r.unimp & lane)));
+  }
   regs.latch(r.target) = next;
   if (h.post_write != nullptr) h.post_write(h.block, old, next, w);
   regs.latch(r.target) = static_cast<std::uint16_t>(regs.latch(r.target) & ~r.pulse);

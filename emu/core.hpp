@@ -135,6 +135,7 @@ struct ChipCore {
   void watchdog_expired();
   std::uint32_t begin_access(std::uint32_t addr, std::string_view what);
   void write_reg(const RegDesc& r, std::uint32_t offset, std::uint8_t value);
+  [[nodiscard]] bool unimp_news(const RegDesc& r, std::uint16_t ones) const;
 
   // The plain path (bus.cpp, docs/engine.md "Plain accesses"): the accesses the description
   // (RegDesc::plain) and the installed hooks make straight loads and stores. Per address: 0 the

@@ -40,7 +40,8 @@ constexpr std::array<NameEntry<Access>, 9> kAccesses{{
     {Access::RSVD, "RSVD",
      "reserved: reads 0, not writable; a write that would change it is logged"},
     {Access::UNIMP, "UNIMP",
-     "exists on the chip, behaviour not modelled: stored, every access logged"},
+     "exists on the chip, behaviour not modelled: stored; logged at every access of a register of "
+     "nothing else, elsewhere at a write of 1 to one and at a read while one is 1"},
 }};
 
 constexpr std::array<NameEntry<Block>, 9> kBlocks{{

@@ -5,6 +5,7 @@
 
 #include "dpc31/reg_ids.hpp"
 #include "harness.hpp"
+#include "responder.hpp"
 #include "test_util.hpp"
 
 using namespace dpc31;
@@ -57,10 +58,58 @@ TEST_P(Mode, StartAndGoOfflineInOneWriteEndsAsStartThenGoOffline) {
   EXPECT_NE(c.peek_reg(RegId::Int_Req_Reg) & irq::MAC_Reset, 0);
   EXPECT_EQ(c.peek_reg(RegId::Mode_Reg1), 0x04);
   if (GetParam().profile == Profile::vpc3plus) {
-    EXPECT_EQ(c.read(0x15), 0x04);
+    EXPECT_EQ(c.read(0x15) & 0x80, 0x00);
   }
   user_start(c);  // the next Start clears it
   EXPECT_EQ(c.peek_reg(RegId::Mode_Reg1), 0x01);
+}
+
+// Mode bits the model stores but does not act on are UNIMP (docs/registers.md; docs/decisions.md,
+// "The twenty-ninth session: s29-chip"): Mode_Reg0 MinTSDR (bit 3), Early_Rdy (5),
+// Spec_Prm_Buf_Mode (12); on the VPC3+ Mode_Reg2 DX_Int_Port, SYNC_Ena, SYNC_Pol (3..5) and
+// Mode_Reg1's En_Chk_SSAP (7, set and cleared through Mode_Reg1_S / _R). A write of 1 to one is
+// logged, as a read while one is 1; a write that leaves them 0 is not, so a driver's standard
+// set-up logs nothing.
+TEST_P(Mode, UnmodelledModeBitsAreLoggedWhenWrittenAsOne) {
+  Chip c = make();
+  const auto logged = [&](const std::string& what) {
+    return log_.count_containing(what + " stored, behaviour not modelled");
+  };
+  const auto write = [&](RegId id, std::uint8_t v) {
+    c.write(static_cast<std::uint32_t>(c.addr_of(id)), v);
+  };
+  Responder user(ResponderConfig{});
+  DirectBus bus(c);
+  user.init(bus);
+  EXPECT_EQ(log_.count_containing("behaviour not modelled"), 0u);
+  user_go_offline(c);  // Mode_Reg0 is written Offline
+  for (const auto& [bit, name] : {std::pair{0x0008, "MinTSDR"}, std::pair{0x0020, "Early_Rdy"},
+                                  std::pair{0x1000, "Spec_Prm_Buf_Mode"}}) {
+    bus_write16(c, 0x06, 16, static_cast<std::uint16_t>(bit));
+    EXPECT_EQ(logged(std::string("Mode_Reg0: ") + name), 1u);
+    EXPECT_EQ(c.peek_reg(RegId::Mode_Reg0), bit);  // stored
+    bus_write16(c, 0x06, 16, 0x0000);
+    log_.clear();
+  }
+  bus_write16(c, 0x06, 16, 0x0000);
+  EXPECT_EQ(log_.count_containing("behaviour not modelled"), 0u);
+  if (GetParam().profile != Profile::vpc3plus) return;
+  write(RegId::Mode_Reg2, 0x38);
+  EXPECT_EQ(logged("Mode_Reg2: DX_Int_Port, SYNC_Ena, SYNC_Pol"), 1u);
+  write(RegId::Mode_Reg2, 0x05);  // clears them (a change, logged); GC_Int_Mode, DX_Int_Mode
+  log_.clear();
+  write(RegId::Mode_Reg2, 0x05);
+  EXPECT_EQ(log_.count_containing("behaviour not modelled"), 0u);
+  write(RegId::Mode_Reg1_S, 0x80);  // En_Chk_SSAP set
+  EXPECT_EQ(logged("Mode_Reg1_S: En_Chk_SSAP"), 1u);
+  EXPECT_EQ(c.read(0x15) & 0x80, 0x80);  // read back
+  EXPECT_EQ(log_.count_containing("read of Mode_Reg1: behaviour not modelled"), 1u);
+  write(RegId::Mode_Reg1_R, 0x80);  // and cleared
+  EXPECT_EQ(logged("Mode_Reg1_R: En_Chk_SSAP"), 1u);
+  log_.clear();
+  EXPECT_EQ(c.read(0x15) & 0x80, 0x00);
+  write(RegId::Mode_Reg1_S, 0x02);  // EOI: no UNIMP bit
+  EXPECT_EQ(log_.count_containing("behaviour not modelled"), 0u);
 }
 
 // The DPC31 starts, stops and leaves the master through its Instruction_Queue (DPC31 p.22,

@@ -180,7 +180,7 @@ TEST_P(Ral, IntelVersusMotorolaViews) {
     SCOPED_TRACE(std::string(name));
     Chip c = make();
     const RegDesc* r = find_reg(c.profile(), name);
-    const auto store = static_cast<std::uint16_t>(r->rw);
+    const auto store = static_cast<std::uint16_t>(r->rw | r->unimp);  // UNIMP bits are stored too
     c.write(static_cast<std::uint32_t>(r->write_addr), 0x12);
     c.write(static_cast<std::uint32_t>(r->write_addr + 1), 0x34);
     // Intel: the lower address holds bits 7..0; Motorola: bits 15..8.

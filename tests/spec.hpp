@@ -56,8 +56,8 @@ inline const std::vector<Row>& rows() {
       {S, "Int_Mask_Reg", -1, 0x04, 16, 0xFFFF, "--oooooo---ooooo"},
       {D, "Int_Mask_Reg", -1, 0x04, 16, 0xFFFF, "--oooooo--oooooo"},
       {V, "Int_Mask_Reg", -1, 0x04, 16, 0xFFFF, "oooooooooooooooo"},
-      {S | D, "Mode_Reg0", 0x06, 0x06, 16, 0x0000, "--ww-wwwwwwww-ww"},
-      {V, "Mode_Reg0", 0x06, 0x06, 16, 0x0000, "-wwwwwwwwwwwwwww"},
+      {S | D, "Mode_Reg0", 0x06, 0x06, 16, 0x0000, "--wu-wwwwwuwu-ww"},
+      {V, "Mode_Reg0", 0x06, 0x06, 16, 0x0000, "-wwuwwwwwwuwuwww"},
       {ALL, "Din_Buffer_SM", 0x08, -1, 8, 0xE1, "rrrrrrrr"},
       {S, "Mode_Reg1_S", -1, 0x08, 8, 0x00, "--ssSsSs"},
       // DPC31: start, stop, Leave_Master and the user watchdog are requests (p.22, Table 5.1-3).
@@ -74,7 +74,7 @@ inline const std::vector<Row>& rows() {
       {ALL, "MinTSDR_Val", -1, 0x0B, 8, 0x0B, "oooooooo"},
       {ALL, "Diag_Buffer_SM", 0x0C, -1, 8, 0x09, "----rrrr"},
       {S | D, "Reserved_0Ch_W", -1, 0x0C, 8, -1, "--------", false, true},
-      {V, "Mode_Reg2", -1, 0x0C, 8, 0x01, "oooooooo"},  // GC_Int_Mode = 1 "(default)", VPC3+C p.50
+      {V, "Mode_Reg2", -1, 0x0C, 8, 0x01, "oouuuooo"},  // GC_Int_Mode = 1 "(default)", VPC3+C p.50
       {ALL, "New_Diag_Buffer_Cmd", 0x0D, -1, 8, -1, "------kk"},
       {S | D, "Reserved_0Dh_W", -1, 0x0D, 8, -1, "--------", false, true},
       {V, "Sync_PW_Reg", -1, 0x0D, 8, 0x00, "uuuuuuuu"},
@@ -102,7 +102,7 @@ inline const std::vector<Row>& rows() {
       {S, "Reserved_15h_R", 0x15, -1, 8, -1, "--------", false, true},
       {S, "Mode_Reg1", -1, -1, 8, 0x00, "--rrRrRr"},
       {D, "Mode_Reg1", 0x15, -1, 8, 0x00, "---r--R-"},
-      {V, "Mode_Reg1", 0x15, -1, 8, 0x00, "r-rrRrRr"},
+      {V, "Mode_Reg1", 0x15, -1, 8, 0x00, "u-rrRrRr"},
       {ALL, "Reserved_15h_W", -1, 0x15, 8, -1, "--------", false, true},
       {D, "Param_Reg", 0x0872, 0x0872, 8, 0x00, "------ww"},
       {D, "C31_Control", 0x17, 0x17, 8, 0x00, "-------w"},

@@ -184,11 +184,11 @@ enum dpc31_profile {
 #define SPC3_Mode_Reg0_Dis_Stop_Control_Pos             1u
 #define SPC3_Mode_Reg0_Dis_Stop_Control_Msk             0x0002u /* 1 RW: 1 = stop bit not checked (overwritten by Set_Prm) */
 #define SPC3_Mode_Reg0_MinTSDR_Pos                      3u
-#define SPC3_Mode_Reg0_MinTSDR_Msk                      0x0008u /* 3 RW: MinTSDR default after reset: 0 pure DP, 1 combi */
+#define SPC3_Mode_Reg0_MinTSDR_Msk                      0x0008u /* 3 UNIMP: MinTSDR default after reset: 0 pure DP, 1 combi (stored, not evaluated by the model: MinTSDR_Val and Set_Prm set it) */
 #define SPC3_Mode_Reg0_INT_Pol_Pos                      4u
 #define SPC3_Mode_Reg0_INT_Pol_Msk                      0x0010u /* 4 RW: X/INT polarity: 0 low-active, 1 high-active */
 #define SPC3_Mode_Reg0_Early_Rdy_Pos                    5u
-#define SPC3_Mode_Reg0_Early_Rdy_Msk                    0x0020u /* 5 RW: Ready one clock earlier */
+#define SPC3_Mode_Reg0_Early_Rdy_Msk                    0x0020u /* 5 UNIMP: Ready one clock earlier (stored, not evaluated by the model: every access takes its clocks) */
 #define SPC3_Mode_Reg0_Sync_Supported_Pos               6u
 #define SPC3_Mode_Reg0_Sync_Supported_Msk               0x0040u /* 6 RW: Sync accepted */
 #define SPC3_Mode_Reg0_Freeze_Supported_Pos             7u
@@ -200,7 +200,7 @@ enum dpc31_profile {
 #define SPC3_Mode_Reg0_User_Time_Base_Pos               10u
 #define SPC3_Mode_Reg0_User_Time_Base_Msk               0x0400u /* 10 RW: User_Timer_Clock period: 0 = 1 ms, 1 = 10 ms */
 #define SPC3_Mode_Reg0_Spec_Prm_Buf_Mode_Pos            12u
-#define SPC3_Mode_Reg0_Spec_Prm_Buf_Mode_Msk            0x1000u /* 12 RW: Prm data written to the special Prm buffer */
+#define SPC3_Mode_Reg0_Spec_Prm_Buf_Mode_Msk            0x1000u /* 12 UNIMP: Prm data written to the special Prm buffer (stored, not evaluated by the model: Set_Prm goes through the Aux buffers) */
 #define SPC3_Mode_Reg0_Spec_Clear_Mode_Pos              13u
 #define SPC3_Mode_Reg0_Spec_Clear_Mode_Msk              0x2000u /* 13 RW: fail-safe: accept Data_Exchange with DU length 0 */
 
@@ -762,11 +762,11 @@ enum dpc31_profile {
 #define VPC3_Mode_Reg0_WD_Base_Pos                      2u
 #define VPC3_Mode_Reg0_WD_Base_Msk                      0x0004u /* 2 RW: watchdog time base: 0 = 10 ms, 1 = 1 ms */
 #define VPC3_Mode_Reg0_MinTSDR_Pos                      3u
-#define VPC3_Mode_Reg0_MinTSDR_Msk                      0x0008u /* 3 RW: MinTSDR default after reset: 0 pure DP, 1 combi */
+#define VPC3_Mode_Reg0_MinTSDR_Msk                      0x0008u /* 3 UNIMP: MinTSDR default after reset: 0 pure DP, 1 combi (stored, not evaluated by the model: MinTSDR_Val and Set_Prm set it) */
 #define VPC3_Mode_Reg0_INT_Pol_Pos                      4u
 #define VPC3_Mode_Reg0_INT_Pol_Msk                      0x0010u /* 4 RW: X/INT polarity: 0 low-active, 1 high-active */
 #define VPC3_Mode_Reg0_Early_Rdy_Pos                    5u
-#define VPC3_Mode_Reg0_Early_Rdy_Msk                    0x0020u /* 5 RW: Ready one clock earlier */
+#define VPC3_Mode_Reg0_Early_Rdy_Msk                    0x0020u /* 5 UNIMP: Ready one clock earlier (stored, not evaluated by the model: every access takes its clocks) */
 #define VPC3_Mode_Reg0_Sync_Supported_Pos               6u
 #define VPC3_Mode_Reg0_Sync_Supported_Msk               0x0040u /* 6 RW: Sync accepted */
 #define VPC3_Mode_Reg0_Freeze_Supported_Pos             7u
@@ -780,7 +780,7 @@ enum dpc31_profile {
 #define VPC3_Mode_Reg0_Set_Ext_Prm_Supported_Pos        11u
 #define VPC3_Mode_Reg0_Set_Ext_Prm_Supported_Msk        0x0800u /* 11 RW: SAP53 Ext_User_Prm accepted */
 #define VPC3_Mode_Reg0_Spec_Prm_Buf_Mode_Pos            12u
-#define VPC3_Mode_Reg0_Spec_Prm_Buf_Mode_Msk            0x1000u /* 12 RW: Prm data written to the special Prm buffer */
+#define VPC3_Mode_Reg0_Spec_Prm_Buf_Mode_Msk            0x1000u /* 12 UNIMP: Prm data written to the special Prm buffer (stored, not evaluated by the model: Set_Prm goes through the Aux buffers) */
 #define VPC3_Mode_Reg0_Spec_Clear_Mode_Pos              13u
 #define VPC3_Mode_Reg0_Spec_Clear_Mode_Msk              0x2000u /* 13 RW: fail-safe: accept Data_Exchange with DU length 0 */
 #define VPC3_Mode_Reg0_PrmCmd_Supported_Pos             14u
@@ -814,7 +814,7 @@ enum dpc31_profile {
 #define VPC3_Mode_Reg1_S_Res_User_WD_Pos                5u
 #define VPC3_Mode_Reg1_S_Res_User_WD_Msk                0x20u /* 5 W1S: reload the user watchdog; the chip clears it at the next Data_Exchange */
 #define VPC3_Mode_Reg1_S_En_Chk_SSAP_Pos                7u
-#define VPC3_Mode_Reg1_S_En_Chk_SSAP_Msk                0x80u /* 7 W1S: check the master's SSAP (stored; not evaluated by the model) */
+#define VPC3_Mode_Reg1_S_En_Chk_SSAP_Msk                0x80u /* 7 W1S: check the master's SSAP (stored; not evaluated by the model: UNIMP in Mode_Reg1, a write of 1 through either port logged) */
 
 /* New_Din_Buffer_Cmd: derived, 8 bit -- Command read: U -> N, the free buffer becomes the new U */
 #define VPC3_New_Din_Buffer_Cmd                         0x009u /* read */
@@ -837,7 +837,7 @@ enum dpc31_profile {
 #define VPC3_Mode_Reg1_R_Res_User_WD_Pos                5u
 #define VPC3_Mode_Reg1_R_Res_User_WD_Msk                0x20u /* 5 W1C: reload the user watchdog; the chip clears it at the next Data_Exchange */
 #define VPC3_Mode_Reg1_R_En_Chk_SSAP_Pos                7u
-#define VPC3_Mode_Reg1_R_En_Chk_SSAP_Msk                0x80u /* 7 W1C: check the master's SSAP (stored; not evaluated by the model) */
+#define VPC3_Mode_Reg1_R_En_Chk_SSAP_Msk                0x80u /* 7 W1C: check the master's SSAP (stored; not evaluated by the model: UNIMP in Mode_Reg1, a write of 1 through either port logged) */
 
 /* Dout_Buffer_SM: derived, 8 bit -- Dout buffer state machine: which Dout buffer is in D, N, U, F */
 #define VPC3_Dout_Buffer_SM                             0x00Au /* read */
@@ -886,11 +886,11 @@ enum dpc31_profile {
 #define VPC3_Mode_Reg2_DX_Int_Mode_Pos                  2u
 #define VPC3_Mode_Reg2_DX_Int_Mode_Msk                  0x04u /* 2 WO: 0 = DX_Out only if the Dout length is not 0 (default), 1 = DX_Out after every Data_Exchange telegram */
 #define VPC3_Mode_Reg2_DX_Int_Port_Pos                  3u
-#define VPC3_Mode_Reg2_DX_Int_Port_Msk                  0x08u /* 3 WO: DX_Out on a port pin (stored) */
+#define VPC3_Mode_Reg2_DX_Int_Port_Msk                  0x08u /* 3 UNIMP: DX_Out on a port pin (stored, pin not modelled) */
 #define VPC3_Mode_Reg2_SYNC_Ena_Pos                     4u
-#define VPC3_Mode_Reg2_SYNC_Ena_Msk                     0x10u /* 4 WO: SYNC pin enable (stored) */
+#define VPC3_Mode_Reg2_SYNC_Ena_Msk                     0x10u /* 4 UNIMP: SYNC pin enable (stored, SYNC pin not modelled) */
 #define VPC3_Mode_Reg2_SYNC_Pol_Pos                     5u
-#define VPC3_Mode_Reg2_SYNC_Pol_Msk                     0x20u /* 5 WO: SYNC pin polarity (stored) */
+#define VPC3_Mode_Reg2_SYNC_Pol_Msk                     0x20u /* 5 UNIMP: SYNC pin polarity (stored, SYNC pin not modelled) */
 #define VPC3_Mode_Reg2_No_Check_Prm_Reserved_Pos        6u
 #define VPC3_Mode_Reg2_No_Check_Prm_Reserved_Msk        0x40u /* 6 WO: reserved Set_Prm bits not checked */
 #define VPC3_Mode_Reg2_4kB_Mode_Pos                     7u
@@ -990,7 +990,7 @@ enum dpc31_profile {
 #define VPC3_Mode_Reg1_Res_User_WD_Pos                  5u
 #define VPC3_Mode_Reg1_Res_User_WD_Msk                  0x20u /* 5 RO: reload the user watchdog; the chip clears it at the next Data_Exchange */
 #define VPC3_Mode_Reg1_En_Chk_SSAP_Pos                  7u
-#define VPC3_Mode_Reg1_En_Chk_SSAP_Msk                  0x80u /* 7 RO: check the master's SSAP (stored; not evaluated by the model) */
+#define VPC3_Mode_Reg1_En_Chk_SSAP_Msk                  0x80u /* 7 UNIMP: check the master's SSAP (stored; not evaluated by the model: UNIMP in Mode_Reg1, a write of 1 through either port logged) */
 
 /* Reserved_15h_W: reserved, 8 bit -- reserved write side */
 #define VPC3_Reserved_15h_W                             0x015u /* write */
@@ -1350,11 +1350,11 @@ enum dpc31_profile {
 #define DPC31_Mode_Reg0_Dis_Stop_Control_Pos            1u
 #define DPC31_Mode_Reg0_Dis_Stop_Control_Msk            0x0002u /* 1 RW: 1 = stop bit not checked (overwritten by Set_Prm) */
 #define DPC31_Mode_Reg0_MinTSDR_Pos                     3u
-#define DPC31_Mode_Reg0_MinTSDR_Msk                     0x0008u /* 3 RW: MinTSDR default after reset: 0 pure DP, 1 combi */
+#define DPC31_Mode_Reg0_MinTSDR_Msk                     0x0008u /* 3 UNIMP: MinTSDR default after reset: 0 pure DP, 1 combi (stored, not evaluated by the model: MinTSDR_Val and Set_Prm set it) */
 #define DPC31_Mode_Reg0_INT_Pol_Pos                     4u
 #define DPC31_Mode_Reg0_INT_Pol_Msk                     0x0010u /* 4 RW: X/INT polarity: 0 low-active, 1 high-active */
 #define DPC31_Mode_Reg0_Early_Rdy_Pos                   5u
-#define DPC31_Mode_Reg0_Early_Rdy_Msk                   0x0020u /* 5 RW: Ready one clock earlier */
+#define DPC31_Mode_Reg0_Early_Rdy_Msk                   0x0020u /* 5 UNIMP: Ready one clock earlier (stored, not evaluated by the model: every access takes its clocks) */
 #define DPC31_Mode_Reg0_Sync_Supported_Pos              6u
 #define DPC31_Mode_Reg0_Sync_Supported_Msk              0x0040u /* 6 RW: Sync accepted */
 #define DPC31_Mode_Reg0_Freeze_Supported_Pos            7u
@@ -1366,7 +1366,7 @@ enum dpc31_profile {
 #define DPC31_Mode_Reg0_User_Time_Base_Pos              10u
 #define DPC31_Mode_Reg0_User_Time_Base_Msk              0x0400u /* 10 RW: User_Timer_Clock period: 0 = 1 ms, 1 = 10 ms */
 #define DPC31_Mode_Reg0_Spec_Prm_Buf_Mode_Pos           12u
-#define DPC31_Mode_Reg0_Spec_Prm_Buf_Mode_Msk           0x1000u /* 12 RW: Prm data written to the special Prm buffer */
+#define DPC31_Mode_Reg0_Spec_Prm_Buf_Mode_Msk           0x1000u /* 12 UNIMP: Prm data written to the special Prm buffer (stored, not evaluated by the model: Set_Prm goes through the Aux buffers) */
 #define DPC31_Mode_Reg0_Spec_Clear_Mode_Pos             13u
 #define DPC31_Mode_Reg0_Spec_Clear_Mode_Msk             0x2000u /* 13 RW: fail-safe: accept Data_Exchange with DU length 0 */
 
