@@ -548,7 +548,11 @@ void bind_chip_class(py::module_& m) {
                 c, f, [&](auto cb) { c.chip.on_irq_change(std::move(cb)); },
                 [](const py::object& fn, U64 cy, bool a) { fn(cy, a); });
           },
-          py::arg("callback"), "callback(cycle, active) at every X/INT edge; None removes all")
+          py::arg("callback"),
+          "callback(cycle, active) whenever the interrupt becomes active or inactive (X/INT "
+          "follows it through Mode_Reg0.INT_Pol; a polarity write moves the pin without a call); "
+          "None "
+          "removes all")
       .def(
           "on_pb3_change",
           [](PyChip& c, const py::object& f) {

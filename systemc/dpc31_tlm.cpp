@@ -33,7 +33,8 @@ Dpc31Tlm::Dpc31Tlm(const sc_core::sc_module_name& name, const ChipOptions& optio
       rxd("rxd"),
       chip_(options),
       ticks_per_second_(static_cast<std::uint64_t>(
-          std::llround(1.0 / sc_core::sc_get_time_resolution().to_seconds()))) {
+          std::llround(1.0 / sc_core::sc_get_time_resolution().to_seconds()))),
+      x_int_level_(chip_.x_int_pin()) {
   // Coarser, two cycles share a time: accesses are no longer back to back, events move.
   if (ticks_per_second_ < chip_.clock_hz()) {
     throw std::invalid_argument(
@@ -44,12 +45,12 @@ Dpc31Tlm::Dpc31Tlm(const sc_core::sc_module_name& name, const ChipOptions& optio
   bus.register_b_transport(this, &Dpc31Tlm::b_transport);
   bus.register_transport_dbg(this, &Dpc31Tlm::transport_dbg);
   bus.register_get_direct_mem_ptr(this, &Dpc31Tlm::get_direct_mem_ptr);
-  x_int.initialize(chip_.x_int_pin());
+  x_int.initialize(x_int_level_);
   irq.initialize(chip_.irq_active());
   pb3.initialize(chip_.pb3_pin());
   txd.initialize(chip_.txd_pin());
   chip_.on_irq_change([this](std::uint64_t cycle, bool active) {
-    schedule(cycle, kXInt, chip_.x_int_pin());
+    follow_x_int(cycle);
     schedule(cycle, kIrq, active);
   });
   chip_.on_pb3_change([this](std::uint64_t cycle, bool high) { schedule(cycle, kPb3, high); });
@@ -85,6 +86,12 @@ void Dpc31Tlm::schedule(std::uint64_t cycle, int pin, bool level) {
   edges_.push_back({at, pin, level});
   const sc_core::sc_time now = sc_core::sc_time_stamp();
   edge_due_.notify(at > now ? at - now : sc_core::SC_ZERO_TIME);
+}
+
+void Dpc31Tlm::follow_x_int(std::uint64_t cycle) {
+  if (chip_.x_int_pin() == x_int_level_) return;
+  x_int_level_ = !x_int_level_;
+  schedule(cycle, kXInt, x_int_level_);
 }
 
 void Dpc31Tlm::apply_edges() {
@@ -216,6 +223,7 @@ void Dpc31Tlm::b_transport(tlm::tlm_generic_payload& tr, sc_core::sc_time& delay
       data[i] = chip_.read(a);
     } else {
       chip_.write(a, data[i]);
+      follow_x_int(chip_.cycle());  // Mode_Reg0.INT_Pol flips the pin when the write completes
     }
     ++accesses_;
   }
@@ -241,6 +249,8 @@ unsigned int Dpc31Tlm::transport_dbg(tlm::tlm_generic_payload& tr) {
       data[done] = chip_.peek(a);
     } else if (!chip_.poke(a, data[done])) {
       break;  // no storage behind the read side: the bytes before it are written
+    } else {
+      follow_x_int(chip_.cycle());  // a poked INT_Pol moves the pin too
     }
   }
   tr.set_response_status(tlm::TLM_OK_RESPONSE);

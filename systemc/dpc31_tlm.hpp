@@ -70,9 +70,12 @@ class Dpc31Tlm : public sc_core::sc_module {
   void b_transport(tlm::tlm_generic_payload& tr, sc_core::sc_time& delay);
   unsigned int transport_dbg(tlm::tlm_generic_payload& tr);
   bool get_direct_mem_ptr(tlm::tlm_generic_payload& tr, tlm::tlm_dmi& dmi);
-  void run();                         // SC_THREAD: the chip's own events at their times
-  void watch_rxd();                   // SC_THREAD: the rxd port\'s changes onto the chip\'s RxD
-  void apply_edges();                 // SC_METHOD: scheduled pin changes onto the ports
+  void run();          // SC_THREAD: the chip's own events at their times
+  void watch_rxd();    // SC_THREAD: the rxd port\'s changes onto the chip\'s RxD
+  void apply_edges();  // SC_METHOD: scheduled pin changes onto the ports
+  // X/INT follows the interrupt and Mode_Reg0.INT_Pol: a polarity write flips the pin without a
+  // change of the interrupt (no on_irq_change), so the pin is compared after every write.
+  void follow_x_int(std::uint64_t cycle);
   void step_to(std::uint64_t cycle);  // never past `cycle`, never backwards
   void schedule(std::uint64_t cycle, int pin, bool level);
 
@@ -86,6 +89,7 @@ class Dpc31Tlm : public sc_core::sc_module {
     bool level;
   };
   std::deque<Edge> edges_;
+  bool x_int_level_;  // the X/INT level last scheduled
   sc_core::sc_event edge_due_;
   sc_core::sc_event irq_rise_;
   sc_core::sc_event changed_;  // an access or RxD moved the chip's next event
