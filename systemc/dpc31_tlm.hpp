@@ -29,7 +29,9 @@ class Dpc31Tlm : public sc_core::sc_module {
   sc_core::sc_out<bool> pb3;    // dpc31 port PB3 (low on the other profiles)
   sc_core::sc_out<bool> txd;    // the serial output, each edge at its cycle's time
   // The serial input for a UART model (optional): its value at time 0 and each change drive RxD at
-  // the first clock at or after their time (a low start is warned of: PROFIBUS idles high).
+  // the first clock at or after their time (a low start is warned of: PROFIBUS idles high), or at
+  // the chip's cycle where a bus access took it past that time (docs/systemc.md: not exact beside
+  // bus traffic; drive_rxd_chars ahead of time is).
   // Unbound: drive it through chip().drive_rxd / drive_rxd_chars.
   sc_core::sc_port<sc_core::sc_signal_in_if<bool>, 1, sc_core::SC_ZERO_OR_MORE_BOUND> rxd;
 
