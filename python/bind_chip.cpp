@@ -135,6 +135,15 @@ std::vector<std::uint8_t> from_bytes(const py::bytes& b) {
   return {s.begin(), s.end()};
 }
 
+std::vector<std::uint8_t> raw_telegram(const py::bytes& b) {
+  std::vector<std::uint8_t> v = from_bytes(b);
+  if (v.empty()) throw py::value_error("telegram: no bytes");
+  if (v.size() > fdl::kMaxFrameLength) {
+    throw py::value_error(fmt::format("telegram: more than {} bytes", fdl::kMaxFrameLength));
+  }
+  return v;
+}
+
 std::uint32_t profibus_rate(std::uint32_t baud) {
   if (const std::string e = not_a_profibus_rate(baud); !e.empty()) throw py::value_error(e);
   return baud;

@@ -395,6 +395,7 @@ PyStation& add_station(py::object self, U8 address, const std::string& profile,
   s.may_join();
   auto st = std::make_unique<PyStation>();
   st->name = new_station_name(s.seg, name.value_or("station " + std::to_string(address)));
+  if (st->name.empty()) throw py::value_error(empty_name_for("station " + std::to_string(address)));
   SlaveConfig sc = slave.value_or(SlaveConfig{});
   sc.address = address;
   if (!slave) {
@@ -530,6 +531,7 @@ void bind_segment_class(py::module_& m) {
           "add_sender",
           [](P& s, const std::string& name) {
             s.may_join();
+            if (name.empty()) throw py::value_error(empty_name_for("a sender"));
             return s.joined(s.seg.add_sender(new_station_name(s.seg, name)),
                             wave::kDriverWithoutAddress);
           },
@@ -578,7 +580,7 @@ void bind_segment_class(py::module_& m) {
           "send",
           [](P& s, std::size_t sender, const py::bytes& data, std::optional<U64> start,
              const std::optional<std::string>& fault, std::optional<int> fault_char) {
-            const std::vector<U8> v = from_bytes(data);
+            const std::vector<U8> v = raw_telegram(data);
             const UartFault f = fault_of(fault, fault_char);
             const U64 at = start.value_or(s.seg.cycle() + 33 * U64{s.seg.bit_cycles()});
             if (at < s.seg.cycle()) throw py::value_error("start is before the line's time");
@@ -628,13 +630,23 @@ void bind_segment_class(py::module_& m) {
           "time; the segment runs on without them.")
       .def(
           "check_bus",
-          [](P& s, U64 ttr, std::optional<std::uint32_t> slot_bits, std::uint32_t min_tsdr_bits,
-             std::uint32_t tsyn_bits, const std::optional<std::vector<U8>>& masters) {
+          [](P& s, U64 ttr, const std::optional<std::int64_t>& slot_bits,
+             std::uint32_t min_tsdr_bits, std::uint32_t tsyn_bits,
+             const std::optional<std::vector<std::int64_t>>& masters) {
             s.enter();
+            // The ranges of a segment scenario's `segment slot=` and of a master's address.
+            const std::uint32_t slot =
+                slot_bits ? in_range<std::uint32_t>(named(kSlotBits, "slot_bits"), *slot_bits)
+                          : s.master_slot_bits;
+            std::vector<U8> addresses = s.master_addresses;
+            if (masters) {
+              addresses.clear();
+              for (const std::int64_t a : *masters)
+                addresses.push_back(in_range<U8>(kMasterAddress, a));
+            }
             // The masters' own slot time by default: an answer a master waits for and takes is
             // neither late nor unsolicited (a segment scenario shares `s.slot_bits` so).
-            BusTiming t{s.seg.bit_cycles(), min_tsdr_bits, slot_bits.value_or(s.master_slot_bits),
-                        tsyn_bits,          ttr,           masters.value_or(s.master_addresses)};
+            BusTiming t{s.seg.bit_cycles(), min_tsdr_bits, slot, tsyn_bits, ttr, addresses};
             s.check_log.clear();
             s.check = std::make_unique<BusCheck>(t, [&s](const LogRecord& r) {
               s.check_log.push_back("[cycle " + std::to_string(r.cycle) + "] " + r.text);
@@ -656,10 +668,11 @@ void bind_segment_class(py::module_& m) {
       });
 }
 
-// A master's service that sends bytes (Data_Exchange's outputs, a raw telegram), without a fault.
-template <Exchange (DpMaster::*Service)(const std::vector<U8>&, UartFault)>
+// A master's service that sends bytes (Data_Exchange's outputs, a raw telegram), without a fault;
+// `Bytes` takes them from Python with its checks.
+template <Exchange (DpMaster::*Service)(const std::vector<U8>&, UartFault), auto Bytes>
 Exchange bytes_service(PySegMaster& pm, const py::bytes& data) {
-  const std::vector<U8> v = from_bytes(data);
+  const std::vector<U8> v = Bytes(data);
   return pm.act([&] { return (*pm.m.*Service)(v, UartFault{}); });
 }
 
@@ -685,16 +698,24 @@ void bind_seg_master(py::module_& m) {
           py::arg("index"))
       .def(
           "startup_all",
-          [](M& pm, int tries) { return pm.act([&] { return pm.m->startup_all(tries); }); },
+          [](M& pm, const py::int_& tries) {
+            const int n = in_range<int>(kTries, tries);
+            return pm.act([&] { return pm.m->startup_all(n); });
+          },
           py::arg("tries") = kStartupTries)
       .def(
-          "startup", [](M& pm, int tries) { return pm.act([&] { return pm.m->startup(tries); }); },
+          "startup",
+          [](M& pm, const py::int_& tries) {
+            const int n = in_range<int>(kTries, tries);
+            return pm.act([&] { return pm.m->startup(n); });
+          },
           py::arg("tries") = kStartupTries)
       .def(
           "begin_startup",
-          [](M& pm, int tries) {
+          [](M& pm, const py::int_& tries) {
+            const int n = in_range<int>(kTries, tries);
             pm.s.enter();
-            pm.m->begin_startup(tries);
+            pm.m->begin_startup(n);
           },
           py::arg("tries") = kStartupTries,
           "The start-up under the token: the next use_token visits spend their cycles on it.")
@@ -722,7 +743,8 @@ void bind_seg_master(py::module_& m) {
           py::arg("outputs") = py::none(), py::arg("skip") = std::vector<U8>{},
           "Data_Exchange with every slave in order (outputs[i] to slave i; zeros where none), "
           "but the station addresses in `skip`.")
-      .def("data_exchange", &bytes_service<&DpMaster::data_exchange>, py::arg("outputs"))
+      .def("data_exchange", &bytes_service<&DpMaster::data_exchange, &from_bytes>,
+           py::arg("outputs"))
       .def(
           "use_token",
           [](M& pm, U8 next, const py::object& outputs_arg) {
@@ -755,7 +777,7 @@ void bind_seg_master(py::module_& m) {
             return pm.act([&] { return pm.m->transact(req); });
           },
           py::arg("request"))
-      .def("transact_raw", &bytes_service<&DpMaster::transact_raw>, py::arg("data"))
+      .def("transact_raw", &bytes_service<&DpMaster::transact_raw, &raw_telegram>, py::arg("data"))
       .def(
           "idle",
           [](M& pm, U64 cycles) {

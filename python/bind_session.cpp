@@ -664,8 +664,13 @@ void bind_master(py::module_& m) {
              const MasterConfig mc{in_range<U8>(kMasterAddress, address), rate,
                                    in_range<std::uint32_t>(kSlotBits, slot_bits),
                                    in_range<std::uint32_t>(kIdleBits, idle_bits)};
+             const SlaveConfig sc = slave.value_or(SlaveConfig{});
+             if (sc.wd_base_1ms && c.chip.profile().id == Profile::vpc3plus &&
+                 (sc.user_prm.empty() || (sc.user_prm[0] & dpv1::status1::DPV1_Enable) == 0)) {
+               throw py::value_error(wd_base_needs_dpv1("wd_base_1ms=True"));
+             }
              c.enter(true);
-             return std::make_unique<PyMaster>(std::move(chip), mc, slave.value_or(SlaveConfig{}));
+             return std::make_unique<PyMaster>(std::move(chip), mc, sc);
            }),
            py::arg("chip").none(true), py::arg("address") = 2, py::arg("baud") = 1'500'000,
            py::arg("slot_bits") = 100, py::arg("idle_bits") = 33, py::arg("slave") = py::none())
@@ -694,6 +699,11 @@ void bind_master(py::module_& m) {
              bool dx_out_port, const std::vector<RecordArg>& records,
              const std::optional<py::int_>& work_cycles) {
             ResponderConfig rc;
+            if (pm.chip.chip.profile().id != Profile::dpc31) {  // as a scenario's `user` line
+              if (dx_out_port) throw py::value_error(dx_out_port_is_for_dpc31("dx_out_port="));
+              if (py::len(substitute) != 0)
+                throw py::value_error(substitute_is_for_dpc31("substitute="));
+            }
             // A scenario's `record` and `dpv1 work=` lines: the VPC3+'s only, and the time
             // spent on a record only where there is one (no silent options).
             if (!records.empty()) no_dpv1_but_on_vpc3plus(pm.chip.chip, "records");
@@ -762,12 +772,16 @@ void bind_master(py::module_& m) {
       .def("clear_history", [](PyMaster& pm) { pm.m->clear_history(); })
       .def(
           "startup",
-          [](PyMaster& pm, int tries) { return pm.act([&] { return pm.m->startup(tries); }); },
+          [](PyMaster& pm, const py::int_& tries) {
+            const int n = in_range<int>(kTries, tries);
+            return pm.act([&] { return pm.m->startup(n); });
+          },
           py::arg("tries") = kStartupTries)
       .def(
           "restart",
-          [](PyMaster& pm, U64 tries, std::uint32_t retries) {
-            return pm.act([&] { return pm.m->restart(tries, retries); });
+          [](PyMaster& pm, const py::int_& tries, std::uint32_t retries) {
+            const int n = in_range<int>(kTries, tries);
+            return pm.act([&] { return pm.m->restart(n, retries); });
           },
           py::arg("tries") = kStartupTries, py::arg("retries") = 1)
       .def(
@@ -816,7 +830,7 @@ void bind_master(py::module_& m) {
           "transact_raw",
           [](PyMaster& pm, const py::bytes& raw, const std::optional<std::string>& fault,
              std::optional<int> fault_char) {
-            const std::vector<U8> v = from_bytes(raw);
+            const std::vector<U8> v = raw_telegram(raw);
             const UartFault f = fault_of(fault, fault_char);
             return pm.act([&] { return pm.m->transact_raw(v, f); });
           },
