@@ -206,6 +206,10 @@ void enter_run(const RunState& run, bool changes, std::string_view who, std::str
 void user_side_runs_with(const void* user_side, const std::shared_ptr<const RunState>& run);
 void enter_user_side(const void* user_side, bool changes);
 
+// Thrown out of a master's wait that an observer's exception stopped (DpMaster::waited): the
+// master's call ends there, and PyChip::run raises the observer's exception instead.
+struct ObserverStopped {};
+
 // One chip as Python holds it. The GIL is released while the chip runs; Python observers take it
 // again. An observer's exception stops the run (Chip::request_stop) and is raised when the call
 // that ran the chip returns. While the chip runs (`busy`), only the thread running it may look
@@ -230,6 +234,9 @@ class PyChip {
         rethrow();
         return r;
       }
+    } catch (const ObserverStopped&) {
+      rethrow();
+      throw;
     } catch (py::error_already_set& interrupt) {
       // Ctrl-C between two slices: the next call starts clean.
       keep_as_context(interrupt, std::exchange(error, nullptr));

@@ -491,7 +491,9 @@ struct PyMaster {
       : chip_ref(std::move(chip_obj)),
         chip(chip_ref.cast<PyChip&>()),
         config(mc),
-        m(std::make_unique<DpMaster>(chip.chip, mc, sc)) {}
+        m(std::make_unique<DpMaster>(chip.chip, mc, sc)) {
+    ends_at_observer_error();
+  }
   py::object chip_ref;
   PyChip& chip;
   MasterConfig config;
@@ -515,6 +517,13 @@ struct PyMaster {
   auto act(F&& f) {
     return chip.run(std::forward<F>(f));
   }
+  // An observer's exception ends the master's call after the wait it stopped (docs/python.md,
+  // "The GIL"): the master clears the chip's stop after each wait and would go on.
+  void ends_at_observer_error() {
+    m->waited = [this] {
+      if (chip.error) throw ObserverStopped{};
+    };
+  }
   // The user side sets the chip up before the master's first request, and the master counts
   // its bus idle from then on, as in a scenario (session/scenario_run.cpp): it is made anew.
   template <typename Init>
@@ -529,6 +538,7 @@ struct PyMaster {
     });
     dpv1_m.reset();  // it holds the master
     m = std::make_unique<DpMaster>(chip.chip, config, slave);
+    ends_at_observer_error();
   }
 };
 
