@@ -647,6 +647,8 @@ void bind_chip(py::module_& m) {
   m.attr("FirmwareError") = e.firmware;
   // A scenario's run sets them (the `firmware` line or the step it faulted in); None elsewhere.
   for (const char* name : {"file", "line", "step", "reason"}) e.firmware.attr(name) = py::none();
+  // Every ScenarioError of the module sets them; None on one raised by hand.
+  for (const char* name : {"file", "line", "reason"}) e.scenario.attr(name) = py::none();
   m.attr("InputError") = e.input;
   // The emulator's errors as dpc31.Error and its subclasses, with the C++ message;
   // std::invalid_argument (a ChipOptions the chip refuses) as ValueError.

@@ -824,7 +824,7 @@ void bind_segment_scenario(py::module_& m) {
                 load_segment_scenario(read_path_arg(path, "path"), s, single, err);
             if (l == SegmentLoad::error) fail(err);
             if (l == SegmentLoad::not_segment) {
-              raise(errors().scenario, path + ": not a segment scenario (use Scenario.load)");
+              fail(ScenarioError{path, 0, "not a segment scenario (use Scenario.load)"});
             }
             return s;
           },

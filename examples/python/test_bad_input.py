@@ -733,3 +733,19 @@ def test_settings_a_scenario_refuses_are_refused_in_its_words():
         with pytest.raises(ValueError, match=r"^tries 0 out of range \(1\.\.100000\)$"):
             call(tries=0)
     assert not sm.starting_up
+
+
+def test_a_single_chip_file_given_to_segment_scenario_load_names_its_file_line_and_reason(
+        tmp_path):
+    """docs/python.md "Errors": a ScenarioError has .file, .line, .reason (line 0: the file as a
+    whole, as for a missing file); this one had none of them (audit s29 a-py finding 6)."""
+    single = tmp_path / "single.scn"
+    single.write_text("profile spc3\nstartup\n")
+    with pytest.raises(dpc31.ScenarioError) as e:
+        dpc31.SegmentScenario.load(str(single))
+    assert str(e.value) == f"{single}: not a segment scenario (use Scenario.load)"
+    assert (e.value.file, e.value.line, e.value.reason) == (
+        str(single), 0, "not a segment scenario (use Scenario.load)")
+    # One raised by hand has them too, as None (as FirmwareError's).
+    assert (dpc31.ScenarioError("x").file, dpc31.ScenarioError("x").line,
+            dpc31.ScenarioError("x").reason) == (None, None, None)

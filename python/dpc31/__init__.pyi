@@ -6,9 +6,9 @@ from typing import Callable, Dict, List, Optional, Tuple
 class Error(RuntimeError): ...
 class SnapshotError(Error): ...
 class ScenarioError(Error):
-    file: str
-    line: int
-    reason: str
+    file: Optional[str]
+    line: Optional[int]
+    reason: Optional[str]
 class FirmwareError(Error):
     file: Optional[str]
     line: Optional[int]
