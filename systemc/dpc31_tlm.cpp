@@ -107,7 +107,8 @@ void Dpc31Tlm::apply_edges() {
         break;
       case kIrq:
         irq.write(e.level);
-        if (e.level) irq_rise_.notify();
+        // At the next delta: its waiters wake after the update, and the signal reads true.
+        if (e.level) irq_rise_.notify(sc_core::SC_ZERO_TIME);
         break;
       case kPb3:
         pb3.write(e.level);

@@ -51,7 +51,8 @@ class Dpc31Tlm : public sc_core::sc_module {
   // The last cycle with a time: Chip::kLastCycle, or cycle_at(sc_max_time()) where that is sooner
   // (885 443 715 538 058 at 48 MHz and 1 ps, about 213 days).
   [[nodiscard]] std::uint64_t last_cycle() const;
-  // Notified when the interrupt becomes active, at that cycle's time.
+  // Notified when the interrupt becomes active, at that cycle's time (the delta after the irq
+  // signal's update: a waiter reads it true).
   [[nodiscard]] const sc_core::sc_event& irq_rise() const { return irq_rise_; }
   // For a process that moves time through the chip's serial side (the built-in DP master's
   // DpMaster::scheduler): waits until the chip reached `cycle` or one of its steps stopped

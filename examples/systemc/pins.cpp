@@ -1,7 +1,8 @@
 // The model's pin signals against the chip's pins (docs/systemc.md, "X/INT, the interrupt, PB3,
 // TxD"): an SPC3 whose initiator unmasks User_Timer_Clock alone, makes X/INT high-active
 // (Mode_Reg0.INT_Pol = 1, written while Offline) and starts the chip. Exit 0 when every check
-// holds; each one that does not is a line on stderr.
+// holds; each one that does not is a line on stderr. A process woken by irq_rise() reads the irq
+// signal true (it read false until the next delta).
 //
 // Expected cycles (docs/timing.md, "Bus accesses": an access starting at t completes at t + 4;
 // "Interrupt line": polarity INT_Pol = 0 low-active, 1 high-active; "Timers": the first
@@ -97,6 +98,7 @@ struct Bench : sc_core::sc_module {
     wait(delay);
     delay = sc_core::SC_ZERO_TIME;
     wait(chip.irq_rise());
+    expect(irq.read(), "irq reads false right after irq_rise()");
     write(SPC3_Int_Ack_Reg_LO_INTEL, SPC3_Int_Req_Reg_User_Timer_Clock_Msk, delay);
     wait(delay);
     wait(sc_core::SC_ZERO_TIME);
