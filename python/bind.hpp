@@ -295,9 +295,12 @@ std::uint16_t peek_field(const Chip& chip, std::string_view reg, std::string_vie
 py::object addr_of(const Chip& chip, std::string_view name);
 py::bytes to_bytes(std::span<const std::uint8_t> b);
 std::vector<std::uint8_t> from_bytes(const py::bytes& b);
-// A raw telegram (transact_raw, Segment.send): 1 to 255 bytes as a scenario's `send BYTES`,
-// else a ValueError ("telegram: more than 255 bytes", "telegram: no bytes").
-std::vector<std::uint8_t> raw_telegram(const py::bytes& b);
+// Bytes as the module takes them: `bytes`, a `bytearray` or a list of ints 0..255, else a
+// TypeError / ValueError named `what` ("outputs[0]: 300 out of range (0..255)").
+std::vector<std::uint8_t> bytes_like(py::handle o, std::string_view what);
+// A raw telegram (transact_raw, Segment.send): 1 to 255 bytes (bytes-like) as a scenario's `send
+// BYTES`, else a ValueError ("telegram: more than 255 bytes", "telegram: no bytes").
+std::vector<std::uint8_t> raw_telegram(py::handle data);
 py::dict counters_dict(const FdlCounters& c);
 // `v` within `r` as the type the C++ takes, else a ValueError with the scenario parser's words
 // for it (vocabulary.hpp): both doors refuse a value alike.

@@ -135,8 +135,25 @@ std::vector<std::uint8_t> from_bytes(const py::bytes& b) {
   return {s.begin(), s.end()};
 }
 
-std::vector<std::uint8_t> raw_telegram(const py::bytes& b) {
-  std::vector<std::uint8_t> v = from_bytes(b);
+std::vector<std::uint8_t> bytes_like(py::handle o, std::string_view what) {
+  if (py::isinstance<py::bytes>(o)) return from_bytes(py::reinterpret_borrow<py::bytes>(o));
+  if (py::isinstance<py::bytearray>(o)) {
+    const auto* p = reinterpret_cast<const std::uint8_t*>(PyByteArray_AsString(o.ptr()));
+    return {p, p + PyByteArray_Size(o.ptr())};
+  }
+  try {
+    return o.cast<std::vector<std::uint8_t>>();
+  } catch (const IntOutOfRange& e) {
+    throw py::value_error(fmt::format("{}: {}", what, e.range));
+  } catch (const py::cast_error&) {
+    throw py::type_error(
+        fmt::format("{}: bytes expected, got {}", what,
+                    py::str(py::type::of(o).attr("__name__")).cast<std::string>()));
+  }
+}
+
+std::vector<std::uint8_t> raw_telegram(py::handle data) {
+  std::vector<std::uint8_t> v = bytes_like(data, "data");
   if (v.empty()) throw py::value_error("telegram: no bytes");
   if (v.size() > fdl::kMaxFrameLength) {
     throw py::value_error(fmt::format("telegram: more than {} bytes", fdl::kMaxFrameLength));
@@ -402,8 +419,8 @@ void bind_chip_class(py::module_& m) {
           py::arg("addr"), py::arg("length"))
       .def(
           "write_block",
-          [](PyChip& c, std::int64_t a, const py::bytes& b) {
-            const std::vector<U8> v = from_bytes(b);
+          [](PyChip& c, std::int64_t a, const py::object& b) {
+            const std::vector<U8> v = bytes_like(b, "data");
             const U32 at = bus_addr(c.chip, a, static_cast<std::int64_t>(v.size()));
             c.run([&] { c.chip.write_block(at, v); });
           },

@@ -34,23 +34,7 @@ Outputs outputs_of(const py::object& o) {
   Outputs out;
   if (o.is_none()) return out;
   for (const py::handle item : o) {
-    if (py::isinstance<py::bytes>(item)) {
-      out.push_back(from_bytes(py::reinterpret_borrow<py::bytes>(item)));
-    } else if (py::isinstance<py::bytearray>(item)) {
-      const auto b = py::reinterpret_borrow<py::bytearray>(item);
-      const auto* p = reinterpret_cast<const U8*>(PyByteArray_AsString(b.ptr()));
-      out.emplace_back(p, p + PyByteArray_Size(b.ptr()));
-    } else {
-      try {
-        out.push_back(item.cast<std::vector<U8>>());
-      } catch (const IntOutOfRange& e) {
-        throw py::value_error(fmt::format("outputs[{}]: {}", out.size(), e.range));
-      } catch (const py::cast_error&) {
-        throw py::type_error(
-            fmt::format("outputs[{}]: bytes expected, got {}", out.size(),
-                        py::str(py::type::of(item).attr("__name__")).cast<std::string>()));
-      }
-    }
+    out.push_back(bytes_like(item, fmt::format("outputs[{}]", out.size())));
   }
   return out;
 }
@@ -578,7 +562,7 @@ void bind_segment_class(py::module_& m) {
       .def("align", [](P& s) { s.run([&] { s.seg.align(); }); })
       .def(
           "send",
-          [](P& s, std::size_t sender, const py::bytes& data, std::optional<U64> start,
+          [](P& s, std::size_t sender, const py::object& data, std::optional<U64> start,
              const std::optional<std::string>& fault, std::optional<int> fault_char) {
             const std::vector<U8> v = raw_telegram(data);
             const UartFault f = fault_of(fault, fault_char);
@@ -668,10 +652,13 @@ void bind_segment_class(py::module_& m) {
       });
 }
 
+// data_exchange's outputs.
+std::vector<U8> outputs_arg(py::handle o) { return bytes_like(o, "outputs"); }
+
 // A master's service that sends bytes (Data_Exchange's outputs, a raw telegram), without a fault;
 // `Bytes` takes them from Python with its checks.
 template <Exchange (DpMaster::*Service)(const std::vector<U8>&, UartFault), auto Bytes>
-Exchange bytes_service(PySegMaster& pm, const py::bytes& data) {
+Exchange bytes_service(PySegMaster& pm, const py::object& data) {
   const std::vector<U8> v = Bytes(data);
   return pm.act([&] { return (*pm.m.*Service)(v, UartFault{}); });
 }
@@ -743,7 +730,7 @@ void bind_seg_master(py::module_& m) {
           py::arg("outputs") = py::none(), py::arg("skip") = std::vector<U8>{},
           "Data_Exchange with every slave in order (outputs[i] to slave i; zeros where none), "
           "but the station addresses in `skip`.")
-      .def("data_exchange", &bytes_service<&DpMaster::data_exchange, &from_bytes>,
+      .def("data_exchange", &bytes_service<&DpMaster::data_exchange, &outputs_arg>,
            py::arg("outputs"))
       .def(
           "use_token",

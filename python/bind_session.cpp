@@ -796,9 +796,9 @@ void bind_master(py::module_& m) {
           py::arg("tries") = kStartupTries, py::arg("retries") = 1)
       .def(
           "data_exchange",
-          [](PyMaster& pm, const py::bytes& out, const std::optional<std::string>& fault,
+          [](PyMaster& pm, const py::object& out, const std::optional<std::string>& fault,
              std::optional<int> fault_char) {
-            const std::vector<U8> v = from_bytes(out);
+            const std::vector<U8> v = bytes_like(out, "outputs");
             const UartFault f = fault_of(fault, fault_char);
             return pm.act([&] { return pm.m->data_exchange(v, f); });
           },
@@ -838,7 +838,7 @@ void bind_master(py::module_& m) {
           py::arg("request"), py::arg("fault") = py::none(), py::arg("fault_char") = py::none())
       .def(
           "transact_raw",
-          [](PyMaster& pm, const py::bytes& raw, const std::optional<std::string>& fault,
+          [](PyMaster& pm, const py::object& raw, const std::optional<std::string>& fault,
              std::optional<int> fault_char) {
             const std::vector<U8> v = raw_telegram(raw);
             const UartFault f = fault_of(fault, fault_char);
