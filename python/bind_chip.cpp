@@ -373,6 +373,16 @@ void observe(PyChip& c, const py::object& f, Setter set, Convert convert) {
   }
 }
 
+// A property of the chip's running state: from another thread while the chip runs it is refused
+// as peek is (PyChip::enter), not read while that thread writes it.
+template <typename F>
+auto looked(F f) {
+  return [f](const PyChip& c) {
+    c.enter(false);
+    return f(c.chip);
+  };
+}
+
 void bind_chip_class(py::module_& m) {
   using U8 = std::uint8_t;
   using U32 = std::uint32_t;
@@ -514,23 +524,23 @@ void bind_chip_class(py::module_& m) {
           "step_until_irq",
           [](PyChip& c, U64 n) { return c.run([&] { return c.chip.step_until_irq(n); }); },
           py::arg("cycles"))
-      .def_property_readonly("cycle", [](const PyChip& c) { return c.chip.cycle(); })
+      .def_property_readonly("cycle", looked([](const Chip& c) { return c.cycle(); }))
       .def_property_readonly("clock_hz", [](const PyChip& c) { return c.chip.clock_hz(); })
       .def_property_readonly("bus_access_cycles",
                              [](const PyChip& c) { return c.chip.bus_access_cycles(); })
       // pins and state
-      .def_property_readonly("x_int", [](const PyChip& c) { return c.chip.x_int_pin(); })
-      .def_property_readonly("irq_active", [](const PyChip& c) { return c.chip.irq_active(); })
-      .def_property_readonly("pb3", [](const PyChip& c) { return c.chip.pb3_pin(); })
-      .def_property_readonly("txd", [](const PyChip& c) { return c.chip.txd_pin(); })
-      .def_property_readonly("started", [](const PyChip& c) { return c.chip.started(); })
-      .def_property_readonly("dp_state", [](const PyChip& c) { return c.chip.dp_state(); })
-      .def_property_readonly("wd_state", [](const PyChip& c) { return c.chip.wd_state(); })
+      .def_property_readonly("x_int", looked([](const Chip& c) { return c.x_int_pin(); }))
+      .def_property_readonly("irq_active", looked([](const Chip& c) { return c.irq_active(); }))
+      .def_property_readonly("pb3", looked([](const Chip& c) { return c.pb3_pin(); }))
+      .def_property_readonly("txd", looked([](const Chip& c) { return c.txd_pin(); }))
+      .def_property_readonly("started", looked([](const Chip& c) { return c.started(); }))
+      .def_property_readonly("dp_state", looked([](const Chip& c) { return c.dp_state(); }))
+      .def_property_readonly("wd_state", looked([](const Chip& c) { return c.wd_state(); }))
       .def_property_readonly("station_address",
-                             [](const PyChip& c) { return c.chip.station_address(); })
-      .def_property_readonly("bit_cycles", [](const PyChip& c) { return c.chip.bit_cycles(); })
+                             looked([](const Chip& c) { return c.station_address(); }))
+      .def_property_readonly("bit_cycles", looked([](const Chip& c) { return c.bit_cycles(); }))
       .def_property_readonly("fdl_counters",
-                             [](const PyChip& c) { return counters_dict(c.chip.fdl_counters()); })
+                             looked([](const Chip& c) { return counters_dict(c.fdl_counters()); }))
       .def_property_readonly("profile",
                              [](const PyChip& c) { return std::string(c.chip.profile().name); })
       .def_property_readonly("bus",
@@ -549,8 +559,8 @@ void bind_chip_class(py::module_& m) {
              return c.chip.probe();
            })
       .def_property_readonly("next_deadline",
-                             [](const PyChip& c) { return c.chip.next_deadline(); })
-      .def_property_readonly("watchdog_due", [](const PyChip& c) { return c.chip.watchdog_due(); })
+                             looked([](const Chip& c) { return c.next_deadline(); }))
+      .def_property_readonly("watchdog_due", looked([](const Chip& c) { return c.watchdog_due(); }))
       // the serial side
       .def(
           "drive_rxd",

@@ -180,3 +180,29 @@ def test_an_observers_exception_ends_a_data_exchange_before_its_answer():
     # DX_Out's edge, at the request's end: the call ends there, the answer not waited for.
     assert len(calls) == 1 and calls[0][1] is True
     assert chip.cycle == calls[0][0] and m.counters.answered == answered
+
+
+def test_a_running_chips_state_properties_are_refused_to_another_thread():
+    """docs/python.md, "The GIL": a call from another thread while the chip runs raises
+    dpc31.Error; its state properties (cycle, dp_state, fdl_counters, ...) were read while the
+    running thread wrote them (audit s29 a-py finding 10). Its constants still read."""
+    import threading
+
+    chip = dpc31.Chip("spc3", engine="per-cycle")
+    chip.write(chip.addr_of("Mode_Reg1_S"), 0x01)
+    names = ("cycle", "x_int", "irq_active", "pb3", "txd", "started", "dp_state", "wd_state",
+             "station_address", "bit_cycles", "fdl_counters", "next_deadline", "watchdog_due")
+    runner = threading.Thread(target=chip.step, args=(40 * P,))
+    refused = set()
+    runner.start()
+    while runner.is_alive():
+        for name in names:
+            try:
+                getattr(chip, name)
+            except dpc31.Error as e:
+                assert "running in another thread" in str(e)
+                refused.add(name)
+        assert chip.profile == "spc3" and chip.clock_hz == 48_000_000
+    runner.join()
+    assert refused == set(names)
+    assert chip.cycle == 4 + 40 * P
