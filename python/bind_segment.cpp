@@ -119,9 +119,14 @@ class PySegment {
   template <typename F>
   auto run(F&& f, bool joins = false) {
     enter();
+    if (!outputs_error.empty()) raise(errors().error, outputs_error);
     if (outputs && !joins && !line_attached) {
       std::string e;
-      check_output(outputs->attach_line(seg, codes, e), e);
+      if (!outputs->attach_line(seg, codes, e)) {
+        outputs.reset();  // nothing will be written: its temporaries go now, not at collection
+        outputs_error = e;
+        raise(errors().error, e);
+      }
       line_attached = true;
     }
     const Running running(*run_);
@@ -186,6 +191,7 @@ class PySegment {
   std::unique_ptr<SegmentOutputs> outputs;  // null: none asked, or close() wrote them
   std::vector<U8> codes;                    // each station's code in line.driver
   bool line_attached = false;
+  std::string outputs_error;  // the outputs could not be attached: every later run says so
 
  private:
   template <typename T>
