@@ -206,6 +206,10 @@ void enter_run(const RunState& run, bool changes, std::string_view who, std::str
 void user_side_runs_with(const void* user_side, const std::shared_ptr<const RunState>& run);
 void enter_user_side(const void* user_side, bool changes);
 
+// Thrown out of a master's wait that an observer's exception stopped (DpMaster::waited): the
+// master's call ends there, and PyChip::run raises the observer's exception instead.
+struct ObserverStopped {};
+
 // One chip as Python holds it. The GIL is released while the chip runs; Python observers take it
 // again. An observer's exception stops the run (Chip::request_stop) and is raised when the call
 // that ran the chip returns. While the chip runs (`busy`), only the thread running it may look
@@ -230,6 +234,9 @@ class PyChip {
         rethrow();
         return r;
       }
+    } catch (const ObserverStopped&) {
+      rethrow();
+      throw;
     } catch (py::error_already_set& interrupt) {
       // Ctrl-C between two slices: the next call starts clean.
       keep_as_context(interrupt, std::exchange(error, nullptr));
@@ -288,6 +295,12 @@ std::uint16_t peek_field(const Chip& chip, std::string_view reg, std::string_vie
 py::object addr_of(const Chip& chip, std::string_view name);
 py::bytes to_bytes(std::span<const std::uint8_t> b);
 std::vector<std::uint8_t> from_bytes(const py::bytes& b);
+// Bytes as the module takes them: `bytes`, a `bytearray` or a list of ints 0..255, else a
+// TypeError / ValueError named `what` ("outputs[0]: 300 out of range (0..255)").
+std::vector<std::uint8_t> bytes_like(py::handle o, std::string_view what);
+// A raw telegram (transact_raw, Segment.send): 1 to 255 bytes (bytes-like) as a scenario's `send
+// BYTES`, else a ValueError ("telegram: more than 255 bytes", "telegram: no bytes").
+std::vector<std::uint8_t> raw_telegram(py::handle data);
 py::dict counters_dict(const FdlCounters& c);
 // `v` within `r` as the type the C++ takes, else a ValueError with the scenario parser's words
 // for it (vocabulary.hpp): both doors refuse a value alike.

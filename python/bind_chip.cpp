@@ -135,6 +135,32 @@ std::vector<std::uint8_t> from_bytes(const py::bytes& b) {
   return {s.begin(), s.end()};
 }
 
+std::vector<std::uint8_t> bytes_like(py::handle o, std::string_view what) {
+  if (py::isinstance<py::bytes>(o)) return from_bytes(py::reinterpret_borrow<py::bytes>(o));
+  if (py::isinstance<py::bytearray>(o)) {
+    const auto* p = reinterpret_cast<const std::uint8_t*>(PyByteArray_AsString(o.ptr()));
+    return {p, p + PyByteArray_Size(o.ptr())};
+  }
+  try {
+    return o.cast<std::vector<std::uint8_t>>();
+  } catch (const IntOutOfRange& e) {
+    throw py::value_error(fmt::format("{}: {}", what, e.range));
+  } catch (const py::cast_error&) {
+    throw py::type_error(
+        fmt::format("{}: bytes expected, got {}", what,
+                    py::str(py::type::of(o).attr("__name__")).cast<std::string>()));
+  }
+}
+
+std::vector<std::uint8_t> raw_telegram(py::handle data) {
+  std::vector<std::uint8_t> v = bytes_like(data, "data");
+  if (v.empty()) throw py::value_error("telegram: no bytes");
+  if (v.size() > fdl::kMaxFrameLength) {
+    throw py::value_error(fmt::format("telegram: more than {} bytes", fdl::kMaxFrameLength));
+  }
+  return v;
+}
+
 std::uint32_t profibus_rate(std::uint32_t baud) {
   if (const std::string e = not_a_profibus_rate(baud); !e.empty()) throw py::value_error(e);
   return baud;
@@ -347,6 +373,16 @@ void observe(PyChip& c, const py::object& f, Setter set, Convert convert) {
   }
 }
 
+// A property of the chip's running state: from another thread while the chip runs it is refused
+// as peek is (PyChip::enter), not read while that thread writes it.
+template <typename F>
+auto looked(F f) {
+  return [f](const PyChip& c) {
+    c.enter(false);
+    return f(c.chip);
+  };
+}
+
 void bind_chip_class(py::module_& m) {
   using U8 = std::uint8_t;
   using U32 = std::uint32_t;
@@ -393,8 +429,8 @@ void bind_chip_class(py::module_& m) {
           py::arg("addr"), py::arg("length"))
       .def(
           "write_block",
-          [](PyChip& c, std::int64_t a, const py::bytes& b) {
-            const std::vector<U8> v = from_bytes(b);
+          [](PyChip& c, std::int64_t a, const py::object& b) {
+            const std::vector<U8> v = bytes_like(b, "data");
             const U32 at = bus_addr(c.chip, a, static_cast<std::int64_t>(v.size()));
             c.run([&] { c.chip.write_block(at, v); });
           },
@@ -488,23 +524,23 @@ void bind_chip_class(py::module_& m) {
           "step_until_irq",
           [](PyChip& c, U64 n) { return c.run([&] { return c.chip.step_until_irq(n); }); },
           py::arg("cycles"))
-      .def_property_readonly("cycle", [](const PyChip& c) { return c.chip.cycle(); })
+      .def_property_readonly("cycle", looked([](const Chip& c) { return c.cycle(); }))
       .def_property_readonly("clock_hz", [](const PyChip& c) { return c.chip.clock_hz(); })
       .def_property_readonly("bus_access_cycles",
                              [](const PyChip& c) { return c.chip.bus_access_cycles(); })
       // pins and state
-      .def_property_readonly("x_int", [](const PyChip& c) { return c.chip.x_int_pin(); })
-      .def_property_readonly("irq_active", [](const PyChip& c) { return c.chip.irq_active(); })
-      .def_property_readonly("pb3", [](const PyChip& c) { return c.chip.pb3_pin(); })
-      .def_property_readonly("txd", [](const PyChip& c) { return c.chip.txd_pin(); })
-      .def_property_readonly("started", [](const PyChip& c) { return c.chip.started(); })
-      .def_property_readonly("dp_state", [](const PyChip& c) { return c.chip.dp_state(); })
-      .def_property_readonly("wd_state", [](const PyChip& c) { return c.chip.wd_state(); })
+      .def_property_readonly("x_int", looked([](const Chip& c) { return c.x_int_pin(); }))
+      .def_property_readonly("irq_active", looked([](const Chip& c) { return c.irq_active(); }))
+      .def_property_readonly("pb3", looked([](const Chip& c) { return c.pb3_pin(); }))
+      .def_property_readonly("txd", looked([](const Chip& c) { return c.txd_pin(); }))
+      .def_property_readonly("started", looked([](const Chip& c) { return c.started(); }))
+      .def_property_readonly("dp_state", looked([](const Chip& c) { return c.dp_state(); }))
+      .def_property_readonly("wd_state", looked([](const Chip& c) { return c.wd_state(); }))
       .def_property_readonly("station_address",
-                             [](const PyChip& c) { return c.chip.station_address(); })
-      .def_property_readonly("bit_cycles", [](const PyChip& c) { return c.chip.bit_cycles(); })
+                             looked([](const Chip& c) { return c.station_address(); }))
+      .def_property_readonly("bit_cycles", looked([](const Chip& c) { return c.bit_cycles(); }))
       .def_property_readonly("fdl_counters",
-                             [](const PyChip& c) { return counters_dict(c.chip.fdl_counters()); })
+                             looked([](const Chip& c) { return counters_dict(c.fdl_counters()); }))
       .def_property_readonly("profile",
                              [](const PyChip& c) { return std::string(c.chip.profile().name); })
       .def_property_readonly("bus",
@@ -523,8 +559,8 @@ void bind_chip_class(py::module_& m) {
              return c.chip.probe();
            })
       .def_property_readonly("next_deadline",
-                             [](const PyChip& c) { return c.chip.next_deadline(); })
-      .def_property_readonly("watchdog_due", [](const PyChip& c) { return c.chip.watchdog_due(); })
+                             looked([](const Chip& c) { return c.next_deadline(); }))
+      .def_property_readonly("watchdog_due", looked([](const Chip& c) { return c.watchdog_due(); }))
       // the serial side
       .def(
           "drive_rxd",
@@ -548,7 +584,11 @@ void bind_chip_class(py::module_& m) {
                 c, f, [&](auto cb) { c.chip.on_irq_change(std::move(cb)); },
                 [](const py::object& fn, U64 cy, bool a) { fn(cy, a); });
           },
-          py::arg("callback"), "callback(cycle, active) at every X/INT edge; None removes all")
+          py::arg("callback"),
+          "callback(cycle, active) whenever the interrupt becomes active or inactive (X/INT "
+          "follows it through Mode_Reg0.INT_Pol; a polarity write moves the pin without a call); "
+          "None "
+          "removes all")
       .def(
           "on_pb3_change",
           [](PyChip& c, const py::object& f) {
@@ -634,6 +674,8 @@ void bind_chip(py::module_& m) {
   m.attr("FirmwareError") = e.firmware;
   // A scenario's run sets them (the `firmware` line or the step it faulted in); None elsewhere.
   for (const char* name : {"file", "line", "step", "reason"}) e.firmware.attr(name) = py::none();
+  // Every ScenarioError of the module sets them; None on one raised by hand.
+  for (const char* name : {"file", "line", "reason"}) e.scenario.attr(name) = py::none();
   m.attr("InputError") = e.input;
   // The emulator's errors as dpc31.Error and its subclasses, with the C++ message;
   // std::invalid_argument (a ChipOptions the chip refuses) as ValueError.

@@ -34,23 +34,7 @@ Outputs outputs_of(const py::object& o) {
   Outputs out;
   if (o.is_none()) return out;
   for (const py::handle item : o) {
-    if (py::isinstance<py::bytes>(item)) {
-      out.push_back(from_bytes(py::reinterpret_borrow<py::bytes>(item)));
-    } else if (py::isinstance<py::bytearray>(item)) {
-      const auto b = py::reinterpret_borrow<py::bytearray>(item);
-      const auto* p = reinterpret_cast<const U8*>(PyByteArray_AsString(b.ptr()));
-      out.emplace_back(p, p + PyByteArray_Size(b.ptr()));
-    } else {
-      try {
-        out.push_back(item.cast<std::vector<U8>>());
-      } catch (const IntOutOfRange& e) {
-        throw py::value_error(fmt::format("outputs[{}]: {}", out.size(), e.range));
-      } catch (const py::cast_error&) {
-        throw py::type_error(
-            fmt::format("outputs[{}]: bytes expected, got {}", out.size(),
-                        py::str(py::type::of(item).attr("__name__")).cast<std::string>()));
-      }
-    }
+    out.push_back(bytes_like(item, fmt::format("outputs[{}]", out.size())));
   }
   return out;
 }
@@ -135,9 +119,14 @@ class PySegment {
   template <typename F>
   auto run(F&& f, bool joins = false) {
     enter();
+    if (!outputs_error.empty()) raise(errors().error, outputs_error);
     if (outputs && !joins && !line_attached) {
       std::string e;
-      check_output(outputs->attach_line(seg, codes, e), e);
+      if (!outputs->attach_line(seg, codes, e)) {
+        outputs.reset();  // nothing will be written: its temporaries go now, not at collection
+        outputs_error = e;
+        raise(errors().error, e);
+      }
       line_attached = true;
     }
     const Running running(*run_);
@@ -202,6 +191,7 @@ class PySegment {
   std::unique_ptr<SegmentOutputs> outputs;  // null: none asked, or close() wrote them
   std::vector<U8> codes;                    // each station's code in line.driver
   bool line_attached = false;
+  std::string outputs_error;  // the outputs could not be attached: every later run says so
 
  private:
   template <typename T>
@@ -395,6 +385,7 @@ PyStation& add_station(py::object self, U8 address, const std::string& profile,
   s.may_join();
   auto st = std::make_unique<PyStation>();
   st->name = new_station_name(s.seg, name.value_or("station " + std::to_string(address)));
+  if (st->name.empty()) throw py::value_error(empty_name_for("station " + std::to_string(address)));
   SlaveConfig sc = slave.value_or(SlaveConfig{});
   sc.address = address;
   if (!slave) {
@@ -530,6 +521,7 @@ void bind_segment_class(py::module_& m) {
           "add_sender",
           [](P& s, const std::string& name) {
             s.may_join();
+            if (name.empty()) throw py::value_error(empty_name_for("a sender"));
             return s.joined(s.seg.add_sender(new_station_name(s.seg, name)),
                             wave::kDriverWithoutAddress);
           },
@@ -576,9 +568,9 @@ void bind_segment_class(py::module_& m) {
       .def("align", [](P& s) { s.run([&] { s.seg.align(); }); })
       .def(
           "send",
-          [](P& s, std::size_t sender, const py::bytes& data, std::optional<U64> start,
+          [](P& s, std::size_t sender, const py::object& data, std::optional<U64> start,
              const std::optional<std::string>& fault, std::optional<int> fault_char) {
-            const std::vector<U8> v = from_bytes(data);
+            const std::vector<U8> v = raw_telegram(data);
             const UartFault f = fault_of(fault, fault_char);
             const U64 at = start.value_or(s.seg.cycle() + 33 * U64{s.seg.bit_cycles()});
             if (at < s.seg.cycle()) throw py::value_error("start is before the line's time");
@@ -628,13 +620,23 @@ void bind_segment_class(py::module_& m) {
           "time; the segment runs on without them.")
       .def(
           "check_bus",
-          [](P& s, U64 ttr, std::optional<std::uint32_t> slot_bits, std::uint32_t min_tsdr_bits,
-             std::uint32_t tsyn_bits, const std::optional<std::vector<U8>>& masters) {
+          [](P& s, U64 ttr, const std::optional<std::int64_t>& slot_bits,
+             std::uint32_t min_tsdr_bits, std::uint32_t tsyn_bits,
+             const std::optional<std::vector<std::int64_t>>& masters) {
             s.enter();
+            // The ranges of a segment scenario's `segment slot=` and of a master's address.
+            const std::uint32_t slot =
+                slot_bits ? in_range<std::uint32_t>(named(kSlotBits, "slot_bits"), *slot_bits)
+                          : s.master_slot_bits;
+            std::vector<U8> addresses = s.master_addresses;
+            if (masters) {
+              addresses.clear();
+              for (const std::int64_t a : *masters)
+                addresses.push_back(in_range<U8>(kMasterAddress, a));
+            }
             // The masters' own slot time by default: an answer a master waits for and takes is
             // neither late nor unsolicited (a segment scenario shares `s.slot_bits` so).
-            BusTiming t{s.seg.bit_cycles(), min_tsdr_bits, slot_bits.value_or(s.master_slot_bits),
-                        tsyn_bits,          ttr,           masters.value_or(s.master_addresses)};
+            BusTiming t{s.seg.bit_cycles(), min_tsdr_bits, slot, tsyn_bits, ttr, addresses};
             s.check_log.clear();
             s.check = std::make_unique<BusCheck>(t, [&s](const LogRecord& r) {
               s.check_log.push_back("[cycle " + std::to_string(r.cycle) + "] " + r.text);
@@ -656,10 +658,14 @@ void bind_segment_class(py::module_& m) {
       });
 }
 
-// A master's service that sends bytes (Data_Exchange's outputs, a raw telegram), without a fault.
-template <Exchange (DpMaster::*Service)(const std::vector<U8>&, UartFault)>
-Exchange bytes_service(PySegMaster& pm, const py::bytes& data) {
-  const std::vector<U8> v = from_bytes(data);
+// data_exchange's outputs.
+std::vector<U8> outputs_arg(py::handle o) { return bytes_like(o, "outputs"); }
+
+// A master's service that sends bytes (Data_Exchange's outputs, a raw telegram), without a fault;
+// `Bytes` takes them from Python with its checks.
+template <Exchange (DpMaster::*Service)(const std::vector<U8>&, UartFault), auto Bytes>
+Exchange bytes_service(PySegMaster& pm, const py::object& data) {
+  const std::vector<U8> v = Bytes(data);
   return pm.act([&] { return (*pm.m.*Service)(v, UartFault{}); });
 }
 
@@ -685,16 +691,24 @@ void bind_seg_master(py::module_& m) {
           py::arg("index"))
       .def(
           "startup_all",
-          [](M& pm, int tries) { return pm.act([&] { return pm.m->startup_all(tries); }); },
+          [](M& pm, const py::int_& tries) {
+            const int n = in_range<int>(kTries, tries);
+            return pm.act([&] { return pm.m->startup_all(n); });
+          },
           py::arg("tries") = kStartupTries)
       .def(
-          "startup", [](M& pm, int tries) { return pm.act([&] { return pm.m->startup(tries); }); },
+          "startup",
+          [](M& pm, const py::int_& tries) {
+            const int n = in_range<int>(kTries, tries);
+            return pm.act([&] { return pm.m->startup(n); });
+          },
           py::arg("tries") = kStartupTries)
       .def(
           "begin_startup",
-          [](M& pm, int tries) {
+          [](M& pm, const py::int_& tries) {
+            const int n = in_range<int>(kTries, tries);
             pm.s.enter();
-            pm.m->begin_startup(tries);
+            pm.m->begin_startup(n);
           },
           py::arg("tries") = kStartupTries,
           "The start-up under the token: the next use_token visits spend their cycles on it.")
@@ -722,7 +736,8 @@ void bind_seg_master(py::module_& m) {
           py::arg("outputs") = py::none(), py::arg("skip") = std::vector<U8>{},
           "Data_Exchange with every slave in order (outputs[i] to slave i; zeros where none), "
           "but the station addresses in `skip`.")
-      .def("data_exchange", &bytes_service<&DpMaster::data_exchange>, py::arg("outputs"))
+      .def("data_exchange", &bytes_service<&DpMaster::data_exchange, &outputs_arg>,
+           py::arg("outputs"))
       .def(
           "use_token",
           [](M& pm, U8 next, const py::object& outputs_arg) {
@@ -755,7 +770,7 @@ void bind_seg_master(py::module_& m) {
             return pm.act([&] { return pm.m->transact(req); });
           },
           py::arg("request"))
-      .def("transact_raw", &bytes_service<&DpMaster::transact_raw>, py::arg("data"))
+      .def("transact_raw", &bytes_service<&DpMaster::transact_raw, &raw_telegram>, py::arg("data"))
       .def(
           "idle",
           [](M& pm, U64 cycles) {
@@ -802,7 +817,7 @@ void bind_segment_scenario(py::module_& m) {
                 load_segment_scenario(read_path_arg(path, "path"), s, single, err);
             if (l == SegmentLoad::error) fail(err);
             if (l == SegmentLoad::not_segment) {
-              raise(errors().scenario, path + ": not a segment scenario (use Scenario.load)");
+              fail(ScenarioError{path, 0, "not a segment scenario (use Scenario.load)"});
             }
             return s;
           },

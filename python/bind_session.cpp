@@ -491,7 +491,9 @@ struct PyMaster {
       : chip_ref(std::move(chip_obj)),
         chip(chip_ref.cast<PyChip&>()),
         config(mc),
-        m(std::make_unique<DpMaster>(chip.chip, mc, sc)) {}
+        m(std::make_unique<DpMaster>(chip.chip, mc, sc)) {
+    ends_at_observer_error();
+  }
   py::object chip_ref;
   PyChip& chip;
   MasterConfig config;
@@ -515,6 +517,13 @@ struct PyMaster {
   auto act(F&& f) {
     return chip.run(std::forward<F>(f));
   }
+  // An observer's exception ends the master's call after the wait it stopped (docs/python.md,
+  // "The GIL"): the master clears the chip's stop after each wait and would go on.
+  void ends_at_observer_error() {
+    m->waited = [this] {
+      if (chip.error) throw ObserverStopped{};
+    };
+  }
   // The user side sets the chip up before the master's first request, and the master counts
   // its bus idle from then on, as in a scenario (session/scenario_run.cpp): it is made anew.
   template <typename Init>
@@ -529,6 +538,7 @@ struct PyMaster {
     });
     dpv1_m.reset();  // it holds the master
     m = std::make_unique<DpMaster>(chip.chip, config, slave);
+    ends_at_observer_error();
   }
 };
 
@@ -664,8 +674,13 @@ void bind_master(py::module_& m) {
              const MasterConfig mc{in_range<U8>(kMasterAddress, address), rate,
                                    in_range<std::uint32_t>(kSlotBits, slot_bits),
                                    in_range<std::uint32_t>(kIdleBits, idle_bits)};
+             const SlaveConfig sc = slave.value_or(SlaveConfig{});
+             if (sc.wd_base_1ms && c.chip.profile().id == Profile::vpc3plus &&
+                 (sc.user_prm.empty() || (sc.user_prm[0] & dpv1::status1::DPV1_Enable) == 0)) {
+               throw py::value_error(wd_base_needs_dpv1("wd_base_1ms=True"));
+             }
              c.enter(true);
-             return std::make_unique<PyMaster>(std::move(chip), mc, slave.value_or(SlaveConfig{}));
+             return std::make_unique<PyMaster>(std::move(chip), mc, sc);
            }),
            py::arg("chip").none(true), py::arg("address") = 2, py::arg("baud") = 1'500'000,
            py::arg("slot_bits") = 100, py::arg("idle_bits") = 33, py::arg("slave") = py::none())
@@ -696,6 +711,11 @@ void bind_master(py::module_& m) {
              const std::optional<py::int_>& wd_baud_control,
              const std::optional<py::int_>& user_wd_value) {
             ResponderConfig rc;
+            if (pm.chip.chip.profile().id != Profile::dpc31) {  // as a scenario's `user` line
+              if (dx_out_port) throw py::value_error(dx_out_port_is_for_dpc31("dx_out_port="));
+              if (py::len(substitute) != 0)
+                throw py::value_error(substitute_is_for_dpc31("substitute="));
+            }
             // The `user` step's checks (scenario_parse.cpp): its ranges and words.
             if (wd_baud_control)
               rc.wd_baud_control = in_range<U8>(kWdBaudControl, *wd_baud_control);
@@ -775,19 +795,23 @@ void bind_master(py::module_& m) {
       .def("clear_history", [](PyMaster& pm) { pm.m->clear_history(); })
       .def(
           "startup",
-          [](PyMaster& pm, int tries) { return pm.act([&] { return pm.m->startup(tries); }); },
+          [](PyMaster& pm, const py::int_& tries) {
+            const int n = in_range<int>(kTries, tries);
+            return pm.act([&] { return pm.m->startup(n); });
+          },
           py::arg("tries") = kStartupTries)
       .def(
           "restart",
-          [](PyMaster& pm, U64 tries, std::uint32_t retries) {
-            return pm.act([&] { return pm.m->restart(tries, retries); });
+          [](PyMaster& pm, const py::int_& tries, std::uint32_t retries) {
+            const int n = in_range<int>(kTries, tries);
+            return pm.act([&] { return pm.m->restart(n, retries); });
           },
           py::arg("tries") = kStartupTries, py::arg("retries") = 1)
       .def(
           "data_exchange",
-          [](PyMaster& pm, const py::bytes& out, const std::optional<std::string>& fault,
+          [](PyMaster& pm, const py::object& out, const std::optional<std::string>& fault,
              std::optional<int> fault_char) {
-            const std::vector<U8> v = from_bytes(out);
+            const std::vector<U8> v = bytes_like(out, "outputs");
             const UartFault f = fault_of(fault, fault_char);
             return pm.act([&] { return pm.m->data_exchange(v, f); });
           },
@@ -827,9 +851,9 @@ void bind_master(py::module_& m) {
           py::arg("request"), py::arg("fault") = py::none(), py::arg("fault_char") = py::none())
       .def(
           "transact_raw",
-          [](PyMaster& pm, const py::bytes& raw, const std::optional<std::string>& fault,
+          [](PyMaster& pm, const py::object& raw, const std::optional<std::string>& fault,
              std::optional<int> fault_char) {
-            const std::vector<U8> v = from_bytes(raw);
+            const std::vector<U8> v = raw_telegram(raw);
             const UartFault f = fault_of(fault, fault_char);
             return pm.act([&] { return pm.m->transact_raw(v, f); });
           },

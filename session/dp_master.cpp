@@ -360,6 +360,7 @@ void DpMaster::run_until(std::uint64_t cycle) {
   // A falling edge may be a start bit: look at the line again (the wait is event-driven).
   if (seg_) {
     scheduler(cycle);
+    if (waited) waited();
     return;
   }
   if (wake_on_txd_) chip_->wake_on_txd(true);
@@ -374,6 +375,7 @@ void DpMaster::run_until(std::uint64_t cycle) {
   }
   if (wake_on_txd_) chip_->wake_on_txd(false);
   chip_->clear_stop();
+  if (waited) waited();
 }
 
 void DpMaster::idle(std::uint64_t cycles) { run_until(Chip::cycle_after(now(), cycles)); }

@@ -314,6 +314,9 @@ class DpMaster {
   // docs/systemc.md): it returns once the chip has reached `cycle`, or earlier when a step of the
   // chip stopped (Chip::request_stop, wake_on_txd).
   std::function<void(std::uint64_t cycle)> scheduler;
+  // Called after each wait, the chip's stop cleared: it may throw to end the master's call there
+  // (Python: an observer's exception ends the call at once). Empty: the master goes on.
+  std::function<void()> waited;
   // Narration of what happened (`dpc31 run` prints it).
   std::function<void(const std::string&)> narrate;
   // A start-up found `slave` locked by master `by` (its Slave_Diag's Master_Add): the master

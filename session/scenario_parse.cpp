@@ -31,7 +31,6 @@ namespace {
 using namespace scenario_lex;  // NOLINT: the parser's own lexical helpers
 
 constexpr std::uint64_t kMaxExchanges = 1'000'000;
-constexpr std::uint64_t kMaxTries = 100'000;
 
 constexpr std::string_view kAnswerKinds[] = {"none", "sc", "data", "ok", "ue",
                                              "rr",   "rs", "dl",   "nr", "dh"};
@@ -172,13 +171,10 @@ class Parser {
               "'irq-controller' is for profile dpc31: only the DPC31 has a C31 core");
     }
     if (substitute_line_ != 0 && p != Profile::dpc31) {
-      fail_at(substitute_line_,
-              "user substitute= is for profile dpc31: only the DPC31 has the clear buffer C");
+      fail_at(substitute_line_, substitute_is_for_dpc31("user substitute="));
     }
     if (dx_out_port_line_ != 0 && p != Profile::dpc31) {
-      fail_at(dx_out_port_line_,
-              "user dx_out_port= is for profile dpc31: only the DPC31 has "
-              "C31_Control.Enable_DX_Out_Port");
+      fail_at(dx_out_port_line_, dx_out_port_is_for_dpc31("user dx_out_port="));
     }
     if (user_wd_value_line_ != 0 && p == Profile::dpc31 && !s_.user.user_watchdog) {
       fail_at(user_wd_value_line_, user_wd_value_needs_user_wd("user user_wd_value="));
@@ -225,9 +221,7 @@ class Parser {
   void wd_base_checked(const SlaveConfig& sl, int line) const {
     if (s_.chip.profile != Profile::vpc3plus) return;
     if (!sl.user_prm.empty() && (sl.user_prm[0] & dpv1::status1::DPV1_Enable) != 0) return;
-    fail_at(line,
-            "wd_base= on profile vpc3plus needs DPV1_Enable (user_prm byte 0 bit 7): without "
-            "DPV1 the VPC3+ takes WD_Base from Mode_Reg0, not from Set_Prm");
+    fail_at(line, wd_base_needs_dpv1("wd_base="));
   }
 
   // wd_base=10ms and user_prm byte 0 bit 2 (1 ms) both give Set_Prm byte 7 bit 2: the master
@@ -491,7 +485,7 @@ class Parser {
     step_.count = dflt;
     for (const auto& [k, v] : opts_) {
       if (k != "tries") unknown_option(k);
-      step_.count = number(v, "tries", 1, kMaxTries);
+      step_.count = number(v, kTries);
     }
   }
 

@@ -172,7 +172,7 @@ class Parser {
                        st.slave.address));
     st.name = fmt::format("station {}", st.slave.address);
     if (auto v = take("name")) {
-      if (v->empty()) fail(fmt::format("empty name for station {}", st.slave.address));
+      if (v->empty()) fail(empty_name_for(st.name));
       st.name = std::string(*v);
     }
     if (auto v = take("profile")) {

@@ -207,4 +207,24 @@ std::string second_station_named(std::string_view name) {
   return fmt::format("a second station named '{}'", name);
 }
 
+std::string empty_name_for(std::string_view whose) {
+  return fmt::format("empty name for {}", whose);
+}
+
+std::string substitute_is_for_dpc31(std::string_view option) {
+  return fmt::format("{} is for profile dpc31: only the DPC31 has the clear buffer C", option);
+}
+
+std::string dx_out_port_is_for_dpc31(std::string_view option) {
+  return fmt::format("{} is for profile dpc31: only the DPC31 has C31_Control.Enable_DX_Out_Port",
+                     option);
+}
+
+std::string wd_base_needs_dpv1(std::string_view option) {
+  return fmt::format(
+      "{} on profile vpc3plus needs DPV1_Enable (user_prm byte 0 bit 7): without DPV1 the VPC3+ "
+      "takes WD_Base from Mode_Reg0, not from Set_Prm",
+      option);
+}
+
 }  // namespace dpc31

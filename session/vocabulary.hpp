@@ -97,6 +97,8 @@ inline constexpr ValueRange kCpuClock{"clock", 1'000'000, 40'000'000};
 // time has the range of a segment's `segment slot=`: the bus parameter TSL's in EN 50170 part 2.
 inline constexpr ValueRange kSlotBits{"slot", 37, 16383};
 inline constexpr ValueRange kIdleBits{"idle", 1, 65535};
+// A start-up's or restart's attempts (`startup tries=`, Python's startup / restart / startup_all).
+inline constexpr ValueRange kTries{"tries", 1, 100'000};
 // The token rules of a segment's master (TTR, the GAP factor, HSA: the ranges of the bus
 // parameters in EN 50170 part 2).
 inline constexpr ValueRange kTtrBits{"ttr", 256, 16'777'215};
@@ -156,5 +158,15 @@ inline constexpr ValueRange kC31Code{"code", 0x08A0, 0x1FFF};
 // master's sender is "master ADDR"; a name taken is "a second station named 'NAME'".
 [[nodiscard]] std::string master_station_name(std::uint8_t address);
 [[nodiscard]] std::string second_station_named(std::string_view name);
+// "empty name for WHOSE" ("station 5", "a sender"): a name is a scope and names the station.
+[[nodiscard]] std::string empty_name_for(std::string_view whose);
+// The options of the DPC31 alone, refused on the other profiles (No silent options), `option` as
+// the door writes it (a scenario's "user substitute=", Python's "substitute="): "OPTION is for
+// profile dpc31: only the DPC31 has ...".
+[[nodiscard]] std::string substitute_is_for_dpc31(std::string_view option);
+[[nodiscard]] std::string dx_out_port_is_for_dpc31(std::string_view option);
+// The VPC3+ takes WD_Base from Set_Prm's DPV1_Status_1 only with DPV1_Enable; without it
+// Mode_Reg0.WD_Base decides (VPC3+C p.53, docs/dpv1.md): a watchdog base asked of Set_Prm there.
+[[nodiscard]] std::string wd_base_needs_dpv1(std::string_view option);
 
 }  // namespace dpc31

@@ -1,11 +1,13 @@
 // The SystemC TLM-2.0 model of the chip (docs/systemc.md).
 //
 // Time: the chip's cycle c is at time_of(c) on the SystemC time line. The chip never runs ahead of
-// what the rest of the platform could still change: its own thread steps it only up to the
-// current time, from event to event (Chip::next_deadline); a bus access may take it ahead of the
-// current time (an initiator running ahead with a quantum keeper) only while no event of the chip
-// falls before the access ends and no other process waits for a cycle before the access starts;
-// otherwise the initiator is synchronised first. The pins' changes are applied at their times.
+// what the rest of the platform could still change but the rxd port (an access takes the chip to
+// its end at once; an rxd change meanwhile lands at the chip's cycle): its own thread steps it only
+// up to the current time, from event to event (Chip::next_deadline); a bus access may take it ahead
+// of the current time (an initiator running ahead with a quantum keeper) only while no event of the
+// chip falls before the access ends and no other process waits for a cycle before the access
+// starts; otherwise the initiator is synchronised first. The pins' changes are applied at their
+// times.
 #include "dpc31_tlm.hpp"
 
 #include <algorithm>
@@ -33,7 +35,8 @@ Dpc31Tlm::Dpc31Tlm(const sc_core::sc_module_name& name, const ChipOptions& optio
       rxd("rxd"),
       chip_(options),
       ticks_per_second_(static_cast<std::uint64_t>(
-          std::llround(1.0 / sc_core::sc_get_time_resolution().to_seconds()))) {
+          std::llround(1.0 / sc_core::sc_get_time_resolution().to_seconds()))),
+      x_int_level_(chip_.x_int_pin()) {
   // Coarser, two cycles share a time: accesses are no longer back to back, events move.
   if (ticks_per_second_ < chip_.clock_hz()) {
     throw std::invalid_argument(
@@ -44,12 +47,12 @@ Dpc31Tlm::Dpc31Tlm(const sc_core::sc_module_name& name, const ChipOptions& optio
   bus.register_b_transport(this, &Dpc31Tlm::b_transport);
   bus.register_transport_dbg(this, &Dpc31Tlm::transport_dbg);
   bus.register_get_direct_mem_ptr(this, &Dpc31Tlm::get_direct_mem_ptr);
-  x_int.initialize(chip_.x_int_pin());
+  x_int.initialize(x_int_level_);
   irq.initialize(chip_.irq_active());
   pb3.initialize(chip_.pb3_pin());
   txd.initialize(chip_.txd_pin());
   chip_.on_irq_change([this](std::uint64_t cycle, bool active) {
-    schedule(cycle, kXInt, chip_.x_int_pin());
+    follow_x_int(cycle);
     schedule(cycle, kIrq, active);
   });
   chip_.on_pb3_change([this](std::uint64_t cycle, bool high) { schedule(cycle, kPb3, high); });
@@ -87,6 +90,12 @@ void Dpc31Tlm::schedule(std::uint64_t cycle, int pin, bool level) {
   edge_due_.notify(at > now ? at - now : sc_core::SC_ZERO_TIME);
 }
 
+void Dpc31Tlm::follow_x_int(std::uint64_t cycle) {
+  if (chip_.x_int_pin() == x_int_level_) return;
+  x_int_level_ = !x_int_level_;
+  schedule(cycle, kXInt, x_int_level_);
+}
+
 void Dpc31Tlm::apply_edges() {
   const sc_core::sc_time now = sc_core::sc_time_stamp();
   while (!edges_.empty() && edges_.front().at <= now) {
@@ -98,7 +107,8 @@ void Dpc31Tlm::apply_edges() {
         break;
       case kIrq:
         irq.write(e.level);
-        if (e.level) irq_rise_.notify();
+        // At the next delta: its waiters wake after the update, and the signal reads true.
+        if (e.level) irq_rise_.notify(sc_core::SC_ZERO_TIME);
         break;
       case kPb3:
         pb3.write(e.level);
@@ -216,6 +226,7 @@ void Dpc31Tlm::b_transport(tlm::tlm_generic_payload& tr, sc_core::sc_time& delay
       data[i] = chip_.read(a);
     } else {
       chip_.write(a, data[i]);
+      follow_x_int(chip_.cycle());  // Mode_Reg0.INT_Pol flips the pin when the write completes
     }
     ++accesses_;
   }
@@ -241,6 +252,8 @@ unsigned int Dpc31Tlm::transport_dbg(tlm::tlm_generic_payload& tr) {
       data[done] = chip_.peek(a);
     } else if (!chip_.poke(a, data[done])) {
       break;  // no storage behind the read side: the bytes before it are written
+    } else {
+      follow_x_int(chip_.cycle());  // a poked INT_Pol moves the pin too
     }
   }
   tr.set_response_status(tlm::TLM_OK_RESPONSE);

@@ -29,7 +29,9 @@ class Dpc31Tlm : public sc_core::sc_module {
   sc_core::sc_out<bool> pb3;    // dpc31 port PB3 (low on the other profiles)
   sc_core::sc_out<bool> txd;    // the serial output, each edge at its cycle's time
   // The serial input for a UART model (optional): its value at time 0 and each change drive RxD at
-  // the first clock at or after their time (a low start is warned of: PROFIBUS idles high).
+  // the first clock at or after their time (a low start is warned of: PROFIBUS idles high), or at
+  // the chip's cycle where a bus access took it past that time (docs/systemc.md: not exact beside
+  // bus traffic; drive_rxd_chars ahead of time is).
   // Unbound: drive it through chip().drive_rxd / drive_rxd_chars.
   sc_core::sc_port<sc_core::sc_signal_in_if<bool>, 1, sc_core::SC_ZERO_OR_MORE_BOUND> rxd;
 
@@ -49,7 +51,8 @@ class Dpc31Tlm : public sc_core::sc_module {
   // The last cycle with a time: Chip::kLastCycle, or cycle_at(sc_max_time()) where that is sooner
   // (885 443 715 538 058 at 48 MHz and 1 ps, about 213 days).
   [[nodiscard]] std::uint64_t last_cycle() const;
-  // Notified when the interrupt becomes active, at that cycle's time.
+  // Notified when the interrupt becomes active, at that cycle's time (the delta after the irq
+  // signal's update: a waiter reads it true).
   [[nodiscard]] const sc_core::sc_event& irq_rise() const { return irq_rise_; }
   // For a process that moves time through the chip's serial side (the built-in DP master's
   // DpMaster::scheduler): waits until the chip reached `cycle` or one of its steps stopped
@@ -70,9 +73,12 @@ class Dpc31Tlm : public sc_core::sc_module {
   void b_transport(tlm::tlm_generic_payload& tr, sc_core::sc_time& delay);
   unsigned int transport_dbg(tlm::tlm_generic_payload& tr);
   bool get_direct_mem_ptr(tlm::tlm_generic_payload& tr, tlm::tlm_dmi& dmi);
-  void run();                         // SC_THREAD: the chip's own events at their times
-  void watch_rxd();                   // SC_THREAD: the rxd port\'s changes onto the chip\'s RxD
-  void apply_edges();                 // SC_METHOD: scheduled pin changes onto the ports
+  void run();          // SC_THREAD: the chip's own events at their times
+  void watch_rxd();    // SC_THREAD: the rxd port\'s changes onto the chip\'s RxD
+  void apply_edges();  // SC_METHOD: scheduled pin changes onto the ports
+  // X/INT follows the interrupt and Mode_Reg0.INT_Pol: a polarity write flips the pin without a
+  // change of the interrupt (no on_irq_change), so the pin is compared after every write.
+  void follow_x_int(std::uint64_t cycle);
   void step_to(std::uint64_t cycle);  // never past `cycle`, never backwards
   void schedule(std::uint64_t cycle, int pin, bool level);
 
@@ -86,6 +92,7 @@ class Dpc31Tlm : public sc_core::sc_module {
     bool level;
   };
   std::deque<Edge> edges_;
+  bool x_int_level_;  // the X/INT level last scheduled
   sc_core::sc_event edge_due_;
   sc_core::sc_event irq_rise_;
   sc_core::sc_event changed_;  // an access or RxD moved the chip's next event

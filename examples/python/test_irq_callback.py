@@ -6,6 +6,8 @@ first event is at Start + P, then every P, P = ceil(1 ms x 48 MHz) = 48000 (User
 X/INT goes active in the cycle the event is latched and inactive when the acknowledge completes.
 """
 
+import pytest
+
 import dpc31
 
 P = 48_000
@@ -139,3 +141,68 @@ def test_a_masters_user_side_is_refused_to_another_thread_while_the_master_runs_
     runner.join()
     assert refused > 0  # the main thread ran Python while the other thread was inside idle()
     r.take_interrupts()  # between runs every call works
+
+
+def _raising(calls):
+    def fails(cycle, active):
+        calls.append((cycle, active))
+        raise RuntimeError("observer fails")
+    return fails
+
+
+def test_an_observers_exception_ends_the_masters_call_at_once():
+    """docs/python.md, "The GIL": the master's waits end at once. The master cleared the chip's
+    stop after every wait and went on: startup() ran 2.9 M cycles and 458 requests to
+    Data_Exchange before it raised (audit s29 a-py finding 4)."""
+    chip = dpc31.Chip("spc3")
+    m = dpc31.Master(chip, slave=dpc31.SlaveConfig(address=5))
+    m.run_responder(inputs=b"\1\2\3\4")
+    calls = []
+    chip.on_irq_change(_raising(calls))
+    with pytest.raises(RuntimeError, match="^observer fails$"):
+        m.startup()
+    # The first request starts after TSYN, 33 bit times of 32 clocks at 1.5 Mbaud: 1056. The
+    # responder's first interrupt edge comes before it, and the call ends at its cycle.
+    assert len(calls) == 1 and calls[0][0] < 33 * 32
+    assert chip.cycle == calls[0][0] and m.counters.requests == 0
+
+
+def test_an_observers_exception_ends_a_data_exchange_before_its_answer():
+    chip = dpc31.Chip("spc3")
+    m = dpc31.Master(chip, slave=dpc31.SlaveConfig(address=5))
+    m.run_responder(inputs=b"\1\2\3\4")
+    assert m.startup()
+    answered = m.counters.answered
+    calls = []
+    chip.on_irq_change(_raising(calls))
+    with pytest.raises(RuntimeError, match="^observer fails$"):
+        m.data_exchange(b"\0\0\0\0")
+    # DX_Out's edge, at the request's end: the call ends there, the answer not waited for.
+    assert len(calls) == 1 and calls[0][1] is True
+    assert chip.cycle == calls[0][0] and m.counters.answered == answered
+
+
+def test_a_running_chips_state_properties_are_refused_to_another_thread():
+    """docs/python.md, "The GIL": a call from another thread while the chip runs raises
+    dpc31.Error; its state properties (cycle, dp_state, fdl_counters, ...) were read while the
+    running thread wrote them (audit s29 a-py finding 10). Its constants still read."""
+    import threading
+
+    chip = dpc31.Chip("spc3", engine="per-cycle")
+    chip.write(chip.addr_of("Mode_Reg1_S"), 0x01)
+    names = ("cycle", "x_int", "irq_active", "pb3", "txd", "started", "dp_state", "wd_state",
+             "station_address", "bit_cycles", "fdl_counters", "next_deadline", "watchdog_due")
+    runner = threading.Thread(target=chip.step, args=(40 * P,))
+    refused = set()
+    runner.start()
+    while runner.is_alive():
+        for name in names:
+            try:
+                getattr(chip, name)
+            except dpc31.Error as e:
+                assert "running in another thread" in str(e)
+                refused.add(name)
+        assert chip.profile == "spc3" and chip.clock_hz == 48_000_000
+    runner.join()
+    assert refused == set(names)
+    assert chip.cycle == 4 + 40 * P

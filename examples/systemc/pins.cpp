@@ -1,0 +1,121 @@
+// The model's pin signals against the chip's pins (docs/systemc.md, "X/INT, the interrupt, PB3,
+// TxD"): an SPC3 whose initiator unmasks User_Timer_Clock alone, makes X/INT high-active
+// (Mode_Reg0.INT_Pol = 1, written while Offline) and starts the chip. Exit 0 when every check
+// holds; each one that does not is a line on stderr. A process woken by irq_rise() reads the irq
+// signal true (it read false until the next delta).
+//
+// Expected cycles (docs/timing.md, "Bus accesses": an access starting at t completes at t + 4;
+// "Interrupt line": polarity INT_Pol = 0 low-active, 1 high-active; "Timers": the first
+// User_Timer_Clock at s + 48 000 after Start_SPC3 completes at s):
+//   Int_Mask_Reg lo, hi 4, 8; Mode_Reg0 lo (INT_Pol = 1) 12: X/INT, inactive, goes from high to
+//   low; Start_SPC3 16; User_Timer_Clock 48 016: the interrupt and X/INT go high; its
+//   acknowledge (Int_Ack_Reg lo) starts there and completes at 48 020: both go low.
+#include <tlm_utils/simple_initiator_socket.h>
+
+#include <cstdint>
+#include <cstdio>
+#include <string>
+#include <systemc>
+#include <tlm>
+#include <utility>
+#include <vector>
+
+#include "dpc31/dpc31_regs.h"
+#include "dpc31_tlm.hpp"
+
+namespace {
+
+dpc31::ChipOptions spc3() {
+  dpc31::ChipOptions o;
+  o.profile = dpc31::Profile::spc3;
+  return o;
+}
+
+using Edges = std::vector<std::pair<std::uint64_t, bool>>;  // (cycle, level)
+
+std::string text(const Edges& edges) {
+  std::string s;
+  for (const auto& [cycle, level] : edges) {
+    s += " " + std::to_string(cycle) + ":" + (level ? "1" : "0");
+  }
+  return s.empty() ? " none" : s;
+}
+
+struct Bench : sc_core::sc_module {
+  tlm_utils::simple_initiator_socket<sc_core::sc_module> cpu{"cpu"};
+  dpc31::systemc::Dpc31Tlm chip{"spc3", spc3()};
+  sc_core::sc_signal<bool> x_int{"x_int"}, irq{"irq"}, pb3{"pb3"}, txd{"txd"};
+  Edges x_int_edges;
+  int failures = 0;
+
+  SC_HAS_PROCESS(Bench);
+  explicit Bench(const sc_core::sc_module_name& n) : sc_module(n) {
+    cpu.bind(chip.bus);
+    chip.x_int(x_int);
+    chip.irq(irq);
+    chip.pb3(pb3);
+    chip.txd(txd);
+    SC_THREAD(initiator);
+    SC_METHOD(watch_x_int);
+    sensitive << x_int;
+    dont_initialize();
+  }
+
+  void watch_x_int() {
+    // The initial value is written at time 0: the edges that follow are the ones looked at.
+    if (sc_core::sc_time_stamp() == sc_core::SC_ZERO_TIME) return;
+    x_int_edges.emplace_back(chip.cycle_at(sc_core::sc_time_stamp()), x_int.read());
+  }
+
+  void expect(bool ok, const std::string& what) {
+    if (ok) return;
+    std::fprintf(stderr, "pins: %s\n", what.c_str());
+    ++failures;
+  }
+
+  // A write of one byte, running ahead of SystemC time (the delay annotated to its end).
+  void write(std::uint32_t addr, unsigned char value, sc_core::sc_time& delay) {
+    tlm::tlm_generic_payload tr;
+    tr.set_command(tlm::TLM_WRITE_COMMAND);
+    tr.set_address(addr);
+    tr.set_data_ptr(&value);
+    tr.set_data_length(1);
+    tr.set_streaming_width(1);
+    tr.set_response_status(tlm::TLM_INCOMPLETE_RESPONSE);
+    cpu->b_transport(tr, delay);
+    expect(tr.is_response_ok(), "a write is refused");
+  }
+
+  void initiator() {
+    wait(sc_core::SC_ZERO_TIME);
+    expect(x_int.read(), "X/INT is not high at reset (low-active, inactive)");
+    sc_core::sc_time delay = sc_core::SC_ZERO_TIME;
+    write(SPC3_Int_Mask_Reg_LO_INTEL,
+          static_cast<unsigned char>(~SPC3_Int_Req_Reg_User_Timer_Clock_Msk), delay);
+    write(SPC3_Int_Mask_Reg_HI_INTEL, 0xFF, delay);
+    write(SPC3_Mode_Reg0_LO_INTEL, SPC3_Mode_Reg0_INT_Pol_Msk, delay);
+    write(SPC3_Mode_Reg1_S, SPC3_Mode_Reg1_S_Start_SPC3_Msk, delay);
+    wait(delay);
+    delay = sc_core::SC_ZERO_TIME;
+    wait(chip.irq_rise());
+    expect(irq.read(), "irq reads false right after irq_rise()");
+    write(SPC3_Int_Ack_Reg_LO_INTEL, SPC3_Int_Req_Reg_User_Timer_Clock_Msk, delay);
+    wait(delay);
+    wait(sc_core::SC_ZERO_TIME);
+    const Edges want{{12, false}, {48016, true}, {48020, false}};
+    expect(x_int_edges == want,
+           "x_int edges (cycle:level)" + text(x_int_edges) + ", expected" + text(want));
+    expect(x_int.read() == chip.chip().x_int_pin(), "x_int differs from the chip's X/INT pin");
+    sc_core::sc_stop();
+  }
+};
+
+}  // namespace
+
+int sc_main(int, char*[]) {
+  sc_core::sc_report_handler::set_actions("/OSCI/SystemC", sc_core::SC_INFO,
+                                          sc_core::SC_DO_NOTHING);
+  Bench bench{"bench"};
+  sc_core::sc_start();
+  return bench.failures == 0 ? 0 : 1;
+}
