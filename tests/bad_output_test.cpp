@@ -69,6 +69,52 @@ TEST_F(BadInput, OutputSymlinksAreFollowedOnlyToAnExistingFile) {
   EXPECT_EQ(listing(), before);
 }
 
+// docs/bad-input.md "Output files": a descriptor (/dev/stdout, /dev/stderr, /dev/fd/N,
+// /proc/self/fd/N) is written in place, whatever its stream is: a `>>` log grows, a `>` file
+// holds the walk and then the JSON, a deleted file is no reason to make one (s29-sec, finding 1).
+TEST_F(BadInput, ADescriptorRedirectedToAFileIsWrittenInPlace) {
+  ASSERT_EQ(dpc31("run " + kScn + " --json alone.json").rc, 0);
+  const std::string walk = dpc31("run " + kScn).out;
+  const std::string json = slurp(path("alone.json"));
+  ASSERT_GT(walk.size(), 1000u);
+  ASSERT_GT(json.size(), 500u);
+  const auto sh = [this](const std::string& line) {
+    return testutil::run_command("cd " + path("") + " && " + line + " 2>&1");
+  };
+  const std::string run = kCli + " run " + kScn;
+  spit(path("results.log"), "previous 1\nprevious 2\n");
+  struct stat before {};
+  ASSERT_EQ(::stat(path("results.log").c_str(), &before), 0);
+  EXPECT_EQ(sh(run + " --quiet --json /dev/stdout >> results.log").rc, 0);
+  EXPECT_EQ(slurp(path("results.log")), "previous 1\nprevious 2\n" + json);
+  struct stat after {};
+  ASSERT_EQ(::stat(path("results.log").c_str(), &after), 0);
+  EXPECT_EQ(after.st_ino, before.st_ino) << "results.log was replaced";
+  EXPECT_EQ(sh(run + " --json /dev/stdout > both.txt").rc, 0);
+  EXPECT_EQ(slurp(path("both.txt")), walk + json);
+  spit(path("err.log"), "earlier\n");
+  EXPECT_EQ(testutil::run_command("cd " + path("") + " && " + run +
+                                  " --quiet --json /dev/stderr 2>> err.log")
+                .rc,
+            0);
+  EXPECT_EQ(slurp(path("err.log")), "earlier\n" + json);
+  spit(path("fd3.log"), "three\n");
+  EXPECT_EQ(sh(run + " --quiet --json /dev/fd/3 3>> fd3.log").rc, 0);
+  EXPECT_EQ(slurp(path("fd3.log")), "three\n" + json);
+  // The file behind standard output deleted (a rotated log): written to it, nothing made here.
+  const testutil::CommandResult gone =
+      sh("( exec > gone.txt; rm gone.txt; " + run + " --quiet --json /proc/self/fd/1 )");
+  EXPECT_EQ(gone.rc, 0) << gone.out;
+  EXPECT_EQ(gone.out, "");
+  EXPECT_EQ(listing(), (std::vector<std::string>{"alone.json", "both.txt", "err.log", "fd3.log",
+                                                 "results.log"}));
+  // The bridge's live log: appended to, not truncated.
+  spit(path("b.log"), "old bridge log\n");
+  sh("timeout -s TERM 2 " + kCli + " bridge --tcp 0 --slave 5:DO4 --log /dev/stdout >> b.log");
+  const std::string blog = slurp(path("b.log"));
+  EXPECT_EQ(blog.rfind("old bridge log\ndpc31 bridge: ", 0), 0u) << blog;
+}
+
 // A full file system: fstapi does not check its writes, so only the walk of what it wrote
 // shows it. Exit 2, one line, the old file kept, no temporary left (finding 6). A small tmpfs
 // mounted for the test (root; the suite runs as root in CI and here).

@@ -747,7 +747,7 @@ int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
     if (std::string foreign = outfile::foreign_symlink(o.log); !foreign.empty()) {
       return refuse(foreign);
     }
-    owned.reset(std::fopen(o.log.c_str(), "w"));
+    owned.reset(outfile::open_live(o.log));
     if (!owned) {
       return refuse(fmt::format("cannot write the log {}: {}", o.log, std::strerror(errno)));
     }
