@@ -17,6 +17,8 @@ namespace {
 
 const std::string kScn = kTraces + "gc_clear_spc3.scn";
 
+std::string refused_words() { return ": an output must not replace an input"; }
+
 // The FST writer (fstapi) unlinks the name it is given: a device or a FIFO named by --fst must
 // be written in place, never replaced by a plain file (issue 14, finding 2).
 TEST_F(BadInput, FstToADeviceKeepsTheDeviceNode) {
@@ -330,6 +332,42 @@ TEST_F(BadInput, AnOutputThatNamesAnInputOrAnotherOutputIsRefused) {
   EXPECT_EQ(slurp(path("b.vcd")), b_text);
   EXPECT_FALSE(fs::exists(path("new.vcd")));
   EXPECT_FALSE(fs::exists(path("r.json")));
+}
+
+// docs/security.md "Outputs never destroy what is there": no output replaces what a scenario
+// reads, its `cpu` line's image and the SDCC map beside it included (`dpc31 run`, `cosim
+// --session`), nor a plug-in through a link in `demo --out-dir` (s29-sec, finding 2: each was
+// written over, exit 0). The image: LJMP 000Bh, its checksum F0h, and the end record.
+TEST_F(BadInput, AnOutputNeverReplacesWhatTheScenarioReads) {
+  const std::string image = ":0300000002000BF0\n:00000001FF\n";
+  file("fw.ihx", image);
+  file("fw.map", "the map\n");
+  file("s.scn", "profile spc3\ncpu 80c32 firmware fw.ihx\nstartup\n");
+  file("c.scn", "profile dpc31\ncpu c31 firmware fw.ihx code=0x1000\nstartup\n");
+  const std::string is_image = ": is the `cpu 80c32` image " + path("fw.ihx") + refused_words();
+  expect_bad(dpc31("run s.scn --quiet --json fw.ihx"), "dpc31 run: --json fw.ihx" + is_image,
+             "json");
+  expect_bad(dpc31("run s.scn --quiet --record ./fw.ihx"),
+             "dpc31 run: --record ./fw.ihx" + is_image, "record");
+  expect_bad(dpc31("run s.scn --quiet --vcd fw.map"),
+             "dpc31 run: --vcd fw.map: is the SDCC map " + path("fw.map") + refused_words(), "map");
+  expect_bad(dpc31("run c.scn --quiet --pcap fw.ihx"),
+             "dpc31 run: --pcap fw.ihx: is the `cpu c31` image " + path("fw.ihx") + refused_words(),
+             "c31");
+  expect_bad(dpc31("cosim --session s.scn --junit fw.ihx"),
+             "dpc31 cosim: --junit fw.ihx" + is_image, "cosim --session");
+  EXPECT_EQ(slurp(path("fw.ihx")), image);
+  EXPECT_EQ(slurp(path("fw.map")), "the map\n");
+  // demo: its capture in --out-dir is a link to the plug-in; refused before it is loaded.
+  const std::string plugin = copy(BAD_PLUGIN_MARK, "fw.so");
+  const std::string bytes = slurp(plugin);
+  fs::create_directory(path("out"));
+  fs::create_symlink("../fw.so", path("out/dpc31-demo.pcapng"));
+  expect_bad(dpc31("demo --firmware ./fw.so --out-dir out", "DPC31_PLUGIN_MARK=" + path("mark")),
+             "dpc31 demo: --out-dir out/dpc31-demo.pcapng: is --firmware ./fw.so" + refused_words(),
+             "demo");
+  EXPECT_EQ(slurp(plugin), bytes);
+  EXPECT_FALSE(fs::exists(path("mark"))) << "the plug-in was loaded";
 }
 
 // A long run (10^6 exchanges at 12 Mbaud, about 40 s of chip time): long enough to be signalled.
