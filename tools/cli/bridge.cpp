@@ -511,6 +511,12 @@ class Bridge {
         anchor_chip_ = engine_->cycle();
       }
       deliver();
+      if (port_.sent_all()) {
+        // A half-closed client (`nc -N`): no more bytes come, so an incomplete telegram goes out
+        // now; the connection closes once every request it sent is answered (or timed out).
+        if (engine_->partial()) engine_->flush_partial();
+        if (!engine_->busy()) port_.hang_up(events_);
+      }
       const Clock::time_point after = Clock::now();
       if (realtime_) {
         const std::uint64_t wall = anchor_chip_ + to_cycles(after - anchor_wall_, f);
