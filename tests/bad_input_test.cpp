@@ -365,11 +365,12 @@ TEST_F(BadInput, RunOutputPaths) {
     expect_bad(dpc31("run " + scn + " --quiet " + o + " taken"),
                "dpc31 run: taken: cannot write: is a directory", o + " directory");
     expect_bad_prefix(dpc31("run " + scn + " --quiet " + o + " no/such/x"),
-                      "dpc31 run: no/such/x: cannot create the temporary file no/such/x.",
+                      "dpc31 run: no/such/x: cannot create the temporary file no/such/.dpc31-",
                       o + " missing directory");
-    expect_bad_prefix(dpc31("run " + scn + " --quiet " + o + " " + ro + "/x"),
-                      "dpc31 run: " + ro + "/x: cannot create the temporary file " + ro + "/x.",
-                      o + " unwritable");
+    expect_bad_prefix(
+        dpc31("run " + scn + " --quiet " + o + " " + ro + "/x"),
+        "dpc31 run: " + ro + "/x: cannot create the temporary file " + ro + "/.dpc31-",
+        o + " unwritable");
     EXPECT_TRUE(fs::is_empty(path("taken"))) << o;
     EXPECT_EQ(listing(), before) << o;
     // The same among good outputs: none of them is written either.
@@ -1142,7 +1143,7 @@ TEST_F(BadWaves, MapFileOptionsAndOutputs) {
     expect_bad(dpc31("wavediff good.vcd good.fst " + o + " taken"),
                "taken: cannot write: is a directory", o);
     expect_bad_prefix(dpc31("wavediff good.vcd good.fst " + o + " no/such/x"),
-                      "no/such/x: cannot create the temporary file no/such/x.", o);
+                      "no/such/x: cannot create the temporary file no/such/.dpc31-", o);
     EXPECT_EQ(listing(), before) << o;
     // Among good outputs: none of them is written.
     const std::string all = outputs_one_taken({"--json", "--diff-vcd", "--wavedrom"}, o);

@@ -117,6 +117,29 @@ TEST_F(BadInput, ADescriptorRedirectedToAFileIsWrittenInPlace) {
   EXPECT_EQ(blog.rfind("old bridge log\ndpc31 bridge: ", 0), 0u) << blog;
 }
 
+// docs/bad-input.md "Output files": the replacement keeps the replaced file's permission bits (a
+// file made private stays private), a hard link to it keeps the old bytes, the temporary's short
+// name leaves every name the file system takes possible (255 bytes), and a name ending in '/' is
+// one line (s29-sec, findings 7 and 8: 0600 became 0644; 245..255-byte names failed).
+TEST_F(BadInput, AReplacedOutputKeepsItsModeAndAnyNameWorks) {
+  spit(path("out.json"), "secret");
+  ASSERT_EQ(::chmod(path("out.json").c_str(), 0600), 0);
+  fs::create_hard_link(path("out.json"), path("link.json"));
+  ASSERT_EQ(dpc31("run " + kScn + " --quiet --json out.json").rc, 0);
+  struct stat st {};
+  ASSERT_EQ(::stat(path("out.json").c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 07777, 0600u);
+  EXPECT_EQ(slurp(path("out.json")).substr(0, 1), "{");
+  EXPECT_EQ(slurp(path("link.json")), "secret");  // rename: the other link keeps the old file
+  const std::string longest = std::string(250, 'a') + ".json";
+  const Outcome r = dpc31("run " + kScn + " --quiet --json " + longest);
+  EXPECT_EQ(r.rc, 0) << r.err;
+  EXPECT_EQ(slurp(path(longest)).substr(0, 1), "{");
+  expect_bad(dpc31("run " + kScn + " --quiet --json new.json/"),
+             "dpc31 run: new.json/: cannot write: a file name cannot end in '/'", "slash");
+  EXPECT_EQ(listing(), (std::vector<std::string>{longest, "link.json", "out.json"}));
+}
+
 // A full file system: fstapi does not check its writes, so only the walk of what it wrote
 // shows it. Exit 2, one line, the old file kept, no temporary left (finding 6). A small tmpfs
 // mounted for the test (root; the suite runs as root in CI and here).

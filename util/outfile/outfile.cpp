@@ -48,11 +48,14 @@ std::string create_temp(const std::string& path,
     error = kEmptyName;
     return {};
   }
-  // The pid keeps two processes apart; the counter two temporaries of one process (or a leftover
-  // of a killed run with a recycled pid).
+  // A short name in the target's directory, whatever the target's: a name of 255 bytes, the
+  // most a file system takes, stays possible. The pid keeps two processes apart; the counter two
+  // temporaries of one process (or a leftover of a killed run with a recycled pid).
+  const std::string dir = path.substr(0, path.rfind('/') + 1);
   for (int attempt = 0; attempt < 100; ++attempt) {
-    const std::string tmp = attempt == 0 ? fmt::format("{}.{}.tmp", path, ::getpid())
-                                         : fmt::format("{}.{}-{}.tmp", path, ::getpid(), attempt);
+    const std::string tmp = attempt == 0
+                                ? fmt::format("{}.dpc31-{}.tmp", dir, ::getpid())
+                                : fmt::format("{}.dpc31-{}-{}.tmp", dir, ::getpid(), attempt);
     const int e = create(tmp);
     if (e == 0) return tmp;
     if (e != EEXIST) {
@@ -217,6 +220,10 @@ bool OutFile::open(const std::string& path) {
       target_ = real.get();  // a symlink stays a symlink: the file it names is replaced
     }
   }
+  if (!direct_ && path.ends_with('/')) {
+    // No such directory (else it was refused above): a file's name does not end in '/'.
+    return fail(fmt::format("{}: cannot write: a file name cannot end in '/'", path));
+  }
   if (!direct_) {
     std::string error;
     tmp_ = create_temp(
@@ -228,6 +235,13 @@ bool OutFile::open(const std::string& path) {
         error);
     if (tmp_.empty()) return fail(error);
     tmp_entry_ = cleanup::Entry::path(tmp_);
+    // The replacement keeps the file's permission bits: a file made private stays private.
+    if (S_ISREG(st.st_mode) && ::fchmod(fd, st.st_mode & 07777) != 0) {
+      const int e = errno;
+      ::close(fd);
+      discard();
+      return fail(fmt::format("{}: cannot write: {}", path, errno_text(e)));
+    }
   }
   f_ = ::fdopen(fd, "wb");
   if (f_ == nullptr) {
@@ -479,6 +493,8 @@ bool write_file_at(int dirfd, const std::string& name, std::string_view bytes,
     ::unlinkat(dirfd, tmp.c_str(), 0);
     return false;
   };
+  // The replacement keeps the file's permission bits, as OutFile's does.
+  if (exists && ::fchmod(fd, st.st_mode & 07777) != 0) return fail("cannot write", errno);
   for (std::size_t done = 0; done < bytes.size();) {
     const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
     if (n < 0 && errno == EINTR) continue;

@@ -18,8 +18,9 @@ namespace dpc31::outfile {
 // Why an empty name is refused: OutFile's and every output option's words (path_option.hpp).
 inline constexpr std::string_view kEmptyName = "an empty file name: nothing can be written there";
 
-// A fresh temporary next to `path`, made by `create(name)`, which returns 0 or an errno value;
-// EEXIST tries the next name ("<path>.<pid>.tmp", "<path>.<pid>-1.tmp", ...). Returns its name,
+// A fresh temporary in `path`'s directory, made by `create(name)`, which returns 0 or an errno
+// value; EEXIST tries the next name ("DIR/.dpc31-<pid>.tmp", "DIR/.dpc31-<pid>-1.tmp", ...): short
+// whatever `path`'s name, so that a name of 255 bytes can be written. Returns its name,
 // or "" with a one-line `error`. For temporaries that are not plain files (bridge's symlink).
 std::string create_temp(const std::string& path,
                         const std::function<int(const std::string&)>& create, std::string& error);
@@ -64,7 +65,7 @@ class OutFile {
   OutFile(const OutFile&) = delete;
   OutFile& operator=(const OutFile&) = delete;
 
-  // Creates the temporary. False with error() if `path` is a directory, the running program
+  // Creates the temporary. False with error() if `path` is a directory, ends in '/', the running program
   // (/proc/self/exe), a symbolic link to nothing, another user's link in a sticky directory
   // (foreign_symlink), or the temporary cannot be created; nothing is touched then. A file still
   // open is discarded first. A `path` that is not a regular file (a device, a FIFO: /dev/null),
@@ -85,7 +86,8 @@ class OutFile {
   [[nodiscard]] const std::string& path() const { return path_; }
   [[nodiscard]] bool is_open() const { return !tmp_.empty(); }
 
-  // Flushes, syncs and renames the temporary over the target. False with error() if any write
+  // Flushes, syncs and renames the temporary over the target, whose permission bits the new file
+  // has (open() set them; another hard link to the old file keeps the old bytes). False with error() if any write
   // since open() failed or the rename fails; the temporary is then removed.
   bool commit();
   // commit() for what a library wrote to library_path() as FST: first checks that fstapi left a
