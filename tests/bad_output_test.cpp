@@ -177,6 +177,10 @@ TEST_F(BadInput, AFailedWriteToTheStandardOutputIsExit2) {
   const std::string full = ": cannot write the standard output: No space left on device";
   for (const auto& [args, want] : std::vector<std::pair<std::string, std::string>>{
            {"regs --profile dpc31", "dpc31 regs" + full},
+           // CLI11's help and version through the same checked stream (s29-sec, finding 10).
+           {"--version", "dpc31" + full},
+           {"--help", "dpc31" + full},
+           {"run --help", "dpc31 run" + full},
            {"regs --profile all --format c", "dpc31 regs" + full},
            {"run " + kScn, "dpc31 run" + full},
            {"replay " + kTraces + "gc_clear_spc3.trace", "dpc31 replay" + full},
