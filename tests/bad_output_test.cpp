@@ -140,6 +140,26 @@ TEST_F(BadInput, AReplacedOutputKeepsItsModeAndAnyNameWorks) {
   EXPECT_EQ(listing(), (std::vector<std::string>{longest, "link.json", "out.json"}));
 }
 
+// docs/bridge.md: SIGTERM ends the bridge with exit 0 and removes its symlink, also while its
+// --log FIFO has no reader yet and open() waits for one (s29-sec, finding 12: exit 2, `cannot
+// write the log ...: Interrupted system call`).
+TEST_F(BadInput, ASignalWhileTheLogFifoWaitsForItsReaderIsAStop) {
+  ASSERT_EQ(::mkfifo(path("lf").c_str(), 0600), 0);
+  const std::string err = (root_ / "io" / "err").string();
+  const pid_t pid =
+      spawn({kCli, "bridge", "--pty", path("dp"), "--firmware", "DO4", "--log", path("lf")},
+            path(""), err);
+  ASSERT_TRUE(eventually([&] { return fs::is_symlink(path("dp")); }));
+  std::this_thread::sleep_for(
+      std::chrono::milliseconds(300));  // into open(): nothing else shows it
+  ::kill(pid, SIGTERM);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << status << " " << slurp(err);
+  EXPECT_EQ(slurp(err), "");
+  EXPECT_EQ(listing(), std::vector<std::string>{"lf"});
+}
+
 // A full file system: fstapi does not check its writes, so only the walk of what it wrote
 // shows it. Exit 2, one line, the old file kept, no temporary left (finding 6). A small tmpfs
 // mounted for the test (root; the suite runs as root in CI and here).

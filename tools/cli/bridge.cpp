@@ -754,6 +754,8 @@ int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
       return refuse(foreign);
     }
     owned.reset(outfile::open_live(o.log));
+    // A FIFO waits in open() for its reader: a stop signal then is a stop, not a failed log.
+    if (!owned && errno == EINTR && g_signal != 0) return 0;
     if (!owned) {
       return refuse(fmt::format("cannot write the log {}: {}", o.log, std::strerror(errno)));
     }
