@@ -65,14 +65,14 @@ class OutFile {
   OutFile(const OutFile&) = delete;
   OutFile& operator=(const OutFile&) = delete;
 
-  // Creates the temporary. False with error() if `path` is a directory, ends in '/', the running program
-  // (/proc/self/exe), a symbolic link to nothing, another user's link in a sticky directory
-  // (foreign_symlink), or the temporary cannot be created; nothing is touched then. A file still
-  // open is discarded first. A `path` that is not a regular file (a device, a FIFO: /dev/null),
-  // or reaches one through a descriptor (descriptor_link: /dev/stdout redirected to a file), is
-  // written in place, never removed or replaced; a symlink to a file is followed: the link stays,
-  // the file it names is replaced. The temporary is removed if a signal ends the process
-  // (cleanup.hpp).
+  // Creates the temporary. False with error() if `path` is a directory, ends in '/', is the
+  // running program (/proc/self/exe), a symbolic link to nothing, another user's link in a sticky
+  // directory (foreign_symlink), or the temporary cannot be created; nothing is touched then. A
+  // file still open is discarded first. A `path` that is not a regular file (a device, a FIFO:
+  // /dev/null), or reaches one through a descriptor (descriptor_link: /dev/stdout redirected to a
+  // file), is written in place, never removed or replaced; a symlink to a file is followed: the
+  // link stays, the file it names is replaced. The temporary is removed if a signal ends the
+  // process (cleanup.hpp).
   bool open(const std::string& path);
   // Buffered stream on the temporary (fmt::print, fwrite); nullptr when not open.
   std::FILE* stream();
@@ -87,8 +87,8 @@ class OutFile {
   [[nodiscard]] bool is_open() const { return !tmp_.empty(); }
 
   // Flushes, syncs and renames the temporary over the target, whose permission bits the new file
-  // has (open() set them; another hard link to the old file keeps the old bytes). False with error() if any write
-  // since open() failed or the rename fails; the temporary is then removed.
+  // has (open() set them; another hard link to the old file keeps the old bytes). False with
+  // error() if any write since open() failed or the rename fails; the temporary is then removed.
   bool commit();
   // commit() for what a library wrote to library_path() as FST: first checks that fstapi left a
   // whole file (fst_chain::incomplete; its writes are unchecked, so a full file system shows
