@@ -18,6 +18,7 @@
 #include "cpu51_config.hpp"
 #include "firmware.h"
 #include "firmware_host.hpp"
+#include "plugin_symbol.hpp"
 #include "trust.hpp"
 #include "vocabulary.hpp"
 
@@ -140,6 +141,11 @@ Library open_library(int fd, const std::string& path) {
     throw FirmwareError("firmware plug-in " + path +
                         " exports no " DPC31_FIRMWARE_SYMBOL
                         " (DPC31_FIRMWARE_EXPORT, dpc31/dpc31_firmware.h)");
+  }
+  if (const std::string why =
+          symbol_problem(sym, DPC31_FIRMWARE_SYMBOL, SymbolKind::pointer, "dpc31/dpc31_firmware.h");
+      !why.empty()) {
+    throw FirmwareError("firmware plug-in " + path + ": " + why);
   }
   const dpc31_firmware* const fw = *static_cast<const dpc31_firmware* const*>(sym);
   const std::string problem = descriptor_problem(fw);

@@ -21,6 +21,7 @@
 #include "dpc31/fdl_counters.hpp"
 #include "dpc31/uart.hpp"
 #include "dpv1_master.hpp"
+#include "outfile.hpp"
 #include "responder.hpp"
 #include "vocabulary.hpp"
 
@@ -173,6 +174,11 @@ bool parse_scenario_file(std::string_view text, const std::string& path,
 // copy itself when the caller did not.
 [[nodiscard]] bool plugin_pending(const Scenario& s);
 bool bind_plugin(Scenario& s, ScenarioError& err);
+
+// The files a run of `s` reads besides its text: a firmware plug-in not yet bound, a `cpu` line's
+// image and the SDCC map beside it. Every door that runs a scenario hands them with its outputs
+// to outfile::distinct, before any work: no output may replace one.
+[[nodiscard]] std::vector<outfile::Named> scenario_inputs(const Scenario& s);
 
 // The 80C32 image a `cpu` header names, read and checked before anything runs or is written: false
 // with `error` (`SCENARIO:LINE: IMAGE: reason`, or `SCENARIO:LINE: IMAGE:LINE: reason`, the `cpu`

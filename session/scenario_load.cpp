@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "cpu51_module.hpp"
 #include "firmware_host.hpp"
 #include "scenario.hpp"
 #include "textfile.hpp"
@@ -65,6 +66,16 @@ std::string plugin_refused_untrusted(const std::string& untrusted) {
 }
 
 bool plugin_pending(const Scenario& s) { return !s.firmware.empty() && s.firmware_desc == nullptr; }
+
+std::vector<outfile::Named> scenario_inputs(const Scenario& s) {
+  std::vector<outfile::Named> inputs;
+  if (plugin_pending(s)) inputs.push_back({"the firmware plug-in", s.firmware});
+  if (s.cpu) {
+    inputs.push_back({fmt::format("the `cpu {}` image", s.cpu->c31 ? "c31" : "80c32"), s.cpu->hex});
+    inputs.push_back({"the SDCC map", cpu51_map_path(s.cpu->hex)});
+  }
+  return inputs;
+}
 
 bool bind_plugin(Scenario& s, ScenarioError& err) {
   if (!plugin_pending(s)) return true;

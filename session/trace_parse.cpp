@@ -291,21 +291,29 @@ class TraceParser {
     now_ = l.cycle;
   }
 
+  // A bus address within the profile's address bus: the chip would drop the upper bits, and the
+  // line would act on another address (as every door refuses it: docs/decisions.md).
+  std::uint32_t address(std::string_view s) {
+    const std::uint32_t a = hexnum(s, 4, "address");
+    const ValueRange bus{"address", 0, (1u << profile_desc(t_.chip.profile).address_bits) - 1};
+    if (a > bus.max) fail(out_of_range(bus, fmt::format("0x{}", s)));
+    return a;
+  }
+
   void body(const std::vector<std::string_view>& w, TraceLine& l) {
     const std::string_view k = w[0];
-    const std::uint32_t addr_digits = 4;
     if (k == "wr") {
       arity(w, 4, "wr CYCLE ADDR DATA");
       l.kind = TraceKind::wr;
       l.cycle = dec(w[1], "cycle");
-      l.addr = hexnum(w[2], addr_digits, "address");
+      l.addr = address(w[2]);
       l.data = hexbyte(w[3], "data");
     } else if (k == "rd") {
       arity(w, 5, "rd CYCLE ADDR = DATA");
       if (w[3] != "=") fail("expected 'rd CYCLE ADDR = DATA'");
       l.kind = TraceKind::rd;
       l.cycle = dec(w[1], "cycle");
-      l.addr = hexnum(w[2], addr_digits, "address");
+      l.addr = address(w[2]);
       l.data = hexbyte(w[4], "data");
     } else if (k == "rx") {
       if (w.size() < 3) fail("expected 'rx START BYTES... [fault=KIND:CHAR] [fed=CYCLE]'");

@@ -365,11 +365,12 @@ TEST_F(BadInput, RunOutputPaths) {
     expect_bad(dpc31("run " + scn + " --quiet " + o + " taken"),
                "dpc31 run: taken: cannot write: is a directory", o + " directory");
     expect_bad_prefix(dpc31("run " + scn + " --quiet " + o + " no/such/x"),
-                      "dpc31 run: no/such/x: cannot create the temporary file no/such/x.",
+                      "dpc31 run: no/such/x: cannot create the temporary file no/such/.dpc31-",
                       o + " missing directory");
-    expect_bad_prefix(dpc31("run " + scn + " --quiet " + o + " " + ro + "/x"),
-                      "dpc31 run: " + ro + "/x: cannot create the temporary file " + ro + "/x.",
-                      o + " unwritable");
+    expect_bad_prefix(
+        dpc31("run " + scn + " --quiet " + o + " " + ro + "/x"),
+        "dpc31 run: " + ro + "/x: cannot create the temporary file " + ro + "/.dpc31-",
+        o + " unwritable");
     EXPECT_TRUE(fs::is_empty(path("taken"))) << o;
     EXPECT_EQ(listing(), before) << o;
     // The same among good outputs: none of them is written either.
@@ -1142,7 +1143,7 @@ TEST_F(BadWaves, MapFileOptionsAndOutputs) {
     expect_bad(dpc31("wavediff good.vcd good.fst " + o + " taken"),
                "taken: cannot write: is a directory", o);
     expect_bad_prefix(dpc31("wavediff good.vcd good.fst " + o + " no/such/x"),
-                      "no/such/x: cannot create the temporary file no/such/x.", o);
+                      "no/such/x: cannot create the temporary file no/such/.dpc31-", o);
     EXPECT_EQ(listing(), before) << o;
     // Among good outputs: none of them is written.
     const std::string all = outputs_one_taken({"--json", "--diff-vcd", "--wavedrom"}, o);
@@ -1289,6 +1290,29 @@ TEST_F(BadInput, ServeOptions) {
   }
   EXPECT_EQ(slurp(path("plain")), "old");  // a file that is not a socket is not replaced
   EXPECT_EQ(listing(), std::vector<std::string>{"plain"});
+}
+
+// A library that exports the entry name as the wrong kind of symbol (docs/bring-up.md, section 3:
+// one line, exit 2, never a crash; s29-sec, finding 6): dpc31/dpc31_firmware.h declares the
+// descriptor a pointer, dpc31_rtl_model.h dpc31_rtl_model_get a function. They crashed (SIGSEGV).
+TEST_F(BadInput, PluginEntrySymbolsOfTheWrongKindAreRefused) {
+  for (const auto& [lib, is] : std::vector<std::pair<std::string, std::string>>{
+           {WRONG_SYMBOL_FW_INT, "data of 4 bytes"}, {WRONG_SYMBOL_FW_FUNC, "a function"}}) {
+    const std::string line = "firmware plug-in " + lib + ": dpc31_firmware_descriptor is " + is +
+                             ", not the pointer dpc31/dpc31_firmware.h declares";
+    expect_bad(dpc31("soak --cycles 1000 --firmware " + lib), "dpc31 soak: " + line, lib);
+    expect_bad(dpc31("bridge --pty p --firmware " + lib), "dpc31 bridge: " + line, lib);
+    expect_bad(dpc31("demo --firmware " + lib), "dpc31 demo: " + line, lib);
+    file("plugin.scn", "firmware " + lib + "\nstartup\n");
+    expect_bad(dpc31("run plugin.scn"), "plugin.scn:1: " + line, lib);
+  }
+  const std::string rtl = WRONG_SYMBOL_RTL_INT;
+  expect_bad(dpc31("cosim --rtl-model " + rtl + " --seeds 1 --cycles 100"),
+             "dpc31 cosim: " + rtl +
+                 ": dpc31_rtl_model_get is data of 4 bytes, not the function dpc31_rtl_model.h "
+                 "declares",
+             "rtl-model");
+  EXPECT_EQ(listing(), std::vector<std::string>{"plugin.scn"});
 }
 
 // Firmware plug-ins (dpc31/dpc31_firmware.h) are checked at load: the library loads with every

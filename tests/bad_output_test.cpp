@@ -17,6 +17,8 @@ namespace {
 
 const std::string kScn = kTraces + "gc_clear_spc3.scn";
 
+std::string refused_words() { return ": an output must not replace an input"; }
+
 // The FST writer (fstapi) unlinks the name it is given: a device or a FIFO named by --fst must
 // be written in place, never replaced by a plain file (issue 14, finding 2).
 TEST_F(BadInput, FstToADeviceKeepsTheDeviceNode) {
@@ -69,6 +71,95 @@ TEST_F(BadInput, OutputSymlinksAreFollowedOnlyToAnExistingFile) {
   EXPECT_EQ(listing(), before);
 }
 
+// docs/bad-input.md "Output files": a descriptor (/dev/stdout, /dev/stderr, /dev/fd/N,
+// /proc/self/fd/N) is written in place, whatever its stream is: a `>>` log grows, a `>` file
+// holds the walk and then the JSON, a deleted file is no reason to make one (s29-sec, finding 1).
+TEST_F(BadInput, ADescriptorRedirectedToAFileIsWrittenInPlace) {
+  ASSERT_EQ(dpc31("run " + kScn + " --json alone.json").rc, 0);
+  const std::string walk = dpc31("run " + kScn).out;
+  const std::string json = slurp(path("alone.json"));
+  ASSERT_GT(walk.size(), 1000u);
+  ASSERT_GT(json.size(), 500u);
+  const auto sh = [this](const std::string& line) {
+    return testutil::run_command("cd " + path("") + " && " + line + " 2>&1");
+  };
+  const std::string run = kCli + " run " + kScn;
+  spit(path("results.log"), "previous 1\nprevious 2\n");
+  struct stat before {};
+  ASSERT_EQ(::stat(path("results.log").c_str(), &before), 0);
+  EXPECT_EQ(sh(run + " --quiet --json /dev/stdout >> results.log").rc, 0);
+  EXPECT_EQ(slurp(path("results.log")), "previous 1\nprevious 2\n" + json);
+  struct stat after {};
+  ASSERT_EQ(::stat(path("results.log").c_str(), &after), 0);
+  EXPECT_EQ(after.st_ino, before.st_ino) << "results.log was replaced";
+  EXPECT_EQ(sh(run + " --json /dev/stdout > both.txt").rc, 0);
+  EXPECT_EQ(slurp(path("both.txt")), walk + json);
+  spit(path("err.log"), "earlier\n");
+  EXPECT_EQ(testutil::run_command("cd " + path("") + " && " + run +
+                                  " --quiet --json /dev/stderr 2>> err.log")
+                .rc,
+            0);
+  EXPECT_EQ(slurp(path("err.log")), "earlier\n" + json);
+  spit(path("fd3.log"), "three\n");
+  EXPECT_EQ(sh(run + " --quiet --json /dev/fd/3 3>> fd3.log").rc, 0);
+  EXPECT_EQ(slurp(path("fd3.log")), "three\n" + json);
+  // The file behind standard output deleted (a rotated log): written to it, nothing made here.
+  const testutil::CommandResult gone =
+      sh("( exec > gone.txt; rm gone.txt; " + run + " --quiet --json /proc/self/fd/1 )");
+  EXPECT_EQ(gone.rc, 0) << gone.out;
+  EXPECT_EQ(gone.out, "");
+  EXPECT_EQ(listing(), (std::vector<std::string>{"alone.json", "both.txt", "err.log", "fd3.log",
+                                                 "results.log"}));
+  // The bridge's live log: appended to, not truncated.
+  spit(path("b.log"), "old bridge log\n");
+  sh("timeout -s TERM 2 " + kCli + " bridge --tcp 0 --slave 5:DO4 --log /dev/stdout >> b.log");
+  const std::string blog = slurp(path("b.log"));
+  EXPECT_EQ(blog.rfind("old bridge log\ndpc31 bridge: ", 0), 0u) << blog;
+}
+
+// docs/bad-input.md "Output files": the replacement keeps the replaced file's permission bits (a
+// file made private stays private), a hard link to it keeps the old bytes, the temporary's short
+// name leaves every name the file system takes possible (255 bytes), and a name ending in '/' is
+// one line (s29-sec, findings 7 and 8: 0600 became 0644; 245..255-byte names failed).
+TEST_F(BadInput, AReplacedOutputKeepsItsModeAndAnyNameWorks) {
+  spit(path("out.json"), "secret");
+  ASSERT_EQ(::chmod(path("out.json").c_str(), 0600), 0);
+  fs::create_hard_link(path("out.json"), path("link.json"));
+  ASSERT_EQ(dpc31("run " + kScn + " --quiet --json out.json").rc, 0);
+  struct stat st {};
+  ASSERT_EQ(::stat(path("out.json").c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 07777, 0600u);
+  EXPECT_EQ(slurp(path("out.json")).substr(0, 1), "{");
+  EXPECT_EQ(slurp(path("link.json")), "secret");  // rename: the other link keeps the old file
+  const std::string longest = std::string(250, 'a') + ".json";
+  const Outcome r = dpc31("run " + kScn + " --quiet --json " + longest);
+  EXPECT_EQ(r.rc, 0) << r.err;
+  EXPECT_EQ(slurp(path(longest)).substr(0, 1), "{");
+  expect_bad(dpc31("run " + kScn + " --quiet --json new.json/"),
+             "dpc31 run: new.json/: cannot write: a file name cannot end in '/'", "slash");
+  EXPECT_EQ(listing(), (std::vector<std::string>{longest, "link.json", "out.json"}));
+}
+
+// docs/bridge.md: SIGTERM ends the bridge with exit 0 and removes its symlink, also while its
+// --log FIFO has no reader yet and open() waits for one (s29-sec, finding 12: exit 2, `cannot
+// write the log ...: Interrupted system call`).
+TEST_F(BadInput, ASignalWhileTheLogFifoWaitsForItsReaderIsAStop) {
+  ASSERT_EQ(::mkfifo(path("lf").c_str(), 0600), 0);
+  const std::string err = (root_ / "io" / "err").string();
+  const pid_t pid =
+      spawn({kCli, "bridge", "--pty", path("dp"), "--firmware", "DO4", "--log", path("lf")},
+            path(""), err);
+  ASSERT_TRUE(eventually([&] { return fs::is_symlink(path("dp")); }));
+  std::this_thread::sleep_for(
+      std::chrono::milliseconds(300));  // into open(): nothing else shows it
+  ::kill(pid, SIGTERM);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << status << " " << slurp(err);
+  EXPECT_EQ(slurp(err), "");
+  EXPECT_EQ(listing(), std::vector<std::string>{"lf"});
+}
+
 // A full file system: fstapi does not check its writes, so only the walk of what it wrote
 // shows it. Exit 2, one line, the old file kept, no temporary left (finding 6). A small tmpfs
 // mounted for the test (root; the suite runs as root in CI and here).
@@ -106,6 +197,10 @@ TEST_F(BadInput, AFailedWriteToTheStandardOutputIsExit2) {
   const std::string full = ": cannot write the standard output: No space left on device";
   for (const auto& [args, want] : std::vector<std::pair<std::string, std::string>>{
            {"regs --profile dpc31", "dpc31 regs" + full},
+           // CLI11's help and version through the same checked stream (s29-sec, finding 10).
+           {"--version", "dpc31" + full},
+           {"--help", "dpc31" + full},
+           {"run --help", "dpc31 run" + full},
            {"regs --profile all --format c", "dpc31 regs" + full},
            {"run " + kScn, "dpc31 run" + full},
            {"replay " + kTraces + "gc_clear_spc3.trace", "dpc31 replay" + full},
@@ -284,6 +379,42 @@ TEST_F(BadInput, AnOutputThatNamesAnInputOrAnotherOutputIsRefused) {
   EXPECT_EQ(slurp(path("b.vcd")), b_text);
   EXPECT_FALSE(fs::exists(path("new.vcd")));
   EXPECT_FALSE(fs::exists(path("r.json")));
+}
+
+// docs/security.md "Outputs never destroy what is there": no output replaces what a scenario
+// reads, its `cpu` line's image and the SDCC map beside it included (`dpc31 run`, `cosim
+// --session`), nor a plug-in through a link in `demo --out-dir` (s29-sec, finding 2: each was
+// written over, exit 0). The image: LJMP 000Bh, its checksum F0h, and the end record.
+TEST_F(BadInput, AnOutputNeverReplacesWhatTheScenarioReads) {
+  const std::string image = ":0300000002000BF0\n:00000001FF\n";
+  file("fw.ihx", image);
+  file("fw.map", "the map\n");
+  file("s.scn", "profile spc3\ncpu 80c32 firmware fw.ihx\nstartup\n");
+  file("c.scn", "profile dpc31\ncpu c31 firmware fw.ihx code=0x1000\nstartup\n");
+  const std::string is_image = ": is the `cpu 80c32` image " + path("fw.ihx") + refused_words();
+  expect_bad(dpc31("run s.scn --quiet --json fw.ihx"), "dpc31 run: --json fw.ihx" + is_image,
+             "json");
+  expect_bad(dpc31("run s.scn --quiet --record ./fw.ihx"),
+             "dpc31 run: --record ./fw.ihx" + is_image, "record");
+  expect_bad(dpc31("run s.scn --quiet --vcd fw.map"),
+             "dpc31 run: --vcd fw.map: is the SDCC map " + path("fw.map") + refused_words(), "map");
+  expect_bad(dpc31("run c.scn --quiet --pcap fw.ihx"),
+             "dpc31 run: --pcap fw.ihx: is the `cpu c31` image " + path("fw.ihx") + refused_words(),
+             "c31");
+  expect_bad(dpc31("cosim --session s.scn --junit fw.ihx"),
+             "dpc31 cosim: --junit fw.ihx" + is_image, "cosim --session");
+  EXPECT_EQ(slurp(path("fw.ihx")), image);
+  EXPECT_EQ(slurp(path("fw.map")), "the map\n");
+  // demo: its capture in --out-dir is a link to the plug-in; refused before it is loaded.
+  const std::string plugin = copy(BAD_PLUGIN_MARK, "fw.so");
+  const std::string bytes = slurp(plugin);
+  fs::create_directory(path("out"));
+  fs::create_symlink("../fw.so", path("out/dpc31-demo.pcapng"));
+  expect_bad(dpc31("demo --firmware ./fw.so --out-dir out", "DPC31_PLUGIN_MARK=" + path("mark")),
+             "dpc31 demo: --out-dir out/dpc31-demo.pcapng: is --firmware ./fw.so" + refused_words(),
+             "demo");
+  EXPECT_EQ(slurp(plugin), bytes);
+  EXPECT_FALSE(fs::exists(path("mark"))) << "the plug-in was loaded";
 }
 
 // A long run (10^6 exchanges at 12 Mbaud, about 40 s of chip time): long enough to be signalled.

@@ -21,6 +21,9 @@ drop lines), and SIGTERM ends the bridge promptly while the flood goes on.
 
 tcp_bad_arguments: bad options, --pty beside --tcp, a port in use: one line, exit 2, nothing made.
 
+tcp_half_close: a client that half-closes after its FDL_Status (shutdown(SHUT_WR), `nc -N`) reads
+the answer, then the bridge closes the connection.
+
 Usage: bridge_line_test.py DPC31_CLI DISSECTOR CASE. Python 3 standard library and tshark.
 Every wait is on an event (a log line, an answer), none on a wall time, except the bound
 tcp_flood_and_sigterm checks.
@@ -315,6 +318,38 @@ def tcp_bad_arguments():
         busy.close()
 
 
+def tcp_half_close():
+    """docs/bridge.md, "Over TCP": a client that closes its sending side after its request
+    (shutdown(SHUT_WR), `nc -N`) still reads: the request goes on the bus, the answer comes back,
+    then the bridge closes the connection (s29-sec, finding 3: the request was dropped)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        b = TcpBridge(tmp, "--firmware", "DO4", "--baud", str(BAUD), "--pacing", "free",
+                      "--log-level", "telegrams")
+        try:
+            m = PacedMaster(b, BAUD, device=b.url)
+            m.expect("FDL_Status", m.find_slave(), bt.status_ok())  # the chip has the rate
+            m.close()
+            b.wait_for_log("closed the connection: queues flushed", GUARD)
+            for k in range(1, 4):
+                c = socket.create_connection(("127.0.0.1", b.port), timeout=GUARD)
+                c.sendall(bt.sd1(bt.SLAVE, bt.MASTER, 0x49))  # FDL_Status: 10 05 02 49 50 16
+                c.shutdown(socket.SHUT_WR)
+                got = b""
+                while chunk := c.recv(64):
+                    got += chunk
+                c.close()
+                check(got == bt.status_ok(), f"half-close {k}: the answer was {got.hex(' ')}")
+                b.wait_for_log("closed the connection: queues flushed", GUARD, 1 + k)
+            # The searching master's close is an end of input too: 1 + 3.
+            check(sum("closed its sending side: answering what it sent" in line
+                      for line in b.log_lines()) == 4, "the half-closes are not in the log")
+            check(not any("queued telegrams" in line for line in b.log_lines()),
+                  "a request was dropped")
+            b.stop()
+        finally:
+            b.kill()
+
+
 def doc_commands_tcp():
     """docs/bridge.md, "Over TCP": the bridge on a TCP port and tools/dp_master.py as written
     there (the port the kernel picks for 5000)."""
@@ -334,6 +369,7 @@ CASES = {
     "tcp_two_clients_and_garbage": tcp_two_clients_and_garbage,
     "pcap_tshark_fields": pcap_tshark_fields,
     "tcp_flood_and_sigterm": tcp_flood_and_sigterm,
+    "tcp_half_close": tcp_half_close,
 }
 
 

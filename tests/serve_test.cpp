@@ -477,10 +477,11 @@ TEST(Serve, AFrameNoTelegramCarriesIsRefusedByItsField) {
 TEST(Serve, OverlongLinesAreRefusedAndTheConnectionKept) {
   ServerProcess server(kCli, {"--tcp", "0"});
   LineClient c = LineClient::tcp(server.port());
-  // 4096 bytes is the limit (a CR on top is allowed); one more is too long.
-  EXPECT_EQ(c.command("ping" + std::string(4092, ' ')), "OK pong");
-  EXPECT_EQ(c.command("ping" + std::string(4092, ' ') + "\r"), "OK pong");
-  EXPECT_TRUE(starts_with(c.command("ping" + std::string(4093, ' ')), "ERR line_too_long "));
+  // 16384 bytes is the limit (a CR on top is allowed); one more is too long.
+  EXPECT_EQ(c.command("ping" + std::string(16380, ' ')), "OK pong");
+  EXPECT_EQ(c.command("ping" + std::string(16380, ' ') + "\r"), "OK pong");
+  EXPECT_TRUE(starts_with(c.command("ping" + std::string(16381, ' ')), "ERR line_too_long "));
+  EXPECT_EQ(c.command("ping"), "OK pong");
   // A 1 MB line in one go, followed by a command in the same stream: one error, then the reply.
   c.send(std::string(1 << 20, 'x') + "\nping\n");
   EXPECT_TRUE(starts_with(c.reply(), "ERR line_too_long "));
@@ -490,6 +491,30 @@ TEST(Serve, OverlongLinesAreRefusedAndTheConnectionKept) {
   c.send("\nping\n");
   EXPECT_TRUE(starts_with(c.reply(), "ERR line_too_long "));
   EXPECT_EQ(c.reply(), "OK pong");
+}
+
+// docs/protocol.md, Commands and Limits: `writeblock` / `pokeblock` take at most 4096 bytes, and
+// a whole block fits on one line, its hex packed or with a blank between the bytes (s29-sec,
+// finding 4: the 4096-byte line took 2039). 4097 bytes are `ERR range`. The DPC31's user area
+// 08A0h-1FFFh (docs/registers.md) holds 1000h-1FFFh.
+TEST(Serve, AWholeBlockFitsOnALine) {
+  ServerProcess server(kCli, {"--tcp", "0"});
+  LineClient c = LineClient::tcp(server.port());
+  std::string packed;
+  std::string spaced;
+  for (int i = 0; i < 4096; ++i) {
+    const std::string byte = fmt::format("{:02X}", (i * 7 + 3) & 0xFF);
+    packed += byte;
+    spaced += " " + byte;
+  }
+  EXPECT_EQ(c.command("writeblock 0x1000 " + packed), "OK");
+  EXPECT_EQ(c.command("readblock 0x1000 4096"), "OK " + packed);
+  EXPECT_EQ(c.command("writeblock 0x1000 " + std::string(2 * 4096, '0')), "OK");
+  EXPECT_EQ(c.command("pokeblock 0x1000" + spaced), "OK");
+  EXPECT_EQ(c.command("peekblock 0x1000 4096"), "OK " + packed);
+  EXPECT_TRUE(starts_with(c.command("writeblock 0x900 " + packed + "00"), "ERR range "));
+  EXPECT_TRUE(starts_with(c.command("pokeblock 0x900" + spaced + " 00"), "ERR range "));
+  EXPECT_EQ(c.command("peekblock 0x900 1"), "OK 00");  // nothing of the refused blocks written
 }
 
 TEST(Serve, BinaryJunkGetsErrorsOnly) {
@@ -677,16 +702,20 @@ TEST(Serve, IdleTimeout) {
   EXPECT_EQ(active.command("ping"), "OK pong");  // 1.5 s in, kept alive by its pings
 }
 
+// docs/protocol.md: exit 0 after SIGINT, SIGTERM or SIGHUP (its terminal closed), the socket
+// removed (SIGHUP: s29-sec, finding 9; it exited by the signal and left the socket).
 TEST(Serve, SigtermExitsZero) {
-  TempDir dir;
-  ServerProcess server(kCli, {"--unix", dir.file("s")});
-  LineClient c = LineClient::unix_socket(dir.file("s"));
-  EXPECT_EQ(c.command("ping"), "OK pong");
-  server.signal(SIGTERM);
-  EXPECT_TRUE(c.read_until_closed().empty());
-  EXPECT_EQ(c.async, (std::vector<std::string>{"! bye shutdown"}));
-  EXPECT_EQ(server.wait_exit(5000), 0);
-  EXPECT_FALSE(std::filesystem::exists(dir.file("s")));
+  for (const int sig : {SIGTERM, SIGINT, SIGHUP}) {
+    TempDir dir;
+    ServerProcess server(kCli, {"--unix", dir.file("s")});
+    LineClient c = LineClient::unix_socket(dir.file("s"));
+    EXPECT_EQ(c.command("ping"), "OK pong");
+    server.signal(sig);
+    EXPECT_TRUE(c.read_until_closed().empty());
+    EXPECT_EQ(c.async, (std::vector<std::string>{"! bye shutdown"})) << sig;
+    EXPECT_EQ(server.wait_exit(5000), 0) << sig;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("s"))) << sig;
+  }
 }
 
 // A socket file left by a server that died is replaced; one in use is not.

@@ -980,7 +980,7 @@ TEST_F(SnapshotFile, FailedSaveThrowsAndLeavesNoTemporaryFile) {
   } else {
     expect_throw("/proc/dpc31-snapshot-test.snap");
   }
-  // No name: refused before a temporary file ".PID.tmp" is made in the working directory.
+  // No name: refused before a temporary file ".dpc31-PID.tmp" is made in the working directory.
   const fs::path cwd = fs::current_path();
   fs::current_path(dir_);
   try {

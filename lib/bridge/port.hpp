@@ -56,6 +56,11 @@ class ClientPort {
   [[nodiscard]] virtual bool present() const = 0;  // a client is connected
   // Writes to the client; returns the bytes written (fewer when the client does not read).
   virtual std::size_t write(std::span<const std::uint8_t> bytes) = 0;
+  // The client closed its sending side but may still read (a TCP half-close: `nc -N`): what it
+  // sent is answered, then the bridge calls hang_up(), once nothing of it is queued, on the line
+  // or unanswered.
+  [[nodiscard]] virtual bool sent_all() const { return false; }
+  virtual void hang_up(const PortEvents& /*ev*/) {}
 };
 
 }  // namespace dpc31::bridge

@@ -122,7 +122,8 @@ std::string TcpPort::describe() const {
 // in the backlog believing it is connected.
 std::vector<pollfd> TcpPort::poll_fds() const {
   std::vector<pollfd> fds{{listen_, POLLIN, 0}};
-  if (client_ >= 0) fds.push_back({client_, POLLIN, 0});
+  // After a half-close only a reset is looked for: POLLIN would report the end of input forever.
+  if (client_ >= 0) fds.push_back({client_, static_cast<short>(sent_all_ ? 0 : POLLIN), 0});
   return fds;
 }
 
@@ -146,6 +147,8 @@ void TcpPort::accept_one(const PortEvents& ev) {
       return;  // EAGAIN: no more waiting; anything else is the next client's problem
     }
     const std::string peer = address_text(ss);
+    // A client that half-closed waits for its answers only while nobody else wants the port.
+    if (sent_all()) drop_client(ev, "closed the connection");
     if (client_ >= 0) {
       ::close(fd);
       ev.note(fmt::format("refused a second client from {}: one client at a time ({} is connected)",
@@ -162,23 +165,32 @@ void TcpPort::accept_one(const PortEvents& ev) {
 }
 
 void TcpPort::read_client(const PortEvents& ev) {
-  std::string why;
-  const auto read = [this, &why](std::uint8_t* buf, std::size_t size) -> long {
+  int error = 0;  // 0: the end of its input
+  const auto read = [this, &error](std::uint8_t* buf, std::size_t size) -> long {
     for (;;) {
       const ssize_t n = ::recv(client_, buf, size, MSG_DONTWAIT);
       if (n > 0) return n;
       if (n < 0 && errno == EINTR) continue;
       if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return 0;
-      why = n == 0 ? std::string("closed the connection") : errno_text("connection");
+      error = n < 0 ? errno : 0;
       return -1;
     }
   };
-  if (!read_bounded(read, ev)) drop_client(ev, why);
+  if (read_bounded(read, ev)) return;
+  if (error == 0 && !sent_all_) {
+    // The end of its input, which may be a half-close: the client may still read its answers.
+    sent_all_ = true;
+    ev.note(fmt::format("client {} closed its sending side: answering what it sent", peer_));
+    return;
+  }
+  errno = error;
+  drop_client(ev, error == 0 ? std::string("closed the connection") : errno_text("connection"));
 }
 
 void TcpPort::drop_client(const PortEvents& ev, const std::string& why) {
   ::close(client_);
   client_ = -1;
+  sent_all_ = false;
   // What it queued and the bus has not carried yet goes with it, as on the pty.
   ev.gone();
   ev.note(fmt::format("client {} {}: queues flushed", peer_, why));

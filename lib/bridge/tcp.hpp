@@ -35,6 +35,8 @@ class TcpPort final : public ClientPort {
   void service(std::span<const pollfd> fds, const PortEvents& ev) override;
   [[nodiscard]] bool present() const override { return client_ >= 0; }
   std::size_t write(std::span<const std::uint8_t> bytes) override;
+  [[nodiscard]] bool sent_all() const override { return client_ >= 0 && sent_all_; }
+  void hang_up(const PortEvents& ev) override { drop_client(ev, "closed the connection"); }
   [[nodiscard]] unsigned port() const { return port_; }  // the bound port
 
  private:
@@ -43,6 +45,7 @@ class TcpPort final : public ClientPort {
   void drop_client(const PortEvents& ev, const std::string& why);
   int listen_ = -1;
   int client_ = -1;
+  bool sent_all_ = false;  // the client half-closed: no more bytes come, its answers still go
   std::string host_;
   unsigned port_ = 0;
   std::string peer_;  // "127.0.0.1:51234"

@@ -19,6 +19,7 @@
 
 #include "child.hpp"
 #include "outfile.hpp"
+#include "plugin_symbol.hpp"
 #include "textfile.hpp"
 #include "trust.hpp"
 
@@ -93,7 +94,17 @@ std::shared_ptr<const RtlLibrary> RtlLibrary::load(const std::string& path, std:
     return nullptr;
   }
   using Entry = const dpc31_rtl_model* (*)();
-  const auto entry = reinterpret_cast<Entry>(::dlsym(h, "dpc31_rtl_model_get"));
+  void* const sym = ::dlsym(h, "dpc31_rtl_model_get");
+  if (const std::string why = sym != nullptr
+                                  ? symbol_problem(sym, "dpc31_rtl_model_get", SymbolKind::function,
+                                                   "dpc31_rtl_model.h")
+                                  : std::string();
+      !why.empty()) {
+    error = fmt::format("{}: {}", path, why);
+    ::dlclose(h);
+    return nullptr;
+  }
+  const auto entry = reinterpret_cast<Entry>(sym);
   const dpc31_rtl_model* m = entry != nullptr ? entry() : nullptr;
   if (m == nullptr || m->abi != DPC31_RTL_MODEL_ABI || m->outputs != DPC31_RTL_OUTPUTS) {
     error = m == nullptr ? fmt::format(

@@ -49,7 +49,9 @@ struct ServerOptions {
   std::FILE* log = nullptr;
   // Seconds a new connection has for its first line (and auth); the idle timeout if shorter.
   double hello_timeout = 10;
-  std::size_t max_line = 4096;           // bytes per line, without the newline
+  // Bytes per line, without the newline: a whole *block of kMaxBlock bytes fits, its hex with a
+  // blank between the bytes (3 x 4096 and the command).
+  std::size_t max_line = 16 * 1024;
   std::size_t max_output = 1u << 20;     // queued output bytes before a client is dropped
   std::size_t output_pause = 64u << 10;  // stop executing a client's lines above this much output
   std::size_t max_input = 64u << 10;     // unexecuted input bytes before reading pauses

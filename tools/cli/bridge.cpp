@@ -530,6 +530,12 @@ class Bridge {
         anchor_chip_ = engine_->cycle();
       }
       deliver();
+      if (port_.sent_all()) {
+        // A half-closed client (`nc -N`): no more bytes come, so an incomplete telegram goes out
+        // now; the connection closes once every request it sent is answered (or timed out).
+        if (engine_->partial()) engine_->flush_partial();
+        if (!engine_->busy()) port_.hang_up(events_);
+      }
       const Clock::time_point after = Clock::now();
       if (realtime_) {
         const std::uint64_t wall = anchor_chip_ + to_cycles(after - anchor_wall_, f);
@@ -772,7 +778,9 @@ int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
     if (std::string foreign = outfile::foreign_symlink(o.log); !foreign.empty()) {
       return refuse(foreign);
     }
-    owned.reset(std::fopen(o.log.c_str(), "w"));
+    owned.reset(outfile::open_live(o.log));
+    // A FIFO waits in open() for its reader: a stop signal then is a stop, not a failed log.
+    if (!owned && errno == EINTR && g_signal != 0) return 0;
     if (!owned) {
       return refuse(fmt::format("cannot write the log {}: {}", o.log, std::strerror(errno)));
     }

@@ -21,6 +21,7 @@
 #include "lockstep.hpp"
 #include "outfile.hpp"
 #include "rtl_library.hpp"
+#include "scenario.hpp"
 #include "session.hpp"
 #include "textfile.hpp"
 #include "whole_number.hpp"
@@ -765,6 +766,13 @@ int run_cosim(const CosimOptions& given) {
   std::vector<outfile::Named> inputs = {
       {"--replay", o.replay}, {"--session", o.session}, {"--rtl-model", o.rtl_model}};
   for (const std::string& v : o.rtl_sources) inputs.push_back({"--rtl", v});
+  // What the scenario reads (a plug-in, a `cpu` image): a scenario that does not load is said
+  // by the session's recording, with its line; a pipe is read once, by the recording.
+  if (Scenario sc; std::filesystem::is_regular_file(o.session)) {
+    if (ScenarioError ignored; load_scenario(o.session, sc, ignored)) {
+      for (outfile::Named& n : scenario_inputs(sc)) inputs.push_back(std::move(n));
+    }
+  }
   if (const std::string same = outfile::distinct(inputs, {{"--junit", o.junit}}); !same.empty()) {
     fmt::print(stderr, "dpc31 cosim: {}\n", same);
     return 2;

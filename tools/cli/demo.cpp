@@ -311,6 +311,20 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option,
     fmt::print(stderr, "dpc31 demo: {}\n", timescale_error(timescale));
     return 2;
   }
+  // A link in --out-dir may name the plug-in, as a bridge's or soak's output may: refused
+  // before the plug-in is loaded (a fresh private directory holds no such link).
+  if (const RunOptions ro = demo_outputs(out_dir_option, timescale); !out_dir_option.empty()) {
+    if (const std::string same = outfile::distinct(
+            {{"--firmware", firmware && is_plugin_path(*firmware) ? *firmware : std::string()}},
+            {{"--out-dir", ro.vcd},
+             {"--out-dir", ro.la_vcd},
+             {"--out-dir", ro.gtkw},
+             {"--out-dir", ro.pcap}});
+        !same.empty()) {
+      fmt::print(stderr, "dpc31 demo: {}\n", same);
+      return 2;
+    }
+  }
   // Checked first: bad input is one line, and nothing is made. "" is an unknown firmware, as in
   // soak, not the default.
   DpSession session = do4_session(opt);

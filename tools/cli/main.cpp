@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <limits>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -313,10 +314,22 @@ int main(int argc, char** argv) {
     return 2;
   };
 
+  // What went to the standard output is part of the result: a write that failed (a full disk,
+  // /dev/full) is exit 2, whatever the command found.
+  const auto stdout_failed = [&refuse] {
+    return refuse(fmt::format("cannot write the standard output: {}",
+                              std::strerror(g_stdout_errno != 0 ? g_stdout_errno : EIO)));
+  };
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --help-all
+    if (e.get_exit_code() == 0) {  // --help, --help-all, --version: through the checked stdout
+      std::ostringstream text;
+      app.exit(e, text, text);
+      std::fputs(text.str().c_str(), stdout);
+      return std::fflush(stdout) != 0 || std::ferror(stdout) != 0 ? stdout_failed() : 0;
+    }
     // A first word that names no subcommand: CLI11 says only that one is required.
     if (app.get_subcommands().empty() && argc > 1 && argv[1][0] != '-') {
       std::string known;
@@ -402,12 +415,6 @@ int main(int argc, char** argv) {
       return 0;
     }
     return 2;
-  };
-  // What went to the standard output is part of the result: a write that failed (a full disk,
-  // /dev/full) is exit 2, whatever the command found.
-  const auto stdout_failed = [&refuse] {
-    return refuse(fmt::format("cannot write the standard output: {}",
-                              std::strerror(g_stdout_errno != 0 ? g_stdout_errno : EIO)));
   };
   int rc = 2;
   try {

@@ -54,16 +54,10 @@ int run_with_outputs(const RunOptions& opt, std::string_view text, const LineSin
   const std::vector<outfile::Named> outputs = {
       {"--json", opt.json},     {"--record", opt.record}, {"--vcd", opt.vcd},  {"--fst", opt.fst},
       {"--la-vcd", opt.la_vcd}, {"--pcap", opt.pcap},     {"--gtkw", opt.gtkw}};
-  const std::string same = outfile::distinct({{"the scenario", opt.scenario}}, outputs);
-  if (!same.empty()) {
+  std::vector<outfile::Named> inputs = scenario_inputs(s);
+  inputs.insert(inputs.begin(), {"the scenario", opt.scenario});
+  if (const std::string same = outfile::distinct(inputs, outputs); !same.empty()) {
     fmt::print(err, "dpc31 run: {}\n", same);
-    return 2;
-  }
-  if (const std::string plugin_same =
-          plugin_pending(s) ? outfile::distinct({{"the firmware plug-in", s.firmware}}, outputs)
-                            : std::string();
-      !plugin_same.empty()) {
-    fmt::print(err, "dpc31 run: {}\n", plugin_same);
     return 2;
   }
   s.chip.engine = opt.engine;

@@ -133,6 +133,7 @@ int run_serve(const ServeArgs& a, std::FILE* out, std::FILE* err) {
     sigemptyset(&sa.sa_mask);
     sigaction(SIGINT, &sa, nullptr);
     sigaction(SIGTERM, &sa, nullptr);
+    sigaction(SIGHUP, &sa, nullptr);  // its terminal closed: a stop like the others
     const int rc = server.run();
     g_server.store(nullptr);
     return rc;

@@ -48,11 +48,14 @@ std::string create_temp(const std::string& path,
     error = kEmptyName;
     return {};
   }
-  // The pid keeps two processes apart; the counter two temporaries of one process (or a leftover
-  // of a killed run with a recycled pid).
+  // A short name in the target's directory, whatever the target's: a name of 255 bytes, the
+  // most a file system takes, stays possible. The pid keeps two processes apart; the counter two
+  // temporaries of one process (or a leftover of a killed run with a recycled pid).
+  const std::string dir = path.substr(0, path.rfind('/') + 1);
   for (int attempt = 0; attempt < 100; ++attempt) {
-    const std::string tmp = attempt == 0 ? fmt::format("{}.{}.tmp", path, ::getpid())
-                                         : fmt::format("{}.{}-{}.tmp", path, ::getpid(), attempt);
+    const std::string tmp = attempt == 0
+                                ? fmt::format("{}.dpc31-{}.tmp", dir, ::getpid())
+                                : fmt::format("{}.dpc31-{}-{}.tmp", dir, ::getpid(), attempt);
     const int e = create(tmp);
     if (e == 0) return tmp;
     if (e != EEXIST) {
@@ -71,8 +74,13 @@ bool replace(const std::string& tmp, const std::string& path, std::string& error
   return false;
 }
 
-std::string foreign_symlink(const std::string& path) {
-  // Walked as the kernel resolves it: component by component, a link's target spliced in.
+namespace {
+
+// Walks `path` as the kernel resolves it: component by component, a link's target spliced in.
+// `visit(dir, here, lst)` sees each symbolic link (`here`, in the resolved directory `dir`) before
+// it is followed; a non-empty answer ends the walk with it.
+template <typename Visit>
+std::string walk_links(const std::string& path, Visit visit) {
   std::string done = path.starts_with('/') ? "" : ".";
   std::string rest = path;
   for (int links = 0; !rest.empty();) {
@@ -88,14 +96,7 @@ std::string foreign_symlink(const std::string& path) {
       done = here;
       continue;
     }
-    struct stat dst {};
-    if (::stat(dir.c_str(), &dst) == 0 && (dst.st_mode & S_ISVTX) != 0 &&
-        (dst.st_mode & S_IWOTH) != 0 && lst.st_uid != ::geteuid() && lst.st_uid != dst.st_uid) {
-      return fmt::format(
-          "{}: cannot write: {} is a symbolic link of uid {} in the sticky directory {}, which "
-          "belongs to neither you nor that directory's owner (not followed: protected symlinks)",
-          path, here, lst.st_uid, dir);
-    }
+    if (std::string verdict = visit(dir, here, lst); !verdict.empty()) return verdict;
     if (++links > 40) return {};  // a loop: open() reports it
     std::array<char, 4096> buf{};
     const ssize_t n = ::readlink(here.c_str(), buf.data(), buf.size());
@@ -105,6 +106,78 @@ std::string foreign_symlink(const std::string& path) {
     rest = rest.empty() ? target : target + "/" + rest;
   }
   return {};
+}
+
+}  // namespace
+
+std::string foreign_symlink(const std::string& path) {
+  return walk_links(
+      path,
+      [&path](const std::string& dir, const std::string& here,
+              const struct stat& lst) -> std::string {
+        struct stat dst {};
+        if (::stat(dir.c_str(), &dst) == 0 && (dst.st_mode & S_ISVTX) != 0 &&
+            (dst.st_mode & S_IWOTH) != 0 && lst.st_uid != ::geteuid() && lst.st_uid != dst.st_uid) {
+          return fmt::format(
+              "{}: cannot write: {} is a symbolic link of uid {} in the sticky directory {}, which "
+              "belongs to neither you nor that directory's owner (not followed: protected "
+              "symlinks)",
+              path, here, lst.st_uid, dir);
+        }
+        return {};
+      });
+}
+
+Descriptor descriptor_link(const std::string& path) {
+  Descriptor d;
+  const std::string self = std::to_string(::getpid());
+  walk_links(
+      path,
+      [&](const std::string& dir, const std::string& here, const struct stat&) -> std::string {
+        // /proc/PID/fd or /proc/PID/task/TID/fd (/dev/fd and /proc/self resolve to these).
+        if (!dir.starts_with("/proc/") || !dir.ends_with("/fd")) return {};
+        const std::string pid = dir.substr(6, dir.find('/', 6) - 6);
+        const std::string n = here.substr(dir.size() + 1);
+        d.link = true;
+        if (pid == self && !n.empty() && n.size() < 10 &&
+            n.find_first_not_of("0123456789") == std::string::npos) {
+          d.own = std::stoi(n);
+        }
+        return "stop";
+      });
+  return d;
+}
+
+namespace {
+
+// A target written in place (OutFile::open): our own descriptor through a duplicate, so that the
+// shell's `>>` or `>` holds (its offset, O_APPEND); another process's regular file appended to,
+// never truncated. -1 with errno.
+int open_in_place(const std::string& path, const Descriptor& d, const struct stat& st) {
+  if (d.own >= 0) {
+    std::fflush(stdout);  // what the command printed so far comes first
+    std::fflush(stderr);
+    return ::fcntl(d.own, F_DUPFD_CLOEXEC, 0);
+  }
+  return ::open(path.c_str(), O_WRONLY | (S_ISREG(st.st_mode) ? O_APPEND : O_TRUNC) | O_CLOEXEC);
+}
+
+}  // namespace
+
+std::FILE* open_live(const std::string& path) {
+  struct stat st {};
+  const Descriptor d = descriptor_link(path);
+  const bool in_place = ::stat(path.c_str(), &st) == 0 && (!S_ISREG(st.st_mode) || d.link);
+  const int fd = in_place ? open_in_place(path, d, st)
+                          : ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  if (fd < 0) return nullptr;
+  std::FILE* f = ::fdopen(fd, "w");
+  if (f == nullptr) {
+    const int e = errno;
+    ::close(fd);
+    errno = e;
+  }
+  return f;
 }
 
 OutFile::~OutFile() { discard(); }
@@ -132,10 +205,12 @@ bool OutFile::open(const std::string& path) {
     // Found before any work is done, not at the rename after it.
     if (S_ISDIR(st.st_mode)) return fail(fmt::format("{}: cannot write: is a directory", path));
     if (is_running_program(st)) return fail(running_program_refused(path));
-    if (!S_ISREG(st.st_mode)) {
-      // A device or a FIFO (/dev/stdout, /dev/null): there is no file to replace, and renaming
-      // over it would put a plain file in its place. Written in place.
-      fd = ::open(path.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
+    const Descriptor d = descriptor_link(path);
+    if (!S_ISREG(st.st_mode) || d.link) {
+      // A device, a FIFO (/dev/null) or a descriptor (/dev/stdout, /dev/fd/N, /proc/self/fd/N,
+      // whatever its stream is): there is no file of ours to replace, and renaming over it would
+      // put a plain file in its place, or replace the file the shell opened. Written in place.
+      fd = open_in_place(path, d, st);
       if (fd < 0) return fail(fmt::format("{}: cannot write: {}", path, errno_text(errno)));
       direct_ = true;
       tmp_ = path;
@@ -144,6 +219,10 @@ bool OutFile::open(const std::string& path) {
                real) {
       target_ = real.get();  // a symlink stays a symlink: the file it names is replaced
     }
+  }
+  if (!direct_ && path.ends_with('/')) {
+    // No such directory (else it was refused above): a file's name does not end in '/'.
+    return fail(fmt::format("{}: cannot write: a file name cannot end in '/'", path));
   }
   if (!direct_) {
     std::string error;
@@ -156,6 +235,13 @@ bool OutFile::open(const std::string& path) {
         error);
     if (tmp_.empty()) return fail(error);
     tmp_entry_ = cleanup::Entry::path(tmp_);
+    // The replacement keeps the file's permission bits: a file made private stays private.
+    if (S_ISREG(st.st_mode) && ::fchmod(fd, st.st_mode & 07777) != 0) {
+      const int e = errno;
+      ::close(fd);
+      discard();
+      return fail(fmt::format("{}: cannot write: {}", path, errno_text(e)));
+    }
   }
   f_ = ::fdopen(fd, "wb");
   if (f_ == nullptr) {
@@ -263,6 +349,7 @@ bool OutFile::commit() {
     }
     if (in != nullptr) std::fclose(in);
   }
+  if (direct_) std::fflush(stdout);  // /dev/stdout: what the command printed before comes first
   // Errors of stdio surface at the flush; an fsync before the rename so that a crash leaves the
   // old file or the new one, never an empty one.
   if (std::fflush(f_) != 0 || std::ferror(f_) != 0) {
@@ -277,6 +364,7 @@ bool OutFile::commit() {
     discard();  // the scratch directory
     return error_.empty();
   }
+  if (direct_) std::fflush(stdout);  // /dev/stdout: what the command printed before comes first
   std::string error;
   if (error_.empty() && !replace(tmp_, target_, error)) fail(error);
   if (!error_.empty()) {
@@ -321,6 +409,7 @@ std::string distinct(const std::vector<Named>& inputs, const std::vector<Named>&
   struct Id {
     bool exists = false;
     bool special = false;  // a device or a FIFO
+    bool descriptor = false;
     dev_t dev = 0;
     ino_t ino = 0;
     std::string abs;
@@ -331,6 +420,9 @@ std::string distinct(const std::vector<Named>& inputs, const std::vector<Named>&
     if (::stat(p.c_str(), &st) == 0) {
       id.exists = true;
       id.special = !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode);
+      // /dev/stdout to a file: written in place, so outputs may share it as a device; it is
+      // still compared with the inputs.
+      id.descriptor = descriptor_link(p).link;
       id.dev = st.st_dev;
       id.ino = st.st_ino;
     }
@@ -356,7 +448,8 @@ std::string distinct(const std::vector<Named>& inputs, const std::vector<Named>&
       }
     }
     for (std::size_t j = 0; j < k; ++j) {
-      if (!outputs[j].path.empty() && same(out_ids[k], out_ids[j])) {
+      if (!outputs[j].path.empty() && !out_ids[k].descriptor && !out_ids[j].descriptor &&
+          same(out_ids[k], out_ids[j])) {
         return fmt::format("{} {} and {} {} are the same file: each output needs its own",
                            outputs[j].what, outputs[j].path, outputs[k].what, outputs[k].path);
       }
@@ -400,6 +493,8 @@ bool write_file_at(int dirfd, const std::string& name, std::string_view bytes,
     ::unlinkat(dirfd, tmp.c_str(), 0);
     return false;
   };
+  // The replacement keeps the file's permission bits, as OutFile's does.
+  if (exists && ::fchmod(fd, st.st_mode & 07777) != 0) return fail("cannot write", errno);
   for (std::size_t done = 0; done < bytes.size();) {
     const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
     if (n < 0 && errno == EINTR) continue;

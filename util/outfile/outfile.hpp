@@ -18,8 +18,9 @@ namespace dpc31::outfile {
 // Why an empty name is refused: OutFile's and every output option's words (path_option.hpp).
 inline constexpr std::string_view kEmptyName = "an empty file name: nothing can be written there";
 
-// A fresh temporary next to `path`, made by `create(name)`, which returns 0 or an errno value;
-// EEXIST tries the next name ("<path>.<pid>.tmp", "<path>.<pid>-1.tmp", ...). Returns its name,
+// A fresh temporary in `path`'s directory, made by `create(name)`, which returns 0 or an errno
+// value; EEXIST tries the next name ("DIR/.dpc31-<pid>.tmp", "DIR/.dpc31-<pid>-1.tmp", ...): short
+// whatever `path`'s name, so that a name of 255 bytes can be written. Returns its name,
 // or "" with a one-line `error`. For temporaries that are not plain files (bridge's symlink).
 std::string create_temp(const std::string& path,
                         const std::function<int(const std::string&)>& create, std::string& error);
@@ -33,6 +34,22 @@ bool replace(const std::string& tmp, const std::string& path, std::string& error
 // effective uid) nor to that directory's owner: another user may have put it there to make us
 // write where they chose. "" or one line naming the link and its owner.
 std::string foreign_symlink(const std::string& path);
+
+// Whether `path` reaches a file through a process's descriptor (/dev/stdout, /dev/fd/N,
+// /proc/self/fd/N, /proc/PID/fd/N: a link in a /proc/PID/fd directory on the way): `link`, and
+// `own` the descriptor's number when it is one of this process's, else -1. Such a target is
+// written in place, never replaced, whatever file the descriptor holds.
+struct Descriptor {
+  bool link = false;
+  int own = -1;
+};
+Descriptor descriptor_link(const std::string& path);
+
+// A file written as it goes (a live log that a user tails), not through a temporary: a target
+// that OutFile::open writes in place is written in place the same way (/dev/stdout redirected
+// with `>>` is appended to, not truncated); anything else is created or truncated. nullptr with
+// errno.
+std::FILE* open_live(const std::string& path);
 
 // A new directory only this user can enter (mkdtemp, mode 0700) in `parent`, or without it in the
 // temporary directory (TMPDIR, as std::filesystem::temp_directory_path finds it), named
@@ -48,13 +65,14 @@ class OutFile {
   OutFile(const OutFile&) = delete;
   OutFile& operator=(const OutFile&) = delete;
 
-  // Creates the temporary. False with error() if `path` is a directory, the running program
-  // (/proc/self/exe), a symbolic link to nothing, another user's link in a sticky directory
-  // (foreign_symlink), or the temporary cannot be created; nothing is touched then. A file still
-  // open is discarded first. A `path` that is a device or a FIFO (/dev/stdout, /dev/null) is
-  // written in place, never removed or replaced; a symlink to a file is followed: the link stays,
-  // the file it names is replaced. The temporary is removed if a signal ends the process
-  // (cleanup.hpp).
+  // Creates the temporary. False with error() if `path` is a directory, ends in '/', is the
+  // running program (/proc/self/exe), a symbolic link to nothing, another user's link in a sticky
+  // directory (foreign_symlink), or the temporary cannot be created; nothing is touched then. A
+  // file still open is discarded first. A `path` that is not a regular file (a device, a FIFO:
+  // /dev/null), or reaches one through a descriptor (descriptor_link: /dev/stdout redirected to a
+  // file), is written in place, never removed or replaced; a symlink to a file is followed: the
+  // link stays, the file it names is replaced. The temporary is removed if a signal ends the
+  // process (cleanup.hpp).
   bool open(const std::string& path);
   // Buffered stream on the temporary (fmt::print, fwrite); nullptr when not open.
   std::FILE* stream();
@@ -68,8 +86,9 @@ class OutFile {
   [[nodiscard]] const std::string& path() const { return path_; }
   [[nodiscard]] bool is_open() const { return !tmp_.empty(); }
 
-  // Flushes, syncs and renames the temporary over the target. False with error() if any write
-  // since open() failed or the rename fails; the temporary is then removed.
+  // Flushes, syncs and renames the temporary over the target, whose permission bits the new file
+  // has (open() set them; another hard link to the old file keeps the old bytes). False with
+  // error() if any write since open() failed or the rename fails; the temporary is then removed.
   bool commit();
   // commit() for what a library wrote to library_path() as FST: first checks that fstapi left a
   // whole file (fst_chain::incomplete; its writes are unchecked, so a full file system shows
@@ -86,7 +105,7 @@ class OutFile {
   std::string path_;    // as given, for messages
   std::string target_;  // what is replaced: the path, or the file a symlink names
   std::string tmp_;
-  bool direct_ = false;      // a device or FIFO, written in place
+  bool direct_ = false;      // a device, FIFO or descriptor, written in place
   std::string scratch_dir_;  // library_path() of a direct target: the private directory
   cleanup::Entry tmp_entry_;
   std::vector<cleanup::Entry> scratch_entries_;  // the scratch files, their .hier, the directory
@@ -108,8 +127,8 @@ struct Named {
 // Refuses, before any work, an output that is one of the inputs or another output (the same
 // file by st_dev and st_ino when it exists, else the same absolute path once the directory part
 // is resolved): "" or one line. The running program (/proc/self/exe) is always one of the inputs.
-// Devices and FIFOs may be named several times (--vcd /dev/null --fst /dev/null). Empty paths
-// (options not given) are skipped.
+// Devices and FIFOs may be named several times, and so may a descriptor (/dev/stdout to a file)
+// (--vcd /dev/null --fst /dev/null). Empty paths (options not given) are skipped.
 std::string distinct(const std::vector<Named>& inputs, const std::vector<Named>& outputs);
 
 // The whole file `name` (one component, no '/') in the directory open as `dirfd`, relative to it
