@@ -507,10 +507,13 @@ void ChipCore::write_reg(const RegDesc& r, std::uint32_t offset, std::uint8_t va
   const RegHooks& h = hooks[RegisterFile::idx(r.id)];
   written_bits = w;
   if (h.pre_write != nullptr) next = h.pre_write(h.block, old, next);
-  // The UNIMP bits the write leaves 1 or changes; a port's are its target's (VPC3+ Mode_Reg1_S /
-  // _R: En_Chk_SSAP).
-  const auto unimp =
-      static_cast<std::uint16_t>((next | (next ^ old)) & lane & regs.reg(r.target)->unimp);
+  // The UNIMP bits the write leaves 1 or changes; a set port's (VPC3+ Mode_Reg1_S: En_Chk_SSAP,
+  // its target's bit) only where it writes a 1, a reset port's where it clears a 1: their other
+  // writes (each EOI, each Res_User_WD, a driver's FFh reset) do not touch them.
+  const auto port = static_cast<std::uint16_t>(r.w1s | r.w1c);
+  const auto touched =
+      static_cast<std::uint16_t>((w & r.w1s) | (w & r.w1c & old) | ((next | (next ^ old)) & ~port));
+  const auto unimp = static_cast<std::uint16_t>(touched & lane & regs.reg(r.target)->unimp);
   if (unimp_news(r, unimp)) {
     signals.log(LogLevel::info, "{}: {} stored, behaviour not modelled", r.name,
                 field_names(r, unimp != 0 ? unimp : static_cast<std::uint16_t>(r.unimp & lane)));

@@ -152,6 +152,8 @@ class PySegment {
     if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
     return r;
   }
+  // A look at the running state: an observer of this thread may, another thread may not.
+  void look() const { enter_run(*run_, false, "segment", "history, counters, ...", "run it"); }
   void enter() const {
     if (run_->busy) {
       raise(errors().error, "the segment is running (another thread, or an observer)");
@@ -779,10 +781,22 @@ void bind_seg_master(py::module_& m) {
                 pm, cycles, [&] { return pm.s.seg.cycle(); }, [] { return false; });
           },
           py::arg("cycles"), "Time passes with a silent line from this master.")
-      .def_property_readonly("counters", [](const M& pm) { return pm.m->counters(); })
-      .def_property_readonly("history", [](const M& pm) { return pm.m->history(); })
+      .def_property_readonly("counters",
+                             [](const M& pm) {
+                               pm.s.look();  // not read while another thread runs it
+                               return pm.m->counters();
+                             })
+      .def_property_readonly("history",
+                             [](const M& pm) {
+                               pm.s.look();  // not read while another thread runs it
+                               return pm.m->history();
+                             })
       .def_property_readonly(
-          "locks", [](const M& pm) { return pm.m->locks(); },
+          "locks",
+          [](const M& pm) {
+            pm.s.look();
+            return pm.m->locks();
+          },
           "{slave address: master address}: the slaves a start-up found locked by another master "
           "(Slave_Diag's Master_Add), which it left alone")
       .def("clear_history", [](M& pm) { pm.m->clear_history(); });

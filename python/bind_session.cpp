@@ -786,10 +786,22 @@ void bind_master(py::module_& m) {
             return MasterSlave{pm.m->slave(), "Master.slave", "Master(slave=SlaveConfig(...))"};
           })
       .def_property_readonly("bit_cycles", [](const PyMaster& pm) { return pm.m->bit_cycles(); })
-      .def_property_readonly("counters", [](const PyMaster& pm) { return pm.m->counters(); })
-      .def_property_readonly("history", [](const PyMaster& pm) { return pm.m->history(); })
+      .def_property_readonly("counters",
+                             [](const PyMaster& pm) {
+                               pm.chip.enter(false);  // as the chip's state properties
+                               return pm.m->counters();
+                             })
+      .def_property_readonly("history",
+                             [](const PyMaster& pm) {
+                               pm.chip.enter(false);  // as the chip's state properties
+                               return pm.m->history();
+                             })
       .def_property_readonly(
-          "locks", [](const PyMaster& pm) { return pm.m->locks(); },
+          "locks",
+          [](const PyMaster& pm) {
+            pm.chip.enter(false);
+            return pm.m->locks();
+          },
           "{slave address: master address}: a start-up that returned False because its slave is "
           "locked by another master (Slave_Diag's Master_Add) names it here")
       .def("clear_history", [](PyMaster& pm) { pm.m->clear_history(); })

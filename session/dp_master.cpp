@@ -360,7 +360,7 @@ void DpMaster::run_until(std::uint64_t cycle) {
   // A falling edge may be a start bit: look at the line again (the wait is event-driven).
   if (seg_) {
     scheduler(cycle);
-    if (waited) waited();
+    end_wait();
     return;
   }
   if (wake_on_txd_) chip_->wake_on_txd(true);
@@ -375,7 +375,15 @@ void DpMaster::run_until(std::uint64_t cycle) {
   }
   if (wake_on_txd_) chip_->wake_on_txd(false);
   chip_->clear_stop();
-  if (waited) waited();
+  end_wait();
+}
+
+// A `waited` that throws ends the caller's wait there: no wake on TxD may outlive it (a later
+// idle() would stop at every TxD edge).
+void DpMaster::end_wait() {
+  if (!waited) return;
+  wake_on_txd_ = false;
+  waited();
 }
 
 void DpMaster::idle(std::uint64_t cycles) { run_until(Chip::cycle_after(now(), cycles)); }

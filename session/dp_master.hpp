@@ -348,6 +348,7 @@ class DpMaster {
   void data_exchange(std::span<const std::uint8_t> outputs, UartFault fault, Exchange& ex);
   void transact(UartFault fault, Exchange& ex);  // ex.request sent
   void run_until(std::uint64_t cycle);
+  void end_wait();  // after a wait: the Python door's `waited`
   // transact / transact_raw: `bytes` on the line, then the answer awaited unless `no_answer`,
   // into `ex`, whose request is the exchange's (and the history's) request.
   // `req`: the request as it decodes (nullptr: it does not), whose answer is mirrored.

@@ -21,11 +21,15 @@
 #include "dpc31/fdl_counters.hpp"
 #include "dpc31/uart.hpp"
 #include "dpv1_master.hpp"
-#include "outfile.hpp"
 #include "responder.hpp"
 #include "vocabulary.hpp"
 
 struct dpc31_firmware;  // dpc31/dpc31_firmware.h
+
+// util/outfile/outfile.hpp: not installed, so this installed header only names the type.
+namespace dpc31::outfile {
+struct Named;
+}
 
 namespace dpc31 {
 

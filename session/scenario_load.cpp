@@ -8,6 +8,7 @@
 
 #include "cpu51_module.hpp"
 #include "firmware_host.hpp"
+#include "outfile.hpp"
 #include "scenario.hpp"
 #include "textfile.hpp"
 #include "trust.hpp"

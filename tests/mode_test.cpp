@@ -110,6 +110,13 @@ TEST_P(Mode, UnmodelledModeBitsAreLoggedWhenWrittenAsOne) {
   EXPECT_EQ(c.read(0x15) & 0x80, 0x00);
   write(RegId::Mode_Reg1_S, 0x02);  // EOI: no UNIMP bit
   EXPECT_EQ(log_.count_containing("behaviour not modelled"), 0u);
+  // With En_Chk_SSAP set, a port's other writes (each EOI, each Res_User_WD) do not write it:
+  // only its set once, no line per EOI (the review of the twenty-ninth session).
+  write(RegId::Mode_Reg1_S, 0x80);
+  log_.clear();
+  for (int i = 0; i < 3; ++i) write(RegId::Mode_Reg1_S, 0x22);  // EOI, Res_User_WD
+  write(RegId::Mode_Reg1_R, 0x10);                              // En_Change_Cfg_Buffer reset
+  EXPECT_EQ(log_.count_containing("behaviour not modelled"), 0u);
 }
 
 // The DPC31 starts, stops and leaves the master through its Instruction_Queue (DPC31 p.22,

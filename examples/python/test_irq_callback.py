@@ -182,6 +182,30 @@ def test_an_observers_exception_ends_a_data_exchange_before_its_answer():
     assert chip.cycle == calls[0][0] and m.counters.answered == answered
 
 
+def test_an_observers_exception_in_the_answers_wait_leaves_idle_its_cycles():
+    # The exception at the ISR's EOI (the second edge), while the master waits for the answer:
+    # the wait it ended leaves no wake on TxD behind, so idle(n) takes its n cycles, the answer's
+    # edges on TxD notwithstanding (the review of the twenty-ninth session: 300, 352, 352).
+    chip = dpc31.Chip("spc3")
+    m = dpc31.Master(chip, slave=dpc31.SlaveConfig(address=5))
+    m.run_responder(inputs=b"\1\2\3\4")
+    assert m.startup()
+    calls = []
+
+    def fails_second(cycle, active):
+        calls.append((cycle, active))
+        if len(calls) == 2:
+            raise RuntimeError("observer fails")
+    chip.on_irq_change(fails_second)
+    with pytest.raises(RuntimeError, match="^observer fails$"):
+        m.data_exchange(b"\0\0\0\0")
+    chip.on_irq_change(None)
+    for _ in range(3):
+        start = chip.cycle
+        m.idle(3000)
+        assert chip.cycle == start + 3000
+
+
 def test_a_running_chips_state_properties_are_refused_to_another_thread():
     """docs/python.md, "The GIL": a call from another thread while the chip runs raises
     dpc31.Error; its state properties (cycle, dp_state, fdl_counters, ...) were read while the

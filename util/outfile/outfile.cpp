@@ -364,7 +364,6 @@ bool OutFile::commit() {
     discard();  // the scratch directory
     return error_.empty();
   }
-  if (direct_) std::fflush(stdout);  // /dev/stdout: what the command printed before comes first
   std::string error;
   if (error_.empty() && !replace(tmp_, target_, error)) fail(error);
   if (!error_.empty()) {
