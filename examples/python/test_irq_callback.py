@@ -230,3 +230,28 @@ def test_a_running_chips_state_properties_are_refused_to_another_thread():
     runner.join()
     assert refused == set(names)
     assert chip.cycle == 4 + 40 * P
+
+
+def test_a_running_masters_history_counters_and_locks_are_refused_to_another_thread():
+    """The master's running state, as the chip's (the review of the twenty-ninth session: all 48
+    reads of history, counters and locks went through while the chip's cycle was refused)."""
+    import threading
+
+    chip = dpc31.Chip("spc3")
+    m = dpc31.Master(chip, slave=dpc31.SlaveConfig(address=5))
+    m.run_responder(inputs=b"\1\2\3\4")
+    assert m.startup()
+    names = ("history", "counters", "locks")
+    runner = threading.Thread(target=lambda: [m.data_exchange(b"\0\0\0\0") for _ in range(3000)])
+    refused = set()
+    runner.start()
+    while runner.is_alive():
+        for name in names:
+            try:
+                getattr(m, name)
+            except dpc31.Error as e:
+                assert "running in another thread" in str(e)
+                refused.add(name)
+    runner.join()
+    assert refused == set(names)
+    assert len(m.history) >= 3000 and m.locks == {}
