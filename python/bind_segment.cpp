@@ -486,12 +486,14 @@ void bind_segment_class(py::module_& m) {
              const std::optional<std::string>& variant, const std::optional<std::string>& firmware,
              const std::optional<std::string>& name, std::pair<std::int64_t, std::int64_t> wd,
              const std::optional<SlaveConfig>& slave, const std::optional<bool>& user_wd,
-             const std::optional<std::uint16_t>& user_wd_value) {
-            // The checks of a segment scenario's `station ADDRESS wd=F1,F2`.
+             const std::optional<py::int_>& user_wd_value) {
+            // The checks of a segment scenario's `station ADDRESS wd=F1,F2 user_wd_value=N`.
+            std::optional<std::uint16_t> wd_value;
+            if (user_wd_value) wd_value = in_range<std::uint16_t>(kUserWdValue, *user_wd_value);
             PyStation& st = add_station(
                 self, in_range<U8>(kStationAddress, address), profile, variant, firmware, name,
                 {in_range<U8>(kWdFactor1, wd.first), in_range<U8>(kWdFactor2, wd.second)}, slave,
-                user_wd, user_wd_value);
+                user_wd, wd_value);
             py::object o = py::cast(&st, py::return_value_policy::reference);
             o.attr("_segment") = self;  // a station keeps its segment alive
             return o;

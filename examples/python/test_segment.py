@@ -193,6 +193,10 @@ def test_the_built_in_user_side_serves_its_user_watchdog_when_asked():
             seg.add_station(7, "spc3", firmware="DO4", user_wd=given)
     with pytest.raises(ValueError, match="user_wd_value needs user_wd=1 on profile dpc31"):
         seg.add_station(8, "dpc31", user_wd_value=5)
+    # its range, in the `station` line's words, as Master.run_responder's (was pybind's TypeError)
+    for value in (70000, -1):
+        with pytest.raises(ValueError, match=rf"^user_wd_value {value} out of range \(0..65535\)$"):
+            seg.add_station(9, "spc3", user_wd_value=value)
 
 
 def test_a_long_run_takes_its_user_sides_interrupts_so_they_stay_short():
