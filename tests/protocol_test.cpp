@@ -450,52 +450,6 @@ TEST_P(Protocol, DpWatchdogExpiresAtTheExactCycle) {
   EXPECT_EQ(b.user.outputs.back().data, (Bytes{0, 0, 0, 0}));
 }
 
-// A user that gives User_Prm_Data_Okay only after Baud_Control ran out (docs/decisions.md, "The
-// twenty-ninth session: s29-chip"; seed 002: "the watchdog is used for the 'DP_Control' state,
-// after a 'Set_Param telegram' was received with ... WD_On = 1"): the request that finds the rate
-// again enters DP_Control and restarts it, so a pulled cable makes Wait_Prm exactly TWD (10 x 10 x
-// 10 ms = 48 000 000 clocks) after that request is acted on (docs/timing.md, "DP watchdog"). First
-// the same Okay followed by the user's Leave_Master before the rate is found: no master is left
-// to monitor, so that rate found enters Baud_Control.
-TEST_P(Protocol, PrmOkayInBaudSearchArmsTheDpWatchdogWhenTheRateIsFound) {
-  ResponderConfig rc = config();
-  rc.wd_baud_control = 1;  // 10 ms (20 ms on the VPC3+)
-  Bench b(GetParam(), 12'000'000, rc);
-  const int mask = b.chip.addr_of(RegId::Int_Mask_Reg);
-  const std::uint16_t user_mask = testutil::bus_read16(b.chip, mask, 16);
-  // The master parameterises the slave while the user is busy (no interrupt served); Baud_Control
-  // runs out before the user accepts.
-  const auto okay_in_baud_search = [&] {
-    testutil::bus_write16(b.chip, mask, 16, 0xFFFF);
-    EXPECT_FALSE(b.master.startup(6));
-    EXPECT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
-    b.master.idle(20 * 48'000);
-    ASSERT_EQ(b.chip.wd_state(), WdState::Baud_Search);
-    testutil::bus_write16(b.chip, mask, 16, user_mask);  // Prm OK, Cfg OK now
-    b.master.idle(48'000);
-    ASSERT_EQ(b.chip.dp_state(), DpState::Data_Exchange);
-    ASSERT_EQ(b.chip.wd_state(), WdState::Baud_Search);
-  };
-  ASSERT_NO_FATAL_FAILURE(okay_in_baud_search());
-  testutil::user_leave_master(b.chip);
-  b.master.idle(48'000);
-  EXPECT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
-  EXPECT_TRUE(b.master.slave_diag().answer);  // finds the rate
-  EXPECT_EQ(b.chip.wd_state(), WdState::Baud_Control);
-
-  ASSERT_NO_FATAL_FAILURE(okay_in_baud_search());
-  const Exchange dx = b.master.data_exchange({1, 2, 3, 4});
-  ASSERT_TRUE(dx.answer);
-  EXPECT_EQ(b.chip.wd_state(), WdState::DP_Control);
-  const std::uint64_t expiry = b.acted(dx) + 48'000'000;
-  b.master.idle(expiry - 1 - b.chip.cycle());  // cable pulled
-  EXPECT_EQ(b.chip.dp_state(), DpState::Data_Exchange);
-  b.chip.step(1);
-  EXPECT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
-  EXPECT_EQ(b.chip.wd_state(), WdState::Baud_Control);
-  EXPECT_NE(b.chip.peek_reg(RegId::Int_Req_Reg) & irq::WD_DP_Control_Timeout, 0u);
-}
-
 // A write to WD_Baud_Control_Val in the cycle the watchdog starts Baud_Control (docs/timing.md,
 // "Order within one cycle": the protocol side and the watchdog's deadline, steps 2 and 3, come
 // before a bus access completing in that cycle, step 5; "Baud_Control": WD_Baud_Control_Val x 10
