@@ -206,52 +206,52 @@ def test_an_observers_exception_in_the_answers_wait_leaves_idle_its_cycles():
         assert chip.cycle == start + 3000
 
 
-def test_a_running_chips_state_properties_are_refused_to_another_thread():
-    """docs/python.md, "The GIL": a call from another thread while the chip runs raises
-    dpc31.Error; its state properties (cycle, dp_state, fdl_counters, ...) were read while the
-    running thread wrote them (audit s29 a-py finding 10). Its constants still read."""
+def _refused_while(run, obj, names, between=lambda: None):
+    """The `names` of `obj` that another thread was refused (dpc31.Error, "running in another
+    thread") while `run` ran in its own thread; `between` after each round of looks."""
     import threading
 
-    chip = dpc31.Chip("spc3", engine="per-cycle")
-    chip.write(chip.addr_of("Mode_Reg1_S"), 0x01)
-    names = ("cycle", "x_int", "irq_active", "pb3", "txd", "started", "dp_state", "wd_state",
-             "station_address", "bit_cycles", "fdl_counters", "next_deadline", "watchdog_due")
-    runner = threading.Thread(target=chip.step, args=(40 * P,))
+    runner = threading.Thread(target=run)
     refused = set()
     runner.start()
     while runner.is_alive():
         for name in names:
             try:
-                getattr(chip, name)
+                getattr(obj, name)
             except dpc31.Error as e:
                 assert "running in another thread" in str(e)
                 refused.add(name)
-        assert chip.profile == "spc3" and chip.clock_hz == 48_000_000
+        between()
     runner.join()
-    assert refused == set(names)
+    return refused
+
+
+def test_a_running_chips_state_properties_are_refused_to_another_thread():
+    """docs/python.md, "The GIL": a call from another thread while the chip runs raises
+    dpc31.Error; its state properties (cycle, dp_state, fdl_counters, ...) were read while the
+    running thread wrote them (audit s29 a-py finding 10). Its constants still read."""
+    chip = dpc31.Chip("spc3", engine="per-cycle")
+    chip.write(chip.addr_of("Mode_Reg1_S"), 0x01)
+    names = ("cycle", "x_int", "irq_active", "pb3", "txd", "started", "dp_state", "wd_state",
+             "station_address", "bit_cycles", "fdl_counters", "next_deadline", "watchdog_due")
+
+    def constants_read():
+        assert chip.profile == "spc3" and chip.clock_hz == 48_000_000
+    assert _refused_while(lambda: chip.step(40 * P), chip, names, constants_read) == set(names)
     assert chip.cycle == 4 + 40 * P
 
 
 def test_a_running_masters_history_counters_and_locks_are_refused_to_another_thread():
     """The master's running state, as the chip's (the review of the twenty-ninth session: all 48
     reads of history, counters and locks went through while the chip's cycle was refused)."""
-    import threading
-
     chip = dpc31.Chip("spc3")
     m = dpc31.Master(chip, slave=dpc31.SlaveConfig(address=5))
     m.run_responder(inputs=b"\1\2\3\4")
     assert m.startup()
     names = ("history", "counters", "locks")
-    runner = threading.Thread(target=lambda: [m.data_exchange(b"\0\0\0\0") for _ in range(3000)])
-    refused = set()
-    runner.start()
-    while runner.is_alive():
-        for name in names:
-            try:
-                getattr(m, name)
-            except dpc31.Error as e:
-                assert "running in another thread" in str(e)
-                refused.add(name)
-    runner.join()
-    assert refused == set(names)
+
+    def exchanges():
+        for _ in range(3000):
+            m.data_exchange(b"\0\0\0\0")
+    assert _refused_while(exchanges, m, names) == set(names)
     assert len(m.history) >= 3000 and m.locks == {}
