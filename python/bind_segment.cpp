@@ -96,8 +96,9 @@ void check_distinct(const std::vector<outfile::Named>& inputs,
 
 // The segment as Python holds it. The GIL is released while the line runs; a Python observer
 // (on_telegram, on_collision) takes it again, and its exception is raised when the running call
-// returns (the call still runs to its end; the observers are not called again in it). One thread
-// at a time: a call while another runs it raises dpc31.Error.
+// returns: a master's call ends after the wait it came in (DpMaster::waited), any other runs to
+// its end; the observers are not called again in it. One thread at a time: a call while another
+// runs it raises dpc31.Error.
 class PySegment {
  public:
   PySegment(std::uint32_t baud_, std::uint32_t clock_hz) : seg(baud_, clock_hz), baud(baud_) {
@@ -140,6 +141,9 @@ class PySegment {
             return f();
           }
         });
+      } catch (const ObserverStopped&) {
+        if (check) check->idle_until(seg.cycle());
+        std::rethrow_exception(std::exchange(error_, nullptr));
       } catch (py::error_already_set& interrupt) {
         // Ctrl-C between two slices: the check sees the line up to there, the next call starts
         // clean.
@@ -152,6 +156,8 @@ class PySegment {
     if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
     return r;
   }
+  // A master's wait ends here once an observer raised: read by the running thread only.
+  [[nodiscard]] bool observer_failed() const { return error_ != nullptr; }
   // A look at the running state: an observer of this thread may, another thread may not.
   void look() const { enter_run(*run_, false, "segment", "history, counters, ...", "run it"); }
   void enter() const {
@@ -231,6 +237,9 @@ struct PySegMaster {
     const std::size_t station = s.joined(
         s.seg.add_sender(new_station_name(s.seg, master_station_name(mc.address))), mc.address);
     m = std::make_unique<DpMaster>(s.seg, station, mc, std::move(slaves));
+    m->waited = [this] {
+      if (s.observer_failed()) throw ObserverStopped{};
+    };
     s.master_slot_bits =
         s.master_addresses.empty() ? mc.slot_bits : std::max(s.master_slot_bits, mc.slot_bits);
     s.master_addresses.push_back(mc.address);
@@ -778,7 +787,7 @@ void bind_seg_master(py::module_& m) {
       .def(
           "idle",
           [](M& pm, U64 cycles) {
-            // An observer's error does not end a segment's call: no slice stops for it.
+            // An observer's error ends the call at the end of its slice (DpMaster::waited).
             idle_in_slices(
                 pm, cycles, [&] { return pm.s.seg.cycle(); }, [] { return false; });
           },

@@ -391,6 +391,13 @@ def test_bad_input_is_a_clear_error_and_an_observers_exception_arrives():
     seg.on_telegram(boom)
     with pytest.raises(KeyError, match="observer"):
         master.fdl_status()
+    # docs/python.md, "A segment": a master's call ends after the wait the exception came in. The
+    # start-up's first request is the only one sent (it ran all its tries on before).
+    requests = master.counters.requests
+    with pytest.raises(KeyError, match="observer"):
+        master.startup_all()
+    assert master.counters.requests == requests + 1
+    seg.on_telegram(None)
     with pytest.raises(ValueError, match="before the line's time"):
         seg.send(sender, b"\x10", start=0)
 
