@@ -255,6 +255,7 @@ void write_file_atomic(const std::string& path, std::span<const std::uint8_t> by
 }
 
 std::vector<std::uint8_t> read_file(const std::string& path) {
+  if (path.empty()) throw SnapshotError(std::string(outfile::kEmptyReadName));  // no ": why"
   std::string text;
   std::string error;
   if (!read_text_file(path, kMaxFileSize, "snapshot", text, error)) {

@@ -179,7 +179,8 @@ struct Header {
 // Writes `bytes` to a temporary file next to `path` and renames it over `path`; on any error
 // the temporary file is removed and SnapshotError("PATH: reason") thrown.
 void write_file_atomic(const std::string& path, std::span<const std::uint8_t> bytes);
-// The whole file (at most kMaxFileSize bytes); SnapshotError("PATH: reason") when unreadable.
+// The whole file (at most kMaxFileSize bytes); SnapshotError("PATH: reason") when unreadable; for
+// "" the words of an empty option, no "PATH: ".
 [[nodiscard]] std::vector<std::uint8_t> read_file(const std::string& path);
 
 }  // namespace dpc31::snap

@@ -1006,6 +1006,13 @@ TEST_F(SnapshotFile, LoadErrorsNameThePath) {
     }
   };
   expect_error((dir_ / "none.snap").string(), "no such file");
+  // No name: the words of `--load-state ''` (util/outfile/path_option.hpp), no ": no such file".
+  try {
+    c.load_state_file("");
+    ADD_FAILURE() << "loaded an empty name";
+  } catch (const SnapshotError& e) {
+    EXPECT_STREQ(e.what(), "an empty file name: nothing can be read there");
+  }
   const std::string foreign = (dir_ / "foreign.snap").string();
   std::ofstream(foreign) << "# a scenario, not a snapshot\n";
   expect_error(foreign, "not a dpc31emu snapshot (bad magic)");

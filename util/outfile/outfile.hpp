@@ -17,6 +17,8 @@ namespace dpc31::outfile {
 
 // Why an empty name is refused: OutFile's and every output option's words (path_option.hpp).
 inline constexpr std::string_view kEmptyName = "an empty file name: nothing can be written there";
+// The same for an input (path_option.hpp, Chip::load_state_file).
+inline constexpr std::string_view kEmptyReadName = "an empty file name: nothing can be read there";
 
 // A fresh temporary in `path`'s directory, made by `create(name)`, which returns 0 or an errno
 // value; EEXIST tries the next name ("DIR/.dpc31-<pid>.tmp", "DIR/.dpc31-<pid>-1.tmp", ...): short

@@ -16,8 +16,7 @@ inline CLI::Validator named(Use use) {
   return CLI::Validator(
       [use](std::string& path) -> std::string {
         if (!path.empty()) return {};
-        return use == Use::write ? std::string(kEmptyName)
-                                 : "an empty file name: nothing can be read there";
+        return std::string(use == Use::write ? kEmptyName : kEmptyReadName);
       },
       "", "named");
 }
