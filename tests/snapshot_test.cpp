@@ -944,8 +944,15 @@ TEST_F(SnapshotFile, SaveWritesExactlyTheFileAndLoadRestoresIt) {
   const std::string path = (dir_ / "a.snap").string();
   a.save_state_file(path);
   EXPECT_EQ(listing(dir_), std::vector<std::string>{"a.snap"});
-  a.save_state_file(path);  // over an existing file
+  // Over an existing file made private: it stays so (docs/bad-input.md: a replaced file
+  // keeps its permission bits), as every door that saves a snapshot (serve's `save`, Python) has
+  // it.
+  ASSERT_EQ(::chmod(path.c_str(), 0600), 0);
+  a.save_state_file(path);
   EXPECT_EQ(listing(dir_), std::vector<std::string>{"a.snap"});
+  struct stat st {};
+  ASSERT_EQ(::stat(path.c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 07777, 0600u);
   Chip b({Profile::vpc3plus, BusMode::intel, 0});
   b.load_state_file(path);
   EXPECT_EQ(b.save_state(), a.save_state());
