@@ -469,6 +469,19 @@ void bind_board(py::module_& m) {
           "callback(addr, value, cycle) for every write to the board's RAM (an output latch), "
           "with the chip cycle its strobe ends.")
       .def(
+          "on_serial",
+          [](PyBoard& b, py::function f) {
+            const auto serial = b.chip.observer<std::uint8_t, U64>(
+                std::move(f), [](py::object& fn, std::uint8_t d, U64 c) { fn(d, c); });
+            Cpu51Board& board = *b.board;
+            board.cpu().on_serial_tx = [serial, &board](std::uint8_t d, bool, U64 machine_cycle) {
+              serial(d, board.chip_cycle_of(machine_cycle * mcs51::clocks_per_cycle));
+            };
+          },
+          py::arg("callback"),
+          "callback(data, cycle) for every character the CPU's serial port sends (SBUF), with "
+          "the chip cycle its TI is set (docs/cpu.md, \"Serial port\").")
+      .def(
           "chip_cycle_of",
           [](const PyBoard& b, U64 clock) { return b.board->chip_cycle_of(clock); },
           py::arg("cpu_clock"), "The chip cycle of a CPU oscillator clock counted from reset.")

@@ -14,6 +14,12 @@
 
 namespace dpc31 {
 
+std::string Cpu51Module::serial_text(bool c31, std::uint8_t data) {
+  return fmt::format(
+      "{} serial port: sent {:#04x}{}", c31 ? "C31" : "80C32", data,
+      data >= 0x20 && data < 0x7F ? fmt::format(" '{}'", static_cast<char>(data)) : std::string());
+}
+
 namespace {
 
 constexpr std::size_t kMaxHexBytes = 4u << 20;  // 64 KB of code is about 180 KB of HEX

@@ -97,6 +97,9 @@ class Cpu51Module {
   std::function<void(std::uint64_t cycle, unsigned port, std::uint32_t value)> on_port;
   // A character the serial port sent (SBUF, its TI set at `cycle`; docs/cpu.md, "Serial port").
   std::function<void(std::uint64_t cycle, std::uint8_t data)> on_serial;
+  // How the walk and the bridge's log say one: "80C32 serial port: sent 0x41 'A'" (the printable
+  // ASCII character quoted; "C31" for the DPC31's).
+  [[nodiscard]] static std::string serial_text(bool c31, std::uint8_t data);
   // Forgets port_writes() and interrupts (the port values stay), as FirmwareHost's.
   void clear_history() {
     writes_.clear();

@@ -713,10 +713,7 @@ class Runner {
     // What the firmware sends on its UART (a debug printf), bounded as the port writes.
     m51_->on_serial = [this](std::uint64_t cycle, std::uint8_t data) {
       const std::string line =
-          fmt::format("{} serial port: sent {:#04x}{} at {}", s_.cpu->c31 ? "C31" : "80C32", data,
-                      data >= 0x20 && data < 0x7F ? fmt::format(" '{}'", static_cast<char>(data))
-                                                  : std::string(),
-                      time_text(cycle));
+          fmt::format("{} at {}", Cpu51Module::serial_text(s_.cpu->c31, data), time_text(cycle));
       for (std::string& l : serial_lines_.add(cycle, line))
         limited_note(cycle, l == line, l, "serial port");
     };

@@ -132,6 +132,27 @@ def idle_timer_window():
            "--profile", "spc3", "--trace-cpu-from", "528", "--trace-cpu-to", "720", whole=True)
 
 
+def serial_port():
+    """docs/bridge.md, "The log": a character the 80C32's serial port sends is an `SBUF` line at
+    the default events level. MOV SBUF,#41h; SJMP $ (ServeCpu.SerialCharactersReachTheClient's
+    image): in mode 0 TI is set at the end of machine cycle 10, chip cycle 264 at 24 MHz
+    (ScenarioCpu51.TheSerialPortsCharactersReachTheWalk derives it from the manual)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        image = os.path.join(tmp, "sbuf.ihx")
+        with open(image, "w", encoding="ascii") as f:
+            f.write(":0500000075994180FE2E\n:00000001FF\n")
+        b = bt.Bridge(tmp, "--cpu", "80c32", "--firmware", image, "--profile", "spc3",
+                      "--pacing", "free")
+        try:
+            b.wait_for_log(" SBUF ", GUARD)
+            b.stop(signal.SIGTERM)
+            got = [line for line in b.log_lines() if " SBUF " in line]
+            want = [f"{264:>12} SBUF  slave5   80C32 serial port: sent 0x41 'A'"]
+            check(got == want, f"SBUF lines: {got}, expected {want}")
+        finally:
+            b.kill()
+
+
 def trace_write_fails():
     """A trace that cannot be written (a full device) stops the bridge naming the file, as every
     output does (docs/bad-input.md, "Output files"), exit 2; an empty window and a window without
@@ -199,6 +220,7 @@ CASES = {
     "c31_bad_arguments": c31_bad_arguments,
     "idle_timer_window": idle_timer_window,
     "trace_write_fails": trace_write_fails,
+    "serial_port": serial_port,
 }
 
 

@@ -164,3 +164,18 @@ def test_the_masters_retry_does_not_depend_on_the_slaves_cpu(tmp_path):
         master.run_board(board)
         first, second = master.fdl_status(), master.fdl_status()
         assert (first.request_start, second.request_start) == (1056, 7424), hz
+
+
+def test_the_serial_ports_characters_reach_on_serial(tmp_path):
+    """docs/cpu.md, "Serial port": MOV SBUF,#41h; SJMP $ in mode 0 sets TI at the end of machine
+    cycle 10, chip cycle 264 at 24 MHz (ScenarioCpu51.TheSerialPortsCharactersReachTheWalk derives
+    it from the manual); the callback gets (data, cycle) once, nothing more while SJMP spins."""
+    image = tmp_path / "sbuf.ihx"
+    image.write_text(":0500000075994180FE2E\n:00000001FF\n")
+    chip = dpc31.Chip("spc3")
+    board = dpc31.Cpu51Board(chip)
+    board.load_hex(str(image))
+    sent = []
+    board.on_serial(lambda data, cycle: sent.append((data, cycle)))
+    board.run_until(48_000)
+    assert sent == [(0x41, 264)]

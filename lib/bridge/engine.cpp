@@ -98,6 +98,11 @@ Engine::Engine(const Setup& setup, LogSink log)
     m51_->on_port = [this](std::uint64_t cycle, unsigned port, std::uint32_t value) {
       port_written(0, cycle, "80C32", m51_->port_name(port), port, value);
     };
+    // What the firmware sends on its UART (a debug printf): every character, at both levels (the
+    // log's bound holds it, docs/bridge.md "The log").
+    m51_->on_serial = [this](std::uint64_t cycle, std::uint8_t data) {
+      add_line(cycle, "SBUF", stations_[0].name, Cpu51Module::serial_text(setup_.cpu->c31, data));
+    };
   } else {
     add_slave(0, *solo_, SlaveSpec{setup_.address, setup_.chip, setup_.firmware});
   }
