@@ -325,6 +325,12 @@ std::string profile_text(const ChipOptions& chip) {
   return profile;
 }
 
+// A firmware as line 1 names it: a plug-in by its descriptor name and the path it came from
+// ("DO4 (./libdpc31_fw_do4.so)"), so that one that keeps a built-in's name is told from it.
+std::string firmware_text(const dpc31_firmware& fw, const std::string& given) {
+  return is_plugin_path(given) ? fmt::format("{} ({})", fw.name, given) : std::string(fw.name);
+}
+
 // With --slave: each station in the order given, "slave5 (profile dpc31, irq-controller
 // external, firmware DO4)".
 std::string header(const Checked& c, const BridgeOptions& o, const std::string& port,
@@ -333,10 +339,11 @@ std::string header(const Checked& c, const BridgeOptions& o, const std::string& 
     std::string stations;
     for (std::size_t i = 0; i < c.setup.slaves.size(); ++i) {
       const bridge::SlaveSpec& s = c.setup.slaves[i];
-      stations += fmt::format(
-          "{}{} (profile {}, firmware {})", i == 0 ? "" : ", ", e.stations()[i].name,
-          profile_text(s.chip),
-          s.firmware != nullptr ? std::string_view(s.firmware->name) : bridge::kResponderName);
+      stations += fmt::format("{}{} (profile {}, firmware {})", i == 0 ? "" : ", ",
+                              e.stations()[i].name, profile_text(s.chip),
+                              s.firmware != nullptr
+                                  ? firmware_text(*s.firmware, slave_fields(o.slaves[i])[1])
+                                  : std::string(bridge::kResponderName));
     }
     return fmt::format(
         "dpc31 bridge: pacing {}, baud {}, {} slave{}: {}, slot {} bit times, log level {}, {}",
@@ -352,7 +359,7 @@ std::string header(const Checked& c, const BridgeOptions& o, const std::string& 
       c.setup.cpu ? fmt::format("{} on {} at {} Hz{}", o.firmware,
                                 c.setup.cpu->c31 ? "the C31" : "an 80C32", c.setup.cpu->hz,
                                 symbols_text(c.setup.cpu_image))
-                  : std::string(c.setup.firmware->name),
+                  : firmware_text(*c.setup.firmware, o.firmware),
       c.setup.cpu ? fmt::format("address switch {} (port 1)", c.setup.address)
                   : fmt::format("address {}", chip_after_init.station_address()),
       c.setup.slot_bits, o.log_level, port);
