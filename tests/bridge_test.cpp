@@ -412,6 +412,29 @@ TEST_F(BridgeEngine, EventsLevelClosesEveryRunOfUnansweredRequests) {
                        "answered again, after 2 requests without an answer"}));
 }
 
+// A run never answered is counted when it ends otherwise: the client goes away, or the bridge
+// stops (audit s30 a-master, finding 8: "counted until an answer", and no answer came, so the
+// count was never written). docs/bridge.md, "The log".
+TEST_F(BridgeEngine, EventsLevelCountsARunThatEndsWithoutAnAnswer) {
+  make(dpc31::bridge::LogDetail::events);
+  find_slave();
+  const std::uint64_t from = engine_->cycle();
+  const Bytes absent = sd1(9, 2, 0x49);  // FDL_Status to a station nobody has
+  for (int i = 0; i < 3; ++i) EXPECT_TRUE(exchange(absent).empty());
+  engine_->client_gone();
+  for (int i = 0; i < 2; ++i) EXPECT_TRUE(exchange(absent).empty());
+  engine_->flush_log();
+  std::vector<std::string> notes;
+  for (const Line& l : tagged("NOTE")) {
+    if (l.cycle >= from) notes.push_back(l.text);
+  }
+  const std::string opened =
+      "no answer within the slot time (the next ones are counted until an answer)";
+  EXPECT_EQ(notes, (std::vector<std::string>{
+                       opened, "3 requests without an answer, then the client went away", opened,
+                       "2 requests without an answer, then the bridge stopped"}));
+}
+
 // Garbage on the pty at the line's own speed (issue 29: 41.5 MB of log in 10 s): every broken
 // telegram differs from the one before, so only the log's bound holds it (docs/bridge.md, "The
 // log"): at most LogLimiter::kBurst lines per 48 000 000 cycles at the events level, and one LOG

@@ -205,7 +205,17 @@ void Engine::release_log(std::uint64_t upto) {
   held_.erase(held_.begin(), held_.begin() + static_cast<std::ptrdiff_t>(n));
 }
 
+void Engine::end_unanswered_run(std::string_view how) {
+  if (unanswered_ == 0) return;
+  add_line(cycle(), "NOTE", kBridgeName,
+           fmt::format("{} request{} without an answer, then {}", unanswered_,
+                       unanswered_ == 1 ? "" : "s", how));
+  unanswered_ = 0;
+}
+
 void Engine::flush_log() {
+  // A run of unanswered requests the events level said it counts is closed by the end too.
+  end_unanswered_run("the bridge stopped");
   release_log(UINT64_MAX);
   for (const std::string& s : limiter_.flush()) log_(cycle(), "LOG", kBridgeName, s);
 }
@@ -256,6 +266,7 @@ void Engine::flush_partial() {
 }
 
 void Engine::client_gone() {
+  end_unanswered_run("the client went away");
   if (!partial_.empty()) {
     note(fmt::format("dropped an incomplete telegram: {}",
                      hex_bytes(std::span(partial_).first(

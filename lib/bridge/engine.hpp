@@ -136,7 +136,8 @@ class Engine {
   std::vector<std::uint8_t> take_output();
   // The client went away: its incomplete telegram and every queued telegram that has not reached
   // the bus yet are dropped (what is on the line finishes), so that the next client's requests
-  // are not stuck behind a flood of its bytes; one line says how much.
+  // are not stuck behind a flood of its bytes; one line says how much. A run of unanswered
+  // requests ends with it (its count is written).
   void client_gone();
   // Reports bytes dropped since the last report, whether or not a second has passed.
   void report_dropped();
@@ -150,7 +151,7 @@ class Engine {
   // An event line at the current cycle.
   void note(const std::string& text);
   // Every line held back goes to the sink now: the owner calls it at the end (nothing more will
-  // come), before the sink goes away.
+  // come), before the sink goes away. A run of unanswered requests ends here (its count written).
   void flush_log();
 
  private:
@@ -159,6 +160,9 @@ class Engine {
     bool wants_answer = false;
     bool garbage = false;  // bytes that cannot be a telegram (merged with the next such run)
   };
+  // Closes a run of unanswered requests that ends otherwise than by an answer: "N requests
+  // without an answer, then HOW" (no line when there is none).
+  void end_unanswered_run(std::string_view how);
   void queue_group(std::vector<std::uint8_t> bytes, bool garbage);
   void drop(std::size_t bytes);
   void start_next();
