@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "../lib/bridge/engine.hpp"
+#include "../lib/bridge/pacing.hpp"
 #include "../lib/bridge/pty.hpp"
 #include "baud_search.hpp"
 #include "bridge_engine_record.hpp"
@@ -557,6 +558,45 @@ TEST(BridgePty, SymlinkRules) {
   EXPECT_NE(dpc31::bridge::make_link(file, "/dev/pts/1").find("not a symlink"), std::string::npos);
   EXPECT_TRUE(std::filesystem::is_regular_file(file));
   std::filesystem::remove_all(dir);
+}
+
+// docs/bridge.md, "Pacing", free: "Between exchanges chip time advances with the wall clock, so
+// chip time runs ahead of wall time by the sum of the exchanges' durations". The loop's turns
+// with a client take a little longer than their 1 ms wait (the poll's own overhead); each kept
+// only 1 ms of chip time, and chip time ran at about 0.9 of the wall clock's (audit s30 a-master,
+// finding 7). Made-up times: 1000 turns 1.08 ms apart at 48 MHz, 51 840 cycles each, and one
+// exchange of 96 000 cycles (2 ms) in the middle that takes no wall time.
+TEST(BridgePacing, FreeChipTimeKeepsUpWithTheWallClockBetweenExchanges) {
+  using namespace std::chrono_literals;
+  dpc31::bridge::Pacing pacing(false, 48'000'000, 5ms);
+  const auto t0 = dpc31::bridge::Pacing::Clock::time_point{} + 1h;
+  pacing.anchor(t0, 0);
+  std::uint64_t chip = 0;
+  for (int turn = 1; turn <= 1000; ++turn) {
+    const auto now = t0 + turn * 1080us;
+    chip = std::max(chip, pacing.target(now, 1ms, chip));
+    if (turn == 500) {
+      chip += 96'000;  // settle(): the exchange, at no wall time
+      pacing.anchor(now, chip);
+    }
+  }
+  EXPECT_EQ(chip, 1000u * 51'840 + 96'000);
+}
+
+// A turn runs at most its bound (5 ms: 240 000 cycles): free drops what is left (no debt), realtime
+// catches it up over the next turns (docs/bridge.md, "Pacing").
+TEST(BridgePacing, ABoundedTurnFreeDropsTheRestRealtimeCatchesUp) {
+  using namespace std::chrono_literals;
+  const auto t0 = dpc31::bridge::Pacing::Clock::time_point{} + 1h;
+  dpc31::bridge::Pacing free(false, 48'000'000, 5ms);
+  free.anchor(t0, 0);
+  EXPECT_EQ(free.target(t0 + 20ms, 1ms, 0), 240'000u);        // 20 ms due: 5 ms run
+  EXPECT_EQ(free.target(t0 + 21ms, 1ms, 240'000), 288'000u);  // then 1 ms later: 1 ms more
+  dpc31::bridge::Pacing realtime(true, 48'000'000, 5ms);
+  realtime.anchor(t0, 0);
+  EXPECT_EQ(realtime.target(t0 + 20ms, 1ms, 0), 240'000u);        // 21 ms due (to the wake-up)
+  EXPECT_EQ(realtime.target(t0 + 21ms, 1ms, 240'000), 480'000u);  // 22 ms due: 5 ms more
+  EXPECT_EQ(realtime.wall_cycle(t0 + 21ms), 1'008'000u);
 }
 
 }  // namespace

@@ -1,7 +1,7 @@
 // The chip side of `dpc31 bridge` (docs/bridge.md): one chip with an example firmware on its host
 // CPU, fed with the bytes a DP master program writes and giving back the bytes the chip sends.
 // No operating system here: the pty, the wall clock and the pacing are the caller's
-// (tools/cli/bridge.cpp), so tests can drive it cycle-exactly.
+// (tools/cli/bridge.cpp, with pacing.hpp), so tests can drive it cycle-exactly.
 //
 // With several slaves (Setup::slaves, --slave) the line is a Segment (session/segment.hpp): the
 // client is the segment's sender "master", every station a chip with its user side.
