@@ -166,6 +166,8 @@ class Engine {
   void queue_group(std::vector<std::uint8_t> bytes, bool garbage);
   void drop(std::size_t bytes);
   void start_next();
+  // The first cycle a queued request may start: TSYN after the last telegram on the line.
+  std::uint64_t next_start();
   void collect();  // TxD characters up to now: output, answer, end of the exchange
   void finish_answer(AnswerCollector& a, std::string_view how);
   void step_to(std::uint64_t cycle);
@@ -181,7 +183,8 @@ class Engine {
   // How far ahead of the line's time a request may go on the line: TSYN on the one chip (its RxD
   // takes edges ahead), none on a segment (every station hears it at its cycle).
   [[nodiscard]] std::uint64_t lead() const { return seg_ ? 0 : std::uint64_t{kTsynBits} * t_; }
-  // Who drove the answer whose first start bit is `start`.
+  // Who drove the character whose start bit is at `start`: the chip whose answer covered it (of
+  // two, the first, which keeps the line).
   [[nodiscard]] std::string_view sender_of(std::uint64_t start) const;
   void add_line(std::uint64_t cycle, std::string_view tag, std::string_view who, std::string text);
   // A telegram line, at the telegrams level or when it is broken or `how` says what is wrong.
@@ -210,8 +213,14 @@ class Engine {
   std::vector<Slave> slaves_;      // parallel to stations_; outlives seg_'s CPUs that run them
   std::unique_ptr<Segment> seg_;   // or the segment (--slave)
   std::size_t master_ = 0;         // the client's station on seg_
-  // The answers the segment's chips began (their first start bit, the station), for sender_of.
-  std::deque<std::pair<std::uint64_t, std::size_t>> sent_;
+  // The answers the segment's chips armed (their first start bit, the end of their last stop bit,
+  // the station), for sender_of and for TSYN after whatever a chip drove.
+  struct Sent {
+    std::uint64_t start = 0;
+    std::uint64_t end = 0;
+    std::size_t station = 0;
+  };
+  std::deque<Sent> sent_;
   std::uint32_t t_;
   std::unique_ptr<Cpu> cpu_;  // the one chip's host CPU
   std::unique_ptr<Cpu51Module> m51_;
