@@ -321,18 +321,29 @@ def tcp_bad_arguments():
         busy.close()
 
 
+def tcp_bridge_with_the_rate(tmp):
+    """DO4 on --tcp 0 in free pacing at the telegrams level, its baud search over: a searching
+    master found it and closed its connection."""
+    b = TcpBridge(tmp, "--firmware", "DO4", "--baud", str(BAUD), "--pacing", "free",
+                  "--log-level", "telegrams")
+    try:
+        m = PacedMaster(b, BAUD, device=b.url)
+        m.expect("FDL_Status", m.find_slave(), bt.status_ok())
+        m.close()
+        b.wait_for_log("closed the connection: queues flushed", GUARD)
+    except BaseException:
+        b.kill()
+        raise
+    return b
+
+
 def tcp_half_close():
     """docs/bridge.md, "Over TCP": a client that closes its sending side after its request
     (shutdown(SHUT_WR), `nc -N`) still reads: the request goes on the bus, the answer comes back,
     then the bridge closes the connection (s29-sec, finding 3: the request was dropped)."""
     with tempfile.TemporaryDirectory() as tmp:
-        b = TcpBridge(tmp, "--firmware", "DO4", "--baud", str(BAUD), "--pacing", "free",
-                      "--log-level", "telegrams")
+        b = tcp_bridge_with_the_rate(tmp)
         try:
-            m = PacedMaster(b, BAUD, device=b.url)
-            m.expect("FDL_Status", m.find_slave(), bt.status_ok())  # the chip has the rate
-            m.close()
-            b.wait_for_log("closed the connection: queues flushed", GUARD)
             for k in range(1, 4):
                 c = socket.create_connection(("127.0.0.1", b.port), timeout=GUARD)
                 c.sendall(bt.sd1(bt.SLAVE, bt.MASTER, 0x49))  # FDL_Status: 10 05 02 49 50 16
@@ -360,13 +371,8 @@ def tcp_split_writes_nagle():
     s30 a-master, finding 3: the bridge's delayed ACK held the rest back for up to 40 ms, and the
     request went out as a truncated and a bad_sd telegram; 0-3 of 10 were answered)."""
     with tempfile.TemporaryDirectory() as tmp:
-        b = TcpBridge(tmp, "--firmware", "DO4", "--baud", str(BAUD), "--pacing", "free",
-                      "--log-level", "telegrams")
+        b = tcp_bridge_with_the_rate(tmp)
         try:
-            m = PacedMaster(b, BAUD, device=b.url)
-            m.expect("FDL_Status", m.find_slave(), bt.status_ok())  # the chip has the rate
-            m.close()
-            b.wait_for_log("closed the connection: queues flushed", GUARD)
             request = bt.sd1(bt.SLAVE, bt.MASTER, 0x49)  # 10 05 02 49 50 16
             c = socket.create_connection(("127.0.0.1", b.port), timeout=GUARD)
             try:

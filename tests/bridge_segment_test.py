@@ -192,8 +192,9 @@ def one_slave_log_line():
         try:
             b.stop()
             line = b.log_lines()[0]
-            check(f"2 slaves: slave5 (profile dpc31, irq-controller external, firmware CNT2 ({cnt2})), "
-                  "slave6 (profile dpc31, irq-controller external, firmware CNT2), slot " in line,
+            check("2 slaves: slave5 (profile dpc31, irq-controller external, firmware CNT2 "
+                  f"({cnt2})), slave6 (profile dpc31, irq-controller external, firmware CNT2), "
+                  "slot " in line,
                   f"log line 1: {line}")
         finally:
             b.kill()

@@ -67,6 +67,19 @@ class BridgeEngine : public ::testing::Test, protected testutil::EngineRecord {
     FAIL() << "FDL_Status never answered";
   }
 
+  // The NOTE lines from cycle `from` on, once every held line is out (the end of the run).
+  std::vector<std::string> notes_since(std::uint64_t from) {
+    engine_->flush_log();
+    std::vector<std::string> notes;
+    for (const Line& l : tagged("NOTE")) {
+      if (l.cycle >= from) notes.push_back(l.text);
+    }
+    return notes;
+  }
+  // The events level's line at the first of a run of unanswered requests.
+  static constexpr const char* kRunOpened =
+      "no answer within the slot time (the next ones are counted until an answer)";
+
   // A DP start-up of DO4 as a master writes it, each request as soon as the last answer is in
   // (docs/bridge.md: DO4's GSD defaults; watchdog 100 x 10 x 10 ms), then `exchanges`
   // Data_Exchanges of 05 01.
@@ -401,16 +414,10 @@ TEST_F(BridgeEngine, EventsLevelClosesEveryRunOfUnansweredRequests) {
   EXPECT_TRUE(exchange(absent).empty());
   EXPECT_TRUE(exchange(absent).empty());
   EXPECT_EQ(exchange(kFdlStatus), kStatusOk);
-  engine_->flush_log();
-  std::vector<std::string> notes;
-  for (const Line& l : tagged("NOTE")) {
-    if (l.cycle >= from) notes.push_back(l.text);
-  }
-  const std::string opened =
-      "no answer within the slot time (the next ones are counted until an answer)";
-  EXPECT_EQ(notes, (std::vector<std::string>{
-                       opened, "answered again, after 1 request without an answer", opened,
-                       "answered again, after 2 requests without an answer"}));
+  EXPECT_EQ(
+      notes_since(from),
+      (std::vector<std::string>{kRunOpened, "answered again, after 1 request without an answer",
+                                kRunOpened, "answered again, after 2 requests without an answer"}));
 }
 
 // A run never answered is counted when it ends otherwise: the client goes away, or the bridge
@@ -424,16 +431,10 @@ TEST_F(BridgeEngine, EventsLevelCountsARunThatEndsWithoutAnAnswer) {
   for (int i = 0; i < 3; ++i) EXPECT_TRUE(exchange(absent).empty());
   engine_->client_gone();
   for (int i = 0; i < 2; ++i) EXPECT_TRUE(exchange(absent).empty());
-  engine_->flush_log();
-  std::vector<std::string> notes;
-  for (const Line& l : tagged("NOTE")) {
-    if (l.cycle >= from) notes.push_back(l.text);
-  }
-  const std::string opened =
-      "no answer within the slot time (the next ones are counted until an answer)";
-  EXPECT_EQ(notes, (std::vector<std::string>{
-                       opened, "3 requests without an answer, then the client went away", opened,
-                       "2 requests without an answer, then the bridge stopped"}));
+  EXPECT_EQ(notes_since(from),
+            (std::vector<std::string>{
+                kRunOpened, "3 requests without an answer, then the client went away", kRunOpened,
+                "2 requests without an answer, then the bridge stopped"}));
 }
 
 // Garbage on the pty at the line's own speed (issue 29: 41.5 MB of log in 10 s): every broken
