@@ -30,16 +30,23 @@ static int dpv1_on(DPS_P(do4)) {
   return (dps_dpv1_status(DRV_ 1) & VPC3_Prm_Status_1_DPV1_Enable_Msk) != 0;
 }
 
-static void publish_diag(DPS_P(do4)) {
+/* renew: only if the block says something new (dps_renew_diag). */
+static void publish_diag(DPS_P_(do4) int renew) {
   const uint8_t osp = (uint8_t)(self->s.modul_ok ? 0x00 : 0x01);
-  if (!dpv1_on(ME)) {
-    const uint8_t diag[2] = {0x02, osp};
-    dps_set_diag(DRV_ diag, sizeof diag, 0);
+  uint8_t diag[5] = {0x02, osp};
+  uint8_t len = 2;
+  if (dpv1_on(ME)) {
+    diag[0] = 0x05;
+    diag[1] = self->alarm_spec ? (uint8_t)kDiagAlarm : (uint8_t)kStatusMessage;
+    diag[2] = 0x00;
+    diag[3] = self->alarm_spec ? self->alarm_spec : (uint8_t)(osp ? kAppears : kDisappears);
+    diag[4] = osp;
+    len = 5;
+  }
+  if (renew) {
+    dps_renew_diag(DRV_ diag, len, self->alarm_spec != 0);
   } else {
-    const uint8_t diag[5] = {
-        0x05, self->alarm_spec ? (uint8_t)kDiagAlarm : (uint8_t)kStatusMessage, 0x00,
-        self->alarm_spec ? self->alarm_spec : (uint8_t)(osp ? kAppears : kDisappears), osp};
-    dps_set_diag(DRV_ diag, sizeof diag, self->alarm_spec != 0);
+    dps_set_diag(DRV_ diag, len, self->alarm_spec != 0);
   }
 }
 
@@ -59,7 +66,7 @@ static void drive(DPS_P_(do4) uint8_t terminals, uint8_t modul_ok) {
       self->alarm_seq = (uint8_t)((self->alarm_seq + 1u) & 0x1Fu);
     }
     /* The mode is also a status for the master. */
-    publish_diag(ME);
+    publish_diag(ME_ 0);
   }
 }
 
@@ -132,7 +139,7 @@ static uint8_t dpv1_alarm_ack(DPS_P_(do4) const uint8_t* req, uint8_t* resp) {
   if (req[2] != kDiagAlarm || req[3] != self->alarm_spec)
     return dpv1_error(resp, kAlarmAck, kInvalidParameter);
   self->alarm_spec = 0;
-  publish_diag(ME);
+  publish_diag(ME_ 0);
   memcpy(resp, req, 4);
   return 4;
 }
@@ -148,6 +155,14 @@ static uint8_t dpv1_request(DPS_CB_P_ uint8_t sap, const uint8_t* req, uint8_t l
   if ((sap == DPS_SAP_C1 || sap == DPS_SAP_C2) && len >= 4u && (fn == kRead || fn == kWrite))
     return dpv1_record(ME_ req, len, resp);
   return dpv1_error(resp, fn, kFeatureNotSupported);
+}
+
+/* DPV1 (VPC3+): a Set_Prm taken. It dropped an outstanding alarm (check_prm) and may have switched
+ * DPV1 on or off: the diag block says so now, not at the next change of mode ("A new Set_Prm drops
+ * an outstanding alarm"; "Without DPV1 the block stays 02h, S", docs/firmware.md). */
+static void dpv1_prm(DPS_CB_P) {
+  DPS_MODULE_SELF(do4);
+  publish_diag(ME_ 1);
 }
 
 static int check_prm(DPS_CB_P_ const uint8_t* prm, uint8_t len) DPS_REENTRANT {
@@ -202,9 +217,9 @@ static void tick(DPS_CB_P) {
   }
 }
 
-static const dps_module kModule = {"DO4",     DO4_IDENT, kCfg,        sizeof kCfg, 1,
-                                   2,         7 + 1 + 3, check_prm,   outputs,     inputs,
-                                   comm_lost, tick,      dpv1_request};
+static const dps_module kModule = {"DO4",     DO4_IDENT, kCfg,         sizeof kCfg, 1,
+                                   2,         7 + 1 + 3, check_prm,    outputs,     inputs,
+                                   comm_lost, tick,      dpv1_request, dpv1_prm};
 
 void do4_init(DPS_P_(do4) const dps_board* board) {
   memset(&self->s, 0,
