@@ -30,23 +30,16 @@ static int dpv1_on(DPS_P(do4)) {
   return (dps_dpv1_status(DRV_ 1) & VPC3_Prm_Status_1_DPV1_Enable_Msk) != 0;
 }
 
-/* renew: only if the block says something new (dps_renew_diag). */
-static void publish_diag(DPS_P_(do4) int renew) {
+static void publish_diag(DPS_P(do4)) {
   const uint8_t osp = (uint8_t)(self->s.modul_ok ? 0x00 : 0x01);
-  uint8_t diag[5] = {0x02, osp};
-  uint8_t len = 2;
-  if (dpv1_on(ME)) {
-    diag[0] = 0x05;
-    diag[1] = self->alarm_spec ? (uint8_t)kDiagAlarm : (uint8_t)kStatusMessage;
-    diag[2] = 0x00;
-    diag[3] = self->alarm_spec ? self->alarm_spec : (uint8_t)(osp ? kAppears : kDisappears);
-    diag[4] = osp;
-    len = 5;
-  }
-  if (renew) {
-    dps_renew_diag(DRV_ diag, len, self->alarm_spec != 0);
+  if (!dpv1_on(ME)) {
+    const uint8_t diag[2] = {0x02, osp};
+    dps_set_diag(DRV_ diag, sizeof diag, 0);
   } else {
-    dps_set_diag(DRV_ diag, len, self->alarm_spec != 0);
+    const uint8_t diag[5] = {
+        0x05, self->alarm_spec ? (uint8_t)kDiagAlarm : (uint8_t)kStatusMessage, 0x00,
+        self->alarm_spec ? self->alarm_spec : (uint8_t)(osp ? kAppears : kDisappears), osp};
+    dps_set_diag(DRV_ diag, sizeof diag, self->alarm_spec != 0);
   }
 }
 
@@ -66,7 +59,7 @@ static void drive(DPS_P_(do4) uint8_t terminals, uint8_t modul_ok) {
       self->alarm_seq = (uint8_t)((self->alarm_seq + 1u) & 0x1Fu);
     }
     /* The mode is also a status for the master. */
-    publish_diag(ME_ 0);
+    publish_diag(ME);
   }
 }
 
@@ -139,7 +132,7 @@ static uint8_t dpv1_alarm_ack(DPS_P_(do4) const uint8_t* req, uint8_t* resp) {
   if (req[2] != kDiagAlarm || req[3] != self->alarm_spec)
     return dpv1_error(resp, kAlarmAck, kInvalidParameter);
   self->alarm_spec = 0;
-  publish_diag(ME_ 0);
+  publish_diag(ME);
   memcpy(resp, req, 4);
   return 4;
 }
@@ -157,12 +150,17 @@ static uint8_t dpv1_request(DPS_CB_P_ uint8_t sap, const uint8_t* req, uint8_t l
   return dpv1_error(resp, fn, kFeatureNotSupported);
 }
 
-/* DPV1 (VPC3+): a Set_Prm taken. It dropped an outstanding alarm (check_prm) and may have switched
- * DPV1 on or off: the diag block says so now, not at the next change of mode ("A new Set_Prm drops
- * an outstanding alarm"; "Without DPV1 the block stays 02h, S", docs/firmware.md). */
-static void dpv1_prm(DPS_CB_P) {
+/* DPV1 (VPC3+): after a Set_Prm. A block already shown that the Set_Prm made wrong is handed over
+ * again at once, not at the next change of mode: the DP block after one with DPV1_Enable (or the
+ * other way round), an alarm it dropped (check_prm; docs/firmware.md: "A new Set_Prm drops an
+ * outstanding alarm", "Without DPV1 the block stays 02h, S"). Else nothing: an unchanged block
+ * would only raise Diag_Flag, and a first one would change the start-up. */
+static void dpv1_prm(DPS_CB_P) DPS_REENTRANT {
   DPS_MODULE_SELF(do4);
-  publish_diag(ME_ 1);
+  const uint8_t head = dps_given_diag(DRV_ 0); /* 02h DP, 05h DPV1; 0: none shown yet */
+  if (head != 0 && (head != (dpv1_on(ME) ? 0x05u : 0x02u) ||
+                    (head == 0x05u && dps_given_diag(DRV_ 1) == kDiagAlarm && !self->alarm_spec)))
+    publish_diag(ME);
 }
 
 static int check_prm(DPS_CB_P_ const uint8_t* prm, uint8_t len) DPS_REENTRANT {

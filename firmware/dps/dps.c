@@ -374,12 +374,8 @@ static void publish_diag(DPS_P(dps)) {
   ++self->stats.diag_updates;
 }
 
-void dps_renew_diag(DPS_P_(dps) const uint8_t* bytes, uint8_t len, int ext_diag) {
-  if (self->diag_len == 0) return; /* the chip sends the six standard bytes, as at start-up */
-  if (len == self->diag_len && (ext_diag != 0) == (self->diag_ext != 0) &&
-      memcmp(bytes, self->diag, len) == 0)
-    return;
-  dps_set_diag(ME_ bytes, len, ext_diag);
+uint8_t dps_given_diag(DPS_P_(dps) uint8_t k) DPS_REENTRANT {
+  return k < self->diag_len ? self->diag[k] : 0u;
 }
 
 void dps_set_diag(DPS_P_(dps) const uint8_t* bytes, uint8_t len, int ext_diag) {
@@ -402,17 +398,6 @@ static void dpv1_restart(DPS_P_(dps) const uint8_t* status) {
   memcpy(self->dpv1_status, status, sizeof self->dpv1_status);
   self->dpv1_pending = (uint8_t)(self->dpv1_pending & ~((1u << kC1Saps) - 1u));
   for (k = 0; k < kC1Saps; ++k) Vpc3Write(self->dpv1_buf[k] + VPC3_DPV1_Buf_Control, 0x00);
-}
-
-/* A Set_Prm taken on the VPC3+, with DPV1_Enable (status: its DPV1_Status_1..3) or without (0):
- * the status in place, then the module told (its diag may say something else now). */
-static void dpv1_prm_taken(DPS_P_(dps) const uint8_t* status) {
-  if (status) {
-    dpv1_restart(ME_ status);
-  } else {
-    memset(self->dpv1_status, 0, sizeof self->dpv1_status);
-  }
-  if (self->mod->dpv1_prm != 0) self->mod->dpv1_prm(ME);
 }
 
 /* FDL_Ind: take each request whose buffer holds IND (the buffer stays the user's until the
@@ -440,10 +425,12 @@ static void dpv1_take_indications(DPS_P(dps)) {
   }
 }
 
-/* DPV1 events. MSAC_C1 lives in the master's Data_Exchange (docs/dpv1.md): entering it opens the
+/* DPV1 events. After a Set_Prm (handle_prm took or refused it) the module brings up to date what
+ * depends on it. MSAC_C1 lives in the master's Data_Exchange (docs/dpv1.md): entering it opens the
  * C1 SAPs, to the locking master once the diag buffer names it (c1_open_to_master), to any
  * station until then; DX_Out and FDL_Ind (before its request is taken) narrow them to it. */
 static void dpv1_isr(DPS_P_(dps) uint16_t ir) DPS_REENTRANT {
+  if ((ir & New_Prm_Data) && self->mod->dpv1_prm != 0) self->mod->dpv1_prm(ME);
   if ((ir & (Go_Leave_Data_Exchange | DX_Out | FDL_Ind)) && self->c1_waiting) {
     c1_open_to_master(ME);
     if ((ir & Go_Leave_Data_Exchange) && self->c1_waiting && in_data_exchange(ME))
@@ -630,8 +617,8 @@ static void handle_prm(DPS_P(dps)) {
     if (result != Prm_Conflict) {
       if (ok) {
         ++self->stats.prm_ok;
-        if (self->sap_list) {
-          dpv1_prm_taken(ME_ dpv1 ? prm + VPC3_Prm_Status_1 : 0);
+        if (dpv1) {
+          dpv1_restart(ME_ prm + VPC3_Prm_Status_1);
         } else {
           memset(self->dpv1_status, 0, sizeof self->dpv1_status);
         }
@@ -727,7 +714,8 @@ void dps_isr(DPS_P(dps)) {
   }
   if (ir & New_SSA_Data) handle_ssa(ME);
   if ((ir & Diag_Buffer_Changed) && self->diag_pending) publish_diag(ME);
-  if (self->sap_list && (ir & (Go_Leave_Data_Exchange | DX_Out | FDL_Ind))) dpv1_isr(ME_ ir);
+  if (self->sap_list && (ir & (New_Prm_Data | Go_Leave_Data_Exchange | DX_Out | FDL_Ind)))
+    dpv1_isr(ME_ ir);
   if (self->sap_list && (ir & Poll_End_Ind)) dpv1_response_sent(ME);
   /* The tick first: the one that answers an Initiate does not count for its connection. */
   if ((ir & User_Timer_Clock) && self->c2_busy) c2_tick(ME);

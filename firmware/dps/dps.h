@@ -114,10 +114,10 @@ typedef struct dps_module {
    * Called from the 1 ms task after the indication: the master's polls get SC until then. */
   uint8_t (*dpv1_request)(DPS_CB_P_ uint8_t sap, const uint8_t* req, uint8_t len,
                           uint8_t* resp) DPS_REENTRANT;
-  /* DPV1 on the VPC3+: a Set_Prm was taken (its verdict Okay), with or without DPV1_Enable, and
-   * dps_dpv1_status gives its status bytes: the module brings up to date what depends on them
-   * or on the parameters, e.g. its diag (dps_renew_diag). May be NULL. */
-  void (*dpv1_prm)(DPS_CB_P);
+  /* DPV1 on the VPC3+: after each Set_Prm (its verdict given; dps_dpv1_status gives the status
+   * bytes of the one taken last) the module brings up to date what depends on it, e.g. its diag.
+   * May be NULL. */
+  void (*dpv1_prm)(DPS_CB_P) DPS_REENTRANT;
 } dps_module;
 
 /* Bookkeeping for hosts and tests. */
@@ -178,9 +178,8 @@ void dps_update_inputs(DPS_P(dps));
 /* Publish user diag bytes (device-related block) after the 6 standard bytes; ext_diag sets
  * Ext_Diag in byte 0. Queued until a diag buffer is free (Diag_Buffer_Changed). */
 void dps_set_diag(DPS_P_(dps) const uint8_t* bytes, uint8_t len, int ext_diag);
-/* dps_set_diag once the module has handed over a diag, unless these bytes are the ones it gave
- * last: a block that says something new, without a Diag_Flag for one that does not. */
-void dps_renew_diag(DPS_P_(dps) const uint8_t* bytes, uint8_t len, int ext_diag);
+/* Byte k of the user diag bytes given last (dps_set_diag); 0 beyond them, and before any. */
+uint8_t dps_given_diag(DPS_P_(dps) uint8_t k) DPS_REENTRANT;
 /* User_Timer_Clock interrupts on (1) or off (0). */
 void dps_timer_enable(DPS_P_(dps) int on);
 /* DPV1_Status_1..3 (k = 1..3) of the Set_Prm taken last; all 0 when it had no DPV1_Enable. */
