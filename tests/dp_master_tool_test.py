@@ -193,6 +193,27 @@ def foreign_saps_are_not_ours():
         m.close()
 
 
+def answering_line(answer, requests=None):
+    """A line on the loopback that answers each request `req`, in order, with `answer(req)` (and
+    appends it to `requests`) until the master closes. Returns its server socket and thread."""
+    server = socket.create_server(("127.0.0.1", 0))
+
+    def serve():
+        conn, _ = server.accept()
+        buf = b""
+        while chunk := conn.recv(512):
+            buf += chunk
+            while (n := frame_length(buf)) is not None and len(buf) >= n:
+                req, buf = buf[:n], buf[n:]
+                if requests is not None:
+                    requests.append(req)
+                conn.sendall(answer(req))
+        conn.close()
+    thread = threading.Thread(target=serve, daemon=True)
+    thread.start()
+    return server, thread
+
+
 def msac_c1_refusals_named():
     """An SD1 answer to an MSAC_C1 request is named by its FC (EN 50170, include/dpc31/fdl.hpp:
     1 UE, 2 RR, 3 RS, 9 NR) with a reason that holds: RR is no resource (a Write longer than the
@@ -203,17 +224,8 @@ def msac_c1_refusals_named():
             "buffer, or its buffer is busy)", 0x03: "RS (the slave serves no SAP 51 now",
             0x09: "NR (no response data)"}
     for code, name in want.items():
-        server = socket.create_server(("127.0.0.1", 0))
-
-        def serve(server=server, code=code):
-            conn, _ = server.accept()
-            buf = b""
-            while chunk := conn.recv(512):
-                buf += chunk
-                while (n := frame_length(buf)) is not None and len(buf) >= n:
-                    req, buf = buf[:n], buf[n:]
-                    conn.sendall(sd1(MASTER, SLAVE, code if req[0] == SD2 else 0x00))
-        threading.Thread(target=serve, daemon=True).start()
+        server, _ = answering_line(
+            lambda req, code=code: sd1(MASTER, SLAVE, code if req[0] == SD2 else 0x00))
         m = Master(f"socket://127.0.0.1:{server.getsockname()[1]}", 19200, TIMEOUT, MASTER,
                    SLAVE, search=20.0)
         try:
@@ -443,21 +455,9 @@ def a_locked_slave_is_left_alone():
     # Station_Status_1 00h, _2 0Ch (bit 2 always 1, WD_On), _3 00h, Master_Add 3, Ident 0D04h.
     diag = sd2(MASTER, SLAVE, 0x08, [0x00, 0x0C, 0x00, 0x03, 0x0D, 0x04], dsap=SAP_MASTER,
                ssap=SAP_SLAVE_DIAG)
-    server = socket.create_server(("127.0.0.1", 0))
     requests = []
-
-    def serve():
-        conn, _ = server.accept()
-        buf = b""
-        while chunk := conn.recv(512):
-            buf += chunk
-            while (n := frame_length(buf)) is not None and len(buf) >= n:
-                req, buf = buf[:n], buf[n:]
-                requests.append(req)
-                conn.sendall(sd1(MASTER, SLAVE, 0x00) if req[0] == SD1 else diag)
-        conn.close()
-    line = threading.Thread(target=serve, daemon=True)
-    line.start()
+    server, line = answering_line(
+        lambda req: sd1(MASTER, SLAVE, 0x00) if req[0] == SD1 else diag, requests)
     exits(1, "dp_master: locked by master 3 (its Slave_Diag's Master_Add): not parameterised",
           f"socket://127.0.0.1:{server.getsockname()[1]}", *DO4)
     server.close()
