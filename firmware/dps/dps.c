@@ -102,7 +102,8 @@ static dps dps_the;
  * indication and response buffer at once, as the Profichip driver has it for its MSAC_C1 SAPs.
  * The ISR takes a request on FDL_Ind; the 1 ms task answers it (the master's polls get SC
  * meanwhile); Poll_End_Ind frees the buffer. MSAC_C1 is the locking master's: SAPs 51 and 50
- * take only its address (Request_SA), from Data_Exchange on. */
+ * open when the chip enters Data_Exchange and take only its address (Request_SA) once the diag
+ * buffer names it, any station until then (dpv1_isr). */
 /* The connection before the resource manager: an Abort and a new Initiate taken in the same tick
  * close first, then open. */
 enum { kDpv1Saps = DPS_DPV1_SAPS, kC1Saps = 2u, kConn = 2u, kRm = 3u };
