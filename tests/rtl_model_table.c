@@ -18,8 +18,6 @@
 
 #define EXPORT __attribute__((visibility("default")))
 
-static int instance;
-
 static void* create(int motorola, unsigned asic_type, unsigned mutant_sel) {
   (void)motorola;
   (void)asic_type;
@@ -27,14 +25,17 @@ static void* create(int motorola, unsigned asic_type, unsigned mutant_sel) {
 #if defined(CREATE_NULL)
   return 0;
 #else
+  static int instance;
   return &instance;
 #endif
 }
 static void destroy(void* m) { (void)m; }
+#if !defined(NULL_STEP)
 static void step(void* m, const struct dpc31_rtl_inputs* in) {
   (void)m;
   (void)in;
 }
+#endif
 static void read_outputs(const void* m, uint32_t out[DPC31_RTL_OUTPUTS]) {
   (void)m;
   for (int i = 0; i < DPC31_RTL_OUTPUTS; ++i) out[i] = 0;
@@ -69,7 +70,9 @@ static const struct dpc31_rtl_model model = {
 #endif
     .create = create,
     .destroy = destroy,
-#if !defined(NULL_STEP)
+#if defined(NULL_STEP)
+    .step = 0,
+#else
     .step = step,
 #endif
     .read_outputs = read_outputs,
@@ -78,6 +81,7 @@ static const struct dpc31_rtl_model model = {
 EXPORT const struct dpc31_rtl_model* dpc31_rtl_model_get(void);
 const struct dpc31_rtl_model* dpc31_rtl_model_get(void) {
 #if defined(GET_NULL)
+  (void)model;
   return 0;
 #else
   return &model;

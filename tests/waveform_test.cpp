@@ -390,7 +390,7 @@ TEST(Waveform, TheC31sInterruptIsItsInt0Pin) {
   EXPECT_FALSE(only.attach(external, error));
   EXPECT_EQ(error, "no signal of the dpc31 matches 'pins.c31_int0' (see docs/waveforms.md)");
 
-  o.signals = {"pins.x_int", "pins.c31_int0"};
+  o.signals = {"pins.c31_int0"};
   Chip chip(ChipOptions{Profile::dpc31, BusMode::intel, 0, Engine::event, std::nullopt,
                         IrqController::c31});
   chip.set_log_sink(nullptr);
@@ -401,8 +401,8 @@ TEST(Waveform, TheC31sInterruptIsItsInt0Pin) {
   wave::Recorder rec(o);
   ASSERT_TRUE(rec.attach(chip, error)) << error;
   // The expected body: each change of the C31's interrupt, INT0 low while it is active.
-  std::string want;
-  bool active = chip.irq_active();
+  bool active = chip.irq_active();  // the user's init has run: its events may be pending
+  std::string want = fmt::format("\n{}\n", active ? 0 : 1);  // $dumpvars, before any time line
   chip.on_irq_change([&](std::uint64_t c, bool) {
     if (chip.irq_active() == active) return;
     active = chip.irq_active();
@@ -412,7 +412,7 @@ TEST(Waveform, TheC31sInterruptIsItsInt0Pin) {
   master.set_firmware([&](BusPort& b) { user.isr(b); });
   ASSERT_TRUE(master.startup());
   ASSERT_TRUE(rec.finish(chip.cycle(), error)) << error;
-  ASSERT_FALSE(want.empty());
+  ASSERT_GT(std::count(want.begin(), want.end(), '#'), 0);  // the start-up has interrupts
   const std::string v = slurp(o.path);
   // Each signal's VCD identifier, from its $var line.
   const auto id = [&v](const std::string& name) {
@@ -420,17 +420,15 @@ TEST(Waveform, TheC31sInterruptIsItsInt0Pin) {
     const std::size_t from = v.rfind(' ', at - 1) + 1;
     return at == std::string::npos ? std::string("?") : v.substr(from, at - from);
   };
-  const std::string x_int = id("x_int");
   const std::string int0 = id("c31_int0");
   std::string changes;
   std::istringstream is(v.substr(v.find("$dumpvars\n")));
-  std::string at;  // $dumpvars (#0) has no time line of its own here
+  std::string at;
   for (std::string line; std::getline(is, line);) {
     if (line.starts_with('#')) at = line;
     if (line == "0" + int0 || line == "1" + int0) changes += at + "\n" + line.substr(0, 1) + "\n";
-    EXPECT_NE(line, "0" + x_int) << "X/INT active at " << at;
   }
-  EXPECT_EQ(changes, "\n1\n" + want);  // the first: $dumpvars at #0, before any time line
+  EXPECT_EQ(changes, want);
 }
 
 // A unit longer than a clock cycle (20.8 ns at 48 MHz) would give neighbouring cycles one time.

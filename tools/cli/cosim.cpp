@@ -424,10 +424,11 @@ void write_divergence(const CosimOptions& o, const cosim::Stimulus& s, const cos
     } else {
       output_failed(error);
     }
-    const RtlFst fst = write_rtl_fst(around, dut, o.mutant, in_vcd("rtl_internal.fst"), error);
-    if (fst == RtlFst::written) {
+    const cosim::RtlFst fst =
+        write_rtl_fst(around, dut, o.mutant, in_vcd("rtl_internal.fst"), error);
+    if (fst == cosim::RtlFst::written) {
       entry["fst"] = in_vcd("rtl_internal.fst");
-    } else if (fst == RtlFst::failed) {
+    } else if (fst == cosim::RtlFst::failed) {
       output_failed(error);
     } else if (!o.quiet) {
       fmt::print(stderr, "  {}\n", error);
@@ -440,11 +441,11 @@ void write_dump(const CosimOptions& o, const cosim::Stimulus& s, const cosim::Du
                 const std::function<void(const std::string&)>& output_failed) {
   std::string error;
   if (!write_window(s, dut, o.mutant, 0, s.size(), o.dump_dir, error)) output_failed(error);
-  const RtlFst fst = write_rtl_fst(
+  const cosim::RtlFst fst = write_rtl_fst(
       s, dut, o.mutant, (std::filesystem::path(o.dump_dir) / "rtl_internal.fst").string(), error);
-  if (fst == RtlFst::failed) {
+  if (fst == cosim::RtlFst::failed) {
     output_failed(error);
-  } else if (fst == RtlFst::not_traced && !o.quiet) {
+  } else if (fst == cosim::RtlFst::not_traced && !o.quiet) {
     fmt::print(stderr, "{}\n", error);
   }
 }
