@@ -104,16 +104,16 @@ def late_pair(tmp_path):
 def test_window_tolerance_and_edge_as_the_cli_takes_them(tmp_path):
     # docs/wavediff.md: --tolerance-cycles, --tolerance, --start, --end (inclusive), --edge
     a, b = late_pair(tmp_path)
-    late = dpc31.wavediff(a, b, clock="clk")
+    late = dpc31.wavediff(a, b, clock="top.clk")
     assert not late.same
     assert (late.diffs[0].first.at.cycle, late.diffs[0].first.a, late.diffs[0].first.b) == (1, "1",
                                                                                              "0")
-    assert dpc31.wavediff(a, b, clock="clk", tolerance_cycles=1).same  # one cycle long
-    assert dpc31.wavediff(a, b, clock="clk", start="c2").same  # edges 2 and 3 agree
-    assert dpc31.wavediff(a, b, clock="clk", end="c0").same
-    assert not dpc31.wavediff(a, b, clock="clk", end="c1").same
+    assert dpc31.wavediff(a, b, clock="top.clk", tolerance_cycles=1).same  # one cycle long
+    assert dpc31.wavediff(a, b, clock="top.clk", start="c2").same  # edges 2 and 3 agree
+    assert dpc31.wavediff(a, b, clock="top.clk", end="c0").same
+    assert not dpc31.wavediff(a, b, clock="top.clk", end="c1").same
     # the falling edges are at 10, 20, 30, 40 ns: at 20 ns A is 1 and B 0
-    falling = dpc31.wavediff(a, b, clock="clk", edge="falling")
+    falling = dpc31.wavediff(a, b, clock="top.clk", edge="falling")
     assert (falling.diffs[0].first.at.cycle, falling.diffs[0].first.at.time) == (1, 20)
     # event mode: 10 ns of difference
     assert dpc31.wavediff(a, b, tolerance="10ns").same
