@@ -155,7 +155,7 @@ function(dpc31emu_verilate_model)
   set_source_files_properties(${entry} PROPERTIES OBJECT_DEPENDS ${vdir}/ports.checked)
   target_include_directories(${arg_TARGET} PRIVATE ${DPC31EMU_RTL_ADAPTER_DIR})
   target_compile_definitions(${arg_TARGET} PRIVATE DPC31_RTL_CLASS=${prefix}
-    DPC31_RTL_HEADER="${prefix}.h" DPC31_RTL_TOP="${arg_TOP}")
+    DPC31_RTL_HEADER="${prefix}.h" DPC31_RTL_TOP="${arg_TOP}" DPC31_RTL_PROFILE="${arg_PROFILE}")
   target_compile_features(${arg_TARGET} PRIVATE cxx_std_20)
   # Verilator's generated code is not the user's: no warnings, no debug information (as
   # rtl/CMakeLists.txt). Only the entry point is visible: the harness may hold several models,

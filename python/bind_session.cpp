@@ -1100,7 +1100,9 @@ void bind_wavediff(py::module_& m) {
          const std::optional<std::string>& clock_b, const std::string& strip_a,
          const std::string& strip_b, bool strip_auto, const std::string& map_file,
          std::vector<std::string> include, std::vector<std::string> exclude, bool ignore_missing,
-         const std::string& xz, const std::string& diff_vcd) {
+         const std::string& xz, const std::string& diff_vcd, const std::string& edge,
+         const std::string& start, const std::string& end, const std::string& tolerance,
+         std::uint64_t tolerance_cycles) {
         Options o;
         o.file_a = read_path_arg(a, "a");
         o.file_b = read_path_arg(b, "b");
@@ -1120,6 +1122,13 @@ void bind_wavediff(py::module_& m) {
         } else {
           throw py::value_error("xz '" + xz + "': expected one of strict, wildcard, zero");
         }
+        if (edge != "rising" && edge != "falling" && edge != "both")
+          throw py::value_error("edge '" + edge + "': expected one of rising, falling, both");
+        o.edge = edge == "falling" ? Edge::falling : edge == "both" ? Edge::both : Edge::rising;
+        o.tolerance_cycles = tolerance_cycles;
+        // In the CLI's words, as compare() says the rest ("--tolerance-cycles needs --clock").
+        if (const std::string why = take_window(start, end, tolerance, o); !why.empty())
+          throw OptionError(why);
         py::gil_scoped_release nogil;
         return compare(o);
       },
@@ -1128,8 +1137,13 @@ void bind_wavediff(py::module_& m) {
       py::arg("strip_auto") = false, py::arg("map_file") = "",
       py::arg("include") = std::vector<std::string>{},
       py::arg("exclude") = std::vector<std::string>{}, py::arg("ignore_missing") = false,
-      py::arg("xz") = "strict", py::arg("diff_vcd") = "",
-      "Compares two waveforms (VCD or FST) as `dpc31 wavediff` does; raises InputError.");
+      py::arg("xz") = "strict", py::arg("diff_vcd") = "", py::arg("edge") = "rising",
+      py::arg("start") = "", py::arg("end") = "", py::arg("tolerance") = "",
+      py::arg("tolerance_cycles") = 0,
+      "Compares two waveforms (VCD or FST) as `dpc31 wavediff` does, with its options of the "
+      "same names (start, end: '100ns' or 'c12'; tolerance: '5ns'; edge and tolerance_cycles "
+      "with clock); no json, merge or wavedrom files: the report has .json() and .text(). Raises "
+      "InputError, in the CLI's words.");
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "dpc31/dpc31_firmware.h"
+#include "dpc31_rtl_model.h"
 
 using namespace badinput;
 
@@ -1313,6 +1314,57 @@ TEST_F(BadInput, PluginEntrySymbolsOfTheWrongKindAreRefused) {
                  "declares",
              "rtl-model");
   EXPECT_EQ(listing(), std::vector<std::string>{"plugin.scn"});
+}
+
+// A --rtl-model's table (dpc31_rtl_model.h) is checked before any entry is used: one line that
+// names what is wrong, exit 2, never a NULL called (rtl_model_table.c).
+TEST_F(BadInput, RtlModelTablesAreCheckedBeforeUse) {
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {RTL_TABLE_GET_NULL, "dpc31_rtl_model_get() returned NULL, not a model"},
+      {RTL_TABLE_OLD_ABI, "model interface version 3, this harness needs " +
+                              std::to_string(DPC31_RTL_MODEL_ABI) +
+                              " (rebuild it against this dpc31emu)"},
+      {RTL_TABLE_OUTPUTS_30,
+       "the model has 30 outputs, this harness compares 31 (DPC31_RTL_OUTPUTS)"},
+      {RTL_TABLE_NULL_STEP, "the model's step is NULL"},
+      {RTL_TABLE_NO_PROFILE, "the model's profile is NULL"},
+      {RTL_TABLE_BAD_PROFILE, "the model's profile 'dpc32' is not spc3, vpc3plus or dpc31"},
+      // Built with PROFILE spc3, run on the default dpc31: every seed would differ at cycle 0.
+      {RTL_TABLE_SPC3,
+       "the model is built for profile spc3, not dpc31: run it with --profile spc3 (a session: a "
+       "scenario of that profile), or build it with PROFILE dpc31"},
+      // The header: "NULL when out of memory".
+      {RTL_TABLE_CREATE_NULL, "its create() returned NULL: no model to run (out of memory?)"}};
+  for (const auto& [lib, why] : cases) {
+    expect_bad(dpc31("cosim --rtl-model " + lib + " --seeds 1 --cycles 100 --out o"),
+               "dpc31 cosim: " + lib + ": " + why, lib);
+  }
+  EXPECT_TRUE(listing().empty());
+}
+
+// A model that cannot trace leaves the divergence's exit code 1, with a note that says why there
+// is no rtl_internal.fst (docs/golden-model.md, "On a divergence"); a mutant of rtl/dpc31_blocks.v
+// by name is refused on a profile the built-in one is refused on.
+TEST_F(BadInput, RtlModelWithoutTracingOrMutantOfAnotherProfile) {
+  const std::string zero = RTL_TABLE_NO_TRACE;
+  // Every output 0: the C++ blocks differ at cycle 0. The window (--vcd) and the whole run
+  // (--dump) are written but for rtl_internal.fst, which is the note.
+  for (const std::string dir : {"w", "d"}) {
+    const Outcome r = dpc31("cosim --rtl-model " + zero + " --seeds 1 --cycles 100 --out o " +
+                            (dir == "w" ? "--vcd " : "--dump ") + dir);
+    EXPECT_EQ(r.rc, 1) << r.err;
+    EXPECT_NE(r.err.find(dir + "/rtl_internal.fst: not written: the RTL model " + zero +
+                         " did not trace (its trace_to returned 0)\n"),
+              std::string::npos)
+        << r.err;
+    EXPECT_TRUE(fs::exists(path(dir + "/emu.vcd"))) << dir;
+    EXPECT_FALSE(fs::exists(path(dir + "/rtl_internal.fst"))) << dir;
+  }
+  const std::string sel = RTL_TABLE_MUTANT_SEL;
+  expect_bad(dpc31("cosim --rtl-model " + sel + " --mutant SAP_NO_RR --seeds 1 --cycles 100"),
+             "dpc31 cosim: mutant 'SAP_NO_RR' is built for profile vpc3plus, not dpc31 (--profile "
+             "vpc3plus)",
+             "SAP_NO_RR on dpc31");
 }
 
 // Firmware plug-ins (dpc31/dpc31_firmware.h) are checked at load: the library loads with every

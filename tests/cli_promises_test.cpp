@@ -126,6 +126,55 @@ TEST_F(BadInput, CosimSessionWritesItsOutputs) {
   EXPECT_EQ(dpc31("cosim --replay fixed.trace --quiet").rc, 0);
 }
 
+// A session whose chip did not do what its scenario expects says so as `dpc31 run` does (the
+// expect's line on stderr) and exits 1 (docs/golden-model.md, "Session mode"): it exited 0 with
+// only `"scenario_expects_passed": false` in the summary (audit s30, finding 12).
+TEST_F(BadInput, CosimSessionNamesAFailedExpect) {
+  // The scenario ends in Data_Exchange (its own last expect): Wait_Prm is not where it is.
+  const std::string scn = slurp(kScn);
+  file("x.scn", scn + "expect dp_state Wait_Prm\n");
+  const auto line = std::count(scn.begin(), scn.end(), '\n') + 1;
+  const std::string failed =
+      "x.scn:" + std::to_string(line) + ": expected dp_state Wait_Prm, got Data_Exchange\n";
+  const Outcome run = dpc31("run x.scn --quiet");
+  EXPECT_EQ(run.rc, 1);
+  EXPECT_EQ(run.err, failed);
+  const Outcome r = dpc31("cosim --session x.scn --quiet");
+  EXPECT_EQ(r.rc, 1) << r.err;
+  EXPECT_EQ(r.err, failed);
+  EXPECT_EQ(line_with(r.out, "\"scenario_expects_passed\":"),
+            "\"scenario_expects_passed\": false,");
+  EXPECT_EQ(line_with(r.out, "\"diverged\":"), "\"diverged\": false,");
+  // The scenario as shipped passes: exit 0, nothing said.
+  copy(kScn, "ok.scn");
+  const Outcome ok = dpc31("cosim --session ok.scn --quiet");
+  EXPECT_EQ(ok.rc, 0) << ok.err;
+  EXPECT_EQ(ok.err, "");
+  EXPECT_EQ(line_with(ok.out, "\"scenario_expects_passed\":"),
+            "\"scenario_expects_passed\": true,");
+}
+
+// A shrunk stimulus may fail sooner than the run it came from (the shrinker keeps any stimulus
+// that still diverges): the report names the cycle its replay diverges at (audit s30, finding 7).
+TEST_F(BadInput, CosimShrunkTraceNamesItsOwnDivergence) {
+  // EOI_SHORT's seed 1 shrinks to a stimulus that diverges before the run's cycle.
+  const Outcome r = dpc31("cosim --mutant EOI_SHORT --seeds 2 --out o");
+  EXPECT_EQ(r.rc, 1) << r.err;
+  const std::string run_cycle = line_with(r.out, "\"cycle\":");
+  const std::string shrunk = line_with(r.err, "  shrunk to ");
+  const std::string mark = ", which diverge at cycle ";
+  const std::size_t at = shrunk.find(mark);
+  ASSERT_NE(at, std::string::npos) << r.err;
+  const std::string own =
+      shrunk.substr(at + mark.size(), shrunk.find(' ', at + mark.size()) - at - mark.size());
+  EXPECT_EQ(shrunk.substr(shrunk.find(" (replay it there): ")),
+            " (replay it there): o/cosim-dpc31-seed1.trace");
+  EXPECT_NE("\"cycle\": " + own + ",", run_cycle);
+  const Outcome again = dpc31("cosim --replay o/cosim-dpc31-seed1.trace --out r --quiet");
+  EXPECT_EQ(again.rc, 1) << again.err;
+  EXPECT_EQ(line_with(again.out, "\"cycle\":"), "\"cycle\": " + own + ",");
+}
+
 // A `cpu` image that cannot be read is refused at its line before the session runs, as `dpc31 run`
 // refuses it (exit 2, docs/cpu.md): the session ran and "diverged" at cycle 0 (review, s27).
 TEST_F(BadInput, CosimSessionRefusesABadCpuImage) {

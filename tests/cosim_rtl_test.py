@@ -430,6 +430,11 @@ CASES = {
     "mutant_without_input": lambda: one_line_exit_2(
         run(OWN + ["--mutant", "NO_C_SWAP", "--seeds", "1"]),
         "module dpc31_blocks has no mutant_sel input", CACHE + "/none"),
+    # A vpc3plus mutant on the dpc31: refused as the built-in --mutant is (it ran and "passed").
+    "mutant_of_another_profile": lambda: one_line_exit_2(
+        run(OWN + ["--define", "MUTANTS", "--mutant", "SAP_NO_RR", "--seeds", "1"]),
+        "dpc31 cosim: mutant 'SAP_NO_RR' is built for profile vpc3plus, not dpc31 "
+        "(--profile vpc3plus)", CACHE + "/none"),
 }
 
 if __name__ == "__main__":

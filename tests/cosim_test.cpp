@@ -694,13 +694,15 @@ TEST(Cosim, RtlInternalWaveformOnDemand) {
   const Stimulus s = random_stimulus({Profile::dpc31, 3, 2000});
   const std::string path = testutil::scratch() + "cosim_rtl.fst";
   std::string error;
-  ASSERT_TRUE(write_rtl_fst(s, {Profile::dpc31, BusMode::intel}, "", path, error)) << error;
+  ASSERT_EQ(write_rtl_fst(s, {Profile::dpc31, BusMode::intel}, "", path, error), RtlFst::written)
+      << error;
   std::FILE* f = std::fopen(path.c_str(), "rb");
   ASSERT_NE(f, nullptr);
   std::fseek(f, 0, SEEK_END);
   EXPECT_GT(std::ftell(f), 100);
   std::fclose(f);
   // The mutants are built without tracing: said plainly, nothing written.
-  EXPECT_FALSE(write_rtl_fst(s, {Profile::dpc31, BusMode::intel}, "POLARITY", path + "2", error));
+  EXPECT_EQ(write_rtl_fst(s, {Profile::dpc31, BusMode::intel}, "POLARITY", path + "2", error),
+            RtlFst::not_traced);
   EXPECT_NE(error.find("without tracing"), std::string::npos);
 }

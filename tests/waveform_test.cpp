@@ -371,6 +371,66 @@ TEST(Waveform, APatternMatchesTheChipsOwnSignals) {
   }
 }
 
+// With the C31's interrupt controller served, the interrupt the firmware gets is the C31's INT0
+// (low-active), not X/INT, which stays inactive (docs/dpc31.md, "Two interrupt controllers"):
+// pins.c31_int0 shows it, at each cycle the controller's activity changes (docs/timing.md: 0
+// cycles of latency), in ps round(cycle x 10^12 / 48 MHz). It is no signal of the external one's.
+TEST(Waveform, TheC31sInterruptIsItsInt0Pin) {
+  wave::Options o;
+  o.path = tmp("c31_int0.vcd");
+  o.signals = {"pins.*"};
+  Chip external({Profile::dpc31, BusMode::intel, 0});
+  std::string error;
+  wave::Recorder none(o);
+  EXPECT_TRUE(none.attach(external, error)) << error;
+  EXPECT_TRUE(none.finish(external.cycle(), error)) << error;
+  EXPECT_EQ(slurp(o.path).find("c31_int0"), std::string::npos);
+  o.signals = {"pins.c31_int0"};
+  wave::Recorder only(o);
+  EXPECT_FALSE(only.attach(external, error));
+  EXPECT_EQ(error, "no signal of the dpc31 matches 'pins.c31_int0' (see docs/waveforms.md)");
+
+  o.signals = {"pins.c31_int0"};
+  Chip chip(ChipOptions{Profile::dpc31, BusMode::intel, 0, Engine::event, std::nullopt,
+                        IrqController::c31});
+  chip.set_log_sink(nullptr);
+  ResponderConfig rc;
+  Responder user(rc);
+  DirectBus bus(chip);
+  user.init(bus);
+  wave::Recorder rec(o);
+  ASSERT_TRUE(rec.attach(chip, error)) << error;
+  // The expected body: each change of the C31's interrupt, INT0 low while it is active.
+  bool active = chip.irq_active();  // the user's init has run: its events may be pending
+  std::string want = fmt::format("\n{}\n", active ? 0 : 1);  // $dumpvars, before any time line
+  chip.on_irq_change([&](std::uint64_t c, bool) {
+    if (chip.irq_active() == active) return;
+    active = chip.irq_active();
+    want += fmt::format("#{}\n{}\n", (c * 125'000 + 3) / 6, active ? 0 : 1);  // 10^12 / 48e6
+  });
+  DpMaster master(chip, MasterConfig{2, 1'500'000, 100, 33}, rc.slave);
+  master.set_firmware([&](BusPort& b) { user.isr(b); });
+  ASSERT_TRUE(master.startup());
+  ASSERT_TRUE(rec.finish(chip.cycle(), error)) << error;
+  ASSERT_GT(std::count(want.begin(), want.end(), '#'), 0);  // the start-up has interrupts
+  const std::string v = slurp(o.path);
+  // Each signal's VCD identifier, from its $var line.
+  const auto id = [&v](const std::string& name) {
+    const std::size_t at = v.find(" " + name + " $end");
+    const std::size_t from = v.rfind(' ', at - 1) + 1;
+    return at == std::string::npos ? std::string("?") : v.substr(from, at - from);
+  };
+  const std::string int0 = id("c31_int0");
+  std::string changes;
+  std::istringstream is(v.substr(v.find("$dumpvars\n")));
+  std::string at;
+  for (std::string line; std::getline(is, line);) {
+    if (line.starts_with('#')) at = line;
+    if (line == "0" + int0 || line == "1" + int0) changes += at + "\n" + line.substr(0, 1) + "\n";
+  }
+  EXPECT_EQ(changes, want);
+}
+
 // A unit longer than a clock cycle (20.8 ns at 48 MHz) would give neighbouring cycles one time.
 TEST(Waveform, ATimescaleCoarserThanACycleIsRefused) {
   Chip chip({Profile::spc3, BusMode::intel, 0});

@@ -85,3 +85,47 @@ def test_no_signal_in_common_is_an_error_not_same(cli, tmp_path):
         dpc31.wavediff(run, run, clock_b="clk")
     assert str(e.value) == "--clock-b needs --clock"
     assert not dpc31.wavediff(run, str(other)).same  # one-sided names: different
+
+
+def late_pair(tmp_path):
+    """Two dumps of one 10 ns clock (rising at 5, 15, 25, 35 ns: edges 0..3) whose `sig` rises at
+    12 ns in A and one clock later, at 22 ns, in B: sampled at the rising edges, A and B differ at
+    edge 1 only (A 1, B 0); in event mode for the 10 ns from 12 to 22 ns."""
+    def dump(name, rise):
+        changes = [(t, f"{(t // 5) % 2}!") for t in range(5, 45, 5)] + [(rise, '1"')]
+        path = tmp_path / name
+        path.write_text("$timescale 1ns $end\n$scope module top $end\n$var wire 1 ! clk $end\n"
+                        "$var wire 1 \" sig $end\n$upscope $end\n$enddefinitions $end\n"
+                        "#0\n0!\n0\"\n" + "".join(f"#{t}\n{v}\n" for t, v in sorted(changes)))
+        return str(path)
+    return dump("a.vcd", 12), dump("b.vcd", 22)
+
+
+def test_window_tolerance_and_edge_as_the_cli_takes_them(tmp_path):
+    # docs/wavediff.md: --tolerance-cycles, --tolerance, --start, --end (inclusive), --edge
+    a, b = late_pair(tmp_path)
+    late = dpc31.wavediff(a, b, clock="top.clk")
+    assert not late.same
+    assert (late.diffs[0].first.at.cycle, late.diffs[0].first.a, late.diffs[0].first.b) == (1, "1",
+                                                                                             "0")
+    assert dpc31.wavediff(a, b, clock="top.clk", tolerance_cycles=1).same  # one cycle long
+    assert dpc31.wavediff(a, b, clock="top.clk", start="c2").same  # edges 2 and 3 agree
+    assert dpc31.wavediff(a, b, clock="top.clk", end="c0").same
+    assert not dpc31.wavediff(a, b, clock="top.clk", end="c1").same
+    # the falling edges are at 10, 20, 30, 40 ns: at 20 ns A is 1 and B 0
+    falling = dpc31.wavediff(a, b, clock="top.clk", edge="falling")
+    assert (falling.diffs[0].first.at.cycle, falling.diffs[0].first.at.time) == (1, 20)
+    # event mode: 10 ns of difference
+    assert dpc31.wavediff(a, b, tolerance="10ns").same
+    assert not dpc31.wavediff(a, b, tolerance="9ns").same
+    assert dpc31.wavediff(a, b, start="25ns").same
+    # bad options: the CLI's words (docs/bad-input.md)
+    for kw, message in [({"edge": "falling"}, "--edge needs --clock"),
+                        ({"tolerance_cycles": 1}, "--tolerance-cycles needs --clock"),
+                        ({"start": "30ns", "end": "20ns"}, "--start is after --end")]:
+        with pytest.raises(dpc31.InputError) as e:
+            dpc31.wavediff(a, b, **kw)
+        assert str(e.value) == message
+    with pytest.raises(dpc31.InputError) as e:
+        dpc31.wavediff(a, b, tolerance="10")
+    assert str(e.value).startswith("--tolerance: ")

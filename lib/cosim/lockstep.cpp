@@ -13,6 +13,7 @@
 #include "dpc31/dpv1.hpp"
 #include "dpc31/reg_ids.hpp"
 #include "outfile.hpp"
+#include "rtl_library.hpp"
 #include "textfile.hpp"
 #include "whole_number.hpp"
 
@@ -578,31 +579,38 @@ bool parse_trace(const std::string& text, const std::string& file, Stimulus& out
   return true;
 }
 
-bool write_rtl_fst(const Stimulus& s, const DutOptions& o, std::string_view mutant,
-                   const std::string& path, std::string& error) {
+RtlFst write_rtl_fst(const Stimulus& s, const DutOptions& o, std::string_view mutant,
+                     const std::string& path, std::string& error) {
   std::unique_ptr<Dut> rtl = make_rtl_dut(o, mutant);
   outfile::OutFile out;
   if (!out.open(path)) {
     error = out.error();
-    return false;
+    return RtlFst::failed;
   }
   // Verilator's tracer opens the file by name (fstapi unlinks it first): a regular file of ours.
   const std::string name = out.library_path();
   if (name.empty()) {
     error = out.error();
-    return false;
+    return RtlFst::failed;
   }
   if (!rtl || !rtl->trace_to(name)) {
-    error = fmt::format("{}: this RTL model was built without tracing (mutants are)", path);
-    return false;
+    error = o.rtl ? fmt::format(
+                        "{}: not written: the RTL model {} did not trace (its trace_to "
+                        "returned 0)",
+                        path, o.rtl->path())
+                  : fmt::format(
+                        "{}: not written: the built-in mutants' RTL model is built "
+                        "without tracing",
+                        path);
+    return RtlFst::not_traced;
   }
   for (const Inputs& in : s) rtl->step(in);
   rtl.reset();  // closes the trace
   if (!out.commit_fst()) {
     error = out.error();
-    return false;
+    return RtlFst::failed;
   }
-  return true;
+  return RtlFst::written;
 }
 
 // --- waveform window ---

@@ -125,10 +125,12 @@ std::string write_trace(const Stimulus& s, const std::string& header);
 bool parse_trace(const std::string& text, const std::string& file, Stimulus& out,
                  std::string& error, std::optional<Profile> profile = std::nullopt);
 
-// The RTL's internal waveform (FST, Verilator tracing) over a whole stimulus. False (with a
-// reason) for models built without tracing (the mutants).
-bool write_rtl_fst(const Stimulus& s, const DutOptions& o, std::string_view mutant,
-                   const std::string& path, std::string& error);
+// The RTL's internal waveform (FST, Verilator tracing) over a whole stimulus: written, not
+// traced (the built-in mutants' model is built without tracing, a --rtl-model's trace_to returned
+// 0: a note, the run's outcome stands) or failed (the file cannot be written); `error` says why.
+enum class RtlFst { written, not_traced, failed };
+RtlFst write_rtl_fst(const Stimulus& s, const DutOptions& o, std::string_view mutant,
+                     const std::string& path, std::string& error);
 
 // VCD of both sides' outputs (and the inputs) for cycles [from, to): the waveform window around
 // a divergence. Files written to a temporary name and renamed.

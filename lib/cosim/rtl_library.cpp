@@ -59,6 +59,34 @@ class LibDut final : public Dut {
   void* model_;
 };
 
+// What is wrong with the table dpc31_rtl_model_get() returned ("" if nothing): each entry is
+// used, a NULL one would be called. `profile` gets the model's.
+std::string table_problem(const dpc31_rtl_model* m, Profile& profile) {
+  if (m == nullptr) return "dpc31_rtl_model_get() returned NULL, not a model";
+  if (m->abi != DPC31_RTL_MODEL_ABI) {
+    return fmt::format(
+        "model interface version {}, this harness needs {} (rebuild it against this dpc31emu)",
+        m->abi, DPC31_RTL_MODEL_ABI);
+  }
+  if (m->outputs != DPC31_RTL_OUTPUTS) {
+    return fmt::format("the model has {} outputs, this harness compares {} (DPC31_RTL_OUTPUTS)",
+                       m->outputs, DPC31_RTL_OUTPUTS);
+  }
+  const std::pair<const char*, bool> entries[] = {
+      {"top", m->top != nullptr},          {"profile", m->profile != nullptr},
+      {"create", m->create != nullptr},    {"destroy", m->destroy != nullptr},
+      {"step", m->step != nullptr},        {"read_outputs", m->read_outputs != nullptr},
+      {"trace_to", m->trace_to != nullptr}};
+  for (const auto& [name, set] : entries) {
+    if (!set) return fmt::format("the model's {} is NULL", name);
+  }
+  if (!parse_profile(m->profile, profile)) {
+    return fmt::format("the model's profile '{}' is not spc3, vpc3plus or dpc31",
+                       shown(m->profile));
+  }
+  return "";
+}
+
 }  // namespace
 
 std::shared_ptr<const RtlLibrary> RtlLibrary::load(const std::string& path, std::string& error) {
@@ -105,18 +133,18 @@ std::shared_ptr<const RtlLibrary> RtlLibrary::load(const std::string& path, std:
     return nullptr;
   }
   const auto entry = reinterpret_cast<Entry>(sym);
-  const dpc31_rtl_model* m = entry != nullptr ? entry() : nullptr;
-  if (m == nullptr || m->abi != DPC31_RTL_MODEL_ABI || m->outputs != DPC31_RTL_OUTPUTS) {
-    error = m == nullptr ? fmt::format(
-                               "{}: no dpc31_rtl_model_get() entry point (not built by "
-                               "dpc31emu_verilate_model or dpc31 cosim --rtl)",
-                               path)
-                         : fmt::format("{}: model interface version {}, this harness needs {}",
-                                       path, m->abi, DPC31_RTL_MODEL_ABI);
+  Profile profile = Profile::dpc31;
+  const std::string why = entry != nullptr
+                              ? table_problem(entry(), profile)
+                              : std::string(
+                                    "no dpc31_rtl_model_get() entry point (not built "
+                                    "by dpc31emu_verilate_model or dpc31 cosim --rtl)");
+  if (!why.empty()) {
+    error = fmt::format("{}: {}", path, why);
     ::dlclose(h);
     return nullptr;
   }
-  return std::shared_ptr<const RtlLibrary>(new RtlLibrary(h, m, path));
+  return std::shared_ptr<const RtlLibrary>(new RtlLibrary(h, entry(), profile, path));
 }
 
 RtlLibrary::~RtlLibrary() { ::dlclose(handle_); }

@@ -28,12 +28,15 @@ class RtlLibrary {
   [[nodiscard]] bool has_mutant_sel() const { return model_->has_mutant_sel != 0; }
   [[nodiscard]] std::string top() const { return model_->top; }
   [[nodiscard]] const std::string& path() const { return path_; }
+  // The profile the model is built for (PROFILE of dpc31emu_verilate_model, -GPROFILE=).
+  [[nodiscard]] Profile profile() const { return profile_; }
 
  private:
-  RtlLibrary(void* handle, const dpc31_rtl_model* model, std::string path)
-      : handle_(handle), model_(model), path_(std::move(path)) {}
+  RtlLibrary(void* handle, const dpc31_rtl_model* model, Profile profile, std::string path)
+      : handle_(handle), model_(model), profile_(profile), path_(std::move(path)) {}
   void* handle_;
   const dpc31_rtl_model* model_;
+  Profile profile_;
   std::string path_;
 };
 

@@ -101,7 +101,7 @@ bool record_session(const std::string& scenario_path, Session& out, std::string&
     error = "dpc31 cosim: " + where.message(e.what());
     return false;
   }
-  out.scenario_passed = o.ok();
+  out.scenario_failures = o.failures;
   if (!out.unreplayable.empty()) {
     error = scenario_path + ": " + out.unreplayable;
     return false;

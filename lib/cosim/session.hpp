@@ -18,7 +18,8 @@ struct Session {
   std::vector<std::pair<std::uint64_t, Inputs>> events;  // stimulus index (= chip cycle - 1)
   std::uint64_t cycles = 0;                              // the session's length
   Outputs chip_final;                                    // the live chip's blocks at the end
-  bool scenario_passed = false;
+  // The scenario's expects that failed ("FILE:LINE: expected X, got Y", as `dpc31 run` says).
+  std::vector<std::string> scenario_failures;
   // The first cycle whose block events came in an order its inputs cannot carry (requests of one
   // InstQ_Wr write other than in the order User_Leave_Master, MAC_Stop, MAC_Start), else empty.
   std::string unreplayable;

@@ -3,6 +3,7 @@
 
 #include <charconv>
 #include <nlohmann/json.hpp>
+#include <tuple>
 
 #include "outfile.hpp"
 #include "textfile.hpp"
@@ -157,6 +158,23 @@ bool parse_duration(std::string_view text, std::uint64_t& fs, std::string& error
   }
   fs = static_cast<std::uint64_t>(v);
   return true;
+}
+
+std::string take_window(std::string_view start, std::string_view end, std::string_view tolerance,
+                        Options& o) {
+  std::string why;
+  for (const auto& [name, text, bound] :
+       {std::tuple{"start", start, &o.start}, std::tuple{"end", end, &o.end}}) {
+    if (text.empty()) continue;
+    Bound b;
+    if (!parse_bound(text, b, why)) return fmt::format("--{}: {}", name, why);
+    *bound = b;
+  }
+  if (o.start && o.end && o.start->cycles == o.end->cycles && o.start->value > o.end->value)
+    return "--start is after --end";
+  if (!tolerance.empty() && !parse_duration(tolerance, o.tolerance_fs, why))
+    return "--tolerance: " + why;
+  return "";
 }
 
 bool parse_bound(std::string_view text, Bound& out, std::string& error) {

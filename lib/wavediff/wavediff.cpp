@@ -124,6 +124,7 @@ void Engine::setup(Report& rep) {
       throw OptionError("cycle bounds (c123) need --clock");
     }
     if (!o_.clock_b.empty()) throw OptionError("--clock-b needs --clock");
+    if (o_.edge != Edge::rising) throw OptionError("--edge needs --clock");
   }
   tol_ = clock_mode() ? o_.tolerance_cycles : to_common(o_.tolerance_fs, false);
   if (!clock_mode() && o_.end) {  // an FST reader may skip the blocks after the window

@@ -116,6 +116,11 @@ struct Report {
   }
 };
 
+// --start, --end ("100ns", "c12") and --tolerance ("5ns") as typed, "" for none, into `o`: "" or
+// what is wrong ("--start: ..."), in the CLI's words for every door.
+std::string take_window(std::string_view start, std::string_view end, std::string_view tolerance,
+                        Options& o);
+
 // Runs the comparison and writes --diff-vcd and --wavedrom files. Throws InputError (also where
 // an output, --json's too, names an input).
 Report compare(const Options& o);

@@ -75,7 +75,6 @@ CLI::App* add_subcommand(CLI::App& app, CliArgs& a) {
 
 int run_cli(CliArgs a, std::FILE* out, std::FILE* err) {
   Options& o = a.opt;
-  std::string why;
   auto bad = [&](const std::string& what) {
     fmt::print(err, "dpc31 wavediff: {}\n", what);
     return 2;
@@ -85,22 +84,8 @@ int run_cli(CliArgs a, std::FILE* out, std::FILE* err) {
          : a.xz == "zero"   ? XzPolicy::zero
                             : XzPolicy::strict;
   o.edge = a.edge == "falling" ? Edge::falling : a.edge == "both" ? Edge::both : Edge::rising;
-  if (!a.start.empty()) {
-    Bound b;
-    if (!parse_bound(a.start, b, why)) return bad("--start: " + why);
-    o.start = b;
-  }
-  if (!a.end.empty()) {
-    Bound b;
-    if (!parse_bound(a.end, b, why)) return bad("--end: " + why);
-    o.end = b;
-  }
-  if (o.start && o.end && o.start->cycles == o.end->cycles && o.start->value > o.end->value) {
-    return bad("--start is after --end");
-  }
-  if (!a.tolerance.empty() && !parse_duration(a.tolerance, o.tolerance_fs, why)) {
-    return bad("--tolerance: " + why);
-  }
+  if (const std::string why = take_window(a.start, a.end, a.tolerance, o); !why.empty())
+    return bad(why);
   std::string text;
   std::string errors;
   const int rc = run(o, text, errors);

@@ -40,6 +40,7 @@ enum Sig : std::uint16_t {
   kDiagSm,
   kPb3,      // after the others, so the older signals keep their VCD identifiers
   kService,  // likewise
+  kC31Int0,  // likewise
   kCount
 };
 
@@ -60,7 +61,8 @@ constexpr std::array<SignalDef, kCount> kSignals = {{{"pins.rxd", 1},
                                                      {"blocks.din_sm", 8},
                                                      {"blocks.diag_sm", 4},
                                                      {"pins.pb3", 1},
-                                                     {"state.service", 8}}};
+                                                     {"state.service", 8},
+                                                     {"pins.c31_int0", 1}}};
 
 static_assert(std::all_of(kSignals.begin(), kSignals.end(),
                           [](const SignalDef& d) { return d.width <= 16; }),
@@ -130,9 +132,13 @@ bool glob(const std::string& pattern, const std::string& name) {
   return fnmatch(pattern.c_str(), name.c_str(), 0) == 0;
 }
 
-// Whether a chip has the signal: PB3 is a DPC31 port.
+// Whether a chip has the signal: PB3 is a DPC31 port; the C31's INT0 is driven by the chip only
+// when the bus reaches the C31's interrupt controller (docs/dpc31.md, "Two interrupt
+// controllers"), X/INT then stays inactive.
 bool chip_has(const Chip& chip, std::size_t sig) {
-  return sig != kPb3 || chip.profile().id == Profile::dpc31;
+  if (sig == kPb3) return chip.profile().id == Profile::dpc31;
+  if (sig == kC31Int0) return chip.irq_controller() == IrqController::c31;
+  return true;
 }
 
 // The time unit 10^exp s as $timescale writes it: "1ps", "10ns", "100us".
@@ -302,8 +308,10 @@ struct Recorder::Impl {
                                  c.din_buffer_sm,
                                  c.diag_buffer_sm,
                                  s.chip->x_int_pin() ? 1u : 0u,
-                                 s.chip->pb3_pin() ? 1u : 0u};
-    const Sig sigs[] = {kDpState, kWdState, kBaud, kIrr, kDoutSm, kDinSm, kDiagSm, kXInt, kPb3};
+                                 s.chip->pb3_pin() ? 1u : 0u,
+                                 s.chip->irq_active() ? 0u : 1u};  // INT0 is low-active
+    const Sig sigs[] = {kDpState, kWdState, kBaud, kIrr, kDoutSm,
+                        kDinSm,   kDiagSm,  kXInt, kPb3, kC31Int0};
     for (std::size_t i = 0; i < std::size(sigs); ++i) {
       if (s.sampled[sigs[i]] == now[i]) continue;
       s.sampled[sigs[i]] = now[i];
@@ -577,15 +585,19 @@ bool Recorder::Impl::attach_chip(Chip& chip, std::string scope, std::string& err
   s.scope = std::move(scope);
   s.var.fill(kNoVar);
   s.sampled.fill(0xFFFFFFFF);
-  // Declared scope by scope: PB3 (the newest signal, last in the list) beside the other pins.
+  // Declared scope by scope: PB3 and the C31's INT0 (newer signals, last in the list) beside
+  // the other pins.
   const auto add = [&](std::size_t i) {
     const std::string full = full_name(s, kSignals[i].name);
     if (chip_has(chip, i) && take(kSignals[i].name, full, kSignals[i].width))
       add_var(s, static_cast<std::uint8_t>(i), kSignals[i]);
   };
   for (std::size_t i = 0; i < kCount; ++i) {
-    if (i != kPb3 && i != kService) add(i);
-    if (i == kXInt) add(kPb3);
+    if (i != kPb3 && i != kService && i != kC31Int0) add(i);
+    if (i == kXInt) {
+      add(kPb3);
+      add(kC31Int0);
+    }
     if (i == kBaud) add(kService);
   }
   // One chip (a segment's line has its own): a file without a variable helps nobody, and fstapi

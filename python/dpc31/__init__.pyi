@@ -590,4 +590,5 @@ def wavediff(a: str, b: str, *, clock: Optional[str] = None, clock_b: Optional[s
              strip_a: str = "", strip_b: str = "", strip_auto: bool = False,
              map_file: str = "", include: List[str] = [], exclude: List[str] = [],
              ignore_missing: bool = False, xz: str = "strict",
-             diff_vcd: str = "") -> WaveReport: ...
+             diff_vcd: str = "", edge: str = "rising", start: str = "", end: str = "",
+             tolerance: str = "", tolerance_cycles: int = 0) -> WaveReport: ...

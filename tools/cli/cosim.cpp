@@ -363,7 +363,7 @@ constexpr int kSessionShrinkRuns = 50;
 // waveform window in --vcd; `entry` gets their paths, a file not written goes to `output_failed`.
 void write_divergence(const CosimOptions& o, const cosim::Stimulus& s, const cosim::RunResult& r,
                       const cosim::DutOptions& dut, const std::string& name,
-                      const std::string& origin, int max_runs, bool traced, nlohmann::json& entry,
+                      const std::string& origin, int max_runs, nlohmann::json& entry,
                       const std::function<void(const std::string&)>& output_failed) {
   using namespace dpc31::cosim;
   entry["signals"] = r.signals;
@@ -395,7 +395,16 @@ void write_divergence(const CosimOptions& o, const cosim::Stimulus& s, const cos
     }
   } else if (outfile::write_file(trace, write_trace(small, header), error)) {
     entry["trace"] = trace;
-    if (!o.quiet) fmt::print(stderr, "  shrunk to {} stimulus events: {}\n", events(small), trace);
+    if (!o.quiet) {
+      // The shrinker keeps any stimulus that still fails: idled, it may fail sooner, and its
+      // replay reports that cycle.
+      const std::int64_t own = run_lockstep(small, dut, o.mutant).divergence;
+      fmt::print(stderr, "  shrunk to {} stimulus events{}: {}\n", events(small),
+                 own == r.divergence
+                     ? ""
+                     : fmt::format(", which diverge at cycle {} (replay it there)", own),
+                 trace);
+    }
   } else {
     output_failed(error);
   }
@@ -415,9 +424,11 @@ void write_divergence(const CosimOptions& o, const cosim::Stimulus& s, const cos
     } else {
       output_failed(error);
     }
-    if (write_rtl_fst(around, dut, o.mutant, in_vcd("rtl_internal.fst"), error)) {
+    const cosim::RtlFst fst =
+        write_rtl_fst(around, dut, o.mutant, in_vcd("rtl_internal.fst"), error);
+    if (fst == cosim::RtlFst::written) {
       entry["fst"] = in_vcd("rtl_internal.fst");
-    } else if (traced) {
+    } else if (fst == cosim::RtlFst::failed) {
       output_failed(error);
     } else if (!o.quiet) {
       fmt::print(stderr, "  {}\n", error);
@@ -427,16 +438,15 @@ void write_divergence(const CosimOptions& o, const cosim::Stimulus& s, const cos
 
 // --dump: the whole run of `s`, both sides, for wavediff or GTKWave.
 void write_dump(const CosimOptions& o, const cosim::Stimulus& s, const cosim::DutOptions& dut,
-                bool traced, const std::function<void(const std::string&)>& output_failed) {
+                const std::function<void(const std::string&)>& output_failed) {
   std::string error;
   if (!write_window(s, dut, o.mutant, 0, s.size(), o.dump_dir, error)) output_failed(error);
-  if (!write_rtl_fst(s, dut, o.mutant,
-                     (std::filesystem::path(o.dump_dir) / "rtl_internal.fst").string(), error)) {
-    if (traced) {
-      output_failed(error);
-    } else if (!o.quiet) {
-      fmt::print(stderr, "{}\n", error);
-    }
+  const cosim::RtlFst fst = write_rtl_fst(
+      s, dut, o.mutant, (std::filesystem::path(o.dump_dir) / "rtl_internal.fst").string(), error);
+  if (fst == cosim::RtlFst::failed) {
+    output_failed(error);
+  } else if (fst == cosim::RtlFst::not_traced && !o.quiet) {
+    fmt::print(stderr, "{}\n", error);
   }
 }
 
@@ -508,6 +518,15 @@ int finish(const CosimOptions& o, const nlohmann::json& summary, const nlohmann:
   return diverged ? 1 : 0;
 }
 
+// "" or why the built-in --mutant NAME does not run on the run's profile: the built-in mutants
+// live in a model of one profile (the SAP header machine's: vpc3plus).
+std::string mutant_not_on_profile(const CosimOptions& o) {
+  const auto p = cosim::rtl_mutant_profile(o.mutant);
+  if (!p || *p == o.profile) return "";
+  return fmt::format("mutant '{}' is built for profile {}, not {} (--profile {})", o.mutant,
+                     profile_name(*p), o.profile_name, profile_name(*p));
+}
+
 // The model the run uses in place of the built-in ones: --rtl (built into the cache, or taken
 // from it) or --rtl-model. False with the line already printed (exit 2).
 // `id` names the model in the JSON summary the same on every machine: the cache key for --rtl,
@@ -540,6 +559,14 @@ bool load_rtl(const CosimOptions& o, cosim::DutOptions& dut, std::string& id) {
     return fail("--top and --define are for --rtl (a --rtl-model is built already)");
   dut.rtl = RtlLibrary::load(path, error);
   if (!dut.rtl) return fail(error);
+  // Its PROFILE is fixed when it is built: on another profile every seed would "diverge".
+  if (dut.rtl->profile() != o.profile) {
+    return fail(fmt::format(
+        "{}: the model is built for profile {}, not {}: run it with --profile {} (a session: a "
+        "scenario of that profile), or build it with PROFILE {}",
+        path, profile_name(dut.rtl->profile()), o.profile_name, profile_name(dut.rtl->profile()),
+        o.profile_name));
+  }
   const std::filesystem::path p(path);
   id = (o.rtl_model.empty() ? p.parent_path().filename() : p.filename()).string();
   if (!o.mutant.empty()) {
@@ -553,7 +580,11 @@ bool load_rtl(const CosimOptions& o, cosim::DutOptions& dut, std::string& id) {
           fmt::format("--mutant {}: module {} has no mutant_sel input (rtl/dpc31_blocks.v "
                       "has it with --define MUTANTS)",
                       o.mutant, dut.rtl->top()));
+    // A mutant of rtl/dpc31_blocks.v by name runs where the built-in one does.
+    if (const std::string why = mutant_not_on_profile(o); !why.empty()) return fail(why);
   }
+  if (!make_rtl_dut(dut, o.mutant))
+    return fail(path + ": its create() returned NULL: no model to run (out of memory?)");
   return true;
 }
 
@@ -715,11 +746,13 @@ int run_session_mode(const CosimOptions& given, outfile::OutFile& junit_out) {
   o.bus = s.options.bus;
   std::string rtl_id;
   if (!load_rtl(o, s.options, rtl_id) || !windows_ready(o)) return 2;
+  // A chip that did not do what its scenario says: its lines, as `dpc31 run` prints them, and
+  // exit 1 whatever the lockstep finds.
+  for (const std::string& line : s.scenario_failures) fmt::print(stderr, "{}\n", line);
   const RunResult r = run_session(s, o.mutant);  // s.options carries a --rtl model
   if (!o.quiet) {
     for (const std::string& line : r.report) fmt::print(stderr, "{}\n", line);
   }
-  const bool traced = s.options.rtl != nullptr || !rtl_mutant_profile(o.mutant);
   std::string failed_output;
   const auto output_failed = [&failed_output](const std::string& why) {
     if (failed_output.empty()) failed_output = why;
@@ -732,12 +765,12 @@ int run_session_mode(const CosimOptions& given, outfile::OutFile& junit_out) {
     write_divergence(o, stimulus, r, s.options,
                      fmt::format("cosim-{}-session-{}.trace", o.profile_name, stem),
                      "session " + std::filesystem::absolute(o.session).string(), kSessionShrinkRuns,
-                     traced, entry, output_failed);
+                     entry, output_failed);
   } else if (r.divergence >= 0 && !o.quiet) {
     // Only the live chip saw the other end: a trace replays the blocks, not the chip.
     fmt::print(stderr, "  no trace or waveform window: a replay has no live chip to differ from\n");
   }
-  if (!o.dump_dir.empty()) write_dump(o, stimulus, s.options, traced, output_failed);
+  if (!o.dump_dir.empty()) write_dump(o, stimulus, s.options, output_failed);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   nlohmann::json summary = {{"session", o.session},
                             {"profile", o.profile_name},
@@ -747,7 +780,7 @@ int run_session_mode(const CosimOptions& given, outfile::OutFile& junit_out) {
                             {"rtl", rtl_id},
                             {"cycles", s.cycles},
                             {"block_events", s.events.size()},
-                            {"scenario_expects_passed", s.scenario_passed},
+                            {"scenario_expects_passed", s.scenario_failures.empty()},
                             {"diverged", r.divergence >= 0},
                             {"cycle", r.divergence},
                             {"signals", r.signals},
@@ -755,7 +788,8 @@ int run_session_mode(const CosimOptions& given, outfile::OutFile& junit_out) {
   for (const char* k : {"trace", "vcd", "fst"}) {
     if (entry.contains(k)) summary[k] = entry[k];
   }
-  return finish(o, summary, nlohmann::json::array({entry}), junit_out, failed_output);
+  const int rc = finish(o, summary, nlohmann::json::array({entry}), junit_out, failed_output);
+  return rc == 0 && !s.scenario_failures.empty() ? 1 : rc;
 }
 
 }  // namespace
@@ -831,11 +865,8 @@ int run_cosim(const CosimOptions& given) {
   std::string rtl_id;
   if (!load_rtl(o, dut, rtl_id)) return 2;
   if (!make_rtl_dut(dut, o.mutant)) {
-    // The built-in mutants live in a model of one profile (the SAP header machine's: vpc3plus).
-    if (const auto p = rtl_mutant_profile(o.mutant)) {
-      fmt::print(stderr,
-                 "dpc31 cosim: mutant '{}' is built for profile {}, not {} (--profile {})\n",
-                 o.mutant, profile_name(*p), o.profile_name, profile_name(*p));
+    if (const std::string why = mutant_not_on_profile(o); !why.empty()) {
+      fmt::print(stderr, "dpc31 cosim: {}\n", why);
     } else {
       fmt::print(stderr, "dpc31 cosim: no RTL model for profile {} mutant '{}' (no such mutant)\n",
                  o.profile_name, o.mutant);
@@ -843,10 +874,9 @@ int run_cosim(const CosimOptions& given) {
     return 2;
   }
   if (!windows_ready(o)) return 2;
-  // A model built without tracing (the built-in mutants') writes no rtl_internal.fst: a note.
-  // Any other output that fails in the run is exit 2, after the summary and the JUnit, which
-  // record the seeds that ran; the first failure is the one line.
-  const bool traced = dut.rtl != nullptr || !rtl_mutant_profile(o.mutant);
+  // A model that does not trace (the built-in mutants', a --rtl-model whose trace_to returns 0)
+  // writes no rtl_internal.fst: a note. Any other output that fails in the run is exit 2, after
+  // the summary and the JUnit, which record the seeds that ran; the first failure is the one line.
   std::string failed_output;
   const auto output_failed = [&failed_output](const std::string& error) {
     if (failed_output.empty()) failed_output = error;
@@ -876,7 +906,7 @@ int run_cosim(const CosimOptions& given) {
       write_divergence(o, s, r, dut,
                        fmt::format("cosim-{}-seed{}{}.trace", o.profile_name, seed,
                                    o.replay.empty() ? "" : "-replay"),
-                       fmt::format("seed {}", seed), kSeedShrinkRuns, traced, entry, output_failed);
+                       fmt::format("seed {}", seed), kSeedShrinkRuns, entry, output_failed);
     }
     results.push_back(entry);
     if (tty) {
@@ -892,7 +922,7 @@ int run_cosim(const CosimOptions& given) {
   if (!o.dump_dir.empty()) {
     // The whole run of the first stimulus.
     write_dump(o, runs.empty() ? random_stimulus({o.profile, lo, o.cycles}) : runs[0].second, dut,
-               traced, output_failed);
+               output_failed);
   }
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   nlohmann::json run = {{"profile", o.profile_name},

@@ -12,7 +12,7 @@ extern "C" {
 #endif
 
 /* Raised whenever a struct below changes; the harness refuses any other value. */
-#define DPC31_RTL_MODEL_ABI 3
+#define DPC31_RTL_MODEL_ABI 4
 /* Outputs in the order of docs/golden-model.md "Outputs compared on every cycle", bus_rdata last.
  */
 #define DPC31_RTL_OUTPUTS 31
@@ -37,6 +37,9 @@ struct dpc31_rtl_model {
   uint32_t outputs;   /* DPC31_RTL_OUTPUTS */
   int has_mutant_sel; /* the model has the input mutant_sel[3:0] */
   const char* top;    /* the Verilog top module */
+  /* The profile the model is built for (-GPROFILE=): "spc3", "vpc3plus" or "dpc31" (ABI 4); the
+   * harness refuses a run of another profile. */
+  const char* profile;
   /* A model after its power-on reset (one clock with rst = 1); NULL when out of memory. The
    * static inputs stay as given for the whole run. */
   void* (*create)(int motorola, unsigned asic_type, unsigned mutant_sel);

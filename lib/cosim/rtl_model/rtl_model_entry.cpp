@@ -1,6 +1,7 @@
 // The C entry point (dpc31_rtl_model.h) over one Verilated model, compiled once per model by
 // dpc31emu_verilate_model() (packaging/dpc31emu_rtl.cmake) with DPC31_RTL_CLASS (the Verilated
-// class) and DPC31_RTL_HEADER (its header), DPC31_RTL_TOP (the module name).
+// class) and DPC31_RTL_HEADER (its header), DPC31_RTL_TOP (the module name), DPC31_RTL_PROFILE
+// (the PROFILE it is verilated for).
 #include "verilated_blocks.hpp"
 #include DPC31_RTL_HEADER
 
@@ -26,6 +27,7 @@ constexpr dpc31_rtl_model kModel = {DPC31_RTL_MODEL_ABI,
                                     DPC31_RTL_OUTPUTS,
                                     Blocks::kHasMutantSel ? 1 : 0,
                                     DPC31_RTL_TOP,
+                                    DPC31_RTL_PROFILE,
                                     create,
                                     destroy,
                                     step,
