@@ -179,6 +179,10 @@ struct Trace {
   std::vector<TraceLine> lines;
 };
 
+// Why `baud` cannot be a trace's `baud` line ("" if it can): out of 1..12000000, or (with a
+// `clock_hz`) no whole bit time at that clock. The parser and the recorder say it alike.
+std::string trace_baud_problem(std::uint64_t baud, std::uint32_t clock_hz = 0);
+
 bool parse_trace(std::string_view text, const std::string& file, Trace& out, TraceError& err);
 bool load_trace(const std::string& path, Trace& out, TraceError& err);
 

@@ -241,15 +241,14 @@ class TraceParser {
       once(have_baud_);
       arity(w, 2, "baud N");
       const std::uint64_t b = dec(w[1], "baud");
-      if (b == 0 || b > 12'000'000) fail(fmt::format("baud {} out of range (1..12000000)", b));
+      if (const std::string why = trace_baud_problem(b); !why.empty()) fail(why);
       t_.baud = static_cast<std::uint32_t>(b);
     } else {
       return false;
     }
     // At the later of the two lines, the one that makes the pair unusable.
-    if ((k == "clock" || k == "baud") && have_clock_ && have_baud_ &&
-        bit_cycles(clock(), t_.baud) == 0) {
-      fail(fmt::format("baud {} is unusable at clock {}", t_.baud, clock()));
+    if ((k == "clock" || k == "baud") && have_clock_ && have_baud_) {
+      if (const std::string why = trace_baud_problem(t_.baud, clock()); !why.empty()) fail(why);
     }
     return true;
   }
@@ -435,6 +434,14 @@ class TraceParser {
 };
 
 }  // namespace
+
+std::string trace_baud_problem(std::uint64_t baud, std::uint32_t clock_hz) {
+  if (baud == 0 || baud > 12'000'000)
+    return fmt::format("baud {} out of range (1..12000000)", baud);
+  if (clock_hz != 0 && bit_cycles(clock_hz, static_cast<std::uint32_t>(baud)) == 0)
+    return fmt::format("baud {} is unusable at clock {}", baud, clock_hz);
+  return "";
+}
 
 bool parse_trace(std::string_view text, const std::string& file, Trace& out, TraceError& err) {
   Trace t;

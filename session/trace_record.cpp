@@ -12,6 +12,26 @@
 
 namespace dpc31 {
 
+namespace {
+
+// A comment line of the trace: its text stays on the line (a scenario's or a firmware's file name
+// may hold a newline, which put the rest of the name on body lines), and a control byte, which
+// the parser refuses anywhere in the file, is written as \xHH. Tabs and UTF-8 stay as they are.
+std::string comment_line(std::string_view text) {
+  std::string out = "# ";
+  for (const char c : text) {
+    const auto b = static_cast<unsigned char>(c);
+    if ((b < 0x20 && c != '\t') || b == 0x7F) {
+      out += fmt::format("\\x{:02X}", b);
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 std::vector<TraceStateKey> trace_state(const Chip& c) {
   return {
       {"dp", std::string(dp_state_name(c.dp_state()))},
@@ -75,9 +95,12 @@ void TraceRecorder::attach(Chip& chip) {
   chip_ = &chip;
   if (chip.cycle() != 0) {
     error_ = fmt::format("the recording must start at cycle 0, not {}", chip.cycle());
+  } else {
+    // A baud the trace's `baud` line cannot hold makes a file replay refuses at that line.
+    error_ = trace_baud_problem(baud_, chip.clock_hz());
   }
   header_.emplace_back(kTraceMagic);
-  for (const std::string& n : notes_) header_.push_back(n.empty() ? "#" : "# " + n);
+  for (const std::string& n : notes_) header_.push_back(n.empty() ? "#" : comment_line(n));
   header_.push_back(fmt::format("profile {}", profile_name(chip.profile().id)));
   if (chip.vpc3_variant()) {
     header_.push_back(fmt::format("variant {}", vpc3_variant_name(*chip.vpc3_variant())));
@@ -146,7 +169,7 @@ void TraceRecorder::close_rxd() {
 void TraceRecorder::heading(std::string text) { headings_.push_back(std::move(text)); }
 
 void TraceRecorder::note(std::uint64_t cycle, std::string text) {
-  seg_.push_back(Entry{cycle, "# " + std::move(text)});
+  seg_.push_back(Entry{cycle, comment_line(text)});
 }
 
 void TraceRecorder::note_heard(std::uint64_t start, std::string text) {
@@ -166,7 +189,7 @@ void TraceRecorder::note_heard(std::uint64_t start, std::string text) {
       const std::string& line = body_[i - 1];
       if (!line.starts_with("rx ")) continue;
       if (line.starts_with(rx)) {
-        body_.insert(body_.begin() + static_cast<std::ptrdiff_t>(i), "# " + std::move(text));
+        body_.insert(body_.begin() + static_cast<std::ptrdiff_t>(i), comment_line(text));
         return;
       }
       std::uint64_t at = 0;
@@ -197,7 +220,7 @@ void TraceRecorder::close_segment() {
     later.assign(std::make_move_iterator(beyond), std::make_move_iterator(seg_.end()));
     seg_.erase(beyond, seg_.end());
   }
-  for (const std::string& h : headings_) body_.push_back("# " + h);
+  for (const std::string& h : headings_) body_.push_back(comment_line(h));
   for (const Entry& e : seg_) {
     const bool comment = e.text.starts_with('#');
     if (e.key < last_key_ && !comment && error_.empty()) {
@@ -228,7 +251,12 @@ void TraceRecorder::checkpoint() {
 }
 
 void TraceRecorder::finish() {
-  if (chip_ == nullptr || finished_) return;
+  if (chip_ == nullptr) {
+    // text() has no header then: nothing replay could read.
+    if (error_.empty()) error_ = "never attached to a chip: attach() before the run";
+    return;
+  }
+  if (finished_) return;
   if (closing_) close_segment();
   checkpoint();
   body_.push_back(fmt::format("end {}", chip_->cycle()));

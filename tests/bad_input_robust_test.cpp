@@ -54,12 +54,20 @@ TEST_F(BadInput, CosimFailedDumpKeepsTheSummaryAndJunit) {
   EXPECT_NE(slurp(path("j.xml")).find("tests=\"2\""), std::string::npos);
 }
 
-// The seed range base + seeds (one past the last seed) is a 64-bit number: it wrapped to 0.
+// The seed range base + seeds (one past the last seed, the summary's "to") is a 64-bit number:
+// it wrapped to 0. The one seed 2^64 - 1 does not run past 2^64 - 1, its "to" does: the message
+// says so (docs/decisions.md, s30-out).
 TEST_F(BadInput, CosimSeedRangeStaysWithin64Bits) {
   expect_bad(dpc31("cosim --seed-base 18446744073709551615 --seeds 2 --quiet"),
-             "dpc31 cosim: --seed-base 18446744073709551615 with --seeds 2: the seeds run past "
-             "18446744073709551615, the last 64-bit number",
+             "dpc31 cosim: --seed-base 18446744073709551615 with --seeds 2: the summary's \"to\" "
+             "(one past the last seed) would pass 18446744073709551615, the last 64-bit number: "
+             "the last seed a run can have is 18446744073709551614",
              "wrap");
+  expect_bad(dpc31("cosim --seed-base 18446744073709551615 --seeds 1 --quiet"),
+             "dpc31 cosim: --seed-base 18446744073709551615 with --seeds 1: the summary's \"to\" "
+             "(one past the last seed) would pass 18446744073709551615, the last 64-bit number: "
+             "the last seed a run can have is 18446744073709551614",
+             "the last seed alone");
   expect_bad_prefix(dpc31("cosim --seed-base 18446744073709551615 --seeds 1 --shard 1/2"),
                     "dpc31 cosim: --seed-base ", "wrap in a shard");
   const Outcome r = dpc31("cosim --seed-base 18446744073709551613 --seeds 2 --cycles 100 --quiet");
@@ -174,4 +182,22 @@ TEST_F(BadInput, VcdTokensAreBoundedByTheWidestValue) {
              "long.vcd:1: a token longer than 32 MiB (the widest value, 2^24 bits, has 16 Mi "
              "characters)",
              "long token");
+}
+
+// A session's JUnit case is named by its scenario's file name, which may hold the markup
+// characters and a newline: the file stays XML a CI can read (python3's parser), and the name
+// reads back as it is (docs/golden-model.md, "Session mode": PROFILE.session.NAME).
+TEST_F(BadInput, CosimSessionJunitEscapesTheScenarioName) {
+  const std::string name = "we&ird<\"x'>\n.scn";
+  copy(std::string(SOURCE_DIR) + "/traces/gc_sync_dpc31.scn", name);
+  const Outcome r = dpc31(
+      "cosim --session 'we&ird<\"x'\\''>\n.scn' --mutant EOI_SHORT --junit weird.xml "
+      "--out weird --quiet");
+  ASSERT_EQ(r.rc, 1) << r.err;  // the mutant's divergence
+  const testutil::CommandResult parsed = testutil::run_command(
+      "python3 -c \"import sys, xml.etree.ElementTree as t; c = t.parse(sys.argv[1]).find("
+      "'testcase'); print(repr(c.get('name')), c.find('failure') is not None)\" " +
+      path("weird.xml") + " 2>&1");
+  ASSERT_EQ(parsed.rc, 0) << slurp(path("weird.xml"));
+  EXPECT_EQ(parsed.out, "'dpc31.session.we&ird<\"x\\'>\\n' True\n") << slurp(path("weird.xml"));
 }

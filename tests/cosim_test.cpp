@@ -360,6 +360,12 @@ TEST(Cosim, BrokenTracesAreRejectedWithFileAndLine) {
   EXPECT_EQ(e, "i.trace:2: 'end' needs the cycle count, at least the last cycle + 1");
   EXPECT_FALSE(parse_trace("5 ev_din\nend x\n", "i.trace", s, e));
   EXPECT_EQ(e, "i.trace:2: 'end' needs the cycle count, at least the last cycle + 1");
+  // One count, as the golden trace's `end CYCLE` (the audit's `end 9180 extra` ran as end 9180).
+  EXPECT_FALSE(parse_trace("5 ev_din\nend 9180 extra\n", "i.trace", s, e));
+  EXPECT_EQ(e, "i.trace:2: 'end' takes one cycle count, not also 'extra'");
+  EXPECT_FALSE(parse_trace("5 ev_din\nend 9180 9999\n", "i.trace", s, e));
+  EXPECT_EQ(e, "i.trace:2: 'end' takes one cycle count, not also '9999'");
+  EXPECT_TRUE(parse_trace("5 ev_din\nend 9180 \r\n", "i.trace", s, e)) << e;
   EXPECT_TRUE(parse_trace("# c\n2 wr 0008<-01 ev_gc(20)\nend 4\n", "f.trace", s, e)) << e;
   ASSERT_EQ(s.size(), 4u);
   EXPECT_TRUE(s[2].bus_wr && s[2].ev_gc && s[2].gc_cmd == 0x20 && s[2].bus_wdata == 0x01);

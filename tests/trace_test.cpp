@@ -349,6 +349,34 @@ TEST(TraceFile, ReplayChecksAHandWrittenTrace) {
   EXPECT_EQ(replay_text(text, msg), 0) << msg;
 }
 
+// error(): "Empty, or why the recording is not a valid trace". A baud the `baud` line cannot hold
+// and a recorder never attached gave an empty error() and a text() the parser refuses (the
+// audit's rec.cpp); each now says why, in the parser's words.
+TEST(TraceFile, TheRecorderSaysWhyItsRecordingIsNoTrace) {
+  for (const std::uint32_t baud : {0U, 12'000'001U, 4'000'000'000U}) {
+    dpc31::Chip c({dpc31::Profile::spc3, dpc31::BusMode::intel});
+    dpc31::TraceRecorder r(baud);
+    r.attach(c);
+    c.step(10);
+    r.finish();
+    EXPECT_EQ(r.error(), "baud " + std::to_string(baud) + " out of range (1..12000000)");
+    Trace t;
+    TraceError e;
+    EXPECT_FALSE(parse_trace(r.text(), "x.trace", t, e));
+  }
+  dpc31::ChipOptions slow{dpc31::Profile::spc3, dpc31::BusMode::intel};
+  slow.clock_hz = 1000;  // T = 1000 / 1500000 rounds to no whole cycle
+  dpc31::Chip c(slow);
+  dpc31::TraceRecorder r(1'500'000);
+  r.attach(c);
+  r.finish();
+  EXPECT_EQ(r.error(), "baud 1500000 is unusable at clock 1000");
+  dpc31::TraceRecorder never(1'500'000);
+  never.finish();
+  EXPECT_EQ(never.error(), "never attached to a chip: attach() before the run");
+  EXPECT_EQ(never.text(), "");
+}
+
 // --- the RxD line ---
 
 std::vector<std::pair<std::uint64_t, bool>> encode(const std::vector<std::uint8_t>& b,
@@ -424,6 +452,27 @@ TEST(TraceCli, RecordThenReplay) {
   EXPECT_EQ(p.rc, 0) << p.out;
   EXPECT_NE(p.out.find(": ok up to cycle "), std::string::npos) << p.out;
   EXPECT_EQ(cli("replay --quiet " + trace).out, "");
+}
+
+// The scenario's file name is written into a comment: a newline in it put "end 5" on a body line
+// of its own and the replay refused the trace (the audit's rnl.trace). It is one comment line,
+// the newline as \x0A, and the trace replays.
+TEST(TraceCli, AFileNameWithANewlineStaysInItsComment) {
+  const std::string scn = tmp("rnl\nend 5\nx.scn");
+  const std::string trace = tmp("rnl.trace");
+  std::ofstream(scn) << kScenario;
+  const Cli r = cli("run --quiet --record " + trace + " '" + scn + "'");
+  ASSERT_EQ(r.rc, 0) << r.out;
+  std::ifstream in(trace);
+  std::stringstream text;
+  text << in.rdbuf();
+  EXPECT_NE(text.str().find("\n# recorded by `dpc31 run --record` from " +
+                            tmp("rnl\\x0Aend 5\\x0Ax.scn") + " (docs/trace-format.md)\n"),
+            std::string::npos)
+      << text.str().substr(0, 300);
+  const Cli p = cli("replay --quiet " + trace);
+  EXPECT_EQ(p.rc, 0) << p.out;
+  std::remove(scn.c_str());
 }
 
 // docs/trace-format.md's "Example" as a user copies it: an SPC3 started by Mode_Reg1_S (the

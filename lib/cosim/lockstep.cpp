@@ -10,8 +10,10 @@
 #include <sstream>
 #include <system_error>
 
+#include "child.hpp"
 #include "dpc31/dpv1.hpp"
 #include "dpc31/reg_ids.hpp"
+#include "fst_hooks.h"
 #include "outfile.hpp"
 #include "rtl_library.hpp"
 #include "textfile.hpp"
@@ -549,6 +551,9 @@ bool parse_trace(const std::string& text, const std::string& file, Stimulus& out
         return fail(fmt::format("'end' beyond {} cycles", kMaxCycles));
       if (ec != std::errc{} || total < last)
         return fail("'end' needs the cycle count, at least the last cycle + 1");
+      // One count, as the golden trace's 'end CYCLE' and the header's one value per line.
+      if (std::string more; ls >> more)
+        return fail(fmt::format("'end' takes one cycle count, not also '{}'", shown(more)));
       out.resize(total);
       ended = true;
       continue;
@@ -581,7 +586,6 @@ bool parse_trace(const std::string& text, const std::string& file, Stimulus& out
 
 RtlFst write_rtl_fst(const Stimulus& s, const DutOptions& o, std::string_view mutant,
                      const std::string& path, std::string& error) {
-  std::unique_ptr<Dut> rtl = make_rtl_dut(o, mutant);
   outfile::OutFile out;
   if (!out.open(path)) {
     error = out.error();
@@ -593,7 +597,20 @@ RtlFst write_rtl_fst(const Stimulus& s, const DutOptions& o, std::string_view mu
     error = out.error();
     return RtlFst::failed;
   }
-  if (!rtl || !rtl->trace_to(name)) {
+  // The model traces in a child process: the tracer of a model built elsewhere (--rtl,
+  // --rtl-model) carries its own fstapi, whose writes nobody checks, and it dies of SIGBUS when
+  // a file of it cannot grow (a full file system, `ulimit -f`). Here that is one line and exit
+  // 2, after the summary, with the temporaries removed by this process.
+  enum : int { kTraced = 0, kNoTracing = 3, kWritesFailed = 4 };
+  const child::Result r = child::call([&] {
+    std::unique_ptr<Dut> rtl = make_rtl_dut(o, mutant);
+    const unsigned long failed = dpc31_fst_failed_writes();
+    if (!rtl || !rtl->trace_to(name)) return int{kNoTracing};
+    for (const Inputs& in : s) rtl->step(in);
+    rtl.reset();  // closes the trace
+    return dpc31_fst_failed_writes() == failed ? int{kTraced} : int{kWritesFailed};
+  });
+  if (r.exit_code == kNoTracing) {
     error = o.rtl ? fmt::format(
                         "{}: not written: the RTL model {} did not trace (its trace_to "
                         "returned 0)",
@@ -604,9 +621,14 @@ RtlFst write_rtl_fst(const Stimulus& s, const DutOptions& o, std::string_view mu
                         path);
     return RtlFst::not_traced;
   }
-  for (const Inputs& in : s) rtl->step(in);
-  rtl.reset();  // closes the trace
-  if (!out.commit_fst()) {
+  if (r.exit_code != kTraced && r.exit_code != kWritesFailed) {
+    error = fmt::format(
+        "{}: cannot write: the RTL model's FST tracer ended its process ({}): is the file "
+        "system full?",
+        path, r.exit_code == -1 ? "a signal" : fmt::format("exit {}", r.exit_code));
+    return RtlFst::failed;
+  }
+  if (!out.commit_fst(r.exit_code == kWritesFailed)) {
     error = out.error();
     return RtlFst::failed;
   }

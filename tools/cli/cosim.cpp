@@ -474,14 +474,58 @@ bool windows_ready(const CosimOptions& o) {
   return true;
 }
 
+// Text for an XML attribute value: the markup characters as entities, tab, line feed and
+// carriage return as character references (an attribute's newline would read as a space), and
+// the other C0 controls, which XML 1.0 cannot carry at all, as U+FFFD. A session's case is named
+// by its scenario's file name, which may hold any of them.
+std::string xml_attribute(std::string_view text) {
+  std::string out;
+  for (const char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&apos;";
+        break;
+      case '\t':
+        out += "&#9;";
+        break;
+      case '\n':
+        out += "&#10;";
+        break;
+      case '\r':
+        out += "&#13;";
+        break;
+      default:
+        if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
+          out += "\xEF\xBF\xBD";
+        } else {
+          out += c;
+        }
+    }
+  }
+  return out;
+}
+
 std::string junit(const std::string& profile, const nlohmann::json& results) {
   std::string cases;
   int failures = 0;
   for (const auto& r : results) {
     // A seed's case, or a session's (named by its scenario).
     const std::string name =
-        r.contains("seed") ? fmt::format("{}.seed{}", profile, r["seed"].get<std::uint64_t>())
-                           : fmt::format("{}.session.{}", profile, r["session"].get<std::string>());
+        r.contains("seed")
+            ? fmt::format("{}.seed{}", profile, r["seed"].get<std::uint64_t>())
+            : fmt::format("{}.session.{}", profile, xml_attribute(r["session"].get<std::string>()));
     if (r["diverged"].get<bool>()) {
       ++failures;
       cases += fmt::format(
@@ -811,13 +855,17 @@ int run_cosim(const CosimOptions& given) {
     fmt::print(stderr, "dpc31 cosim: {}\n", same);
     return 2;
   }
-  // The run's seeds, base + seeds (one past the last) included, are 64-bit numbers: a range that
-  // wrapped past 2^64 - 1 to 0 ran seeds of another run and summed to a summary merge refuses.
+  // The summary's "to" is one past the last seed (base + seeds), a 64-bit number like every
+  // seed: a range that wrapped to 0 ran seeds of another run and summed to a summary merge
+  // refuses. So the last seed a run can have is 2^64 - 2, and the message says that, not that
+  // the seeds themselves overflow (seed 2^64 - 1 alone would fit, its "to" would not).
   if (o.replay.empty() && o.seeds > std::numeric_limits<std::uint64_t>::max() - o.seed_base) {
     fmt::print(stderr,
-               "dpc31 cosim: --seed-base {} with --seeds {}: the seeds run past {}, the last "
-               "64-bit number\n",
-               o.seed_base, o.seeds, std::numeric_limits<std::uint64_t>::max());
+               "dpc31 cosim: --seed-base {} with --seeds {}: the summary's \"to\" (one past the "
+               "last seed) would pass {}, the last 64-bit number: the last seed a run can have "
+               "is {}\n",
+               o.seed_base, o.seeds, std::numeric_limits<std::uint64_t>::max(),
+               std::numeric_limits<std::uint64_t>::max() - 1);
     return 2;
   }
   // Opened before the seeds run: a bad path is one line up front, not after minutes.

@@ -12,6 +12,7 @@
 #include <system_error>
 
 #include "fst_chain.hpp"
+#include "fst_hooks.h"
 
 namespace dpc31::outfile {
 
@@ -190,6 +191,7 @@ bool OutFile::fail(std::string msg) {
 bool OutFile::open(const std::string& path) {
   discard();
   error_.clear();
+  fst_failures_.reset();
   path_ = path;
   target_ = path;
   direct_ = false;
@@ -285,6 +287,8 @@ std::string OutFile::library_path() {
     fail(fmt::format("{}: not open for writing", path_));
     return {};
   }
+  // Before the library writes: commit_fst() compares (fst_hooks.h).
+  if (!fst_failures_) fst_failures_ = dpc31_fst_failed_writes();
   if (!direct_) {
     if (scratch_entries_.empty()) scratch_entries_.push_back(cleanup::Entry::path(tmp_ + ".hier"));
     return tmp_;
@@ -304,9 +308,19 @@ std::string OutFile::library_path() {
   return scratch_dir_ + "/out";
 }
 
-bool OutFile::commit_fst() {
+bool OutFile::commit_fst(bool failed_elsewhere) {
   const std::string written = library_path();
   if (written.empty()) return false;
+  // A write fstapi did not check failed (a scratch file in /tmp, the .hier next to the file): a
+  // whole-looking file with wrong values, so the walk below cannot tell.
+  if (failed_elsewhere || dpc31_fst_failed_writes() != *fst_failures_) {
+    const int err = failed_elsewhere ? 0 : dpc31_fst_last_errno();
+    discard();
+    return fail(
+        fmt::format("{}: cannot write: a write of the FST writer failed ({}): is the file "
+                    "system full?",
+                    path_, err != 0 ? errno_text(err) : "its scratch files"));
+  }
   const std::string problem = fst_chain::incomplete(written);
   if (problem.empty()) {
     // The library wrote a file of its own under the name (commit() syncs only the one open()

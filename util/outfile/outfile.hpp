@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -92,10 +93,11 @@ class OutFile {
   // has (open() set them; another hard link to the old file keeps the old bytes). False with
   // error() if any write since open() failed or the rename fails; the temporary is then removed.
   bool commit();
-  // commit() for what a library wrote to library_path() as FST: first checks that fstapi left a
-  // whole file (fst_chain::incomplete; its writes are unchecked, so a full file system shows
-  // only there), else discards it with a one-line error().
-  bool commit_fst();
+  // commit() for what a library wrote to library_path() as FST: first checks that none of
+  // fstapi's unchecked writes failed since library_path() (fst_hooks.h: its scratch files) and
+  // that it left a whole file (fst_chain::incomplete), else discards it with a one-line error().
+  // `failed_elsewhere`: the library wrote in a child process, which counted a failure there.
+  bool commit_fst(bool failed_elsewhere = false);
   // Removes the temporary; the target stays as it was.
   void discard();
 
@@ -109,6 +111,7 @@ class OutFile {
   std::string tmp_;
   bool direct_ = false;      // a device, FIFO or descriptor, written in place
   std::string scratch_dir_;  // library_path() of a direct target: the private directory
+  std::optional<unsigned long> fst_failures_;  // dpc31_fst_failed_writes() at library_path()
   cleanup::Entry tmp_entry_;
   std::vector<cleanup::Entry> scratch_entries_;  // the scratch files, their .hier, the directory
   std::FILE* f_ = nullptr;
