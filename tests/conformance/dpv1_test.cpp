@@ -91,6 +91,14 @@ struct Dpv1 : Bare {
     testutil::user_start(chip);
     found_again();
   }
+  // With Set_Ext_Prm_Supported: the master's Set_Prm and the user's User_Prm_Data_Okay, so the
+  // slave is in Wait_Cfg, where a Set_Ext_Prm is taken (p.54).
+  void wait_cfg_for_set_ext_prm() {
+    set_ext_prm_supported();
+    ASSERT_TRUE(master.fdl_status().answer);
+    master.set_prm();
+    ASSERT_EQ(chip.read(0x0E), 0x00);  // User_Prm_Data_Okay
+  }
   // After a Start the chip searches the baud rate again: FDL_Status until it answers.
   void found_again() {
     for (int i = 0; i < 20 && !master.fdl_status().answer; ++i) {
@@ -259,10 +267,7 @@ TEST(Dpv1SetExtPrm, WithoutSetExtPrmSupportedRs) {
 // (docs/timing.md "Command reads"). Audit s30 a-dpv1 finding 1: the Cfg OK entered at once.
 TEST(Dpv1SetExtPrm, CfgOkWaitsForTheSetExtPrmVerdict) {
   Dpv1 b;
-  b.set_ext_prm_supported();
-  ASSERT_TRUE(b.master.fdl_status().answer);
-  b.master.set_prm();
-  ASSERT_EQ(b.chip.read(0x0E), 0x00);  // User_Prm_Data_Okay: Wait_Cfg
+  b.wait_cfg_for_set_ext_prm();
   ASSERT_EQ(wire(b.master.set_ext_prm({0x07, 0x81, 0x00, 0x00, 0x42}).answer), sc());
   EXPECT_EQ(wire(b.master.chk_cfg().answer), sc());
   EXPECT_EQ(b.chip.read(0x10), 0x00);  // User_Cfg_Data_Okay: finished
@@ -296,10 +301,7 @@ TEST(Dpv1SetExtPrm, CfgOkWaitsForTheSetExtPrmVerdict) {
 // Wait_Cfg until the new one's Cfg OK.
 TEST(Dpv1SetExtPrm, WaitingCfgOkEndsWithNotOkayOrANewChkCfg) {
   Dpv1 b;
-  b.set_ext_prm_supported();
-  ASSERT_TRUE(b.master.fdl_status().answer);
-  b.master.set_prm();
-  ASSERT_EQ(b.chip.read(0x0E), 0x00);
+  b.wait_cfg_for_set_ext_prm();
   ASSERT_EQ(wire(b.master.set_ext_prm({0x07, 0x81}).answer), sc());
   b.master.chk_cfg();
   ASSERT_EQ(b.chip.read(0x10), 0x00);
@@ -332,10 +334,7 @@ TEST(Dpv1SetExtPrm, WaitingCfgOkEndsWithNotOkayOrANewChkCfg) {
 // logged as "not between Set_Prm and Chk_Cfg", the empty one was not logged).
 TEST(Dpv1SetExtPrm, AnotherMasterIsIgnoredAndEveryRefusalLogsItsReason) {
   Dpv1 b;
-  b.set_ext_prm_supported();
-  ASSERT_TRUE(b.master.fdl_status().answer);
-  b.master.set_prm();
-  ASSERT_EQ(b.chip.read(0x0E), 0x00);  // User_Prm_Data_Okay: Wait_Cfg
+  b.wait_cfg_for_set_ext_prm();
   const auto ext = [&](std::uint8_t from, Bytes du) {
     return wire(b.srd(sap::Set_Ext_Prm, std::move(du), 62,
                       fdl::make_request_fc(fdl::Function::SRD_high, false, false), from)
