@@ -96,7 +96,7 @@ void dp_fields(Ar& ar, S& s) {
   ar(s.prm_wd_fact2);
   ar(s.prm_wd_1ms);
   ar(s.failsafe);
-  ar(s.dx_on_new_din);
+  ar(s.dx_deferred);
   ar(s.diag_requester);
   ar(s.sync_mode);
   ar(s.freeze_mode);

@@ -54,13 +54,20 @@ std::uint16_t DpStateMachine::verdict(Handshake& h, std::uint16_t event, bool& f
   return r;
 }
 
-// The same reads answer a Set_Ext_Prm (VPC3+, New_Ext_Prm_Data): accepting it changes nothing
-// else.
+// The same reads answer a Set_Ext_Prm (VPC3+, New_Ext_Prm_Data): accepting it only lets a Cfg OK
+// that waits for it enter Data_Exchange.
 std::uint16_t DpStateMachine::prm_verdict(Verdict v) {
   const bool ext = s_.ext_prm;
   const std::uint16_t r = verdict(
       s_.prm, ext ? irq::New_Ext_Prm_Data : irq::New_Prm_Data, s_.prm_fault, v, [this, ext] {
-        if (ext) return;
+        if (ext) {
+          // The last parameter telegram acknowledged: a Cfg OK given meanwhile takes effect now.
+          if (s_.dx_deferred && s_.state == DpState::Wait_Cfg) {
+            s_.dx_deferred = false;
+            enter_data_exchange();
+          }
+          return;
+        }
         // The parameters are accepted: the DP watchdog runs with the new TWD from now on.
         watchdog_.parameterise(s_.prm_wd_on, s_.prm_wd_fact1, s_.prm_wd_fact2, s_.prm_wd_1ms);
         if (s_.state == DpState::Wait_Prm) s_.state = DpState::Wait_Cfg;
@@ -72,10 +79,12 @@ std::uint16_t DpStateMachine::prm_verdict(Verdict v) {
 // SPC3 p.31: "the transition to 'DATA_EX' takes place immediately, if no Din_buffer is present
 // (R_Len_Din_Puf = 00H) ..." — otherwise (the sentence is cut off in every copy; modelled) at
 // the user's next New_Din_Buffer_Cmd, so the first answer in Data_Exchange carries the user's
-// inputs. VPC3+ and DPC31: at once.
+// inputs. VPC3+C p.48: "the VPC3+C does not go to DATA-EXCH before all parameter telegrams and
+// configuration telegrams have been acknowledged": a Set_Ext_Prm's verdict pending (the only Prm
+// verdict Wait_Cfg can have), at that verdict. Otherwise at once.
 void DpStateMachine::enter_data_exchange() {
-  if (regs_.id() == Profile::spc3 && regs_.cell(RegId::R_Len_Din_Buf) != 0) {
-    s_.dx_on_new_din = true;
+  if (s_.prm.pending || (regs_.id() == Profile::spc3 && regs_.cell(RegId::R_Len_Din_Buf) != 0)) {
+    s_.dx_deferred = true;
     return;
   }
   s_.state = DpState::Data_Exchange;
@@ -189,8 +198,13 @@ bool DpStateMachine::service(const fdl::Frame& req) {
     // SPC3 p.36 (Rd_Outp: "If there is a buffer change from 'N' to 'U' ... between the first
     // call-up and the repetition, the new output data is sent during the repetition") and
     // DPC31 p.33 (Rd_Inp, U -> N -> D): these two answer from the buffers as they are now.
-    if (req.dsap &&
-        (fdl::sap_number(*req.dsap) == sap::Rd_Inp || fdl::sap_number(*req.dsap) == sap::Rd_Outp)) {
+    const bool io = req.dsap && (fdl::sap_number(*req.dsap) == sap::Rd_Inp ||
+                                 fdl::sap_number(*req.dsap) == sap::Rd_Outp);
+    // Named in the log: an RS or an old response with no reason would be a riddle (the log's
+    // limiter bounds a master that repeats for ever).
+    sig_.log(LogLevel::info, "FCB repeat from {}: {}", req.sa,
+             io ? "answered from the buffers as they are now" : "the previous answer again");
+    if (io) {
       std::optional<Frame> fresh = read_io(req);
       if (!fresh) return false;
       fdl::encode(*fresh, s_.last_response);
@@ -402,7 +416,7 @@ void DpStateMachine::prm_fault() {
 void DpStateMachine::prm_accepted() {
   s_.prm_fault = s_.cfg_fault = s_.not_supported = false;
   s_.ext_prm = false;
-  s_.dx_on_new_din = false;  // the new parameters need their verdicts again
+  s_.dx_deferred = false;  // the new parameters need their verdicts again
   s_.prm.arrived();
   irq_.raise(irq::New_Prm_Data);
 }
@@ -413,7 +427,7 @@ void DpStateMachine::cfg_accepted() {
     s_.state = DpState::Wait_Cfg;
     irq_.raise(irq::Go_Leave_Data_Exchange);
   }
-  s_.dx_on_new_din = false;  // the new configuration needs its verdict again
+  s_.dx_deferred = false;  // the new configuration needs its verdict again
   s_.cfg.arrived();
   irq_.raise(irq::New_Cfg_Data);
 }
@@ -531,10 +545,10 @@ std::optional<fdl::Frame> DpStateMachine::set_slave_add(const fdl::Frame& req) {
 }
 
 // The user handed new inputs over (New_Din_Buffer_Cmd): an SPC3 waiting after Cfg OK enters
-// Data_Exchange now.
+// Data_Exchange now (a VPC3+ waiting for a Set_Ext_Prm's verdict goes on waiting).
 void DpStateMachine::din_handed_over() {
-  if (!s_.dx_on_new_din || s_.state != DpState::Wait_Cfg) return;
-  s_.dx_on_new_din = false;
+  if (!s_.dx_deferred || s_.prm.pending || s_.state != DpState::Wait_Cfg) return;
+  s_.dx_deferred = false;
   s_.state = DpState::Data_Exchange;
   irq_.raise(irq::Go_Leave_Data_Exchange);
 }
@@ -653,7 +667,7 @@ void DpStateMachine::leave_master() {
   s_.freeze_mode = false;
   s_.user_wd_armed = false;
   s_.fcb_valid = false;
-  s_.dx_on_new_din = false;
+  s_.dx_deferred = false;
   watchdog_.master_left();
   buffers_.end_clear();
   sig_.log(LogLevel::info, "Leave_Master: DP state -> Wait_Prm");

@@ -79,8 +79,9 @@ class DpStateMachine {
     std::uint8_t prm_wd_fact2 = 0;
     bool prm_wd_1ms = false;
     bool failsafe = false;  // dpc31: Set_Prm byte 13 Failsafe (fail-safe Data_Exchange accepted)
-    // SPC3 with a Din buffer: Cfg OK given, Data_Exchange at the user's next New_Din_Buffer_Cmd.
-    bool dx_on_new_din = false;
+    // Cfg OK given, Data_Exchange waits: on an SPC3 with a Din buffer for the user's next
+    // New_Din_Buffer_Cmd, on a VPC3+ for the pending Set_Ext_Prm's verdict.
+    bool dx_deferred = false;
     std::uint8_t diag_requester = 0xFF;  // the master whose Slave_Diag answer is being sent
     bool sync_mode = false;
     bool freeze_mode = false;

@@ -749,6 +749,9 @@ void bind_master(py::module_& m) {
             }
             rc.dpv1.c1_master = pm.config.address;  // as a scenario's (scenario_run.cpp)
             rc.slave = pm.m->slave();
+            if (const std::string why = records_need_dpv1("records=", rc.slave.user_prm);
+                !records.empty() && !why.empty())
+              throw py::value_error(why);
             rc.sync_supported = sync_supported;
             rc.freeze_supported = freeze_supported;
             rc.spec_clear_mode = spec_clear_mode;

@@ -118,7 +118,7 @@ module dpc31_blocks #(
   reg  [7:0] opt_reg;    // dpc31 Param_Reg / vpc3plus Mode_Reg2, only the OPT_MASK bits
   reg        in_clear;   // dpc31: the current clear was signalled (N_Cl, DX_Out): once per clear
   reg  [7:0] len_din;    // mirrored cell R_Len_Din_Buf (only the user writes it)
-  reg        dx_on_new_din;  // spc3: Cfg OK given, Data_Exchange at the next New_Din_Buffer_Cmd
+  reg        dx_deferred;  // Cfg OK given, DX waits: spc3 New_Din_Buffer_Cmd, vpc3plus Ext_Prm OK
   reg [18:0] eoi_cnt;    // cycles of EOI inactive time left; X/INT may be active only at 0
   reg [18:0] ut_cnt;     // while started: cycles to the next User_Timer_Clock
   reg  [1:0] dout_d, dout_n, dout_u, dout_f;
@@ -160,7 +160,7 @@ module dpc31_blocks #(
   reg  [1:0] nx_diag1, nx_diag2;
   reg        nx_u_cleared, nx_n_cleared, nx_n_cl, nx_d_fresh, nx_in_clear;
   reg  [7:0] nx_len_din;
-  reg        nx_dx_on_new_din;
+  reg        nx_dx_deferred;
   reg  [7:0] nx_dout_ptr1, nx_dout_ptr2, nx_dout_ptr3, nx_dout_ptr_c;
   reg  [7:0] nx_cfg_ptr, nx_read_cfg_ptr, nx_gc_command;
   reg  [7:0] nx_opt_reg;
@@ -227,7 +227,7 @@ module dpc31_blocks #(
     nx_d_fresh = d_fresh;
     nx_in_clear = in_clear;
     nx_len_din = len_din;
-    nx_dx_on_new_din = dx_on_new_din;
+    nx_dx_deferred = dx_deferred;
     nx_dout_ptr1 = dout_ptr1;
     nx_dout_ptr2 = dout_ptr2;
     nx_dout_ptr3 = dout_ptr3;
@@ -316,7 +316,7 @@ module dpc31_blocks #(
       nx_prm_fault = 1'b0;
       nx_cfg_fault = 1'b0;
       nx_not_supported = 1'b0;
-      nx_dx_on_new_din = 1'b0;  // the new parameters need their verdicts again
+      nx_dx_deferred = 1'b0;  // the new parameters need their verdicts again
       nx_ext_prm = 1'b0;
       prm_arrived;
       raise(IRQ_NEW_PRM);
@@ -335,7 +335,7 @@ module dpc31_blocks #(
         nx_dp_state = DP_WAIT_CFG;
         raise(IRQ_GO_LEAVE_DX);
       end
-      nx_dx_on_new_din = 1'b0;  // the new configuration needs its verdict again
+      nx_dx_deferred = 1'b0;  // the new configuration needs its verdict again
       cfg_arrived;
       raise(IRQ_NEW_CFG);
     end
@@ -382,8 +382,8 @@ module dpc31_blocks #(
         // u_to_n on Din; the result is the new U. spc3 after Cfg OK: Data_Exchange now.
         u_to_n;
         nx_bus_rdata = {6'd0, nx_din_u};
-        if (nx_dx_on_new_din && nx_dp_state == DP_WAIT_CFG) begin
-          nx_dx_on_new_din = 1'b0;
+        if (nx_dx_deferred && !nx_prm_pending && nx_dp_state == DP_WAIT_CFG) begin
+          nx_dx_deferred = 1'b0;
           nx_dp_state = DP_DATA_EXCHANGE;
           raise(IRQ_GO_LEAVE_DX);
         end
@@ -541,7 +541,7 @@ module dpc31_blocks #(
       d_fresh <= 1'b0;
       in_clear <= 1'b0;
       len_din <= `SPC3_R_Len_Din_Buf_RESET;
-      dx_on_new_din <= 1'b0;
+      dx_deferred <= 1'b0;
       dout_ptr1 <= DOUT_PTR1_RESET;
       dout_ptr2 <= DOUT_PTR2_RESET;
       dout_ptr3 <= DOUT_PTR3_RESET;
@@ -596,7 +596,7 @@ module dpc31_blocks #(
       d_fresh <= nx_d_fresh;
       in_clear <= nx_in_clear;
       len_din <= nx_len_din;
-      dx_on_new_din <= nx_dx_on_new_din;
+      dx_deferred <= nx_dx_deferred;
       dout_ptr1 <= nx_dout_ptr1;
       dout_ptr2 <= nx_dout_ptr2;
       dout_ptr3 <= nx_dout_ptr3;

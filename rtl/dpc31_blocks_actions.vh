@@ -147,7 +147,7 @@
       nx_not_supported = 1'b0;
       nx_sync_mode = 1'b0;
       nx_freeze_mode = 1'b0;
-      nx_dx_on_new_din = 1'b0;
+      nx_dx_deferred = 1'b0;
       nx_ext_prm = 1'b0;
       nx_sap_sending = 1'b0;  // the MAC reset: no response on the wire
     end
@@ -169,7 +169,7 @@
         nx_freeze_mode = 1'b0;
         nx_n_cl = 1'b0;
         nx_in_clear = 1'b0;
-        nx_dx_on_new_din = 1'b0;
+        nx_dx_deferred = 1'b0;
         nx_ext_prm = 1'b0;
         if (was_dx) raise(IRQ_GO_LEAVE_DX);
         dout_clear;
@@ -270,7 +270,7 @@
   // have discarded what it announced); 01 (conflict, newer cleared, still pending) when a newer
   // one arrived; else 00, not pending, and the completion.
   // vpc3plus: the same reads answer a Set_Ext_Prm (ext_prm): they clear New_Ext_Prm_Data, and
-  // accepting it changes nothing else.
+  // accepting it only lets a Cfg OK that waits for it (dx_deferred) enter Data_Exchange.
   task prm_handshake(input not_ok, output [7:0] res);
     reg [15:0] ev_bit;
     begin
@@ -288,8 +288,16 @@
         // event made the handshake pending, and this read completes it).
         nx_irr = nx_irr & ~ev_bit;
         nx_prm_fault = not_ok;
-        if (not_ok) leave_master;
-        else if (!nx_ext_prm && nx_dp_state == DP_WAIT_PRM) nx_dp_state = DP_WAIT_CFG;
+        if (not_ok) begin
+          leave_master;
+        end else if (!nx_ext_prm && nx_dp_state == DP_WAIT_PRM) begin
+          nx_dp_state = DP_WAIT_CFG;
+        end else if (nx_ext_prm && nx_dx_deferred && nx_dp_state == DP_WAIT_CFG) begin
+          // VPC3+C p.48: the last parameter telegram acknowledged, a Cfg OK given meanwhile.
+          nx_dx_deferred = 1'b0;
+          nx_dp_state = DP_DATA_EXCHANGE;
+          raise(IRQ_GO_LEAVE_DX);
+        end
       end
       if (!nx_prm_pending) nx_ext_prm = 1'b0;
     end
@@ -317,10 +325,11 @@
             nx_cfg_ptr = nx_read_cfg_ptr;
             nx_read_cfg_ptr = t;
           end
-          // spc3 with a Din buffer (R_Len_Din_Buf != 0): at the next New_Din_Buffer_Cmd.
+          // spc3 with a Din buffer (R_Len_Din_Buf != 0): at the next New_Din_Buffer_Cmd;
+          // vpc3plus with a Set_Ext_Prm's verdict pending: at that verdict (VPC3+C p.48).
           if (nx_dp_state == DP_WAIT_CFG) begin
-            if (IS_SPC3 && nx_len_din != 8'h00) begin
-              nx_dx_on_new_din = 1'b1;
+            if (nx_prm_pending || (IS_SPC3 && nx_len_din != 8'h00)) begin
+              nx_dx_deferred = 1'b1;
             end else begin
               nx_dp_state = DP_DATA_EXCHANGE;
               raise(IRQ_GO_LEAVE_DX);

@@ -6,6 +6,7 @@
 #include "dpc31/dp.hpp"
 #include "dpc31/hex.hpp"
 #include "dpc31/names.hpp"
+#include "vocabulary.hpp"
 
 namespace dpc31 {
 
@@ -28,6 +29,10 @@ std::string answer_summary(const Dpv1Answer& a) {
       if (a.du.empty()) return fmt::format("SC {}", polls);  // Abort: no response PDU
       [[fallthrough]];
     case Dpv1Answer::Outcome::malformed:
+      if (a.du.empty() && a.last) {  // a data response of no data: its FC names it
+        return fmt::format("malformed {} without data {}",
+                           response_name(fdl::response_code(a.last->fc)), polls);
+      }
       return fmt::format("{}{} {}", a.outcome == Dpv1Answer::Outcome::malformed ? "malformed " : "",
                          hex_bytes(a.du, " ", 16), polls);
     case Dpv1Answer::Outcome::negative:
@@ -51,8 +56,15 @@ void Dpv1Master::take(Dpv1Answer& a, const Exchange& ex) const {
     return;
   }
   a.end = ex.answer_end;
-  a.outcome = ex.answer->du.empty() && ex.answer->sd != fdl::SC ? Dpv1Answer::Outcome::refused
-                                                                : Dpv1Answer::Outcome::positive;
+  if (!ex.answer->du.empty() || ex.answer->sd == fdl::SC) {
+    a.outcome = Dpv1Answer::Outcome::positive;
+    return;
+  }
+  // An answer without data: the slave's refusal (RS, RR, ...), or a data response (DL, DH) that
+  // carries none, which is no DPV1 response (docs/dpv1.md, "Outcomes").
+  const fdl::Response r = fdl::response_code(ex.answer->fc);
+  a.outcome = r == fdl::Response::DL || r == fdl::Response::DH ? Dpv1Answer::Outcome::malformed
+                                                               : Dpv1Answer::Outcome::refused;
 }
 
 Dpv1Answer Dpv1Master::no_connection() const {

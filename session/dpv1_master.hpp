@@ -58,7 +58,8 @@ inline constexpr std::string_view kDpv1OnVpc3plusOnly =
     "DPV1 is modelled on the VPC3+ only (the DPC31's is not modelled; the SPC3 has none)";
 
 [[nodiscard]] std::string outcome_name(Dpv1Answer::Outcome o);
-// "5E 00 01 04 11 22 33 44 after 2 polls", "negative 80 B0 00", "timeout after 40 polls" ...
+// "5E 00 01 04 11 22 33 44 after 2 polls", "negative 80 B0 00", "timeout after 40 polls",
+// "malformed DL without data after 0 polls" ...
 [[nodiscard]] std::string answer_summary(const Dpv1Answer& a);
 
 class Dpv1Master {

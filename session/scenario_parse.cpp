@@ -185,11 +185,9 @@ class Parser {
     }
     // The built-in user side's DPV1 part answers only what the chip hands it: without
     // DPV1_Enable the SAP list stays off (every request RS), without a record there is none.
-    const std::vector<std::uint8_t>& prm = s_.user.slave.user_prm;
-    if (record_line_ != 0 && (prm.empty() || (prm[0] & dpv1::status1::DPV1_Enable) == 0)) {
-      fail_at(record_line_,
-              "record needs DPV1_Enable (slave user_prm= byte 0 bit 7): without it the VPC3+ "
-              "keeps the SAP list off and answers every DPV1 request RS");
+    if (const std::string why = records_need_dpv1("record", s_.user.slave.user_prm);
+        record_line_ != 0 && !why.empty()) {
+      fail_at(record_line_, why);
     }
     if (work_line_ != 0 && (firmware_seen_ || s_.cpu)) {
       fail_at(work_line_, scenario_dpv1::user_side_only("dpv1 work="));

@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "dpc31/dp.hpp"
+#include "dpc31/dpv1.hpp"
 #include "dpc31/names.hpp"
 #include "textfile.hpp"
 #include "whole_number.hpp"
@@ -224,6 +225,14 @@ std::string wd_base_needs_dpv1(std::string_view option) {
   return fmt::format(
       "{} on profile vpc3plus needs DPV1_Enable (user_prm byte 0 bit 7): without DPV1 the VPC3+ "
       "takes WD_Base from Mode_Reg0, not from Set_Prm",
+      option);
+}
+
+std::string records_need_dpv1(std::string_view option, const std::vector<std::uint8_t>& user_prm) {
+  if (!user_prm.empty() && (user_prm[0] & dpv1::status1::DPV1_Enable) != 0) return {};
+  return fmt::format(
+      "{} needs DPV1_Enable (slave user_prm= byte 0 bit 7): without it the VPC3+ keeps the SAP "
+      "list off and answers every DPV1 request RS",
       option);
 }
 

@@ -7,6 +7,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "dpc31/chip.hpp"
 #include "dpc31/dp.hpp"
@@ -168,5 +169,10 @@ inline constexpr ValueRange kC31Code{"code", 0x08A0, 0x1FFF};
 // The VPC3+ takes WD_Base from Set_Prm's DPV1_Status_1 only with DPV1_Enable; without it
 // Mode_Reg0.WD_Base decides (VPC3+C p.53, docs/dpv1.md): a watchdog base asked of Set_Prm there.
 [[nodiscard]] std::string wd_base_needs_dpv1(std::string_view option);
+// The built-in user side's records are served through the VPC3+'s SAP list, which only a Set_Prm
+// with DPV1_Enable switches on: "" for a slave `user_prm` with it, else why records (`option`:
+// "record", "records=") are refused.
+[[nodiscard]] std::string records_need_dpv1(std::string_view option,
+                                            const std::vector<std::uint8_t>& user_prm);
 
 }  // namespace dpc31

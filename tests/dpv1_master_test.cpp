@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 
 #include "dpc31/dp.hpp"
 #include "responder.hpp"
@@ -245,6 +246,43 @@ TEST(Dpv1Master, NegativeResponse) {
   EXPECT_EQ(a.error, (pdu::ErrorResponse{pdu::Function::Write, pdu::Error_Decode_DPV1,
                                          pdu::error::Write_Length_Error, 0}));
   EXPECT_EQ(r.user.dpv1()->records().front().data, (pdu::Bytes{0x11, 0x22, 0x33, 0x44}));
+}
+
+// A data response (DL) that carries no data is malformed, not refused: refused is the slave's RS
+// or RR (docs/dpv1.md, "Outcomes"; audit s30 a-dpv1, finding 7: it was called refused). The
+// firmware's SAP list by hand (VPC3+C p.54-56): SAP 51 at 600h, its indication buffer at 640h
+// (segment C8h), its response buffer at 680h (D0h) armed before the request with RESP + USER,
+// Length 0, FC 08h. The Read (15 characters, t0..t0+660) is answered at once with that response:
+// 68 05 05 68 82 85 08 33 33 75 16 (FCS 82+85+08+33+33 = 175h), 11 T after the request's end,
+// 11 characters of 44 clocks: it ends at t0 + 660 + 44 + 484 = t0 + 1188, the outcome's cycle.
+TEST(Dpv1Master, ADataResponseWithoutDataIsMalformed) {
+  ResponderConfig rc;
+  rc.slave.user_prm = {0xC0, 0x00, 0x00};  // DPV1_Enable: the SAP list on; no records
+  Chip chip{ChipOptions{Profile::vpc3plus, BusMode::intel, 0}};
+  Responder user(rc);
+  DpMaster master(chip, MasterConfig{2, 12'000'000, 100, 33}, rc.slave);
+  Dpv1Master dpv1(chip, master);
+  DirectBus bus(chip);
+  user.init(bus);
+  master.set_firmware([&user](BusPort& b) { user.isr(b); });
+  ASSERT_TRUE(master.startup());
+  master.idle(200);
+  const std::array<std::uint8_t, 8> list = {51, 0x7F, 0x7F, 0x00, 0xC8, 0x00, 0xD0, 0xFF};
+  const std::array<std::uint8_t, 4> ind = {0x00, 20, 0, 0};
+  const std::array<std::uint8_t, 4> resp = {0xA0, 20, 0, 0x08};  // RESP + USER, Length 0, DL
+  chip.write_block(0x600, list);
+  chip.write_block(0x640, ind);
+  chip.write_block(0x680, resp);
+  chip.write(static_cast<std::uint32_t>(chip.addr_of(RegId::R_FDL_SAP_List_Ptr)), 0xC0);
+  const Dpv1Answer a = dpv1.read(0, 1, 4);
+  EXPECT_EQ(a.outcome, Dpv1Answer::Outcome::malformed);
+  ASSERT_TRUE(a.last);
+  EXPECT_EQ(fdl::encode(*a.last),
+            (pdu::Bytes{0x68, 0x05, 0x05, 0x68, 0x82, 0x85, 0x08, 0x33, 0x33, 0x75, 0x16}));
+  EXPECT_TRUE(a.du.empty());
+  EXPECT_EQ(a.polls, 0u);
+  EXPECT_EQ(a.end, a.start + 1188);
+  EXPECT_EQ(answer_summary(a), "malformed DL without data after 0 polls");  // the walk's words
 }
 
 // MSAC_C2: Initiate gets the connection's SAP from the resource manager; Read on it; Abort closes

@@ -457,6 +457,11 @@ def test_a_scenario_error_of_its_plugin_and_a_bad_cpu_image_are_not_firmware_fau
      r"work_cycles 48000001 out of range \(0..48000000\)"),
     (lambda: _master().run_responder(work_cycles=1440),
      r"work_cycles: no records to work on \(records=\)"),
+    # A slave whose Set_Prm lacks DPV1_Enable (_master's: no user_prm) never opens the SAP
+    # list: the scenario refuses its `record` lines in these words (audit s30 a-dpv1, finding 5).
+    (lambda: _master().run_responder(records=[(0, 1, b"\x01")]),
+     r"records= needs DPV1_Enable \(slave user_prm= byte 0 bit 7\): without it the VPC3\+ keeps "
+     r"the SAP list off and answers every DPV1 request RS"),
 ])
 def test_dpv1_and_board_values_the_scenario_refuses_are_value_errors_in_its_words(call, message):
     with pytest.raises(ValueError, match="^" + message + "$"):

@@ -91,6 +91,14 @@ struct Dpv1 : Bare {
     testutil::user_start(chip);
     found_again();
   }
+  // With Set_Ext_Prm_Supported: the master's Set_Prm and the user's User_Prm_Data_Okay, so the
+  // slave is in Wait_Cfg, where a Set_Ext_Prm is taken (p.54).
+  void wait_cfg_for_set_ext_prm() {
+    set_ext_prm_supported();
+    ASSERT_TRUE(master.fdl_status().answer);
+    master.set_prm();
+    ASSERT_EQ(chip.read(0x0E), 0x00);  // User_Prm_Data_Okay
+  }
   // After a Start the chip searches the baud rate again: FDL_Status until it answers.
   void found_again() {
     for (int i = 0; i < 20 && !master.fdl_status().answer; ++i) {
@@ -249,6 +257,73 @@ TEST(Dpv1SetExtPrm, WithoutSetExtPrmSupportedRs) {
   EXPECT_EQ(irr(b.chip) & irq::New_Ext_Prm_Data, 0);
 }
 
+// p.48 (manual-quotes.md, "Cfg OK goes to Data_Exchange at once"): "During start-up, the VPC3+C
+// does not go to DATA-EXCH before all parameter telegrams and configuration telegrams have been
+// acknowledged"; p.43: "immediately, if trigger counters for the parameter telegrams and
+// configuration telegrams are at 0". A Cfg OK while a Set_Ext_Prm waits for its verdict keeps
+// Wait_Cfg (its read answers 00h, New_Cfg_Data cleared); meanwhile a Data_Exchange gets RS and
+// the diag Station_Not_Ready, as in Wait_Cfg. The Set_Ext_Prm's User_Prm_Data_Okay then enters
+// Data_Exchange at its completion cycle, with Go/Leave_Data_Exchange, as the Cfg OK would have
+// (docs/timing.md "Command reads"). Audit s30 a-dpv1 finding 1: the Cfg OK entered at once.
+TEST(Dpv1SetExtPrm, CfgOkWaitsForTheSetExtPrmVerdict) {
+  Dpv1 b;
+  b.wait_cfg_for_set_ext_prm();
+  ASSERT_EQ(wire(b.master.set_ext_prm({0x07, 0x81, 0x00, 0x00, 0x42}).answer), sc());
+  EXPECT_EQ(wire(b.master.chk_cfg().answer), sc());
+  EXPECT_EQ(b.chip.read(0x10), 0x00);  // User_Cfg_Data_Okay: finished
+  EXPECT_EQ(b.chip.dp_state(), DpState::Wait_Cfg);
+  EXPECT_EQ(irr(b.chip) & (irq::New_Cfg_Data | irq::Go_Leave_Data_Exchange), 0);
+  EXPECT_EQ(wire(b.master.data_exchange({0, 0, 0, 0}).answer), short_fc(kFcRS));
+  const Exchange d = b.master.slave_diag();
+  ASSERT_TRUE(d.answer);
+  EXPECT_EQ(d.answer->du[0], 0x02);  // Station_Not_Ready only
+  std::uint64_t verdict_at = 0, dx_at = 0;
+  b.chip.on_bus_access([&](std::uint64_t c, const BusAccess& a) {
+    if (!a.write && a.addr == 0x0E) verdict_at = c;
+  });
+  b.chip.on_state_change([&](std::uint64_t c) {
+    if (dx_at == 0 && b.chip.dp_state() == DpState::Data_Exchange) dx_at = c;
+  });
+  EXPECT_EQ(b.chip.read(0x0E), 0x00);  // the Set_Ext_Prm's verdict
+  EXPECT_NE(verdict_at, 0u);
+  EXPECT_EQ(dx_at, verdict_at);
+  EXPECT_EQ(irr(b.chip) & (irq::New_Ext_Prm_Data | irq::Go_Leave_Data_Exchange),
+            irq::Go_Leave_Data_Exchange);
+  const Exchange dx = b.master.data_exchange({0, 0, 0, 0});
+  ASSERT_TRUE(dx.answer);
+  EXPECT_EQ(dx.answer->fc, kFcDL);
+}
+
+// The same wait (p.48), the other verdicts (modelled, docs/decisions.md "The thirtieth session:
+// s30-dpv1chip"): the Set_Ext_Prm's User_Prm_Data_Not_Okay goes to Wait_Prm with Prm_Fault and
+// no Go/Leave_Data_Exchange (Data_Exchange was never entered); a Chk_Cfg while the Cfg OK waits
+// is a new configuration (SC, New_Cfg_Data): the Set_Ext_Prm's Okay then leaves the chip in
+// Wait_Cfg until the new one's Cfg OK.
+TEST(Dpv1SetExtPrm, WaitingCfgOkEndsWithNotOkayOrANewChkCfg) {
+  Dpv1 b;
+  b.wait_cfg_for_set_ext_prm();
+  ASSERT_EQ(wire(b.master.set_ext_prm({0x07, 0x81}).answer), sc());
+  b.master.chk_cfg();
+  ASSERT_EQ(b.chip.read(0x10), 0x00);
+  b.ack_all();
+  EXPECT_EQ(b.chip.read(0x0F), 0x00);  // User_Prm_Data_Not_Okay: finished
+  EXPECT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
+  EXPECT_EQ(irr(b.chip) & irq::Go_Leave_Data_Exchange, 0);
+  EXPECT_TRUE(prm_fault(b));
+
+  b.master.set_prm();
+  ASSERT_EQ(b.chip.read(0x0E), 0x00);
+  ASSERT_EQ(wire(b.master.set_ext_prm({0x07, 0x81}).answer), sc());
+  b.master.chk_cfg();
+  ASSERT_EQ(b.chip.read(0x10), 0x00);  // Cfg OK: waits for the Set_Ext_Prm's verdict
+  EXPECT_EQ(wire(b.master.chk_cfg().answer), sc());
+  EXPECT_EQ(irr(b.chip) & irq::New_Cfg_Data, irq::New_Cfg_Data);
+  EXPECT_EQ(b.chip.read(0x0E), 0x00);  // the Set_Ext_Prm accepted: the new Cfg still unchecked
+  EXPECT_EQ(b.chip.dp_state(), DpState::Wait_Cfg);
+  EXPECT_EQ(b.chip.read(0x10), 0x00);
+  EXPECT_EQ(b.chip.dp_state(), DpState::Data_Exchange);
+}
+
 // Set_Ext_Prm from a master that does not lock the slave is ignored (SC) in every state, as its
 // Set_Prm and Chk_Cfg are ("If the Check_Config message does not come from 'Master_Add' ...
 // DPS ignores this message", DPC31 p.28): before the state is looked at (modelled,
@@ -259,10 +334,7 @@ TEST(Dpv1SetExtPrm, WithoutSetExtPrmSupportedRs) {
 // logged as "not between Set_Prm and Chk_Cfg", the empty one was not logged).
 TEST(Dpv1SetExtPrm, AnotherMasterIsIgnoredAndEveryRefusalLogsItsReason) {
   Dpv1 b;
-  b.set_ext_prm_supported();
-  ASSERT_TRUE(b.master.fdl_status().answer);
-  b.master.set_prm();
-  ASSERT_EQ(b.chip.read(0x0E), 0x00);  // User_Prm_Data_Okay: Wait_Cfg
+  b.wait_cfg_for_set_ext_prm();
   const auto ext = [&](std::uint8_t from, Bytes du) {
     return wire(b.srd(sap::Set_Ext_Prm, std::move(du), 62,
                       fdl::make_request_fc(fdl::Function::SRD_high, false, false), from)
@@ -509,6 +581,40 @@ TEST(Dpv1Processing, RepeatedPollGetsTheSameResponse) {
   EXPECT_EQ(wire(again.answer), wire(first.answer));
   EXPECT_TRUE(b.irq_on.empty());
   EXPECT_EQ(wire(b.srd(kC1, {}, kC1, fc(true)).answer), sc());  // the next poll: nothing left
+}
+
+// EN 50170's repetition (modelled): a request from the master of the last answer with FCV = 1 and
+// that answer's FCB gets the previous answer again, whatever it asks. The chip's log names it at
+// the cycle the request is acted on, as every other RS has its line (audit s30 a-dpv1, finding 9:
+// scn/bis_b.scn, a raw request to a closed SAP with FCB 1 before a Read with FCB 1, showed the
+// Read's RS with no reason). The same line again folds into the log's repeat count: a master
+// that repeats for ever cannot flood the log (LogLimiter).
+TEST(Dpv1Processing, AnFcbRepeatIsNamedInTheLog) {
+  Dpv1 b;
+  b.online({Entry{}});
+  std::vector<LogRecord> lines;
+  b.chip.set_log_sink([&lines](const LogRecord& r) { lines.push_back(r); });
+  const std::uint8_t fcb1 = fdl::make_request_fc(fdl::Function::SRD_high, true, true);
+  // The master's last FCB (Chk_Cfg) was 0: this one is new. SAP 40 is not in the list.
+  EXPECT_EQ(wire(b.srd(40, kRead, 48, fcb1).answer), short_fc(kFcRS));
+  b.ack_all();
+  b.irq_on.clear();
+  std::vector<std::uint64_t> acted;
+  for (int i = 0; i < 3; ++i) {
+    const Exchange read = b.srd(kC1, kRead, kC1, fcb1);
+    EXPECT_EQ(wire(read.answer), short_fc(kFcRS));  // the previous answer, not SC
+    acted.push_back(b.acted(read));
+  }
+  EXPECT_TRUE(b.irq_on.empty());  // nothing stored: no FDL_Ind
+  EXPECT_EQ(b.chip.fdl_counters().repeated, 3u);
+  std::vector<std::uint64_t> at;
+  for (const LogRecord& r : lines) {
+    if (r.text == "FCB repeat from 2: the previous answer again") {
+      EXPECT_EQ(r.level, LogLevel::info);
+      at.push_back(r.cycle);
+    }
+  }
+  EXPECT_EQ(at, std::vector<std::uint64_t>{acted[0]});
 }
 
 // --- profiles ---
