@@ -427,10 +427,12 @@ LateSlave late_slave(bool reference) {
                                    fmt::join(t.bytes, " ")));
   };
   EXPECT_TRUE(l.master->startup_all());
-  const std::vector<std::uint8_t> set_prm{0x68, 0x0D, 0x0D, 0x68, 0x85, 0x82, 0x5D,
-                                          0x3D, 0x3E, 0x88, 0x0A, 0x0A, 0xFF, 0x0C,
-                                          0x31, 0x00, 0x00, 0xB7, 0x16};
-  const std::uint64_t end = l.seg.send(rogue, set_prm, l.seg.cycle() + 33 * l.seg.bit_cycles());
+  // lb.scn's Set_Prm without its user parameter byte (Line's slaves have none), FCB 1 (FC 7Dh:
+  // the start-up's last request to 5, Slave_Diag, had FCB 0), FCS 20h more.
+  const std::vector<std::uint8_t> set_prm{0x68, 0x0C, 0x0C, 0x68, 0x85, 0x82, 0x7D, 0x3D, 0x3E,
+                                          0x88, 0x0A, 0x0A, 0xFF, 0x0C, 0x31, 0x00, 0xD7, 0x16};
+  // After TSYN from the end of the last answer (the master returned inside its stop bit).
+  const std::uint64_t end = l.seg.send(rogue, set_prm, l.seg.cycle() + 40 * l.seg.bit_cycles());
   l.seg.run_until(end + 1500 * l.seg.bit_cycles());  // 1 ms
   EXPECT_TRUE(l.seg.collisions().empty());
   for (int i = 0; i < 3; ++i) out.cycles.push_back(l.master->dp_cycle());
@@ -445,7 +447,7 @@ TEST(Segment, ASlaveAnsweringAfterTheSlotTimeCollidesAndTheLineGoesOnOnBothLines
   const LateSlave ref = late_slave(true);
   const std::uint64_t t = 32;  // clocks a bit at 1.5 Mbaud
   ASSERT_EQ(fast.cycles.size(), 3U);
-  ASSERT_FALSE(fast.collisions.empty());
+  ASSERT_FALSE(fast.collisions.empty()) << fmt::format("{}", fmt::join(fast.line, "\n"));
   // Station 5's answer to the first Data_Exchange starts 255 T after the request's end, inside
   // the master's next request (to 6: TSL + TSYN = 133 T after that end, 13 characters of 11 T):
   // the master keeps the line, station 5 (spc3, station 0) drove into it.
