@@ -685,7 +685,7 @@ TEST(SegmentOutputs, NoLineButTheTokensComesAfterALaterStepsHeading) {
       heading_line = line;
     }
   }
-  EXPECT_GT(headings, 20u);
+  EXPECT_GT(headings, 10u);
   const std::size_t tel = r.out.find("] rogue: 10 07 02 49 52 16");
   const std::size_t tsyn = r.out.find("] bus: short_tsyn: rogue sent after 2 bit times");
   const std::size_t step = r.out.find("] line 35: run 1ms");
