@@ -450,9 +450,10 @@ void Mac::on_char(const UartChar& c) {
   const bool stop_ok = c.stop_ok || regs_.mode0(fields::Mode_Reg0::Dis_Stop_Control);
   if (!c.parity_ok || !start_ok || !stop_ok) {
     // One count per broken telegram: characters misframed after the first error are its tail.
-    // Of one character's errors the first sampled counts: start bit, parity, stop bit.
-    const bool fresh = !s_.discarding && (s_.in_frame || c.idle_bits >= kTsynBits);
-    if (fresh) {
+    // A character after TSYN opens a telegram whatever the one before was (docs/timing.md
+    // "Telegrams"). Of one character's errors the first sampled counts: start bit, parity, stop
+    // bit.
+    if (s_.in_frame || c.idle_bits >= kTsynBits) {
       if (!start_ok) {
         ++counters_.start_bit;
       } else if (!c.parity_ok) {
@@ -461,7 +462,6 @@ void Mac::on_char(const UartChar& c) {
         ++counters_.stop_bit;
       }
     }
-    s_.discarding = true;
     s_.in_frame = false;
     s_.frame.reset();
     s_.frame_timeout = kNever;
@@ -483,7 +483,6 @@ void Mac::on_char(const UartChar& c) {
       return;
     }
     s_.skipping = false;
-    s_.discarding = false;
     s_.in_frame = true;
     s_.frame.reset();
   }
@@ -499,7 +498,6 @@ void Mac::frame_ended(fdl::Assembler::Status st, const UartChar& c, const fdl::D
   s_.frame_timeout = kNever;
   if (st == fdl::Assembler::Status::error) {
     // The rest of the broken telegram is its tail, not an unsynchronised one: wait for TSYN.
-    s_.discarding = true;
     s_.skipping = true;
     count_frame_error(counters_, s_.frame, fdl::Error::none);
     return;
@@ -708,10 +706,7 @@ bool Mac::hear_run(const HeardRun& r) {
   const FdlCounters& add = dp_.started() ? r.started : r.offline;
   for (const CounterField& f : kFdlCounterFields) counters_.*f.member += add.*f.member;
   s_.skipping = r.skipping;
-  if (r.synced != nullptr) {
-    s_.frame = r.synced->frame;
-    s_.discarding = s_.frame.status() == fdl::Assembler::Status::error;
-  }
+  if (r.synced != nullptr) s_.frame = r.synced->frame;
   s_.rx.after_chars(r.last_start, r.last_byte, r.last_idle);
   drop_heard_rxd(clock_.now);
   clock_.quiet_until = 0;
@@ -744,7 +739,6 @@ void Mac::take_heard() {
   if (h.kind != HeardTelegram::Kind::frame) return;
   // on_char of each character: a frame after TSYN, complete or broken at the last one.
   s_.skipping = false;
-  s_.discarding = false;
   s_.frame = h.tel->frame;
   frame_ended(
       s_.frame.status(),

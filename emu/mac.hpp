@@ -126,7 +126,6 @@ class Mac {
     std::vector<UartChar> chars;  // scratch for UartRx::advance
     bool in_frame = false;
     bool skipping = false;  // after a telegram, an error or an unsynchronised start: wait for TSYN
-    bool discarding = false;  // the telegram in progress was already counted as broken
     std::uint64_t frame_timeout = kNever;
     std::uint8_t search_code = 0;
     std::uint64_t search_deadline = kNever;

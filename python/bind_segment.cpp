@@ -286,6 +286,21 @@ void bind_line(py::module_& m) {
       .def_readonly("start", &LineTelegram::start)
       .def_readonly("end", &LineTelegram::end)
       .def_property_readonly("bytes", [](const LineTelegram& t) { return to_bytes(t.bytes); })
+      .def_property_readonly(
+          "fault",
+          [](const LineTelegram& t) -> py::object {
+            if (t.fault.kind == UartFault::Kind::none) return py::none();
+            return py::str(std::string(fault_kind_name(t.fault.kind)));
+          },
+          "its first broken character's first error as send() names it ('parity', 'start', "
+          "'stop'); None: every character good")
+      .def_property_readonly(
+          "fault_char",
+          [](const LineTelegram& t) -> py::object {
+            if (t.fault.kind == UartFault::Kind::none) return py::none();
+            return py::int_(t.fault.char_index);
+          },
+          "the index of that character; None: every character good")
       .def("__repr__", [](const LineTelegram& t) {
         return "<LineTelegram from " + std::to_string(t.from) + " at " + std::to_string(t.start) +
                ", " + std::to_string(t.bytes.size()) + " bytes>";

@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include "dp_master.hpp"
+#include "vocabulary.hpp"
 
 namespace dpc31 {
 
@@ -120,14 +121,15 @@ void BusCheck::answer(const LineTelegram& t, const fdl::Frame& f, bool ok,
   const std::uint64_t delay = t.start - p.end;
   const std::uint64_t tbits = delay / timing_.bit_cycles;
   const bool mirroring = mirrors(f, p.request.sa, p.request.da);
+  if (!answers_request(timing_, delay, ok, mirroring)) {
+    if (ok) unsolicited(t, f, sender);
+    return;
+  }
+  if (on_answer) on_answer(delay);
   if (delay > bits(timing_.slot_bits)) {
-    if (answers_request(timing_, delay, ok, mirroring)) {
-      violation(BusViolation::late_answer, t.start,
-                fmt::format("answer to station {} {} bit times after the request (slot time {})",
-                            p.request.da, tbits, timing_.slot_bits));
-    } else if (ok) {
-      unsolicited(t, f, sender);
-    }
+    violation(BusViolation::late_answer, t.start,
+              fmt::format("answer to station {} {} bit times after the request (slot time {})",
+                          p.request.da, tbits, timing_.slot_bits));
     return;
   }
   if (delay < bits(timing_.min_tsdr_bits)) {
@@ -159,12 +161,16 @@ void BusCheck::telegram(const LineTelegram& t, const std::string& sender) {
   idle_until(t.start);
   token_lost_reported_ = false;
   const fdl::Decoded d = fdl::decode(t.bytes);
-  const bool ok = d.error == fdl::Error::none;
+  // A broken character breaks the telegram whatever its bytes read (a chip discards it).
+  const bool chars_ok = t.fault.kind == UartFault::Kind::none;
+  const bool ok = chars_ok && d.error == fdl::Error::none;
   const bool request = ok && is_request(d.frame);
   if (!ok) {
     violation(BusViolation::bad_frame, t.start,
               fmt::format("{} bytes from cycle {} do not decode ({})", t.bytes.size(), t.start,
-                          fdl::error_name(d.error)));
+                          chars_ok ? std::string(fdl::error_name(d.error))
+                                   : fmt::format("character {}: {}", t.fault.char_index,
+                                                 fault_name(t.fault.kind))));
   }
   if (pending_ && !request) {
     answer(t, d.frame, ok, sender);

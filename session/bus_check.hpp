@@ -6,6 +6,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -73,6 +74,10 @@ class BusCheck {
   // A line of another source goes into the same log now (the limiter's end_repeats): the note of
   // the violations repeated before it is handed to the sink first, at the last one's cycle.
   void end_repeats();
+
+  // Told of each telegram the check pairs with its request as its answer (answers_request): the
+  // delay from the request's end to its first start bit, in clock cycles (`expect tsdr`).
+  std::function<void(std::uint64_t delay)> on_answer;
 
   [[nodiscard]] std::uint64_t count(BusViolation v) const {
     return counts_[static_cast<std::size_t>(v)];

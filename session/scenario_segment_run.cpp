@@ -42,7 +42,9 @@ class SegmentRun {
         seg_(s.baud),
         check_(BusTiming{seg_.bit_cycles(), 11, s.slot_bits, 33,
                          s.masters.size() > 1 ? s.ttr_bits : 0, masters()},
-               [this](const LogRecord& r) { print(r.cycle, r.text); }) {}
+               [this](const LogRecord& r) { print(r.cycle, r.text); }) {
+    check_.on_answer = [this](std::uint64_t delay) { answered(delay); };
+  }
 
   int run() {
     build();
@@ -217,23 +219,20 @@ class SegmentRun {
     };
   }
 
-  // Requests that want an answer, and the answers' delays (expect tsdr); the last request to each
-  // station from its master (expect watchdog_expired).
+  // The last request to each station from its master (expect watchdog_expired).
   void telegram(const LineTelegram& t) {
     const fdl::Decoded d = fdl::decode(t.bytes);
     say(t.start, fmt::format("{}: {}", seg_.name(t.from), scenario_lex::bytes_text(t.bytes)));
-    if (d.error == fdl::Error::none && d.frame.sd == fdl::SD4) {
-      pending_.reset();  // a token after a request nobody answered is no answer
-    } else if (d.error == fdl::Error::none && fdl::is_request(d.frame.fc)) {
+    if (d.error == fdl::Error::none && d.frame.sd != fdl::SD4 && fdl::is_request(d.frame.fc))
       last_request_[d.frame.da] = t.end;
-      pending_ = wants_answer(d.frame) ? std::optional<std::uint64_t>(t.end) : std::nullopt;
-    } else if (pending_) {
-      const std::uint64_t d = t.start - *pending_;
-      delays_.count += 1;
-      delays_.min = std::min(delays_.min, d);
-      delays_.max = std::max(delays_.max, d);
-      pending_.reset();
-    }
+  }
+
+  // An answer as the bus check pairs it with its request (BusCheck::on_answer): its delay for
+  // `expect tsdr`, so that both call the same telegrams answers (docs/segment.md "Bus checks").
+  void answered(std::uint64_t delay) {
+    delays_.count += 1;
+    delays_.min = std::min(delays_.min, delay);
+    delays_.max = std::max(delays_.max, delay);
   }
 
   // The line to the end of the telegram on it (the last one relayed whole, or an answer a chip
@@ -259,7 +258,11 @@ class SegmentRun {
     const std::uint64_t now = seg_.cycle();
     const bool whole_on = seg_.whole_start() <= now && now < whole_end();
     const bool answer_on = tx_from_ <= now && now < tx_until_;
-    if (!whole_on && !answer_on) seg_.flush();
+    if (!whole_on && !answer_on) {
+      seg_.flush();
+    } else {
+      seg_.close_ended();  // one that ended while another station drives on (a collision)
+    }
     seg_.align();  // a station's trace checkpoints its chip at the line's time
     states_in_order();
     check_.idle_until(seg_.cycle());
@@ -496,7 +499,6 @@ class SegmentRun {
   std::vector<std::unique_ptr<DpMaster>> masters_;
   std::vector<std::optional<TokenVisit>> visits_;  // each master's last visit of the token
   std::map<std::uint8_t, std::uint64_t> last_request_;
-  std::optional<std::uint64_t> pending_;
   // The first start bit and the end of the last answer a chip decided to send.
   std::uint64_t tx_from_ = 0;
   std::uint64_t tx_until_ = 0;

@@ -567,7 +567,14 @@ void Segment::close_telegrams(std::uint64_t upto, std::uint64_t known) {
   if (line_rx_.receiving() || line_rx_.next_deadline() <= to) {
     chars_.clear();
     line_rx_.advance(to, chars_);
-    for (const UartChar& c : chars_) line_chars(std::span(&c.data, 1), c.start);
+    for (const UartChar& c : chars_) {
+      // The first error sampled, as Mac::on_char counts it.
+      const UartFault::Kind bad = !c.start_ok    ? UartFault::Kind::start
+                                  : !c.parity_ok ? UartFault::Kind::parity
+                                  : !c.stop_ok   ? UartFault::Kind::stop
+                                                 : UartFault::Kind::none;
+      line_chars(std::span(&c.data, 1), c.start, bad);
+    }
     // The whole characters after those, back to back: one block.
     if (!line_rx_.due().empty()) line_chars(line_rx_.due(), line_rx_.due_start());
   }
@@ -578,7 +585,8 @@ void Segment::close_telegrams(std::uint64_t upto, std::uint64_t known) {
   }
 }
 
-void Segment::line_chars(std::span<const std::uint8_t> data, std::uint64_t start) {
+void Segment::line_chars(std::span<const std::uint8_t> data, std::uint64_t start,
+                         UartFault::Kind bad) {
   if (open_now_ && start > open_.end) {
     if (on_telegram) on_telegram(open_);
     open_now_ = false;
@@ -593,12 +601,19 @@ void Segment::line_chars(std::span<const std::uint8_t> data, std::uint64_t start
     open_.from = from;
     open_.start = start;
     open_.bytes.clear();  // its memory kept: no allocation per telegram
+    open_.fault = {};
   }
+  if (bad != UartFault::Kind::none && open_.fault.kind == UartFault::Kind::none)
+    open_.fault = {static_cast<int>(open_.bytes.size()), bad};
   open_.bytes.insert(open_.bytes.end(), data.begin(), data.end());
   open_.end = start + data.size() * std::uint64_t{kUartCharBits} * t_;
 }
 
 void Segment::flush() { close_telegrams(UINT64_MAX, now_); }
+
+void Segment::close_ended() {
+  if (open_now_) close_telegrams(now_ + 1, now_);
+}
 
 void Segment::check_send(std::size_t from, std::uint64_t start, std::uint64_t cycles) const {
   if (const Station& s = station(from); s.chip) {

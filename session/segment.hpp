@@ -24,12 +24,16 @@
 namespace dpc31 {
 
 // One telegram on the line: who drove it, its first start bit, the end of its last stop bit and
-// its characters' data (a broken character as its data bits read).
+// its characters' data (a broken character as its data bits read), and the verdict of its first
+// broken character as the line's receiver read it (its index and the first error sampled: start
+// bit, parity, stop bit, as a chip counts them; kind none: every character good). A chip
+// discards such a telegram (docs/timing.md "Telegrams"), so the bus check and the capture do.
 struct LineTelegram {
   std::size_t from = 0;
   std::uint64_t start = 0;
   std::uint64_t end = 0;
   std::vector<std::uint8_t> bytes;
+  UartFault fault;
 };
 
 struct Collision {
@@ -123,6 +127,10 @@ class Segment {
   [[nodiscard]] std::uint64_t line_final() const { return line_final_; }
   // Hands on_telegram what is still open (the end of a run).
   void flush();
+  // Hands on_telegram the open telegram if it ended by the line's time and no character starts at
+  // its end (every edge up to the line's time is relayed): what a round after this cycle would
+  // close first, told now (a scenario's step that ends while a collision keeps the line busy).
+  void close_ended();
 
   // A host CPU may end a firmware access this many clocks after the cycle it was asked to reach:
   // past a round's end only where nobody else drives within them (docs/segment.md, "A firmware
@@ -192,7 +200,9 @@ class Segment {
   void close_telegrams(std::uint64_t upto, std::uint64_t known);
   // Characters of the line back to back from `start`, at its bit time: the open telegram's, or
   // the first of a new one.
-  void line_chars(std::span<const std::uint8_t> data, std::uint64_t start);
+  // `bad`: the first error of a one-character `data` (none: good).
+  void line_chars(std::span<const std::uint8_t> data, std::uint64_t start,
+                  UartFault::Kind bad = UartFault::Kind::none);
   void collide(std::size_t first, std::size_t second, std::uint64_t cycle);
 
   std::uint32_t clock_hz_;

@@ -60,8 +60,13 @@ void ArmedAnswer::withdraw() {
 
 std::uint64_t ArmedAnswer::next_edge() const {
   if (made) return next < edges.size() ? edges[next].first : UINT64_MAX;
-  // Not made: nothing relayed (its first start bit is next), or all of it.
-  return next == 0 && !bytes.empty() ? start : UINT64_MAX;
+  if (bytes.empty() || next == kWhole) return UINT64_MAX;  // nothing to relay, or all of it
+  if (next == 0) return start;                             // its first start bit
+  // Its first start bit alone (it found the line taken: a collision): the rest goes edge by
+  // edge from the first character's second edge, a round's end like every edge of the line.
+  std::array<std::pair<std::uint64_t, bool>, kUartCharBits> e{};
+  uart_char_edges(bytes[0], start, t, e.data());
+  return e[1].first;
 }
 
 bool ArmedAnswer::behind() const {

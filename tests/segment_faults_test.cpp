@@ -184,6 +184,39 @@ TEST(SegmentFaults, ABrokenTelegramAfterTheSlotTimeIsOneBadFrame) {
                                        at, fdl::error_name(fdl::Error::bad_fcs)));
 }
 
+// docs/timing.md "Telegrams": a bad character "discards the telegram" whatever its bytes read, so
+// the line's view of a request with a parity error in its FCS (character 3: FDL_Status is SD DA
+// SA FC FCS ED) is a bad frame, no request: the good answer 11 bit times after it answers nothing.
+TEST(SegmentFaults, AParityErrorMakesATelegramABadFrameOnTheLine) {
+  Faults f;
+  std::vector<LineTelegram> line;
+  f.seg.on_telegram = [&f, &line](const LineTelegram& t) {
+    line.push_back(t);
+    f.check.telegram(t, f.seg.name(t.from));
+  };
+  const std::uint64_t start = f.bits(100);
+  const std::uint64_t end =
+      f.seg.send(f.master, fdl_status(20, 2), start, UartFault{3, UartFault::Kind::parity});
+  f.seg.send(f.rogue, status_answer(2, 20), end + f.bits(11));
+  f.settle(end + f.bits(400));
+  ASSERT_EQ(line.size(), 2U);
+  EXPECT_EQ(line[0].fault.kind, UartFault::Kind::parity);
+  EXPECT_EQ(line[0].fault.char_index, 3);
+  EXPECT_EQ(line[0].bytes, fdl_status(20, 2));  // the bytes read well
+  EXPECT_EQ(line[1].fault.kind, UartFault::Kind::none);
+  for (std::size_t k = 0; k < kBusViolationKinds; ++k) {
+    const auto kind = static_cast<BusViolation>(k);
+    const bool counted = kind == BusViolation::bad_frame || kind == BusViolation::unsolicited;
+    EXPECT_EQ(f.check.count(kind), counted ? 1U : 0U) << bus_violation_name(kind);
+  }
+  ASSERT_EQ(f.log.size(), 2U);
+  EXPECT_EQ(f.log[0].text,
+            fmt::format("bus: bad_frame: 6 bytes from cycle {} do not decode (character 3: "
+                        "parity error)",
+                        start));
+  EXPECT_EQ(f.log[1].text, "bus: unsolicited: an answer from station 20 nobody asked for");
+}
+
 TEST(SegmentFaults, AStationThatAnswersEarly) {
   Faults f;
   // 10 bit times: one short of min TSDR (11).

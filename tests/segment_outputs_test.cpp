@@ -658,6 +658,42 @@ TEST(SegmentOutputs, ATelegramOfTheLineIsLoggedBeforeWhatComesAfterItsEnd) {
   }
 }
 
+// docs/segment.md "The log": a telegram's line (stamped at its first start bit) and its checks'
+// lines come once the line stayed idle past its end, a step that ends there prints them before the
+// next step's lines, and only a visit's `master N: the token: ...` line comes later: no line after
+// a step's heading is stamped before it. The audit's case: two_masters.scn's line 34 sends the
+// rogue's second FDL_Status 2 T after its first, into which the SPC3's answer to the first
+// collides; the step ends at the rogue's telegram's end while the SPC3 still drives. Until the
+// thirtieth session that telegram and its `bus: short_tsyn` line came after line 35's heading.
+TEST(SegmentOutputs, NoLineButTheTokensComesAfterALaterStepsHeading) {
+  const auto r =
+      sh(fmt::format("cd {} && {} run traces/segment/two_masters.scn", SOURCE_DIR, DPC31_CLI));
+  ASSERT_EQ(r.rc, 0) << r.out;
+  std::istringstream in(r.out);
+  std::uint64_t heading = 0;
+  std::string heading_line;
+  std::size_t headings = 0;
+  for (std::string line; std::getline(in, line);) {
+    std::uint64_t cycle = 0;
+    int used = 0;
+    if (std::sscanf(line.c_str(), "[cycle %" SCNu64 "] %n", &cycle, &used) < 1) continue;
+    if (line.find(": the token: ") != std::string::npos) continue;
+    EXPECT_LE(heading, cycle) << "'" << line << "' after '" << heading_line << "'";
+    if (line.compare(static_cast<std::size_t>(used), 5, "line ") == 0) {
+      ++headings;
+      heading = cycle;
+      heading_line = line;
+    }
+  }
+  EXPECT_GT(headings, 10u);
+  const std::size_t tel = r.out.find("] rogue: 10 07 02 49 52 16");
+  const std::size_t tsyn = r.out.find("] bus: short_tsyn: rogue sent after 2 bit times");
+  const std::size_t step = r.out.find("] line 35: run 1ms");
+  ASSERT_NE(step, std::string::npos);
+  EXPECT_LT(tsyn, tel);
+  EXPECT_LT(tel, step);
+}
+
 // The case a user found (the twenty-third session): three_slaves.scn's `cycle 40 skip=7` ends at
 // the end of its last answer's stop bit, the VPC3+'s (17 characters: E = its start + 17 x 11 T,
 // docs/timing.md, T = 32 clocks at 1.5 Mbaud), and line 48's expect looks there

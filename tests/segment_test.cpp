@@ -6,6 +6,7 @@
 #include "segment.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -405,6 +406,71 @@ TEST(Segment, TwoSlavesOnOneAddressCollideWithBothNamesAndTheCycle) {
   EXPECT_EQ(line.seg.name(c.first), "spc3");
   EXPECT_EQ(line.seg.name(c.second), "vpc3plus");
   EXPECT_EQ(seen.size(), 1U);
+}
+
+// The audit's lb.scn on both lines: a scripted Set_Prm (SA 2, Lock_Req, min TSDR FFh) gives
+// station 5 a min TSDR of 255 bit times, beyond the slot time (100): its answers are late and
+// collide with what comes next. docs/segment.md "Collisions": the first driver keeps the line, the
+// collision is reported, the run goes on; the telegram-level line is the reference line (until the
+// thirtieth session it threw "line order broken" unless an on_line observer was attached).
+struct LateSlave {
+  std::vector<Collision> collisions;
+  std::vector<std::string> line;  // every telegram of the line
+  std::vector<std::vector<Exchange>> cycles;
+};
+LateSlave late_slave(bool reference) {
+  Line l(kBaud, {5, 6}, 1, reference);
+  const std::size_t rogue = l.seg.add_sender("rogue");
+  LateSlave out;
+  l.seg.on_telegram = [&](const LineTelegram& t) {
+    out.line.push_back(fmt::format("{} {}..{} {:02X}", l.seg.name(t.from), t.start, t.end,
+                                   fmt::join(t.bytes, " ")));
+  };
+  EXPECT_TRUE(l.master->startup_all());
+  // lb.scn's Set_Prm without its user parameter byte (Line's slaves have none), FCB 1 (FC 7Dh:
+  // the start-up's last request to 5, Slave_Diag, had FCB 0), FCS 20h more.
+  const std::vector<std::uint8_t> set_prm{0x68, 0x0C, 0x0C, 0x68, 0x85, 0x82, 0x7D, 0x3D, 0x3E,
+                                          0x88, 0x0A, 0x0A, 0xFF, 0x0C, 0x31, 0x00, 0xD7, 0x16};
+  // After TSYN from the end of the last answer (the master returned inside its stop bit).
+  const std::uint64_t end = l.seg.send(rogue, set_prm, l.seg.cycle() + 40 * l.seg.bit_cycles());
+  l.seg.run_until(end + 1500 * l.seg.bit_cycles());  // 1 ms
+  EXPECT_TRUE(l.seg.collisions().empty());
+  for (int i = 0; i < 3; ++i) out.cycles.push_back(l.master->dp_cycle());
+  l.seg.run_until(l.seg.cycle() + 1500 * l.seg.bit_cycles());
+  l.seg.flush();
+  out.collisions = l.seg.collisions();
+  return out;
+}
+
+TEST(Segment, ASlaveAnsweringAfterTheSlotTimeCollidesAndTheLineGoesOnOnBothLines) {
+  const LateSlave fast = late_slave(false);
+  const LateSlave ref = late_slave(true);
+  const std::uint64_t t = 32;  // clocks a bit at 1.5 Mbaud
+  ASSERT_EQ(fast.cycles.size(), 3U);
+  ASSERT_FALSE(fast.collisions.empty()) << fmt::format("{}", fmt::join(fast.line, "\n"));
+  // Station 5's answer to the first Data_Exchange starts 255 T after the request's end, inside
+  // the master's next request (to 6: TSL + TSYN = 133 T after that end, 13 characters of 11 T):
+  // the master keeps the line, station 5 (spc3, station 0) drove into it.
+  const Exchange& first = fast.cycles[0][0];
+  EXPECT_FALSE(first.answer);
+  EXPECT_EQ(fast.cycles[0][1].request_start, first.request_end + 133 * t);
+  EXPECT_EQ(fast.collisions[0].cycle, first.request_end + 255 * t);
+  EXPECT_EQ(fast.collisions[0].first, 2U);  // master 2 (after spc3, vpc3plus)
+  EXPECT_EQ(fast.collisions[0].second, 0U);
+  ASSERT_EQ(fast.collisions.size(), ref.collisions.size());
+  for (std::size_t i = 0; i < fast.collisions.size(); ++i) {
+    EXPECT_EQ(fast.collisions[i].cycle, ref.collisions[i].cycle) << i;
+    EXPECT_EQ(fast.collisions[i].first, ref.collisions[i].first) << i;
+    EXPECT_EQ(fast.collisions[i].second, ref.collisions[i].second) << i;
+  }
+  EXPECT_EQ(fast.line, ref.line);
+  for (std::size_t c = 0; c < 3; ++c) {
+    for (std::size_t i = 0; i < 2; ++i) {
+      EXPECT_EQ(fast.cycles[c][i].request_end, ref.cycles[c][i].request_end) << c << " " << i;
+      EXPECT_EQ(fast.cycles[c][i].answer_start, ref.cycles[c][i].answer_start) << c << " " << i;
+      EXPECT_EQ(fast.cycles[c][i].wait_end, ref.cycles[c][i].wait_end) << c << " " << i;
+    }
+  }
 }
 
 TEST(Segment, TwoMastersPassTheTokenAndReachDataExchangeWithASlaveEach) {
@@ -1070,6 +1136,30 @@ ScenarioRun run_passing(const std::string& text) {
   EXPECT_EQ(r.errors, std::vector<std::string>{});
   EXPECT_EQ(r.code, 0);
   return r;
+}
+
+// docs/scenario-format.md: `expect tsdr` counts the answers the bus check pairs with their
+// requests (docs/segment.md "Bus checks"): a scripted station's answer to an FDL_Status to 9
+// 132 bit times after its end is the asked station's late answer (before TSL + TSYN = 133) and
+// its delay counts; at 133 bit times the bus check calls it unsolicited and `expect tsdr 11`
+// (the start-up's answers, each 11 bit times) holds. The audit's u133.scn.
+TEST(SegmentScenario, ExpectTsdrCountsOnlyWhatTheBusCheckCallsAnAnswer) {
+  for (const int after : {132, 133}) {
+    const bool late = after == 132;
+    const ScenarioRun r = run_scenario_text(fmt::format(
+        "segment baud=1500000 slot=100\nstation 5 profile=spc3\nsender asker\nsender nine\n"
+        "startup\nsend from=asker after=33bits 10,09,03,49,55,16\n"
+        "send from=nine after={}bits 10,03,09,00,0C,16\nrun 1ms\n"
+        "expect bus_violation late_answer {}\nexpect bus_violation unsolicited {}\n"
+        "expect tsdr 11\n",
+        after, late ? 1 : 0, late ? 0 : 1));
+    ASSERT_EQ(r.errors.size(), late ? 1U : 0U) << after;
+    if (late) {
+      EXPECT_EQ(r.errors[0].substr(0, 27), "s.scn:11: expected tsdr 11,") << r.errors[0];
+      EXPECT_NE(r.errors[0].find("delays 11..132 bit times"), std::string::npos) << r.errors[0];
+    }
+    EXPECT_EQ(r.code, late ? 1 : 0) << after;
+  }
 }
 
 // Two masters without a TTR still pass a token, so a lost one is found (docs/segment.md, "Bus

@@ -85,6 +85,53 @@ def test_a_segments_line_decodes_in_tshark(traces, tmp_path):
     assert header.count("$var wire 1 ") > 2 and " level $end" in header and " driver $end" in header
 
 
+def test_a_parity_error_is_marked_in_the_pcap_and_the_bus_check(traces, tmp_path):
+    """The audit's py_parity_pcap.py: an FDL_Status to station 5 with the parity bit of its FCS
+    (character 4) inverted reads as good bytes, but the chip discards it (docs/timing.md
+    "Telegrams": one parity error, no answer), so the line's view says so too: the LineTelegram's
+    fault, the bus check's bad_frame (docs/segment.md "Bus checks") and, in the pcapng, the comment
+    and the symbol error flag that the dissector shows as profibus.char_error (docs/capture.md)."""
+    seg = dpc31.Segment(1_500_000, pcapng=str(tmp_path / "parity.pcapng"))
+    s5 = seg.add_station(5, "spc3")
+    master = seg.add_master(2, [5])
+    rogue = seg.add_sender("rogue")
+    check = seg.check_bus()
+    assert master.startup_all()
+    before = dict(s5.fdl_counters)
+    line = []
+    seg.on_telegram(line.append)
+    request = bytes([0x10, 5, 2, 0x49, 0x50, 0x16])
+    start = seg.cycle + 40 * T
+    end = seg.send(rogue, request, start=start, fault="parity", fault_char=4)
+    assert end == start + 6 * 11 * T
+    seg.run_until(end + 300 * T)
+    assert {k: s5.fdl_counters[k] - before[k] for k in before
+            if s5.fdl_counters[k] != before[k]} == {"parity": 1}
+    # The start-up's last answer (closed once the line stayed idle past it), then the request.
+    assert [(t.sender, t.start, t.end, t.bytes, t.fault, t.fault_char) for t in line[-1:]] == [
+        (rogue, start, end, request, "parity", 4)]
+    assert all(t.fault is None and t.fault_char is None for t in line[:-1]) and len(line) == 2
+    assert {k: v for k, v in check.counts.items() if v} == {"bad_frame": 1}
+    assert seg.bus_log[-1] == (f"[cycle {start}] bus: bad_frame: 6 bytes from cycle {start} do "
+                               "not decode (character 4: parity error)")
+    seg.close()
+    lua = pathlib.Path(traces).parent / "lib" / "capture" / "profibus_dl.lua"
+    env = dict(os.environ, HOME=str(tmp_path), XDG_CONFIG_HOME=str(tmp_path))
+    out = subprocess.run(
+        ["tshark", "-n", "-X", f"lua_script:{lua}", "-r", str(tmp_path / "parity.pcapng"),
+         "-T", "fields", "-E", "separator=|", "-e", "frame.comment",
+         "-e", "frame.packet_flags_symbol_error", "-e", "profibus.fcs_ok", "-e", "_ws.expert"],
+        env=env, capture_output=True, text=True, check=True).stdout
+    rows = [r.split("|") for r in out.splitlines()]
+    # The master's start-up (every telegram good, none flagged), then the rogue's request.
+    assert all(r[1] in ("0", "False") and "Malformed" not in r[3] for r in rows[:-1])
+    comment, symbol_error, fcs_ok, expert = rows[-1]
+    assert comment == f"cycles {start}-{end}, rogue, character 4: parity error"
+    assert symbol_error in ("1", "True") and fcs_ok in ("1", "True")
+    assert ("(Error/Malformed): A character with a parity, start or stop bit error (pcapng "
+            "symbol error)") in expert
+
+
 def test_bad_paths_and_late_stations_are_clear_errors(traces, tmp_path):
     missing = tmp_path / "no" / "such"
     with pytest.raises(dpc31.Error, match="no/such/seg.vcd"):

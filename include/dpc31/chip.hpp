@@ -153,8 +153,7 @@ struct HeardRun {
   FdlCounters started;
   FdlCounters offline;
   bool skipping = false;  // after the run: the MAC waits for TSYN
-  // The run's last telegram after TSYN (the framing after it: its assembler; discarding if that
-  // broke), or none.
+  // The run's last telegram after TSYN (the framing after it: its assembler), or none.
   const HeardFrame* synced = nullptr;
   // The run's last character: its start, its byte and the idle bit times before it (a telegram
   // of one character; 0 otherwise).

@@ -115,9 +115,10 @@ std::vector<std::uint8_t> enhanced_packet_block(const Packet& p) {
   b.u32(static_cast<std::uint32_t>(p.bytes.size()));  // original
   b.bytes(p.bytes);
   b.pad();
-  if (p.direction != Direction::unknown) {
+  if (p.direction != Direction::unknown || p.symbol_error) {
     const auto f = static_cast<std::uint32_t>(p.direction);
-    const std::uint8_t flags[4] = {static_cast<std::uint8_t>(f), 0, 0, 0};
+    const std::uint8_t flags[4] = {static_cast<std::uint8_t>(f), 0, 0,
+                                   static_cast<std::uint8_t>(p.symbol_error ? 0x80 : 0)};
     b.option(kEpbFlags, flags);
   }
   if (!p.comment.empty()) b.option(kOptComment, p.comment);

@@ -37,6 +37,9 @@ struct Packet {
   Direction direction = Direction::unknown;
   std::span<const std::uint8_t> bytes;  // SD to ED, as on the wire
   std::string comment;                  // opt_comment; "" = none
+  // epb_flags bit 31 (symbol error): a character read with a parity, start or stop bit error
+  // (bytes that read well are still no telegram: a receiver discards it).
+  bool symbol_error = false;
 };
 
 struct WriterOptions {

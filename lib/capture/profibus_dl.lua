@@ -212,6 +212,8 @@ local e = {
                              expert.severity.ERROR),
   dpv1_short = ProtoExpert.new("profibus.dpv1.short", "DPV1 data unit too short",
                                expert.group.MALFORMED, expert.severity.ERROR),
+  char_error = ProtoExpert.new("profibus.char_error", "Character error", expert.group.MALFORMED,
+                               expert.severity.ERROR),
 }
 p.experts = e
 
@@ -562,6 +564,9 @@ local function parse(tvb, pinfo, tree)
 end
 
 local data_dissector = Dissector.get("data")
+-- epb_flags bit 31: the writer read a character with a parity, start or stop bit error, which no
+-- byte shows (docs/capture.md).
+local symbol_error = Field.new("frame.packet_flags_symbol_error")
 
 function p.dissector(tvb, pinfo, tree)
   local len = tvb:len()
@@ -578,6 +583,11 @@ function p.dissector(tvb, pinfo, tree)
   if not ok then
     sub:add_proto_expert_info(e.internal, "Dissector error: " .. tostring(info))
     info = "dissector error"
+  end
+  local broken = symbol_error()
+  if broken and broken.value then
+    sub:add_proto_expert_info(e.char_error, "A character with a parity, start or stop bit error " ..
+      "(pcapng symbol error): every receiver discards the telegram")
   end
   pinfo.cols.info = info
   if len > 0 then sub:append_text(", " .. (sd_names[tvb(0, 1):uint()] or "?")) end

@@ -8,6 +8,7 @@
 #include "bus_check.hpp"
 #include "dp_master.hpp"
 #include "dpc31/fdl.hpp"
+#include "vocabulary.hpp"
 
 namespace dpc31 {
 
@@ -91,10 +92,14 @@ bool SegmentOutputs::write(std::string& error) {
 // calls unsolicited answers nothing either).
 void SegmentOutputs::capture(const LineTelegram& t) {
   const fdl::Decoded d = fdl::decode(t.bytes);
-  const bool ok = d.error == fdl::Error::none && d.frame.sd != fdl::SD4;
+  const bool chars_ok = t.fault.kind == UartFault::Kind::none;
+  const bool ok = chars_ok && d.error == fdl::Error::none && d.frame.sd != fdl::SD4;
   const bool request = ok && fdl::is_request(d.frame.fc);
   Held h{t, fmt::format("cycles {}-{}, {}", t.start, t.end, seg_->name(t.from)), d.frame.sa,
          d.frame.da};
+  // A broken character: the bus check's words, and the packet flagged (docs/capture.md).
+  if (!chars_ok)
+    h.comment += fmt::format(", character {}: {}", t.fault.char_index, fault_name(t.fault.kind));
   if (held_) {
     const BusTiming timing{seg_->bit_cycles(), 11, opt_.slot_bits, 33, 0, {}};
     if (ok && !request && t.from != held_->t.from &&
@@ -118,7 +123,7 @@ void SegmentOutputs::add(const Held& h) {
   if (!ns) return;  // 584 years of line time
   pcap_.add(capture::Packet{
       *ns, seg_->is_chip(h.t.from) ? capture::Direction::outbound : capture::Direction::inbound,
-      h.t.bytes, h.comment});
+      h.t.bytes, h.comment, h.t.fault.kind != UartFault::Kind::none});
 }
 
 SegmentScenarioOutputs::SegmentScenarioOutputs(const SegmentScenario& s, SegmentOutputOptions opt)

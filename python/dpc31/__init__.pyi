@@ -428,6 +428,8 @@ class LineTelegram:
     start: int
     end: int
     bytes: bytes
+    fault: Optional[str]
+    fault_char: Optional[int]
 
 class Collision:
     cycle: int

@@ -57,6 +57,35 @@ TEST_P(Fdl, Tsyn_RequestNeeds33IdleBitTimesBeforeIt) {
   }
 }
 
+// docs/timing.md "Telegrams", errors: a bad character "discards the telegram, counts one error of
+// the first kind seen (of one bad character the first bit sampled: start bit, then parity, then
+// stop bit), and the receiver waits for TSYN again: the rest of the broken telegram is its tail
+// and counts nothing"; TSYN: a telegram begins with a character after >= 33 idle bit times. So an
+// FDL_Status to us 33 bit times after a broken one is a telegram of its own whatever the one
+// before was: three with a parity error in the SD (parity bit inverted) count three parity
+// errors, one with a stop error in the SD (stop bit low) one stop_bit error, and nothing else
+// is counted (their good characters are tails) and nothing answered.
+TEST_P(Fdl, BadCharacter_AfterTsynOpensATelegramWhateverTheOneBeforeWas) {
+  Bare b(GetParam());
+  Edges txd;
+  b.chip.on_txd([&](std::uint64_t at, bool level) { txd.emplace_back(at, level); });
+  std::uint64_t end =
+      send_on_rxd(b.chip, Bytes{0x10, 0x09, 0x02, 0x49, 0x54, 0x16}, b.chip.cycle() + 40 * 4, 4);
+  b.chip.step(end - b.chip.cycle());
+  FdlCounters want = b.chip.fdl_counters();
+  const Bytes to_us{0x10, 0x05, 0x02, 0x49, 0x50, 0x16};
+  for (const UartFault::Kind k : {UartFault::Kind::parity, UartFault::Kind::parity,
+                                  UartFault::Kind::parity, UartFault::Kind::stop}) {
+    end = send_on_rxd(b.chip, to_us, end + 33 * 4, 4, UartFault{0, k});
+    b.chip.step(end - b.chip.cycle());
+    ++(k == UartFault::Kind::parity ? want.parity : want.stop_bit);
+    EXPECT_EQ(b.chip.fdl_counters(), want) << "after the telegram ending at " << end;
+  }
+  b.chip.step(end + 200 * 4 - b.chip.cycle());
+  EXPECT_EQ(b.chip.fdl_counters(), want);
+  EXPECT_TRUE(txd.empty());
+}
+
 // chip-facts §5.4 [S-SSA]: "SSA: after New_SSA_Data the user reads SSA_Buffer_Free_Cmd (14h) to
 // re-enable SAP55; the ASIC internally adopts the new address". Set_Slave_Add to 9 (SC): New_SSA_
 // Data, the chip answers at 9; a second one before the user freed the buffer: RR (10 02 09 02 0D
