@@ -239,4 +239,30 @@ inline std::vector<FstBlock> fst_blocks(const std::string& b) {
   return out;
 }
 
+// " --json taken --vcd new-vcd ...": every output option, `taken` (a directory) for `bad`, a new
+// file for the others. Appended piece by piece: the operator+ chain it replaces made GCC 12 at
+// -O3 report a false -Wrestrict (issue 17).
+inline std::string outputs_one_taken(std::initializer_list<const char*> options,
+                                     const std::string& bad) {
+  std::string all;
+  for (const char* opt : options) {
+    all += ' ';
+    all += opt;
+    if (opt == bad) {
+      all += " taken";
+    } else {
+      all += " new";
+      all += opt + 1;
+    }
+  }
+  return all;
+}
+
+// A file input and the one line expected on stderr for it.
+struct FileCase {
+  std::string name;
+  std::string path;
+  std::string line;  // the one line expected on stderr
+};
+
 }  // namespace badinput
