@@ -1,0 +1,685 @@
+// Segment scenarios (docs/scenario-format.md, "Segments"; split from segment_test.cpp at its
+// second namespace): several `slave` blocks, masters and scripted stations from the scenario
+// door, their `expect`s, bus checks and the walk, with the cycles docs/timing.md gives.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <iterator>
+#include <map>
+#include <memory>
+#include <optional>
+#include <typeinfo>
+#include <vector>
+
+#include "bus_check.hpp"
+#include "dpc31/fdl.hpp"
+#include "heap_in_use.hpp"
+#include "scenario_segment.hpp"
+#include "segment.hpp"
+#include "vocabulary.hpp"
+
+namespace dpc31 {
+namespace {
+
+// `expect visit` from the scenario door (docs/scenario-format.md, "Segments"): a master alone
+// with ttr= claims the token at its first visit (TRR 0, TTH = TTR = 1000 bit times: both cycles,
+// at 33 and 363 T, start before it) and passes it to itself; a wrong field fails with what the
+// visit did.
+TEST(SegmentScenario, ExpectVisitChecksTheMastersLastVisit) {
+  const std::string head =
+      "segment\nstation 5 profile=spc3\nstation 6 profile=vpc3plus\n"
+      "master 2 slaves=5,6 ttr=1000\nstartup\ncycle 1\n";
+  const auto run = [](const std::string& text, std::vector<std::string>& errors) {
+    SegmentScenario s;
+    ScenarioError err;
+    EXPECT_TRUE(parse_segment_scenario(text, "v.scn", s, err)) << err.text();
+    return run_segment_scenario(s, {}, [&errors](const std::string& e) { errors.push_back(e); });
+  };
+  // The start-up's last visit (docs/segment.md, "The start-up under TTR") is the Slave_Diag that
+  // finds 6 ready: TSYN 33 + request 121 (11 characters) + TSDR 11 + answer 187 (17) + TSYN 33 +
+  // the token 33 = 418 T, the next visit's TRR: TTH 582, cycles at 33 and 363 (T = 32 clocks).
+  std::vector<std::string> errors;
+  EXPECT_EQ(run(head + "expect visit 2 polled=5,6 rotation=418 hold=582 gap=none\n", errors), 0);
+  EXPECT_TRUE(errors.empty()) << errors.front();
+  EXPECT_EQ(run(head + "expect visit 2 polled=5 rotation=0\n", errors), 1);
+  ASSERT_EQ(errors.size(), 1U);
+  EXPECT_EQ(errors[0],
+            "v.scn:7: expected visit 2 polled=5 rotation=0, got polled 5,6, rotation 418 bit "
+            "times, hold 582 bit times, gap none");
+  // After the start-up alone the last visit polled no one (`none`, not an empty list: the audit
+  // s28 aud2, finding 7): it carried the Slave_Diag to 6. The visit before it carried 6's Chk_Cfg
+  // (13 characters), so its TRR is TSYN 33 + 143 + TSDR 11 + the SC 11 + TSYN 33 + the token 33 =
+  // 264 bit times, TTH 736.
+  errors.clear();
+  EXPECT_EQ(run("segment\nstation 5 profile=spc3\nstation 6 profile=vpc3plus\n"
+                "master 2 slaves=5,6 ttr=1000\nstartup\nexpect visit 2 polled=5\n",
+                errors),
+            1);
+  EXPECT_EQ(errors, std::vector<std::string>{
+                        "v.scn:6: expected visit 2 polled=5, got polled none, start-up 6, rotation "
+                        "264 bit times, hold 736 bit times, gap none"});
+}
+
+// A failed `expect tsdr` says the delays in bit times, as the check is written (docs/scenario-
+// format.md: "expected X, got Y" in the check's own terms; the audit s28 aud2, finding 7). The
+// start-up's five answers (FDL_Status, Slave_Diag, Set_Prm's SC, Chk_Cfg's SC, Slave_Diag) each
+// start 11 T after their request's end (docs/timing.md: max(11, MinTSDR) with MinTSDR 11 after
+// Start and no Set_Prm byte 3).
+TEST(SegmentScenario, ExpectTsdrSaysTheDelaysInBitTimes) {
+  SegmentScenario s;
+  ScenarioError err;
+  ASSERT_TRUE(parse_segment_scenario("segment\nstation 5 profile=spc3\nstartup\nexpect tsdr 12\n",
+                                     "t.scn", s, err))
+      << err.text();
+  std::vector<std::string> errors;
+  EXPECT_EQ(run_segment_scenario(s, {}, [&errors](const std::string& e) { errors.push_back(e); }),
+            1);
+  EXPECT_EQ(errors, std::vector<std::string>{
+                        "t.scn:4: expected tsdr 12, got 5 answers, delays 11..11 bit times"});
+}
+
+// Two stations on one address and no `master` line: the default master polls every address once
+// (one FCB state per slave). Both answer each of the start-up's five requests (docs/segment.md:
+// FDL_Status, Slave_Diag, Set_Prm, Chk_Cfg, Slave_Diag) at the same MinTSDR: five collisions, the
+// first driver keeping the line, so the master hears one answer and the start-up completes.
+TEST(SegmentScenario, TwoStationsOnOneAddressArePolledOnceAndCollide) {
+  SegmentScenario s;
+  ScenarioError err;
+  ASSERT_TRUE(
+      parse_segment_scenario("segment\nstation 5\nstation 5 name=twin profile=vpc3plus\nstartup\n"
+                             "expect collisions 5\nexpect state 5 Data_Exchange\n",
+                             "c.scn", s, err))
+      << err.text();
+  ASSERT_EQ(s.masters.size(), 1U);
+  EXPECT_EQ(s.masters[0].slaves, (std::vector<std::uint8_t>{5}));
+  std::vector<std::string> errors;
+  EXPECT_EQ(run_segment_scenario(s, {}, [&errors](const std::string& e) { errors.push_back(e); }),
+            0);
+  EXPECT_TRUE(errors.empty()) << errors.front();
+}
+
+// A long `cycle N` keeps the run's memory flat (docs/decisions.md): the masters' histories are
+// not kept, nor the responders' output fetches. What the heap grew by over the `cycle` step
+// (from its start to its end) with 2 000 DP cycles of two slaves is within 16 KiB of that with
+// 200; without the trim every exchange's history stayed (about 0.5 MB more). ASan's allocator is
+// not malloc's: there only the run.
+TEST(SegmentScenario, ALongCycleStepKeepsTheMemoryFlat) {
+  struct Heap : SegmentObserver {
+    void step_begins(const SegmentStep& st, std::string_view) override {
+      if (st.kind == SegmentStep::Kind::cycle) at_start = test::heap_in_use();
+    }
+    void step_ends(const SegmentStep& st) override {
+      if (st.kind == SegmentStep::Kind::cycle) grown = test::heap_in_use() - at_start;
+    }
+    std::int64_t at_start = 0;
+    std::int64_t grown = 0;
+  };
+  const auto grown = [](int cycles) {
+    SegmentScenario s;
+    ScenarioError err;
+    EXPECT_TRUE(parse_segment_scenario(
+        fmt::format("segment\nstation 5 profile=spc3 firmware=DO4 wd=1,1\n"
+                    "station 6 profile=vpc3plus firmware=CNT2 wd=1,1\nmaster 2 slaves=5,6\n"
+                    "startup\ncycle {}\nexpect state 5 Data_Exchange\n"
+                    "expect state 6 Data_Exchange\n",
+                    cycles),
+        "long.scn", s, err))
+        << err.text();
+    Heap heap;
+    std::vector<std::string> errors;
+    EXPECT_EQ(run_segment_scenario(
+                  s, {}, [&errors](const std::string& e) { errors.push_back(e); }, &heap),
+              0);
+    EXPECT_TRUE(errors.empty()) << errors.front();
+    return heap.grown;
+  };
+  const std::int64_t short_run = grown(200);
+  const std::int64_t long_run = grown(2000);
+  if (test::kHeapCounted) {
+    EXPECT_LE(long_run, short_run + 16 * 1024)
+        << "grown by " << short_run << " bytes over 200 DP cycles, " << long_run << " over 2 000";
+  }
+}
+
+// The user watchdog of a station with the built-in user side (docs/timing.md: it counts
+// Data_Exchange telegrams; Res_User_WD, which the user side sets with Start_SPC3, loads
+// R_User_WD_Value at the next Data_Exchange, each later one counts down, and the one that reaches
+// 0 is not answered and makes Leave_Master). So with R_User_WD_Value = N and no service, the
+// station answers Data_Exchanges 1..N and not N + 1. What each station did with every
+// Data_Exchange request to it, in order: answered with its 4 input bytes, or not at all.
+struct DataExchanges : SegmentObserver {
+  enum class Answer : std::uint8_t { none, data, other };
+  explicit DataExchanges(const SegmentScenario& s) {
+    for (const SegmentStation& st : s.stations) address.push_back(st.slave.address);
+  }
+  void telegram(const LineTelegram& t) override {
+    const fdl::Decoded d = fdl::decode(t.bytes);
+    if (d.error != fdl::Error::none) return;
+    if (t.from >= address.size()) {  // a master: the request a chip's next telegram answers
+      asked.reset();
+      if (d.frame.sd != fdl::SD4 && fdl::is_request(d.frame.fc) &&
+          service_name(d.frame) == "Data_Exchange") {
+        asked = d.frame.da;
+        answers[d.frame.da].push_back(Answer::none);
+      }
+    } else if (asked && *asked == address[t.from]) {
+      answers[*asked].back() = d.frame.du.size() == 4 ? Answer::data : Answer::other;
+      asked.reset();
+    }
+  }
+  std::vector<std::uint8_t> address;  // each chip station's, by its index on the segment
+  std::optional<std::uint8_t> asked;
+  std::map<std::uint8_t, std::vector<Answer>> answers;
+};
+
+DataExchanges run_exchanges(const std::string& text) {
+  SegmentScenario s;
+  ScenarioError err;
+  EXPECT_TRUE(parse_segment_scenario(text, "uwd.scn", s, err)) << err.text();
+  DataExchanges dx(s);
+  std::vector<std::string> errors;
+  EXPECT_EQ(run_segment_scenario(
+                s, {}, [&errors](const std::string& e) { errors.push_back(e); }, &dx),
+            0);
+  EXPECT_TRUE(errors.empty()) << errors.front();
+  return dx;
+}
+
+// The default (R_User_WD_Value 0x1FF = 511, not served): Data_Exchanges 1..511 answered, the 512th
+// not, and none answered with data after it (the station is in Wait_Prm; the master does not
+// parameterise it again within `cycle`).
+TEST(SegmentScenario, AStationWithoutUserWdLeavesDataExchangeAtIts512thDataExchange) {
+  using A = DataExchanges::Answer;
+  const DataExchanges dx = run_exchanges(
+      "segment baud=12000000\nstation 5 profile=spc3\nstation 6 profile=vpc3plus\nstartup\n"
+      "cycle 511\nexpect state 5 Data_Exchange\nexpect state 6 Data_Exchange\ncycle 2\n"
+      "expect state 5 Wait_Prm\nexpect state 6 Wait_Prm\n");
+  for (const std::uint8_t a : {5, 6}) {
+    const std::vector<A>& got = dx.answers.at(a);
+    ASSERT_GE(got.size(), 513U) << "station " << int{a};
+    EXPECT_EQ(std::count(got.begin(), got.begin() + 511, A::data), 511) << "station " << int{a};
+    EXPECT_EQ(got[511], A::none) << "station " << int{a};
+    EXPECT_EQ(std::count(got.begin() + 512, got.end(), A::data), 0) << "station " << int{a};
+  }
+}
+
+// `user_wd=1`: the user side sets Res_User_WD on every DX_Out, so the count is loaded again at
+// every next Data_Exchange and never reaches 0: 1 500 DP cycles, every Data_Exchange answered
+// (the DPC31's DPS_User_Watchdog reset on every DX_Out as well).
+TEST(SegmentScenario, AStationThatServesItsUserWatchdogStaysInDataExchange) {
+  using A = DataExchanges::Answer;
+  const DataExchanges dx = run_exchanges(
+      "segment baud=12000000\nstation 5 profile=spc3 user_wd=1\n"
+      "station 6 profile=vpc3plus user_wd=1\nstation 7 profile=dpc31 user_wd=1\nstartup\n"
+      "cycle 1500\nexpect state 5 Data_Exchange\nexpect state 6 Data_Exchange\n"
+      "expect state 7 Data_Exchange\n");
+  for (const std::uint8_t a : {5, 6, 7}) {
+    const std::vector<A>& got = dx.answers.at(a);
+    EXPECT_EQ(got.size(), 1500U) << "station " << int{a};
+    EXPECT_EQ(std::count(got.begin(), got.end(), A::data), 1500) << "station " << int{a};
+  }
+}
+
+// `user_wd_value=3` without the service: Data_Exchanges 1..3 answered, the 4th not (the count
+// loaded at the first, 2 and 1 at the next two, 0 at the fourth). The station beside it keeps
+// the default.
+TEST(SegmentScenario, UserWdValueSetsTheDataExchangeThatIsNotAnswered) {
+  using A = DataExchanges::Answer;
+  const DataExchanges dx = run_exchanges(
+      "segment baud=12000000\nstation 5 profile=spc3 user_wd_value=3\nstation 6 profile=spc3\n"
+      "startup\ncycle 3\nexpect state 5 Data_Exchange\ncycle 2\nexpect state 5 Wait_Prm\n"
+      "expect state 6 Data_Exchange\n");
+  const std::vector<A>& got = dx.answers.at(5);
+  ASSERT_GE(got.size(), 5U);
+  EXPECT_EQ(std::vector<A>(got.begin(), got.begin() + 4),
+            (std::vector<A>{A::data, A::data, A::data, A::none}));
+  EXPECT_EQ(std::count(got.begin() + 4, got.end(), A::data), 0);
+  EXPECT_EQ(std::count(dx.answers.at(6).begin(), dx.answers.at(6).end(), A::data), 5);
+}
+
+// Bad input in a segment scenario: one line, FILE:LINE, nothing run (docs/bad-input.md).
+TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
+  const std::pair<const char*, const char*> cases[] = {
+      {"segment\nstation 5\nbogus 3\n", "f.scn:3: unknown command 'bogus'"},
+      {"station 5\n", "f.scn:1: a segment scenario begins with 'segment'"},
+      {"segment\nstation 5 firmware=DO4\nstation 6 firmware=NOPE\n",
+       "f.scn:3: unknown firmware 'NOPE' (DO4, CNT2, or a plug-in path such as ./libmine.so)"},
+      // The token's options (docs/scenario-format.md, "Segments").
+      {"segment\nstation 5\nmaster 2 hsa=9\n",
+       "f.scn:3: hsa= without gap=: the HSA bounds the GAP the master polls"},
+      {"segment\nstation 5\nmaster 9 gap=1 hsa=8\n", "f.scn:3: hsa=8 below the master's address 9"},
+      {"segment\nstation 5\nmaster 2 ttr=1000\nmaster 3 ttr=2000\n",
+       "f.scn:4: ttr=2000 differs from master 2's ttr=1000: give the bus check's TTR on the "
+       "segment "
+       "line (segment ttr=BITS)"},
+      {"segment\nstation 5\nmaster 2 gap=0\n", "f.scn:3: gap 0 out of range (1..100)"},
+      {"segment\nstation 5\nmaster 2 ttr=1000\ncycle 1 skip=5\n",
+       "f.scn:4: cycle skip=: master 2 obeys the token (ttr=, gap=) and polls all its slaves"},
+      {"segment\nstation 5\nmaster 2\nexpect visit 2\n",
+       "f.scn:4: master 2 does not obey the token: give it ttr= or gap="},
+      {"segment\nstation 5\nmaster 2 gap=1\nexpect visit 3\n", "f.scn:4: no master 3"},
+      {"segment\nstation 5\nmaster 2 gap=1\nexpect visit 2 gap_answered=maybe\n",
+       "f.scn:4: gap_answered='maybe': yes or no"},
+      {"segment\nstation 5\nexpect state 9 Data_Exchange\n", "f.scn:3: no station 9"},
+      {"segment\nstation 5\nstartup\nstation 6\n", "f.scn:4: 'station' after the first action"},
+      // The built-in user side's options, checked as the single chip's `user` step checks them.
+      {"segment\nstation 5\nstation 6 profile=spc3 firmware=DO4 user_wd=1\n",
+       "f.scn:3: 'user_wd' configures the built-in user side; a firmware configures itself"},
+      {"segment\nstation 5 user_wd_value=9 firmware=CNT2 profile=vpc3plus\n",
+       "f.scn:2: 'user_wd_value' configures the built-in user side; a firmware configures itself"},
+      {"segment\nstation 5\nstation 6 profile=dpc31 user_wd_value=5\n",
+       "f.scn:3: user_wd_value= needs user_wd=1 on profile dpc31: the DPS_User_Watchdog loads "
+       "R_User_WD_Value only through its requests"},
+      {"segment\nstation 5 user_wd_value=5\n",
+       "f.scn:2: user_wd_value= needs user_wd=1 on profile dpc31: the DPS_User_Watchdog loads "
+       "R_User_WD_Value only through its requests"},
+      {"segment\nstation 5 profile=spc3 user_wd=yes\n",
+       "f.scn:2: bad value 'yes' for user_wd: 0 or 1"},
+      {"segment\nstation 5 profile=spc3 user_wd_value=65536\n",
+       "f.scn:2: user_wd_value 65536 out of range (0..65535)"},
+      // A master's slaves are stations of the segment, named before or after it.
+      {"segment\nstation 5\nmaster 2 slaves=9\nstartup\n", "f.scn:3: slaves=9: no station 9"},
+      {"segment\nmaster 2 slaves=5,9\nstation 5\nstartup\n", "f.scn:2: slaves=5,9: no station 9"},
+      // One FCB state per slave (EN 50170): a slave listed twice would see its FCB repeated.
+      {"segment\nstation 5\nstation 6\nmaster 2 slaves=5,6,5\nstartup\n",
+       "f.scn:4: slaves=5,6,5: station 5 twice"},
+      // One name a station, chips, senders and masters alike: it is the station's scope in the
+      // waveforms and names it in the log and in `send from=`.
+      {"segment\nstation 5 name=a\nstation 6 name=a\nstartup\n",
+       "f.scn:3: a second station named 'a'"},
+      {"segment\nstation 5 name=a\nsender a\nstartup\n", "f.scn:3: a second station named 'a'"},
+      {"segment\nsender x\nstation 5\nsender x\nstartup\n", "f.scn:4: a second station named 'x'"},
+      {"segment\nstation 5\nmaster 2 slaves=5\nmaster 2 slaves=5\nstartup\n",
+       "f.scn:4: a second station named 'master 2'"},
+      {"segment\nstation 5\nmaster 2\nstartup\npass_token from=9 to=2\n",
+       "f.scn:5: pass_token from=9: no master of that address"},
+      {"segment\nstation 5\n", "f.scn: only header commands: nothing to run"},
+      // A word no command takes (a mistyped option: its `=` missing) is refused, never ignored,
+      // in the single chip's words.
+      {"segment\nstation 5\nstartup\nexpect state 5 Data_Exchange after_request 999999\n",
+       "f.scn:4: 'expect state' takes a station and a DP state; unexpected 'after_request'"},
+      {"segment\nstation 5\nstartup\nexpect state 5 Data_Exchange wd DP_Control\n",
+       "f.scn:4: 'expect state' takes a station and a DP state; unexpected 'wd'"},
+      {"segment\nstation 5\nstartup\nexpect tsdr 11 foo\n",
+       "f.scn:4: 'expect tsdr' takes the bit times; unexpected 'foo'"},
+      {"segment\nstation 5\nstartup\nexpect bus_violation collision 0 extra\n",
+       "f.scn:4: 'expect bus_violation' takes a violation kind and a count; unexpected 'extra'"},
+      {"segment baud=12000000 extra\n",
+       "f.scn:1: 'segment' takes no arguments; unexpected 'extra'"},
+      {"segment\nstation 5 6\n", "f.scn:2: 'station' takes a station address; unexpected '6'"},
+      {"segment\nstation 5\nstartup foo\n",
+       "f.scn:3: 'startup' takes no arguments; unexpected 'foo'"},
+      {"segment\nstation 5\ncycle 2 3\n",
+       "f.scn:3: 'cycle' takes the number of rotations; unexpected '3'"},
+      {"segment\nstation 5\nrun 1ms 2ms\n", "f.scn:3: 'run' takes a time; unexpected '2ms'"},
+      // The walk's form of a telegram (spaces) copied back, as the single chip's `send` says it.
+      {"segment\nsender a\nsend from=a 10 05 02 49 50 16\n",
+       "f.scn:3: send: the bytes are separated by commas (10,05,...); unexpected '05'"},
+      // Every station is one: a name, and a master's address, once.
+      {"segment\nsender a\nsender a\n", "f.scn:3: a second station named 'a'"},
+      {"segment\nstation 5 name=a\nsender a\n", "f.scn:3: a second station named 'a'"},
+      {"segment\nstation 5 name=\n", "f.scn:2: empty name for station 5"},
+      {"segment\nstation 5\nmaster 2\nmaster 2\n", "f.scn:4: a second station named 'master 2'"},
+      {"segment\nstation 5\nmaster 5\n", "f.scn:3: master 5 at the address of station 5"},
+      {"segment\nmaster 5\nstation 5\n", "f.scn:3: station 5 at the address of master 5"},
+      {"segment\nstation 5\nstation 2\nstartup\n",
+       "f.scn:3: station 2 at the address of master 2, the default master: give a 'master' line"},
+      // token_hold needs a TTR and a token passed between masters: else it could only count 0.
+      {"segment\nstation 5\nstation 6\nmaster 2 slaves=5\nmaster 3 slaves=6\nstartup\n"
+       "expect bus_violation token_hold 0\n",
+       "f.scn:7: token_hold is checked on a line with two or more masters and a TTR (segment "
+       "ttr=BITS or master ... ttr=BITS): without them it would always count 0"},
+      {"segment ttr=1000\nstation 5\nstartup\nexpect bus_violation token_hold 0\n",
+       "f.scn:4: token_hold is checked on a line with two or more masters and a TTR (segment "
+       "ttr=BITS or master ... ttr=BITS): without them it would always count 0"},
+      // A second `segment` line would replace the first's settings (docs/scenario-format.md: a
+      // repeated header command is a parse error naming the first's line; the audit s28 aud2,
+      // finding 6: the run was silently at the second's rate).
+      {"# the line\nsegment baud=1500000\nsegment slot=200\nstation 5\nstartup\n",
+       "f.scn:3: 'segment' given twice: first at line 2"},
+      {"segment\nsegment baud=1500000\nstation 5\nstartup\n",
+       "f.scn:2: 'segment' given twice: first at line 1"},
+      // One slot range at every door (vocabulary.hpp kSlotBits).
+      {"segment slot=36\nstation 5\nstartup\n", "f.scn:1: slot 36 out of range (37..16383)"},
+      // The only rates the chips' baud search finds, refused in the single chip's words.
+      {"segment baud=12345\nstation 5\nstartup\n",
+       "f.scn:1: baud 12345 is not a PROFIBUS rate (9600, 19200, 45450, 93750, 187500, 500000, "
+       "1500000, 3000000, 6000000, 12000000)"},
+  };
+  for (const auto& [text, want] : cases) {
+    SegmentScenario s;
+    ScenarioError err;
+    EXPECT_FALSE(parse_segment_scenario(text, "f.scn", s, err)) << text;
+    EXPECT_EQ(err.text(), want);
+  }
+  // With the segment line silent, the bus check takes the TTR its masters obey.
+  SegmentScenario s;
+  ScenarioError err;
+  ASSERT_TRUE(parse_segment_scenario(
+      "segment\nstation 5\nmaster 2 ttr=1200\nmaster 3 ttr=1200 gap=2 hsa=9\nstartup\n", "f.scn", s,
+      err))
+      << err.text();
+  EXPECT_EQ(s.ttr_bits, 1200U);
+  EXPECT_EQ(s.masters[1].gap_factor, 2U);
+  EXPECT_EQ(s.masters[1].hsa, 9U);
+  EXPECT_TRUE(s.masters[1].obeys_token);
+  EXPECT_TRUE(is_segment_scenario("# a comment\n\nsegment baud=12000000\n"));
+  EXPECT_FALSE(is_segment_scenario("profile spc3\n"));
+  // A UTF-8 BOM from an editor is skipped, as the single chip's parser skips it.
+  EXPECT_TRUE(is_segment_scenario("\xEF\xBB\xBFsegment\nstation 5\nstartup\n"));
+  ASSERT_TRUE(parse_segment_scenario("\xEF\xBB\xBFsegment\nstation 5\nstartup\n", "f.scn", s, err))
+      << err.text();
+  EXPECT_EQ(s.stations.size(), 1U);
+}
+
+// A segment scenario's text run: its exit code, the walk and the failed checks.
+struct ScenarioRun {
+  int code = 0;
+  std::vector<std::string> walk;
+  std::vector<std::string> errors;
+  // The cycle of the walk's last line that contains `text` (0 when none does).
+  [[nodiscard]] std::uint64_t cycle_of(std::string_view text) const {
+    for (auto l = walk.rbegin(); l != walk.rend(); ++l) {
+      if (l->find(text) != std::string::npos) return std::stoull(l->substr(l->find("cycle") + 5));
+    }
+    ADD_FAILURE() << "no walk line with " << text;
+    return 0;
+  }
+};
+
+ScenarioRun run_scenario_text(const std::string& text) {
+  SegmentScenario s;
+  ScenarioError err;
+  EXPECT_TRUE(parse_segment_scenario(text, "s.scn", s, err)) << err.text();
+  ScenarioRun r;
+  r.code = run_segment_scenario(
+      s, [&r](const std::string& l) { r.walk.push_back(l); },
+      [&r](const std::string& e) { r.errors.push_back(e); });
+  return r;
+}
+
+// The same for a run whose every check passes: exit 0, no failure.
+ScenarioRun run_passing(const std::string& text) {
+  ScenarioRun r = run_scenario_text(text);
+  EXPECT_EQ(r.errors, std::vector<std::string>{});
+  EXPECT_EQ(r.code, 0);
+  return r;
+}
+
+// docs/scenario-format.md: `expect tsdr` counts the answers the bus check pairs with their
+// requests (docs/segment.md "Bus checks"): a scripted station's answer to an FDL_Status to 9
+// 132 bit times after its end is the asked station's late answer (before TSL + TSYN = 133) and
+// its delay counts; at 133 bit times the bus check calls it unsolicited and `expect tsdr 11`
+// (the start-up's answers, each 11 bit times) holds. The audit's u133.scn.
+TEST(SegmentScenario, ExpectTsdrCountsOnlyWhatTheBusCheckCallsAnAnswer) {
+  for (const int after : {132, 133}) {
+    const bool late = after == 132;
+    const ScenarioRun r = run_scenario_text(fmt::format(
+        "segment baud=1500000 slot=100\nstation 5 profile=spc3\nsender asker\nsender nine\n"
+        "startup\nsend from=asker after=33bits 10,09,03,49,55,16\n"
+        "send from=nine after={}bits 10,03,09,00,0C,16\nrun 1ms\n"
+        "expect bus_violation late_answer {}\nexpect bus_violation unsolicited {}\n"
+        "expect tsdr 11\n",
+        after, late ? 1 : 0, late ? 0 : 1));
+    ASSERT_EQ(r.errors.size(), late ? 1U : 0U) << after;
+    if (late) {
+      EXPECT_EQ(r.errors[0].substr(0, 27), "s.scn:11: expected tsdr 11,") << r.errors[0];
+      EXPECT_NE(r.errors[0].find("delays 11..132 bit times"), std::string::npos) << r.errors[0];
+    }
+    EXPECT_EQ(r.code, late ? 1 : 0) << after;
+  }
+}
+
+// Two masters without a TTR still pass a token, so a lost one is found (docs/segment.md, "Bus
+// checks": TTO = TSL x (6 + 2 x 2) = 1000 bit times needs no TTR): the token to nobody (DC 09 02,
+// 3 characters: its end 33 T = 1056 clocks after its start at 1.5 Mbaud) leaves the line idle,
+// counted once at that end + 1000 T (32 000 clocks).
+TEST(SegmentScenario, TwoMastersWithoutTtrCheckTheToken) {
+  const ScenarioRun r = run_scenario_text(
+      "segment\nstation 5 profile=spc3\nstation 6 profile=dpc31\nmaster 2 slaves=5\n"
+      "master 3 slaves=6\nstartup\ncycle 2\npass_token from=2 to=9\nrun 2ms\n"
+      "expect bus_violation token_lost 1\nexpect bus_violation duplicate_token 0\n");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_TRUE(r.errors.empty()) << r.errors.front();
+  const std::uint64_t token = r.cycle_of("master 2: DC 09 02");
+  EXPECT_EQ(r.cycle_of("bus: token_lost"), token + 1056 + 32000);
+}
+
+// Only actions move the line's time (docs/scenario-format.md, "Segments"): a master's action ends
+// on a quiet line, at the end of the last answer's stop bit; an expect moves no time; `run T`
+// lasts T; `send` counts its `after=` (33 bit times) from the quiet line and lasts to its
+// telegram's end. At 12 Mbaud, T = 4 clocks.
+TEST(SegmentScenario, OnlyActionsMoveTheLinesTime) {
+  const ScenarioRun r = run_scenario_text(
+      "segment baud=12000000\nstation 5 profile=spc3\nmaster 2 slaves=5\nsender a\nstartup\n"
+      "expect state 5 Data_Exchange\nexpect state 5 Data_Exchange\n"
+      "send from=a 10,05,02,49,50,16\nrun 1000\nexpect state 5 Data_Exchange\n"
+      "expect bus_violation short_tsyn 0\n");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_TRUE(r.errors.empty()) << r.errors.front();
+  // The start-up's last telegram, the Slave_Diag answer: 17 characters of 11 T from its start.
+  const std::uint64_t quiet = r.cycle_of("line 6: expect");
+  EXPECT_EQ(r.cycle_of("] station 5: 68 0B 0B 68 82 85 08") + 17 * 11 * 4, quiet);
+  EXPECT_EQ(r.cycle_of("line 7: expect"), quiet);
+  EXPECT_EQ(r.cycle_of("line 8: send"), quiet);
+  const std::uint64_t sent = r.cycle_of("] a: 10 05 02 49 50 16");
+  EXPECT_EQ(sent, quiet + 33 * 4);
+  EXPECT_EQ(r.cycle_of("line 9: run"), sent + 6 * 11 * 4);
+  EXPECT_EQ(r.cycle_of("line 10: expect"), sent + 6 * 11 * 4 + 1000);
+  EXPECT_EQ(r.cycle_of("line 11: expect"), sent + 6 * 11 * 4 + 1000);
+}
+
+// A run with no telegram on the line at all (the segment has relayed none whole: its whole_start
+// is "never") ends after its `run`s: nothing to finish at the end.
+TEST(SegmentScenario, ALineWithoutATelegramEndsAfterItsRuns) {
+  const ScenarioRun r =
+      run_scenario_text("segment\nstation 5 profile=spc3\nrun 1000\nexpect state 5 Wait_Prm\n");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_EQ(r.cycle_of("line 4: expect"), r.cycle_of("line 3: run") + 1000);
+  EXPECT_EQ(r.cycle_of("1 expects passed"), r.cycle_of("line 3: run") + 1000);
+}
+
+// A short TSYN names the station that sent, not the SA its frame carries: sender `a` sends a
+// request in master 2's name 32 bit times after the start-up's last answer.
+TEST(SegmentScenario, AShortTsynNamesItsSender) {
+  const ScenarioRun r = run_scenario_text(
+      "segment baud=12000000\nstation 5 profile=spc3\nmaster 2 slaves=5\nsender a\nstartup\n"
+      "send from=a after=32bits 10,05,02,49,50,16\nrun 1000\nexpect bus_violation short_tsyn 1\n");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_TRUE(r.errors.empty()) << r.errors.front();
+  EXPECT_NE(r.cycle_of("bus: short_tsyn: a sent after 32 bit times of idle (TSYN 33)"), 0U);
+}
+
+// The built-in master keeps TSYN after every telegram on the line, not only its own
+// (docs/timing.md: a telegram after fewer than 33 idle bit times is ignored and counted `no_sync`;
+// docs/scenario- format.md `idle=`: after the end of the line's last telegram; the audit s28 aud2,
+// finding 1: it counted from its own traffic and started on the last bit of another station's
+// token). At 12 Mbaud T = 4 clocks. A sender's token (DC 02 02, 3 characters: 33 T) ends 132 clocks
+// after its first start bit; master 2's Data_Exchange (4 output bytes: SD2 with 13 characters)
+// starts TSYN = 132 clocks later, and station 5 answers it (13 characters) 11 T after its end.
+TEST(SegmentScenario, TheMasterKeepsTsynAfterAnotherStationsTelegram) {
+  const ScenarioRun r = run_passing(
+      "segment baud=12000000\nstation 5 profile=spc3\nmaster 2 slaves=5\nsender r\nstartup\n"
+      "cycle 1\nsend from=r after=200bits DC,02,02\ncycle 1\nexpect bus_violation short_tsyn 0\n"
+      "expect state 5 Data_Exchange\n");
+  const std::uint64_t token = r.cycle_of("] r: DC 02 02");
+  const std::uint64_t request = r.cycle_of("] master 2: 68 07 07 68 05 02");
+  EXPECT_EQ(request, token + 33 * 4 + 33 * 4);
+  EXPECT_EQ(r.cycle_of("] station 5: 68 07 07 68 02 05"), request + 13 * 11 * 4 + 11 * 4);
+}
+
+// A token claimed without an SD4 is held from TSYN before the claiming master's first request
+// (docs/segment.md, "The token"): the master's own TTH counts from there as the bus check's does
+// (the review s28 rev2 finding 1: it counted from the claim's step, 33 bit times earlier for the
+// check, and the check charged it token_hold at TTR 331..340).
+TEST(SegmentScenario, AClaimedTokensHoldIsTheBusChecks) {
+  for (const int ttr : {331, 335, 340}) {
+    run_passing(
+        fmt::format("segment baud=12000000\nstation 5 name=spc3 profile=spc3\n"
+                    "station 6 name=vpc3plus profile=vpc3plus\nstation 7 name=dpc31 profile=dpc31\n"
+                    "master 2 slaves=5,6 ttr={0}\nmaster 3 slaves=7 ttr={0}\nstartup\ncycle 2\n"
+                    "pass_token from=2 to=9\nrun 2ms\ncycle 3\nexpect bus_violation token_hold 0\n",
+                    ttr));
+  }
+}
+
+// The same after another master's token: master 3, given the token by master 2, passes it back
+// TSYN after master 2's token ends (each DC xx yy: 33 T), not at once (the audit's f1b).
+TEST(SegmentScenario, AMasterPassesTheTokenTsynAfterTheTokenItGot) {
+  const ScenarioRun r = run_passing(
+      "segment baud=12000000\nstation 5 profile=spc3\nmaster 2 slaves=5\nmaster 3 slaves=5\n"
+      "pass_token from=2 to=3\npass_token from=3 to=2\nexpect bus_violation short_tsyn 0\n");
+  EXPECT_EQ(r.cycle_of("] master 3: DC 02 03"), r.cycle_of("] master 2: DC 03 02") + 66 * 4);
+}
+
+// A master that finds a slave locked by another (its Slave_Diag's Master_Add, byte 3, neither FFh
+// nor its own address: chip-facts.md, "Slave_Diag"; Master_Lock is the master's own bit) does not
+// parameterise it, and its walk says so (the audit s28 aud2, finding 4: master 3 took the slave
+// for ready and sent it Data_Exchange silently). At 1.5 Mbaud T = 32 clocks: master 3's Slave_Diag
+// answer `00 0C 00 02 0C 31` is 17 characters; the master stops at its last stop sample, end - T
+// + T/2, where the walk says it.
+TEST(SegmentScenario, AMasterLeavesASlaveLockedByAnotherMasterAlone) {
+  const ScenarioRun r = run_passing(
+      "segment\nstation 5 profile=spc3\nstation 6 profile=vpc3plus\nmaster 2 slaves=5,6\n"
+      "master 3 slaves=5\nstartup\nexpect state 5 Data_Exchange\n");
+  const std::uint64_t diag =
+      r.cycle_of("] station 5: 68 0B 0B 68 83 85 08 3E 3C 00 0C 00 02 0C 31");
+  EXPECT_EQ(r.cycle_of("master 3: station 5 is locked by master 2 (its Slave_Diag's Master_Add): "
+                       "not parameterised, its start-up ends"),
+            diag + 17 * 11 * 32 - 32 + 16);
+  // No Set_Prm (DSAP 3D) nor Chk_Cfg (3E) from master 3.
+  EXPECT_EQ(std::count_if(r.walk.begin(), r.walk.end(),
+                          [](const std::string& l) {
+                            return l.find("] master 3: 68") != std::string::npos &&
+                                   (l.find(" 3D 3E ") != std::string::npos ||
+                                    l.find(" 3E 3E ") != std::string::npos);
+                          }),
+            0);
+}
+
+// Two stations at one address answer each of the start-up's five requests and the three
+// Data_Exchanges together: eight collisions, each its own line in the walk (docs/segment.md, "Bus
+// checks": one log line a violation; a run of equal lines folds only where nothing comes between,
+// and then its note comes right after it: the audit s28 aud2, finding 8: one line showed and the
+// note came 40 lines later). The chips' state lines are in cycle order (docs/segment.md, "The
+// log"; finding 9: the two twins' Data_Exchange lines came in station order).
+TEST(SegmentScenario, EachCollisionIsALineAndStateLinesAreInCycleOrder) {
+  const ScenarioRun r = run_passing(
+      "segment\nstation 5 name=a profile=spc3\nstation 5 name=b profile=vpc3plus\n"
+      "station 6 profile=dpc31\nstartup\ncycle 3\nexpect collisions 8\n");
+  std::vector<std::uint64_t> states;
+  std::size_t collisions = 0;
+  for (const std::string& l : r.walk) {
+    EXPECT_EQ(l.find("repeated"), std::string::npos) << l;
+    if (l.find("] bus: collision: b drove the line while a had it") != std::string::npos)
+      ++collisions;
+    if (l.find(" / ") != std::string::npos) states.push_back(std::stoull(l.substr(7)));
+  }
+  EXPECT_EQ(collisions, 8U);
+  EXPECT_TRUE(std::is_sorted(states.begin(), states.end()));
+  EXPECT_GE(states.size(), 6U);  // each of the three through Wait_Cfg into Data_Exchange at least
+}
+
+// An unanswered request waits for its answer only up to its slot time (docs/timing.md, "The
+// master's wait"; docs/segment.md, "Bus checks"): each telegram long after it stands on its own.
+// At 12 Mbaud T = 4 clocks, a 6-character telegram lasts 66 T = 264 clocks, `send` starts 33 T
+// after the quiet line and ends at its telegram's end, `run 1ms` lasts 48 000 clocks, and the
+// line idle for TTO = 100 x (6 + 2 x 2) = 1000 T = 4000 clocks after a telegram's end is one
+// token_lost (master 2 alone). The rogue asks station 9 (nobody) in master 2's name; after a lost
+// token a babbler's answer is unsolicited (no late answer, no wrong responder), and a request
+// with a corrupted FCS (49 + 09 + 02 = 54, sent as 55) is one bad frame.
+TEST(SegmentScenario, AnUnansweredRequestWaitsNoLongerThanItsSlotTime) {
+  const ScenarioRun r = run_scenario_text(
+      "segment baud=12000000\nstation 5 profile=spc3\nmaster 2 slaves=5\nsender rogue\n"
+      "sender babbler\nstartup\nexpect state 5 Data_Exchange\n"
+      "send from=rogue after=33bits 10,09,02,49,54,16\nrun 1ms\n"
+      "send from=babbler after=33bits 10,02,07,00,09,16\n"
+      "send from=rogue after=33bits 10,09,02,49,54,16\nrun 1ms\n"
+      "send from=rogue after=33bits 10,09,02,49,55,16\nrun 1000\n"
+      "expect bus_violation unsolicited 1\nexpect bus_violation bad_frame 1\n"
+      "expect bus_violation late_answer 0\nexpect bus_violation wrong_responder 0\n"
+      "expect bus_violation token_lost 2\n");
+  EXPECT_EQ(r.errors, std::vector<std::string>{});
+  EXPECT_EQ(r.code, 0);
+  const std::uint64_t quiet = r.cycle_of("line 7: expect");
+  const std::uint64_t end1 = quiet + 132 + 264;         // the first request to 9
+  const std::uint64_t babble = end1 + 48000 + 132;      // the babbler's answer
+  const std::uint64_t end3 = babble + 264 + 132 + 264;  // the second request to 9
+  const std::uint64_t broken = end3 + 48000 + 132;      // the corrupted request
+  const auto at = [](std::uint64_t cycle, std::string_view text) {
+    return fmt::format("[cycle {:>10}] bus: {}", cycle, text);
+  };
+  const std::vector<std::string> want = {
+      at(end1 + 4000,
+         fmt::format("token_lost: the line idle for TTO (1000 bit times) since cycle {}", end1)),
+      at(babble, "unsolicited: an answer from station 7 nobody asked for"),
+      at(end3 + 4000,
+         fmt::format("token_lost: the line idle for TTO (1000 bit times) since cycle {}", end3)),
+      at(broken, fmt::format("bad_frame: 6 bytes from cycle {} do not decode (bad_fcs)", broken))};
+  std::vector<std::string> bus;
+  std::copy_if(r.walk.begin(), r.walk.end(), std::back_inserter(bus),
+               [](const std::string& l) { return l.find("] bus: ") != std::string::npos; });
+  EXPECT_EQ(bus, want);
+}
+
+// A telegram that ends at a step's end (its last stop bit) is over there: the walk prints it, and
+// the bus check counts it, before the next step's lines at that cycle (docs/decisions.md, the
+// twenty-third session; a chip's event at an expect's cycle comes before the expect in the single
+// chip's walk too). Until then the segment told of it one character time later, after them. At
+// 12 Mbaud T = 4 clocks: `send` starts 32 T after the start-up's quiet end (line 6's cycle) and
+// ends 6 characters of 11 T later, where line 8's expect looks (docs/scenario-format.md,
+// "Segments": `send` ends at its telegram's end, a check moves no time); the short TSYN is
+// stamped at the telegram's start, where the idle ended too soon (the bus check is told of each
+// telegram just before the log prints it).
+TEST(SegmentScenario, ATelegramEndingAtAStepsEndComesBeforeItsExpects) {
+  const ScenarioRun r = run_scenario_text(
+      "segment baud=12000000\nstation 5 profile=spc3\nmaster 2 slaves=5\nsender a\nstartup\n"
+      "expect state 5 Data_Exchange\nsend from=a after=32bits 10,05,02,49,50,16\n"
+      "expect bus_violation short_tsyn 1\n");
+  EXPECT_EQ(r.errors, std::vector<std::string>{});  // the short TSYN counted: exit 0
+  const std::uint64_t quiet = r.cycle_of("line 6: expect");
+  const std::uint64_t sent = quiet + 32 * 4;
+  const std::uint64_t end = sent + 6 * 11 * 4;
+  const auto at = [](std::uint64_t cycle, std::string_view text) {
+    return fmt::format("[cycle {:>10}] {}", cycle, text);
+  };
+  const std::vector<std::string> want = {
+      at(quiet, "line 7: send from=a after=32bits 10,05,02,49,50,16"),
+      at(sent, "bus: short_tsyn: a sent after 32 bit times of idle (TSYN 33)"),
+      at(sent, "a: 10 05 02 49 50 16"), at(end, "line 8: expect bus_violation short_tsyn 1"),
+      at(end, "ok")};
+  const auto from = std::find(r.walk.begin(), r.walk.end(), want.front());
+  ASSERT_NE(from, r.walk.end());
+  EXPECT_EQ(std::vector<std::string>(
+                from, from + std::min<std::ptrdiff_t>(r.walk.end() - from, want.size())),
+            want);
+  EXPECT_EQ(r.code, 0);
+}
+
+// A station that never left DP_Control fails `expect watchdog_expired` saying so (not "left at
+// cycle 0"), with the cycle expected: the last request's end - T + T/2 + TWD.
+TEST(SegmentScenario, AWatchdogThatNeverExpiredSaysSo) {
+  const ScenarioRun r = run_scenario_text(
+      "segment baud=12000000\nstation 5 profile=spc3\nmaster 2 slaves=5\nstartup\n"
+      "expect watchdog_expired 5 twd=100\n");
+  EXPECT_EQ(r.code, 1);
+  ASSERT_EQ(r.errors.size(), 1U);
+  EXPECT_EQ(r.errors[0].substr(0, r.errors[0].find(" at cycle")),
+            "s.scn:5: expected watchdog_expired 5 twd=100, got never left DP_Control, expected it");
+}
+
+// The single chip's loader on a segment's file names the segment's loader, at the `segment` line.
+TEST(SegmentScenario, TheSingleChipLoaderNamesTheSegmentLoader) {
+  Scenario s;
+  ScenarioError err;
+  EXPECT_FALSE(
+      parse_scenario("# two stations\n\nsegment baud=1500000\nstation 5\n", "f.scn", s, err));
+  EXPECT_EQ(err.text(),
+            "f.scn:3: 'segment' begins a segment scenario (docs/scenario-format.md, \"Segments\"): "
+            "load it with SegmentScenario (load_segment_scenario; dpc31.SegmentScenario in Python) "
+            "or run it with `dpc31 run`");
+}
+
+}  // namespace
+}  // namespace dpc31
