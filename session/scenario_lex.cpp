@@ -91,6 +91,10 @@ std::uint64_t duration(std::string_view s, std::uint64_t f, std::uint64_t t) {
     check(kMaxSeconds * f / t);
     return v * t;
   }
+  if (unit.size() > 1 && (unit[0] == '.' || unit[0] == ',') && unit[1] >= '0' && unit[1] <= '9') {
+    fail(fmt::format("time '{}': a time is a whole number of its unit: write it in a smaller unit",
+                     shown(s)));
+  }
   fail(fmt::format("bad time unit '{}' in '{}' (us, ms, s, bits, or none for cycles)", shown(unit),
                    shown(s)));
 }

@@ -676,8 +676,14 @@ class Parser {
       step_.when_cycle = number(pos_.back(), "cycle", 0, kMaxSeconds * clock() * 1000);
       pos_.resize(pos_.size() - 2);
     }
+    // The form (with its cycle for dp_state, wd_state and port) and the first word too many.
     auto args = [&](std::size_t n, std::string_view form) {
-      if (pos_.size() != n + 1) fail(fmt::format("expected 'expect {} {}'", what, form));
+      if (pos_.size() == n + 1) return;
+      const bool timed = what == "dp_state" || what == "wd_state" || what == "port";
+      const std::string usage =
+          fmt::format("expected 'expect {} {}{}'", what, form, timed ? " [at CYCLE|after N]" : "");
+      if (pos_.size() < n + 1) fail(usage);
+      fail(fmt::format("{}; unexpected '{}'", usage, shown(pos_[n + 1])));
     };
     if (what == "dp_state") {
       args(1, "Wait_Prm|Wait_Cfg|Data_Exchange");

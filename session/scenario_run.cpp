@@ -593,8 +593,10 @@ class Runner {
       case StepKind::read:
       case StepKind::request: {
         std::string done = scenario_bus::act(chip_, st, last_read_);  // the accesses take time
-        if (done.empty())
-          fail(st.line, "request: the Instruction_Queue is not set up (InstQ_Len 0)");
+        if (done.empty()) {  // the walk says it too: an empty line said nothing
+          done = "request: the Instruction_Queue is not set up (InstQ_Len 0)";
+          fail(st.line, done);
+        }
         note(chip_.cycle(), std::move(done));
         break;
       }

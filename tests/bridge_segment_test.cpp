@@ -228,6 +228,69 @@ TEST_F(BridgeSegment, AStationMovedOntoAnotherAddressCollides) {
   EXPECT_EQ(notes.back().cycle, line_[n + 1].start);
 }
 
+// A late answer that collides (audit s30 a-master, finding 4). Station 5 gets MinTSDR FFh (255
+// bit times, beyond the slot time of 100); then the client writes Slave_Diag to 5, FDL_Status to 6
+// and Slave_Diag to 6 at once. Slave_Diag to 5 (R1, 11 characters) times out, FDL_Status to 6
+// (R2) follows at R1's end + (100 + 33) T, station 6 answers it at R2's end + 11 T, and station 5
+// answers R1 at R1's end + 255 T, into station 6's answer (which keeps the line). The rest of
+// station 5's 17 characters ends at R1's end + (255 + 17 * 11) T. docs/bridge.md, "Several
+// slaves": each answer names the station whose chip drove it; "How bytes become a bus": the next
+// request (R3) follows TSYN after the end of the last telegram on the bus, whoever drove it.
+// Before, the rest of station 5's answer was logged as one-byte telegrams of slave6, and R3 started
+// TSYN after station 6's answer, into station 5's.
+TEST_F(BridgeSegment, ALateAnswerIsItsStationsAndTheNextRequestWaitsForItsEnd) {
+  find(5);
+  exchange(frame(6, 0x49));
+  EXPECT_EQ(srd(5, {}, 60), diag_answer(5, {0x02, 0x05, 0x00, 0xFF, 0x0C, 0x31}));
+  EXPECT_TRUE(srd(5, {0x88, 0x0A, 0x0A, 0xFF, 0x0C, 0x31, 0x00, 0x00}, 61).empty());  // late SC
+  engine_->run_until(engine_->cycle() + 1000 * kT);
+  EXPECT_EQ(engine_->take_output(), Bytes{0xE5});
+  const std::size_t n = line_.size();
+  Bytes three = frame(5, 0x7D, {}, 60);
+  const Bytes status6 = frame(6, 0x49);
+  const Bytes diag6 = frame(6, 0x7D, {}, 60);
+  three.insert(three.end(), status6.begin(), status6.end());
+  three.insert(three.end(), diag6.begin(), diag6.end());
+  engine_->feed(three);
+  EXPECT_TRUE(engine_->settle(48'000'000));
+  engine_->run_until(engine_->cycle() + 1000 * kT);
+  engine_->flush_log();
+  ASSERT_EQ(line_.size(), n + 6);
+  const Sent& r1 = line_[n];
+  const Sent& r2 = line_[n + 1];
+  const Sent& a2 = line_[n + 2];
+  const Sent& late = line_[n + 3];
+  const Sent& r3 = line_[n + 4];
+  const Sent& a3 = line_[n + 5];
+  EXPECT_EQ(r1.sender, "master");
+  EXPECT_EQ(r1.end, r1.start + 11 * 11 * kT);
+  EXPECT_EQ(r2.sender, "master");
+  EXPECT_EQ(r2.start, r1.end + (100 + 33) * kT);
+  EXPECT_EQ(a2.sender, "slave6");
+  EXPECT_EQ(a2.start, r2.end + 11 * kT);
+  EXPECT_EQ(a2.bytes, (Bytes{0x10, 0x02, 0x06, 0x00, 0x08, 0x16}));
+  // What the client heard of station 5 after station 6 let go of the line: station 5's.
+  EXPECT_EQ(late.sender, "slave5");
+  EXPECT_EQ(late.end, r1.end + (255 + 17 * 11) * kT);
+  EXPECT_EQ(r3.sender, "master");
+  EXPECT_EQ(r3.start, late.end + 33 * kT);
+  EXPECT_EQ(a3.sender, "slave6");
+  EXPECT_EQ(a3.bytes, diag_answer(6, {0x02, 0x05, 0x00, 0xFF, 0x0C, 0x31}));
+  // One collision, station 5's into station 6's answer; the master drove into nobody's.
+  std::vector<std::string> collisions;
+  for (const Line& l : tagged("NOTE")) {
+    if (l.cycle >= r1.start && l.text.starts_with("collision")) collisions.push_back(l.text);
+  }
+  EXPECT_EQ(collisions,
+            std::vector<std::string>{"collision: slave5 drove into the telegram of slave6"});
+  // The log's TxD lines between station 6's answer and R3: the one of station 5.
+  std::vector<std::string> between;
+  for (const Line& l : tagged("TxD")) {
+    if (l.cycle > a2.start && l.cycle < r3.start) between.push_back(l.station);
+  }
+  EXPECT_EQ(between, std::vector<std::string>{"slave5"});
+}
+
 TEST(BridgeSegmentSetup, RefusesTwoStationsAtOneAddressButNotSeveralFirmwares) {
   const dpc31_firmware* do4 = dpc31_find_firmware("DO4");
   const dpc31_firmware* cnt2 = dpc31_find_firmware("CNT2");

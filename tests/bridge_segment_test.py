@@ -183,6 +183,21 @@ def one_slave_log_line():
                   f"log line 1: {line}")
         finally:
             b.kill()
+        # A plug-in beside the built-in firmware of its name: its path tells them apart (audit
+        # s30, finding 10: both were `firmware CNT2`).
+        cnt2 = bt.plugin("cnt2")
+        own = os.path.join(tmp, "plugin")  # a log of its own: the first one's is read as ready
+        os.mkdir(own)
+        b = blt.TcpBridge(own, "--slave", f"5:{cnt2}", "--slave", "6:CNT2", "--pacing", "free")
+        try:
+            b.stop()
+            line = b.log_lines()[0]
+            check("2 slaves: slave5 (profile dpc31, irq-controller external, firmware CNT2 "
+                  f"({cnt2})), slave6 (profile dpc31, irq-controller external, firmware CNT2), "
+                  "slot " in line,
+                  f"log line 1: {line}")
+        finally:
+            b.kill()
 
 
 def bad_slave_arguments():

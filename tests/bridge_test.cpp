@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "../lib/bridge/engine.hpp"
+#include "../lib/bridge/pacing.hpp"
 #include "../lib/bridge/pty.hpp"
 #include "baud_search.hpp"
 #include "bridge_engine_record.hpp"
@@ -65,6 +66,19 @@ class BridgeEngine : public ::testing::Test, protected testutil::EngineRecord {
     }
     FAIL() << "FDL_Status never answered";
   }
+
+  // The NOTE lines from cycle `from` on, once every held line is out (the end of the run).
+  std::vector<std::string> notes_since(std::uint64_t from) {
+    engine_->flush_log();
+    std::vector<std::string> notes;
+    for (const Line& l : tagged("NOTE")) {
+      if (l.cycle >= from) notes.push_back(l.text);
+    }
+    return notes;
+  }
+  // The events level's line at the first of a run of unanswered requests.
+  static constexpr const char* kRunOpened =
+      "no answer within the slot time (the next ones are counted until an answer)";
 
   // A DP start-up of DO4 as a master writes it, each request as soon as the last answer is in
   // (docs/bridge.md: DO4's GSD defaults; watchdog 100 x 10 x 10 ms), then `exchanges`
@@ -400,16 +414,27 @@ TEST_F(BridgeEngine, EventsLevelClosesEveryRunOfUnansweredRequests) {
   EXPECT_TRUE(exchange(absent).empty());
   EXPECT_TRUE(exchange(absent).empty());
   EXPECT_EQ(exchange(kFdlStatus), kStatusOk);
-  engine_->flush_log();
-  std::vector<std::string> notes;
-  for (const Line& l : tagged("NOTE")) {
-    if (l.cycle >= from) notes.push_back(l.text);
-  }
-  const std::string opened =
-      "no answer within the slot time (the next ones are counted until an answer)";
-  EXPECT_EQ(notes, (std::vector<std::string>{
-                       opened, "answered again, after 1 request without an answer", opened,
-                       "answered again, after 2 requests without an answer"}));
+  EXPECT_EQ(
+      notes_since(from),
+      (std::vector<std::string>{kRunOpened, "answered again, after 1 request without an answer",
+                                kRunOpened, "answered again, after 2 requests without an answer"}));
+}
+
+// A run never answered is counted when it ends otherwise: the client goes away, or the bridge
+// stops (audit s30 a-master, finding 8: "counted until an answer", and no answer came, so the
+// count was never written). docs/bridge.md, "The log".
+TEST_F(BridgeEngine, EventsLevelCountsARunThatEndsWithoutAnAnswer) {
+  make(dpc31::bridge::LogDetail::events);
+  find_slave();
+  const std::uint64_t from = engine_->cycle();
+  const Bytes absent = sd1(9, 2, 0x49);  // FDL_Status to a station nobody has
+  for (int i = 0; i < 3; ++i) EXPECT_TRUE(exchange(absent).empty());
+  engine_->client_gone();
+  for (int i = 0; i < 2; ++i) EXPECT_TRUE(exchange(absent).empty());
+  EXPECT_EQ(notes_since(from),
+            (std::vector<std::string>{
+                kRunOpened, "3 requests without an answer, then the client went away", kRunOpened,
+                "2 requests without an answer, then the bridge stopped"}));
 }
 
 // Garbage on the pty at the line's own speed (issue 29: 41.5 MB of log in 10 s): every broken
@@ -534,6 +559,45 @@ TEST(BridgePty, SymlinkRules) {
   EXPECT_NE(dpc31::bridge::make_link(file, "/dev/pts/1").find("not a symlink"), std::string::npos);
   EXPECT_TRUE(std::filesystem::is_regular_file(file));
   std::filesystem::remove_all(dir);
+}
+
+// docs/bridge.md, "Pacing", free: "Between exchanges chip time advances with the wall clock, so
+// chip time runs ahead of wall time by the sum of the exchanges' durations". The loop's turns
+// with a client take a little longer than their 1 ms wait (the poll's own overhead); each kept
+// only 1 ms of chip time, and chip time ran at about 0.9 of the wall clock's (audit s30 a-master,
+// finding 7). Made-up times: 1000 turns 1.08 ms apart at 48 MHz, 51 840 cycles each, and one
+// exchange of 96 000 cycles (2 ms) in the middle that takes no wall time.
+TEST(BridgePacing, FreeChipTimeKeepsUpWithTheWallClockBetweenExchanges) {
+  using namespace std::chrono_literals;
+  dpc31::bridge::Pacing pacing(false, 48'000'000, 5ms);
+  const auto t0 = dpc31::bridge::Pacing::Clock::time_point{} + 1h;
+  pacing.anchor(t0, 0);
+  std::uint64_t chip = 0;
+  for (int turn = 1; turn <= 1000; ++turn) {
+    const auto now = t0 + turn * 1080us;
+    chip = std::max(chip, pacing.target(now, 1ms, chip));
+    if (turn == 500) {
+      chip += 96'000;  // settle(): the exchange, at no wall time
+      pacing.anchor(now, chip);
+    }
+  }
+  EXPECT_EQ(chip, 1000u * 51'840 + 96'000);
+}
+
+// A turn runs at most its bound (5 ms: 240 000 cycles): free drops what is left (no debt), realtime
+// catches it up over the next turns (docs/bridge.md, "Pacing").
+TEST(BridgePacing, ABoundedTurnFreeDropsTheRestRealtimeCatchesUp) {
+  using namespace std::chrono_literals;
+  const auto t0 = dpc31::bridge::Pacing::Clock::time_point{} + 1h;
+  dpc31::bridge::Pacing free(false, 48'000'000, 5ms);
+  free.anchor(t0, 0);
+  EXPECT_EQ(free.target(t0 + 20ms, 1ms, 0), 240'000u);        // 20 ms due: 5 ms run
+  EXPECT_EQ(free.target(t0 + 21ms, 1ms, 240'000), 288'000u);  // then 1 ms later: 1 ms more
+  dpc31::bridge::Pacing realtime(true, 48'000'000, 5ms);
+  realtime.anchor(t0, 0);
+  EXPECT_EQ(realtime.target(t0 + 20ms, 1ms, 0), 240'000u);        // 21 ms due (to the wake-up)
+  EXPECT_EQ(realtime.target(t0 + 21ms, 1ms, 240'000), 480'000u);  // 22 ms due: 5 ms more
+  EXPECT_EQ(realtime.wall_cycle(t0 + 21ms), 1'008'000u);
 }
 
 }  // namespace

@@ -299,10 +299,14 @@ def check_order(lines):
         last = int(parts[0])
 
 
-def check_log(b, pacing, baud):
+def check_log(b, pacing, baud, firmware="DO4"):
+    """`firmware`: as given; line 1 names a plug-in's path beside its name (audit s30, finding 10:
+    a plug-in that keeps a built-in's name was not told from it)."""
     lines = b.log_lines()
     first = lines[0]
-    for want in (f"pacing {pacing}", f"baud {baud}", "profile dpc31, irq-controller external, firmware DO4",
+    named = "DO4" if firmware == "DO4" else f"DO4 ({firmware})"
+    for want in (f"pacing {pacing}", f"baud {baud}",
+                 f"profile dpc31, irq-controller external, firmware {named}, address 5",
                  "address 5, slot 100 bit times, log level telegrams",
                  f"pty {b.path} -> /dev/pts/"):
         check(want in first, f"log line 1 lacks '{want}': {first}")
@@ -400,7 +404,7 @@ def do4_two_clients(pacing, baud=19200, firmware="DO4"):
             m.expect("Data_Exchange 0A 01 again", m.srd([0x0A, 0x01]), dx_answer(0x08, [0xA1]))
             m.close()
             b.stop(signal.SIGTERM)
-            check_log(b, pacing, baud)
+            check_log(b, pacing, baud, firmware)
         finally:
             b.kill()
 
@@ -823,7 +827,9 @@ CASES = {
     "cnt2_free_logmsg": cnt2_logmsg,
     # The same through the plug-in path: the built-in firmwares as shared libraries.
     "do4_plugin_free_two_clients": lambda: do4_two_clients("free", firmware=plugin("do4")),
-    "cnt2_plugin_free_logmsg": lambda: cnt2_logmsg(plugin("cnt2")),
+    "cnt2_plugin_free_logmsg": lambda: cnt2_logmsg(
+        plugin("cnt2"), first=f"profile vpc3plus, variant c, firmware CNT2 ({plugin('cnt2')}), "
+        "address 9"),
     "bad_arguments_exit_2": bad_arguments,
     "do4_80c32_free": do4_80c32_free,
     "cnt2_80c32_free": cnt2_80c32_free,

@@ -295,6 +295,127 @@ TEST(Do4Dpv1, AlarmAckOnSap50Or51AndAWrongSlotThroughAScenario) {
   EXPECT_EQ(o.passed, 14u);
 }
 
+// A scenario with DO4 on `profile` at 1.5 Mbaud, slave 5, TWD 100 ms, these User_Prm_Data, then
+// `body`; it runs with every expect passed.
+void run_do4_scenario(const std::string& profile, const std::string& user_prm,
+                      const std::string& body, std::size_t expects) {
+  const std::string text = "profile " + profile + "\nbaud 1500000\nfirmware DO4\n" +
+                           "slave address=5 wd=2,5 user_prm=" + user_prm + "\n" + body;
+  Scenario s;
+  ScenarioError err;
+  ASSERT_TRUE(parse_scenario(text, "t.scn", s, err)) << err.text();
+  const ScenarioOutcome o = run_scenario(s, {}, {});
+  EXPECT_EQ(o.failures, std::vector<std::string>{});
+  EXPECT_EQ(o.passed, expects);
+}
+
+// Keep-alive for `ms` ms: a Data_Exchange with the last outputs every 40 ms, within the 100 ms
+// watchdog.
+std::string keep_alive(int ms) {
+  std::string t;
+  for (int k = 0; k < ms; k += 40) t += "exchange\nsilence 40ms\n";
+  return t;
+}
+
+// docs/firmware.md "DO4 with DPV1": "A new Set_Prm drops an outstanding alarm", and the diag says
+// so at once. The alarm of entering OSP (Seq_Nr 0: 05 01 00 01 01, Ext_Diag 08h in byte 0), then a
+// master restart (its Set_Prm): the Slave_Diag shows the status block 05 81 00 (Specifier 01h OSP
+// appears) 01 (S) with Ext_Diag clear, and an Alarm_Ack for the dropped alarm finds none
+// outstanding: DC 80 B5 00. Before the fix the alarm block stayed and its Alarm_Ack got B5.
+TEST(Do4Dpv1, ANewSetPrmDropsTheAlarmFromTheDiag) {
+  run_do4_scenario("vpc3plus", "C0,20,00,01,09,00",
+                   "startup\nexchange outputs=05,01\nexchange outputs=05,00\n"
+                   "diag\nexpect diag_byte 0 0x08\nexpect diag_byte 7 0x01\n"
+                   "restart\nexchange outputs=05,00\n"
+                   "diag\nexpect diag_byte 0 0x00\nexpect diag_byte 6 0x05\n"
+                   "expect diag_byte 7 0x81\nexpect diag_byte 9 0x01\nexpect diag_byte 10 0x01\n"
+                   "alarm_ack slot=0 type=1 seq=0 spec=1\nexpect dpv1 error 80,B5,00\n",
+                   8);
+}
+
+// docs/firmware.md: "Without DPV1 the block stays 02h, S". DPV1 in OSP mode (status block 05 81 00
+// 01 01), then the master parameterises DO4 without DPV1_Enable (its module bytes right after the
+// Spec_User_Prm_Byte 00) and checks its Cfg: the next Slave_Diag has the DP block 02 01 (OSP).
+// Before the fix the DPV1 status block stayed.
+TEST(Do4Dpv1, ADpSetPrmTurnsTheBlockBackToDp) {
+  run_do4_scenario("vpc3plus", "C0,00,00,01,09,00",
+                   "startup\nexchange outputs=05,01\nexchange outputs=05,00\n"
+                   "diag\nexpect diag_byte 6 0x05\nexpect diag_byte 7 0x81\n"
+                   "set_prm user_prm=00,01,09,00\nexpect answer sc\nchk_cfg\n"
+                   "diag\nexpect diag_byte 6 0x02\nexpect diag_byte 7 0x01\n",
+                   5);
+}
+
+// docs/dpv1.md "Negative responses": the request's function number | 80h. A Read (5E 00 01 02) on
+// the resource manager's SAP 49 is answered, at the poll after the 1 ms task, DE 80 A9 00 (feature
+// not supported) from SAP 49 to the master's SAP 48: 68 09 09 68, DA 82h, SA 85h, FC 08h, DSAP 30h,
+// SSAP 31h, the 4 bytes, FCS = (82 + 85 + 08 + 30 + 31 + DE + 80 + A9) mod 100h = 77h, 16h. Before
+// the fix it was the Initiate's D7 80 B8 00.
+TEST(Do4Dpv1, AnotherFunctionOnSap49IsNotSupported) {
+  run_do4_scenario("vpc3plus", "C0,20,00,01,09,00",
+                   "startup\nexchange outputs=05,01\n"
+                   "send from=2 fc=0x4D dsap=49 ssap=48 du=5E,00,01,02\nexpect answer sc\n"
+                   "silence 3ms\nsend from=2 fc=0x4D dsap=49 ssap=48\n"
+                   "expect answer 68,09,09,68,82,85,08,30,31,DE,80,A9,00,77,16\n",
+                   2);
+}
+
+// An Initiate (Send_Timeout 0Ah: 100 ms) whose master never polls SAP 49: its resource manager's
+// response is withdrawn with the connection it opened, whose time-out closes it at the
+// (10 x 10 + 1)-th tick after the one that answered (docs/firmware.md "MSAC_C2"). At about 85 ms
+// another master's Initiate still gets RR (the response waits: its master may still poll); after
+// 125 ms an Initiate is positive. Before the fix SAP 49 stayed occupied for good: RR, `refused`.
+TEST(Do4Dpv1, AnUnpolledInitiateIsWithdrawnAfterSendTimeout) {
+  const std::string initiate = "du=57,00,00,00,00,0A,00,01,00,00,00,00,00,00,00,00\n";
+  run_do4_scenario("vpc3plus", "C0,20,00,01,09,00",
+                   "startup\nexchange outputs=05,01\n"
+                   "send from=2 fc=0x4D dsap=49 ssap=48 " +
+                       initiate + "expect answer sc\n" + keep_alive(80) +
+                       "send from=7 fc=0x4D dsap=49 ssap=48 " + initiate + "expect answer rr\n" +
+                       keep_alive(40) + "c2_initiate send_timeout=100\nexpect dpv1 positive\n",
+                   3);
+}
+
+// A negative answer on SAP 49 that opened nothing (here to a Read) waits for its poll at most the
+// GSD's C2_Response_Timeout, 100 x 10 ms: withdrawn at the 1001st tick after the one that answered
+// it. At about 960 ms an Initiate still gets RR; after 1.04 s one is positive. Before the fix:
+// RR for good.
+TEST(Do4Dpv1, AnUnpolledNegativeAnswerOnSap49IsWithdrawn) {
+  run_do4_scenario("vpc3plus", "C0,20,00,01,09,00",
+                   "startup\nexchange outputs=05,01\n"
+                   "send from=2 fc=0x4D dsap=49 ssap=48 du=5E,00,01,02\nexpect answer sc\n" +
+                       keep_alive(960) +
+                       "send from=7 fc=0x4D dsap=49 ssap=48 "
+                       "du=57,00,00,00,00,0A,00,01,00,00,00,00,00,00,00,00\n"
+                       "expect answer rr\n" +
+                       keep_alive(80) + "c2_initiate send_timeout=100\nexpect dpv1 positive\n",
+                   3);
+}
+
+// docs/dpv1.md: MSAC_C1 lives in the master's Data_Exchange. Right after the standard start-up
+// (the slave in Data_Exchange, no cyclic telegram yet) the class-1 master reads the OSP record:
+// 5E 00 01 02, OSPMode 01h, value 09h (the Set_Prm's module bytes). The FDL_Ind narrowed the SAPs
+// to master 2 (Master_Add of the Slave_Diag it fetched), so station 7's Read gets RS. Before the
+// fix the SAPs opened at the first DX_Out only: the Read got RS (the audit's scn/d10.scn).
+TEST(Do4Dpv1, Msac1ServedRightAfterTheStartUp) {
+  run_do4_scenario("vpc3plus", "C0,20,00,01,09,00",
+                   "startup\nexpect dp_state Data_Exchange\n"
+                   "dpv1_read slot=0 index=1 length=2\nexpect dpv1 5E,00,01,02,01,09\n"
+                   "send from=7 fc=0x4D dsap=51 ssap=51 du=5E,00,01,02\nexpect answer rs\n",
+                   3);
+}
+
+// The DPV1 GSD is for the VPC3+ only (docs/firmware.md "GSD files"): on the SPC3 DO4's Prm and Aux
+// buffers hold its 11-byte DP Set_Prm, so the chip answers the 13-byte DPV1 Set_Prm RR ("Buffer too
+// small", chip-facts.md 5.4) and the slave stays in Wait_Prm, Station_Not_Ready (02h) without
+// Prm_Fault (40h); on the DPC31 the chip takes it (SC) and refuses DPV1_Enable: Prm_Fault, 42h.
+TEST(Do4Dpv1, Spc3AnswersTheDpv1SetPrmRrDpc31RefusesIt) {
+  const std::string body = "startup tries=470\nset_prm\nexpect answer ";
+  const std::string after = "diag\nexpect dp_state Wait_Prm\nexpect diag_byte 0 ";
+  run_do4_scenario("spc3", "C0,20,00,01,09,00", body + "rr\n" + after + "0x02\n", 3);
+  run_do4_scenario("dpc31", "C0,20,00,01,09,00", body + "sc\n" + after + "0x42\n", 3);
+}
+
 // Without Enable_Diagnostic_Alarm the OSP mode is only a status block: no Ext_Diag, and an
 // Alarm_Ack finds no alarm (state conflict).
 TEST(Do4Dpv1, NoAlarmWithoutEnableDiagnosticAlarm) {

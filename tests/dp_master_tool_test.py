@@ -193,6 +193,51 @@ def foreign_saps_are_not_ours():
         m.close()
 
 
+def answering_line(answer, requests=None):
+    """A line on the loopback that answers each request `req`, in order, with `answer(req)` (and
+    appends it to `requests`) until the master closes. Returns its server socket and thread."""
+    server = socket.create_server(("127.0.0.1", 0))
+
+    def serve():
+        conn, _ = server.accept()
+        buf = b""
+        while chunk := conn.recv(512):
+            buf += chunk
+            while (n := frame_length(buf)) is not None and len(buf) >= n:
+                req, buf = buf[:n], buf[n:]
+                if requests is not None:
+                    requests.append(req)
+                conn.sendall(answer(req))
+        conn.close()
+    thread = threading.Thread(target=serve, daemon=True)
+    thread.start()
+    return server, thread
+
+
+def msac_c1_refusals_named():
+    """An SD1 answer to an MSAC_C1 request is named by its FC (EN 50170, include/dpc31/fdl.hpp:
+    1 UE, 2 RR, 3 RS, 9 NR) with a reason that holds: RR is no resource (a Write longer than the
+    SAP's Max_Length, docs/firmware.md's DO4 table; the buffer busy), RS the SAP not served. A
+    line answers FDL_Status OK and the request with SD1 FC `code`. Before the fix RR was named
+    "UE (the slave serves no SAP 51)" and UE was raw hex."""
+    want = {0x01: "UE (user error", 0x02: "RR (no resource: the request is longer than the SAP's "
+            "buffer, or its buffer is busy)", 0x03: "RS (the slave serves no SAP 51 now",
+            0x09: "NR (no response data)"}
+    for code, name in want.items():
+        server, _ = answering_line(
+            lambda req, code=code: sd1(MASTER, SLAVE, code if req[0] == SD2 else 0x00))
+        m = Master(f"socket://127.0.0.1:{server.getsockname()[1]}", 19200, TIMEOUT, MASTER,
+                   SLAVE, search=20.0)
+        try:
+            m.msac_c1([0x5E, 0x00, 0x01, 0x02], 1.0)
+            raise Fail(f"FC {code:X}h: no failure")
+        except Fail as e:
+            check(str(e).startswith(f"MSAC_C1 5E 00 01 02: {name}"), f"FC {code:X}h: '{e}'")
+        finally:
+            m.close()
+            server.close()
+
+
 def refused(convert, text, want):
     """`convert(text)` is an argparse type error whose message holds `want`."""
     try:
@@ -410,21 +455,9 @@ def a_locked_slave_is_left_alone():
     # Station_Status_1 00h, _2 0Ch (bit 2 always 1, WD_On), _3 00h, Master_Add 3, Ident 0D04h.
     diag = sd2(MASTER, SLAVE, 0x08, [0x00, 0x0C, 0x00, 0x03, 0x0D, 0x04], dsap=SAP_MASTER,
                ssap=SAP_SLAVE_DIAG)
-    server = socket.create_server(("127.0.0.1", 0))
     requests = []
-
-    def serve():
-        conn, _ = server.accept()
-        buf = b""
-        while chunk := conn.recv(512):
-            buf += chunk
-            while (n := frame_length(buf)) is not None and len(buf) >= n:
-                req, buf = buf[:n], buf[n:]
-                requests.append(req)
-                conn.sendall(sd1(MASTER, SLAVE, 0x00) if req[0] == SD1 else diag)
-        conn.close()
-    line = threading.Thread(target=serve, daemon=True)
-    line.start()
+    server, line = answering_line(
+        lambda req: sd1(MASTER, SLAVE, 0x00) if req[0] == SD1 else diag, requests)
     exits(1, "dp_master: locked by master 3 (its Slave_Diag's Master_Add): not parameterised",
           f"socket://127.0.0.1:{server.getsockname()[1]}", *DO4)
     server.close()
@@ -497,6 +530,7 @@ def device_lost_tcp():
 CASES = {"slow_line_search_drained": slow_line_search_drained,
          "late_answer_before_the_search": late_answer_before_the_search,
          "foreign_saps_are_not_ours": foreign_saps_are_not_ours,
+         "msac_c1_refusals_named": msac_c1_refusals_named,
          "hex_bytes_and_ranges": hex_bytes_and_ranges,
          "outputs_from_the_cfg": outputs_from_the_cfg,
          "zero_inputs_sc_and_sd1_dh": zero_inputs_sc_and_sd1_dh,

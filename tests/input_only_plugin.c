@@ -37,7 +37,7 @@ static void comm_lost(DPS_CB_P_ int why) {
 }
 
 static const dps_module kModule = {"INPUT-ONLY", INPUT_ONLY_IDENT, kCfg,   sizeof kCfg, 1, 0, 7 + 1,
-                                   check_prm,    outputs,          inputs, comm_lost,   0, 0};
+                                   check_prm,    outputs,          inputs, comm_lost,   0, 0, 0};
 
 static input_only g_the;
 

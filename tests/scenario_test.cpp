@@ -124,6 +124,10 @@ TEST(ScenarioParse, ErrorsNameFileAndLine) {
             "t.scn:2: bad byte '2G' in outputs (hex bytes separated by commas)");
   EXPECT_EQ(parse_error("startup\nsilence 10min\n"),
             "t.scn:2: bad time unit 'min' in '10min' (us, ms, s, bits, or none for cycles)");
+  // A fraction is no unit (audit s30 a-docs, finding 6: "bad time unit '.5ms' in '1.5ms'").
+  EXPECT_EQ(parse_error("startup\nsilence 1.5ms\n"),
+            "t.scn:2: time '1.5ms': a time is a whole number of its unit: write it in a smaller "
+            "unit");
   EXPECT_EQ(parse_error("startup\nsilence 4000s\n"),
             "t.scn:2: time '4000s' too long (at most 3600 s)");
   EXPECT_TRUE(parse_error("startup\nexpect counter parityy 1\n")
@@ -430,6 +434,18 @@ TEST(ScenarioParse, BusActionsRefuseWhatTheMapDoesNot) {
       {h + "expect irq count\n",
        "t.scn:2: expected 'expect irq NAME at CYCLE|after N' or 'expect irq count N'"},
       {h + "expect irq count x\n", "t.scn:2: bad number 'x' for count"},
+      // A word too many names itself, the form its cycle (audit s30 a-docs, finding 7: a bare
+      // usage line before).
+      {h + "expect dp_state Data_Exchange extra\n",
+       "t.scn:2: expected 'expect dp_state Wait_Prm|Wait_Cfg|Data_Exchange [at CYCLE|after N]'; "
+       "unexpected 'extra'"},
+      {h + "expect wd_state DP_Control after\n",
+       "t.scn:2: expected 'expect wd_state Baud_Search|Baud_Control|DP_Control [at CYCLE|after "
+       "N]'; "
+       "unexpected 'after'"},
+      {h + "expect dp_state\n",
+       "t.scn:2: expected 'expect dp_state Wait_Prm|Wait_Cfg|Data_Exchange [at CYCLE|after N]'"},
+      {h + "expect outputs 01 02\n", "t.scn:2: expected 'expect outputs BYTES'; unexpected '02'"},
       {h + "expect irq FDL_Ind at 5\n",
        "t.scn:2: 'FDL_Ind' is not an interrupt of spc3 (Int_Req_Reg: DX_Out, New_Prm_Data, "
        "WD_DP_Control_Timeout, ...)"},

@@ -367,5 +367,33 @@ TEST(ScenarioWalk, AHostUserSideThatNeverStartsTheChipIsSaid) {
   }
 }
 
+// docs/scenario-format.md, "Exact cycles": its example runs as written (with the default
+// header) and both its checks hold; it said 2915904 for a run that enters Data_Exchange at
+// 2915900 (audit s30 a-docs, finding 1).
+TEST(ScenarioWalk, TheExactCyclesExampleOfTheDocsRunsAsWritten) {
+  const std::string doc = file_text(fs::path(SOURCE_DIR) / "docs" / "scenario-format.md");
+  const std::size_t at = doc.find("```\nstartup\nexpect dp_state Data_Exchange at ");
+  ASSERT_NE(at, std::string::npos);
+  const std::size_t from = at + 4;
+  const std::string text = doc.substr(from, doc.find("```", from) - from);
+  const Walk w = run(text, fs::path(SOURCE_DIR) / "t.scn", dpc31::Engine::event);
+  EXPECT_TRUE(w.errors.empty()) << (w.errors.empty() ? "" : w.errors.front());
+  EXPECT_EQ(w.outcome.passed, 2u);
+  EXPECT_TRUE(w.outcome.ok()) << (w.outcome.ok() ? "" : w.outcome.failures.front());
+}
+
+// docs/scenario-format.md, `request`: a queue the user side has not set up (InstQ_Len 0) is
+// reported at run time (exit 1) and nothing is written; the walk's line says it (it was an empty
+// line, audit s30 a-docs, finding 2).
+TEST(ScenarioWalk, ARequestOnAQueueNotSetUpIsSaidInTheWalk) {
+  const std::string text = "startup\nwrite InstQ_Len 0\nrequest MAC_Stop\n";
+  const Walk w = run(text, fs::path(SOURCE_DIR) / "t.scn", dpc31::Engine::event);
+  const std::string why = "request: the Instruction_Queue is not set up (InstQ_Len 0)";
+  ASSERT_EQ(w.outcome.failures.size(), 1u);
+  EXPECT_EQ(w.outcome.failures[0], (fs::path(SOURCE_DIR) / "t.scn").string() + ":3: " + why);
+  EXPECT_NE(walk_cycle(w, why), 0u);
+  for (const std::string& l : w.lines) EXPECT_GT(l.size(), 19u) << "an empty walk line";
+}
+
 }  // namespace
 }  // namespace scenario_walk

@@ -49,6 +49,13 @@ SD1, SD2, SC, ED = 0x10, 0x68, 0xE5, 0x16
 SAP_SLAVE_DIAG, SAP_SET_PRM, SAP_CHK_CFG, SAP_MASTER = 60, 61, 62, 62
 # DPV1 (include/dpc31/pdu.hpp): MSAC_C1's SAP, Read and Write, the negative response's bit.
 SAP_MSAC_C1, DPV1_READ, DPV1_WRITE, DPV1_ERROR = 51, 0x5E, 0x5F, 0x80
+# An SD1 answer to a request with data: its FC's low nibble (EN 50170; include/dpc31/fdl.hpp).
+FDL_REFUSALS = {
+    0x01: "UE (user error: the slave's user refused the request)",
+    0x02: "RR (no resource: the request is longer than the SAP's buffer, or its buffer is busy)",
+    0x03: f"RS (the slave serves no SAP {SAP_MSAC_C1} now, or not for this master)",
+    0x09: "NR (no response data)",
+}
 # The longest data unit of a DP telegram (Set_Prm, Chk_Cfg, Data_Exchange, a DPV1 PDU).
 MAX_DU = 244
 # --help's epilog (docs/bridge.md, "With a master program", says the same).
@@ -373,7 +380,7 @@ class Master:
         """MSAC_C1: `pdu` from SAP 51 to SAP 51, then polls (SRD without data, the same SAPs, the
         next FCB each) while the slave answers SC, until its response or `time_out` seconds (the
         GSD's C1_Response_Timeout). Returns (the response's data unit, the polls answered SC).
-        Anything else fails: no answer, RS / RR (the slave serves no SAP 51 now), the time-out."""
+        Anything else fails: no answer, an FDL refusal (FDL_REFUSALS), the time-out."""
         a = self.srd(pdu, SAP_MSAC_C1, SAP_MSAC_C1)
         deadline = time.monotonic() + time_out
         polls = -1  # the request's own SC is not a poll's
@@ -383,9 +390,8 @@ class Master:
                   f"MSAC_C1 {hexs(pdu)}: no response within {time_out:g} s ({polls} polls)")
             a = self.srd([], SAP_MSAC_C1, SAP_MSAC_C1)
         if a is not None and a[0] == SD1:
-            names = {0x02: "UE", 0x03: "RS", 0x09: "RR"}
-            raise Fail(f"MSAC_C1 {hexs(pdu)}: {names.get(a[3] & 0x0F, hexs(a))} "
-                       f"(the slave serves no SAP {SAP_MSAC_C1})")
+            raise Fail(f"MSAC_C1 {hexs(pdu)}: "
+                       + FDL_REFUSALS.get(a[3] & 0x0F, f"answered {hexs(a)}"))
         return answer_du(a, True), max(polls, 0)
 
     def slave_diag(self):

@@ -119,7 +119,7 @@ static void comm_lost(DPS_CB_P_ int why) {
 
 static const uint8_t kCfg[2] = {0x25, 0x17};
 static const dps_module kModule = {"CNT2",    CNT2_IDENT, kCfg,   sizeof kCfg, 8, 6, 7 + 1,
-                                   check_prm, outputs,    inputs, comm_lost,   0, 0};
+                                   check_prm, outputs,    inputs, comm_lost,   0, 0, 0};
 
 void cnt2_init(DPS_P_(cnt2) const dps_board* board) {
   memset(self->c, 0, sizeof self->c); /* the shadows start as all MSG = 0 */

@@ -150,6 +150,19 @@ static uint8_t dpv1_request(DPS_CB_P_ uint8_t sap, const uint8_t* req, uint8_t l
   return dpv1_error(resp, fn, kFeatureNotSupported);
 }
 
+/* DPV1 (VPC3+): after a Set_Prm. A block already shown that the Set_Prm made wrong is handed over
+ * again at once, not at the next change of mode: the DP block after one with DPV1_Enable (or the
+ * other way round), an alarm it dropped (check_prm; docs/firmware.md: "A new Set_Prm drops an
+ * outstanding alarm", "Without DPV1 the block stays 02h, S"). Else nothing: an unchanged block
+ * would only raise Diag_Flag, and a first one would change the start-up. */
+static void dpv1_prm(DPS_CB_P) DPS_REENTRANT {
+  DPS_MODULE_SELF(do4);
+  const uint8_t head = dps_given_diag(DRV_ 0); /* 02h DP, 05h DPV1; 0: none shown yet */
+  if (head != 0 && (head != (dpv1_on(ME) ? 0x05u : 0x02u) ||
+                    (head == 0x05u && dps_given_diag(DRV_ 1) == kDiagAlarm && !self->alarm_spec)))
+    publish_diag(ME);
+}
+
 static int check_prm(DPS_CB_P_ const uint8_t* prm, uint8_t len) DPS_REENTRANT {
   DPS_MODULE_SELF(do4);
   if (len != 3 || prm[0] > DO4_REPLACE || (prm[1] & 0xF0u) != 0) return 0;
@@ -202,9 +215,9 @@ static void tick(DPS_CB_P) {
   }
 }
 
-static const dps_module kModule = {"DO4",     DO4_IDENT, kCfg,        sizeof kCfg, 1,
-                                   2,         7 + 1 + 3, check_prm,   outputs,     inputs,
-                                   comm_lost, tick,      dpv1_request};
+static const dps_module kModule = {"DO4",     DO4_IDENT, kCfg,         sizeof kCfg, 1,
+                                   2,         7 + 1 + 3, check_prm,    outputs,     inputs,
+                                   comm_lost, tick,      dpv1_request, dpv1_prm};
 
 void do4_init(DPS_P_(do4) const dps_board* board) {
   memset(&self->s, 0,

@@ -102,7 +102,8 @@ static dps dps_the;
  * indication and response buffer at once, as the Profichip driver has it for its MSAC_C1 SAPs.
  * The ISR takes a request on FDL_Ind; the 1 ms task answers it (the master's polls get SC
  * meanwhile); Poll_End_Ind frees the buffer. MSAC_C1 is the locking master's: SAPs 51 and 50
- * take only its address (Request_SA), from Data_Exchange on. */
+ * open when the chip enters Data_Exchange and take only its address (Request_SA) once the diag
+ * buffer names it, any station until then (dpv1_isr). */
 /* The connection before the resource manager: an Abort and a new Initiate taken in the same tick
  * close first, then open. */
 enum { kDpv1Saps = DPS_DPV1_SAPS, kC1Saps = 2u, kConn = 2u, kRm = 3u };
@@ -113,7 +114,11 @@ enum { kFcResponse = 0x08u /* DL: response data low */ };
  * response's (57h, Max_Len_Data_Unit, then the same from Features_Supported on). */
 enum { kIdle = 0x48u, kRmResponse = 0x56u, kInitiate = 0x57u, kAbort = 0x58u };
 enum { kInitiateReq = 16u, kInitiateRes = 12u, kNegative = 0x80u, kDecodeDpv1 = 0x80u };
-enum { kInvalidParameter = 0xB8u, kResourceBusy = 0xC2u };
+enum { kInvalidParameter = 0xB8u, kResourceBusy = 0xC2u, kFeatureNotSupported = 0xA9u };
+enum { kC2Open = 1, kRmWaits = 2 }; /* dps.c2_busy */
+/* How long a resource manager's response that opened nothing waits for its poll (10 ms units): the
+ * GSD's C2_Response_Timeout, the time a master waits for it. */
+enum { kRmResponseTimeout = 100u };
 enum { FDL_Ind = VPC3_Int_Req_Reg_FDL_Ind_Msk, Poll_End_Ind = VPC3_Int_Req_Reg_Poll_End_Ind_Msk };
 static const uint8_t kDpv1Sap[kDpv1Saps] = {DPS_SAP_C1, DPS_SAP_ALARM, DPS_SAP_C2, DPS_SAP_C2_RM};
 
@@ -252,7 +257,7 @@ void dps_init(DPS_P_(dps) const dps_board* board, const dps_module* module) {
   self->sap_list = board->profile == DPC31_PROFILE_VPC3PLUS && module->dpv1_request != 0;
   self->timer_module = 0;
   self->dpv1_pending = 0;
-  self->c2_open = 0;
+  self->c2_busy = 0;
   memset(self->dpv1_status, 0, sizeof self->dpv1_status);
   self->instq_wr = 0;
   self->indq_rd = 0;
@@ -309,13 +314,17 @@ void dps_update_inputs(DPS_P(dps)) {
 /* The 1 ms task runs while the module wants it or a DPV1 request waits. */
 void dps_timer_enable(DPS_P_(dps) int on) {
   self->timer_module = on;
-  set_mask(ME_ on || self->dpv1_pending || self->c2_open
+  set_mask(ME_ on || self->dpv1_pending || self->c2_busy
                ? (uint16_t)(self->mask | User_Timer_Clock)
                : (uint16_t)(self->mask & ~User_Timer_Clock));
 }
 
 uint8_t dps_dpv1_status(DPS_P_(dps) uint8_t k) {
   return k >= 1u && k <= 3u ? self->dpv1_status[k - 1u] : 0u;
+}
+
+static int in_data_exchange(DPS_P(dps)) {
+  return ((read16(ME_ self->map->status) >> 4) & 3u) == 2u;
 }
 
 /* Request_SA of both MSAC_C1 SAPs. */
@@ -366,6 +375,10 @@ static void publish_diag(DPS_P(dps)) {
   ++self->stats.diag_updates;
 }
 
+uint8_t dps_given_diag(DPS_P_(dps) uint8_t k) DPS_REENTRANT {
+  return k < self->diag_len ? self->diag[k] : 0u;
+}
+
 void dps_set_diag(DPS_P_(dps) const uint8_t* bytes, uint8_t len, int ext_diag) {
   self->diag_len = len > DPS_MAX_DIAG ? (uint8_t)DPS_MAX_DIAG : len;
   memcpy(self->diag, bytes, self->diag_len);
@@ -413,9 +426,17 @@ static void dpv1_take_indications(DPS_P(dps)) {
   }
 }
 
-/* DPV1 events: Data_Exchange may open the C1 SAPs; FDL_Ind brings requests. */
+/* DPV1 events. After a Set_Prm (handle_prm took or refused it) the module brings up to date what
+ * depends on it. MSAC_C1 lives in the master's Data_Exchange (docs/dpv1.md): entering it opens the
+ * C1 SAPs, to the locking master once the diag buffer names it (c1_open_to_master), to any
+ * station until then; DX_Out and FDL_Ind (before its request is taken) narrow them to it. */
 static void dpv1_isr(DPS_P_(dps) uint16_t ir) DPS_REENTRANT {
-  if ((ir & DX_Out) && self->c1_waiting) c1_open_to_master(ME);
+  if ((ir & New_Prm_Data) && self->mod->dpv1_prm != 0) self->mod->dpv1_prm(ME);
+  if ((ir & (Go_Leave_Data_Exchange | DX_Out | FDL_Ind)) && self->c1_waiting) {
+    c1_open_to_master(ME);
+    if ((ir & Go_Leave_Data_Exchange) && self->c1_waiting && in_data_exchange(ME))
+      c1_request_sa(ME_ VPC3_SAP_Entry_Request_SA_All);
+  }
   if (ir & FDL_Ind) dpv1_take_indications(ME);
 }
 
@@ -438,30 +459,41 @@ static uint8_t dpv1_negative(uint8_t* resp, uint8_t function, uint8_t code) {
   return 4;
 }
 
+/* A resource manager's response nobody polled for withdrawn: SAP 49's one buffer free, so the
+ * chip takes Initiates again instead of answering them RR (docs/firmware.md "MSAC_C2"). */
+static void rm_withdraw(DPS_P(dps)) {
+  if (self->c2_busy & kRmWaits) Vpc3Write(self->dpv1_buf[kRm] + VPC3_DPV1_Buf_Control, 0x00);
+  self->c2_busy = (int)(self->c2_busy & ~kRmWaits);
+}
+
 /* The connection closed (Abort, time-out): its SAP off (the chip answers RS there), its buffer
- * free, a request waiting there dropped. */
+ * free, a request waiting there dropped; so is a resource manager's response still waiting, the
+ * one that opened it or a busy answer: its master gave up on it. */
 static void c2_close(DPS_P(dps)) {
   Vpc3Write(self->sap_entry[kConn] + VPC3_SAP_Entry_Ind_Buf_Ptr0, 0x00);
   Vpc3Write(self->dpv1_buf[kConn] + VPC3_DPV1_Buf_Control, 0x00);
   self->dpv1_pending = (uint8_t)(self->dpv1_pending & ~(1u << kConn));
-  self->c2_open = 0;
+  rm_withdraw(ME);
+  self->c2_busy = 0;
 }
 
-/* Initiate on SAP 49. Open: Initiate | 80h, Resource_Busy. Else the Initiate response
- * (Max_Len_Data_Unit, the request's features and profile, S and D address swapped) waits in the
- * connection's buffer for the master's first poll there, the connection's SAP is switched on, and
- * the resource manager answers 56h, the connection's SAP, the Send_Timeout. */
+/* Initiate on SAP 49 (another function there: its own number | 80h, feature not supported, as
+ * DO4 answers a function it does not serve). Open: Initiate | 80h, Resource_Busy. Else the
+ * Initiate response (Max_Len_Data_Unit, the request's features and profile, S and D address
+ * swapped) waits in the connection's buffer for the master's first poll there, the connection's
+ * SAP is switched on, and the resource manager answers 56h, the connection's SAP, the
+ * Send_Timeout. */
 static uint8_t c2_initiate(DPS_P_(dps) const uint8_t* req, uint8_t len, uint8_t* resp) {
   uint8_t res[DPS_DPV1_MAX_PDU];
   uint8_t s_len, d_len;
-  if (len < kInitiateReq || req[0] != kInitiate)
-    return dpv1_negative(resp, kInitiate, kInvalidParameter);
+  if (req[0] != kInitiate) return dpv1_negative(resp, req[0], kFeatureNotSupported);
+  if (len < kInitiateReq) return dpv1_negative(resp, kInitiate, kInvalidParameter);
   s_len = req[13];
   d_len = req[15];
   if ((unsigned)len != (unsigned)kInitiateReq + s_len + d_len ||
       (unsigned)kInitiateRes + s_len + d_len > DPS_DPV1_MAX_PDU)
     return dpv1_negative(resp, kInitiate, kInvalidParameter);
-  if (self->c2_open) return dpv1_negative(resp, kInitiate, kResourceBusy);
+  if (self->c2_busy & kC2Open) return dpv1_negative(resp, kInitiate, kResourceBusy);
   res[0] = kInitiate;
   res[1] = DPS_DPV1_MAX_PDU - 4u;
   memcpy(res + 2, req + 6, 6); /* Features_Supported, Profile_Features_Supported, Ident */
@@ -474,7 +506,7 @@ static uint8_t c2_initiate(DPS_P_(dps) const uint8_t* req, uint8_t len, uint8_t*
   dpv1_respond(ME_ kConn, res, (uint8_t)(kInitiateRes + s_len + d_len));
   Vpc3Write(self->sap_entry[kConn] + VPC3_SAP_Entry_Ind_Buf_Ptr0,
             (uint8_t)(self->dpv1_buf[kConn] >> self->map->segment_shift));
-  self->c2_open = 1;
+  self->c2_busy |= kC2Open;
   self->c2_timeout = (uint16_t)((uint16_t)req[4] << 8 | req[5]);
   self->c2_quiet_ms = 0;
   ++self->stats.c2_opened;
@@ -511,6 +543,13 @@ static void dpv1_answer(DPS_P(dps)) {
     self->dpv1_pending = (uint8_t)(self->dpv1_pending & ~(1u << k));
     if (k == kRm) {
       n = c2_initiate(ME_ self->dpv1_req[k], self->dpv1_len[k], resp);
+      /* Its response waits for its poll: with a connection open until it closes, else for
+       * C2_Response_Timeout (c2_tick). */
+      if ((self->c2_busy & kC2Open) == 0) {
+        self->c2_timeout = kRmResponseTimeout;
+        self->c2_quiet_ms = 0;
+      }
+      self->c2_busy |= kRmWaits;
     } else if (k == kConn) {
       n = c2_request(ME_ self->dpv1_req[k], self->dpv1_len[k], resp);
       if (n == 0) continue;
@@ -519,17 +558,22 @@ static void dpv1_answer(DPS_P(dps)) {
     }
     dpv1_respond(ME_ k, resp, n);
   }
-  if (!self->timer_module && !self->c2_open)
+  if (!self->timer_module && !self->c2_busy)
     set_mask(ME_(uint16_t)(self->mask & ~User_Timer_Clock));
 }
 
 /* The connection's time-out, on each 1 ms tick while it is open: closed at the first tick that
  * finds it quiet longer than Send_Timeout, the (10 x Send_Timeout + 1)-th tick after its last
- * request taken or response sent, so never before Send_Timeout has run out (docs/firmware.md). */
+ * request taken or response sent, so never before Send_Timeout has run out (docs/firmware.md).
+ * Without a connection the same count withdraws the resource manager's response. */
 static void c2_tick(DPS_P(dps)) {
   if (++self->c2_quiet_ms <= (uint32_t)self->c2_timeout * 10u) return;
-  c2_close(ME);
-  ++self->stats.c2_timeouts;
+  if (self->c2_busy & kC2Open) {
+    c2_close(ME);
+    ++self->stats.c2_timeouts;
+  } else {
+    rm_withdraw(ME);
+  }
   if (!self->timer_module && !self->dpv1_pending)
     set_mask(ME_(uint16_t)(self->mask & ~User_Timer_Clock));
 }
@@ -544,8 +588,12 @@ static void dpv1_response_sent(DPS_P(dps)) {
     Vpc3Write(self->sap_entry[k] + VPC3_SAP_Entry_Sap,
               (uint8_t)(b0 & ~VPC3_SAP_Entry_Sap_Response_Sent_Msk));
     if (k == kConn) self->c2_quiet_ms = 0;
+    if (k == kRm) self->c2_busy = (int)(self->c2_busy & ~kRmWaits);
     ++self->stats.dpv1_responses_sent;
   }
+  if ((self->mask & User_Timer_Clock) && !self->timer_module && !self->dpv1_pending &&
+      !self->c2_busy)
+    set_mask(ME_(uint16_t)(self->mask & ~User_Timer_Clock));
 }
 
 /* Set_Prm: the ASIC checked ident, lock and reserved bits; the module checks its own bytes.
@@ -636,10 +684,6 @@ static void handle_ssa(DPS_P(dps)) {
   (void)Vpc3Read(self->map->ssa_free);
 }
 
-static int in_data_exchange(DPS_P(dps)) {
-  return ((read16(ME_ self->map->status) >> 4) & 3u) == 2u;
-}
-
 void dps_isr(DPS_P(dps)) {
   const uint16_t ir = read16(ME_ self->map->int_reg);
   ++self->stats.interrupts;
@@ -671,10 +715,11 @@ void dps_isr(DPS_P(dps)) {
   }
   if (ir & New_SSA_Data) handle_ssa(ME);
   if ((ir & Diag_Buffer_Changed) && self->diag_pending) publish_diag(ME);
-  if (self->sap_list && (ir & (DX_Out | FDL_Ind))) dpv1_isr(ME_ ir);
+  if (self->sap_list && (ir & (New_Prm_Data | Go_Leave_Data_Exchange | DX_Out | FDL_Ind)))
+    dpv1_isr(ME_ ir);
   if (self->sap_list && (ir & Poll_End_Ind)) dpv1_response_sent(ME);
   /* The tick first: the one that answers an Initiate does not count for its connection. */
-  if ((ir & User_Timer_Clock) && self->c2_open) c2_tick(ME);
+  if ((ir & User_Timer_Clock) && self->c2_busy) c2_tick(ME);
   if ((ir & User_Timer_Clock) && self->dpv1_pending) dpv1_answer(ME);
   if ((ir & User_Timer_Clock) && self->timer_module && self->mod->tick != 0) {
     ++self->stats.ticks;

@@ -114,6 +114,10 @@ typedef struct dps_module {
    * Called from the 1 ms task after the indication: the master's polls get SC until then. */
   uint8_t (*dpv1_request)(DPS_CB_P_ uint8_t sap, const uint8_t* req, uint8_t len,
                           uint8_t* resp) DPS_REENTRANT;
+  /* DPV1 on the VPC3+: after each Set_Prm (its verdict given; dps_dpv1_status gives the status
+   * bytes of the one taken last) the module brings up to date what depends on it, e.g. its diag.
+   * May be NULL. */
+  void (*dpv1_prm)(DPS_CB_P) DPS_REENTRANT;
 } dps_module;
 
 /* Bookkeeping for hosts and tests. */
@@ -152,11 +156,15 @@ struct dps {
   uint8_t dpv1_req[DPS_DPV1_SAPS][DPS_DPV1_MAX_PDU];
   uint8_t dpv1_len[DPS_DPV1_SAPS];
   uint8_t dpv1_pending; /* bit k: the request of SAP k waits for the 1 ms task */
-  int c2_open;          /* the MSAC_C2 connection is open */
+  /* MSAC_C2: bit 0 the connection is open, bit 1 the resource manager's response waits for its
+   * poll (dps.c, kC2Open, kRmWaits); not 0: the 1 ms tick runs. */
+  int c2_busy;
   /* DPV1 parameterised: the C1 SAPs wait for the master's address. (With the Send_Timeout in its
    * 16 bits the instance keeps its size: the 80C32 traces count the cycles of its clearing.) */
   int c1_waiting;
-  uint16_t c2_timeout;  /* its Send_Timeout (Initiate: 10 ms units) */
+  /* The connection's Send_Timeout (Initiate: 10 ms units); without a connection, how long the
+   * resource manager's response waits for its poll. */
+  uint16_t c2_timeout;
   uint32_t c2_quiet_ms; /* 1 ms ticks since its last request taken or response sent */
 };
 
@@ -170,6 +178,8 @@ void dps_update_inputs(DPS_P(dps));
 /* Publish user diag bytes (device-related block) after the 6 standard bytes; ext_diag sets
  * Ext_Diag in byte 0. Queued until a diag buffer is free (Diag_Buffer_Changed). */
 void dps_set_diag(DPS_P_(dps) const uint8_t* bytes, uint8_t len, int ext_diag);
+/* Byte k of the user diag bytes given last (dps_set_diag); 0 beyond them, and before any. */
+uint8_t dps_given_diag(DPS_P_(dps) uint8_t k) DPS_REENTRANT;
 /* User_Timer_Clock interrupts on (1) or off (0). */
 void dps_timer_enable(DPS_P_(dps) int on);
 /* DPV1_Status_1..3 (k = 1..3) of the Set_Prm taken last; all 0 when it had no DPV1_Enable. */

@@ -73,9 +73,9 @@ Engine::Engine(const Setup& setup, LogSink log)
       Chip& chip = seg_->chip(index);
       add_slave(i, chip, s);
       seg_->set_firmware(index, slaves_[i].user.program);
-      // Who drove an answer: each chip tells of its own when it starts sending it.
+      // Who drove an answer, and until when: each chip tells of its own when it arms it.
       chip.on_telegram([this, i](const Telegram& t) {
-        if (t.from_chip) sent_.emplace_back(t.start, i);
+        if (t.from_chip) sent_.push_back({t.start, t.end, i});
       });
     }
     seg_->on_collision = [this](const Collision& c) {
@@ -205,7 +205,17 @@ void Engine::release_log(std::uint64_t upto) {
   held_.erase(held_.begin(), held_.begin() + static_cast<std::ptrdiff_t>(n));
 }
 
+void Engine::end_unanswered_run(std::string_view how) {
+  if (unanswered_ == 0) return;
+  add_line(cycle(), "NOTE", kBridgeName,
+           fmt::format("{} request{} without an answer, then {}", unanswered_,
+                       unanswered_ == 1 ? "" : "s", how));
+  unanswered_ = 0;
+}
+
 void Engine::flush_log() {
+  // A run of unanswered requests the events level said it counts is closed by the end too.
+  end_unanswered_run("the bridge stopped");
   release_log(UINT64_MAX);
   for (const std::string& s : limiter_.flush()) log_(cycle(), "LOG", kBridgeName, s);
 }
@@ -256,6 +266,7 @@ void Engine::flush_partial() {
 }
 
 void Engine::client_gone() {
+  end_unanswered_run("the client went away");
   if (!partial_.empty()) {
     note(fmt::format("dropped an incomplete telegram: {}",
                      hex_bytes(std::span(partial_).first(
@@ -321,7 +332,7 @@ void Engine::queue_group(std::vector<std::uint8_t> bytes, bool garbage) {
 // every station there first).
 void Engine::start_next() {
   while (!in_flight_ && !queue_.empty()) {
-    const std::uint64_t start = std::max(cycle(), bus_free_ + std::uint64_t{kTsynBits} * t_);
+    const std::uint64_t start = next_start();
     if (start > cycle() + lead()) break;
     Request r = std::move(queue_.front());
     queue_.pop_front();
@@ -339,28 +350,46 @@ void Engine::start_next() {
   }
 }
 
+// TSYN counts from the end of whatever a chip drives, an answer nobody waits for any more (a late
+// one) included: it is on the line until its end, which the chip knew when it armed it. A master
+// hears the line busy before its own start and waits.
+std::uint64_t Engine::next_start() {
+  for (;;) {
+    const std::uint64_t start = std::max(cycle(), bus_free_ + std::uint64_t{kTsynBits} * t_);
+    const auto driving = std::find_if(sent_.begin(), sent_.end(), [&](const Sent& a) {
+      return a.start <= start && a.end > bus_free_;
+    });
+    if (driving == sent_.end()) return start;
+    bus_free_ = driving->end;
+  }
+}
+
 std::uint64_t Engine::put_on_line(std::span<const std::uint8_t> bytes, std::uint64_t start) {
   return seg_ ? seg_->send(master_, bytes, start) : send_on_rxd(*solo_, bytes, start, t_);
 }
 
 std::string_view Engine::sender_of(std::uint64_t start) const {
   if (!seg_) return stations_.front().name;
-  // The chip that began the latest answer by `start` (every character the client hears is a
-  // chip's); of two that began at once the first, which the segment lets keep the line.
-  std::size_t who = 0;
-  std::optional<std::uint64_t> latest;
-  for (const auto& [at, i] : sent_) {
-    if (at <= start && (!latest || at > *latest)) {
-      latest = at;
-      who = i;
+  // The chip whose answer covers the character (every character the client hears is a chip's);
+  // of two that overlap the one that began first, which the segment lets keep the line; the
+  // bytes of the second after the first's end are its own. None covers it: the latest begun.
+  const Sent* who = nullptr;
+  for (const Sent& a : sent_) {
+    if (a.start > start) continue;
+    const bool covers = start < a.end;
+    const bool who_covers = who != nullptr && start < who->end;
+    if (who == nullptr || (covers && (!who_covers || a.start < who->start)) ||
+        (!covers && !who_covers && a.start > who->start)) {
+      who = &a;
     }
   }
-  return stations_[who].name;
+  return stations_[who != nullptr ? who->station : 0].name;
 }
 
 void Engine::finish_answer(AnswerCollector& a, std::string_view how) {
   const std::string_view who = sender_of(a.start());
-  while (sent_.size() > 1 && sent_[1].first <= a.start()) sent_.pop_front();
+  // An answer over by this one's start covers no later character (bus_free_ is past its end).
+  std::erase_if(sent_, [&](const Sent& s) { return s.end <= a.start(); });
   log_telegram(a.start(), "TxD", who, a.bytes(), how);
   if (line_) line_({a.start(), a.end(), who, a.bytes()});
   bus_free_ = std::max(bus_free_, a.end());

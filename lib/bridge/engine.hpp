@@ -1,7 +1,7 @@
 // The chip side of `dpc31 bridge` (docs/bridge.md): one chip with an example firmware on its host
 // CPU, fed with the bytes a DP master program writes and giving back the bytes the chip sends.
 // No operating system here: the pty, the wall clock and the pacing are the caller's
-// (tools/cli/bridge.cpp), so tests can drive it cycle-exactly.
+// (tools/cli/bridge.cpp, with pacing.hpp), so tests can drive it cycle-exactly.
 //
 // With several slaves (Setup::slaves, --slave) the line is a Segment (session/segment.hpp): the
 // client is the segment's sender "master", every station a chip with its user side.
@@ -136,7 +136,8 @@ class Engine {
   std::vector<std::uint8_t> take_output();
   // The client went away: its incomplete telegram and every queued telegram that has not reached
   // the bus yet are dropped (what is on the line finishes), so that the next client's requests
-  // are not stuck behind a flood of its bytes; one line says how much.
+  // are not stuck behind a flood of its bytes; one line says how much. A run of unanswered
+  // requests ends with it (its count is written).
   void client_gone();
   // Reports bytes dropped since the last report, whether or not a second has passed.
   void report_dropped();
@@ -150,7 +151,7 @@ class Engine {
   // An event line at the current cycle.
   void note(const std::string& text);
   // Every line held back goes to the sink now: the owner calls it at the end (nothing more will
-  // come), before the sink goes away.
+  // come), before the sink goes away. A run of unanswered requests ends here (its count written).
   void flush_log();
 
  private:
@@ -159,9 +160,14 @@ class Engine {
     bool wants_answer = false;
     bool garbage = false;  // bytes that cannot be a telegram (merged with the next such run)
   };
+  // Closes a run of unanswered requests that ends otherwise than by an answer: "N requests
+  // without an answer, then HOW" (no line when there is none).
+  void end_unanswered_run(std::string_view how);
   void queue_group(std::vector<std::uint8_t> bytes, bool garbage);
   void drop(std::size_t bytes);
   void start_next();
+  // The first cycle a queued request may start: TSYN after the last telegram on the line.
+  std::uint64_t next_start();
   void collect();  // TxD characters up to now: output, answer, end of the exchange
   void finish_answer(AnswerCollector& a, std::string_view how);
   void step_to(std::uint64_t cycle);
@@ -177,7 +183,8 @@ class Engine {
   // How far ahead of the line's time a request may go on the line: TSYN on the one chip (its RxD
   // takes edges ahead), none on a segment (every station hears it at its cycle).
   [[nodiscard]] std::uint64_t lead() const { return seg_ ? 0 : std::uint64_t{kTsynBits} * t_; }
-  // Who drove the answer whose first start bit is `start`.
+  // Who drove the character whose start bit is at `start`: the chip whose answer covered it (of
+  // two, the first, which keeps the line).
   [[nodiscard]] std::string_view sender_of(std::uint64_t start) const;
   void add_line(std::uint64_t cycle, std::string_view tag, std::string_view who, std::string text);
   // A telegram line, at the telegrams level or when it is broken or `how` says what is wrong.
@@ -206,8 +213,14 @@ class Engine {
   std::vector<Slave> slaves_;      // parallel to stations_; outlives seg_'s CPUs that run them
   std::unique_ptr<Segment> seg_;   // or the segment (--slave)
   std::size_t master_ = 0;         // the client's station on seg_
-  // The answers the segment's chips began (their first start bit, the station), for sender_of.
-  std::deque<std::pair<std::uint64_t, std::size_t>> sent_;
+  // The answers the segment's chips armed (their first start bit, the end of their last stop bit,
+  // the station), for sender_of and for TSYN after whatever a chip drove.
+  struct Sent {
+    std::uint64_t start = 0;
+    std::uint64_t end = 0;
+    std::size_t station = 0;
+  };
+  std::deque<Sent> sent_;
   std::uint32_t t_;
   std::unique_ptr<Cpu> cpu_;  // the one chip's host CPU
   std::unique_ptr<Cpu51Module> m51_;

@@ -164,12 +164,26 @@ void TcpPort::accept_one(const PortEvents& ev) {
   }
 }
 
+// A client with Nagle on (pyserial's socket://) holds the rest of a telegram it wrote in two
+// writes until its first part is ACKed; Linux delays the ACK up to 40 ms once it sees a dialogue,
+// beyond the 20 ms after which an incomplete telegram goes out as it is. The kernel clears
+// TCP_QUICKACK by itself, so it is set again after every read.
+void TcpPort::quick_ack() const {
+#ifdef TCP_QUICKACK
+  const int one = 1;
+  ::setsockopt(client_, IPPROTO_TCP, TCP_QUICKACK, &one, sizeof one);
+#endif
+}
+
 void TcpPort::read_client(const PortEvents& ev) {
   int error = 0;  // 0: the end of its input
   const auto read = [this, &error](std::uint8_t* buf, std::size_t size) -> long {
     for (;;) {
       const ssize_t n = ::recv(client_, buf, size, MSG_DONTWAIT);
-      if (n > 0) return n;
+      if (n > 0) {
+        quick_ack();
+        return n;
+      }
       if (n < 0 && errno == EINTR) continue;
       if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return 0;
       error = n < 0 ? errno : 0;

@@ -42,6 +42,8 @@ class TcpPort final : public ClientPort {
  private:
   void accept_one(const PortEvents& ev);
   void read_client(const PortEvents& ev);
+  // ACK what was read at once (TCP_QUICKACK), not after the delayed-ACK timer.
+  void quick_ack() const;
   void drop_client(const PortEvents& ev, const std::string& why);
   int listen_ = -1;
   int client_ = -1;

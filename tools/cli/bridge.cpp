@@ -20,6 +20,7 @@
 #include <system_error>
 
 #include "../bridge/engine.hpp"
+#include "../bridge/pacing.hpp"
 #include "../bridge/pty.hpp"
 #include "../bridge/tcp.hpp"
 #include "numbers.hpp"
@@ -61,14 +62,6 @@ extern "C" void on_signal(int sig) {
 
 bool parse_uint(const std::string& s, std::uint64_t max, std::uint64_t& v) {
   return numbers::parse_whole(s, v) == std::errc{} && v <= max;
-}
-
-// Chip cycles in a wall-clock duration (no overflow for years).
-std::uint64_t to_cycles(Clock::duration d, std::uint32_t clock_hz) {
-  const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(d).count();
-  if (ns <= 0) return 0;
-  const auto u = static_cast<std::uint64_t>(ns);
-  return u / 1'000'000'000 * clock_hz + u % 1'000'000'000 * clock_hz / 1'000'000'000;
 }
 
 struct Checked {
@@ -325,6 +318,12 @@ std::string profile_text(const ChipOptions& chip) {
   return profile;
 }
 
+// A firmware as line 1 names it: a plug-in by its descriptor name and the path it came from
+// ("DO4 (./libdpc31_fw_do4.so)"), so that one that keeps a built-in's name is told from it.
+std::string firmware_text(const dpc31_firmware& fw, const std::string& given) {
+  return is_plugin_path(given) ? fmt::format("{} ({})", fw.name, given) : std::string(fw.name);
+}
+
 // With --slave: each station in the order given, "slave5 (profile dpc31, irq-controller
 // external, firmware DO4)".
 std::string header(const Checked& c, const BridgeOptions& o, const std::string& port,
@@ -333,10 +332,11 @@ std::string header(const Checked& c, const BridgeOptions& o, const std::string& 
     std::string stations;
     for (std::size_t i = 0; i < c.setup.slaves.size(); ++i) {
       const bridge::SlaveSpec& s = c.setup.slaves[i];
-      stations += fmt::format(
-          "{}{} (profile {}, firmware {})", i == 0 ? "" : ", ", e.stations()[i].name,
-          profile_text(s.chip),
-          s.firmware != nullptr ? std::string_view(s.firmware->name) : bridge::kResponderName);
+      stations += fmt::format("{}{} (profile {}, firmware {})", i == 0 ? "" : ", ",
+                              e.stations()[i].name, profile_text(s.chip),
+                              s.firmware != nullptr
+                                  ? firmware_text(*s.firmware, slave_fields(o.slaves[i])[1])
+                                  : std::string(bridge::kResponderName));
     }
     return fmt::format(
         "dpc31 bridge: pacing {}, baud {}, {} slave{}: {}, slot {} bit times, log level {}, {}",
@@ -352,7 +352,7 @@ std::string header(const Checked& c, const BridgeOptions& o, const std::string& 
       c.setup.cpu ? fmt::format("{} on {} at {} Hz{}", o.firmware,
                                 c.setup.cpu->c31 ? "the C31" : "an 80C32", c.setup.cpu->hz,
                                 symbols_text(c.setup.cpu_image))
-                  : std::string(c.setup.firmware->name),
+                  : firmware_text(*c.setup.firmware, o.firmware),
       c.setup.cpu ? fmt::format("address switch {} (port 1)", c.setup.address)
                   : fmt::format("address {}", chip_after_init.station_address()),
       c.setup.slot_bits, o.log_level, port);
@@ -493,10 +493,11 @@ class Bridge {
   // Returns the exit code.
   int run() {
     const std::uint32_t f = engine_->chip().clock_hz();
-    anchor_wall_ = Clock::now();
-    anchor_chip_ = engine_->cycle();
-    last_input_ = anchor_wall_;
-    Clock::time_point last_lag_report = anchor_wall_ - std::chrono::hours(1);
+    bridge::Pacing pacing(realtime_, f, kIdleTick);
+    const Clock::time_point start = Clock::now();
+    pacing.anchor(start, engine_->cycle());
+    last_input_ = start;
+    Clock::time_point last_lag_report = start - std::chrono::hours(1);
     engine_->note("waiting for a client");
     while (g_signal == 0) {
       if (log_.failed() != 0) return 2;
@@ -511,23 +512,13 @@ class Bridge {
       }
       // Realtime runs the chip to the wall-clock time of the next wake-up, so chip time never
       // falls behind the wall clock; free runs it to now, and settle() lets an exchange take no
-      // wall time (chip time then runs ahead by the exchanges' durations).
-      const Clock::time_point until = realtime_ ? now + wait : now;
-      std::uint64_t target = anchor_chip_ + to_cycles(until - anchor_wall_, f);
-      // A bounded turn: a chip slower than the wall clock (a polling firmware in a Debug build)
-      // otherwise ran ever longer turns and never read the client again. Free: one loop period
-      // of chip time at most, and no debt. Realtime: at most kIdleTick, the rest caught up over
-      // the next turns (the lag is reported below).
-      target = std::min(target, engine_->cycle() + to_cycles(realtime_ ? kIdleTick : wait, f));
-      if (!realtime_) {
-        anchor_wall_ = now;
-        anchor_chip_ = std::max(target, engine_->cycle());
-      }
+      // wall time (chip time then runs ahead by the exchanges' durations). A bounded turn either
+      // way (bridge::Pacing).
+      const std::uint64_t target = pacing.target(now, wait, engine_->cycle());
       if (target > engine_->cycle()) engine_->run_until(target);
       if (!realtime_ && engine_->busy()) {
         engine_->settle(kSettleSeconds * f);
-        anchor_wall_ = Clock::now();
-        anchor_chip_ = engine_->cycle();
+        pacing.anchor(Clock::now(), engine_->cycle());
       }
       deliver();
       if (port_.sent_all()) {
@@ -538,13 +529,14 @@ class Bridge {
       }
       const Clock::time_point after = Clock::now();
       if (realtime_) {
-        const std::uint64_t wall = anchor_chip_ + to_cycles(after - anchor_wall_, f);
-        if (wall > engine_->cycle() + to_cycles(kLagReport, f) &&
+        const std::uint64_t wall = pacing.wall_cycle(after);
+        if (wall > engine_->cycle() + pacing.cycles(kLagReport) &&
             after - last_lag_report > std::chrono::seconds(10)) {
           engine_->note(fmt::format("running {} ms behind the wall clock",
                                     (wall - engine_->cycle()) / (f / 1000)));
           last_lag_report = after;
         }
+        const Clock::time_point until = now + wait;  // the wake-up the chip ran to
         wait = until > after ? until - after : Clock::duration::zero();
       } else {
         wait = engine_->busy() ? Clock::duration::zero() : wait;
@@ -618,8 +610,6 @@ class Bridge {
           },
       .gone = [this] { engine_->client_gone(); },
       .note = [this](const std::string& text) { engine_->note(text); }};
-  Clock::time_point anchor_wall_;
-  std::uint64_t anchor_chip_ = 0;
   Clock::time_point last_input_;
   std::size_t dropped_ = 0;  // answer bytes dropped (no client) and not yet logged
 };
