@@ -544,6 +544,58 @@ TEST(CosimSession, AnOfflineThatWaitsForTheRequestIsNamed) {
                         cycle));
 }
 
+// A VPC3+ with the SAP list (SAP 51, two indication buffers, one response buffer) and
+// Set_Ext_Prm_Supported set Offline (p.54), started, the rate found; the Responder as the cyclic
+// firmware, the built-in master at 12 Mbaud on the wire, everything recorded for the lockstep.
+struct Dpv1Bench {
+  static constexpr std::uint32_t kList = 0x400, kInd0 = 0x500, kInd1 = 0x600, kResp = 0x700;
+  static std::uint8_t seg(std::uint32_t a) { return static_cast<std::uint8_t>(a >> 3); }
+  static ResponderConfig config() {
+    ResponderConfig rc;
+    rc.slave.user_prm = {dpv1::status1::DPV1_Enable, 0x00, 0x00};
+    rc.spec_clear_mode = false;  // no Fail_Safe required
+    return rc;
+  }
+  ResponderConfig rc = config();
+  Recording rec{Profile::vpc3plus};
+  Chip& chip = rec.chip;
+  Session& s = rec.s;
+  Responder user{rc};
+  // The user side sets the chip up before the master is made: the master counts its bus idle
+  // from its own construction on.
+  bool user_ready = [this] {
+    user.set_inputs({0xA1, 0xA2, 0xA3, 0xA4});
+    DirectBus bus(chip);
+    user.init(bus);
+    return true;
+  }();
+  DpMaster master{chip, MasterConfig{2, 12'000'000, 100, 33}, rc.slave};
+  std::uint32_t at(RegId id) const { return static_cast<std::uint32_t>(chip.addr_of(id)); }
+  Dpv1Bench() {
+    namespace hd = dpv1::header;
+    master.set_firmware([this](BusPort& b) { user.isr(b); });
+    chip.write(at(RegId::Mode_Reg1_S), fields::Mode_Reg1_S::Go_Offline);
+    chip.write(at(RegId::R_FDL_SAP_List_Ptr), seg(kList));
+    std::uint32_t a = kList;
+    for (const std::uint8_t v : {std::uint8_t{51}, dpv1::entry::kAll, dpv1::entry::kAll,
+                                 dpv1::service::All, seg(kInd0), seg(kInd1), seg(kResp)})
+      chip.write(a++, v);
+    chip.write(a, dpv1::entry::kEndOfList);
+    for (const std::uint32_t buf : {kInd0, kInd1, kResp}) {
+      chip.write(buf + hd::Control, 0x00);
+      chip.write(buf + hd::Max_Length, 240);
+    }
+    const std::uint32_t m0_hi = at(RegId::Mode_Reg0) + 1;
+    chip.write(m0_hi, static_cast<std::uint8_t>(chip.read(m0_hi) |
+                                                (fields::Mode_Reg0::Set_Ext_Prm_Supported >> 8)));
+    chip.write(at(RegId::Mode_Reg1_S), fields::Mode_Reg1_S::Start_SPC3);
+    for (int i = 0; i < 20 && !master.fdl_status().answer; ++i) {
+    }
+  }
+  Dpv1Bench(const Dpv1Bench&) = delete;
+  Dpv1Bench& operator=(const Dpv1Bench&) = delete;
+};
+
 // Issue 28: a DPV1 exchange of a whole VPC3+ (the built-in master on the wire, the Responder as
 // the cyclic firmware, the test as the DPV1 user on the bus, docs/dpv1.md "A request, a poll, a
 // response") reaches the blocks as block events: Set_Ext_Prm (ext_prm), an MSAC_C1 request
@@ -552,40 +604,13 @@ TEST(CosimSession, AnOfflineThatWaitsForTheRequestIsNamed) {
 // its Control bytes and Response_Sent read by the firmware included.
 TEST(CosimSession, Dpv1ExchangeReachesTheBlocks) {
   namespace hd = dpv1::header;
-  constexpr std::uint32_t kList = 0x400, kInd0 = 0x500, kInd1 = 0x600, kResp = 0x700;
-  auto seg = [](std::uint32_t a) { return static_cast<std::uint8_t>(a >> 3); };
-  ResponderConfig rc;
-  rc.slave.user_prm = {dpv1::status1::DPV1_Enable, 0x00, 0x00};
-  rc.spec_clear_mode = false;  // no Fail_Safe required
-  Recording rec(Profile::vpc3plus);
-  Chip& chip = rec.chip;
-  Session& s = rec.s;
-  Responder user(rc);
-  user.set_inputs({0xA1, 0xA2, 0xA3, 0xA4});
-  DirectBus bus(chip);
-  user.init(bus);
-  DpMaster master(chip, MasterConfig{2, 12'000'000, 100, 33}, rc.slave);
-  master.set_firmware([&user](BusPort& b) { user.isr(b); });
-  auto at = [&chip](RegId id) { return static_cast<std::uint32_t>(chip.addr_of(id)); };
-  // Offline (p.54): the SAP list (SAP 51, two indication buffers, one response buffer), the
-  // headers, Set_Ext_Prm_Supported; then Start.
-  chip.write(at(RegId::Mode_Reg1_S), fields::Mode_Reg1_S::Go_Offline);
-  chip.write(at(RegId::R_FDL_SAP_List_Ptr), seg(kList));
-  std::uint32_t a = kList;
-  for (const std::uint8_t v : {std::uint8_t{51}, dpv1::entry::kAll, dpv1::entry::kAll,
-                               dpv1::service::All, seg(kInd0), seg(kInd1), seg(kResp)})
-    chip.write(a++, v);
-  chip.write(a, dpv1::entry::kEndOfList);
-  for (const std::uint32_t buf : {kInd0, kInd1, kResp}) {
-    chip.write(buf + hd::Control, 0x00);
-    chip.write(buf + hd::Max_Length, 240);
-  }
-  const std::uint32_t m0_hi = at(RegId::Mode_Reg0) + 1;
-  chip.write(m0_hi, static_cast<std::uint8_t>(chip.read(m0_hi) |
-                                              (fields::Mode_Reg0::Set_Ext_Prm_Supported >> 8)));
-  chip.write(at(RegId::Mode_Reg1_S), fields::Mode_Reg1_S::Start_SPC3);
-  for (int i = 0; i < 20 && !master.fdl_status().answer; ++i) {
-  }
+  using B = Dpv1Bench;
+  Dpv1Bench b;
+  Chip& chip = b.chip;
+  Session& s = b.s;
+  DpMaster& master = b.master;
+  const std::uint32_t kList = B::kList, kInd0 = B::kInd0, kInd1 = B::kInd1, kResp = B::kResp;
+  auto at = [&b](RegId id) { return b.at(id); };
   master.set_prm();  // the Responder answers User_Prm_Data_Okay in its ISR
   EXPECT_EQ(fdl::encode(*master.set_ext_prm({0x07, 0x81, 0x00, 0x00, 0x42}).answer),
             std::vector<std::uint8_t>{0xE5});
@@ -636,6 +661,29 @@ TEST(CosimSession, Dpv1ExchangeReachesTheBlocks) {
   EXPECT_LT(r.divergence, 0) << report;
   // A header mutant in this session: caught.
   EXPECT_GE(run_session(s, "SAP_RESP_KEPT").divergence, 0);
+}
+
+// VPC3+C p.48: "the VPC3+C does not go to DATA-EXCH before all parameter telegrams and
+// configuration telegrams have been acknowledged". The Set_Ext_Prm's verdict given after the
+// Cfg OK: the chip stays in Wait_Cfg until it, then enters Data_Exchange (docs/dpv1.md
+// "Set_Ext_Prm"), and the RTL's DP state machine follows it cycle by cycle (rtl/, dx_deferred;
+// the review of the thirtieth session: no lockstep test reached this order).
+TEST(CosimSession, ACfgOkWaitingForTheSetExtPrmVerdictStaysInLockstep) {
+  Dpv1Bench b;
+  b.master.set_prm();  // the Responder answers User_Prm_Data_Okay in its ISR
+  EXPECT_EQ(fdl::encode(*b.master.set_ext_prm({0x07, 0x81, 0x00, 0x00, 0x42}).answer),
+            std::vector<std::uint8_t>{0xE5});
+  b.master.chk_cfg();  // the Responder answers User_Cfg_Data_Okay; the Set_Ext_Prm still waits
+  ASSERT_EQ(b.chip.dp_state(), DpState::Wait_Cfg);
+  EXPECT_EQ(b.chip.read(b.at(RegId::User_Prm_Data_Okay)), 0x00);  // the Set_Ext_Prm's verdict
+  ASSERT_EQ(b.chip.dp_state(), DpState::Data_Exchange);
+  b.master.data_exchange({1, 2, 3, 4});
+  end_recording(b.chip, b.s);
+  ASSERT_EQ(b.s.unreplayable, "");
+  const RunResult r = run_session(b.s);
+  std::string report;
+  for (const std::string& line : r.report) report += line + "\n";
+  EXPECT_LT(r.divergence, 0) << report;
 }
 
 // Issue 14 item 9: a stimulus trace of a few bytes that names 10^8 cycles holds what the file
