@@ -201,3 +201,22 @@ TEST_F(BadInput, CosimSessionJunitEscapesTheScenarioName) {
   ASSERT_EQ(parsed.rc, 0) << slurp(path("weird.xml"));
   EXPECT_EQ(parsed.out, "'dpc31.session.we&ird<\"x\\'>\\n' True\n") << slurp(path("weird.xml"));
 }
+
+// `cosim merge` names its cases by the shards' `profile`, a string of the summary: escaped as the
+// session's name (the review of the thirtieth session: `name="dpc31"<&.seed1"`, exit 0).
+TEST_F(BadInput, CosimMergeJunitEscapesTheProfile) {
+  const Outcome run = dpc31("cosim --seeds 1 --cycles 100 --shard 1/1 --quiet");
+  ASSERT_EQ(run.rc, 0) << run.err;
+  std::string summary = run.out;
+  const std::string key = "\"profile\": \"dpc31\"";
+  ASSERT_NE(summary.find(key), std::string::npos) << summary;
+  summary.replace(summary.find(key), key.size(), "\"profile\": \"dpc31\\\"<&\"");
+  file("s.json", summary);
+  const Outcome m = dpc31("cosim merge s.json --junit m.xml");
+  const testutil::CommandResult parsed = testutil::run_command(
+      "python3 -c \"import sys, xml.etree.ElementTree as t; print(t.parse(sys.argv[1]).find("
+      "'testcase').get('name'))\" " +
+      path("m.xml") + " 2>&1");
+  ASSERT_EQ(parsed.rc, 0) << m.err << slurp(path("m.xml"));
+  EXPECT_EQ(parsed.out, "dpc31\"<&.seed1\n");
+}

@@ -139,9 +139,14 @@ TEST_F(BadInput, CosimSessionNamesAFailedExpect) {
   const Outcome run = dpc31("run x.scn --quiet");
   EXPECT_EQ(run.rc, 1);
   EXPECT_EQ(run.err, failed);
-  const Outcome r = dpc31("cosim --session x.scn --quiet");
+  const Outcome r = dpc31("cosim --session x.scn --junit x.xml --quiet");
   EXPECT_EQ(r.rc, 1) << r.err;
   EXPECT_EQ(r.err, failed);
+  // The JUnit case fails too: a CI reading it saw a pass (the review of the thirtieth session).
+  EXPECT_NE(slurp(path("x.xml")).find("failures=\"1\""), std::string::npos) << slurp(path("x.xml"));
+  EXPECT_NE(slurp(path("x.xml")).find("<failure message=\"an expect of the scenario failed\"/>"),
+            std::string::npos)
+      << slurp(path("x.xml"));
   EXPECT_EQ(line_with(r.out, "\"scenario_expects_passed\":"),
             "\"scenario_expects_passed\": false,");
   EXPECT_EQ(line_with(r.out, "\"diverged\":"), "\"diverged\": false,");
@@ -221,6 +226,16 @@ TEST_F(BadInput, CosimSessionRefusesWhatItWouldIgnore) {
   const Outcome bare = dpc31("cosim --session s.scn --quiet");
   EXPECT_EQ(bare.rc, 0) << bare.err;
   EXPECT_EQ(line_with(bare.out, "\"variant\":"), "\"variant\": 12") << bare.out;
+  // A mutant the session's profile has no model for is refused as in seed mode (the review of the
+  // thirtieth session: "no RTL model for mutant", a 0-event trace and exit 1 before).
+  const std::string spc3 = copy(kTraces + "buffers_spc3.scn", "b.scn");
+  expect_bad(dpc31("cosim --session b.scn --mutant SAP_NO_RR --quiet"),
+             "dpc31 cosim: mutant 'SAP_NO_RR' is built for profile vpc3plus, not spc3 (--profile "
+             "vpc3plus)",
+             "mutant of another profile");
+  expect_bad(dpc31("cosim --session b.scn --mutant NO_SUCH --quiet"),
+             "dpc31 cosim: no RTL model for profile spc3 mutant 'NO_SUCH' (no such mutant)",
+             "no such mutant");
   // --shard-base alone blamed a --shard '1/1' nobody gave.
   expect_bad(dpc31("cosim --seeds 2 --cycles 10 --shard-base 0 --quiet"),
              "dpc31 cosim: --shard-base requires --shard", "shard-base");

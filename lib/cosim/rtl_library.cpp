@@ -134,8 +134,10 @@ std::shared_ptr<const RtlLibrary> RtlLibrary::load(const std::string& path, std:
   }
   const auto entry = reinterpret_cast<Entry>(sym);
   Profile profile = Profile::dpc31;
+  // One call: the table checked is the table kept.
+  const auto* const table = entry != nullptr ? entry() : nullptr;
   const std::string why = entry != nullptr
-                              ? table_problem(entry(), profile)
+                              ? table_problem(table, profile)
                               : std::string(
                                     "no dpc31_rtl_model_get() entry point (not built "
                                     "by dpc31emu_verilate_model or dpc31 cosim --rtl)");
@@ -144,7 +146,7 @@ std::shared_ptr<const RtlLibrary> RtlLibrary::load(const std::string& path, std:
     ::dlclose(h);
     return nullptr;
   }
-  return std::shared_ptr<const RtlLibrary>(new RtlLibrary(h, entry(), profile, path));
+  return std::shared_ptr<const RtlLibrary>(new RtlLibrary(h, table, profile, path));
 }
 
 RtlLibrary::~RtlLibrary() { ::dlclose(handle_); }

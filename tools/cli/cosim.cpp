@@ -522,16 +522,26 @@ std::string junit(const std::string& profile, const nlohmann::json& results) {
   int failures = 0;
   for (const auto& r : results) {
     // A seed's case, or a session's (named by its scenario).
+    // The whole name escaped: a merged summary's profile is a string as any other.
     const std::string name =
-        r.contains("seed")
-            ? fmt::format("{}.seed{}", profile, r["seed"].get<std::uint64_t>())
-            : fmt::format("{}.session.{}", profile, xml_attribute(r["session"].get<std::string>()));
+        xml_attribute(r.contains("seed")
+                          ? fmt::format("{}.seed{}", profile, r["seed"].get<std::uint64_t>())
+                          : fmt::format("{}.session.{}", profile, r["session"].get<std::string>()));
+    // A session fails on a divergence and on a scenario expect that did not hold (exit 1 both).
+    const bool expects_failed =
+        r.contains("scenario_expects_passed") && !r["scenario_expects_passed"].get<bool>();
     if (r["diverged"].get<bool>()) {
       ++failures;
       cases += fmt::format(
           "  <testcase classname=\"cosim\" name=\"{}\"><failure message=\"divergence at cycle "
           "{}\"/></testcase>\n",
           name, r["cycle"].get<std::int64_t>());
+    } else if (expects_failed) {
+      ++failures;
+      cases += fmt::format(
+          "  <testcase classname=\"cosim\" name=\"{}\"><failure message=\"an expect of the "
+          "scenario failed\"/></testcase>\n",
+          name);
     } else {
       cases += fmt::format("  <testcase classname=\"cosim\" name=\"{}\"/>\n", name);
     }
@@ -569,6 +579,19 @@ std::string mutant_not_on_profile(const CosimOptions& o) {
   if (!p || *p == o.profile) return "";
   return fmt::format("mutant '{}' is built for profile {}, not {} (--profile {})", o.mutant,
                      profile_name(*p), o.profile_name, profile_name(*p));
+}
+
+// Whether the run's RTL side can be made (the built-in model of its profile, or --mutant's); else
+// false with the line printed (exit 2): a mutant of another profile, or no such mutant.
+bool rtl_dut_ready(const CosimOptions& o, const cosim::DutOptions& dut) {
+  if (cosim::make_rtl_dut(dut, o.mutant)) return true;
+  if (const std::string why = mutant_not_on_profile(o); !why.empty()) {
+    fmt::print(stderr, "dpc31 cosim: {}\n", why);
+  } else {
+    fmt::print(stderr, "dpc31 cosim: no RTL model for profile {} mutant '{}' (no such mutant)\n",
+               o.profile_name, o.mutant);
+  }
+  return false;
 }
 
 // The model the run uses in place of the built-in ones: --rtl (built into the cache, or taken
@@ -789,7 +812,8 @@ int run_session_mode(const CosimOptions& given, outfile::OutFile& junit_out) {
   o.profile_name = profile_desc(s.options.profile).name;
   o.bus = s.options.bus;
   std::string rtl_id;
-  if (!load_rtl(o, s.options, rtl_id) || !windows_ready(o)) return 2;
+  if (!load_rtl(o, s.options, rtl_id) || !rtl_dut_ready(o, s.options) || !windows_ready(o))
+    return 2;
   // A chip that did not do what its scenario says: its lines, as `dpc31 run` prints them, and
   // exit 1 whatever the lockstep finds.
   for (const std::string& line : s.scenario_failures) fmt::print(stderr, "{}\n", line);
@@ -802,8 +826,10 @@ int run_session_mode(const CosimOptions& given, outfile::OutFile& junit_out) {
     if (failed_output.empty()) failed_output = why;
   };
   const std::string stem = std::filesystem::path(o.session).stem().string();
-  nlohmann::json entry = {
-      {"session", stem}, {"diverged", r.divergence >= 0}, {"cycle", r.divergence}};
+  nlohmann::json entry = {{"session", stem},
+                          {"diverged", r.divergence >= 0},
+                          {"cycle", r.divergence},
+                          {"scenario_expects_passed", s.scenario_failures.empty()}};
   const Stimulus stimulus = session_stimulus(s);
   if (r.divergence >= 0 && static_cast<std::uint64_t>(r.divergence) < s.cycles) {
     write_divergence(o, stimulus, r, s.options,
@@ -912,16 +938,7 @@ int run_cosim(const CosimOptions& given) {
   DutOptions dut{o.profile, o.bus, o.variant};
   std::string rtl_id;
   if (!load_rtl(o, dut, rtl_id)) return 2;
-  if (!make_rtl_dut(dut, o.mutant)) {
-    if (const std::string why = mutant_not_on_profile(o); !why.empty()) {
-      fmt::print(stderr, "dpc31 cosim: {}\n", why);
-    } else {
-      fmt::print(stderr, "dpc31 cosim: no RTL model for profile {} mutant '{}' (no such mutant)\n",
-                 o.profile_name, o.mutant);
-    }
-    return 2;
-  }
-  if (!windows_ready(o)) return 2;
+  if (!rtl_dut_ready(o, dut) || !windows_ready(o)) return 2;
   // A model that does not trace (the built-in mutants', a --rtl-model whose trace_to returns 0)
   // writes no rtl_internal.fst: a note. Any other output that fails in the run is exit 2, after
   // the summary and the JUnit, which record the seeds that ran; the first failure is the one line.
