@@ -27,6 +27,21 @@ constexpr std::size_t kMaxHexBytes = 4u << 20;  // 64 KB of code is about 180 KB
 // unnamed) instead of stopping.
 constexpr std::uintmax_t kMaxMapBytes = 4u << 20;
 
+// A shipped scenario names its image beside it (traces/do4_80c32.scn: do4_80c32.ihx), but the
+// build writes the image and a copy of the scenario to build/firmware/mcs51/ (docs/cpu.md): where
+// this program is such a build's (build/bin/dpc31) and that directory holds an image of the
+// missing one's name, the message points there; elsewhere (installed, Python) it says nothing more.
+std::string built_image_hint(const std::string& hex) {
+  std::error_code ec;
+  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (ec) return {};
+  const std::filesystem::path built = exe.parent_path().parent_path() / "firmware" / "mcs51" /
+                                      std::filesystem::path(hex).filename();
+  if (!std::filesystem::is_regular_file(built, ec)) return {};
+  return fmt::format(" (the build made {}: run the scenario's copy beside it, docs/cpu.md)",
+                     built.string());
+}
+
 // SDCC's map: the code symbols are the lines "C:   0000203C  _do4_init   do4".
 void read_map(const std::string& text, std::map<std::uint16_t, std::string>& out) {
   std::istringstream in(text);
@@ -110,7 +125,10 @@ bool load_cpu51_image(const Cpu51Config& cfg, Cpu51Image& image, std::string& er
   std::string text;
   // The reader's reason names no file: the message is FILE: reason.
   if (!read_text_file(cfg.hex, kMaxHexBytes, "Intel HEX", text, error)) {
-    error = fmt::format("{}: {}", cfg.hex, error);
+    std::error_code ec;
+    const std::string hint =
+        std::filesystem::exists(cfg.hex, ec) ? std::string() : built_image_hint(cfg.hex);
+    error = fmt::format("{}: {}{}", cfg.hex, error, hint);
     return false;
   }
   mcs51::HexImage hex;

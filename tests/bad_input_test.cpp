@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <initializer_list>
 #include <iterator>
 #include <string>
@@ -119,6 +120,25 @@ TEST_F(BadInput, RunCpuImage) {
     EXPECT_EQ(slurp(path("old.json")), "old") << c.name;
     EXPECT_EQ(listing(), before) << c.name;
   }
+}
+
+// A shipped 80C32 scenario names its image beside it, but the build writes the image (and a copy of
+// the scenario) to build/firmware/mcs51/ (docs/cpu.md): run from traces/, the message said only
+// "no such file" (audit a-docs, finding 8); now it names the built image. A missing image the
+// build did not make (none.ihx above) keeps the bare message.
+TEST_F(BadInput, AShippedCpuScenarioRunFromTracesNamesTheBuiltImage) {
+  const std::string built = (std::filesystem::path(kCli).parent_path().parent_path() / "firmware" /
+                             "mcs51" / "cnt2_80c32.ihx")
+                                .string();
+  ASSERT_TRUE(std::filesystem::is_regular_file(built)) << built << " (the sdcc build, setup.sh)";
+  const Outcome r = dpc31("run " + kTraces + "cnt2_80c32.scn");
+  // Line 22 of traces/cnt2_80c32.scn is its `cpu 80c32 ... firmware cnt2_80c32.ihx` header.
+  expect_bad(r,
+             kTraces + "cnt2_80c32.scn:22: " + kTraces +
+                 "cnt2_80c32.ihx: no such file (the build made " + built +
+                 ": run the scenario's copy beside it, docs/cpu.md)",
+             "a shipped cpu scenario");
+  EXPECT_EQ(r.out, "");
 }
 
 // An image whose program is SJMP $ (80 FE), for the doors that need one that loads.
