@@ -166,6 +166,46 @@ TEST_F(BridgeEngine, EveryRequestWaitsTsynAfterTheLastAnswer) {
   EXPECT_EQ(tagged("RxD").back().cycle, answer_start + (6 * 11 + 33) * kT);
 }
 
+// A late answer is on the line until its end, which the chip knew when it armed it: a request
+// the client writes while it is there waits TSYN after its end (docs/timing.md "Telegrams": TSYN
+// of idle before every request), on the single chip's line as on a segment's
+// (BridgeSegment.ALateAnswerIsItsStationsAndTheNextRequestWaitsForItsEnd). The single chip's
+// bridge started it at once, into the late answer.
+TEST_F(BridgeEngine, ARequestWrittenDuringALateAnswerWaitsTsynAfterItsEnd) {
+  find_slave();
+  const auto sd2 = [](std::uint8_t fc, Bytes du, std::uint8_t dsap) {
+    return dpc31::fdl::encode(dpc31::fdl::make_frame(5, 2, fc, std::move(du), dsap, 62));
+  };
+  EXPECT_FALSE(exchange(sd2(0x7D, {}, 60)).empty());  // Slave_Diag, FCB 1
+  // Set_Prm with MinTSDR 255 bit times: its own SC comes at the new MinTSDR (docs/timing.md),
+  // past the slot time of 100 bits, so the client has no answer.
+  EXPECT_TRUE(
+      exchange(sd2(0x5D, {0x88, 0x64, 0x0A, 0xFF, 0x0D, 0x04, 0x00, 0x00, 0x00, 0x00, 0x00}, 61))
+          .empty());
+  const std::size_t k = line_.size() - 1;
+  const Sent prm = line_[k];
+  ASSERT_EQ(prm.sender, "master");
+  ASSERT_EQ(prm.bytes.size(), 22u);  // SD2: 4 + DA SA FC DSAP SSAP + 11 + FCS ED
+  // The client writes FDL_Status while the late SC (one character, 255..266 bit times after the
+  // Set_Prm's end) is on the line.
+  engine_->run_until(prm.end + 258 * kT);
+  const std::uint64_t written = engine_->cycle();
+  ASSERT_LT(written, prm.end + 266 * kT);
+  engine_->feed(kFdlStatus);
+  EXPECT_TRUE(engine_->settle(48'000'000));
+  engine_->flush_log();
+  ASSERT_GE(line_.size(), k + 3);
+  const Sent& late = line_[k + 1];
+  const Sent& req = line_[k + 2];
+  EXPECT_EQ(late.sender, "slave5");
+  EXPECT_EQ(late.bytes, Bytes{0xE5});
+  EXPECT_EQ(late.start, prm.end + 255 * kT);
+  EXPECT_EQ(late.end, prm.end + 266 * kT);
+  EXPECT_EQ(req.sender, "master");
+  EXPECT_EQ(req.bytes, kFdlStatus);
+  EXPECT_EQ(req.start, prm.end + (266 + 33) * kT);
+}
+
 TEST_F(BridgeEngine, SplitsTelegramsWrittenTogetherAndSendsEachAfterTsyn) {
   find_slave();
   // Global_Control (SDN broadcast: no answer) and FDL_Status in one write.

@@ -73,10 +73,7 @@ Engine::Engine(const Setup& setup, LogSink log)
       Chip& chip = seg_->chip(index);
       add_slave(i, chip, s);
       seg_->set_firmware(index, slaves_[i].user.program);
-      // Who drove an answer, and until when: each chip tells of its own when it arms it.
-      chip.on_telegram([this, i](const Telegram& t) {
-        if (t.from_chip) sent_.push_back({t.start, t.end, i});
-      });
+      watch_answers(i, chip);
     }
     seg_->on_collision = [this](const Collision& c) {
       add_line(c.cycle, "NOTE", kBridgeName,
@@ -106,11 +103,20 @@ Engine::Engine(const Setup& setup, LogSink log)
   } else {
     add_slave(0, *solo_, SlaveSpec{setup_.address, setup_.chip, setup_.firmware});
   }
+  watch_answers(0, *solo_);
   rx_ = TxdReceiver(t_, solo_->cycle());
   // TxD in batches of characters, taken when the bridge looks (collect): no event per bit.
   solo_->on_txd_chars([this](const TxdRun& r) { rx_.take(r); });
   if (!m51_) cpu_ = std::make_unique<Cpu>(*solo_, slaves_[0].user.program);
   bus_free_ = solo_->cycle();
+}
+
+// Who drove an answer, and until when (a late one too, for next_start): each chip tells of its
+// own when it arms it.
+void Engine::watch_answers(std::size_t i, Chip& chip) {
+  chip.on_telegram([this, i](const Telegram& t) {
+    if (t.from_chip) sent_.push_back({t.start, t.end, i});
+  });
 }
 
 // The log's view of station `i`: its chip's messages and state changes.

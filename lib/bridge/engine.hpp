@@ -175,6 +175,7 @@ class Engine {
   // Station `i`'s chip, its user side, and the log's view of it.
   void add_slave(std::size_t i, Chip& chip, const SlaveSpec& spec);
   void watch_slave(std::size_t i);
+  void watch_answers(std::size_t i, Chip& chip);
   void check_states(std::size_t i, std::uint64_t cycle);
   void port_written(std::size_t i, std::uint64_t cycle, const std::string& module,
                     const std::string& port, unsigned index, std::uint32_t value);
