@@ -246,6 +246,9 @@ class PyChip {
   }
   // Checks that the caller may touch the chip now (mutating: it would change it).
   void enter(bool mutating) const;
+  // Checks that `call` (on_irq_change, Cpu51Board.on_serial, ...) may add or remove an observer
+  // now: not while the chip runs, whose list of observers an observer's own call is in.
+  void enter_observers(std::string_view call) const;
   // A Python callable as an observer: called with the GIL, errors kept for rethrow().
   template <typename... Args, typename Convert>
   std::function<void(Args...)> observer(py::function f, Convert convert);
@@ -260,6 +263,10 @@ class PyChip {
  private:
   std::shared_ptr<RunState> run_ = std::make_shared<RunState>();
 };
+
+// An observer argument `callback` of `call`: a callable, or None (nullopt: remove), else a
+// TypeError naming the argument (pybind11's cast names neither).
+std::optional<py::function> callback_arg(const py::object& f, std::string_view call);
 
 // A Python object kept by C++ code that may copy it without the GIL: the reference is dropped
 // with the GIL held.
@@ -360,12 +367,12 @@ void one_clock_a_bit(std::uint32_t clock_hz, std::uint32_t baud);
 // An address on the chip's bus with `n` bytes from it inside (`n` 0: the address alone), else a
 // ValueError in `dpc31 serve`'s words: the chip would take the upper bits off (and log it per
 // byte).
-std::uint32_t bus_addr(const Chip& chip, std::int64_t a, std::int64_t n = 0);
+std::uint32_t bus_addr(const Chip& chip, const py::int_& a, std::int64_t n = 0);
 // Python's fault= and fault_char= as a UartFault, else a ValueError; no fault_char: the last
 // character, as a scenario's `corrupt` (DpMaster and Segment place it: vocabulary.hpp).
 UartFault fault_of(const std::optional<std::string>& kind, std::optional<int> char_index);
 // A byte `what` (0..255), else a ValueError.
-std::uint8_t byte_value(std::string_view what, std::int64_t v);
+std::uint8_t byte_value(std::string_view what, const py::int_& v);
 // The bytes of a frame, else a ValueError naming its first field fdl::encode refuses and that
 // field's range (Frame.encode, and the masters' transact before they send).
 std::vector<std::uint8_t> sendable(const fdl::Frame& f);
