@@ -243,3 +243,33 @@ def test_a_running_masters_history_counters_and_locks_are_refused_to_another_thr
     assert set(refused) == set(names)
     assert all("running in another thread" in e for e in refused.values())
     assert m.history[-1].request.du == b"\x0a\x0b\x0c\x0d" and m.locks == {}  # it ran
+
+
+def test_an_observer_may_not_change_the_observers_it_is_among():
+    """docs/python.md, "The GIL": an observer may look at its chip but not change what the run
+    uses; its own list of observers is that (the chip calls each in turn), so on_irq_change(None)
+    from an observer is a dpc31.Error that says so (it spoke of accessing or stepping the chip:
+    s31 benches finding 10), raised when the step returns; after it the observer is removed. A
+    callback that is not callable is a TypeError naming the argument."""
+    chip = dpc31.Chip("spc3")
+    mask = ~dpc31.register("spc3", "Int_Req_Reg").field("User_Timer_Clock").mask & 0xFFFF
+    chip.write(chip.addr_of("Int_Mask_Reg"), mask & 0xFF)
+    chip.write(chip.addr_of("Int_Mask_Reg") + 1, mask >> 8)
+    chip.write(chip.addr_of("Mode_Reg1_S"), 0x01)  # Start at 12: the first event at 12 + P
+    calls = []
+
+    def once(cycle, active):
+        calls.append(cycle)
+        chip.on_irq_change(None)
+
+    chip.on_irq_change(once)
+    with pytest.raises(dpc31.Error) as e:
+        chip.step(2 * P)
+    assert str(e.value) == ("the chip is running: an observer may look at it (peek, cycle, "
+                            "probe, ...) but not add or remove observers (on_irq_change): change "
+                            "them after the call returns")
+    assert calls == [12 + P] and chip.cycle == 12 + 2 * P
+    chip.on_irq_change(None)
+    with pytest.raises(TypeError, match="^on_pb3_change: callback: a callable or None expected, "
+                                        "got int$"):
+        chip.on_pb3_change(5)
