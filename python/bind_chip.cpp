@@ -206,12 +206,12 @@ std::string text_of(const py::int_& v) { return py::str(py::handle(v)).cast<std:
 
 }  // namespace
 
-std::uint32_t bus_addr(const Chip& chip, const py::int_& addr, std::int64_t n) {
+std::uint32_t bus_addr(const Chip& chip, const AnyInt& addr, std::int64_t n) {
   const std::int64_t limit = std::int64_t{1} << chip.profile().address_bits;
-  const std::int64_t a = clamped(addr);
+  const std::int64_t a = clamped(addr.value);
   if (a < 0 || a >= limit) {
     throw py::value_error(
-        range_error_text("addr", text_of(addr), 0, static_cast<std::uint64_t>(limit - 1)));
+        range_error_text("addr", text_of(addr.value), 0, static_cast<std::uint64_t>(limit - 1)));
   }
   if (n < 0 || n > limit - a) {
     throw py::value_error("block " + std::to_string(a) + "+" + std::to_string(n) +
@@ -223,15 +223,16 @@ std::uint32_t bus_addr(const Chip& chip, const py::int_& addr, std::int64_t n) {
 namespace {
 
 // A value of a register's bits (`mask`), in dpc31 serve's words when it is not one.
-std::uint16_t reg_value(std::string_view what, const py::int_& value, std::uint16_t mask) {
-  const std::int64_t v = clamped(value);
-  if (v < 0 || v > mask) throw py::value_error(range_error_text(what, text_of(value), 0, mask));
+std::uint16_t reg_value(std::string_view what, const AnyInt& value, std::uint16_t mask) {
+  const std::int64_t v = clamped(value.value);
+  if (v < 0 || v > mask)
+    throw py::value_error(range_error_text(what, text_of(value.value), 0, mask));
   return static_cast<std::uint16_t>(v);
 }
 
 }  // namespace
 
-std::uint8_t byte_value(std::string_view what, const py::int_& v) {
+std::uint8_t byte_value(std::string_view what, const AnyInt& v) {
   return static_cast<std::uint8_t>(reg_value(what, v, 0xFF));
 }
 
@@ -441,14 +442,14 @@ void bind_chip_class(py::module_& m) {
       // the bus: each access takes bus_access_cycles clocks, the chip runs meanwhile
       .def(
           "read",
-          [](PyChip& c, const py::int_& a) {
+          [](PyChip& c, const AnyInt& a) {
             const U32 at = bus_addr(c.chip, a);
             return c.run([&] { return c.chip.read(at); });
           },
           py::arg("addr"))
       .def(
           "write",
-          [](PyChip& c, const py::int_& a, const py::int_& v) {
+          [](PyChip& c, const AnyInt& a, const AnyInt& v) {
             const U32 at = bus_addr(c.chip, a);
             const U8 b = byte_value("value", v);
             c.run([&] { c.chip.write(at, b); });
@@ -456,7 +457,7 @@ void bind_chip_class(py::module_& m) {
           py::arg("addr"), py::arg("value"))
       .def(
           "read_block",
-          [](PyChip& c, const py::int_& a, std::int64_t n) {
+          [](PyChip& c, const AnyInt& a, std::int64_t n) {
             const U32 at = bus_addr(c.chip, a, n);
             std::vector<U8> out(static_cast<std::size_t>(n));
             c.run([&] { c.chip.read_block(at, out); });
@@ -465,7 +466,7 @@ void bind_chip_class(py::module_& m) {
           py::arg("addr"), py::arg("length"))
       .def(
           "write_block",
-          [](PyChip& c, const py::int_& a, const py::object& b) {
+          [](PyChip& c, const AnyInt& a, const py::object& b) {
             const std::vector<U8> v = bytes_like(b, "data");
             const U32 at = bus_addr(c.chip, a, static_cast<std::int64_t>(v.size()));
             c.run([&] { c.chip.write_block(at, v); });
@@ -473,7 +474,7 @@ void bind_chip_class(py::module_& m) {
           py::arg("addr"), py::arg("data"))
       .def(
           "fill",
-          [](PyChip& c, const py::int_& a, const py::int_& v, std::int64_t n) {
+          [](PyChip& c, const AnyInt& a, const AnyInt& v, std::int64_t n) {
             const U32 at = bus_addr(c.chip, a, n);
             const U8 b = byte_value("value", v);
             c.run([&] { c.chip.fill(at, b, static_cast<std::size_t>(n)); });
@@ -481,7 +482,7 @@ void bind_chip_class(py::module_& m) {
           py::arg("addr"), py::arg("value"), py::arg("length"))
       .def(
           "equal",
-          [](PyChip& c, const py::int_& a, const py::int_& b, std::int64_t n) {
+          [](PyChip& c, const AnyInt& a, const AnyInt& b, std::int64_t n) {
             const U32 at = bus_addr(c.chip, a, n);
             const U32 bt = bus_addr(c.chip, b, n);
             return c.run([&] { return c.chip.equal(at, bt, static_cast<std::size_t>(n)); });
@@ -490,14 +491,14 @@ void bind_chip_class(py::module_& m) {
       // the debugger: no time, no side effects
       .def(
           "peek",
-          [](const PyChip& c, const py::int_& a) {
+          [](const PyChip& c, const AnyInt& a) {
             c.enter(false);
             return c.chip.peek(bus_addr(c.chip, a));
           },
           py::arg("addr"))
       .def(
           "poke",
-          [](PyChip& c, const py::int_& a, const py::int_& v) {
+          [](PyChip& c, const AnyInt& a, const AnyInt& v) {
             const U32 at = bus_addr(c.chip, a);
             const U8 b = byte_value("value", v);
             c.enter(true);
@@ -506,7 +507,7 @@ void bind_chip_class(py::module_& m) {
           py::arg("addr"), py::arg("value"))
       .def(
           "peek_block",
-          [](const PyChip& c, const py::int_& a, std::int64_t n) {
+          [](const PyChip& c, const AnyInt& a, std::int64_t n) {
             const U32 at = bus_addr(c.chip, a, n);
             c.enter(false);
             std::vector<U8> out(static_cast<std::size_t>(n));
@@ -524,7 +525,7 @@ void bind_chip_class(py::module_& m) {
           py::arg("name"))
       .def(
           "poke_reg",
-          [](PyChip& c, std::string_view name, const py::int_& v) {
+          [](PyChip& c, std::string_view name, const AnyInt& v) {
             // Checked against the register's bits before any access, in dpc31 serve's words.
             const RegDesc& r = reg_desc(c.chip, name);
             const std::uint16_t value = reg_value("value", v, r.mask());

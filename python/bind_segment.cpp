@@ -414,7 +414,7 @@ void bind_station(py::module_& m) {
       .def("probe", read([](Chip& c) { return c.probe(); }))
       .def(
           "peek",
-          [read](py::object self, const py::int_& a) {
+          [read](py::object self, const AnyInt& a) {
             return read([a](Chip& c) { return c.peek(bus_addr(c, a)); })(std::move(self));
           },
           py::arg("addr"))

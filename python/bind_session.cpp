@@ -82,10 +82,9 @@ auto bytes_field(std::vector<U8> SlaveConfig::*member, const char* what, bool no
 
 void bind_frames(py::module_& m) {
   py::class_<fdl::Frame>(m, "Frame", "An FDL telegram (include/dpc31/fdl.hpp).")
-      .def(py::init([](const py::int_& da, const py::int_& sa, const py::int_& fc,
-                       const py::bytes& du, const std::optional<py::int_>& dsap,
-                       const std::optional<py::int_>& ssap) {
-             const auto sap = [](const char* what, const std::optional<py::int_>& v) {
+      .def(py::init([](const AnyInt& da, const AnyInt& sa, const AnyInt& fc, const py::bytes& du,
+                       const std::optional<AnyInt>& dsap, const std::optional<AnyInt>& ssap) {
+             const auto sap = [](const char* what, const std::optional<AnyInt>& v) {
                return v ? std::optional<U8>(byte_value(what, *v)) : std::nullopt;
              };
              return fdl::make_frame(byte_value("da", da), byte_value("sa", sa),

@@ -810,6 +810,12 @@ def test_an_int_beyond_int64_names_the_bus_range():
         dpc31.Frame(2**63, 1, 0x49)
     assert chip.cycle == 0
 
+    class Index:  # what a numpy integer is to the module: an int as before
+        def __index__(self):
+            return 0x100
+    chip.write(Index(), 7)
+    assert chip.peek(Index()) == 7 and chip.cycle == 4
+
 
 def test_segment_scenario_parse_of_a_single_chips_text_says_what_load_says(traces):
     """docs/python.md, Scenarios: a single chip's scenario says `FILE: not a segment scenario
