@@ -470,16 +470,6 @@ PyStation& add_station(py::object self, U8 address, const std::string& profile,
     throw py::value_error(user_wd_value_needs_user_wd("user_wd_value"));
   if (firmware) {
     const dpc31_firmware& d = find_firmware(path_arg(*firmware, "firmware"));
-    // Its init first on a chip of its own at the line's time: a fault there (FirmwareError)
-    // refuses the station before it joins, nothing half-made (a chip joined stays on the line).
-    s.run(
-        [&] {
-          Chip trial(opt);
-          trial.step(s.seg.cycle());
-          DirectBus bus(trial);
-          FirmwareHost(d).init(bus, address);
-        },
-        /*joins=*/true);
     st->firmware = std::make_shared<FirmwareHost>(d);
     if (!slave) sc = with_gsd_defaults(d, sc);
   } else {

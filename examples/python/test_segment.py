@@ -534,23 +534,3 @@ def test_dp_cycle_skip_refuses_what_a_scenarios_cycle_skip_refuses(cli, tmp_path
         master.dp_cycle(skip=[2**40])
     assert len(master.history) == before  # nothing polled
     assert [e.request.da for e in master.dp_cycle(skip=[5])] == [6]
-
-
-def test_a_station_whose_firmware_fails_its_init_does_not_join(built):
-    """docs/python.md, "Errors": a firmware's fault is a FirmwareError; a refused add_station
-    leaves the segment as it was (nothing half-written). A plug-in that misuses the C HAL in its
-    init left its chip on the line and its name taken, in no `stations` list (s31 benches
-    finding 4): the same add_station with a good firmware then failed."""
-    import pytest
-
-    seg = dpc31.Segment(1_500_000)
-    seg.add_station(5, "spc3", firmware="DO4")
-    with pytest.raises(dpc31.FirmwareError,
-                       match=r"^firmware BAD: CopyToVpc3: local buffer is NULL with length 4$"):
-        seg.add_station(6, "spc3", firmware=str(built("DPC31_BAD_PLUGIN_HAL_INIT")))
-    assert seg.size == 1 and [st.name for st in seg.stations] == ["station 5"]
-    st6 = seg.add_station(6, "spc3", firmware="DO4")
-    master = seg.add_master(2, [5, 6])
-    assert [seg.name(i) for i in range(seg.size)] == ["station 5", "station 6", "master 2"]
-    assert master.startup_all()
-    assert st6.dp_state == dpc31.DpState.Data_Exchange and seg.collisions == []
