@@ -450,8 +450,10 @@ PyStation& add_station(py::object self, U8 address, const std::string& profile,
   s.may_join();
   auto st = std::make_unique<PyStation>();
   st->segment = &s;
-  st->name = new_station_name(s.seg, name.value_or("station " + std::to_string(address)));
-  if (st->name.empty()) throw py::value_error(empty_name_for("station " + std::to_string(address)));
+  const std::string whose = "station " + std::to_string(address);
+  if (std::string why = station_name_refused(name.value_or(whose), whose); !why.empty())
+    throw py::value_error(why);
+  st->name = new_station_name(s.seg, name.value_or(whose));
   SlaveConfig sc = slave.value_or(SlaveConfig{});
   sc.address = address;
   if (!slave) {
@@ -589,7 +591,8 @@ void bind_segment_class(py::module_& m) {
           "add_sender",
           [](P& s, const std::string& name) {
             s.may_join();
-            if (name.empty()) throw py::value_error(empty_name_for("a sender"));
+            if (std::string why = station_name_refused(name, "a sender"); !why.empty())
+              throw py::value_error(why);
             return s.joined(s.seg.add_sender(new_station_name(s.seg, name)),
                             wave::kDriverWithoutAddress);
           },

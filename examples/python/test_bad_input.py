@@ -722,6 +722,12 @@ def test_settings_a_scenario_refuses_are_refused_in_its_words():
         seg.add_station(6, "spc3", name="")
     with pytest.raises(ValueError, match=r"^empty name for a sender$"):
         seg.add_sender("")
+    # At most 64 bytes: a name is a waveform scope, a --record file's name, in capture comments.
+    with pytest.raises(ValueError, match=r"^a name of 65 bytes for station 6: at most 64$"):
+        seg.add_station(6, "spc3", name="s" * 65)
+    with pytest.raises(ValueError, match=r"^a name of 66000 bytes for a sender: at most 64$"):
+        seg.add_sender("r" * 66000)
+    assert seg.add_station(6, "spc3", name="s" * 64).name == "s" * 64
     x = seg.add_sender("x")
     for data, why in ((b"", "no bytes"), (b"\0" * 256, "more than 255 bytes")):
         with pytest.raises(ValueError, match=rf"^telegram: {why}$"):
