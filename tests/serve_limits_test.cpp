@@ -1,7 +1,9 @@
 // `dpc31 serve` against the findings of issue 29 (docs/security.md, "dpc31 serve"): a secret file
 // of another user, guessing the secret, a Unix socket whose backlog is full, a state directory
-// without a quota, an idle timeout of almost nothing, a hard link in the state directory. Each
-// test makes the attack and sees it refused or bounded; the real binary as a child process.
+// without a quota, an idle timeout of almost nothing, a hard link in the state directory; and of
+// the s31-serve audit: the temporaries' names, blanks at a name's end, legacy --tcp addresses,
+// another interface without a secret, --max-clients above the descriptor limit. Each test makes
+// the attack and sees it refused or bounded; the real binary as a child process.
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
