@@ -14,10 +14,14 @@ static_assert(kLogLevelNames.size() == static_cast<std::size_t>(LogLevel::error)
 
 std::string_view level_name(LogLevel l) { return name_of(l, kLogLevelNames); }
 
+std::string log_line(const LogRecord& r) {
+  return fmt::format("[cycle {}] {}: {}", r.cycle, level_name(r.level), r.text);
+}
+
 LogSink stderr_sink(LogLevel min_level) {
   return [min_level](const LogRecord& r) {
     if (r.level < min_level) return;
-    fmt::print(stderr, "[cycle {}] {}: {}\n", r.cycle, level_name(r.level), r.text);
+    fmt::print(stderr, "{}\n", log_line(r));
   };
 }
 

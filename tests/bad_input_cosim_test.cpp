@@ -350,12 +350,14 @@ TEST_F(BadInput, CosimOptionsAndOutputs) {
   for (const char* args : {"--seeds 0", "--cycles abc", "--profile z80", "--bus sideways"}) {
     expect_bad_prefix(dpc31(std::string("cosim --junit old.xml ") + args), "dpc31 cosim: ", args);
   }
-  // The JUnit file is checked before any seed runs.
+  // The JUnit file is checked before any seed runs; its line has the subcommand's prefix as every
+  // other output's (docs/bad-input.md; s31-serve, finding 8: it was the bare path).
   const Outcome r = dpc31("cosim --seeds 1 --cycles 100 --junit taken");
-  expect_bad(r, "taken: cannot write: is a directory", "junit directory");
+  expect_bad(r, "dpc31 cosim: taken: cannot write: is a directory", "junit directory");
   EXPECT_EQ(r.out, "");
   expect_bad_prefix(dpc31("cosim --seeds 1 --cycles 100 --junit no/such/j.xml"),
-                    "no/such/j.xml: cannot create the temporary file ", "junit missing directory");
+                    "dpc31 cosim: no/such/j.xml: cannot create the temporary file ",
+                    "junit missing directory");
   // Directories for shrunk traces and waveforms that cannot be made: found before any seed
   // runs (a divergent mutant would write into them), not a crash in the middle.
   spit(path("plain"), "old");
@@ -416,7 +418,8 @@ TEST_F(BadInput, CosimMerge) {
   expect_bad(dpc31("cosim --shard -1/2 --junit old.xml"),
              "dpc31 cosim: --shard must be K/N with 1 <= K <= N, not '-1/2'", "negative");
   // A summary that does not add up (shard 1/2 of seeds 1..4 ran seeds 1 and 2): a result cut, a
-  // seed not its own, a count that is not its results'.
+  // seed not its own, a count that is not its results'. A range's end is one past its last seed,
+  // and said so (s31-serve, finding 10: "its 2 seeds from 1 to 3").
   const std::string whole = slurp(path("s1.json"));
   const auto edited = [&](const std::string& name, const std::string& from, const std::string& to) {
     std::string t = whole;
@@ -434,11 +437,12 @@ TEST_F(BadInput, CosimMerge) {
   const std::string incomplete = ": not the complete set of one run";
   expect_bad(
       dpc31(merge + "cut_results.json s2.json"),
-      "dpc31 cosim merge: cut_results.json: 1 results for its 2 seeds from 1 to 3" + incomplete,
+      "dpc31 cosim merge: cut_results.json: 1 results for its 2 seeds from 1 up to 3 (exclusive)" +
+          incomplete,
       "results cut");
   expect_bad(dpc31(merge + "foreign_seed.json s2.json"),
              "dpc31 cosim merge: foreign_seed.json: result 1 is seed 999999, not 1: not its seeds "
-             "from 1 to 3 in order" +
+             "from 1 up to 3 (exclusive) in order" +
                  incomplete,
              "foreign seed");
   expect_bad(dpc31(merge + "false_count.json s2.json"),

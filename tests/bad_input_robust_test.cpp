@@ -26,18 +26,19 @@ TEST_F(BadInput, CosimWindowFilesAreCheckedBeforeTheSeeds) {
   const std::string run = "cosim --seeds 1 --cycles 3000 --mutant NEXT_DOUT_KEEPS_N --quiet ";
   fs::create_directories(path("d/rtl.vcd"));
   Outcome r = dpc31(run + "--out o --junit j.xml --dump d");
-  expect_bad(r, "d/rtl.vcd: cannot write: is a directory", "--dump rtl.vcd");
+  expect_bad(r, "dpc31 cosim: d/rtl.vcd: cannot write: is a directory", "--dump rtl.vcd");
   EXPECT_EQ(r.out, "");
   EXPECT_FALSE(fs::exists(path("o"))) << "a seed ran";
   EXPECT_FALSE(fs::exists(path("j.xml")));
   fs::create_directories(path("v/emu.vcd"));
   r = dpc31(run + "--out o --vcd v");
-  expect_bad(r, "v/emu.vcd: cannot write: is a directory", "--vcd emu.vcd");
+  expect_bad(r, "dpc31 cosim: v/emu.vcd: cannot write: is a directory", "--vcd emu.vcd");
   EXPECT_FALSE(fs::exists(path("o"))) << "a seed ran";
   // The RTL's internal FST was a note without --quiet and exit 0.
   fs::create_directories(path("f/rtl_internal.fst"));
   expect_bad(dpc31("cosim --seeds 1 --cycles 2000 --quiet --dump f"),
-             "f/rtl_internal.fst: cannot write: is a directory", "--dump rtl_internal.fst");
+             "dpc31 cosim: f/rtl_internal.fst: cannot write: is a directory",
+             "--dump rtl_internal.fst");
   EXPECT_EQ(fs::directory_iterator(path("f/rtl_internal.fst")), fs::directory_iterator());
   EXPECT_FALSE(fs::exists(path("f/emu.vcd")));
 }
@@ -48,7 +49,7 @@ TEST_F(BadInput, CosimWindowFilesAreCheckedBeforeTheSeeds) {
 TEST_F(BadInput, CosimFailedDumpKeepsTheSummaryAndJunit) {
   const Outcome r =
       dpc31("cosim --seeds 2 --cycles 20000 --quiet --dump d --junit j.xml", "ulimit -f 16;");
-  expect_bad_prefix(r, "d/", "dump past the limit");
+  expect_bad_prefix(r, "dpc31 cosim: d/", "dump past the limit");
   EXPECT_NE(r.err.find(": cannot write: File too large"), std::string::npos) << r.err;
   EXPECT_NE(r.out.find("\"divergent_seeds\": 0"), std::string::npos) << r.out;
   EXPECT_NE(slurp(path("j.xml")).find("tests=\"2\""), std::string::npos);

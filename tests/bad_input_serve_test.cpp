@@ -290,6 +290,22 @@ TEST_F(BadInput, AFirmwareThatHangsInAStepKeepsTheWalk) {
   EXPECT_EQ(listing(), (std::vector<std::string>{"isr.scn", "segisr.scn"}));
 }
 
+// s31-serve, finding 6: `soak --firmware` with a firmware that hangs after its init wrote
+// reserved bits of Int_Mask_Reg (on the DPC31, the default profile) printed the chip's two
+// warnings ahead of the hang guard's line. docs/soak.md and docs/bad-input.md promise exactly
+// one line: the chip's log is kept for after the report, which a run that ends in exit 2 has not.
+TEST_F(BadInput, ASoakWhoseFirmwareHangsPrintsOneLine) {
+  const std::string hangs =
+      " hangs: it ran 2000 ms of host time without a bus access or a board hook call (a while(1) "
+      "loop, e.g. its fatal-error handler?); stopped";
+  expect_bad(
+      dpc31("soak --cycles 2e7 --fault-period 5e5 --firmware " + std::string(BAD_PLUGIN_SPIN_ISR)),
+      "dpc31 soak: firmware BAD" + hangs, "spin_isr soak");
+  expect_bad(
+      dpc31("soak --cycles 2e7 --fault-period 5e5 --firmware " + std::string(BAD_PLUGIN_HAL_ISR)),
+      "dpc31 soak: firmware BAD: CopyFromVpc3: local buffer is NULL with length 2", "hal_isr soak");
+}
+
 // A firmware that hangs in its hardware input (a `hw` step): hw_input is firmware code as its ISR
 // and init are, so the guard stops it with the same line, naming the step (docs/bring-up.md,
 // section 4), exit 2. The plug-in's init makes no bus access: the walk's `not started:` line is

@@ -327,7 +327,7 @@ TEST_F(BadInput, ACosimDumpPastAFileSizeLimitKeepsTheSummary) {
       " cosim --seeds 1 --cycles 20000 --quiet --dump d 2>" + (root_ / "io" / "err").string());
   EXPECT_EQ(r.rc, 2);
   const std::string err = slurp((root_ / "io" / "err").string());
-  EXPECT_TRUE(err.starts_with("d/")) << err;
+  EXPECT_TRUE(err.starts_with("dpc31 cosim: d/")) << err;  // the prefix: s31-serve, finding 8
   EXPECT_NE(err.find(": cannot write: "), std::string::npos) << err;
   EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
   EXPECT_NE(r.out.find("\"divergent_seeds\": 0"), std::string::npos) << r.out;

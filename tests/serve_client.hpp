@@ -51,21 +51,24 @@ inline int scaled_ms(int ms) {
 }
 
 // `dpc31 serve ARGS...` with its stdout on a pipe; the constructor waits for the "listening"
-// lines (one per endpoint asked for).
+// lines (one per endpoint asked for). `launcher` (a shell that sets a limit, then `exec "$@"`)
+// runs it, if given.
 class ServerProcess {
  public:
-  ServerProcess(const std::string& binary, const std::vector<std::string>& args) {
+  ServerProcess(const std::string& binary, const std::vector<std::string>& args,
+                const std::vector<std::string>& launcher = {}) {
     int p[2];
     if (::pipe2(p, O_CLOEXEC) != 0) throw std::runtime_error("pipe2");
     posix_spawn_file_actions_t fa;
     posix_spawn_file_actions_init(&fa);
     posix_spawn_file_actions_adddup2(&fa, p[1], STDOUT_FILENO);
-    std::vector<std::string> argv_s = {binary, "serve"};
+    std::vector<std::string> argv_s = launcher;
+    argv_s.insert(argv_s.end(), {binary, "serve"});
     argv_s.insert(argv_s.end(), args.begin(), args.end());
     std::vector<char*> argv;
     for (auto& a : argv_s) argv.push_back(a.data());
     argv.push_back(nullptr);
-    const int rc = posix_spawn(&pid_, binary.c_str(), &fa, nullptr, argv.data(), environ);
+    const int rc = posix_spawn(&pid_, argv_s.front().c_str(), &fa, nullptr, argv.data(), environ);
     posix_spawn_file_actions_destroy(&fa);
     ::close(p[1]);
     out_fd_ = p[0];

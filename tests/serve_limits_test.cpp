@@ -1,7 +1,9 @@
 // `dpc31 serve` against the findings of issue 29 (docs/security.md, "dpc31 serve"): a secret file
 // of another user, guessing the secret, a Unix socket whose backlog is full, a state directory
-// without a quota, an idle timeout of almost nothing, a hard link in the state directory. Each
-// test makes the attack and sees it refused or bounded; the real binary as a child process.
+// without a quota, an idle timeout of almost nothing, a hard link in the state directory; and of
+// the s31-serve audit: the temporaries' names, blanks at a name's end, legacy --tcp addresses,
+// another interface without a secret, --max-clients above the descriptor limit. Each test makes
+// the attack and sees it refused or bounded; the real binary as a child process.
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -267,4 +269,167 @@ TEST(ServeSecurity, SaveReplacesAHardLinkInsteadOfWritingThroughIt) {
   EXPECT_NE(a.st_ino, b.st_ino);
   EXPECT_EQ(a.st_nlink, 1u);
   EXPECT_EQ(c.command("load linked"), "OK 0");
+}
+
+// s31-serve, finding 3: a client saved under the 100 names `save`'s temporary may take
+// (`.dpc31-PID.tmp`, `.dpc31-PID-K.tmp`, docs/protocol.md "Snapshots"), and every later `save`
+// of every client failed ("every name is taken"). Names starting with `.dpc31-` are the
+// server's: refused by their form, so `save` keeps working.
+TEST(ServeSecurity, AClientCannotTakeTheTemporaryNamesOfSave) {
+  TempDir dir;
+  ServerProcess server(kCli, {"--tcp", "0", "--state-dir", dir.path()});
+  LineClient c = LineClient::tcp(server.port());
+  EXPECT_EQ(c.command("save old"), "OK 0");
+  for (int k = 0; k < 100; ++k) {
+    const std::string name = k == 0 ? fmt::format(".dpc31-{}.tmp", server.pid())
+                                    : fmt::format(".dpc31-{}-{}.tmp", server.pid(), k);
+    EXPECT_EQ(c.command("save " + name),
+              "ERR denied " + name + ": a name starting with '.dpc31-' is the server's temporary");
+  }
+  EXPECT_EQ(c.command("load .dpc31-x"),
+            "ERR denied .dpc31-x: a name starting with '.dpc31-' is the server's temporary");
+  EXPECT_EQ(c.command("save sub/.dpc31-1.tmp"),
+            "ERR denied sub/.dpc31-1.tmp: a name starting with '.dpc31-' is the server's "
+            "temporary");
+  EXPECT_EQ(c.command("save new"), "OK 0");
+  EXPECT_EQ(c.command("save old"), "OK 0");
+  EXPECT_EQ(c.command("save .dpc31"), "OK 0");  // not the prefix: an ordinary name
+  EXPECT_EQ(dir.tree(), (std::vector<std::string>{".dpc31", "new", "old"}));
+}
+
+// s31-serve, finding 9: `save a ` wrote over `a` (the blanks at NAME's end were dropped, though
+// docs/protocol.md said NAME is the rest of the line, blanks included). The blanks after the
+// command separate it from NAME; a component that begins or ends with a blank is refused: it
+// could not be told from the one without in a listing.
+TEST(ServeSecurity, ANameEndingInABlankIsRefusedNotTrimmed) {
+  TempDir dir;
+  ::mkdir(dir.file("snaps").c_str(), 0700);
+  ::mkdir(dir.file("snaps/sub").c_str(), 0700);
+  ServerProcess server(kCli, {"--tcp", "0", "--state-dir", dir.file("snaps")});
+  LineClient c = LineClient::tcp(server.port());
+  EXPECT_EQ(c.command("save a"), "OK 0");
+  EXPECT_EQ(c.command("step 8"), "OK 8");
+  // As the reply shows NAME: the blanks after the command dropped, a tab as a blank (a reply is
+  // printable ASCII).
+  for (const auto& [name, shown] :
+       std::vector<std::pair<std::string, std::string>>{{"a ", "a "},
+                                                        {"a\t", "a "},
+                                                        {"sub/ a", "sub/ a"},
+                                                        {"sub /a", "sub /a"},
+                                                        {" a ", "a "}}) {
+    for (const std::string cmd : {"save", "load"}) {
+      EXPECT_EQ(c.command(cmd + " " + name),
+                "ERR denied " + shown + ": a component may not begin or end with a blank")
+          << cmd << " '" << name << "'";
+    }
+  }
+  EXPECT_EQ(c.command("save \t two  words"), "OK 8");  // the separator; inner blanks are NAME's
+  EXPECT_EQ(c.command("load a"), "OK 0");              // `a` is the first save's
+  EXPECT_EQ(dir.tree(),
+            (std::vector<std::string>{"snaps", "snaps/a", "snaps/sub", "snaps/two  words"}));
+}
+
+// s31-serve, finding 4 (docs/protocol.md: ADDR is "numeric IPv4, `[v6]`, or a host name"): the
+// resolver read inet_aton's legacy forms, so `--tcp 0:5555` listened on every interface
+// (0.0.0.0). Each is now exit 2 with one line; `timeout` ends a server that listens instead.
+TEST(ServeSecurity, TcpAddressesTakeOnlyTheDocumentedForms) {
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {"0:0", "'0' is neither a dotted-quad IPv4 address"},
+      {"0x7f000001:0", "'0x7f000001' is neither a dotted-quad IPv4 address"},
+      {"127.1:0", "'127.1' is neither a dotted-quad IPv4 address"},
+      {"127.0.0.010:0", "'127.0.0.010' is neither a dotted-quad IPv4 address"},  // octal 8
+      {"127.0.0.256:0", "'127.0.0.256' is neither a dotted-quad IPv4 address"},  // not to DNS
+      {"::1:0", "an IPv6 address goes in brackets: [::1]:PORT"},
+      {"[127.0.0.1]:0", "'[127.0.0.1]' is no IPv6 address"},
+  };
+  for (const auto& [addr, why] : refused) {
+    const CommandResult r =
+        run_command("timeout 10 " + kCli + " serve --tcp " + addr + " 2>&1 >/dev/null");
+    EXPECT_EQ(r.rc, 2) << addr;
+    EXPECT_EQ(r.out, "dpc31 serve: --tcp '" + addr + "': " +
+                         (why.find("dotted") != std::string::npos
+                              ? why + " (four decimal parts: 127.0.0.1, 0.0.0.0) nor a host name\n"
+                              : why + "\n"))
+        << addr;
+  }
+  for (const std::string addr : {"127.0.0.1:0", "[::1]:0", "localhost:0"}) {
+    ServerProcess server(kCli, {"--tcp", addr});
+    ASSERT_EQ(server.listening().size(), 1u) << addr;
+    const std::string& l = server.listening()[0];
+    EXPECT_TRUE((addr[0] != '[' && starts_with(l, "listening tcp 127.0.0.1:")) ||
+                (addr[0] != '1' && starts_with(l, "listening tcp [::1]:")))
+        << l;
+  }
+}
+
+// s31-serve, finding 4: another interface than the loopback without --secret-file is what the
+// threat model (docs/protocol.md) says not to do: one warning line on stderr at start, before
+// the listening line; none on the loopback or with a secret.
+TEST(ServeSecurity, AnotherInterfaceWithoutASecretIsWarnedAbout) {
+  TempDir dir;
+  const std::string secret = secret_file(dir, "0123456789abcdef-the-secret");
+  const std::vector<std::pair<std::vector<std::string>, bool>> cases = {
+      {{"--tcp", "0.0.0.0:0"}, true},
+      {{"--tcp", "0.0.0.0:0", "--secret-file", secret}, false},
+      {{"--tcp", "127.0.0.1:0"}, false},
+      {{"--tcp", "127.0.0.2:0"}, false},
+  };
+  for (const auto& [args, warned] : cases) {
+    const std::string log = dir.file("err");
+    std::string port;
+    {
+      const StderrTo to(log);
+      ServerProcess server(kCli, args);
+      ASSERT_EQ(server.listening().size(), 1u);
+      port = std::to_string(server.port());
+    }
+    EXPECT_EQ(slurp(log), warned ? "dpc31 serve: warning: tcp 0.0.0.0:" + port +
+                                       " is not a loopback address and there is no "
+                                       "--secret-file: every host that reaches it is a full "
+                                       "client\n"
+                                 : "")
+        << args[1];
+  }
+}
+
+// s31-serve, finding 5: with --max-clients above what RLIMIT_NOFILE allows, newcomers waited
+// unanswered in the backlog once accept() failed (EMFILE). The server raises its soft limit as
+// far as the hard one allows; under `ulimit -n 24` (both limits) that is not enough for 1000:
+// one line on stderr says how many it serves, and a newcomer beyond them gets `ERR busy`.
+TEST(ServeSecurity, MaxClientsAboveTheDescriptorLimitIsClampedAndSaid) {
+  TempDir dir;
+  const std::string log = dir.file("err");
+  std::unique_ptr<ServerProcess> server;
+  {
+    const StderrTo to(log);
+    server = std::make_unique<ServerProcess>(
+        kCli, std::vector<std::string>{"--tcp", "0", "--max-clients", "1000"},
+        std::vector<std::string>{"/bin/sh", "-c", "ulimit -n 24 && exec \"$@\"", "sh"});
+  }
+  const std::vector<std::string> err = lines_of(slurp(log));
+  ASSERT_EQ(err.size(), 1u) << slurp(log);
+  // "... the descriptor limit is 24 (ulimit -n, hard limit 24) and K are in use or kept: at
+  // most N clients", N = 24 - K; K is the 8 kept and those open (at least stdin, stdout,
+  // stderr, the listener, the wake-up pipe's two ends and the spare: 7).
+  const std::string head =
+      "dpc31 serve: --max-clients 1000: the descriptor limit is 24 (ulimit -n, hard limit 24) "
+      "and ";
+  ASSERT_TRUE(starts_with(err[0], head)) << err[0];
+  const std::vector<std::string> w = words(err[0].substr(head.size()));
+  ASSERT_EQ(w.size(), 10u) << err[0];
+  const int kept = std::stoi(w[0]);
+  const int n = std::stoi(w[8]);
+  EXPECT_GE(kept, 8 + 7);
+  EXPECT_EQ(n, 24 - kept);
+  EXPECT_EQ(err[0], head + fmt::format("{} are in use or kept: at most {} clients", kept, n));
+  std::vector<LineClient> clients;
+  for (int i = 0; i < n; ++i) {
+    clients.push_back(LineClient::tcp(server->port()));
+    EXPECT_EQ(clients.back().command("ping"), "OK pong") << i;
+  }
+  for (int i = 0; i < 20; ++i) {
+    LineClient late = LineClient::tcp(server->port());
+    EXPECT_EQ(late.read_line(), fmt::format("ERR busy too many clients (at most {})", n)) << i;
+  }
+  EXPECT_EQ(clients.front().command("ping"), "OK pong");
 }

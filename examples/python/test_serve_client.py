@@ -63,6 +63,28 @@ def test_errors_are_exceptions(server):
         assert remote.ping() == "pong"
 
 
+def test_empty_blocks_are_answered_as_on_the_chip(server):
+    """s31-serve, finding 7: an empty block raised ServeError on the client (the protocol has no
+    empty block: `usage: writeblock ADDR HEX...`, `length 0 is out of range (1..4096)`), where
+    dpc31.Chip gives None and b''. A bad address (0x800: the SPC3 has
+    2 KB, chip-facts.md) still raises on both doors."""
+    import dpc31
+
+    native = dpc31.Chip("spc3")
+    with Client(tcp=server) as remote:
+        for chip in (native, remote):
+            assert chip.write_block(0x400, b"") is None
+            assert chip.read_block(0x400, 0) == b""
+            assert chip.peek_block(0x400, 0) == b""
+            assert chip.cycle == 0  # no bus access
+        with pytest.raises(ValueError):
+            native.read_block(0x800, 0)
+        with pytest.raises(ServeError) as e:
+            remote.read_block(0x800, 0)
+        assert e.value.code == "range"
+        assert remote.ping() == "pong"
+
+
 # A register of the SPC3 (chip-facts.md §1.1, the register map: 08h write side Mode_Reg1_S), one
 # it has at no address (Mode_Reg1: set at 08h, reset at 09h, its read-back at 15h the VPC3+'s
 # only), one of another profile (manual-quotes.md, DPC31 p.22: InstQ_Base, the Instruction_Queue's

@@ -22,7 +22,10 @@ using LogSink = std::function<void(const LogRecord&)>;
 
 std::string_view level_name(LogLevel l);
 
-// The default sink: warnings and errors to stderr as "[cycle N] warn: text".
+// "[cycle N] warn: text", the default sink's line (without its newline).
+std::string log_line(const LogRecord& r);
+
+// The default sink: warnings and errors to stderr as log_line has them.
 LogSink stderr_sink(LogLevel min_level = LogLevel::warn);
 
 // A log that never floods (docs/decisions.md, "Logs that never flood"). Every log of ours (the

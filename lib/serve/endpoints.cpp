@@ -1,5 +1,6 @@
 #include "endpoints.hpp"
 
+#include <arpa/inet.h>
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <netdb.h>
@@ -26,6 +27,33 @@ bool all_digits(std::string_view s) {
   return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
 }
 
+// Why `host` is none of the forms docs/protocol.md names for ADDR (a dotted-quad IPv4 address,
+// `[v6]`, a host name), "" if it is one. The resolver also reads inet_aton's legacy forms (`0`,
+// `127.1`, `0x7f000001`, `010.0.0.1` in octal) as addresses: `0:5555`, meant as "port 5555",
+// would listen on every interface. A name whose last label is all digits is no host name
+// (RFC 3696, 2) and would only go to DNS.
+std::string check_host(const std::string& host, bool bracketed) {
+  in6_addr v6{};
+  if (bracketed) {
+    return ::inet_pton(AF_INET6, host.c_str(), &v6) == 1
+               ? std::string()
+               : fmt::format("'[{}]' is no IPv6 address", host);
+  }
+  if (host.find(':') != std::string::npos) {
+    return fmt::format("an IPv6 address goes in brackets: [{}]:PORT", host);
+  }
+  in_addr v4{};
+  if (::inet_pton(AF_INET, host.c_str(), &v4) == 1) return {};
+  const std::string_view last = std::string_view(host).substr(host.rfind('.') + 1);
+  if (::inet_aton(host.c_str(), &v4) != 0 || all_digits(last)) {
+    return fmt::format(
+        "'{}' is neither a dotted-quad IPv4 address (four decimal parts: 127.0.0.1, 0.0.0.0) nor a "
+        "host name",
+        host);
+  }
+  return {};
+}
+
 }  // namespace
 
 void set_cloexec_nonblock(int fd) {
@@ -38,6 +66,7 @@ Endpoint open_tcp(const std::string& spec) {
   int& tcp_fd = ep.fd;
   std::string host = "127.0.0.1";
   std::string port_text = spec;
+  bool bracketed = false;
   if (!all_digits(spec)) {
     const std::size_t colon = spec.rfind(':');
     if (colon == std::string::npos) {
@@ -45,13 +74,15 @@ Endpoint open_tcp(const std::string& spec) {
     }
     host = spec.substr(0, colon);
     port_text = spec.substr(colon + 1);
-    if (host.size() >= 2 && host.front() == '[' && host.back() == ']') {
-      host = host.substr(1, host.size() - 2);
-    }
+    bracketed = host.size() >= 2 && host.front() == '[' && host.back() == ']';
+    if (bracketed) host = host.substr(1, host.size() - 2);
   }
   if (host.empty() || !all_digits(port_text) || port_text.size() > 5 ||
       std::stoul(port_text) > 65535) {
     throw ServerError(fmt::format("--tcp '{}': expected PORT or ADDR:PORT, port 0..65535", spec));
+  }
+  if (const std::string why = check_host(host, bracketed); !why.empty()) {
+    throw ServerError(fmt::format("--tcp '{}': {}", spec, why));
   }
   addrinfo hints{};
   hints.ai_family = AF_UNSPEC;
@@ -89,6 +120,10 @@ Endpoint open_tcp(const std::string& spec) {
   ::getnameinfo(reinterpret_cast<sockaddr*>(&ss), len, h, sizeof h, s, sizeof s,
                 NI_NUMERICHOST | NI_NUMERICSERV);
   ep.port = static_cast<std::uint16_t>(std::stoul(s));
+  ep.loopback =
+      ss.ss_family == AF_INET6
+          ? IN6_IS_ADDR_LOOPBACK(&reinterpret_cast<const sockaddr_in6&>(ss).sin6_addr)
+          : (ntohl(reinterpret_cast<const sockaddr_in&>(ss).sin_addr.s_addr) >> 24) == 127;
   ep.line = ss.ss_family == AF_INET6 ? fmt::format("listening tcp [{}]:{}", h, s)
                                      : fmt::format("listening tcp {}:{}", h, s);
   return ep;

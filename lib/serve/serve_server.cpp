@@ -1,9 +1,12 @@
 #include "serve_server.hpp"
 
+#include <dirent.h>
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <poll.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -32,7 +35,10 @@ constexpr std::size_t kKeepBuffer = 64u << 10;  // a drained buffer keeps this c
 constexpr std::size_t kLoneRound = 64;          // lines of a round when only one client has work
 constexpr auto kCloseGrace = std::chrono::seconds(2);  // to flush the last lines of a client
 constexpr auto kShutdownGrace = std::chrono::seconds(1);
-constexpr auto kAcceptPause = std::chrono::milliseconds(100);  // after EMFILE and friends
+constexpr auto kAcceptPause = std::chrono::milliseconds(100);  // after ENOBUFS and ENOMEM
+// Descriptors kept free beyond the clients': the spare that refuses a newcomer when none is left
+// (accept_some), and those `save`/`load` open for a while (directories on the way, the file).
+constexpr rlim_t kReservedDescriptors = 8;
 // A lone client's next line is waited for in recv() itself for up to this long, and only this
 // long after poll() last looked at every socket (docs/protocol.md, "Several clients").
 constexpr auto kLoneWait = std::chrono::milliseconds(1);
@@ -128,6 +134,13 @@ struct Server::Impl {
   ~Impl();
 
   void open_wake_pipe();
+  // Makes room for --max-clients descriptors: raises the soft RLIMIT_NOFILE as far as needed and
+  // the hard limit allows, else lowers max_clients to what fits, with one line on the log.
+  void fit_descriptors();
+  // A newcomer when no descriptor is left: the spare is given up to accept it, to tell it
+  // `ERR busy` instead of leaving it unanswered in the backlog, and taken again. False if there
+  // is no spare (accepting pauses then).
+  bool refuse_without_descriptor(int lfd);
   void listen_tcp(const std::string& spec);
   void listen_unix(const std::string& path);
   void poll_once();
@@ -163,6 +176,7 @@ struct Server::Impl {
   int unix_fd = -1;
   int wake_r = -1;
   int wake_w = -1;
+  int spare_fd = -1;  // /dev/null, held for refuse_without_descriptor
   std::uint16_t port = 0;
   std::string unix_bound;  // unlinked at the end if it is still our socket
   dev_t unix_dev = 0;
@@ -185,7 +199,7 @@ Server::Impl::~Impl() {
   for (auto& c : clients) {
     if (c->fd >= 0) ::close(c->fd);
   }
-  for (const int fd : {tcp_fd, unix_fd, wake_r, wake_w}) {
+  for (const int fd : {tcp_fd, unix_fd, wake_r, wake_w, spare_fd}) {
     if (fd >= 0) ::close(fd);
   }
   struct stat st {};
@@ -204,10 +218,69 @@ void Server::Impl::open_wake_pipe() {
   set_cloexec_nonblock(wake_w);
 }
 
+void Server::Impl::fit_descriptors() {
+  spare_fd = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
+  rlim_t open_now = 0;  // this process's descriptors now, counted in /proc/self/fd
+  if (DIR* d = ::opendir("/proc/self/fd")) {
+    while (const dirent* e = ::readdir(d)) open_now += e->d_name[0] != '.' ? 1 : 0;
+    ::closedir(d);
+    --open_now;  // the directory's own
+  }
+  rlimit lim{};
+  if (::getrlimit(RLIMIT_NOFILE, &lim) != 0) return;
+  const rlim_t needed = open_now + opt.max_clients + kReservedDescriptors;
+  if (lim.rlim_cur != RLIM_INFINITY && lim.rlim_cur < needed) {
+    rlimit raised = lim;
+    raised.rlim_cur = lim.rlim_max == RLIM_INFINITY ? needed : std::min(needed, lim.rlim_max);
+    if (::setrlimit(RLIMIT_NOFILE, &raised) == 0) lim = raised;
+  }
+  if (lim.rlim_cur == RLIM_INFINITY || lim.rlim_cur >= needed) return;
+  const rlim_t room = lim.rlim_cur > open_now + kReservedDescriptors
+                          ? lim.rlim_cur - open_now - kReservedDescriptors
+                          : 0;
+  if (room == 0) {
+    throw ServerError(
+        fmt::format("no descriptor left for a client: {} open, the limit is {} "
+                    "(ulimit -n), {} are kept for refusing clients and snapshots",
+                    open_now, lim.rlim_cur, kReservedDescriptors));
+  }
+  if (opt.log != nullptr) {
+    fmt::print(opt.log,
+               "dpc31 serve: --max-clients {}: the descriptor limit is {} (ulimit -n, hard limit "
+               "{}) and {} are in use or kept: at most {} clients\n",
+               opt.max_clients, lim.rlim_cur, lim.rlim_max, open_now + kReservedDescriptors, room);
+    std::fflush(opt.log);
+  }
+  opt.max_clients = static_cast<std::size_t>(room);
+}
+
+bool Server::Impl::refuse_without_descriptor(int lfd) {
+  if (spare_fd < 0) return false;
+  ::close(spare_fd);
+  const int fd = ::accept4(lfd, nullptr, nullptr, SOCK_CLOEXEC);
+  if (fd >= 0) {
+    constexpr std::string_view kMsg = "ERR busy the server has no descriptor left for a client\n";
+    ::send(fd, kMsg.data(), kMsg.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
+    Client c;
+    c.fd = fd;
+    close_client(c);
+  }
+  spare_fd = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
+  return true;
+}
+
 void Server::Impl::listen_tcp(const std::string& spec) {
   Endpoint e = open_tcp(spec);
   tcp_fd = e.fd;
   port = e.port;
+  // Other hosts reach it, and nothing asks them who they are (docs/protocol.md, "Threat model").
+  if (!e.loopback && !opt.secret && opt.log != nullptr) {
+    fmt::print(opt.log,
+               "dpc31 serve: warning: {} is not a loopback address and there is no "
+               "--secret-file: every host that reaches it is a full client\n",
+               e.line.substr(e.line.find("tcp ")));
+    std::fflush(opt.log);
+  }
   listening.push_back(std::move(e.line));
 }
 
@@ -236,6 +309,7 @@ void Server::Impl::accept_some(int lfd, bool tcp) {
     const int fd = ::accept4(lfd, reinterpret_cast<sockaddr*>(&from), &from_len, SOCK_CLOEXEC);
     if (fd < 0) {
       if (errno == EINTR || errno == ECONNABORTED) continue;
+      if ((errno == EMFILE || errno == ENFILE) && refuse_without_descriptor(lfd)) continue;
       if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM) {
         accept_paused_until = now + kAcceptPause;
       }
@@ -731,6 +805,7 @@ Server::Server(ServerOptions opt) : impl_(std::make_unique<Impl>(std::move(opt))
   impl_->open_wake_pipe();
   if (impl_->opt.tcp) impl_->listen_tcp(*impl_->opt.tcp);
   if (impl_->opt.unix_path) impl_->listen_unix(*impl_->opt.unix_path);
+  impl_->fit_descriptors();
 }
 
 Server::~Server() = default;

@@ -45,7 +45,8 @@ struct ServerOptions {
   std::optional<std::string> secret;
   std::size_t max_clients = 16;  // connections, also those that have not sent their first line
   double idle_timeout = 300;     // seconds without input before a client is closed; 0 = never
-  // One line per wrong secret (who, how many in a row, the delay); nullptr: none.
+  // One line per wrong secret (who, how many in a row, the delay), and a warning at start for a
+  // TCP port on another interface than the loopback without a secret; nullptr: none.
   std::FILE* log = nullptr;
   // Seconds a new connection has for its first line (and auth); the idle timeout if shorter.
   double hello_timeout = 10;

@@ -144,8 +144,9 @@ struct Options {
 // The rest of the line after the command word (paths may contain blanks).
 std::string_view rest_of_line(std::string_view line, std::string_view cmd) {
   std::string_view r = line.substr(line.find(cmd) + cmd.size());
+  // The blanks before it separate it from the command; those at its end are NAME's, and
+  // StateDir refuses them (docs/protocol.md, "Snapshots").
   while (!r.empty() && (r.front() == ' ' || r.front() == '\t')) r.remove_prefix(1);
-  while (!r.empty() && (r.back() == ' ' || r.back() == '\t')) r.remove_suffix(1);
   return r;
 }
 

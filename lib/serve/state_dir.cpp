@@ -19,6 +19,8 @@ namespace {
 
 constexpr std::size_t kMaxComponent = 255;  // NAME_MAX
 
+bool is_blank(char c) { return c == ' ' || c == '\t'; }
+
 std::string errno_text(int e) { return std::strerror(e); }
 
 StateDir::Error denied(std::string message) {
@@ -88,6 +90,15 @@ std::string StateDir::check_name(std::string_view name) {
     if (comp == "." || comp == "..") {
       return fmt::format("{}: '{}' is not allowed (names stay inside the state directory)", name,
                          comp);
+    }
+    if (comp.starts_with(outfile::kTempPrefix)) {
+      // The server's own temporaries: a client that took all their names would stop every save.
+      return fmt::format("{}: a name starting with '{}' is the server's temporary", name,
+                         outfile::kTempPrefix);
+    }
+    if (is_blank(comp.front()) || is_blank(comp.back())) {
+      // Invisible in a listing: `save a ` would be a second `a` (or, trimmed, overwrite it).
+      return fmt::format("{}: a component may not begin or end with a blank", name);
     }
     if (comp.size() > kMaxComponent) {
       return fmt::format("{}: a component longer than {} bytes", name, kMaxComponent);

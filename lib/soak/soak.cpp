@@ -46,6 +46,14 @@ class Soak {
  public:
   explicit Soak(const Options& o)
       : o_(o), rc_(responder_config(o)), chip_(chip_options(o)), user_(rc_), rng_(o.seed) {
+    chip_.set_log_sink([this](const LogRecord& r) {
+      if (r.level < LogLevel::warn) return;
+      if (log_.size() < kKeptLog) {
+        log_.push_back(log_line(r));
+      } else {
+        ++log_left_out_;
+      }
+    });
     DirectBus bus(chip_);
     MasterConfig mc;
     mc.address = kMaster;
@@ -164,6 +172,13 @@ class Soak {
     r.rows.push_back({"data.wrong_inputs", 0, wrong_inputs_});
     r.rows.push_back({"data.wrong_outputs", 0, wrong_outputs_});
     return r;
+  }
+
+  // The chip's log, kept for the report (set_log_sink hands over what its limiters still owe).
+  void take_log(Result& r) {
+    chip_.set_log_sink({});
+    r.log = std::move(log_);
+    r.log_left_out = log_left_out_;
   }
 
  private:
@@ -328,6 +343,8 @@ class Soak {
   std::uint64_t wd_timeouts_ = 0;
   std::uint64_t wrong_inputs_ = 0;
   std::uint64_t wrong_outputs_ = 0;
+  std::vector<std::string> log_;
+  std::uint64_t log_left_out_ = 0;
 };
 
 }  // namespace
@@ -356,7 +373,12 @@ std::uint64_t resident_kib() {
   return 0;
 }
 
-Result run(const Options& o) { return Soak(o).run(); }
+Result run(const Options& o) {
+  Soak soak(o);
+  Result r = soak.run();
+  soak.take_log(r);
+  return r;
+}
 
 CLI::App* add_subcommand(CLI::App& app, Options& o) {
   auto* s = app.add_subcommand(
@@ -460,6 +482,10 @@ int run_cli(const Options& o, std::FILE* out, std::FILE* err) {
     fmt::print(out, "{:<24} {:>12} {:>12}{}\n", row.name, row.expected, row.actual,
                row.ok() ? "" : "  MISMATCH");
     bad += row.ok() ? 0 : 1;
+  }
+  for (const std::string& l : r.log) fmt::print(err, "{}\n", l);
+  if (r.log_left_out != 0) {
+    fmt::print(err, "... and {} more lines of the chip's log\n", r.log_left_out);
   }
   if (bad == 0) {
     fmt::print(out, "\nresult: every counter accounts exactly for the injected faults\n");

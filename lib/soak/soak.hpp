@@ -66,8 +66,14 @@ struct Result {
   std::uint64_t exchanges = 0;  // Data_Exchange requests answered with data
   std::array<std::uint64_t, kFaultKinds> injected{};
   std::vector<Row> rows;
+  // The chip's warnings and errors (log_line), the first kKeptLog of them, and how many more:
+  // printed on stderr after the report, so that a run that ends in its one line of exit 2 (a
+  // firmware that hangs) has nothing else there (docs/bad-input.md).
+  std::vector<std::string> log;
+  std::uint64_t log_left_out = 0;
   [[nodiscard]] bool ok() const;
 };
+inline constexpr std::size_t kKeptLog = 100;
 
 // Runs the soak; throws std::runtime_error if the first start-up fails.
 Result run(const Options& o);

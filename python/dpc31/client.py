@@ -179,14 +179,29 @@ class Client:
             raise
         return True
 
+    # An empty block is no transfer, as on dpc31.Chip (None, b''): the protocol has no empty
+    # block, so only ADDR is checked, by a `peek` (no side effect): a bad one raises as for a
+    # block of one byte.
     def read_block(self, addr: int, length: int) -> bytes:
+        if length == 0:
+            return self._no_block(addr)
         return bytes.fromhex(self._call(f"readblock {addr} {length}"))
 
     def write_block(self, addr: int, data: bytes) -> None:
-        self._call(f"writeblock {addr} {bytes(data).hex()}")
+        data = bytes(data)
+        if not data:
+            self._no_block(addr)
+            return
+        self._call(f"writeblock {addr} {data.hex()}")
 
     def peek_block(self, addr: int, length: int) -> bytes:
+        if length == 0:
+            return self._no_block(addr)
         return bytes.fromhex(self._call(f"peekblock {addr} {length}"))
+
+    def _no_block(self, addr: int) -> bytes:
+        self._call(f"peek {addr}")
+        return b""
 
     def peek_reg(self, name: str) -> int:
         return int(self._call(f"peek_reg {name}"), 16)

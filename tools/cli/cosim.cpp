@@ -195,7 +195,7 @@ bool windows_ready(const CosimOptions& o) {
     }
     if (!std::filesystem::is_directory(dir, ec)) continue;
     if (const std::string why = window_unwritable(dir); !why.empty()) {
-      fmt::print(stderr, "{}\n", why);
+      fmt::print(stderr, "dpc31 cosim: {}\n", why);
       return false;
     }
   }
@@ -209,11 +209,11 @@ int finish(const CosimOptions& o, const nlohmann::json& summary, const nlohmann:
   fmt::print("{}\n", summary.dump(2));
   if (!o.junit.empty() &&
       !(junit_out.write(junit(o.profile_name, results)) && junit_out.commit())) {
-    fmt::print(stderr, "{}\n", junit_out.error());
+    fmt::print(stderr, "dpc31 cosim: {}\n", junit_out.error());
     return 2;
   }
   if (!failed_output.empty()) {
-    fmt::print(stderr, "{}\n", failed_output);
+    fmt::print(stderr, "dpc31 cosim: {}\n", failed_output);
     return 2;
   }
   const bool diverged = std::any_of(results.begin(), results.end(), [](const nlohmann::json& r) {
@@ -435,7 +435,7 @@ int run_cosim(const CosimOptions& given) {
   // Opened before the seeds run: a bad path is one line up front, not after minutes.
   outfile::OutFile junit_out;
   if (!o.junit.empty() && !junit_out.open(o.junit)) {
-    fmt::print(stderr, "{}\n", junit_out.error());
+    fmt::print(stderr, "dpc31 cosim: {}\n", junit_out.error());
     return 2;
   }
   // The directories are made only when something goes into them, but checked now.

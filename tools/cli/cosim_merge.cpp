@@ -7,6 +7,7 @@
 #include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "cosim.hpp"
@@ -62,6 +63,15 @@ nlohmann::json parse_summary(const std::string& text, bool& too_deep) {
   }
 }
 
+// A summary's seed range in words: its "to" is one past the last seed, said so (an empty
+// shard's range has no last seed). Every message of merge says a range this way.
+std::string seeds_text(std::string_view from, std::string_view to) {
+  return fmt::format("seeds from {} up to {} (exclusive)", from, to);
+}
+std::string seeds_text(std::uint64_t from, std::uint64_t to) {
+  return seeds_text(std::to_string(from), std::to_string(to));
+}
+
 // Why a shard's summary does not add up ("" if it does): its seeds are not its part of the run's
 // range, run in order from the first, all of them unless it stopped at its one divergence
 // (without --keep-going), or its counts are not those of its results.
@@ -77,28 +87,27 @@ std::string shard_mismatch(const nlohmann::json& j) {
   // The bounds of --seeds and --shard keep the arithmetic below within 64 bits.
   if (to < from || to - from > 100'000'000 || count == 0 || count > 0xFFFF'FFFF || index == 0 ||
       index > count)
-    return fmt::format("shard {}/{} of seeds from {} to {} is no shard of a run", index, count,
-                       from, to);
+    return fmt::format("shard {}/{} of {} is no shard of a run", index, count,
+                       seeds_text(from, to));
   const std::uint64_t lo = from + (to - from) * (index - 1) / count;
   const std::uint64_t hi = from + (to - from) * index / count;
   if (j["seeds"]["from"] != lo || j["seeds"]["to"] != hi)
-    return fmt::format("seeds from {} to {}, but shard {}/{} of seeds from {} to {} has {} to {}",
-                       j["seeds"]["from"].dump(), j["seeds"]["to"].dump(), index, count, from, to,
-                       lo, hi);
+    return fmt::format("{}, but shard {}/{} of {} has {}",
+                       seeds_text(j["seeds"]["from"].dump(), j["seeds"]["to"].dump()), index, count,
+                       seeds_text(from, to), seeds_text(lo, hi));
   const nlohmann::json& results = j["results"];
   std::uint64_t diverged = 0;
   for (std::size_t k = 0; k < results.size(); ++k) {
     const auto seed = results[k]["seed"].get<std::uint64_t>();
     if (seed != lo + k)
-      return fmt::format("result {} is seed {}, not {}: not its seeds from {} to {} in order",
-                         k + 1, seed, lo + k, lo, hi);
+      return fmt::format("result {} is seed {}, not {}: not its {} in order", k + 1, seed, lo + k,
+                         seeds_text(lo, hi));
     if (results[k]["diverged"].get<bool>()) ++diverged;
   }
   const bool stopped =
       j["keep_going"] != true && diverged == 1 && results.back()["diverged"].get<bool>();
   if (results.size() != hi - lo && !stopped)
-    return fmt::format("{} results for its {} seeds from {} to {}", results.size(), hi - lo, lo,
-                       hi);
+    return fmt::format("{} results for its {} {}", results.size(), hi - lo, seeds_text(lo, hi));
   if (j["keep_going"] != true && diverged > 1)
     return fmt::format("{} divergent results without keep_going", diverged);
   if (j.value("divergent_seeds", nlohmann::json()) != diverged ||
@@ -213,8 +222,7 @@ int run_cosim_merge(const MergeOptions& o) {
   if (!o.junit.empty() &&
       !(junit_out.write(junit(first["profile"].get<std::string>(), summary["results"])) &&
         junit_out.commit())) {
-    fmt::print(stderr, "{}\n", junit_out.error());
-    return 2;
+    return fail(junit_out.error());
   }
   return summary["divergent_seeds"].get<std::uint64_t>() == 0 ? 0 : 1;
 }

@@ -4,10 +4,10 @@
 
 #include <atomic>
 #include <cerrno>
-#include <csignal>
 #include <cstring>
 
 #include "chip_choice.hpp"
+#include "cleanup.hpp"
 #include "dpc31/regdesc.hpp"
 #include "numbers.hpp"
 #include "path_option.hpp"
@@ -18,8 +18,10 @@ namespace dpc31::cli {
 namespace {
 
 std::atomic<serve::Server*> g_server{nullptr};
+std::atomic<bool> g_stop{false};  // a stop signal came before the server was there to tell
 
 extern "C" void on_stop_signal(int /*sig*/) {
+  g_stop.store(true);
   if (serve::Server* s = g_server.load()) s->stop();
 }
 
@@ -116,9 +118,18 @@ int run_serve(const ServeArgs& a, std::FILE* out, std::FILE* err) {
   opt.idle_timeout = a.idle_timeout;
   opt.log = err;
   if (!a.state_dir.empty()) opt.state_dir = a.state_dir;
+  // Before anything is bound, so that a client that signals as soon as it reads the listening
+  // line stops the server in order (exit 0, the socket removed) instead of killing it.
+  // Its terminal closed (SIGHUP): a stop like the others, unless the signal was ignored at start.
+  cleanup::stop_on_signals(on_stop_signal);
   try {
     if (!a.secret_file.empty()) opt.secret = serve::read_secret_file(a.secret_file);
     serve::Server server(opt);
+    g_server.store(&server);
+    const struct Unset {
+      ~Unset() { g_server.store(nullptr); }
+    } unset;
+    if (g_stop.load()) server.stop();  // the handler ran before the store: run() returns at once
     for (const std::string& l : server.listening()) fmt::print(out, "{}\n", l);
     // Where it listens is what a client needs (port 0 picks one): unsaid, nobody can connect.
     errno = 0;
@@ -127,18 +138,8 @@ int run_serve(const ServeArgs& a, std::FILE* out, std::FILE* err) {
                  std::strerror(errno != 0 ? errno : EIO));
       return 2;
     }
-    g_server.store(&server);
-    struct sigaction sa {};
-    sa.sa_handler = on_stop_signal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, nullptr);
-    sigaction(SIGTERM, &sa, nullptr);
-    sigaction(SIGHUP, &sa, nullptr);  // its terminal closed: a stop like the others
-    const int rc = server.run();
-    g_server.store(nullptr);
-    return rc;
+    return server.run();
   } catch (const serve::ServerError& e) {
-    g_server.store(nullptr);
     fmt::print(err, "dpc31 serve: {}\n", e.what());
     return 2;
   }

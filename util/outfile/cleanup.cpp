@@ -117,20 +117,36 @@ void remove_at_exit() {
   });
 }
 
+namespace {
+
+// Sets `handler` for each of the three signals, except one that is ignored (nohup's SIGHUP, the
+// SIGINT of a shell's background job: the caller of the program asked for that) and, with
+// `only_default`, one that already has a handler of the program's own.
+void set_handlers(void (*handler)(int), bool only_default) {
+  for (const int sig : kSignals) {
+    struct sigaction old {};
+    if (::sigaction(sig, nullptr, &old) != 0 || old.sa_handler == SIG_IGN ||
+        (only_default && old.sa_handler != SIG_DFL)) {
+      continue;
+    }
+    struct sigaction sa {};
+    sa.sa_handler = handler;
+    ::sigfillset(&sa.sa_mask);  // one handler run at a time
+    ::sigaction(sig, &sa, nullptr);
+  }
+}
+
+}  // namespace
+
 void install() {
   static std::once_flag once;
   std::call_once(once, [] {
     g_owner = ::getpid();
-    for (const int sig : kSignals) {
-      struct sigaction old {};
-      if (::sigaction(sig, nullptr, &old) != 0 || old.sa_handler != SIG_DFL) continue;
-      struct sigaction sa {};
-      sa.sa_handler = dpc31_cleanup_on_signal;
-      ::sigfillset(&sa.sa_mask);  // one handler run at a time
-      ::sigaction(sig, &sa, nullptr);
-    }
+    set_handlers(dpc31_cleanup_on_signal, true);
   });
 }
+
+void stop_on_signals(void (*handler)(int)) { set_handlers(handler, false); }
 
 Entry& Entry::operator=(Entry&& o) noexcept {
   if (this != &o) {

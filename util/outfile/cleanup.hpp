@@ -17,6 +17,11 @@ namespace dpc31::cleanup {
 // calls it first.
 void install();
 
+// Makes `handler` the action of each of the three signals that is not ignored, replacing
+// install()'s: for a program that stops in order on them (`dpc31 serve`). An ignored one stays
+// ignored, as install() leaves it (`nohup dpc31 serve ... &` survives its terminal's hangup).
+void stop_on_signals(void (*handler)(int));
+
 // Also at the process's exit (std::atexit), does what remove_registered does with what is still
 // registered then: for a library in another program's process (the Python module), whose
 // objects need not be destroyed before it exits. Once; a forked child's exit leaves them alone.

@@ -54,9 +54,9 @@ std::string create_temp(const std::string& path,
   // temporaries of one process (or a leftover of a killed run with a recycled pid).
   const std::string dir = path.substr(0, path.rfind('/') + 1);
   for (int attempt = 0; attempt < 100; ++attempt) {
-    const std::string tmp = attempt == 0
-                                ? fmt::format("{}.dpc31-{}.tmp", dir, ::getpid())
-                                : fmt::format("{}.dpc31-{}-{}.tmp", dir, ::getpid(), attempt);
+    const std::string tmp =
+        attempt == 0 ? fmt::format("{}{}{}.tmp", dir, kTempPrefix, ::getpid())
+                     : fmt::format("{}{}{}-{}.tmp", dir, kTempPrefix, ::getpid(), attempt);
     const int e = create(tmp);
     if (e == 0) return tmp;
     if (e != EEXIST) {

@@ -21,6 +21,10 @@ inline constexpr std::string_view kEmptyName = "an empty file name: nothing can 
 // The same for an input (path_option.hpp, Chip::load_state_file).
 inline constexpr std::string_view kEmptyReadName = "an empty file name: nothing can be read there";
 
+// How every temporary's name begins: a name space of our own, which `dpc31 serve` keeps its
+// clients' snapshot names out of (lib/serve/state_dir.cpp), so they cannot take its names.
+inline constexpr std::string_view kTempPrefix = ".dpc31-";
+
 // A fresh temporary in `path`'s directory, made by `create(name)`, which returns 0 or an errno
 // value; EEXIST tries the next name ("DIR/.dpc31-<pid>.tmp", "DIR/.dpc31-<pid>-1.tmp", ...): short
 // whatever `path`'s name, so that a name of 255 bytes can be written. Returns its name,
