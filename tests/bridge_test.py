@@ -91,18 +91,21 @@ def fate_tags(lines):
 class Bridge:
     """The bridge as a child process; its symlink in a temporary directory."""
 
-    def __init__(self, tmp, *args, link="dp0"):
+    def __init__(self, tmp, *args, link="dp0", ignored=()):
         self.path = os.path.join(tmp, link)
         self.start(tmp, ["--pty", self.path], args,
                    lambda: os.path.islink(self.path) and os.path.exists(self.path),
-                   "the bridge made no symlink")
+                   "the bridge made no symlink", ignored)
 
-    def start(self, tmp, line, args, ready, missing):
+    def start(self, tmp, line, args, ready, missing, ignored=()):
         """Runs the bridge on `line` (its --pty or --tcp option) with its log in `tmp`, and waits
-        until `ready()` (or fails with `missing` after GUARD, or when the bridge exits)."""
+        until `ready()` (or fails with `missing` after GUARD, or when the bridge exits).
+        `ignored`: signals the bridge inherits ignored (as under nohup)."""
         self.log = os.path.join(tmp, "bridge.log")
         self.proc = subprocess.Popen([CLI, "bridge"] + line + ["--log", self.log] + list(args),
-                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                     preexec_fn=lambda: [signal.signal(s, signal.SIG_IGN)
+                                                         for s in ignored])
         deadline = time.monotonic() + GUARD
         while not ready():
             if self.proc.poll() is not None:
@@ -373,6 +376,29 @@ def do4_80c32_free():
                   "the trace never enters int0_isr by its map name")
         finally:
             b.kill()
+
+
+def ignored_signal_stays_ignored():
+    """A signal ignored when the bridge starts stays ignored (`nohup dpc31 bridge ... &`, and a
+    background job's SIGINT): the bridge replaced it with its stop handler and ended on the
+    terminal's hangup (s31, after the serve audit's finding 2). After the ignored signal the
+    bridge still answers a master, and only SIGTERM stops it, exit 0, said in its log."""
+    for sig, name in ((signal.SIGHUP, "SIGHUP"), (signal.SIGINT, "SIGINT")):
+        with tempfile.TemporaryDirectory() as tmp:
+            b = Bridge(tmp, "--firmware", "DO4", "--baud", "19200", "--log-level", "telegrams",
+                       ignored=(sig,))
+            try:
+                b.proc.send_signal(sig)
+                m = PacedMaster(b, 19200)
+                m.expect("FDL_Status", m.find_slave(), status_ok())
+                m.close()
+                check(b.proc.poll() is None, f"the bridge ended on the ignored {name}")
+                b.stop(signal.SIGTERM)
+                stops = [line for line in b.log_lines() if "stopping on" in line]
+                check(len(stops) == 1 and stops[0].endswith("stopping on SIGTERM"),
+                      f"after an ignored {name}: {stops}")
+            finally:
+                b.kill()
 
 
 def do4_two_clients(pacing, baud=19200, firmware="DO4"):
@@ -837,6 +863,7 @@ CASES = {
     "profibus_rates_default_log": profibus_rates_default_log,
     "dpc31_request_lost_in_data_exchange": dpc31_request_lost_in_data_exchange,
     "answer_dropped_without_client": answer_dropped_without_client,
+    "ignored_signal_stays_ignored": ignored_signal_stays_ignored,
 }
 
 

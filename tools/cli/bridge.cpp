@@ -18,6 +18,7 @@
 #include <optional>
 #include <span>
 #include <system_error>
+#include <utility>
 
 #include "../bridge/engine.hpp"
 #include "../bridge/pacing.hpp"
@@ -387,9 +388,13 @@ class SignalGuard {
     struct sigaction sa {};
     sa.sa_handler = on_signal;
     sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, &old_int_);
-    sigaction(SIGTERM, &sa, &old_term_);
-    sigaction(SIGHUP, &sa, &old_hup_);
+    // A signal ignored at start stays ignored (`nohup dpc31 bridge ... &` survives its terminal's
+    // hangup), as cleanup::install() and `serve` leave it.
+    for (auto [sig, old] : {std::pair{SIGINT, &old_int_}, std::pair{SIGTERM, &old_term_},
+                            std::pair{SIGHUP, &old_hup_}}) {
+      sigaction(sig, nullptr, old);
+      if (old->sa_handler != SIG_IGN) sigaction(sig, &sa, nullptr);
+    }
     ok_ = true;
   }
   ~SignalGuard() {
