@@ -58,9 +58,30 @@ void name_int_arguments(const py::module_& m);
 // arguments that took the same object by how many took it.
 void int_taken(PyObject* v);
 
+// An int of any size as given (an int, or what has __index__: a numpy integer, as the C++
+// integers' casters take), for the arguments whose own range the module names for it (a bus
+// address, a byte value: bus_addr, byte_value), where a C++ integer's caster names its own.
+struct AnyInt {
+  py::int_ value;
+};
+
 }  // namespace dpc31::py_bind
 
 namespace pybind11::detail {
+
+template <>
+class type_caster<dpc31::py_bind::AnyInt> {
+ public:
+  PYBIND11_TYPE_CASTER(dpc31::py_bind::AnyInt, const_name("int"));
+  bool load(handle src, bool /*convert*/) {
+    // A float or a str is no int: pybind11's TypeError, as for a C++ integer.
+    if (PyFloat_Check(src.ptr()) || !PyIndex_Check(src.ptr())) return false;
+    object v = reinterpret_steal<object>(PyNumber_Index(src.ptr()));
+    if (!v) throw error_already_set();
+    value.value = reinterpret_borrow<pybind11::int_>(v);
+    return true;
+  }
+};
 
 // pybind11 takes an int that the argument's integer cannot hold (2**70 for a count, -1 for an
 // unsigned) as a reason to try the next overload, and without one raises a TypeError that names
@@ -246,6 +267,9 @@ class PyChip {
   }
   // Checks that the caller may touch the chip now (mutating: it would change it).
   void enter(bool mutating) const;
+  // Checks that `call` (on_irq_change, Cpu51Board.on_serial, ...) may add or remove an observer
+  // now: not while the chip runs, whose list of observers an observer's own call is in.
+  void enter_observers(std::string_view call) const;
   // A Python callable as an observer: called with the GIL, errors kept for rethrow().
   template <typename... Args, typename Convert>
   std::function<void(Args...)> observer(py::function f, Convert convert);
@@ -260,6 +284,10 @@ class PyChip {
  private:
   std::shared_ptr<RunState> run_ = std::make_shared<RunState>();
 };
+
+// An observer argument `callback` of `call`: a callable, or None (nullopt: remove), else a
+// TypeError naming the argument (pybind11's cast names neither).
+std::optional<py::function> callback_arg(const py::object& f, std::string_view call);
 
 // A Python object kept by C++ code that may copy it without the GIL: the reference is dropped
 // with the GIL held.
@@ -360,12 +388,12 @@ void one_clock_a_bit(std::uint32_t clock_hz, std::uint32_t baud);
 // An address on the chip's bus with `n` bytes from it inside (`n` 0: the address alone), else a
 // ValueError in `dpc31 serve`'s words: the chip would take the upper bits off (and log it per
 // byte).
-std::uint32_t bus_addr(const Chip& chip, std::int64_t a, std::int64_t n = 0);
+std::uint32_t bus_addr(const Chip& chip, const AnyInt& a, std::int64_t n = 0);
 // Python's fault= and fault_char= as a UartFault, else a ValueError; no fault_char: the last
 // character, as a scenario's `corrupt` (DpMaster and Segment place it: vocabulary.hpp).
 UartFault fault_of(const std::optional<std::string>& kind, std::optional<int> char_index);
 // A byte `what` (0..255), else a ValueError.
-std::uint8_t byte_value(std::string_view what, std::int64_t v);
+std::uint8_t byte_value(std::string_view what, const AnyInt& v);
 // The bytes of a frame, else a ValueError naming its first field fdl::encode refuses and that
 // field's range (Frame.encode, and the masters' transact before they send).
 std::vector<std::uint8_t> sendable(const fdl::Frame& f);

@@ -57,6 +57,21 @@ void PyChip::enter(bool mutating) const {
   enter_run(*run_, mutating, "chip", "peek, cycle, probe, ...", "access or step it");
 }
 
+void PyChip::enter_observers(std::string_view call) const {
+  enter_run(*run_, true, "chip", "peek, cycle, probe, ...",
+            fmt::format("add or remove observers ({}): change them after the call returns", call));
+}
+
+std::optional<py::function> callback_arg(const py::object& f, std::string_view call) {
+  if (f.is_none()) return std::nullopt;
+  if (!PyCallable_Check(f.ptr())) {
+    throw py::type_error(
+        fmt::format("{}: callback: a callable or None expected, got {}", call,
+                    py::str(py::type::of(f).attr("__name__")).cast<std::string>()));
+  }
+  return py::reinterpret_borrow<py::function>(f);
+}
+
 void keep_as_context(const py::error_already_set& interrupt, std::exception_ptr pending) {
   if (!pending) return;
   try {
@@ -173,11 +188,30 @@ void one_clock_a_bit(std::uint32_t clock_hz, std::uint32_t baud) {
   }
 }
 
-std::uint32_t bus_addr(const Chip& chip, std::int64_t a, std::int64_t n) {
+namespace {
+
+// A Python int as an int64_t, one beyond that range as its nearer end: every range the module
+// checks lies inside, so 2**63 is refused in the bus's or the byte's words, not int64_t's.
+std::int64_t clamped(const py::int_& v) {
+  int overflow = 0;
+  const long long x = PyLong_AsLongLongAndOverflow(v.ptr(), &overflow);
+  if (overflow != 0) {
+    return overflow > 0 ? std::numeric_limits<std::int64_t>::max()
+                        : std::numeric_limits<std::int64_t>::min();
+  }
+  return x;
+}
+
+std::string text_of(const py::int_& v) { return py::str(py::handle(v)).cast<std::string>(); }
+
+}  // namespace
+
+std::uint32_t bus_addr(const Chip& chip, const AnyInt& addr, std::int64_t n) {
   const std::int64_t limit = std::int64_t{1} << chip.profile().address_bits;
+  const std::int64_t a = clamped(addr.value);
   if (a < 0 || a >= limit) {
     throw py::value_error(
-        range_error_text("addr", std::to_string(a), 0, static_cast<std::uint64_t>(limit - 1)));
+        range_error_text("addr", text_of(addr.value), 0, static_cast<std::uint64_t>(limit - 1)));
   }
   if (n < 0 || n > limit - a) {
     throw py::value_error("block " + std::to_string(a) + "+" + std::to_string(n) +
@@ -189,14 +223,16 @@ std::uint32_t bus_addr(const Chip& chip, std::int64_t a, std::int64_t n) {
 namespace {
 
 // A value of a register's bits (`mask`), in dpc31 serve's words when it is not one.
-std::uint16_t reg_value(std::string_view what, std::int64_t v, std::uint16_t mask) {
-  if (v < 0 || v > mask) throw py::value_error(range_error_text(what, std::to_string(v), 0, mask));
+std::uint16_t reg_value(std::string_view what, const AnyInt& value, std::uint16_t mask) {
+  const std::int64_t v = clamped(value.value);
+  if (v < 0 || v > mask)
+    throw py::value_error(range_error_text(what, text_of(value.value), 0, mask));
   return static_cast<std::uint16_t>(v);
 }
 
 }  // namespace
 
-std::uint8_t byte_value(std::string_view what, std::int64_t v) {
+std::uint8_t byte_value(std::string_view what, const AnyInt& v) {
   return static_cast<std::uint8_t>(reg_value(what, v, 0xFF));
 }
 
@@ -364,12 +400,13 @@ void bind_values(py::module_& m) {
 
 // Observers: on_X(callable) adds one, on_X(None) removes all of that kind (Chip's rule).
 template <typename... Args, typename Setter, typename Convert>
-void observe(PyChip& c, const py::object& f, Setter set, Convert convert) {
-  c.enter(true);
-  if (f.is_none()) {
+void observe(PyChip& c, std::string_view call, const py::object& f, Setter set, Convert convert) {
+  const std::optional<py::function> fn = callback_arg(f, call);
+  c.enter_observers(call);
+  if (!fn) {
     set(std::function<void(Args...)>{});
   } else {
-    set(c.observer<Args...>(f.cast<py::function>(), convert));
+    set(c.observer<Args...>(*fn, convert));
   }
 }
 
@@ -402,14 +439,14 @@ void bind_chip_class(py::module_& m) {
       // the bus: each access takes bus_access_cycles clocks, the chip runs meanwhile
       .def(
           "read",
-          [](PyChip& c, std::int64_t a) {
+          [](PyChip& c, const AnyInt& a) {
             const U32 at = bus_addr(c.chip, a);
             return c.run([&] { return c.chip.read(at); });
           },
           py::arg("addr"))
       .def(
           "write",
-          [](PyChip& c, std::int64_t a, std::int64_t v) {
+          [](PyChip& c, const AnyInt& a, const AnyInt& v) {
             const U32 at = bus_addr(c.chip, a);
             const U8 b = byte_value("value", v);
             c.run([&] { c.chip.write(at, b); });
@@ -417,7 +454,7 @@ void bind_chip_class(py::module_& m) {
           py::arg("addr"), py::arg("value"))
       .def(
           "read_block",
-          [](PyChip& c, std::int64_t a, std::int64_t n) {
+          [](PyChip& c, const AnyInt& a, std::int64_t n) {
             const U32 at = bus_addr(c.chip, a, n);
             std::vector<U8> out(static_cast<std::size_t>(n));
             c.run([&] { c.chip.read_block(at, out); });
@@ -426,7 +463,7 @@ void bind_chip_class(py::module_& m) {
           py::arg("addr"), py::arg("length"))
       .def(
           "write_block",
-          [](PyChip& c, std::int64_t a, const py::object& b) {
+          [](PyChip& c, const AnyInt& a, const py::object& b) {
             const std::vector<U8> v = bytes_like(b, "data");
             const U32 at = bus_addr(c.chip, a, static_cast<std::int64_t>(v.size()));
             c.run([&] { c.chip.write_block(at, v); });
@@ -434,7 +471,7 @@ void bind_chip_class(py::module_& m) {
           py::arg("addr"), py::arg("data"))
       .def(
           "fill",
-          [](PyChip& c, std::int64_t a, std::int64_t v, std::int64_t n) {
+          [](PyChip& c, const AnyInt& a, const AnyInt& v, std::int64_t n) {
             const U32 at = bus_addr(c.chip, a, n);
             const U8 b = byte_value("value", v);
             c.run([&] { c.chip.fill(at, b, static_cast<std::size_t>(n)); });
@@ -442,7 +479,7 @@ void bind_chip_class(py::module_& m) {
           py::arg("addr"), py::arg("value"), py::arg("length"))
       .def(
           "equal",
-          [](PyChip& c, std::int64_t a, std::int64_t b, std::int64_t n) {
+          [](PyChip& c, const AnyInt& a, const AnyInt& b, std::int64_t n) {
             const U32 at = bus_addr(c.chip, a, n);
             const U32 bt = bus_addr(c.chip, b, n);
             return c.run([&] { return c.chip.equal(at, bt, static_cast<std::size_t>(n)); });
@@ -451,14 +488,14 @@ void bind_chip_class(py::module_& m) {
       // the debugger: no time, no side effects
       .def(
           "peek",
-          [](const PyChip& c, std::int64_t a) {
+          [](const PyChip& c, const AnyInt& a) {
             c.enter(false);
             return c.chip.peek(bus_addr(c.chip, a));
           },
           py::arg("addr"))
       .def(
           "poke",
-          [](PyChip& c, std::int64_t a, std::int64_t v) {
+          [](PyChip& c, const AnyInt& a, const AnyInt& v) {
             const U32 at = bus_addr(c.chip, a);
             const U8 b = byte_value("value", v);
             c.enter(true);
@@ -467,7 +504,7 @@ void bind_chip_class(py::module_& m) {
           py::arg("addr"), py::arg("value"))
       .def(
           "peek_block",
-          [](const PyChip& c, std::int64_t a, std::int64_t n) {
+          [](const PyChip& c, const AnyInt& a, std::int64_t n) {
             const U32 at = bus_addr(c.chip, a, n);
             c.enter(false);
             std::vector<U8> out(static_cast<std::size_t>(n));
@@ -485,7 +522,7 @@ void bind_chip_class(py::module_& m) {
           py::arg("name"))
       .def(
           "poke_reg",
-          [](PyChip& c, std::string_view name, std::int64_t v) {
+          [](PyChip& c, std::string_view name, const AnyInt& v) {
             // Checked against the register's bits before any access, in dpc31 serve's words.
             const RegDesc& r = reg_desc(c.chip, name);
             const std::uint16_t value = reg_value("value", v, r.mask());
@@ -578,7 +615,7 @@ void bind_chip_class(py::module_& m) {
           "on_irq_change",
           [](PyChip& c, const py::object& f) {
             observe<U64, bool>(
-                c, f, [&](auto cb) { c.chip.on_irq_change(std::move(cb)); },
+                c, "on_irq_change", f, [&](auto cb) { c.chip.on_irq_change(std::move(cb)); },
                 [](const py::object& fn, U64 cy, bool a) { fn(cy, a); });
           },
           py::arg("callback"),
@@ -590,7 +627,7 @@ void bind_chip_class(py::module_& m) {
           "on_pb3_change",
           [](PyChip& c, const py::object& f) {
             observe<U64, bool>(
-                c, f, [&](auto cb) { c.chip.on_pb3_change(std::move(cb)); },
+                c, "on_pb3_change", f, [&](auto cb) { c.chip.on_pb3_change(std::move(cb)); },
                 [](const py::object& fn, U64 cy, bool h) { fn(cy, h); });
           },
           py::arg("callback"))
@@ -598,7 +635,7 @@ void bind_chip_class(py::module_& m) {
           "on_telegram",
           [](PyChip& c, const py::object& f) {
             observe<const Telegram&>(
-                c, f, [&](auto cb) { c.chip.on_telegram(std::move(cb)); },
+                c, "on_telegram", f, [&](auto cb) { c.chip.on_telegram(std::move(cb)); },
                 [](const py::object& fn, const Telegram& t) { fn(t); });
           },
           py::arg("callback"), "callback(Telegram) for every frame received and answer sent")
@@ -606,7 +643,7 @@ void bind_chip_class(py::module_& m) {
           "on_bus_access",
           [](PyChip& c, const py::object& f) {
             observe<U64, const BusAccess&>(
-                c, f, [&](auto cb) { c.chip.on_bus_access(std::move(cb)); },
+                c, "on_bus_access", f, [&](auto cb) { c.chip.on_bus_access(std::move(cb)); },
                 [](const py::object& fn, U64 cy, const BusAccess& a) {
                   // The C++ side has the byte of a write only (BusAccess::data): None for a read.
                   fn(cy, a.write, a.addr, a.write ? py::object(py::int_(a.data)) : py::none());

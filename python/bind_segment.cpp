@@ -39,9 +39,12 @@ Outputs outputs_of(const py::object& o) {
   return out;
 }
 
+class PySegment;
+
 // A chip station: the chip is the segment's, the user side is kept here. Its DP and watchdog
 // state changes are recorded as the chip makes them (cycle, DP state, WD state).
 struct PyStation {
+  const PySegment* segment = nullptr;  // its owner
   std::size_t index = 0;
   std::string name;
   SlaveConfig slave;
@@ -93,6 +96,24 @@ void check_distinct(const std::vector<outfile::Named>& inputs,
       {{"vcd", vcd.value_or("")}, {"fst", fst.value_or("")}, {"pcapng", pcapng.value_or("")}});
   if (!same.empty()) throw py::value_error(same);
 }
+
+// A look at a segment's running state (its cycle, a master's history, a bus check's counts): an
+// observer of the running thread may, another thread may not.
+void look_at_segment(const RunState& run) {
+  enter_run(run, false, "segment", "history, counters, ...", "run it");
+}
+
+// A bus check as Python holds it: shared with its segment, so one that a second check_bus()
+// replaced keeps the counts it had (it sees no telegram after), never freed memory; its counts
+// are the segment's running state.
+struct PyBusCheck {
+  std::shared_ptr<const BusCheck> check;
+  std::shared_ptr<const RunState> run;
+  [[nodiscard]] const BusCheck& looked() const {
+    look_at_segment(*run);
+    return *check;
+  }
+};
 
 // The segment as Python holds it. The GIL is released while the line runs; a Python observer
 // (on_telegram, on_collision) takes it again, and its exception is raised when the running call
@@ -159,7 +180,7 @@ class PySegment {
   // A master's wait ends here once an observer raised: read by the running thread only.
   [[nodiscard]] bool observer_failed() const { return error_ != nullptr; }
   // A look at the running state: an observer of this thread may, another thread may not.
-  void look() const { enter_run(*run_, false, "segment", "history, counters, ...", "run it"); }
+  void look() const { look_at_segment(*run_); }
   void enter() const {
     if (run_->busy) {
       raise(errors().error, "the segment is running (another thread, or an observer)");
@@ -192,7 +213,7 @@ class PySegment {
   std::vector<std::unique_ptr<PyStation>> stations;
   std::vector<U8> master_addresses;
   std::uint32_t master_slot_bits = 100;  // the largest TSL of the masters added (100: none yet)
-  std::unique_ptr<BusCheck> check;
+  std::shared_ptr<BusCheck> check;       // shared with the BusChecks Python holds
   std::vector<std::string> check_log;
   std::shared_ptr<py::object> telegram_cb;
   std::shared_ptr<py::object> collision_cb;
@@ -253,6 +274,22 @@ struct PySegMaster {
   PySegment& s;
   std::unique_ptr<DpMaster> m;
 };
+
+// Whose running state a property reads.
+const PySegment& segment_of(const PySegment& s) { return s; }
+const PySegment& segment_of(const PyStation& st) { return *st.segment; }
+const PySegment& segment_of(const PySegMaster& pm) { return pm.s; }
+
+// A property of the segment's running state (Segment.cycle, Station.changes, a master's history):
+// refused to another thread while the segment runs (PySegment::look), not read while that thread
+// writes it; an observer of the running thread may read it.
+template <typename T, typename F>
+auto looked(F f) {
+  return [f](const T& x) {
+    segment_of(x).look();
+    return f(x);
+  };
+}
 
 // The slaves of a master: station addresses (their SlaveConfig as the station was added) or
 // SlaveConfigs as they are.
@@ -317,25 +354,26 @@ void bind_line(py::module_& m) {
       .def_readonly("startup", &TokenVisit::startup)
       .def_readonly("gap", &TokenVisit::gap)
       .def_readonly("gap_answered", &TokenVisit::gap_answered);
-  py::class_<BusCheck>(m, "BusCheck", "The bus check of a segment (docs/segment.md).")
+  py::class_<PyBusCheck>(m, "BusCheck", "The bus check of a segment (docs/segment.md).")
       .def(
           "count",
-          [](const BusCheck& c, const std::string& kind) {
+          [](const PyBusCheck& c, const std::string& kind) {
             BusViolation v{};
             if (!parse_bus_violation(kind, v)) throw py::value_error("no violation '" + kind + "'");
-            return c.count(v);
+            return c.looked().count(v);
           },
           py::arg("kind"))
       .def_property_readonly("counts",
-                             [](const BusCheck& c) {
+                             [](const PyBusCheck& c) {
+                               const BusCheck& check = c.looked();
                                py::dict d;
                                for (std::size_t i = 0; i < kBusViolationKinds; ++i) {
                                  const auto v = static_cast<BusViolation>(i);
-                                 d[py::str(std::string(bus_violation_name(v)))] = c.count(v);
+                                 d[py::str(std::string(bus_violation_name(v)))] = check.count(v);
                                }
                                return d;
                              })
-      .def_property_readonly("total", &BusCheck::total);
+      .def_property_readonly("total", [](const PyBusCheck& c) { return c.looked().total(); });
 }
 
 void bind_station(py::module_& m) {
@@ -361,8 +399,9 @@ void bind_station(py::module_& m) {
       .def_property_readonly("address", [](const S& s) { return s.slave.address; })
       .def_readonly("firmware", &S::firmware)
       .def_readonly("responder", &S::responder)
-      .def_readonly("changes", &S::changes,
-                    "(cycle, DpState, WdState) at each change of either, as the chip made it")
+      .def_property_readonly("changes", looked<S>([](const S& s) { return s.changes; }),
+                             "(cycle, DpState, WdState) at each change of either, as the chip "
+                             "made it")
       .def_property_readonly("cycle", read([](Chip& c) { return c.cycle(); }))
       .def_property_readonly("dp_state", read([](Chip& c) { return c.dp_state(); }))
       .def_property_readonly("wd_state", read([](Chip& c) { return c.wd_state(); }))
@@ -375,7 +414,7 @@ void bind_station(py::module_& m) {
       .def("probe", read([](Chip& c) { return c.probe(); }))
       .def(
           "peek",
-          [read](py::object self, std::int64_t a) {
+          [read](py::object self, const AnyInt& a) {
             return read([a](Chip& c) { return c.peek(bus_addr(c, a)); })(std::move(self));
           },
           py::arg("addr"))
@@ -410,8 +449,11 @@ PyStation& add_station(py::object self, U8 address, const std::string& profile,
   PySegment& s = self.cast<PySegment&>();
   s.may_join();
   auto st = std::make_unique<PyStation>();
-  st->name = new_station_name(s.seg, name.value_or("station " + std::to_string(address)));
-  if (st->name.empty()) throw py::value_error(empty_name_for("station " + std::to_string(address)));
+  st->segment = &s;
+  const std::string whose = "station " + std::to_string(address);
+  if (std::string why = station_name_refused(name.value_or(whose), whose); !why.empty())
+    throw py::value_error(why);
+  st->name = new_station_name(s.seg, name.value_or(whose));
   SlaveConfig sc = slave.value_or(SlaveConfig{});
   sc.address = address;
   if (!slave) {
@@ -549,7 +591,8 @@ void bind_segment_class(py::module_& m) {
           "add_sender",
           [](P& s, const std::string& name) {
             s.may_join();
-            if (name.empty()) throw py::value_error(empty_name_for("a sender"));
+            if (std::string why = station_name_refused(name, "a sender"); !why.empty())
+              throw py::value_error(why);
             return s.joined(s.seg.add_sender(new_station_name(s.seg, name)),
                             wave::kDriverWithoutAddress);
           },
@@ -587,7 +630,7 @@ void bind_segment_class(py::module_& m) {
       .def(
           "name", [](const P& s, std::size_t i) { return s.seg.name(i); }, py::arg("station"))
       .def_property_readonly("size", [](const P& s) { return s.seg.size(); })
-      .def_property_readonly("cycle", [](const P& s) { return s.seg.cycle(); })
+      .def_property_readonly("cycle", looked<P>([](const P& s) { return s.seg.cycle(); }))
       .def_property_readonly("bit_cycles", [](const P& s) { return s.seg.bit_cycles(); })
       .def_property_readonly("clock_hz", [](const P& s) { return s.seg.clock_hz(); })
       .def(
@@ -615,7 +658,7 @@ void bind_segment_class(py::module_& m) {
             s.run([&] { s.seg.pulse(sender, start, low); });
           },
           py::arg("sender"), py::arg("start"), py::arg("low_cycles"))
-      .def_property_readonly("collisions", [](const P& s) { return s.seg.collisions(); })
+      .def_property_readonly("collisions", looked<P>([](const P& s) { return s.seg.collisions(); }))
       .def(
           "on_telegram",
           [](P& s, const std::optional<py::function>& f) {
@@ -666,24 +709,41 @@ void bind_segment_class(py::module_& m) {
             // neither late nor unsolicited (a segment scenario shares `s.slot_bits` so).
             BusTiming t{s.seg.bit_cycles(), min_tsdr_bits, slot, tsyn_bits, ttr, addresses};
             s.check_log.clear();
-            s.check = std::make_unique<BusCheck>(t, [&s](const LogRecord& r) {
+            s.check = std::make_shared<BusCheck>(t, [&s](const LogRecord& r) {
               s.check_log.push_back("[cycle " + std::to_string(r.cycle) + "] " + r.text);
             });
-            return s.check.get();
+            return PyBusCheck{s.check, s.run_state()};
           },
           py::kw_only(), py::arg("ttr") = 0, py::arg("slot_bits") = py::none(),
           py::arg("min_tsdr_bits") = 11, py::arg("tsyn_bits") = 33, py::arg("masters") = py::none(),
-          py::return_value_policy::reference_internal,
           "The bus check on every telegram from now on (masters: the masters' addresses, for the "
           "token checks and TTO; default those added, none: no token checks; slot_bits: TSL, "
           "default the largest of the masters added, 100 without one; TTR 0: no token_hold).")
-      .def_property_readonly(
-          "bus_check", [](const P& s) { return s.check.get(); },
-          py::return_value_policy::reference_internal)
+      .def_property_readonly("bus_check",
+                             [](const P& s) -> std::optional<PyBusCheck> {
+                               if (!s.check) return std::nullopt;
+                               return PyBusCheck{s.check, s.run_state()};
+                             })
       .def_property_readonly("bus_log", [](P& s) {
+        s.enter();  // the flush changes the running check's log
         if (s.check) s.check->flush();
         return s.check_log;
       });
+}
+
+// dp_cycle's skip=: stations of the segment, refused as a segment scenario's `cycle skip=` refuses
+// an address (its range and its words).
+std::vector<U8> skipped(const PySegment& s, const std::vector<py::int_>& skip) {
+  constexpr ValueRange kSkipped{"station", 0, 126};
+  std::vector<U8> out;
+  for (const py::int_& v : skip) {
+    const U8 a = in_range<U8>(kSkipped, v);
+    if (std::none_of(s.stations.begin(), s.stations.end(),
+                     [a](const auto& st) { return st->slave.address == a; }))
+      throw py::value_error(fmt::format("no station {}", a));
+    out.push_back(a);
+  }
+  return out;
 }
 
 // data_exchange's outputs.
@@ -702,13 +762,12 @@ void bind_seg_master(py::module_& m) {
   py::class_<M>(m, "SegmentMaster", "The built-in DP master on a segment (DpMaster).")
       .def_property_readonly("address", [](const M& pm) { return pm.m->address(); })
       .def_property_readonly("slave_count", [](const M& pm) { return pm.m->slave_count(); })
-      .def_property_readonly("selected", [](const M& pm) { return pm.m->selected(); })
-      .def_property_readonly("slave",
-                             [](const M& pm) {
+      .def_property_readonly("selected", looked<M>([](const M& pm) { return pm.m->selected(); }))
+      .def_property_readonly("slave", looked<M>([](const M& pm) {
                                return MasterSlave{
                                    pm.m->slave(), "SegmentMaster.slave",
                                    "Segment.add_station(..., slave=SlaveConfig(...))"};
-                             })
+                             }))
       .def(
           "select",
           [](M& pm, std::size_t i) {
@@ -740,12 +799,15 @@ void bind_seg_master(py::module_& m) {
           },
           py::arg("tries") = kStartupTries,
           "The start-up under the token: the next use_token visits spend their cycles on it.")
-      .def_property_readonly("starting_up", [](const M& pm) { return pm.m->starting_up(); })
-      .def_property_readonly("started_up", [](const M& pm) { return pm.m->started_up(); })
+      .def_property_readonly("starting_up",
+                             looked<M>([](const M& pm) { return pm.m->starting_up(); }))
+      .def_property_readonly("started_up",
+                             looked<M>([](const M& pm) { return pm.m->started_up(); }))
       .def(
           "dp_cycle",
-          [](M& pm, const py::object& outputs_arg, const std::vector<U8>& skip) {
+          [](M& pm, const py::object& outputs_arg, const std::vector<py::int_>& skip_arg) {
             const Outputs outputs = outputs_of(outputs_arg);
+            const std::vector<U8> skip = skipped(pm.s, skip_arg);
             return pm.act([&] {
               DpMaster& dm = *pm.m;
               if (skip.empty()) return dm.dp_cycle(outputs);
@@ -761,7 +823,7 @@ void bind_seg_master(py::module_& m) {
               return out;
             });
           },
-          py::arg("outputs") = py::none(), py::arg("skip") = std::vector<U8>{},
+          py::arg("outputs") = py::none(), py::arg("skip") = std::vector<py::int_>{},
           "Data_Exchange with every slave in order (outputs[i] to slave i; zeros where none), "
           "but the station addresses in `skip`.")
       .def("data_exchange", &bytes_service<&DpMaster::data_exchange, &outputs_arg>,
@@ -782,7 +844,8 @@ void bind_seg_master(py::module_& m) {
           "wait_token",
           [](M& pm, U64 timeout) { return pm.act([&] { return pm.m->wait_token(timeout); }); },
           py::arg("timeout"))
-      .def_property_readonly("token_rotation", [](const M& pm) { return pm.m->token_rotation(); })
+      .def_property_readonly("token_rotation",
+                             looked<M>([](const M& pm) { return pm.m->token_rotation(); }))
       .def("fdl_status", [](M& pm) { return pm.act([&] { return pm.m->fdl_status(); }); })
       .def("slave_diag", [](M& pm) { return pm.act([&] { return pm.m->slave_diag(); }); })
       .def(
@@ -807,25 +870,16 @@ void bind_seg_master(py::module_& m) {
                 pm, cycles, [&] { return pm.s.seg.cycle(); }, [] { return false; });
           },
           py::arg("cycles"), "Time passes with a silent line from this master.")
-      .def_property_readonly("counters",
-                             [](const M& pm) {
-                               pm.s.look();  // not read while another thread runs it
-                               return pm.m->counters();
-                             })
-      .def_property_readonly("history",
-                             [](const M& pm) {
-                               pm.s.look();  // not read while another thread runs it
-                               return pm.m->history();
-                             })
+      .def_property_readonly("counters", looked<M>([](const M& pm) { return pm.m->counters(); }))
+      .def_property_readonly("history", looked<M>([](const M& pm) { return pm.m->history(); }))
       .def_property_readonly(
-          "locks",
-          [](const M& pm) {
-            pm.s.look();
-            return pm.m->locks();
-          },
+          "locks", looked<M>([](const M& pm) { return pm.m->locks(); }),
           "{slave address: master address}: the slaves a start-up found locked by another master "
           "(Slave_Diag's Master_Add), which it left alone")
-      .def("clear_history", [](M& pm) { pm.m->clear_history(); });
+      .def("clear_history", [](M& pm) {
+        pm.s.enter();
+        pm.m->clear_history();
+      });
 }
 
 // A segment scenario (docs/scenario-format.md, "Segments") and what its run gave.
@@ -867,6 +921,13 @@ void bind_segment_scenario(py::module_& m) {
           [fail](std::string_view text, const std::string& file) {
             SegmentScenario s;
             ScenarioError err;
+            // A single chip's text: what load says of its file (line 0, the text as a whole);
+            // a text that is neither, the single chip's error, as load gives.
+            if (!is_segment_scenario(text)) {
+              Scenario single;
+              if (!parse_scenario(text, path_arg(file, "file"), single, err)) fail(err);
+              fail(ScenarioError{file, 0, "not a segment scenario (use Scenario.parse)"});
+            }
             if (!parse_segment_scenario(text, path_arg(file, "file"), s, err)) fail(err);
             return s;
           },

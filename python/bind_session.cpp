@@ -82,9 +82,9 @@ auto bytes_field(std::vector<U8> SlaveConfig::*member, const char* what, bool no
 
 void bind_frames(py::module_& m) {
   py::class_<fdl::Frame>(m, "Frame", "An FDL telegram (include/dpc31/fdl.hpp).")
-      .def(py::init([](std::int64_t da, std::int64_t sa, std::int64_t fc, const py::bytes& du,
-                       std::optional<std::int64_t> dsap, std::optional<std::int64_t> ssap) {
-             const auto sap = [](const char* what, const std::optional<std::int64_t>& v) {
+      .def(py::init([](const AnyInt& da, const AnyInt& sa, const AnyInt& fc, const py::bytes& du,
+                       const std::optional<AnyInt>& dsap, const std::optional<AnyInt>& ssap) {
+             const auto sap = [](const char* what, const std::optional<AnyInt>& v) {
                return v ? std::optional<U8>(byte_value(what, *v)) : std::nullopt;
              };
              return fdl::make_frame(byte_value("da", da), byte_value("sa", sa),
@@ -383,27 +383,34 @@ void bind_board(py::module_& m) {
           py::arg("addr"), "A byte of the board's RAM (XDATA outside the chip's window).")
       .def(
           "on_ram_write",
-          [](PyBoard& b, py::function f) {
+          [](PyBoard& b, const py::object& f) {
+            const std::optional<py::function> fn = callback_arg(f, "on_ram_write");
+            b.chip.enter_observers("on_ram_write");
+            b.board->on_ram_write = nullptr;
+            if (!fn) return;
             b.board->on_ram_write = b.chip.observer<std::uint16_t, std::uint8_t, U64>(
-                std::move(f),
-                [](py::object& fn, std::uint16_t a, std::uint8_t v, U64 c) { fn(a, v, c); });
+                *fn, [](py::object& cb, std::uint16_t a, std::uint8_t v, U64 c) { cb(a, v, c); });
           },
           py::arg("callback"),
           "callback(addr, value, cycle) for every write to the board's RAM (an output latch), "
-          "with the chip cycle its strobe ends.")
+          "with the chip cycle its strobe ends; None removes it.")
       .def(
           "on_serial",
-          [](PyBoard& b, py::function f) {
-            const auto serial = b.chip.observer<std::uint8_t, U64>(
-                std::move(f), [](py::object& fn, std::uint8_t d, U64 c) { fn(d, c); });
+          [](PyBoard& b, const py::object& f) {
+            const std::optional<py::function> fn = callback_arg(f, "on_serial");
+            b.chip.enter_observers("on_serial");
             Cpu51Board& board = *b.board;
+            board.cpu().on_serial_tx = nullptr;
+            if (!fn) return;
+            const auto serial = b.chip.observer<std::uint8_t, U64>(
+                *fn, [](py::object& cb, std::uint8_t d, U64 c) { cb(d, c); });
             board.cpu().on_serial_tx = [serial, &board](std::uint8_t d, bool, U64 machine_cycle) {
               serial(d, board.chip_cycle_of(machine_cycle * mcs51::clocks_per_cycle));
             };
           },
           py::arg("callback"),
           "callback(data, cycle) for every character the CPU's serial port sends (SBUF), with "
-          "the chip cycle its TI is set (docs/cpu.md, \"Serial port\").")
+          "the chip cycle its TI is set (docs/cpu.md, \"Serial port\"); None removes it.")
       .def(
           "chip_cycle_of",
           [](const PyBoard& b, U64 clock) { return b.board->chip_cycle_of(clock); },

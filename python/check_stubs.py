@@ -1,7 +1,8 @@
 """Python.stubs: the type stubs (dpc31/__init__.pyi) name exactly what the native module binds.
 
 Every class and function of the stubs exists in dpc31._dpc31 (or in dpc31 itself) and has every
-member the stubs give it; every public name of the module and of its classes is in the stubs.
+member the stubs give it; every public name of the module and of its classes is in the stubs;
+every method's parameters and their defaults are the binding's (`...`: any default).
 Usage: python3 check_stubs.py STUBS (with the built package on PYTHONPATH)."""
 
 import ast
@@ -32,6 +33,81 @@ def stub_members(node):
             members.update(t.id for t in item.targets)
     return members
 
+
+def stub_params(fn):
+    """(name, default) of a stub function's parameters after self; `*name` keyword-only; a
+    default `...` stands for any."""
+    a = fn.args
+    plain = a.posonlyargs + a.args
+    defaults = [None] * (len(plain) - len(a.defaults)) + [ast.unparse(d) for d in a.defaults]
+    out = list(zip([x.arg for x in plain], defaults))
+    out += [("*" + x.arg, None if d is None else ast.unparse(d))
+            for x, d in zip(a.kwonlyargs, a.kw_defaults)]
+    return [p for p in out if p[0] not in ("self", "cls")]
+
+
+def split_top(text):
+    """`text` split at the commas outside brackets."""
+    parts, depth, cur = [], 0, ""
+    for ch in text:
+        depth += ch in "([{"
+        depth -= ch in ")]}"
+        if ch == "," and depth == 0:
+            parts.append(cur.strip())
+            cur = ""
+        else:
+            cur += ch
+    return parts + [cur.strip()] if cur.strip() else parts
+
+
+def native_params(obj):
+    """(name, default) of each pybind11 signature in obj's docstring (one per overload)."""
+    sigs = []
+    for line in (getattr(obj, "__doc__", None) or "").splitlines():
+        line = line.strip()
+        head = line.split(". ", 1)[1] if line[:1].isdigit() and ". " in line else line
+        if "(" not in head or ") -> " not in head:
+            continue
+        inner = head[head.index("(") + 1:head.rindex(") -> ")]
+        params, kw_only = [], False
+        for p in split_top(inner):
+            if p == "*":
+                kw_only = True
+                continue
+            name, _, default = p.partition("=")
+            name = name.split(":")[0].strip()
+            if name not in ("self", "cls"):
+                params.append(("*" + name if kw_only else name, default.strip() or None))
+        sigs.append(params)
+    return sigs
+
+
+def compare_signature(qual, fn, native):
+    """The stub's parameters and defaults are one of the native signatures' (Python.stubs let
+    `check_bus(slot_bits: int = 100)` stand where the binding's default is None)."""
+    sigs = native_params(native)
+    stub = stub_params(fn)
+    if not sigs:
+        return
+    for sig in sigs:
+        if any(n.startswith("**") for n, _ in sig):
+            return  # the binding takes keywords of its own (SlaveConfig(**kwargs))
+        if [n for n, _ in sig] == [n for n, _ in stub] and all(
+                s == "..." or s == n for (_, s), (_, n) in zip(stub, sig)):
+            return
+    problems.append(f"{qual}{[f'{n}={d}' if d else n for n, d in stub]}: the module binds "
+                    f"{[[f'{n}={d}' if d else n for n, d in sig] for sig in sigs]}")
+
+
+for node in stubs.body:
+    if isinstance(node, ast.ClassDef) and hasattr(_dpc31, node.name):
+        for item in node.body:
+            if isinstance(item, ast.FunctionDef) and not item.decorator_list and hasattr(
+                    getattr(_dpc31, node.name), item.name):
+                compare_signature(f"{node.name}.{item.name}", item,
+                                  getattr(getattr(_dpc31, node.name), item.name))
+    elif isinstance(node, ast.FunctionDef) and hasattr(dpc31, node.name):
+        compare_signature(node.name, node, getattr(dpc31, node.name))
 
 for node in stubs.body:
     if isinstance(node, ast.ClassDef):

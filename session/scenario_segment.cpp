@@ -67,7 +67,9 @@ class Parser {
     } else if (c == "master") {
       master();
     } else if (c == "sender") {
-      s_.senders.emplace_back(new_station_name(std::string(positional(0, "a sender's name"))));
+      const std::string_view name = positional(0, "a sender's name");
+      if (std::string why = station_name_refused(name, "a sender"); !why.empty()) fail(why);
+      s_.senders.emplace_back(new_station_name(std::string(name)));
     } else {
       step(line, c);
     }
@@ -172,7 +174,7 @@ class Parser {
                        st.slave.address));
     st.name = fmt::format("station {}", st.slave.address);
     if (auto v = take("name")) {
-      if (v->empty()) fail(empty_name_for(st.name));
+      if (std::string why = station_name_refused(*v, st.name); !why.empty()) fail(why);
       st.name = std::string(*v);
     }
     if (auto v = take("profile")) {

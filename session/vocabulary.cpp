@@ -208,8 +208,13 @@ std::string second_station_named(std::string_view name) {
   return fmt::format("a second station named '{}'", name);
 }
 
-std::string empty_name_for(std::string_view whose) {
-  return fmt::format("empty name for {}", whose);
+std::string station_name_refused(std::string_view name, std::string_view whose) {
+  if (name.empty()) return fmt::format("empty name for {}", whose);
+  if (name.size() > kMaxStationName) {
+    return fmt::format("a name of {} bytes for {}: at most {}", name.size(), whose,
+                       kMaxStationName);
+  }
+  return {};
 }
 
 std::string substitute_is_for_dpc31(std::string_view option) {

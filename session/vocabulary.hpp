@@ -3,6 +3,7 @@
 // of a scenario, the trace files, the bridge's log and the serve protocol all use these.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -159,8 +160,13 @@ inline constexpr ValueRange kC31Code{"code", 0x08A0, 0x1FFF};
 // master's sender is "master ADDR"; a name taken is "a second station named 'NAME'".
 [[nodiscard]] std::string master_station_name(std::uint8_t address);
 [[nodiscard]] std::string second_station_named(std::string_view name);
-// "empty name for WHOSE" ("station 5", "a sender"): a name is a scope and names the station.
-[[nodiscard]] std::string empty_name_for(std::string_view whose);
+// A station's name is at most this many bytes: it is the station's scope in the waveforms (beside
+// "stationADDR_") and names its --record file (FILE.stationADDR_NAME.trace: a file name is at most
+// 255 bytes on Linux), its log lines and its packets' comments in a capture.
+inline constexpr std::size_t kMaxStationName = 64;
+// "" for a name WHOSE ("station 5", "a sender") may have, else why not: "empty name for WHOSE", "a
+// name of 65 bytes for WHOSE: at most 64".
+[[nodiscard]] std::string station_name_refused(std::string_view name, std::string_view whose);
 // The options of the DPC31 alone, refused on the other profiles (No silent options), `option` as
 // the door writes it (a scenario's "user substitute=", Python's "substitute="): "OPTION is for
 // profile dpc31: only the DPC31 has ...".

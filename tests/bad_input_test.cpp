@@ -303,6 +303,10 @@ TEST_F(BadInput, RunOptionValues) {
   expect_bad(dpc31("run " + scn + " --la-vcd old.vcd --timescale 10s"),
              "dpc31 run: --timescale '10s': use 1, 10 or 100 fs or ps, or 1 or 10 ns",
              "timescale above 1 s");
+  // An empty unit is a bad unit as any other (it was taken for "not given": the default, silently).
+  expect_bad(dpc31("run " + scn + " --vcd old.vcd --timescale ''"),
+             "dpc31 run: --timescale '': use 1, 10 or 100 fs or ps, or 1 or 10 ns",
+             "empty timescale");
   // A waveform's option without a waveform acts on nothing: refused whatever its value ("No
   // silent options"; a good --timescale, --signals, --from and --to were ignored), for one chip
   // and for a segment.
@@ -311,6 +315,7 @@ TEST_F(BadInput, RunOptionValues) {
     for (const auto& [args, line] : std::vector<std::pair<std::string, std::string>>{
              {"--timescale ps", "--timescale ps" + any},
              {"--timescale 1ns", "--timescale 1ns" + any},
+             {"--timescale ''", "--timescale ''" + any},
              {"--signals nomatch", "--signals nomatch" + any},
              {"--signals 'pins.*,state.*'", "--signals pins.*,state.*" + any},
              {"--from 10 --to 20", "--from 10" + any},
@@ -514,6 +519,11 @@ TEST_F(BadInput, RegsAndDemoOptions) {
   r = dpc31("demo --out-dir fresh --timescale 1min");
   expect_bad(r, "dpc31 demo: --timescale '1min': use 1, 10 or 100 fs or ps, or 1 or 10 ns",
              "demo timescale");
+  EXPECT_EQ(r.out, "");
+  EXPECT_FALSE(fs::exists(path("fresh")));
+  r = dpc31("demo --out-dir fresh --timescale ''");
+  expect_bad(r, "dpc31 demo: --timescale '': use 1, 10 or 100 fs or ps, or 1 or 10 ns",
+             "demo empty timescale");
   EXPECT_EQ(r.out, "");
   EXPECT_FALSE(fs::exists(path("fresh")));
   r = dpc31("demo --out-dir plain/sub");

@@ -186,6 +186,36 @@ TEST_F(BadInput, FullFileSystemIsExit2AndKeepsTheOldFile) {
   EXPECT_EQ(left, (std::vector<std::string>{"fill", "old.fst", "old.json", "old.vcd"}));
 }
 
+// Several outputs of one run are each whole or absent, written in a fixed order when the run is
+// over: --record, the waveforms (--vcd, --fst, --la-vcd, each with its --gtkw), --pcap, --json
+// (README "Command line", docs/bad-input.md "Output files"). A write that fails there is exit 2
+// with its one line; the outputs before it are in place and whole, the failed one and those after
+// it absent (the outside audit of s31: README said "no output file written" of every exit 2).
+TEST_F(BadInput, SeveralOutputsAreEachWholeOrAbsentInTheirOrder) {
+  const Outcome whole = dpc31("run " + kScn + " --quiet --vcd whole.vcd --record whole.trace");
+  ASSERT_EQ(whole.rc, 0) << whole.err;
+  const std::string vcd = slurp(path("whole.vcd"));
+  const std::string trace = slurp(path("whole.trace"));
+  fs::remove(path("whole.vcd"));
+  fs::remove(path("whole.trace"));
+  // The waveform, then the capture that fails: the waveform is kept whole, the JSON never made.
+  Outcome r = dpc31("run " + kScn + " --quiet --vcd x.vcd --pcap /dev/full --json x.json");
+  expect_bad_prefix(r, "dpc31 run: /dev/full: cannot write", "pcap after the vcd");
+  EXPECT_EQ(listing(), std::vector<std::string>{"x.vcd"});
+  EXPECT_EQ(slurp(path("x.vcd")), vcd);
+  fs::remove(path("x.vcd"));
+  // The waveform fails: the trace before it is kept, the capture after it is not written.
+  r = dpc31("run " + kScn + " --quiet --record x.trace --vcd /dev/full --pcap x.pcapng");
+  expect_bad_prefix(r, "dpc31 run: /dev/full: cannot write", "vcd after the trace");
+  EXPECT_EQ(listing(), std::vector<std::string>{"x.trace"});
+  EXPECT_EQ(slurp(path("x.trace")), trace);
+  fs::remove(path("x.trace"));
+  // Bad input found before the run writes nothing at all.
+  r = dpc31("run " + kScn + " --quiet --record x.trace --vcd x.vcd --timescale 3ns");
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_EQ(listing(), std::vector<std::string>{});
+}
+
 // The standard output is an output too: a write that fails is exit 2 with one line, whatever
 // the command found (finding 6; wavediff found differences, exit 1 before the write). The bridge
 // writes its log there and stops on the failed write with its own line, the only one (before,

@@ -15,7 +15,9 @@
 #include <iterator>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "dp_master.hpp"
@@ -467,6 +469,63 @@ TEST(Capture, AttachRecordsEveryTelegram) {
   s.master->data_exchange({0x05, 0x06, 0x07, 0x08});
   EXPECT_EQ(w.packets(), s.seen.size() - 2);
   EXPECT_EQ(dir.tree(), std::vector<std::string>{"startup.pcapng"});
+}
+
+// A text option's length is 16 bits (draft-ietf-opsawg-pcapng §3.5: Option Length), so 65535 bytes
+// is the longest: written, and tshark reads it back whole. One byte more used to be written with
+// its length wrapped (65536 -> 0), add() and close() reporting success, and tshark refused the
+// whole file ("Not enough data to handle option of length ..."). Now it is refused, never cut: the
+// first error is kept (docs/capture.md, "File format"), close() fails, the target stays as it was;
+// a header option too long (if_name, shb_userappl) fails open() before any file is made.
+TEST(Capture, AnOptionLongerThanSixteenBitsIsRefusedNeverWrittenCorrupt) {
+  ASSERT_TRUE(have_tshark()) << kNoTshark;
+  TempDir dir;
+  const std::string path = dir.file("long.pcapng");
+  {
+    PcapngWriter w;
+    ASSERT_TRUE(w.open(path)) << w.error();
+    ASSERT_TRUE(w.add(Packet{0, Direction::inbound, kFdlStatusReq, std::string(65535, 'c')}));
+    ASSERT_TRUE(w.add(Packet{1000, Direction::outbound, kFdlStatusAns, "x"}));
+    ASSERT_TRUE(w.close()) << w.error();
+  }
+  std::string err;
+  const std::string fields =
+      tshark(dir, "-r " + quote(path) + " -T fields -e frame.number -e frame.comment", &err);
+  EXPECT_EQ(err.find("corrupt"), std::string::npos) << err;
+  EXPECT_EQ(fields, "1\t" + std::string(65535, 'c') + "\n2\tx\n");
+
+  TempDir out;  // tshark's home is in `dir`
+  const std::string target = out.file("long.pcapng");
+  { std::ofstream(target) << "old"; }
+  PcapngWriter w;
+  ASSERT_TRUE(w.open(target)) << w.error();
+  ASSERT_TRUE(w.add(Packet{0, Direction::inbound, kFdlStatusReq, "first"}));
+  EXPECT_FALSE(w.add(Packet{1000, Direction::outbound, kFdlStatusAns, std::string(65536, 'c')}));
+  EXPECT_EQ(w.error(), "packet 2: opt_comment of 65536 bytes: a pcapng option holds at most 65535");
+  EXPECT_FALSE(w.add(Packet{2000, Direction::inbound, kFdlStatusReq, "after"}));
+  EXPECT_EQ(w.packets(), 1u);
+  EXPECT_FALSE(w.close());
+  EXPECT_EQ(w.error(), "packet 2: opt_comment of 65536 bytes: a pcapng option holds at most 65535");
+  EXPECT_EQ(read_file(target), (Bytes{'o', 'l', 'd'}));
+  EXPECT_EQ(out.tree(), std::vector<std::string>{"long.pcapng"});
+
+  for (const auto& [opt, name] :
+       {std::pair{WriterOptions{"dpc31emu", std::string(70000, 'i'), true}, "if_name"},
+        std::pair{WriterOptions{std::string(65536, 'a'), "dpc31", true}, "shb_userappl"}}) {
+    PcapngWriter bad(opt);
+    EXPECT_FALSE(bad.open(target));
+    EXPECT_FALSE(bad.is_open());
+    EXPECT_EQ(bad.error(), target + ": " + name + " of " + (name[0] == 'i' ? "70000" : "65536") +
+                               " bytes: a pcapng option holds at most 65535");
+    EXPECT_FALSE(bad.add(Packet{0, Direction::inbound, kFdlStatusReq, ""}));
+    EXPECT_FALSE(bad.close());
+    EXPECT_EQ(read_file(target), (Bytes{'o', 'l', 'd'}));
+    EXPECT_EQ(out.tree(), std::vector<std::string>{"long.pcapng"});
+  }
+  // The pure encoder refuses it too, naming the option.
+  EXPECT_THROW((void)enhanced_packet_block(
+                   Packet{0, Direction::unknown, kFdlStatusReq, std::string(65536, 'c')}),
+               std::length_error);
 }
 
 // A late answer (docs/capture.md "Order"): the slave's MinTSDR 150 bit times is above the master's

@@ -426,6 +426,42 @@ TEST(SegmentOutputs, ThePcapPairsAsTheBusCheckDoes) {
   EXPECT_EQ(got, want);
 }
 
+// What the capture and the bus check do with a telegram that does not decode inside a request's
+// window (docs/capture.md, a segment's --pcap; docs/segment.md "Bus checks"; the outside audit of
+// s31): the bus check takes it as the request's answer (`bad_frame`, and `early_answer` when it
+// starts before min TSDR), the capture pairs it with nothing. two_masters.scn's collision: the
+// rogue's request 10 07 02 49 52 16 to station 7 (6 characters, 6 x 352 = 2112 cycles at 1.5 Mbaud,
+// 48 MHz) from S to S + 2112, and the SPC3's remainder F1, one character (352 cycles), 2 bit times
+// (64 cycles) after it.
+TEST(SegmentOutputs, TheCaptureLeavesACollisionsRemainsUnpaired) {
+  const std::string pcap = tmp("remains.pcapng");
+  const auto r = sh(fmt::format("cd {} && {} run traces/segment/two_masters.scn --pcap {}",
+                                SOURCE_DIR, DPC31_CLI, pcap));
+  ASSERT_EQ(r.rc, 0) << r.out;
+  const std::string request = "] rogue: 10 07 02 49 52 16\n";
+  const std::size_t at = r.out.find(request);
+  ASSERT_NE(at, std::string::npos) << r.out;
+  const std::uint64_t s = std::stoull(r.out.substr(r.out.rfind("[cycle", at) + 6));
+  const std::uint64_t f = s + 6 * kChar + 2 * kT;
+  const std::string cycle = fmt::format("[cycle {:>10}] ", f);
+  EXPECT_NE(r.out.find(cycle + "bus: bad_frame: 1 bytes from cycle " + std::to_string(f) +
+                       " do not decode (bad_sd)\n" + cycle +
+                       "bus: early_answer: answer to station 7 2 bit times after the request (min "
+                       "TSDR 11)\n" +
+                       cycle + "spc3: F1\n"),
+            std::string::npos)
+      << r.out;
+  const auto t = testutil::run_command(fmt::format(
+      "env HOME={0} XDG_CONFIG_HOME={0} tshark -n -X lua_script:{1}/lib/capture/profibus_dl.lua "
+      "-r {2} -T fields -e frame.comment 2>/dev/null",
+      ::testing::TempDir(), SOURCE_DIR, pcap));
+  ASSERT_EQ(t.rc, 0) << t.out;
+  EXPECT_NE(t.out.find(fmt::format("\ncycles {}-{}, rogue\ncycles {}-{}, spc3\n", s, s + 6 * kChar,
+                                   f, f + kChar)),
+            std::string::npos)
+      << t.out;
+}
+
 // A `# from NAME` note follows the rx line of the telegram it names (docs/trace-format.md), also
 // when the segment reports the telegram only after many steps that move no time (expects): the
 // review's case of 70 expects after the rogue's telegram put its note after the next step's
@@ -503,6 +539,43 @@ TEST(SegmentOutputs, BadInputIsOneLineAndNoFile) {
   EXPECT_EQ(r.rc, 2) << r.out;
   EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;
   EXPECT_EQ(slurp(scn), slurp(kScenario));
+}
+
+// A station's name is at most 64 bytes (docs/scenario-format.md, vocabulary.hpp kMaxStationName).
+// The longest is every output's: the VCD and FST scope `station5_NAME` compare the same in
+// wavediff, tshark reads the capture whose comments carry it, --record writes
+// FILE.station5_NAME.trace. One byte more is refused at its line, exit 2, nothing written (the
+// audit: 17 000 bytes made a VCD wavediff refuses, 66 000 a pcapng tshark calls corrupt).
+TEST(SegmentOutputs, AStationsNameIsAtMost64BytesAndEveryOutputTakesIt) {
+  const std::string body = "\nstartup\n";  // the default master 2 brings station 5 up
+  const std::string name(64, 'n');
+  const std::string file = tmp("name64.scn");
+  { std::ofstream(file) << "segment\nstation 5 profile=spc3 name=" << name << body; }
+  const std::string vcd = tmp("n64.vcd"), fst = tmp("n64.fst"), pcap = tmp("n64.pcapng");
+  auto r = sh(fmt::format("{} run --quiet {} --vcd {} --fst {} --pcap {} --record {}", DPC31_CLI,
+                          file, vcd, fst, pcap, tmp("n64.trace")));
+  ASSERT_EQ(r.rc, 0) << r.out;
+  EXPECT_NE(slurp(vcd).find("$scope module station5_" + name + " $end"), std::string::npos);
+  EXPECT_TRUE(fs::exists(tmp("n64.station5_" + name + ".trace")));
+  r = sh(fmt::format("{} wavediff {} {}", DPC31_CLI, vcd, fst));
+  EXPECT_EQ(r.rc, 0) << r.out;
+  // The master's requests and the station's answers, each named (docs/capture.md).
+  r = testutil::run_command(fmt::format(
+      "env HOME={0} XDG_CONFIG_HOME={0} tshark -n -X lua_script:{1}/lib/capture/profibus_dl.lua "
+      "-r {2} -T fields -e frame.comment 2>&1",
+      ::testing::TempDir(), SOURCE_DIR, pcap));
+  ASSERT_EQ(r.rc, 0) << r.out;
+  EXPECT_NE(r.out.find(", master 2, answered by " + name + "\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(", " + name + ", answer to master 2\n"), std::string::npos) << r.out;
+
+  const std::string file65 = tmp("name65.scn");
+  { std::ofstream(file65) << "segment\nstation 5 profile=spc3 name=" << name << "n" << body; }
+  const std::string vcd65 = tmp("n65.vcd"), pcap65 = tmp("n65.pcapng");
+  r = sh(fmt::format("{} run --quiet {} --vcd {} --pcap {}", DPC31_CLI, file65, vcd65, pcap65));
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_EQ(r.out, fmt::format("{}:2: a name of 65 bytes for station 5: at most 64\n", file65));
+  EXPECT_FALSE(fs::exists(vcd65));
+  EXPECT_FALSE(fs::exists(pcap65));
 }
 
 // The outputs finished and destroyed, the segment runs on (dpc31.Segment's close()): the

@@ -240,7 +240,7 @@ TEST(SegmentScenario, UserWdValueSetsTheDataExchangeThatIsNotAnswered) {
 
 // Bad input in a segment scenario: one line, FILE:LINE, nothing run (docs/bad-input.md).
 TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
-  const std::pair<const char*, const char*> cases[] = {
+  const std::pair<std::string, std::string> cases[] = {
       {"segment\nstation 5\nbogus 3\n", "f.scn:3: unknown command 'bogus'"},
       {"station 5\n", "f.scn:1: a segment scenario begins with 'segment'"},
       {"segment\nstation 5 firmware=DO4\nstation 6 firmware=NOPE\n",
@@ -320,6 +320,12 @@ TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
       {"segment\nsender a\nsender a\n", "f.scn:3: a second station named 'a'"},
       {"segment\nstation 5 name=a\nsender a\n", "f.scn:3: a second station named 'a'"},
       {"segment\nstation 5 name=\n", "f.scn:2: empty name for station 5"},
+      // At most 64 bytes (vocabulary.hpp kMaxStationName): a name is a waveform scope, a --record
+      // file's name, in every capture comment (the audit's 66 000 made a corrupt pcapng).
+      {"segment\nstation 5 name=" + std::string(65, 's') + "\n",
+       "f.scn:2: a name of 65 bytes for station 5: at most 64"},
+      {"segment\nsender " + std::string(66000, 'r') + "\n",
+       "f.scn:2: a name of 66000 bytes for a sender: at most 64"},
       {"segment\nstation 5\nmaster 2\nmaster 2\n", "f.scn:4: a second station named 'master 2'"},
       {"segment\nstation 5\nmaster 5\n", "f.scn:3: master 5 at the address of station 5"},
       {"segment\nmaster 5\nstation 5\n", "f.scn:3: station 5 at the address of master 5"},

@@ -62,3 +62,42 @@ def cli() -> str:
 @pytest.fixture
 def traces() -> pathlib.Path:
     return built_path("DPC31_TRACES")
+
+
+def _refused_while(run, looks, hold):
+    """The looks (name: callable) that this thread was refused while `run` ran in another, as
+    {name: message}. `hold(callback)` adds an observer of that run (`hold(None)` removes it): its
+    first call holds the run there, the GIL released, while this thread looks, so every look falls
+    inside the run, whatever the scheduler does."""
+    import threading
+
+    import dpc31
+
+    inside, looked = threading.Event(), threading.Event()
+
+    def observer(*_):
+        if not inside.is_set():
+            inside.set()
+            looked.wait()
+
+    hold(observer)
+    runner = threading.Thread(target=run)
+    runner.start()
+    refused = {}
+    try:
+        assert inside.wait(60), "the run called no observer"
+        for name, look in looks.items():
+            try:
+                look()
+            except dpc31.Error as e:
+                refused[name] = str(e)
+    finally:
+        looked.set()
+        runner.join()
+    hold(None)
+    return refused
+
+
+@pytest.fixture
+def refused_while():
+    return _refused_while

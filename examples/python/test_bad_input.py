@@ -722,6 +722,12 @@ def test_settings_a_scenario_refuses_are_refused_in_its_words():
         seg.add_station(6, "spc3", name="")
     with pytest.raises(ValueError, match=r"^empty name for a sender$"):
         seg.add_sender("")
+    # At most 64 bytes: a name is a waveform scope, a --record file's name, in capture comments.
+    with pytest.raises(ValueError, match=r"^a name of 65 bytes for station 6: at most 64$"):
+        seg.add_station(6, "spc3", name="s" * 65)
+    with pytest.raises(ValueError, match=r"^a name of 66000 bytes for a sender: at most 64$"):
+        seg.add_sender("r" * 66000)
+    assert seg.add_station(6, "spc3", name="s" * 64).name == "s" * 64
     x = seg.add_sender("x")
     for data, why in ((b"", "no bytes"), (b"\0" * 256, "more than 255 bytes")):
         with pytest.raises(ValueError, match=rf"^telegram: {why}$"):
@@ -787,3 +793,49 @@ def test_bytes_arguments_take_what_dp_cycle_takes():
     assert sm.data_exchange([5, 1]).request.du == b"\5\1"
     with pytest.raises(ValueError, match=r"^outputs: -1 out of range \(0\.\.255\)$"):
         sm.data_exchange([-1])
+
+
+def test_an_int_beyond_int64_names_the_bus_range():
+    """docs/python.md, the mapping table: an address beyond the bus is `addr 2048 is out of range
+    (0..2047)`; 2**63 and more named the range of the binding's int64_t, negatives in it (s31
+    benches finding 11). The same for a byte value (`write(0, 256)`'s 0..255)."""
+    chip = dpc31.Chip("spc3")
+    for big in (2**63, 2**64):
+        for call in (lambda: chip.peek(big), lambda: chip.read(big),
+                     lambda: chip.read_block(big, 1), lambda: chip.write(big, 0)):
+            with pytest.raises(ValueError) as e:
+                call()
+            assert str(e.value) == f"addr {big} is out of range (0..2047)"
+        with pytest.raises(ValueError) as e:
+            chip.write(0, big)
+        assert str(e.value) == f"value {big} is out of range (0..255)"
+    with pytest.raises(ValueError, match=r"^addr -9223372036854775809 is out of range "
+                                         r"\(0\.\.2047\)$"):
+        chip.peek(-2**63 - 1)
+    with pytest.raises(ValueError, match=r"^da 9223372036854775808 is out of range \(0\.\.255\)$"):
+        dpc31.Frame(2**63, 1, 0x49)
+    assert chip.cycle == 0
+
+    class Index:  # what a numpy integer is to the module: an int as before
+        def __index__(self):
+            return 0x100
+    chip.write(Index(), 7)
+    assert chip.peek(Index()) == 7 and chip.cycle == 4
+
+
+def test_segment_scenario_parse_of_a_single_chips_text_says_what_load_says(traces):
+    """docs/python.md, Scenarios: a single chip's scenario says `FILE: not a segment scenario
+    (use Scenario.load)`, line 0; parse said `x.scn:5: a segment scenario begins with 'segment'`
+    (s31 benches finding 12). parse points to Scenario.parse."""
+    path = traces / "do4_osp_replace.scn"
+    loaded = pytest.raises(dpc31.ScenarioError, dpc31.SegmentScenario.load, str(path)).value
+    parsed = pytest.raises(dpc31.ScenarioError, dpc31.SegmentScenario.parse, path.read_text(),
+                           file=str(path)).value
+    assert str(loaded) == f"{path}: not a segment scenario (use Scenario.load)"
+    assert str(parsed) == f"{path}: not a segment scenario (use Scenario.parse)"
+    assert (parsed.file, parsed.line) == (loaded.file, loaded.line) == (str(path), 0)
+    # Neither a segment's nor a single chip's: the single chip's error, as load gives it.
+    bad = pytest.raises(dpc31.ScenarioError, dpc31.SegmentScenario.parse, "frobnicate\n",
+                        file="x.scn").value
+    assert str(bad) == str(pytest.raises(dpc31.ScenarioError, dpc31.Scenario.parse,
+                                         "frobnicate\n", file="x.scn").value)

@@ -181,6 +181,39 @@ def test_the_serial_ports_characters_reach_on_serial(tmp_path):
     assert sent == [(0x41, 264)]
 
 
+def test_the_boards_observers_are_removed_with_none(tmp_path):
+    """docs/python.md, the observers: a callable adds one, None removes it; the board's
+    on_serial(None) and on_ram_write(None) were TypeErrors naming no argument (s31 benches
+    finding 9). MOV SBUF,#41h sends one character (TI at chip cycle 264, as above); MOV DPTR,
+    #0100h; MOVX @DPTR,A writes the board's RAM once (0100h is outside the chip's window at
+    8000h)."""
+    import pytest
+
+    sbuf, movx = tmp_path / "sbuf.ihx", tmp_path / "movx.ihx"
+    sbuf.write_text(":0500000075994180FE2E\n:00000001FF\n")
+    movx.write_text(":06000000900100F080FEFB\n:00000001FF\n")
+    seen = {}
+    for removed in (False, True):
+        serial = dpc31.Cpu51Board(dpc31.Chip("spc3"))
+        serial.load_hex(str(sbuf))
+        ram = dpc31.Cpu51Board(dpc31.Chip("spc3"))
+        ram.load_hex(str(movx))
+        sent, written = [], []
+        serial.on_serial(lambda data, cycle: sent.append(data))
+        ram.on_ram_write(lambda addr, value, cycle: written.append(addr))
+        if removed:
+            serial.on_serial(None)
+            ram.on_ram_write(None)
+        serial.run_until(48_000)
+        ram.run_until(48_000)
+        seen[removed] = (sent, written)
+    assert seen == {False: ([0x41], [0x0100]), True: ([], [])}
+    for name in ("on_serial", "on_ram_write"):
+        with pytest.raises(TypeError, match=f"^{name}: callback: a callable or None expected, "
+                                            "got int$"):
+            getattr(serial, name)(5)
+
+
 def sbuf_board(tmp_path):
     """docs/cpu.md's example, MOV SBUF,#41h; SJMP $, on an 80C32 at 24 MHz beside an SPC3."""
     image = tmp_path / "sbuf.ihx"

@@ -420,3 +420,117 @@ def test_a_slave_read_back_is_a_read_only_copy():
                               "Segment.add_station(..., slave=SlaveConfig(...))")
         else:
             raise AssertionError(f"{owner}: a field set on the copy was taken in silence")
+
+
+def test_a_bus_check_kept_from_before_a_second_check_bus_keeps_its_counts():
+    """docs/python.md, "The bus check": a second check_bus() starts a new check; the BusCheck
+    kept from the first keeps the counts it had (it read freed memory: s31 benches finding 1).
+    One telegram of two characters 55h 01h from a sender is no frame (docs/segment.md,
+    bad_frame)."""
+    seg = dpc31.Segment(1_500_000)
+    seg.add_station(5, "spc3")
+    sender = seg.add_sender("noise")
+    first = seg.check_bus()
+    seg.send(sender, b"\x55\x01")
+    seg.run_until(seg.cycle + 10_000)
+    assert first.total == 1 and first.count("bad_frame") == 1
+    second = seg.check_bus()
+    junk = [bytearray(b"\xff" * 2440) for _ in range(200)]  # what reused the freed check
+    assert first.total == 1 and first.counts["bad_frame"] == 1 and len(junk) == 200
+    seg.send(sender, b"\x55\x01")
+    seg.run_until(seg.cycle + 10_000)
+    assert (first.total, second.total, seg.bus_check.total) == (1, 1, 1)
+    seg.send(sender, b"\x55\x01")
+    seg.run_until(seg.cycle + 10_000)
+    assert (first.total, second.total, seg.bus_check.total) == (1, 2, 2)
+
+
+def test_a_running_segments_state_is_refused_to_another_thread(refused_while):
+    """docs/python.md, "A segment": one thread at a time. The line's cycle and collisions, a
+    station's changes, a master's selected slave, start-up and token state, the bus check's
+    counts were read (and bus_log flushed the running check) by another thread while the segment
+    ran (s31 benches finding 3): each is refused now, as a master's history is. Looked at while
+    an on_telegram observer holds a dp_cycle."""
+    seg = dpc31.Segment(1_500_000)
+    st = seg.add_station(5, "spc3")
+    master = seg.add_master(2, [5])
+    check = seg.check_bus()
+    assert master.startup_all()
+    looks = {
+        "Segment.cycle": lambda: seg.cycle, "Segment.collisions": lambda: seg.collisions,
+        "Segment.bus_log": lambda: seg.bus_log, "Station.changes": lambda: st.changes,
+        "SegmentMaster.selected": lambda: master.selected,
+        "SegmentMaster.slave": lambda: master.slave,
+        "SegmentMaster.starting_up": lambda: master.starting_up,
+        "SegmentMaster.started_up": lambda: master.started_up,
+        "SegmentMaster.token_rotation": lambda: master.token_rotation,
+        "SegmentMaster.history": lambda: master.history,
+        "SegmentMaster.clear_history": master.clear_history,
+        "BusCheck.total": lambda: check.total, "BusCheck.counts": lambda: check.counts,
+        "BusCheck.count": lambda: check.count("bad_frame"),
+        "constants": lambda: (seg.size, seg.bit_cycles, seg.clock_hz, st.name, st.address,
+                              master.address, master.slave_count),
+    }
+    refused = refused_while(master.dp_cycle, looks, seg.on_telegram)
+    assert set(refused) == set(looks) - {"constants"}
+    for name, e in refused.items():
+        # bus_log and clear_history change the running state: refused to an observer too
+        assert e in ("the segment is running in another thread (one thread at a time)",
+                     "the segment is running (another thread, or an observer)"), name
+    assert len(master.history) > 0 and check.total == 0
+
+
+def test_an_observer_may_look_at_the_segments_state_but_not_flush_its_check():
+    """The running thread's observer may read what it looks at (a master's history is so), not
+    bus_log, which flushes the running check."""
+    seg = dpc31.Segment(1_500_000)
+    st = seg.add_station(5, "spc3")
+    master = seg.add_master(2, [5])
+    check = seg.check_bus()
+    seen = []
+
+    def observer(_):
+        if seen:
+            return
+        seen.append((seg.cycle > 0, len(st.changes), check.total, master.started_up))
+        try:
+            seg.bus_log
+        except dpc31.Error as e:
+            seen.append(str(e))
+
+    seg.on_telegram(observer)
+    assert master.startup_all()
+    assert seen[0][0] and seen[1:] == ["the segment is running (another thread, or an observer)"]
+
+
+def test_dp_cycle_skip_refuses_what_a_scenarios_cycle_skip_refuses(cli, tmp_path):
+    """docs/python.md, "Errors": a value a scenario line takes too is refused in its words. A
+    skip= address that is no station (a typo) was accepted and every slave polled (s31 benches
+    finding 5); `cycle 1 skip=` refuses it in a segment scenario."""
+    import subprocess
+
+    import pytest
+
+    seg = dpc31.Segment(1_500_000)
+    seg.add_station(5, "spc3")
+    seg.add_station(6, "spc3")
+    master = seg.add_master(2, [5, 6])
+    assert master.startup_all()
+    words = {}
+    for skip in (99, 200):
+        scn = tmp_path / f"skip{skip}.scn"
+        scn.write_text("segment baud=1500000\nstation 5 profile=spc3\nstation 6 profile=spc3\n"
+                       f"master 2 slaves=5,6\nstartup\ncycle 1 skip={skip}\n")
+        r = subprocess.run([cli, "run", str(scn)], capture_output=True, text=True)
+        assert r.returncode == 2
+        words[skip] = r.stderr.strip().removeprefix(f"{scn}:6: ")
+    assert words == {99: "no station 99", 200: "station 200 out of range (0..126)"}
+    before = len(master.history)
+    for skip in (99, 200):
+        with pytest.raises(ValueError) as e:
+            master.dp_cycle(skip=[5, skip])
+        assert str(e.value) == words[skip]
+    with pytest.raises(ValueError, match=r"^station 1099511627776 out of range \(0\.\.126\)$"):
+        master.dp_cycle(skip=[2**40])
+    assert len(master.history) == before  # nothing polled
+    assert [e.request.da for e in master.dp_cycle(skip=[5])] == [6]

@@ -4,6 +4,8 @@
 
 #include <cstdio>
 #include <limits>
+#include <stdexcept>
+#include <string_view>
 #include <utility>
 
 #include "outfile.hpp"
@@ -50,7 +52,12 @@ class Block {
     pad();
     options_ = true;
   }
-  void option(std::uint16_t code, const std::string& s) {
+  // A text option: refused (std::length_error naming it) when its 16-bit length cannot hold it.
+  void option(std::uint16_t code, std::string_view name, const std::string& s) {
+    if (s.size() > kMaxOptionBytes) {
+      throw std::length_error(fmt::format("{} of {} bytes: a pcapng option holds at most {}", name,
+                                          s.size(), kMaxOptionBytes));
+    }
     option(code, {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()});
   }
   // Type, total length, body, total length. The option list, if any, ends with opt_endofopt.
@@ -91,7 +98,7 @@ std::vector<std::uint8_t> section_header_block(const WriterOptions& opt) {
   b.u16(1);                                          // major version
   b.u16(0);                                          // minor version
   b.u64(std::numeric_limits<std::uint64_t>::max());  // section length -1: not given
-  if (!opt.application.empty()) b.option(kShbUserAppl, opt.application);
+  if (!opt.application.empty()) b.option(kShbUserAppl, "shb_userappl", opt.application);
   return b.finish(kShb);
 }
 
@@ -100,7 +107,7 @@ std::vector<std::uint8_t> interface_description_block(const WriterOptions& opt) 
   b.u16(kLinkTypeProfibusDl);
   b.u16(0);  // reserved
   b.u32(0);  // snaplen: no limit
-  if (!opt.interface_name.empty()) b.option(kIfName, opt.interface_name);
+  if (!opt.interface_name.empty()) b.option(kIfName, "if_name", opt.interface_name);
   const std::uint8_t tsresol = kTsresolNanoseconds;
   b.option(kIfTsresol, std::span<const std::uint8_t>(&tsresol, 1));
   return b.finish(kIdb);
@@ -121,7 +128,7 @@ std::vector<std::uint8_t> enhanced_packet_block(const Packet& p) {
                                    static_cast<std::uint8_t>(p.symbol_error ? 0x80 : 0)};
     b.option(kEpbFlags, flags);
   }
-  if (!p.comment.empty()) b.option(kOptComment, p.comment);
+  if (!p.comment.empty()) b.option(kOptComment, "opt_comment", p.comment);
   return b.finish(kEpb);
 }
 
@@ -158,7 +165,11 @@ struct PcapngWriter::State {
     return true;
   }
   bool add(const Packet& p) {
-    if (!put(enhanced_packet_block(p))) return false;
+    try {
+      if (!put(enhanced_packet_block(p))) return false;
+    } catch (const std::length_error& e) {
+      return fail(fmt::format("packet {}: {}", packets + 1, e.what()));
+    }
     ++packets;
     return true;
   }
@@ -203,8 +214,17 @@ bool PcapngWriter::open(const std::string& path) {
   s.error.clear();
   s.packets = 0;
   s.held.clear();
+  // Both blocks before the file: an option they cannot hold leaves nothing behind.
+  std::vector<std::uint8_t> shb;
+  std::vector<std::uint8_t> idb;
+  try {
+    shb = section_header_block(s.opt);
+    idb = interface_description_block(s.opt);
+  } catch (const std::length_error& e) {
+    return s.fail(fmt::format("{}: {}", path, e.what()));
+  }
   if (!s.out.open(path)) return s.fail(s.out.error());
-  return s.put(section_header_block(s.opt)) && s.put(interface_description_block(s.opt));
+  return s.put(shb) && s.put(idb);
 }
 
 bool PcapngWriter::add(const Packet& p) { return state_->add(p); }

@@ -8,6 +8,7 @@
 // of range) is kept; every later call fails with it and close() reports it.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -47,6 +48,11 @@ struct WriterOptions {
   std::string interface_name = "dpc31";  // if_name; "" = omitted
   bool cycle_comments = true;            // telegrams get opt_comment "cycles START-END"
 };
+
+// A text option (shb_userappl, if_name, opt_comment) is at most this many bytes: its length is
+// 16 bits. A longer one is refused, never cut: the encoders throw std::length_error ("opt_comment
+// of 65536 bytes: a pcapng option holds at most 65535"), open() and add() fail with it.
+inline constexpr std::size_t kMaxOptionBytes = 0xFFFF;
 
 // The blocks as written (little-endian sections), for tests and other writers.
 [[nodiscard]] std::vector<std::uint8_t> section_header_block(const WriterOptions& opt);

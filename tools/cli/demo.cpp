@@ -227,7 +227,7 @@ class MadeDirs {
 };
 
 // The files the demo writes, in `out_dir`. No scenario file: its failures name none.
-RunOptions demo_outputs(const std::string& out_dir, const std::string& timescale) {
+RunOptions demo_outputs(const std::string& out_dir, const std::optional<std::string>& timescale) {
   RunOptions ro;
   ro.vcd = (std::filesystem::path(out_dir) / "dpc31-demo.vcd").string();
   ro.la_vcd = (std::filesystem::path(out_dir) / "dpc31-demo-la.vcd").string();
@@ -304,11 +304,11 @@ int run_dp_session(const ChipOptions& opt, const RunOptions& ro, ChipRun& run,
 }  // namespace
 
 int run_demo(ChipOptions opt, const std::string& out_dir_option,
-             const std::optional<std::string>& firmware, const std::string& timescale,
-             std::FILE* out) {
+             const std::optional<std::string>& firmware,
+             const std::optional<std::string>& timescale, std::FILE* out) {
   int unit_exp = 0;
-  if (!timescale.empty() && !parse_timescale(timescale, unit_exp)) {
-    fmt::print(stderr, "dpc31 demo: {}\n", timescale_error(timescale));
+  if (timescale && !parse_timescale(*timescale, unit_exp)) {
+    fmt::print(stderr, "dpc31 demo: {}\n", timescale_error(*timescale));
     return 2;
   }
   // A link in --out-dir may name the plug-in, as a bridge's or soak's output may: refused

@@ -13,10 +13,10 @@ namespace dpc31::cli {
 // example firmware (or `firmware`: a built-in name or a plug-in path; "" is refused as unknown),
 // its waveform and capture written to `out_dir`, or if that is empty (not given) to a new private
 // directory TMPDIR/dpc31-demo-XXXXXX (mkdtemp), whose name it prints: the full VCD, a second VCD
-// for logic-analyser tools (docs/waveforms.md) and the pcapng. `timescale` ("" = the forms'
-// defaults) is the unit of both waveforms.
+// for logic-analyser tools (docs/waveforms.md) and the pcapng. `timescale` (none: the forms'
+// defaults; "" is refused as any bad unit) is the unit of both waveforms.
 int run_demo(ChipOptions opt, const std::string& out_dir,
-             const std::optional<std::string>& firmware, const std::string& timescale,
-             std::FILE* out);
+             const std::optional<std::string>& firmware,
+             const std::optional<std::string>& timescale, std::FILE* out);
 
 }  // namespace dpc31::cli

@@ -106,7 +106,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"intel", "motorola"}));
   dpc31::cli::ChipChoice demo_chip;
   dpc31::cli::add_chip_options(demo, demo_chip);
-  std::string demo_timescale;
+  std::optional<std::string> demo_timescale;  // none: each waveform's default
   demo->add_option("--timescale", demo_timescale,
                    "time unit of both waveforms: " + kTimescales +
                        "; default 1ps for the full VCD, 10ns for the logic analysers' VCD");

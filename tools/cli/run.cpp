@@ -122,12 +122,15 @@ std::string waveform_options_error(const RunOptions& opt) {
       }
       if (opt.from) return needs(fmt::format("--from {}", *opt.from), kAny);
       if (opt.to) return needs(fmt::format("--to {}", *opt.to), kAny);
-      if (!opt.timescale.empty()) return needs("--timescale " + opt.timescale, kAny);
+      if (opt.timescale) {
+        return needs(fmt::format("--timescale {}", opt.timescale->empty() ? "''" : *opt.timescale),
+                     kAny);
+      }
     }
   }
   int unit_exp = 0;
-  if (!opt.timescale.empty() && !parse_timescale(opt.timescale, unit_exp))
-    return timescale_error(opt.timescale);
+  if (opt.timescale && !parse_timescale(*opt.timescale, unit_exp))
+    return timescale_error(*opt.timescale);
   if (opt.to.value_or(UINT64_MAX) <= opt.from.value_or(0)) {
     return fmt::format("--to {} is not after --from {}: an empty waveform window",
                        opt.to.value_or(UINT64_MAX), opt.from.value_or(0));
@@ -152,10 +155,7 @@ std::vector<wave::Options> wave_options(const RunOptions& opt) {
     if (path == (opt.vcd.empty() ? opt.fst : opt.vcd)) w.gtkw = opt.gtkw;
     // The logic-analyser form's default: 10 ns, the sample period of a 100 MHz analyser (sigrok
     // makes one sample per unit; 8.3 per bit at 12 Mbaud). The full form's: 1 ps.
-    parse_timescale(!opt.timescale.empty() ? opt.timescale
-                    : flat                 ? "10ns"
-                                           : "1ps",
-                    w.timescale_exp);
+    parse_timescale(opt.timescale.value_or(flat ? "10ns" : "1ps"), w.timescale_exp);
     out.push_back(w);
   }
   return out;

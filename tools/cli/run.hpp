@@ -25,7 +25,8 @@ struct RunOptions {
   std::vector<std::string> signals;   // waveform signal globs ("" = all)
   std::optional<std::uint64_t> from;  // waveform window, cycles (none: from 0)
   std::optional<std::uint64_t> to;    // (none: to the end)
-  std::string timescale;          // "" = 1ps, 10ns for the logic-analyser form (docs/waveforms.md)
+  std::optional<std::string>
+      timescale;                  // none: 1ps, 10ns for the logic-analyser form (docs/waveforms.md)
   bool flat = false;              // --vcd / --fst in the logic-analyser form
   std::string gtkw;               // a GTKWave save file for --vcd (or else --fst)
   std::string pcap;               // the chip's telegrams as pcapng (docs/capture.md)

@@ -183,6 +183,12 @@ class Decoder(srd.Decoder):
     def bits(self, samples):
         return samples / self.bit
 
+    def gap(self, ss, end):
+        '''Bit times from `end`, a character's computed (fractional) end, to
+        sample `ss`, never below 0: a start bit right after a stop bit lies
+        within one sample of its end, either side (docs/waveforms.md).'''
+        return max(0.0, self.bits(ss - end))
+
     def decode(self, ss, es, data):
         ptype, rxtx, pdata = data
         if ptype == 'PARITY ERROR':
@@ -227,7 +233,7 @@ class Decoder(srd.Decoder):
             return
         gap = None
         if self.last_end is not None:
-            gap = self.bits(c.ss - self.last_end)
+            gap = self.gap(c.ss, self.last_end)
         tg = self.tg
         if tg is not None and (gap >= TSYN_BITS or c.rxtx != tg.chars[0].rxtx):
             self.cut(c.ss)
@@ -492,7 +498,7 @@ class Decoder(srd.Decoder):
         if answers:
             # TSDR: from the end of the request's last stop bit to the first
             # start bit of its answer; later than the slot time is too late.
-            tsdr = self.bits(ss - req[3])
+            tsdr = self.gap(ss, req[3])
             self.putx(req[3], ss, A_TSDR, ['TSDR %.1f bit times' % tsdr,
                                            'TSDR %.0f' % tsdr])
             if tsdr > self.slot:
@@ -504,7 +510,7 @@ class Decoder(srd.Decoder):
         if req is not None and not self.answered:
             self.putx(req[3], ss, A_WARNING, [
                 'No answer: the next telegram came after %.1f bit times' %
-                self.bits(ss - req[3]), 'No answer'])
+                self.gap(ss, req[3]), 'No answer'])
         self.answered = True
         self.putx(idle_ss, idle_es, A_IDLE, [
             'Idle %s%.1f bit times' % ('' if exact else '>= ', idle),
