@@ -396,8 +396,11 @@ void Chip::load_state(std::span<const std::uint8_t> bytes) {
   // Commit: nothing below throws. The log sink and the observers belong to whoever attached
   // them, not to the state.
   fresh->signals.take_attachments(c.signals);
+  const bool line = c.irq.line(), pb3 = c.irq.pb3();
   core_ = std::move(fresh);
   now_ = &core_->clock.now;
+  // The loaded X/INT and PB3 from the loaded cycle on: their observers see the edges there.
+  core_->irq.tell_since(line, pb3);
   moved();
 }
 

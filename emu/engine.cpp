@@ -84,7 +84,9 @@ bool ChipCore::advance_events(std::uint64_t end, Stop stop_at) {
     mode.skip_quiet_user_ticks(end < other ? end + 1 : other);
     const std::uint64_t next = std::min(mode.user_timer_at(), other);
     if (next > end) {
-      clock.quiet_until = next;
+      // Not past the last cycle: a block transfer's quiet run (bus.cpp) and a bus access end at
+      // it, as a step does (Chip::cycle_after).
+      clock.quiet_until = std::min(next, Chip::kLastCycle);
       break;
     }
     clock.now = std::max(clock.now, next);

@@ -19,13 +19,21 @@ void InterruptController::install_hooks(HookTable& h) {
 }
 
 // After the register file's reset (X/INT follows the reset IRR and IMR). The reset clears DX_Out
-// and C31_Control, so PB3 falls in the reset's cycle, its observer told (docs/timing.md).
+// and C31_Control, so PB3 falls in the reset's cycle, and an active interrupt ends there: their
+// observers are told (docs/timing.md).
 void InterruptController::reset() {
-  const bool pb3 = s_.pb3;
+  const State before = s_;
   s_ = State{};
-  s_.pb3 = pb3;
-  set_pb3(false);
   s_.line = active();
+  tell_since(before.line, before.pb3);
+}
+
+void InterruptController::tell_since(bool line, bool pb3) {
+  const State now = s_;
+  s_.pb3 = pb3;
+  set_pb3(now.pb3);
+  s_.line = line;
+  if (now.line != line) line_changed(now.line);
 }
 
 void InterruptController::note_events(std::uint16_t bits, std::uint64_t cycle) {

@@ -32,6 +32,9 @@ class InterruptController {
   InterruptController(Clock& clock, RegisterFile& regs, const Signals& sig, IrqController served)
       : clock_(clock), regs_(regs), sig_(sig), served_(served) {}
   void reset();
+  // The observers last saw X/INT's activity `line` and PB3 `pb3` (before a reset or the load of
+  // a snapshot): tells them each level that differs now, at this cycle.
+  void tell_since(bool line, bool pb3);
   // Binds the hooks of the registers this block owns (reg_hooks.hpp).
   void install_hooks(HookTable& h);
 

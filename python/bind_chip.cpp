@@ -434,11 +434,8 @@ void bind_chip_class(py::module_& m) {
            py::arg("profile") = "dpc31", py::arg("bus") = "intel", py::arg("clock_hz") = 0,
            py::arg("engine") = "event", py::arg("variant") = py::none(),
            py::arg("irq_controller") = "external")
-      .def("reset",
-           [](PyChip& c) {
-             c.enter(true);
-             c.chip.reset();
-           })
+      // run: the reset's edges reach the observers, whose exception is raised here
+      .def("reset", [](PyChip& c) { c.run([&] { c.chip.reset(); }); })
       // the bus: each access takes bus_access_cycles clocks, the chip runs meanwhile
       .def(
           "read",
@@ -663,8 +660,8 @@ void bind_chip_class(py::module_& m) {
       .def(
           "load_state",
           [](PyChip& c, const py::bytes& b) {
-            c.enter(true);
-            c.chip.load_state(from_bytes(b));
+            const std::vector<std::uint8_t> bytes = from_bytes(b);
+            c.run([&] { c.chip.load_state(bytes); });
           },
           py::arg("data"))
       .def(
@@ -677,8 +674,8 @@ void bind_chip_class(py::module_& m) {
       .def(
           "load_state_file",
           [](PyChip& c, const std::string& path) {
-            c.enter(true);
-            c.chip.load_state_file(read_path_arg(path, "path"));
+            const std::string file = read_path_arg(path, "path");
+            c.run([&] { c.chip.load_state_file(file); });
           },
           py::arg("path"));
 }

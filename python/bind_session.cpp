@@ -359,7 +359,7 @@ void bind_board(py::module_& m) {
           "Loads an Intel HEX image (SDCC's, Keil's) as program memory; InputError 'FILE:LINE: "
           "reason' for a bad record. Returns the bytes it gives.")
       .def(
-          "run_until", [](PyBoard& b, U64 cycle) { b.chip.run([&] { b.run_until(cycle); }); },
+          "run_until", [](PyBoard& b, U64 cycle) { b.chip.run([&] { b.run_to(cycle); }); },
           py::arg("cycle"),
           "Runs CPU and chip together until the chip's cycle is at least `cycle` (the CPU's "
           "step in progress ends).")

@@ -60,6 +60,15 @@ struct PyBoard {
   void run_until(std::uint64_t cycle) {
     while (chip.chip.cycle() < cycle && !chip.chip.stop_requested()) board->run_until(cycle);
   }
+  // Cpu51Board.run_until: to the cycle asked, as Chip.step(n), after an observer's exception too
+  // (docs/python.md, "The GIL"): the stop the observer requested ends a master's wait (the
+  // scheduler above), not this call. The observers are not called again.
+  void run_to(std::uint64_t cycle) {
+    run_until(cycle);
+    if (!chip.error) return;
+    chip.chip.clear_stop();
+    run_until(cycle);
+  }
 };
 
 // The parts of bind_session(), one file each.

@@ -165,6 +165,9 @@ std::uint64_t Cpu51Board::run_end() const {
 // is seen by the samples after it; only a MOVX whose access to the chip starts before the end
 // runs across it (the access keeps its cycle).
 void Cpu51Board::run_until(std::uint64_t chip_cycle) {
+  // A reset took the chip's cycle back to 0: it was an event at the board's instant, and the
+  // chip's clock counts on from there, as the CPU's does (docs/cpu.md, "The board").
+  chip_to(ended_);
   note_chip();
   event_clock_ = 0;  // the first instant walked reads X/INT whatever happened to the chip before
   due_ = 0;
@@ -186,6 +189,7 @@ void Cpu51Board::run_until(std::uint64_t chip_cycle) {
   }
   in_run_ = false;
   chip_to(chip_.stop_requested() ? chip_cycle_of(due_) : chip_cycle);
+  ended_ = chip_.cycle();
 }
 
 // The instants of the step starting at clock `start`: 0 its start, 1 + j the sample of its cycle

@@ -115,6 +115,7 @@ class Cpu51Board final : public mcs51::XdataBus {
   std::uint64_t chip_end_ = 0;
   std::uint64_t end_clock_ = 0;
   bool in_run_ = false;
+  std::uint64_t ended_ = 0;  // the chip's cycle where the last run ended: the board's instant
   // The next step's instants walked so far (walk): its first clock, how many, whether X/INT
   // changed at one (placed in its cycle), the level at the last one. A run that ends inside the
   // step leaves the rest to the next run.

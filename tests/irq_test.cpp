@@ -175,6 +175,39 @@ TEST_P(Irq, PolarityFollowsIntPol) {
   EXPECT_TRUE(c.x_int_pin());
 }
 
+// A hardware reset clears Int_Req_Reg: an active interrupt ends in the reset's cycle, cycle 0 of
+// the new time line, and on_irq_change sees that edge, as the PB3 observer sees PB3's
+// (docs/timing.md, "Interrupt line"; docs/decisions.md, "The thirty-first session: s31-reset").
+TEST_P(Irq, AHardwareResetEndsAnActiveInterruptWithAnEdgeAtCycle0) {
+  Chip c = make();
+  bus_write16(c, 0x04, 16, static_cast<std::uint16_t>(~irq::DX_Out));
+  harness::asic_raise(c, irq::DX_Out);  // cycle 8
+  c.step(100);
+  c.reset();
+  EXPECT_FALSE(c.irq_active());
+  c.reset();  // inactive already: no edge
+  const std::vector<std::pair<std::uint64_t, bool>> expect = {{8, true}, {0, false}};
+  EXPECT_EQ(edges_.v, expect);
+}
+
+// A snapshot's load gives the chip the snapshot's X/INT from the loaded cycle on: on_irq_change
+// sees an edge there where the line changes, none where it does not (docs/snapshots.md).
+TEST_P(Irq, LoadingASnapshotShowsTheLoadedInterruptAtTheLoadedCycle) {
+  Chip c = make();
+  const std::vector<std::uint8_t> quiet = c.save_state();  // cycle 0, inactive
+  bus_write16(c, 0x04, 16, static_cast<std::uint16_t>(~irq::DX_Out));
+  harness::asic_raise(c, irq::DX_Out);  // cycle 8
+  const std::vector<std::uint8_t> active = c.save_state();
+  c.step(92);
+  c.load_state(quiet);
+  EXPECT_FALSE(c.irq_active());
+  c.load_state(active);
+  c.load_state(active);  // active already: no edge
+  EXPECT_TRUE(c.irq_active());
+  const std::vector<std::pair<std::uint64_t, bool>> expect = {{8, true}, {0, false}, {8, true}};
+  EXPECT_EQ(edges_.v, expect);
+}
+
 INSTANTIATE_TEST_SUITE_P(Chips, Irq, ::testing::ValuesIn(testutil::all_chip_params()),
                          testutil::param_name);
 

@@ -1,6 +1,7 @@
 // Mode_Reg0/1/2, Start / Go_Offline, Status_Reg, user timer, RAM access violation, profile layout.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <limits>
 
 #include "dpc31/reg_ids.hpp"
@@ -167,6 +168,33 @@ TEST_P(Mode, TimeEndsAtTheLastCycleAStepPastItStopsThere) {
   d.step(1000);
   EXPECT_FALSE(d.step_until_irq(std::numeric_limits<std::uint64_t>::max()));
   EXPECT_EQ(d.cycle(), kLast);
+}
+
+// At the last cycle every access stops there, as a single one does (Chip::cycle_after): a
+// block transfer's quiet run of RAM too, and so a Start after it and step_until_irq; the chip's
+// snapshot there loads back (docs/timing.md, "Clock and time"; docs/decisions.md, "The
+// thirty-first session: s31-reset").
+TEST_P(Mode, AtTheLastCycleBlockTransfersAStartAndStepUntilIrqStopThere) {
+  Chip c = make();
+  c.step(std::numeric_limits<std::uint64_t>::max());  // no event: the end at once
+  ASSERT_EQ(c.cycle(), Chip::kLastCycle);
+  const auto ram = static_cast<std::uint32_t>(0x3F0 & ((1u << c.profile().address_bits) - 1));
+  std::array<std::uint8_t, 8> bytes{1, 2, 3, 4, 5, 6, 7, 8};
+  c.write_block(ram, bytes);
+  EXPECT_EQ(c.cycle(), Chip::kLastCycle);
+  c.read_block(ram, bytes);
+  EXPECT_EQ(c.cycle(), Chip::kLastCycle);
+  c.fill(ram, 0, bytes.size());
+  EXPECT_EQ(c.cycle(), Chip::kLastCycle);
+  EXPECT_TRUE(c.equal(ram, ram + 4, 4));
+  EXPECT_EQ(c.cycle(), Chip::kLastCycle);
+  user_start(c);
+  EXPECT_EQ(c.cycle(), Chip::kLastCycle);
+  EXPECT_FALSE(c.step_until_irq(10));
+  EXPECT_EQ(c.cycle(), Chip::kLastCycle);
+  Chip d = make();
+  d.load_state(c.save_state());
+  EXPECT_EQ(d.cycle(), Chip::kLastCycle);
 }
 
 TEST_P(Mode, ModeReg0OnlyWhileOffline) {

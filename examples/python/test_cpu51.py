@@ -212,3 +212,46 @@ def test_the_boards_observers_are_removed_with_none(tmp_path):
         with pytest.raises(TypeError, match=f"^{name}: callback: a callable or None expected, "
                                             "got int$"):
             getattr(serial, name)(5)
+
+
+def sbuf_board(tmp_path):
+    """docs/cpu.md's example, MOV SBUF,#41h; SJMP $, on an 80C32 at 24 MHz beside an SPC3."""
+    image = tmp_path / "sbuf.ihx"
+    image.write_text(":0500000075994180FE2E\n:00000001FF\n")
+    chip = dpc31.Chip("spc3")
+    board = dpc31.Cpu51Board(chip)
+    board.load_hex(str(image))
+    return chip, board
+
+
+def test_a_boards_run_after_an_observers_exception_ends_at_the_cycle_asked(tmp_path):
+    """As Chip.step(n) (docs/python.md, "The GIL"): the exception is raised when run_until returns,
+    and chip and CPU are where the run without it ends: chip cycle 48 000, CPU clock 24 000 at
+    24 MHz, machine cycle 2 000 (SJMP's step [1998, 2000) samples last at chip cycle 47 996 and
+    runs; the next one's first sample, 48 020, waits)."""
+    chip, board = sbuf_board(tmp_path)
+    calls = []
+
+    def boom(data, cycle):
+        calls.append((data, cycle))
+        raise RuntimeError("serial observer failed")
+
+    board.on_serial(boom)
+    with pytest.raises(RuntimeError, match="serial observer failed"):
+        board.run_until(48_000)
+    assert calls == [(0x41, 264)]
+    assert (chip.cycle, board.machine_cycles) == (48_000, 2000)
+
+
+def test_a_chip_reset_under_a_board_counts_on_from_the_boards_instant(tmp_path):
+    """docs/cpu.md, "The board": a reset is an event at the board's instant and the chip's clock
+    counts on, as the CPU's does: the next run brings the chip from 0 back to 48 000 (nothing runs
+    for run_until(10)), and run_until(96 000) ends with the CPU at machine cycle 4 000."""
+    chip, board = sbuf_board(tmp_path)
+    board.run_until(48_000)
+    chip.reset()
+    assert chip.cycle == 0
+    board.run_until(10)
+    assert (chip.cycle, board.machine_cycles) == (48_000, 2000)
+    board.run_until(96_000)
+    assert (chip.cycle, board.machine_cycles) == (96_000, 4000)

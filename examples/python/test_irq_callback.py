@@ -70,6 +70,48 @@ def test_an_exception_in_a_callback_stops_the_run_and_is_raised():
     assert chip.cycle == 12 + 11 * P
 
 
+def started_with_an_active_interrupt():
+    """An SPC3 with User_Timer_Clock alone unmasked, started at 12: the interrupt active at
+    12 + P; its on_irq_change edges in a list."""
+    chip = dpc31.Chip("spc3")
+    utc = dpc31.register("spc3", "Int_Req_Reg").field("User_Timer_Clock").mask
+    chip.write(chip.addr_of("Int_Mask_Reg"), ~utc & 0xFF)
+    chip.write(chip.addr_of("Int_Mask_Reg") + 1, 0xFF)
+    chip.write(chip.addr_of("Mode_Reg1_S"), 0x01)  # Start_SPC3, completes at 12
+    edges = []
+    chip.on_irq_change(lambda cycle, active: edges.append((cycle, active)))
+    assert chip.step_until_irq(2 * P) and chip.cycle == 12 + P
+    return chip, edges
+
+
+def test_a_reset_and_a_snapshots_load_show_the_interrupts_edge():
+    """A hardware reset clears Int_Req_Reg: the interrupt ends at cycle 0 of the new time line,
+    and on_irq_change is told, as for PB3 (docs/timing.md, "Interrupt line"); a snapshot's load
+    shows the loaded interrupt at the loaded cycle where it differs (docs/snapshots.md)."""
+    chip, edges = started_with_an_active_interrupt()
+    active = chip.save_state()
+    chip.reset()
+    assert not chip.irq_active and chip.x_int
+    chip.load_state(active)
+    assert chip.irq_active and not chip.x_int
+    chip.load_state(active)  # the same level: no edge
+    assert edges == [(12 + P, True), (0, False), (12 + P, True)]
+
+
+def test_an_observers_exception_in_a_reset_is_raised_by_the_reset():
+    chip, _ = started_with_an_active_interrupt()
+
+    def boom(cycle, active):
+        raise ValueError(f"edge at {cycle}: {active}")
+
+    chip.on_irq_change(boom)
+    with pytest.raises(ValueError, match="edge at 0: False"):
+        chip.reset()
+    assert chip.cycle == 0 and not chip.irq_active
+    chip.step(10)  # nothing left over for the next call
+    assert chip.cycle == 10
+
+
 def test_observers_may_look_but_not_touch():
     chip = dpc31.Chip("spc3")
     seen = []

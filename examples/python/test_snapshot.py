@@ -54,3 +54,22 @@ def test_a_snapshot_of_another_profile_is_refused():
     assert chip.cycle == 100  # unchanged
     with pytest.raises(dpc31.SnapshotError):
         chip.load_state(b"not a snapshot")
+
+
+def test_at_the_end_of_time_every_access_stops_there_and_the_snapshot_loads_back():
+    """The chip's time ends at Chip::kLastCycle, 2**62 - 1 (docs/python.md): the "no limit"
+    step(2**64 - 1) of a chip without events reaches it at once, and a block transfer, a Start and
+    step_until_irq stop there as a single access does; its snapshot loads back (docs/timing.md,
+    "Clock and time")."""
+    last = 2**62 - 1
+    chip = dpc31.Chip("spc3")
+    chip.step(2**64 - 1)
+    assert chip.cycle == last
+    chip.write_block(0x100, b"\x01\x02\x03\x04")
+    assert chip.read_block(0x100, 8)[:4] == b"\x01\x02\x03\x04" and chip.cycle == last
+    chip.write(chip.addr_of("Mode_Reg1_S"), 0x01)  # Start_SPC3
+    assert chip.started and chip.cycle == last
+    assert not chip.step_until_irq(10) and chip.cycle == last
+    again = dpc31.Chip("spc3")
+    again.load_state(chip.save_state())
+    assert again.cycle == last and again.started

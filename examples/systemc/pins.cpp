@@ -1,15 +1,21 @@
 // The model's pin signals against the chip's pins (docs/systemc.md, "X/INT, the interrupt, PB3,
-// TxD"): an SPC3 whose initiator unmasks User_Timer_Clock alone, makes X/INT high-active
-// (Mode_Reg0.INT_Pol = 1, written while Offline) and starts the chip. Exit 0 when every check
-// holds; each one that does not is a line on stderr. A process woken by irq_rise() reads the irq
-// signal true (it read false until the next delta).
+// TxD"), in two runs: `dpc31_sc_pins polarity` (CTest SystemC.pins) and `dpc31_sc_pins reset`
+// (CTest SystemC.reset). Exit 0 when every check holds; each one that does not is a line on
+// stderr. Both use an SPC3 whose initiator unmasks User_Timer_Clock alone and starts the chip.
 //
 // Expected cycles (docs/timing.md, "Bus accesses": an access starting at t completes at t + 4;
-// "Interrupt line": polarity INT_Pol = 0 low-active, 1 high-active; "Timers": the first
-// User_Timer_Clock at s + 48 000 after Start_SPC3 completes at s):
-//   Int_Mask_Reg lo, hi 4, 8; Mode_Reg0 lo (INT_Pol = 1) 12: X/INT, inactive, goes from high to
-//   low; Start_SPC3 16; User_Timer_Clock 48 016: the interrupt and X/INT go high; its
-//   acknowledge (Int_Ack_Reg lo) starts there and completes at 48 020: both go low.
+// "Interrupt line": polarity INT_Pol = 0 low-active, 1 high-active, and a hardware reset clears
+// Int_Req_Reg; "Timers": the first User_Timer_Clock at s + 48 000 after Start_SPC3 completes at
+// s):
+// - polarity: X/INT made high-active (Mode_Reg0.INT_Pol = 1, written while Offline). Int_Mask_Reg
+//   lo, hi 4, 8; Mode_Reg0 lo (INT_Pol = 1) 12: X/INT, inactive, goes from high to low;
+//   Start_SPC3 16; User_Timer_Clock 48 016: the interrupt and X/INT go high; its acknowledge
+//   (Int_Ack_Reg lo) starts there and completes at 48 020: both go low. A process woken by
+//   irq_rise() reads the irq signal true (it read false until the next delta).
+// - reset (docs/systemc.md, "A reset"): Int_Mask_Reg lo, hi 4, 8; Start_SPC3 12; User_Timer_Clock
+//   48 012: irq high, X/INT (low-active) low; chip().reset() there: irq low, X/INT high at
+//   48 012. The same three writes again start at 48 012 (the reset chip brought to SystemC time,
+//   its clock counting on): 48 016, 48 020, Start_SPC3 48 024, User_Timer_Clock 96 024.
 #include <tlm_utils/simple_initiator_socket.h>
 
 #include <cstdint>
@@ -45,11 +51,12 @@ struct Bench : sc_core::sc_module {
   tlm_utils::simple_initiator_socket<sc_core::sc_module> cpu{"cpu"};
   dpc31::systemc::Dpc31Tlm chip{"spc3", spc3()};
   sc_core::sc_signal<bool> x_int{"x_int"}, irq{"irq"}, pb3{"pb3"}, txd{"txd"};
-  Edges x_int_edges;
+  Edges x_int_edges, irq_edges;
   int failures = 0;
+  const bool reset_run;
 
   SC_HAS_PROCESS(Bench);
-  explicit Bench(const sc_core::sc_module_name& n) : sc_module(n) {
+  Bench(const sc_core::sc_module_name& n, bool reset) : sc_module(n), reset_run(reset) {
     cpu.bind(chip.bus);
     chip.x_int(x_int);
     chip.irq(irq);
@@ -59,13 +66,18 @@ struct Bench : sc_core::sc_module {
     SC_METHOD(watch_x_int);
     sensitive << x_int;
     dont_initialize();
+    SC_METHOD(watch_irq);
+    sensitive << irq;
+    dont_initialize();
   }
 
-  void watch_x_int() {
-    // The initial value is written at time 0: the edges that follow are the ones looked at.
+  // The initial values are written at time 0: the edges that follow are the ones looked at.
+  void note(Edges& edges, bool level) {
     if (sc_core::sc_time_stamp() == sc_core::SC_ZERO_TIME) return;
-    x_int_edges.emplace_back(chip.cycle_at(sc_core::sc_time_stamp()), x_int.read());
+    edges.emplace_back(chip.cycle_at(sc_core::sc_time_stamp()), level);
   }
+  void watch_x_int() { note(x_int_edges, x_int.read()); }
+  void watch_irq() { note(irq_edges, irq.read()); }
 
   void expect(bool ok, const std::string& what) {
     if (ok) return;
@@ -87,6 +99,60 @@ struct Bench : sc_core::sc_module {
   }
 
   void initiator() {
+    if (reset_run) {
+      run_reset();
+    } else {
+      run_polarity();
+    }
+    sc_core::sc_stop();
+  }
+
+  // User_Timer_Clock alone unmasked, Start_SPC3, each write waited for: the chip's cycle when
+  // the Start completed.
+  std::uint64_t start() {
+    sc_core::sc_time delay = sc_core::SC_ZERO_TIME;
+    for (const auto& [addr, value] :
+         {std::pair<std::uint32_t, unsigned>{SPC3_Int_Mask_Reg_LO_INTEL,
+                                             ~SPC3_Int_Req_Reg_User_Timer_Clock_Msk & 0xFFu},
+          {SPC3_Int_Mask_Reg_HI_INTEL, 0xFFu},
+          {SPC3_Mode_Reg1_S, SPC3_Mode_Reg1_S_Start_SPC3_Msk}}) {
+      write(addr, static_cast<unsigned char>(value), delay);
+      wait(delay);
+      delay = sc_core::SC_ZERO_TIME;
+    }
+    return chip.chip().cycle();
+  }
+
+  void run_reset() {
+    expect(start() == 12, "the first Start_SPC3 completes at " +
+                              std::to_string(chip.chip().cycle()) + ", expected 12");
+    wait(chip.irq_rise());
+    expect(sc_core::sc_time_stamp() == chip.time_of(48012),
+           "the first User_Timer_Clock at " + sc_core::sc_time_stamp().to_string() +
+               ", expected time_of(48012)");
+    chip.chip().reset();
+    wait(sc_core::SC_ZERO_TIME);
+    wait(sc_core::SC_ZERO_TIME);
+    expect(!irq.read() && x_int.read(), "after the reset irq reads " + std::to_string(irq.read()) +
+                                            " and x_int " + std::to_string(x_int.read()) +
+                                            ", expected 0 and 1");
+    const std::uint64_t s = start();
+    expect(s == 48024, "the Start after the reset completes at chip cycle " + std::to_string(s) +
+                           ", expected 48024 (SystemC time in clocks)");
+    wait(chip.irq_rise());
+    expect(sc_core::sc_time_stamp() == chip.time_of(96024) && chip.chip().cycle() == 96024,
+           "the User_Timer_Clock after the reset at " + sc_core::sc_time_stamp().to_string() +
+               ", chip cycle " + std::to_string(chip.chip().cycle()) +
+               ", expected time_of(96024), cycle 96024");
+    const Edges irq_want{{48012, true}, {48012, false}, {96024, true}};
+    expect(irq_edges == irq_want,
+           "irq edges (cycle:level)" + text(irq_edges) + ", expected" + text(irq_want));
+    const Edges x_int_want{{48012, false}, {48012, true}, {96024, false}};
+    expect(x_int_edges == x_int_want,
+           "x_int edges (cycle:level)" + text(x_int_edges) + ", expected" + text(x_int_want));
+  }
+
+  void run_polarity() {
     wait(sc_core::SC_ZERO_TIME);
     expect(x_int.read(), "X/INT is not high at reset (low-active, inactive)");
     sc_core::sc_time delay = sc_core::SC_ZERO_TIME;
@@ -106,16 +172,20 @@ struct Bench : sc_core::sc_module {
     expect(x_int_edges == want,
            "x_int edges (cycle:level)" + text(x_int_edges) + ", expected" + text(want));
     expect(x_int.read() == chip.chip().x_int_pin(), "x_int differs from the chip's X/INT pin");
-    sc_core::sc_stop();
   }
 };
 
 }  // namespace
 
-int sc_main(int, char*[]) {
+int sc_main(int argc, char* argv[]) {
+  const std::string run = argc == 2 ? argv[1] : "";
+  if (run != "polarity" && run != "reset") {
+    std::fprintf(stderr, "pins: usage: pins polarity|reset\n");
+    return 2;
+  }
   sc_core::sc_report_handler::set_actions("/OSCI/SystemC", sc_core::SC_INFO,
                                           sc_core::SC_DO_NOTHING);
-  Bench bench{"bench"};
+  Bench bench{"bench", run == "reset"};
   sc_core::sc_start();
   return bench.failures == 0 ? 0 : 1;
 }

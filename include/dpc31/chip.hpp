@@ -178,7 +178,8 @@ class Chip {
   Chip(Chip&&) noexcept;
   Chip& operator=(Chip&&) noexcept;
 
-  // Hardware reset: registers and RAM cells to their reset values, cycle counter to 0.
+  // Hardware reset: registers and RAM cells to their reset values, cycle counter to 0. The end
+  // of an active interrupt and PB3's fall are told to their observers at cycle 0.
   void reset();
 
   // --- the bus (front door) ---
@@ -368,7 +369,8 @@ class Chip {
   // sink are not state: they stay attached across load_state.
   [[nodiscard]] std::vector<std::uint8_t> save_state() const;
   // Only a snapshot of a chip with the same profile, bus mode and clock_hz is accepted.
-  // throws dpc31::SnapshotError; on error the chip is unchanged
+  // throws dpc31::SnapshotError; on error the chip is unchanged. on_irq_change and
+  // on_pb3_change see the loaded interrupt and PB3 at the loaded cycle where they differ.
   void load_state(std::span<const std::uint8_t> bytes);
   // temp file + rename; throws SnapshotError (message names the path)
   void save_state_file(const std::string& path) const;

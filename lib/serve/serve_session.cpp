@@ -417,9 +417,8 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
     }
     if (cmd == "reset") {
       arity(t, 0, 0, "reset");
-      chip_.reset();
+      chip_.reset();  // an interrupt it ends reaches the clients through on_irq_change
       clear_injected();
-      resync_irq();
       return ok(fmt::format("{}", chip_.cycle()));
     }
     if (cmd == "inject" || cmd == "inject_fdl") {
@@ -545,7 +544,6 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
         return err("snapshot", one_line(fmt::format("{}: {}", name, x.what())));
       }
       clear_injected();
-      resync_irq();
       return ok(fmt::format("{}", chip_.cycle()));
     }
     if (cmd == "auth") {

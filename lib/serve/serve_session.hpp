@@ -29,9 +29,9 @@ inline constexpr std::uint64_t kMaxStep = std::uint64_t{1} << 40;  // cycles per
 // With --cpu the CPU runs too, about 4 times real time where the chip alone runs some 20 000
 // (an idle 80C32 at 24 MHz): 2^30 cycles, 22 s of chip time, is some 5 s of the server's time.
 inline constexpr std::uint64_t kMaxStepCpu = std::uint64_t{1} << 30;
-inline constexpr std::size_t kMaxBlock = 4096;                     // bytes per *block command
-inline constexpr std::size_t kMaxInject = 1024;                    // bytes per inject
-inline constexpr std::uint32_t kMaxIdleBits = 1'000'000;           // inject idle=
+inline constexpr std::size_t kMaxBlock = 4096;            // bytes per *block command
+inline constexpr std::size_t kMaxInject = 1024;           // bytes per inject
+inline constexpr std::uint32_t kMaxIdleBits = 1'000'000;  // inject idle=
 // Injected bytes and telegrams not yet on the line (their END still ahead of the chip's cycle):
 // one more `inject` is `ERR queue_full` (docs/protocol.md, "Limits"). Each queued byte holds
 // about 11 RxD edges and a received character in the chip (some 250 bytes of memory).
@@ -89,7 +89,7 @@ class Session {
 
  private:
   void emit(AsyncLine::Kind kind, std::string text, LogLevel level = LogLevel::info);
-  // After reset / load: report a changed interrupt level the chip did not report itself.
+  // After a poke: report a changed interrupt level the chip did not report itself.
   void resync_irq();
   [[nodiscard]] std::uint32_t default_bit_cycles() const;
   [[nodiscard]] std::uint32_t address_limit() const;

@@ -232,6 +232,29 @@ TEST(Cpu51Board, RunUntilEndsAtTheCycleAskedWhateverTheCpuRuns) {
   }
 }
 
+// A hardware reset of the chip under a board (Chip::reset) is an event at the board's instant:
+// the chip's clock counts on from there, as the CPU's does (docs/cpu.md, "The board"). The next
+// run brings the reset chip (cycle 0) to the cycle where the last run ended, and a run to a cycle
+// before that runs nothing. SJMP $ (80h FEh, 2 machine cycles) at 24 MHz: chip cycle 48 000 is
+// CPU clock 24 000, machine cycle 2 000; the step [1998, 2000) samples last at clock 23 998
+// (chip cycle 47 996) and runs, the next one's first sample (chip cycle 48 020) waits.
+TEST(Cpu51Board, AResetChipCountsOnFromTheBoardsInstant) {
+  Chip chip({Profile::spc3, BusMode::intel});
+  Cpu51Board board(chip, 24'000'000, 0x8000);
+  const std::vector<std::uint8_t> spin = {0x80, 0xFE};
+  board.cpu().load_code(0, spin);
+  board.run_until(48'000);
+  ASSERT_EQ(board.cpu().cycles(), 2000u);
+  chip.reset();
+  EXPECT_EQ(chip.cycle(), 0u);
+  board.run_until(10);
+  EXPECT_EQ(chip.cycle(), 48'000u);
+  EXPECT_EQ(board.cpu().cycles(), 2000u);
+  board.run_until(96'000);
+  EXPECT_EQ(chip.cycle(), 96'000u);
+  EXPECT_EQ(board.cpu().cycles(), 4000u);
+}
+
 // An X/INT change whose S5P2 sample falls in a MOVX's first cycle is polled in its second (the
 // manual: flags "sampled at S5P2 of every machine cycle; the samples are polled during the
 // following machine cycle"), so the call follows the MOVX, whether it reads the chip or the
