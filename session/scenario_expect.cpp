@@ -188,7 +188,7 @@ scenario_bus::Check check(const ScenarioStep& st, const Seen& seen) {
         what = "irq count";
         want = std::to_string(st.value);
         got = std::to_string(seen.irq_count);
-        if (got != want) got += ": " + rises_text(seen, true);
+        if (got != want) got += fmt::format(": {}", rises_text(seen, true));
         break;
       }
       what = "irq " + st.name;

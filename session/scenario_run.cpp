@@ -647,10 +647,10 @@ class Runner {
     }
     const fdl::Frame& req = request_of(i);
     std::string s = fmt::format("{} -> {} {}", req.sa, req.da, service_name(req));
-    if (!req.du.empty()) s += " " + hex_bytes(req.du, " ", 32);
+    if (!req.du.empty()) s += fmt::format(" {}", hex_bytes(req.du, " ", 32));
     const auto it = notes_.find(i);
     if (it != notes_.end()) s += " [" + it->second + "]";
-    if (wants_answer(req)) s += " => " + outcome(master_->history()[i]);
+    if (wants_answer(req)) s += fmt::format(" => {}", outcome(master_->history()[i]));
     return s;
   }
 

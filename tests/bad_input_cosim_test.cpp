@@ -310,7 +310,7 @@ TEST_F(BadInput, CosimReplayHeaderLinesAgree) {
   spit(path("old.xml"), "old");
   int i = 0;
   for (const Case& c : cases) {
-    const std::string name = "h" + std::to_string(i++) + ".stim";
+    const std::string name = std::string("h").append(std::to_string(i++)).append(".stim");
     file(name, c.header + body);
     const auto before = listing();
     const Outcome r = dpc31("cosim --replay " + name + " --junit old.xml --out o --dump d " +

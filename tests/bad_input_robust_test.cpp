@@ -161,7 +161,10 @@ TEST_F(BadInput, WavediffWarningsAreBounded) {
             std::string::npos)
       << r.err;
   std::string map;
-  for (int i = 0; i < 30; ++i) map += "a" + std::to_string(i) + " = b" + std::to_string(i) + "\n";
+  for (int i = 0; i < 30; ++i) {
+    const std::string n = std::to_string(i);
+    map.append("a").append(n).append(" = b").append(n).append("\n");
+  }
   file("m.map", map);
   r = dpc31("wavediff twice.vcd twice.vcd --map m.map");
   EXPECT_EQ(lines(r.err), 44u) << r.err;

@@ -42,7 +42,7 @@ using Edges = std::vector<std::pair<std::uint64_t, bool>>;  // (cycle, level)
 std::string text(const Edges& edges) {
   std::string s;
   for (const auto& [cycle, level] : edges) {
-    s += " " + std::to_string(cycle) + ":" + (level ? "1" : "0");
+    s.append(" ").append(std::to_string(cycle)).append(level ? ":1" : ":0");
   }
   return s.empty() ? " none" : s;
 }

@@ -22,7 +22,7 @@ inline std::string hex_bytes(std::span<const std::uint8_t> bytes, std::string_vi
     s += kDigits[bytes[i] >> 4];
     s += kDigits[bytes[i] & 0xF];
   }
-  if (bytes.size() > max) s += " ... (" + std::to_string(bytes.size()) + " bytes)";
+  if (bytes.size() > max) s.append(" ... (").append(std::to_string(bytes.size())).append(" bytes)");
   return s;
 }
 

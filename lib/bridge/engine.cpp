@@ -48,7 +48,7 @@ std::string telegram_summary(std::span<const std::uint8_t> bytes) {
     s += fmt::format(" SAP {}->{}", f.ssap ? fmt::format("{}", fdl::sap_number(*f.ssap)) : "-",
                      f.dsap ? fmt::format("{}", fdl::sap_number(*f.dsap)) : "-");
   }
-  if (!f.du.empty()) s += " DU " + hex_bytes(f.du);
+  if (!f.du.empty()) s += fmt::format(" DU {}", hex_bytes(f.du));
   return s;
 }
 

@@ -258,7 +258,8 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
               : std::string(),
           chip_.irq_controller() == IrqController::c31 ? " irq_controller=c31" : "",
           chip_.bus_mode() == BusMode::intel ? "intel" : "motorola", chip_.clock_hz(),
-          chip_.bus_access_cycles(), p.address_bits, cpu_ ? " " + cpu_->describe() : ""));
+          chip_.bus_access_cycles(), p.address_bits,
+          cpu_ ? fmt::format(" {}", cpu_->describe()) : std::string()));
     }
     if (cmd == "ping") {
       arity(t, 0, 0, "ping");

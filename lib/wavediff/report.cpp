@@ -289,7 +289,7 @@ int run(const Options& o, std::string& out, std::string& err) {
     out += text_report(r, o.max_signals);
     return r.same() ? 0 : 1;
   } catch (const OptionError& e) {
-    err += "dpc31 wavediff: " + std::string(e.what()) + "\n";
+    err += fmt::format("dpc31 wavediff: {}\n", e.what());
     return 2;
   } catch (const InputError& e) {
     err += std::string(e.what()) + "\n";

@@ -1,16 +1,17 @@
 # CTest Install.consumer (packaging/CMakeLists.txt): installs the build into a fresh prefix,
 # checks the installed files, runs the installed CLI, builds examples/consumer with only that
 # prefix on CMAKE_PREFIX_PATH and runs it (the segment consumer's VCD and pcapng checked),
-# compiles every installed header alone and docs/cpu.md's 80C32 snippet (tests/install/headers),
-# and builds and runs its C program through pkg-config. Then examples/plugin the same way: its
-# firmware plug-in in both configurations (interrupt-driven, and polling with every interrupt
-# masked) under its C host, and behind the installed `dpc31 bridge` with the installed
-# tools/dp_master.py as the master, to Data_Exchange; the plug-in built with pkg-config's flags
-# alone; the driver's fatal-error loop stopped by the hang guard (bridge_example.py). Any failing
-# step fails the test.
+# compiles every installed header alone, docs/cpu.md's 80C32 snippet and README's "Using the
+# library" snippet (tests/install/headers), and builds and runs its C program and
+# tests/install/pkgconfig_consumer.cpp (C++: the 80C32 board, the segment outputs) through
+# pkg-config alone. Then examples/plugin the same way: its firmware plug-in in both
+# configurations (interrupt-driven, and polling with every interrupt masked) under its C host,
+# and behind the installed `dpc31 bridge` with the installed tools/dp_master.py as the master, to
+# Data_Exchange; the plug-in built with pkg-config's flags alone; the driver's fatal-error loop
+# stopped by the hang guard (bridge_example.py). Any failing step fails the test.
 #   cmake -DBUILD_DIR=... -DWORK_DIR=... -DEXAMPLE_DIR=... -DPLUGIN_DIR=... -DBRIDGE_CHECK=...
-#         -DHEADERS_DIR=... -DCPU_DOC=... -DPYTHON=... -DLIBDIR=... -DC_COMPILER=...
-#         -DCXX_COMPILER=... -P check_install.cmake
+#         -DHEADERS_DIR=... -DCPU_DOC=... -DREADME=... -DPKGCONFIG_CONSUMER=... -DPYTHON=...
+#         -DLIBDIR=... -DC_COMPILER=... -DCXX_COMPILER=... -P check_install.cmake
 set(prefix ${WORK_DIR}/prefix)
 file(REMOVE_RECURSE ${WORK_DIR})
 
@@ -67,11 +68,18 @@ if(NOT shb STREQUAL "0a0d0d0a")
 endif()
 run(${WORK_DIR}/build/hal_consumer)
 
-# Every installed header alone, and docs/cpu.md's 80C32 snippet as written (tests/install/headers).
+# Every installed header alone, docs/cpu.md's 80C32 snippet and README's snippet as written
+# (tests/install/headers).
 run(${CMAKE_COMMAND} -S ${HEADERS_DIR} -B ${WORK_DIR}/headers -DCMAKE_PREFIX_PATH=${prefix}
-  -DDPC31_PREFIX=${prefix} -DCPU_DOC=${CPU_DOC} -DCMAKE_C_COMPILER=${C_COMPILER}
+  -DDPC31_PREFIX=${prefix} -DCPU_DOC=${CPU_DOC} -DREADME=${README} -DCMAKE_C_COMPILER=${C_COMPILER}
   -DCMAKE_CXX_COMPILER=${CXX_COMPILER} "-DCMAKE_C_FLAGS=${strict}" "-DCMAKE_CXX_FLAGS=${strict}")
 run(${CMAKE_COMMAND} --build ${WORK_DIR}/headers --parallel 2)
+# README's program: three bus accesses of 4 clocks, then step(48000) (docs/timing.md).
+execute_process(COMMAND ${WORK_DIR}/headers/readme_snippet OUTPUT_VARIABLE readme_out
+  COMMAND_ECHO STDOUT COMMAND_ERROR_IS_FATAL ANY)
+if(NOT readme_out MATCHES ", cycle 48012\n$")
+  message(FATAL_ERROR "README's snippet: got '${readme_out}', want its last line to end 'cycle 48012'")
+endif()
 
 # pkg-config: only the prefix's .pc files; a plain C compile and link.
 set(ENV{PKG_CONFIG_LIBDIR} ${prefix}/${LIBDIR}/pkgconfig)
@@ -81,8 +89,19 @@ message(STATUS "pkg-config: ${flags}")
 separate_arguments(flags UNIX_COMMAND "${flags}")
 run(${C_COMPILER} -std=c99 -Wall -Wextra -Werror ${EXAMPLE_DIR}/hal_consumer.c ${flags}
   -o ${WORK_DIR}/hal_pkgconfig)
+# A C++ program on the 80C32 board by name and the segment outputs, from the same flags alone.
+run(${CXX_COMPILER} -std=c++20 -Wall -Wextra -Werror ${PKGCONFIG_CONSUMER} ${flags}
+  -o ${WORK_DIR}/cpp_pkgconfig)
 set(ENV{LD_LIBRARY_PATH} ${prefix}/${LIBDIR})
 run(${WORK_DIR}/hal_pkgconfig)
+# SJMP $ for 1 ms of the chip at 48 MHz: the 80C32 at 24 MHz, 12 clocks a machine cycle, has run
+# 48000 / 24 = 2000 machine cycles (docs/timing.md, "An 80C32 beside the chip") and stays at 0000h.
+execute_process(COMMAND ${WORK_DIR}/cpp_pkgconfig OUTPUT_VARIABLE cpp_out COMMAND_ECHO STDOUT
+  COMMAND_ERROR_IS_FATAL ANY)
+set(want "pkgconfig consumer: station5_spc3, PC 0000h after 2000 machine cycles\n")
+if(NOT cpp_out STREQUAL want)
+  message(FATAL_ERROR "cpp_pkgconfig: got '${cpp_out}', want '${want}'")
+endif()
 
 # examples/plugin: the plug-ins and the C host, from the CMake package only.
 unset(ENV{LD_LIBRARY_PATH})

@@ -221,12 +221,13 @@ bool take_trace_header(const std::string& path, const std::string& text, CosimOp
   if (rtl.empty() && rtl_model.empty()) return true;
   const int rtl_line = rtl.empty() ? at("rtl-model") : at("rtl");
   // Your RTL: the run's model, as it was built (sources, top, defines) or loaded.
-  const std::string recorded = rtl.empty() ? "--rtl-model " + rtl_model : "--rtl " + joined(rtl);
+  const std::string recorded =
+      rtl.empty() ? "--rtl-model " + rtl_model : fmt::format("--rtl {}", joined(rtl));
   if ((!o.rtl_sources.empty() || !o.rtl_model.empty()) &&
       !(same_files(o.rtl_sources, rtl) && same_files({o.rtl_model}, {rtl_model}))) {
-    error = fmt::format(
-        "{}:{}: recorded with {}, not {}", path, rtl_line, recorded,
-        o.rtl_sources.empty() ? "--rtl-model " + o.rtl_model : "--rtl " + joined(o.rtl_sources));
+    error = fmt::format("{}:{}: recorded with {}, not {}", path, rtl_line, recorded,
+                        o.rtl_sources.empty() ? "--rtl-model " + o.rtl_model
+                                              : fmt::format("--rtl {}", joined(o.rtl_sources)));
     return false;
   }
   if (!rtl.empty() && !o.top.empty() && o.top != top) {
