@@ -637,7 +637,7 @@ class Runner {
   std::string describe(std::size_t i) const {
     if (const auto raw = raw_.find(i); raw != raw_.end()) {  // `send`: the bytes as given
       const fdl::Decoded d = fdl::decode(raw->second);
-      std::string s = "send " + hex_bytes(raw->second, " ", fdl::kMaxFrameLength);
+      std::string s = fmt::format("send {}", hex_bytes(raw->second, " ", fdl::kMaxFrameLength));
       if (d.error != fdl::Error::none) {
         s += fmt::format(" [{}]", fdl::error_name(d.error));
       } else if (!wants_answer(d.frame)) {

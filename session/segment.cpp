@@ -81,7 +81,18 @@ void Segment::use_reference_line(bool on) {
   reference_ = on;
 }
 
+// A name is a waveform scope, part of a trace's file name and in every capture comment: its
+// bound holds at every door (docs/capture.md), not only where a scenario or Python checks it;
+// checked before anything of the station is made.
+void Segment::check_name(const std::string& name) const {
+  if (name.size() > kMaxStationName) {
+    throw std::invalid_argument(fmt::format(
+        "segment: {}", station_name_refused(name, fmt::format("station {}", stations_.size()))));
+  }
+}
+
 std::size_t Segment::add_chip(std::string name, ChipOptions opt) {
+  check_name(name);
   auto s = std::make_unique<Station>();
   s->name = std::move(name);
   s->chip = std::make_unique<Chip>(opt);
@@ -123,6 +134,7 @@ std::size_t Segment::add_chip(std::string name, ChipOptions opt) {
 }
 
 std::size_t Segment::add_sender(std::string name) {
+  check_name(name);
   auto s = std::make_unique<Station>();
   s->name = std::move(name);
   add_station(std::move(s));

@@ -50,7 +50,8 @@ class Segment {
   Segment(const Segment&) = delete;
   Segment& operator=(const Segment&) = delete;
 
-  // A chip station; its clock must be the segment's. Returns its index.
+  // A chip station; its clock must be the segment's. Returns its index. A name longer than
+  // kMaxStationName (64 bytes) is std::invalid_argument, for a sender too.
   std::size_t add_chip(std::string name, ChipOptions opt);
   // A station without a chip (a master, a scripted station): it drives the line with send().
   std::size_t add_sender(std::string name);
@@ -161,6 +162,7 @@ class Segment {
   void look_at(Station& s);
   void set_next(std::size_t i, std::uint64_t next);
   void add_station(std::unique_ptr<Station> s);
+  void check_name(const std::string& name) const;
   // due_: the chips whose next event is at or before `bound`, in station order.
   void due_by(std::uint64_t bound);
   // Station i's answer, armed and now starting on the line at `cycle`, to every other chip whole;

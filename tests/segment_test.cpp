@@ -13,6 +13,7 @@
 #include <memory>
 #include <optional>
 #include <stdexcept>
+#include <string>
 #include <typeinfo>
 #include <vector>
 
@@ -170,6 +171,25 @@ TEST(Segment, ABreakIsOneBrokenCharacterOnTheLine) {
   EXPECT_EQ(got[0].bytes, (std::vector<std::uint8_t>{0x00}));
   EXPECT_EQ(got[0].start, s);
   EXPECT_EQ(got[0].end, s + 11 * t);
+}
+
+// A station's name is at most 64 bytes at the C++ door too (docs/capture.md: a segment's capture
+// comments hold the names): the review of s31 found add_chip and add_sender took any length where
+// the scenario and Python refused 65 bytes. The refusal leaves nothing behind: a 64-byte name is
+// still free, and the next station gets the next index.
+TEST(Segment, AStationNameLongerThan64BytesIsRefusedBeforeTheStationIsMade) {
+  dpc31::Segment seg(1500000);
+  const std::string long_name(65, 'n');
+  try {
+    seg.add_chip(long_name, dpc31::ChipOptions{dpc31::Profile::spc3});
+    ADD_FAILURE() << "add_chip took a 65-byte name";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), "segment: a name of 65 bytes for station 0: at most 64");
+  }
+  EXPECT_THROW(seg.add_sender(long_name), std::invalid_argument);
+  EXPECT_EQ(seg.size(), 0u);
+  EXPECT_EQ(seg.add_chip(std::string(64, 'n'), dpc31::ChipOptions{dpc31::Profile::spc3}), 0u);
+  EXPECT_EQ(seg.add_sender("master"), 1u);
 }
 
 TEST(Segment, ASendBeforeTheChipsCycleThrowsWithBothNames) {

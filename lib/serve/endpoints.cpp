@@ -35,7 +35,11 @@ bool all_digits(std::string_view s) {
 std::string check_host(const std::string& host, bool bracketed) {
   in6_addr v6{};
   if (bracketed) {
-    return ::inet_pton(AF_INET6, host.c_str(), &v6) == 1
+    // A link-local address names its interface after '%' (fe80::1%eth0, RFC 4007): the
+    // resolver takes the zone, inet_pton the address before it.
+    const std::string addr = host.substr(0, host.find('%'));
+    const bool zone_ok = addr.size() == host.size() || addr.size() + 1 < host.size();
+    return zone_ok && ::inet_pton(AF_INET6, addr.c_str(), &v6) == 1
                ? std::string()
                : fmt::format("'[{}]' is no IPv6 address", host);
   }
@@ -120,10 +124,17 @@ Endpoint open_tcp(const std::string& spec) {
   ::getnameinfo(reinterpret_cast<sockaddr*>(&ss), len, h, sizeof h, s, sizeof s,
                 NI_NUMERICHOST | NI_NUMERICSERV);
   ep.port = static_cast<std::uint16_t>(std::stoul(s));
-  ep.loopback =
-      ss.ss_family == AF_INET6
-          ? IN6_IS_ADDR_LOOPBACK(&reinterpret_cast<const sockaddr_in6&>(ss).sin6_addr)
-          : (ntohl(reinterpret_cast<const sockaddr_in&>(ss).sin_addr.s_addr) >> 24) == 127;
+  // ::1, 127/8, and 127/8 mapped into IPv6 (::ffff:127.0.0.1).
+  const auto v4_loopback = [](std::uint32_t host_order) { return (host_order >> 24) == 127; };
+  if (ss.ss_family == AF_INET6) {
+    const in6_addr& a = reinterpret_cast<const sockaddr_in6&>(ss).sin6_addr;
+    std::uint32_t mapped = 0;
+    std::memcpy(&mapped, a.s6_addr + 12, 4);
+    ep.loopback =
+        IN6_IS_ADDR_LOOPBACK(&a) || (IN6_IS_ADDR_V4MAPPED(&a) && v4_loopback(ntohl(mapped)));
+  } else {
+    ep.loopback = v4_loopback(ntohl(reinterpret_cast<const sockaddr_in&>(ss).sin_addr.s_addr));
+  }
   ep.line = ss.ss_family == AF_INET6 ? fmt::format("listening tcp [{}]:{}", h, s)
                                      : fmt::format("listening tcp {}:{}", h, s);
   return ep;

@@ -189,7 +189,6 @@ std::size_t Session::inject_queue_telegrams() {
 Session::Session(ChipOptions opt, std::function<void(const AsyncLine&)> sink)
     : chip_(opt), emit_(std::move(sink)) {
   chip_.on_irq_change([this](std::uint64_t cycle, bool active) {
-    irq_reported_ = active;
     emit(AsyncLine::Kind::irq, fmt::format("! irq {} {}", cycle, active ? 1 : 0));
   });
   chip_.on_telegram([this](const Telegram& t) {
@@ -211,12 +210,6 @@ void Session::attach_cpu(CpuSetup setup) {
 
 void Session::emit(AsyncLine::Kind kind, std::string text, LogLevel level) {
   if (emit_) emit_(AsyncLine{kind, level, std::move(text)});
-}
-
-void Session::resync_irq() {
-  if (chip_.irq_active() == irq_reported_) return;
-  irq_reported_ = chip_.irq_active();
-  emit(AsyncLine::Kind::irq, fmt::format("! irq {} {}", chip_.cycle(), irq_reported_ ? 1 : 0));
 }
 
 std::uint32_t Session::default_bit_cycles() const {
@@ -392,8 +385,7 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
       if (!chip_.poke_reg(r->id, v)) {
         return err("no_storage", fmt::format("{} has no storage to poke", r->name));
       }
-      resync_irq();
-      return ok();
+      return ok();  // a changed interrupt: poke_reg told on_irq_change (`! irq`) already
     }
     if (cmd == "step" || cmd == "run_until_irq") {
       arity(t, 1, 1, cmd, cmd == "step" ? "N" : "MAX");

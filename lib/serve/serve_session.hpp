@@ -89,8 +89,6 @@ class Session {
 
  private:
   void emit(AsyncLine::Kind kind, std::string text, LogLevel level = LogLevel::info);
-  // After a poke: report a changed interrupt level the chip did not report itself.
-  void resync_irq();
   [[nodiscard]] std::uint32_t default_bit_cycles() const;
   [[nodiscard]] std::uint32_t address_limit() const;
   // Forgets the injected telegrams whose END the chip has reached.
@@ -99,7 +97,6 @@ class Session {
 
   Chip chip_;
   std::function<void(const AsyncLine&)> emit_;
-  bool irq_reported_ = false;  // the interrupt level the clients were last told
   std::uint64_t rx_free_ = 0;  // end of the last injected telegram: RxD is ours until then
   std::deque<std::pair<std::uint64_t, std::size_t>> injected_;  // END, bytes; oldest first
   std::size_t injected_bytes_ = 0;
