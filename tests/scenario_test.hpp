@@ -6,8 +6,6 @@
 #include <gtest/gtest.h>
 #include <stdlib.h>
 
-#include <array>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -15,6 +13,7 @@
 
 // emu/ is not on the tests' include path.
 #include "scenario.hpp"
+#include "test_files.hpp"
 
 namespace scenario_test {
 
@@ -47,28 +46,17 @@ inline std::string parse_error(const std::string& text) {
   return err.text();
 }
 
-// A scenario file in a fresh temporary directory.
+// A scenario file in a fresh private temporary directory (testutil::TempDir: TMPDIR, mkdtemp
+// checked, removed with everything in it).
 class TempFile {
  public:
-  explicit TempFile(const std::string& text) {
-    std::array<char, 32> dir{};
-    std::snprintf(dir.data(), dir.size(), "/tmp/scn_test_XXXXXX");
-    dir_ = mkdtemp(dir.data());
-    path_ = dir_ / "s.scn";
-    std::ofstream(path_) << text;
-  }
-  ~TempFile() {
-    std::error_code ec;
-    std::filesystem::remove_all(dir_, ec);
-  }
-  TempFile(const TempFile&) = delete;
-  TempFile& operator=(const TempFile&) = delete;
-  [[nodiscard]] std::string path() const { return path_.string(); }
-  [[nodiscard]] std::filesystem::path dir() const { return dir_; }
+  explicit TempFile(const std::string& text) : path_(dir_.write("s.scn", text)) {}
+  [[nodiscard]] std::string path() const { return path_; }
+  [[nodiscard]] std::filesystem::path dir() const { return dir_.path(); }
 
  private:
-  std::filesystem::path dir_;
-  std::filesystem::path path_;
+  testutil::TempDir dir_;
+  std::string path_;
 };
 
 }  // namespace scenario_test
