@@ -2,11 +2,13 @@
 // of another user, guessing the secret, a Unix socket whose backlog is full, a state directory
 // without a quota, an idle timeout of almost nothing, a hard link in the state directory; and of
 // the s31-serve audit: the temporaries' names, blanks at a name's end, legacy --tcp addresses,
-// another interface without a secret, --max-clients above the descriptor limit. Each test makes
+// another interface without a secret, --max-clients above the descriptor limit, no descriptor left
+// for a newcomer. Each test makes
 // the attack and sees it refused or bounded; the real binary as a child process.
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/un.h>
@@ -18,6 +20,9 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <optional>
+#include <set>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
@@ -442,4 +447,49 @@ TEST(ServeSecurity, MaxClientsAboveTheDescriptorLimitIsClampedAndSaid) {
     EXPECT_EQ(late.read_line(), fmt::format("ERR busy too many clients (at most {})", n)) << i;
   }
   EXPECT_EQ(clients.front().command("ping"), "OK pong");
+}
+
+// The spare descriptor (lib/serve/serve_server.cpp, refuse_without_descriptor): when the limit
+// falls below what --max-clients was fitted to (here lowered from outside with prlimit(2) once
+// the server runs, as an administrator's `prlimit --pid` does), accept() fails with EMFILE. A
+// newcomer then gets `ERR busy the server has no descriptor left for a client` at once instead of
+// waiting unanswered in the backlog, the server keeps serving the clients it has, and a client
+// that leaves makes room for the next one (docs/protocol.md, `--max-clients`).
+TEST(ServeSecurity, ANewcomerWithoutADescriptorLeftIsToldBusyAndTheOthersGoOn) {
+  ServerProcess server(kCli, {"--tcp", "0"});
+  // A new descriptor takes the lowest free number, and RLIMIT_NOFILE bounds the numbers: a
+  // limit of the lowest free number + 1 leaves room for one client (the spare, opened at the
+  // start, lies below it).
+  std::set<long> open;
+  for (const auto& e :
+       std::filesystem::directory_iterator(fmt::format("/proc/{}/fd", server.pid())))
+    open.insert(std::stol(e.path().filename().string()));
+  rlim_t lowest_free = 0;
+  while (open.count(static_cast<long>(lowest_free)) != 0) ++lowest_free;
+  const rlimit one_more{lowest_free + 1, lowest_free + 1};
+  ASSERT_EQ(::prlimit(server.pid(), RLIMIT_NOFILE, &one_more, nullptr), 0) << std::strerror(errno);
+  std::optional<LineClient> first = LineClient::tcp(server.port());
+  EXPECT_EQ(first->command("ping"), "OK pong");
+  for (int i = 0; i < 5; ++i) {
+    LineClient late = LineClient::tcp(server.port());
+    EXPECT_EQ(late.read_line(), "ERR busy the server has no descriptor left for a client") << i;
+  }
+  EXPECT_EQ(first->command("ping"), "OK pong");
+  first.reset();
+  // The first one's descriptor is free again once the server has seen it leave. A refused
+  // newcomer reads its line unasked; an accepted one reads nothing until it asks.
+  bool served = false;
+  for (int i = 0; i < 50 && !served; ++i) {
+    LineClient next = LineClient::tcp(server.port());
+    std::optional<std::string> told;
+    try {
+      told = next.read_line(200);
+    } catch (const std::runtime_error&) {
+      served = next.command("ping") == "OK pong";
+      continue;
+    }
+    EXPECT_EQ(told, "ERR busy the server has no descriptor left for a client") << i;
+    std::this_thread::sleep_for(milliseconds(20));
+  }
+  EXPECT_TRUE(served);
 }
