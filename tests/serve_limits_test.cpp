@@ -3,8 +3,8 @@
 // without a quota, an idle timeout of almost nothing, a hard link in the state directory; and of
 // the s31-serve audit: the temporaries' names, blanks at a name's end, legacy --tcp addresses,
 // another interface without a secret, --max-clients above the descriptor limit, no descriptor left
-// for a newcomer. Each test makes
-// the attack and sees it refused or bounded; the real binary as a child process.
+// for a newcomer. Each test makes the attack and sees it refused or bounded; the real binary as a
+// child process.
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
