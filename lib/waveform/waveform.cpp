@@ -293,13 +293,17 @@ struct Recorder::Impl {
     }
     return rx_tx;
   }
-  // A session left without a channel to decode (--signals) is refused before the run.
+  [[nodiscard]] std::string no_session_channel() const {
+    return fmt::format(
+        "{}: a PulseView session decodes pins.rxd or pins.txd (a segment's line.level), and "
+        "--signals leaves them out of {}",
+        opt.pvs, opt.path);
+  }
+  // A session left without a channel to decode (--signals) is refused as the run starts.
   [[nodiscard]] bool session_has_channels(std::string& err) const {
     const auto [rx, tx] = session_channels();
     if (!pvs.is_open() || !rx.empty() || !tx.empty()) return true;
-    err =
-        fmt::format("{}: a PulseView session decodes {}, which --signals leaves out of {}", opt.pvs,
-                    line != nullptr ? "the line (line.level)" : "pins.rxd or pins.txd", opt.path);
+    err = no_session_channel();
     return false;
   }
 
@@ -681,13 +685,21 @@ Recorder::~Recorder() = default;
 bool Recorder::open(std::string& error) { return impl_->open_outputs(error); }
 
 bool Recorder::check_signals(std::string& error) const {
-  for (const std::string& p : impl_->opt.signals) {
+  const Impl& m = *impl_;
+  for (const std::string& p : m.opt.signals) {
     const bool any = std::any_of(kSignals.begin(), kSignals.end(),
                                  [&](const SignalDef& d) { return glob(p, d.name); });
     if (!any) {
       error = fmt::format("no signal matches '{}' (see docs/waveforms.md)", p);
       return false;
     }
+  }
+  // A PulseView session needs a line to decode: one chip's RxD or TxD (every chip has both), a
+  // segment's line (attach_line checks which of them the run has).
+  if (!m.opt.pvs.empty() && !m.take("pins.rxd", "pins.rxd", 1) &&
+      !m.take("pins.txd", "pins.txd", 1) && !m.take("line.level", "line.level", 1)) {
+    error = m.no_session_channel();
+    return false;
   }
   return true;
 }
