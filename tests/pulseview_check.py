@@ -78,9 +78,10 @@ def stop(proc, name):
 def start_xvfb(d):
     """An Xvfb of our own on a free display (-displayfd: it writes the number when ready)."""
     r, w = os.pipe()
-    xvfb = subprocess.Popen(["Xvfb", "-displayfd", str(w), "-nolisten", "tcp", "-screen", "0",
-                             "1280x800x24"], pass_fds=(w,), stdout=subprocess.DEVNULL,
-                            stderr=open(d / "xvfb.log", "w", encoding="utf-8"))
+    with open(d / "xvfb.log", "w", encoding="utf-8") as log:
+        xvfb = subprocess.Popen(["Xvfb", "-displayfd", str(w), "-nolisten", "tcp", "-screen", "0",
+                                 "1280x800x24"], pass_fds=(w,), stdout=subprocess.DEVNULL,
+                                stderr=log)
     os.close(w)
     with os.fdopen(r) as f:
         display = f.readline().strip()
@@ -137,12 +138,13 @@ def main():
         env.pop("QT_QPA_PLATFORM", None)
         log = d / "pulseview.log"
         t0 = time.monotonic()
-        # -c: no sessions restored, -D: no device scan; the rest is the page's command line.
-        with open(log, "w", encoding="utf-8") as out:
-            pv = subprocess.Popen(["pulseview", "-c", "-D", "-I", "vcd", "-i", str(vcd)], env=env,
-                                  stdout=out, stderr=subprocess.STDOUT)
+        pv = None
         got = []
         try:
+            # -c: no sessions restored, -D: no device scan; the rest is the page's command line.
+            with open(log, "w", encoding="utf-8") as out:
+                pv = subprocess.Popen(["pulseview", "-c", "-D", "-I", "vcd", "-i", str(vcd)],
+                                      env=env, stdout=out, stderr=subprocess.STDOUT)
             while time.monotonic() - t0 < DEADLINE_S and pv.poll() is None:
                 time.sleep(0.2)
                 if puts.exists():
@@ -150,8 +152,9 @@ def main():
                 if len(got) >= len(want):
                     break
         finally:
-            exited = pv.poll()
-            stop(pv, "PulseView")
+            exited = pv.poll() if pv else None
+            if pv:
+                stop(pv, "PulseView")
             stop(xvfb, "Xvfb")
         took = time.monotonic() - t0
         said = log.read_text(encoding="utf-8", errors="replace").strip()[-600:]
