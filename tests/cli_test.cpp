@@ -170,6 +170,50 @@ TEST(Cli, RunWritesTheLogicAnalyserForm) {
   EXPECT_NE(slurp(dir + "la1.vcd").find("$timescale 1ns $end"), std::string::npos);
 }
 
+// The PulseView session (docs/waveforms.md, "PulseView") takes the scenario's rate: 12 000 000 =
+// B71B00h, int64 little-endian 00 1B B7 00 00 00 00 00 in QSettings' escapes: \0, \x1b, \xb7,
+// five \0. A flat --vcd gets the same session as --la-vcd. A segment's decodes its line as RX,
+// without TX; one whose --signals leave the line out is refused, nothing written.
+TEST(Cli, RunWritesAPulseViewSessionForTheRunsRate) {
+  const std::string dir = testutil::scratch();
+  const std::string scn = std::string(SOURCE_DIR) + "/traces/startup_dpc31_12m.scn";
+  ASSERT_EQ(run("run " + scn + " --quiet --la-vcd " + dir + "12m.vcd --pvs " + dir + "12m.pvs").rc,
+            0);
+  const std::string pvs = slurp(dir + "12m.pvs");
+  EXPECT_NE(pvs.find("decoder0\\option0\\name=baudrate\ndecoder0\\option0\\type=x\n"
+                     "decoder0\\option0\\value=@ByteArray(\\0\\x1b\\xb7\\0\\0\\0\\0\\0)\n"),
+            std::string::npos)
+      << pvs;
+  EXPECT_NE(pvs.find("channel0\\assigned_signal_name=rxd\n"), std::string::npos) << pvs;
+  EXPECT_NE(pvs.find("channel1\\assigned_signal_name=txd\n"), std::string::npos) << pvs;
+  ASSERT_EQ(
+      run("run " + scn + " --quiet --vcd " + dir + "12m_flat.vcd --flat --pvs " + dir + "flat.pvs")
+          .rc,
+      0);
+  EXPECT_EQ(slurp(dir + "flat.pvs"), pvs);
+  const std::string seg = std::string(SOURCE_DIR) + "/traces/segment/two_masters.scn";
+  ASSERT_EQ(run("run " + seg + " --quiet --la-vcd " + dir + "seg.vcd --pvs " + dir + "seg.pvs").rc,
+            0);
+  const std::string seg_pvs = slurp(dir + "seg.pvs");
+  EXPECT_NE(seg_pvs.find("channels=2\nchannel0\\assigned_signal_name=line\n"
+                         "channel0\\initial_pin_state=2\nchannel1\\initial_pin_state=2\n"),
+            std::string::npos)
+      << seg_pvs;
+  const Result none =
+      testutil::run_command(std::string(DPC31_CLI) + " run " + seg + " --quiet --la-vcd " + dir +
+                            "none.vcd --signals "
+                            "'pins.*' --pvs " +
+                            dir + "none.pvs 2>&1");
+  EXPECT_EQ(none.rc, 2);
+  EXPECT_EQ(none.out, "dpc31 run: " + dir +
+                          "none.pvs: a PulseView session decodes pins.rxd or pins.txd (a "
+                          "segment's line.level), and --signals leaves them out of " +
+                          dir + "none.vcd\n")
+      << none.out;
+  EXPECT_FALSE(std::filesystem::exists(dir + "none.pvs"));
+  EXPECT_FALSE(std::filesystem::exists(dir + "none.vcd"));
+}
+
 // `dpc31 bench --quick`: every row of the table is there and well-formed. The timings are not
 // checked (speed is measured by the benchmarks, not asserted by tests).
 TEST(CliBench, QuickPrintsEveryRowWellFormed) {
