@@ -208,8 +208,14 @@ class Chip {
   // side has no storage (derived values, reserved and unmapped addresses).
   bool poke(std::uint32_t addr, std::uint8_t value);
   // Whole registers by id, including write-only latches (Int_Mask_Reg, WD_Baud_Control_Val).
+  // A poked latch acts as the bus write's value would: VPC3+ Mode_Reg2.4kB_Mode switches the RAM
+  // decode (2 KB / 4 KB) at once, in Offline or not. Bits whose state is the chip's machines',
+  // not the latch's, never disagree with them: a poke that would change Mode_Reg1's Start_SPC3,
+  // Go_Offline (the run state) or its pulses EOI, User_Leave_Master is std::invalid_argument
+  // (poke_reg_problem says why; "" when the poke is taken), nothing stored.
   [[nodiscard]] std::uint16_t peek_reg(RegId id) const;
   bool poke_reg(RegId id, std::uint16_t value);
+  [[nodiscard]] std::string poke_reg_problem(RegId id, std::uint16_t value) const;
 
   // --- time ---
   // The chip's time ends at kLastCycle, 2^62 - 1 (about 3 000 years at 48 MHz): a step past it
