@@ -101,8 +101,8 @@ void RegisterFile::note_buffer(RegId ptr_cell, std::uint32_t base, std::size_t l
                 name, cell(ptr_cell), base, registers_end_);
       break;
     case FoldedLog::Line::address:
-      sig_->log(LogLevel::warn, "{} = {:02X}h puts its buffer at {:#05x}, over the registers",
-                name, cell(ptr_cell), base);
+      sig_->log(LogLevel::warn, "{} = {:02X}h puts its buffer at {:#05x}, over the registers", name,
+                cell(ptr_cell), base);
       break;
     case FoldedLog::Line::count:
       sig_->log(LogLevel::warn,

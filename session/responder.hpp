@@ -56,7 +56,7 @@ struct ResponderLayout {
   std::uint32_t seg_shift = 3;
   std::array<std::uint32_t, kRegIdCount> segment{};  // by pointer cell (R_*_Buf_Ptr*, queues)
   std::uint32_t dpv1 = 0;                            // the DPV1 part's first segment
-  std::uint32_t end = 0;      // one past the last byte of the last buffer
+  std::uint32_t end = 0;                             // one past the last byte of the last buffer
   std::uint32_t ram_end = 0;  // one past the last byte of the RAM (in that mode)
 };
 [[nodiscard]] ResponderLayout responder_layout(const ProfileDesc& p, const ResponderConfig& cfg);

@@ -342,8 +342,9 @@ TEST(Responder, LengthCellsBeyondADataUnitSendTheFirst244BytesAndSaySo) {
     DpMaster m(chip, MasterConfig{2, 1'500'000}, rc.slave);
     m.set_firmware([&user](BusPort& b) { user.isr(b); });
     ASSERT_TRUE(m.startup());
-    const std::string beyond = ": beyond the 244 bytes of a DP data unit: the answer sends the "
-                               "buffer's first 244 (modelled)";
+    const std::string beyond =
+        ": beyond the 244 bytes of a DP data unit: the answer sends the "
+        "buffer's first 244 (modelled)";
     for (const int len : {245, 246, 247, 255, 255, 244, 245}) {
       SCOPED_TRACE(len);
       chip.write(cell("R_Len_Din_Buf"), static_cast<std::uint8_t>(len));
@@ -402,8 +403,8 @@ TEST(Responder, BuffersOverTheRegistersAreLogged) {
   DpMaster m(chip, MasterConfig{2, 1'500'000}, rc.slave);
   m.set_firmware([&user](BusPort& b) { user.isr(b); });
   ASSERT_TRUE(m.startup());
-  for (const char* ptr : {"R_Dout_Buf_Ptr1", "R_Dout_Buf_Ptr2", "R_Dout_Buf_Ptr3",
-                          "R_Din_Buf_Ptr1", "R_Din_Buf_Ptr2", "R_Din_Buf_Ptr3"}) {
+  for (const char* ptr : {"R_Dout_Buf_Ptr1", "R_Dout_Buf_Ptr2", "R_Dout_Buf_Ptr3", "R_Din_Buf_Ptr1",
+                          "R_Din_Buf_Ptr2", "R_Din_Buf_Ptr3"}) {
     chip.write(static_cast<std::uint32_t>(find_reg(chip.profile(), ptr)->read_addr), 0x00);
   }
   log.clear();
@@ -412,15 +413,16 @@ TEST(Responder, BuffersOverTheRegistersAreLogged) {
   EXPECT_EQ(x.answer->du, (std::vector<std::uint8_t>{0xFF, 0xFF, 0xFF, 0xFF}));
   ASSERT_EQ(log.size(), 1u);
   EXPECT_TRUE(log[0].starts_with("R_Dout_Buf_Ptr")) << log[0];
-  EXPECT_TRUE(log[0].ends_with(" = 00h puts its buffer at 0x000, over the registers (below "
-                               "0x016): the chip keeps its bytes in RAM the CPU does not see "
-                               "there (modelled); further such uses are counted"))
+  EXPECT_TRUE(
+      log[0].ends_with(" = 00h puts its buffer at 0x000, over the registers (below "
+                       "0x016): the chip keeps its bytes in RAM the CPU does not see "
+                       "there (modelled); further such uses are counted"))
       << log[0];
   EXPECT_NE(chip.read(0x000), 0xFF);
   for (int i = 0; i < 4; ++i) m.data_exchange({0xFF, 0xFF, 0xFF, 0xFF});  // uses 3..10
   ASSERT_EQ(log.size(), 2u);
-  EXPECT_TRUE(log[1].starts_with(
-      "10 uses of buffers over the registers so far (the latest: R_Din_Buf_Ptr"))
+  EXPECT_TRUE(
+      log[1].starts_with("10 uses of buffers over the registers so far (the latest: R_Din_Buf_Ptr"))
       << log[1];
 }
 

@@ -152,7 +152,8 @@ TEST(ScenarioParse, IrqControllerHeaderChoosesTheC31s) {
 TEST(ScenarioParse, IrqControllerComesAfterProfileDpc31AsVariantAfterItsProfile) {
   const std::string before =
       ":1: 'irq-controller' needs 'profile dpc31' before it: only the DPC31 has a C31 core";
-  for (const std::string second : {"profile dpc31", "profile spc3", "profile vpc3plus", "startup"}) {
+  for (const std::string second :
+       {"profile dpc31", "profile spc3", "profile vpc3plus", "startup"}) {
     for (const std::string first : {"irq-controller c31", "irq-controller external"}) {
       EXPECT_EQ(parse_error(first + "\n" + second + "\nstartup\n"), "t.scn" + before)
           << first << " / " << second;
@@ -491,9 +492,9 @@ TEST(ScenarioParse, SlaveLengthsWhoseBuffersDoNotFitTheRamAreRefused) {
   EXPECT_EQ(parse_error("slave in=233 out=233\nprofile spc3\nstartup\n"),
             "t.scn:1: slave in=233 out=233: the built-in user side's buffers would end at 0x61f, "
             "past the 1536 bytes of RAM of profile spc3 (its user area 0x040..0x5ff)");
-  for (const std::string ok : {"profile spc3\nslave in=232 out=232\n",
-                               "profile vpc3plus\nslave in=244 out=244\n",
-                               "profile dpc31\nslave in=244 out=244\n"}) {
+  for (const std::string ok :
+       {"profile spc3\nslave in=232 out=232\n", "profile vpc3plus\nslave in=244 out=244\n",
+        "profile dpc31\nslave in=244 out=244\n"}) {
     EXPECT_EQ(parse_error(ok + "startup\n"), "") << ok;
   }
 }
