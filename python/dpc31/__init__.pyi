@@ -272,6 +272,7 @@ class Dpv1Outcome(enum.Enum):
     timeout = 4
     malformed = 5
     no_connection = 6
+    aborted = 7
 
 class Dpv1Rules:
     retries: int
@@ -283,6 +284,7 @@ class Dpv1Answer:
     outcome: Dpv1Outcome
     du: bytes
     error: Optional[Tuple[int, int, int]]
+    abort: Optional[Tuple[int, int, int, int]]  # aborted: Subnet, Instance, Reason_Code, detail
     last: Optional[Frame]
     polls: int
     start: int
@@ -345,7 +347,9 @@ class Master:
     def dpv1_write(self, slot: int, index: int, data: bytes) -> Dpv1Answer: ...
     def alarm_ack(self, slot: int, alarm_type: int, specifier: int,
                   sap: int = 50) -> Dpv1Answer: ...
-    def c2_initiate(self, send_timeout: int = 100, features_supported: int = 1) -> Dpv1Answer: ...
+    def c2_initiate(self, send_timeout: int = 100, features_supported: int = 0x0100,
+                    s_type: int = 0, s_addr: bytes = b"\x00\x00", d_type: int = 0,
+                    d_addr: bytes = b"\x00\x00") -> Dpv1Answer: ...
     def c2_read(self, slot: int, index: int, length: int) -> Dpv1Answer: ...
     def c2_write(self, slot: int, index: int, data: bytes) -> Dpv1Answer: ...
     def c2_transport(self, slot: int, index: int, data: bytes) -> Dpv1Answer: ...
