@@ -484,49 +484,39 @@ static void c2_close(DPS_P(dps)) {
   self->c2_busy = 0;
 }
 
-/* The Profichip driver's checks of an Initiate before its user sees it (MSAC_C2_RealizeIndRecv):
- * a Type 0 address whose Len is not 2: Abort FE; shorter than 20 bytes or than 16 + both
- * addresses: Abort IA. 0: accepted. */
-static uint8_t c2_initiate_abort(const uint8_t* req, uint8_t len) {
-  unsigned sd;
-  if (len < kInitiateReq) return kAbortIA;
-  if ((req[12] == 0 && req[13] != kAddrApiScl) || (req[14] == 0 && req[15] != kAddrApiScl))
-    return kAbortFE;
-  sd = (unsigned)req[13] + req[15];
-  if (len < kInitiateReqMin || len < kInitiateReq + sd) return kAbortIA;
-  return 0;
-}
-
 /* Initiate on SAP 49 (another function there: its own number | 80h, feature not supported, as
  * DO4 answers a function it does not serve). Open: Initiate | 80h, Resource_Busy. Else the
  * Initiate response (Max_Len_Data_Unit, its own features: Read/Write, no profile; S and D
  * address swapped) waits in the connection's buffer for the master's first poll there, the
  * connection's SAP is switched on, and the resource manager answers 56h, the connection's SAP,
- * the Send_Timeout. A request the driver's checks refuse gets its Abort there instead, one whose
- * D_Type is not 0 (DO4 is not the connection's end) Initiate | 80h, feature not supported, as
- * the Profichip example user answers it; either closes the connection once sent. */
+ * the Send_Timeout. The Profichip driver's checks before its user sees an Initiate
+ * (MSAC_C2_RealizeIndRecv) put its Abort there instead: a Type 0 address whose Len is not 2,
+ * Abort FE; shorter than 20 bytes or than 16 + both addresses, Abort IA. D_Type not 0 (DO4 is
+ * not the connection's end): Initiate | 80h, feature not supported, as the Profichip example
+ * user answers it. Either closes the connection once sent. No local beyond the old ones: the
+ * 80C32 build's XSEG, which its start-up clears, keeps its size (traces/do4_80c32.scn). */
 static uint8_t c2_initiate(DPS_P_(dps) const uint8_t* req, uint8_t len, uint8_t* resp) {
   uint8_t res[DPS_DPV1_MAX_PDU];
-  uint8_t n, refused;
+  uint8_t s_len, d_len;
   if (req[0] != kInitiate) return dpv1_negative(resp, req[0], kFeatureNotSupported);
   if (len < 6u) return dpv1_negative(resp, kInitiate, kInvalidParameter); /* no Send_Timeout */
   if (self->c2_busy & kC2Open) return dpv1_negative(resp, kInitiate, kResourceBusy);
-  refused = c2_initiate_abort(req, len);
-  if (refused) {
-    res[0] = kAbort;
-    res[1] = 0x00; /* Subnet: none */
-    res[2] = refused;
-    res[3] = 0x00;
-    n = 4;
-  } else if (req[14] != 0 || (unsigned)kInitiateRes + req[13] + req[15] > DPS_DPV1_MAX_PDU) {
-    n = dpv1_negative(res, kInitiate, kFeatureNotSupported);
-    refused = 1;
-  } else {
-    const uint8_t s_len = req[13], d_len = req[15];
+  s_len = req[13]; /* read before the length is checked: the buffer holds DPS_DPV1_MAX_PDU */
+  d_len = req[15];
+  res[0] = kAbort;
+  res[1] = 0x00; /* Subnet: none */
+  res[2] =
+      len < kInitiateReq                                                                 ? kAbortIA
+      : (req[12] == 0 && s_len != kAddrApiScl) || (req[14] == 0 && d_len != kAddrApiScl) ? kAbortFE
+      : len < kInitiateReqMin || (unsigned)len < (unsigned)kInitiateReq + s_len + d_len  ? kAbortIA
+                                                                                         : 0;
+  res[3] = 0x00;
+  if (res[2] == 0 && (req[14] != 0 || (unsigned)kInitiateRes + s_len + d_len > DPS_DPV1_MAX_PDU)) {
+    dpv1_negative(res, kInitiate, kFeatureNotSupported);
+  } else if (res[2] == 0) {
     res[0] = kInitiate;
     res[1] = DPS_DPV1_MAX_PDU - 4u;
-    res[2] = kFeaturesRW; /* Features_Supported_1, _2 */
-    res[3] = 0x00;
+    res[2] = kFeaturesRW;  /* Features_Supported_1, _2 */
     memset(res + 4, 0, 4); /* Profile_Features_Supported, Profile_Ident_Number: none */
     res[8] = req[14];      /* S_Type, S_Len: the request's D_Type, D_Len */
     res[9] = d_len;
@@ -534,15 +524,16 @@ static uint8_t c2_initiate(DPS_P_(dps) const uint8_t* req, uint8_t len, uint8_t*
     res[11] = s_len;
     memcpy(res + kInitiateRes, req + kInitiateReq + s_len, d_len);
     memcpy(res + kInitiateRes + d_len, req + kInitiateReq, s_len);
-    n = (uint8_t)(kInitiateRes + s_len + d_len);
   }
-  dpv1_respond(ME_ kConn, res, n);
+  /* res[0]: the Initiate response, or a refusal (the Abort, the negative response: 4 bytes) */
+  dpv1_respond(ME_ kConn, res,
+               res[0] == kInitiate ? (uint8_t)(kInitiateRes + s_len + d_len) : (uint8_t)4u);
   Vpc3Write(self->sap_entry[kConn] + VPC3_SAP_Entry_Ind_Buf_Ptr0,
             (uint8_t)(self->dpv1_buf[kConn] >> self->map->segment_shift));
-  self->c2_busy |= refused ? kC2Open | kC2Closing : kC2Open;
+  self->c2_busy |= res[0] == kInitiate ? kC2Open : kC2Open | kC2Closing;
   self->c2_timeout = (uint16_t)((uint16_t)req[4] << 8 | req[5]);
   self->c2_quiet_ms = 0;
-  if (!refused) ++self->stats.c2_opened;
+  if (res[0] == kInitiate) ++self->stats.c2_opened;
   resp[0] = kRmResponse;
   resp[1] = DPS_SAP_C2;
   resp[2] = req[4];
