@@ -537,6 +537,20 @@ TEST(Dpv1Scenario, TheUserSideRefusesTheInitiatesTheProfichipDriverRefuses) {
   EXPECT_EQ(failed_expects(text), std::vector<std::string>{});
 }
 
+// A SAP list laid out by hand (VPC3+C p.55, 8-byte segments; the layout of
+// TheInitiatesTimeOutRunsFromItsFirstStartBit): SAP 49 (indication buffer 0710h, response buffer
+// 0740h) with the resource manager's response 56 28 (SAP 40) and Send_Timeout `send_timeout`
+// ready (USER + RESP), SAP 40 (0780h, 07C0h) with the Initiate response 57 F0 01 00 ... ready.
+std::string hand_laid_connection(std::string_view send_timeout) {
+  return "profile vpc3plus\nbaud 12000000\nslave address=5 user_prm=C0,00,00\nstartup\n"
+         "write 0x700 bytes=31,7F,7F,00,E2,00,E8,28,7F,7F,00,F0,00,F8,FF\n"
+         "write 0x710 bytes=00,20,00,00\nwrite 0x740 bytes=A0,20,04,08,56,28," +
+         std::string(send_timeout) +
+         "\nwrite 0x780 bytes=00,20,00,00\n"
+         "write 0x7C0 bytes=A0,20,10,08,57,F0,01,00,00,00,00,00,00,02,00,02,00,00,00,00\n"
+         "write R_FDL_SAP_List_Ptr 0xE0\n";
+}
+
 // A slave's Abort in answer to a service on the connection (audit s32-dpv1m, finding 3): a SAP
 // list laid out by hand (VPC3+C p.55, 8-byte segments) as in
 // TheInitiatesTimeOutRunsFromItsFirstStartBit, SAP 49's response 56 28 00 64 and SAP 40's
@@ -546,12 +560,7 @@ TEST(Dpv1Scenario, TheUserSideRefusesTheInitiatesTheProfichipDriverRefuses) {
 // no_connection, nothing sent. Before: `malformed`.
 TEST(Dpv1Scenario, AnAbortInAnswerToAServiceIsAborted) {
   const std::string text =
-      "profile vpc3plus\nbaud 12000000\nslave address=5 user_prm=C0,00,00\nstartup\n"
-      "write 0x700 bytes=31,7F,7F,00,E2,00,E8,28,7F,7F,00,F0,00,F8,FF\n"
-      "write 0x710 bytes=00,20,00,00\nwrite 0x740 bytes=A0,20,04,08,56,28,00,64\n"
-      "write 0x780 bytes=00,20,00,00\n"
-      "write 0x7C0 bytes=A0,20,10,08,57,F0,01,00,00,00,00,00,00,02,00,02,00,00,00,00\n"
-      "write R_FDL_SAP_List_Ptr 0xE0\n"
+      hand_laid_connection("00,64") +
       "c2_initiate\nexpect dpv1 positive\n"
       "write 0x7C0 bytes=A0,20,04,08,58,00,13,00\n"
       "c2_idle\nexpect dpv1 aborted\nexpect dpv1 58,00,13,00\nexpect dpv1 polls 0\n"
@@ -571,16 +580,10 @@ TEST(Dpv1Scenario, AnAbortInAnswerToAServiceIsAborted) {
 // 2 x 480 000 = 960 000 is n = 1363 (t0+960 300; n = 1362 ends at t0+959 596). Before: the
 // master's own 10 ms, 681 polls, t0+480 172.
 TEST(Dpv1Scenario, TheConnectionRunsOnTheLargerSendTimeout) {
-  const std::string text =
-      "profile vpc3plus\nbaud 12000000\nslave address=5 user_prm=C0,00,00\nstartup\n"
-      "write 0x700 bytes=31,7F,7F,00,E2,00,E8,28,7F,7F,00,F0,00,F8,FF\n"
-      "write 0x710 bytes=00,20,00,00\nwrite 0x740 bytes=A0,20,04,08,56,28,00,02\n"
-      "write 0x780 bytes=00,20,00,00\n"
-      "write 0x7C0 bytes=A0,20,10,08,57,F0,01,00,00,00,00,00,00,02,00,02,00,00,00,00\n"
-      "write R_FDL_SAP_List_Ptr 0xE0\n"
-      "c2_initiate send_timeout=1\nexpect dpv1 positive\n"
-      "c2_read slot=0 index=1 length=4\nexpect dpv1 timeout after 960300\n"
-      "expect dpv1 polls 1363\n";
+  const std::string text = hand_laid_connection("00,02") +
+                           "c2_initiate send_timeout=1\nexpect dpv1 positive\n"
+                           "c2_read slot=0 index=1 length=4\nexpect dpv1 timeout after 960300\n"
+                           "expect dpv1 polls 1363\n";
   EXPECT_EQ(failed_expects(text), std::vector<std::string>{});
 }
 
