@@ -200,13 +200,13 @@ void bind_dpv1(py::module_& m, py::class_<PyMaster>& master) {
       .def_property_readonly(
           "c2_sap",
           [](const PyMaster& pm) { return pm.dpv1_m ? pm.dpv1_m->c2_sap() : std::nullopt; })
-      .def_property_readonly(
-          "c2_send_timeout",
-          [](const PyMaster& pm) -> std::optional<std::uint16_t> {
-            // the open connection's: max(the Initiate's, the resource manager's) x 10 ms
-            if (!pm.dpv1_m || !pm.dpv1_m->c2_sap()) return std::nullopt;
-            return pm.dpv1_m->c2_send_timeout();
-          })
+      .def_property_readonly("c2_send_timeout",
+                             [](const PyMaster& pm) -> std::optional<std::uint16_t> {
+                               // the open connection's: max(the Initiate's, the resource manager's)
+                               // x 10 ms
+                               if (!pm.dpv1_m || !pm.dpv1_m->c2_sap()) return std::nullopt;
+                               return pm.dpv1_m->c2_send_timeout();
+                             })
       .def("dpv1_read", &read_record<&Dpv1Master::read>, py::arg("slot"), py::arg("index"),
            py::arg("length"), "MSAC_C1 Read (SAP 51 -> 51), polled until the response")
       .def("dpv1_write", &send_record<&Dpv1Master::write>, py::arg("slot"), py::arg("index"),
