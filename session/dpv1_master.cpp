@@ -164,15 +164,17 @@ Dpv1Answer Dpv1Master::initiate(const pdu::Initiate& req) {
   const auto immediate = pdu::ResourceManager::parse(rm.du);
   classify(rm, Function::Initiate, immediate.has_value());
   if (rm.outcome != Dpv1Answer::Outcome::positive) return rm;
-  // The resource manager's immediate response names the connection's SAP: the Initiate response
-  // is polled for there, within the same Send_Timeout from the Initiate's first start bit.
-  Dpv1Answer a = transfer(immediate->sap, rules_.c2_ssap, {}, timeout, rm.start);
+  // The resource manager's immediate response names the connection's SAP and the slave's
+  // Send_Timeout: the Initiate response is polled for there, within the connection's (the
+  // larger one) from the Initiate's first start bit.
+  const std::uint16_t send_timeout = std::max(req.send_timeout, immediate->send_timeout);
+  Dpv1Answer a = transfer(immediate->sap, rules_.c2_ssap, {}, cycles_10ms(send_timeout), rm.start);
   a.polls += rm.polls;
   take_abort(a, immediate->sap);  // the slave refused the Initiate (the Profichip driver's Abort)
   classify(a, Function::Initiate, pdu::Initiate::parse(a.du, true).has_value());
   if (a.outcome == Dpv1Answer::Outcome::positive) {  // else an open connection stays open
     c2_sap_ = immediate->sap;
-    c2_timeout_ = std::max(req.send_timeout, immediate->send_timeout);
+    c2_timeout_ = send_timeout;
   }
   return a;
 }

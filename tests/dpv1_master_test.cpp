@@ -461,24 +461,48 @@ constexpr const char* kHead =
     "profile vpc3plus\nbaud 12000000\nslave address=5 user_prm=C0,00,00\n"
     "record slot=0 index=1 data=11,22,33,44\n";
 
+// A SAP list laid out by hand (VPC3+C p.55, 8-byte segments): SAP 49 (indication buffer 0710h,
+// response buffer 0740h) with the resource manager's response 56 28 (SAP 40) and Send_Timeout
+// `send_timeout` ready (USER + RESP), SAP 40 (0780h, 07C0h) with `sap40_response` in its response
+// buffer (the Initiate response 57 F0 01 00 ... ready, or nothing: every poll there gets SC).
+constexpr std::string_view kInitiateResponseReady =
+    "A0,20,10,08,57,F0,01,00,00,00,00,00,00,02,00,02,00,00,00,00";
+constexpr std::string_view kNoResponse = "00,20,00,00";
+std::string hand_laid_connection(std::string_view send_timeout, std::string_view sap40_response) {
+  return "profile vpc3plus\nbaud 12000000\nslave address=5 user_prm=C0,00,00\nstartup\n"
+         "write 0x700 bytes=31,7F,7F,00,E2,00,E8,28,7F,7F,00,F0,00,F8,FF\n"
+         "write 0x710 bytes=00,20,00,00\nwrite 0x740 bytes=A0,20,04,08,56,28," +
+         std::string(send_timeout) +
+         "\nwrite 0x780 bytes=00,20,00,00\nwrite 0x7C0 bytes=" + std::string(sap40_response) +
+         "\nwrite R_FDL_SAP_List_Ptr 0xE0\n";
+}
+
 // The Initiate's response time-out (audit s28 aud1, finding 1; docs/dpv1.md, "Outcomes": the
-// connection's Send_Timeout, from the request's first start bit, checked at each SC). A SAP list
-// laid out by hand (VPC3+C p.55, 8-byte segments): SAP 49 with the resource manager's response
-// 56 28 00 01 ready (USER + RESP), SAP 40 that never answers. At 12 Mbaud (T = 4 clocks,
+// connection's Send_Timeout, from the request's first start bit, checked at each SC). The SAP
+// list laid out by hand: SAP 49 with the resource manager's response 56 28 00 01 ready, SAP 40
+// that never answers. At 12 Mbaud (T = 4 clocks,
 // docs/timing.md) from t0: the Initiate (20 bytes, 31 characters = 341 T), TSDR 11 T, the
 // response (15 characters = 165 T), 33 T idle: the first poll on SAP 40 at t0 + 550 T = 2200;
 // its SC ends 121 + 11 + 11 T later, poll k's at t0 + 2772 + 704k. Send_Timeout 1 = 480 000
 // clocks: the first SC at or past it is k = 678 (t0 + 480 084), after 679 polls. Before, the
 // time-out ran again from the first poll on SAP 40 (s28).
 TEST(Dpv1Scenario, TheInitiatesTimeOutRunsFromItsFirstStartBit) {
-  const std::string text =
-      "profile vpc3plus\nbaud 12000000\nslave address=5 user_prm=C0,00,00\nstartup\n"
-      "write 0x700 bytes=31,7F,7F,00,E2,00,E8,28,7F,7F,00,F0,00,F8,FF\n"
-      "write 0x710 bytes=00,20,00,00\nwrite 0x740 bytes=A0,20,04,08,56,28,00,01\n"
-      "write 0x780 bytes=00,20,00,00\nwrite 0x7C0 bytes=00,20,00,00\n"
-      "write R_FDL_SAP_List_Ptr 0xE0\n"
-      "c2_initiate send_timeout=1\nexpect dpv1 timeout after 480084\nexpect dpv1 polls 679\n";
-  EXPECT_EQ(failed_expects(text), std::vector<std::string>{});
+  EXPECT_EQ(failed_expects(hand_laid_connection("00,01", kNoResponse) +
+                           "c2_initiate send_timeout=1\nexpect dpv1 timeout after 480084\n"
+                           "expect dpv1 polls 679\n"),
+            std::vector<std::string>{});
+}
+
+// Once the resource manager named a larger Send_Timeout (56 28 00 02: 20 ms) than the Initiate's
+// (1: 10 ms), the Initiate's own wait on SAP 40 runs on it too (docs/dpv1.md: the connection's
+// Send_Timeout is the larger one; audit s32-dpv1m, finding 4). As above, poll k's SC on SAP 40
+// ends at t0 + 2772 + 704k; the first at or past 960 000 is k = 1360 (t0 + 960 212; k = 1359
+// ends at t0 + 959 508), after 1361 polls. Before: t0 + 480 084, 679 polls.
+TEST(Dpv1Scenario, TheInitiateWaitsOnTheResourceManagersLargerSendTimeout) {
+  EXPECT_EQ(failed_expects(hand_laid_connection("00,02", kNoResponse) +
+                           "c2_initiate send_timeout=1\nexpect dpv1 timeout after 960212\n"
+                           "expect dpv1 polls 1361\n"),
+            std::vector<std::string>{});
 }
 
 // The resource manager's one buffer (audit a11, finding 1): master 9's Initiate (Send_Timeout 1 =
@@ -537,30 +561,14 @@ TEST(Dpv1Scenario, TheUserSideRefusesTheInitiatesTheProfichipDriverRefuses) {
   EXPECT_EQ(failed_expects(text), std::vector<std::string>{});
 }
 
-// A SAP list laid out by hand (VPC3+C p.55, 8-byte segments; the layout of
-// TheInitiatesTimeOutRunsFromItsFirstStartBit): SAP 49 (indication buffer 0710h, response buffer
-// 0740h) with the resource manager's response 56 28 (SAP 40) and Send_Timeout `send_timeout`
-// ready (USER + RESP), SAP 40 (0780h, 07C0h) with the Initiate response 57 F0 01 00 ... ready.
-std::string hand_laid_connection(std::string_view send_timeout) {
-  return "profile vpc3plus\nbaud 12000000\nslave address=5 user_prm=C0,00,00\nstartup\n"
-         "write 0x700 bytes=31,7F,7F,00,E2,00,E8,28,7F,7F,00,F0,00,F8,FF\n"
-         "write 0x710 bytes=00,20,00,00\nwrite 0x740 bytes=A0,20,04,08,56,28," +
-         std::string(send_timeout) +
-         "\nwrite 0x780 bytes=00,20,00,00\n"
-         "write 0x7C0 bytes=A0,20,10,08,57,F0,01,00,00,00,00,00,00,02,00,02,00,00,00,00\n"
-         "write R_FDL_SAP_List_Ptr 0xE0\n";
-}
-
-// A slave's Abort in answer to a service on the connection (audit s32-dpv1m, finding 3): a SAP
-// list laid out by hand (VPC3+C p.55, 8-byte segments) as in
-// TheInitiatesTimeOutRunsFromItsFirstStartBit, SAP 49's response 56 28 00 64 and SAP 40's
-// Initiate response ready; then SAP 40's response buffer gets 58 00 13 00 (Instance MSAC_C2,
-// TO), which answers the Idle at once. The outcome is `aborted` (its bytes checkable), the walk
-// names Instance and Reason_Code, and the master forgets the connection: the next Read is
-// no_connection, nothing sent. Before: `malformed`.
+// A slave's Abort in answer to a service on the connection (audit s32-dpv1m, finding 3): the SAP
+// list laid out by hand, SAP 49's response 56 28 00 64 and SAP 40's Initiate response ready; then
+// SAP 40's response buffer gets 58 00 13 00 (Instance MSAC_C2, TO), which answers the Idle at once.
+// The outcome is `aborted` (its bytes checkable), the walk names Instance and Reason_Code, and the
+// master forgets the connection: the next Read is no_connection, nothing sent. Before: `malformed`.
 TEST(Dpv1Scenario, AnAbortInAnswerToAServiceIsAborted) {
   const std::string text =
-      hand_laid_connection("00,64") +
+      hand_laid_connection("00,64", kInitiateResponseReady) +
       "c2_initiate\nexpect dpv1 positive\n"
       "write 0x7C0 bytes=A0,20,04,08,58,00,13,00\n"
       "c2_idle\nexpect dpv1 aborted\nexpect dpv1 58,00,13,00\nexpect dpv1 polls 0\n"
@@ -580,7 +588,7 @@ TEST(Dpv1Scenario, AnAbortInAnswerToAServiceIsAborted) {
 // 2 x 480 000 = 960 000 is n = 1363 (t0+960 300; n = 1362 ends at t0+959 596). Before: the
 // master's own 10 ms, 681 polls, t0+480 172.
 TEST(Dpv1Scenario, TheConnectionRunsOnTheLargerSendTimeout) {
-  const std::string text = hand_laid_connection("00,02") +
+  const std::string text = hand_laid_connection("00,02", kInitiateResponseReady) +
                            "c2_initiate send_timeout=1\nexpect dpv1 positive\n"
                            "c2_read slot=0 index=1 length=4\nexpect dpv1 timeout after 960300\n"
                            "expect dpv1 polls 1363\n";
