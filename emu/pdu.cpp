@@ -297,6 +297,29 @@ Bytes Initiate::build() const {
   return out;
 }
 
+Initiate initiate_request(std::uint16_t send_timeout) {
+  Initiate req;
+  req.send_timeout = send_timeout;
+  req.features_supported = Features_DPV1_RW;
+  req.s_type = req.d_type = Addr_Type_API_SCL;
+  req.s_addr = req.d_addr = Bytes(kAddrLenAPISCL, 0x00);
+  return req;
+}
+
+std::optional<Abort> initiate_abort(View req) {
+  const auto abort = [](std::uint8_t reason) {
+    return Abort{0, Abort_Instance_MSAC_C2, reason, 0};
+  };
+  const std::size_t head = kInitiateReqFixed;
+  if (req.size() < head) return abort(Abort_IA);  // not even its Add_Addr_Param's head
+  const std::uint8_t s_type = req[12], s_len = req[13], d_type = req[14], d_len = req[15];
+  if ((s_type == Addr_Type_API_SCL && s_len != kAddrLenAPISCL) ||
+      (d_type == Addr_Type_API_SCL && d_len != kAddrLenAPISCL))
+    return abort(Abort_FE);
+  if (req.size() < kInitiateReqMin || req.size() < head + s_len + d_len) return abort(Abort_IA);
+  return std::nullopt;
+}
+
 std::optional<Abort> Abort::parse(View du) {
   if (du.size() != 4 || !has(du, Function::Abort)) return std::nullopt;
   return Abort{du[1], static_cast<std::uint8_t>((du[2] >> 4) & 0x3),

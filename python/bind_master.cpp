@@ -132,6 +132,14 @@ Dpv1Answer send_record(PyMaster& pm, std::int64_t slot, std::int64_t index, cons
   return pm.dpv1([&](Dpv1Master& d) { return (d.*Send)(s, i, std::move(v)); });
 }
 
+// An Initiate's S_Addr or D_Addr: at most kAddrMax bytes, as a scenario's s_addr= / d_addr=.
+pdu::Bytes address(const py::bytes& b, std::string_view what) {
+  pdu::Bytes v = from_bytes(b);
+  if (v.size() > kAddrMax)
+    throw py::value_error(fmt::format("{}: more than {} bytes", what, kAddrMax));
+  return v;
+}
+
 // The master's DPV1 services (docs/dpv1.md, "The master's side"), one call for one call of
 // Dpv1Master; each runs the chip until the response, the time-out or no answer.
 void bind_dpv1(py::module_& m, py::class_<PyMaster>& master) {
@@ -143,7 +151,8 @@ void bind_dpv1(py::module_& m, py::class_<PyMaster>& master) {
       .value("no_answer", O::no_answer)
       .value("timeout", O::timeout)
       .value("malformed", O::malformed)
-      .value("no_connection", O::no_connection);
+      .value("no_connection", O::no_connection)
+      .value("aborted", O::aborted);
   py::class_<Dpv1Rules>(m, "Dpv1Rules", "The master's DPV1 rules (retries, time-out, C2 SAP).")
       .def(py::init(&with_kwargs<Dpv1Rules>))
       .def_property(
@@ -168,6 +177,14 @@ void bind_dpv1(py::module_& m, py::class_<PyMaster>& master) {
                                return py::make_tuple(a.error->error_decode, a.error->error_code_1,
                                                      a.error->error_code_2);
                              })
+      .def_property_readonly("abort",
+                             [](const Dpv1Answer& a) -> std::optional<py::tuple> {
+                               // aborted: the slave's (Subnet, Instance, Reason_Code, detail)
+                               if (!a.abort) return std::nullopt;
+                               return py::make_tuple(a.abort->subnet, a.abort->instance,
+                                                     a.abort->reason_code,
+                                                     a.abort->additional_detail);
+                             })
       .def_readonly("last", &Dpv1Answer::last)
       .def_readonly("polls", &Dpv1Answer::polls)
       .def_readonly("start", &Dpv1Answer::start)
@@ -183,6 +200,13 @@ void bind_dpv1(py::module_& m, py::class_<PyMaster>& master) {
       .def_property_readonly(
           "c2_sap",
           [](const PyMaster& pm) { return pm.dpv1_m ? pm.dpv1_m->c2_sap() : std::nullopt; })
+      .def_property_readonly("c2_send_timeout",
+                             [](const PyMaster& pm) -> std::optional<std::uint16_t> {
+                               // the open connection's: max(the Initiate's, the resource manager's)
+                               // x 10 ms
+                               if (!pm.dpv1_m || !pm.dpv1_m->c2_sap()) return std::nullopt;
+                               return pm.dpv1_m->c2_send_timeout();
+                             })
       .def("dpv1_read", &read_record<&Dpv1Master::read>, py::arg("slot"), py::arg("index"),
            py::arg("length"), "MSAC_C1 Read (SAP 51 -> 51), polled until the response")
       .def("dpv1_write", &send_record<&Dpv1Master::write>, py::arg("slot"), py::arg("index"),
@@ -202,14 +226,24 @@ void bind_dpv1(py::module_& m, py::class_<PyMaster>& master) {
           "specifier = Seq_Nr << 3 | Add_Ack << 2 | bits 1..0")
       .def(
           "c2_initiate",
-          [](PyMaster& pm, std::int64_t send_timeout, std::uint16_t features_supported) {
-            pdu::Initiate req;
-            req.send_timeout = in_range<std::uint16_t>(kSendTimeout, send_timeout);
+          [](PyMaster& pm, std::int64_t send_timeout, std::uint16_t features_supported,
+             std::int64_t s_type, const py::bytes& s_addr, std::int64_t d_type,
+             const py::bytes& d_addr) {
+            pdu::Initiate req =
+                pdu::initiate_request(in_range<std::uint16_t>(kSendTimeout, send_timeout));
             req.features_supported = features_supported;
+            req.s_type = in_range<U8>(named(kAddrType, "s_type"), s_type);
+            req.d_type = in_range<U8>(named(kAddrType, "d_type"), d_type);
+            req.s_addr = address(s_addr, "s_addr");
+            req.d_addr = address(d_addr, "d_addr");
             return pm.dpv1([&](Dpv1Master& d) { return d.initiate(req); });
           },
-          py::arg("send_timeout") = 100, py::arg("features_supported") = 1,
-          "MSAC_C2 Initiate to SAP 49, then the connection's SAP polled for its response")
+          py::arg("send_timeout") = 100, py::arg("features_supported") = pdu::Features_DPV1_RW,
+          py::arg("s_type") = pdu::Addr_Type_API_SCL, py::arg("s_addr") = py::bytes("\0\0", 2),
+          py::arg("d_type") = pdu::Addr_Type_API_SCL, py::arg("d_addr") = py::bytes("\0\0", 2),
+          "MSAC_C2 Initiate to SAP 49, then the connection's SAP polled for its response; "
+          "features_supported: Features_Supported_1 in the high byte (0x0100: Read and Write); "
+          "s_addr / d_addr: Type 0 is API, SCL (2 bytes)")
       .def("c2_read", &read_record<&Dpv1Master::c2_read>, py::arg("slot"), py::arg("index"),
            py::arg("length"))
       .def("c2_write", &send_record<&Dpv1Master::c2_write>, py::arg("slot"), py::arg("index"),

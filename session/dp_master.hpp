@@ -4,6 +4,7 @@
 // answer. While the chip runs, the user side (firmware) is called whenever X/INT goes active.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <functional>
@@ -307,6 +308,14 @@ class DpMaster {
   // reported, so that the memory of `dpc31 run` does not grow with the run.
   void keep_last_exchange() {
     if (history_.size() > 1) history_.erase(history_.begin(), history_.end() - 1);
+  }
+  // Forgets history()[first, last): a DPV1 service folds its polls (Dpv1Master::polled).
+  void forget_exchanges(std::size_t first, std::size_t last) {
+    last = std::min(last, history_.size());
+    if (first < last) {
+      history_.erase(history_.begin() + static_cast<std::ptrdiff_t>(first),
+                     history_.begin() + static_cast<std::ptrdiff_t>(last));
+    }
   }
   [[nodiscard]] const MasterCounters& counters() const { return counters_; }
   // Who moves time while the master waits. Empty: the master steps its chip itself (and runs

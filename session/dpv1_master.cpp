@@ -3,6 +3,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
 #include "dpc31/dp.hpp"
 #include "dpc31/hex.hpp"
 #include "dpc31/names.hpp"
@@ -14,10 +16,10 @@ namespace {
 using pdu::Function;
 }  // namespace
 
-constexpr std::array<std::string_view, 7> kOutcomeNames = {
-    "positive", "negative", "refused", "no answer", "timeout", "malformed", "no connection"};
-static_assert(kOutcomeNames.size() ==
-                  static_cast<std::size_t>(Dpv1Answer::Outcome::no_connection) + 1,
+constexpr std::array<std::string_view, 8> kOutcomeNames = {"positive",      "negative", "refused",
+                                                           "no answer",     "timeout",  "malformed",
+                                                           "no connection", "aborted"};
+static_assert(kOutcomeNames.size() == static_cast<std::size_t>(Dpv1Answer::Outcome::aborted) + 1,
               "a new value: name it here");
 
 std::string outcome_name(Dpv1Answer::Outcome o) { return std::string(name_of(o, kOutcomeNames)); }
@@ -39,6 +41,9 @@ std::string answer_summary(const Dpv1Answer& a) {
       return fmt::format("negative {} {}", hex_bytes(a.du, " ", 4), polls);
     case Dpv1Answer::Outcome::no_connection:
       return "no connection, nothing sent";
+    case Dpv1Answer::Outcome::aborted:
+      return fmt::format("aborted {} (instance {}, reason {}) {}", hex_bytes(a.du, " ", 4),
+                         a.abort->instance, a.abort->reason_code, polls);
     default:
       return fmt::format("{} {}", outcome_name(a.outcome), polls);
   }
@@ -48,14 +53,14 @@ std::uint64_t Dpv1Master::cycles_10ms(std::uint32_t units) const {
   return std::uint64_t{units} * chip_.clock_hz() / 100;
 }
 
-void Dpv1Master::take(Dpv1Answer& a, const Exchange& ex) const {
+void Dpv1Master::take(Dpv1Answer& a, const Exchange& ex) {
   a.last = ex.answer;
   if (!ex.answer) {
-    a.end = ex.wait_end;  // docs/timing.md, "The master's wait"
+    a.end = last_end_ = ex.wait_end;  // docs/timing.md, "The master's wait"
     a.outcome = Dpv1Answer::Outcome::no_answer;
     return;
   }
-  a.end = ex.answer_end;
+  a.end = last_end_ = ex.answer_end;
   if (!ex.answer->du.empty() || ex.answer->sd == fdl::SC) {
     a.outcome = Dpv1Answer::Outcome::positive;
     return;
@@ -70,13 +75,17 @@ void Dpv1Master::take(Dpv1Answer& a, const Exchange& ex) const {
 Dpv1Answer Dpv1Master::no_connection() const {
   Dpv1Answer a;
   a.outcome = Dpv1Answer::Outcome::no_connection;
-  a.start = a.end = chip_.cycle();
+  // The master acts on an answer at its last stop bit's sample, before the line's end that
+  // stamps the previous outcome: a service asked after it is not stamped before it.
+  a.start = a.end = std::max(chip_.cycle(), last_end_);
   return a;
 }
 
 Dpv1Answer Dpv1Master::transfer(std::uint8_t dsap, std::uint8_t ssap, pdu::Bytes req,
                                 std::uint64_t timeout, std::optional<std::uint64_t> since) {
   Dpv1Answer a;
+  std::uint32_t sent = 0;               // polls sent
+  std::optional<std::size_t> kept_end;  // history() after the last poll kept
   Exchange ex = m_.acyclic(dsap, ssap, std::move(req));
   a.start = since.value_or(ex.request_start);  // the first try's: the time-out counts from it
   ex = m_.retry(std::move(ex), rules_.retries);
@@ -94,7 +103,15 @@ Dpv1Answer Dpv1Master::transfer(std::uint8_t dsap, std::uint8_t ssap, pdu::Bytes
       a.outcome = Dpv1Answer::Outcome::timeout;
       return a;
     }
+    const std::size_t before = m_.history().size();
     ex = m_.retry(m_.acyclic(dsap, ssap, {}), rules_.retries);
+    if (polled) {
+      polled();
+    } else if (++sent == kKeptPolls) {
+      kept_end = m_.history().size();
+    } else if (kept_end) {  // the polls between the kept ones and this one forgotten
+      m_.forget_exchanges(*kept_end, before);
+    }
   }
 }
 
@@ -106,6 +123,14 @@ void Dpv1Master::classify(Dpv1Answer& a, Function f, bool positive_ok) {
   } else if (!positive_ok) {
     a.outcome = Dpv1Answer::Outcome::malformed;
   }
+}
+
+void Dpv1Master::take_abort(Dpv1Answer& a, std::uint8_t sap) {
+  if (a.outcome != Dpv1Answer::Outcome::positive) return;
+  a.abort = pdu::Abort::parse(a.du);
+  if (!a.abort) return;
+  a.outcome = Dpv1Answer::Outcome::aborted;
+  if (c2_sap_ == sap) c2_sap_.reset();  // the slave closed the connection
 }
 
 Dpv1Answer Dpv1Master::read(std::uint8_t slot, std::uint8_t index, std::uint8_t length) {
@@ -139,14 +164,17 @@ Dpv1Answer Dpv1Master::initiate(const pdu::Initiate& req) {
   const auto immediate = pdu::ResourceManager::parse(rm.du);
   classify(rm, Function::Initiate, immediate.has_value());
   if (rm.outcome != Dpv1Answer::Outcome::positive) return rm;
-  // The resource manager's immediate response names the connection's SAP: the Initiate response
-  // is polled for there, within the same Send_Timeout from the Initiate's first start bit.
-  Dpv1Answer a = transfer(immediate->sap, rules_.c2_ssap, {}, timeout, rm.start);
+  // The resource manager's immediate response names the connection's SAP and the slave's
+  // Send_Timeout: the Initiate response is polled for there, within the connection's (the
+  // larger one) from the Initiate's first start bit.
+  const std::uint16_t send_timeout = std::max(req.send_timeout, immediate->send_timeout);
+  Dpv1Answer a = transfer(immediate->sap, rules_.c2_ssap, {}, cycles_10ms(send_timeout), rm.start);
   a.polls += rm.polls;
+  take_abort(a, immediate->sap);  // the slave refused the Initiate (the Profichip driver's Abort)
   classify(a, Function::Initiate, pdu::Initiate::parse(a.du, true).has_value());
   if (a.outcome == Dpv1Answer::Outcome::positive) {  // else an open connection stays open
     c2_sap_ = immediate->sap;
-    c2_timeout_ = req.send_timeout;
+    c2_timeout_ = send_timeout;
   }
   return a;
 }
@@ -161,8 +189,8 @@ Dpv1Answer Dpv1Master::on_connection(Function f, pdu::Bytes req, bool with_data)
   } else if (const auto r = pdu::Record::parse(a.du, f, with_data)) {
     ok = r->slot == sent[1] && r->index == sent[2];
   }
+  take_abort(a, *c2_sap_);
   classify(a, f, ok);
-  if (pdu::Abort::parse(a.du)) c2_sap_.reset();  // the slave closed the connection
   return a;
 }
 

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -39,16 +40,19 @@ struct Dpv1Answer {
     malformed,  // data that is neither the positive nor the negative response
     // MSAC_C2 without an open connection: nothing sent (the master has no SAP to send it to)
     no_connection,
+    // the slave's Abort PDU (58h) in place of an MSAC_C2 response: the connection is gone
+    aborted,
   };
   Outcome outcome = Outcome::no_answer;
   pdu::Bytes du;                            // the response's data unit as received
   std::optional<pdu::ErrorResponse> error;  // negative
+  std::optional<pdu::Abort> abort;          // aborted: the slave's Instance and Reason_Code
   std::optional<fdl::Frame> last;           // the last answer on the wire
   std::uint32_t polls = 0;                  // polls answered SC before the response
   // The request's first start bit, and the outcome's cycle (docs/dpv1.md, "The outcome's
   // cycle"): the last answer's last stop bit; no_answer: where the master's wait ended after the
   // last try (Exchange::wait_end, docs/timing.md "The master's wait"); no_connection: both the
-  // cycle the service was asked for.
+  // cycle the service was asked for, never before the previous service's outcome cycle.
   std::uint64_t start = 0;
   std::uint64_t end = 0;
 };
@@ -74,9 +78,12 @@ class Dpv1Master {
   Dpv1Answer alarm_ack(const pdu::AlarmAck& ack, std::uint8_t dsap = sap::MSAC_C1_Alarm);
 
   // MSAC_C2. initiate sends the Initiate request to SAP 49 and polls it until the resource
-  // manager's immediate response (56h: the connection's SAP), then polls the connection's SAP
-  // for the Initiate response; positive: the connection is open (c2_sap()); otherwise the
-  // connection open before, if any, stays open.
+  // manager's immediate response (56h: the connection's SAP, the slave's Send_Timeout), then
+  // polls the connection's SAP for the Initiate response; positive: the connection is open
+  // (c2_sap()), its Send_Timeout the larger of the request's and the resource manager's (the
+  // slave's minimum: the Profichip driver runs the connection on that larger one); otherwise the
+  // connection open before, if any, stays open. A service the slave answers with an Abort PDU
+  // is `aborted`, and the master forgets that SAP's connection.
   Dpv1Answer initiate(const pdu::Initiate& req);
   Dpv1Answer c2_read(std::uint8_t slot, std::uint8_t index, std::uint8_t length);
   Dpv1Answer c2_write(std::uint8_t slot, std::uint8_t index, pdu::Bytes data);
@@ -87,9 +94,18 @@ class Dpv1Master {
   // again.
   Dpv1Answer c2_abort(const pdu::Abort& a);
   [[nodiscard]] std::optional<std::uint8_t> c2_sap() const { return c2_sap_; }
+  // The open connection's Send_Timeout (10 ms units) the master times its services out on.
+  [[nodiscard]] std::uint16_t c2_send_timeout() const { return c2_timeout_; }
 
   [[nodiscard]] const Dpv1Rules& rules() const { return rules_; }
   Dpv1Rules& rules() { return rules_; }
+
+  // Called after each poll of a service, its exchange the newest of the master's history(): the
+  // scenario runner reports it there and forgets what it reported. Unset, the master keeps a
+  // service's request, its first kKeptPolls polls and its newest in history(), and forgets the
+  // polls between, so a long time-out keeps the history flat (Dpv1Answer::polls counts them all).
+  std::function<void()> polled;
+  static constexpr std::uint32_t kKeptPolls = 16;
 
  private:
   // Sends `req` from `ssap` to `dsap`, polls while SC until `timeout` cycles after `since` (the
@@ -98,12 +114,14 @@ class Dpv1Master {
                       std::optional<std::uint64_t> since = std::nullopt);
   // The positive response is of `f` and parses as `ok` says, or the negative one of `f`.
   static void classify(Dpv1Answer& a, pdu::Function f, bool positive_ok);
+  // An Abort PDU from `sap` in place of the response: aborted, and that SAP's connection gone.
+  void take_abort(Dpv1Answer& a, std::uint8_t sap);
   Dpv1Answer on_connection(pdu::Function f, pdu::Bytes req, bool with_data);
   // MSAC_C2 without an open connection: at the current cycle, nothing sent.
   [[nodiscard]] Dpv1Answer no_connection() const;
   // Fills the answer's last answer, end and outcome from one exchange: no_answer, refused (not
   // SC and no data), else positive (the caller looks further).
-  void take(Dpv1Answer& a, const Exchange& ex) const;
+  void take(Dpv1Answer& a, const Exchange& ex);
   [[nodiscard]] std::uint64_t cycles_10ms(std::uint32_t units) const;
 
   const Chip& chip_;
@@ -111,6 +129,7 @@ class Dpv1Master {
   Dpv1Rules rules_;
   std::optional<std::uint8_t> c2_sap_;
   std::uint16_t c2_timeout_ = 0;  // the connection's Send_Timeout (10 ms)
+  std::uint64_t last_end_ = 0;    // the last outcome's cycle (no_connection is not before it)
 };
 
 }  // namespace dpc31

@@ -81,7 +81,7 @@ void Dpv1User::close(BusPort& c) {
   const Slot& k = slots_[connection];
   c.write(k.entry + en::Ind_Buf_Ptr0, 0x00);
   c.write(k.buffer + hd::Control, 0x00);
-  open_ = false;
+  open_ = closing_ = false;
 }
 
 std::optional<pdu::Bytes> Dpv1User::record(Function f, const pdu::Bytes& req) {
@@ -133,33 +133,55 @@ std::optional<pdu::Bytes> Dpv1User::answer(BusPort& c, Sap s, const pdu::Bytes& 
       return a->build();
     }
     case rm: {
-      const std::optional<pdu::Initiate> i = pdu::Initiate::parse(req, false);
-      if (!i) return std::nullopt;
-      rm_timeout_ = i->send_timeout;
+      if (*f != Function::Initiate || req.size() < 6) return std::nullopt;
+      const auto send_timeout = static_cast<std::uint16_t>(req[4] << 8 | req[5]);
+      rm_timeout_ = send_timeout;
       if (open_) {
         return pdu::ErrorResponse{Function::Initiate, pdu::Error_Decode_DPV1,
                                   pdu::error::Resource_Busy, 0}
             .build();
       }
-      // Open: the Initiate response waits in the connection's buffer for the master's first
-      // poll there; the resource manager answers with the connection's SAP.
+      // The Initiate response waits in the connection's buffer for the master's first poll
+      // there; the resource manager answers with the connection's SAP. As the Profichip
+      // driver: a request its checks refuse gets an Abort there instead (pdu::initiate_abort),
+      // one whose D_Type is not 0 (the slave is not the connection's end) a negative response
+      // (application, not supported); either closes the connection once sent.
       const Slot& k = slots_[connection];
-      pdu::Initiate res = *i;
-      res.response = true;
-      res.send_timeout = 0;
-      res.max_len_data_unit = kRecordMax - 4;
-      std::swap(res.s_type, res.d_type);
-      std::swap(res.s_addr, res.d_addr);
-      const pdu::Bytes r = res.build();
+      const std::optional<pdu::Abort> abort = pdu::initiate_abort(req);
+      std::optional<pdu::Initiate> i;
+      if (!abort) {  // through D_Addr (S_Len, D_Len: bytes 13, 15)
+        const std::size_t n = pdu::kInitiateReqFixed + req[13] + req[15];
+        i = pdu::Initiate::parse(pdu::View(req).first(n), false);
+      }
+      closing_ = abort || i->d_type != pdu::Addr_Type_API_SCL;
+      pdu::Bytes r;
+      if (abort) {
+        r = abort->build();
+      } else if (closing_) {
+        r = pdu::ErrorResponse{Function::Initiate, pdu::Error_Decode_DPV1,
+                               pdu::error::Feature_Not_Supported, 0}
+                .build();
+      } else {
+        // Its own features (Read/Write) and no profile; S and D address swapped.
+        pdu::Initiate res;
+        res.response = true;
+        res.max_len_data_unit = kRecordMax - 4;
+        res.features_supported = pdu::Features_DPV1_RW;
+        res.s_type = i->d_type;
+        res.s_addr = i->d_addr;
+        res.d_type = i->s_type;
+        res.d_addr = i->s_addr;
+        r = res.build();
+      }
       c.write_block(k.buffer + hd::kBytes, r);
       c.write(k.buffer + hd::Length, static_cast<std::uint8_t>(r.size()));
       c.write(k.buffer + hd::Function_Code, kFcResponse);
       c.write(k.buffer + hd::Control, hd::USER | hd::RESP);
       c.write(k.entry + en::Ind_Buf_Ptr0, k.segment);
       open_ = true;
-      send_timeout_ = i->send_timeout;
+      send_timeout_ = send_timeout;
       activity_ = c.cycle();
-      return pdu::ResourceManager{cfg_.c2_sap, i->send_timeout}.build();
+      return pdu::ResourceManager{cfg_.c2_sap, send_timeout}.build();
     }
     case connection:
       activity_ = c.cycle();
@@ -207,6 +229,7 @@ void Dpv1User::serve(BusPort& c, std::uint16_t ir) {
       if ((b0 & en::Response_Sent) == 0) continue;
       c.write(slots_[s].entry + en::Sap, static_cast<std::uint8_t>(b0 & ~en::Response_Sent));
       if (s == connection) activity_ = c.cycle();
+      if (s == connection && closing_) close(c);  // the refusal went out
       if (s == rm) rm_waits_ = false;
     }
   }

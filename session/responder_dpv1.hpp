@@ -76,6 +76,7 @@ class Dpv1User {
   Slot slots_[kSaps];
   std::uint32_t seg_shift_ = 3;
   bool open_ = false;
+  bool closing_ = false;  // the connection's buffer holds a refused Initiate's Abort or negative
   std::uint16_t send_timeout_ = 0;  // 10 ms
   std::uint64_t activity_ = 0;      // the connection's last request stored or response sent
   // The resource manager's response waits for its poll since `rm_since_`, at most the Initiate's

@@ -128,6 +128,7 @@ struct ScenarioStep {
   std::optional<std::uint8_t> from;
   // send with fields: destination (nullopt: the slave) and SAPs (nullopt: none).
   std::optional<std::uint8_t> to, dsap, ssap;
+  pdu::Initiate initiate;  // c2_initiate: the request
 };
 
 struct Scenario {

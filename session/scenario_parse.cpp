@@ -126,9 +126,13 @@ class Parser {
       }
       if (fault == nullptr || !is_action(st.kind)) continue;
       if (!sends_request(st.kind)) {
-        fail_at(fault->line, fmt::format("the next action ('{}', line {}) sends no request to "
-                                         "damage",
-                                         st.text.substr(0, st.text.find(' ')), st.line));
+        // A DPV1 service sends a request and polls, but is not one a fault damages
+        // (docs/scenario-format.md, "DPV1").
+        const std::string_view why = st.kind == StepKind::dpv1
+                                         ? "is a DPV1 service: a fault line cannot damage it"
+                                         : "sends no request to damage";
+        fail_at(fault->line, fmt::format("the next action ('{}', line {}) {}",
+                                         st.text.substr(0, st.text.find(' ')), st.line, why));
       }
       fault = nullptr;
     }

@@ -110,6 +110,12 @@ class Runner {
     master_ = std::make_unique<DpMaster>(chip_, s_.master, s_.user.slave);
     dpv1_ = std::make_unique<Dpv1Master>(chip_, *master_, s_.dpv1);
     dpv1_->rules().retries = s_.retries;
+    // Each poll reported as it comes, then forgotten, as `exchange N` does: a long DPV1 time-out
+    // keeps the history flat and the walk shows every poll.
+    dpv1_->polled = [this] {
+      report_history();
+      forget_reported();
+    };
     master_->on_locked = [this](std::uint8_t, std::uint8_t by) { locked_by_ = by; };
     if (hooks_.observer != nullptr) {
       master_->on_send = [this](std::uint64_t start, std::span<const std::uint8_t> bytes,

@@ -127,6 +127,12 @@ inline constexpr ValueRange kWorkCycles{"work", 0, 48'000'000};
 inline constexpr ValueRange kUserWdValue{"user_wd_value", 0, 0xFFFF};
 inline constexpr ValueRange kWdBaudControl{"wd_baud_control", 0, 255};
 inline constexpr ValueRange kSendTimeout{"send_timeout", 1, 65535};
+// An Initiate's Add_Addr_Param (`c2_initiate s_type= s_addr= d_type= d_addr=`, Python's
+// c2_initiate()): a Type is one byte, an address at most 16 bytes (a Type 1 address: API, SCL,
+// Network_Address and MAC_Address), so the request stays within the 32-byte buffer public
+// slave stacks give the resource manager.
+inline constexpr ValueRange kAddrType{"type", 0, 255};
+inline constexpr std::size_t kAddrMax = 16;
 inline constexpr ValueRange kAbortReason{"reason", 0, 15};
 inline constexpr ValueRange kAbortInstance{"instance", 0, 3};  // 0 FDL, 1 MSAC_C2, 2 user
 // An 80C32 board's XDATA window for the chip (`cpu base=`): its 4 KB below the top of XDATA.

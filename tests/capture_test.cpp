@@ -796,11 +796,12 @@ TEST(Capture, TsharkDecodesTheShippedDpv1Capture) {
 // The other DPV1 data units, built by hand into SD2 telegrams and written by the pcapng writer:
 //   Alarm_Ack  5C 00 01 09: slot 0, Alarm_Type 1 (Diagnosis), Specifier 09h = Seq_Nr 1,
 //              Add_Ack 0, specifier 1 (appears)
-//   Initiate request  57 00 00 00 01 2C 00 01 00 00 00 00 00 02 00 02 01 02 03 04:
-//              Send_Timeout 012Ch = 300, Features_Supported 0001h, Profile_Features_Supported 0,
+//   Initiate request  57 00 00 00 01 2C 01 00 00 00 00 00 00 02 00 02 01 02 03 04:
+//              Send_Timeout 012Ch = 300, Features_Supported 0100h (Features_Supported_1 01h:
+//              Read/Write, the byte order docs/dpv1.md gives), Profile_Features_Supported 0,
 //              Profile_Ident_Number 0, S_Type 0, S_Len 2, D_Type 0, D_Len 2, S_Addr 0102,
 //              D_Addr 0304
-//   Initiate response 57 F0 00 01 00 00 00 00 00 02 00 02 03 04 01 02: Max_Len_Data_Unit 240
+//   Initiate response 57 F0 01 00 00 00 00 00 00 02 00 02 03 04 01 02: Max_Len_Data_Unit 240
 //   Abort      58 00 13 00: Subnet 0, Instance 1 (MSAC_C2, bits 5..4), Reason_Code 3 (bits 3..0)
 //   a Write request cut after the slot: an expert info, no Lua error.
 TEST(Capture, TsharkDecodesDpv1AlarmAckInitiateAbort) {
@@ -813,10 +814,10 @@ TEST(Capture, TsharkDecodesDpv1AlarmAckInitiateAbort) {
   };
   const std::vector<Bytes> packets = {
       frame(true, 50, {0x5C, 0x00, 0x01, 0x09}),
-      frame(true, 49, {0x57, 0x00, 0x00, 0x00, 0x01, 0x2C, 0x00, 0x01, 0x00, 0x00,
+      frame(true, 49, {0x57, 0x00, 0x00, 0x00, 0x01, 0x2C, 0x01, 0x00, 0x00, 0x00,
                        0x00, 0x00, 0x00, 0x02, 0x00, 0x02, 0x01, 0x02, 0x03, 0x04}),
       frame(false, 48,
-            {0x57, 0xF0, 0x00, 0x01, 0x00, 0x00, 0x00, 0x00, 0x00, 0x02, 0x00, 0x02, 0x03, 0x04,
+            {0x57, 0xF0, 0x01, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x02, 0x00, 0x02, 0x03, 0x04,
              0x01, 0x02}),
       frame(true, 48, {0x58, 0x00, 0x13, 0x00}),
       frame(true, 51, {0x5F, 0x00}),
@@ -836,8 +837,8 @@ TEST(Capture, TsharkDecodesDpv1AlarmAckInitiateAbort) {
                " -e profibus.dpv1.reason_code -e _ws.expert.message");
   const std::vector<std::string> expected = {
       "0x5c,0,1,1,0,1,,,,,,,,,,,",
-      "0x57,,,,,,300,,0x0001,2,2,0102,0304,,,,",
-      "0x57,,,,,,,240,0x0001,2,2,0304,0102,,,,",
+      "0x57,,,,,,300,,0x0100,2,2,0102,0304,,,,",
+      "0x57,,,,,,,240,0x0100,2,2,0304,0102,,,,",
       "0x58,,,,,,,,,,,,,0,1,3,",
       "0x5f,0,,,,,,,,,,,,,,,Write: the data unit ends at byte 2",
   };

@@ -366,7 +366,7 @@ TEST(Do4Dpv1, AnotherFunctionOnSap49IsNotSupported) {
 // another master's Initiate still gets RR (the response waits: its master may still poll); after
 // 125 ms an Initiate is positive. Before the fix SAP 49 stayed occupied for good: RR, `refused`.
 TEST(Do4Dpv1, AnUnpolledInitiateIsWithdrawnAfterSendTimeout) {
-  const std::string initiate = "du=57,00,00,00,00,0A,00,01,00,00,00,00,00,00,00,00\n";
+  const std::string initiate = "du=57,00,00,00,00,0A,01,00,00,00,00,00,00,02,00,02,00,00,00,00\n";
   run_do4_scenario("vpc3plus", "C0,20,00,01,09,00",
                    "startup\nexchange outputs=05,01\n"
                    "send from=2 fc=0x4D dsap=49 ssap=48 " +
@@ -386,10 +386,27 @@ TEST(Do4Dpv1, AnUnpolledNegativeAnswerOnSap49IsWithdrawn) {
                    "send from=2 fc=0x4D dsap=49 ssap=48 du=5E,00,01,02\nexpect answer sc\n" +
                        keep_alive(960) +
                        "send from=7 fc=0x4D dsap=49 ssap=48 "
-                       "du=57,00,00,00,00,0A,00,01,00,00,00,00,00,00,00,00\n"
+                       "du=57,00,00,00,00,0A,01,00,00,00,00,00,00,02,00,02,00,00,00,00\n"
                        "expect answer rr\n" +
                        keep_alive(80) + "c2_initiate send_timeout=100\nexpect dpv1 positive\n",
                    3);
+}
+
+// DO4 checks an Initiate as the Profichip driver's MSAC_C2_RealizeIndRecv (audit s32-dpv1m,
+// finding 1; docs/firmware.md "MSAC_C2"): a Type 0 S_Addr of 1 byte gets the driver's Abort on
+// SAP 40, 58 00 12 00 (Instance MSAC_C2, Reason_Code FE), the master's outcome `aborted`; Type 1
+// addresses of no bytes (16 bytes, under 20) 58 00 17 00 (IA); D_Type 1 (DO4 is not the
+// connection's end) Initiate | 80h, 80 A9 00. Each closes the connection once sent, so the
+// correct Initiate after them opens it: DO4's own Features 01 00, S and D swapped.
+TEST(Do4Dpv1, AnInitiateTheProfichipDriverRefusesGetsItsAbort) {
+  run_do4_scenario("vpc3plus", "C0,20,00,01,09,00",
+                   "startup\nexchange outputs=05,01\n"
+                   "c2_initiate s_addr=00\nexpect dpv1 aborted\nexpect dpv1 58,00,12,00\n"
+                   "c2_initiate s_type=1 s_addr=- d_type=1 d_addr=-\nexpect dpv1 58,00,17,00\n"
+                   "c2_initiate d_type=1\nexpect dpv1 error 80,A9,00\n"
+                   "c2_initiate s_addr=00,11 d_addr=00,22\n"
+                   "expect dpv1 57,10,01,00,00,00,00,00,00,02,00,02,00,22,00,11\n",
+                   5);
 }
 
 // docs/dpv1.md: MSAC_C1 lives in the master's Data_Exchange. Right after the standard start-up

@@ -291,8 +291,7 @@ TEST(Dpv1Master, ADataResponseWithoutDataIsMalformed) {
 TEST(Dpv1Master, ClassTwoConnection) {
   Rig r;
   r.start();
-  pdu::Initiate req;
-  req.send_timeout = 1;  // 10 ms
+  const pdu::Initiate req = pdu::initiate_request(1);  // Send_Timeout 10 ms
   Dpv1Answer a = r.dpv1.initiate(req);
   ASSERT_EQ(a.outcome, Dpv1Answer::Outcome::positive);
   ASSERT_EQ(r.dpv1.c2_sap(), std::optional<std::uint8_t>(40));
@@ -332,6 +331,61 @@ TEST(Dpv1Master, NoConnectionSendsNothing) {
   EXPECT_EQ(r.master.history().size(), sent);
   EXPECT_EQ(r.master.counters().requests, requests);
   EXPECT_TRUE(r.irq_on.empty());
+}
+
+// A long response time-out keeps the master's history flat (audit s32-dpv1m, finding 2: every
+// poll stayed, ~290 bytes each, 20 MB per chip second at 12 Mbaud): the request, the first
+// kKeptPolls polls and the newest stay, the polls between are counted, not kept. A user side
+// that works 1 s, C1_Response_Timeout 50 = 0.5 s = 24 000 000 clocks: the Read's SC ends at
+// t0+748, poll n's at t0+748+704n (Dpv1Master.ResponseTimeOut); the first at or past the
+// time-out is n = 34 090 (t0+24 000 108). Before: 34 091 history records.
+TEST(Dpv1Master, ALongTimeOutKeepsTheHistoryFlat) {
+  Dpv1Rules rules;
+  rules.c1_response_timeout = 50;
+  Rig r(48'000'000, rules);
+  r.start();
+  const std::size_t before = r.master.history().size();
+  const Dpv1Answer a = r.dpv1.read(0, 1, 4);
+  EXPECT_EQ(a.outcome, Dpv1Answer::Outcome::timeout);
+  EXPECT_EQ(a.polls, 34'090u);
+  EXPECT_EQ(a.end, a.start + 748 + 704 * 34'090);
+  EXPECT_EQ(r.master.history().size() - before, 1 + Dpv1Master::kKeptPolls + 1);
+  EXPECT_EQ(r.master.history().back().answer_end, a.end);  // the newest poll is the last one
+}
+
+// The slave's refusal of an Initiate (audit s32-dpv1m, findings 1 and 3): the built-in user side
+// checks the request as the Profichip driver's MSAC_C2_RealizeIndRecv does; a Type 0 S_Addr of
+// 1 byte (Len 1, not 2) gets the driver's Abort on the connection's SAP: 58h, Subnet 0,
+// Instance MSAC_C2 (1) | Reason_Code FE (2), 0. The master's outcome is `aborted` with that
+// Abort, and it knows no connection.
+TEST(Dpv1Master, AnInitiateTheSlaveAbortsIsAborted) {
+  Rig r;
+  r.start();
+  pdu::Initiate req = pdu::initiate_request(100);
+  req.s_addr = {0x00};
+  const Dpv1Answer a = r.dpv1.initiate(req);
+  EXPECT_EQ(a.outcome, Dpv1Answer::Outcome::aborted);
+  EXPECT_EQ(a.du, (pdu::Bytes{0x58, 0x00, 0x12, 0x00}));
+  EXPECT_EQ(a.abort, (pdu::Abort{0, 1, 2, 0}));
+  EXPECT_FALSE(r.dpv1.c2_sap());
+  EXPECT_EQ(answer_summary(a), "aborted 58 00 12 00 (instance 1, reason 2) after 2 polls");
+}
+
+// A no_connection right after a service (audit s32-dpv1m, finding 6): the master acted on the
+// Abort's SC at its last stop bit's sample, 2 clocks (end - T + floor(T/2), T = 4) before the
+// SC's end, the Abort's outcome cycle; the next service is asked after that outcome, so
+// docs/dpv1.md "The outcome's cycle" stamps it there, not 2 clocks earlier.
+TEST(Dpv1Master, NoConnectionRightAfterAServiceIsNotStampedBeforeIt) {
+  Rig r;
+  r.start();
+  ASSERT_EQ(r.dpv1.initiate(pdu::initiate_request(100)).outcome, Dpv1Answer::Outcome::positive);
+  const Dpv1Answer abort = r.dpv1.c2_abort({0, 2, 3, 0});
+  ASSERT_EQ(abort.outcome, Dpv1Answer::Outcome::positive);
+  ASSERT_EQ(r.chip.cycle(), abort.end - 2);  // where the master stopped
+  const Dpv1Answer a = r.dpv1.c2_read(0, 1, 4);
+  EXPECT_EQ(a.outcome, Dpv1Answer::Outcome::no_connection);
+  EXPECT_EQ(a.start, abort.end);
+  EXPECT_EQ(a.end, abort.end);
 }
 
 // `expect dpv1 sc` (docs/scenario-format.md, "DPV1"): the Abort gets SC and no response; a check
@@ -407,24 +461,48 @@ constexpr const char* kHead =
     "profile vpc3plus\nbaud 12000000\nslave address=5 user_prm=C0,00,00\n"
     "record slot=0 index=1 data=11,22,33,44\n";
 
+// A SAP list laid out by hand (VPC3+C p.55, 8-byte segments): SAP 49 (indication buffer 0710h,
+// response buffer 0740h) with the resource manager's response 56 28 (SAP 40) and Send_Timeout
+// `send_timeout` ready (USER + RESP), SAP 40 (0780h, 07C0h) with `sap40_response` in its response
+// buffer (the Initiate response 57 F0 01 00 ... ready, or nothing: every poll there gets SC).
+constexpr std::string_view kInitiateResponseReady =
+    "A0,20,10,08,57,F0,01,00,00,00,00,00,00,02,00,02,00,00,00,00";
+constexpr std::string_view kNoResponse = "00,20,00,00";
+std::string hand_laid_connection(std::string_view send_timeout, std::string_view sap40_response) {
+  return "profile vpc3plus\nbaud 12000000\nslave address=5 user_prm=C0,00,00\nstartup\n"
+         "write 0x700 bytes=31,7F,7F,00,E2,00,E8,28,7F,7F,00,F0,00,F8,FF\n"
+         "write 0x710 bytes=00,20,00,00\nwrite 0x740 bytes=A0,20,04,08,56,28," +
+         std::string(send_timeout) +
+         "\nwrite 0x780 bytes=00,20,00,00\nwrite 0x7C0 bytes=" + std::string(sap40_response) +
+         "\nwrite R_FDL_SAP_List_Ptr 0xE0\n";
+}
+
 // The Initiate's response time-out (audit s28 aud1, finding 1; docs/dpv1.md, "Outcomes": the
-// connection's Send_Timeout, from the request's first start bit, checked at each SC). A SAP list
-// laid out by hand (VPC3+C p.55, 8-byte segments): SAP 49 with the resource manager's response
-// 56 28 00 01 ready (USER + RESP), SAP 40 that never answers. At 12 Mbaud (T = 4 clocks,
-// docs/timing.md) from t0: the Initiate (16 bytes, 27 characters = 297 T), TSDR 11 T, the
-// response (15 characters = 165 T), 33 T idle: the first poll on SAP 40 at t0 + 506 T = 2024;
-// its SC ends 121 + 11 + 11 T later, poll k's at t0 + 2596 + 704k. Send_Timeout 1 = 480 000
-// clocks: the first SC at or past it is k = 679 (t0 + 480 612), after 680 polls. Before, the
-// time-out ran again from the first poll on SAP 40: 683 polls, t0 + 482 724.
+// connection's Send_Timeout, from the request's first start bit, checked at each SC). The SAP
+// list laid out by hand: SAP 49 with the resource manager's response 56 28 00 01 ready, SAP 40
+// that never answers. At 12 Mbaud (T = 4 clocks,
+// docs/timing.md) from t0: the Initiate (20 bytes, 31 characters = 341 T), TSDR 11 T, the
+// response (15 characters = 165 T), 33 T idle: the first poll on SAP 40 at t0 + 550 T = 2200;
+// its SC ends 121 + 11 + 11 T later, poll k's at t0 + 2772 + 704k. Send_Timeout 1 = 480 000
+// clocks: the first SC at or past it is k = 678 (t0 + 480 084), after 679 polls. Before, the
+// time-out ran again from the first poll on SAP 40 (s28).
 TEST(Dpv1Scenario, TheInitiatesTimeOutRunsFromItsFirstStartBit) {
-  const std::string text =
-      "profile vpc3plus\nbaud 12000000\nslave address=5 user_prm=C0,00,00\nstartup\n"
-      "write 0x700 bytes=31,7F,7F,00,E2,00,E8,28,7F,7F,00,F0,00,F8,FF\n"
-      "write 0x710 bytes=00,20,00,00\nwrite 0x740 bytes=A0,20,04,08,56,28,00,01\n"
-      "write 0x780 bytes=00,20,00,00\nwrite 0x7C0 bytes=00,20,00,00\n"
-      "write R_FDL_SAP_List_Ptr 0xE0\n"
-      "c2_initiate send_timeout=1\nexpect dpv1 timeout after 480612\nexpect dpv1 polls 680\n";
-  EXPECT_EQ(failed_expects(text), std::vector<std::string>{});
+  EXPECT_EQ(failed_expects(hand_laid_connection("00,01", kNoResponse) +
+                           "c2_initiate send_timeout=1\nexpect dpv1 timeout after 480084\n"
+                           "expect dpv1 polls 679\n"),
+            std::vector<std::string>{});
+}
+
+// Once the resource manager named a larger Send_Timeout (56 28 00 02: 20 ms) than the Initiate's
+// (1: 10 ms), the Initiate's own wait on SAP 40 runs on it too (docs/dpv1.md: the connection's
+// Send_Timeout is the larger one; audit s32-dpv1m, finding 4). As above, poll k's SC on SAP 40
+// ends at t0 + 2772 + 704k; the first at or past 960 000 is k = 1360 (t0 + 960 212; k = 1359
+// ends at t0 + 959 508), after 1361 polls. Before: t0 + 480 084, 679 polls.
+TEST(Dpv1Scenario, TheInitiateWaitsOnTheResourceManagersLargerSendTimeout) {
+  EXPECT_EQ(failed_expects(hand_laid_connection("00,02", kNoResponse) +
+                           "c2_initiate send_timeout=1\nexpect dpv1 timeout after 960212\n"
+                           "expect dpv1 polls 1361\n"),
+            std::vector<std::string>{});
 }
 
 // The resource manager's one buffer (audit a11, finding 1): master 9's Initiate (Send_Timeout 1 =
@@ -438,12 +516,82 @@ TEST(Dpv1Scenario, AnUncollectedResourceManagerResponseIsWithdrawnAfterItsSendTi
   const std::string text = std::string(kHead) +
                            "dpv1 work=1440\nstartup\n"
                            "send from=9 fc=0x6D dsap=49 ssap=48 "
-                           "du=57,00,00,00,00,01,00,01,00,00,00,00,00,00,00,00\n"
+                           "du=57,00,00,00,00,01,01,00,00,00,00,00,00,02,00,02,00,00,00,00\n"
                            "expect answer sc\nsilence 5ms\n"
                            "c2_initiate send_timeout=100\nexpect dpv1 refused\nexpect answer rr\n"
                            "silence 20ms\n"
                            "c2_initiate send_timeout=100\n"
-                           "expect dpv1 57,F0,00,01,00,00,00,00,00,00,00,00\nexpect dpv1 polls 2\n";
+                           "expect dpv1 57,F0,01,00,00,00,00,00,00,02,00,02,00,00,00,00\n"
+                           "expect dpv1 polls 2\n";
+  EXPECT_EQ(failed_expects(text), std::vector<std::string>{});
+}
+
+// The Initiate request (audit s32-dpv1m, finding 1), as the Profichip VPC3+ driver reads it
+// (its INITIATE_REQ_PDU: Send_Timeout, bFeaturesSupported1, bFeaturesSupported2, ...; DpCfg.h
+// C2_FEATURES_SUPPORTED_1 01h "Read and Write supported", _2 00h) and as IEC 61158-6 has the
+// Add_Addr_Param: S_Type 0, S_Len 2, D_Type 0, D_Len 2, then S_Addr and D_Addr (API, SCL each):
+// 57 00 00 00 | 00 64 | 01 00 | 00 00 | 00 00 | 00 02 00 02 | 00 11 | 00 22, 20 bytes (the
+// driver's MSAC_C2_MIN_CR_PDU_SIZE). The built-in user side answers as the driver's
+// MSAC_C2_InitiateReqToRes: Max_Len_Data_Unit F0h, its own Features 01 00, no profile, S and D
+// swapped (S_Addr = the request's D_Addr). Before: Features 00 01 and no addresses (16 bytes).
+TEST(Dpv1Scenario, TheInitiateClaimsReadWriteInItsFirstFeaturesByteWithTypeZeroAddresses) {
+  const std::string text = std::string(kHead) +
+                           "dpv1 work=1440\nstartup\nc2_initiate s_addr=00,11 d_addr=00,22\n"
+                           "expect dpv1 57,F0,01,00,00,00,00,00,00,02,00,02,00,22,00,11\n";
+  std::vector<std::string> walk;
+  EXPECT_EQ(failed_expects(text, &walk), std::vector<std::string>{});
+  EXPECT_TRUE(has_line(walk, "57 00 00 00 00 64 01 00 00 00 00 00 00 02 00 02 00 11 00 22"));
+}
+
+// What the Profichip driver refuses, the built-in user side refuses alike (audit s32-dpv1m,
+// finding 1), each on the connection's SAP after the resource manager's 56h, and closes the
+// connection once it is sent: a Type 0 address of Len 1: Abort 58 00 12 00 (Instance MSAC_C2,
+// FE); Type 1 addresses of no bytes (16 bytes, under MSAC_C2_MIN_CR_PDU_SIZE 20): Abort
+// 58 00 17 00 (IA); D_Type 1 (the slave is not the connection's end): the driver's example user
+// answers Initiate | 80h, application / not supported (A9h). A correct Initiate is then taken.
+TEST(Dpv1Scenario, TheUserSideRefusesTheInitiatesTheProfichipDriverRefuses) {
+  const std::string text = std::string(kHead) +
+                           "dpv1 work=1440\nstartup\n"
+                           "c2_initiate s_addr=00\nexpect dpv1 aborted\nexpect dpv1 58,00,12,00\n"
+                           "c2_read slot=0 index=1 length=4\nexpect dpv1 no_connection\n"
+                           "c2_initiate s_type=1 s_addr=- d_type=1 d_addr=-\n"
+                           "expect dpv1 58,00,17,00\n"
+                           "c2_initiate d_type=1\nexpect dpv1 error 80,A9,00\n"
+                           "c2_initiate\nexpect dpv1 positive\n";
+  EXPECT_EQ(failed_expects(text), std::vector<std::string>{});
+}
+
+// A slave's Abort in answer to a service on the connection (audit s32-dpv1m, finding 3): the SAP
+// list laid out by hand, SAP 49's response 56 28 00 64 and SAP 40's Initiate response ready; then
+// SAP 40's response buffer gets 58 00 13 00 (Instance MSAC_C2, TO), which answers the Idle at once.
+// The outcome is `aborted` (its bytes checkable), the walk names Instance and Reason_Code, and the
+// master forgets the connection: the next Read is no_connection, nothing sent. Before: `malformed`.
+TEST(Dpv1Scenario, AnAbortInAnswerToAServiceIsAborted) {
+  const std::string text =
+      hand_laid_connection("00,64", kInitiateResponseReady) +
+      "c2_initiate\nexpect dpv1 positive\n"
+      "write 0x7C0 bytes=A0,20,04,08,58,00,13,00\n"
+      "c2_idle\nexpect dpv1 aborted\nexpect dpv1 58,00,13,00\nexpect dpv1 polls 0\n"
+      "c2_read slot=0 index=1 length=4\nexpect dpv1 no_connection\n";
+  std::vector<std::string> walk;
+  EXPECT_EQ(failed_expects(text, &walk), std::vector<std::string>{});
+  EXPECT_TRUE(has_line(walk, "c2_idle: aborted 58 00 13 00 (instance 1, reason 3) after 0 polls"));
+}
+
+// The connection's Send_Timeout is the larger of the Initiate's and the resource manager's
+// (audit s32-dpv1m, finding 4): the Profichip driver runs the connection on max(the request's,
+// its own minimum) and names its own in the 56h response, so a master that asked for less would
+// give up while the slave still works. The layout above, the resource manager answering
+// 56 28 00 02 (20 ms) to an Initiate with Send_Timeout 1 (10 ms); SAP 40's response buffer then
+// holds nothing, so the Read on the connection gets SC for ever. At 12 Mbaud: the Read's SC ends
+// at t0+748, poll n's at t0+748+704n (Dpv1Master.ResponseTimeOut); the first at or past
+// 2 x 480 000 = 960 000 is n = 1363 (t0+960 300; n = 1362 ends at t0+959 596). Before: the
+// master's own 10 ms, 681 polls, t0+480 172.
+TEST(Dpv1Scenario, TheConnectionRunsOnTheLargerSendTimeout) {
+  const std::string text = hand_laid_connection("00,02", kInitiateResponseReady) +
+                           "c2_initiate send_timeout=1\nexpect dpv1 positive\n"
+                           "c2_read slot=0 index=1 length=4\nexpect dpv1 timeout after 960300\n"
+                           "expect dpv1 polls 1363\n";
   EXPECT_EQ(failed_expects(text), std::vector<std::string>{});
 }
 
@@ -638,18 +786,20 @@ TEST(Dpv1Scenario, ParseErrorsNameTheLine) {
       // in a byte list the byte's error.
       {"profile vpc3plus\nstartup\nexpect dpv1 no-answer\n",
        "t.scn:3: unknown DPV1 outcome 'no-answer': "
-       "positive|negative|refused|no_answer|timeout|malformed|no_connection|sc, or the response's "
+       "positive|negative|refused|no_answer|timeout|malformed|no_connection|aborted|sc, or the "
+       "response's "
        "hex bytes"},
       {"profile vpc3plus\nstartup\nexpect dpv1 5E,0x100\n",
        "t.scn:3: bad byte '0x100' in dpv1 response (hex bytes separated by commas)"},
       {"profile vpc3plus\nstartup\nexpect dpv1 polls\n",
        "t.scn:3: expected 'expect dpv1 BYTES', 'expect dpv1 error DECODE,CODE1,CODE2', 'expect "
        "dpv1 polls N' or 'expect dpv1 "
-       "positive|negative|refused|no_answer|timeout|malformed|no_connection|sc'"},
+       "positive|negative|refused|no_answer|timeout|malformed|no_connection|aborted|sc'"},
       {"profile vpc3plus\nstartup\nexpect dpv1 error 80,B0\n",
        "t.scn:3: expect dpv1 error: three bytes, Error_Decode,Error_Code_1,Error_Code_2"},
       {"profile vpc3plus\ncorrupt parity\ndpv1_read slot=0 index=1 length=4\n",
-       "t.scn:2: the next action ('dpv1_read', line 3) sends no request to damage"},
+       "t.scn:2: the next action ('dpv1_read', line 3) is a DPV1 service: a fault line cannot "
+       "damage it"},
       {"profile vpc3plus\nrecord slot=0 index=1 data=01\nrecord slot=0 index=1 data=02\n",
        "t.scn:3: record slot=0 index=1 given twice"},
       {"profile vpc3plus\nalarm_ack slot=0 type=1\n",

@@ -66,20 +66,26 @@ def test_class2_connection():
     _, master, _ = do4_in_data_exchange()
     master.dpv1_rules = dpc31.Dpv1Rules(c2_ssap=48)
     init = master.c2_initiate(send_timeout=100)
-    # 57h, Max_Len_Data_Unit 10h, Features 00 01, the rest 0 (traces/do4_dpv1_c2_vpc3plus.scn)
-    assert init.du == bytes([0x57, 0x10, 0x00, 0x01] + [0x00] * 8)
+    # 57h, Max_Len_Data_Unit 10h, Features_Supported_1 01h (Read/Write) and _2 00h, no profile,
+    # S and D Type 0 Len 2, API 0 SCL 0 (traces/do4_dpv1_c2_vpc3plus.scn)
+    assert init.du == bytes([0x57, 0x10, 0x01, 0x00] + [0x00] * 4 + [0x00, 0x02, 0x00, 0x02]
+                            + [0x00] * 4)
     assert master.c2_sap == 40
+    assert master.c2_send_timeout == 100
     assert master.c2_read(0, 1, 2).du == bytes([0x5E, 0x00, 0x01, 0x02, 0x01, 0x09])
     assert master.c2_idle().du == bytes([0x48, 0x00])
     abort = master.c2_abort(reason=3)
     assert abort.outcome == dpc31.Dpv1Outcome.positive and abort.du == b""
     assert abort.last.encode() == b"\xE5"  # SC
     assert master.c2_sap is None
-    # Without a connection: no_connection at the cycle asked, nothing sent (docs/dpv1.md).
+    # Without a connection: no_connection at the cycle asked, nothing sent (docs/dpv1.md). The
+    # master acted on the Abort's SC at its stop bit's sample, T/2 = 16 clocks before the SC's
+    # end, the Abort's outcome cycle: the Read, asked after that outcome, is stamped there.
     sent, now = master.counters.requests, master.chip.cycle
+    assert now == abort.end - 16
     none = master.c2_read(0, 1, 2)
     assert none.outcome == dpc31.Dpv1Outcome.no_connection
-    assert (none.start, none.end, none.polls, none.last) == (now, now, 0, None)
+    assert (none.start, none.end, none.polls, none.last) == (abort.end, abort.end, 0, None)
     assert (master.counters.requests, master.chip.cycle) == (sent, now)
 
 
@@ -195,3 +201,34 @@ def test_a_request_names_its_sap_as_the_decoders_do(dsap, name):
     (chip-facts.md, "DP SAPs"); a SAP without a service by its number."""
     frame = dpc31.Frame(5, 2, 0x6D, b"\x5E\x00\x01\x04", dsap=dsap, ssap=51)  # SRD_high
     assert frame.service == name
+
+
+def test_an_initiate_the_slave_refuses_is_aborted_and_its_addresses_are_the_callers():
+    """The Initiate from Python (audit s32-dpv1m, findings 1 and 3): the addresses are the
+    caller's (s_type=, s_addr=, d_type=, d_addr=); the request is 16 bytes and the two
+    addresses (docs/dpv1.md "The Initiate"). A Type 0 S_Addr of 1 byte is one the Profichip
+    driver refuses: the built-in user side answers its Abort 58 00 12 00 (Instance MSAC_C2,
+    Reason_Code FE), the outcome is `aborted` with that Abort, and no connection is known.
+    The default Initiate is then taken; its response swaps S and D."""
+    chip = dpc31.Chip("vpc3plus")
+    master = dpc31.Master(chip, address=2, baud=12_000_000,
+                          slave=dpc31.SlaveConfig(address=5, user_prm=b"\xC0\x00\x00"))
+    master.run_responder(records=[(0, 1, b"\x11\x22\x33\x44")])
+    assert master.startup()
+    first = len(master.history)
+    refused = master.c2_initiate(s_addr=b"\x00")
+    assert refused.outcome == dpc31.Dpv1Outcome.aborted
+    assert refused.du == b"\x58\x00\x12\x00"
+    assert refused.abort == (0, 1, 2, 0)
+    assert master.c2_sap is None and master.c2_send_timeout is None
+    assert master.history[first].request.du == bytes(
+        [0x57, 0, 0, 0, 0x00, 0x64, 0x01, 0x00, 0, 0, 0, 0, 0x00, 0x01, 0x00, 0x02, 0x00, 0x00,
+         0x00])
+    init = master.c2_initiate(s_addr=b"\x00\x11", d_addr=b"\x00\x22")
+    assert init.outcome == dpc31.Dpv1Outcome.positive and init.abort is None
+    assert init.du == bytes([0x57, 0xF0, 0x01, 0x00, 0, 0, 0, 0, 0x00, 0x02, 0x00, 0x02,
+                             0x00, 0x22, 0x00, 0x11])
+    with pytest.raises(ValueError, match="s_addr: more than 16 bytes"):
+        master.c2_initiate(s_addr=bytes(17))
+    with pytest.raises(ValueError, match=r"d_type 256 out of range \(0..255\)"):
+        master.c2_initiate(d_type=256)

@@ -109,13 +109,20 @@ static dps dps_the;
 enum { kDpv1Saps = DPS_DPV1_SAPS, kC1Saps = 2u, kConn = 2u, kRm = 3u };
 enum { kFcResponse = 0x08u /* DL: response data low */ };
 /* MSAC_C2 (IEC 61158-6 type 3; docs/dpv1.md "The master's side"): function numbers, the
- * Initiate request's fixed part (57h, 3 reserved, Send_Timeout, Features_Supported,
+ * Initiate request's fixed part (57h, 3 reserved, Send_Timeout, Features_Supported_1 and _2,
  * Profile_Features_Supported, Profile_Ident_Number, S_Type, S_Len, D_Type, D_Len) and its
- * response's (57h, Max_Len_Data_Unit, then the same from Features_Supported on). */
+ * response's (57h, Max_Len_Data_Unit, then the same from Features_Supported on). A Type 0
+ * address is API and SCL (2 bytes): the least request is 20 bytes. The Abort the Profichip
+ * driver sends for a request it refuses: Instance MSAC_C2 (10h) | FE (invalid request) or IA
+ * (invalid address information). */
 enum { kIdle = 0x48u, kRmResponse = 0x56u, kInitiate = 0x57u, kAbort = 0x58u };
 enum { kInitiateReq = 16u, kInitiateRes = 12u, kNegative = 0x80u, kDecodeDpv1 = 0x80u };
+enum { kAddrApiScl = 2u, kInitiateReqMin = 20u, kFeaturesRW = 0x01u /* Features_Supported_1 */ };
+enum { kAbortFE = 0x12u, kAbortIA = 0x17u };
 enum { kInvalidParameter = 0xB8u, kResourceBusy = 0xC2u, kFeatureNotSupported = 0xA9u };
-enum { kC2Open = 1, kRmWaits = 2 }; /* dps.c2_busy */
+/* dps.c2_busy; kC2Closing: the connection's buffer holds a refused Initiate's answer, and the
+ * connection closes once it is sent. */
+enum { kC2Open = 1, kRmWaits = 2, kC2Closing = 4 };
 /* How long a resource manager's response that opened nothing waits for its poll (10 ms units): the
  * GSD's C2_Response_Timeout, the time a master waits for it. */
 enum { kRmResponseTimeout = 100u };
@@ -479,37 +486,54 @@ static void c2_close(DPS_P(dps)) {
 
 /* Initiate on SAP 49 (another function there: its own number | 80h, feature not supported, as
  * DO4 answers a function it does not serve). Open: Initiate | 80h, Resource_Busy. Else the
- * Initiate response (Max_Len_Data_Unit, the request's features and profile, S and D address
- * swapped) waits in the connection's buffer for the master's first poll there, the connection's
- * SAP is switched on, and the resource manager answers 56h, the connection's SAP, the
- * Send_Timeout. */
+ * Initiate response (Max_Len_Data_Unit, its own features: Read/Write, no profile; S and D
+ * address swapped) waits in the connection's buffer for the master's first poll there, the
+ * connection's SAP is switched on, and the resource manager answers 56h, the connection's SAP,
+ * the Send_Timeout. The Profichip driver's checks before its user sees an Initiate
+ * (MSAC_C2_RealizeIndRecv) put its Abort there instead: a Type 0 address whose Len is not 2,
+ * Abort FE; shorter than 20 bytes or than 16 + both addresses, Abort IA. D_Type not 0 (DO4 is
+ * not the connection's end): Initiate | 80h, feature not supported, as the Profichip example
+ * user answers it. Either closes the connection once sent. No local beyond the old ones: the
+ * 80C32 build's XSEG, which its start-up clears, keeps its size (traces/do4_80c32.scn). */
 static uint8_t c2_initiate(DPS_P_(dps) const uint8_t* req, uint8_t len, uint8_t* resp) {
   uint8_t res[DPS_DPV1_MAX_PDU];
   uint8_t s_len, d_len;
   if (req[0] != kInitiate) return dpv1_negative(resp, req[0], kFeatureNotSupported);
-  if (len < kInitiateReq) return dpv1_negative(resp, kInitiate, kInvalidParameter);
-  s_len = req[13];
-  d_len = req[15];
-  if ((unsigned)len != (unsigned)kInitiateReq + s_len + d_len ||
-      (unsigned)kInitiateRes + s_len + d_len > DPS_DPV1_MAX_PDU)
-    return dpv1_negative(resp, kInitiate, kInvalidParameter);
+  if (len < 6u) return dpv1_negative(resp, kInitiate, kInvalidParameter); /* no Send_Timeout */
   if (self->c2_busy & kC2Open) return dpv1_negative(resp, kInitiate, kResourceBusy);
-  res[0] = kInitiate;
-  res[1] = DPS_DPV1_MAX_PDU - 4u;
-  memcpy(res + 2, req + 6, 6); /* Features_Supported, Profile_Features_Supported, Ident */
-  res[8] = req[14];            /* S_Type, S_Len: the request's D_Type, D_Len */
-  res[9] = d_len;
-  res[10] = req[12];
-  res[11] = s_len;
-  memcpy(res + kInitiateRes, req + kInitiateReq + s_len, d_len);
-  memcpy(res + kInitiateRes + d_len, req + kInitiateReq, s_len);
-  dpv1_respond(ME_ kConn, res, (uint8_t)(kInitiateRes + s_len + d_len));
+  s_len = req[13]; /* read before the length is checked: the buffer holds DPS_DPV1_MAX_PDU */
+  d_len = req[15];
+  res[0] = kAbort;
+  res[1] = 0x00; /* Subnet: none */
+  res[2] =
+      len < kInitiateReq                                                                 ? kAbortIA
+      : (req[12] == 0 && s_len != kAddrApiScl) || (req[14] == 0 && d_len != kAddrApiScl) ? kAbortFE
+      : len < kInitiateReqMin || (unsigned)len < (unsigned)kInitiateReq + s_len + d_len  ? kAbortIA
+                                                                                         : 0;
+  res[3] = 0x00;
+  if (res[2] == 0 && (req[14] != 0 || (unsigned)kInitiateRes + s_len + d_len > DPS_DPV1_MAX_PDU)) {
+    dpv1_negative(res, kInitiate, kFeatureNotSupported);
+  } else if (res[2] == 0) {
+    res[0] = kInitiate;
+    res[1] = DPS_DPV1_MAX_PDU - 4u;
+    res[2] = kFeaturesRW;  /* Features_Supported_1, _2 */
+    memset(res + 4, 0, 4); /* Profile_Features_Supported, Profile_Ident_Number: none */
+    res[8] = req[14];      /* S_Type, S_Len: the request's D_Type, D_Len */
+    res[9] = d_len;
+    res[10] = req[12];
+    res[11] = s_len;
+    memcpy(res + kInitiateRes, req + kInitiateReq + s_len, d_len);
+    memcpy(res + kInitiateRes + d_len, req + kInitiateReq, s_len);
+  }
+  /* res[0]: the Initiate response, or a refusal (the Abort, the negative response: 4 bytes) */
+  dpv1_respond(ME_ kConn, res,
+               res[0] == kInitiate ? (uint8_t)(kInitiateRes + s_len + d_len) : (uint8_t)4u);
   Vpc3Write(self->sap_entry[kConn] + VPC3_SAP_Entry_Ind_Buf_Ptr0,
             (uint8_t)(self->dpv1_buf[kConn] >> self->map->segment_shift));
-  self->c2_busy |= kC2Open;
+  self->c2_busy |= res[0] == kInitiate ? kC2Open : kC2Open | kC2Closing;
   self->c2_timeout = (uint16_t)((uint16_t)req[4] << 8 | req[5]);
   self->c2_quiet_ms = 0;
-  ++self->stats.c2_opened;
+  if (res[0] == kInitiate) ++self->stats.c2_opened;
   resp[0] = kRmResponse;
   resp[1] = DPS_SAP_C2;
   resp[2] = req[4];
@@ -588,6 +612,7 @@ static void dpv1_response_sent(DPS_P(dps)) {
     Vpc3Write(self->sap_entry[k] + VPC3_SAP_Entry_Sap,
               (uint8_t)(b0 & ~VPC3_SAP_Entry_Sap_Response_Sent_Msk));
     if (k == kConn) self->c2_quiet_ms = 0;
+    if (k == kConn && (self->c2_busy & kC2Closing)) c2_close(ME); /* the refusal went out */
     if (k == kRm) self->c2_busy = (int)(self->c2_busy & ~kRmWaits);
     ++self->stats.dpv1_responses_sent;
   }

@@ -6,6 +6,7 @@
 // Pure: no chip state, no timing. The data unit excludes the SAP bytes (fdl::Frame::du).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -158,6 +159,7 @@ inline constexpr std::uint8_t Invalid_Parameter = 0xB8;
 inline constexpr std::uint8_t Invalid_Type = 0xB9;
 inline constexpr std::uint8_t Read_Constrain_Conflict = 0xC0;
 inline constexpr std::uint8_t Write_Constrain_Conflict = 0xC1;
+inline constexpr std::uint8_t Feature_Not_Supported = 0xA9;  // application: not supported
 inline constexpr std::uint8_t Resource_Busy = 0xC2;
 inline constexpr std::uint8_t Resource_Unavailable = 0xC3;
 }  // namespace error
@@ -209,7 +211,16 @@ struct ErrorResponse {
 // MSAC_C2 Initiate request: 57h, 3 reserved, Send_Timeout, Features_Supported,
 // Profile_Features_Supported, Profile_Ident_Number, then Add_Addr_Param (S_Type, S_Len, D_Type,
 // D_Len, S_Addr, D_Addr). The response: 57h, Max_Len_Data_Unit, Features_Supported,
-// Profile_Features_Supported, Profile_Ident_Number, Add_Addr_Param.
+// Profile_Features_Supported, Profile_Ident_Number, Add_Addr_Param. Features_Supported is two
+// bytes on the wire, Features_Supported_1 first (the high byte of the field here): its bit 0 is
+// "Read and Write supported" (the Profichip driver's C2_FEATURES_SUPPORTED_1 01h, _2 00h).
+inline constexpr std::uint16_t Features_DPV1_RW = 0x0100;
+// Add_Addr_Param's Type 0: the address is API and SCL, one byte each (Len 2); the Profichip
+// driver aborts an Initiate whose Type 0 address has another Len, or that is shorter than
+// 20 bytes (MSAC_C2_MIN_CR_PDU_SIZE).
+inline constexpr std::uint8_t Addr_Type_API_SCL = 0;
+// The request's bytes through D_Len, and its least length with Type 0 addresses.
+inline constexpr std::size_t kAddrLenAPISCL = 2, kInitiateReqFixed = 16, kInitiateReqMin = 20;
 struct Initiate {
   bool response = false;
   std::uint16_t send_timeout = 0;      // request only, 10 ms units
@@ -225,6 +236,9 @@ struct Initiate {
   [[nodiscard]] Bytes build() const;
   friend bool operator==(const Initiate&, const Initiate&) = default;
 };
+// The class-2 master's Initiate request: Read/Write (Features_DPV1_RW), no profile, S_Addr and
+// D_Addr of Type 0: API 0, SCL 0 each (20 bytes).
+[[nodiscard]] Initiate initiate_request(std::uint16_t send_timeout);
 
 // MSAC_C2 Abort: 58h, Subnet, Instance (bits 5..4) | Reason_Code (bits 3..0), Additional_Detail.
 struct Abort {
@@ -236,6 +250,15 @@ struct Abort {
   [[nodiscard]] Bytes build() const;
   friend bool operator==(const Abort&, const Abort&) = default;
 };
+// Instance and Reason_Code values (the Profichip driver's MSAC_C2_INSTANCE_*, MSAC_C2_ABT_*).
+inline constexpr std::uint8_t Abort_Instance_MSAC_C2 = 1;
+inline constexpr std::uint8_t Abort_FE = 0x02;  // invalid request PDU received
+inline constexpr std::uint8_t Abort_IA = 0x07;  // invalid additional address information
+// The slave's checks of an Initiate request before its user sees it (the Profichip driver's
+// MSAC_C2_RealizeIndRecv): a Type 0 address whose Len is not 2 is Abort FE, a request shorter
+// than 20 bytes or than 16 + S_Len + D_Len is Abort IA (MSAC_C2 instance, Subnet 0); nullopt:
+// accepted (bytes past the addresses are ignored).
+[[nodiscard]] std::optional<Abort> initiate_abort(View req);
 
 // MSAC_C2 Idle: 48h and one reserved byte. The RM's immediate response on SAP 49: 56h, the
 // connection's SAP, Send_Timeout (high, low).
