@@ -235,14 +235,15 @@ void expect_pb3_of_a_sync(LineClient& client, RemoteChip& chip) {
   EXPECT_TRUE(chip.ok("status").ends_with(" pb3=1"));
   const std::uint64_t ack = chip.cycle();
   chip.ok("write 0x03 0x21");  // Int_Ack_Reg bits 15..8: DX_Out, New_GC_Command
-  EXPECT_EQ(pb3_lines(client).back(), fmt::format("! pb3 {} 0", ack + 4));
   EXPECT_TRUE(chip.ok("status").ends_with(" pb3=0"));
-  sync();
+  const std::uint64_t again = sync();
   EXPECT_TRUE(chip.ok("status").ends_with(" pb3=1"));
   chip.ok("reset");
-  EXPECT_EQ(pb3_lines(client).back(), "! pb3 0 0");
   EXPECT_TRUE(chip.ok("status").ends_with(" pb3=0"));
-  EXPECT_EQ(pb3_lines(client).size(), 4u);
+  EXPECT_EQ(
+      pb3_lines(client),
+      (std::vector<std::string>{fmt::format("! pb3 {} 1", high), fmt::format("! pb3 {} 0", ack + 4),
+                                fmt::format("! pb3 {} 1", again), "! pb3 0 0"}));
 }
 
 // The test is the firmware (Responder's init over `write` lines, its own ISR on `! irq` lines)

@@ -286,7 +286,7 @@ INSTANTIATE_TEST_SUITE_P(
                  "'check pb3' follows 'profile dpc31': only the DPC31 has the DX_Out port PB3"},
         BadInput{"dpc31-trace 1\nprofile dpc31\ncheck xint\n", 3, "unknown check 'xint' (pb3)"},
         BadInput{kHead + "pb3 4 1\nend 8\n", 6, "a 'pb3' line needs the header line 'check pb3'"},
-        BadInput{kHead + "check pb3\nwr 4 0000 00\nend 8\n", 6,
+        BadInput{kHead + "wr 4 0000 00\ncheck pb3\nend 8\n", 7,
                  "header line 'check' after the first event"}));
 
 TEST(TraceFile, CommentsAndBlankLinesAnywhere) {
