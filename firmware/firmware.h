@@ -24,6 +24,13 @@ const dpc31_firmware* dpc31_find_firmware(const char* name);
 /* All of them, NULL-terminated. */
 extern const dpc31_firmware* const dpc31_firmwares[];
 
+/* The values one hardware input takes, min..max (a host checks a scenario's `hw` line against
+ * them when it parses it). */
+typedef struct dpc31_hw_range {
+  uint32_t min;
+  uint32_t max;
+} dpc31_hw_range;
+
 /* A built-in firmware on instances: `instance_size` zeroed bytes per station, aligned for any
  * type, passed to every entry point. */
 typedef struct dpc31_builtin {
@@ -32,6 +39,7 @@ typedef struct dpc31_builtin {
   void (*init)(void* self, const dpc31_board* board);
   void (*isr)(void* self);
   int (*hw_input)(void* self, const char* name, uint32_t value); /* NULL: none */
+  const dpc31_hw_range* hw_ranges; /* one per descriptor->hw_inputs, in their order (NULL: none) */
 } dpc31_builtin;
 
 /* The built-in firmware of a descriptor; NULL: not one of them (a plug-in). */

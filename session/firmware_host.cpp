@@ -6,6 +6,7 @@
 #include <span>
 
 #include "firmware.h"
+#include "scenario_lex.hpp"
 
 namespace dpc31 {
 
@@ -196,6 +197,13 @@ Cpu::Program FirmwareHost::program(const Cpu::Isr& after) {
   return p;
 }
 
+std::optional<ValueRange> builtin_hw_range(const dpc31_firmware& fw, std::string_view name) {
+  const dpc31_builtin* b = dpc31_builtin_of(&fw);
+  const int i = scenario_lex::name_index(fw.hw_inputs, name);
+  if (b == nullptr || b->hw_ranges == nullptr || i < 0) return std::nullopt;
+  return ValueRange{fw.hw_inputs[i], b->hw_ranges[i].min, b->hw_ranges[i].max};
+}
+
 std::string FirmwareHost::hw_input(const std::string& name, std::uint32_t value) {
   // A hardware input is the module's own pin, not a chip access: no bus is selected, and a HAL
   // call or a board hook that needs the chip (reset_line, wait_1ms) from it is the firmware's
@@ -220,7 +228,12 @@ std::string FirmwareHost::hw_input(const std::string& name, std::uint32_t value)
     r = run_->hw_input(name.c_str(), value);
   }
   if (r == -1) return "unknown hardware input '" + name + "' of " + fw_.name;
-  if (r == -2) return "value " + std::to_string(value) + " out of range for " + name;
+  if (r == -2) {
+    if (const auto range = builtin_hw_range(fw_, name)) {
+      return out_of_range(*range, std::to_string(value));
+    }
+    return "value " + std::to_string(value) + " out of range for " + name;
+  }
   return {};
 }
 

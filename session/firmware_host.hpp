@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -24,6 +25,7 @@
 #include "dp_master.hpp"
 #include "dpc31/dpc31_firmware.h"
 #include "dpc31/hal.hpp"
+#include "vocabulary.hpp"
 
 struct dpc31_builtin;  // firmware.h
 
@@ -53,6 +55,12 @@ const dpc31_firmware& find_firmware(const std::string& spec);
 // nobody holds is the next station's. A descriptor of no loaded plug-in (a built-in, one a
 // program defines itself) is returned as it is. Throws FirmwareError when a copy cannot load.
 [[nodiscard]] std::shared_ptr<const dpc31_firmware> plugin_copy(const dpc31_firmware& fw);
+
+// The values hardware input `name` of `fw` takes, named by the input: a built-in firmware's
+// (firmware.h, hw_ranges) are known before the run (a scenario's `hw` line is checked when it is
+// parsed); a plug-in's only its hw_input knows (nullopt), as for a name `fw` has not.
+[[nodiscard]] std::optional<ValueRange> builtin_hw_range(const dpc31_firmware& fw,
+                                                         std::string_view name);
 
 class FirmwareHost final : private board::Hooks {
  public:

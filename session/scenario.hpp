@@ -234,7 +234,8 @@ class ScenarioObserver {
   // The master puts a telegram on RxD from `start` (DpMaster::on_send), damaged by `fault`.
   virtual void telegram_sent(std::uint64_t /*start*/, std::span<const std::uint8_t> /*bytes*/,
                              UartFault /*fault*/) {}
-  // Any other event of the walk at its cycle: a transaction, a state change, a chip message.
+  // Any other event of the walk at its cycle: a transaction, a state change, a chip message (not
+  // PB3's edges: an observer has them from Chip::on_pb3_change).
   virtual void walk_note(std::uint64_t /*cycle*/, std::string_view /*text*/) {}
   // After the last step, before ScenarioHooks::at_end.
   virtual void run_ends(Chip& /*chip*/) {}

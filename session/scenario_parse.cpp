@@ -615,7 +615,11 @@ class Parser {
                          name_list(fw_->hw_inputs)));
       }
       step_.name = std::string(pos_[0]);
-      step_.value = static_cast<std::uint32_t>(number(pos_[1], "hw value", 0, 0xFFFF'FFFF));
+      // A built-in firmware's range is known now; a plug-in's hw_input says at the run.
+      const std::optional<ValueRange> range =
+          fw_ != nullptr ? builtin_hw_range(*fw_, pos_[0]) : std::nullopt;
+      step_.value = static_cast<std::uint32_t>(
+          number(pos_[1], range.value_or(ValueRange{"hw value", 0, 0xFFFF'FFFF})));
     } else if (cmd_ == "inputs") {
       if (firmware_seen_ || s_.cpu)
         fail("'inputs' feeds the built-in user side; a firmware makes its own");

@@ -144,7 +144,8 @@ class Runner {
     });
     chip_.on_pb3_change([this](std::uint64_t cycle, bool high) {
       pb3_rises_ += high ? 1 : 0;
-      note(cycle, fmt::format("PB3 {}", high ? "high (DX_Out of a Sync)" : "low"));
+      note(cycle, fmt::format("PB3 {}", high ? "high (DX_Out of a Sync)" : "low"),
+           Event::Kind::pin);
     });
     outputs_.assign(s_.user.slave.out_len, 0);
     // A host user side has started the chip in its init (the line at its Start_SPC3); a `cpu`
@@ -219,7 +220,8 @@ class Runner {
 
  private:
   struct Event {
-    enum class Kind : std::uint8_t { note, started, step, passed, failed, end };
+    // pin: a pin's edge, which an observer takes from the chip itself (a trace's `pb3` line).
+    enum class Kind : std::uint8_t { note, pin, started, step, passed, failed, end };
     std::uint64_t cycle;
     std::string text;
     Kind kind = Kind::note;
@@ -264,6 +266,7 @@ class Runner {
       case Event::Kind::failed:
         o.expect_checked(e.cycle, *e.step, e.kind == Event::Kind::passed, e.text);
         break;
+      case Event::Kind::pin:
       case Event::Kind::end:
         break;
     }

@@ -1,10 +1,10 @@
 // Golden traces: a line-based, diff-friendly record of one chip session with cycle stamps — the
 // telegrams the chip received (RxD) and sent (TxD), every CPU bus access (writes, and reads with
-// the value the firmware got), every X/INT edge, and the chip's state at checkpoints — and the
-// replay that plays it back on a fresh chip with neither master nor firmware: the recorded RxD
-// telegrams and bus accesses are performed at their cycles, everything else is an expectation
-// and checked exactly. The format is specified in docs/trace-format.md; `dpc31 run --record` and
-// `dpc31 replay` are the front ends.
+// the value the firmware got), every X/INT edge (and the DPC31's PB3 edges), and the chip's state
+// at checkpoints — and the replay that plays it back on a fresh chip with neither master nor
+// firmware: the recorded RxD telegrams and bus accesses are performed at their cycles, everything
+// else is an expectation and checked exactly. The format is specified in docs/trace-format.md;
+// `dpc31 run --record` and `dpc31 replay` are the front ends.
 #pragma once
 
 #include <cstdint>
@@ -146,7 +146,7 @@ struct TraceError {
   [[nodiscard]] std::string text() const;  // "FILE:LINE: message" (or "FILE: message")
 };
 
-enum class TraceKind : std::uint8_t { rx, rxd, wr, rd, xint, tx, state, end };
+enum class TraceKind : std::uint8_t { rx, rxd, wr, rd, xint, pb3, tx, state, end };
 
 struct TraceStateKey {
   std::string key;    // dp, wd, status, irr, imr, station, fdl
@@ -165,7 +165,7 @@ struct TraceLine {
   std::uint64_t end = 0;    // tx: end of the last stop bit
   std::uint32_t addr = 0;   // wr / rd
   std::uint8_t data = 0;    // wr data, rd expected value
-  bool level = false;       // xint: 1 = active
+  bool level = false;       // xint: 1 = active; pb3: 1 = high
   std::vector<std::uint8_t> bytes;
   UartFault fault;
   std::vector<std::pair<std::uint64_t, bool>> edges;  // rxd
@@ -176,6 +176,9 @@ struct Trace {
   std::string file;
   ChipOptions chip;
   std::uint32_t baud = 0;
+  // The header's `check pb3`: the DPC31's PB3 edges are expectations (`pb3` lines), every other
+  // edge a mismatch. Without it (traces older than the line) PB3 is not looked at.
+  bool check_pb3 = false;
   std::vector<TraceLine> lines;
 };
 
@@ -197,6 +200,8 @@ struct ReplayOutcome {
   std::uint32_t telegrams_in = 0;
   std::uint32_t telegrams_out = 0;
   std::uint32_t irq_edges = 0;
+  bool pb3_checked = false;  // the trace's `check pb3`
+  std::uint32_t pb3_edges = 0;
   std::uint32_t states = 0;
 };
 

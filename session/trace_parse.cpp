@@ -223,6 +223,14 @@ class TraceParser {
         fail(fmt::format(
             "'irq-controller {}' follows 'profile dpc31': only the DPC31 has a C31 core", w[1]));
       }
+    } else if (k == "check") {
+      once(have_check_);
+      arity(w, 2, "check pb3");
+      if (w[1] != "pb3") fail(fmt::format("unknown check '{}' (pb3)", shown(w[1])));
+      if (t_.chip.profile != Profile::dpc31 || !have_profile_) {
+        fail("'check pb3' follows 'profile dpc31': only the DPC31 has the DX_Out port PB3");
+      }
+      t_.check_pb3 = true;
     } else if (k == "bus") {
       once(have_bus_);
       arity(w, 2, "bus intel|motorola");
@@ -267,6 +275,7 @@ class TraceParser {
         start = l.cycle - access;
         break;
       case TraceKind::xint:
+      case TraceKind::pb3:
         last_expect_ = std::max(last_expect_, l.cycle);
         return;
       case TraceKind::tx:
@@ -377,9 +386,11 @@ class TraceParser {
         prev = c;
         l.edges.emplace_back(c, lv == "1");
       }
-    } else if (k == "xint") {
-      arity(w, 3, "xint CYCLE 0|1");
-      l.kind = TraceKind::xint;
+    } else if (k == "xint" || k == "pb3") {
+      arity(w, 3, k == "xint" ? "xint CYCLE 0|1" : "pb3 CYCLE 0|1");
+      // Without the header's `check pb3` the replay would not look at PB3 besides this line.
+      if (k == "pb3" && !t_.check_pb3) fail("a 'pb3' line needs the header line 'check pb3'");
+      l.kind = k == "xint" ? TraceKind::xint : TraceKind::pb3;
       l.cycle = dec(w[1], "cycle");
       if (w[2] != "0" && w[2] != "1") fail(fmt::format("bad level '{}' (0 or 1)", shown(w[2])));
       l.level = w[2] == "1";
@@ -413,8 +424,8 @@ class TraceParser {
       ended_ = true;
     } else {
       fail(
-          fmt::format("unknown line '{}' (rx, rxd, wr, rd, xint, tx, state, end; header: profile, "
-                      "variant, irq-controller, bus, clock, baud)",
+          fmt::format("unknown line '{}' (rx, rxd, wr, rd, xint, pb3, tx, state, end; header: "
+                      "profile, variant, irq-controller, check, bus, clock, baud)",
                       shown(k)));
     }
   }
@@ -423,6 +434,7 @@ class TraceParser {
   bool have_profile_ = false;
   bool have_variant_ = false;
   bool have_irq_controller_ = false;
+  bool have_check_ = false;
   bool have_bus_ = false;
   bool have_clock_ = false;
   bool have_baud_ = false;

@@ -108,6 +108,10 @@ void TraceRecorder::attach(Chip& chip) {
   if (chip.irq_controller() != IrqController::external) {
     header_.push_back(fmt::format("irq-controller {}", irq_controller_name(chip.irq_controller())));
   }
+  // The DPC31's PB3 is checked as X/INT is: its edges are `pb3` lines, and a replay whose chip
+  // drives it otherwise fails, even where the port is never enabled.
+  const bool pb3 = chip.profile().id == Profile::dpc31;
+  if (pb3) header_.emplace_back("check pb3");
   header_.push_back(
       fmt::format("bus {}", chip.bus_mode() == BusMode::intel ? "intel" : "motorola"));
   header_.push_back(fmt::format("clock {}", chip.clock_hz()));
@@ -125,6 +129,11 @@ void TraceRecorder::attach(Chip& chip) {
   chip.on_irq_change([this](std::uint64_t cycle, bool active) {
     add(cycle, fmt::format("xint {} {}", cycle, active ? 1 : 0));
   });
+  if (pb3) {
+    chip.on_pb3_change([this](std::uint64_t cycle, bool high) {
+      add(cycle, fmt::format("pb3 {} {}", cycle, high ? 1 : 0));
+    });
+  }
   chip.on_telegram([this](const Telegram& t) {
     if (!t.from_chip) return;  // received ones are recorded from RxD, edge by edge
     add(t.start, fmt::format("tx {} {} {}", t.start, t.end, hex_bytes(t.bytes)));

@@ -27,9 +27,15 @@ class Replayer {
   explicit Replayer(const Trace& t) : t_(t), chip_(t.chip) {
     // Each event the chip makes ends the step in progress, to be checked before time goes on.
     chip_.on_irq_change([this](std::uint64_t cycle, bool active) {
-      irq_.emplace_back(cycle, active);
+      irq_.seen.emplace_back(cycle, active);
       chip_.request_stop();
     });
+    if (t.check_pb3) {
+      chip_.on_pb3_change([this](std::uint64_t cycle, bool high) {
+        pb3_.seen.emplace_back(cycle, high);
+        chip_.request_stop();
+      });
+    }
     chip_.on_telegram([this](const Telegram& tg) {
       if (tg.from_chip) {
         tx_.push_back(tg);
@@ -44,6 +50,7 @@ class Replayer {
 
   ReplayOutcome run() {
     ReplayOutcome o;
+    o.pb3_checked = t_.check_pb3;
     try {
       for (std::size_t i = 0; i < t_.lines.size(); ++i) {
         const TraceLine& l = t_.lines[i];
@@ -77,12 +84,22 @@ class Replayer {
     while (chip_.cycle() < to) {
       chip_.clear_stop();                        // one an access requested, too
       chip_.step_until_irq(to - chip_.cycle());  // step() does not end at a request
-      if (!irq_.empty() || !tx_.empty()) check_due(o, horizon, next);
+      if (!irq_.seen.empty() || !pb3_.seen.empty() || !tx_.empty()) check_due(o, horizon, next);
     }
   }
 
-  static std::string xint_text(std::uint64_t c, bool level) {
-    return fmt::format("xint {} at cycle {}", level ? 1 : 0, c);
+  // A line the chip drives (X/INT, PB3): its expected edges (`xint` / `pb3` lines) not yet due,
+  // and the edges the chip made that no expectation has matched yet.
+  struct Pin {
+    TraceKind kind;  // of its trace lines
+    std::string_view keyword;
+    std::string_view edge;  // "X/INT edge"
+    std::deque<const TraceLine*> pend;
+    std::deque<std::pair<std::uint64_t, bool>> seen;
+  };
+
+  static std::string edge_text(const Pin& p, std::uint64_t c, bool level) {
+    return fmt::format("{} {} at cycle {}", p.keyword, level ? 1 : 0, c);
   }
   static std::string tx_text(std::uint64_t s, std::uint64_t e,
                              std::span<const std::uint8_t> bytes) {
@@ -96,41 +113,49 @@ class Replayer {
     return fmt::format("no other {} up to cycle {}", what, horizon - 1);
   }
 
+  // Compares the edges of `p` due by now with its expectations, in order (check_due).
+  static void check_edges(Pin& p, std::uint32_t& count, std::uint64_t now, std::uint64_t horizon,
+                          const TraceLine* next, int next_line) {
+    for (;;) {
+      const TraceLine* e = p.pend.empty() ? nullptr : p.pend.front();
+      if (e != nullptr && e->cycle <= now) {
+        if (p.seen.empty()) {
+          mismatch(e->line, fmt::format("expected {}, got no {} by cycle {}",
+                                        edge_text(p, e->cycle, e->level), p.edge, now));
+        }
+        const auto [c, lv] = p.seen.front();
+        if (c != e->cycle || lv != e->level) {
+          mismatch(e->line, fmt::format("expected {}, got {}", edge_text(p, e->cycle, e->level),
+                                        edge_text(p, c, lv)));
+        }
+        p.seen.pop_front();
+        p.pend.pop_front();
+        ++count;
+        continue;
+      }
+      if (!p.seen.empty() && p.seen.front().first <= now && p.seen.front().first < horizon &&
+          (e == nullptr || p.seen.front().first < e->cycle)) {
+        if (e == nullptr && next != nullptr && next->kind == p.kind) e = next;
+        const std::string got = edge_text(p, p.seen.front().first, p.seen.front().second);
+        if (e != nullptr) {
+          mismatch(e->line,
+                   fmt::format("expected {}, got {}", edge_text(p, e->cycle, e->level), got));
+        }
+        mismatch(next_line,
+                 fmt::format("expected {}, got {}", nothing_expected(horizon, next, p.edge), got));
+      }
+      return;
+    }
+  }
+
   // Compares the expectations due by now with what the chip did, in order. Every expectation
   // before `horizon` has been read (`next` is the line about to be played, nullptr after the
   // end): an event the chip made before it is unexpected if no expectation matches it.
   void check_due(ReplayOutcome& o, std::uint64_t horizon, const TraceLine* next) {
     const std::uint64_t now = chip_.cycle();
     const int next_line = next != nullptr ? next->line : end_line_;
-    for (;;) {
-      const TraceLine* e = pend_irq_.empty() ? nullptr : pend_irq_.front();
-      if (e != nullptr && e->cycle <= now) {
-        if (irq_.empty()) {
-          mismatch(e->line, fmt::format("expected {}, got no X/INT edge by cycle {}",
-                                        xint_text(e->cycle, e->level), now));
-        }
-        const auto [c, lv] = irq_.front();
-        if (c != e->cycle || lv != e->level) {
-          mismatch(e->line, fmt::format("expected {}, got {}", xint_text(e->cycle, e->level),
-                                        xint_text(c, lv)));
-        }
-        irq_.pop_front();
-        pend_irq_.pop_front();
-        ++o.irq_edges;
-        continue;
-      }
-      if (!irq_.empty() && irq_.front().first <= now && irq_.front().first < horizon &&
-          (e == nullptr || irq_.front().first < e->cycle)) {
-        if (e == nullptr && next != nullptr && next->kind == TraceKind::xint) e = next;
-        const std::string got = xint_text(irq_.front().first, irq_.front().second);
-        if (e != nullptr) {
-          mismatch(e->line, fmt::format("expected {}, got {}", xint_text(e->cycle, e->level), got));
-        }
-        mismatch(next_line, fmt::format("expected {}, got {}",
-                                        nothing_expected(horizon, next, "X/INT edge"), got));
-      }
-      break;
-    }
+    check_edges(irq_, o.irq_edges, now, horizon, next, next_line);
+    check_edges(pb3_, o.pb3_edges, now, horizon, next, next_line);
     for (;;) {
       const TraceLine* e = pend_tx_.empty() ? nullptr : pend_tx_.front();
       if (e != nullptr && e->start <= now) {
@@ -197,8 +222,11 @@ class Replayer {
         break;
       }
       case TraceKind::xint:
-        pend_irq_.push_back(&l);
+        irq_.pend.push_back(&l);
         return;  // checked when time has passed it
+      case TraceKind::pb3:
+        pb3_.pend.push_back(&l);
+        return;
       case TraceKind::tx:
         pend_tx_.push_back(&l);
         return;
@@ -220,7 +248,7 @@ class Replayer {
       case TraceKind::end:
         step_to(l, l.cycle, o, kForever, nullptr);
         check_due(o, kForever, nullptr);
-        if (!pend_irq_.empty() || !pend_tx_.empty()) {
+        if (!irq_.pend.empty() || !pb3_.pend.empty() || !pend_tx_.empty()) {
           // The parser keeps expectations before the end; a guard all the same.
           mismatch(l.line, "expected every expectation due by the end");
         }
@@ -233,10 +261,11 @@ class Replayer {
   std::uint32_t t_bit_ = 0;
   std::uint32_t access_ = 4;
   int end_line_ = 0;
-  std::deque<std::pair<std::uint64_t, bool>> irq_;  // observed, not yet matched
-  std::deque<Telegram> tx_;
-  std::deque<const TraceLine*> pend_irq_;  // expected, not yet due
-  std::deque<const TraceLine*> pend_tx_;
+  Pin irq_{TraceKind::xint, "xint", "X/INT edge", {}, {}};
+  Pin pb3_{
+      TraceKind::pb3, "pb3", "PB3 edge", {}, {}};  // looked at with the header's `check pb3` only
+  std::deque<Telegram> tx_;                        // observed, not yet matched
+  std::deque<const TraceLine*> pend_tx_;           // expected, not yet due
 };
 
 }  // namespace

@@ -60,6 +60,11 @@ TEST_F(BadInput, RunScenarioFile) {
        path("seg_slave.scn") + ":3: slaves=5,9: no station 9"},
       {"segment: only headers", file("seg_header.scn", "segment\nstation 5\n"),
        path("seg_header.scn") + ": only header commands: nothing to run"},
+      // A built-in firmware's hardware input out of its range (CNT2's MSG bits: 1..15) is bad
+      // input, found before the run (audit s32 finding 6: it ran, and exited 1).
+      {"hw value out of range",
+       file("hw.scn", "profile dpc31\nfirmware CNT2\nstartup\nhw event1 16\n"),
+       path("hw.scn") + ":4: event1 16 out of range (1..15)"},
   };
   fs::create_directory(path("dir"));
   spit(path("old.json"), "old");

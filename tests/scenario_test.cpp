@@ -199,6 +199,21 @@ TEST(ScenarioParse, GarbageGivesOneLine) {
   EXPECT_EQ(e.find('\n'), std::string::npos);
 }
 
+// A built-in firmware's hardware input is range-checked when the file is parsed, as every other
+// range (docs/scenario-format.md, `hw`; audit s32 finding 6: `hw event1 16` ran and failed as an
+// expect, exit 1). CNT2's MSG bits are four (cnt2.h: bits 3..0 MSG), and an event sets at least
+// one: event1, event2, pwm_event1, pwm_event2 take 1..15; a count is any number of pulses.
+TEST(ScenarioParse, ABuiltInFirmwaresHwValuesAreCheckedWhenParsing) {
+  const std::string h = "profile dpc31\nfirmware CNT2\nstartup\n";
+  EXPECT_EQ(parse_error(h + "hw event1 16\n"), "t.scn:4: event1 16 out of range (1..15)");
+  EXPECT_EQ(parse_error(h + "hw pwm_event1 0\n"), "t.scn:4: pwm_event1 0 out of range (1..15)");
+  EXPECT_EQ(parse_error(h + "hw event2 0x10\n"), "t.scn:4: event2 0x10 out of range (0x1..0xF)");
+  EXPECT_EQ(parse_error(h + "hw event1 15\nhw pwm_event2 1\nhw count1 0\nhw count2 4294967295\n"),
+            "");
+  EXPECT_EQ(parse_error(h + "hw count1 4294967296\n"),
+            "t.scn:4: count1 4294967296 out of range (0..4294967295)");
+}
+
 TEST(ScenarioParse, TimesAndNumbers) {
   dpc31::Scenario s;
   dpc31::ScenarioError err;

@@ -203,6 +203,49 @@ void PrintTo(const StartupParam& p, std::ostream* os) { *os << startup_name(p); 
 
 class ServeStartup : public ::testing::TestWithParam<StartupParam> {};
 
+// The `! pb3` lines the client got, in order.
+std::vector<std::string> pb3_lines(const LineClient& c) {
+  std::vector<std::string> v;
+  for (const std::string& l : c.async) {
+    if (l.starts_with("! pb3 ")) v.push_back(l);
+  }
+  return v;
+}
+
+// A DPC31 in Data_Exchange at 12 Mbaud behind the socket (ServeStartup): PB3, the DX_Out port of
+// seed 003 p.32, in `status` and as `! pb3` lines (audit s32 finding 3: serve showed no PB3).
+// docs/timing.md "dpc31 PB3": with C31_Control (17h) bit 0 Enable_DX_Out_Port, high in the cycle
+// a Global_Control with Sync is acted on, the last stop sample of its 13 characters, END - T +
+// T/2 = END - 2 at T = 4 clocks; low at the completion (4 clocks after its start) of the access
+// that clears DX_Out, and at a hardware reset (`reset`), at cycle 0 of the new time line.
+void expect_pb3_of_a_sync(LineClient& client, RemoteChip& chip) {
+  EXPECT_TRUE(pb3_lines(client).empty());  // the start-up's DX_Outs are not on the port
+  EXPECT_TRUE(chip.ok("status").ends_with(" pb3=0"));
+  chip.ok("write 0x17 0x01");
+  const auto sync = [&] {
+    // Broadcast SDN from master 2 to SAP 58: Control_Command 20h (Sync), Group_Select 00h.
+    const std::vector<std::string> r =
+        words(chip.ok("inject_fdl 127 2 0x46 dsap=58 ssap=62 data=2000"));
+    const std::uint64_t end = std::stoull(r.at(1));
+    chip.ok(fmt::format("step {}", end - chip.cycle()));
+    return end - 2;
+  };
+  const std::uint64_t high = sync();
+  EXPECT_EQ(pb3_lines(client), (std::vector<std::string>{fmt::format("! pb3 {} 1", high)}));
+  EXPECT_TRUE(chip.ok("status").ends_with(" pb3=1"));
+  const std::uint64_t ack = chip.cycle();
+  chip.ok("write 0x03 0x21");  // Int_Ack_Reg bits 15..8: DX_Out, New_GC_Command
+  EXPECT_TRUE(chip.ok("status").ends_with(" pb3=0"));
+  const std::uint64_t again = sync();
+  EXPECT_TRUE(chip.ok("status").ends_with(" pb3=1"));
+  chip.ok("reset");
+  EXPECT_TRUE(chip.ok("status").ends_with(" pb3=0"));
+  EXPECT_EQ(
+      pb3_lines(client),
+      (std::vector<std::string>{fmt::format("! pb3 {} 1", high), fmt::format("! pb3 {} 0", ack + 4),
+                                fmt::format("! pb3 {} 1", again), "! pb3 0 0"}));
+}
+
 // The test is the firmware (Responder's init over `write` lines, its own ISR on `! irq` lines)
 // and the DP master (`inject_fdl` at 12 Mbaud, which the chip hears first while it searches).
 // The answers are the bytes tests/protocol_test.cpp derives by hand for the in-process start-up.
@@ -310,6 +353,7 @@ TEST_P(ServeStartup, DpStartupToDataExchange) {
   ASSERT_FALSE(fw.outputs.empty());
   EXPECT_EQ(fw.outputs.back(), (std::vector<std::uint8_t>{1, 2, 3, 4}));
   EXPECT_GE(fw.interrupts, 4);
+  if (prm.profile == dpc31::Profile::dpc31) expect_pb3_of_a_sync(client, chip);
   EXPECT_EQ(chip.cmd("shutdown"), "OK shutdown");
   EXPECT_EQ(server.wait_exit(5000), 0);
   EXPECT_FALSE(std::filesystem::exists(sock));  // the server removes its socket

@@ -4,10 +4,12 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <sstream>
 #include <string>
@@ -277,7 +279,15 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{kHead + "wr 4 E007 21\nend 4\n", 6,
                  "address 0xE007 out of range (0x0000..0x1FFF)"},
         BadInput{kHead + "rd 4 2000 = 00\nend 4\n", 6,
-                 "address 0x2000 out of range (0x0000..0x1FFF)"}));
+                 "address 0x2000 out of range (0x0000..0x1FFF)"},
+        // PB3 is the DPC31's; a `pb3` line is checked only with the header's `check pb3`, which
+        // also checks that no other edge comes (docs/trace-format.md).
+        BadInput{"dpc31-trace 1\nprofile spc3\ncheck pb3\nbus intel\n", 3,
+                 "'check pb3' follows 'profile dpc31': only the DPC31 has the DX_Out port PB3"},
+        BadInput{"dpc31-trace 1\nprofile dpc31\ncheck xint\n", 3, "unknown check 'xint' (pb3)"},
+        BadInput{kHead + "pb3 4 1\nend 8\n", 6, "a 'pb3' line needs the header line 'check pb3'"},
+        BadInput{kHead + "wr 4 0000 00\ncheck pb3\nend 8\n", 7,
+                 "header line 'check' after the first event"}));
 
 TEST(TraceFile, CommentsAndBlankLinesAnywhere) {
   const std::string text =
@@ -698,4 +708,110 @@ TEST(TraceRun, Dpv1ExchangesRecordAndReplay) {
   ASSERT_NE(req, std::string::npos);
   EXPECT_EQ(t.substr(t.rfind('\n', req) + 1, 3), "rx ");  // a line of the master's
   EXPECT_NE(t.find(" 82 85 08 33 33 5E 00 01 04 11 22 33 44 "), std::string::npos);
+}
+
+// --- PB3 (seed 003, DPC31 p.32; docs/timing.md "dpc31 PB3") ---
+
+namespace {
+
+// traces/gc_sync_pb3_dpc31.trace as `edit` leaves it, replayed; the exit code and message.
+int replay_pb3_golden(const std::function<void(std::vector<std::string>&)>& edit,
+                      std::string& msg) {
+  std::vector<std::string> v =
+      lines_of(testutil::slurp(std::string(SOURCE_DIR) + "/traces/gc_sync_pb3_dpc31.trace"));
+  edit(v);
+  return replay_text(join(v), msg);
+}
+
+// The 1-based line number of the line `text` in the golden PB3 trace.
+int pb3_golden_line(const std::string& text) {
+  const std::vector<std::string> v =
+      lines_of(testutil::slurp(std::string(SOURCE_DIR) + "/traces/gc_sync_pb3_dpc31.trace"));
+  return static_cast<int>(std::find(v.begin(), v.end(), text) - v.begin()) + 1;
+}
+
+// "t.trace:LINE: MESSAGE".
+std::string line_msg(int line, const std::string& message) {
+  return "t.trace:" + std::to_string(line) + ": " + message;
+}
+
+}  // namespace
+
+// The recorder writes PB3's edges as `pb3` lines (no longer as `# PB3 ...` comments) under the
+// header `check pb3`, at the cycles of docs/timing.md: the Sync of rx 2939504 (13 characters of
+// 352 clocks at 1.5 Mbaud) ends at 2944080 and is acted on at its last stop sample, 2944080 - 32
+// + 16 = 2944064, where DX_Out is latched; PB3 falls at the completion of the user's Int_Ack_Reg
+// write (wr 2944112 0003 21). The second Sync: 2955696 + 4576 - 16 = 2960256, acknowledged at
+// 2960324. Unsync and Sync with Unsync drive no edge.
+TEST(TracePb3, SyncEdgesAreRecordedAsPb3Lines) {
+  const std::string t = record_shipped("gc_sync_pb3_dpc31");
+  const std::vector<std::string> v = lines_of(t);
+  std::vector<std::string> pb3;
+  for (const std::string& l : v) {
+    if (l.starts_with("pb3 ")) pb3.push_back(l);
+  }
+  EXPECT_EQ(pb3, (std::vector<std::string>{"pb3 2944064 1", "pb3 2944112 0", "pb3 2960256 1",
+                                           "pb3 2960324 0"}));
+  EXPECT_NE(t.find("\nprofile dpc31\ncheck pb3\nbus intel\n"), std::string::npos);
+  EXPECT_EQ(t.find("# PB3 "), std::string::npos);
+  // The other profiles have no PB3: no `check pb3`.
+  EXPECT_EQ(recorded().find("check pb3"), std::string::npos);
+}
+
+// A replay whose chip drives PB3 otherwise fails at the `pb3` line, naming both edges.
+TEST(TracePb3, AChangedPb3FailsTheReplayWithAPairedLine) {
+  std::string msg;
+  // The port never enabled (the auditor's cut: no C31_Control write): PB3 never rises.
+  EXPECT_EQ(
+      replay_pb3_golden(
+          [](std::vector<std::string>& v) { std::erase(v, std::string("wr 196 0017 01")); }, msg),
+      1);
+  EXPECT_EQ(msg, line_msg(pb3_golden_line("pb3 2944064 1") - 1,
+                          "expected pb3 1 at cycle 2944064, got no PB3 edge by cycle 2944064"));
+  // The edge expected one access earlier than the Sync's stop sample.
+  EXPECT_EQ(replay_pb3_golden(
+                [](std::vector<std::string>& v) {
+                  *std::find(v.begin(), v.end(), "pb3 2944064 1") = "pb3 2944060 1";
+                },
+                msg),
+            1);
+  EXPECT_EQ(msg, line_msg(pb3_golden_line("pb3 2944064 1"),
+                          "expected pb3 1 at cycle 2944060, got pb3 1 at cycle 2944064"));
+  // An edge the trace does not expect (the second Sync's): the chip makes it inside the read
+  // that completes at 2960260, so it is reported at the next line (docs/trace-format.md), the
+  // read completing at 2960264, which expects none before its cycle.
+  EXPECT_EQ(replay_pb3_golden(
+                [](std::vector<std::string>& v) {
+                  std::erase(v, std::string("pb3 2960256 1"));
+                  std::erase(v, std::string("pb3 2960324 0"));
+                },
+                msg),
+            1);
+  EXPECT_EQ(msg, line_msg(pb3_golden_line("rd 2960264 0003 = 20") - 1,
+                          "expected no other PB3 edge up to cycle 2960263, got pb3 1 at cycle "
+                          "2960256"));
+}
+
+// A trace without `check pb3` (recorded before it existed) replays as before: PB3 is not looked
+// at, whatever the chip drives there.
+TEST(TracePb3, ATraceWithoutCheckPb3DoesNotLookAtPb3) {
+  std::string msg;
+  EXPECT_EQ(replay_pb3_golden(
+                [](std::vector<std::string>& v) {
+                  std::erase_if(v, [](const std::string& l) {
+                    return l == "check pb3" || l.starts_with("pb3 ");
+                  });
+                },
+                msg),
+            0)
+      << msg;
+}
+
+TEST(TracePb3, TheReplayCountsPb3EdgesWhereItChecksThem) {
+  const Cli r = cli("replay " + std::string(SOURCE_DIR) + "/traces/gc_sync_pb3_dpc31.trace");
+  EXPECT_EQ(r.rc, 0) << r.out;
+  EXPECT_NE(r.out.find(": 464 telegrams in, 7 out, 104 writes, 72 reads, 20 X/INT edges, 4 PB3 "
+                       "edges, 8 states\n"),
+            std::string::npos)
+      << r.out;
 }

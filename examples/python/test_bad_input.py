@@ -299,6 +299,17 @@ def test_an_unknown_port_is_a_value_error_as_an_unknown_hardware_input_is():
         fw.hw_input("nope", 1)
 
 
+def test_a_builtin_firmwares_hw_input_names_its_range():
+    # CNT2's message events set 1..15 of its four MSG bits (cnt2.h), as a scenario's `hw` line
+    # is refused when parsed: the range is named (it was "value 16 out of range for event1").
+    master = dpc31.Master(dpc31.Chip("dpc31"), address=2, baud=1_500_000,
+                          slave=dpc31.SlaveConfig(address=5))
+    fw = master.run_firmware("CNT2")
+    with pytest.raises(ValueError, match=r"^event1 16 out of range \(1\.\.15\)$"):
+        fw.hw_input("event1", 16)
+    fw.hw_input("event1", 15)
+
+
 @pytest.mark.parametrize("plugin, message", [
     ("DPC31_BAD_PLUGIN_HAL_INIT", "CopyToVpc3: local buffer is NULL with length 4"),
     ("DPC31_BAD_PLUGIN_HAL_ISR", "CopyFromVpc3: local buffer is NULL with length 2"),

@@ -228,3 +228,21 @@ def test_an_observers_exception_is_raised_by_an_addr_of_that_gives_none(tmp_path
                 remote.addr_of("InstQ_Base")
             assert raised.value.__context__ is None  # not raised while the ServeError was handled
             assert remote.addr_of("InstQ_Base") is None  # not kept for the next call
+
+
+def test_pb3_reaches_the_client_as_status_and_observer(tmp_path):
+    """The DPC31's DX_Out port as dpc31.Chip has it (`pb3`, `on_pb3_change`): serve's `status`
+    field `pb3=` and its `! pb3 CYCLE 0|1` lines (docs/protocol.md; the server's side, a Sync's
+    edges at their cycles, is tests/serve_test.cpp's ServeStartup). A scripted server: the step's
+    reply comes after a PB3 edge."""
+    status = (b"OK cycle=2944080 started=1 dp=Data_Exchange wd=DP_Control baud=12000000 xint=0 "
+              b"irq=1 station=5 txd=1 pb3=1\n")
+    with scripted_server(tmp_path, (b"OK profile=dpc31\n",  # info
+                                    b"! irq 2944064 1\n! pb3 2944064 1\nOK 2944080\n",  # step
+                                    status)) as path:
+        with Client(unix=path, timeout=30) as remote:
+            edges = []
+            remote.on_pb3_change(lambda cycle, high: edges.append((cycle, high)))
+            remote.step(16)
+            assert edges == [(2944064, True)]
+            assert remote.pb3 is True

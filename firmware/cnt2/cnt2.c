@@ -137,6 +137,8 @@ const cnt2_pwm* cnt2_get_pwm(DPS_P_(cnt2) int channel) { return &self->p[channel
  * the 80C32"). */
 #ifndef __SDCC
 
+enum { MSG_ALL = 0x0F }; /* the four MSG bits */
+
 static int channel_of(const char* name, const char* stem) {
   const size_t n = strlen(stem);
   if (strncmp(name, stem, n) != 0 || (name[n] != '1' && name[n] != '2') || name[n + 1] != 0)
@@ -163,7 +165,7 @@ int cnt2_hw_input(cnt2* self, const char* name, uint32_t value) {
   } else {
     return -1;
   }
-  if (value == 0 || value > 0x0Fu) return -2;
+  if (value == 0 || value > MSG_ALL) return -2;
   m->hw_events |= (uint8_t)value;
   return 0;
 }
@@ -171,6 +173,9 @@ int cnt2_hw_input(cnt2* self, const char* name, uint32_t value) {
 static const char* const kPorts[] = {"hold1", "hold2", "pwm_hold1", "pwm_hold2", "pwm1", "pwm2", 0};
 static const char* const kHwInputs[] = {"count1",     "count2",     "event1", "event2",
                                         "pwm_event1", "pwm_event2", 0};
+/* A count is any number of pulses; a message event latches MSG bits, at least one of the four. */
+static const dpc31_hw_range kHwRanges[] = {{0, 0xFFFFFFFFu}, {0, 0xFFFFFFFFu}, {1, MSG_ALL},
+                                           {1, MSG_ALL},     {1, MSG_ALL},     {1, MSG_ALL}};
 static const uint8_t kPrm[] = {0x00}; /* Spec_User_Prm_Byte */
 DPC31_BUILTIN_ENTRIES(cnt2)
 static int cnt2_hw_input_in(void* inst, const char* name, uint32_t value) {
@@ -196,6 +201,6 @@ const dpc31_firmware cnt2_firmware = {DPC31_FIRMWARE_ABI_VERSION,
                                       6,
                                       kPrm,
                                       sizeof kPrm};
-const dpc31_builtin cnt2_builtin = {&cnt2_firmware, sizeof(cnt2), cnt2_start_in, cnt2_isr_in,
-                                    cnt2_hw_input_in};
+const dpc31_builtin cnt2_builtin = {&cnt2_firmware, sizeof(cnt2),     cnt2_start_in,
+                                    cnt2_isr_in,    cnt2_hw_input_in, kHwRanges};
 #endif

@@ -256,5 +256,5 @@ const dpc31_firmware do4_firmware = {DPC31_FIRMWARE_ABI_VERSION,
                                      2,
                                      kPrm,
                                      sizeof kPrm};
-const dpc31_builtin do4_builtin = {&do4_firmware, sizeof(do4), do4_start_in, do4_isr_in, 0};
+const dpc31_builtin do4_builtin = {&do4_firmware, sizeof(do4), do4_start_in, do4_isr_in, 0, 0};
 #endif

@@ -191,6 +191,10 @@ Session::Session(ChipOptions opt, std::function<void(const AsyncLine&)> sink)
   chip_.on_irq_change([this](std::uint64_t cycle, bool active) {
     emit(AsyncLine::Kind::irq, fmt::format("! irq {} {}", cycle, active ? 1 : 0));
   });
+  // The DPC31's DX_Out port (seed 003): the level a client sees in `status` changes here.
+  chip_.on_pb3_change([this](std::uint64_t cycle, bool high) {
+    emit(AsyncLine::Kind::pb3, fmt::format("! pb3 {} {}", cycle, high ? 1 : 0));
+  });
   chip_.on_telegram([this](const Telegram& t) {
     emit(AsyncLine::Kind::telegram,
          fmt::format("! telegram {} {} {} {}", t.start, t.end, t.from_chip ? "tx" : "rx",
@@ -271,10 +275,11 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
         baud = code < std::size(kBaudRates) ? fmt::format("{}", kBaudRates[code]) : "?";
       }
       return ok(fmt::format(
-          "cycle={} started={} dp={} wd={} baud={} xint={} irq={} station={} txd={}", chip_.cycle(),
-          chip_.started() ? 1 : 0, dp_state_name(chip_.dp_state()), wd_state_name(chip_.wd_state()),
-          baud, chip_.x_int_pin() ? 1 : 0, chip_.irq_active() ? 1 : 0, chip_.station_address(),
-          chip_.txd_pin() ? 1 : 0));
+          "cycle={} started={} dp={} wd={} baud={} xint={} irq={} station={} txd={} pb3={}",
+          chip_.cycle(), chip_.started() ? 1 : 0, dp_state_name(chip_.dp_state()),
+          wd_state_name(chip_.wd_state()), baud, chip_.x_int_pin() ? 1 : 0,
+          chip_.irq_active() ? 1 : 0, chip_.station_address(), chip_.txd_pin() ? 1 : 0,
+          chip_.pb3_pin() ? 1 : 0));
     }
     if (cpu_ && (cmd == "read" || cmd == "write" || cmd == "readblock" || cmd == "writeblock")) {
       // The CPU is the bus master (docs/decisions.md): a client's access would take bus cycles

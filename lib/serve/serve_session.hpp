@@ -48,7 +48,7 @@ bool is_command(std::string_view word);
 
 // A line that is not the reply to a command ("! ..."), as the chip produced it.
 struct AsyncLine {
-  enum class Kind : std::uint8_t { irq, telegram, log, port } kind;
+  enum class Kind : std::uint8_t { irq, pb3, telegram, log, port } kind;
   LogLevel level;    // kind log only
   std::string text;  // without the newline
 };

@@ -11,8 +11,9 @@ methods have the names of ``dpc31.Chip``'s; what the protocol gives is what they
 
 A reply ``ERR code message`` raises ``ServeError`` (``.code``, ``.message``); a connection that
 ends or a line that is not the protocol's raises ``ConnectionError``. Asynchronous lines (``! irq``,
-``! telegram``, ``! log``, ``! port``) reach the observers given with ``on_irq_change``,
-``on_telegram``, ``on_log`` and ``on_port`` while a command waits for its reply. A server with
+``! pb3``, ``! telegram``, ``! log``, ``! port``) reach the observers given with ``on_irq_change``,
+``on_pb3_change``, ``on_telegram``, ``on_log`` and ``on_port`` while a command waits for its
+reply. A server with
 ``--cpu`` adds the CPU's view: ``cpu()``, ``cpu_port(n)``, ``latch()``.
 """
 
@@ -59,6 +60,7 @@ class Client:
             self._sock.connect(unix)
         self._file = self._sock.makefile("rb")
         self._irq: List[Callable[[int, bool], None]] = []
+        self._pb3: List[Callable[[int, bool], None]] = []
         self._telegram: List[Callable[[Telegram], None]] = []
         self._log: List[Callable[[int, str, str], None]] = []
         self._port: List[Callable[[int, str, int], None]] = []
@@ -115,6 +117,8 @@ class Client:
         words = line.split()
         if len(words) == 4 and words[1] == "irq":
             self._notify(self._irq, int(words[2]), words[3] == "1")
+        elif len(words) == 4 and words[1] == "pb3":
+            self._notify(self._pb3, int(words[2]), words[3] == "1")
         elif len(words) == 6 and words[1] == "telegram":
             t = Telegram(words[4] == "tx", bytes.fromhex(words[5]), int(words[2]), int(words[3]))
             self._notify(self._telegram, t)
@@ -136,6 +140,10 @@ class Client:
     # --- observers: a callable adds one, None removes all of that kind (as dpc31.Chip) ---
     def on_irq_change(self, callback: Optional[Callable[[int, bool], None]]) -> None:
         self._observe(self._irq, callback)
+
+    def on_pb3_change(self, callback: Optional[Callable[[int, bool], None]]) -> None:
+        """The DPC31's port PB3 (DX_Out of a Sync): (cycle, high) for each ``! pb3`` line."""
+        self._observe(self._pb3, callback)
 
     def on_telegram(self, callback: Optional[Callable[[Telegram], None]]) -> None:
         self._observe(self._telegram, callback)
@@ -252,6 +260,10 @@ class Client:
     @property
     def irq_active(self) -> bool:
         return self.status()["irq"] == "1"
+
+    @property
+    def pb3(self) -> bool:
+        return self.status()["pb3"] == "1"
 
     @property
     def started(self) -> bool:

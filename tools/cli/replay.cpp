@@ -16,11 +16,13 @@ int run_replay_command(const ReplayOptions& opt, std::FILE* out, std::FILE* err)
     return rc;
   }
   if (!opt.quiet) {
+    // PB3 is counted where the trace checks it (`check pb3`), else it was not looked at.
     fmt::print(out,
                "{}: ok up to cycle {}: {} telegrams in, {} out, {} writes, {} reads, {} X/INT "
-               "edges, {} states\n",
+               "edges, {}{} states\n",
                opt.trace, o.final_cycle, o.telegrams_in, o.telegrams_out, o.writes, o.reads,
-               o.irq_edges, o.states);
+               o.irq_edges, o.pb3_checked ? fmt::format("{} PB3 edges, ", o.pb3_edges) : "",
+               o.states);
   }
   return 0;
 }
