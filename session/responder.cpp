@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <span>
 #include <stdexcept>
 
 #include "dpc31/dp.hpp"
@@ -19,6 +18,14 @@ constexpr std::uint16_t kHandledByReads = irq::New_Prm_Data | irq::New_Cfg_Data;
 constexpr std::uint8_t kQueueLen = 4;  // dpc31: entries of each queue (one always empty)
 constexpr std::uint16_t kDpv1Events = irq::FDL_Ind | irq::Poll_End_Ind | irq::User_Timer_Clock;
 
+// "" when `given` bytes fill the slave's `key`= bytes (none, or exactly `len`), else why not.
+std::string length_problem(std::size_t given, std::size_t len, std::string_view key,
+                           std::string_view what) {
+  if (given == 0 || given == len) return {};
+  return fmt::format("{} bytes for a slave with {}={}: {} are exactly {}= bytes, or none", given,
+                     key, len, what, key);
+}
+
 }  // namespace
 
 std::string refused_beside_firmware(std::string_view option) {
@@ -27,9 +34,19 @@ std::string refused_beside_firmware(std::string_view option) {
 }
 
 std::string inputs_length_problem(std::size_t given, std::size_t in_len) {
-  if (given == 0 || given == in_len) return {};
-  return fmt::format("{} bytes for a slave with in={}: inputs are exactly in= bytes, or none",
-                     given, in_len);
+  return length_problem(given, in_len, "in", "inputs");
+}
+
+std::string substitute_length_problem(std::size_t given, std::size_t out_len) {
+  return length_problem(given, out_len, "out", "substitute values");
+}
+
+ResponderConfig Responder::checked(ResponderConfig cfg) {
+  if (const std::string why = substitute_length_problem(cfg.substitute.size(), cfg.slave.out_len);
+      !why.empty()) {
+    throw std::invalid_argument("substitute: " + why);
+  }
+  return cfg;
 }
 
 void Responder::set_inputs(std::vector<std::uint8_t> in) {
@@ -207,9 +224,7 @@ void Responder::request(BusPort& c,
 
 // dpc31: after a cleared fetch the old U is the new clear buffer C; prepare the substitute values.
 void Responder::refill_substitute(BusPort& c) {
-  const std::span<const std::uint8_t> sub(cfg_.substitute);
-  c.write_block(buffer(c, RegId::R_Dout_Buf_Ptr_C),
-                sub.first(std::min<std::size_t>(sub.size(), cfg_.slave.out_len)));
+  c.write_block(buffer(c, RegId::R_Dout_Buf_Ptr_C), cfg_.substitute);  // none or out_len bytes
 }
 
 void Responder::give_inputs(BusPort& c, bool always) {

@@ -213,6 +213,11 @@ class Parser {
         inputs_line_ != 0 && !why.empty()) {
       fail_at(inputs_line_, "user inputs=: " + why);
     }
+    if (const std::string why =
+            substitute_length_problem(s_.user.substitute.size(), s_.user.slave.out_len);
+        substitute_line_ != 0 && !why.empty()) {
+      fail_at(substitute_line_, "user substitute=: " + why);
+    }
   }
   // The VPC3+ takes WD_Base from Set_Prm's DPV1_Status_1 only with DPV1_Enable; without it
   // Mode_Reg0.WD_Base decides (VPC3+C p.53, docs/dpv1.md).
