@@ -185,7 +185,7 @@ void Responder::init(BusPort& c) {
   c.write(cell_addr(c.chip(), RegId::R_Len_Read_Cfg_Data), static_cast<std::uint8_t>(s.cfg.size()));
   c.write_block(buffer(c, RegId::R_Read_Cfg_Buf_Ptr), s.cfg);
   if (p.id == Profile::dpc31) {
-    refill_substitute(c);
+    refill_substitute(c, false);  // C holds 00h from the reset unless substitute values are given
     alloc(RegId::InstQ_Base, kQueueLen * request::kEntryBytes);
     alloc(RegId::IndQ_Base, kQueueLen * request::kEntryBytes);
     c.write(cell_addr(c.chip(), RegId::InstQ_Len), kQueueLen);
@@ -222,9 +222,17 @@ void Responder::request(BusPort& c,
   c.write(cell_addr(c.chip(), RegId::InstQ_Wr), instq_wr_);
 }
 
-// dpc31: after a cleared fetch the old U is the new clear buffer C; prepare the substitute values.
-void Responder::refill_substitute(BusPort& c) {
-  c.write_block(buffer(c, RegId::R_Dout_Buf_Ptr_C), cfg_.substitute);  // none or out_len bytes
+// dpc31: after a cleared fetch the old U may be the new clear buffer C; prepare the substitute
+// values. Without any they are 00h: C holds them from the RAM's reset until the first C fetch,
+// which leaves the old outputs there, so only that is zeroed (`c_fetched`).
+void Responder::refill_substitute(BusPort& c, bool c_fetched) {
+  const std::uint32_t base = buffer(c, RegId::R_Dout_Buf_Ptr_C);  // read always: traces show it
+  if (!cfg_.substitute.empty()) {
+    c.write_block(base, cfg_.substitute);
+  } else if (c_fetched) {
+    const std::vector<std::uint8_t> zeros(cfg_.slave.out_len, 0x00);
+    c.write_block(base, zeros);
+  }
 }
 
 void Responder::give_inputs(BusPort& c, bool always) {
@@ -272,13 +280,16 @@ void Responder::isr(BusPort& c) {
     if ((r & fields::Next_Dout_Buffer_Cmd::State_U_Buffer) != 0) {
       static constexpr RegId kPtr[] = {RegId::R_Dout_Buf_Ptr1, RegId::R_Dout_Buf_Ptr2,
                                        RegId::R_Dout_Buf_Ptr3};
-      const std::uint32_t base =
-          buffer(c, kPtr[field_of(r, fields::Next_Dout_Buffer_Cmd::Ind_U_Buffer) - 1]);
+      const auto u =
+          static_cast<std::uint8_t>(field_of(r, fields::Next_Dout_Buffer_Cmd::Ind_U_Buffer));
+      const std::uint32_t base = buffer(c, kPtr[u - 1]);
       Output& o = outputs.emplace_back(Output{
           c.cycle(), std::move(spare_), (r & fields::Next_Dout_Buffer_Cmd::U_Buffer_Cleared) != 0});
       o.data.resize(cfg_.slave.out_len);
       c.read_block(base, o.data);
-      if (o.cleared && c.chip().profile().id == Profile::dpc31) refill_substitute(c);
+      // The C fetch exchanges the pointer cells, so U keeps its number; N -> U never does.
+      if (o.cleared && c.chip().profile().id == Profile::dpc31) refill_substitute(c, u == last_u_);
+      last_u_ = u;
     }
     give_inputs(c);
     if (cfg_.user_watchdog) {

@@ -102,7 +102,7 @@ class Responder {
   std::uint32_t buffer(BusPort& c, RegId ptr_cell) const;
   // Hands U over (New_Din_Buffer_Cmd) with `inputs`; without inputs only if `always`.
   void give_inputs(BusPort& c, bool always = false);
-  void refill_substitute(BusPort& c);
+  void refill_substitute(BusPort& c, bool c_fetched);
   static ResponderConfig checked(ResponderConfig cfg);
   // dpc31: puts requests (code, parameter) into the Instruction_Queue and moves InstQ_Wr past
   // them with one write: the MAC executes them in that write's completion cycle.
@@ -115,6 +115,7 @@ class Responder {
   std::uint32_t seg_shift_ = 3;
   std::vector<std::uint8_t> spare_;  // a forgotten fetch's data buffer, for the next fetch
   std::uint8_t instq_wr_ = 0;        // dpc31: the next free Instruction_Queue entry
+  std::uint8_t last_u_ = 0;          // the U buffer of the last fetch (0: none yet)
   mutable const ProfileDesc* regs_of_ = nullptr;  // the profile regs_ was filled from
   mutable std::array<const RegDesc*, kRegIdCount> regs_{};
 };
