@@ -6,7 +6,8 @@ cd "$(dirname "$0")"
 
 # Build: compiler, CMake, Verilator and the libraries. Checks in the test suite: gtkwave
 # (vcd2fst / fst2vcd; the GUI under xvfb's Xvfb for our save files), sigrok-cli (UART and
-# PROFIBUS decode of our waveforms), tshark (our pcapng captures), python3 (a DP master on the
+# PROFIBUS decode of our waveforms), pulseview (the GUI under Xvfb: the demo's capture with its
+# session's decoders), tshark (our pcapng captures), python3 (a DP master on the
 # pty of dpc31 bridge). The fuzz build of test.sh: clang with its sanitizer and libFuzzer
 # runtimes (libclang-rt-14-dev), ninja. The install test (Install.*):
 # pkgconf (pkg-config), and for the Debian package (cpack -G DEB) dpkg-dev and file. GNU
@@ -16,9 +17,9 @@ cd "$(dirname "$0")"
 # (docs/python.md): pybind11-dev, python3-dev, python3-pytest; the SystemC TLM-2.0 model
 # (docs/systemc.md): libsystemc-dev.
 packages=(cmake g++ make ccache verilator libfmt-dev libcli11-dev nlohmann-json3-dev libgtest-dev
-  libbenchmark-dev zlib1g-dev gtkwave xvfb sigrok-cli tshark python3 clang libclang-rt-14-dev
-  ninja-build pkgconf dpkg-dev file parallel rsync sdcc sdcc-ucsim pybind11-dev python3-dev
-  python3-pytest libsystemc-dev)
+  libbenchmark-dev zlib1g-dev gtkwave xvfb sigrok-cli pulseview tshark python3 clang
+  libclang-rt-14-dev ninja-build pkgconf dpkg-dev file parallel rsync sdcc sdcc-ucsim pybind11-dev
+  python3-dev python3-pytest libsystemc-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

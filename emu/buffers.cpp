@@ -168,7 +168,7 @@ void BufferUnit::failsafe_clear() {
 }
 
 void BufferUnit::dout_clear() {
-  regs_.clear_ram(regs_.buffer_addr(dout_ptr(s_.dout.d)), regs_.cell(RegId::R_Len_Dout_Buf));
+  regs_.clear_buffer(dout_ptr(s_.dout.d), regs_.cell(RegId::R_Len_Dout_Buf));
   s_.dout.d_to_n();
   s_.n_cleared = true;
   s_.d_fresh = false;

@@ -315,7 +315,7 @@ std::string other_profiles_at(Profile self, std::uint32_t a, bool write) {
 
 // Unmapped accesses and those beyond the address bus never flood the log (docs/decisions.md,
 // "Logs that never flood"): a driver's polling loop is millions of them.
-ChipCore::FoldedLog::Line ChipCore::FoldedLog::note(std::uint32_t a) {
+FoldedLog::Line FoldedLog::note(std::uint32_t a) {
   constexpr std::size_t kAddressLines = 16;
   ++count;
   if (count == 1) {

@@ -55,6 +55,22 @@ std::uint8_t Chip::peek(std::uint32_t addr) const { return core_->peek(addr); }
 bool Chip::poke(std::uint32_t addr, std::uint8_t value) { return core_->poke(addr, value); }
 std::uint16_t Chip::peek_reg(RegId id) const { return core_->reg_value(id); }
 
+std::string Chip::poke_reg_problem(RegId id, std::uint16_t value) const {
+  if (id != RegId::Mode_Reg1) return {};
+  const RegDesc* r = core_->regs.reg(id);
+  namespace m1 = fields::Mode_Reg1;
+  const auto run_state =
+      static_cast<std::uint16_t>(m1::Start_SPC3 | m1::Go_Offline | m1::EOI | m1::User_Leave_Master);
+  const std::uint16_t now = core_->regs.latch(id);
+  const auto changed = static_cast<std::uint16_t>((now ^ value) & run_state & r->mask());
+  if (changed == 0) return {};
+  return fmt::format(
+      "poke_reg Mode_Reg1 {:#04x}: bits {:#04x} would change; Start_SPC3 and Go_Offline are the "
+      "chip's run state ({}), EOI and User_Leave_Master pulses that never stay set: only a "
+      "command changes them (Mode_Reg1_S / Mode_Reg1_R over the bus)",
+      value, changed, core_->dp.started() ? "Passive_Idle" : "Offline");
+}
+
 bool Chip::poke_reg(RegId id, std::uint16_t value) {
   ChipCore& c = *core_;
   const RegDesc* r = c.regs.reg(id);
@@ -64,7 +80,10 @@ bool Chip::poke_reg(RegId id, std::uint16_t value) {
     return true;
   }
   if (r->kind != Kind::latch) return false;
+  if (std::string why = poke_reg_problem(id, value); !why.empty())
+    throw std::invalid_argument(std::move(why));
   c.regs.latch(id) = static_cast<std::uint16_t>(value & r->mask());
+  if (id == RegId::Mode_Reg2) c.regs.follow_mode2(c.regs.latch(id));
   c.irq.update_line();
   return true;
 }

@@ -59,14 +59,6 @@ struct ChipCore {
   bool stop = false;               // Chip::request_stop
   std::uint16_t written_bits = 0;  // the lane-aligned value of the write the hooks are serving
   // Accesses a driver for another chip makes over and over (bus.cpp): a log, not chip state.
-  struct FoldedLog {
-    enum class Line { first, address, count, none };
-    // The line one more access at `a` gets: the first names the cause, the first few addresses
-    // one each, then a count at 10, 100, 1000, ... accesses in all (docs/decisions.md).
-    Line note(std::uint32_t a);
-    std::uint64_t count = 0;
-    std::vector<std::uint32_t> logged;  // the first few addresses, one line each
-  };
   FoldedLog unmapped;
   FoldedLog beyond_bus;  // addresses with bits above the profile's address bus
 

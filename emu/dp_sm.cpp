@@ -111,6 +111,28 @@ Frame DpStateMachine::sap_answer(const Frame& req, Response code,
                          req.dsap);
 }
 
+// One rule for every length cell an answer is read by (R_Len_Din_Buf, R_Len_Dout_Buf,
+// R_Len_Read_Cfg_Data, R_Len_Diag_Buf1/2): a DP data unit carries at most 244 bytes (chip-facts
+// §1.2), so a cell beyond it sends the buffer's first 244, and the log says so once per cell and
+// value (modelled: the manuals give the cells' limits, not what the chip does past them).
+std::size_t DpStateMachine::answer_length(RegId len_cell) {
+  const std::uint8_t len = regs_.cell(len_cell);
+  auto& [cell, logged] = *std::find_if(over_long_.begin(), over_long_.end(),
+                                       [len_cell](const auto& c) { return c.first == len_cell; });
+  if (len <= kMaxBufferLength) {
+    logged = 0;
+    return len;
+  }
+  if (logged != len) {
+    logged = len;
+    sig_.log(LogLevel::warn,
+             "{} = {}: beyond the {} bytes of a DP data unit: the answer sends the buffer's first "
+             "{} (modelled)",
+             regs_.reg(cell)->name, len, kMaxBufferLength, kMaxBufferLength);
+  }
+  return kMaxBufferLength;
+}
+
 Frame DpStateMachine::short_answer(const Frame& req, Response code) const {
   return fdl::make_frame(req.sa, s_.station, fdl::make_response_fc(code));
 }
@@ -251,7 +273,8 @@ bool DpStateMachine::service(const fdl::Frame& req) {
           answer = short_answer(req, Response::RR);
           break;
         }
-        regs_.read_buffer(RegId::R_Read_Cfg_Buf_Ptr, regs_.cell(RegId::R_Len_Read_Cfg_Data), du_);
+        regs_.read_buffer(RegId::R_Read_Cfg_Buf_Ptr, answer_length(RegId::R_Len_Read_Cfg_Data),
+                          du_);
         answer = sap_answer(req, Response::DL, std::move(du_));
         break;
       case sap::Rd_Inp:
@@ -456,8 +479,7 @@ std::optional<fdl::Frame> DpStateMachine::slave_diag(const fdl::Frame& req) {
   static constexpr RegId kPtr[] = {RegId::R_Diag_Buf_Ptr1, RegId::R_Diag_Buf_Ptr2};
   static constexpr RegId kLen[] = {RegId::R_Len_Diag_Buf1, RegId::R_Len_Diag_Buf2};
   const int k = buffers_.sending_diag();
-  const std::size_t len =
-      std::clamp<std::size_t>(regs_.cell(kLen[k]), kStandardDiagBytes, kMaxBufferLength);
+  const std::size_t len = std::max(answer_length(kLen[k]), kStandardDiagBytes);
   regs_.read_buffer(kPtr[k], len, du_);
   const std::uint8_t user = du_[0];
   using D = pdu::SlaveDiag;
@@ -503,10 +525,10 @@ std::optional<fdl::Frame> DpStateMachine::read_io(const fdl::Frame& req) {
   if (fdl::sap_number(*req.dsap) == sap::Rd_Inp) {
     sig_.emit(BlockEvent::Kind::din);
     buffers_.inputs_due(s_.freeze_mode);
-    regs_.read_buffer(buffers_.din_d_ptr(), regs_.cell(RegId::R_Len_Din_Buf), du_);
+    regs_.read_buffer(buffers_.din_d_ptr(), answer_length(RegId::R_Len_Din_Buf), du_);
   } else {
     // Read_Outputs is served from the user's U buffer.
-    regs_.read_buffer(buffers_.dout_u_ptr(), regs_.cell(RegId::R_Len_Dout_Buf), du_);
+    regs_.read_buffer(buffers_.dout_u_ptr(), answer_length(RegId::R_Len_Dout_Buf), du_);
   }
   return sap_answer(req, Response::DL, std::move(du_));
 }
@@ -583,7 +605,7 @@ std::optional<fdl::Frame> DpStateMachine::data_exchange(const fdl::Frame& req) {
   }
   sig_.emit(BlockEvent::Kind::din);
   buffers_.inputs_due(s_.freeze_mode);
-  const std::size_t in_len = regs_.cell(RegId::R_Len_Din_Buf);
+  const std::size_t in_len = answer_length(RegId::R_Len_Din_Buf);
   const Response code = buffers_.diag_flag() ? Response::DH : Response::DL;
   if (in_len == 0) return code == Response::DL ? fdl::sc() : short_answer(req, code);
   regs_.read_buffer(buffers_.din_d_ptr(), in_len, du_);

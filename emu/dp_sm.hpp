@@ -4,9 +4,11 @@
 // OK / Not_OK reads answer 00 finished, 01 conflict, 11 not allowed.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "buffers.hpp"
@@ -183,6 +185,9 @@ class DpStateMachine {
   [[nodiscard]] fdl::Frame sap_answer(const fdl::Frame& req, fdl::Response code,
                                       std::vector<std::uint8_t> du) const;
   [[nodiscard]] fdl::Frame short_answer(const fdl::Frame& req, fdl::Response code) const;
+  // The bytes an answer takes from a buffer whose length cell is `len_cell`: the cell's value, at
+  // most the 244 of a DP data unit (docs/timing.md, "Length cells").
+  std::size_t answer_length(RegId len_cell);
 
   RegisterFile& regs_;
   InterruptController& irq_;
@@ -195,6 +200,13 @@ class DpStateMachine {
   // The RAM's bytes for an answer's data unit (read_buffer): their memory goes out with the
   // answer and comes back once it is encoded (service).
   std::vector<std::uint8_t> du_;
+  // The over-long value each answering length cell was last logged with (0: none): one line per
+  // cell and value. Log state only, not the chip's (not in a snapshot).
+  std::array<std::pair<RegId, std::uint8_t>, 5> over_long_ = {{{RegId::R_Len_Din_Buf, 0},
+                                                               {RegId::R_Len_Dout_Buf, 0},
+                                                               {RegId::R_Len_Read_Cfg_Data, 0},
+                                                               {RegId::R_Len_Diag_Buf1, 0},
+                                                               {RegId::R_Len_Diag_Buf2, 0}}};
 };
 
 }  // namespace dpc31

@@ -18,9 +18,7 @@ void ModeRegisters::install_hooks(HookTable& h) {
   at(RegId::Mode_Reg0).pre_write = offline_only;
   at(RegId::Mode_Reg2).pre_write = offline_only;
   at(RegId::Mode_Reg2).post_write = [](void* b, std::uint16_t, std::uint16_t now, std::uint16_t) {
-    RegisterFile& regs = self<ModeRegisters>(b).regs_;
-    regs.set_large_ram(regs.profile().ram_size_large != 0 &&
-                       (now & fields::Mode_Reg2::_4kB_Mode) != 0);
+    self<ModeRegisters>(b).regs_.follow_mode2(now);
   };
   // Only the bits the profile's Mode_Reg1_S takes act: on the DPC31 Start_SPC3, Go_Offline,
   // User_Leave_Master and Res_User_WD are requests (IGN here, docs/dpc31.md).

@@ -29,6 +29,9 @@ RegisterFile::RegisterFile(const ProfileDesc& prof, BusMode bus, const Signals& 
       region_map_[a] = static_cast<std::uint16_t>(i);
     }
   }
+  for (const RegionDesc& r : prof.regions) {  // in address order
+    if (r.begin == registers_end_ && !r.ram) registers_end_ = r.end;
+  }
 }
 
 void RegisterFile::reset() {
@@ -86,8 +89,35 @@ std::uint32_t RegisterFile::buffer_addr(RegId ptr_cell) const {
   return static_cast<std::uint32_t>(cell(ptr_cell)) << segment_shift();
 }
 
-void RegisterFile::clear_ram(std::uint32_t begin, std::uint32_t len) {
-  for (std::uint32_t i = 0; i < len; ++i) ram_write(begin + i, 0);
+void RegisterFile::note_buffer(RegId ptr_cell, std::uint32_t base, std::size_t len) {
+  if (len == 0 || base >= registers_end_) return;
+  const std::string_view name = reg(ptr_cell)->name;
+  switch (over_registers_.note(base)) {
+    case FoldedLog::Line::first:
+      sig_->log(LogLevel::warn,
+                "{} = {:02X}h puts its buffer at {:#05x}, over the registers (below {:#05x}): the "
+                "chip keeps its bytes in RAM the CPU does not see there (modelled); further such "
+                "uses are counted",
+                name, cell(ptr_cell), base, registers_end_);
+      break;
+    case FoldedLog::Line::address:
+      sig_->log(LogLevel::warn, "{} = {:02X}h puts its buffer at {:#05x}, over the registers", name,
+                cell(ptr_cell), base);
+      break;
+    case FoldedLog::Line::count:
+      sig_->log(LogLevel::warn,
+                "{} uses of buffers over the registers so far (the latest: {} at {:#05x})",
+                over_registers_.count, name, base);
+      break;
+    case FoldedLog::Line::none:
+      break;
+  }
+}
+
+void RegisterFile::clear_buffer(RegId ptr_cell, std::size_t len) {
+  const std::uint32_t base = buffer_addr(ptr_cell);
+  note_buffer(ptr_cell, base, len);
+  for (std::size_t i = 0; i < len; ++i) ram_write(base + static_cast<std::uint32_t>(i), 0);
 }
 
 void RegisterFile::ram_write(std::uint32_t addr, std::uint8_t v) {
@@ -106,12 +136,14 @@ std::uint8_t RegisterFile::ram_read(std::uint32_t addr) {
 
 void RegisterFile::write_buffer(RegId ptr_cell, std::span<const std::uint8_t> bytes) {
   const std::uint32_t base = buffer_addr(ptr_cell);
+  note_buffer(ptr_cell, base, bytes.size());
   for (std::size_t i = 0; i < bytes.size(); ++i)
     ram_write(base + static_cast<std::uint32_t>(i), bytes[i]);
 }
 
 void RegisterFile::read_buffer(RegId ptr_cell, std::size_t len, std::vector<std::uint8_t>& out) {
   const std::uint32_t base = buffer_addr(ptr_cell);
+  note_buffer(ptr_cell, base, len);
   out.resize(len);
   for (std::size_t i = 0; i < len; ++i) out[i] = ram_read(base + static_cast<std::uint32_t>(i));
 }

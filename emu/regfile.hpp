@@ -62,7 +62,10 @@ class RegisterFile {
   [[nodiscard]] std::uint32_t buffer_addr(RegId ptr_cell) const;
   std::uint8_t ram_read(std::uint32_t addr);
   void ram_write(std::uint32_t addr, std::uint8_t v);
-  void clear_ram(std::uint32_t begin, std::uint32_t len);
+  // A buffer the ASIC uses over the registers (its pointer 00h, the reset value, or any segment
+  // below the first RAM cell) keeps its bytes in the RAM behind them, which the CPU does not see
+  // there (modelled): each use is logged, through the warnings' limiter.
+  void clear_buffer(RegId ptr_cell, std::size_t len);
   void write_buffer(RegId ptr_cell, std::span<const std::uint8_t> bytes);
   // `len` bytes into `out` (its old contents replaced, its capacity kept).
   void read_buffer(RegId ptr_cell, std::size_t len, std::vector<std::uint8_t>& out);
@@ -81,7 +84,10 @@ class RegisterFile {
   void note_violation(std::uint32_t addr, std::uint32_t mapped);
   [[nodiscard]] bool ram_access_violation() const { return s_.ram_access_violation; }
   void clear_ram_access_violation() { s_.ram_access_violation = false; }
-  void set_large_ram(bool on) { s_.large_ram = on; }
+  // VPC3+ 4kB_Mode: the RAM decode follows Mode_Reg2, written over the bus or poked.
+  void follow_mode2(std::uint16_t mode2) {
+    s_.large_ram = prof_->ram_size_large != 0 && (mode2 & fields::Mode_Reg2::_4kB_Mode) != 0;
+  }
   // A violation takes a started chip offline: wired by the chip to the mode block.
   std::function<void()> on_violation;
 
@@ -95,6 +101,9 @@ class RegisterFile {
   const ProfileDesc* prof_;
   BusMode bus_;
   const Signals* sig_;
+  std::uint32_t registers_end_ = 0;  // one past the non-RAM regions from address 0 (registers)
+  FoldedLog over_registers_;         // buffers used there, by address: a log, not chip state
+  void note_buffer(RegId ptr_cell, std::uint32_t base, std::size_t len);
   State s_;
   std::vector<std::uint16_t> rd_map_;
   std::vector<std::uint16_t> wr_map_;

@@ -317,6 +317,10 @@ void bind_master(py::module_& m) {
             rc.substitute = from_bytes(substitute);
             rc.user_watchdog = user_watchdog;
             rc.dx_out_port = dx_out_port;
+            // The buffers for the Master's SlaveConfig must fit the chip's RAM.
+            if (const std::string why = responder_layout_problem(pm.chip.chip.profile(), rc);
+                !why.empty())
+              throw py::value_error("SlaveConfig " + why);
             auto r = std::make_shared<Responder>(rc);
             r->set_inputs(from_bytes(inputs));
             pm.start_user_side(rc.slave, [&](BusPort& bus) { r->init(bus); });

@@ -479,6 +479,9 @@ PyStation& add_station(py::object self, U8 address, const std::string& profile,
     rc.slave = sc;
     rc.user_watchdog = user_wd.value_or(false);
     rc.user_wd_value = user_wd_value.value_or(rc.user_wd_value);
+    if (const std::string why = responder_layout_problem(profile_desc(opt.profile), rc);
+        !why.empty())
+      throw py::value_error("slave=SlaveConfig " + why);
     st->responder = std::make_shared<Responder>(rc);
   }
   st->slave = sc;

@@ -17,6 +17,13 @@ constexpr std::uint8_t kHandshakeConflict = 0x01;  // the OK / Not_OK reads' 01:
 constexpr std::uint16_t kHandledByReads = irq::New_Prm_Data | irq::New_Cfg_Data;
 constexpr std::uint8_t kQueueLen = 4;  // dpc31: entries of each queue (one always empty)
 constexpr std::uint16_t kDpv1Events = irq::FDL_Ind | irq::Poll_End_Ind | irq::User_Timer_Clock;
+constexpr std::uint8_t kDiagLen = 6;  // the standard diag, no user part
+// Aux buffers (Set_Prm, Chk_Cfg and the Read_Cfg copy in them, Set_Slave_Address) take the
+// longest of the three.
+std::uint32_t aux_len(const SlaveConfig& s) {
+  return std::max<std::uint32_t>({8u + static_cast<std::uint32_t>(s.user_prm.size()),
+                                  static_cast<std::uint32_t>(s.cfg.size()), 4u});
+}
 
 // "" when `given` bytes fill the slave's `key`= bytes (none, or exactly `len`), else why not.
 std::string length_problem(std::size_t given, std::size_t len, std::string_view key,
@@ -65,6 +72,53 @@ std::string user_wd_value_needs_user_wd(std::string_view option) {
       option);
 }
 
+ResponderLayout responder_layout(const ProfileDesc& p, const ResponderConfig& cfg) {
+  const SlaveConfig& s = cfg.slave;
+  ResponderLayout l;
+  // VPC3+: large buffers need the 4 KB mode (16-byte segments), the margin is the DPV1 part's.
+  l.large = p.ram_size_large != 0 && 3u * (s.in_len + s.out_len) + 1024 > p.ram_size - p.user_base;
+  l.seg_shift = l.large ? p.segment_shift_large : p.segment_shift;
+  l.ram_end = p.ram_begin + (l.large ? p.ram_size_large : p.ram_size);
+  const std::uint32_t seg = 1u << l.seg_shift;
+  std::uint32_t next = (p.user_base + seg - 1) / seg;
+  const auto alloc = [&](RegId ptr_cell, std::uint32_t len) {
+    l.segment[static_cast<std::size_t>(ptr_cell)] = next;
+    next += std::max<std::uint32_t>(1, (len + seg - 1) / seg);
+  };
+  for (RegId r : {RegId::R_Dout_Buf_Ptr1, RegId::R_Dout_Buf_Ptr2, RegId::R_Dout_Buf_Ptr3})
+    alloc(r, s.out_len);
+  for (RegId r : {RegId::R_Din_Buf_Ptr1, RegId::R_Din_Buf_Ptr2, RegId::R_Din_Buf_Ptr3})
+    alloc(r, s.in_len);
+  if (p.id == Profile::dpc31) alloc(RegId::R_Dout_Buf_Ptr_C, s.out_len);
+  alloc(RegId::R_Diag_Buf_Ptr1, kDiagLen);
+  alloc(RegId::R_Diag_Buf_Ptr2, kDiagLen);
+  for (RegId r : {RegId::R_Aux_Buf_Ptr1, RegId::R_Aux_Buf_Ptr2, RegId::R_Prm_Buf_Ptr,
+                  RegId::R_Cfg_Buf_Ptr, RegId::R_Read_Cfg_Buf_Ptr, RegId::R_SSA_Buf_Ptr}) {
+    alloc(r, aux_len(s));
+  }
+  if (p.id == Profile::dpc31) {
+    alloc(RegId::InstQ_Base, kQueueLen * request::kEntryBytes);
+    alloc(RegId::IndQ_Base, kQueueLen * request::kEntryBytes);
+  }
+  l.dpv1 = next;
+  if (!cfg.dpv1.records.empty()) next += Dpv1User::segments(l.seg_shift);
+  l.end = next << l.seg_shift;
+  return l;
+}
+
+std::string responder_layout_problem(const ProfileDesc& p, const ResponderConfig& cfg) {
+  const ResponderLayout l = responder_layout(p, cfg);
+  // A pointer cell holds segments 0..255: past them is no buffer either (never below the RAM's
+  // end on our profiles, but the check is the cell's).
+  const std::uint32_t limit = std::min(l.ram_end, 256u << l.seg_shift);
+  if (l.end <= limit) return {};
+  return fmt::format(
+      "in={} out={}: the built-in user side's buffers would end at {:#05x}, past the {} bytes of "
+      "RAM of profile {}{} (its user area {:#05x}..{:#05x})",
+      cfg.slave.in_len, cfg.slave.out_len, l.end - 1, l.ram_end - p.ram_begin, p.name,
+      l.large ? " in 4kB_Mode" : "", p.user_base, limit - 1);
+}
+
 const RegDesc& Responder::reg(const Chip& c, RegId id) const {
   const ProfileDesc& p = c.profile();
   if (regs_of_ != &p) {
@@ -110,6 +164,9 @@ std::uint32_t Responder::buffer(BusPort& c, RegId ptr_cell) const {
 void Responder::init(BusPort& c) {
   const ProfileDesc& p = c.chip().profile();
   const SlaveConfig& s = cfg_.slave;
+  if (const std::string why = responder_layout_problem(p, cfg_); !why.empty())
+    throw std::invalid_argument(why);
+  const ResponderLayout layout = responder_layout(p, cfg_);
   // Only defined bits: a write to reserved bits would be reported by the chip.
   const auto defined = [&](RegId id) {
     const RegDesc* r = find_reg(p, id);
@@ -125,20 +182,18 @@ void Responder::init(BusPort& c) {
   if (cfg_.freeze_supported) mode0 |= m0::Freeze_Supported;
   if (cfg_.spec_clear_mode) mode0 |= m0::Spec_Clear_Mode;
   write16(c, RegId::Mode_Reg0, mode0);
-  // VPC3+ Mode_Reg2: large buffers need the 4 KB mode (16-byte segments; this write leaves
-  // GC_Int_Mode 0). An input-only slave raises DX_Out only with DX_Int_Mode = 1 ("0 - DX Interrupt
-  // only generated, if DOUT length not 0", Profichip DpCfg.h), and the user watchdog is served on
-  // DX_Out: the user side sets it then, as an input-only slave's firmware does.
-  const bool large =
-      p.ram_size_large != 0 && 3u * (s.in_len + s.out_len) + 1024 > p.ram_size - p.user_base;
+  // VPC3+ Mode_Reg2: large buffers need the 4 KB mode (this write leaves GC_Int_Mode 0). An
+  // input-only slave raises DX_Out only with DX_Int_Mode = 1 ("0 - DX Interrupt only generated, if
+  // DOUT length not 0", Profichip DpCfg.h), and the user watchdog is served on DX_Out: the user
+  // side sets it then, as an input-only slave's firmware does.
   if (p.id == Profile::vpc3plus) {
     const auto reset = static_cast<std::uint16_t>(find_reg(p, RegId::Mode_Reg2)->reset);
-    std::uint16_t mode2 = large ? fields::Mode_Reg2::_4kB_Mode : reset;
+    std::uint16_t mode2 = layout.large ? fields::Mode_Reg2::_4kB_Mode : reset;
     if (cfg_.user_watchdog && s.out_len == 0) mode2 |= fields::Mode_Reg2::DX_Int_Mode;
     if (mode2 != reset)
       c.write(waddr(c.chip(), RegId::Mode_Reg2), static_cast<std::uint8_t>(mode2));
   }
-  seg_shift_ = large ? p.segment_shift_large : p.segment_shift;
+  seg_shift_ = layout.seg_shift;
   const std::uint16_t enabled = irq::MAC_Reset | irq::Go_Leave_Data_Exchange |
                                 irq::Baudrate_Detect | irq::WD_DP_Control_Timeout |
                                 irq::New_GC_Command | irq::New_SSA_Data | irq::New_Cfg_Data |
@@ -154,46 +209,40 @@ void Responder::init(BusPort& c) {
   c.write(cell_addr(c.chip(), RegId::R_TS_Adr), s.address);
   c.write(cell_addr(c.chip(), RegId::R_Real_No_Add_Change), 0x00);
 
-  // Buffers, segment by segment from the start of the user area.
-  const std::uint32_t seg = 1u << seg_shift_;
-  std::uint32_t next = (p.user_base + seg - 1) / seg;
-  auto alloc = [&](RegId ptr_cell, std::uint32_t len) {
-    c.write(cell_addr(c.chip(), ptr_cell), static_cast<std::uint8_t>(next));
-    next += std::max<std::uint32_t>(1, (len + seg - 1) / seg);
+  // Buffers where responder_layout puts them, the cells in the order of its allocation.
+  const auto place = [&](RegId ptr_cell) {
+    c.write(cell_addr(c.chip(), ptr_cell),
+            static_cast<std::uint8_t>(layout.segment[static_cast<std::size_t>(ptr_cell)]));
   };
-  const std::uint32_t aux_len =
-      std::max<std::uint32_t>({8u + static_cast<std::uint32_t>(s.user_prm.size()),
-                               static_cast<std::uint32_t>(s.cfg.size()), 4u});
   c.write(cell_addr(c.chip(), RegId::R_Len_Dout_Buf), s.out_len);
   c.write(cell_addr(c.chip(), RegId::R_Len_Din_Buf), s.in_len);
-  for (RegId r : {RegId::R_Dout_Buf_Ptr1, RegId::R_Dout_Buf_Ptr2, RegId::R_Dout_Buf_Ptr3})
-    alloc(r, s.out_len);
-  for (RegId r : {RegId::R_Din_Buf_Ptr1, RegId::R_Din_Buf_Ptr2, RegId::R_Din_Buf_Ptr3})
-    alloc(r, s.in_len);
-  if (p.id == Profile::dpc31) alloc(RegId::R_Dout_Buf_Ptr_C, s.out_len);
-  c.write(cell_addr(c.chip(), RegId::R_Len_Diag_Buf1), 6);
-  c.write(cell_addr(c.chip(), RegId::R_Len_Diag_Buf2), 6);
-  alloc(RegId::R_Diag_Buf_Ptr1, 6);
-  alloc(RegId::R_Diag_Buf_Ptr2, 6);
-  c.write(cell_addr(c.chip(), RegId::R_Len_Cntrl_Buf1), static_cast<std::uint8_t>(aux_len));
-  c.write(cell_addr(c.chip(), RegId::R_Len_Cntrl_Buf2), static_cast<std::uint8_t>(aux_len));
+  for (RegId r : {RegId::R_Dout_Buf_Ptr1, RegId::R_Dout_Buf_Ptr2, RegId::R_Dout_Buf_Ptr3,
+                  RegId::R_Din_Buf_Ptr1, RegId::R_Din_Buf_Ptr2, RegId::R_Din_Buf_Ptr3})
+    place(r);
+  if (p.id == Profile::dpc31) place(RegId::R_Dout_Buf_Ptr_C);
+  c.write(cell_addr(c.chip(), RegId::R_Len_Diag_Buf1), kDiagLen);
+  c.write(cell_addr(c.chip(), RegId::R_Len_Diag_Buf2), kDiagLen);
+  place(RegId::R_Diag_Buf_Ptr1);
+  place(RegId::R_Diag_Buf_Ptr2);
+  c.write(cell_addr(c.chip(), RegId::R_Len_Cntrl_Buf1), static_cast<std::uint8_t>(aux_len(s)));
+  c.write(cell_addr(c.chip(), RegId::R_Len_Cntrl_Buf2), static_cast<std::uint8_t>(aux_len(s)));
   c.write(cell_addr(c.chip(), RegId::R_Aux_Buf_Sel), 0x00);
   for (RegId r : {RegId::R_Aux_Buf_Ptr1, RegId::R_Aux_Buf_Ptr2, RegId::R_Prm_Buf_Ptr,
                   RegId::R_Cfg_Buf_Ptr, RegId::R_Read_Cfg_Buf_Ptr, RegId::R_SSA_Buf_Ptr}) {
-    alloc(r, aux_len);
+    place(r);
   }
   c.write(cell_addr(c.chip(), RegId::R_Len_Read_Cfg_Data), static_cast<std::uint8_t>(s.cfg.size()));
   c.write_block(buffer(c, RegId::R_Read_Cfg_Buf_Ptr), s.cfg);
   if (p.id == Profile::dpc31) {
     refill_substitute(c, false);  // C holds 00h from the reset unless substitute values are given
-    alloc(RegId::InstQ_Base, kQueueLen * request::kEntryBytes);
-    alloc(RegId::IndQ_Base, kQueueLen * request::kEntryBytes);
+    place(RegId::InstQ_Base);
+    place(RegId::IndQ_Base);
     c.write(cell_addr(c.chip(), RegId::InstQ_Len), kQueueLen);
     c.write(cell_addr(c.chip(), RegId::IndQ_Len), kQueueLen);
   }
   if (p.id == Profile::dpc31 && cfg_.dx_out_port)
     c.write(waddr(c.chip(), RegId::C31_Control), fields::C31_Control::Enable_DX_Out_Port);
-  if (dpv1_) next = dpv1_->init(c, next, seg_shift_);
+  if (dpv1_) dpv1_->init(c, layout.dpv1, seg_shift_);
   give_inputs(c);
   if (p.id != Profile::dpc31) {
     c.write(waddr(c.chip(), RegId::Mode_Reg1_S),

@@ -52,6 +52,23 @@ struct ResponderConfig {
 // chip's `user substitute=`, the Responder's constructor, Python's run_responder(substitute=)).
 [[nodiscard]] std::string substitute_length_problem(std::size_t given, std::size_t out_len);
 
+// Where the built-in user side puts its buffers (Responder::init): segment after segment from
+// the start of the user area, in the order init() writes the pointer cells.
+struct ResponderLayout {
+  bool large = false;  // VPC3+ 4kB_Mode: its 16-byte segments and 4 KB of RAM
+  std::uint32_t seg_shift = 3;
+  std::array<std::uint32_t, kRegIdCount> segment{};  // by pointer cell (R_*_Buf_Ptr*, queues)
+  std::uint32_t dpv1 = 0;                            // the DPV1 part's first segment
+  std::uint32_t end = 0;                             // one past the last byte of the last buffer
+  std::uint32_t ram_end = 0;  // one past the last byte of the RAM (in that mode)
+};
+[[nodiscard]] ResponderLayout responder_layout(const ProfileDesc& p, const ResponderConfig& cfg);
+// "" when the layout fits the profile's RAM, else why not, in the words of every door that sets
+// the slave's lengths (a scenario's `slave`, Python's run_responder and Segment.add_station,
+// Responder::init itself): a buffer past the RAM is a RAM access violation on every access.
+[[nodiscard]] std::string responder_layout_problem(const ProfileDesc& p,
+                                                   const ResponderConfig& cfg);
+
 class Responder {
  public:
   // dpv1_ is built in the initialiser list: an emplace() in the body makes GCC 12's
@@ -63,7 +80,9 @@ class Responder {
         dpv1_(cfg_.dpv1.records.empty() ? std::nullopt
                                         : std::optional<Dpv1User>(std::in_place, cfg_.dpv1)) {}
 
-  void init(BusPort& bus);  // registers, buffers, Start_SPC3 (dpc31: the queues, MAC_Start)
+  // Registers, buffers, Start_SPC3 (dpc31: the queues, MAC_Start). Buffers that would not fit
+  // the RAM (responder_layout_problem) are std::invalid_argument, before any write.
+  void init(BusPort& bus);
   void isr(BusPort& bus);
 
   struct Output {

@@ -2,6 +2,7 @@
 #include "responder_dpv1.hpp"
 
 #include <algorithm>
+#include <iterator>
 
 #include "dpc31/chip.hpp"
 #include "dpc31/dp.hpp"
@@ -16,13 +17,29 @@ using pdu::Function;
 constexpr std::uint8_t kFcResponse = 0x08;  // DL, as the Profichip driver writes it
 constexpr std::uint8_t kMaxLen[] = {Dpv1User::kRecordMax, Dpv1User::kAlarmMax, Dpv1User::kRmMax,
                                     Dpv1User::kRecordMax};
+constexpr unsigned kSlots = std::size(kMaxLen);
+// Segments of `seg` bytes the SAP list (its entries and the end mark) and slot `s`'s buffer take.
+constexpr std::uint32_t list_segments(std::uint32_t seg) {
+  return (kSlots * en::kBytes + 1 + seg - 1) / seg;
+}
+constexpr std::uint32_t slot_segments(unsigned s, std::uint32_t seg) {
+  return (hd::kBytes + kMaxLen[s] + seg - 1) / seg;
+}
 }  // namespace
+
+std::uint32_t Dpv1User::segments(std::uint32_t seg_shift) {
+  static_assert(kSlots == kSaps);
+  const std::uint32_t seg = 1u << seg_shift;
+  std::uint32_t n = list_segments(seg);
+  for (unsigned s = 0; s < kSlots; ++s) n += slot_segments(s, seg);
+  return n;
+}
 
 std::uint32_t Dpv1User::init(BusPort& c, std::uint32_t next, std::uint32_t seg_shift) {
   seg_shift_ = seg_shift;
   const std::uint32_t seg = 1u << seg_shift;
   const std::uint32_t list = next;
-  next += (kSaps * en::kBytes + 1 + seg - 1) / seg;
+  next += list_segments(seg);
   const std::uint8_t saps[kSaps] = {sap::MSAC_C1, sap::MSAC_C1_Alarm, sap::MSAC_C2_RM, cfg_.c2_sap};
   for (unsigned s = 0; s < kSaps; ++s) {
     Slot& sl = slots_[s];
@@ -30,7 +47,7 @@ std::uint32_t Dpv1User::init(BusPort& c, std::uint32_t next, std::uint32_t seg_s
     sl.entry = (list << seg_shift) + s * en::kBytes;
     sl.segment = static_cast<std::uint8_t>(next);
     sl.buffer = next << seg_shift;
-    next += (hd::kBytes + kMaxLen[s] + seg - 1) / seg;
+    next += slot_segments(s, seg);
     // The connection's SAP stays off (Ind_Buf_Ptr0 00h) until an Initiate opens it, MSAC_C1's
     // until Data_Exchange.
     const std::uint8_t ind = s == rm ? sl.segment : 0;

@@ -43,6 +43,8 @@ class Dpv1User {
   // 49 for anybody, and the connection's SAP switched off) and its buffers from segment `next`
   // on; writes R_FDL_SAP_List_Ptr. Returns the next free segment.
   std::uint32_t init(BusPort& c, std::uint32_t next, std::uint32_t seg_shift);
+  // The segments init() takes (its return minus `next`).
+  [[nodiscard]] static std::uint32_t segments(std::uint32_t seg_shift);
   // From the ISR on Go/Leave_Data_Exchange: MSAC_C1 (SAPs 51 and 50) is served in Data_Exchange
   // only; leaving it switches them off and frees their buffers (a response not collected too).
   void data_exchange(BusPort& c, bool in);

@@ -166,10 +166,6 @@ class Parser {
   // option the chosen profile has nothing for is refused at its line.
   void profile_options_checked() const {
     const Profile p = s_.chip.profile;
-    if (irq_controller_line_ != 0 && p != Profile::dpc31) {
-      fail_at(irq_controller_line_,
-              "'irq-controller' is for profile dpc31: only the DPC31 has a C31 core");
-    }
     if (substitute_line_ != 0 && p != Profile::dpc31) {
       fail_at(substitute_line_, substitute_is_for_dpc31("user substitute="));
     }
@@ -217,6 +213,12 @@ class Parser {
             substitute_length_problem(s_.user.substitute.size(), s_.user.slave.out_len);
         substitute_line_ != 0 && !why.empty()) {
       fail_at(substitute_line_, "user substitute=: " + why);
+    }
+    // The built-in user side's buffers must fit this profile's RAM (the lengths are `slave`'s,
+    // the DPV1 part's room the records').
+    if (const std::string why = responder_layout_problem(profile_desc(p), s_.user);
+        !firmware_seen_ && !s_.cpu && !why.empty()) {
+      fail_at(slave_line_ != 0 ? slave_line_ : record_line_, "slave " + why);
     }
   }
   // The VPC3+ takes WD_Base from Set_Prm's DPV1_Status_1 only with DPV1_Enable; without it
@@ -331,9 +333,11 @@ class Parser {
       if (s_.chip.variant && s_.chip.profile != Profile::vpc3plus) {
         fail("a 'variant' was given: only profile vpc3plus has variants");
       }
-      if (s_.chip.irq_controller == IrqController::c31 && s_.chip.profile != Profile::dpc31) {
-        fail("'irq-controller c31' was given: only profile dpc31 has a C31 core");
+      if ((irq_controller_line_ != 0 || s_.chip.irq_controller == IrqController::c31) &&
+          s_.chip.profile != Profile::dpc31) {
+        fail("an 'irq-controller' was given: only profile dpc31 has a C31 core");
       }
+      profile_line_ = step_.line;
     } else if (cmd_ == "variant") {
       positional(1, 1, "one of b, c, s");
       no_options();
@@ -352,8 +356,10 @@ class Parser {
       if (!parse_irq_controller(pos_[0], s_.chip.irq_controller)) {
         fail(fmt::format("unknown irq-controller '{}' (external, c31)", shown(pos_[0])));
       }
-      if (s_.chip.irq_controller == IrqController::c31 && s_.chip.profile != Profile::dpc31) {
-        fail("'irq-controller c31' needs 'profile dpc31' before it: only the DPC31 has a C31 core");
+      // After `profile dpc31` only (docs/scenario-format.md), as `variant` after its profile:
+      // the default profile is no `profile` line.
+      if (profile_line_ == 0 || s_.chip.profile != Profile::dpc31) {
+        fail("'irq-controller' needs 'profile dpc31' before it: only the DPC31 has a C31 core");
       }
     } else if (cmd_ == "bus") {
       positional(1, 1, "intel or motorola");
@@ -416,6 +422,7 @@ class Parser {
     } else if (cmd_ == "slave") {
       positional(0, 0, "options only");
       slave_seen_ = true;
+      slave_line_ = step_.line;
       SlaveConfig& sl = s_.user.slave;
       for (const auto& [k, v] : opts_) {
         if (prm_option(sl, k, v)) continue;
@@ -823,6 +830,7 @@ class Parser {
   bool slave_seen_ = false;
   bool user_seen_ = false;
   // The lines of options only some profiles act on (profile_options_checked); 0: not given.
+  int profile_line_ = 0;  // the last `profile`
   int irq_controller_line_ = 0;
   int cpu_line_ = 0;
   int substitute_line_ = 0;
@@ -836,6 +844,7 @@ class Parser {
   // The lines of the stations' addresses and of the user's inputs (0: the default).
   int master_address_line_ = 0;
   int slave_address_line_ = 0;
+  int slave_line_ = 0;  // the last `slave` (its lengths place the user side's buffers)
   int inputs_line_ = 0;
   std::map<std::string, int, std::less<>> header_lines_;  // each header command's line
   bool body_ = false;                  // an action or expect has been seen: no more headers

@@ -393,6 +393,15 @@ TEST_F(BadInput, RunWaveformOutputsAreCheckedBeforeTheWalk) {
       {"--fst taken", "dpc31 run: taken: cannot write: is a directory"},
       {"--la-vcd taken", "dpc31 run: taken: cannot write: is a directory"},
       {"--vcd new.vcd --gtkw taken", "dpc31 run: taken: cannot write: is a directory"},
+      {"--la-vcd new.vcd --pvs taken", "dpc31 run: taken: cannot write: is a directory"},
+      // PulseView's session goes with a VCD in the logic-analyser form that holds RxD or TxD.
+      {"--pvs new.pvs",
+       "dpc31 run: --pvs new.pvs: a PulseView session needs --la-vcd (or --vcd with --flat)"},
+      {"--vcd new.vcd --pvs new.pvs",
+       "dpc31 run: --pvs new.pvs: a PulseView session needs --la-vcd (or --vcd with --flat)"},
+      {"--la-vcd new.vcd --signals pins.x_int --pvs new.pvs",
+       "dpc31 run: new.pvs: a PulseView session decodes pins.rxd or pins.txd (a segment's "
+       "line.level), and --signals leaves them out of new.vcd"},
       {"--vcd new.vcd --signals 'nomatch*'",
        "dpc31 run: no signal matches 'nomatch*' (see docs/waveforms.md)"},
   };
@@ -537,8 +546,8 @@ TEST_F(BadInput, RegsAndDemoOptions) {
 // Each of the demo's files that cannot be written (here a directory in its place) is one line
 // naming it, "dpc31 demo: ...", before anything is printed; nothing of the others is left.
 TEST_F(BadInput, DemoOutputsAreCheckedBeforeAnythingIsPrinted) {
-  for (const char* name :
-       {"dpc31-demo.vcd", "dpc31-demo-la.vcd", "dpc31-demo.gtkw", "dpc31-demo.pcapng"}) {
+  for (const char* name : {"dpc31-demo.vcd", "dpc31-demo-la.vcd", "dpc31-demo.gtkw",
+                           "dpc31-demo-la.pvs", "dpc31-demo.pcapng"}) {
     const std::string dir = std::string("out-") + name;
     fs::create_directories(path(dir + "/" + name));
     const Outcome r = dpc31("demo --out-dir " + dir);
@@ -550,11 +559,11 @@ TEST_F(BadInput, DemoOutputsAreCheckedBeforeAnythingIsPrinted) {
     EXPECT_EQ(left, std::vector<std::string>{name});
     EXPECT_TRUE(fs::is_empty(path(dir + "/" + name))) << name;
   }
-  // The good case: the demo prints its story and writes its four files.
+  // The good case: the demo prints its story and writes its five files.
   const Outcome ok = dpc31("demo --out-dir good");
   EXPECT_EQ(ok.rc, 0) << ok.err;
   EXPECT_NE(ok.out, "");
-  EXPECT_EQ(std::distance(fs::directory_iterator(path("good")), fs::directory_iterator()), 4);
+  EXPECT_EQ(std::distance(fs::directory_iterator(path("good")), fs::directory_iterator()), 5);
   // Without --out-dir, a TMPDIR that is no directory is named (the library gives no path then).
   const Outcome gone = dpc31("demo", "TMPDIR=" + path("none"));
   expect_bad(gone,

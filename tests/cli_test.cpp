@@ -170,6 +170,46 @@ TEST(Cli, RunWritesTheLogicAnalyserForm) {
   EXPECT_NE(slurp(dir + "la1.vcd").find("$timescale 1ns $end"), std::string::npos);
 }
 
+// The PulseView session (docs/waveforms.md, "PulseView") takes the scenario's rate: 12 000 000 =
+// B71B00h, int64 little-endian 00 1B B7 00 00 00 00 00 in QSettings' escapes: \0, \x1b, \xb7,
+// five \0. A flat --vcd gets the same session as --la-vcd. A segment's decodes its line as RX,
+// without TX; one whose --signals leave the line out is refused, nothing written.
+TEST(Cli, RunWritesAPulseViewSessionForTheRunsRate) {
+  const std::string dir = testutil::scratch();
+  // The session `run SCN ARGS --pvs NAME.pvs` writes ("" if the run failed).
+  const auto session = [&dir](const std::string& scn, const std::string& args,
+                              const std::string& name) {
+    const Result r = run("run " + std::string(SOURCE_DIR) + "/traces/" + scn + " --quiet " + args +
+                         " --pvs " + dir + name + ".pvs");
+    return r.rc == 0 ? slurp(dir + name + ".pvs") : std::string();
+  };
+  const std::string pvs = session("startup_dpc31_12m.scn", "--la-vcd " + dir + "12m.vcd", "12m");
+  EXPECT_NE(pvs.find("decoder0\\option0\\name=baudrate\ndecoder0\\option0\\type=x\n"
+                     "decoder0\\option0\\value=@ByteArray(\\0\\x1b\\xb7\\0\\0\\0\\0\\0)\n"),
+            std::string::npos)
+      << pvs;
+  EXPECT_NE(pvs.find("channel0\\assigned_signal_name=rxd\n"), std::string::npos) << pvs;
+  EXPECT_NE(pvs.find("channel1\\assigned_signal_name=txd\n"), std::string::npos) << pvs;
+  EXPECT_EQ(session("startup_dpc31_12m.scn", "--vcd " + dir + "12m_flat.vcd --flat", "flat"), pvs);
+  const std::string seg =
+      session("segment/two_masters.scn", "--la-vcd " + dir + "seg.vcd", "segment");
+  EXPECT_NE(seg.find("channels=2\nchannel0\\assigned_signal_name=line\n"
+                     "channel0\\initial_pin_state=2\nchannel1\\initial_pin_state=2\n"),
+            std::string::npos)
+      << seg;
+  const Result none = testutil::run_command(
+      std::string(DPC31_CLI) + " run " + SOURCE_DIR + "/traces/segment/two_masters.scn --quiet " +
+      "--la-vcd " + dir + "none.vcd --signals 'pins.*' --pvs " + dir + "none.pvs 2>&1");
+  EXPECT_EQ(none.rc, 2);
+  EXPECT_EQ(none.out, "dpc31 run: " + dir +
+                          "none.pvs: a PulseView session decodes pins.rxd or pins.txd (a "
+                          "segment's line.level), and --signals leaves them out of " +
+                          dir + "none.vcd\n")
+      << none.out;
+  EXPECT_FALSE(std::filesystem::exists(dir + "none.pvs"));
+  EXPECT_FALSE(std::filesystem::exists(dir + "none.vcd"));
+}
+
 // `dpc31 bench --quick`: every row of the table is there and well-formed. The timings are not
 // checked (speed is measured by the benchmarks, not asserted by tests).
 TEST(CliBench, QuickPrintsEveryRowWellFormed) {

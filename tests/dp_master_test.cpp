@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -291,4 +292,161 @@ TEST(Responder, SubstituteValuesOfAnotherLengthThanOutAreRefused) {
   }
 }
 
+// The built-in user side's buffers must fit the profile's RAM (audit s32 siblings, finding 1:
+// on the SPC3 in=out=235 put them past 5FFh without a word, a RAM access violation, the chip
+// Offline). SPC3: 8-byte segments from 40h (segment 8), 3 x out, 3 x in, 2 diag buffers of 6
+// bytes and 6 aux buffers of 8 (1 segment each). in = out = 232: 29 segments each, 8 + 174 + 8
+// = 190 segments, the last byte 0x5EF; in = out = 233: 30 each, 8 + 180 + 8 = 196, the last
+// byte 0x61F, past 0x5FF. Refused before any bus access, in every door's words.
+TEST(Responder, BuffersPastTheRamAreRefusedBeforeAnyWrite) {
+  ResponderConfig rc;
+  rc.slave.in_len = rc.slave.out_len = 233;
+  Chip chip(ChipOptions{Profile::spc3});
+  DirectBus bus(chip);
+  Responder user(rc);
+  try {
+    user.init(bus);
+    ADD_FAILURE() << "taken";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "in=233 out=233: the built-in user side's buffers would end at 0x61f, past the 1536 "
+              "bytes of RAM of profile spc3 (its user area 0x040..0x5ff)");
+  }
+  EXPECT_EQ(chip.cycle(), 0u) << "a bus access before the refusal";
+  EXPECT_EQ(responder_layout(chip.profile(), rc).end, 0x620u);
+  rc.slave.in_len = rc.slave.out_len = 232;
+  EXPECT_EQ(responder_layout(chip.profile(), rc).end, 0x5F0u);
+  Responder fits(rc);
+  std::vector<std::uint8_t> in(232);
+  for (std::size_t i = 0; i < in.size(); ++i) in[i] = static_cast<std::uint8_t>(i);
+  fits.set_inputs(in);
+  fits.init(bus);
+  DpMaster m(chip, MasterConfig{2, 1'500'000}, rc.slave);
+  m.set_firmware([&fits](BusPort& b) { fits.isr(b); });
+  ASSERT_TRUE(m.startup());
+  const Exchange x = m.data_exchange(std::vector<std::uint8_t>(232, 0x5A));
+  ASSERT_TRUE(x.answer);
+  EXPECT_EQ(x.answer->du, in);
+  EXPECT_EQ(chip.peek_reg(RegId::Status_Reg) & fields::Status_Reg::RAM_Access_Violation, 0);
+  // The other profiles hold 244 each way: the VPC3+ in 4kB_Mode (16-byte segments, 4 to 108:
+  // 0x6BF), the DPC31 from 08A0h (32-byte segments, 69 to 135 with its clear buffer C and its
+  // queues: 0x10DF).
+  rc.slave.in_len = rc.slave.out_len = 244;
+  EXPECT_EQ(responder_layout(profile_desc(Profile::vpc3plus), rc).end, 0x6C0u);
+  EXPECT_EQ(responder_layout(profile_desc(Profile::dpc31), rc).end, 0x10E0u);
+  EXPECT_NE(responder_layout_problem(profile_desc(Profile::spc3), rc), "");
+}
+
+// One rule for every length cell an answer reads (docs/timing.md, "Length cells"): a DP data
+// unit carries at most 244 bytes (chip-facts.md §1.2), so R_Len_Din_Buf, R_Len_Read_Cfg_Data
+// and R_Len_Diag_Buf beyond it send the buffer's first 244 bytes, and the chip says so once per
+// cell and value (audit s32 siblings, finding 4: from 247 no answer to a Data_Exchange, 245 and
+// 246 input bytes sent, Get_Cfg and Rd_Inp unanswered from 245, the diag cut without a word).
+TEST(Responder, LengthCellsBeyondADataUnitSendTheFirst244BytesAndSaySo) {
+  for (const Profile p : {Profile::spc3, Profile::vpc3plus, Profile::dpc31}) {
+    SCOPED_TRACE(std::string(profile_desc(p).name));
+    Chip chip(ChipOptions{p});
+    std::vector<std::string> log;
+    chip.set_log_sink([&log](const LogRecord& r) { log.push_back(r.text); });
+    const auto logged = [&log](const std::string& text) {
+      return std::count_if(log.begin(), log.end(),
+                           [&text](const std::string& l) { return l.find(text) == 0; });
+    };
+    const auto cell = [&chip](const char* name) {
+      return static_cast<std::uint32_t>(find_reg(chip.profile(), name)->read_addr);
+    };
+    ResponderConfig rc;
+    rc.slave.in_len = 244;
+    Responder user(rc);
+    std::vector<std::uint8_t> in(244);
+    for (std::size_t i = 0; i < in.size(); ++i) in[i] = static_cast<std::uint8_t>(i + 1);
+    user.set_inputs(in);
+    DirectBus bus(chip);
+    user.init(bus);
+    DpMaster m(chip, MasterConfig{2, 1'500'000}, rc.slave);
+    m.set_firmware([&user](BusPort& b) { user.isr(b); });
+    ASSERT_TRUE(m.startup());
+    const std::string beyond =
+        ": beyond the 244 bytes of a DP data unit: the answer sends the "
+        "buffer's first 244 (modelled)";
+    for (const int len : {245, 246, 247, 255, 255, 244, 245}) {
+      SCOPED_TRACE(len);
+      chip.write(cell("R_Len_Din_Buf"), static_cast<std::uint8_t>(len));
+      Exchange x = m.data_exchange({0, 0, 0, 0});
+      ASSERT_TRUE(x.answer);
+      EXPECT_EQ(x.answer->du, in);
+      x = m.read_inputs();
+      ASSERT_TRUE(x.answer);
+      EXPECT_EQ(x.answer->du, in);
+    }
+    // Once per value it was set to (245 twice: 244 came between), never at 244 itself.
+    EXPECT_EQ(logged("R_Len_Din_Buf = 245" + beyond), 2);
+    for (const int len : {246, 247, 255}) {
+      EXPECT_EQ(logged(fmt::format("R_Len_Din_Buf = {}", len) + beyond), 1);
+    }
+    EXPECT_EQ(logged("R_Len_Din_Buf = 244"), 0);
+
+    // Get_Cfg: the Read_Cfg buffer's 244 bytes from its segment on, as the user reads them.
+    const std::uint32_t read_cfg = static_cast<std::uint32_t>(chip.read(cell("R_Read_Cfg_Buf_Ptr")))
+                                   << chip.profile().segment_shift;
+    std::vector<std::uint8_t> ram(244);
+    for (std::uint32_t i = 0; i < ram.size(); ++i) ram[i] = chip.read(read_cfg + i);
+    chip.write(cell("R_Len_Read_Cfg_Data"), 250);
+    Exchange x = m.get_cfg();
+    ASSERT_TRUE(x.answer);
+    EXPECT_EQ(x.answer->du, ram);
+    EXPECT_EQ(logged("R_Len_Read_Cfg_Data = 250" + beyond), 1);
+
+    // Slave_Diag: cut to 244 as before, now with its line (whichever diag buffer is sent).
+    chip.write(cell("R_Len_Diag_Buf1"), 250);
+    chip.write(cell("R_Len_Diag_Buf2"), 250);
+    x = m.slave_diag();
+    ASSERT_TRUE(x.answer);
+    EXPECT_EQ(x.answer->du.size(), 244u);
+    EXPECT_EQ(logged("R_Len_Diag_Buf1 = 250" + beyond) + logged("R_Len_Diag_Buf2 = 250" + beyond),
+              1);
+  }
+}
+
+// A buffer pointer that puts a buffer over the registers (00h, the reset value: a driver that
+// forgot them) is served from the RAM behind them, which the CPU does not see there (modelled):
+// the log says so the first time, then counts the uses as unmapped accesses are counted, at 10,
+// 100, ... (audit s32 siblings, finding 5: silent). Each Data_Exchange with outputs is two uses:
+// the outputs stored into D, the inputs read from D. The outputs FF come back as the inputs (the
+// same hidden bytes at 000h) while a bus read of 000h gives Int_Req_Reg's low byte.
+TEST(Responder, BuffersOverTheRegistersAreLogged) {
+  Chip chip(ChipOptions{Profile::spc3});
+  std::vector<std::string> log;  // the warnings
+  chip.set_log_sink([&log](const LogRecord& r) {
+    if (r.level == LogLevel::warn) log.push_back(r.text);
+  });
+  ResponderConfig rc;
+  Responder user(rc);  // no inputs: the user side writes no buffer itself
+  DirectBus bus(chip);
+  user.init(bus);
+  DpMaster m(chip, MasterConfig{2, 1'500'000}, rc.slave);
+  m.set_firmware([&user](BusPort& b) { user.isr(b); });
+  ASSERT_TRUE(m.startup());
+  for (const char* ptr : {"R_Dout_Buf_Ptr1", "R_Dout_Buf_Ptr2", "R_Dout_Buf_Ptr3", "R_Din_Buf_Ptr1",
+                          "R_Din_Buf_Ptr2", "R_Din_Buf_Ptr3"}) {
+    chip.write(static_cast<std::uint32_t>(find_reg(chip.profile(), ptr)->read_addr), 0x00);
+  }
+  log.clear();
+  const Exchange x = m.data_exchange({0xFF, 0xFF, 0xFF, 0xFF});
+  ASSERT_TRUE(x.answer);
+  EXPECT_EQ(x.answer->du, (std::vector<std::uint8_t>{0xFF, 0xFF, 0xFF, 0xFF}));
+  ASSERT_EQ(log.size(), 1u);
+  EXPECT_TRUE(log[0].starts_with("R_Dout_Buf_Ptr")) << log[0];
+  EXPECT_TRUE(
+      log[0].ends_with(" = 00h puts its buffer at 0x000, over the registers (below "
+                       "0x016): the chip keeps its bytes in RAM the CPU does not see "
+                       "there (modelled); further such uses are counted"))
+      << log[0];
+  EXPECT_NE(chip.read(0x000), 0xFF);
+  for (int i = 0; i < 4; ++i) m.data_exchange({0xFF, 0xFF, 0xFF, 0xFF});  // uses 3..10
+  ASSERT_EQ(log.size(), 2u);
+  EXPECT_TRUE(
+      log[1].starts_with("10 uses of buffers over the registers so far (the latest: R_Din_Buf_Ptr"))
+      << log[1];
+}
 }  // namespace

@@ -3,6 +3,7 @@
 
 #include <array>
 #include <limits>
+#include <stdexcept>
 
 #include "dpc31/reg_ids.hpp"
 #include "harness.hpp"
@@ -309,6 +310,44 @@ TEST(Vpc3, FourKilobyteMode) {
               "(further ones are not logged until Start clears Status bit 3)");
     EXPECT_NE(c.peek_reg(RegId::Status_Reg) & 0x08, 0);
   }
+}
+
+// The debugger's back door never leaves a register and the chip disagreeing (audit s32
+// siblings, finding 2; include/dpc31/chip.hpp, poke_reg). A poked Mode_Reg2.4kB_Mode is the
+// mode, as the bus write's: 900h is RAM of its own, and a poke of 01h puts the 2 KB decode back
+// (960h wraps to 160h, VPC3+ chip-facts.md §0). Before, the latch read 80h while 900h wrapped.
+TEST(Vpc3, PokedFourKilobyteModeIsTheMode) {
+  Chip c({Profile::vpc3plus, BusMode::intel});
+  ASSERT_TRUE(c.poke_reg(RegId::Mode_Reg2, 0x80));
+  c.write(0x900, 0x5A);
+  EXPECT_EQ(c.peek(0x900), 0x5A);
+  EXPECT_EQ(c.peek(0x100), 0x00);
+  EXPECT_EQ(c.peek_reg(RegId::Status_Reg) & 0x08, 0);  // no RAM access violation
+  ASSERT_TRUE(c.poke_reg(RegId::Mode_Reg2, 0x01));
+  EXPECT_EQ(c.peek_reg(RegId::Mode_Reg2), 0x01);
+  c.write(0x960, 0x55);
+  EXPECT_EQ(c.peek(0x160), 0x55);
+  EXPECT_NE(c.peek_reg(RegId::Status_Reg) & 0x08, 0);
+}
+
+// Mode_Reg1's Start_SPC3 and Go_Offline are the chip's run state, EOI and User_Leave_Master
+// pulses: a poke that would change them is refused with the reason, nothing stored (a poked
+// Start_SPC3 read 1 while the chip stayed Offline). Its other bits are the latch's own.
+TEST_P(Mode, PokeOfModeReg1RunStateBitsIsRefused) {
+  Chip c = make();
+  for (const std::uint16_t bit : {0x01, 0x02, 0x04, 0x08}) {
+    SCOPED_TRACE(bit);
+    EXPECT_THROW(c.poke_reg(RegId::Mode_Reg1, bit), std::invalid_argument);
+    EXPECT_EQ(c.peek_reg(RegId::Mode_Reg1), 0x00);
+  }
+  EXPECT_EQ(c.poke_reg_problem(RegId::Mode_Reg1, 0x01),
+            "poke_reg Mode_Reg1 0x01: bits 0x01 would change; Start_SPC3 and Go_Offline are the "
+            "chip's run state (Offline), EOI and User_Leave_Master pulses that never stay set: "
+            "only a command changes them (Mode_Reg1_S / Mode_Reg1_R over the bus)");
+  EXPECT_FALSE(c.started());
+  EXPECT_TRUE(c.poke_reg(RegId::Mode_Reg1, 0x10));  // En_Change_Cfg_Buffer
+  EXPECT_EQ(c.peek_reg(RegId::Mode_Reg1), 0x10);
+  EXPECT_EQ(c.poke_reg_problem(RegId::Mode_Reg2, 0x80), "");
 }
 
 TEST_P(Mode, GcCommandPreset) {

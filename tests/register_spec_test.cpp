@@ -75,5 +75,39 @@ TEST_P(RegisterSpec, ProfileLayoutMatchesTheManual) {
   }
 }
 
+// A field's text is this profile's (the generated header, registers.md, the Verilog include and
+// `dpc31 regs` print it): it names only what the profile has. The SPC3's New_GC_Command cited the
+// DPC31's New_GC_Int mode, the DPC31's Status_Reg and MAC_Reset a Start_SPC3 and a RAM access
+// violation it cannot have (audit s32 siblings, finding 3; chip-facts.md §5.5, registers.md).
+TEST_P(RegisterSpec, FieldTextsNameOnlyWhatTheProfileHas) {
+  const ProfileDesc& p = profile_desc(GetParam());
+  const auto has_field = [&](std::string_view prefix) {
+    for (const RegDesc& r : p.regs) {
+      for (const FieldDesc& f : r.fields) {
+        if (f.name.starts_with(prefix)) return true;
+      }
+    }
+    return false;
+  };
+  const RegDesc* start = find_reg(p, "Mode_Reg1_S");
+  ASSERT_NE(start, nullptr);
+  const bool start_acts = (start->ign & fields::Mode_Reg1::Start_SPC3) == 0;
+  for (const RegDesc& r : p.regs) {
+    for (const FieldDesc& f : r.fields) {
+      SCOPED_TRACE(std::string(r.name) + "." + std::string(f.name) + ": " + std::string(f.desc));
+      const auto names = [&f](std::string_view what) {
+        return f.desc.find(what) != std::string_view::npos;
+      };
+      EXPECT_TRUE(!names("New_GC_Int") || has_field("New_GC_Int"));
+      for (const char* reg : {"Mode_Reg2", "Param_Reg"}) {
+        EXPECT_TRUE(!names(reg) || find_reg(p, reg) != nullptr) << reg;
+      }
+      EXPECT_TRUE(!names("4kB_Mode") || p.ram_size_large != 0);
+      EXPECT_TRUE(!names("Start_SPC3") || start_acts);
+      EXPECT_TRUE(!names("RAM access violation") || p.violation_from != 0);
+    }
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Profiles, RegisterSpec, ::testing::ValuesIn(kAllProfiles),
                          [](const auto& i) { return testutil::pname(i.param); });

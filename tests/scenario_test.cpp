@@ -140,13 +140,37 @@ TEST(ScenarioParse, IrqControllerHeaderChoosesTheC31s) {
   EXPECT_TRUE(c31);
   EXPECT_EQ(x_int_low, 0);
   EXPECT_TRUE(walk.has("profile dpc31, the C31's interrupt controller"));
-  EXPECT_EQ(parse_error("profile spc3\nirq-controller c31\n"),
-            "t.scn:2: 'irq-controller c31' needs 'profile dpc31' before it: only the DPC31 has a "
-            "C31 core");
   EXPECT_EQ(parse_error("profile dpc31\nirq-controller cpu\n"),
             "t.scn:2: unknown irq-controller 'cpu' (external, c31)");
-  EXPECT_EQ(parse_error("profile dpc31\nirq-controller c31\nprofile spc3\n"),
-            "t.scn:3: 'irq-controller c31' was given: only profile dpc31 has a C31 core");
+}
+
+// `irq-controller` comes after `profile dpc31` only (docs/scenario-format.md, Header), with the
+// same words and line rule as `variant` after `profile vpc3plus`: refused at its own line when
+// no `profile dpc31` came before it (the default profile is no line), at the later `profile`
+// line that contradicts it (audit s32 siblings, finding 6: accepted before `profile dpc31`, and
+// refused on line 1 or 2 with two texts before another profile).
+TEST(ScenarioParse, IrqControllerComesAfterProfileDpc31AsVariantAfterItsProfile) {
+  const std::string before =
+      ":1: 'irq-controller' needs 'profile dpc31' before it: only the DPC31 has a C31 core";
+  for (const std::string second :
+       {"profile dpc31", "profile spc3", "profile vpc3plus", "startup"}) {
+    for (const std::string first : {"irq-controller c31", "irq-controller external"}) {
+      EXPECT_EQ(parse_error(first + "\n" + second + "\nstartup\n"), "t.scn" + before)
+          << first << " / " << second;
+    }
+  }
+  EXPECT_EQ(parse_error("profile spc3\nirq-controller external\nstartup\n"),
+            "t.scn:2: 'irq-controller' needs 'profile dpc31' before it: only the DPC31 has a C31 "
+            "core");
+  for (const std::string later : {"irq-controller c31", "irq-controller external"}) {
+    EXPECT_EQ(parse_error("profile dpc31\n" + later + "\nprofile spc3\nstartup\n"),
+              "t.scn:3: an 'irq-controller' was given: only profile dpc31 has a C31 core")
+        << later;
+  }
+  // The variant's words, for comparison: the same shape.
+  EXPECT_EQ(parse_error("variant s\nprofile vpc3plus\nstartup\n"),
+            "t.scn:1: 'variant' needs 'profile vpc3plus' before it: only the VPC3+ has variants");
+  EXPECT_EQ(parse_error("profile dpc31\nirq-controller external\nstartup\n"), "");
 }
 
 TEST(ScenarioParse, FaultsNeedARequestToDamage) {
@@ -430,10 +454,6 @@ TEST(ScenarioParse, BusActionsRefuseWhatTheMapDoesNot) {
 TEST(ScenarioParse, OptionsWithoutEffectOnTheProfileAreRefused) {
   const std::string dpc31_only = "startup\n";
   const std::vector<std::pair<std::string, std::string>> refused = {
-      {"profile spc3\nirq-controller external\n" + dpc31_only,
-       "t.scn:2: 'irq-controller' is for profile dpc31: only the DPC31 has a C31 core"},
-      {"irq-controller external\nprofile vpc3plus\n" + dpc31_only,
-       "t.scn:1: 'irq-controller' is for profile dpc31: only the DPC31 has a C31 core"},
       {"profile spc3\nuser substitute=01,02\n" + dpc31_only,
        "t.scn:2: user substitute= is for profile dpc31: only the DPC31 has the clear buffer C"},
       {"user dx_out_port=1\nprofile vpc3plus\n" + dpc31_only,
@@ -457,6 +477,25 @@ TEST(ScenarioParse, OptionsWithoutEffectOnTheProfileAreRefused) {
         "profile spc3\nuser user_wd_value=5\n", "profile spc3\nslave wd_base=1ms\n",
         "profile vpc3plus\nslave wd_base=1ms user_prm=80,00,00\n"}) {
     EXPECT_EQ(parse_error(ok + dpc31_only), "") << ok;
+  }
+}
+
+// The built-in user side's buffers must fit the profile's RAM: refused at the `slave` line that
+// sets the lengths (audit s32 siblings, finding 1: `slave in=235 out=235` on the SPC3 ran into a
+// RAM access violation and ended as "expected dp_state Data_Exchange, got Wait_Prm"). SPC3:
+// 8-byte segments from 40h; in = out = 233 take 30 each, 8 + 180 + 2 diag + 6 aux = 196
+// segments, the last byte 0x61F; 232 take 29 each, 190 segments, the last byte 0x5EF.
+TEST(ScenarioParse, SlaveLengthsWhoseBuffersDoNotFitTheRamAreRefused) {
+  EXPECT_EQ(parse_error("profile spc3\nslave in=233 out=233\nstartup\n"),
+            "t.scn:2: slave in=233 out=233: the built-in user side's buffers would end at 0x61f, "
+            "past the 1536 bytes of RAM of profile spc3 (its user area 0x040..0x5ff)");
+  EXPECT_EQ(parse_error("slave in=233 out=233\nprofile spc3\nstartup\n"),
+            "t.scn:1: slave in=233 out=233: the built-in user side's buffers would end at 0x61f, "
+            "past the 1536 bytes of RAM of profile spc3 (its user area 0x040..0x5ff)");
+  for (const std::string ok :
+       {"profile spc3\nslave in=232 out=232\n", "profile vpc3plus\nslave in=244 out=244\n",
+        "profile dpc31\nslave in=244 out=244\n"}) {
+    EXPECT_EQ(parse_error(ok + "startup\n"), "") << ok;
   }
 }
 

@@ -444,6 +444,7 @@ TEST(Serve, MalformedLinesGetOneErrorEach) {
       {"inject_fdl 5 2 0x49 dsap=0x80", "ERR range"},
       {"addr No_Such_Reg", "ERR unknown_register"},
       {"poke_reg Int_Reg 1", "ERR no_storage"},
+      {"poke_reg Mode_Reg1 1", "ERR run_state"},  // Start_SPC3 while Offline (chip.hpp)
       {"log loud", "ERR syntax"},
       {"save", "ERR syntax"},
       {"quit now", "ERR syntax"},

@@ -16,6 +16,7 @@
 
 #include "cpu.hpp"
 #include "dp_master.hpp"
+#include "pvs.hpp"
 #include "responder.hpp"
 #include "run_command.hpp"
 #include "scenario.hpp"
@@ -199,6 +200,81 @@ TEST(Waveform, TheSaveFilesTimesAreGtkwavesAtTenNanoseconds) {
                                   -std::log2(static_cast<double>(ns(o.to) - ns(o.from)) / 2.0),
                                   ns(acted), rest));
   EXPECT_EQ(lines[4], "[markername] Awd_state=Baud_Control");
+}
+
+// The PulseView session beside a logic-analyser VCD (docs/waveforms.md, "PulseView"): the keys
+// PulseView 0.4.2 restores (DecodeSignal::restore_settings), the UART decoder's options as
+// GlobalSettings::store_gvariant writes them (type string, serialised GVariant as a QByteArray in
+// QSettings' INI escapes). 1 500 000 = 16E360h: int64 little-endian 60 E3 16 00 00 00 00 00 ->
+// '`' (60h, printable), \xe3 (from 7Fh), \x16 (a control byte), five \0; "even" and its NUL.
+// Channel 0 is the uart decoder's rx, 1 its tx; initial pin state 2 is
+// SRD_INITIAL_PIN_SAME_AS_SAMPLE0. Tests/pulseview_check.py loads this in PulseView itself.
+TEST(Waveform, APulseViewSessionStacksTheDecodersOnRxdAndTxd) {
+  wave::Options o;
+  o.path = tmp("session.vcd");
+  o.flat = true;
+  o.timescale_exp = -8;
+  o.pvs = tmp("session.pvs");
+  o.baud = 1'500'000;
+  record_startup(o);
+  const std::string head =
+      "; dpc31emu: the UART decoder (8E1) and PROFIBUS DP stacked on it (docs/waveforms.md)\n"
+      "[General]\ndecode_signals=1\n\n[decode_signal0]\nname=PROFIBUS DP\nenabled=true\n"
+      "decoders=2\ndecoder0\\id=uart\ndecoder0\\visible=true\ndecoder0\\options=2\n"
+      "decoder0\\option0\\name=baudrate\ndecoder0\\option0\\type=x\n"
+      "decoder0\\option0\\value=@ByteArray(`\\xe3\\x16\\0\\0\\0\\0\\0)\n"
+      "decoder0\\option1\\name=parity\ndecoder0\\option1\\type=s\n"
+      "decoder0\\option1\\value=@ByteArray(even\\0)\n"
+      "decoder1\\id=profibus_dp\ndecoder1\\visible=true\ndecoder1\\options=0\nchannels=2\n";
+  EXPECT_EQ(slurp(o.pvs),
+            head +
+                "channel0\\assigned_signal_name=rxd\nchannel0\\initial_pin_state=2\n"
+                "channel1\\assigned_signal_name=txd\nchannel1\\initial_pin_state=2\n");
+  // Only TxD in the file: rx stays unassigned.
+  o.signals = {"pins.txd", "pins.x_int"};
+  record_startup(o);
+  EXPECT_EQ(slurp(o.pvs),
+            head +
+                "channel0\\initial_pin_state=2\n"
+                "channel1\\assigned_signal_name=txd\nchannel1\\initial_pin_state=2\n");
+  // Neither: refused before the run, nothing written.
+  o.signals = {"pins.x_int"};
+  o.path = tmp("session_none.vcd");
+  o.pvs = tmp("session_none.pvs");
+  std::string error;
+  EXPECT_FALSE(wave::Recorder(o).check_signals(error));
+  EXPECT_EQ(error, o.pvs +
+                       ": a PulseView session decodes pins.rxd or pins.txd (a segment's "
+                       "line.level), and --signals leaves them out of " +
+                       o.path);
+  // PulseView reads a VCD in the logic-analyser form only, and the decoder needs the rate.
+  o.signals.clear();
+  o.flat = false;
+  EXPECT_FALSE(wave::Recorder(o).open(error));
+  EXPECT_EQ(error, o.pvs + ": a PulseView session is for a VCD in the logic-analyser form (flat)");
+  o.flat = true;
+  o.baud = 0;
+  EXPECT_FALSE(wave::Recorder(o).open(error));
+  EXPECT_EQ(error, o.pvs + ": a PulseView session needs the bus's baud rate");
+  EXPECT_FALSE(std::ifstream(o.pvs).good());
+  EXPECT_FALSE(std::ifstream(o.path).good());
+}
+
+// QSettings' INI escapes of the rate's bytes (qsettings.cpp, iniEscapedString): 500 000 =
+// 7A120h -> 20 A1 07 00 ..: a space, \xa1, 07h as its named escape \a (no hex digit follows a
+// named one); 12 544 = 3100h -> 00 31 00 ..: '1' (31h) right after \0 is a hex digit, escaped
+// (\x31) so that it is not read as part of the escape; 59 = 3Bh: ';' would start a comment, so
+// the value goes in quotes.
+TEST(Waveform, APulseViewSessionsRateInQSettingsEscapes) {
+  const auto rate = [](std::uint32_t baud) {
+    const std::string s = wave::pulseview_session_text(baud, "rxd", "");
+    const std::string key = "decoder0\\option0\\value=";
+    const std::size_t at = s.find(key) + key.size();
+    return s.substr(at, s.find('\n', at) - at);
+  };
+  EXPECT_EQ(rate(500'000), "@ByteArray( \\xa1\\a\\0\\0\\0\\0\\0)");
+  EXPECT_EQ(rate(12'544), "@ByteArray(\\0\\x31\\0\\0\\0\\0\\0\\0)");
+  EXPECT_EQ(rate(59), "\"@ByteArray(;\\0\\0\\0\\0\\0\\0\\0)\"");
 }
 
 TEST(Waveform, SigrokDecodesTheTelegramBytes) {

@@ -848,3 +848,49 @@ def test_segment_scenario_parse_of_a_single_chips_text_says_what_load_says(trace
                         file="x.scn").value
     assert str(bad) == str(pytest.raises(dpc31.ScenarioError, dpc31.Scenario.parse,
                                          "frobnicate\n", file="x.scn").value)
+
+
+def test_slave_lengths_whose_buffers_do_not_fit_the_ram_are_refused():
+    # Audit s32 siblings, finding 1: on the SPC3, in=out=240 put the built-in user side's buffers
+    # past 5FFh (a RAM access violation at 0x610, the chip Offline), run_responder said nothing.
+    # 8-byte segments from 40h: 3 x 30 out, 3 x 30 in, 2 diag, 6 aux = segment 8 + 188 = 196,
+    # the last byte 0x61F.
+    chip = dpc31.Chip("spc3")
+    master = dpc31.Master(chip, address=2, baud=1_500_000,
+                          slave=dpc31.SlaveConfig(address=5, in_len=240, out_len=240))
+    with pytest.raises(ValueError, match=r"^SlaveConfig in=240 out=240: the built-in user side's "
+                                         r"buffers would end at 0x61f, past the 1536 bytes of "
+                                         r"RAM of profile spc3 \(its user area 0x040..0x5ff\)$"):
+        master.run_responder()
+    assert chip.cycle == 0  # nothing written
+    seg = dpc31.Segment()
+    with pytest.raises(ValueError, match=r"^slave=SlaveConfig in=240 out=240: .* profile spc3 "):
+        seg.add_station(5, profile="spc3", slave=dpc31.SlaveConfig(in_len=240, out_len=240))
+    # 232 bytes each way fit (29 segments each: the last byte 0x5EF) and run.
+    master = dpc31.Master(dpc31.Chip("spc3"), address=2, baud=1_500_000,
+                          slave=dpc31.SlaveConfig(address=5, in_len=232, out_len=232))
+    master.run_responder(inputs=bytes(range(232)))
+    assert master.startup()
+    assert master.data_exchange(bytes(232)).answer.du == bytes(range(232))
+
+
+def test_a_poke_reg_takes_effect_or_is_refused_never_disagreeing_with_the_chip():
+    # Audit s32 siblings, finding 2: Mode_Reg2's poked 4kB_Mode left the RAM decode at 2 KB, a
+    # poked Start_SPC3 read 1 while Offline. VPC3+: 800h..FFFh are RAM with 4kB_Mode, else they
+    # wrap to address - 800h (docs/registers.md).
+    chip = dpc31.Chip("vpc3plus")
+    assert chip.poke_reg("Mode_Reg2", 0x80)
+    chip.write(0x900, 0x5A)
+    assert (chip.peek(0x900), chip.peek(0x100)) == (0x5A, 0x00)
+    assert chip.peek_reg("Status_Reg") & 0x08 == 0  # no RAM access violation
+    assert chip.poke_reg("Mode_Reg2", 0x01)  # 2 KB again: 960h wraps to 160h
+    chip.write(0x960, 0x55)
+    assert chip.peek(0x160) == 0x55
+    spc3 = dpc31.Chip("spc3")
+    with pytest.raises(ValueError, match=r"^poke_reg Mode_Reg1 0x01: bits 0x01 would change; "
+                                         r"Start_SPC3 and Go_Offline are the chip's run state "
+                                         r"\(Offline\)"):
+        spc3.poke_reg("Mode_Reg1", 0x01)
+    assert spc3.peek_reg("Mode_Reg1") == 0x00
+    assert spc3.poke_reg("Mode_Reg1", 0x10)  # En_Change_Cfg_Buffer: the latch's own
+    assert spc3.peek_reg("Mode_Reg1") == 0x10

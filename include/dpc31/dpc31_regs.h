@@ -46,7 +46,7 @@ enum dpc31_profile {
 #define SPC3_Int_Req_Reg_User_Timer_Clock_Pos           4u
 #define SPC3_Int_Req_Reg_User_Timer_Clock_Msk           0x0010u /* 4 RW: user time base (1 ms / 10 ms) elapsed */
 #define SPC3_Int_Req_Reg_New_GC_Command_Pos             8u
-#define SPC3_Int_Req_Reg_New_GC_Command_Msk             0x0100u /* 8 RW: Global_Control received (changed command byte, or every GC in New_GC_Int mode 1) */
+#define SPC3_Int_Req_Reg_New_GC_Command_Msk             0x0100u /* 8 RW: Global_Control received with a changed command byte */
 #define SPC3_Int_Req_Reg_New_SSA_Data_Pos               9u
 #define SPC3_Int_Req_Reg_New_SSA_Data_Msk               0x0200u /* 9 RW: Set_Slave_Address received into the SSA buffer */
 #define SPC3_Int_Req_Reg_New_Cfg_Data_Pos               10u
@@ -76,7 +76,7 @@ enum dpc31_profile {
 #define SPC3_Int_Reg_User_Timer_Clock_Pos               4u
 #define SPC3_Int_Reg_User_Timer_Clock_Msk               0x0010u /* 4 RO: user time base (1 ms / 10 ms) elapsed */
 #define SPC3_Int_Reg_New_GC_Command_Pos                 8u
-#define SPC3_Int_Reg_New_GC_Command_Msk                 0x0100u /* 8 RO: Global_Control received (changed command byte, or every GC in New_GC_Int mode 1) */
+#define SPC3_Int_Reg_New_GC_Command_Msk                 0x0100u /* 8 RO: Global_Control received with a changed command byte */
 #define SPC3_Int_Reg_New_SSA_Data_Pos                   9u
 #define SPC3_Int_Reg_New_SSA_Data_Msk                   0x0200u /* 9 RO: Set_Slave_Address received into the SSA buffer */
 #define SPC3_Int_Reg_New_Cfg_Data_Pos                   10u
@@ -106,7 +106,7 @@ enum dpc31_profile {
 #define SPC3_Int_Ack_Reg_User_Timer_Clock_Pos           4u
 #define SPC3_Int_Ack_Reg_User_Timer_Clock_Msk           0x0010u /* 4 W1C: user time base (1 ms / 10 ms) elapsed */
 #define SPC3_Int_Ack_Reg_New_GC_Command_Pos             8u
-#define SPC3_Int_Ack_Reg_New_GC_Command_Msk             0x0100u /* 8 W1C: Global_Control received (changed command byte, or every GC in New_GC_Int mode 1) */
+#define SPC3_Int_Ack_Reg_New_GC_Command_Msk             0x0100u /* 8 W1C: Global_Control received with a changed command byte */
 #define SPC3_Int_Ack_Reg_New_SSA_Data_Pos               9u
 #define SPC3_Int_Ack_Reg_New_SSA_Data_Msk               0x0200u /* 9 W1C: Set_Slave_Address received into the SSA buffer */
 #define SPC3_Int_Ack_Reg_New_Cfg_Data_Pos               10u
@@ -160,7 +160,7 @@ enum dpc31_profile {
 #define SPC3_Int_Mask_Reg_User_Timer_Clock_Pos          4u
 #define SPC3_Int_Mask_Reg_User_Timer_Clock_Msk          0x0010u /* 4 WO: user time base (1 ms / 10 ms) elapsed */
 #define SPC3_Int_Mask_Reg_New_GC_Command_Pos            8u
-#define SPC3_Int_Mask_Reg_New_GC_Command_Msk            0x0100u /* 8 WO: Global_Control received (changed command byte, or every GC in New_GC_Int mode 1) */
+#define SPC3_Int_Mask_Reg_New_GC_Command_Msk            0x0100u /* 8 WO: Global_Control received with a changed command byte */
 #define SPC3_Int_Mask_Reg_New_SSA_Data_Pos              9u
 #define SPC3_Int_Mask_Reg_New_SSA_Data_Msk              0x0200u /* 9 WO: Set_Slave_Address received into the SSA buffer */
 #define SPC3_Int_Mask_Reg_New_Cfg_Data_Pos              10u
@@ -1196,7 +1196,7 @@ enum dpc31_profile {
 #define DPC31_Int_Req_Reg_HI_MOTOROLA                   0x0000u
 #define DPC31_Int_Req_Reg_RESET                         0x0000u
 #define DPC31_Int_Req_Reg_MAC_Reset_Pos                 0u
-#define DPC31_Int_Req_Reg_MAC_Reset_Msk                 0x0001u /* 0 RW: Offline reached after Go_Offline or a RAM access violation */
+#define DPC31_Int_Req_Reg_MAC_Reset_Msk                 0x0001u /* 0 RW: Offline reached after the MAC_Stop request (Instruction_Queue) */
 #define DPC31_Int_Req_Reg_Go_Leave_Data_Exchange_Pos    1u
 #define DPC31_Int_Req_Reg_Go_Leave_Data_Exchange_Msk    0x0002u /* 1 RW: DP state machine entered or left Data_Exchange */
 #define DPC31_Int_Req_Reg_Baudrate_Detect_Pos           2u
@@ -1208,7 +1208,7 @@ enum dpc31_profile {
 #define DPC31_Int_Req_Reg_Indication_Pos                5u
 #define DPC31_Int_Req_Reg_Indication_Msk                0x0020u /* 5 RW: DPC31: a new entry in the Indication_Queue (the bit is modelled) */
 #define DPC31_Int_Req_Reg_New_GC_Command_Pos            8u
-#define DPC31_Int_Req_Reg_New_GC_Command_Msk            0x0100u /* 8 RW: Global_Control received (changed command byte, or every GC in New_GC_Int mode 1) */
+#define DPC31_Int_Req_Reg_New_GC_Command_Msk            0x0100u /* 8 RW: Global_Control received (changed command byte, or every GC with Param_Reg.New_GC_Int_Mode) */
 #define DPC31_Int_Req_Reg_New_SSA_Data_Pos              9u
 #define DPC31_Int_Req_Reg_New_SSA_Data_Msk              0x0200u /* 9 RW: Set_Slave_Address received into the SSA buffer */
 #define DPC31_Int_Req_Reg_New_Cfg_Data_Pos              10u
@@ -1228,7 +1228,7 @@ enum dpc31_profile {
 #define DPC31_Int_Reg_HI_MOTOROLA                       0x0002u
 #define DPC31_Int_Reg_RESET                             0x0000u
 #define DPC31_Int_Reg_MAC_Reset_Pos                     0u
-#define DPC31_Int_Reg_MAC_Reset_Msk                     0x0001u /* 0 RO: Offline reached after Go_Offline or a RAM access violation */
+#define DPC31_Int_Reg_MAC_Reset_Msk                     0x0001u /* 0 RO: Offline reached after the MAC_Stop request (Instruction_Queue) */
 #define DPC31_Int_Reg_Go_Leave_Data_Exchange_Pos        1u
 #define DPC31_Int_Reg_Go_Leave_Data_Exchange_Msk        0x0002u /* 1 RO: DP state machine entered or left Data_Exchange */
 #define DPC31_Int_Reg_Baudrate_Detect_Pos               2u
@@ -1240,7 +1240,7 @@ enum dpc31_profile {
 #define DPC31_Int_Reg_Indication_Pos                    5u
 #define DPC31_Int_Reg_Indication_Msk                    0x0020u /* 5 RO: DPC31: a new entry in the Indication_Queue (the bit is modelled) */
 #define DPC31_Int_Reg_New_GC_Command_Pos                8u
-#define DPC31_Int_Reg_New_GC_Command_Msk                0x0100u /* 8 RO: Global_Control received (changed command byte, or every GC in New_GC_Int mode 1) */
+#define DPC31_Int_Reg_New_GC_Command_Msk                0x0100u /* 8 RO: Global_Control received (changed command byte, or every GC with Param_Reg.New_GC_Int_Mode) */
 #define DPC31_Int_Reg_New_SSA_Data_Pos                  9u
 #define DPC31_Int_Reg_New_SSA_Data_Msk                  0x0200u /* 9 RO: Set_Slave_Address received into the SSA buffer */
 #define DPC31_Int_Reg_New_Cfg_Data_Pos                  10u
@@ -1260,7 +1260,7 @@ enum dpc31_profile {
 #define DPC31_Int_Ack_Reg_HI_MOTOROLA                   0x0002u
 #define DPC31_Int_Ack_Reg_RESET                         0x0000u
 #define DPC31_Int_Ack_Reg_MAC_Reset_Pos                 0u
-#define DPC31_Int_Ack_Reg_MAC_Reset_Msk                 0x0001u /* 0 W1C: Offline reached after Go_Offline or a RAM access violation */
+#define DPC31_Int_Ack_Reg_MAC_Reset_Msk                 0x0001u /* 0 W1C: Offline reached after the MAC_Stop request (Instruction_Queue) */
 #define DPC31_Int_Ack_Reg_Go_Leave_Data_Exchange_Pos    1u
 #define DPC31_Int_Ack_Reg_Go_Leave_Data_Exchange_Msk    0x0002u /* 1 W1C: DP state machine entered or left Data_Exchange */
 #define DPC31_Int_Ack_Reg_Baudrate_Detect_Pos           2u
@@ -1272,7 +1272,7 @@ enum dpc31_profile {
 #define DPC31_Int_Ack_Reg_Indication_Pos                5u
 #define DPC31_Int_Ack_Reg_Indication_Msk                0x0020u /* 5 W1C: DPC31: a new entry in the Indication_Queue (the bit is modelled) */
 #define DPC31_Int_Ack_Reg_New_GC_Command_Pos            8u
-#define DPC31_Int_Ack_Reg_New_GC_Command_Msk            0x0100u /* 8 W1C: Global_Control received (changed command byte, or every GC in New_GC_Int mode 1) */
+#define DPC31_Int_Ack_Reg_New_GC_Command_Msk            0x0100u /* 8 W1C: Global_Control received (changed command byte, or every GC with Param_Reg.New_GC_Int_Mode) */
 #define DPC31_Int_Ack_Reg_New_SSA_Data_Pos              9u
 #define DPC31_Int_Ack_Reg_New_SSA_Data_Msk              0x0200u /* 9 W1C: Set_Slave_Address received into the SSA buffer */
 #define DPC31_Int_Ack_Reg_New_Cfg_Data_Pos              10u
@@ -1296,7 +1296,7 @@ enum dpc31_profile {
 #define DPC31_Status_Reg_Diag_Flag_Pos                  2u
 #define DPC31_Status_Reg_Diag_Flag_Msk                  0x0004u /* 2 RO: the master has not yet fetched the current diag buffer */
 #define DPC31_Status_Reg_RAM_Access_Violation_Pos       3u
-#define DPC31_Status_Reg_RAM_Access_Violation_Msk       0x0008u /* 3 RO: an access beyond the RAM happened; cleared by Start_SPC3 (modelled) */
+#define DPC31_Status_Reg_RAM_Access_Violation_Msk       0x0008u /* 3 RO: never set: all 8 KB are decoded, no access is beyond the RAM (modelled) */
 #define DPC31_Status_Reg_DP_State_Pos                   4u
 #define DPC31_Status_Reg_DP_State_Msk                   0x0030u /* 5:4 RO: 00 Wait_Prm, 01 Wait_Cfg, 10 Data_Exchange */
 #define DPC31_Status_Reg_WD_State_Pos                   6u
@@ -1314,7 +1314,7 @@ enum dpc31_profile {
 #define DPC31_Int_Mask_Reg_HI_MOTOROLA                  0x0004u
 #define DPC31_Int_Mask_Reg_RESET                        0xFFFFu
 #define DPC31_Int_Mask_Reg_MAC_Reset_Pos                0u
-#define DPC31_Int_Mask_Reg_MAC_Reset_Msk                0x0001u /* 0 WO: Offline reached after Go_Offline or a RAM access violation */
+#define DPC31_Int_Mask_Reg_MAC_Reset_Msk                0x0001u /* 0 WO: Offline reached after the MAC_Stop request (Instruction_Queue) */
 #define DPC31_Int_Mask_Reg_Go_Leave_Data_Exchange_Pos   1u
 #define DPC31_Int_Mask_Reg_Go_Leave_Data_Exchange_Msk   0x0002u /* 1 WO: DP state machine entered or left Data_Exchange */
 #define DPC31_Int_Mask_Reg_Baudrate_Detect_Pos          2u
@@ -1326,7 +1326,7 @@ enum dpc31_profile {
 #define DPC31_Int_Mask_Reg_Indication_Pos               5u
 #define DPC31_Int_Mask_Reg_Indication_Msk               0x0020u /* 5 WO: DPC31: a new entry in the Indication_Queue (the bit is modelled) */
 #define DPC31_Int_Mask_Reg_New_GC_Command_Pos           8u
-#define DPC31_Int_Mask_Reg_New_GC_Command_Msk           0x0100u /* 8 WO: Global_Control received (changed command byte, or every GC in New_GC_Int mode 1) */
+#define DPC31_Int_Mask_Reg_New_GC_Command_Msk           0x0100u /* 8 WO: Global_Control received (changed command byte, or every GC with Param_Reg.New_GC_Int_Mode) */
 #define DPC31_Int_Mask_Reg_New_SSA_Data_Pos             9u
 #define DPC31_Int_Mask_Reg_New_SSA_Data_Msk             0x0200u /* 9 WO: Set_Slave_Address received into the SSA buffer */
 #define DPC31_Int_Mask_Reg_New_Cfg_Data_Pos             10u

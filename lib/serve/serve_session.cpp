@@ -382,6 +382,8 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
       }
       if (cmd == "peek_reg") return ok(fmt::format("{:#06x}", chip_.peek_reg(r->id)));
       const auto v = static_cast<std::uint16_t>(number(t[2], r->mask(), "value"));
+      if (std::string why = chip_.poke_reg_problem(r->id, v); !why.empty())
+        return err("run_state", std::move(why));
       if (!chip_.poke_reg(r->id, v)) {
         return err("no_storage", fmt::format("{} has no storage to poke", r->name));
       }

@@ -15,6 +15,7 @@
 #include "gtkw.hpp"
 #include "gtkwave/fstapi.h"
 #include "outfile.hpp"
+#include "pvs.hpp"
 #include "vcd_body.hpp"
 #include "vocabulary.hpp"
 #include "wavediff.hpp"  // vcd_id: one VCD identifier code for every writer
@@ -196,6 +197,7 @@ struct Recorder::Impl {
   std::string error;             // the first failure, reported by finish()
   outfile::OutFile out;          // opened by the first attach, so that a bad path is found early
   outfile::OutFile gtkw;         // the save file (Options::gtkw), likewise
+  outfile::OutFile pvs;          // the PulseView session setup (Options::pvs), likewise
   std::vector<std::pair<std::uint64_t, std::string>> markers;  // its named markers (26 at most)
 
   // The line (attach_line): station -> driver code, the bit time, the character on the line.
@@ -262,7 +264,47 @@ struct Recorder::Impl {
       err = gtkw.error();
       return false;
     }
+    if (!opt.pvs.empty()) {
+      // PulseView reads VCD (libsigrok's input), and only the logic-analyser form of it.
+      if (opt.fst || !opt.flat) {
+        err = fmt::format("{}: a PulseView session is for a VCD in the logic-analyser form (flat)",
+                          opt.pvs);
+        return false;
+      }
+      if (opt.baud == 0) {
+        err = fmt::format("{}: a PulseView session needs the bus's baud rate", opt.pvs);
+        return false;
+      }
+      if (!pvs.is_open() && !pvs.open(opt.pvs)) {
+        err = pvs.error();
+        return false;
+      }
+    }
     return true;
+  }
+  // The channels a PulseView session's UART decoder reads, as the file names them: one chip's
+  // RxD and TxD, or a segment's line (the bus as every station hears it: rx only).
+  [[nodiscard]] std::pair<std::string, std::string> session_channels() const {
+    std::pair<std::string, std::string> rx_tx;
+    for (const Var& v : vars) {
+      if (v.name == "pins.rxd" || v.name == kLineSignals[kLineLevel].name)
+        rx_tx.first = path(v).second;
+      if (v.name == "pins.txd") rx_tx.second = path(v).second;
+    }
+    return rx_tx;
+  }
+  [[nodiscard]] std::string no_session_channel() const {
+    return fmt::format(
+        "{}: a PulseView session decodes pins.rxd or pins.txd (a segment's line.level), and "
+        "--signals leaves them out of {}",
+        opt.pvs, opt.path);
+  }
+  // A session left without a channel to decode (--signals) is refused as the run starts.
+  [[nodiscard]] bool session_has_channels(std::string& err) const {
+    const auto [rx, tx] = session_channels();
+    if (!pvs.is_open() || !rx.empty() || !tx.empty()) return true;
+    err = no_session_channel();
+    return false;
   }
 
   [[nodiscard]] std::uint64_t now() const {
@@ -608,6 +650,7 @@ bool Recorder::Impl::attach_chip(Chip& chip, std::string scope, std::string& err
     sources.pop_back();
     return false;
   }
+  if (line == nullptr && !session_has_channels(err)) return false;
   Source* src = &s;
   push(s, chip.cycle(), kRxd, 1);
   push(s, chip.cycle(), kTxd, chip.txd_pin() ? 1 : 0);
@@ -642,13 +685,21 @@ Recorder::~Recorder() = default;
 bool Recorder::open(std::string& error) { return impl_->open_outputs(error); }
 
 bool Recorder::check_signals(std::string& error) const {
-  for (const std::string& p : impl_->opt.signals) {
+  const Impl& m = *impl_;
+  for (const std::string& p : m.opt.signals) {
     const bool any = std::any_of(kSignals.begin(), kSignals.end(),
                                  [&](const SignalDef& d) { return glob(p, d.name); });
     if (!any) {
       error = fmt::format("no signal matches '{}' (see docs/waveforms.md)", p);
       return false;
     }
+  }
+  // A PulseView session needs a line to decode: one chip's RxD or TxD (every chip has both), a
+  // segment's line (attach_line checks which of them the run has).
+  if (!m.opt.pvs.empty() && !m.take("pins.rxd", "pins.rxd", 1) &&
+      !m.take("pins.txd", "pins.txd", 1) && !m.take("line.level", "line.level", 1)) {
+    error = m.no_session_channel();
+    return false;
   }
   return true;
 }
@@ -696,6 +747,7 @@ bool Recorder::attach_line(std::vector<std::uint8_t> driver_codes, std::uint32_t
     error = fmt::format("{}: a segment's line without a station", m.opt.path);
     return false;
   }
+  if (!m.session_has_channels(error)) return false;
   m.driver_codes = std::move(driver_codes);
   m.char_cycles = std::uint64_t{kUartCharBits} * bit_cycles;
   m.horizon = std::move(line_final);
@@ -763,6 +815,13 @@ bool Recorder::finish(std::uint64_t end_cycle, std::string& error) {
     }
     if (!(m.gtkw.write(save_file_text(f)) && m.gtkw.commit())) {
       error = m.gtkw.error();
+      return false;
+    }
+  }
+  if (m.pvs.is_open()) {
+    const auto [rx, tx] = m.session_channels();
+    if (!(m.pvs.write(pulseview_session_text(m.opt.baud, rx, tx)) && m.pvs.commit())) {
+      error = m.pvs.error();
       return false;
     }
   }

@@ -22,6 +22,8 @@ struct Options {
   int timescale_exp = -12;           // 10^exp seconds per unit: -12 1 ps, -8 10 ns, ...
   bool flat = false;                 // one scope, 1-bit signals only (for sigrok's VCD input)
   std::string gtkw;                  // also a GTKWave save file for it here (gtkw.hpp)
+  std::string pvs;                   // also a PulseView session setup here (pvs.hpp): flat VCD
+  std::uint32_t baud = 0;            // the bus's rate, for that setup's UART decoder
 };
 
 // The documented signal list: name (below the top scope "dpc31") and width.

@@ -232,6 +232,8 @@ RunOptions demo_outputs(const std::string& out_dir, const std::optional<std::str
   ro.vcd = (std::filesystem::path(out_dir) / "dpc31-demo.vcd").string();
   ro.la_vcd = (std::filesystem::path(out_dir) / "dpc31-demo-la.vcd").string();
   ro.gtkw = (std::filesystem::path(out_dir) / "dpc31-demo.gtkw").string();
+  // Beside its VCD under the same name: PulseView opens it with the VCD by itself.
+  ro.pvs = (std::filesystem::path(out_dir) / "dpc31-demo-la.pvs").string();
   ro.timescale = timescale;
   ro.pcap = (std::filesystem::path(out_dir) / "dpc31-demo.pcapng").string();
   return ro;
@@ -295,9 +297,10 @@ int run_dp_session(const ChipOptions& opt, const RunOptions& ro, ChipRun& run,
   }
   fmt::print(out,
              "\nwaveform (VCD): {}\nGTKWave save file (gtkwave {}): {}\nwaveform for "
-             "logic-analyser tools (VCD, sigrok-cli -I vcd): {}\ntelegrams (pcapng, link type "
-             "257): {}\n",
-             ro.vcd, ro.gtkw, ro.gtkw, ro.la_vcd, ro.pcap);
+             "logic-analyser tools (VCD, sigrok-cli -I vcd): {}\nPulseView session (pulseview "
+             "-I vcd -i {} opens it, UART and PROFIBUS DP decoders stacked): {}\ntelegrams "
+             "(pcapng, link type 257): {}\n",
+             ro.vcd, ro.gtkw, ro.gtkw, ro.la_vcd, ro.la_vcd, ro.pvs, ro.pcap);
   return rc;
 }
 
@@ -319,6 +322,7 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option,
             {{"--out-dir", ro.vcd},
              {"--out-dir", ro.la_vcd},
              {"--out-dir", ro.gtkw},
+             {"--out-dir", ro.pvs},
              {"--out-dir", ro.pcap}});
         !same.empty()) {
       fmt::print(stderr, "dpc31 demo: {}\n", same);
@@ -374,7 +378,7 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option,
   // one line, and nothing else.
   const RunOptions ro = demo_outputs(out_dir, timescale);
   ChipRun run(ro, "dpc31 demo", stderr);
-  if (run.open() != 0) return 2;
+  if (run.open(session.scenario.master.baud) != 0) return 2;
   Chip chip(opt);
   Narrator n(chip, out);
   const ProfileDesc& p = chip.profile();

@@ -162,6 +162,11 @@ int main(int argc, char** argv) {
                   "also write a GTKWave save file for --vcd (or --fst): signals by block, states "
                   "by name, markers at the state changes (docs/waveforms.md)")
       ->check(named(Use::write));
+  run->add_option("--pvs", run_opt.pvs,
+                  "also write a PulseView session for --la-vcd (or --vcd --flat): the UART and "
+                  "PROFIBUS DP decoders on RxD and TxD; PulseView opens NAME.pvs beside NAME.vcd "
+                  "by itself (docs/waveforms.md)")
+      ->check(named(Use::write));
   run->add_option_function<std::string>(
          "--engine",
          [&run_opt](const std::string& name) {

@@ -52,8 +52,8 @@ nlohmann::json summary(const Scenario& s, const ScenarioOutcome& o) {
 int run_with_outputs(const RunOptions& opt, std::string_view text, const LineSink& walk,
                      const LineSink& errors, Scenario& s, std::FILE* err) {
   const std::vector<outfile::Named> outputs = {
-      {"--json", opt.json},     {"--record", opt.record}, {"--vcd", opt.vcd},  {"--fst", opt.fst},
-      {"--la-vcd", opt.la_vcd}, {"--pcap", opt.pcap},     {"--gtkw", opt.gtkw}};
+      {"--json", opt.json},     {"--record", opt.record}, {"--vcd", opt.vcd},   {"--fst", opt.fst},
+      {"--la-vcd", opt.la_vcd}, {"--pcap", opt.pcap},     {"--gtkw", opt.gtkw}, {"--pvs", opt.pvs}};
   std::vector<outfile::Named> inputs = scenario_inputs(s);
   inputs.insert(inputs.begin(), {"the scenario", opt.scenario});
   if (const std::string same = outfile::distinct(inputs, outputs); !same.empty()) {
@@ -62,7 +62,7 @@ int run_with_outputs(const RunOptions& opt, std::string_view text, const LineSin
   }
   s.chip.engine = opt.engine;
   ChipRun run(opt, "dpc31 run", err);
-  if (const int rc = run.open(); rc != 0) return rc;
+  if (const int rc = run.open(s.master.baud); rc != 0) return rc;
   ScenarioOutcome o;
   return run.run(s, text, walk, errors, o);
 }
@@ -128,6 +128,10 @@ std::string waveform_options_error(const RunOptions& opt) {
       }
     }
   }
+  // PulseView reads VCD only (libsigrok's input), and our logic-analyser form of it.
+  if (!opt.pvs.empty() && opt.la_vcd.empty() && (opt.vcd.empty() || !opt.flat))
+    return fmt::format("--pvs {}: a PulseView session needs --la-vcd (or --vcd with --flat)",
+                       opt.pvs);
   int unit_exp = 0;
   if (opt.timescale && !parse_timescale(*opt.timescale, unit_exp))
     return timescale_error(*opt.timescale);
@@ -138,7 +142,7 @@ std::string waveform_options_error(const RunOptions& opt) {
   return {};
 }
 
-std::vector<wave::Options> wave_options(const RunOptions& opt) {
+std::vector<wave::Options> wave_options(const RunOptions& opt, std::uint32_t baud) {
   std::vector<wave::Options> out;
   for (const auto& [path, fst, flat] :
        {std::tuple{opt.vcd, false, opt.flat}, std::tuple{opt.fst, true, opt.flat},
@@ -153,6 +157,11 @@ std::vector<wave::Options> wave_options(const RunOptions& opt) {
     w.flat = flat;
     // The save file opens --vcd, or --fst without it.
     if (path == (opt.vcd.empty() ? opt.fst : opt.vcd)) w.gtkw = opt.gtkw;
+    // The PulseView session: --la-vcd, or a flat --vcd without it.
+    if (path == (opt.la_vcd.empty() ? opt.vcd : opt.la_vcd) && !fst) {
+      w.pvs = opt.pvs;
+      w.baud = baud;
+    }
     // The logic-analyser form's default: 10 ns, the sample period of a 100 MHz analyser (sigrok
     // makes one sample per unit; 8.3 per bit at 12 Mbaud). The full form's: 1 ps.
     parse_timescale(opt.timescale.value_or(flat ? "10ns" : "1ps"), w.timescale_exp);
@@ -185,7 +194,7 @@ ChipRun::ChipRun(const RunOptions& opt, std::string command, std::FILE* err)
 
 ChipRun::~ChipRun() = default;
 
-int ChipRun::open() {
+int ChipRun::open(std::uint32_t baud) {
   Impl& m = *impl_;
   const RunOptions& opt = m.opt;
   // Every output is opened now: a bad path is found before the run, before any is written.
@@ -194,7 +203,7 @@ int ChipRun::open() {
   }
   if (const std::string e = waveform_options_error(opt); !e.empty()) return m.fail(e);
   std::string error;
-  for (const wave::Options& w : wave_options(opt)) {
+  for (const wave::Options& w : wave_options(opt, baud)) {
     auto& rec = m.waves.emplace_back(std::make_unique<wave::Recorder>(w));
     if (!(rec->check_signals(error) && rec->open(error))) return m.fail(error);
   }

@@ -29,6 +29,7 @@ struct RunOptions {
       timescale;                  // none: 1ps, 10ns for the logic-analyser form (docs/waveforms.md)
   bool flat = false;              // --vcd / --fst in the logic-analyser form
   std::string gtkw;               // a GTKWave save file for --vcd (or else --fst)
+  std::string pvs;                // a PulseView session for --la-vcd (or else --vcd --flat)
   std::string pcap;               // the chip's telegrams as pcapng (docs/capture.md)
   Engine engine = Engine::event;  // how time advances (docs/engine.md)
 };
@@ -48,9 +49,10 @@ std::string timescale_error(const std::string& t);
 std::string waveform_options_error(const RunOptions& opt);
 
 // The waveforms `opt` asks for (--vcd, --fst, --la-vcd), each with its window, signals, form,
-// time unit and the GTKWave save file on the first of --vcd / --fst; the same for one chip and
-// for a segment. The time unit is checked before (parse_timescale).
-std::vector<wave::Options> wave_options(const RunOptions& opt);
+// time unit, the GTKWave save file on the first of --vcd / --fst and the PulseView session on
+// --la-vcd (or else a flat --vcd), whose UART decoder reads the bus at `baud`; the same for one
+// chip and for a segment. The time unit is checked before (parse_timescale).
+std::vector<wave::Options> wave_options(const RunOptions& opt, std::uint32_t baud);
 
 // `dpc31 run`: plays a scenario file (docs/scenario-format.md), printing the state walk to `out`
 // and failures to `err`. Returns the exit code: 0 every expect held, 1 one failed, 2 bad input.
@@ -69,8 +71,8 @@ class ChipRun {
   ChipRun(const ChipRun&) = delete;
   ChipRun& operator=(const ChipRun&) = delete;
 
-  // 0, or 2 with its line written.
-  int open();
+  // 0, or 2 with its line written. `baud`: the scenario's, for a PulseView session (--pvs).
+  int open(std::uint32_t baud);
   // After open(): 0, 1 or 2 like the command. `text` is the scenario's (its leading comments head
   // the --record trace).
   int run(const Scenario& s, std::string_view text, const LineSink& walk, const LineSink& errors,

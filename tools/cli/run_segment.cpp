@@ -34,7 +34,7 @@ namespace {
 class RunOutputs final : public SegmentScenarioOutputs {
  public:
   RunOutputs(const RunOptions& opt, const SegmentScenario& s, std::string_view text)
-      : SegmentScenarioOutputs(s, SegmentOutputOptions{wave_options(opt), opt.pcap}),
+      : SegmentScenarioOutputs(s, SegmentOutputOptions{wave_options(opt, s.baud), opt.pcap}),
         opt_(opt),
         s_(s),
         comments_(leading_comments(text)) {}
@@ -43,7 +43,8 @@ class RunOutputs final : public SegmentScenarioOutputs {
   [[nodiscard]] std::vector<outfile::Named> outputs() const {
     std::vector<outfile::Named> out = {{"--json", opt_.json}, {"--vcd", opt_.vcd},
                                        {"--fst", opt_.fst},   {"--la-vcd", opt_.la_vcd},
-                                       {"--pcap", opt_.pcap}, {"--gtkw", opt_.gtkw}};
+                                       {"--pcap", opt_.pcap}, {"--gtkw", opt_.gtkw},
+                                       {"--pvs", opt_.pvs}};
     for (const std::string& sc : scopes()) {
       out.push_back({"--record", opt_.record.empty() ? "" : station_trace_path(opt_.record, sc)});
     }
