@@ -151,12 +151,15 @@ RegId BufferUnit::newest_dout_ptr() const {
 }
 
 // Clear_Data and the fail-safe Data_Exchange without outputs. SPC3 / VPC3+: D is cleared and
-// passed on. dpc31: D is left alone; N_Cl makes the next fetch hand over the C buffer.
+// passed on. dpc31: D's memory is left alone ("not deleted and ... not changed"), but outputs a
+// Sync holds there are older than the clear: no later Sync or Unsync hands them over. N_Cl makes
+// the next fetch hand over the C buffer.
 void BufferUnit::failsafe_clear() {
   if (regs_.id() != Profile::dpc31) {
     dout_clear();
     return;
   }
+  s_.d_fresh = false;
   // Once per clear: until real outputs arrive, a further clear changes nothing.
   if (s_.in_clear) return;
   s_.in_clear = true;

@@ -102,17 +102,20 @@
     end
   endtask
 
-  // failsafe_clear: spc3 / vpc3plus: dout_clear. dpc31: once per clear: if In_Clear, nothing;
-  // otherwise In_Clear = 1, N_Cl = 1 and DX_Out.
-  // (dpc31: D and D-fresh are left as they are; the spec names nothing else.)
+  // failsafe_clear: spc3 / vpc3plus: dout_clear. dpc31: D not fresh (outputs a Sync holds in D
+  // are older than the clear; D itself is left as it is); then once per clear: if In_Clear,
+  // nothing; otherwise In_Clear = 1, N_Cl = 1 and DX_Out.
   task failsafe_clear;
     begin
       if (!IS_DPC31) begin
         dout_clear;
-      end else if (!nx_in_clear) begin
-        nx_in_clear = 1'b1;
-        nx_n_cl = 1'b1;
-        raise(IRQ_DX_OUT);
+      end else begin
+        nx_d_fresh = 1'b0;
+        if (!nx_in_clear) begin
+          nx_in_clear = 1'b1;
+          nx_n_cl = 1'b1;
+          raise(IRQ_DX_OUT);
+        end
       end
     end
   endtask

@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <span>
 #include <stdexcept>
 
 #include "dpc31/dp.hpp"
@@ -26,6 +25,14 @@ std::uint32_t aux_len(const SlaveConfig& s) {
                                   static_cast<std::uint32_t>(s.cfg.size()), 4u});
 }
 
+// "" when `given` bytes fill the slave's `key`= bytes (none, or exactly `len`), else why not.
+std::string length_problem(std::size_t given, std::size_t len, std::string_view key,
+                           std::string_view what) {
+  if (given == 0 || given == len) return {};
+  return fmt::format("{} bytes for a slave with {}={}: {} are exactly {}= bytes, or none", given,
+                     key, len, what, key);
+}
+
 }  // namespace
 
 std::string refused_beside_firmware(std::string_view option) {
@@ -34,9 +41,19 @@ std::string refused_beside_firmware(std::string_view option) {
 }
 
 std::string inputs_length_problem(std::size_t given, std::size_t in_len) {
-  if (given == 0 || given == in_len) return {};
-  return fmt::format("{} bytes for a slave with in={}: inputs are exactly in= bytes, or none",
-                     given, in_len);
+  return length_problem(given, in_len, "in", "inputs");
+}
+
+std::string substitute_length_problem(std::size_t given, std::size_t out_len) {
+  return length_problem(given, out_len, "out", "substitute values");
+}
+
+ResponderConfig Responder::checked(ResponderConfig cfg) {
+  if (const std::string why = substitute_length_problem(cfg.substitute.size(), cfg.slave.out_len);
+      !why.empty()) {
+    throw std::invalid_argument("substitute: " + why);
+  }
+  return cfg;
 }
 
 void Responder::set_inputs(std::vector<std::uint8_t> in) {
@@ -217,7 +234,7 @@ void Responder::init(BusPort& c) {
   c.write(cell_addr(c.chip(), RegId::R_Len_Read_Cfg_Data), static_cast<std::uint8_t>(s.cfg.size()));
   c.write_block(buffer(c, RegId::R_Read_Cfg_Buf_Ptr), s.cfg);
   if (p.id == Profile::dpc31) {
-    refill_substitute(c);
+    refill_substitute(c, false);  // C holds 00h from the reset unless substitute values are given
     place(RegId::InstQ_Base);
     place(RegId::IndQ_Base);
     c.write(cell_addr(c.chip(), RegId::InstQ_Len), kQueueLen);
@@ -254,11 +271,17 @@ void Responder::request(BusPort& c,
   c.write(cell_addr(c.chip(), RegId::InstQ_Wr), instq_wr_);
 }
 
-// dpc31: after a cleared fetch the old U is the new clear buffer C; prepare the substitute values.
-void Responder::refill_substitute(BusPort& c) {
-  const std::span<const std::uint8_t> sub(cfg_.substitute);
-  c.write_block(buffer(c, RegId::R_Dout_Buf_Ptr_C),
-                sub.first(std::min<std::size_t>(sub.size(), cfg_.slave.out_len)));
+// dpc31: after a cleared fetch the old U may be the new clear buffer C; prepare the substitute
+// values. Without any they are 00h: C holds them from the RAM's reset until the first C fetch,
+// which leaves the old outputs there, so only that is zeroed (`c_fetched`).
+void Responder::refill_substitute(BusPort& c, bool c_fetched) {
+  const std::uint32_t base = buffer(c, RegId::R_Dout_Buf_Ptr_C);  // read always: traces show it
+  if (!cfg_.substitute.empty()) {
+    c.write_block(base, cfg_.substitute);
+  } else if (c_fetched) {
+    const std::vector<std::uint8_t> zeros(cfg_.slave.out_len, 0x00);
+    c.write_block(base, zeros);
+  }
 }
 
 void Responder::give_inputs(BusPort& c, bool always) {
@@ -306,13 +329,16 @@ void Responder::isr(BusPort& c) {
     if ((r & fields::Next_Dout_Buffer_Cmd::State_U_Buffer) != 0) {
       static constexpr RegId kPtr[] = {RegId::R_Dout_Buf_Ptr1, RegId::R_Dout_Buf_Ptr2,
                                        RegId::R_Dout_Buf_Ptr3};
-      const std::uint32_t base =
-          buffer(c, kPtr[field_of(r, fields::Next_Dout_Buffer_Cmd::Ind_U_Buffer) - 1]);
+      const auto u =
+          static_cast<std::uint8_t>(field_of(r, fields::Next_Dout_Buffer_Cmd::Ind_U_Buffer));
+      const std::uint32_t base = buffer(c, kPtr[u - 1]);
       Output& o = outputs.emplace_back(Output{
           c.cycle(), std::move(spare_), (r & fields::Next_Dout_Buffer_Cmd::U_Buffer_Cleared) != 0});
       o.data.resize(cfg_.slave.out_len);
       c.read_block(base, o.data);
-      if (o.cleared && c.chip().profile().id == Profile::dpc31) refill_substitute(c);
+      // The C fetch exchanges the pointer cells, so U keeps its number; N -> U never does.
+      if (o.cleared && c.chip().profile().id == Profile::dpc31) refill_substitute(c, u == last_u_);
+      last_u_ = u;
     }
     give_inputs(c);
     if (cfg_.user_watchdog) {

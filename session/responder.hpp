@@ -48,6 +48,9 @@ struct ResponderConfig {
 // in_len), else why not, in the words of every door that sets them (the single chip's `user
 // inputs=` and `inputs`, Responder::set_inputs, Python's Responder.inputs).
 [[nodiscard]] std::string inputs_length_problem(std::size_t given, std::size_t in_len);
+// The same for the dpc31 clear buffer C's substitute values and the slave's out_len (the single
+// chip's `user substitute=`, the Responder's constructor, Python's run_responder(substitute=)).
+[[nodiscard]] std::string substitute_length_problem(std::size_t given, std::size_t out_len);
 
 // Where the built-in user side puts its buffers (Responder::init): segment after segment from
 // the start of the user area, in the order init() writes the pointer cells.
@@ -69,9 +72,11 @@ struct ResponderLayout {
 class Responder {
  public:
   // dpv1_ is built in the initialiser list: an emplace() in the body makes GCC 12's
-  // -Wmaybe-uninitialized fire (falsely) in the ASan build.
+  // -Wmaybe-uninitialized fire (falsely) in the ASan build. Substitute values of another length
+  // than the slave's out_len are std::invalid_argument (substitute_length_problem): the user would
+  // get them padded with the C buffer's stale bytes, or cut.
   explicit Responder(ResponderConfig cfg)
-      : cfg_(std::move(cfg)),
+      : cfg_(checked(std::move(cfg))),
         dpv1_(cfg_.dpv1.records.empty() ? std::nullopt
                                         : std::optional<Dpv1User>(std::in_place, cfg_.dpv1)) {}
 
@@ -116,7 +121,8 @@ class Responder {
   std::uint32_t buffer(BusPort& c, RegId ptr_cell) const;
   // Hands U over (New_Din_Buffer_Cmd) with `inputs`; without inputs only if `always`.
   void give_inputs(BusPort& c, bool always = false);
-  void refill_substitute(BusPort& c);
+  void refill_substitute(BusPort& c, bool c_fetched);
+  static ResponderConfig checked(ResponderConfig cfg);
   // dpc31: puts requests (code, parameter) into the Instruction_Queue and moves InstQ_Wr past
   // them with one write: the MAC executes them in that write's completion cycle.
   void request(BusPort& c, std::initializer_list<std::pair<std::uint8_t, std::uint8_t>> entries);
@@ -128,6 +134,7 @@ class Responder {
   std::uint32_t seg_shift_ = 3;
   std::vector<std::uint8_t> spare_;  // a forgotten fetch's data buffer, for the next fetch
   std::uint8_t instq_wr_ = 0;        // dpc31: the next free Instruction_Queue entry
+  std::uint8_t last_u_ = 0;          // the U buffer of the last fetch (0: none yet)
   mutable const ProfileDesc* regs_of_ = nullptr;  // the profile regs_ was filled from
   mutable std::array<const RegDesc*, kRegIdCount> regs_{};
 };

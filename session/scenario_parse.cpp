@@ -213,6 +213,11 @@ class Parser {
         inputs_line_ != 0 && !why.empty()) {
       fail_at(inputs_line_, "user inputs=: " + why);
     }
+    if (const std::string why =
+            substitute_length_problem(s_.user.substitute.size(), s_.user.slave.out_len);
+        substitute_line_ != 0 && !why.empty()) {
+      fail_at(substitute_line_, "user substitute=: " + why);
+    }
     // The built-in user side's buffers must fit this profile's RAM (the lengths are `slave`'s,
     // the DPV1 part's room the records').
     if (const std::string why = responder_layout_problem(profile_desc(p), s_.user);

@@ -268,6 +268,30 @@ TEST(Responder, InputsOfAnotherLengthThanInAreRefused) {
   EXPECT_TRUE(user.inputs().empty());
 }
 
+// The dpc31 clear buffer C takes substitute values of the slave's out_len or none: 2 bytes for 4
+// outputs reached the user as 5A 5B and the C buffer's stale bytes (old outputs after a cleared
+// fetch), 6 were cut to 4 (std::invalid_argument, in the scenario's words).
+TEST(Responder, SubstituteValuesOfAnotherLengthThanOutAreRefused) {
+  ResponderConfig rc;  // out_len 4
+  for (const std::vector<std::uint8_t>& bad :
+       {std::vector<std::uint8_t>{0x5A, 0x5B}, std::vector<std::uint8_t>(6, 0x5A)}) {
+    rc.substitute = bad;
+    try {
+      const Responder user(rc);
+      ADD_FAILURE() << bad.size() << " bytes taken";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()),
+                fmt::format("substitute: {} bytes for a slave with out=4: substitute values are "
+                            "exactly out= bytes, or none",
+                            bad.size()));
+    }
+  }
+  for (const std::size_t ok : {0, 4}) {
+    rc.substitute.assign(ok, 0x5A);
+    EXPECT_NO_THROW(const Responder user(rc)) << ok;
+  }
+}
+
 // The built-in user side's buffers must fit the profile's RAM (audit s32 siblings, finding 1:
 // on the SPC3 in=out=235 put them past 5FFh without a word, a RAM access violation, the chip
 // Offline). SPC3: 8-byte segments from 40h (segment 8), 3 x out, 3 x in, 2 diag buffers of 6
@@ -425,5 +449,4 @@ TEST(Responder, BuffersOverTheRegistersAreLogged) {
       log[1].starts_with("10 uses of buffers over the registers so far (the latest: R_Din_Buf_Ptr"))
       << log[1];
 }
-
 }  // namespace

@@ -297,6 +297,7 @@ TEST_P(Protocol, MaximumDataLengthsRoundTrip) {
   ResponderConfig rc = config();
   rc.slave.in_len = 244;
   rc.slave.out_len = 244;
+  rc.substitute.assign(244, 0x5A);  // the clear buffer C is out_len bytes too
   rc.slave.cfg = {0xC0, 0xBC, 0xBC, 0xC0, 0xBC, 0xBC,
                   0xC0, 0xBC, 0xBC, 0xC0, 0xBC, 0xBC};  // 4 x 61
   Bytes in(244), out(244);
@@ -387,6 +388,28 @@ TEST_P(Protocol, FailsafeDataExchangeWithoutOutputs) {
   EXPECT_EQ(o.data,
             GetParam() == Profile::dpc31 ? (Bytes{0x5A, 0x5B, 0x5C, 0x5D}) : (Bytes{0, 0, 0, 0}));
   EXPECT_EQ(b.chip.dp_state(), DpState::Data_Exchange);
+}
+
+// The built-in user side without substitute values: every clear hands the user 00h, as the
+// SPC3 and VPC3+ clear D. On the dpc31 the first C fetch leaves the old U buffer (outputs 01..04)
+// in the new C; the responder zeroes it, so the second clear does not hand old outputs over as
+// substitute values (they came back as 01 02 03 04, flagged cleared).
+TEST_P(Protocol, WithoutSubstituteValuesEveryClearHandsOverZeros) {
+  Bench b(GetParam(), 12'000'000);
+  ASSERT_TRUE(b.master.startup());
+  for (const std::uint8_t first : {0x01, 0x11}) {
+    SCOPED_TRACE(int(first));
+    b.master.data_exchange({first, static_cast<std::uint8_t>(first + 1),
+                            static_cast<std::uint8_t>(first + 2),
+                            static_cast<std::uint8_t>(first + 3)});
+    b.master.idle(2000);
+    ASSERT_EQ(b.user.outputs.back().data[0], first);
+    b.master.global_control(0x02);
+    b.master.idle(2000);  // the user's ISR fetches on DX_Out
+    EXPECT_TRUE(b.user.outputs.back().cleared);
+    EXPECT_EQ(b.user.outputs.back().data, (Bytes{0, 0, 0, 0}));
+    b.master.global_control(0x00);  // Operate: the next outputs end the clear
+  }
 }
 
 TEST_P(Protocol, GlobalControlReservedBitGivesNotSupportedAndWaitPrm) {
@@ -732,7 +755,8 @@ TEST_P(Protocol, DataExchangeInSd3) {
   ResponderConfig rc = config();
   rc.slave.in_len = 8;
   rc.slave.out_len = 8;
-  rc.slave.cfg = {0x17, 0x27};  // 8 in, 8 out
+  rc.substitute.assign(8, 0x5A);  // the clear buffer C is out_len bytes too
+  rc.slave.cfg = {0x17, 0x27};    // 8 in, 8 out
   Bench b(GetParam(), 12'000'000, rc);
   b.user.set_inputs({1, 2, 3, 4, 5, 6, 7, 8});
   ASSERT_TRUE(b.master.startup());

@@ -487,7 +487,7 @@ TEST(ScenarioParse, OptionsWithoutEffectOnTheProfileAreRefused) {
   for (const auto& [text, line] : refused) EXPECT_EQ(parse_error(text), line) << text;
   // The same options where the profile acts on them.
   for (const std::string ok :
-       {"profile dpc31\nirq-controller external\n", "profile dpc31\nuser substitute=01,02\n",
+       {"profile dpc31\nirq-controller external\n", "profile dpc31\nuser substitute=01,02,03,04\n",
         "profile dpc31\nuser dx_out_port=1\n", "profile dpc31\nuser user_wd=1 user_wd_value=5\n",
         "profile spc3\nuser user_wd_value=5\n", "profile spc3\nslave wd_base=1ms\n",
         "profile vpc3plus\nslave wd_base=1ms user_prm=80,00,00\n"}) {
@@ -563,6 +563,14 @@ TEST(ScenarioParse, WhatWouldBeSilentlyOverriddenIsRefused) {
        "none"},
       {"user inputs=A1,A2,A3,A4\nstartup\ninputs 01,02\n",
        "t.scn:3: inputs: 2 bytes for a slave with in=4: inputs are exactly in= bytes, or none"},
+      // The substitute values likewise: padded with the C buffer's stale bytes (old outputs after
+      // a cleared fetch), or cut (s32 audit finding 5).
+      {"profile dpc31\nuser substitute=5A,5B\nstartup\n",
+       "t.scn:2: user substitute=: 2 bytes for a slave with out=4: substitute values are exactly "
+       "out= bytes, or none"},
+      {"profile dpc31\nuser substitute=5A,5B,5C,5D\nslave out=6\nstartup\n",
+       "t.scn:2: user substitute=: 4 bytes for a slave with out=6: substitute values are exactly "
+       "out= bytes, or none"},
       {"profile spc3\nexpect pb3 0\n", "t.scn:2: 'expect pb3' needs profile dpc31"},
       {"profile vpc3plus\nstartup\nexpect pb3 1\n", "t.scn:3: 'expect pb3' needs profile dpc31"},
       {"master slot=36\nstartup\n", "t.scn:1: slot 36 out of range (37..16383)"},

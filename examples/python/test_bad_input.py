@@ -74,6 +74,15 @@ def test_send_and_pulse_need_a_sender_and_an_end_before_the_last_cycle():
     (lambda: _master().set_slave_address(200), r"new address 200 out of range \(0..126\)"),
     (lambda: _master().run_responder(inputs=b"\x01\x02"),
      r"inputs: 2 bytes for a slave with in=4: inputs are exactly in= bytes, or none$"),
+    # The dpc31 clear buffer C likewise: padded with its stale bytes, or cut (s32 finding 5).
+    (lambda: dpc31.Master(dpc31.Chip("dpc31"), slave=dpc31.SlaveConfig(address=5)).run_responder(
+        substitute=b"\x5a\x5b"),
+     r"substitute: 2 bytes for a slave with out=4: substitute values are exactly out= bytes, or "
+     r"none$"),
+    (lambda: dpc31.Master(dpc31.Chip("dpc31"), slave=dpc31.SlaveConfig(address=5)).run_responder(
+        substitute=bytes(6)),
+     r"substitute: 6 bytes for a slave with out=4: substitute values are exactly out= bytes, or "
+     r"none$"),
     # A `cpu` line's clock= range, under the Python argument's name.
     (lambda: dpc31.Cpu51Board(dpc31.Chip("spc3"), hz=1), r"hz 1 out of range "
      r"\(1000000..40000000\)"),
@@ -712,7 +721,7 @@ def test_settings_a_scenario_refuses_are_refused_in_its_words():
             m.run_responder(substitute=b"\1\2\3\4")
         assert m.responder is None and chip.cycle == 0
     dpc31.Master(dpc31.Chip("dpc31"), slave=dpc31.SlaveConfig(address=5)).run_responder(
-        dx_out_port=True, substitute=b"\1")
+        dx_out_port=True, substitute=b"\1\2\3\4")
 
     # `startup tries=` / `restart tries=`: 1..100000 (2**31 in that range's words too).
     m = _master()

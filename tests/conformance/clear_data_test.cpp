@@ -157,6 +157,92 @@ TEST(Dpc31ClearData, SyncAndClearDataInOneCommand) {
   EXPECT_EQ(dx_outs, 1u);
 }
 
+// A dpc31 slave in Sync mode whose D holds the outputs 21..24, not yet handed to the user.
+struct SyncHeldBench {
+  Bench b{Profile::dpc31, 1'500'000, with_substitute()};
+  std::size_t n = 0;  // the user's fetches before 21..24
+
+  SyncHeldBench() {
+    EXPECT_TRUE(b.master.startup());
+    b.master.global_control(kGC_Sync);
+    b.master.idle(kIsrTime);
+    n = b.user.outputs.size();
+    b.master.data_exchange({0x21, 0x22, 0x23, 0x24});
+    EXPECT_EQ(b.user.outputs.size(), n);
+  }
+  std::uint8_t dout_sm() { return b.chip.read(conformance::addr(b.chip, RegId::Dout_Buffer_SM)); }
+  void mask_all(bool masked) {
+    const std::uint32_t mask = conformance::addr(b.chip, RegId::Int_Mask_Reg);
+    b.chip.write(mask, masked ? 0xFF : 0x00);
+    b.chip.write(mask + 1, masked ? 0xFF : 0x00);
+  }
+};
+
+// Outputs a Sync holds in D, then a clear (Clear_Data or a fail-safe exchange), then the next Sync
+// or Unsync. Clear_Data "is not deleted and it is not changed" for D, but the user is to get the
+// substitute values ("the C and U buffers are exchanged ... 'U_Buffer_Cleared'", seed 003 p.32),
+// and the Sync/Unsync hand-over is of "the previously transferred output data" — transferred
+// before the clear, so older than it: modelled, they never reach the user (docs/decisions.md,
+// "stale outputs must not come back"; the SPC3 and VPC3+ clear D itself). The release raises
+// DX_Out and hands nothing over: Next_Dout_Buffer_Cmd = U_Buffer_Cleared | the same U.
+TEST(Dpc31ClearData, OutputsHeldBySyncBeforeAClearNeverReachTheUser) {
+  for (const bool failsafe : {false, true}) {
+    for (const std::uint8_t release : {kGC_Sync, kGC_Unsync}) {
+      SCOPED_TRACE(failsafe ? "fail-safe exchange" : "Clear_Data");
+      SCOPED_TRACE(release == kGC_Sync ? "Sync" : "Unsync");
+      SyncHeldBench sb;
+      Bench& b = sb.b;
+      if (failsafe) {
+        b.master.data_exchange({});
+      } else {
+        b.master.global_control(kGC_Clear_Data);
+      }
+      b.master.idle(kIsrTime);
+      ASSERT_EQ(b.user.outputs.size(), sb.n + 1);
+      EXPECT_EQ(b.user.outputs.back().data, kSubstitute);
+      EXPECT_TRUE(b.user.outputs.back().cleared);
+      const std::size_t irqs = b.user.interrupts.size();
+      b.master.global_control(release);
+      b.master.idle(kIsrTime);
+      ASSERT_GT(b.user.interrupts.size(), irqs);
+      EXPECT_NE(b.user.interrupts[irqs].second & irq::DX_Out, 0);  // the Sync is still signalled
+      EXPECT_EQ(b.user.outputs.size(), sb.n + 1);                  // but 21..24 stay unseen
+      const unsigned u = (sb.dout_sm() >> 4) & 3u;
+      EXPECT_EQ(b.chip.read(conformance::addr(b.chip, RegId::Next_Dout_Buffer_Cmd)),
+                kU_Buffer_Cleared | u);
+      // Outputs after the clear are handed over as ever: the master has left Clear.
+      b.master.data_exchange({0x31, 0x32, 0x33, 0x34});
+      if (release == kGC_Sync) b.master.global_control(kGC_Sync);
+      b.master.idle(kIsrTime);
+      ASSERT_EQ(b.user.outputs.size(), sb.n + 2);
+      EXPECT_EQ(b.user.outputs.back().data, (Bytes{0x31, 0x32, 0x33, 0x34}));
+      EXPECT_FALSE(b.user.outputs.back().cleared);
+    }
+  }
+}
+
+// The same with a slow user: every interrupt masked over the clear and the next Sync. The Sync
+// hands no buffer over, so Dout_Buffer_SM is the ring as before with N_Cl (bit 7) added when the
+// user looks, and its one fetch gets the substitute values flagged U_Buffer_Cleared: the user
+// learns the master went to Clear.
+TEST(Dpc31ClearData, AUserWithInterruptsMaskedOverClearAndSyncStillGetsTheClear) {
+  SyncHeldBench sb;
+  Bench& b = sb.b;
+  const std::uint8_t ring = sb.dout_sm();
+  ASSERT_EQ(ring & kN_Cl, 0);
+  sb.mask_all(true);
+  b.master.global_control(kGC_Clear_Data);
+  b.master.global_control(kGC_Sync);
+  b.master.idle(kIsrTime);
+  ASSERT_EQ(b.user.outputs.size(), sb.n);  // the user has not looked yet
+  EXPECT_EQ(sb.dout_sm(), ring | kN_Cl);
+  sb.mask_all(false);
+  b.master.idle(kIsrTime);
+  ASSERT_EQ(b.user.outputs.size(), sb.n + 1);
+  EXPECT_EQ(b.user.outputs.back().data, kSubstitute);
+  EXPECT_TRUE(b.user.outputs.back().cleared);
+}
+
 // Once per clear, in every order: repeated Clear_Data and fail-safe exchanges while the master
 // stays in Clear hand the substitute values over once; real outputs end the clear; the next
 // Clear hands them over again (the firmware refilled the new C after the first fetch).

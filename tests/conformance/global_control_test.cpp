@@ -243,6 +243,30 @@ TEST(GlobalControlDpc31, NewGcIntMode0_InterruptOnlyOnAChangedCommandByte) {
   }
 }
 
+// Which command mode 0 compares with: the Control_Command "for the last received Global_Control
+// message" is what the chip stores in the RAM cell GC_Command, and the comparison is with that
+// cell, which the user may write (modelled, docs/decisions.md: the FFh preset "not a valid value"
+// (p.33) makes the first Global_Control a change only so). Freeze (FFh -> 08h: interrupt); the
+// user writes 00h, Freeze (08h vs 00h: interrupt); Unfreeze (04h vs 08h: interrupt); the user
+// writes 08h, Freeze (08h vs 08h: none, though the last received command was 04h).
+TEST(GlobalControlDpc31, NewGcIntMode0_ComparesWithTheGcCommandCellTheUserMayWrite) {
+  Bench b(Profile::dpc31, 12'000'000);
+  ASSERT_TRUE(b.master.startup());
+  const std::pair<int, std::uint8_t> steps[] = {
+      {-1, kGC_Freeze}, {0x00, kGC_Freeze}, {-1, kGC_Unfreeze}, {0x08, kGC_Freeze}};
+  std::vector<std::uint64_t> acted;
+  for (const auto& [cell, cmd] : steps) {
+    if (cell >= 0) b.chip.write(wr(b.chip, RegId::R_GC_Command), static_cast<std::uint8_t>(cell));
+    acted.push_back(b.acted(b.master.global_control(cmd)));
+    b.master.idle(2000);
+  }
+  EXPECT_EQ(gc_interrupts(b.user), 3u);
+  for (const std::size_t k : {0u, 1u, 2u}) {
+    EXPECT_TRUE(isr_saw(b.user, acted[k], irq::New_GC_Command)) << k;
+  }
+  EXPECT_EQ(gc_command(b.chip), kGC_Freeze);
+}
+
 // Seed 003 p.33: "With 'New_GC_Int mode=1', the interrupt is generated after each receipt of a
 // GC message." Param_Reg bit 0 = 1: three identical Freezes, three New_GC_Command, each at the
 // cycle its telegram is acted on.

@@ -53,6 +53,25 @@ TEST(Vpc3GcIntMode, ZeroInterruptsOnlyOnAChangedCommand) {
   EXPECT_EQ(count(b.user, k, irq::New_GC_Command), 2u);  // 08h (new), 04h (changed)
 }
 
+// The comparison is with the R_GC_Command cell, which the user may write (modelled,
+// docs/decisions.md): VPC3+C p.50 "The R_GC_Command RAM cell is not initialized by the VPC3+C.
+// Therefore the cell has to be preset with 00H during power-up" matters only so. A driver that
+// preset 08h misses the first Freeze (08h); once it writes 00h, the same Freeze interrupts.
+TEST(Vpc3GcIntMode, ZeroComparesWithTheGcCommandCellTheUserMayWrite) {
+  Bench b(Profile::vpc3plus);
+  set_mode_reg2(b.chip, 0x00);
+  b.chip.write(addr(b.chip, RegId::R_GC_Command), 0x08);
+  ASSERT_TRUE(b.master.startup());
+  const std::size_t k = b.user.interrupts.size();
+  b.master.global_control(0x08);
+  b.master.idle(kIsrTime);
+  EXPECT_EQ(count(b.user, k, irq::New_GC_Command), 0u);
+  b.chip.write(addr(b.chip, RegId::R_GC_Command), 0x00);
+  b.master.global_control(0x08);
+  b.master.idle(kIsrTime);
+  EXPECT_EQ(count(b.user, k, irq::New_GC_Command), 1u);
+}
+
 ResponderConfig inputs_only() {
   ResponderConfig rc;
   rc.slave.cfg = {0x13};  // 4 input bytes, no outputs
