@@ -114,8 +114,9 @@ TEST(ScenarioParse, VariantHeaderChoosesTheVpc3plusAsicType) {
   EXPECT_EQ(parse_error("profile spc3\nvariant s\n"),
             "t.scn:2: 'variant' needs 'profile vpc3plus' before it: only the VPC3+ has variants");
   EXPECT_EQ(parse_error("profile vpc3plus\nvariant d\n"), "t.scn:2: unknown variant 'd' (b, c, s)");
+  // A profile after the variant is a second `profile` line, refused as such.
   EXPECT_EQ(parse_error("profile vpc3plus\nvariant s\nprofile dpc31\n"),
-            "t.scn:3: a 'variant' was given: only profile vpc3plus has variants");
+            "t.scn:3: 'profile' given twice: first at line 1");
 }
 
 // The header line `irq-controller c31` puts the user's bus on the DPC31's C31 interrupt
@@ -146,9 +147,10 @@ TEST(ScenarioParse, IrqControllerHeaderChoosesTheC31s) {
 
 // `irq-controller` comes after `profile dpc31` only (docs/scenario-format.md, Header), with the
 // same words and line rule as `variant` after `profile vpc3plus`: refused at its own line when
-// no `profile dpc31` came before it (the default profile is no line), at the later `profile`
-// line that contradicts it (audit s32 siblings, finding 6: accepted before `profile dpc31`, and
-// refused on line 1 or 2 with two texts before another profile).
+// no `profile dpc31` came before it (the default profile is no line); a `profile` after it is a
+// second `profile` line, refused as that (audit s32 siblings, finding 6: accepted before
+// `profile dpc31`; review s32 rev1, finding 4: the second line was named as the irq-controller's
+// fault).
 TEST(ScenarioParse, IrqControllerComesAfterProfileDpc31AsVariantAfterItsProfile) {
   const std::string before =
       ":1: 'irq-controller' needs 'profile dpc31' before it: only the DPC31 has a C31 core";
@@ -163,9 +165,11 @@ TEST(ScenarioParse, IrqControllerComesAfterProfileDpc31AsVariantAfterItsProfile)
             "t.scn:2: 'irq-controller' needs 'profile dpc31' before it: only the DPC31 has a C31 "
             "core");
   for (const std::string later : {"irq-controller c31", "irq-controller external"}) {
-    EXPECT_EQ(parse_error("profile dpc31\n" + later + "\nprofile spc3\nstartup\n"),
-              "t.scn:3: an 'irq-controller' was given: only profile dpc31 has a C31 core")
-        << later;
+    for (const std::string again : {"profile spc3", "profile dpc31"}) {
+      EXPECT_EQ(parse_error("profile dpc31\n" + later + "\n" + again + "\nstartup\n"),
+                "t.scn:3: 'profile' given twice: first at line 1")
+          << later << " / " << again;
+    }
   }
   // The variant's words, for comparison: the same shape.
   EXPECT_EQ(parse_error("variant s\nprofile vpc3plus\nstartup\n"),
