@@ -540,7 +540,7 @@ std::uint8_t ChipCore::peek(std::uint32_t addr) const {
 }
 
 std::optional<ChipCore::PokedLatch> ChipCore::poked_latch(std::uint32_t addr,
-                                                         std::uint8_t value) const {
+                                                          std::uint8_t value) const {
   bool violation = false;
   const std::uint32_t a = regs.decode(addr, violation);
   const std::uint16_t i = regs.read_index(a);

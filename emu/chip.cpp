@@ -96,8 +96,9 @@ std::uint16_t Chip::peek_reg(RegId id) const { return core_->reg_value(id); }
 
 std::string Chip::poke_reg_problem(RegId id, std::uint16_t value) const {
   const std::string why = run_state_problem(*core_, id, value);
-  return why.empty() ? why
-                     : fmt::format("poke_reg {} {:#04x}: {}", core_->regs.reg(id)->name, value, why);
+  return why.empty()
+             ? why
+             : fmt::format("poke_reg {} {:#04x}: {}", core_->regs.reg(id)->name, value, why);
 }
 
 bool Chip::poke_reg(RegId id, std::uint16_t value) {
