@@ -291,19 +291,13 @@ TEST(Dpv1Master, ADataResponseWithoutDataIsMalformed) {
 // so the Read is refused (RR); then the list itself at segment 02h (010h), where the hidden 00h
 // bytes hold no SAP 51 (RS).
 TEST(Dpv1Master, SapBuffersOverTheRegistersAreLogged) {
-  ResponderConfig rc;
-  rc.slave.user_prm = {0xC0, 0x00, 0x00};  // DPV1_Enable: the SAP list on; no records
-  Chip chip{ChipOptions{Profile::vpc3plus, BusMode::intel, 0}};
-  Responder user(rc);
-  DpMaster master(chip, MasterConfig{2, 12'000'000, 100, 33}, rc.slave);
-  Dpv1Master dpv1(chip, master);
-  DirectBus bus(chip);
-  user.init(bus);
-  master.set_firmware([&user](BusPort& b) { user.isr(b); });
-  ASSERT_TRUE(master.startup());
+  Rig r;
+  r.start();
+  Chip& chip = r.chip;
+  Dpv1Master& dpv1 = r.dpv1;
   std::vector<std::string> log;
-  chip.set_log_sink([&log](const LogRecord& r) {
-    if (r.text.find("over the registers") != std::string::npos) log.push_back(r.text);
+  chip.set_log_sink([&log](const LogRecord& rec) {
+    if (rec.text.find("over the registers") != std::string::npos) log.push_back(rec.text);
   });
   chip.write_block(0x600,
                    std::array<std::uint8_t, 8>{51, 0x7F, 0x7F, 0x00, 0x01, 0x00, 0xD0, 0xFF});
