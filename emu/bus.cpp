@@ -539,7 +539,29 @@ std::uint8_t ChipCore::peek(std::uint32_t addr) const {
       v >> (8 * r.placement(regs.bus())[a - static_cast<std::uint32_t>(r.read_addr)]));
 }
 
+std::optional<ChipCore::PokedLatch> ChipCore::poked_latch(std::uint32_t addr,
+                                                          std::uint8_t value) const {
+  bool violation = false;
+  const std::uint32_t a = regs.decode(addr, violation);
+  const std::uint16_t i = regs.read_index(a);
+  if (i == kNoReg || prof().regs[i].kind != Kind::latch) return std::nullopt;
+  const RegDesc& r = prof().regs[i];
+  const unsigned shift = 8u * r.placement(regs.bus())[a - static_cast<std::uint32_t>(r.read_addr)];
+  const std::uint16_t s = regs.latch(r.id);
+  return PokedLatch{r.id, static_cast<std::uint16_t>((s & ~(0xFFu << shift)) | (value << shift))};
+}
+
+void ChipCore::poke_latch(RegId id, std::uint16_t value) {
+  regs.latch(id) = static_cast<std::uint16_t>(value & regs.reg(id)->mask());
+  if (id == RegId::Mode_Reg2) regs.follow_mode2(regs.latch(id));
+  irq.update_line();
+}
+
 bool ChipCore::poke(std::uint32_t addr, std::uint8_t value) {
+  if (const auto l = poked_latch(addr, value)) {
+    poke_latch(l->id, l->value);
+    return true;
+  }
   bool violation = false;
   const std::uint32_t a = regs.decode(addr, violation);
   const std::uint16_t i = regs.read_index(a);
@@ -549,16 +571,8 @@ bool ChipCore::poke(std::uint32_t addr, std::uint8_t value) {
     regs.set_mem(a, value);
     return true;
   }
-  const RegDesc& r = prof().regs[i];
-  if (r.kind == Kind::cell) {
-    regs.set_mem(a, value);
-    return true;
-  }
-  if (r.kind != Kind::latch) return false;
-  const unsigned shift = 8u * r.placement(regs.bus())[a - static_cast<std::uint32_t>(r.read_addr)];
-  std::uint16_t& s = regs.latch(r.id);
-  s = static_cast<std::uint16_t>((s & ~(0xFFu << shift)) | (value << shift));
-  irq.update_line();
+  if (prof().regs[i].kind != Kind::cell) return false;
+  regs.set_mem(a, value);
   return true;
 }
 

@@ -52,23 +52,53 @@ std::size_t Chip::quiet_ram_run(std::uint32_t addr, std::size_t len, bool write)
   return core_->quiet_ram_run(addr, len, write);
 }
 std::uint8_t Chip::peek(std::uint32_t addr) const { return core_->peek(addr); }
-bool Chip::poke(std::uint32_t addr, std::uint8_t value) { return core_->poke(addr, value); }
-std::uint16_t Chip::peek_reg(RegId id) const { return core_->reg_value(id); }
+namespace {
 
-std::string Chip::poke_reg_problem(RegId id, std::uint16_t value) const {
+// Why Mode_Reg1 may not take `value` ("" when it may): Start_SPC3 and Go_Offline are the chip's
+// run state, EOI and User_Leave_Master pulses. The comparison is with what the chip has (the DP
+// part's started state, the last Go_Offline command, pulses 0, reserved bits as the read side
+// shows them), not with the latch, so that a latch put wrong can always be put right.
+std::string run_state_problem(const ChipCore& c, RegId id, std::uint16_t value) {
   if (id != RegId::Mode_Reg1) return {};
-  const RegDesc* r = core_->regs.reg(id);
   namespace m1 = fields::Mode_Reg1;
   const auto run_state =
       static_cast<std::uint16_t>(m1::Start_SPC3 | m1::Go_Offline | m1::EOI | m1::User_Leave_Master);
-  const std::uint16_t now = core_->regs.latch(id);
-  const auto changed = static_cast<std::uint16_t>((now ^ value) & run_state & r->mask());
+  const auto has = static_cast<std::uint16_t>(
+      ((c.dp.started() ? m1::Start_SPC3 : 0u) | (c.regs.latch(id) & m1::Go_Offline)) &
+      ~c.regs.reg(id)->rsvd);
+  const auto changed = static_cast<std::uint16_t>((has ^ value) & run_state);
   if (changed == 0) return {};
   return fmt::format(
-      "poke_reg Mode_Reg1 {:#04x}: bits {:#04x} would change; Start_SPC3 and Go_Offline are the "
-      "chip's run state ({}), EOI and User_Leave_Master pulses that never stay set: only a "
-      "command changes them (Mode_Reg1_S / Mode_Reg1_R over the bus)",
-      value, changed, core_->dp.started() ? "Passive_Idle" : "Offline");
+      "bits {:#04x} would change; Start_SPC3 and Go_Offline are the chip's run state ({}), EOI "
+      "and User_Leave_Master pulses that never stay set: only a command changes them "
+      "(Mode_Reg1_S / Mode_Reg1_R over the bus)",
+      changed, c.dp.started() ? "Passive_Idle" : "Offline");
+}
+
+}  // namespace
+
+std::string Chip::poke_problem(std::uint32_t addr, std::uint8_t value) const {
+  const auto l = core_->poked_latch(addr, value);
+  if (!l) return {};
+  const std::string why = run_state_problem(*core_, l->id, l->value);
+  return why.empty() ? why
+                     : fmt::format("poke {:#06x} {:#04x}: {} {:#04x}: {}", addr, value,
+                                   core_->regs.reg(l->id)->name, l->value, why);
+}
+
+bool Chip::poke(std::uint32_t addr, std::uint8_t value) {
+  if (std::string why = poke_problem(addr, value); !why.empty())
+    throw std::invalid_argument(std::move(why));
+  return core_->poke(addr, value);
+}
+
+std::uint16_t Chip::peek_reg(RegId id) const { return core_->reg_value(id); }
+
+std::string Chip::poke_reg_problem(RegId id, std::uint16_t value) const {
+  const std::string why = run_state_problem(*core_, id, value);
+  return why.empty()
+             ? why
+             : fmt::format("poke_reg {} {:#04x}: {}", core_->regs.reg(id)->name, value, why);
 }
 
 bool Chip::poke_reg(RegId id, std::uint16_t value) {
@@ -82,9 +112,7 @@ bool Chip::poke_reg(RegId id, std::uint16_t value) {
   if (r->kind != Kind::latch) return false;
   if (std::string why = poke_reg_problem(id, value); !why.empty())
     throw std::invalid_argument(std::move(why));
-  c.regs.latch(id) = static_cast<std::uint16_t>(value & r->mask());
-  if (id == RegId::Mode_Reg2) c.regs.follow_mode2(c.regs.latch(id));
-  c.irq.update_line();
+  c.poke_latch(id, value);
   return true;
 }
 

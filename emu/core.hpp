@@ -84,6 +84,16 @@ struct ChipCore {
   void note_beyond_bus(std::uint32_t addr, std::string_view what);
   [[nodiscard]] std::uint8_t peek(std::uint32_t addr) const;
   bool poke(std::uint32_t addr, std::uint8_t value);
+  // The latch a poke of `value` at addr stores into and its whole value after it (Chip::poke
+  // checks it against the run state first); nullopt where the poke reaches no latch.
+  struct PokedLatch {
+    RegId id;
+    std::uint16_t value;
+  };
+  [[nodiscard]] std::optional<PokedLatch> poked_latch(std::uint32_t addr, std::uint8_t value) const;
+  // The one store of a poked latch (byte poke and poke_reg): masked, VPC3+ Mode_Reg2's RAM
+  // decode follows, X/INT follows.
+  void poke_latch(RegId id, std::uint16_t value);
   [[nodiscard]] std::uint16_t reg_value(RegId id) const;  // storage or derived (no side effect)
   // Block transfers (docs/timing.md, "Block transfers"): byte i at addr + i, each access as
   // bus_read / bus_write makes it, in order; runs of plain RAM that no event interrupts move at

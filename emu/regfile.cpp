@@ -90,19 +90,21 @@ std::uint32_t RegisterFile::buffer_addr(RegId ptr_cell) const {
 }
 
 void RegisterFile::note_buffer(RegId ptr_cell, std::uint32_t base, std::size_t len) {
-  if (len == 0 || base >= registers_end_) return;
-  const std::string_view name = reg(ptr_cell)->name;
+  if (len != 0 && over_registers(base)) note_buffer(reg(ptr_cell)->name, cell(ptr_cell), base);
+}
+
+void RegisterFile::note_buffer(std::string_view name, std::uint8_t value, std::uint32_t base) {
   switch (over_registers_.note(base)) {
     case FoldedLog::Line::first:
       sig_->log(LogLevel::warn,
                 "{} = {:02X}h puts its buffer at {:#05x}, over the registers (below {:#05x}): the "
                 "chip keeps its bytes in RAM the CPU does not see there (modelled); further such "
                 "uses are counted",
-                name, cell(ptr_cell), base, registers_end_);
+                name, value, base, registers_end_);
       break;
     case FoldedLog::Line::address:
       sig_->log(LogLevel::warn, "{} = {:02X}h puts its buffer at {:#05x}, over the registers", name,
-                cell(ptr_cell), base);
+                value, base);
       break;
     case FoldedLog::Line::count:
       sig_->log(LogLevel::warn,

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <functional>
 #include <span>
+#include <string_view>
 #include <vector>
 
 #include "dpc31/chip.hpp"
@@ -66,6 +67,12 @@ class RegisterFile {
   // below the first RAM cell) keeps its bytes in the RAM behind them, which the CPU does not see
   // there (modelled): each use is logged, through the warnings' limiter.
   void clear_buffer(RegId ptr_cell, std::size_t len);
+  // The same for a buffer the ASIC reaches otherwise (the DPC31's queues, the VPC3+'s SAP list
+  // and its Ind / Resp buffers): `pointer` names what holds `value`, called only when `base` is
+  // over the registers (over_registers), so a caller builds that name only then.
+  [[nodiscard]] bool over_registers(std::uint32_t base) const { return base < registers_end_; }
+  void note_buffer(std::string_view pointer, std::uint8_t value, std::uint32_t base);
+  void note_buffer(RegId ptr_cell, std::uint32_t base, std::size_t len);
   void write_buffer(RegId ptr_cell, std::span<const std::uint8_t> bytes);
   // `len` bytes into `out` (its old contents replaced, its capacity kept).
   void read_buffer(RegId ptr_cell, std::size_t len, std::vector<std::uint8_t>& out);
@@ -103,7 +110,6 @@ class RegisterFile {
   const Signals* sig_;
   std::uint32_t registers_end_ = 0;  // one past the non-RAM regions from address 0 (registers)
   FoldedLog over_registers_;         // buffers used there, by address: a log, not chip state
-  void note_buffer(RegId ptr_cell, std::uint32_t base, std::size_t len);
   State s_;
   std::vector<std::uint16_t> rd_map_;
   std::vector<std::uint16_t> wr_map_;

@@ -46,6 +46,7 @@ void RequestInterface::instq_written() {
              q.wr, q.rd, q.len);
     return;
   }
+  if (q.rd != q.wr) regs_.note_buffer(RegId::InstQ_Base, q.base, q.len * request::kEntryBytes);
   while (q.rd != q.wr) {
     const std::uint8_t code = regs_.ram_read(q.entry(q.rd));
     const std::uint8_t param = regs_.ram_read(q.entry(q.rd) + 1);
@@ -148,6 +149,7 @@ void RequestInterface::indicate(std::uint8_t code, std::uint8_t event) {
              event);
     return;
   }
+  regs_.note_buffer(RegId::IndQ_Base, q.base, q.len * request::kEntryBytes);
   regs_.ram_write(q.entry(q.wr), code);
   regs_.ram_write(q.entry(q.wr) + 1, event);
   regs_.set_cell(RegId::IndQ_Wr, q.next(q.wr));

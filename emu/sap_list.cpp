@@ -73,12 +73,25 @@ std::uint32_t SapList::find(std::uint8_t sap) {
   const std::uint8_t ptr = regs_.cell(RegId::R_FDL_SAP_List_Ptr);
   if (ptr == 0) return 0;  // no list (modelled, as R_SSA_Buf_Ptr = 00h switches SAP55 off)
   std::uint32_t a = segment(ptr);
+  regs_.note_buffer(RegId::R_FDL_SAP_List_Ptr, a, e::kBytes);
   for (std::uint32_t i = 0; i < kMaxEntries; ++i, a += e::kBytes) {
     const std::uint8_t b0 = regs_.ram_read(a + e::Sap);
     if (b0 == e::kEndOfList) return 0;
     if ((b0 & e::SAP_Number) == sap) return a;
   }
   return 0;
+}
+
+std::uint32_t SapList::buffer(std::uint32_t entry, std::uint32_t field, std::uint8_t ptr) {
+  const std::uint32_t buf = segment(ptr);
+  if (regs_.over_registers(buf)) {
+    const char* name = field == e::Ind_Buf_Ptr0   ? "Ind_Buf_Ptr[0]"
+                       : field == e::Ind_Buf_Ptr1 ? "Ind_Buf_Ptr[1]"
+                                                  : "Resp_Buf_Ptr";
+    regs_.note_buffer(
+        fmt::format("SAP {}'s {}", regs_.ram_read(entry + e::Sap) & e::SAP_Number, name), ptr, buf);
+  }
+  return buf;
 }
 
 SapListAnswer SapList::request(const fdl::Frame& req) {
@@ -128,9 +141,10 @@ std::uint32_t SapList::free_buffer(std::uint32_t entry) {
   const std::uint8_t ind0 = regs_.ram_read(entry + e::Ind_Buf_Ptr0);
   const std::uint8_t ind1 = regs_.ram_read(entry + e::Ind_Buf_Ptr1);
   // Ind_Buf_Ptr[1] = 00h or the same buffer (the Profichip driver's MSAC_C1 SAPs): one buffer.
-  for (const std::uint8_t p : {ind0, ind1 != ind0 ? ind1 : std::uint8_t{0}}) {
-    if (p == 0) continue;
-    const std::uint32_t buf = segment(p);
+  for (const std::uint32_t field : {e::Ind_Buf_Ptr0, e::Ind_Buf_Ptr1}) {
+    const std::uint8_t p = field == e::Ind_Buf_Ptr0 ? ind0 : ind1;
+    if (p == 0 || (field == e::Ind_Buf_Ptr1 && ind1 == ind0)) continue;
+    const std::uint32_t buf = buffer(entry, field, p);
     if ((regs_.ram_read(buf + h::Control) & (h::USER | h::IND | h::RESP | h::INUSE)) == 0)
       return buf;
   }
@@ -162,7 +176,7 @@ SapListAnswer SapList::answer(std::uint32_t entry) {
   using Kind = SapListAnswer::Kind;
   const std::uint8_t rp = regs_.ram_read(entry + e::Resp_Buf_Ptr);
   if (rp == 0) return {Kind::sc, 0, {}};
-  const std::uint32_t buf = segment(rp);
+  const std::uint32_t buf = buffer(entry, e::Resp_Buf_Ptr, rp);
   if ((regs_.ram_read(buf + h::Control) & (h::USER | h::RESP)) != (h::USER | h::RESP))
     return {Kind::sc, 0, {}};
   const std::size_t len = std::min<std::size_t>(

@@ -66,6 +66,9 @@ class SapList {
   std::uint32_t segment(std::uint8_t ptr) const {
     return std::uint32_t{ptr} << regs_.segment_shift();
   }
+  // The buffer at segment `ptr`, the entry's pointer at `field` (Ind_Buf_Ptr0/1, Resp_Buf_Ptr);
+  // one over the registers is logged (RegisterFile::note_buffer).
+  std::uint32_t buffer(std::uint32_t entry, std::uint32_t field, std::uint8_t ptr);
   // The entry's first indication buffer with none of USER, IND, RESP, INUSE; 0: none.
   [[nodiscard]] std::uint32_t free_buffer(std::uint32_t entry);
   bool store(std::uint32_t buf, const fdl::Frame& req);

@@ -72,11 +72,13 @@ std::string user_wd_value_needs_user_wd(std::string_view option) {
       option);
 }
 
-ResponderLayout responder_layout(const ProfileDesc& p, const ResponderConfig& cfg) {
+namespace {
+
+// The layout in one RAM mode (the VPC3+'s 4kB_Mode: `large`).
+ResponderLayout layout_in(const ProfileDesc& p, const ResponderConfig& cfg, bool large) {
   const SlaveConfig& s = cfg.slave;
   ResponderLayout l;
-  // VPC3+: large buffers need the 4 KB mode (16-byte segments), the margin is the DPV1 part's.
-  l.large = p.ram_size_large != 0 && 3u * (s.in_len + s.out_len) + 1024 > p.ram_size - p.user_base;
+  l.large = large;
   l.seg_shift = l.large ? p.segment_shift_large : p.segment_shift;
   l.ram_end = p.ram_begin + (l.large ? p.ram_size_large : p.ram_size);
   const std::uint32_t seg = 1u << l.seg_shift;
@@ -106,17 +108,35 @@ ResponderLayout responder_layout(const ProfileDesc& p, const ResponderConfig& cf
   return l;
 }
 
+// A pointer cell holds segments 0..255: past them is no buffer either (never below the RAM's
+// end on our profiles, but the check is the cell's).
+std::uint32_t layout_limit(const ResponderLayout& l) {
+  return std::min(l.ram_end, 256u << l.seg_shift);
+}
+
+}  // namespace
+
+// The smaller RAM mode while the layout fits it: 4kB_Mode (VPC3+) only for one that does not.
+ResponderLayout responder_layout(const ProfileDesc& p, const ResponderConfig& cfg) {
+  const ResponderLayout small = layout_in(p, cfg, false);
+  if (small.end <= layout_limit(small) || p.ram_size_large == 0) return small;
+  return layout_in(p, cfg, true);
+}
+
 std::string responder_layout_problem(const ProfileDesc& p, const ResponderConfig& cfg) {
   const ResponderLayout l = responder_layout(p, cfg);
-  // A pointer cell holds segments 0..255: past them is no buffer either (never below the RAM's
-  // end on our profiles, but the check is the cell's).
-  const std::uint32_t limit = std::min(l.ram_end, 256u << l.seg_shift);
+  const std::uint32_t limit = layout_limit(l);
   if (l.end <= limit) return {};
+  // Every length the layout takes: the aux buffers are as long as the longer of cfg and
+  // user_prm (+ 8), the DPV1 part is there with records.
+  const SlaveConfig& s = cfg.slave;
+  const auto bytes = [](std::size_t n) { return fmt::format("{} byte{}", n, n == 1 ? "" : "s"); };
   return fmt::format(
-      "in={} out={}: the built-in user side's buffers would end at {:#05x}, past the {} bytes of "
-      "RAM of profile {}{} (its user area {:#05x}..{:#05x})",
-      cfg.slave.in_len, cfg.slave.out_len, l.end - 1, l.ram_end - p.ram_begin, p.name,
-      l.large ? " in 4kB_Mode" : "", p.user_base, limit - 1);
+      "in={} out={} cfg of {} user_prm of {}{}: the built-in user side's buffers would end at "
+      "{:#05x}, past the {} bytes of RAM of profile {}{} (its user area {:#05x}..{:#05x})",
+      s.in_len, s.out_len, bytes(s.cfg.size()), bytes(s.user_prm.size()),
+      cfg.dpv1.records.empty() ? "" : " and the DPV1 records' buffers", l.end - 1,
+      l.ram_end - p.ram_begin, p.name, l.large ? " in 4kB_Mode" : "", p.user_base, limit - 1);
 }
 
 const RegDesc& Responder::reg(const Chip& c, RegId id) const {

@@ -18,36 +18,30 @@ constexpr std::uint8_t kFcResponse = 0x08;  // DL, as the Profichip driver write
 constexpr std::uint8_t kMaxLen[] = {Dpv1User::kRecordMax, Dpv1User::kAlarmMax, Dpv1User::kRmMax,
                                     Dpv1User::kRecordMax};
 constexpr unsigned kSlots = std::size(kMaxLen);
-// Segments of `seg` bytes the SAP list (its entries and the end mark) and slot `s`'s buffer take.
-constexpr std::uint32_t list_segments(std::uint32_t seg) {
-  return (kSlots * en::kBytes + 1 + seg - 1) / seg;
-}
-constexpr std::uint32_t slot_segments(unsigned s, std::uint32_t seg) {
-  return (hd::kBytes + kMaxLen[s] + seg - 1) / seg;
+// The layout in segments of `seg` bytes: the SAP list (its entries and the end mark), then the
+// slots' buffers in order; slot `s`'s buffer starts `slot_offset(s)` segments in, and
+// slot_offset(kSlots) is the whole (the one place of this arithmetic: segments() and init()).
+constexpr std::uint32_t slot_offset(unsigned s, std::uint32_t seg) {
+  std::uint32_t n = (kSlots * en::kBytes + 1 + seg - 1) / seg;
+  for (unsigned k = 0; k < s; ++k) n += (hd::kBytes + kMaxLen[k] + seg - 1) / seg;
+  return n;
 }
 }  // namespace
 
 std::uint32_t Dpv1User::segments(std::uint32_t seg_shift) {
   static_assert(kSlots == kSaps);
-  const std::uint32_t seg = 1u << seg_shift;
-  std::uint32_t n = list_segments(seg);
-  for (unsigned s = 0; s < kSlots; ++s) n += slot_segments(s, seg);
-  return n;
+  return slot_offset(kSlots, 1u << seg_shift);
 }
 
-std::uint32_t Dpv1User::init(BusPort& c, std::uint32_t next, std::uint32_t seg_shift) {
+void Dpv1User::init(BusPort& c, std::uint32_t list, std::uint32_t seg_shift) {
   seg_shift_ = seg_shift;
-  const std::uint32_t seg = 1u << seg_shift;
-  const std::uint32_t list = next;
-  next += list_segments(seg);
   const std::uint8_t saps[kSaps] = {sap::MSAC_C1, sap::MSAC_C1_Alarm, sap::MSAC_C2_RM, cfg_.c2_sap};
   for (unsigned s = 0; s < kSaps; ++s) {
     Slot& sl = slots_[s];
     sl.sap = saps[s];
     sl.entry = (list << seg_shift) + s * en::kBytes;
-    sl.segment = static_cast<std::uint8_t>(next);
-    sl.buffer = next << seg_shift;
-    next += slot_segments(s, seg);
+    sl.segment = static_cast<std::uint8_t>(list + slot_offset(s, 1u << seg_shift));
+    sl.buffer = std::uint32_t{sl.segment} << seg_shift;
     // The connection's SAP stays off (Ind_Buf_Ptr0 00h) until an Initiate opens it, MSAC_C1's
     // until Data_Exchange.
     const std::uint8_t ind = s == rm ? sl.segment : 0;
@@ -66,7 +60,6 @@ std::uint32_t Dpv1User::init(BusPort& c, std::uint32_t next, std::uint32_t seg_s
   c.write(static_cast<std::uint32_t>(
               find_reg(c.chip().profile(), RegId::R_FDL_SAP_List_Ptr)->read_addr),
           static_cast<std::uint8_t>(list));
-  return next;
 }
 
 void Dpv1User::data_exchange(BusPort& c, bool in) {

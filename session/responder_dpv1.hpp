@@ -40,10 +40,10 @@ class Dpv1User {
   explicit Dpv1User(Dpv1UserConfig cfg) : cfg_(std::move(cfg)) {}
 
   // The SAP list (SAPs 51 and 50 for the class-1 master only and switched off until Data_Exchange,
-  // 49 for anybody, and the connection's SAP switched off) and its buffers from segment `next`
-  // on; writes R_FDL_SAP_List_Ptr. Returns the next free segment.
-  std::uint32_t init(BusPort& c, std::uint32_t next, std::uint32_t seg_shift);
-  // The segments init() takes (its return minus `next`).
+  // 49 for anybody, and the connection's SAP switched off) and its buffers from segment `list`
+  // on; writes R_FDL_SAP_List_Ptr.
+  void init(BusPort& c, std::uint32_t list, std::uint32_t seg_shift);
+  // The segments init() takes from `list` on.
   [[nodiscard]] static std::uint32_t segments(std::uint32_t seg_shift);
   // From the ISR on Go/Leave_Data_Exchange: MSAC_C1 (SAPs 51 and 50) is served in Data_Exchange
   // only; leaving it switches them off and frees their buffers (a response not collected too).

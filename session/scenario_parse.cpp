@@ -334,13 +334,6 @@ class Parser {
       if (!parse_profile(pos_[0], s_.chip.profile)) {
         fail(fmt::format("unknown profile '{}' (spc3, vpc3plus, dpc31)", shown(pos_[0])));
       }
-      if (s_.chip.variant && s_.chip.profile != Profile::vpc3plus) {
-        fail("a 'variant' was given: only profile vpc3plus has variants");
-      }
-      if ((irq_controller_line_ != 0 || s_.chip.irq_controller == IrqController::c31) &&
-          s_.chip.profile != Profile::dpc31) {
-        fail("an 'irq-controller' was given: only profile dpc31 has a C31 core");
-      }
       profile_line_ = step_.line;
     } else if (cmd_ == "variant") {
       positional(1, 1, "one of b, c, s");

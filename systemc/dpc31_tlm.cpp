@@ -250,8 +250,9 @@ unsigned int Dpc31Tlm::transport_dbg(tlm::tlm_generic_payload& tr) {
     const auto a = static_cast<std::uint32_t>(addr + done);
     if (tr.is_read()) {
       data[done] = chip_.peek(a);
-    } else if (!chip_.poke(a, data[done])) {
-      break;  // no storage behind the read side: the bytes before it are written
+    } else if (!chip_.poke_problem(a, data[done]).empty() || !chip_.poke(a, data[done])) {
+      break;  // no storage behind the read side, or Mode_Reg1's run state: the bytes before it
+              // are written
     } else {
       follow_x_int(chip_.cycle());  // a poked INT_Pol moves the pin too
     }

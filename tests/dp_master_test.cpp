@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "dpc31/bus_port.hpp"
+#include "dpc31/dp.hpp"
 #include "responder.hpp"
 #include "segment.hpp"
 
@@ -309,8 +310,9 @@ TEST(Responder, BuffersPastTheRamAreRefusedBeforeAnyWrite) {
     ADD_FAILURE() << "taken";
   } catch (const std::invalid_argument& e) {
     EXPECT_EQ(std::string(e.what()),
-              "in=233 out=233: the built-in user side's buffers would end at 0x61f, past the 1536 "
-              "bytes of RAM of profile spc3 (its user area 0x040..0x5ff)");
+              "in=233 out=233 cfg of 2 bytes user_prm of 0 bytes: the built-in user side's "
+              "buffers would end at 0x61f, past the 1536 bytes of RAM of profile spc3 (its user "
+              "area 0x040..0x5ff)");
   }
   EXPECT_EQ(chip.cycle(), 0u) << "a bus access before the refusal";
   EXPECT_EQ(responder_layout(chip.profile(), rc).end, 0x620u);
@@ -328,11 +330,11 @@ TEST(Responder, BuffersPastTheRamAreRefusedBeforeAnyWrite) {
   ASSERT_TRUE(x.answer);
   EXPECT_EQ(x.answer->du, in);
   EXPECT_EQ(chip.peek_reg(RegId::Status_Reg) & fields::Status_Reg::RAM_Access_Violation, 0);
-  // The other profiles hold 244 each way: the VPC3+ in 4kB_Mode (16-byte segments, 4 to 108:
-  // 0x6BF), the DPC31 from 08A0h (32-byte segments, 69 to 135 with its clear buffer C and its
-  // queues: 0x10DF).
+  // The other profiles hold 244 each way: the VPC3+ still in 2 KB (8-byte segments, 8 to 202:
+  // 3 x 31 out, 3 x 31 in, 2 diag, 6 x 1 aux: 202; 0x64F), the DPC31 from 08A0h (32-byte segments,
+  // 69 to 135 with its clear buffer C and its queues: 0x10DF).
   rc.slave.in_len = rc.slave.out_len = 244;
-  EXPECT_EQ(responder_layout(profile_desc(Profile::vpc3plus), rc).end, 0x6C0u);
+  EXPECT_EQ(responder_layout(profile_desc(Profile::vpc3plus), rc).end, 0x650u);
   EXPECT_EQ(responder_layout(profile_desc(Profile::dpc31), rc).end, 0x10E0u);
   EXPECT_NE(responder_layout_problem(profile_desc(Profile::spc3), rc), "");
 }
@@ -449,4 +451,36 @@ TEST(Responder, BuffersOverTheRegistersAreLogged) {
       log[1].starts_with("10 uses of buffers over the registers so far (the latest: R_Din_Buf_Ptr"))
       << log[1];
 }
+
+// The DPC31's queues are buffers the chip uses as well (review s32 rev1, finding 3: InstQ_Base
+// and IndQ_Base, 00h at reset, were read and written behind the registers without a word):
+// pointers below 0800h log as the DP buffers do. MAC_Stop (11h) from a queue at segment 50h
+// (0A00h) confirms into an Indication_Queue at segment 01h (020h); then InstQ_Base 00h has the
+// chip read entry 1 at 002h, behind the registers: 00h, no request.
+TEST(Requests, QueuesOverTheRegistersAreLogged) {
+  Chip chip(ChipOptions{Profile::dpc31});
+  std::vector<std::string> log;
+  chip.set_log_sink([&log](const LogRecord& r) {
+    if (r.level == LogLevel::warn) log.push_back(r.text);
+  });
+  const auto at = [&chip](RegId id) { return static_cast<std::uint32_t>(chip.addr_of(id)); };
+  chip.write(at(RegId::InstQ_Base), 0x50);
+  chip.write(at(RegId::InstQ_Len), 4);
+  chip.write(at(RegId::IndQ_Base), 0x01);
+  chip.write(at(RegId::IndQ_Len), 4);
+  chip.write_block(0xA00, std::array<std::uint8_t, 2>{request::MAC_Stop, 0x00});
+  chip.write(at(RegId::InstQ_Wr), 1);
+  ASSERT_EQ(log.size(), 1u);
+  EXPECT_EQ(log[0],
+            "IndQ_Base = 01h puts its buffer at 0x020, over the registers (below 0x800): the chip "
+            "keeps its bytes in RAM the CPU does not see there (modelled); further such uses are "
+            "counted");
+  EXPECT_EQ(chip.read(at(RegId::IndQ_Wr)), 1);
+  chip.write(at(RegId::InstQ_Base), 0x00);
+  chip.write(at(RegId::InstQ_Wr), 2);
+  ASSERT_EQ(log.size(), 3u);
+  EXPECT_EQ(log[1], "InstQ_Base = 00h puts its buffer at 0x000, over the registers");
+  EXPECT_EQ(log[2], "unknown request code 00h (parameter 00h): skipped");
+}
+
 }  // namespace

@@ -285,6 +285,37 @@ TEST(Dpv1Master, ADataResponseWithoutDataIsMalformed) {
   EXPECT_EQ(answer_summary(a), "malformed DL without data after 0 polls");  // the walk's words
 }
 
+// The SAP list and its buffers are buffers the chip uses (review s32 rev1, finding 3: pointers
+// below 016h were served from the RAM behind the registers without a word): they log as the DP
+// buffers do. SAP 51's Ind_Buf_Ptr[0] = 01h (008h): the hidden bytes there are 00h, Max_Length 0,
+// so the Read is refused (RR); then the list itself at segment 02h (010h), where the hidden 00h
+// bytes hold no SAP 51 (RS).
+TEST(Dpv1Master, SapBuffersOverTheRegistersAreLogged) {
+  Rig r;
+  r.start();
+  Chip& chip = r.chip;
+  Dpv1Master& dpv1 = r.dpv1;
+  std::vector<std::string> log;
+  chip.set_log_sink([&log](const LogRecord& rec) {
+    if (rec.text.find("over the registers") != std::string::npos) log.push_back(rec.text);
+  });
+  chip.write_block(0x600,
+                   std::array<std::uint8_t, 8>{51, 0x7F, 0x7F, 0x00, 0x01, 0x00, 0xD0, 0xFF});
+  const auto list_ptr = static_cast<std::uint32_t>(chip.addr_of(RegId::R_FDL_SAP_List_Ptr));
+  chip.write(list_ptr, 0xC0);
+  EXPECT_EQ(dpv1.read(0, 1, 4).outcome, Dpv1Answer::Outcome::refused);
+  ASSERT_GE(log.size(), 1u);
+  EXPECT_EQ(log[0],
+            "SAP 51's Ind_Buf_Ptr[0] = 01h puts its buffer at 0x008, over the registers (below "
+            "0x016): the chip keeps its bytes in RAM the CPU does not see there (modelled); "
+            "further such uses are counted");
+  log.clear();
+  chip.write(list_ptr, 0x02);
+  EXPECT_EQ(dpv1.read(0, 1, 4).outcome, Dpv1Answer::Outcome::refused);
+  ASSERT_GE(log.size(), 1u);
+  EXPECT_EQ(log[0], "R_FDL_SAP_List_Ptr = 02h puts its buffer at 0x010, over the registers");
+}
+
 // MSAC_C2: Initiate gets the connection's SAP from the resource manager; Read on it; Abort closes
 // it on both sides (a new Initiate is taken); without a request for Send_Timeout the user side
 // closes it (its SAP answers RS).

@@ -350,6 +350,39 @@ TEST_P(Mode, PokeOfModeReg1RunStateBitsIsRefused) {
   EXPECT_EQ(c.poke_reg_problem(RegId::Mode_Reg2, 0x80), "");
 }
 
+// The byte back door at Mode_Reg1's read-back (15h on the VPC3+ and the DPC31) keeps the same
+// rule as poke_reg: Start_SPC3 / EOI poked there read 1 while Status_Reg said Offline.
+TEST(ModeBackDoor, PokeAtModeReg1ReadBackKeepsTheRunStateRule) {
+  for (const Profile p : {Profile::vpc3plus, Profile::dpc31}) {
+    SCOPED_TRACE(static_cast<int>(p));
+    Chip c({p, BusMode::intel});
+    const auto a1 = static_cast<std::uint32_t>(c.addr_of(RegId::Mode_Reg1));
+    ASSERT_EQ(a1, 0x15u);
+    for (const std::uint8_t bits : {0x01, 0x02, 0x03}) {
+      EXPECT_THROW(c.poke(a1, bits), std::invalid_argument);
+      EXPECT_EQ(c.peek_reg(RegId::Mode_Reg1), 0x00);
+      EXPECT_EQ(c.read(a1), 0x00);
+    }
+    EXPECT_EQ(c.poke_problem(a1, 0x03),
+              "poke 0x0015 0x03: Mode_Reg1 0x03: bits 0x03 would change; Start_SPC3 and "
+              "Go_Offline are the chip's run state (Offline), EOI and User_Leave_Master pulses "
+              "that never stay set: only a command changes them (Mode_Reg1_S / Mode_Reg1_R over "
+              "the bus)");
+    EXPECT_FALSE(c.started());
+    EXPECT_TRUE(c.poke(a1, 0x10));  // En_Change_Cfg_Buffer is the latch's own
+    EXPECT_EQ(c.read(a1), 0x10);
+    EXPECT_TRUE(c.poke_reg(RegId::Mode_Reg1, 0x00));
+  }
+  // Started by its command, the VPC3+ has Start_SPC3: a poke keeping it is taken, one clearing
+  // it refused.
+  Chip c({Profile::vpc3plus, BusMode::intel});
+  c.write(static_cast<std::uint32_t>(c.addr_of(RegId::Mode_Reg1_S)), 0x01);
+  ASSERT_TRUE(c.started());
+  EXPECT_TRUE(c.poke(0x15, 0x11));
+  EXPECT_THROW(c.poke(0x15, 0x10), std::invalid_argument);
+  EXPECT_EQ(c.peek_reg(RegId::Mode_Reg1), 0x11);
+}
+
 TEST_P(Mode, GcCommandPreset) {
   Chip c = make();
   const RegDesc* r = find_reg(c.profile(), "R_GC_Command");

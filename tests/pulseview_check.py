@@ -3,6 +3,7 @@
 (docs/waveforms.md, "PulseView").
 
 Usage: pulseview_check.py path/to/dpc31 SOURCE_DIR
+       pulseview_check.py --self-check   (the comparison on doctored lists; no PulseView)
 
 `dpc31 demo` writes dpc31-demo-la.vcd and, beside it, dpc31-demo-la.pvs. PulseView opens the
 VCD as the page says (`pulseview -I vcd -i dpc31-demo-la.vcd`, SIGROKDECODE_DIR naming
@@ -13,9 +14,11 @@ so the embedded Python reports them: a sitecustomize module (PYTHONPATH) wraps
 sigrokdecode.Decoder.put and writes each of the profibus_dp decoder's telegram annotations to a
 file. They must be exactly sigrok-cli's for the same stack on the same file (whose decoding the
 Sigrok.profibus_dp_demo test checks against the demo's pcapng): every telegram, its sample
-numbers and its text, in order. Once they are all there PulseView is closed (SIGTERM, then
-SIGKILL after 5 s) and so is the Xvfb the test started; a run that has not shown them in 60 s
-fails with what PulseView printed. Nothing is installed here (setup.sh installs pulseview and
+numbers and its text, in order, and no more. Once as many are there, PulseView gets a further
+second to put any extra ones, is closed (SIGTERM, then SIGKILL after 5 s) and so is the Xvfb the
+test started; the whole list it put is then compared (`got == want`): fewer, more or other
+telegrams fail, and a run that has not shown them all in 60 s fails with what PulseView
+printed. Nothing is installed here (setup.sh installs pulseview and
 xvfb). Exit 0 if so, 1 with the reason.
 """
 
@@ -101,7 +104,43 @@ def telegrams(lines):
     return out
 
 
+def mismatch(got, want):
+    """Why PulseView's telegrams are not sigrok-cli's, or None: the whole lists, in order."""
+    if got == want:
+        return None
+    for i, (g, w) in enumerate(zip(got, want)):
+        if g != w:
+            return (f"telegram {i + 1}: PulseView {g[0]}-{g[1]} '{g[2]}', sigrok-cli "
+                    f"{w[0]}-{w[1]} '{w[2]}'")
+    if len(got) > len(want):
+        g = got[len(want)]
+        return (f"PulseView put {len(got)} telegrams, sigrok-cli decodes {len(want)}: the first "
+                f"extra one is {g[0]}-{g[1]} '{g[2]}' (a decoder stacked twice?)")
+    return f"PulseView put {len(got)} of the {len(want)} telegrams sigrok-cli decodes"
+
+
+def self_check():
+    """mismatch() on doctored lists: each difference is found, equal lists pass."""
+    want = [(10, 20, "Request SRD_high 2 -> 5: Set_Prm"), (30, 40, "Short acknowledge SC")]
+    cases = [
+        (list(want), None),
+        (want + [want[1]], "PulseView put 3 telegrams, sigrok-cli decodes 2: the first extra one "
+                           "is 30-40 'Short acknowledge SC' (a decoder stacked twice?)"),
+        (want[:1], "PulseView put 1 of the 2 telegrams sigrok-cli decodes"),
+        ([want[0], (30, 41, want[1][2])],
+         "telegram 2: PulseView 30-41 'Short acknowledge SC', sigrok-cli 30-40 "
+         "'Short acknowledge SC'"),
+    ]
+    for got, why in cases:
+        if mismatch(got, want) != why:
+            fail(f"mismatch({got}) gave {mismatch(got, want)!r}, expected {why!r}")
+    print(f"OK: the comparison caught all {len(cases) - 1} doctored lists")
+
+
 def main():
+    if sys.argv[1:] == ["--self-check"]:
+        self_check()
+        return
     if len(sys.argv) != 3:
         fail(__doc__.split("\n\n")[1])
     dpc31, src = sys.argv[1], Path(sys.argv[2])
@@ -150,6 +189,7 @@ def main():
                 if puts.exists():
                     got = telegrams(puts.read_text(encoding="utf-8").splitlines())
                 if len(got) >= len(want):
+                    time.sleep(1)  # room for any telegram beyond sigrok-cli's
                     break
         finally:
             exited = pv.poll() if pv else None
@@ -158,16 +198,18 @@ def main():
             stop(xvfb, "Xvfb")
         took = time.monotonic() - t0
         said = log.read_text(encoding="utf-8", errors="replace").strip()[-600:]
+        # The whole list PulseView put, read after it stopped.
+        if puts.exists():
+            got = telegrams(puts.read_text(encoding="utf-8").splitlines())
         if len(got) < len(want):
             why = (f"PulseView exited ({exited})" if exited is not None
                    else f"in {DEADLINE_S} s")
             fail(f"{why}, PulseView's PROFIBUS DP decoder put {len(got)} of the {len(want)} "
                  f"telegrams sigrok-cli decodes (no decoder stack from dpc31-demo-la.pvs?); "
                  f"PulseView printed: {said}")
-        for i, (g, w) in enumerate(zip(got, want)):
-            if g != w:
-                fail(f"telegram {i + 1}: PulseView {g[0]}-{g[1]} '{g[2]}', sigrok-cli "
-                     f"{w[0]}-{w[1]} '{w[2]}'")
+        why = mismatch(got, want)
+        if why is not None:
+            fail(why)
         print(f"OK: PulseView decoded the demo's {len(want)} telegrams as sigrok-cli does "
               f"({took:.1f} s)")
 

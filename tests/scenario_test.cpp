@@ -114,8 +114,9 @@ TEST(ScenarioParse, VariantHeaderChoosesTheVpc3plusAsicType) {
   EXPECT_EQ(parse_error("profile spc3\nvariant s\n"),
             "t.scn:2: 'variant' needs 'profile vpc3plus' before it: only the VPC3+ has variants");
   EXPECT_EQ(parse_error("profile vpc3plus\nvariant d\n"), "t.scn:2: unknown variant 'd' (b, c, s)");
+  // A profile after the variant is a second `profile` line, refused as such.
   EXPECT_EQ(parse_error("profile vpc3plus\nvariant s\nprofile dpc31\n"),
-            "t.scn:3: a 'variant' was given: only profile vpc3plus has variants");
+            "t.scn:3: 'profile' given twice: first at line 1");
 }
 
 // The header line `irq-controller c31` puts the user's bus on the DPC31's C31 interrupt
@@ -146,9 +147,10 @@ TEST(ScenarioParse, IrqControllerHeaderChoosesTheC31s) {
 
 // `irq-controller` comes after `profile dpc31` only (docs/scenario-format.md, Header), with the
 // same words and line rule as `variant` after `profile vpc3plus`: refused at its own line when
-// no `profile dpc31` came before it (the default profile is no line), at the later `profile`
-// line that contradicts it (audit s32 siblings, finding 6: accepted before `profile dpc31`, and
-// refused on line 1 or 2 with two texts before another profile).
+// no `profile dpc31` came before it (the default profile is no line); a `profile` after it is a
+// second `profile` line, refused as that (audit s32 siblings, finding 6: accepted before
+// `profile dpc31`; review s32 rev1, finding 4: the second line was named as the irq-controller's
+// fault).
 TEST(ScenarioParse, IrqControllerComesAfterProfileDpc31AsVariantAfterItsProfile) {
   const std::string before =
       ":1: 'irq-controller' needs 'profile dpc31' before it: only the DPC31 has a C31 core";
@@ -163,9 +165,11 @@ TEST(ScenarioParse, IrqControllerComesAfterProfileDpc31AsVariantAfterItsProfile)
             "t.scn:2: 'irq-controller' needs 'profile dpc31' before it: only the DPC31 has a C31 "
             "core");
   for (const std::string later : {"irq-controller c31", "irq-controller external"}) {
-    EXPECT_EQ(parse_error("profile dpc31\n" + later + "\nprofile spc3\nstartup\n"),
-              "t.scn:3: an 'irq-controller' was given: only profile dpc31 has a C31 core")
-        << later;
+    for (const std::string again : {"profile spc3", "profile dpc31"}) {
+      EXPECT_EQ(parse_error("profile dpc31\n" + later + "\n" + again + "\nstartup\n"),
+                "t.scn:3: 'profile' given twice: first at line 1")
+          << later << " / " << again;
+    }
   }
   // The variant's words, for comparison: the same shape.
   EXPECT_EQ(parse_error("variant s\nprofile vpc3plus\nstartup\n"),
@@ -502,16 +506,50 @@ TEST(ScenarioParse, OptionsWithoutEffectOnTheProfileAreRefused) {
 // segments, the last byte 0x61F; 232 take 29 each, 190 segments, the last byte 0x5EF.
 TEST(ScenarioParse, SlaveLengthsWhoseBuffersDoNotFitTheRamAreRefused) {
   EXPECT_EQ(parse_error("profile spc3\nslave in=233 out=233\nstartup\n"),
-            "t.scn:2: slave in=233 out=233: the built-in user side's buffers would end at 0x61f, "
-            "past the 1536 bytes of RAM of profile spc3 (its user area 0x040..0x5ff)");
+            "t.scn:2: slave in=233 out=233 cfg of 2 bytes user_prm of 0 bytes: the built-in user "
+            "side's buffers would end at 0x61f, past the 1536 bytes of RAM of profile spc3 (its "
+            "user area 0x040..0x5ff)");
   EXPECT_EQ(parse_error("slave in=233 out=233\nprofile spc3\nstartup\n"),
-            "t.scn:1: slave in=233 out=233: the built-in user side's buffers would end at 0x61f, "
-            "past the 1536 bytes of RAM of profile spc3 (its user area 0x040..0x5ff)");
+            "t.scn:1: slave in=233 out=233 cfg of 2 bytes user_prm of 0 bytes: the built-in user "
+            "side's buffers would end at 0x61f, past the 1536 bytes of RAM of profile spc3 (its "
+            "user area 0x040..0x5ff)");
   for (const std::string ok :
        {"profile spc3\nslave in=232 out=232\n", "profile vpc3plus\nslave in=244 out=244\n",
         "profile dpc31\nslave in=244 out=244\n"}) {
     EXPECT_EQ(parse_error(ok + "startup\n"), "") << ok;
   }
+}
+
+// The VPC3+'s RAM mode follows the whole layout, not in/out alone (review s32 rev1, finding 2:
+// a 200-byte Cfg with in = out = 150 was kept in 2 KB and refused, while in = out = 200 was
+// taken). The aux buffers take the longest of 8 + user_prm, cfg and 4 bytes (session/responder).
+// 2 KB, 8-byte segments from 40h: 8 + 3 x 19 out + 3 x 19 in + 2 diag + 6 x 25 aux = 274
+// segments, past the 256 a pointer cell holds and the RAM (last byte 0x88F). 4kB_Mode, 16-byte
+// segments: 4 + 30 + 30 + 2 + 6 x 13 = 144 segments, the last byte 0x8FF. The SPC3 has no 4 KB:
+// the same slave is refused there, naming the cfg's length.
+TEST(ScenarioParse, LongCfgOnTheVpc3PlusTakesTheFourKilobyteMode) {
+  std::string cfg = "0x10";
+  for (int i = 1; i < 200; ++i) cfg += ",0x10";
+  const std::string slave = "slave address=5 in=150 out=150 cfg=" + cfg + "\n";
+  dpc31::Scenario s;
+  dpc31::ScenarioError err;
+  ASSERT_TRUE(dpc31::parse_scenario(
+      "profile vpc3plus\n" + slave + "startup\nexpect dp_state Data_Exchange\n", "t.scn", s, err))
+      << err.text();
+  const dpc31::ResponderLayout l =
+      dpc31::responder_layout(dpc31::profile_desc(dpc31::Profile::vpc3plus), s.user);
+  EXPECT_TRUE(l.large);
+  EXPECT_EQ(l.end, 0x900u);
+  std::uint16_t mode2 = 0;
+  dpc31::ScenarioHooks hooks;
+  hooks.at_end = [&](dpc31::Chip& c) { mode2 = c.peek_reg(dpc31::RegId::Mode_Reg2); };
+  Lines walk;
+  EXPECT_TRUE(dpc31::run_scenario(s, walk.sink(), {}, hooks).ok());
+  EXPECT_EQ(mode2 & dpc31::fields::Mode_Reg2::_4kB_Mode, dpc31::fields::Mode_Reg2::_4kB_Mode);
+  EXPECT_EQ(parse_error("profile spc3\n" + slave + "startup\n"),
+            "t.scn:2: slave in=150 out=150 cfg of 200 bytes user_prm of 0 bytes: the built-in user "
+            "side's buffers would end at 0x88f, past the 1536 bytes of RAM of profile spc3 (its "
+            "user area 0x040..0x5ff)");
 }
 
 // wd_base=10ms and user_prm byte 0 bit 2 (WD_Base, the 1 ms base) both drive Set_Prm byte 7 bit

@@ -489,6 +489,8 @@ TEST(Serve, MalformedLinesGetOneErrorEach) {
       {"addr No_Such_Reg", "ERR unknown_register"},
       {"poke_reg Int_Reg 1", "ERR no_storage"},
       {"poke_reg Mode_Reg1 1", "ERR run_state"},  // Start_SPC3 while Offline (chip.hpp)
+      {"poke 0x15 2", "ERR run_state"},           // EOI at Mode_Reg1's read-back: the same rule
+      {"pokeblock 0x15 03", "ERR run_state"},     // (review s32 rev1, finding 1)
       {"log loud", "ERR syntax"},
       {"save", "ERR syntax"},
       {"quit now", "ERR syntax"},

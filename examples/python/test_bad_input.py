@@ -869,13 +869,14 @@ def test_slave_lengths_whose_buffers_do_not_fit_the_ram_are_refused():
     chip = dpc31.Chip("spc3")
     master = dpc31.Master(chip, address=2, baud=1_500_000,
                           slave=dpc31.SlaveConfig(address=5, in_len=240, out_len=240))
-    with pytest.raises(ValueError, match=r"^SlaveConfig in=240 out=240: the built-in user side's "
-                                         r"buffers would end at 0x61f, past the 1536 bytes of "
-                                         r"RAM of profile spc3 \(its user area 0x040..0x5ff\)$"):
+    with pytest.raises(ValueError, match=r"^SlaveConfig in=240 out=240 cfg of 2 bytes user_prm "
+                                         r"of 0 bytes: the built-in user side's buffers would "
+                                         r"end at 0x61f, past the 1536 bytes of RAM of profile "
+                                         r"spc3 \(its user area 0x040..0x5ff\)$"):
         master.run_responder()
     assert chip.cycle == 0  # nothing written
     seg = dpc31.Segment()
-    with pytest.raises(ValueError, match=r"^slave=SlaveConfig in=240 out=240: .* profile spc3 "):
+    with pytest.raises(ValueError, match=r"^slave=SlaveConfig in=240 out=240 cfg of 2 bytes .* profile spc3 "):
         seg.add_station(5, profile="spc3", slave=dpc31.SlaveConfig(in_len=240, out_len=240))
     # 232 bytes each way fit (29 segments each: the last byte 0x5EF) and run.
     master = dpc31.Master(dpc31.Chip("spc3"), address=2, baud=1_500_000,
@@ -905,3 +906,18 @@ def test_a_poke_reg_takes_effect_or_is_refused_never_disagreeing_with_the_chip()
     assert spc3.peek_reg("Mode_Reg1") == 0x00
     assert spc3.poke_reg("Mode_Reg1", 0x10)  # En_Change_Cfg_Buffer: the latch's own
     assert spc3.peek_reg("Mode_Reg1") == 0x10
+
+
+def test_a_poke_at_mode_reg1_keeps_the_run_state_rule():
+    # Review s32 rev1, finding 1: poke(15h, 01h) made Mode_Reg1 read Start_SPC3 = 1 while the
+    # chip stayed Offline, and poke_reg could not put it back. The byte door has poke_reg's rule.
+    for profile in ("vpc3plus", "dpc31"):
+        chip = dpc31.Chip(profile)
+        a1 = chip.addr_of("Mode_Reg1")
+        with pytest.raises(ValueError, match=r"^poke 0x0015 0x01: Mode_Reg1 0x01: bits 0x01 would "
+                                             r"change; Start_SPC3 and Go_Offline are the chip's "
+                                             r"run state \(Offline\)"):
+            chip.poke(a1, 0x01)
+        assert (chip.read(a1), chip.peek_reg("Mode_Reg1")) == (0x00, 0x00)
+        assert chip.poke(a1, 0x10)
+        assert chip.read(a1) == 0x10

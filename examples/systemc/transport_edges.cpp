@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <string>
+#include <utility>
 #include <systemc>
 #include <tlm>
 
@@ -100,6 +101,17 @@ struct Bench : sc_core::sc_module {
     tlm::tlm_generic_payload r;
     set(r, tlm::TLM_READ_COMMAND, kTop, two, 2);
     expect(cpu->transport_dbg(r) == 0, "a debug read at the top of the 64-bit range");
+    // A debug write keeps Chip::poke's run-state rule: EOI at Mode_Reg1's read-back (15h) is not
+    // stored and ends the transfer; En_Change_Cfg_Buffer is the latch's own.
+    for (const auto& [byte, taken] : {std::pair{0x02, 0u}, std::pair{0x10, 1u}}) {
+      unsigned char m1 = static_cast<unsigned char>(byte);
+      tlm::tlm_generic_payload p;
+      set(p, tlm::TLM_WRITE_COMMAND, 0x15, &m1, 1);
+      const unsigned done = cpu->transport_dbg(p);
+      expect(done == taken && chip.chip().peek(0x15) == (taken != 0 ? byte : 0),
+             "a debug write of " + hex(static_cast<std::uint64_t>(byte)) + " at 15h transferred " +
+                 std::to_string(done) + " bytes");
+    }
     sc_core::sc_stop();
   }
 };

@@ -205,14 +205,18 @@ class Chip {
   // peek returns what a bus read would return now (command reads: the result they would give).
   [[nodiscard]] std::uint8_t peek(std::uint32_t addr) const;
   // poke stores into RAM / a RAM cell / the latch behind the read side; false where the read
-  // side has no storage (derived values, reserved and unmapped addresses).
+  // side has no storage (derived values, reserved and unmapped addresses). A byte that would
+  // change Mode_Reg1's run state or pulses (below) is std::invalid_argument, nothing stored
+  // (poke_problem says why; "" when the poke is taken).
   bool poke(std::uint32_t addr, std::uint8_t value);
+  [[nodiscard]] std::string poke_problem(std::uint32_t addr, std::uint8_t value) const;
   // Whole registers by id, including write-only latches (Int_Mask_Reg, WD_Baud_Control_Val).
   // A poked latch is the state it holds: VPC3+ Mode_Reg2.4kB_Mode switches the RAM decode
   // (2 KB / 4 KB) at once, in Offline or not. Bits whose state is the chip's machines',
   // not the latch's, never disagree with them: a poke that would change Mode_Reg1's Start_SPC3,
   // Go_Offline (the run state) or its pulses EOI, User_Leave_Master is std::invalid_argument
-  // (poke_reg_problem says why; "" when the poke is taken), nothing stored.
+  // (poke_reg_problem says why; "" when the poke is taken), nothing stored. "Change" is against
+  // what the chip has (Start_SPC3: started; pulses: 0), not the latch, as at the byte door.
   [[nodiscard]] std::uint16_t peek_reg(RegId id) const;
   bool poke_reg(RegId id, std::uint16_t value);
   [[nodiscard]] std::string poke_reg_problem(RegId id, std::uint16_t value) const;

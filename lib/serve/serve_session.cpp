@@ -318,6 +318,8 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
       const auto v = static_cast<std::uint8_t>(number(t[2], 0xFF, "value"));
       if (cmd == "write") {
         chip_.write(a, v);
+      } else if (std::string why = chip_.poke_problem(a, v); !why.empty()) {
+        return err("run_state", std::move(why));
       } else if (!chip_.poke(a, v)) {
         return err("no_storage", fmt::format("nothing to poke at {:#06x}", a));
       } else if (cpu_) {
@@ -350,6 +352,8 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
       for (std::uint32_t i = 0; i < bytes.size(); ++i) {
         if (cmd == "writeblock") {
           chip_.write(a + i, bytes[i]);
+        } else if (std::string why = chip_.poke_problem(a + i, bytes[i]); !why.empty()) {
+          return err("run_state", fmt::format("{} ({} bytes before it poked)", why, i));
         } else if (!chip_.poke(a + i, bytes[i])) {
           return err(
               "no_storage",
