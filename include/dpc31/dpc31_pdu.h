@@ -1,9 +1,9 @@
 /*
  * dpc31_pdu.h -- the protocol names a C DP / DPV1 driver needs beside dpc31_regs.h (the chip's
  * registers and buffer layouts): the diag buffer's standard part and the user's bits in its byte
- * 0, the Slave_Diag status bits, the DPV1 SAPs, function numbers and error codes. C99, plain
- * integer constants (SDCC too); the C++ side has the same values in pdu.hpp, fdl.hpp and dp.hpp
- * (tests/pdu_c_header_test.cpp holds them equal).
+ * 0, the Slave_Diag status bits, the DPV1 SAPs, function numbers and error codes, the MSAC_C2
+ * Initiate's and Abort's values. C99, plain integer constants (SDCC too); the C++ side has the
+ * same values in pdu.hpp, fdl.hpp and dp.hpp (tests/pdu_c_header_test.cpp holds them equal).
  */
 #ifndef DPC31_PDU_H
 #define DPC31_PDU_H
