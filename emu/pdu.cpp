@@ -244,8 +244,10 @@ Bytes ErrorResponse::build() const {
 }
 
 namespace {
-constexpr std::size_t kInitiateReqHead = 12, kInitiateResHead = 8, kAddrHead = 4;
-}
+// Add_Addr_Param's S_Type, S_Len, D_Type, D_Len; before it the fixed fields.
+constexpr std::size_t kAddrHead = 4, kInitiateReqHead = kInitiateReqFixed - kAddrHead,
+                      kInitiateResHead = kInitiateResFixed - kAddrHead;
+}  // namespace
 
 std::optional<Initiate> Initiate::parse(View du, bool response) {
   const std::size_t head = response ? kInitiateResHead : kInitiateReqHead;

@@ -132,7 +132,8 @@ Dpv1Answer send_record(PyMaster& pm, std::int64_t slot, std::int64_t index, cons
   return pm.dpv1([&](Dpv1Master& d) { return (d.*Send)(s, i, std::move(v)); });
 }
 
-// An Initiate's S_Addr or D_Addr: at most kAddrMax bytes, as a scenario's s_addr= / d_addr=.
+// An Initiate's S_Addr or D_Addr: at most kAddrMax bytes (both together too: addresses_too_long),
+// as a scenario's s_addr= / d_addr=.
 pdu::Bytes address(const py::bytes& b, std::string_view what) {
   pdu::Bytes v = from_bytes(b);
   if (v.size() > kAddrMax)
@@ -236,6 +237,10 @@ void bind_dpv1(py::module_& m, py::class_<PyMaster>& master) {
             req.d_type = in_range<U8>(named(kAddrType, "d_type"), d_type);
             req.s_addr = address(s_addr, "s_addr");
             req.d_addr = address(d_addr, "d_addr");
+            if (const std::string why = addresses_too_long(req.s_addr.size(), req.d_addr.size());
+                !why.empty()) {
+              throw py::value_error(why);
+            }
             return pm.dpv1([&](Dpv1Master& d) { return d.initiate(req); });
           },
           py::arg("send_timeout") = 100, py::arg("features_supported") = pdu::Features_DPV1_RW,

@@ -126,8 +126,11 @@ std::optional<pdu::Bytes> Dpv1User::answer(BusPort& c, Sap s, const pdu::Bytes& 
       return a->build();
     }
     case rm: {
-      if (*f != Function::Initiate || req.size() < 6) return std::nullopt;
-      const auto send_timeout = static_cast<std::uint16_t>(req[4] << 8 | req[5]);
+      if (*f != Function::Initiate) return std::nullopt;
+      // A request too short to hold its Send_Timeout runs on the driver's own (its Abort IA
+      // waits for the poll that long).
+      const auto send_timeout = req.size() < 6 ? pdu::kMsacC2TimeoutMin
+                                               : static_cast<std::uint16_t>(req[4] << 8 | req[5]);
       rm_timeout_ = send_timeout;
       if (open_) {
         return pdu::ErrorResponse{Function::Initiate, pdu::Error_Decode_DPV1,
@@ -136,15 +139,19 @@ std::optional<pdu::Bytes> Dpv1User::answer(BusPort& c, Sap s, const pdu::Bytes& 
       }
       // The Initiate response waits in the connection's buffer for the master's first poll
       // there; the resource manager answers with the connection's SAP. As the Profichip
-      // driver: a request its checks refuse gets an Abort there instead (pdu::initiate_abort),
+      // driver: a request its checks refuse gets an Abort there instead (pdu::initiate_abort);
+      // as its example user, one to an API other than 0 (the first byte of D_Addr) Abort IA,
       // one whose D_Type is not 0 (the slave is not the connection's end) a negative response
       // (application, not supported); either closes the connection once sent.
       const Slot& k = slots_[connection];
-      const std::optional<pdu::Abort> abort = pdu::initiate_abort(req);
+      std::optional<pdu::Abort> abort = pdu::initiate_abort(req);
       std::optional<pdu::Initiate> i;
       if (!abort) {  // through D_Addr (S_Len, D_Len: bytes 13, 15)
         const std::size_t n = pdu::kInitiateReqFixed + req[13] + req[15];
         i = pdu::Initiate::parse(pdu::View(req).first(n), false);
+        if (!i->d_addr.empty() && i->d_addr[0] != 0) {
+          abort = pdu::Abort{0, pdu::Abort_Instance_MSAC_C2, pdu::Abort_IA, 0};
+        }
       }
       closing_ = abort || i->d_type != pdu::Addr_Type_API_SCL;
       pdu::Bytes r;

@@ -186,6 +186,11 @@ bool parse_action(std::string_view cmd, std::span<const std::string_view> pos,
         unknown(k, cmd);
       }
     }
+    if (const std::string why =
+            addresses_too_long(st.initiate.s_addr.size(), st.initiate.d_addr.size());
+        !why.empty()) {
+      fail(why);
+    }
   } else if (cmd == "c2_abort") {
     st.value = 0x02;  // instance: the user (0 FDL, 1 MSAC_C2, 2 user)
     for (const auto& [k, v] : opts) {

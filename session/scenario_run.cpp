@@ -110,11 +110,18 @@ class Runner {
     master_ = std::make_unique<DpMaster>(chip_, s_.master, s_.user.slave);
     dpv1_ = std::make_unique<Dpv1Master>(chip_, *master_, s_.dpv1);
     dpv1_->rules().retries = s_.retries;
-    // Each poll reported as it comes, then forgotten, as `exchange N` does: a long DPV1 time-out
-    // keeps the history flat and the walk shows every poll.
+    // Each poll reported as it comes, then forgotten, as `exchange N` does, and the walk's lines
+    // written as their folds are decided: a long DPV1 time-out keeps the history and the walk
+    // flat. Nothing noted later is older than the chip's cycle, so what is sorted now stays so.
+    // An observer (a trace being recorded, which keeps every telegram anyway) is told a step's
+    // events at its end, with the chip standing there: they wait for it.
     dpv1_->polled = [this] {
       report_history();
       forget_reported();
+      if (hooks_.observer == nullptr && events_.size() >= kDrainAt) {
+        report_outputs();
+        drain(false);
+      }
     };
     master_->on_locked = [this](std::uint8_t, std::uint8_t by) { locked_by_ = by; };
     if (hooks_.observer != nullptr) {
@@ -275,31 +282,74 @@ class Runner {
   // Events are collected during an action and printed in cycle order: a transaction's line is
   // only known once its answer is in, after the state changes it caused. The walk folds what
   // repeats (an observer is told every event).
-  void flush() {
+  void flush() { drain(true); }
+
+  // Writes the events whose lines are decided and forgets them. At the step's end (`all`) that is
+  // every event; during a long action (a DPV1 service's polls) the ones whose fold the events
+  // still to come cannot change, and a run that keeps repeating is counted as it goes (`fold_`):
+  // the walk is the one the whole step would give, the memory flat.
+  void drain(bool all) {
     std::stable_sort(events_.begin(), events_.end(),
                      [](const Event& a, const Event& b) { return a.cycle < b.cycle; });
-    const std::vector<Fold> folds = walk_ ? fold_plan() : std::vector<Fold>{};
-    std::optional<std::size_t> group;  // the first line of the group being written
-    std::size_t skip_to = 0;           // the lines before it are folded
-    for (std::size_t i = 0; i < events_.size(); ++i) {
-      const Event& e = events_[i];
-      if (walk_ && i >= skip_to) {
-        if (!e.walked) walk_(fmt::format("[cycle {:>10}] {}", e.cycle, e.text));
-        if (folds[i].repeats != 0) group = i;
-        if (group && i + 1 == *group + folds[*group].lines) {
-          const Fold& f = folds[*group];
-          skip_to = *group + (f.repeats + 1) * f.lines;
-          walk_(fmt::format("[cycle {:>10}] {} repeated (x{}, last at cycle {})",
-                            events_[i + 1].cycle,
-                            f.lines == 1 ? std::string("the line above")
-                                         : fmt::format("the {} lines above", f.lines),
-                            f.repeats, events_[skip_to - 1].cycle));
-          group.reset();
-        }
+    const std::size_t n = events_.size();
+    std::size_t i = 0;  // the first event not written
+    while (i < n) {
+      if (!walk_) {
+        tell_all(i, 1);
+        ++i;
+        continue;
       }
-      if (hooks_.observer != nullptr) tell(*hooks_.observer, e);
+      if (fold_) {
+        const std::size_t k = fold_->group.size();
+        const std::size_t have = std::min(k, n - i);
+        bool same = true;
+        for (std::size_t x = 0; x < have && same; ++x)
+          same = events_[i + x].text == fold_->group[x];
+        if (same && have == k) {
+          tell_all(i, k);
+          ++fold_->repeats;
+          fold_->last_cycle = events_[i + k - 1].cycle;
+          i += k;
+          continue;
+        }
+        if (same && !all) break;  // the next repeat still coming
+        end_fold();
+        continue;
+      }
+      const Fold f = fold_at(i, n);
+      if (!all && !f.settled && !f.periodic) break;
+      write(events_[i]);
+      tell_all(i, 1);
+      if (f.repeats == 0) {
+        ++i;
+        continue;
+      }
+      for (std::size_t x = 1; x < f.lines; ++x) write(events_[i + x]);
+      tell_all(i + 1, f.lines * (f.repeats + 1) - 1);
+      fold_ = Folding{{},
+                      f.repeats,
+                      events_[i + f.lines].cycle,
+                      events_[i + f.lines * (f.repeats + 1) - 1].cycle};
+      for (std::size_t x = 0; x < f.lines; ++x) fold_->group.push_back(events_[i + x].text);
+      i += f.lines * (f.repeats + 1);
     }
-    events_.clear();
+    events_.erase(events_.begin(), events_.begin() + static_cast<std::ptrdiff_t>(i));
+    if (all && fold_) end_fold();
+  }
+
+  void write(const Event& e) {
+    if (!e.walked) walk_(fmt::format("[cycle {:>10}] {}", e.cycle, e.text));
+  }
+  void tell_all(std::size_t from, std::size_t count) {
+    if (hooks_.observer == nullptr) return;
+    for (std::size_t x = from; x < from + count; ++x) tell(*hooks_.observer, events_[x]);
+  }
+  void end_fold() {
+    const std::size_t k = fold_->group.size();
+    walk_(fmt::format("[cycle {:>10}] {} repeated (x{}, last at cycle {})", fold_->first_cycle,
+                      k == 1 ? std::string("the line above") : fmt::format("the {} lines above", k),
+                      fold_->repeats, fold_->last_cycle));
+    fold_.reset();
   }
 
   // A run of a group of up to kFoldLines lines that comes again and again (a start-up that
@@ -308,31 +358,50 @@ class Runner {
   // cycles of the repeats. At each line the group that folds the most lines is taken, if it
   // comes at least three times.
   static constexpr std::size_t kFoldLines = 8;
+  // The events a long action holds before it writes those decided (many times kFoldLines).
+  static constexpr std::size_t kDrainAt = 256;
   struct Fold {
     std::size_t lines = 0;    // in the group that starts at this line
     std::size_t repeats = 0;  // how often it comes again right after its first occurrence
+    // Of the first `n` events: no group size's run reaches the n-th (the later events cannot
+    // change the fold), or only those of multiples of `lines` do, which never fold more than
+    // `lines` (a longer run only adds repeats).
+    bool settled = true;
+    bool periodic = false;
   };
-  std::vector<Fold> fold_plan() const {
-    const std::size_t n = events_.size();
-    std::vector<Fold> plan(n);
+  [[nodiscard]] Fold fold_at(std::size_t i, std::size_t n) const {
     const auto same = [&](std::size_t a, std::size_t b, std::size_t k) {
       for (std::size_t x = 0; x < k; ++x) {
         if (events_[a + x].text != events_[b + x].text) return false;
       }
       return true;
     };
-    for (std::size_t i = 0; i < n;) {
-      Fold best;
-      for (std::size_t k = 1; k <= kFoldLines && i + 2 * k <= n; ++k) {
-        std::size_t r = 0;
-        while (i + (r + 2) * k <= n && same(i, i + (r + 1) * k, k)) ++r;
-        if (r >= 2 && r * k > best.repeats * best.lines) best = {k, r};
+    Fold best;
+    std::vector<std::size_t> open;  // the group sizes whose run reaches the n-th event
+    for (std::size_t k = 1; k <= kFoldLines; ++k) {
+      if (i + 2 * k > n) {
+        open.push_back(k);
+        continue;
       }
-      plan[i] = best;
-      i += best.repeats == 0 ? 1 : (best.repeats + 1) * best.lines;
+      std::size_t r = 0;
+      while (i + (r + 2) * k <= n && same(i, i + (r + 1) * k, k)) ++r;
+      if (i + (r + 2) * k > n) open.push_back(k);
+      if (r >= 2 && r * k > best.repeats * best.lines) best = {k, r};
     }
-    return plan;
+    best.settled = open.empty();
+    best.periodic = best.repeats != 0 && std::all_of(open.begin(), open.end(), [&](std::size_t k) {
+                      return k % best.lines == 0;
+                    });
+    return best;
   }
+  // A group being folded while its repeats still come.
+  struct Folding {
+    std::vector<std::string> group;
+    std::size_t repeats;
+    std::uint64_t first_cycle;  // of the first repeat
+    std::uint64_t last_cycle;   // of the last line of the last repeat
+  };
+  std::optional<Folding> fold_;
 
   void fail(int line, const std::string& msg) {
     const std::string text = fmt::format("{}:{}: {}", s_.file, line, msg);

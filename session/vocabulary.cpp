@@ -21,6 +21,14 @@ constexpr std::array<std::string_view, 3> kDpStateNames = {"Wait_Prm", "Wait_Cfg
 static_assert(kDpStateNames.size() == static_cast<std::size_t>(DpState::Data_Exchange) + 1,
               "a new value: name it here");
 
+std::string addresses_too_long(std::size_t s_len, std::size_t d_len) {
+  if (s_len + d_len <= kAddrMax) return {};
+  return fmt::format(
+      "s_addr and d_addr: {} bytes together, more than {}: the Initiate ({} bytes) would not fit "
+      "the resource manager's {}-byte buffer",
+      s_len + d_len, kAddrMax, pdu::kInitiateReqFixed + s_len + d_len, Dpv1User::kRmMax);
+}
+
 std::string_view dp_state_name(DpState s) { return name_of(s, kDpStateNames); }
 
 constexpr std::array<std::string_view, 3> kWdStateNames = {"Baud_Search", "Baud_Control",

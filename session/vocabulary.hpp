@@ -14,7 +14,9 @@
 #include "dpc31/dp.hpp"
 #include "dpc31/fdl.hpp"
 #include "dpc31/fdl_counters.hpp"
+#include "dpc31/pdu.hpp"
 #include "dpc31/uart.hpp"
+#include "responder_dpv1.hpp"
 
 namespace dpc31 {
 
@@ -128,11 +130,13 @@ inline constexpr ValueRange kUserWdValue{"user_wd_value", 0, 0xFFFF};
 inline constexpr ValueRange kWdBaudControl{"wd_baud_control", 0, 255};
 inline constexpr ValueRange kSendTimeout{"send_timeout", 1, 65535};
 // An Initiate's Add_Addr_Param (`c2_initiate s_type= s_addr= d_type= d_addr=`, Python's
-// c2_initiate()): a Type is one byte, an address at most 16 bytes (a Type 1 address: API, SCL,
-// Network_Address and MAC_Address), so the request stays within the 32-byte buffer public
-// slave stacks give the resource manager.
+// c2_initiate()): a Type is one byte; S_Addr and D_Addr together (a Type 1 address: API, SCL,
+// Network_Address and MAC_Address) at most what the built-in user side's resource-manager buffer
+// (Max_Length 32, as public slave stacks have it) holds past the request's 16 fixed bytes: 16.
 inline constexpr ValueRange kAddrType{"type", 0, 255};
-inline constexpr std::size_t kAddrMax = 16;
+inline constexpr std::size_t kAddrMax = Dpv1User::kRmMax - pdu::kInitiateReqFixed;
+// The refusal of a pair of addresses longer than kAddrMax together ("" when they fit).
+std::string addresses_too_long(std::size_t s_len, std::size_t d_len);
 inline constexpr ValueRange kAbortReason{"reason", 0, 15};
 inline constexpr ValueRange kAbortInstance{"instance", 0, 3};  // 0 FDL, 1 MSAC_C2, 2 user
 // An 80C32 board's XDATA window for the chip (`cpu base=`): its 4 KB below the top of XDATA.

@@ -404,9 +404,27 @@ TEST(Do4Dpv1, AnInitiateTheProfichipDriverRefusesGetsItsAbort) {
                    "c2_initiate s_addr=00\nexpect dpv1 aborted\nexpect dpv1 58,00,12,00\n"
                    "c2_initiate s_type=1 s_addr=- d_type=1 d_addr=-\nexpect dpv1 58,00,17,00\n"
                    "c2_initiate d_type=1\nexpect dpv1 error 80,A9,00\n"
+                   "c2_initiate d_addr=01,00\nexpect dpv1 58,00,17,00\n"
                    "c2_initiate s_addr=00,11 d_addr=00,22\n"
                    "expect dpv1 57,10,01,00,00,00,00,00,00,02,00,02,00,22,00,11\n",
-                   5);
+                   6);
+}
+
+// s32-rev2 (review finding 4): an Initiate too short to hold its Send_Timeout (57 00 00 00 00)
+// gets the driver's Abort IA like any shorter than 20 bytes: the resource manager answers 56h,
+// SAP 40 (28h), the driver's own Send_Timeout 100 (00 64; FCS 52h), and the poll on SAP 40 gets
+// 58 00 17 00 (FCS D6h); the connection closes once it is sent, so an Initiate after it is taken.
+// Before: 80 B8 00 (Invalid_Parameter) on SAP 49 and nothing opened.
+TEST(Do4Dpv1, AnInitiateWithoutSendTimeoutGetsTheAbort) {
+  run_do4_scenario("vpc3plus", "C0,20,00,01,09,00",
+                   "startup\nexchange outputs=05,01\n"
+                   "send from=2 fc=0x4D dsap=49 ssap=48 du=57,00,00,00,00\nexpect answer sc\n"
+                   "silence 3ms\nsend from=2 fc=0x5D dsap=49 ssap=48\n"
+                   "expect answer 68,09,09,68,82,85,08,30,31,56,28,00,64,52,16\n"
+                   "send from=2 fc=0x7D dsap=40 ssap=48\n"
+                   "expect answer 68,09,09,68,82,85,08,30,28,58,00,17,00,D6,16\n"
+                   "silence 3ms\nc2_initiate\nexpect dpv1 positive\n",
+                   4);
 }
 
 // docs/dpv1.md: MSAC_C1 lives in the master's Data_Exchange. Right after the standard start-up

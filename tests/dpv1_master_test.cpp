@@ -588,7 +588,44 @@ TEST(Dpv1Scenario, TheUserSideRefusesTheInitiatesTheProfichipDriverRefuses) {
                            "c2_initiate s_type=1 s_addr=- d_type=1 d_addr=-\n"
                            "expect dpv1 58,00,17,00\n"
                            "c2_initiate d_type=1\nexpect dpv1 error 80,A9,00\n"
+                           "c2_initiate d_addr=01,00\nexpect dpv1 58,00,17,00\n"
                            "c2_initiate\nexpect dpv1 positive\n";
+  EXPECT_EQ(failed_expects(text), std::vector<std::string>{});
+}
+
+// s32-rev2 (review finding 2): the largest Initiate the doors take, S_Addr and D_Addr 16 bytes
+// together (a Type 1 S_Addr of 14: API 0, SCL 0, 12 more; a Type 0 D_Addr 00 00), is 32 bytes,
+// the resource manager's Max_Length: the built-in user side takes it and answers S and D swapped:
+// 57 F0 01 00 00 00 00 00, S_Type 0 S_Len 2, D_Type 1 D_Len 14, 00 00, then the 14 bytes. Before,
+// the doors took 16 bytes an address, and a 34-byte Initiate got RR (`refused`).
+TEST(Dpv1Scenario, TheLargestInitiateTheDoorsTakeFitsTheResourceManager) {
+  const std::string addr = "00,00,01,02,03,04,05,06,07,08,09,0A,0B,0C";
+  const std::string text =
+      std::string(kHead) + "dpv1 work=1440\nstartup\nc2_initiate s_type=1 s_addr=" + addr +
+      " d_addr=00,00\nexpect dpv1 57,F0,01,00,00,00,00,00,00,02,01,0E,00,00," + addr + "\n";
+  EXPECT_EQ(failed_expects(text), std::vector<std::string>{});
+}
+
+// s32-rev2 (review findings 3 and 4): the driver's example user serves API 0 only and aborts an
+// Initiate to another API (the first byte of D_Addr; here API 1) with 58 00 17 00 (Instance
+// MSAC_C2, IA) before it looks at D_Type; and the driver aborts any Initiate shorter than 20
+// bytes IA, one too short to hold its Send_Timeout (57 00 00 00 00, 5 bytes) too. That one's
+// resource manager answer carries the driver's own Send_Timeout 100 (pdu::kMsacC2TimeoutMin):
+// DL, DSAP 48 (30h), SSAP 49 (31h), 56 28 00 64, FCS 52h; the poll on SAP 40 (28h) gets the Abort,
+// FCS D6h, and the connection closes once it is sent. Before: API 1 positive, and no answer at
+// all to the 5 bytes (every poll SC).
+TEST(Dpv1Scenario, TheUserSideAbortsAnotherApiAndAnInitiateWithoutSendTimeout) {
+  const std::string text = std::string(kHead) +
+                           "dpv1 work=1440\nstartup\n"
+                           "c2_initiate d_addr=01,00\nexpect dpv1 aborted\n"
+                           "expect dpv1 58,00,17,00\n"
+                           "send from=2 fc=0x6D dsap=49 ssap=48 du=57,00,00,00,00\n"
+                           "expect answer sc\nsilence 1ms\n"
+                           "send from=2 fc=0x5D dsap=49 ssap=48\n"
+                           "expect answer 68,09,09,68,82,85,08,30,31,56,28,00,64,52,16\n"
+                           "send from=2 fc=0x7D dsap=40 ssap=48\n"
+                           "expect answer 68,09,09,68,82,85,08,30,28,58,00,17,00,D6,16\n"
+                           "silence 1ms\nc2_initiate\nexpect dpv1 positive\n";
   EXPECT_EQ(failed_expects(text), std::vector<std::string>{});
 }
 
@@ -835,6 +872,12 @@ TEST(Dpv1Scenario, ParseErrorsNameTheLine) {
        "t.scn:3: record slot=0 index=1 given twice"},
       {"profile vpc3plus\nalarm_ack slot=0 type=1\n",
        "t.scn:2: alarm_ack needs slot=N type=N seq=N"},
+      // s32-rev2 (review finding 2): S_Addr and D_Addr together past the 16 bytes the 32-byte
+      // resource-manager buffer holds beside the request's 16 fixed ones (15 + 2 = 17).
+      {"profile vpc3plus\nstartup\nc2_initiate s_type=1 "
+       "s_addr=00,00,01,02,03,04,05,06,07,08,09,0A,0B,0C,0D d_addr=00,00\n",
+       "t.scn:3: s_addr and d_addr: 17 bytes together, more than 16: the Initiate (33 bytes) "
+       "would not fit the resource manager's 32-byte buffer"},
       // The Specifier's bits 1..0 (docs/dpv1.md: Seq_Nr << 3 | Add_Ack << 2 | bits 1..0).
       {"profile vpc3plus\nalarm_ack slot=0 type=1 seq=0 spec=5\n",
        "t.scn:2: spec 5 out of range (0..3)"},

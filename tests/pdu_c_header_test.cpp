@@ -74,6 +74,20 @@ static_assert(DPC31_DPV1_READ_CONSTRAIN_CONFLICT == error::Read_Constrain_Confli
 static_assert(DPC31_DPV1_WRITE_CONSTRAIN_CONFLICT == error::Write_Constrain_Conflict);
 static_assert(DPC31_DPV1_RESOURCE_BUSY == error::Resource_Busy);
 static_assert(DPC31_DPV1_RESOURCE_UNAVAILABLE == error::Resource_Unavailable);
+static_assert(DPC31_DPV1_FEATURE_NOT_SUPPORTED == error::Feature_Not_Supported);
+
+static_assert(DPC31_MSAC_C2_INITIATE_REQ_FIXED == dpc31::pdu::kInitiateReqFixed);
+static_assert(DPC31_MSAC_C2_INITIATE_RES_FIXED == dpc31::pdu::kInitiateResFixed);
+static_assert(DPC31_MSAC_C2_ADDR_TYPE_API_SCL == dpc31::pdu::Addr_Type_API_SCL);
+static_assert(DPC31_MSAC_C2_ADDR_LEN_API_SCL == dpc31::pdu::kAddrLenAPISCL);
+static_assert(DPC31_MSAC_C2_INITIATE_MIN == dpc31::pdu::kInitiateReqMin);
+static_assert(DPC31_MSAC_C2_TIMEOUT_MIN == dpc31::pdu::kMsacC2TimeoutMin);
+// Features_Supported_1 is the high byte of pdu::Initiate's field.
+static_assert(DPC31_MSAC_C2_FEATURES_1_RW << 8 == dpc31::pdu::Features_DPV1_RW);
+// The Abort's third byte as the C name gives it: Instance in bits 5..4.
+static_assert(DPC31_MSAC_C2_INSTANCE_MSAC_C2 == dpc31::pdu::Abort_Instance_MSAC_C2 << 4);
+static_assert(DPC31_MSAC_C2_ABT_FE == dpc31::pdu::Abort_FE);
+static_assert(DPC31_MSAC_C2_ABT_IA == dpc31::pdu::Abort_IA);
 
 }  // namespace
 

@@ -230,5 +230,20 @@ def test_an_initiate_the_slave_refuses_is_aborted_and_its_addresses_are_the_call
                              0x00, 0x22, 0x00, 0x11])
     with pytest.raises(ValueError, match="s_addr: more than 16 bytes"):
         master.c2_initiate(s_addr=bytes(17))
+    # s32-rev2 (review finding 2): both addresses together fit the resource manager's 32-byte
+    # buffer beside the request's 16 fixed bytes, or the call is refused, nothing sent.
+    sent = master.counters.requests
+    with pytest.raises(ValueError, match=r"s_addr and d_addr: 18 bytes together, more than 16: "
+                       r"the Initiate \(34 bytes\) would not fit the resource manager's 32-byte"):
+        master.c2_initiate(s_type=1, s_addr=bytes(16))
+    assert master.counters.requests == sent
+    # The largest taken (the connection closed first): a Type 1 S_Addr of 14 bytes beside the
+    # Type 0 D_Addr, 32 bytes; the response swaps them.
+    master.c2_abort()
+    assert master.c2_sap is None
+    big = master.c2_initiate(s_type=1, s_addr=bytes(14))
+    assert big.outcome == dpc31.Dpv1Outcome.positive
+    assert big.du == bytes([0x57, 0xF0, 0x01, 0x00, 0, 0, 0, 0, 0x00, 0x02, 0x01, 0x0E, 0x00,
+                            0x00]) + bytes(14)
     with pytest.raises(ValueError, match=r"d_type 256 out of range \(0..255\)"):
         master.c2_initiate(d_type=256)

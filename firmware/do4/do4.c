@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "../firmware.h"
+#include "dpc31/dpc31_pdu.h"
 #include "dpc31/dpc31_regs.h"
 
 static const uint8_t kCfg[2] = {0x21, 0x10}; /* 2 output bytes, 1 input byte */
@@ -72,21 +73,16 @@ static void enter_osp(DPS_P(do4)) {
 /* DPV1 (VPC3+, docs/firmware.md "DO4 with DPV1"): the OSP configuration as the record of slot 0
  * index 1, two bytes as in Set_Prm: OSPMode, replacement value. Function numbers and error codes
  * per IEC 61158-6 type 3 (docs/dpv1.md, "Negative responses"). */
+enum { kRead = DPC31_DPV1_READ, kWrite = DPC31_DPV1_WRITE, kAlarmAck = DPC31_DPV1_ALARM_ACK };
+enum { kErrorBit = DPC31_DPV1_ERROR_BIT, kErrorDecodeDpv1 = DPC31_DPV1_ERROR_DECODE_DPV1 };
 enum {
-  kRead = 0x5Eu,
-  kWrite = 0x5Fu,
-  kAlarmAck = 0x5Cu,
-  kErrorBit = 0x80u,
-  kErrorDecodeDpv1 = 0x80u
-};
-enum {
-  kInvalidIndex = 0xB0u,       /* access: invalid index */
-  kWriteLengthError = 0xB1u,   /* access: write length error */
-  kInvalidSlot = 0xB2u,        /* access: invalid slot */
-  kStateConflict = 0xB5u,      /* access: state conflict */
-  kInvalidRange = 0xB7u,       /* access: invalid range */
-  kInvalidParameter = 0xB8u,   /* access: invalid parameter */
-  kFeatureNotSupported = 0xA9u /* application: feature not supported */
+  kInvalidIndex = DPC31_DPV1_INVALID_INDEX,
+  kWriteLengthError = DPC31_DPV1_WRITE_LENGTH_ERROR,
+  kInvalidSlot = DPC31_DPV1_INVALID_SLOT,
+  kStateConflict = DPC31_DPV1_STATE_CONFLICT,
+  kInvalidRange = DPC31_DPV1_INVALID_RANGE,
+  kInvalidParameter = DPC31_DPV1_INVALID_PARAMETER,
+  kFeatureNotSupported = DPC31_DPV1_FEATURE_NOT_SUPPORTED
 };
 enum { kOspSlot = 0u, kOspIndex = 1u, kOspRecordLen = 2u };
 

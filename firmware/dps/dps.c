@@ -3,6 +3,7 @@
 
 #include <string.h>
 
+#include "dpc31/dpc31_pdu.h"
 #include "dpc31/dpc31_regs.h"
 
 /* The drivers' serial-mode types, as their platform.h defines them (the HAL uses the plain
@@ -83,9 +84,12 @@ enum { Start_SPC3 = 0x01u, EOI = 0x02u, Res_User_WD = 0x20u };
 enum { Prm_Conflict = 0x01u };                             /* handshake read result */
 enum { State_U_Buffer = 0x04u, U_Buffer_Cleared = 0x08u }; /* Next_Dout_Buffer_Cmd */
 enum { DP_Mode = 0x0100u, Spec_Clear_Mode = 0x2000u };     /* Mode_Reg0 */
-enum { Ext_Diag = 0x01u };                                 /* diag byte 0 */
-enum { kDiagMasterAdd = 3u, kNoMaster = 0xFFu };           /* diag byte 3: Master_Add */
-enum { kStdPrm = 7u, kStdDiag = 6u };
+enum { Ext_Diag = DPC31_DIAG_EXT_DIAG };                   /* diag byte 0 */
+enum {
+  kDiagMasterAdd = DPC31_DIAG_MASTER_ADD,
+  kNoMaster = DPC31_DIAG_NO_MASTER
+}; /* diag byte 3: Master_Add */
+enum { kStdPrm = 7u, kStdDiag = DPC31_DIAG_STANDARD };
 
 /* The instance every function works on (dps.h, "One instance"): passed on as ME / ME_. On the
  * 80C32 the one static instance, reached by its address. */
@@ -107,7 +111,7 @@ static dps dps_the;
 /* The connection before the resource manager: an Abort and a new Initiate taken in the same tick
  * close first, then open. */
 enum { kDpv1Saps = DPS_DPV1_SAPS, kC1Saps = 2u, kConn = 2u, kRm = 3u };
-enum { kFcResponse = 0x08u /* DL: response data low */ };
+enum { kFcResponse = DPC31_DPV1_FC_RESPONSE /* DL: response data low */ };
 /* MSAC_C2 (IEC 61158-6 type 3; docs/dpv1.md "The master's side"): function numbers, the
  * Initiate request's fixed part (57h, 3 reserved, Send_Timeout, Features_Supported_1 and _2,
  * Profile_Features_Supported, Profile_Ident_Number, S_Type, S_Len, D_Type, D_Len) and its
@@ -115,11 +119,21 @@ enum { kFcResponse = 0x08u /* DL: response data low */ };
  * address is API and SCL (2 bytes): the least request is 20 bytes. The Abort the Profichip
  * driver sends for a request it refuses: Instance MSAC_C2 (10h) | FE (invalid request) or IA
  * (invalid address information). */
-enum { kIdle = 0x48u, kRmResponse = 0x56u, kInitiate = 0x57u, kAbort = 0x58u };
-enum { kInitiateReq = 16u, kInitiateRes = 12u, kNegative = 0x80u, kDecodeDpv1 = 0x80u };
-enum { kAddrApiScl = 2u, kInitiateReqMin = 20u, kFeaturesRW = 0x01u /* Features_Supported_1 */ };
-enum { kAbortFE = 0x12u, kAbortIA = 0x17u };
-enum { kInvalidParameter = 0xB8u, kResourceBusy = 0xC2u, kFeatureNotSupported = 0xA9u };
+enum { kIdle = DPC31_DPV1_IDLE, kRmResponse = DPC31_DPV1_RESOURCE_MANAGER };
+enum { kInitiate = DPC31_DPV1_INITIATE, kAbort = DPC31_DPV1_ABORT };
+enum { kInitiateReq = DPC31_MSAC_C2_INITIATE_REQ_FIXED };
+enum { kInitiateRes = DPC31_MSAC_C2_INITIATE_RES_FIXED };
+enum { kNegative = DPC31_DPV1_ERROR_BIT, kDecodeDpv1 = DPC31_DPV1_ERROR_DECODE_DPV1 };
+enum { kAddrApiScl = DPC31_MSAC_C2_ADDR_LEN_API_SCL, kInitiateReqMin = DPC31_MSAC_C2_INITIATE_MIN };
+enum {
+  kAddrTypeApiScl = DPC31_MSAC_C2_ADDR_TYPE_API_SCL,
+  kSendTimeoutEnd = 6u /* 57h .. low byte */
+};
+enum { kFeaturesRW = DPC31_MSAC_C2_FEATURES_1_RW };
+enum { kAbortFE = DPC31_MSAC_C2_INSTANCE_MSAC_C2 | DPC31_MSAC_C2_ABT_FE };
+enum { kAbortIA = DPC31_MSAC_C2_INSTANCE_MSAC_C2 | DPC31_MSAC_C2_ABT_IA };
+enum { kInvalidParameter = DPC31_DPV1_INVALID_PARAMETER, kResourceBusy = DPC31_DPV1_RESOURCE_BUSY };
+enum { kFeatureNotSupported = DPC31_DPV1_FEATURE_NOT_SUPPORTED };
 /* dps.c2_busy; kC2Closing: the connection's buffer holds a refused Initiate's answer, and the
  * connection closes once it is sent. */
 enum { kC2Open = 1, kRmWaits = 2, kC2Closing = 4 };
@@ -489,29 +503,34 @@ static void c2_close(DPS_P(dps)) {
  * Initiate response (Max_Len_Data_Unit, its own features: Read/Write, no profile; S and D
  * address swapped) waits in the connection's buffer for the master's first poll there, the
  * connection's SAP is switched on, and the resource manager answers 56h, the connection's SAP,
- * the Send_Timeout. The Profichip driver's checks before its user sees an Initiate
- * (MSAC_C2_RealizeIndRecv) put its Abort there instead: a Type 0 address whose Len is not 2,
- * Abort FE; shorter than 20 bytes or than 16 + both addresses, Abort IA. D_Type not 0 (DO4 is
- * not the connection's end): Initiate | 80h, feature not supported, as the Profichip example
- * user answers it. Either closes the connection once sent. No local beyond the old ones: the
- * 80C32 build's XSEG, which its start-up clears, keeps its size (traces/do4_80c32.scn). */
+ * the Send_Timeout (a request too short to hold one: DPC31_MSAC_C2_TIMEOUT_MIN, the driver's
+ * own). The Profichip driver's checks before its user sees an Initiate (MSAC_C2_RealizeIndRecv)
+ * put its Abort there instead: a Type 0 address whose Len is not 2, Abort FE; shorter than 20
+ * bytes or than 16 + both addresses, Abort IA. Then its example user's: a D_Addr whose API is
+ * not 0, Abort IA; D_Type not 0 (DO4 is not the connection's end), Initiate | 80h, feature not
+ * supported. Either closes the connection once sent. No local beyond the old ones: the 80C32
+ * build's XSEG, which its start-up clears, keeps its size (traces/do4_80c32.scn). */
 static uint8_t c2_initiate(DPS_P_(dps) const uint8_t* req, uint8_t len, uint8_t* resp) {
   uint8_t res[DPS_DPV1_MAX_PDU];
   uint8_t s_len, d_len;
   if (req[0] != kInitiate) return dpv1_negative(resp, req[0], kFeatureNotSupported);
-  if (len < 6u) return dpv1_negative(resp, kInitiate, kInvalidParameter); /* no Send_Timeout */
   if (self->c2_busy & kC2Open) return dpv1_negative(resp, kInitiate, kResourceBusy);
+  resp[2] = len < kSendTimeoutEnd ? (uint8_t)(DPC31_MSAC_C2_TIMEOUT_MIN >> 8) : req[4];
+  resp[3] = len < kSendTimeoutEnd ? (uint8_t)DPC31_MSAC_C2_TIMEOUT_MIN : req[5];
   s_len = req[13]; /* read before the length is checked: the buffer holds DPS_DPV1_MAX_PDU */
   d_len = req[15];
   res[0] = kAbort;
   res[1] = 0x00; /* Subnet: none */
-  res[2] =
-      len < kInitiateReq                                                                 ? kAbortIA
-      : (req[12] == 0 && s_len != kAddrApiScl) || (req[14] == 0 && d_len != kAddrApiScl) ? kAbortFE
-      : len < kInitiateReqMin || (unsigned)len < (unsigned)kInitiateReq + s_len + d_len  ? kAbortIA
-                                                                                         : 0;
+  res[2] = len < kInitiateReq ? kAbortIA
+           : (req[12] == kAddrTypeApiScl && s_len != kAddrApiScl) ||
+                   (req[14] == kAddrTypeApiScl && d_len != kAddrApiScl)
+               ? kAbortFE
+           : len < kInitiateReqMin || (unsigned)len < (unsigned)kInitiateReq + s_len + d_len
+               ? kAbortIA
+           : d_len != 0u && req[kInitiateReq + s_len] != 0u ? kAbortIA /* D_Addr's API */
+                                                            : 0;
   res[3] = 0x00;
-  if (res[2] == 0 && (req[14] != 0 || (unsigned)kInitiateRes + s_len + d_len > DPS_DPV1_MAX_PDU)) {
+  if (res[2] == 0 && req[14] != kAddrTypeApiScl) {
     dpv1_negative(res, kInitiate, kFeatureNotSupported);
   } else if (res[2] == 0) {
     res[0] = kInitiate;
@@ -531,13 +550,11 @@ static uint8_t c2_initiate(DPS_P_(dps) const uint8_t* req, uint8_t len, uint8_t*
   Vpc3Write(self->sap_entry[kConn] + VPC3_SAP_Entry_Ind_Buf_Ptr0,
             (uint8_t)(self->dpv1_buf[kConn] >> self->map->segment_shift));
   self->c2_busy |= res[0] == kInitiate ? kC2Open : kC2Open | kC2Closing;
-  self->c2_timeout = (uint16_t)((uint16_t)req[4] << 8 | req[5]);
+  self->c2_timeout = (uint16_t)((uint16_t)resp[2] << 8 | resp[3]);
   self->c2_quiet_ms = 0;
   if (res[0] == kInitiate) ++self->stats.c2_opened;
   resp[0] = kRmResponse;
   resp[1] = DPS_SAP_C2;
-  resp[2] = req[4];
-  resp[3] = req[5];
   return 4;
 }
 

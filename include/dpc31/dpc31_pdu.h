@@ -1,9 +1,9 @@
 /*
  * dpc31_pdu.h -- the protocol names a C DP / DPV1 driver needs beside dpc31_regs.h (the chip's
  * registers and buffer layouts): the diag buffer's standard part and the user's bits in its byte
- * 0, the Slave_Diag status bits, the DPV1 SAPs, function numbers and error codes. C99, plain
- * integer constants (SDCC too); the C++ side has the same values in pdu.hpp, fdl.hpp and dp.hpp
- * (tests/pdu_c_header_test.cpp holds them equal).
+ * 0, the Slave_Diag status bits, the DPV1 SAPs, function numbers and error codes, the MSAC_C2
+ * Initiate's and Abort's values. C99, plain integer constants (SDCC too); the C++ side has the
+ * same values in pdu.hpp, fdl.hpp and dp.hpp (tests/pdu_c_header_test.cpp holds them equal).
  */
 #ifndef DPC31_PDU_H
 #define DPC31_PDU_H
@@ -83,5 +83,27 @@
 #define DPC31_DPV1_WRITE_CONSTRAIN_CONFLICT 0xC1u
 #define DPC31_DPV1_RESOURCE_BUSY 0xC2u
 #define DPC31_DPV1_RESOURCE_UNAVAILABLE 0xC3u
+#define DPC31_DPV1_FEATURE_NOT_SUPPORTED 0xA9u /* application: feature not supported */
+
+/* MSAC_C2's Initiate (docs/dpv1.md "The Initiate"): the request's bytes through D_Len (57h, 3
+ * reserved, Send_Timeout, Features_Supported_1 and _2, Profile_Features_Supported,
+ * Profile_Ident_Number, S_Type, S_Len, D_Type, D_Len), its response's (57h, Max_Len_Data_Unit,
+ * then the same from Features_Supported on), a Type 0 address (API and SCL, Len 2) and the least
+ * request with two of them (the Profichip driver's MSAC_C2_MIN_CR_PDU_SIZE). */
+#define DPC31_MSAC_C2_INITIATE_REQ_FIXED 16u
+#define DPC31_MSAC_C2_INITIATE_RES_FIXED 12u
+#define DPC31_MSAC_C2_ADDR_TYPE_API_SCL 0x00u
+#define DPC31_MSAC_C2_ADDR_LEN_API_SCL 2u
+#define DPC31_MSAC_C2_INITIATE_MIN 20u
+#define DPC31_MSAC_C2_FEATURES_1_RW 0x01u /* Features_Supported_1: Read and Write supported */
+/* The Send_Timeout (10 ms units) the Profichip driver keeps a connection on at least (its
+ * MSAC_C2_TIMEOUT_12MBAUD .. _1_5MBAUD), and the one its refusals run on. */
+#define DPC31_MSAC_C2_TIMEOUT_MIN 100u
+
+/* MSAC_C2's Abort (4 bytes): 58h, Subnet, Instance (bits 5..4) | Reason_Code (bits 3..0),
+ * Additional_Detail; the ones the Profichip driver sends for an Initiate it refuses. */
+#define DPC31_MSAC_C2_INSTANCE_MSAC_C2 0x10u
+#define DPC31_MSAC_C2_ABT_FE 0x02u /* invalid request PDU received */
+#define DPC31_MSAC_C2_ABT_IA 0x07u /* invalid additional address information */
 
 #endif /* DPC31_PDU_H */

@@ -219,8 +219,13 @@ inline constexpr std::uint16_t Features_DPV1_RW = 0x0100;
 // driver aborts an Initiate whose Type 0 address has another Len, or that is shorter than
 // 20 bytes (MSAC_C2_MIN_CR_PDU_SIZE).
 inline constexpr std::uint8_t Addr_Type_API_SCL = 0;
-// The request's bytes through D_Len, and its least length with Type 0 addresses.
-inline constexpr std::size_t kAddrLenAPISCL = 2, kInitiateReqFixed = 16, kInitiateReqMin = 20;
+// The request's and the response's bytes through D_Len, and the request's least length with
+// Type 0 addresses.
+inline constexpr std::size_t kAddrLenAPISCL = 2, kInitiateReqFixed = 16, kInitiateResFixed = 12,
+                             kInitiateReqMin = 20;
+// The Send_Timeout (10 ms) the Profichip driver keeps a connection on at least (its
+// MSAC_C2_TIMEOUT_12MBAUD .. _1_5MBAUD), and the one its refusals run on.
+inline constexpr std::uint16_t kMsacC2TimeoutMin = 100;
 struct Initiate {
   bool response = false;
   std::uint16_t send_timeout = 0;      // request only, 10 ms units
