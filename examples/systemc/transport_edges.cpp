@@ -8,9 +8,9 @@
 #include <cstdint>
 #include <cstdio>
 #include <string>
-#include <utility>
 #include <systemc>
 #include <tlm>
+#include <utility>
 
 #include "dpc31_tlm.hpp"
 
