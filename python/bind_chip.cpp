@@ -435,7 +435,8 @@ void bind_chip_class(py::module_& m) {
            py::arg("profile") = "dpc31", py::arg("bus") = "intel", py::arg("clock_hz") = 0,
            py::arg("engine") = "event", py::arg("variant") = py::none(),
            py::arg("irq_controller") = "external")
-      // run: the reset's edges reach the observers, whose exception is raised here
+      // run: the reset's edges reach the observers, whose exception is raised here; under a
+      // Cpu51Board at the board's instant, where the chip's clock counts on (docs/cpu.md)
       .def("reset",
            [](PyChip& c) {
              c.run([&] { c.chip.reset(c.board != nullptr ? c.board->instant() : 0); });
