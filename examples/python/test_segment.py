@@ -554,6 +554,16 @@ def test_a_station_refused_at_its_init_leaves_the_segment_as_it_was(built, tmp_p
         seg.add_station(5, "spc3", firmware="DO4", name="spc3", wd=(1, 1))
         if refused:
             cycle = seg.cycle
+            # Refused before the chip is made: a taken name, a bad address, firmware or profile,
+            # buffers past the built-in user side's RAM.
+            for bad_args in (dict(address=6, name="spc3"), dict(address=200),
+                             dict(address=6, firmware="NOPE"), dict(address=6, profile="spc4"),
+                             dict(address=6, profile="spc3",
+                                  slave=dpc31.SlaveConfig(address=6, in_len=244, out_len=244))):
+                with pytest.raises((ValueError, dpc31.FirmwareError)):
+                    seg.add_station(**bad_args)
+                assert seg.size == 1, bad_args
+            # Refused by the firmware's init, on the station's chip: it leaves again.
             with pytest.raises(dpc31.FirmwareError,
                                match=r"^firmware BAD: CopyToVpc3: local buffer is NULL"):
                 seg.add_station(6, "dpc31", firmware=bad, name="dpc31")
