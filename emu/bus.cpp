@@ -213,8 +213,8 @@ bool ChipCore::bus_equal(std::uint32_t a, std::uint32_t b, std::size_t len) {
   return true;
 }
 
-void ChipCore::reset() {
-  clock.now = 0;
+void ChipCore::reset(std::uint64_t at) {
+  clock.now = at;
   clock.quiet_until = 0;
   regs.reset();
   buffers.reset();
