@@ -62,7 +62,8 @@ class BusCheck {
   // `sink`: where each violation's log line goes (through the limiter).
   explicit BusCheck(BusTiming timing, LogSink sink = {});
 
-  // Wires itself to the segment's telegrams and collisions.
+  // Wires itself to the segment's telegrams and collisions, from the segment's cycle now: a
+  // telegram that began before it is judged by nothing but its end (the idle time after it).
   void watch(Segment& seg);
   // `sender`: the sending station's name (Segment::name), for the log; none: its frame's SA.
   void telegram(const LineTelegram& t, const std::string& sender = {});
@@ -96,6 +97,7 @@ class BusCheck {
   LogLimiter limiter_;
   std::array<std::uint64_t, kBusViolationKinds> counts_{};
   std::optional<std::uint64_t> last_end_;  // end of the last telegram on the line
+  std::uint64_t watched_from_ = 0;         // the segment's cycle at watch()
   std::uint64_t last_violation_ = 0;       // the cycle of the last violation
   bool token_lost_reported_ = false;
   struct Pending {

@@ -23,6 +23,8 @@
 
 #include "dpc31/bus_port.hpp"
 #include "dpc31/dp.hpp"
+#include "dpc31/log.hpp"
+#include "dpc31/pdu.hpp"
 #include "responder.hpp"
 #include "segment.hpp"
 
@@ -151,6 +153,103 @@ TEST(DpMaster, OnOneChipALateAnswerIsNoLaterRequestsAnswer) {
   }
   EXPECT_TRUE(answered_late) << "the chip never found the rate: nothing was late";
   EXPECT_EQ(master.counters().no_answer, 300u);
+}
+
+// A late answer that ends before the master's next request would start (the rogue's SC 105 bit
+// times after the request's end, on the line before the wait ends): docs/timing.md, "The master's
+// wait": the idle time counts from the end of the last telegram on the line, "whichever is
+// later", so the next request starts 105 + 11 + 33 = 149 bit times after the first one's end,
+// not TSL + TSYN = 133 (where the rogue's SC left only 17 bit times of idle). The SC is counted
+// late (MasterCounters::late) and is no request's answer.
+TEST(DpMaster, ALateAnswerMovesTheNextRequestToTsynAfterItsEnd) {
+  Line l;
+  l.master.on_send = [&](std::uint64_t start, std::span<const std::uint8_t> request,
+                         const UartFault&) {
+    if (l.first_end != 0) return;
+    l.first_end = start + request.size() * kChar;
+    l.seg.send(l.rogue, std::vector<std::uint8_t>{fdl::SC}, l.first_end + kTsl + 5 * T);
+  };
+  const Exchange a = l.master.fdl_status();
+  EXPECT_FALSE(a.answer);
+  EXPECT_EQ(a.wait_end, a.request_end + kTsl);
+  const Exchange b = l.master.fdl_status();
+  EXPECT_EQ(b.request_start, a.request_end + (105 + 11 + 33) * T);
+  EXPECT_FALSE(b.answer);
+  EXPECT_EQ(l.master.counters().late, 1u);
+  EXPECT_EQ(l.master.counters().no_answer, 2u);
+  EXPECT_TRUE(l.seg.collisions().empty());
+}
+
+// The same on one chip, 12 Mbaud (T = 4), with a slot time of 5 bit times: the chip answers
+// FDL_Status (SD1, 6 characters) at the request's end + 11 T (docs/timing.md, "Telegrams":
+// max(11, MinTSDR) T, MinTSDR_Val 11), to + 77 T; the next request starts TSYN after that end,
+// + 110 T = 440 cycles after the first one's end (before: + 38 T, the slot time's end + TSYN).
+TEST(DpMaster, OnOneChipTheRequestAfterALateAnswerWaitsTsynFromItsEnd) {
+  constexpr std::uint64_t kT12 = 4;
+  Chip chip(ChipOptions{Profile::spc3});
+  ResponderConfig rc;
+  Responder user(rc);
+  DirectBus bus(chip);
+  user.init(bus);
+  MasterConfig mc;
+  mc.baud = 12'000'000;
+  {
+    DpMaster first(chip, mc, rc.slave);  // TSL 100: the chip found the rate and answers
+    first.set_firmware([&user](BusPort& b) { user.isr(b); });
+    ASSERT_TRUE(first.startup());
+  }
+  mc.slot_bits = 5;
+  DpMaster master(chip, mc, rc.slave);
+  master.set_firmware([&user](BusPort& b) { user.isr(b); });
+  const Exchange a = master.fdl_status();
+  EXPECT_FALSE(a.answer);
+  EXPECT_EQ(a.wait_end, a.request_end + 5 * kT12);
+  const Exchange b = master.fdl_status();
+  EXPECT_EQ(b.request_start, a.request_end + (11 + 66 + 33) * kT12);
+  EXPECT_FALSE(b.answer);
+  EXPECT_EQ(master.counters().late, 1u);
+}
+
+// One chip, 12 Mbaud, MinTSDR 255 (a Set_Prm from the locking master with Lock/Unlock 00: only
+// MinTSDR taken, CP 5613 p.198): its SC comes 1020 cycles after the request's end, past TSL
+// (400). The master's Slave_Diag (SD2, 11 characters) starts TSL + TSYN = 532 cycles after the
+// Set_Prm's end and ends 484 later, at + 1016, so the chip is asked while its SC still waits for
+// its TSDR: half duplex, it does not act on that request (no `requests` counted, a warning), and
+// the SC at + 1020 comes 1 bit time after the Slave_Diag's end, before the shortest TSDR (11):
+// the master passes it over as late, not as the Slave_Diag's answer (docs/timing.md, "The
+// master's wait").
+TEST(DpMaster, OnOneChipAnAnswerDueWhenAskedAgainIsLateAndTheRequestNotActedOn) {
+  Chip chip(ChipOptions{Profile::spc3});
+  std::vector<std::string> warnings;
+  chip.set_log_sink([&warnings](const LogRecord& r) {
+    if (r.level == LogLevel::warn) warnings.push_back(r.text);
+  });
+  ResponderConfig rc;
+  Responder user(rc);
+  DirectBus bus(chip);
+  user.init(bus);
+  MasterConfig mc;
+  mc.baud = 12'000'000;
+  DpMaster master(chip, mc, rc.slave);
+  master.set_firmware([&user](BusPort& b) { user.isr(b); });
+  ASSERT_TRUE(master.startup());
+  master.slave().min_tsdr = 255;
+  const Exchange prm = master.set_prm_status(pdu::SetPrm::WD_On);  // Lock/Unlock 00
+  EXPECT_FALSE(prm.answer);
+  const std::uint32_t requests = chip.fdl_counters().requests;
+  const Exchange diag = master.slave_diag();
+  EXPECT_EQ(diag.request_start, prm.request_end + (100 + 33) * 4);
+  EXPECT_EQ(diag.request_end, prm.request_end + 1016);
+  EXPECT_FALSE(diag.answer);
+  EXPECT_FALSE(diag.stray);
+  EXPECT_EQ(diag.wait_end, diag.request_end + 400);
+  EXPECT_EQ(chip.fdl_counters().requests, requests);
+  EXPECT_EQ(master.counters().late, 1u);
+  EXPECT_EQ(std::count(warnings.begin(), warnings.end(),
+                       "a request from station 2 ended while the answer to the one before was "
+                       "still due (armed or on the line): not acted on, not answered (half "
+                       "duplex)"),
+            1);
 }
 
 // An answer mirrors its request's addresses: a telegram in its place from another station, or to
