@@ -44,7 +44,7 @@ BusCheck::BusCheck(BusTiming timing, LogSink sink)
 }
 
 void BusCheck::watch(Segment& seg) {
-  watched_from_ = seg.cycle();
+  watch_from(seg.cycle());
   seg.on_telegram = [this, &seg](const LineTelegram& t) { telegram(t, seg.name(t.from)); };
   seg.on_collision = [this, &seg](const Collision& c) {
     collision(c, seg.name(c.first), seg.name(c.second));

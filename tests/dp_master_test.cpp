@@ -43,7 +43,7 @@ struct Line {
   std::size_t rogue = seg.add_sender("rogue");
   std::size_t m = seg.add_sender("master 2");
   DpMaster master{seg, m, MasterConfig{}, {SlaveConfig{}}};
-  // The rogue sends `bytes` TSDR 11 after the end of the master's first request (its first
+  // The rogue sends `bytes` TSDR (tsdr_bits) after the end of the master's first request (its first
   // start bit and its characters: on_send), and nothing after later ones. The scheduler returns
   // after the send, as a segment waking its master does (Segment::run_until's wake_for): the
   // master looks at the line at the start bit, not only at its wait's end.
@@ -56,13 +56,14 @@ struct Line {
       if (!sent) {
         sent = true;
         seg.run_until(first_end);
-        seg.send(rogue, bytes, first_end + 11 * T);
+        seg.send(rogue, bytes, first_end + tsdr_bits * T);
         return;
       }
       seg.run_until(cycle);
     };
   }
   std::uint64_t first_end = 0;
+  std::uint64_t tsdr_bits = 11;  // the rogue's answer delay
 };
 
 TEST(DpMaster, NoAnswerEndsTheWaitASlotTimeAfterTheRequestThenTsyn) {
@@ -163,12 +164,8 @@ TEST(DpMaster, OnOneChipALateAnswerIsNoLaterRequestsAnswer) {
 // late (MasterCounters::late) and is no request's answer.
 TEST(DpMaster, ALateAnswerMovesTheNextRequestToTsynAfterItsEnd) {
   Line l;
-  l.master.on_send = [&](std::uint64_t start, std::span<const std::uint8_t> request,
-                         const UartFault&) {
-    if (l.first_end != 0) return;
-    l.first_end = start + request.size() * kChar;
-    l.seg.send(l.rogue, std::vector<std::uint8_t>{fdl::SC}, l.first_end + kTsl + 5 * T);
-  };
+  l.rogue_answers_the_first_request({fdl::SC});
+  l.tsdr_bits = 105;
   const Exchange a = l.master.fdl_status();
   EXPECT_FALSE(a.answer);
   EXPECT_EQ(a.wait_end, a.request_end + kTsl);
