@@ -645,9 +645,10 @@ void DpMaster::wait_answer(Exchange& ex, const fdl::Frame* req) {
   wake_on_txd_ = false;
   if (passed_end != 0) {  // a late answer (to the request before) passed over
     ++counters_.late;
-    note(fmt::format("[cycle {:>10}] a late answer inside the request or its shortest TSDR: no "
-                     "answer",
-                     passed_end));
+    note(
+        fmt::format("[cycle {:>10}] a late answer inside the request or its shortest TSDR: no "
+                    "answer",
+                    passed_end));
   }
   // No answer within the slot time: 0, 0 and none. An earlier answer in ex (dp_cycle's filling
   // form) lends its data unit's buffer to this one.
