@@ -15,6 +15,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <new>
 #include <span>
 #include <stdexcept>
@@ -64,6 +65,23 @@ struct Line {
   }
   std::uint64_t first_end = 0;
   std::uint64_t tsdr_bits = 11;  // the rogue's answer delay
+};
+
+// One SPC3 with the built-in user side, for masters at 12 Mbaud (T = 4) made with master().
+struct OneChip {
+  Chip chip{ChipOptions{Profile::spc3}};
+  ResponderConfig rc;
+  Responder user{rc};
+  DirectBus bus{chip};
+  OneChip() { user.init(bus); }
+  std::unique_ptr<DpMaster> master(std::uint32_t slot_bits) {
+    MasterConfig mc;
+    mc.baud = 12'000'000;  // the baud search's first rate
+    mc.slot_bits = slot_bits;
+    auto m = std::make_unique<DpMaster>(chip, mc, rc.slave);
+    m->set_firmware([this](BusPort& b) { user.isr(b); });
+    return m;
+  }
 };
 
 TEST(DpMaster, NoAnswerEndsTheWaitASlotTimeAfterTheRequestThenTsyn) {
@@ -130,16 +148,10 @@ TEST(DpMaster, ALateAnswerEndsNoWaitInsideTheNextRequest) {
 // the earliest (a bus access of the firmware may carry the run a few cycles past it).
 TEST(DpMaster, OnOneChipALateAnswerIsNoLaterRequestsAnswer) {
   constexpr std::uint64_t kT12 = 4;  // cycles a bit at 12 Mbaud
-  Chip chip(ChipOptions{Profile::spc3});
-  ResponderConfig rc;
-  Responder user(rc);
-  DirectBus bus(chip);
-  user.init(bus);
-  MasterConfig mc;
-  mc.baud = 12'000'000;  // the baud search's first rate
-  mc.slot_bits = 5;
-  DpMaster master(chip, mc, rc.slave);
-  master.set_firmware([&user](BusPort& b) { user.isr(b); });
+  OneChip one;
+  Chip& chip = one.chip;
+  const std::unique_ptr<DpMaster> owner = one.master(5);
+  DpMaster& master = *owner;
   bool answered_late = false;  // the chip answered at all (it found the rate)
   std::uint64_t last_end = 0;
   for (int i = 0; i < 300; ++i) {
@@ -183,21 +195,10 @@ TEST(DpMaster, ALateAnswerMovesTheNextRequestToTsynAfterItsEnd) {
 // + 110 T = 440 cycles after the first one's end (before: + 38 T, the slot time's end + TSYN).
 TEST(DpMaster, OnOneChipTheRequestAfterALateAnswerWaitsTsynFromItsEnd) {
   constexpr std::uint64_t kT12 = 4;
-  Chip chip(ChipOptions{Profile::spc3});
-  ResponderConfig rc;
-  Responder user(rc);
-  DirectBus bus(chip);
-  user.init(bus);
-  MasterConfig mc;
-  mc.baud = 12'000'000;
-  {
-    DpMaster first(chip, mc, rc.slave);  // TSL 100: the chip found the rate and answers
-    first.set_firmware([&user](BusPort& b) { user.isr(b); });
-    ASSERT_TRUE(first.startup());
-  }
-  mc.slot_bits = 5;
-  DpMaster master(chip, mc, rc.slave);
-  master.set_firmware([&user](BusPort& b) { user.isr(b); });
+  OneChip one;
+  ASSERT_TRUE(one.master(100)->startup());  // TSL 100: the chip found the rate and answers
+  const std::unique_ptr<DpMaster> owner = one.master(5);
+  DpMaster& master = *owner;
   const Exchange a = master.fdl_status();
   EXPECT_FALSE(a.answer);
   EXPECT_EQ(a.wait_end, a.request_end + 5 * kT12);
@@ -216,19 +217,14 @@ TEST(DpMaster, OnOneChipTheRequestAfterALateAnswerWaitsTsynFromItsEnd) {
 // the master passes it over as late, not as the Slave_Diag's answer (docs/timing.md, "The
 // master's wait").
 TEST(DpMaster, OnOneChipAnAnswerDueWhenAskedAgainIsLateAndTheRequestNotActedOn) {
-  Chip chip(ChipOptions{Profile::spc3});
+  OneChip one;
+  Chip& chip = one.chip;
   std::vector<std::string> warnings;
   chip.set_log_sink([&warnings](const LogRecord& r) {
     if (r.level == LogLevel::warn) warnings.push_back(r.text);
   });
-  ResponderConfig rc;
-  Responder user(rc);
-  DirectBus bus(chip);
-  user.init(bus);
-  MasterConfig mc;
-  mc.baud = 12'000'000;
-  DpMaster master(chip, mc, rc.slave);
-  master.set_firmware([&user](BusPort& b) { user.isr(b); });
+  const std::unique_ptr<DpMaster> owner = one.master(100);
+  DpMaster& master = *owner;
   ASSERT_TRUE(master.startup());
   master.slave().min_tsdr = 255;
   const Exchange prm = master.set_prm_status(pdu::SetPrm::WD_On);  // Lock/Unlock 00
