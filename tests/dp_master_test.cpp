@@ -245,6 +245,17 @@ TEST(DpMaster, OnOneChipAnAnswerDueWhenAskedAgainIsLateAndTheRequestNotActedOn) 
             1);
 }
 
+// The audit's start-up with MinTSDR 255 and TSL 100 (12 Mbaud): from the Set_Prm on every answer
+// is late, so none is taken, and `startup()` does not report a Data_Exchange it never saw (it
+// returned true from a Chk_Cfg's late SC taken as the next Slave_Diag's answer).
+TEST(DpMaster, AStartUpWhoseAnswersAreAllLateFails) {
+  OneChip one;
+  one.rc.slave.min_tsdr = 255;
+  const std::unique_ptr<DpMaster> owner = one.master(100);
+  EXPECT_FALSE(owner->startup(20));
+  EXPECT_GT(owner->counters().late, 0u);
+}
+
 // An answer mirrors its request's addresses: a telegram in its place from another station, or to
 // another, is not its answer (Exchange::stray, counted as a bad answer).
 TEST(DpMaster, ATelegramAddressedOtherwiseIsNotTheAnswer) {
