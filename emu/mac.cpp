@@ -534,6 +534,15 @@ void Mac::on_frame(const fdl::Frame& f, const UartChar& last) {
     ++counters_.foreign_address;
     return;
   }
+  if (f.da == dp_.station() && tx_busy()) {
+    // Half duplex, one request at a time: the answer to the one before still waits for its TSDR
+    // or is on the line, so this one is not acted on (docs/timing.md, "Telegrams").
+    sig_.log(LogLevel::warn,
+             "a request from station {} ended while the answer to the one before was still due "
+             "(armed or on the line): not acted on, not answered (half duplex)",
+             f.sa);
+    return;
+  }
   if (f.da == dp_.station()) watchdog_.retrigger(f.sa, dp_.master_add());
   serving_ = true;
   if (dp_.service(f)) send(dp_.answer(), last.end);

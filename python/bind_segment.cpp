@@ -736,6 +736,7 @@ void bind_segment_class(py::module_& m) {
             s.check = std::make_shared<BusCheck>(t, [&s](const LogRecord& r) {
               s.check_log.push_back("[cycle " + std::to_string(r.cycle) + "] " + r.text);
             });
+            s.check->watch_from(s.seg.cycle());
             return PyBusCheck{s.check, s.run_state()};
           },
           py::kw_only(), py::arg("ttr") = 0, py::arg("slot_bits") = py::none(),

@@ -122,7 +122,8 @@ void bind_frames(py::module_& m) {
       .def_readonly("answered", &MasterCounters::answered)
       .def_readonly("no_answer", &MasterCounters::no_answer)
       .def_readonly("bad_answer", &MasterCounters::bad_answer)
-      .def_readonly("noise", &MasterCounters::noise);
+      .def_readonly("noise", &MasterCounters::noise)
+      .def_readonly("late", &MasterCounters::late);
   py::class_<SlaveConfig>(m, "SlaveConfig", "The slave as the master parameterises it.")
       .def(py::init(&with_kwargs<SlaveConfig>))
       .def_property(

@@ -44,6 +44,7 @@ BusCheck::BusCheck(BusTiming timing, LogSink sink)
 }
 
 void BusCheck::watch(Segment& seg) {
+  watch_from(seg.cycle());
   seg.on_telegram = [this, &seg](const LineTelegram& t) { telegram(t, seg.name(t.from)); };
   seg.on_collision = [this, &seg](const Collision& c) {
     collision(c, seg.name(c.first), seg.name(c.second));
@@ -158,6 +159,12 @@ void BusCheck::arrive(std::uint8_t holder, std::uint64_t at, bool rotated) {
 }
 
 void BusCheck::telegram(const LineTelegram& t, const std::string& sender) {
+  if (t.start < watched_from_) {
+    // Begun before the check (armed inside it, as after a call that returns at an answer's last
+    // stop sample): its request was not seen, so it is no answer, nor unsolicited.
+    last_end_ = t.end;
+    return;
+  }
   idle_until(t.start);
   token_lost_reported_ = false;
   const fdl::Decoded d = fdl::decode(t.bytes);

@@ -62,8 +62,12 @@ class BusCheck {
   // `sink`: where each violation's log line goes (through the limiter).
   explicit BusCheck(BusTiming timing, LogSink sink = {});
 
-  // Wires itself to the segment's telegrams and collisions.
+  // Wires itself to the segment's telegrams and collisions, from the segment's cycle now
+  // (watch_from).
   void watch(Segment& seg);
+  // Judges the telegrams that begin at or after `cycle`: one that began before it (its request
+  // unseen, when armed inside an answer) counts only by its end, for the idle time after it.
+  void watch_from(std::uint64_t cycle) { watched_from_ = cycle; }
   // `sender`: the sending station's name (Segment::name), for the log; none: its frame's SA.
   void telegram(const LineTelegram& t, const std::string& sender = {});
   void collision(const Collision& c, const std::string& first, const std::string& second);
@@ -96,6 +100,7 @@ class BusCheck {
   LogLimiter limiter_;
   std::array<std::uint64_t, kBusViolationKinds> counts_{};
   std::optional<std::uint64_t> last_end_;  // end of the last telegram on the line
+  std::uint64_t watched_from_ = 0;         // the segment's cycle at watch()
   std::uint64_t last_violation_ = 0;       // the cycle of the last violation
   bool token_lost_reported_ = false;
   struct Pending {

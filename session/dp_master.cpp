@@ -13,6 +13,11 @@
 
 namespace dpc31 {
 
+namespace {
+// A slave answers no earlier than 11 bit times after its request's end (EN 50170: TSDR >= 11).
+constexpr std::uint32_t kShortestTsdrBits = 11;
+}  // namespace
+
 std::uint64_t send_on_rxd(Chip& chip, std::span<const std::uint8_t> bytes, std::uint64_t start,
                           std::uint32_t bit_cycles, UartFault fault) {
   if (fault.kind != UartFault::Kind::none)
@@ -337,10 +342,10 @@ std::uint64_t DpMaster::look() {
   chars_.clear();
   const std::uint64_t at = now();
   rx_.advance(at, chars_);
-  // On a segment every station counts its idle time from the last character on the line,
-  // whoever sent it; a telegram still arriving is not waited for (docs/timing.md, "The master's
-  // wait"), and a single chip's answers are the master's own exchanges.
-  if (seg_ && !rx_.receiving()) {
+  // Every station counts its idle time from the last character on the line, whoever sent it
+  // (a single chip's late answer too); a telegram still arriving is not waited for here, but by
+  // next_start after a wait without an answer (docs/timing.md, "The master's wait").
+  if (!rx_.receiving()) {
     if (!rx_.due().empty()) {
       line_end_ = rx_.due_start() + rx_.due().size() * std::uint64_t{kUartCharBits} * t_;
     } else if (!chars_.empty()) {
@@ -399,8 +404,38 @@ std::uint64_t DpMaster::send_time(std::uint64_t at, std::uint32_t idle_bits) con
   return std::max(at, std::max(bus_free_, line_end_) + std::uint64_t{idle_bits} * t_);
 }
 
+std::uint64_t DpMaster::next_start(std::uint32_t idle_bits) {
+  std::uint64_t start = send_time(look(), idle_bits);
+  if (!watch_late_) return start;
+  // The asked station may still answer after the slot time (a MinTSDR above TSL): a telegram
+  // that comes before our start is that late answer, no answer to any request, and the idle
+  // time counts from its end (TSYN for the stations after it), as from any telegram's.
+  watch_late_ = false;
+  bool heard = late_heard_;
+  late_heard_ = false;
+  for (;;) {
+    heard = heard || rx_.receiving() || !chars_.empty() || !rx_.due().empty();
+    if (rx_.receiving()) {
+      run_until(std::max(rx_.next_deadline(), now() + 1));
+    } else {
+      start = send_time(now(), idle_bits);
+      if (now() >= start) break;
+      wake_on_txd_ = true;  // a start bit wakes the master up
+      run_until(start);
+      wake_on_txd_ = false;
+    }
+    look();
+  }
+  if (heard) {
+    ++counters_.late;
+    note(fmt::format("[cycle {:>10}] a late answer on the line (after the slot time): no answer",
+                     line_end_));
+  }
+  return start;
+}
+
 void DpMaster::line_noise(std::span<const std::uint8_t> bytes, std::uint32_t idle_bits) {
-  const std::uint64_t start = send_time(look(), idle_bits);
+  const std::uint64_t start = next_start(idle_bits);
   if (on_send) on_send(start, bytes, {});
   bus_free_ = put_on_line(bytes, start, {});
   ++counters_.noise;
@@ -408,7 +443,7 @@ void DpMaster::line_noise(std::span<const std::uint8_t> bytes, std::uint32_t idl
 }
 
 void DpMaster::glitch(std::uint32_t low_cycles) {
-  const std::uint64_t start = send_time(look(), cfg_.idle_bits);
+  const std::uint64_t start = next_start(cfg_.idle_bits);
   if (seg_) {
     seg_->pulse(station_, start, low_cycles);
   } else {
@@ -482,7 +517,7 @@ void DpMaster::send(std::span<const std::uint8_t> bytes, UartFault fault, bool n
                     Exchange& ex, const fdl::Frame* req) {
   place_fault(fault, bytes.size());
   // What the line carried before (another master's traffic, for instance) is no answer to us.
-  ex.request_start = send_time(look(), cfg_.idle_bits);
+  ex.request_start = next_start(cfg_.idle_bits);
   if (on_send) on_send(ex.request_start, bytes, fault);
   ex.request_end = put_on_line(bytes, ex.request_start, fault);
   // On a segment the wait for an answer runs the line itself: a stop at the request's end would
@@ -521,13 +556,15 @@ void DpMaster::wait_answer(Exchange& ex, const fdl::Frame* req) {
   // The slot time is the wait for an answer's first start bit: one later is no answer.
   const std::uint64_t last_start = ex.request_end + slot;
   answer_.reset();
-  // What began before the request's end is no answer to it (a late answer to the request before,
-  // another station's telegram): a character that starts then, and each one back to back after
-  // it (less than a bit time of idle: the same telegram), is passed over.
+  // What began before the request's end + the shortest TSDR (11 bit times, EN 50170) is no answer
+  // to it (a late answer to the request before, another station's telegram): a character that
+  // starts then, and each one back to back after it (less than a bit time of idle: the same
+  // telegram), is passed over.
+  const std::uint64_t first_answer = ex.request_end + std::uint64_t{kShortestTsdrBits} * t_;
   std::uint64_t passed_end = 0;
   const auto passed = [&](std::uint64_t start) {
     return !answer_.started() &&
-           (start < ex.request_end || (passed_end != 0 && start < passed_end + t_));
+           (start < first_answer || (passed_end != 0 && start < passed_end + t_));
   };
   bool late = false;  // a first start bit past the slot time came
   // The character starting at `start` belongs to the answer (else it is passed over, or late).
@@ -572,9 +609,12 @@ void DpMaster::wait_answer(Exchange& ex, const fdl::Frame* req) {
     const bool late_start = !answer_.started() && rx_.receiving() && !passed(rx_.busy_from()) &&
                             rx_.busy_from() > last_start;
     if (late || late_start || (!rx_.receiving() && at >= wait_end)) {
-      // The wait ended at wait_end; a late start bit is found only at or past it.
+      // The wait ended at wait_end; a late start bit is found only at or past it. Without an
+      // answer started the asked station may still answer: next_start watches for it.
       bus_free_ = at;
       ex.wait_end = wait_end;
+      watch_late_ = !answer_.started();
+      late_heard_ = late || late_start;
       break;
     }
     // Event-driven: sleep until a start bit (TxD falls) or the wait ends; once the length is
@@ -603,6 +643,13 @@ void DpMaster::wait_answer(Exchange& ex, const fdl::Frame* req) {
     run_until(std::max(next, at + 1));
   }
   wake_on_txd_ = false;
+  if (passed_end != 0) {  // a late answer (to the request before) passed over
+    ++counters_.late;
+    note(
+        fmt::format("[cycle {:>10}] a late answer inside the request or its shortest TSDR: no "
+                    "answer",
+                    passed_end));
+  }
   // No answer within the slot time: 0, 0 and none. An earlier answer in ex (dp_cycle's filling
   // form) lends its data unit's buffer to this one.
   ex.answer_start = answer_.start();

@@ -160,6 +160,10 @@ struct MasterCounters {
   // request's answer (Exchange::stray).
   std::uint64_t bad_answer = 0;
   std::uint64_t noise = 0;  // noise bursts and glitches put on the line (line_noise, glitch)
+  // Telegrams taken for late answers, no answer to any request (docs/timing.md, "The master's
+  // wait"): one heard after a wait ended without an answer, before the next request went out,
+  // or one whose first start bit came before a request's end + 11 bit times (the shortest TSDR).
+  std::uint64_t late = 0;
 };
 
 // Requests of a start-up by default: enough FDL_Status for the chip's baud search from Start at
@@ -370,6 +374,9 @@ class DpMaster {
   // The first start bit a telegram of ours may have at `at` or later: `idle_bits` after the end
   // of the last telegram on the line, ours or another station's (as far as look() heard it).
   [[nodiscard]] std::uint64_t send_time(std::uint64_t at, std::uint32_t idle_bits) const;
+  // send_time from now, the line watched up to it after a wait without an answer (watch_late_):
+  // a late answer heard there moves it to `idle_bits` after that telegram's end.
+  std::uint64_t next_start(std::uint32_t idle_bits);
   void note(const std::string& s);
   [[nodiscard]] std::uint64_t now() const;
   std::uint64_t put_on_line(std::span<const std::uint8_t> bytes, std::uint64_t start,
@@ -422,6 +429,10 @@ class DpMaster {
   bool wake_on_txd_ = false;    // waiting for an answer whose length is not known yet
   std::uint64_t bus_free_ = 0;  // where our own last exchange left the line free
   std::uint64_t line_end_ = 0;  // end of the last character another station drove (look())
+  // The last wait ended without an answer: the asked station may still answer late, so the
+  // line is watched up to the next request's start (quiet_start).
+  bool watch_late_ = false;
+  bool late_heard_ = false;  // that wait ended at a late start bit: the watch counts it
   std::unique_ptr<Cpu> cpu_;
   std::vector<Exchange> history_;
   // The exchanges clear_history() forgot last: history() takes each new exchange as a copy into

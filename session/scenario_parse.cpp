@@ -238,9 +238,7 @@ class Parser {
   void wd_base_agrees(const SlaveConfig& sl, bool wd_base_10ms, int line) const {
     if (!wd_base_10ms || sl.user_prm.empty() || (sl.user_prm[0] & dpv1::status1::WD_Base) == 0)
       return;
-    fail_at(line,
-            "wd_base=10ms contradicts user_prm byte 0 bit 2 (WD_Base: the 1 ms base): both are "
-            "Set_Prm byte 7 bit 2; give one of them");
+    fail_at(line, wd_base_contradicts_user_prm());
   }
 
   // Cycles, or a time with a unit; rounded up like every minimum time (docs/timing.md).

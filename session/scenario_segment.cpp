@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "dpc31/bus_port.hpp"
+#include "dpc31/dp.hpp"
 #include "firmware_host.hpp"
 #include "responder.hpp"
 #include "scenario_lex.hpp"
@@ -207,6 +208,19 @@ class Parser {
       if (f.size() != 2) fail(fmt::format("wd='{}': two factors, as in wd=10,10", *v));
       st.slave.wd_fact1 = static_cast<std::uint8_t>(number(f[0], kWdFactor1));
       st.slave.wd_fact2 = static_cast<std::uint8_t>(number(f[1], kWdFactor2));
+    }
+    // The single chip's `slave` options of the same names, with their checks.
+    if (auto v = take("min_tsdr"))
+      st.slave.min_tsdr = static_cast<std::uint8_t>(number(*v, kMinTsdr));
+    if (auto v = take("wd_base")) {
+      if (*v != "1ms" && *v != "10ms") fail(fmt::format("wd_base '{}': 1ms or 10ms", *v));
+      st.slave.wd_base_1ms = *v == "1ms";
+      const std::vector<std::uint8_t>& up = st.slave.user_prm;  // a firmware's GSD defaults
+      if (st.chip.profile == Profile::vpc3plus &&
+          (up.empty() || (up[0] & dpv1::status1::DPV1_Enable) == 0))
+        fail(wd_base_needs_dpv1("wd_base="));
+      if (!st.slave.wd_base_1ms && !up.empty() && (up[0] & dpv1::status1::WD_Base) != 0)
+        fail(wd_base_contradicts_user_prm());
     }
     new_station_name(st.name);
     s_.stations.push_back(std::move(st));

@@ -241,6 +241,11 @@ std::string wd_base_needs_dpv1(std::string_view option) {
       option);
 }
 
+std::string wd_base_contradicts_user_prm() {
+  return "wd_base=10ms contradicts user_prm byte 0 bit 2 (WD_Base: the 1 ms base): both are "
+         "Set_Prm byte 7 bit 2; give one of them";
+}
+
 std::string records_need_dpv1(std::string_view option, const std::vector<std::uint8_t>& user_prm) {
   if (!user_prm.empty() && (user_prm[0] & dpv1::status1::DPV1_Enable) != 0) return {};
   return fmt::format(

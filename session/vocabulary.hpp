@@ -185,6 +185,8 @@ inline constexpr std::size_t kMaxStationName = 64;
 // The VPC3+ takes WD_Base from Set_Prm's DPV1_Status_1 only with DPV1_Enable; without it
 // Mode_Reg0.WD_Base decides (VPC3+C p.53, docs/dpv1.md): a watchdog base asked of Set_Prm there.
 [[nodiscard]] std::string wd_base_needs_dpv1(std::string_view option);
+// wd_base=10ms beside a user_prm byte 0 with bit 2 (the 1 ms base): both are Set_Prm byte 7 bit 2.
+[[nodiscard]] std::string wd_base_contradicts_user_prm();
 // The built-in user side's records are served through the VPC3+'s SAP list, which only a Set_Prm
 // with DPV1_Enable switches on: "" for a slave `user_prm` with it, else why records (`option`:
 // "record", "records=") are refused.

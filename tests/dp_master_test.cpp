@@ -15,6 +15,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <new>
 #include <span>
 #include <stdexcept>
@@ -23,6 +24,8 @@
 
 #include "dpc31/bus_port.hpp"
 #include "dpc31/dp.hpp"
+#include "dpc31/log.hpp"
+#include "dpc31/pdu.hpp"
 #include "responder.hpp"
 #include "segment.hpp"
 
@@ -41,7 +44,7 @@ struct Line {
   std::size_t rogue = seg.add_sender("rogue");
   std::size_t m = seg.add_sender("master 2");
   DpMaster master{seg, m, MasterConfig{}, {SlaveConfig{}}};
-  // The rogue sends `bytes` TSDR 11 after the end of the master's first request (its first
+  // The rogue sends `bytes` TSDR (tsdr_bits) after the end of the master's first request (its first
   // start bit and its characters: on_send), and nothing after later ones. The scheduler returns
   // after the send, as a segment waking its master does (Segment::run_until's wake_for): the
   // master looks at the line at the start bit, not only at its wait's end.
@@ -54,13 +57,31 @@ struct Line {
       if (!sent) {
         sent = true;
         seg.run_until(first_end);
-        seg.send(rogue, bytes, first_end + 11 * T);
+        seg.send(rogue, bytes, first_end + tsdr_bits * T);
         return;
       }
       seg.run_until(cycle);
     };
   }
   std::uint64_t first_end = 0;
+  std::uint64_t tsdr_bits = 11;  // the rogue's answer delay
+};
+
+// One SPC3 with the built-in user side, for masters at 12 Mbaud (T = 4) made with master().
+struct OneChip {
+  Chip chip{ChipOptions{Profile::spc3}};
+  ResponderConfig rc;
+  Responder user{rc};
+  DirectBus bus{chip};
+  OneChip() { user.init(bus); }
+  std::unique_ptr<DpMaster> master(std::uint32_t slot_bits) {
+    MasterConfig mc;
+    mc.baud = 12'000'000;  // the baud search's first rate
+    mc.slot_bits = slot_bits;
+    auto m = std::make_unique<DpMaster>(chip, mc, rc.slave);
+    m->set_firmware([this](BusPort& b) { user.isr(b); });
+    return m;
+  }
 };
 
 TEST(DpMaster, NoAnswerEndsTheWaitASlotTimeAfterTheRequestThenTsyn) {
@@ -127,16 +148,10 @@ TEST(DpMaster, ALateAnswerEndsNoWaitInsideTheNextRequest) {
 // the earliest (a bus access of the firmware may carry the run a few cycles past it).
 TEST(DpMaster, OnOneChipALateAnswerIsNoLaterRequestsAnswer) {
   constexpr std::uint64_t kT12 = 4;  // cycles a bit at 12 Mbaud
-  Chip chip(ChipOptions{Profile::spc3});
-  ResponderConfig rc;
-  Responder user(rc);
-  DirectBus bus(chip);
-  user.init(bus);
-  MasterConfig mc;
-  mc.baud = 12'000'000;  // the baud search's first rate
-  mc.slot_bits = 5;
-  DpMaster master(chip, mc, rc.slave);
-  master.set_firmware([&user](BusPort& b) { user.isr(b); });
+  OneChip one;
+  Chip& chip = one.chip;
+  const std::unique_ptr<DpMaster> owner = one.master(5);
+  DpMaster& master = *owner;
   bool answered_late = false;  // the chip answered at all (it found the rate)
   std::uint64_t last_end = 0;
   for (int i = 0; i < 300; ++i) {
@@ -151,6 +166,94 @@ TEST(DpMaster, OnOneChipALateAnswerIsNoLaterRequestsAnswer) {
   }
   EXPECT_TRUE(answered_late) << "the chip never found the rate: nothing was late";
   EXPECT_EQ(master.counters().no_answer, 300u);
+}
+
+// A late answer that ends before the master's next request would start (the rogue's SC 105 bit
+// times after the request's end, on the line before the wait ends): docs/timing.md, "The master's
+// wait": the idle time counts from the end of the last telegram on the line, "whichever is
+// later", so the next request starts 105 + 11 + 33 = 149 bit times after the first one's end,
+// not TSL + TSYN = 133 (where the rogue's SC left only 17 bit times of idle). The SC is counted
+// late (MasterCounters::late) and is no request's answer.
+TEST(DpMaster, ALateAnswerMovesTheNextRequestToTsynAfterItsEnd) {
+  Line l;
+  l.rogue_answers_the_first_request({fdl::SC});
+  l.tsdr_bits = 105;
+  const Exchange a = l.master.fdl_status();
+  EXPECT_FALSE(a.answer);
+  EXPECT_EQ(a.wait_end, a.request_end + kTsl);
+  const Exchange b = l.master.fdl_status();
+  EXPECT_EQ(b.request_start, a.request_end + (105 + 11 + 33) * T);
+  EXPECT_FALSE(b.answer);
+  EXPECT_EQ(l.master.counters().late, 1u);
+  EXPECT_EQ(l.master.counters().no_answer, 2u);
+  EXPECT_TRUE(l.seg.collisions().empty());
+}
+
+// The same on one chip, 12 Mbaud (T = 4), with a slot time of 5 bit times: the chip answers
+// FDL_Status (SD1, 6 characters) at the request's end + 11 T (docs/timing.md, "Telegrams":
+// max(11, MinTSDR) T, MinTSDR_Val 11), to + 77 T; the next request starts TSYN after that end,
+// + 110 T = 440 cycles after the first one's end (before: + 38 T, the slot time's end + TSYN).
+TEST(DpMaster, OnOneChipTheRequestAfterALateAnswerWaitsTsynFromItsEnd) {
+  constexpr std::uint64_t kT12 = 4;
+  OneChip one;
+  ASSERT_TRUE(one.master(100)->startup());  // TSL 100: the chip found the rate and answers
+  const std::unique_ptr<DpMaster> owner = one.master(5);
+  DpMaster& master = *owner;
+  const Exchange a = master.fdl_status();
+  EXPECT_FALSE(a.answer);
+  EXPECT_EQ(a.wait_end, a.request_end + 5 * kT12);
+  const Exchange b = master.fdl_status();
+  EXPECT_EQ(b.request_start, a.request_end + (11 + 66 + 33) * kT12);
+  EXPECT_FALSE(b.answer);
+  EXPECT_EQ(master.counters().late, 1u);
+}
+
+// One chip, 12 Mbaud, MinTSDR 255 (a Set_Prm from the locking master with Lock/Unlock 00: only
+// MinTSDR taken, CP 5613 p.198): its SC comes 1020 cycles after the request's end, past TSL
+// (400). The master's Slave_Diag (SD2, 11 characters) starts TSL + TSYN = 532 cycles after the
+// Set_Prm's end and ends 484 later, at + 1016, so the chip is asked while its SC still waits for
+// its TSDR: half duplex, it does not act on that request (no `requests` counted, a warning), and
+// the SC at + 1020 comes 1 bit time after the Slave_Diag's end, before the shortest TSDR (11):
+// the master passes it over as late, not as the Slave_Diag's answer (docs/timing.md, "The
+// master's wait").
+TEST(DpMaster, OnOneChipAnAnswerDueWhenAskedAgainIsLateAndTheRequestNotActedOn) {
+  OneChip one;
+  Chip& chip = one.chip;
+  std::vector<std::string> warnings;
+  chip.set_log_sink([&warnings](const LogRecord& r) {
+    if (r.level == LogLevel::warn) warnings.push_back(r.text);
+  });
+  const std::unique_ptr<DpMaster> owner = one.master(100);
+  DpMaster& master = *owner;
+  ASSERT_TRUE(master.startup());
+  master.slave().min_tsdr = 255;
+  const Exchange prm = master.set_prm_status(pdu::SetPrm::WD_On);  // Lock/Unlock 00
+  EXPECT_FALSE(prm.answer);
+  const std::uint32_t requests = chip.fdl_counters().requests;
+  const Exchange diag = master.slave_diag();
+  EXPECT_EQ(diag.request_start, prm.request_end + (100 + 33) * 4);
+  EXPECT_EQ(diag.request_end, prm.request_end + 1016);
+  EXPECT_FALSE(diag.answer);
+  EXPECT_FALSE(diag.stray);
+  EXPECT_EQ(diag.wait_end, diag.request_end + 400);
+  EXPECT_EQ(chip.fdl_counters().requests, requests);
+  EXPECT_EQ(master.counters().late, 1u);
+  EXPECT_EQ(std::count(warnings.begin(), warnings.end(),
+                       "a request from station 2 ended while the answer to the one before was "
+                       "still due (armed or on the line): not acted on, not answered (half "
+                       "duplex)"),
+            1);
+}
+
+// The audit's start-up with MinTSDR 255 and TSL 100 (12 Mbaud): from the Set_Prm on every answer
+// is late, so none is taken, and `startup()` does not report a Data_Exchange it never saw (it
+// returned true from a Chk_Cfg's late SC taken as the next Slave_Diag's answer).
+TEST(DpMaster, AStartUpWhoseAnswersAreAllLateFails) {
+  OneChip one;
+  one.rc.slave.min_tsdr = 255;
+  const std::unique_ptr<DpMaster> owner = one.master(100);
+  EXPECT_FALSE(owner->startup(20));
+  EXPECT_GT(owner->counters().late, 0u);
 }
 
 // An answer mirrors its request's addresses: a telegram in its place from another station, or to

@@ -319,13 +319,15 @@ TEST(ScenarioWalk, AStartupOfASlaveLockedByAnotherMasterSaysSo) {
   EXPECT_EQ(said, 1);
 }
 
-// On one chip the master's idle time counts from its own exchanges: a late answer still on the
-// line when a step's request is due is not waited for (docs/timing.md, "The master's wait"; the
-// review s28 rev2 finding 2: a version that counted every character it had heard started the
-// request TSYN after the late answer's 4th character). MinTSDR 60 bit times is past the slot time
-// 37, so every answer is late; after `silence 40bits` (more than TSYN 33 since the last wait's
-// end) the request starts as its step does, into the late answer.
-TEST(ScenarioWalk, OnOneChipALateAnswerOnTheLineIsNotWaitedFor) {
+// On one chip too the master's idle time counts from the end of the last telegram on the line:
+// after a wait without an answer, a late answer that comes before the next request moves it to
+// TSYN after that answer's end (docs/timing.md, "The master's wait"; until the thirty-third
+// session the request started as its step did, into the late answer). 1.5 Mbaud, T = 32:
+// MinTSDR 60 bit times is past the slot time 37, so every answer is late. The first `exchange`'s
+// repeat ends at E; its wait at E + 37 T; the `silence 40bits` step starts TSYN later and ends at
+// S = E + 110 T. The late answer (the FCB repeat's, SD2 with 4 input bytes: 13 characters, 143 T)
+// runs from E + 60 T to E + 203 T, so the step's Data_Exchange starts at E + 236 T = S + 126 T.
+TEST(ScenarioWalk, OnOneChipALateAnswerOnTheLineIsWaitedFor) {
   const Walk w =
       run("profile spc3\nbaud 1500000\nmaster address=2 slot=37\nslave address=5 min_tsdr=60\n"
           "startup\nexchange 1\nsilence 40bits\nexchange 1\n",
@@ -340,7 +342,7 @@ TEST(ScenarioWalk, OnOneChipALateAnswerOnTheLineIsNotWaitedFor) {
     return std::pair{std::uint64_t{0}, w.lines.size()};
   };
   const auto [step, at] = cycle_of("] line 8: exchange 1", 0);
-  EXPECT_EQ(cycle_of("] 2 -> 5 Data_Exchange", at).first, step);
+  EXPECT_EQ(cycle_of("] 2 -> 5 Data_Exchange", at).first, step + 126 * 32);
 }
 
 // A host user side that never starts the chip (the GLOBALS plug-in of tests/bad_plugin.c: its

@@ -79,6 +79,28 @@ TEST(SegmentScenario, ExpectTsdrSaysTheDelaysInBitTimes) {
                         "t.scn:4: expected tsdr 12, got 5 answers, delays 11..11 bit times"});
 }
 
+// A station's min_tsdr= and wd_base= (the single chip's `slave` options, docs/scenario-format.md
+// "Segments"): the master's Set_Prm carries them. 12 Mbaud. MinTSDR 20 on station 6: its answers
+// from the Set_Prm's SC on start 20 T after their request's end (docs/timing.md, "answer":
+// max(11, MinTSDR) T; before it, FDL_Status and Slave_Diag at 11), so `expect tsdr 20` fails
+// with the delays 11..20. The 1 ms base with wd=1,1 on station 5: TWD = 1 ms x 1 x 1, and left
+// unpolled it expires 1 ms after its last restart (with the 10 ms base not within `run 2ms`).
+TEST(SegmentScenario, AStationsMinTsdrAndWdBaseReachItsSetPrm) {
+  SegmentScenario s;
+  ScenarioError err;
+  ASSERT_TRUE(parse_segment_scenario(
+      "segment baud=12000000\nstation 5 profile=spc3 wd=1,1 wd_base=1ms\n"
+      "station 6 profile=dpc31 min_tsdr=20\nmaster 2 slaves=5,6\nstartup\ncycle 1 skip=5\n"
+      "run 2ms\nexpect watchdog_expired 5 twd=1ms\nexpect tsdr 20\n",
+      "t.scn", s, err))
+      << err.text();
+  std::vector<std::string> errors;
+  EXPECT_EQ(run_segment_scenario(s, {}, [&errors](const std::string& e) { errors.push_back(e); }),
+            1);
+  EXPECT_EQ(errors, std::vector<std::string>{
+                        "t.scn:9: expected tsdr 20, got 11 answers, delays 11..20 bit times"});
+}
+
 // Two stations on one address and no `master` line: the default master polls every address once
 // (one FCB state per slave). Both answer each of the start-up's five requests (docs/segment.md:
 // FDL_Status, Slave_Diag, Set_Prm, Chk_Cfg, Slave_Diag) at the same MinTSDR: five collisions, the
@@ -278,6 +300,13 @@ TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
        "f.scn:2: bad value 'yes' for user_wd: 0 or 1"},
       {"segment\nstation 5 profile=spc3 user_wd_value=65536\n",
        "f.scn:2: user_wd_value 65536 out of range (0..65535)"},
+      // The single chip's `slave` min_tsdr= and wd_base=, with its checks and words.
+      {"segment\nstation 5 profile=spc3 min_tsdr=256\n",
+       "f.scn:2: min_tsdr 256 out of range (0..255)"},
+      {"segment\nstation 5 profile=spc3 wd_base=2ms\n", "f.scn:2: wd_base '2ms': 1ms or 10ms"},
+      {"segment\nstation 5 profile=vpc3plus wd_base=1ms\n",
+       "f.scn:2: wd_base= on profile vpc3plus needs DPV1_Enable (user_prm byte 0 bit 7): without "
+       "DPV1 the VPC3+ takes WD_Base from Mode_Reg0, not from Set_Prm"},
       // A master's slaves are stations of the segment, named before or after it.
       {"segment\nstation 5\nmaster 2 slaves=9\nstartup\n", "f.scn:3: slaves=9: no station 9"},
       {"segment\nmaster 2 slaves=5,9\nstation 5\nstartup\n", "f.scn:2: slaves=5,9: no station 9"},

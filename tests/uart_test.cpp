@@ -67,6 +67,22 @@ TEST(UartBaud, BitCyclesRoundToNearest) {
   EXPECT_EQ(bit_cycles(0xFFFF'FFFF, 2), 2147483648u);
 }
 
+// docs/timing.md, "the lowest clock": from 9 MHz up the ten rates have ten different bit times
+// (1, 2, 3, 6, 18, 48, 96, 198, 469, 938 at 9 MHz: 0.75 and 1.5 round up); one clock below,
+// 12 and 6 Mbaud share one (0.749... and 1.499... both round to 1), and at any clock from 9 MHz up
+// each rate's bit time is above the next faster one's.
+TEST(UartBaud, TheTenRatesAreDistinctFromNineMegahertz) {
+  constexpr std::uint32_t kAt9MHz[10] = {1, 2, 3, 6, 18, 48, 96, 198, 469, 938};
+  for (int i = 0; i < 10; ++i) EXPECT_EQ(bit_cycles(9'000'000, kBaudRates[i]), kAt9MHz[i]);
+  EXPECT_EQ(bit_cycles(8'999'999, 12'000'000), bit_cycles(8'999'999, 6'000'000));
+  for (const std::uint32_t hz : {9'000'000u, 9'000'001u, 11'999'999u, 17'999'999u, 48'000'000u}) {
+    for (int i = 1; i < 10; ++i) {
+      EXPECT_GT(bit_cycles(hz, kBaudRates[i]), bit_cycles(hz, kBaudRates[i - 1]))
+          << hz << " Hz, " << kBaudRates[i] << " baud";
+    }
+  }
+}
+
 TEST(UartBaud, BaudCodeRoundTrip) {
   for (int i = 0; i < 10; ++i) EXPECT_EQ(baud_code(kBaudRates[i]), i);
   EXPECT_EQ(baud_code(0), -1);

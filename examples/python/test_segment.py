@@ -584,3 +584,53 @@ def test_a_station_refused_at_its_init_leaves_the_segment_as_it_was(built, tmp_p
         return seen
 
     assert run(True) == run(False)
+
+
+def test_after_a_late_answer_the_next_request_waits_tsyn_from_its_end():
+    # docs/timing.md, "The master's wait": the idle time counts from the end of the last telegram
+    # on the line or the master's own exchange's end, whichever is later. 12 Mbaud, T = 4. A
+    # Set_Prm to station 5 from its master with Lock/Unlock 00 and byte 3 = 105 takes only MinTSDR
+    # (docs/decisions.md, the Set_Prm lock rules): its own SC starts 105 T after the request's end
+    # E ("answer": max(11, MinTSDR) T), past TSL = 100, and ends at E + 116 T. The FDL_Status to
+    # station 6 then starts TSYN after it, at E + 149 T (not at the slot time's end + TSYN,
+    # E + 133 T, where station 6 heard 17 bit times of idle: no_sync, no answer), and is answered.
+    seg = dpc31.Segment(12_000_000)
+    t = seg.bit_cycles
+    seg.add_station(5, "spc3")
+    six = seg.add_station(6, "vpc3plus")
+    master = seg.add_master(2, [5, 6], slot_bits=100)
+    assert master.startup_all()
+    check = seg.check_bus(slot_bits=100)
+    no_sync = six.fdl_counters["no_sync"]  # the start-up's, from the baud search
+    master.select(0)
+    prm = master.transact(dpc31.Frame(da=5, sa=2, fc=0x4D, dsap=61, ssap=62,
+                                      du=bytes([0x08, 10, 10, 105, 0x0C, 0x31, 0, 0])))
+    e = prm.request_end
+    assert prm.answer is None and prm.wait_end == e + 100 * t
+    master.select(1)
+    status = master.fdl_status()
+    assert status.request_start == e + 149 * t
+    assert status.answer is not None
+    assert master.counters.late == 1
+    assert six.fdl_counters["no_sync"] == no_sync
+    seg.flush()
+    # The bus check: the SC late (after TSL, before TSL + TSYN), nothing of the master's.
+    assert (check.count("late_answer"), check.total) == (1, 1), seg.bus_log
+
+
+def test_a_bus_check_armed_inside_an_answer_judges_what_begins_after_it():
+    # startup_all (as every exchange) returns at its last answer's last stop sample, inside that
+    # answer (docs/timing.md, "Serial line": ready at the stop sample, 2 cycles before the end at
+    # T = 4): a check armed there does not call that answer, whose request it never saw,
+    # unsolicited; the FDL_Status after it is a clean exchange.
+    seg = dpc31.Segment(12_000_000)
+    seg.add_station(5, "spc3")
+    seg.add_station(6, "vpc3plus")
+    master = seg.add_master(2, [5, 6], slot_bits=100)
+    assert master.startup_all()
+    assert seg.cycle == master.history[-1].answer_end - 2
+    check = seg.check_bus(slot_bits=100)
+    master.select(0)
+    assert master.fdl_status().answer is not None
+    seg.flush()
+    assert check.total == 0, seg.bus_log

@@ -186,6 +186,7 @@ class MasterCounters:
     no_answer: int
     bad_answer: int
     noise: int
+    late: int
 
 class SlaveConfig:
     address: int
