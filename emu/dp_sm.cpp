@@ -460,7 +460,14 @@ std::optional<fdl::Frame> DpStateMachine::chk_cfg(const fdl::Frame& req) {
   // not come from 'Master_Add' i.e., the locking master, DPS ignores this message."
   if (req.sa != s_.master_add) {
     ++counters_.not_allowed;
-    sig_.log(LogLevel::info, "Chk_Cfg from {}: not the locking master: ignored", req.sa);
+    // Unlocked (a refused Set_Prm, a Leave_Master): the reason is the missing Set_Prm.
+    if (s_.master_add == pdu::SlaveDiag::kNoMaster)
+      sig_.log(LogLevel::info,
+               "Chk_Cfg from {}: no master has locked the slave (Master_Add FFh: not "
+               "parameterised): ignored",
+               req.sa);
+    else
+      sig_.log(LogLevel::info, "Chk_Cfg from {}: not the locking master: ignored", req.sa);
     return fdl::sc();
   }
   if (req.du.empty() || req.du.size() > kMaxBufferLength ||

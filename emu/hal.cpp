@@ -3,6 +3,7 @@
 #include "dpc31/hal.hpp"
 
 #include <algorithm>
+#include <cinttypes>
 #include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
@@ -83,8 +84,31 @@ inline BusPort& bus(const char* fn) {
   bus("Vpc3Write").write(addr, value);
 }
 
-[[noreturn]] void null_buffer(const char* fn, uint16_t len) {
-  misuse("%s: local buffer is NULL with length %u", fn, static_cast<unsigned>(len));
+// A block's pointers, checked in one place before any access. A chip "pointer" of the drivers'
+// serial mode holds a chip address (0x0000..0xFFFF) in its value; a local buffer is host memory,
+// which never lies there (Linux maps nothing below vm.mmap_min_addr, 64 KiB by default). Either
+// the other way round is a swapped pair of arguments: the HAL would read or write host memory at
+// a chip address, a crash the firmware's call can name (docs/decisions.md).
+constexpr std::uintptr_t kChipWindow = 0x10000;
+
+std::uint16_t chip_address(const char* fn, const std::uint8_t* chip, uint16_t len) {
+  const auto value = reinterpret_cast<std::uintptr_t>(chip);
+  if (len != 0 && value >= kChipWindow) [[unlikely]]
+    misuse("%s: chip pointer %#" PRIxPTR
+           " is not a chip address (0x0000..0xFFFF): the arguments swapped?",
+           fn, value);
+  return static_cast<std::uint16_t>(value);
+}
+
+void check_local(const char* fn, const void* local, uint16_t len) {
+  const auto value = reinterpret_cast<std::uintptr_t>(local);
+  if (len == 0 || value >= kChipWindow) [[likely]]
+    return;
+  if (local == nullptr)
+    misuse("%s: local buffer is NULL with length %u", fn, static_cast<unsigned>(len));
+  misuse("%s: local buffer %#" PRIxPTR
+         " is a chip address (0x0000..0xFFFF), not host memory: the arguments swapped?",
+         fn, value);
 }
 
 [[noreturn, gnu::cold, gnu::noinline]] void null_handle(const char* fn) {
@@ -105,14 +129,14 @@ void pieces(uint16_t addr, uint16_t len, F&& f) {
 
 // The block functions: one block transfer of the bus per piece (Chip::write_block & co.).
 void copy_to(BusPort& b, uint16_t dst, const uint8_t* src, uint16_t len, const char* fn) {
-  if (src == nullptr && len != 0) null_buffer(fn, len);
+  check_local(fn, src, len);
   pieces(dst, len, [&](uint16_t a, std::size_t i, std::size_t n) {
     b.write_block(a, std::span<const uint8_t>(src + i, n));
   });
 }
 
 void copy_from(BusPort& b, uint8_t* dst, uint16_t src, uint16_t len, const char* fn) {
-  if (dst == nullptr && len != 0) null_buffer(fn, len);
+  check_local(fn, dst, len);
   pieces(src, len, [&](uint16_t a, std::size_t i, std::size_t n) {
     b.read_block(a, std::span<uint8_t>(dst + i, n));
   });
@@ -190,11 +214,6 @@ C& handle(C* chip, const char* fn) {
   if (chip == nullptr) [[unlikely]]
     dpc31::hal::null_handle(fn);
   return *chip;
-}
-// A chip "pointer" of the drivers' serial mode (VPC3_UNSIGNED8_PTR, uint8_t *) holds the chip
-// address in its value: its low 16 bits are the address.
-std::uint16_t chip_address(const std::uint8_t* p) {
-  return static_cast<std::uint16_t>(reinterpret_cast<std::uintptr_t>(p) & 0xFFFFu);
 }
 // A pin's C callback as the chip's observer: fn(user, cycle, 1 when active / high).
 std::function<void(std::uint64_t, bool)> pin_observer(dpc31_irq_fn fn, void* user) {
@@ -318,13 +337,15 @@ void dpc31_select(dpc31_chip* chip) {
 }
 
 void CopyToVpc3(uint8_t* pToVpc3Memory, uint8_t* pLocalMemory, uint16_t wLength) {
-  dpc31::hal::copy_to(bus("CopyToVpc3"), chip_address(pToVpc3Memory), pLocalMemory, wLength,
-                      "CopyToVpc3");
+  const char* const fn = "CopyToVpc3";
+  const uint16_t dst = dpc31::hal::chip_address(fn, pToVpc3Memory, wLength);
+  dpc31::hal::copy_to(bus(fn), dst, pLocalMemory, wLength, fn);
 }
 
 void CopyFromVpc3(uint8_t* pLocalMemory, uint8_t* pToVpc3Memory, uint16_t wLength) {
-  dpc31::hal::copy_from(bus("CopyFromVpc3"), pLocalMemory, chip_address(pToVpc3Memory), wLength,
-                        "CopyFromVpc3");
+  const char* const fn = "CopyFromVpc3";
+  const uint16_t src = dpc31::hal::chip_address(fn, pToVpc3Memory, wLength);
+  dpc31::hal::copy_from(bus(fn), pLocalMemory, src, wLength, fn);
 }
 
 void Vpc3MemSet(uint16_t wAddress, uint8_t bValue, uint16_t wLength) {
@@ -332,8 +353,10 @@ void Vpc3MemSet(uint16_t wAddress, uint8_t bValue, uint16_t wLength) {
 }
 
 uint8_t Vpc3MemCmp(uint8_t* pToVpc3Memory1, uint8_t* pToVpc3Memory2, uint16_t wLength) {
-  return dpc31::hal::mem_cmp(bus("Vpc3MemCmp"), chip_address(pToVpc3Memory1),
-                             chip_address(pToVpc3Memory2), wLength);
+  const char* const fn = "Vpc3MemCmp";
+  const uint16_t a = dpc31::hal::chip_address(fn, pToVpc3Memory1, wLength);
+  const uint16_t b = dpc31::hal::chip_address(fn, pToVpc3Memory2, wLength);
+  return dpc31::hal::mem_cmp(bus(fn), a, b, wLength);
 }
 
 void dpc31_port_write(unsigned port, uint32_t value) {

@@ -76,18 +76,27 @@ struct Signals {
   Observers<std::uint64_t, const BusAccess&> bus;
   Observers<std::uint64_t> state;              // after every event and every bus access
   mutable std::array<LogLimiter, 4> limiters;  // per LogLevel; they go with the sink
+  // Of the log's last line at info or above: whose repeats are owed.
+  mutable std::size_t last_level = static_cast<std::size_t>(LogLevel::info);
 
   // Reports a protocol-side action on the blocks (call sites only, never inside the actions).
   void emit(BlockEvent::Kind k, std::uint16_t value = 0, std::uint8_t data = 0) const {
     if (block) block(clock->now, BlockEvent{k, value, data});
   }
   // Through the level's limiter (folded, bounded: dpc31::LogLimiter); one per level, so that a
-  // flood of remarks never crowds out a warning.
+  // flood of remarks never crowds out a warning. The repeats are the log's from info up (what the
+  // walk and the bridge log show): a line of another of those levels ends those of the line
+  // before, whose count comes first (s33 audit). Debug lines (one per EOI) keep their own.
   template <typename... Args>
   void log(LogLevel level, fmt::format_string<Args...> f, Args&&... args) const {
     if (!sink || level < shown) return;
-    for (std::string& t : limiters[static_cast<std::size_t>(level)].add(
-             clock->now, fmt::format(f, std::forward<Args>(args)...)))
+    const auto l = static_cast<std::size_t>(level);
+    if (level != LogLevel::debug && l != last_level) {
+      for (std::string& t : limiters[last_level].end_repeats())
+        sink(LogRecord{clock->now, static_cast<LogLevel>(last_level), std::move(t)});
+      last_level = l;
+    }
+    for (std::string& t : limiters[l].add(clock->now, fmt::format(f, std::forward<Args>(args)...)))
       sink(LogRecord{clock->now, level, std::move(t)});
   }
   // What the limiters still owe goes to the sink (before it is replaced, at the end of a run).
@@ -101,6 +110,7 @@ struct Signals {
     sink = std::move(from.sink);
     shown = from.shown;
     limiters = std::move(from.limiters);
+    last_level = from.last_level;
     irq = std::move(from.irq);
     pb3 = std::move(from.pb3);
     txd = std::move(from.txd);

@@ -58,7 +58,13 @@ class HangPlace {
 // none), writes out what standard output holds (the walk up to the hang), prints "PROGRAM: PLACE:
 // WHO hangs: ..." on stderr and exits with 2. PLACE is set_hang_place's (left out when none); WHO
 // is the spinning firmware's Hooks::hang_name, or "firmware FIRMWARE" when no Hooks are installed.
+// The line also goes to `log_fd` (a log file the program flushes line by line; -1: none).
+// A fatal signal (SIGSEGV, SIGBUS, SIGILL, SIGFPE, SIGABRT: a crash in the firmware's code, or in
+// what it called) gets the same removal and line, "PROGRAM: PLACE: WHO crashed: SIGSEGV ...", from
+// a handler on an alternate stack, which then raises the signal again with its default action:
+// the process ends by it.
 void guard_hangs(const std::string& program, const std::string& firmware,
-                 const std::string& remove = {}, std::chrono::milliseconds limit = kHangLimit);
+                 const std::string& remove = {}, std::chrono::milliseconds limit = kHangLimit,
+                 int log_fd = -1);
 
 }  // namespace dpc31::board

@@ -11,6 +11,7 @@
 #include <exception>
 #include <memory>
 #include <mutex>
+#include <stdexcept>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -53,6 +54,9 @@ std::string descriptor_problem(const dpc31_firmware* fw) {
            std::to_string(DPC31_FIRMWARE_ABI_VERSION) + " (rebuild it against this dpc31emu)";
   }
   if (fw->name == nullptr || fw->name[0] == '\0') return "the descriptor has no name";
+  if (std::string c = control_character_in(fw->name); !c.empty())
+    return "the descriptor's name has a control character, " + c +
+           " (a name is shown in logs and walks, one entry a line)";
   if (fw->init == nullptr) return "the descriptor has no init";
   if (fw->isr == nullptr && fw->main_step == nullptr) {
     return "the descriptor has neither isr nor main_step";
@@ -294,7 +298,11 @@ extern "C" {
 
 const dpc31_firmware* dpc31_firmware_load(const char* path, char* err, size_t err_size) {
   try {
-    return &dpc31::find_firmware(dpc31::file_path(path != nullptr ? path : ""));
+    // file_path would make "" the directory "./": the reason names what the caller gave.
+    if (path == nullptr || *path == '\0')
+      throw std::invalid_argument(std::string("cannot load firmware plug-in: no path given (") +
+                                  (path == nullptr ? "NULL" : "an empty string") + ")");
+    return &dpc31::find_firmware(dpc31::file_path(path));
   } catch (const std::exception& e) {
     if (err != nullptr && err_size > 0) {
       std::strncpy(err, e.what(), err_size - 1);

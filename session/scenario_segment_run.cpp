@@ -42,7 +42,10 @@ class SegmentRun {
         seg_(s.baud),
         check_(BusTiming{seg_.bit_cycles(), 11, s.slot_bits, 33,
                          s.masters.size() > 1 ? s.ttr_bits : 0, masters()},
-               [this](const LogRecord& r) { print(r.cycle, r.text); }) {
+               [this](const LogRecord& r) {
+                 states_through(r.cycle);  // a check's line in cycle order (token_lost)
+                 print(r.cycle, r.text);
+               }) {
     check_.on_answer = [this](std::uint64_t delay) { answered(delay); };
   }
 
@@ -100,14 +103,22 @@ class SegmentRun {
   }
   // The chips' state changes, held until the next other line: in one round of the line each chip
   // runs on its own, so two chips' changes come in station order, not in cycle order.
-  void states_in_order() {
+  void states_in_order() { states_through(UINT64_MAX); }
+  // Those up to `cycle`; the rest stay held. A bus check's line found late (token_lost, at the
+  // step's end: stamped TTO after the line fell idle) comes after those before it only.
+  void states_through(std::uint64_t cycle) {
+    if (telling_states_) return;  // a check's note among them (end_repeats): they are in order
+    telling_states_ = true;
     std::stable_sort(states_.begin(), states_.end(),
                      [](const auto& a, const auto& b) { return a.first < b.first; });
-    for (const auto& [cycle, text] : states_) {
+    const auto end = std::find_if(states_.begin(), states_.end(),
+                                  [cycle](const auto& s) { return s.first > cycle; });
+    for (auto it = states_.begin(); it != end; ++it) {
       check_.end_repeats();
-      print(cycle, text);
+      print(it->first, it->second);
     }
-    states_.clear();
+    states_.erase(states_.begin(), end);
+    telling_states_ = false;
   }
 
   void build() {
@@ -264,8 +275,8 @@ class SegmentRun {
       seg_.close_ended();  // one that ended while another station drives on (a collision)
     }
     seg_.align();  // a station's trace checkpoints its chip at the line's time
-    states_in_order();
     check_.idle_until(seg_.cycle());
+    states_in_order();
   }
 
   // Each master in turn, the token passed on after it (with several masters): `work(m, next)`
@@ -503,6 +514,7 @@ class SegmentRun {
   std::uint64_t tx_from_ = 0;
   std::uint64_t tx_until_ = 0;
   std::vector<std::pair<std::uint64_t, std::string>> states_;  // states_in_order's lines
+  bool telling_states_ = false;
   // The answers' delays after their requests so far (expect tsdr): how many, the least and the
   // greatest (kept as these three, not one by one: a long run's memory stays flat).
   struct {

@@ -222,6 +222,16 @@ std::string station_name_refused(std::string_view name, std::string_view whose) 
     return fmt::format("a name of {} bytes for {}: at most {}", name.size(), whose,
                        kMaxStationName);
   }
+  if (std::string c = control_character_in(name); !c.empty())
+    return fmt::format("the name for {} has a control character, {}", whose, c);
+  return {};
+}
+
+std::string control_character_in(std::string_view name) {
+  for (std::size_t i = 0; i < name.size(); ++i) {
+    const auto b = static_cast<unsigned char>(name[i]);
+    if (b < 0x20 || b == 0x7F) return fmt::format("byte {:02X}h at offset {}", b, i);
+  }
   return {};
 }
 

@@ -175,8 +175,12 @@ inline constexpr ValueRange kC31Code{"code", 0x08A0, 0x1FFF};
 // 255 bytes on Linux), its log lines and its packets' comments in a capture.
 inline constexpr std::size_t kMaxStationName = 64;
 // "" for a name WHOSE ("station 5", "a sender") may have, else why not: "empty name for WHOSE", "a
-// name of 65 bytes for WHOSE: at most 64".
+// name of 65 bytes for WHOSE: at most 64", "the name for WHOSE has a control character, byte 1Bh
+// at offset 0".
 [[nodiscard]] std::string station_name_refused(std::string_view name, std::string_view whose);
+// A name shown in logs and walks, one entry a line, holds no control character (below 20h, 7Fh):
+// "" or which one, "byte 0Ah at offset 3" (a newline would forge a line of its own).
+[[nodiscard]] std::string control_character_in(std::string_view name);
 // The options of the DPC31 alone, refused on the other profiles (No silent options), `option` as
 // the door writes it (a scenario's "user substitute=", Python's "substitute="): "OPTION is for
 // profile dpc31: only the DPC31 has ...".

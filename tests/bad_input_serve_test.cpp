@@ -3,6 +3,7 @@
 // sections): one line on stderr, exit 2, nothing left behind.
 #include <gtest/gtest.h>
 
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -166,6 +167,7 @@ TEST_F(BadInput, FirmwarePlugins) {
   const std::string bad_port = BAD_PLUGIN_BAD_PORT;
   const std::string twice_input = BAD_PLUGIN_TWICE_INPUT;
   const std::string no_export = BAD_PLUGIN_NO_EXPORT;
+  const std::string nl_name = BAD_PLUGIN_NL_NAME;
   const std::string undefined = BAD_PLUGIN_UNDEFINED;
   const std::string version = std::to_string(DPC31_FIRMWARE_ABI_VERSION);
   const std::vector<std::pair<std::string, std::string>> exact = {
@@ -179,6 +181,10 @@ TEST_F(BadInput, FirmwarePlugins) {
                      "and '_', not starting with a digit"},
       {twice_input,
        "firmware plug-in " + twice_input + ": the descriptor's inputs: input 'kick' named twice"},
+      // s33 audit finding 11: a name is shown in logs and walks, one entry a line.
+      {nl_name, "firmware plug-in " + nl_name +
+                    ": the descriptor's name has a control character, byte 0Ah at offset 3 (a "
+                    "name is shown in logs and walks, one entry a line)"},
       {no_export, "firmware plug-in " + no_export +
                       " exports no dpc31_firmware_descriptor (DPC31_FIRMWARE_EXPORT, "
                       "dpc31/dpc31_firmware.h)"},
@@ -290,6 +296,45 @@ TEST_F(BadInput, AFirmwareThatHangsInAStepKeepsTheWalk) {
   EXPECT_EQ(listing(), (std::vector<std::string>{"isr.scn", "segisr.scn"}));
 }
 
+// s33 audit findings 1 and 5: a firmware that crashes (SIGSEGV in its init) ended `dpc31 run`
+// with no line, its output temporaries left, and `dpc31 bridge` with its --pty symlink left; the
+// hang guard's line never reached the bridge's --log. The fatal signal now gets the hang guard's
+// kind of line, naming the firmware and the place (docs/bring-up.md, section 4), the temporaries
+// and the symlink go, and the process still ends by the signal; both lines go to the --log too.
+TEST_F(BadInput, AFirmwareThatCrashesIsNamedAndLeavesNothing) {
+  const std::string crash = BAD_PLUGIN_CRASH;
+  const std::string err = (root_ / "io" / "err").string();
+  const auto signalled = [&](const std::string& args) {
+    std::vector<std::string> argv = {kCli};
+    std::istringstream words(args);
+    for (std::string w; words >> w;) argv.push_back(w);
+    const pid_t pid = spawn(argv, path(""), err);
+    int st = 0;
+    EXPECT_EQ(::waitpid(pid, &st, 0), pid);
+    return WIFSIGNALED(st) ? WTERMSIG(st) : -1;
+  };
+  const std::string crashed =
+      "firmware BAD crashed: SIGSEGV (a bad pointer?) while its code ran; stopped\n";
+  file("crash.scn", "# crashes in init\nfirmware " + crash + "\nstartup\n");
+  file("old.json", "old");
+  EXPECT_EQ(signalled("run crash.scn --json old.json --vcd new.vcd"), SIGSEGV);
+  EXPECT_EQ(slurp(err), "dpc31 run: crash.scn:2: " + crashed);
+  EXPECT_EQ(slurp(path("old.json")), "old");
+  EXPECT_EQ(signalled("bridge --pty p --firmware " + crash + " --log crash.log"), SIGSEGV);
+  EXPECT_EQ(slurp(err), "dpc31 bridge: " + crashed);
+  EXPECT_EQ(slurp(path("crash.log")), "dpc31 bridge: " + crashed);
+  const std::string hangs =
+      "dpc31 bridge: firmware BAD hangs: it ran 2000 ms of host time without a bus access or a "
+      "board hook call (a while(1) loop, e.g. its fatal-error handler?); stopped\n";
+  const Outcome spin =
+      dpc31("bridge --pty p --firmware " + std::string(BAD_PLUGIN_SPIN) + " --log spin.log");
+  EXPECT_EQ(spin.rc, 2);
+  EXPECT_EQ(spin.err, hangs);
+  EXPECT_EQ(slurp(path("spin.log")), hangs);
+  EXPECT_EQ(listing(),
+            (std::vector<std::string>{"crash.log", "crash.scn", "old.json", "spin.log"}));
+}
+
 // s31-serve, finding 6: `soak --firmware` with a firmware that hangs after its init wrote
 // reserved bits of Int_Mask_Reg (on the DPC31, the default profile) printed the chip's two
 // warnings ahead of the hang guard's line. docs/soak.md and docs/bad-input.md promise exactly
@@ -387,6 +432,11 @@ TEST_F(BadInput, FirmwareFaults) {
       {BAD_PLUGIN_HAL_ISR, "firmware BAD: CopyFromVpc3: local buffer is NULL with length 2",
        "fault.scn:3: startup", "segfault.scn:4: startup",
        started + "[cycle         16] line 3: startup\n"},
+      // s33 audit finding 1: the pointers swapped read host memory at 0x40 (SIGSEGV, exit 139).
+      {BAD_PLUGIN_HAL_SWAP,
+       "firmware BAD: CopyToVpc3: chip pointer 0x12345678 is not a chip address (0x0000..0xFFFF): "
+       "the arguments swapped?",
+       "fault.scn:2", "segfault.scn", ""},
   };
   fs::create_directory(path("o"));
   for (const auto& [lib, line, run_at, seg_at, walk_end] : plugins) {

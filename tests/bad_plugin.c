@@ -5,6 +5,7 @@
  *   BAD_PORT     a port name that is not a word ("out puts")
  *   TWICE_INPUT  a hardware input named twice
  *   NO_EXPORT    no DPC31_FIRMWARE_EXPORT: the well-known symbol is missing
+ *   NL_NAME      a name with a newline, which would forge a line of the walk (s33 audit)
  *   UNDEFINED    it calls a function no host provides: dlopen (RTLD_NOW) fails
  *   SPIN         it loads, and its init spins in while(1) without a bus access (the hang guard)
  *   MARK         a valid plug-in whose loading alone (a constructor) creates the file named by
@@ -14,6 +15,11 @@
  *   HAL_INIT     its init calls CopyToVpc3 with a NULL buffer
  *   HAL_ISR      its init raises an interrupt; its ISR calls CopyFromVpc3 with a NULL buffer;
  *                its hardware input "kick" reads the chip, which no host selects for it
+ *   HAL_SWAP     its init calls CopyToVpc3 with the two pointers swapped: a host address as the
+ *                chip pointer, a chip address (0x40) as the local buffer
+ * and one that crashes (a store through a NULL pointer in init), which the host cannot catch: the
+ * fatal-signal handler names it and removes the temporaries (tests/bad_input_serve_test.cpp):
+ *   CRASH
  * and one whose ISR hangs, so that the guard stops it inside a scenario's step (FirmwarePlugins):
  *   SPIN_ISR     its init raises an interrupt as HAL_ISR's does; its ISR spins in while(1)
  * and one whose hardware input "spin" hangs, which the guard stops inside a scenario's `hw` step as
@@ -51,6 +57,10 @@ static const char* const kPorts[] = {"outputs", "out puts", 0};
 #define PORTS 0
 #endif
 
+#ifdef CRASH
+static volatile unsigned char* volatile g_nowhere; /* NULL, unknown to the compiler */
+#endif
+
 #ifndef NO_INIT
 static void init(const dpc31_board* board) {
   (void)board;
@@ -66,6 +76,12 @@ static void init(const dpc31_board* board) {
 #endif
 #ifdef HAL_INIT
   CopyToVpc3((uint8_t*)0x100, 0, 4);
+#endif
+#ifdef HAL_SWAP
+  CopyToVpc3((uint8_t*)(uintptr_t)0x12345678u, (uint8_t*)0x40, 4);
+#endif
+#ifdef CRASH
+  *g_nowhere = 1;
 #endif
 #if defined(HAL_ISR) || defined(SPIN_ISR)
   /* Int_Mask_Reg all open, Int_Req_Reg's MAC_Reset set (both bytes: either bus mode). */
@@ -144,7 +160,13 @@ static const uint8_t kCfg[] = {0x10};
 #define INIT init
 #endif
 
-static const dpc31_firmware kBad = {ABI,       "BAD",  0,    PORTS,       INIT, ISR, step, HW_INPUT,
+#ifdef NL_NAME
+#define NAME "BAD\n[cycle 1] line 9: expect dp_state Data_Exchange: ok"
+#else
+#define NAME "BAD"
+#endif
+
+static const dpc31_firmware kBad = {ABI,       NAME,   0,    PORTS,       INIT, ISR, step, HW_INPUT,
                                     HW_INPUTS, 0x0001, kCfg, sizeof kCfg, 1,    0,   0,    0};
 
 #ifdef NO_EXPORT

@@ -394,6 +394,36 @@ TEST(BlockTransferDeathTest, NullLocalBufferIsReported) {
   dpc31_destroy(c);
 }
 
+// s33 audit finding 1: the local buffer and the chip pointer swapped (both uint8_t *) read or wrote
+// host memory at a chip address: SIGSEGV. A chip pointer holds a chip address, 0x0000..0xFFFF
+// (dpc31_hal.h); a local buffer never lies there. Either the other way round is the handler's
+// message, naming the function and the pointer, before any access.
+TEST(BlockTransferDeathTest, SwappedPointersAreReported) {
+  dpc31_chip* c = dpc31_create("dpc31", 0);
+  const auto chip_ptr = [](std::uintptr_t a) { return reinterpret_cast<std::uint8_t*>(a); };
+  std::uint8_t local[4] = {1, 2, 3, 4};
+  EXPECT_DEATH(dpc31_copy_to(c, 0x0900, chip_ptr(0x40), 4),
+               "dpc31_copy_to: local buffer 0x40 is a chip address \\(0x0000..0xFFFF\\), not host "
+               "memory: the arguments swapped\\?");
+  dpc31_select(c);
+  EXPECT_DEATH(CopyToVpc3(local, chip_ptr(0x40), 4),
+               "CopyToVpc3: chip pointer 0x[0-9a-f]+ is not a chip address \\(0x0000..0xFFFF\\): "
+               "the arguments swapped\\?");
+  EXPECT_DEATH(CopyFromVpc3(chip_ptr(0x0900), local, 4), "CopyFromVpc3: chip pointer 0x[0-9a-f]+ ");
+  EXPECT_DEATH(CopyFromVpc3(chip_ptr(0x0040), chip_ptr(0x0900), 4),
+               "CopyFromVpc3: local buffer 0x40 is a chip address");
+  EXPECT_DEATH(Vpc3MemCmp(chip_ptr(0x0900), local, 1), "Vpc3MemCmp: chip pointer 0x[0-9a-f]+ ");
+  EXPECT_DEATH(Vpc3MemCmp(chip_ptr(0x10000), chip_ptr(0x0900), 1),
+               "Vpc3MemCmp: chip pointer 0x10000 is not a chip address");
+  // The last chip address is one; a block of no bytes touches nothing, whatever its pointers.
+  EXPECT_EQ(Vpc3MemCmp(chip_ptr(0xFFFF), chip_ptr(0xFFFF), 1), 0);
+  EXPECT_EQ(dpc31_cycle(c), 8u);  // two reads, 4 clocks each (docs/timing.md)
+  CopyToVpc3(local, chip_ptr(0x40), 0);
+  EXPECT_EQ(dpc31_cycle(c), 8u);
+  dpc31_select(nullptr);
+  dpc31_destroy(c);
+}
+
 }  // namespace
 
 // dpc31_hal.h: "Calling Vpc3Read & co. ... with no chip selected is a programming error: the

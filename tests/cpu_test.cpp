@@ -299,6 +299,9 @@ TEST(FirmwareModule, HalMisuseIsTheModulesError) {
   const std::pair<const char*, const char*> plugins[] = {
       {BAD_PLUGIN_HAL_INIT, "firmware BAD: CopyToVpc3: local buffer is NULL with length 4"},
       {BAD_PLUGIN_HAL_ISR, "firmware BAD: CopyFromVpc3: local buffer is NULL with length 2"},
+      {BAD_PLUGIN_HAL_SWAP,
+       "firmware BAD: CopyToVpc3: chip pointer 0x12345678 is not a chip address (0x0000..0xFFFF): "
+       "the arguments swapped?"},
   };
   for (const auto& [lib, line] : plugins) {
     char err[256] = "";
@@ -310,6 +313,16 @@ TEST(FirmwareModule, HalMisuseIsTheModulesError) {
     EXPECT_STREQ(dpc31_module_error(m), line);
     dpc31_module_destroy(m);
   }
+}
+
+// s33 audit finding 10: a NULL or empty path was taken as the current directory ("./: is a
+// directory"): the one-line reason (dpc31_firmware.h) names the argument instead.
+TEST(FirmwareModule, LoadWithNoPathSaysSo) {
+  char err[128] = "";
+  EXPECT_EQ(dpc31_firmware_load(nullptr, err, sizeof err), nullptr);
+  EXPECT_STREQ(err, "cannot load firmware plug-in: no path given (NULL)");
+  EXPECT_EQ(dpc31_firmware_load("", err, sizeof err), nullptr);
+  EXPECT_STREQ(err, "cannot load firmware plug-in: no path given (an empty string)");
 }
 
 // A fresh start per module: a plug-in's globals are what its file gives them in every module,

@@ -159,3 +159,35 @@ TEST(LogLimiter, LinesTheDefaultSinkDropsAreNotCountedForALaterSink) {
   ASSERT_EQ(log.records.size(), 2u);
   EXPECT_EQ(log.records[1].level, LogLevel::info);
 }
+
+// s33 audit finding 2: the repeat count is the log's, whatever the level. An info line repeated,
+// then a warning: the count comes before the warning (docs/scenario-format.md, "The walk": "comes
+// with the chip's next different line"), not at the run's end after it; and the info line after
+// the warning is no repeat. Each read costs 4 clocks and logs at its end (docs/timing.md).
+TEST(LogLimiter, ALineOfAnotherLevelEndsTheRepeats) {
+  Chip c({Profile::dpc31, BusMode::intel});
+  testutil::LogCapture log;
+  log.attach(c);
+  std::uint32_t warned = 0;  // a reserved register: reads 00h with a warning
+  for (const RegDesc& r : c.profile().regs)
+    if (r.kind == Kind::reserved && r.read_addr >= 0)
+      warned = static_cast<std::uint32_t>(r.read_addr);
+  std::uint32_t remark = 0;  // RAM the user must not touch: read with an info line
+  for (const RegionDesc& g : c.profile().regions)
+    if (g.ram && g.reserved) remark = g.begin;
+  ASSERT_NE(warned, 0u);
+  ASSERT_NE(remark, 0u);
+  for (int i = 0; i < 3; ++i) c.read(remark);  // cycles 4, 8, 12
+  c.read(warned);                              // 16
+  c.read(remark);                              // 20
+  c.set_log_sink(nullptr);
+  ASSERT_EQ(log.records.size(), 4u);
+  EXPECT_EQ(log.records[0].cycle, 4u);
+  EXPECT_EQ(log.records[1].level, LogLevel::info);
+  EXPECT_EQ(log.records[1].text, "last line repeated 2 times, cycles 8 to 12");
+  EXPECT_EQ(log.records[1].cycle, 16u);
+  EXPECT_EQ(log.records[2].level, LogLevel::warn);
+  EXPECT_EQ(log.records[2].cycle, 16u);
+  EXPECT_EQ(log.records[3].text, log.records[0].text);
+  EXPECT_EQ(log.records[3].cycle, 20u);
+}

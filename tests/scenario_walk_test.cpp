@@ -128,6 +128,23 @@ std::uint64_t walk_cycle(const Walk& w, const std::string& text) {
   return 0;
 }
 
+// s33 audit finding 9: after a refused Set_Prm (a wrong Ident_Number: Prm_Fault, Master_Add FFh)
+// no master locks the slave; the Chk_Cfg that follows was logged "not the locking master", which
+// sends the user to the master addresses. Its reason is now the missing lock (DPC31 p.28: a
+// Check_Config not from Master_Add is ignored).
+TEST(ScenarioWalk, AChkCfgAfterARefusedSetPrmNamesTheMissingLock) {
+  const Walk w = run("profile spc3\nslave address=5\nstartup\nset_prm ident=0x1234\nchk_cfg\n",
+                     "chk.scn", dpc31::Engine::event);
+  std::size_t unlocked = 0;
+  for (const std::string& l : w.lines) {
+    EXPECT_EQ(l.find("not the locking master"), std::string::npos) << l;
+    if (l.ends_with("] chip: Chk_Cfg from 2: no master has locked the slave (Master_Add FFh: not "
+                    "parameterised): ignored"))
+      ++unlocked;
+  }
+  EXPECT_EQ(unlocked, 1u);
+}
+
 // a19 finding 1: ECHO51 (tests/data/walk/echo51.c, an SPC3 firmware with only New_Prm_Data,
 // New_Cfg_Data and DX_Out unmasked) accepts the Chk_Cfg and hands its first inputs over with
 // New_Din_Buffer_Cmd; "the SPC3 waiting after Cfg OK enters Data_Exchange" at that read

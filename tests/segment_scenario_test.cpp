@@ -349,6 +349,11 @@ TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
       {"segment\nsender a\nsender a\n", "f.scn:3: a second station named 'a'"},
       {"segment\nstation 5 name=a\nsender a\n", "f.scn:3: a second station named 'a'"},
       {"segment\nstation 5 name=\n", "f.scn:2: empty name for station 5"},
+      // s33 audit finding 11: a control character would redraw or forge the walk's lines.
+      {"segment\nstation 5 name=a\x1b[2J\n",
+       "f.scn:2: the name for station 5 has a control character, byte 1Bh at offset 1"},
+      {"segment\nsender r\x7f\n",
+       "f.scn:2: the name for a sender has a control character, byte 7Fh at offset 1"},
       // At most 64 bytes (vocabulary.hpp kMaxStationName): a name is a waveform scope, a --record
       // file's name, in every capture comment (the audit's 66 000 made a corrupt pcapng).
       {"segment\nstation 5 name=" + std::string(65, 's') + "\n",
@@ -479,6 +484,30 @@ TEST(SegmentScenario, TwoMastersWithoutTtrCheckTheToken) {
   EXPECT_TRUE(r.errors.empty()) << r.errors.front();
   const std::uint64_t token = r.cycle_of("master 2: DC 09 02");
   EXPECT_EQ(r.cycle_of("bus: token_lost"), token + 1056 + 32000);
+}
+
+// s33 audit finding 3: docs/segment.md "The log": every line but a visit's token line is in cycle
+// order. A `run` that leaves the line idle finds the lost token only at the step's end (stamped
+// TTO = 100 x (6 + 2 x 2) = 1000 bit times, 32 000 clocks at 1.5 Mbaud, after the last telegram),
+// and it came after the station's watchdog expiry 48 M cycles later. Now the walk of the run
+// step is in cycle order, the token loss first.
+TEST(SegmentScenario, ALostTokenFoundAtAStepsEndIsToldInCycleOrder) {
+  const ScenarioRun r = run_scenario_text(
+      "segment\nstation 5 profile=spc3\nmaster 2 slaves=5\nstartup\ncycle 2\nrun 1100ms\n"
+      "expect bus_violation token_lost 1\n");
+  EXPECT_TRUE(r.errors.empty()) << r.errors.front();
+  const std::uint64_t last = r.cycle_of("line 6: run");  // the line is quiet from here
+  EXPECT_EQ(r.cycle_of("bus: token_lost"), last + 32000);
+  std::uint64_t before = 0;
+  bool in_run = false;
+  for (const std::string& l : r.walk) {
+    in_run = in_run || l.find("line 6: run") != std::string::npos;
+    if (!in_run) continue;
+    const std::uint64_t c = std::stoull(l.substr(l.find("cycle") + 5));
+    EXPECT_LE(before, c) << l;
+    before = c;
+  }
+  EXPECT_LT(r.cycle_of("bus: token_lost"), r.cycle_of("station 5: Wait_Prm"));
 }
 
 // Only actions move the line's time (docs/scenario-format.md, "Segments"): a master's action ends

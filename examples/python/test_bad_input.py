@@ -742,6 +742,13 @@ def test_settings_a_scenario_refuses_are_refused_in_its_words():
         seg.add_station(6, "spc3", name="")
     with pytest.raises(ValueError, match=r"^empty name for a sender$"):
         seg.add_sender("")
+    # One entry a line in logs and walks: no control character (s33 audit, finding 11).
+    with pytest.raises(ValueError, match=r"^the name for station 6 has a control character, "
+                       r"byte 0Ah at offset 1$"):
+        seg.add_station(6, "spc3", name="s\nx")
+    with pytest.raises(ValueError, match=r"^the name for a sender has a control character, "
+                       r"byte 0Dh at offset 0$"):
+        seg.add_sender("\rr")
     # At most 64 bytes: a name is a waveform scope, a --record file's name, in capture comments.
     with pytest.raises(ValueError, match=r"^a name of 65 bytes for station 6: at most 64$"):
         seg.add_station(6, "spc3", name="s" * 65)

@@ -15,7 +15,7 @@
  * VPC3_SERIAL_MODE. The header uses only standard types: the drivers' own platform.h #defines
  * uint16_t (uint16_t), VPC3_UNSIGNED8_PTR and MEM_UNSIGNED8_PTR (uint8_t *), and the six
  * prototypes below are what those expand to, so both declarations agree. A chip pointer
- * (VPC3_UNSIGNED8_PTR) carries the chip address in its value; the HAL uses its low 16 bits.
+ * (VPC3_UNSIGNED8_PTR) carries the chip address, 0x0000..0xFFFF, in its value.
  */
 #ifndef DPC31_HAL_H
 #define DPC31_HAL_H
@@ -98,7 +98,8 @@ typedef void (*dpc31_port_fn)(void* user, uint64_t cycle, unsigned port, uint32_
 void dpc31_set_port_callback(dpc31_chip* chip, dpc31_port_fn fn, void* user);
 
 /* Calling Vpc3Read & co. (or dpc31_port_write) with no chip selected, or a block function with a
- * NULL local buffer and a non-zero length, is a programming error: the handler gets a message; the
+ * non-zero length and a NULL local buffer, a local buffer at a chip address (below 0x10000: the
+ * two pointers swapped) or a chip pointer beyond 0xFFFF, is a programming error: the handler gets a message; the
  * default prints it to stderr and aborts. The handler must not return (the access cannot be
  * made): exit or longjmp out of it; one that returns gets a line on stderr saying so and the
  * process aborts. A longjmp out of it leaks nothing (the message is in a buffer of the calling

@@ -795,13 +795,18 @@ int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
   Log log(log_file);
   // A firmware stuck in a loop without a bus access cannot be stopped from this thread: the guard
   // ends the process with one line (and takes the symlink away first).
+  // Its line goes into the --log too, as a firmware fault's does.
+  const int log_fd = owned ? ::fileno(owned.get()) : -1;
   if (!c->setup.slaves.empty()) {
     // Every station's firmware is guarded; the built-in user side always makes bus accesses.
     for (const bridge::SlaveSpec& s : c->setup.slaves) {
-      if (s.firmware != nullptr) board::guard_hangs("dpc31 bridge", s.firmware->name, door.link);
+      if (s.firmware != nullptr) {
+        board::guard_hangs("dpc31 bridge", s.firmware->name, door.link, board::kHangLimit, log_fd);
+      }
     }
   } else if (!c->setup.cpu) {
-    board::guard_hangs("dpc31 bridge", c->setup.firmware->name, door.link);
+    board::guard_hangs("dpc31 bridge", c->setup.firmware->name, door.link, board::kHangLimit,
+                       log_fd);
   }
   outfile::OutFile trace;
   if (!o.trace_cpu.empty() && !trace.open(o.trace_cpu)) return refuse(trace.error());

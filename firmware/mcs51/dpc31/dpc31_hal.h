@@ -40,7 +40,7 @@ void Vpc3Write(uint16_t wAddress, uint8_t bData);
 /* The drivers' chip "pointer": the chip address as an XDATA pointer's value. */
 #define CHIP_PTR(a) ((uint8_t*)(__xdata uint8_t*)(uint16_t)(a))
 
-/* A chip "pointer" carries the chip address in its low 16 bits, as on the host. */
+/* A chip "pointer" carries the chip address in its low 16 bits (the 8051 generic pointer). */
 void CopyToVpc3(uint8_t* pToVpc3Memory, uint8_t* pLocalMemory, uint16_t wLength);
 void CopyFromVpc3(uint8_t* pLocalMemory, uint8_t* pToVpc3Memory, uint16_t wLength);
 void Vpc3MemSet(uint16_t wAddress, uint8_t bValue, uint16_t wLength);
