@@ -43,6 +43,7 @@ struct Observers {
   mutable std::uint32_t calling = 0;
   explicit operator bool() const { return !fns.empty(); }
   void operator()(A... a) const {
+    if (fns.empty()) return;  // most lists (the state's, after every event) have none
     const Calling in(calling);
     for (const auto& f : fns) f(a...);
   }
