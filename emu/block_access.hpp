@@ -10,6 +10,15 @@ struct BlockAccess {
   static auto& state(B& b) {
     return b.s_;
   }
+  // What a block's log has said already (emu/folded_log.hpp): not its state, but in the snapshot.
+  template <typename D>
+  static auto& over_long(D& dp) {
+    return dp.over_long_;
+  }
+  template <typename R>
+  static auto& over_registers(R& regs) {
+    return regs.over_registers_;
+  }
 };
 
 }  // namespace dpc31

@@ -213,8 +213,8 @@ bool ChipCore::bus_equal(std::uint32_t a, std::uint32_t b, std::size_t len) {
   return true;
 }
 
-void ChipCore::reset() {
-  clock.now = 0;
+void ChipCore::reset(std::uint64_t at) {
+  clock.now = at;
   clock.quiet_until = 0;
   regs.reset();
   buffers.reset();
@@ -312,24 +312,6 @@ std::string other_profiles_at(Profile self, std::uint32_t a, bool write) {
 }
 
 }  // namespace
-
-// Unmapped accesses and those beyond the address bus never flood the log (docs/decisions.md,
-// "Logs that never flood"): a driver's polling loop is millions of them.
-FoldedLog::Line FoldedLog::note(std::uint32_t a) {
-  constexpr std::size_t kAddressLines = 16;
-  ++count;
-  if (count == 1) {
-    logged.push_back(a);
-    return Line::first;
-  }
-  if (logged.size() < kAddressLines && std::find(logged.begin(), logged.end(), a) == logged.end()) {
-    logged.push_back(a);
-    return Line::address;
-  }
-  std::uint64_t p = 10;
-  while (p < count) p *= 10;
-  return p == count ? Line::count : Line::none;
-}
 
 void ChipCore::note_unmapped(std::uint32_t a, std::string_view access) {
   const FoldedLog::Line line = unmapped.note(a);

@@ -18,8 +18,13 @@ Chip::~Chip() = default;
 Chip::Chip(Chip&&) noexcept = default;
 Chip& Chip::operator=(Chip&&) noexcept = default;
 
-void Chip::reset() {
-  core_->reset();
+void Chip::reset() { reset(0); }
+void Chip::reset(std::uint64_t cycle) {
+  if (cycle > kLastCycle) {
+    throw std::invalid_argument(
+        fmt::format("Chip::reset: cycle {} is past the chip's last cycle {}", cycle, kLastCycle));
+  }
+  core_->reset(cycle);
   moved();
 }
 std::uint8_t Chip::read(std::uint32_t addr) {

@@ -1,4 +1,4 @@
-// The chip's snapshot (docs/snapshots.md, format version 5): every block's state, written and
+// The chip's snapshot (docs/snapshots.md, format version 6): every block's state, written and
 // read in one place so that the format is one list. Each list is a template run with a Writer
 // (save) or a Reader (load), so save and load cannot drift apart; a static_assert on each
 // block's State makes a new member fail the build until it is listed here.
@@ -207,6 +207,20 @@ void counter_fields(Ar& ar, S& s) {
   for (const CounterField& f : kFdlCounterFields) ar(s.*(f.member));
 }
 
+// A FoldedLog: the occurrences counted, then the addresses logged one line each (the first one
+// with the first occurrence: none exactly when nothing was counted).
+template <typename Ar, typename L>
+void folded_log_fields(Ar& ar, L& l) {
+  static_assert(snap::member_count<FoldedLog>() == 2, "a new member: add it here");
+  ar(l.count);
+  ar.sequence(l.logged, FoldedLog::kAddressLines, [](auto& a, auto& x) { a(x); });
+  if constexpr (requires { ar.fail(""); }) {
+    if (l.logged.empty() != (l.count == 0) || l.logged.size() > l.count)
+      ar.fail(fmt::format("a folded log of {} occurrences with {} addresses logged", l.count,
+                          l.logged.size()));
+  }
+}
+
 // Everything that influences future behaviour. Not here: the configuration (profile, bus,
 // clock rate: the header), the tables derived from the profile (decode maps, hooks), the log sink
 // and the observers, quiet_until (a cache, 0 = recompute) and stop (a request of whoever steps the
@@ -368,6 +382,20 @@ void core_fields(Ar& ar, C& c) {
          sl.entry != sl_reset.entry || sl.response != sl_reset.response))
       ar.fail("the SAP list is not off on a chip without one (VPC3+ only)");
   }
+  // Format version 6: what the log has said already, so that a restored chip does not say it
+  // again where the original run would not.
+  ar.section("LOGS");
+  for (auto& [cell, logged] : A::over_long(c.dp)) {
+    ar(logged);
+    if constexpr (requires { ar.fail(""); }) {
+      if (logged != 0 && logged <= fdl::kMaxDpData)
+        ar.fail(fmt::format("{} logged as over-long at {}, within the {} bytes of a DP data unit",
+                            kRegIdNames[static_cast<std::size_t>(cell)], logged, fdl::kMaxDpData));
+    }
+  }
+  folded_log_fields(ar, c.unmapped);
+  folded_log_fields(ar, c.beyond_bus);
+  folded_log_fields(ar, A::over_registers(c.regs));
 }
 
 snap::Header header_of(const ChipCore& c) {

@@ -63,7 +63,9 @@ struct ChipCore {
   FoldedLog beyond_bus;  // addresses with bits above the profile's address bus
 
   [[nodiscard]] const ProfileDesc& prof() const { return regs.profile(); }
-  void reset();  // the hardware reset: cycle 0, every block in its reset state
+  // The hardware reset: every block in its reset state, the time line from `at` (0: its own;
+  // a platform's instant: Chip::reset(cycle)).
+  void reset(std::uint64_t at = 0);
 
   // --- the CPU's bus side (bus.cpp): decode, the hooks, QEMU's write rule ---
   // 4 clocks, then the access: the plain path inline, everything else out of line.

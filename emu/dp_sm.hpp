@@ -201,7 +201,7 @@ class DpStateMachine {
   // answer and comes back once it is encoded (service).
   std::vector<std::uint8_t> du_;
   // The over-long value each answering length cell was last logged with (0: none): one line per
-  // cell and value. Log state only, not the chip's (not in a snapshot).
+  // cell and value. The log's memory, not the chip's state (a snapshot carries it: LOGS).
   std::array<std::pair<RegId, std::uint8_t>, 5> over_long_ = {{{RegId::R_Len_Din_Buf, 0},
                                                                {RegId::R_Len_Dout_Buf, 0},
                                                                {RegId::R_Len_Read_Cfg_Data, 0},

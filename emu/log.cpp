@@ -2,9 +2,11 @@
 
 #include <fmt/core.h>
 
+#include <algorithm>
 #include <cstdio>
 
 #include "dpc31/names.hpp"
+#include "folded_log.hpp"
 
 namespace dpc31 {
 
@@ -92,6 +94,23 @@ std::vector<std::string> LogLimiter::flush() {
   left_out_ = 0;
   last_.clear();
   return out;
+}
+
+// Unmapped accesses and those beyond the address bus, buffers over the registers: a driver's
+// polling loop is millions of them.
+FoldedLog::Line FoldedLog::note(std::uint32_t a) {
+  ++count;
+  if (count == 1) {
+    logged.push_back(a);
+    return Line::first;
+  }
+  if (logged.size() < kAddressLines && std::find(logged.begin(), logged.end(), a) == logged.end()) {
+    logged.push_back(a);
+    return Line::address;
+  }
+  std::uint64_t p = 10;
+  while (p < count) p *= 10;
+  return p == count ? Line::count : Line::none;
 }
 
 }  // namespace dpc31

@@ -14,6 +14,7 @@
 #include "dpc31/chip.hpp"
 #include "dpc31/reg_ids.hpp"
 #include "dpc31/regdesc.hpp"
+#include "folded_log.hpp"
 #include "signals.hpp"
 
 namespace dpc31 {

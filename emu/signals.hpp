@@ -69,17 +69,6 @@ struct Observers {
   }
 };
 
-// A mistake made over and over (an unmapped access in a polling loop, a buffer over the registers
-// on every exchange) never floods the log (docs/decisions.md, "Logs that never flood").
-struct FoldedLog {
-  enum class Line { first, address, count, none };
-  // The line one more occurrence at `a` gets: the first names the cause, the first few addresses
-  // one each, then a count at 10, 100, 1000, ... occurrences in all.
-  Line note(std::uint32_t a);
-  std::uint64_t count = 0;
-  std::vector<std::uint32_t> logged;  // the first few addresses, one line each
-};
-
 struct Signals {
   explicit Signals(const Clock& c) : clock(&c), sink(stderr_sink()) {}
 

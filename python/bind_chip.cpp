@@ -10,6 +10,7 @@
 
 #include "bind.hpp"
 #include "cleanup.hpp"
+#include "cpu51_board.hpp"
 #include "dpc31/snapshot.hpp"
 #include "firmware_host.hpp"
 #include "vocabulary.hpp"
@@ -454,8 +455,12 @@ void bind_chip_class(py::module_& m) {
            py::arg("profile") = "dpc31", py::arg("bus") = "intel", py::arg("clock_hz") = 0,
            py::arg("engine") = "event", py::arg("variant") = py::none(),
            py::arg("irq_controller") = "external")
-      // run: the reset's edges reach the observers, whose exception is raised here
-      .def("reset", [](PyChip& c) { c.run([&] { c.chip.reset(); }); })
+      // run: the reset's edges reach the observers, whose exception is raised here; under a
+      // Cpu51Board at the board's instant, where the chip's clock counts on (docs/cpu.md)
+      .def("reset",
+           [](PyChip& c) {
+             c.run([&] { c.chip.reset(c.board != nullptr ? c.board->instant() : 0); });
+           })
       // the bus: each access takes bus_access_cycles clocks, the chip runs meanwhile
       .def(
           "read",

@@ -438,6 +438,29 @@ void bind_station(py::module_& m) {
           py::arg("name"));
 }
 
+// Station `st`'s user side set up on its chip, which has just joined: its state changes recorded,
+// the firmware's or responder's init run, its ISR given to the segment.
+void set_up(PySegment& s, PyStation& st, U8 address) {
+  Chip& chip = s.seg.chip(st.index);
+  chip.on_state_change([&st, &chip](U64 cycle) {
+    const DpState dp = chip.dp_state();
+    const WdState wd = chip.wd_state();
+    if (st.changes.empty() || std::get<1>(st.changes.back()) != dp ||
+        std::get<2>(st.changes.back()) != wd) {
+      st.changes.emplace_back(cycle, dp, wd);
+    }
+  });
+  DirectBus bus(chip);
+  if (st.firmware) {
+    st.firmware->init(bus, address);
+    s.seg.set_firmware(st.index, st.firmware->program());
+  } else {
+    st.responder->init(bus);
+    Responder* r = st.responder.get();
+    s.seg.set_firmware(st.index, [r](BusPort& b) { r->isr(b); });
+  }
+}
+
 // A chip station with its user side: a firmware (built-in name or plug-in path) or the built-in
 // responder, set up on its chip now, as a segment scenario's `station` line does.
 PyStation& add_station(py::object self, U8 address, const std::string& profile,
@@ -489,35 +512,33 @@ PyStation& add_station(py::object self, U8 address, const std::string& profile,
   std::string out_error;
   s.run(
       [&] {
-        st->index = s.joined(s.seg.add_chip(st->name, opt), address);
-        if (s.outputs &&
-            !s.outputs->add_station(s.seg, st->index, station_scope(address, st->name), out_error))
-          return;
-        Chip& chip = s.seg.chip(st->index);
-        chip.on_state_change([&raw, &chip](U64 cycle) {
-          const DpState dp = chip.dp_state();
-          const WdState wd = chip.wd_state();
-          if (raw.changes.empty() || std::get<1>(raw.changes.back()) != dp ||
-              std::get<2>(raw.changes.back()) != wd) {
-            raw.changes.emplace_back(cycle, dp, wd);
+        st->index = s.seg.add_chip(st->name, opt);
+        // Refused from here on (a waveform's scope, the firmware's init): the station leaves
+        // again, the segment as it was (size, names, indices, waveforms).
+        bool in_outputs = false;
+        try {
+          if (s.outputs) {
+            in_outputs = s.outputs->add_station(s.seg, st->index, station_scope(address, st->name),
+                                                out_error);
+            if (!in_outputs) {
+              s.seg.remove_last_chip();
+              return;
+            }
           }
-        });
-        DirectBus bus(chip);
-        if (raw.firmware) {
-          raw.firmware->init(bus, address);
-          s.seg.set_firmware(raw.index, raw.firmware->program());
-        } else {
-          raw.responder->init(bus);
-          Responder* r = raw.responder.get();
-          s.seg.set_firmware(raw.index, [r](BusPort& b) { r->isr(b); });
+          set_up(s, raw, address);
+        } catch (...) {
+          if (in_outputs) s.outputs->remove_station();
+          s.seg.remove_last_chip();
+          throw;
         }
+        s.joined(st->index, address);
       },
       /*joins=*/true);
+  check_output(out_error.empty(), out_error);
   // With the GIL held again: the registry of user sides is Python's state.
   user_side_runs_with(raw.firmware ? static_cast<const void*>(raw.firmware.get())
                                    : static_cast<const void*>(raw.responder.get()),
                       s.run_state());
-  check_output(out_error.empty(), out_error);
   s.stations.push_back(std::move(st));
   return raw;
 }

@@ -297,7 +297,8 @@ class Parser {
     const bool c31 = pos_[0] == "c31";
     if ((pos_[0] != "80c32" && !c31) || pos_[1] != "firmware")
       fail("the form is 'cpu 80c32 firmware FILE'");
-    if (c31 && s_.chip.profile != Profile::dpc31)
+    // Line-ordered as `irq-controller`: the default profile is no `profile` line.
+    if (c31 && (profile_line_ == 0 || s_.chip.profile != Profile::dpc31))
       fail("'cpu c31' needs 'profile dpc31' before it: only the DPC31 has a C31 core");
     if (firmware_seen_ || user_seen_ || slave_seen_ || !s_.user.dpv1.records.empty())
       fail("'cpu' comes before 'slave', without 'firmware', 'user' and 'record'");

@@ -286,8 +286,9 @@ class Runner {
 
   // Writes the events whose lines are decided and forgets them. At the step's end (`all`) that is
   // every event; during a long action (a DPV1 service's polls) the ones whose fold the events
-  // still to come cannot change, and a run that keeps repeating is counted as it goes (`fold_`):
-  // the walk is the one the whole step would give, the memory flat.
+  // still to come cannot change. fold_at decides which group folds; its repeats are counted one
+  // by one as they come (`fold_`), whether they are all here (the step's end) or still coming (a
+  // long action): one rule, so the walk is the one the whole step would give, the memory flat.
   void drain(bool all) {
     std::stable_sort(events_.begin(), events_.end(),
                      [](const Event& a, const Event& b) { return a.cycle < b.cycle; });
@@ -307,7 +308,7 @@ class Runner {
           same = events_[i + x].text == fold_->group[x];
         if (same && have == k) {
           tell_all(i, k);
-          ++fold_->repeats;
+          if (fold_->repeats++ == 0) fold_->first_cycle = events_[i].cycle;
           fold_->last_cycle = events_[i + k - 1].cycle;
           i += k;
           continue;
@@ -316,22 +317,19 @@ class Runner {
         end_fold();
         continue;
       }
+      // Where the fold of the line is decided: the line, or the first occurrence of the group
+      // that folds, is written; the group's repeats, those here and those still to come, are
+      // counted above, by the one running fold.
       const Fold f = fold_at(i, n);
       if (!all && !f.settled && !f.periodic) break;
-      write(events_[i]);
-      tell_all(i, 1);
-      if (f.repeats == 0) {
-        ++i;
-        continue;
+      const std::size_t lines = f.repeats == 0 ? 1 : f.lines;
+      for (std::size_t x = 0; x < lines; ++x) write(events_[i + x]);
+      tell_all(i, lines);
+      if (f.repeats != 0) {
+        fold_ = Folding{};
+        for (std::size_t x = 0; x < lines; ++x) fold_->group.push_back(events_[i + x].text);
       }
-      for (std::size_t x = 1; x < f.lines; ++x) write(events_[i + x]);
-      tell_all(i + 1, f.lines * (f.repeats + 1) - 1);
-      fold_ = Folding{{},
-                      f.repeats,
-                      events_[i + f.lines].cycle,
-                      events_[i + f.lines * (f.repeats + 1) - 1].cycle};
-      for (std::size_t x = 0; x < f.lines; ++x) fold_->group.push_back(events_[i + x].text);
-      i += f.lines * (f.repeats + 1);
+      i += lines;
     }
     events_.erase(events_.begin(), events_.begin() + static_cast<std::ptrdiff_t>(i));
     if (all && fold_) end_fold();
@@ -394,12 +392,12 @@ class Runner {
                     });
     return best;
   }
-  // A group being folded while its repeats still come.
+  // A group being folded: its repeats counted as they come.
   struct Folding {
     std::vector<std::string> group;
-    std::size_t repeats;
-    std::uint64_t first_cycle;  // of the first repeat
-    std::uint64_t last_cycle;   // of the last line of the last repeat
+    std::size_t repeats = 0;
+    std::uint64_t first_cycle = 0;  // of the first repeat
+    std::uint64_t last_cycle = 0;   // of the last line of the last repeat
   };
   std::optional<Folding> fold_;
 

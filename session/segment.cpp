@@ -142,6 +142,25 @@ std::size_t Segment::add_sender(std::string name) {
   return stations_.size() - 1;
 }
 
+void Segment::remove_last_chip() {
+  if (stations_.empty() || !stations_.back()->chip) {
+    throw std::logic_error("segment: remove_last_chip without a chip added last");
+  }
+  Station& s = *stations_.back();
+  // What it drove is on the line, in the other stations and in the collisions: it stays.
+  if (!s.out.bytes.empty() || !s.txd.empty() || owner_ == s.index) {
+    throw std::logic_error("segment: station " + s.name + " drove the line: it stays on it");
+  }
+  set_next(s.index, UINT64_MAX);  // its leaf is free again, as add_station finds a new one
+  next_.pop_back();
+  everyone_.pop_back();
+  std::erase(busy_, s.index);
+  std::erase(moved_, s.index);
+  log_.remove_chip(s.index, s.address);
+  stations_.pop_back();
+  front_stale_ = true;  // its init may have run it ahead of the line's time (cycle())
+}
+
 void Segment::set_firmware(std::size_t i, Cpu::Isr isr) {
   station(i).cpu = std::make_unique<Cpu>(chip(i), std::move(isr));
   look_at(*stations_[i]);

@@ -55,6 +55,11 @@ class Segment {
   std::size_t add_chip(std::string name, ChipOptions opt);
   // A station without a chip (a master, a scripted station): it drives the line with send().
   std::size_t add_sender(std::string name);
+  // Takes the last station added off the line again, a chip that has never driven it: a door
+  // whose user side fails to set up after add_chip (a firmware's init) refuses the station and
+  // leaves the segment as it was (its size, its names, the next station's index, the line's
+  // time). std::logic_error for another station or one that drove the line.
+  void remove_last_chip();
   // The user side of chip station `i`, run on its own host CPU whenever its X/INT is active
   // (or with a main loop).
   void set_firmware(std::size_t i, Cpu::Isr isr);

@@ -46,6 +46,12 @@ class TelegramLog {
   // The chips that hear a telegram at once: those that cannot wait (in station order) and those
   // at a request's destination address, kept as the segment looks at its chips.
   void add_chip(std::size_t i) { chips_.push_back(i); }
+  // Chip i, the last one added, leaves the segment (Segment::remove_last_chip).
+  void remove_chip(std::size_t i, int address) {
+    std::erase(chips_, i);
+    set_eager(i, false);
+    set_address(i, address, -1);
+  }
   [[nodiscard]] std::size_t chips() const { return chips_.size(); }
   void set_eager(std::size_t i, bool on) { keep(eager_, i, on); }
   void set_address(std::size_t i, int from, int to);

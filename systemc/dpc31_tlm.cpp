@@ -55,6 +55,9 @@ Dpc31Tlm::Dpc31Tlm(const sc_core::sc_module_name& name, const ChipOptions& optio
     follow_x_int(cycle);
     schedule(cycle, kIrq, active);
   });
+  // After every bus access, step, reset and load_state: a Mode_Reg0.INT_Pol written or reset
+  // flips X/INT without a change of the interrupt (no on_irq_change).
+  chip_.on_cycle([this](std::uint64_t cycle) { follow_x_int(cycle); });
   chip_.on_pb3_change([this](std::uint64_t cycle, bool high) { schedule(cycle, kPb3, high); });
   chip_.on_txd([this](std::uint64_t cycle, bool level) { schedule(cycle, kTxd, level); });
   SC_THREAD(run);
@@ -225,8 +228,7 @@ void Dpc31Tlm::b_transport(tlm::tlm_generic_payload& tr, sc_core::sc_time& delay
     if (tr.is_read()) {
       data[i] = chip_.read(a);
     } else {
-      chip_.write(a, data[i]);
-      follow_x_int(chip_.cycle());  // Mode_Reg0.INT_Pol flips the pin when the write completes
+      chip_.write(a, data[i]);  // X/INT followed at its completion (on_cycle)
     }
     ++accesses_;
   }

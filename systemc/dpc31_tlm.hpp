@@ -41,7 +41,8 @@ class Dpc31Tlm : public sc_core::sc_module {
   Dpc31Tlm(const sc_core::sc_module_name& name, const ChipOptions& options);
 
   // The chip: its serial input (drive_rxd, drive_rxd_chars) and what a testbench looks at. Use
-  // it from SystemC processes only; time moves through the model, not through Chip::step.
+  // it from SystemC processes only; time moves through the model, not through Chip::step. The
+  // model watches its Chip::on_cycle (one watcher): a platform does not set another.
   Chip& chip() { return chip_; }
   // The time base: cycle c is at ceil(c / clock_hz) seconds on the SystemC time line (the time
   // resolution decides the rounding); cycle_at is its inverse. The time line ends at
@@ -76,8 +77,9 @@ class Dpc31Tlm : public sc_core::sc_module {
   void run();          // SC_THREAD: the chip's own events at their times
   void watch_rxd();    // SC_THREAD: the rxd port\'s changes onto the chip\'s RxD
   void apply_edges();  // SC_METHOD: scheduled pin changes onto the ports
-  // X/INT follows the interrupt and Mode_Reg0.INT_Pol: a polarity write flips the pin without a
-  // change of the interrupt (no on_irq_change), so the pin is compared after every write.
+  // X/INT follows the interrupt and Mode_Reg0.INT_Pol: a polarity write, a reset or a load_state
+  // flips the pin without a change of the interrupt (no on_irq_change), so the pin is compared
+  // wherever the chip may have moved (Chip::on_cycle) and after a debug write.
   void follow_x_int(std::uint64_t cycle);
   void step_to(std::uint64_t cycle);  // never past `cycle`, never backwards
   void schedule(std::uint64_t cycle, int pin, bool level);

@@ -168,6 +168,10 @@ TEST_F(BadInput, CpuBoardSetUpsThatCannotWork) {
       {"the C31's controller",
        file("i1.scn", "profile dpc31\nirq-controller c31\ncpu 80c32 firmware halt.ihx\nstartup\n"),
        path("i1.scn") + ":3: " + c31_irq},
+      {"the C31 without its profile line",
+       file("c1.scn", "baud 1500000\ncpu c31 firmware halt.ihx\nstartup\n"),
+       path("c1.scn") +
+           ":2: 'cpu c31' needs 'profile dpc31' before it: only the DPC31 has a C31 core"},
       {"the C31 without its controller",
        file("i2.scn",
             "profile dpc31\ncpu c31 firmware halt.ihx\nirq-controller external\nstartup\n"),

@@ -410,6 +410,53 @@ TEST(Responder, LengthCellsBeyondADataUnitSendTheFirst244BytesAndSaySo) {
   }
 }
 
+// What the log has said is in the snapshot (docs/snapshots.md, section LOGS): a chip restored
+// from one says nothing the original run would not have said. Before the snapshot each cause
+// once: R_Len_Din_Buf 250 (a line per cell and value, docs/timing.md "Length cells"), the Dout
+// and Din pointers 00h (a Data_Exchange is two uses of buffers over the registers: the first
+// use's line, then a count at 10, 100, ...) and a read at 0x802 beyond the SPC3's 11-bit bus (the
+// bus side's folded log, as unmapped accesses have). After the load the same causes again: no
+// line at all, and the 10th use of a buffer over the registers (the 5th Data_Exchange in all)
+// gives its count, as in the run that was never saved.
+TEST(Responder, ARestoredChipDoesNotRepeatItsLog) {
+  Chip chip(ChipOptions{Profile::spc3});
+  std::vector<std::string> log;
+  chip.set_log_sink([&log](const LogRecord& r) {
+    if (r.level == LogLevel::warn) log.push_back(r.text);
+  });
+  ResponderConfig rc;
+  Responder user(rc);
+  DirectBus bus(chip);
+  user.init(bus);
+  DpMaster m(chip, MasterConfig{2, 1'500'000}, rc.slave);
+  m.set_firmware([&user](BusPort& b) { user.isr(b); });
+  ASSERT_TRUE(m.startup());
+  const auto cell = [&chip](const char* name) {
+    return static_cast<std::uint32_t>(find_reg(chip.profile(), name)->read_addr);
+  };
+  for (const char* ptr : {"R_Dout_Buf_Ptr1", "R_Dout_Buf_Ptr2", "R_Dout_Buf_Ptr3", "R_Din_Buf_Ptr1",
+                          "R_Din_Buf_Ptr2", "R_Din_Buf_Ptr3"}) {
+    chip.write(cell(ptr), 0x00);
+  }
+  chip.write(cell("R_Len_Din_Buf"), 250);
+  const auto causes = [&] {
+    ASSERT_TRUE(m.data_exchange({1, 2, 3, 4}).answer);
+    chip.read(0x802);
+  };
+  log.clear();
+  causes();
+  ASSERT_EQ(log.size(), 3u) << "each cause's first line";
+  chip.load_state(chip.save_state());
+  log.clear();
+  causes();
+  EXPECT_EQ(log, std::vector<std::string>{});
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(m.data_exchange({1, 2, 3, 4}).answer);  // uses 5..10
+  ASSERT_EQ(log.size(), 1u);
+  EXPECT_TRUE(
+      log[0].starts_with("10 uses of buffers over the registers so far (the latest: R_Din_Buf_Ptr"))
+      << log[0];
+}
+
 // A buffer pointer that puts a buffer over the registers (00h, the reset value: a driver that
 // forgot them) is served from the RAM behind them, which the CPU does not see there (modelled):
 // the log says so the first time, then counts the uses as unmapped accesses are counted, at 10,

@@ -192,6 +192,66 @@ TEST(Segment, AStationNameLongerThan64BytesIsRefusedBeforeTheStationIsMade) {
   EXPECT_EQ(seg.add_sender("master"), 1u);
 }
 
+// A door whose station fails to set up after add_chip (Python's add_station, a firmware's init
+// refused) takes the chip off again (Segment::remove_last_chip): its init ran it past the line's
+// time, and afterwards the line's time, size and next index are as before and the line runs as on
+// a segment that never had it, on both lines.
+TEST(Segment, AChipTakenOffBeforeItDroveLeavesTheLineAsItWas) {
+  for (const bool reference : {false, true}) {
+    Line plain(kBaud, {5, 6}, 1, reference);
+    Line line(kBaud, {5, 6}, 1, reference);
+    ASSERT_TRUE(plain.master->startup_all());
+    ASSERT_TRUE(line.master->startup_all());
+    const std::uint64_t cycle = line.seg.cycle();
+    const std::size_t late = line.seg.add_chip("late", ChipOptions{Profile::spc3});
+    ResponderConfig rc;
+    rc.slave.address = 7;
+    Responder user(rc);
+    DirectBus bus(line.seg.chip(late));
+    user.init(bus);
+    ASSERT_GT(line.seg.cycle(), cycle) << reference;
+    line.seg.remove_last_chip();
+    EXPECT_EQ(line.seg.size(), 3U) << reference;
+    EXPECT_EQ(line.seg.cycle(), cycle) << reference;
+    const std::vector<Exchange> a = plain.master->dp_cycle();
+    const std::vector<Exchange> b = line.master->dp_cycle();
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      EXPECT_EQ(b[i].request_start, a[i].request_start) << reference << " " << i;
+      EXPECT_EQ(b[i].answer_start, a[i].answer_start) << reference << " " << i;
+      EXPECT_EQ(b[i].answer_end, a[i].answer_end) << reference << " " << i;
+      EXPECT_EQ(b[i].answer.has_value(), a[i].answer.has_value()) << reference << " " << i;
+    }
+    EXPECT_TRUE(line.seg.collisions().empty());
+    EXPECT_EQ(line.seg.add_chip("late", ChipOptions{Profile::spc3}), late);
+  }
+}
+
+// Only a chip added last that never drove the line leaves: what it drove is in the others.
+TEST(Segment, RemoveLastChipRefusesASenderAndAChipThatAnswered) {
+  Segment seg(kBaud);
+  const std::size_t master = seg.add_sender("master 2");
+  EXPECT_THROW(seg.remove_last_chip(), std::logic_error);
+  SlaveConfig sc;
+  sc.address = 5;
+  ResponderConfig rc;
+  rc.slave = sc;
+  Responder user(rc);
+  const std::size_t chip = seg.add_chip("spc3", ChipOptions{Profile::spc3});
+  DirectBus bus(seg.chip(chip));
+  user.init(bus);
+  seg.set_firmware(chip, [&user](BusPort& b) { user.isr(b); });
+  DpMaster m(seg, master, MasterConfig{2, kBaud}, {sc});
+  ASSERT_TRUE(m.startup_all());
+  try {
+    seg.remove_last_chip();
+    ADD_FAILURE() << "a chip that answered left the line";
+  } catch (const std::logic_error& e) {
+    EXPECT_EQ(std::string(e.what()), "segment: station spc3 drove the line: it stays on it");
+  }
+  EXPECT_EQ(seg.size(), 2U);
+}
+
 TEST(Segment, ASendBeforeTheChipsCycleThrowsWithBothNames) {
   Segment seg(kBaud);
   (void)seg.add_chip("slave a", ChipOptions{});

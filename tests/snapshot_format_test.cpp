@@ -93,10 +93,11 @@ TEST(SnapshotFormat, AfterResetEachSectionHasTheSizeTheTableGives) {
        (4 + 3 + 4 + 8 + 8 + 2 + 8 + 8 + 8) + 3 * (1 + 4 + 4 + 4) + (1 + 4 + 4 + 4 + 4 + 4) + 1},
       {"CNTR", 20 * 4},
       {"RQIF", 8 + 8 + 2 + 1},
-      {"SAPL", 1 + 1 + 4 + 4}};
+      {"SAPL", 1 + 1 + 4 + 4},
+      {"LOGS", 5 + 3 * (8 + 4)}};
   for (const auto& [profile, mem, total] :
-       {std::tuple{Profile::spc3, 2048u, 2813u}, std::tuple{Profile::vpc3plus, 4096u, 4861u},
-        std::tuple{Profile::dpc31, 8192u, 8957u}}) {
+       {std::tuple{Profile::spc3, 2048u, 2858u}, std::tuple{Profile::vpc3plus, 4096u, 4906u},
+        std::tuple{Profile::dpc31, 8192u, 9002u}}) {
     const Bytes s = Chip(ChipOptions{profile}).save_state();
     EXPECT_EQ(s.size(), total) << "docs/snapshots.md gives the size after reset";
     std::size_t at = snap::kHeaderSize;
@@ -108,7 +109,7 @@ TEST(SnapshotFormat, AfterResetEachSectionHasTheSizeTheTableGives) {
                 tag);
       at += 4 + (tag == "MEM " ? 4 + mem : size);
     }
-    EXPECT_EQ(at, s.size()) << "the payload ends after SAPL";
+    EXPECT_EQ(at, s.size()) << "the payload ends after LOGS";
   }
 }
 
@@ -151,7 +152,7 @@ TEST(SnapshotFormat, BadFilesAreRefusedAndLeaveTheChipUnchanged) {
 
   b = good;
   set_le(b, 8, snap::kFormatVersion + 1, 4);
-  expect_refused(target, b, "snapshot format version 6 is newer than this build reads (5)");
+  expect_refused(target, b, "snapshot format version 7 is newer than this build reads (6)");
   set_le(b, 8, 0, 4);
   expect_refused(target, b, "snapshot format version 0 is not supported");
 
@@ -405,6 +406,25 @@ TEST(SnapshotFormat, ABlockTheChipLacksOrABitTimeOfNoRateIsRefused) {
       expect_refused(target, b, wrong);
     }
   }
+}
+
+// What the log has said (section LOGS, version 6) as the log can have said it: an over-long
+// length cell is logged only beyond 244 (docs/timing.md, "Length cells"), and a folded log names
+// an address exactly when it has counted an occurrence (the first names the cause).
+TEST(SnapshotFormat, ALogMemoryTheLogCannotHaveIsRefused) {
+  Chip target = mid_session(Profile::spc3);
+  const Bytes good = target.save_state();
+  const std::size_t logs = section_at(good, "LOGS") + 4;
+  Bytes b = good;
+  b[logs] = 244;  // R_Len_Din_Buf
+  reseal(b);
+  expect_refused(
+      target, b,
+      "R_Len_Din_Buf logged as over-long at 244, within the 244 bytes of a DP data unit");
+  b = good;
+  set_le(b, logs + 5, 1, 8);  // unmapped accesses: one counted, no address
+  reseal(b);
+  expect_refused(target, b, "a folded log of 1 occurrences with 0 addresses logged");
 }
 
 // Diag_Buffer_SM's two buffers as the manuals move them: one with the user and one with the

@@ -271,13 +271,40 @@ def test_a_load_under_a_board_takes_only_a_snapshot_of_the_boards_instant(tmp_pa
 
 def test_a_chip_reset_under_a_board_counts_on_from_the_boards_instant(tmp_path):
     """docs/cpu.md, "The board": a reset is an event at the board's instant and the chip's clock
-    counts on, as the CPU's does: the next run brings the chip from 0 back to 48 000 (nothing runs
-    for run_until(10)), and run_until(96 000) ends with the CPU at machine cycle 4 000."""
+    counts on from there, as the CPU's does: the chip stands at 48 000 after it, a run to 10 runs
+    nothing, and run_until(96 000) ends with the CPU at machine cycle 4 000."""
     chip, board = sbuf_board(tmp_path)
     board.run_until(48_000)
     chip.reset()
-    assert chip.cycle == 0
+    assert chip.cycle == 48_000
     board.run_until(10)
     assert (chip.cycle, board.machine_cycles) == (48_000, 2000)
+    board.run_until(96_000)
+    assert (chip.cycle, board.machine_cycles) == (96_000, 4000)
+
+
+def test_a_chip_reset_under_a_board_tells_its_edges_at_the_boards_instant(tmp_path):
+    """docs/cpu.md, "The board"; docs/timing.md, "hardware reset" (it clears Int_Req_Reg: an active
+    interrupt ends in the reset's cycle) and "Timers" (the first User_Timer_Clock at Start + 48 000).
+    User_Timer_Clock alone unmasked and Start_SPC3 written before the board runs complete at 4, 8,
+    12: the interrupt is active from 48 012 (SJMP $ never serves it). Chip.reset() after
+    run_until(50 000) is at the board's instant: the interrupt ends at 50 000 (on_irq_change),
+    X/INT is high again, and an access then completes at 50 004, not at 4."""
+    chip, board = sbuf_board(tmp_path)
+    utc = dpc31.register("spc3", "Int_Req_Reg").field("User_Timer_Clock").mask
+    imr = chip.addr_of("Int_Mask_Reg")
+    start = dpc31.register("spc3", "Mode_Reg1_S").field("Start_SPC3").mask
+    edges = []
+    chip.on_irq_change(lambda cycle, active: edges.append((cycle, active)))
+    chip.write(imr, ~utc & 0xFF)
+    chip.write(imr + 1, 0xFF)
+    chip.write(chip.addr_of("Mode_Reg1_S"), start)
+    board.run_until(50_000)
+    assert edges == [(48_012, True)] and not chip.x_int
+    chip.reset()
+    assert edges == [(48_012, True), (50_000, False)]
+    assert (chip.cycle, chip.x_int, chip.started) == (50_000, True, False)
+    chip.write(imr, 0xFF)
+    assert chip.cycle == 50_004
     board.run_until(96_000)
     assert (chip.cycle, board.machine_cycles) == (96_000, 4000)

@@ -11,6 +11,7 @@ import pathlib
 import re
 
 import dpc31
+import pytest
 
 T = 32
 # "DP watchdog": TWD = ceil(10 ms x WD_Fact_1 x WD_Fact_2 x f) = 10 ms x 1 x 1 x 48 MHz.
@@ -534,3 +535,52 @@ def test_dp_cycle_skip_refuses_what_a_scenarios_cycle_skip_refuses(cli, tmp_path
         master.dp_cycle(skip=[2**40])
     assert len(master.history) == before  # nothing polled
     assert [e.request.da for e in master.dp_cycle(skip=[5])] == [6]
+
+
+@pytest.mark.parametrize("outputs", [False, True])
+def test_a_station_refused_at_its_init_leaves_the_segment_as_it_was(built, tmp_path, outputs):
+    """docs/python.md, "A segment": an add_station whose firmware's init fails (the bad plug-in's
+    NULL buffer to CopyToVpc3) takes its chip off the line again: the segment's size, stations and
+    cycle are as before, its name, address and index are free, and the line runs as on a segment
+    that never saw it; with outputs, the waveform and the pcapng are those of that segment byte
+    for byte (no scope of the refused station)."""
+    bad = str(built("DPC31_BAD_PLUGIN_HAL_INIT"))
+
+    def run(refused):
+        d = tmp_path / ("refused" if refused else "plain")
+        d.mkdir()
+        files = {"vcd": str(d / "seg.vcd"), "pcapng": str(d / "seg.pcapng")} if outputs else {}
+        seg = dpc31.Segment(1_500_000, **files)
+        seg.add_station(5, "spc3", firmware="DO4", name="spc3", wd=(1, 1))
+        if refused:
+            cycle = seg.cycle
+            # Refused before the chip is made: a taken name, a bad address, firmware or profile,
+            # buffers past the built-in user side's RAM.
+            for bad_args in (dict(address=6, name="spc3"), dict(address=200),
+                             dict(address=6, firmware="NOPE"), dict(address=6, profile="spc4"),
+                             dict(address=6, profile="spc3",
+                                  slave=dpc31.SlaveConfig(address=6, in_len=244, out_len=244))):
+                with pytest.raises((ValueError, dpc31.FirmwareError)):
+                    seg.add_station(**bad_args)
+                assert seg.size == 1, bad_args
+            # Refused by the firmware's init, on the station's chip: it leaves again.
+            with pytest.raises(dpc31.FirmwareError,
+                               match=r"^firmware BAD: CopyToVpc3: local buffer is NULL"):
+                seg.add_station(6, "dpc31", firmware=bad, name="dpc31")
+            assert (seg.size, len(seg.stations), seg.cycle) == (1, 1, cycle)
+        station = seg.add_station(6, "dpc31", firmware="DO4", name="dpc31", wd=(1, 1))
+        assert (station.index, seg.size) == (1, 2)
+        master = seg.add_master(2, [5, 6])
+        line = []
+        seg.on_telegram(line.append)
+        assert master.startup_all()
+        master.dp_cycle()
+        assert seg.collisions == []
+        seen = ([(t.sender, t.start, t.end, t.bytes) for t in line], seg.cycle,
+                [st.dp_state for st in seg.stations])
+        seg.close()
+        if outputs:
+            seen += ((d / "seg.vcd").read_bytes(), (d / "seg.pcapng").read_bytes())
+        return seen
+
+    assert run(True) == run(False)

@@ -1,7 +1,8 @@
 // The model's pin signals against the chip's pins (docs/systemc.md, "X/INT, the interrupt, PB3,
-// TxD"), in two runs: `dpc31_sc_pins polarity` (CTest SystemC.pins) and `dpc31_sc_pins reset`
-// (CTest SystemC.reset). Exit 0 when every check holds; each one that does not is a line on
-// stderr. Both use an SPC3 whose initiator unmasks User_Timer_Clock alone and starts the chip.
+// TxD"), in three runs: `dpc31_sc_pins polarity` (CTest SystemC.pins), `dpc31_sc_pins reset`
+// (CTest SystemC.reset) and `dpc31_sc_pins polarity_jump` (CTest SystemC.polarity_jump). Exit 0
+// when every check holds; each one that does not is a line on stderr. The first two use an SPC3
+// whose initiator unmasks User_Timer_Clock alone and starts the chip.
 //
 // Expected cycles (docs/timing.md, "Bus accesses": an access starting at t completes at t + 4;
 // "Interrupt line": polarity INT_Pol = 0 low-active, 1 high-active, and a hardware reset clears
@@ -16,6 +17,10 @@
 //   48 012: irq high, X/INT (low-active) low; chip().reset() there: irq low, X/INT high at
 //   48 012. The same three writes again start at 48 012 (the reset chip brought to SystemC time,
 //   its clock counting on): 48 016, 48 020, Start_SPC3 48 024, User_Timer_Clock 96 024.
+// - polarity_jump: no interrupt at all, only INT_Pol moves X/INT. Mode_Reg0 lo (INT_Pol = 1)
+//   completes at 4: X/INT (inactive) goes low; a snapshot there; chip().reset() at 1000 takes
+//   Mode_Reg0 back to 0 (low-active): high at 1000; load_state of the snapshot at 2000 (INT_Pol 1
+//   again, its cycle 4 in the past: written at once): low at 2000.
 #include <tlm_utils/simple_initiator_socket.h>
 
 #include <cstdint>
@@ -53,10 +58,10 @@ struct Bench : sc_core::sc_module {
   sc_core::sc_signal<bool> x_int{"x_int"}, irq{"irq"}, pb3{"pb3"}, txd{"txd"};
   Edges x_int_edges, irq_edges;
   int failures = 0;
-  const bool reset_run;
+  const std::string run;
 
   SC_HAS_PROCESS(Bench);
-  Bench(const sc_core::sc_module_name& n, bool reset) : sc_module(n), reset_run(reset) {
+  Bench(const sc_core::sc_module_name& n, std::string which) : sc_module(n), run(std::move(which)) {
     cpu.bind(chip.bus);
     chip.x_int(x_int);
     chip.irq(irq);
@@ -99,8 +104,10 @@ struct Bench : sc_core::sc_module {
   }
 
   void initiator() {
-    if (reset_run) {
+    if (run == "reset") {
       run_reset();
+    } else if (run == "polarity_jump") {
+      run_polarity_jump();
     } else {
       run_polarity();
     }
@@ -152,6 +159,24 @@ struct Bench : sc_core::sc_module {
            "x_int edges (cycle:level)" + text(x_int_edges) + ", expected" + text(x_int_want));
   }
 
+  void run_polarity_jump() {
+    sc_core::sc_time delay = sc_core::SC_ZERO_TIME;
+    write(SPC3_Mode_Reg0_LO_INTEL, SPC3_Mode_Reg0_INT_Pol_Msk, delay);
+    wait(delay);
+    const std::vector<std::uint8_t> snapshot = chip.chip().save_state();
+    wait(chip.time_of(1000) - sc_core::sc_time_stamp());
+    chip.chip().reset();
+    wait(chip.time_of(2000) - sc_core::sc_time_stamp());
+    chip.chip().load_state(snapshot);
+    wait(sc_core::SC_ZERO_TIME);
+    wait(sc_core::SC_ZERO_TIME);
+    expect(irq_edges.empty(), "irq edges (cycle:level)" + text(irq_edges) + ", expected none");
+    const Edges want{{4, false}, {1000, true}, {2000, false}};
+    expect(x_int_edges == want,
+           "x_int edges (cycle:level)" + text(x_int_edges) + ", expected" + text(want));
+    expect(x_int.read() == chip.chip().x_int_pin(), "x_int differs from the chip's X/INT pin");
+  }
+
   void run_polarity() {
     wait(sc_core::SC_ZERO_TIME);
     expect(x_int.read(), "X/INT is not high at reset (low-active, inactive)");
@@ -179,13 +204,13 @@ struct Bench : sc_core::sc_module {
 
 int sc_main(int argc, char* argv[]) {
   const std::string run = argc == 2 ? argv[1] : "";
-  if (run != "polarity" && run != "reset") {
-    std::fprintf(stderr, "pins: usage: pins polarity|reset\n");
+  if (run != "polarity" && run != "reset" && run != "polarity_jump") {
+    std::fprintf(stderr, "pins: usage: pins polarity|reset|polarity_jump\n");
     return 2;
   }
   sc_core::sc_report_handler::set_actions("/OSCI/SystemC", sc_core::SC_INFO,
                                           sc_core::SC_DO_NOTHING);
-  Bench bench{"bench", run == "reset"};
+  Bench bench{"bench", run};
   sc_core::sc_start();
   return bench.failures == 0 ? 0 : 1;
 }

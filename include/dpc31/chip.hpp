@@ -181,6 +181,10 @@ class Chip {
   // Hardware reset: registers and RAM cells to their reset values, cycle counter to 0. The end
   // of an active interrupt and PB3's fall are told to their observers at cycle 0.
   void reset();
+  // The same reset in a platform whose clock counts on (a Cpu51Board's instant(), docs/cpu.md):
+  // the new time line starts at `cycle`, where the reset's edges are told. A cycle past
+  // kLastCycle is std::invalid_argument, the chip unchanged.
+  void reset(std::uint64_t cycle);
 
   // --- the bus (front door) ---
   std::uint8_t read(std::uint32_t addr);

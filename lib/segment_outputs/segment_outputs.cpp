@@ -40,10 +40,17 @@ bool SegmentOutputs::open(std::string& error) {
 bool SegmentOutputs::add_station(Segment& seg, std::size_t index, const std::string& scope,
                                  std::string& error) {
   seg_ = &seg;
-  for (auto& w : waves_) {
-    if (!w->attach_station(seg.chip(index), scope, error)) return false;
+  for (std::size_t i = 0; i < waves_.size(); ++i) {
+    if (waves_[i]->attach_station(seg.chip(index), scope, error)) continue;
+    // Refused by one: out of those before it too, so that the station may leave whole.
+    while (i > 0) waves_[--i]->detach_station();
+    return false;
   }
   return true;
+}
+
+void SegmentOutputs::remove_station() {
+  for (auto& w : waves_) w->detach_station();
 }
 
 bool SegmentOutputs::attach_line(Segment& seg, std::vector<std::uint8_t> driver_codes,

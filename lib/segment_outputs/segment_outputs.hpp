@@ -55,6 +55,9 @@ class SegmentOutputs {
   // Chip station `index` of `seg` joins, before its user side's init: its scope in every
   // waveform. False with a line.
   bool add_station(Segment& seg, std::size_t index, const std::string& scope, std::string& error);
+  // The station added last leaves again before it ran (Segment::remove_last_chip): as before it
+  // was added.
+  void remove_station();
   // Every station is on the line: `driver_codes` each one's code in line.driver, in the segment's
   // order (wave::Recorder::attach_line); the line's edges go to the waveforms from now on
   // (Segment::on_line). False with a line.

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <numeric>
 #include <optional>
+#include <stdexcept>
 #include <string_view>
 
 #include "dpc31/reg_ids.hpp"
@@ -738,6 +739,28 @@ bool Recorder::attach_station(Chip& chip, const std::string& scope, std::string&
     m.push(s, 0, kLineDriver, kNoDriver);
   }
   return m.attach_chip(chip, scope, error);
+}
+
+void Recorder::detach_station() {
+  Impl& m = *impl_;
+  if (m.line == nullptr || m.horizon || m.sources.size() < 2) {
+    throw std::logic_error("waveform: detach_station without a station attached before the line");
+  }
+  // Nothing is drained before the line is attached (now()): its changes are all in its queues.
+  m.sources.pop_back();
+  if (m.sources.size() == 1) {
+    m.sources.pop_back();
+    m.line = nullptr;
+  }
+  const auto first = static_cast<std::size_t>(
+      std::find_if(m.vars.begin(), m.vars.end(),
+                   [&m](const Var& v) { return v.source >= m.sources.size(); }) -
+      m.vars.begin());
+  for (auto* v : {&m.cur, &m.next}) v->resize(first);
+  m.in_step.resize(first);
+  m.id.resize(first);
+  m.handle.resize(first);
+  m.vars.resize(first);
 }
 
 bool Recorder::attach_line(std::vector<std::uint8_t> driver_codes, std::uint32_t bit_cycles,

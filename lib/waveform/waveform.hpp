@@ -65,6 +65,10 @@ class Recorder {
   // has been reported (Segment::line_final). Then every edge the line's holder drives through
   // line_edge (Segment::on_line). False with a one-line error as attach().
   bool attach_station(Chip& chip, const std::string& scope, std::string& error);
+  // The last station attached leaves again before the line is attached (its chip left the
+  // segment before it ran: Segment::remove_last_chip): its scope, its variables and its changes
+  // go, the first station's with the line's.
+  void detach_station();
   bool attach_line(std::vector<std::uint8_t> driver_codes, std::uint32_t bit_cycles,
                    std::function<std::uint64_t()> line_final, std::string& error);
   void line_edge(std::size_t station, std::uint64_t cycle, bool level);

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "board_image.hpp"
@@ -305,6 +306,45 @@ TEST(Cpu51Board, ALoadTakesOnlyASnapshotOfTheBoardsInstant) {
   }
   chip.load_state(at48);  // the board is gone: any cycle again
   EXPECT_EQ(chip.cycle(), 48'000u);
+}
+
+// The same reset at the board's instant (Chip::reset(board.instant())): the chip's new time line
+// starts there, so its edges are told there and an access after it lands after it (docs/cpu.md,
+// "The board"). User_Timer_Clock alone unmasked (Int_Mask_Reg 04h/05h) and Start_SPC3 (Mode_Reg1_S
+// 08h) written before the board runs: 4, 8, 12; the first User_Timer_Clock at 12 + 48 000
+// (docs/timing.md, "Timers"); SJMP $ never serves it. A hardware reset clears Int_Req_Reg, the
+// interrupt ends in the reset's cycle (docs/timing.md, "hardware reset"): 50 000, where the run
+// ended; X/INT (low-active, INT_Pol 0 after it) high; a write then completes at 50 004.
+TEST(Cpu51Board, AResetAtTheBoardsInstantTellsItsEdgesThere) {
+  Chip chip({Profile::spc3, BusMode::intel});
+  Cpu51Board board(chip, 24'000'000, 0x8000);
+  const std::vector<std::uint8_t> spin = {0x80, 0xFE};
+  board.cpu().load_code(0, spin);
+  std::vector<std::pair<std::uint64_t, bool>> edges;
+  chip.on_irq_change(
+      [&edges](std::uint64_t cycle, bool active) { edges.emplace_back(cycle, active); });
+  chip.write(0x04, 0xEF);  // all but User_Timer_Clock (bit 4) masked
+  chip.write(0x05, 0xFF);
+  chip.write(0x08, 0x01);  // Start_SPC3
+  EXPECT_EQ(board.instant(), 0u);
+  board.run_until(50'000);
+  EXPECT_EQ(board.instant(), 50'000u);
+  EXPECT_FALSE(chip.x_int_pin());
+  chip.reset(board.instant());
+  const std::vector<std::pair<std::uint64_t, bool>> want = {{48'012, true}, {50'000, false}};
+  EXPECT_EQ(edges, want);
+  EXPECT_EQ(chip.cycle(), 50'000u);
+  EXPECT_TRUE(chip.x_int_pin());
+  EXPECT_FALSE(chip.started());
+  chip.write(0x04, 0xFF);
+  EXPECT_EQ(chip.cycle(), 50'004u);
+  board.run_until(96'000);
+  EXPECT_EQ(chip.cycle(), 96'000u);
+  EXPECT_EQ(board.cpu().cycles(), 4000u);
+  EXPECT_EQ(edges.size(), 2u);
+  // Past the chip's last cycle: refused, the chip as it was.
+  EXPECT_THROW(chip.reset(Chip::kLastCycle + 1), std::invalid_argument);
+  EXPECT_EQ(chip.cycle(), 96'000u);
 }
 
 // An X/INT change whose S5P2 sample falls in a MOVX's first cycle is polled in its second (the

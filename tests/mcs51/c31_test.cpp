@@ -157,8 +157,15 @@ TEST(C31, TheScenarioHeaderIsCheckedWhenParsed) {
     ScenarioError err;
     return parse_scenario(text, "t.scn", s, err) ? std::string() : err.text();
   };
-  EXPECT_EQ(error("profile spc3\ncpu c31 firmware a.ihx\n"),
-            "t.scn:2: 'cpu c31' needs 'profile dpc31' before it: only the DPC31 has a C31 core");
+  // As `irq-controller` (docs/scenario-format.md): `profile dpc31` on a line before it, not the
+  // default profile, not a profile line after it, not another profile.
+  const std::string rule =
+      "'cpu c31' needs 'profile dpc31' before it: only the DPC31 has a C31 core";
+  EXPECT_EQ(error("profile spc3\ncpu c31 firmware a.ihx\n"), "t.scn:2: " + rule);
+  EXPECT_EQ(error("cpu c31 firmware a.ihx\nsilence 1ms\n"), "t.scn:1: " + rule);
+  EXPECT_EQ(error("baud 1500000\ncpu c31 firmware a.ihx\nprofile dpc31\n"), "t.scn:2: " + rule);
+  EXPECT_EQ(error("profile dpc31\ncpu c31 firmware a.ihx\nprofile dpc31\n"),
+            "t.scn:3: 'profile' given twice: first at line 1");
   EXPECT_EQ(error("profile dpc31\ncpu c31 firmware a.ihx base=0x8000\n"),
             "t.scn:2: 'cpu c31' takes clock= and code= ('base=' is the 80C32 board's)");
   EXPECT_EQ(error("profile dpc31\ncpu c31 firmware a.ihx code=0x0800\n"),
