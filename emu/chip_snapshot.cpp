@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <stdexcept>
 #include <type_traits>
 
 #include "block_access.hpp"
@@ -412,6 +413,12 @@ std::vector<std::uint8_t> Chip::save_state() const {
 
 void Chip::load_state(std::span<const std::uint8_t> bytes) {
   ChipCore& c = *core_;
+  // The blocks below the observer are in the middle of an event or access on the old core.
+  if (c.signals.calling_out()) {
+    throw std::logic_error(
+        "load_state from inside the chip's observer or log sink: the chip is in the middle of an "
+        "event or access (load it after the call that runs the chip has returned)");
+  }
   const std::span<const std::uint8_t> payload = snap::open(bytes, header_of(c));
   // Decode into a fresh core (its tables built from the same profile); *core_ is untouched until
   // everything has been read and checked.
@@ -421,9 +428,22 @@ void Chip::load_state(std::span<const std::uint8_t> bytes) {
   snap::Reader r(payload);
   core_fields(r, *fresh);
   r.finish();
-  // Commit: nothing below throws. The log sink and the observers belong to whoever attached
-  // them, not to the state.
+  // A CPU board's time goes on from its instant (docs/cpu.md, "The board"): a chip at another
+  // cycle would take the CPU's accesses at cycles the firmware never saw.
+  if (board_instant_ != nullptr && fresh->clock.now != *board_instant_) {
+    throw SnapshotError(
+        fmt::format("snapshot of cycle {} under a CPU board at cycle {}: the CPU's state is not "
+                    "the chip's: it would run on against another chip",
+                    fresh->clock.now, *board_instant_));
+  }
+  // The old state's TxD edges up to its cycle reach the batch observers, as at take_txd(): the
+  // snapshot has them as taken.
+  c.mac.tx_catch_up();
+  // Commit: nothing below throws. The log sink, the observers and the wake-up and stop request
+  // belong to whoever attached or asked for them, not to the state.
   fresh->signals.take_attachments(c.signals);
+  fresh->mac.keep_wake(c.mac);
+  fresh->stop = c.stop;
   const bool line = c.irq.line(), pb3 = c.irq.pb3();
   core_ = std::move(fresh);
   now_ = &core_->clock.now;

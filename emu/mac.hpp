@@ -201,6 +201,12 @@ class Mac {
   void wake_on_txd(bool on);
   // Whether a TxD wake-up fired since the last call (ChipCore stops the step there).
   [[nodiscard]] bool take_txd_wake() { return std::exchange(woke_, false); }
+  // Chip::load_state: the wake-up is whoever steps the chip's, not state: it stays as it was.
+  void keep_wake(const Mac& old) {
+    wake_ = old.wake_;
+    woke_ = old.woke_;
+    if (wake_) clock_.note_deadline(deadline());
+  }
   [[nodiscard]] bool txd_level() const;  // TxD now, also with edges not yet taken
   [[nodiscard]] std::uint32_t bit_time() const { return s_.rx.bit_time(); }
 

@@ -19,6 +19,18 @@
 
 namespace dpc31 {
 
+// Counts a call out of the chip to its user (an observer, the log sink) while it runs, also
+// when it throws.
+struct Calling {
+  explicit Calling(std::uint32_t& n) : n_(n) { ++n_; }
+  ~Calling() { --n_; }
+  Calling(const Calling&) = delete;
+  Calling& operator=(const Calling&) = delete;
+
+ private:
+  std::uint32_t& n_;
+};
+
 // Several parties watch the chip (the scenario runner, waveform and capture writers, the
 // built-in master): each observer is a list. Adding an empty function clears the list.
 // Each has an id (from 1), so that one party can take its own away (remove) and leave the rest.
@@ -27,8 +39,12 @@ struct Observers {
   std::vector<std::function<void(A...)>> fns;
   std::vector<ObserverId> ids;  // fns[i]'s
   ObserverId last = 0;
+  // Calls in progress: the chip is inside one of them (Signals::calling_out).
+  mutable std::uint32_t calling = 0;
   explicit operator bool() const { return !fns.empty(); }
   void operator()(A... a) const {
+    if (fns.empty()) return;  // most lists (the state's, after every event) have none
+    const Calling in(calling);
     for (const auto& f : fns) f(a...);
   }
   // The new observer's id; 0 for an empty function.
@@ -78,6 +94,16 @@ struct Signals {
   mutable std::array<LogLimiter, 4> limiters;  // per LogLevel; they go with the sink
   // Of the log's last line at info or above: whose repeats are owed.
   mutable std::size_t last_level = static_cast<std::size_t>(LogLevel::info);
+  mutable std::uint32_t sinking = 0;  // calls of the sink in progress
+
+  // Whether the chip is inside a call to one of its observers or its sink: its blocks are in the
+  // middle of an event or access (Chip::load_state refuses to replace them there).
+  [[nodiscard]] bool calling_out() const {
+    return sinking + irq.calling + pb3.calling + txd.calling + txd_edges.calling +
+               txd_chars.calling + rxd.calling + telegram.calling + answer.calling + block.calling +
+               bus.calling + state.calling !=
+           0;
+  }
 
   // Reports a protocol-side action on the blocks (call sites only, never inside the actions).
   void emit(BlockEvent::Kind k, std::uint16_t value = 0, std::uint8_t data = 0) const {
@@ -90,6 +116,7 @@ struct Signals {
   template <typename... Args>
   void log(LogLevel level, fmt::format_string<Args...> f, Args&&... args) const {
     if (!sink || level < shown) return;
+    const Calling in(sinking);
     const auto l = static_cast<std::size_t>(level);
     if (level != LogLevel::debug && l != last_level) {
       for (std::string& t : limiters[last_level].end_repeats())
@@ -101,6 +128,7 @@ struct Signals {
   }
   // What the limiters still owe goes to the sink (before it is replaced, at the end of a run).
   void flush_log() const {
+    const Calling in(sinking);
     for (std::size_t l = 0; l < limiters.size(); ++l)
       for (std::string& t : limiters[l].flush())
         if (sink) sink(LogRecord{clock->now, static_cast<LogLevel>(l), std::move(t)});

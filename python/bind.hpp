@@ -333,6 +333,9 @@ std::vector<std::uint8_t> from_bytes(const py::bytes& b);
 // Bytes as the module takes them: `bytes`, a `bytearray` or a list of ints 0..255, else a
 // TypeError / ValueError named `what` ("outputs[0]: 300 out of range (0..255)").
 std::vector<std::uint8_t> bytes_like(py::handle o, std::string_view what);
+// The bytes of any object with the buffer protocol (bytes, bytearray, memoryview, array): a
+// snapshot. Anything else is a TypeError that names its type, never its contents.
+std::vector<std::uint8_t> buffer_bytes(py::handle o, std::string_view what);
 // A raw telegram (transact_raw, Segment.send): 1 to 255 bytes (bytes-like) as a scenario's `send
 // BYTES`, else a ValueError ("telegram: more than 255 bytes", "telegram: no bytes").
 std::vector<std::uint8_t> raw_telegram(py::handle data);
@@ -383,6 +386,9 @@ inline const std::string& read_path_arg(const std::string& path, std::string_vie
     throw py::value_error(std::string(what) + ": an empty file name: nothing can be read there");
   return path;
 }
+// A file name given as a str or an os.PathLike (pathlib.Path), as open() takes it (os.fspath),
+// then path_arg's check.
+std::string fspath_arg(const py::object& path, std::string_view what);
 inline const std::optional<std::string>& path_arg(const std::optional<std::string>& path,
                                                   std::string_view what) {
   if (path) path_arg(*path, what);

@@ -168,6 +168,26 @@ std::vector<std::uint8_t> bytes_like(py::handle o, std::string_view what) {
   }
 }
 
+std::vector<std::uint8_t> buffer_bytes(py::handle o, std::string_view what) {
+  if (PyObject_CheckBuffer(o.ptr()) == 0) {
+    throw py::type_error(
+        fmt::format("{}: a bytes-like object expected, got {}", what,
+                    py::str(py::type::of(o).attr("__name__")).cast<std::string>()));
+  }
+  Py_buffer view{};
+  if (PyObject_GetBuffer(o.ptr(), &view, PyBUF_FULL_RO) != 0) throw py::error_already_set();
+  std::vector<std::uint8_t> v(static_cast<std::size_t>(view.len));
+  const int copied = PyBuffer_ToContiguous(v.data(), &view, view.len, 'C');
+  PyBuffer_Release(&view);
+  if (copied != 0) throw py::error_already_set();
+  return v;
+}
+
+std::string fspath_arg(const py::object& path, std::string_view what) {
+  const py::object p = py::module_::import("os").attr("fspath")(path);
+  return path_arg(p.cast<std::string>(), what);
+}
+
 std::vector<std::uint8_t> raw_telegram(py::handle data) {
   std::vector<std::uint8_t> v = bytes_like(data, "data");
   if (v.empty()) throw py::value_error("telegram: no bytes");
@@ -664,22 +684,22 @@ void bind_chip_class(py::module_& m) {
            })
       .def(
           "load_state",
-          [](PyChip& c, const py::bytes& b) {
-            const std::vector<std::uint8_t> bytes = from_bytes(b);
+          [](PyChip& c, const py::object& data) {
+            const std::vector<std::uint8_t> bytes = buffer_bytes(data, "data");
             c.run([&] { c.chip.load_state(bytes); });
           },
           py::arg("data"))
       .def(
           "save_state_file",
-          [](const PyChip& c, const std::string& path) {
+          [](const PyChip& c, const py::object& path) {
             c.enter(false);
-            c.chip.save_state_file(path_arg(path, "path"));
+            c.chip.save_state_file(fspath_arg(path, "path"));
           },
           py::arg("path"))
       .def(
           "load_state_file",
-          [](PyChip& c, const std::string& path) {
-            const std::string file = read_path_arg(path, "path");
+          [](PyChip& c, const py::object& path) {
+            const std::string file = read_path_arg(fspath_arg(path, "path"), "path");
             c.run([&] { c.chip.load_state_file(file); });
           },
           py::arg("path"));

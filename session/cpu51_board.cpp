@@ -45,9 +45,11 @@ Cpu51Board::Cpu51Board(Chip& chip, std::uint32_t cpu_hz, std::uint16_t base)
   if (!boarded.insert(&chip).second)
     throw std::invalid_argument("the chip has a board already: one CPU drives a chip's bus");
   cpu_.set_xdata(this);
+  BoardAccess::hold(chip_, &ended_);
 }
 
 Cpu51Board::~Cpu51Board() {
+  BoardAccess::hold(chip_, nullptr);
   const std::scoped_lock lock(boarded_mutex);
   boarded.erase(&chip_);
 }

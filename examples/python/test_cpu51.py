@@ -243,6 +243,32 @@ def test_a_boards_run_after_an_observers_exception_ends_at_the_cycle_asked(tmp_p
     assert (chip.cycle, board.machine_cycles) == (48_000, 2000)
 
 
+def test_a_load_under_a_board_takes_only_a_snapshot_of_the_boards_instant(tmp_path):
+    """docs/cpu.md, "The board": under a board the chip loads only a snapshot of the board's
+    instant, where its last run ended; another cycle is refused as `dpc31 serve --cpu` refuses
+    `load` (SnapshotError, the chip unchanged): a chip at 96 000 under a CPU at 48 000 took the
+    CPU's accesses of the gap back to back. After a reset the board's instant is still 96 000."""
+    chip, board = sbuf_board(tmp_path)
+    board.run_until(48_000)
+    at48 = chip.save_state()
+    board.run_until(96_000)
+    at96 = chip.save_state()
+    chip2, board2 = sbuf_board(tmp_path)
+    board2.run_until(48_000)
+    before = chip2.save_state()
+    with pytest.raises(dpc31.SnapshotError) as e:
+        chip2.load_state(at96)
+    assert str(e.value) == ("snapshot of cycle 96000 under a CPU board at cycle 48000: the CPU's "
+                            "state is not the chip's: it would run on against another chip")
+    assert chip2.save_state() == before
+    chip.reset()
+    chip.load_state(at96)
+    with pytest.raises(dpc31.SnapshotError):
+        chip.load_state(at48)
+    board.run_until(144_000)
+    assert (chip.cycle, board.machine_cycles) == (144_000, 6000)
+
+
 def test_a_chip_reset_under_a_board_counts_on_from_the_boards_instant(tmp_path):
     """docs/cpu.md, "The board": a reset is an event at the board's instant and the chip's clock
     counts on from there, as the CPU's does: the chip stands at 48 000 after it, a run to 10 runs

@@ -73,3 +73,42 @@ def test_at_the_end_of_time_every_access_stops_there_and_the_snapshot_loads_back
     again = dpc31.Chip("spc3")
     again.load_state(chip.save_state())
     assert again.cycle == last and again.started
+
+
+def test_load_state_takes_any_bytes_like_object_and_files_take_paths(tmp_path):
+    """load_state takes what the buffer protocol gives (bytes, bytearray, memoryview, array), as
+    write_block takes a bytearray; anything else is a one-line TypeError naming its type, never
+    the snapshot's bytes (pybind11 printed all of them as the call's arguments). The file
+    functions take a pathlib.Path as open() does (docs/python.md)."""
+    import array
+    import pathlib
+
+    a = dpc31.Chip("spc3")
+    a.step(1000)
+    snap = a.save_state()
+    assert len(snap) == 2858  # docs/snapshots.md: after reset on the spc3 (version 6)
+    for data in (bytearray(snap), memoryview(snap), memoryview(bytearray(snap)),
+                 array.array("B", snap)):
+        b = dpc31.Chip("spc3")
+        b.load_state(data)
+        assert (b.cycle, b.save_state()) == (1000, snap), type(data).__name__
+    b = dpc31.Chip("spc3")
+    with pytest.raises(TypeError) as e:
+        b.load_state(list(snap))
+    assert str(e.value) == "data: a bytes-like object expected, got list"
+    with pytest.raises(TypeError) as e:
+        b.load_state(snap.hex())
+    assert str(e.value) == "data: a bytes-like object expected, got str"
+    assert b.cycle == 0
+
+    path = tmp_path / "a.snap"
+    assert isinstance(path, pathlib.Path)
+    a.save_state_file(path)
+    assert path.read_bytes() == snap
+    b.load_state_file(path)
+    assert b.save_state() == snap
+    with pytest.raises(dpc31.SnapshotError) as e:
+        b.load_state_file(tmp_path / "missing.snap")
+    assert str(e.value) == f"{tmp_path / 'missing.snap'}: no such file"
+    with pytest.raises(TypeError):
+        b.load_state_file(5)

@@ -305,9 +305,9 @@ class Chip {
   // TxD edges, reported when time reaches them: each edge is an event of the chip.
   void on_txd(std::function<void(std::uint64_t, bool)> cb);
   // TxD edges for a receiver of the caller's own (a master, the bridge): handed over in order and
-  // in batches, none before its cycle, at the chip's next event, at take_txd() and at the end of
-  // every answer. They are no events: a run nobody else watches is not stepped bit by bit
-  // (docs/engine.md, "Characters on TxD").
+  // in batches, none before its cycle, at the chip's next event, at take_txd(), at load_state
+  // (the old state's) and at the end of every answer. They are no events: a run nobody else watches
+  // is not stepped bit by bit (docs/engine.md, "Characters on TxD").
   void on_txd_edges(std::function<void(std::span<const std::pair<std::uint64_t, bool>>)> cb);
   // The same line for a receiver that takes characters (the built-in master, the bridge): handed
   // over as on_txd_edges hands its edges, but a character whose edges are all on the line comes
@@ -382,9 +382,14 @@ class Chip {
   // transmitter, RxD edges already driven ahead of time, the cycle counter. Observers and the log
   // sink are not state: they stay attached across load_state.
   [[nodiscard]] std::vector<std::uint8_t> save_state() const;
-  // Only a snapshot of a chip with the same profile, bus mode and clock_hz is accepted.
-  // throws dpc31::SnapshotError; on error the chip is unchanged. on_irq_change and
-  // on_pb3_change see the loaded interrupt and PB3 at the loaded cycle where they differ.
+  // Only a snapshot of a chip with the same profile, bus mode and clock_hz is accepted, and
+  // under a CPU board (Cpu51Board) only one of the board's instant, where its last run ended.
+  // throws dpc31::SnapshotError; on error the chip is unchanged. The TxD edges up to the old
+  // cycle go to the on_txd_edges and on_txd_chars observers first, as take_txd() hands them
+  // over; on_irq_change and on_pb3_change see the loaded interrupt and PB3 at the loaded cycle
+  // where they differ. A wake_on_txd and a request_stop stay as they were (not state). Refused
+  // from inside one of the chip's observers or its log sink while the chip calls it (the access
+  // or step in progress runs on the state it would replace): std::logic_error, chip unchanged.
   void load_state(std::span<const std::uint8_t> bytes);
   // temp file + rename; throws SnapshotError (message names the path)
   void save_state_file(const std::string& path) const;
@@ -427,7 +432,16 @@ class Chip {
   // segment, and inline it costs no call. Set wherever core_ is.
   const std::uint64_t* now_;
   std::function<void(std::uint64_t)> on_cycle_;
+  // The instant of the CPU board that drives the bus (its last run's end), or none.
+  const std::uint64_t* board_instant_ = nullptr;
   friend struct LineAccess;
+  friend struct BoardAccess;
+};
+
+// Internal: a CPU board's hold on its chip (session/cpu51_board.cpp): load_state takes only a
+// snapshot of the board's instant, where the CPU's time stands.
+struct BoardAccess {
+  static void hold(Chip& c, const std::uint64_t* instant) { c.board_instant_ = instant; }
 };
 
 // Internal: a segment's way onto its chips' RxD (session/segment.cpp), not the user's (use the

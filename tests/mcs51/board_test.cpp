@@ -256,6 +256,58 @@ TEST(Cpu51Board, AResetChipCountsOnFromTheBoardsInstant) {
   EXPECT_EQ(board.cpu().cycles(), 4000u);
 }
 
+// A snapshot's load under a board (Chip::load_state) takes only the board's instant, where its
+// last run ended: a chip put to another cycle would take the CPU's accesses at cycles the firmware
+// never saw (the audit of the thirty-third session: loaded at 200 000 under a board at 50 000,
+// the CPU's accesses of [50 000, 200 000) landed 4 cycles apart from 200 004). The refusal is
+// `dpc31 serve --cpu`'s for `load` (docs/protocol.md), the chip unchanged; after a reset
+// (docs/cpu.md, "The board") the board's instant is still where the run ended. SJMP $ at 24 MHz: 48
+// 000 chip cycles are 2 000 machine cycles (AResetChipCountsOnFromTheBoardsInstant).
+TEST(Cpu51Board, ALoadTakesOnlyASnapshotOfTheBoardsInstant) {
+  const std::vector<std::uint8_t> spin = {0x80, 0xFE};
+  std::vector<std::uint8_t> at48, at96;
+  {
+    Chip chip({Profile::spc3, BusMode::intel});
+    Cpu51Board board(chip, 24'000'000, 0x8000);
+    board.cpu().load_code(0, spin);
+    board.run_until(48'000);
+    at48 = chip.save_state();
+    board.run_until(96'000);
+    at96 = chip.save_state();
+  }
+  Chip chip({Profile::spc3, BusMode::intel});
+  const auto refused = [&](const std::vector<std::uint8_t>& s, const std::string& message) {
+    const std::vector<std::uint8_t> before = chip.save_state();
+    try {
+      chip.load_state(s);
+      ADD_FAILURE() << "loaded; expected: " << message;
+    } catch (const SnapshotError& e) {
+      EXPECT_EQ(std::string(e.what()), message);
+    }
+    EXPECT_EQ(chip.save_state(), before) << "a refused snapshot changed the chip";
+  };
+  {
+    Cpu51Board board(chip, 24'000'000, 0x8000);
+    board.cpu().load_code(0, spin);
+    board.run_until(48'000);
+    refused(at96,
+            "snapshot of cycle 96000 under a CPU board at cycle 48000: the CPU's state is not the "
+            "chip's: it would run on against another chip");
+    board.run_until(96'000);
+    refused(at48,
+            "snapshot of cycle 48000 under a CPU board at cycle 96000: the CPU's state is not the "
+            "chip's: it would run on against another chip");
+    chip.reset();  // cycle 0; the board's instant stays 96 000
+    chip.load_state(at96);
+    EXPECT_EQ(chip.cycle(), 96'000u);
+    board.run_until(144'000);
+    EXPECT_EQ(chip.cycle(), 144'000u);
+    EXPECT_EQ(board.cpu().cycles(), 6000u);
+  }
+  chip.load_state(at48);  // the board is gone: any cycle again
+  EXPECT_EQ(chip.cycle(), 48'000u);
+}
+
 // The same reset at the board's instant (Chip::reset(board.instant())): the chip's new time line
 // starts there, so its edges are told there and an access after it lands after it (docs/cpu.md,
 // "The board"). User_Timer_Clock alone unmasked (Int_Mask_Reg 04h/05h) and Start_SPC3 (Mode_Reg1_S
