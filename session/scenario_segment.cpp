@@ -24,6 +24,15 @@ namespace {
 
 using namespace scenario_lex;  // NOLINT: the scenario's lexical helpers
 
+// Why `expect port` cannot name `name` of `fw` ("" when it can): the single chip's words.
+std::string port_refused(const dpc31_firmware& fw, std::string_view name) {
+  std::vector<const char*> ports;
+  for (auto n = fw.ports; n && *n; ++n) ports.push_back(*n);
+  ports.push_back(nullptr);
+  if (name_index(ports.data(), name) >= 0) return "";
+  return fmt::format("unknown port '{}' of {} ({})", shown(name), fw.name, name_list(ports.data()));
+}
+
 std::vector<std::string_view> words(std::string_view line) {
   const std::size_t hash = line.find('#');
   if (hash != std::string_view::npos) line = line.substr(0, hash);
@@ -395,11 +404,33 @@ class Parser {
       }
     } else if (what == "visit") {
       visit(st);
+    } else if (what == "port") {
+      port(st);
     } else if (what == "collisions") {
       st.kind = K::expect_collisions;
       st.count = number(positional(1, "a count"), "count", 0, 1'000'000'000);
     } else {
       fail(fmt::format("unknown expect '{}'", what));
+    }
+  }
+
+  // `expect port STATION NAME VALUE`: the single chip's `expect port NAME VALUE` of a station's
+  // firmware. A plug-in's port names are checked when bind_segment_plugins() loads it.
+  void port(SegmentStep& st) {
+    st.kind = SegmentStep::Kind::expect_port;
+    st.station = station_address(positional(1, "a station"));
+    st.name = std::string(positional(2, "a port name"));
+    st.count = number(positional(3, "a port value"), "port value", 0, 0xFFFF'FFFF);
+    const auto def =
+        std::find_if(s_.stations.begin(), s_.stations.end(),
+                     [&st](const SegmentStation& d) { return d.slave.address == st.station; });
+    if (def->firmware.empty()) {
+      fail(fmt::format("'expect port' needs a firmware: station {} runs the built-in user side",
+                       st.station));
+    }
+    if (def->plugin_line == 0) {
+      if (const std::string why = port_refused(find_firmware(def->firmware), st.name); !why.empty())
+        fail(why);
     }
   }
 
@@ -518,11 +549,20 @@ bool bind_segment_plugins(SegmentScenario& s, ScenarioError& err) {
       err = ScenarioError{s.file, st.plugin_line, plugin_refused_untrusted(s.untrusted)};
       return false;
     }
+    const dpc31_firmware* fw = nullptr;
     try {
-      st.slave = with_gsd_defaults(find_firmware(st.firmware), st.slave);
+      fw = &find_firmware(st.firmware);
+      st.slave = with_gsd_defaults(*fw, st.slave);
     } catch (const FirmwareError& e) {
       err = ScenarioError{s.file, st.plugin_line, e.what()};
       return false;
+    }
+    for (const SegmentStep& step : s.steps) {
+      if (step.kind != SegmentStep::Kind::expect_port || step.station != st.slave.address) continue;
+      if (std::string why = port_refused(*fw, step.name); !why.empty()) {
+        err = ScenarioError{s.file, step.line, std::move(why)};
+        return false;
+      }
     }
   }
   s.plugins_bound = true;

@@ -52,6 +52,7 @@ struct SegmentStep {
     expect_violation,   // `violation` counted `count` times
     expect_collisions,  // `count` collisions
     expect_visit,       // master `address`'s last token visit (`visit`)
+    expect_port,        // `station`'s firmware port `name` holds `count`
   };
   Kind kind = Kind::run;
   int line = 0;

@@ -15,6 +15,7 @@
 #include "dpc31/bus_port.hpp"
 #include "firmware_host.hpp"
 #include "responder.hpp"
+#include "scenario_expect.hpp"
 #include "scenario_lex.hpp"
 #include "scenario_segment.hpp"
 #include "segment.hpp"
@@ -149,6 +150,16 @@ class SegmentRun {
         who = fmt::format("the host firmware {}", fw.name);
         st->firmware = std::make_unique<FirmwareHost>(fw);
         st->firmware->name_station(def.slave.address);
+        // Its port writes as the single chip's walk shows them, named by station, held with the
+        // state changes: a chip runs ahead of the others in a round (states_in_order).
+        const FirmwareHost* host = st->firmware.get();
+        st->firmware->on_port = [this, host, name = def.name, &chip](
+                                    std::uint64_t cycle, unsigned port, std::uint32_t value) {
+          states_.emplace_back(
+              cycle, fmt::format("{}: {}: {} = {} at {:.3f} us", name, host->firmware().name,
+                                 host->port_name(port), scenario_expect::port_text(value),
+                                 static_cast<double>(cycle) * 1e6 / chip.clock_hz()));
+        };
         st->firmware->init(bus, def.slave.address);
         seg_.set_firmware(st->index, st->firmware->program());
       }
@@ -478,6 +489,12 @@ class SegmentRun {
       case K::expect_visit:
         ok = visit_matches(st, got);
         break;
+      case K::expect_port: {
+        const std::int64_t v = by_address_.at(st.station)->firmware->port(st.name);
+        ok = v == static_cast<std::int64_t>(st.count);
+        got = scenario_expect::port_text(static_cast<std::uint32_t>(v));
+        break;
+      }
       default:
         break;
     }

@@ -335,6 +335,28 @@ TEST_F(BadInput, AFirmwareThatCrashesIsNamedAndLeavesNothing) {
             (std::vector<std::string>{"crash.log", "crash.scn", "old.json", "spin.log"}));
 }
 
+// s33 audit finding 5: `dpc31 bridge --log F` that never gets past its start left F emptied with
+// nothing in it. Now a fault in the firmware's init (a hang here; a HAL misuse or a crash the
+// same) replaces the earlier session's log by its line, and an output that cannot be written (a
+// --pcap in a directory that does not exist) is refused before the log is opened: F is kept
+// (docs/bridge.md, "The log"; docs/decisions.md, s33-hal2).
+TEST_F(BadInput, ABridgeThatNeverStartsLeavesTheLogWithItsFaultOrAsItWas) {
+  const std::string before = "4 NOTE bridge waiting for a client\n";
+  file("keep.log", before);
+  const Outcome pcap =
+      dpc31("bridge --pty p --firmware DO4 --profile spc3 --log keep.log --pcap no/x.pcapng");
+  EXPECT_EQ(pcap.rc, 2);
+  EXPECT_NE(pcap.err.find("no/x.pcapng"), std::string::npos) << pcap.err;
+  EXPECT_EQ(slurp(path("keep.log")), before);
+  file("spin.log", before);
+  const Outcome spin =
+      dpc31("bridge --pty p --firmware " + std::string(BAD_PLUGIN_SPIN) + " --log spin.log");
+  EXPECT_EQ(spin.rc, 2);
+  EXPECT_EQ(slurp(path("spin.log")), spin.err);
+  EXPECT_NE(spin.err.find("firmware BAD hangs"), std::string::npos) << spin.err;
+  EXPECT_EQ(listing(), (std::vector<std::string>{"keep.log", "spin.log"}));
+}
+
 // s31-serve, finding 6: `soak --firmware` with a firmware that hangs after its init wrote
 // reserved bits of Int_Mask_Reg (on the DPC31, the default profile) printed the chip's two
 // warnings ahead of the hang guard's line. docs/soak.md and docs/bad-input.md promise exactly

@@ -6,6 +6,7 @@
 #include <fmt/core.h>
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <string>
 #include <vector>
 
@@ -190,4 +191,38 @@ TEST(LogLimiter, ALineOfAnotherLevelEndsTheRepeats) {
   EXPECT_EQ(log.records[2].cycle, 16u);
   EXPECT_EQ(log.records[3].text, log.records[0].text);
   EXPECT_EQ(log.records[3].cycle, 20u);
+}
+
+// The same rule's other half (s33-hal, emu/signals.hpp): a debug line keeps its own count, so it
+// does not end the info line's repeats; a firmware's per-interrupt debug lines would otherwise end
+// every fold (the audit's logrepeat2.scn). Two equal info lines, an Int_Ack_Reg write of a bit it
+// does not change (logged at debug, emu/bus.cpp; docs/timing.md "acknowledge exceptions"), two
+// more: one info line, the debug line, and at the end one count of the three repeats. Each access
+// costs 4 clocks and logs at its end (docs/timing.md).
+TEST(LogLimiter, ADebugLineBetweenEqualInfoLinesKeepsTheFold) {
+  Chip c({Profile::dpc31, BusMode::intel});
+  testutil::LogCapture log;
+  log.attach(c);
+  std::uint32_t remark = 0;  // RAM the user must not touch: read with an info line
+  for (const RegionDesc& g : c.profile().regions)
+    if (g.ram && g.reserved) remark = g.begin;
+  const RegDesc* ack = find_reg(c.profile(), RegId::Int_Ack_Reg);
+  ASSERT_NE(remark, 0u);
+  ASSERT_NE(ack, nullptr);
+  ASSERT_NE(ack->ign, 0u);
+  const int bit = std::countr_zero(ack->ign);  // Intel mode: the low byte at the lower address
+  c.read(remark);                              // cycle 4
+  c.read(remark);                              // 8
+  c.write(static_cast<std::uint32_t>(ack->write_addr + bit / 8),
+          static_cast<std::uint8_t>(1u << (bit % 8)));  // 12
+  c.read(remark);                                       // 16
+  c.read(remark);                                       // 20
+  c.set_log_sink(nullptr);
+  ASSERT_EQ(log.records.size(), 3u);
+  EXPECT_EQ(log.records[0].level, LogLevel::info);
+  EXPECT_EQ(log.records[0].cycle, 4u);
+  EXPECT_EQ(log.records[1].level, LogLevel::debug);
+  EXPECT_EQ(log.records[1].cycle, 12u);
+  EXPECT_EQ(log.records[2].level, LogLevel::info);
+  EXPECT_EQ(log.records[2].text, "last line repeated 3 times, cycles 8 to 20");
 }

@@ -267,6 +267,12 @@ TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
       {"station 5\n", "f.scn:1: a segment scenario begins with 'segment'"},
       {"segment\nstation 5 firmware=DO4\nstation 6 firmware=NOPE\n",
        "f.scn:3: unknown firmware 'NOPE' (DO4, CNT2, or a plug-in path such as ./libmine.so)"},
+      // `expect port` (s33 audit finding 8): a station with a firmware, one of its ports.
+      {"segment\nstation 5\nexpect port 5 outputs 1\n",
+       "f.scn:3: 'expect port' needs a firmware: station 5 runs the built-in user side"},
+      {"segment\nstation 5 firmware=DO4\nexpect port 5 led 1\n",
+       "f.scn:3: unknown port 'led' of DO4 (outputs, modul_ok)"},
+      {"segment\nstation 5 firmware=DO4\nexpect port 6 outputs 1\n", "f.scn:3: no station 6"},
       // The token's options (docs/scenario-format.md, "Segments").
       {"segment\nstation 5\nmaster 2 hsa=9\n",
        "f.scn:3: hsa= without gap=: the HSA bounds the GAP the master polls"},
@@ -445,6 +451,33 @@ ScenarioRun run_passing(const std::string& text) {
   EXPECT_EQ(r.errors, std::vector<std::string>{});
   EXPECT_EQ(r.code, 0);
   return r;
+}
+
+// s33 audit finding 8: a station's firmware shows its port writes in the walk, named by station,
+// and `expect port STATION NAME VALUE` checks them (docs/scenario-format.md, "Segments"). The
+// GLOBALS plug-in (tests/bad_plugin.c) writes its run count to port "boots" in init, before any
+// bus access: at cycle 0, and 1 on each station, as each runs an instance of its own with fresh
+// globals (docs/firmware.md, "Instances").
+TEST(SegmentScenario, AStationsFirmwarePortsAreInTheWalkAndChecked) {
+  const std::string head = fmt::format(
+      "segment\nstation 5 profile=spc3 firmware={0}\nstation 6 profile=vpc3plus firmware={0}\n"
+      "run 1ms\n",
+      BAD_PLUGIN_GLOBALS);
+  const ScenarioRun r = run_scenario_text(head + "expect port 5 boots 1\nexpect port 6 boots 2\n");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.errors, std::vector<std::string>{"s.scn:6: expected port 6 boots 2, got 0x1 (0001)"});
+  for (const char* station : {"station 5", "station 6"}) {
+    const std::string line =
+        fmt::format("[cycle          0] {}: BAD: boots = 0x1 (0001) at 0.000 us", station);
+    EXPECT_NE(std::find(r.walk.begin(), r.walk.end(), line), r.walk.end()) << line;
+  }
+  // A name the firmware does not have: the single chip's words, at the check's line, before the
+  // run (the plug-in's ports are known once it is loaded).
+  SegmentScenario s;
+  ScenarioError err;
+  ASSERT_TRUE(parse_segment_scenario(head + "expect port 6 outputs 1\n", "s.scn", s, err));
+  EXPECT_FALSE(bind_segment_plugins(s, err));
+  EXPECT_EQ(err.text(), "s.scn:5: unknown port 'outputs' of BAD (boots)");
 }
 
 // docs/scenario-format.md: `expect tsdr` counts the answers the bus check pairs with their

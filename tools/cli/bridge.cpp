@@ -769,6 +769,12 @@ int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
     fmt::print(err, "dpc31 bridge: {}\n", why);
     return 2;
   };
+  // The outputs written through temporaries first: one that cannot be written leaves an earlier
+  // session's log as it was (s33 audit finding 5), and a refused log leaves no temporary.
+  outfile::OutFile trace;
+  if (!o.trace_cpu.empty() && !trace.open(o.trace_cpu)) return refuse(trace.error());
+  capture::PcapngWriter pcap;
+  if (!o.pcap.empty() && !pcap.open(o.pcap)) return refuse(pcap.error());
   if (!o.log.empty()) {
     if (std::string foreign = outfile::foreign_symlink(o.log); !foreign.empty()) {
       return refuse(foreign);
@@ -808,10 +814,6 @@ int run_bridge(const BridgeOptions& o, std::FILE* out, std::FILE* err) {
     board::guard_hangs("dpc31 bridge", c->setup.firmware->name, door.link, board::kHangLimit,
                        log_fd);
   }
-  outfile::OutFile trace;
-  if (!o.trace_cpu.empty() && !trace.open(o.trace_cpu)) return refuse(trace.error());
-  capture::PcapngWriter pcap;
-  if (!o.pcap.empty() && !pcap.open(o.pcap)) return refuse(pcap.error());
   int rc = 0;
   try {
     Bridge b(*c, *door.port, log);
