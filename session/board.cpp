@@ -72,6 +72,7 @@ struct Guard {
   std::string fallback;  // "firmware FIRMWARE"
   std::string remove;    // unlinked on the way out ("": none)
   int log_fd = -1;       // the line goes here too (-1: only stderr)
+  pid_t owner = 0;       // the process that set the guard (a forked child inherits the handler)
 };
 Guard g_guard;
 
@@ -114,17 +115,28 @@ constexpr Fatal kFatal[] = {
     {SIGABRT, "SIGABRT (abort(), a failed assert?)"},
 };
 
-// Async-signal-safe: writev, unlink, kill (cleanup), sigaction, raise. The default action then
-// ends the process by the signal, so its exit status stays the signal's.
+// Async-signal-safe but for the walk's flush (tried, as the hang watcher does): writev, unlink,
+// kill (cleanup), sigaction, raise. The default action then ends the process by the signal, so
+// its exit status stays the signal's.
+// A forked child (util/child: a traced RTL model may die of SIGBUS on a full disk by design) only
+// dies: the parent's temporaries and line are the parent's.
 extern "C" void dpc31_on_fatal_signal(int sig) {
-  remove_files();
-  const bool in_firmware = g_depth.load(std::memory_order_acquire) != 0;
-  for (const Fatal& f : kFatal) {
-    if (f.sig == sig) {
-      write_fault_line({" crashed: ", f.name,
-                        in_firmware ? " while its code ran; stopped\n"
-                                    : " outside its code (in the emulator: please report it); "
-                                      "stopped\n"});
+  if (::getpid() == g_guard.owner) {
+    remove_files();
+    const bool in_firmware = g_depth.load(std::memory_order_acquire) != 0;
+    for (const Fatal& f : kFatal) {
+      if (f.sig == sig) {
+        write_fault_line({" crashed: ", f.name,
+                          in_firmware ? " while its code ran; stopped\n"
+                                      : " outside its code (in the emulator: please report it); "
+                                        "stopped\n"});
+      }
+    }
+    // The walk printed so far is kept, as at a hang (stdout to a file or a pipe is buffered);
+    // the lock is only tried: a firmware that crashed inside a stdio call cannot block the exit.
+    if (::ftrylockfile(stdout) == 0) {
+      std::fflush(stdout);
+      ::funlockfile(stdout);
     }
   }
   struct sigaction dfl {};
@@ -157,7 +169,7 @@ void guard_hangs(const std::string& program, const std::string& firmware, const 
   // The line is made here but for the firmware's name and its place, which were made before it
   // ran: the watcher and the signal handler flush nothing they might find locked, writev(2) them
   // and end the process, allocating nothing.
-  g_guard = {program + ": ", "firmware " + firmware, remove, log_fd};
+  g_guard = {program + ": ", "firmware " + firmware, remove, log_fd, ::getpid()};
   catch_fatal_signals();
   const std::string tail = " hangs: it ran " + std::to_string(limit.count()) +
                            " ms of host time without a bus access or a board hook call (a "

@@ -116,13 +116,14 @@ class BadInput : public ::testing::Test {
 // Starts `argv` in `dir` without waiting: its standard output on /dev/null, its standard error on
 // `stderr_file` (or the test's); in a process group of its own if `own_group`.
 inline pid_t spawn(const std::vector<std::string>& argv, const std::string& dir,
-                   const std::string& stderr_file = {}, bool own_group = false) {
+                   const std::string& stderr_file = {}, bool own_group = false,
+                   const std::string& stdout_file = "/dev/null") {
   std::vector<char*> args;
   for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
   posix_spawn_file_actions_t fa;
   posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&fa, 1, stdout_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   if (!stderr_file.empty()) {
     posix_spawn_file_actions_addopen(&fa, 2, stderr_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
                                      0644);

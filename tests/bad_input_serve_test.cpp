@@ -335,6 +335,27 @@ TEST_F(BadInput, AFirmwareThatCrashesIsNamedAndLeavesNothing) {
             (std::vector<std::string>{"crash.log", "crash.scn", "old.json", "spin.log"}));
 }
 
+// s33 review finding 1: a crash after the walk has printed lines, with stdout to a file (CI, a
+// pipe): the walk so far is kept, as at a hang (docs/bring-up.md, section 4). It was lost, the
+// buffered stdout never written.
+TEST_F(BadInput, AFirmwareThatCrashesLaterKeepsTheWalkPrintedSoFar) {
+  file("later.scn", "# crashes in its hardware input\nfirmware " +
+                        std::string(BAD_PLUGIN_CRASH_INPUT) + "\nstartup\nhw crash 1\n");
+  const std::string err = (root_ / "io" / "err").string();
+  const std::string out = (root_ / "io" / "out").string();
+  const pid_t pid = spawn({kCli, "run", "later.scn"}, path(""), err, false, out);
+  int st = 0;
+  ASSERT_EQ(::waitpid(pid, &st, 0), pid);
+  ASSERT_TRUE(WIFSIGNALED(st));
+  EXPECT_EQ(WTERMSIG(st), SIGSEGV);
+  EXPECT_EQ(slurp(err),
+            "dpc31 run: later.scn:4: hw: firmware BAD crashed: SIGSEGV (a bad pointer?) "
+            "while its code ran; stopped\n");
+  const std::string walk = slurp(out);
+  EXPECT_NE(walk.find("] line 3: startup\n"), std::string::npos) << walk;
+  EXPECT_NE(walk.find("] line 4: hw crash 1\n"), std::string::npos) << walk;
+}
+
 // s33 audit finding 5: `dpc31 bridge --log F` that never gets past its start left F emptied with
 // nothing in it. Now a fault in the firmware's init (a hang here; a HAL misuse or a crash the
 // same) replaces the earlier session's log by its line, and an output that cannot be written (a

@@ -20,6 +20,8 @@
  * and one that crashes (a store through a NULL pointer in init), which the host cannot catch: the
  * fatal-signal handler names it and removes the temporaries (tests/bad_input_serve_test.cpp):
  *   CRASH
+ *   CRASH_INPUT  its hardware input "crash" stores through a NULL pointer (a crash after the walk
+ *                has printed lines)
  * and one whose ISR hangs, so that the guard stops it inside a scenario's step (FirmwarePlugins):
  *   SPIN_ISR     its init raises an interrupt as HAL_ISR's does; its ISR spins in while(1)
  * and one whose hardware input "spin" hangs, which the guard stops inside a scenario's `hw` step as
@@ -136,8 +138,19 @@ static int spin(const char* name, uint32_t value) {
 static const char* const kInputs[] = {"spin", "wait", "release", 0};
 #define HW_INPUT spin
 #define HW_INPUTS kInputs
+#elif defined(CRASH_INPUT)
+static volatile unsigned char* volatile g_nowhere_later; /* NULL, unknown to the compiler */
+static int crash(const char* name, uint32_t value) {
+  (void)name;
+  (void)value;
+  *g_nowhere_later = 1;
+  return 0;
+}
+static const char* const kInputs[] = {"crash", 0};
+#define HW_INPUT crash
+#define HW_INPUTS kInputs
 #endif
-#if !defined(HAL_ISR) && !defined(TWICE_INPUT) && !defined(SPIN_INPUT)
+#if !defined(HAL_ISR) && !defined(TWICE_INPUT) && !defined(SPIN_INPUT) && !defined(CRASH_INPUT)
 #define HW_INPUT 0
 #define HW_INPUTS 0
 #endif
