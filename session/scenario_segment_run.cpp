@@ -77,7 +77,7 @@ class SegmentRun {
   struct Station {
     std::size_t index = 0;
     std::unique_ptr<Responder> responder;
-    std::unique_ptr<FirmwareHost> firmware;
+    FirmwareHost* firmware = nullptr;  // in hosts_
     DpState dp = DpState::Wait_Prm;
     WdState wd = WdState::Baud_Search;
     std::optional<std::uint64_t> left_dp_control;  // the cycle DP_Control last ended
@@ -148,11 +148,12 @@ class SegmentRun {
       } else {
         const dpc31_firmware& fw = find_firmware(def.firmware);
         who = fmt::format("the host firmware {}", fw.name);
-        st->firmware = std::make_unique<FirmwareHost>(fw);
+        hosts_.push_back(std::make_unique<FirmwareHost>(fw));
+        st->firmware = hosts_.back().get();
         st->firmware->name_station(def.slave.address);
         // Its port writes as the single chip's walk shows them, named by station, held with the
         // state changes: a chip runs ahead of the others in a round (states_in_order).
-        const FirmwareHost* host = st->firmware.get();
+        const FirmwareHost* host = st->firmware;
         st->firmware->on_port = [this, host, name = def.name, &chip](
                                     std::uint64_t cycle, unsigned port, std::uint32_t value) {
           states_.emplace_back(
@@ -519,6 +520,8 @@ class SegmentRun {
   const LineSink& errors_;
   SegmentObserver quiet_;
   SegmentObserver* observer_;
+  // The host firmwares outlive the segment: its CPUs unwind a main loop suspended inside one.
+  std::vector<std::unique_ptr<FirmwareHost>> hosts_;
   Segment seg_;
   BusCheck check_;
   std::vector<std::unique_ptr<Station>> stations_;

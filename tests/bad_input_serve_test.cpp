@@ -302,6 +302,11 @@ TEST_F(BadInput, AFirmwareThatHangsInAStepKeepsTheWalk) {
 // kind of line, naming the firmware and the place (docs/bring-up.md, section 4), the temporaries
 // and the symlink go, and the process still ends by the signal; both lines go to the --log too.
 TEST_F(BadInput, AFirmwareThatCrashesIsNamedAndLeavesNothing) {
+#if defined(__SANITIZE_ADDRESS__)
+  // The sanitizers take the crash themselves (their report and exit; UBSan's null store check in
+  // the plug-in first): our handler is not the one that runs (docs/sanitizers.md).
+  GTEST_SKIP() << "the sanitizers catch the plug-in's crash before our handler";
+#endif
   const std::string crash = BAD_PLUGIN_CRASH;
   const std::string err = (root_ / "io" / "err").string();
   const auto signalled = [&](const std::string& args) {
@@ -339,6 +344,11 @@ TEST_F(BadInput, AFirmwareThatCrashesIsNamedAndLeavesNothing) {
 // pipe): the walk so far is kept, as at a hang (docs/bring-up.md, section 4). It was lost, the
 // buffered stdout never written.
 TEST_F(BadInput, AFirmwareThatCrashesLaterKeepsTheWalkPrintedSoFar) {
+#if defined(__SANITIZE_ADDRESS__)
+  // The sanitizers take the crash themselves (their report and exit; UBSan's null store check in
+  // the plug-in first): our handler is not the one that runs (docs/sanitizers.md).
+  GTEST_SKIP() << "the sanitizers catch the plug-in's crash before our handler";
+#endif
   file("later.scn", "# crashes in its hardware input\nfirmware " +
                         std::string(BAD_PLUGIN_CRASH_INPUT) + "\nstartup\nhw crash 1\n");
   const std::string err = (root_ / "io" / "err").string();
