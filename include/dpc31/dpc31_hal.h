@@ -99,8 +99,8 @@ void dpc31_set_port_callback(dpc31_chip* chip, dpc31_port_fn fn, void* user);
 
 /* Calling Vpc3Read & co. (or dpc31_port_write) with no chip selected, or a block function with a
  * non-zero length and a NULL local buffer, a local buffer at a chip address (below 0x10000: the
- * two pointers swapped) or a chip pointer beyond 0xFFFF, is a programming error: the handler gets a message; the
- * default prints it to stderr and aborts. The handler must not return (the access cannot be
+ * two pointers swapped) or a chip pointer beyond 0xFFFF, is a programming error: the handler
+ * gets a message; the default prints it to stderr and aborts. The handler must not return (the access cannot be
  * made): exit or longjmp out of it; one that returns gets a line on stderr saying so and the
  * process aborts. A longjmp out of it leaks nothing (the message is in a buffer of the calling
  * thread, valid until its next error). NULL restores the default. A firmware run by a host of the
