@@ -22,6 +22,32 @@
 namespace dpc31 {
 namespace {
 
+// A segment scenario's text run: its exit code, the walk and the failed checks.
+struct ScenarioRun {
+  int code = 0;
+  std::vector<std::string> walk;
+  std::vector<std::string> errors;
+  // The cycle of the walk's last line that contains `text` (0 when none does).
+  [[nodiscard]] std::uint64_t cycle_of(std::string_view text) const {
+    for (auto l = walk.rbegin(); l != walk.rend(); ++l) {
+      if (l->find(text) != std::string::npos) return std::stoull(l->substr(l->find("cycle") + 5));
+    }
+    ADD_FAILURE() << "no walk line with " << text;
+    return 0;
+  }
+};
+
+ScenarioRun run_scenario_text(const std::string& text, const char* file = "s.scn") {
+  SegmentScenario s;
+  ScenarioError err;
+  EXPECT_TRUE(parse_segment_scenario(text, file, s, err)) << err.text();
+  ScenarioRun r;
+  r.code = run_segment_scenario(
+      s, [&r](const std::string& l) { r.walk.push_back(l); },
+      [&r](const std::string& e) { r.errors.push_back(e); });
+  return r;
+}
+
 // `expect visit` from the scenario door (docs/scenario-format.md, "Segments"): a master alone
 // with ttr= claims the token at its first visit (TRR 0, TTH = TTR = 1000 bit times: both cycles,
 // at 33 and 363 T, start before it) and passes it to itself; a wrong field fails with what the
@@ -67,16 +93,11 @@ TEST(SegmentScenario, ExpectVisitChecksTheMastersLastVisit) {
 // start 11 T after their request's end (docs/timing.md: max(11, MinTSDR) with MinTSDR 11 after
 // Start and no Set_Prm byte 3).
 TEST(SegmentScenario, ExpectTsdrSaysTheDelaysInBitTimes) {
-  SegmentScenario s;
-  ScenarioError err;
-  ASSERT_TRUE(parse_segment_scenario("segment\nstation 5 profile=spc3\nstartup\nexpect tsdr 12\n",
-                                     "t.scn", s, err))
-      << err.text();
-  std::vector<std::string> errors;
-  EXPECT_EQ(run_segment_scenario(s, {}, [&errors](const std::string& e) { errors.push_back(e); }),
-            1);
-  EXPECT_EQ(errors, std::vector<std::string>{
-                        "t.scn:4: expected tsdr 12, got 5 answers, delays 11..11 bit times"});
+  const ScenarioRun r =
+      run_scenario_text("segment\nstation 5 profile=spc3\nstartup\nexpect tsdr 12\n", "t.scn");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.errors, std::vector<std::string>{
+                          "t.scn:4: expected tsdr 12, got 5 answers, delays 11..11 bit times"});
 }
 
 // A station's min_tsdr= and wd_base= (the single chip's `slave` options, docs/scenario-format.md
@@ -86,19 +107,14 @@ TEST(SegmentScenario, ExpectTsdrSaysTheDelaysInBitTimes) {
 // with the delays 11..20. The 1 ms base with wd=1,1 on station 5: TWD = 1 ms x 1 x 1, and left
 // unpolled it expires 1 ms after its last restart (with the 10 ms base not within `run 2ms`).
 TEST(SegmentScenario, AStationsMinTsdrAndWdBaseReachItsSetPrm) {
-  SegmentScenario s;
-  ScenarioError err;
-  ASSERT_TRUE(parse_segment_scenario(
+  const ScenarioRun r = run_scenario_text(
       "segment baud=12000000\nstation 5 profile=spc3 wd=1,1 wd_base=1ms\n"
       "station 6 profile=dpc31 min_tsdr=20\nmaster 2 slaves=5,6\nstartup\ncycle 1 skip=5\n"
       "run 2ms\nexpect watchdog_expired 5 twd=1ms\nexpect tsdr 20\n",
-      "t.scn", s, err))
-      << err.text();
-  std::vector<std::string> errors;
-  EXPECT_EQ(run_segment_scenario(s, {}, [&errors](const std::string& e) { errors.push_back(e); }),
-            1);
-  EXPECT_EQ(errors, std::vector<std::string>{
-                        "t.scn:9: expected tsdr 20, got 11 answers, delays 11..20 bit times"});
+      "t.scn");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.errors, std::vector<std::string>{
+                          "t.scn:9: expected tsdr 20, got 11 answers, delays 11..20 bit times"});
 }
 
 // Two stations on one address and no `master` line: the default master polls every address once
@@ -417,32 +433,6 @@ TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
   ASSERT_TRUE(parse_segment_scenario("\xEF\xBB\xBFsegment\nstation 5\nstartup\n", "f.scn", s, err))
       << err.text();
   EXPECT_EQ(s.stations.size(), 1U);
-}
-
-// A segment scenario's text run: its exit code, the walk and the failed checks.
-struct ScenarioRun {
-  int code = 0;
-  std::vector<std::string> walk;
-  std::vector<std::string> errors;
-  // The cycle of the walk's last line that contains `text` (0 when none does).
-  [[nodiscard]] std::uint64_t cycle_of(std::string_view text) const {
-    for (auto l = walk.rbegin(); l != walk.rend(); ++l) {
-      if (l->find(text) != std::string::npos) return std::stoull(l->substr(l->find("cycle") + 5));
-    }
-    ADD_FAILURE() << "no walk line with " << text;
-    return 0;
-  }
-};
-
-ScenarioRun run_scenario_text(const std::string& text) {
-  SegmentScenario s;
-  ScenarioError err;
-  EXPECT_TRUE(parse_segment_scenario(text, "s.scn", s, err)) << err.text();
-  ScenarioRun r;
-  r.code = run_segment_scenario(
-      s, [&r](const std::string& l) { r.walk.push_back(l); },
-      [&r](const std::string& e) { r.errors.push_back(e); });
-  return r;
 }
 
 // The same for a run whose every check passes: exit 0, no failure.
