@@ -560,6 +560,149 @@ TEST(Responder, ARestoredChipDoesNotRepeatItsLog) {
       << log[0];
 }
 
+// A firmware that gives its Cfg verdict (User_Cfg_Data_Okay, 00h finished) but never reads
+// New_Din_Buffer_Cmd, which the built-in user side does at once: its New_Cfg_Data is masked and the
+// test reads the verdict for it. SPC3 p.31: "the transition to 'DATA_EX' takes place immediately,
+// if no Din_buffer is present (R_Len_Din_Puf = 00H) ... Otherwise" (cut off; modelled: at the
+// user's next New_Din_Buffer_Cmd, docs/decisions.md), so with R_Len_Din_Buf = 4 the SPC3 stays in
+// Wait_Cfg and its Slave_Diag shows Station_Not_Ready. The first poll from Master_Add acted on
+// (docs/timing.md: at the stop sample of the request's last character, end - T + T/2) 10 ms =
+// 480 000 cycles (48 MHz) or more after the verdict read's completion cycle gets the warning, and
+// nothing after it does (a Data_Exchange answered RS neither). The snapshot carries when the wait
+// began and that it was said (docs/snapshots.md, LOGS): a chip restored from before the warning
+// says it at its own first poll past the same cycle, one restored from after it never. The VPC3+
+// (VPC3+C p.43: "immediately, if trigger counters ... are at 0") and the DPC31 enter
+// Data_Exchange at the verdict itself: no wait, no line.
+TEST(Responder, AnSpc3FirmwareThatNeverReadsNewDinBufferCmdIsToldOnce) {
+  using D = pdu::SlaveDiag;
+  const std::string warning =
+      "master 2 is refused (Slave_Diag with Station_Not_Ready): the SPC3 is still in Wait_Cfg at "
+      "least 10 ms after User_Cfg_Data_Okay, because the firmware has not read "
+      "New_Din_Buffer_Cmd since; with R_Len_Din_Buf = 4 it enters Data_Exchange only at that read "
+      "(SPC3 p.31, modelled). Hand the inputs over once after User_Cfg_Data_Okay: write them into "
+      "the U buffer, then read New_Din_Buffer_Cmd (docs/bring-up.md)";
+  for (const Profile p : {Profile::spc3, Profile::vpc3plus, Profile::dpc31}) {
+    SCOPED_TRACE(std::string(profile_desc(p).name));
+    Chip chip(ChipOptions{p});
+    std::vector<std::pair<std::uint64_t, std::string>> log;  // the warnings
+    chip.set_log_sink([&log](const LogRecord& r) {
+      if (r.level == LogLevel::warn) log.emplace_back(r.cycle, r.text);
+    });
+    ResponderConfig rc;
+    Responder user(rc);
+    DirectBus bus(chip);
+    user.init(bus);
+    const auto at = [&chip](RegId id) { return static_cast<std::uint32_t>(chip.addr_of(id)); };
+    // The built-in user side's mask (C0F0h: every interrupt it serves enabled), New_Cfg_Data too.
+    constexpr std::uint16_t kMask = 0xC0F0 | irq::New_Cfg_Data;
+    chip.write(at(RegId::Int_Mask_Reg), static_cast<std::uint8_t>(kMask));  // Intel: low first
+    chip.write(at(RegId::Int_Mask_Reg) + 1, static_cast<std::uint8_t>(kMask >> 8));
+    DpMaster m(chip, MasterConfig{2, 1'500'000}, rc.slave);
+    m.set_firmware([&user](BusPort& b) { user.isr(b); });
+    while (!m.fdl_status().answer) {
+    }
+    ASSERT_EQ(m.set_prm().answer->sd, fdl::SC);
+    ASSERT_EQ(m.chk_cfg().answer->sd, fdl::SC);
+    ASSERT_EQ(chip.dp_state(), DpState::Wait_Cfg);
+    ASSERT_EQ(chip.read(at(RegId::User_Cfg_Data_Okay)), 0x00);
+    if (p != Profile::spc3) {
+      EXPECT_EQ(chip.dp_state(), DpState::Data_Exchange);
+      for (int i = 0; i < 60; ++i) ASSERT_TRUE(m.slave_diag().answer);  // 60 x 233 us: 14 ms
+      EXPECT_EQ(log, (std::vector<std::pair<std::uint64_t, std::string>>{}));
+      continue;
+    }
+    const std::uint64_t due = chip.cycle() + 480'000;
+    // Polls the Slave_Diag until one is acted on at `due` or later, and returns that cycle; the
+    // chip's snapshot after the first poll acted on 5 ms or more before `due` goes to `half_way`.
+    const auto poll_past = [&due](DpMaster& master, Chip& c, std::vector<std::uint8_t>* half_way,
+                                  const std::vector<std::pair<std::uint64_t, std::string>>& l) {
+      for (;;) {
+        const Exchange d = master.slave_diag();
+        EXPECT_TRUE(d.answer && (d.answer->du.at(0) & D::St1_Station_Not_Ready) != 0);
+        const std::uint64_t acted = d.request_end - T + T / 2;
+        if (acted >= due) return acted;
+        EXPECT_EQ(l.size(), 0u) << "said at the poll acted on at " << acted;
+        if (half_way != nullptr && half_way->empty() && acted + 240'000 >= due)
+          *half_way = c.save_state();
+      }
+    };
+    std::vector<std::uint8_t> half_way;
+    const std::uint64_t acted = poll_past(m, chip, &half_way, log);
+    ASSERT_EQ(log.size(), 1u);
+    EXPECT_EQ(log[0], std::pair(acted, warning));
+    std::vector<std::uint8_t> said = chip.save_state();
+    for (int i = 0; i < 10; ++i) ASSERT_TRUE(m.slave_diag().answer);
+    EXPECT_EQ(fdl::response_code(m.data_exchange({1, 2, 3, 4}).answer->fc), fdl::Response::RS);
+    EXPECT_EQ(log.size(), 1u) << log.back().second;
+    EXPECT_EQ(chip.dp_state(), DpState::Wait_Cfg);
+
+    for (std::vector<std::uint8_t>* snapshot : {&half_way, &said}) {
+      Chip restored(ChipOptions{p});
+      std::vector<std::pair<std::uint64_t, std::string>> restored_log;
+      restored.set_log_sink([&restored_log](const LogRecord& r) {
+        if (r.level == LogLevel::warn) restored_log.emplace_back(r.cycle, r.text);
+      });
+      restored.load_state(*snapshot);
+      DpMaster mr(restored, MasterConfig{2, 1'500'000}, rc.slave);
+      if (snapshot == &half_way) {
+        const std::uint64_t restored_acted = poll_past(mr, restored, nullptr, restored_log);
+        ASSERT_EQ(restored_log.size(), 1u);
+        EXPECT_EQ(restored_log[0], std::pair(restored_acted, warning));
+      } else {
+        for (int i = 0; i < 10; ++i) ASSERT_TRUE(mr.slave_diag().answer);
+        EXPECT_EQ(restored_log.size(), 0u);
+      }
+    }
+  }
+}
+
+// The same SPC3 firmware that does read New_Din_Buffer_Cmd, 5 ms after its Cfg verdict: the
+// chip enters Data_Exchange at that read (docs/decisions.md), and polls for 20 ms after the
+// verdict give no warning; nor does the built-in user side, which reads it at once.
+TEST(Responder, AnSpc3FirmwareThatReadsNewDinBufferCmdIsNotWarned) {
+  Chip chip(ChipOptions{Profile::spc3});
+  std::vector<std::string> log;  // the warnings
+  chip.set_log_sink([&log](const LogRecord& r) {
+    if (r.level == LogLevel::warn) log.push_back(r.text);
+  });
+  ResponderConfig rc;
+  Responder user(rc);
+  DirectBus bus(chip);
+  user.init(bus);
+  const auto at = [&chip](RegId id) { return static_cast<std::uint32_t>(chip.addr_of(id)); };
+  constexpr std::uint16_t kMask = 0xC0F0 | irq::New_Cfg_Data;             // as the test above
+  chip.write(at(RegId::Int_Mask_Reg), static_cast<std::uint8_t>(kMask));  // Intel: low byte first
+  chip.write(at(RegId::Int_Mask_Reg) + 1, static_cast<std::uint8_t>(kMask >> 8));
+  DpMaster m(chip, MasterConfig{2, 1'500'000}, rc.slave);
+  m.set_firmware([&user](BusPort& b) { user.isr(b); });
+  while (!m.fdl_status().answer) {
+  }
+  ASSERT_EQ(m.set_prm().answer->sd, fdl::SC);
+  ASSERT_EQ(m.chk_cfg().answer->sd, fdl::SC);
+  ASSERT_EQ(chip.read(at(RegId::User_Cfg_Data_Okay)), 0x00);
+  const std::uint64_t verdict = chip.cycle();
+  while (chip.cycle() < verdict + 240'000) ASSERT_TRUE(m.slave_diag().answer);
+  EXPECT_EQ(chip.dp_state(), DpState::Wait_Cfg);
+  chip.read(at(RegId::New_Din_Buffer_Cmd));
+  EXPECT_EQ(chip.dp_state(), DpState::Data_Exchange);
+  while (chip.cycle() < verdict + 960'000) ASSERT_TRUE(m.slave_diag().answer);
+  EXPECT_EQ(log, std::vector<std::string>{});
+
+  Chip fine(ChipOptions{Profile::spc3});
+  fine.set_log_sink([&log](const LogRecord& r) {
+    if (r.level == LogLevel::warn) log.push_back(r.text);
+  });
+  Responder fine_user(rc);
+  DirectBus fine_bus(fine);
+  fine_user.init(fine_bus);
+  DpMaster fm(fine, MasterConfig{2, 1'500'000}, rc.slave);
+  fm.set_firmware([&fine_user](BusPort& b) { fine_user.isr(b); });
+  ASSERT_TRUE(fm.startup());
+  const std::uint64_t ready = fine.cycle();
+  while (fine.cycle() < ready + 960'000) ASSERT_TRUE(fm.data_exchange({1, 2, 3, 4}).answer);
+  EXPECT_EQ(log, std::vector<std::string>{});
+}
+
 // A buffer pointer that puts a buffer over the registers (00h, the reset value: a driver that
 // forgot them) is served from the RAM behind them, which the CPU does not see there (modelled):
 // the log says so the first time, then counts the uses as unmapped accesses are counted, at 10,
