@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
@@ -412,6 +413,52 @@ TEST(ScenarioWalk, ARequestOnAQueueNotSetUpIsSaidInTheWalk) {
   EXPECT_EQ(w.outcome.failures[0], (fs::path(SOURCE_DIR) / "t.scn").string() + ":3: " + why);
   EXPECT_NE(walk_cycle(w, why), 0u);
   for (const std::string& l : w.lines) EXPECT_GT(l.size(), 19u) << "an empty walk line";
+}
+
+// An SPC3 firmware that gives its Cfg verdict but never reads New_Din_Buffer_Cmd (here the
+// built-in user side with New_Cfg_Data masked, C0F0h being its own mask, and the scenario's `read`
+// as the verdict) keeps the chip in Wait_Cfg: SPC3 p.31, "the transition to 'DATA_EX' takes place
+// immediately, if no Din_buffer is present (R_Len_Din_Puf = 00H) ... Otherwise" (modelled: at the
+// next New_Din_Buffer_Cmd, docs/decisions.md). The walk (what `dpc31 run` prints) says why once,
+// at the first Slave_Diag from Master_Add acted on 10 ms = 480 000 cycles or more after the
+// verdict read's completion cycle V. At 12 Mbaud (T = 4 cycles) the second `startup` sends
+// FDL_Status at V (6 characters, TSDR 11, its OK 6 characters, idle 33: 176 bit times), then
+// Slave_Diag every 352 bit times = 1 408 cycles from V + 704 (the request 11 characters = 121 bit
+// times, TSDR 11, the DL answer of 6 bytes 17 characters = 187, idle 33). Poll k is acted on at
+// the stop sample of its last character (docs/timing.md): V + 704 + 1408k + 484 - 4 + 2 =
+// V + 1186 + 1408k; the first at or past V + 480 000 is k = 341, at V + 481 314. A firmware that
+// makes the read (the built-in user side as it is) is never told.
+TEST(ScenarioWalk, AnSpc3FirmwareThatNeverReadsNewDinBufferCmdIsToldOnce) {
+  const std::string warning =
+      "chip: master 2 is refused (Slave_Diag with Station_Not_Ready): the SPC3 is still in "
+      "Wait_Cfg at least 10 ms after User_Cfg_Data_Okay, because the firmware has not read "
+      "New_Din_Buffer_Cmd since; with R_Len_Din_Buf = 4 it enters Data_Exchange only at that read "
+      "(SPC3 p.31, modelled). Hand the inputs over once after User_Cfg_Data_Okay: write them into "
+      "the U buffer, then read New_Din_Buffer_Cmd (docs/bring-up.md)";
+  const std::string head =
+      "profile spc3\nbaud 12000000\nmaster address=2\nslave address=5\nuser inputs=A1,A2,A3,A4\n";
+  const std::string forgets = head +
+                              "write Int_Mask_Reg 0xC4F0\nstartup tries=20\n"
+                              "read User_Cfg_Data_Okay\nexpect read 0x00\nstartup tries=400\n"
+                              "expect dp_state Wait_Cfg\n";
+  const std::string reads = head + "startup\nexpect dp_state Data_Exchange\nexchange 400\n";
+  for (const dpc31::Engine engine : {dpc31::Engine::event, dpc31::Engine::per_cycle}) {
+    SCOPED_TRACE(engine_name(engine));
+    Walk w = run(forgets, fs::path(SOURCE_DIR) / "t.scn", engine);
+    EXPECT_TRUE(w.outcome.ok()) << (w.outcome.ok() ? "" : w.outcome.failures.front());
+    const std::uint64_t verdict = walk_cycle(w, "read User_Cfg_Data_Okay = 0x00");
+    ASSERT_NE(verdict, 0u);
+    EXPECT_EQ(walk_cycle(w, warning), verdict + 481'314);
+    EXPECT_EQ(std::count_if(w.lines.begin(), w.lines.end(),
+                            [](const std::string& l) {
+                              return l.find("] chip: master ") != std::string::npos;
+                            }),
+              1);
+    w = run(reads, fs::path(SOURCE_DIR) / "t.scn", engine);
+    EXPECT_TRUE(w.outcome.ok()) << (w.outcome.ok() ? "" : w.outcome.failures.front());
+    for (const std::string& l : w.lines)
+      EXPECT_EQ(l.find("New_Din_Buffer_Cmd"), std::string::npos) << l;
+  }
 }
 
 }  // namespace
