@@ -575,12 +575,16 @@ TEST(Responder, ARestoredChipDoesNotRepeatItsLog) {
 // Data_Exchange at the verdict itself: no wait, no line.
 TEST(Responder, AnSpc3FirmwareThatNeverReadsNewDinBufferCmdIsToldOnce) {
   using D = pdu::SlaveDiag;
-  const std::string warning =
-      "master 2 is refused (Slave_Diag with Station_Not_Ready): the SPC3 is still in Wait_Cfg at "
-      "least 10 ms after User_Cfg_Data_Okay, because the firmware has not read "
-      "New_Din_Buffer_Cmd since; with R_Len_Din_Buf = 4 it enters Data_Exchange only at that read "
-      "(SPC3 p.31, modelled). Hand the inputs over once after User_Cfg_Data_Okay: write them into "
-      "the U buffer, then read New_Din_Buffer_Cmd (docs/bring-up.md)";
+  const auto warning = [](const char* refused) {
+    return fmt::format(
+        "master 2 is refused ({}): the SPC3 is still in Wait_Cfg at least 10 ms after "
+        "User_Cfg_Data_Okay, because the firmware has not read New_Din_Buffer_Cmd since; with "
+        "R_Len_Din_Buf = 4 it enters Data_Exchange only at that read (SPC3 p.31, modelled). Hand "
+        "the inputs over once after User_Cfg_Data_Okay: write them into the U buffer, then read "
+        "New_Din_Buffer_Cmd (docs/bring-up.md)",
+        refused);
+  };
+  const std::string by_diag = warning("Slave_Diag with Station_Not_Ready");
   for (const Profile p : {Profile::spc3, Profile::vpc3plus, Profile::dpc31}) {
     SCOPED_TRACE(std::string(profile_desc(p).name));
     Chip chip(ChipOptions{p});
@@ -612,13 +616,16 @@ TEST(Responder, AnSpc3FirmwareThatNeverReadsNewDinBufferCmdIsToldOnce) {
       continue;
     }
     const std::uint64_t due = chip.cycle() + 480'000;
-    // Polls the Slave_Diag until one is acted on at `due` or later, and returns that cycle; the
-    // chip's snapshot after the first poll acted on 5 ms or more before `due` goes to `half_way`.
+    // Polls with Slave_Diag (or Data_Exchange, `dx`) until one is acted on at `due` or later,
+    // and returns that cycle; the chip's snapshot after the first poll acted on 5 ms or more
+    // before `due` goes to `half_way`.
     const auto poll_past = [&due](DpMaster& master, Chip& c, std::vector<std::uint8_t>* half_way,
-                                  const std::vector<std::pair<std::uint64_t, std::string>>& l) {
+                                  const std::vector<std::pair<std::uint64_t, std::string>>& l,
+                                  bool dx = false) {
       for (;;) {
-        const Exchange d = master.slave_diag();
-        EXPECT_TRUE(d.answer && (d.answer->du.at(0) & D::St1_Station_Not_Ready) != 0);
+        const Exchange d = dx ? master.data_exchange({1, 2, 3, 4}) : master.slave_diag();
+        EXPECT_TRUE(d.answer && (dx ? fdl::response_code(d.answer->fc) == fdl::Response::RS
+                                    : (d.answer->du.at(0) & D::St1_Station_Not_Ready) != 0));
         const std::uint64_t acted = d.request_end - T + T / 2;
         if (acted >= due) return acted;
         EXPECT_EQ(l.size(), 0u) << "said at the poll acted on at " << acted;
@@ -629,14 +636,16 @@ TEST(Responder, AnSpc3FirmwareThatNeverReadsNewDinBufferCmdIsToldOnce) {
     std::vector<std::uint8_t> half_way;
     const std::uint64_t acted = poll_past(m, chip, &half_way, log);
     ASSERT_EQ(log.size(), 1u);
-    EXPECT_EQ(log[0], std::pair(acted, warning));
+    EXPECT_EQ(log[0], std::pair(acted, by_diag));
     std::vector<std::uint8_t> said = chip.save_state();
     for (int i = 0; i < 10; ++i) ASSERT_TRUE(m.slave_diag().answer);
     EXPECT_EQ(fdl::response_code(m.data_exchange({1, 2, 3, 4}).answer->fc), fdl::Response::RS);
     EXPECT_EQ(log.size(), 1u) << log.back().second;
     EXPECT_EQ(chip.dp_state(), DpState::Wait_Cfg);
 
-    for (std::vector<std::uint8_t>* snapshot : {&half_way, &said}) {
+    // Restored from half-way: polled by Slave_Diag, then by Data_Exchange; from after the line.
+    for (const auto& [snapshot, dx] :
+         {std::pair{&half_way, false}, {&half_way, true}, {&said, false}}) {
       Chip restored(ChipOptions{p});
       std::vector<std::pair<std::uint64_t, std::string>> restored_log;
       restored.set_log_sink([&restored_log](const LogRecord& r) {
@@ -645,9 +654,10 @@ TEST(Responder, AnSpc3FirmwareThatNeverReadsNewDinBufferCmdIsToldOnce) {
       restored.load_state(*snapshot);
       DpMaster mr(restored, MasterConfig{2, 1'500'000}, rc.slave);
       if (snapshot == &half_way) {
-        const std::uint64_t restored_acted = poll_past(mr, restored, nullptr, restored_log);
+        const std::uint64_t restored_acted = poll_past(mr, restored, nullptr, restored_log, dx);
         ASSERT_EQ(restored_log.size(), 1u);
-        EXPECT_EQ(restored_log[0], std::pair(restored_acted, warning));
+        EXPECT_EQ(restored_log[0],
+                  std::pair(restored_acted, dx ? warning("Data_Exchange answered RS") : by_diag));
       } else {
         for (int i = 0; i < 10; ++i) ASSERT_TRUE(mr.slave_diag().answer);
         EXPECT_EQ(restored_log.size(), 0u);
