@@ -560,6 +560,40 @@ TEST(Responder, ARestoredChipDoesNotRepeatItsLog) {
       << log[0];
 }
 
+// The firmware of the two tests below: the built-in user side with New_Cfg_Data masked (C0F0h is
+// its own mask, every interrupt it serves enabled), so that the test gives the Cfg verdict for it
+// (User_Cfg_Data_Okay, 00h finished) and chooses whether New_Din_Buffer_Cmd is read after it.
+struct CfgVerdictByHand {
+  explicit CfgVerdictByHand(Profile p) : chip(ChipOptions{p}) {
+    chip.set_log_sink([this](const LogRecord& r) {
+      if (r.level == LogLevel::warn) log.emplace_back(r.cycle, r.text);
+    });
+  }
+  [[nodiscard]] std::uint32_t at(RegId id) const {
+    return static_cast<std::uint32_t>(chip.addr_of(id));
+  }
+  // Start-up to the Cfg verdict, given: Wait_Cfg until the VPC3+ and DPC31 enter Data_Exchange.
+  void to_the_verdict() {
+    DirectBus bus(chip);
+    user.init(bus);
+    constexpr std::uint16_t kMask = 0xC0F0 | irq::New_Cfg_Data;
+    chip.write(at(RegId::Int_Mask_Reg), static_cast<std::uint8_t>(kMask));  // Intel: low first
+    chip.write(at(RegId::Int_Mask_Reg) + 1, static_cast<std::uint8_t>(kMask >> 8));
+    master.set_firmware([this](BusPort& b) { user.isr(b); });
+    while (!master.fdl_status().answer) {
+    }
+    ASSERT_EQ(master.set_prm().answer->sd, fdl::SC);
+    ASSERT_EQ(master.chk_cfg().answer->sd, fdl::SC);
+    ASSERT_EQ(chip.dp_state(), DpState::Wait_Cfg);
+    ASSERT_EQ(chip.read(at(RegId::User_Cfg_Data_Okay)), 0x00);
+  }
+  Chip chip;
+  std::vector<std::pair<std::uint64_t, std::string>> log;  // the warnings
+  ResponderConfig rc;
+  Responder user{rc};
+  DpMaster master{chip, MasterConfig{2, 1'500'000}, rc.slave};
+};
+
 // A firmware that gives its Cfg verdict (User_Cfg_Data_Okay, 00h finished) but never reads
 // New_Din_Buffer_Cmd, which the built-in user side does at once: its New_Cfg_Data is masked and the
 // test reads the verdict for it. SPC3 p.31: "the transition to 'DATA_EX' takes place immediately,
@@ -587,28 +621,11 @@ TEST(Responder, AnSpc3FirmwareThatNeverReadsNewDinBufferCmdIsToldOnce) {
   const std::string by_diag = warning("Slave_Diag with Station_Not_Ready");
   for (const Profile p : {Profile::spc3, Profile::vpc3plus, Profile::dpc31}) {
     SCOPED_TRACE(std::string(profile_desc(p).name));
-    Chip chip(ChipOptions{p});
-    std::vector<std::pair<std::uint64_t, std::string>> log;  // the warnings
-    chip.set_log_sink([&log](const LogRecord& r) {
-      if (r.level == LogLevel::warn) log.emplace_back(r.cycle, r.text);
-    });
-    ResponderConfig rc;
-    Responder user(rc);
-    DirectBus bus(chip);
-    user.init(bus);
-    const auto at = [&chip](RegId id) { return static_cast<std::uint32_t>(chip.addr_of(id)); };
-    // The built-in user side's mask (C0F0h: every interrupt it serves enabled), New_Cfg_Data too.
-    constexpr std::uint16_t kMask = 0xC0F0 | irq::New_Cfg_Data;
-    chip.write(at(RegId::Int_Mask_Reg), static_cast<std::uint8_t>(kMask));  // Intel: low first
-    chip.write(at(RegId::Int_Mask_Reg) + 1, static_cast<std::uint8_t>(kMask >> 8));
-    DpMaster m(chip, MasterConfig{2, 1'500'000}, rc.slave);
-    m.set_firmware([&user](BusPort& b) { user.isr(b); });
-    while (!m.fdl_status().answer) {
-    }
-    ASSERT_EQ(m.set_prm().answer->sd, fdl::SC);
-    ASSERT_EQ(m.chk_cfg().answer->sd, fdl::SC);
-    ASSERT_EQ(chip.dp_state(), DpState::Wait_Cfg);
-    ASSERT_EQ(chip.read(at(RegId::User_Cfg_Data_Okay)), 0x00);
+    CfgVerdictByHand f(p);
+    ASSERT_NO_FATAL_FAILURE(f.to_the_verdict());
+    Chip& chip = f.chip;
+    DpMaster& m = f.master;
+    const auto& log = f.log;
     if (p != Profile::spc3) {
       EXPECT_EQ(chip.dp_state(), DpState::Data_Exchange);
       for (int i = 0; i < 60; ++i) ASSERT_TRUE(m.slave_diag().answer);  // 60 x 233 us: 14 ms
@@ -652,7 +669,7 @@ TEST(Responder, AnSpc3FirmwareThatNeverReadsNewDinBufferCmdIsToldOnce) {
         if (r.level == LogLevel::warn) restored_log.emplace_back(r.cycle, r.text);
       });
       restored.load_state(*snapshot);
-      DpMaster mr(restored, MasterConfig{2, 1'500'000}, rc.slave);
+      DpMaster mr(restored, MasterConfig{2, 1'500'000}, f.rc.slave);
       if (snapshot == &half_way) {
         const std::uint64_t restored_acted = poll_past(mr, restored, nullptr, restored_log, dx);
         ASSERT_EQ(restored_log.size(), 1u);
@@ -670,42 +687,27 @@ TEST(Responder, AnSpc3FirmwareThatNeverReadsNewDinBufferCmdIsToldOnce) {
 // chip enters Data_Exchange at that read (docs/decisions.md), and polls for 20 ms after the
 // verdict give no warning; nor does the built-in user side, which reads it at once.
 TEST(Responder, AnSpc3FirmwareThatReadsNewDinBufferCmdIsNotWarned) {
-  Chip chip(ChipOptions{Profile::spc3});
-  std::vector<std::string> log;  // the warnings
-  chip.set_log_sink([&log](const LogRecord& r) {
-    if (r.level == LogLevel::warn) log.push_back(r.text);
-  });
-  ResponderConfig rc;
-  Responder user(rc);
-  DirectBus bus(chip);
-  user.init(bus);
-  const auto at = [&chip](RegId id) { return static_cast<std::uint32_t>(chip.addr_of(id)); };
-  constexpr std::uint16_t kMask = 0xC0F0 | irq::New_Cfg_Data;             // as the test above
-  chip.write(at(RegId::Int_Mask_Reg), static_cast<std::uint8_t>(kMask));  // Intel: low byte first
-  chip.write(at(RegId::Int_Mask_Reg) + 1, static_cast<std::uint8_t>(kMask >> 8));
-  DpMaster m(chip, MasterConfig{2, 1'500'000}, rc.slave);
-  m.set_firmware([&user](BusPort& b) { user.isr(b); });
-  while (!m.fdl_status().answer) {
-  }
-  ASSERT_EQ(m.set_prm().answer->sd, fdl::SC);
-  ASSERT_EQ(m.chk_cfg().answer->sd, fdl::SC);
-  ASSERT_EQ(chip.read(at(RegId::User_Cfg_Data_Okay)), 0x00);
+  CfgVerdictByHand f(Profile::spc3);
+  ASSERT_NO_FATAL_FAILURE(f.to_the_verdict());
+  Chip& chip = f.chip;
+  DpMaster& m = f.master;
   const std::uint64_t verdict = chip.cycle();
   while (chip.cycle() < verdict + 240'000) ASSERT_TRUE(m.slave_diag().answer);
   EXPECT_EQ(chip.dp_state(), DpState::Wait_Cfg);
-  chip.read(at(RegId::New_Din_Buffer_Cmd));
+  chip.read(f.at(RegId::New_Din_Buffer_Cmd));
   EXPECT_EQ(chip.dp_state(), DpState::Data_Exchange);
   while (chip.cycle() < verdict + 960'000) ASSERT_TRUE(m.slave_diag().answer);
-  EXPECT_EQ(log, std::vector<std::string>{});
+  EXPECT_EQ(f.log.size(), 0u) << f.log.front().second;
 
   Chip fine(ChipOptions{Profile::spc3});
+  std::vector<std::string> log;  // the warnings
   fine.set_log_sink([&log](const LogRecord& r) {
     if (r.level == LogLevel::warn) log.push_back(r.text);
   });
-  Responder fine_user(rc);
+  Responder fine_user(f.rc);
   DirectBus fine_bus(fine);
   fine_user.init(fine_bus);
-  DpMaster fm(fine, MasterConfig{2, 1'500'000}, rc.slave);
+  DpMaster fm(fine, MasterConfig{2, 1'500'000}, f.rc.slave);
   fm.set_firmware([&fine_user](BusPort& b) { fine_user.isr(b); });
   ASSERT_TRUE(fm.startup());
   const std::uint64_t ready = fine.cycle();
