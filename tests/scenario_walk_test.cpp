@@ -461,5 +461,39 @@ TEST(ScenarioWalk, AnSpc3FirmwareThatNeverReadsNewDinBufferCmdIsToldOnce) {
   }
 }
 
+// The same mistake in a firmware plug-in (tests/input_only_plugin.c with FORGETS_DIN: the dps
+// driver, its ISR preceded by one that reads User_Cfg_Data_Okay on New_Cfg_Data and nothing else)
+// under the default `startup`: the walk says it once. Its verdict read completes at V (the run's own bus
+// reads); the Slave_Diag polls start at S (the walk's first `Slave_Diag => DL 02 0C ...` line)
+// and every 1 408 cycles after it, each acted on 482 cycles after its start (as above), so the
+// line comes at the first S + 482 + 1408k at or past V + 480 000.
+TEST(ScenarioWalk, APlugInThatNeverReadsNewDinBufferCmdIsToldOnce) {
+  const std::string text = fmt::format(
+      "profile spc3\nbaud 12000000\nfirmware {}\nslave address=5\nstartup\n"
+      "expect dp_state Wait_Cfg\n",
+      PLUGIN_FORGETS_DIN);
+  for (const dpc31::Engine engine : {dpc31::Engine::event, dpc31::Engine::per_cycle}) {
+    SCOPED_TRACE(engine_name(engine));
+    const Walk w = run(text, fs::path(SOURCE_DIR) / "t.scn", engine);
+    EXPECT_TRUE(w.outcome.ok()) << (w.outcome.ok() ? "" : w.outcome.failures.front());
+    const std::uint64_t verdict = w.read_after(SPC3_User_Cfg_Data_Okay, SPC3_User_Cfg_Data_Okay);
+    const std::uint64_t polls = walk_cycle(w, "2 -> 5 Slave_Diag => DL 02 0C 00 02 0E 10");
+    ASSERT_NE(verdict, 0u);
+    ASSERT_GT(polls, verdict);
+    const std::uint64_t k = (verdict + 480'000 - polls - 482 + 1407) / 1408;
+    std::vector<std::string> said;
+    for (const std::string& l : w.lines) {
+      if (l.find("] chip: master 2 is refused") != std::string::npos) said.push_back(l);
+    }
+    ASSERT_EQ(said.size(), 1u);
+    EXPECT_TRUE(
+        said[0].starts_with(fmt::format("[cycle {:>10}] chip: master 2 is refused (Slave_Diag "
+                                        "with Station_Not_Ready): the SPC3 is still in "
+                                        "Wait_Cfg at least 10 ms after User_Cfg_Data_Okay",
+                                        polls + 482 + 1408 * k)))
+        << said[0];
+  }
+}
+
 }  // namespace
 }  // namespace scenario_walk
