@@ -463,10 +463,10 @@ TEST(ScenarioWalk, AnSpc3FirmwareThatNeverReadsNewDinBufferCmdIsToldOnce) {
 
 // The same mistake in a firmware plug-in (tests/input_only_plugin.c with FORGETS_DIN: the dps
 // driver, its ISR preceded by one that reads User_Cfg_Data_Okay on New_Cfg_Data and nothing else)
-// under the default `startup`: the walk says it once. Its verdict read completes at V (the run's own bus
-// reads); the Slave_Diag polls start at S (the walk's first `Slave_Diag => DL 02 0C ...` line)
-// and every 1 408 cycles after it, each acted on 482 cycles after its start (as above), so the
-// line comes at the first S + 482 + 1408k at or past V + 480 000.
+// under the default `startup`: the walk says it once. Its verdict read completes at V (the run's
+// own bus reads); the Slave_Diag polls start at S (the walk's first `Slave_Diag => DL 02 0C ...`
+// line) and every 1 408 cycles after it, each acted on 482 cycles after its start (as above), so
+// the line comes at the first S + 482 + 1408k at or past V + 480 000.
 TEST(ScenarioWalk, APlugInThatNeverReadsNewDinBufferCmdIsToldOnce) {
   const std::string text = fmt::format(
       "profile spc3\nbaud 12000000\nfirmware {}\nslave address=5\nstartup\n"
