@@ -660,17 +660,29 @@ TEST(Responder, AnSpc3FirmwareThatNeverReadsNewDinBufferCmdIsToldOnce) {
     EXPECT_EQ(log.size(), 1u) << log.back().second;
     EXPECT_EQ(chip.dp_state(), DpState::Wait_Cfg);
 
-    // Restored from half-way: polled by Slave_Diag, then by Data_Exchange; from after the line.
-    for (const auto& [snapshot, dx] :
-         {std::pair{&half_way, false}, {&half_way, true}, {&said, false}}) {
+    // Restored from half-way: polled by Slave_Diag, by Data_Exchange, by another master (3, which
+    // has not locked the slave: its polls past `due` say nothing, master 2's next one does); from
+    // after the line.
+    enum class Poll { diag, dx, other_master, after_the_line };
+    for (const Poll how : {Poll::diag, Poll::dx, Poll::other_master, Poll::after_the_line}) {
+      SCOPED_TRACE(static_cast<int>(how));
       Chip restored(ChipOptions{p});
       std::vector<std::pair<std::uint64_t, std::string>> restored_log;
       restored.set_log_sink([&restored_log](const LogRecord& r) {
         if (r.level == LogLevel::warn) restored_log.emplace_back(r.cycle, r.text);
       });
-      restored.load_state(*snapshot);
+      restored.load_state(how == Poll::after_the_line ? said : half_way);
       DpMaster mr(restored, MasterConfig{2, 1'500'000}, f.rc.slave);
-      if (snapshot == &half_way) {
+      if (how == Poll::other_master) {
+        DpMaster other(restored, MasterConfig{3, 1'500'000}, f.rc.slave);
+        poll_past(other, restored, nullptr, restored_log);
+        for (int i = 0; i < 10; ++i) ASSERT_TRUE(other.slave_diag().answer);
+        EXPECT_EQ(restored_log.size(), 0u);
+        const Exchange d = mr.slave_diag();
+        ASSERT_EQ(restored_log.size(), 1u);
+        EXPECT_EQ(restored_log[0], std::pair(d.request_end - T + T / 2, by_diag));
+      } else if (how != Poll::after_the_line) {
+        const bool dx = how == Poll::dx;
         const std::uint64_t restored_acted = poll_past(mr, restored, nullptr, restored_log, dx);
         ASSERT_EQ(restored_log.size(), 1u);
         EXPECT_EQ(restored_log[0],
