@@ -249,7 +249,7 @@ std::string silent_read(unsigned ms) {
       ms);
 }
 
-// The walk of `text` (with an observer: the runner then holds the step's events to its end), and
+// The walk of `text` (with an observer, which is told every event as the walk's drains come), and
 // the most the heap held beyond the run's start at any walk line.
 std::vector<std::string> walk_of(const std::string& text, bool observed, std::int64_t& peak) {
   dpc31::Scenario s;
@@ -277,9 +277,9 @@ std::vector<std::string> walk_of(const std::string& text, bool observed, std::in
 // s32-rev2 (review finding 1): with the walk printed, the runner held every poll of a DPV1
 // time-out as a walk event until the step ended (about 140 bytes a poll: a 655 s time-out ran out
 // of memory). It writes the lines whose folds are decided as it goes: the heap it holds over ten
-// times the polls (2 000 ms, 1 363 637 polls, against 200 ms) grows by no more than 16 KiB, and
-// the walk is the one the runner gives when it holds the step's events to its end (with an
-// observer), the polls folded into one line whose count is the outcome's less the first.
+// times the polls (2 000 ms, 1 363 637 polls, against 200 ms) grows by no more than 16 KiB, the
+// walk is the one the runner gives with an observer (which held the step's events to its end
+// until s34-record), the polls folded into one line whose count is the outcome's less the first.
 TEST(ScenarioWalk, ALongDpv1TimeoutKeepsTheWalkFlat) {
   std::int64_t held = 0;
   const std::vector<std::string> whole = walk_of(silent_read(200), true, held);

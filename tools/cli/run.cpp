@@ -223,6 +223,10 @@ int ChipRun::run(const Scenario& s, std::string_view text, const LineSink& walk,
     notes.push_back(
         fmt::format("recorded by `dpc31 run --record` from {} (docs/trace-format.md)", s.file));
     rec = std::make_unique<TraceRecorder>(s.master.baud, std::move(notes));
+    // Written as it goes into the temporary: a long run holds no trace (a device or a descriptor
+    // gets it from a scratch file at the end, after the walk, as before).
+    if (!m.rec_out.spool()) return m.fail(m.rec_out.error());
+    rec->write_to([&out = m.rec_out](std::string_view bytes) { out.write(bytes); });
     hooks = rec->scenario_hooks();
   }
   std::string attach_error;
@@ -270,8 +274,7 @@ int ChipRun::run(const Scenario& s, std::string_view text, const LineSink& walk,
   const int rc = o.ok() ? 0 : 1;
   if (rec && !rec->error().empty())
     return m.fail(fmt::format("cannot record {}: {}", opt.scenario, rec->error()));
-  if (rec && !(m.rec_out.write(rec->text()) && m.rec_out.commit()))
-    return m.fail(m.rec_out.error());
+  if (rec && !m.rec_out.commit()) return m.fail(m.rec_out.error());
   std::string error;
   for (auto& w : m.waves) {
     if (!w->finish(end_cycle, error)) return m.fail(error);

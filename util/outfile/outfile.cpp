@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <system_error>
+#include <utility>
 
 #include "fst_chain.hpp"
 #include "fst_hooks.h"
@@ -259,7 +260,17 @@ bool OutFile::open(const std::string& path) {
   return true;
 }
 
-std::FILE* OutFile::stream() { return f_; }
+std::FILE* OutFile::stream() { return spool_ != nullptr ? spool_ : f_; }
+
+bool OutFile::spool() {
+  if (tmp_.empty()) return fail(fmt::format("{}: not open for writing", path_));
+  if (!direct_ || spool_ != nullptr) return true;
+  const std::string scratch = scratch_path();
+  if (scratch.empty()) return false;
+  spool_ = std::fopen(scratch.c_str(), "wbe");
+  if (spool_ == nullptr) return fail(fmt::format("{}: cannot write: {}", path_, errno_text(errno)));
+  return true;
+}
 
 std::string make_temp_dir(const std::string& prefix, std::string& error,
                           const std::string& parent) {
@@ -293,6 +304,10 @@ std::string OutFile::library_path() {
     if (scratch_entries_.empty()) scratch_entries_.push_back(cleanup::Entry::path(tmp_ + ".hier"));
     return tmp_;
   }
+  return scratch_path();
+}
+
+std::string OutFile::scratch_path() {
   if (scratch_dir_.empty()) {
     std::string error;
     scratch_dir_ = make_temp_dir("dpc31-out-", error);
@@ -344,7 +359,7 @@ bool OutFile::commit_fst(bool failed_elsewhere) {
 
 bool OutFile::write(std::string_view bytes) {
   if (f_ == nullptr) return fail(fmt::format("{}: not open for writing", path_));
-  if (std::fwrite(bytes.data(), 1, bytes.size(), f_) != bytes.size()) {
+  if (std::fwrite(bytes.data(), 1, bytes.size(), stream()) != bytes.size()) {
     return fail(fmt::format("{}: cannot write: {}", path_, errno_text(errno)));
   }
   return true;
@@ -352,8 +367,15 @@ bool OutFile::write(std::string_view bytes) {
 
 bool OutFile::commit() {
   if (tmp_.empty()) return fail(fmt::format("{}: not open for writing", path_));
-  if (!scratch_dir_.empty()) {
-    // A device or FIFO target: what the library wrote to the scratch file goes into it now.
+  if (spool_ != nullptr) {
+    if (std::fflush(spool_) != 0 || std::ferror(spool_) != 0)
+      fail(fmt::format("{}: cannot write: {}", path_, errno_text(errno)));
+    if (std::fclose(std::exchange(spool_, nullptr)) != 0)
+      fail(fmt::format("{}: cannot write: {}", path_, errno_text(errno)));
+  }
+  if (!scratch_dir_.empty() && error_.empty()) {
+    // A device or FIFO target: what the library (or spool()) wrote to the scratch file goes into
+    // it now.
     std::FILE* in = std::fopen((scratch_dir_ + "/out").c_str(), "rb");
     if (in == nullptr)
       fail(fmt::format("{}: cannot read the scratch file: {}", path_, errno_text(errno)));
@@ -390,6 +412,7 @@ bool OutFile::commit() {
 }
 
 void OutFile::discard() {
+  if (spool_ != nullptr) std::fclose(std::exchange(spool_, nullptr));
   if (f_ != nullptr) {
     std::fclose(f_);
     f_ = nullptr;
