@@ -201,6 +201,9 @@ int ChipRun::open(std::uint32_t baud) {
   for (auto [path, out] : {std::pair{&opt.record, &m.rec_out}, std::pair{&opt.json, &m.json_out}}) {
     if (!path->empty() && !out->open(*path)) return m.fail(out->error());
   }
+  // The trace is written as the run goes: a device or a descriptor gets it from a scratch file
+  // at the end, after the walk.
+  if (!opt.record.empty() && !m.rec_out.spool()) return m.fail(m.rec_out.error());
   if (const std::string e = waveform_options_error(opt); !e.empty()) return m.fail(e);
   std::string error;
   for (const wave::Options& w : wave_options(opt, baud)) {
@@ -223,9 +226,7 @@ int ChipRun::run(const Scenario& s, std::string_view text, const LineSink& walk,
     notes.push_back(
         fmt::format("recorded by `dpc31 run --record` from {} (docs/trace-format.md)", s.file));
     rec = std::make_unique<TraceRecorder>(s.master.baud, std::move(notes));
-    // Written as it goes into the temporary: a long run holds no trace (a device or a descriptor
-    // gets it from a scratch file at the end, after the walk, as before).
-    if (!m.rec_out.spool()) return m.fail(m.rec_out.error());
+    // Written as it goes into the temporary (spooled since open()): a long run holds no trace.
     rec->write_to([&out = m.rec_out](std::string_view bytes) { out.write(bytes); });
     hooks = rec->scenario_hooks();
   }

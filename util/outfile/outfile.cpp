@@ -367,6 +367,9 @@ bool OutFile::write(std::string_view bytes) {
 
 bool OutFile::commit() {
   if (tmp_.empty()) return fail(fmt::format("{}: not open for writing", path_));
+  // /dev/stdout: what the command printed before comes first, also before a scratch file's bytes
+  // (more than the stream's buffer go to the descriptor at once).
+  if (direct_) std::fflush(stdout);
   if (spool_ != nullptr) {
     if (std::fflush(spool_) != 0 || std::ferror(spool_) != 0)
       fail(fmt::format("{}: cannot write: {}", path_, errno_text(errno)));
@@ -385,7 +388,6 @@ bool OutFile::commit() {
     }
     if (in != nullptr) std::fclose(in);
   }
-  if (direct_) std::fflush(stdout);  // /dev/stdout: what the command printed before comes first
   // Errors of stdio surface at the flush; an fsync before the rename so that a crash leaves the
   // old file or the new one, never an empty one.
   if (std::fflush(f_) != 0 || std::ferror(f_) != 0) {
