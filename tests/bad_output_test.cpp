@@ -171,19 +171,24 @@ TEST_F(BadInput, FullFileSystemIsExit2AndKeepsTheOldFile) {
   spit(full + "/old.fst", "old fst");
   spit(full + "/old.vcd", "old vcd");
   spit(full + "/old.json", "old json");
+  spit(full + "/old.trace", "old trace");
   tmpfs.fill();  // what is left cannot hold a waveform of the whole run
-  for (const auto& [opt, name] : {std::pair{"--fst", "old.fst"}, std::pair{"--vcd", "old.vcd"},
-                                  std::pair{"--json", "old.json"}}) {
+  // The trace too, which is written as the run goes (s34-record).
+  for (const auto& [opt, name] :
+       {std::pair{"--fst", "old.fst"}, std::pair{"--vcd", "old.vcd"},
+        std::pair{"--json", "old.json"}, std::pair{"--record", "old.trace"}}) {
     const Outcome r = dpc31("run " + kScn + " --quiet " + opt + " full/" + name);
     expect_bad_prefix(r, std::string("dpc31 run: full/") + name + ": cannot write", name);
   }
   EXPECT_EQ(slurp(full + "/old.fst"), "old fst");
   EXPECT_EQ(slurp(full + "/old.vcd"), "old vcd");
   EXPECT_EQ(slurp(full + "/old.json"), "old json");
+  EXPECT_EQ(slurp(full + "/old.trace"), "old trace");
   std::vector<std::string> left;
   for (const auto& e : fs::directory_iterator(full)) left.push_back(e.path().filename().string());
   std::sort(left.begin(), left.end());
-  EXPECT_EQ(left, (std::vector<std::string>{"fill", "old.fst", "old.json", "old.vcd"}));
+  EXPECT_EQ(left,
+            (std::vector<std::string>{"fill", "old.fst", "old.json", "old.trace", "old.vcd"}));
 }
 
 // Several outputs of one run are each whole or absent, written in a fixed order when the run is

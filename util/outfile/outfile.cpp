@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <system_error>
+#include <utility>
 
 #include "fst_chain.hpp"
 #include "fst_hooks.h"
@@ -259,7 +260,17 @@ bool OutFile::open(const std::string& path) {
   return true;
 }
 
-std::FILE* OutFile::stream() { return f_; }
+std::FILE* OutFile::stream() { return spool_ != nullptr ? spool_ : f_; }
+
+bool OutFile::spool() {
+  if (tmp_.empty()) return fail(fmt::format("{}: not open for writing", path_));
+  if (!direct_ || spool_ != nullptr) return true;
+  const std::string scratch = scratch_path();
+  if (scratch.empty()) return false;
+  spool_ = std::fopen(scratch.c_str(), "wbe");
+  if (spool_ == nullptr) return fail(fmt::format("{}: cannot write: {}", path_, errno_text(errno)));
+  return true;
+}
 
 std::string make_temp_dir(const std::string& prefix, std::string& error,
                           const std::string& parent) {
@@ -293,6 +304,10 @@ std::string OutFile::library_path() {
     if (scratch_entries_.empty()) scratch_entries_.push_back(cleanup::Entry::path(tmp_ + ".hier"));
     return tmp_;
   }
+  return scratch_path();
+}
+
+std::string OutFile::scratch_path() {
   if (scratch_dir_.empty()) {
     std::string error;
     scratch_dir_ = make_temp_dir("dpc31-out-", error);
@@ -344,7 +359,7 @@ bool OutFile::commit_fst(bool failed_elsewhere) {
 
 bool OutFile::write(std::string_view bytes) {
   if (f_ == nullptr) return fail(fmt::format("{}: not open for writing", path_));
-  if (std::fwrite(bytes.data(), 1, bytes.size(), f_) != bytes.size()) {
+  if (std::fwrite(bytes.data(), 1, bytes.size(), stream()) != bytes.size()) {
     return fail(fmt::format("{}: cannot write: {}", path_, errno_text(errno)));
   }
   return true;
@@ -352,8 +367,18 @@ bool OutFile::write(std::string_view bytes) {
 
 bool OutFile::commit() {
   if (tmp_.empty()) return fail(fmt::format("{}: not open for writing", path_));
-  if (!scratch_dir_.empty()) {
-    // A device or FIFO target: what the library wrote to the scratch file goes into it now.
+  // /dev/stdout: what the command printed before comes first, also before a scratch file's bytes
+  // (more than the stream's buffer go to the descriptor at once).
+  if (direct_) std::fflush(stdout);
+  if (spool_ != nullptr) {
+    if (std::fflush(spool_) != 0 || std::ferror(spool_) != 0)
+      fail(fmt::format("{}: cannot write: {}", path_, errno_text(errno)));
+    if (std::fclose(std::exchange(spool_, nullptr)) != 0)
+      fail(fmt::format("{}: cannot write: {}", path_, errno_text(errno)));
+  }
+  if (!scratch_dir_.empty() && error_.empty()) {
+    // A device or FIFO target: what the library (or spool()) wrote to the scratch file goes into
+    // it now.
     std::FILE* in = std::fopen((scratch_dir_ + "/out").c_str(), "rb");
     if (in == nullptr)
       fail(fmt::format("{}: cannot read the scratch file: {}", path_, errno_text(errno)));
@@ -363,7 +388,6 @@ bool OutFile::commit() {
     }
     if (in != nullptr) std::fclose(in);
   }
-  if (direct_) std::fflush(stdout);  // /dev/stdout: what the command printed before comes first
   // Errors of stdio surface at the flush; an fsync before the rename so that a crash leaves the
   // old file or the new one, never an empty one.
   if (std::fflush(f_) != 0 || std::ferror(f_) != 0) {
@@ -390,6 +414,7 @@ bool OutFile::commit() {
 }
 
 void OutFile::discard() {
+  if (spool_ != nullptr) std::fclose(std::exchange(spool_, nullptr));
   if (f_ != nullptr) {
     std::fclose(f_);
     f_ = nullptr;
