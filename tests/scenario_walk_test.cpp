@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
@@ -344,6 +345,8 @@ TEST(ScenarioWalk, AStartupOfASlaveLockedByAnotherMasterSaysSo) {
 // repeat ends at E; its wait at E + 37 T; the `silence 40bits` step starts TSYN later and ends at
 // S = E + 110 T. The late answer (the FCB repeat's, SD2 with 4 input bytes: 13 characters, 143 T)
 // runs from E + 60 T to E + 203 T, so the step's Data_Exchange starts at E + 236 T = S + 126 T.
+// The walk tells that late answer once, at its end, S + 93 T (docs/timing.md: "told once in
+// `dpc31 run`'s walk ... at the end of its last stop bit"; until the thirty-fourth session never).
 TEST(ScenarioWalk, OnOneChipALateAnswerOnTheLineIsWaitedFor) {
   const Walk w =
       run("profile spc3\nbaud 1500000\nmaster address=2 slot=37\nslave address=5 min_tsdr=60\n"
@@ -360,6 +363,10 @@ TEST(ScenarioWalk, OnOneChipALateAnswerOnTheLineIsWaitedFor) {
   };
   const auto [step, at] = cycle_of("] line 8: exchange 1", 0);
   EXPECT_EQ(cycle_of("] 2 -> 5 Data_Exchange", at).first, step + 126 * 32);
+  const std::string told =
+      fmt::format("[cycle {:>10}] master: a late answer on the line (after the slot time): no answer",
+                  step + 93 * 32);
+  EXPECT_EQ(std::count(w.lines.begin(), w.lines.end(), told), 1) << told;
 }
 
 // A host user side that never starts the chip (the GLOBALS plug-in of tests/bad_plugin.c: its
