@@ -135,7 +135,8 @@ const SlaveConfig& DpMaster::checked_slaves(const std::vector<SlaveConfig>& slav
                                             std::uint8_t master) {
   if (slaves.empty()) throw std::invalid_argument("DpMaster: a master needs at least one slave");
   for (auto it = slaves.begin(); it != slaves.end(); ++it) {
-    if (it->address == master) throw std::invalid_argument("DpMaster: " + master_at_station(master));
+    if (it->address == master)
+      throw std::invalid_argument("DpMaster: " + master_at_station(master));
     if (std::any_of(slaves.begin(), it,
                     [&it](const SlaveConfig& s) { return s.address == it->address; })) {
       throw std::invalid_argument(

@@ -316,11 +316,13 @@ class Parser {
     std::uint64_t a = 0;
     const bool address = parse_u64(v, a);
     if (named != s_.stations.end()) {
-      if (address && a != named->slave.address && is_station(static_cast<std::uint8_t>(a)))
+      if (address && a <= 126 && a != named->slave.address &&
+          is_station(static_cast<std::uint8_t>(a)))
         fail(fmt::format("'{}' is the name of one station and the address of another", v));
       st.station = named->slave.address;
       return static_cast<std::size_t>(named - s_.stations.begin());
     }
+    if (!address) fail(fmt::format("no station named '{}'", v));
     st.station = station_address(v);
     std::vector<std::size_t> at;
     for (std::size_t i = 0; i < s_.stations.size(); ++i) {
@@ -329,11 +331,11 @@ class Parser {
     if (at.size() > 1) {
       std::string names;
       for (const std::size_t i : at) {
-        names += fmt::format("{}'{}' (line {})", names.empty() ? "" : ", ", s_.stations[i].name,
+        names += fmt::format("{}'{}' at line {}", names.empty() ? "" : ", ", s_.stations[i].name,
                              station_lines_[i]);
       }
-      fail(fmt::format("station {} is {} stations, {}: name the one to check", st.station,
-                       at.size(), names));
+      fail(fmt::format("station {} names {} stations ({}): give the name of the one to check",
+                       st.station, at.size(), names));
     }
     return at.front();
   }

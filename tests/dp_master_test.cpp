@@ -297,15 +297,17 @@ std::vector<std::uint8_t> diag_answer(std::uint8_t st1, std::uint8_t st2, std::u
 // docs/decisions.md, the thirty-fourth session: a start-up's Set_Prm without an answer leaves the
 // slave's state unknown, so the master goes on with Slave_Diag, not Chk_Cfg (EN 50170: a master
 // parameterises a slave again from its diagnosis). Station 5 answers FDL_Status and a first
-// Slave_Diag with Prm_Req (Wait_Prm), is silent to Set_Prm, then reports Wait_Cfg (Station_Not_Ready,
-// Master_Add 2, no Prm_Req): the master sends Set_Prm and Chk_Cfg again. The Slave_Diag after the
-// silent Set_Prm starts TSL 100 + TSYN 33 bit times after its end (docs/timing.md).
+// Slave_Diag with Prm_Req (Wait_Prm), is silent to Set_Prm, then reports Wait_Cfg
+// (Station_Not_Ready, Master_Add 2, no Prm_Req): the master sends Set_Prm and Chk_Cfg again. The
+// Slave_Diag after the silent Set_Prm starts TSL 100 + TSYN 33 bit times after its end
+// (docs/timing.md).
 TEST(DpMaster, AnUnansweredSetPrmIsFollowedBySlaveDiagAndParameterisedAgain) {
   ScriptedSlave l;
   int prms = 0;
   l.answer = [&prms](const fdl::Frame& req) -> std::vector<std::uint8_t> {
     using D = pdu::SlaveDiag;
-    if (!req.dsap) return fdl::encode(fdl::make_frame(2, 5, fdl::make_response_fc(fdl::Response::OK)));
+    if (!req.dsap)
+      return fdl::encode(fdl::make_frame(2, 5, fdl::make_response_fc(fdl::Response::OK)));
     switch (fdl::sap_number(*req.dsap)) {
       case sap::Slave_Diag:
         return prms == 0 ? diag_answer(D::St1_Station_Not_Ready, D::St2_Prm_Req | D::St2_Always_1,
@@ -325,8 +327,8 @@ TEST(DpMaster, AnUnansweredSetPrmIsFollowedBySlaveDiagAndParameterisedAgain) {
     saps.push_back(e.request.dsap ? std::optional(fdl::sap_number(*e.request.dsap)) : std::nullopt);
   }
   const std::vector<std::optional<std::uint8_t>> want = {
-      std::nullopt,    sap::Slave_Diag, sap::Set_Prm, sap::Slave_Diag,
-      sap::Set_Prm,    sap::Slave_Diag, sap::Set_Prm, sap::Slave_Diag};
+      std::nullopt, sap::Slave_Diag, sap::Set_Prm, sap::Slave_Diag,
+      sap::Set_Prm, sap::Slave_Diag, sap::Set_Prm, sap::Slave_Diag};
   ASSERT_GE(saps.size(), want.size());
   EXPECT_EQ(std::vector(saps.begin(), saps.begin() + static_cast<std::ptrdiff_t>(want.size())),
             want);

@@ -363,9 +363,9 @@ TEST(ScenarioWalk, OnOneChipALateAnswerOnTheLineIsWaitedFor) {
   };
   const auto [step, at] = cycle_of("] line 8: exchange 1", 0);
   EXPECT_EQ(cycle_of("] 2 -> 5 Data_Exchange", at).first, step + 126 * 32);
-  const std::string told =
-      fmt::format("[cycle {:>10}] master: a late answer on the line (after the slot time): no answer",
-                  step + 93 * 32);
+  const std::string told = fmt::format(
+      "[cycle {:>10}] master: a late answer on the line (after the slot time): no answer",
+      step + 93 * 32);
   EXPECT_EQ(std::count(w.lines.begin(), w.lines.end(), told), 1) << told;
 }
 
