@@ -125,6 +125,9 @@ class Runner {
       }
     };
     master_->on_locked = [this](std::uint8_t, std::uint8_t by) { locked_by_ = by; };
+    master_->on_late = [this](std::uint64_t end, bool after_slot) {
+      note(end, fmt::format("master: {}", late_answer_text(after_slot)));
+    };
     if (hooks_.observer != nullptr) {
       master_->on_send = [this](std::uint64_t start, std::span<const std::uint8_t> bytes,
                                 UartFault fault) {

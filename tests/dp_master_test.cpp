@@ -14,9 +14,11 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <new>
+#include <optional>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -254,6 +256,102 @@ TEST(DpMaster, AStartUpWhoseAnswersAreAllLateFails) {
   const std::unique_ptr<DpMaster> owner = one.master(100);
   EXPECT_FALSE(owner->startup(20));
   EXPECT_GT(owner->counters().late, 0u);
+}
+
+// Station 5 played by a scripted sender: each request of the master is answered with what
+// `answer` makes of it (nothing: silence), TSDR 11 bit times after the request's end.
+struct ScriptedSlave {
+  Segment seg{1'500'000};
+  std::size_t rogue = seg.add_sender("station 5");
+  std::size_t m = seg.add_sender("master 2");
+  DpMaster master{seg, m, MasterConfig{}, {SlaveConfig{}}};
+  std::function<std::vector<std::uint8_t>(const fdl::Frame&)> answer;
+  std::vector<std::uint8_t> due;
+  std::uint64_t due_at = 0;
+  ScriptedSlave() {
+    master.on_send = [this](std::uint64_t start, std::span<const std::uint8_t> request,
+                            const UartFault&) {
+      const fdl::Decoded d = fdl::decode(request);
+      due = d.error == fdl::Error::none ? answer(d.frame) : std::vector<std::uint8_t>{};
+      due_at = start + request.size() * kChar + 11 * T;
+    };
+    master.scheduler = [this](std::uint64_t cycle) {
+      if (!due.empty() && cycle >= due_at) {
+        seg.run_until(due_at);
+        seg.send(rogue, due, due_at);
+        due.clear();
+        return;
+      }
+      seg.run_until(cycle);
+    };
+  }
+};
+
+// A Slave_Diag answer (DL, from SAP 60 to the master's 62) with Station_Status_1..3, Master_Add
+// and the Ident_Number 0C31h (chip-facts.md, Slave_Diag).
+std::vector<std::uint8_t> diag_answer(std::uint8_t st1, std::uint8_t st2, std::uint8_t master) {
+  return fdl::encode(fdl::make_frame(2, 5, fdl::make_response_fc(fdl::Response::DL),
+                                     {st1, st2, 0x00, master, 0x0C, 0x31}, 62, 60));
+}
+
+// docs/decisions.md, the thirty-fourth session: a start-up's Set_Prm without an answer leaves the
+// slave's state unknown, so the master goes on with Slave_Diag, not Chk_Cfg (EN 50170: a master
+// parameterises a slave again from its diagnosis). Station 5 answers FDL_Status and a first
+// Slave_Diag with Prm_Req (Wait_Prm), is silent to Set_Prm, then reports Wait_Cfg
+// (Station_Not_Ready, Master_Add 2, no Prm_Req): the master sends Set_Prm and Chk_Cfg again. The
+// Slave_Diag after the silent Set_Prm starts TSL 100 + TSYN 33 bit times after its end
+// (docs/timing.md).
+TEST(DpMaster, AnUnansweredSetPrmIsFollowedBySlaveDiagAndParameterisedAgain) {
+  ScriptedSlave l;
+  int prms = 0;
+  l.answer = [&prms](const fdl::Frame& req) -> std::vector<std::uint8_t> {
+    using D = pdu::SlaveDiag;
+    if (!req.dsap)
+      return fdl::encode(fdl::make_frame(2, 5, fdl::make_response_fc(fdl::Response::OK)));
+    switch (fdl::sap_number(*req.dsap)) {
+      case sap::Slave_Diag:
+        return prms == 0 ? diag_answer(D::St1_Station_Not_Ready, D::St2_Prm_Req | D::St2_Always_1,
+                                       D::kNoMaster)
+                         : diag_answer(D::St1_Station_Not_Ready, D::St2_Always_1 | D::St2_WD_On, 2);
+      case sap::Set_Prm:
+        ++prms;
+        return {};
+      default:
+        return {};
+    }
+  };
+  EXPECT_FALSE(l.master.startup(6));
+  const std::vector<Exchange>& h = l.master.history();
+  std::vector<std::optional<std::uint8_t>> saps;
+  for (const Exchange& e : h) {
+    saps.push_back(e.request.dsap ? std::optional(fdl::sap_number(*e.request.dsap)) : std::nullopt);
+  }
+  const std::vector<std::optional<std::uint8_t>> want = {
+      std::nullopt, sap::Slave_Diag, sap::Set_Prm, sap::Slave_Diag,
+      sap::Set_Prm, sap::Slave_Diag, sap::Set_Prm, sap::Slave_Diag};
+  ASSERT_GE(saps.size(), want.size());
+  EXPECT_EQ(std::vector(saps.begin(), saps.begin() + static_cast<std::ptrdiff_t>(want.size())),
+            want);
+  EXPECT_FALSE(h[2].answer);
+  EXPECT_EQ(h[3].request_start, h[2].request_end + kTsl + kTsyn);
+  EXPECT_EQ(std::count(saps.begin(), saps.end(), std::optional<std::uint8_t>(sap::Chk_Cfg)), 0);
+}
+
+// A master is a station too: the C++ door refuses a slave at the master's own address (a segment
+// scenario's `master 5 at the address of station 5`; the Segment knows no chip's address).
+TEST(DpMaster, ASlaveAtTheMastersOwnAddressIsRefused) {
+  Segment seg{1'500'000};
+  const std::size_t m = seg.add_sender("master 5");
+  SlaveConfig five;
+  five.address = 5;
+  MasterConfig mc;
+  mc.address = 5;
+  try {
+    DpMaster master(seg, m, mc, {SlaveConfig{}, five});
+    ADD_FAILURE() << "master 5 polling slave 5 was taken";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "DpMaster: master 5 at the address of station 5");
+  }
 }
 
 // An answer mirrors its request's addresses: a telegram in its place from another station, or to

@@ -341,14 +341,18 @@ TEST(ScenarioWalk, AStartupOfASlaveLockedByAnotherMasterSaysSo) {
 // after a wait without an answer, a late answer that comes before the next request moves it to
 // TSYN after that answer's end (docs/timing.md, "The master's wait"; until the thirty-third
 // session the request started as its step did, into the late answer). 1.5 Mbaud, T = 32:
-// MinTSDR 60 bit times is past the slot time 37, so every answer is late. The first `exchange`'s
+// MinTSDR 60 bit times is past the slot time 37, so every answer is late: the start-up's Set_Prm
+// is unanswered, so it sends no Chk_Cfg (docs/scenario-format.md `startup`), and `chk_cfg` brings
+// the slave to Data_Exchange, where it answers with its inputs. The first `exchange`'s
 // repeat ends at E; its wait at E + 37 T; the `silence 40bits` step starts TSYN later and ends at
 // S = E + 110 T. The late answer (the FCB repeat's, SD2 with 4 input bytes: 13 characters, 143 T)
 // runs from E + 60 T to E + 203 T, so the step's Data_Exchange starts at E + 236 T = S + 126 T.
+// The walk tells that late answer once, at its end, S + 93 T (docs/timing.md: "told once in
+// `dpc31 run`'s walk ... at the end of its last stop bit"; until the thirty-fourth session never).
 TEST(ScenarioWalk, OnOneChipALateAnswerOnTheLineIsWaitedFor) {
   const Walk w =
       run("profile spc3\nbaud 1500000\nmaster address=2 slot=37\nslave address=5 min_tsdr=60\n"
-          "startup\nexchange 1\nsilence 40bits\nexchange 1\n",
+          "startup\nchk_cfg\nexchange 1\nsilence 40bits\nexchange 1\n",
           "late.scn", dpc31::Engine::event);
   const auto cycle_of = [&w](std::string_view text, std::size_t from) {
     for (std::size_t i = from; i < w.lines.size(); ++i) {
@@ -359,8 +363,12 @@ TEST(ScenarioWalk, OnOneChipALateAnswerOnTheLineIsWaitedFor) {
     ADD_FAILURE() << "no walk line with " << text;
     return std::pair{std::uint64_t{0}, w.lines.size()};
   };
-  const auto [step, at] = cycle_of("] line 8: exchange 1", 0);
+  const auto [step, at] = cycle_of("] line 9: exchange 1", 0);
   EXPECT_EQ(cycle_of("] 2 -> 5 Data_Exchange", at).first, step + 126 * 32);
+  const std::string told = fmt::format(
+      "[cycle {:>10}] master: a late answer on the line (after the slot time): no answer",
+      step + 93 * 32);
+  EXPECT_EQ(std::count(w.lines.begin(), w.lines.end(), told), 1) << told;
 }
 
 // A host user side that never starts the chip (the GLOBALS plug-in of tests/bad_plugin.c: its
