@@ -70,8 +70,9 @@ TEST_F(BadInput, AnOutputNameTooLongIsFoundBeforeTheWork) {
   expect_bad(dpc31("cosim --seeds 1 --cycles 100 --junit " + name), "dpc31 cosim: " + line,
              "cosim");
   const std::string data = std::string(SOURCE_DIR) + "/tests/data/wavediff/";
-  expect_bad(dpc31("wavediff " + data + "emu.vcd " + data + "rtl.vcd --json " + name),
-             "dpc31 wavediff: " + line, "wavediff");
+  // wavediff's lines name the file first, as its inputs' do.
+  expect_bad(dpc31("wavediff " + data + "emu.vcd " + data + "rtl.vcd --json " + name), line,
+             "wavediff");
   EXPECT_TRUE(listing().empty());
 }
 
@@ -109,7 +110,8 @@ TEST_F(BadInput, AnOutputThatIsTheStandardOutputsFileIsRefused) {
              "dpc31 bench: --json ../io/out" + why, "bench");
   r = dpc31("run " + scn + " --json /dev/stdout");
   EXPECT_EQ(r.rc, 0) << r.err;
-  EXPECT_TRUE(r.out.starts_with("[cycle")) << r.out.substr(0, 80);
+  // The walk, then the JSON.
+  EXPECT_LT(r.out.find("[cycle"), r.out.find("\"final_cycle\"")) << r.out.substr(0, 80);
   EXPECT_NE(r.out.find("\"final_cycle\""), std::string::npos);
   EXPECT_TRUE(listing().empty());
 }

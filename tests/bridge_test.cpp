@@ -600,7 +600,7 @@ TEST(BridgePty, SymlinkRules) {
   EXPECT_TRUE(std::filesystem::is_regular_file(file));
   // A symlink that is not a pty's (a user's own: a dotfile, /dev/stdout) is refused and kept as
   // it was, dangling or not (docs/bridge.md, "The symlink").
-  for (const std::string to : {file, std::string("/proc/self/fd/1"), (dir / "gone").string()}) {
+  for (const std::string& to : {file, std::string("/proc/self/fd/1"), (dir / "gone").string()}) {
     const std::string own = (dir / "own").string();
     std::filesystem::remove(own);
     std::filesystem::create_symlink(to, own);
