@@ -395,8 +395,8 @@ TEST_F(BadInput, AClosedPipeIsAFailedWrite) {
 
 // The running program is an input of every command: `bridge --pcap build/bin/dpc31` renamed its
 // capture over the program (the audit of 2026-12-05, run 21). A copy of it here, run as ./dpc31:
-// refused before anything runs by distinct(), and by OutFile::open() where a command has no
-// distinct() (bench --json).
+// refused before anything runs by distinct() (OutFile::open() refuses it too, for a library's
+// caller).
 TEST_F(BadInput, TheRunningProgramIsNeverAnOutput) {
   const std::string exe = copy(kCli, "dpc31");
   const std::string bytes = slurp(exe);
@@ -410,7 +410,8 @@ TEST_F(BadInput, TheRunningProgramIsNeverAnOutput) {
             "dpc31 run: --json " + exe + is_it + ": an output must not replace an input"},
            {"soak --cycles 1000 --json dpc31",
             "dpc31 soak: --json dpc31" + is_it + ": an output must not replace an input"},
-           {"bench --bench /bin/true --json dpc31", "dpc31 bench: dpc31: cannot write" + is_it}}) {
+           {"bench --bench /bin/true --json dpc31",
+            "dpc31 bench: --json dpc31" + is_it + ": an output must not replace an input"}}) {
     const testutil::CommandResult r = testutil::run_command(
         "cd " + path("") + " && timeout 60 ./dpc31 " + args + " 2>&1 >/dev/null");
     EXPECT_EQ(r.rc, 2) << args;

@@ -634,6 +634,17 @@ TEST(BridgePty, SymlinkRules) {
   std::ofstream(file) << "keep\n";
   EXPECT_NE(dpc31::bridge::make_link(file, "/dev/pts/1").find("not a symlink"), std::string::npos);
   EXPECT_TRUE(std::filesystem::is_regular_file(file));
+  // A symlink that is not a pty's (a user's own: a dotfile, /dev/stdout) is refused and kept as
+  // it was, dangling or not (docs/bridge.md, "The symlink").
+  for (const std::string& to : {file, std::string("/proc/self/fd/1"), (dir / "gone").string()}) {
+    const std::string own = (dir / "own").string();
+    std::filesystem::remove(own);
+    std::filesystem::create_symlink(to, own);
+    EXPECT_EQ(
+        dpc31::bridge::make_link(own, "/dev/pts/1"),
+        own + " is a symlink to " + to + ", not to a pty in /dev/pts/: refusing to replace it");
+    EXPECT_EQ(std::filesystem::read_symlink(own).string(), to);
+  }
   std::filesystem::remove_all(dir);
 }
 

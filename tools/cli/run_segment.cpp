@@ -2,6 +2,7 @@
 // station and the line at the top and one pcapng of the line (lib/segment_outputs), a golden trace
 // per station, the JSON summary. Nothing is written unless the run completes.
 #include <fmt/core.h>
+#include <sys/stat.h>
 
 #include <cstdint>
 #include <memory>
@@ -53,6 +54,18 @@ class RunOutputs final : public SegmentScenarioOutputs {
 
   // Opens the files the run does not write as it goes; false with a line.
   bool open(std::string& error) {
+    // The stations' traces are named after FILE, beside it: beside a device, a FIFO or a
+    // descriptor (/dev/null, /dev/stdout) they would be new files in its directory (/dev).
+    struct stat st {};
+    if (!opt_.record.empty() &&
+        ((::stat(opt_.record.c_str(), &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode)) ||
+         outfile::descriptor_link(opt_.record).link)) {
+      error = fmt::format(
+          "--record {}: not a regular file: a segment writes a trace per station beside FILE "
+          "(FILE.stationN.trace), so FILE names a file",
+          opt_.record);
+      return false;
+    }
     if (!SegmentScenarioOutputs::open(error)) return false;
     for (const std::string& sc : scopes()) {
       if (opt_.record.empty()) break;

@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cerrno>
+#include <climits>
 #include <cstdlib>
 #include <filesystem>
 #include <system_error>
@@ -14,6 +15,7 @@
 
 #include "fst_chain.hpp"
 #include "fst_hooks.h"
+#include "textfile.hpp"
 
 namespace dpc31::outfile {
 
@@ -39,6 +41,16 @@ std::string running_program() {
 
 std::string running_program_refused(const std::string& path) {
   return fmt::format("{}: cannot write: is the running program {}", path, running_program());
+}
+
+// Whether rename() into `path` fails with ENAMETOOLONG: its last component longer than its
+// directory's file system takes (NAME_MAX where it cannot be asked), or the whole over PATH_MAX.
+bool name_too_long(const std::string& path) {
+  const std::size_t slash = path.rfind('/');
+  const std::string dir = slash == std::string::npos ? "." : path.substr(0, slash + 1);
+  const std::size_t name = slash == std::string::npos ? path.size() : path.size() - slash - 1;
+  const long max = ::pathconf(dir.c_str(), _PC_NAME_MAX);
+  return name > static_cast<std::size_t>(max > 0 ? max : NAME_MAX) || path.size() >= PATH_MAX;
 }
 
 }  // namespace
@@ -185,7 +197,7 @@ std::FILE* open_live(const std::string& path) {
 OutFile::~OutFile() { discard(); }
 
 bool OutFile::fail(std::string msg) {
-  if (error_.empty()) error_ = std::move(msg);
+  if (error_.empty()) error_ = shown_line(msg);  // one line whatever the name holds
   return false;
 }
 
@@ -226,6 +238,11 @@ bool OutFile::open(const std::string& path) {
   if (!direct_ && path.ends_with('/')) {
     // No such directory (else it was refused above): a file's name does not end in '/'.
     return fail(fmt::format("{}: cannot write: a file name cannot end in '/'", path));
+  }
+  // The temporary's name is short whatever the target's: a name its file system cannot hold
+  // would be found only at the rename, after the work.
+  if (!direct_ && name_too_long(target_)) {
+    return fail(fmt::format("{}: cannot write: {}", path, errno_text(ENAMETOOLONG)));
   }
   if (!direct_) {
     std::string error;
@@ -274,22 +291,20 @@ bool OutFile::spool() {
 
 std::string make_temp_dir(const std::string& prefix, std::string& error,
                           const std::string& parent) {
-  std::error_code ec;
-  const std::filesystem::path tmp =
-      parent.empty() ? std::filesystem::temp_directory_path(ec) : std::filesystem::path(parent);
-  std::string dir = (tmp / (prefix + "XXXXXX")).string();
-  if (!ec && ::mkdtemp(dir.data()) != nullptr) return dir;
-  // On error the path is empty: the variable it came from is named instead (libstdc++ reads
-  // these in this order).
-  std::string where = tmp.string();
+  // The variables std::filesystem::temp_directory_path reads, in its order; an empty one is
+  // unset, as mktemp(1) and Python's tempfile take it (a CI job's exported empty TMPDIR).
+  std::string tmp = parent;
+  std::string where = parent;
   for (const char* name : {"TMPDIR", "TMP", "TEMP", "TEMPDIR"}) {
-    if (const char* v = std::getenv(name); ec && v != nullptr) {
+    if (const char* v = std::getenv(name); tmp.empty() && v != nullptr && *v != '\0') {
+      tmp = v;
       where = fmt::format("{}={}", name, v);
-      break;
     }
   }
-  error = fmt::format("cannot create a directory in {}: {}", where,
-                      ec ? ec.message() : errno_text(errno));
+  if (tmp.empty()) tmp = where = "/tmp";
+  std::string dir = (std::filesystem::path(tmp) / (prefix + "XXXXXX")).string();
+  if (::mkdtemp(dir.data()) != nullptr) return dir;
+  error = fmt::format("cannot create a directory in {}: {}", where, errno_text(errno));
   return {};
 }
 
@@ -477,19 +492,31 @@ std::string distinct(const std::vector<Named>& inputs, const std::vector<Named>&
   all_inputs.push_back({"the running program", running_program()});
   std::vector<Id> out_ids;
   for (const Named& o : outputs) out_ids.push_back(o.path.empty() ? Id{} : id_of(o.path));
+  // The file the shell redirected the standard output to: renamed over, what the command prints
+  // there would go with the old file (/dev/stdout writes into it instead: a descriptor).
+  struct stat out1 {};
+  const bool stdout_file = ::fstat(STDOUT_FILENO, &out1) == 0 && S_ISREG(out1.st_mode);
   for (std::size_t k = 0; k < outputs.size(); ++k) {
     if (outputs[k].path.empty() || out_ids[k].special) continue;
+    if (stdout_file && out_ids[k].exists && !out_ids[k].descriptor &&
+        out_ids[k].dev == out1.st_dev && out_ids[k].ino == out1.st_ino) {
+      return shown_line(fmt::format(
+          "{} {}: is the file the standard output goes to: what is printed there would be lost "
+          "(name /dev/stdout to write into it)",
+          outputs[k].what, outputs[k].path));
+    }
     for (const Named& in : all_inputs) {
       if (!in.path.empty() && same(out_ids[k], id_of(in.path))) {
-        return fmt::format("{} {}: is {} {}: an output must not replace an input", outputs[k].what,
-                           outputs[k].path, in.what, in.path);
+        return shown_line(fmt::format("{} {}: is {} {}: an output must not replace an input",
+                                      outputs[k].what, outputs[k].path, in.what, in.path));
       }
     }
     for (std::size_t j = 0; j < k; ++j) {
       if (!outputs[j].path.empty() && !out_ids[k].descriptor && !out_ids[j].descriptor &&
           same(out_ids[k], out_ids[j])) {
-        return fmt::format("{} {} and {} {} are the same file: each output needs its own",
-                           outputs[j].what, outputs[j].path, outputs[k].what, outputs[k].path);
+        return shown_line(
+            fmt::format("{} {} and {} {} are the same file: each output needs its own",
+                        outputs[j].what, outputs[j].path, outputs[k].what, outputs[k].path));
       }
     }
   }
