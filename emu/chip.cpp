@@ -18,11 +18,18 @@ Chip::~Chip() = default;
 Chip::Chip(Chip&&) noexcept = default;
 Chip& Chip::operator=(Chip&&) noexcept = default;
 
-void Chip::reset() { reset(0); }
+// Under a CPU board the reset is an event at the board's instant, as a load there takes only it.
+void Chip::reset() { reset(board_instant_ != nullptr ? *board_instant_ : 0); }
 void Chip::reset(std::uint64_t cycle) {
   if (cycle > kLastCycle) {
     throw std::invalid_argument(
         fmt::format("Chip::reset: cycle {} is past the chip's last cycle {}", cycle, kLastCycle));
+  }
+  if (board_instant_ != nullptr && cycle != *board_instant_) {
+    throw std::invalid_argument(fmt::format(
+        "Chip::reset: cycle {} under a CPU board at cycle {}: a reset there is at the board's "
+        "instant (the CPU's clock counts on)",
+        cycle, *board_instant_));
   }
   core_->reset(cycle);
   moved();

@@ -179,11 +179,14 @@ class Chip {
   Chip& operator=(Chip&&) noexcept;
 
   // Hardware reset: registers and RAM cells to their reset values, cycle counter to 0. The end
-  // of an active interrupt and PB3's fall are told to their observers at cycle 0.
+  // of an active interrupt and PB3's fall are told to their observers at cycle 0. Under a CPU
+  // board (Cpu51Board) the reset is at the board's instant(), where its clock counts on
+  // (docs/cpu.md, "The board"): reset(board.instant()).
   void reset();
   // The same reset in a platform whose clock counts on (a Cpu51Board's instant(), docs/cpu.md):
   // the new time line starts at `cycle`, where the reset's edges are told. A cycle past
-  // kLastCycle is std::invalid_argument, the chip unchanged.
+  // kLastCycle, or under a CPU board another than its instant, is std::invalid_argument, the chip
+  // unchanged.
   void reset(std::uint64_t cycle);
 
   // --- the bus (front door) ---
