@@ -318,10 +318,11 @@ WdState Chip::wd_state() const { return core_->watchdog.state(); }
 void Chip::on_irq_change(std::function<void(std::uint64_t, bool)> cb) {
   core_->signals.irq.add(std::move(cb));
 }
-void Chip::set_log_sink(LogSink sink) {
+void Chip::set_log_sink(LogSink sink) { set_log_sink(std::move(sink), LogLevel::debug); }
+void Chip::set_log_sink(LogSink sink, LogLevel shown) {
   core_->signals.flush_log();  // what the old sink is still owed (a repeat count, lines left out)
   core_->signals.sink = std::move(sink);
-  core_->signals.shown = LogLevel::debug;
+  core_->signals.shown = shown;
 }
 const ProfileDesc& Chip::profile() const { return core_->prof(); }
 BusMode Chip::bus_mode() const { return core_->regs.bus(); }
