@@ -94,8 +94,8 @@ class Session {
   void emit(AsyncLine::Kind kind, std::string text, LogLevel level = LogLevel::info);
   // `client` asks for the chip's log from `level` up (none: off).
   void follow_log(ClientState& client, std::optional<LogLevel> level);
-  // The chip's log sink shows what the lowest level any client asked for (nothing: no sink), so
-  // its repeat counts are those of the lines a client may see (Chip::set_log_sink).
+  // The chip's log sink shows the lowest level any client asked for and up (none asked: no
+  // sink), so its repeat counts are those of the lines a client may see (Chip::set_log_sink).
   void show_log();
   [[nodiscard]] std::uint32_t default_bit_cycles() const;
   [[nodiscard]] std::uint32_t address_limit() const;
