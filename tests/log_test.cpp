@@ -6,7 +6,6 @@
 #include <fmt/core.h>
 #include <gtest/gtest.h>
 
-#include <bit>
 #include <string>
 #include <vector>
 
@@ -195,28 +194,17 @@ TEST(LogLimiter, ALineOfAnotherLevelEndsTheRepeats) {
 
 namespace {
 
-// An info line, a debug line (both repeatable) and a chip to log them, driven through the bus: a
-// read of RAM the user must not touch is an info line; an Int_Ack_Reg write of a bit it does not
-// change is a debug line (emu/bus.cpp; docs/timing.md "acknowledge exceptions"). Each access
-// costs 4 clocks and logs at its end (docs/timing.md).
+// An info line and a debug line, both repeatable (testutil::RepeatableLogLines), and a chip to log
+// them. Each access costs 4 clocks and logs at its end (docs/timing.md).
 struct InfoAndDebug {
   Chip c{{Profile::dpc31, BusMode::intel}};
-  std::uint32_t remark = 0;
-  std::uint32_t ack = 0;
-  std::uint8_t ack_bit = 0;
+  testutil::RepeatableLogLines lines{c.profile()};
   InfoAndDebug() {
-    for (const RegionDesc& g : c.profile().regions)
-      if (g.ram && g.reserved) remark = g.begin;
-    const RegDesc* r = find_reg(c.profile(), RegId::Int_Ack_Reg);
-    EXPECT_NE(remark, 0u);
-    EXPECT_TRUE(r != nullptr && r->ign != 0);
-    if (r == nullptr || r->ign == 0) return;
-    const int bit = std::countr_zero(r->ign);  // Intel mode: the low byte at the lower address
-    ack = static_cast<std::uint32_t>(r->write_addr + bit / 8);
-    ack_bit = static_cast<std::uint8_t>(1u << (bit % 8));
+    EXPECT_NE(lines.info_read, 0u);
+    EXPECT_NE(lines.debug_write, 0u);
   }
-  void info() { c.read(remark); }
-  void debug() { c.write(ack, ack_bit); }
+  void info() { c.read(lines.info_read); }
+  void debug() { c.write(lines.debug_write, lines.debug_value); }
 };
 
 std::vector<std::string> shown(const std::vector<LogRecord>& records) {

@@ -5,7 +5,6 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include <bit>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -15,6 +14,7 @@
 #include "dpc31/chip.hpp"
 #include "responder.hpp"
 #include "serve_client.hpp"
+#include "test_util.hpp"
 
 using testutil::starts_with;
 
@@ -140,17 +140,11 @@ TEST(ServeSession, RepeatCountsFollowTheLowestLevelAsked) {
   for (const std::string level : {"debug", "info"}) {
     SCOPED_TRACE(level);
     LocalSession s;
-    const dpc31::ProfileDesc& p = s.s.chip().profile();
-    std::uint32_t remark = 0;
-    for (const dpc31::RegionDesc& g : p.regions)
-      if (g.ram && g.reserved) remark = g.begin;
-    const dpc31::RegDesc* ack = dpc31::find_reg(p, dpc31::RegId::Int_Ack_Reg);
-    ASSERT_NE(remark, 0u);
-    ASSERT_TRUE(ack != nullptr && ack->ign != 0);
-    const int bit = std::countr_zero(ack->ign);  // Intel mode: the low byte at the lower address
-    const std::string info = fmt::format("read {:#x}", remark);
-    const std::string debug =
-        fmt::format("write {:#x} {:#x}", ack->write_addr + bit / 8, 1u << (bit % 8));
+    const testutil::RepeatableLogLines l(s.s.chip().profile());
+    ASSERT_NE(l.info_read, 0u);
+    ASSERT_NE(l.debug_write, 0u);
+    const std::string info = fmt::format("read {:#x}", l.info_read);
+    const std::string debug = fmt::format("write {:#x} {:#x}", l.debug_write, l.debug_value);
     EXPECT_EQ(s("log " + level), "OK");
     for (const std::string& line : {info, info, debug, debug, info, info})
       EXPECT_TRUE(starts_with(s(line), "OK")) << line;

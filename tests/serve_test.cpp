@@ -13,7 +13,6 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
-#include <bit>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -33,6 +32,7 @@
 #include "serve_server.hpp"
 #include "serve_session.hpp"
 #include "test_files.hpp"
+#include "test_util.hpp"
 
 using namespace testutil;  // the server process, line client, temporary directory
 
@@ -682,17 +682,11 @@ TEST(Serve, TcpBindsLoopbackByDefault) {
 // at 24, and the last client's `log off` hands over that count.
 TEST(Serve, TheChipsLogFoldsAsTheLowestLevelAskedShowsIt) {
   ServerProcess server(kCli, {"--tcp", "0", "--profile", "dpc31"});
-  const dpc31::ProfileDesc& p = dpc31::profile_desc(dpc31::Profile::dpc31);
-  std::uint32_t remark = 0;
-  for (const dpc31::RegionDesc& g : p.regions)
-    if (g.ram && g.reserved) remark = g.begin;
-  const dpc31::RegDesc* ack = dpc31::find_reg(p, dpc31::RegId::Int_Ack_Reg);
-  ASSERT_NE(remark, 0u);
-  ASSERT_TRUE(ack != nullptr && ack->ign != 0);
-  const int bit = std::countr_zero(ack->ign);  // Intel mode: the low byte at the lower address
-  const std::string info = fmt::format("read {:#x}", remark);
-  const std::string debug =
-      fmt::format("write {:#x} {:#x}", ack->write_addr + bit / 8, 1u << (bit % 8));
+  const testutil::RepeatableLogLines l(dpc31::profile_desc(dpc31::Profile::dpc31));
+  ASSERT_NE(l.info_read, 0u);
+  ASSERT_NE(l.debug_write, 0u);
+  const std::string info = fmt::format("read {:#x}", l.info_read);
+  const std::string debug = fmt::format("write {:#x} {:#x}", l.debug_write, l.debug_value);
   LineClient low = LineClient::tcp(server.port());
   LineClient high = LineClient::tcp(server.port());
   ASSERT_EQ(low.command("log debug"), "OK");
