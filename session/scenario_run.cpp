@@ -76,9 +76,8 @@ class Runner {
                         s_.chip.bus == BusMode::intel ? "intel" : "motorola", s_.master.address,
                         s_.user.slave.address, s_.master.baud));
     }
-    chip_.set_log_sink([this](const LogRecord& r) {
-      if (r.level >= LogLevel::info) note(r.cycle, "chip: " + r.text);
-    });
+    chip_.set_log_sink([this](const LogRecord& r) { note(r.cycle, "chip: " + r.text); },
+                       LogLevel::info);
     if (hooks_.observer != nullptr) hooks_.observer->run_begins(chip_);
     if (hooks_.at_start) hooks_.at_start(chip_);
     user_.set_inputs(s_.inputs);

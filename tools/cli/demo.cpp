@@ -58,10 +58,11 @@ class Narrator {
                    chip_.x_int_pin() ? "high" : "low", active ? "active" : "inactive");
       }
     });
-    chip_.set_log_sink([this](const LogRecord& r) {
-      if (r.level >= LogLevel::info)
-        fmt::print(out_, "[cycle {:>8}]   chip: {}\n", r.cycle, r.text);
-    });
+    chip_.set_log_sink(
+        [this](const LogRecord& r) {
+          fmt::print(out_, "[cycle {:>8}]   chip: {}\n", r.cycle, r.text);
+        },
+        LogLevel::info);
   }
 
   std::uint8_t read(RegId id, int byte = 0) {
