@@ -11,6 +11,7 @@
 #include <span>
 
 #include "dpc31/dpc31_hal.h"
+#include "dpc31/dpc31_version.h"
 #include "harness.hpp"
 
 struct dpc31_chip {
@@ -380,5 +381,8 @@ void dpc31_set_port_callback(dpc31_chip* chip, dpc31_port_fn fn, void* user) {
 void dpc31_set_error_handler(dpc31_error_fn fn) {
   dpc31::hal::g_error = fn != nullptr ? fn : dpc31::hal::default_error;
 }
+
+// The header's version as compiled into this library (dpc31_version.h).
+const char* dpc31emu_version(void) { return DPC31EMU_VERSION_STRING; }
 
 }  // extern "C"

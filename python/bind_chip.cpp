@@ -10,6 +10,7 @@
 
 #include "bind.hpp"
 #include "cleanup.hpp"
+#include "dpc31/dpc31_version.h"
 #include "dpc31/snapshot.hpp"
 #include "firmware_host.hpp"
 #include "vocabulary.hpp"
@@ -871,6 +872,8 @@ void name_int_arguments(const py::module_& m) {
 
 PYBIND11_MODULE(_dpc31, m) {
   m.doc() = "dpc31emu: the SPC3 / VPC3+ / DPC31 PROFIBUS-DP slave ASICs, cycle-accurate";
+  // dpc31.__version__: the loaded libdpc31emu.so's, not this module's build (docs/python.md).
+  m.attr("__version__") = dpc31emu_version();
   // No output's temporary outlives the script: a SIGTERM or SIGHUP the script has no handler of
   // its own for, and its exit, remove what is unfinished (Python need not destroy a Segment
   // that an uncaught exception's traceback still holds).

@@ -2,12 +2,14 @@
 # `cmake --install` into a fresh prefix puts it in lib/python3/dist-packages/dpc31 (no
 # LD_LIBRARY_PATH: the module finds libdpc31emu.so by its RPATH); the system python3 imports it
 # from there and runs issue 32's command and a firmware plug-in from the prefix to
-# Data_Exchange. Then the .deb's layout: what `cpack -G DEB` packs is this install with the
-# prefix /usr (CPACK_PACKAGING_INSTALL_PREFIX), so an install to DESTDIR with --prefix /usr must
-# put the module where Debian's python3 looks (/usr/lib/python3/dist-packages) and work from
-# there. -DDEB=ON also builds the .deb and looks into it (minutes: not in CTest). Any failing
+# Data_Exchange, and prints dpc31.__version__. Then the .deb's layout: what `cpack -G DEB` packs
+# is this install with the prefix /usr (CPACK_PACKAGING_INSTALL_PREFIX), so an install to DESTDIR
+# with --prefix /usr must put the module where Debian's python3 looks
+# (/usr/lib/python3/dist-packages) and work from there. -DDEB=ON also builds the .deb and looks
+# into it (minutes: not in CTest). Any failing
 # step fails the test.
-#   cmake -DBUILD_DIR=... -DWORK_DIR=... -DPYTHON=... -DLIBDIR=... -DDEB=ON|OFF -P check_install.cmake
+#   cmake -DBUILD_DIR=... -DWORK_DIR=... -DPYTHON=... -DLIBDIR=... -DVERSION=... -DDEB=ON|OFF
+#         -P check_install.cmake
 include(${CMAKE_CURRENT_LIST_DIR}/../packaging/install_test_common.cmake)
 set(site ${prefix}/lib/python3/dist-packages)
 foreach(f dpc31/__init__.py dpc31/__init__.pyi dpc31/client.py dpc31/py.typed)
@@ -33,6 +35,13 @@ print(dpc31.__file__, fw.name, m.chip.dp_state.name)
 run(${PYTHON} ${WORK_DIR}/plugin.py)
 if(NOT out MATCHES "^${site}/dpc31/__init__.py DO4 Data_Exchange\n$")
   message(FATAL_ERROR "the installed module with the installed DO4 plug-in printed '${out}'")
+endif()
+
+# dpc31.__version__: the loaded libdpc31emu.so's, the project's version (project(VERSION)).
+file(WRITE ${WORK_DIR}/version.py "import dpc31\nprint(dpc31.__version__)\n")
+run(${PYTHON} ${WORK_DIR}/version.py)
+if(NOT out STREQUAL "${VERSION}\n")
+  message(FATAL_ERROR "dpc31.__version__ is '${out}', want '${VERSION}'")
 endif()
 
 set(ENV{DESTDIR} ${WORK_DIR}/root)

@@ -22,7 +22,8 @@ __all__ = [
 
 
 def __getattr__(name: str) -> Any:
-    if name not in __all__:
+    # __version__ is the loaded libdpc31emu.so's version ("0.1.0"), from the native module.
+    if name not in __all__ and name != "__version__":
         raise AttributeError(f"module 'dpc31' has no attribute '{name}'")
     if name == "run_scenario":
         value: Any = _run_scenario

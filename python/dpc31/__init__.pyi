@@ -4,6 +4,8 @@ import enum
 import os
 from typing import Callable, Dict, List, Optional, Sequence, Tuple, Union
 
+__version__: str
+
 class Error(RuntimeError): ...
 class SnapshotError(Error): ...
 class ScenarioError(Error):

@@ -22,6 +22,7 @@
 #include "cosim.hpp"
 #include "demo.hpp"
 #include "dpc31/chip.hpp"
+#include "dpc31/dpc31_version.h"
 #include "numbers.hpp"
 #include "path_option.hpp"
 #include "regfmt.hpp"
@@ -87,7 +88,7 @@ int main(int argc, char** argv) {
   using dpc31::outfile::Use;
   CLI::App app{"dpc31emu: cycle-accurate emulator of the Siemens DPC31, SPC3 and VPC3+"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "dpc31 " DPC31_VERSION, "print the version and exit");
+  app.set_version_flag("--version", "dpc31 " DPC31EMU_VERSION_STRING, "print the version and exit");
   const std::vector<std::string> profiles = {"spc3", "vpc3plus", "dpc31"};
 
   std::string demo_profile = "dpc31";
