@@ -108,8 +108,12 @@ class BusCheck {
     std::uint64_t end;
   };
   std::optional<Pending> pending_;  // a request waiting for its answer
+  // Who holds the token and how long (docs/segment.md, "The token"), for a request or token `f`.
+  void token_rules(const LineTelegram& t, const fdl::Frame& f);
   // The token to `holder` at `at` (`rotated`: by an SD4; else claimed, no rotation before).
   void arrive(std::uint8_t holder, std::uint64_t at, bool rotated);
+  // `holder` holds the token from `at`, after a rotation time `trr` (cycles).
+  void hold_from(std::uint8_t holder, std::uint64_t at, std::uint64_t trr);
 
   static constexpr std::uint64_t kNever = UINT64_MAX;
   std::optional<std::uint8_t> holder_;        // who holds the token
@@ -118,6 +122,11 @@ class BusCheck {
   std::uint64_t hold_ = 0;                    // its TTH = TTR - TRR (0: a late token), in cycles
   bool held_cycle_started_ = false;           // the holder started a message cycle since then
   std::array<std::uint64_t, 256> arrived_{};  // each master's last arrival (kNever: none)
+  struct Pass {
+    std::uint8_t to;
+    std::uint64_t end;
+  };
+  std::optional<Pass> passing_;  // a token passed, not yet taken (its addressee silent so far)
 };
 
 }  // namespace dpc31
