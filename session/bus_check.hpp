@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "dpc31/fdl.hpp"
@@ -73,6 +74,9 @@ class BusCheck {
   void collision(const Collision& c, const std::string& first, const std::string& second);
   // The line is idle up to `now` (a token lost is found once TTO has passed without a telegram).
   void idle_until(std::uint64_t now);
+  // The rules from now on, the counts and the token's state kept (Python's check_bus follows the
+  // masters added after it: their addresses, slot time and TTR where the call gave none).
+  void retime(BusTiming timing) { timing_ = std::move(timing); }
   // Hands the sink what the limiter still owes.
   void flush();
   // A line of another source goes into the same log now (the limiter's end_repeats): the note of
