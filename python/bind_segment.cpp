@@ -119,9 +119,10 @@ std::string ttr_differs(U8 address, U64 ttr, const std::vector<U8>& addresses,
                         const std::vector<U64>& ttrs, std::size_t before) {
   for (std::size_t i = 0; i < before; ++i) {
     if (ttr != 0 && ttrs[i] != 0 && ttrs[i] != ttr) {
-      return fmt::format("master {}: ttr={} differs from master {}'s ttr={}: give the bus "
-                         "check's TTR (check_bus(ttr=BITS))",
-                         address, ttr, addresses[i], ttrs[i]);
+      return fmt::format(
+          "master {}: ttr={} differs from master {}'s ttr={}: give the bus "
+          "check's TTR (check_bus(ttr=BITS))",
+          address, ttr, addresses[i], ttrs[i]);
     }
   }
   return {};
@@ -237,8 +238,9 @@ class PySegment {
     } else if (addresses.size() > 1) {
       for (const U64 t : master_ttrs) ttr = t != 0 ? t : ttr;
     }
-    return BusTiming{seg.bit_cycles(), a.min_tsdr_bits, a.slot_bits.value_or(master_slot_bits),
-                     a.tsyn_bits,      ttr,             addresses};
+    return BusTiming{
+        seg.bit_cycles(), a.min_tsdr_bits, a.slot_bits.value_or(master_slot_bits), a.tsyn_bits, ttr,
+        addresses};
   }
   Chip& chip(const PyStation& s) {
     enter();
@@ -791,9 +793,9 @@ void bind_segment_class(py::module_& m) {
             }
             const std::uint32_t slot = a.slot_bits.value_or(s.master_slot_bits);
             if (a.min_tsdr_bits > slot) {
-              throw py::value_error(fmt::format(
-                  "min_tsdr_bits {} above the slot time {}: no answer could be in time",
-                  a.min_tsdr_bits, slot));
+              throw py::value_error(
+                  fmt::format("min_tsdr_bits {} above the slot time {}: no answer could be in time",
+                              a.min_tsdr_bits, slot));
             }
             // The masters' own slot time by default: an answer a master waits for and takes is
             // neither late nor unsolicited (a segment scenario shares `s.slot_bits` so).

@@ -108,16 +108,16 @@ void BusCheck::collision(const Collision& c, const std::string& first, const std
   // all; after that window (a station answering after TSL + TSYN drives into the asker's next
   // request), or with no request waiting, nobody asked for it.
   if (c.cycle < watched_from_) return;
-  if (pending_ && (c.cycle < pending_->end ||
-                   answers_request(timing_, c.cycle - pending_->end, false, false)))
+  if (pending_ &&
+      (c.cycle < pending_->end || answers_request(timing_, c.cycle - pending_->end, false, false)))
     return;
-  violation(BusViolation::unsolicited, c.cycle,
-            pending_ ? fmt::format("a telegram from {} nobody asked for, begun {} bit times after "
-                                   "the request to station {} (slot time {}), lost in the collision",
-                                   second, (c.cycle - pending_->end) / timing_.bit_cycles,
-                                   pending_->request.da, timing_.slot_bits)
-                     : fmt::format("a telegram from {} nobody asked for, lost in the collision",
-                                   second));
+  violation(
+      BusViolation::unsolicited, c.cycle,
+      pending_ ? fmt::format("a telegram from {} nobody asked for, begun {} bit times after "
+                             "the request to station {} (slot time {}), lost in the collision",
+                             second, (c.cycle - pending_->end) / timing_.bit_cycles,
+                             pending_->request.da, timing_.slot_bits)
+               : fmt::format("a telegram from {} nobody asked for, lost in the collision", second));
 }
 
 // An SC carries no address: its sender is named, as short_tsyn names it.
