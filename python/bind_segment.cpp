@@ -104,6 +104,31 @@ void look_at_segment(const RunState& run) {
   enter_run(run, false, "segment", "history, counters, ...", "run it");
 }
 
+// check_bus's arguments as given; none: the masters' (their addresses, largest slot time, and
+// with two or more of them the TTR they obey), followed as masters join.
+struct CheckArgs {
+  std::optional<U64> ttr;
+  std::optional<std::uint32_t> slot_bits;
+  std::uint32_t min_tsdr_bits = 11;
+  std::uint32_t tsyn_bits = 33;
+  std::optional<std::vector<U8>> masters;
+};
+
+// A master's ttr= beside the masters' before it, where the bus check takes its TTR from them: a
+// scenario's `master` line refuses a second TTR so (docs/scenario-format.md, `segment`); "" fits.
+std::string ttr_differs(U8 address, U64 ttr, const std::vector<U8>& addresses,
+                        const std::vector<U64>& ttrs, std::size_t before) {
+  for (std::size_t i = 0; i < before; ++i) {
+    if (ttr != 0 && ttrs[i] != 0 && ttrs[i] != ttr) {
+      return fmt::format(
+          "master {}: ttr={} differs from master {}'s ttr={}: give the bus "
+          "check's TTR (check_bus(ttr=BITS))",
+          address, ttr, addresses[i], ttrs[i]);
+    }
+  }
+  return {};
+}
+
 // A bus check as Python holds it: shared with its segment, so one that a second check_bus()
 // replaced keeps the counts it had (it sees no telegram after), never freed memory; its counts
 // are the segment's running state.
@@ -204,6 +229,20 @@ class PySegment {
   }
   // Shared with the stations' user sides (user_side_runs_with).
   [[nodiscard]] const std::shared_ptr<RunState>& run_state() const { return run_; }
+  // The bus check's timing from check_args and the masters added so far.
+  [[nodiscard]] BusTiming check_timing() const {
+    const CheckArgs& a = check_args;
+    const std::vector<U8> addresses = a.masters.value_or(master_addresses);
+    U64 ttr = 0;
+    if (a.ttr) {
+      ttr = *a.ttr;
+    } else if (addresses.size() > 1) {
+      for (const U64 t : master_ttrs) ttr = t != 0 ? t : ttr;
+    }
+    return BusTiming{
+        seg.bit_cycles(), a.min_tsdr_bits, a.slot_bits.value_or(master_slot_bits), a.tsyn_bits, ttr,
+        addresses};
+  }
   Chip& chip(const PyStation& s) {
     enter();
     return seg.chip(s.index);
@@ -213,8 +252,10 @@ class PySegment {
   std::uint32_t baud;
   std::vector<std::unique_ptr<PyStation>> stations;
   std::vector<U8> master_addresses;
+  std::vector<U64> master_ttrs;          // each master's ttr= (0: none), as master_addresses
   std::uint32_t master_slot_bits = 100;  // the largest TSL of the masters added (100: none yet)
   std::shared_ptr<BusCheck> check;       // shared with the BusChecks Python holds
+  CheckArgs check_args;                  // what check_bus was given (the rest: the masters')
   std::vector<std::string> check_log;
   std::shared_ptr<py::object> telegram_cb;
   std::shared_ptr<py::object> collision_cb;
@@ -265,7 +306,9 @@ struct PySegMaster {
     s.master_slot_bits =
         s.master_addresses.empty() ? mc.slot_bits : std::max(s.master_slot_bits, mc.slot_bits);
     s.master_addresses.push_back(mc.address);
+    s.master_ttrs.push_back(mc.ttr_bits);
     if (s.outputs) s.outputs->pair_within(s.master_slot_bits);
+    if (s.check) s.check->retime(s.check_timing());  // a check running follows the masters
   }
   template <typename F>
   auto act(F&& f) {
@@ -339,6 +382,9 @@ void bind_line(py::module_& m) {
             return py::int_(t.fault.char_index);
           },
           "the index of that character; None: every character good")
+      .def_readonly("collided", &LineTelegram::collided,
+                    "the rest of a telegram a collision cut (its sender drove into another's): "
+                    "no telegram of its own to the bus check and the capture")
       .def("__repr__", [](const LineTelegram& t) {
         return "<LineTelegram from " + std::to_string(t.from) + " at " + std::to_string(t.start) +
                ", " + std::to_string(t.bytes.size()) + " bytes>";
@@ -348,9 +394,9 @@ void bind_line(py::module_& m) {
       .def_readonly("first", &Collision::first)
       .def_readonly("second", &Collision::second);
   py::class_<TokenVisit>(m, "TokenVisit", "What one visit of the token did (use_token).")
-      .def_readonly("arrived", &TokenVisit::arrived)
-      .def_readonly("rotation", &TokenVisit::rotation)
-      .def_readonly("hold", &TokenVisit::hold)
+      .def_readonly("arrived", &TokenVisit::arrived, "the token's arrival, a cycle of the line")
+      .def_readonly("rotation", &TokenVisit::rotation, "TRR in clock cycles (0: the ring's first)")
+      .def_readonly("hold", &TokenVisit::hold, "TTH = TTR - TRR in clock cycles (0: a late token)")
       .def_readonly("polled", &TokenVisit::polled)
       .def_readonly("startup", &TokenVisit::startup)
       .def_readonly("gap", &TokenVisit::gap)
@@ -647,6 +693,11 @@ void bind_segment_class(py::module_& m) {
               if (!e.empty()) throw py::value_error(e);
             }
             std::vector<SlaveConfig> sl = slaves_of(s, slaves);
+            if (s.check && !s.check_args.ttr) {
+              const std::string e = ttr_differs(mc.address, mc.ttr_bits, s.master_addresses,
+                                                s.master_ttrs, s.master_addresses.size());
+              if (!e.empty()) throw py::value_error(e);
+            }
             try {
               return std::make_unique<PySegMaster>(std::move(self), mc, std::move(sl));
             } catch (const std::invalid_argument& e) {
@@ -722,23 +773,41 @@ void bind_segment_class(py::module_& m) {
           "time; the segment runs on without them.")
       .def(
           "check_bus",
-          [](P& s, U64 ttr, const std::optional<std::int64_t>& slot_bits,
-             std::uint32_t min_tsdr_bits, std::uint32_t tsyn_bits,
-             const std::optional<std::vector<std::int64_t>>& masters) {
+          [](P& s, const std::optional<std::int64_t>& ttr,
+             const std::optional<std::int64_t>& slot_bits, const py::int_& min_tsdr_bits,
+             const py::int_& tsyn_bits, const std::optional<std::vector<std::int64_t>>& masters) {
             s.enter();
-            // The ranges of a segment scenario's `segment slot=` and of a master's address.
-            const std::uint32_t slot =
-                slot_bits ? in_range<std::uint32_t>(named(kSlotBits, "slot_bits"), *slot_bits)
-                          : s.master_slot_bits;
-            std::vector<U8> addresses = s.master_addresses;
+            // The ranges of a segment scenario's `segment ttr=` (0: none) and `slot=`, of a
+            // station's min_tsdr= and a master's idle time (TSYN) and address.
+            CheckArgs a;
+            if (ttr) a.ttr = *ttr == 0 ? 0 : in_range<U64>(kTtrBits, *ttr);
+            if (slot_bits)
+              a.slot_bits = in_range<std::uint32_t>(named(kSlotBits, "slot_bits"), *slot_bits);
+            a.min_tsdr_bits =
+                in_range<std::uint32_t>(named(kMinTsdr, "min_tsdr_bits"), min_tsdr_bits);
+            a.tsyn_bits = in_range<std::uint32_t>(named(kIdleBits, "tsyn_bits"), tsyn_bits);
             if (masters) {
-              addresses.clear();
-              for (const std::int64_t a : *masters)
-                addresses.push_back(in_range<U8>(kMasterAddress, a));
+              a.masters.emplace();
+              for (const std::int64_t m : *masters)
+                a.masters->push_back(in_range<U8>(kMasterAddress, m));
+            }
+            if (!a.ttr) {
+              for (std::size_t i = 0; i < s.master_addresses.size(); ++i) {
+                const std::string e = ttr_differs(s.master_addresses[i], s.master_ttrs[i],
+                                                  s.master_addresses, s.master_ttrs, i);
+                if (!e.empty()) throw py::value_error(e);
+              }
+            }
+            const std::uint32_t slot = a.slot_bits.value_or(s.master_slot_bits);
+            if (a.min_tsdr_bits > slot) {
+              throw py::value_error(
+                  fmt::format("min_tsdr_bits {} above the slot time {}: no answer could be in time",
+                              a.min_tsdr_bits, slot));
             }
             // The masters' own slot time by default: an answer a master waits for and takes is
             // neither late nor unsolicited (a segment scenario shares `s.slot_bits` so).
-            BusTiming t{s.seg.bit_cycles(), min_tsdr_bits, slot, tsyn_bits, ttr, addresses};
+            s.check_args = std::move(a);
+            const BusTiming t = s.check_timing();
             s.check_log.clear();
             s.check = std::make_shared<BusCheck>(t, [&s](const LogRecord& r) {
               s.check_log.push_back("[cycle " + std::to_string(r.cycle) + "] " + r.text);
@@ -746,11 +815,13 @@ void bind_segment_class(py::module_& m) {
             s.check->watch_from(s.seg.cycle());
             return PyBusCheck{s.check, s.run_state()};
           },
-          py::kw_only(), py::arg("ttr") = 0, py::arg("slot_bits") = py::none(),
+          py::kw_only(), py::arg("ttr") = py::none(), py::arg("slot_bits") = py::none(),
           py::arg("min_tsdr_bits") = 11, py::arg("tsyn_bits") = 33, py::arg("masters") = py::none(),
           "The bus check on every telegram from now on (masters: the masters' addresses, for the "
-          "token checks and TTO; default those added, none: no token checks; slot_bits: TSL, "
-          "default the largest of the masters added, 100 without one; TTR 0: no token_hold).")
+          "token checks and TTO; default those added, now and later, none: no token checks; "
+          "slot_bits: TSL, default the largest of the masters added, 100 without one; ttr: TTR "
+          "in bit times, default the ttr= of the masters added with two or more, 0: no "
+          "token_hold).")
       .def_property_readonly("bus_check",
                              [](const P& s) -> std::optional<PyBusCheck> {
                                if (!s.check) return std::nullopt;

@@ -91,7 +91,9 @@ void BusCheck::idle_until(std::uint64_t now) {
   const std::uint64_t due = *last_end_ + token_lost_timeout();
   if (now < due) return;
   token_lost_reported_ = true;
+  // The token is gone: the next request or token claims a new one (no hold of the old counts).
   holder_.reset();
+  passing_.reset();
   violation(BusViolation::token_lost, due,
             fmt::format("the line idle for TTO ({} bit times) since cycle {}",
                         token_lost_timeout() / timing_.bit_cycles, *last_end_));
@@ -100,6 +102,22 @@ void BusCheck::idle_until(std::uint64_t now) {
 void BusCheck::collision(const Collision& c, const std::string& first, const std::string& second) {
   violation(BusViolation::collision, c.cycle,
             fmt::format("{} drove the line while {} had it", second, first));
+  // The second driver's telegram is lost in it (what is heard of it after is its rest,
+  // LineTelegram::collided, no telegram of its own): it is judged by its start alone. Inside the
+  // answer window of the request waiting then it may have been the answer, and the collision says
+  // all; after that window (a station answering after TSL + TSYN drives into the asker's next
+  // request), or with no request waiting, nobody asked for it.
+  if (c.cycle < watched_from_) return;
+  if (pending_ &&
+      (c.cycle < pending_->end || answers_request(timing_, c.cycle - pending_->end, false, false)))
+    return;
+  violation(
+      BusViolation::unsolicited, c.cycle,
+      pending_ ? fmt::format("a telegram from {} nobody asked for, begun {} bit times after "
+                             "the request to station {} (slot time {}), lost in the collision",
+                             second, (c.cycle - pending_->end) / timing_.bit_cycles,
+                             pending_->request.da, timing_.slot_bits)
+               : fmt::format("a telegram from {} nobody asked for, lost in the collision", second));
 }
 
 // An SC carries no address: its sender is named, as short_tsyn names it.
@@ -149,13 +167,59 @@ void BusCheck::answer(const LineTelegram& t, const fdl::Frame& f, bool ok,
 // token"); a late token (TRR >= TTR) allows the visit's first cycle only.
 void BusCheck::arrive(std::uint8_t holder, std::uint64_t at, bool rotated) {
   std::uint64_t& before = arrived_[holder];
-  trr_ = rotated && before != kNever ? at - before : 0;
+  hold_from(holder, at, rotated && before != kNever ? at - before : 0);
+  before = at;
+}
+
+void BusCheck::hold_from(std::uint8_t holder, std::uint64_t at, std::uint64_t trr) {
+  trr_ = trr;
   const std::uint64_t ttr = bits(timing_.ttr_bits);
   hold_ = trr_ < ttr ? ttr - trr_ : 0;
-  before = at;
   holder_ = holder;
   token_at_ = at;
   held_cycle_started_ = false;
+  passing_.reset();
+}
+
+// EN 50170 / IEC 61158-4-3 token passing: the passer watches the line for the slot time; when the
+// addressee shows no activity it passes the token again, or to the station after. So a token
+// passed is taken at its addressee's first request or token (arriving at the SD4's end, as
+// DpMaster::wait_token takes it); until then the passer holds it, and its retry or its pass to
+// another station once the slot time has passed is no second token (before, the addressee may
+// still begin).
+void BusCheck::token_rules(const LineTelegram& t, const fdl::Frame& f) {
+  if (passing_ && f.sa == passing_->to) arrive(f.sa, passing_->end, true);
+  if (holder_ && f.sa != *holder_) {
+    violation(BusViolation::duplicate_token, t.start,
+              fmt::format("station {} sent while station {} holds the token", f.sa, *holder_));
+  } else if (passing_ && t.start < passing_->end + bits(timing_.slot_bits)) {
+    violation(BusViolation::duplicate_token, t.start,
+              fmt::format("station {} sent {} bit times after its token to station {}, inside the "
+                          "slot time ({}) in which that station may take it",
+                          f.sa, (t.start - passing_->end) / timing_.bit_cycles, passing_->to,
+                          timing_.slot_bits));
+  } else if (holder_ && timing_.ttr_bits != 0 && !is_token(f) && held_cycle_started_ &&
+             t.start >= token_at_ + hold_) {
+    violation(BusViolation::token_hold, t.start,
+              fmt::format("station {} started a message cycle {} bit times after it got the "
+                          "token (TTH {} = TTR {} - TRR {})",
+                          f.sa, (t.start - token_at_) / timing_.bit_cycles,
+                          hold_ / timing_.bit_cycles, timing_.ttr_bits, trr_ / timing_.bit_cycles));
+  }
+  // A claimed token: held from the TSYN its first request or token waited, no rotation before.
+  // A claim by a token is no arrival (DpMaster::pass_token measures no TRR from it).
+  const std::uint64_t claimed = t.start - std::min(t.start, bits(timing_.tsyn_bits));
+  if (is_token(f)) {
+    if (!holder_) hold_from(f.sa, claimed, 0);
+    if (f.da == f.sa) {
+      arrive(f.sa, t.end, true);  // a master alone takes its own token at the SD4's end
+    } else {
+      passing_ = Pass{f.da, t.end};
+    }
+  } else {
+    if (!holder_) arrive(f.sa, claimed, false);
+    held_cycle_started_ = true;
+  }
 }
 
 void BusCheck::telegram(const LineTelegram& t, const std::string& sender) {
@@ -167,6 +231,11 @@ void BusCheck::telegram(const LineTelegram& t, const std::string& sender) {
   }
   idle_until(t.start);
   token_lost_reported_ = false;
+  if (t.collided) {
+    // The rest of a telegram lost in a collision: judged there (collision), counted once.
+    last_end_ = t.end;
+    return;
+  }
   const fdl::Decoded d = fdl::decode(t.bytes);
   // A broken character breaks the telegram whatever its bytes read (a chip discards it).
   const bool chars_ok = t.fault.kind == UartFault::Kind::none;
@@ -194,29 +263,7 @@ void BusCheck::telegram(const LineTelegram& t, const std::string& sender) {
                             (t.start - *last_end_) / timing_.bit_cycles, timing_.tsyn_bits));
     }
     // Who holds the token needs only the masters; how long it may hold it, their TTR.
-    if (!timing_.masters.empty()) {
-      if (holder_ && d.frame.sa != *holder_) {
-        violation(
-            BusViolation::duplicate_token, t.start,
-            fmt::format("station {} sent while station {} holds the token", d.frame.sa, *holder_));
-      } else if (timing_.ttr_bits != 0 && !is_token(d.frame) && held_cycle_started_ &&
-                 t.start >= token_at_ + hold_) {
-        violation(
-            BusViolation::token_hold, t.start,
-            fmt::format("station {} started a message cycle {} bit times after it got the "
-                        "token (TTH {} = TTR {} - TRR {})",
-                        d.frame.sa, (t.start - token_at_) / timing_.bit_cycles,
-                        hold_ / timing_.bit_cycles, timing_.ttr_bits, trr_ / timing_.bit_cycles));
-      }
-      if (is_token(d.frame)) {
-        arrive(d.frame.da, t.end, true);
-      } else {
-        // A claimed token: held from the TSYN its first request waited, with no rotation before.
-        if (!holder_)
-          arrive(d.frame.sa, t.start - std::min(t.start, bits(timing_.tsyn_bits)), false);
-        held_cycle_started_ = true;
-      }
-    }
+    if (!timing_.masters.empty()) token_rules(t, d.frame);
     if (wants_answer(d.frame)) pending_ = Pending{d.frame, t.end};
   }
   last_end_ = t.end;

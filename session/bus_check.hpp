@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "dpc31/fdl.hpp"
@@ -73,6 +74,9 @@ class BusCheck {
   void collision(const Collision& c, const std::string& first, const std::string& second);
   // The line is idle up to `now` (a token lost is found once TTO has passed without a telegram).
   void idle_until(std::uint64_t now);
+  // The rules from now on, the counts and the token's state kept (Python's check_bus follows the
+  // masters added after it: their addresses, slot time and TTR where the call gave none).
+  void retime(BusTiming timing) { timing_ = std::move(timing); }
   // Hands the sink what the limiter still owes.
   void flush();
   // A line of another source goes into the same log now (the limiter's end_repeats): the note of
@@ -108,8 +112,12 @@ class BusCheck {
     std::uint64_t end;
   };
   std::optional<Pending> pending_;  // a request waiting for its answer
+  // Who holds the token and how long (docs/segment.md, "The token"), for a request or token `f`.
+  void token_rules(const LineTelegram& t, const fdl::Frame& f);
   // The token to `holder` at `at` (`rotated`: by an SD4; else claimed, no rotation before).
   void arrive(std::uint8_t holder, std::uint64_t at, bool rotated);
+  // `holder` holds the token from `at`, after a rotation time `trr` (cycles).
+  void hold_from(std::uint8_t holder, std::uint64_t at, std::uint64_t trr);
 
   static constexpr std::uint64_t kNever = UINT64_MAX;
   std::optional<std::uint8_t> holder_;        // who holds the token
@@ -118,6 +126,11 @@ class BusCheck {
   std::uint64_t hold_ = 0;                    // its TTH = TTR - TRR (0: a late token), in cycles
   bool held_cycle_started_ = false;           // the holder started a message cycle since then
   std::array<std::uint64_t, 256> arrived_{};  // each master's last arrival (kNever: none)
+  struct Pass {
+    std::uint8_t to;
+    std::uint64_t end;
+  };
+  std::optional<Pass> passing_;  // a token passed, not yet taken (its addressee silent so far)
 };
 
 }  // namespace dpc31

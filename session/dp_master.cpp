@@ -247,7 +247,9 @@ Exchange DpMaster::pass_token(std::uint8_t next) {
 TokenVisit DpMaster::use_token(std::uint8_t next,
                                const std::vector<std::vector<std::uint8_t>>& outputs) {
   check_outputs(outputs);
-  if (!holding_) {  // claimed: no rotation before it; held from TSYN before its first request
+  // A token to this master already on the line is taken (as wait_token takes it); without one
+  // the master claims the token: no rotation before it; held from TSYN before its first request.
+  if (!holding_ && !wait_token(0)) {
     token_at_ = send_time(now(), cfg_.idle_bits) - std::uint64_t{cfg_.idle_bits} * t_;
     trr_ = 0;
     holding_ = true;

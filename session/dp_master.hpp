@@ -225,7 +225,8 @@ class DpMaster {
   // TRR: the real rotation time measured at the last token received (0 before the second).
   [[nodiscard]] std::uint64_t token_rotation() const { return trr_; }
   // One visit of the token (docs/segment.md, "The token"), once this master holds it (after
-  // wait_token, or now, claiming it: the ring starts here, TRR 0): Data_Exchange with its slaves
+  // wait_token; a token to it already on the line is taken as wait_token takes it; else now,
+  // claiming it: the ring starts here, TRR 0): Data_Exchange with its slaves
   // in turn, from where the last visit stopped, each a high-priority message cycle that starts
   // only while the rotation time since the token before is under TTR (the first cycle of a visit
   // always: a late token allows that one only); every G visits, while time remains, one address

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <map>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -295,17 +296,20 @@ class SegmentRun {
     states_in_order();
   }
 
-  // Each master in turn, the token passed on after it (with several masters): `work(m, next)`
-  // does master m's part and returns whether it passed the token to `next` itself.
+  // Each master in turn from the one that holds the token, the token passed on after it (with
+  // several masters): `work(m, next)` does master m's part and returns whether it passed the
+  // token to `next` itself.
   template <typename Work>
   void rotation(Work work) {
-    const bool ring = masters_.size() > 1;
-    for (std::size_t m = 0; m < masters_.size(); ++m) {
-      if (ring && m > 0) masters_[m]->wait_token(token_wait());
-      const std::uint8_t next = masters_[(m + 1) % masters_.size()]->address();
+    const std::size_t n = masters_.size();
+    const bool ring = n > 1;
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::size_t m = (holder_ + k) % n;
+      if (ring && k > 0) masters_[m]->wait_token(token_wait());
+      const std::uint8_t next = masters_[(m + 1) % n]->address();
       if (!work(m, next) && ring) masters_[m]->pass_token(next);
     }
-    if (ring) masters_[0]->wait_token(token_wait());
+    if (ring) masters_[holder_]->wait_token(token_wait());
   }
   std::uint64_t token_wait() const { return std::uint64_t{s_.slot_bits} * 300 * seg_.bit_cycles(); }
 
@@ -343,21 +347,30 @@ class SegmentRun {
         seg_.send(senders_.at(st.name), st.bytes, seg_.cycle() + st.time);
         seg_.run_until(seg_.cycle() + st.bytes.size() * 11 * seg_.bit_cycles());
         break;
-      case K::pass_token:
-        master(st.address).pass_token(st.station);
+      case K::pass_token: {
+        // A master among the scenario's takes the token (the next rotation starts there); another
+        // address shows no activity, and the passer keeps it (EN 50170: nobody took it).
+        holder_ = master_index(st.address).value();  // the parser refuses another
+        masters_[holder_]->pass_token(st.station);
+        if (const auto to = master_index(st.station); to && *to != holder_) {
+          masters_[*to]->wait_token(token_wait());
+          holder_ = *to;
+        }
         quiet();
         break;
+      }
       default:
         check(st);
     }
     forget();
   }
 
-  DpMaster& master(std::uint8_t address) {
+  // The index of the master of `address` in masters_ (none: no master there).
+  std::optional<std::size_t> master_index(std::uint8_t address) const {
     const auto m = std::find_if(masters_.begin(), masters_.end(),
                                 [address](const auto& dm) { return dm->address() == address; });
-    if (m == masters_.end()) throw std::invalid_argument(fmt::format("no master {}", address));
-    return **m;
+    if (m == masters_.end()) return std::nullopt;
+    return static_cast<std::size_t>(m - masters_.begin());
   }
 
   // Nothing here reads the masters' histories nor what a firmware wrote to its ports or took as
@@ -531,6 +544,7 @@ class SegmentRun {
   std::vector<std::unique_ptr<Station>> stations_;
   std::map<std::string, std::size_t> senders_;
   std::vector<std::unique_ptr<DpMaster>> masters_;
+  std::size_t holder_ = 0;  // the master that holds the token: a rotation starts there
   std::vector<std::optional<TokenVisit>> visits_;  // each master's last visit of the token
   std::map<std::uint8_t, std::uint64_t> last_request_;
   // The first start bit and the end of the last answer a chip decided to send.

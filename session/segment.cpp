@@ -633,6 +633,8 @@ void Segment::line_chars(std::span<const std::uint8_t> data, std::uint64_t start
     open_.start = start;
     open_.bytes.clear();  // its memory kept: no allocation per telegram
     open_.fault = {};
+    // A burst's falling edges come at most a character time apart (Segment::collide).
+    open_.collided = start <= stations_[from]->colliding_until;
   }
   if (bad != UartFault::Kind::none && open_.fault.kind == UartFault::Kind::none)
     open_.fault = {static_cast<int>(open_.bytes.size()), bad};

@@ -28,12 +28,16 @@ namespace dpc31 {
 // broken character as the line's receiver read it (its index and the first error sampled: start
 // bit, parity, stop bit, as a chip counts them; kind none: every character good). A chip
 // discards such a telegram (docs/timing.md "Telegrams"), so the bus check and the capture do.
+// `collided`: its first character went on from a burst of its sender that drove into another's
+// telegram (a Collision's second driver): the rest of a telegram the collision cut, no telegram
+// of its own to the bus check and the capture.
 struct LineTelegram {
   std::size_t from = 0;
   std::uint64_t start = 0;
   std::uint64_t end = 0;
   std::vector<std::uint8_t> bytes;
   UartFault fault;
+  bool collided = false;
 };
 
 struct Collision {

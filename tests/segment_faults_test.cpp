@@ -383,6 +383,8 @@ TEST(SegmentFaults, ADuplicateToken) {
 // whether or not the station is one of the masters named (EN 50170: a station that sends a token
 // or a request acts as a master; docs/segment.md, `duplicate_token`). Master 2 passes the token
 // to 3 (3 characters: 33 bit times from 100); 9, no master named, sends a request TSYN later.
+// 3 has shown no activity: master 2 still holds the token (until the thirty-fourth session the
+// line named 3, which had not taken it).
 TEST(SegmentFaults, ARequestFromAStationThatIsNoMasterIsADuplicateToken) {
   Faults f(false, kTtr);
   const std::uint64_t end = f.seg.send(f.master, bytes_of(fdl::token(3, 2)), f.bits(100));
@@ -392,7 +394,84 @@ TEST(SegmentFaults, ARequestFromAStationThatIsNoMasterIsADuplicateToken) {
   f.expect_only(BusViolation::duplicate_token, 1);
   ASSERT_EQ(f.log.size(), 1U);
   EXPECT_EQ(f.log[0].cycle, end + f.bits(kTsyn));
-  EXPECT_EQ(f.log[0].text, "bus: duplicate_token: station 9 sent while station 3 holds the token");
+  EXPECT_EQ(f.log[0].text, "bus: duplicate_token: station 9 sent while station 2 holds the token");
+}
+
+// EN 50170 / IEC 61158-4-3 token passing (docs/segment.md, "The token"): the passer watches the
+// line for the slot time after its token; when the addressee shows no activity it passes the
+// token again, or to the station after. Master 2 passes the token to 9 (nobody there: DC 09 02, 33
+// T, from 100 T), again TSL + 1 bit later, then to master 3 (the rogue in its name), which takes
+// it (its own token back to 2, TSYN after). Nothing is a violation (s34 audit aSeg finding 1: the
+// retry and the pass to 3 were each a duplicate_token, 9 said to hold the token).
+TEST(SegmentFaults, ATokenPassedAgainAfterASilentSlotTimeIsNoDuplicateToken) {
+  Faults f(false, kTtr);
+  const std::uint64_t first = f.seg.send(f.master, bytes_of(fdl::token(9, 2)), f.bits(100));
+  const std::uint64_t again =
+      f.seg.send(f.master, bytes_of(fdl::token(9, 2)), first + f.bits(kSlot + 1));
+  const std::uint64_t to3 =
+      f.seg.send(f.master, bytes_of(fdl::token(3, 2)), again + f.bits(kSlot + 1));
+  f.seg.send(f.rogue, bytes_of(fdl::token(2, 3)), to3 + f.bits(kTsyn));
+  f.settle(to3 + f.bits(kTsyn + 33 + 50));
+  EXPECT_EQ(f.check.total(), 0U) << (f.log.empty() ? "" : f.log.front().text);
+}
+
+// The passer's own request inside the slot time after its token is a second token: the addressee
+// may still take it then (master 2's SDN 40 T after its token to 3, slot time 100).
+TEST(SegmentFaults, ThePassersRequestInsideTheSlotTimeIsADuplicateToken) {
+  Faults f(false, kTtr);
+  const std::uint64_t end = f.seg.send(f.master, bytes_of(fdl::token(3, 2)), f.bits(100));
+  f.seg.send(f.master, fdl_status(40, 2), end + f.bits(40));
+  f.settle(end + f.bits(400));
+  f.expect_only(BusViolation::duplicate_token, 1);
+  EXPECT_EQ(f.log[0].cycle, end + f.bits(40));
+  EXPECT_EQ(f.log[0].text,
+            "bus: duplicate_token: station 2 sent 40 bit times after its token to station 3, "
+            "inside the slot time (100) in which that station may take it");
+}
+
+// A lost token is gone (docs/segment.md, "The token"): the same master's next request claims a
+// new one, held from TSYN before it. Master 2 claims with FDL_Status to 40 from 100 T (held from
+// 67 T; 66 T, unanswered), the line idles: token_lost at its end + TTO = 166 + 100 x (6 + 2 x 2) =
+// 1166 T. Its next request at 2100 T is 2033 T after the old claim, past TTH = TTR 2000, but it
+// is a new claim's first cycle (s34 audit aSeg finding 3: it was a token_hold).
+TEST(SegmentFaults, TheRequestAfterALostTokenClaimsAFreshOne) {
+  Faults f(false, kTtr);
+  const std::uint64_t end = f.seg.send(f.master, fdl_status(40, 2), f.bits(100));
+  ASSERT_EQ(end, f.bits(166));
+  f.settle(f.bits(2000));
+  f.seg.send(f.master, fdl_status(40, 2), f.bits(2100));
+  f.settle(f.bits(2400));
+  f.expect_only(BusViolation::token_lost, 1);
+  EXPECT_EQ(f.log[0].cycle, f.bits(1166));
+}
+
+// A station answering after TSL + TSYN drives into its asker's next request, sent then (docs/
+// timing.md "The master's wait"; docs/segment.md "Bus checks"). Master 2 asks 20 (FDL_Status, 66
+// T from 100 T: its end E = 166 T), asks 21 at E + 133 T; the rogue answers for 20 (an SD2 of 17
+// characters) at E + 134 T: a collision there, rogue the second driver, and its telegram, begun
+// 134 T after the request to 20, is unsolicited. What the line hears of it after the request to
+// 21 is its rest, counted no more (s34 audit aSeg finding 4: a bad_frame and an early_answer "to
+// station 21" blamed the late station for answering early).
+TEST(SegmentFaults, AnAnswerAfterTslPlusTsynIsACollisionAndUnsolicitedOnce) {
+  Faults f(false);
+  const std::uint64_t end = f.seg.send(f.master, fdl_status(20, 2), f.bits(100));
+  ASSERT_EQ(end, f.bits(166));
+  f.seg.send(f.master, fdl_status(21, 2), end + f.bits(kSlot + kTsyn));
+  f.seg.send(f.rogue,
+             bytes_of(fdl::make_frame(2, 20, fdl::make_response_fc(fdl::Response::OK),
+                                      {1, 2, 3, 4, 5, 6, 7, 8})),
+             end + f.bits(kSlot + kTsyn + 1));
+  f.settle(end + f.bits(600));
+  ASSERT_EQ(f.seg.collisions().size(), 1U);
+  EXPECT_EQ(f.seg.collisions()[0].cycle, end + f.bits(134));
+  EXPECT_EQ(f.check.count(BusViolation::collision), 1U);
+  EXPECT_EQ(f.check.count(BusViolation::unsolicited), 1U);
+  EXPECT_EQ(f.check.total(), 2U);
+  ASSERT_EQ(f.log.size(), 2U);
+  EXPECT_EQ(f.log[1].cycle, end + f.bits(134));
+  EXPECT_EQ(f.log[1].text,
+            "bus: unsolicited: a telegram from rogue nobody asked for, begun 134 bit times after "
+            "the request to station 20 (slot time 100), lost in the collision");
 }
 
 }  // namespace

@@ -691,6 +691,35 @@ TEST(SegmentScenario, AMasterPassesTheTokenTsynAfterTheTokenItGot) {
   EXPECT_EQ(r.cycle_of("] master 3: DC 02 03"), r.cycle_of("] master 2: DC 03 02") + 66 * 4);
 }
 
+// s34 audit aSeg finding 2: after `pass_token from=2 to=3` master 3 holds the token, so the next
+// rotation is its own (docs/scenario-format.md, `cycle`: token rotations): the step starts at
+// the token's end (the line quiet), master 3 polls 6 TSYN (33 T, 32 clocks each) later, then
+// passes the token to 2, which polls 5. It started with master 2, twice a duplicate_token.
+TEST(SegmentScenario, ACycleAfterPassTokenStartsAtTheMasterThatHoldsIt) {
+  const ScenarioRun r = run_passing(
+      "segment\nstation 5 profile=spc3\nstation 6 profile=dpc31\nmaster 2 slaves=5\n"
+      "master 3 slaves=6\nstartup\ncycle 1\npass_token from=2 to=3\ncycle 1\n"
+      "expect bus_violation duplicate_token 0\n");
+  // Master 3's poll, its token to 2, master 2's poll: in this order, the first TSYN after the step.
+  const std::vector<std::uint64_t> rotation{r.cycle_of("] master 3: 68 07 07 68 06 03 5D"),
+                                            r.cycle_of("] master 3: DC 02 03"),
+                                            r.cycle_of("] master 2: 68 07 07 68 05 02 5D")};
+  EXPECT_EQ(rotation.front(), r.cycle_of("line 9: cycle 1") + 33 * 32);
+  EXPECT_TRUE(std::is_sorted(rotation.begin(), rotation.end()));
+}
+
+// s34 audit aSeg finding 1 from the scenario door: a token passed to an absent station (9) and,
+// after a silent slot time, again, then to master 3 (EN 50170 token passing, docs/segment.md "The
+// token"): master 2 holds the token until 3 takes it, so nothing is a duplicate_token, and the
+// rotation after goes on from 3.
+TEST(SegmentScenario, ATokenPassRetriedAfterTheSlotTimeIsNoDuplicateToken) {
+  run_passing(
+      "segment\nstation 5 profile=spc3\nstation 6 profile=dpc31\nmaster 2 slaves=5\n"
+      "master 3 slaves=6\nstartup\ncycle 1\npass_token from=2 to=9\nrun 100bits\n"
+      "pass_token from=2 to=9\nrun 100bits\npass_token from=2 to=3\ncycle 1\n"
+      "expect bus_violation duplicate_token 0\nexpect bus_violation token_lost 0\n");
+}
+
 // A master that finds a slave locked by another (its Slave_Diag's Master_Add, byte 3, neither FFh
 // nor its own address: chip-facts.md, "Slave_Diag"; Master_Lock is the master's own bit) does not
 // parameterise it, and its walk says so (the audit s28 aud2, finding 4: master 3 took the slave

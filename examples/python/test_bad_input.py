@@ -765,7 +765,21 @@ def test_settings_a_scenario_refuses_are_refused_in_its_words():
             seg.check_bus(slot_bits=slot)
     with pytest.raises(ValueError, match=r"^master address 127 out of range \(0\.\.126\)$"):
         seg.check_bus(masters=[2, 127])
+    # `segment ttr=` 256..16777215 (0: no token_hold); TSYN as a master's idle time, 1..65535; a
+    # min TSDR as a station's min_tsdr=, 0..255, and not above the slot time (s34 audit aSeg
+    # finding 8: each was taken).
+    for ttr in (10, 255, 16777216):
+        with pytest.raises(ValueError, match=rf"^ttr {ttr} out of range \(256\.\.16777215\)$"):
+            seg.check_bus(ttr=ttr)
+    with pytest.raises(ValueError, match=r"^tsyn_bits 0 out of range \(1\.\.65535\)$"):
+        seg.check_bus(tsyn_bits=0)
+    with pytest.raises(ValueError, match=r"^min_tsdr_bits 256 out of range \(0\.\.255\)$"):
+        seg.check_bus(min_tsdr_bits=256)
+    with pytest.raises(ValueError, match=r"^min_tsdr_bits 200 above the slot time 100: no answer "
+                                         r"could be in time$"):
+        seg.check_bus(min_tsdr_bits=200)
     assert seg.bus_check is None
+    seg.check_bus(min_tsdr_bits=100, ttr=0)
     sm = seg.add_master(2, [5])
     for call in (sm.startup_all, sm.startup, sm.begin_startup):
         with pytest.raises(ValueError, match=r"^tries 0 out of range \(1\.\.100000\)$"):

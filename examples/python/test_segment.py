@@ -653,3 +653,95 @@ def test_a_bus_check_armed_inside_an_answer_judges_what_begins_after_it():
     assert master.fdl_status().answer is not None
     seg.flush()
     assert check.total == 0, seg.bus_log
+
+
+def test_a_token_passed_again_after_a_silent_slot_time_is_no_duplicate_token():
+    """EN 50170 token passing (docs/segment.md, "The token"; s34 audit aSeg finding 1): master 2
+    passes the token to 9 (nobody there), hears nothing for the slot time (100 bit times), passes
+    it again, then to master 3, which takes it and passes it back. Master 2 holds the token until
+    3 shows activity: no violation (the retry and the pass to 3 were each a duplicate_token)."""
+    seg = dpc31.Segment(1_500_000)
+    seg.add_station(5, "spc3")
+    m2 = seg.add_master(2, [5])
+    m3 = seg.add_master(3, [5])
+    check = seg.check_bus()
+    for to in (9, 9, 3):
+        m2.pass_token(to)
+        m2.idle(100 * T)
+    assert m3.wait_token(10**6)
+    m3.pass_token(2)
+    seg.flush()
+    assert check.total == 0, seg.bus_log
+
+
+def test_use_token_takes_the_token_passed_to_it():
+    """docs/segment.md "A master that obeys TTR", Arrival (s34 audit aSeg finding 6): a master's
+    use_token takes a token to it already on the line, as wait_token would, so a ring of
+    use_token alone measures TRR from one arrival (the end of the SD4 to it) to the next; it used
+    to claim the token at every visit (TRR 0, TTH the whole TTR)."""
+    seg = dpc31.Segment(1_500_000)
+    for a, p in ((5, "spc3"), (6, "vpc3plus"), (7, "dpc31")):
+        seg.add_station(a, p)
+    m2 = seg.add_master(2, [5, 6], ttr=600)
+    m3 = seg.add_master(3, [7], ttr=600)
+    assert m2.startup_all() and m3.startup_all()
+    tokens = {}
+    seg.on_telegram(lambda t: tokens.setdefault(t.bytes[1], []).append(t.end)
+                    if t.bytes[0] == 0xDC else None)
+    check = seg.check_bus()  # the masters' TTR, 600 bit times
+    visits = {2: [], 3: []}
+    for _ in range(4):
+        visits[2].append(m2.use_token(3))
+        visits[3].append(m3.use_token(2))
+    seg.flush()
+    assert [v.arrived for v in visits[3]] == tokens[3]
+    assert [v.arrived for v in visits[2][1:]] == tokens[2][:3]
+    for vs in visits.values():
+        for before, v in zip(vs, vs[1:]):
+            assert v.rotation == v.arrived - before.arrived
+            assert v.hold == max(0, 600 * T - v.rotation)
+    assert check.total == 0, seg.bus_log
+
+
+def test_check_bus_takes_the_masters_ttr_and_the_masters_added_after_it():
+    """docs/python.md "The bus check" (s34 audit aSeg finding 6): without ttr= the check takes
+    the TTR the masters obey, as a scenario's `segment` does, with two or more of them; a check
+    made before add_master follows the masters added after it (their addresses for TTO and the
+    token checks); masters of different TTRs need the check's own."""
+    def segment():
+        seg = dpc31.Segment(1_500_000)
+        seg.add_station(5, "spc3")
+        return seg
+    counts = []
+    for ttr in (None, 600):
+        seg = segment()
+        m2 = seg.add_master(2, [5], ttr=600)
+        seg.add_master(3, [5], ttr=600)
+        check = seg.check_bus() if ttr is None else seg.check_bus(ttr=ttr)
+        m2.startup_all()  # back to back, past TTR: a master without the token's rules
+        seg.flush()
+        counts.append(check.count("token_hold"))
+    assert counts[0] > 0 and counts[0] == counts[1]
+    # Made before the masters: TTO = 100 x (6 + 2 x 2) = 1000 bit times after the token's end.
+    seg = segment()
+    check = seg.check_bus()
+    m2 = seg.add_master(2, [5])
+    seg.add_master(3, [5])
+    end = m2.pass_token(9).request_end
+    seg.run_until(end + 1000 * T - 1)
+    assert check.count("token_lost") == 0
+    seg.run_until(end + 1000 * T)
+    assert check.count("token_lost") == 1 and check.total == 1
+    seg = segment()
+    seg.add_master(2, [5], ttr=600)
+    seg.add_master(3, [5], ttr=800)
+    with pytest.raises(ValueError, match=r"^master 3: ttr=800 differs from master 2's ttr=600: "
+                                         r"give the bus check's TTR \(check_bus\(ttr=BITS\)\)$"):
+        seg.check_bus()
+    seg.check_bus(ttr=1000)
+    seg = segment()
+    seg.add_master(2, [5], ttr=600)
+    seg.check_bus()
+    with pytest.raises(ValueError, match=r"^master 3: ttr=800 differs from master 2's ttr=600"):
+        seg.add_master(3, [5], ttr=800)
+    assert seg.size == 2  # the refused master's station did not join

@@ -95,8 +95,8 @@ bool SegmentOutputs::write(std::string& error) {
 
 // The line's telegrams (docs/capture.md, "A segment's line"): each with its sender; a request that
 // wants an answer is held until the next telegram says who answered it (a frame that decodes,
-// from another station: what is left of a collision answers nothing; a telegram the bus check
-// calls unsolicited answers nothing either).
+// from another station: what is left of a collision answers nothing, even where its bytes read
+// as a frame; a telegram the bus check calls unsolicited answers nothing either).
 void SegmentOutputs::capture(const LineTelegram& t) {
   const fdl::Decoded d = fdl::decode(t.bytes);
   const bool chars_ok = t.fault.kind == UartFault::Kind::none;
@@ -109,7 +109,7 @@ void SegmentOutputs::capture(const LineTelegram& t) {
     h.comment += fmt::format(", character {}: {}", t.fault.char_index, fault_name(t.fault.kind));
   if (held_) {
     const BusTiming timing{seg_->bit_cycles(), 11, opt_.slot_bits, 33, 0, {}};
-    if (ok && !request && t.from != held_->t.from &&
+    if (ok && !request && !t.collided && t.from != held_->t.from &&
         answers_request(timing, t.start - held_->t.end, ok,
                         mirrors(d.frame, held_->sa, held_->da))) {
       held_->comment += fmt::format(", answered by {}", seg_->name(t.from));

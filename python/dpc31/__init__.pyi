@@ -440,6 +440,7 @@ class LineTelegram:
     bytes: bytes
     fault: Optional[str]
     fault_char: Optional[int]
+    collided: bool
 
 class Collision:
     cycle: int
@@ -447,9 +448,9 @@ class Collision:
     second: int
 
 class TokenVisit:
-    arrived: int
-    rotation: int
-    hold: int
+    arrived: int   # a cycle of the line
+    rotation: int  # TRR in clock cycles
+    hold: int      # TTH in clock cycles
     polled: List[int]
     startup: List[int]
     gap: Optional[int]
@@ -542,7 +543,7 @@ class Segment:
     def on_collision(self, callback: Optional[Callable[[Collision], None]]) -> None: ...
     def flush(self) -> None: ...
     def close(self) -> None: ...
-    def check_bus(self, *, ttr: int = 0, slot_bits: Optional[int] = None, min_tsdr_bits: int = 11,
+    def check_bus(self, *, ttr: Optional[int] = None, slot_bits: Optional[int] = None, min_tsdr_bits: int = 11,
                   tsyn_bits: int = 33, masters: Optional[List[int]] = None) -> BusCheck: ...
     bus_check: Optional[BusCheck]
     bus_log: List[str]
