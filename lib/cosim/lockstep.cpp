@@ -181,6 +181,38 @@ struct Gen {
   }
 };
 
+// Every address whose read the harness compares (the registers, command reads included, and the
+// mirrored cells; compared_read), once per profile: the reads that kReads does not weight.
+const std::vector<std::uint16_t>& compared_reads(const ProfileDesc& p) {
+  static const std::array<std::vector<std::uint16_t>, std::size(kAllProfiles)> tables = [] {
+    std::array<std::vector<std::uint16_t>, std::size(kAllProfiles)> t;
+    for (const Profile q : kAllProfiles) {
+      for (std::uint32_t a = 0; a <= 0xFFFF; ++a)
+        if (compared_read(profile_desc(q), static_cast<std::uint16_t>(a)))
+          t[static_cast<std::size_t>(q)].push_back(static_cast<std::uint16_t>(a));
+    }
+    return t;
+  }();
+  return tables[static_cast<std::size_t>(p.id)];
+}
+
+// RAM outside the registers and cells that a bus write may hit, [first, end): the user area, on
+// the vpc3plus past the stimulus's SAP list and buffers (080h-27Fh) and below the 2 KB end (a
+// RAM access violation is an event input, not a bus write's effect here).
+struct RamRange {
+  std::uint16_t first, end;
+};
+RamRange user_ram(Profile p) {
+  switch (p) {
+    case Profile::spc3:
+      return {0x040, 0x600};
+    case Profile::vpc3plus:
+      return {0x300, 0x800};
+    default:
+      return {0x8A0, 0x2000};  // dpc31: the user buffer area
+  }
+}
+
 void random_access(Gen& g, Inputs& in) {
   static constexpr RegId kReads[] = {RegId::Int_Req_Reg,         RegId::Int_Reg,
                                      RegId::Status_Reg,          RegId::Mode_Reg0,
@@ -192,7 +224,13 @@ void random_access(Gen& g, Inputs& in) {
                                      RegId::SSA_Buffer_Free_Cmd, RegId::R_Dout_Buf_Ptr1,
                                      RegId::R_Cfg_Buf_Ptr,       RegId::R_GC_Command};
   const std::uint32_t kind = g.pick(100);
-  if (kind < 40) {
+  if (kind >= 32 && kind < 40) {  // any compared read: the read-backs and cells kReads lacks
+    const std::vector<std::uint16_t>& all = compared_reads(g.p);
+    in.bus_rd = true;
+    in.bus_addr = all[g.pick(static_cast<std::uint32_t>(all.size()))];
+    return;
+  }
+  if (kind < 32) {
     const RegId id = kReads[g.pick(std::size(kReads))];
     const RegDesc* r = find_reg(g.p, id);
     in.bus_rd = true;
@@ -215,12 +253,16 @@ void random_access(Gen& g, Inputs& in) {
     in.bus_addr = g.waddr(RegId::Int_Req_Reg, lane);
     in.bus_wdata = static_cast<std::uint8_t>(in.bus_wdata & g.byte());
   } else if (kind < 82) {  // Mode_Reg1 set: Start (twice as often), the others, Start with EOI
+    // or Go_Offline, and any value (several actions in one write)
     namespace m1 = fields::Mode_Reg1_S;
     static constexpr std::uint8_t kSet[] = {
-        m1::Start_SPC3,           m1::Start_SPC3,  m1::User_Leave_Master,   m1::Go_Offline,
-        m1::En_Change_Cfg_Buffer, m1::Res_User_WD, m1::Start_SPC3 | m1::EOI};
+        m1::Start_SPC3,           m1::Start_SPC3,
+        m1::User_Leave_Master,    m1::Go_Offline,
+        m1::En_Change_Cfg_Buffer, m1::Res_User_WD,
+        m1::Start_SPC3 | m1::EOI, m1::Start_SPC3 | m1::Go_Offline};
     in.bus_addr = g.waddr(RegId::Mode_Reg1_S);
-    in.bus_wdata = kSet[g.pick(std::size(kSet))];
+    const std::uint32_t k = g.pick(std::size(kSet) + 1);
+    if (k < std::size(kSet)) in.bus_wdata = kSet[k];
   } else if (kind < 85) {
     in.bus_addr = g.waddr(RegId::Mode_Reg1_R);
   } else if (kind < 90) {
@@ -231,11 +273,14 @@ void random_access(Gen& g, Inputs& in) {
                                                     : RegId::Mode_Reg0;
     in.bus_addr = g.waddr(opt);
     in.bus_wdata = static_cast<std::uint8_t>(in.bus_wdata & 0x03);
-  } else {  // the mirrored pointer cells
+  } else if (kind < 97) {  // the mirrored pointer cells
     static constexpr RegId kCells[] = {RegId::R_Dout_Buf_Ptr1,    RegId::R_Dout_Buf_Ptr2,
                                        RegId::R_Dout_Buf_Ptr3,    RegId::R_Cfg_Buf_Ptr,
                                        RegId::R_Read_Cfg_Buf_Ptr, RegId::R_GC_Command};
     in.bus_addr = g.waddr(kCells[g.pick(std::size(kCells))]);
+  } else {  // other RAM: a write that must change no register (an address decode that aliases)
+    const RamRange r = user_ram(g.p.id);
+    in.bus_addr = static_cast<std::uint16_t>(r.first + g.pick(r.end - r.first));
   }
 }
 
