@@ -46,14 +46,22 @@ bool Lockstep::step(const Inputs& in) {
   const bool read_compared =
       in.bus_rd && !in.rst &&
       (compared_read(profile_, in.bus_addr) || emu_->compares_ram(in.bus_addr));
+  const bool stopped = rtl_->stopped();
   // Nearly every cycle agrees: one comparison of the arrays, the report only on a difference.
-  if (std::equal(a.v.begin(), a.v.begin() + Outputs::kRdata, b.v.begin()) &&
+  if (!stopped && std::equal(a.v.begin(), a.v.begin() + Outputs::kRdata, b.v.begin()) &&
       (!read_compared || a.v[Outputs::kRdata] == b.v[Outputs::kRdata])) {
     ++cycle_;
     return true;
   }
   std::vector<std::string> lines;
   std::vector<std::string> names;
+  if (stopped) {
+    lines.push_back(fmt::format(
+        "  {} stopped itself ($stop, $fatal or a failed assertion; its message is on standard "
+        "error)",
+        rtl_->name()));
+    names.emplace_back("$stop");
+  }
   for (std::size_t i = 0; i < Outputs::kCount; ++i) {
     if (i == Outputs::kRdata && !read_compared) continue;
     if (a.v[i] == b.v[i]) continue;
