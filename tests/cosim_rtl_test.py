@@ -202,6 +202,16 @@ def waveforms_and_number():
         check(r.returncode == 1, f"exit {r.returncode}: {r.stderr}")
         for f in ("emu.vcd", "rtl.vcd", "rtl_internal.fst"):
             check(os.path.getsize(os.path.join(work, "win", f)) > 0, f"no {f}")
+        # The window's three files begin at one clock edge (s34 audit, finding 8: the FST began
+        # at cycle 0 and wavediff reported ~20 false differences): the FST against emu.vcd names
+        # the one real difference, x_int, at the window's cycle of the divergence d, d - (d - 50).
+        d = summary(r)["results"][0]["cycle"]
+        check(d > 50, f"the divergence at {d} is inside the first window: the check proves nothing")
+        w = subprocess.run([CLI, "wavediff", "win/emu.vcd", "win/rtl_internal.fst", "--strip",
+                            "auto", "--clock", "clk", "--ignore-missing"], capture_output=True,
+                           text=True, cwd=work, timeout=600)
+        check("first divergence: x_int at cycle 50 " in w.stdout and "1 differ" in w.stdout,
+              f"wavediff emu.vcd rtl_internal.fst: {w.stdout[-1500:]}")
         n = run(args + ["--mutant", "7", "--out", "out7"], cwd=work)  # MUT_POLARITY = 4'd7
         check(n.returncode == 1, f"--mutant 7: exit {n.returncode}")
         a, b = summary(r)["results"], summary(n)["results"]

@@ -31,7 +31,8 @@ const std::map<std::string, std::vector<std::string>>& expected_signals() {
       {"NEXT_DOUT_KEEPS_N", {"dout_sm"}},
       {"ACK_NEIGHBOUR", {"irr"}},
       {"EOI_SHORT", {"x_int"}},
-      {"CLEAR_IGNORED_IN_SYNC", {"dout_sm", "n_cl", "n_cleared", "irr"}},
+      // d_fresh: the dpc31's clear marks D not fresh (docs/golden-model.md, failsafe_clear).
+      {"CLEAR_IGNORED_IN_SYNC", {"dout_sm", "n_cl", "n_cleared", "irr", "d_fresh"}},
       {"NO_C_SWAP", {"dout_ptr1", "dout_ptr2", "dout_ptr3", "dout_ptr_c"}},
       {"ACK_BEATS_EVENT", {"irr"}},
       {"POLARITY", {"x_int"}},
@@ -748,7 +749,7 @@ TEST(Cosim, RtlInternalWaveformOnDemand) {
   const Stimulus s = random_stimulus({Profile::dpc31, 3, 2000});
   const std::string path = testutil::scratch() + "cosim_rtl.fst";
   std::string error;
-  ASSERT_EQ(write_rtl_fst(s, {Profile::dpc31, BusMode::intel}, "", path, error), RtlFst::written)
+  ASSERT_EQ(write_rtl_fst(s, {Profile::dpc31, BusMode::intel}, "", 0, path, error), RtlFst::written)
       << error;
   std::FILE* f = std::fopen(path.c_str(), "rb");
   ASSERT_NE(f, nullptr);
@@ -756,7 +757,7 @@ TEST(Cosim, RtlInternalWaveformOnDemand) {
   EXPECT_GT(std::ftell(f), 100);
   std::fclose(f);
   // The mutants are built without tracing: said plainly, nothing written.
-  EXPECT_EQ(write_rtl_fst(s, {Profile::dpc31, BusMode::intel}, "POLARITY", path + "2", error),
+  EXPECT_EQ(write_rtl_fst(s, {Profile::dpc31, BusMode::intel}, "POLARITY", 0, path + "2", error),
             RtlFst::not_traced);
   EXPECT_NE(error.find("without tracing"), std::string::npos);
 }

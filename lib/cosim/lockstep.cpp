@@ -522,6 +522,41 @@ Stimulus random_stimulus(const RandomConfig& c) {
 
 // --- shrinking ---
 
+namespace {
+
+// The inputs of one cycle as the tokens of its trace line ("rd 000e", "ev_dout"), each whole.
+std::vector<std::string> input_tokens(const Inputs& in) {
+  const std::string line = in.describe();
+  std::vector<std::string> out;
+  std::istringstream is(line);
+  for (std::string tok;;) {
+    is >> std::ws;
+    const auto from = static_cast<std::size_t>(is.tellg());
+    if (!(is >> tok)) break;
+    Inputs scratch;
+    parse_input_token(tok, is, scratch);  // reads the operand of "rd" / "wr" too
+    const auto to = is.tellg();
+    out.push_back(
+        line.substr(from, to < 0 ? std::string::npos : static_cast<std::size_t>(to) - from));
+  }
+  return out;
+}
+
+// The inputs of the tokens but the k-th.
+Inputs without_token(const std::vector<std::string>& tokens, std::size_t k) {
+  Inputs in;
+  for (std::size_t i = 0; i < tokens.size(); ++i) {
+    if (i == k) continue;
+    std::istringstream is(tokens[i]);
+    std::string tok;
+    is >> tok;
+    parse_input_token(tok, is, in);
+  }
+  return in;
+}
+
+}  // namespace
+
 Stimulus shrink(const Stimulus& s, const DutOptions& o, std::string_view mutant, int max_runs,
                 int* runs_taken) {
   int own = 0;
@@ -558,6 +593,24 @@ Stimulus shrink(const Stimulus& s, const DutOptions& o, std::string_view mutant,
       }
     }
     if (chunk == 1) break;
+  }
+  // Then the inputs of each cycle left one by one: a read or an event beside the input that
+  // fails goes too.
+  const std::vector<Stimulus::Event> kept = best.events();
+  for (const auto& [c, in] : kept) {
+    if (c >= best.size()) break;  // cut off: it fails sooner without an input dropped before
+    std::vector<std::string> tokens = input_tokens(in);
+    for (std::size_t k = 0; tokens.size() > 1 && k < tokens.size() && runs < max_runs;) {
+      Stimulus t = best;
+      t.set(c, without_token(tokens, k));
+      if (const std::int64_t d = fails(t); d >= 0) {
+        t.resize(static_cast<std::uint64_t>(d) + 1);
+        best = std::move(t);
+        tokens.erase(tokens.begin() + static_cast<std::ptrdiff_t>(k));
+      } else {
+        ++k;
+      }
+    }
   }
   return best;
 }
@@ -615,6 +668,12 @@ bool parse_trace(const std::string& text, const std::string& file, Stimulus& out
     // beyond the bound.
     std::uint64_t cycle = 0;
     const std::errc cycle_ec = numbers::parse_whole(first, cycle);
+    // The other ".trace" of the project: a chip's golden trace (docs/trace-format.md).
+    if (n == 1 && first == "dpc31-trace") {
+      return fail(
+          "a golden trace of `dpc31 run --record` (replay it with `dpc31 replay`), not a "
+          "stimulus trace of `dpc31 cosim`");
+    }
     if (cycle_ec == std::errc::invalid_argument)
       return fail(fmt::format("'{}' is not a cycle number", shown(first)));
     if (cycle_ec == std::errc{} && cycle < last && !(cycle == 0 && out.empty()))
@@ -638,7 +697,7 @@ bool parse_trace(const std::string& text, const std::string& file, Stimulus& out
 }
 
 RtlFst write_rtl_fst(const Stimulus& s, const DutOptions& o, std::string_view mutant,
-                     const std::string& path, std::string& error) {
+                     std::uint64_t from, const std::string& path, std::string& error) {
   outfile::OutFile out;
   if (!out.open(path)) {
     error = out.error();
@@ -658,8 +717,13 @@ RtlFst write_rtl_fst(const Stimulus& s, const DutOptions& o, std::string_view mu
   const child::Result r = child::call([&] {
     std::unique_ptr<Dut> rtl = make_rtl_dut(o, mutant);
     const unsigned long failed = dpc31_fst_failed_writes();
-    if (!rtl || !rtl->trace_to(name)) return int{kNoTracing};
-    for (const Inputs& in : s) rtl->step(in);
+    if (!rtl) return int{kNoTracing};
+    // The cycles before the window untraced: the FST's first clock edge is the window's first
+    // cycle, as in emu.vcd, so that wavediff lines the files up edge by edge.
+    Stimulus::Iterator in = s.begin();
+    for (std::uint64_t c = 0; c < std::min(from, s.size()); ++c, ++in) rtl->step(*in);
+    if (!rtl->trace_to(name)) return int{kNoTracing};
+    for (std::uint64_t c = std::min(from, s.size()); c < s.size(); ++c, ++in) rtl->step(*in);
     rtl.reset();  // closes the trace
     return dpc31_fst_failed_writes() == failed ? int{kTraced} : int{kWritesFailed};
   });

@@ -153,7 +153,7 @@ void write_divergence(const CosimOptions& o, const cosim::Stimulus& s, const cos
       output_failed(error);
     }
     const cosim::RtlFst fst =
-        write_rtl_fst(around, dut, o.mutant, in_vcd("rtl_internal.fst"), error);
+        write_rtl_fst(around, dut, o.mutant, from, in_vcd("rtl_internal.fst"), error);
     if (fst == cosim::RtlFst::written) {
       entry["fst"] = in_vcd("rtl_internal.fst");
     } else if (fst == cosim::RtlFst::failed) {
@@ -169,8 +169,9 @@ void write_dump(const CosimOptions& o, const cosim::Stimulus& s, const cosim::Du
                 const std::function<void(const std::string&)>& output_failed) {
   std::string error;
   if (!write_window(s, dut, o.mutant, 0, s.size(), o.dump_dir, error)) output_failed(error);
-  const cosim::RtlFst fst = write_rtl_fst(
-      s, dut, o.mutant, (std::filesystem::path(o.dump_dir) / "rtl_internal.fst").string(), error);
+  const cosim::RtlFst fst =
+      write_rtl_fst(s, dut, o.mutant, 0,
+                    (std::filesystem::path(o.dump_dir) / "rtl_internal.fst").string(), error);
   if (fst == cosim::RtlFst::failed) {
     output_failed(error);
   } else if (fst == cosim::RtlFst::not_traced && !o.quiet) {
@@ -554,9 +555,8 @@ int run_cosim(const CosimOptions& given) {
     if (tty) {
       const std::size_t width = 40;
       const std::size_t done = (i + 1) * width / total;
-      model_text.progress(fmt::format("\r[{}{}] {}/{} seeds, {} divergent",
-                                      std::string(done, '#'), std::string(width - done, '.'),
-                                      i + 1, total, diverged));
+      model_text.progress(fmt::format("\r[{}{}] {}/{} seeds, {} divergent", std::string(done, '#'),
+                                      std::string(width - done, '.'), i + 1, total, diverged));
     }
     if (diverged > 0 && !o.keep_going) break;
   }
