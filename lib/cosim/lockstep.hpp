@@ -99,9 +99,10 @@ struct RandomConfig {
   std::uint64_t seed = 1;
   std::uint64_t cycles = 20'000;
 };
-// Constrained random, reproducible from the seed: register reads and writes (every command read,
-// masks, acknowledges, EOI, Start/Go_Offline, mirrored cells), every event input, Global_Control
-// commands, resets, and same-cycle collisions of events with accesses.
+// Constrained random, reproducible from the seed: reads of every compared address (command reads,
+// read-backs, mirrored cells), writes (masks, acknowledges, EOI, any Mode_Reg1_S value, the mode
+// and option registers, mirrored cells, other RAM), every event input, Global_Control commands,
+// resets, and same-cycle collisions of events with accesses.
 Stimulus random_stimulus(const RandomConfig& c);
 
 // Runs a whole stimulus; returns the cycle of the first divergence or -1.
