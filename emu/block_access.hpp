@@ -15,6 +15,10 @@ struct BlockAccess {
   static auto& over_long(D& dp) {
     return dp.over_long_;
   }
+  template <typename D>
+  static auto& din_wait(D& dp) {
+    return dp.din_wait_;
+  }
   template <typename R>
   static auto& over_registers(R& regs) {
     return regs.over_registers_;

@@ -18,11 +18,18 @@ Chip::~Chip() = default;
 Chip::Chip(Chip&&) noexcept = default;
 Chip& Chip::operator=(Chip&&) noexcept = default;
 
-void Chip::reset() { reset(0); }
+// Under a CPU board the reset is an event at the board's instant, as a load there takes only it.
+void Chip::reset() { reset(board_instant_ != nullptr ? *board_instant_ : 0); }
 void Chip::reset(std::uint64_t cycle) {
   if (cycle > kLastCycle) {
     throw std::invalid_argument(
         fmt::format("Chip::reset: cycle {} is past the chip's last cycle {}", cycle, kLastCycle));
+  }
+  if (board_instant_ != nullptr && cycle != *board_instant_) {
+    throw std::invalid_argument(fmt::format(
+        "Chip::reset: cycle {} under a CPU board at cycle {}: a reset there is at the board's "
+        "instant (the CPU's clock counts on)",
+        cycle, *board_instant_));
   }
   core_->reset(cycle);
   moved();
@@ -311,10 +318,11 @@ WdState Chip::wd_state() const { return core_->watchdog.state(); }
 void Chip::on_irq_change(std::function<void(std::uint64_t, bool)> cb) {
   core_->signals.irq.add(std::move(cb));
 }
-void Chip::set_log_sink(LogSink sink) {
+void Chip::set_log_sink(LogSink sink) { set_log_sink(std::move(sink), LogLevel::debug); }
+void Chip::set_log_sink(LogSink sink, LogLevel shown) {
   core_->signals.flush_log();  // what the old sink is still owed (a repeat count, lines left out)
   core_->signals.sink = std::move(sink);
-  core_->signals.shown = LogLevel::debug;
+  core_->signals.shown = shown;
 }
 const ProfileDesc& Chip::profile() const { return core_->prof(); }
 BusMode Chip::bus_mode() const { return core_->regs.bus(); }

@@ -1,4 +1,4 @@
-// The chip's snapshot (docs/snapshots.md, format version 6): every block's state, written and
+// The chip's snapshot (docs/snapshots.md, format version 7): every block's state, written and
 // read in one place so that the format is one list. Each list is a template run with a Writer
 // (save) or a Reader (load), so save and load cannot drift apart; a static_assert on each
 // block's State makes a new member fail the build until it is listed here.
@@ -392,6 +392,18 @@ void core_fields(Ar& ar, C& c) {
         ar.fail(fmt::format("{} logged as over-long at {}, within the {} bytes of a DP data unit",
                             kRegIdNames[static_cast<std::size_t>(cell)], logged, fdl::kMaxDpData));
     }
+  }
+  // Format version 7: the SPC3's wait for New_Din_Buffer_Cmd, as the log has seen it.
+  auto& din_wait = A::din_wait(c.dp);
+  static_assert(snap::member_count<std::remove_cvref_t<decltype(din_wait)>>() == 2,
+                "a new member: add it here");
+  ar(din_wait.since);
+  ar(din_wait.said);
+  if constexpr (requires { ar.fail(""); }) {
+    if (c.dp.waits_for_din() && din_wait.since > c.clock.now)
+      ar.fail(
+          fmt::format("the wait for New_Din_Buffer_Cmd begins at cycle {}, after the snapshot's {}",
+                      din_wait.since, c.clock.now));
   }
   folded_log_fields(ar, c.unmapped);
   folded_log_fields(ar, c.beyond_bus);

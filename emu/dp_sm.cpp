@@ -85,6 +85,7 @@ std::uint16_t DpStateMachine::prm_verdict(Verdict v) {
 void DpStateMachine::enter_data_exchange() {
   if (s_.prm.pending || (regs_.id() == Profile::spc3 && regs_.cell(RegId::R_Len_Din_Buf) != 0)) {
     s_.dx_deferred = true;
+    din_wait_.since = sig_.clock->now;
     return;
   }
   s_.state = DpState::Data_Exchange;
@@ -517,6 +518,7 @@ std::optional<fdl::Frame> DpStateMachine::slave_diag(const fdl::Frame& req) {
   buffers_.diag_send_begin();
   s_.diag_in_flight = true;
   s_.diag_requester = req.sa;
+  note_din_wait(req, "Slave_Diag with Station_Not_Ready");
   return sap_answer(req, Response::DL, std::move(du_));
 }
 
@@ -576,7 +578,7 @@ std::optional<fdl::Frame> DpStateMachine::set_slave_add(const fdl::Frame& req) {
 // The user handed new inputs over (New_Din_Buffer_Cmd): an SPC3 waiting after Cfg OK enters
 // Data_Exchange now (a VPC3+ waiting for a Set_Ext_Prm's verdict goes on waiting).
 void DpStateMachine::din_handed_over() {
-  if (!s_.dx_deferred || s_.prm.pending || s_.state != DpState::Wait_Cfg) return;
+  if (!waits_for_din()) return;
   s_.dx_deferred = false;
   s_.state = DpState::Data_Exchange;
   irq_.raise(irq::Go_Leave_Data_Exchange);
@@ -587,9 +589,30 @@ void DpStateMachine::ssa_accepted() {
   irq_.raise(irq::New_SSA_Data);
 }
 
+// An SPC3 firmware that gives its Cfg OK but never reads New_Din_Buffer_Cmd keeps the chip in
+// Wait_Cfg for good, and its master sees only "not ready". A user side hands its inputs over
+// within its ISR for the Cfg verdict; a master still refused kDinWaitMs after that verdict (the
+// time the built-in master gives a Prm check, docs/decisions.md) waits for a read that is not
+// coming: the log says so, once per chip (docs/bring-up.md, section 7). Only the SPC3 waits so
+// (waits_for_din): the VPC3+ and the DPC31 enter Data_Exchange at the Cfg OK itself.
+void DpStateMachine::note_din_wait(const fdl::Frame& req, const char* answered) {
+  if (din_wait_.said || !waits_for_din() || req.sa != s_.master_add ||
+      sig_.clock->now - din_wait_.since < sig_.clock->cycles_for_us(kDinWaitMs * 1000))
+    return;
+  din_wait_.said = true;
+  sig_.log(LogLevel::warn,
+           "master {} is refused ({}): the SPC3 is still in Wait_Cfg at least {} ms after "
+           "User_Cfg_Data_Okay, because the firmware has not read New_Din_Buffer_Cmd since; with "
+           "R_Len_Din_Buf = {} it enters Data_Exchange only at that read (SPC3 p.31, modelled). "
+           "Hand the inputs over once after User_Cfg_Data_Okay: write them into the U buffer, "
+           "then read New_Din_Buffer_Cmd (docs/bring-up.md)",
+           req.sa, answered, kDinWaitMs, regs_.cell(RegId::R_Len_Din_Buf));
+}
+
 std::optional<fdl::Frame> DpStateMachine::data_exchange(const fdl::Frame& req) {
   if (s_.state != DpState::Data_Exchange || req.sa != s_.master_add) {
     ++counters_.not_allowed;
+    note_din_wait(req, "Data_Exchange answered RS");
     return short_answer(req, Response::RS);
   }
   sig_.emit(BlockEvent::Kind::dx);

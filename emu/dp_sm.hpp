@@ -147,6 +147,11 @@ class DpStateMachine {
   [[nodiscard]] std::uint16_t cfg_preview() const { return s_.cfg.preview(); }
   void ssa_buffer_free() { s_.ssa_free = true; }  // SAP55 accepts Set_Slave_Add again
   void din_handed_over();
+  // The wait for New_Din_Buffer_Cmd the log warns of, and the time it allows the firmware.
+  [[nodiscard]] bool waits_for_din() const {
+    return s_.dx_deferred && !s_.prm.pending && s_.state == DpState::Wait_Cfg;
+  }
+  static constexpr std::uint64_t kDinWaitMs = 10;
 
   [[nodiscard]] DpState state() const { return s_.state; }
   [[nodiscard]] std::uint8_t station() const { return s_.station; }
@@ -173,6 +178,7 @@ class DpStateMachine {
   }
   fdl::Frame sap_list_answer(const fdl::Frame& req, const SapListAnswer& a);
   std::optional<fdl::Frame> data_exchange(const fdl::Frame& req);
+  void note_din_wait(const fdl::Frame& req, const char* answered);
   void global_control(const fdl::Frame& req);
   template <typename Accepted>
   std::uint16_t verdict(Handshake& h, std::uint16_t event, bool& fault, Verdict v,
@@ -207,6 +213,14 @@ class DpStateMachine {
                                                                {RegId::R_Len_Read_Cfg_Data, 0},
                                                                {RegId::R_Len_Diag_Buf1, 0},
                                                                {RegId::R_Len_Diag_Buf2, 0}}};
+  // An SPC3 waiting for the user's New_Din_Buffer_Cmd after its Cfg OK: when the wait began (the
+  // OK read) and whether the log has said that the firmware never made the read; said once per
+  // chip. The log's memory, not the chip's state (a snapshot carries it: LOGS).
+  struct DinWaitLog {
+    std::uint64_t since = 0;
+    bool said = false;
+  };
+  DinWaitLog din_wait_;
 };
 
 }  // namespace dpc31

@@ -75,8 +75,8 @@ struct Signals {
   const Clock* clock;
   LogSink sink;
   // The sink shows no line below this level: warn for the default stderr sink, so that the
-  // debug and info lines it drops are not formatted (an EOI logs one per interrupt); debug for a
-  // sink of the user's.
+  // debug and info lines it drops are not formatted (an EOI logs one per interrupt); for a sink
+  // of the user's what Chip::set_log_sink was given (debug: every level).
   LogLevel shown = LogLevel::warn;
   Observers<std::uint64_t, bool> irq;  // X/INT activity
   Observers<std::uint64_t, bool> pb3;  // dpc31 port PB3
@@ -92,8 +92,8 @@ struct Signals {
   Observers<std::uint64_t, const BusAccess&> bus;
   Observers<std::uint64_t> state;              // after every event and every bus access
   mutable std::array<LogLimiter, 4> limiters;  // per LogLevel; they go with the sink
-  // Of the log's last line at info or above: whose repeats are owed.
-  mutable std::size_t last_level = static_cast<std::size_t>(LogLevel::info);
+  // Of the log's last line: whose repeats are owed.
+  mutable std::size_t last_level = 0;
   mutable std::uint32_t sinking = 0;  // calls of the sink in progress
 
   // Whether the chip is inside a call to one of its observers or its sink: its blocks are in the
@@ -110,15 +110,16 @@ struct Signals {
     if (block) block(clock->now, BlockEvent{k, value, data});
   }
   // Through the level's limiter (folded, bounded: dpc31::LogLimiter); one per level, so that a
-  // flood of remarks never crowds out a warning. The repeats are the log's from info up (what the
-  // walk and the bridge log show): a line of another of those levels ends those of the line
-  // before, whose count comes first (s33 audit). Debug lines (one per EOI) keep their own.
+  // flood of remarks never crowds out a warning. The repeats are the log's as its sink shows it
+  // (syslogd's "last message repeated"): a line of another level ends those of the line before,
+  // whose count comes first (s33 audit, s34-left). A level the sink does not show is not even
+  // formatted, so a firmware's per-interrupt debug lines end no fold where nobody sees them.
   template <typename... Args>
   void log(LogLevel level, fmt::format_string<Args...> f, Args&&... args) const {
     if (!sink || level < shown) return;
     const Calling in(sinking);
     const auto l = static_cast<std::size_t>(level);
-    if (level != LogLevel::debug && l != last_level) {
+    if (l != last_level) {
       for (std::string& t : limiters[last_level].end_repeats())
         sink(LogRecord{clock->now, static_cast<LogLevel>(last_level), std::move(t)});
       last_level = l;

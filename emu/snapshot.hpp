@@ -154,7 +154,7 @@ consteval std::size_t member_count() {
 [[nodiscard]] std::uint32_t crc32(std::span<const std::uint8_t> bytes, std::uint32_t crc = 0);
 
 // The container around a payload (docs/snapshots.md, "Byte layout").
-inline constexpr std::uint32_t kFormatVersion = 6;
+inline constexpr std::uint32_t kFormatVersion = 7;
 inline constexpr std::size_t kHeaderSize = 36;
 // load_state_file refuses larger files (a snapshot is about 8 KB plus what is queued).
 inline constexpr std::size_t kMaxFileSize = kMaxSnapshotFileBytes;

@@ -27,10 +27,6 @@
 #include "dpc31/fdl.hpp"
 #include "vocabulary.hpp"
 
-namespace dpc31 {
-class Cpu51Board;
-}
-
 namespace dpc31::py_bind {
 
 namespace py = pybind11;
@@ -243,9 +239,6 @@ class PyChip {
  public:
   explicit PyChip(const ChipOptions& o) : chip(o) {}
   Chip chip;
-  // The Cpu51Board that runs it (one at a time; null: none): its reset is an event at the
-  // board's instant.
-  const Cpu51Board* board = nullptr;
 
   // The call that lets time pass: checks, releases the GIL around `f`, rethrows an observer's
   // exception. Called with the GIL held.

@@ -10,7 +10,6 @@
 
 #include "bind.hpp"
 #include "cleanup.hpp"
-#include "cpu51_board.hpp"
 #include "dpc31/snapshot.hpp"
 #include "firmware_host.hpp"
 #include "vocabulary.hpp"
@@ -457,10 +456,7 @@ void bind_chip_class(py::module_& m) {
            py::arg("irq_controller") = "external")
       // run: the reset's edges reach the observers, whose exception is raised here; under a
       // Cpu51Board at the board's instant, where the chip's clock counts on (docs/cpu.md)
-      .def("reset",
-           [](PyChip& c) {
-             c.run([&] { c.chip.reset(c.board != nullptr ? c.board->instant() : 0); });
-           })
+      .def("reset", [](PyChip& c) { c.run([&] { c.chip.reset(); }); })
       // the bus: each access takes bus_access_cycles clocks, the chip runs meanwhile
       .def(
           "read",

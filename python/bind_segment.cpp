@@ -4,6 +4,7 @@
 // (lib/segment_outputs), one call for one call.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <memory>
 #include <variant>
 
@@ -254,7 +255,7 @@ struct PySegMaster {
   PySegMaster(py::object seg_obj, const MasterConfig& mc, std::vector<SlaveConfig> slaves)
       : seg_ref(std::move(seg_obj)), s(seg_ref.cast<PySegment&>()) {
     s.may_join();
-    DpMaster::checked_slaves(slaves);  // before the station joins: nothing half-made
+    DpMaster::checked_slaves(slaves, mc.address);  // before the station joins: nothing half-made
     const std::size_t station = s.joined(
         s.seg.add_sender(new_station_name(s.seg, master_station_name(mc.address))), mc.address);
     m = std::make_unique<DpMaster>(s.seg, station, mc, std::move(slaves));
@@ -471,6 +472,9 @@ PyStation& add_station(py::object self, U8 address, const std::string& profile,
                        const std::optional<std::uint16_t>& user_wd_value) {
   PySegment& s = self.cast<PySegment&>();
   s.may_join();
+  if (std::find(s.master_addresses.begin(), s.master_addresses.end(), address) !=
+      s.master_addresses.end())
+    throw py::value_error(station_at_master(address));
   auto st = std::make_unique<PyStation>();
   st->segment = &s;
   const std::string whose = "station " + std::to_string(address);
@@ -634,6 +638,9 @@ void bind_segment_class(py::module_& m) {
                             in_range<std::uint32_t>(kIdleBits, idle_bits),
                             ttr == 0 ? 0 : in_range<U64>(kTtrBits, ttr),
                             gap == 0 ? U8{0} : in_range<U8>(kGapFactor, gap)};
+            if (std::any_of(s.stations.begin(), s.stations.end(),
+                            [&mc](const auto& st) { return st->slave.address == mc.address; }))
+              throw py::value_error(master_at_station(mc.address));
             if (hsa) {
               mc.hsa = in_range<U8>(kHsa, *hsa);
               const std::string e = hsa_refused(mc.hsa, mc.gap_factor, mc.address);

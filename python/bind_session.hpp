@@ -51,9 +51,7 @@ struct PyBoard {
     } catch (const std::invalid_argument& e) {
       throw py::value_error(e.what());
     }
-    chip.board = board.get();
   }
-  ~PyBoard() { chip.board = nullptr; }  // a chip has one board at a time (Cpu51Board)
   PyBoard(const PyBoard&) = delete;
   PyBoard& operator=(const PyBoard&) = delete;
   py::object chip_ref;

@@ -167,9 +167,8 @@ std::uint64_t Cpu51Board::run_end() const {
 // is seen by the samples after it; only a MOVX whose access to the chip starts before the end
 // runs across it (the access keeps its cycle).
 void Cpu51Board::run_until(std::uint64_t chip_cycle) {
-  // A reset took the chip's cycle back to 0: it was an event at the board's instant, and the
-  // chip's clock counts on from there, as the CPU's does (docs/cpu.md, "The board").
-  chip_to(ended_);
+  // The chip stands at the board's instant or after it (an access since, a reset or a load
+  // there: Chip::reset, Chip::load_state), never before.
   note_chip();
   event_clock_ = 0;  // the first instant walked reads X/INT whatever happened to the chip before
   due_ = 0;

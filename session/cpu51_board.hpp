@@ -59,8 +59,8 @@ class Cpu51Board final : public mcs51::XdataBus {
   // until the chip asked to stop (Chip::request_stop, wake_on_txd) at the step's end.
   void run_until(std::uint64_t chip_cycle);
   // The board's instant: the chip cycle where the last run_until ended (0 before the first). A
-  // reset of the chip under the board is an event there: Chip::reset(instant()) tells its edges
-  // at it (docs/cpu.md, "The board").
+  // reset of the chip under the board is an event there: Chip::reset() starts the chip's new time
+  // line and tells its edges at it (docs/cpu.md, "The board").
   [[nodiscard]] std::uint64_t instant() const { return ended_; }
 
   // A write to the board's RAM (outside the chip's window), with the chip cycle of its strobe's

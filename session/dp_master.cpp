@@ -113,7 +113,7 @@ DpMaster::DpMaster(Segment& seg, std::size_t station, MasterConfig m,
     : seg_(&seg),
       station_(station),
       cfg_(m),
-      slave_(checked_slaves(slaves)),
+      slave_(checked_slaves(slaves, m.address)),
       t_(seg.bit_cycles()),
       target_(slave_.address),
       rx_(t_, seg.cycle()),
@@ -131,9 +131,12 @@ DpMaster::DpMaster(Segment& seg, std::size_t station, MasterConfig m,
   };
 }
 
-const SlaveConfig& DpMaster::checked_slaves(const std::vector<SlaveConfig>& slaves) {
+const SlaveConfig& DpMaster::checked_slaves(const std::vector<SlaveConfig>& slaves,
+                                            std::uint8_t master) {
   if (slaves.empty()) throw std::invalid_argument("DpMaster: a master needs at least one slave");
   for (auto it = slaves.begin(); it != slaves.end(); ++it) {
+    if (it->address == master)
+      throw std::invalid_argument("DpMaster: " + master_at_station(master));
     if (std::any_of(slaves.begin(), it,
                     [&it](const SlaveConfig& s) { return s.address == it->address; })) {
       throw std::invalid_argument(
@@ -355,8 +358,14 @@ std::uint64_t DpMaster::look() {
   return at;
 }
 
-void DpMaster::note(const std::string& s) {
-  if (narrate) narrate(s);
+std::string_view late_answer_text(bool after_slot) {
+  return after_slot ? "a late answer on the line (after the slot time): no answer"
+                    : "a late answer inside a request or its shortest TSDR: no answer";
+}
+
+void DpMaster::late_answer(std::uint64_t end, bool after_slot) {
+  ++counters_.late;
+  if (on_late) on_late(end, after_slot);
 }
 
 // To `cycle`, or less when the chip's TxD wakes the master up (wake_on_txd_).
@@ -426,11 +435,7 @@ std::uint64_t DpMaster::next_start(std::uint32_t idle_bits) {
     }
     look();
   }
-  if (heard) {
-    ++counters_.late;
-    note(fmt::format("[cycle {:>10}] a late answer on the line (after the slot time): no answer",
-                     line_end_));
-  }
+  if (heard) late_answer(line_end_, true);
   return start;
 }
 
@@ -643,13 +648,7 @@ void DpMaster::wait_answer(Exchange& ex, const fdl::Frame* req) {
     run_until(std::max(next, at + 1));
   }
   wake_on_txd_ = false;
-  if (passed_end != 0) {  // a late answer (to the request before) passed over
-    ++counters_.late;
-    note(
-        fmt::format("[cycle {:>10}] a late answer inside the request or its shortest TSDR: no "
-                    "answer",
-                    passed_end));
-  }
+  if (passed_end != 0) late_answer(passed_end, false);  // one to the request before
   // No answer within the slot time: 0, 0 and none. An earlier answer in ex (dp_cycle's filling
   // form) lends its data unit's buffer to this one.
   ex.answer_start = answer_.start();
@@ -809,7 +808,6 @@ bool DpMaster::startup_request(Startup& s) {
   switch (s.phase) {
     case P::fdl_status:
       if (fdl_status().answer) {
-        note(fmt::format("[cycle {:>10}] FDL_Status answered", now()));
         s.phase = P::diag;
       } else {
         ++s.n;
@@ -819,11 +817,16 @@ bool DpMaster::startup_request(Startup& s) {
       const Exchange prm = set_prm();
       s.check_until =
           prm.answer && prm.answer->sd == fdl::SC ? prm.request_start + kPrmCheckMs * ms : 0;
-      s.phase = P::cfg;
+      s.unconfirmed = !prm.answer;
+      // Unanswered, the slave's state is unknown: the start-up goes on at Slave_Diag, not with a
+      // Chk_Cfg to a slave that may not hold our parameters (docs/decisions.md, the
+      // thirty-fourth session).
+      s.phase = prm.answer ? P::cfg : P::diag;
+      if (!prm.answer) ++s.n;
       return true;
     }
     case P::cfg:
-      chk_cfg();
+      s.unconfirmed = !chk_cfg().answer;
       ++s.n;
       s.phase = P::diag;
       return true;
@@ -843,17 +846,12 @@ bool DpMaster::startup_request(Startup& s) {
   if (locked) {
     // Master_Lock: another master parameterised the slave and holds it (chip-facts.md, Slave_Diag
     // byte 3); it is not ours to parameterise (docs/decisions.md, the twenty-eighth session).
-    note(
-        fmt::format("[cycle {:>10}] Slave_Diag: locked by master {} (Master_Add), not "
-                    "parameterised: its start-up ends here",
-                    now(), d->master_add));
     locks_[slave_.address] = d->master_add;
     if (on_locked) on_locked(slave_.address, d->master_add);
     s.phase = P::failed;
     return true;
   }
   if (diag_ready(*diag.answer)) {
-    note(fmt::format("[cycle {:>10}] Slave_Diag: ready for Data_Exchange", now()));
     s.phase = P::ready;
     return true;
   }
@@ -870,7 +868,11 @@ bool DpMaster::startup_request(Startup& s) {
       return true;
     }
     // Prm_Req (or a fault): parameterise and configure.
-    note(fmt::format("[cycle {:>10}] Slave_Diag: Prm_Req, sending Set_Prm and Chk_Cfg", now()));
+    s.phase = P::prm;
+    return true;
+  }
+  // Not ready, and our last Set_Prm or Chk_Cfg went unanswered: parameterise and configure again.
+  if (s.unconfirmed) {
     s.phase = P::prm;
     return true;
   }

@@ -13,6 +13,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -148,6 +149,9 @@ class AnswerCollector {
   std::uint64_t end_ = 0;
 };
 
+// What the walks say of a telegram taken for a late answer (DpMaster::on_late).
+[[nodiscard]] std::string_view late_answer_text(bool after_slot);
+
 // The request is SRD or FDL_Status to one station: the master waits for an answer.
 [[nodiscard]] bool wants_answer(const fdl::Frame& request);
 
@@ -185,9 +189,12 @@ class DpMaster {
   // `slaves` (at least one), each with its own FCB state; the first is selected. The stations'
   // firmware is the segment's, not the master's.
   DpMaster(Segment& seg, std::size_t station, MasterConfig m, std::vector<SlaveConfig> slaves);
-  // The slaves such a master may poll: at least one, no address twice (each keeps one FCB state,
-  // which a second entry would break); else std::invalid_argument. Returns the first.
-  static const SlaveConfig& checked_slaves(const std::vector<SlaveConfig>& slaves);
+  // The slaves such a master at `master` may poll: at least one, no address twice (each keeps one
+  // FCB state, which a second entry would break), none at the master's own address (a master is
+  // a station too: "master 5 at the address of station 5"); else std::invalid_argument. Returns
+  // the first.
+  static const SlaveConfig& checked_slaves(const std::vector<SlaveConfig>& slaves,
+                                           std::uint8_t master);
 
   void set_firmware(Firmware isr) { cpu_ = std::make_unique<Cpu>(*chip_, std::move(isr)); }
   // A firmware with a main loop and the board's interrupt input (FirmwareHost::program).
@@ -281,7 +288,9 @@ class DpMaster {
   Exchange service(std::uint8_t dsap, std::vector<std::uint8_t> du, bool srd = true);
 
   // The standard start-up: FDL_Status until answered, Slave_Diag, Set_Prm, Chk_Cfg, Slave_Diag
-  // until the slave is ready. Returns false if it did not reach Data_Exchange within `tries`, or
+  // until the slave is ready. An unanswered Set_Prm is followed by Slave_Diag, not Chk_Cfg; after
+  // an unanswered Set_Prm or Chk_Cfg a Slave_Diag that is not ready starts Set_Prm and Chk_Cfg
+  // again. Returns false if it did not reach Data_Exchange within `tries`, or
   // at once when a Slave_Diag names another master in Master_Add (on_locked).
   // A slave still checking our accepted Set_Prm (Prm_Req, Master_Add ours, no fault) is polled
   // every 1 ms for up to kPrmCheckMs before it is parameterised again.
@@ -330,8 +339,11 @@ class DpMaster {
   // Called after each wait, the chip's stop cleared: it may throw to end the master's call there
   // (Python: an observer's exception ends the call at once). Empty: the master goes on.
   std::function<void()> waited;
-  // Narration of what happened (`dpc31 run` prints it).
-  std::function<void(const std::string&)> narrate;
+  // A telegram taken for a late answer (counters().late, docs/timing.md "The master's wait"):
+  // the end of its last stop bit and where it came (`after_slot`: on the line after a wait that
+  // ended without an answer; else inside a request or its shortest TSDR). `dpc31 run`'s walks
+  // tell it.
+  std::function<void(std::uint64_t end, bool after_slot)> on_late;
   // A start-up found `slave` locked by master `by` (its Slave_Diag's Master_Add): the master
   // leaves it alone, as a DP master does, and that slave's start-up ends without Data_Exchange.
   std::function<void(std::uint8_t slave, std::uint8_t by)> on_locked;
@@ -377,7 +389,7 @@ class DpMaster {
   // send_time from now, the line watched up to it after a wait without an answer (watch_late_):
   // a late answer heard there moves it to `idle_bits` after that telegram's end.
   std::uint64_t next_start(std::uint32_t idle_bits);
-  void note(const std::string& s);
+  void late_answer(std::uint64_t end, bool after_slot);  // counted, and on_late told
   [[nodiscard]] std::uint64_t now() const;
   std::uint64_t put_on_line(std::span<const std::uint8_t> bytes, std::uint64_t start,
                             UartFault fault);
@@ -391,6 +403,7 @@ class DpMaster {
     int n = 0;
     std::uint64_t check_until = 0;  // our accepted Set_Prm's start + kPrmCheckMs; 0: none yet
     std::uint64_t wait_until = 0;   // a slave checking our Set_Prm is asked again from here
+    bool unconfirmed = false;       // our last Set_Prm or Chk_Cfg went unanswered
   };
   // The selected slave's next start-up request; false when none went out (it is over, or it
   // waits until wait_until).

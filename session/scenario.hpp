@@ -225,7 +225,8 @@ class ScenarioObserver {
   // side that gave no Start_SPC3.
   virtual void user_side_started(std::uint64_t /*cycle*/, std::string_view /*who*/,
                                  std::string_view /*text*/) {}
-  // Step `st` begins at `cycle` ("line K: TEXT").
+  // Step `st` begins at `cycle` ("line K: TEXT"). Told with the step's other events, in cycle
+  // order: at the step's end, or during a long action (a DPV1 service's polls) as they come.
   virtual void step_begins(std::uint64_t /*cycle*/, const ScenarioStep& /*st*/,
                            std::string_view /*text*/) {}
   // The expect `st` was checked ("line K: TEXT: ok", or "...: FAILED, got X").
@@ -237,6 +238,12 @@ class ScenarioObserver {
   // Any other event of the walk at its cycle: a transaction, a state change, a chip message (not
   // PB3's edges: an observer has them from Chip::on_pb3_change).
   virtual void walk_note(std::uint64_t /*cycle*/, std::string_view /*text*/) {}
+  // Every event before `cycle` (the chip's cycle) has been told, and no later one is older:
+  // during a long action, between two of its polls.
+  virtual void events_told(std::uint64_t /*cycle*/) {}
+  // Every event of the user side's init, of a step or of an expect's check has been told: the
+  // chip stands at the end of it, `cycle` (a trace's checkpoint).
+  virtual void step_ends(std::uint64_t /*cycle*/) {}
   // After the last step, before ScenarioHooks::at_end.
   virtual void run_ends(Chip& /*chip*/) {}
 };

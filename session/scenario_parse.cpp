@@ -22,8 +22,9 @@
 namespace dpc31 {
 
 std::string ScenarioError::text() const {
-  if (line <= 0) return fmt::format("{}: {}", file, message);
-  return fmt::format("{}:{}: {}", file, line, message);
+  // One line whatever the file's name holds (a newline, an ESC).
+  if (line <= 0) return shown_line(fmt::format("{}: {}", file, message));
+  return shown_line(fmt::format("{}:{}: {}", file, line, message));
 }
 
 namespace {

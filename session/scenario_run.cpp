@@ -76,9 +76,8 @@ class Runner {
                         s_.chip.bus == BusMode::intel ? "intel" : "motorola", s_.master.address,
                         s_.user.slave.address, s_.master.baud));
     }
-    chip_.set_log_sink([this](const LogRecord& r) {
-      if (r.level >= LogLevel::info) note(r.cycle, "chip: " + r.text);
-    });
+    chip_.set_log_sink([this](const LogRecord& r) { note(r.cycle, "chip: " + r.text); },
+                       LogLevel::info);
     if (hooks_.observer != nullptr) hooks_.observer->run_begins(chip_);
     if (hooks_.at_start) hooks_.at_start(chip_);
     user_.set_inputs(s_.inputs);
@@ -113,17 +112,21 @@ class Runner {
     // Each poll reported as it comes, then forgotten, as `exchange N` does, and the walk's lines
     // written as their folds are decided: a long DPV1 time-out keeps the history and the walk
     // flat. Nothing noted later is older than the chip's cycle, so what is sorted now stays so.
-    // An observer (a trace being recorded, which keeps every telegram anyway) is told a step's
-    // events at its end, with the chip standing there: they wait for it.
+    // An observer is told every event held so far, and that none older will come (a trace writes
+    // what precedes them; its checkpoint waits for step_ends).
     dpv1_->polled = [this] {
       report_history();
       forget_reported();
-      if (hooks_.observer == nullptr && events_.size() >= kDrainAt) {
+      if (events_.size() >= kDrainAt) {
         report_outputs();
         drain(false);
+        if (hooks_.observer != nullptr) hooks_.observer->events_told(chip_.cycle());
       }
     };
     master_->on_locked = [this](std::uint8_t, std::uint8_t by) { locked_by_ = by; };
+    master_->on_late = [this](std::uint64_t end, bool after_slot) {
+      note(end, fmt::format("master: {}", late_answer_text(after_slot)));
+    };
     if (hooks_.observer != nullptr) {
       master_->on_send = [this](std::uint64_t start, std::span<const std::uint8_t> bytes,
                                 UartFault fault) {
@@ -218,7 +221,7 @@ class Runner {
          fmt::format("end: dp_state {}, wd_state {}; expects passed {}, failed {}",
                      dp_state_name(out_.dp), wd_state_name(out_.wd), out_.passed, out_.failed),
          Event::Kind::end);
-    flush();
+    drain(true);
     chip_.on_state_change({});
     chip_.on_irq_change({});
     chip_.on_pb3_change({});
@@ -234,6 +237,7 @@ class Runner {
     Kind kind = Kind::note;
     const ScenarioStep* step = nullptr;  // step / passed / failed
     bool walked = false;                 // printed already (walk_now); the observer is told later
+    bool told = false;                   // to the observer (the walk may still hold it)
   };
 
   // A step's line is printed when the step begins, before the firmware runs in it: when that
@@ -281,8 +285,11 @@ class Runner {
 
   // Events are collected during an action and printed in cycle order: a transaction's line is
   // only known once its answer is in, after the state changes it caused. The walk folds what
-  // repeats (an observer is told every event).
-  void flush() { drain(true); }
+  // repeats (an observer is told every event, then that the step, expect or init has ended).
+  void flush() {
+    drain(true);
+    if (hooks_.observer != nullptr) hooks_.observer->step_ends(chip_.cycle());
+  }
 
   // Writes the events whose lines are decided and forgets them. At the step's end (`all`) that is
   // every event; during a long action (a DPV1 service's polls) the ones whose fold the events
@@ -293,13 +300,14 @@ class Runner {
     std::stable_sort(events_.begin(), events_.end(),
                      [](const Event& a, const Event& b) { return a.cycle < b.cycle; });
     const std::size_t n = events_.size();
-    std::size_t i = 0;  // the first event not written
-    while (i < n) {
-      if (!walk_) {
-        tell_all(i, 1);
-        ++i;
-        continue;
+    // The observer is told every event now, whatever the walk still holds for its folds.
+    if (hooks_.observer != nullptr) {
+      for (Event& e : events_) {
+        if (!std::exchange(e.told, true)) tell(*hooks_.observer, e);
       }
+    }
+    std::size_t i = walk_ ? 0 : n;  // the first event not written
+    while (i < n) {
       if (fold_) {
         const std::size_t k = fold_->group.size();
         const std::size_t have = std::min(k, n - i);
@@ -307,7 +315,6 @@ class Runner {
         for (std::size_t x = 0; x < have && same; ++x)
           same = events_[i + x].text == fold_->group[x];
         if (same && have == k) {
-          tell_all(i, k);
           if (fold_->repeats++ == 0) fold_->first_cycle = events_[i].cycle;
           fold_->last_cycle = events_[i + k - 1].cycle;
           i += k;
@@ -324,7 +331,6 @@ class Runner {
       if (!all && !f.settled && !f.periodic) break;
       const std::size_t lines = f.repeats == 0 ? 1 : f.lines;
       for (std::size_t x = 0; x < lines; ++x) write(events_[i + x]);
-      tell_all(i, lines);
       if (f.repeats != 0) {
         fold_ = Folding{};
         for (std::size_t x = 0; x < lines; ++x) fold_->group.push_back(events_[i + x].text);
@@ -337,10 +343,6 @@ class Runner {
 
   void write(const Event& e) {
     if (!e.walked) walk_(fmt::format("[cycle {:>10}] {}", e.cycle, e.text));
-  }
-  void tell_all(std::size_t from, std::size_t count) {
-    if (hooks_.observer == nullptr) return;
-    for (std::size_t x = from; x < from + count; ++x) tell(*hooks_.observer, events_[x]);
   }
   void end_fold() {
     const std::size_t k = fold_->group.size();

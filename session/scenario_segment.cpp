@@ -97,8 +97,7 @@ class Parser {
       for (std::size_t i = 0; i < s_.stations.size(); ++i) {
         if (s_.stations[i].slave.address == 2) {
           throw ParseFail{station_lines_[i],
-                          "station 2 at the address of master 2, the default master: give a "
-                          "'master' line"};
+                          station_at_master(2) + ", the default master: give a 'master' line"};
         }
       }
     }
@@ -178,10 +177,7 @@ class Parser {
     SegmentStation st;
     st.slave.address =
         static_cast<std::uint8_t>(number(positional(0, "a station address"), kStationAddress));
-    // A master is a station too: none shares its address (two chips may: they collide).
-    if (find_master(st.slave.address) != nullptr)
-      fail(fmt::format("station {} at the address of master {}", st.slave.address,
-                       st.slave.address));
+    if (find_master(st.slave.address) != nullptr) fail(station_at_master(st.slave.address));
     st.name = fmt::format("station {}", st.slave.address);
     if (auto v = take("name")) {
       if (std::string why = station_name_refused(*v, st.name); !why.empty()) fail(why);
@@ -256,8 +252,7 @@ class Parser {
         static_cast<std::uint8_t>(number(positional(0, "a master address"), kMasterAddress));
     // A second master at an address is a second station named 'master ADDR' (Python's words).
     new_station_name(master_station_name(m.address));
-    if (is_station(m.address))
-      fail(fmt::format("master {} at the address of station {}", m.address, m.address));
+    if (is_station(m.address)) fail(master_at_station(m.address));
     const std::optional<std::string_view> slaves = take("slaves");
     if (slaves) m.slaves = bytes_list(*slaves);
     master_lines_.push_back(line_);
@@ -313,6 +308,38 @@ class Parser {
     return a;
   }
 
+  // The station an expect checks: a station's name= or an address that one station has. Two
+  // chips may share an address (they collide): the address alone would pick one in silence.
+  std::size_t checked_station(SegmentStep& st, std::string_view v) const {
+    const auto named = std::find_if(s_.stations.begin(), s_.stations.end(),
+                                    [v](const SegmentStation& s) { return s.name == v; });
+    std::uint64_t a = 0;
+    const bool address = parse_u64(v, a);
+    if (named != s_.stations.end()) {
+      if (address && a <= 126 && a != named->slave.address &&
+          is_station(static_cast<std::uint8_t>(a)))
+        fail(fmt::format("'{}' is the name of one station and the address of another", v));
+      st.station = named->slave.address;
+      return static_cast<std::size_t>(named - s_.stations.begin());
+    }
+    if (!address) fail(fmt::format("no station named '{}'", v));
+    st.station = station_address(v);
+    std::vector<std::size_t> at;
+    for (std::size_t i = 0; i < s_.stations.size(); ++i) {
+      if (s_.stations[i].slave.address == st.station) at.push_back(i);
+    }
+    if (at.size() > 1) {
+      std::string names;
+      for (const std::size_t i : at) {
+        names += fmt::format("{}'{}' at line {}", names.empty() ? "" : ", ", s_.stations[i].name,
+                             station_lines_[i]);
+      }
+      fail(fmt::format("station {} names {} stations ({}): give the name of the one to check",
+                       st.station, at.size(), names));
+    }
+    return at.front();
+  }
+
   void step(int line, std::string_view c) {
     using K = SegmentStep::Kind;
     SegmentStep st;
@@ -362,7 +389,7 @@ class Parser {
     using K = SegmentStep::Kind;
     if (what == "state") {
       st.kind = K::expect_state;
-      st.station = station_address(positional(1, "a station"));
+      st.station_index = checked_station(st, positional(1, "a station"));
       const std::string_view dp = positional(2, "a DP state");
       bool ok = false;
       for (const DpState d : {DpState::Wait_Prm, DpState::Wait_Cfg, DpState::Data_Exchange}) {
@@ -385,7 +412,7 @@ class Parser {
       st.count = number(positional(1, "the bit times"), "TSDR", 11, 255);
     } else if (what == "watchdog_expired") {
       st.kind = K::expect_expired;
-      st.station = station_address(positional(1, "a station"));
+      st.station_index = checked_station(st, positional(1, "a station"));
       st.time = time(take("twd").value_or(""));
     } else if (what == "bus_violation") {
       st.kind = K::expect_violation;
@@ -418,12 +445,10 @@ class Parser {
   // firmware. A plug-in's port names are checked when bind_segment_plugins() loads it.
   void port(SegmentStep& st) {
     st.kind = SegmentStep::Kind::expect_port;
-    st.station = station_address(positional(1, "a station"));
+    st.station_index = checked_station(st, positional(1, "a station"));
     st.name = std::string(positional(2, "a port name"));
     st.count = number(positional(3, "a port value"), "port value", 0, 0xFFFF'FFFF);
-    const auto def =
-        std::find_if(s_.stations.begin(), s_.stations.end(),
-                     [&st](const SegmentStation& d) { return d.slave.address == st.station; });
+    const SegmentStation* def = &s_.stations[st.station_index];
     if (def->firmware.empty()) {
       fail(fmt::format("'expect port' needs a firmware: station {} runs the built-in user side",
                        st.station));
@@ -543,7 +568,8 @@ std::vector<std::string> segment_plugins(const SegmentScenario& s) {
 
 bool bind_segment_plugins(SegmentScenario& s, ScenarioError& err) {
   if (s.plugins_bound) return true;
-  for (SegmentStation& st : s.stations) {
+  for (std::size_t i = 0; i < s.stations.size(); ++i) {
+    SegmentStation& st = s.stations[i];
     if (st.plugin_line == 0) continue;
     if (!s.untrusted.empty()) {
       err = ScenarioError{s.file, st.plugin_line, plugin_refused_untrusted(s.untrusted)};
@@ -558,7 +584,7 @@ bool bind_segment_plugins(SegmentScenario& s, ScenarioError& err) {
       return false;
     }
     for (const SegmentStep& step : s.steps) {
-      if (step.kind != SegmentStep::Kind::expect_port || step.station != st.slave.address) continue;
+      if (step.kind != SegmentStep::Kind::expect_port || step.station_index != i) continue;
       if (std::string why = port_refused(*fw, step.name); !why.empty()) {
         err = ScenarioError{s.file, step.line, std::move(why)};
         return false;

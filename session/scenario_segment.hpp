@@ -61,6 +61,8 @@ struct SegmentStep {
   std::uint64_t time = 0;
   std::uint8_t address = 0;
   std::uint8_t station = 0;
+  // The station an expect names (by address or name=): its place in SegmentScenario::stations.
+  std::size_t station_index = 0;
   std::optional<std::uint8_t> skip;
   std::string name;
   std::vector<std::uint8_t> bytes;

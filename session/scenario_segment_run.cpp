@@ -198,7 +198,6 @@ class SegmentRun {
         }
       });
       observer_->user_side_started(st->index, who);
-      by_address_[def.slave.address] = st.get();
       stations_.push_back(std::move(st));
     }
     for (const std::string& name : s_.senders) senders_[name] = seg_.add_sender(name);
@@ -226,6 +225,11 @@ class SegmentRun {
                                       "Slave_Diag's Master_Add): not parameterised, its start-up "
                                       "ends",
                                       a, slave, by));
+      };
+      // Held with the state changes: the master may take the late telegram before the segment
+      // tells of it.
+      masters_.back()->on_late = [this, a = m.address](std::uint64_t end, bool after_slot) {
+        states_.emplace_back(end, fmt::format("master {}: {}", a, late_answer_text(after_slot)));
       };
       visits_.emplace_back();
     }
@@ -446,7 +450,7 @@ class SegmentRun {
     bool ok = false;
     switch (st.kind) {
       case K::expect_state: {
-        const Station& sta = *by_address_.at(st.station);
+        const Station& sta = *stations_[st.station_index];
         const Chip& c = seg_.chip(sta.index);
         ok = c.dp_state() == st.dp && (!st.wd || c.wd_state() == *st.wd);
         got = fmt::format("{} / {}", dp_state_name(c.dp_state()), wd_state_name(c.wd_state()));
@@ -473,7 +477,7 @@ class SegmentRun {
         const std::uint64_t t = seg_.bit_cycles();
         const auto it = last_request_.find(st.station);
         const std::uint64_t want = it == last_request_.end() ? 0 : it->second - t + t / 2 + st.time;
-        const std::optional<std::uint64_t> left = by_address_.at(st.station)->left_dp_control;
+        const std::optional<std::uint64_t> left = stations_[st.station_index]->left_dp_control;
         ok = it != last_request_.end() && left == want;
         got = left ? fmt::format("left DP_Control at cycle {}, expected {}", *left, want)
                    : fmt::format("never left DP_Control, expected it at cycle {}", want);
@@ -491,7 +495,7 @@ class SegmentRun {
         ok = visit_matches(st, got);
         break;
       case K::expect_port: {
-        const std::int64_t v = by_address_.at(st.station)->firmware->port(st.name);
+        const std::int64_t v = stations_[st.station_index]->firmware->port(st.name);
         ok = v == static_cast<std::int64_t>(st.count);
         got = scenario_expect::port_text(static_cast<std::uint32_t>(v));
         break;
@@ -525,7 +529,6 @@ class SegmentRun {
   Segment seg_;
   BusCheck check_;
   std::vector<std::unique_ptr<Station>> stations_;
-  std::map<std::uint8_t, Station*> by_address_;
   std::map<std::string, std::size_t> senders_;
   std::vector<std::unique_ptr<DpMaster>> masters_;
   std::vector<std::optional<TokenVisit>> visits_;  // each master's last visit of the token

@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <optional>
 #include <span>
 #include <string>
@@ -37,7 +38,10 @@ struct RxdTelegram {
 // Records a session on one chip. attach() it at cycle 0, before anything touches the chip; the
 // recorder must outlive the chip's observers (it stays registered until the chip is gone).
 // Entries are collected per segment — the stretch between two checkpoints — and each segment is
-// written in cycle order, headed by its comments and followed by a `state` line.
+// written in cycle order, headed by its comments and followed by a `state` line. The lines go
+// out as they are decided (write_to), or are kept for text(): the header at attach(), a segment
+// when it closes, and during a long scenario step the lines that no later event can precede
+// (events_told), so a long run holds only what is still open.
 class TraceRecorder final : public ScenarioObserver {
  public:
   // `baud`: the rate of the telegrams on RxD (the master's); `notes`: comment lines for the top
@@ -46,6 +50,10 @@ class TraceRecorder final : public ScenarioObserver {
   TraceRecorder(const TraceRecorder&) = delete;
   TraceRecorder& operator=(const TraceRecorder&) = delete;
 
+  // The trace's bytes, line by line as they are decided, go to `out` instead of text(). Call
+  // before attach(). A trace whose error() is not empty at the end is no trace: its reader
+  // discards what it was given (`dpc31 run --record` writes a temporary file it then removes).
+  void write_to(std::function<void(std::string_view)> out) { out_ = std::move(out); }
   void attach(Chip& chip);
   // The chip is a station of a segment (docs/segment.md, "Outputs"): its RxD is the line, handed
   // over edge by edge at their cycles when another chip drives it. Every telegram it hears
@@ -59,20 +67,24 @@ class TraceRecorder final : public ScenarioObserver {
   void note(std::uint64_t cycle, std::string text);
   // A comment on the telegram heard from `start` (hear_line): right after its `rx` line.
   void note_heard(std::uint64_t start, std::string text);
+  // The line's telegram from `start` is reported (a segment's on_telegram, in order of start):
+  // no note comes for it or an earlier one, so the lines before the next `rx` line go out.
+  void heard(std::uint64_t start);
   // Closes the current segment: its events in cycle order, then a `state` line at the chip's
   // current cycle (left out when nothing changed since the previous one).
   void checkpoint();
   // The last checkpoint and the `end` line. Nothing may be recorded afterwards.
   void finish();
 
-  [[nodiscard]] std::string text() const;
+  // The trace once finish()ed, without write_to (what went out so far before then).
+  [[nodiscard]] const std::string& text() const { return kept_; }
   // Empty, or why the recording is not a valid trace (then text() must not be used).
   [[nodiscard]] const std::string& error() const { return error_; }
 
   // For scenario runs: hooks with the recorder as the run's observer. It attaches at the start
   // and finishes at the end; each step and each checked expect heads a segment closed by the
-  // chip's state after it, the walk's other events become notes at their cycles. The recorder
-  // must outlive the run.
+  // chip's state at its end (step_ends), the walk's other events become notes at their cycles.
+  // The recorder must outlive the run.
   ScenarioHooks scenario_hooks();
   void run_begins(Chip& chip) override;
   void user_side_started(std::uint64_t cycle, std::string_view who, std::string_view text) override;
@@ -83,6 +95,12 @@ class TraceRecorder final : public ScenarioObserver {
   void expect_checked(std::uint64_t cycle, const ScenarioStep& st, bool ok,
                       std::string_view text) override;
   void walk_note(std::uint64_t cycle, std::string_view text) override;
+  // Writes the segment's heading and its lines before `cycle` (and before an RxD batch still
+  // open): no later event is older.
+  void events_told(std::uint64_t cycle) override;
+  // The chip's state now is the checkpoint of the segment headed last; it closes at the next
+  // chip event (the step's walk notes, told before, are in it).
+  void step_ends(std::uint64_t cycle) override;
   // What the sender puts on RxD next (DpMaster::on_send): the batch of edges it hands over is
   // written as an `rx` line from it when uart_encode of it gives exactly those edges.
   void telegram_sent(std::uint64_t start, std::span<const std::uint8_t> bytes,
@@ -93,20 +111,31 @@ class TraceRecorder final : public ScenarioObserver {
   struct Entry {
     std::uint64_t key;  // cycle the line is ordered by
     std::string text;
+    // A walk note: after the chip's lines of its cycle, as when the runner told the notes only at
+    // the step's end.
+    bool walk = false;
   };
   void add(std::uint64_t key, std::string text);
   void close_rxd();
   void close_segment();
+  // The headings, then the segment's entries before `upto` in cycle order (the rest stay).
+  void write_entries(std::uint64_t upto);
+  // A line of the trace: to out_ (or kept_); a station's (hear_line) waits in held_ while a note
+  // may still come after an `rx` line before it.
+  void put(std::string_view line);
+  void emit(std::string line);
+  void release_held(bool all);
   [[nodiscard]] std::string state_line() const;
-  // A heading for the segment of the step (or expect) now reported, with the chip's state after
-  // it as its checkpoint; the segment is closed when the next step's first chip event comes in.
+  // A heading for the segment of the step (or expect) now told; step_ends() gives its checkpoint.
   void mark(std::string heading);
 
   Chip* chip_ = nullptr;
   std::uint32_t baud_;
   std::vector<std::string> notes_;
-  std::vector<std::string> header_;
-  std::vector<std::string> body_;
+  std::function<void(std::string_view)> out_;
+  std::string kept_;
+  std::deque<std::string> held_;
+  std::optional<std::uint64_t> heard_;  // heard(): the start of the last telegram reported
   // The segment being collected.
   std::vector<std::string> headings_;
   std::vector<Entry> seg_;

@@ -30,6 +30,13 @@ std::string comment_line(std::string_view text) {
   return out;
 }
 
+// The start bit's cycle of an `rx` line.
+std::uint64_t rx_start(std::string_view line) {
+  std::uint64_t at = 0;
+  std::from_chars(line.data() + 3, line.data() + line.size(), at);
+  return at;
+}
+
 }  // namespace
 
 std::vector<TraceStateKey> trace_state(const Chip& c) {
@@ -99,23 +106,22 @@ void TraceRecorder::attach(Chip& chip) {
     // A baud the trace's `baud` line cannot hold makes a file replay refuses at that line.
     error_ = trace_baud_problem(baud_, chip.clock_hz());
   }
-  header_.emplace_back(kTraceMagic);
-  for (const std::string& n : notes_) header_.push_back(n.empty() ? "#" : comment_line(n));
-  header_.push_back(fmt::format("profile {}", profile_name(chip.profile().id)));
+  put(kTraceMagic);
+  for (const std::string& n : notes_) put(n.empty() ? "#" : comment_line(n));
+  put(fmt::format("profile {}", profile_name(chip.profile().id)));
   if (chip.vpc3_variant()) {
-    header_.push_back(fmt::format("variant {}", vpc3_variant_name(*chip.vpc3_variant())));
+    put(fmt::format("variant {}", vpc3_variant_name(*chip.vpc3_variant())));
   }
   if (chip.irq_controller() != IrqController::external) {
-    header_.push_back(fmt::format("irq-controller {}", irq_controller_name(chip.irq_controller())));
+    put(fmt::format("irq-controller {}", irq_controller_name(chip.irq_controller())));
   }
   // The DPC31's PB3 is checked as X/INT is: its edges are `pb3` lines, and a replay whose chip
   // drives it otherwise fails, even where the port is never enabled.
   const bool pb3 = chip.profile().id == Profile::dpc31;
-  if (pb3) header_.emplace_back("check pb3");
-  header_.push_back(
-      fmt::format("bus {}", chip.bus_mode() == BusMode::intel ? "intel" : "motorola"));
-  header_.push_back(fmt::format("clock {}", chip.clock_hz()));
-  header_.push_back(fmt::format("baud {}", baud_));
+  if (pb3) put("check pb3");
+  put(fmt::format("bus {}", chip.bus_mode() == BusMode::intel ? "intel" : "motorola"));
+  put(fmt::format("clock {}", chip.clock_hz()));
+  put(fmt::format("baud {}", baud_));
 
   chip.on_bus_access([this](std::uint64_t cycle, const BusAccess& e) {
     if (e.write) {
@@ -192,21 +198,53 @@ void TraceRecorder::note_heard(std::uint64_t start, std::string text) {
   const bool open = std::any_of(seg_.begin(), seg_.end(), [&](const Entry& e) {
     return e.key == start && e.text.starts_with(rx);
   });
-  if (!open) {
-    // Back to its line: the rx lines before it are earlier (the trace is in cycle order).
-    for (std::size_t i = body_.size(); i > 0; --i) {
-      const std::string& line = body_[i - 1];
-      if (!line.starts_with("rx ")) continue;
-      if (line.starts_with(rx)) {
-        body_.insert(body_.begin() + static_cast<std::ptrdiff_t>(i), comment_line(text));
-        return;
-      }
-      std::uint64_t at = 0;
-      std::from_chars(line.data() + 3, line.data() + line.size(), at);
-      if (at < start) break;
+  // Back to its line: the rx lines before it are earlier (the trace is in cycle order); those
+  // gone out are of telegrams reported before (heard()).
+  for (std::size_t i = held_.size(); !open && i > 0; --i) {
+    const std::string& line = held_[i - 1];
+    if (!line.starts_with("rx ")) continue;
+    if (line.starts_with(rx)) {
+      held_.insert(held_.begin() + static_cast<std::ptrdiff_t>(i), comment_line(text));
+      heard(start);
+      return;
     }
+    if (rx_start(line) < start) break;
   }
   note(start, std::move(text));
+  heard(start);
+}
+
+void TraceRecorder::heard(std::uint64_t start) {
+  heard_ = std::max(heard_.value_or(0), start);
+  release_held(false);
+}
+
+void TraceRecorder::put(std::string_view line) {
+  if (out_) {
+    out_(line);
+    out_("\n");
+  } else {
+    kept_.append(line);
+    kept_ += '\n';
+  }
+}
+
+void TraceRecorder::emit(std::string line) {
+  if (line_t_ == 0) {
+    put(line);
+  } else {
+    held_.push_back(std::move(line));
+  }
+}
+
+void TraceRecorder::release_held(bool all) {
+  while (!held_.empty()) {
+    const std::string& line = held_.front();
+    // An rx line of a telegram not yet reported may still get its note.
+    if (!all && line.starts_with("rx ") && (!heard_ || rx_start(line) > *heard_)) return;
+    put(line);
+    held_.pop_front();
+  }
 }
 
 std::string TraceRecorder::state_line() const {
@@ -215,41 +253,42 @@ std::string TraceRecorder::state_line() const {
   return s;
 }
 
+void TraceRecorder::write_entries(std::uint64_t upto) {
+  std::stable_sort(seg_.begin(), seg_.end(), [](const Entry& a, const Entry& b) {
+    return a.key < b.key || (a.key == b.key && !a.walk && b.walk);
+  });
+  for (std::string& h : headings_) emit(comment_line(h));
+  headings_.clear();
+  const auto beyond =
+      std::find_if(seg_.begin(), seg_.end(), [&](const Entry& e) { return e.key >= upto; });
+  for (auto e = seg_.begin(); e != beyond; ++e) {
+    const bool comment = e->text.starts_with('#');
+    if (e->key < last_key_ && !comment && error_.empty()) {
+      error_ = fmt::format("'{}' is out of cycle order (after cycle {})", e->text, last_key_);
+    }
+    if (!comment) last_key_ = std::max(last_key_, e->key);
+    emit(std::move(e->text));
+  }
+  seg_.erase(seg_.begin(), beyond);
+}
+
 void TraceRecorder::close_segment() {
   close_rxd();
   closing_ = false;
-  std::stable_sort(seg_.begin(), seg_.end(),
-                   [](const Entry& a, const Entry& b) { return a.key < b.key; });
   // What lies beyond the checkpoint (an answer the chip decided at its request's end, due
-  // TSDR later, when a segment's step ended in between) opens the next segment.
-  std::vector<Entry> later;
-  if (pending_state_) {
-    const auto beyond = std::find_if(seg_.begin(), seg_.end(),
-                                     [&](const Entry& e) { return e.key > pending_state_->first; });
-    later.assign(std::make_move_iterator(beyond), std::make_move_iterator(seg_.end()));
-    seg_.erase(beyond, seg_.end());
-  }
-  for (const std::string& h : headings_) body_.push_back(comment_line(h));
-  for (const Entry& e : seg_) {
-    const bool comment = e.text.starts_with('#');
-    if (e.key < last_key_ && !comment && error_.empty()) {
-      error_ = fmt::format("'{}' is out of cycle order (after cycle {})", e.text, last_key_);
-    }
-    if (!comment) last_key_ = std::max(last_key_, e.key);
-    body_.push_back(e.text);
-  }
-  headings_.clear();
-  seg_ = std::move(later);
+  // TSDR later, when a segment's step ended in between) stays to open the next segment.
+  write_entries(pending_state_ ? pending_state_->first + 1 : UINT64_MAX);
   if (pending_state_) {
     const auto& [cycle, line] = *pending_state_;
     if (cycle < last_key_ && error_.empty()) {
       error_ = fmt::format("'{}' is out of cycle order (after cycle {})", line, last_key_);
     }
     last_key_ = std::max(last_key_, cycle);
-    if (line != last_state_) body_.push_back(line);
+    if (line != last_state_) emit(line);
     last_state_ = line;
     pending_state_.reset();
   }
+  release_held(false);
 }
 
 void TraceRecorder::checkpoint() {
@@ -268,15 +307,9 @@ void TraceRecorder::finish() {
   if (finished_) return;
   if (closing_) close_segment();
   checkpoint();
-  body_.push_back(fmt::format("end {}", chip_->cycle()));
+  emit(fmt::format("end {}", chip_->cycle()));
+  release_held(true);
   finished_ = true;
-}
-
-std::string TraceRecorder::text() const {
-  std::string s;
-  for (const std::string& l : header_) s += l + '\n';
-  for (const std::string& l : body_) s += l + '\n';
-  return s;
 }
 
 ScenarioHooks TraceRecorder::scenario_hooks() {
@@ -289,15 +322,27 @@ void TraceRecorder::run_begins(Chip& chip) { attach(chip); }
 
 void TraceRecorder::run_ends(Chip&) { finish(); }
 
-// The runner reports a step's events at its end, with the chip standing still: the step's own
-// line marks a checkpoint, the other events become notes at their cycles.
+// The runner tells a step's events in cycle order, its own line first (at its end, or during a
+// long action as they come): that line heads a segment, the other events become notes at their
+// cycles, and step_ends() gives the checkpoint.
 void TraceRecorder::mark(std::string heading) {
   if (chip_ == nullptr || finished_) return;
   if (closing_) close_segment();  // the previous step left no event: close it now
-  close_rxd();
   headings_.push_back(std::move(heading));
+}
+
+void TraceRecorder::step_ends(std::uint64_t) {
+  if (chip_ == nullptr || finished_) return;
+  if (closing_) close_segment();
+  close_rxd();
   pending_state_.emplace(chip_->cycle(), state_line());
   closing_ = true;
+}
+
+void TraceRecorder::events_told(std::uint64_t cycle) {
+  if (chip_ == nullptr || finished_ || closing_) return;
+  write_entries(rxd_.empty() ? cycle : std::min(cycle, rxd_fed_));
+  release_held(false);
 }
 
 std::string TraceRecorder::user_side_heading(std::string_view who) const {
@@ -334,7 +379,7 @@ void TraceRecorder::telegram_sent(std::uint64_t start, std::span<const std::uint
 
 void TraceRecorder::walk_note(std::uint64_t cycle, std::string_view text) {
   if (chip_ == nullptr || finished_) return;
-  note(cycle, std::string(text));
+  seg_.push_back(Entry{cycle, comment_line(text), true});
 }
 
 }  // namespace dpc31

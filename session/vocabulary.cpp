@@ -216,6 +216,14 @@ std::string second_station_named(std::string_view name) {
   return fmt::format("a second station named '{}'", name);
 }
 
+std::string master_at_station(std::uint8_t address) {
+  return fmt::format("master {} at the address of station {}", address, address);
+}
+
+std::string station_at_master(std::uint8_t address) {
+  return fmt::format("station {} at the address of master {}", address, address);
+}
+
 std::string station_name_refused(std::string_view name, std::string_view whose) {
   if (name.empty()) return fmt::format("empty name for {}", whose);
   if (name.size() > kMaxStationName) {

@@ -170,6 +170,11 @@ inline constexpr ValueRange kC31Code{"code", 0x08A0, 0x1FFF};
 // master's sender is "master ADDR"; a name taken is "a second station named 'NAME'".
 [[nodiscard]] std::string master_station_name(std::uint8_t address);
 [[nodiscard]] std::string second_station_named(std::string_view name);
+// A master is a station too: none shares its address with a chip station (two chips may: they
+// collide). The refusal of the one that came second: "master 5 at the address of station 5",
+// "station 5 at the address of master 5".
+[[nodiscard]] std::string master_at_station(std::uint8_t address);
+[[nodiscard]] std::string station_at_master(std::uint8_t address);
 // A station's name is at most this many bytes: it is the station's scope in the waveforms (beside
 // "stationADDR_") and names its --record file (FILE.stationADDR_NAME.trace: a file name is at most
 // 255 bytes on Linux), its log lines and its packets' comments in a capture.

@@ -342,7 +342,8 @@ TEST_F(BadInput, AFirmwareThatCrashesIsNamedAndLeavesNothing) {
 
 // s33 review finding 1: a crash after the walk has printed lines, with stdout to a file (CI, a
 // pipe): the walk so far is kept, as at a hang (docs/bring-up.md, section 4). It was lost, the
-// buffered stdout never written.
+// buffered stdout never written. The trace, whose lines went to its temporary as the run went
+// (s34-record), is not left: neither the file nor the temporary.
 TEST_F(BadInput, AFirmwareThatCrashesLaterKeepsTheWalkPrintedSoFar) {
 #if defined(__SANITIZE_ADDRESS__)
   // The sanitizers take the crash themselves (their report and exit; UBSan's null store check in
@@ -353,7 +354,8 @@ TEST_F(BadInput, AFirmwareThatCrashesLaterKeepsTheWalkPrintedSoFar) {
                         std::string(BAD_PLUGIN_CRASH_INPUT) + "\nstartup\nhw crash 1\n");
   const std::string err = (root_ / "io" / "err").string();
   const std::string out = (root_ / "io" / "out").string();
-  const pid_t pid = spawn({kCli, "run", "later.scn"}, path(""), err, false, out);
+  const pid_t pid =
+      spawn({kCli, "run", "later.scn", "--record", "later.trace"}, path(""), err, false, out);
   int st = 0;
   ASSERT_EQ(::waitpid(pid, &st, 0), pid);
   ASSERT_TRUE(WIFSIGNALED(st));
@@ -364,6 +366,7 @@ TEST_F(BadInput, AFirmwareThatCrashesLaterKeepsTheWalkPrintedSoFar) {
   const std::string walk = slurp(out);
   EXPECT_NE(walk.find("] line 3: startup\n"), std::string::npos) << walk;
   EXPECT_NE(walk.find("] line 4: hw crash 1\n"), std::string::npos) << walk;
+  EXPECT_EQ(listing(), std::vector<std::string>{"later.scn"});
 }
 
 // s33 audit finding 5: `dpc31 bridge --log F` that never gets past its start left F emptied with

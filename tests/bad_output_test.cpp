@@ -171,19 +171,24 @@ TEST_F(BadInput, FullFileSystemIsExit2AndKeepsTheOldFile) {
   spit(full + "/old.fst", "old fst");
   spit(full + "/old.vcd", "old vcd");
   spit(full + "/old.json", "old json");
+  spit(full + "/old.trace", "old trace");
   tmpfs.fill();  // what is left cannot hold a waveform of the whole run
-  for (const auto& [opt, name] : {std::pair{"--fst", "old.fst"}, std::pair{"--vcd", "old.vcd"},
-                                  std::pair{"--json", "old.json"}}) {
+  // The trace too, which is written as the run goes (s34-record).
+  for (const auto& [opt, name] :
+       {std::pair{"--fst", "old.fst"}, std::pair{"--vcd", "old.vcd"},
+        std::pair{"--json", "old.json"}, std::pair{"--record", "old.trace"}}) {
     const Outcome r = dpc31("run " + kScn + " --quiet " + opt + " full/" + name);
     expect_bad_prefix(r, std::string("dpc31 run: full/") + name + ": cannot write", name);
   }
   EXPECT_EQ(slurp(full + "/old.fst"), "old fst");
   EXPECT_EQ(slurp(full + "/old.vcd"), "old vcd");
   EXPECT_EQ(slurp(full + "/old.json"), "old json");
+  EXPECT_EQ(slurp(full + "/old.trace"), "old trace");
   std::vector<std::string> left;
   for (const auto& e : fs::directory_iterator(full)) left.push_back(e.path().filename().string());
   std::sort(left.begin(), left.end());
-  EXPECT_EQ(left, (std::vector<std::string>{"fill", "old.fst", "old.json", "old.vcd"}));
+  EXPECT_EQ(left,
+            (std::vector<std::string>{"fill", "old.fst", "old.json", "old.trace", "old.vcd"}));
 }
 
 // Several outputs of one run are each whole or absent, written in a fixed order when the run is
@@ -390,8 +395,8 @@ TEST_F(BadInput, AClosedPipeIsAFailedWrite) {
 
 // The running program is an input of every command: `bridge --pcap build/bin/dpc31` renamed its
 // capture over the program (the audit of 2026-12-05, run 21). A copy of it here, run as ./dpc31:
-// refused before anything runs by distinct(), and by OutFile::open() where a command has no
-// distinct() (bench --json).
+// refused before anything runs by distinct() (OutFile::open() refuses it too, for a library's
+// caller).
 TEST_F(BadInput, TheRunningProgramIsNeverAnOutput) {
   const std::string exe = copy(kCli, "dpc31");
   const std::string bytes = slurp(exe);
@@ -405,7 +410,8 @@ TEST_F(BadInput, TheRunningProgramIsNeverAnOutput) {
             "dpc31 run: --json " + exe + is_it + ": an output must not replace an input"},
            {"soak --cycles 1000 --json dpc31",
             "dpc31 soak: --json dpc31" + is_it + ": an output must not replace an input"},
-           {"bench --bench /bin/true --json dpc31", "dpc31 bench: dpc31: cannot write" + is_it}}) {
+           {"bench --bench /bin/true --json dpc31",
+            "dpc31 bench: --json dpc31" + is_it + ": an output must not replace an input"}}) {
     const testutil::CommandResult r = testutil::run_command(
         "cd " + path("") + " && timeout 60 ./dpc31 " + args + " 2>&1 >/dev/null");
     EXPECT_EQ(r.rc, 2) << args;

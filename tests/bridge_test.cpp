@@ -25,6 +25,7 @@
 #include "bridge_engine_record.hpp"
 #include "dpc31/fdl.hpp"
 #include "dpc31/fdl_counters.hpp"
+#include "firmware_host.hpp"
 
 namespace {
 
@@ -513,6 +514,41 @@ TEST_F(BridgeEngine, GarbageOnThePtyKeepsTheLogBounded) {
   EXPECT_EQ(rx.size() + said, sent);
 }
 
+// docs/bring-up.md, section 7: an SPC3 whose firmware gives its Cfg verdict but never reads
+// New_Din_Buffer_Cmd (tests/input_only_plugin.c built with FORGETS_DIN) stays in Wait_Cfg, and
+// the bridge's log carries the chip's line about it once, as every chip line: a CHIP line of
+// slave5. At 19 200 baud a Slave_Diag poll comes every 352 bit times (18.3 ms), the first 176
+// bit times (9.2 ms) after the Chk_Cfg is acted on (its SC after TSDR 11, 11 bits, idle 33, the
+// request's 121): the second poll is the first 10 ms past the verdict.
+TEST_F(BridgeEngine, AnSpc3FirmwareThatNeverReadsNewDinBufferCmdIsToldOnceInTheLog) {
+  dpc31::bridge::Setup s;
+  s.chip.profile = dpc31::Profile::spc3;
+  s.firmware = &dpc31::find_firmware(PLUGIN_FORGETS_DIN);
+  EngineRecord::make(s);
+  find_slave();
+  bool fcb = true;  // the first SRD after FDL_Status has FCB = 1
+  const auto srd = [&](Bytes du, std::uint8_t dsap) {
+    const auto fc = static_cast<std::uint8_t>(fcb ? 0x7D : 0x5D);
+    fcb = !fcb;
+    return exchange(dpc31::fdl::encode(dpc31::fdl::make_frame(5, 2, fc, du, dsap, 62)));
+  };
+  // The plug-in's GSD defaults: Ident 0E10h, Cfg 10, the Spec_User_Prm_Byte 00.
+  EXPECT_EQ(srd({0x88, 0x0A, 0x0A, 0x00, 0x0E, 0x10, 0x00, 0x00}, 61), Bytes{0xE5});
+  EXPECT_EQ(srd({0x10}, 62), Bytes{0xE5});
+  for (int i = 0; i < 3; ++i) EXPECT_FALSE(srd({}, 60).empty());
+  EXPECT_EQ(engine_->chip().dp_state(), dpc31::DpState::Wait_Cfg);
+  engine_->flush_log();
+  std::size_t said = 0;
+  for (const Line& l : tagged("CHIP")) {
+    if (l.text.starts_with("master 2 is refused (Slave_Diag with Station_Not_Ready): the SPC3 is "
+                           "still in Wait_Cfg at least 10 ms after User_Cfg_Data_Okay")) {
+      EXPECT_EQ(l.station, "slave5");
+      ++said;
+    }
+  }
+  EXPECT_EQ(said, 1u);
+}
+
 TEST(BridgeSummary, NamesServicesAndAnswers) {
   using dpc31::bridge::telegram_summary;
   using dpc31::fdl::encode;
@@ -598,6 +634,17 @@ TEST(BridgePty, SymlinkRules) {
   std::ofstream(file) << "keep\n";
   EXPECT_NE(dpc31::bridge::make_link(file, "/dev/pts/1").find("not a symlink"), std::string::npos);
   EXPECT_TRUE(std::filesystem::is_regular_file(file));
+  // A symlink that is not a pty's (a user's own: a dotfile, /dev/stdout) is refused and kept as
+  // it was, dangling or not (docs/bridge.md, "The symlink").
+  for (const std::string& to : {file, std::string("/proc/self/fd/1"), (dir / "gone").string()}) {
+    const std::string own = (dir / "own").string();
+    std::filesystem::remove(own);
+    std::filesystem::create_symlink(to, own);
+    EXPECT_EQ(
+        dpc31::bridge::make_link(own, "/dev/pts/1"),
+        own + " is a symlink to " + to + ", not to a pty in /dev/pts/: refusing to replace it");
+    EXPECT_EQ(std::filesystem::read_symlink(own).string(), to);
+  }
   std::filesystem::remove_all(dir);
 }
 

@@ -14,9 +14,11 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <new>
+#include <optional>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -254,6 +256,102 @@ TEST(DpMaster, AStartUpWhoseAnswersAreAllLateFails) {
   const std::unique_ptr<DpMaster> owner = one.master(100);
   EXPECT_FALSE(owner->startup(20));
   EXPECT_GT(owner->counters().late, 0u);
+}
+
+// Station 5 played by a scripted sender: each request of the master is answered with what
+// `answer` makes of it (nothing: silence), TSDR 11 bit times after the request's end.
+struct ScriptedSlave {
+  Segment seg{1'500'000};
+  std::size_t rogue = seg.add_sender("station 5");
+  std::size_t m = seg.add_sender("master 2");
+  DpMaster master{seg, m, MasterConfig{}, {SlaveConfig{}}};
+  std::function<std::vector<std::uint8_t>(const fdl::Frame&)> answer;
+  std::vector<std::uint8_t> due;
+  std::uint64_t due_at = 0;
+  ScriptedSlave() {
+    master.on_send = [this](std::uint64_t start, std::span<const std::uint8_t> request,
+                            const UartFault&) {
+      const fdl::Decoded d = fdl::decode(request);
+      due = d.error == fdl::Error::none ? answer(d.frame) : std::vector<std::uint8_t>{};
+      due_at = start + request.size() * kChar + 11 * T;
+    };
+    master.scheduler = [this](std::uint64_t cycle) {
+      if (!due.empty() && cycle >= due_at) {
+        seg.run_until(due_at);
+        seg.send(rogue, due, due_at);
+        due.clear();
+        return;
+      }
+      seg.run_until(cycle);
+    };
+  }
+};
+
+// A Slave_Diag answer (DL, from SAP 60 to the master's 62) with Station_Status_1..3, Master_Add
+// and the Ident_Number 0C31h (chip-facts.md, Slave_Diag).
+std::vector<std::uint8_t> diag_answer(std::uint8_t st1, std::uint8_t st2, std::uint8_t master) {
+  return fdl::encode(fdl::make_frame(2, 5, fdl::make_response_fc(fdl::Response::DL),
+                                     {st1, st2, 0x00, master, 0x0C, 0x31}, 62, 60));
+}
+
+// docs/decisions.md, the thirty-fourth session: a start-up's Set_Prm without an answer leaves the
+// slave's state unknown, so the master goes on with Slave_Diag, not Chk_Cfg (EN 50170: a master
+// parameterises a slave again from its diagnosis). Station 5 answers FDL_Status and a first
+// Slave_Diag with Prm_Req (Wait_Prm), is silent to Set_Prm, then reports Wait_Cfg
+// (Station_Not_Ready, Master_Add 2, no Prm_Req): the master sends Set_Prm and Chk_Cfg again. The
+// Slave_Diag after the silent Set_Prm starts TSL 100 + TSYN 33 bit times after its end
+// (docs/timing.md).
+TEST(DpMaster, AnUnansweredSetPrmIsFollowedBySlaveDiagAndParameterisedAgain) {
+  ScriptedSlave l;
+  int prms = 0;
+  l.answer = [&prms](const fdl::Frame& req) -> std::vector<std::uint8_t> {
+    using D = pdu::SlaveDiag;
+    if (!req.dsap)
+      return fdl::encode(fdl::make_frame(2, 5, fdl::make_response_fc(fdl::Response::OK)));
+    switch (fdl::sap_number(*req.dsap)) {
+      case sap::Slave_Diag:
+        return prms == 0 ? diag_answer(D::St1_Station_Not_Ready, D::St2_Prm_Req | D::St2_Always_1,
+                                       D::kNoMaster)
+                         : diag_answer(D::St1_Station_Not_Ready, D::St2_Always_1 | D::St2_WD_On, 2);
+      case sap::Set_Prm:
+        ++prms;
+        return {};
+      default:
+        return {};
+    }
+  };
+  EXPECT_FALSE(l.master.startup(6));
+  const std::vector<Exchange>& h = l.master.history();
+  std::vector<std::optional<std::uint8_t>> saps;
+  for (const Exchange& e : h) {
+    saps.push_back(e.request.dsap ? std::optional(fdl::sap_number(*e.request.dsap)) : std::nullopt);
+  }
+  const std::vector<std::optional<std::uint8_t>> want = {
+      std::nullopt, sap::Slave_Diag, sap::Set_Prm, sap::Slave_Diag,
+      sap::Set_Prm, sap::Slave_Diag, sap::Set_Prm, sap::Slave_Diag};
+  ASSERT_GE(saps.size(), want.size());
+  EXPECT_EQ(std::vector(saps.begin(), saps.begin() + static_cast<std::ptrdiff_t>(want.size())),
+            want);
+  EXPECT_FALSE(h[2].answer);
+  EXPECT_EQ(h[3].request_start, h[2].request_end + kTsl + kTsyn);
+  EXPECT_EQ(std::count(saps.begin(), saps.end(), std::optional<std::uint8_t>(sap::Chk_Cfg)), 0);
+}
+
+// A master is a station too: the C++ door refuses a slave at the master's own address (a segment
+// scenario's `master 5 at the address of station 5`; the Segment knows no chip's address).
+TEST(DpMaster, ASlaveAtTheMastersOwnAddressIsRefused) {
+  Segment seg{1'500'000};
+  const std::size_t m = seg.add_sender("master 5");
+  SlaveConfig five;
+  five.address = 5;
+  MasterConfig mc;
+  mc.address = 5;
+  try {
+    DpMaster master(seg, m, mc, {SlaveConfig{}, five});
+    ADD_FAILURE() << "master 5 polling slave 5 was taken";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "DpMaster: master 5 at the address of station 5");
+  }
 }
 
 // An answer mirrors its request's addresses: a telegram in its place from another station, or to
@@ -558,6 +656,173 @@ TEST(Responder, ARestoredChipDoesNotRepeatItsLog) {
   EXPECT_TRUE(
       log[0].starts_with("10 uses of buffers over the registers so far (the latest: R_Din_Buf_Ptr"))
       << log[0];
+}
+
+// The firmware of the two tests below: the built-in user side with New_Cfg_Data masked (C0F0h is
+// its own mask, every interrupt it serves enabled), so that the test gives the Cfg verdict for it
+// (User_Cfg_Data_Okay, 00h finished) and chooses whether New_Din_Buffer_Cmd is read after it.
+struct CfgVerdictByHand {
+  explicit CfgVerdictByHand(Profile p) : chip(ChipOptions{p}) {
+    chip.set_log_sink([this](const LogRecord& r) {
+      if (r.level == LogLevel::warn) log.emplace_back(r.cycle, r.text);
+    });
+  }
+  [[nodiscard]] std::uint32_t at(RegId id) const {
+    return static_cast<std::uint32_t>(chip.addr_of(id));
+  }
+  // Start-up to the Cfg verdict, given: Wait_Cfg until the VPC3+ and DPC31 enter Data_Exchange.
+  void to_the_verdict() {
+    DirectBus bus(chip);
+    user.init(bus);
+    constexpr std::uint16_t kMask = 0xC0F0 | irq::New_Cfg_Data;
+    chip.write(at(RegId::Int_Mask_Reg), static_cast<std::uint8_t>(kMask));  // Intel: low first
+    chip.write(at(RegId::Int_Mask_Reg) + 1, static_cast<std::uint8_t>(kMask >> 8));
+    master.set_firmware([this](BusPort& b) { user.isr(b); });
+    while (!master.fdl_status().answer) {
+    }
+    ASSERT_EQ(master.set_prm().answer->sd, fdl::SC);
+    ASSERT_EQ(master.chk_cfg().answer->sd, fdl::SC);
+    ASSERT_EQ(chip.dp_state(), DpState::Wait_Cfg);
+    ASSERT_EQ(chip.read(at(RegId::User_Cfg_Data_Okay)), 0x00);
+  }
+  Chip chip;
+  std::vector<std::pair<std::uint64_t, std::string>> log;  // the warnings
+  ResponderConfig rc;
+  Responder user{rc};
+  DpMaster master{chip, MasterConfig{2, 1'500'000}, rc.slave};
+};
+
+// A firmware that gives its Cfg verdict (User_Cfg_Data_Okay, 00h finished) but never reads
+// New_Din_Buffer_Cmd, which the built-in user side does at once: its New_Cfg_Data is masked and the
+// test reads the verdict for it. SPC3 p.31: "the transition to 'DATA_EX' takes place immediately,
+// if no Din_buffer is present (R_Len_Din_Puf = 00H) ... Otherwise" (cut off; modelled: at the
+// user's next New_Din_Buffer_Cmd, docs/decisions.md), so with R_Len_Din_Buf = 4 the SPC3 stays in
+// Wait_Cfg and its Slave_Diag shows Station_Not_Ready. The first poll from Master_Add acted on
+// (docs/timing.md: at the stop sample of the request's last character, end - T + T/2) 10 ms =
+// 480 000 cycles (48 MHz) or more after the verdict read's completion cycle gets the warning, and
+// nothing after it does (a Data_Exchange answered RS neither). The snapshot carries when the wait
+// began and that it was said (docs/snapshots.md, LOGS): a chip restored from before the warning
+// says it at its own first poll past the same cycle, one restored from after it never. The VPC3+
+// (VPC3+C p.43: "immediately, if trigger counters ... are at 0") and the DPC31 enter
+// Data_Exchange at the verdict itself: no wait, no line.
+TEST(Responder, AnSpc3FirmwareThatNeverReadsNewDinBufferCmdIsToldOnce) {
+  using D = pdu::SlaveDiag;
+  const auto warning = [](const char* refused) {
+    return fmt::format(
+        "master 2 is refused ({}): the SPC3 is still in Wait_Cfg at least 10 ms after "
+        "User_Cfg_Data_Okay, because the firmware has not read New_Din_Buffer_Cmd since; with "
+        "R_Len_Din_Buf = 4 it enters Data_Exchange only at that read (SPC3 p.31, modelled). Hand "
+        "the inputs over once after User_Cfg_Data_Okay: write them into the U buffer, then read "
+        "New_Din_Buffer_Cmd (docs/bring-up.md)",
+        refused);
+  };
+  const std::string by_diag = warning("Slave_Diag with Station_Not_Ready");
+  for (const Profile p : {Profile::spc3, Profile::vpc3plus, Profile::dpc31}) {
+    SCOPED_TRACE(std::string(profile_desc(p).name));
+    CfgVerdictByHand f(p);
+    ASSERT_NO_FATAL_FAILURE(f.to_the_verdict());
+    Chip& chip = f.chip;
+    DpMaster& m = f.master;
+    const auto& log = f.log;
+    if (p != Profile::spc3) {
+      EXPECT_EQ(chip.dp_state(), DpState::Data_Exchange);
+      for (int i = 0; i < 60; ++i) ASSERT_TRUE(m.slave_diag().answer);  // 60 x 233 us: 14 ms
+      EXPECT_EQ(log, (std::vector<std::pair<std::uint64_t, std::string>>{}));
+      continue;
+    }
+    const std::uint64_t due = chip.cycle() + 480'000;
+    // Polls with Slave_Diag (or Data_Exchange, `dx`) until one is acted on at `due` or later,
+    // and returns that cycle; the chip's snapshot after the first poll acted on 5 ms or more
+    // before `due` goes to `half_way`.
+    const auto poll_past = [&due](DpMaster& master, Chip& c, std::vector<std::uint8_t>* half_way,
+                                  const std::vector<std::pair<std::uint64_t, std::string>>& l,
+                                  bool dx = false) {
+      for (;;) {
+        const Exchange d = dx ? master.data_exchange({1, 2, 3, 4}) : master.slave_diag();
+        EXPECT_TRUE(d.answer && (dx ? fdl::response_code(d.answer->fc) == fdl::Response::RS
+                                    : (d.answer->du.at(0) & D::St1_Station_Not_Ready) != 0));
+        const std::uint64_t acted = d.request_end - T + T / 2;
+        if (acted >= due) return acted;
+        EXPECT_EQ(l.size(), 0u) << "said at the poll acted on at " << acted;
+        if (half_way != nullptr && half_way->empty() && acted + 240'000 >= due)
+          *half_way = c.save_state();
+      }
+    };
+    std::vector<std::uint8_t> half_way;
+    const std::uint64_t acted = poll_past(m, chip, &half_way, log);
+    ASSERT_EQ(log.size(), 1u);
+    EXPECT_EQ(log[0], std::pair(acted, by_diag));
+    std::vector<std::uint8_t> said = chip.save_state();
+    for (int i = 0; i < 10; ++i) ASSERT_TRUE(m.slave_diag().answer);
+    EXPECT_EQ(fdl::response_code(m.data_exchange({1, 2, 3, 4}).answer->fc), fdl::Response::RS);
+    EXPECT_EQ(log.size(), 1u) << log.back().second;
+    EXPECT_EQ(chip.dp_state(), DpState::Wait_Cfg);
+
+    // Restored from half-way: polled by Slave_Diag, by Data_Exchange, by another master (3, which
+    // has not locked the slave: its polls past `due` say nothing, master 2's next one does); from
+    // after the line.
+    enum class Poll { diag, dx, other_master, after_the_line };
+    for (const Poll how : {Poll::diag, Poll::dx, Poll::other_master, Poll::after_the_line}) {
+      SCOPED_TRACE(static_cast<int>(how));
+      Chip restored(ChipOptions{p});
+      std::vector<std::pair<std::uint64_t, std::string>> restored_log;
+      restored.set_log_sink([&restored_log](const LogRecord& r) {
+        if (r.level == LogLevel::warn) restored_log.emplace_back(r.cycle, r.text);
+      });
+      restored.load_state(how == Poll::after_the_line ? said : half_way);
+      DpMaster mr(restored, MasterConfig{2, 1'500'000}, f.rc.slave);
+      if (how == Poll::other_master) {
+        DpMaster other(restored, MasterConfig{3, 1'500'000}, f.rc.slave);
+        poll_past(other, restored, nullptr, restored_log);
+        for (int i = 0; i < 10; ++i) ASSERT_TRUE(other.slave_diag().answer);
+        EXPECT_EQ(restored_log.size(), 0u);
+        const Exchange d = mr.slave_diag();
+        ASSERT_EQ(restored_log.size(), 1u);
+        EXPECT_EQ(restored_log[0], std::pair(d.request_end - T + T / 2, by_diag));
+      } else if (how != Poll::after_the_line) {
+        const bool dx = how == Poll::dx;
+        const std::uint64_t restored_acted = poll_past(mr, restored, nullptr, restored_log, dx);
+        ASSERT_EQ(restored_log.size(), 1u);
+        EXPECT_EQ(restored_log[0],
+                  std::pair(restored_acted, dx ? warning("Data_Exchange answered RS") : by_diag));
+      } else {
+        for (int i = 0; i < 10; ++i) ASSERT_TRUE(mr.slave_diag().answer);
+        EXPECT_EQ(restored_log.size(), 0u);
+      }
+    }
+  }
+}
+
+// The same SPC3 firmware that does read New_Din_Buffer_Cmd, 5 ms after its Cfg verdict: the
+// chip enters Data_Exchange at that read (docs/decisions.md), and polls for 20 ms after the
+// verdict give no warning; nor does the built-in user side, which reads it at once.
+TEST(Responder, AnSpc3FirmwareThatReadsNewDinBufferCmdIsNotWarned) {
+  CfgVerdictByHand f(Profile::spc3);
+  ASSERT_NO_FATAL_FAILURE(f.to_the_verdict());
+  Chip& chip = f.chip;
+  DpMaster& m = f.master;
+  const std::uint64_t verdict = chip.cycle();
+  while (chip.cycle() < verdict + 240'000) ASSERT_TRUE(m.slave_diag().answer);
+  EXPECT_EQ(chip.dp_state(), DpState::Wait_Cfg);
+  chip.read(f.at(RegId::New_Din_Buffer_Cmd));
+  EXPECT_EQ(chip.dp_state(), DpState::Data_Exchange);
+  while (chip.cycle() < verdict + 960'000) ASSERT_TRUE(m.slave_diag().answer);
+  EXPECT_EQ(f.log.size(), 0u) << f.log.front().second;
+
+  Chip fine(ChipOptions{Profile::spc3});
+  std::vector<std::string> log;  // the warnings
+  fine.set_log_sink([&log](const LogRecord& r) {
+    if (r.level == LogLevel::warn) log.push_back(r.text);
+  });
+  Responder fine_user(f.rc);
+  DirectBus fine_bus(fine);
+  fine_user.init(fine_bus);
+  DpMaster fm(fine, MasterConfig{2, 1'500'000}, f.rc.slave);
+  fm.set_firmware([&fine_user](BusPort& b) { fine_user.isr(b); });
+  ASSERT_TRUE(fm.startup());
+  const std::uint64_t ready = fine.cycle();
+  while (fine.cycle() < ready + 960'000) ASSERT_TRUE(fm.data_exchange({1, 2, 3, 4}).answer);
+  EXPECT_EQ(log, std::vector<std::string>{});
 }
 
 // A buffer pointer that puts a buffer over the registers (00h, the reset value: a driver that

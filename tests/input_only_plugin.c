@@ -1,8 +1,15 @@
 /* input_only_plugin.c -- a firmware plug-in with inputs only (one byte, a counter of its
  * Data_Exchanges; no outputs): the master's Data_Exchange request carries no data unit, an SD1 of
- * 6 characters (soak's fault placement, tests/soak_test.cpp). On the shipped dps driver. */
+ * 6 characters (soak's fault placement, tests/soak_test.cpp). On the shipped dps driver.
+ * With FORGETS_DIN it makes the mistake of docs/bring-up.md, section 7
+ * (tests/scenario_walk_test.cpp): its own ISR, entered before the driver's, gives the Cfg verdict
+ * on New_Cfg_Data (User_Cfg_Data_Okay) and nothing else; that read clears the event, so the
+ * driver's Cfg handler, which would hand the inputs over with New_Din_Buffer_Cmd, never runs. */
 #include <string.h>
 
+#ifdef FORGETS_DIN
+#include "dpc31/dpc31_regs.h"
+#endif
 #include "firmware.h"
 
 #define INPUT_ONLY_IDENT 0x0E10u
@@ -40,14 +47,26 @@ static const dps_module kModule = {"INPUT-ONLY", INPUT_ONLY_IDENT, kCfg,   sizeo
                                    check_prm,    outputs,          inputs, comm_lost,   0, 0, 0};
 
 static input_only g_the;
+#ifdef FORGETS_DIN
+static int g_motorola;
+#endif
 
 static void start(const dpc31_board* board) {
   const dps_board b = dpc31_dps_board(board);
   memset(&g_the, 0, sizeof g_the);
+#ifdef FORGETS_DIN
+  g_motorola = board->motorola;
+#endif
   dps_init(&g_the.drv, &b, &kModule);
 }
 
-static void isr(void) { dps_isr(&g_the.drv); }
+static void isr(void) {
+#ifdef FORGETS_DIN /* the SPC3's registers: the mistake is the SPC3's alone */
+  const uint8_t high = Vpc3Read(g_motorola ? SPC3_Int_Reg_HI_MOTOROLA : SPC3_Int_Reg_HI_INTEL);
+  if ((high & (SPC3_Int_Reg_New_Cfg_Data_Msk >> 8)) != 0) (void)Vpc3Read(SPC3_User_Cfg_Data_Okay);
+#endif
+  dps_isr(&g_the.drv);
+}
 
 static const uint8_t kPrm[] = {0x00}; /* Spec_User_Prm_Byte */
 static const dpc31_firmware kInputOnly = {

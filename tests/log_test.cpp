@@ -6,7 +6,6 @@
 #include <fmt/core.h>
 #include <gtest/gtest.h>
 
-#include <bit>
 #include <string>
 #include <vector>
 
@@ -193,36 +192,75 @@ TEST(LogLimiter, ALineOfAnotherLevelEndsTheRepeats) {
   EXPECT_EQ(log.records[3].cycle, 20u);
 }
 
-// The same rule's other half (s33-hal, emu/signals.hpp): a debug line keeps its own count, so it
-// does not end the info line's repeats; a firmware's per-interrupt debug lines would otherwise end
-// every fold (the audit's logrepeat2.scn). Two equal info lines, an Int_Ack_Reg write of a bit it
-// does not change (logged at debug, emu/bus.cpp; docs/timing.md "acknowledge exceptions"), two
-// more: one info line, the debug line, and at the end one count of the three repeats. Each access
-// costs 4 clocks and logs at its end (docs/timing.md).
-TEST(LogLimiter, ADebugLineBetweenEqualInfoLinesKeepsTheFold) {
-  Chip c({Profile::dpc31, BusMode::intel});
+namespace {
+
+// An info line and a debug line, both repeatable (testutil::RepeatableLogLines), and a chip to log
+// them. Each access costs 4 clocks and logs at its end (docs/timing.md).
+struct InfoAndDebug {
+  Chip c{{Profile::dpc31, BusMode::intel}};
+  testutil::RepeatableLogLines lines{c.profile()};
+  InfoAndDebug() {
+    EXPECT_NE(lines.info_read, 0u);
+    EXPECT_NE(lines.debug_write, 0u);
+  }
+  void info() { c.read(lines.info_read); }
+  void debug() { c.write(lines.debug_write, lines.debug_value); }
+};
+
+std::vector<std::string> shown(const std::vector<LogRecord>& records) {
+  std::vector<std::string> out;
+  for (const LogRecord& r : records) out.push_back(log_line(r));
+  return out;
+}
+
+}  // namespace
+
+// The repeats are the log's as its sink sees it (syslogd's "last message repeated"; docs/
+// decisions.md, s34-left): a sink that shows debug lines (Chip::set_log_sink(sink): every level)
+// sees a debug line end the info line's repeats, and an info line end the debug line's; each
+// count comes right after the line it counts. Info at 4 and 8, debug at 12 and 16, info at 20 and
+// 24; the last count when the sink is replaced, at 24.
+TEST(LogLimiter, ADebugLineTheSinkShowsEndsTheRepeatsBeforeIt) {
+  InfoAndDebug d;
   testutil::LogCapture log;
-  log.attach(c);
-  std::uint32_t remark = 0;  // RAM the user must not touch: read with an info line
-  for (const RegionDesc& g : c.profile().regions)
-    if (g.ram && g.reserved) remark = g.begin;
-  const RegDesc* ack = find_reg(c.profile(), RegId::Int_Ack_Reg);
-  ASSERT_NE(remark, 0u);
-  ASSERT_NE(ack, nullptr);
-  ASSERT_NE(ack->ign, 0u);
-  const int bit = std::countr_zero(ack->ign);  // Intel mode: the low byte at the lower address
-  c.read(remark);                              // cycle 4
-  c.read(remark);                              // 8
-  c.write(static_cast<std::uint32_t>(ack->write_addr + bit / 8),
-          static_cast<std::uint8_t>(1u << (bit % 8)));  // 12
-  c.read(remark);                                       // 16
-  c.read(remark);                                       // 20
-  c.set_log_sink(nullptr);
-  ASSERT_EQ(log.records.size(), 3u);
-  EXPECT_EQ(log.records[0].level, LogLevel::info);
-  EXPECT_EQ(log.records[0].cycle, 4u);
-  EXPECT_EQ(log.records[1].level, LogLevel::debug);
-  EXPECT_EQ(log.records[1].cycle, 12u);
-  EXPECT_EQ(log.records[2].level, LogLevel::info);
-  EXPECT_EQ(log.records[2].text, "last line repeated 3 times, cycles 8 to 20");
+  log.attach(d.c);
+  d.info();   // 4
+  d.info();   // 8
+  d.debug();  // 12
+  d.debug();  // 16
+  d.info();   // 20
+  d.info();   // 24
+  d.c.set_log_sink(nullptr);
+  ASSERT_EQ(log.records.size(), 6u);
+  const std::string& info = log.records[0].text;
+  const std::string& debug = log.records[2].text;
+  EXPECT_EQ(shown(log.records), (std::vector<std::string>{
+                                    "[cycle 4] info: " + info,
+                                    "[cycle 12] info: last line repeated 1 times, at cycle 8",
+                                    "[cycle 12] debug: " + debug,
+                                    "[cycle 20] debug: last line repeated 1 times, at cycle 16",
+                                    "[cycle 20] info: " + info,
+                                    "[cycle 24] info: last line repeated 1 times, at cycle 24",
+                                }));
+}
+
+// A sink that shows no debug lines (Chip::set_log_sink(sink, LogLevel::info), as the scenario
+// walk and the bridge log) keeps the info line's fold across them: the chip does not even format
+// them (s33-hal's concern: a firmware's per-interrupt debug line would otherwise end every fold).
+// The same accesses: one info line, then one count of its three repeats.
+TEST(LogLimiter, ADebugLineTheSinkDoesNotShowKeepsTheFold) {
+  InfoAndDebug d;
+  std::vector<LogRecord> records;
+  d.c.set_log_sink([&records](const LogRecord& r) { records.push_back(r); }, LogLevel::info);
+  d.info();
+  d.info();
+  d.debug();
+  d.debug();
+  d.info();
+  d.info();
+  d.c.set_log_sink(nullptr);
+  ASSERT_EQ(records.size(), 2u);
+  EXPECT_EQ(shown(records), (std::vector<std::string>{
+                                "[cycle 4] info: " + records[0].text,
+                                "[cycle 24] info: last line repeated 3 times, cycles 8 to 24"}));
 }

@@ -24,6 +24,7 @@
 
 #include "heap_in_use.hpp"
 #include "scenario_test.hpp"
+#include "trace.hpp"
 
 using namespace scenario_test;
 
@@ -249,7 +250,7 @@ std::string silent_read(unsigned ms) {
       ms);
 }
 
-// The walk of `text` (with an observer: the runner then holds the step's events to its end), and
+// The walk of `text` (with an observer, which is told every event as the walk's drains come), and
 // the most the heap held beyond the run's start at any walk line.
 std::vector<std::string> walk_of(const std::string& text, bool observed, std::int64_t& peak) {
   dpc31::Scenario s;
@@ -277,9 +278,9 @@ std::vector<std::string> walk_of(const std::string& text, bool observed, std::in
 // s32-rev2 (review finding 1): with the walk printed, the runner held every poll of a DPV1
 // time-out as a walk event until the step ended (about 140 bytes a poll: a 655 s time-out ran out
 // of memory). It writes the lines whose folds are decided as it goes: the heap it holds over ten
-// times the polls (2 000 ms, 1 363 637 polls, against 200 ms) grows by no more than 16 KiB, and
-// the walk is the one the runner gives when it holds the step's events to its end (with an
-// observer), the polls folded into one line whose count is the outcome's less the first.
+// times the polls (2 000 ms, 1 363 637 polls, against 200 ms) grows by no more than 16 KiB, the
+// walk is the one the runner gives with an observer (which held the step's events to its end
+// until s34-record), the polls folded into one line whose count is the outcome's less the first.
 TEST(ScenarioWalk, ALongDpv1TimeoutKeepsTheWalkFlat) {
   std::int64_t held = 0;
   const std::vector<std::string> whole = walk_of(silent_read(200), true, held);
@@ -299,6 +300,60 @@ TEST(ScenarioWalk, ALongDpv1TimeoutKeepsTheWalkFlat) {
   if (dpc31::test::kHeapCounted) {
     EXPECT_LE(long_run, short_run + 16 * 1024)
         << "held " << short_run << " bytes over 200 ms of polls, " << long_run << " over 2000";
+  }
+}
+
+// What a trace recorder of `silent_read(ms)` gave: its bytes' count and FNV-1a hash (the
+// bytes themselves would be the memory measured), and with `streamed` (write_to) the most the
+// heap held beyond the run's start at every 1024th write (mallinfo2 walks the heap).
+struct Recorded {
+  std::uint64_t bytes = 0;
+  std::uint64_t hash = 14695981039346656037ULL;
+  std::int64_t peak = 0;
+  void add(std::string_view b) {
+    bytes += b.size();
+    for (const char c : b) hash = (hash ^ static_cast<unsigned char>(c)) * 1099511628211ULL;
+  }
+};
+Recorded record_silent_read(unsigned ms, bool streamed) {
+  dpc31::Scenario s;
+  dpc31::ScenarioError err;
+  EXPECT_TRUE(dpc31::parse_scenario(silent_read(ms), "t.scn", s, err)) << err.text();
+  Recorded r;
+  std::int64_t at_start = 0;
+  std::uint64_t writes = 0;
+  dpc31::TraceRecorder rec(s.master.baud);
+  if (streamed) {
+    rec.write_to([&](std::string_view b) {
+      if (writes++ % 1024 == 0) r.peak = std::max(r.peak, dpc31::test::heap_in_use() - at_start);
+      r.add(b);
+    });
+  }
+  dpc31::ScenarioHooks hooks = rec.scenario_hooks();
+  hooks.at_start = [&](dpc31::Chip&) { at_start = dpc31::test::heap_in_use(); };
+  const dpc31::ScenarioOutcome o = dpc31::run_scenario(s, {}, {}, hooks);
+  EXPECT_EQ(o.passed, 1u);
+  EXPECT_EQ(rec.error(), "");
+  if (!streamed) r.add(rec.text());
+  return r;
+}
+
+// s34-record: the trace recorder (`dpc31 run --record`'s, here through the C++ door) held every
+// line until the run ended, about 440 bytes of heap a poll. Written as they are decided
+// (TraceRecorder::write_to, the runner telling the polls' events as they come), the heap it holds
+// over five times the polls (500 ms against 100 ms) grows by no more than 64 KiB, and the bytes
+// are those the recorder keeps for text() without write_to.
+TEST(ScenarioWalk, ALongDpv1TimeoutKeepsTheTraceFlat) {
+  const Recorded kept = record_silent_read(100, false);
+  const Recorded short_run = record_silent_read(100, true);
+  EXPECT_EQ(short_run.bytes, kept.bytes);
+  EXPECT_EQ(short_run.hash, kept.hash);
+  const Recorded long_run = record_silent_read(500, true);
+  EXPECT_GT(long_run.bytes, 4 * short_run.bytes);
+  if (dpc31::test::kHeapCounted) {
+    EXPECT_LE(long_run.peak, short_run.peak + 64 * 1024)
+        << "held " << short_run.peak << " bytes over 100 ms of polls, " << long_run.peak
+        << " over 500";
   }
 }
 

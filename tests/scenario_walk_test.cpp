@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
@@ -340,14 +341,18 @@ TEST(ScenarioWalk, AStartupOfASlaveLockedByAnotherMasterSaysSo) {
 // after a wait without an answer, a late answer that comes before the next request moves it to
 // TSYN after that answer's end (docs/timing.md, "The master's wait"; until the thirty-third
 // session the request started as its step did, into the late answer). 1.5 Mbaud, T = 32:
-// MinTSDR 60 bit times is past the slot time 37, so every answer is late. The first `exchange`'s
+// MinTSDR 60 bit times is past the slot time 37, so every answer is late: the start-up's Set_Prm
+// is unanswered, so it sends no Chk_Cfg (docs/scenario-format.md `startup`), and `chk_cfg` brings
+// the slave to Data_Exchange, where it answers with its inputs. The first `exchange`'s
 // repeat ends at E; its wait at E + 37 T; the `silence 40bits` step starts TSYN later and ends at
 // S = E + 110 T. The late answer (the FCB repeat's, SD2 with 4 input bytes: 13 characters, 143 T)
 // runs from E + 60 T to E + 203 T, so the step's Data_Exchange starts at E + 236 T = S + 126 T.
+// The walk tells that late answer once, at its end, S + 93 T (docs/timing.md: "told once in
+// `dpc31 run`'s walk ... at the end of its last stop bit"; until the thirty-fourth session never).
 TEST(ScenarioWalk, OnOneChipALateAnswerOnTheLineIsWaitedFor) {
   const Walk w =
       run("profile spc3\nbaud 1500000\nmaster address=2 slot=37\nslave address=5 min_tsdr=60\n"
-          "startup\nexchange 1\nsilence 40bits\nexchange 1\n",
+          "startup\nchk_cfg\nexchange 1\nsilence 40bits\nexchange 1\n",
           "late.scn", dpc31::Engine::event);
   const auto cycle_of = [&w](std::string_view text, std::size_t from) {
     for (std::size_t i = from; i < w.lines.size(); ++i) {
@@ -358,8 +363,12 @@ TEST(ScenarioWalk, OnOneChipALateAnswerOnTheLineIsWaitedFor) {
     ADD_FAILURE() << "no walk line with " << text;
     return std::pair{std::uint64_t{0}, w.lines.size()};
   };
-  const auto [step, at] = cycle_of("] line 8: exchange 1", 0);
+  const auto [step, at] = cycle_of("] line 9: exchange 1", 0);
   EXPECT_EQ(cycle_of("] 2 -> 5 Data_Exchange", at).first, step + 126 * 32);
+  const std::string told = fmt::format(
+      "[cycle {:>10}] master: a late answer on the line (after the slot time): no answer",
+      step + 93 * 32);
+  EXPECT_EQ(std::count(w.lines.begin(), w.lines.end(), told), 1) << told;
 }
 
 // A host user side that never starts the chip (the GLOBALS plug-in of tests/bad_plugin.c: its
@@ -412,6 +421,86 @@ TEST(ScenarioWalk, ARequestOnAQueueNotSetUpIsSaidInTheWalk) {
   EXPECT_EQ(w.outcome.failures[0], (fs::path(SOURCE_DIR) / "t.scn").string() + ":3: " + why);
   EXPECT_NE(walk_cycle(w, why), 0u);
   for (const std::string& l : w.lines) EXPECT_GT(l.size(), 19u) << "an empty walk line";
+}
+
+// An SPC3 firmware that gives its Cfg verdict but never reads New_Din_Buffer_Cmd (here the
+// built-in user side with New_Cfg_Data masked, C0F0h being its own mask, and the scenario's `read`
+// as the verdict) keeps the chip in Wait_Cfg: SPC3 p.31, "the transition to 'DATA_EX' takes place
+// immediately, if no Din_buffer is present (R_Len_Din_Puf = 00H) ... Otherwise" (modelled: at the
+// next New_Din_Buffer_Cmd, docs/decisions.md). The walk (what `dpc31 run` prints) says why once,
+// at the first Slave_Diag from Master_Add acted on 10 ms = 480 000 cycles or more after the
+// verdict read's completion cycle V. At 12 Mbaud (T = 4 cycles) the second `startup` sends
+// FDL_Status at V (6 characters, TSDR 11, its OK 6 characters, idle 33: 176 bit times), then
+// Slave_Diag every 352 bit times = 1 408 cycles from V + 704 (the request 11 characters = 121 bit
+// times, TSDR 11, the DL answer of 6 bytes 17 characters = 187, idle 33). Poll k is acted on at
+// the stop sample of its last character (docs/timing.md): V + 704 + 1408k + 484 - 4 + 2 =
+// V + 1186 + 1408k; the first at or past V + 480 000 is k = 341, at V + 481 314. A firmware that
+// makes the read (the built-in user side as it is) is never told.
+TEST(ScenarioWalk, AnSpc3FirmwareThatNeverReadsNewDinBufferCmdIsToldOnce) {
+  const std::string warning =
+      "chip: master 2 is refused (Slave_Diag with Station_Not_Ready): the SPC3 is still in "
+      "Wait_Cfg at least 10 ms after User_Cfg_Data_Okay, because the firmware has not read "
+      "New_Din_Buffer_Cmd since; with R_Len_Din_Buf = 4 it enters Data_Exchange only at that read "
+      "(SPC3 p.31, modelled). Hand the inputs over once after User_Cfg_Data_Okay: write them into "
+      "the U buffer, then read New_Din_Buffer_Cmd (docs/bring-up.md)";
+  const std::string head =
+      "profile spc3\nbaud 12000000\nmaster address=2\nslave address=5\nuser inputs=A1,A2,A3,A4\n";
+  const std::string forgets = head +
+                              "write Int_Mask_Reg 0xC4F0\nstartup tries=20\n"
+                              "read User_Cfg_Data_Okay\nexpect read 0x00\nstartup tries=400\n"
+                              "expect dp_state Wait_Cfg\n";
+  const std::string reads = head + "startup\nexpect dp_state Data_Exchange\nexchange 400\n";
+  for (const dpc31::Engine engine : {dpc31::Engine::event, dpc31::Engine::per_cycle}) {
+    SCOPED_TRACE(engine_name(engine));
+    Walk w = run(forgets, fs::path(SOURCE_DIR) / "t.scn", engine);
+    EXPECT_TRUE(w.outcome.ok()) << (w.outcome.ok() ? "" : w.outcome.failures.front());
+    const std::uint64_t verdict = walk_cycle(w, "read User_Cfg_Data_Okay = 0x00");
+    ASSERT_NE(verdict, 0u);
+    EXPECT_EQ(walk_cycle(w, warning), verdict + 481'314);
+    EXPECT_EQ(std::count_if(w.lines.begin(), w.lines.end(),
+                            [](const std::string& l) {
+                              return l.find("] chip: master ") != std::string::npos;
+                            }),
+              1);
+    w = run(reads, fs::path(SOURCE_DIR) / "t.scn", engine);
+    EXPECT_TRUE(w.outcome.ok()) << (w.outcome.ok() ? "" : w.outcome.failures.front());
+    for (const std::string& l : w.lines)
+      EXPECT_EQ(l.find("New_Din_Buffer_Cmd"), std::string::npos) << l;
+  }
+}
+
+// The same mistake in a firmware plug-in (tests/input_only_plugin.c with FORGETS_DIN: the dps
+// driver, its ISR preceded by one that reads User_Cfg_Data_Okay on New_Cfg_Data and nothing else)
+// under the default `startup`: the walk says it once. Its verdict read completes at V (the run's
+// own bus reads); the Slave_Diag polls start at S (the walk's first `Slave_Diag => DL 02 0C ...`
+// line) and every 1 408 cycles after it, each acted on 482 cycles after its start (as above), so
+// the line comes at the first S + 482 + 1408k at or past V + 480 000.
+TEST(ScenarioWalk, APlugInThatNeverReadsNewDinBufferCmdIsToldOnce) {
+  const std::string text = fmt::format(
+      "profile spc3\nbaud 12000000\nfirmware {}\nslave address=5\nstartup\n"
+      "expect dp_state Wait_Cfg\n",
+      PLUGIN_FORGETS_DIN);
+  for (const dpc31::Engine engine : {dpc31::Engine::event, dpc31::Engine::per_cycle}) {
+    SCOPED_TRACE(engine_name(engine));
+    const Walk w = run(text, fs::path(SOURCE_DIR) / "t.scn", engine);
+    EXPECT_TRUE(w.outcome.ok()) << (w.outcome.ok() ? "" : w.outcome.failures.front());
+    const std::uint64_t verdict = w.read_after(SPC3_User_Cfg_Data_Okay, SPC3_User_Cfg_Data_Okay);
+    const std::uint64_t polls = walk_cycle(w, "2 -> 5 Slave_Diag => DL 02 0C 00 02 0E 10");
+    ASSERT_NE(verdict, 0u);
+    ASSERT_GT(polls, verdict);
+    const std::uint64_t k = (verdict + 480'000 - polls - 482 + 1407) / 1408;
+    std::vector<std::string> said;
+    for (const std::string& l : w.lines) {
+      if (l.find("] chip: master 2 is refused") != std::string::npos) said.push_back(l);
+    }
+    ASSERT_EQ(said.size(), 1u);
+    EXPECT_TRUE(
+        said[0].starts_with(fmt::format("[cycle {:>10}] chip: master 2 is refused (Slave_Diag "
+                                        "with Station_Not_Ready): the SPC3 is still in "
+                                        "Wait_Cfg at least 10 ms after User_Cfg_Data_Okay",
+                                        polls + 482 + 1408 * k)))
+        << said[0];
+  }
 }
 
 }  // namespace

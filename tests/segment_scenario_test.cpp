@@ -120,14 +120,16 @@ TEST(SegmentScenario, AStationsMinTsdrAndWdBaseReachItsSetPrm) {
 // Two stations on one address and no `master` line: the default master polls every address once
 // (one FCB state per slave). Both answer each of the start-up's five requests (docs/segment.md:
 // FDL_Status, Slave_Diag, Set_Prm, Chk_Cfg, Slave_Diag) at the same MinTSDR: five collisions, the
-// first driver keeping the line, so the master hears one answer and the start-up completes.
+// first driver keeping the line, so the master hears one answer and the start-up completes: both
+// take every request and reach Data_Exchange, each checked by its name.
 TEST(SegmentScenario, TwoStationsOnOneAddressArePolledOnceAndCollide) {
   SegmentScenario s;
   ScenarioError err;
-  ASSERT_TRUE(
-      parse_segment_scenario("segment\nstation 5\nstation 5 name=twin profile=vpc3plus\nstartup\n"
-                             "expect collisions 5\nexpect state 5 Data_Exchange\n",
-                             "c.scn", s, err))
+  ASSERT_TRUE(parse_segment_scenario(
+      "segment\nstation 5 name=first\nstation 5 name=twin profile=vpc3plus\nstartup\n"
+      "expect collisions 5\nexpect state first Data_Exchange\n"
+      "expect state twin Data_Exchange\n",
+      "c.scn", s, err))
       << err.text();
   ASSERT_EQ(s.masters.size(), 1U);
   EXPECT_EQ(s.masters[0].slaves, (std::vector<std::uint8_t>{5}));
@@ -135,6 +137,58 @@ TEST(SegmentScenario, TwoStationsOnOneAddressArePolledOnceAndCollide) {
   EXPECT_EQ(run_segment_scenario(s, {}, [&errors](const std::string& e) { errors.push_back(e); }),
             0);
   EXPECT_TRUE(errors.empty()) << errors.front();
+}
+
+// The audit's twin2.scn (s34 aSeg, finding 7): two chips at station 5, checked by name (a
+// station's name= in `expect state`, `expect watchdog_expired`, `expect port`). Both take every
+// request to 5, but the SPC3 ('a') is not served its user watchdog (user_wd_value=1, docs/timing.md
+// "user watchdog": it leaves Data_Exchange at its second Data_Exchange), so after five rotations
+// 'b' is in Data_Exchange and 'a' in Wait_Prm; by address either check was the later line's
+// station.
+TEST(SegmentScenario, TwoStationsAtOneAddressAreCheckedByName) {
+  const ScenarioRun r = run_scenario_text(
+      "segment\nstation 5 name=b profile=dpc31 user_wd=1\n"
+      "station 5 name=a profile=spc3 user_wd_value=1\nmaster 2 slaves=5\nstartup\ncycle 5\n"
+      "expect state b Data_Exchange\nexpect state a Wait_Prm wd=DP_Control\n"
+      "expect state a Data_Exchange\n",
+      "twin2.scn");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.errors, std::vector<std::string>{"twin2.scn:9: expected state a Data_Exchange, got "
+                                               "Wait_Prm / DP_Control"});
+}
+
+// docs/timing.md, "The master's wait": each telegram the master takes for a late answer is told
+// once in the walk, at its end. 12 Mbaud (T = 4 clocks), MinTSDR 120 > TSL 100: from the Set_Prm
+// on every answer is late. The Set_Prm (19 characters, 836 clocks) starts at P; its SC starts
+// 120 T after its end (P + 1316) and ends 11 T later, P + 1360, the master's line; the request
+// after it starts TSYN later, P + 1492, and is a Slave_Diag (FCB set: 7D), not a Chk_Cfg: the
+// Set_Prm was not answered (docs/scenario-format.md `startup`), so the slave stays in Wait_Cfg.
+// Of the 1000 tries the Set_Prm is one, then 999 Slave_Diags, each answered late: 1000 late
+// answers, the bus check's `late_answer`s, and 999 lines, one for each but the last, which follows
+// the start-up's last request (the master watches for one before its next request only).
+TEST(SegmentScenario, ALateAnswerIsToldOnceInTheWalk) {
+  const ScenarioRun r = run_scenario_text(
+      "segment baud=12000000 slot=100\nstation 5 profile=spc3 min_tsdr=120\nmaster 2 slaves=5\n"
+      "startup\nexpect state 5 Wait_Cfg\n",
+      "late.scn");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_TRUE(r.errors.empty()) << r.errors.front();
+  const std::uint64_t p = r.cycle_of("] master 2: 68 0D 0D 68 85 82 5D 3D 3E");
+  const std::string told = fmt::format(
+      "[cycle {:>10}] master 2: a late answer on the line (after the slot time): no answer",
+      p + 1360);
+  const auto at = std::find(r.walk.begin(), r.walk.end(), told);
+  ASSERT_NE(at, r.walk.end()) << told;
+  ASSERT_NE(at + 1, r.walk.end());
+  EXPECT_EQ(*(at + 1),
+            fmt::format("[cycle {:>10}] master 2: 68 05 05 68 85 82 7D 3C 3E FE 16", p + 1492));
+  const auto count = [&r](std::string_view text) {
+    return std::count_if(r.walk.begin(), r.walk.end(), [text](const std::string& l) {
+      return l.find(text) != std::string::npos;
+    });
+  };
+  EXPECT_EQ(count("] bus: late_answer: "), 1000);
+  EXPECT_EQ(count("] master 2: a late answer"), 999);
 }
 
 // A long `cycle N` keeps the run's memory flat (docs/decisions.md): the masters' histories are
@@ -387,6 +441,23 @@ TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
       {"segment\nmaster 5\nstation 5\n", "f.scn:3: station 5 at the address of master 5"},
       {"segment\nstation 5\nstation 2\nstartup\n",
        "f.scn:3: station 2 at the address of master 2, the default master: give a 'master' line"},
+      // Two chips at one address (the duplicate-address fault): a check by that address would
+      // pick one in silence (s34 audit aSeg, finding 7); each is named instead.
+      {"segment\nstation 5 name=b\nstation 5 name=a profile=spc3\nmaster 2 slaves=5\nstartup\n"
+       "expect state 5 Data_Exchange\n",
+       "f.scn:6: station 5 names 2 stations ('b' at line 2, 'a' at line 3): give the name of the "
+       "one to check"},
+      {"segment\nstation 5\nstation 5 name=a\nstartup\nexpect watchdog_expired 5 twd=10ms\n",
+       "f.scn:5: station 5 names 2 stations ('station 5' at line 2, 'a' at line 3): give the name "
+       "of the one to check"},
+      {"segment\nstation 5 name=b firmware=DO4\nstation 5 name=a firmware=DO4\nstartup\n"
+       "expect port 5 outputs 0\n",
+       "f.scn:5: station 5 names 2 stations ('b' at line 2, 'a' at line 3): give the name of the "
+       "one to check"},
+      {"segment\nstation 5 name=6\nstation 6\nstartup\nexpect state 6 Wait_Prm\n",
+       "f.scn:5: '6' is the name of one station and the address of another"},
+      {"segment\nstation 5 name=a\nstartup\nexpect state b Wait_Prm\n",
+       "f.scn:4: no station named 'b'"},
       // token_hold needs a TTR and a token passed between masters: else it could only count 0.
       {"segment\nstation 5\nstation 6\nmaster 2 slaves=5\nmaster 3 slaves=6\nstartup\n"
        "expect bus_violation token_hold 0\n",

@@ -14,6 +14,7 @@
 #include "dpc31/chip.hpp"
 #include "responder.hpp"
 #include "serve_client.hpp"
+#include "test_util.hpp"
 
 using testutil::starts_with;
 
@@ -109,6 +110,8 @@ TEST(ServeSession, RunUntilIrqIsLevelTriggered) {
 
 TEST(ServeSession, LogLinesFollowTheClientsLevel) {
   LocalSession s;
+  EXPECT_EQ(s("log warn"), "OK");
+  EXPECT_EQ(s.client.log_level, dpc31::LogLevel::warn);
   EXPECT_EQ(s("read 0x18"), "OK 0x00");
   ASSERT_EQ(s.lines.size(), 1u);  // emitted; the server filters per client
   EXPECT_EQ(s.lines[0],
@@ -120,6 +123,48 @@ TEST(ServeSession, LogLinesFollowTheClientsLevel) {
   EXPECT_EQ(s.client.log_level, dpc31::LogLevel::info);
   EXPECT_EQ(s("log off"), "OK");
   EXPECT_FALSE(s.client.log_level);
+  // No client asks for the log: the chip's sink shows nothing, so nothing is emitted (an unmapped
+  // address's own line, docs/decisions.md "Logs that never flood").
+  EXPECT_EQ(s("read 0x19"), "OK 0x00");
+  EXPECT_EQ(s.lines.size(), 1u);
+}
+
+// The chip's log folds repeats as the lowest level a client asked for shows it (Chip::
+// set_log_sink; docs/protocol.md, `log`): with `log debug` a debug line ends the info line's
+// repeats and their count comes right after the info line; with `log info` alone the debug lines
+// are not formatted and the info line's repeats fold across them. An info line: a read of RAM the
+// user must not touch; a debug line: an Int_Ack_Reg write of a bit it does not change (emu/
+// bus.cpp). Each access costs 4 clocks and logs at its end (docs/timing.md); `log off` hands over
+// the count still owed, at the chip's cycle then (24).
+TEST(ServeSession, RepeatCountsFollowTheLowestLevelAsked) {
+  for (const std::string level : {"debug", "info"}) {
+    SCOPED_TRACE(level);
+    LocalSession s;
+    const testutil::RepeatableLogLines l(s.s.chip().profile());
+    ASSERT_NE(l.info_read, 0u);
+    ASSERT_NE(l.debug_write, 0u);
+    const std::string info = fmt::format("read {:#x}", l.info_read);
+    const std::string debug = fmt::format("write {:#x} {:#x}", l.debug_write, l.debug_value);
+    EXPECT_EQ(s("log " + level), "OK");
+    for (const std::string& line : {info, info, debug, debug, info, info})
+      EXPECT_TRUE(starts_with(s(line), "OK")) << line;
+    EXPECT_EQ(s("log off"), "OK");
+    ASSERT_FALSE(s.lines.empty());
+    const std::string remark_line = s.lines[0].substr(s.lines[0].find(" info ") + 6);
+    std::vector<std::string> want;
+    if (level == "debug") {
+      ASSERT_EQ(s.lines.size(), 6u);
+      const std::string debug_line = s.lines[2].substr(s.lines[2].find(" debug ") + 7);
+      want = {
+          "! log 4 info " + remark_line,  "! log 12 info last line repeated 1 times, at cycle 8",
+          "! log 12 debug " + debug_line, "! log 20 debug last line repeated 1 times, at cycle 16",
+          "! log 20 info " + remark_line, "! log 24 info last line repeated 1 times, at cycle 24"};
+    } else {
+      want = {"! log 4 info " + remark_line,
+              "! log 24 info last line repeated 3 times, cycles 8 to 24"};
+    }
+    EXPECT_EQ(s.lines, want);
+  }
 }
 
 TEST(ServeSession, InjectQueueCountsWhatIsAheadOfTheChip) {

@@ -32,6 +32,7 @@
 #include "serve_server.hpp"
 #include "serve_session.hpp"
 #include "test_files.hpp"
+#include "test_util.hpp"
 
 using namespace testutil;  // the server process, line client, temporary directory
 
@@ -669,6 +670,52 @@ TEST(Serve, TcpBindsLoopbackByDefault) {
   EXPECT_EQ(listeners("/proc/net/tcp"), std::vector<std::string>{"0100007F" + port});
   EXPECT_TRUE(listeners("/proc/net/tcp6").empty());  // nor on IPv6's any-address
   EXPECT_EQ(server.listening().at(0), fmt::format("listening tcp 127.0.0.1:{}", server.port()));
+}
+
+// Two clients: the chip's log shows the lowest level any client asked for and folds repeats as
+// that level shows them (docs/protocol.md, `log`). On the DPC31 a read of its internal work cells
+// (RAM the user must not touch) is an info line, a write of 1 to a bit Int_Ack_Reg ignores a debug
+// line (emu/bus.cpp); 4 clocks an access (docs/timing.md). While one client asks for debug lines,
+// the debug line at 12 ends the info line's repeats (their count at 12, told to both); once it
+// asks for none the log starts afresh at info (Chip::set_log_sink: what was owed goes first,
+// nothing here), so the info line at 20 is written, its repeat at 28 folds across the debug line
+// at 24, and the last client's `log off` hands over that count.
+TEST(Serve, TheChipsLogFoldsAsTheLowestLevelAskedShowsIt) {
+  ServerProcess server(kCli, {"--tcp", "0", "--profile", "dpc31"});
+  const testutil::RepeatableLogLines l(dpc31::profile_desc(dpc31::Profile::dpc31));
+  ASSERT_NE(l.info_read, 0u);
+  ASSERT_NE(l.debug_write, 0u);
+  const std::string info = fmt::format("read {:#x}", l.info_read);
+  const std::string debug = fmt::format("write {:#x} {:#x}", l.debug_write, l.debug_value);
+  LineClient low = LineClient::tcp(server.port());
+  LineClient high = LineClient::tcp(server.port());
+  ASSERT_EQ(low.command("log debug"), "OK");
+  ASSERT_EQ(high.command("log info"), "OK");
+  for (const std::string& c : {info, info, debug, info})
+    ASSERT_EQ(high.command(c).substr(0, 2), "OK");
+  ASSERT_EQ(low.command("log off"), "OK");
+  for (const std::string& c : {info, debug, info}) ASSERT_EQ(high.command(c).substr(0, 2), "OK");
+  ASSERT_EQ(high.command("log off"), "OK");
+  ASSERT_EQ(low.command("ping"), "OK pong");  // what the server sent low before has arrived
+  ASSERT_FALSE(high.async.empty());
+  const std::string r = high.async[0].substr(high.async[0].find(" info ") + 6);
+  ASSERT_GE(low.async.size(), 3u);
+  const std::string d = low.async[2].substr(low.async[2].find(" debug ") + 7);
+  EXPECT_EQ(low.async, (std::vector<std::string>{
+                           "! log 4 info " + r,
+                           "! log 12 info last line repeated 1 times, at cycle 8",
+                           "! log 12 debug " + d,
+                           "! log 16 info " + r,
+                       }));
+  EXPECT_EQ(high.async, (std::vector<std::string>{
+                            "! log 4 info " + r,
+                            "! log 12 info last line repeated 1 times, at cycle 8",
+                            "! log 16 info " + r,
+                            "! log 20 info " + r,
+                            "! log 28 info last line repeated 1 times, at cycle 28",
+                        }));
+  EXPECT_TRUE(starts_with(r, "read of internal work cells")) << r;
+  EXPECT_TRUE(starts_with(d, "Int_Ack_Reg: ")) << d;
 }
 
 // A client that stops reading while async lines pile up is dropped, not waited for.

@@ -94,10 +94,10 @@ TEST(SnapshotFormat, AfterResetEachSectionHasTheSizeTheTableGives) {
       {"CNTR", 20 * 4},
       {"RQIF", 8 + 8 + 2 + 1},
       {"SAPL", 1 + 1 + 4 + 4},
-      {"LOGS", 5 + 3 * (8 + 4)}};
+      {"LOGS", 5 + (8 + 1) + 3 * (8 + 4)}};
   for (const auto& [profile, mem, total] :
-       {std::tuple{Profile::spc3, 2048u, 2858u}, std::tuple{Profile::vpc3plus, 4096u, 4906u},
-        std::tuple{Profile::dpc31, 8192u, 9002u}}) {
+       {std::tuple{Profile::spc3, 2048u, 2867u}, std::tuple{Profile::vpc3plus, 4096u, 4915u},
+        std::tuple{Profile::dpc31, 8192u, 9011u}}) {
     const Bytes s = Chip(ChipOptions{profile}).save_state();
     EXPECT_EQ(s.size(), total) << "docs/snapshots.md gives the size after reset";
     std::size_t at = snap::kHeaderSize;
@@ -152,7 +152,7 @@ TEST(SnapshotFormat, BadFilesAreRefusedAndLeaveTheChipUnchanged) {
 
   b = good;
   set_le(b, 8, snap::kFormatVersion + 1, 4);
-  expect_refused(target, b, "snapshot format version 7 is newer than this build reads (6)");
+  expect_refused(target, b, "snapshot format version 8 is newer than this build reads (7)");
   set_le(b, 8, 0, 4);
   expect_refused(target, b, "snapshot format version 0 is not supported");
 
@@ -408,9 +408,11 @@ TEST(SnapshotFormat, ABlockTheChipLacksOrABitTimeOfNoRateIsRefused) {
   }
 }
 
-// What the log has said (section LOGS, version 6) as the log can have said it: an over-long
-// length cell is logged only beyond 244 (docs/timing.md, "Length cells"), and a folded log names
-// an address exactly when it has counted an occurrence (the first names the cause).
+// What the log has said (section LOGS, versions 6 and 7) as the log can have said it: an
+// over-long length cell is logged only beyond 244 (docs/timing.md, "Length cells"), an SPC3's wait
+// for New_Din_Buffer_Cmd began at or before the snapshot's cycle (at its User_Cfg_Data_Okay read),
+// and a folded log names an address exactly when it has counted an occurrence (the first names
+// the cause).
 TEST(SnapshotFormat, ALogMemoryTheLogCannotHaveIsRefused) {
   Chip target = mid_session(Profile::spc3);
   const Bytes good = target.save_state();
@@ -422,9 +424,33 @@ TEST(SnapshotFormat, ALogMemoryTheLogCannotHaveIsRefused) {
       target, b,
       "R_Len_Din_Buf logged as over-long at 244, within the 244 bytes of a DP data unit");
   b = good;
-  set_le(b, logs + 5, 1, 8);  // unmapped accesses: one counted, no address
+  set_le(b, logs + 5 + 9, 1, 8);  // unmapped accesses: one counted, no address
   reseal(b);
   expect_refused(target, b, "a folded log of 1 occurrences with 0 addresses logged");
+
+  // An SPC3 with a Din buffer waits after its Cfg OK (SPC3 p.31; docs/decisions.md) from the
+  // completion cycle of the User_Cfg_Data_Okay read.
+  Chip waiting(ChipOptions{Profile::spc3});
+  const auto at = [&waiting](RegId id) { return static_cast<std::uint32_t>(waiting.addr_of(id)); };
+  waiting.write(at(RegId::R_Len_Din_Buf), 4);
+  harness::asic_prm_received(waiting);
+  ASSERT_EQ(waiting.read(at(RegId::User_Prm_Data_Okay)), 0x00);
+  harness::asic_cfg_received(waiting);
+  ASSERT_EQ(waiting.read(at(RegId::User_Cfg_Data_Okay)), 0x00);
+  ASSERT_EQ(waiting.dp_state(), DpState::Wait_Cfg);
+  const std::uint64_t now = waiting.cycle();
+  const Bytes wait = waiting.save_state();
+  const std::size_t since = section_at(wait, "LOGS") + 4 + 5;
+  b = wait;
+  set_le(b, since, now, 8);
+  reseal(b);
+  EXPECT_EQ(b, wait) << "the wait began at the read's completion cycle";
+  set_le(b, since, now + 1, 8);
+  reseal(b);
+  expect_refused(target, b,
+                 fmt::format("the wait for New_Din_Buffer_Cmd begins at cycle {}, after the "
+                             "snapshot's {}",
+                             now + 1, now));
 }
 
 // Diag_Buffer_SM's two buffers as the manuals move them: one with the user and one with the

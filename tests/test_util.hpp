@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <bit>
+#include <cstdint>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -24,6 +26,25 @@ struct LogCapture {
     return n;
   }
   void clear() { records.clear(); }
+};
+
+// Two chip log lines a test can repeat through the bus: an info line, a read of RAM the user must
+// not touch (the profile's last reserved RAM region), and a debug line, a write of 1 to a bit
+// Int_Ack_Reg ignores (emu/bus.cpp; docs/timing.md "acknowledge exceptions"), Intel mode: the
+// register's low byte at the lower address. 0 where the profile has none.
+struct RepeatableLogLines {
+  std::uint32_t info_read = 0;
+  std::uint32_t debug_write = 0;
+  std::uint8_t debug_value = 0;
+  explicit RepeatableLogLines(const dpc31::ProfileDesc& p) {
+    for (const dpc31::RegionDesc& g : p.regions)
+      if (g.ram && g.reserved) info_read = g.begin;
+    const dpc31::RegDesc* ack = dpc31::find_reg(p, dpc31::RegId::Int_Ack_Reg);
+    if (ack == nullptr || ack->ign == 0) return;
+    const int bit = std::countr_zero(ack->ign);
+    debug_write = static_cast<std::uint32_t>(ack->write_addr + bit / 8);
+    debug_value = static_cast<std::uint8_t>(1u << (bit % 8));
+  }
 };
 
 inline std::string pname(dpc31::Profile p) { return std::string(dpc31::profile_desc(p).name); }

@@ -2,12 +2,8 @@
 // in several styles, option sets, and running the comparison in-process or through the binary.
 #pragma once
 
-#include <fcntl.h>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cstdlib>
@@ -21,6 +17,7 @@
 #include <utility>
 #include <vector>
 
+#include "run_command.hpp"
 #include "synthetic_vcd.hpp"
 #include "test_files.hpp"
 #include "wavediff.hpp"
@@ -218,27 +215,6 @@ inline std::string vcd2fst() {
   return p;
 }
 
-// Runs a program and waits for it; exit code, and the child's peak RSS in KiB.
-inline int spawn(const std::vector<std::string>& args, long* maxrss_kib = nullptr,
-                 const std::string& out_file = "/dev/null") {
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    const int fd = ::open(out_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    if (fd >= 0) {
-      ::dup2(fd, 1);
-      ::dup2(fd, 2);
-    }
-    std::vector<char*> argv;
-    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    ::execv(argv[0], argv.data());
-    ::_exit(127);
-  }
-  int status = 0;
-  struct rusage ru {};
-  ::wait4(pid, &status, 0, &ru);
-  if (maxrss_kib != nullptr) *maxrss_kib = ru.ru_maxrss;
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
+using testutil::spawn;
 
 }  // namespace wavediff_test

@@ -403,6 +403,25 @@ def test_bad_input_is_a_clear_error_and_an_observers_exception_arrives():
         seg.send(sender, b"\x10", start=0)
 
 
+def test_a_master_and_a_chip_station_never_share_an_address():
+    # docs/python.md, "A segment": refused as a segment scenario's `master` and `station` lines
+    # refuse it, in their words, the station not joined (s34 audit aSeg, finding 5: master 5
+    # polled its own address and the chip there answered it). A SlaveConfig at the master's own
+    # address is refused by DpMaster itself, the C++ door's words.
+    seg = dpc31.Segment(1_500_000)
+    seg.add_station(5, "spc3")
+    with pytest.raises(ValueError, match=r"^master 5 at the address of station 5$"):
+        seg.add_master(5, [5])
+    assert seg.size == 1
+    seg.add_master(2, [5])
+    with pytest.raises(ValueError, match=r"^station 2 at the address of master 2$"):
+        seg.add_station(2, "dpc31")
+    assert seg.size == 2
+    with pytest.raises(ValueError, match=r"^DpMaster: master 3 at the address of station 3$"):
+        seg.add_master(3, [dpc31.SlaveConfig(address=3)])
+    assert seg.size == 2
+
+
 def test_a_slave_read_back_is_a_read_only_copy():
     # docs/python.md: Station.slave and SegmentMaster.slave are copies of the slave the master
     # sends (given at add_station); a field set on one raises instead of changing nothing.

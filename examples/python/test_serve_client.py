@@ -246,3 +246,50 @@ def test_pb3_reaches_the_client_as_status_and_observer(tmp_path):
             remote.step(16)
             assert edges == [(2944064, True)]
             assert remote.pb3 is True
+
+
+@pytest.mark.parametrize("level", ["debug", "info"])
+def test_a_log_shown_from_a_level_folds_repeats_as_that_level_shows_them(cli, level):
+    """docs/protocol.md, `log`: the chip's log folds repeats as the lowest level a client asked
+    for shows it. With `on_log(..., "debug")` a debug line between two equal info lines ends their
+    repeats, the count right after the info line; with "info" the chip formats no debug line and
+    the info line's repeats fold across them. On the DPC31 a read of its internal work cells (RAM
+    the user must not touch) is an info line, a write of 1 to a bit Int_Ack_Reg ignores a debug
+    line, a read of its unused register area a warning (regs/dpc31_regs.json); 4 clocks an access
+    (docs/timing.md): the warning at 28 ends the last repeats."""
+    import dpc31
+
+    remark = [g.begin for g in dpc31.regions("dpc31") if g.ram and g.reserved][-1]
+    unmapped = [g.begin for g in dpc31.regions("dpc31") if not g.ram and g.reserved][0]
+    ack = dpc31.register("dpc31", "Int_Ack_Reg")
+    bit = min(f.lsb for f in ack.fields if f.access == "IGN")  # Intel: low byte first
+    proc = subprocess.Popen([cli, "serve", "--tcp", "0", "--profile", "dpc31"],
+                            stdout=subprocess.PIPE, text=True)
+    try:
+        host, port = proc.stdout.readline().split()[2].rsplit(":", 1)
+        seen = []
+        with Client(tcp=(host, int(port))) as remote:
+            remote.on_log(lambda cycle, lvl, text: seen.append((cycle, lvl, text)), level)
+            for step in ("info", "info", "debug", "debug", "info", "info"):
+                if step == "info":
+                    remote.read(remark)
+                else:
+                    remote.write(ack.write_addr + bit // 8, 1 << (bit % 8))
+            remote.read(unmapped)
+    finally:
+        proc.terminate()
+        assert proc.wait(timeout=30) == 0
+    info = seen[0][2]
+    if level == "debug":
+        assert seen == [(4, "info", info),
+                        (12, "info", "last line repeated 1 times, at cycle 8"),
+                        (12, "debug", seen[2][2]),
+                        (20, "debug", "last line repeated 1 times, at cycle 16"),
+                        (20, "info", info),
+                        (28, "info", "last line repeated 1 times, at cycle 24"),
+                        (28, "warn", seen[-1][2])]
+    else:
+        assert seen == [(4, "info", info),
+                        (28, "info", "last line repeated 3 times, cycles 8 to 24"),
+                        (28, "warn", seen[-1][2])]
+    assert "unmapped address" in seen[-1][2]

@@ -129,3 +129,27 @@ def test_a_slave_locked_by_another_master_is_named_in_locks():
     diags = [ex for ex in second.history[before:] if ex.request.service == "Slave_Diag"]
     assert diags[0].answer.du[3] == 0xFF
     assert second.locks == {}
+
+
+def test_an_spc3_firmware_that_never_reads_new_din_buffer_cmd_is_told_once(capfd):
+    # docs/bring-up.md, section 7: an SPC3 with a Din buffer enters Data_Exchange at the firmware's
+    # first New_Din_Buffer_Cmd read after its Cfg verdict (SPC3 p.31, modelled). Here the built-in
+    # user side does not see New_Cfg_Data (masked: its own mask C0F0h with bit 10 set) and the
+    # verdict is read for it, without that read: the chip stays in Wait_Cfg, and its warning
+    # reaches Python on standard error (the default log sink), once, as `[cycle N] warn: ...`.
+    chip = dpc31.Chip("spc3")
+    master = dpc31.Master(chip, address=2, baud=12_000_000, slave=dpc31.SlaveConfig(address=5))
+    master.run_responder(inputs=b"\x11\x22\x33\x44")
+    mask = chip.addr_of("Int_Mask_Reg")
+    chip.write(mask, 0xF0)  # Intel: the low byte first
+    chip.write(mask + 1, 0xC4)
+    assert not master.startup(tries=20)  # Set_Prm, Chk_Cfg, then polls: the verdict pending
+    assert chip.read(chip.addr_of("User_Cfg_Data_Okay")) == 0x00
+    capfd.readouterr()
+    assert not master.startup(tries=400)  # Slave_Diag every 1 408 cycles: 11.7 ms of polls
+    assert chip.dp_state == dpc31.DpState.Wait_Cfg
+    warnings = [line for line in capfd.readouterr().err.splitlines()
+                if "has not read New_Din_Buffer_Cmd" in line]
+    assert len(warnings) == 1, warnings
+    assert "] warn: master 2 is refused (Slave_Diag with Station_Not_Ready): the SPC3 is still " \
+           "in Wait_Cfg at least 10 ms after User_Cfg_Data_Okay" in warnings[0]

@@ -208,12 +208,15 @@ bool same(const char* what, const std::vector<std::uint64_t>& a,
   return false;
 }
 
-// `--bench N`: N from 1 to 10^9 accesses; anything else is a usage error (exit 2).
+// `--bench N`: N from 1 to 10^9 accesses, decimal or 0x hex as every number of the dpc31 command
+// line (docs/security.md, "Numbers on the command line"); anything else is a usage error (exit 2).
 bool parse_args(int argc, char* argv[], std::uint64_t& bench) {
   if (argc == 1) return true;
   if (argc != 3 || std::strcmp(argv[1], "--bench") != 0) return false;
-  const std::string_view n(argv[2]);
-  const auto [end, ec] = std::from_chars(n.data(), n.data() + n.size(), bench);
+  std::string_view n(argv[2]);
+  const bool hex = n.size() > 2 && n[0] == '0' && (n[1] == 'x' || n[1] == 'X');
+  if (hex) n.remove_prefix(2);
+  const auto [end, ec] = std::from_chars(n.data(), n.data() + n.size(), bench, hex ? 16 : 10);
   return ec == std::errc() && end == n.data() + n.size() && bench >= 1 && bench <= 1'000'000'000;
 }
 

@@ -179,11 +179,14 @@ class Chip {
   Chip& operator=(Chip&&) noexcept;
 
   // Hardware reset: registers and RAM cells to their reset values, cycle counter to 0. The end
-  // of an active interrupt and PB3's fall are told to their observers at cycle 0.
+  // of an active interrupt and PB3's fall are told to their observers at cycle 0. Under a CPU
+  // board (Cpu51Board) the reset is at the board's instant(), where its clock counts on
+  // (docs/cpu.md, "The board"): reset(board.instant()).
   void reset();
   // The same reset in a platform whose clock counts on (a Cpu51Board's instant(), docs/cpu.md):
   // the new time line starts at `cycle`, where the reset's edges are told. A cycle past
-  // kLastCycle is std::invalid_argument, the chip unchanged.
+  // kLastCycle, or under a CPU board another than its instant, is std::invalid_argument, the chip
+  // unchanged.
   void reset(std::uint64_t cycle);
 
   // --- the bus (front door) ---
@@ -349,10 +352,15 @@ class Chip {
   [[nodiscard]] const FdlCounters& fdl_counters() const;
   [[nodiscard]] std::uint8_t station_address() const;
   [[nodiscard]] std::uint32_t bit_cycles() const;  // at the current (or searched) baud rate
-  // The chip's log: every line passes a LogLimiter per level first (folded repeats, at most
-  // LogLimiter::kBurst lines per level in LogLimiter::kWindow cycles). Replacing the sink (an
-  // empty one at the end of a run) first gives the old one what its limiters still owe.
+  // The chip's log: every line passes a LogLimiter per level first (at most LogLimiter::kBurst
+  // lines per level in LogLimiter::kWindow cycles). Repeats are folded as the sink sees them: a
+  // line equal to the one the sink was given last is counted, and the count comes right after
+  // the line it counts, before any line of another level. The sink gets every level, or with
+  // `shown` those from it up: the chip formats no line below (a debug line it does not show ends
+  // no fold). Replacing the sink (an empty one at the end of a run) first gives the old one what
+  // its limiters still owe.
   void set_log_sink(LogSink sink);
+  void set_log_sink(LogSink sink, LogLevel shown);
 
   [[nodiscard]] const ProfileDesc& profile() const;
   // The VPC3+ variant the chip was made as (nullopt on the other profiles).

@@ -23,7 +23,7 @@ struct FdlCounters {
   std::uint32_t truncated = 0;             // the line went idle (TSYN) inside a frame
   std::uint32_t oversize = 0;              // more characters than SD / LE announce
   std::uint32_t bad_sap = 0;               // unsupported address extension
-  std::uint32_t no_sync = 0;               // a request not preceded by TSYN idle
+  std::uint32_t no_sync = 0;               // a telegram not preceded by TSYN idle (an answer too)
   std::uint32_t foreign_address = 0;       // well-formed, for another station
   std::uint32_t unknown_sap = 0;           // DSAP the DP slave does not serve (answered RS)
   std::uint32_t unsupported_function = 0;  // FC function the slave does not serve

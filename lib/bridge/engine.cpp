@@ -122,9 +122,9 @@ void Engine::watch_answers(std::size_t i, Chip& chip) {
 // The log's view of station `i`: its chip's messages and state changes.
 void Engine::watch_slave(std::size_t i) {
   Slave& s = slaves_[i];
-  s.chip->set_log_sink([this, i](const LogRecord& r) {
-    if (r.level >= LogLevel::info) add_line(r.cycle, "CHIP", stations_[i].name, r.text);
-  });
+  s.chip->set_log_sink(
+      [this, i](const LogRecord& r) { add_line(r.cycle, "CHIP", stations_[i].name, r.text); },
+      LogLevel::info);
   s.dp = s.chip->dp_state();
   s.wd = s.chip->wd_state();
   s.chip->on_state_change([this, i](std::uint64_t cycle) { check_states(i, cycle); });

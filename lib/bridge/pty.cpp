@@ -240,6 +240,16 @@ std::string make_link(const std::string& path, const std::string& target) {
     if (!S_ISLNK(st.st_mode)) {
       return path + " exists and is not a symlink: refusing to replace it";
     }
+    // Only a pty's link (a bridge's: stale, or live and the newest bridge wins) is replaced: a
+    // user's own link (a dotfile, /dev/stdout, /dev/fd) is theirs, and would be gone at exit.
+    std::vector<char> buf(4096);
+    const ssize_t n = ::readlink(path.c_str(), buf.data(), buf.size() - 1);
+    if (n < 0) return errno_text(path.c_str());
+    const std::string old(buf.data(), static_cast<std::size_t>(n));
+    if (!old.starts_with(kPtsDir)) {
+      return fmt::format("{} is a symlink to {}, not to a pty in {}: refusing to replace it", path,
+                         old, kPtsDir);
+    }
     // Replace atomically: a client never finds the path missing.
     std::string error;
     const std::string tmp = outfile::create_temp(

@@ -17,6 +17,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 #include "port.hpp"
 
@@ -85,8 +86,12 @@ class PtyPort final : public ClientPort {
   bool speed_checked_ = false;
 };
 
-// Makes `path` a symlink to `target`. An existing symlink is replaced (atomically); any other
-// existing file is left alone. Returns an empty string, or a one-line reason it failed.
+// Where the slave sides of pseudo-terminals are: an existing symlink into it is a bridge's.
+inline constexpr std::string_view kPtsDir = "/dev/pts/";
+
+// Makes `path` a symlink to `target`. An existing symlink into kPtsDir is replaced (atomically);
+// any other existing file or symlink is left alone. Returns an empty string, or a one-line reason
+// it failed.
 std::string make_link(const std::string& path, const std::string& target);
 // Removes `path` if it is still a symlink to `target` (not one another bridge made since).
 void remove_link(const std::string& path, const std::string& target);

@@ -755,7 +755,11 @@ void Server::Impl::poll_once() {
       close_client(*c);
     }
   }
-  std::erase_if(clients, [](const auto& c) { return c->fd < 0; });
+  std::erase_if(clients, [this](const auto& c) {
+    if (c->fd >= 0) return false;
+    session.leave(c->state);
+    return true;
+  });
 }
 
 void Server::Impl::final_flush() {

@@ -200,10 +200,35 @@ Session::Session(ChipOptions opt, std::function<void(const AsyncLine&)> sink)
          fmt::format("! telegram {} {} {} {}", t.start, t.end, t.from_chip ? "tx" : "rx",
                      dpc31::hex_bytes(t.bytes, "")));
   });
-  chip_.set_log_sink([this](const LogRecord& r) {
-    emit(AsyncLine::Kind::log,
-         fmt::format("! log {} {} {}", r.cycle, level_name(r.level), one_line(r.text)), r.level);
-  });
+  chip_.set_log_sink({});  // no client asked for the log yet (show_log)
+}
+
+void Session::follow_log(ClientState& client, std::optional<LogLevel> level) {
+  if (client.log_level) --log_clients_[static_cast<std::size_t>(*client.log_level)];
+  if (level) ++log_clients_[static_cast<std::size_t>(*level)];
+  show_log();  // what the old sink is owed goes to the clients as they asked for it
+  client.log_level = level;
+}
+
+void Session::leave(ClientState& client) { follow_log(client, std::nullopt); }
+
+void Session::show_log() {
+  std::optional<LogLevel> lowest;
+  for (std::size_t l = log_clients_.size(); l-- > 0;)
+    if (log_clients_[l] != 0) lowest = static_cast<LogLevel>(l);
+  if (lowest == log_shown_) return;
+  log_shown_ = lowest;
+  if (!lowest) {
+    chip_.set_log_sink({});
+    return;
+  }
+  chip_.set_log_sink(
+      [this](const LogRecord& r) {
+        emit(AsyncLine::Kind::log,
+             fmt::format("! log {} {} {}", r.cycle, level_name(r.level), one_line(r.text)),
+             r.level);
+      },
+      *lowest);
 }
 
 void Session::attach_cpu(CpuSetup setup) {
@@ -514,12 +539,12 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
       static constexpr std::array kLevels = {LogLevel::debug, LogLevel::info, LogLevel::warn,
                                              LogLevel::error};
       if (t[1] == "off") {
-        client.log_level.reset();
+        follow_log(client, std::nullopt);
         return ok();
       }
       for (const LogLevel l : kLevels) {
         if (t[1] == level_name(l)) {
-          client.log_level = l;
+          follow_log(client, l);
           return ok();
         }
       }

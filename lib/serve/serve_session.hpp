@@ -3,6 +3,7 @@
 // emits, so the interpreter can be driven and tested on its own.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <deque>
 #include <functional>
@@ -72,6 +73,8 @@ class Session {
 
   // Executes one line (without its newline; a trailing CR is ignored).
   Result execute(std::string_view line, ClientState& client);
+  // The client goes: the log level it asked for no longer counts (show_log).
+  void leave(ClientState& client);
 
   Chip& chip() { return chip_; }
 
@@ -89,6 +92,11 @@ class Session {
 
  private:
   void emit(AsyncLine::Kind kind, std::string text, LogLevel level = LogLevel::info);
+  // `client` asks for the chip's log from `level` up (none: off).
+  void follow_log(ClientState& client, std::optional<LogLevel> level);
+  // The chip's log sink shows the lowest level any client asked for and up (none asked: no
+  // sink), so its repeat counts are those of the lines a client may see (Chip::set_log_sink).
+  void show_log();
   [[nodiscard]] std::uint32_t default_bit_cycles() const;
   [[nodiscard]] std::uint32_t address_limit() const;
   // Forgets the injected telegrams whose END the chip has reached.
@@ -101,8 +109,10 @@ class Session {
   std::deque<std::pair<std::uint64_t, std::size_t>> injected_;  // END, bytes; oldest first
   std::size_t injected_bytes_ = 0;
   StateDir state_dir_;
-  std::vector<std::string_view> tokens_;  // the words of the line being executed
-  std::unique_ptr<BoardCpu> cpu_;         // --cpu: the bus master
+  std::vector<std::string_view> tokens_;      // the words of the line being executed
+  std::unique_ptr<BoardCpu> cpu_;             // --cpu: the bus master
+  std::array<std::size_t, 4> log_clients_{};  // per LogLevel: the clients that asked for it
+  std::optional<LogLevel> log_shown_;         // the lowest of them, what the chip's sink shows
 };
 
 }  // namespace dpc31::serve

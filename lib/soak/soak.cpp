@@ -46,14 +46,15 @@ class Soak {
  public:
   explicit Soak(const Options& o)
       : o_(o), rc_(responder_config(o)), chip_(chip_options(o)), user_(rc_), rng_(o.seed) {
-    chip_.set_log_sink([this](const LogRecord& r) {
-      if (r.level < LogLevel::warn) return;
-      if (log_.size() < kKeptLog) {
-        log_.push_back(log_line(r));
-      } else {
-        ++log_left_out_;
-      }
-    });
+    chip_.set_log_sink(
+        [this](const LogRecord& r) {
+          if (log_.size() < kKeptLog) {
+            log_.push_back(log_line(r));
+          } else {
+            ++log_left_out_;
+          }
+        },
+        LogLevel::warn);
     DirectBus bus(chip_);
     MasterConfig mc;
     mc.address = kMaster;

@@ -5,7 +5,10 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <stdexcept>
 #include <string>
+#include <string_view>
+#include <system_error>
 #include <vector>
 
 #include "cpu.hpp"
@@ -24,8 +27,11 @@ fs::path g_dir;
 
 void put(const std::string& target, const std::string& name, const Bytes& b) {
   fs::create_directories(g_dir / target);
-  std::ofstream f(g_dir / target / name, std::ios::binary);
+  const fs::path path = g_dir / target / name;
+  std::ofstream f(path, std::ios::binary);
   f.write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
+  f.close();
+  if (!f) throw std::runtime_error(path.string() + ": cannot write");
 }
 
 ResponderConfig user_config() {  // as in chip_fuzz.cpp
@@ -112,14 +118,8 @@ void startup_prefix(DpMaster& m) {
   m.idle(2000);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  if (argc != 2) {
-    std::fprintf(stderr, "usage: %s CORPUS_DIR\n", argv[0]);
-    return 2;
-  }
-  g_dir = argv[1];
+// Every seed into g_dir; throws on a failed write.
+void write_seeds() {
   const char* names[] = {"spc3", "vpc3plus", "dpc31"};
   const Profile profiles[] = {Profile::spc3, Profile::vpc3plus, Profile::dpc31};
   // Data_Exchange prefix (setup bit 3), 1.5 Mbaud: what the master does next.
@@ -197,6 +197,38 @@ int main(int argc, char** argv) {
       ahead.step(150);
       put("snapshot_loader", n + "_rx_in_progress", ahead.save_state());
     }
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // Bad input is one line and exit 2 (docs/bad-input.md), and nothing is made for it.
+  const char* kUsage =
+      "usage: dpc31_fuzz_make_seeds CORPUS_DIR (made if missing; its parent must exist)";
+  const std::string_view arg = argc == 2 ? argv[1] : "";
+  if (arg == "--help" || arg == "-h") {
+    std::printf("%s\n", kUsage);
+    return 0;
+  }
+  if (argc != 2 || arg.empty() || arg[0] == '-') {
+    std::fprintf(stderr, "dpc31_fuzz_make_seeds: %s\n", kUsage);
+    return 2;
+  }
+  g_dir = argv[1];
+  // One level: a mistyped parent (/nonexistent/x) is refused, not created.
+  std::error_code ec;
+  fs::create_directory(g_dir, ec);
+  if (!fs::is_directory(g_dir)) {
+    std::fprintf(stderr, "dpc31_fuzz_make_seeds: %s: %s\n", argv[1],
+                 ec ? ("cannot create the directory: " + ec.message()).c_str() : "not a directory");
+    return 2;
+  }
+  try {
+    write_seeds();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "dpc31_fuzz_make_seeds: %s\n", e.what());
+    return 2;
   }
   return 0;
 }

@@ -234,11 +234,11 @@ TEST(Cpu51Board, RunUntilEndsAtTheCycleAskedWhateverTheCpuRuns) {
 }
 
 // A hardware reset of the chip under a board (Chip::reset) is an event at the board's instant:
-// the chip's clock counts on from there, as the CPU's does (docs/cpu.md, "The board"). The next
-// run brings the reset chip (cycle 0) to the cycle where the last run ended, and a run to a cycle
-// before that runs nothing. SJMP $ (80h FEh, 2 machine cycles) at 24 MHz: chip cycle 48 000 is
-// CPU clock 24 000, machine cycle 2 000; the step [1998, 2000) samples last at clock 23 998
-// (chip cycle 47 996) and runs, the next one's first sample (chip cycle 48 020) waits.
+// the chip's new time line starts there and its clock counts on, as the CPU's does (docs/cpu.md,
+// "The board"), and a run to a cycle before it runs nothing. SJMP $ (80h FEh, 2 machine cycles) at
+// 24 MHz: chip cycle 48 000 is CPU clock 24 000, machine cycle 2 000; the step [1998, 2000)
+// samples last at clock 23 998 (chip cycle 47 996) and runs, the next one's first sample (chip
+// cycle 48 020) waits.
 TEST(Cpu51Board, AResetChipCountsOnFromTheBoardsInstant) {
   Chip chip({Profile::spc3, BusMode::intel});
   Cpu51Board board(chip, 24'000'000, 0x8000);
@@ -247,7 +247,7 @@ TEST(Cpu51Board, AResetChipCountsOnFromTheBoardsInstant) {
   board.run_until(48'000);
   ASSERT_EQ(board.cpu().cycles(), 2000u);
   chip.reset();
-  EXPECT_EQ(chip.cycle(), 0u);
+  EXPECT_EQ(chip.cycle(), 48'000u);
   board.run_until(10);
   EXPECT_EQ(chip.cycle(), 48'000u);
   EXPECT_EQ(board.cpu().cycles(), 2000u);
@@ -297,7 +297,8 @@ TEST(Cpu51Board, ALoadTakesOnlyASnapshotOfTheBoardsInstant) {
     refused(at48,
             "snapshot of cycle 48000 under a CPU board at cycle 96000: the CPU's state is not the "
             "chip's: it would run on against another chip");
-    chip.reset();  // cycle 0; the board's instant stays 96 000
+    chip.reset();  // at the board's instant, 96 000
+    EXPECT_EQ(chip.cycle(), 96'000u);
     chip.load_state(at96);
     EXPECT_EQ(chip.cycle(), 96'000u);
     board.run_until(144'000);
@@ -308,13 +309,15 @@ TEST(Cpu51Board, ALoadTakesOnlyASnapshotOfTheBoardsInstant) {
   EXPECT_EQ(chip.cycle(), 48'000u);
 }
 
-// The same reset at the board's instant (Chip::reset(board.instant())): the chip's new time line
-// starts there, so its edges are told there and an access after it lands after it (docs/cpu.md,
-// "The board"). User_Timer_Clock alone unmasked (Int_Mask_Reg 04h/05h) and Start_SPC3 (Mode_Reg1_S
-// 08h) written before the board runs: 4, 8, 12; the first User_Timer_Clock at 12 + 48 000
-// (docs/timing.md, "Timers"); SJMP $ never serves it. A hardware reset clears Int_Req_Reg, the
-// interrupt ends in the reset's cycle (docs/timing.md, "hardware reset"): 50 000, where the run
-// ended; X/INT (low-active, INT_Pol 0 after it) high; a write then completes at 50 004.
+// The same reset (Chip::reset(), as Chip::reset(board.instant())): the chip's new time line
+// starts at the board's instant, so its edges are told there and an access after it lands after it
+// (docs/cpu.md, "The board"); a reset at another cycle is refused, as a load of another cycle's
+// snapshot is (ALoadTakesOnlyASnapshotOfTheBoardsInstant). User_Timer_Clock alone unmasked
+// (Int_Mask_Reg 04h/05h) and Start_SPC3 (Mode_Reg1_S 08h) written before the board runs: 4, 8, 12;
+// the first User_Timer_Clock at 12 + 48 000 (docs/timing.md, "Timers"); SJMP $ never serves it. A
+// hardware reset clears Int_Req_Reg, the interrupt ends in the reset's cycle (docs/timing.md,
+// "hardware reset"): 50 000, where the run ended; X/INT (low-active, INT_Pol 0 after it) high; a
+// write then completes at 50 004.
 TEST(Cpu51Board, AResetAtTheBoardsInstantTellsItsEdgesThere) {
   Chip chip({Profile::spc3, BusMode::intel});
   Cpu51Board board(chip, 24'000'000, 0x8000);
@@ -330,7 +333,7 @@ TEST(Cpu51Board, AResetAtTheBoardsInstantTellsItsEdgesThere) {
   board.run_until(50'000);
   EXPECT_EQ(board.instant(), 50'000u);
   EXPECT_FALSE(chip.x_int_pin());
-  chip.reset(board.instant());
+  chip.reset();
   const std::vector<std::pair<std::uint64_t, bool>> want = {{48'012, true}, {50'000, false}};
   EXPECT_EQ(edges, want);
   EXPECT_EQ(chip.cycle(), 50'000u);
@@ -342,9 +345,31 @@ TEST(Cpu51Board, AResetAtTheBoardsInstantTellsItsEdgesThere) {
   EXPECT_EQ(chip.cycle(), 96'000u);
   EXPECT_EQ(board.cpu().cycles(), 4000u);
   EXPECT_EQ(edges.size(), 2u);
-  // Past the chip's last cycle: refused, the chip as it was.
-  EXPECT_THROW(chip.reset(Chip::kLastCycle + 1), std::invalid_argument);
+  // Past the chip's last cycle, or another cycle than the board's instant: refused, the chip as
+  // it was (started again: Mode_Reg1_S 08h).
+  chip.write(0x08, 0x01);  // 96 004
+  const auto refused = [&](std::uint64_t cycle, const std::string& message) {
+    try {
+      chip.reset(cycle);
+      ADD_FAILURE() << "reset at " << cycle << "; expected: " << message;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()), message);
+    }
+    EXPECT_EQ(chip.cycle(), 96'004u);
+    EXPECT_TRUE(chip.started());
+  };
+  refused(Chip::kLastCycle + 1,
+          fmt::format("Chip::reset: cycle {} is past the chip's last cycle {}",
+                      Chip::kLastCycle + 1, Chip::kLastCycle));
+  refused(0,
+          "Chip::reset: cycle 0 under a CPU board at cycle 96000: a reset there is at the board's "
+          "instant (the CPU's clock counts on)");
+  refused(96'004,
+          "Chip::reset: cycle 96004 under a CPU board at cycle 96000: a reset there is at the "
+          "board's instant (the CPU's clock counts on)");
+  chip.reset(board.instant());
   EXPECT_EQ(chip.cycle(), 96'000u);
+  EXPECT_FALSE(chip.started());
 }
 
 // An X/INT change whose S5P2 sample falls in a MOVX's first cycle is polled in its second (the

@@ -484,7 +484,12 @@ int run_bench(const BenchArgs& args, std::FILE* out, std::FILE* err) {
                bench);
     return 2;
   }
-  // Opened before the minutes of measuring, so that a bad path is one line up front.
+  // Checked and opened before the minutes of measuring, so that a bad path is one line up front.
+  if (const std::string same = outfile::distinct({{"--bench", bench}}, {{"--json", a.json}});
+      !same.empty()) {
+    fmt::print(err, "dpc31 bench: {}\n", same);
+    return 2;
+  }
   outfile::OutFile json_out;
   if (!a.json.empty() && !json_out.open(a.json)) {
     fmt::print(err, "dpc31 bench: {}\n", json_out.error());

@@ -625,7 +625,9 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
   auto* b = app.add_subcommand("bridge",
                                "the RS-485 line of one slave (or of several, --slave) as a "
                                "pseudo-terminal or a loopback TCP port for a DP master program");
-  auto* pty = b->add_option("--pty", o.pty, "symlink to create to the pty's slave side (or --tcp)")
+  auto* pty = b->add_option("--pty", o.pty,
+                            "symlink to create to the pty's slave side (or --tcp); an existing "
+                            "PATH must be a symlink into /dev/pts/ (a bridge's)")
                   ->check(outfile::named(outfile::Use::write));
   b->add_option("--tcp", o.tcp,
                 "[HOST:]PORT: a raw TCP port instead of the pty (127.0.0.1 unless HOST; 0: any "

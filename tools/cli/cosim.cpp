@@ -70,6 +70,24 @@ bool can_be_directory(const std::filesystem::path& dir, std::string& why) {
 // The files a waveform window (--vcd, --dump) writes into its directory.
 const char* const kWindowFiles[] = {"emu.vcd", "rtl.vcd", "rtl_internal.fst"};
 
+// Every file a run may write, for outfile::distinct: --junit, the windows' files in --vcd and
+// --dump, and a shrunk trace in --out, whose name (cosim-PROFILE-seedN.trace, -session-...) is
+// known only at its divergence: a --junit there named like one is taken for it.
+std::vector<outfile::Named> run_outputs(const CosimOptions& o) {
+  std::vector<outfile::Named> out = {{"--junit", o.junit}};
+  for (const auto& [opt, dir] : {std::pair{"--vcd", o.vcd_dir}, std::pair{"--dump", o.dump_dir}}) {
+    if (dir.empty()) continue;
+    for (const char* name : kWindowFiles)
+      out.push_back({opt, (std::filesystem::path(dir) / name).string()});
+  }
+  const std::string name = std::filesystem::path(o.junit).filename().string();
+  if (name.starts_with("cosim-") && name.ends_with(".trace")) {
+    out.push_back(
+        {"--out", (std::filesystem::path(o.out_dir.empty() ? "." : o.out_dir) / name).string()});
+  }
+  return out;
+}
+
 // "" if each of the window's files in `dir` can be written (opened, then discarded), else the
 // one-line reason: checked before the seeds run, not found after them.
 std::string window_unwritable(const std::string& dir) {
@@ -454,7 +472,13 @@ int run_cosim(const CosimOptions& given) {
       for (outfile::Named& n : scenario_inputs(sc)) inputs.push_back(std::move(n));
     }
   }
-  if (const std::string same = outfile::distinct(inputs, {{"--junit", o.junit}}); !same.empty()) {
+  std::string same = outfile::distinct(inputs, run_outputs(o));
+  // A directory is no file of distinct()'s, but --junit must not be one of them either.
+  for (const auto& [opt, dir] : {std::pair{"--out", o.out_dir}, std::pair{"--vcd", o.vcd_dir},
+                                 std::pair{"--dump", o.dump_dir}}) {
+    if (same.empty()) same = outfile::distinct({}, {{opt, dir}, {"--junit", o.junit}});
+  }
+  if (!same.empty()) {
     fmt::print(stderr, "dpc31 cosim: {}\n", same);
     return 2;
   }

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <cstdlib>
@@ -28,6 +29,20 @@ namespace {
 namespace m0 = fields::Mode_Reg0;
 namespace m1 = fields::Mode_Reg1_S;
 
+// `path` as one word of a POSIX shell command, quoted only where the shell would split or
+// expand it (a space in TMPDIR): the printed commands can be pasted as they are.
+std::string shell_word(const std::string& path) {
+  const bool plain = !path.empty() && std::all_of(path.begin(), path.end(), [](char c) {
+    const auto u = static_cast<unsigned char>(c);
+    return u >= 0x80 || std::isalnum(u) != 0 ||
+           std::string_view("_-./:@%+=,").find(c) != std::string_view::npos;
+  });
+  if (plain) return path;
+  std::string q = "'";
+  for (char c : path) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
 // A firmware-like view of the chip that narrates what it does.
 class Narrator {
  public:
@@ -43,10 +58,11 @@ class Narrator {
                    chip_.x_int_pin() ? "high" : "low", active ? "active" : "inactive");
       }
     });
-    chip_.set_log_sink([this](const LogRecord& r) {
-      if (r.level >= LogLevel::info)
-        fmt::print(out_, "[cycle {:>8}]   chip: {}\n", r.cycle, r.text);
-    });
+    chip_.set_log_sink(
+        [this](const LogRecord& r) {
+          fmt::print(out_, "[cycle {:>8}]   chip: {}\n", r.cycle, r.text);
+        },
+        LogLevel::info);
   }
 
   std::uint8_t read(RegId id, int byte = 0) {
@@ -300,7 +316,8 @@ int run_dp_session(const ChipOptions& opt, const RunOptions& ro, ChipRun& run,
              "logic-analyser tools (VCD, sigrok-cli -I vcd): {}\nPulseView session (pulseview "
              "-I vcd -i {} opens it, UART and PROFIBUS DP decoders stacked): {}\ntelegrams "
              "(pcapng, link type 257): {}\n",
-             ro.vcd, ro.gtkw, ro.gtkw, ro.la_vcd, ro.la_vcd, ro.pvs, ro.pcap);
+             ro.vcd, shell_word(ro.gtkw), ro.gtkw, ro.la_vcd, shell_word(ro.la_vcd), ro.pvs,
+             ro.pcap);
   return rc;
 }
 

@@ -354,8 +354,23 @@ int main(int argc, char** argv) {
     if (wavediff->parsed()) return dpc31::wavediff::run_cli(wavediff_args, stdout, stderr);
     if (run->parsed()) return dpc31::cli::run_scenario_command(run_opt, stdout, stderr);
     if (replay->parsed()) return dpc31::cli::run_replay_command(replay_opt, stdout, stderr);
-    if (merge->parsed()) return dpc31::cli::run_cosim_merge(merge_opt);
+    if (merge->parsed()) {
+      // cosim's options act on seeds that merge does not run (docs/decisions.md, "No silent
+      // options"): `cosim --junit F merge ...` wrote no F.
+      for (const CLI::Option* opt : cosim->get_options()) {
+        if (opt->count() > 0) {
+          return refuse(fmt::format(
+              "{} before merge: an option of cosim's seeds, which merge does not run; merge's "
+              "own options go after it",
+              opt->get_name()));
+        }
+      }
+      return dpc31::cli::run_cosim_merge(merge_opt);
+    }
     if (cosim->parsed()) {
+      if (cosim->count("--window") > 0 && cos.vcd_dir.empty()) {
+        return refuse(fmt::format("--window {}: the divergence's window needs --vcd", cos.window));
+      }
       dpc31::parse_profile(cos.profile_name, cos.profile);
       cos.profile_given = cosim->count("--profile") > 0;
       cos.mutant_given = cosim->count("--mutant") > 0;

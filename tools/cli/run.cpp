@@ -201,6 +201,9 @@ int ChipRun::open(std::uint32_t baud) {
   for (auto [path, out] : {std::pair{&opt.record, &m.rec_out}, std::pair{&opt.json, &m.json_out}}) {
     if (!path->empty() && !out->open(*path)) return m.fail(out->error());
   }
+  // The trace is written as the run goes: a device or a descriptor gets it from a scratch file
+  // at the end, after the walk.
+  if (!opt.record.empty() && !m.rec_out.spool()) return m.fail(m.rec_out.error());
   if (const std::string e = waveform_options_error(opt); !e.empty()) return m.fail(e);
   std::string error;
   for (const wave::Options& w : wave_options(opt, baud)) {
@@ -223,6 +226,8 @@ int ChipRun::run(const Scenario& s, std::string_view text, const LineSink& walk,
     notes.push_back(
         fmt::format("recorded by `dpc31 run --record` from {} (docs/trace-format.md)", s.file));
     rec = std::make_unique<TraceRecorder>(s.master.baud, std::move(notes));
+    // Written as it goes into the temporary (spooled since open()): a long run holds no trace.
+    rec->write_to([&out = m.rec_out](std::string_view bytes) { out.write(bytes); });
     hooks = rec->scenario_hooks();
   }
   std::string attach_error;
@@ -270,8 +275,7 @@ int ChipRun::run(const Scenario& s, std::string_view text, const LineSink& walk,
   const int rc = o.ok() ? 0 : 1;
   if (rec && !rec->error().empty())
     return m.fail(fmt::format("cannot record {}: {}", opt.scenario, rec->error()));
-  if (rec && !(m.rec_out.write(rec->text()) && m.rec_out.commit()))
-    return m.fail(m.rec_out.error());
+  if (rec && !m.rec_out.commit()) return m.fail(m.rec_out.error());
   std::string error;
   for (auto& w : m.waves) {
     if (!w->finish(end_cycle, error)) return m.fail(error);

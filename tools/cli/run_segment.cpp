@@ -2,6 +2,7 @@
 // station and the line at the top and one pcapng of the line (lib/segment_outputs), a golden trace
 // per station, the JSON summary. Nothing is written unless the run completes.
 #include <fmt/core.h>
+#include <sys/stat.h>
 
 #include <cstdint>
 #include <memory>
@@ -53,11 +54,23 @@ class RunOutputs final : public SegmentScenarioOutputs {
 
   // Opens the files the run does not write as it goes; false with a line.
   bool open(std::string& error) {
+    // The stations' traces are named after FILE, beside it: beside a device, a FIFO or a
+    // descriptor (/dev/null, /dev/stdout) they would be new files in its directory (/dev).
+    struct stat st {};
+    if (!opt_.record.empty() &&
+        ((::stat(opt_.record.c_str(), &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode)) ||
+         outfile::descriptor_link(opt_.record).link)) {
+      error = fmt::format(
+          "--record {}: not a regular file: a segment writes a trace per station beside FILE "
+          "(FILE.stationN.trace), so FILE names a file",
+          opt_.record);
+      return false;
+    }
     if (!SegmentScenarioOutputs::open(error)) return false;
     for (const std::string& sc : scopes()) {
       if (opt_.record.empty()) break;
       auto& f = trace_files_.emplace_back(std::make_unique<outfile::OutFile>());
-      if (!f->open(station_trace_path(opt_.record, sc))) {
+      if (!f->open(station_trace_path(opt_.record, sc)) || !f->spool()) {
         error = f->error();
         return false;
       }
@@ -81,6 +94,8 @@ class RunOutputs final : public SegmentScenarioOutputs {
                     "(docs/trace-format.md)",
                     s_.file, s_.stations[index].slave.address, s_.stations[index].name));
     auto& r = traces_.emplace_back(std::make_unique<TraceRecorder>(s_.baud, std::move(notes)));
+    // Written as it goes into the station's temporary (as one chip's trace is).
+    r->write_to([&out = *trace_files_[index]](std::string_view bytes) { out.write(bytes); });
     r->hear_line(seg.bit_cycles());
     r->attach(seg.chip(index));
     heard_from_.push_back(SIZE_MAX);
@@ -103,7 +118,10 @@ class RunOutputs final : public SegmentScenarioOutputs {
   void telegram(const LineTelegram& t) override {
     // Each station's trace names the sender of what it heard when the sender changes.
     for (std::size_t k = 0; k < traces_.size(); ++k) {
-      if (k == t.from || heard_from_[k] == t.from) continue;
+      if (k == t.from || heard_from_[k] == t.from) {
+        traces_[k]->heard(t.start);
+        continue;
+      }
       heard_from_[k] = t.from;
       traces_[k]->note_heard(t.start, fmt::format("from {}", seg_->name(t.from)));
     }
@@ -124,7 +142,7 @@ class RunOutputs final : public SegmentScenarioOutputs {
                             opt_.scenario, traces_[k]->error());
         return false;
       }
-      if (!(trace_files_[k]->write(traces_[k]->text()) && trace_files_[k]->commit())) {
+      if (!trace_files_[k]->commit()) {
         error = trace_files_[k]->error();
         return false;
       }

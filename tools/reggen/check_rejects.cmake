@@ -46,6 +46,28 @@ endforeach()
 if(_count EQUAL 0)
   message(FATAL_ERROR "no cases in ${DATA_DIR}/cases.txt")
 endif()
+
+# The command line's own bad input, the same way (CLI11's exit() gave 106 and 109 and a second
+# line; a file as --out-dir was exit 1 after generating everything).
+macro(expect_refused label expected)
+  math(EXPR _count "${_count} + 1")
+  execute_process(COMMAND "${REGGEN}" ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE stdout
+                  ERROR_VARIABLE err)
+  string(REGEX MATCHALL "\n" _newlines "${err}")
+  list(LENGTH _newlines _lines)
+  string(FIND "${err}" "${expected}" _at)
+  if(NOT rc EQUAL 2 OR NOT _lines EQUAL 1 OR _at EQUAL -1)
+    message(SEND_ERROR "${label}: exit ${rc}, ${_lines} lines, expected exit 2 and one line "
+                       "containing '${expected}'; stderr: ${err}")
+    math(EXPR _failures "${_failures} + 1")
+  endif()
+endmacro()
+file(WRITE "${WORK_DIR}/a_file" "")
+expect_refused("no arguments" "reggen: --in is required")
+expect_refused("unknown option" "reggen: The following argument was not expected: --bogus"
+               --in "${DATA_DIR}/minimal_ok.json" --out-dir "${WORK_DIR}/x" --bogus)
+expect_refused("--out-dir a file" "reggen: --out-dir ${WORK_DIR}/a_file: not a directory"
+               --in "${DATA_DIR}/minimal_ok.json" --out-dir "${WORK_DIR}/a_file")
 if(_failures GREATER 0)
   message(FATAL_ERROR "${_failures} of ${_count} bad inputs not rejected as expected")
 endif()

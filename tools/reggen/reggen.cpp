@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <exception>
 #include <filesystem>
 #include <fstream>
@@ -87,7 +88,18 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help
+    // One line and exit 2, as every bad input: CLI11's exit() adds a second line and returns
+    // its own codes (106 for a missing option).
+    std::string what = e.what();
+    std::replace(what.begin(), what.end(), '\n', ' ');
+    fmt::print(stderr, "reggen: {}\n", what);
+    return kExitBadInput;
+  }
+  // A file where the directory goes is bad input, found before anything is generated.
+  if (std::error_code ec; fs::exists(out_dir, ec) && !fs::is_directory(out_dir, ec)) {
+    fmt::print(stderr, "reggen: --out-dir {}: not a directory\n", out_dir);
+    return kExitBadInput;
   }
 
   std::vector<Output> outputs;

@@ -7,12 +7,15 @@
 
 #include <array>
 #include <cerrno>
+#include <climits>
 #include <cstdlib>
 #include <filesystem>
 #include <system_error>
+#include <utility>
 
 #include "fst_chain.hpp"
 #include "fst_hooks.h"
+#include "textfile.hpp"
 
 namespace dpc31::outfile {
 
@@ -38,6 +41,16 @@ std::string running_program() {
 
 std::string running_program_refused(const std::string& path) {
   return fmt::format("{}: cannot write: is the running program {}", path, running_program());
+}
+
+// Whether rename() into `path` fails with ENAMETOOLONG: its last component longer than its
+// directory's file system takes (NAME_MAX where it cannot be asked), or the whole over PATH_MAX.
+bool name_too_long(const std::string& path) {
+  const std::size_t slash = path.rfind('/');
+  const std::string dir = slash == std::string::npos ? "." : path.substr(0, slash + 1);
+  const std::size_t name = slash == std::string::npos ? path.size() : path.size() - slash - 1;
+  const long max = ::pathconf(dir.c_str(), _PC_NAME_MAX);
+  return name > static_cast<std::size_t>(max > 0 ? max : NAME_MAX) || path.size() >= PATH_MAX;
 }
 
 }  // namespace
@@ -184,7 +197,7 @@ std::FILE* open_live(const std::string& path) {
 OutFile::~OutFile() { discard(); }
 
 bool OutFile::fail(std::string msg) {
-  if (error_.empty()) error_ = std::move(msg);
+  if (error_.empty()) error_ = shown_line(msg);  // one line whatever the name holds
   return false;
 }
 
@@ -226,6 +239,11 @@ bool OutFile::open(const std::string& path) {
     // No such directory (else it was refused above): a file's name does not end in '/'.
     return fail(fmt::format("{}: cannot write: a file name cannot end in '/'", path));
   }
+  // The temporary's name is short whatever the target's: a name its file system cannot hold
+  // would be found only at the rename, after the work.
+  if (!direct_ && name_too_long(target_)) {
+    return fail(fmt::format("{}: cannot write: {}", path, errno_text(ENAMETOOLONG)));
+  }
   if (!direct_) {
     std::string error;
     tmp_ = create_temp(
@@ -259,26 +277,34 @@ bool OutFile::open(const std::string& path) {
   return true;
 }
 
-std::FILE* OutFile::stream() { return f_; }
+std::FILE* OutFile::stream() { return spool_ != nullptr ? spool_ : f_; }
+
+bool OutFile::spool() {
+  if (tmp_.empty()) return fail(fmt::format("{}: not open for writing", path_));
+  if (!direct_ || spool_ != nullptr) return true;
+  const std::string scratch = scratch_path();
+  if (scratch.empty()) return false;
+  spool_ = std::fopen(scratch.c_str(), "wbe");
+  if (spool_ == nullptr) return fail(fmt::format("{}: cannot write: {}", path_, errno_text(errno)));
+  return true;
+}
 
 std::string make_temp_dir(const std::string& prefix, std::string& error,
                           const std::string& parent) {
-  std::error_code ec;
-  const std::filesystem::path tmp =
-      parent.empty() ? std::filesystem::temp_directory_path(ec) : std::filesystem::path(parent);
-  std::string dir = (tmp / (prefix + "XXXXXX")).string();
-  if (!ec && ::mkdtemp(dir.data()) != nullptr) return dir;
-  // On error the path is empty: the variable it came from is named instead (libstdc++ reads
-  // these in this order).
-  std::string where = tmp.string();
+  // The variables std::filesystem::temp_directory_path reads, in its order; an empty one is
+  // unset, as mktemp(1) and Python's tempfile take it (a CI job's exported empty TMPDIR).
+  std::string tmp = parent;
+  std::string where = parent;
   for (const char* name : {"TMPDIR", "TMP", "TEMP", "TEMPDIR"}) {
-    if (const char* v = std::getenv(name); ec && v != nullptr) {
+    if (const char* v = std::getenv(name); tmp.empty() && v != nullptr && *v != '\0') {
+      tmp = v;
       where = fmt::format("{}={}", name, v);
-      break;
     }
   }
-  error = fmt::format("cannot create a directory in {}: {}", where,
-                      ec ? ec.message() : errno_text(errno));
+  if (tmp.empty()) tmp = where = "/tmp";
+  std::string dir = (std::filesystem::path(tmp) / (prefix + "XXXXXX")).string();
+  if (::mkdtemp(dir.data()) != nullptr) return dir;
+  error = fmt::format("cannot create a directory in {}: {}", where, errno_text(errno));
   return {};
 }
 
@@ -293,6 +319,10 @@ std::string OutFile::library_path() {
     if (scratch_entries_.empty()) scratch_entries_.push_back(cleanup::Entry::path(tmp_ + ".hier"));
     return tmp_;
   }
+  return scratch_path();
+}
+
+std::string OutFile::scratch_path() {
   if (scratch_dir_.empty()) {
     std::string error;
     scratch_dir_ = make_temp_dir("dpc31-out-", error);
@@ -344,7 +374,7 @@ bool OutFile::commit_fst(bool failed_elsewhere) {
 
 bool OutFile::write(std::string_view bytes) {
   if (f_ == nullptr) return fail(fmt::format("{}: not open for writing", path_));
-  if (std::fwrite(bytes.data(), 1, bytes.size(), f_) != bytes.size()) {
+  if (std::fwrite(bytes.data(), 1, bytes.size(), stream()) != bytes.size()) {
     return fail(fmt::format("{}: cannot write: {}", path_, errno_text(errno)));
   }
   return true;
@@ -352,8 +382,18 @@ bool OutFile::write(std::string_view bytes) {
 
 bool OutFile::commit() {
   if (tmp_.empty()) return fail(fmt::format("{}: not open for writing", path_));
-  if (!scratch_dir_.empty()) {
-    // A device or FIFO target: what the library wrote to the scratch file goes into it now.
+  // /dev/stdout: what the command printed before comes first, also before a scratch file's bytes
+  // (more than the stream's buffer go to the descriptor at once).
+  if (direct_) std::fflush(stdout);
+  if (spool_ != nullptr) {
+    if (std::fflush(spool_) != 0 || std::ferror(spool_) != 0)
+      fail(fmt::format("{}: cannot write: {}", path_, errno_text(errno)));
+    if (std::fclose(std::exchange(spool_, nullptr)) != 0)
+      fail(fmt::format("{}: cannot write: {}", path_, errno_text(errno)));
+  }
+  if (!scratch_dir_.empty() && error_.empty()) {
+    // A device or FIFO target: what the library (or spool()) wrote to the scratch file goes into
+    // it now.
     std::FILE* in = std::fopen((scratch_dir_ + "/out").c_str(), "rb");
     if (in == nullptr)
       fail(fmt::format("{}: cannot read the scratch file: {}", path_, errno_text(errno)));
@@ -363,7 +403,6 @@ bool OutFile::commit() {
     }
     if (in != nullptr) std::fclose(in);
   }
-  if (direct_) std::fflush(stdout);  // /dev/stdout: what the command printed before comes first
   // Errors of stdio surface at the flush; an fsync before the rename so that a crash leaves the
   // old file or the new one, never an empty one.
   if (std::fflush(f_) != 0 || std::ferror(f_) != 0) {
@@ -390,6 +429,7 @@ bool OutFile::commit() {
 }
 
 void OutFile::discard() {
+  if (spool_ != nullptr) std::fclose(std::exchange(spool_, nullptr));
   if (f_ != nullptr) {
     std::fclose(f_);
     f_ = nullptr;
@@ -452,19 +492,31 @@ std::string distinct(const std::vector<Named>& inputs, const std::vector<Named>&
   all_inputs.push_back({"the running program", running_program()});
   std::vector<Id> out_ids;
   for (const Named& o : outputs) out_ids.push_back(o.path.empty() ? Id{} : id_of(o.path));
+  // The file the shell redirected the standard output to: renamed over, what the command prints
+  // there would go with the old file (/dev/stdout writes into it instead: a descriptor).
+  struct stat out1 {};
+  const bool stdout_file = ::fstat(STDOUT_FILENO, &out1) == 0 && S_ISREG(out1.st_mode);
   for (std::size_t k = 0; k < outputs.size(); ++k) {
     if (outputs[k].path.empty() || out_ids[k].special) continue;
+    if (stdout_file && out_ids[k].exists && !out_ids[k].descriptor &&
+        out_ids[k].dev == out1.st_dev && out_ids[k].ino == out1.st_ino) {
+      return shown_line(fmt::format(
+          "{} {}: is the file the standard output goes to: what is printed there would be lost "
+          "(name /dev/stdout to write into it)",
+          outputs[k].what, outputs[k].path));
+    }
     for (const Named& in : all_inputs) {
       if (!in.path.empty() && same(out_ids[k], id_of(in.path))) {
-        return fmt::format("{} {}: is {} {}: an output must not replace an input", outputs[k].what,
-                           outputs[k].path, in.what, in.path);
+        return shown_line(fmt::format("{} {}: is {} {}: an output must not replace an input",
+                                      outputs[k].what, outputs[k].path, in.what, in.path));
       }
     }
     for (std::size_t j = 0; j < k; ++j) {
       if (!outputs[j].path.empty() && !out_ids[k].descriptor && !out_ids[j].descriptor &&
           same(out_ids[k], out_ids[j])) {
-        return fmt::format("{} {} and {} {} are the same file: each output needs its own",
-                           outputs[j].what, outputs[j].path, outputs[k].what, outputs[k].path);
+        return shown_line(
+            fmt::format("{} {} and {} {} are the same file: each output needs its own",
+                        outputs[j].what, outputs[j].path, outputs[k].what, outputs[k].path));
       }
     }
   }

@@ -83,6 +83,11 @@ class OutFile {
   bool open(const std::string& path);
   // Buffered stream on the temporary (fmt::print, fwrite); nullptr when not open.
   std::FILE* stream();
+  // For bytes written as the work goes that must still come after what the command prints (a
+  // trace streamed during a run, `dpc31 run --record /dev/stdout`): a target written in place
+  // gets them at commit(), from a scratch file (as library_path()'s) that write() and stream()
+  // use from now on; a regular target's temporary is such a file already. False with error().
+  bool spool();
   bool write(std::string_view bytes);
   // For a library that writes a file by name (fstapi, Verilator's FST tracer: they unlink the
   // name, create it again, seek in it and keep NAME.hier next to it while they write): a regular
@@ -110,11 +115,14 @@ class OutFile {
 
  private:
   bool fail(std::string msg);
+  // The scratch file of a direct target, its private directory made first: "" with error().
+  std::string scratch_path();
   std::string path_;    // as given, for messages
   std::string target_;  // what is replaced: the path, or the file a symlink names
   std::string tmp_;
-  bool direct_ = false;      // a device, FIFO or descriptor, written in place
-  std::string scratch_dir_;  // library_path() of a direct target: the private directory
+  bool direct_ = false;         // a device, FIFO or descriptor, written in place
+  std::string scratch_dir_;     // library_path() of a direct target: the private directory
+  std::FILE* spool_ = nullptr;  // spool(): the scratch file, instead of f_
   std::optional<unsigned long> fst_failures_;  // dpc31_fst_failed_writes() at library_path()
   cleanup::Entry tmp_entry_;
   std::vector<cleanup::Entry> scratch_entries_;  // the scratch files, their .hier, the directory

@@ -107,11 +107,14 @@ std::string not_text(unsigned char c) {
                 : fmt::format("a control byte \\x{:02X}: not a text file", c);
 }
 
-std::string shown(std::string_view s, std::size_t max_chars) {
+namespace {
+
+// `s` with each byte below 0x20, DEL and (unless `keep_high`) each byte from 0x80 as \xHH.
+std::string escaped(std::string_view s, std::size_t max_chars, bool keep_high) {
   std::string out;
   for (std::size_t i = 0; i < s.size() && i < max_chars; ++i) {
     const auto c = static_cast<unsigned char>(s[i]);
-    if (c >= 0x20 && c < 0x7F) {
+    if ((c >= 0x20 && c < 0x7F) || (keep_high && c >= 0x80)) {
       out += static_cast<char>(c);
     } else {
       out += fmt::format("\\x{:02X}", c);
@@ -120,5 +123,13 @@ std::string shown(std::string_view s, std::size_t max_chars) {
   if (s.size() > max_chars) out += "...";
   return out;
 }
+
+}  // namespace
+
+std::string shown(std::string_view s, std::size_t max_chars) {
+  return escaped(s, max_chars, false);
+}
+
+std::string shown_line(std::string_view line) { return escaped(line, kWhole, true); }
 
 }  // namespace dpc31

@@ -57,5 +57,8 @@ std::string not_text(unsigned char c);
 // `max_chars` characters and "..." (a name its reader bounds already: kWhole, never cut).
 inline constexpr std::size_t kWhole = std::string_view::npos;
 std::string shown(std::string_view s, std::size_t max_chars = 40);
+// A message that names files, as one line: its control bytes (a newline, an ESC in a file's
+// name) as \xHH, the rest as it is (a name in UTF-8 stays readable).
+std::string shown_line(std::string_view line);
 
 }  // namespace dpc31

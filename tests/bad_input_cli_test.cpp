@@ -1,0 +1,172 @@
+// Findings of an outside audit of the `dpc31` command line as a whole (s34): a user's symlink
+// that the bridge replaced, outputs that named one another or the standard output's file and were
+// found only after the work (or never), options that acted on nothing, names printed raw.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "bad_input.hpp"
+
+using namespace badinput;
+
+// docs/bridge.md, "The symlink": only a pty's link is replaced. A user's own link at PATH (a
+// dotfile kept as a link; the audit's was /dev/stdout) is refused before the bridge starts, and
+// stays as it was.
+TEST_F(BadInput, TheBridgeKeepsAUsersOwnSymlink) {
+  file("real_config", "my config\n");
+  fs::create_symlink("real_config", path("mylink"));
+  // `timeout`: the old bridge ran on, and removed the link when the signal stopped it.
+  expect_bad(dpc31("bridge --pty mylink --firmware DO4", "timeout 10"),
+             "dpc31 bridge: mylink is a symlink to real_config, not to a pty in /dev/pts/: "
+             "refusing to replace it",
+             "a user's symlink");
+  EXPECT_EQ(fs::read_symlink(path("mylink")).string(), "real_config");
+  EXPECT_EQ(slurp(path("mylink")), "my config\n");
+}
+
+// docs/bad-input.md, "Output files": "an output that names an input or another output is refused
+// before any work". cosim's --junit against the files its --dump, --vcd and --out write (their
+// names known before the seeds: a shrunk trace's by its pattern), and against the directories.
+TEST_F(BadInput, CosimJunitNeverNamesAnotherOutput) {
+  fs::create_directory(path("d"));
+  fs::create_directory(path("v"));
+  fs::create_directory(path("o"));
+  const std::string seeds = "cosim --seeds 1 --cycles 3000 --mutant NO_C_SWAP ";
+  const std::string same = " are the same file: each output needs its own";
+  Outcome r = dpc31(seeds + "--dump d --junit d/emu.vcd");
+  expect_bad(r, "dpc31 cosim: --junit d/emu.vcd and --dump d/emu.vcd" + same, "--dump");
+  EXPECT_EQ(r.out, "");
+  expect_bad(dpc31(seeds + "--vcd v --junit v/rtl_internal.fst"),
+             "dpc31 cosim: --junit v/rtl_internal.fst and --vcd v/rtl_internal.fst" + same,
+             "--vcd");
+  expect_bad(
+      dpc31(seeds + "--out o --junit o/cosim-dpc31-seed1.trace"),
+      "dpc31 cosim: --junit o/cosim-dpc31-seed1.trace and --out o/cosim-dpc31-seed1.trace" + same,
+      "--out");
+  // --out's default is the working directory.
+  expect_bad(
+      dpc31(seeds + "--junit cosim-dpc31-seed1.trace"),
+      "dpc31 cosim: --junit cosim-dpc31-seed1.trace and --out ./cosim-dpc31-seed1.trace" + same,
+      "--out .");
+  // A directory not there yet: the old run wrote every seed, then failed at the rename.
+  expect_bad(dpc31(seeds + "--dump n --junit n"), "dpc31 cosim: --dump n and --junit n" + same,
+             "--dump = --junit");
+  EXPECT_EQ(listing(), (std::vector<std::string>{"d", "o", "v"}));
+  for (const char* dir : {"d", "o", "v"}) EXPECT_TRUE(fs::is_empty(path(dir))) << dir;
+}
+
+// README, "Command line": "Bad input found before the work (an option, a scenario, an output
+// that cannot be created) writes no output file". A name of 256 bytes (NAME_MAX is 255): the
+// temporary's short name was created, and the name itself failed only at the rename.
+TEST_F(BadInput, AnOutputNameTooLongIsFoundBeforeTheWork) {
+  const std::string name = std::string(256, 'n') + ".json";
+  const std::string line = name + ": cannot write: File name too long";
+  Outcome r = dpc31("run " + kTraces + "startup_dpc31_1m5.scn --record ok.trace --json " + name);
+  expect_bad(r, "dpc31 run: " + line, "run");
+  EXPECT_EQ(r.out, "");  // no walk
+  r = dpc31("soak --cycles 1e6 --json " + name);
+  expect_bad(r, "dpc31 soak: " + line, "soak");
+  EXPECT_EQ(r.out, "");
+  expect_bad(dpc31("cosim --seeds 1 --cycles 100 --junit " + name), "dpc31 cosim: " + line,
+             "cosim");
+  const std::string data = std::string(SOURCE_DIR) + "/tests/data/wavediff/";
+  // wavediff's lines name the file first, as its inputs' do.
+  expect_bad(dpc31("wavediff " + data + "emu.vcd " + data + "rtl.vcd --json " + name), line,
+             "wavediff");
+  EXPECT_TRUE(listing().empty());
+}
+
+// docs/decisions.md, "No silent options": cosim's options before `merge` acted on nothing (`cosim
+// --junit F merge ...` wrote no F, exit 0).
+TEST_F(BadInput, CosimMergeRefusesTheOptionsOfCosim) {
+  const std::string why =
+      " before merge: an option of cosim's seeds, which merge does not run; merge's own options "
+      "go after it";
+  expect_bad(dpc31("cosim --junit parent.xml merge a.json b.json"),
+             "dpc31 cosim merge: --junit" + why, "--junit");
+  expect_bad(dpc31("cosim --profile spc3 --quiet merge a.json b.json"),
+             "dpc31 cosim merge: --profile" + why, "--profile");
+  EXPECT_TRUE(listing().empty());
+}
+
+// docs/bad-input.md, "Output files": an output renamed over the file the shell redirected the
+// standard output to took that file's place, and what was printed went with the old one (`run
+// s.scn --json out.txt > out.txt`: the walk lost, exit 0). /dev/stdout still writes into it.
+TEST_F(BadInput, AnOutputThatIsTheStandardOutputsFileIsRefused) {
+  const std::string scn = kTraces + "startup_dpc31_1m5.scn";
+  const std::string why =
+      ": is the file the standard output goes to: what is printed there would "
+      "be lost (name /dev/stdout to write into it)";
+  Outcome r = dpc31("run " + scn + " --json ../io/out");
+  expect_bad(r, "dpc31 run: --json ../io/out" + why, "run --json");
+  EXPECT_EQ(r.out, "");
+  expect_bad(dpc31("run " + scn + " --record ../io/out"), "dpc31 run: --record ../io/out" + why,
+             "run --record");
+  expect_bad(dpc31("soak --cycles 1e6 --json ../io/out"), "dpc31 soak: --json ../io/out" + why,
+             "soak");
+  expect_bad(dpc31("cosim --seeds 1 --cycles 100 --junit ../io/out"),
+             "dpc31 cosim: --junit ../io/out" + why, "cosim");
+  expect_bad(dpc31("bench --bench /bin/true --json ../io/out"),
+             "dpc31 bench: --json ../io/out" + why, "bench");
+  r = dpc31("run " + scn + " --json /dev/stdout");
+  EXPECT_EQ(r.rc, 0) << r.err;
+  // The walk, then the JSON.
+  EXPECT_LT(r.out.find("[cycle"), r.out.find("\"final_cycle\"")) << r.out.substr(0, 80);
+  EXPECT_NE(r.out.find("\"final_cycle\""), std::string::npos);
+  EXPECT_TRUE(listing().empty());
+}
+
+// docs/segment.md, "Outputs": a station's trace is FILE.stationN_NAME.trace, beside FILE. FILE a
+// FIFO or a device (`--record /dev/null`) made new files in its directory, /dev: refused.
+TEST_F(BadInput, ASegmentsRecordNamesARegularFile) {
+  ASSERT_EQ(::mkfifo(path("fifo").c_str(), 0600), 0);
+  const Outcome r = dpc31("run " + kTraces + "segment/two_masters.scn --record fifo");
+  expect_bad(r,
+             "dpc31 run: --record fifo: not a regular file: a segment writes a trace per station "
+             "beside FILE (FILE.stationN.trace), so FILE names a file",
+             "a FIFO");
+  EXPECT_EQ(r.out, "");
+  EXPECT_EQ(listing(), std::vector<std::string>{"fifo"});
+}
+
+// docs/decisions.md, "No silent options": --window sizes the --vcd window; without --vcd it acted
+// on nothing, as `run --from` without a waveform would.
+TEST_F(BadInput, CosimWindowNeedsVcd) {
+  expect_bad(dpc31("cosim --seeds 1 --cycles 3000 --mutant NO_C_SWAP --window 5"),
+             "dpc31 cosim: --window 5: the divergence's window needs --vcd", "no --vcd");
+  EXPECT_TRUE(listing().empty());
+}
+
+// An exported but empty TMPDIR is unset, as mktemp(1) and Python's tempfile take it: the scratch
+// directory of an FST written to a device goes to /tmp (removed after).
+TEST_F(BadInput, AnEmptyTmpdirIsUnset) {
+  const Outcome r =
+      dpc31("run " + kTraces + "startup_dpc31_1m5.scn --quiet --fst /dev/null", "TMPDIR=");
+  EXPECT_EQ(r.rc, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+}
+
+// docs/bad-input.md: "exactly one line on stderr". A name's control bytes are shown as \xHH, as
+// a file's contents are: a newline made two lines, an ESC reached the terminal.
+TEST_F(BadInput, NamesWithControlBytesAreOneEscapedLine) {
+  expect_bad(dpc31("run \"$(printf 'a\\nb.scn')\""), "a\\x0Ab.scn: no such file", "newline");
+  file("c\x1B[31mred.scn", "x\n");
+  expect_bad(dpc31("run \"$(printf 'c\\033[31mred.scn')\""),
+             "c\\x1B[31mred.scn:1: unknown command 'x'", "ESC");
+  expect_bad_prefix(dpc31("run " + kTraces + "startup_dpc31_1m5.scn --quiet --json " +
+                          "\"$(printf 'd\\ne/x.json')\""),
+                    "dpc31 run: d\\x0Ae/x.json: cannot create the temporary file d\\x0Ae/", "json");
+}
+
+// The commands the demo prints can be pasted as they are: a path with a space is quoted.
+TEST_F(BadInput, TheDemosCommandsQuoteAPathWithASpace) {
+  const Outcome r = dpc31("demo --out-dir 'd\xC3\xA9 mo'");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.out.find("GTKWave save file (gtkwave 'd\xC3\xA9 mo/dpc31-demo.gtkw'): d\xC3\xA9 "
+                       "mo/dpc31-demo.gtkw\n"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("(pulseview -I vcd -i 'd\xC3\xA9 mo/dpc31-demo-la.vcd' opens it"),
+            std::string::npos)
+      << r.out;
+}
