@@ -260,6 +260,25 @@ TEST(Cosim, ShrinkKeepsOnlyTheEventsNeeded) {
   }
 }
 
+// A cycle is kept for the input that fails; a read beside it goes too (s34 audit, finding 14: the
+// shrinker dropped whole cycles only). EOI_SHORT with the EOI completing at 103 diverges at
+// 103 + 47 = 150 (docs/timing.md: T = 48, the mutant one short); the read of Int_Req_Reg at 102,
+// beside the event, changes nothing.
+TEST(Cosim, ShrinkDropsTheInputsBesideTheOneThatFails) {
+  const DutOptions o{Profile::dpc31, BusMode::intel};
+  Stimulus s;
+  std::string e;
+  ASSERT_TRUE(parse_trace("100 wr 0004<-00\n102 rd 0000 ev_irq(00ff)\n103 wr 0008<-02\nend 151\n",
+                          "t.trace", s, e))
+      << e;
+  ASSERT_EQ(run_lockstep(s, o, "EOI_SHORT").divergence, 150);
+  Stimulus want;
+  ASSERT_TRUE(parse_trace("100 wr 0004<-00\n102 ev_irq(00ff)\n103 wr 0008<-02\nend 151\n",
+                          "want.trace", want, e))
+      << e;
+  EXPECT_EQ(write_trace(shrink(s, o, "EOI_SHORT"), ""), write_trace(want, ""));
+}
+
 // ev_mac_start is the dpc31's request, the four DPV1 inputs the vpc3plus's SAP list
 // (docs/golden-model.md, "Event inputs"): a trace for another profile that has one is refused at
 // its line; for the profile that has it, it is taken. ev_mac_stop is every profile's: on the spc3
