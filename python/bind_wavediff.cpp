@@ -19,7 +19,9 @@ void bind_wavediff(py::module_& m) {
   py::class_<Point>(m, "WavePoint")
       .def_readonly("time", &Point::time)
       .def_readonly("time_b", &Point::time_b)
-      .def_readonly("cycle", &Point::cycle);
+      .def_readonly("cycle", &Point::cycle)
+      .def_readonly("own_a", &Point::own_a)
+      .def_readonly("own_b", &Point::own_b);
   py::class_<Divergence>(m, "Divergence")
       .def_readonly("at", &Divergence::at)
       .def_readonly("a", &Divergence::a)

@@ -458,7 +458,12 @@ module dpc31_blocks #(
         if (w8[M1_START] && !nx_started) start;
         if (w8[M1_EOI]) eoi;
         if (w8[M1_USER_LEAVE_MASTER]) leave_master;
-        if (w8[M1_GO_OFFLINE] && nx_started) go_offline;
+        if (w8[M1_GO_OFFLINE]) begin
+          // Go_Offline stays 1 as after its own write, though a Start of this write cleared it
+          // (docs/timing.md "Start and Go_Offline in one write": as a Start then a Go_Offline).
+          nx_mode_reg1[M1_GO_OFFLINE] = 1'b1;
+          if (nx_started) go_offline;
+        end
       end else if (a == A_MODE_REG1_R) begin
         // Mode_Reg1_R: a 1 clears the bit.
         // CHOICE: no actions: clearing Start_SPC3 does not stop the chip (decisions.md), a 1 in

@@ -202,10 +202,8 @@
     begin
       nx_started = 1'b0;
       nx_mode_reg1[M1_START] = 1'b0;
-      // CHOICE: the Go_Offline bit is left as it is: normally 1 (set by this write, "stays set
-      // while Offline"). Start and Go_Offline in one write: the literal order of the spec (the
-      // write sets both bits, start clears Go_Offline, go_offline clears Start_SPC3) ends
-      // Offline with both bits 0; we keep that literal result.
+      // The Go_Offline bit is the write's (set again after a Start of the same write, "stays set
+      // while Offline"); a MAC_Stop leaves it as it is.
       dp_reset;
       nx_ut_cnt = 19'd0;  // user timer stops
       raise(IRQ_MAC_RESET);

@@ -34,6 +34,12 @@ TEST_F(BadInput, CosimReplayAndSessionFiles) {
             "\x7f"
             "ELF\x01\x02\x03\n"),
        path("garbage.stim") + ":1: '\\x7FELF\\x01\\x02\\x03' is not a cycle number"},
+      // The other ".trace" of the project is named (s34 audit, finding 14: "'dpc31-trace' is not
+      // a cycle number").
+      {"golden trace", copy(kTraces + "gc_sync_dpc31.trace", "golden.trace"),
+       path("golden.trace") +
+           ":1: a golden trace of `dpc31 run --record` (replay it with `dpc31 replay`), not a "
+           "stimulus trace of `dpc31 cosim`"},
   };
   const auto files = listing();
   for (const FileCase& c : replay) {
@@ -62,6 +68,8 @@ TEST_F(BadInput, CosimReplayAndSessionFiles) {
     EXPECT_EQ(listing(), files2) << c.name;
   }
   EXPECT_EQ(dpc31("cosim --replay " + good + " --quiet").rc, 0);  // the good stimulus runs
+  // A UTF-8 BOM before the first line is skipped, as in a golden trace (docs/trace-format.md).
+  EXPECT_EQ(dpc31("cosim --replay " + file("bom.stim", "\xEF\xBB\xBF" + stim) + " --quiet").rc, 0);
 }
 
 // An input the trace's profile has not (docs/golden-model.md, "Event inputs": ev_mac_start is

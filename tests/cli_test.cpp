@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "dpc31/regdesc.hpp"
@@ -64,6 +65,28 @@ TEST(Cli, RegsReproducesTheCheckedInOutputs) {
             slurp(std::string(SOURCE_DIR) + "/rtl/dpc31_regs.vh"));
   EXPECT_EQ(run("regs --profile all --format markdown").out,
             slurp(std::string(SOURCE_DIR) + "/docs/registers.md"));
+}
+
+// The Verilog include names each register's access policies as masks (s34 audit, finding 12),
+// values from the register tables of docs/registers.md: the DPC31's Mode_Reg1_S has its requests
+// IGN (5 Res_User_WD, 3 User_Leave_Master, 2 Go_Offline, 0 Start_SPC3: 2Dh), W1S 4 and 1 (12h),
+// EOI a pulse (02h), 7:6 reserved (C0h); the SPC3's Int_Ack_Reg W1C 13, 12, 9, 8, 4..0 (331Fh),
+// IGN New_Prm_Data / New_Cfg_Data (0C00h), reserved 15:14 and 7:5 (C0E0h); no RO mask (only
+// the policies a register has).
+TEST(Cli, RegsVerilogCarriesThePolicyMasks) {
+  const std::string vh = run("regs --profile all --format verilog").out;
+  const auto value = [&vh](const std::string& name) {
+    const std::size_t at = vh.find("`define " + name + " ");
+    if (at == std::string::npos) return std::string("(missing)");
+    const std::string line = vh.substr(at, vh.find('\n', at) - at);
+    return line.substr(line.find_last_of(' ') + 1);
+  };
+  const std::pair<const char*, const char*> want[] = {
+      {"DPC31_Mode_Reg1_S_IGN", "8'h2D"},    {"DPC31_Mode_Reg1_S_W1S", "8'h12"},
+      {"DPC31_Mode_Reg1_S_PULSE", "8'h02"},  {"DPC31_Mode_Reg1_S_RSVD", "8'hC0"},
+      {"SPC3_Int_Ack_Reg_W1C", "16'h331F"},  {"SPC3_Int_Ack_Reg_IGN", "16'h0C00"},
+      {"SPC3_Int_Ack_Reg_RSVD", "16'hC0E0"}, {"SPC3_Int_Ack_Reg_RO", "(missing)"}};
+  for (const auto& [name, v] : want) EXPECT_EQ(value(name), v) << name;
 }
 
 TEST(Cli, DemoRunsOnEveryProfile) {

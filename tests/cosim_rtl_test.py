@@ -202,6 +202,16 @@ def waveforms_and_number():
         check(r.returncode == 1, f"exit {r.returncode}: {r.stderr}")
         for f in ("emu.vcd", "rtl.vcd", "rtl_internal.fst"):
             check(os.path.getsize(os.path.join(work, "win", f)) > 0, f"no {f}")
+        # The window's three files begin at one clock edge (s34 audit, finding 8: the FST began
+        # at cycle 0 and wavediff reported ~20 false differences): the FST against emu.vcd names
+        # the one real difference, x_int, at the window's cycle of the divergence d, d - (d - 50).
+        d = next(x["cycle"] for x in summary(r)["results"] if x["diverged"])
+        check(d > 50, f"the divergence at {d} is inside the first window: the check proves nothing")
+        w = subprocess.run([CLI, "wavediff", "win/emu.vcd", "win/rtl_internal.fst", "--strip",
+                            "auto", "--clock", "clk", "--ignore-missing"], capture_output=True,
+                           text=True, cwd=work, timeout=600)
+        check("first divergence: x_int at cycle 50 " in w.stdout and "1 differ" in w.stdout,
+              f"wavediff emu.vcd rtl_internal.fst: {w.stdout[-1500:]}")
         n = run(args + ["--mutant", "7", "--out", "out7"], cwd=work)  # MUT_POLARITY = 4'd7
         check(n.returncode == 1, f"--mutant 7: exit {n.returncode}")
         a, b = summary(r)["results"], summary(n)["results"]
@@ -235,6 +245,53 @@ def window_after_divergence():
                       f"end {end} --window {window}: {side}.vcd spans #{stamps[0]}..#{stamps[-1]}, "
                       f"want #{want[0]}..#{want[1]}")
     print("the window reaches --window cycles after the divergence, past the stimulus's end")
+
+
+def rtl_stops_itself():
+    # Finding 2 and 4 of the s34 audit: a user RTL's $fatal aborted dpc31 (exit 134, nothing
+    # written), and its $display text went into the JSON summary on stdout. Our blocks wrapped in
+    # a module that prints on every bus write and stops itself ($fatal) at a write to 0123h: the
+    # run reports a divergence at that write's cycle (77) with the signal "$stop", shrunk to that
+    # one write, exit 1; stdout is the JSON summary alone, the RTL's text is on stderr.
+    with tempfile.TemporaryDirectory() as work:
+        top = "dpc31_stops"
+        decl = [f"  {'input' if d == 'IN' else 'output'} wire {f'[{w - 1}:0] ' if w > 1 else ''}{n}"
+                for d, n, w in ports()]
+        with open(os.path.join(work, top + ".v"), "w") as f:
+            f.write(f"module {top} #(parameter PROFILE = 2) (\n" + ",\n".join(decl) + "\n);\n"
+                    "  dpc31_blocks #(.PROFILE(PROFILE)) blocks (.*);\n"
+                    "  always @(posedge clk) if (bus_wr) begin\n"
+                    '    $display("RTL debug: wr %h", bus_addr);\n'
+                    '    if (bus_addr == 13\'h0123) $fatal(1, "checker: write to 0123h");\n'
+                    "  end\nendmodule\n")
+        with open(os.path.join(work, "t.trace"), "w") as f:
+            f.write("# profile dpc31\n10 wr 0004<-00\n77 wr 0123<-00\n90 wr 0005<-00\nend 100\n")
+        r = run(["--replay", "t.trace", "--rtl", os.path.join(work, top + ".v"), "--rtl", BLOCKS,
+                 "--top", top, "--out", "out"], cwd=work)
+        check(r.returncode == 1, f"exit {r.returncode}, want 1: {r.stderr[-2000:]}")
+        s = summary(r)  # stdout is JSON: no RTL text in it
+        res = s["results"][0]
+        check(res["cycle"] == 77 and res["signals"] == ["$stop"], f"result {res}")
+        check("RTL debug: wr 0004" in r.stderr and "checker: write to 0123h" in r.stderr,
+              f"the RTL's text is not on stderr: {r.stderr[-2000:]}")
+        check("RTL stopped itself ($stop, $fatal or a failed assertion" in r.stderr, r.stderr)
+        shrunk = open(os.path.join(work, res["trace"])).read()
+        events = [l for l in shrunk.splitlines() if l and not l.startswith("#")]
+        check(events == ["77 wr 0123<-00", "end 78"], f"shrunk trace: {events}")
+    print("$fatal: a divergence at cycle 77 ($stop), shrunk; stdout the summary alone")
+
+
+def blank_in_path():
+    # Finding 7 of the s34 audit: Verilator cuts a path at its first blank and stopped on a lint
+    # warning about a file 'sp' that does not exist. Refused up front, one line, exit 2.
+    with tempfile.TemporaryDirectory() as work:
+        os.mkdir(os.path.join(work, "sp ace"))
+        stub(os.path.join(work, "sp ace", "stub.v"))
+        cache = os.path.join(work, "cache")
+        one_line_exit_2(run(["--rtl", os.path.join(work, "sp ace", "stub.v"), "--top", "stub"],
+                            cache=cache),
+                        f"--rtl {work}/sp ace/stub.v: a path with a blank cannot be built "
+                        "(Verilator cuts file names at the first blank)", cache)
 
 
 def bad(args, part, files=None, extra=()):
@@ -396,6 +453,8 @@ CASES = {
     "replay_names_its_rtl": replay_names_its_rtl,
     "waveforms_and_number": waveforms_and_number,
     "window_after_divergence": window_after_divergence,
+    "rtl_stops_itself": rtl_stops_itself,
+    "blank_in_path": blank_in_path,
     "missing_port": lambda: bad(["--rtl", "@stub.v", "--top", "stub"],
                                 "Vstub: port irr missing (a 16-bit output",
                                 {"stub.v": {"drop": "irr"}}),

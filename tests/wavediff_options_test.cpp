@@ -395,6 +395,32 @@ TEST(WavediffData, HandWrittenPairWithStripMapAndSplitBits) {
   EXPECT_EQ(run_opts(o).rc, 0);
 }
 
+// Clock mode names each edge by its own time in its file (s34 audit, finding 11: B's time was the
+// common time in B's units, rounded). A: 1 ns, clk rises at #5, #15, #25; B: 1 ps, the same
+// clock 645 ps later in each period (#5645, #15645, #25645: 5.645 ns, common time 6 ns). d
+// differs at the second edge (cycle 1): "B 16ns, #15645", not #16000.
+TEST(WavediffReport, ClockModeGivesEachFilesOwnEdgeTime) {
+  Dir d;
+  const auto head = [](const char* unit) {
+    return std::string("$timescale ") + unit +
+           " $end\n$scope module top $end\n$var wire 1 ! d $end\n"
+           "$var wire 1 \" clk $end\n$upscope $end\n$enddefinitions $end\n";
+  };
+  const auto a = d.write("a.vcd", head("1ns") +
+                                      "#0\n0!\n0\"\n#5\n1\"\n#10\n0\"\n#15\n1\"\n#20\n0\"\n"
+                                      "#25\n1\"\n#30\n0\"\n");
+  const auto b = d.write("b.vcd", head("1ps") +
+                                      "#0\n0!\n0\"\n#5645\n1\"\n#10000\n1!\n0\"\n#15645\n1\"\n"
+                                      "#20000\n0\"\n#25645\n1\"\n#30000\n0\"\n");
+  Options o = opts(a, b);
+  o.clock_a = "top.clk";
+  const Outcome r = run_opts(o);
+  EXPECT_EQ(r.rc, 1) << r.err;
+  EXPECT_NE(r.out.find("first divergence: top.d at cycle 1 (A 15ns, #15; B 16ns, #15645): A=0 B=1"),
+            std::string::npos)
+      << r.out;
+}
+
 // docs/wavediff.md, "Report": its command, run in tests/data/wavediff as it says, prints exactly
 // the report it shows, exit 1 (different; the divergence worked out in the test above).
 TEST(WavediffCli, TheReportExampleOfTheDocs) {

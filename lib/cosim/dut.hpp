@@ -95,6 +95,8 @@ class Dut {
   // Internal waveform of the whole model from now on (Verilated models built with tracing:
   // FST). False where the model has none.
   virtual bool trace_to(const std::string& /*path*/) { return false; }
+  // The model has stopped itself ($stop, $fatal or a failed assertion of an RTL): a divergence.
+  [[nodiscard]] virtual bool stopped() const { return false; }
 };
 
 struct DutOptions {

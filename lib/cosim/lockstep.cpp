@@ -46,14 +46,22 @@ bool Lockstep::step(const Inputs& in) {
   const bool read_compared =
       in.bus_rd && !in.rst &&
       (compared_read(profile_, in.bus_addr) || emu_->compares_ram(in.bus_addr));
+  const bool stopped = rtl_->stopped();
   // Nearly every cycle agrees: one comparison of the arrays, the report only on a difference.
-  if (std::equal(a.v.begin(), a.v.begin() + Outputs::kRdata, b.v.begin()) &&
+  if (!stopped && std::equal(a.v.begin(), a.v.begin() + Outputs::kRdata, b.v.begin()) &&
       (!read_compared || a.v[Outputs::kRdata] == b.v[Outputs::kRdata])) {
     ++cycle_;
     return true;
   }
   std::vector<std::string> lines;
   std::vector<std::string> names;
+  if (stopped) {
+    lines.push_back(fmt::format(
+        "  {} stopped itself ($stop, $fatal or a failed assertion; its message is on standard "
+        "error)",
+        rtl_->name()));
+    names.emplace_back("$stop");
+  }
   for (std::size_t i = 0; i < Outputs::kCount; ++i) {
     if (i == Outputs::kRdata && !read_compared) continue;
     if (a.v[i] == b.v[i]) continue;
@@ -181,6 +189,38 @@ struct Gen {
   }
 };
 
+// Every address whose read the harness compares (the registers, command reads included, and the
+// mirrored cells; compared_read), once per profile: the reads that kReads does not weight.
+const std::vector<std::uint16_t>& compared_reads(const ProfileDesc& p) {
+  static const std::array<std::vector<std::uint16_t>, std::size(kAllProfiles)> tables = [] {
+    std::array<std::vector<std::uint16_t>, std::size(kAllProfiles)> t;
+    for (const Profile q : kAllProfiles) {
+      for (std::uint32_t a = 0; a <= 0xFFFF; ++a)
+        if (compared_read(profile_desc(q), static_cast<std::uint16_t>(a)))
+          t[static_cast<std::size_t>(q)].push_back(static_cast<std::uint16_t>(a));
+    }
+    return t;
+  }();
+  return tables[static_cast<std::size_t>(p.id)];
+}
+
+// RAM outside the registers and cells that a bus write may hit, [first, end): the user area, on
+// the vpc3plus past the stimulus's SAP list and buffers (080h-27Fh) and below the 2 KB end (a
+// RAM access violation is an event input, not a bus write's effect here).
+struct RamRange {
+  std::uint16_t first, end;
+};
+RamRange user_ram(Profile p) {
+  switch (p) {
+    case Profile::spc3:
+      return {0x040, 0x600};
+    case Profile::vpc3plus:
+      return {0x300, 0x800};
+    default:
+      return {0x8A0, 0x2000};  // dpc31: the user buffer area
+  }
+}
+
 void random_access(Gen& g, Inputs& in) {
   static constexpr RegId kReads[] = {RegId::Int_Req_Reg,         RegId::Int_Reg,
                                      RegId::Status_Reg,          RegId::Mode_Reg0,
@@ -192,7 +232,13 @@ void random_access(Gen& g, Inputs& in) {
                                      RegId::SSA_Buffer_Free_Cmd, RegId::R_Dout_Buf_Ptr1,
                                      RegId::R_Cfg_Buf_Ptr,       RegId::R_GC_Command};
   const std::uint32_t kind = g.pick(100);
-  if (kind < 40) {
+  if (kind >= 32 && kind < 40) {  // any compared read: the read-backs and cells kReads lacks
+    const std::vector<std::uint16_t>& all = compared_reads(g.p);
+    in.bus_rd = true;
+    in.bus_addr = all[g.pick(static_cast<std::uint32_t>(all.size()))];
+    return;
+  }
+  if (kind < 32) {
     const RegId id = kReads[g.pick(std::size(kReads))];
     const RegDesc* r = find_reg(g.p, id);
     in.bus_rd = true;
@@ -215,12 +261,16 @@ void random_access(Gen& g, Inputs& in) {
     in.bus_addr = g.waddr(RegId::Int_Req_Reg, lane);
     in.bus_wdata = static_cast<std::uint8_t>(in.bus_wdata & g.byte());
   } else if (kind < 82) {  // Mode_Reg1 set: Start (twice as often), the others, Start with EOI
+    // or Go_Offline, and any value (several actions in one write)
     namespace m1 = fields::Mode_Reg1_S;
     static constexpr std::uint8_t kSet[] = {
-        m1::Start_SPC3,           m1::Start_SPC3,  m1::User_Leave_Master,   m1::Go_Offline,
-        m1::En_Change_Cfg_Buffer, m1::Res_User_WD, m1::Start_SPC3 | m1::EOI};
+        m1::Start_SPC3,           m1::Start_SPC3,
+        m1::User_Leave_Master,    m1::Go_Offline,
+        m1::En_Change_Cfg_Buffer, m1::Res_User_WD,
+        m1::Start_SPC3 | m1::EOI, m1::Start_SPC3 | m1::Go_Offline};
     in.bus_addr = g.waddr(RegId::Mode_Reg1_S);
-    in.bus_wdata = kSet[g.pick(std::size(kSet))];
+    const std::uint32_t k = g.pick(std::size(kSet) + 1);
+    if (k < std::size(kSet)) in.bus_wdata = kSet[k];
   } else if (kind < 85) {
     in.bus_addr = g.waddr(RegId::Mode_Reg1_R);
   } else if (kind < 90) {
@@ -231,11 +281,14 @@ void random_access(Gen& g, Inputs& in) {
                                                     : RegId::Mode_Reg0;
     in.bus_addr = g.waddr(opt);
     in.bus_wdata = static_cast<std::uint8_t>(in.bus_wdata & 0x03);
-  } else {  // the mirrored pointer cells
+  } else if (kind < 97) {  // the mirrored pointer cells
     static constexpr RegId kCells[] = {RegId::R_Dout_Buf_Ptr1,    RegId::R_Dout_Buf_Ptr2,
                                        RegId::R_Dout_Buf_Ptr3,    RegId::R_Cfg_Buf_Ptr,
                                        RegId::R_Read_Cfg_Buf_Ptr, RegId::R_GC_Command};
     in.bus_addr = g.waddr(kCells[g.pick(std::size(kCells))]);
+  } else {  // other RAM: a write that must change no register (an address decode that aliases)
+    const RamRange r = user_ram(g.p.id);
+    in.bus_addr = static_cast<std::uint16_t>(r.first + g.pick(r.end - r.first));
   }
 }
 
@@ -469,6 +522,41 @@ Stimulus random_stimulus(const RandomConfig& c) {
 
 // --- shrinking ---
 
+namespace {
+
+// The inputs of one cycle as the tokens of its trace line ("rd 000e", "ev_dout"), each whole.
+std::vector<std::string> input_tokens(const Inputs& in) {
+  const std::string line = in.describe();
+  std::vector<std::string> out;
+  std::istringstream is(line);
+  for (std::string tok;;) {
+    is >> std::ws;
+    const auto from = static_cast<std::size_t>(is.tellg());
+    if (!(is >> tok)) break;
+    Inputs scratch;
+    parse_input_token(tok, is, scratch);  // reads the operand of "rd" / "wr" too
+    const auto to = is.tellg();
+    out.push_back(
+        line.substr(from, to < 0 ? std::string::npos : static_cast<std::size_t>(to) - from));
+  }
+  return out;
+}
+
+// The inputs of the tokens but the k-th.
+Inputs without_token(const std::vector<std::string>& tokens, std::size_t k) {
+  Inputs in;
+  for (std::size_t i = 0; i < tokens.size(); ++i) {
+    if (i == k) continue;
+    std::istringstream is(tokens[i]);
+    std::string tok;
+    is >> tok;
+    parse_input_token(tok, is, in);
+  }
+  return in;
+}
+
+}  // namespace
+
 Stimulus shrink(const Stimulus& s, const DutOptions& o, std::string_view mutant, int max_runs,
                 int* runs_taken) {
   int own = 0;
@@ -505,6 +593,24 @@ Stimulus shrink(const Stimulus& s, const DutOptions& o, std::string_view mutant,
       }
     }
     if (chunk == 1) break;
+  }
+  // Then the inputs of each cycle left one by one: a read or an event beside the input that
+  // fails goes too.
+  const std::vector<Stimulus::Event> kept = best.events();
+  for (const auto& [c, in] : kept) {
+    if (c >= best.size()) break;  // cut off: it fails sooner without an input dropped before
+    std::vector<std::string> tokens = input_tokens(in);
+    for (std::size_t k = 0; tokens.size() > 1 && k < tokens.size() && runs < max_runs;) {
+      Stimulus t = best;
+      t.set(c, without_token(tokens, k));
+      if (const std::int64_t d = fails(t); d >= 0) {
+        t.resize(static_cast<std::uint64_t>(d) + 1);
+        best = std::move(t);
+        tokens.erase(tokens.begin() + static_cast<std::ptrdiff_t>(k));
+      } else {
+        ++k;
+      }
+    }
   }
   return best;
 }
@@ -562,6 +668,12 @@ bool parse_trace(const std::string& text, const std::string& file, Stimulus& out
     // beyond the bound.
     std::uint64_t cycle = 0;
     const std::errc cycle_ec = numbers::parse_whole(first, cycle);
+    // The other ".trace" of the project: a chip's golden trace (docs/trace-format.md).
+    if (n == 1 && first == "dpc31-trace") {
+      return fail(
+          "a golden trace of `dpc31 run --record` (replay it with `dpc31 replay`), not a "
+          "stimulus trace of `dpc31 cosim`");
+    }
     if (cycle_ec == std::errc::invalid_argument)
       return fail(fmt::format("'{}' is not a cycle number", shown(first)));
     if (cycle_ec == std::errc{} && cycle < last && !(cycle == 0 && out.empty()))
@@ -585,7 +697,7 @@ bool parse_trace(const std::string& text, const std::string& file, Stimulus& out
 }
 
 RtlFst write_rtl_fst(const Stimulus& s, const DutOptions& o, std::string_view mutant,
-                     const std::string& path, std::string& error) {
+                     std::uint64_t from, const std::string& path, std::string& error) {
   outfile::OutFile out;
   if (!out.open(path)) {
     error = out.error();
@@ -605,8 +717,13 @@ RtlFst write_rtl_fst(const Stimulus& s, const DutOptions& o, std::string_view mu
   const child::Result r = child::call([&] {
     std::unique_ptr<Dut> rtl = make_rtl_dut(o, mutant);
     const unsigned long failed = dpc31_fst_failed_writes();
-    if (!rtl || !rtl->trace_to(name)) return int{kNoTracing};
-    for (const Inputs& in : s) rtl->step(in);
+    if (!rtl) return int{kNoTracing};
+    // The cycles before the window untraced: the FST's first clock edge is the window's first
+    // cycle, as in emu.vcd, so that wavediff lines the files up edge by edge.
+    Stimulus::Iterator in = s.begin();
+    for (std::uint64_t c = 0; c < std::min(from, s.size()); ++c, ++in) rtl->step(*in);
+    if (!rtl->trace_to(name)) return int{kNoTracing};
+    for (std::uint64_t c = std::min(from, s.size()); c < s.size(); ++c, ++in) rtl->step(*in);
     rtl.reset();  // closes the trace
     return dpc31_fst_failed_writes() == failed ? int{kTraced} : int{kWritesFailed};
   });

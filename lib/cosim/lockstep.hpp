@@ -99,9 +99,10 @@ struct RandomConfig {
   std::uint64_t seed = 1;
   std::uint64_t cycles = 20'000;
 };
-// Constrained random, reproducible from the seed: register reads and writes (every command read,
-// masks, acknowledges, EOI, Start/Go_Offline, mirrored cells), every event input, Global_Control
-// commands, resets, and same-cycle collisions of events with accesses.
+// Constrained random, reproducible from the seed: reads of every compared address (command reads,
+// read-backs, mirrored cells), writes (masks, acknowledges, EOI, any Mode_Reg1_S value, the mode
+// and option registers, mirrored cells, other RAM), every event input, Global_Control commands,
+// resets, and same-cycle collisions of events with accesses.
 Stimulus random_stimulus(const RandomConfig& c);
 
 // Runs a whole stimulus; returns the cycle of the first divergence or -1.
@@ -113,7 +114,8 @@ struct RunResult {
 using DutFactory = std::unique_ptr<Dut> (*)(const DutOptions&, std::string_view);
 RunResult run_lockstep(const Stimulus& s, const DutOptions& o, std::string_view mutant = "");
 
-// Shrinks a failing stimulus to a short one that still diverges (cycles made idle, the tail cut).
+// Shrinks a failing stimulus to a short one that still diverges (cycles made idle, the tail cut,
+// then the inputs of each cycle left one by one).
 // `runs_taken`, if given, receives the number of lockstep runs it took (at most max_runs).
 Stimulus shrink(const Stimulus& s, const DutOptions& o, std::string_view mutant,
                 int max_runs = 3000, int* runs_taken = nullptr);
@@ -125,12 +127,13 @@ std::string write_trace(const Stimulus& s, const std::string& header);
 bool parse_trace(const std::string& text, const std::string& file, Stimulus& out,
                  std::string& error, std::optional<Profile> profile = std::nullopt);
 
-// The RTL's internal waveform (FST, Verilator tracing) over a whole stimulus: written, not
-// traced (the built-in mutants' model is built without tracing, a --rtl-model's trace_to returned
-// 0: a note, the run's outcome stands) or failed (the file cannot be written); `error` says why.
+// The RTL's internal waveform (FST, Verilator tracing) of a stimulus from cycle `from` on (a
+// window's first cycle, as its emu.vcd and rtl.vcd; 0: the whole run): written, not traced (the
+// built-in mutants' model is built without tracing, a --rtl-model's trace_to returned 0: a note,
+// the run's outcome stands) or failed (the file cannot be written); `error` says why.
 enum class RtlFst { written, not_traced, failed };
 RtlFst write_rtl_fst(const Stimulus& s, const DutOptions& o, std::string_view mutant,
-                     const std::string& path, std::string& error);
+                     std::uint64_t from, const std::string& path, std::string& error);
 
 // VCD of both sides' outputs (and the inputs) for cycles [from, to): the waveform window around
 // a divergence. Files written to a temporary name and renamed.

@@ -64,6 +64,7 @@ class RtlDut final : public Dut {
     return o;
   }
   [[nodiscard]] std::string name() const override { return "RTL"; }
+  [[nodiscard]] bool stopped() const override { return blocks_.stopped(); }
 
  private:
   VerilatedBlocks<V> blocks_;

@@ -39,8 +39,7 @@ std::string with_hex(const std::string& v) {
 std::string where(const Report& r, const Point& p) {
   if (r.clock_mode) {
     return fmt::format("cycle {} (A {}, #{}; B {}, #{})", p.cycle, time_text(p.time, r.pow),
-                       file_time(p.time, r.pow, r.pow_a), time_text(p.time_b, r.pow),
-                       file_time(p.time_b, r.pow, r.pow_b));
+                       p.own_a, time_text(p.time_b, r.pow), p.own_b);
   }
   return fmt::format("{} (A #{}, B #{})", time_text(p.time, r.pow),
                      file_time(p.time, r.pow, r.pow_a), file_time(p.time, r.pow, r.pow_b));
@@ -59,14 +58,14 @@ std::string values(const Divergence& d) {
 }
 
 nlohmann::ordered_json point_json(const Report& r, const Point& p) {
-  nlohmann::ordered_json j = {{"time", p.time},
-                              {"time_text", time_text(p.time, r.pow)},
-                              {"time_a", file_time(p.time, r.pow, r.pow_a)}};
-  if (r.clock_mode) {
+  nlohmann::ordered_json j = {{"time", p.time}, {"time_text", time_text(p.time, r.pow)}};
+  if (r.clock_mode) {  // each edge's own time in its file
+    j["time_a"] = std::to_string(p.own_a);
     j["cycle"] = p.cycle;
-    j["time_b"] = file_time(p.time_b, r.pow, r.pow_b);
+    j["time_b"] = std::to_string(p.own_b);
     j["time_b_text"] = time_text(p.time_b, r.pow);
   } else {
+    j["time_a"] = file_time(p.time, r.pow, r.pow_a);
     j["time_b"] = file_time(p.time, r.pow, r.pow_b);
   }
   return j;

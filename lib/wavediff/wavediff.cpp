@@ -594,7 +594,7 @@ void Engine::run_clock(const Hook& hook) {
       }
       break;
     }
-    const Point pt{A.norm(A.r->time()), B.norm(B.r->time()), n};
+    const Point pt{A.norm(A.r->time()), B.norm(B.r->time()), n, A.r->time(), B.r->time()};
     if (pt.time > end_t) break;
     if (n < start_c || pt.time < start_t) {
       clear_dirty();

@@ -58,11 +58,14 @@ struct Options {
 };
 
 // Where something was seen. Event mode: `time` in the common unit. Clock mode: `cycle` (the edge
-// index, from 0) and the edge's time on each side (common unit).
+// index, from 0) and the edge's time on each side (common unit), and in each file's own units
+// (the "#" of the file: a finer file's edge is not rounded there).
 struct Point {
   std::uint64_t time = 0;  // A's time (event mode: the time of both)
   std::uint64_t time_b = 0;
   std::uint64_t cycle = 0;
+  std::uint64_t own_a = 0;  // clock mode only
+  std::uint64_t own_b = 0;
 };
 
 struct Divergence {

@@ -568,6 +568,8 @@ class WavePoint:
     time: int
     time_b: int
     cycle: int
+    own_a: int
+    own_b: int
 
 class Divergence:
     at: WavePoint

@@ -171,7 +171,7 @@ void write_divergence(const CosimOptions& o, const cosim::Stimulus& s, const cos
       output_failed(error);
     }
     const cosim::RtlFst fst =
-        write_rtl_fst(around, dut, o.mutant, in_vcd("rtl_internal.fst"), error);
+        write_rtl_fst(around, dut, o.mutant, from, in_vcd("rtl_internal.fst"), error);
     if (fst == cosim::RtlFst::written) {
       entry["fst"] = in_vcd("rtl_internal.fst");
     } else if (fst == cosim::RtlFst::failed) {
@@ -187,8 +187,9 @@ void write_dump(const CosimOptions& o, const cosim::Stimulus& s, const cosim::Du
                 const std::function<void(const std::string&)>& output_failed) {
   std::string error;
   if (!write_window(s, dut, o.mutant, 0, s.size(), o.dump_dir, error)) output_failed(error);
-  const cosim::RtlFst fst = write_rtl_fst(
-      s, dut, o.mutant, (std::filesystem::path(o.dump_dir) / "rtl_internal.fst").string(), error);
+  const cosim::RtlFst fst =
+      write_rtl_fst(s, dut, o.mutant, 0,
+                    (std::filesystem::path(o.dump_dir) / "rtl_internal.fst").string(), error);
   if (fst == cosim::RtlFst::failed) {
     output_failed(error);
   } else if (fst == cosim::RtlFst::not_traced && !o.quiet) {
@@ -220,10 +221,46 @@ bool windows_ready(const CosimOptions& o) {
   return true;
 }
 
+// Standard output carries the JSON summary alone (and the progress bar on a terminal): while the
+// models run, descriptor 1 points at standard error, so that what an RTL prints there ($display,
+// $write, Verilator's $finish and $stop lines, on every run of a shrink) cannot corrupt it.
+class ModelTextToStderr {
+ public:
+  ModelTextToStderr() : tty_(::isatty(STDOUT_FILENO) != 0) {
+    std::fflush(stdout);
+    saved_ = ::dup(STDOUT_FILENO);
+    if (saved_ >= 0 && ::dup2(STDERR_FILENO, STDOUT_FILENO) < 0) end();
+  }
+  ~ModelTextToStderr() { end(); }
+  ModelTextToStderr(const ModelTextToStderr&) = delete;
+  ModelTextToStderr& operator=(const ModelTextToStderr&) = delete;
+
+  [[nodiscard]] bool tty() const { return tty_; }
+  // A progress line on the real standard output, the model's text before it to standard error.
+  void progress(const std::string& text) const {
+    std::fflush(stdout);
+    if (saved_ < 0 || ::write(saved_, text.data(), text.size()) < 0) return;  // best effort
+  }
+  // Standard output back, the model's text flushed to standard error first.
+  void end() {
+    if (saved_ < 0) return;
+    std::fflush(stdout);
+    ::dup2(saved_, STDOUT_FILENO);
+    ::close(saved_);
+    saved_ = -1;
+  }
+
+ private:
+  bool tty_;
+  int saved_ = -1;
+};
+
 // The end of a run: the JSON summary, the JUnit of its `results`, then the first output that
 // failed. Exit 0 clean, 1 a divergence, 2 an output not written.
 int finish(const CosimOptions& o, const nlohmann::json& summary, const nlohmann::json& results,
-           outfile::OutFile& junit_out, const std::string& failed_output) {
+           outfile::OutFile& junit_out, const std::string& failed_output,
+           ModelTextToStderr& model_text) {
+  model_text.end();
   fmt::print("{}\n", summary.dump(2));
   if (!o.junit.empty() &&
       !(junit_out.write(junit(o.profile_name, results)) && junit_out.commit())) {
@@ -348,7 +385,8 @@ std::string session_chip_mismatch(const CosimOptions& o, const dpc31::cosim::Dut
   return {};
 }
 
-int run_session_mode(const CosimOptions& given, outfile::OutFile& junit_out) {
+int run_session_mode(const CosimOptions& given, outfile::OutFile& junit_out,
+                     ModelTextToStderr& model_text) {
   using namespace dpc31::cosim;
   Session s;
   std::string error;
@@ -414,7 +452,8 @@ int run_session_mode(const CosimOptions& given, outfile::OutFile& junit_out) {
   for (const char* k : {"trace", "vcd", "fst"}) {
     if (entry.contains(k)) summary[k] = entry[k];
   }
-  const int rc = finish(o, summary, nlohmann::json::array({entry}), junit_out, failed_output);
+  const int rc =
+      finish(o, summary, nlohmann::json::array({entry}), junit_out, failed_output, model_text);
   return rc == 0 && !s.scenario_failures.empty() ? 1 : rc;
 }
 
@@ -470,7 +509,8 @@ int run_cosim(const CosimOptions& given) {
       return 2;
     }
   }
-  if (!o.session.empty()) return run_session_mode(o, junit_out);
+  ModelTextToStderr model_text;
+  if (!o.session.empty()) return run_session_mode(o, junit_out, model_text);
   // A replayed trace first: its header names the model to build.
   std::vector<std::pair<std::uint64_t, Stimulus>> runs;
   if (!o.replay.empty()) {
@@ -511,7 +551,7 @@ int run_cosim(const CosimOptions& given) {
   // Seeds of this shard: a contiguous part of [seed_base, seed_base + seeds).
   const std::uint64_t lo = o.seed_base + o.seeds * (o.shard - 1) / o.shards;
   const std::uint64_t hi = o.seed_base + o.seeds * o.shard / o.shards;
-  const bool tty = isatty(STDOUT_FILENO) != 0 && !o.quiet;
+  const bool tty = model_text.tty() && !o.quiet;
   nlohmann::json results = nlohmann::json::array();
   std::uint64_t diverged = 0;
   std::uint64_t cycles = 0;
@@ -539,13 +579,12 @@ int run_cosim(const CosimOptions& given) {
     if (tty) {
       const std::size_t width = 40;
       const std::size_t done = (i + 1) * width / total;
-      fmt::print("\r[{}{}] {}/{} seeds, {} divergent", std::string(done, '#'),
-                 std::string(width - done, '.'), i + 1, total, diverged);
-      std::fflush(stdout);
+      model_text.progress(fmt::format("\r[{}{}] {}/{} seeds, {} divergent", std::string(done, '#'),
+                                      std::string(width - done, '.'), i + 1, total, diverged));
     }
     if (diverged > 0 && !o.keep_going) break;
   }
-  if (tty) fmt::print("\n");
+  if (tty) model_text.progress("\n");
   if (!o.dump_dir.empty()) {
     // The whole run of the first stimulus.
     write_dump(o, runs.empty() ? random_stimulus({o.profile, lo, o.cycles}) : runs[0].second, dut,
@@ -575,7 +614,7 @@ int run_cosim(const CosimOptions& given) {
                                   {"of", {{"from", o.seed_base}, {"to", o.seed_base + o.seeds}}}};
     summary = summary_json(run, shard, lo, hi, cycles, secs, results);
   }
-  return finish(o, summary, results, junit_out, failed_output);
+  return finish(o, summary, results, junit_out, failed_output, model_text);
 }
 
 }  // namespace dpc31::cli

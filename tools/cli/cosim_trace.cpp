@@ -281,6 +281,8 @@ bool read_stimulus(const std::string& path, cosim::Stimulus& s, CosimOptions& o,
     error = fmt::format("{}: {}", path, why);
     return false;
   }
+  // A UTF-8 BOM before the first line is skipped, as in a golden trace and a scenario.
+  if (text.starts_with("\xEF\xBB\xBF")) text.erase(0, 3);
   if (text.empty()) {
     error = fmt::format("{}: empty file, not a stimulus trace", path);
     return false;

@@ -252,6 +252,12 @@ class DefineWriter {
   std::size_t width_ = 0;
 };
 
+std::string upper_case(std::string_view s) {
+  std::string out{s};
+  for (char& c : out) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return out;
+}
+
 std::vector<std::string> profile_heading(const ProfileDesc& p) {
   std::vector<std::string> lines{
       fmt::format("{} (profile {}, prefix {}_)", p.title, p.name, p.macro)};
@@ -303,6 +309,10 @@ class MacroFormat {
   // The macros of one field (reg_prefix = "<P>_<Reg>").
   virtual void field(DefineWriter& w, const std::string& reg_prefix, const RegDesc& r,
                      const FieldDesc& f) const = 0;
+  // The register's per-bit access policies (reg_prefix = "<P>_<Reg>"); the C header has them in
+  // its field comments.
+  virtual void policies(DefineWriter& /*w*/, const std::string& /*reg_prefix*/,
+                        const RegDesc& /*r*/) const {}
 };
 
 void write_defines(DefineWriter& w, Profiles profiles, const MacroFormat& format) {
@@ -319,6 +329,7 @@ void write_defines(DefineWriter& w, Profiles profiles, const MacroFormat& format
       w.comment(register_comment(p, r));
       for (const AddrSide& side : address_sides(r, "_RD", "_WR")) format.address(w, p, r, side);
       if (r.has_reset) w.define(reg_prefix + "_RESET", format.reset(r));
+      format.policies(w, reg_prefix, r);
       for (const FieldDesc* f : named_fields(r)) format.field(w, reg_prefix, r, *f);
       if (r.alias.empty()) continue;
       // The same register under its own manual's name.
@@ -383,6 +394,15 @@ class VerilogFormat final : public MacroFormat {
     w.define(name + "_POS", fmt::format("{}", f.lsb));
     w.define(name + "_W", fmt::format("{}", f.width));
   }
+  // One mask per policy the register has (P_<Reg>_W1C, _IGN, _RSVD, ...): what an RTL needs to
+  // decode a write (which bits it stores, clears, ignores) without copying it by hand.
+  void policies(DefineWriter& w, const std::string& reg_prefix, const RegDesc& r) const override {
+    for (const NamedMask& m : masks(r)) {
+      if (m.value == 0) continue;
+      w.define(fmt::format("{}_{}", reg_prefix, upper_case(m.name)),
+               fmt::format("{}'h{:0{}X}", r.width, m.value, r.width / 4));
+    }
+  }
 
  private:
   // One address width for all profiles: the widest bus (DPC31, 13 bits).
@@ -407,9 +427,7 @@ std::string emit_c_header(Profiles profiles) {
   w.comment("Profiles, numbered as dpc31::Profile of the emulator.");
   w.raw("enum dpc31_profile {");
   for (std::size_t i = 0; i < profiles.size(); ++i) {
-    std::string upper{profiles[i]->name};
-    for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-    const std::string id = "DPC31_PROFILE_" + upper;
+    const std::string id = "DPC31_PROFILE_" + upper_case(profiles[i]->name);
     w.reserve(id);
     w.raw(fmt::format("  {} = {}{}", id, static_cast<unsigned>(profiles[i]->id),
                       i + 1 < profiles.size() ? "," : ""));
@@ -438,7 +456,10 @@ std::string emit_verilog(Profiles profiles) {
        std::string{kGeneratedBanner} + ".",
        "Per profile P: P_ADDR_<Reg> (13-bit byte address; _RD/_WR when the read and "
        "write side differ),",
-       "P_<Reg>_<Field>_POS / _W (lsb, width), P_<Reg>_RESET (sized to the register)."});
+       "P_<Reg>_<Field>_POS / _W (lsb, width), P_<Reg>_RESET (sized to the register),",
+       "P_<Reg>_<POLICY>: the bits of each access policy the register has (RO, RW, W1C, W1S, "
+       "CMD, WO, IGN,",
+       "RSVD, UNIMP, PULSE; docs/registers.md), sized to the register."});
   w.raw("`ifndef DPC31_REGS_VH");
   w.raw("`define DPC31_REGS_VH");
   write_defines(w, profiles, VerilogFormat{});

@@ -12,7 +12,7 @@ extern "C" {
 #endif
 
 /* Raised whenever a struct below changes; the harness refuses any other value. */
-#define DPC31_RTL_MODEL_ABI 4
+#define DPC31_RTL_MODEL_ABI 5
 /* Outputs in the order of docs/golden-model.md "Outputs compared on every cycle", bus_rdata last.
  */
 #define DPC31_RTL_OUTPUTS 31
@@ -49,6 +49,9 @@ struct dpc31_rtl_model {
   void (*read_outputs)(const void* model, uint32_t out[DPC31_RTL_OUTPUTS]);
   /* FST of every internal signal from now on; 0 if the file cannot be opened. */
   int (*trace_to)(void* model, const char* path);
+  /* 1 once the RTL has stopped itself ($stop, $fatal, a failed assertion), else 0 (ABI 5); the
+   * harness reports it as a divergence in that cycle. NULL: a model that never stops itself. */
+  int (*stopped)(const void* model);
 };
 
 const struct dpc31_rtl_model* dpc31_rtl_model_get(void);

@@ -22,6 +22,7 @@ void read_outputs(const void* m, std::uint32_t* out) {
   static_cast<const Blocks*>(m)->read_outputs(out);
 }
 int trace_to(void* m, const char* path) { return static_cast<Blocks*>(m)->trace_to(path) ? 1 : 0; }
+int stopped(const void* m) { return static_cast<const Blocks*>(m)->stopped() ? 1 : 0; }
 
 constexpr dpc31_rtl_model kModel = {DPC31_RTL_MODEL_ABI,
                                     DPC31_RTL_OUTPUTS,
@@ -32,7 +33,8 @@ constexpr dpc31_rtl_model kModel = {DPC31_RTL_MODEL_ABI,
                                     destroy,
                                     step,
                                     read_outputs,
-                                    trace_to};
+                                    trace_to,
+                                    stopped};
 
 }  // namespace
 

@@ -20,6 +20,9 @@ class VerilatedBlocks {
 
   VerilatedBlocks(bool motorola, unsigned asic_type, unsigned mutant_sel)
       : top_(std::make_unique<V>(&ctx_)) {
+    // A $stop, $fatal or failed assertion of the RTL ends its run with a report, not the whole
+    // process with abort(): Verilator then only prints its message and sets gotError.
+    ctx_.fatalOnError(false);
     // Only a model with mutants has the input; it stays constant for the whole run.
     if constexpr (kHasMutantSel) top_->mutant_sel = static_cast<std::uint8_t>(mutant_sel);
     top_->motorola = motorola ? 1 : 0;
@@ -48,6 +51,9 @@ class VerilatedBlocks {
       return false;
     }
   }
+
+  // The RTL has stopped itself ($stop, $fatal, a failed assertion).
+  [[nodiscard]] bool stopped() const { return ctx_.gotError(); }
 
   void step(const dpc31_rtl_inputs& in) {
     top_->rst = in.rst;
