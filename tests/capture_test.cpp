@@ -531,9 +531,10 @@ TEST(Capture, AnOptionLongerThanSixteenBitsIsRefusedNeverWrittenCorrupt) {
 // A late answer (docs/capture.md "Order"): the slave's MinTSDR 150 bit times is above the master's
 // slot time 100, at 12 Mbaud (T = 4 clocks, docs/timing.md). The Set_Prm (19 characters, 209 T =
 // 836 clocks) ends at E; its SC starts at E + 150 T = E + 600 and lasts 11 T = 44 clocks (the
-// "answer" row); the master gave up at E + 100 T and starts the Chk_Cfg (13 characters, 572
-// clocks) TSYN later, at E + 133 T = E + 532 ("The master's wait"): before the SC, which the
-// chip decided first. The capture is in start order all the same.
+// "answer" row); the master gave up at E + 100 T and, the Set_Prm unanswered, asks Slave_Diag
+// (11 characters, 484 clocks; docs/scenario-format.md `startup`) TSYN later, at E + 133 T =
+// E + 532 ("The master's wait"): before the SC, which the chip decided first. The capture is in
+// start order all the same.
 TEST(Capture, ALateAnswerIsWrittenAfterTheRequestThatStartedBeforeIt) {
   ASSERT_TRUE(have_tshark()) << kNoTshark;
   TempDir dir;
@@ -569,9 +570,9 @@ TEST(Capture, ALateAnswerIsWrittenAfterTheRequestThatStartedBeforeIt) {
   ASSERT_GE(std::distance(set_prm, frames.end()), 3);
   const std::uint64_t e = set_prm->end;
   EXPECT_EQ(set_prm->end - set_prm->start, 836u);
-  EXPECT_EQ(set_prm[1].len, 13u);  // the Chk_Cfg
+  EXPECT_EQ(set_prm[1].len, 11u);  // the Slave_Diag
   EXPECT_EQ(set_prm[1].start, e + 532);
-  EXPECT_EQ(set_prm[1].end, e + 532 + 572);
+  EXPECT_EQ(set_prm[1].end, e + 532 + 484);
   EXPECT_EQ(set_prm[2].len, 1u);  // the Set_Prm's SC
   EXPECT_EQ(set_prm[2].start, e + 600);
   EXPECT_EQ(set_prm[2].end, e + 644);
