@@ -745,3 +745,29 @@ def test_check_bus_takes_the_masters_ttr_and_the_masters_added_after_it():
     with pytest.raises(ValueError, match=r"^master 3: ttr=800 differs from master 2's ttr=600"):
         seg.add_master(3, [5], ttr=800)
     assert seg.size == 2  # the refused master's station did not join
+
+
+def test_a_master_that_lowers_the_checks_slot_time_below_its_min_tsdr_is_refused():
+    """docs/python.md "The bus check" (review s34 rev1 finding 2): a check following the masters'
+    slot time refuses a min_tsdr_bits above it in the same words whether the master came first
+    (check_bus refuses) or after (add_master refuses; its station does not join). The first
+    master's slot_bits=37 replaces the default 100; 60 > 37."""
+    seg = dpc31.Segment(1_500_000)
+    seg.add_station(5, "spc3")
+    seg.add_master(2, [5], slot_bits=37)
+    words = r"^min_tsdr_bits 60 above the slot time 37: no answer could be in time$"
+    with pytest.raises(ValueError, match=words):
+        seg.check_bus(min_tsdr_bits=60)
+    seg = dpc31.Segment(1_500_000)
+    seg.add_station(5, "spc3")
+    check = seg.check_bus(min_tsdr_bits=60)
+    with pytest.raises(ValueError, match=words):
+        seg.add_master(2, [5], slot_bits=37)
+    assert seg.size == 1  # nothing joined
+    seg.add_master(2, [5], slot_bits=60)  # at the slot time: answers at 60 are in time
+    # The check's own slot time is not the masters': nothing to refuse.
+    seg = dpc31.Segment(1_500_000)
+    seg.add_station(5, "spc3")
+    check = seg.check_bus(min_tsdr_bits=60, slot_bits=100)
+    seg.add_master(2, [5], slot_bits=37)
+    assert check.total == 0
