@@ -400,7 +400,8 @@ void bind_line(py::module_& m) {
   py::class_<Collision>(m, "Collision", "Two stations driving the line at once.")
       .def_readonly("cycle", &Collision::cycle)
       .def_readonly("first", &Collision::first)
-      .def_readonly("second", &Collision::second);
+      .def_readonly("second", &Collision::second)
+      .def_readonly("answer", &Collision::answer);
   py::class_<TokenVisit>(m, "TokenVisit", "What one visit of the token did (use_token).")
       .def_readonly("arrived", &TokenVisit::arrived, "the token's arrival, a cycle of the line")
       .def_readonly("rotation", &TokenVisit::rotation, "TRR in clock cycles (0: the ring's first)")

@@ -116,6 +116,7 @@ def test_a_collision_and_a_lost_token_are_counted():
     # both answer at end + 11 T: the second driver collides there, the first keeps the line
     [c] = seg.collisions
     assert (c.cycle, seg.name(c.first), seg.name(c.second)) == (end + 11 * t, "spc3", "twin")
+    assert c.answer  # a chip's: a slave sends nothing but answers
     assert check.count("collision") == 1
     assert any("twin drove the line while spc3 had it" in l for l in seg.bus_log)
     # The token to master 3, which is not there: the line stays idle; TTO = TSL x (6 + 2 x 2),
@@ -771,3 +772,22 @@ def test_a_master_that_lowers_the_checks_slot_time_below_its_min_tsdr_is_refused
     check = seg.check_bus(min_tsdr_bits=60, slot_bits=100)
     seg.add_master(2, [5], slot_bits=37)
     assert check.total == 0
+
+
+def test_a_request_lost_in_a_collision_is_no_unsolicited_answer():
+    """docs/segment.md "Bus checks", `unsolicited` (review s34 rev1 finding 3): a sender's request
+    that drives into another telegram is the collision alone (Collision.answer false); a
+    sender's answer there, with no request waiting, is also unsolicited."""
+    counts = []
+    # FDL_Status 20 <- 3 (FCS 14h + 03h + 49h = 60h), then an answer 2 <- 20 (FC 00h, OK; FCS 16h)
+    for lost in (bytes([0x10, 20, 3, 0x49, 0x60, 0x16]), bytes([0x10, 2, 20, 0x00, 0x16, 0x16])):
+        seg = dpc31.Segment(1_500_000)
+        master = seg.add_sender(MASTER)
+        rogue = seg.add_sender("rogue")
+        check = seg.check_bus(masters=[2])
+        seg.send(master, bytes([0x10, 21, 2, 0x49, 0x60, 0x16]), start=1000)  # FCS 60h
+        seg.send(rogue, lost, start=1000 + 11 * T)  # inside the master's telegram
+        seg.flush()
+        [c] = seg.collisions
+        counts.append((c.answer, check.count("collision"), check.count("unsolicited")))
+    assert counts == [(False, 1, 0), (True, 1, 1)]
