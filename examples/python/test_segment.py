@@ -791,3 +791,26 @@ def test_a_request_lost_in_a_collision_is_no_unsolicited_answer():
         [c] = seg.collisions
         counts.append((c.answer, check.count("collision"), check.count("unsolicited")))
     assert counts == [(False, 1, 0), (True, 1, 1)]
+
+
+def test_a_master_keeps_the_token_nobody_took():
+    """docs/segment.md "The token" (review s34 rev1 finding 1): pass_token to an address of no
+    master added leaves the passer holding the token it held, so its next use_token goes on with
+    that token (its arrival and TRR), not a fresh claim (TRR 0)."""
+    seg = dpc31.Segment(1_500_000)
+    seg.add_station(5, "spc3")
+    seg.add_station(6, "dpc31")
+    m2 = seg.add_master(2, [5], ttr=1000)
+    m3 = seg.add_master(3, [6], ttr=1000)
+    m2.use_token(3)  # the claim
+    m3.use_token(2)
+    held = m2.use_token(3)  # the token from 3: TRR measured from the claim
+    m3.use_token(2)
+    assert m2.wait_token(0)  # 3's token to 2: it arrives TRR after the arrival before
+    trr = m2.token_rotation
+    m2.pass_token(9)
+    seg.run_until(seg.cycle + 100 * T)  # the slot time: 9 showed no activity
+    kept = m2.use_token(3)
+    assert trr != 0
+    assert (kept.arrived, kept.rotation, kept.hold) == (held.arrived + trr, trr,
+                                                         max(0, 1000 * T - trr))
