@@ -129,6 +129,14 @@ std::string ttr_differs(U8 address, U64 ttr, const std::vector<U8>& addresses,
   return {};
 }
 
+// The check's min TSDR above its slot time (no answer could be in time), refused at check_bus and
+// at an add_master that lowers the slot time the check follows; "" fits.
+std::string tsdr_above_slot(std::uint32_t min_tsdr_bits, std::uint32_t slot_bits) {
+  if (min_tsdr_bits <= slot_bits) return {};
+  return fmt::format("min_tsdr_bits {} above the slot time {}: no answer could be in time",
+                     min_tsdr_bits, slot_bits);
+}
+
 // A bus check as Python holds it: shared with its segment, so one that a second check_bus()
 // replaced keeps the counts it had (it sees no telegram after), never freed memory; its counts
 // are the segment's running state.
@@ -392,7 +400,8 @@ void bind_line(py::module_& m) {
   py::class_<Collision>(m, "Collision", "Two stations driving the line at once.")
       .def_readonly("cycle", &Collision::cycle)
       .def_readonly("first", &Collision::first)
-      .def_readonly("second", &Collision::second);
+      .def_readonly("second", &Collision::second)
+      .def_readonly("answer", &Collision::answer);
   py::class_<TokenVisit>(m, "TokenVisit", "What one visit of the token did (use_token).")
       .def_readonly("arrived", &TokenVisit::arrived, "the token's arrival, a cycle of the line")
       .def_readonly("rotation", &TokenVisit::rotation, "TRR in clock cycles (0: the ring's first)")
@@ -698,6 +707,13 @@ void bind_segment_class(py::module_& m) {
                                                 s.master_ttrs, s.master_addresses.size());
               if (!e.empty()) throw py::value_error(e);
             }
+            if (s.check && !s.check_args.slot_bits) {  // the check retimed to the masters' TSL
+              const std::string e = tsdr_above_slot(
+                  s.check_args.min_tsdr_bits, s.master_addresses.empty()
+                                                  ? mc.slot_bits
+                                                  : std::max(s.master_slot_bits, mc.slot_bits));
+              if (!e.empty()) throw py::value_error(e);
+            }
             try {
               return std::make_unique<PySegMaster>(std::move(self), mc, std::move(sl));
             } catch (const std::invalid_argument& e) {
@@ -798,12 +814,9 @@ void bind_segment_class(py::module_& m) {
                 if (!e.empty()) throw py::value_error(e);
               }
             }
-            const std::uint32_t slot = a.slot_bits.value_or(s.master_slot_bits);
-            if (a.min_tsdr_bits > slot) {
-              throw py::value_error(
-                  fmt::format("min_tsdr_bits {} above the slot time {}: no answer could be in time",
-                              a.min_tsdr_bits, slot));
-            }
+            const std::string above =
+                tsdr_above_slot(a.min_tsdr_bits, a.slot_bits.value_or(s.master_slot_bits));
+            if (!above.empty()) throw py::value_error(above);
             // The masters' own slot time by default: an answer a master waits for and takes is
             // neither late nor unsolicited (a segment scenario shares `s.slot_bits` so).
             s.check_args = std::move(a);
@@ -941,7 +954,15 @@ void bind_seg_master(py::module_& m) {
           "One visit of the token (TTR, the GAP update), then the token to `next`.")
       .def(
           "pass_token",
-          [](M& pm, U8 next) { return pm.act([&] { return pm.m->pass_token(next); }); },
+          [](M& pm, U8 next) {
+            return pm.act([&] {
+              const Exchange ex = pm.m->pass_token(next);
+              // To no master of the segment: nobody takes it, the passer keeps it (EN 50170).
+              const auto& ms = pm.s.master_addresses;
+              if (std::find(ms.begin(), ms.end(), next) == ms.end()) pm.m->keep_token();
+              return ex;
+            });
+          },
           py::arg("next"))
       .def(
           "wait_token",

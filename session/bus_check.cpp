@@ -106,8 +106,9 @@ void BusCheck::collision(const Collision& c, const std::string& first, const std
   // LineTelegram::collided, no telegram of its own): it is judged by its start alone. Inside the
   // answer window of the request waiting then it may have been the answer, and the collision says
   // all; after that window (a station answering after TSL + TSYN drives into the asker's next
-  // request), or with no request waiting, nobody asked for it.
-  if (c.cycle < watched_from_) return;
+  // request), or with no request waiting, nobody asked for it. A request or a token
+  // (Collision::answer) is no answer: the collision says all of it too.
+  if (c.cycle < watched_from_ || !c.answer) return;
   if (pending_ &&
       (c.cycle < pending_->end || answers_request(timing_, c.cycle - pending_->end, false, false)))
     return;

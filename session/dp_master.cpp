@@ -236,12 +236,19 @@ bool DpMaster::started_up() const {
 
 Exchange DpMaster::pass_token(std::uint8_t next) {
   const Exchange ex = transact(fdl::token(next, cfg_.address));
+  passed_held_ = holding_ && next != cfg_.address;
   holding_ = next == cfg_.address;
   if (holding_) {  // the only master: it receives its own token at the end of the SD4
     trr_ = token_at_ != 0 ? ex.request_end - token_at_ : 0;
     token_at_ = ex.request_end;
   }
   return ex;
+}
+
+void DpMaster::keep_token() {
+  // Its arrival and TRR stay those of the token it held, as the bus check keeps them.
+  if (passed_held_) holding_ = true;
+  passed_held_ = false;
 }
 
 TokenVisit DpMaster::use_token(std::uint8_t next,

@@ -219,6 +219,10 @@ class DpMaster {
   void dp_cycle(const std::vector<std::vector<std::uint8_t>>& outputs, std::vector<Exchange>& out);
   // Passes the token (SD4) to `next` (its own address: keeps it); nothing is waited for.
   Exchange pass_token(std::uint8_t next);
+  // The addressee of the last pass_token showed no activity within TSL (a slave, an absent
+  // address): the token it held stays with it (EN 50170), so use_token goes on with that token's
+  // arrival and TRR. Nothing when it held none before the pass.
+  void keep_token();
   // Listens until an SD4 to this master arrives (true: the token is ours, token_rotation() is the
   // time since the last one) or `timeout` cycles of line time pass.
   bool wait_token(std::uint64_t timeout);
@@ -426,6 +430,7 @@ class DpMaster {
   std::uint64_t token_at_ = 0;  // when the token last came
   std::uint64_t trr_ = 0;
   bool holding_ = false;        // the token is ours (received or claimed, not passed on)
+  bool passed_held_ = false;    // the last pass_token passed a token held (keep_token)
   std::size_t next_slave_ = 0;  // where the next visit's cycles begin
   std::uint64_t visits_since_gap_ = 0;
   std::optional<std::uint8_t> gap_next_;        // the GAP address asked next (none: the first)

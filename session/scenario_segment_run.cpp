@@ -352,7 +352,9 @@ class SegmentRun {
         // address shows no activity, and the passer keeps it (EN 50170: nobody took it).
         holder_ = master_index(st.address).value();  // the parser refuses another
         masters_[holder_]->pass_token(st.station);
-        if (const auto to = master_index(st.station); to && *to != holder_) {
+        if (const auto to = master_index(st.station); !to) {
+          masters_[holder_]->keep_token();
+        } else if (*to != holder_) {
           masters_[*to]->wait_token(token_wait());
           holder_ = *to;
         }

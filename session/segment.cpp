@@ -481,14 +481,14 @@ void Segment::hear_whole(std::size_t from, const std::shared_ptr<const HeardFram
   }
 }
 
-void Segment::collide(std::size_t first, std::size_t second, std::uint64_t cycle) {
+void Segment::collide(std::size_t first, std::size_t second, std::uint64_t cycle, bool answer) {
   // One collision per burst of the second driver: each of its falling edges holds the burst open
   // one character time, as the line's holder's do.
   Station& s = *stations_[second];
   const bool fresh = s.colliding_until == 0 || cycle > s.colliding_until;
   s.colliding_until = std::max(s.colliding_until, cycle + std::uint64_t{kUartCharBits} * t_);
   if (!fresh) return;
-  collisions_.push_back({cycle, first, second});
+  collisions_.push_back({cycle, first, second, answer});
   if (on_collision) on_collision(collisions_.back());
 }
 
@@ -669,7 +669,11 @@ std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> byte
   run_to_send(start);
   const std::uint64_t end = start + cycles;
   if (owner_ && *owner_ != from && start < owned_until_) {
-    collide(*owner_, from, start);
+    const fdl::Decoded d = fdl::decode(bytes);
+    const bool request =
+        d.error == fdl::Error::none &&
+        (d.frame.sd == fdl::SD4 || (d.frame.sd != fdl::SC && fdl::is_request(d.frame.fc)));
+    collide(*owner_, from, start, !request);
     return end;
   }
   owner_ = from;

@@ -44,6 +44,9 @@ struct Collision {
   std::uint64_t cycle = 0;  // the second driver's first edge while the first drove
   std::size_t first = 0;    // the station that had the line
   std::size_t second = 0;   // the station that drove into it (not heard by the others)
+  // The second driver's telegram may be an answer: a chip's (a slave sends nothing else), a
+  // sender's unless its bytes are a request or a token (a master's are).
+  bool answer = true;
 };
 
 class Segment {
@@ -214,7 +217,8 @@ class Segment {
   // `bad`: the first error of a one-character `data` (none: good).
   void line_chars(std::span<const std::uint8_t> data, std::uint64_t start,
                   UartFault::Kind bad = UartFault::Kind::none);
-  void collide(std::size_t first, std::size_t second, std::uint64_t cycle);
+  // `answer`: Collision::answer (false: a sender's request or token).
+  void collide(std::size_t first, std::size_t second, std::uint64_t cycle, bool answer = true);
 
   std::uint32_t clock_hz_;
   std::uint32_t t_;

@@ -474,5 +474,24 @@ TEST(SegmentFaults, AnAnswerAfterTslPlusTsynIsACollisionAndUnsolicitedOnce) {
             "the request to station 20 (slot time 100), lost in the collision");
 }
 
+// The same collision when the second driver's telegram is a request or a token (review s34 rev1
+// finding 3; docs/segment.md "Bus checks", `unsolicited`): no answer, so not one nobody asked
+// for; the collision alone says it. Begun 134 T after the request to 20 as above, where an
+// answer was unsolicited.
+TEST(SegmentFaults, ARequestOrTokenLostInACollisionIsNoUnsolicitedAnswer) {
+  for (const std::vector<std::uint8_t>& lost : {fdl_status(22, 3), bytes_of(fdl::token(4, 3))}) {
+    Faults f(false);
+    const std::uint64_t end = f.seg.send(f.master, fdl_status(20, 2), f.bits(100));
+    f.seg.send(f.master, fdl_status(21, 2), end + f.bits(kSlot + kTsyn));
+    f.seg.send(f.rogue, lost, end + f.bits(kSlot + kTsyn + 1));
+    f.settle(end + f.bits(600));
+    ASSERT_EQ(f.seg.collisions().size(), 1U);
+    EXPECT_FALSE(f.seg.collisions()[0].answer);
+    f.expect_only(BusViolation::collision, 1);
+    ASSERT_EQ(f.log.size(), 1U);
+    EXPECT_EQ(f.log[0].text, "bus: collision: rogue drove the line while master 2 had it");
+  }
+}
+
 }  // namespace
 }  // namespace dpc31

@@ -720,6 +720,46 @@ TEST(SegmentScenario, ATokenPassRetriedAfterTheSlotTimeIsNoDuplicateToken) {
       "expect bus_violation duplicate_token 0\nexpect bus_violation token_lost 0\n");
 }
 
+// Review s34 rev1 finding 1: a token passed to an absent address (9) leaves the passer holding it
+// (docs/scenario-format.md, `pass_token`; docs/segment.md "The token": EN 50170, nobody took it),
+// so master 2's next visit goes on with the token it held: the same arrival (the walk stamps the
+// visit there), TRR and TTH as the visit before the pass, not a fresh claim (TRR 0, TTH = TTR),
+// and the bus check, which keeps that arrival too, finds no token_hold. The master goes on once
+// the slot time after its token has passed (`run 100bits`: before, 9 may still take it).
+TEST(SegmentScenario, AMasterKeepsTheTokenNobodyTook) {
+  const ScenarioRun r = run_passing(
+      "segment\nstation 5 profile=spc3\nstation 6 profile=dpc31\nmaster 2 slaves=5,6 ttr=1000\n"
+      "master 3 slaves=6 ttr=1000\nstartup\ncycle 2\npass_token from=2 to=9\nrun 100bits\ncycle 1\n"
+      "expect bus_violation token_hold 0\nexpect bus_violation duplicate_token 0\n");
+  // Before the pass: master 2's last visit's arrival, and master 3's token to it (DC 02 03, 3
+  // characters: it arrives 33 T = 1056 clocks after its start, at 1.5 Mbaud).
+  std::uint64_t before = 0;
+  std::uint64_t arrival = 0;
+  std::string kept;  // master 2's visit after the pass
+  bool passed = false;
+  for (const std::string& l : r.walk) {
+    const std::uint64_t at = std::stoull(l.substr(l.find("cycle") + 5));
+    const bool visit = l.find("master 2: the token: TRR") != std::string::npos;
+    if (l.find("line 8: pass_token") != std::string::npos) {
+      passed = true;
+    } else if (!passed && l.find("] master 3: DC 02 03") != std::string::npos) {
+      arrival = at + 1056;
+    } else if (!passed && visit) {
+      before = at;
+    } else if (passed && visit && kept.empty()) {
+      kept = l;
+    }
+  }
+  ASSERT_NE(arrival, 0U);
+  ASSERT_FALSE(kept.empty());
+  const std::uint64_t trr = (arrival - before) / 32;
+  EXPECT_EQ(std::stoull(kept.substr(kept.find("cycle") + 5)), arrival) << kept;
+  EXPECT_NE(
+      kept.find(fmt::format("master 2: the token: TRR {} bit times, TTH {}, ", trr, 1000 - trr)),
+      std::string::npos)
+      << kept;
+}
+
 // A master that finds a slave locked by another (its Slave_Diag's Master_Add, byte 3, neither FFh
 // nor its own address: chip-facts.md, "Slave_Diag"; Master_Lock is the master's own bit) does not
 // parameterise it, and its walk says so (the audit s28 aud2, finding 4: master 3 took the slave

@@ -116,6 +116,7 @@ def test_a_collision_and_a_lost_token_are_counted():
     # both answer at end + 11 T: the second driver collides there, the first keeps the line
     [c] = seg.collisions
     assert (c.cycle, seg.name(c.first), seg.name(c.second)) == (end + 11 * t, "spc3", "twin")
+    assert c.answer  # a chip's: a slave sends nothing but answers
     assert check.count("collision") == 1
     assert any("twin drove the line while spc3 had it" in l for l in seg.bus_log)
     # The token to master 3, which is not there: the line stays idle; TTO = TSL x (6 + 2 x 2),
@@ -745,3 +746,71 @@ def test_check_bus_takes_the_masters_ttr_and_the_masters_added_after_it():
     with pytest.raises(ValueError, match=r"^master 3: ttr=800 differs from master 2's ttr=600"):
         seg.add_master(3, [5], ttr=800)
     assert seg.size == 2  # the refused master's station did not join
+
+
+def test_a_master_that_lowers_the_checks_slot_time_below_its_min_tsdr_is_refused():
+    """docs/python.md "The bus check" (review s34 rev1 finding 2): a check following the masters'
+    slot time refuses a min_tsdr_bits above it in the same words whether the master came first
+    (check_bus refuses) or after (add_master refuses; its station does not join). The first
+    master's slot_bits=37 replaces the default 100; 60 > 37."""
+    seg = dpc31.Segment(1_500_000)
+    seg.add_station(5, "spc3")
+    seg.add_master(2, [5], slot_bits=37)
+    words = r"^min_tsdr_bits 60 above the slot time 37: no answer could be in time$"
+    with pytest.raises(ValueError, match=words):
+        seg.check_bus(min_tsdr_bits=60)
+    seg = dpc31.Segment(1_500_000)
+    seg.add_station(5, "spc3")
+    check = seg.check_bus(min_tsdr_bits=60)
+    with pytest.raises(ValueError, match=words):
+        seg.add_master(2, [5], slot_bits=37)
+    assert seg.size == 1  # nothing joined
+    seg.add_master(2, [5], slot_bits=60)  # at the slot time: answers at 60 are in time
+    # The check's own slot time is not the masters': nothing to refuse.
+    seg = dpc31.Segment(1_500_000)
+    seg.add_station(5, "spc3")
+    check = seg.check_bus(min_tsdr_bits=60, slot_bits=100)
+    seg.add_master(2, [5], slot_bits=37)
+    assert check.total == 0
+
+
+def test_a_request_lost_in_a_collision_is_no_unsolicited_answer():
+    """docs/segment.md "Bus checks", `unsolicited` (review s34 rev1 finding 3): a sender's request
+    that drives into another telegram is the collision alone (Collision.answer false); a
+    sender's answer there, with no request waiting, is also unsolicited."""
+    counts = []
+    # FDL_Status 20 <- 3 (FCS 14h + 03h + 49h = 60h), then an answer 2 <- 20 (FC 00h, OK; FCS 16h)
+    for lost in (bytes([0x10, 20, 3, 0x49, 0x60, 0x16]), bytes([0x10, 2, 20, 0x00, 0x16, 0x16])):
+        seg = dpc31.Segment(1_500_000)
+        master = seg.add_sender(MASTER)
+        rogue = seg.add_sender("rogue")
+        check = seg.check_bus(masters=[2])
+        seg.send(master, bytes([0x10, 21, 2, 0x49, 0x60, 0x16]), start=1000)  # FCS 60h
+        seg.send(rogue, lost, start=1000 + 11 * T)  # inside the master's telegram
+        seg.flush()
+        [c] = seg.collisions
+        counts.append((c.answer, check.count("collision"), check.count("unsolicited")))
+    assert counts == [(False, 1, 0), (True, 1, 1)]
+
+
+def test_a_master_keeps_the_token_nobody_took():
+    """docs/segment.md "The token" (review s34 rev1 finding 1): pass_token to an address of no
+    master added leaves the passer holding the token it held, so its next use_token goes on with
+    that token (its arrival and TRR), not a fresh claim (TRR 0)."""
+    seg = dpc31.Segment(1_500_000)
+    seg.add_station(5, "spc3")
+    seg.add_station(6, "dpc31")
+    m2 = seg.add_master(2, [5], ttr=1000)
+    m3 = seg.add_master(3, [6], ttr=1000)
+    m2.use_token(3)  # the claim
+    m3.use_token(2)
+    held = m2.use_token(3)  # the token from 3: TRR measured from the claim
+    m3.use_token(2)
+    assert m2.wait_token(0)  # 3's token to 2: it arrives TRR after the arrival before
+    trr = m2.token_rotation
+    m2.pass_token(9)
+    seg.run_until(seg.cycle + 100 * T)  # the slot time: 9 showed no activity
+    kept = m2.use_token(3)
+    assert trr != 0
+    assert (kept.arrived, kept.rotation, kept.hold) == (held.arrived + trr, trr,
+                                                         max(0, 1000 * T - trr))
