@@ -108,6 +108,14 @@ TEST_F(BadInput, AnOutputThatIsTheStandardOutputsFileIsRefused) {
              "dpc31 cosim: --junit ../io/out" + why, "cosim");
   expect_bad(dpc31("bench --bench /bin/true --json ../io/out"),
              "dpc31 bench: --json ../io/out" + why, "bench");
+  // A segment's station trace is named after FILE, and FILE cannot be /dev/stdout (a segment's
+  // --record names a file): no advice. The standard output's file linked under the name.
+  fs::create_hard_link(path("../io/out"), path("s.station5_spc3.trace"));
+  expect_bad(dpc31("run " + kTraces + "segment/three_slaves.scn --record s"),
+             "dpc31 run: --record s.station5_spc3.trace: is the file the standard output goes "
+             "to: what is printed there would be lost",
+             "segment --record");
+  fs::remove(path("s.station5_spc3.trace"));
   r = dpc31("run " + scn + " --json /dev/stdout");
   EXPECT_EQ(r.rc, 0) << r.err;
   // The walk, then the JSON.
@@ -117,16 +125,26 @@ TEST_F(BadInput, AnOutputThatIsTheStandardOutputsFileIsRefused) {
 }
 
 // docs/segment.md, "Outputs": a station's trace is FILE.stationN_NAME.trace, beside FILE. FILE a
-// FIFO or a device (`--record /dev/null`) made new files in its directory, /dev: refused.
+// FIFO or a device (`--record /dev/null`) made new files in its directory, /dev: refused. So are
+// a directory and a name ending in '/' (`d/` wrote hidden d/.station5_spc3.trace files), as one
+// chip's --record refuses them (docs/bad-input.md, "Output files").
 TEST_F(BadInput, ASegmentsRecordNamesARegularFile) {
   ASSERT_EQ(::mkfifo(path("fifo").c_str(), 0600), 0);
-  const Outcome r = dpc31("run " + kTraces + "segment/two_masters.scn --record fifo");
+  fs::create_directory(path("d"));
+  const std::string run = "run " + kTraces + "segment/two_masters.scn --record ";
+  const Outcome r = dpc31(run + "fifo");
   expect_bad(r,
              "dpc31 run: --record fifo: not a regular file: a segment writes a trace per station "
              "beside FILE (FILE.stationN.trace), so FILE names a file",
              "a FIFO");
   EXPECT_EQ(r.out, "");
-  EXPECT_EQ(listing(), std::vector<std::string>{"fifo"});
+  expect_bad(dpc31(run + "d"), "dpc31 run: --record d: cannot write: is a directory", "dir");
+  expect_bad(dpc31(run + "d/"),
+             "dpc31 run: --record d/: cannot write: a file name cannot end in '/'", "dir/");
+  expect_bad(dpc31(run + "new/"),
+             "dpc31 run: --record new/: cannot write: a file name cannot end in '/'", "new/");
+  EXPECT_EQ(listing(), (std::vector<std::string>{"d", "fifo"}));
+  EXPECT_TRUE(fs::is_empty(path("d")));
 }
 
 // docs/decisions.md, "No silent options": --window sizes the --vcd window; without --vcd it acted
@@ -156,6 +174,21 @@ TEST_F(BadInput, NamesWithControlBytesAreOneEscapedLine) {
   expect_bad_prefix(dpc31("run " + kTraces + "startup_dpc31_1m5.scn --quiet --json " +
                           "\"$(printf 'd\\ne/x.json')\""),
                     "dpc31 run: d\\x0Ae/x.json: cannot create the temporary file d\\x0Ae/", "json");
+  // A segment's --record, the bridge's symlink refusal (the link's name and what it points to),
+  // replay's and wavediff's inputs.
+  ASSERT_EQ(::mkfifo(path("f\nifo").c_str(), 0600), 0);
+  expect_bad(dpc31("run " + kTraces + "segment/two_masters.scn --record \"$(printf 'f\\nifo')\""),
+             "dpc31 run: --record f\\x0Aifo: not a regular file: a segment writes a trace per "
+             "station beside FILE (FILE.stationN.trace), so FILE names a file",
+             "segment --record");
+  fs::create_symlink("real\nconf", path("my\x1Blink"));
+  expect_bad(dpc31("bridge --pty \"$(printf 'my\\033link')\" --firmware DO4", "timeout 10"),
+             "dpc31 bridge: my\\x1Blink is a symlink to real\\x0Aconf, not to a pty in /dev/pts/: "
+             "refusing to replace it",
+             "bridge");
+  expect_bad(dpc31("replay \"$(printf 'a\\nb.trace')\""), "a\\x0Ab.trace: no such file", "replay");
+  expect_bad(dpc31("wavediff \"$(printf 'a\\nb.vcd')\" x.vcd"),
+             "a\\x0Ab.vcd:0: cannot open: No such file or directory", "wavediff");
 }
 
 // The commands the demo prints can be pasted as they are: a path with a space is quoted.

@@ -4,12 +4,15 @@
  * With FORGETS_DIN it makes the mistake of docs/bring-up.md, section 7
  * (tests/scenario_walk_test.cpp): its own ISR, entered before the driver's, gives the Cfg verdict
  * on New_Cfg_Data (User_Cfg_Data_Okay) and nothing else; that read clears the event, so the
- * driver's Cfg handler, which would hand the inputs over with New_Din_Buffer_Cmd, never runs. */
+ * driver's Cfg handler, which would hand the inputs over with New_Din_Buffer_Cmd, never runs.
+ * It starts only on the emulator its headers are from (dpc31emu_version(), docs/install.md
+ * "Versions"): the program that loads it exports that function too (firmware/plugin_host.list). */
 #include <string.h>
 
 #ifdef FORGETS_DIN
 #include "dpc31/dpc31_regs.h"
 #endif
+#include "dpc31/dpc31_version.h"
 #include "firmware.h"
 
 #define INPUT_ONLY_IDENT 0x0E10u
@@ -53,6 +56,7 @@ static int g_motorola;
 
 static void start(const dpc31_board* board) {
   const dps_board b = dpc31_dps_board(board);
+  if (strcmp(dpc31emu_version(), DPC31EMU_VERSION_STRING) != 0) return; /* silent: no slave */
   memset(&g_the, 0, sizeof g_the);
 #ifdef FORGETS_DIN
   g_motorola = board->motorola;

@@ -288,10 +288,10 @@ int run(const Options& o, std::string& out, std::string& err) {
     out += text_report(r, o.max_signals);
     return r.same() ? 0 : 1;
   } catch (const OptionError& e) {
-    err += fmt::format("dpc31 wavediff: {}\n", e.what());
+    err += shown_line(fmt::format("dpc31 wavediff: {}", e.what())) + "\n";
     return 2;
   } catch (const InputError& e) {
-    err += std::string(e.what()) + "\n";
+    err += shown_line(e.what()) + "\n";  // one line whatever a name holds
     return 2;
   }
 }

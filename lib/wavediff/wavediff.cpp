@@ -652,7 +652,7 @@ Report compare(const Options& o) {
        {"--diff-vcd", o.diff_vcd},
        {"--wavedrom", o.wavedrom},
        {"--merge", o.merge},
-       {"--merge's save file", o.merge.empty() ? std::string() : save_file_name(o.merge)}});
+       {"--merge's save file", o.merge.empty() ? std::string() : save_file_name(o.merge), false}});
   if (!same.empty()) throw OptionError(same);
   Report rep;
   Engine e(o);

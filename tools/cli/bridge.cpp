@@ -28,6 +28,7 @@
 #include "outfile.hpp"
 #include "path_option.hpp"
 #include "pcapng.hpp"
+#include "textfile.hpp"
 #include "vocabulary.hpp"
 #include "whole_number.hpp"
 
@@ -180,7 +181,7 @@ std::string parse_slave(const std::string& spec, bridge::SlaveSpec& s) {
 // One line on `err` and nullopt for a bad option.
 std::optional<Checked> check(const BridgeOptions& o, std::FILE* err) {
   const auto bad = [err](const std::string& msg) {
-    fmt::print(err, "dpc31 bridge: {}\n", msg);
+    fmt::print(err, "dpc31 bridge: {}\n", shown_line(msg));
     return std::nullopt;
   };
   if (!o.extra.empty()) return bad(fmt::format("unexpected argument '{}'", o.extra.front()));
@@ -727,7 +728,7 @@ bool open_door(const Checked& c, const BridgeOptions& o, Door& d, std::FILE* err
     return false;
   }
   if (const std::string why = bridge::make_link(o.pty, d.pty->slave_name()); !why.empty()) {
-    fmt::print(err, "dpc31 bridge: {}\n", why);
+    fmt::print(err, "dpc31 bridge: {}\n", shown_line(why));  // a name's newline: still one line
     return false;
   }
   d.link = o.pty;

@@ -78,12 +78,13 @@ std::vector<outfile::Named> run_outputs(const CosimOptions& o) {
   for (const auto& [opt, dir] : {std::pair{"--vcd", o.vcd_dir}, std::pair{"--dump", o.dump_dir}}) {
     if (dir.empty()) continue;
     for (const char* name : kWindowFiles)
-      out.push_back({opt, (std::filesystem::path(dir) / name).string()});
+      out.push_back({opt, (std::filesystem::path(dir) / name).string(), false});  // DIR's files
   }
   const std::string name = std::filesystem::path(o.junit).filename().string();
   if (name.starts_with("cosim-") && name.ends_with(".trace")) {
-    out.push_back(
-        {"--out", (std::filesystem::path(o.out_dir.empty() ? "." : o.out_dir) / name).string()});
+    out.push_back({"--out",
+                   (std::filesystem::path(o.out_dir.empty() ? "." : o.out_dir) / name).string(),
+                   false});
   }
   return out;
 }

@@ -3,6 +3,7 @@
 #include <fmt/core.h>
 
 // The trace replay lives with the emulator (emu/ is not on this target's include path).
+#include "textfile.hpp"
 #include "trace.hpp"
 
 namespace dpc31::cli {
@@ -12,7 +13,7 @@ int run_replay_command(const ReplayOptions& opt, std::FILE* out, std::FILE* err)
   ReplayOutcome o;
   const int rc = replay_trace_file(opt.trace, message, &o);
   if (rc != 0) {
-    fmt::print(err, "{}\n", message);
+    fmt::print(err, "{}\n", shown_line(message));  // one line whatever the name holds
     return rc;
   }
   if (!opt.quiet) {

@@ -202,7 +202,7 @@ int ChipRun::open(std::uint32_t baud) {
     if (!path->empty() && !out->open(*path)) return m.fail(out->error());
   }
   // The trace is written as the run goes: a device or a descriptor gets it from a scratch file
-  // at the end, after the walk.
+  // in TMPDIR, as large as the trace, at the end, after the walk.
   if (!opt.record.empty() && !m.rec_out.spool()) return m.fail(m.rec_out.error());
   if (const std::string e = waveform_options_error(opt); !e.empty()) return m.fail(e);
   std::string error;
@@ -226,7 +226,8 @@ int ChipRun::run(const Scenario& s, std::string_view text, const LineSink& walk,
     notes.push_back(
         fmt::format("recorded by `dpc31 run --record` from {} (docs/trace-format.md)", s.file));
     rec = std::make_unique<TraceRecorder>(s.master.baud, std::move(notes));
-    // Written as it goes into the temporary (spooled since open()): a long run holds no trace.
+    // Written as it goes (spooled since open()): a long run holds no trace in memory. Its bytes
+    // are on disk: a regular FILE's temporary, else a scratch file in TMPDIR as large as the trace.
     rec->write_to([&out = m.rec_out](std::string_view bytes) { out.write(bytes); });
     hooks = rec->scenario_hooks();
   }

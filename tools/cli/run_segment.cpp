@@ -17,6 +17,7 @@
 #include "scenario_segment.hpp"
 #include "segment.hpp"
 #include "segment_outputs.hpp"
+#include "textfile.hpp"
 #include "trace.hpp"
 #include "vocabulary.hpp"
 
@@ -47,7 +48,9 @@ class RunOutputs final : public SegmentScenarioOutputs {
                                        {"--pcap", opt_.pcap}, {"--gtkw", opt_.gtkw},
                                        {"--pvs", opt_.pvs}};
     for (const std::string& sc : scopes()) {
-      out.push_back({"--record", opt_.record.empty() ? "" : station_trace_path(opt_.record, sc)});
+      // Named after FILE, which cannot be a descriptor: no /dev/stdout in its place.
+      out.push_back(
+          {"--record", opt_.record.empty() ? "" : station_trace_path(opt_.record, sc), false});
     }
     return out;
   }
@@ -55,16 +58,23 @@ class RunOutputs final : public SegmentScenarioOutputs {
   // Opens the files the run does not write as it goes; false with a line.
   bool open(std::string& error) {
     // The stations' traces are named after FILE, beside it: beside a device, a FIFO or a
-    // descriptor (/dev/null, /dev/stdout) they would be new files in its directory (/dev).
-    struct stat st {};
-    if (!opt_.record.empty() &&
-        ((::stat(opt_.record.c_str(), &st) == 0 && !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode)) ||
-         outfile::descriptor_link(opt_.record).link)) {
-      error = fmt::format(
-          "--record {}: not a regular file: a segment writes a trace per station beside FILE "
-          "(FILE.stationN.trace), so FILE names a file",
-          opt_.record);
-      return false;
+    // descriptor (/dev/null, /dev/stdout) they would be new files in its directory (/dev), and
+    // FILE `d/` would put hidden `d/.stationN.trace` files in d. One chip's FILE is refused so.
+    if (!opt_.record.empty()) {
+      const std::string& f = opt_.record;
+      struct stat st {};
+      const bool there = ::stat(f.c_str(), &st) == 0;
+      const char* why =
+          f.ends_with('/')               ? "cannot write: a file name cannot end in '/'"
+          : there && S_ISDIR(st.st_mode) ? "cannot write: is a directory"
+          : (there && !S_ISREG(st.st_mode)) || outfile::descriptor_link(f).link
+              ? "not a regular file: a segment writes a trace per station beside FILE "
+                "(FILE.stationN.trace), so FILE names a file"
+              : nullptr;
+      if (why != nullptr) {
+        error = shown_line(fmt::format("--record {}: {}", f, why));
+        return false;
+      }
     }
     if (!SegmentScenarioOutputs::open(error)) return false;
     for (const std::string& sc : scopes()) {

@@ -501,9 +501,9 @@ std::string distinct(const std::vector<Named>& inputs, const std::vector<Named>&
     if (stdout_file && out_ids[k].exists && !out_ids[k].descriptor &&
         out_ids[k].dev == out1.st_dev && out_ids[k].ino == out1.st_ino) {
       return shown_line(fmt::format(
-          "{} {}: is the file the standard output goes to: what is printed there would be lost "
-          "(name /dev/stdout to write into it)",
-          outputs[k].what, outputs[k].path));
+          "{} {}: is the file the standard output goes to: what is printed there would be lost{}",
+          outputs[k].what, outputs[k].path,
+          outputs[k].stdout_may_stand_in ? " (name /dev/stdout to write into it)" : ""));
     }
     for (const Named& in : all_inputs) {
       if (!in.path.empty() && same(out_ids[k], id_of(in.path))) {

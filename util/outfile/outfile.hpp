@@ -135,10 +135,13 @@ class OutFile {
 bool write_file(const std::string& path, std::string_view bytes, std::string& error);
 
 // A file a command names on its command line, for distinct(): the option ("--json") or the
-// argument's role ("the scenario"), and the path.
+// argument's role ("the scenario"), and the path. `stdout_may_stand_in`: the user named this
+// one file and may name /dev/stdout instead (not a name derived from another: a segment's
+// station trace, a file in cosim's directory; not a library call's argument).
 struct Named {
   std::string what;
   std::string path;
+  bool stdout_may_stand_in = true;
 };
 
 // Refuses, before any work, an output that is one of the inputs or another output (the same
