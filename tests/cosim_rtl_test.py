@@ -407,13 +407,18 @@ def host_code_refused():
 def names_are_data_for_cmake():
     # A Verilog file name with ]==] closed the bracket argument of the generated CMakeLists.txt
     # and ran its own CMake code at configure. Names now reach CMake as -D values; a name with a
-    # newline or ';' (which a CMake list cannot carry) is refused.
+    # newline or ';' (which a CMake list cannot carry) is refused, and one with a blank too
+    # (Verilator cuts file names at a blank, docs/golden-model.md).
     with tempfile.TemporaryDirectory() as work:
-        evil = "x]==])file(TOUCH pwned)#.v"
+        evil = 'x]==])file(TOUCH"pwned")#.v'
         stub(os.path.join(work, evil), **SYNTAX_ERROR)
         cache = os.path.join(work, "cache")
         r = run(["--rtl", os.path.join(work, evil), "--top", "stub"], cache=cache, cwd=work)
         check(r.returncode == 2 and "Verilator: %Error" in r.stderr, r.stderr)
+        blank = "x]==])file(TOUCH pwned)#.v"
+        stub(os.path.join(work, blank), **SYNTAX_ERROR)
+        one_line_exit_2(run(["--rtl", os.path.join(work, blank), "--top", "stub"], cache=cache,
+                            cwd=work), "a path with a blank cannot be built", cache)
         nl = "y]==])\nfile(TOUCH pwned)\n#.v"
         stub(os.path.join(work, nl))
         one_line_exit_2(run(["--rtl", os.path.join(work, nl), "--top", "stub"], cache=cache,
