@@ -446,6 +446,7 @@ class Collision:
     cycle: int
     first: int
     second: int
+    answer: bool  # the later station's telegram could have been an answer (docs/segment.md)
 
 class TokenVisit:
     arrived: int   # a cycle of the line
