@@ -8,6 +8,7 @@
 #include <array>
 #include <cerrno>
 #include <charconv>
+#include <filesystem>
 #include <limits>
 #include <system_error>
 
@@ -658,7 +659,8 @@ bool TraceFile::copy_pipe(std::string& error) {
   ::close(fd_);
   fd_ = copy;
   if (!copied) {
-    error = fmt::format("cannot copy the pipe to {}: {}", dir,
+    error = fmt::format("cannot copy the pipe to a scratch file in {}: {}",
+                        std::filesystem::path(dir).parent_path().string(),
                         std::error_code(e, std::generic_category()).message());
   }
   return error.empty();
