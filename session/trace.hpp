@@ -234,7 +234,8 @@ class TraceSource {
  public:
   virtual ~TraceSource() = default;
   [[nodiscard]] virtual const Trace& header() const = 0;
-  [[nodiscard]] virtual std::unique_ptr<TraceCursor> cursor(std::optional<TraceKind> only) const = 0;
+  [[nodiscard]] virtual std::unique_ptr<TraceCursor> cursor(
+      std::optional<TraceKind> only) const = 0;
 };
 
 // A trace file, checked whole in one reading line by line, then read again by its cursors: a

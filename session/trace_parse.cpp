@@ -1,7 +1,6 @@
 // Golden traces: the parser (trace text -> Trace). The format: docs/trace-format.md.
-#include <fmt/format.h>
-
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -522,7 +521,8 @@ constexpr std::uint64_t kMaxPipeBytes = std::uint64_t{1} << 30;
 // Why line `l` that TextLines read is no trace line: throws Fail.
 void refuse_unread(const TextLines::Line& l) {
   if (l.nul) fail(not_text(0));
-  if (l.too_long) fail(fmt::format("a line of more than {} bytes: not a trace line", kMaxLineBytes));
+  if (l.too_long)
+    fail(fmt::format("a line of more than {} bytes: not a trace line", kMaxLineBytes));
   if (l.long_text) {
     fail(fmt::format("more than {} bytes before the comment: not a trace line", kMaxTextBytes));
   }
@@ -530,8 +530,8 @@ void refuse_unread(const TextLines::Line& l) {
 
 // The keyword of a line of `kind`.
 std::string_view keyword(TraceKind kind) {
-  constexpr std::array<std::string_view, 9> kWords = {"rx", "rxd", "wr",    "rd", "xint",
-                                                      "pb3", "tx", "state", "end"};
+  constexpr std::array<std::string_view, 9> kWords = {"rx",  "rxd", "wr",    "rd", "xint",
+                                                      "pb3", "tx",  "state", "end"};
   return kWords.at(static_cast<std::size_t>(kind));
 }
 
@@ -543,7 +543,6 @@ std::string_view first_word(std::string_view text) {
   while (k < text.size() && !is_space(text[k])) ++k;
   return text.substr(i, k - i);
 }
-
 
 // The event lines of a checked trace file, read again from its first event line.
 class FileCursor final : public TraceCursor {
@@ -569,7 +568,8 @@ class FileCursor final : public TraceCursor {
  private:
   // The file was checked whole before: what no longer parses, or ends early, was changed since.
   [[noreturn]] void changed(int line, std::string_view why) const {
-    throw TraceError{header_.file, line, fmt::format("the file changed while it was replayed: {}", why)};
+    throw TraceError{header_.file, line,
+                     fmt::format("the file changed while it was replayed: {}", why)};
   }
 
   void advance() {
@@ -687,7 +687,8 @@ bool TraceFile::check(TraceError& err) {
     if (!first) {
       try {
         refuse_unread(t);
-        if (p.line(no, no == 1 ? scenario_lex::without_bom(t.text) : t.text, l) && body_line_ == 0) {
+        if (p.line(no, no == 1 ? scenario_lex::without_bom(t.text) : t.text, l) &&
+            body_line_ == 0) {
           body_offset_ = t.offset;
           body_line_ = no;
         }

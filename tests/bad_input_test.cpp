@@ -527,10 +527,10 @@ TEST_F(BadInput, ReplayReadsAPipeLikeTheFile) {
              "/dev/stdin:" + std::to_string(std::count(text.begin(), text.end(), '\n')) +
                  ": truncated: the last line has no end of line",
              "cut");
-  expect_bad(dpc31("replay /dev/stdin", "ulimit -f 1 && cat good.trace | " + tmpdir),
-             "/dev/stdin: cannot copy the pipe to a scratch file in " + path("tmp") +
-                 ": File too large",
-             "file size limit");
+  expect_bad(
+      dpc31("replay /dev/stdin", "ulimit -f 1 && cat good.trace | " + tmpdir),
+      "/dev/stdin: cannot copy the pipe to a scratch file in " + path("tmp") + ": File too large",
+      "file size limit");
   EXPECT_TRUE(fs::is_empty(path("tmp")));
 }
 

@@ -687,9 +687,8 @@ TEST(CliRun, ALongDpv1TimeoutReplaysFlat) {
   }
   EXPECT_GT(size[1], std::uintmax_t{64} << 20);  // past the old bound
 #if !defined(__SANITIZE_ADDRESS__)
-  EXPECT_LE(rss[1], rss[0] + 4 * 1024)
-      << "peak RSS " << rss[0] << " KiB for " << size[0] << " bytes, " << rss[1] << " KiB for "
-      << size[1];
+  EXPECT_LE(rss[1], rss[0] + 4 * 1024) << "peak RSS " << rss[0] << " KiB for " << size[0]
+                                       << " bytes, " << rss[1] << " KiB for " << size[1];
 #endif
 }
 

@@ -585,10 +585,10 @@ std::string file_error(const std::string& path, const std::string& text, Trace* 
 
 // A line as one string of all its fields.
 std::string fields(const dpc31::TraceLine& l) {
-  std::string s = fmt::format("{} {} {} {} {} {} {} {} {} {}:{} |", l.line, static_cast<int>(l.kind),
-                              l.cycle, l.start, l.end, l.addr, l.data, l.level,
-                              fmt::join(l.bytes, ","), static_cast<int>(l.fault.kind),
-                              l.fault.char_index);
+  std::string s =
+      fmt::format("{} {} {} {} {} {} {} {} {} {}:{} |", l.line, static_cast<int>(l.kind), l.cycle,
+                  l.start, l.end, l.addr, l.data, l.level, fmt::join(l.bytes, ","),
+                  static_cast<int>(l.fault.kind), l.fault.char_index);
   for (const auto& [c, lv] : l.edges) s += fmt::format(" {}:{}", c, lv);
   for (const dpc31::TraceStateKey& k : l.state) s += fmt::format(" {}={}", k.key, k.value);
   return s;
@@ -604,10 +604,16 @@ std::vector<std::string> all_fields(const Trace& t) {
 // file read line by line is refused as the file read whole, at the same line with the same words;
 // what both take has the same lines.
 TEST(TraceFileLines, RefusedAsTheWholeFileWas) {
-  const std::string good = kHead + "# a comment\nwr 4 0004 E0\n\nwr 8 0005 C0 # IMR\n" +
-                           kMacStart + "xint 25 1\nrx 100 10 05 02 49 50 16\nend 1000\n";
-  std::vector<std::string> texts = {good, "\xEF\xBB\xBF" + good, "\xEF\xBB\xBF", "\n", "#\n",
-                                    "dpc31-trace 1", "dpc31-trace 1\n", "dpc31-trace\v1",
+  const std::string good = kHead + "# a comment\nwr 4 0004 E0\n\nwr 8 0005 C0 # IMR\n" + kMacStart +
+                           "xint 25 1\nrx 100 10 05 02 49 50 16\nend 1000\n";
+  std::vector<std::string> texts = {good,
+                                    "\xEF\xBB\xBF" + good,
+                                    "\xEF\xBB\xBF",
+                                    "\n",
+                                    "#\n",
+                                    "dpc31-trace 1",
+                                    "dpc31-trace 1\n",
+                                    "dpc31-trace\v1",
                                     "dpc31-trace 1\r\n" + kHead.substr(14)};
   for (std::size_t n = 0; n < good.size(); ++n) texts.push_back(good.substr(0, n));
   // Binary: a control byte or a NUL before, in and after the first wrong line, cut or not.
@@ -620,14 +626,13 @@ TEST(TraceFileLines, RefusedAsTheWholeFileWas) {
       texts.push_back(t + "x");
     }
   }
-  for (const char* t :
-       {"\x7f"
-        "ELF\x01\x02\x03\n\xff\xfe\n",
-        "\x7f"
-        "ELF\x01\x02\x03\n\xff\xfe\nx",
-        "\x7f"
-        "ELF\x02\x01\x01garbage",
-        "garbage\nmore\x01\nend"}) {
+  for (const char* t : {"\x7f"
+                        "ELF\x01\x02\x03\n\xff\xfe\n",
+                        "\x7f"
+                        "ELF\x01\x02\x03\n\xff\xfe\nx",
+                        "\x7f"
+                        "ELF\x02\x01\x01garbage",
+                        "garbage\nmore\x01\nend"}) {
     texts.emplace_back(t);
   }
   // And edits of it, the same ones each run: bytes put in, taken out, the end cut.
@@ -638,9 +643,15 @@ TEST(TraceFileLines, RefusedAsTheWholeFileWas) {
     for (int k = static_cast<int>(rng() % 3); k >= 0; --k) {
       const std::size_t at = rng() % (t.size() + 1);
       switch (rng() % 3) {
-        case 0: t.insert(at, 1, alphabet[rng() % alphabet.size()]); break;
-        case 1: t.erase(std::min(at, t.size() - 1), 1); break;
-        default: t.resize(at); break;
+        case 0:
+          t.insert(at, 1, alphabet[rng() % alphabet.size()]);
+          break;
+        case 1:
+          t.erase(std::min(at, t.size() - 1), 1);
+          break;
+        default:
+          t.resize(at);
+          break;
       }
       if (t.empty()) break;
     }
@@ -688,10 +699,10 @@ TEST(TraceFileLines, ALineAcrossTwoPiecesIsOneLine) {
   TraceError e;
   ASSERT_TRUE(parse_trace(testutil::slurp(path), path, whole, e));
   const ReplayOutcome m = dpc31::replay_trace(whole);
-  EXPECT_EQ(std::tie(o.final_cycle, o.telegrams_in, o.telegrams_out, o.writes, o.reads,
-                     o.irq_edges, o.states),
-            std::tie(m.final_cycle, m.telegrams_in, m.telegrams_out, m.writes, m.reads,
-                     m.irq_edges, m.states));
+  EXPECT_EQ(std::tie(o.final_cycle, o.telegrams_in, o.telegrams_out, o.writes, o.reads, o.irq_edges,
+                     o.states),
+            std::tie(m.final_cycle, m.telegrams_in, m.telegrams_out, m.writes, m.reads, m.irq_edges,
+                     m.states));
 }
 
 // The bounds that remain are a line's (docs/security.md): its text before the comment at most

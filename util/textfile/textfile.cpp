@@ -45,8 +45,7 @@ constexpr std::size_t kPiece = 64 * 1024;
 
 }  // namespace
 
-int open_text_file(const std::string& path, std::string_view what, std::string& error,
-                   bool& pipe) {
+int open_text_file(const std::string& path, std::string_view what, std::string& error, bool& pipe) {
   // Opened once (a pipe can be read only once), without waiting: a named FIFO's open() would
   // wait for a writer (the run hung). What was opened is judged by its descriptor, so nothing
   // renamed in at the path meanwhile gets past: a FIFO or a device (/dev/zero fills the cap) is

@@ -19,8 +19,7 @@ bool read_text_file(const std::string& path, std::size_t max_bytes, std::string_
 // The descriptor read_text_file reads (the caller closes it), or -1 with `error` set: a FIFO, a
 // device or a socket refused unopened, a directory named. `pipe`: an anonymous pipe, which can be
 // read only once and not at an offset.
-int open_text_file(const std::string& path, std::string_view what, std::string& error,
-                   bool& pipe);
+int open_text_file(const std::string& path, std::string_view what, std::string& error, bool& pipe);
 // The same from a descriptor the caller opened and closes (a FIFO opened a second time would wait
 // for another writer).
 bool read_text_fd(int fd, std::size_t max_bytes, std::string_view what, std::string& text,
@@ -34,13 +33,13 @@ bool read_text_fd(int fd, std::size_t max_bytes, std::string_view what, std::str
 class TextLines {
  public:
   struct Line {
-    std::string_view text;      // up to the comment byte; valid until next()
-    std::uint64_t offset = 0;   // of the line's first byte in the file
-    bool ended = false;         // by '\n'; false: the file's last line, cut off
-    bool too_long = false;      // the line over max_line: `text` is empty
-    bool long_text = false;     // the text over max_text: `text` is empty
-    bool nul = false;           // a NUL byte in the line (with `inspect`)
-    bool control = false;       // a control byte other than tab, CR, LF (or DEL) in it (`inspect`)
+    std::string_view text;     // up to the comment byte; valid until next()
+    std::uint64_t offset = 0;  // of the line's first byte in the file
+    bool ended = false;        // by '\n'; false: the file's last line, cut off
+    bool too_long = false;     // the line over max_line: `text` is empty
+    bool long_text = false;    // the text over max_text: `text` is empty
+    bool nul = false;          // a NUL byte in the line (with `inspect`)
+    bool control = false;      // a control byte other than tab, CR, LF (or DEL) in it (`inspect`)
   };
   // `inspect`: look at each byte for `nul` and `control` (a first reading; one that reads the
   // file again after it need not).
