@@ -518,11 +518,12 @@ constexpr std::uint64_t kMaxLineBytes = std::uint64_t{64} << 20;
 // A pipe is read once: its trace is copied to a scratch file first, at most this much.
 constexpr std::uint64_t kMaxPipeBytes = std::uint64_t{1} << 30;
 
-// Why line `l` that TextLines read is no trace line: throws Fail.
-void refuse_unread(const TextLines::Line& l) {
+// Refuses (throws Fail) a line that TextLines read but the parser must not see.
+void refuse_unparsable(const TextLines::Line& l) {
   if (l.nul) fail(not_text(0));
-  if (l.too_long)
+  if (l.too_long) {
     fail(fmt::format("a line of more than {} bytes: not a trace line", kMaxLineBytes));
+  }
   if (l.long_text) {
     fail(fmt::format("more than {} bytes before the comment: not a trace line", kMaxTextBytes));
   }
@@ -577,7 +578,7 @@ class FileCursor final : public TraceCursor {
     while (reader_.next(t)) {
       ++no_;
       try {
-        refuse_unread(t);
+        refuse_unparsable(t);
         const std::string_view w = first_word(t.text);
         if (w.empty() || (!only_.empty() && w != only_)) continue;
         parser_.event(no_, t.text, line_);
@@ -652,7 +653,7 @@ bool TraceFile::copy_pipe(std::string& error) {
       const ssize_t w = ::write(copy, piece.data() + done, static_cast<std::size_t>(n - done));
       if (w < 0 && errno == EINTR) continue;
       copied = w > 0;
-      e = w < 0 ? errno : ENOSPC;
+      if (!copied) e = w < 0 ? errno : ENOSPC;
       done += std::max<ssize_t>(w, 0);
     }
   }
@@ -686,7 +687,7 @@ bool TraceFile::check(TraceError& err) {
     ended = t.ended;
     if (!first) {
       try {
-        refuse_unread(t);
+        refuse_unparsable(t);
         if (p.line(no, no == 1 ? scenario_lex::without_bom(t.text) : t.text, l) &&
             body_line_ == 0) {
           body_offset_ = t.offset;
@@ -712,11 +713,9 @@ bool TraceFile::check(TraceError& err) {
   // the cut's error; a binary one is its first error before the cut line (the cut line blank),
   // and a binary file without any newline is one line, the first.
   const bool cut = !ended && !decided;
-  if (cut && !binary) {
-    err = TraceError{header_.file, no, "truncated: the last line has no end of line"};
-  } else if (first && (!cut || first->line < no || no == 1)) {
+  if (first && (!cut || (binary && (first->line < no || no == 1)))) {
     err = *first;
-  } else if (cut && no > 1) {
+  } else if (cut && !(binary && no == 1)) {
     err = TraceError{header_.file, no, "truncated: the last line has no end of line"};
   } else if (std::string why = p.unfinished(); !why.empty()) {
     err = TraceError{header_.file, no, std::move(why)};
