@@ -612,6 +612,8 @@ TraceFile::~TraceFile() {
 
 bool TraceFile::open(const std::string& path, TraceError& err) {
   err = TraceError{path, 0, {}};
+  if (fd_ >= 0) ::close(fd_);
+  body_line_ = 0;
   bool pipe = false;
   fd_ = open_text_file(path, "trace", err.message, pipe);
   if (fd_ < 0 || (pipe && !copy_pipe(err.message))) return false;
