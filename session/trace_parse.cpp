@@ -512,8 +512,8 @@ namespace {
 // A line's text before its comment: a telegram's `rx` or `tx` line has less than 1 KiB, an
 // `rxd` line with every edge of a 255-character telegram less than 64 KiB.
 constexpr std::size_t kMaxTextBytes = 1u << 20;
-// A whole line, comment and all: a scenario's comment (at most 16 MiB, its file's bound, each
-// control byte written as \xHH) heads the trace the recorder writes of it.
+// A whole line, comment and all: a scenario's comment (its file has at most 16 MiB) heads the
+// trace the recorder writes of it.
 constexpr std::uint64_t kMaxLineBytes = std::uint64_t{64} << 20;
 // A pipe is read once: its trace is copied to a scratch file first, at most this much.
 constexpr std::uint64_t kMaxPipeBytes = std::uint64_t{1} << 30;
