@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -216,6 +217,57 @@ struct Trace {
 std::string trace_baud_problem(std::uint64_t baud, std::uint32_t clock_hz = 0);
 
 bool parse_trace(std::string_view text, const std::string& file, Trace& out, TraceError& err);
+
+// The event lines of a trace in order, one at a time: all of them, or those of one kind.
+class TraceCursor {
+ public:
+  virtual ~TraceCursor() = default;
+  // The next line, nullptr after the last; valid until take().
+  virtual const TraceLine* peek() = 0;
+  // The next line; the cursor moves past it.
+  virtual TraceLine take() = 0;
+};
+
+// What a replay reads: a trace's header (a Trace's fields but its lines) and cursors over its
+// event lines, as many as it needs at once.
+class TraceSource {
+ public:
+  virtual ~TraceSource() = default;
+  [[nodiscard]] virtual const Trace& header() const = 0;
+  [[nodiscard]] virtual std::unique_ptr<TraceCursor> cursor(
+      std::optional<TraceKind> only) const = 0;
+};
+
+// A trace file, checked whole in one reading line by line, then read again by its cursors: a
+// trace of any length in bounded memory (a piece of the file and a line per reader; a line
+// whose text before its comment is over 1 MiB, or over 64 MiB in all, is refused at its line).
+// A pipe, which can be read only once, is copied to a scratch file in TMPDIR first (unlinked at
+// once), at most 1 GiB. A cursor that finds the file changed since (a line that no longer
+// parses, no 'end' line) throws a TraceError.
+class TraceFile final : public TraceSource {
+ public:
+  TraceFile() = default;
+  ~TraceFile() override;
+  TraceFile(const TraceFile&) = delete;
+  TraceFile& operator=(const TraceFile&) = delete;
+
+  // False with `err` if `path` cannot be read or is not a trace: the error parse_trace gives its
+  // text, and those of a file (a cut last line: docs/trace-format.md).
+  bool open(const std::string& path, TraceError& err);
+  [[nodiscard]] const Trace& header() const override { return header_; }
+  [[nodiscard]] std::unique_ptr<TraceCursor> cursor(std::optional<TraceKind> only) const override;
+
+ private:
+  bool copy_pipe(std::string& error);
+  bool check(TraceError& err);
+
+  int fd_ = -1;
+  Trace header_;
+  std::uint64_t body_offset_ = 0;  // where the first event line begins
+  int body_line_ = 0;              // its number
+};
+
+// The whole trace in memory (TraceFile's reading; its lines, however many).
 bool load_trace(const std::string& path, Trace& out, TraceError& err);
 
 // --- replay ---
@@ -235,9 +287,13 @@ struct ReplayOutcome {
 };
 
 ReplayOutcome replay_trace(const Trace& t);
+// The lines as it goes, each from a cursor of `s`: the replay holds the lines it plays and the
+// next expectation of each kind, not the trace (a TraceFile's cursor may throw a TraceError).
+ReplayOutcome replay_trace(const TraceSource& s);
 
-// Load, parse, replay. Exit code: 0 every expectation held, 1 one did not (`message` is the
-// first mismatch), 2 bad input (`message` is one "FILE:LINE: message" line, nothing run).
+// Check, then replay, the file (TraceFile). Exit code: 0 every expectation held, 1 one did not
+// (`message` is the first mismatch), 2 bad input (`message` is one "FILE:LINE: message" line,
+// nothing run; or the file changed while it was replayed).
 int replay_trace_file(const std::string& path, std::string& message,
                       ReplayOutcome* outcome = nullptr);
 

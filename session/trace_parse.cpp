@@ -1,10 +1,19 @@
 // Golden traces: the parser (trace text -> Trace). The format: docs/trace-format.md.
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <array>
+#include <cerrno>
 #include <charconv>
+#include <filesystem>
+#include <limits>
+#include <system_error>
 
 #include "dpc31/fdl.hpp"
+#include "outfile.hpp"
+#include "scenario_lex.hpp"
 #include "textfile.hpp"
 #include "trace.hpp"
 #include "vocabulary.hpp"
@@ -13,7 +22,6 @@ namespace dpc31 {
 
 namespace {
 
-constexpr std::size_t kMaxFileBytes = 64u << 20;
 constexpr std::uint64_t kMaxCycle = std::uint64_t{1} << 62;
 constexpr std::uint32_t kMaxClock = 200'000'000;
 
@@ -140,7 +148,8 @@ class TraceParser {
  public:
   explicit TraceParser(Trace& t) : t_(t) {}
 
-  void line(int no, std::string_view raw) {
+  // Parses line `no`: true if it is an event, then in `l`.
+  bool line(int no, std::string_view raw, TraceLine& l) {
     const std::string_view text = raw.substr(0, raw.find('#'));
     const std::vector<std::string_view> w = words(text);
     if (no == 1) {
@@ -148,13 +157,13 @@ class TraceParser {
         fail(fmt::format("not a dpc31 trace (the first line must be '{}')", kTraceMagic));
       }
       if (w[1] != "1") fail(fmt::format("trace format version '{}': only 1 is known", shown(w[1])));
-      return;
+      return false;
     }
-    if (w.empty()) return;
+    if (w.empty()) return false;
     if (ended_) fail(fmt::format("'{}' after the 'end' line", shown(w[0])));
     if (header(w)) {
       if (body_) fail(fmt::format("header line '{}' after the first event", shown(w[0])));
-      return;
+      return false;
     }
     if (!body_) {
       for (const auto& [name, seen] : {std::pair{"profile", have_profile_},
@@ -165,7 +174,7 @@ class TraceParser {
       }
       body_ = true;
     }
-    TraceLine l;
+    l = TraceLine{};
     l.line = no;
     body(w, l);
     if (l.cycle < order_) {
@@ -176,14 +185,21 @@ class TraceParser {
     }
     order_ = l.cycle;
     timing(l);
-    t_.lines.push_back(std::move(l));
+    return true;
   }
 
-  void finish(int last) {
-    if (!ended_) {
-      throw std::pair<int, std::string>(
-          last, body_ ? "truncated trace: no 'end' line" : "no events and no 'end' line");
-    }
+  // An event line of a trace whose lines were all parsed before (a cursor reads them again): the
+  // header is t_'s, the order and timing were checked then.
+  void event(int no, std::string_view raw, TraceLine& l) {
+    l = TraceLine{};
+    l.line = no;
+    body(words(raw.substr(0, raw.find('#'))), l);
+  }
+
+  // After the last line: why the trace is not whole ("" if it is).
+  [[nodiscard]] std::string unfinished() const {
+    if (ended_) return "";
+    return body_ ? "truncated trace: no 'end' line" : "no events and no 'end' line";
   }
 
  private:
@@ -458,7 +474,7 @@ std::string trace_baud_problem(std::uint64_t baud, std::uint32_t clock_hz) {
 bool parse_trace(std::string_view text, const std::string& file, Trace& out, TraceError& err) {
   Trace t;
   t.file = file;
-  if (text.starts_with("\xEF\xBB\xBF")) text.remove_prefix(3);
+  text = scenario_lex::without_bom(text);
   if (text.empty()) {
     err = TraceError{file, 0, "empty file, not a trace"};
     return false;
@@ -467,39 +483,268 @@ bool parse_trace(std::string_view text, const std::string& file, Trace& out, Tra
   int no = 0;
   try {
     std::string_view rest = text;
+    TraceLine l;
     while (!rest.empty()) {
       const std::size_t nl = rest.find('\n');
       const std::string_view line = rest.substr(0, nl);
       rest = nl == std::string_view::npos ? std::string_view{} : rest.substr(nl + 1);
       ++no;
-      if (line.find('\0') != std::string_view::npos) fail("a NUL byte: not a text file");
-      p.line(no, line);
+      if (line.find('\0') != std::string_view::npos) fail(not_text(0));
+      if (p.line(no, line, l)) t.lines.push_back(std::move(l));
     }
-    p.finish(no);
   } catch (const Fail& f) {
     err = TraceError{file, no, f.message};
     return false;
-  } catch (const std::pair<int, std::string>& f) {
-    err = TraceError{file, f.first, f.second};
+  }
+  if (std::string why = p.unfinished(); !why.empty()) {
+    err = TraceError{file, no, std::move(why)};
     return false;
   }
   out = std::move(t);
   return true;
 }
 
-bool load_trace(const std::string& path, Trace& out, TraceError& err) {
+// ---------------------------------------------------------------------------------------------
+// A trace file, read line by line
+
+namespace {
+
+// A line's text before its comment: a telegram's `rx` or `tx` line has less than 1 KiB, an
+// `rxd` line with every edge of a 255-character telegram less than 64 KiB.
+constexpr std::size_t kMaxTextBytes = 1u << 20;
+// A whole line, comment and all: a scenario's comment (its file has at most 16 MiB) heads the
+// trace the recorder writes of it.
+constexpr std::uint64_t kMaxLineBytes = std::uint64_t{64} << 20;
+// A pipe is read once: its trace is copied to a scratch file first, at most this much.
+constexpr std::uint64_t kMaxPipeBytes = std::uint64_t{1} << 30;
+
+// Refuses (throws Fail) a line that TextLines read but the parser must not see.
+void refuse_unparsable(const TextLines::Line& l) {
+  if (l.nul) fail(not_text(0));
+  if (l.too_long) {
+    fail(fmt::format("a line of more than {} bytes: not a trace line", kMaxLineBytes));
+  }
+  if (l.long_text) {
+    fail(fmt::format("more than {} bytes before the comment: not a trace line", kMaxTextBytes));
+  }
+}
+
+// The keyword of a line of `kind`.
+std::string_view keyword(TraceKind kind) {
+  constexpr std::array<std::string_view, 9> kWords = {"rx",  "rxd", "wr",    "rd", "xint",
+                                                      "pb3", "tx",  "state", "end"};
+  return kWords.at(static_cast<std::size_t>(kind));
+}
+
+// The first word of a line's text (before its comment).
+std::string_view first_word(std::string_view text) {
+  std::size_t i = 0;
+  while (i < text.size() && is_space(text[i])) ++i;
+  std::size_t k = i;
+  while (k < text.size() && !is_space(text[k])) ++k;
+  return text.substr(i, k - i);
+}
+
+// The event lines of a checked trace file, read again from its first event line.
+class FileCursor final : public TraceCursor {
+ public:
+  FileCursor(int fd, const Trace& header, std::uint64_t offset, int line,
+             std::optional<TraceKind> only)
+      : reader_(fd, offset, kMaxTextBytes, kMaxLineBytes, '#', false),
+        header_(header),
+        parser_(header_),
+        no_(line - 1),
+        only_(only ? keyword(*only) : std::string_view{}) {}
+
+  const TraceLine* peek() override {
+    if (!have_ && !done_) advance();
+    return have_ ? &line_ : nullptr;
+  }
+  TraceLine take() override {
+    peek();
+    have_ = false;
+    return std::move(line_);
+  }
+
+ private:
+  // The file was checked whole before: what no longer parses, or ends early, was changed since.
+  [[noreturn]] void changed(int line, std::string_view why) const {
+    throw TraceError{header_.file, line,
+                     fmt::format("the file changed while it was replayed: {}", why)};
+  }
+
+  void advance() {
+    TextLines::Line t;
+    while (reader_.next(t)) {
+      ++no_;
+      try {
+        refuse_unparsable(t);
+        const std::string_view w = first_word(t.text);
+        if (w.empty() || (!only_.empty() && w != only_)) continue;
+        parser_.event(no_, t.text, line_);
+      } catch (const Fail& f) {
+        changed(no_, f.message);
+      }
+      have_ = true;
+      done_ = line_.kind == TraceKind::end;
+      return;
+    }
+    if (reader_.failed()) throw TraceError{header_.file, 0, "cannot read the file"};
+    done_ = true;
+    if (only_.empty()) changed(no_, "no 'end' line");
+  }
+
+  TextLines reader_;
+  Trace header_;
+  TraceParser parser_;
+  int no_;
+  std::string_view only_;  // the keyword of the lines it reads ("": all)
+  TraceLine line_;
+  bool have_ = false;  // line_ is the next line
+  bool done_ = false;  // past the 'end' line or the file's end
+};
+
+}  // namespace
+
+TraceFile::~TraceFile() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+bool TraceFile::open(const std::string& path, TraceError& err) {
   err = TraceError{path, 0, {}};
-  std::string text;
-  if (!read_text_file(path, kMaxFileBytes, "trace", text, err.message)) return false;
-  err.line = cut_or_earlier_error(text, err.message, [&](const std::string& whole, std::string& m) {
-    Trace t;
-    TraceError e;
-    if (parse_trace(whole, path, t, e)) return 0;
-    m = e.message;
-    return e.line;
-  });
-  if (err.line != 0) return false;
-  return parse_trace(text, path, out, err);
+  if (fd_ >= 0) ::close(fd_);
+  body_line_ = 0;
+  bool pipe = false;
+  fd_ = open_text_file(path, "trace", err.message, pipe);
+  if (fd_ < 0 || (pipe && !copy_pipe(err.message))) return false;
+  header_ = Trace{};
+  header_.file = path;
+  return check(err);
+}
+
+bool TraceFile::copy_pipe(std::string& error) {
+  // Unlinked at once, the copy lives as long as its descriptor.
+  const std::string dir = outfile::make_temp_dir("dpc31-replay-", error);
+  if (dir.empty()) {
+    error = "cannot copy the pipe: " + error;
+    return false;
+  }
+  const std::string name = dir + "/pipe.trace";
+  const int copy = ::open(name.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+  int e = errno;
+  ::unlink(name.c_str());
+  ::rmdir(dir.c_str());
+  std::vector<char> piece(64 * 1024);
+  std::uint64_t total = 0;
+  bool copied = copy >= 0;
+  while (copied) {
+    const ssize_t n = ::read(fd_, piece.data(), piece.size());
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      if (n < 0) error = "cannot read the file";
+      break;
+    }
+    total += static_cast<std::uint64_t>(n);
+    if (total > kMaxPipeBytes) {
+      error = fmt::format(
+          "too large for a trace from a pipe (more than {} bytes): replay it from a file",
+          kMaxPipeBytes);
+      break;
+    }
+    for (ssize_t done = 0; copied && done < n;) {
+      const ssize_t w = ::write(copy, piece.data() + done, static_cast<std::size_t>(n - done));
+      if (w < 0 && errno == EINTR) continue;
+      copied = w > 0;
+      if (!copied) e = w < 0 ? errno : ENOSPC;
+      done += std::max<ssize_t>(w, 0);
+    }
+  }
+  ::close(fd_);
+  fd_ = copy;
+  if (!copied) {
+    error = fmt::format("cannot copy the pipe to a scratch file in {}: {}",
+                        std::filesystem::path(dir).parent_path().string(),
+                        std::error_code(e, std::generic_category()).message());
+  }
+  return error.empty();
+}
+
+bool TraceFile::check(TraceError& err) {
+  TextLines reader(fd_, 0, kMaxTextBytes, kMaxLineBytes, '#', true);
+  TraceParser p(header_);
+  TextLines::Line t;
+  TraceLine l;
+  int no = 0;
+  bool binary = false;              // a control byte other than tab, CR, LF: no text file
+  bool ended = true;                // the last line read ends with its newline
+  bool decided = false;             // the error found is the file's whatever follows
+  std::optional<TraceError> first;  // the first line that does not parse
+  while (reader.next(t)) {
+    if (no == std::numeric_limits<int>::max()) {
+      err.message = fmt::format("more than {} lines: not a trace", no);
+      return false;
+    }
+    ++no;
+    binary |= t.control;
+    ended = t.ended;
+    if (!first) {
+      try {
+        refuse_unparsable(t);
+        if (p.line(no, no == 1 ? scenario_lex::without_bom(t.text) : t.text, l) &&
+            body_line_ == 0) {
+          body_offset_ = t.offset;
+          body_line_ = no;
+        }
+      } catch (const Fail& f) {
+        first = TraceError{header_.file, no, f.message};
+      }
+    }
+    // A binary file's first error is its own once a later line begins: a cut end cannot hide it.
+    decided = first && binary && t.ended;
+    if (decided) break;
+  }
+  if (reader.failed()) {
+    err.message = "cannot read the file";
+    return false;
+  }
+  if (no == 0) {
+    err.message = "empty file, not a trace";
+    return false;
+  }
+  // As cut_or_earlier_error (textfile.hpp) has it for a file read whole: a text file cut off is
+  // the cut's error; a binary one is its first error before the cut line (the cut line blank),
+  // and a binary file without any newline is one line, the first.
+  const bool cut = !ended && !decided;
+  if (first && (!cut || (binary && (first->line < no || no == 1)))) {
+    err = *first;
+  } else if (cut && !(binary && no == 1)) {
+    err = TraceError{header_.file, no, "truncated: the last line has no end of line"};
+  } else if (std::string why = p.unfinished(); !why.empty()) {
+    err = TraceError{header_.file, no, std::move(why)};
+  } else {
+    return true;
+  }
+  return false;
+}
+
+std::unique_ptr<TraceCursor> TraceFile::cursor(std::optional<TraceKind> only) const {
+  return std::make_unique<FileCursor>(fd_, header_, body_offset_, body_line_, only);
+}
+
+bool load_trace(const std::string& path, Trace& out, TraceError& err) {
+  TraceFile file;
+  if (!file.open(path, err)) return false;
+  Trace t = file.header();
+  try {
+    for (const auto c = file.cursor(std::nullopt); c->peek() != nullptr;) {
+      t.lines.push_back(c->take());
+    }
+  } catch (const TraceError& e) {
+    err = e;
+    return false;
+  }
+  out = std::move(t);
+  return true;
 }
 
 }  // namespace dpc31

@@ -22,15 +22,54 @@ struct Mismatch {
   std::string message;
 };
 
+// A Trace in memory as a TraceSource: its lines copied as they are taken.
+class MemoryCursor final : public TraceCursor {
+ public:
+  MemoryCursor(const std::vector<TraceLine>& lines, std::optional<TraceKind> only)
+      : lines_(lines), only_(only) {}
+  const TraceLine* peek() override {
+    while (i_ < lines_.size() && only_ && lines_[i_].kind != *only_) ++i_;
+    return i_ < lines_.size() ? &lines_[i_] : nullptr;
+  }
+  TraceLine take() override {
+    const TraceLine* l = peek();
+    ++i_;
+    return *l;
+  }
+
+ private:
+  const std::vector<TraceLine>& lines_;
+  std::optional<TraceKind> only_;
+  std::size_t i_ = 0;
+};
+
+class MemorySource final : public TraceSource {
+ public:
+  explicit MemorySource(const Trace& t) : t_(t) {}
+  [[nodiscard]] const Trace& header() const override { return t_; }
+  [[nodiscard]] std::unique_ptr<TraceCursor> cursor(std::optional<TraceKind> only) const override {
+    return std::make_unique<MemoryCursor>(t_.lines, only);
+  }
+
+ private:
+  const Trace& t_;
+};
+
 class Replayer {
  public:
-  explicit Replayer(const Trace& t) : t_(t), chip_(t.chip) {
+  explicit Replayer(const TraceSource& s)
+      : t_(s.header()),
+        chip_(t_.chip),
+        lines_(s.cursor(std::nullopt)),
+        tx_expected_(s.cursor(TraceKind::tx)) {
+    irq_.expected = s.cursor(TraceKind::xint);
+    if (t_.check_pb3) pb3_.expected = s.cursor(TraceKind::pb3);
     // Each event the chip makes ends the step in progress, to be checked before time goes on.
     chip_.on_irq_change([this](std::uint64_t cycle, bool active) {
       irq_.seen.emplace_back(cycle, active);
       chip_.request_stop();
     });
-    if (t.check_pb3) {
+    if (t_.check_pb3) {
       chip_.on_pb3_change([this](std::uint64_t cycle, bool high) {
         pb3_.seen.emplace_back(cycle, high);
         chip_.request_stop();
@@ -42,20 +81,19 @@ class Replayer {
         chip_.request_stop();
       }
     });
-    t_bit_ = bit_cycles(chip_.clock_hz(), t.baud);
+    t_bit_ = bit_cycles(chip_.clock_hz(), t_.baud);
     access_ = chip_.bus_access_cycles();
     chip_.set_log_sink({});  // the replay reports its checks, not the model's remarks
-    end_line_ = t.lines.empty() ? 0 : t.lines.back().line;
   }
 
   ReplayOutcome run() {
     ReplayOutcome o;
     o.pb3_checked = t_.check_pb3;
     try {
-      for (std::size_t i = 0; i < t_.lines.size(); ++i) {
-        const TraceLine& l = t_.lines[i];
+      while (lines_->peek() != nullptr) {
+        const TraceLine l = lines_->take();
         check_due(o, l.cycle, &l);
-        act(l, i + 1 < t_.lines.size() ? &t_.lines[i + 1] : nullptr, o);
+        act(l, lines_->peek(), o);
       }
       o.ok = true;
     } catch (const Mismatch& m) {
@@ -88,15 +126,22 @@ class Replayer {
     }
   }
 
-  // A line the chip drives (X/INT, PB3): its expected edges (`xint` / `pb3` lines) not yet due,
-  // and the edges the chip made that no expectation has matched yet.
+  // A line the chip drives (X/INT, PB3): its expected edges (`xint` / `pb3` lines, read from a
+  // cursor of their own), and the edges the chip made that no expectation has matched yet.
   struct Pin {
     TraceKind kind;  // of its trace lines
     std::string_view keyword;
     std::string_view edge;  // "X/INT edge"
-    std::deque<const TraceLine*> pend;
+    std::unique_ptr<TraceCursor> expected;
     std::deque<std::pair<std::uint64_t, bool>> seen;
   };
+
+  // The first expectation of `c` not yet met, once it has been played (a line up to the one
+  // played last): the expectations not yet due are those, in order.
+  [[nodiscard]] const TraceLine* pending(TraceCursor* c) const {
+    const TraceLine* e = c != nullptr ? c->peek() : nullptr;
+    return e != nullptr && e->line <= played_ ? e : nullptr;
+  }
 
   static std::string edge_text(const Pin& p, std::uint64_t c, bool level) {
     return fmt::format("{} {} at cycle {}", p.keyword, level ? 1 : 0, c);
@@ -114,10 +159,10 @@ class Replayer {
   }
 
   // Compares the edges of `p` due by now with its expectations, in order (check_due).
-  static void check_edges(Pin& p, std::uint32_t& count, std::uint64_t now, std::uint64_t horizon,
-                          const TraceLine* next, int next_line) {
+  void check_edges(Pin& p, std::uint32_t& count, std::uint64_t now, std::uint64_t horizon,
+                   const TraceLine* next, int next_line) {
     for (;;) {
-      const TraceLine* e = p.pend.empty() ? nullptr : p.pend.front();
+      const TraceLine* e = pending(p.expected.get());
       if (e != nullptr && e->cycle <= now) {
         if (p.seen.empty()) {
           mismatch(e->line, fmt::format("expected {}, got no {} by cycle {}",
@@ -129,7 +174,7 @@ class Replayer {
                                         edge_text(p, c, lv)));
         }
         p.seen.pop_front();
-        p.pend.pop_front();
+        p.expected->take();
         ++count;
         continue;
       }
@@ -153,11 +198,11 @@ class Replayer {
   // end): an event the chip made before it is unexpected if no expectation matches it.
   void check_due(ReplayOutcome& o, std::uint64_t horizon, const TraceLine* next) {
     const std::uint64_t now = chip_.cycle();
-    const int next_line = next != nullptr ? next->line : end_line_;
+    const int next_line = next != nullptr ? next->line : played_;  // after the last: the last
     check_edges(irq_, o.irq_edges, now, horizon, next, next_line);
     check_edges(pb3_, o.pb3_edges, now, horizon, next, next_line);
     for (;;) {
-      const TraceLine* e = pend_tx_.empty() ? nullptr : pend_tx_.front();
+      const TraceLine* e = pending(tx_expected_.get());
       if (e != nullptr && e->start <= now) {
         if (tx_.empty()) {
           mismatch(e->line, fmt::format("expected {}, got no telegram from the chip by cycle {}",
@@ -169,7 +214,7 @@ class Replayer {
                                         tx_text(g.start, g.end, g.bytes)));
         }
         tx_.pop_front();
-        pend_tx_.pop_front();
+        tx_expected_->take();
         ++o.telegrams_out;
         continue;
       }
@@ -194,6 +239,7 @@ class Replayer {
   void act(const TraceLine& l, const TraceLine* after, ReplayOutcome& o) {
     constexpr std::uint64_t kForever = std::numeric_limits<std::uint64_t>::max();
     const std::uint64_t horizon = after != nullptr ? after->cycle : kForever;
+    played_ = l.line;
     switch (l.kind) {
       case TraceKind::rx: {
         step_to(l, l.cycle, o, horizon, after);
@@ -222,14 +268,9 @@ class Replayer {
         break;
       }
       case TraceKind::xint:
-        irq_.pend.push_back(&l);
-        return;  // checked when time has passed it
       case TraceKind::pb3:
-        pb3_.pend.push_back(&l);
-        return;
       case TraceKind::tx:
-        pend_tx_.push_back(&l);
-        return;
+        return;  // pending now, checked when time has passed it
       case TraceKind::state: {
         step_to(l, l.cycle, o, l.cycle + 1, &l);
         check_due(o, l.cycle + 1, &l);  // a state line follows the expectations of its cycle
@@ -248,7 +289,8 @@ class Replayer {
       case TraceKind::end:
         step_to(l, l.cycle, o, kForever, nullptr);
         check_due(o, kForever, nullptr);
-        if (!irq_.pend.empty() || !pb3_.pend.empty() || !pend_tx_.empty()) {
+        if (pending(irq_.expected.get()) != nullptr || pending(pb3_.expected.get()) != nullptr ||
+            pending(tx_expected_.get()) != nullptr) {
           // The parser keeps expectations before the end; a guard all the same.
           mismatch(l.line, "expected every expectation due by the end");
         }
@@ -258,34 +300,42 @@ class Replayer {
 
   const Trace& t_;
   Chip chip_;
+  std::unique_ptr<TraceCursor> lines_;        // every line, played in order
+  std::unique_ptr<TraceCursor> tx_expected_;  // the `tx` lines
+  int played_ = 0;                            // the line played last
   std::uint32_t t_bit_ = 0;
   std::uint32_t access_ = 4;
-  int end_line_ = 0;
   Pin irq_{TraceKind::xint, "xint", "X/INT edge", {}, {}};
   Pin pb3_{
       TraceKind::pb3, "pb3", "PB3 edge", {}, {}};  // looked at with the header's `check pb3` only
   std::deque<Telegram> tx_;                        // observed, not yet matched
-  std::deque<const TraceLine*> pend_tx_;           // expected, not yet due
 };
 
 }  // namespace
 
-ReplayOutcome replay_trace(const Trace& t) {
-  Replayer r(t);
+ReplayOutcome replay_trace(const TraceSource& s) {
+  Replayer r(s);
   return r.run();
 }
 
+ReplayOutcome replay_trace(const Trace& t) { return replay_trace(MemorySource(t)); }
+
 int replay_trace_file(const std::string& path, std::string& message, ReplayOutcome* outcome) {
-  Trace t;
+  TraceFile file;
   TraceError err;
-  if (!load_trace(path, t, err)) {
+  if (!file.open(path, err)) {
     message = err.text();
     return 2;
   }
-  const ReplayOutcome o = replay_trace(t);
-  if (outcome != nullptr) *outcome = o;
-  message = o.failure;
-  return o.ok ? 0 : 1;
+  try {
+    const ReplayOutcome o = replay_trace(file);
+    if (outcome != nullptr) *outcome = o;
+    message = o.failure;
+    return o.ok ? 0 : 1;
+  } catch (const TraceError& changed) {
+    message = changed.text();
+    return 2;
+  }
 }
 
 }  // namespace dpc31

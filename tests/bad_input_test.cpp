@@ -509,6 +509,31 @@ TEST_F(BadInput, ReplayTraceFile) {
   EXPECT_EQ(dpc31("replay --quiet " + good).rc, 0);  // the good file itself replays
 }
 
+// A trace from a pipe (`| ... /dev/stdin`) replays as the file does (docs/trace-format.md): the
+// replay reads a trace twice (its check, then the replay), so a pipe is copied to a scratch file
+// in TMPDIR first, removed at once; a copy that cannot be written (here the file size limit) is
+// named, exit 2, nothing run.
+TEST_F(BadInput, ReplayReadsAPipeLikeTheFile) {
+  const std::string text = slurp(copy(kTraces + "gc_clear_spc3.trace", "good.trace"));
+  file("cut.trace", text.substr(0, text.size() - 3));
+  fs::create_directory(path("tmp"));
+  const std::string tmpdir = "TMPDIR=" + path("tmp");
+  const Outcome f = dpc31("replay good.trace");
+  ASSERT_EQ(f.rc, 0) << f.err;
+  const Outcome p = dpc31("replay /dev/stdin", "cat good.trace | " + tmpdir);
+  EXPECT_EQ(p.rc, 0) << p.err;
+  EXPECT_EQ("/dev/stdin" + f.out.substr(f.out.find(':')), p.out);
+  expect_bad(dpc31("replay /dev/stdin", "cat cut.trace | " + tmpdir),
+             "/dev/stdin:" + std::to_string(std::count(text.begin(), text.end(), '\n')) +
+                 ": truncated: the last line has no end of line",
+             "cut");
+  expect_bad(
+      dpc31("replay /dev/stdin", "ulimit -f 1 && cat good.trace | " + tmpdir),
+      "/dev/stdin: cannot copy the pipe to a scratch file in " + path("tmp") + ": File too large",
+      "file size limit");
+  EXPECT_TRUE(fs::is_empty(path("tmp")));
+}
+
 // --- regs, demo ---------------------------------------------------------------------------------
 
 TEST_F(BadInput, RegsAndDemoOptions) {

@@ -665,6 +665,33 @@ TEST(CliRun, ALongDpv1TimeoutKeepsTheRecordFlat) {
   EXPECT_EQ(run("replay " + dir + "read100.trace").rc, 0);
 }
 
+// s35-replay: `dpc31 replay` read the whole trace (at most 64 MiB, `too large for a trace`) and
+// held every line of it: the 950 ms time-out's trace, past that bound (about 70 MB: the cheapest
+// run we know of that is, DPV1 polls at 12 Mbaud being the densest lines), was refused, and the
+// 100 ms one (7.1 MB) peaked at about 58 MB. The replay reads the file line by line (twice: a
+// check, then the replay; docs/trace-format.md): both replay, and the long one's peak RSS is
+// within 4 MiB of the short one's.
+TEST(CliRun, ALongDpv1TimeoutReplaysFlat) {
+  const std::string dir = testutil::scratch();
+  long rss[2] = {0, 0};
+  std::uintmax_t size[2] = {0, 0};
+  for (const unsigned ms : {100U, 950U}) {
+    const int k = ms == 100 ? 0 : 1;
+    const std::string scn = dir + "replay" + std::to_string(ms) + ".scn";
+    std::ofstream(scn) << silent_read(ms);
+    const std::string trace = dir + "replay" + std::to_string(ms) + ".trace";
+    ASSERT_EQ(testutil::spawn({DPC31_CLI, "run", "--quiet", "--record", trace, scn}), 0) << ms;
+    size[k] = std::filesystem::file_size(trace);
+    EXPECT_EQ(testutil::spawn({DPC31_CLI, "replay", "--quiet", trace}, &rss[k]), 0) << ms;
+    std::filesystem::remove(trace);
+  }
+  EXPECT_GT(size[1], std::uintmax_t{64} << 20);  // past the old bound
+#if !defined(__SANITIZE_ADDRESS__)
+  EXPECT_LE(rss[1], rss[0] + 4 * 1024) << "peak RSS " << rss[0] << " KiB for " << size[0]
+                                       << " bytes, " << rss[1] << " KiB for " << size[1];
+#endif
+}
+
 // A trace written as the run goes still comes after the walk where both go to one file: a target
 // written in place (a descriptor, a device, a FIFO) gets it from a scratch file when the run ends
 // (docs/bad-input.md, "Output files"), as it got the whole trace then before.

@@ -1,6 +1,8 @@
 // Golden traces (docs/trace-format.md): recording, the parser's refusals, the replay's first
 // mismatch, the RxD line formats, the `dpc31 replay` command, and the session behind the golden
 // trace traces/diag_ext_diag_dpc31.trace (extended diagnosis, which scenarios cannot express).
+#include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -8,11 +10,14 @@
 #include <array>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <iterator>
+#include <random>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "run_command.hpp"
@@ -25,6 +30,7 @@
 #include "dpc31/uart.hpp"
 #include "responder.hpp"
 #include "scenario.hpp"
+#include "textfile.hpp"
 #include "trace.hpp"
 
 namespace {
@@ -543,6 +549,202 @@ TEST(TraceCli, ExitCodes) {
   EXPECT_EQ(
       r.out.rfind("dpc31 run: /nonexistent-dir/x.trace: cannot create the temporary file ", 0), 0u)
       << r.out;
+}
+
+// --- a trace file read line by line (s35-replay) ---
+//
+// `dpc31 replay` read the file whole, at most 64 MiB; TraceFile reads it line by line, twice (a
+// check of it all, then the replay), and must refuse what the whole file's reading refused with
+// the same line: that reading is still cut_or_earlier_error (textfile.hpp) with parse_trace.
+
+// The whole file's error ("" for a trace).
+std::string whole_file_error(const std::string& name, const std::string& text) {
+  TraceError err{name, 0, {}};
+  err.line =
+      dpc31::cut_or_earlier_error(text, err.message, [&](const std::string& whole, std::string& m) {
+        Trace t;
+        TraceError e;
+        if (parse_trace(whole, name, t, e)) return 0;
+        m = e.message;
+        return e.line;
+      });
+  if (err.line != 0) return err.text();
+  Trace t;
+  return parse_trace(text, name, t, err) ? "" : err.text();
+}
+
+// TraceFile's error for a file holding `text` ("" for a trace, its lines in `out`).
+std::string file_error(const std::string& path, const std::string& text, Trace* out = nullptr) {
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << text;
+  Trace t;
+  TraceError err;
+  if (!dpc31::load_trace(path, t, err)) return err.text();
+  if (out != nullptr) *out = std::move(t);
+  return "";
+}
+
+// A line as one string of all its fields.
+std::string fields(const dpc31::TraceLine& l) {
+  std::string s =
+      fmt::format("{} {} {} {} {} {} {} {} {} {}:{} |", l.line, static_cast<int>(l.kind), l.cycle,
+                  l.start, l.end, l.addr, l.data, l.level, fmt::join(l.bytes, ","),
+                  static_cast<int>(l.fault.kind), l.fault.char_index);
+  for (const auto& [c, lv] : l.edges) s += fmt::format(" {}:{}", c, lv);
+  for (const dpc31::TraceStateKey& k : l.state) s += fmt::format(" {}={}", k.key, k.value);
+  return s;
+}
+
+std::vector<std::string> all_fields(const Trace& t) {
+  std::vector<std::string> v;
+  for (const dpc31::TraceLine& l : t.lines) v.push_back(fields(l));
+  return v;
+}
+
+// Every cut of a short trace, the parser's refusals, binary files cut or whole, a BOM, CR LF: the
+// file read line by line is refused as the file read whole, at the same line with the same words;
+// what both take has the same lines.
+TEST(TraceFileLines, RefusedAsTheWholeFileWas) {
+  const std::string good = kHead + "# a comment\nwr 4 0004 E0\n\nwr 8 0005 C0 # IMR\n" + kMacStart +
+                           "xint 25 1\nrx 100 10 05 02 49 50 16\nend 1000\n";
+  std::vector<std::string> texts = {good,
+                                    "\xEF\xBB\xBF" + good,
+                                    "\xEF\xBB\xBF",
+                                    "\n",
+                                    "#\n",
+                                    "dpc31-trace 1",
+                                    "dpc31-trace 1\n",
+                                    "dpc31-trace\v1",
+                                    "dpc31-trace 1\r\n" + kHead.substr(14)};
+  for (std::size_t n = 0; n < good.size(); ++n) texts.push_back(good.substr(0, n));
+  // Binary: a control byte or a NUL before, in and after the first wrong line, cut or not.
+  for (const std::string& bad : {std::string("\x01"), std::string(1, '\0'), std::string("\x7F")}) {
+    for (const std::size_t at : {std::size_t{3}, kHead.size() + 2, good.size() - 4}) {
+      std::string t = good;
+      t.insert(at, bad);
+      texts.push_back(t);
+      texts.push_back(t.substr(0, t.size() - 2));
+      texts.push_back(t + "x");
+    }
+  }
+  for (const char* t : {"\x7f"
+                        "ELF\x01\x02\x03\n\xff\xfe\n",
+                        "\x7f"
+                        "ELF\x01\x02\x03\n\xff\xfe\nx",
+                        "\x7f"
+                        "ELF\x02\x01\x01garbage",
+                        "garbage\nmore\x01\nend"}) {
+    texts.emplace_back(t);
+  }
+  // And edits of it, the same ones each run: bytes put in, taken out, the end cut.
+  std::mt19937 rng(35);
+  const std::string alphabet("\n\n\n\x01\0#  x0\r\xEF", 13);
+  for (int i = 0; i < 800; ++i) {
+    std::string t = good;
+    for (int k = static_cast<int>(rng() % 3); k >= 0; --k) {
+      const std::size_t at = rng() % (t.size() + 1);
+      switch (rng() % 3) {
+        case 0:
+          t.insert(at, 1, alphabet[rng() % alphabet.size()]);
+          break;
+        case 1:
+          t.erase(std::min(at, t.size() - 1), 1);
+          break;
+        default:
+          t.resize(at);
+          break;
+      }
+      if (t.empty()) break;
+    }
+    texts.push_back(t);
+  }
+  const std::string path = tmp("lines.trace");
+  int refused = 0;
+  for (const std::string& t : texts) {
+    Trace whole;
+    TraceError e;
+    const std::string want = whole_file_error(path, t);
+    Trace read;
+    EXPECT_EQ(file_error(path, t, &read), want) << fmt::format("{:?}", t);
+    if (want.empty() && parse_trace(t, path, whole, e)) {
+      EXPECT_EQ(all_fields(read), all_fields(whole)) << fmt::format("{:?}", t);
+    }
+    refused += want.empty() ? 0 : 1;
+  }
+  // Most are refused, some are traces still (a comment or a blank line edited).
+  EXPECT_GT(refused, 500);
+  EXPECT_LT(refused, static_cast<int>(texts.size()) - 50);
+}
+
+// The file is read in 64 KiB pieces: a line across two of them, at each place around the end of
+// the first, is the line the parser reads in the whole text, and the trace replays as it does.
+TEST(TraceFileLines, ALineAcrossTwoPiecesIsOneLine) {
+  const std::string& text = recorded();
+  const std::size_t second = text.find('\n') + 1;
+  const std::string path = tmp("pieces.trace");
+  for (std::size_t pad = 65536 - 120; pad < 65536 + 4; ++pad) {
+    // A comment line that puts the next lines' bytes across offset 65536.
+    const std::string t = text.substr(0, second) + "# " + std::string(pad - second - 3, 'x') +
+                          "\n" + text.substr(second);
+    Trace whole;
+    TraceError e;
+    ASSERT_TRUE(parse_trace(t, path, whole, e)) << e.text();
+    Trace read;
+    ASSERT_EQ(file_error(path, t, &read), "") << pad;
+    ASSERT_EQ(all_fields(read), all_fields(whole)) << pad;
+  }
+  std::string message;
+  ReplayOutcome o;
+  EXPECT_EQ(dpc31::replay_trace_file(path, message, &o), 0) << message;
+  Trace whole;
+  TraceError e;
+  ASSERT_TRUE(parse_trace(testutil::slurp(path), path, whole, e));
+  const ReplayOutcome m = dpc31::replay_trace(whole);
+  EXPECT_EQ(std::tie(o.final_cycle, o.telegrams_in, o.telegrams_out, o.writes, o.reads, o.irq_edges,
+                     o.states),
+            std::tie(m.final_cycle, m.telegrams_in, m.telegrams_out, m.writes, m.reads, m.irq_edges,
+                     m.states));
+}
+
+// The bounds that remain are a line's (docs/security.md): its text before the comment at most
+// 1 MiB (an `rxd` line with every edge of a telegram has less than 64 KiB), 64 MiB in all (a
+// scenario's comment line, at most 16 MiB, heads the trace the recorder writes of it). The file
+// has none: it was refused past 64 MiB.
+TEST(TraceFileLines, BoundsALineNotTheFile) {
+  const std::string head = kHead + "wr 4 0004 E0\n";
+  const std::string path = tmp("long.trace");
+  // 1 MiB of text: `rxd 4 4:1` and blanks.
+  const std::string rxd = "rxd 4 4:1";
+  EXPECT_EQ(file_error(path, head + rxd + std::string((1u << 20) - rxd.size(), ' ') + "\nend 8\n"),
+            "");
+  EXPECT_EQ(
+      file_error(path, head + rxd + std::string((1u << 20) + 1 - rxd.size(), ' ') + "\nend 8\n"),
+      path + ":7: more than 1048576 bytes before the comment: not a trace line");
+  // A comment of 2 MiB replays; a line of 64 MiB is taken, one byte more is not.
+  EXPECT_EQ(file_error(path, head + "# " + std::string(2u << 20, 'c') + "\nend 8\n"), "");
+  std::string message;
+  EXPECT_EQ(dpc31::replay_trace_file(path, message), 0) << message;
+  EXPECT_EQ(file_error(path, head + "#" + std::string((64u << 20) - 1, 'c') + "\nend 8\n"), "");
+  EXPECT_EQ(file_error(path, head + "#" + std::string(64u << 20, 'c') + "\nend 8\n"),
+            path + ":7: a line of more than 67108864 bytes: not a trace line");
+  std::filesystem::remove(path);
+}
+
+// The replay reads the file again after its check: a file changed in between (here cut before
+// its `end` line) is bad input when the replay finds it, named so, not a mismatch or a crash.
+TEST(TraceFileLines, AFileChangedAfterItsCheckIsNamed) {
+  const std::string path = tmp("changed.trace");
+  const std::string good = kHead + "wr 4 0004 E0\nwr 8 0005 C0\nend 100\n";
+  std::ofstream(path) << good;
+  dpc31::TraceFile file;
+  TraceError err;
+  ASSERT_TRUE(file.open(path, err)) << err.text();
+  std::ofstream(path, std::ios::trunc) << good.substr(0, good.rfind("end"));
+  try {
+    (void)dpc31::replay_trace(file);
+    ADD_FAILURE() << "no error";
+  } catch (const TraceError& e) {
+    EXPECT_EQ(e.text(), path + ":7: the file changed while it was replayed: no 'end' line");
+  }
 }
 
 // --- traces/diag_ext_diag_dpc31.trace ---

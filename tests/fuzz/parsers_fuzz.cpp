@@ -1,6 +1,8 @@
 // Fuzz targets for the text and binary inputs of the product: golden traces, scenario files, the
 // `dpc31 serve` command lines and snapshots. Each goes through the same function the product
 // uses on a file or a socket line; errors must come back as the documented error values.
+#include <sys/mman.h>
+#include <unistd.h>
 #include <zlib.h>
 
 #include <algorithm>
@@ -18,6 +20,7 @@
 #include "scenario.hpp"
 #include "scenario_segment.hpp"
 #include "serve_session.hpp"
+#include "textfile.hpp"
 #include "trace.hpp"
 
 namespace dpc31::fuzz {
@@ -39,18 +42,49 @@ constexpr std::uint64_t kMaxReplayCycles = std::uint64_t{1} << 32;
 
 }  // namespace
 
-// `dpc31 replay FILE`: parse (errors are TraceError, exit 2), then replay on a fresh chip.
+// `dpc31 replay FILE`: the file checked line by line (TraceFile: errors are TraceError, exit 2),
+// which must refuse what the file read whole refuses (its cut last line, cut_or_earlier_error,
+// then parse_trace) at the same line in the same words; then the replay on a fresh chip from the
+// file, which must end as the replay of the parsed text does.
 int trace_parser(const std::uint8_t* data, std::size_t size) {
+  const std::string_view input = text(data, size);
+  TraceError whole{"fuzz.trace", 0, {}};
+  whole.line =
+      cut_or_earlier_error(input, whole.message, [&](const std::string& all, std::string& m) {
+        Trace p;
+        TraceError e;
+        if (parse_trace(all, "fuzz.trace", p, e)) return 0;
+        m = e.message;
+        return e.line;
+      });
   Trace t;
+  const bool parsed = whole.line == 0 && parse_trace(input, "fuzz.trace", t, whole);
+  if (!parsed && whole.message.empty()) bug("parse_trace failed without a message");
+
+  const int fd = ::memfd_create("fuzz.trace", MFD_CLOEXEC);
+  if (fd < 0 || ::write(fd, data, size) != static_cast<ssize_t>(size)) bug("memfd_create/write");
+  TraceFile file;
   TraceError err;
-  if (!parse_trace(text(data, size), "fuzz.trace", t, err)) {
-    if (err.message.empty()) bug("parse_trace failed without a message");
-    return 0;
+  const bool opened = file.open("/proc/self/fd/" + std::to_string(fd), err);
+  ::close(fd);
+  if (opened != parsed || (!opened && (err.line != whole.line || err.message != whole.message))) {
+    bug("TraceFile: '" + err.message + "' at line " + std::to_string(err.line) + ", read whole: '" +
+        whole.message + "' at line " + std::to_string(whole.line));
   }
+  if (!parsed) return 0;
   std::uint64_t last = 0;
   for (const TraceLine& l : t.lines) last = std::max({last, l.cycle, l.start, l.end});
   if (last > kMaxReplayCycles) return 0;
-  (void)replay_trace(t);
+  const ReplayOutcome a = replay_trace(file);
+  const ReplayOutcome b = replay_trace(t);
+  // The failures name their files: the rest, "LINE: expected ...", is compared.
+  const auto said = [](const std::string& f) { return f.substr(std::min(f.find(':'), f.size())); };
+  if (a.ok != b.ok || said(a.failure) != said(b.failure) || a.final_cycle != b.final_cycle ||
+      a.telegrams_out != b.telegrams_out || a.irq_edges != b.irq_edges ||
+      a.pb3_edges != b.pb3_edges || a.states != b.states) {
+    bug("the replay from the file ends unlike the parsed trace's: '" + a.failure + "' against '" +
+        b.failure + "'");
+  }
   return 0;
 }
 

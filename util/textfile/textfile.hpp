@@ -1,10 +1,13 @@
-// Reading an input file whole, with a size bound and a one-line reason when it cannot be read.
+// Reading an input file whole, with a size bound and a one-line reason when it cannot be read;
+// or line by line, holding one line (TextLines).
 #pragma once
 
 #include <algorithm>
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace dpc31 {
 
@@ -13,10 +16,53 @@ namespace dpc31 {
 // (`<(...)`, `/dev/stdin` from `|`) is read.
 bool read_text_file(const std::string& path, std::size_t max_bytes, std::string_view what,
                     std::string& text, std::string& error);
+// The descriptor read_text_file reads (the caller closes it), or -1 with `error` set: a FIFO, a
+// device or a socket refused unopened, a directory named. `pipe`: an anonymous pipe, which can be
+// read only once and not at an offset.
+int open_text_file(const std::string& path, std::string_view what, std::string& error, bool& pipe);
 // The same from a descriptor the caller opened and closes (a FIFO opened a second time would wait
 // for another writer).
 bool read_text_fd(int fd, std::size_t max_bytes, std::string_view what, std::string& text,
                   std::string& error);
+
+// A text file line by line from a descriptor that can be read at an offset (a regular file), in
+// 64 KiB pieces (pread: readers of one descriptor do not move each other). A line's text up to
+// its first `comment` byte is held, at most `max_text` bytes of it; the comment is passed over
+// unheld, and the whole line may have at most `max_line` bytes. Memory: a piece and a line's
+// text, whatever the file holds.
+class TextLines {
+ public:
+  struct Line {
+    std::string_view text;     // up to the comment byte; valid until next()
+    std::uint64_t offset = 0;  // of the line's first byte in the file
+    bool ended = false;        // by '\n'; false: the file's last line, cut off
+    bool too_long = false;     // the line over max_line: `text` is empty
+    bool long_text = false;    // the text over max_text: `text` is empty
+    bool nul = false;          // a NUL byte in the line (with `inspect`)
+    bool control = false;      // a control byte other than tab, CR, LF (or DEL) in it (`inspect`)
+  };
+  // `inspect`: look at each byte for `nul` and `control` (a first reading; one that reads the
+  // file again after it need not).
+  TextLines(int fd, std::uint64_t offset, std::size_t max_text, std::uint64_t max_line,
+            char comment, bool inspect);
+  // The next line; false at the end of the file, or when a read failed (failed()).
+  bool next(Line& line);
+  [[nodiscard]] bool failed() const { return failed_; }
+
+ private:
+  bool fill();
+  int fd_;
+  std::uint64_t at_;  // the file offset of piece_'s end
+  std::size_t max_text_;
+  std::uint64_t max_line_;
+  char comment_;
+  bool inspect_;
+  std::vector<char> piece_;
+  std::size_t pos_ = 0;
+  std::size_t end_ = 0;
+  std::string text_;  // a line's text that began in an earlier piece
+  bool failed_ = false;
+};
 
 // A line-based file cut off mid-line may still parse ("end 10000" cut to "end 1000"); every
 // editor and writer ends the last line, so a file without that newline is taken as cut off.
