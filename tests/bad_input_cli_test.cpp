@@ -203,3 +203,24 @@ TEST_F(BadInput, TheDemosCommandsQuoteAPathWithASpace) {
             std::string::npos)
       << r.out;
 }
+
+// docs/soak.md: --cycles and --fault-period are whole numbers of cycles, in decimal or with an
+// exponent. A fraction was cut off (`1000000.7` ran a fault every 1000000 cycles); it is refused
+// in the option's words, and a whole value with an exponent or a point is taken exactly.
+TEST_F(BadInput, ACountOfCyclesWithAFractionIsRefused) {
+  expect_bad(dpc31("soak --cycles 2e6 --fault-period 1000000.7"),
+             "dpc31 soak: --fault-period: '1000000.7' is not a whole number", "fault period");
+  expect_bad(dpc31("soak --cycles 2000000.5"),
+             "dpc31 soak: --cycles: '2000000.5' is not a whole number", "cycles");
+  expect_bad(dpc31("soak --cycles 2e6 --fault-period 1e-1"),
+             "dpc31 soak: --fault-period: '1e-1' is not a whole number", "negative exponent");
+  EXPECT_TRUE(listing().empty());
+  const Outcome r = dpc31("soak --cycles 2.0e6 --fault-period 2.5e5 --json s.json");
+  EXPECT_EQ(r.rc, 0) << r.err;
+  EXPECT_EQ(r.out.rfind("dpc31 soak: profile dpc31, 1500000 baud, TWD 20 ms, a fault every "
+                        "250000 cycles, seed 1\n",
+                        0),
+            0u)
+      << r.out;
+  EXPECT_NE(slurp(path("s.json")).find("\"fault_period\": 250000,"), std::string::npos);
+}

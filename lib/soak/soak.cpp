@@ -384,12 +384,10 @@ Result run(const Options& o) {
 CLI::App* add_subcommand(CLI::App& app, Options& o) {
   auto* s = app.add_subcommand(
       "soak", "a long Data_Exchange run with injected faults; every error counter must match");
-  // Counts of cycles may be written 1e9 (parsed as a number, then taken whole).
+  // Counts of cycles may be written 1e9; a fraction of a cycle is refused, never cut off.
   const auto cycles = [s](const char* name, std::uint64_t& v, const char* what) {
-    s->add_option_function<double>(
-         name, [&v](double d) { v = static_cast<std::uint64_t>(d); },
-         fmt::format("{} (default {})", what, v))
-        ->check(numbers::real(1.0, 1e15));
+    s->add_option(name, v, fmt::format("{} (default {})", what, v))
+        ->transform(numbers::count(1, 1'000'000'000'000'000));
   };
   cycles("--cycles", o.cycles, "run until the chip's cycle counter reaches this");
   s->add_option("--profile", o.profile, "chip profile")
