@@ -224,3 +224,27 @@ TEST_F(BadInput, ACountOfCyclesWithAFractionIsRefused) {
       << r.out;
   EXPECT_NE(slurp(path("s.json")).find("\"fault_period\": 250000,"), std::string::npos);
 }
+
+// docs/bad-input.md, "Output files": `-` is the standard output of a file option and the standard
+// input of an input, as /dev/stdout and /dev/stdin are (it wrote a file named `-`, and read none);
+// `./-` names a file called `-`; an option that names a directory refuses `-`.
+TEST_F(BadInput, ADashIsTheStandardOutputOrInput) {
+  const std::string scn = kTraces + "startup_dpc31_1m5.scn";
+  ASSERT_EQ(dpc31("run " + scn + " --quiet --json r.json").rc, 0);
+  const Outcome to_stdout = dpc31("run " + scn + " --quiet --json -");
+  EXPECT_EQ(to_stdout.rc, 0) << to_stdout.err;
+  EXPECT_EQ(to_stdout.out, slurp(path("r.json")));
+  EXPECT_EQ(listing(), std::vector<std::string>{"r.json"});
+  const Outcome from_stdin = dpc31("run - --quiet --json ./-", "cat " + scn + " |");
+  EXPECT_EQ(from_stdin.rc, 0) << from_stdin.err;
+  std::string json = slurp(path("r.json"));
+  json.replace(json.find(scn), scn.size(), "/dev/stdin");  // the scenario's name as read
+  EXPECT_EQ(slurp(path("-")), json);
+  fs::remove(path("-"));
+  fs::remove(path("r.json"));
+  expect_bad(dpc31("cosim --seeds 1 --dump -"),
+             "dpc31 cosim: --dump: '-' is the standard input or output, which this option cannot "
+             "name: ./- names one called -",
+             "a directory option");
+  EXPECT_TRUE(listing().empty());
+}

@@ -411,7 +411,7 @@ CLI::App* add_subcommand(CLI::App& app, Options& o) {
       ->capture_default_str()
       ->transform(numbers::whole(0));
   s->add_option("--json", o.json, "write the result as JSON to this file")
-      ->check(outfile::named(outfile::Use::write));
+      ->transform(outfile::named(outfile::Use::write));
   s->add_option("--firmware", o.firmware,
                 "the slave's firmware instead of the built-in responder: a built-in name or a "
                 "plug-in ./libmine.so (only the chip's and the master's counters are checked)");
