@@ -451,6 +451,7 @@ int run_cli(const Options& o, std::FILE* out, std::FILE* err) {
   // The chip as run, defaults named: a report or JSON alone tells which chip it was.
   const std::string variant =
       o.profile != "vpc3plus" ? "" : (o.chip.variant.empty() ? "c" : o.chip.variant);
+  // On the spc3 and vpc3plus too: their one controller is the external processor's (X/INT).
   const std::string irq_controller =
       o.chip.irq_controller.empty() ? "external" : o.chip.irq_controller;
   fmt::print(
