@@ -1,11 +1,13 @@
 // Golden traces (docs/trace-format.md): recording, the parser's refusals, the replay's first
 // mismatch, the RxD line formats, the `dpc31 replay` command, and the session behind the golden
 // trace traces/diag_ext_diag_dpc31.trace (extended diagnosis, which scenarios cannot express).
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
 #include <algorithm>
 #include <array>
+#include <cinttypes>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -462,6 +464,46 @@ TEST(TraceCli, RecordThenReplay) {
   EXPECT_EQ(p.rc, 0) << p.out;
   EXPECT_NE(p.out.find(": ok up to cycle "), std::string::npos) << p.out;
   EXPECT_EQ(cli("replay --quiet " + trace).out, "");
+}
+
+// docs/timing.md, "The master's wait": the answer to a run's last request that starts after the
+// slot time (MinTSDR 120 > TSL 100 bit times) is heard out before one chip's run ends, and the
+// run ends the idle time after it, TSYN = 33 bit times of 32 cycles at 1.5 Mbaud (48 MHz). The
+// trace ended at the slot time's end + TSYN, inside that answer, and did not replay (`end at
+// cycle 2959580 before an expected event at cycle 2967964`).
+TEST(TraceCli, ARunWhoseLastAnswerIsLateReplays) {
+  const std::string scn = tmp("late.scn");
+  const std::string trace = tmp("late.trace");
+  std::ofstream(scn) << "profile dpc31\nbaud 1500000\nmaster address=2 slot=100 retries=0\n"
+                        "slave address=5 ident=0x0C31 cfg=13,1F in=16 out=4\n"
+                        "user inputs=A0,A1,A2,A3,A4,A5,A6,A7,A8,A9,AA,AB,AC,AD,AE,AF\n"
+                        "startup\nset_prm min_tsdr=120\nchk_cfg\nexchange 1 outputs=01,02,03,04\n";
+  const Cli r = cli("run --record " + trace + " " + scn);
+  ASSERT_EQ(r.rc, 0) << r.out;
+  const std::vector<std::string> lines = lines_of(testutil::slurp(trace));
+  ASSERT_GE(lines.size(), 3u);
+  // The chip's last telegram, its late answer: `tx START END bytes`, then `end CYCLE`.
+  std::string tx;
+  for (const std::string& l : lines) {
+    if (l.starts_with("tx ")) tx = l;
+  }
+  std::uint64_t start = 0;
+  std::uint64_t end = 0;
+  ASSERT_EQ(std::sscanf(tx.c_str(), "tx %" SCNu64 " %" SCNu64, &start, &end), 2) << tx;
+  EXPECT_NE(tx.find(" 68 13 13 68 02 05 08 A0 A1 A2 "), std::string::npos) << tx;
+  EXPECT_EQ(lines.back(), fmt::format("end {}", end + 33 * 32));
+  EXPECT_NE(r.out.find(fmt::format("[cycle {:>10}] master: a late answer on the line (after the "
+                                   "slot time): no answer\n[cycle {:>10}] end: dp_state "
+                                   "Data_Exchange",
+                                   end, end + 33 * 32)),
+            std::string::npos)
+      << r.out;
+  const Cli p = cli("replay " + trace);
+  EXPECT_EQ(p.rc, 0) << p.out;
+  EXPECT_EQ(p.out.rfind(trace + ": ok up to cycle " + std::to_string(end + 33 * 32) + ": ", 0), 0u)
+      << p.out;
+  std::remove(scn.c_str());
+  std::remove(trace.c_str());
 }
 
 // The scenario's file name is written into a comment: a newline in it put "end 5" on a body line
