@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <array>
-#include <cinttypes>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -487,21 +486,25 @@ TEST(TraceCli, ARunWhoseLastAnswerIsLateReplays) {
   for (const std::string& l : lines) {
     if (l.starts_with("tx ")) tx = l;
   }
+  std::istringstream fields(tx.substr(3));
   std::uint64_t start = 0;
   std::uint64_t end = 0;
-  ASSERT_EQ(std::sscanf(tx.c_str(), "tx %" SCNu64 " %" SCNu64, &start, &end), 2) << tx;
+  ASSERT_TRUE(fields >> start >> end) << tx;
   EXPECT_NE(tx.find(" 68 13 13 68 02 05 08 A0 A1 A2 "), std::string::npos) << tx;
-  EXPECT_EQ(lines.back(), fmt::format("end {}", end + 33 * 32));
-  EXPECT_NE(r.out.find(fmt::format("[cycle {:>10}] master: a late answer on the line (after the "
-                                   "slot time): no answer\n[cycle {:>10}] end: dp_state "
-                                   "Data_Exchange",
-                                   end, end + 33 * 32)),
+  const std::string last = std::to_string(end + 33 * 32);
+  EXPECT_EQ(lines.back(), "end " + last);
+  // The walk's cycles right-aligned in 10 columns.
+  const auto at = [](const std::string& cycle) {
+    return "[cycle " + std::string(10 - cycle.size(), ' ') + cycle + "] ";
+  };
+  EXPECT_NE(r.out.find(at(std::to_string(end)) +
+                       "master: a late answer on the line (after the slot time): no answer\n" +
+                       at(last) + "end: dp_state Data_Exchange"),
             std::string::npos)
       << r.out;
   const Cli p = cli("replay " + trace);
   EXPECT_EQ(p.rc, 0) << p.out;
-  EXPECT_EQ(p.out.rfind(trace + ": ok up to cycle " + std::to_string(end + 33 * 32) + ": ", 0), 0u)
-      << p.out;
+  EXPECT_EQ(p.out.rfind(trace + ": ok up to cycle " + last + ": ", 0), 0u) << p.out;
   std::remove(scn.c_str());
   std::remove(trace.c_str());
 }
