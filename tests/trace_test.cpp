@@ -1,7 +1,6 @@
 // Golden traces (docs/trace-format.md): recording, the parser's refusals, the replay's first
 // mismatch, the RxD line formats, the `dpc31 replay` command, and the session behind the golden
 // trace traces/diag_ext_diag_dpc31.trace (extended diagnosis, which scenarios cannot express).
-#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
