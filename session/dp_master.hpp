@@ -260,6 +260,11 @@ class DpMaster {
   Exchange transact_raw(const std::vector<std::uint8_t>& bytes, UartFault fault = {});
   // Lets time pass with a silent bus (cable pulled), running the firmware on interrupts.
   void idle(std::uint64_t cycles);
+  // After a wait without an answer, runs on to where a next request of ours could start, as
+  // sending one would: a late answer still on the line is heard out (counted, on_late told) and
+  // the idle time counted from its end. Nothing otherwise. The end of a session: what a
+  // request's asked station still sends belongs to it.
+  void hear_out_late_answer() { next_start(cfg_.idle_bits); }
   // Sends `ex.request` again, unchanged (same FCB), while it wants an answer and has none, at
   // most `retries` times.
   Exchange retry(Exchange ex, std::uint32_t retries);

@@ -195,6 +195,11 @@ class Runner {
       flush();
       forget_reported();
     }
+    // A late answer to the last request ends on the line before the run does: a trace that
+    // ended inside it could not replay (the chip's `tx` line past its `end`).
+    master_->hear_out_late_answer();
+    report_history();
+    fold_interrupts();
     if (hooks_.observer != nullptr) hooks_.observer->run_ends(chip_);
     if (hooks_.at_end) hooks_.at_end(chip_);
     out_.final_cycle = chip_.cycle();

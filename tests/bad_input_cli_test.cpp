@@ -203,3 +203,48 @@ TEST_F(BadInput, TheDemosCommandsQuoteAPathWithASpace) {
             std::string::npos)
       << r.out;
 }
+
+// docs/soak.md: --cycles and --fault-period are whole numbers of cycles, in decimal or with an
+// exponent. A fraction was cut off (`1000000.7` ran a fault every 1000000 cycles); it is refused
+// in the option's words, and a whole value with an exponent or a point is taken exactly.
+TEST_F(BadInput, ACountOfCyclesWithAFractionIsRefused) {
+  expect_bad(dpc31("soak --cycles 2e6 --fault-period 1000000.7"),
+             "dpc31 soak: --fault-period: '1000000.7' is not a whole number", "fault period");
+  expect_bad(dpc31("soak --cycles 2000000.5"),
+             "dpc31 soak: --cycles: '2000000.5' is not a whole number", "cycles");
+  expect_bad(dpc31("soak --cycles 2e6 --fault-period 1e-1"),
+             "dpc31 soak: --fault-period: '1e-1' is not a whole number", "negative exponent");
+  EXPECT_TRUE(listing().empty());
+  const Outcome r = dpc31("soak --cycles 2.0e6 --fault-period 2.5e5 --json s.json");
+  EXPECT_EQ(r.rc, 0) << r.err;
+  EXPECT_EQ(r.out.rfind("dpc31 soak: profile dpc31, 1500000 baud, TWD 20 ms, a fault every "
+                        "250000 cycles, seed 1\n",
+                        0),
+            0u)
+      << r.out;
+  EXPECT_NE(slurp(path("s.json")).find("\"fault_period\": 250000,"), std::string::npos);
+}
+
+// docs/bad-input.md, "Output files": `-` is the standard output of a file option and the standard
+// input of an input, as /dev/stdout and /dev/stdin are (it wrote a file named `-`, and read none);
+// `./-` names a file called `-`; an option that names a directory refuses `-`.
+TEST_F(BadInput, ADashIsTheStandardOutputOrInput) {
+  const std::string scn = kTraces + "startup_dpc31_1m5.scn";
+  ASSERT_EQ(dpc31("run " + scn + " --quiet --json r.json").rc, 0);
+  const Outcome to_stdout = dpc31("run " + scn + " --quiet --json -");
+  EXPECT_EQ(to_stdout.rc, 0) << to_stdout.err;
+  EXPECT_EQ(to_stdout.out, slurp(path("r.json")));
+  EXPECT_EQ(listing(), std::vector<std::string>{"r.json"});
+  const Outcome from_stdin = dpc31("run - --quiet --json ./-", "cat " + scn + " |");
+  EXPECT_EQ(from_stdin.rc, 0) << from_stdin.err;
+  std::string json = slurp(path("r.json"));
+  json.replace(json.find(scn), scn.size(), "/dev/stdin");  // the scenario's name as read
+  EXPECT_EQ(slurp(path("-")), json);
+  fs::remove(path("-"));
+  fs::remove(path("r.json"));
+  expect_bad(dpc31("cosim --seeds 1 --dump -"),
+             "dpc31 cosim: --dump: '-' is the standard input or output, which this option cannot "
+             "name: ./- names one called -",
+             "a directory option");
+  EXPECT_TRUE(listing().empty());
+}

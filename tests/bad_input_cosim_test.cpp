@@ -632,6 +632,30 @@ TEST_F(BadWaves, FstFiles) {
   EXPECT_EQ(dpc31("wavediff good.vcd good.fst").rc, 0);
 }
 
+// docs/wavediff.md, "Errors (exit 2)": one pipe named as A and B (`/dev/stdin` twice, or
+// `/dev/stdin` and `/dev/fd/0`) is one stream, read once: B got what A's reader left, and the line
+// was a header error in the middle of the file (`/dev/stdin:1: unexpected '…' in the header`). A
+// standard input from a file opens anew for each side and compares.
+TEST_F(BadWaves, OneStreamAsBothSidesIsRefused) {
+  spit(path("old.json"), "old");
+  const auto before = listing();
+  for (const char* b : {"/dev/stdin", "/dev/fd/0"}) {
+    const Outcome r =
+        dpc31(std::string("wavediff /dev/stdin ") + b + " --json old.json", "cat good.vcd |");
+    expect_bad(r,
+               std::string(b) +
+                   ":0: the same stream as A (/dev/stdin), which can be read only once: save it "
+                   "to a file to compare it with itself",
+               b);
+    EXPECT_EQ(r.out, "") << b;
+    EXPECT_EQ(slurp(path("old.json")), "old") << b;
+    EXPECT_EQ(listing(), before) << b;
+  }
+  const Outcome from_file = dpc31("wavediff /dev/stdin /dev/stdin < good.vcd");
+  EXPECT_EQ(from_file.rc, 0) << from_file.err;
+  EXPECT_NE(from_file.out.find("\nresult: same\n"), std::string::npos) << from_file.out;
+}
+
 TEST_F(BadWaves, MapFileOptionsAndOutputs) {
   fs::create_directory(path("dir"));
   file("bad.map", "# renames\ndpc31.pins.rxd =\n");

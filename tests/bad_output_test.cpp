@@ -325,7 +325,7 @@ TEST_F(BadInput, AFailedScratchWriteOfTheFstWriterIsAFailedWrite) {
 // Verilator's FST tracer of `cosim --dump` mmap()ed a file it could not extend (`ulimit -f 4`):
 // SIGBUS, exit 135, the summary lost and .dpc31-PID.tmp{,.hier} left (a-verif finding 2). The
 // model traces in a child process now, its fstapi's mmap is checked: exit 2 after the summary,
-// one line naming the file, nothing left in the directory.
+// one line naming the file, nothing left: not d either, which the run made and did not fill.
 TEST_F(BadInput, ACosimDumpPastAFileSizeLimitKeepsTheSummary) {
   const testutil::CommandResult r = testutil::run_command(
       "cd " + path("") + " && ulimit -f 4 && timeout 300 " + kCli +
@@ -336,8 +336,26 @@ TEST_F(BadInput, ACosimDumpPastAFileSizeLimitKeepsTheSummary) {
   EXPECT_NE(err.find(": cannot write: "), std::string::npos) << err;
   EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
   EXPECT_NE(r.out.find("\"divergent_seeds\": 0"), std::string::npos) << r.out;
-  for (const auto& e : fs::directory_iterator(path("d"))) {
-    EXPECT_FALSE(e.path().filename().string().starts_with(".dpc31-")) << e.path();
+  EXPECT_TRUE(listing().empty());
+}
+
+// docs/bad-input.md, "Output files": a signal in the middle of a cosim run removes the --dump
+// directory it made and its parents that it made (empty: the dump comes after the seeds), and
+// leaves the directory the user had.
+TEST_F(BadInput, ASignalDuringACosimRemovesTheDirectoriesItMade) {
+  fs::create_directory(path("have"));
+  for (const int sig : {SIGINT, SIGTERM}) {
+    const pid_t pid = spawn(
+        {kCli, "cosim", "--seeds", "100000000", "--dump", "have/new/dump", "--quiet"}, path(""));
+    ASSERT_GT(pid, 0);
+    EXPECT_TRUE(eventually([&] { return fs::is_directory(path("have/new/dump")); })) << sig;
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    ASSERT_EQ(::kill(pid, sig), 0);
+    int status = 0;
+    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+    EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << sig << " status " << status;
+    EXPECT_EQ(listing(), std::vector<std::string>{"have"}) << sig;
+    EXPECT_TRUE(fs::is_empty(path("have"))) << sig;
   }
 }
 

@@ -16,6 +16,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <random>
 #include <sstream>
 #include <string>
@@ -132,9 +133,10 @@ class Firmware {
       while (bus_.read(raddr(RegId::User_Cfg_Data_Okay)) == kConflict) {
       }
       ++cfg_ok;
+      if (now) cfg_at = now();
       // The SPC3 enters Data_Exchange with the first New_Din_Buffer_Cmd after Cfg OK (SPC3
       // p.31, docs/decisions.md): the inputs A1..A4 into U, then hand it over.
-      if (p_.id == dpc31::Profile::spc3) {
+      if (p_.id == dpc31::Profile::spc3 && !forgets_din) {
         static constexpr RegId kDin[] = {RegId::R_Din_Buf_Ptr1, RegId::R_Din_Buf_Ptr2,
                                          RegId::R_Din_Buf_Ptr3};
         const unsigned u = (bus_.read(raddr(RegId::Din_Buffer_SM)) >> 4) & 3u;
@@ -165,6 +167,10 @@ class Firmware {
   int interrupts = 0;
   int prm_ok = 0;
   int cfg_ok = 0;
+  // A driver that hands its inputs over only on DX_Out (docs/bring-up.md, section 7).
+  bool forgets_din = false;
+  std::function<std::uint64_t()> now;  // the chip's cycle, for cfg_at
+  std::uint64_t cfg_at = 0;            // the completion cycle of the User_Cfg_Data_Okay read
   std::vector<std::vector<std::uint8_t>> outputs;
 
  private:
@@ -193,11 +199,13 @@ struct StartupParam {
   const char* transport;
   dpc31::Profile profile;
   dpc31::BusMode bus;
+  bool forgets_din = false;  // the firmware never reads New_Din_Buffer_Cmd
 };
 
 std::string startup_name(const StartupParam& p) {
   return std::string(p.transport) + "_" + std::string(dpc31::profile_desc(p.profile).name) +
-         (p.bus == dpc31::BusMode::intel ? "_intel" : "_motorola");
+         (p.bus == dpc31::BusMode::intel ? "_intel" : "_motorola") +
+         (p.forgets_din ? "_forgets_din" : "");
 }
 
 void PrintTo(const StartupParam& p, std::ostream* os) { *os << startup_name(p); }
@@ -274,6 +282,9 @@ TEST_P(ServeStartup, DpStartupToDataExchange) {
   EXPECT_NE(chip.ok("status").find("started=1 dp=Wait_Prm wd=Baud_Search baud=search"),
             std::string::npos);
   Firmware fw(bus, dpc31::profile_desc(prm.profile), prm.bus);
+  fw.forgets_din = prm.forgets_din;
+  fw.now = [&chip] { return chip.cycle(); };
+  if (prm.forgets_din) chip.ok("log warn");
 
   // Runs the chip to `target`, entering the ISR whenever X/INT is active.
   const auto run_to = [&](std::uint64_t target) {
@@ -340,6 +351,42 @@ TEST_P(ServeStartup, DpStartupToDataExchange) {
   EXPECT_EQ(fw.prm_ok, 1);
   EXPECT_EQ(transact(srd(0x7D, 62, {0x13, 0x23})), "E5");  // Chk_Cfg
   EXPECT_EQ(fw.cfg_ok, 1);
+  if (prm.forgets_din) {
+    // docs/bring-up.md, section 7: the SPC3 stays in Wait_Cfg, and the first Slave_Diag of the
+    // locking master acted on (its last stop sample, END - T + T/2 = END - 2) 10 ms (480 000
+    // cycles) or more after the User_Cfg_Data_Okay read is told once, to a client that asked
+    // for warnings, as `! log CYCLE warn TEXT`.
+    const auto logs = [&client] {
+      std::vector<std::string> v;
+      for (const std::string& l : client.async) {
+        if (l.starts_with("! log ")) v.push_back(l);
+      }
+      return v;
+    };
+    ASSERT_GT(fw.cfg_at, 0u);
+    chip.ok(fmt::format("step {}", fw.cfg_at + 200'000 - chip.cycle()));
+    EXPECT_EQ(transact(srd(0x5D, 60, {})).substr(0, 24), "680B0B688285083E3C020C00");
+    EXPECT_TRUE(logs().empty());
+    chip.ok(fmt::format("step {}", fw.cfg_at + 480'000 - chip.cycle()));
+    const std::size_t mark = chip.telegrams.size();
+    transact(srd(0x7D, 60, {}));
+    ASSERT_GT(chip.telegrams.size(), mark);
+    EXPECT_EQ(logs(), (std::vector<std::string>{fmt::format(
+                          "! log {} warn master 2 is refused (Slave_Diag with Station_Not_Ready): "
+                          "the SPC3 is still in Wait_Cfg at least 10 ms after User_Cfg_Data_Okay, "
+                          "because the firmware has not read New_Din_Buffer_Cmd since; with "
+                          "R_Len_Din_Buf = 4 it enters Data_Exchange only at that read (SPC3 "
+                          "p.31, modelled). Hand the inputs over once after User_Cfg_Data_Okay: "
+                          "write them into the U buffer, then read New_Din_Buffer_Cmd "
+                          "(docs/bring-up.md)",
+                          chip.telegrams[mark].end - 2)}));
+    transact(srd(0x5D, 60, {}));  // once per chip
+    EXPECT_EQ(logs().size(), 1u);
+    EXPECT_NE(chip.ok("status").find("dp=Wait_Cfg"), std::string::npos);
+    EXPECT_EQ(chip.cmd("shutdown"), "OK shutdown");
+    EXPECT_EQ(server.wait_exit(5000), 0);
+    return;
+  }
   EXPECT_EQ(transact(srd(0x5D, 60, {})),
             "680B0B688285083E3C000C00020C31D416");  // Slave_Diag: ready, locked by master 2
   EXPECT_EQ(transact(srd(0x7D, std::nullopt, {1, 2, 3, 4})),
@@ -365,6 +412,7 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(StartupParam{"tcp", dpc31::Profile::dpc31, dpc31::BusMode::intel},
                       StartupParam{"unix", dpc31::Profile::dpc31, dpc31::BusMode::intel},
                       StartupParam{"unix", dpc31::Profile::spc3, dpc31::BusMode::motorola},
+                      StartupParam{"tcp", dpc31::Profile::spc3, dpc31::BusMode::intel, true},
                       StartupParam{"tcp", dpc31::Profile::vpc3plus, dpc31::BusMode::intel}),
     [](const auto& i) { return startup_name(i.param); });
 

@@ -470,6 +470,50 @@ TEST(TraceCli, RecordThenReplay) {
   EXPECT_EQ(cli("replay --quiet " + trace).out, "");
 }
 
+// docs/timing.md, "The master's wait": the answer to a run's last request that starts after the
+// slot time (MinTSDR 120 > TSL 100 bit times) is heard out before one chip's run ends, and the
+// run ends the idle time after it, TSYN = 33 bit times of 32 cycles at 1.5 Mbaud (48 MHz). The
+// trace ended at the slot time's end + TSYN, inside that answer, and did not replay (`end at
+// cycle 2959580 before an expected event at cycle 2967964`).
+TEST(TraceCli, ARunWhoseLastAnswerIsLateReplays) {
+  const std::string scn = tmp("late.scn");
+  const std::string trace = tmp("late.trace");
+  std::ofstream(scn) << "profile dpc31\nbaud 1500000\nmaster address=2 slot=100 retries=0\n"
+                        "slave address=5 ident=0x0C31 cfg=13,1F in=16 out=4\n"
+                        "user inputs=A0,A1,A2,A3,A4,A5,A6,A7,A8,A9,AA,AB,AC,AD,AE,AF\n"
+                        "startup\nset_prm min_tsdr=120\nchk_cfg\nexchange 1 outputs=01,02,03,04\n";
+  const Cli r = cli("run --record " + trace + " " + scn);
+  ASSERT_EQ(r.rc, 0) << r.out;
+  const std::vector<std::string> lines = lines_of(testutil::slurp(trace));
+  ASSERT_GE(lines.size(), 3u);
+  // The chip's last telegram, its late answer: `tx START END bytes`, then `end CYCLE`.
+  std::string tx;
+  for (const std::string& l : lines) {
+    if (l.starts_with("tx ")) tx = l;
+  }
+  std::istringstream fields(tx.substr(3));
+  std::uint64_t start = 0;
+  std::uint64_t end = 0;
+  ASSERT_TRUE(fields >> start >> end) << tx;
+  EXPECT_NE(tx.find(" 68 13 13 68 02 05 08 A0 A1 A2 "), std::string::npos) << tx;
+  const std::string last = std::to_string(end + 33 * 32);
+  EXPECT_EQ(lines.back(), "end " + last);
+  // The walk's cycles right-aligned in 10 columns.
+  const auto at = [](const std::string& cycle) {
+    return "[cycle " + std::string(10 - cycle.size(), ' ') + cycle + "] ";
+  };
+  EXPECT_NE(r.out.find(at(std::to_string(end)) +
+                       "master: a late answer on the line (after the slot time): no answer\n" +
+                       at(last) + "end: dp_state Data_Exchange"),
+            std::string::npos)
+      << r.out;
+  const Cli p = cli("replay " + trace);
+  EXPECT_EQ(p.rc, 0) << p.out;
+  EXPECT_EQ(p.out.rfind(trace + ": ok up to cycle " + last + ": ", 0), 0u) << p.out;
+  std::remove(scn.c_str());
+  std::remove(trace.c_str());
+}
+
 // The scenario's file name is written into a comment: a newline in it put "end 5" on a body line
 // of its own and the replay refused the trace (the audit's rnl.trace). It is one comment line,
 // the newline as \x0A, and the trace replays.

@@ -384,12 +384,10 @@ Result run(const Options& o) {
 CLI::App* add_subcommand(CLI::App& app, Options& o) {
   auto* s = app.add_subcommand(
       "soak", "a long Data_Exchange run with injected faults; every error counter must match");
-  // Counts of cycles may be written 1e9 (parsed as a number, then taken whole).
+  // Counts of cycles may be written 1e9; a fraction of a cycle is refused, never cut off.
   const auto cycles = [s](const char* name, std::uint64_t& v, const char* what) {
-    s->add_option_function<double>(
-         name, [&v](double d) { v = static_cast<std::uint64_t>(d); },
-         fmt::format("{} (default {})", what, v))
-        ->check(numbers::real(1.0, 1e15));
+    s->add_option(name, v, fmt::format("{} (default {})", what, v))
+        ->transform(numbers::count(1, 1'000'000'000'000'000));
   };
   cycles("--cycles", o.cycles, "run until the chip's cycle counter reaches this");
   s->add_option("--profile", o.profile, "chip profile")
@@ -413,7 +411,7 @@ CLI::App* add_subcommand(CLI::App& app, Options& o) {
       ->capture_default_str()
       ->transform(numbers::whole(0));
   s->add_option("--json", o.json, "write the result as JSON to this file")
-      ->check(outfile::named(outfile::Use::write));
+      ->transform(outfile::named(outfile::Use::write));
   s->add_option("--firmware", o.firmware,
                 "the slave's firmware instead of the built-in responder: a built-in name or a "
                 "plug-in ./libmine.so (only the chip's and the master's counters are checked)");
@@ -453,6 +451,7 @@ int run_cli(const Options& o, std::FILE* out, std::FILE* err) {
   // The chip as run, defaults named: a report or JSON alone tells which chip it was.
   const std::string variant =
       o.profile != "vpc3plus" ? "" : (o.chip.variant.empty() ? "c" : o.chip.variant);
+  // On the spc3 and vpc3plus too: their one controller is the external processor's (X/INT).
   const std::string irq_controller =
       o.chip.irq_controller.empty() ? "external" : o.chip.irq_controller;
   fmt::print(

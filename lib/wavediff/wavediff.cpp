@@ -5,6 +5,7 @@
 #include "wavediff.hpp"
 
 #include <fmt/format.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -96,6 +97,16 @@ std::uint32_t Engine::find_clock(const Side& s, const std::string& name) const {
 }
 
 void Engine::setup(Report& rep) {
+  // A pipe, FIFO or device named twice (`wavediff /dev/stdin /dev/stdin`) is one stream: B's
+  // reader would get what A's left of it, an empty file or a header cut in the middle.
+  if (struct stat a{}, b{}; ::stat(o_.file_a.c_str(), &a) == 0 &&
+                            ::stat(o_.file_b.c_str(), &b) == 0 && a.st_dev == b.st_dev &&
+                            a.st_ino == b.st_ino && !S_ISREG(a.st_mode) && !S_ISDIR(a.st_mode)) {
+    fail(o_.file_b, 0,
+         fmt::format("the same stream as A ({}), which can be read only once: save it to a file "
+                     "to compare it with itself",
+                     o_.file_a));
+  }
   A.r = open_wave(o_.file_a);
   B.r = open_wave(o_.file_b);
   A.label = "A";

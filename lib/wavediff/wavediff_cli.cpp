@@ -15,16 +15,16 @@ CLI::App* add_subcommand(CLI::App& app, CliArgs& a) {
       "wavediff", "compare two waveforms (VCD or FST) by signal name; exit 0 same, 1 different");
   c->add_option("A", o.file_a, "first waveform (VCD or FST)")
       ->required()
-      ->check(outfile::named(outfile::Use::read));
+      ->transform(outfile::named(outfile::Use::read));
   c->add_option("B", o.file_b, "second waveform (VCD or FST)")
       ->required()
-      ->check(outfile::named(outfile::Use::read));
+      ->transform(outfile::named(outfile::Use::read));
   c->add_option("--strip-a", o.strip_a, "remove this top scope from A's names (e.g. TOP.tb)");
   c->add_option("--strip-b", o.strip_b, "remove this top scope from B's names");
   c->add_option("--strip", a.strip, "auto: strip the common top scopes that match most names")
       ->check(CLI::IsMember({"auto"}));
   c->add_option("--map", o.map_file, "renames: lines 'nameA = nameB', '#' comments")
-      ->check(outfile::named(outfile::Use::read));
+      ->transform(outfile::named(outfile::Use::read));
   auto* clock = c->add_option("--clock", o.clock_a,
                               "clock-sampled mode: sample at the edges of this A signal");
   c->add_option("--clock-b", o.clock_b, "the clock in B (default: the B signal matched to --clock)")
@@ -53,17 +53,17 @@ CLI::App* add_subcommand(CLI::App& app, CliArgs& a) {
   c->add_flag("--ignore-missing", o.ignore_missing,
               "signals on one side only are listed but are not a difference");
   c->add_option("--json", o.json_file, "write the report as JSON to this file")
-      ->check(outfile::named(outfile::Use::write));
+      ->transform(outfile::named(outfile::Use::write));
   c->add_option("--diff-vcd", o.diff_vcd,
                 "write a VCD with scopes a/, b/ and diff/ (1 = values differ) for GTKWave")
-      ->check(outfile::named(outfile::Use::write));
+      ->transform(outfile::named(outfile::Use::write));
   c->add_option("--merge", o.merge,
                 "write A's and B's signals (scopes a, b) with a diff signal for each, as one "
                 "VCD or FST (by the extension) and a GTKWave save file beside it (.gtkw)")
-      ->check(outfile::named(outfile::Use::write));
+      ->transform(outfile::named(outfile::Use::write));
   auto* wavedrom = c->add_option("--wavedrom", o.wavedrom,
                                  "write WaveJSON of the window around the first divergence")
-                       ->check(outfile::named(outfile::Use::write));
+                       ->transform(outfile::named(outfile::Use::write));
   c->add_option("--wavedrom-window", o.wavedrom_window,
                 "events or cycles shown before and after the first divergence (default 8)")
       ->transform(numbers::whole(1, 1000))

@@ -410,7 +410,7 @@ CLI::App* add_bench_subcommand(CLI::App& app, BenchArgs& a) {
   auto* quick = cmd->add_flag("--quick", a.quick,
                               "one short run each and 8 MB wavediff files (a smoke test)");
   cmd->add_option("--json", a.json, "also write the table as JSON to this file")
-      ->check(outfile::named(outfile::Use::write));
+      ->transform(outfile::named(outfile::Use::write));
   cmd->add_option("--min-time", a.min_time, "seconds per benchmark (default 0.5)")
       ->check(numbers::real(0.001, 3600.0))
       ->excludes(quick);
@@ -424,14 +424,14 @@ CLI::App* add_bench_subcommand(CLI::App& app, BenchArgs& a) {
       ->excludes(quick);
   cmd->add_option("--wavediff-dir", a.wavediff_dir,
                   "where item f's files go (default: TMPDIR; needs twice --wavediff-mb)")
-      ->check(outfile::named(outfile::Use::write))
+      ->transform(outfile::named(outfile::Use::place))
       ->check(CLI::ExistingDirectory);
   cmd->add_option("--build", a.build_source,
                   "row h: time a fresh ./setup.sh build of this source tree (about 5 minutes on "
                   "two cores; every package must be installed). This runs SOURCE_DIR/setup.sh, "
                   "a shell script, with your rights: as root it apt-get installs any package it "
                   "lists that is missing. Name only a tree you trust")
-      ->check(outfile::named(outfile::Use::read))
+      ->transform(outfile::named(outfile::Use::read))
       ->check(CLI::ExistingDirectory &
               CLI::Validator(
                   [](const std::string& d) {
@@ -453,7 +453,7 @@ CLI::App* add_bench_subcommand(CLI::App& app, BenchArgs& a) {
           "ITEM"));
   cmd->add_option("--bench", a.bench_binary,
                   "the dpc31_bench program (default: next to this dpc31)")
-      ->check(outfile::named(outfile::Use::read))
+      ->transform(outfile::named(outfile::Use::read))
       ->check(CLI::ExistingFile);
   // An item's options beside an --items that leaves it out act on nothing: refused, not dropped.
   cmd->callback([cmd, &a] {

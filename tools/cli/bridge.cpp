@@ -629,7 +629,7 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
   auto* pty = b->add_option("--pty", o.pty,
                             "symlink to create to the pty's slave side (or --tcp); an existing "
                             "PATH must be a symlink into /dev/pts/ (a bridge's)")
-                  ->check(outfile::named(outfile::Use::write));
+                  ->transform(outfile::named(outfile::Use::place));
   b->add_option("--tcp", o.tcp,
                 "[HOST:]PORT: a raw TCP port instead of the pty (127.0.0.1 unless HOST; 0: any "
                 "free port, named in the log)")
@@ -638,7 +638,7 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
   b->add_flag("--allow-remote", o.allow_remote,
               "let --tcp listen on an address other hosts reach (no authentication!)");
   b->add_option("--pcap", o.pcap, "write every telegram on the line here as pcapng at the end")
-      ->check(outfile::named(outfile::Use::write));
+      ->transform(outfile::named(outfile::Use::write));
   b->add_option("--baud", o.baud, "baud rate of the bus (a PROFIBUS rate)")->capture_default_str();
   b->add_option("--profile", o.profile, "chip profile: spc3, vpc3plus, dpc31")
       ->capture_default_str();
@@ -657,7 +657,7 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
                 "with --cpu 80c32: the chip's 4 KB window in XDATA (0x8000)")
       ->check(outfile::given());
   b->add_option("--trace-cpu", o.trace_cpu, "write every CPU instruction with its cycle here")
-      ->check(outfile::named(outfile::Use::write));
+      ->transform(outfile::named(outfile::Use::write));
   b->add_option("--trace-cpu-from", o.trace_cpu_from,
                 "with --trace-cpu: only the steps from this chip cycle on")
       ->transform(numbers::whole(0));
@@ -683,7 +683,7 @@ CLI::App* add_bridge_subcommand(CLI::App& app, BridgeOptions& o) {
   b->add_option("--slot", o.slot, "slot time in bit times: how long a request waits for an answer")
       ->capture_default_str();
   b->add_option("--log", o.log, "write the log to this file instead of stdout")
-      ->check(outfile::named(outfile::Use::write));
+      ->transform(outfile::named(outfile::Use::write));
   b->add_option("--log-level", o.log_level,
                 "events: state changes and faults; telegrams: also every telegram and port write")
       ->capture_default_str();

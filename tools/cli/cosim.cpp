@@ -107,17 +107,19 @@ constexpr int kSessionShrinkRuns = 50;
 
 // What a divergence of `s` leaves: its stimulus shrunk (in at most `max_runs` lockstep runs) into
 // --out as `name` (the header names the run's model and `origin`, a seed or a session) and the
-// waveform window in --vcd; `entry` gets their paths, a file not written goes to `output_failed`.
+// waveform window in --vcd (the directories made go to `made`); `entry` gets their paths, a file
+// not written goes to `output_failed`.
 void write_divergence(const CosimOptions& o, const cosim::Stimulus& s, const cosim::RunResult& r,
                       const cosim::DutOptions& dut, const std::string& name,
                       const std::string& origin, int max_runs, nlohmann::json& entry,
+                      outfile::MadeDirs& made,
                       const std::function<void(const std::string&)>& output_failed) {
   using namespace dpc31::cosim;
   entry["signals"] = r.signals;
   const Stimulus small = shrink(s, dut, o.mutant, max_runs);
   const std::string dir = o.out_dir.empty() ? "." : o.out_dir;
   std::error_code ec;
-  std::filesystem::create_directories(dir, ec);  // checked up front; a failure shows below
+  made.make(dir, ec);  // checked up front; a failure shows below
   // A replay shrinks its trace again under a name of its own: a seed run's trace, which the
   // replayed one may be or come from, is never written over, nor the replayed trace itself.
   const std::string trace = (std::filesystem::path(dir) / name).string();
@@ -166,6 +168,7 @@ void write_divergence(const CosimOptions& o, const cosim::Stimulus& s, const cos
     const auto in_vcd = [&](const char* name) {
       return (std::filesystem::path(o.vcd_dir) / name).string();
     };
+    made.make(o.vcd_dir, ec);  // as --out's
     if (write_window(around, dut, o.mutant, from, around.size(), o.vcd_dir, error)) {
       entry["vcd"] = {in_vcd("emu.vcd"), in_vcd("rtl.vcd")};
     } else {
@@ -199,7 +202,7 @@ void write_dump(const CosimOptions& o, const cosim::Stimulus& s, const cosim::Du
 }
 
 // The waveform windows' files, checked before the run (false: the line printed, exit 2).
-bool windows_ready(const CosimOptions& o) {
+bool windows_ready(const CosimOptions& o, outfile::MadeDirs& made) {
   // One that cannot be written was found only after the run. --dump always writes its directory,
   // made now; --vcd's is made at a divergence, its files are checked now if it is there: first,
   // so that a refusal leaves no --dump directory behind.
@@ -207,8 +210,7 @@ bool windows_ready(const CosimOptions& o) {
        {std::tuple{"--vcd", o.vcd_dir, false}, std::tuple{"--dump", o.dump_dir, true}}) {
     if (dir.empty()) continue;
     std::error_code ec;
-    if (make) std::filesystem::create_directories(dir, ec);
-    if (ec) {
+    if (make && !made.make(dir, ec)) {
       fmt::print(stderr, "dpc31 cosim: {} {}: cannot create the directory: {}\n", opt, dir,
                  ec.message());
       return false;
@@ -407,7 +409,9 @@ int run_session_mode(const CosimOptions& given, outfile::OutFile& junit_out,
   o.profile_name = profile_desc(s.options.profile).name;
   o.bus = s.options.bus;
   std::string rtl_id;
-  if (!load_rtl(o, s.options, rtl_id) || !rtl_dut_ready(o, s.options) || !windows_ready(o))
+  // What it makes for its outputs and leaves empty is removed again (a signal, a failed write).
+  outfile::MadeDirs made;
+  if (!load_rtl(o, s.options, rtl_id) || !rtl_dut_ready(o, s.options) || !windows_ready(o, made))
     return 2;
   // A chip that did not do what its scenario says: its lines, as `dpc31 run` prints them, and
   // exit 1 whatever the lockstep finds.
@@ -430,7 +434,7 @@ int run_session_mode(const CosimOptions& given, outfile::OutFile& junit_out,
     write_divergence(o, stimulus, r, s.options,
                      fmt::format("cosim-{}-session-{}.trace", o.profile_name, stem),
                      "session " + std::filesystem::absolute(o.session).string(), kSessionShrinkRuns,
-                     entry, output_failed);
+                     entry, made, output_failed);
   } else if (r.divergence >= 0 && !o.quiet) {
     // Only the live chip saw the other end: a trace replays the blocks, not the chip.
     fmt::print(stderr, "  no trace or waveform window: a replay has no live chip to differ from\n");
@@ -541,7 +545,9 @@ int run_cosim(const CosimOptions& given) {
   DutOptions dut{o.profile, o.bus, o.variant};
   std::string rtl_id;
   if (!load_rtl(o, dut, rtl_id)) return 2;
-  if (!rtl_dut_ready(o, dut) || !windows_ready(o)) return 2;
+  // What it makes for its outputs and leaves empty is removed again (a signal, a failed write).
+  outfile::MadeDirs made;
+  if (!rtl_dut_ready(o, dut) || !windows_ready(o, made)) return 2;
   // A model that does not trace (the built-in mutants', a --rtl-model whose trace_to returns 0)
   // writes no rtl_internal.fst: a note. Any other output that fails in the run is exit 2, after
   // the summary and the JUnit, which record the seeds that ran; the first failure is the one line.
@@ -574,7 +580,7 @@ int run_cosim(const CosimOptions& given) {
       write_divergence(o, s, r, dut,
                        fmt::format("cosim-{}-seed{}{}.trace", o.profile_name, seed,
                                    o.replay.empty() ? "" : "-replay"),
-                       fmt::format("seed {}", seed), kSeedShrinkRuns, entry, output_failed);
+                       fmt::format("seed {}", seed), kSeedShrinkRuns, entry, made, output_failed);
     }
     results.push_back(entry);
     if (tty) {

@@ -217,31 +217,6 @@ expect dp_state Data_Exchange
   return s;
 }
 
-// The directories the demo made for its files (mkdtemp's, or --out-dir and the parents it
-// created), deepest first: removed again unless its files are written, also by a signal or the
-// hang guard (cleanup.hpp), so that a demo that fails leaves nothing behind. Only empty ones go.
-class MadeDirs {
- public:
-  MadeDirs() = default;
-  MadeDirs(const MadeDirs&) = delete;
-  MadeDirs& operator=(const MadeDirs&) = delete;
-  ~MadeDirs() {
-    for (const std::string& d : dirs_) ::rmdir(d.c_str());
-  }
-  void add(const std::string& dir) {
-    dirs_.push_back(dir);
-    entries_.push_back(cleanup::Entry::dir(dir));
-  }
-  void keep() {
-    dirs_.clear();
-    entries_.clear();
-  }
-
- private:
-  std::vector<std::string> dirs_;
-  std::vector<cleanup::Entry> entries_;
-};
-
 // The files the demo writes, in `out_dir`. No scenario file: its failures name none.
 RunOptions demo_outputs(const std::string& out_dir, const std::optional<std::string>& timescale) {
   RunOptions ro;
@@ -370,7 +345,9 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option,
   // wherever that led.
   std::string out_dir = out_dir_option;
   std::error_code ec;
-  MadeDirs made;
+  // Removed again unless its files are written, also by a signal or the hang guard, so that a
+  // demo that fails leaves nothing behind.
+  outfile::MadeDirs made;
   if (out_dir.empty()) {
     std::string error;
     out_dir = outfile::make_temp_dir("dpc31-demo-", error);
@@ -379,17 +356,10 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option,
       return 2;
     }
     made.add(out_dir);
-  } else {
-    for (std::filesystem::path d = out_dir; !d.empty() && !std::filesystem::exists(d, ec);
-         d = d.parent_path()) {
-      made.add(d.string());
-    }
-    std::filesystem::create_directories(out_dir, ec);
-    if (ec || !std::filesystem::is_directory(out_dir)) {
-      fmt::print(stderr, "dpc31 demo: {}: cannot create the output directory: {}\n", out_dir,
-                 ec ? ec.message() : "Not a directory");
-      return 2;
-    }
+  } else if (!made.make(out_dir, ec)) {
+    fmt::print(stderr, "dpc31 demo: {}: cannot create the output directory: {}\n", out_dir,
+               ec.message());
+    return 2;
   }
   // Its files are opened now, before the register session prints: one that cannot be made is
   // one line, and nothing else.

@@ -102,7 +102,7 @@ int main(int argc, char** argv) {
   demo->add_option("--out-dir", demo_out,
                    "where the DP session's waveform and capture go (default: a new directory "
                    "TMPDIR/dpc31-demo-XXXXXX)")
-      ->check(named(Use::write));
+      ->transform(named(Use::place));
   demo->add_option("--bus", demo_bus, "bus byte order")
       ->check(CLI::IsMember({"intel", "motorola"}));
   dpc31::cli::ChipChoice demo_chip;
@@ -131,17 +131,17 @@ int main(int argc, char** argv) {
   auto* run = app.add_subcommand("run", "play a scenario file and print the state walk");
   run->add_option("scenario", run_opt.scenario, "scenario file (docs/scenario-format.md)")
       ->required()
-      ->check(named(Use::read));
+      ->transform(named(Use::read));
   run->add_flag("--quiet", run_opt.quiet, "print no state walk, only failures");
   run->add_option("--json", run_opt.json, "write a JSON summary to this file")
-      ->check(named(Use::write));
+      ->transform(named(Use::write));
   run->add_option("--record", run_opt.record,
                   "write a golden trace of the run to this file (docs/trace-format.md)")
-      ->check(named(Use::write));
+      ->transform(named(Use::write));
   run->add_option("--vcd", run_opt.vcd, "write the run as a VCD waveform (docs/waveforms.md)")
-      ->check(named(Use::write));
+      ->transform(named(Use::write));
   run->add_option("--fst", run_opt.fst, "write the run as an FST waveform")
-      ->check(named(Use::write));
+      ->transform(named(Use::write));
   // One value a time (GLOB,GLOB or the option again): more took the scenario after it.
   run->add_option("--signals", run_opt.signals, "waveform signals (globs, e.g. pins.*)")
       ->delimiter(',')
@@ -153,7 +153,7 @@ int main(int argc, char** argv) {
   run->add_option("--la-vcd", run_opt.la_vcd,
                   "also write the run as a VCD for logic-analyser tools (sigrok, PulseView): "
                   "1-bit signals, one scope")
-      ->check(named(Use::write));
+      ->transform(named(Use::write));
   run->add_option(
       "--timescale", run_opt.timescale,
       "waveform time unit: " + kTimescales + "; default 1ps, 10ns with --flat and --la-vcd");
@@ -162,12 +162,12 @@ int main(int argc, char** argv) {
   run->add_option("--gtkw", run_opt.gtkw,
                   "also write a GTKWave save file for --vcd (or --fst): signals by block, states "
                   "by name, markers at the state changes (docs/waveforms.md)")
-      ->check(named(Use::write));
+      ->transform(named(Use::write));
   run->add_option("--pvs", run_opt.pvs,
                   "also write a PulseView session for --la-vcd (or --vcd --flat): the UART and "
                   "PROFIBUS DP decoders on RxD and TxD; PulseView opens NAME.pvs beside NAME.vcd "
                   "by itself (docs/waveforms.md)")
-      ->check(named(Use::write));
+      ->transform(named(Use::write));
   run->add_option_function<std::string>(
          "--engine",
          [&run_opt](const std::string& name) {
@@ -179,14 +179,14 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"event", "per-cycle"}))
       ->default_str("event");
   run->add_option("--pcap", run_opt.pcap, "write the telegrams as pcapng (docs/capture.md)")
-      ->check(named(Use::write));
+      ->transform(named(Use::write));
 
   dpc31::cli::ReplayOptions replay_opt;
   auto* replay = app.add_subcommand(
       "replay", "replay a golden trace on a fresh chip and check every expected value");
   replay->add_option("trace", replay_opt.trace, "trace file (docs/trace-format.md)")
       ->required()
-      ->check(named(Use::read));
+      ->transform(named(Use::read));
   replay->add_flag("--quiet", replay_opt.quiet, "print nothing on success");
 
   dpc31::cli::CosimOptions cos;
@@ -216,20 +216,20 @@ int main(int argc, char** argv) {
   cos_shard_base_opt->needs(cos_random.back());  // alone it blamed a --shard 1/1 never given
   // A run's outputs: a session writes them too (its divergence's trace and window, its dump).
   cosim->add_option("--junit", cos.junit, "write JUnit XML results to this file")
-      ->check(named(Use::write));
+      ->transform(named(Use::write));
   cosim->add_option("--vcd", cos.vcd_dir, "on divergence, write emu.vcd and rtl.vcd around it here")
-      ->check(named(Use::write));
+      ->transform(named(Use::place));
   cosim
       ->add_option("--window", cos.window,
                    "cycles before and after the divergence in the VCD window")
       ->transform(whole(0, 100'000'000));
   cosim->add_option("--out", cos.out_dir, "where shrunk stimulus traces go (default .)")
-      ->check(named(Use::write));
+      ->transform(named(Use::place));
   cosim
       ->add_option("--dump", cos.dump_dir,
                    "write emu.vcd, rtl.vcd (ports) and rtl_internal.fst of the first run (or the "
                    "session) here")
-      ->check(named(Use::write));
+      ->transform(named(Use::place));
   // What a --session run never reads (refused beside it, with cos_random).
   std::vector<CLI::Option*> cos_not_session;
   auto* cos_replay =
@@ -237,7 +237,7 @@ int main(int argc, char** argv) {
           ->add_option("--replay", cos.replay,
                        "replay a stimulus trace instead of random seeds (with the profile and "
                        "mutant its header names)")
-          ->check(named(Use::read));
+          ->transform(named(Use::read));
   for (CLI::Option* opt : cos_random) cos_replay->excludes(opt);
   cos_replay->excludes(cos_shard_base_opt);
   cos_not_session.insert(cos_not_session.end(), cos_random.begin(), cos_random.end());
@@ -250,7 +250,7 @@ int main(int argc, char** argv) {
                    "your Verilog sources in place of the built-in model: Verilated and built "
                    "into the cache on first use (docs/golden-model.md)")
       ->expected(1, -1)
-      ->check(named(Use::read));
+      ->transform(named(Use::read));
   cosim->add_option("--top", cos.top, "with --rtl: the top module");
   cosim->add_option("--define", cos.defines, "with --rtl: a Verilog define NAME or NAME=VALUE")
       ->take_all();
@@ -261,23 +261,23 @@ int main(int argc, char** argv) {
   cosim
       ->add_option("--rtl-model", cos.rtl_model,
                    "a model built by dpc31emu_verilate_model() (a .so) in place of the built-in")
-      ->check(named(Use::read));
+      ->transform(named(Use::read));
   // dpc31 cosim merge: the shards' JSON summaries into the whole run's (docs/regression.md).
   dpc31::cli::MergeOptions merge_opt;
   auto* merge = cosim->add_subcommand(
       "merge", "merge the JSON summaries of the shards of one run into its summary and JUnit");
   merge->add_option("summaries", merge_opt.inputs, "the shards' JSON summaries")
       ->required()
-      ->check(named(Use::read));
+      ->transform(named(Use::read));
   merge->add_option("--junit", merge_opt.junit, "write the whole run's JUnit XML to this file")
-      ->check(named(Use::write));
+      ->transform(named(Use::write));
   auto* cos_session =
       cosim
           ->add_option(
               "--session", cos.session,
               "chip-session mode: run this scenario on the full chip, drive the RTL with its "
               "block events")
-          ->check(named(Use::read));
+          ->transform(named(Use::read));
   cos_not_session.push_back(
       cosim->add_flag("--keep-going", cos.keep_going, "do not stop at the first divergent seed"));
   cos_replay->excludes(cos_not_session.back());

@@ -56,15 +56,15 @@ CLI::App* add_serve_subcommand(CLI::App& app, ServeArgs& a) {
       ->check(outfile::given());
   cmd->add_option("--unix", a.unix_path,
                   "listen on a Unix socket at this path (created mode 0600: this user only)")
-      ->check(outfile::named(outfile::Use::write));
+      ->transform(outfile::named(outfile::Use::place));
   cmd->add_option("--state-dir", a.state_dir,
                   "the directory save and load may use (names relative to it); without it they "
                   "are refused")
-      ->check(outfile::named(outfile::Use::write));
+      ->transform(outfile::named(outfile::Use::place));
   cmd->add_option("--secret-file", a.secret_file,
                   "TCP clients must send 'auth SECRET' first; SECRET is this file's first line "
                   "(16+ characters, file mode 600)")
-      ->check(outfile::named(outfile::Use::read));
+      ->transform(outfile::named(outfile::Use::read));
   cmd->add_option("--profile", a.profile, "chip profile")
       ->check(CLI::IsMember({"spc3", "vpc3plus", "dpc31"}));
   cmd->add_option("--bus", a.bus, "bus byte order")->check(CLI::IsMember({"intel", "motorola"}));
@@ -74,7 +74,7 @@ CLI::App* add_serve_subcommand(CLI::App& app, ServeArgs& a) {
                   "c31[:HZ] (--profile dpc31): on the DPC31's own C31")
       ->check(outfile::given());
   cmd->add_option("--firmware", a.firmware, "with --cpu: the Intel HEX image (SDCC, Keil)")
-      ->check(outfile::named(outfile::Use::read));
+      ->transform(outfile::named(outfile::Use::read));
   cmd->add_option("--code", a.code,
                   "with --cpu c31: the C31's code area in the chip's RAM (0x1000)")
       ->check(outfile::given());

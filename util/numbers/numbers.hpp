@@ -7,11 +7,13 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <string>
+#include <string_view>
 #include <system_error>
 
 #include "whole_number.hpp"
@@ -33,6 +35,67 @@ inline CLI::Validator whole(std::uint64_t lo,
         return {};
       },
       "UINT in " + std::to_string(lo) + ".." + std::to_string(hi), "whole");
+}
+
+// A count lo..hi (hi at most 10^18) in decimal, whole or with an exponent ("2000000", "1e9",
+// "2.5e6"), handed to CLI11 in plain decimal; a value with a fraction ("1000000.7", "1e-1") is
+// refused, never cut to a whole one. Read digit by digit: a double rounds a fraction away
+// beyond 2^53.
+inline CLI::Validator count(std::uint64_t lo, std::uint64_t hi) {
+  return CLI::Validator(
+      [lo, hi](std::string& s) -> std::string {
+        const std::string range = std::to_string(lo) + ".." + std::to_string(hi);
+        std::string_view t = s;
+        std::string digits;      // the mantissa's digits without the point
+        std::int64_t point = 0;  // digits after the point
+        bool seen_point = false;
+        while (!t.empty() && ((t[0] >= '0' && t[0] <= '9') || (t[0] == '.' && !seen_point))) {
+          if (t[0] == '.') {
+            seen_point = true;
+          } else {
+            digits += t[0];
+            point += seen_point ? 1 : 0;
+          }
+          t.remove_prefix(1);
+        }
+        std::int64_t exponent = 0;
+        bool exponent_ok = true;
+        if (!t.empty() && (t[0] == 'e' || t[0] == 'E')) {
+          t.remove_prefix(1);
+          const bool negative = !t.empty() && t[0] == '-';
+          if (!t.empty() && (t[0] == '-' || t[0] == '+')) t.remove_prefix(1);
+          exponent_ok = !t.empty();
+          for (; !t.empty() && t[0] >= '0' && t[0] <= '9'; t.remove_prefix(1)) {
+            // Past 1000 the count is 0 or beyond any hi either way.
+            exponent = std::min<std::int64_t>(exponent * 10 + (t[0] - '0'), 1000);
+          }
+          if (negative) exponent = -exponent;
+        }
+        if (digits.empty() || !t.empty() || !exponent_ok) return "'" + s + "' is not a number";
+        // The digits left of the point after the exponent shifted it; those right of it must be 0.
+        const std::int64_t whole_digits =
+            static_cast<std::int64_t>(digits.size()) - point + exponent;
+        std::uint64_t v = 0;
+        for (std::int64_t i = 0; i < static_cast<std::int64_t>(digits.size()); ++i) {
+          const int d = digits[static_cast<std::size_t>(i)] - '0';
+          if (i >= whole_digits) {
+            if (d != 0) return "'" + s + "' is not a whole number";
+          } else if (v != 0 || d != 0) {
+            if (v > hi / 10 || v * 10 + static_cast<std::uint64_t>(d) > hi)
+              return "'" + s + "' is outside " + range;
+            v = v * 10 + static_cast<std::uint64_t>(d);
+          }
+        }
+        for (std::int64_t i = static_cast<std::int64_t>(digits.size()); i < whole_digits && v != 0;
+             ++i) {
+          if (v > hi / 10) return "'" + s + "' is outside " + range;
+          v *= 10;
+        }
+        if (v < lo) return "'" + s + "' is outside " + range;
+        s = std::to_string(v);
+        return {};
+      },
+      "COUNT in " + std::to_string(lo) + ".." + std::to_string(hi), "count");
 }
 
 // A finite real number lo..hi ("0.5", "1e9"; not "nan", "inf", "1e400" or "0.5s").

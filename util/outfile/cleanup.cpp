@@ -69,16 +69,23 @@ void remove_all(int sig) {
   for (int i = kPaths; i < kPaths + kChildren; ++i) {
     if (g_slots[i].state.load() == 2) ::kill(g_slots[i].pid, sig);
   }
-  for (const Kind kind : {Kind::file, Kind::tree, Kind::dir}) {  // a directory empties first
+  for (const Kind kind : {Kind::file, Kind::tree}) {  // a directory empties first
     for (int i = 0; i < kPaths; ++i) {
       if (g_slots[i].state.load() != 2 || g_slots[i].kind != kind) continue;
       if (kind == Kind::file) {
         ::unlink(g_slots[i].path);
-      } else if (kind == Kind::tree) {
-        remove_at(AT_FDCWD, g_slots[i].path, 0);
       } else {
-        ::rmdir(g_slots[i].path);
+        remove_at(AT_FDCWD, g_slots[i].path, 0);
       }
+    }
+  }
+  // A parent may sit in an earlier slot than its child: again while one went (each removal at
+  // most once).
+  for (bool removed = true; removed;) {
+    removed = false;
+    for (int i = 0; i < kPaths; ++i) {
+      if (g_slots[i].state.load() != 2 || g_slots[i].kind != Kind::dir) continue;
+      removed = ::rmdir(g_slots[i].path) == 0 || removed;
     }
   }
 }

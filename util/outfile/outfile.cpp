@@ -308,6 +308,38 @@ std::string make_temp_dir(const std::string& prefix, std::string& error,
   return {};
 }
 
+MadeDirs::~MadeDirs() {
+  for (auto d = dirs_.rbegin(); d != dirs_.rend(); ++d) ::rmdir(d->c_str());  // the empty ones
+}
+
+bool MadeDirs::make(const std::string& dir, std::error_code& ec) {
+  ec.clear();
+  std::filesystem::path prefix;
+  for (const std::filesystem::path& part : std::filesystem::path(dir)) {
+    prefix /= part;
+    if (part.empty()) continue;  // the end of "d/"
+    if (::mkdir(prefix.c_str(), 0777) == 0) {
+      add(prefix.string());
+    } else if (errno != EEXIST) {
+      ec.assign(errno, std::generic_category());
+      return false;
+    }
+  }
+  if (std::filesystem::is_directory(dir, ec)) return true;
+  if (!ec) ec = std::make_error_code(std::errc::not_a_directory);
+  return false;
+}
+
+void MadeDirs::add(const std::string& dir) {
+  dirs_.push_back(dir);
+  entries_.push_back(cleanup::Entry::dir(dir));
+}
+
+void MadeDirs::keep() {
+  dirs_.clear();
+  entries_.clear();
+}
+
 std::string OutFile::library_path() {
   if (tmp_.empty()) {
     fail(fmt::format("{}: not open for writing", path_));

@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <system_error>
 #include <vector>
 
 #include "cleanup.hpp"
@@ -64,6 +65,27 @@ std::FILE* open_live(const std::string& path);
 // `error` that names the place.
 std::string make_temp_dir(const std::string& prefix, std::string& error,
                           const std::string& parent = {});
+
+// The directories a run makes for its outputs (an --out-dir, a --dump DIR, the parents they
+// lacked): each is removed again if it is still empty when SIGINT, SIGTERM or SIGHUP ends the
+// process (cleanup::Entry::dir), or when this object goes without keep(). Only a directory this
+// process's own mkdir() made is listed, never one that was there before.
+class MadeDirs {
+ public:
+  MadeDirs() = default;
+  ~MadeDirs();
+  MadeDirs(const MadeDirs&) = delete;
+  MadeDirs& operator=(const MadeDirs&) = delete;
+  // `dir` and each missing parent, one mkdir() each; false with `ec` if `dir` is no directory
+  // then (what was made stays listed).
+  bool make(const std::string& dir, std::error_code& ec);
+  void add(const std::string& dir);  // one made elsewhere (make_temp_dir)
+  void keep();                       // the run's outputs are in place: nothing is removed
+
+ private:
+  std::vector<std::string> dirs_;  // a parent before its children
+  std::vector<cleanup::Entry> entries_;
+};
 
 class OutFile {
  public:

@@ -10,13 +10,25 @@
 
 namespace dpc31::outfile {
 
-enum class Use { read, write };
+// `read` and `write`: a file; `place`: a directory, a socket or a link, made or read.
+enum class Use { read, write, place };
 
+// `-` is the standard input of a file read and the standard output of a file written, as the
+// common convention has it: handed on as /dev/stdin or /dev/stdout, which every door already
+// takes (a descriptor, written in place; the standard output's own file rule). `./-` names a
+// file called `-`. A place cannot be a stream: `-` is refused there.
 inline CLI::Validator named(Use use) {
   return CLI::Validator(
       [use](std::string& path) -> std::string {
+        if (path == "-") {
+          if (use == Use::place)
+            return "'-' is the standard input or output, which this option cannot name: ./- names "
+                   "one called -";
+          path = use == Use::read ? "/dev/stdin" : "/dev/stdout";
+          return {};
+        }
         if (!path.empty()) return {};
-        return std::string(use == Use::write ? kEmptyName : kEmptyReadName);
+        return std::string(use == Use::read ? kEmptyReadName : kEmptyName);
       },
       "", "named");
 }
