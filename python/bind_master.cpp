@@ -198,13 +198,16 @@ void bind_dpv1(py::module_& m, py::class_<PyMaster>& master) {
           // `master.dpv1_rules.c1_response_timeout = 1` reaches the next service.
           "dpv1_rules", [](PyMaster& pm) -> Dpv1Rules& { return pm.dpv1_rules; },
           [](PyMaster& pm, const Dpv1Rules& r) { pm.dpv1_rules = r; })
-      .def_property_readonly(
-          "c2_sap",
-          [](const PyMaster& pm) { return pm.dpv1_m ? pm.dpv1_m->c2_sap() : std::nullopt; })
+      .def_property_readonly("c2_sap",
+                             [](const PyMaster& pm) {
+                               pm.chip.enter(false);  // the running service opens or forgets it
+                               return pm.dpv1_m ? pm.dpv1_m->c2_sap() : std::nullopt;
+                             })
       .def_property_readonly("c2_send_timeout",
                              [](const PyMaster& pm) -> std::optional<std::uint16_t> {
                                // the open connection's: max(the Initiate's, the resource manager's)
                                // x 10 ms
+                               pm.chip.enter(false);
                                if (!pm.dpv1_m || !pm.dpv1_m->c2_sap()) return std::nullopt;
                                return pm.dpv1_m->c2_send_timeout();
                              })
@@ -422,7 +425,13 @@ void bind_master(py::module_& m) {
           },
           "{slave address: master address}: a start-up that returned False because its slave is "
           "locked by another master (Slave_Diag's Master_Add) names it here")
-      .def("clear_history", [](PyMaster& pm) { pm.m->clear_history(); })
+      .def("clear_history",
+           [](PyMaster& pm) {
+             // The running master appends to it: refused to another thread and to an observer.
+             enter_run(*pm.chip.run_state(), true, "chip", "history, counters, ...",
+                       "clear the master's history");
+             pm.m->clear_history();
+           })
       .def(
           "startup",
           [](PyMaster& pm, const py::int_& tries) {

@@ -321,6 +321,14 @@ unsigned port_index(std::int64_t n) {
   return static_cast<unsigned>(n);
 }
 
+// A register of the programmer's model: the running CPU changes it, so another thread is refused
+// it while the board runs (an observer may look).
+template <auto Get>
+auto cpu_state(const PyBoard& b) {
+  b.chip.enter(false);
+  return (b.board->cpu().*Get)();
+}
+
 void bind_board(py::module_& m) {
   py::class_<PyBoard>(m, "Cpu51Board",
                       "An 80C32 beside the chip (its XDATA window at `address`, X/INT on INT0), "
@@ -366,11 +374,17 @@ void bind_board(py::module_& m) {
           "step in progress ends).")
       .def(
           "port",
-          [](const PyBoard& b, std::int64_t n) { return b.board->cpu().port_latch(port_index(n)); },
+          [](const PyBoard& b, std::int64_t n) {
+            b.chip.enter(false);  // the running CPU writes it
+            return b.board->cpu().port_latch(port_index(n));
+          },
           py::arg("n"), "Port n's latch (0..3: P0..P3).")
       .def(
           "pins",
-          [](const PyBoard& b, std::int64_t n) { return b.board->cpu().port_pins(port_index(n)); },
+          [](const PyBoard& b, std::int64_t n) {
+            b.chip.enter(false);
+            return b.board->cpu().port_pins(port_index(n));
+          },
           py::arg("n"), "Port n's pins: the latch AND what the outside drives.")
       .def(
           "set_port_input",
@@ -380,7 +394,11 @@ void bind_board(py::module_& m) {
           },
           py::arg("n"), py::arg("value"), "What the outside drives on port n (an address switch).")
       .def(
-          "xdata", [](const PyBoard& b, std::uint16_t addr) { return b.board->ram(addr); },
+          "xdata",
+          [](const PyBoard& b, std::uint16_t addr) {
+            b.chip.enter(false);
+            return b.board->ram(addr);
+          },
           py::arg("addr"), "A byte of the board's RAM (XDATA outside the chip's window).")
       .def(
           "on_ram_write",
@@ -414,18 +432,19 @@ void bind_board(py::module_& m) {
           "the chip cycle its TI is set (docs/cpu.md, \"Serial port\"); None removes it.")
       .def(
           "chip_cycle_of",
-          [](const PyBoard& b, U64 clock) { return b.board->chip_cycle_of(clock); },
+          [](const PyBoard& b, U64 clock) {
+            b.chip.enter(false);
+            return b.board->chip_cycle_of(clock);
+          },
           py::arg("cpu_clock"), "The chip cycle of a CPU oscillator clock counted from reset.")
-      .def_property_readonly("pc", [](const PyBoard& b) { return b.board->cpu().pc(); })
-      .def_property_readonly("a", [](const PyBoard& b) { return b.board->cpu().a(); })
-      .def_property_readonly("b", [](const PyBoard& b) { return b.board->cpu().b(); })
-      .def_property_readonly("psw", [](const PyBoard& b) { return b.board->cpu().psw(); })
-      .def_property_readonly("sp", [](const PyBoard& b) { return b.board->cpu().sp(); })
-      .def_property_readonly("dptr", [](const PyBoard& b) { return b.board->cpu().dptr(); })
-      .def_property_readonly("machine_cycles",
-                             [](const PyBoard& b) { return b.board->cpu().cycles(); })
-      .def_property_readonly("in_service",
-                             [](const PyBoard& b) { return b.board->cpu().in_service(); })
+      .def_property_readonly("pc", cpu_state<&mcs51::Cpu::pc>)
+      .def_property_readonly("a", cpu_state<&mcs51::Cpu::a>)
+      .def_property_readonly("b", cpu_state<&mcs51::Cpu::b>)
+      .def_property_readonly("psw", cpu_state<&mcs51::Cpu::psw>)
+      .def_property_readonly("sp", cpu_state<&mcs51::Cpu::sp>)
+      .def_property_readonly("dptr", cpu_state<&mcs51::Cpu::dptr>)
+      .def_property_readonly("machine_cycles", cpu_state<&mcs51::Cpu::cycles>)
+      .def_property_readonly("in_service", cpu_state<&mcs51::Cpu::in_service>)
       .def_property_readonly("chip", [](const PyBoard& b) { return b.chip_ref; });
 }
 }  // namespace
