@@ -15,7 +15,17 @@
 #include <stdexcept>
 #include <string>
 
+#include "board.hpp"
+
 namespace dpc31::systemc {
+
+KeepSelection::KeepSelection()
+    : hal_(hal::exchange_selection({})), hooks_(board::exchange(nullptr)) {}
+
+KeepSelection::~KeepSelection() {
+  board::exchange(hooks_);
+  hal::exchange_selection(hal_);
+}
 
 namespace {
 
@@ -213,10 +223,13 @@ void Dpc31Tlm::b_transport(tlm::tlm_generic_payload& tr, sc_core::sc_time& delay
     // EOI time: X/INT may change), or a process waiting for a cycle up to the access. Run the
     // platform up to the initiator's time, and let a waiting process act first.
     ++syncs_;
-    wait(delay);
-    delay = sc_core::SC_ZERO_TIME;
-    step_to(cycle_at(sc_core::sc_time_stamp()));
-    while (chip_.stop_requested() || chip_.cycle() >= horizon_) wait(scheduler_moved_);
+    {
+      const KeepSelection keep;  // the other initiators run their firmware meanwhile
+      wait(delay);
+      delay = sc_core::SC_ZERO_TIME;
+      step_to(cycle_at(sc_core::sc_time_stamp()));
+      while (chip_.stop_requested() || chip_.cycle() >= horizon_) wait(scheduler_moved_);
+    }
     step_to(start);
   } else {
     step_to(start);

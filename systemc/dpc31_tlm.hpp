@@ -13,9 +13,32 @@
 #include <tlm>
 #include <utility>
 
+#include "dpc31/bus_port.hpp"
 #include "dpc31/chip.hpp"
 
+namespace dpc31::board {
+class Hooks;
+}
+
 namespace dpc31::systemc {
+
+// The C HAL's selected chip (dpc31_select, a FirmwareHost's call into its firmware) and the board
+// hooks are per OS thread, and SystemC's threads share one: an initiator that waits inside a call
+// into its firmware sets its own aside for the wait, so another initiator's firmware calls made
+// meanwhile neither take nor clear it (docs/systemc.md, "Several chips"). b_transport does so
+// around its own waits; a platform's wait inside a firmware call (a quantum keeper's sync()) is
+// made while one of these lives.
+class KeepSelection {
+ public:
+  KeepSelection();
+  ~KeepSelection();
+  KeepSelection(const KeepSelection&) = delete;
+  KeepSelection& operator=(const KeepSelection&) = delete;
+
+ private:
+  hal::Selection hal_;
+  board::Hooks* hooks_;
+};
 
 class Dpc31Tlm : public sc_core::sc_module {
  public:
