@@ -289,6 +289,7 @@ void bind_master(py::module_& m) {
                                    in_range<std::uint32_t>(kSlotBits, slot_bits),
                                    in_range<std::uint32_t>(kIdleBits, idle_bits)};
              const SlaveConfig sc = slave.value_or(SlaveConfig{});
+             if (sc.address == mc.address) throw py::value_error(master_and_slave_at(sc.address));
              if (sc.wd_base_1ms && c.chip.profile().id == Profile::vpc3plus &&
                  (sc.user_prm.empty() || (sc.user_prm[0] & dpv1::status1::DPV1_Enable) == 0)) {
                throw py::value_error(wd_base_needs_dpv1("wd_base_1ms=True"));

@@ -54,6 +54,9 @@ def test_send_and_pulse_need_a_sender_and_an_end_before_the_last_cycle():
     (lambda: dpc31.Master(dpc31.Chip("spc3"), address=200),
      r"master address 200 out of range \(0..126\)"),
     (lambda: dpc31.Master(dpc31.Chip("spc3"), slot_bits=0), r"slot 0 out of range \(37..16383\)"),
+    # A master at its slave's address ran a whole session from 5 to 5 (audit s35 aTb finding 3).
+    (lambda: dpc31.Master(dpc31.Chip("spc3"), address=5, slave=dpc31.SlaveConfig(address=5)),
+     r"the master and the slave both have address 5: each station needs its own$"),
     (lambda: dpc31.SlaveConfig(address=200), r"slave address 200 out of range \(0..125\)"),
     (lambda: dpc31.Segment().add_station(127), r"station address 127 out of range \(0..125\)"),
     (lambda: dpc31.Segment().add_station(200), r"station address 200 out of range \(0..125\)"),
