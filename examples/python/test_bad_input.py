@@ -945,3 +945,26 @@ def test_a_poke_at_mode_reg1_keeps_the_run_state_rule():
         assert (chip.read(a1), chip.peek_reg("Mode_Reg1")) == (0x00, 0x00)
         assert chip.poke(a1, 0x10)
         assert chip.read(a1) == 0x10
+
+
+def test_a_glitch_of_no_clocks_is_refused_and_a_long_one_holds_the_line():
+    """session/dp_master.hpp, DpMaster::glitch: glitch(0) counted a start_bit error for a pulse of
+    no width; glitch(1_000_000) returned 11 bit times after it began, and the next request went
+    out on the line it held low (audit s35 aTb finding 5). Now 0 is a ValueError, nothing on the
+    line, and the next request starts TSYN (33 T, T = 32 at 1.5 Mbaud) after the pulse's rise.
+    The pulse itself starts TSYN after the last answer's end."""
+    chip = dpc31.Chip("spc3")
+    m = dpc31.Master(chip, baud=1_500_000, slave=dpc31.SlaveConfig(address=5))
+    m.run_responder(inputs=b"\x11\x22\x33\x44")
+    assert m.startup()
+    last = m.data_exchange(b"\x01\x02\x03\x04")
+    at, counters = chip.cycle, dict(chip.fdl_counters)
+    with pytest.raises(ValueError, match="^glitch: low_cycles 0: a pulse lasts 1 clock or more$"):
+        m.glitch(0)
+    assert (chip.cycle, dict(chip.fdl_counters), m.counters.noise) == (at, counters, 0)
+    start = last.answer_end + 33 * 32
+    m.glitch(1_000_000)
+    assert chip.cycle == start + 1_000_000
+    nxt = m.data_exchange(b"\x01\x02\x03\x04")
+    assert nxt.request_start == start + 1_000_000 + 33 * 32 and nxt.answer is not None
+
