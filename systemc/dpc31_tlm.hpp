@@ -104,6 +104,9 @@ class Dpc31Tlm : public sc_core::sc_module {
   // flips the pin without a change of the interrupt (no on_irq_change), so the pin is compared
   // wherever the chip may have moved (Chip::on_cycle) and after a debug write.
   void follow_x_int(std::uint64_t cycle);
+  // A reset or load_state took the chip back to `cycle`: the pins' changes queued after now are
+  // dropped and the pins follow the chip's; a warning where an initiator had run ahead past now.
+  void went_back(std::uint64_t cycle);
   void step_to(std::uint64_t cycle);  // never past `cycle`, never backwards
   void schedule(std::uint64_t cycle, int pin, bool level);
 
@@ -117,7 +120,8 @@ class Dpc31Tlm : public sc_core::sc_module {
     bool level;
   };
   std::deque<Edge> edges_;
-  bool x_int_level_;  // the X/INT level last scheduled
+  bool x_int_level_;        // the X/INT level last scheduled
+  std::uint64_t seen_ = 0;  // the chip's cycle after its last move (Chip::on_cycle)
   sc_core::sc_event edge_due_;
   sc_core::sc_event irq_rise_;
   sc_core::sc_event changed_;  // an access or RxD moved the chip's next event
