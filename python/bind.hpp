@@ -380,8 +380,10 @@ inline const std::string& read_path_arg(const std::string& path, std::string_vie
   return path;
 }
 // A file name given as a str or an os.PathLike (pathlib.Path), as open() takes it (os.fspath),
-// then path_arg's check.
+// then path_arg's check; another type is a TypeError naming the argument.
 std::string fspath_arg(const py::object& path, std::string_view what);
+// The same for an argument whose None is "not given".
+std::optional<std::string> fspath_arg_or_none(const py::object& path, std::string_view what);
 inline const std::optional<std::string>& path_arg(const std::optional<std::string>& path,
                                                   std::string_view what) {
   if (path) path_arg(*path, what);

@@ -184,8 +184,19 @@ std::vector<std::uint8_t> buffer_bytes(py::handle o, std::string_view what) {
 }
 
 std::string fspath_arg(const py::object& path, std::string_view what) {
+  if (!py::isinstance<py::str>(path) && !py::isinstance<py::bytes>(path) &&
+      !py::hasattr(path, "__fspath__")) {
+    throw py::type_error(
+        fmt::format("{}: a str or an os.PathLike expected, got {}", what,
+                    py::str(py::type::of(path).attr("__name__")).cast<std::string>()));
+  }
   const py::object p = py::module_::import("os").attr("fspath")(path);
   return path_arg(p.cast<std::string>(), what);
+}
+
+std::optional<std::string> fspath_arg_or_none(const py::object& path, std::string_view what) {
+  if (path.is_none()) return std::nullopt;
+  return fspath_arg(path, what);
 }
 
 std::vector<std::uint8_t> raw_telegram(py::handle data) {

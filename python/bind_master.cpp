@@ -301,8 +301,8 @@ void bind_master(py::module_& m) {
            py::arg("slot_bits") = 100, py::arg("idle_bits") = 33, py::arg("slave") = py::none())
       .def(
           "run_firmware",
-          [](PyMaster& pm, const std::string& spec, bool gsd_defaults) {
-            const dpc31_firmware& d = find_firmware(path_arg(spec, "firmware"));
+          [](PyMaster& pm, const py::object& spec, bool gsd_defaults) {
+            const dpc31_firmware& d = find_firmware(fspath_arg(spec, "firmware"));
             const SlaveConfig slave =
                 gsd_defaults ? with_gsd_defaults(d, pm.m->slave()) : pm.m->slave();
             auto fw = std::make_shared<FirmwareHost>(d);

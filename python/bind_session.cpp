@@ -350,10 +350,10 @@ void bind_board(py::module_& m) {
           "its interrupt controller (the chip made with irq_controller='c31'); docs/dpc31.md.")
       .def(
           "load_hex",
-          [](PyBoard& b, const std::string& path) {
+          [](PyBoard& b, const py::object& path) {
             b.chip.enter(true);
             Cpu51Config cfg = b.cfg;
-            cfg.hex = read_path_arg(path, "path");
+            cfg.hex = read_path_arg(fspath_arg(path, "path"), "path");
             Cpu51Image image;
             std::string why;
             if (!load_cpu51_image(cfg, image, why)) raise(errors().input, why);
