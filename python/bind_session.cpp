@@ -56,7 +56,7 @@ namespace {
 template <typename T, typename M>
 auto bytes_property(M T::*member) {
   return std::make_pair([member](const T& t) { return to_bytes(t.*member); },
-                        [member](T& t, const py::bytes& b) { t.*member = from_bytes(b); });
+                        [member](T& t, const py::object& b) { t.*member = bytes_like(b, "du"); });
 }
 
 // A SlaveConfig field as a scenario's `slave` line takes it (vocabulary.hpp), else a ValueError
@@ -70,8 +70,8 @@ auto number_field(F SlaveConfig::*member, const ValueRange& r) {
 auto bytes_field(std::vector<U8> SlaveConfig::*member, const char* what, bool non_empty,
                  std::size_t max) {
   return std::make_pair([member](const SlaveConfig& c) { return to_bytes(c.*member); },
-                        [member, what, non_empty, max](SlaveConfig& c, const py::bytes& b) {
-                          std::vector<U8> v = from_bytes(b);
+                        [member, what, non_empty, max](SlaveConfig& c, const py::object& b) {
+                          std::vector<U8> v = bytes_like(b, what);
                           if (non_empty && v.empty())
                             throw py::value_error(fmt::format("{}: at least one byte", what));
                           if (v.size() > max)
@@ -82,13 +82,13 @@ auto bytes_field(std::vector<U8> SlaveConfig::*member, const char* what, bool no
 
 void bind_frames(py::module_& m) {
   py::class_<fdl::Frame>(m, "Frame", "An FDL telegram (include/dpc31/fdl.hpp).")
-      .def(py::init([](const AnyInt& da, const AnyInt& sa, const AnyInt& fc, const py::bytes& du,
+      .def(py::init([](const AnyInt& da, const AnyInt& sa, const AnyInt& fc, const py::object& du,
                        const std::optional<AnyInt>& dsap, const std::optional<AnyInt>& ssap) {
              const auto sap = [](const char* what, const std::optional<AnyInt>& v) {
                return v ? std::optional<U8>(byte_value(what, *v)) : std::nullopt;
              };
              return fdl::make_frame(byte_value("da", da), byte_value("sa", sa),
-                                    byte_value("fc", fc), from_bytes(du), sap("dsap", dsap),
+                                    byte_value("fc", fc), bytes_like(du, "du"), sap("dsap", dsap),
                                     sap("ssap", ssap));
            }),
            py::arg("da"), py::arg("sa"), py::arg("fc"), py::arg("du") = py::bytes(),
@@ -284,9 +284,10 @@ void bind_user_side(py::module_& m) {
             enter_user_side(&r, false);
             return to_bytes(r.inputs());
           },
-          [](Responder& r, const py::bytes& b) {
+          [](Responder& r, const py::object& b) {
+            std::vector<U8> v = bytes_like(b, "inputs");
             enter_user_side(&r, true);
-            r.set_inputs(from_bytes(b));
+            r.set_inputs(std::move(v));
           })
       .def_property_readonly(
           "outputs",
