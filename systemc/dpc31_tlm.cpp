@@ -2,12 +2,13 @@
 //
 // Time: the chip's cycle c is at time_of(c) on the SystemC time line. The chip never runs ahead of
 // what the rest of the platform could still change but the rxd port (an access takes the chip to
-// its end at once; an rxd change meanwhile lands at the chip's cycle): its own thread steps it only
-// up to the current time, from event to event (Chip::next_deadline); a bus access may take it ahead
-// of the current time (an initiator running ahead with a quantum keeper) only while no event of the
-// chip falls before the access ends and no other process waits for a cycle before the access
-// starts; otherwise the initiator is synchronised first. The pins' changes are applied at their
-// times.
+// its end at once; an rxd change meanwhile lands at the chip's cycle) and a reset or load_state
+// by another process (it undoes what an initiator running ahead did: warned, went_back): its own
+// thread steps it only up to the current time, from event to event (Chip::next_deadline); a bus
+// access may take it ahead of the current time (an initiator running ahead with a quantum keeper)
+// only while no event of the chip falls before the access ends and no other process waits for a
+// cycle before the access starts; otherwise the initiator is synchronised first. The pins' changes
+// are applied at their times.
 #include "dpc31_tlm.hpp"
 
 #include <algorithm>

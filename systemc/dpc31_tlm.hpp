@@ -75,15 +75,16 @@ class Dpc31Tlm : public sc_core::sc_module {
   // The last cycle with a time: Chip::kLastCycle, or cycle_at(sc_max_time()) where that is sooner
   // (885 443 715 538 058 at 48 MHz and 1 ps, about 213 days).
   [[nodiscard]] std::uint64_t last_cycle() const;
-  // Notified when the interrupt becomes active, at that cycle's time (the delta after the irq
-  // signal's update: a waiter reads it true).
+  // Notified when the irq signal rises, at that cycle's time (the delta after the signal's
+  // update: a waiter reads it true); an activation and an end applied at one time notify nothing.
   [[nodiscard]] const sc_core::sc_event& irq_rise() const { return irq_rise_; }
   // For a process that moves time through the chip's serial side (the built-in DP master's
   // DpMaster::scheduler): waits until the chip reached `cycle` or one of its steps stopped
   // (Chip::request_stop, wake_on_txd); a cycle after last_cycle() waits until last_cycle(), where
   // the time line ends (a "no limit" wait returns there). Accesses that would start at or after
   // `cycle` wait until this process has acted, as the host CPU of the native run gives the bus side
-  // its turn.
+  // its turn; so does an access while a step stopped it, and none waits for a stop with no
+  // process here.
   void run_until(std::uint64_t cycle);
   // RxD edges were driven ahead of time: the chip's next event may be sooner.
   void rxd_driven() { changed_.notify(sc_core::SC_ZERO_TIME); }
