@@ -323,9 +323,13 @@ std::uint16_t peek_field(const Chip& chip, std::string_view reg, std::string_vie
 py::object addr_of(const Chip& chip, std::string_view name);
 py::bytes to_bytes(std::span<const std::uint8_t> b);
 std::vector<std::uint8_t> from_bytes(const py::bytes& b);
-// Bytes as the module takes them: `bytes`, a `bytearray` or a list of ints 0..255, else a
-// TypeError / ValueError named `what` ("outputs[0]: 300 out of range (0..255)").
+// Bytes as the module takes them: a bytes-like object (`bytes`, `bytearray`, `memoryview`,
+// `array`: its bytes) or a list of ints 0..255, else a TypeError / ValueError named `what`
+// ("outputs[0]: 300 out of range (0..255)").
 std::vector<std::uint8_t> bytes_like(py::handle o, std::string_view what);
+// "{what}: an int expected, got str": the type `sample` (the field's value) has, the one `got`
+// has; for a TypeError that names its argument where pybind11's names none.
+std::string type_expected(std::string_view what, py::handle sample, py::handle got);
 // The bytes of any object with the buffer protocol (bytes, bytearray, memoryview, array): a
 // snapshot. Anything else is a TypeError that names its type, never its contents.
 std::vector<std::uint8_t> buffer_bytes(py::handle o, std::string_view what);
@@ -380,8 +384,10 @@ inline const std::string& read_path_arg(const std::string& path, std::string_vie
   return path;
 }
 // A file name given as a str or an os.PathLike (pathlib.Path), as open() takes it (os.fspath),
-// then path_arg's check.
+// then path_arg's check; another type is a TypeError naming the argument.
 std::string fspath_arg(const py::object& path, std::string_view what);
+// The same for an argument whose None is "not given".
+std::optional<std::string> fspath_arg_or_none(const py::object& path, std::string_view what);
 inline const std::optional<std::string>& path_arg(const std::optional<std::string>& path,
                                                   std::string_view what) {
   if (path) path_arg(*path, what);

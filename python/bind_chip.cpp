@@ -153,10 +153,8 @@ std::vector<std::uint8_t> from_bytes(const py::bytes& b) {
 
 std::vector<std::uint8_t> bytes_like(py::handle o, std::string_view what) {
   if (py::isinstance<py::bytes>(o)) return from_bytes(py::reinterpret_borrow<py::bytes>(o));
-  if (py::isinstance<py::bytearray>(o)) {
-    const auto* p = reinterpret_cast<const std::uint8_t*>(PyByteArray_AsString(o.ptr()));
-    return {p, p + PyByteArray_Size(o.ptr())};
-  }
+  // bytearray, memoryview, array: their bytes as a snapshot's load takes them.
+  if (PyObject_CheckBuffer(o.ptr()) != 0) return buffer_bytes(o, what);
   try {
     return o.cast<std::vector<std::uint8_t>>();
   } catch (const IntOutOfRange& e) {
@@ -166,6 +164,21 @@ std::vector<std::uint8_t> bytes_like(py::handle o, std::string_view what) {
         fmt::format("{}: bytes expected, got {}", what,
                     py::str(py::type::of(o).attr("__name__")).cast<std::string>()));
   }
+}
+
+std::string type_expected(std::string_view what, py::handle sample, py::handle got) {
+  const auto name = [](py::handle o) {
+    return py::str(py::type::of(o).attr("__name__")).cast<std::string>();
+  };
+  std::string expected = "a " + name(sample);
+  if (py::isinstance<py::bool_>(sample)) {
+    expected = "a bool";
+  } else if (py::isinstance<py::int_>(sample)) {
+    expected = "an int";
+  } else if (py::isinstance<py::bytes>(sample)) {
+    expected = "bytes";
+  }
+  return fmt::format("{}: {} expected, got {}", what, expected, name(got));
 }
 
 std::vector<std::uint8_t> buffer_bytes(py::handle o, std::string_view what) {
@@ -184,8 +197,19 @@ std::vector<std::uint8_t> buffer_bytes(py::handle o, std::string_view what) {
 }
 
 std::string fspath_arg(const py::object& path, std::string_view what) {
+  if (!py::isinstance<py::str>(path) && !py::isinstance<py::bytes>(path) &&
+      !py::hasattr(path, "__fspath__")) {
+    throw py::type_error(
+        fmt::format("{}: a str or an os.PathLike expected, got {}", what,
+                    py::str(py::type::of(path).attr("__name__")).cast<std::string>()));
+  }
   const py::object p = py::module_::import("os").attr("fspath")(path);
   return path_arg(p.cast<std::string>(), what);
+}
+
+std::optional<std::string> fspath_arg_or_none(const py::object& path, std::string_view what) {
+  if (path.is_none()) return std::nullopt;
+  return fspath_arg(path, what);
 }
 
 std::vector<std::uint8_t> raw_telegram(py::handle data) {
@@ -224,6 +248,20 @@ std::int64_t clamped(const py::int_& v) {
 }
 
 std::string text_of(const py::int_& v) { return py::str(py::handle(v)).cast<std::string>(); }
+
+// A block's length, after its address's check: 0 up to the whole address space, else a
+// ValueError naming it ("length -1 is out of range (0..2048)"); it was called a block "ending
+// beyond" the space, or given int64_t's range.
+std::int64_t block_length(const Chip& chip, const AnyInt& addr, const AnyInt& n) {
+  bus_addr(chip, addr);
+  const std::int64_t limit = std::int64_t{1} << chip.profile().address_bits;
+  const std::int64_t v = clamped(n.value);
+  if (v < 0 || v > limit) {
+    throw py::value_error(
+        range_error_text("length", text_of(n.value), 0, static_cast<std::uint64_t>(limit)));
+  }
+  return v;
+}
 
 }  // namespace
 
@@ -476,7 +514,8 @@ void bind_chip_class(py::module_& m) {
           py::arg("addr"), py::arg("value"))
       .def(
           "read_block",
-          [](PyChip& c, const AnyInt& a, std::int64_t n) {
+          [](PyChip& c, const AnyInt& a, const AnyInt& length) {
+            const std::int64_t n = block_length(c.chip, a, length);
             const U32 at = bus_addr(c.chip, a, n);
             std::vector<U8> out(static_cast<std::size_t>(n));
             c.run([&] { c.chip.read_block(at, out); });
@@ -493,7 +532,8 @@ void bind_chip_class(py::module_& m) {
           py::arg("addr"), py::arg("data"))
       .def(
           "fill",
-          [](PyChip& c, const AnyInt& a, const AnyInt& v, std::int64_t n) {
+          [](PyChip& c, const AnyInt& a, const AnyInt& v, const AnyInt& length) {
+            const std::int64_t n = block_length(c.chip, a, length);
             const U32 at = bus_addr(c.chip, a, n);
             const U8 b = byte_value("value", v);
             c.run([&] { c.chip.fill(at, b, static_cast<std::size_t>(n)); });
@@ -501,7 +541,8 @@ void bind_chip_class(py::module_& m) {
           py::arg("addr"), py::arg("value"), py::arg("length"))
       .def(
           "equal",
-          [](PyChip& c, const AnyInt& a, const AnyInt& b, std::int64_t n) {
+          [](PyChip& c, const AnyInt& a, const AnyInt& b, const AnyInt& length) {
+            const std::int64_t n = block_length(c.chip, a, length);
             const U32 at = bus_addr(c.chip, a, n);
             const U32 bt = bus_addr(c.chip, b, n);
             return c.run([&] { return c.chip.equal(at, bt, static_cast<std::size_t>(n)); });
@@ -526,7 +567,8 @@ void bind_chip_class(py::module_& m) {
           py::arg("addr"), py::arg("value"))
       .def(
           "peek_block",
-          [](const PyChip& c, const AnyInt& a, std::int64_t n) {
+          [](const PyChip& c, const AnyInt& a, const AnyInt& length) {
+            const std::int64_t n = block_length(c.chip, a, length);
             const U32 at = bus_addr(c.chip, a, n);
             c.enter(false);
             std::vector<U8> out(static_cast<std::size_t>(n));
@@ -627,9 +669,10 @@ void bind_chip_class(py::module_& m) {
           py::arg("cycle"), py::arg("level"))
       .def(
           "drive_rxd_chars",
-          [](PyChip& c, const py::bytes& b, U64 start, U32 bit_cycles) {
+          [](PyChip& c, const py::object& b, U64 start, U32 bit_cycles) {
+            std::vector<U8> data = bytes_like(b, "data");
             c.enter(true);
-            return c.chip.drive_rxd_chars(from_bytes(b), start, bit_cycles);
+            return c.chip.drive_rxd_chars(data, start, bit_cycles);
           },
           py::arg("data"), py::arg("start"), py::arg("bit_cycles"))
       // observers

@@ -30,7 +30,7 @@ void no_dpv1_but_on_vpc3plus(const Chip& chip, std::string_view what) {
   }
 }
 
-using RecordArg = std::tuple<py::int_, py::int_, py::bytes>;
+using RecordArg = std::tuple<py::int_, py::int_, py::object>;
 
 // run_responder's records=: (slot, index, data) each, as a scenario's `record` lines take them;
 // a ValueError in their words, after the record's place in the list.
@@ -40,7 +40,7 @@ std::vector<Dpv1Record> dpv1_records(const std::vector<RecordArg>& given) {
     const std::string at = fmt::format("records[{}]: ", out.size());
     try {
       Dpv1Record r{in_range<U8>(kRecordSlot, slot), in_range<U8>(kRecordIndex, index),
-                   from_bytes(data)};
+                   bytes_like(data, "data")};
       if (r.data.size() > kRecordLength.max)
         throw py::value_error(fmt::format("data: more than {} bytes", kRecordLength.max));
       for (const Dpv1Record& o : out) {
@@ -123,10 +123,11 @@ Dpv1Answer read_record(PyMaster& pm, std::int64_t slot, std::int64_t index, std:
   return pm.dpv1([&](Dpv1Master& d) { return (d.*Read)(s, i, n); });
 }
 template <Dpv1Answer (Dpv1Master::*Send)(U8, U8, pdu::Bytes)>
-Dpv1Answer send_record(PyMaster& pm, std::int64_t slot, std::int64_t index, const py::bytes& data) {
+Dpv1Answer send_record(PyMaster& pm, std::int64_t slot, std::int64_t index,
+                       const py::object& data) {
   const auto s = in_range<U8>(kRecordSlot, slot);
   const auto i = in_range<U8>(kRecordIndex, index);
-  pdu::Bytes v = from_bytes(data);
+  pdu::Bytes v = bytes_like(data, "data");
   if (v.size() > kRecordLength.max)
     throw py::value_error(fmt::format("data: more than {} bytes", kRecordLength.max));
   return pm.dpv1([&](Dpv1Master& d) { return (d.*Send)(s, i, std::move(v)); });
@@ -134,8 +135,8 @@ Dpv1Answer send_record(PyMaster& pm, std::int64_t slot, std::int64_t index, cons
 
 // An Initiate's S_Addr or D_Addr: at most kAddrMax bytes (both together too: addresses_too_long),
 // as a scenario's s_addr= / d_addr=.
-pdu::Bytes address(const py::bytes& b, std::string_view what) {
-  pdu::Bytes v = from_bytes(b);
+pdu::Bytes address(const py::object& b, std::string_view what) {
+  pdu::Bytes v = bytes_like(b, what);
   if (v.size() > kAddrMax)
     throw py::value_error(fmt::format("{}: more than {} bytes", what, kAddrMax));
   return v;
@@ -198,13 +199,16 @@ void bind_dpv1(py::module_& m, py::class_<PyMaster>& master) {
           // `master.dpv1_rules.c1_response_timeout = 1` reaches the next service.
           "dpv1_rules", [](PyMaster& pm) -> Dpv1Rules& { return pm.dpv1_rules; },
           [](PyMaster& pm, const Dpv1Rules& r) { pm.dpv1_rules = r; })
-      .def_property_readonly(
-          "c2_sap",
-          [](const PyMaster& pm) { return pm.dpv1_m ? pm.dpv1_m->c2_sap() : std::nullopt; })
+      .def_property_readonly("c2_sap",
+                             [](const PyMaster& pm) {
+                               pm.chip.enter(false);  // the running service opens or forgets it
+                               return pm.dpv1_m ? pm.dpv1_m->c2_sap() : std::nullopt;
+                             })
       .def_property_readonly("c2_send_timeout",
                              [](const PyMaster& pm) -> std::optional<std::uint16_t> {
                                // the open connection's: max(the Initiate's, the resource manager's)
                                // x 10 ms
+                               pm.chip.enter(false);
                                if (!pm.dpv1_m || !pm.dpv1_m->c2_sap()) return std::nullopt;
                                return pm.dpv1_m->c2_send_timeout();
                              })
@@ -228,8 +232,8 @@ void bind_dpv1(py::module_& m, py::class_<PyMaster>& master) {
       .def(
           "c2_initiate",
           [](PyMaster& pm, std::int64_t send_timeout, std::uint16_t features_supported,
-             std::int64_t s_type, const py::bytes& s_addr, std::int64_t d_type,
-             const py::bytes& d_addr) {
+             std::int64_t s_type, const py::object& s_addr, std::int64_t d_type,
+             const py::object& d_addr) {
             pdu::Initiate req =
                 pdu::initiate_request(in_range<std::uint16_t>(kSendTimeout, send_timeout));
             req.features_supported = features_supported;
@@ -286,6 +290,7 @@ void bind_master(py::module_& m) {
                                    in_range<std::uint32_t>(kSlotBits, slot_bits),
                                    in_range<std::uint32_t>(kIdleBits, idle_bits)};
              const SlaveConfig sc = slave.value_or(SlaveConfig{});
+             if (sc.address == mc.address) throw py::value_error(master_and_slave_at(sc.address));
              if (sc.wd_base_1ms && c.chip.profile().id == Profile::vpc3plus &&
                  (sc.user_prm.empty() || (sc.user_prm[0] & dpv1::status1::DPV1_Enable) == 0)) {
                throw py::value_error(wd_base_needs_dpv1("wd_base_1ms=True"));
@@ -297,8 +302,8 @@ void bind_master(py::module_& m) {
            py::arg("slot_bits") = 100, py::arg("idle_bits") = 33, py::arg("slave") = py::none())
       .def(
           "run_firmware",
-          [](PyMaster& pm, const std::string& spec, bool gsd_defaults) {
-            const dpc31_firmware& d = find_firmware(path_arg(spec, "firmware"));
+          [](PyMaster& pm, const py::object& spec, bool gsd_defaults) {
+            const dpc31_firmware& d = find_firmware(fspath_arg(spec, "firmware"));
             const SlaveConfig slave =
                 gsd_defaults ? with_gsd_defaults(d, pm.m->slave()) : pm.m->slave();
             auto fw = std::make_shared<FirmwareHost>(d);
@@ -315,16 +320,18 @@ void bind_master(py::module_& m) {
           "firmware's Ident, Cfg, lengths and User_Prm (as a scenario's `firmware` line).")
       .def(
           "run_responder",
-          [](PyMaster& pm, const py::bytes& inputs, bool sync_supported, bool freeze_supported,
-             bool spec_clear_mode, const py::bytes& substitute, bool user_watchdog,
+          [](PyMaster& pm, const py::object& inputs_arg, bool sync_supported, bool freeze_supported,
+             bool spec_clear_mode, const py::object& substitute_arg, bool user_watchdog,
              bool dx_out_port, const std::vector<RecordArg>& records,
              const std::optional<py::int_>& work_cycles,
              const std::optional<py::int_>& wd_baud_control,
              const std::optional<py::int_>& user_wd_value) {
+            const std::vector<U8> inputs = bytes_like(inputs_arg, "inputs");
+            const std::vector<U8> substitute = bytes_like(substitute_arg, "substitute");
             ResponderConfig rc;
             if (pm.chip.chip.profile().id != Profile::dpc31) {  // as a scenario's `user` line
               if (dx_out_port) throw py::value_error(dx_out_port_is_for_dpc31("dx_out_port="));
-              if (py::len(substitute) != 0)
+              if (!substitute.empty())
                 throw py::value_error(substitute_is_for_dpc31("substitute="));
             }
             // The `user` step's checks (scenario_parse.cpp): its ranges and words.
@@ -353,7 +360,7 @@ void bind_master(py::module_& m) {
             rc.sync_supported = sync_supported;
             rc.freeze_supported = freeze_supported;
             rc.spec_clear_mode = spec_clear_mode;
-            rc.substitute = from_bytes(substitute);
+            rc.substitute = substitute;
             rc.user_watchdog = user_watchdog;
             rc.dx_out_port = dx_out_port;
             // The buffers for the Master's SlaveConfig must fit the chip's RAM.
@@ -361,7 +368,7 @@ void bind_master(py::module_& m) {
                 !why.empty())
               throw py::value_error("SlaveConfig " + why);
             auto r = std::make_shared<Responder>(rc);
-            r->set_inputs(from_bytes(inputs));
+            r->set_inputs(inputs);
             pm.start_user_side(rc.slave, [&](BusPort& bus) { r->init(bus); });
             pm.m->set_firmware([r](BusPort& b) { r->isr(b); });
             user_side_runs_with(r.get(), pm.chip.run_state());
@@ -422,7 +429,13 @@ void bind_master(py::module_& m) {
           },
           "{slave address: master address}: a start-up that returned False because its slave is "
           "locked by another master (Slave_Diag's Master_Add) names it here")
-      .def("clear_history", [](PyMaster& pm) { pm.m->clear_history(); })
+      .def("clear_history",
+           [](PyMaster& pm) {
+             // The running master appends to it: refused to another thread and to an observer.
+             enter_run(*pm.chip.run_state(), true, "chip", "history, counters, ...",
+                       "clear the master's history");
+             pm.m->clear_history();
+           })
       .def(
           "startup",
           [](PyMaster& pm, const py::int_& tries) {
@@ -498,8 +511,8 @@ void bind_master(py::module_& m) {
           py::arg("cycles"), "Time passes with a silent bus (cable pulled); the firmware runs.")
       .def(
           "line_noise",
-          [](PyMaster& pm, const py::bytes& b, std::uint32_t idle_bits) {
-            const std::vector<U8> v = from_bytes(b);
+          [](PyMaster& pm, const py::object& b, std::uint32_t idle_bits) {
+            const std::vector<U8> v = bytes_like(b, "data");
             pm.act([&] { pm.m->line_noise(v, idle_bits); });
           },
           py::arg("data"), py::arg("idle_bits"))

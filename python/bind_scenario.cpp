@@ -116,10 +116,11 @@ void bind_scenarios(py::module_& m) {
   py::class_<Scenario>(m, "Scenario", "A parsed scenario file (docs/scenario-format.md).")
       .def_static(
           "load",
-          [](const std::string& path) {
+          [](const py::object& path) {
             Scenario s;
             ScenarioError err;
-            if (!load_scenario(read_path_arg(path, "path"), s, err)) raise_scenario(err);
+            if (!load_scenario(read_path_arg(fspath_arg(path, "path"), "path"), s, err))
+              raise_scenario(err);
             return s;
           },
           py::arg("path"))

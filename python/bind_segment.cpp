@@ -556,7 +556,7 @@ PyStation& add_station(py::object self, U8 address, const std::string& profile,
   if (user_wd_value && opt.profile == Profile::dpc31 && !user_wd.value_or(false))
     throw py::value_error(user_wd_value_needs_user_wd("user_wd_value"));
   if (firmware) {
-    const dpc31_firmware& d = find_firmware(path_arg(*firmware, "firmware"));
+    const dpc31_firmware& d = find_firmware(*firmware);  // checked as a file name
     st->firmware = std::make_shared<FirmwareHost>(d);
     if (!slave) sc = with_gsd_defaults(d, sc);
   } else {
@@ -610,10 +610,12 @@ void bind_segment_class(py::module_& m) {
   py::class_<P>(m, "Segment",
                 "A bus segment: chips, masters and scripted senders on one RS-485 line "
                 "(docs/segment.md).")
-      .def(py::init([](std::uint32_t baud, std::uint32_t clock_hz,
-                       const std::optional<std::string>& vcd, const std::optional<std::string>& fst,
-                       const std::optional<std::string>& pcapng,
+      .def(py::init([](std::uint32_t baud, std::uint32_t clock_hz, const py::object& vcd_arg,
+                       const py::object& fst_arg, const py::object& pcapng_arg,
                        const std::vector<std::string>& signals) {
+             const auto vcd = fspath_arg_or_none(vcd_arg, "vcd");
+             const auto fst = fspath_arg_or_none(fst_arg, "fst");
+             const auto pcapng = fspath_arg_or_none(pcapng_arg, "pcapng");
              // A rate the chips' baud search finds (a scenario's `baud`), a bit at least one
              // clock.
              auto s = std::make_unique<P>(profibus_rate(baud), clock_hz);
@@ -635,7 +637,7 @@ void bind_segment_class(py::module_& m) {
       .def(
           "add_station",
           [](py::object self, std::int64_t address, const std::string& profile,
-             const std::optional<std::string>& variant, const std::optional<std::string>& firmware,
+             const std::optional<std::string>& variant, const py::object& firmware,
              const std::optional<std::string>& name, std::pair<std::int64_t, std::int64_t> wd,
              const std::optional<SlaveConfig>& slave, const std::optional<bool>& user_wd,
              const std::optional<py::int_>& user_wd_value) {
@@ -643,7 +645,8 @@ void bind_segment_class(py::module_& m) {
             std::optional<std::uint16_t> wd_value;
             if (user_wd_value) wd_value = in_range<std::uint16_t>(kUserWdValue, *user_wd_value);
             PyStation& st = add_station(
-                self, in_range<U8>(kStationAddress, address), profile, variant, firmware, name,
+                self, in_range<U8>(kStationAddress, address), profile, variant,
+                fspath_arg_or_none(firmware, "firmware"), name,
                 {in_range<U8>(kWdFactor1, wd.first), in_range<U8>(kWdFactor2, wd.second)}, slave,
                 user_wd, wd_value);
             py::object o = py::cast(&st, py::return_value_policy::reference);
@@ -1029,16 +1032,16 @@ void bind_segment_scenario(py::module_& m) {
   py::class_<SegmentScenario>(m, "SegmentScenario", "A parsed segment scenario file.")
       .def_static(
           "load",
-          [fail](const std::string& path) {
+          [fail](const py::object& path) {
             SegmentScenario s;
             Scenario single;
             ScenarioError err;
             // A file that cannot be read or is no scenario at all: Scenario.load's words for it.
-            const SegmentLoad l =
-                load_segment_scenario(read_path_arg(path, "path"), s, single, err);
+            const std::string file = read_path_arg(fspath_arg(path, "path"), "path");
+            const SegmentLoad l = load_segment_scenario(file, s, single, err);
             if (l == SegmentLoad::error) fail(err);
             if (l == SegmentLoad::not_segment) {
-              fail(ScenarioError{path, 0, "not a segment scenario (use Scenario.load)"});
+              fail(ScenarioError{file, 0, "not a segment scenario (use Scenario.load)"});
             }
             return s;
           },
@@ -1063,9 +1066,11 @@ void bind_segment_scenario(py::module_& m) {
       .def_readonly("baud", &SegmentScenario::baud)
       .def(
           "run",
-          [](const SegmentScenario& s, const std::optional<std::string>& vcd,
-             const std::optional<std::string>& fst, const std::optional<std::string>& pcapng,
-             const std::vector<std::string>& signals) {
+          [](const SegmentScenario& s, const py::object& vcd_arg, const py::object& fst_arg,
+             const py::object& pcapng_arg, const std::vector<std::string>& signals) {
+            const auto vcd = fspath_arg_or_none(vcd_arg, "vcd");
+            const auto fst = fspath_arg_or_none(fst_arg, "fst");
+            const auto pcapng = fspath_arg_or_none(pcapng_arg, "pcapng");
             std::vector<outfile::Named> inputs = {{"the scenario", s.file}};
             for (const std::string& p : segment_plugins(s))
               inputs.push_back({"the firmware plug-in", p});

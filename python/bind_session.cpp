@@ -56,7 +56,7 @@ namespace {
 template <typename T, typename M>
 auto bytes_property(M T::*member) {
   return std::make_pair([member](const T& t) { return to_bytes(t.*member); },
-                        [member](T& t, const py::bytes& b) { t.*member = from_bytes(b); });
+                        [member](T& t, const py::object& b) { t.*member = bytes_like(b, "du"); });
 }
 
 // A SlaveConfig field as a scenario's `slave` line takes it (vocabulary.hpp), else a ValueError
@@ -70,8 +70,8 @@ auto number_field(F SlaveConfig::*member, const ValueRange& r) {
 auto bytes_field(std::vector<U8> SlaveConfig::*member, const char* what, bool non_empty,
                  std::size_t max) {
   return std::make_pair([member](const SlaveConfig& c) { return to_bytes(c.*member); },
-                        [member, what, non_empty, max](SlaveConfig& c, const py::bytes& b) {
-                          std::vector<U8> v = from_bytes(b);
+                        [member, what, non_empty, max](SlaveConfig& c, const py::object& b) {
+                          std::vector<U8> v = bytes_like(b, what);
                           if (non_empty && v.empty())
                             throw py::value_error(fmt::format("{}: at least one byte", what));
                           if (v.size() > max)
@@ -82,13 +82,13 @@ auto bytes_field(std::vector<U8> SlaveConfig::*member, const char* what, bool no
 
 void bind_frames(py::module_& m) {
   py::class_<fdl::Frame>(m, "Frame", "An FDL telegram (include/dpc31/fdl.hpp).")
-      .def(py::init([](const AnyInt& da, const AnyInt& sa, const AnyInt& fc, const py::bytes& du,
+      .def(py::init([](const AnyInt& da, const AnyInt& sa, const AnyInt& fc, const py::object& du,
                        const std::optional<AnyInt>& dsap, const std::optional<AnyInt>& ssap) {
              const auto sap = [](const char* what, const std::optional<AnyInt>& v) {
                return v ? std::optional<U8>(byte_value(what, *v)) : std::nullopt;
              };
              return fdl::make_frame(byte_value("da", da), byte_value("sa", sa),
-                                    byte_value("fc", fc), from_bytes(du), sap("dsap", dsap),
+                                    byte_value("fc", fc), bytes_like(du, "du"), sap("dsap", dsap),
                                     sap("ssap", ssap));
            }),
            py::arg("da"), py::arg("sa"), py::arg("fc"), py::arg("du") = py::bytes(),
@@ -284,9 +284,10 @@ void bind_user_side(py::module_& m) {
             enter_user_side(&r, false);
             return to_bytes(r.inputs());
           },
-          [](Responder& r, const py::bytes& b) {
+          [](Responder& r, const py::object& b) {
+            std::vector<U8> v = bytes_like(b, "inputs");
             enter_user_side(&r, true);
-            r.set_inputs(from_bytes(b));
+            r.set_inputs(std::move(v));
           })
       .def_property_readonly(
           "outputs",
@@ -321,6 +322,14 @@ unsigned port_index(std::int64_t n) {
   return static_cast<unsigned>(n);
 }
 
+// A register of the programmer's model: the running CPU changes it, so another thread is refused
+// it while the board runs (an observer may look).
+template <auto Get>
+auto cpu_state(const PyBoard& b) {
+  b.chip.enter(false);
+  return (b.board->cpu().*Get)();
+}
+
 void bind_board(py::module_& m) {
   py::class_<PyBoard>(m, "Cpu51Board",
                       "An 80C32 beside the chip (its XDATA window at `address`, X/INT on INT0), "
@@ -342,10 +351,10 @@ void bind_board(py::module_& m) {
           "its interrupt controller (the chip made with irq_controller='c31'); docs/dpc31.md.")
       .def(
           "load_hex",
-          [](PyBoard& b, const std::string& path) {
+          [](PyBoard& b, const py::object& path) {
             b.chip.enter(true);
             Cpu51Config cfg = b.cfg;
-            cfg.hex = read_path_arg(path, "path");
+            cfg.hex = read_path_arg(fspath_arg(path, "path"), "path");
             Cpu51Image image;
             std::string why;
             if (!load_cpu51_image(cfg, image, why)) raise(errors().input, why);
@@ -366,11 +375,17 @@ void bind_board(py::module_& m) {
           "step in progress ends).")
       .def(
           "port",
-          [](const PyBoard& b, std::int64_t n) { return b.board->cpu().port_latch(port_index(n)); },
+          [](const PyBoard& b, std::int64_t n) {
+            b.chip.enter(false);  // the running CPU writes it
+            return b.board->cpu().port_latch(port_index(n));
+          },
           py::arg("n"), "Port n's latch (0..3: P0..P3).")
       .def(
           "pins",
-          [](const PyBoard& b, std::int64_t n) { return b.board->cpu().port_pins(port_index(n)); },
+          [](const PyBoard& b, std::int64_t n) {
+            b.chip.enter(false);
+            return b.board->cpu().port_pins(port_index(n));
+          },
           py::arg("n"), "Port n's pins: the latch AND what the outside drives.")
       .def(
           "set_port_input",
@@ -380,7 +395,11 @@ void bind_board(py::module_& m) {
           },
           py::arg("n"), py::arg("value"), "What the outside drives on port n (an address switch).")
       .def(
-          "xdata", [](const PyBoard& b, std::uint16_t addr) { return b.board->ram(addr); },
+          "xdata",
+          [](const PyBoard& b, std::uint16_t addr) {
+            b.chip.enter(false);
+            return b.board->ram(addr);
+          },
           py::arg("addr"), "A byte of the board's RAM (XDATA outside the chip's window).")
       .def(
           "on_ram_write",
@@ -414,18 +433,19 @@ void bind_board(py::module_& m) {
           "the chip cycle its TI is set (docs/cpu.md, \"Serial port\"); None removes it.")
       .def(
           "chip_cycle_of",
-          [](const PyBoard& b, U64 clock) { return b.board->chip_cycle_of(clock); },
+          [](const PyBoard& b, U64 clock) {
+            b.chip.enter(false);
+            return b.board->chip_cycle_of(clock);
+          },
           py::arg("cpu_clock"), "The chip cycle of a CPU oscillator clock counted from reset.")
-      .def_property_readonly("pc", [](const PyBoard& b) { return b.board->cpu().pc(); })
-      .def_property_readonly("a", [](const PyBoard& b) { return b.board->cpu().a(); })
-      .def_property_readonly("b", [](const PyBoard& b) { return b.board->cpu().b(); })
-      .def_property_readonly("psw", [](const PyBoard& b) { return b.board->cpu().psw(); })
-      .def_property_readonly("sp", [](const PyBoard& b) { return b.board->cpu().sp(); })
-      .def_property_readonly("dptr", [](const PyBoard& b) { return b.board->cpu().dptr(); })
-      .def_property_readonly("machine_cycles",
-                             [](const PyBoard& b) { return b.board->cpu().cycles(); })
-      .def_property_readonly("in_service",
-                             [](const PyBoard& b) { return b.board->cpu().in_service(); })
+      .def_property_readonly("pc", cpu_state<&mcs51::Cpu::pc>)
+      .def_property_readonly("a", cpu_state<&mcs51::Cpu::a>)
+      .def_property_readonly("b", cpu_state<&mcs51::Cpu::b>)
+      .def_property_readonly("psw", cpu_state<&mcs51::Cpu::psw>)
+      .def_property_readonly("sp", cpu_state<&mcs51::Cpu::sp>)
+      .def_property_readonly("dptr", cpu_state<&mcs51::Cpu::dptr>)
+      .def_property_readonly("machine_cycles", cpu_state<&mcs51::Cpu::cycles>)
+      .def_property_readonly("in_service", cpu_state<&mcs51::Cpu::in_service>)
       .def_property_readonly("chip", [](const PyBoard& b) { return b.chip_ref; });
 }
 }  // namespace

@@ -22,7 +22,16 @@ using U64 = std::uint64_t;
 template <typename T>
 T with_kwargs(const py::kwargs& kw) {
   py::object o = py::cast(T{});
-  for (const auto& [k, v] : kw) py::setattr(o, k, v);
+  for (const auto& [k, v] : kw) {
+    try {
+      py::setattr(o, k, v);
+    } catch (py::error_already_set& e) {
+      // pybind11's "(): incompatible function arguments" names neither the keyword nor the type
+      // it takes: the field's own value says that.
+      if (!e.matches(PyExc_TypeError) || !py::hasattr(o, k)) throw;
+      throw py::type_error(type_expected(py::str(k).cast<std::string>(), o.attr(k), v));
+    }
+  }
   return o.cast<T>();
 }
 

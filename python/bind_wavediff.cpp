@@ -54,26 +54,26 @@ void bind_wavediff(py::module_& m) {
       .def("json", &json_report);
   m.def(
       "wavediff",
-      [](const std::string& a, const std::string& b, const std::optional<std::string>& clock,
+      [](const py::object& a, const py::object& b, const std::optional<std::string>& clock,
          const std::optional<std::string>& clock_b, const std::string& strip_a,
-         const std::string& strip_b, bool strip_auto, const std::string& map_file,
+         const std::string& strip_b, bool strip_auto, const py::object& map_file,
          std::vector<std::string> include, std::vector<std::string> exclude, bool ignore_missing,
-         const std::string& xz, const std::string& diff_vcd, const std::string& edge,
+         const std::string& xz, const py::object& diff_vcd, const std::string& edge,
          const std::string& start, const std::string& end, const std::string& tolerance,
          std::uint64_t tolerance_cycles) {
         Options o;
-        o.file_a = read_path_arg(a, "a");
-        o.file_b = read_path_arg(b, "b");
+        o.file_a = read_path_arg(fspath_arg(a, "a"), "a");
+        o.file_b = read_path_arg(fspath_arg(b, "b"), "b");
         o.clock_a = clock.value_or("");
         o.clock_b = clock_b.value_or("");
         o.strip_a = strip_a;
         o.strip_b = strip_b;
         o.strip_auto = strip_auto;
-        o.map_file = path_arg(map_file, "map_file");
+        o.map_file = fspath_arg(map_file, "map_file");
         o.include = std::move(include);
         o.exclude = std::move(exclude);
         o.ignore_missing = ignore_missing;
-        o.diff_vcd = path_arg(diff_vcd, "diff_vcd");
+        o.diff_vcd = fspath_arg(diff_vcd, "diff_vcd");
         if (xz == "strict" || xz == "wildcard" || xz == "zero") {
           o.xz = xz == "strict" ? XzPolicy::strict
                                 : (xz == "wildcard" ? XzPolicy::wildcard : XzPolicy::zero);

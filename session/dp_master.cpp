@@ -457,6 +457,9 @@ void DpMaster::line_noise(std::span<const std::uint8_t> bytes, std::uint32_t idl
 }
 
 void DpMaster::glitch(std::uint32_t low_cycles) {
+  // Its rising edge at its falling edge's cycle is no pulse (the chip counted a start bit error).
+  if (low_cycles == 0)
+    throw std::invalid_argument("glitch: low_cycles 0: a pulse lasts 1 clock or more");
   const std::uint64_t start = next_start(cfg_.idle_bits);
   if (seg_) {
     seg_->pulse(station_, start, low_cycles);
@@ -464,7 +467,9 @@ void DpMaster::glitch(std::uint32_t low_cycles) {
     chip_->drive_rxd(start, false);
     chip_->drive_rxd(start + low_cycles, true);
   }
-  bus_free_ = start + std::uint64_t{kUartCharBits} * t_;
+  // Free once the line has risen and the character the receiver samples from it has ended: a
+  // request before the rise would go out on a line held low.
+  bus_free_ = start + std::max<std::uint64_t>(low_cycles, std::uint64_t{kUartCharBits} * t_);
   ++counters_.noise;
   run_until(bus_free_);
 }

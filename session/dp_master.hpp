@@ -272,7 +272,9 @@ class DpMaster {
   // a telegram the chip must not accept). Nothing is waited for but the last stop bit.
   void line_noise(std::span<const std::uint8_t> bytes, std::uint32_t idle_bits);
   // A low pulse of `low_cycles` after a TSYN of bus idle; the chip's receiver samples one
-  // character from it (11 bit times), which the next request waits out.
+  // character from it (11 bit times). The next request waits out that character and the pulse,
+  // whichever ends later (a pulse longer than a character holds the line low, as a segment's
+  // does). A `low_cycles` of 0 is std::invalid_argument, nothing on the line.
   void glitch(std::uint32_t low_cycles);
 
   // The DP services, FCB handled per EN 50170 (FCV = 1 from the second SRD on).

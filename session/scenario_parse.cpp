@@ -205,10 +205,7 @@ class Parser {
     const std::uint8_t slave = s_.user.slave.address;
     if (slave == s_.master.address) {
       // The later of the two lines that set them (one may be the other's default).
-      fail_at(std::max(master_address_line_, slave_address_line_),
-              fmt::format("the master and the slave both have address {}: each station needs "
-                          "its own",
-                          slave));
+      fail_at(std::max(master_address_line_, slave_address_line_), master_and_slave_at(slave));
     }
     if (const std::string why = inputs_length_problem(s_.inputs.size(), s_.user.slave.in_len);
         inputs_line_ != 0 && !why.empty()) {

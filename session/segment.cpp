@@ -719,6 +719,9 @@ void Segment::run_to_send(std::uint64_t start) {
 }
 
 void Segment::pulse(std::size_t from, std::uint64_t start, std::uint64_t low_cycles) {
+  // Its rising edge at its falling edge's cycle would be no pulse, and out of the line's order.
+  if (low_cycles == 0)
+    throw std::invalid_argument("pulse: low_cycles 0: a pulse lasts 1 clock or more");
   check_send(from, start, std::max(low_cycles, std::uint64_t{kUartCharBits} * t_));
   run_to_send(start);
   if (owner_ && *owner_ != from && start < owned_until_) {

@@ -108,7 +108,8 @@ class Segment {
   // would end past the last cycle the line counts (UINT64_MAX is its "never").
   std::uint64_t send(std::size_t from, std::span<const std::uint8_t> bytes, std::uint64_t start,
                      UartFault fault = {});
-  // A low pulse from `from` of `low_cycles` at `start` (a glitch, line noise); refused as send().
+  // A low pulse from `from` of `low_cycles` at `start` (a glitch, line noise); refused as send(),
+  // and a `low_cycles` of 0 (std::invalid_argument, nothing on the line).
   void pulse(std::size_t from, std::uint64_t start, std::uint64_t low_cycles);
 
   // Runs every station to `cycle`. With `wake_for`, returns as soon as a start bit from another

@@ -224,6 +224,11 @@ std::string station_at_master(std::uint8_t address) {
   return fmt::format("station {} at the address of master {}", address, address);
 }
 
+std::string master_and_slave_at(std::uint8_t address) {
+  return fmt::format("the master and the slave both have address {}: each station needs its own",
+                     address);
+}
+
 std::string station_name_refused(std::string_view name, std::string_view whose) {
   if (name.empty()) return fmt::format("empty name for {}", whose);
   if (name.size() > kMaxStationName) {

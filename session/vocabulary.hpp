@@ -191,6 +191,9 @@ inline constexpr std::size_t kMaxStationName = 64;
 // profile dpc31: only the DPC31 has ...".
 [[nodiscard]] std::string substitute_is_for_dpc31(std::string_view option);
 [[nodiscard]] std::string dx_out_port_is_for_dpc31(std::string_view option);
+// A single chip's master and its slave at one address (a scenario's `master address=` and `slave
+// address=`, Python's Master(address=, slave=)): two stations at one address are no PROFIBUS.
+[[nodiscard]] std::string master_and_slave_at(std::uint8_t address);
 // The VPC3+ takes WD_Base from Set_Prm's DPV1_Status_1 only with DPV1_Enable; without it
 // Mode_Reg0.WD_Base decides (VPC3+C p.53, docs/dpv1.md): a watchdog base asked of Set_Prm there.
 [[nodiscard]] std::string wd_base_needs_dpv1(std::string_view option);

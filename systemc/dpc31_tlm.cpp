@@ -2,12 +2,13 @@
 //
 // Time: the chip's cycle c is at time_of(c) on the SystemC time line. The chip never runs ahead of
 // what the rest of the platform could still change but the rxd port (an access takes the chip to
-// its end at once; an rxd change meanwhile lands at the chip's cycle): its own thread steps it only
-// up to the current time, from event to event (Chip::next_deadline); a bus access may take it ahead
-// of the current time (an initiator running ahead with a quantum keeper) only while no event of the
-// chip falls before the access ends and no other process waits for a cycle before the access
-// starts; otherwise the initiator is synchronised first. The pins' changes are applied at their
-// times.
+// its end at once; an rxd change meanwhile lands at the chip's cycle) and a reset or load_state
+// by another process (it undoes what an initiator running ahead did: warned, went_back): its own
+// thread steps it only up to the current time, from event to event (Chip::next_deadline); a bus
+// access may take it ahead of the current time (an initiator running ahead with a quantum keeper)
+// only while no event of the chip falls before the access ends and no other process waits for a
+// cycle before the access starts; otherwise the initiator is synchronised first. The pins' changes
+// are applied at their times.
 #include "dpc31_tlm.hpp"
 
 #include <algorithm>
@@ -15,7 +16,17 @@
 #include <stdexcept>
 #include <string>
 
+#include "board.hpp"
+
 namespace dpc31::systemc {
+
+KeepSelection::KeepSelection()
+    : hal_(hal::exchange_selection({})), hooks_(board::exchange(nullptr)) {}
+
+KeepSelection::~KeepSelection() {
+  board::exchange(hooks_);
+  hal::exchange_selection(hal_);
+}
 
 namespace {
 
@@ -56,8 +67,13 @@ Dpc31Tlm::Dpc31Tlm(const sc_core::sc_module_name& name, const ChipOptions& optio
     schedule(cycle, kIrq, active);
   });
   // After every bus access, step, reset and load_state: a Mode_Reg0.INT_Pol written or reset
-  // flips X/INT without a change of the interrupt (no on_irq_change).
-  chip_.on_cycle([this](std::uint64_t cycle) { follow_x_int(cycle); });
+  // flips X/INT without a change of the interrupt (no on_irq_change); a reset or a load may take
+  // the chip back.
+  chip_.on_cycle([this](std::uint64_t cycle) {
+    if (cycle < seen_) went_back(cycle);
+    seen_ = cycle;
+    follow_x_int(cycle);
+  });
   chip_.on_pb3_change([this](std::uint64_t cycle, bool high) { schedule(cycle, kPb3, high); });
   chip_.on_txd([this](std::uint64_t cycle, bool level) { schedule(cycle, kTxd, level); });
   SC_THREAD(run);
@@ -93,6 +109,31 @@ void Dpc31Tlm::schedule(std::uint64_t cycle, int pin, bool level) {
   edge_due_.notify(at > now ? at - now : sc_core::SC_ZERO_TIME);
 }
 
+void Dpc31Tlm::went_back(std::uint64_t cycle) {
+  const sc_core::sc_time now = sc_core::sc_time_stamp();
+  if (seen_ > cycle_at(now)) {
+    SC_REPORT_WARNING(
+        "/dpc31/Dpc31Tlm/reset",
+        ("a reset or load_state at " + now.to_string() + " took back the chip's cycles up to " +
+         std::to_string(seen_) + " (" + time_of(seen_).to_string() +
+         "), which an initiator running ahead had reached: its accesses there are undone, their "
+         "pin changes not shown; synchronise the initiators before a reset")
+            .c_str());
+  }
+  // The pin changes after now are of the time line the chip left: the pins show the chip's.
+  std::erase_if(edges_, [&](const Edge& e) { return e.at > now; });
+  const auto last = [&](int pin, bool shown) {
+    for (auto e = edges_.rbegin(); e != edges_.rend(); ++e) {
+      if (e->pin == pin) return e->level;
+    }
+    return shown;
+  };
+  x_int_level_ = last(kXInt, x_int.read());
+  if (last(kIrq, irq.read()) != chip_.irq_active()) schedule(cycle, kIrq, chip_.irq_active());
+  if (last(kPb3, pb3.read()) != chip_.pb3_pin()) schedule(cycle, kPb3, chip_.pb3_pin());
+  if (last(kTxd, txd.read()) != chip_.txd_pin()) schedule(cycle, kTxd, chip_.txd_pin());
+}
+
 void Dpc31Tlm::follow_x_int(std::uint64_t cycle) {
   if (chip_.x_int_pin() == x_int_level_) return;
   x_int_level_ = !x_int_level_;
@@ -101,6 +142,8 @@ void Dpc31Tlm::follow_x_int(std::uint64_t cycle) {
 
 void Dpc31Tlm::apply_edges() {
   const sc_core::sc_time now = sc_core::sc_time_stamp();
+  bool irq_level = irq.read();
+  const bool irq_was = irq_level;
   while (!edges_.empty() && edges_.front().at <= now) {
     const Edge e = edges_.front();
     edges_.pop_front();
@@ -110,8 +153,7 @@ void Dpc31Tlm::apply_edges() {
         break;
       case kIrq:
         irq.write(e.level);
-        // At the next delta: its waiters wake after the update, and the signal reads true.
-        if (e.level) irq_rise_.notify(sc_core::SC_ZERO_TIME);
+        irq_level = e.level;
         break;
       case kPb3:
         pb3.write(e.level);
@@ -121,6 +163,9 @@ void Dpc31Tlm::apply_edges() {
         break;
     }
   }
+  // A rise of the signal (the last write of a time wins), at the next delta: its waiters wake
+  // after the update, and the signal reads true.
+  if (irq_level && !irq_was) irq_rise_.notify(sc_core::SC_ZERO_TIME);
   if (!edges_.empty()) edge_due_.notify(edges_.front().at - now);
 }
 
@@ -213,10 +258,15 @@ void Dpc31Tlm::b_transport(tlm::tlm_generic_payload& tr, sc_core::sc_time& delay
     // EOI time: X/INT may change), or a process waiting for a cycle up to the access. Run the
     // platform up to the initiator's time, and let a waiting process act first.
     ++syncs_;
-    wait(delay);
-    delay = sc_core::SC_ZERO_TIME;
-    step_to(cycle_at(sc_core::sc_time_stamp()));
-    while (chip_.stop_requested() || chip_.cycle() >= horizon_) wait(scheduler_moved_);
+    {
+      const KeepSelection keep;  // the other initiators run their firmware meanwhile
+      wait(delay);
+      delay = sc_core::SC_ZERO_TIME;
+      step_to(cycle_at(sc_core::sc_time_stamp()));
+      // A stop lets the process in run_until act first; with none there, nobody would clear it.
+      while (chip_.cycle() >= horizon_ || (chip_.stop_requested() && horizon_ != kNone))
+        wait(scheduler_moved_);
+    }
     step_to(start);
   } else {
     step_to(start);

@@ -13,9 +13,32 @@
 #include <tlm>
 #include <utility>
 
+#include "dpc31/bus_port.hpp"
 #include "dpc31/chip.hpp"
 
+namespace dpc31::board {
+class Hooks;
+}
+
 namespace dpc31::systemc {
+
+// The C HAL's selected chip (dpc31_select, a FirmwareHost's call into its firmware) and the board
+// hooks are per OS thread, and SystemC's threads share one: an initiator that waits inside a call
+// into its firmware sets its own aside for the wait, so another initiator's firmware calls made
+// meanwhile neither take nor clear it (docs/systemc.md, "Several chips"). b_transport does so
+// around its own waits; a platform's wait inside a firmware call (a quantum keeper's sync()) is
+// made while one of these lives.
+class KeepSelection {
+ public:
+  KeepSelection();
+  ~KeepSelection();
+  KeepSelection(const KeepSelection&) = delete;
+  KeepSelection& operator=(const KeepSelection&) = delete;
+
+ private:
+  hal::Selection hal_;
+  board::Hooks* hooks_;
+};
 
 class Dpc31Tlm : public sc_core::sc_module {
  public:
@@ -52,15 +75,16 @@ class Dpc31Tlm : public sc_core::sc_module {
   // The last cycle with a time: Chip::kLastCycle, or cycle_at(sc_max_time()) where that is sooner
   // (885 443 715 538 058 at 48 MHz and 1 ps, about 213 days).
   [[nodiscard]] std::uint64_t last_cycle() const;
-  // Notified when the interrupt becomes active, at that cycle's time (the delta after the irq
-  // signal's update: a waiter reads it true).
+  // Notified when the irq signal rises, at that cycle's time (the delta after the signal's
+  // update: a waiter reads it true); an activation and an end applied at one time notify nothing.
   [[nodiscard]] const sc_core::sc_event& irq_rise() const { return irq_rise_; }
   // For a process that moves time through the chip's serial side (the built-in DP master's
   // DpMaster::scheduler): waits until the chip reached `cycle` or one of its steps stopped
   // (Chip::request_stop, wake_on_txd); a cycle after last_cycle() waits until last_cycle(), where
   // the time line ends (a "no limit" wait returns there). Accesses that would start at or after
   // `cycle` wait until this process has acted, as the host CPU of the native run gives the bus side
-  // its turn.
+  // its turn; so does an access while a step stopped it, and none waits for a stop with no
+  // process here.
   void run_until(std::uint64_t cycle);
   // RxD edges were driven ahead of time: the chip's next event may be sooner.
   void rxd_driven() { changed_.notify(sc_core::SC_ZERO_TIME); }
@@ -81,6 +105,9 @@ class Dpc31Tlm : public sc_core::sc_module {
   // flips the pin without a change of the interrupt (no on_irq_change), so the pin is compared
   // wherever the chip may have moved (Chip::on_cycle) and after a debug write.
   void follow_x_int(std::uint64_t cycle);
+  // A reset or load_state took the chip back to `cycle`: the pins' changes queued after now are
+  // dropped and the pins follow the chip's; a warning where an initiator had run ahead past now.
+  void went_back(std::uint64_t cycle);
   void step_to(std::uint64_t cycle);  // never past `cycle`, never backwards
   void schedule(std::uint64_t cycle, int pin, bool level);
 
@@ -94,7 +121,8 @@ class Dpc31Tlm : public sc_core::sc_module {
     bool level;
   };
   std::deque<Edge> edges_;
-  bool x_int_level_;  // the X/INT level last scheduled
+  bool x_int_level_;        // the X/INT level last scheduled
+  std::uint64_t seen_ = 0;  // the chip's cycle after its last move (Chip::on_cycle)
   sc_core::sc_event edge_due_;
   sc_core::sc_event irq_rise_;
   sc_core::sc_event changed_;  // an access or RxD moved the chip's next event

@@ -895,6 +895,30 @@ TEST_P(Malformed, GlitchCountsOnlyItsStartBit) {
   EXPECT_TRUE(b.master.data_exchange({1, 2, 3, 4}).answer);
 }
 
+// DpMaster::glitch (dp_master.hpp): 0 clocks is no pulse (it counted a start_bit error), and a
+// pulse longer than the character the receiver samples from it holds the line low: the master's
+// next request waits for its rise and a TSYN (33 bit times) after it, as after a segment's pulse.
+// It went out 11 bit times after the pulse began, on a line held low (audit s35 aTb finding 5).
+TEST_P(Malformed, AGlitchOfNoClocksIsRefusedAndALongOneHoldsTheLine) {
+  Bench b(GetParam(), 12'000'000);
+  ASSERT_TRUE(b.master.startup());
+  const Exchange last = b.master.data_exchange({1, 2, 3, 4});
+  ASSERT_TRUE(last.answer);
+  const FdlCounters before = b.chip.fdl_counters();
+  const std::uint64_t at = b.chip.cycle();
+  EXPECT_THROW(b.master.glitch(0), std::invalid_argument);
+  EXPECT_EQ(b.chip.cycle(), at);
+  EXPECT_EQ(changed(before, b.chip.fdl_counters()), "");
+  EXPECT_EQ(b.master.counters().noise, 0u);
+  // The pulse starts TSYN after the answer's end: 33 T = 132 clocks at 12 Mbaud (T = 4).
+  const std::uint64_t start = last.answer_end + 33 * b.T();
+  b.master.glitch(10'000);
+  EXPECT_EQ(b.chip.cycle(), start + 10'000);
+  const Exchange next = b.master.data_exchange({1, 2, 3, 4});
+  EXPECT_EQ(next.request_start, start + 10'000 + 33 * b.T());
+  EXPECT_TRUE(next.answer);
+}
+
 TEST_P(Malformed, TailOfABrokenTelegramIsNotCountedAgain) {
   Bench b(GetParam(), 12'000'000);
   ASSERT_TRUE(b.master.startup());

@@ -315,6 +315,23 @@ TEST(Segment, ASendOrPulseNeedsASenderAndAnEndBeforeTheLastCycle) {
   EXPECT_EQ(seg.send(m, token, 1000), 1000 + 3 * 11 * seg.bit_cycles());
 }
 
+// A pulse of no clocks put its rising edge at its falling edge's cycle: a "line order broken"
+// logic_error from the line, or a start_bit error counted for nothing (audit s35 aTb finding 4).
+// Refused before the line is touched: the segment has not run to the start.
+TEST(Segment, APulseOfNoClocksIsRefused) {
+  Segment seg(kBaud);
+  seg.add_chip("slave a", ChipOptions{});
+  const std::size_t m = seg.add_sender("rogue");
+  try {
+    seg.pulse(m, 1000, 0);
+    ADD_FAILURE() << "a pulse of 0 clocks was taken";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "pulse: low_cycles 0: a pulse lasts 1 clock or more");
+  }
+  EXPECT_EQ(seg.cycle(), 0u);
+  EXPECT_NO_THROW(seg.pulse(m, 1000, 1));  // one clock is a pulse
+}
+
 // A segment's master keeps one FCB state per slave (EN 50170: the FCB alternates per station), so
 // it polls each at most once a cycle: an empty list or an address twice is refused.
 TEST(Segment, AMastersSlavesAreAtLeastOneAndEachOnce) {

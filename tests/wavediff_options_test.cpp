@@ -66,7 +66,7 @@ TEST(WavediffTolerance, ShiftedEdgesInTimeAndCycles) {
     if (clock_b) e.clock_b = "top.clk";
     if (!clock_b) e.tolerance_cycles = 1;
     const std::string what =
-        clock_b ? "--clock-b needs --clock" : "--tolerance-cycles needs --clock";
+        clock_b ? "--clock-b requires --clock" : "--tolerance-cycles requires --clock";
     try {
       (void)compare(e);
       ADD_FAILURE() << what;

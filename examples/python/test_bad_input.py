@@ -54,6 +54,9 @@ def test_send_and_pulse_need_a_sender_and_an_end_before_the_last_cycle():
     (lambda: dpc31.Master(dpc31.Chip("spc3"), address=200),
      r"master address 200 out of range \(0..126\)"),
     (lambda: dpc31.Master(dpc31.Chip("spc3"), slot_bits=0), r"slot 0 out of range \(37..16383\)"),
+    # A master at its slave's address ran a whole session from 5 to 5 (audit s35 aTb finding 3).
+    (lambda: dpc31.Master(dpc31.Chip("spc3"), address=5, slave=dpc31.SlaveConfig(address=5)),
+     r"the master and the slave both have address 5: each station needs its own$"),
     (lambda: dpc31.SlaveConfig(address=200), r"slave address 200 out of range \(0..125\)"),
     (lambda: dpc31.Segment().add_station(127), r"station address 127 out of range \(0..125\)"),
     (lambda: dpc31.Segment().add_station(200), r"station address 200 out of range \(0..125\)"),
@@ -942,3 +945,135 @@ def test_a_poke_at_mode_reg1_keeps_the_run_state_rule():
         assert (chip.read(a1), chip.peek_reg("Mode_Reg1")) == (0x00, 0x00)
         assert chip.poke(a1, 0x10)
         assert chip.read(a1) == 0x10
+
+
+def test_a_glitch_of_no_clocks_is_refused_and_a_long_one_holds_the_line():
+    """session/dp_master.hpp, DpMaster::glitch: glitch(0) counted a start_bit error for a pulse of
+    no width; glitch(1_000_000) returned 11 bit times after it began, and the next request went
+    out on the line it held low (audit s35 aTb finding 5). Now 0 is a ValueError, nothing on the
+    line, and the next request starts TSYN (33 T, T = 32 at 1.5 Mbaud) after the pulse's rise.
+    The pulse itself starts TSYN after the last answer's end."""
+    chip = dpc31.Chip("spc3")
+    m = dpc31.Master(chip, baud=1_500_000, slave=dpc31.SlaveConfig(address=5))
+    m.run_responder(inputs=b"\x11\x22\x33\x44")
+    assert m.startup()
+    last = m.data_exchange(b"\x01\x02\x03\x04")
+    at, counters = chip.cycle, dict(chip.fdl_counters)
+    with pytest.raises(ValueError, match="^glitch: low_cycles 0: a pulse lasts 1 clock or more$"):
+        m.glitch(0)
+    assert (chip.cycle, dict(chip.fdl_counters), m.counters.noise) == (at, counters, 0)
+    start = last.answer_end + 33 * 32
+    m.glitch(1_000_000)
+    assert chip.cycle == start + 1_000_000
+    nxt = m.data_exchange(b"\x01\x02\x03\x04")
+    assert nxt.request_start == start + 1_000_000 + 33 * 32 and nxt.answer is not None
+
+
+def test_every_argument_that_names_a_file_takes_a_pathlib_path(tmp_path, traces):
+    """docs/python.md: a file is named as open() takes it, a str or an os.PathLike, wherever a
+    file is named (pytest's tmp_path is a pathlib.Path); only the snapshot files took one, the
+    others raised pybind11's "incompatible function arguments" (audit s35 aTb finding 8). Each
+    call does what its str does: the same walk, the same files written."""
+    scn, seg = traces / "startup_dpc31_1m5.scn", traces / "segment" / "two_masters.scn"
+    assert isinstance(scn, pathlib.Path)
+    assert dpc31.Scenario.load(scn).run().walk == dpc31.Scenario.load(str(scn)).run().walk
+    assert dpc31.run_scenario(scn).walk == dpc31.run_scenario(str(scn)).walk
+    result = dpc31.SegmentScenario.load(seg).run(vcd=tmp_path / "r.vcd",
+                                                 pcapng=tmp_path / "r.pcapng")
+    assert result.walk == dpc31.SegmentScenario.load(str(seg)).run().walk
+    segment = dpc31.Segment(vcd=tmp_path / "s.vcd", fst=tmp_path / "s.fst",
+                            pcapng=tmp_path / "s.pcapng")
+    segment.add_station(5, "spc3")
+    segment.run_until(1000)
+    segment.close()
+    diff = dpc31.wavediff(tmp_path / "r.vcd", tmp_path / "r.vcd", diff_vcd=tmp_path / "d.vcd")
+    assert diff.same
+    image = tmp_path / "sjmp.ihx"
+    image.write_text(":0200000080FE80\n:00000001FF\n")  # SJMP $
+    assert dpc31.Cpu51Board(dpc31.Chip("spc3")).load_hex(image) == 2
+    plugin = pathlib.Path(dpc31.__file__).resolve().parents[2] / "lib" / "libdpc31_fw_do4.so"
+    if plugin.exists():
+        assert _master().run_firmware(plugin).name == _master().run_firmware("DO4").name
+        dpc31.Segment().add_station(5, firmware=plugin)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "d.vcd", "r.pcapng", "r.vcd", "s.fst", "s.pcapng", "s.vcd", "sjmp.ihx"]
+
+
+@pytest.mark.parametrize("call, what", [
+    (lambda: dpc31.Scenario.load(5), "path"),
+    (lambda: dpc31.run_scenario(5), "path"),
+    (lambda: dpc31.SegmentScenario.load(5), "path"),
+    (lambda: dpc31.Segment(vcd=5), "vcd"),
+    (lambda: dpc31.Cpu51Board(dpc31.Chip("spc3")).load_hex(5), "path"),
+    (lambda: dpc31.wavediff(5, "b.vcd"), "a"),
+    (lambda: dpc31.wavediff("a.vcd", "b.vcd", map_file=5), "map_file"),
+    (lambda: _master().run_firmware(5), "firmware"),
+    (lambda: dpc31.Segment().add_station(5, firmware=5), "firmware"),
+])
+def test_a_file_argument_of_another_type_is_a_type_error_naming_it(call, what):
+    with pytest.raises(TypeError, match=f"^{what}: a str or an os.PathLike expected, got int$"):
+        call()
+
+
+def test_every_bytes_argument_takes_a_bytearray_a_memoryview_and_a_list():
+    """docs/python.md: an argument of bytes takes any bytes-like object or a list of ints, as
+    the stubs now type it; nine took bytes alone (pybind11's "incompatible function arguments"
+    for the bytearray a type checker let through: audit s35 aTb findings 9 and 10)."""
+    import array
+
+    for data in (bytearray(b"\x13"), memoryview(b"\x13"), array.array("B", [0x13]), [0x13]):
+        assert dpc31.Frame(5, 2, 0x6D, du=data).du == b"\x13"
+        assert dpc31.SlaveConfig(cfg=data).cfg == b"\x13"
+        frame = dpc31.Frame(5, 2, 0x6D)
+        frame.du = data
+        assert frame.du == b"\x13"
+        a, b = dpc31.Chip("spc3"), dpc31.Chip("spc3")
+        assert a.drive_rxd_chars(data, 10, 4) == b.drive_rxd_chars(b"\x13", 10, 4) == 10 + 11 * 4
+    user_prm = [0xC0, 0x00, 0x00]  # DPV1_Enable
+    m = dpc31.Master(dpc31.Chip("vpc3plus"), slave=dpc31.SlaveConfig(address=5, user_prm=user_prm))
+    r = m.run_responder(inputs=bytearray(b"\x01\x02\x03\x04"),
+                        records=[(0, 1, memoryview(b"\x07\x08"))])
+    assert r.inputs == b"\x01\x02\x03\x04"
+    r.inputs = [4, 3, 2, 1]
+    assert r.inputs == b"\x04\x03\x02\x01"
+    assert m.startup()
+    assert m.dpv1_write(0, 1, bytearray(b"\x09\x0a")).outcome == dpc31.Dpv1Outcome.positive
+    # the Read response: Function_Num 5Eh, slot 0, index 1, length 2, the data written
+    assert m.dpv1_read(0, 1, 2).du == b"\x5e\x00\x01\x02\x09\x0a"
+    m.line_noise(bytearray(b"\x01"), 40)
+    assert m.c2_initiate(s_addr=bytearray(b"\x00\x00"), d_addr=[0, 0]).outcome == \
+        dpc31.Dpv1Outcome.positive
+    assert m.c2_write(0, 1, [0x0b, 0x0c]).outcome == m.c2_transport(0, 1, bytearray(b"\x0c")).outcome \
+        == dpc31.Dpv1Outcome.positive
+    with pytest.raises(TypeError, match="^data: bytes expected, got str$"):
+        m.dpv1_write(0, 1, "x")
+
+
+@pytest.mark.parametrize("call", [
+    lambda c, n: c.read_block(0, n),
+    lambda c, n: c.peek_block(0, n),
+    lambda c, n: c.fill(0, 0, n),
+    lambda c, n: c.equal(0, 1, n),
+])
+def test_a_block_length_outside_the_address_space_is_named(call):
+    """A negative length was "block 0+-1 ends beyond the address space", 2**64 int64_t's range
+    (audit s35 aTb finding 9). 0 to 2048 are lengths on the SPC3 (0..2047)."""
+    chip = dpc31.Chip("spc3")
+    for n in (-1, 2049, 2**64):
+        with pytest.raises(ValueError, match=f"^length {n} is out of range \\(0..2048\\)$"):
+            call(chip, n)
+    assert chip.cycle == 0
+    call(chip, 0)
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: dpc31.SlaveConfig(address="x"), "address: an int expected, got str"),
+    (lambda: dpc31.SlaveConfig(wd_on="x"), "wd_on: a bool expected, got str"),
+    (lambda: dpc31.SlaveConfig(cfg="x"), "cfg: bytes expected, got str"),
+    (lambda: dpc31.Dpv1Rules(retries="x"), "retries: an int expected, got str"),
+])
+def test_a_keyword_of_the_wrong_type_is_a_type_error_naming_it(call, message):
+    """It was pybind11's "(): incompatible function arguments", naming no argument (audit s35
+    aTb finding 9)."""
+    with pytest.raises(TypeError, match="^" + re.escape(message) + "$"):
+        call()

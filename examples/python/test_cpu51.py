@@ -243,6 +243,22 @@ def test_a_boards_run_after_an_observers_exception_ends_at_the_cycle_asked(tmp_p
     assert (chip.cycle, board.machine_cycles) == (48_000, 2000)
 
 
+def test_a_running_boards_cpu_is_refused_to_another_thread(tmp_path, refused_while):
+    """docs/python.md, "The GIL": one chip, one thread at a time. The CPU's registers, ports and
+    RAM were read while the running thread wrote them (audit s35 aTb finding 1), where
+    set_port_input and load_hex were refused. The looks happen while on_serial holds the run (TI
+    at chip cycle 264); the run then ends at 48 000 as without them."""
+    chip, board = sbuf_board(tmp_path)
+    names = ("pc", "a", "b", "psw", "sp", "dptr", "machine_cycles", "in_service")
+    looks = {name: (lambda name=name: getattr(board, name)) for name in names}
+    looks.update(port=lambda: board.port(1), pins=lambda: board.pins(1),
+                 xdata=lambda: board.xdata(0x100), chip_cycle_of=lambda: board.chip_cycle_of(24))
+    refused = refused_while(lambda: board.run_until(48_000), looks, board.on_serial)
+    assert set(refused) == set(looks)
+    assert all("running in another thread" in e for e in refused.values())
+    assert (chip.cycle, board.machine_cycles, board.pc) == (48_000, 2000, 3)
+
+
 def test_a_load_under_a_board_takes_only_a_snapshot_of_the_boards_instant(tmp_path):
     """docs/cpu.md, "The board": under a board the chip loads only a snapshot of the board's
     instant, where its last run ended; another cycle is refused as `dpc31 serve --cpu` refuses

@@ -279,12 +279,33 @@ def test_a_running_masters_history_counters_and_locks_are_refused_to_another_thr
     m = dpc31.Master(chip, slave=dpc31.SlaveConfig(address=5))
     m.run_responder(inputs=b"\1\2\3\4")
     assert m.startup()
-    names = ("history", "counters", "locks")
+    names = ("history", "counters", "locks", "c2_sap", "c2_send_timeout")
     looks = {name: (lambda name=name: getattr(m, name)) for name in names}
+    # clear_history() cleared the list the running master appends to: a segfault or a double
+    # free (audit s35 aTb finding 1).
+    looks["clear_history"] = m.clear_history
     refused = refused_while(lambda: m.data_exchange(b"\x0a\x0b\x0c\x0d"), looks, chip.on_telegram)
-    assert set(refused) == set(names)
+    assert set(refused) == set(names) | {"clear_history"}
     assert all("running in another thread" in e for e in refused.values())
     assert m.history[-1].request.du == b"\x0a\x0b\x0c\x0d" and m.locks == {}  # it ran
+
+
+def test_an_observer_may_not_clear_the_history_the_running_master_appends_to():
+    """As SegmentMaster.clear_history() (docs/python.md, "The GIL"): an observer may look at the
+    history but not clear it; the Error is raised when the exchange returns, which ran to its end
+    (its request the last entry), and between runs the call works."""
+    chip = dpc31.Chip("spc3")
+    m = dpc31.Master(chip, slave=dpc31.SlaveConfig(address=5))
+    m.run_responder(inputs=b"\1\2\3\4")
+    assert m.startup()
+    chip.on_telegram(lambda *_: m.clear_history())
+    with pytest.raises(dpc31.Error, match="an observer may look at it .* but not clear the "
+                                          "master's history"):
+        m.data_exchange(b"\0\0\0\0")
+    chip.on_telegram(None)
+    assert len(m.history) > 1
+    m.clear_history()
+    assert m.history == []
 
 
 def test_an_observer_may_not_change_the_observers_it_is_among():

@@ -814,3 +814,18 @@ def test_a_master_keeps_the_token_nobody_took():
     assert trr != 0
     assert (kept.arrived, kept.rotation, kept.hold) == (held.arrived + trr, trr,
                                                          max(0, 1000 * T - trr))
+
+
+def test_a_pulse_of_no_clocks_is_refused_and_puts_nothing_on_the_line():
+    """docs/segment.md: a pulse of 0 clocks is refused before the line is touched; it was taken,
+    and a started station counted a start_bit error for it (or the line raised an internal
+    "line order broken" RuntimeError): audit s35 aTb finding 4."""
+    seg = dpc31.Segment(1_500_000)
+    station = seg.add_station(5, "spc3", wd=(1, 1))
+    rogue = seg.add_sender("rogue")
+    start = seg.cycle
+    with pytest.raises(ValueError, match="^pulse: low_cycles 0: a pulse lasts 1 clock or more$"):
+        seg.pulse(rogue, start + 1000, 0)
+    assert seg.cycle == start
+    seg.run_until(start + 10_000)
+    assert station.fdl_counters["start_bit"] == 0

@@ -83,7 +83,7 @@ def test_no_signal_in_common_is_an_error_not_same(cli, tmp_path):
     # an option of clock mode without the clock, in the same words (docs/bad-input.md)
     with pytest.raises(dpc31.InputError) as e:
         dpc31.wavediff(run, run, clock_b="clk")
-    assert str(e.value) == "--clock-b needs --clock"
+    assert str(e.value) == "--clock-b requires --clock"
     assert not dpc31.wavediff(run, str(other)).same  # one-sided names: different
 
 
@@ -120,8 +120,8 @@ def test_window_tolerance_and_edge_as_the_cli_takes_them(tmp_path):
     assert not dpc31.wavediff(a, b, tolerance="9ns").same
     assert dpc31.wavediff(a, b, start="25ns").same
     # bad options: the CLI's words (docs/bad-input.md)
-    for kw, message in [({"edge": "falling"}, "--edge needs --clock"),
-                        ({"tolerance_cycles": 1}, "--tolerance-cycles needs --clock"),
+    for kw, message in [({"edge": "falling"}, "--edge requires --clock"),
+                        ({"tolerance_cycles": 1}, "--tolerance-cycles requires --clock"),
                         ({"start": "30ns", "end": "20ns"}, "--start is after --end")]:
         with pytest.raises(dpc31.InputError) as e:
             dpc31.wavediff(a, b, **kw)

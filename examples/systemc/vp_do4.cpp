@@ -4,6 +4,8 @@
 // cycles of the native run (the same firmware on the host CPU model, session/cpu.cpp): every
 // telegram, every answer and every DO4 output write, compared one by one. Exit 0 when equal.
 //   vp_do4 [--bench N]   N: also time N b_transport accesses (register reads) per second
+//   vp_do4 --two         two such platforms in one simulation (a dpc31 at 5, a vpc3plus at 6),
+//                        each compared with its own native run
 #include <tlm_utils/simple_initiator_socket.h>
 #include <tlm_utils/tlm_quantumkeeper.h>
 
@@ -12,6 +14,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <systemc>
 #include <tlm>
@@ -25,6 +28,21 @@
 namespace {
 
 using dpc31::systemc::Dpc31Tlm;
+using dpc31::systemc::KeepSelection;
+
+// A platform's chip and its DO4's station address.
+struct Station {
+  dpc31::Profile profile;
+  std::uint8_t address;
+};
+constexpr Station kAlone{dpc31::Profile::dpc31, 5};
+constexpr Station kSecond{dpc31::Profile::vpc3plus, 6};
+
+dpc31::SlaveConfig slave_of(const dpc31_firmware& d, const Station& st) {
+  dpc31::SlaveConfig s = dpc31::with_gsd_defaults(d);
+  s.address = st.address;
+  return s;
+}
 
 // What one run gave: the telegrams with their cycles, DO4's output writes, the end.
 struct Run {
@@ -46,13 +64,13 @@ void master_session(dpc31::DpMaster& m, dpc31::FirmwareHost& fw, Run& r) {
   for (const auto& w : fw.port_writes()) r.outputs.insert(r.outputs.end(), {w.cycle, w.value});
 }
 
-Run native() {
+Run native(const Station& st) {
   const dpc31_firmware& d = dpc31::find_firmware("DO4");
-  dpc31::Chip chip({dpc31::Profile::dpc31});
+  dpc31::Chip chip({st.profile});
   dpc31::FirmwareHost fw(d);
   dpc31::DirectBus bus(chip);
-  fw.init(bus, 5);
-  dpc31::DpMaster m(chip, {}, dpc31::with_gsd_defaults(d));
+  fw.init(bus, st.address);
+  dpc31::DpMaster m(chip, {}, slave_of(d, st));
   m.set_firmware(fw.program());
   Run r;
   master_session(m, fw, r);
@@ -96,10 +114,14 @@ class SocketBus final : public dpc31::BusPort {
     const sc_core::sc_time now = sc_core::sc_time_stamp();
     const std::uint64_t at = model_.cycle_at(now + qk_.get_local_time());
     qk_.set(model_.time_of(at + cycles) - now);
-    if (qk_.need_sync()) qk_.sync();
+    if (qk_.need_sync()) sync();
   }
   [[nodiscard]] const dpc31::Chip& chip() const override { return model_.chip(); }
-  void sync() { qk_.sync(); }
+  // A wait inside the firmware's call: another platform's firmware runs meanwhile.
+  void sync() {
+    const KeepSelection keep;
+    qk_.sync();
+  }
 
  private:
   void access(tlm::tlm_command cmd, std::uint32_t addr, std::uint8_t* data) {
@@ -113,7 +135,7 @@ class SocketBus final : public dpc31::BusPort {
     socket_->b_transport(tr, delay);
     if (tr.is_response_error()) SC_REPORT_FATAL("vp_do4", tr.get_response_string().c_str());
     qk_.set(delay);
-    if (qk_.need_sync()) qk_.sync();
+    if (qk_.need_sync()) sync();
   }
   tlm_utils::simple_initiator_socket<sc_core::sc_module>& socket_;
   Dpc31Tlm& model_;
@@ -122,7 +144,8 @@ class SocketBus final : public dpc31::BusPort {
 
 struct Platform : sc_core::sc_module {
   tlm_utils::simple_initiator_socket<sc_core::sc_module> cpu_socket{"cpu_socket"};
-  Dpc31Tlm chip{"dpc31", dpc31::ChipOptions{}};
+  Station station;
+  Dpc31Tlm chip;
   sc_core::sc_signal<bool> x_int{"x_int"}, irq{"irq"}, pb3{"pb3"}, txd{"txd"};
   const dpc31_firmware& d = dpc31::find_firmware("DO4");
   dpc31::FirmwareHost fw{d};
@@ -130,9 +153,12 @@ struct Platform : sc_core::sc_module {
   Run result;
   std::uint64_t bench_accesses = 0;
   double bench_seconds = 0;
+  int& running;  // the platforms whose master has not ended: the last one stops the simulation
 
   SC_HAS_PROCESS(Platform);
-  explicit Platform(const sc_core::sc_module_name& n, std::uint64_t bench) : sc_module(n) {
+  Platform(const sc_core::sc_module_name& n, const Station& st, std::uint64_t bench, int& run)
+      : sc_module(n), station(st), chip("dpc31", dpc31::ChipOptions{st.profile}), running(run) {
+    ++running;
     cpu_socket.bind(chip.bus);
     chip.x_int(x_int);
     chip.irq(irq);
@@ -147,7 +173,7 @@ struct Platform : sc_core::sc_module {
   // interrupt-driven), level-triggered as the native CPU model.
   void cpu() {
     SocketBus bus(cpu_socket, chip);
-    fw.init(bus, 5);
+    fw.init(bus, station.address);
     bus.sync();
     init_done.notify();
     wait(sc_core::SC_ZERO_TIME);  // the master is set up at the end of main()'s set-up, as natively
@@ -163,12 +189,12 @@ struct Platform : sc_core::sc_module {
 
   void master() {
     wait(init_done);
-    dpc31::DpMaster m(chip.chip(), {}, dpc31::with_gsd_defaults(d));
+    dpc31::DpMaster m(chip.chip(), {}, slave_of(d, station));
     m.scheduler = [this](std::uint64_t cycle) { chip.run_until(cycle); };
     master_session(m, fw, result);
     result.cycle = chip.chip().cycle();
     if (bench_accesses != 0) bench();
-    sc_core::sc_stop();
+    if (--running == 0) sc_core::sc_stop();
   }
 
   // b_transport's rate: reads of one RAM byte of the user area through the socket, one payload
@@ -209,9 +235,11 @@ bool same(const char* what, const std::vector<std::uint64_t>& a,
 }
 
 // `--bench N`: N from 1 to 10^9 accesses, decimal or 0x hex as every number of the dpc31 command
-// line (docs/security.md, "Numbers on the command line"); anything else is a usage error (exit 2).
-bool parse_args(int argc, char* argv[], std::uint64_t& bench) {
+// line (docs/security.md, "Numbers on the command line"); `--two`: two platforms; anything else
+// is a usage error (exit 2).
+bool parse_args(int argc, char* argv[], std::uint64_t& bench, bool& two) {
   if (argc == 1) return true;
+  if (argc == 2 && std::strcmp(argv[1], "--two") == 0) return two = true;
   if (argc != 3 || std::strcmp(argv[1], "--bench") != 0) return false;
   std::string_view n(argv[2]);
   const bool hex = n.size() > 2 && n[0] == '0' && (n[1] == 'x' || n[1] == 'X');
@@ -220,22 +248,8 @@ bool parse_args(int argc, char* argv[], std::uint64_t& bench) {
   return ec == std::errc() && end == n.data() + n.size() && bench >= 1 && bench <= 1'000'000'000;
 }
 
-}  // namespace
-
-int sc_main(int argc, char* argv[]) {
-  std::uint64_t bench = 0;
-  if (!parse_args(argc, argv, bench)) {
-    std::fprintf(stderr, "dpc31_vp_do4: usage: dpc31_vp_do4 [--bench N] (N accesses, 1 to 10^9)\n");
-    return 2;
-  }
-  const Run ref = native();
-  tlm_utils::tlm_quantumkeeper::set_global_quantum(sc_core::sc_time(1, sc_core::SC_US));
-  Platform vp("vp", bench);
-  // The platform stops itself: SystemC's "Info: /OSCI/SystemC: Simulation stopped by user." and
-  // its blank line would go to stdout before the report, which is the report alone.
-  sc_core::sc_report_handler::set_actions("/OSCI/SystemC", sc_core::SC_INFO,
-                                          sc_core::SC_DO_NOTHING);
-  sc_core::sc_start();
+// One platform's run against its native run: true when every value is equal.
+bool report(const Platform& vp, const Run& ref) {
   const Run& got = vp.result;
   bool ok = got.data_exchange && ref.data_exchange;
   std::printf("Data_Exchange: native %s, SystemC %s\n", ref.data_exchange ? "yes" : "no",
@@ -246,6 +260,37 @@ int sc_main(int argc, char* argv[]) {
   std::printf("b_transport: %llu accesses, %llu synchronised\n",
               static_cast<unsigned long long>(vp.chip.accesses()),
               static_cast<unsigned long long>(vp.chip.syncs()));
+  return ok;
+}
+
+}  // namespace
+
+int sc_main(int argc, char* argv[]) {
+  std::uint64_t bench = 0;
+  bool two = false;
+  if (!parse_args(argc, argv, bench, two)) {
+    std::fprintf(stderr,
+                 "dpc31_vp_do4: usage: dpc31_vp_do4 [--bench N] [--two] (N accesses, 1 to 10^9; "
+                 "--two alone)\n");
+    return 2;
+  }
+  const Run ref = native(kAlone);
+  const Run ref2 = two ? native(kSecond) : Run{};
+  tlm_utils::tlm_quantumkeeper::set_global_quantum(sc_core::sc_time(1, sc_core::SC_US));
+  int running = 0;
+  Platform vp("vp", kAlone, bench, running);
+  std::unique_ptr<Platform> second;
+  if (two) second = std::make_unique<Platform>("vp2", kSecond, 0, running);
+  // The platform stops itself: SystemC's "Info: /OSCI/SystemC: Simulation stopped by user." and
+  // its blank line would go to stdout before the report, which is the report alone.
+  sc_core::sc_report_handler::set_actions("/OSCI/SystemC", sc_core::SC_INFO,
+                                          sc_core::SC_DO_NOTHING);
+  sc_core::sc_start();
+  bool ok = report(vp, ref);
+  if (second) {
+    std::printf("second platform, a vpc3plus at %u:\n", unsigned{kSecond.address});
+    ok = report(*second, ref2) && ok;
+  }
   if (bench != 0) {
     std::printf("bench: %.3g b_transport accesses per second\n",
                 static_cast<double>(bench) / vp.bench_seconds);

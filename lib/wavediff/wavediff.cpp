@@ -130,12 +130,12 @@ void Engine::setup(Report& rep) {
     if (o_.tolerance_fs != 0)
       throw OptionError("--tolerance is for event mode; use --tolerance-cycles");
   } else {
-    if (o_.tolerance_cycles != 0) throw OptionError("--tolerance-cycles needs --clock");
+    if (o_.tolerance_cycles != 0) throw OptionError("--tolerance-cycles requires --clock");
     if ((o_.start && o_.start->cycles) || (o_.end && o_.end->cycles)) {
       throw OptionError("cycle bounds (c123) need --clock");
     }
-    if (!o_.clock_b.empty()) throw OptionError("--clock-b needs --clock");
-    if (o_.edge != Edge::rising) throw OptionError("--edge needs --clock");
+    if (!o_.clock_b.empty()) throw OptionError("--clock-b requires --clock");
+    if (o_.edge != Edge::rising) throw OptionError("--edge requires --clock");
   }
   tol_ = clock_mode() ? o_.tolerance_cycles : to_common(o_.tolerance_fs, false);
   if (!clock_mode() && o_.end) {  // an FST reader may skip the blocks after the window

@@ -6,6 +6,7 @@ extension module ``dpc31._dpc31``, loaded at the first use of one of its names, 
 3.7 or later: before it (no module ``__getattr__``) ``import dpc31`` loads it at once.
 """
 
+import os
 import sys
 from typing import Any
 
@@ -66,7 +67,7 @@ def __dir__() -> list:
     return sorted(list(globals()) + __all__)
 
 
-def _run_scenario(path: str) -> Any:
+def _run_scenario(path: "str | os.PathLike[str]") -> Any:
     """Loads and runs a scenario file (``dpc31 run PATH``); raises ScenarioError on a bad file."""
     return _native().Scenario.load(path).run()
 
