@@ -166,8 +166,6 @@ class Segment {
   // Whether another station drives the line anywhere in [from, to] (another chip's armed answer)
   // or a firmware may not run past a cycle there (hard_end_).
   [[nodiscard]] bool others_drive(const Station& s, std::uint64_t from, std::uint64_t to) const;
-  // run_until(start) for a sender that drives from `start`: no firmware runs past it.
-  void run_to_send(std::uint64_t start);
   // One round of run_until: every station that needs it to the earliest next event (<= cycle).
   void round(std::uint64_t cycle);
   // What the rounds know of a chip: its next event and whether its firmware runs.
