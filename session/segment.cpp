@@ -732,6 +732,11 @@ void Segment::pulse(std::size_t from, std::uint64_t start, std::uint64_t low_cyc
   hear(from, start + low_cycles, true);
 }
 
+void Segment::run_to_send(std::uint64_t start, std::optional<std::size_t> wake_for) {
+  const Scoped at(hard_end_, start);
+  run_until(start, wake_for);
+}
+
 void Segment::run_until(std::uint64_t cycle, std::optional<std::size_t> wake_for) {
   cycle = std::min(cycle, Chip::kLastCycle);  // where the chips' time ends
   catch_up();
@@ -832,6 +837,8 @@ void Segment::round(std::uint64_t cycle) {
 
 // A character whose start bit is on the line is handed whole: the receiver is then as its edges up
 // to the line's time would leave it (UartRx::take), and what it reports by then is the same.
+bool Segment::heard_nothing(std::size_t listener) const { return station(listener).heard.empty(); }
+
 void Segment::take_line(std::size_t listener, const std::function<void(const TxdRun&)>& take) {
   Station& s = station(listener);
   const auto end = std::upper_bound(s.heard.begin(), s.heard.end(), now_, before);

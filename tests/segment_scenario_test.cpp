@@ -715,6 +715,32 @@ TEST(SegmentScenario, APollingFirmwareTakesEveryMsacC1PollAt12Mbaud) {
   EXPECT_LT(write_poll, read_poll);
 }
 
+// The audit s35 aMix, findings 2 and 7 from the scenario door (tsyn_after_send.scn): the SPC3
+// answers a scripted FDL_Status (6 characters) TSDR 11 bit times after it (T = 32); the next
+// `cycle`'s Data_Exchange starts TSYN (33 T) after that answer's end, no bus violation, no
+// collision, no "late answer" of master 2 (it asked nothing unanswered), and the walk from the
+// step on is in cycle order (docs/segment.md "The log"). Until the thirty-fifth session master 2
+// drove into the answer (a collision) and told it as its late answer after its own request.
+TEST(SegmentScenario, TheMasterWaitsForAnAnswerToAnotherStationsRequest) {
+  const ScenarioRun r = run_passing(
+      "segment baud=1500000\nstation 5 profile=spc3\nmaster 2 slaves=5\nsender tool\nstartup\n"
+      "cycle 1\nsend from=tool 10,05,09,49,57,16\ncycle 1\nexpect bus_violation short_tsyn 0\n"
+      "expect collisions 0\n");
+  const std::uint64_t answer = r.cycle_of("] station 5: 10 09 05 00 0E 16");
+  EXPECT_EQ(answer, r.cycle_of("] tool: 10 05 09 49 57 16") + (6 * 11 + 11) * 32);
+  EXPECT_EQ(r.cycle_of("] master 2: 68 07 07 68 05 02"), answer + (6 * 11 + 33) * 32);
+  std::uint64_t last = 0;
+  for (std::size_t i = 0; i < r.walk.size(); ++i) {
+    EXPECT_EQ(r.walk[i].find("late answer"), std::string::npos) << r.walk[i];
+    if (r.walk[i].find("] line 8:") != std::string::npos) last = 1;
+    if (last == 0) continue;
+    const std::uint64_t at = std::stoull(r.walk[i].substr(r.walk[i].find("cycle") + 5));
+    EXPECT_GE(at, last) << r.walk[i];
+    last = at;
+  }
+  EXPECT_NE(last, 0U);
+}
+
 // A token claimed without an SD4 is held from TSYN before the claiming master's first request
 // (docs/segment.md, "The token"): the master's own TTH counts from there as the bus check's does
 // (the review s28 rev2 finding 1: it counted from the claim's step, 33 bit times earlier for the
