@@ -424,10 +424,15 @@ std::uint64_t DpMaster::send_time(std::uint64_t at, std::uint32_t idle_bits) con
 
 std::uint64_t DpMaster::next_start(std::uint32_t idle_bits) {
   std::uint64_t start = send_time(look(), idle_bits);
-  if (!watch_late_) return start;
-  // The asked station may still answer after the slot time (a MinTSDR above TSL): a telegram
-  // that comes before our start is that late answer, no answer to any request, and the idle
-  // time counts from its end (TSYN for the stations after it), as from any telegram's.
+  // On one chip only the chip answers, and only the master: nothing to watch but its late answer.
+  if (!watch_late_ && !seg_) return start;
+  // A master drives no busy line (RS-485 half duplex, EN 50170 TSYN): a telegram on it when the
+  // master decides, or one whose first start bit comes before the master's (another station's
+  // answer to a scripted station's request, a sender's telegram), moves the start to the idle
+  // time after that telegram's end, so no station after it misses TSYN. After a wait without an
+  // answer (watch_late_) it is the asked station's late answer, no answer to any request; else
+  // it is another station's, and no late answer of ours.
+  const bool asked = watch_late_;
   watch_late_ = false;
   bool heard = late_heard_;
   late_heard_ = false;
@@ -437,15 +442,24 @@ std::uint64_t DpMaster::next_start(std::uint32_t idle_bits) {
       run_until(std::max(rx_.next_deadline(), now() + 1));
     } else {
       start = send_time(now(), idle_bits);
-      if (now() >= start) break;
-      wake_on_txd_ = true;  // a start bit wakes the master up
-      run_until(start);
-      wake_on_txd_ = false;
+      if (now() >= start || wait_to_send(start)) break;
     }
     look();
   }
-  if (heard) late_answer(line_end_, true);
+  if (heard && asked) late_answer(line_end_, true);
   return start;
+}
+
+bool DpMaster::wait_to_send(std::uint64_t start) {
+  wake_on_txd_ = true;  // a start bit wakes the master up
+  if (seg_) {
+    seg_->run_to_send(start, station_);
+    end_wait();
+  } else {
+    run_until(start);
+  }
+  wake_on_txd_ = false;
+  return seg_ && now() >= start && seg_->heard_nothing(station_);
 }
 
 void DpMaster::line_noise(std::span<const std::uint8_t> bytes, std::uint32_t idle_bits) {

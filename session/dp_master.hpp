@@ -398,9 +398,14 @@ class DpMaster {
   // The first start bit a telegram of ours may have at `at` or later: `idle_bits` after the end
   // of the last telegram on the line, ours or another station's (as far as look() heard it).
   [[nodiscard]] std::uint64_t send_time(std::uint64_t at, std::uint32_t idle_bits) const;
-  // send_time from now, the line watched up to it after a wait without an answer (watch_late_):
-  // a late answer heard there moves it to `idle_bits` after that telegram's end.
+  // send_time from now, the line watched up to it (on a segment always, on one chip after a wait
+  // without an answer, watch_late_): a telegram heard there moves it to `idle_bits` after that
+  // telegram's end (after such a wait: a late answer, counted and told).
   std::uint64_t next_start(std::uint32_t idle_bits);
+  // Runs the line up to our first start bit at `start`, woken by another station's start bit;
+  // on a segment no firmware runs past `start` (Segment::run_to_send), and true: it got there
+  // and nobody else drove meanwhile (nothing new for look()).
+  bool wait_to_send(std::uint64_t start);
   void late_answer(std::uint64_t end, bool after_slot);  // counted, and on_late told
   [[nodiscard]] std::uint64_t now() const;
   std::uint64_t put_on_line(std::span<const std::uint8_t> bytes, std::uint64_t start,
@@ -456,7 +461,7 @@ class DpMaster {
   std::uint64_t bus_free_ = 0;  // where our own last exchange left the line free
   std::uint64_t line_end_ = 0;  // end of the last character another station drove (look())
   // The last wait ended without an answer: the asked station may still answer late, so the
-  // line is watched up to the next request's start (quiet_start).
+  // line is watched up to the next request's start (next_start).
   bool watch_late_ = false;
   bool late_heard_ = false;  // that wait ended at a late start bit: the watch counts it
   std::unique_ptr<Cpu> cpu_;

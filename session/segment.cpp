@@ -666,7 +666,10 @@ std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> byte
   place_fault(fault, bytes.size());
   const std::uint64_t cycles = bytes.size() * std::uint64_t{kUartCharBits} * t_;
   check_send(from, start, cycles);
-  run_to_send(start);
+  // No firmware runs past the first start bit, neither while the line is brought there nor while
+  // the chips are given the telegram (step_station): each takes it at its exact edges.
+  const Scoped at(hard_end_, start);
+  run_until(start);
   const std::uint64_t end = start + cycles;
   if (owner_ && *owner_ != from && start < owned_until_) {
     const fdl::Decoded d = fdl::decode(bytes);
@@ -683,7 +686,7 @@ std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> byte
   const bool whole = !reference_ && fault.kind == UartFault::Kind::none;
   Edges edges;
   if (!whole || on_line) uart_encode(bytes, start, t_, edges, fault);
-  // run_to_send brought the line's time to the front of the chips (none stands past it).
+  // run_until brought the line's time to the front of the chips (none stands past it).
   for (std::size_t k = 0; start < now_ && k < stations_.size(); ++k) {
     const Station& s = *stations_[k];
     if (k != from && s.chip && start < s.chip->cycle()) {
@@ -713,17 +716,14 @@ std::uint64_t Segment::send(std::size_t from, std::span<const std::uint8_t> byte
   return end;
 }
 
-void Segment::run_to_send(std::uint64_t start) {
-  const Scoped at(hard_end_, start);
-  run_until(start);
-}
-
 void Segment::pulse(std::size_t from, std::uint64_t start, std::uint64_t low_cycles) {
   // Its rising edge at its falling edge's cycle would be no pulse, and out of the line's order.
   if (low_cycles == 0)
     throw std::invalid_argument("pulse: low_cycles 0: a pulse lasts 1 clock or more");
   check_send(from, start, std::max(low_cycles, std::uint64_t{kUartCharBits} * t_));
-  run_to_send(start);
+  // Its two edges are hard ends, as a telegram's first start bit is (send).
+  const Scoped at(hard_end_, start);
+  run_until(start);
   if (owner_ && *owner_ != from && start < owned_until_) {
     collide(*owner_, from, start);
     return;
@@ -731,7 +731,13 @@ void Segment::pulse(std::size_t from, std::uint64_t start, std::uint64_t low_cyc
   owner_ = from;
   owned_until_ = start + std::uint64_t{kUartCharBits} * t_;
   hear(from, start, false);
+  const Scoped rise(hard_end_, start + low_cycles);
   hear(from, start + low_cycles, true);
+}
+
+void Segment::run_to_send(std::uint64_t start, std::optional<std::size_t> wake_for) {
+  const Scoped at(hard_end_, start);
+  run_until(start, wake_for);
 }
 
 void Segment::run_until(std::uint64_t cycle, std::optional<std::size_t> wake_for) {
@@ -834,6 +840,8 @@ void Segment::round(std::uint64_t cycle) {
 
 // A character whose start bit is on the line is handed whole: the receiver is then as its edges up
 // to the line's time would leave it (UartRx::take), and what it reports by then is the same.
+bool Segment::heard_nothing(std::size_t listener) const { return station(listener).heard.empty(); }
+
 void Segment::take_line(std::size_t listener, const std::function<void(const TxdRun&)>& take) {
   Station& s = station(listener);
   const auto end = std::upper_bound(s.heard.begin(), s.heard.end(), now_, before);

@@ -115,12 +115,17 @@ class Segment {
   // Runs every station to `cycle`. With `wake_for`, returns as soon as a start bit from another
   // station than that one is on the line (cycle() is then where the line stands).
   void run_until(std::uint64_t cycle, std::optional<std::size_t> wake_for = std::nullopt);
+  // run_until for a sender whose telegram starts at `start`: no firmware runs past it (a hard
+  // end, docs/segment.md "A firmware across a round's end"), so every chip can be given it there.
+  void run_to_send(std::uint64_t start, std::optional<std::size_t> wake_for = std::nullopt);
 
   // What station `listener` hears of the line (everything but its own driving) up to cycle(),
   // handed to `take` in order as runs of TxD: good characters whole from their start bits (a
   // character whose start bit is on the line comes whole), the rest as edges up to the line's
   // time (docs/segment.md). A sender's receiver (a master: TxdReceiver::take) uses it.
   void take_line(std::size_t listener, const std::function<void(const TxdRun&)>& take);
+  // Whether the line brought `listener` nothing since it last took it (take_line).
+  [[nodiscard]] bool heard_nothing(std::size_t listener) const;
 
   // The last telegram the line relayed whole to the senders (a chip's answer at its first start
   // bit, a sender's good telegram): its first start bit and its characters back to back, known to
@@ -167,8 +172,6 @@ class Segment {
   // Whether another station drives the line anywhere in [from, to] (another chip's armed answer)
   // or a firmware may not run past a cycle there (hard_end_).
   [[nodiscard]] bool others_drive(const Station& s, std::uint64_t from, std::uint64_t to) const;
-  // run_until(start) for a sender that drives from `start`: no firmware runs past it.
-  void run_to_send(std::uint64_t start);
   // One round of run_until: every station that needs it to the earliest next event (<= cycle).
   void round(std::uint64_t cycle);
   // What the rounds know of a chip: its next event and whether its firmware runs.

@@ -667,6 +667,80 @@ TEST(SegmentScenario, TheMasterKeepsTsynAfterAnotherStationsTelegram) {
   EXPECT_EQ(r.cycle_of("] station 5: 68 07 07 68 02 05"), request + 13 * 11 * 4 + 11 * 4);
 }
 
+// The audit s35 aMix, finding 1 (seg_plugin_dpv1.scn): a scripted class-1 station writes the
+// record of a polling firmware (tests/dpv1_plugin.c, MSAC_C1 on SAP 51) beside DO4 and the built-in
+// user side at 12 Mbaud: Read, Write, Read, each with its poll 1 ms later. Each poll is taken at
+// its exact edges (no parity error, docs/segment.md "A firmware across a round's end": a sender's
+// start is a hard end) and answered TSDR 11 bit times (T = 4) after its 11 characters end: the
+// Write's response (its header), then the record as written. Until the thirty-fifth session the
+// first poll reached the plug-in's CPU 2 clocks late and was lost, the Write got RR and the record
+// was never written.
+TEST(SegmentScenario, APollingFirmwareTakesEveryMsacC1PollAt12Mbaud) {
+  const std::string poll = "send from=tool 68,05,05,68,85,82,4D,33,33,BA,16\nrun 1ms\n";
+  const std::string read = "send from=tool 68,09,09,68,85,82,4D,33,33,5E,00,01,04,1D,16\nrun 1ms\n";
+  const ScenarioRun r = run_passing(
+      std::string("segment baud=12000000\nstation 5 name=plug profile=vpc3plus firmware=") +
+      DPV1_PLUGIN +
+      "\nstation 6 name=do4 profile=spc3 firmware=DO4\nstation 7 name=resp profile=dpc31\n"
+      "master 2 slaves=5,6,7\nsender tool\nstartup\ncycle 3\n" +
+      read + poll +
+      "send from=tool 68,0D,0D,68,85,82,4D,33,33,5F,00,01,04,A1,A2,A3,A4,A8,16\nrun 1ms\n" + poll +
+      read + poll +
+      "cycle 3\nexpect state 5 Data_Exchange\nexpect state 6 Data_Exchange\n"
+      "expect state 7 Data_Exchange\n");
+  // Each answer and the last poll before it in the walk (the `run` step's line between them).
+  const auto cycle = [](const std::string& l) {
+    return std::stoull(l.substr(l.find("cycle") + 5));
+  };
+  const auto answered_at = [&](std::string_view answer) -> std::pair<std::uint64_t, std::uint64_t> {
+    std::uint64_t poll = 0;
+    for (const std::string& l : r.walk) {
+      if (l.find("] tool: 68 05 05 68 85 82 4D 33 33 BA 16") != std::string::npos) poll = cycle(l);
+      if (l.find(answer) != std::string::npos) return {poll, cycle(l)};
+    }
+    ADD_FAILURE() << "no answer " << answer;
+    return {0, 0};
+  };
+  const std::uint64_t tsdr = (11 * 11 + 11) * 4;  // the poll's 11 characters, then 11 T
+  const auto [first_poll, first_answer] =
+      answered_at("] plug: 68 0D 0D 68 82 85 08 33 33 5E 00 01 04 11 22 33 44 82 16");
+  EXPECT_EQ(first_answer, first_poll + tsdr);
+  const auto [write_poll, write_answer] =
+      answered_at("] plug: 68 09 09 68 82 85 08 33 33 5F 00 01 04 D9 16");
+  EXPECT_EQ(write_answer, write_poll + tsdr);
+  const auto [read_poll, read_answer] =
+      answered_at("] plug: 68 0D 0D 68 82 85 08 33 33 5E 00 01 04 A1 A2 A3 A4 62 16");
+  EXPECT_EQ(read_answer, read_poll + tsdr);
+  EXPECT_LT(first_poll, write_poll);
+  EXPECT_LT(write_poll, read_poll);
+}
+
+// The audit s35 aMix, findings 2 and 7 from the scenario door (tsyn_after_send.scn): the SPC3
+// answers a scripted FDL_Status (6 characters) TSDR 11 bit times after it (T = 32); the next
+// `cycle`'s Data_Exchange starts TSYN (33 T) after that answer's end, no bus violation, no
+// collision, no "late answer" of master 2 (it asked nothing unanswered), and the walk from the
+// step on is in cycle order (docs/segment.md "The log"). Until the thirty-fifth session master 2
+// drove into the answer (a collision) and told it as its late answer after its own request.
+TEST(SegmentScenario, TheMasterWaitsForAnAnswerToAnotherStationsRequest) {
+  const ScenarioRun r = run_passing(
+      "segment baud=1500000\nstation 5 profile=spc3\nmaster 2 slaves=5\nsender tool\nstartup\n"
+      "cycle 1\nsend from=tool 10,05,09,49,57,16\ncycle 1\nexpect bus_violation short_tsyn 0\n"
+      "expect collisions 0\n");
+  const std::uint64_t answer = r.cycle_of("] station 5: 10 09 05 00 0E 16");
+  EXPECT_EQ(answer, r.cycle_of("] tool: 10 05 09 49 57 16") + (6 * 11 + 11) * 32);
+  EXPECT_EQ(r.cycle_of("] master 2: 68 07 07 68 05 02"), answer + (6 * 11 + 33) * 32);
+  std::uint64_t last = 0;
+  for (std::size_t i = 0; i < r.walk.size(); ++i) {
+    EXPECT_EQ(r.walk[i].find("late answer"), std::string::npos) << r.walk[i];
+    if (r.walk[i].find("] line 8:") != std::string::npos) last = 1;
+    if (last == 0) continue;
+    const std::uint64_t at = std::stoull(r.walk[i].substr(r.walk[i].find("cycle") + 5));
+    EXPECT_GE(at, last) << r.walk[i];
+    last = at;
+  }
+  EXPECT_NE(last, 0U);
+}
+
 // A token claimed without an SD4 is held from TSYN before the claiming master's first request
 // (docs/segment.md, "The token"): the master's own TTH counts from there as the bus check's does
 // (the review s28 rev2 finding 1: it counted from the claim's step, 33 bit times earlier for the

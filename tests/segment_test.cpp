@@ -878,6 +878,40 @@ TEST(Segment, AMastersSlaveKeepsItsConfigurationAcrossSelects) {
 // in Python): a data unit over DP's 244 bytes (fdl::encode would give no bytes: nothing went on
 // the line and no answer was counted), a frame fdl::encode refuses, more outputs than slaves.
 // Nothing reaches the line and the FCB is as it was: the next request is a fresh master's first.
+// The audit s35 aMix, finding 2: a master drives no busy line (RS-485 half duplex); its TSYN
+// counts from the end of the last telegram on the line, also one still in progress when it
+// decides or one that starts after that, before its own start (docs/segment.md "Masters on it").
+// A scripted station's FDL_Status to the SPC3 at 5 (SA 9): the SPC3 answers it TSDR 11 bit times
+// after its end (6 characters: 66 T), so the master's next Data_Exchange starts 33 T after that
+// answer's end, and nothing is a late answer of the master's, which asked nothing unanswered
+// (docs/timing.md "The master's wait"). Twice: the master decides at the scripted telegram's end,
+// before the answer starts (the scenario's `send`, then `cycle`), and while the telegram is on
+// the line (Python's `Segment.send` with its default start, then `dp_cycle`). Until the thirty-fifth session
+// it started 33 T after the scripted telegram's start or end: a collision with it or with the
+// answer, its Data_Exchange lost, counters().late 1 (the first case first: after an exchange
+// without an answer the master watched the line before its next request already).
+TEST(Segment, AMasterStartsNoRequestIntoAnotherStationsTelegram) {
+  Line line(kBaud, {5});
+  DpMaster& m = *line.master;
+  const std::size_t tool = line.seg.add_sender("tool");
+  ASSERT_TRUE(m.startup_all());
+  m.dp_cycle();
+  const std::vector<std::uint8_t> status = {0x10, 0x05, 0x09, 0x49, 0x57, 0x16};
+  const std::uint64_t t = line.seg.bit_cycles();
+  for (const bool decide_inside : {false, true}) {
+    SCOPED_TRACE(decide_inside ? "decided while the telegram is on the line" : "at its end");
+    const std::uint64_t end = line.seg.send(tool, status, line.seg.cycle() + 40 * t);
+    line.seg.run_until(decide_inside ? end - 20 * t : end);
+    const std::vector<Exchange> x = m.dp_cycle();
+    ASSERT_EQ(x.size(), 1U);
+    const std::uint64_t answer_end = end + 11 * t + 6 * 11 * t;
+    EXPECT_EQ(x[0].request_start, answer_end + 33 * t);
+    EXPECT_TRUE(x[0].answer);
+  }
+  EXPECT_TRUE(line.seg.collisions().empty());
+  EXPECT_EQ(m.counters().late, 0U);
+}
+
 TEST(Segment, AMasterRefusesWhatItCannotSend) {
   const auto make = [](Segment& seg) {
     std::vector<SlaveConfig> slaves(2);

@@ -638,6 +638,26 @@ def test_after_a_late_answer_the_next_request_waits_tsyn_from_its_end():
     assert (check.count("late_answer"), check.total) == (1, 1), seg.bus_log
 
 
+def test_a_master_starts_no_request_into_another_stations_telegram():
+    # docs/segment.md, "Masters on it" (the audit s35 aMix, finding 2): a master drives no busy
+    # line. 1.5 Mbaud, T = 32. A scripted FDL_Status to station 5 (SA 9, 6 characters) with its
+    # default start, then dp_cycle: the master decides while it is on the line, station 5 answers
+    # it 11 T after its end (6 characters), and the Data_Exchange starts TSYN (33 T) after that
+    # answer's end, is answered, collides with nothing and is no late answer of the master's.
+    seg = dpc31.Segment(1_500_000)
+    t = seg.bit_cycles
+    seg.add_station(5, "spc3")
+    master = seg.add_master(2, [5])
+    tool = seg.add_sender("tool")
+    assert master.startup_all()
+    master.dp_cycle()
+    end = seg.send(tool, bytes([0x10, 0x05, 0x09, 0x49, 0x57, 0x16]))
+    (dx,) = master.dp_cycle()
+    assert dx.request_start == end + (11 + 66 + 33) * t
+    assert dx.answer is not None
+    assert seg.collisions == [] and master.counters.late == 0
+
+
 def test_a_bus_check_armed_inside_an_answer_judges_what_begins_after_it():
     # startup_all (as every exchange) returns at its last answer's last stop sample, inside that
     # answer (docs/timing.md, "Serial line": ready at the stop sample, 2 cycles before the end at
