@@ -228,6 +228,11 @@ class Parser {
         fail(wd_base_contradicts_user_prm());
     }
     new_station_name(st.name);
+    const std::string scope = station_scope(st.slave.address, st.name);
+    for (const SegmentStation& o : s_.stations) {
+      if (station_scope(o.slave.address, o.name) == scope)
+        fail(second_station_in_scope(st.name, o.name, scope));
+    }
     s_.stations.push_back(std::move(st));
     station_lines_.push_back(line_);
   }

@@ -397,6 +397,12 @@ TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
       {"segment\nsender x\nstation 5\nsender x\nstartup\n", "f.scn:4: a second station named 'x'"},
       {"segment\nstation 5\nmaster 2 slaves=5\nmaster 2 slaves=5\nstartup\n",
        "f.scn:4: a second station named 'master 2'"},
+      // s35 audit aMix finding 5: names apart whose scopes are one (station_scope makes '/' a
+      // '_') would be one module in a VCD, one set of wires in an LA-VCD, one --record file.
+      {"segment\nstation 5 name=a/b\nstation 5 name=a_b\nstartup\n",
+       "f.scn:3: a second station named 'a_b' in the waveform scope of 'a/b' (station5_a_b)"},
+      {"segment\nstation 6 name=x.y\nstation 6 name=x-y\n",
+       "f.scn:3: a second station named 'x-y' in the waveform scope of 'x.y' (station6_x_y)"},
       {"segment\nstation 5\nmaster 2\nstartup\npass_token from=9 to=2\n",
        "f.scn:5: pass_token from=9: no master of that address"},
       {"segment\nstation 5\n", "f.scn: only header commands: nothing to run"},

@@ -423,6 +423,22 @@ def test_a_master_and_a_chip_station_never_share_an_address():
     assert seg.size == 2
 
 
+def test_a_second_station_in_one_waveform_scope_is_refused(tmp_path):
+    # docs/python.md, "A segment": the name is the station's scope in the waveforms; `a/b` and
+    # `a_b` at one address are both station5_a_b (s35 audit aMix finding 5), refused at the
+    # second's add_station in a segment scenario's words, outputs asked or not, the station not
+    # joined.
+    for vcd in (None, str(tmp_path / "s.vcd")):
+        seg = dpc31.Segment(1_500_000, vcd=vcd)
+        seg.add_station(5, "spc3", name="a/b")
+        with pytest.raises(ValueError, match=r"^a second station named 'a_b' in the waveform "
+                           r"scope of 'a/b' \(station5_a_b\)$"):
+            seg.add_station(5, "vpc3plus", name="a_b")
+        assert seg.size == 1
+        seg.add_station(6, "spc3", name="a_b")  # station6_a_b: a scope of its own
+        assert seg.size == 2
+
+
 def test_a_slave_read_back_is_a_read_only_copy():
     # docs/python.md: Station.slave and SegmentMaster.slave are copies of the slave the master
     # sends (given at add_station); a field set on one raises instead of changing nothing.
