@@ -902,6 +902,40 @@ TEST(SegmentScenario, AWatchdogThatNeverExpiredSaysSo) {
             "s.scn:5: expected watchdog_expired 5 twd=100, got never left DP_Control, expected it");
 }
 
+// s35 audit aMix finding 3 (its seg_wd_c2.scn): DO4 on a VPC3+ parameterised by a raw Set_Prm
+// from SA 2 (88h Lock_Req + WD_On, WD_Fact 01 0A on the 10 ms base: TWD 100 ms; DPV1_Status_1
+// C0h DPV1_Enable + Fail_Safe); then a class-2 master (SA 3) runs MSAC_C2 (Initiate, polls, a
+// Read) until 3787952.
+// "The 'DP_Control' state serves response time monitoring of the DP master (Master_Add)" (SPC3
+// p.25): only master 2's requests restart it. Its last, the Data_Exchange poll of `cycle 2` to
+// station 5 (11 bytes from 3160560, T = 32: end 3160560 + 11 x 352 = 3164432), is acted on at
+// end - T + T/2 = 3164416 (docs/timing.md); expiry + 100 ms (4 800 000 clocks) = 7964416, with
+// 99 ms 7916416. The old check took c2's last poll (end 3787952) and expected 8587936.
+TEST(SegmentScenario, WatchdogExpiryCountsFromTheLockingMastersLastRequest) {
+  const std::string head =
+      "segment baud=1500000\nstation 5 name=vpc profile=vpc3plus firmware=DO4\n"
+      "station 6 name=spc profile=spc3\nmaster 2 slaves=5,6\nsender tool\nsender c2\n"
+      "startup\ncycle 3\n"
+      "send from=tool 68,12,12,68,85,82,4D,3D,3E,88,01,0A,00,0D,04,00,C0,20,00,01,09,00,5D,16\n"
+      "run 1ms\nsend from=tool 68,07,07,68,85,82,4D,3E,3E,21,10,01,16\nrun 1ms\ncycle 2\n"
+      "expect state 5 Data_Exchange\n"
+      "send from=c2 68,19,19,68,85,83,4D,31,30,57,00,00,00,00,64,01,00,00,00,00,00,00,02,00,02,"
+      "00,00,00,00,76,16\n"
+      "run 3ms\nsend from=c2 68,05,05,68,85,83,4D,31,30,B6,16\n"
+      "run 3ms\nsend from=c2 68,05,05,68,85,83,4D,28,30,AD,16\n"
+      "run 3ms\nsend from=c2 68,09,09,68,85,83,4D,28,30,5E,00,01,02,0E,16\n"
+      "run 3ms\nsend from=c2 68,05,05,68,85,83,4D,28,30,AD,16\nrun 120ms\n";
+  const ScenarioRun r =
+      run_scenario_text(head +
+                            "expect watchdog_expired 5 twd=100ms\nexpect state 5 Wait_Prm\n"
+                            "expect watchdog_expired vpc twd=99ms\n",
+                        "wd.scn");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.errors, std::vector<std::string>{"wd.scn:27: expected watchdog_expired vpc twd=99ms, "
+                                               "got left DP_Control at cycle 7964416, expected "
+                                               "7916416"});
+}
+
 // The single chip's loader on a segment's file names the segment's loader, at the `segment` line.
 TEST(SegmentScenario, TheSingleChipLoaderNamesTheSegmentLoader) {
   Scenario s;
