@@ -71,6 +71,8 @@ class SegmentRun {
     states_in_order();
     check_.flush();
     seg_.align();  // the observers' chips at the line's time (docs/segment.md)
+    // What the chips' logs still owe (a fold's `last line repeated` note): before the last line.
+    for (const auto& st : stations_) seg_.chip(st->index).set_log_sink({});
     observer_->run_ends(seg_, passed_, failed_);
     say(seg_.cycle(), fmt::format("{} expects passed, {} failed", passed_, failed_));
     return failed_ == 0 ? 0 : 1;
@@ -131,6 +133,13 @@ class SegmentRun {
       st->index = seg_.add_chip(def.name, def.chip);
       observer_->station_added(seg_, st->index);
       Chip& chip = seg_.chip(st->index);
+      // The chip's own log (info and up, folded by the chip) as the single chip's walk has it,
+      // named by station as its other lines: held with the state changes, in cycle order.
+      chip.set_log_sink(
+          [this, name = def.name](const LogRecord& r) {
+            states_.emplace_back(r.cycle, fmt::format("{}: chip: {}", name, r.text));
+          },
+          LogLevel::info);
       DirectBus bus(chip);
       // The words of the single chip's trace heading (scenario_run.cpp's user_side_name).
       std::string who = "the built-in user side";

@@ -936,6 +936,48 @@ TEST(SegmentScenario, WatchdogExpiryCountsFromTheLockingMastersLastRequest) {
                                                "7916416"});
 }
 
+// s35 audit aMix finding 8: each station's chip log is in the walk as the single chip's `chip: …`,
+// named by station, at the chip's cycle: the DPC31 refuses a Set_Prm with DPV1_Enable "with
+// Prm_Fault and a log line" (docs/dpv1.md) at the request's acted-on cycle, end - T + T/2 (21
+// characters of 11 T = 32: start + 7392 - 16); the unlocked chip then ignores each Chk_Cfg with a
+// line (13 characters: start + 4576 - 16), the second and third folded by the chip's rule into
+// one note at the run's end, just before its last line, naming the repeats' own cycles.
+TEST(SegmentScenario, EachStationsChipLogIsInTheWalk) {
+  const std::string cfg = "send from=tool 68,07,07,68,87,82,4D,3E,3E,13,23,08,16\nrun 1ms\n";
+  const ScenarioRun r = run_scenario_text(
+      "segment\nstation 7 name=d profile=dpc31\nmaster 2 slaves=7\nsender tool\nstartup\n"
+      "send from=tool 68,0F,0F,68,87,82,4D,3D,3E,88,0A,C8,00,0C,31,00,C0,00,00,28,16\nrun 1ms\n" +
+      cfg + cfg + cfg);
+  EXPECT_EQ(r.code, 0);
+  const auto at = [](std::uint64_t cycle, const std::string& text) {
+    return fmt::format("[cycle {:>10}] d: chip: {}", cycle, text);
+  };
+  const auto has = [&r](const std::string& line) {
+    return std::find(r.walk.begin(), r.walk.end(), line) != r.walk.end();
+  };
+  const std::uint64_t prm = r.cycle_of("tool: 68 0F 0F 68");
+  EXPECT_TRUE(has(at(prm + 21 * 352 - 16,
+                     "Set_Prm from 2: DPV1_Enable: the DPC31's DPV1 is not modelled: Prm_Fault")));
+  std::vector<std::uint64_t> chk;
+  for (const std::string& l : r.walk) {
+    if (l.find("tool: 68 07 07 68") != std::string::npos)
+      chk.push_back(std::stoull(l.substr(l.find("cycle") + 5)));
+  }
+  ASSERT_EQ(chk.size(), 3U);
+  EXPECT_TRUE(has(at(chk[0] + 13 * 352 - 16,
+                     "Chk_Cfg from 2: no master has locked the slave (Master_Add FFh: not "
+                     "parameterised): ignored")));
+  EXPECT_EQ(std::count_if(r.walk.begin(), r.walk.end(),
+                          [](const std::string& l) { return l.find("Chk_Cfg from") != l.npos; }),
+            1);
+  ASSERT_GE(r.walk.size(), 2U);
+  const std::string& end = r.walk.back();
+  EXPECT_EQ(r.walk[r.walk.size() - 2],
+            at(std::stoull(end.substr(end.find("cycle") + 5)),
+               fmt::format("last line repeated 2 times, cycles {} to {}", chk[1] + 13 * 352 - 16,
+                           chk[2] + 13 * 352 - 16)));
+}
+
 // The single chip's loader on a segment's file names the segment's loader, at the `segment` line.
 TEST(SegmentScenario, TheSingleChipLoaderNamesTheSegmentLoader) {
   Scenario s;
