@@ -397,6 +397,21 @@ TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
       {"segment\nsender x\nstation 5\nsender x\nstartup\n", "f.scn:4: a second station named 'x'"},
       {"segment\nstation 5\nmaster 2 slaves=5\nmaster 2 slaves=5\nstartup\n",
        "f.scn:4: a second station named 'master 2'"},
+      // s35 audit aMix finding 6: a single chip's command or check is refused as such, not as an
+      // unknown word (a segment's DPV1 is the gap docs/segment.md names).
+      {"segment\nstation 5 profile=vpc3plus\nstartup\ndpv1_read slot=0 index=1 length=2\n",
+       "f.scn:4: 'dpv1_read' is a single chip's command: not on a segment"},
+      {"segment\nstation 5\nc2_initiate\n",
+       "f.scn:3: 'c2_initiate' is a single chip's command: not on a segment"},
+      {"segment\nstation 5\nrecord slot=0 index=1 data=01\n",
+       "f.scn:3: 'record' is a single chip's command: not on a segment"},
+      {"segment\nstation 5\nexchange 2\n",
+       "f.scn:3: 'exchange' is a single chip's command: not on a segment"},
+      {"segment\nstation 5\nexpect dpv1 refused\n",
+       "f.scn:3: 'expect dpv1' is a single chip's check: not on a segment"},
+      {"segment\nstation 5\nexpect answer rs\n",
+       "f.scn:3: 'expect answer' is a single chip's check: not on a segment"},
+      {"segment\nstation 5\nfrobnicate\n", "f.scn:3: unknown command 'frobnicate'"},
       // s35 audit aMix finding 5: names apart whose scopes are one (station_scope makes '/' a
       // '_') would be one module in a VCD, one set of wires in an LA-VCD, one --record file.
       {"segment\nstation 5 name=a/b\nstation 5 name=a_b\nstartup\n",
