@@ -471,6 +471,9 @@ void bind_station(py::module_& m) {
       .def_property_readonly("profile", read([](Chip& c) { return std::string(c.profile().name); }))
       .def_property_readonly("watchdog_due", read([](Chip& c) { return c.watchdog_due(); }))
       .def("probe", read([](Chip& c) { return c.probe(); }))
+      // The chip's snapshot at the line's time (a Chip's save_state, docs/snapshots.md); no
+      // load_state: it would move one chip's time and receiver under the line (docs/python.md).
+      .def("save_state", read([](Chip& c) { return to_bytes(c.save_state()); }))
       .def(
           "peek",
           [read](py::object self, const AnyInt& a) {
