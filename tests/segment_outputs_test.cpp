@@ -583,13 +583,18 @@ TEST(SegmentOutputs, AStationsNameIsAtMost64BytesAndEveryOutputTakesIt) {
 // The outputs finished and destroyed, the segment runs on (dpc31.Segment's close()): the
 // observers they put on the line and its chips do nothing any more, and the file holds the line
 // up to its time then.
+// The outputs of a segment built by hand: one VCD at `path`.
+dpc31::SegmentOutputOptions one_vcd(const std::string& path) {
+  dpc31::wave::Options w;
+  w.path = path;
+  return {{w}, ""};
+}
+
 TEST(SegmentOutputs, TheSegmentRunsOnAfterItsOutputsAreGone) {
   using namespace dpc31;
   const std::string vcd = tmp("gone.vcd");
   Segment seg(1'500'000);
-  wave::Options w;
-  w.path = vcd;
-  auto out = std::make_unique<SegmentOutputs>(SegmentOutputOptions{{w}, ""});
+  auto out = std::make_unique<SegmentOutputs>(one_vcd(vcd));
   std::string e;
   ASSERT_TRUE(out->open(e)) << e;
   const std::size_t chip = seg.add_chip("station 5", ChipOptions{});
@@ -622,9 +627,7 @@ TEST(SegmentOutputs, ASecondStationInOneScopeIsRefused) {
   using namespace dpc31;
   const std::string vcd = tmp("scope.vcd");
   Segment seg(1'500'000);
-  wave::Options w;
-  w.path = vcd;
-  SegmentOutputs out(SegmentOutputOptions{{w}, ""});
+  SegmentOutputs out(one_vcd(vcd));
   std::string e;
   ASSERT_TRUE(out.open(e)) << e;
   ASSERT_TRUE(out.add_station(seg, seg.add_chip("a/b", ChipOptions{}), station_scope(5, "a/b"), e))
