@@ -24,10 +24,7 @@ namespace {
 // DPV1 is modelled on the VPC3+ only (a scenario refuses `record`, `dpv1` and the DPV1 actions
 // on another profile at its parse): a ValueError naming the chip's, before anything is sent.
 void no_dpv1_but_on_vpc3plus(const Chip& chip, std::string_view what) {
-  if (chip.profile().id != Profile::vpc3plus) {
-    throw py::value_error(fmt::format("{} need a vpc3plus, not a {}: {}", what,
-                                      profile_name(chip.profile().id), kDpv1OnVpc3plusOnly));
-  }
+  if (std::string why = dpv1_refused(chip, what); !why.empty()) throw py::value_error(why);
 }
 
 using RecordArg = std::tuple<py::int_, py::int_, py::object>;

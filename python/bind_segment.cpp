@@ -471,6 +471,9 @@ void bind_station(py::module_& m) {
       .def_property_readonly("profile", read([](Chip& c) { return std::string(c.profile().name); }))
       .def_property_readonly("watchdog_due", read([](Chip& c) { return c.watchdog_due(); }))
       .def("probe", read([](Chip& c) { return c.probe(); }))
+      // The chip's snapshot at the line's time (a Chip's save_state, docs/snapshots.md); no
+      // load_state: it would move one chip's time and receiver under the line (docs/python.md).
+      .def("save_state", read([](Chip& c) { return to_bytes(c.save_state()); }))
       .def(
           "peek",
           [read](py::object self, const AnyInt& a) {
@@ -539,6 +542,11 @@ PyStation& add_station(py::object self, U8 address, const std::string& profile,
   if (std::string why = station_name_refused(name.value_or(whose), whose); !why.empty())
     throw py::value_error(why);
   st->name = new_station_name(s.seg, name.value_or(whose));
+  const std::string scope = station_scope(address, st->name);
+  for (const auto& o : s.stations) {
+    if (station_scope(o->slave.address, o->name) == scope)
+      throw py::value_error(second_station_in_scope(st->name, o->name, scope));
+  }
   SlaveConfig sc = slave.value_or(SlaveConfig{});
   sc.address = address;
   if (!slave) {
@@ -580,8 +588,7 @@ PyStation& add_station(py::object self, U8 address, const std::string& profile,
         bool in_outputs = false;
         try {
           if (s.outputs) {
-            in_outputs = s.outputs->add_station(s.seg, st->index, station_scope(address, st->name),
-                                                out_error);
+            in_outputs = s.outputs->add_station(s.seg, st->index, scope, out_error);
             if (!in_outputs) {
               s.seg.remove_last_chip();
               return;

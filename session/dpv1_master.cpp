@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <stdexcept>
 
 #include "dpc31/dp.hpp"
 #include "dpc31/hex.hpp"
@@ -70,6 +71,17 @@ void Dpv1Master::take(Dpv1Answer& a, const Exchange& ex) {
   const fdl::Response r = fdl::response_code(ex.answer->fc);
   a.outcome = r == fdl::Response::DL || r == fdl::Response::DH ? Dpv1Answer::Outcome::malformed
                                                                : Dpv1Answer::Outcome::refused;
+}
+
+std::string dpv1_refused(const Chip& chip, std::string_view what) {
+  if (chip.profile().id == Profile::vpc3plus) return {};
+  return fmt::format("{} need a vpc3plus, not a {}: {}", what, profile_name(chip.profile().id),
+                     kDpv1OnVpc3plusOnly);
+}
+
+Dpv1Master::Dpv1Master(const Chip& chip, DpMaster& m, Dpv1Rules r) : chip_(chip), m_(m), rules_(r) {
+  if (std::string why = dpv1_refused(chip, "DPV1 services"); !why.empty())
+    throw std::invalid_argument("Dpv1Master: " + why);
 }
 
 Dpv1Answer Dpv1Master::no_connection() const {

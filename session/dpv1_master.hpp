@@ -57,7 +57,8 @@ struct Dpv1Answer {
   std::uint64_t end = 0;
 };
 
-// The DPV1 services' refusal on a chip without DPV1 (the scenario parser's and Python's words).
+// The DPV1 services' refusal on a chip without DPV1 (the scenario parser's, Python's and
+// Dpv1Master's words).
 inline constexpr std::string_view kDpv1OnVpc3plusOnly =
     "DPV1 is modelled on the VPC3+ only (the DPC31's is not modelled; the SPC3 has none)";
 
@@ -66,9 +67,15 @@ inline constexpr std::string_view kDpv1OnVpc3plusOnly =
 // "malformed DL without data after 0 polls" ...
 [[nodiscard]] std::string answer_summary(const Dpv1Answer& a);
 
+// "" on a VPC3+, else why WHAT ("DPV1 services", "records") are refused on `chip`, every door's
+// words: "DPV1 services need a vpc3plus, not a dpc31: DPV1 is modelled on the VPC3+ only (...)".
+[[nodiscard]] std::string dpv1_refused(const Chip& chip, std::string_view what);
+
 class Dpv1Master {
  public:
-  Dpv1Master(const Chip& chip, DpMaster& m, Dpv1Rules r = {}) : chip_(chip), m_(m), rules_(r) {}
+  // On another chip than the VPC3+ std::invalid_argument ("Dpv1Master: " and dpv1_refused's
+  // words): its services are refused before anything is sent (docs/dpv1.md).
+  Dpv1Master(const Chip& chip, DpMaster& m, Dpv1Rules r = {});
 
   // MSAC_C1: Read / Write from SAP 51 to SAP 51, Alarm_Ack from SAP 51 to the slave's SAP 50 or
   // 51 (`dsap`; the standard allows both). Another `dsap` is sent as given, for a bench that

@@ -138,10 +138,7 @@ bool parse_header(std::string_view cmd, std::span<const std::string_view> pos,
 
 bool parse_action(std::string_view cmd, std::span<const std::string_view> pos,
                   std::span<const Option> opts, const Scenario& s, ScenarioStep& st) {
-  static constexpr std::string_view kActions[] = {"dpv1_read",    "dpv1_write", "alarm_ack",
-                                                  "c2_initiate",  "c2_read",    "c2_write",
-                                                  "c2_transport", "c2_idle",    "c2_abort"};
-  if (std::find(std::begin(kActions), std::end(kActions), cmd) == std::end(kActions)) return false;
+  if (std::find(kActions.begin(), kActions.end(), cmd) == kActions.end()) return false;
   needs_vpc3plus(cmd, s);
   no_positional(pos, cmd);
   st.kind = StepKind::dpv1;

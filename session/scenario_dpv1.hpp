@@ -5,6 +5,7 @@
 // scenario parser and runner.
 #pragma once
 
+#include <array>
 #include <optional>
 #include <span>
 #include <string>
@@ -18,6 +19,11 @@
 namespace dpc31::scenario_dpv1 {
 
 using Option = std::pair<std::string_view, std::string_view>;
+
+// The DPV1 actions (parse_action).
+inline constexpr std::array<std::string_view, 9> kActions = {
+    "dpv1_read", "dpv1_write", "alarm_ack",    "c2_initiate", "c2_read",
+    "c2_write",  "c2_idle",    "c2_transport", "c2_abort"};
 
 // `record slot=N index=N data=BYTES`, `dpv1 work=N c1_timeout=N c2_ssap=N` into `s`; false if
 // `cmd` is neither (throws scenario_lex::ParseFail).

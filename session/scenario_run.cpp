@@ -107,22 +107,25 @@ class Runner {
       user_.init(bus);
     }
     master_ = std::make_unique<DpMaster>(chip_, s_.master, s_.user.slave);
-    dpv1_ = std::make_unique<Dpv1Master>(chip_, *master_, s_.dpv1);
-    dpv1_->rules().retries = s_.retries;
-    // Each poll reported as it comes, then forgotten, as `exchange N` does, and the walk's lines
-    // written as their folds are decided: a long DPV1 time-out keeps the history and the walk
-    // flat. Nothing noted later is older than the chip's cycle, so what is sorted now stays so.
-    // An observer is told every event held so far, and that none older will come (a trace writes
-    // what precedes them; its checkpoint waits for step_ends).
-    dpv1_->polled = [this] {
-      report_history();
-      forget_reported();
-      if (events_.size() >= kDrainAt) {
-        report_outputs();
-        drain(false);
-        if (hooks_.observer != nullptr) hooks_.observer->events_told(chip_.cycle());
-      }
-    };
+    // The parser refused DPV1 steps on another chip: only a VPC3+ has a DPV1 master.
+    if (s_.chip.profile == Profile::vpc3plus) {
+      dpv1_ = std::make_unique<Dpv1Master>(chip_, *master_, s_.dpv1);
+      dpv1_->rules().retries = s_.retries;
+      // Each poll reported as it comes, then forgotten, as `exchange N` does, and the walk's lines
+      // written as their folds are decided: a long DPV1 time-out keeps the history and the walk
+      // flat. Nothing noted later is older than the chip's cycle, so what is sorted now stays so.
+      // An observer is told every event held so far, and that none older will come (a trace writes
+      // what precedes them; its checkpoint waits for step_ends).
+      dpv1_->polled = [this] {
+        report_history();
+        forget_reported();
+        if (events_.size() >= kDrainAt) {
+          report_outputs();
+          drain(false);
+          if (hooks_.observer != nullptr) hooks_.observer->events_told(chip_.cycle());
+        }
+      };
+    }
     master_->on_locked = [this](std::uint8_t, std::uint8_t by) { locked_by_ = by; };
     master_->on_late = [this](std::uint64_t end, bool after_slot) {
       note(end, fmt::format("master: {}", late_answer_text(after_slot)));

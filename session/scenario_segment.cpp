@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <map>
 #include <memory>
 #include <set>
@@ -13,6 +14,7 @@
 #include "dpc31/dp.hpp"
 #include "firmware_host.hpp"
 #include "responder.hpp"
+#include "scenario_dpv1.hpp"
 #include "scenario_lex.hpp"
 #include "segment.hpp"
 #include "textfile.hpp"
@@ -23,6 +25,53 @@ namespace dpc31 {
 namespace {
 
 using namespace scenario_lex;  // NOLINT: the scenario's lexical helpers
+
+// A single chip's command a segment does not have (docs/scenario-format.md "Segments"): refused
+// as such, not as an unknown word. Its DPV1 is the gap docs/segment.md names.
+bool single_chip_command(std::string_view c) {
+  static constexpr std::array<std::string_view, 31> kOneChip = {"profile",
+                                                                "variant",
+                                                                "bus",
+                                                                "hw",
+                                                                "irq-controller",
+                                                                "baud",
+                                                                "slave",
+                                                                "user",
+                                                                "firmware",
+                                                                "cpu",
+                                                                "inputs",
+                                                                "record",
+                                                                "dpv1",
+                                                                "exchange",
+                                                                "gc",
+                                                                "set_prm",
+                                                                "chk_cfg",
+                                                                "get_cfg",
+                                                                "diag",
+                                                                "fdl_status",
+                                                                "read_inputs",
+                                                                "read_outputs",
+                                                                "set_slave_address",
+                                                                "restart",
+                                                                "silence",
+                                                                "foreign_master",
+                                                                "corrupt",
+                                                                "bad_fcs",
+                                                                "request",
+                                                                "read",
+                                                                "write"};
+  return std::find(kOneChip.begin(), kOneChip.end(), c) != kOneChip.end() ||
+         std::find(scenario_dpv1::kActions.begin(), scenario_dpv1::kActions.end(), c) !=
+             scenario_dpv1::kActions.end();
+}
+
+// The same for a single chip's `expect` kinds (`expect dpv1`, `expect answer`, ...).
+bool single_chip_check(std::string_view what) {
+  static constexpr std::array<std::string_view, 13> kOneChip = {
+      "answer", "baud", "cleared", "counter", "diag_byte", "dp_state", "dpv1",
+      "inputs", "irq",  "irr_bit", "outputs", "station",   "wd_state"};
+  return std::find(kOneChip.begin(), kOneChip.end(), what) != kOneChip.end();
+}
 
 // Why `expect port` cannot name `name` of `fw` ("" when it can): the single chip's words.
 std::string port_refused(const dpc31_firmware& fw, std::string_view name) {
@@ -228,6 +277,11 @@ class Parser {
         fail(wd_base_contradicts_user_prm());
     }
     new_station_name(st.name);
+    const std::string scope = station_scope(st.slave.address, st.name);
+    for (const SegmentStation& o : s_.stations) {
+      if (station_scope(o.slave.address, o.name) == scope)
+        fail(second_station_in_scope(st.name, o.name, scope));
+    }
     s_.stations.push_back(std::move(st));
     station_lines_.push_back(line_);
   }
@@ -379,6 +433,8 @@ class Parser {
       st.station = static_cast<std::uint8_t>(number(take("to").value_or(""), "to", 0, 126));
     } else if (c == "expect") {
       expect(st, positional(0, "what to expect"));
+    } else if (single_chip_command(c)) {
+      fail(fmt::format("'{}' is a single chip's command: not on a segment", c));
     } else {
       fail(fmt::format("unknown command '{}'", c));
     }
@@ -436,6 +492,8 @@ class Parser {
     } else if (what == "collisions") {
       st.kind = K::expect_collisions;
       st.count = number(positional(1, "a count"), "count", 0, 1'000'000'000);
+    } else if (single_chip_check(what)) {
+      fail(fmt::format("'expect {}' is a single chip's check: not on a segment", what));
     } else {
       fail(fmt::format("unknown expect '{}'", what));
     }

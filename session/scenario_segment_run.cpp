@@ -14,6 +14,8 @@
 
 #include "dp_master.hpp"
 #include "dpc31/bus_port.hpp"
+#include "dpc31/dp.hpp"
+#include "dpc31/pdu.hpp"
 #include "firmware_host.hpp"
 #include "responder.hpp"
 #include "scenario_expect.hpp"
@@ -69,6 +71,8 @@ class SegmentRun {
     states_in_order();
     check_.flush();
     seg_.align();  // the observers' chips at the line's time (docs/segment.md)
+    // What the chips' logs still owe (a fold's `last line repeated` note): before the last line.
+    for (const auto& st : stations_) seg_.chip(st->index).set_log_sink({});
     observer_->run_ends(seg_, passed_, failed_);
     say(seg_.cycle(), fmt::format("{} expects passed, {} failed", passed_, failed_));
     return failed_ == 0 ? 0 : 1;
@@ -129,6 +133,13 @@ class SegmentRun {
       st->index = seg_.add_chip(def.name, def.chip);
       observer_->station_added(seg_, st->index);
       Chip& chip = seg_.chip(st->index);
+      // The chip's own log (info and up, folded by the chip) as the single chip's walk has it,
+      // named by station as its other lines: held with the state changes, in cycle order.
+      chip.set_log_sink(
+          [this, name = def.name](const LogRecord& r) {
+            states_.emplace_back(r.cycle, fmt::format("{}: chip: {}", name, r.text));
+          },
+          LogLevel::info);
       DirectBus bus(chip);
       // The words of the single chip's trace heading (scenario_run.cpp's user_side_name).
       std::string who = "the built-in user side";
@@ -247,12 +258,32 @@ class SegmentRun {
     };
   }
 
-  // The last request to each station from its master (expect watchdog_expired).
+  // The last request to each station from its locking master (expect watchdog_expired).
   void telegram(const LineTelegram& t) {
     const fdl::Decoded d = fdl::decode(t.bytes);
     say(t.start, fmt::format("{}: {}", seg_.name(t.from), scenario_lex::bytes_text(t.bytes)));
-    if (d.error == fdl::Error::none && d.frame.sd != fdl::SD4 && fdl::is_request(d.frame.fc))
-      last_request_[d.frame.da] = t.end;
+    if (d.error != fdl::Error::none || d.frame.sd == fdl::SD4) return;
+    const fdl::Frame& f = d.frame;
+    if (!fdl::is_request(f.fc)) {
+      // A Slave_Diag answer shows whom the station is locked to (Master_Add, FFh none).
+      if (f.ssap == sap::Slave_Diag && f.du.size() >= pdu::SlaveDiag::kStandard)
+        locked_to_[f.sa] = f.du[3];
+      return;
+    }
+    // "The 'DP_Control' state serves response time monitoring of the DP master (Master_Add)"
+    // (SPC3 p.25): only its requests restart the timer, another master's (a class-2 master's
+    // MSAC_C2) do not. Checked before the request is served, as the chip does.
+    const auto lock = locked_to_.find(f.da);
+    if (lock != locked_to_.end() && lock->second == f.sa) last_request_[f.da] = t.end;
+    if (f.dsap != sap::Set_Prm || f.du.empty()) return;
+    // A Set_Prm locks a station no other master holds (Lock_Req) and unlocks it (Unlock_Req);
+    // while another master holds it, it is ignored (DPC31 p.28).
+    std::uint8_t& holder = locked_to_.try_emplace(f.da, pdu::SlaveDiag::kNoMaster).first->second;
+    if (holder != pdu::SlaveDiag::kNoMaster && holder != f.sa) return;
+    if ((f.du[0] & pdu::SetPrm::Unlock_Req) != 0)
+      holder = pdu::SlaveDiag::kNoMaster;
+    else if ((f.du[0] & pdu::SetPrm::Lock_Req) != 0)
+      holder = f.sa;
   }
 
   // An answer as the bus check pairs it with its request (BusCheck::on_answer): its delay for
@@ -547,8 +578,11 @@ class SegmentRun {
   std::map<std::string, std::size_t> senders_;
   std::vector<std::unique_ptr<DpMaster>> masters_;
   std::size_t holder_ = 0;  // the master that holds the token: a rotation starts there
-  std::vector<std::optional<TokenVisit>> visits_;  // each master's last visit of the token
-  std::map<std::uint8_t, std::uint64_t> last_request_;
+  std::vector<std::optional<TokenVisit>> visits_;       // each master's last visit of the token
+  std::map<std::uint8_t, std::uint64_t> last_request_;  // from the station's locking master
+  // Each station's locking master as the line shows it: its Set_Prm's lock bits, its Slave_Diag
+  // answers' Master_Add.
+  std::map<std::uint8_t, std::uint8_t> locked_to_;
   // The first start bit and the end of the last answer a chip decided to send.
   std::uint64_t tx_from_ = 0;
   std::uint64_t tx_until_ = 0;

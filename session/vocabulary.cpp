@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <iterator>
 #include <stdexcept>
@@ -214,6 +215,20 @@ std::string master_station_name(std::uint8_t address) { return fmt::format("mast
 
 std::string second_station_named(std::string_view name) {
   return fmt::format("a second station named '{}'", name);
+}
+
+std::string station_scope(std::uint8_t address, std::string_view name) {
+  std::string s = fmt::format("station{}", address);
+  if (name == fmt::format("station {}", address)) return s;
+  s += '_';
+  for (const char c : name) s += std::isalnum(static_cast<unsigned char>(c)) != 0 ? c : '_';
+  return s;
+}
+
+std::string second_station_in_scope(std::string_view name, std::string_view first,
+                                    std::string_view scope) {
+  return fmt::format("{} in the waveform scope of '{}' ({})", second_station_named(name), first,
+                     scope);
 }
 
 std::string master_at_station(std::uint8_t address) {

@@ -170,6 +170,14 @@ inline constexpr ValueRange kC31Code{"code", 0x08A0, 0x1FFF};
 // master's sender is "master ADDR"; a name taken is "a second station named 'NAME'".
 [[nodiscard]] std::string master_station_name(std::uint8_t address);
 [[nodiscard]] std::string second_station_named(std::string_view name);
+// A chip station's scope in a segment's waveform: station5 (the address), station5_spc3 when its
+// name is not the default "station 5" (other characters than letters and digits made '_').
+[[nodiscard]] std::string station_scope(std::uint8_t address, std::string_view name);
+// Two chip stations whose names differ only where the scope has '_' (`a/b`, `a_b` at one address)
+// would share one scope and one --record file: the second is refused as a second name is, "a
+// second station named 'a_b' in the waveform scope of 'a/b' (station5_a_b)".
+[[nodiscard]] std::string second_station_in_scope(std::string_view name, std::string_view first,
+                                                  std::string_view scope);
 // A master is a station too: none shares its address with a chip station (two chips may: they
 // collide). The refusal of the one that came second: "master 5 at the address of station 5",
 // "station 5 at the address of master 5".

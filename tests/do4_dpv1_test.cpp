@@ -186,6 +186,36 @@ TEST(Do4Dpv1, StrayMsac1RequestsFromAnotherStationGetRsAndStoreNothing) {
   EXPECT_EQ(firmware_bench::stats_of(b.host)->dpv1_requests, requests_before + 1);
 }
 
+// MSAC_C1 lives in the master's Data_Exchange (docs/dpv1.md, docs/firmware.md "DO4 with DPV1":
+// the Profichip driver stops it when the slave leaves): when the DP watchdog (TWD 100 ms) expires
+// and the chip goes to Wait_Prm, DO4 closes SAPs 51 and 50 (Request_SA = its own address) and
+// frees their buffers. A response DO4 had ready before is not sent: the master's poll gets RS (no
+// service activated, VPC3+C p.55), so does a new Read, which stores nothing. A new start-up opens
+// them again. (s35 audit aMix finding 4: the poll got 5E 00 01 02 01 09 after the expiry.)
+TEST(Do4Dpv1, LeavingDataExchangeClosesMsac1) {
+  Dpv1Bench b;
+  ASSERT_TRUE(b.master.startup());
+  b.master.data_exchange({0x05, 0x01});
+  const auto rs = [](const Exchange& ex) {
+    ASSERT_TRUE(ex.answer);
+    EXPECT_EQ(ex.answer->fc & fdl::kFcCodeMask, 0x03);
+    EXPECT_TRUE(ex.answer->du.empty());
+  };
+  // Taken (SC) and answered by the 1 ms task, but not polled for.
+  const Exchange read = b.master.acyclic(kC1, kC1, pdu::read_request(0, 1, 2).build());
+  ASSERT_TRUE(read.answer && *read.answer == fdl::sc());
+  const std::uint64_t requests = firmware_bench::stats_of(b.host)->dpv1_requests;
+  b.master.idle(5'000'000);  // past TWD = 4 800 000 clocks
+  ASSERT_EQ(b.chip.dp_state(), DpState::Wait_Prm);
+  rs(b.master.acyclic(kC1, kC1, {}));
+  rs(b.master.acyclic(kC1, kC1, pdu::read_request(0, 1, 2).build()));
+  b.master.idle(100'000);  // two 1 ms ticks: nothing to answer
+  EXPECT_EQ(firmware_bench::stats_of(b.host)->dpv1_requests, requests);
+  ASSERT_TRUE(b.master.startup());
+  EXPECT_EQ(b.request(pdu::read_request(0, 1, 2).build()).du,
+            (pdu::Bytes{0x5E, 0x00, 0x01, 0x02, 0x01, 0x09}));
+}
+
 // Without DPV1_Enable in Set_Prm (the GSD defaults) the SAP list is off: a request to SAP 51 is
 // refused RS as for any SAP the chip does not serve, and DO4 is the DP-only module it was.
 TEST(Do4Dpv1, WithoutDpv1EnableSap51IsRefused) {

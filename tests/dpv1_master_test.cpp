@@ -5,10 +5,13 @@
 // rules of docs/dpv1.md ("The master's side"); the derivation of each number is beside it.
 #include "dpv1_master.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <array>
+#include <stdexcept>
+#include <string>
 
 #include "dpc31/dp.hpp"
 #include "responder.hpp"
@@ -118,10 +121,11 @@ TEST(Dpv1Master, NoAnswerAfterRetries) {
 
 // A master asking station 5 on a 1.5 Mbaud line (T = 32 clocks, a character 11 T) where only a
 // scripted sender answers: `bytes` TSDR 11 T after the end of request number `nth` (from 1), and
-// nothing to the others. The clock's chip only gives Dpv1Master its 48 MHz.
+// nothing to the others. The clock's chip only gives Dpv1Master its 48 MHz (a VPC3+: it refuses
+// another).
 struct ScriptedLine {
   static constexpr std::uint64_t T = 32;
-  Chip clock;
+  Chip clock{ChipOptions{Profile::vpc3plus, BusMode::intel, 0}};
   Segment seg{1'500'000};
   std::size_t rogue = seg.add_sender("rogue");
   std::size_t m = seg.add_sender("master 2");
@@ -919,6 +923,37 @@ TEST(Dpv1Scenario, ParseErrorsNameTheLine) {
   s = Scenario{};
   EXPECT_FALSE(parse_scenario("profile vpc3plus\nc2_abort reason=16\n", "t.scn", s, err));
   EXPECT_EQ(err.line, 2);
+}
+
+// docs/dpv1.md (top): "The master's DPV1 services on another chip than the VPC3+ are refused before
+// anything is sent", in the scenario's and Python's words; the C++ door at the Dpv1Master's making
+// (s35 audit aMix finding 9: a Read on a DPC31 sent its request and its retry, then no_answer),
+// on one chip and on a segment's station. Nothing is sent: the master's history stays empty.
+TEST(Dpv1Master, AnotherChipThanTheVpc3plusIsRefusedBeforeAnythingIsSent) {
+  const auto refused = [](const Chip& chip, DpMaster& master, const char* profile) {
+    try {
+      Dpv1Master dpv1(chip, master);
+      ADD_FAILURE() << profile << ": not refused";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()),
+                fmt::format("Dpv1Master: DPV1 services need a vpc3plus, not a {}: DPV1 is "
+                            "modelled on the VPC3+ only (the DPC31's is not modelled; the SPC3 "
+                            "has none)",
+                            profile));
+    }
+    EXPECT_TRUE(master.history().empty());
+  };
+  for (const Profile p : {Profile::dpc31, Profile::spc3}) {
+    Chip chip{ChipOptions{p, BusMode::intel, 0}};
+    DpMaster master(chip, MasterConfig{2, 1'500'000, 100, 33}, SlaveConfig{});
+    refused(chip, master, p == Profile::dpc31 ? "dpc31" : "spc3");
+    EXPECT_EQ(chip.cycle(), 0U);
+  }
+  Segment seg(1'500'000);
+  const std::size_t station = seg.add_chip("d", ChipOptions{Profile::dpc31, BusMode::intel, 0});
+  DpMaster master(seg, seg.add_sender("master 2"), MasterConfig{}, {SlaveConfig{}});
+  refused(seg.chip(station), master, "dpc31");
+  EXPECT_EQ(seg.cycle(), 0U);
 }
 
 }  // namespace

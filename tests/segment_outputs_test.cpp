@@ -583,13 +583,18 @@ TEST(SegmentOutputs, AStationsNameIsAtMost64BytesAndEveryOutputTakesIt) {
 // The outputs finished and destroyed, the segment runs on (dpc31.Segment's close()): the
 // observers they put on the line and its chips do nothing any more, and the file holds the line
 // up to its time then.
+// The outputs of a segment built by hand: one VCD at `path`.
+dpc31::SegmentOutputOptions one_vcd(const std::string& path) {
+  dpc31::wave::Options w;
+  w.path = path;
+  return {{w}, ""};
+}
+
 TEST(SegmentOutputs, TheSegmentRunsOnAfterItsOutputsAreGone) {
   using namespace dpc31;
   const std::string vcd = tmp("gone.vcd");
   Segment seg(1'500'000);
-  wave::Options w;
-  w.path = vcd;
-  auto out = std::make_unique<SegmentOutputs>(SegmentOutputOptions{{w}, ""});
+  auto out = std::make_unique<SegmentOutputs>(one_vcd(vcd));
   std::string e;
   ASSERT_TRUE(out->open(e)) << e;
   const std::size_t chip = seg.add_chip("station 5", ChipOptions{});
@@ -613,6 +618,38 @@ TEST(SegmentOutputs, TheSegmentRunsOnAfterItsOutputsAreGone) {
   seg.flush();
   EXPECT_EQ(slurp(vcd), written);
   EXPECT_FALSE(written.empty());
+}
+
+// Two chips whose scopes are one are refused at the second's add_station, in the scenario's
+// words (docs/segment.md "Outputs"; s35 audit aMix finding 5: the VCD had one module
+// station5_a_b holding both chips' signals twice). The first keeps its scope; another joins.
+TEST(SegmentOutputs, ASecondStationInOneScopeIsRefused) {
+  using namespace dpc31;
+  const std::string vcd = tmp("scope.vcd");
+  Segment seg(1'500'000);
+  SegmentOutputs out(one_vcd(vcd));
+  std::string e;
+  ASSERT_TRUE(out.open(e)) << e;
+  ASSERT_TRUE(out.add_station(seg, seg.add_chip("a/b", ChipOptions{}), station_scope(5, "a/b"), e))
+      << e;
+  EXPECT_FALSE(
+      out.add_station(seg, seg.add_chip("a_b", ChipOptions{}), station_scope(5, "a_b"), e));
+  EXPECT_EQ(e, "a second station named 'a_b' in the waveform scope of 'a/b' (station5_a_b)");
+  seg.remove_last_chip();
+  e.clear();
+  ASSERT_TRUE(out.add_station(seg, seg.add_chip("c", ChipOptions{}), station_scope(6, "c"), e))
+      << e;
+  ASSERT_TRUE(out.attach_line(seg, {5, 6}, e)) << e;
+  seg.run_until(1000);
+  out.end(seg);
+  ASSERT_TRUE(out.write(e)) << e;
+  const std::string text = slurp(vcd);
+  std::size_t modules = 0;
+  for (std::size_t at = text.find("$scope module station5_a_b "); at != std::string::npos;
+       at = text.find("$scope module station5_a_b ", at + 1))
+    ++modules;
+  EXPECT_EQ(modules, 1u);
+  EXPECT_NE(text.find("$scope module station6_c "), std::string::npos);
 }
 
 // A station's user watchdog options refused at their line (docs/scenario-format.md, "Segments"):

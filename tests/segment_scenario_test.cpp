@@ -397,6 +397,27 @@ TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
       {"segment\nsender x\nstation 5\nsender x\nstartup\n", "f.scn:4: a second station named 'x'"},
       {"segment\nstation 5\nmaster 2 slaves=5\nmaster 2 slaves=5\nstartup\n",
        "f.scn:4: a second station named 'master 2'"},
+      // s35 audit aMix finding 6: a single chip's command or check is refused as such, not as an
+      // unknown word (a segment's DPV1 is the gap docs/segment.md names).
+      {"segment\nstation 5 profile=vpc3plus\nstartup\ndpv1_read slot=0 index=1 length=2\n",
+       "f.scn:4: 'dpv1_read' is a single chip's command: not on a segment"},
+      {"segment\nstation 5\nc2_initiate\n",
+       "f.scn:3: 'c2_initiate' is a single chip's command: not on a segment"},
+      {"segment\nstation 5\nrecord slot=0 index=1 data=01\n",
+       "f.scn:3: 'record' is a single chip's command: not on a segment"},
+      {"segment\nstation 5\nexchange 2\n",
+       "f.scn:3: 'exchange' is a single chip's command: not on a segment"},
+      {"segment\nstation 5\nexpect dpv1 refused\n",
+       "f.scn:3: 'expect dpv1' is a single chip's check: not on a segment"},
+      {"segment\nstation 5\nexpect answer rs\n",
+       "f.scn:3: 'expect answer' is a single chip's check: not on a segment"},
+      {"segment\nstation 5\nfrobnicate\n", "f.scn:3: unknown command 'frobnicate'"},
+      // s35 audit aMix finding 5: names apart whose scopes are one (station_scope makes '/' a
+      // '_') would be one module in a VCD, one set of wires in an LA-VCD, one --record file.
+      {"segment\nstation 5 name=a/b\nstation 5 name=a_b\nstartup\n",
+       "f.scn:3: a second station named 'a_b' in the waveform scope of 'a/b' (station5_a_b)"},
+      {"segment\nstation 6 name=x.y\nstation 6 name=x-y\n",
+       "f.scn:3: a second station named 'x-y' in the waveform scope of 'x.y' (station6_x_y)"},
       {"segment\nstation 5\nmaster 2\nstartup\npass_token from=9 to=2\n",
        "f.scn:5: pass_token from=9: no master of that address"},
       {"segment\nstation 5\n", "f.scn: only header commands: nothing to run"},
@@ -968,6 +989,82 @@ TEST(SegmentScenario, AWatchdogThatNeverExpiredSaysSo) {
   ASSERT_EQ(r.errors.size(), 1U);
   EXPECT_EQ(r.errors[0].substr(0, r.errors[0].find(" at cycle")),
             "s.scn:5: expected watchdog_expired 5 twd=100, got never left DP_Control, expected it");
+}
+
+// s35 audit aMix finding 3 (its seg_wd_c2.scn): DO4 on a VPC3+ parameterised by a raw Set_Prm
+// from SA 2 (88h Lock_Req + WD_On, WD_Fact 01 0A on the 10 ms base: TWD 100 ms; DPV1_Status_1
+// C0h DPV1_Enable + Fail_Safe); then a class-2 master (SA 3) runs MSAC_C2 (Initiate, polls, a
+// Read) until 3787952.
+// "The 'DP_Control' state serves response time monitoring of the DP master (Master_Add)" (SPC3
+// p.25): only master 2's requests restart it. Its last, the Data_Exchange poll of `cycle 2` to
+// station 5 (11 bytes from 3160560, T = 32: end 3160560 + 11 x 352 = 3164432), is acted on at
+// end - T + T/2 = 3164416 (docs/timing.md); expiry + 100 ms (4 800 000 clocks) = 7964416, with
+// 99 ms 7916416. The old check took c2's last poll (end 3787952) and expected 8587936.
+TEST(SegmentScenario, WatchdogExpiryCountsFromTheLockingMastersLastRequest) {
+  const std::string head =
+      "segment baud=1500000\nstation 5 name=vpc profile=vpc3plus firmware=DO4\n"
+      "station 6 name=spc profile=spc3\nmaster 2 slaves=5,6\nsender tool\nsender c2\n"
+      "startup\ncycle 3\n"
+      "send from=tool 68,12,12,68,85,82,4D,3D,3E,88,01,0A,00,0D,04,00,C0,20,00,01,09,00,5D,16\n"
+      "run 1ms\nsend from=tool 68,07,07,68,85,82,4D,3E,3E,21,10,01,16\nrun 1ms\ncycle 2\n"
+      "expect state 5 Data_Exchange\n"
+      "send from=c2 68,19,19,68,85,83,4D,31,30,57,00,00,00,00,64,01,00,00,00,00,00,00,02,00,02,"
+      "00,00,00,00,76,16\n"
+      "run 3ms\nsend from=c2 68,05,05,68,85,83,4D,31,30,B6,16\n"
+      "run 3ms\nsend from=c2 68,05,05,68,85,83,4D,28,30,AD,16\n"
+      "run 3ms\nsend from=c2 68,09,09,68,85,83,4D,28,30,5E,00,01,02,0E,16\n"
+      "run 3ms\nsend from=c2 68,05,05,68,85,83,4D,28,30,AD,16\nrun 120ms\n";
+  const ScenarioRun r =
+      run_scenario_text(head +
+                            "expect watchdog_expired 5 twd=100ms\nexpect state 5 Wait_Prm\n"
+                            "expect watchdog_expired vpc twd=99ms\n",
+                        "wd.scn");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.errors, std::vector<std::string>{"wd.scn:27: expected watchdog_expired vpc twd=99ms, "
+                                               "got left DP_Control at cycle 7964416, expected "
+                                               "7916416"});
+}
+
+// s35 audit aMix finding 8: each station's chip log is in the walk as the single chip's `chip: …`,
+// named by station, at the chip's cycle: the DPC31 refuses a Set_Prm with DPV1_Enable "with
+// Prm_Fault and a log line" (docs/dpv1.md) at the request's acted-on cycle, end - T + T/2 (21
+// characters of 11 T = 32: start + 7392 - 16); the unlocked chip then ignores each Chk_Cfg with a
+// line (13 characters: start + 4576 - 16), the second and third folded by the chip's rule into
+// one note at the run's end, just before its last line, naming the repeats' own cycles.
+TEST(SegmentScenario, EachStationsChipLogIsInTheWalk) {
+  const std::string cfg = "send from=tool 68,07,07,68,87,82,4D,3E,3E,13,23,08,16\nrun 1ms\n";
+  const ScenarioRun r = run_scenario_text(
+      "segment\nstation 7 name=d profile=dpc31\nmaster 2 slaves=7\nsender tool\nstartup\n"
+      "send from=tool 68,0F,0F,68,87,82,4D,3D,3E,88,0A,C8,00,0C,31,00,C0,00,00,28,16\nrun 1ms\n" +
+      cfg + cfg + cfg);
+  EXPECT_EQ(r.code, 0);
+  const auto at = [](std::uint64_t cycle, const std::string& text) {
+    return fmt::format("[cycle {:>10}] d: chip: {}", cycle, text);
+  };
+  const auto has = [&r](const std::string& line) {
+    return std::find(r.walk.begin(), r.walk.end(), line) != r.walk.end();
+  };
+  const std::uint64_t prm = r.cycle_of("tool: 68 0F 0F 68");
+  EXPECT_TRUE(has(at(prm + 21 * 352 - 16,
+                     "Set_Prm from 2: DPV1_Enable: the DPC31's DPV1 is not modelled: Prm_Fault")));
+  std::vector<std::uint64_t> chk;
+  for (const std::string& l : r.walk) {
+    if (l.find("tool: 68 07 07 68") != std::string::npos)
+      chk.push_back(std::stoull(l.substr(l.find("cycle") + 5)));
+  }
+  ASSERT_EQ(chk.size(), 3U);
+  EXPECT_TRUE(has(at(chk[0] + 13 * 352 - 16,
+                     "Chk_Cfg from 2: no master has locked the slave (Master_Add FFh: not "
+                     "parameterised): ignored")));
+  EXPECT_EQ(std::count_if(r.walk.begin(), r.walk.end(),
+                          [](const std::string& l) { return l.find("Chk_Cfg from") != l.npos; }),
+            1);
+  ASSERT_GE(r.walk.size(), 2U);
+  const std::string& end = r.walk.back();
+  EXPECT_EQ(r.walk[r.walk.size() - 2],
+            at(std::stoull(end.substr(end.find("cycle") + 5)),
+               fmt::format("last line repeated 2 times, cycles {} to {}", chk[1] + 13 * 352 - 16,
+                           chk[2] + 13 * 352 - 16)));
 }
 
 // The single chip's loader on a segment's file names the segment's loader, at the `segment` line.

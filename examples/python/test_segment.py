@@ -423,6 +423,42 @@ def test_a_master_and_a_chip_station_never_share_an_address():
     assert seg.size == 2
 
 
+def test_a_second_station_in_one_waveform_scope_is_refused(tmp_path):
+    # docs/python.md, "A segment": the name is the station's scope in the waveforms; `a/b` and
+    # `a_b` at one address are both station5_a_b (s35 audit aMix finding 5), refused at the
+    # second's add_station in a segment scenario's words, outputs asked or not, the station not
+    # joined.
+    for vcd in (None, str(tmp_path / "s.vcd")):
+        seg = dpc31.Segment(1_500_000, vcd=vcd)
+        seg.add_station(5, "spc3", name="a/b")
+        with pytest.raises(ValueError, match=r"^a second station named 'a_b' in the waveform "
+                           r"scope of 'a/b' \(station5_a_b\)$"):
+            seg.add_station(5, "vpc3plus", name="a_b")
+        assert seg.size == 1
+        seg.add_station(6, "spc3", name="a_b")  # station6_a_b: a scope of its own
+        assert seg.size == 2
+
+
+def test_a_stations_snapshot_is_its_chips_at_the_lines_time():
+    # docs/python.md, "A segment": Station.save_state is the station's chip's snapshot at the
+    # line's time (s35 audit aMix finding 10: no snapshot door for a station outside C++). Loaded
+    # into a Chip of its profile it is that chip: its cycle, states, counters and registers, and
+    # it saves back to the same bytes.
+    seg, stations, master, check, line = three_slaves()
+    assert master.startup_all()
+    master.dp_cycle()
+    for st in stations:
+        snap = st.save_state()
+        chip = dpc31.Chip(st.profile)
+        chip.load_state(snap)
+        assert chip.cycle == st.cycle == seg.cycle
+        assert (chip.dp_state, chip.wd_state) == (dpc31.DpState.Data_Exchange,
+                                                  dpc31.WdState.DP_Control)
+        assert chip.fdl_counters == st.fdl_counters
+        assert chip.peek_reg("Status_Reg") == st.peek_reg("Status_Reg")
+        assert chip.save_state() == snap
+
+
 def test_a_slave_read_back_is_a_read_only_copy():
     # docs/python.md: Station.slave and SegmentMaster.slave are copies of the slave the master
     # sends (given at add_station); a field set on one raises instead of changing nothing.

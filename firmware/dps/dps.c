@@ -134,6 +134,9 @@ enum { kAbortFE = DPC31_MSAC_C2_INSTANCE_MSAC_C2 | DPC31_MSAC_C2_ABT_FE };
 enum { kAbortIA = DPC31_MSAC_C2_INSTANCE_MSAC_C2 | DPC31_MSAC_C2_ABT_IA };
 enum { kInvalidParameter = DPC31_DPV1_INVALID_PARAMETER, kResourceBusy = DPC31_DPV1_RESOURCE_BUSY };
 enum { kFeatureNotSupported = DPC31_DPV1_FEATURE_NOT_SUPPORTED };
+/* dps.c1_waiting: 0 the C1 SAPs take only the master's address; else they wait for it, open to any
+ * station in Data_Exchange (kC1Any) or closed outside it (kC1Closed). */
+enum { kC1Any = 1, kC1Closed = 2 };
 /* dps.c2_busy; kC2Closing: the connection's buffer holds a refused Initiate's answer, and the
  * connection closes once it is sent. */
 enum { kC2Open = 1, kRmWaits = 2, kC2Closing = 4 };
@@ -407,19 +410,22 @@ void dps_set_diag(DPS_P_(dps) const uint8_t* bytes, uint8_t len, int ext_diag) {
   publish_diag(ME);
 }
 
-/* A Set_Prm with DPV1_Enable starts MSAC_C1 afresh: its status bytes kept for the module, both
- * buffers free, no request pending, the C1 SAPs closed until Data_Exchange names the master
- * (another one, maybe). The class-1 master's Set_Prm leaves a class-2 master's connection alone
- * (docs/decisions.md). */
-static void dpv1_restart(DPS_P_(dps) const uint8_t* status) {
+/* MSAC_C1 stops: both buffers free, no request pending, the C1 SAPs closed until Data_Exchange
+ * names the master (another one, maybe). Closed first (our own address: nobody sends to itself,
+ * as the Profichip driver locks its SAPs), so freeing the buffers also drops what came before. */
+static void c1_close(DPS_P(dps)) {
   uint8_t k;
-  /* Closed first (our own address: nobody sends to itself, as the Profichip driver locks its
-   * SAPs), so freeing the buffers also drops what came before. */
   c1_request_sa(ME_ self->stats.station_address);
-  self->c1_waiting = 1;
-  memcpy(self->dpv1_status, status, sizeof self->dpv1_status);
+  self->c1_waiting = kC1Closed;
   self->dpv1_pending = (uint8_t)(self->dpv1_pending & ~((1u << kC1Saps) - 1u));
   for (k = 0; k < kC1Saps; ++k) Vpc3Write(self->dpv1_buf[k] + VPC3_DPV1_Buf_Control, 0x00);
+}
+
+/* A Set_Prm with DPV1_Enable starts MSAC_C1 afresh, its status bytes kept for the module. The
+ * class-1 master's Set_Prm leaves a class-2 master's connection alone (docs/decisions.md). */
+static void dpv1_restart(DPS_P_(dps) const uint8_t* status) {
+  memcpy(self->dpv1_status, status, sizeof self->dpv1_status);
+  c1_close(ME);
 }
 
 /* FDL_Ind: take each request whose buffer holds IND (the buffer stays the user's until the
@@ -450,13 +456,19 @@ static void dpv1_take_indications(DPS_P(dps)) {
 /* DPV1 events. After a Set_Prm (handle_prm took or refused it) the module brings up to date what
  * depends on it. MSAC_C1 lives in the master's Data_Exchange (docs/dpv1.md): entering it opens the
  * C1 SAPs, to the locking master once the diag buffer names it (c1_open_to_master), to any
- * station until then; DX_Out and FDL_Ind (before its request is taken) narrow them to it. */
+ * station until then; DX_Out and FDL_Ind (before its request is taken) narrow them to it; leaving
+ * it (Leave_Master, the watchdog) closes them, as the Profichip driver stops MSAC_C1 there. */
 static void dpv1_isr(DPS_P_(dps) uint16_t ir) DPS_REENTRANT {
   if ((ir & New_Prm_Data) && self->mod->dpv1_prm != 0) self->mod->dpv1_prm(ME);
+  if ((ir & Go_Leave_Data_Exchange) && self->c1_waiting != kC1Closed &&
+      (self->dpv1_status[0] & VPC3_Prm_Status_1_DPV1_Enable_Msk) != 0 && !in_data_exchange(ME))
+    c1_close(ME);
   if ((ir & (Go_Leave_Data_Exchange | DX_Out | FDL_Ind)) && self->c1_waiting) {
     c1_open_to_master(ME);
-    if ((ir & Go_Leave_Data_Exchange) && self->c1_waiting && in_data_exchange(ME))
+    if ((ir & Go_Leave_Data_Exchange) && self->c1_waiting && in_data_exchange(ME)) {
       c1_request_sa(ME_ VPC3_SAP_Entry_Request_SA_All);
+      self->c1_waiting = kC1Any;
+    }
   }
   if (ir & FDL_Ind) dpv1_take_indications(ME);
 }

@@ -159,8 +159,9 @@ struct dps {
   /* MSAC_C2: bit 0 the connection is open, bit 1 the resource manager's response waits for its
    * poll (dps.c, kC2Open, kRmWaits); not 0: the 1 ms tick runs. */
   int c2_busy;
-  /* DPV1 parameterised: the C1 SAPs wait for the master's address. (With the Send_Timeout in its
-   * 16 bits the instance keeps its size: the 80C32 traces count the cycles of its clearing.) */
+  /* Not 0: the C1 SAPs wait for the master's address, open to any station in Data_Exchange or
+   * closed outside it (dps.c, kC1Any, kC1Closed). (With the Send_Timeout in its 16 bits the
+   * instance keeps its size: the 80C32 traces count the cycles of its clearing.) */
   int c1_waiting;
   /* The connection's Send_Timeout (Initiate: 10 ms units); without a connection, how long the
    * resource manager's response waits for its poll. */

@@ -2,7 +2,6 @@
 
 #include <fmt/core.h>
 
-#include <cctype>
 #include <utility>
 
 #include "bus_check.hpp"
@@ -11,14 +10,6 @@
 #include "vocabulary.hpp"
 
 namespace dpc31 {
-
-std::string station_scope(std::uint8_t address, std::string_view name) {
-  std::string s = fmt::format("station{}", address);
-  if (name == fmt::format("station {}", address)) return s;
-  s += '_';
-  for (const char c : name) s += std::isalnum(static_cast<unsigned char>(c)) != 0 ? c : '_';
-  return s;
-}
 
 SegmentOutputs::SegmentOutputs(SegmentOutputOptions opt) : opt_(std::move(opt)) {
   for (const wave::Options& w : opt_.waves) waves_.push_back(std::make_unique<wave::Recorder>(w));
@@ -39,6 +30,13 @@ bool SegmentOutputs::open(std::string& error) {
 
 bool SegmentOutputs::add_station(Segment& seg, std::size_t index, const std::string& scope,
                                  std::string& error) {
+  // One scope a chip: two would be one module in a VCD, one set of wires in an LA-VCD.
+  for (const auto& [taken, name] : scoped_) {
+    if (taken == scope) {
+      error = second_station_in_scope(seg.name(index), name, scope);
+      return false;
+    }
+  }
   seg_ = &seg;
   for (std::size_t i = 0; i < waves_.size(); ++i) {
     if (waves_[i]->attach_station(seg.chip(index), scope, error)) continue;
@@ -46,11 +44,13 @@ bool SegmentOutputs::add_station(Segment& seg, std::size_t index, const std::str
     while (i > 0) waves_[--i]->detach_station();
     return false;
   }
+  scoped_.emplace_back(scope, seg.name(index));
   return true;
 }
 
 void SegmentOutputs::remove_station() {
   for (auto& w : waves_) w->detach_station();
+  scoped_.pop_back();
 }
 
 bool SegmentOutputs::attach_line(Segment& seg, std::vector<std::uint8_t> driver_codes,

@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "pcapng.hpp"
@@ -20,10 +21,6 @@
 #include "waveform.hpp"
 
 namespace dpc31 {
-
-// A station's scope in a segment's waveform: station5 (the address), station5_spc3 when its name
-// is not the default "station 5" (other characters than letters and digits made '_').
-[[nodiscard]] std::string station_scope(std::uint8_t address, std::string_view name);
 
 struct SegmentOutputOptions {
   std::vector<wave::Options> waves;  // each a VCD or an FST (wave::Options)
@@ -53,7 +50,7 @@ class SegmentOutputs {
   // The line's TSL from now on (SegmentOutputOptions::slot_bits), as its masters join.
   void pair_within(std::uint32_t slot_bits) { opt_.slot_bits = slot_bits; }
   // Chip station `index` of `seg` joins, before its user side's init: its scope in every
-  // waveform. False with a line.
+  // waveform. False with a line (a scope an earlier station has: second_station_in_scope).
   bool add_station(Segment& seg, std::size_t index, const std::string& scope, std::string& error);
   // The station added last leaves again before it ran (Segment::remove_last_chip): as before it
   // was added.
@@ -85,6 +82,7 @@ class SegmentOutputs {
   std::vector<std::unique_ptr<wave::Recorder>> waves_;
   capture::PcapngWriter pcap_{capture::WriterOptions{"dpc31emu", "segment", true}};
   std::optional<Held> held_;
+  std::vector<std::pair<std::string, std::string>> scoped_;  // each station's scope, its name
   std::uint64_t end_cycle_ = 0;
   std::shared_ptr<bool> live_ = std::make_shared<bool>(true);  // false once destroyed
 };
