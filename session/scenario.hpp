@@ -69,6 +69,7 @@ enum class StepKind : std::uint8_t {
   send,     // a telegram as given: raw bytes, or fields from any station
   request,  // a DPC31 request through the Instruction_Queue (bus writes)
   dpv1,     // a DPV1 service of the master (MSAC_C1, MSAC_C2): `name` says which
+  reset,    // the RESET of a `cpu` board: CPU and chip together (no time passes)
 };
 
 enum class ExpectKind : std::uint8_t {

@@ -48,7 +48,7 @@ std::string_view trim(std::string_view s) {
 bool sends_request(StepKind k) {
   return is_action(k) && k != StepKind::silence && k != StepKind::foreign_master &&
          k != StepKind::write && k != StepKind::read && k != StepKind::send &&
-         k != StepKind::request && k != StepKind::dpv1;
+         k != StepKind::request && k != StepKind::dpv1 && k != StepKind::reset;
 }
 
 class Parser {
@@ -603,6 +603,12 @@ class Parser {
       positional(1, 1, "one time (e.g. 200ms)");
       no_options();
       step_.cycles = duration(pos_[0]);
+    } else if (cmd_ == "reset") {
+      // The RESET a CPU board shares with the chip (docs/cpu.md, "The board's reset"); a host's
+      // firmware or the built-in user side would not start the chip again after it.
+      if (!s_.cpu)
+        fail("'reset' is the RESET of a CPU board (header 'cpu'), CPU and chip together");
+      simple(StepKind::reset);
     } else if (cmd_ == "hw") {
       step_.kind = StepKind::hw;
       positional(2, 2, "a hardware input and a value");

@@ -133,6 +133,29 @@ TEST(ScenarioCpu51, TheSerialPortsCharactersReachTheWalk) {
             r.walk.end());
 }
 
+// The scenario's `reset` (docs/scenario-format.md): the RESET the board shares, CPU and chip
+// together at the cycle the last action ended (docs/cpu.md, "The board's reset";
+// Cpu51Board.TheBoardsResetStartsCpuAndChipAtItsInstantAndEndsAPowerDown derives the image's
+// cycles): MOV DPTR,#4000h; INC 30h; MOV A,30h; MOVX @DPTR,A writes `outputs` at 24 x 4 + 36 =
+// 132, then ORL PCON,#02h powers down. `silence 1ms` ends at 48 000 = machine cycle 2 000, a
+// boundary: the reset starts the CPU there, RAM kept, so `outputs` = 2 at 24 x 2 004 + 36 = 48 132.
+// Without a `cpu` header there is no board to reset: refused at its line.
+TEST(ScenarioCpu51, ResetStartsTheBoardAgainAndEndsAPowerDown) {
+  TempFile f(
+      "profile spc3\ncpu 80c32 clock=24000000 firmware fw.ihx\nsilence 1ms\n"
+      "expect port outputs 1 at 132\nreset\nsilence 1ms\nexpect port outputs 2 at 48132\n");
+  std::ofstream(f.dir() / "fw.ihx") << ":0D0000009040000530E530F043870280FE9F\n:00000001FF\n";
+  const FileRun r = run_file(f.path());
+  EXPECT_EQ(r.code, 0) << (r.errors.empty() ? "" : r.errors[0]);
+  EXPECT_NE(std::find(r.walk.begin(), r.walk.end(),
+                      "[cycle      48000] reset: the 80C32 and the chip start again"),
+            r.walk.end());
+  EXPECT_EQ(parse_error("reset\n"),
+            "t.scn:1: 'reset' is the RESET of a CPU board (header 'cpu'), CPU and chip together");
+  EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx\nreset now\n"),
+            "t.scn:2: 'reset' takes no arguments; unexpected 'now'");
+}
+
 // The image's FILE.map gives the walk its code names (docs/cpu.md); a map beside it that names
 // no code (not SDCC's, or cut short) is said on the walk's line of the board, and the run goes on.
 TEST(ScenarioCpu51, AMapWithoutCodeSymbolsIsSaid) {
