@@ -239,6 +239,8 @@ class ScenarioObserver {
   // Any other event of the walk at its cycle: a transaction, a state change, a chip message (not
   // PB3's edges: an observer has them from Chip::on_pb3_change).
   virtual void walk_note(std::uint64_t /*cycle*/, std::string_view /*text*/) {}
+  // The board's RESET (the scenario's `reset`) at `cycle`, before the chip's reset tells its edges.
+  virtual void board_reset(std::uint64_t /*cycle*/) {}
   // Every event before `cycle` (the chip's cycle) has been told, and no later one is older:
   // during a long action, between two of its polls.
   virtual void events_told(std::uint64_t /*cycle*/) {}

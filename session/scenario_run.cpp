@@ -685,7 +685,9 @@ class Runner {
         break;
       }
       case StepKind::reset:  // at the board's instant, the chip's cycle (the scheduler's end)
+        if (hooks_.observer != nullptr) hooks_.observer->board_reset(chip_.cycle());
         m51_->board().reset();
+        check_states(chip_.cycle());  // the chip stopped: the walk says so at the reset's cycle
         note(chip_.cycle(),
              fmt::format("reset: the {} and the chip start again", s_.cpu->c31 ? "C31" : "80C32"));
         break;
