@@ -69,6 +69,10 @@ class Parser {
       rest = trim(rest.substr(k));
     }
     cmd_ = words_[0];
+    if (first_line_ == 0) {
+      first_line_ = no;
+      first_cmd_ = std::string(cmd_);
+    }
     for (std::size_t i = 1; i < words_.size(); ++i) {
       const std::size_t eq = words_[i].find('=');
       if (eq == std::string_view::npos) {
@@ -656,7 +660,15 @@ class Parser {
     } else if (scenario_bus::parse_action(cmd_, pos_, opts_, s_.chip.profile, step_, last_read_)) {
     } else if (scenario_dpv1::parse_action(cmd_, pos_, opts_, s_, step_)) {
     } else if (cmd_ == "segment") {
-      // A segment's file has its own loader (scenario_segment.hpp).
+      // A segment's file has its own loader (scenario_segment.hpp), which `dpc31 run` takes for
+      // a file whose first line is `segment`: after another line it is misplaced.
+      if (first_line_ != step_.line) {
+        fail(
+            fmt::format("'segment' must be the first line of a segment scenario "
+                        "(docs/scenario-format.md, \"Segments\"); '{}' (line {}) is a single "
+                        "chip's, which a segment scenario has not",
+                        shown(first_cmd_), first_line_));
+      }
       fail(
           "'segment' begins a segment scenario (docs/scenario-format.md, \"Segments\"): load it "
           "with SegmentScenario (load_segment_scenario; dpc31.SegmentScenario in Python) or run "
@@ -830,6 +842,8 @@ class Parser {
   ScenarioStep step_;
   std::optional<SlaveConfig> view_;  // the master's view of the slave after the steps so far
   bool headers_ = false;
+  std::string first_cmd_;  // the file's first command and its line (a misplaced `segment`)
+  int first_line_ = 0;
   const dpc31_firmware* bound_;         // the plug-in bind_plugin() loaded, or nullptr
   const dpc31_firmware* fw_ = nullptr;  // the firmware's descriptor, once known
   bool firmware_seen_ = false;
