@@ -297,9 +297,15 @@ class Parser {
   // controller): only checked here; the image is read when the run starts (cpu51_module.hpp).
   void cpu_header() {
     positional(3, 3, "80c32 firmware FILE.ihx");
-    const bool c31 = pos_[0] == "c31";
-    if ((pos_[0] != "80c32" && !c31) || pos_[1] != "firmware")
-      fail("the form is 'cpu 80c32 firmware FILE'");
+    const std::string_view core = cpu_core(pos_[0]);
+    const bool c31 = core == "c31";
+    if (core.empty() || pos_[1] != "firmware") {
+      fail(
+          fmt::format("{}the form is 'cpu 80c32 [clock=HZ] firmware FILE [base=A] [latch=A] "
+                      "[ports=N1,N2...]' or 'cpu c31 [clock=HZ] firmware FILE [code=A]'",
+                      core.empty() ? fmt::format("unknown CPU '{}' (80c32, c31): ", shown(pos_[0]))
+                                   : std::string()));
+    }
     // Line-ordered as `irq-controller`: the default profile is no `profile` line.
     if (c31 && (profile_line_ == 0 || s_.chip.profile != Profile::dpc31))
       fail("'cpu c31' needs 'profile dpc31' before it: only the DPC31 has a C31 core");

@@ -46,8 +46,16 @@ FileRun run_file(const std::string& path) {
 // `cpu 80c32` (docs/cpu.md): the header is checked when parsing, the image is read only when the
 // run starts, relative to the scenario file; a bad record is FILE:LINE, exit 2, nothing run.
 TEST(ScenarioCpu51, HeaderIsCheckedAndTheImageReadWhenTheRunStarts) {
-  EXPECT_EQ(parse_error("cpu 8051 firmware a.ihx\nstartup\n"),
-            "t.scn:1: the form is 'cpu 80c32 firmware FILE'");
+  // The form names every option (a line with clock= read as if clock= were wrong); the part's
+  // name in any case, as `--firmware DO4` (the s35 audit, finding 7).
+  const std::string form =
+      "the form is 'cpu 80c32 [clock=HZ] firmware FILE [base=A] [latch=A] [ports=N1,N2...]' or "
+      "'cpu c31 [clock=HZ] firmware FILE [code=A]'";
+  EXPECT_EQ(parse_error("cpu 8051 clock=24000000 firmware a.ihx\nstartup\n"),
+            "t.scn:1: unknown CPU '8051' (80c32, c31): " + form);
+  EXPECT_EQ(parse_error("cpu 80C32 clock=24000000 image a.ihx\nstartup\n"), "t.scn:1: " + form);
+  EXPECT_EQ(parse_error("cpu 80C32 clock=24000000 firmware a.ihx\nstartup\n"), "");
+  EXPECT_EQ(parse_error("profile dpc31\ncpu C31 firmware a.ihx\nstartup\n"), "");
   EXPECT_EQ(parse_error("cpu 80c32 clock=50000000 firmware a.ihx\nstartup\n"),
             "t.scn:1: clock 50000000 out of range (1000000..40000000)");
   EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx latch=0x8000 ports=x\nstartup\n"),
