@@ -623,6 +623,12 @@ class Parser {
       step_.kind = StepKind::hw;
       positional(2, 2, "a hardware input and a value");
       no_options();
+      if (s_.cpu) {
+        fail(
+            fmt::format("'hw': the {} board wires no hardware inputs to its firmware (docs/cpu.md, "
+                        "CNT2 on the 80C32, \"Limits\")",
+                        s_.cpu->c31 ? "C31" : "80C32"));
+      }
       if (!firmware_seen_) fail("'hw' needs a firmware (header 'firmware NAME')");
       if (fw_ != nullptr && name_index(fw_->hw_inputs, pos_[0]) < 0) {
         fail(fmt::format("unknown hardware input '{}' of {} ({})", shown(pos_[0]), fw_->name,

@@ -55,6 +55,10 @@ TEST(ScenarioCpu51, HeaderIsCheckedAndTheImageReadWhenTheRunStarts) {
             "t.scn:1: unknown CPU '8051' (80c32, c31): " + form);
   EXPECT_EQ(parse_error("cpu 80C32 clock=24000000 image a.ihx\nstartup\n"), "t.scn:1: " + form);
   EXPECT_EQ(parse_error("cpu 80C32 clock=24000000 firmware a.ihx\nstartup\n"), "");
+  // `hw` is refused for what the board lacks, not for a `firmware` header that `cpu` excludes.
+  EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx\nslave address=7\nhw count1 5\n"),
+            "t.scn:3: 'hw': the 80C32 board wires no hardware inputs to its firmware (docs/cpu.md, "
+            "CNT2 on the 80C32, \"Limits\")");
   EXPECT_EQ(parse_error("profile dpc31\ncpu C31 firmware a.ihx\nstartup\n"), "");
   EXPECT_EQ(parse_error("cpu 80c32 clock=50000000 firmware a.ihx\nstartup\n"),
             "t.scn:1: clock 50000000 out of range (1000000..40000000)");

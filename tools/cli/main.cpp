@@ -63,6 +63,30 @@ void check_stdout_writes() {
   stdout = f;
 }
 
+// The standard error through a stream that first writes what the standard output holds: with both
+// on one file or pipe (`2>&1`) an error line lands between two walk lines, in their order, not
+// inside a line the buffered walk had half written. Unbuffered, as stdio's stderr.
+ssize_t write_stderr(void* /*cookie*/, const char* buf, std::size_t n) {
+  std::fflush(stdout);  // a failure is stdout's own, said at the end (g_stdout_errno)
+  std::size_t done = 0;
+  while (done < n) {
+    const ssize_t w = ::write(STDERR_FILENO, buf + done, n - done);
+    if (w < 0 && errno == EINTR) continue;
+    if (w <= 0) return done > 0 ? static_cast<ssize_t>(done) : -1;
+    done += static_cast<std::size_t>(w);
+  }
+  return static_cast<ssize_t>(n);
+}
+
+void order_stderr_after_stdout() {
+  cookie_io_functions_t io{};
+  io.write = write_stderr;
+  std::FILE* f = ::fopencookie(nullptr, "w", io);
+  if (f == nullptr) return;  // the plain stderr then: the lines still show, maybe out of order
+  std::setvbuf(f, nullptr, _IONBF, 0);
+  stderr = f;
+}
+
 // The units a waveform of `run` and `demo` takes, and why the coarser ones are refused.
 const std::string kTimescales = std::string(dpc31::cli::kTimescaleUnits) +
                                 " (a unit longer than a 48 MHz clock cycle, 20.8 ns, is refused)";
@@ -83,6 +107,7 @@ int main(int argc, char** argv) {
   std::signal(SIGXFSZ, SIG_IGN);
   std::signal(SIGPIPE, SIG_IGN);
   check_stdout_writes();
+  order_stderr_after_stdout();
   using dpc31::numbers::whole;
   using dpc31::outfile::named;
   using dpc31::outfile::Use;
