@@ -50,7 +50,9 @@ const std::array<std::uint8_t, 256> Cpu::parity_ = [] {
 
 Cpu::Cpu() { reset(); }
 
-void Cpu::reset() {
+void Cpu::reset(std::uint64_t from) {
+  cycles_ = std::max(cycles_, from);  // the clock counts on; the peripherals' lag_ is dropped below
+  insn_start_ = cycles_;
   sfr_.fill(0);
   sf(sfr::SP) = 0x07;
   sf(sfr::P0) = sf(sfr::P1) = sf(sfr::P2) = sf(sfr::P3) = 0xFF;
@@ -58,6 +60,9 @@ void Cpu::reset() {
   in_service_ = 0;
   raised_ = 0;
   block_ = false;
+  next_irq_ = -1;
+  last_req_ = 0;
+  int0_change_.pending = false;
   last_pins_ = 0x3F;
   pins_dirty_ = true;
   t1_half_ = tx_div_ = rx_div_ = 0;

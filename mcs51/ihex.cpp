@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
 namespace mcs51 {
 
 namespace {
@@ -13,7 +15,18 @@ int hex_digit(char c) {
 }
 }  // namespace
 
+namespace {
+// Bytes no text file holds (NUL, other control characters than tab, CR, LF; DEL): a raw image.
+bool binary(std::string_view text) {
+  return std::any_of(text.begin(), text.end(), [](char c) {
+    const auto b = static_cast<unsigned char>(c);
+    return (b < 0x20 && c != '\t' && c != '\r' && c != '\n') || b == 0x7F;
+  });
+}
+}  // namespace
+
 bool parse_ihex(std::string_view text, HexImage& image, std::string& error) {
+  const std::string_view whole = text;
   int line_no = 0;
   bool ended = false;
   while (!text.empty()) {
@@ -28,7 +41,15 @@ bool parse_ihex(std::string_view text, HexImage& image, std::string& error) {
       return false;
     };
     if (ended) return fail("record after the end-of-file record");
-    if (line[0] != ':') return fail("a record starts with ':'");
+    if (line[0] != ':') {
+      // A raw binary (objcopy -O binary, a Keil .bin) given for an Intel HEX image.
+      if (binary(whole)) {
+        return fail(
+            "a record starts with ':': binary bytes, not an Intel HEX image (convert a raw image "
+            "with objcopy -I binary -O ihex FILE.bin FILE.ihx)");
+      }
+      return fail("a record starts with ':'");
+    }
     // ':', the byte count, the address (4), the type (2), 2 a data byte, the checksum (2).
     if (line.size() < 11) return fail("short record");
     const int count_hi = hex_digit(line[1]), count_lo = hex_digit(line[2]);

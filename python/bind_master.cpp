@@ -300,7 +300,9 @@ void bind_master(py::module_& m) {
       .def(
           "run_firmware",
           [](PyMaster& pm, const py::object& spec, bool gsd_defaults) {
-            const dpc31_firmware& d = find_firmware(fspath_arg(spec, "firmware"));
+            const dpc31_firmware& d = find_firmware(
+                fspath_arg(spec, "firmware"),
+                "load it on a dpc31.Cpu51Board (board.load_hex(path), docs/python.md)");
             const SlaveConfig slave =
                 gsd_defaults ? with_gsd_defaults(d, pm.m->slave()) : pm.m->slave();
             auto fw = std::make_shared<FirmwareHost>(d);

@@ -84,7 +84,8 @@ void bind_scenarios(py::module_& m) {
       .value("read", StepKind::read)
       .value("send", StepKind::send)
       .value("request", StepKind::request)
-      .value("dpv1", StepKind::dpv1);
+      .value("dpv1", StepKind::dpv1)
+      .value("reset", StepKind::reset);
   py::class_<ScenarioStep>(m, "Step", "One line of a scenario file.")
       .def_readonly("line", &ScenarioStep::line)
       .def_readonly("text", &ScenarioStep::text)

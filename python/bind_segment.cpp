@@ -564,7 +564,7 @@ PyStation& add_station(py::object self, U8 address, const std::string& profile,
   if (user_wd_value && opt.profile == Profile::dpc31 && !user_wd.value_or(false))
     throw py::value_error(user_wd_value_needs_user_wd("user_wd_value"));
   if (firmware) {
-    const dpc31_firmware& d = find_firmware(*firmware);  // checked as a file name
+    const dpc31_firmware& d = find_firmware(*firmware, kHexAtSegment);  // checked as a file name
     st->firmware = std::make_shared<FirmwareHost>(d);
     if (!slave) sc = with_gsd_defaults(d, sc);
   } else {

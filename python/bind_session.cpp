@@ -373,6 +373,11 @@ void bind_board(py::module_& m) {
           py::arg("cycle"),
           "Runs CPU and chip together until the chip's cycle is at least `cycle` (the CPU's "
           "step in progress ends).")
+      // run: the chip's reset edges reach the observers, whose exception is raised here
+      .def(
+          "reset", [](PyBoard& b) { b.chip.run([&] { b.board->reset(); }); },
+          "The board's RESET, which CPU and chip share (docs/cpu.md, \"The board's reset\"): both "
+          "reset at the board's instant, the CPU from 0000h (a power-down ends), RAM kept.")
       .def(
           "port",
           [](const PyBoard& b, std::int64_t n) {

@@ -71,10 +71,14 @@ Cpu51Board::Cpu51Board(Chip& chip, std::uint32_t cpu_hz, C31 c31)
   window_ = c31_space;
   c31_ = true;
   code_base_ = c31.code_base;
-  // Code address c is RAM address code_base + c: the RAM as it is, and FFh past 1FFFh, where
-  // nothing answers (docs/dpc31.md, "The C31").
+  c31_code_from_ram();
+}
+
+// Code address c is RAM address code_base + c: the RAM as it is, and FFh past 1FFFh, where
+// nothing answers (docs/dpc31.md, "The C31").
+void Cpu51Board::c31_code_from_ram() {
   std::vector<std::uint8_t> code(0x10000, 0xFF);
-  for (std::uint32_t a = 0; a < c31_space - code_base_; ++a) code[a] = chip.peek(code_base_ + a);
+  for (std::uint32_t a = 0; a < c31_space - code_base_; ++a) code[a] = chip_.peek(code_base_ + a);
   cpu_.load_code(0, code);
 }
 
@@ -88,7 +92,21 @@ bool Cpu51Board::load_c31_code(const std::vector<std::uint8_t>& bytes,
     chip_.poke(code_base_ + a, bytes[a]);
     cpu_.load_code(static_cast<std::uint16_t>(a), std::span(&bytes[a], 1));
   }
+  c31_bytes_ = bytes;
+  c31_used_ = used;
   return true;
+}
+
+void Cpu51Board::reset() {
+  chip_.reset(ended_);
+  // The first machine cycle starting at or after the instant's first CPU clock: the instruction
+  // in progress there ends with the reset.
+  cpu_.reset((clock_reaching(ended_) + cycle_clocks - 1) / cycle_clocks);
+  walked_ = {cpu_.clocks(), 0, false, level_};  // the next step is another: nothing walked yet
+  if (c31_) {
+    c31_code_from_ram();
+    load_c31_code(c31_bytes_, c31_used_);
+  }
 }
 
 bool Cpu51Board::int0_level() const { return c31_ ? !chip_.irq_active() : chip_.x_int_pin(); }

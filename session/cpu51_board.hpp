@@ -62,6 +62,11 @@ class Cpu51Board final : public mcs51::XdataBus {
   // reset of the chip under the board is an event there: Chip::reset() starts the chip's new time
   // line and tells its edges at it (docs/cpu.md, "The board").
   [[nodiscard]] std::uint64_t instant() const { return ended_; }
+  // The board's RESET, which CPU and chip share (docs/cpu.md, "The board's reset"): both reset at
+  // the board's instant; the CPU starts from 0000h in the first machine cycle that begins at or
+  // after it (an idle or a power-down ends), its RAM and the board's RAM kept. The C31's code
+  // area, cleared with the chip's RAM, gets load_c31_code's last image again.
+  void reset();
 
   // A write to the board's RAM (outside the chip's window), with the chip cycle of its strobe's
   // end: an output latch decoded there (Cpu51Module's ports).
@@ -77,6 +82,8 @@ class Cpu51Board final : public mcs51::XdataBus {
 
  private:
   void chip_to(std::uint64_t cycle);
+  // The C31's program memory: the chip's RAM from code_base_ up to 1FFFh, FFh past it.
+  void c31_code_from_ram();
   // The first CPU clock whose chip cycle (chip_cycle_of) is at least `cycle`.
   [[nodiscard]] std::uint64_t clock_reaching(std::uint64_t cycle) const;
   // The lazy walk (run_until): the board brings the chip to chip_cycle_of(clock) for the INT0
@@ -106,6 +113,8 @@ class Cpu51Board final : public mcs51::XdataBus {
   std::uint32_t window_ = window;
   bool c31_ = false;
   std::uint16_t code_base_ = 0;
+  std::vector<std::uint8_t> c31_bytes_;  // load_c31_code's last image, for reset()
+  std::vector<bool> c31_used_;
   std::vector<std::uint8_t> ram_ = std::vector<std::uint8_t>(0x10000, 0);
   // The lazy walk's state: the CPU clock the chip is due at (its chip cycle is where a board
   // stepping the chip to every sample would have it); the chip's own cycle, X/INT and the first

@@ -49,6 +49,10 @@ struct Cpu51Config {
 // "" or why `names` cannot name ports (what = "port") or a module's inputs ("input"): one empty,
 // not a word, or named twice, in the words of Cpu51Config::ports_problem, which uses it, as does
 // a plug-in's descriptor at load (firmware_plugin.cpp).
+// The core a scenario's `cpu` line or `--cpu` names, in any case (`80C32`, as the docs and the walk
+// spell the part; `--firmware DO4` is case-insensitive too): "80c32", "c31", or "" for another.
+[[nodiscard]] std::string_view cpu_core(std::string_view word);
+
 [[nodiscard]] std::string names_problem(const std::vector<std::string>& names,
                                         std::string_view what);
 

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <filesystem>
 #include <sstream>
 
@@ -63,6 +64,15 @@ void read_map(const std::string& text, std::map<std::uint16_t, std::string>& out
 }
 
 }  // namespace
+
+std::string_view cpu_core(std::string_view word) {
+  for (const std::string_view core : {std::string_view("80c32"), std::string_view("c31")}) {
+    if (std::equal(word.begin(), word.end(), core.begin(), core.end(),
+                   [](char a, char b) { return std::tolower(static_cast<unsigned char>(a)) == b; }))
+      return core;
+  }
+  return {};
+}
 
 std::string names_problem(const std::vector<std::string>& names, std::string_view what) {
   const auto word = [](const std::string& n) {
@@ -216,9 +226,9 @@ std::string apply_cpu51_choice(const Cpu51Choice& choice, ChipOptions& chip, Cpu
                                Cpu51Image& image) {
   const std::string_view spec = choice.cpu;
   const std::size_t colon = spec.find(':');
-  const std::string_view core = spec.substr(0, colon);
+  const std::string_view core = cpu_core(spec.substr(0, colon));
   std::uint32_t hz = 24'000'000;
-  if ((core != "80c32" && core != "c31") ||
+  if (core.empty() ||
       (colon != std::string_view::npos &&
        !parse_address(spec.substr(colon + 1), static_cast<std::uint32_t>(kCpuClock.min),
                       static_cast<std::uint32_t>(kCpuClock.max), hz))) {

@@ -17,6 +17,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -38,10 +39,23 @@ class FirmwareError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// What a door tells of an Intel HEX image given where a plug-in is named (docs/bring-up.md,
+// section 3): how to run it where that door has a CPU, else that it cannot run one.
+inline constexpr std::string_view kHexAtCpuDoor =
+    "add --cpu 80c32 (in a scenario: cpu 80c32 firmware FILE)";
+inline constexpr std::string_view kHexAtSegment =
+    "a segment's station cannot run an 80C32 image (docs/segment.md); one chip runs it: `dpc31 "
+    "run` with the header cpu 80c32 firmware FILE, or --cpu 80c32 at `dpc31 bridge` and `dpc31 "
+    "serve`";
+// The same for a command without a CPU (`dpc31 demo`, `dpc31 soak`).
+[[nodiscard]] std::string hex_at_command(std::string_view command);
+
 // A firmware by what the user wrote: a plug-in path (it contains '/' or ends in ".so") or the
 // name of a built-in one (DO4, CNT2). Throws FirmwareError with one line when there is none or
-// the plug-in fails its checks (load, symbol, ABI version, required fields).
-const dpc31_firmware& find_firmware(const std::string& spec);
+// the plug-in fails its checks (load, symbol, ABI version, required fields); an Intel HEX image
+// there is said so, with `hex_remedy` (this door's words).
+const dpc31_firmware& find_firmware(const std::string& spec,
+                                    std::string_view hex_remedy = kHexAtCpuDoor);
 [[nodiscard]] bool is_plugin_path(const std::string& spec);
 // The built-in names, "DO4, CNT2".
 [[nodiscard]] std::string builtin_firmware_names();

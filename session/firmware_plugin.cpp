@@ -2,6 +2,7 @@
 // header (dpc31_firmware_load, dpc31_module_*).
 #include <dlfcn.h>
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -119,7 +120,7 @@ struct Library {
 
 // The library open at `fd` (dlopen through /proc/self/fd/N) and its descriptor; `path` names it
 // in messages. `fd` is closed when dlopen fails, else it stays open with the library.
-Library open_library(int fd, const std::string& path) {
+Library open_library(int fd, const std::string& path, std::string_view hex_remedy) {
   // RTLD_NOW: an undefined symbol fails here, not in the middle of a run. RTLD_LOCAL: two
   // plug-ins may use the same names. The library load_plugin loads is never closed (its
   // descriptor is the firmware's for the process); a copy is closed with its last host.
@@ -133,9 +134,7 @@ Library open_library(int fd, const std::string& path) {
     // An Intel HEX record starts with ':': the user meant a CPU's program, not a plug-in.
     char first = 0;
     if (::pread(fd, &first, 1, 0) == 1 && first == ':')
-      why +=
-          "; it is an Intel HEX image, a CPU's program: add --cpu 80c32 (in a scenario: cpu "
-          "80c32 firmware FILE)";
+      why += fmt::format("; it is an Intel HEX image, a CPU's program: {}", hex_remedy);
     ::close(fd);
     throw FirmwareError("cannot load firmware plug-in: " + why);
   }
@@ -189,7 +188,7 @@ Library load_copy(const Loaded& l) {
     }
     at += n;
   }
-  return open_library(copy, l.path);
+  return open_library(copy, l.path, kHexAtCpuDoor);  // loaded before: no Intel HEX image
 }
 
 // A directory in its place (an empty name is ./), a FIFO or a device is no library, whoever could
@@ -200,7 +199,7 @@ void not_a_library(const std::string& path, const struct stat& st) {
                       (S_ISDIR(st.st_mode) ? ": is a directory" : ": not a regular file"));
 }
 
-const dpc31_firmware& load_plugin(const std::string& spec) {
+const dpc31_firmware& load_plugin(const std::string& spec, std::string_view hex_remedy) {
   const std::string path = file_path(spec);
   // Checked and loaded through one descriptor: what was checked is what runs, whatever is renamed
   // or swapped in at the path meanwhile (docs/security.md, "Code a command runs").
@@ -235,7 +234,7 @@ const dpc31_firmware& load_plugin(const std::string& spec) {
       return *known->fw;
     }
   }
-  const dpc31_firmware& fw = *open_library(fd, path).fw;
+  const dpc31_firmware& fw = *open_library(fd, path, hex_remedy).fw;
   auto l = std::make_unique<Loaded>();
   l->fd = fd;
   l->dev = st.st_dev;
@@ -274,8 +273,15 @@ std::shared_ptr<const dpc31_firmware> plugin_copy(const dpc31_firmware& fw) {
   return {copy.fw, [copy](const dpc31_firmware*) { close_copy(copy); }};
 }
 
-const dpc31_firmware& find_firmware(const std::string& spec) {
-  if (is_plugin_path(spec)) return load_plugin(spec);
+std::string hex_at_command(std::string_view command) {
+  return fmt::format(
+      "`dpc31 {}` cannot run an 80C32 image; `dpc31 run` (the header cpu 80c32 firmware FILE), "
+      "`dpc31 bridge` and `dpc31 serve` (--cpu 80c32) can",
+      command);
+}
+
+const dpc31_firmware& find_firmware(const std::string& spec, std::string_view hex_remedy) {
+  if (is_plugin_path(spec)) return load_plugin(spec, hex_remedy);
   const dpc31_firmware* fw = dpc31_find_firmware(spec.c_str());
   if (fw == nullptr) {
     throw FirmwareError("unknown firmware '" + spec + "' (" + builtin_firmware_names() +
@@ -302,7 +308,10 @@ const dpc31_firmware* dpc31_firmware_load(const char* path, char* err, size_t er
     if (path == nullptr || *path == '\0')
       throw std::invalid_argument(std::string("cannot load firmware plug-in: no path given (") +
                                   (path == nullptr ? "NULL" : "an empty string") + ")");
-    return &dpc31::find_firmware(dpc31::file_path(path));
+    return &dpc31::find_firmware(
+        dpc31::file_path(path),
+        "an 80C32 image runs on a dpc31::Cpu51Board (C++, docs/cpu.md), or with --cpu 80c32 at "
+        "`dpc31 run`, `dpc31 bridge` and `dpc31 serve`");
   } catch (const std::exception& e) {
     if (err != nullptr && err_size > 0) {
       std::strncpy(err, e.what(), err_size - 1);

@@ -69,6 +69,7 @@ enum class StepKind : std::uint8_t {
   send,     // a telegram as given: raw bytes, or fields from any station
   request,  // a DPC31 request through the Instruction_Queue (bus writes)
   dpv1,     // a DPV1 service of the master (MSAC_C1, MSAC_C2): `name` says which
+  reset,    // the RESET of a `cpu` board: CPU and chip together (no time passes)
 };
 
 enum class ExpectKind : std::uint8_t {
@@ -238,6 +239,8 @@ class ScenarioObserver {
   // Any other event of the walk at its cycle: a transaction, a state change, a chip message (not
   // PB3's edges: an observer has them from Chip::on_pb3_change).
   virtual void walk_note(std::uint64_t /*cycle*/, std::string_view /*text*/) {}
+  // The board's RESET (the scenario's `reset`) at `cycle`, before the chip's reset tells its edges.
+  virtual void board_reset(std::uint64_t /*cycle*/) {}
   // Every event before `cycle` (the chip's cycle) has been told, and no later one is older:
   // during a long action, between two of its polls.
   virtual void events_told(std::uint64_t /*cycle*/) {}

@@ -48,7 +48,7 @@ std::string_view trim(std::string_view s) {
 bool sends_request(StepKind k) {
   return is_action(k) && k != StepKind::silence && k != StepKind::foreign_master &&
          k != StepKind::write && k != StepKind::read && k != StepKind::send &&
-         k != StepKind::request && k != StepKind::dpv1;
+         k != StepKind::request && k != StepKind::dpv1 && k != StepKind::reset;
 }
 
 class Parser {
@@ -69,6 +69,10 @@ class Parser {
       rest = trim(rest.substr(k));
     }
     cmd_ = words_[0];
+    if (first_line_ == 0) {
+      first_line_ = no;
+      first_cmd_ = std::string(cmd_);
+    }
     for (std::size_t i = 1; i < words_.size(); ++i) {
       const std::size_t eq = words_[i].find('=');
       if (eq == std::string_view::npos) {
@@ -290,9 +294,15 @@ class Parser {
   // controller): only checked here; the image is read when the run starts (cpu51_module.hpp).
   void cpu_header() {
     positional(3, 3, "80c32 firmware FILE.ihx");
-    const bool c31 = pos_[0] == "c31";
-    if ((pos_[0] != "80c32" && !c31) || pos_[1] != "firmware")
-      fail("the form is 'cpu 80c32 firmware FILE'");
+    const std::string_view core = cpu_core(pos_[0]);
+    const bool c31 = core == "c31";
+    if (core.empty() || pos_[1] != "firmware") {
+      fail(
+          fmt::format("{}the form is 'cpu 80c32 [clock=HZ] firmware FILE [base=A] [latch=A] "
+                      "[ports=N1,N2...]' or 'cpu c31 [clock=HZ] firmware FILE [code=A]'",
+                      core.empty() ? fmt::format("unknown CPU '{}' (80c32, c31): ", shown(pos_[0]))
+                                   : std::string()));
+    }
     // Line-ordered as `irq-controller`: the default profile is no `profile` line.
     if (c31 && (profile_line_ == 0 || s_.chip.profile != Profile::dpc31))
       fail("'cpu c31' needs 'profile dpc31' before it: only the DPC31 has a C31 core");
@@ -600,10 +610,22 @@ class Parser {
       positional(1, 1, "one time (e.g. 200ms)");
       no_options();
       step_.cycles = duration(pos_[0]);
+    } else if (cmd_ == "reset") {
+      // The RESET a CPU board shares with the chip (docs/cpu.md, "The board's reset"); a host's
+      // firmware or the built-in user side would not start the chip again after it.
+      if (!s_.cpu)
+        fail("'reset' is the RESET of a CPU board (header 'cpu'), CPU and chip together");
+      simple(StepKind::reset);
     } else if (cmd_ == "hw") {
       step_.kind = StepKind::hw;
       positional(2, 2, "a hardware input and a value");
       no_options();
+      if (s_.cpu) {
+        fail(
+            fmt::format("'hw': the {} board wires no hardware inputs to its firmware (docs/cpu.md, "
+                        "CNT2 on the 80C32, \"Limits\")",
+                        s_.cpu->c31 ? "C31" : "80C32"));
+      }
       if (!firmware_seen_) fail("'hw' needs a firmware (header 'firmware NAME')");
       if (fw_ != nullptr && name_index(fw_->hw_inputs, pos_[0]) < 0) {
         fail(fmt::format("unknown hardware input '{}' of {} ({})", shown(pos_[0]), fw_->name,
@@ -647,7 +669,15 @@ class Parser {
     } else if (scenario_bus::parse_action(cmd_, pos_, opts_, s_.chip.profile, step_, last_read_)) {
     } else if (scenario_dpv1::parse_action(cmd_, pos_, opts_, s_, step_)) {
     } else if (cmd_ == "segment") {
-      // A segment's file has its own loader (scenario_segment.hpp).
+      // A segment's file has its own loader (scenario_segment.hpp), which `dpc31 run` takes for
+      // a file whose first line is `segment`: after another line it is misplaced.
+      if (first_line_ != step_.line) {
+        fail(
+            fmt::format("'segment' must be the first line of a segment scenario "
+                        "(docs/scenario-format.md, \"Segments\"); '{}' (line {}) is a single "
+                        "chip's, which a segment scenario has not",
+                        shown(first_cmd_), first_line_));
+      }
       fail(
           "'segment' begins a segment scenario (docs/scenario-format.md, \"Segments\"): load it "
           "with SegmentScenario (load_segment_scenario; dpc31.SegmentScenario in Python) or run "
@@ -821,6 +851,8 @@ class Parser {
   ScenarioStep step_;
   std::optional<SlaveConfig> view_;  // the master's view of the slave after the steps so far
   bool headers_ = false;
+  std::string first_cmd_;  // the file's first command and its line (a misplaced `segment`)
+  int first_line_ = 0;
   const dpc31_firmware* bound_;         // the plug-in bind_plugin() loaded, or nullptr
   const dpc31_firmware* fw_ = nullptr;  // the firmware's descriptor, once known
   bool firmware_seen_ = false;

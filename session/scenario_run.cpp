@@ -692,6 +692,13 @@ class Runner {
         note(dpv1_last_->end, fmt::format("{}: {}", st.name, answer_summary(*dpv1_last_)));
         break;
       }
+      case StepKind::reset:  // at the board's instant, the chip's cycle (the scheduler's end)
+        if (hooks_.observer != nullptr) hooks_.observer->board_reset(chip_.cycle());
+        m51_->board().reset();
+        check_states(chip_.cycle());  // the chip stopped: the walk says so at the reset's cycle
+        note(chip_.cycle(),
+             fmt::format("reset: the {} and the chip start again", s_.cpu->c31 ? "C31" : "80C32"));
+        break;
       case StepKind::inputs:
         user_.set_inputs(st.bytes);
         break;

@@ -433,6 +433,9 @@ class Parser {
       st.station = static_cast<std::uint8_t>(number(take("to").value_or(""), "to", 0, 126));
     } else if (c == "expect") {
       expect(st, positional(0, "what to expect"));
+    } else if (c == "cpu") {
+      // A station is driven by its host's firmware; no door puts a CPU board on a segment.
+      fail(fmt::format("'cpu' is a single chip's header: {}", kHexAtSegment));
     } else if (single_chip_command(c)) {
       fail(fmt::format("'{}' is a single chip's command: not on a segment", c));
     } else {
@@ -635,7 +638,7 @@ bool bind_segment_plugins(SegmentScenario& s, ScenarioError& err) {
     }
     const dpc31_firmware* fw = nullptr;
     try {
-      fw = &find_firmware(st.firmware);
+      fw = &find_firmware(st.firmware, kHexAtSegment);
       st.slave = with_gsd_defaults(*fw, st.slave);
     } catch (const FirmwareError& e) {
       err = ScenarioError{s.file, st.plugin_line, e.what()};

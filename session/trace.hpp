@@ -96,6 +96,8 @@ class TraceRecorder final : public ScenarioObserver {
   void expect_checked(std::uint64_t cycle, const ScenarioStep& st, bool ok,
                       std::string_view text) override;
   void walk_note(std::uint64_t cycle, std::string_view text) override;
+  // A `reset` line: the replay resets its chip there.
+  void board_reset(std::uint64_t cycle) override;
   // Writes the segment's heading and its lines before `cycle` (and before an RxD batch still
   // open): no later event is older.
   void events_told(std::uint64_t cycle) override;
@@ -176,7 +178,7 @@ struct TraceError {
   [[nodiscard]] std::string text() const;  // "FILE:LINE: message" (or "FILE: message")
 };
 
-enum class TraceKind : std::uint8_t { rx, rxd, wr, rd, xint, pb3, tx, state, end };
+enum class TraceKind : std::uint8_t { rx, rxd, wr, rd, xint, pb3, tx, state, reset, end };
 
 struct TraceStateKey {
   std::string key;    // dp, wd, status, irr, imr, station, fdl

@@ -306,6 +306,7 @@ class TraceParser {
       case TraceKind::rx:
       case TraceKind::rxd:
       case TraceKind::state:
+      case TraceKind::reset:
         break;
     }
     if (start < now_) {
@@ -410,6 +411,10 @@ class TraceParser {
       l.cycle = dec(w[1], "cycle");
       if (w[2] != "0" && w[2] != "1") fail(fmt::format("bad level '{}' (0 or 1)", shown(w[2])));
       l.level = w[2] == "1";
+    } else if (k == "reset") {
+      arity(w, 2, "reset CYCLE");
+      l.kind = TraceKind::reset;
+      l.cycle = dec(w[1], "cycle");
     } else if (k == "tx") {
       if (w.size() < 4) fail("expected 'tx START END BYTES...'");
       l.kind = TraceKind::tx;

@@ -377,6 +377,8 @@ void TraceRecorder::telegram_sent(std::uint64_t start, std::span<const std::uint
   sent_ = RxdTelegram{start, {bytes.begin(), bytes.end()}, fault};
 }
 
+void TraceRecorder::board_reset(std::uint64_t cycle) { add(cycle, fmt::format("reset {}", cycle)); }
+
 void TraceRecorder::walk_note(std::uint64_t cycle, std::string_view text) {
   if (chip_ == nullptr || finished_) return;
   seg_.push_back(Entry{cycle, comment_line(text), true});

@@ -252,6 +252,10 @@ class Replayer {
         for (const auto& [c, lv] : l.edges) chip_.drive_rxd(c, lv);
         ++o.telegrams_in;
         break;
+      case TraceKind::reset:  // the board's RESET: the chip's new time line starts there
+        step_to(l, l.cycle, o, horizon, after);
+        chip_.reset(l.cycle);
+        break;
       case TraceKind::wr:
         step_to(l, l.cycle - access_, o, horizon, after);
         chip_.write(l.addr, l.data);

@@ -713,3 +713,39 @@ TEST(CliRun, ATraceToTheStandardOutputComesAfterTheWalk) {
   std::ofstream(dir + "read.trace") << both.substr(trace);
   EXPECT_EQ(run("replay " + dir + "read.trace").rc, 0);
 }
+
+namespace {
+
+// With stdout and stderr on one file (`2>&1`), a failed check's line goes out after the walk lines
+// before it, never inside one (the s35 audit, finding 9: the buffered walk was flushed later, the
+// failure landed mid-line). The image writes the latch every 5 machine cycles (MOV DPTR,#4000h;
+// MOVX @DPTR,A; INC A; SJMP back: ServeCpu.PortLinesAreBoundedAndTheClientKept), 1 000 walk lines
+// in 10 ms, far more than stdio's buffer; the check that follows fails.
+TEST(Cli, AnErrorLineGoesOutAfterTheWalkLinesBeforeIt) {
+  const testutil::TempDir dir;
+  std::ofstream(dir.file("fw.ihx")) << ":07000000904000F00480FCB9\n:00000001FF\n";
+  std::ofstream(dir.file("f.scn"))
+      << "profile spc3\ncpu 80c32 firmware fw.ihx\nsilence 10ms\nexpect port outputs 0x55\n";
+  const Result r =
+      testutil::run_command(std::string(DPC31_CLI) + " run " + dir.file("f.scn") + " 2>&1");
+  EXPECT_EQ(r.rc, 1);
+  std::istringstream in(r.out);
+  std::vector<std::string> lines;
+  for (std::string l; std::getline(in, l);) lines.push_back(l);
+  ASSERT_GT(lines.size(), 1000u);
+  const std::string failure = dir.file("f.scn") + ":4: expected port outputs 0x55, got ";
+  std::size_t at = lines.size();
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    if (lines[i].starts_with(failure)) {
+      at = i;
+    } else {
+      EXPECT_TRUE(lines[i].starts_with(i == 0 ? "scenario " : "[cycle ")) << i << ": " << lines[i];
+    }
+  }
+  ASSERT_LT(at, lines.size());
+  // Every port write of the silence (before cycle 480 000, where the check is) precedes it.
+  for (std::size_t i = at + 1; i < lines.size(); ++i)
+    EXPECT_EQ(lines[i].find(" 80C32 at "), std::string::npos) << i << ": " << lines[i];
+}
+
+}  // namespace

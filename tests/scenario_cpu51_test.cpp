@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "scenario_test.hpp"
+#include "trace.hpp"
 
 using namespace scenario_test;
 
@@ -45,8 +46,20 @@ FileRun run_file(const std::string& path) {
 // `cpu 80c32` (docs/cpu.md): the header is checked when parsing, the image is read only when the
 // run starts, relative to the scenario file; a bad record is FILE:LINE, exit 2, nothing run.
 TEST(ScenarioCpu51, HeaderIsCheckedAndTheImageReadWhenTheRunStarts) {
-  EXPECT_EQ(parse_error("cpu 8051 firmware a.ihx\nstartup\n"),
-            "t.scn:1: the form is 'cpu 80c32 firmware FILE'");
+  // The form names every option (a line with clock= read as if clock= were wrong); the part's
+  // name in any case, as `--firmware DO4` (the s35 audit, finding 7).
+  const std::string form =
+      "the form is 'cpu 80c32 [clock=HZ] firmware FILE [base=A] [latch=A] [ports=N1,N2...]' or "
+      "'cpu c31 [clock=HZ] firmware FILE [code=A]'";
+  EXPECT_EQ(parse_error("cpu 8051 clock=24000000 firmware a.ihx\nstartup\n"),
+            "t.scn:1: unknown CPU '8051' (80c32, c31): " + form);
+  EXPECT_EQ(parse_error("cpu 80C32 clock=24000000 image a.ihx\nstartup\n"), "t.scn:1: " + form);
+  EXPECT_EQ(parse_error("cpu 80C32 clock=24000000 firmware a.ihx\nstartup\n"), "");
+  // `hw` is refused for what the board lacks, not for a `firmware` header that `cpu` excludes.
+  EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx\nslave address=7\nhw count1 5\n"),
+            "t.scn:3: 'hw': the 80C32 board wires no hardware inputs to its firmware (docs/cpu.md, "
+            "CNT2 on the 80C32, \"Limits\")");
+  EXPECT_EQ(parse_error("profile dpc31\ncpu C31 firmware a.ihx\nstartup\n"), "");
   EXPECT_EQ(parse_error("cpu 80c32 clock=50000000 firmware a.ihx\nstartup\n"),
             "t.scn:1: clock 50000000 out of range (1000000..40000000)");
   EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx latch=0x8000 ports=x\nstartup\n"),
@@ -133,6 +146,29 @@ TEST(ScenarioCpu51, TheSerialPortsCharactersReachTheWalk) {
             r.walk.end());
 }
 
+// The scenario's `reset` (docs/scenario-format.md): the RESET the board shares, CPU and chip
+// together at the cycle the last action ended (docs/cpu.md, "The board's reset";
+// Cpu51Board.TheBoardsResetStartsCpuAndChipAtItsInstantAndEndsAPowerDown derives the image's
+// cycles): MOV DPTR,#4000h; INC 30h; MOV A,30h; MOVX @DPTR,A writes `outputs` at 24 x 4 + 36 =
+// 132, then ORL PCON,#02h powers down. `silence 1ms` ends at 48 000 = machine cycle 2 000, a
+// boundary: the reset starts the CPU there, RAM kept, so `outputs` = 2 at 24 x 2 004 + 36 = 48 132.
+// Without a `cpu` header there is no board to reset: refused at its line.
+TEST(ScenarioCpu51, ResetStartsTheBoardAgainAndEndsAPowerDown) {
+  TempFile f(
+      "profile spc3\ncpu 80c32 clock=24000000 firmware fw.ihx\nsilence 1ms\n"
+      "expect port outputs 1 at 132\nreset\nsilence 1ms\nexpect port outputs 2 at 48132\n");
+  std::ofstream(f.dir() / "fw.ihx") << ":0D0000009040000530E530F043870280FE9F\n:00000001FF\n";
+  const FileRun r = run_file(f.path());
+  EXPECT_EQ(r.code, 0) << (r.errors.empty() ? "" : r.errors[0]);
+  EXPECT_NE(std::find(r.walk.begin(), r.walk.end(),
+                      "[cycle      48000] reset: the 80C32 and the chip start again"),
+            r.walk.end());
+  EXPECT_EQ(parse_error("reset\n"),
+            "t.scn:1: 'reset' is the RESET of a CPU board (header 'cpu'), CPU and chip together");
+  EXPECT_EQ(parse_error("cpu 80c32 firmware a.ihx\nreset now\n"),
+            "t.scn:2: 'reset' takes no arguments; unexpected 'now'");
+}
+
 // The image's FILE.map gives the walk its code names (docs/cpu.md); a map beside it that names
 // no code (not SDCC's, or cut short) is said on the walk's line of the board, and the run goes on.
 TEST(ScenarioCpu51, AMapWithoutCodeSymbolsIsSaid) {
@@ -184,6 +220,31 @@ TEST(ScenarioCpu51, AMapThatCannotBeReadIsRefused) {
   std::filesystem::remove(f.dir() / "fw.map");
   std::filesystem::create_symlink("/dev/zero", f.dir() / "fw.map");
   refused("not a regular file, not a SDCC map file");
+}
+
+// CNT2 on the 80C32, its first hold (docs/cpu.md, "The interrupt latency in the walk"): the
+// Data_Exchange of line 87 starts at X = 6 030 720 (the walk's, as the scenario's comments take
+// it); 15 characters, acted on at X + (11 x 15 - 1) x 256 + 128 = 6 072 832: DX_Out, X/INT active
+// (docs/timing.md). INT0 samples it in m = 253 034 (24m + 20 = 6 072 836), the idle CPU polls in
+// m + 1, calls in m + 2..3, the vector in m + 4; to the ISR's read of Int_Reg 133 machine cycles
+// (LJMP 2, int0_isr's saves and LCALL 32, cnt2_isr 2, dps_isr 41, __gptrget 14, read16 42: DO4's
+// path, traces/do4_80c32.scn): the MOVX in M = 253 171 completes at 24 M + 36 = 6 076 140, 3 308
+// cycles after the edge. The acknowledge (X/INT inactive) and the EOI are the run's (a 3.15 ms
+// path not derived by hand): pinned here so that the prose follows the build.
+TEST(ScenarioCpu51, Cnt2sInterruptLatencyIsTheDocumented) {
+  dpc31::Scenario s;
+  dpc31::ScenarioError err;
+  ASSERT_TRUE(dpc31::load_scenario(FW51_DIR "/cnt2_80c32.scn", s, err)) << err.text();
+  dpc31::TraceRecorder rec(s.master.baud);
+  EXPECT_TRUE(dpc31::run_scenario(s, {}, {}, rec.scenario_hooks()).ok());
+  const std::string& t = rec.text();
+  std::size_t at = 0;
+  for (const char* const line :
+       {"\nxint 6072832 1\n", "\nrd 6076140 0002 = 00\n", "\nwr 6222660 0003 20\n",
+        "\nxint 6222660 0\n", "\nwr 6224076 0008 02\n"}) {
+    at = t.find(line, at);
+    ASSERT_NE(at, std::string::npos) << line;
+  }
 }
 
 }  // namespace

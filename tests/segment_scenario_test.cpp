@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <fstream>
 #include <iterator>
 #include <map>
 #include <memory>
@@ -17,6 +18,7 @@
 #include "heap_in_use.hpp"
 #include "scenario_segment.hpp"
 #include "segment.hpp"
+#include "test_files.hpp"
 #include "vocabulary.hpp"
 
 namespace dpc31 {
@@ -1077,6 +1079,37 @@ TEST(SegmentScenario, TheSingleChipLoaderNamesTheSegmentLoader) {
             "f.scn:3: 'segment' begins a segment scenario (docs/scenario-format.md, \"Segments\"): "
             "load it with SegmentScenario (load_segment_scenario; dpc31.SegmentScenario in Python) "
             "or run it with `dpc31 run`");
+  // After another line `dpc31 run` took the file for a single chip's (its first line decides):
+  // the misplaced line is named, not the command the user ran (the s35 audit, finding 2).
+  EXPECT_FALSE(parse_scenario("baud 1500000\nsegment\nstation 5\n", "f.scn", s, err));
+  EXPECT_EQ(err.text(),
+            "f.scn:2: 'segment' must be the first line of a segment scenario "
+            "(docs/scenario-format.md, \"Segments\"); 'baud' (line 1) is a single chip's, which a "
+            "segment scenario has not");
+}
+
+// A segment's station cannot be an 80C32 board at any door (docs/segment.md): a `cpu` line is
+// refused in those words, not as an unknown command, and so is an Intel HEX image as a station's
+// plug-in; neither is sent to a door that refuses it (the s35 audit, finding 1).
+TEST(SegmentScenario, An80c32ImageIsRefusedInWordsThatNameTheLimit) {
+  const std::string limit =
+      "a segment's station cannot run an 80C32 image (docs/segment.md); one chip runs it: `dpc31 "
+      "run` with the header cpu 80c32 firmware FILE, or --cpu 80c32 at `dpc31 bridge` and `dpc31 "
+      "serve`";
+  SegmentScenario s;
+  ScenarioError err;
+  EXPECT_FALSE(parse_segment_scenario("segment\ncpu 80c32 firmware fw.ihx\nstation 5\nrun 1ms\n",
+                                      "g.scn", s, err));
+  EXPECT_EQ(err.text(), "g.scn:2: 'cpu' is a single chip's header: " + limit);
+  const testutil::TempDir dir;
+  std::ofstream(dir.file("fw.ihx")) << ":0200000080FE80\n:00000001FF\n";
+  ASSERT_TRUE(parse_segment_scenario("segment\nstation 7 profile=spc3 firmware=./fw.ihx\nrun 1ms\n",
+                                     dir.file("h.scn"), s, err))
+      << err.text();
+  EXPECT_FALSE(bind_segment_plugins(s, err));
+  EXPECT_EQ(err.line, 2);
+  EXPECT_TRUE(err.message.ends_with("; it is an Intel HEX image, a CPU's program: " + limit))
+      << err.message;
 }
 
 }  // namespace

@@ -1061,3 +1061,28 @@ TEST(TracePb3, TheReplayCountsPb3EdgesWhereItChecksThem) {
             std::string::npos)
       << r.out;
 }
+
+// A `cpu` scenario's `reset` (the board's RESET, docs/cpu.md "The board's reset") is a `reset
+// CYCLE` line, and the replay resets its chip there (docs/trace-format.md). The image: MOV
+// DPTR,#8008h [0,2); MOV A,#01h [2]; MOVX @DPTR,A [3,5): Start_SPC3 completes at 24 x 3 + 36 =
+// 108 (24 MHz beside 48 MHz, docs/cpu.md "MOVX timing"); SJMP $. `silence 1ms` ends at 48 000,
+// machine cycle 2 000, where the reset starts the CPU again: Start_SPC3 at 48 108. Without the
+// line the replay's chip stays started through the reset's checkpoint: a mismatch there.
+TEST(Trace, ABoardsResetIsALineTheReplayFollows) {
+  const testutil::TempDir dir;
+  const std::string image = dir.file("start.ihx");
+  std::ofstream(image) << ":080000009080087401F080FEFD\n:00000001FF\n";
+  const std::vector<std::string> v =
+      lines_of(record("profile spc3\ncpu 80c32 clock=24000000 firmware " + image +
+                      "\nsilence 1ms\nreset\n"
+                      "silence 1ms\n"));
+  const std::size_t first = find_line(v, "wr 108 0008 01");
+  const std::size_t reset = find_line(v, "reset 48000", first);
+  find_line(v, "wr 48108 0008 01", reset);
+  std::string message;
+  EXPECT_EQ(replay_text(join(v), message), 0) << message;
+  std::vector<std::string> without = v;
+  without.erase(without.begin() + static_cast<std::ptrdiff_t>(reset));
+  EXPECT_EQ(replay_text(join(without), message), 1);
+  EXPECT_TRUE(message.starts_with("t.trace:")) << message;
+}

@@ -58,6 +58,38 @@ def test_do4_on_the_80c32_reaches_data_exchange_and_drives_its_outputs_on_time(f
     assert board.in_service == 0
 
 
+def test_the_boards_reset_starts_do4_again_to_data_exchange(fw51):
+    """docs/cpu.md, "The board's reset": Cpu51Board.reset() resets CPU and chip together at the
+    board's instant, and DO4 starts the chip again from its reset vector. The instant I is where
+    the master's idle ended; the CPU starts in the first machine cycle at or after it, m0 = ceil(I /
+    24) at 24 MHz beside 48 MHz, and DO4's start-up (traces/do4_80c32.scn, rule 5 of docs/cpu.md
+    "Exact cycles") reaches Start_SPC3 22 127 machine cycles later: X/INT active with DX_Out at
+    24 (m0 + 22 127) + 36. Then the master's start-up reaches Data_Exchange again. (A reset of the
+    chip alone, Chip.reset(), leaves the firmware idle in its main loop and the chip Offline.)"""
+    chip = dpc31.Chip("spc3")
+    board = dpc31.Cpu51Board(chip, hz=24_000_000, address=0x8000)
+    board.load_hex(str(fw51 / "do4_80c32.ihx"))
+    board.set_port_input(1, 7)
+    slave = dpc31.SlaveConfig(address=7, ident=0x0D04, cfg=b"\x21\x10", in_len=1, out_len=2,
+                              wd_fact1=2, wd_fact2=5, user_prm=b"\x00\x01\x05\x00")
+    master = dpc31.Master(chip, address=2, baud=187_500, slave=slave)
+    master.run_board(board)
+    assert master.startup()
+    master.idle(5 * 48_000 + 7)  # an instant that is no machine cycle's start
+    edges = []
+    chip.on_irq_change(lambda cycle, active: edges.append((cycle, active)))
+    instant = chip.cycle
+    board.reset()
+    assert chip.cycle == instant and board.pc == 0
+    assert chip.dp_state != dpc31.DpState.Data_Exchange
+    m0 = (instant + 23) // 24
+    assert board.machine_cycles == m0
+    master.idle(20 * 48_000)
+    assert (24 * (m0 + 22_127) + 36, True) in edges
+    assert master.startup()
+    assert chip.dp_state == dpc31.DpState.Data_Exchange
+
+
 def test_the_c31_runs_from_the_chips_ram(board_programs):
     # MOVX strobes at clocks 78, 162, 282, 366, 426 = chip cycles 156, 324, 564, 732, 852 at
     # 24 MHz (c31_ack.asm's machine cycles [5,7), [12,14), [22,24), [29,31), [34,36); WR ends

@@ -82,6 +82,15 @@ bool record_session(const std::string& scenario_path, Session& out, std::string&
     return false;
   }
   if (!check_cpu_image(sc, error)) return false;  // a bad 80C32 image: its line, as in `run`
+  // The block events replay one time line from the chip's power-on: a RESET inside it is none.
+  for (const ScenarioStep& st : sc.steps) {
+    if (st.kind != StepKind::reset) continue;
+    error = fmt::format(
+        "{}:{}: 'reset' (the CPU board's RESET) cannot be replayed in lockstep: "
+        "the block events start at the one reset of the session",
+        scenario_path, st.line);
+    return false;
+  }
   out = Session{};
   out.options = {sc.chip.profile, sc.chip.bus, sc.chip.variant};
   ScenarioHooks hooks;

@@ -38,6 +38,8 @@ class BoardCpu {
   void run_until(std::uint64_t cycle);
   // The same, ending after the CPU's step in which the interrupt became active (true).
   bool run_until_irq(std::uint64_t cycle);
+  // `reset`: the board's RESET, CPU and chip together at the chip's cycle (Cpu51Board::reset).
+  void reset() { module_->board().reset(); }
   // `cpu`: "core=80c32 hz=F pc=0x.. a=.. b=.. psw=.. sp=.. dptr=.. r0=.. .. r7=.. ie=.. ip=..
   // in_service=N idle=0|1 machine_cycles=N".
   [[nodiscard]] std::string registers() const;

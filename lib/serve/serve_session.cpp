@@ -313,10 +313,10 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
                                     "look without a bus cycle",
                                     cmd));
     }
-    if (cpu_ && (cmd == "reset" || cmd == "load")) {
-      return err("cpu", fmt::format("{}: the CPU's state is not the chip's: it would run on "
-                                    "against another chip (restart the server)",
-                                    cmd));
+    if (cpu_ && cmd == "load") {
+      return err("cpu",
+                 "load: the CPU's state is not the chip's: it would run on against another "
+                 "chip (`reset` starts the board again)");
     }
     if (cmd == "cpu" || cmd == "cpu_port" || cmd == "latch") {
       if (cmd == "cpu_port") {
@@ -446,7 +446,13 @@ Session::Result Session::execute(std::string_view line, ClientState& client) {
     }
     if (cmd == "reset") {
       arity(t, 0, 0, "reset");
-      chip_.reset();  // an interrupt it ends reaches the clients through on_irq_change
+      // The board's RESET under a CPU, CPU and chip together at the chip's cycle; an interrupt
+      // it ends reaches the clients through on_irq_change.
+      if (cpu_) {
+        cpu_->reset();
+      } else {
+        chip_.reset();
+      }
       clear_injected();
       return ok(fmt::format("{}", chip_.cycle()));
     }

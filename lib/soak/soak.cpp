@@ -442,7 +442,8 @@ int run_cli(const Options& o, std::FILE* out, std::FILE* err) {
   Result r;
   try {
     // A firmware stuck in a loop without a bus access cannot be stopped from this thread.
-    if (o.firmware) board::guard_hangs("dpc31 soak", find_firmware(*o.firmware).name);
+    if (o.firmware)
+      board::guard_hangs("dpc31 soak", find_firmware(*o.firmware, hex_at_command("soak")).name);
     r = run(o);
   } catch (const std::exception& e) {
     fmt::print(err, "dpc31 soak: {}\n", e.what());

@@ -372,6 +372,43 @@ TEST(Cpu51Board, AResetAtTheBoardsInstantTellsItsEdgesThere) {
   EXPECT_FALSE(chip.started());
 }
 
+// The board's RESET (docs/cpu.md, "The board's reset"), CPU and chip together at the board's
+// instant. The program (machine cycles in brackets, 24 MHz beside 48 MHz: machine cycle m is chip
+// cycles [24m, 24m + 24)): MOV DPTR,#4000h [0,2); INC 30h [2]; MOV A,30h [3]; MOVX @DPTR,A [4,6),
+// its WR strobe ending at 24 x 4 + 36 = 132 (docs/cpu.md, "MOVX timing"); ORL PCON,#02h [6,8):
+// power-down, which only a reset ends (Intel's manual). A run to 48 010 leaves the CPU at machine
+// cycle 2 000 (the power-down's next cycle samples at clock 24 010, past the end's clock 24 005).
+// The reset there starts the chip's new time line at 48 010 and the CPU in the first machine
+// cycle starting at or after clock 24 005: 2 001 (24 012). RAM is kept, so the image writes
+// 30h + 1 = 2 in MOVX [2 005, 2 007): at 24 x 2 005 + 36 = 48 156, and powers down again.
+TEST(Cpu51Board, TheBoardsResetStartsCpuAndChipAtItsInstantAndEndsAPowerDown) {
+  Chip chip({Profile::spc3, BusMode::intel});
+  Cpu51Board board(chip, 24'000'000, 0x8000);
+  const std::vector<std::uint8_t> code = {0x90, 0x40, 0x00, 0x05, 0x30, 0xE5, 0x30,
+                                          0xF0, 0x43, 0x87, 0x02, 0x80, 0xFE};
+  board.cpu().load_code(0, code);
+  std::vector<Seen> latch;
+  board.on_ram_write = [&latch](std::uint16_t addr, std::uint8_t value, std::uint64_t cycle) {
+    latch.push_back({cycle, true, addr, value});
+  };
+  chip.write(0x08, 0x01);  // Start_SPC3: the reset must stop the chip too
+  board.run_until(48'010);
+  EXPECT_TRUE(board.cpu().powered_down());
+  EXPECT_EQ(board.cpu().cycles(), 2000u);
+  EXPECT_TRUE(chip.started());
+  board.reset();
+  EXPECT_EQ(chip.cycle(), 48'010u);
+  EXPECT_FALSE(chip.started());
+  EXPECT_FALSE(board.cpu().powered_down());
+  EXPECT_EQ(board.cpu().pc(), 0u);
+  EXPECT_EQ(board.cpu().cycles(), 2001u);
+  board.run_until(96'000);
+  const std::vector<Seen> want = {{132, true, 0x4000, 1}, {48'156, true, 0x4000, 2}};
+  EXPECT_EQ(latch, want);
+  EXPECT_TRUE(board.cpu().powered_down());
+  EXPECT_EQ(chip.cycle(), 96'000u);
+}
+
 // An X/INT change whose S5P2 sample falls in a MOVX's first cycle is polled in its second (the
 // manual: flags "sampled at S5P2 of every machine cycle; the samples are polled during the
 // following machine cycle"), so the call follows the MOVX, whether it reads the chip or the

@@ -35,6 +35,27 @@ ChipOptions c31_chip() {
   return {.profile = Profile::dpc31, .bus = BusMode::intel, .irq_controller = IrqController::c31};
 }
 
+// The board's RESET on the C31 (docs/cpu.md, "The board's reset"): the chip's reset clears its RAM,
+// the code area too, and the board puts the loaded image there again, as its loader did. The
+// program: MOV DPTR,#0900h [0,2); INC 30h [2]; MOV A,30h [3]; MOVX @DPTR,A [4,6) into the user
+// area; SJMP $. 30h + 1 = 1 at 0900h, and after the reset, RAM 30h kept, 2 (without the image put
+// back the C31 ran the cleared RAM: NOPs, 0900h stayed 00h).
+TEST(C31, TheBoardsResetPutsTheImageBackIntoTheClearedRam) {
+  Chip chip(c31_chip());
+  Cpu51Board board(chip, 24'000'000, Cpu51Board::C31{0x1000});
+  ASSERT_TRUE(load(board, {0x90, 0x09, 0x00, 0x05, 0x30, 0xE5, 0x30, 0xF0, 0x80, 0xFE}));
+  chip.poke(0x0901, 0x55);  // user area: cleared by the reset
+  board.run_until(48'000);
+  EXPECT_EQ(chip.peek(0x0900), 1);
+  board.reset();
+  EXPECT_EQ(chip.peek(0x0900), 0);
+  EXPECT_EQ(chip.peek(0x0901), 0);
+  EXPECT_EQ(chip.peek(0x1000), 0x90);  // the image again
+  EXPECT_EQ(chip.peek(0x1009), 0xFE);
+  board.run_until(96'000);
+  EXPECT_EQ(chip.peek(0x0900), 2);
+}
+
 TEST(C31, RunsFromTheChipsRamAndTakesTheC31sInterrupt) {
   // C31 at 24 MHz (one oscillator clock = 2 chip clocks), code area from 1000h. MOVX in machine
   // cycles [5,7), [12,14), in the routine [22,24), then [29,31) and [34,36) (board/c31_ack.asm):

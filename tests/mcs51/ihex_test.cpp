@@ -3,6 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <string>
+#include <string_view>
+
 namespace mcs51 {
 namespace {
 
@@ -23,6 +26,21 @@ TEST(Mcs51Hex, DataRecordsLandAtTheirAddresses) {
       << err;
   EXPECT_EQ(two.size, 4u);
   EXPECT_EQ(two.bytes[3], 0xFE);
+}
+
+// A raw binary where an Intel HEX image is expected (objcopy -O binary's output: LJMP 000Bh with
+// its NUL byte, SJMP $) says so and how to convert it; a text file that is no image keeps the plain
+// words (the s35 audit, finding 6).
+TEST(Mcs51Hex, ARawBinaryIsNamedAndTheConversionGiven) {
+  HexImage img;
+  std::string err;
+  using namespace std::string_view_literals;
+  EXPECT_FALSE(parse_ihex("\x02\x00\x0B\x80\xFE"sv, img, err));
+  EXPECT_EQ(err,
+            "line 1: a record starts with ':': binary bytes, not an Intel HEX image (convert a raw "
+            "image with objcopy -I binary -O ihex FILE.bin FILE.ihx)");
+  EXPECT_FALSE(parse_ihex("hello\n", img, err));
+  EXPECT_EQ(err, "line 1: a record starts with ':'");
 }
 
 TEST(Mcs51Hex, BadRecordsNameTheirLine) {

@@ -237,17 +237,18 @@ struct Program {
   Run run;
 };
 
+constexpr const char* kUsage =
+    "usage: mcs51_ucsim_check [--limit N] [--timeout S] [--s51 PATH] [--coverage] PROGRAM.ihx...";
+
 int usage(const std::string& why) {
-  std::cerr << "mcs51_ucsim_check: " << why
-            << " (usage: mcs51_ucsim_check [--limit N] [--timeout S] [--s51 PATH] [--coverage] "
-               "PROGRAM.ihx...)\n";
+  std::cerr << "mcs51_ucsim_check: " << why << " (" << kUsage << ")\n";
   return 2;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::size_t limit = 3000;
+  std::size_t limit = 20'000;        // steps per program unless it reaches its SJMP $ (docs/cpu.md)
   std::chrono::seconds timeout{60};  // per s51 run; the slowest program takes about 2 s
   std::string s51 = S51_PROGRAM;
   std::vector<Program> programs;
@@ -255,6 +256,13 @@ int main(int argc, char** argv) {
   bool coverage = false;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
+    if (arg == "--help" || arg == "-h") {
+      std::cout << kUsage
+                << "\nEach program runs to its SJMP $ or N steps (default 20000) on the core and "
+                   "on s51, compared after every instruction (docs/cpu.md, \"The ucsim "
+                   "cross-check\"); --timeout S per s51 run (default 60).\n";
+      return 0;
+    }
     if (arg == "--limit" || arg == "--timeout" || arg == "--s51") {
       if (i + 1 == argc) return usage(arg + " needs a value");
       const std::string v = argv[++i];

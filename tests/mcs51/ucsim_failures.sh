@@ -2,7 +2,8 @@
 # Mcs51.UcsimCheckFailures: an s51 that fails (a signal, no trace, no end in time, not there) and
 # a bad --limit are exit 2 with one line that says so, never "differs"; a coverage gap is exit 1
 # beside "1 of 1 programs equal"; nothing is left behind:
-# no script in TMPDIR, no s51 (or what it started) running. Usage: ucsim_failures.sh CHECK PROGRAM
+# no script in TMPDIR, no s51 (or what it started) running; --help and the default limit.
+# Usage: ucsim_failures.sh CHECK PROGRAM [LONG_PROGRAM]
 set -u
 check=$1
 prog=$2
@@ -34,6 +35,17 @@ expect "$prog: s51 gave no end within 1 s: killed" --s51 "$dir/slow" --timeout 1
 usage="(usage: mcs51_ucsim_check [--limit N] [--timeout S] [--s51 PATH] [--coverage] PROGRAM.ihx...)"
 expect "mcs51_ucsim_check: --limit 'abc' must be a whole number 1..100000000 $usage" --limit abc
 expect "mcs51_ucsim_check: --timeout '0' must be a whole number 1..100000000 $usage" --timeout 0
+# --help is the usage on stdout, exit 0, as the CLI's; without --limit a program runs to its SJMP $
+# or 20 000 steps (docs/cpu.md, "The ucsim cross-check"): the s35 audit found 3 000.
+help=$("$check" --help | head -n 1)
+rc=$?
+[ $rc -eq 0 ] || { echo "--help: exit $rc, not 0"; fail=1; }
+[ "($help)" = "$usage" ] || { echo "--help: $help"; fail=1; }
+if [ $# -ge 3 ]; then  # a program longer than 3 000 steps (DO4 for the 80C32)
+  long=$("$check" "$3" | head -n 1)
+  [ "$long" = "$("$check" --limit 20000 "$3" | head -n 1)" ] &&
+    [ "$long" != "$("$check" --limit 3000 "$3" | head -n 1)" ] || { echo "default limit: $long"; fail=1; }
+fi
 # --coverage on one program that is equal but runs a few opcodes: the program counts as equal,
 # the gap is a verdict of its own (exit 1), not an unequal program.
 out=$("$check" --coverage "$prog")

@@ -170,7 +170,7 @@ std::string parse_slave(const std::string& spec, bridge::SlaveSpec& s) {
   }
   if (f[1] != bridge::kResponderName) {
     try {
-      s.firmware = &find_firmware(f[1]);
+      s.firmware = &find_firmware(f[1], kHexAtSegment);
     } catch (const FirmwareError& e) {
       return fmt::format("--slave '{}': {}", spec, e.what());
     }

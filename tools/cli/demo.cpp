@@ -326,7 +326,7 @@ int run_demo(ChipOptions opt, const std::string& out_dir_option,
   DpSession session = do4_session(opt);
   if (firmware) {
     try {
-      const dpc31_firmware& fw = find_firmware(*firmware);
+      const dpc31_firmware& fw = find_firmware(*firmware, hex_at_command("demo"));
       board::guard_hangs("dpc31 demo", fw.name);
       session = firmware_session(opt, fw, *firmware);
     } catch (const FirmwareError& e) {

@@ -35,17 +35,15 @@
 
 namespace {
 
-// The standard output through a stream that remembers why its first write failed: stdio keeps
-// only an error flag, and by the end errno says something else.
-int g_stdout_errno = 0;
-
-ssize_t write_stdout(void* /*cookie*/, const char* buf, std::size_t n) {
+// All `n` bytes to `fd` (a cookie stream's write, EINTR retried): the count written, -1 for none;
+// `why` is the failure's errno (EIO for a write of 0 bytes), left alone when all were written.
+ssize_t write_all(int fd, const char* buf, std::size_t n, int& why) {
   std::size_t done = 0;
   while (done < n) {
-    const ssize_t w = ::write(STDOUT_FILENO, buf + done, n - done);
+    const ssize_t w = ::write(fd, buf + done, n - done);
     if (w < 0 && errno == EINTR) continue;
     if (w <= 0) {
-      if (g_stdout_errno == 0) g_stdout_errno = w < 0 ? errno : EIO;
+      why = w < 0 ? errno : EIO;
       return done > 0 ? static_cast<ssize_t>(done) : -1;
     }
     done += static_cast<std::size_t>(w);
@@ -53,14 +51,43 @@ ssize_t write_stdout(void* /*cookie*/, const char* buf, std::size_t n) {
   return static_cast<ssize_t>(n);
 }
 
-void check_stdout_writes() {
+// `stream` (stdout or stderr) replaced by one writing through `write` with `mode` buffering; left
+// as it is where the stream cannot be made.
+void replace_stream(std::FILE*& stream, cookie_write_function_t* write, int mode) {
   cookie_io_functions_t io{};
-  io.write = write_stdout;
+  io.write = write;
   std::FILE* f = ::fopencookie(nullptr, "w", io);
-  if (f == nullptr) return;  // the plain stdout then: failures still show, without the reason
-  // As stdio would: line-buffered on a terminal (progress lines), fully buffered otherwise.
-  std::setvbuf(f, nullptr, ::isatty(STDOUT_FILENO) != 0 ? _IOLBF : _IOFBF, BUFSIZ);
-  stdout = f;
+  if (f == nullptr) return;
+  std::setvbuf(f, nullptr, mode, mode == _IONBF ? 0 : BUFSIZ);
+  stream = f;
+}
+
+// The standard output through a stream that remembers why its first write failed: stdio keeps
+// only an error flag, and by the end errno says something else.
+int g_stdout_errno = 0;
+
+ssize_t write_stdout(void* /*cookie*/, const char* buf, std::size_t n) {
+  int why = 0;
+  const ssize_t w = write_all(STDOUT_FILENO, buf, n, why);
+  if (why != 0 && g_stdout_errno == 0) g_stdout_errno = why;
+  return w;
+}
+
+// The standard error through a stream that first writes what the standard output holds: with both
+// on one file or pipe (`2>&1`) an error line lands between two walk lines, in their order, not
+// inside a line the buffered walk had half written. Unbuffered, as stdio's stderr.
+ssize_t write_stderr(void* /*cookie*/, const char* buf, std::size_t n) {
+  std::fflush(stdout);  // a failure is stdout's own, said at the end (g_stdout_errno)
+  int why = 0;
+  return write_all(STDERR_FILENO, buf, n, why);
+}
+
+void replace_std_streams() {
+  // stdout as stdio would buffer it: line-buffered on a terminal (progress lines), fully
+  // otherwise; without the cookie stream failures still show, without the reason (and stderr's
+  // lines maybe out of order).
+  replace_stream(stdout, write_stdout, ::isatty(STDOUT_FILENO) != 0 ? _IOLBF : _IOFBF);
+  replace_stream(stderr, write_stderr, _IONBF);
 }
 
 // The units a waveform of `run` and `demo` takes, and why the coarser ones are refused.
@@ -82,7 +109,7 @@ int main(int argc, char** argv) {
   // temporaries removed; SIGXFSZ and SIGPIPE ended the process silently.
   std::signal(SIGXFSZ, SIG_IGN);
   std::signal(SIGPIPE, SIG_IGN);
-  check_stdout_writes();
+  replace_std_streams();
   using dpc31::numbers::whole;
   using dpc31::outfile::named;
   using dpc31::outfile::Use;

@@ -54,8 +54,11 @@ class Cpu {
  public:
   Cpu();
 
-  // The hardware reset: PC 0, SP 07h, the ports FFh, every other SFR 00h; RAM is kept.
-  void reset();
+  // The hardware reset: PC 0, SP 07h, the ports FFh, every other SFR 00h; RAM is kept; idle and
+  // power-down end, an interrupt due or in service is forgotten. The clock counts on: the first
+  // instruction starts at machine cycle `from` (a board's RESET at its instant), or where the
+  // CPU stands if that is later.
+  void reset(std::uint64_t from = 0);
   // Program memory (64 KB, external on the 80C32: EA tied low).
   void load_code(std::uint16_t addr, std::span<const std::uint8_t> bytes);
   std::uint8_t code(std::uint16_t addr) const { return code_[addr]; }
