@@ -29,7 +29,7 @@ using namespace scenario_lex;  // NOLINT: the scenario's lexical helpers
 // A single chip's command a segment does not have (docs/scenario-format.md "Segments"): refused
 // as such, not as an unknown word. Its DPV1 is the gap docs/segment.md names.
 bool single_chip_command(std::string_view c) {
-  static constexpr std::array<std::string_view, 31> kOneChip = {"profile",
+  static constexpr std::array<std::string_view, 32> kOneChip = {"profile",
                                                                 "variant",
                                                                 "bus",
                                                                 "hw",
@@ -53,6 +53,7 @@ bool single_chip_command(std::string_view c) {
                                                                 "read_outputs",
                                                                 "set_slave_address",
                                                                 "restart",
+                                                                "reset",
                                                                 "silence",
                                                                 "foreign_master",
                                                                 "corrupt",

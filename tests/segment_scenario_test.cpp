@@ -409,6 +409,9 @@ TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
        "f.scn:3: 'record' is a single chip's command: not on a segment"},
       {"segment\nstation 5\nexchange 2\n",
        "f.scn:3: 'exchange' is a single chip's command: not on a segment"},
+      // The board's `reset` (s35-cpu) belongs to a `cpu` header, which a segment has not.
+      {"segment\nstation 5\nreset\n",
+       "f.scn:3: 'reset' is a single chip's command: not on a segment"},
       {"segment\nstation 5\nexpect dpv1 refused\n",
        "f.scn:3: 'expect dpv1' is a single chip's check: not on a segment"},
       {"segment\nstation 5\nexpect answer rs\n",
