@@ -262,8 +262,9 @@ class DpMaster {
   void idle(std::uint64_t cycles);
   // After a wait without an answer, runs on to where a next request of ours could start, as
   // sending one would: a late answer still on the line is heard out (counted, on_late told) and
-  // the idle time counted from its end. Nothing otherwise. The end of a session: what a
-  // request's asked station still sends belongs to it.
+  // the idle time counted from its end. On one chip nothing otherwise; on a segment it runs on
+  // to the idle time after the line's last telegram (next_start watches the line there). The end
+  // of a session: what a request's asked station still sends belongs to it.
   void hear_out_late_answer() { next_start(cfg_.idle_bits); }
   // Sends `ex.request` again, unchanged (same FCB), while it wants an answer and has none, at
   // most `retries` times.

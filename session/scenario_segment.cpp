@@ -29,7 +29,7 @@ using namespace scenario_lex;  // NOLINT: the scenario's lexical helpers
 // A single chip's command a segment does not have (docs/scenario-format.md "Segments"): refused
 // as such, not as an unknown word. Its DPV1 is the gap docs/segment.md names.
 bool single_chip_command(std::string_view c) {
-  static constexpr std::array<std::string_view, 32> kOneChip = {"profile",
+  static constexpr std::array<std::string_view, 31> kOneChip = {"profile",
                                                                 "variant",
                                                                 "bus",
                                                                 "hw",
@@ -38,7 +38,6 @@ bool single_chip_command(std::string_view c) {
                                                                 "slave",
                                                                 "user",
                                                                 "firmware",
-                                                                "cpu",
                                                                 "inputs",
                                                                 "record",
                                                                 "dpv1",
@@ -68,9 +67,10 @@ bool single_chip_command(std::string_view c) {
 
 // The same for a single chip's `expect` kinds (`expect dpv1`, `expect answer`, ...).
 bool single_chip_check(std::string_view what) {
-  static constexpr std::array<std::string_view, 13> kOneChip = {
-      "answer", "baud", "cleared", "counter", "diag_byte", "dp_state", "dpv1",
-      "inputs", "irq",  "irr_bit", "outputs", "station",   "wd_state"};
+  static constexpr std::array<std::string_view, 18> kOneChip = {
+      "answer", "baud",       "cleared", "counter", "diag_byte", "dp_state",
+      "dpv1",   "indication", "inputs",  "irq",     "irr_bit",   "outputs",
+      "pb3",    "ram",        "read",    "reg",     "station",   "wd_state"};
   return std::find(kOneChip.begin(), kOneChip.end(), what) != kOneChip.end();
 }
 

@@ -838,10 +838,10 @@ void Segment::round(std::uint64_t cycle) {
   line_final_ = now_;
 }
 
-// A character whose start bit is on the line is handed whole: the receiver is then as its edges up
-// to the line's time would leave it (UartRx::take), and what it reports by then is the same.
 bool Segment::heard_nothing(std::size_t listener) const { return station(listener).heard.empty(); }
 
+// A character whose start bit is on the line is handed whole: the receiver is then as its edges up
+// to the line's time would leave it (UartRx::take), and what it reports by then is the same.
 void Segment::take_line(std::size_t listener, const std::function<void(const TxdRun&)>& take) {
   Station& s = station(listener);
   const auto end = std::upper_bound(s.heard.begin(), s.heard.end(), now_, before);

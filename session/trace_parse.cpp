@@ -415,6 +415,10 @@ class TraceParser {
       arity(w, 2, "reset CYCLE");
       l.kind = TraceKind::reset;
       l.cycle = dec(w[1], "cycle");
+      // Chip::reset refuses a cycle past the chip's time; here it is the line's bad input.
+      if (l.cycle > Chip::kLastCycle)
+        fail(fmt::format("reset cycle {} is past the chip's last cycle {}", l.cycle,
+                         Chip::kLastCycle));
     } else if (k == "tx") {
       if (w.size() < 4) fail("expected 'tx START END BYTES...'");
       l.kind = TraceKind::tx;
@@ -536,8 +540,8 @@ void refuse_unparsable(const TextLines::Line& l) {
 
 // The keyword of a line of `kind`.
 std::string_view keyword(TraceKind kind) {
-  constexpr std::array<std::string_view, 9> kWords = {"rx",  "rxd", "wr",    "rd", "xint",
-                                                      "pb3", "tx",  "state", "end"};
+  constexpr std::array<std::string_view, 10> kWords = {"rx",  "rxd", "wr",    "rd",    "xint",
+                                                       "pb3", "tx",  "state", "reset", "end"};
   return kWords.at(static_cast<std::size_t>(kind));
 }
 

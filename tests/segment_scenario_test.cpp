@@ -416,6 +416,10 @@ TEST(SegmentScenario, BadLinesAreOneErrorWithTheirLine) {
        "f.scn:3: 'expect dpv1' is a single chip's check: not on a segment"},
       {"segment\nstation 5\nexpect answer rs\n",
        "f.scn:3: 'expect answer' is a single chip's check: not on a segment"},
+      {"segment\nstation 5\nexpect reg Param_Reg 0x02\n",
+       "f.scn:3: 'expect reg' is a single chip's check: not on a segment"},
+      {"segment\nstation 5\nexpect pb3 1\n",
+       "f.scn:3: 'expect pb3' is a single chip's check: not on a segment"},
       {"segment\nstation 5\nfrobnicate\n", "f.scn:3: unknown command 'frobnicate'"},
       // s35 audit aMix finding 5: names apart whose scopes are one (station_scope makes '/' a
       // '_') would be one module in a VCD, one set of wires in an LA-VCD, one --record file.

@@ -1085,4 +1085,13 @@ TEST(Trace, ABoardsResetIsALineTheReplayFollows) {
   without.erase(without.begin() + static_cast<std::ptrdiff_t>(reset));
   EXPECT_EQ(replay_text(join(without), message), 1);
   EXPECT_TRUE(message.starts_with("t.trace:")) << message;
+  // A reset past the chip's time (Chip::kLastCycle = 2^62 - 1) is the line's bad input, exit 2 at
+  // its line before anything runs (docs/trace-format.md), not Chip::reset's exception mid-replay.
+  std::vector<std::string> late = v;
+  late[reset] = "reset 4611686018427387904";
+  EXPECT_EQ(replay_text(join(late), message), 2) << message;
+  EXPECT_EQ(message, fmt::format("t.trace:{}: reset cycle 4611686018427387904 is past the chip's "
+                                 "last cycle 4611686018427387903",
+                                 reset + 1))
+      << message;
 }
