@@ -886,10 +886,10 @@ TEST(Segment, AMastersSlaveKeepsItsConfigurationAcrossSelects) {
 // answer's end, and nothing is a late answer of the master's, which asked nothing unanswered
 // (docs/timing.md "The master's wait"). Twice: the master decides at the scripted telegram's end,
 // before the answer starts (the scenario's `send`, then `cycle`), and while the telegram is on
-// the line (Python's `Segment.send` with its default start, then `dp_cycle`). Until the thirty-fifth session
-// it started 33 T after the scripted telegram's start or end: a collision with it or with the
-// answer, its Data_Exchange lost, counters().late 1 (the first case first: after an exchange
-// without an answer the master watched the line before its next request already).
+// the line (Python's `Segment.send` with its default start, then `dp_cycle`). Until the
+// thirty-fifth session it started 33 T after the scripted telegram's start or end: a collision with
+// it or with the answer, its Data_Exchange lost, counters().late 1 (the first case first: after an
+// exchange without an answer the master watched the line before its next request already).
 TEST(Segment, AMasterStartsNoRequestIntoAnotherStationsTelegram) {
   Line line(kBaud, {5});
   DpMaster& m = *line.master;
